@@ -1,0 +1,23 @@
+//! # isotrack-cli
+//!
+//! The thin command-line layer: argument parsing ([`cli`]), the commands, and the run outputs
+//! ([`output`]: `trace.csv`, `summary.json`, the resolved `scenario.toml`).
+#![deny(missing_docs)]
+
+pub mod cli;
+pub mod output;
+pub mod run;
+
+/// Process exit codes (BSD `sysexits.h`, the convention for command-line tools).
+pub mod exit {
+    /// Success: the run executed, whatever its outcome.
+    pub const OK: u8 = 0;
+    /// Command-line usage error (clap's own errors exit with 2).
+    pub const USAGE: u8 = 64;
+    /// Invalid input data: a malformed or invalid scenario or override.
+    pub const DATAERR: u8 = 65;
+    /// An input file does not exist or cannot be read.
+    pub const NOINPUT: u8 = 66;
+    /// An output file or directory cannot be created or written.
+    pub const CANTCREAT: u8 = 73;
+}

@@ -1,0 +1,19 @@
+//! The `isotrack` binary: parse arguments, dispatch, map failures to exit codes.
+use clap::Parser;
+use isotrack_cli::cli::{Cli, Command};
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Run(args) => isotrack_cli::run::run(args),
+        Command::Show(args) => isotrack_cli::run::show(args),
+    };
+    match result {
+        Ok(()) => ExitCode::from(isotrack_cli::exit::OK),
+        Err(f) => {
+            eprintln!("error: {}", f.message);
+            ExitCode::from(f.code)
+        }
+    }
+}

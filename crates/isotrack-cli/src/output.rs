@@ -1,0 +1,80 @@
+//! Run outputs: the trace CSV, the summary JSON and the resolved scenario.
+
+use isotrack_scenario::{Scenario, ScenarioFile};
+use isotrack_sim::{RunResult, TraceRow};
+use serde::Serialize;
+use std::path::Path;
+
+/// The columns of `trace.csv`, in order.
+pub const TRACE_COLUMNS: [&str; 8] = [
+    "t_s",
+    "x_m",
+    "y_m",
+    "heading_rad",
+    "s",
+    "error",
+    "omega_radps",
+    "s_measured",
+];
+
+/// Writes `trace.csv`: a header row, then one row per recorded step. Numbers are written in
+/// Rust's shortest round-trip form, so they read back bit-identical; `s_measured` is empty
+/// before the first measurement.
+pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
+    let mut w = csv::Writer::from_path(path)?;
+    w.write_record(TRACE_COLUMNS)?;
+    let mut buf: Vec<String> = Vec::with_capacity(TRACE_COLUMNS.len());
+    for r in rows {
+        buf.clear();
+        for v in [
+            r.t_s,
+            r.x_m,
+            r.y_m,
+            r.heading_rad,
+            r.s,
+            r.error,
+            r.omega_radps,
+        ] {
+            buf.push(format!("{v}"));
+        }
+        buf.push(r.s_measured.map(|v| format!("{v}")).unwrap_or_default());
+        w.write_record(&buf)?;
+    }
+    w.flush()
+}
+
+/// The content of `summary.json`.
+#[derive(Debug, Serialize)]
+pub struct Summary<'a> {
+    /// isotrack's version.
+    pub isotrack_version: &'static str,
+    /// The scenario file as given, or `null` for the built-in default.
+    pub scenario_path: Option<String>,
+    /// The run's outcome and metrics (flattened: `outcome`, `steady_state_max_abs_error`, ...).
+    #[serde(flatten)]
+    pub result: &'a RunResult,
+    /// The fully resolved scenario.
+    pub scenario: &'a ScenarioFile,
+}
+
+/// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`).
+pub fn write_summary(
+    path: &Path,
+    scenario: &Scenario,
+    scenario_path: Option<&Path>,
+    result: &RunResult,
+) -> std::io::Result<()> {
+    let s = Summary {
+        isotrack_version: env!("CARGO_PKG_VERSION"),
+        scenario_path: scenario_path.map(|p| p.display().to_string()),
+        result,
+        scenario: scenario.file(),
+    };
+    let text = serde_json::to_string_pretty(&s).map_err(std::io::Error::other)?;
+    std::fs::write(path, text + "\n")
+}
+
+/// The resolved scenario as TOML (reads back as the same scenario).
+pub fn scenario_toml(scenario: &Scenario) -> String {
+    toml::to_string(scenario.file()).unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}

@@ -1,0 +1,74 @@
+//! Coordinate-free isoline controllers.
+//!
+//! A controller implements [`IsolineController`]: at every sensor sample it receives a
+//! [`Measurement`] (the sample's time stamp and the measured field value: no position, no heading,
+//! no gradient) and returns the turn-rate command `omega` (rad/s, positive = left), which the
+//! simulation holds until the next sample.
+//!
+//! Every controller shares the output stage [`OutputStage`]: the turning direction (which side the
+//! higher field values lie on) and the optional turn-rate limit `|omega| <= omega_max`.
+
+mod pi_isoline;
+
+pub use pi_isoline::{AntiWindup, PiIsoline, PiIsolineParams};
+
+/// One sensor sample: all a coordinate-free controller ever sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measurement {
+    /// Time the sample was taken at, seconds.
+    pub t_s: f64,
+    /// Measured field value `s(t)` (field units; noise and delay included).
+    pub value: f64,
+}
+
+/// A coordinate-free isoline-tracking controller.
+pub trait IsolineController {
+    /// Processes one sample and returns the turn-rate command in rad/s (positive turns left),
+    /// held until the next sample. The result is finite for finite input.
+    fn update(&mut self, m: &Measurement) -> f64;
+    /// Returns the controller to its initial state (integrators, estimators).
+    fn reset(&mut self);
+}
+
+/// Which side of the vehicle the higher field values lie on once it tracks the isoline.
+///
+/// Dong & You's law as printed settles with the source of a circular field on the right
+/// (clockwise around a maximum; their equilibrium `phi = -pi/2`), which is [`HigherSide::Right`].
+/// [`HigherSide::Left`] mirrors the law (`omega -> -omega`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum HigherSide {
+    /// Higher values on the right: clockwise around a maximum (the paper's convention).
+    #[default]
+    Right,
+    /// Higher values on the left: counter-clockwise around a maximum.
+    Left,
+}
+
+impl HigherSide {
+    /// The factor applied to a law written for [`HigherSide::Right`]: `+1` or `-1`.
+    pub fn sign(self) -> f64 {
+        match self {
+            HigherSide::Right => 1.0,
+            HigherSide::Left => -1.0,
+        }
+    }
+}
+
+/// The output stage every controller shares: `omega = sat(direction * u, omega_max)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OutputStage {
+    /// Turning direction.
+    pub higher_side: HigherSide,
+    /// Optional turn-rate limit `omega_max` in rad/s (> 0).
+    pub max_turn_rate_radps: Option<f64>,
+}
+
+impl OutputStage {
+    /// Applies the direction and the limit to the law's raw output `u` (written for
+    /// [`HigherSide::Right`]).
+    pub fn apply(&self, u: f64) -> f64 {
+        crate::math::saturate(self.higher_side.sign() * u, self.max_turn_rate_radps)
+    }
+}

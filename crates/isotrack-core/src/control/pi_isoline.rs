@@ -1,0 +1,276 @@
+//! Dong & You's PI-like isoline controller.
+
+use super::{HigherSide, IsolineController, Measurement, OutputStage};
+use crate::estimate::{DerivativeEstimator, DerivativeKind};
+
+/// Anti-windup scheme for the integral state `sigma` of [`PiIsoline`].
+///
+/// The paper has none. Far from the isoline `tanh(eps/c2)` saturates, `e` keeps one sign for a
+/// long time and `sigma` grows, and after arrival the robot must first unwind it: with `ki = 1`
+/// from 20 m out on the paper's circular field this costs on the order of 1000 s (see the
+/// `circular-far-start-antiwindup` scenario and README).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum AntiWindup {
+    /// Integrate always (the paper's law).
+    #[default]
+    None,
+    /// Clamp the integral action: `|ki*sigma| <= limit_radps`. A turn rate beyond the vehicle's
+    /// reach, or beyond the curvature `v/r` of any isoline worth tracking, is never useful.
+    Clamp {
+        /// Bound on `|ki*sigma|`, rad/s (> 0).
+        limit_radps: f64,
+    },
+    /// Conditional integration (an "integrator zone"): integrate only while `|eps| < band`, i.e.
+    /// near the isoline where `tanh(eps/c2)` is not saturated; hold `sigma` elsewhere.
+    Conditional {
+        /// Half-width of the integration zone in field units (> 0).
+        band: f64,
+    },
+    /// Back-calculation against the turn-rate limit:
+    /// `sigma' = e + (u_sat - u)/(ki*T_t)`. Needs `max_turn_rate_radps` to have any effect.
+    BackCalculation {
+        /// Tracking time constant `T_t`, seconds (> 0).
+        tracking_time_s: f64,
+    },
+}
+
+/// Parameters of [`PiIsoline`]; see its documentation for the law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PiIsolineParams {
+    /// Desired level `s_d` (field units).
+    pub level: f64,
+    /// Proportional gain `kp > 0`, rad per field unit.
+    pub kp: f64,
+    /// Integral gain `ki >= 0`, rad/s per field unit.
+    pub ki: f64,
+    /// Sliding-surface slope limit `c1 > 0`, field units per second.
+    pub c1: f64,
+    /// Sliding-surface softness `c2 > 0`, field units.
+    pub c2: f64,
+    /// Turning direction and turn-rate limit.
+    pub output: OutputStage,
+    /// Anti-windup scheme.
+    pub anti_windup: AntiWindup,
+    /// Estimator for `eps'`.
+    pub derivative: DerivativeKind,
+}
+
+impl PiIsolineParams {
+    /// The paper's Fig. 2(b) gains (Table III): `kp = 10, ki = 1, c1 = 0.2, c2 = 1`, direction as
+    /// printed, no limit, no anti-windup, backward difference.
+    pub fn paper_fig2b(level: f64) -> Self {
+        Self {
+            level,
+            kp: 10.0,
+            ki: 1.0,
+            c1: 0.2,
+            c2: 1.0,
+            output: OutputStage {
+                higher_side: HigherSide::Right,
+                max_turn_rate_radps: None,
+            },
+            anti_windup: AntiWindup::None,
+            derivative: DerivativeKind::BackwardDifference,
+        }
+    }
+}
+
+/// Dong & You's coordinate-free PI-like controller (paper eqs. (2)-(3)):
+///
+/// ```text
+/// omega = kp*e + ki*sigma,   sigma' = e,
+/// e     = eps' + c1*tanh(eps/c2),   eps = s - s_d,
+/// ```
+///
+/// in discrete time at the sensor rate: at sample `k` (time `t_k`, interval `T_k = t_k - t_{k-1}`)
+/// `eps'_k` comes from the [`DerivativeEstimator`], `sigma_k = sigma_{k-1} + T_k*e_k` (backward
+/// Euler), and `omega_k` is held until the next sample. Then the shared [`OutputStage`] applies
+/// the direction and the optional limit, and the [`AntiWindup`] scheme guards `sigma`.
+///
+/// On the first sample no derivative is known yet: `eps'_0 = 0`.
+///
+/// Source: F. Dong and K. You, "Coordinate-free isoline tracking in unknown 2-D scalar fields",
+/// arXiv:2003.12684 (2020), eqs. (2)-(3).
+#[derive(Clone, Debug)]
+pub struct PiIsoline {
+    params: PiIsolineParams,
+    estimator: DerivativeEstimator,
+    sigma: f64,
+    last_t_s: Option<f64>,
+    last_e: f64,
+}
+
+impl PiIsoline {
+    /// A controller at rest (`sigma = 0`).
+    pub fn new(params: PiIsolineParams) -> Self {
+        Self {
+            estimator: DerivativeEstimator::new(params.derivative),
+            params,
+            sigma: 0.0,
+            last_t_s: None,
+            last_e: 0.0,
+        }
+    }
+    /// The parameters.
+    pub fn params(&self) -> &PiIsolineParams {
+        &self.params
+    }
+    /// The integral state `sigma` (field units).
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+    /// The last sliding variable `e` (field units per second).
+    pub fn last_e(&self) -> f64 {
+        self.last_e
+    }
+}
+
+impl IsolineController for PiIsoline {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let p = &self.params;
+        let eps = m.value - p.level;
+        let eps_dot = self.estimator.update(m.t_s, eps);
+        let e = eps_dot + p.c1 * libm::tanh(eps / p.c2);
+        let dt = match self.last_t_s {
+            Some(t0) if m.t_s > t0 => m.t_s - t0,
+            _ => 0.0,
+        };
+        self.last_t_s = Some(m.t_s);
+        if !e.is_finite() {
+            // A non-finite measurement: hold the integral and command nothing new from it.
+            return p.output.apply(p.kp * self.last_e + p.ki * self.sigma);
+        }
+        self.last_e = e;
+
+        let mut sigma = self.sigma;
+        match p.anti_windup {
+            AntiWindup::None => sigma += dt * e,
+            AntiWindup::Clamp { limit_radps } => {
+                sigma += dt * e;
+                if p.ki > 0.0 {
+                    let s_max = limit_radps / p.ki;
+                    sigma = sigma.clamp(-s_max, s_max);
+                }
+            }
+            AntiWindup::Conditional { band } => {
+                if libm::fabs(eps) < band {
+                    sigma += dt * e;
+                }
+            }
+            AntiWindup::BackCalculation { tracking_time_s } => {
+                // Evaluate the unsaturated output with the previous sigma, then bleed the
+                // excess back into the integrator.
+                let u = p.kp * e + p.ki * sigma;
+                let u_sat = crate::math::saturate(u, p.output.max_turn_rate_radps);
+                let bleed = if p.ki > 0.0 {
+                    (u_sat - u) / (p.ki * tracking_time_s)
+                } else {
+                    0.0
+                };
+                sigma += dt * (e + bleed);
+            }
+        }
+        self.sigma = sigma;
+        p.output.apply(p.kp * e + p.ki * self.sigma)
+    }
+
+    fn reset(&mut self) {
+        self.estimator.reset();
+        self.sigma = 0.0;
+        self.last_t_s = None;
+        self.last_e = 0.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn params() -> PiIsolineParams {
+        PiIsolineParams::paper_fig2b(10.0)
+    }
+
+    #[test]
+    fn first_sample_is_pure_tanh_term() {
+        let mut c = PiIsoline::new(params());
+        // eps = 2, eps' = 0 on the first sample: omega = kp*c1*tanh(2).
+        let w = c.update(&Measurement {
+            t_s: 0.0,
+            value: 12.0,
+        });
+        assert_relative_eq!(w, 10.0 * 0.2 * libm::tanh(2.0), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn law_matches_hand_computation() {
+        let mut c = PiIsoline::new(params());
+        c.update(&Measurement {
+            t_s: 0.0,
+            value: 9.0,
+        });
+        let w = c.update(&Measurement {
+            t_s: 0.1,
+            value: 9.05,
+        });
+        // eps = -0.95, eps' = 0.5, e = 0.5 + 0.2 tanh(-0.95); sigma after first sample = 0
+        // (dt = 0), after second = 0.1 e.
+        let e = 0.5 + 0.2 * libm::tanh(-0.95);
+        assert_relative_eq!(w, 10.0 * e + 1.0 * 0.1 * e, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn left_mirrors_right() {
+        let mut r = PiIsoline::new(params());
+        let mut l = PiIsoline::new(PiIsolineParams {
+            output: OutputStage {
+                higher_side: HigherSide::Left,
+                max_turn_rate_radps: None,
+            },
+            ..params()
+        });
+        for k in 0..50 {
+            let m = Measurement {
+                t_s: k as f64 * 0.1,
+                value: 10.0 + libm::sin(k as f64 * 0.3),
+            };
+            assert_eq!(r.update(&m), -l.update(&m));
+        }
+    }
+
+    #[test]
+    fn turn_rate_limit_and_clamp_hold() {
+        let mut c = PiIsoline::new(PiIsolineParams {
+            output: OutputStage {
+                higher_side: HigherSide::Right,
+                max_turn_rate_radps: Some(0.3),
+            },
+            anti_windup: AntiWindup::Clamp { limit_radps: 0.2 },
+            ..params()
+        });
+        for k in 0..1000 {
+            let w = c.update(&Measurement {
+                t_s: k as f64 * 0.1,
+                value: 0.0,
+            });
+            assert!(w.abs() <= 0.3 + 1e-15);
+        }
+        assert!((c.sigma() * 1.0).abs() <= 0.2 + 1e-12);
+    }
+
+    #[test]
+    fn conditional_integration_holds_far_from_isoline() {
+        let mut c = PiIsoline::new(PiIsolineParams {
+            anti_windup: AntiWindup::Conditional { band: 1.0 },
+            ..params()
+        });
+        for k in 0..100 {
+            c.update(&Measurement {
+                t_s: k as f64 * 0.1,
+                value: 5.0,
+            });
+        }
+        assert_eq!(c.sigma(), 0.0);
+    }
+}

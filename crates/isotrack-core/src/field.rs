@@ -1,0 +1,24 @@
+//! Scalar-field traits.
+//!
+//! [`ScalarField`] is all a sensor may query: the value at a point. [`FieldDerivatives`] adds the
+//! gradient and Hessian; only analysis (metrics, the paper's Prop. 2 check, tests) uses them,
+//! never a coordinate-free controller, which by construction receives measurements only.
+
+use crate::math::{Mat2, Vec2};
+
+/// A (possibly time-varying) 2-D scalar field `F(t, p)`.
+pub trait ScalarField {
+    /// `F(t, p)` at time `t_s` (seconds) and position `p` (metres), or `None` where the field has
+    /// no value (outside its domain, a no-data cell). A vehicle reaching such a point ends its run
+    /// with the outcome `left_field`.
+    fn value(&self, t_s: f64, p: Vec2) -> Option<f64>;
+}
+
+/// Spatial derivatives of a field, for analysis and metrics only.
+pub trait FieldDerivatives: ScalarField {
+    /// `grad F(t, p)` (field units per metre), `None` where the field has no value.
+    fn gradient(&self, t_s: f64, p: Vec2) -> Option<Vec2>;
+    /// The Hessian `d2F/dp2(t, p)` (field units per square metre), `None` where the field has no
+    /// value or is not twice differentiable.
+    fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2>;
+}

@@ -1,0 +1,154 @@
+//! Small 2-D geometry helpers (SI units: metres, radians).
+
+use core::ops::{Add, Mul, Neg, Sub};
+
+/// A 2-D vector or point in metres (x east, y north), or any 2-D quantity such as a gradient.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Vec2 {
+    /// East component.
+    pub x: f64,
+    /// North component.
+    pub y: f64,
+}
+
+impl Vec2 {
+    /// Builds a vector from its components.
+    pub const fn new(x: f64, y: f64) -> Self {
+        Self { x, y }
+    }
+    /// The unit vector at angle `angle_rad` counter-clockwise from +x.
+    pub fn from_angle(angle_rad: f64) -> Self {
+        let (s, c) = libm::sincos(angle_rad);
+        Self { x: c, y: s }
+    }
+    /// Dot product.
+    pub fn dot(self, o: Self) -> f64 {
+        self.x * o.x + self.y * o.y
+    }
+    /// z component of the cross product `self x o`.
+    pub fn cross(self, o: Self) -> f64 {
+        self.x * o.y - self.y * o.x
+    }
+    /// Euclidean norm `sqrt(x^2 + y^2)`. (Not `hypot`: it is several times slower, and its
+    /// overflow protection only matters beyond 1e154 m.)
+    pub fn norm(self) -> f64 {
+        libm::sqrt(self.x * self.x + self.y * self.y)
+    }
+    /// `self` rotated by +90 degrees (counter-clockwise).
+    pub fn perp(self) -> Self {
+        Self::new(-self.y, self.x)
+    }
+    /// Both components are finite.
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite()
+    }
+}
+
+impl Add for Vec2 {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y)
+    }
+}
+impl Sub for Vec2 {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y)
+    }
+}
+impl Mul<f64> for Vec2 {
+    type Output = Self;
+    fn mul(self, k: f64) -> Self {
+        Self::new(self.x * k, self.y * k)
+    }
+}
+impl Neg for Vec2 {
+    type Output = Self;
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y)
+    }
+}
+
+/// A symmetric 2x2 matrix (a Hessian), row-major `[[xx, xy], [yx, yy]]`.
+pub type Mat2 = [[f64; 2]; 2];
+
+/// Spectral norm (largest singular value) of a symmetric 2x2 matrix: the largest |eigenvalue|.
+///
+/// For `[[a, b], [b, c]]` the eigenvalues are `(a + c)/2 +- sqrt(((a - c)/2)^2 + b^2)`.
+pub fn sym_spectral_norm(m: &Mat2) -> f64 {
+    let a = m[0][0];
+    let c = m[1][1];
+    let b = 0.5 * (m[0][1] + m[1][0]);
+    let mean = 0.5 * (a + c);
+    let r = libm::hypot(0.5 * (a - c), b);
+    libm::fabs(mean) + r
+}
+
+/// A planar pose: position in metres and heading (course over ground) in radians,
+/// counter-clockwise from +x (east).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Pose2 {
+    /// Position, metres.
+    pub position: Vec2,
+    /// Heading, radians counter-clockwise from +x.
+    pub heading_rad: f64,
+}
+
+impl Pose2 {
+    /// All components are finite.
+    pub fn is_finite(&self) -> bool {
+        self.position.is_finite() && self.heading_rad.is_finite()
+    }
+}
+
+/// Wraps an angle to `(-pi, pi]`.
+pub fn wrap_angle(angle_rad: f64) -> f64 {
+    use core::f64::consts::{PI, TAU};
+    let mut a = libm::remainder(angle_rad, TAU);
+    if a <= -PI {
+        a += TAU;
+    }
+    a
+}
+
+/// Clamps `x` to `[-limit, limit]`; `None` means no limit. A NaN input stays NaN.
+pub fn saturate(x: f64, limit: Option<f64>) -> f64 {
+    match limit {
+        Some(l) if x > l => l,
+        Some(l) if x < -l => -l,
+        _ => x,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use core::f64::consts::PI;
+
+    #[test]
+    fn wrap_angle_range() {
+        assert_relative_eq!(wrap_angle(3.0 * PI), PI, epsilon = 1e-12);
+        assert_relative_eq!(wrap_angle(-3.0 * PI), PI, epsilon = 1e-12);
+        assert_relative_eq!(wrap_angle(0.5), 0.5);
+        assert_relative_eq!(wrap_angle(-0.5 - 4.0 * PI), -0.5, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn spectral_norm_matches_eigenvalues() {
+        // diag(3, -5): norm 5.
+        assert_relative_eq!(sym_spectral_norm(&[[3.0, 0.0], [0.0, -5.0]]), 5.0);
+        // [[2,1],[1,2]]: eigenvalues 1 and 3.
+        assert_relative_eq!(sym_spectral_norm(&[[2.0, 1.0], [1.0, 2.0]]), 3.0);
+    }
+
+    #[test]
+    fn saturate_limits() {
+        assert_eq!(saturate(2.0, Some(1.0)), 1.0);
+        assert_eq!(saturate(-2.0, Some(1.0)), -1.0);
+        assert_eq!(saturate(0.3, Some(1.0)), 0.3);
+        assert_eq!(saturate(5.0, None), 5.0);
+    }
+}

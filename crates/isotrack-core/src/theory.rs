@@ -1,0 +1,173 @@
+//! Closed forms from the paper and from our derivations (`../shared/reference/baselines.md`,
+//! section 0), usable on board (`no_std`) and as independent oracles in tests.
+//!
+//! Notation: Dubins robot at speed `v`, circular field with isoline radius `r_d` and radial slope
+//! `alpha = |dF/dd|` at `r_d`, the PI-like law with gains `kp, ki, c1, c2`.
+
+/// Radius of the level-`level` isoline of `F = i0*exp(-k*d)`: `r = ln(i0/level)/k`, or `None`
+/// if the level is not attained (`level <= 0` or `level >= i0`) or `k <= 0`.
+pub fn radial_exp_isoline_radius_m(i0: f64, decay_per_m: f64, level: f64) -> Option<f64> {
+    if !(level > 0.0 && level < i0 && decay_per_m > 0.0) {
+        return None;
+    }
+    Some(libm::log(i0 / level) / decay_per_m)
+}
+
+/// The orbit the P-like law (`ki = 0`) settles on in a circular field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CircularOrbit {
+    /// Orbit radius `d*`, metres.
+    pub radius_m: f64,
+    /// Steady tracking error `eps* = F(d*) - s_d` (field units; negative: the orbit lies outside
+    /// the isoline, on the lower side).
+    pub error: f64,
+}
+
+/// Steady orbit of the P-like law (`ki = 0`, direction as printed) on `F = i0*exp(-k*d)`.
+///
+/// On a circular orbit of radius `d` the measurement is constant, so `eps' = 0` and the turn rate
+/// must equal the orbit's `-v/d` (clockwise): `kp*c1*tanh(eps*/c2) = -v/d*`, that is
+///
+/// ```text
+/// |eps*| = c2*atanh(v/(kp*c1*d*)),   eps* = F(d*) - s_d,
+/// ```
+///
+/// (baselines.md section 0, derived for the linear radial profile; it holds for any decreasing
+/// radial profile because only `F(d*)` enters). Solved for `d*` by bisection on
+/// `g(d) = c1*tanh((F(d) - s_d)/c2) + v/(kp*d)`, strictly decreasing for `d > r_d` with
+/// `g(r_d) > 0`. Returns `None` when no orbit exists (`kp*c1*d* <= v` everywhere, or invalid
+/// parameters).
+pub fn radial_exp_p_orbit(
+    i0: f64,
+    decay_per_m: f64,
+    level: f64,
+    speed_mps: f64,
+    kp: f64,
+    c1: f64,
+    c2: f64,
+) -> Option<CircularOrbit> {
+    let r_d = radial_exp_isoline_radius_m(i0, decay_per_m, level)?;
+    if !(speed_mps > 0.0 && kp > 0.0 && c1 > 0.0 && c2 > 0.0) {
+        return None;
+    }
+    // g(d) = c1*tanh((F(d) - s_d)/c2) + v/(kp*d). At d = r_d, g = v/(kp*r_d) > 0. As d grows,
+    // F(d) - s_d decreases to -s_d, so g tends to c1*tanh(-s_d/c2) < 0 if that beats v/(kp*d).
+    // g is strictly decreasing for d > r_d (both terms decrease), so the root is unique.
+    let g = |d: f64| {
+        c1 * libm::tanh((i0 * libm::exp(-decay_per_m * d) - level) / c2) + speed_mps / (kp * d)
+    };
+    let mut lo = r_d;
+    let mut hi = r_d.max(1e-9);
+    let mut found = false;
+    for _ in 0..200 {
+        hi *= 2.0;
+        if g(hi) < 0.0 {
+            found = true;
+            break;
+        }
+    }
+    if !found {
+        return None;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let d = 0.5 * (lo + hi);
+    Some(CircularOrbit {
+        radius_m: d,
+        error: i0 * libm::exp(-decay_per_m * d) - level,
+    })
+}
+
+/// Coefficients `[a2, a1, a0]` of the characteristic polynomial `l^3 + a2*l^2 + a1*l + a0` of the
+/// PI-like law linearised about the tracking orbit of a circular field (`ki > 0`; baselines.md
+/// section 0, from the paper's Jacobian `A` in the proof of Prop. 1):
+///
+/// ```text
+/// a2 = kp*alpha*v,  a1 = alpha*v*kp*c1/c2 + alpha*v*ki + v^2/r_d^2,  a0 = alpha*v*ki*c1/c2.
+/// ```
+pub fn prop1_characteristic_polynomial(
+    alpha: f64,
+    speed_mps: f64,
+    r_d_m: f64,
+    kp: f64,
+    ki: f64,
+    c1: f64,
+    c2: f64,
+) -> [f64; 3] {
+    let av = alpha * speed_mps;
+    [
+        kp * av,
+        av * kp * c1 / c2 + av * ki + speed_mps * speed_mps / (r_d_m * r_d_m),
+        av * ki * c1 / c2,
+    ]
+}
+
+/// Exact local (Routh-Hurwitz) stability condition of the tracking orbit on a circular field:
+/// `kp*(alpha*v*(c1/c2)*kp + alpha*v*ki + v^2/r_d^2) > ki*c1/c2` (i.e. `a2*a1 > a0` with all
+/// coefficients positive). Necessary and sufficient for local exponential stability; any `kp > 0`
+/// works when `ki = 0`. (baselines.md section 0.)
+pub fn prop1_exact_local_condition(
+    alpha: f64,
+    speed_mps: f64,
+    r_d_m: f64,
+    kp: f64,
+    ki: f64,
+    c1: f64,
+    c2: f64,
+) -> bool {
+    let [a2, a1, a0] = prop1_characteristic_polynomial(alpha, speed_mps, r_d_m, kp, ki, c1, c2);
+    if ki == 0.0 {
+        return a2 > 0.0 && a1 > 0.0;
+    }
+    a2 > 0.0 && a1 > 0.0 && a0 > 0.0 && a2 * a1 > a0
+}
+
+/// The paper's Prop. 1 sufficient conditions: `kp*(kp - 2)*v*alpha_min > ki` and
+/// `v*alpha_min > c1 > 0`. Sufficient, not necessary (baselines.md section 0).
+pub fn prop1_paper_conditions(alpha_min: f64, speed_mps: f64, kp: f64, ki: f64, c1: f64) -> bool {
+    kp * (kp - 2.0) * speed_mps * alpha_min > ki && speed_mps * alpha_min > c1 && c1 > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn isoline_radius_of_paper_field() {
+        // 20 exp(-0.1 d) = 10 at d = 10 ln 2.
+        let r = radial_exp_isoline_radius_m(20.0, 0.1, 10.0).unwrap();
+        assert_relative_eq!(r, 10.0 * core::f64::consts::LN_2, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn orbit_satisfies_the_balance() {
+        let o = radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 10.0, 0.2, 1.0).unwrap();
+        // kp*c1*tanh(eps/c2) = -v/d
+        assert_relative_eq!(
+            10.0 * 0.2 * libm::tanh(o.error),
+            -0.5 / o.radius_m,
+            epsilon = 1e-12
+        );
+        assert!(o.error < 0.0 && o.radius_m > 10.0 * core::f64::consts::LN_2);
+    }
+
+    #[test]
+    fn paper_conditions_imply_exact_ones() {
+        // baselines.md: kp = 1, ki = 0.05, c1 = 0.5, c2 = 1, v = alpha = 1, r_d = 10 violates the
+        // paper's condition but satisfies the exact one; kp = ki = 0.05 violates the exact one.
+        assert!(!prop1_paper_conditions(1.0, 1.0, 1.0, 0.05, 0.5));
+        assert!(prop1_exact_local_condition(
+            1.0, 1.0, 10.0, 1.0, 0.05, 0.5, 1.0
+        ));
+        assert!(!prop1_exact_local_condition(
+            1.0, 1.0, 10.0, 0.05, 0.05, 0.5, 1.0
+        ));
+    }
+}

@@ -1,0 +1,19 @@
+//! The vehicle trait: a turn-rate command in, a pose out.
+
+use crate::math::Pose2;
+
+/// A vehicle driven by a turn-rate (course-rate) command `omega` in rad/s, positive to the left
+/// (counter-clockwise seen from above).
+///
+/// Each vehicle owns its integration scheme: the simulation loop only asks it to advance one step
+/// with the command held (zero-order hold) and reads its pose.
+pub trait Vehicle {
+    /// The full state (whatever the model needs).
+    type State: Copy;
+    /// Advances `state` by `dt_s` seconds with `omega_radps` held over the step.
+    fn step(&self, state: &mut Self::State, omega_radps: f64, dt_s: f64);
+    /// Position and course of the state; the sensor samples the field at this position.
+    fn pose(&self, state: &Self::State) -> Pose2;
+    /// Ground speed in m/s (for metrics such as path length per unit time).
+    fn speed_mps(&self, state: &Self::State) -> f64;
+}

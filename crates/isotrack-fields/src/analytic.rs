@@ -1,0 +1,321 @@
+//! Closed-form scalar fields with exact gradients and Hessians.
+
+use isotrack_core::math::{Mat2, Vec2};
+use isotrack_core::{FieldDerivatives, ScalarField};
+
+/// The paper's circular field (eq. (4)): `F(p) = i0*exp(-k*|p - p0|)`.
+///
+/// Level sets are circles about `p0`: the level `s` lies at radius `ln(i0/s)/k`. The gradient has
+/// norm `k*F` and points to the source; the Hessian is
+/// `F''*r r^T + F'/d*(I - r r^T)` with `F' = -k*F`, `F'' = k^2*F`, `r` the unit radial vector.
+/// At the source itself the field is not differentiable (gradient and Hessian are `None`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadialExp {
+    /// Peak value `i0` at the source (field units).
+    pub i0: f64,
+    /// Decay rate `k`, 1/m.
+    pub decay_per_m: f64,
+    /// Source position `p0`, metres.
+    pub center_m: Vec2,
+}
+
+impl RadialExp {
+    /// The field of the paper's Sec. VI-B: `20*exp(-0.1*|p|)`.
+    pub fn paper() -> Self {
+        Self {
+            i0: 20.0,
+            decay_per_m: 0.1,
+            center_m: Vec2::new(0.0, 0.0),
+        }
+    }
+    fn eval(&self, p: Vec2) -> f64 {
+        self.i0 * (-self.decay_per_m * (p - self.center_m).norm()).exp()
+    }
+    fn grad(&self, p: Vec2) -> Option<Vec2> {
+        let r = p - self.center_m;
+        let d = r.norm();
+        if d == 0.0 {
+            return None;
+        }
+        let f = self.eval(p);
+        Some(r * (-self.decay_per_m * f / d))
+    }
+    fn hess(&self, p: Vec2) -> Option<Mat2> {
+        let r = p - self.center_m;
+        let d = r.norm();
+        if d == 0.0 {
+            return None;
+        }
+        let f = self.eval(p);
+        let k = self.decay_per_m;
+        let (ux, uy) = (r.x / d, r.y / d);
+        let f1 = -k * f;
+        let f2 = k * k * f;
+        let t = f1 / d;
+        Some([
+            [f2 * ux * ux + t * (1.0 - ux * ux), (f2 - t) * ux * uy],
+            [(f2 - t) * ux * uy, f2 * uy * uy + t * (1.0 - uy * uy)],
+        ])
+    }
+}
+
+/// One anisotropic Gaussian source of a [`GaussianPlumes`] field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plume {
+    /// Source centre, metres.
+    pub center_m: Vec2,
+    /// Peak amplitude above the background (field units; may be negative for a sink).
+    pub amplitude: f64,
+    /// Standard deviations along the plume's own axes, metres (> 0).
+    pub sigma_m: [f64; 2],
+    /// Rotation of the plume's first axis from +x, radians counter-clockwise.
+    pub rotation_rad: f64,
+}
+
+impl Plume {
+    /// `S^-1` with `S = R diag(sx^2, sy^2) R^T`.
+    fn inverse_covariance(&self) -> Mat2 {
+        let (s, c) = self.rotation_rad.sin_cos();
+        let a = 1.0 / (self.sigma_m[0] * self.sigma_m[0]);
+        let b = 1.0 / (self.sigma_m[1] * self.sigma_m[1]);
+        // R diag(a, b) R^T
+        [
+            [a * c * c + b * s * s, (a - b) * c * s],
+            [(a - b) * c * s, a * s * s + b * c * c],
+        ]
+    }
+}
+
+/// A sum of anisotropic Gaussian plumes over a background:
+/// `F(p) = b + sum_i A_i*exp(-1/2 (p - c_i)^T S_i^-1 (p - c_i))`.
+///
+/// Gradient `-sum_i g_i S_i^-1 d_i` and Hessian `sum_i g_i (S_i^-1 d_i d_i^T S_i^-1 - S_i^-1)`,
+/// with `g_i` the i-th term and `d_i = p - c_i`. With two or more overlapping sources the isolines
+/// are non-circular and non-convex, like a PM2.5 map interpolated from a few hot spots.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaussianPlumes {
+    /// Background level (field units).
+    pub background: f64,
+    /// The sources.
+    pub plumes: Vec<Plume>,
+}
+
+impl GaussianPlumes {
+    fn terms(&self, p: Vec2) -> impl Iterator<Item = (f64, Vec2, Mat2)> + '_ {
+        self.plumes.iter().map(move |pl| {
+            let si = pl.inverse_covariance();
+            let d = p - pl.center_m;
+            let sd = Vec2::new(
+                si[0][0] * d.x + si[0][1] * d.y,
+                si[1][0] * d.x + si[1][1] * d.y,
+            );
+            let g = pl.amplitude * (-0.5 * d.dot(sd)).exp();
+            (g, sd, si)
+        })
+    }
+    fn eval(&self, p: Vec2) -> f64 {
+        self.background + self.terms(p).map(|(g, _, _)| g).sum::<f64>()
+    }
+    fn grad(&self, p: Vec2) -> Vec2 {
+        self.terms(p)
+            .fold(Vec2::default(), |acc, (g, sd, _)| acc - sd * g)
+    }
+    fn hess(&self, p: Vec2) -> Mat2 {
+        let mut h = [[0.0; 2]; 2];
+        for (g, sd, si) in self.terms(p) {
+            let v = [sd.x, sd.y];
+            for i in 0..2 {
+                for j in 0..2 {
+                    h[i][j] += g * (v[i] * v[j] - si[i][j]);
+                }
+            }
+        }
+        h
+    }
+}
+
+/// A linear ramp `F(p) = offset + g . p`: straight, parallel isolines; gradient `g`, Hessian 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearRamp {
+    /// Value at the origin (field units).
+    pub offset: f64,
+    /// Gradient `g`, field units per metre.
+    pub gradient_per_m: Vec2,
+}
+
+/// The analytic field kinds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnalyticKind {
+    /// See [`RadialExp`].
+    RadialExp(RadialExp),
+    /// See [`GaussianPlumes`].
+    GaussianPlumes(GaussianPlumes),
+    /// See [`LinearRamp`].
+    LinearRamp(LinearRamp),
+}
+
+/// An analytic field with an optional rectangular domain `[x_min, x_max, y_min, y_max]` (metres)
+/// outside which it has no value (a vehicle that leaves it ends its run as `left_field`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnalyticField {
+    /// The closed form.
+    pub kind: AnalyticKind,
+    /// Optional domain `[x_min, x_max, y_min, y_max]`, metres.
+    pub domain_m: Option<[f64; 4]>,
+}
+
+impl AnalyticField {
+    /// An unbounded field.
+    pub fn new(kind: AnalyticKind) -> Self {
+        Self {
+            kind,
+            domain_m: None,
+        }
+    }
+    fn inside(&self, p: Vec2) -> bool {
+        match self.domain_m {
+            None => p.is_finite(),
+            Some([x0, x1, y0, y1]) => p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1,
+        }
+    }
+}
+
+impl ScalarField for AnalyticField {
+    fn value(&self, _t_s: f64, p: Vec2) -> Option<f64> {
+        if !self.inside(p) {
+            return None;
+        }
+        let v = match &self.kind {
+            AnalyticKind::RadialExp(f) => f.eval(p),
+            AnalyticKind::GaussianPlumes(f) => f.eval(p),
+            AnalyticKind::LinearRamp(f) => f.offset + f.gradient_per_m.dot(p),
+        };
+        v.is_finite().then_some(v)
+    }
+}
+
+impl FieldDerivatives for AnalyticField {
+    fn gradient(&self, _t_s: f64, p: Vec2) -> Option<Vec2> {
+        if !self.inside(p) {
+            return None;
+        }
+        match &self.kind {
+            AnalyticKind::RadialExp(f) => f.grad(p),
+            AnalyticKind::GaussianPlumes(f) => Some(f.grad(p)),
+            AnalyticKind::LinearRamp(f) => Some(f.gradient_per_m),
+        }
+    }
+    fn hessian(&self, _t_s: f64, p: Vec2) -> Option<Mat2> {
+        if !self.inside(p) {
+            return None;
+        }
+        match &self.kind {
+            AnalyticKind::RadialExp(f) => f.hess(p),
+            AnalyticKind::GaussianPlumes(f) => Some(f.hess(p)),
+            AnalyticKind::LinearRamp(_) => Some([[0.0; 2]; 2]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn plumes() -> AnalyticField {
+        AnalyticField::new(AnalyticKind::GaussianPlumes(GaussianPlumes {
+            background: 1.0,
+            plumes: vec![
+                Plume {
+                    center_m: Vec2::new(0.0, 0.0),
+                    amplitude: 20.0,
+                    sigma_m: [12.0, 6.0],
+                    rotation_rad: 0.4,
+                },
+                Plume {
+                    center_m: Vec2::new(15.0, 8.0),
+                    amplitude: 12.0,
+                    sigma_m: [5.0, 9.0],
+                    rotation_rad: -0.3,
+                },
+            ],
+        }))
+    }
+
+    fn fields() -> Vec<AnalyticField> {
+        vec![
+            AnalyticField::new(AnalyticKind::RadialExp(RadialExp {
+                i0: 20.0,
+                decay_per_m: 0.1,
+                center_m: Vec2::new(1.0, -2.0),
+            })),
+            plumes(),
+            AnalyticField::new(AnalyticKind::LinearRamp(LinearRamp {
+                offset: 3.0,
+                gradient_per_m: Vec2::new(0.5, -0.25),
+            })),
+        ]
+    }
+
+    /// Central differences of `value` (independent of the closed-form gradient).
+    fn fd_grad(f: &AnalyticField, p: Vec2, h: f64) -> Vec2 {
+        let v = |q: Vec2| f.value(0.0, q).unwrap();
+        Vec2::new(
+            (v(p + Vec2::new(h, 0.0)) - v(p - Vec2::new(h, 0.0))) / (2.0 * h),
+            (v(p + Vec2::new(0.0, h)) - v(p - Vec2::new(0.0, h))) / (2.0 * h),
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn gradient_matches_finite_differences(x in -30.0..30.0f64, y in -30.0..30.0f64) {
+            for f in fields() {
+                let p = Vec2::new(x, y);
+                if let Some(g) = f.gradient(0.0, p) {
+                    let fd = fd_grad(&f, p, 1e-5);
+                    let scale = 1.0 + g.norm();
+                    prop_assert!((g - fd).norm() < 1e-6 * scale, "{:?} vs {:?}", g, fd);
+                }
+            }
+        }
+
+        #[test]
+        fn hessian_matches_finite_differences_of_gradient(x in -30.0..30.0f64, y in -30.0..30.0f64) {
+            for f in fields() {
+                let p = Vec2::new(x, y);
+                let h = 1e-5;
+                if (p - Vec2::new(1.0, -2.0)).norm() < 1e-3 { continue; }
+                if let Some(hs) = f.hessian(0.0, p) {
+                    let gx = (f.gradient(0.0, p + Vec2::new(h, 0.0)).unwrap() - f.gradient(0.0, p - Vec2::new(h, 0.0)).unwrap()) * (0.5 / h);
+                    let gy = (f.gradient(0.0, p + Vec2::new(0.0, h)).unwrap() - f.gradient(0.0, p - Vec2::new(0.0, h)).unwrap()) * (0.5 / h);
+                    let scale = 1.0 + hs[0][0].abs() + hs[1][1].abs() + hs[0][1].abs();
+                    prop_assert!((hs[0][0] - gx.x).abs() < 1e-5 * scale);
+                    prop_assert!((hs[0][1] - gx.y).abs() < 1e-5 * scale);
+                    prop_assert!((hs[1][0] - gy.x).abs() < 1e-5 * scale);
+                    prop_assert!((hs[1][1] - gy.y).abs() < 1e-5 * scale);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn paper_field_level_10_is_at_10_ln2() {
+        let f = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+        let r = 10.0 * std::f64::consts::LN_2;
+        for k in 0..8 {
+            let a = k as f64 * 0.7;
+            let v = f.value(0.0, Vec2::from_angle(a) * r).unwrap();
+            assert!((v - 10.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn domain_bounds_the_field() {
+        let mut f = fields().remove(2);
+        f.domain_m = Some([-1.0, 1.0, -1.0, 1.0]);
+        assert!(f.value(0.0, Vec2::new(0.5, 0.5)).is_some());
+        assert!(f.value(0.0, Vec2::new(1.5, 0.5)).is_none());
+        assert!(f.gradient(0.0, Vec2::new(1.5, 0.5)).is_none());
+        assert!(f.value(0.0, Vec2::new(f64::NAN, 0.5)).is_none());
+    }
+}

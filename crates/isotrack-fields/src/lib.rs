@@ -1,0 +1,14 @@
+//! # isotrack-fields
+//!
+//! Scalar fields behind the [`ScalarField`] / [`FieldDerivatives`] traits of `isotrack-core`.
+//!
+//! * [`analytic`]: closed-form fields with exact gradient and Hessian: the paper's circular field
+//!   [`RadialExp`], a sum of anisotropic Gaussian plumes [`GaussianPlumes`] (a PM2.5-like
+//!   multi-source map with non-circular isolines), and a [`LinearRamp`]; [`AnalyticField`] wraps
+//!   them with an optional rectangular domain outside which the field has no value.
+#![deny(missing_docs)]
+
+pub mod analytic;
+
+pub use analytic::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
+pub use isotrack_core::{FieldDerivatives, ScalarField};

@@ -1,0 +1,188 @@
+//! From a resolved [`Scenario`] to runnable parts, and running them.
+
+use crate::schema::*;
+use crate::Scenario;
+use isotrack_core::control::{AntiWindup, OutputStage, PiIsoline, PiIsolineParams};
+use isotrack_core::estimate::DerivativeKind;
+use isotrack_core::math::Vec2;
+use isotrack_core::{IsolineController, Measurement};
+use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
+use isotrack_sim::{simulate, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
+use isotrack_vehicles::{Dubins, DubinsState};
+
+/// Every controller a scenario can name, behind one type (static dispatch in the loop).
+#[derive(Clone, Debug)]
+pub enum ControllerModel {
+    /// `pi_isoline`.
+    PiIsoline(PiIsoline),
+}
+
+impl IsolineController for ControllerModel {
+    #[inline]
+    fn update(&mut self, m: &Measurement) -> f64 {
+        match self {
+            ControllerModel::PiIsoline(c) => c.update(m),
+        }
+    }
+    fn reset(&mut self) {
+        match self {
+            ControllerModel::PiIsoline(c) => c.reset(),
+        }
+    }
+}
+
+fn v2(a: [f64; 2]) -> Vec2 {
+    Vec2::new(a[0], a[1])
+}
+
+impl Scenario {
+    /// The level `s_d` the scenario tracks.
+    pub fn level(&self) -> f64 {
+        self.file.controller.level.unwrap_or_default()
+    }
+
+    /// The field.
+    pub fn field(&self) -> AnalyticField {
+        let f = &self.file.field;
+        let kind = match f.kind.unwrap_or(FieldKind::RadialExp) {
+            FieldKind::RadialExp => AnalyticKind::RadialExp(RadialExp {
+                i0: f.i0.unwrap_or(20.0),
+                decay_per_m: f.decay_per_m.unwrap_or(0.1),
+                center_m: v2(f.center_m.unwrap_or_default()),
+            }),
+            FieldKind::GaussianPlumes => AnalyticKind::GaussianPlumes(GaussianPlumes {
+                background: f.background.unwrap_or_default(),
+                plumes: f
+                    .sources
+                    .clone()
+                    .unwrap_or_default()
+                    .into_iter()
+                    .map(|s| Plume {
+                        center_m: v2(s.center_m),
+                        amplitude: s.amplitude,
+                        sigma_m: s.sigma_m,
+                        rotation_rad: s.rotation_rad,
+                    })
+                    .collect(),
+            }),
+            FieldKind::LinearRamp => AnalyticKind::LinearRamp(LinearRamp {
+                offset: f.offset.unwrap_or_default(),
+                gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
+            }),
+        };
+        AnalyticField {
+            kind,
+            domain_m: f.domain_m,
+        }
+    }
+
+    /// The controller, at rest.
+    pub fn controller(&self) -> ControllerModel {
+        let c = &self.file.controller;
+        let derivative = match c
+            .derivative
+            .unwrap_or(DerivativeKindName::BackwardDifference)
+        {
+            DerivativeKindName::BackwardDifference => DerivativeKind::BackwardDifference,
+            DerivativeKindName::FilteredDifference => DerivativeKind::FilteredDifference {
+                tau_s: c.derivative_tau_s.unwrap_or(0.1),
+            },
+            DerivativeKindName::Levant => DerivativeKind::Levant {
+                lipschitz: c.derivative_lipschitz.unwrap_or(1.0),
+            },
+        };
+        let anti_windup = match c.anti_windup.unwrap_or(AntiWindupKind::None) {
+            AntiWindupKind::None => AntiWindup::None,
+            AntiWindupKind::Clamp => AntiWindup::Clamp {
+                limit_radps: c.integral_limit_radps.unwrap_or(f64::INFINITY),
+            },
+            AntiWindupKind::Conditional => AntiWindup::Conditional {
+                band: c.integral_band.unwrap_or(1.0),
+            },
+            AntiWindupKind::BackCalculation => AntiWindup::BackCalculation {
+                tracking_time_s: c.tracking_time_s.unwrap_or(1.0),
+            },
+        };
+        match c.kind.unwrap_or(ControllerKind::PiIsoline) {
+            ControllerKind::PiIsoline => {
+                ControllerModel::PiIsoline(PiIsoline::new(PiIsolineParams {
+                    level: self.level(),
+                    kp: c.kp.unwrap_or(10.0),
+                    ki: c.ki.unwrap_or(0.0),
+                    c1: c.c1.unwrap_or(0.2),
+                    c2: c.c2.unwrap_or(1.0),
+                    output: OutputStage {
+                        higher_side: c.higher_side.unwrap_or_default(),
+                        max_turn_rate_radps: c.max_turn_rate_radps,
+                    },
+                    anti_windup,
+                    derivative,
+                }))
+            }
+        }
+    }
+
+    /// The sensor, seeded by `sim.seed`.
+    pub fn sensor(&self) -> Sensor {
+        let s = &self.file.sensor;
+        let dt = self.dt_s();
+        Sensor::new(
+            SensorConfig {
+                rate_hz: s.rate_hz.unwrap_or(1.0 / dt),
+                noise_std: s.noise_std.unwrap_or(0.0),
+                delay_s: s.delay_s.unwrap_or(0.0),
+            },
+            dt,
+            self.file.sim.seed.unwrap_or(0),
+        )
+        .expect("validated by resolve")
+    }
+
+    /// Integration step, s.
+    pub fn dt_s(&self) -> f64 {
+        self.file.sim.dt_s.unwrap_or(0.01)
+    }
+
+    /// The step plan (durations as step counts).
+    pub fn plan(&self) -> StepPlan {
+        let f = &self.file;
+        StepPlan::new(
+            self.dt_s(),
+            f.sim.duration_s.unwrap_or(600.0),
+            f.output.record_rate_hz.unwrap_or(10.0),
+            f.metrics.steady_state_fraction.unwrap_or(0.2),
+            f.metrics.convergence_tolerance.unwrap_or(0.1),
+            self.level(),
+        )
+        .expect("validated by resolve")
+    }
+
+    /// Runs the scenario, recording the trace into `sink`.
+    pub fn run<S: TraceSink + ?Sized>(&self, sink: &mut S) -> RunResult {
+        let field = self.field();
+        let mut controller = self.controller();
+        let mut sensor = self.sensor();
+        let plan = self.plan();
+        let i = &self.file.initial;
+        match self.file.vehicle.kind.unwrap_or(VehicleKind::Dubins) {
+            VehicleKind::Dubins => {
+                let vehicle = Dubins {
+                    speed_mps: self.file.vehicle.speed_mps.unwrap_or(0.5),
+                };
+                let x0 = DubinsState {
+                    position_m: Vec2::new(i.x_m.unwrap_or(0.0), i.y_m.unwrap_or(0.0)),
+                    heading_rad: i.heading_rad.unwrap_or(0.0),
+                };
+                simulate(
+                    &field,
+                    &vehicle,
+                    x0,
+                    &mut controller,
+                    &mut sensor,
+                    &plan,
+                    sink,
+                )
+            }
+        }
+    }
+}

@@ -1,0 +1,317 @@
+//! The scenario file format.
+//!
+//! Every key is optional in a file; [`crate::resolve`] fills the defaults listed here and checks
+//! that each key applies to the chosen `kind`. Units are in the key names. Coordinates: x east,
+//! y north, headings counter-clockwise from +x, turn rates positive to the left.
+//!
+//! ```toml
+//! [field]
+//! kind = "radial_exp"          # radial_exp | gaussian_plumes | linear_ramp
+//! i0 = 20.0                    # radial_exp: F = i0*exp(-decay_per_m*|p - center_m|)
+//! decay_per_m = 0.1
+//! center_m = [0.0, 0.0]
+//! # domain_m = [-50, 50, -50, 50]   # optional [x_min, x_max, y_min, y_max]; outside: no value
+//!
+//! [vehicle]
+//! kind = "dubins"
+//! speed_mps = 0.5
+//!
+//! [initial]
+//! x_m = 10.0
+//! y_m = 0.0
+//! heading_rad = 1.5707963267948966
+//!
+//! [sensor]
+//! rate_hz = 100.0              # default: every step (1/sim.dt_s)
+//! noise_std = 0.0              # field units
+//! delay_s = 0.0
+//!
+//! [controller]
+//! kind = "pi_isoline"
+//! level = 10.0
+//! kp = 10.0
+//! ki = 1.0
+//! c1 = 0.2
+//! c2 = 1.0
+//! higher_side = "right"        # right (paper: clockwise around a maximum) | left
+//! # max_turn_rate_radps = 1.0  # optional |omega| limit
+//! anti_windup = "none"         # none | clamp | conditional | back_calculation
+//! derivative = "backward_difference"   # backward_difference | filtered_difference | levant
+//!
+//! [sim]
+//! dt_s = 0.01
+//! duration_s = 600.0
+//! seed = 0
+//!
+//! [metrics]
+//! steady_state_fraction = 0.2
+//! convergence_tolerance = 0.1  # default: 1 % of |controller.level| (0.01 if the level is 0)
+//!
+//! [output]
+//! record_rate_hz = 10.0        # trace rows per second; 0 turns the trace off
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+/// A scenario file. Unknown keys are rejected everywhere.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioFile {
+    /// Optional short name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Optional free-text description.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// The scalar field.
+    pub field: FieldSection,
+    /// The vehicle.
+    pub vehicle: VehicleSection,
+    /// The initial state.
+    pub initial: InitialSection,
+    /// The sensor.
+    pub sensor: SensorSection,
+    /// The controller.
+    pub controller: ControllerSection,
+    /// Integration and run length.
+    pub sim: SimSection,
+    /// Metric settings.
+    pub metrics: MetricsSection,
+    /// Output settings.
+    pub output: OutputSection,
+}
+
+/// Field kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldKind {
+    /// `F = i0*exp(-decay_per_m*|p - center_m|)` (the paper's circular field, eq. (4)).
+    RadialExp,
+    /// `F = background + sum_i amplitude_i*exp(-1/2 d_i^T S_i^-1 d_i)` over `sources`.
+    GaussianPlumes,
+    /// `F = offset + gradient_per_m . p`.
+    LinearRamp,
+}
+
+/// `[field]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FieldSection {
+    /// Field kind (default `radial_exp`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<FieldKind>,
+    /// `radial_exp`: peak value (default 20).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub i0: Option<f64>,
+    /// `radial_exp`: decay rate, 1/m (default 0.1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decay_per_m: Option<f64>,
+    /// `radial_exp`: source position, m (default `[0, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub center_m: Option<[f64; 2]>,
+    /// `gaussian_plumes`: background level (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub background: Option<f64>,
+    /// `gaussian_plumes`: the sources (default: a three-source PM2.5-like map).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sources: Option<Vec<PlumeSpec>>,
+    /// `linear_ramp`: value at the origin (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
+    /// `linear_ramp`: gradient, field units per metre (default `[0, 1]`: increasing northward).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gradient_per_m: Option<[f64; 2]>,
+    /// Any kind: optional domain `[x_min, x_max, y_min, y_max]`, m; outside it the field has no
+    /// value and a run ends as `left_field`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub domain_m: Option<[f64; 4]>,
+}
+
+/// One Gaussian source of a `gaussian_plumes` field.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlumeSpec {
+    /// Centre, m.
+    pub center_m: [f64; 2],
+    /// Peak amplitude above the background.
+    pub amplitude: f64,
+    /// Standard deviations along the plume's axes, m.
+    pub sigma_m: [f64; 2],
+    /// Rotation of the first axis from +x, rad (default 0).
+    #[serde(default)]
+    pub rotation_rad: f64,
+}
+
+/// Vehicle kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VehicleKind {
+    /// The Dubins robot of the paper, eq. (5).
+    Dubins,
+}
+
+/// `[vehicle]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct VehicleSection {
+    /// Vehicle kind (default `dubins`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<VehicleKind>,
+    /// `dubins`: constant speed, m/s (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_mps: Option<f64>,
+}
+
+/// `[initial]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitialSection {
+    /// East position, m (default 10).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_m: Option<f64>,
+    /// North position, m (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub y_m: Option<f64>,
+    /// Heading, rad counter-clockwise from +x (default pi/2: north).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_rad: Option<f64>,
+}
+
+/// `[sensor]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorSection {
+    /// Sampling rate, Hz (default: every step, `1/sim.dt_s`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rate_hz: Option<f64>,
+    /// Standard deviation of additive Gaussian noise, field units (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise_std: Option<f64>,
+    /// Transport delay, s (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_s: Option<f64>,
+}
+
+/// Controller kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControllerKind {
+    /// Dong & You's PI-like law, eqs. (2)-(3).
+    PiIsoline,
+}
+
+/// Anti-windup schemes (see `isotrack_core::control::AntiWindup`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AntiWindupKind {
+    /// Integrate always (the paper).
+    None,
+    /// `|ki*sigma| <= integral_limit_radps`.
+    Clamp,
+    /// Integrate only while `|eps| < integral_band`.
+    Conditional,
+    /// `sigma' = e + (u_sat - u)/(ki*tracking_time_s)` against `max_turn_rate_radps`.
+    BackCalculation,
+}
+
+/// Derivative estimators (see `isotrack_core::estimate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DerivativeKindName {
+    /// Backward difference.
+    BackwardDifference,
+    /// Low-pass filtered backward difference (`derivative_tau_s`).
+    FilteredDifference,
+    /// Levant's robust exact differentiator (`derivative_lipschitz`).
+    Levant,
+}
+
+/// `[controller]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ControllerSection {
+    /// Controller kind (default `pi_isoline`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<ControllerKind>,
+    /// Desired level `s_d`, field units (default 10).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level: Option<f64>,
+    /// `kp > 0` (default 10).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kp: Option<f64>,
+    /// `ki >= 0` (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ki: Option<f64>,
+    /// `c1 > 0`, field units per second (default 0.2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c1: Option<f64>,
+    /// `c2 > 0`, field units (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c2: Option<f64>,
+    /// Which side the higher values lie on: `right` (default; the paper) or `left`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub higher_side: Option<isotrack_core::control::HigherSide>,
+    /// Optional turn-rate limit `|omega| <= max_turn_rate_radps`, rad/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_turn_rate_radps: Option<f64>,
+    /// Anti-windup scheme (default `none`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anti_windup: Option<AntiWindupKind>,
+    /// `clamp`: bound on `|ki*sigma|`, rad/s (default: `max_turn_rate_radps` if set, else
+    /// `kp*c1`, the proportional term's own reach).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub integral_limit_radps: Option<f64>,
+    /// `conditional`: integrate while `|eps| < integral_band`, field units (default `c2`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub integral_band: Option<f64>,
+    /// `back_calculation`: tracking time constant, s (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tracking_time_s: Option<f64>,
+    /// Derivative estimator for `eps'` (default `backward_difference`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derivative: Option<DerivativeKindName>,
+    /// `filtered_difference`: filter time constant, s (default 0.1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derivative_tau_s: Option<f64>,
+    /// `levant`: bound `L` on `|s''|`, field units/s^2 (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub derivative_lipschitz: Option<f64>,
+}
+
+/// `[sim]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimSection {
+    /// Integration step, s (default 0.01).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_s: Option<f64>,
+    /// Run length, s (default 600); a whole number of steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub duration_s: Option<f64>,
+    /// Seed of the run's random streams (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}
+
+/// `[metrics]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MetricsSection {
+    /// Fraction of the planned duration, at its end, that forms the steady-state window
+    /// (default 0.2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steady_state_fraction: Option<f64>,
+    /// Tolerance on `|eps|` for the convergence time, field units (default 1 % of
+    /// `|controller.level|`, or 0.01 if the level is 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub convergence_tolerance: Option<f64>,
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSection {
+    /// Trace rows per second (default 10); 0 turns the trace off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record_rate_hz: Option<f64>,
+}

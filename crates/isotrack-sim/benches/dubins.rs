@@ -1,0 +1,52 @@
+//! Throughput of the simulation loop on the paper's Fig. 2(b) scenario (Dubins robot, circular
+//! field, PI-like law, 100 Hz sensing, dt = 0.01 s, 600 s = 60 000 steps).
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use isotrack_core::control::{PiIsoline, PiIsolineParams};
+use isotrack_core::math::Vec2;
+use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
+use isotrack_sim::{simulate, NoTrace, Sensor, SensorConfig, StepPlan, TraceRow};
+use isotrack_vehicles::{Dubins, DubinsState};
+use std::hint::black_box;
+
+fn run(record_rate_hz: f64) -> u64 {
+    let field = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+    let vehicle = Dubins { speed_mps: 0.5 };
+    let x0 = DubinsState {
+        position_m: Vec2::new(10.0, 0.0),
+        heading_rad: -std::f64::consts::FRAC_PI_2,
+    };
+    let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
+    let cfg = SensorConfig {
+        rate_hz: 100.0,
+        noise_std: 0.0,
+        delay_s: 0.0,
+    };
+    let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
+    let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 10.0).unwrap();
+    if record_rate_hz > 0.0 {
+        let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
+        simulate(&field, &vehicle, x0, &mut c, &mut sensor, &plan, &mut rows).steps
+    } else {
+        simulate(
+            &field,
+            &vehicle,
+            x0,
+            &mut c,
+            &mut sensor,
+            &plan,
+            &mut NoTrace,
+        )
+        .steps
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dubins_circular_600s");
+    g.throughput(Throughput::Elements(60_000));
+    g.bench_function("trace_off", |b| b.iter(|| black_box(run(black_box(0.0)))));
+    g.bench_function("trace_10hz", |b| b.iter(|| black_box(run(black_box(10.0)))));
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,25 @@
+//! # isotrack-sim
+//!
+//! One simulation loop for every field, vehicle and controller ([`simulate`]), the sensor model
+//! between the world and the controller ([`Sensor`]), streaming run metrics ([`Metrics`]) and
+//! trace recording ([`TraceSink`]).
+//!
+//! One step `k` (time `t_k = k*dt`), in this order:
+//! 1. `pose = vehicle.pose(x_k)`; a non-finite pose ends the run as `diverged`;
+//! 2. `s_k = field.value(t_k, pose)`; no value ends the run as `left_field`;
+//! 3. on sample steps the [`Sensor`] turns the (possibly delayed) true value into a noisy
+//!    [`Measurement`](isotrack_core::Measurement) and the controller updates `omega`, which is
+//!    otherwise held;
+//! 4. metrics and (at the recording rate) the trace observe `(t_k, pose, s_k, omega)`;
+//! 5. `x_{k+1} = vehicle.step(x_k, omega, dt)`.
+#![deny(missing_docs)]
+
+mod metrics;
+mod sensor;
+mod simulation;
+mod trace;
+
+pub use metrics::{Metrics, MetricsConfig, RunMetrics};
+pub use sensor::{Sensor, SensorConfig, SensorError};
+pub use simulation::{simulate, Outcome, RunResult, StepPlan, StepPlanError};
+pub use trace::{NoTrace, TraceRow, TraceSink};

@@ -1,0 +1,195 @@
+//! Streaming run metrics: constant memory whatever the run length.
+
+use serde::Serialize;
+
+/// What the metrics need to know before the run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetricsConfig {
+    /// Step, seconds.
+    pub dt_s: f64,
+    /// First step of the steady-state window (the window is `[t_ss, t_end]` of the planned run).
+    pub steady_state_start_step: u64,
+    /// Convergence tolerance on `|eps|`, field units (> 0).
+    pub convergence_tolerance: f64,
+}
+
+/// Accumulates the metrics of one run step by step.
+#[derive(Clone, Debug)]
+pub struct Metrics {
+    cfg: MetricsConfig,
+    ss_n: u64,
+    ss_max_abs: f64,
+    ss_sum: f64,
+    ss_sum_sq: f64,
+    ss_tv_omega: f64,
+    ss_sign_changes: u64,
+    ss_prev_omega: Option<f64>,
+    ss_prev_sign: f64,
+    last_violation: Option<u64>,
+    last_step: u64,
+    path_length_m: f64,
+    effort: f64,
+}
+
+/// The metrics of a finished run. `None` (JSON `null`) where a metric is undefined: no step
+/// reached the steady-state window, or the error never stayed within tolerance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunMetrics {
+    /// `max |eps|` over the steady-state window (field units).
+    pub steady_state_max_abs_error: Option<f64>,
+    /// `sqrt(mean(eps^2))` over the steady-state window.
+    pub steady_state_rms_error: Option<f64>,
+    /// `mean(eps)` over the steady-state window (signed: the bias).
+    pub steady_state_mean_error: Option<f64>,
+    /// First time after which `|eps|` stays below the tolerance to the end of the run, seconds;
+    /// `None` if it is above the tolerance at the end, or the run did not complete.
+    pub convergence_time_s: Option<f64>,
+    /// Distance travelled, metres (sum of step displacements).
+    pub path_length_m: f64,
+    /// Control effort `integral(omega^2 dt)` over the run, rad^2/s.
+    pub control_effort: f64,
+    /// Chattering: total variation of `omega` over the steady-state window divided by the
+    /// window's duration, rad/s^2.
+    pub chattering_radps2: Option<f64>,
+    /// Sign changes of `omega` per second over the steady-state window.
+    pub sign_changes_per_s: Option<f64>,
+}
+
+impl Metrics {
+    /// Empty accumulator.
+    pub fn new(cfg: MetricsConfig) -> Self {
+        Self {
+            cfg,
+            ss_n: 0,
+            ss_max_abs: 0.0,
+            ss_sum: 0.0,
+            ss_sum_sq: 0.0,
+            ss_tv_omega: 0.0,
+            ss_sign_changes: 0,
+            ss_prev_omega: None,
+            ss_prev_sign: 0.0,
+            last_violation: None,
+            last_step: 0,
+            path_length_m: 0.0,
+            effort: 0.0,
+        }
+    }
+
+    /// Observes step `k`: the true error `eps_k` and the command `omega_k` held over the step.
+    #[inline]
+    pub fn observe(&mut self, k: u64, eps: f64, omega: f64) {
+        self.last_step = k;
+        if eps.abs() >= self.cfg.convergence_tolerance {
+            self.last_violation = Some(k);
+        }
+        self.effort += omega * omega * self.cfg.dt_s;
+        if k >= self.cfg.steady_state_start_step {
+            self.ss_n += 1;
+            self.ss_max_abs = self.ss_max_abs.max(eps.abs());
+            self.ss_sum += eps;
+            self.ss_sum_sq += eps * eps;
+            if let Some(prev) = self.ss_prev_omega {
+                self.ss_tv_omega += (omega - prev).abs();
+            }
+            self.ss_prev_omega = Some(omega);
+            let sign = if omega > 0.0 {
+                1.0
+            } else if omega < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            if sign != 0.0 {
+                if self.ss_prev_sign != 0.0 && sign != self.ss_prev_sign {
+                    self.ss_sign_changes += 1;
+                }
+                self.ss_prev_sign = sign;
+            }
+        }
+    }
+
+    /// Adds a step's displacement to the path length.
+    #[inline]
+    pub fn add_path(&mut self, ds_m: f64) {
+        self.path_length_m += ds_m;
+    }
+
+    /// The metrics; `completed` says whether the run reached its planned end.
+    pub fn finish(&self, completed: bool) -> RunMetrics {
+        let n = self.ss_n as f64;
+        let have_ss = self.ss_n > 0;
+        let window_s = (self.ss_n.saturating_sub(1)) as f64 * self.cfg.dt_s;
+        let per_s = |x: f64| (have_ss && window_s > 0.0).then(|| x / window_s);
+        RunMetrics {
+            steady_state_max_abs_error: have_ss.then_some(self.ss_max_abs),
+            steady_state_rms_error: have_ss.then(|| (self.ss_sum_sq / n).sqrt()),
+            steady_state_mean_error: have_ss.then(|| self.ss_sum / n),
+            convergence_time_s: if !completed {
+                None
+            } else {
+                match self.last_violation {
+                    None => Some(0.0),
+                    Some(k) if k == self.last_step => None,
+                    Some(k) => Some((k + 1) as f64 * self.cfg.dt_s),
+                }
+            },
+            path_length_m: self.path_length_m,
+            control_effort: self.effort,
+            chattering_radps2: per_s(self.ss_tv_omega),
+            sign_changes_per_s: per_s(self.ss_sign_changes as f64),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn window_statistics_and_convergence() {
+        let mut m = Metrics::new(MetricsConfig {
+            dt_s: 0.5,
+            steady_state_start_step: 6,
+            convergence_tolerance: 0.1,
+        });
+        // eps: 1, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02 (10 steps)
+        let eps = [1.0, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02];
+        let om = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0];
+        for k in 0..10 {
+            m.observe(k as u64, eps[k], om[k]);
+        }
+        let r = m.finish(true);
+        // last violation at k = 4 -> converged from k = 5, t = 2.5 s
+        assert_eq!(r.convergence_time_s, Some(2.5));
+        assert_relative_eq!(r.steady_state_max_abs_error.unwrap(), 0.06);
+        assert_relative_eq!(
+            r.steady_state_mean_error.unwrap(),
+            (0.02 - 0.04 + 0.06 - 0.02) / 4.0
+        );
+        let rms =
+            ((0.02f64.powi(2) + 0.04f64.powi(2) + 0.06f64.powi(2) + 0.02f64.powi(2)) / 4.0).sqrt();
+        assert_relative_eq!(r.steady_state_rms_error.unwrap(), rms);
+        // window 3 intervals of 0.5 s = 1.5 s; TV = 2+2+2 = 6; 3 sign changes
+        assert_relative_eq!(r.chattering_radps2.unwrap(), 4.0);
+        assert_relative_eq!(r.sign_changes_per_s.unwrap(), 2.0);
+        // effort: 4 steps with omega^2 = 1 times dt 0.5
+        assert_relative_eq!(r.control_effort, 2.0);
+    }
+
+    #[test]
+    fn never_converged_and_early_end() {
+        let mut m = Metrics::new(MetricsConfig {
+            dt_s: 1.0,
+            steady_state_start_step: 100,
+            convergence_tolerance: 0.1,
+        });
+        m.observe(0, 0.0, 0.0);
+        m.observe(1, 5.0, 0.0);
+        let r = m.finish(true);
+        assert_eq!(r.convergence_time_s, None);
+        assert_eq!(r.steady_state_max_abs_error, None);
+        assert_eq!(r.chattering_radps2, None);
+        assert_eq!(m.finish(false).convergence_time_s, None);
+    }
+}

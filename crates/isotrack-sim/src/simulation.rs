@@ -1,0 +1,231 @@
+//! The simulation loop.
+
+use crate::metrics::{Metrics, MetricsConfig, RunMetrics};
+use crate::sensor::{whole_steps, Sensor};
+use crate::trace::{TraceRow, TraceSink};
+use isotrack_core::{IsolineController, ScalarField, Vehicle};
+use serde::Serialize;
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// The run reached its planned duration.
+    Completed,
+    /// The state or the command became non-finite.
+    Diverged,
+    /// The vehicle reached a point where the field has no value (domain edge, no-data cell).
+    LeftField,
+}
+
+impl Outcome {
+    /// The snake_case name used in `summary.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Completed => "completed",
+            Outcome::Diverged => "diverged",
+            Outcome::LeftField => "left_field",
+        }
+    }
+}
+
+/// Step counts of a run, from its durations in seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepPlan {
+    /// Step, s.
+    pub dt_s: f64,
+    /// Number of steps (the run covers `[0, n_steps*dt]`).
+    pub n_steps: u64,
+    /// Record a trace row every this many steps (0: no trace).
+    pub record_every: u64,
+    /// First step of the steady-state window.
+    pub steady_state_start_step: u64,
+    /// Convergence tolerance on `|eps|`.
+    pub convergence_tolerance: f64,
+    /// The level `s_d` the error is measured from.
+    pub level: f64,
+}
+
+/// Why durations do not make a [`StepPlan`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StepPlanError {
+    /// Duration not a whole number of steps.
+    #[error("the duration {duration_s} s is not a whole number of steps of {dt_s} s")]
+    DurationNotMultiple {
+        /// Duration, s.
+        duration_s: f64,
+        /// Step, s.
+        dt_s: f64,
+    },
+    /// Recording period not a whole number of steps.
+    #[error("the recording period 1/{rate_hz} s is not a whole number of steps of {dt_s} s")]
+    RecordRateNotMultiple {
+        /// Rate, Hz.
+        rate_hz: f64,
+        /// Step, s.
+        dt_s: f64,
+    },
+}
+
+impl StepPlan {
+    /// Builds the plan: `record_rate_hz = 0` turns the trace off; the steady-state window is the
+    /// last `steady_state_fraction` of the planned duration.
+    pub fn new(
+        dt_s: f64,
+        duration_s: f64,
+        record_rate_hz: f64,
+        steady_state_fraction: f64,
+        convergence_tolerance: f64,
+        level: f64,
+    ) -> Result<Self, StepPlanError> {
+        let n_steps = whole_steps(duration_s, dt_s)
+            .ok_or(StepPlanError::DurationNotMultiple { duration_s, dt_s })?;
+        let record_every = if record_rate_hz == 0.0 {
+            0
+        } else {
+            whole_steps(1.0 / record_rate_hz, dt_s)
+                .filter(|&n| n >= 1)
+                .ok_or(StepPlanError::RecordRateNotMultiple {
+                    rate_hz: record_rate_hz,
+                    dt_s,
+                })?
+        };
+        let ss = ((1.0 - steady_state_fraction) * n_steps as f64).ceil() as u64;
+        Ok(Self {
+            dt_s,
+            n_steps,
+            record_every,
+            steady_state_start_step: ss.min(n_steps),
+            convergence_tolerance,
+            level,
+        })
+    }
+}
+
+/// What a run produced.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunResult {
+    /// How it ended.
+    pub outcome: Outcome,
+    /// A sentence on why, for non-`completed` outcomes.
+    pub outcome_detail: Option<String>,
+    /// Time of the last valid step, s.
+    pub t_end_s: f64,
+    /// Steps integrated.
+    pub steps: u64,
+    /// Measurements delivered to the controller.
+    pub samples: u64,
+    /// Last valid position `[x, y]`, m.
+    pub end_position_m: [f64; 2],
+    /// The metrics.
+    #[serde(flatten)]
+    pub metrics: RunMetrics,
+}
+
+/// Runs one simulation: `field`, `vehicle` from `x0`, `controller` behind `sensor`, for
+/// `plan.n_steps` steps, recording into `sink`. See the crate documentation for the order of a step.
+///
+/// Generic over every part so the loop is monomorphised: no dynamic dispatch in the hot path.
+pub fn simulate<F, V, C, S>(
+    field: &F,
+    vehicle: &V,
+    x0: V::State,
+    controller: &mut C,
+    sensor: &mut Sensor,
+    plan: &StepPlan,
+    sink: &mut S,
+) -> RunResult
+where
+    F: ScalarField + ?Sized,
+    V: Vehicle,
+    C: IsolineController + ?Sized,
+    S: TraceSink + ?Sized,
+{
+    let mut x = x0;
+    let mut metrics = Metrics::new(MetricsConfig {
+        dt_s: plan.dt_s,
+        steady_state_start_step: plan.steady_state_start_step,
+        convergence_tolerance: plan.convergence_tolerance,
+    });
+    let mut omega = 0.0_f64;
+    let mut s_measured: Option<f64> = None;
+    let mut samples = 0u64;
+    let mut outcome = Outcome::Completed;
+    let mut detail = None;
+    let mut last_row: Option<TraceRow> = None;
+    let mut last_recorded_step: Option<u64> = None;
+    let mut last_valid_step = 0u64;
+    let mut prev_pos = vehicle.pose(&x).position;
+    let mut end_pos = prev_pos;
+
+    for k in 0..=plan.n_steps {
+        let t = k as f64 * plan.dt_s;
+        let pose = vehicle.pose(&x);
+        if !pose.is_finite() {
+            outcome = Outcome::Diverged;
+            detail = Some(format!("non-finite vehicle state at t = {t} s"));
+            break;
+        }
+        let Some(s) = field.value(t, pose.position) else {
+            outcome = Outcome::LeftField;
+            detail = Some(format!(
+                "the field has no value at ({:.6}, {:.6}) m, t = {t} s",
+                pose.position.x, pose.position.y
+            ));
+            break;
+        };
+        if k > 0 {
+            metrics.add_path((pose.position - prev_pos).norm());
+        }
+        prev_pos = pose.position;
+        if let Some(m) = sensor.observe(k, t, s) {
+            samples += 1;
+            s_measured = Some(m.value);
+            let w = controller.update(&m);
+            if !w.is_finite() {
+                outcome = Outcome::Diverged;
+                detail = Some(format!("non-finite turn-rate command at t = {t} s"));
+                break;
+            }
+            omega = w;
+        }
+        let eps = s - plan.level;
+        metrics.observe(k, eps, omega);
+        last_valid_step = k;
+        end_pos = pose.position;
+        let row = TraceRow {
+            t_s: t,
+            x_m: pose.position.x,
+            y_m: pose.position.y,
+            heading_rad: pose.heading_rad,
+            s,
+            error: eps,
+            omega_radps: omega,
+            s_measured,
+        };
+        if plan.record_every > 0 && k.is_multiple_of(plan.record_every) {
+            sink.record(&row);
+            last_recorded_step = Some(k);
+        }
+        last_row = Some(row);
+        if k == plan.n_steps {
+            break;
+        }
+        vehicle.step(&mut x, omega, plan.dt_s);
+    }
+    // Always keep the last valid state in the trace.
+    if plan.record_every > 0 && last_recorded_step != Some(last_valid_step) {
+        if let Some(row) = last_row {
+            sink.record(&row);
+        }
+    }
+    RunResult {
+        outcome,
+        outcome_detail: detail,
+        t_end_s: last_valid_step as f64 * plan.dt_s,
+        steps: last_valid_step,
+        samples,
+        end_position_m: [end_pos.x, end_pos.y],
+        metrics: metrics.finish(outcome == Outcome::Completed),
+    }
+}
