@@ -83,7 +83,7 @@ impl DerivativeEstimator {
             DerivativeKind::BackwardDifference => raw,
             DerivativeKind::FilteredDifference { tau_s } => {
                 if self.primed {
-                    let a = libm::exp(-dt / tau_s);
+                    let a = crate::fmath::exp(-dt / tau_s);
                     a * self.estimate + (1.0 - a) * raw
                 } else {
                     self.primed = true;
@@ -104,7 +104,7 @@ impl DerivativeEstimator {
                     0.0
                 };
                 let z1 = self.estimate;
-                let z0_dot = z1 - 1.5 * libm::sqrt(lipschitz) * libm::sqrt(libm::fabs(err)) * sgn;
+                let z0_dot = z1 - 1.5 * crate::fmath::sqrt(lipschitz) * crate::fmath::sqrt(libm::fabs(err)) * sgn;
                 let z1_dot = -1.1 * lipschitz * sgn;
                 self.z0 += dt * z0_dot;
                 z1 + dt * z1_dot

@@ -21,6 +21,7 @@
 pub mod control;
 pub mod estimate;
 pub mod field;
+mod fmath;
 pub mod math;
 pub mod theory;
 pub mod vehicle;

@@ -19,7 +19,7 @@ impl Vec2 {
     }
     /// The unit vector at angle `angle_rad` counter-clockwise from +x.
     pub fn from_angle(angle_rad: f64) -> Self {
-        let (s, c) = libm::sincos(angle_rad);
+        let (s, c) = crate::fmath::sincos(angle_rad);
         Self { x: c, y: s }
     }
     /// Dot product.
@@ -33,7 +33,7 @@ impl Vec2 {
     /// Euclidean norm `sqrt(x^2 + y^2)`. (Not `hypot`: it is several times slower, and its
     /// overflow protection only matters beyond 1e154 m.)
     pub fn norm(self) -> f64 {
-        libm::sqrt(self.x * self.x + self.y * self.y)
+        crate::fmath::sqrt(self.x * self.x + self.y * self.y)
     }
     /// `self` rotated by +90 degrees (counter-clockwise).
     pub fn perp(self) -> Self {
@@ -106,9 +106,11 @@ impl Pose2 {
 /// Wraps an angle to `(-pi, pi]`.
 pub fn wrap_angle(angle_rad: f64) -> f64 {
     use core::f64::consts::{PI, TAU};
-    let mut a = libm::remainder(angle_rad, TAU);
+    let mut a = angle_rad - TAU * crate::fmath::round(angle_rad / TAU);
     if a <= -PI {
         a += TAU;
+    } else if a > PI {
+        a -= TAU;
     }
     a
 }

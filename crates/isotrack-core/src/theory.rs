@@ -10,7 +10,7 @@ pub fn radial_exp_isoline_radius_m(i0: f64, decay_per_m: f64, level: f64) -> Opt
     if !(level > 0.0 && level < i0 && decay_per_m > 0.0) {
         return None;
     }
-    Some(libm::log(i0 / level) / decay_per_m)
+    Some(crate::fmath::ln(i0 / level) / decay_per_m)
 }
 
 /// The orbit the P-like law (`ki = 0`) settles on in a circular field.
@@ -54,7 +54,7 @@ pub fn radial_exp_p_orbit(
     // F(d) - s_d decreases to -s_d, so g tends to c1*tanh(-s_d/c2) < 0 if that beats v/(kp*d).
     // g is strictly decreasing for d > r_d (both terms decrease), so the root is unique.
     let g = |d: f64| {
-        c1 * libm::tanh((i0 * libm::exp(-decay_per_m * d) - level) / c2) + speed_mps / (kp * d)
+        c1 * crate::fmath::tanh((i0 * crate::fmath::exp(-decay_per_m * d) - level) / c2) + speed_mps / (kp * d)
     };
     let mut lo = r_d;
     let mut hi = r_d.max(1e-9);
@@ -80,7 +80,7 @@ pub fn radial_exp_p_orbit(
     let d = 0.5 * (lo + hi);
     Some(CircularOrbit {
         radius_m: d,
-        error: i0 * libm::exp(-decay_per_m * d) - level,
+        error: i0 * crate::fmath::exp(-decay_per_m * d) - level,
     })
 }
 
@@ -151,7 +151,7 @@ mod tests {
         let o = radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 10.0, 0.2, 1.0).unwrap();
         // kp*c1*tanh(eps/c2) = -v/d
         assert_relative_eq!(
-            10.0 * 0.2 * libm::tanh(o.error),
+            10.0 * 0.2 * crate::fmath::tanh(o.error),
             -0.5 / o.radius_m,
             epsilon = 1e-12
         );

@@ -55,6 +55,9 @@ pub(crate) fn whole_steps(duration_s: f64, dt_s: f64) -> Option<u64> {
 #[derive(Clone, Debug)]
 pub struct Sensor {
     every: u64,
+    /// Steps until the next sample (a countdown instead of `k % every`: a 64-bit division per
+    /// step costs more than the rest of the sensor).
+    countdown: u64,
     delay_steps: usize,
     noise_std: f64,
     history: VecDeque<f64>,
@@ -76,6 +79,7 @@ impl Sensor {
         })? as usize;
         Ok(Self {
             every,
+            countdown: 0,
             delay_steps,
             noise_std: cfg.noise_std,
             history: VecDeque::with_capacity(delay_steps + 1),
@@ -88,9 +92,12 @@ impl Sensor {
         self.every
     }
 
-    /// Called at every step `k` with the true value at the vehicle. Returns the measurement on
-    /// sample steps once the delay has filled, `None` otherwise.
-    pub fn observe(&mut self, k: u64, t_s: f64, true_value: f64) -> Option<Measurement> {
+    /// Called at every step `k = 0, 1, 2, ...`, in order and exactly once each, with the step's
+    /// time and the true value at the vehicle. Returns the measurement on sample steps (`k` a
+    /// multiple of the sample period) once the delay has filled, `None` otherwise.
+    pub fn observe(&mut self, t_s: f64, true_value: f64) -> Option<Measurement> {
+        let sample_now = self.countdown == 0;
+        self.countdown = if sample_now { self.every - 1 } else { self.countdown - 1 };
         let delayed = if self.delay_steps == 0 {
             true_value
         } else {
@@ -100,7 +107,7 @@ impl Sensor {
             }
             self.history.pop_front()?
         };
-        if !k.is_multiple_of(self.every) {
+        if !sample_now {
             return None;
         }
         let noise = if self.noise_std > 0.0 {
@@ -131,7 +138,7 @@ mod tests {
         assert_eq!(s.steps_per_sample(), 10);
         let mut got = vec![];
         for k in 0..100u64 {
-            if let Some(m) = s.observe(k, k as f64 * 0.01, k as f64) {
+            if let Some(m) = s.observe(k as f64 * 0.01, k as f64) {
                 got.push((k, m.value));
             }
         }
@@ -167,7 +174,7 @@ mod tests {
         let draw = |seed| {
             let mut s = Sensor::new(cfg, 0.01, seed).unwrap();
             (0..20000u64)
-                .map(|k| s.observe(k, 0.0, 3.0).unwrap().value)
+                .map(|_| s.observe(0.0, 3.0).unwrap().value)
                 .collect::<Vec<_>>()
         };
         let a = draw(7);

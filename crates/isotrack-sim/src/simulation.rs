@@ -156,6 +156,8 @@ where
     let mut last_recorded_step: Option<u64> = None;
     let mut last_valid_step = 0u64;
     let mut prev_pos = vehicle.pose(&x).position;
+    // Countdown to the next recorded step (not `k % record_every`: see `Sensor`).
+    let mut record_countdown = 0u64;
     let mut end_pos = prev_pos;
 
     for k in 0..=plan.n_steps {
@@ -178,7 +180,7 @@ where
             metrics.add_path((pose.position - prev_pos).norm());
         }
         prev_pos = pose.position;
-        if let Some(m) = sensor.observe(k, t, s) {
+        if let Some(m) = sensor.observe(t, s) {
             samples += 1;
             s_measured = Some(m.value);
             let w = controller.update(&m);
@@ -203,9 +205,13 @@ where
             omega_radps: omega,
             s_measured,
         };
-        if plan.record_every > 0 && k.is_multiple_of(plan.record_every) {
-            sink.record(&row);
-            last_recorded_step = Some(k);
+        if plan.record_every > 0 {
+            if record_countdown == 0 {
+                sink.record(&row);
+                last_recorded_step = Some(k);
+                record_countdown = plan.record_every;
+            }
+            record_countdown -= 1;
         }
         last_row = Some(row);
         if k == plan.n_steps {

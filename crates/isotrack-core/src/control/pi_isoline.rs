@@ -131,7 +131,7 @@ impl IsolineController for PiIsoline {
         let p = &self.params;
         let eps = m.value - p.level;
         let eps_dot = self.estimator.update(m.t_s, eps);
-        let e = eps_dot + p.c1 * libm::tanh(eps / p.c2);
+        let e = eps_dot + p.c1 * crate::fmath::tanh(eps / p.c2);
         let dt = match self.last_t_s {
             Some(t0) if m.t_s > t0 => m.t_s - t0,
             _ => 0.0,
@@ -200,7 +200,7 @@ mod tests {
             t_s: 0.0,
             value: 12.0,
         });
-        assert_relative_eq!(w, 10.0 * 0.2 * libm::tanh(2.0), epsilon = 1e-12);
+        assert_relative_eq!(w, 10.0 * 0.2 * crate::fmath::tanh(2.0), epsilon = 1e-12);
     }
 
     #[test]
@@ -216,7 +216,7 @@ mod tests {
         });
         // eps = -0.95, eps' = 0.5, e = 0.5 + 0.2 tanh(-0.95); sigma after first sample = 0
         // (dt = 0), after second = 0.1 e.
-        let e = 0.5 + 0.2 * libm::tanh(-0.95);
+        let e = 0.5 + 0.2 * crate::fmath::tanh(-0.95);
         assert_relative_eq!(w, 10.0 * e + 1.0 * 0.1 * e, epsilon = 1e-12);
     }
 

@@ -1,0 +1,227 @@
+//! The `isotrack` binary end to end: outputs, overrides, and every bad-input path (clear
+//! message, non-zero exit, never a panic).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn isotrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+/// Checks a failure: the exit code, no panic, and the message contains every `needle`.
+fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "stderr: {e}");
+    assert!(!e.contains("panicked"), "panic: {e}");
+    for n in needles {
+        assert!(e.contains(n), "expected `{n}` in: {e}");
+    }
+}
+
+#[test]
+fn default_run_prints_a_summary() {
+    let o = isotrack(&["run"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("outcome     completed"), "{out}");
+    assert!(out.contains("convergence"), "{out}");
+}
+
+#[test]
+fn out_dir_has_trace_summary_and_resolved_scenario() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run1");
+    let o = isotrack(&[
+        "run",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "controller.kp=20",
+        "--set",
+        "sim.duration_s=60",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    // trace.csv: header and 10 Hz rows over 60 s (601 rows), no NaN anywhere.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines = trace.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in ["t_s", "x_m", "y_m", "heading_rad", "s", "error", "omega_radps"] {
+        assert!(header.contains(&col), "missing column {col}: {header:?}");
+    }
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 601);
+    assert!(!trace.to_lowercase().contains("nan"));
+    let t_col = header.iter().position(|c| *c == "t_s").unwrap();
+    let t1: f64 = rows[1][t_col].parse().unwrap();
+    assert!((t1 - 0.1).abs() < 1e-12, "10 Hz recording: second row at {t1}");
+    // error = s - level on every row.
+    let (si, ei) = (
+        header.iter().position(|c| *c == "s").unwrap(),
+        header.iter().position(|c| *c == "error").unwrap(),
+    );
+    for r in &rows {
+        let s: f64 = r[si].parse().unwrap();
+        let e: f64 = r[ei].parse().unwrap();
+        assert!((s - 10.0 - e).abs() < 1e-12);
+    }
+
+    // summary.json: the required keys and the resolved scenario with the override applied.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["outcome"], "completed");
+    for k in [
+        "steady_state_max_abs_error",
+        "steady_state_rms_error",
+        "steady_state_mean_error",
+        "convergence_time_s",
+        "scenario",
+    ] {
+        assert!(summary.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(summary["scenario"]["controller"]["kp"], 20.0);
+    assert_eq!(summary["scenario"]["sim"]["dt_s"], 0.01);
+    assert_eq!(summary["scenario"]["field"]["kind"], "radial_exp");
+
+    // The resolved scenario runs again to the same result.
+    let out2 = dir.path().join("run2");
+    let o = isotrack(&[
+        "run",
+        out.join("scenario.toml").to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(out.join("trace.csv")).unwrap(),
+        std::fs::read(out2.join("trace.csv")).unwrap()
+    );
+}
+
+#[test]
+fn never_converged_is_null_in_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = isotrack(&[
+        "run",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--set",
+        "sim.duration_s=5",
+    ]);
+    assert!(o.status.success());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    assert!(summary["convergence_time_s"].is_null());
+}
+
+#[test]
+fn toml_syntax_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = write(dir.path(), "bad.toml", "[controller]\nkp = = 3\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["bad.toml:2"]);
+}
+
+#[test]
+fn unknown_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = write(dir.path(), "bad.toml", "[sim]\ndt_s = 0.01\ndt_sec = 0.02\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["bad.toml:3", "dt_sec", "sim.dt_sec"]);
+    let f = write(dir.path(), "bad2.toml", "[simulation]\ndt_s = 0.01\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["bad2.toml:1", "simulation"]);
+}
+
+#[test]
+fn invalid_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = write(
+        dir.path(),
+        "bad.toml",
+        "[controller]\nkp = 0\nc2 = -1\n\n[sim]\ndt_s = -0.01\n\n[initial]\nx_m = nan\n",
+    );
+    let o = isotrack(&["run", &f]);
+    assert_fails(
+        &o,
+        65,
+        &[
+            "bad.toml:2:6: `controller.kp`: must be > 0",
+            "bad.toml:3:6: `controller.c2`: must be > 0",
+            "bad.toml:6:8: `sim.dt_s`: must be > 0",
+            "bad.toml:9:7: `initial.x_m`: must be a finite number",
+        ],
+    );
+    let f = write(dir.path(), "ki.toml", "[controller]\nki = -0.5\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["ki.toml:2", "controller.ki", ">= 0"]);
+    let f = write(dir.path(), "ty.toml", "[sim]\nduration_s = \"long\"\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["ty.toml:2", "sim.duration_s"]);
+    let f = write(dir.path(), "step.toml", "[sim]\ndt_s = 0.03\nduration_s = 1.0\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["sim.duration_s", "whole number"]);
+    let f = write(dir.path(), "kind.toml", "[field]\nkind = \"linear_ramp\"\ni0 = 3\n");
+    assert_fails(&isotrack(&["run", &f]), 65, &["kind.toml:3", "field.i0", "does not apply"]);
+}
+
+#[test]
+fn bad_overrides() {
+    assert_fails(
+        &isotrack(&["run", "--set", "controller.kp=-2"]),
+        65,
+        &["--set controller.kp=-2", "must be > 0"],
+    );
+    assert_fails(
+        &isotrack(&["run", "--set", "controller.kd=2"]),
+        65,
+        &["--set controller.kd=2", "kd"],
+    );
+    assert_fails(
+        &isotrack(&["run", "--set", "controller.kp"]),
+        65,
+        &["KEY=VALUE"],
+    );
+    assert_fails(
+        &isotrack(&["run", "--set", "sim.dt_s=fast"]),
+        65,
+        &["--set sim.dt_s=fast"],
+    );
+}
+
+#[test]
+fn missing_file() {
+    assert_fails(
+        &isotrack(&["run", "/nonexistent/scenario.toml"]),
+        66,
+        &["/nonexistent/scenario.toml", "cannot read"],
+    );
+}
+
+#[test]
+fn unwritable_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let blocker = write(dir.path(), "file", "x");
+    assert_fails(
+        &isotrack(&["run", "--out", &format!("{blocker}/sub"), "--set", "sim.duration_s=1"]),
+        73,
+        &["cannot write"],
+    );
+}
+
+#[test]
+fn bad_command_line() {
+    let o = isotrack(&["run", "--frobnicate"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!stderr(&o).contains("panicked"));
+}
