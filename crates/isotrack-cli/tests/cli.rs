@@ -59,7 +59,15 @@ fn out_dir_has_trace_summary_and_resolved_scenario() {
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let mut lines = trace.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    for col in ["t_s", "x_m", "y_m", "heading_rad", "s", "error", "omega_radps"] {
+    for col in [
+        "t_s",
+        "x_m",
+        "y_m",
+        "heading_rad",
+        "s",
+        "error",
+        "omega_radps",
+    ] {
         assert!(header.contains(&col), "missing column {col}: {header:?}");
     }
     let rows: Vec<Vec<String>> = lines
@@ -69,7 +77,10 @@ fn out_dir_has_trace_summary_and_resolved_scenario() {
     assert!(!trace.to_lowercase().contains("nan"));
     let t_col = header.iter().position(|c| *c == "t_s").unwrap();
     let t1: f64 = rows[1][t_col].parse().unwrap();
-    assert!((t1 - 0.1).abs() < 1e-12, "10 Hz recording: second row at {t1}");
+    assert!(
+        (t1 - 0.1).abs() < 1e-12,
+        "10 Hz recording: second row at {t1}"
+    );
     // error = s - level on every row.
     let (si, ei) = (
         header.iter().position(|c| *c == "s").unwrap(),
@@ -140,8 +151,16 @@ fn toml_syntax_error() {
 #[test]
 fn unknown_key() {
     let dir = tempfile::tempdir().unwrap();
-    let f = write(dir.path(), "bad.toml", "[sim]\ndt_s = 0.01\ndt_sec = 0.02\n");
-    assert_fails(&isotrack(&["run", &f]), 65, &["bad.toml:3", "dt_sec", "sim.dt_sec"]);
+    let f = write(
+        dir.path(),
+        "bad.toml",
+        "[sim]\ndt_s = 0.01\ndt_sec = 0.02\n",
+    );
+    assert_fails(
+        &isotrack(&["run", &f]),
+        65,
+        &["bad.toml:3", "dt_sec", "sim.dt_sec"],
+    );
     let f = write(dir.path(), "bad2.toml", "[simulation]\ndt_s = 0.01\n");
     assert_fails(&isotrack(&["run", &f]), 65, &["bad2.toml:1", "simulation"]);
 }
@@ -166,13 +185,37 @@ fn invalid_values() {
         ],
     );
     let f = write(dir.path(), "ki.toml", "[controller]\nki = -0.5\n");
-    assert_fails(&isotrack(&["run", &f]), 65, &["ki.toml:2", "controller.ki", ">= 0"]);
+    assert_fails(
+        &isotrack(&["run", &f]),
+        65,
+        &["ki.toml:2", "controller.ki", ">= 0"],
+    );
     let f = write(dir.path(), "ty.toml", "[sim]\nduration_s = \"long\"\n");
-    assert_fails(&isotrack(&["run", &f]), 65, &["ty.toml:2", "sim.duration_s"]);
-    let f = write(dir.path(), "step.toml", "[sim]\ndt_s = 0.03\nduration_s = 1.0\n");
-    assert_fails(&isotrack(&["run", &f]), 65, &["sim.duration_s", "whole number"]);
-    let f = write(dir.path(), "kind.toml", "[field]\nkind = \"linear_ramp\"\ni0 = 3\n");
-    assert_fails(&isotrack(&["run", &f]), 65, &["kind.toml:3", "field.i0", "does not apply"]);
+    assert_fails(
+        &isotrack(&["run", &f]),
+        65,
+        &["ty.toml:2", "sim.duration_s"],
+    );
+    let f = write(
+        dir.path(),
+        "step.toml",
+        "[sim]\ndt_s = 0.03\nduration_s = 1.0\n",
+    );
+    assert_fails(
+        &isotrack(&["run", &f]),
+        65,
+        &["sim.duration_s", "whole number"],
+    );
+    let f = write(
+        dir.path(),
+        "kind.toml",
+        "[field]\nkind = \"linear_ramp\"\ni0 = 3\n",
+    );
+    assert_fails(
+        &isotrack(&["run", &f]),
+        65,
+        &["kind.toml:3", "field.i0", "does not apply"],
+    );
 }
 
 #[test]
@@ -213,7 +256,13 @@ fn unwritable_output() {
     let dir = tempfile::tempdir().unwrap();
     let blocker = write(dir.path(), "file", "x");
     assert_fails(
-        &isotrack(&["run", "--out", &format!("{blocker}/sub"), "--set", "sim.duration_s=1"]),
+        &isotrack(&[
+            "run",
+            "--out",
+            &format!("{blocker}/sub"),
+            "--set",
+            "sim.duration_s=1",
+        ]),
         73,
         &["cannot write"],
     );

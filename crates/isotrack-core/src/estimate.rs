@@ -104,7 +104,11 @@ impl DerivativeEstimator {
                     0.0
                 };
                 let z1 = self.estimate;
-                let z0_dot = z1 - 1.5 * crate::fmath::sqrt(lipschitz) * crate::fmath::sqrt(libm::fabs(err)) * sgn;
+                let z0_dot = z1
+                    - 1.5
+                        * crate::fmath::sqrt(lipschitz)
+                        * crate::fmath::sqrt(libm::fabs(err))
+                        * sgn;
                 let z1_dot = -1.1 * lipschitz * sgn;
                 self.z0 += dt * z0_dot;
                 z1 + dt * z1_dot

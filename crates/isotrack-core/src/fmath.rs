@@ -26,10 +26,6 @@ mod imp {
         x.round()
     }
     #[inline]
-    pub fn atanh(x: f64) -> f64 {
-        x.atanh()
-    }
-    #[inline]
     pub fn ln(x: f64) -> f64 {
         x.ln()
     }
@@ -56,10 +52,6 @@ mod imp {
     #[inline]
     pub fn round(x: f64) -> f64 {
         libm::round(x)
-    }
-    #[inline]
-    pub fn atanh(x: f64) -> f64 {
-        libm::atanh(x)
     }
     #[inline]
     pub fn ln(x: f64) -> f64 {

@@ -54,7 +54,8 @@ pub fn radial_exp_p_orbit(
     // F(d) - s_d decreases to -s_d, so g tends to c1*tanh(-s_d/c2) < 0 if that beats v/(kp*d).
     // g is strictly decreasing for d > r_d (both terms decrease), so the root is unique.
     let g = |d: f64| {
-        c1 * crate::fmath::tanh((i0 * crate::fmath::exp(-decay_per_m * d) - level) / c2) + speed_mps / (kp * d)
+        c1 * crate::fmath::tanh((i0 * crate::fmath::exp(-decay_per_m * d) - level) / c2)
+            + speed_mps / (kp * d)
     };
     let mut lo = r_d;
     let mut hi = r_d.max(1e-9);

@@ -97,7 +97,11 @@ impl Sensor {
     /// multiple of the sample period) once the delay has filled, `None` otherwise.
     pub fn observe(&mut self, t_s: f64, true_value: f64) -> Option<Measurement> {
         let sample_now = self.countdown == 0;
-        self.countdown = if sample_now { self.every - 1 } else { self.countdown - 1 };
+        self.countdown = if sample_now {
+            self.every - 1
+        } else {
+            self.countdown - 1
+        };
         let delayed = if self.delay_steps == 0 {
             true_value
         } else {
