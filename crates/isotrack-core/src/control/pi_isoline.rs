@@ -274,3 +274,59 @@ mod tests {
         assert_eq!(c.sigma(), 0.0);
     }
 }
+
+#[cfg(test)]
+mod proptests {
+    use super::*;
+    use crate::estimate::DerivativeKind;
+    use proptest::prelude::*;
+
+    fn any_anti_windup() -> impl Strategy<Value = AntiWindup> {
+        prop_oneof![
+            Just(AntiWindup::None),
+            (1e-3..10.0f64).prop_map(|l| AntiWindup::Clamp { limit_radps: l }),
+            (1e-3..10.0f64).prop_map(|b| AntiWindup::Conditional { band: b }),
+            (1e-2..10.0f64).prop_map(|t| AntiWindup::BackCalculation { tracking_time_s: t }),
+        ]
+    }
+
+    fn any_derivative() -> impl Strategy<Value = DerivativeKind> {
+        prop_oneof![
+            Just(DerivativeKind::BackwardDifference),
+            (1e-3..10.0f64).prop_map(|t| DerivativeKind::FilteredDifference { tau_s: t }),
+            (1e-3..100.0f64).prop_map(|l| DerivativeKind::Levant { lipschitz: l }),
+        ]
+    }
+
+    proptest! {
+        /// For any valid gains and any finite measurement sequence the command is finite, and
+        /// within the turn-rate limit when there is one.
+        #[test]
+        fn command_is_finite_and_limited(
+            kp in 1e-3..1e3f64, ki in 0.0..1e2f64, c1 in 1e-3..1e2f64, c2 in 1e-3..1e2f64,
+            level in -1e6..1e6f64,
+            limit in proptest::option::of(1e-3..10.0f64),
+            left in any::<bool>(),
+            aw in any_anti_windup(), d in any_derivative(),
+            dt in 1e-3..2.0f64,
+            values in proptest::collection::vec(-1e9..1e9f64, 1..200),
+        ) {
+            let mut c = PiIsoline::new(PiIsolineParams {
+                level, kp, ki, c1, c2,
+                output: OutputStage {
+                    higher_side: if left { HigherSide::Left } else { HigherSide::Right },
+                    max_turn_rate_radps: limit,
+                },
+                anti_windup: aw,
+                derivative: d,
+            });
+            for (k, v) in values.iter().enumerate() {
+                let w = c.update(&Measurement { t_s: k as f64 * dt, value: *v });
+                prop_assert!(w.is_finite(), "omega = {w}");
+                if let Some(l) = limit {
+                    prop_assert!(w.abs() <= l, "|{w}| > {l}");
+                }
+            }
+        }
+    }
+}
