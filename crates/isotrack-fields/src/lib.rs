@@ -6,9 +6,12 @@
 //!   [`RadialExp`], a sum of anisotropic Gaussian plumes [`GaussianPlumes`] (a PM2.5-like
 //!   multi-source map with non-circular isolines), and a [`LinearRamp`]; [`AnalyticField`] wraps
 //!   them with an optional rectangular domain outside which the field has no value.
+//! * [`grid`]: regular grids ([`grid::Grid2`]) with bilinear or C1 bicubic interpolation and
+//!   analytic derivatives ([`grid::GridField`]).
 #![deny(missing_docs)]
 
 pub mod analytic;
+pub mod grid;
 
 pub use analytic::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 pub use isotrack_core::{FieldDerivatives, ScalarField};

@@ -1,0 +1,229 @@
+//! Regular grids of field values and their interpolation.
+//!
+//! Layout (the same as `shared/data`): `values[iy*nx + ix]`, row `iy = 0` is the southernmost,
+//! column `ix = 0` the westernmost; node `(ix, iy)` sits at
+//! `(origin_m.x + ix*dx, origin_m.y + iy*dy)` (cell centres). `NaN` marks no-data.
+
+mod interp;
+
+pub use interp::{GridField, Interpolation};
+
+use isotrack_core::math::Vec2;
+
+/// Why a grid cannot be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GridError {
+    /// Fewer than 2 x 2 nodes.
+    #[error("the grid has {nx} x {ny} nodes; at least 2 x 2 are needed")]
+    TooSmall {
+        /// Columns.
+        nx: usize,
+        /// Rows.
+        ny: usize,
+    },
+    /// `values.len() != nx*ny`.
+    #[error("{len} values do not fill {nx} x {ny} nodes")]
+    SizeMismatch {
+        /// Values given.
+        len: usize,
+        /// Columns.
+        nx: usize,
+        /// Rows.
+        ny: usize,
+    },
+    /// Non-positive or non-finite spacing, or non-finite origin.
+    #[error("invalid georeference: spacing {spacing_m:?} m (must be > 0), origin {origin_m:?} m")]
+    BadGeoreference {
+        /// Spacing.
+        spacing_m: [f64; 2],
+        /// Origin.
+        origin_m: [f64; 2],
+    },
+    /// Every value is no-data.
+    #[error("every value is NaN / no-data")]
+    AllNoData,
+    /// A value is infinite.
+    #[error("infinite value at column {ix}, row {iy}")]
+    Infinite {
+        /// Column.
+        ix: usize,
+        /// Row.
+        iy: usize,
+    },
+}
+
+/// A regular 2-D grid of values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid2 {
+    nx: usize,
+    ny: usize,
+    origin_m: Vec2,
+    spacing_m: [f64; 2],
+    values: Vec<f64>,
+}
+
+impl Grid2 {
+    /// A grid of `nx` columns and `ny` rows, row-major from the south-west node.
+    pub fn new(
+        nx: usize,
+        ny: usize,
+        origin_m: Vec2,
+        spacing_m: [f64; 2],
+        values: Vec<f64>,
+    ) -> Result<Self, GridError> {
+        if nx < 2 || ny < 2 {
+            return Err(GridError::TooSmall { nx, ny });
+        }
+        if values.len() != nx * ny {
+            return Err(GridError::SizeMismatch {
+                len: values.len(),
+                nx,
+                ny,
+            });
+        }
+        if !(spacing_m.iter().all(|s| s.is_finite() && *s > 0.0) && origin_m.is_finite()) {
+            return Err(GridError::BadGeoreference {
+                spacing_m,
+                origin_m: [origin_m.x, origin_m.y],
+            });
+        }
+        if let Some(i) = values.iter().position(|v| v.is_infinite()) {
+            return Err(GridError::Infinite {
+                ix: i % nx,
+                iy: i / nx,
+            });
+        }
+        if values.iter().all(|v| v.is_nan()) {
+            return Err(GridError::AllNoData);
+        }
+        Ok(Self {
+            nx,
+            ny,
+            origin_m,
+            spacing_m,
+            values,
+        })
+    }
+
+    /// A grid sampled from a function at the nodes (tests, station interpolation).
+    pub fn from_fn(
+        nx: usize,
+        ny: usize,
+        origin_m: Vec2,
+        spacing_m: [f64; 2],
+        f: impl Fn(Vec2) -> f64,
+    ) -> Result<Self, GridError> {
+        let mut values = Vec::with_capacity(nx * ny);
+        for iy in 0..ny {
+            for ix in 0..nx {
+                values.push(f(Vec2::new(
+                    origin_m.x + ix as f64 * spacing_m[0],
+                    origin_m.y + iy as f64 * spacing_m[1],
+                )));
+            }
+        }
+        Self::new(nx, ny, origin_m, spacing_m, values)
+    }
+
+    /// Columns.
+    pub fn nx(&self) -> usize {
+        self.nx
+    }
+    /// Rows.
+    pub fn ny(&self) -> usize {
+        self.ny
+    }
+    /// Position of node (0, 0), m.
+    pub fn origin_m(&self) -> Vec2 {
+        self.origin_m
+    }
+    /// Node spacing `[dx, dy]`, m.
+    pub fn spacing_m(&self) -> [f64; 2] {
+        self.spacing_m
+    }
+    /// The values, row-major from the south-west node.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+    /// The value at node `(ix, iy)` (`NaN` for no-data).
+    #[inline]
+    pub fn at(&self, ix: usize, iy: usize) -> f64 {
+        self.values[iy * self.nx + ix]
+    }
+    /// Position of node `(ix, iy)`, m.
+    pub fn node_m(&self, ix: usize, iy: usize) -> Vec2 {
+        Vec2::new(
+            self.origin_m.x + ix as f64 * self.spacing_m[0],
+            self.origin_m.y + iy as f64 * self.spacing_m[1],
+        )
+    }
+    /// `[x_min, x_max, y_min, y_max]` of the nodes, m.
+    pub fn extent_m(&self) -> [f64; 4] {
+        let far = self.node_m(self.nx - 1, self.ny - 1);
+        [self.origin_m.x, far.x, self.origin_m.y, far.y]
+    }
+    /// Smallest and largest value, ignoring no-data.
+    pub fn value_range(&self) -> (f64, f64) {
+        self.values
+            .iter()
+            .filter(|v| !v.is_nan())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(*v), hi.max(*v))
+            })
+    }
+    /// Count of no-data nodes.
+    pub fn nodata_count(&self) -> usize {
+        self.values.iter().filter(|v| v.is_nan()).count()
+    }
+    /// Replaces the georeference.
+    pub fn with_georeference(
+        mut self,
+        origin_m: Vec2,
+        spacing_m: [f64; 2],
+    ) -> Result<Self, GridError> {
+        if !(spacing_m.iter().all(|s| s.is_finite() && *s > 0.0) && origin_m.is_finite()) {
+            return Err(GridError::BadGeoreference {
+                spacing_m,
+                origin_m: [origin_m.x, origin_m.y],
+            });
+        }
+        self.origin_m = origin_m;
+        self.spacing_m = spacing_m;
+        Ok(self)
+    }
+    /// Applies `f` to every value (no-data stays no-data); a non-finite result becomes no-data.
+    pub fn map_values(mut self, f: impl Fn(f64) -> f64) -> Result<Self, GridError> {
+        for v in &mut self.values {
+            if !v.is_nan() {
+                let w = f(*v);
+                *v = if w.is_finite() { w } else { f64::NAN };
+            }
+        }
+        if self.values.iter().all(|v| v.is_nan()) {
+            return Err(GridError::AllNoData);
+        }
+        Ok(self)
+    }
+    /// The sub-grid of columns `ix0..=ix1` and rows `iy0..=iy1` (node positions unchanged).
+    pub fn crop(&self, ix0: usize, ix1: usize, iy0: usize, iy1: usize) -> Result<Self, GridError> {
+        let ix1 = ix1.min(self.nx - 1);
+        let iy1 = iy1.min(self.ny - 1);
+        if ix0 >= ix1 || iy0 >= iy1 {
+            return Err(GridError::TooSmall {
+                nx: ix1.saturating_sub(ix0) + 1,
+                ny: iy1.saturating_sub(iy0) + 1,
+            });
+        }
+        let mut values = Vec::with_capacity((ix1 - ix0 + 1) * (iy1 - iy0 + 1));
+        for iy in iy0..=iy1 {
+            values.extend_from_slice(&self.values[iy * self.nx + ix0..=iy * self.nx + ix1]);
+        }
+        Self::new(
+            ix1 - ix0 + 1,
+            iy1 - iy0 + 1,
+            self.node_m(ix0, iy0),
+            self.spacing_m,
+            values,
+        )
+    }
+}
