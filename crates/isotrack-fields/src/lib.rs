@@ -11,7 +11,9 @@
 #![deny(missing_docs)]
 
 pub mod analytic;
+pub mod georef;
 pub mod grid;
+pub mod io;
 
 pub use analytic::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 pub use isotrack_core::{FieldDerivatives, ScalarField};

@@ -1,0 +1,55 @@
+//! CSV grids (the `shared/data` layout): no header, one row per line, row 0 = south.
+
+use super::{plain_grid, FilePosition, LoadError, LoadedGrid};
+use std::path::Path;
+
+pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(bytes);
+    let mut values = Vec::new();
+    let mut nx: Option<usize> = None;
+    let mut ny = 0usize;
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize);
+            LoadError::new(
+                path,
+                line.map(|l| FilePosition::Line(l, None)),
+                format!("{e}"),
+            )
+        })?;
+        let line = rec.position().map_or(ny + 1, |p| p.line() as usize);
+        if rec.len() == 1 && rec[0].is_empty() {
+            continue; // blank line
+        }
+        match nx {
+            None => nx = Some(rec.len()),
+            Some(n) if n != rec.len() => {
+                return Err(LoadError::new(
+                    path,
+                    Some(FilePosition::Line(line, None)),
+                    format!("ragged row: {} values, the first row has {n}", rec.len()),
+                ))
+            }
+            _ => {}
+        }
+        for (c, tok) in rec.iter().enumerate() {
+            let v: f64 = tok.parse().map_err(|_| {
+                LoadError::new(
+                    path,
+                    Some(FilePosition::Line(line, Some(c + 1))),
+                    format!("`{tok}` is not a number"),
+                )
+            })?;
+            values.push(v);
+        }
+        ny += 1;
+    }
+    let Some(nx) = nx else {
+        return Err(LoadError::new(path, None, "empty file: no grid rows"));
+    };
+    plain_grid(path, nx, ny, values)
+}

@@ -1,0 +1,152 @@
+//! GeoTIFF grids through the pure-Rust `tiff` crate; the GeoTIFF tags (`ModelPixelScale`,
+//! `ModelTiepoint`, `GeoKeyDirectory`, GDAL's no-data) are plain TIFF tags read here.
+
+use super::{flip_rows, FilePosition, LoadError, LoadedGrid};
+use crate::georef::{lonlat_spacing_m, Georeference};
+use crate::grid::Grid2;
+use isotrack_core::Vec2;
+use std::io::Cursor;
+use std::path::Path;
+use tiff::decoder::{Decoder, DecodingResult};
+use tiff::tags::Tag;
+use tiff::ColorType;
+
+/// GeoKey ids (GeoTIFF 1.1, OGC 19-008r4).
+const GT_MODEL_TYPE: u16 = 1024;
+const GT_RASTER_TYPE: u16 = 1025;
+const GEOGRAPHIC_TYPE: u16 = 2048;
+const PROJECTED_CS_TYPE: u16 = 3072;
+
+pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
+    let len = bytes.len() as u64;
+    let tiff_err = |e: tiff::TiffError| {
+        let truncated = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
+        if truncated {
+            LoadError::new(
+                path,
+                Some(FilePosition::Offset(len)),
+                format!("truncated TIFF: the file ends at byte {len} before its data does ({e})"),
+            )
+        } else {
+            LoadError::new(path, None, format!("invalid TIFF: {e}"))
+        }
+    };
+    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(tiff_err)?;
+    let (w, h) = dec.dimensions().map_err(tiff_err)?;
+    let (nx, ny) = (w as usize, h as usize);
+    match dec.colortype().map_err(tiff_err)? {
+        ColorType::Gray(_) => {}
+        other => {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!("need one band (grey), found {other:?}"),
+            ))
+        }
+    }
+    let nodata: Option<f64> = dec
+        .find_tag(Tag::GdalNodata)
+        .map_err(tiff_err)?
+        .and_then(|v| v.into_string().ok())
+        .and_then(|s| s.trim_matches(char::from(0)).trim().parse().ok());
+    let scale = dec
+        .find_tag(Tag::ModelPixelScaleTag)
+        .map_err(tiff_err)?
+        .map(|v| v.into_f64_vec())
+        .transpose()
+        .map_err(tiff_err)?;
+    let tie = dec
+        .find_tag(Tag::ModelTiepointTag)
+        .map_err(tiff_err)?
+        .map(|v| v.into_f64_vec())
+        .transpose()
+        .map_err(tiff_err)?;
+    let keys = dec
+        .find_tag(Tag::GeoKeyDirectoryTag)
+        .map_err(tiff_err)?
+        .map(|v| v.into_u16_vec())
+        .transpose()
+        .map_err(tiff_err)?
+        .unwrap_or_default();
+    let geokey = |id: u16| -> Option<u16> {
+        // Header of 4 shorts, then entries (KeyID, TIFFTagLocation, Count, Value); only keys
+        // stored inline (location 0) matter here.
+        keys.get(4..)?
+            .chunks_exact(4)
+            .find(|e| e[0] == id && e[1] == 0)
+            .map(|e| e[3])
+    };
+    let img = dec.read_image().map_err(tiff_err)?;
+    let mut values: Vec<f64> = match img {
+        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U64(v) => v.into_iter().map(|x| x as f64).collect(),
+        DecodingResult::I8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I64(v) => v.into_iter().map(|x| x as f64).collect(),
+        DecodingResult::F32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::F64(v) => v,
+        DecodingResult::F16(v) => v.into_iter().map(f64::from).collect(),
+    };
+    if values.len() != nx * ny {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "{} samples for {nx} x {ny} pixels (more than one band?)",
+                values.len()
+            ),
+        ));
+    }
+    if let Some(nd) = nodata {
+        for v in &mut values {
+            if *v == nd {
+                *v = f64::NAN;
+            }
+        }
+    }
+    flip_rows(&mut values, nx, ny);
+    let (origin, spacing, georeference) = match (scale, tie) {
+        (Some(s), Some(t)) if s.len() >= 2 && t.len() >= 6 => {
+            let (sx, sy) = (s[0], s[1]);
+            let (ti, tj, tx, ty) = (t[0], t[1], t[3], t[4]);
+            // PixelIsArea (the default): the tie point is a pixel's corner; PixelIsPoint: its
+            // centre.
+            let c = if geokey(GT_RASTER_TYPE) == Some(2) {
+                0.0
+            } else {
+                0.5
+            };
+            // After the flip, node (0, 0) is the south-west pixel: column 0, row h-1.
+            let x0 = tx + (0.0 - ti + c) * sx;
+            let y0 = ty - ((ny - 1) as f64 - tj + c) * sy;
+            if geokey(GT_MODEL_TYPE) == Some(2) {
+                let ref_lat = y0 + 0.5 * (ny - 1) as f64 * sy;
+                (
+                    Vec2::default(),
+                    lonlat_spacing_m(sx, sy, ref_lat),
+                    Georeference::LonLat {
+                        lon0_deg: x0,
+                        lat0_deg: y0,
+                        dlon_deg: sx,
+                        dlat_deg: sy,
+                        ref_lat_deg: ref_lat,
+                    },
+                )
+            } else {
+                (
+                    Vec2::new(x0, y0),
+                    [sx, sy],
+                    Georeference::Metres {
+                        epsg: geokey(PROJECTED_CS_TYPE).or(geokey(GEOGRAPHIC_TYPE)),
+                    },
+                )
+            }
+        }
+        _ => (Vec2::default(), [1.0, 1.0], Georeference::None),
+    };
+    let grid = Grid2::new(nx, ny, origin, spacing, values).map_err(|e| LoadError::grid(path, e))?;
+    Ok(LoadedGrid { grid, georeference })
+}

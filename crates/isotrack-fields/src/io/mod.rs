@@ -1,0 +1,155 @@
+//! Grid loaders: CSV, NumPy `.npy`, ESRI ASCII grid, GeoTIFF.
+//!
+//! Every loader returns a [`LoadedGrid`] oriented as in `shared/data` (row 0 south, column 0
+//! west) with its native georeference converted to local metres ([`crate::georef`]), and every
+//! failure a [`LoadError`] naming the file and the line or byte offset.
+
+mod asc;
+mod csv_grid;
+mod geotiff;
+mod npy;
+
+use crate::georef::Georeference;
+use crate::grid::{Grid2, GridError};
+use std::fmt;
+use std::path::Path;
+
+/// A grid file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridFormat {
+    /// Comma-separated values, no header, one grid row per line, row 0 = south; `NaN` = no-data.
+    Csv,
+    /// NumPy `.npy`, 2-D, shape `(rows, cols)`, row 0 = south; float64/float32/integer dtypes.
+    Npy,
+    /// ESRI ASCII grid (`.asc`): header `ncols nrows xllcorner|xllcenter yllcorner|yllcenter
+    /// cellsize [NODATA_value]`, rows north to south.
+    Asc,
+    /// GeoTIFF: one band, any integer or float sample type; `ModelPixelScale`/`ModelTiepoint`
+    /// georeference, geographic (degrees) or projected (metres); GDAL no-data tag honoured.
+    GeoTiff,
+}
+
+impl GridFormat {
+    /// The format of a file name's extension (`csv`, `npy`, `asc`, `tif`/`tiff`).
+    pub fn from_extension(path: &Path) -> Option<Self> {
+        match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+            "csv" | "txt" => Some(Self::Csv),
+            "npy" => Some(Self::Npy),
+            "asc" => Some(Self::Asc),
+            "tif" | "tiff" => Some(Self::GeoTiff),
+            _ => None,
+        }
+    }
+}
+
+/// Where in a file a problem is.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FilePosition {
+    /// 1-based line (text formats), with an optional 1-based field/column.
+    Line(usize, Option<usize>),
+    /// Byte offset (binary formats).
+    Offset(u64),
+}
+
+/// A grid file that cannot be used.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LoadError {
+    /// The file.
+    pub path: String,
+    /// Where in it, if known.
+    pub position: Option<FilePosition>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.position {
+            Some(FilePosition::Line(l, Some(c))) => {
+                write!(f, "{}:{l}: field {c}: {}", self.path, self.message)
+            }
+            Some(FilePosition::Line(l, None)) => write!(f, "{}:{l}: {}", self.path, self.message),
+            Some(FilePosition::Offset(o)) => {
+                write!(f, "{} (byte offset {o}): {}", self.path, self.message)
+            }
+            None => write!(f, "{}: {}", self.path, self.message),
+        }
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+impl LoadError {
+    pub(crate) fn new(
+        path: &Path,
+        position: Option<FilePosition>,
+        message: impl Into<String>,
+    ) -> Self {
+        Self {
+            path: path.display().to_string(),
+            position,
+            message: message.into(),
+        }
+    }
+    pub(crate) fn grid(path: &Path, e: GridError) -> Self {
+        Self::new(path, None, e.to_string())
+    }
+}
+
+/// A grid as read, with the georeference the file carried.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedGrid {
+    /// The values, georeferenced in local metres (1 m spacing at the origin when the file has
+    /// no georeference).
+    pub grid: Grid2,
+    /// What the file said about its coordinates.
+    pub georeference: Georeference,
+}
+
+/// Loads a grid file; `format` is inferred from the extension when `None`.
+pub fn load_grid(path: &Path, format: Option<GridFormat>) -> Result<LoadedGrid, LoadError> {
+    let format = match format.or_else(|| GridFormat::from_extension(path)) {
+        Some(f) => f,
+        None => {
+            return Err(LoadError::new(
+                path,
+                None,
+                "cannot tell the format from the extension; give it (csv, npy, asc, geotiff)",
+            ))
+        }
+    };
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    match format {
+        GridFormat::Csv => csv_grid::parse(path, &bytes),
+        GridFormat::Npy => npy::parse(path, &bytes),
+        GridFormat::Asc => asc::parse(path, &bytes),
+        GridFormat::GeoTiff => geotiff::parse(path, &bytes),
+    }
+}
+
+/// Builds a grid with no georeference (1 m spacing, origin at 0).
+pub(crate) fn plain_grid(
+    path: &Path,
+    nx: usize,
+    ny: usize,
+    values: Vec<f64>,
+) -> Result<LoadedGrid, LoadError> {
+    let grid = Grid2::new(nx, ny, isotrack_core::Vec2::default(), [1.0, 1.0], values)
+        .map_err(|e| LoadError::grid(path, e))?;
+    Ok(LoadedGrid {
+        grid,
+        georeference: Georeference::None,
+    })
+}
+
+/// Flips rows stored north-to-south into the south-to-north layout.
+pub(crate) fn flip_rows(values: &mut [f64], nx: usize, ny: usize) {
+    for iy in 0..ny / 2 {
+        let (a, b) = values.split_at_mut((ny - 1 - iy) * nx);
+        a[iy * nx..iy * nx + nx].swap_with_slice(&mut b[..nx]);
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,275 @@
+//! Loader tests: every format reads the same grid; every malformed file is a clear error naming
+//! the file and the line or offset.
+
+use super::*;
+use std::io::Write;
+
+fn tmp(name: &str, bytes: &[u8]) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join(name);
+    std::fs::File::create(&p).unwrap().write_all(bytes).unwrap();
+    (dir, p)
+}
+
+fn err_of(name: &str, bytes: &[u8]) -> LoadError {
+    let (_d, p) = tmp(name, bytes);
+    load_grid(&p, None).expect_err("should fail")
+}
+
+/// A 3 x 4 grid (3 columns, 4 rows), row 0 south: value = 10*row + col.
+fn expected() -> Vec<f64> {
+    (0..4)
+        .flat_map(|r| (0..3).map(move |c| (10 * r + c) as f64))
+        .collect()
+}
+
+#[test]
+fn csv_reads_rows_south_first() {
+    let text = "0,1,2\n10,11,12\n20,21,22\n30,31,32\n";
+    let (_d, p) = tmp("g.csv", text.as_bytes());
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!((g.grid.nx(), g.grid.ny()), (3, 4));
+    assert_eq!(g.grid.values(), expected().as_slice());
+    assert_eq!(g.georeference, Georeference::None);
+}
+
+#[test]
+fn csv_nan_is_nodata() {
+    let (_d, p) = tmp("g.csv", b"1,NaN\n3,4\n");
+    let g = load_grid(&p, None).unwrap();
+    assert!(g.grid.at(1, 0).is_nan());
+    assert_eq!(g.grid.nodata_count(), 1);
+}
+
+#[test]
+fn csv_errors_name_file_and_line() {
+    let e = err_of("ragged.csv", b"1,2,3\n4,5\n");
+    assert_eq!(e.position, Some(FilePosition::Line(2, None)));
+    assert!(e.to_string().contains("ragged.csv:2"), "{e}");
+    assert!(e.message.contains("ragged"), "{e}");
+    let e = err_of("token.csv", b"1,2\n3,abc\n");
+    assert_eq!(e.position, Some(FilePosition::Line(2, Some(2))));
+    assert!(e.message.contains("abc"), "{e}");
+    let e = err_of("empty.csv", b"");
+    assert!(e.message.contains("empty"), "{e}");
+    let e = err_of("allnan.csv", b"NaN,NaN\nNaN,NaN\n");
+    assert!(e.message.contains("NaN"), "{e}");
+    let e = err_of("one.csv", b"1,2,3\n");
+    assert!(e.message.contains("2 x 2"), "{e}");
+}
+
+fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+#[test]
+fn npy_reads_float64_float32_int_and_fortran_order() {
+    let f64s: Vec<u8> = expected().iter().flat_map(|v| v.to_le_bytes()).collect();
+    let (_d, p) = tmp("g.npy", &npy_bytes("<f8", "(4, 3)", false, &f64s));
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        expected().as_slice()
+    );
+
+    let f32s: Vec<u8> = expected()
+        .iter()
+        .flat_map(|v| (*v as f32).to_le_bytes())
+        .collect();
+    let (_d, p) = tmp("g.npy", &npy_bytes("<f4", "(4, 3)", false, &f32s));
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        expected().as_slice()
+    );
+
+    let i16s: Vec<u8> = expected()
+        .iter()
+        .flat_map(|v| (*v as i16).to_le_bytes())
+        .collect();
+    let (_d, p) = tmp("g.npy", &npy_bytes("<i2", "(4, 3)", false, &i16s));
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        expected().as_slice()
+    );
+
+    // Fortran order: column-major storage of the same array.
+    let e = expected();
+    let fort: Vec<u8> = (0..3)
+        .flat_map(|c| (0..4).map(move |r| (r, c)))
+        .flat_map(|(r, c)| e[r * 3 + c].to_le_bytes())
+        .collect();
+    let (_d, p) = tmp("g.npy", &npy_bytes("<f8", "(4, 3)", true, &fort));
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        expected().as_slice()
+    );
+}
+
+#[test]
+fn npy_errors() {
+    let e = err_of("u.npy", &npy_bytes("<U3", "(2, 2)", false, &[0u8; 48]));
+    assert!(e.message.contains("dtype"), "{e}");
+    let e = err_of("c.npy", &npy_bytes("<c16", "(2, 2)", false, &[0u8; 64]));
+    assert!(e.message.contains("dtype"), "{e}");
+    let e = err_of("s.npy", &npy_bytes("<f8", "(12,)", false, &[0u8; 96]));
+    assert!(e.message.contains("2-D"), "{e}");
+    let e = err_of("t.npy", &npy_bytes("<f8", "(4, 3)", false, &[0u8; 40]));
+    assert!(e.message.contains("truncated"), "{e}");
+    let e = err_of("junk.npy", b"not an npy file at all");
+    assert!(e.to_string().contains("junk.npy"), "{e}");
+}
+
+#[test]
+fn asc_reads_north_first_with_nodata_and_corner_origin() {
+    let text = "ncols 3\nnrows 4\nxllcorner 100\nyllcorner 200\ncellsize 10\nNODATA_value -9999\n\
+                30 31 32\n20 21 -9999\n10 11 12\n0 1 2\n";
+    let (_d, p) = tmp("g.asc", text.as_bytes());
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!(g.grid.at(2, 0), 2.0);
+    assert!(g.grid.at(2, 2).is_nan());
+    assert_eq!(g.grid.at(0, 3), 30.0);
+    assert_eq!(g.grid.origin_m(), isotrack_core::Vec2::new(105.0, 205.0));
+    assert_eq!(g.grid.spacing_m(), [10.0, 10.0]);
+}
+
+#[test]
+fn asc_errors() {
+    let e = err_of(
+        "a.asc",
+        b"ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 x 6\n",
+    );
+    assert_eq!(e.position, Some(FilePosition::Line(7, Some(2))));
+    let e = err_of(
+        "b.asc",
+        b"ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5\n",
+    );
+    assert!(e.message.contains("truncated"), "{e}");
+    let e = err_of(
+        "c.asc",
+        b"ncols 3\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3\n4 5 6\n",
+    );
+    assert!(e.message.contains("yllcorner"), "{e}");
+    let e = err_of("d.asc", b"ncols three\n");
+    assert_eq!(e.position, Some(FilePosition::Line(1, None)));
+}
+
+/// Writes a one-band float GeoTIFF with the tags GDAL writes.
+fn geotiff_bytes(geographic: bool, nodata: Option<&str>) -> Vec<u8> {
+    use tiff::encoder::{colortype::Gray64Float, TiffEncoder};
+    let mut buf = std::io::Cursor::new(Vec::new());
+    {
+        let mut enc = TiffEncoder::new(&mut buf).unwrap();
+        let mut img = enc.new_image::<Gray64Float>(3, 4).unwrap();
+        // TIFF rows are north first.
+        let e = expected();
+        let north_first: Vec<f64> = (0..4)
+            .rev()
+            .flat_map(|r| e[r * 3..r * 3 + 3].to_vec())
+            .collect();
+        let (sx, sy, tx, ty) = if geographic {
+            (0.5, 0.25, 10.0, 51.0)
+        } else {
+            (30.0, 30.0, 500_000.0, 5_000_120.0)
+        };
+        img.encoder()
+            .write_tag(Tag::ModelPixelScaleTag, &[sx, sy, 0.0][..])
+            .unwrap();
+        img.encoder()
+            .write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, tx, ty, 0.0][..])
+            .unwrap();
+        let keys: Vec<u16> = if geographic {
+            vec![1, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326]
+        } else {
+            vec![1, 1, 0, 2, 1024, 0, 1, 1, 3072, 0, 1, 32632]
+        };
+        img.encoder()
+            .write_tag(Tag::GeoKeyDirectoryTag, &keys[..])
+            .unwrap();
+        if let Some(nd) = nodata {
+            img.encoder().write_tag(Tag::GdalNodata, nd).unwrap();
+        }
+        img.write_data(&north_first).unwrap();
+    }
+    buf.into_inner()
+}
+
+use tiff::tags::Tag;
+
+#[test]
+fn geotiff_projected_reads_georeference() {
+    let (_d, p) = tmp("g.tif", &geotiff_bytes(false, Some("11")));
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!(g.georeference, Georeference::Metres { epsg: Some(32632) });
+    assert_eq!(g.grid.spacing_m(), [30.0, 30.0]);
+    // Pixel-is-area: tie point at the NW corner; SW pixel centre = (tx + 15, ty - 4*30 + 15).
+    assert_eq!(
+        g.grid.origin_m(),
+        isotrack_core::Vec2::new(500_015.0, 5_000_015.0)
+    );
+    assert_eq!(g.grid.at(2, 3), 32.0);
+    assert!(g.grid.at(1, 1).is_nan(), "GDAL no-data 11");
+}
+
+#[test]
+fn geotiff_geographic_is_projected_to_metres() {
+    let (_d, p) = tmp("g.tiff", &geotiff_bytes(true, None));
+    let g = load_grid(&p, None).unwrap();
+    let Georeference::LonLat {
+        lon0_deg, lat0_deg, ..
+    } = g.georeference
+    else {
+        panic!("{:?}", g.georeference)
+    };
+    assert!((lon0_deg - 10.25).abs() < 1e-12 && (lat0_deg - 50.125).abs() < 1e-12);
+    let [dx, dy] = g.grid.spacing_m();
+    // 0.25 degrees of latitude = 27.8 km; 0.5 degrees of longitude at 50.5 N = 35.4 km.
+    assert!((dy - 27_798.77).abs() < 1.0, "{dy}");
+    assert!(
+        (dx - 0.5 * 111_195.08 * 50.5f64.to_radians().cos()).abs() < 1.0,
+        "{dx}"
+    );
+}
+
+#[test]
+fn geotiff_truncated_and_garbage() {
+    let full = geotiff_bytes(false, None);
+    let e = err_of("t.tif", &full[..full.len() - 40]);
+    assert!(e.to_string().contains("t.tif"), "{e}");
+    assert!(
+        e.message.contains("truncated") || e.message.contains("invalid"),
+        "{e}"
+    );
+    let e = err_of("h.tif", &full[..6]);
+    assert!(e.to_string().contains("h.tif"), "{e}");
+    let e = err_of("z.tif", b"II*\x00garbage garbage garbage");
+    assert!(e.to_string().contains("z.tif"), "{e}");
+}
+
+#[test]
+fn unknown_extension_and_missing_file() {
+    let e = err_of("g.xyz", b"1,2\n3,4\n");
+    assert!(e.message.contains("format"), "{e}");
+    let e = load_grid(Path::new("/nonexistent/g.csv"), None).unwrap_err();
+    assert!(e.message.contains("cannot read"), "{e}");
+}
+
+#[test]
+fn shared_data_csv_and_npy_agree() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/volcano");
+    let a = load_grid(&Path::new(dir).join("volcano.csv"), None).unwrap();
+    let b = load_grid(&Path::new(dir).join("volcano.npy"), None).unwrap();
+    assert_eq!(a.grid.values(), b.grid.values());
+    assert_eq!((a.grid.nx(), a.grid.ny()), (61, 87));
+    assert_eq!(a.grid.value_range(), (94.0, 195.0));
+}
