@@ -14,6 +14,8 @@ pub mod analytic;
 pub mod georef;
 pub mod grid;
 pub mod io;
+pub mod isoline;
+pub mod stations;
 
 pub use analytic::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 pub use isotrack_core::{FieldDerivatives, ScalarField};

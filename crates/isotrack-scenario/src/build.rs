@@ -1,13 +1,16 @@
 //! From a resolved [`Scenario`] to runnable parts, and running them.
 
+use crate::field::FieldModel;
 use crate::schema::*;
 use crate::Scenario;
 use isotrack_core::control::{AntiWindup, OutputStage, PiIsoline, PiIsolineParams};
 use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
+use isotrack_core::ScalarField;
 use isotrack_core::{IsolineController, Measurement};
-use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
-use isotrack_sim::{simulate, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
+use isotrack_sim::{
+    simulate, IsolineDistanceFn, RunResult, Sensor, SensorConfig, StepPlan, TraceSink,
+};
 use isotrack_vehicles::{Dubins, DubinsState};
 
 /// Every controller a scenario can name, behind one type (static dispatch in the loop).
@@ -31,49 +34,10 @@ impl IsolineController for ControllerModel {
     }
 }
 
-fn v2(a: [f64; 2]) -> Vec2 {
-    Vec2::new(a[0], a[1])
-}
-
 impl Scenario {
     /// The level `s_d` the scenario tracks.
     pub fn level(&self) -> f64 {
         self.file.controller.level.unwrap_or_default()
-    }
-
-    /// The field.
-    pub fn field(&self) -> AnalyticField {
-        let f = &self.file.field;
-        let kind = match f.kind.unwrap_or(FieldKind::RadialExp) {
-            FieldKind::RadialExp => AnalyticKind::RadialExp(RadialExp {
-                i0: f.i0.unwrap_or(20.0),
-                decay_per_m: f.decay_per_m.unwrap_or(0.1),
-                center_m: v2(f.center_m.unwrap_or_default()),
-            }),
-            FieldKind::GaussianPlumes => AnalyticKind::GaussianPlumes(GaussianPlumes {
-                background: f.background.unwrap_or_default(),
-                plumes: f
-                    .sources
-                    .clone()
-                    .unwrap_or_default()
-                    .into_iter()
-                    .map(|s| Plume {
-                        center_m: v2(s.center_m),
-                        amplitude: s.amplitude,
-                        sigma_m: s.sigma_m,
-                        rotation_rad: s.rotation_rad,
-                    })
-                    .collect(),
-            }),
-            FieldKind::LinearRamp => AnalyticKind::LinearRamp(LinearRamp {
-                offset: f.offset.unwrap_or_default(),
-                gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
-            }),
-        };
-        AnalyticField {
-            kind,
-            domain_m: f.domain_m,
-        }
     }
 
     /// The controller, at rest.
@@ -159,7 +123,22 @@ impl Scenario {
 
     /// Runs the scenario, recording the trace into `sink`.
     pub fn run<S: TraceSink + ?Sized>(&self, sink: &mut S) -> RunResult {
-        let field = self.field();
+        let iso = self.isoline();
+        let dist = |p: Vec2| iso.distance(p);
+        match self.field() {
+            FieldModel::Analytic(f) => self.run_on(f, Some(&dist), sink),
+            FieldModel::Grid(f) => self.run_on(f, Some(&dist), sink),
+        }
+    }
+
+    /// Runs the scenario on a given field (dispatched once, so the loop is monomorphised per
+    /// field type).
+    fn run_on<F: ScalarField, S: TraceSink + ?Sized>(
+        &self,
+        field: &F,
+        isoline: Option<IsolineDistanceFn<'_>>,
+        sink: &mut S,
+    ) -> RunResult {
         let mut controller = self.controller();
         let mut sensor = self.sensor();
         let plan = self.plan();
@@ -174,12 +153,13 @@ impl Scenario {
                     heading_rad: i.heading_rad.unwrap_or(0.0),
                 };
                 simulate(
-                    &field,
+                    field,
                     &vehicle,
                     x0,
                     &mut controller,
                     &mut sensor,
                     &plan,
+                    isoline,
                     sink,
                 )
             }

@@ -14,6 +14,7 @@
 #![deny(missing_docs)]
 
 pub mod build;
+pub mod field;
 pub mod load;
 pub mod resolve;
 pub mod schema;
@@ -22,13 +23,49 @@ pub use build::ControllerModel;
 pub use load::{load_scenario, parse_scenario, ErrorLocation, ScenarioError};
 pub use schema::ScenarioFile;
 
-/// A resolved, validated scenario: every key that applies has a value.
-#[derive(Clone, Debug, PartialEq)]
+use field::{build_field, FieldModel, IsolineOracle};
+use std::path::Path;
+use std::sync::{Arc, OnceLock};
+
+/// A resolved, validated scenario with its field built (files read): ready to run, any number of
+/// times (cloning shares the field).
+#[derive(Clone, Debug)]
 pub struct Scenario {
     file: ScenarioFile,
+    field: Arc<FieldModel>,
+    isoline: Arc<OnceLock<IsolineOracle>>,
+}
+
+impl PartialEq for Scenario {
+    fn eq(&self, other: &Self) -> bool {
+        self.file == other.file
+    }
 }
 
 impl Scenario {
+    /// Resolves `file` (defaults, checks) and builds its field, reading files relative to
+    /// `base_dir`.
+    pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
+        let mut file = resolve::resolve(file)?;
+        let field = build_field(&mut file.field, base_dir).map_err(|i| vec![i])?;
+        Ok(Self {
+            file,
+            field: Arc::new(field),
+            isoline: Arc::new(OnceLock::new()),
+        })
+    }
+
+    /// The field.
+    pub fn field(&self) -> &FieldModel {
+        &self.field
+    }
+
+    /// The true isoline of the tracked level (built on first use, then shared).
+    pub fn isoline(&self) -> &IsolineOracle {
+        self.isoline
+            .get_or_init(|| IsolineOracle::new(&self.field, self.level()))
+    }
+
     /// The resolved keys (serialise this to record the exact run; it reads back as the same
     /// scenario).
     pub fn file(&self) -> &ScenarioFile {
@@ -37,6 +74,7 @@ impl Scenario {
 
     /// The built-in default: the paper's Fig. 2(b) setting (what an empty file resolves to).
     pub fn default_paper_fig2b() -> Self {
-        resolve::resolve(ScenarioFile::default()).expect("the built-in default scenario is valid")
+        Self::from_file(ScenarioFile::default(), Path::new("."))
+            .expect("the built-in default scenario is valid")
     }
 }

@@ -1,6 +1,6 @@
 //! Reading scenario files and `--set` overrides, with errors that say where.
 
-use crate::resolve::{resolve, Issue};
+use crate::resolve::Issue;
 use crate::schema::ScenarioFile;
 use crate::Scenario;
 use std::fmt;
@@ -102,23 +102,40 @@ impl ScenarioError {
 /// overrides in order, fills defaults and validates.
 pub fn load_scenario(path: Option<&Path>, overrides: &[String]) -> Result<Scenario, ScenarioError> {
     match path {
-        None => parse_scenario("", "<built-in default>", overrides),
+        None => parse_scenario_in("", "<built-in default>", overrides, Path::new(".")),
         Some(p) => {
             let shown = p.display().to_string();
             let text = std::fs::read_to_string(p).map_err(|source| ScenarioError::Io {
                 path: shown.clone(),
                 source,
             })?;
-            parse_scenario(&text, &shown, overrides)
+            let base = p.parent().unwrap_or(Path::new("."));
+            let base = if base.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                base
+            };
+            parse_scenario_in(&text, &shown, overrides, base)
         }
     }
 }
 
-/// Parses scenario text whose origin (for messages) is `origin`, then as [`load_scenario`].
+/// Parses scenario text whose origin (for messages) is `origin`, then as [`load_scenario`];
+/// files it names are relative to the current directory.
 pub fn parse_scenario(
     text: &str,
     origin: &str,
     overrides: &[String],
+) -> Result<Scenario, ScenarioError> {
+    parse_scenario_in(text, origin, overrides, Path::new("."))
+}
+
+/// As [`parse_scenario`], with files relative to `base_dir`.
+pub fn parse_scenario_in(
+    text: &str,
+    origin: &str,
+    overrides: &[String],
+    base_dir: &Path,
 ) -> Result<Scenario, ScenarioError> {
     let located = |span: Option<Range<usize>>, key: Option<String>, message: String| {
         let (line, column) = match &span {
@@ -180,7 +197,7 @@ pub fn parse_scenario(
         .try_into()
         .map_err(|e: toml::de::Error| located(None, None, e.message().to_string()))?;
     // 4. Defaults and values.
-    resolve(file).map_err(|issues| {
+    Scenario::from_file(file, base_dir).map_err(|issues| {
         ScenarioError::Invalid(
             issues
                 .into_iter()

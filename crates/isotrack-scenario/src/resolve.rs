@@ -2,7 +2,6 @@
 //! (or every problem found, each naming its key) out.
 
 use crate::schema::*;
-use crate::Scenario;
 use isotrack_core::control::HigherSide;
 
 /// A problem with one key's value.
@@ -81,8 +80,75 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
     ]
 }
 
-/// Fills the defaults of every applicable key and validates every value.
-pub fn resolve(mut f: ScenarioFile) -> Result<Scenario, Vec<Issue>> {
+/// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 18] {
+    [
+        ("i0", fd.i0.is_some()),
+        ("decay_per_m", fd.decay_per_m.is_some()),
+        ("center_m", fd.center_m.is_some()),
+        ("background", fd.background.is_some()),
+        ("sources", fd.sources.is_some()),
+        ("offset", fd.offset.is_some()),
+        ("gradient_per_m", fd.gradient_per_m.is_some()),
+        ("domain_m", fd.domain_m.is_some()),
+        ("path", fd.path.is_some()),
+        ("format", fd.format.is_some()),
+        ("spacing_m", fd.spacing_m.is_some()),
+        ("origin_m", fd.origin_m.is_some()),
+        ("interpolation", fd.interpolation.is_some()),
+        ("crop_cells", fd.crop_cells.is_some()),
+        ("value_floor", fd.value_floor.is_some()),
+        ("value_log10", fd.value_log10.is_some()),
+        ("value_scale", fd.value_scale.is_some()),
+        ("value_offset", fd.value_offset.is_some()),
+    ]
+}
+
+/// Defaults and checks of a `grid` field (the file itself is read when the scenario is built).
+fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
+    if fd.path.as_deref().is_none_or(str::is_empty) {
+        c.fail("field.path", "is required for field.kind = \"grid\"");
+    }
+    if let Some(sp) = fd.spacing_m {
+        for v in sp {
+            c.positive("field.spacing_m", v);
+        }
+    }
+    if let Some(o) = fd.origin_m {
+        c.all_finite("field.origin_m", &o);
+    }
+    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+    if let Some([c0, c1, r0, r1]) = fd.crop_cells {
+        if c0 >= c1 || r0 >= r1 {
+            c.fail(
+                "field.crop_cells",
+                format!(
+                    "must be [c0, c1, r0, r1] with c0 < c1 and r0 < r1, got {:?}",
+                    [c0, c1, r0, r1]
+                ),
+            );
+        }
+    }
+    if let Some(fl) = fd.value_floor {
+        c.finite("field.value_floor", fl);
+        if fd.value_log10 == Some(true) && fl <= 0.0 {
+            c.fail(
+                "field.value_floor",
+                format!("must be > 0 with value_log10 = true, got {fl}"),
+            );
+        }
+    }
+    fd.value_log10.get_or_insert(false);
+    let scale = *fd.value_scale.get_or_insert(1.0);
+    if c.finite("field.value_scale", scale) && scale == 0.0 {
+        c.fail("field.value_scale", "must not be 0");
+    }
+    c.finite("field.value_offset", *fd.value_offset.get_or_insert(0.0));
+}
+
+/// Fills the defaults of every applicable key and validates every value. Files named by the
+/// scenario are read later, when the [`crate::Scenario`] is built.
+pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     let mut c = Checker::default();
 
     // [sim]
@@ -106,24 +172,41 @@ pub fn resolve(mut f: ScenarioFile) -> Result<Scenario, Vec<Issue>> {
     // [field]
     let fk = *f.field.kind.get_or_insert(FieldKind::RadialExp);
     let fd = &mut f.field;
+    let (kind_name, allowed): (&str, &[&str]) = match fk {
+        FieldKind::RadialExp => ("radial_exp", &["i0", "decay_per_m", "center_m", "domain_m"]),
+        FieldKind::GaussianPlumes => ("gaussian_plumes", &["background", "sources", "domain_m"]),
+        FieldKind::LinearRamp => ("linear_ramp", &["offset", "gradient_per_m", "domain_m"]),
+        FieldKind::Grid => (
+            "grid",
+            &[
+                "path",
+                "format",
+                "spacing_m",
+                "origin_m",
+                "interpolation",
+                "crop_cells",
+                "value_floor",
+                "value_log10",
+                "value_scale",
+                "value_offset",
+            ],
+        ),
+    };
+    for (key, present) in field_keys_present(fd) {
+        if present && !allowed.contains(&key) {
+            c.fail(
+                &format!("field.{key}"),
+                format!("does not apply to field.kind = \"{kind_name}\""),
+            );
+        }
+    }
     match fk {
         FieldKind::RadialExp => {
-            let why = "to field.kind = \"radial_exp\"";
-            c.unused("field.background", &fd.background, why);
-            c.unused("field.sources", &fd.sources, why);
-            c.unused("field.offset", &fd.offset, why);
-            c.unused("field.gradient_per_m", &fd.gradient_per_m, why);
             c.positive("field.i0", *fd.i0.get_or_insert(20.0));
             c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
             c.all_finite("field.center_m", fd.center_m.get_or_insert([0.0, 0.0]));
         }
         FieldKind::GaussianPlumes => {
-            let why = "to field.kind = \"gaussian_plumes\"";
-            c.unused("field.i0", &fd.i0, why);
-            c.unused("field.decay_per_m", &fd.decay_per_m, why);
-            c.unused("field.center_m", &fd.center_m, why);
-            c.unused("field.offset", &fd.offset, why);
-            c.unused("field.gradient_per_m", &fd.gradient_per_m, why);
             c.finite("field.background", *fd.background.get_or_insert(0.0));
             let sources = fd.sources.get_or_insert_with(default_plumes);
             if sources.is_empty() {
@@ -139,12 +222,6 @@ pub fn resolve(mut f: ScenarioFile) -> Result<Scenario, Vec<Issue>> {
             }
         }
         FieldKind::LinearRamp => {
-            let why = "to field.kind = \"linear_ramp\"";
-            c.unused("field.i0", &fd.i0, why);
-            c.unused("field.decay_per_m", &fd.decay_per_m, why);
-            c.unused("field.center_m", &fd.center_m, why);
-            c.unused("field.background", &fd.background, why);
-            c.unused("field.sources", &fd.sources, why);
             c.finite("field.offset", *fd.offset.get_or_insert(0.0));
             let g = *fd.gradient_per_m.get_or_insert([0.0, 1.0]);
             c.all_finite("field.gradient_per_m", &g);
@@ -155,6 +232,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<Scenario, Vec<Issue>> {
                 );
             }
         }
+        FieldKind::Grid => resolve_grid(&mut c, fd),
     }
     if let Some(d) = fd.domain_m {
         c.all_finite("field.domain_m", &d);
@@ -367,7 +445,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<Scenario, Vec<Issue>> {
     }
 
     if c.issues.is_empty() {
-        Ok(Scenario { file: f })
+        Ok(f)
     } else {
         Err(c.issues)
     }

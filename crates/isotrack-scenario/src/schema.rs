@@ -91,6 +91,32 @@ pub enum FieldKind {
     GaussianPlumes,
     /// `F = offset + gradient_per_m . p`.
     LinearRamp,
+    /// A gridded field read from `path`, interpolated.
+    Grid,
+}
+
+/// Grid file formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GridFormatName {
+    /// CSV, no header, row 0 = south.
+    Csv,
+    /// NumPy `.npy`.
+    Npy,
+    /// ESRI ASCII grid.
+    Asc,
+    /// GeoTIFF.
+    Geotiff,
+}
+
+/// Grid interpolation schemes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InterpolationName {
+    /// Bilinear (C0).
+    Bilinear,
+    /// Catmull-Rom bicubic (C1).
+    Bicubic,
 }
 
 /// `[field]`.
@@ -121,10 +147,45 @@ pub struct FieldSection {
     /// `linear_ramp`: gradient, field units per metre (default `[0, 1]`: increasing northward).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gradient_per_m: Option<[f64; 2]>,
-    /// Any kind: optional domain `[x_min, x_max, y_min, y_max]`, m; outside it the field has no
-    /// value and a run ends as `left_field`.
+    /// Analytic kinds: optional domain `[x_min, x_max, y_min, y_max]`, m; outside it the field
+    /// has no value and a run ends as `left_field`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub domain_m: Option<[f64; 4]>,
+    /// `grid`: the file, relative to the scenario file (the resolved scenario records it
+    /// absolute).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    /// `grid`: `csv`, `npy`, `asc` or `geotiff` (default: from the extension).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub format: Option<GridFormatName>,
+    /// `grid`: node spacing `[dx, dy]`, m, overriding the file's georeference (default: the
+    /// file's, or 1 m when it has none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spacing_m: Option<[f64; 2]>,
+    /// `grid`: position of the south-west node (after cropping), m, overriding the file's
+    /// georeference (default: the file's, or `[0, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin_m: Option<[f64; 2]>,
+    /// `grid`: `bilinear` or `bicubic` (default).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interpolation: Option<InterpolationName>,
+    /// `grid`: keep only columns `c0..=c1` and rows `r0..=r1`: `[c0, c1, r0, r1]` (row 0 south).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crop_cells: Option<[usize; 4]>,
+    /// `grid`: raise values below this floor to it before the transform (e.g. the zeros of a
+    /// plume before `value_log10`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_floor: Option<f64>,
+    /// `grid`: take `log10` of the (floored) values (default false).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_log10: Option<bool>,
+    /// `grid`: multiply by this after the log (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_scale: Option<f64>,
+    /// `grid`: then add this (default 0). The transform is
+    /// `v -> value_scale * [log10](max(v, value_floor)) + value_offset`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_offset: Option<f64>,
 }
 
 /// One Gaussian source of a `gaussian_plumes` field.

@@ -25,7 +25,17 @@ fn run(record_rate_hz: f64) -> u64 {
     let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 10.0).unwrap();
     if record_rate_hz > 0.0 {
         let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
-        simulate(&field, &vehicle, x0, &mut c, &mut sensor, &plan, &mut rows).steps
+        simulate(
+            &field,
+            &vehicle,
+            x0,
+            &mut c,
+            &mut sensor,
+            &plan,
+            None,
+            &mut rows,
+        )
+        .steps
     } else {
         simulate(
             &field,
@@ -34,6 +44,7 @@ fn run(record_rate_hz: f64) -> u64 {
             &mut c,
             &mut sensor,
             &plan,
+            None,
             &mut NoTrace,
         )
         .steps

@@ -29,6 +29,9 @@ pub struct Metrics {
     last_step: u64,
     path_length_m: f64,
     effort: f64,
+    iso_n: u64,
+    iso_max: f64,
+    iso_sum_sq: f64,
 }
 
 /// The metrics of a finished run. `None` (JSON `null`) where a metric is undefined: no step
@@ -53,6 +56,11 @@ pub struct RunMetrics {
     pub chattering_radps2: Option<f64>,
     /// Sign changes of `omega` per second over the steady-state window.
     pub sign_changes_per_s: Option<f64>,
+    /// Largest distance to the true isoline over the steady-state window, m (`None` when the
+    /// field gives no isoline distance).
+    pub steady_state_max_isoline_distance_m: Option<f64>,
+    /// RMS distance to the true isoline over the steady-state window, m.
+    pub steady_state_rms_isoline_distance_m: Option<f64>,
 }
 
 impl Metrics {
@@ -72,6 +80,9 @@ impl Metrics {
             last_step: 0,
             path_length_m: 0.0,
             effort: 0.0,
+            iso_n: 0,
+            iso_max: 0.0,
+            iso_sum_sq: 0.0,
         }
     }
 
@@ -108,6 +119,20 @@ impl Metrics {
         }
     }
 
+    /// Whether step `k` is in the steady-state window.
+    #[inline]
+    pub fn in_window(&self, k: u64) -> bool {
+        k >= self.cfg.steady_state_start_step
+    }
+
+    /// Observes the distance to the true isoline at a step of the steady-state window.
+    #[inline]
+    pub fn observe_isoline_distance(&mut self, d_m: f64) {
+        self.iso_n += 1;
+        self.iso_max = self.iso_max.max(d_m);
+        self.iso_sum_sq += d_m * d_m;
+    }
+
     /// Adds a step's displacement to the path length.
     #[inline]
     pub fn add_path(&mut self, ds_m: f64) {
@@ -137,6 +162,9 @@ impl Metrics {
             control_effort: self.effort,
             chattering_radps2: per_s(self.ss_tv_omega),
             sign_changes_per_s: per_s(self.ss_sign_changes as f64),
+            steady_state_max_isoline_distance_m: (self.iso_n > 0).then_some(self.iso_max),
+            steady_state_rms_isoline_distance_m: (self.iso_n > 0)
+                .then(|| (self.iso_sum_sq / self.iso_n as f64).sqrt()),
         }
     }
 }

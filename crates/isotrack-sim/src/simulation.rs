@@ -122,10 +122,16 @@ pub struct RunResult {
     pub metrics: RunMetrics,
 }
 
+/// Distance from a point to the true isoline, m (`None` where unknown). Used for metrics only.
+pub type IsolineDistanceFn<'a> = &'a (dyn Fn(isotrack_core::Vec2) -> Option<f64> + Sync);
+
 /// Runs one simulation: `field`, `vehicle` from `x0`, `controller` behind `sensor`, for
 /// `plan.n_steps` steps, recording into `sink`. See the crate documentation for the order of a step.
+/// `isoline_distance`, if given, is evaluated at every step of the steady-state window for the
+/// isoline-distance metrics.
 ///
 /// Generic over every part so the loop is monomorphised: no dynamic dispatch in the hot path.
+#[allow(clippy::too_many_arguments)]
 pub fn simulate<F, V, C, S>(
     field: &F,
     vehicle: &V,
@@ -133,6 +139,7 @@ pub fn simulate<F, V, C, S>(
     controller: &mut C,
     sensor: &mut Sensor,
     plan: &StepPlan,
+    isoline_distance: Option<IsolineDistanceFn<'_>>,
     sink: &mut S,
 ) -> RunResult
 where
@@ -193,6 +200,13 @@ where
         }
         let eps = s - plan.level;
         metrics.observe(k, eps, omega);
+        if let Some(dist) = isoline_distance {
+            if metrics.in_window(k) {
+                if let Some(d) = dist(pose.position) {
+                    metrics.observe_isoline_distance(d);
+                }
+            }
+        }
         last_valid_step = k;
         end_pos = pose.position;
         let row = TraceRow {

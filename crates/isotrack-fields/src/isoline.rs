@@ -1,0 +1,260 @@
+//! The true isoline, for the distance metric: how far the vehicle is from `F = s_d`.
+//!
+//! * Gridded fields: marching squares over the interpolant sampled on a refined lattice
+//!   (`refine` points per grid cell), giving line segments; the distance is to the nearest
+//!   segment, found through a bucket index. Written by hand rather than with the `contour` crate
+//!   because only unstitched segments are needed and no-data cells must simply produce none
+//!   (`contour`, a d3 port, has no no-data handling).
+//! * Analytic fields: root finding from the query point along the gradient (Newton's method on
+//!   `F(p) - s_d` in the gradient direction), which converges to the foot of the gradient line on
+//!   the isoline: the distance to the isoline to first order, exact for circles and lines.
+
+use crate::grid::GridField;
+use isotrack_core::{FieldDerivatives, ScalarField, Vec2};
+
+/// Line segments of the level set with a bucket index for nearest-segment queries.
+#[derive(Clone, Debug)]
+pub struct IsolineSegments {
+    segments: Vec<(Vec2, Vec2)>,
+    origin: Vec2,
+    cell: f64,
+    nbx: usize,
+    nby: usize,
+    buckets: Vec<Vec<u32>>,
+}
+
+/// Crossing of `level` on the edge from `(pa, va)` to `(pb, vb)`, if the edge straddles it.
+fn crossing(pa: Vec2, va: f64, pb: Vec2, vb: f64, level: f64) -> Option<Vec2> {
+    let (a, b) = (va - level, vb - level);
+    if (a < 0.0) == (b < 0.0) {
+        return None;
+    }
+    let t = a / (a - b);
+    Some(pa + (pb - pa) * t)
+}
+
+impl IsolineSegments {
+    /// Marching squares on values `f(x0 + i*h, y0 + j*h)` over `nx x ny` samples; `None`
+    /// samples (no value) produce no segments in their cells.
+    pub fn from_samples(
+        origin: Vec2,
+        h: f64,
+        nx: usize,
+        ny: usize,
+        level: f64,
+        f: impl Fn(Vec2) -> Option<f64>,
+    ) -> Self {
+        let mut vals = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                vals.push(f(origin + Vec2::new(i as f64 * h, j as f64 * h)).unwrap_or(f64::NAN));
+            }
+        }
+        let p = |i: usize, j: usize| origin + Vec2::new(i as f64 * h, j as f64 * h);
+        let mut segments = Vec::new();
+        for j in 0..ny.saturating_sub(1) {
+            for i in 0..nx.saturating_sub(1) {
+                let c = [
+                    (p(i, j), vals[j * nx + i]),
+                    (p(i + 1, j), vals[j * nx + i + 1]),
+                    (p(i + 1, j + 1), vals[(j + 1) * nx + i + 1]),
+                    (p(i, j + 1), vals[(j + 1) * nx + i]),
+                ];
+                if c.iter().any(|(_, v)| v.is_nan()) {
+                    continue;
+                }
+                let mut pts = [Vec2::default(); 4];
+                let mut n = 0;
+                for e in 0..4 {
+                    let (a, b) = (c[e], c[(e + 1) % 4]);
+                    if let Some(q) = crossing(a.0, a.1, b.0, b.1, level) {
+                        pts[n] = q;
+                        n += 1;
+                    }
+                }
+                match n {
+                    2 => segments.push((pts[0], pts[1])),
+                    4 => {
+                        // Saddle: pair the crossings according to the cell-centre value.
+                        let centre = 0.25 * c.iter().map(|(_, v)| v).sum::<f64>();
+                        let first_above = c[0].1 >= level;
+                        if (centre >= level) == first_above {
+                            segments.push((pts[0], pts[3]));
+                            segments.push((pts[1], pts[2]));
+                        } else {
+                            segments.push((pts[0], pts[1]));
+                            segments.push((pts[2], pts[3]));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Self::index(
+            segments,
+            origin,
+            h * 4.0,
+            nx.div_ceil(4).max(1),
+            ny.div_ceil(4).max(1),
+        )
+    }
+
+    /// The level set of a gridded field, refined `refine` times per cell (>= 1).
+    pub fn for_grid(field: &GridField, level: f64, refine: usize) -> Self {
+        let g = field.grid();
+        let refine = refine.max(1);
+        let [dx, dy] = g.spacing_m();
+        let h = dx.min(dy) / refine as f64;
+        let [x0, x1, y0, y1] = g.extent_m();
+        let nx = ((x1 - x0) / h).floor() as usize + 1;
+        let ny = ((y1 - y0) / h).floor() as usize + 1;
+        Self::from_samples(Vec2::new(x0, y0), h, nx, ny, level, |p| field.value(0.0, p))
+    }
+
+    fn index(segments: Vec<(Vec2, Vec2)>, origin: Vec2, cell: f64, nbx: usize, nby: usize) -> Self {
+        let mut buckets = vec![Vec::new(); nbx * nby];
+        for (k, (a, b)) in segments.iter().enumerate() {
+            let m = (*a + *b) * 0.5;
+            let bx = (((m.x - origin.x) / cell).floor().max(0.0) as usize).min(nbx - 1);
+            let by = (((m.y - origin.y) / cell).floor().max(0.0) as usize).min(nby - 1);
+            buckets[by * nbx + bx].push(k as u32);
+        }
+        Self {
+            segments,
+            origin,
+            cell,
+            nbx,
+            nby,
+            buckets,
+        }
+    }
+
+    /// The segments.
+    pub fn segments(&self) -> &[(Vec2, Vec2)] {
+        &self.segments
+    }
+
+    /// Distance from `p` to the nearest segment, `None` if there are none.
+    pub fn distance(&self, p: Vec2) -> Option<f64> {
+        if self.segments.is_empty() {
+            return None;
+        }
+        let seg_dist = |(a, b): (Vec2, Vec2)| {
+            let ab = b - a;
+            let l2 = ab.dot(ab);
+            let t = if l2 > 0.0 {
+                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (a + ab * t - p).norm()
+        };
+        let bx = ((p.x - self.origin.x) / self.cell).floor();
+        let by = ((p.y - self.origin.y) / self.cell).floor();
+        let mut best = f64::INFINITY;
+        let max_ring = self.nbx.max(self.nby) as i64 + 1;
+        for ring in 0..=max_ring {
+            // Every segment in ring r+1 or beyond is at least (r - 1) cells (minus half a segment)
+            // away; stop once the best found beats that.
+            if best.is_finite() && best < (ring as f64 - 1.5).max(0.0) * self.cell {
+                break;
+            }
+            for j in -ring..=ring {
+                for i in -ring..=ring {
+                    if i.abs() != ring && j.abs() != ring {
+                        continue;
+                    }
+                    let (x, y) = (bx as i64 + i, by as i64 + j);
+                    if x < 0 || y < 0 || x >= self.nbx as i64 || y >= self.nby as i64 {
+                        continue;
+                    }
+                    for &k in &self.buckets[y as usize * self.nbx + x as usize] {
+                        best = best.min(seg_dist(self.segments[k as usize]));
+                    }
+                }
+            }
+        }
+        best.is_finite().then_some(best)
+    }
+}
+
+/// Distance from `p` to the level set of an analytic field by Newton steps along the gradient:
+/// `p_{n+1} = p_n - (F(p_n) - level) grad F / |grad F|^2`. `None` if it does not converge (flat
+/// region, no value).
+pub fn newton_distance<F: FieldDerivatives + ?Sized>(
+    field: &F,
+    t_s: f64,
+    p: Vec2,
+    level: f64,
+) -> Option<f64> {
+    let mut q = p;
+    for _ in 0..60 {
+        let v = field.value(t_s, q)?;
+        let g = field.gradient(t_s, q)?;
+        let g2 = g.dot(g);
+        if g2.is_nan() || g2 <= 0.0 {
+            return None;
+        }
+        let step = g * ((v - level) / g2);
+        q = q - step;
+        if step.norm() < 1e-12 * (1.0 + q.norm()) {
+            let d = (q - p).norm();
+            return d.is_finite().then_some(d);
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analytic::{AnalyticField, AnalyticKind, RadialExp};
+    use crate::grid::{Grid2, Interpolation};
+
+    #[test]
+    fn newton_distance_is_exact_on_circles() {
+        let f = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+        let r = 10.0 * std::f64::consts::LN_2;
+        for (d, a) in [(3.0, 0.2), (6.5, 1.0), (9.0, 2.0), (15.0, -1.0)] {
+            let dist = newton_distance(&f, 0.0, Vec2::from_angle(a) * d, 10.0).unwrap();
+            assert!((dist - (d - r).abs()).abs() < 1e-9, "{d}: {dist}");
+        }
+    }
+
+    #[test]
+    fn grid_segments_give_circle_distance() {
+        let field = |p: Vec2| 20.0 * (-0.1 * p.norm()).exp();
+        let g = Grid2::from_fn(81, 81, Vec2::new(-20.0, -20.0), [0.5, 0.5], field).unwrap();
+        let gf = GridField::new(g, Interpolation::Bicubic);
+        let iso = IsolineSegments::for_grid(&gf, 10.0, 4);
+        let r = 10.0 * std::f64::consts::LN_2;
+        for k in 0..50 {
+            let a = k as f64 * 0.125;
+            let d = 2.0 + (k % 13) as f64;
+            let got = iso.distance(Vec2::from_angle(a) * d).unwrap();
+            assert!((got - (d - r).abs()).abs() < 2e-3, "{d}: {got}");
+        }
+    }
+
+    #[test]
+    fn no_segments_in_nodata() {
+        let g = Grid2::new(
+            3,
+            3,
+            Vec2::default(),
+            [1.0, 1.0],
+            vec![0.0, 1.0, f64::NAN, 0.0, 1.0, 2.0, 0.0, 1.0, 2.0],
+        )
+        .unwrap();
+        let iso = IsolineSegments::from_samples(Vec2::default(), 1.0, 3, 3, 1.5, |p| {
+            GridField::new(g.clone(), Interpolation::Bilinear).value(0.0, p)
+        });
+        // Only the top-right cell (all valid) crosses 1.5.
+        assert_eq!(iso.segments().len(), 1);
+        assert!(
+            IsolineSegments::from_samples(Vec2::default(), 1.0, 3, 3, 99.0, |_| Some(0.0))
+                .distance(Vec2::default())
+                .is_none()
+        );
+    }
+}
