@@ -20,6 +20,40 @@ pub enum Command {
     Run(RunArgs),
     /// Print the fully resolved scenario (every default filled in) as TOML.
     Show(ScenarioArgs),
+    /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
+    /// as a CSV grid with a JSON sidecar.
+    Interpolate(InterpolateArgs),
+}
+
+/// Station interpolation methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// Ordinary kriging with a fitted variogram.
+    Kriging,
+    /// Inverse-distance weighting.
+    Idw,
+}
+
+/// `isotrack interpolate`.
+#[derive(Debug, Args)]
+pub struct InterpolateArgs {
+    /// Station CSV with a header: `x_m, y_m` or `lon_deg, lat_deg` columns and a value column.
+    pub stations: PathBuf,
+    /// The value column.
+    #[arg(long, value_name = "NAME")]
+    pub value_column: String,
+    /// Interpolation method.
+    #[arg(long, value_enum, default_value_t = Method::Kriging)]
+    pub method: Method,
+    /// Grid spacing, m.
+    #[arg(long, value_name = "M", default_value_t = 10_000.0)]
+    pub spacing_m: f64,
+    /// IDW power.
+    #[arg(long, default_value_t = 2.0)]
+    pub idw_power: f64,
+    /// Output grid CSV (the sidecar gets the same name with `.json`).
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
 }
 
 /// A scenario and its overrides.

@@ -1,0 +1,105 @@
+//! `isotrack interpolate`: station values onto a grid file.
+
+use crate::cli::{InterpolateArgs, Method};
+use crate::exit;
+use crate::run::Failure;
+use isotrack_fields::grid::Grid2;
+use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stations};
+use serde_json::json;
+use std::io::Write;
+
+/// Writes a grid as CSV in the `shared/data` layout (no header, row 0 south), numbers in
+/// shortest round-trip form.
+pub fn write_grid_csv(path: &std::path::Path, g: &Grid2) -> std::io::Result<()> {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    for iy in 0..g.ny() {
+        let row: Vec<String> = (0..g.nx()).map(|ix| format!("{}", g.at(ix, iy))).collect();
+        writeln!(out, "{}", row.join(","))?;
+    }
+    out.flush()
+}
+
+/// Runs the command.
+pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
+    let data = |m: String| Failure {
+        code: exit::DATAERR,
+        message: m,
+    };
+    if !(a.spacing_m.is_finite() && a.spacing_m > 0.0) {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: format!("--spacing-m must be > 0, got {}", a.spacing_m),
+        });
+    }
+    let stations = Stations::from_csv(&a.stations, &a.value_column).map_err(|e| Failure {
+        code: if e.message.starts_with("cannot read") {
+            exit::NOINPUT
+        } else {
+            exit::DATAERR
+        },
+        message: e.to_string(),
+    })?;
+    let extent = stations.extent_m();
+    let n = stations.values.len();
+    let projection = stations.projection;
+    let (grid, method) = match a.method {
+        Method::Idw => {
+            let idw = Idw::new(stations, a.idw_power);
+            (
+                idw.to_grid(extent, a.spacing_m),
+                json!({"method": "idw", "power": a.idw_power}),
+            )
+        }
+        Method::Kriging => {
+            let ok = OrdinaryKriging::new(stations).ok_or_else(|| {
+                data("the kriging system is singular (duplicate stations?)".into())
+            })?;
+            let v = ok.variogram();
+            (
+                ok.to_grid(extent, a.spacing_m),
+                json!({"method": "ordinary_kriging", "variogram": {
+                    "model": format!("{:?}", v.model).to_lowercase(),
+                    "nugget": v.nugget, "partial_sill": v.sill, "range_m": v.range_m}}),
+            )
+        }
+    };
+    let grid = grid.map_err(|e| data(e.to_string()))?;
+    let cant = |e: std::io::Error| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", a.out.display()),
+    };
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(cant)?;
+    }
+    write_grid_csv(&a.out, &grid).map_err(cant)?;
+    let (lo, hi) = grid.value_range();
+    let sidecar = json!({
+        "derived": format!("interpolated by isotrack {} from {} ({} stations, column `{}`); a derived product, not measured data",
+            env!("CARGO_PKG_VERSION"), a.stations.display(), n, a.value_column),
+        "layout": "row-major values[iy][ix]; row 0 = southernmost row, column 0 = westernmost column; CSV without header",
+        "shape_rows_cols": [grid.ny(), grid.nx()],
+        "spacing_m": grid.spacing_m(),
+        "origin_m": [grid.origin_m().x, grid.origin_m().y],
+        "projection": projection.map(|(lon0, lat0, ref_lat)| json!({
+            "kind": "equirectangular", "lon0_deg": lon0, "lat0_deg": lat0, "ref_lat_deg": ref_lat,
+            "earth_radius_m": isotrack_fields::georef::EARTH_RADIUS_M})),
+        "interpolation": method,
+        "value_min": lo,
+        "value_max": hi,
+    });
+    let side = a.out.with_extension("json");
+    std::fs::write(
+        &side,
+        serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n",
+    )
+    .map_err(cant)?;
+    println!(
+        "wrote {} ({} x {} nodes, {} m spacing, values {lo:.4} .. {hi:.4}) and {}",
+        a.out.display(),
+        grid.nx(),
+        grid.ny(),
+        a.spacing_m,
+        side.display()
+    );
+    Ok(())
+}
