@@ -20,9 +20,26 @@ pub enum Command {
     Run(RunArgs),
     /// Print the fully resolved scenario (every default filled in) as TOML.
     Show(ScenarioArgs),
+    /// Apply the paper's theory to a scenario: Prop. 1 (circular fields) and Prop. 2 (gain
+    /// conditions and steady-state error bound from the field's own gradient and Hessian).
+    Check(CheckArgs),
     /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
     /// as a CSV grid with a JSON sidecar.
     Interpolate(InterpolateArgs),
+}
+
+/// `isotrack check`.
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The scenario.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Half-width of the tube |F - s_d| <= H over which gamma1..3 are taken (default: c2).
+    #[arg(long, value_name = "H")]
+    pub tube_halfwidth: Option<f64>,
 }
 
 /// Station interpolation methods.

@@ -8,6 +8,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Run(args) => isotrack_cli::run::run(args),
         Command::Show(args) => isotrack_cli::run::show(args),
+        Command::Check(args) => isotrack_cli::run::check(args),
         Command::Interpolate(args) => isotrack_cli::interpolate::interpolate(args),
     };
     match result {

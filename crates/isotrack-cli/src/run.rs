@@ -1,6 +1,6 @@
 //! `isotrack run` and `isotrack show`.
 
-use crate::cli::{RunArgs, ScenarioArgs};
+use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
 use crate::output::{scenario_toml, write_summary, write_trace};
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
@@ -122,5 +122,82 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 pub fn show(args: &ScenarioArgs) -> Result<(), Failure> {
     let scenario = load(args)?;
     print!("{}", scenario_toml(&scenario));
+    Ok(())
+}
+
+fn yes_no(b: Option<bool>) -> &'static str {
+    match b {
+        Some(true) => "yes",
+        Some(false) => "NO",
+        None => "n/a",
+    }
+}
+
+/// `isotrack check`.
+pub fn check(args: &CheckArgs) -> Result<(), Failure> {
+    if let Some(h) = args.tube_halfwidth {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Failure {
+                code: exit::USAGE,
+                message: format!("--tube-halfwidth must be > 0, got {h}"),
+            });
+        }
+    }
+    let scenario = load(&args.scenario)?;
+    let r = isotrack_scenario::check::check(&scenario, args.tube_halfwidth);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+        return Ok(());
+    }
+    let p1 = &r.prop1;
+    println!("Prop. 1 (circular field, local exponential stability)");
+    if p1.applicable {
+        println!(
+            "  alpha = {:.6}  r_d = {:.4} m",
+            p1.alpha.unwrap_or(f64::NAN),
+            p1.r_d_m.unwrap_or(f64::NAN)
+        );
+        println!(
+            "  paper's sufficient conditions kp(kp-2)v*alpha > ki, v*alpha > c1: {}",
+            yes_no(p1.paper_conditions_hold)
+        );
+        println!(
+            "  exact Routh-Hurwitz condition:                               {}",
+            yes_no(p1.exact_local_condition_holds)
+        );
+    } else {
+        println!("  not applicable: {}", p1.note);
+    }
+    let p2 = &r.prop2;
+    let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.6}"));
+    println!("Prop. 2 (smooth field, ki = 0: gain conditions and error bound)");
+    println!(
+        "  tube |F - s_d| <= {} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
+        p2.tube_halfwidth,
+        p2.samples_in_tube,
+        f(p2.gamma1),
+        f(p2.gamma2),
+        f(p2.gamma3)
+    );
+    println!(
+        "  conditions hold: {}   predicted limsup|eps| <= {}   smallest kp: {}",
+        if p2.conditions_hold { "yes" } else { "NO" },
+        f(p2.error_bound),
+        f(p2.min_kp)
+    );
+    println!(
+        "  paper's printed form: smallest kp {}, bound {}",
+        f(p2.paper_min_kp),
+        f(p2.paper_error_bound)
+    );
+    if let Some(phi0) = p2.initial_phi_rad {
+        println!(
+            "  initial phi(t0) = {phi0:.4} rad; in the assumed sector: {}",
+            yes_no(p2.initial_heading_in_sector)
+        );
+    }
+    if !p2.note.is_empty() {
+        println!("  note: {}", p2.note);
+    }
     Ok(())
 }

@@ -274,3 +274,77 @@ fn bad_command_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!stderr(&o).contains("panicked"));
 }
+
+#[test]
+fn check_json_has_the_documented_keys() {
+    let o = isotrack(&["check", "--json", "--set", "controller.ki=0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["prop1"]["paper_conditions_hold"], true);
+    assert_eq!(j["prop1"]["exact_local_condition_holds"], true);
+    assert_eq!(j["prop2"]["conditions_hold"], true);
+    assert!(j["prop2"]["error_bound"].as_f64().unwrap() > 0.0);
+    assert!(j["prop2"]["min_kp"].as_f64().unwrap() > 0.0);
+    // Not circular: prop1 fields are null; ki > 0: Prop. 2 does not apply, bound null.
+    let o = isotrack(&["check", "--json", "--set", "field.kind=linear_ramp"]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["prop1"]["paper_conditions_hold"].is_null());
+    assert!(j["prop2"]["error_bound"].is_null());
+    assert_eq!(j["prop2"]["conditions_hold"], false);
+    // Human output.
+    let o = isotrack(&["check"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Routh-Hurwitz"));
+}
+
+#[test]
+fn nodata_in_a_grid_ends_the_run_as_left_field() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 20 x 20 ramp (value = column) with a NaN block in columns 12..16.
+    let mut csv = String::new();
+    for _ in 0..20 {
+        let row: Vec<String> = (0..20)
+            .map(|i| {
+                if (12..16).contains(&i) {
+                    "NaN".into()
+                } else {
+                    format!("{i}")
+                }
+            })
+            .collect();
+        csv += &row.join(",");
+        csv += "\n";
+    }
+    write(dir.path(), "hole.csv", &csv);
+    let scen = write(
+        dir.path(),
+        "hole.toml",
+        "[field]\nkind = \"grid\"\npath = \"hole.csv\"\n[initial]\nx_m = 2.0\ny_m = 10.0\nheading_rad = 0.0\n\
+         [vehicle]\nspeed_mps = 1.0\n[controller]\nlevel = 100.0\nkp = 1e-6\nki = 0.0\n[sim]\nduration_s = 60.0\n",
+    );
+    let out = dir.path().join("out");
+    let o = isotrack(&["run", &scen, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["outcome"], "left_field");
+    let x_end = s["end_position_m"][0].as_f64().unwrap();
+    // Bicubic: the stencil of the cell [10, 11] already touches the NaN column 12.
+    assert!(
+        (9.9..12.0).contains(&x_end),
+        "stopped before the hole: {x_end}"
+    );
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    assert!(!trace.to_lowercase().contains("nan"));
+    // A bad grid file is a scenario error naming the file and line.
+    write(dir.path(), "bad.csv", "1,2\n3\n");
+    let bad = write(
+        dir.path(),
+        "bad.toml",
+        "[field]\nkind = \"grid\"\npath = \"bad.csv\"\n",
+    );
+    assert_fails(
+        &isotrack(&["run", &bad]),
+        65,
+        &["field.path", "bad.csv:2", "ragged"],
+    );
+}

@@ -172,3 +172,131 @@ mod tests {
         ));
     }
 }
+
+/// Bounds of the field over the operating region, Prop. 2's assumption (paper eq. (20)):
+/// `gamma1 <= |grad F| <= gamma2`, `|hess F| <= gamma3`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldBounds {
+    /// Lower bound on the gradient norm (field units per metre).
+    pub gamma1: f64,
+    /// Upper bound on the gradient norm.
+    pub gamma2: f64,
+    /// Upper bound on the Hessian's spectral norm (field units per square metre).
+    pub gamma3: f64,
+}
+
+/// Prop. 2's gain condition in the unit-consistent form (baselines.md section 0), for the angle
+/// margin `phi` (the paper's epsilon, in `(0, pi/2)`): the smallest `kp` with
+///
+/// ```text
+/// kp > max( gamma3*v / (gamma1*sin(phi)*(v*gamma1*cos(phi) - c1)),
+///           (c2*gamma3*v + c1*gamma2) / (c2*c1*gamma1*sin(phi)) ).
+/// ```
+///
+/// `None` when `v*gamma1*cos(phi) <= c1` (the sliding surface cannot be reached at that margin)
+/// or the bounds are degenerate. The paper prints the second term without the `c2` in the
+/// denominator; the two agree for `c2 = 1` (see [`prop2_paper_min_kp`]).
+pub fn prop2_min_kp(
+    b: &FieldBounds,
+    speed_mps: f64,
+    c1: f64,
+    c2: f64,
+    phi_rad: f64,
+) -> Option<f64> {
+    let (s, c) = crate::fmath::sincos(phi_rad);
+    let reach = speed_mps * b.gamma1 * c - c1;
+    if !(b.gamma1 > 0.0 && reach > 0.0 && s > 0.0) {
+        return None;
+    }
+    let k1 = b.gamma3 * speed_mps / (b.gamma1 * s * reach);
+    let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c2 * c1 * b.gamma1 * s);
+    Some(k1.max(k2))
+}
+
+/// Prop. 2's steady-state bound in the unit-consistent form:
+/// `limsup |eps| <= c2*atanh( (c2*gamma3*v + c1*gamma2) / (kp*c1*c2*gamma1*sin(phi)) )`,
+/// `None` unless `kp` satisfies [`prop2_min_kp`] at `phi`.
+pub fn prop2_error_bound(
+    b: &FieldBounds,
+    speed_mps: f64,
+    kp: f64,
+    c1: f64,
+    c2: f64,
+    phi_rad: f64,
+) -> Option<f64> {
+    let min = prop2_min_kp(b, speed_mps, c1, c2, phi_rad)?;
+    if kp <= min {
+        return None;
+    }
+    let (s, _) = crate::fmath::sincos(phi_rad);
+    let arg = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (kp * c1 * c2 * b.gamma1 * s);
+    (arg < 1.0).then(|| c2 * libm::atanh(arg))
+}
+
+/// The paper's printed Prop. 2 (`c2` absent from the second denominator and from the bound):
+/// `(min_kp, bound)`; not invariant under rescaling the field when `c2 != 1`.
+pub fn prop2_paper_min_kp(
+    b: &FieldBounds,
+    speed_mps: f64,
+    kp: f64,
+    c1: f64,
+    c2: f64,
+    phi_rad: f64,
+) -> (Option<f64>, Option<f64>) {
+    let (s, c) = crate::fmath::sincos(phi_rad);
+    let reach = speed_mps * b.gamma1 * c - c1;
+    if !(b.gamma1 > 0.0 && reach > 0.0 && s > 0.0) {
+        return (None, None);
+    }
+    let k1 = b.gamma3 * speed_mps / (b.gamma1 * s * reach);
+    let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c1 * b.gamma1 * s);
+    let min = k1.max(k2);
+    let arg = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (kp * c1 * b.gamma1 * s);
+    (Some(min), (kp > min && arg < 1.0).then(|| libm::atanh(arg)))
+}
+
+#[cfg(test)]
+mod prop2_tests {
+    use super::*;
+
+    /// On the circular field the bound must cover the exact P-law orbit error
+    /// (gamma1 = gamma2 = alpha, gamma3 = alpha/d_min, phi = pi/2 at the orbit).
+    #[test]
+    fn bound_covers_the_exact_circular_error() {
+        let (v, kp, c1, c2) = (0.5, 10.0, 0.2, 1.0);
+        // Linear radial profile F = s_d - alpha (d - r_d), alpha = 1, r_d = 6.93.
+        let alpha = 1.0;
+        let b = FieldBounds {
+            gamma1: alpha,
+            gamma2: alpha,
+            gamma3: alpha / 6.0,
+        };
+        let phi = 0.9;
+        let bound = prop2_error_bound(&b, v, kp, c1, c2, phi).unwrap();
+        let exact = c2 * libm::atanh(v / (kp * c1 * 6.93));
+        assert!(bound >= exact, "{bound} < {exact}");
+        // Rescaling the field by 10 (and c1, c2 with it) rescales the balanced bound by 10.
+        let b10 = FieldBounds {
+            gamma1: 10.0 * b.gamma1,
+            gamma2: 10.0 * b.gamma2,
+            gamma3: 10.0 * b.gamma3,
+        };
+        let bound10 = prop2_error_bound(&b10, v, kp / 10.0, 10.0 * c1, 10.0 * c2, phi).unwrap();
+        assert!((bound10 - 10.0 * bound).abs() < 1e-9 * bound10);
+        // With c2 = 1 the printed and balanced forms agree.
+        let (pmin, pb) = prop2_paper_min_kp(&b, v, kp, c1, c2, phi);
+        assert_eq!(pmin, prop2_min_kp(&b, v, c1, c2, phi));
+        assert!((pb.unwrap() - bound).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unreachable_surface_has_no_min_kp() {
+        let b = FieldBounds {
+            gamma1: 0.1,
+            gamma2: 0.2,
+            gamma3: 0.01,
+        };
+        // v*gamma1 = 0.05 < c1 = 0.2 at any phi.
+        assert!(prop2_min_kp(&b, 0.5, 0.2, 1.0, 0.3).is_none());
+    }
+}

@@ -14,13 +14,14 @@
 #![deny(missing_docs)]
 
 pub mod build;
+pub mod check;
 pub mod field;
 pub mod load;
 pub mod resolve;
 pub mod schema;
 
 pub use build::ControllerModel;
-pub use load::{load_scenario, parse_scenario, ErrorLocation, ScenarioError};
+pub use load::{load_scenario, parse_scenario, parse_scenario_in, ErrorLocation, ScenarioError};
 pub use schema::ScenarioFile;
 
 use field::{build_field, FieldModel, IsolineOracle};
