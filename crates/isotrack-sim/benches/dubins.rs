@@ -3,6 +3,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use isotrack_core::control::{PiIsoline, PiIsolineParams};
 use isotrack_core::math::Vec2;
+use isotrack_fields::grid::{Grid2, GridField, Interpolation};
 use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
 use isotrack_sim::{simulate, NoTrace, Sensor, SensorConfig, StepPlan, TraceRow};
 use isotrack_vehicles::{Dubins, DubinsState};
@@ -51,11 +52,53 @@ fn run(record_rate_hz: f64) -> u64 {
     }
 }
 
+/// The same scenario on a 0.25 m grid sampled from the circular field (161 x 161 nodes).
+fn run_grid(interp: Interpolation) -> u64 {
+    let grid = Grid2::from_fn(161, 161, Vec2::new(-20.0, -20.0), [0.25, 0.25], |p| {
+        20.0 * (-0.1 * p.norm()).exp()
+    })
+    .unwrap();
+    let field = GridField::new(grid, interp);
+    let vehicle = Dubins { speed_mps: 0.5 };
+    let x0 = DubinsState {
+        position_m: Vec2::new(10.0, 0.0),
+        heading_rad: -std::f64::consts::FRAC_PI_2,
+    };
+    let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
+    let cfg = SensorConfig {
+        rate_hz: 100.0,
+        noise_std: 0.0,
+        delay_s: 0.0,
+    };
+    let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
+    let plan = StepPlan::new(0.01, 600.0, 0.0, 0.2, 0.1, 10.0).unwrap();
+    simulate(
+        &field,
+        &vehicle,
+        x0,
+        &mut c,
+        &mut sensor,
+        &plan,
+        None,
+        &mut NoTrace,
+    )
+    .steps
+}
+
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("dubins_circular_600s");
     g.throughput(Throughput::Elements(60_000));
     g.bench_function("trace_off", |b| b.iter(|| black_box(run(black_box(0.0)))));
     g.bench_function("trace_10hz", |b| b.iter(|| black_box(run(black_box(10.0)))));
+    g.finish();
+    let mut g = c.benchmark_group("dubins_grid_600s");
+    g.throughput(Throughput::Elements(60_000));
+    g.bench_function("bicubic", |b| {
+        b.iter(|| black_box(run_grid(black_box(Interpolation::Bicubic))))
+    });
+    g.bench_function("bilinear", |b| {
+        b.iter(|| black_box(run_grid(black_box(Interpolation::Bilinear))))
+    });
     g.finish();
 }
 

@@ -150,12 +150,20 @@ impl GridField {
                 let (wy, dwy, ddwy) = keys_weights(ty);
                 let (mut f, mut fx, mut fy, mut fxx, mut fyy, mut fxy) =
                     (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+                // Interior cells read the 4 x 4 patch directly; border cells go through the
+                // extrapolating `node`.
+                let interior = i >= 1 && i + 2 < g.nx && j >= 1 && j + 2 < g.ny;
                 for (b, jj) in (j as isize - 1..=j as isize + 2).enumerate() {
                     let mut r = 0.0;
                     let mut rx = 0.0;
                     let mut rxx = 0.0;
+                    let row = if interior { (jj as usize) * g.nx + i - 1 } else { 0 };
                     for (a, ii) in (i as isize - 1..=i as isize + 2).enumerate() {
-                        let v = self.node(ii, jj);
+                        let v = if interior {
+                            g.values[row + a]
+                        } else {
+                            self.node(ii, jj)
+                        };
                         r += wx[a] * v;
                         if DERIV {
                             rx += dwx[a] * v;
