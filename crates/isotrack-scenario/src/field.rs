@@ -5,7 +5,7 @@ use crate::schema::*;
 use isotrack_core::math::{Mat2, Vec2};
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_fields::grid::{GridField, Interpolation};
-use isotrack_fields::io::{load_grid, GridFormat};
+use isotrack_fields::io::{load_grid_variable, GridFormat};
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
 use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 use std::path::{Path, PathBuf};
@@ -128,8 +128,10 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue>
         GridFormatName::Npy => GridFormat::Npy,
         GridFormatName::Asc => GridFormat::Asc,
         GridFormatName::Geotiff => GridFormat::GeoTiff,
+        GridFormatName::Netcdf => GridFormat::NetCdf,
     });
-    let loaded = load_grid(&path, format).map_err(|e| issue("field.path", e.to_string()))?;
+    let loaded = load_grid_variable(&path, format, f.variable.as_deref())
+        .map_err(|e| issue("field.path", e.to_string()))?;
     let mut grid = loaded.grid;
     if let Some([c0, c1, r0, r1]) = f.crop_cells {
         if c1 >= grid.nx() || r1 >= grid.ny() {

@@ -81,7 +81,7 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
 }
 
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 18] {
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 19] {
     [
         ("i0", fd.i0.is_some()),
         ("decay_per_m", fd.decay_per_m.is_some()),
@@ -93,6 +93,7 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 18] {
         ("domain_m", fd.domain_m.is_some()),
         ("path", fd.path.is_some()),
         ("format", fd.format.is_some()),
+        ("variable", fd.variable.is_some()),
         ("spacing_m", fd.spacing_m.is_some()),
         ("origin_m", fd.origin_m.is_some()),
         ("interpolation", fd.interpolation.is_some()),

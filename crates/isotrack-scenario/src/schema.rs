@@ -107,6 +107,8 @@ pub enum GridFormatName {
     Asc,
     /// GeoTIFF.
     Geotiff,
+    /// NetCDF (CF); needs the `netcdf` feature.
+    Netcdf,
 }
 
 /// Grid interpolation schemes.
@@ -155,9 +157,12 @@ pub struct FieldSection {
     /// absolute).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub path: Option<String>,
-    /// `grid`: `csv`, `npy`, `asc` or `geotiff` (default: from the extension).
+    /// `grid`: `csv`, `npy`, `asc`, `geotiff` or `netcdf` (default: from the extension).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub format: Option<GridFormatName>,
+    /// `grid`, NetCDF: the variable to read (default: the first 2-D data variable).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub variable: Option<String>,
     /// `grid`: node spacing `[dx, dy]`, m, overriding the file's georeference (default: the
     /// file's, or 1 m when it has none).
     #[serde(skip_serializing_if = "Option::is_none")]

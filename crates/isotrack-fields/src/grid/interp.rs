@@ -157,7 +157,11 @@ impl GridField {
                     let mut r = 0.0;
                     let mut rx = 0.0;
                     let mut rxx = 0.0;
-                    let row = if interior { (jj as usize) * g.nx + i - 1 } else { 0 };
+                    let row = if interior {
+                        (jj as usize) * g.nx + i - 1
+                    } else {
+                        0
+                    };
                     for (a, ii) in (i as isize - 1..=i as isize + 2).enumerate() {
                         let v = if interior {
                             g.values[row + a]

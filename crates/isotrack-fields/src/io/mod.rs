@@ -7,6 +7,8 @@
 mod asc;
 mod csv_grid;
 mod geotiff;
+#[cfg(feature = "netcdf")]
+mod netcdf;
 mod npy;
 
 use crate::georef::Georeference;
@@ -27,6 +29,8 @@ pub enum GridFormat {
     /// GeoTIFF: one band, any integer or float sample type; `ModelPixelScale`/`ModelTiepoint`
     /// georeference, geographic (degrees) or projected (metres); GDAL no-data tag honoured.
     GeoTiff,
+    /// NetCDF with CF lon/lat (or metre) coordinates; needs the cargo feature `netcdf`.
+    NetCdf,
 }
 
 impl GridFormat {
@@ -37,6 +41,7 @@ impl GridFormat {
             "npy" => Some(Self::Npy),
             "asc" => Some(Self::Asc),
             "tif" | "tiff" => Some(Self::GeoTiff),
+            "nc" | "nc4" | "cdf" => Some(Self::NetCdf),
             _ => None,
         }
     }
@@ -108,19 +113,43 @@ pub struct LoadedGrid {
 
 /// Loads a grid file; `format` is inferred from the extension when `None`.
 pub fn load_grid(path: &Path, format: Option<GridFormat>) -> Result<LoadedGrid, LoadError> {
+    load_grid_variable(path, format, None)
+}
+
+/// As [`load_grid`], naming the variable to read for formats that hold several (NetCDF).
+pub fn load_grid_variable(
+    path: &Path,
+    format: Option<GridFormat>,
+    variable: Option<&str>,
+) -> Result<LoadedGrid, LoadError> {
     let format = match format.or_else(|| GridFormat::from_extension(path)) {
         Some(f) => f,
-        None => {
+        None => return Err(LoadError::new(
+            path,
+            None,
+            "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
+        )),
+    };
+    if format == GridFormat::NetCdf {
+        if !path.exists() {
+            return Err(LoadError::new(path, None, "cannot read: no such file"));
+        }
+        #[cfg(feature = "netcdf")]
+        return netcdf::parse(path, variable);
+        #[cfg(not(feature = "netcdf"))]
+        {
+            let _ = variable;
             return Err(LoadError::new(
                 path,
                 None,
-                "cannot tell the format from the extension; give it (csv, npy, asc, geotiff)",
-            ))
+                "NetCDF support is not built in: rebuild with `--features isotrack-fields/netcdf` (needs libnetcdf-dev)",
+            ));
         }
-    };
+    }
     let bytes =
         std::fs::read(path).map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
     match format {
+        GridFormat::NetCdf => unreachable!("handled above"),
         GridFormat::Csv => csv_grid::parse(path, &bytes),
         GridFormat::Npy => npy::parse(path, &bytes),
         GridFormat::Asc => asc::parse(path, &bytes),
