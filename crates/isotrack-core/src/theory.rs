@@ -203,14 +203,27 @@ pub fn prop2_min_kp(
     c2: f64,
     phi_rad: f64,
 ) -> Option<f64> {
+    prop2_terms(b, speed_mps, c1, c2, phi_rad).map(|(k1, k2, _)| k1.max(k2 / c2))
+}
+
+/// The two gain terms of Prop. 2 with the common numerator of the second,
+/// `(gamma3*v/(gamma1*sin(phi)*(v*gamma1*cos(phi) - c1)), (c2*gamma3*v + c1*gamma2)/(c1*gamma1*sin(phi)), sin(phi))`,
+/// or `None` when the surface is unreachable at `phi`.
+fn prop2_terms(
+    b: &FieldBounds,
+    speed_mps: f64,
+    c1: f64,
+    c2: f64,
+    phi_rad: f64,
+) -> Option<(f64, f64, f64)> {
     let (s, c) = crate::fmath::sincos(phi_rad);
     let reach = speed_mps * b.gamma1 * c - c1;
     if !(b.gamma1 > 0.0 && reach > 0.0 && s > 0.0) {
         return None;
     }
     let k1 = b.gamma3 * speed_mps / (b.gamma1 * s * reach);
-    let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c2 * c1 * b.gamma1 * s);
-    Some(k1.max(k2))
+    let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c1 * b.gamma1 * s);
+    Some((k1, k2, s))
 }
 
 /// Prop. 2's steady-state bound in the unit-consistent form:
@@ -224,12 +237,11 @@ pub fn prop2_error_bound(
     c2: f64,
     phi_rad: f64,
 ) -> Option<f64> {
-    let min = prop2_min_kp(b, speed_mps, c1, c2, phi_rad)?;
-    if kp <= min {
+    let (k1, k2, _) = prop2_terms(b, speed_mps, c1, c2, phi_rad)?;
+    if kp <= k1.max(k2 / c2) {
         return None;
     }
-    let (s, _) = crate::fmath::sincos(phi_rad);
-    let arg = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (kp * c1 * c2 * b.gamma1 * s);
+    let arg = k2 / (kp * c2);
     (arg < 1.0).then(|| c2 * libm::atanh(arg))
 }
 
@@ -243,15 +255,11 @@ pub fn prop2_paper_min_kp(
     c2: f64,
     phi_rad: f64,
 ) -> (Option<f64>, Option<f64>) {
-    let (s, c) = crate::fmath::sincos(phi_rad);
-    let reach = speed_mps * b.gamma1 * c - c1;
-    if !(b.gamma1 > 0.0 && reach > 0.0 && s > 0.0) {
+    let Some((k1, k2, _)) = prop2_terms(b, speed_mps, c1, c2, phi_rad) else {
         return (None, None);
-    }
-    let k1 = b.gamma3 * speed_mps / (b.gamma1 * s * reach);
-    let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c1 * b.gamma1 * s);
+    };
     let min = k1.max(k2);
-    let arg = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (kp * c1 * b.gamma1 * s);
+    let arg = k2 / kp;
     (Some(min), (kp > min && arg < 1.0).then(|| libm::atanh(arg)))
 }
 

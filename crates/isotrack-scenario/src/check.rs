@@ -44,6 +44,20 @@ pub struct Prop1Report {
     pub note: String,
 }
 
+impl Prop1Report {
+    fn not_applicable(note: String) -> Self {
+        Self {
+            applicable: false,
+            alpha: None,
+            r_d_m: None,
+            paper_conditions_hold: None,
+            exact_local_condition_holds: None,
+            characteristic_polynomial: None,
+            note,
+        }
+    }
+}
+
 /// Prop. 2 report.
 #[derive(Clone, Debug, Serialize)]
 pub struct Prop2Report {
@@ -256,15 +270,9 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
                 },
             }
         }
-        _ => Prop1Report {
-            applicable: false,
-            alpha: None,
-            r_d_m: None,
-            paper_conditions_hold: None,
-            exact_local_condition_holds: None,
-            characteristic_polynomial: None,
-            note: "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
-        },
+        _ => Prop1Report::not_applicable(
+            "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
+        ),
     };
 
     // Prop. 2

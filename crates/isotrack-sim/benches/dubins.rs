@@ -1,16 +1,18 @@
 //! Throughput of the simulation loop on the paper's Fig. 2(b) scenario (Dubins robot, circular
-//! field, PI-like law, 100 Hz sensing, dt = 0.01 s, 600 s = 60 000 steps).
+//! field, PI-like law, 100 Hz sensing, dt = 0.01 s, 600 s = 60 000 steps), on the analytic field
+//! and on a grid sampled from it.
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use isotrack_core::control::{PiIsoline, PiIsolineParams};
 use isotrack_core::math::Vec2;
+use isotrack_core::ScalarField;
 use isotrack_fields::grid::{Grid2, GridField, Interpolation};
 use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
-use isotrack_sim::{simulate, NoTrace, Sensor, SensorConfig, StepPlan, TraceRow};
+use isotrack_sim::{simulate, NoTrace, Sensor, SensorConfig, StepPlan, TraceRow, TraceSink};
 use isotrack_vehicles::{Dubins, DubinsState};
 use std::hint::black_box;
 
-fn run(record_rate_hz: f64) -> u64 {
-    let field = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+/// One 600 s run of the Fig. 2(b) setting on `field`, recording into `sink` at `record_rate_hz`.
+fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &mut S) -> u64 {
     let vehicle = Dubins { speed_mps: 0.5 };
     let x0 = DubinsState {
         position_m: Vec2::new(10.0, 0.0),
@@ -24,81 +26,40 @@ fn run(record_rate_hz: f64) -> u64 {
     };
     let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
     let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 10.0).unwrap();
-    if record_rate_hz > 0.0 {
-        let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
-        simulate(
-            &field,
-            &vehicle,
-            x0,
-            &mut c,
-            &mut sensor,
-            &plan,
-            None,
-            &mut rows,
-        )
-        .steps
-    } else {
-        simulate(
-            &field,
-            &vehicle,
-            x0,
-            &mut c,
-            &mut sensor,
-            &plan,
-            None,
-            &mut NoTrace,
-        )
-        .steps
-    }
+    simulate(field, &vehicle, x0, &mut c, &mut sensor, &plan, None, sink).steps
 }
 
-/// The same scenario on a 0.25 m grid sampled from the circular field (161 x 161 nodes).
-fn run_grid(interp: Interpolation) -> u64 {
+fn bench(c: &mut Criterion) {
+    let analytic = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+    let mut g = c.benchmark_group("dubins_circular_600s");
+    g.throughput(Throughput::Elements(60_000));
+    g.bench_function("trace_off", |b| {
+        b.iter(|| black_box(run_on(&analytic, 0.0, &mut NoTrace)))
+    });
+    g.bench_function("trace_10hz", |b| {
+        b.iter(|| {
+            let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
+            black_box(run_on(&analytic, 10.0, &mut rows))
+        })
+    });
+    g.finish();
+
+    // A 0.25 m grid sampled from the circular field (161 x 161 nodes).
     let grid = Grid2::from_fn(161, 161, Vec2::new(-20.0, -20.0), [0.25, 0.25], |p| {
         20.0 * (-0.1 * p.norm()).exp()
     })
     .unwrap();
-    let field = GridField::new(grid, interp);
-    let vehicle = Dubins { speed_mps: 0.5 };
-    let x0 = DubinsState {
-        position_m: Vec2::new(10.0, 0.0),
-        heading_rad: -std::f64::consts::FRAC_PI_2,
-    };
-    let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
-    let cfg = SensorConfig {
-        rate_hz: 100.0,
-        noise_std: 0.0,
-        delay_s: 0.0,
-    };
-    let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
-    let plan = StepPlan::new(0.01, 600.0, 0.0, 0.2, 0.1, 10.0).unwrap();
-    simulate(
-        &field,
-        &vehicle,
-        x0,
-        &mut c,
-        &mut sensor,
-        &plan,
-        None,
-        &mut NoTrace,
-    )
-    .steps
-}
-
-fn bench(c: &mut Criterion) {
-    let mut g = c.benchmark_group("dubins_circular_600s");
-    g.throughput(Throughput::Elements(60_000));
-    g.bench_function("trace_off", |b| b.iter(|| black_box(run(black_box(0.0)))));
-    g.bench_function("trace_10hz", |b| b.iter(|| black_box(run(black_box(10.0)))));
-    g.finish();
     let mut g = c.benchmark_group("dubins_grid_600s");
     g.throughput(Throughput::Elements(60_000));
-    g.bench_function("bicubic", |b| {
-        b.iter(|| black_box(run_grid(black_box(Interpolation::Bicubic))))
-    });
-    g.bench_function("bilinear", |b| {
-        b.iter(|| black_box(run_grid(black_box(Interpolation::Bilinear))))
-    });
+    for (name, interp) in [
+        ("bicubic", Interpolation::Bicubic),
+        ("bilinear", Interpolation::Bilinear),
+    ] {
+        let field = GridField::new(grid.clone(), interp);
+        g.bench_function(name, |b| {
+            b.iter(|| black_box(run_on(&field, 0.0, &mut NoTrace)))
+        });
+    }
     g.finish();
 }
 
