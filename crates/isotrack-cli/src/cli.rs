@@ -23,6 +23,9 @@ pub enum Command {
     /// Apply the paper's theory to a scenario: Prop. 1 (circular fields) and Prop. 2 (gain
     /// conditions and steady-state error bound from the field's own gradient and Hessian).
     Check(CheckArgs),
+    /// Run one scenario with each controller (the paper's law and the baselines) on the same
+    /// field, start, sensor and turn-rate limit, and tabulate the metrics.
+    Compare(CompareArgs),
     /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
     /// as a CSV grid with a JSON sidecar.
     Interpolate(InterpolateArgs),
@@ -40,6 +43,27 @@ pub struct CheckArgs {
     /// Half-width of the tube |F - s_d| <= H over which gamma1..3 are taken (default: c2).
     #[arg(long, value_name = "H")]
     pub tube_halfwidth: Option<f64>,
+}
+
+/// `isotrack compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Comma-separated controller kinds (default: all): pi_isoline, sliding_mode,
+    /// sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference.
+    #[arg(long, value_delimiter = ',', value_name = "KIND,...")]
+    pub controllers: Vec<String>,
+    /// Override a scenario key for every run, e.g. `--set sensor.noise_std=0.05`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Set one controller's own key, e.g. `--gain sliding_mode.gamma=0.3`. Repeatable.
+    #[arg(long = "gain", value_name = "KIND.KEY=VALUE")]
+    pub gain: Vec<String>,
+    /// Write `comparison.csv` and one run directory per controller (`trace.csv`,
+    /// `summary.json`, `scenario.toml`) into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
 /// Station interpolation methods.

@@ -13,7 +13,9 @@ use std::io::Write;
 pub fn write_grid_csv(path: &std::path::Path, g: &Grid2) -> std::io::Result<()> {
     let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
     for iy in 0..g.ny() {
-        let row: Vec<String> = (0..g.nx()).map(|ix| format!("{}", g.at(ix, iy))).collect();
+        let row: Vec<String> = (0..g.nx())
+            .map(|ix| crate::output::num(g.at(ix, iy)))
+            .collect();
         writeln!(out, "{}", row.join(","))?;
     }
     out.flush()

@@ -9,6 +9,7 @@ fn main() -> ExitCode {
         Command::Run(args) => isotrack_cli::run::run(args),
         Command::Show(args) => isotrack_cli::run::show(args),
         Command::Check(args) => isotrack_cli::run::check(args),
+        Command::Compare(args) => isotrack_cli::compare::compare(args),
         Command::Interpolate(args) => isotrack_cli::interpolate::interpolate(args),
     };
     match result {

@@ -18,8 +18,8 @@ pub const TRACE_COLUMNS: [&str; 8] = [
 ];
 
 /// Writes `trace.csv`: a header row, then one row per recorded step. Numbers are written in
-/// Rust's shortest round-trip form, so they read back bit-identical; `s_measured` is empty
-/// before the first measurement.
+/// Rust's shortest round-trip form ([`num`]), so they read back bit-identical; `s_measured` is
+/// empty before the first measurement.
 pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
     let mut w = csv::Writer::from_path(path)?;
     w.write_record(TRACE_COLUMNS)?;
@@ -35,12 +35,18 @@ pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
             r.error,
             r.omega_radps,
         ] {
-            buf.push(format!("{v}"));
+            buf.push(num(v));
         }
-        buf.push(r.s_measured.map(|v| format!("{v}")).unwrap_or_default());
+        buf.push(r.s_measured.map(num).unwrap_or_default());
         w.write_record(&buf)?;
     }
     w.flush()
+}
+
+/// A number as written in CSV outputs: the shortest string that reads back to the same `f64`,
+/// in scientific notation when that is shorter (`7.105427357601002e-15`, `0.5`, `600.0`).
+pub fn num(v: f64) -> String {
+    format!("{v:?}")
 }
 
 /// The content of `summary.json`.

@@ -3,14 +3,15 @@
 use crate::field::FieldModel;
 use crate::schema::*;
 use crate::Scenario;
-use isotrack_core::control::{AntiWindup, OutputStage, PiIsoline, PiIsolineParams};
+use isotrack_core::control::{
+    AntiWindup, GradientReference, GradientReferenceParams, GroundTruth, OutputStage, PiIsoline,
+    PiIsolineParams, Pid, PidCrossing, PidCrossingParams, PidParams, SlidingMode,
+    SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
+};
 use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
-use isotrack_core::ScalarField;
-use isotrack_core::{IsolineController, Measurement};
-use isotrack_sim::{
-    simulate, IsolineDistanceFn, RunResult, Sensor, SensorConfig, StepPlan, TraceSink,
-};
+use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarField};
+use isotrack_sim::{simulate, Oracles, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
 use isotrack_vehicles::{Dubins, DubinsState};
 
 /// Every controller a scenario can name, behind one type (static dispatch in the loop).
@@ -18,19 +19,44 @@ use isotrack_vehicles::{Dubins, DubinsState};
 pub enum ControllerModel {
     /// `pi_isoline`.
     PiIsoline(PiIsoline),
+    /// `sliding_mode` and `sliding_mode_smooth`.
+    SlidingMode(SlidingMode),
+    /// `suboptimal_sosm`.
+    SuboptimalSosm(SuboptimalSosm),
+    /// `pid`.
+    Pid(Pid),
+    /// `pid_crossing`.
+    PidCrossing(PidCrossing),
+    /// `gradient_reference` (not coordinate-free).
+    GradientReference(GradientReference),
+}
+
+macro_rules! each_controller {
+    ($self:ident, $c:ident => $e:expr) => {
+        match $self {
+            ControllerModel::PiIsoline($c) => $e,
+            ControllerModel::SlidingMode($c) => $e,
+            ControllerModel::SuboptimalSosm($c) => $e,
+            ControllerModel::Pid($c) => $e,
+            ControllerModel::PidCrossing($c) => $e,
+            ControllerModel::GradientReference($c) => $e,
+        }
+    };
 }
 
 impl IsolineController for ControllerModel {
     #[inline]
     fn update(&mut self, m: &Measurement) -> f64 {
-        match self {
-            ControllerModel::PiIsoline(c) => c.update(m),
-        }
+        each_controller!(self, c => c.update(m))
     }
     fn reset(&mut self) {
-        match self {
-            ControllerModel::PiIsoline(c) => c.reset(),
-        }
+        each_controller!(self, c => c.reset())
+    }
+    fn needs_ground_truth(&self) -> bool {
+        each_controller!(self, c => c.needs_ground_truth())
+    }
+    fn update_with_truth(&mut self, m: &Measurement, t: &GroundTruth) -> f64 {
+        each_controller!(self, c => c.update_with_truth(m, t))
     }
 }
 
@@ -55,34 +81,86 @@ impl Scenario {
                 lipschitz: c.derivative_lipschitz.unwrap_or(1.0),
             },
         };
-        let anti_windup = match c.anti_windup.unwrap_or(AntiWindupKind::None) {
-            AntiWindupKind::None => AntiWindup::None,
-            AntiWindupKind::Clamp => AntiWindup::Clamp {
-                limit_radps: c.integral_limit_radps.unwrap_or(f64::INFINITY),
-            },
-            AntiWindupKind::Conditional => AntiWindup::Conditional {
-                band: c.integral_band.unwrap_or(1.0),
-            },
-            AntiWindupKind::BackCalculation => AntiWindup::BackCalculation {
-                tracking_time_s: c.tracking_time_s.unwrap_or(1.0),
-            },
+        let output = OutputStage {
+            higher_side: c.higher_side.unwrap_or_default(),
+            max_turn_rate_radps: c.max_turn_rate_radps,
+        };
+        let level = self.level();
+        let u_max = c.max_turn_rate_radps.unwrap_or(1.0);
+        let pid = PidParams {
+            level,
+            kp: c.kp.unwrap_or(3.0),
+            ki: c.ki.unwrap_or(0.2),
+            kd: c.kd.unwrap_or(10.0),
+            output,
+            derivative,
+        };
+        let sliding = |boundary_layer| SlidingModeParams {
+            level,
+            max_turn_rate_radps: u_max,
+            gamma: c.gamma.unwrap_or(0.2),
+            delta: c.delta.unwrap_or(1.0),
+            boundary_layer,
+            output,
+            derivative,
         };
         match c.kind.unwrap_or(ControllerKind::PiIsoline) {
             ControllerKind::PiIsoline => {
+                let anti_windup = match c.anti_windup.unwrap_or(AntiWindupKind::None) {
+                    AntiWindupKind::None => AntiWindup::None,
+                    AntiWindupKind::Clamp => AntiWindup::Clamp {
+                        limit_radps: c.integral_limit_radps.unwrap_or(f64::INFINITY),
+                    },
+                    AntiWindupKind::Conditional => AntiWindup::Conditional {
+                        band: c.integral_band.unwrap_or(1.0),
+                    },
+                    AntiWindupKind::BackCalculation => AntiWindup::BackCalculation {
+                        tracking_time_s: c.tracking_time_s.unwrap_or(1.0),
+                    },
+                };
                 ControllerModel::PiIsoline(PiIsoline::new(PiIsolineParams {
-                    level: self.level(),
+                    level,
                     kp: c.kp.unwrap_or(10.0),
                     ki: c.ki.unwrap_or(0.0),
                     c1: c.c1.unwrap_or(0.2),
                     c2: c.c2.unwrap_or(1.0),
-                    output: OutputStage {
-                        higher_side: c.higher_side.unwrap_or_default(),
-                        max_turn_rate_radps: c.max_turn_rate_radps,
-                    },
+                    output,
                     anti_windup,
                     derivative,
                 }))
             }
+            ControllerKind::SlidingMode => {
+                ControllerModel::SlidingMode(SlidingMode::new(sliding(None)))
+            }
+            ControllerKind::SlidingModeSmooth => ControllerModel::SlidingMode(SlidingMode::new(
+                sliding(Some(c.boundary_layer.unwrap_or(0.05))),
+            )),
+            ControllerKind::SuboptimalSosm => {
+                ControllerModel::SuboptimalSosm(SuboptimalSosm::new(SuboptimalSosmParams {
+                    level,
+                    max_turn_rate_radps: u_max,
+                    alpha_star: c.alpha_star.unwrap_or(0.5),
+                    output,
+                    derivative,
+                }))
+            }
+            ControllerKind::Pid => ControllerModel::Pid(Pid::new(pid)),
+            ControllerKind::PidCrossing => {
+                ControllerModel::PidCrossing(PidCrossing::new(PidCrossingParams {
+                    pid,
+                    crossing_angle_rad: c.crossing_angle_rad.unwrap_or(0.3),
+                    crossing_period_s: c.crossing_period_s.unwrap_or(20.0),
+                    turn_rate_radps: c.crossing_turn_rate_radps.unwrap_or(0.5),
+                }))
+            }
+            ControllerKind::GradientReference => ControllerModel::GradientReference(
+                GradientReference::new(GradientReferenceParams {
+                    level,
+                    ke: c.ke.unwrap_or(0.5),
+                    k_heading: c.k_heading.unwrap_or(1.0),
+                    output,
+                }),
+            ),
         }
     }
 
@@ -123,22 +201,26 @@ impl Scenario {
 
     /// Runs the scenario, recording the trace into `sink`.
     pub fn run<S: TraceSink + ?Sized>(&self, sink: &mut S) -> RunResult {
-        let iso = self.isoline();
-        let dist = |p: Vec2| iso.distance(p);
         match self.field() {
-            FieldModel::Analytic(f) => self.run_on(f, Some(&dist), sink),
-            FieldModel::Grid(f) => self.run_on(f, Some(&dist), sink),
+            FieldModel::Analytic(f) => self.run_on(f, sink),
+            FieldModel::Grid(f) => self.run_on(f, sink),
         }
     }
 
     /// Runs the scenario on a given field (dispatched once, so the loop is monomorphised per
     /// field type).
-    fn run_on<F: ScalarField, S: TraceSink + ?Sized>(
+    fn run_on<F: ScalarField + FieldDerivatives + Sync, S: TraceSink + ?Sized>(
         &self,
         field: &F,
-        isoline: Option<IsolineDistanceFn<'_>>,
         sink: &mut S,
     ) -> RunResult {
+        let iso = self.isoline();
+        let dist = |p: Vec2| iso.distance(p);
+        let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
+        let oracles = Oracles {
+            isoline_distance: Some(&dist),
+            gradient: Some(&grad),
+        };
         let mut controller = self.controller();
         let mut sensor = self.sensor();
         let plan = self.plan();
@@ -159,7 +241,7 @@ impl Scenario {
                     &mut controller,
                     &mut sensor,
                     &plan,
-                    isoline,
+                    &oracles,
                     sink,
                 )
             }

@@ -21,7 +21,10 @@ pub mod resolve;
 pub mod schema;
 
 pub use build::ControllerModel;
-pub use load::{load_scenario, parse_scenario, parse_scenario_in, ErrorLocation, ScenarioError};
+pub use load::{
+    apply_overrides, build_derived, load_scenario, parse_scenario, parse_scenario_in,
+    ErrorLocation, ScenarioError,
+};
 pub use schema::ScenarioFile;
 
 use field::{build_field, FieldModel, IsolineOracle};

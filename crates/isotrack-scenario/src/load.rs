@@ -207,6 +207,70 @@ pub fn parse_scenario_in(
     })
 }
 
+/// Applies `KEY=VALUE` overrides to a (typically resolved) scenario file; errors name the
+/// argument. Used to derive variants of a scenario (e.g. one per controller in `compare`).
+pub fn apply_overrides(
+    file: &ScenarioFile,
+    overrides: &[String],
+) -> Result<ScenarioFile, ScenarioError> {
+    let mut table = match toml::Value::try_from(file) {
+        Ok(toml::Value::Table(t)) => t,
+        _ => toml::Table::new(),
+    };
+    for arg in overrides {
+        let fail = |key: Option<String>, message: String| {
+            ScenarioError::Invalid(vec![LocatedIssue {
+                location: ErrorLocation::Override { arg: arg.clone() },
+                key,
+                message,
+            }])
+        };
+        let (key, raw) = arg
+            .split_once('=')
+            .ok_or_else(|| fail(None, "expected KEY=VALUE".into()))?;
+        let key = key.trim().to_string();
+        insert_dotted(&mut table, &key, parse_override_value(raw.trim()))
+            .map_err(|m| fail(Some(key.clone()), m))?;
+        toml::Value::Table(table.clone())
+            .try_into::<ScenarioFile>()
+            .map_err(|e| fail(Some(key.clone()), e.message().trim().to_string()))?;
+    }
+    toml::Value::Table(table)
+        .try_into()
+        .map_err(|e: toml::de::Error| {
+            ScenarioError::Invalid(vec![LocatedIssue {
+                location: ErrorLocation::Default {
+                    origin: "<derived>".into(),
+                },
+                key: None,
+                message: e.message().to_string(),
+            }])
+        })
+}
+
+/// Resolves and builds a derived scenario file (files relative to `base_dir`); problems are
+/// reported against `origin`.
+pub fn build_derived(
+    file: ScenarioFile,
+    origin: &str,
+    base_dir: &Path,
+) -> Result<Scenario, ScenarioError> {
+    Scenario::from_file(file, base_dir).map_err(|issues| {
+        ScenarioError::Invalid(
+            issues
+                .into_iter()
+                .map(|i| LocatedIssue {
+                    location: ErrorLocation::Default {
+                        origin: origin.to_string(),
+                    },
+                    key: Some(i.key),
+                    message: i.message,
+                })
+                .collect(),
+        )
+    })
+}
+
 /// `VALUE` as a TOML value; a bare word that is not TOML (`dubins`) is taken as a string.
 fn parse_override_value(raw: &str) -> toml::Value {
     match toml::from_str::<toml::Table>(&format!("v = {raw}")) {

@@ -48,11 +48,6 @@ impl Checker {
             self.fail(key, format!("must hold finite numbers, got {xs:?}"));
         }
     }
-    fn unused<T>(&mut self, key: &str, v: &Option<T>, why: &str) {
-        if v.is_some() {
-            self.fail(key, format!("does not apply {why}"));
-        }
-    }
 }
 
 /// The default `gaussian_plumes` sources: three overlapping, rotated, anisotropic plumes whose
@@ -145,6 +140,256 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
         c.fail("field.value_scale", "must not be 0");
     }
     c.finite("field.value_offset", *fd.value_offset.get_or_insert(0.0));
+}
+
+/// `(key, is set)` for every kind-specific key of `[controller]`.
+fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 21] {
+    [
+        ("kp", ct.kp.is_some()),
+        ("ki", ct.ki.is_some()),
+        ("c1", ct.c1.is_some()),
+        ("c2", ct.c2.is_some()),
+        ("kd", ct.kd.is_some()),
+        ("anti_windup", ct.anti_windup.is_some()),
+        ("integral_limit_radps", ct.integral_limit_radps.is_some()),
+        ("integral_band", ct.integral_band.is_some()),
+        ("tracking_time_s", ct.tracking_time_s.is_some()),
+        ("gamma", ct.gamma.is_some()),
+        ("delta", ct.delta.is_some()),
+        ("boundary_layer", ct.boundary_layer.is_some()),
+        ("alpha_star", ct.alpha_star.is_some()),
+        ("crossing_angle_rad", ct.crossing_angle_rad.is_some()),
+        ("crossing_period_s", ct.crossing_period_s.is_some()),
+        (
+            "crossing_turn_rate_radps",
+            ct.crossing_turn_rate_radps.is_some(),
+        ),
+        ("ke", ct.ke.is_some()),
+        ("k_heading", ct.k_heading.is_some()),
+        ("derivative", ct.derivative.is_some()),
+        ("derivative_tau_s", ct.derivative_tau_s.is_some()),
+        ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
+    ]
+}
+
+/// The keys each controller kind takes besides `kind`, `level`, `higher_side`,
+/// `max_turn_rate_radps`.
+fn controller_allowed(kind: ControllerKind) -> &'static [&'static str] {
+    const D: [&str; 3] = ["derivative", "derivative_tau_s", "derivative_lipschitz"];
+    match kind {
+        ControllerKind::PiIsoline => &[
+            "kp",
+            "ki",
+            "c1",
+            "c2",
+            "anti_windup",
+            "integral_limit_radps",
+            "integral_band",
+            "tracking_time_s",
+            D[0],
+            D[1],
+            D[2],
+        ],
+        ControllerKind::SlidingMode => &["gamma", "delta", D[0], D[1], D[2]],
+        ControllerKind::SlidingModeSmooth => {
+            &["gamma", "delta", "boundary_layer", D[0], D[1], D[2]]
+        }
+        ControllerKind::SuboptimalSosm => &["alpha_star", D[0], D[1], D[2]],
+        ControllerKind::Pid => &["kp", "ki", "kd", D[0], D[1], D[2]],
+        ControllerKind::PidCrossing => &[
+            "kp",
+            "ki",
+            "kd",
+            "crossing_angle_rad",
+            "crossing_period_s",
+            "crossing_turn_rate_radps",
+            D[0],
+            D[1],
+            D[2],
+        ],
+        ControllerKind::GradientReference => &["ke", "k_heading"],
+    }
+}
+
+fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
+    let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
+    let allowed = controller_allowed(kind);
+    for (key, present) in controller_keys_present(ct) {
+        if present && !allowed.contains(&key) {
+            c.fail(
+                &format!("controller.{key}"),
+                format!("does not apply to controller.kind = \"{}\"", kind.name()),
+            );
+        }
+    }
+    c.finite("controller.level", *ct.level.get_or_insert(10.0));
+    ct.higher_side.get_or_insert(HigherSide::Right);
+    let bang_bang = matches!(
+        kind,
+        ControllerKind::SlidingMode
+            | ControllerKind::SlidingModeSmooth
+            | ControllerKind::SuboptimalSosm
+    );
+    if bang_bang {
+        ct.max_turn_rate_radps.get_or_insert(1.0);
+    }
+    if let Some(m) = ct.max_turn_rate_radps {
+        c.positive("controller.max_turn_rate_radps", m);
+    }
+    let pos = |c: &mut Checker, key: &str, v: &mut Option<f64>, d: f64| {
+        c.positive(key, *v.get_or_insert(d))
+    };
+    let nonneg = |c: &mut Checker, key: &str, v: &mut Option<f64>, d: f64| {
+        c.non_negative(key, *v.get_or_insert(d))
+    };
+    match kind {
+        ControllerKind::PiIsoline => {
+            pos(c, "controller.kp", &mut ct.kp, 10.0);
+            nonneg(c, "controller.ki", &mut ct.ki, 1.0);
+            pos(c, "controller.c1", &mut ct.c1, 0.2);
+            pos(c, "controller.c2", &mut ct.c2, 1.0);
+            resolve_anti_windup(c, ct);
+        }
+        ControllerKind::SlidingMode | ControllerKind::SlidingModeSmooth => {
+            pos(c, "controller.gamma", &mut ct.gamma, 0.2);
+            pos(c, "controller.delta", &mut ct.delta, 1.0);
+            if kind == ControllerKind::SlidingModeSmooth {
+                pos(c, "controller.boundary_layer", &mut ct.boundary_layer, 0.05);
+            }
+        }
+        ControllerKind::SuboptimalSosm => {
+            let a = *ct.alpha_star.get_or_insert(0.5);
+            if c.finite("controller.alpha_star", a) && !(a > 0.0 && a <= 1.0) {
+                c.fail(
+                    "controller.alpha_star",
+                    format!("must be in (0, 1], got {a}"),
+                );
+            }
+        }
+        ControllerKind::Pid | ControllerKind::PidCrossing => {
+            nonneg(c, "controller.kp", &mut ct.kp, 3.0);
+            nonneg(c, "controller.ki", &mut ct.ki, 0.2);
+            nonneg(c, "controller.kd", &mut ct.kd, 10.0);
+            if kind == ControllerKind::PidCrossing {
+                pos(
+                    c,
+                    "controller.crossing_angle_rad",
+                    &mut ct.crossing_angle_rad,
+                    0.3,
+                );
+                pos(
+                    c,
+                    "controller.crossing_period_s",
+                    &mut ct.crossing_period_s,
+                    20.0,
+                );
+                let d = ct.max_turn_rate_radps.unwrap_or(0.5);
+                pos(
+                    c,
+                    "controller.crossing_turn_rate_radps",
+                    &mut ct.crossing_turn_rate_radps,
+                    d,
+                );
+            }
+        }
+        ControllerKind::GradientReference => {
+            pos(c, "controller.ke", &mut ct.ke, 0.5);
+            pos(c, "controller.k_heading", &mut ct.k_heading, 1.0);
+        }
+    }
+    if kind != ControllerKind::GradientReference {
+        resolve_derivative(c, ct);
+    }
+}
+
+fn resolve_anti_windup(c: &mut Checker, ct: &mut ControllerSection) {
+    let aw = *ct.anti_windup.get_or_insert(AntiWindupKind::None);
+    let (name, own): (&str, Option<&str>) = match aw {
+        AntiWindupKind::None => ("none", None),
+        AntiWindupKind::Clamp => ("clamp", Some("integral_limit_radps")),
+        AntiWindupKind::Conditional => ("conditional", Some("integral_band")),
+        AntiWindupKind::BackCalculation => ("back_calculation", Some("tracking_time_s")),
+    };
+    for (key, present) in [
+        ("integral_limit_radps", ct.integral_limit_radps.is_some()),
+        ("integral_band", ct.integral_band.is_some()),
+        ("tracking_time_s", ct.tracking_time_s.is_some()),
+    ] {
+        if present && own != Some(key) {
+            c.fail(
+                &format!("controller.{key}"),
+                format!("does not apply to controller.anti_windup = \"{name}\""),
+            );
+        }
+    }
+    match aw {
+        AntiWindupKind::None => {}
+        AntiWindupKind::Clamp => {
+            let default = ct
+                .max_turn_rate_radps
+                .unwrap_or(ct.kp.unwrap_or(0.0) * ct.c1.unwrap_or(0.0));
+            c.positive(
+                "controller.integral_limit_radps",
+                *ct.integral_limit_radps.get_or_insert(default),
+            );
+        }
+        AntiWindupKind::Conditional => {
+            let default = ct.c2.unwrap_or(1.0);
+            c.positive(
+                "controller.integral_band",
+                *ct.integral_band.get_or_insert(default),
+            );
+        }
+        AntiWindupKind::BackCalculation => {
+            c.positive(
+                "controller.tracking_time_s",
+                *ct.tracking_time_s.get_or_insert(1.0),
+            );
+            if ct.max_turn_rate_radps.is_none() {
+                c.fail(
+                    "controller.anti_windup",
+                    "\"back_calculation\" needs controller.max_turn_rate_radps (it acts on the saturation)",
+                );
+            }
+        }
+    }
+}
+
+fn resolve_derivative(c: &mut Checker, ct: &mut ControllerSection) {
+    let kind = *ct
+        .derivative
+        .get_or_insert(DerivativeKindName::BackwardDifference);
+    let (name, own): (&str, Option<&str>) = match kind {
+        DerivativeKindName::BackwardDifference => ("backward_difference", None),
+        DerivativeKindName::FilteredDifference => ("filtered_difference", Some("derivative_tau_s")),
+        DerivativeKindName::Levant => ("levant", Some("derivative_lipschitz")),
+    };
+    for (key, present) in [
+        ("derivative_tau_s", ct.derivative_tau_s.is_some()),
+        ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
+    ] {
+        if present && own != Some(key) {
+            c.fail(
+                &format!("controller.{key}"),
+                format!("does not apply to controller.derivative = \"{name}\""),
+            );
+        }
+    }
+    match kind {
+        DerivativeKindName::BackwardDifference => {}
+        DerivativeKindName::FilteredDifference => {
+            c.positive(
+                "controller.derivative_tau_s",
+                *ct.derivative_tau_s.get_or_insert(0.1),
+            );
+        }
+        DerivativeKindName::Levant => {
+            c.positive(
+                "controller.derivative_lipschitz",
+                *ct.derivative_lipschitz.get_or_insert(1.0),
+            );
+        }
+    }
 }
 
 /// Fills the defaults of every applicable key and validates every value. Files named by the
@@ -293,125 +538,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     }
 
     // [controller]
-    let ct = &mut f.controller;
-    match *ct.kind.get_or_insert(ControllerKind::PiIsoline) {
-        ControllerKind::PiIsoline => {
-            c.finite("controller.level", *ct.level.get_or_insert(10.0));
-            c.positive("controller.kp", *ct.kp.get_or_insert(10.0));
-            c.non_negative("controller.ki", *ct.ki.get_or_insert(1.0));
-            c.positive("controller.c1", *ct.c1.get_or_insert(0.2));
-            c.positive("controller.c2", *ct.c2.get_or_insert(1.0));
-            ct.higher_side.get_or_insert(HigherSide::Right);
-            if let Some(m) = ct.max_turn_rate_radps {
-                c.positive("controller.max_turn_rate_radps", m);
-            }
-            let aw = *ct.anti_windup.get_or_insert(AntiWindupKind::None);
-            let why = |k: &str| format!("to controller.anti_windup = \"{k}\"");
-            match aw {
-                AntiWindupKind::None => {
-                    c.unused(
-                        "controller.integral_limit_radps",
-                        &ct.integral_limit_radps,
-                        &why("none"),
-                    );
-                    c.unused("controller.integral_band", &ct.integral_band, &why("none"));
-                    c.unused(
-                        "controller.tracking_time_s",
-                        &ct.tracking_time_s,
-                        &why("none"),
-                    );
-                }
-                AntiWindupKind::Clamp => {
-                    c.unused("controller.integral_band", &ct.integral_band, &why("clamp"));
-                    c.unused(
-                        "controller.tracking_time_s",
-                        &ct.tracking_time_s,
-                        &why("clamp"),
-                    );
-                    let default = ct
-                        .max_turn_rate_radps
-                        .unwrap_or(ct.kp.unwrap_or(0.0) * ct.c1.unwrap_or(0.0));
-                    c.positive(
-                        "controller.integral_limit_radps",
-                        *ct.integral_limit_radps.get_or_insert(default),
-                    );
-                }
-                AntiWindupKind::Conditional => {
-                    c.unused(
-                        "controller.integral_limit_radps",
-                        &ct.integral_limit_radps,
-                        &why("conditional"),
-                    );
-                    c.unused(
-                        "controller.tracking_time_s",
-                        &ct.tracking_time_s,
-                        &why("conditional"),
-                    );
-                    let default = ct.c2.unwrap_or(1.0);
-                    c.positive(
-                        "controller.integral_band",
-                        *ct.integral_band.get_or_insert(default),
-                    );
-                }
-                AntiWindupKind::BackCalculation => {
-                    c.unused(
-                        "controller.integral_limit_radps",
-                        &ct.integral_limit_radps,
-                        &why("back_calculation"),
-                    );
-                    c.unused(
-                        "controller.integral_band",
-                        &ct.integral_band,
-                        &why("back_calculation"),
-                    );
-                    c.positive(
-                        "controller.tracking_time_s",
-                        *ct.tracking_time_s.get_or_insert(1.0),
-                    );
-                    if ct.max_turn_rate_radps.is_none() {
-                        c.fail(
-                            "controller.anti_windup",
-                            "\"back_calculation\" needs controller.max_turn_rate_radps (it acts on the saturation)",
-                        );
-                    }
-                }
-            }
-        }
-    }
-    match *ct
-        .derivative
-        .get_or_insert(DerivativeKindName::BackwardDifference)
-    {
-        DerivativeKindName::BackwardDifference => {
-            let why = "to controller.derivative = \"backward_difference\"";
-            c.unused("controller.derivative_tau_s", &ct.derivative_tau_s, why);
-            c.unused(
-                "controller.derivative_lipschitz",
-                &ct.derivative_lipschitz,
-                why,
-            );
-        }
-        DerivativeKindName::FilteredDifference => {
-            let why = "to controller.derivative = \"filtered_difference\"";
-            c.unused(
-                "controller.derivative_lipschitz",
-                &ct.derivative_lipschitz,
-                why,
-            );
-            c.positive(
-                "controller.derivative_tau_s",
-                *ct.derivative_tau_s.get_or_insert(0.1),
-            );
-        }
-        DerivativeKindName::Levant => {
-            let why = "to controller.derivative = \"levant\"";
-            c.unused("controller.derivative_tau_s", &ct.derivative_tau_s, why);
-            c.positive(
-                "controller.derivative_lipschitz",
-                *ct.derivative_lipschitz.get_or_insert(1.0),
-            );
-        }
-    }
+    resolve_controller(&mut c, &mut f.controller);
 
     // [metrics]
     let frac = *f.metrics.steady_state_fraction.get_or_insert(0.2);

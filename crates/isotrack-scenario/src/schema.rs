@@ -264,6 +264,47 @@ pub struct SensorSection {
 pub enum ControllerKind {
     /// Dong & You's PI-like law, eqs. (2)-(3).
     PiIsoline,
+    /// Matveev et al.'s sliding mode `u_max*sgn(s' + chi(s - s0))` (reconstructed).
+    SlidingMode,
+    /// The same with a boundary layer (continuous; not the paper's law).
+    SlidingModeSmooth,
+    /// Bartolini-type suboptimal second-order sliding mode (Mellucci et al.; reconstructed).
+    SuboptimalSosm,
+    /// Linear PID on `eps` (ablation of the PI-like law).
+    Pid,
+    /// PID with adaptive crossing-angle correction (Newaz et al.; reconstruction).
+    PidCrossing,
+    /// Guiding vector field with true position and gradient: NOT coordinate-free (reference).
+    GradientReference,
+}
+
+impl ControllerKind {
+    /// Every kind, in the order `compare` runs them.
+    pub const ALL: [ControllerKind; 7] = [
+        ControllerKind::PiIsoline,
+        ControllerKind::SlidingMode,
+        ControllerKind::SlidingModeSmooth,
+        ControllerKind::SuboptimalSosm,
+        ControllerKind::Pid,
+        ControllerKind::PidCrossing,
+        ControllerKind::GradientReference,
+    ];
+    /// The snake_case name used in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::PiIsoline => "pi_isoline",
+            ControllerKind::SlidingMode => "sliding_mode",
+            ControllerKind::SlidingModeSmooth => "sliding_mode_smooth",
+            ControllerKind::SuboptimalSosm => "suboptimal_sosm",
+            ControllerKind::Pid => "pid",
+            ControllerKind::PidCrossing => "pid_crossing",
+            ControllerKind::GradientReference => "gradient_reference",
+        }
+    }
+    /// The kind of a name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
 }
 
 /// Anti-windup schemes (see `isotrack_core::control::AntiWindup`).
@@ -302,12 +343,44 @@ pub struct ControllerSection {
     /// Desired level `s_d`, field units (default 10).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub level: Option<f64>,
-    /// `kp > 0` (default 10).
+    /// `pi_isoline`: `kp > 0` (default 10). `pid`, `pid_crossing`: the gain on `eps` (default 3).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kp: Option<f64>,
-    /// `ki >= 0` (default 1).
+    /// `pi_isoline`: `ki >= 0` (default 1). `pid`, `pid_crossing`: the integral gain (default 0.2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ki: Option<f64>,
+    /// `pid`, `pid_crossing`: the gain on `eps'` (default 10). The PID defaults are the
+    /// linearisation of the default PI-like law (`kd = kp`, `kp = kp*c1/c2 + ki`, `ki = ki*c1/c2`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kd: Option<f64>,
+    /// `sliding_mode(_smooth)`: slope of `chi`, 1/s (default 0.2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma: Option<f64>,
+    /// `sliding_mode(_smooth)`: linear zone of `chi`, field units (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delta: Option<f64>,
+    /// `sliding_mode_smooth`: boundary-layer width, field units per second (default 0.05).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boundary_layer: Option<f64>,
+    /// `suboptimal_sosm`: modulation factor `alpha*` in (0, 1] (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub alpha_star: Option<f64>,
+    /// `pid_crossing`: initial crossing angle, rad (default 0.3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crossing_angle_rad: Option<f64>,
+    /// `pid_crossing`: target time between crossings, s (default 20).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crossing_period_s: Option<f64>,
+    /// `pid_crossing`: turn rate of the crossing turn, rad/s (default `max_turn_rate_radps` or
+    /// 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crossing_turn_rate_radps: Option<f64>,
+    /// `gradient_reference`: gain on the distance estimate, 1/m (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ke: Option<f64>,
+    /// `gradient_reference`: heading gain, 1/s (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_heading: Option<f64>,
     /// `c1 > 0`, field units per second (default 0.2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub c1: Option<f64>,
@@ -317,7 +390,8 @@ pub struct ControllerSection {
     /// Which side the higher values lie on: `right` (default; the paper) or `left`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub higher_side: Option<isotrack_core::control::HigherSide>,
-    /// Optional turn-rate limit `|omega| <= max_turn_rate_radps`, rad/s.
+    /// Turn-rate limit `|omega| <= max_turn_rate_radps`, rad/s: optional for the continuous laws;
+    /// the amplitude `u_max` / `U` of `sliding_mode(_smooth)` and `suboptimal_sosm` (default 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_turn_rate_radps: Option<f64>,
     /// Anti-windup scheme (default `none`).

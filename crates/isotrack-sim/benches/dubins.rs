@@ -7,7 +7,9 @@ use isotrack_core::math::Vec2;
 use isotrack_core::ScalarField;
 use isotrack_fields::grid::{Grid2, GridField, Interpolation};
 use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
-use isotrack_sim::{simulate, NoTrace, Sensor, SensorConfig, StepPlan, TraceRow, TraceSink};
+use isotrack_sim::{
+    simulate, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TraceRow, TraceSink,
+};
 use isotrack_vehicles::{Dubins, DubinsState};
 use std::hint::black_box;
 
@@ -26,7 +28,17 @@ fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &m
     };
     let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
     let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 10.0).unwrap();
-    simulate(field, &vehicle, x0, &mut c, &mut sensor, &plan, None, sink).steps
+    simulate(
+        field,
+        &vehicle,
+        x0,
+        &mut c,
+        &mut sensor,
+        &plan,
+        &Oracles::default(),
+        sink,
+    )
+    .steps
 }
 
 fn bench(c: &mut Criterion) {

@@ -21,5 +21,7 @@ mod trace;
 
 pub use metrics::{Metrics, MetricsConfig, RunMetrics};
 pub use sensor::{Sensor, SensorConfig, SensorError};
-pub use simulation::{simulate, IsolineDistanceFn, Outcome, RunResult, StepPlan, StepPlanError};
+pub use simulation::{
+    simulate, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, StepPlan, StepPlanError,
+};
 pub use trace::{NoTrace, TraceRow, TraceSink};

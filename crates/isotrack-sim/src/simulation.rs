@@ -3,6 +3,7 @@
 use crate::metrics::{Metrics, MetricsConfig, RunMetrics};
 use crate::sensor::{whole_steps, Sensor};
 use crate::trace::{TraceRow, TraceSink};
+use isotrack_core::control::GroundTruth;
 use isotrack_core::{IsolineController, ScalarField, Vehicle};
 use serde::Serialize;
 
@@ -125,10 +126,26 @@ pub struct RunResult {
 /// Distance from a point to the true isoline, m (`None` where unknown). Used for metrics only.
 pub type IsolineDistanceFn<'a> = &'a (dyn Fn(isotrack_core::Vec2) -> Option<f64> + Sync);
 
+/// The true field gradient and Hessian at `(t, p)`, for reference controllers only.
+pub type GradientFn<'a> = &'a (dyn Fn(f64, isotrack_core::Vec2) -> Option<(isotrack_core::Vec2, isotrack_core::math::Mat2)>
+         + Sync);
+
+/// Ground-truth oracles the loop may consult: never for a coordinate-free controller.
+#[derive(Clone, Copy, Default)]
+pub struct Oracles<'a> {
+    /// For the isoline-distance metrics (evaluated in the steady-state window).
+    pub isoline_distance: Option<IsolineDistanceFn<'a>>,
+    /// For controllers whose `needs_ground_truth()` is true.
+    pub gradient: Option<GradientFn<'a>>,
+}
+
 /// Runs one simulation: `field`, `vehicle` from `x0`, `controller` behind `sensor`, for
 /// `plan.n_steps` steps, recording into `sink`. See the crate documentation for the order of a step.
-/// `isoline_distance`, if given, is evaluated at every step of the steady-state window for the
-/// isoline-distance metrics.
+/// `oracles.isoline_distance`, if given, is evaluated at every step of the steady-state window for
+/// the isoline-distance metrics; `oracles.gradient` feeds [`GroundTruth`] to a reference
+/// controller that asks for it (`needs_ground_truth`), and no other.
+///
+/// [`GroundTruth`]: isotrack_core::control::GroundTruth
 ///
 /// Generic over every part so the loop is monomorphised: no dynamic dispatch in the hot path.
 #[allow(clippy::too_many_arguments)]
@@ -139,7 +156,7 @@ pub fn simulate<F, V, C, S>(
     controller: &mut C,
     sensor: &mut Sensor,
     plan: &StepPlan,
-    isoline_distance: Option<IsolineDistanceFn<'_>>,
+    oracles: &Oracles<'_>,
     sink: &mut S,
 ) -> RunResult
 where
@@ -149,6 +166,7 @@ where
     S: TraceSink + ?Sized,
 {
     let mut x = x0;
+    let wants_truth = controller.needs_ground_truth();
     let mut metrics = Metrics::new(MetricsConfig {
         dt_s: plan.dt_s,
         steady_state_start_step: plan.steady_state_start_step,
@@ -190,7 +208,17 @@ where
         if let Some(m) = sensor.observe(t, s) {
             samples += 1;
             s_measured = Some(m.value);
-            let w = controller.update(&m);
+            let w = if wants_truth {
+                let truth = GroundTruth {
+                    pose,
+                    speed_mps: vehicle.speed_mps(&x),
+                    value: s,
+                    derivatives: oracles.gradient.and_then(|g| g(t, pose.position)),
+                };
+                controller.update_with_truth(&m, &truth)
+            } else {
+                controller.update(&m)
+            };
             if !w.is_finite() {
                 outcome = Outcome::Diverged;
                 detail = Some(format!("non-finite turn-rate command at t = {t} s"));
@@ -200,7 +228,7 @@ where
         }
         let eps = s - plan.level;
         metrics.observe(k, eps, omega);
-        if let Some(dist) = isoline_distance {
+        if let Some(dist) = oracles.isoline_distance {
             if metrics.in_window(k) {
                 if let Some(d) = dist(pose.position) {
                     metrics.observe_isoline_distance(d);

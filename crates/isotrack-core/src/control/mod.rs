@@ -8,8 +8,13 @@
 //! Every controller shares the output stage [`OutputStage`]: the turning direction (which side the
 //! higher field values lie on) and the optional turn-rate limit `|omega| <= omega_max`.
 
+mod baselines;
 mod pi_isoline;
 
+pub use baselines::{
+    GradientReference, GradientReferenceParams, Pid, PidCrossing, PidCrossingParams, PidParams,
+    SlidingMode, SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
+};
 pub use pi_isoline::{AntiWindup, PiIsoline, PiIsolineParams};
 
 /// One sensor sample: all a coordinate-free controller ever sees.
@@ -21,13 +26,39 @@ pub struct Measurement {
     pub value: f64,
 }
 
-/// A coordinate-free isoline-tracking controller.
+/// What a **reference** controller may know beyond the measurement: the true pose and field
+/// gradient. Coordinate-free controllers never receive it (the simulation passes it only to a
+/// controller whose [`IsolineController::needs_ground_truth`] is true).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GroundTruth {
+    /// True pose.
+    pub pose: crate::math::Pose2,
+    /// True ground speed, m/s.
+    pub speed_mps: f64,
+    /// True field value at the pose (noise-free).
+    pub value: f64,
+    /// True gradient and Hessian at the pose, if the field has them there.
+    pub derivatives: Option<(crate::math::Vec2, crate::math::Mat2)>,
+}
+
+/// An isoline-tracking controller. Coordinate-free controllers implement only
+/// [`update`](Self::update).
 pub trait IsolineController {
     /// Processes one sample and returns the turn-rate command in rad/s (positive turns left),
     /// held until the next sample. The result is finite for finite input.
     fn update(&mut self, m: &Measurement) -> f64;
     /// Returns the controller to its initial state (integrators, estimators).
     fn reset(&mut self);
+    /// Whether the controller needs [`GroundTruth`] (reference controllers only; not
+    /// coordinate-free).
+    fn needs_ground_truth(&self) -> bool {
+        false
+    }
+    /// [`update`](Self::update) with ground truth, called instead of it when
+    /// [`needs_ground_truth`](Self::needs_ground_truth) is true.
+    fn update_with_truth(&mut self, m: &Measurement, _truth: &GroundTruth) -> f64 {
+        self.update(m)
+    }
 }
 
 /// Which side of the vehicle the higher field values lie on once it tracks the isoline.

@@ -1,0 +1,579 @@
+//! The methods Dong & You compare themselves with, as baselines behind the same trait.
+//!
+//! Each law is stated with its inputs, its source and how far it is trusted
+//! (`shared/reference/baselines.md`): **verified** means checked in the primary text,
+//! **reconstructed** means rebuilt from abstracts and secondary sources. Every law is written
+//! for [`HigherSide::Right`](super::HigherSide) (the paper's convention) and goes through the
+//! shared [`OutputStage`] (direction and turn-rate limit); every `eps'` comes from the shared
+//! [`DerivativeEstimator`].
+
+use super::{GroundTruth, IsolineController, Measurement, OutputStage};
+use crate::estimate::{DerivativeEstimator, DerivativeKind};
+use crate::math::{wrap_angle, Vec2};
+
+fn sgn(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// Parameters of [`SlidingMode`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlidingModeParams {
+    /// Desired level `s0`.
+    pub level: f64,
+    /// Maximum turn rate `u_max`, rad/s (> 0): the law's output magnitude.
+    pub max_turn_rate_radps: f64,
+    /// Slope `gamma` of the saturated-linear `chi`, 1/s (> 0).
+    pub gamma: f64,
+    /// Linear zone `delta` of `chi`, field units (> 0); `mu = gamma*delta`.
+    pub delta: f64,
+    /// `None`: the discontinuous law. `Some(phi)`: a boundary layer of width `phi` (field units
+    /// per second), `sgn(sigma) -> sat(sigma/phi)`.
+    pub boundary_layer: Option<f64>,
+    /// Turning direction (the limit is `max_turn_rate_radps` itself).
+    pub output: OutputStage,
+    /// Estimator for `s'`.
+    pub derivative: DerivativeKind,
+}
+
+/// Matveev, Teimoori & Savkin's sliding-mode level-set law (Automatica 48(9), 2012;
+/// **reconstructed**, structure verified in their 2011 Automatica paper):
+///
+/// ```text
+/// omega = u_max * sgn(s' + chi(s - s0)),
+/// chi(z) = gamma*z for |z| <= delta, gamma*delta*sgn(z) otherwise.
+/// ```
+///
+/// Inputs: `s` and `s'` only. With a boundary layer (`sliding_mode_smooth`) `sgn` becomes
+/// `sat(sigma/phi)`: continuous, *not* the paper's law; it separates "discontinuity" from
+/// "structure". Works when `u_max` exceeds the isoline's curvature demand `v/r` and
+/// `mu = gamma*delta < v*inf|grad F|` (baselines.md section 1).
+#[derive(Clone, Debug)]
+pub struct SlidingMode {
+    p: SlidingModeParams,
+    d: DerivativeEstimator,
+}
+
+impl SlidingMode {
+    /// A controller at rest.
+    pub fn new(p: SlidingModeParams) -> Self {
+        Self {
+            d: DerivativeEstimator::new(p.derivative),
+            p,
+        }
+    }
+}
+
+impl IsolineController for SlidingMode {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let p = &self.p;
+        let eps = m.value - p.level;
+        let s_dot = self.d.update(m.t_s, m.value);
+        let chi = if eps.abs() <= p.delta {
+            p.gamma * eps
+        } else {
+            p.gamma * p.delta * sgn(eps)
+        };
+        let sigma = s_dot + chi;
+        let u = match p.boundary_layer {
+            None => sgn(sigma),
+            Some(phi) => (sigma / phi).clamp(-1.0, 1.0),
+        };
+        let u = if u.is_finite() { u } else { 0.0 };
+        let out = OutputStage {
+            max_turn_rate_radps: Some(p.max_turn_rate_radps),
+            ..p.output
+        };
+        out.apply(p.max_turn_rate_radps * u)
+    }
+    fn reset(&mut self) {
+        self.d.reset();
+    }
+}
+
+/// Parameters of [`SuboptimalSosm`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SuboptimalSosmParams {
+    /// Desired level `s_d`.
+    pub level: f64,
+    /// Control amplitude `U`, rad/s (> 0).
+    pub max_turn_rate_radps: f64,
+    /// Modulation factor `alpha*` in `(0, 1]`.
+    pub alpha_star: f64,
+    /// Turning direction.
+    pub output: OutputStage,
+    /// Estimator for `sigma'`, whose sign changes mark the extrema of `sigma`.
+    pub derivative: DerivativeKind,
+}
+
+/// Bartolini, Ferrara & Usai's suboptimal second-order sliding mode (IEEE TAC 43(2), 1998) on
+/// `sigma = s - s_d`, as used for boundary tracking by Mellucci, Menon, Edwards & Challenor
+/// (ACC 2017, IEEE TCST 2019; **reconstructed**):
+///
+/// ```text
+/// omega = alpha(t) * U * sgn(sigma - sigma_M/2),
+/// alpha = alpha* if (sigma - sigma_M/2)(sigma_M - sigma) > 0, else 1,
+/// ```
+///
+/// `sigma_M` the value of `sigma` at its last extremum (a sign change of the estimated
+/// `sigma'`), initially `sigma(0)`. The sign is the one for `g = v grad F . h_perp < 0` (higher
+/// values on the right). Inputs: `s` and the sign of `s'`.
+#[derive(Clone, Debug)]
+pub struct SuboptimalSosm {
+    p: SuboptimalSosmParams,
+    d: DerivativeEstimator,
+    sigma_m: Option<f64>,
+    last_dsign: f64,
+    last_sigma: f64,
+}
+
+impl SuboptimalSosm {
+    /// A controller at rest.
+    pub fn new(p: SuboptimalSosmParams) -> Self {
+        Self {
+            d: DerivativeEstimator::new(p.derivative),
+            p,
+            sigma_m: None,
+            last_dsign: 0.0,
+            last_sigma: 0.0,
+        }
+    }
+}
+
+impl IsolineController for SuboptimalSosm {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let p = &self.p;
+        let sigma = m.value - p.level;
+        let ds = self.d.update(m.t_s, sigma);
+        let dsign = sgn(ds);
+        let sm = *self.sigma_m.get_or_insert(sigma);
+        let sm = if dsign != 0.0 && self.last_dsign != 0.0 && dsign != self.last_dsign {
+            // sigma' changed sign between the last two samples: an extremum at about the
+            // previous sample.
+            self.sigma_m = Some(self.last_sigma);
+            self.last_sigma
+        } else {
+            sm
+        };
+        if dsign != 0.0 {
+            self.last_dsign = dsign;
+        }
+        self.last_sigma = sigma;
+        let alpha = if (sigma - 0.5 * sm) * (sm - sigma) > 0.0 {
+            p.alpha_star
+        } else {
+            1.0
+        };
+        let out = OutputStage {
+            max_turn_rate_radps: Some(p.max_turn_rate_radps),
+            ..p.output
+        };
+        out.apply(alpha * p.max_turn_rate_radps * sgn(sigma - 0.5 * sm))
+    }
+    fn reset(&mut self) {
+        self.d.reset();
+        self.sigma_m = None;
+        self.last_dsign = 0.0;
+        self.last_sigma = 0.0;
+    }
+}
+
+/// Parameters of [`Pid`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PidParams {
+    /// Desired level `s_d`.
+    pub level: f64,
+    /// Proportional gain on `eps`, rad/s per field unit.
+    pub kp: f64,
+    /// Integral gain, rad/s^2 per field unit.
+    pub ki: f64,
+    /// Derivative gain on `eps'`, rad per field unit.
+    pub kd: f64,
+    /// Direction and optional limit.
+    pub output: OutputStage,
+    /// Estimator for `eps'`.
+    pub derivative: DerivativeKind,
+}
+
+/// A linear PID on `eps` (an ablation of Dong & You's law: their `e` with `tanh` replaced by its
+/// linearisation; baselines.md section 6, **our baseline**):
+///
+/// ```text
+/// omega = kd*eps' + kp*eps + ki*integral(eps dt).
+/// ```
+///
+/// With `kd = kp_DY`, `kp = kp_DY*c1/c2 + ki_DY`, `ki = ki_DY*c1/c2` it is the linearisation of
+/// the PI-like law about the isoline. Far from the isoline it asks for `|eps'| > v|grad F|`, which
+/// the vehicle cannot deliver: that is what the `tanh` saturation is for.
+#[derive(Clone, Debug)]
+pub struct Pid {
+    p: PidParams,
+    d: DerivativeEstimator,
+    integral: f64,
+    last_t: Option<f64>,
+}
+
+impl Pid {
+    /// A controller at rest.
+    pub fn new(p: PidParams) -> Self {
+        Self {
+            d: DerivativeEstimator::new(p.derivative),
+            p,
+            integral: 0.0,
+            last_t: None,
+        }
+    }
+    /// The raw (pre-output-stage) PID value for a sample.
+    fn raw(&mut self, m: &Measurement) -> (f64, f64) {
+        let eps = m.value - self.p.level;
+        let eps_dot = self.d.update(m.t_s, eps);
+        let dt = self.last_t.map_or(0.0, |t0| (m.t_s - t0).max(0.0));
+        self.last_t = Some(m.t_s);
+        if eps.is_finite() {
+            self.integral += dt * eps;
+        }
+        (
+            self.p.kd * eps_dot + self.p.kp * eps + self.p.ki * self.integral,
+            eps,
+        )
+    }
+}
+
+impl IsolineController for Pid {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let (u, _) = self.raw(m);
+        let w = self.p.output.apply(u);
+        if w.is_finite() {
+            w
+        } else {
+            0.0
+        }
+    }
+    fn reset(&mut self) {
+        self.d.reset();
+        self.integral = 0.0;
+        self.last_t = None;
+    }
+}
+
+/// Parameters of [`PidCrossing`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PidCrossingParams {
+    /// The PID underneath.
+    pub pid: PidParams,
+    /// Initial crossing angle `beta_0`, rad (> 0).
+    pub crossing_angle_rad: f64,
+    /// Target time between crossings `T*`, s (> 0).
+    pub crossing_period_s: f64,
+    /// Turn rate used to execute the crossing turn, rad/s (> 0).
+    pub turn_rate_radps: f64,
+}
+
+/// PID with adaptive crossing-angle correction, after Newaz, Jeong & Chong (J. Intell. Robot.
+/// Syst. 90, 2018; **reconstructed, low confidence**: only the citation was available).
+///
+/// Between crossings the [`Pid`] steers. At each crossing of the level (a sign change of `eps`)
+/// the vehicle adds a turn of `beta_k` back towards the isoline (left after a low-to-high
+/// crossing, right after high-to-low, for higher values on the right), executed open-loop at
+/// `turn_rate_radps` (the controller knows its own commands, not its heading). The angle adapts
+/// to the time `T_k` since the previous crossing: `beta_{k+1} = clamp(beta_k*sqrt(T_k/T*), 0.02,
+/// 1.5)`: frequent crossings mean a too-steep zig-zag. Inputs: `s` only.
+#[derive(Clone, Debug)]
+pub struct PidCrossing {
+    p: PidCrossingParams,
+    pid: Pid,
+    beta: f64,
+    last_sign: f64,
+    last_cross_t: Option<f64>,
+    /// Remaining turn `(angle left, direction)`.
+    kick: Option<(f64, f64)>,
+    last_t: Option<f64>,
+}
+
+impl PidCrossing {
+    /// A controller at rest.
+    pub fn new(p: PidCrossingParams) -> Self {
+        Self {
+            pid: Pid::new(p.pid),
+            beta: p.crossing_angle_rad,
+            p,
+            last_sign: 0.0,
+            last_cross_t: None,
+            kick: None,
+            last_t: None,
+        }
+    }
+    /// The current crossing angle `beta_k`, rad.
+    pub fn crossing_angle_rad(&self) -> f64 {
+        self.beta
+    }
+}
+
+impl IsolineController for PidCrossing {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let (u, eps) = self.pid.raw(m);
+        let dt = self.last_t.map_or(0.0, |t0| (m.t_s - t0).max(0.0));
+        self.last_t = Some(m.t_s);
+        let sign = sgn(eps);
+        if sign != 0.0 && self.last_sign != 0.0 && sign != self.last_sign {
+            if let Some(tc) = self.last_cross_t {
+                let period = (m.t_s - tc).max(1e-9);
+                self.beta =
+                    (self.beta * (period / self.p.crossing_period_s).sqrt()).clamp(0.02, 1.5);
+            }
+            self.last_cross_t = Some(m.t_s);
+            // Now above (sign > 0): turn left, towards lower values (they lie on the left).
+            self.kick = Some((self.beta, sign));
+        }
+        if sign != 0.0 {
+            self.last_sign = sign;
+        }
+        let mut u = u;
+        if let Some((left, dir)) = self.kick {
+            let done = self.p.turn_rate_radps * dt;
+            let remaining = left - done;
+            if remaining <= 0.0 {
+                self.kick = None;
+            } else {
+                self.kick = Some((remaining, dir));
+                u += dir * self.p.turn_rate_radps;
+            }
+        }
+        let w = self.p.pid.output.apply(u);
+        if w.is_finite() {
+            w
+        } else {
+            0.0
+        }
+    }
+    fn reset(&mut self) {
+        self.pid.reset();
+        self.beta = self.p.crossing_angle_rad;
+        self.last_sign = 0.0;
+        self.last_cross_t = None;
+        self.kick = None;
+        self.last_t = None;
+    }
+}
+
+/// Parameters of [`GradientReference`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GradientReferenceParams {
+    /// Desired level `s_d`.
+    pub level: f64,
+    /// Convergence gain `k_e` on the distance estimate `(F - s_d)/|grad F|`, 1/m (> 0).
+    pub ke: f64,
+    /// Heading gain `k_theta`, 1/s (> 0).
+    pub k_heading: f64,
+    /// Direction and optional limit.
+    pub output: OutputStage,
+}
+
+/// A guiding-vector-field reference (Kapitanyuk, Proskurnikov & Cao, IEEE TCST 2018,
+/// arXiv:1610.04391) that uses the **true position, heading and gradient**: **not
+/// coordinate-free**, the reference for what that information would buy, not a fair competitor.
+///
+/// ```text
+/// n = grad F/|grad F|,  tau = rot(+90 deg) n = (-n_y, n_x)  (higher values on the right),
+/// m = tau - k_e * ((F - s_d)/|grad F|) * n,
+/// omega = v * tau^T H tau / |grad F|  -  k_theta * wrap(theta - atan2(m)),
+/// ```
+///
+/// the first term the feed-forward of the isoline's curvature (`H` the Hessian), so the vehicle
+/// needs no heading error to follow a curved isoline.
+#[derive(Clone, Debug)]
+pub struct GradientReference {
+    p: GradientReferenceParams,
+}
+
+impl GradientReference {
+    /// The controller.
+    pub fn new(p: GradientReferenceParams) -> Self {
+        Self { p }
+    }
+}
+
+impl IsolineController for GradientReference {
+    fn update(&mut self, _m: &Measurement) -> f64 {
+        0.0
+    }
+    fn reset(&mut self) {}
+    fn needs_ground_truth(&self) -> bool {
+        true
+    }
+    fn update_with_truth(&mut self, _m: &Measurement, t: &GroundTruth) -> f64 {
+        let p = &self.p;
+        let Some((g, h)) = t.derivatives.filter(|(g, _)| g.norm() > 0.0) else {
+            return 0.0;
+        };
+        let gn = g.norm();
+        let n = g * (1.0 / gn);
+        // Tangent with higher values on the right (mirrored by the output stage for "left":
+        // the mirrored law turns the other way, so mirror the tangent too).
+        let side = p.output.higher_side.sign();
+        let tau = Vec2::new(-n.y, n.x) * side;
+        let dist = (t.value - p.level) / gn;
+        let m = tau - n * (p.ke * dist);
+        let err = wrap_angle(t.pose.heading_rad - m.y.atan2(m.x));
+        // Curvature feed-forward along tau (tau = side * rot90(n)): v * side * tau^T H tau / |g|.
+        let tht = tau.x * (h[0][0] * tau.x + h[0][1] * tau.y)
+            + tau.y * (h[1][0] * tau.x + h[1][1] * tau.y);
+        let ff = t.speed_mps * side * tht / gn;
+        // The output stage multiplies by `side`; undo it so the command turns towards `m`.
+        let w = p.output.apply((ff - p.k_heading * err) * side);
+        if w.is_finite() {
+            w
+        } else {
+            0.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::HigherSide;
+
+    fn out(limit: Option<f64>) -> OutputStage {
+        OutputStage {
+            higher_side: HigherSide::Right,
+            max_turn_rate_radps: limit,
+        }
+    }
+
+    #[test]
+    fn sliding_mode_is_bang_bang_and_smooth_variant_is_not() {
+        let mut p = SlidingModeParams {
+            level: 10.0,
+            max_turn_rate_radps: 0.5,
+            gamma: 0.2,
+            delta: 1.0,
+            boundary_layer: None,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        let mut c = SlidingMode::new(p);
+        // eps = -3 (beyond delta): chi = -0.2; s' = 0 on the first sample -> omega = -u_max.
+        assert_eq!(
+            c.update(&Measurement {
+                t_s: 0.0,
+                value: 7.0
+            }),
+            -0.5
+        );
+        // s rising at 0.3/s: sigma = 0.3 - 0.2 > 0 -> +u_max.
+        assert_eq!(
+            c.update(&Measurement {
+                t_s: 1.0,
+                value: 7.3
+            }),
+            0.5
+        );
+        p.boundary_layer = Some(1.0);
+        let mut c = SlidingMode::new(p);
+        c.update(&Measurement {
+            t_s: 0.0,
+            value: 7.0,
+        });
+        let w = c.update(&Measurement {
+            t_s: 1.0,
+            value: 7.3,
+        });
+        assert!((w - 0.5 * 0.1).abs() < 1e-12, "{w}");
+    }
+
+    #[test]
+    fn pid_law_by_hand() {
+        let mut c = Pid::new(PidParams {
+            level: 10.0,
+            kp: 2.0,
+            ki: 0.5,
+            kd: 3.0,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        });
+        c.update(&Measurement {
+            t_s: 0.0,
+            value: 9.0,
+        });
+        let w = c.update(&Measurement {
+            t_s: 0.5,
+            value: 9.5,
+        });
+        // eps = -0.5, eps' = 1, integral = 0.5*(-0.5) = -0.25
+        assert!(
+            (w - (3.0 * 1.0 + 2.0 * -0.5 + 0.5 * -0.25)).abs() < 1e-12,
+            "{w}"
+        );
+    }
+
+    #[test]
+    fn crossing_angle_adapts_to_the_crossing_period() {
+        let pid = PidParams {
+            level: 0.0,
+            kp: 0.0,
+            ki: 0.0,
+            kd: 0.0,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        let mut c = PidCrossing::new(PidCrossingParams {
+            pid,
+            crossing_angle_rad: 0.5,
+            crossing_period_s: 20.0,
+            turn_rate_radps: 0.5,
+        });
+        // Crossings every 5 s (too often): beta shrinks by sqrt(5/20) = 0.5 per crossing.
+        let mut t = 0.0;
+        let mut kicks = 0;
+        for k in 0..40 {
+            let v = if (k / 10) % 2 == 0 { -1.0 } else { 1.0 };
+            let w = c.update(&Measurement { t_s: t, value: v });
+            if w != 0.0 {
+                kicks += 1;
+            }
+            t += 0.5;
+        }
+        assert!(kicks > 0);
+        assert!(
+            (c.crossing_angle_rad() - 0.5 * 0.5 * 0.5).abs() < 1e-9,
+            "{}",
+            c.crossing_angle_rad()
+        );
+    }
+
+    #[test]
+    fn gradient_reference_turns_towards_the_field() {
+        let mut c = GradientReference::new(GradientReferenceParams {
+            level: 10.0,
+            ke: 1.0,
+            k_heading: 1.0,
+            output: out(None),
+        });
+        assert!(c.needs_ground_truth());
+        // On the isoline with higher values north, the tangent with them on the right is west.
+        let truth = |heading: f64| GroundTruth {
+            pose: crate::math::Pose2 {
+                position: Vec2::default(),
+                heading_rad: heading,
+            },
+            speed_mps: 1.0,
+            value: 10.0,
+            derivatives: Some((Vec2::new(0.0, 1.0), [[0.0; 2]; 2])),
+        };
+        let m = Measurement {
+            t_s: 0.0,
+            value: 10.0,
+        };
+        assert_eq!(c.update_with_truth(&m, &truth(core::f64::consts::PI)), 0.0);
+        // Heading a little south of west (pi + 0.2): turn right, back to west.
+        assert!(c.update_with_truth(&m, &truth(core::f64::consts::PI + 0.2)) < 0.0);
+        // Heading a little north of west: turn left.
+        assert!(c.update_with_truth(&m, &truth(core::f64::consts::PI - 0.2)) > 0.0);
+    }
+}
