@@ -226,9 +226,9 @@ fn bad_overrides() {
         &["--set controller.kp=-2", "must be > 0"],
     );
     assert_fails(
-        &isotrack(&["run", "--set", "controller.kd=2"]),
+        &isotrack(&["run", "--set", "controller.kz=2"]),
         65,
-        &["--set controller.kd=2", "kd"],
+        &["--set controller.kz=2", "kz"],
     );
     assert_fails(
         &isotrack(&["run", "--set", "controller.kp"]),

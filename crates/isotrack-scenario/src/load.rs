@@ -431,10 +431,10 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named_with_line() {
-        let e = err("[sim]\ndt_s = 0.01\n\n[controller]\nkp = 1\nkd = 2\n", &[]);
+        let e = err("[sim]\ndt_s = 0.01\n\n[controller]\nkp = 1\nkz = 2\n", &[]);
         assert_eq!(file_line(&e[0]), Some(6));
-        assert!(e[0].message.contains("kd"), "{}", e[0]);
-        assert_eq!(e[0].key.as_deref(), Some("controller.kd"));
+        assert!(e[0].message.contains("kz"), "{}", e[0]);
+        assert_eq!(e[0].key.as_deref(), Some("controller.kz"));
     }
 
     #[test]
@@ -468,8 +468,8 @@ mod tests {
                 arg: "controller.kp=0".into()
             }
         );
-        let e = err("", &["controller.kd=1"]);
-        assert!(e[0].message.contains("kd"));
+        let e = err("", &["controller.kz=1"]);
+        assert!(e[0].message.contains("kz"));
         let e = err("", &["controller.kp"]);
         assert!(e[0].message.contains("KEY=VALUE"));
     }
