@@ -348,3 +348,62 @@ fn nodata_in_a_grid_ends_the_run_as_left_field() {
         &["field.path", "bad.csv:2", "ragged"],
     );
 }
+
+#[test]
+fn compare_writes_the_documented_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig2b-circular.toml"
+    );
+    let o = isotrack(&[
+        "compare",
+        scen,
+        "--controllers",
+        "pi_isoline,sliding_mode",
+        "--set",
+        "sim.duration_s=120",
+        "--gain",
+        "sliding_mode.gamma=0.3",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("| pi_isoline | completed"), "{out}");
+    let csv = std::fs::read_to_string(dir.path().join("comparison.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in [
+        "controller",
+        "outcome",
+        "convergence_time_s",
+        "steady_state_max_abs_error",
+        "steady_state_rms_error",
+        "chattering_radps2",
+        "sign_changes_per_s",
+        "control_effort",
+        "steady_state_max_isoline_distance_m",
+    ] {
+        assert!(header.contains(&col), "missing {col}");
+    }
+    assert_eq!(lines.count(), 2);
+    // The per-controller run records the gain override.
+    let s: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("sliding_mode/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(s["scenario"]["controller"]["gamma"], 0.3);
+    assert_eq!(s["scenario"]["controller"]["kind"], "sliding_mode");
+    // Bad controller names and gains are usage errors.
+    assert_fails(
+        &isotrack(&["compare", scen, "--controllers", "bogus"]),
+        64,
+        &["bogus"],
+    );
+    assert_fails(
+        &isotrack(&["compare", scen, "--gain", "gamma=1"]),
+        64,
+        &["KIND.KEY=VALUE"],
+    );
+}
