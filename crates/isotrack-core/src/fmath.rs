@@ -29,6 +29,10 @@ mod imp {
     pub fn ln(x: f64) -> f64 {
         x.ln()
     }
+    #[inline]
+    pub fn atan2(y: f64, x: f64) -> f64 {
+        y.atan2(x)
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -56,6 +60,10 @@ mod imp {
     #[inline]
     pub fn ln(x: f64) -> f64 {
         libm::log(x)
+    }
+    #[inline]
+    pub fn atan2(y: f64, x: f64) -> f64 {
+        libm::atan2(y, x)
     }
 }
 

@@ -323,8 +323,8 @@ impl IsolineController for PidCrossing {
         if sign != 0.0 && self.last_sign != 0.0 && sign != self.last_sign {
             if let Some(tc) = self.last_cross_t {
                 let period = (m.t_s - tc).max(1e-9);
-                self.beta =
-                    (self.beta * (period / self.p.crossing_period_s).sqrt()).clamp(0.02, 1.5);
+                self.beta = (self.beta * crate::fmath::sqrt(period / self.p.crossing_period_s))
+                    .clamp(0.02, 1.5);
             }
             self.last_cross_t = Some(m.t_s);
             // Now above (sign > 0): turn left, towards lower values (they lie on the left).
@@ -419,7 +419,7 @@ impl IsolineController for GradientReference {
         let tau = Vec2::new(-n.y, n.x) * side;
         let dist = (t.value - p.level) / gn;
         let m = tau - n * (p.ke * dist);
-        let err = wrap_angle(t.pose.heading_rad - m.y.atan2(m.x));
+        let err = wrap_angle(t.pose.heading_rad - crate::fmath::atan2(m.y, m.x));
         // Curvature feed-forward along tau (tau = side * rot90(n)): v * side * tau^T H tau / |g|.
         let tht = tau.x * (h[0][0] * tau.x + h[0][1] * tau.y)
             + tau.y * (h[1][0] * tau.x + h[1][1] * tau.y);
