@@ -26,6 +26,12 @@ pub enum Command {
     /// Run one scenario with each controller (the paper's law and the baselines) on the same
     /// field, start, sensor and turn-rate limit, and tabulate the metrics.
     Compare(CompareArgs),
+    /// Trim the fixed-wing UAV (wings level, zero flight-path angle) and print the trim state,
+    /// inputs and autopilot gains.
+    Trim(TrimArgs),
+    /// Apply recorded actuator inputs to the fixed-wing UAV from trim and write the state
+    /// trajectory.
+    Replay(ReplayArgs),
     /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
     /// as a CSV grid with a JSON sidecar.
     Interpolate(InterpolateArgs),
@@ -64,6 +70,38 @@ pub struct CompareArgs {
     /// `summary.json`, `scenario.toml`) into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+/// `isotrack trim`.
+#[derive(Debug, Args)]
+pub struct TrimArgs {
+    /// Airspeed, m/s.
+    #[arg(long, value_name = "V")]
+    pub airspeed_mps: f64,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Use the 2012 code's airspeed-gain formula (`C_L,delta_e` in `a_V1`).
+    #[arg(long)]
+    pub ecen674_gains: bool,
+}
+
+/// `isotrack replay`.
+#[derive(Debug, Args)]
+pub struct ReplayArgs {
+    /// Input CSV with a header: `t_s, delta_e_rad, delta_a_rad, delta_r_rad, delta_t`; each row
+    /// is held until the next.
+    #[arg(long, value_name = "FILE.csv")]
+    pub inputs: PathBuf,
+    /// Output CSV: the state at the input file's time stamps.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: PathBuf,
+    /// Initial (trim) airspeed, m/s.
+    #[arg(long, value_name = "V", default_value_t = 30.0)]
+    pub airspeed_mps: f64,
+    /// Initial altitude, m.
+    #[arg(long, value_name = "H", default_value_t = 100.0)]
+    pub altitude_m: f64,
 }
 
 /// Station interpolation methods.

@@ -4,6 +4,7 @@
 //! ([`output`]: `trace.csv`, `summary.json`, the resolved `scenario.toml`).
 #![deny(missing_docs)]
 
+pub mod aircraft;
 pub mod cli;
 pub mod compare;
 pub mod interpolate;

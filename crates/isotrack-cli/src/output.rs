@@ -17,13 +17,21 @@ pub const TRACE_COLUMNS: [&str; 8] = [
     "s_measured",
 ];
 
+/// The columns a flying vehicle adds to `trace.csv` (roll positive right wing down).
+pub const TELEMETRY_COLUMNS: [&str; 3] = ["altitude_m", "airspeed_mps", "roll_rad"];
+
 /// Writes `trace.csv`: a header row, then one row per recorded step. Numbers are written in
 /// Rust's shortest round-trip form ([`num`]), so they read back bit-identical; `s_measured` is
 /// empty before the first measurement.
 pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
     let mut w = csv::Writer::from_path(path)?;
-    w.write_record(TRACE_COLUMNS)?;
-    let mut buf: Vec<String> = Vec::with_capacity(TRACE_COLUMNS.len());
+    let flying = rows.iter().any(|r| r.telemetry.is_some());
+    let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
+    if flying {
+        header.extend(TELEMETRY_COLUMNS);
+    }
+    w.write_record(&header)?;
+    let mut buf: Vec<String> = Vec::with_capacity(header.len());
     for r in rows {
         buf.clear();
         for v in [
@@ -38,6 +46,12 @@ pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
             buf.push(num(v));
         }
         buf.push(r.s_measured.map(num).unwrap_or_default());
+        if flying {
+            let t = r.telemetry.unwrap_or_default();
+            for v in [t.altitude_m, t.airspeed_mps, t.roll_rad] {
+                buf.push(num(v));
+            }
+        }
         w.write_record(&buf)?;
     }
     w.flush()

@@ -407,3 +407,101 @@ fn compare_writes_the_documented_csv() {
         &["KIND.KEY=VALUE"],
     );
 }
+
+#[test]
+fn trim_json_reproduces_the_trim_table() {
+    let o = isotrack(&["trim", "--airspeed-mps", "30", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((j["alpha_rad"].as_f64().unwrap() - 0.0330598).abs() < 1e-6);
+    assert!((j["delta_e_rad"].as_f64().unwrap() + 0.0718854).abs() < 1e-6);
+    assert!((j["delta_t"].as_f64().unwrap() - 0.398352).abs() < 1e-6);
+    assert!((j["gains"]["kp_chi"].as_f64().unwrap() - 9.0697).abs() < 1e-3);
+    assert_fails(&isotrack(&["trim", "--airspeed-mps=-3"]), 64, &["airspeed"]);
+}
+
+#[test]
+fn replay_of_trim_inputs_stays_in_trim_and_bad_files_fail() {
+    let dir = tempfile::tempdir().unwrap();
+    // The trim inputs at 30 m/s, full precision, for 20 s: straight and level.
+    let j: serde_json::Value =
+        serde_json::from_slice(&isotrack(&["trim", "--airspeed-mps", "30", "--json"]).stdout)
+            .unwrap();
+    let (de, dt) = (
+        j["delta_e_rad"].as_f64().unwrap(),
+        j["delta_t"].as_f64().unwrap(),
+    );
+    let mut text = String::from("t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n");
+    for k in 0..=20 {
+        text += &format!("{k},{de:?},0,0,{dt:?}\n");
+    }
+    let inp = write(dir.path(), "in.csv", &text);
+    let out = dir.path().join("out.csv");
+    let o = isotrack(&["replay", "--inputs", &inp, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(&out).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[..4], ["t_s", "north_m", "east_m", "altitude_m"]);
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(last[0], 20.0);
+    assert!((last[1] - 600.0).abs() < 0.01, "north {}", last[1]);
+    assert!((last[3] - 100.0).abs() < 1e-3, "altitude {}", last[3]);
+    assert!((last[4] - 30.0).abs() < 1e-4, "airspeed {}", last[4]);
+    // Bad input files.
+    let bad = write(
+        dir.path(),
+        "bad.csv",
+        "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n0,0,0,0,0.4\n0,0,0,0,0.4\n",
+    );
+    assert_fails(
+        &isotrack(&["replay", "--inputs", &bad, "--out", out.to_str().unwrap()]),
+        65,
+        &["line 3", "increase"],
+    );
+    let bad = write(dir.path(), "bad2.csv", "t_s,delta_e\n0,0\n");
+    assert_fails(
+        &isotrack(&["replay", "--inputs", &bad, "--out", out.to_str().unwrap()]),
+        65,
+        &["delta_e_rad"],
+    );
+    let bad = write(
+        dir.path(),
+        "bad3.csv",
+        "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n0,x,0,0,0.4\n",
+    );
+    assert_fails(
+        &isotrack(&["replay", "--inputs", &bad, "--out", out.to_str().unwrap()]),
+        65,
+        &["line 2", "delta_e_rad"],
+    );
+}
+
+#[test]
+fn fixed_wing_scenario_traces_telemetry() {
+    let dir = tempfile::tempdir().unwrap();
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig3-uav.toml"
+    );
+    let o = isotrack(&[
+        "run",
+        scen,
+        "--set",
+        "sim.duration_s=60",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trace = std::fs::read_to_string(dir.path().join("trace.csv")).unwrap();
+    let header = trace.lines().next().unwrap();
+    assert!(
+        header.ends_with("altitude_m,airspeed_mps,roll_rad"),
+        "{header}"
+    );
+}

@@ -9,11 +9,27 @@ use crate::math::Pose2;
 /// with the command held (zero-order hold) and reads its pose.
 pub trait Vehicle {
     /// The full state (whatever the model needs).
-    type State: Copy;
+    type State: Clone;
     /// Advances `state` by `dt_s` seconds with `omega_radps` held over the step.
     fn step(&self, state: &mut Self::State, omega_radps: f64, dt_s: f64);
     /// Position and course of the state; the sensor samples the field at this position.
     fn pose(&self, state: &Self::State) -> Pose2;
     /// Ground speed in m/s (for metrics such as path length per unit time).
     fn speed_mps(&self, state: &Self::State) -> f64;
+    /// Extra quantities a flying vehicle reports (altitude, airspeed, roll); `None` for a
+    /// ground robot.
+    fn telemetry(&self, _state: &Self::State) -> Option<Telemetry> {
+        None
+    }
+}
+
+/// What a flying vehicle adds to the trace.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Telemetry {
+    /// Altitude above the reference, m.
+    pub altitude_m: f64,
+    /// Airspeed, m/s.
+    pub airspeed_mps: f64,
+    /// Roll angle, rad, positive right wing down.
+    pub roll_rad: f64,
 }

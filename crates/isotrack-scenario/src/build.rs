@@ -12,7 +12,60 @@ use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarField};
 use isotrack_sim::{simulate, Oracles, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
-use isotrack_vehicles::{Dubins, DubinsState};
+use isotrack_vehicles::{Dubins, DubinsState, FixedWing, FixedWingConfig};
+
+/// Every vehicle a scenario can name.
+#[derive(Clone, Debug)]
+pub enum VehicleModel {
+    /// `dubins`.
+    Dubins(Dubins),
+    /// `fixed_wing` (trimmed, gains computed).
+    FixedWing(Box<FixedWing>),
+}
+
+/// Builds (and for the UAV, trims) the vehicle of a resolved scenario.
+pub fn build_vehicle(f: &ScenarioFile) -> Result<VehicleModel, crate::resolve::Issue> {
+    let v = &f.vehicle;
+    Ok(match v.kind.unwrap_or(VehicleKind::Dubins) {
+        VehicleKind::Dubins => VehicleModel::Dubins(Dubins {
+            speed_mps: v.speed_mps.unwrap_or(0.5),
+        }),
+        VehicleKind::FixedWing => VehicleModel::FixedWing(Box::new(
+            FixedWing::new(FixedWingConfig {
+                airspeed_mps: v.airspeed_mps.unwrap_or(30.0),
+                altitude_m: v.altitude_m.unwrap_or(100.0),
+                wind_mps: v.wind_mps.unwrap_or([0.0, 0.0]),
+                gusts: v.gusts.unwrap_or(false),
+                seed: f.sim.seed.unwrap_or(0),
+                trim_feedforward: v.trim_feedforward.unwrap_or(true),
+                ecen674_gains: v.ecen674_gains.unwrap_or(false),
+            })
+            .map_err(|e| crate::resolve::Issue {
+                key: "vehicle.airspeed_mps".into(),
+                message: e.to_string(),
+            })?,
+        )),
+    })
+}
+
+/// `schedule`: a piecewise-constant turn rate `omega(t) = w_i` for `t_i <= t < t_{i+1}`
+/// (zero before `t_0`), ignoring the measurement: for checking the closed loop against recorded
+/// flights and studying the autopilot's responses. Switching happens at sensor samples.
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    steps: Vec<[f64; 2]>,
+}
+
+impl IsolineController for Schedule {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        self.steps
+            .iter()
+            .rev()
+            .find(|s| m.t_s >= s[0])
+            .map_or(0.0, |s| s[1])
+    }
+    fn reset(&mut self) {}
+}
 
 /// Every controller a scenario can name, behind one type (static dispatch in the loop).
 #[derive(Clone, Debug)]
@@ -29,6 +82,8 @@ pub enum ControllerModel {
     PidCrossing(PidCrossing),
     /// `gradient_reference` (not coordinate-free).
     GradientReference(GradientReference),
+    /// `schedule`.
+    Schedule(Schedule),
 }
 
 macro_rules! each_controller {
@@ -40,6 +95,7 @@ macro_rules! each_controller {
             ControllerModel::Pid($c) => $e,
             ControllerModel::PidCrossing($c) => $e,
             ControllerModel::GradientReference($c) => $e,
+            ControllerModel::Schedule($c) => $e,
         }
     };
 }
@@ -153,6 +209,9 @@ impl Scenario {
                     turn_rate_radps: c.crossing_turn_rate_radps.unwrap_or(0.5),
                 }))
             }
+            ControllerKind::Schedule => ControllerModel::Schedule(Schedule {
+                steps: c.course_rate_radps.clone().unwrap_or_default(),
+            }),
             ControllerKind::GradientReference => ControllerModel::GradientReference(
                 GradientReference::new(GradientReferenceParams {
                     level,
@@ -225,18 +284,33 @@ impl Scenario {
         let mut sensor = self.sensor();
         let plan = self.plan();
         let i = &self.file.initial;
-        match self.file.vehicle.kind.unwrap_or(VehicleKind::Dubins) {
-            VehicleKind::Dubins => {
-                let vehicle = Dubins {
-                    speed_mps: self.file.vehicle.speed_mps.unwrap_or(0.5),
-                };
+        let (x, y, h) = (
+            i.x_m.unwrap_or(0.0),
+            i.y_m.unwrap_or(0.0),
+            i.heading_rad.unwrap_or(0.0),
+        );
+        match &*self.vehicle {
+            VehicleModel::Dubins(vehicle) => {
                 let x0 = DubinsState {
-                    position_m: Vec2::new(i.x_m.unwrap_or(0.0), i.y_m.unwrap_or(0.0)),
-                    heading_rad: i.heading_rad.unwrap_or(0.0),
+                    position_m: Vec2::new(x, y),
+                    heading_rad: h,
                 };
                 simulate(
                     field,
-                    &vehicle,
+                    vehicle,
+                    x0,
+                    &mut controller,
+                    &mut sensor,
+                    &plan,
+                    &oracles,
+                    sink,
+                )
+            }
+            VehicleModel::FixedWing(vehicle) => {
+                let x0 = vehicle.initial_state(x, y, h);
+                simulate(
+                    field,
+                    &**vehicle,
                     x0,
                     &mut controller,
                     &mut sensor,

@@ -37,6 +37,7 @@ use std::sync::{Arc, OnceLock};
 pub struct Scenario {
     file: ScenarioFile,
     field: Arc<FieldModel>,
+    vehicle: Arc<build::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
 }
 
@@ -52,9 +53,11 @@ impl Scenario {
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
         let field = build_field(&mut file.field, base_dir).map_err(|i| vec![i])?;
+        let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         Ok(Self {
             file,
             field: Arc::new(field),
+            vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
         })
     }

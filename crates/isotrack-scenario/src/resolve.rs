@@ -143,7 +143,7 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
 }
 
 /// `(key, is set)` for every kind-specific key of `[controller]`.
-fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 21] {
+fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 22] {
     [
         ("kp", ct.kp.is_some()),
         ("ki", ct.ki.is_some()),
@@ -166,6 +166,7 @@ fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 21]
         ),
         ("ke", ct.ke.is_some()),
         ("k_heading", ct.k_heading.is_some()),
+        ("course_rate_radps", ct.course_rate_radps.is_some()),
         ("derivative", ct.derivative.is_some()),
         ("derivative_tau_s", ct.derivative_tau_s.is_some()),
         ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
@@ -208,6 +209,7 @@ fn controller_allowed(kind: ControllerKind) -> &'static [&'static str] {
             D[2],
         ],
         ControllerKind::GradientReference => &["ke", "k_heading"],
+        ControllerKind::Schedule => &["course_rate_radps"],
     }
 }
 
@@ -296,8 +298,34 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
             pos(c, "controller.ke", &mut ct.ke, 0.5);
             pos(c, "controller.k_heading", &mut ct.k_heading, 1.0);
         }
+        ControllerKind::Schedule => {
+            let sched = ct.course_rate_radps.get_or_insert_with(Vec::new);
+            if sched.is_empty() {
+                c.fail(
+                    "controller.course_rate_radps",
+                    "must hold at least one [t_s, omega_radps] pair",
+                );
+            }
+            for (i, [t, w]) in sched.iter().enumerate() {
+                if !(t.is_finite() && w.is_finite()) {
+                    c.fail(
+                        &format!("controller.course_rate_radps[{i}]"),
+                        "must be finite",
+                    );
+                }
+                if i > 0 && *t <= sched[i - 1][0] {
+                    c.fail(
+                        &format!("controller.course_rate_radps[{i}]"),
+                        "times must increase",
+                    );
+                }
+            }
+        }
     }
-    if kind != ControllerKind::GradientReference {
+    if !matches!(
+        kind,
+        ControllerKind::GradientReference | ControllerKind::Schedule
+    ) {
         resolve_derivative(c, ct);
     }
 }
@@ -491,9 +519,65 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     }
 
     // [vehicle]
-    match *f.vehicle.kind.get_or_insert(VehicleKind::Dubins) {
+    let vk = *f.vehicle.kind.get_or_insert(VehicleKind::Dubins);
+    let vd = &mut f.vehicle;
+    let (vname, vallowed): (&str, &[&str]) = match vk {
+        VehicleKind::Dubins => ("dubins", &["speed_mps"]),
+        VehicleKind::FixedWing => (
+            "fixed_wing",
+            &[
+                "airspeed_mps",
+                "altitude_m",
+                "wind_mps",
+                "gusts",
+                "trim_feedforward",
+                "ecen674_gains",
+            ],
+        ),
+    };
+    for (key, present) in [
+        ("speed_mps", vd.speed_mps.is_some()),
+        ("airspeed_mps", vd.airspeed_mps.is_some()),
+        ("altitude_m", vd.altitude_m.is_some()),
+        ("wind_mps", vd.wind_mps.is_some()),
+        ("gusts", vd.gusts.is_some()),
+        ("trim_feedforward", vd.trim_feedforward.is_some()),
+        ("ecen674_gains", vd.ecen674_gains.is_some()),
+    ] {
+        if present && !vallowed.contains(&key) {
+            c.fail(
+                &format!("vehicle.{key}"),
+                format!("does not apply to vehicle.kind = \"{vname}\""),
+            );
+        }
+    }
+    match vk {
         VehicleKind::Dubins => {
-            c.positive("vehicle.speed_mps", *f.vehicle.speed_mps.get_or_insert(0.5));
+            c.positive("vehicle.speed_mps", *vd.speed_mps.get_or_insert(0.5));
+        }
+        VehicleKind::FixedWing => {
+            let va = *vd.airspeed_mps.get_or_insert(30.0);
+            c.positive("vehicle.airspeed_mps", va);
+            if va.is_finite() && !(15.0..=45.0).contains(&va) {
+                c.fail(
+                    "vehicle.airspeed_mps",
+                    format!("the Aerosonde model is valid for 15..45 m/s, got {va}"),
+                );
+            }
+            let h = *vd.altitude_m.get_or_insert(100.0);
+            if c.finite("vehicle.altitude_m", h) && h <= 50.0 {
+                c.fail(
+                    "vehicle.altitude_m",
+                    format!("must be above the 50 m take-off zone, got {h}"),
+                );
+            }
+            c.all_finite("vehicle.wind_mps", vd.wind_mps.get_or_insert([0.0, 0.0]));
+            vd.gusts.get_or_insert(false);
+            vd.trim_feedforward.get_or_insert(true);
+            vd.ecen674_gains.get_or_insert(false);
+            if dt > 0.02 {
+                c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {dt}"));
+            }
         }
     }
 

@@ -214,6 +214,8 @@ pub struct PlumeSpec {
 pub enum VehicleKind {
     /// The Dubins robot of the paper, eq. (5).
     Dubins,
+    /// The Aerosonde 6-DOF UAV with Beard & McLain's autopilot (paper Sec. VI-C).
+    FixedWing,
 }
 
 /// `[vehicle]`.
@@ -226,6 +228,25 @@ pub struct VehicleSection {
     /// `dubins`: constant speed, m/s (default 0.5).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub speed_mps: Option<f64>,
+    /// `fixed_wing`: commanded and trim airspeed, m/s (default 30).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub airspeed_mps: Option<f64>,
+    /// `fixed_wing`: commanded altitude, m (default 100).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
+    /// `fixed_wing`: steady wind `[east, north]`, m/s (default `[0, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wind_mps: Option<[f64; 2]>,
+    /// `fixed_wing`: Dryden gusts, seeded by `sim.seed` (default false).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gusts: Option<bool>,
+    /// `fixed_wing`: trim feed-forward in the autopilot (default true; false is the 2012 code).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trim_feedforward: Option<bool>,
+    /// `fixed_wing`: the 2012 code's airspeed-gain formula (`C_L,delta_e` in `a_V1`; default
+    /// false, the book's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ecen674_gains: Option<bool>,
 }
 
 /// `[initial]`.
@@ -276,11 +297,14 @@ pub enum ControllerKind {
     PidCrossing,
     /// Guiding vector field with true position and gradient: NOT coordinate-free (reference).
     GradientReference,
+    /// Piecewise-constant turn rate from `course_rate_radps`, ignoring measurements.
+    Schedule,
 }
 
 impl ControllerKind {
     /// Every kind, in the order `compare` runs them.
     pub const ALL: [ControllerKind; 7] = [
+        // (`schedule` is not a tracking law, so it is not in the comparison set.)
         ControllerKind::PiIsoline,
         ControllerKind::SlidingMode,
         ControllerKind::SlidingModeSmooth,
@@ -299,9 +323,10 @@ impl ControllerKind {
             ControllerKind::Pid => "pid",
             ControllerKind::PidCrossing => "pid_crossing",
             ControllerKind::GradientReference => "gradient_reference",
+            ControllerKind::Schedule => "schedule",
         }
     }
-    /// The kind of a name.
+    /// The kind of a name (the comparison set only).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.name() == name)
     }
@@ -381,6 +406,10 @@ pub struct ControllerSection {
     /// `gradient_reference`: heading gain, 1/s (default 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k_heading: Option<f64>,
+    /// `schedule`: `[[t0, w0], [t1, w1], ...]`: turn rate `w_i` (rad/s) from time `t_i` (s) on,
+    /// times increasing; zero before `t0`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub course_rate_radps: Option<Vec<[f64; 2]>>,
     /// `c1 > 0`, field units per second (default 0.2).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub c1: Option<f64>,

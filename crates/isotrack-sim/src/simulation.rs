@@ -246,6 +246,7 @@ where
             error: eps,
             omega_radps: omega,
             s_measured,
+            telemetry: vehicle.telemetry(&x),
         };
         if plan.record_every > 0 {
             if record_countdown == 0 {

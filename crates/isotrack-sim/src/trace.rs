@@ -19,6 +19,8 @@ pub struct TraceRow {
     pub omega_radps: f64,
     /// The last measurement the controller received (noise and delay included), if any yet.
     pub s_measured: Option<f64>,
+    /// Altitude, airspeed and roll of a flying vehicle.
+    pub telemetry: Option<isotrack_core::vehicle::Telemetry>,
 }
 
 /// Receives the rows the simulation records.

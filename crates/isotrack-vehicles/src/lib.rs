@@ -4,9 +4,13 @@
 //! out, each model owning its integrator.
 //!
 //! * [`dubins`]: the paper's Dubins robot (eq. (5)), RK4 with the command held over the step.
+//! * [`fixed_wing`]: the Aerosonde 6-DOF UAV with Beard & McLain's autopilot, trim, gains, and
+//!   Dryden wind (the paper's Sec. VI-C vehicle).
 #![deny(missing_docs)]
 
 pub mod dubins;
+pub mod fixed_wing;
 
 pub use dubins::{Dubins, DubinsState};
+pub use fixed_wing::{FixedWing, FixedWingConfig, FixedWingState};
 pub use isotrack_core::Vehicle;

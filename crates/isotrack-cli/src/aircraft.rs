@@ -1,0 +1,231 @@
+//! `isotrack trim` and `isotrack replay`: the fixed-wing model on its own, for flight-dynamics
+//! users who check it against their own data.
+
+use crate::cli::{ReplayArgs, TrimArgs};
+use crate::exit;
+use crate::output::num;
+use crate::run::Failure;
+use isotrack_vehicles::fixed_wing::dynamics::{air_data, r_body_to_ned, Deltas, WindSample};
+use isotrack_vehicles::fixed_wing::gains::compute_gains;
+use isotrack_vehicles::fixed_wing::params::Aerosonde;
+use isotrack_vehicles::fixed_wing::trim::{trim as solve_trim, trim_state};
+use isotrack_vehicles::{FixedWing, FixedWingConfig};
+use serde_json::json;
+use std::io::Write;
+
+/// `isotrack trim`.
+pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
+    let p = Aerosonde::beard_mclain_2012();
+    let t = solve_trim(&p, a.airspeed_mps).map_err(|e| Failure {
+        code: exit::USAGE,
+        message: e.to_string(),
+    })?;
+    let g = compute_gains(&p, &t, a.ecen674_gains);
+    if a.json {
+        let j = json!({
+            "airspeed_mps": t.airspeed_mps,
+            "alpha_rad": t.alpha_rad,
+            "theta_rad": t.alpha_rad,
+            "delta_e_rad": t.delta_e_rad,
+            "delta_a_rad": 0.0,
+            "delta_r_rad": 0.0,
+            "delta_t": t.delta_t,
+            "u_mps": t.u_mps,
+            "w_mps": t.w_mps,
+            "gains": g,
+        });
+        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+    } else {
+        println!(
+            "wings-level trim at {} m/s (gamma = 0, Aerosonde 2012 parameters)",
+            t.airspeed_mps
+        );
+        println!(
+            "  alpha = theta = {:.7} rad   delta_e = {:.7} rad   delta_t = {:.6}",
+            t.alpha_rad, t.delta_e_rad, t.delta_t
+        );
+        println!(
+            "  u = {:.5} m/s   w = {:.5} m/s   delta_a = delta_r = 0",
+            t.u_mps, t.w_mps
+        );
+        println!("autopilot gains");
+        println!(
+            "  roll    kp_phi {:.5}  kd_phi {:.5}  ki_phi {:.5}",
+            g.kp_phi, g.kd_phi, g.ki_phi
+        );
+        println!("  course  kp_chi {:.5}  ki_chi {:.5}", g.kp_chi, g.ki_chi);
+        println!(
+            "  pitch   kp_theta {:.5}  kd_theta {:.5}  K_theta_DC {:.5}",
+            g.kp_theta, g.kd_theta, g.k_theta_dc
+        );
+        println!(
+            "  airspeed (throttle) kp_v {:.5}  ki_v {:.5}",
+            g.kp_v, g.ki_v
+        );
+        println!(
+            "  airspeed (pitch)    kp_v2 {:.5}  ki_v2 {:.5}",
+            g.kp_v2, g.ki_v2
+        );
+        println!("  altitude kp_h {:.5}  ki_h {:.5}", g.kp_h, g.ki_h);
+    }
+    Ok(())
+}
+
+/// The columns `replay` writes.
+pub const REPLAY_COLUMNS: [&str; 16] = [
+    "t_s",
+    "north_m",
+    "east_m",
+    "altitude_m",
+    "airspeed_mps",
+    "alpha_rad",
+    "beta_rad",
+    "roll_rad",
+    "pitch_rad",
+    "yaw_rad",
+    "u_mps",
+    "v_mps",
+    "w_mps",
+    "p_radps",
+    "q_radps",
+    "r_radps",
+];
+
+/// `isotrack replay`.
+pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
+    let shown = a.inputs.display().to_string();
+    let data = |m: String| Failure {
+        code: exit::DATAERR,
+        message: format!("{shown}: {m}"),
+    };
+    let bytes = std::fs::read(&a.inputs).map_err(|e| Failure {
+        code: exit::NOINPUT,
+        message: format!("cannot read {shown}: {e}"),
+    })?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(bytes.as_slice());
+    let headers = rdr
+        .headers()
+        .map_err(|e| data(format!("line 1: {e}")))?
+        .clone();
+    let cols = [
+        "t_s",
+        "delta_e_rad",
+        "delta_a_rad",
+        "delta_r_rad",
+        "delta_t",
+    ];
+    let idx: Vec<usize> = cols
+        .iter()
+        .map(|c| {
+            headers.iter().position(|h| h == *c).ok_or_else(|| {
+                data(format!(
+                    "line 1: no column `{c}` (need {})",
+                    cols.join(", ")
+                ))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let mut rows: Vec<(f64, Deltas)> = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| data(e.to_string()))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        let mut v = [0.0; 5];
+        for (k, &i) in idx.iter().enumerate() {
+            let tok = rec.get(i).unwrap_or("");
+            v[k] = tok
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    data(format!(
+                        "line {line}: `{}` = `{tok}` is not a finite number",
+                        cols[k]
+                    ))
+                })?;
+        }
+        if let Some((t_prev, _)) = rows.last() {
+            if v[0] <= *t_prev {
+                return Err(data(format!(
+                    "line {line}: t_s = {} does not increase",
+                    v[0]
+                )));
+            }
+        }
+        rows.push((
+            v[0],
+            Deltas {
+                elevator_rad: v[1],
+                aileron_rad: v[2],
+                rudder_rad: v[3],
+                throttle: v[4],
+            },
+        ));
+    }
+    if rows.is_empty() {
+        return Err(data("no input rows".into()));
+    }
+    let uav = FixedWing::new(FixedWingConfig {
+        airspeed_mps: a.airspeed_mps,
+        altitude_m: a.altitude_m,
+        ..FixedWingConfig::default()
+    })
+    .map_err(|e| Failure {
+        code: exit::USAGE,
+        message: e.to_string(),
+    })?;
+    let mut x = trim_state(uav.trim(), a.altitude_m, 0.0);
+    let cant = |e: std::io::Error| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", a.out.display()),
+    };
+    let mut out = std::io::BufWriter::new(std::fs::File::create(&a.out).map_err(cant)?);
+    writeln!(out, "{}", REPLAY_COLUMNS.join(",")).map_err(cant)?;
+    let write_row = |out: &mut dyn Write, t: f64, x: &[f64; 12]| -> std::io::Result<()> {
+        let r = r_body_to_ned(x[6], x[7], x[8]);
+        let air = air_data(x, &WindSample::default(), &r);
+        let vals = [
+            t,
+            x[0],
+            x[1],
+            -x[2],
+            air.va_mps,
+            air.alpha_rad,
+            air.beta_rad,
+            x[6],
+            x[7],
+            x[8],
+            x[3],
+            x[4],
+            x[5],
+            x[9],
+            x[10],
+            x[11],
+        ];
+        writeln!(
+            out,
+            "{}",
+            vals.iter().map(|v| num(*v)).collect::<Vec<_>>().join(",")
+        )
+    };
+    for k in 0..rows.len() {
+        let (t, d) = rows[k];
+        write_row(&mut out, t, &x).map_err(cant)?;
+        if let Some(&(t_next, _)) = rows.get(k + 1) {
+            // Hold `d` over [t, t_next) in steps of at most 0.01 s.
+            let span = t_next - t;
+            let n = (span / 0.01).ceil().max(1.0) as usize;
+            let h = span / n as f64;
+            for _ in 0..n {
+                uav.step_open_loop(&mut x, &d, h);
+            }
+            if !x.iter().all(|v| v.is_finite()) {
+                return Err(data(format!("the state diverged after t = {t} s")));
+            }
+        }
+    }
+    out.flush().map_err(cant)?;
+    println!("wrote {} ({} rows)", a.out.display(), rows.len());
+    Ok(())
+}

@@ -1,0 +1,317 @@
+//! The 12-state rigid-body model with the Aerosonde forces and moments (Beard & McLain 2012,
+//! chapters 3-4; `shared/reference/fixed-wing.md` section 2).
+//!
+//! State `x = [pn, pe, pd, u, v, w, phi, theta, psi, p, q, r]` (NED position; `u, v, w` the
+//! ground velocity in body axes; Euler angles; body rates). Inputs `[de, da, dr, dt]`: surfaces in
+//! rad, throttle in [0, 1].
+
+use super::params::Aerosonde;
+
+/// The state vector.
+pub type State12 = [f64; 12];
+
+/// Actuator inputs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Deltas {
+    /// Elevator, rad.
+    pub elevator_rad: f64,
+    /// Aileron, rad.
+    pub aileron_rad: f64,
+    /// Rudder, rad.
+    pub rudder_rad: f64,
+    /// Throttle, 0..1.
+    pub throttle: f64,
+}
+
+/// Wind: steady part in NED plus gusts in body axes, m/s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WindSample {
+    /// Steady wind `[w_n, w_e, w_d]`, m/s.
+    pub steady_ned_mps: [f64; 3],
+    /// Gusts `[u_wg, v_wg, w_wg]` in body axes, m/s.
+    pub gust_body_mps: [f64; 3],
+}
+
+/// Air data of a state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AirData {
+    /// Airspeed, m/s.
+    pub va_mps: f64,
+    /// Angle of attack `atan(w_r/u_r)`, rad.
+    pub alpha_rad: f64,
+    /// Sideslip `asin(v_r/Va)`, rad.
+    pub beta_rad: f64,
+}
+
+/// Rotation body -> vehicle (NED) of Euler angles, row-major.
+#[inline]
+pub fn r_body_to_ned(phi: f64, theta: f64, psi: f64) -> [[f64; 3]; 3] {
+    r_from_sincos(phi.sin_cos(), theta.sin_cos(), psi.sin_cos())
+}
+
+/// [`r_body_to_ned`] from `(sin, cos)` of the three angles.
+#[inline]
+fn r_from_sincos(
+    (sf, cf): (f64, f64),
+    (st, ct): (f64, f64),
+    (sp, cp): (f64, f64),
+) -> [[f64; 3]; 3] {
+    [
+        [ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp],
+        [ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp],
+        [-st, sf * ct, cf * ct],
+    ]
+}
+
+/// Constants derived from the parameters once, for the force model's hot path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Derived {
+    /// `Gamma, Gamma_1..Gamma_8`.
+    pub gammas: [f64; 9],
+    /// `e^{M alpha0}`.
+    pub stall_k: f64,
+    /// `pi e AR`.
+    pub pi_e_ar: f64,
+}
+
+impl Derived {
+    /// Computes the constants.
+    pub fn new(p: &Aerosonde) -> Self {
+        Self {
+            gammas: p.gammas(),
+            stall_k: (p.stall_m * p.alpha0).exp(),
+            pi_e_ar: std::f64::consts::PI * p.e * p.aspect_ratio(),
+        }
+    }
+}
+
+/// Stall blending function `sigma(alpha)` (book eq. 4.10):
+/// `(1 + e^{-M(a - a0)} + e^{M(a + a0)}) / ((1 + e^{-M(a - a0)})(1 + e^{M(a + a0)}))`,
+/// computed with one exponential: `e^{-M(a - a0)} = K/E`, `e^{M(a + a0)} = K E`,
+/// `E = e^{M a}`, `K = e^{M a0}`.
+#[inline]
+pub fn stall_blend(p: &Aerosonde, alpha: f64) -> f64 {
+    stall_blend_k(p, (p.stall_m * p.alpha0).exp(), alpha)
+}
+
+#[inline]
+fn stall_blend_k(p: &Aerosonde, k: f64, alpha: f64) -> f64 {
+    let e = (p.stall_m * alpha).exp();
+    let (a, b) = (k / e, k * e);
+    (1.0 + a + b) / ((1.0 + a) * (1.0 + b))
+}
+
+/// Lift coefficient with stall blending: `(1 - s)(C_L0 + C_La a) + s*2 sign(a) sin^2(a) cos(a)`
+/// (`sign(0) = 0`).
+#[inline]
+pub fn lift_coefficient(p: &Aerosonde, alpha: f64) -> f64 {
+    let (sa, ca) = alpha.sin_cos();
+    lift_coefficient_sc(p, (p.stall_m * p.alpha0).exp(), alpha, sa, ca)
+}
+
+/// [`lift_coefficient`] with `e^{M alpha0}`, `sin(alpha)`, `cos(alpha)` already known.
+#[inline]
+fn lift_coefficient_sc(p: &Aerosonde, k: f64, alpha: f64, sa: f64, ca: f64) -> f64 {
+    let s = stall_blend_k(p, k, alpha);
+    let sign = if alpha > 0.0 {
+        1.0
+    } else if alpha < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    (1.0 - s) * (p.c_l0 + p.c_l_alpha * alpha) + s * 2.0 * sign * sa * sa * ca
+}
+
+/// Air data of state `x` in `wind`.
+#[inline]
+pub fn air_data(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> AirData {
+    air_data_sc(x, wind, r).0
+}
+
+/// [`air_data`] with `(sin(alpha), cos(alpha))` from the air-relative velocities: for
+/// `alpha = atan(w_r/u_r)`, `cos(alpha) = |u_r|/sqrt(u_r^2 + w_r^2)` and
+/// `sin(alpha) = (w_r/u_r) cos(alpha)` (no trigonometric call).
+#[inline]
+fn air_data_sc(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> (AirData, f64, f64) {
+    let [wn, we, wd] = wind.steady_ned_mps;
+    // R_ned->body = R_body->ned^T.
+    let wb = [
+        r[0][0] * wn + r[1][0] * we + r[2][0] * wd + wind.gust_body_mps[0],
+        r[0][1] * wn + r[1][1] * we + r[2][1] * wd + wind.gust_body_mps[1],
+        r[0][2] * wn + r[1][2] * we + r[2][2] * wd + wind.gust_body_mps[2],
+    ];
+    let (ur, vr, wr) = (x[3] - wb[0], x[4] - wb[1], x[5] - wb[2]);
+    let va = (ur * ur + vr * vr + wr * wr).sqrt();
+    let beta = if va > 0.0 {
+        (vr / va).clamp(-1.0, 1.0).asin()
+    } else {
+        0.0
+    };
+    let (alpha, sa, ca) = if ur != 0.0 {
+        let ca = ur.abs() / (ur * ur + wr * wr).sqrt();
+        ((wr / ur).atan(), wr / ur * ca, ca)
+    } else {
+        let a = wr.atan2(ur);
+        let (sa, ca) = a.sin_cos();
+        (a, sa, ca)
+    };
+    (
+        AirData {
+            va_mps: va,
+            alpha_rad: alpha,
+            beta_rad: beta,
+        },
+        sa,
+        ca,
+    )
+}
+
+/// The state derivative `f(x, delta, wind)`; forces and moments evaluated at `x`.
+pub fn derivatives(
+    p: &Aerosonde,
+    dv: &Derived,
+    x: &State12,
+    d: &Deltas,
+    wind: &WindSample,
+) -> State12 {
+    let gm = &dv.gammas;
+    let (u, v, w) = (x[3], x[4], x[5]);
+    let (phi, theta, psi) = (x[6], x[7], x[8]);
+    let (pr, qr, rr) = (x[9], x[10], x[11]);
+    let (sf, cf) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let r = r_from_sincos((sf, cf), (st, ct), psi.sin_cos());
+    let (air, sa, ca) = air_data_sc(x, wind, &r);
+    let (va, alpha, beta) = (air.va_mps, air.alpha_rad, air.beta_rad);
+    let m = p.mass_kg;
+    // Gravity.
+    let mut fx = -m * p.g * st;
+    let mut fy = m * p.g * ct * sf;
+    let mut fz = m * p.g * ct * cf;
+    let (mut ell, mut mm, mut nn) = (0.0, 0.0, 0.0);
+    if va > 0.0 {
+        let qbar = 0.5 * p.rho * va * va;
+        let cl = lift_coefficient_sc(p, dv.stall_k, alpha, sa, ca);
+        let lin = p.c_l0 + p.c_l_alpha * alpha;
+        let cd = p.c_d_p + lin * lin / dv.pi_e_ar;
+        let cx = -cd * ca + cl * sa;
+        let cxq = -p.c_d_q * ca + p.c_l_q * sa;
+        let cxde = -p.c_d_de * ca + p.c_l_de * sa;
+        let cz = -cd * sa - cl * ca;
+        let czq = -p.c_d_q * sa - p.c_l_q * ca;
+        let czde = -p.c_d_de * sa - p.c_l_de * ca;
+        let cq = p.c * qr / (2.0 * va);
+        let bp = p.b * pr / (2.0 * va);
+        let br = p.b * rr / (2.0 * va);
+        fx += qbar * p.s * (cx + cxq * cq + cxde * d.elevator_rad);
+        fy += qbar
+            * p.s
+            * (p.c_y0
+                + p.c_y_beta * beta
+                + p.c_y_p * bp
+                + p.c_y_r * br
+                + p.c_y_da * d.aileron_rad
+                + p.c_y_dr * d.rudder_rad);
+        fz += qbar * p.s * (cz + czq * cq + czde * d.elevator_rad);
+        ell = qbar
+            * p.s
+            * p.b
+            * (p.c_ell0
+                + p.c_ell_beta * beta
+                + p.c_ell_p * bp
+                + p.c_ell_r * br
+                + p.c_ell_da * d.aileron_rad
+                + p.c_ell_dr * d.rudder_rad);
+        mm = qbar
+            * p.s
+            * p.c
+            * (p.c_m0 + p.c_m_alpha * alpha + p.c_m_q * cq + p.c_m_de * d.elevator_rad);
+        nn = qbar
+            * p.s
+            * p.b
+            * (p.c_n0
+                + p.c_n_beta * beta
+                + p.c_n_p * bp
+                + p.c_n_r * br
+                + p.c_n_da * d.aileron_rad
+                + p.c_n_dr * d.rudder_rad);
+    }
+    // Propulsion (2012 model).
+    let km = p.k_motor * d.throttle;
+    fx += 0.5 * p.rho * p.s_prop * p.c_prop * (km * km - va * va);
+    let ko = p.k_omega * d.throttle;
+    ell -= p.k_tp * ko * ko;
+    let tt = st / ct;
+    [
+        r[0][0] * u + r[0][1] * v + r[0][2] * w,
+        r[1][0] * u + r[1][1] * v + r[1][2] * w,
+        r[2][0] * u + r[2][1] * v + r[2][2] * w,
+        rr * v - qr * w + fx / m,
+        pr * w - rr * u + fy / m,
+        qr * u - pr * v + fz / m,
+        pr + qr * sf * tt + rr * cf * tt,
+        qr * cf - rr * sf,
+        (qr * sf + rr * cf) / ct,
+        gm[1] * pr * qr - gm[2] * qr * rr + gm[3] * ell + gm[4] * nn,
+        gm[5] * pr * rr - gm[6] * (pr * pr - rr * rr) + mm / p.jy,
+        gm[7] * pr * qr - gm[1] * qr * rr + gm[4] * ell + gm[8] * nn,
+    ]
+}
+
+/// One classical RK4 step of `dt_s` with inputs and wind held, forces re-evaluated at every
+/// stage.
+pub fn rk4_step(
+    p: &Aerosonde,
+    gm: &Derived,
+    x: &mut State12,
+    d: &Deltas,
+    wind: &WindSample,
+    dt_s: f64,
+) {
+    let add = |a: &State12, k: &State12, h: f64| {
+        let mut o = *a;
+        for i in 0..12 {
+            o[i] += h * k[i];
+        }
+        o
+    };
+    let k1 = derivatives(p, gm, x, d, wind);
+    let k2 = derivatives(p, gm, &add(x, &k1, 0.5 * dt_s), d, wind);
+    let k3 = derivatives(p, gm, &add(x, &k2, 0.5 * dt_s), d, wind);
+    let k4 = derivatives(p, gm, &add(x, &k3, dt_s), d, wind);
+    for i in 0..12 {
+        x[i] += dt_s / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stall_blend_reference_values() {
+        let p = Aerosonde::beard_mclain_2012();
+        assert!((stall_blend(&p, p.alpha0) - 0.5).abs() < 1e-12);
+        assert!((lift_coefficient(&p, 0.4712) - 1.136439).abs() < 1e-6);
+        assert!((lift_coefficient(&p, 0.6) - 0.529176).abs() < 1e-6);
+        // Inactive in level flight: C_L = C_L0 + C_La a to 1e-9.
+        let a = 0.033;
+        assert!((lift_coefficient(&p, a) - (0.28 + 3.45 * a)).abs() < 1e-9);
+        assert_eq!(
+            lift_coefficient(&p, 0.0),
+            (1.0 - stall_blend(&p, 0.0)) * 0.28
+        );
+    }
+
+    #[test]
+    fn rotation_is_orthonormal() {
+        let r = r_body_to_ned(0.3, -0.2, 1.1);
+        for i in 0..3 {
+            for j in 0..3 {
+                let dot: f64 = (0..3).map(|k| r[i][k] * r[j][k]).sum();
+                assert!((dot - if i == j { 1.0 } else { 0.0 }).abs() < 1e-12);
+            }
+        }
+    }
+}

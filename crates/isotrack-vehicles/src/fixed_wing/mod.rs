@@ -1,0 +1,276 @@
+//! A 6-DOF fixed-wing UAV (the Aerosonde of Beard & McLain, 2012 parameters) flown by its
+//! successive-loop-closure autopilot, driven by a course-rate command: the vehicle of the
+//! paper's Sec. VI-C.
+//!
+//! Guidance interface: the isoline controller's `omega` (rad/s, positive = left, as for the
+//! Dubins robot) is integrated into the course command, `chi_c' = -omega` (course is measured
+//! clockwise from north); altitude and airspeed are held at their commands. One step of `dt`:
+//! gusts advance, the autopilot (sample time `dt`) computes the deflections from the true state,
+//! and RK4 integrates the 12-state model with deflections and wind held, forces re-evaluated at
+//! every stage.
+//!
+//! Frames: the simulation's `(x east, y north)` is the model's `(pe, pn)`; a heading
+//! counter-clockwise from east `h` is the course `chi = pi/2 - h` clockwise from north.
+
+pub mod autopilot;
+pub mod dynamics;
+pub mod gains;
+pub mod params;
+pub mod trim;
+pub mod wind;
+
+use autopilot::{autopilot, AutopilotConfig, AutopilotState, Commands};
+use dynamics::{air_data, r_body_to_ned, rk4_step, Deltas, State12, WindSample};
+use gains::{compute_gains, Gains};
+use isotrack_core::math::{wrap_angle, Pose2, Vec2};
+use isotrack_core::vehicle::Telemetry;
+use isotrack_core::Vehicle;
+use params::Aerosonde;
+use std::f64::consts::FRAC_PI_2;
+use trim::{trim, trim_state, Trim, TrimError};
+use wind::{Dryden, DrydenParams};
+
+/// Configuration of a [`FixedWing`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixedWingConfig {
+    /// Commanded (and trim) airspeed, m/s.
+    pub airspeed_mps: f64,
+    /// Commanded altitude, m.
+    pub altitude_m: f64,
+    /// Steady wind `[east, north]`, m/s (the direction the air moves to).
+    pub wind_mps: [f64; 2],
+    /// Dryden gusts on top (seeded by `seed`).
+    pub gusts: bool,
+    /// Seed of the gusts.
+    pub seed: u64,
+    /// Trim feed-forward in the autopilot (see [`autopilot`]).
+    pub trim_feedforward: bool,
+    /// Use the 2012 code's `a_V1` (with `C_L,delta_e`) for the airspeed gains.
+    pub ecen674_gains: bool,
+}
+
+impl Default for FixedWingConfig {
+    fn default() -> Self {
+        Self {
+            airspeed_mps: 30.0,
+            altitude_m: 100.0,
+            wind_mps: [0.0, 0.0],
+            gusts: false,
+            seed: 0,
+            trim_feedforward: true,
+            ecen674_gains: false,
+        }
+    }
+}
+
+/// The UAV: parameters, trim, gains and autopilot settings (immutable during a run).
+#[derive(Clone, Debug)]
+pub struct FixedWing {
+    params: Aerosonde,
+    derived: dynamics::Derived,
+    trim: Trim,
+    gains: Gains,
+    ap: AutopilotConfig,
+    cfg: FixedWingConfig,
+}
+
+/// The UAV's full state: airframe, autopilot memory, course command and gust generator.
+#[derive(Clone, Debug)]
+pub struct FixedWingState {
+    /// `[pn, pe, pd, u, v, w, phi, theta, psi, p, q, r]`.
+    pub x: State12,
+    /// Autopilot memory.
+    pub autopilot: AutopilotState,
+    /// Course command, rad clockwise from north (continuous).
+    pub course_cmd_rad: f64,
+    /// Ground course, rad clockwise from north (continuous).
+    pub course_rad: f64,
+    /// The last deflections.
+    pub deltas: Deltas,
+    /// The wind acting over the last step.
+    pub wind: WindSample,
+    gusts: Option<Dryden>,
+}
+
+impl FixedWing {
+    /// Trims at the configured airspeed and computes the gains.
+    pub fn new(cfg: FixedWingConfig) -> Result<Self, TrimError> {
+        let params = Aerosonde::beard_mclain_2012();
+        let trim = trim(&params, cfg.airspeed_mps)?;
+        let gains = compute_gains(&params, &trim, cfg.ecen674_gains);
+        Ok(Self {
+            derived: dynamics::Derived::new(&params),
+            params,
+            trim,
+            gains,
+            ap: AutopilotConfig {
+                trim_feedforward: cfg.trim_feedforward,
+                ..AutopilotConfig::default()
+            },
+            cfg,
+        })
+    }
+
+    /// The trim condition.
+    pub fn trim(&self) -> &Trim {
+        &self.trim
+    }
+    /// The autopilot gains.
+    pub fn gains(&self) -> &Gains {
+        &self.gains
+    }
+    /// The parameters.
+    pub fn params(&self) -> &Aerosonde {
+        &self.params
+    }
+
+    fn steady_ned(&self) -> [f64; 3] {
+        [self.cfg.wind_mps[1], self.cfg.wind_mps[0], 0.0]
+    }
+
+    /// Trimmed, wings-level flight at `(x east, y north)` and the configured altitude, flying
+    /// along `heading_rad` (counter-clockwise from east) over the ground: the airframe is
+    /// crabbed into any steady wind so that its ground course is the heading given.
+    pub fn initial_state(&self, x_m: f64, y_m: f64, heading_rad: f64) -> FixedWingState {
+        let chi = FRAC_PI_2 - heading_rad;
+        let [wn, we, _] = self.steady_ned();
+        // Crab: air velocity Va (cos psi, sin psi) + wind must point along chi.
+        let cross = -wn * chi.sin() + we * chi.cos();
+        let crab = (-(cross / self.cfg.airspeed_mps)).clamp(-1.0, 1.0).asin();
+        let psi = chi + crab;
+        let mut x = trim_state(&self.trim, self.cfg.altitude_m, psi);
+        x[0] = y_m;
+        x[1] = x_m;
+        // Ground velocity in body axes = air velocity + wind in body axes.
+        let r = r_body_to_ned(0.0, x[7], psi);
+        let wned = self.steady_ned();
+        for i in 0..3 {
+            x[3 + i] += r[0][i] * wned[0] + r[1][i] * wned[1] + r[2][i] * wned[2];
+        }
+        let gusts = self.cfg.gusts.then(|| {
+            Dryden::new(
+                DrydenParams::default(),
+                self.cfg.airspeed_mps,
+                self.cfg.seed,
+            )
+        });
+        let mut s = FixedWingState {
+            x,
+            autopilot: if self.cfg.trim_feedforward {
+                AutopilotState::from_trim(&self.trim, &self.gains)
+            } else {
+                AutopilotState::default()
+            },
+            course_cmd_rad: 0.0,
+            course_rad: 0.0,
+            deltas: Deltas {
+                elevator_rad: self.trim.delta_e_rad,
+                throttle: self.trim.delta_t,
+                ..Deltas::default()
+            },
+            wind: WindSample {
+                steady_ned_mps: wned,
+                gust_body_mps: [0.0; 3],
+            },
+            gusts,
+        };
+        s.course_rad = Self::ground_course(&s.x, chi);
+        s.course_cmd_rad = s.course_rad;
+        s
+    }
+
+    /// NED ground velocity `[pn', pe', pd']`.
+    pub fn ground_velocity(x: &State12) -> [f64; 3] {
+        let r = r_body_to_ned(x[6], x[7], x[8]);
+        [
+            r[0][0] * x[3] + r[0][1] * x[4] + r[0][2] * x[5],
+            r[1][0] * x[3] + r[1][1] * x[4] + r[1][2] * x[5],
+            r[2][0] * x[3] + r[2][1] * x[4] + r[2][2] * x[5],
+        ]
+    }
+
+    /// The ground course, continuous with `previous` (rad clockwise from north).
+    fn ground_course(x: &State12, previous: f64) -> f64 {
+        let v = Self::ground_velocity(x);
+        if v[0] * v[0] + v[1] * v[1] < 1e-12 {
+            return previous;
+        }
+        previous + wrap_angle(v[1].atan2(v[0]) - previous)
+    }
+
+    /// Air data of a state under its last wind sample.
+    pub fn air_data(&self, s: &FixedWingState) -> dynamics::AirData {
+        let r = r_body_to_ned(s.x[6], s.x[7], s.x[8]);
+        air_data(&s.x, &s.wind, &r)
+    }
+
+    /// Advances `s` by `dt_s` with the course command given directly (guidance bypassed): used by
+    /// the turn-rate interface and by tests of the autopilot.
+    pub fn step_with_commands(&self, s: &mut FixedWingState, cmd: &Commands, dt_s: f64) {
+        if let Some(g) = s.gusts.as_mut() {
+            s.wind.gust_body_mps = g.step(dt_s);
+        }
+        let air = self.air_data(s);
+        let d = autopilot(
+            &mut s.autopilot,
+            &self.ap,
+            &self.gains,
+            &self.trim,
+            &s.x,
+            &air,
+            s.course_rad,
+            cmd,
+            dt_s,
+        );
+        s.deltas = d;
+        rk4_step(&self.params, &self.derived, &mut s.x, &d, &s.wind, dt_s);
+        s.course_rad = Self::ground_course(&s.x, s.course_rad);
+    }
+
+    /// Advances the bare airframe (no autopilot) with deflections `d` held, no gusts.
+    pub fn step_open_loop(&self, x: &mut State12, d: &Deltas, dt_s: f64) {
+        let wind = WindSample {
+            steady_ned_mps: self.steady_ned(),
+            gust_body_mps: [0.0; 3],
+        };
+        rk4_step(&self.params, &self.derived, x, d, &wind, dt_s);
+    }
+}
+
+impl Vehicle for FixedWing {
+    type State = FixedWingState;
+
+    fn step(&self, s: &mut FixedWingState, omega_radps: f64, dt_s: f64) {
+        // omega > 0 turns left: the course (clockwise from north) decreases.
+        s.course_cmd_rad -= omega_radps * dt_s;
+        let cmd = Commands {
+            course_rad: s.course_cmd_rad,
+            altitude_m: self.cfg.altitude_m,
+            airspeed_mps: self.cfg.airspeed_mps,
+        };
+        self.step_with_commands(s, &cmd, dt_s);
+    }
+
+    fn pose(&self, s: &FixedWingState) -> Pose2 {
+        Pose2 {
+            position: Vec2::new(s.x[1], s.x[0]),
+            heading_rad: wrap_angle(FRAC_PI_2 - s.course_rad),
+        }
+    }
+
+    fn speed_mps(&self, s: &FixedWingState) -> f64 {
+        let v = Self::ground_velocity(&s.x);
+        (v[0] * v[0] + v[1] * v[1]).sqrt()
+    }
+
+    fn telemetry(&self, s: &FixedWingState) -> Option<Telemetry> {
+        Some(Telemetry {
+            altitude_m: -s.x[2],
+            airspeed_mps: self.air_data(s).va_mps,
+            roll_rad: s.x[6],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests;

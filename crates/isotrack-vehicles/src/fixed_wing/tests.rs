@@ -1,0 +1,173 @@
+//! Closed-loop tests of the UAV: trimmed flight, loop step responses, steady turns, wind.
+
+use super::autopilot::Commands;
+use super::*;
+
+fn uav(cfg: FixedWingConfig) -> FixedWing {
+    FixedWing::new(cfg).unwrap()
+}
+
+fn fly(
+    v: &FixedWing,
+    s: &mut FixedWingState,
+    cmd: &Commands,
+    seconds: f64,
+    mut each: impl FnMut(f64, &FixedWingState),
+) {
+    let n = (seconds / 0.01).round() as usize;
+    for k in 0..n {
+        v.step_with_commands(s, cmd, 0.01);
+        each((k + 1) as f64 * 0.01, s);
+    }
+}
+
+fn hold(v: &FixedWing, s: &FixedWingState) -> Commands {
+    Commands {
+        course_rad: s.course_rad,
+        altitude_m: v.cfg.altitude_m,
+        airspeed_mps: v.cfg.airspeed_mps,
+    }
+}
+
+/// Straight trimmed flight holds altitude and airspeed in tight bands (with trim feed-forward).
+#[test]
+fn straight_trimmed_flight_holds_altitude_and_airspeed() {
+    let v = uav(FixedWingConfig::default());
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let cmd = hold(&v, &s);
+    let (mut dh, mut dva, mut dchi): (f64, f64, f64) = (0.0, 0.0, 0.0);
+    fly(&v, &mut s, &cmd, 60.0, |_, s| {
+        dh = dh.max((-s.x[2] - 100.0).abs());
+        dva = dva.max((v.air_data(s).va_mps - 30.0).abs());
+        dchi = dchi.max((s.course_rad - cmd.course_rad).abs());
+    });
+    assert!(dh < 0.01, "altitude deviation {dh} m");
+    assert!(dva < 0.01, "airspeed deviation {dva} m/s");
+    assert!(dchi < 1e-3, "course deviation {dchi} rad");
+    // Flying north at 30 m/s for 60 s.
+    assert!((s.x[0] - 1800.0).abs() < 1.0, "pn {}", s.x[0]);
+}
+
+/// Without trim feed-forward (the original), the start from trim dips in airspeed (about
+/// 1.6 m/s per the reference) and recovers.
+#[test]
+fn without_feedforward_the_original_dip_appears_and_recovers() {
+    let v = uav(FixedWingConfig {
+        trim_feedforward: false,
+        ..FixedWingConfig::default()
+    });
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let cmd = hold(&v, &s);
+    let mut dip: f64 = 0.0;
+    let mut late: f64 = 0.0;
+    fly(&v, &mut s, &cmd, 30.0, |t, s| {
+        let e = 30.0 - v.air_data(s).va_mps;
+        dip = dip.max(e);
+        if t > 20.0 {
+            late = late.max(e.abs());
+        }
+    });
+    assert!((0.8..2.5).contains(&dip), "airspeed dip {dip}");
+    assert!(late < 0.1, "not recovered: {late}");
+}
+
+/// Each loop's step response settles: course (+30 deg), altitude (+8 m, inside the hold band),
+/// airspeed (+3 m/s).
+#[test]
+fn loop_step_responses_settle() {
+    let v = uav(FixedWingConfig::default());
+    // Course.
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let mut cmd = hold(&v, &s);
+    cmd.course_rad += 30f64.to_radians();
+    let mut max_bank: f64 = 0.0;
+    fly(&v, &mut s, &cmd, 20.0, |_, s| {
+        max_bank = max_bank.max(s.x[6].abs())
+    });
+    assert!(
+        (s.course_rad - cmd.course_rad).abs() < 0.01,
+        "course error {}",
+        s.course_rad - cmd.course_rad
+    );
+    assert!(max_bank <= 40f64.to_radians() + 0.02, "bank {max_bank}");
+    assert!(max_bank > 5f64.to_radians(), "it banked to turn");
+    // Altitude.
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let mut cmd = hold(&v, &s);
+    cmd.altitude_m = 108.0;
+    fly(&v, &mut s, &cmd, 60.0, |_, _| {});
+    assert!((-s.x[2] - 108.0).abs() < 0.2, "altitude {}", -s.x[2]);
+    // Airspeed.
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let mut cmd = hold(&v, &s);
+    cmd.airspeed_mps = 33.0;
+    fly(&v, &mut s, &cmd, 30.0, |_, _| {});
+    assert!(
+        (v.air_data(&s).va_mps - 33.0).abs() < 0.1,
+        "airspeed {}",
+        v.air_data(&s).va_mps
+    );
+    assert!((-s.x[2] - 100.0).abs() < 1.0);
+}
+
+/// A steady coordinated-rate turn at omega = 0.1 rad/s: bank = atan(V omega/g) = 17.0 deg,
+/// within the small sideslip of the uncoordinated (no rudder) turn.
+#[test]
+fn steady_turn_bank_matches_atan_v_omega_over_g() {
+    let v = uav(FixedWingConfig::default());
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    for _ in 0..6000 {
+        v.step(&mut s, 0.1, 0.01);
+    }
+    let expected = (30.0f64 * 0.1 / 9.8).atan();
+    let air = v.air_data(&s);
+    assert!(
+        (s.x[6] - -expected).abs() < 0.5f64.to_radians() + air.beta_rad.abs(),
+        "bank {} vs {} (beta {})",
+        s.x[6],
+        -expected,
+        air.beta_rad
+    );
+    // A left turn (omega > 0) banks left: roll negative.
+    assert!(s.x[6] < 0.0);
+    assert!(air.beta_rad.abs() < 0.02, "sideslip {}", air.beta_rad);
+}
+
+/// With a steady cross wind the ground course and the heading differ by the crab angle
+/// asin(w/Va); the course loop holds the ground course.
+#[test]
+fn wind_separates_course_from_heading() {
+    let v = uav(FixedWingConfig {
+        wind_mps: [5.0, 0.0], // blowing towards the east
+        ..FixedWingConfig::default()
+    });
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2); // north over the ground
+    let cmd = hold(&v, &s);
+    fly(&v, &mut s, &cmd, 60.0, |_, _| {});
+    let crab = (5.0f64 / 30.0).asin();
+    assert!(s.course_rad.abs() < 1e-3, "course {}", s.course_rad);
+    assert!(
+        (s.x[8] + crab).abs() < 2e-3,
+        "heading {} vs {}",
+        s.x[8],
+        -crab
+    );
+    // Ground track: still due north.
+    assert!(s.x[1].abs() < 2.0, "drifted east {}", s.x[1]);
+    // Gusts: seeded, reproducible, bounded.
+    let g = FixedWingConfig {
+        gusts: true,
+        seed: 3,
+        ..FixedWingConfig::default()
+    };
+    let run = || {
+        let v = uav(g);
+        let mut s = v.initial_state(0.0, 0.0, 0.0);
+        let cmd = hold(&v, &s);
+        fly(&v, &mut s, &cmd, 30.0, |_, _| {});
+        s.x
+    };
+    let (a, b) = (run(), run());
+    assert_eq!(a, b);
+    assert!((-a[2] - 100.0).abs() < 5.0, "gusty altitude {}", -a[2]);
+}

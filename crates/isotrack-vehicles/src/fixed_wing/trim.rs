@@ -1,0 +1,149 @@
+//! Wings-level trim at a given airspeed and zero flight-path angle.
+
+use super::dynamics::{derivatives, Deltas, State12, WindSample};
+use super::params::Aerosonde;
+
+/// A trim condition.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trim {
+    /// Airspeed, m/s.
+    pub airspeed_mps: f64,
+    /// Angle of attack (= pitch, gamma = 0), rad.
+    pub alpha_rad: f64,
+    /// Elevator, rad.
+    pub delta_e_rad: f64,
+    /// Throttle, 0..1.
+    pub delta_t: f64,
+    /// Body velocities `u, w`, m/s.
+    pub u_mps: f64,
+    /// See `u_mps`.
+    pub w_mps: f64,
+}
+
+/// Why trim failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TrimError {
+    /// Newton's method did not converge.
+    #[error("no trim found at {0} m/s (Newton's method did not converge)")]
+    NoConvergence(f64),
+    /// Bad airspeed.
+    #[error("airspeed must be finite and > 0, got {0}")]
+    BadAirspeed(f64),
+}
+
+/// The trim state vector at altitude `h` (position at the origin, heading `psi`).
+pub fn trim_state(t: &Trim, altitude_m: f64, psi_rad: f64) -> State12 {
+    [
+        0.0,
+        0.0,
+        -altitude_m,
+        t.u_mps,
+        0.0,
+        t.w_mps,
+        0.0,
+        t.alpha_rad,
+        psi_rad,
+        0.0,
+        0.0,
+        0.0,
+    ]
+}
+
+/// Solves `u' = w' = q' = 0` for `(alpha, delta_e, delta_t)` with `theta = alpha` (wings level,
+/// `gamma = 0`, `beta = 0`), no wind, by Newton's method with a central-difference Jacobian.
+pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
+    if !(airspeed_mps.is_finite() && airspeed_mps > 0.0) {
+        return Err(TrimError::BadAirspeed(airspeed_mps));
+    }
+    let gm = super::dynamics::Derived::new(p);
+    let residual = |z: [f64; 3]| {
+        let t = Trim {
+            airspeed_mps,
+            alpha_rad: z[0],
+            delta_e_rad: z[1],
+            delta_t: z[2],
+            u_mps: airspeed_mps * z[0].cos(),
+            w_mps: airspeed_mps * z[0].sin(),
+        };
+        let x = trim_state(&t, 100.0, 0.0);
+        let d = Deltas {
+            elevator_rad: z[1],
+            throttle: z[2],
+            ..Deltas::default()
+        };
+        let f = derivatives(p, &gm, &x, &d, &WindSample::default());
+        [f[3], f[5], f[10]]
+    };
+    let mut z = [0.03, -0.07, 0.4];
+    for _ in 0..50 {
+        let r = residual(z);
+        if r.iter().all(|v| v.abs() < 1e-13) {
+            break;
+        }
+        let mut jac = nalgebra::Matrix3::<f64>::zeros();
+        for j in 0..3 {
+            let h = 1e-7;
+            let (mut zp, mut zm) = (z, z);
+            zp[j] += h;
+            zm[j] -= h;
+            let (rp, rm) = (residual(zp), residual(zm));
+            for i in 0..3 {
+                jac[(i, j)] = (rp[i] - rm[i]) / (2.0 * h);
+            }
+        }
+        let step = jac
+            .lu()
+            .solve(&nalgebra::Vector3::new(r[0], r[1], r[2]))
+            .ok_or(TrimError::NoConvergence(airspeed_mps))?;
+        for i in 0..3 {
+            z[i] -= step[i];
+        }
+    }
+    let r = residual(z);
+    if !r.iter().all(|v| v.abs() < 1e-9) || !z.iter().all(|v| v.is_finite()) {
+        return Err(TrimError::NoConvergence(airspeed_mps));
+    }
+    Ok(Trim {
+        airspeed_mps,
+        alpha_rad: z[0],
+        delta_e_rad: z[1],
+        delta_t: z[2],
+        u_mps: airspeed_mps * z[0].cos(),
+        w_mps: airspeed_mps * z[0].sin(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The trim table of `shared/reference/fixed-wing.md` section 4, to 1e-4.
+    #[test]
+    fn reproduces_the_trim_table() {
+        let p = Aerosonde::beard_mclain_2012();
+        for (va, alpha, de, dt, u, w) in [
+            (25.0, 0.082157, -0.109199, 0.333516, 24.9157, 2.0516),
+            (30.0, 0.0330598, -0.0718854, 0.398352, 29.9836, 0.99161),
+            (35.0, 0.003406, -0.049349, 0.463819, 34.9998, 0.1192),
+        ] {
+            let t = trim(&p, va).unwrap();
+            assert!(
+                (t.alpha_rad - alpha).abs() < 1e-4,
+                "{va}: alpha {}",
+                t.alpha_rad
+            );
+            assert!(
+                (t.delta_e_rad - de).abs() < 1e-4,
+                "{va}: de {}",
+                t.delta_e_rad
+            );
+            assert!((t.delta_t - dt).abs() < 1e-4, "{va}: dt {}", t.delta_t);
+            assert!(
+                (t.u_mps - u).abs() < 1e-4 && (t.w_mps - w).abs() < 1e-4,
+                "{va}: u, w {} {}",
+                t.u_mps,
+                t.w_mps
+            );
+        }
+    }
+}
