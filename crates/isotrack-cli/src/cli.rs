@@ -26,6 +26,11 @@ pub enum Command {
     /// Run one scenario with each controller (the paper's law and the baselines) on the same
     /// field, start, sensor and turn-rate limit, and tabulate the metrics.
     Compare(CompareArgs),
+    /// Draw the trajectory over the field and the time series of one or more run directories
+    /// (several are overlaid with a legend).
+    Plot(PlotArgs),
+    /// Regenerate the paper's figures (Fig. 1(a), 2(a)-(c), 3(b)-(c)) from this project's runs.
+    Figures(FiguresArgs),
     /// Trim the fixed-wing UAV (wings level, zero flight-path angle) and print the trim state,
     /// inputs and autopilot gains.
     Trim(TrimArgs),
@@ -70,6 +75,46 @@ pub struct CompareArgs {
     /// `summary.json`, `scenario.toml`) into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+/// Figure format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImageFormat {
+    /// PNG.
+    Png,
+    /// SVG.
+    Svg,
+}
+
+/// `isotrack plot`.
+#[derive(Debug, Args)]
+pub struct PlotArgs {
+    /// Run directories written by `isotrack run --out` or `isotrack compare --out`.
+    #[arg(required = true, value_name = "RUN_DIR")]
+    pub runs: Vec<PathBuf>,
+    /// Image format.
+    #[arg(long, value_enum, default_value_t = ImageFormat::Png)]
+    pub format: ImageFormat,
+    /// Where to write `trajectory.*` and `timeseries.*` (default: the first run directory).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// `isotrack figures`.
+#[derive(Debug, Args)]
+pub struct FiguresArgs {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "docs/figures")]
+    pub out: PathBuf,
+    /// Also write SVG versions.
+    #[arg(long)]
+    pub svg: bool,
+    /// The scenarios directory.
+    #[arg(long, value_name = "DIR", default_value = "scenarios")]
+    pub scenarios: PathBuf,
+    /// Where the runs behind the figures go (trace, summary, scenario per run).
+    #[arg(long, value_name = "DIR", default_value = "target/figure-runs")]
+    pub runs: PathBuf,
 }
 
 /// `isotrack trim`.
@@ -159,4 +204,8 @@ pub struct RunArgs {
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
+    /// After the run, draw `trajectory.png` and `timeseries.png` into the output directory
+    /// (needs `--out`).
+    #[arg(long, requires = "out")]
+    pub plot: bool,
 }

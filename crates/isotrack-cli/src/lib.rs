@@ -7,6 +7,7 @@
 pub mod aircraft;
 pub mod cli;
 pub mod compare;
+pub mod figures;
 pub mod interpolate;
 pub mod output;
 pub mod run;

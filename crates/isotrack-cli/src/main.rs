@@ -10,6 +10,8 @@ fn main() -> ExitCode {
         Command::Show(args) => isotrack_cli::run::show(args),
         Command::Check(args) => isotrack_cli::run::check(args),
         Command::Compare(args) => isotrack_cli::compare::compare(args),
+        Command::Plot(args) => isotrack_cli::figures::plot(args),
+        Command::Figures(args) => isotrack_cli::figures::figures(args),
         Command::Trim(args) => isotrack_cli::aircraft::trim(args),
         Command::Replay(args) => isotrack_cli::aircraft::replay(args),
         Command::Interpolate(args) => isotrack_cli::interpolate::interpolate(args),

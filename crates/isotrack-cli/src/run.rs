@@ -106,6 +106,16 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 resolved.display()
             );
         }
+        if args.plot {
+            let written = crate::figures::plot_dirs(
+                std::slice::from_ref(dir),
+                isotrack_plot::Format::Png,
+                dir,
+            )?;
+            if !args.quiet {
+                println!("plotted     {}", written.join(", "));
+            }
+        }
         result
     } else {
         let result = scenario.run(&mut NoTrace);

@@ -505,3 +505,55 @@ fn fixed_wing_scenario_traces_telemetry() {
         "{header}"
     );
 }
+
+#[test]
+fn run_plot_and_plot_command_write_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    let o = isotrack(&[
+        "run",
+        "--out",
+        a.to_str().unwrap(),
+        "--plot",
+        "-q",
+        "--set",
+        "sim.duration_s=30",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["trajectory.png", "timeseries.png"] {
+        let bytes = std::fs::read(a.join(f)).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG", "{f}");
+    }
+    let b = dir.path().join("b");
+    isotrack(&[
+        "run",
+        "--out",
+        b.to_str().unwrap(),
+        "-q",
+        "--set",
+        "sim.duration_s=30",
+        "--set",
+        "initial.x_m=-8",
+    ]);
+    let out = dir.path().join("both");
+    let o = isotrack(&[
+        "plot",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read_to_string(out.join("trajectory.svg"))
+        .unwrap()
+        .contains("<svg"));
+    // --plot needs --out; a non-run directory is a clear error.
+    assert_eq!(isotrack(&["run", "--plot"]).status.code(), Some(2));
+    assert_fails(
+        &isotrack(&["plot", dir.path().to_str().unwrap()]),
+        66,
+        &["summary.json"],
+    );
+}

@@ -128,6 +128,9 @@ pub struct FieldSection {
     /// Field kind (default `radial_exp`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind: Option<FieldKind>,
+    /// Any kind: the field's units, for figure labels (e.g. `"ug/m^3"`; default none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub units: Option<String>,
     /// `radial_exp`: peak value (default 20).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub i0: Option<f64>,

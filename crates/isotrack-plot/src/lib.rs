@@ -1,0 +1,53 @@
+//! # isotrack-plot
+//!
+//! Publication figures from isotrack's own outputs, never by re-simulating:
+//!
+//! * [`RunData::load`] reads a run directory (`trace.csv`, `summary.json`, the resolved
+//!   `scenario.toml`, whose field is rebuilt to draw the map);
+//! * [`trajectory_figure`]: the trajectories over the field (heat map with a colour bar and
+//!   units, the target isoline bold and a few others thin, start marker with a heading arrow,
+//!   end marker, equal axis scales, axes in metres, legend when several runs are overlaid);
+//! * [`timeseries_figure`]: error, measurement and turn rate against time, the steady-state
+//!   window shaded;
+//! * [`field_map`]: a field alone (the paper's Fig. 1(a)).
+//!
+//! PNG or SVG; the font (DejaVu Sans, `assets/`) is compiled in, so no system font is needed.
+
+mod draw;
+mod run_data;
+
+pub use draw::{field_map, timeseries_figure, trajectory_figure, Format, Panels};
+pub use run_data::{RunData, TraceRecord};
+
+/// Why a figure could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// A run directory or one of its files is missing or malformed.
+    #[error("{0}")]
+    Input(String),
+    /// Drawing or writing the image failed.
+    #[error("cannot draw {path}: {message}")]
+    Draw {
+        /// The image being written.
+        path: String,
+        /// What failed.
+        message: String,
+    },
+}
+
+/// Registers the bundled font (idempotent).
+pub(crate) fn fonts() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        for style in [
+            plotters::style::FontStyle::Normal,
+            plotters::style::FontStyle::Bold,
+            plotters::style::FontStyle::Italic,
+            plotters::style::FontStyle::Oblique,
+        ] {
+            // The font is valid (a test checks rendering); a failure would only lose labels.
+            let _ = plotters::style::register_font("sans-serif", style, FONT);
+        }
+    });
+}

@@ -1,0 +1,127 @@
+//! Reading a run directory.
+
+use crate::PlotError;
+use isotrack_scenario::{load_scenario, Scenario};
+use std::path::{Path, PathBuf};
+
+/// One row of `trace.csv`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TraceRecord {
+    /// Time, s.
+    pub t_s: f64,
+    /// East, m.
+    pub x_m: f64,
+    /// North, m.
+    pub y_m: f64,
+    /// Heading, rad.
+    pub heading_rad: f64,
+    /// True field value.
+    pub s: f64,
+    /// `s - s_d`.
+    pub error: f64,
+    /// Turn-rate command, rad/s.
+    pub omega_radps: f64,
+    /// Last measurement (NaN before the first).
+    pub s_measured: f64,
+}
+
+/// A finished run, as written by `isotrack run --out DIR` (or one directory of `compare`).
+#[derive(Clone, Debug)]
+pub struct RunData {
+    /// Label for legends (the directory name).
+    pub name: String,
+    /// The directory.
+    pub dir: PathBuf,
+    /// The trace.
+    pub trace: Vec<TraceRecord>,
+    /// `summary.json`.
+    pub summary: serde_json::Value,
+    /// The resolved scenario (its field rebuilt for the map).
+    pub scenario: Scenario,
+}
+
+impl RunData {
+    /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml`.
+    pub fn load(dir: &Path) -> Result<Self, PlotError> {
+        let err = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join("summary.json"))
+                .map_err(|e| err(format!("summary.json: {e} (is this a run directory?)")))?,
+        )
+        .map_err(|e| err(format!("summary.json: {e}")))?;
+        let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[])
+            .map_err(|e| err(format!("scenario.toml: {e}")))?;
+        let mut rdr = csv::Reader::from_path(dir.join("trace.csv"))
+            .map_err(|e| err(format!("trace.csv: {e}")))?;
+        let headers = rdr
+            .headers()
+            .map_err(|e| err(format!("trace.csv: {e}")))?
+            .clone();
+        let col = |n: &str| {
+            headers
+                .iter()
+                .position(|h| h == n)
+                .ok_or_else(|| err(format!("trace.csv has no column `{n}`")))
+        };
+        let idx = [
+            col("t_s")?,
+            col("x_m")?,
+            col("y_m")?,
+            col("heading_rad")?,
+            col("s")?,
+            col("error")?,
+            col("omega_radps")?,
+        ];
+        let meas = headers.iter().position(|h| h == "s_measured");
+        let mut trace = Vec::new();
+        for rec in rdr.records() {
+            let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
+            let line = rec.position().map_or(0, |p| p.line());
+            let mut v = [0.0; 7];
+            for (k, &i) in idx.iter().enumerate() {
+                v[k] = rec.get(i).and_then(|t| t.parse().ok()).ok_or_else(|| {
+                    err(format!(
+                        "trace.csv:{line}: column {} is not a number",
+                        headers.get(i).unwrap_or("?")
+                    ))
+                })?;
+            }
+            let m = meas
+                .and_then(|i| rec.get(i))
+                .and_then(|t| t.parse().ok())
+                .unwrap_or(f64::NAN);
+            trace.push(TraceRecord {
+                t_s: v[0],
+                x_m: v[1],
+                y_m: v[2],
+                heading_rad: v[3],
+                s: v[4],
+                error: v[5],
+                omega_radps: v[6],
+                s_measured: m,
+            });
+        }
+        if trace.is_empty() {
+            return Err(err(
+                "trace.csv has no rows (was the trace turned off?)".into()
+            ));
+        }
+        let name = dir.file_name().map_or_else(
+            || dir.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        Ok(Self {
+            name,
+            dir: dir.to_path_buf(),
+            trace,
+            summary,
+            scenario,
+        })
+    }
+
+    /// Start of the steady-state window, s.
+    pub fn steady_state_start_s(&self) -> f64 {
+        let f = self.scenario.file();
+        (1.0 - f.metrics.steady_state_fraction.unwrap_or(0.2)) * f.sim.duration_s.unwrap_or(0.0)
+    }
+}
