@@ -31,6 +31,11 @@ pub enum Command {
     Plot(PlotArgs),
     /// Regenerate the paper's figures (Fig. 1(a), 2(a)-(c), 3(b)-(c)) from this project's runs.
     Figures(FiguresArgs),
+    /// Run a sweep file: the grid product x random draws of one scenario, in parallel,
+    /// resumable, shardable; one row per run in `DIR/results.csv`.
+    Sweep(SweepArgs),
+    /// Combine the outputs of sweep shards; refuses missing or duplicate runs.
+    Merge(MergeArgs),
     /// Trim the fixed-wing UAV (wings level, zero flight-path angle) and print the trim state,
     /// inputs and autopilot gains.
     Trim(TrimArgs),
@@ -115,6 +120,36 @@ pub struct FiguresArgs {
     /// Where the runs behind the figures go (trace, summary, scenario per run).
     #[arg(long, value_name = "DIR", default_value = "target/figure-runs")]
     pub runs: PathBuf,
+}
+
+/// `isotrack sweep`.
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// The sweep file (TOML).
+    pub sweep: PathBuf,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Continue an interrupted sweep in DIR: keep the complete rows, run the rest.
+    #[arg(long)]
+    pub resume: bool,
+    /// Run only the K-th of N disjoint shards (runs with id % N == K - 1), e.g. `--shard 2/8`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// `isotrack merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Shard output directories.
+    #[arg(required = true, value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+    /// Merged output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
 }
 
 /// `isotrack trim`.

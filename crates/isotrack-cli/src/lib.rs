@@ -11,6 +11,7 @@ pub mod figures;
 pub mod interpolate;
 pub mod output;
 pub mod run;
+pub mod sweep;
 
 /// Process exit codes (BSD `sysexits.h`, the convention for command-line tools).
 pub mod exit {

@@ -12,6 +12,8 @@ fn main() -> ExitCode {
         Command::Compare(args) => isotrack_cli::compare::compare(args),
         Command::Plot(args) => isotrack_cli::figures::plot(args),
         Command::Figures(args) => isotrack_cli::figures::figures(args),
+        Command::Sweep(args) => isotrack_cli::sweep::sweep(args),
+        Command::Merge(args) => isotrack_cli::sweep::merge(args),
         Command::Trim(args) => isotrack_cli::aircraft::trim(args),
         Command::Replay(args) => isotrack_cli::aircraft::replay(args),
         Command::Interpolate(args) => isotrack_cli::interpolate::interpolate(args),

@@ -19,11 +19,12 @@ pub mod field;
 pub mod load;
 pub mod resolve;
 pub mod schema;
+pub mod sweep;
 
 pub use build::ControllerModel;
 pub use load::{
     apply_overrides, build_derived, load_scenario, parse_scenario, parse_scenario_in,
-    ErrorLocation, ScenarioError,
+    ErrorLocation, LocatedIssue, ScenarioError,
 };
 pub use schema::ScenarioFile;
 
@@ -59,6 +60,53 @@ impl Scenario {
             field: Arc::new(field),
             vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
+        })
+    }
+
+    /// A variant of this scenario with `KEY=VALUE` overrides applied to its resolved keys. The
+    /// field, vehicle and true isoline are shared with `self` (not rebuilt, files not re-read)
+    /// when the variant leaves their sections and the level unchanged: sweeps stay cheap and
+    /// their memory flat.
+    pub fn derive(&self, overrides: &[String], origin: &str) -> Result<Self, ScenarioError> {
+        let file = apply_overrides(&self.file, overrides)?;
+        let located = |issues: Vec<resolve::Issue>| {
+            ScenarioError::Invalid(
+                issues
+                    .into_iter()
+                    .map(|i| load::LocatedIssue {
+                        location: ErrorLocation::Default {
+                            origin: origin.to_string(),
+                        },
+                        key: Some(i.key),
+                        message: i.message,
+                    })
+                    .collect(),
+            )
+        };
+        let mut file = resolve::resolve(file).map_err(located)?;
+        let field = if file.field == self.file.field {
+            self.field.clone()
+        } else {
+            Arc::new(build_field(&mut file.field, Path::new(".")).map_err(|i| located(vec![i]))?)
+        };
+        let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
+        let vehicle = if same_vehicle {
+            self.vehicle.clone()
+        } else {
+            Arc::new(build::build_vehicle(&file).map_err(|i| located(vec![i]))?)
+        };
+        let isoline = if Arc::ptr_eq(&field, &self.field)
+            && file.controller.level == self.file.controller.level
+        {
+            self.isoline.clone()
+        } else {
+            Arc::new(OnceLock::new())
+        };
+        Ok(Self {
+            file,
+            field,
+            vehicle,
+            isoline,
         })
     }
 

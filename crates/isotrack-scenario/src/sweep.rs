@@ -1,0 +1,330 @@
+//! Sweep files: many runs of one scenario.
+//!
+//! ```toml
+//! scenario = "../scenarios/paper-fig2b-circular.toml"   # relative to the sweep file
+//!
+//! [base]                      # fixed overrides for every run (dotted keys)
+//! sim.duration_s = 300.0
+//!
+//! [grid]                      # the product of these lists
+//! controller.kp = [5.0, 10.0, 20.0]
+//! controller.ki = [0.0, 1.0]
+//!
+//! [random]                    # `runs` draws per grid point
+//! runs = 10
+//! seed = 42
+//! initial.x_m = { uniform = [-15.0, 15.0] }
+//! sensor.noise_std = { normal = [0.02, 0.005] }
+//! ```
+//!
+//! Runs = grid product x random runs. Run `id = grid_index * runs + draw` (grid keys in sorted
+//! order, the last key varying fastest). Draw `r` of grid point `g` takes its values from a
+//! ChaCha8 stream seeded by `seed` on stream `id`: a pure function of the seed and the run's
+//! index, whatever the thread count or shard.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use std::path::{Path, PathBuf};
+
+/// A distribution for a `[random]` key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Dist {
+    /// Uniform on `[a, b)`.
+    Uniform(f64, f64),
+    /// Normal with mean and standard deviation.
+    Normal(f64, f64),
+}
+
+/// A parsed sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepPlan {
+    /// The base scenario file (absolute or relative to the working directory).
+    pub scenario: PathBuf,
+    /// Fixed overrides, `KEY=VALUE`.
+    pub base: Vec<String>,
+    /// Grid keys and their values (TOML literals), keys sorted.
+    pub grid: Vec<(String, Vec<toml::Value>)>,
+    /// Draws per grid point (1 without `[random]`).
+    pub draws: u64,
+    /// Seed of the random draws.
+    pub seed: u64,
+    /// Random keys, sorted.
+    pub random: Vec<(String, Dist)>,
+}
+
+/// A sweep-file problem, naming the file and key.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct SweepError {
+    /// The sweep file.
+    pub path: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+fn flatten(
+    prefix: &str,
+    v: &toml::Value,
+    stop: &dyn Fn(&toml::Value) -> bool,
+    out: &mut Vec<(String, toml::Value)>,
+) {
+    match v {
+        toml::Value::Table(t) if !stop(v) => {
+            for (k, x) in t {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, x, stop, out);
+            }
+        }
+        _ => out.push((prefix.to_string(), v.clone())),
+    }
+}
+
+/// A TOML value as an override `VALUE` (round-trips through `--set` parsing).
+pub fn value_literal(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("{s:?}"),
+        other => other.to_string(),
+    }
+}
+
+impl SweepPlan {
+    /// Reads and checks a sweep file.
+    pub fn load(path: &Path) -> Result<Self, SweepError> {
+        let err = |m: String| SweepError {
+            path: path.display().to_string(),
+            message: m,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+        let doc: toml::Table = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
+        for k in doc.keys() {
+            if !["scenario", "base", "grid", "random"].contains(&k.as_str()) {
+                return Err(err(format!(
+                    "unknown key `{k}`, expected one of `scenario`, `base`, `grid`, `random`"
+                )));
+            }
+        }
+        let scenario = doc
+            .get("scenario")
+            .and_then(|v| v.as_str())
+            .ok_or_else(|| err("`scenario = \"PATH\"` is required".into()))?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let scenario = if Path::new(scenario).is_absolute() {
+            PathBuf::from(scenario)
+        } else {
+            dir.join(scenario)
+        };
+        let never = |_: &toml::Value| false;
+        let mut base = vec![];
+        if let Some(b) = doc.get("base") {
+            let mut flat = vec![];
+            flatten("", b, &never, &mut flat);
+            base = flat
+                .into_iter()
+                .map(|(k, v)| format!("{k}={}", value_literal(&v)))
+                .collect();
+        }
+        let mut grid = vec![];
+        if let Some(g) = doc.get("grid") {
+            let mut flat = vec![];
+            flatten("", g, &never, &mut flat);
+            for (k, v) in flat {
+                let list = v
+                    .as_array()
+                    .filter(|a| !a.is_empty())
+                    .ok_or_else(|| err(format!("grid.{k}: must be a non-empty list of values")))?;
+                grid.push((k, list.clone()));
+            }
+        }
+        grid.sort_by(|a, b| a.0.cmp(&b.0));
+        let (mut draws, mut seed, mut random) = (1, 0, vec![]);
+        if let Some(r) = doc.get("random") {
+            let t = r
+                .as_table()
+                .ok_or_else(|| err("`random` must be a table".into()))?;
+            draws = match t.get("runs") {
+                Some(v) => v
+                    .as_integer()
+                    .filter(|n| *n >= 1)
+                    .ok_or_else(|| err("random.runs must be an integer >= 1".into()))?
+                    as u64,
+                None => return Err(err("random.runs is required".into())),
+            };
+            seed = match t.get("seed") {
+                Some(v) => v
+                    .as_integer()
+                    .filter(|n| *n >= 0)
+                    .ok_or_else(|| err("random.seed must be an integer >= 0".into()))?
+                    as u64,
+                None => 0,
+            };
+            let is_dist = |v: &toml::Value| {
+                v.as_table()
+                    .is_some_and(|t| t.contains_key("uniform") || t.contains_key("normal"))
+            };
+            let mut flat = vec![];
+            for (k, v) in t.iter().filter(|(k, _)| *k != "runs" && *k != "seed") {
+                flatten(k, v, &is_dist, &mut flat);
+            }
+            for (k, v) in flat {
+                let pair = |name: &str| -> Option<(f64, f64)> {
+                    let a = v.as_table()?.get(name)?.as_array()?;
+                    let num = |x: &toml::Value| x.as_float().or(x.as_integer().map(|i| i as f64));
+                    (a.len() == 2)
+                        .then(|| Some((num(&a[0])?, num(&a[1])?)))
+                        .flatten()
+                };
+                let d = match (pair("uniform"), pair("normal")) {
+                    (Some((a, b)), None) if a.is_finite() && b.is_finite() && a < b => Dist::Uniform(a, b),
+                    (None, Some((m, s))) if m.is_finite() && s.is_finite() && s >= 0.0 => Dist::Normal(m, s),
+                    _ => {
+                        return Err(err(format!(
+                            "random.{k}: expected {{ uniform = [a, b] }} with a < b or {{ normal = [mean, std] }} with std >= 0"
+                        )))
+                    }
+                };
+                random.push((k, d));
+            }
+            random.sort_by(|a, b| a.0.cmp(&b.0));
+        }
+        for (k, _) in &grid {
+            if random.iter().any(|(r, _)| r == k) {
+                return Err(err(format!("`{k}` is both in [grid] and [random]")));
+            }
+        }
+        Ok(Self {
+            scenario,
+            base,
+            grid,
+            draws,
+            seed,
+            random,
+        })
+    }
+
+    /// Number of runs.
+    pub fn total(&self) -> u64 {
+        self.grid
+            .iter()
+            .map(|(_, v)| v.len() as u64)
+            .product::<u64>()
+            * self.draws
+    }
+
+    /// The varied keys, in column order (grid, then random).
+    pub fn varied_keys(&self) -> Vec<String> {
+        self.grid
+            .iter()
+            .map(|g| g.0.clone())
+            .chain(self.random.iter().map(|r| r.0.clone()))
+            .collect()
+    }
+
+    /// The values of the varied keys for run `id` (as override literals), in [`varied_keys`]
+    /// order.
+    ///
+    /// [`varied_keys`]: Self::varied_keys
+    pub fn run_values(&self, id: u64) -> Vec<String> {
+        let mut g = id / self.draws;
+        let mut vals = vec![String::new(); self.grid.len()];
+        for (i, (_, list)) in self.grid.iter().enumerate().rev() {
+            let n = list.len() as u64;
+            vals[i] = value_literal(&list[(g % n) as usize]);
+            g /= n;
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(id);
+        for (_, d) in &self.random {
+            let v = match *d {
+                Dist::Uniform(a, b) => {
+                    let u: f64 = rand::RngExt::random(&mut rng);
+                    a + (b - a) * u
+                }
+                Dist::Normal(m, s) => {
+                    let n: f64 = StandardNormal.sample(&mut rng);
+                    m + s * n
+                }
+            };
+            vals.push(format!("{v:?}"));
+        }
+        vals
+    }
+
+    /// The overrides of run `id`: the base, then the varied keys.
+    pub fn run_overrides(&self, id: u64) -> Vec<String> {
+        let mut o = self.base.clone();
+        o.extend(
+            self.varied_keys()
+                .iter()
+                .zip(self.run_values(id))
+                .map(|(k, v)| format!("{k}={v}")),
+        );
+        o
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan(text: &str) -> Result<SweepPlan, SweepError> {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.toml");
+        std::fs::write(&p, text).unwrap();
+        SweepPlan::load(&p)
+    }
+
+    #[test]
+    fn grid_and_random_indexing() {
+        let p = plan(
+            "scenario = \"x.toml\"\n[base]\nsim.duration_s = 10.0\n[grid]\ncontroller.kp = [1.0, 2.0, 3.0]\ncontroller.ki = [0.0, 1.0]\n[random]\nruns = 4\nseed = 9\ninitial.x_m = { uniform = [-1.0, 1.0] }\n",
+        )
+        .unwrap();
+        assert_eq!(p.total(), 24);
+        assert_eq!(
+            p.varied_keys(),
+            ["controller.ki", "controller.kp", "initial.x_m"]
+        );
+        // id = grid_index * 4 + draw; grid index: ki slowest, kp fastest (sorted keys).
+        let v = p.run_values(4 * 4 + 2); // grid 4 = (ki index 1, kp index 1)
+        assert_eq!(&v[..2], ["1.0", "2.0"]);
+        let x: f64 = v[2].parse().unwrap();
+        assert!((-1.0..1.0).contains(&x));
+        // Pure function of (seed, id).
+        assert_eq!(p.run_values(18), p.run_values(18));
+        assert_ne!(p.run_values(18)[2], p.run_values(19)[2]);
+        assert_eq!(p.run_overrides(0)[0], "sim.duration_s=10.0");
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        assert!(plan("scenario = \"x\"\nbogus = 1\n")
+            .unwrap_err()
+            .message
+            .contains("bogus"));
+        assert!(plan("[grid]\na = [1]\n")
+            .unwrap_err()
+            .message
+            .contains("scenario"));
+        assert!(plan("scenario = \"x\"\n[grid]\nsim.seed = 3\n")
+            .unwrap_err()
+            .message
+            .contains("grid.sim.seed"));
+        assert!(
+            plan("scenario = \"x\"\n[random]\nruns = 2\nk = { uniform = [2, 1] }\n")
+                .unwrap_err()
+                .message
+                .contains("random.k")
+        );
+        assert!(
+            plan("scenario = \"x\"\n[random]\nk = { normal = [0, 1] }\n")
+                .unwrap_err()
+                .message
+                .contains("runs")
+        );
+    }
+}
