@@ -103,6 +103,17 @@ pub struct PlotArgs {
     /// Where to write `trajectory.*` and `timeseries.*` (default: the first run directory).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// For a sweep directory (one with `results.csv`): the swept key on the x axis (default: the
+    /// first varied key).
+    #[arg(long, value_name = "KEY")]
+    pub x: Option<String>,
+    /// For a sweep directory: the metric on the y axis.
+    #[arg(
+        long,
+        value_name = "COLUMN",
+        default_value = "steady_state_max_abs_error"
+    )]
+    pub metric: String,
 }
 
 /// `isotrack figures`.

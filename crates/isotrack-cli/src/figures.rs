@@ -60,6 +60,36 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         ImageFormat::Svg => Format::Svg,
     };
     let out = a.out.clone().unwrap_or_else(|| a.runs[0].clone());
+    let results = a.runs[0].join("results.csv");
+    if a.runs.len() == 1 && results.exists() {
+        // A sweep: a metric against a swept parameter.
+        let x = match &a.x {
+            Some(x) => x.clone(),
+            None => {
+                let mut r = csv::Reader::from_path(&results).map_err(|e| Failure {
+                    code: exit::NOINPUT,
+                    message: format!("{}: {e}", results.display()),
+                })?;
+                r.headers()
+                    .ok()
+                    .and_then(|h| h.get(1).map(str::to_string))
+                    .unwrap_or_default()
+            }
+        };
+        std::fs::create_dir_all(&out).map_err(|e| Failure {
+            code: exit::CANTCREAT,
+            message: format!("cannot create {}: {e}", out.display()),
+        })?;
+        let file = out.join(format!(
+            "sweep_{}_vs_{}.{}",
+            a.metric,
+            x.replace('.', "_"),
+            format.extension()
+        ));
+        isotrack_plot::sweep_figure(&results, &x, &a.metric, &file, format).map_err(failure)?;
+        println!("wrote {}", file.display());
+        return Ok(());
+    }
     let written = plot_dirs(&a.runs, format, &out)?;
     println!("wrote {}", written.join(", "));
     Ok(())

@@ -30,9 +30,18 @@ impl Stations {
     pub fn from_csv(path: &Path, value_column: &str) -> Result<Self, LoadError> {
         let bytes = std::fs::read(path)
             .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+        Self::from_csv_bytes(path, &bytes, value_column)
+    }
+
+    /// As [`from_csv`](Self::from_csv) on the file's bytes (`path` names it in errors).
+    pub fn from_csv_bytes(
+        path: &Path,
+        bytes: &[u8],
+        value_column: &str,
+    ) -> Result<Self, LoadError> {
         let mut rdr = csv::ReaderBuilder::new()
             .trim(csv::Trim::All)
-            .from_reader(bytes.as_slice());
+            .from_reader(bytes);
         let headers = rdr
             .headers()
             .map_err(|e| LoadError::new(path, Some(FilePosition::Line(1, None)), e.to_string()))?

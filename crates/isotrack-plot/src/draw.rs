@@ -533,3 +533,85 @@ pub fn timeseries_figure(
         })()
     })
 }
+
+/// A sweep's metric against one swept parameter, from `results.csv` (one point per run;
+/// runs without the metric, e.g. never converged, are left out and counted in the title).
+pub fn sweep_figure(
+    results_csv: &Path,
+    x_key: &str,
+    metric: &str,
+    path: &Path,
+    format: Format,
+) -> Result<(), PlotError> {
+    let err = |m: String| PlotError::Input(format!("{}: {m}", results_csv.display()));
+    let mut rdr = csv::Reader::from_path(results_csv).map_err(|e| err(e.to_string()))?;
+    let headers = rdr.headers().map_err(|e| err(e.to_string()))?.clone();
+    let col = |n: &str| {
+        headers.iter().position(|h| h == n).ok_or_else(|| {
+            err(format!(
+                "no column `{n}`; columns: {}",
+                headers.iter().collect::<Vec<_>>().join(", ")
+            ))
+        })
+    };
+    let (xi, yi) = (col(x_key)?, col(metric)?);
+    let mut pts = vec![];
+    let mut skipped = 0;
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| err(e.to_string()))?;
+        match (
+            rec.get(xi).and_then(|v| v.parse::<f64>().ok()),
+            rec.get(yi).and_then(|v| v.parse::<f64>().ok()),
+        ) {
+            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => pts.push((x, y)),
+            _ => skipped += 1,
+        }
+    }
+    if pts.is_empty() {
+        return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
+    }
+    let (x0, x1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+        (a.0.min(p.0), a.1.max(p.0))
+    });
+    let (y0, y1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+        (a.0.min(p.1), a.1.max(p.1))
+    });
+    let px = 0.05 * (x1 - x0).max(1e-9);
+    let py = 0.05 * (y1 - y0).max(1e-12);
+    let title = format!(
+        "{metric} against {x_key} ({} runs{})",
+        pts.len(),
+        if skipped > 0 {
+            format!(", {skipped} without a value")
+        } else {
+            String::new()
+        }
+    );
+    render!(path, format, (1000, 700), |root| {
+        (|| -> DrawResult {
+            root.fill(&WHITE).map_err(s)?;
+            let mut chart = ChartBuilder::on(&root)
+                .margin(20)
+                .caption(&title, ("sans-serif", 22))
+                .x_label_area_size(50)
+                .y_label_area_size(90)
+                .build_cartesian_2d(x0 - px..x1 + px, y0 - py..y1 + py)
+                .map_err(s)?;
+            chart
+                .configure_mesh()
+                .x_desc(x_key)
+                .y_desc(metric)
+                .label_style(("sans-serif", 15))
+                .axis_desc_style(("sans-serif", 16))
+                .draw()
+                .map_err(s)?;
+            chart
+                .draw_series(
+                    pts.iter()
+                        .map(|&(x, y)| Circle::new((x, y), 4, colour(1).mix(0.6).filled())),
+                )
+                .map_err(s)?;
+            Ok(())
+        })()
+    })
+}

@@ -16,7 +16,7 @@
 mod draw;
 mod run_data;
 
-pub use draw::{field_map, timeseries_figure, trajectory_figure, Format, Panels};
+pub use draw::{field_map, sweep_figure, timeseries_figure, trajectory_figure, Format, Panels};
 pub use run_data::{RunData, TraceRecord};
 
 /// Why a figure could not be made.

@@ -100,7 +100,16 @@ impl SweepPlan {
             message: m,
         };
         let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
-        let doc: toml::Table = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses sweep-file text; `path` names it and anchors the relative scenario path.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, SweepError> {
+        let err = |m: String| SweepError {
+            path: path.display().to_string(),
+            message: m,
+        };
+        let doc: toml::Table = toml::from_str(text).map_err(|e| err(e.to_string()))?;
         for k in doc.keys() {
             if !["scenario", "base", "grid", "random"].contains(&k.as_str()) {
                 return Err(err(format!(

@@ -97,7 +97,21 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
         (None, Some(a), Some(b)) => (a, b),
         _ => return Err(missing("cellsize")),
     };
-    let mut values = Vec::with_capacity(nx * ny);
+    // The header's sizes are untrusted: never allocate more than the text could hold (each
+    // value takes at least two bytes), and refuse products that overflow.
+    let declared = nx
+        .checked_mul(ny)
+        .filter(|n| *n <= bytes.len() / 2 + 1)
+        .ok_or_else(|| {
+            err(
+                1,
+                format!(
+                    "ncols x nrows = {nx} x {ny} values cannot fit in a {}-byte file",
+                    bytes.len()
+                ),
+            )
+        })?;
+    let mut values = Vec::with_capacity(declared);
     let mut last_line = 1;
     for (i, line) in lines {
         last_line = i + 1;

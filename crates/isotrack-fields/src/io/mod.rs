@@ -148,12 +148,23 @@ pub fn load_grid_variable(
     }
     let bytes =
         std::fs::read(path).map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    parse_grid(path, &bytes, format)
+}
+
+/// Parses the bytes of a grid file (any format but NetCDF, which needs a file); `name` is used
+/// in error messages. (The fuzz targets' entry point.)
+pub fn parse_grid(name: &Path, bytes: &[u8], format: GridFormat) -> Result<LoadedGrid, LoadError> {
+    let path = name;
     match format {
-        GridFormat::NetCdf => unreachable!("handled above"),
-        GridFormat::Csv => csv_grid::parse(path, &bytes),
-        GridFormat::Npy => npy::parse(path, &bytes),
-        GridFormat::Asc => asc::parse(path, &bytes),
-        GridFormat::GeoTiff => geotiff::parse(path, &bytes),
+        GridFormat::NetCdf => Err(LoadError::new(
+            path,
+            None,
+            "NetCDF needs a file: use load_grid",
+        )),
+        GridFormat::Csv => csv_grid::parse(path, bytes),
+        GridFormat::Npy => npy::parse(path, bytes),
+        GridFormat::Asc => asc::parse(path, bytes),
+        GridFormat::GeoTiff => geotiff::parse(path, bytes),
     }
 }
 

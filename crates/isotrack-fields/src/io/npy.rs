@@ -30,6 +30,18 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             format!("unsupported dtype {dtype:?}: need a plain numeric dtype"),
         ));
     };
+    // The header's shape is untrusted: refuse a data size beyond the file before reading.
+    let item = ts.num_bytes().unwrap_or(8) as u128;
+    if (ny as u128) * (nx as u128) * item > bytes.len() as u128 {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "shape {shape:?} needs more data than the {}-byte file holds (truncated file?)",
+                bytes.len()
+            ),
+        ));
+    }
     let bad = |e: std::io::Error| {
         LoadError::new(
             path,

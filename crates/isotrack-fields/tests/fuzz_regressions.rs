@@ -1,0 +1,62 @@
+//! Adversarial inputs for the loaders (the fuzz targets' seeds): huge declared sizes with
+//! little data must be errors, never an attempt to allocate the declared size.
+
+use isotrack_fields::io::{parse_grid, GridFormat};
+use std::path::Path;
+
+fn npy(shape: &str, data: &[u8]) -> Vec<u8> {
+    let mut header = format!("{{'descr': '<f8', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
+#[test]
+fn huge_declared_sizes_are_errors() {
+    let asc = b"ncols 99999999\nnrows 99999999\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n";
+    let e = parse_grid(Path::new("big.asc"), asc, GridFormat::Asc).unwrap_err();
+    assert!(e.to_string().contains("big.asc"), "{e}");
+    let e = parse_grid(
+        Path::new("big.npy"),
+        &npy("(100000000, 100000000)", &[0u8; 16]),
+        GridFormat::Npy,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("big.npy"), "{e}");
+    let e = parse_grid(
+        Path::new("ovf.npy"),
+        &npy("(18446744073709551615, 2)", &[0u8; 16]),
+        GridFormat::Npy,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("ovf.npy"), "{e}");
+}
+
+#[test]
+fn degenerate_inputs_are_errors() {
+    for (name, bytes, f) in [
+        ("a.csv", &b"\n\n\n"[..], GridFormat::Csv),
+        ("b.csv", &b",,,\n,,,\n"[..], GridFormat::Csv),
+        ("c.csv", &b"1e400,1\n1,1\n"[..], GridFormat::Csv),
+        (
+            "d.asc",
+            &b"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 0\n1 2\n3 4\n"[..],
+            GridFormat::Asc,
+        ),
+        (
+            "e.tif",
+            &b"MM\x00*\x00\x00\x00\x08\xff\xff"[..],
+            GridFormat::GeoTiff,
+        ),
+        ("f.npy", &b"\x93NUMPY\x01\x00\xff\xff"[..], GridFormat::Npy),
+    ] {
+        let e = parse_grid(Path::new(name), bytes, f).unwrap_err();
+        assert!(e.to_string().contains(name), "{e}");
+    }
+}
