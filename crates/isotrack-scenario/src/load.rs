@@ -169,28 +169,7 @@ pub fn parse_scenario_in(
         toml::from_str(text).map_err(|e| located(e.span(), None, e.message().to_string()))?;
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {
-        let fail = |key: Option<String>, message: String| {
-            ScenarioError::Invalid(vec![LocatedIssue {
-                location: ErrorLocation::Override { arg: arg.clone() },
-                key,
-                message,
-            }])
-        };
-        let (key, raw) = arg
-            .split_once('=')
-            .ok_or_else(|| fail(None, "expected KEY=VALUE".into()))?;
-        let key = key.trim().to_string();
-        if key.is_empty() || key.split('.').any(|p| p.trim().is_empty()) {
-            return Err(fail(
-                None,
-                "expected a dotted key such as controller.kp".into(),
-            ));
-        }
-        let value = parse_override_value(raw.trim());
-        insert_dotted(&mut table, &key, value).map_err(|m| fail(Some(key.clone()), m))?;
-        if let Err(e) = toml::Value::Table(table.clone()).try_into::<ScenarioFile>() {
-            return Err(fail(Some(key.clone()), e.message().trim().to_string()));
-        }
+        let key = apply_one(&mut table, arg)?;
         set_keys.push((key, arg.clone()));
     }
     let file: ScenarioFile = toml::Value::Table(table)
@@ -218,22 +197,7 @@ pub fn apply_overrides(
         _ => toml::Table::new(),
     };
     for arg in overrides {
-        let fail = |key: Option<String>, message: String| {
-            ScenarioError::Invalid(vec![LocatedIssue {
-                location: ErrorLocation::Override { arg: arg.clone() },
-                key,
-                message,
-            }])
-        };
-        let (key, raw) = arg
-            .split_once('=')
-            .ok_or_else(|| fail(None, "expected KEY=VALUE".into()))?;
-        let key = key.trim().to_string();
-        insert_dotted(&mut table, &key, parse_override_value(raw.trim()))
-            .map_err(|m| fail(Some(key.clone()), m))?;
-        toml::Value::Table(table.clone())
-            .try_into::<ScenarioFile>()
-            .map_err(|e| fail(Some(key.clone()), e.message().trim().to_string()))?;
+        apply_one(&mut table, arg)?;
     }
     toml::Value::Table(table)
         .try_into()
@@ -269,6 +233,36 @@ pub fn build_derived(
                 .collect(),
         )
     })
+}
+
+/// Applies one `KEY=VALUE` to `table` and checks the schema still holds; returns the key.
+/// Errors name the argument.
+fn apply_one(table: &mut toml::Table, arg: &str) -> Result<String, ScenarioError> {
+    let fail = |key: Option<String>, message: String| {
+        ScenarioError::Invalid(vec![LocatedIssue {
+            location: ErrorLocation::Override {
+                arg: arg.to_string(),
+            },
+            key,
+            message,
+        }])
+    };
+    let (key, raw) = arg
+        .split_once('=')
+        .ok_or_else(|| fail(None, "expected KEY=VALUE".into()))?;
+    let key = key.trim().to_string();
+    if key.is_empty() || key.split('.').any(|p| p.trim().is_empty()) {
+        return Err(fail(
+            None,
+            "expected a dotted key such as controller.kp".into(),
+        ));
+    }
+    insert_dotted(table, &key, parse_override_value(raw.trim()))
+        .map_err(|m| fail(Some(key.clone()), m))?;
+    toml::Value::Table(table.clone())
+        .try_into::<ScenarioFile>()
+        .map_err(|e| fail(Some(key.clone()), e.message().trim().to_string()))?;
+    Ok(key)
 }
 
 /// `VALUE` as a TOML value; a bare word that is not TOML (`dubins`) is taken as a string.

@@ -56,15 +56,16 @@ pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
         return Err(TrimError::BadAirspeed(airspeed_mps));
     }
     let gm = super::dynamics::Derived::new(p);
+    let trim_of = |z: [f64; 3]| Trim {
+        airspeed_mps,
+        alpha_rad: z[0],
+        delta_e_rad: z[1],
+        delta_t: z[2],
+        u_mps: airspeed_mps * z[0].cos(),
+        w_mps: airspeed_mps * z[0].sin(),
+    };
     let residual = |z: [f64; 3]| {
-        let t = Trim {
-            airspeed_mps,
-            alpha_rad: z[0],
-            delta_e_rad: z[1],
-            delta_t: z[2],
-            u_mps: airspeed_mps * z[0].cos(),
-            w_mps: airspeed_mps * z[0].sin(),
-        };
+        let t = trim_of(z);
         let x = trim_state(&t, 100.0, 0.0);
         let d = Deltas {
             elevator_rad: z[1],
@@ -103,14 +104,7 @@ pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
     if !r.iter().all(|v| v.abs() < 1e-9) || !z.iter().all(|v| v.is_finite()) {
         return Err(TrimError::NoConvergence(airspeed_mps));
     }
-    Ok(Trim {
-        airspeed_mps,
-        alpha_rad: z[0],
-        delta_e_rad: z[1],
-        delta_t: z[2],
-        u_mps: airspeed_mps * z[0].cos(),
-        w_mps: airspeed_mps * z[0].sin(),
-    })
+    Ok(trim_of(z))
 }
 
 #[cfg(test)]
