@@ -109,7 +109,59 @@ pub fn build_field(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, 
             gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
         })),
         FieldKind::Grid => FieldModel::Grid(build_grid(f, base_dir)?),
+        FieldKind::Stations => FieldModel::Grid(build_stations(f, base_dir)?),
     })
+}
+
+fn resolve_path(f: &FieldSection, base_dir: &Path) -> PathBuf {
+    let mut path = PathBuf::from(f.path.clone().unwrap_or_default());
+    if path.is_relative() {
+        path = base_dir.join(path);
+    }
+    path.canonicalize().unwrap_or(path)
+}
+
+/// Stations: read, interpolate onto a grid over their bounding box, then georeference
+/// overrides as for `grid`.
+fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue> {
+    use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stations};
+    let issue = |key: &str, message: String| Issue {
+        key: key.to_string(),
+        message,
+    };
+    let path = resolve_path(f, base_dir);
+    let col = f.value_column.clone().unwrap_or_default();
+    let st = Stations::from_csv(&path, &col).map_err(|e| issue("field.path", e.to_string()))?;
+    let ext = st.extent_m();
+    let spacing = f
+        .grid_spacing_m
+        .unwrap_or(((ext[1] - ext[0]).max(ext[3] - ext[2]) / 100.0).max(1e-6));
+    let grid = match f.method.unwrap_or(StationMethod::Kriging) {
+        StationMethod::Idw => Idw::new(st, f.idw_power.unwrap_or(2.0)).to_grid(ext, spacing),
+        StationMethod::Kriging => OrdinaryKriging::new(st)
+            .ok_or_else(|| {
+                issue(
+                    "field.path",
+                    "the kriging system is singular (duplicate stations?)".into(),
+                )
+            })?
+            .to_grid(ext, spacing),
+    }
+    .map_err(|e| issue("field.grid_spacing_m", e.to_string()))?;
+    let new_spacing = f.spacing_m.unwrap_or(grid.spacing_m());
+    let origin = f.origin_m.map(v2).unwrap_or(grid.origin_m());
+    let grid = grid
+        .with_georeference(origin, new_spacing)
+        .map_err(|e| issue("field.spacing_m", e.to_string()))?;
+    f.path = Some(path.display().to_string());
+    f.grid_spacing_m = Some(spacing);
+    f.spacing_m = Some(grid.spacing_m());
+    f.origin_m = Some([grid.origin_m().x, grid.origin_m().y]);
+    let interp = match f.interpolation.unwrap_or(InterpolationName::Bicubic) {
+        InterpolationName::Bilinear => Interpolation::Bilinear,
+        InterpolationName::Bicubic => Interpolation::Bicubic,
+    };
+    Ok(GridField::new(grid, interp))
 }
 
 fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue> {
@@ -117,12 +169,7 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue>
         key: key.to_string(),
         message,
     };
-    let given = f.path.clone().unwrap_or_default();
-    let mut path = PathBuf::from(&given);
-    if path.is_relative() {
-        path = base_dir.join(path);
-    }
-    let path = path.canonicalize().unwrap_or(path);
+    let path = resolve_path(f, base_dir);
     let format = f.format.map(|g| match g {
         GridFormatName::Csv => GridFormat::Csv,
         GridFormatName::Npy => GridFormat::Npy,

@@ -76,7 +76,7 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
 }
 
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 19] {
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 23] {
     [
         ("i0", fd.i0.is_some()),
         ("decay_per_m", fd.decay_per_m.is_some()),
@@ -89,6 +89,10 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 19] {
         ("path", fd.path.is_some()),
         ("format", fd.format.is_some()),
         ("variable", fd.variable.is_some()),
+        ("value_column", fd.value_column.is_some()),
+        ("method", fd.method.is_some()),
+        ("idw_power", fd.idw_power.is_some()),
+        ("grid_spacing_m", fd.grid_spacing_m.is_some()),
         ("spacing_m", fd.spacing_m.is_some()),
         ("origin_m", fd.origin_m.is_some()),
         ("interpolation", fd.interpolation.is_some()),
@@ -450,6 +454,19 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
         FieldKind::RadialExp => ("radial_exp", &["i0", "decay_per_m", "center_m", "domain_m"]),
         FieldKind::GaussianPlumes => ("gaussian_plumes", &["background", "sources", "domain_m"]),
         FieldKind::LinearRamp => ("linear_ramp", &["offset", "gradient_per_m", "domain_m"]),
+        FieldKind::Stations => (
+            "stations",
+            &[
+                "path",
+                "value_column",
+                "method",
+                "idw_power",
+                "grid_spacing_m",
+                "spacing_m",
+                "origin_m",
+                "interpolation",
+            ],
+        ),
         FieldKind::Grid => (
             "grid",
             &[
@@ -507,6 +524,38 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
             }
         }
         FieldKind::Grid => resolve_grid(&mut c, fd),
+        FieldKind::Stations => {
+            if fd.path.as_deref().is_none_or(str::is_empty) {
+                c.fail("field.path", "is required for field.kind = \"stations\"");
+            }
+            if fd.value_column.as_deref().is_none_or(str::is_empty) {
+                c.fail(
+                    "field.value_column",
+                    "is required for field.kind = \"stations\"",
+                );
+            }
+            let m = *fd.method.get_or_insert(StationMethod::Kriging);
+            if m == StationMethod::Idw {
+                c.positive("field.idw_power", *fd.idw_power.get_or_insert(2.0));
+            } else if fd.idw_power.is_some() {
+                c.fail(
+                    "field.idw_power",
+                    "does not apply to field.method = \"kriging\"",
+                );
+            }
+            if let Some(g) = fd.grid_spacing_m {
+                c.positive("field.grid_spacing_m", g);
+            }
+            if let Some(sp) = fd.spacing_m {
+                for v in sp {
+                    c.positive("field.spacing_m", v);
+                }
+            }
+            if let Some(o) = fd.origin_m {
+                c.all_finite("field.origin_m", &o);
+            }
+            fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+        }
     }
     if let Some(d) = fd.domain_m {
         c.all_finite("field.domain_m", &d);

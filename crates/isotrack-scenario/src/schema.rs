@@ -93,6 +93,19 @@ pub enum FieldKind {
     LinearRamp,
     /// A gridded field read from `path`, interpolated.
     Grid,
+    /// Scattered station values (`path`, a CSV) interpolated onto a grid (IDW or ordinary
+    /// kriging), then interpolated like a `grid`.
+    Stations,
+}
+
+/// Station interpolation methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StationMethod {
+    /// Ordinary kriging with a fitted variogram.
+    Kriging,
+    /// Inverse-distance weighting.
+    Idw,
 }
 
 /// Grid file formats.
@@ -163,6 +176,19 @@ pub struct FieldSection {
     /// `grid`: `csv`, `npy`, `asc`, `geotiff` or `netcdf` (default: from the extension).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub format: Option<GridFormatName>,
+    /// `stations`: the value column of the CSV (required).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_column: Option<String>,
+    /// `stations`: `kriging` (default) or `idw`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<StationMethod>,
+    /// `stations`, `idw`: the power (default 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub idw_power: Option<f64>,
+    /// `stations`: spacing of the grid the stations are interpolated onto, in the stations'
+    /// metres (default: 1/100 of the larger side of their bounding box).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grid_spacing_m: Option<f64>,
     /// `grid`, NetCDF: the variable to read (default: the first 2-D data variable).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub variable: Option<String>,
