@@ -727,3 +727,21 @@ fn a_sigkilled_sweep_resumes_to_the_same_results() {
         std::fs::read(killed.join("results.csv")).unwrap()
     );
 }
+
+#[test]
+fn check_uses_the_uav_airspeed() {
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig3-uav.toml"
+    );
+    let o = isotrack(&["check", scen, "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The reachability remark is computed with v = 30 m/s (the airspeed), not 0.
+    let g1 = j["prop2"]["gamma1"].as_f64().unwrap();
+    let note = j["prop2"]["note"].as_str().unwrap();
+    assert!(
+        note.contains(&format!("v*gamma1 = {:.4}", 30.0 * g1)),
+        "{note}"
+    );
+}

@@ -235,7 +235,13 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         c.c1.unwrap_or(0.0),
         c.c2.unwrap_or(1.0),
     );
-    let v = f.vehicle.speed_mps.unwrap_or(0.0);
+    // The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed in
+    // calm air; the propositions are for a unicycle, which the autopilot only approximates).
+    let v = f
+        .vehicle
+        .speed_mps
+        .or(f.vehicle.airspeed_mps)
+        .unwrap_or(0.0);
     let level = s.level();
 
     // Prop. 1
