@@ -171,3 +171,30 @@ fn wind_separates_course_from_heading() {
     assert_eq!(a, b);
     assert!((-a[2] - 100.0).abs() < 5.0, "gusty altitude {}", -a[2]);
 }
+
+/// The roll loop's step response: a 120 deg course step saturates the course loop, so the roll
+/// loop sees a step to the 40 deg bank limit; it reaches it within 1 deg in under 2 s and
+/// overshoots by less than 3 deg (the design has zeta = 1.2: no overshoot expected).
+#[test]
+fn roll_loop_step_to_the_bank_limit() {
+    let v = uav(FixedWingConfig::default());
+    let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+    let mut cmd = hold(&v, &s);
+    cmd.course_rad += 120f64.to_radians();
+    let limit = 40f64.to_radians();
+    let mut reached: Option<f64> = None;
+    let mut peak: f64 = 0.0;
+    fly(&v, &mut s, &cmd, 4.0, |t, s| {
+        peak = peak.max(s.x[6]);
+        if reached.is_none() && (s.x[6] - limit).abs() < 1f64.to_radians() {
+            reached = Some(t);
+        }
+    });
+    let t = reached.expect("the bank reached the limit");
+    assert!(t < 2.0, "took {t} s");
+    assert!(
+        peak < limit + 3f64.to_radians(),
+        "overshoot to {} deg",
+        peak.to_degrees()
+    );
+}
