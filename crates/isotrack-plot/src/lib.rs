@@ -12,6 +12,7 @@
 //! * [`field_map`]: a field alone (the paper's Fig. 1(a)).
 //!
 //! PNG or SVG; the font (DejaVu Sans, `assets/`) is compiled in, so no system font is needed.
+#![deny(missing_docs)]
 
 mod draw;
 mod run_data;

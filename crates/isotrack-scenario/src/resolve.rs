@@ -1,4 +1,4 @@
-//! Defaults and validation: a [`ScenarioFile`] in, a [`Scenario`] with every applicable key set
+//! Defaults and validation: a [`ScenarioFile`] in, a [`crate::Scenario`] with every applicable key set
 //! (or every problem found, each naming its key) out.
 
 use crate::schema::*;

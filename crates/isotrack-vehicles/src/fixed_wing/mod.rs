@@ -43,7 +43,7 @@ pub struct FixedWingConfig {
     pub gusts: bool,
     /// Seed of the gusts.
     pub seed: u64,
-    /// Trim feed-forward in the autopilot (see [`autopilot`]).
+    /// Trim feed-forward in the autopilot (see [`mod@autopilot`]).
     pub trim_feedforward: bool,
     /// Use the 2012 code's `a_V1` (with `C_L,delta_e`) for the airspeed gains.
     pub ecen674_gains: bool,
