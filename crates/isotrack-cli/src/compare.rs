@@ -2,11 +2,11 @@
 
 use crate::cli::CompareArgs;
 use crate::exit;
-use crate::output::{num, scenario_toml, write_summary, write_trace};
+use crate::output::{num, run_to_trace, scenario_toml, write_summary};
 use crate::run::Failure;
 use isotrack_scenario::schema::{ControllerKind, ControllerSection};
 use isotrack_scenario::{apply_overrides, build_derived, load_scenario, Scenario, ScenarioError};
-use isotrack_sim::{NoTrace, RunResult, TraceRow};
+use isotrack_sim::{NoTrace, RunResult};
 use std::io::Write;
 use std::path::Path;
 
@@ -121,9 +121,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         let r = if let Some(dir) = &a.out {
             let d = dir.join(kind.name());
             std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;
-            let mut rows: Vec<TraceRow> = Vec::new();
-            let r = s.run(&mut rows);
-            write_trace(&d.join("trace.csv"), &rows).map_err(|e| cant(&d, e))?;
+            let r = run_to_trace(&s, &d.join("trace.csv")).map_err(|e| cant(&d, e))?;
             write_summary(&d.join("summary.json"), &s, Some(&a.scenario), &r)
                 .map_err(|e| cant(&d, e))?;
             std::fs::write(d.join("scenario.toml"), scenario_toml(&s)).map_err(|e| cant(&d, e))?;

@@ -2,13 +2,12 @@
 
 use crate::cli::{FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
-use crate::output::{scenario_toml, write_summary, write_trace};
+use crate::output::{run_to_trace, scenario_toml, write_summary};
 use crate::run::Failure;
 use isotrack_plot::{
     field_map, timeseries_figure, trajectory_figure, Format, Panels, PlotError, RunData,
 };
 use isotrack_scenario::{load_scenario, Scenario};
-use isotrack_sim::TraceRow;
 use std::path::{Path, PathBuf};
 
 fn failure(e: PlotError) -> Failure {
@@ -102,9 +101,7 @@ fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Fail
         message: format!("cannot write {}: {e}", dir.display()),
     };
     std::fs::create_dir_all(dir).map_err(cant)?;
-    let mut rows: Vec<TraceRow> = Vec::new();
-    let r = scenario.run(&mut rows);
-    write_trace(&dir.join("trace.csv"), &rows).map_err(cant)?;
+    let r = run_to_trace(scenario, &dir.join("trace.csv")).map_err(cant)?;
     write_summary(&dir.join("summary.json"), scenario, None, &r).map_err(cant)?;
     std::fs::write(dir.join("scenario.toml"), scenario_toml(scenario)).map_err(cant)?;
     let mut d = RunData::load(dir).map_err(failure)?;

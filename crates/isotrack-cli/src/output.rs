@@ -1,7 +1,7 @@
 //! Run outputs: the trace CSV, the summary JSON and the resolved scenario.
 
 use isotrack_scenario::{Scenario, ScenarioFile};
-use isotrack_sim::{RunResult, TraceRow};
+use isotrack_sim::{RunResult, TraceRow, TraceSink};
 use serde::Serialize;
 use std::path::Path;
 
@@ -20,20 +20,50 @@ pub const TRACE_COLUMNS: [&str; 8] = [
 /// The columns a flying vehicle adds to `trace.csv` (roll positive right wing down).
 pub const TELEMETRY_COLUMNS: [&str; 3] = ["altitude_m", "airspeed_mps", "roll_rad"];
 
-/// Writes `trace.csv`: a header row, then one row per recorded step. Numbers are written in
-/// Rust's shortest round-trip form ([`num`]), so they read back bit-identical; `s_measured` is
-/// empty before the first measurement.
-pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
-    let mut w = csv::Writer::from_path(path)?;
-    let flying = rows.iter().any(|r| r.telemetry.is_some());
-    let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
-    if flying {
-        header.extend(TELEMETRY_COLUMNS);
+/// Streams `trace.csv` while the run goes: a header row, then one row per recorded step, so a
+/// long run's trace never has to fit in memory. Numbers are written in Rust's shortest
+/// round-trip form ([`num`]), so they read back bit-identical; `s_measured` is empty before the
+/// first measurement; a flying vehicle adds [`TELEMETRY_COLUMNS`]. The first write error is kept
+/// and returned by [`TraceWriter::finish`].
+pub struct TraceWriter {
+    w: csv::Writer<std::fs::File>,
+    flying: bool,
+    buf: Vec<String>,
+    error: Option<std::io::Error>,
+}
+
+impl TraceWriter {
+    /// Creates the file and writes the header.
+    pub fn create(path: &Path, flying: bool) -> std::io::Result<Self> {
+        let mut w = csv::Writer::from_path(path)?;
+        let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
+        if flying {
+            header.extend(TELEMETRY_COLUMNS);
+        }
+        w.write_record(&header)?;
+        Ok(Self {
+            w,
+            flying,
+            buf: Vec::with_capacity(header.len()),
+            error: None,
+        })
     }
-    w.write_record(&header)?;
-    let mut buf: Vec<String> = Vec::with_capacity(header.len());
-    for r in rows {
-        buf.clear();
+
+    /// Flushes; the first error met while writing, if any.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.w.flush()
+    }
+}
+
+impl TraceSink for TraceWriter {
+    fn record(&mut self, r: &TraceRow) {
+        if self.error.is_some() {
+            return;
+        }
+        self.buf.clear();
         for v in [
             r.t_s,
             r.x_m,
@@ -43,18 +73,27 @@ pub fn write_trace(path: &Path, rows: &[TraceRow]) -> std::io::Result<()> {
             r.error,
             r.omega_radps,
         ] {
-            buf.push(num(v));
+            self.buf.push(num(v));
         }
-        buf.push(r.s_measured.map(num).unwrap_or_default());
-        if flying {
+        self.buf.push(r.s_measured.map(num).unwrap_or_default());
+        if self.flying {
             let t = r.telemetry.unwrap_or_default();
             for v in [t.altitude_m, t.airspeed_mps, t.roll_rad] {
-                buf.push(num(v));
+                self.buf.push(num(v));
             }
         }
-        w.write_record(&buf)?;
+        if let Err(e) = self.w.write_record(&self.buf) {
+            self.error = Some(e.into());
+        }
     }
-    w.flush()
+}
+
+/// Runs `scenario`, streaming its trace into `path`.
+pub fn run_to_trace(scenario: &Scenario, path: &Path) -> std::io::Result<RunResult> {
+    let mut w = TraceWriter::create(path, scenario.is_flying())?;
+    let r = scenario.run(&mut w);
+    w.finish()?;
+    Ok(r)
 }
 
 /// A number as written in CSV outputs: the shortest string that reads back to the same `f64`,

@@ -2,9 +2,9 @@
 
 use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
-use crate::output::{scenario_toml, write_summary, write_trace};
+use crate::output::{run_to_trace, scenario_toml, write_summary};
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
-use isotrack_sim::{NoTrace, RunResult, TraceRow};
+use isotrack_sim::{NoTrace, RunResult};
 
 /// A command's failure: the message and the exit code.
 #[derive(Debug)]
@@ -82,10 +82,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             message: format!("cannot write {what}: {e}"),
         };
         std::fs::create_dir_all(dir).map_err(|e| cant(&dir.display().to_string(), e))?;
-        let mut rows: Vec<TraceRow> = Vec::new();
-        let result = scenario.run(&mut rows);
         let trace = dir.join("trace.csv");
-        write_trace(&trace, &rows).map_err(|e| cant(&trace.display().to_string(), e))?;
+        let result =
+            run_to_trace(&scenario, &trace).map_err(|e| cant(&trace.display().to_string(), e))?;
         let summary = dir.join("summary.json");
         write_summary(
             &summary,

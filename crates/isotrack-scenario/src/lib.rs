@@ -110,6 +110,11 @@ impl Scenario {
         })
     }
 
+    /// Whether the vehicle flies (its trace has altitude, airspeed and roll).
+    pub fn is_flying(&self) -> bool {
+        matches!(*self.vehicle, build::VehicleModel::FixedWing(_))
+    }
+
     /// The field.
     pub fn field(&self) -> &FieldModel {
         &self.field
