@@ -18,7 +18,7 @@ mod draw;
 mod run_data;
 
 pub use draw::{field_map, sweep_figure, timeseries_figure, trajectory_figure, Format, Panels};
-pub use run_data::{RunData, TraceRecord};
+pub use run_data::RunData;
 
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]

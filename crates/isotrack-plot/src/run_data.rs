@@ -2,28 +2,8 @@
 
 use crate::PlotError;
 use isotrack_scenario::{load_scenario, Scenario};
+use isotrack_sim::TraceRow;
 use std::path::{Path, PathBuf};
-
-/// One row of `trace.csv`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct TraceRecord {
-    /// Time, s.
-    pub t_s: f64,
-    /// East, m.
-    pub x_m: f64,
-    /// North, m.
-    pub y_m: f64,
-    /// Heading, rad.
-    pub heading_rad: f64,
-    /// True field value.
-    pub s: f64,
-    /// `s - s_d`.
-    pub error: f64,
-    /// Turn-rate command, rad/s.
-    pub omega_radps: f64,
-    /// Last measurement (NaN before the first).
-    pub s_measured: f64,
-}
 
 /// A finished run, as written by `isotrack run --out DIR` (or one directory of `compare`).
 #[derive(Clone, Debug)]
@@ -33,7 +13,7 @@ pub struct RunData {
     /// The directory.
     pub dir: PathBuf,
     /// The trace.
-    pub trace: Vec<TraceRecord>,
+    pub trace: Vec<TraceRow>,
     /// `summary.json`.
     pub summary: serde_json::Value,
     /// The resolved scenario (its field rebuilt for the map).
@@ -86,11 +66,8 @@ impl RunData {
                     ))
                 })?;
             }
-            let m = meas
-                .and_then(|i| rec.get(i))
-                .and_then(|t| t.parse().ok())
-                .unwrap_or(f64::NAN);
-            trace.push(TraceRecord {
+            let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
+            trace.push(TraceRow {
                 t_s: v[0],
                 x_m: v[1],
                 y_m: v[2],
@@ -99,6 +76,7 @@ impl RunData {
                 error: v[5],
                 omega_radps: v[6],
                 s_measured: m,
+                telemetry: None,
             });
         }
         if trace.is_empty() {

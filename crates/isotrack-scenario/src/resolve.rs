@@ -43,6 +43,24 @@ impl Checker {
             self.fail(key, format!("must be >= 0, got {x}"));
         }
     }
+    /// Rejects every present key of `section` that is not in `allowed` for the chosen
+    /// `choice` (e.g. `field.kind = "grid"`).
+    fn inapplicable(
+        &mut self,
+        section: &str,
+        choice: &str,
+        allowed: &[&str],
+        present: &[(&str, bool)],
+    ) {
+        for (key, is_set) in present {
+            if *is_set && !allowed.contains(key) {
+                self.fail(
+                    &format!("{section}.{key}"),
+                    format!("does not apply to {choice}"),
+                );
+            }
+        }
+    }
     fn all_finite(&mut self, key: &str, xs: &[f64]) {
         if xs.iter().any(|x| !x.is_finite()) {
             self.fail(key, format!("must hold finite numbers, got {xs:?}"));
@@ -220,14 +238,8 @@ fn controller_allowed(kind: ControllerKind) -> &'static [&'static str] {
 fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
     let allowed = controller_allowed(kind);
-    for (key, present) in controller_keys_present(ct) {
-        if present && !allowed.contains(&key) {
-            c.fail(
-                &format!("controller.{key}"),
-                format!("does not apply to controller.kind = \"{}\"", kind.name()),
-            );
-        }
-    }
+    let choice = format!("controller.kind = \"{}\"", kind.name());
+    c.inapplicable("controller", &choice, allowed, &controller_keys_present(ct));
     c.finite("controller.level", *ct.level.get_or_insert(10.0));
     ct.higher_side.get_or_insert(HigherSide::Right);
     let bang_bang = matches!(
@@ -342,18 +354,16 @@ fn resolve_anti_windup(c: &mut Checker, ct: &mut ControllerSection) {
         AntiWindupKind::Conditional => ("conditional", Some("integral_band")),
         AntiWindupKind::BackCalculation => ("back_calculation", Some("tracking_time_s")),
     };
-    for (key, present) in [
-        ("integral_limit_radps", ct.integral_limit_radps.is_some()),
-        ("integral_band", ct.integral_band.is_some()),
-        ("tracking_time_s", ct.tracking_time_s.is_some()),
-    ] {
-        if present && own != Some(key) {
-            c.fail(
-                &format!("controller.{key}"),
-                format!("does not apply to controller.anti_windup = \"{name}\""),
-            );
-        }
-    }
+    c.inapplicable(
+        "controller",
+        &format!("controller.anti_windup = \"{name}\""),
+        own.as_slice(),
+        &[
+            ("integral_limit_radps", ct.integral_limit_radps.is_some()),
+            ("integral_band", ct.integral_band.is_some()),
+            ("tracking_time_s", ct.tracking_time_s.is_some()),
+        ],
+    );
     match aw {
         AntiWindupKind::None => {}
         AntiWindupKind::Clamp => {
@@ -396,17 +406,15 @@ fn resolve_derivative(c: &mut Checker, ct: &mut ControllerSection) {
         DerivativeKindName::FilteredDifference => ("filtered_difference", Some("derivative_tau_s")),
         DerivativeKindName::Levant => ("levant", Some("derivative_lipschitz")),
     };
-    for (key, present) in [
-        ("derivative_tau_s", ct.derivative_tau_s.is_some()),
-        ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
-    ] {
-        if present && own != Some(key) {
-            c.fail(
-                &format!("controller.{key}"),
-                format!("does not apply to controller.derivative = \"{name}\""),
-            );
-        }
-    }
+    c.inapplicable(
+        "controller",
+        &format!("controller.derivative = \"{name}\""),
+        own.as_slice(),
+        &[
+            ("derivative_tau_s", ct.derivative_tau_s.is_some()),
+            ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
+        ],
+    );
     match kind {
         DerivativeKindName::BackwardDifference => {}
         DerivativeKindName::FilteredDifference => {
@@ -483,14 +491,8 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
             ],
         ),
     };
-    for (key, present) in field_keys_present(fd) {
-        if present && !allowed.contains(&key) {
-            c.fail(
-                &format!("field.{key}"),
-                format!("does not apply to field.kind = \"{kind_name}\""),
-            );
-        }
-    }
+    let choice = format!("field.kind = \"{kind_name}\"");
+    c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
     match fk {
         FieldKind::RadialExp => {
             c.positive("field.i0", *fd.i0.get_or_insert(20.0));
@@ -584,22 +586,20 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
             ],
         ),
     };
-    for (key, present) in [
-        ("speed_mps", vd.speed_mps.is_some()),
-        ("airspeed_mps", vd.airspeed_mps.is_some()),
-        ("altitude_m", vd.altitude_m.is_some()),
-        ("wind_mps", vd.wind_mps.is_some()),
-        ("gusts", vd.gusts.is_some()),
-        ("trim_feedforward", vd.trim_feedforward.is_some()),
-        ("ecen674_gains", vd.ecen674_gains.is_some()),
-    ] {
-        if present && !vallowed.contains(&key) {
-            c.fail(
-                &format!("vehicle.{key}"),
-                format!("does not apply to vehicle.kind = \"{vname}\""),
-            );
-        }
-    }
+    c.inapplicable(
+        "vehicle",
+        &format!("vehicle.kind = \"{vname}\""),
+        vallowed,
+        &[
+            ("speed_mps", vd.speed_mps.is_some()),
+            ("airspeed_mps", vd.airspeed_mps.is_some()),
+            ("altitude_m", vd.altitude_m.is_some()),
+            ("wind_mps", vd.wind_mps.is_some()),
+            ("gusts", vd.gusts.is_some()),
+            ("trim_feedforward", vd.trim_feedforward.is_some()),
+            ("ecen674_gains", vd.ecen674_gains.is_some()),
+        ],
+    );
     match vk {
         VehicleKind::Dubins => {
             c.positive("vehicle.speed_mps", *vd.speed_mps.get_or_insert(0.5));
