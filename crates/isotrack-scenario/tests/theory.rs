@@ -217,7 +217,8 @@ fn default_file_is_the_builtin_default() {
     assert_eq!(&f, Scenario::default_paper_fig2b().file());
 }
 
-/// Every bundled scenario loads and completes.
+/// Every bundled scenario loads, completes, converges, and runs again to the same result (the
+/// determinism check over every registered scenario).
 #[test]
 fn bundled_scenarios_complete() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios");
@@ -230,10 +231,11 @@ fn bundled_scenarios_complete() {
         let s = isotrack_scenario::load_scenario(Some(&p), &[]).unwrap();
         let r = s.run(&mut NoTrace);
         assert_eq!(r.outcome, Outcome::Completed, "{}", p.display());
+        assert_eq!(r, s.run(&mut NoTrace), "{} is not deterministic", p.display());
         assert!(r.metrics.convergence_time_s.is_some(), "{}", p.display());
         n += 1;
     }
-    assert!(n >= 3);
+    assert!(n >= 8, "{n} scenarios");
 }
 
 /// The turn-rate limit holds in closed loop; a 1 Hz sensor with delay still tracks (with a
