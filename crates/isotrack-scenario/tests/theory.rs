@@ -231,7 +231,12 @@ fn bundled_scenarios_complete() {
         let s = isotrack_scenario::load_scenario(Some(&p), &[]).unwrap();
         let r = s.run(&mut NoTrace);
         assert_eq!(r.outcome, Outcome::Completed, "{}", p.display());
-        assert_eq!(r, s.run(&mut NoTrace), "{} is not deterministic", p.display());
+        assert_eq!(
+            r,
+            s.run(&mut NoTrace),
+            "{} is not deterministic",
+            p.display()
+        );
         assert!(r.metrics.convergence_time_s.is_some(), "{}", p.display());
         n += 1;
     }
