@@ -155,13 +155,17 @@ pub enum AnalyticKind {
 }
 
 /// An analytic field with an optional rectangular domain `[x_min, x_max, y_min, y_max]` (metres)
-/// outside which it has no value (a vehicle that leaves it ends its run as `left_field`).
+/// outside which it has no value (a vehicle that leaves it ends its run as `left_field`), and an
+/// optional constant drift: the pattern moves at `drift_mps`,
+/// `F(t, p) = F0(p - drift_mps * t)` (a plume carried by the wind; the domain stays put).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AnalyticField {
     /// The closed form.
     pub kind: AnalyticKind,
     /// Optional domain `[x_min, x_max, y_min, y_max]`, metres.
     pub domain_m: Option<[f64; 4]>,
+    /// Velocity of the pattern, m/s (zero: a static field).
+    pub drift_mps: Vec2,
 }
 
 impl AnalyticField {
@@ -170,6 +174,16 @@ impl AnalyticField {
         Self {
             kind,
             domain_m: None,
+            drift_mps: Vec2::default(),
+        }
+    }
+    /// The point of the static pattern seen at `p` at time `t`.
+    #[inline]
+    fn local(&self, t_s: f64, p: Vec2) -> Vec2 {
+        if self.drift_mps == Vec2::default() {
+            p
+        } else {
+            p - self.drift_mps * t_s
         }
     }
     fn inside(&self, p: Vec2) -> bool {
@@ -181,10 +195,11 @@ impl AnalyticField {
 }
 
 impl ScalarField for AnalyticField {
-    fn value(&self, _t_s: f64, p: Vec2) -> Option<f64> {
+    fn value(&self, t_s: f64, p: Vec2) -> Option<f64> {
         if !self.inside(p) {
             return None;
         }
+        let p = self.local(t_s, p);
         let v = match &self.kind {
             AnalyticKind::RadialExp(f) => f.eval(p),
             AnalyticKind::GaussianPlumes(f) => f.eval(p),
@@ -195,20 +210,22 @@ impl ScalarField for AnalyticField {
 }
 
 impl FieldDerivatives for AnalyticField {
-    fn gradient(&self, _t_s: f64, p: Vec2) -> Option<Vec2> {
+    fn gradient(&self, t_s: f64, p: Vec2) -> Option<Vec2> {
         if !self.inside(p) {
             return None;
         }
+        let p = self.local(t_s, p);
         match &self.kind {
             AnalyticKind::RadialExp(f) => f.grad(p),
             AnalyticKind::GaussianPlumes(f) => Some(f.grad(p)),
             AnalyticKind::LinearRamp(f) => Some(f.gradient_per_m),
         }
     }
-    fn hessian(&self, _t_s: f64, p: Vec2) -> Option<Mat2> {
+    fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2> {
         if !self.inside(p) {
             return None;
         }
+        let p = self.local(t_s, p);
         match &self.kind {
             AnalyticKind::RadialExp(f) => f.hess(p),
             AnalyticKind::GaussianPlumes(f) => Some(f.hess(p)),
@@ -307,6 +324,20 @@ mod tests {
             let v = f.value(0.0, Vec2::from_angle(a) * r).unwrap();
             assert!((v - 10.0).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn drift_moves_the_pattern() {
+        let mut f = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+        f.drift_mps = Vec2::new(0.5, -0.2);
+        // At t = 10 s the source is at (5, -2).
+        assert_eq!(f.value(10.0, Vec2::new(5.0, -2.0)), Some(20.0));
+        assert_eq!(f.value(0.0, Vec2::new(0.0, 0.0)), Some(20.0));
+        let g = f.gradient(10.0, Vec2::new(8.0, -2.0)).unwrap();
+        assert!(
+            g.x < 0.0 && g.y.abs() < 1e-12,
+            "points back to the moved source: {g:?}"
+        );
     }
 
     #[test]

@@ -274,7 +274,7 @@ impl Scenario {
         sink: &mut S,
     ) -> RunResult {
         let iso = self.isoline();
-        let dist = |p: Vec2| iso.distance(p);
+        let dist = |t: f64, p: Vec2| iso.distance(t, p);
         let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
         let oracles = Oracles {
             isoline_distance: Some(&dist),

@@ -61,10 +61,10 @@ impl IsolineOracle {
             FieldModel::Grid(g) => IsolineOracle::Segments(IsolineSegments::for_grid(g, level, 4)),
         }
     }
-    /// Distance from `p` to the isoline, m.
-    pub fn distance(&self, p: Vec2) -> Option<f64> {
+    /// Distance from `p` to the isoline at time `t_s`, m.
+    pub fn distance(&self, t_s: f64, p: Vec2) -> Option<f64> {
         match self {
-            IsolineOracle::Newton(f, level) => newton_distance(f, 0.0, p, *level),
+            IsolineOracle::Newton(f, level) => newton_distance(f, t_s, p, *level),
             IsolineOracle::Segments(s) => s.distance(p),
         }
     }
@@ -81,6 +81,7 @@ pub fn build_field(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, 
         FieldModel::Analytic(AnalyticField {
             kind,
             domain_m: f.domain_m,
+            drift_mps: v2(f.drift_mps.unwrap_or_default()),
         })
     };
     Ok(match f.kind.unwrap_or(FieldKind::RadialExp) {

@@ -94,7 +94,7 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
 }
 
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 23] {
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 24] {
     [
         ("i0", fd.i0.is_some()),
         ("decay_per_m", fd.decay_per_m.is_some()),
@@ -104,6 +104,7 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 23] {
         ("offset", fd.offset.is_some()),
         ("gradient_per_m", fd.gradient_per_m.is_some()),
         ("domain_m", fd.domain_m.is_some()),
+        ("drift_mps", fd.drift_mps.is_some()),
         ("path", fd.path.is_some()),
         ("format", fd.format.is_some()),
         ("variable", fd.variable.is_some()),
@@ -459,9 +460,18 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     let fk = *f.field.kind.get_or_insert(FieldKind::RadialExp);
     let fd = &mut f.field;
     let (kind_name, allowed): (&str, &[&str]) = match fk {
-        FieldKind::RadialExp => ("radial_exp", &["i0", "decay_per_m", "center_m", "domain_m"]),
-        FieldKind::GaussianPlumes => ("gaussian_plumes", &["background", "sources", "domain_m"]),
-        FieldKind::LinearRamp => ("linear_ramp", &["offset", "gradient_per_m", "domain_m"]),
+        FieldKind::RadialExp => (
+            "radial_exp",
+            &["i0", "decay_per_m", "center_m", "domain_m", "drift_mps"],
+        ),
+        FieldKind::GaussianPlumes => (
+            "gaussian_plumes",
+            &["background", "sources", "domain_m", "drift_mps"],
+        ),
+        FieldKind::LinearRamp => (
+            "linear_ramp",
+            &["offset", "gradient_per_m", "domain_m", "drift_mps"],
+        ),
         FieldKind::Stations => (
             "stations",
             &[
@@ -558,6 +568,9 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
             }
             fd.interpolation.get_or_insert(InterpolationName::Bicubic);
         }
+    }
+    if let Some(v) = fd.drift_mps {
+        c.all_finite("field.drift_mps", &v);
     }
     if let Some(d) = fd.domain_m {
         c.all_finite("field.domain_m", &d);

@@ -169,6 +169,11 @@ pub struct FieldSection {
     /// has no value and a run ends as `left_field`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub domain_m: Option<[f64; 4]>,
+    /// Analytic kinds: the pattern's constant drift `[vx, vy]`, m/s: `F(t, p) = F0(p - v t)`, a
+    /// time-varying field (default `[0, 0]`). The isoline-distance metric follows the moving
+    /// isoline; `isotrack check` analyses the field at t = 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_mps: Option<[f64; 2]>,
     /// `grid`: the file, relative to the scenario file (the resolved scenario records it
     /// absolute).
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -278,3 +278,33 @@ fn turn_rate_limit_and_slow_delayed_sensing() {
     let e = r.metrics.steady_state_max_abs_error.unwrap();
     assert!(e < 1.0, "1 Hz sensing: steady max |eps| {e}");
 }
+
+/// A time-varying field: the paper's circular plume drifting at u. The PI-like law keeps up while
+/// u < v (the residual grows with u), the isoline-distance metric follows the moving isoline
+/// (a metric at t = 0 would be ~u*t metres off), and a plume faster than the vehicle (u > v, the
+/// boundary-speed condition of Matveev et al. 2015) cannot be followed.
+#[test]
+fn drifting_plume_is_tracked_while_slower_than_the_vehicle() {
+    let steady = |u: f64| {
+        let r = run(&[("field.drift_mps", format!("[{u}, 0.0]"))]);
+        (
+            r.metrics.steady_state_max_abs_error.unwrap(),
+            r.metrics.steady_state_max_isoline_distance_m,
+        )
+    };
+    let (e1, d1) = steady(0.05);
+    let (e2, d2) = steady(0.1);
+    let (d1, d2) = (d1.unwrap(), d2.unwrap());
+    assert!(e1 < 0.01 && e2 < 0.02, "{e1} {e2}");
+    assert!(
+        e2 > 1.5 * e1,
+        "the residual grows with the drift: {e1} -> {e2}"
+    );
+    // alpha = k*s_d = 1 on this isoline: distance and error agree to first order.
+    assert!(
+        (d1 - e1).abs() < 0.1 * e1 && (d2 - e2).abs() < 0.1 * e2,
+        "{d1} vs {e1}, {d2} vs {e2}"
+    );
+    let (e_fast, _) = steady(0.6);
+    assert!(e_fast > 1.0, "a plume faster than the robot: {e_fast}");
+}

@@ -123,8 +123,9 @@ pub struct RunResult {
     pub metrics: RunMetrics,
 }
 
-/// Distance from a point to the true isoline, m (`None` where unknown). Used for metrics only.
-pub type IsolineDistanceFn<'a> = &'a (dyn Fn(isotrack_core::Vec2) -> Option<f64> + Sync);
+/// Distance from a point to the true isoline at time `t_s` (s), m (`None` where unknown). Used
+/// for metrics only.
+pub type IsolineDistanceFn<'a> = &'a (dyn Fn(f64, isotrack_core::Vec2) -> Option<f64> + Sync);
 
 /// The true field gradient and Hessian at `(t, p)`, for reference controllers only.
 pub type GradientFn<'a> = &'a (dyn Fn(f64, isotrack_core::Vec2) -> Option<(isotrack_core::Vec2, isotrack_core::math::Mat2)>
@@ -230,7 +231,7 @@ where
         metrics.observe(k, eps, omega);
         if let Some(dist) = oracles.isoline_distance {
             if metrics.in_window(k) {
-                if let Some(d) = dist(pose.position) {
+                if let Some(d) = dist(t, pose.position) {
                     metrics.observe_isoline_distance(d);
                 }
             }
