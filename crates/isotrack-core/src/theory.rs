@@ -203,19 +203,20 @@ pub fn prop2_min_kp(
     c2: f64,
     phi_rad: f64,
 ) -> Option<f64> {
-    prop2_terms(b, speed_mps, c1, c2, phi_rad).map(|(k1, k2, _)| k1.max(k2 / c2))
+    prop2_terms(b, speed_mps, c1, c2, phi_rad).map(|(k1, k2)| k1.max(k2 / c2))
 }
 
-/// The two gain terms of Prop. 2 with the common numerator of the second,
-/// `(gamma3*v/(gamma1*sin(phi)*(v*gamma1*cos(phi) - c1)), (c2*gamma3*v + c1*gamma2)/(c1*gamma1*sin(phi)), sin(phi))`,
-/// or `None` when the surface is unreachable at `phi`.
+/// The two gain terms of Prop. 2,
+/// `(gamma3*v/(gamma1*sin(phi)*(v*gamma1*cos(phi) - c1)), (c2*gamma3*v + c1*gamma2)/(c1*gamma1*sin(phi)))`
+/// (the second without the `c2` the unit-consistent form divides by), or `None` when the surface
+/// is unreachable at `phi`.
 fn prop2_terms(
     b: &FieldBounds,
     speed_mps: f64,
     c1: f64,
     c2: f64,
     phi_rad: f64,
-) -> Option<(f64, f64, f64)> {
+) -> Option<(f64, f64)> {
     let (s, c) = crate::fmath::sincos(phi_rad);
     let reach = speed_mps * b.gamma1 * c - c1;
     if !(b.gamma1 > 0.0 && reach > 0.0 && s > 0.0) {
@@ -223,7 +224,7 @@ fn prop2_terms(
     }
     let k1 = b.gamma3 * speed_mps / (b.gamma1 * s * reach);
     let k2 = (c2 * b.gamma3 * speed_mps + c1 * b.gamma2) / (c1 * b.gamma1 * s);
-    Some((k1, k2, s))
+    Some((k1, k2))
 }
 
 /// Prop. 2's steady-state bound in the unit-consistent form:
@@ -237,7 +238,7 @@ pub fn prop2_error_bound(
     c2: f64,
     phi_rad: f64,
 ) -> Option<f64> {
-    let (k1, k2, _) = prop2_terms(b, speed_mps, c1, c2, phi_rad)?;
+    let (k1, k2) = prop2_terms(b, speed_mps, c1, c2, phi_rad)?;
     if kp <= k1.max(k2 / c2) {
         return None;
     }
@@ -255,7 +256,7 @@ pub fn prop2_paper_min_kp(
     c2: f64,
     phi_rad: f64,
 ) -> (Option<f64>, Option<f64>) {
-    let Some((k1, k2, _)) = prop2_terms(b, speed_mps, c1, c2, phi_rad) else {
+    let Some((k1, k2)) = prop2_terms(b, speed_mps, c1, c2, phi_rad) else {
         return (None, None);
     };
     let min = k1.max(k2);

@@ -263,17 +263,9 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
                         note: "alpha = k*s_d, the radial slope on the isoline; the paper's conditions are sufficient, the Routh-Hurwitz one is exact (locally)".into(),
                     }
                 }
-                None => Prop1Report {
-                    applicable: false,
-                    alpha: None,
-                    r_d_m: None,
-                    paper_conditions_hold: None,
-                    exact_local_condition_holds: None,
-                    characteristic_polynomial: None,
-                    note: format!(
-                        "level {level} is not attained by the field (0 < level < i0 is needed)"
-                    ),
-                },
+                None => Prop1Report::not_applicable(format!(
+                    "level {level} is not attained by the field (0 < level < i0 is needed)"
+                )),
             }
         }
         _ => Prop1Report::not_applicable(
