@@ -122,8 +122,14 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             let d = dir.join(kind.name());
             std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;
             let r = run_to_trace(&s, &d.join("trace.csv")).map_err(|e| cant(&d, e))?;
-            write_summary(&d.join("summary.json"), &s, Some(&a.scenario), &r)
-                .map_err(|e| cant(&d, e))?;
+            write_summary(
+                &d.join("summary.json"),
+                &s,
+                Some(&a.scenario),
+                &r,
+                &isotrack_scenario::check::warnings(&s),
+            )
+            .map_err(|e| cant(&d, e))?;
             std::fs::write(d.join("scenario.toml"), scenario_toml(&s)).map_err(|e| cant(&d, e))?;
             r
         } else {

@@ -102,7 +102,14 @@ fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Fail
     };
     std::fs::create_dir_all(dir).map_err(cant)?;
     let r = run_to_trace(scenario, &dir.join("trace.csv")).map_err(cant)?;
-    write_summary(&dir.join("summary.json"), scenario, None, &r).map_err(cant)?;
+    write_summary(
+        &dir.join("summary.json"),
+        scenario,
+        None,
+        &r,
+        &isotrack_scenario::check::warnings(scenario),
+    )
+    .map_err(cant)?;
     std::fs::write(dir.join("scenario.toml"), scenario_toml(scenario)).map_err(cant)?;
     let mut d = RunData::load(dir).map_err(failure)?;
     d.name = name.to_string();

@@ -112,6 +112,9 @@ pub struct Summary<'a> {
     /// The run's outcome and metrics (flattened: `outcome`, `steady_state_max_abs_error`, ...).
     #[serde(flatten)]
     pub result: &'a RunResult,
+    /// Warnings about the scenario (also printed on stderr): noise through a backward
+    /// difference, a sampled loop that `isotrack check` finds unstable.
+    pub warnings: &'a [String],
     /// The fully resolved scenario.
     pub scenario: &'a ScenarioFile,
 }
@@ -122,11 +125,13 @@ pub fn write_summary(
     scenario: &Scenario,
     scenario_path: Option<&Path>,
     result: &RunResult,
+    warnings: &[String],
 ) -> std::io::Result<()> {
     let s = Summary {
         isotrack_version: env!("CARGO_PKG_VERSION"),
         scenario_path: scenario_path.map(|p| p.display().to_string()),
         result,
+        warnings,
         scenario: scenario.file(),
     };
     let text = serde_json::to_string_pretty(&s).map_err(std::io::Error::other)?;

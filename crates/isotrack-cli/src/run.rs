@@ -72,6 +72,10 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
 /// `isotrack run`.
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
+    let warnings = isotrack_scenario::check::warnings(&scenario);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let name = args.scenario.scenario.as_ref().map_or_else(
         || "<built-in default: paper Fig. 2(b)>".to_string(),
         |p| p.display().to_string(),
@@ -91,6 +95,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             &scenario,
             args.scenario.scenario.as_deref(),
             &result,
+            &warnings,
         )
         .map_err(|e| cant(&summary.display().to_string(), e))?;
         let resolved = dir.join("scenario.toml");
@@ -158,6 +163,10 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
         return Ok(());
     }
+    println!("verdict: {} ({})", r.verdict.as_str(), r.verdict_reason);
+    for w in &r.warnings {
+        println!("warning: {w}");
+    }
     let p1 = &r.prop1;
     println!("Prop. 1 (circular field, local exponential stability)");
     if p1.applicable {
@@ -180,17 +189,27 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     let p2 = &r.prop2;
     let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.6}"));
     println!("Prop. 2 (smooth field, ki = 0: gain conditions and error bound)");
+    if let Some([lo, hi]) = p2.region_levels {
+        println!(
+            "  start to tube, {lo:.4} <= F <= {hi:.4} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
+            p2.samples_in_region,
+            f(p2.gamma1),
+            f(p2.gamma2),
+            f(p2.gamma3)
+        );
+    }
     println!(
         "  tube |F - s_d| <= {} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
         p2.tube_halfwidth,
         p2.samples_in_tube,
-        f(p2.gamma1),
-        f(p2.gamma2),
-        f(p2.gamma3)
+        f(p2.tube_gamma1),
+        f(p2.tube_gamma2),
+        f(p2.tube_gamma3)
     );
     println!(
-        "  conditions hold: {}   predicted limsup|eps| <= {}   smallest kp: {}",
+        "  conditions hold: {}   bound applies: {}   predicted limsup|eps| <= {}   smallest kp: {}",
         if p2.conditions_hold { "yes" } else { "NO" },
+        if p2.bound_applies { "yes" } else { "NO" },
         f(p2.error_bound),
         f(p2.min_kp)
     );
@@ -208,5 +227,50 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     if !p2.note.is_empty() {
         println!("  note: {}", p2.note);
     }
+    let sm = &r.sampled;
+    println!(
+        "Sampled loop (linearised at the sensor's period T = {} s, delay {} s)",
+        sm.period_s, sm.delay_s
+    );
+    if sm.applicable {
+        let range = sm
+            .slope_range
+            .map_or_else(|| "n/a".to_string(), |[a, b]| format!("{a:.4} .. {b:.4}"));
+        println!(
+            "  model {}, slopes |grad F| {range}: spectral radius {} -> {}",
+            sm.vehicle_model.unwrap_or("n/a"),
+            f(sm.spectral_radius),
+            match sm.stable {
+                Some(true) => "stable",
+                Some(false) => "UNSTABLE",
+                None => "n/a",
+            }
+        );
+        println!(
+            "  largest stable kp {}   longest stable sensor period {} s",
+            f(sm.max_kp),
+            f(sm.max_period_s)
+        );
+        println!("  {}", sensor_rate_line(sm));
+    }
+    if !sm.note.is_empty() {
+        println!("  note: {}", sm.note);
+    }
     Ok(())
+}
+
+/// One line: is the sensor rate the limit?
+fn sensor_rate_line(sm: &isotrack_scenario::check::SampledReport) -> String {
+    let rate = 1.0 / sm.period_s;
+    match (sm.rate_is_the_limit, sm.max_period_s) {
+        (Some(true), Some(t)) => format!(
+            "sensor rate: the limit: {rate} Hz is too slow for these gains; {:.4} Hz or faster is stable",
+            1.0 / t
+        ),
+        (_, Some(t)) if sm.stable == Some(true) => format!(
+            "sensor rate: not the limit: stable at {rate} Hz and down to {:.4} Hz",
+            1.0 / t
+        ),
+        _ => "sensor rate: not the limit: the loop is unstable at any rate (change the gains)".to_string(),
+    }
 }

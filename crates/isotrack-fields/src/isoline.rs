@@ -75,15 +75,19 @@ impl IsolineSegments {
                 match n {
                     2 => segments.push((pts[0], pts[1])),
                     4 => {
-                        // Saddle: pair the crossings according to the cell-centre value.
+                        // Saddle (c0, c2 on one side, c1, c3 on the other): the cell-centre
+                        // value decides which diagonal is connected. Centre on c0's side: c0 and
+                        // c2 join through the middle, so the segments cut off the corners c1
+                        // (edges 0 and 1) and c3 (edges 2 and 3); otherwise they cut off c0
+                        // (edges 3 and 0) and c2 (edges 1 and 2).
                         let centre = 0.25 * c.iter().map(|(_, v)| v).sum::<f64>();
                         let first_above = c[0].1 >= level;
                         if (centre >= level) == first_above {
-                            segments.push((pts[0], pts[3]));
-                            segments.push((pts[1], pts[2]));
-                        } else {
                             segments.push((pts[0], pts[1]));
                             segments.push((pts[2], pts[3]));
+                        } else {
+                            segments.push((pts[0], pts[3]));
+                            segments.push((pts[1], pts[2]));
                         }
                     }
                     _ => {}
@@ -234,6 +238,58 @@ mod tests {
             let got = iso.distance(Vec2::from_angle(a) * d).unwrap();
             assert!((got - (d - r).abs()).abs() < 2e-3, "{d}: {got}");
         }
+    }
+
+    /// The corner a segment cuts off: the one both of its end points' edges touch.
+    fn cut_corner(seg: (Vec2, Vec2)) -> Vec2 {
+        let corners = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ];
+        let on_edge_of = |p: Vec2, c: Vec2| (p.x - c.x).abs() < 1e-12 || (p.y - c.y).abs() < 1e-12;
+        *corners
+            .iter()
+            .find(|&&c| on_edge_of(seg.0, c) && on_edge_of(seg.1, c))
+            .expect("a saddle segment joins two edges sharing a corner")
+    }
+
+    #[test]
+    fn saddle_cells_join_by_the_centre_value() {
+        // One cell, corners c0 = (0,0), c1 = (1,0), c2 = (1,1), c3 = (0,1); c0 and c2 high,
+        // c1 and c3 low: a saddle for level 0.
+        let cell = |v: [f64; 4], level: f64| {
+            IsolineSegments::from_samples(Vec2::default(), 1.0, 2, 2, level, move |p| {
+                Some(match (p.x as i32, p.y as i32) {
+                    (0, 0) => v[0],
+                    (1, 0) => v[1],
+                    (1, 1) => v[2],
+                    _ => v[3],
+                })
+            })
+        };
+        let corners = |iso: IsolineSegments| {
+            let mut c: Vec<(f64, f64)> = iso
+                .segments()
+                .iter()
+                .map(|&s| cut_corner(s))
+                .map(|c| (c.x, c.y))
+                .collect();
+            c.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            c
+        };
+        // Centre (2 - 1 + 2 - 1)/4 = 0.5 >= 0: on c0's side, c0 and c2 connect, the segments
+        // cut off c1 = (1, 0) and c3 = (0, 1).
+        assert_eq!(
+            corners(cell([2.0, -1.0, 2.0, -1.0], 0.0)),
+            vec![(0.0, 1.0), (1.0, 0.0)]
+        );
+        // Centre (1 - 2 + 1 - 2)/4 = -0.5 < 0: on c1's side, the segments cut off c0 and c2.
+        assert_eq!(
+            corners(cell([1.0, -2.0, 1.0, -2.0], 0.0)),
+            vec![(0.0, 0.0), (1.0, 1.0)]
+        );
     }
 
     #[test]

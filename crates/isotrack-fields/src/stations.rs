@@ -1,7 +1,8 @@
 //! Fields from scattered stations: inverse-distance weighting and ordinary kriging.
 //!
-//! The paper's PM2.5 map was interpolated from monitoring stations; these turn station values
-//! (`x, y, value` rows) into a field, evaluated directly or onto a [`Grid2`].
+//! Concentration maps are often made from monitoring stations (the paper does not say how its
+//! PM2.5 map of Handan was made); these turn station values (`x, y, value` rows) into a field,
+//! evaluated directly or onto a [`Grid2`].
 
 use crate::georef::lonlat_to_local_m;
 use crate::grid::Grid2;

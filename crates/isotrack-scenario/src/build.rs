@@ -244,6 +244,16 @@ impl Scenario {
         self.file.sim.dt_s.unwrap_or(0.01)
     }
 
+    /// How long the error must stay within the convergence tolerance, up to the end, for a
+    /// convergence time to be reported: `metrics.convergence_min_dwell_s`, default 10 % of
+    /// `sim.duration_s`, s.
+    pub fn convergence_min_dwell_s(&self) -> f64 {
+        let f = &self.file;
+        f.metrics
+            .convergence_min_dwell_s
+            .unwrap_or(0.1 * f.sim.duration_s.unwrap_or(600.0))
+    }
+
     /// The step plan (durations as step counts).
     pub fn plan(&self) -> StepPlan {
         let f = &self.file;
@@ -253,6 +263,7 @@ impl Scenario {
             f.output.record_rate_hz.unwrap_or(10.0),
             f.metrics.steady_state_fraction.unwrap_or(0.2),
             f.metrics.convergence_tolerance.unwrap_or(0.1),
+            self.convergence_min_dwell_s(),
             self.level(),
         )
         .expect("validated by resolve")

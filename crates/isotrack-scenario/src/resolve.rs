@@ -704,6 +704,19 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
         "metrics.convergence_tolerance",
         *f.metrics.convergence_tolerance.get_or_insert(tol_default),
     );
+    // The dwell's default follows the duration (10 %), which a sweep or `--set` may change
+    // after this file was resolved, so it is left unset here and applied by `Scenario::plan`.
+    if let Some(dwell) = f.metrics.convergence_min_dwell_s {
+        let duration = f.sim.duration_s.unwrap_or(600.0);
+        if c.finite("metrics.convergence_min_dwell_s", dwell)
+            && !(dwell >= 0.0 && (!duration.is_finite() || dwell <= duration))
+        {
+            c.fail(
+                "metrics.convergence_min_dwell_s",
+                format!("must be in [0, sim.duration_s = {duration}] s, got {dwell}"),
+            );
+        }
+    }
 
     // [output]
     let rec = *f.output.record_rate_hz.get_or_insert(10.0);

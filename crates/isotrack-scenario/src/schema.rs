@@ -46,6 +46,7 @@
 //! [metrics]
 //! steady_state_fraction = 0.2
 //! convergence_tolerance = 0.1  # default: 1 % of |controller.level| (0.01 if the level is 0)
+//! convergence_min_dwell_s = 60.0  # default: 10 % of sim.duration_s
 //!
 //! [output]
 //! record_rate_hz = 10.0        # trace rows per second; 0 turns the trace off
@@ -508,6 +509,10 @@ pub struct MetricsSection {
     /// `|controller.level|`, or 0.01 if the level is 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub convergence_tolerance: Option<f64>,
+    /// How long the error must stay within the tolerance, up to the end of the run, for a
+    /// convergence time to be reported, s (default 10 % of `sim.duration_s`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub convergence_min_dwell_s: Option<f64>,
 }
 
 /// `[output]`.

@@ -1,6 +1,7 @@
 //! `check` against simulation: Prop. 1's conditions predict convergence, Prop. 2's bound covers
 //! the simulated steady-state error on analytic and gridded fields.
 
+use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_scenario::check::check;
 use isotrack_scenario::{load_scenario, parse_scenario, parse_scenario_in, Scenario};
 use isotrack_sim::{NoTrace, Outcome};
@@ -75,11 +76,12 @@ fn prop2_bound_covers_circular_field() {
     assert!(r.prop2.error_bound.is_none());
 }
 
-/// Prop. 2 on non-circular fields: Gaussian plumes (analytic) and the volcano DEM (gridded,
-/// real), with kp above the computed minimum. Prop. 2 is a continuous-time result: the sensor
-/// samples every step (a 300-ish kp at 10 Hz sampling is unstable in discrete time).
+/// Prop. 2 on a non-circular field (Gaussian plumes, analytic) with kp above the computed
+/// minimum, sampled every step; and on the volcano DEM, where the sound estimate refuses: the
+/// contour's gentlest slopes (about 0.1) are below the lattice margin `gamma3 * d` (about 0.17
+/// with 1 m lattice cells), so `gamma1` cannot be certified positive and no bound is claimed.
 #[test]
-fn prop2_bound_covers_plumes_and_a_real_grid() {
+fn prop2_bound_covers_plumes_and_refuses_an_uncertified_real_grid() {
     let scen = |name: &str, sets: &[&str]| {
         let p = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../scenarios")
@@ -87,28 +89,57 @@ fn prop2_bound_covers_plumes_and_a_real_grid() {
         let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
         load_scenario(Some(&p), &sets).unwrap()
     };
-    for (name, sets) in [
-        (
-            "gaussian-plumes-pm25.toml",
-            vec![
-                "controller.c1=0.03",
-                "sensor.noise_std=0",
-                "sensor.rate_hz=100",
-                "controller.derivative_tau_s=0.01",
-            ],
-        ),
-        ("volcano.toml", vec!["sensor.rate_hz=100"]),
-    ] {
+    for (name, sets) in [(
+        "gaussian-plumes-pm25.toml",
+        vec![
+            "controller.c1=0.01",
+            "sensor.noise_std=0",
+            // The gains Prop. 2 needs here (kp ~ 2000) are stable sampled only at
+            // kp*alpha*v*T below about 2: T = 0.5 ms.
+            "sim.dt_s=0.0005",
+            "sensor.rate_hz=2000",
+            "controller.derivative_tau_s=0.001",
+        ],
+    )] {
+        // Start inside the tube, on F = s_d + 0.5, heading along the isoline (phi(t0) = -pi/2):
+        // the bound is proved from the region the robot crosses, and from the scenario's
+        // start in the flat background no gamma1 > 0 exists.
+        let plain = scen(name, &sets);
+        let field = plain.field();
+        let mut p = isotrack_core::Vec2::new(0.0, 0.0);
+        while field.value(0.0, p).unwrap() > plain.level() + 0.5 {
+            p = p + isotrack_core::Vec2::new(0.01, -0.01);
+        }
+        let n = -field.gradient(0.0, p).unwrap();
+        let heading = (-n.x).atan2(n.y);
+        let starts = [
+            format!("initial.x_m={}", p.x),
+            format!("initial.y_m={}", p.y),
+            format!("initial.heading_rad={heading}"),
+        ];
+        let sets: Vec<&str> = sets
+            .iter()
+            .copied()
+            .chain(starts.iter().map(|s| s.as_str()))
+            .collect();
         let probe = check(&scen(name, &sets), None);
         let kp = 1.5 * probe.prop2.min_kp.expect("a minimum kp exists");
         let kp_set = format!("controller.kp={kp}");
         let s = scen(name, &[&sets[..], &[kp_set.as_str()]].concat());
         let r = check(&s, None);
         assert!(r.prop2.conditions_hold, "{name}");
+        assert_eq!(r.prop2.initial_heading_in_sector, Some(true), "{name}");
+        assert!(r.prop2.bound_applies, "{name}");
         let bound = r.prop2.error_bound.unwrap();
         let sim = steady_max(&s);
         assert!(sim <= bound, "{name}: simulated {sim} > bound {bound}");
     }
+    let volcano = scen("volcano.toml", &["sensor.rate_hz=100", "controller.kp=50"]);
+    let r = check(&volcano, None);
+    assert_eq!(r.prop2.gamma1, Some(0.0));
+    assert!(!r.prop2.conditions_hold && !r.prop2.bound_applies);
+    assert!(r.prop2.error_bound.is_none() && r.prop2.paper_error_bound.is_none());
+    assert!(r.prop2.note.contains("gamma1"), "{}", r.prop2.note);
 }
 
 /// Prop. 2 on a gridded copy of the circular field (bicubic, 0.5 m cells): same verdict, a bound
@@ -134,8 +165,10 @@ fn prop2_on_a_gridded_circular_field() {
     let (rg, ra) = (check(&g, None), check(&a, None));
     assert!(rg.prop2.conditions_hold);
     let (bg, ba) = (rg.prop2.error_bound.unwrap(), ra.prop2.error_bound.unwrap());
+    // The grid's bound is looser: bicubic interpolation is C1, its Hessian jumps across cell
+    // edges, and those jumps enter gamma3's lattice margin.
     assert!(
-        (bg - ba).abs() < 0.1 * ba,
+        bg >= ba && bg < 1.2 * ba,
         "grid bound {bg} vs analytic {ba}"
     );
     let sim = steady_max(&g);

@@ -27,7 +27,7 @@ fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &m
         delay_s: 0.0,
     };
     let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
-    let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 10.0).unwrap();
+    let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 60.0, 10.0).unwrap();
     simulate(
         field,
         &vehicle,

@@ -11,6 +11,10 @@ pub struct MetricsConfig {
     pub steady_state_start_step: u64,
     /// Convergence tolerance on `|eps|`, field units (> 0).
     pub convergence_tolerance: f64,
+    /// Minimum dwell: the error must stay within the tolerance for at least this many steps,
+    /// up to the end of the run, for a convergence time to be reported. A limit cycle that
+    /// happens to be inside the band at the very end is not convergence.
+    pub convergence_min_dwell_steps: u64,
 }
 
 /// Accumulates the metrics of one run step by step.
@@ -45,11 +49,14 @@ pub struct RunMetrics {
     /// `mean(eps)` over the steady-state window (signed: the bias).
     pub steady_state_mean_error: Option<f64>,
     /// First time after which `|eps|` stays below the tolerance to the end of the run, seconds;
-    /// `None` if it is above the tolerance at the end, or the run did not complete.
+    /// `None` if it stays there for less than the minimum dwell (including not at all at the
+    /// end), or the run did not complete.
     pub convergence_time_s: Option<f64>,
     /// Distance travelled, metres (sum of step displacements).
     pub path_length_m: f64,
-    /// Control effort `integral(omega^2 dt)` over the run, rad^2/s.
+    /// Control effort `integral(omega^2 dt)` over the integrated steps of the run, rad^2/s: the
+    /// sum of `omega_k^2 * dt` over the commands that were held for a step (the command at the
+    /// final sample of a run is never integrated and does not count).
     pub control_effort: f64,
     /// Chattering: total variation of `omega` over the steady-state window divided by the
     /// window's duration, rad/s^2.
@@ -93,7 +100,6 @@ impl Metrics {
         if eps.abs() >= self.cfg.convergence_tolerance {
             self.last_violation = Some(k);
         }
-        self.effort += omega * omega * self.cfg.dt_s;
         if k >= self.cfg.steady_state_start_step {
             self.ss_n += 1;
             self.ss_max_abs = self.ss_max_abs.max(eps.abs());
@@ -133,6 +139,12 @@ impl Metrics {
         self.iso_sum_sq += d_m * d_m;
     }
 
+    /// Adds the command `omega` held over one integrated step to the control effort.
+    #[inline]
+    pub fn integrate_command(&mut self, omega: f64) {
+        self.effort += omega * omega * self.cfg.dt_s;
+    }
+
     /// Adds a step's displacement to the path length.
     #[inline]
     pub fn add_path(&mut self, ds_m: f64) {
@@ -152,10 +164,12 @@ impl Metrics {
             convergence_time_s: if !completed {
                 None
             } else {
+                let dwell = self.cfg.convergence_min_dwell_steps;
                 match self.last_violation {
-                    None => Some(0.0),
+                    None => (self.last_step >= dwell).then_some(0.0),
                     Some(k) if k == self.last_step => None,
-                    Some(k) => Some((k + 1) as f64 * self.cfg.dt_s),
+                    // Inside from step k + 1 to the last step: last_step - k - 1 steps.
+                    Some(k) => (self.last_step - k > dwell).then(|| (k + 1) as f64 * self.cfg.dt_s),
                 }
             },
             path_length_m: self.path_length_m,
@@ -180,12 +194,16 @@ mod tests {
             dt_s: 0.5,
             steady_state_start_step: 6,
             convergence_tolerance: 0.1,
+            convergence_min_dwell_steps: 0,
         });
         // eps: 1, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02 (10 steps)
         let eps = [1.0, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02];
         let om = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, -1.0, 1.0, -1.0];
         for k in 0..10 {
             m.observe(k as u64, eps[k], om[k]);
+            if k < 9 {
+                m.integrate_command(om[k]);
+            }
         }
         let r = m.finish(true);
         // last violation at k = 4 -> converged from k = 5, t = 2.5 s
@@ -201,8 +219,9 @@ mod tests {
         // window 3 intervals of 0.5 s = 1.5 s; TV = 2+2+2 = 6; 3 sign changes
         assert_relative_eq!(r.chattering_radps2.unwrap(), 4.0);
         assert_relative_eq!(r.sign_changes_per_s.unwrap(), 2.0);
-        // effort: 4 steps with omega^2 = 1 times dt 0.5
-        assert_relative_eq!(r.control_effort, 2.0);
+        // effort: the commands of steps 6, 7, 8 are integrated (step 9 is the last sample),
+        // each omega^2 = 1 times dt 0.5
+        assert_relative_eq!(r.control_effort, 1.5);
     }
 
     #[test]
@@ -211,6 +230,7 @@ mod tests {
             dt_s: 1.0,
             steady_state_start_step: 100,
             convergence_tolerance: 0.1,
+            convergence_min_dwell_steps: 0,
         });
         m.observe(0, 0.0, 0.0);
         m.observe(1, 5.0, 0.0);
@@ -219,5 +239,24 @@ mod tests {
         assert_eq!(r.steady_state_max_abs_error, None);
         assert_eq!(r.chattering_radps2, None);
         assert_eq!(m.finish(false).convergence_time_s, None);
+    }
+
+    #[test]
+    fn convergence_needs_the_minimum_dwell() {
+        // Inside the band from step 5 on, the run ends at step 9: 4 steps inside (5..9).
+        let run = |dwell: u64| {
+            let mut m = Metrics::new(MetricsConfig {
+                dt_s: 1.0,
+                steady_state_start_step: 0,
+                convergence_tolerance: 0.1,
+                convergence_min_dwell_steps: dwell,
+            });
+            for k in 0..10u64 {
+                m.observe(k, if k < 5 { 1.0 } else { 0.0 }, 0.0);
+            }
+            m.finish(true).convergence_time_s
+        };
+        assert_eq!(run(4), Some(5.0));
+        assert_eq!(run(5), None, "a short visit at the end is not convergence");
     }
 }

@@ -43,6 +43,8 @@ pub struct StepPlan {
     pub steady_state_start_step: u64,
     /// Convergence tolerance on `|eps|`.
     pub convergence_tolerance: f64,
+    /// Steps the error must stay within the tolerance, to the end, to count as converged.
+    pub convergence_min_dwell_steps: u64,
     /// The level `s_d` the error is measured from.
     pub level: f64,
 }
@@ -70,13 +72,16 @@ pub enum StepPlanError {
 
 impl StepPlan {
     /// Builds the plan: `record_rate_hz = 0` turns the trace off; the steady-state window is the
-    /// last `steady_state_fraction` of the planned duration.
+    /// last `steady_state_fraction` of the planned duration; a convergence time needs the error
+    /// to stay within `convergence_tolerance` for `convergence_min_dwell_s` (rounded up to whole
+    /// steps) up to the end.
     pub fn new(
         dt_s: f64,
         duration_s: f64,
         record_rate_hz: f64,
         steady_state_fraction: f64,
         convergence_tolerance: f64,
+        convergence_min_dwell_s: f64,
         level: f64,
     ) -> Result<Self, StepPlanError> {
         let n_steps = whole_steps(duration_s, dt_s)
@@ -98,6 +103,8 @@ impl StepPlan {
             record_every,
             steady_state_start_step: ss.min(n_steps),
             convergence_tolerance,
+            convergence_min_dwell_steps: ((convergence_min_dwell_s / dt_s).ceil().max(0.0) as u64)
+                .min(n_steps),
             level,
         })
     }
@@ -172,6 +179,7 @@ where
         dt_s: plan.dt_s,
         steady_state_start_step: plan.steady_state_start_step,
         convergence_tolerance: plan.convergence_tolerance,
+        convergence_min_dwell_steps: plan.convergence_min_dwell_steps,
     });
     let mut omega = 0.0_f64;
     let mut s_measured: Option<f64> = None;
@@ -261,6 +269,7 @@ where
         if k == plan.n_steps {
             break;
         }
+        metrics.integrate_command(omega);
         vehicle.step(&mut x, omega, plan.dt_s);
     }
     // Always keep the last valid state in the trace.

@@ -132,15 +132,17 @@ impl IsolineController for PiIsoline {
         let eps = m.value - p.level;
         let eps_dot = self.estimator.update(m.t_s, eps);
         let e = eps_dot + p.c1 * crate::fmath::tanh(eps / p.c2);
+        if !e.is_finite() {
+            // A non-finite measurement: hold the integral and command nothing new from it. The
+            // clock does not advance either, so the next finite sample integrates the whole
+            // interval since the last finite one and no time is lost from `sigma`.
+            return p.output.apply(p.kp * self.last_e + p.ki * self.sigma);
+        }
         let dt = match self.last_t_s {
             Some(t0) if m.t_s > t0 => m.t_s - t0,
             _ => 0.0,
         };
         self.last_t_s = Some(m.t_s);
-        if !e.is_finite() {
-            // A non-finite measurement: hold the integral and command nothing new from it.
-            return p.output.apply(p.kp * self.last_e + p.ki * self.sigma);
-        }
         self.last_e = e;
 
         let mut sigma = self.sigma;
@@ -201,6 +203,21 @@ mod tests {
             value: 12.0,
         });
         assert_relative_eq!(w, 10.0 * 0.2 * crate::fmath::tanh(2.0), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn a_non_finite_sample_does_not_advance_the_clock() {
+        // eps = 2 at t = 0 and t = 2, a NaN at t = 1. The integral must cover the whole
+        // interval [0, 2]: sigma = 2 s * e with e = 0 + c1*tanh(2/c2) (backward difference over
+        // the two finite samples gives eps' = 0).
+        let p = params();
+        let mut c = PiIsoline::new(p);
+        let at = |t_s: f64, value: f64| Measurement { t_s, value };
+        c.update(&at(0.0, 12.0));
+        c.update(&at(1.0, f64::NAN));
+        c.update(&at(2.0, 12.0));
+        let e = p.c1 * (2.0f64 / p.c2).tanh();
+        assert_relative_eq!(c.sigma(), 2.0 * e, max_relative = 1e-12);
     }
 
     #[test]

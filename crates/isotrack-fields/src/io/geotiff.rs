@@ -1,5 +1,11 @@
 //! GeoTIFF grids through the pure-Rust `tiff` crate; the GeoTIFF tags (`ModelPixelScale`,
 //! `ModelTiepoint`, `GeoKeyDirectory`, GDAL's no-data) are plain TIFF tags read here.
+//!
+//! What loads (tested on files GDAL wrote, `tests/fixtures/geotiff`): uncompressed, PackBits,
+//! Deflate, LZW and ZSTD; horizontal (2) and floating-point (3) predictors; strips or tiles;
+//! classic TIFF or BigTIFF; Cloud-Optimised GeoTIFFs (the first image, which COG puts at full
+//! resolution, is read and the overviews after it are ignored); one band of uint8..uint64,
+//! int8..int64, float16/32/64. JPEG and other lossy or exotic codecs are refused by name.
 
 use super::{flip_rows, FilePosition, LoadError, LoadedGrid};
 use crate::georef::{lonlat_spacing_m, Georeference};
@@ -21,6 +27,32 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     let len = bytes.len() as u64;
     let tiff_err = |e: tiff::TiffError| {
         let truncated = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
+        if let tiff::TiffError::UnsupportedError(
+            tiff::TiffUnsupportedError::UnsupportedCompressionMethod(method),
+        ) = &e
+        {
+            let name = match method {
+                tiff::tags::CompressionMethod::ModernJPEG | tiff::tags::CompressionMethod::JPEG => {
+                    "JPEG".to_string()
+                }
+                other => format!("{other:?}"),
+            };
+            return LoadError::new(
+                path,
+                None,
+                format!(
+                    "unsupported TIFF compression {name}: isotrack reads uncompressed, PackBits, \
+                     Deflate, LZW and ZSTD GeoTIFFs (convert with \
+                     `gdal_translate -co COMPRESS=DEFLATE in.tif out.tif`)"
+                ),
+            );
+        }
+        if let tiff::TiffError::UnsupportedError(
+            tiff::TiffUnsupportedError::UnknownCompressionMethod,
+        ) = &e
+        {
+            return LoadError::new(path, None, format!("unknown TIFF compression method ({e})"));
+        }
         if truncated {
             LoadError::new(
                 path,

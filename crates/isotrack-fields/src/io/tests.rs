@@ -2,6 +2,7 @@
 //! the file and the line or offset.
 
 use super::*;
+use isotrack_core::Vec2;
 use std::io::Write;
 
 fn tmp(name: &str, bytes: &[u8]) -> (tempfile::TempDir, std::path::PathBuf) {
@@ -272,4 +273,45 @@ fn shared_data_csv_and_npy_agree() {
     assert_eq!(a.grid.values(), b.grid.values());
     assert_eq!((a.grid.nx(), a.grid.ny()), (61, 87));
     assert_eq!(a.grid.value_range(), (94.0, 195.0));
+}
+
+/// GeoTIFFs written by GDAL (scripts/make-geotiff-fixtures.py): every codec, predictor, layout
+/// and sample type gives exactly the grid of `grid.csv`, with the same georeference.
+#[test]
+fn geotiffs_written_by_gdal_load_like_the_csv() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/geotiff");
+    let csv = load_grid(&dir.join("grid.csv"), None).unwrap();
+    let (nx, ny) = (csv.grid.nx(), csv.grid.ny());
+    assert_eq!((nx, ny), (40, 30));
+    // The fixtures: 25 m pixels, north-west corner (500000, 4650000) in EPSG:32633, so the
+    // south-west pixel's centre is at (500012.5, 4650000 - 29.5*25).
+    let origin = Vec2::new(500_012.5, 4_650_000.0 - 29.5 * 25.0);
+    for name in [
+        "uncompressed_f64.tif",
+        "deflate_f32.tif",
+        "deflate_pred2_i16.tif",
+        "deflate_pred3_f32.tif",
+        "deflate_pred3_f64.tif",
+        "lzw_u8.tif",
+        "lzw_pred2_u8.tif",
+        "zstd_f32.tif",
+        "zstd_pred2_i16.tif",
+        "tiled_deflate_f32.tif",
+        "bigtiff_deflate_f64.tif",
+        "cog_deflate_f32.tif",
+    ] {
+        let g = load_grid(&dir.join(name), None).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((g.grid.nx(), g.grid.ny()), (nx, ny), "{name}");
+        assert_eq!(g.grid.values(), csv.grid.values(), "{name}");
+        assert_eq!(g.grid.spacing_m(), [25.0, 25.0], "{name}");
+        assert_eq!(g.grid.origin_m(), origin, "{name}");
+        assert_eq!(
+            g.georeference,
+            Georeference::Metres { epsg: Some(32633) },
+            "{name}"
+        );
+    }
+    let e = load_grid(&dir.join("jpeg_u8.tif"), None).expect_err("JPEG is not supported");
+    assert!(e.message.contains("JPEG"), "{e}");
+    assert!(e.to_string().contains("jpeg_u8.tif"), "{e}");
 }

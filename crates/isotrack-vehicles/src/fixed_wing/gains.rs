@@ -34,13 +34,11 @@ pub struct Gains {
 /// 2012 code does (a typo there: it moves `kp_v` from 0.13259 to 0.13177).
 pub fn compute_gains(p: &Aerosonde, t: &Trim, ecen674_a_v1: bool) -> Gains {
     let va = t.airspeed_mps;
-    let (rho, s, b, c, jy) = (p.rho, p.s, p.b, p.c, p.jy);
+    let (rho, s, c, jy) = (p.rho, p.s, p.c, p.jy);
     let d45 = 45f64.to_radians();
-    let (cpp, cpda) = p.c_p_p_and_da();
     // Roll.
     let (e_phi_max, zeta_phi) = (15f64.to_radians(), 1.2);
-    let a_phi1 = -0.5 * rho * va * va * s * b * cpp * b / (2.0 * va);
-    let a_phi2 = 0.5 * rho * va * va * s * b * cpda;
+    let (a_phi1, a_phi2) = roll_coefficients(p, va);
     let kp_phi = d45 / e_phi_max * a_phi2.signum();
     let w_phi = (a_phi2.abs() * d45 / e_phi_max).sqrt();
     let kd_phi = (2.0 * zeta_phi * w_phi - a_phi1) / a_phi2;
@@ -93,6 +91,53 @@ pub fn compute_gains(p: &Aerosonde, t: &Trim, ecen674_a_v1: bool) -> Gains {
     }
 }
 
+/// The roll dynamics' coefficients `phi'' = -a_phi1 phi' + a_phi2 delta_a` (Beard & McLain
+/// eq. 5.26): `a_phi1 = -rho Va^2 S b C_p_p b / (4 Va)`, `a_phi2 = rho Va^2 S b C_p_delta_a / 2`.
+fn roll_coefficients(p: &Aerosonde, va: f64) -> (f64, f64) {
+    let (cpp, cpda) = p.c_p_p_and_da();
+    let a_phi1 = -0.5 * p.rho * va * va * p.s * p.b * cpp * p.b / (2.0 * va);
+    let a_phi2 = 0.5 * p.rho * va * va * p.s * p.b * cpda;
+    (a_phi1, a_phi2)
+}
+
+/// The closed lateral loops as linear dynamics, for the sampled-data check of the isoline law
+/// on the UAV (`isotrack check`, docs/SAMPLED.md). Beard & McLain chapter 6, with the roll
+/// loop's small integrator left out:
+///
+/// ```text
+/// roll:    phi'' = -2 zeta_phi w_phi phi' + w_phi^2 (phi_c - phi),
+///          w_phi^2 = kp_phi a_phi2,  2 zeta_phi w_phi = a_phi1 + a_phi2 kd_phi
+/// course:  chi' = (g / Va) phi,   phi_c = kp_chi (chi_c - chi) + ki_chi integral(chi_c - chi)
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct CourseLoopModel {
+    /// Natural frequency of the closed roll loop `w_phi`, rad/s.
+    pub roll_natural_frequency_radps: f64,
+    /// Damping ratio of the closed roll loop `zeta_phi`.
+    pub roll_damping_ratio: f64,
+    /// Course loop proportional gain `kp_chi`, rad of bank per rad of course error.
+    pub kp_chi: f64,
+    /// Course loop integral gain `ki_chi`, rad of bank per rad*s of course error.
+    pub ki_chi: f64,
+    /// `g / Va`, 1/s: course rate per radian of bank (coordinated turn, small bank).
+    pub g_over_airspeed_per_s: f64,
+}
+
+/// The lateral loop model at the trim airspeed for the given gains.
+pub fn course_loop_model(p: &Aerosonde, t: &Trim, g: &Gains) -> CourseLoopModel {
+    let va = t.airspeed_mps;
+    let (a_phi1, a_phi2) = roll_coefficients(p, va);
+    let w2 = g.kp_phi * a_phi2;
+    let w = w2.max(0.0).sqrt();
+    CourseLoopModel {
+        roll_natural_frequency_radps: w,
+        roll_damping_ratio: (a_phi1 + a_phi2 * g.kd_phi) / (2.0 * w),
+        kp_chi: g.kp_chi,
+        ki_chi: g.ki_chi,
+        g_over_airspeed_per_s: p.g / va,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,5 +185,21 @@ mod tests {
         close(g.kp_v, 0.11173, "kp_v");
         close(g.ki_v, 0.44229, "ki_v");
         close(g.ki_h, 0.062797, "ki_h");
+    }
+
+    #[test]
+    fn course_loop_model_has_the_design_damping_and_bandwidth() {
+        // compute_gains places the roll loop at zeta = 1.2 and the course loop at
+        // w_chi = w_phi / 8, zeta_chi = 0.707 (Beard & McLain section 6.3): the model read back
+        // from the gains must show those design values.
+        let p = Aerosonde::beard_mclain_2012();
+        let t = trim(&p, 30.0).unwrap();
+        let g = compute_gains(&p, &t, false);
+        let m = course_loop_model(&p, &t, &g);
+        assert!((m.roll_damping_ratio - 1.2).abs() < 1e-12, "{m:?}");
+        let w_chi = m.roll_natural_frequency_radps / 8.0;
+        assert!((m.kp_chi * m.g_over_airspeed_per_s - 2.0 * 0.707 * w_chi).abs() < 1e-12);
+        assert!((m.ki_chi * m.g_over_airspeed_per_s - w_chi * w_chi).abs() < 1e-12);
+        assert!((m.g_over_airspeed_per_s - p.g / 30.0).abs() < 1e-15);
     }
 }

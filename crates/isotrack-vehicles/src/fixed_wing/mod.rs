@@ -21,7 +21,7 @@ pub mod wind;
 
 use autopilot::{autopilot, AutopilotConfig, AutopilotState, Commands};
 use dynamics::{air_data, r_body_to_ned, rk4_step, Deltas, State12, WindSample};
-use gains::{compute_gains, Gains};
+use gains::{compute_gains, course_loop_model, CourseLoopModel, Gains};
 use isotrack_core::math::{wrap_angle, Pose2, Vec2};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_core::Vehicle;
@@ -118,6 +118,10 @@ impl FixedWing {
     /// The autopilot gains.
     pub fn gains(&self) -> &Gains {
         &self.gains
+    }
+    /// The closed lateral loops as linear dynamics (for the sampled-data check).
+    pub fn course_loop_model(&self) -> CourseLoopModel {
+        course_loop_model(&self.params, &self.trim, &self.gains)
     }
     /// The parameters.
     pub fn params(&self) -> &Aerosonde {

@@ -1,0 +1,246 @@
+//! Field bounds over regions of a lattice, for Prop. 2's `gamma1..3` and the sampled check's
+//! slope range.
+//!
+//! The field is sampled on an `n x n` lattice over the operating region. A lattice *cell* belongs
+//! to a level band `[lo, hi]` when the range of its four corner values meets the band: a band
+//! thinner than the change across one cell still marks the cells it passes through, so a flood
+//! fill over cells (4-neighbours sharing an edge) cannot split a thin tube the way a fill over
+//! lattice points can. The bounds are taken over the corners of the cells of a component, with a
+//! margin for what lies between lattice points (see [`Bounds`]).
+
+use crate::field::FieldModel;
+use isotrack_core::math::{sym_spectral_norm, Vec2};
+use isotrack_core::{FieldDerivatives, ScalarField};
+
+/// The field sampled on the lattice.
+pub(crate) struct Lattice<'a> {
+    field: &'a FieldModel,
+    region: [f64; 4],
+    /// Lattice points per side.
+    n: usize,
+    values: Vec<f64>,
+}
+
+/// Bounds on the field over a set of cells, with margins: with `d` the half-diagonal of a cell
+/// (the farthest any point is from a sampled corner), `gamma1 = min|grad F| - g3 d` and
+/// `gamma2 = max|grad F| + g3 d` (the gradient is `g3`-Lipschitz when `||hess F|| <= g3`), and
+/// `gamma3 = max||hess F|| + L d`, where `L` is the largest change of `||hess F||` per metre
+/// between neighbouring lattice points (a finite-difference estimate of the third derivative).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bounds {
+    pub gamma1: f64,
+    pub gamma2: f64,
+    /// `None` when the field has no Hessian (bilinear grids).
+    pub gamma3: Option<f64>,
+    /// Lattice points the bounds were taken over.
+    pub points: usize,
+}
+
+impl<'a> Lattice<'a> {
+    /// Samples `field` on `n x n` points (`n >= 3`) over `region` `[x0, x1, y0, y1]`.
+    pub(crate) fn new(field: &'a FieldModel, region: [f64; 4], n: usize) -> Self {
+        let n = n.max(3);
+        let mut values = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let p = Self::point_in(region, n, i, j);
+                values.push(field.value(0.0, p).unwrap_or(f64::NAN));
+            }
+        }
+        Self {
+            field,
+            region,
+            n,
+            values,
+        }
+    }
+
+    fn point_in(region: [f64; 4], n: usize, i: usize, j: usize) -> Vec2 {
+        Vec2::new(
+            region[0] + (region[1] - region[0]) * i as f64 / (n - 1) as f64,
+            region[2] + (region[3] - region[2]) * j as f64 / (n - 1) as f64,
+        )
+    }
+
+    pub(crate) fn point(&self, i: usize, j: usize) -> Vec2 {
+        Self::point_in(self.region, self.n, i, j)
+    }
+
+    /// Half the diagonal of a cell, m.
+    pub(crate) fn half_diagonal_m(&self) -> f64 {
+        let hx = (self.region[1] - self.region[0]) / (self.n - 1) as f64;
+        let hy = (self.region[3] - self.region[2]) / (self.n - 1) as f64;
+        0.5 * hx.hypot(hy)
+    }
+
+    /// Range of the corner values of cell `(i, j)` (`None` if a corner has no value).
+    fn cell_range(&self, i: usize, j: usize) -> Option<(f64, f64)> {
+        let c = [
+            self.values[j * self.n + i],
+            self.values[j * self.n + i + 1],
+            self.values[(j + 1) * self.n + i],
+            self.values[(j + 1) * self.n + i + 1],
+        ];
+        if c.iter().any(|v| v.is_nan()) {
+            return None;
+        }
+        Some(
+            c.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                }),
+        )
+    }
+
+    fn cell_in_band(&self, i: usize, j: usize, lo: f64, hi: f64) -> bool {
+        self.cell_range(i, j)
+            .is_some_and(|(a, b)| b >= lo && a <= hi)
+    }
+
+    /// The cell containing `p`, if it lies inside the lattice.
+    pub(crate) fn cell_of(&self, p: Vec2) -> Option<(usize, usize)> {
+        let fx = (p.x - self.region[0]) / (self.region[1] - self.region[0]) * (self.n - 1) as f64;
+        let fy = (p.y - self.region[2]) / (self.region[3] - self.region[2]) * (self.n - 1) as f64;
+        if !(fx >= 0.0 && fy >= 0.0 && fx <= (self.n - 1) as f64 && fy <= (self.n - 1) as f64) {
+            return None;
+        }
+        Some(((fx as usize).min(self.n - 2), (fy as usize).min(self.n - 2)))
+    }
+
+    /// The band's cell nearest `p` (by cell centre).
+    pub(crate) fn nearest_band_cell(&self, p: Vec2, lo: f64, hi: f64) -> Option<(usize, usize)> {
+        let mut best: Option<((usize, usize), f64)> = None;
+        for j in 0..self.n - 1 {
+            for i in 0..self.n - 1 {
+                if self.cell_in_band(i, j, lo, hi) {
+                    let c = (self.point(i, j) + self.point(i + 1, j + 1)) * 0.5;
+                    let d = (c - p).norm();
+                    if best.is_none_or(|(_, b)| d < b) {
+                        best = Some(((i, j), d));
+                    }
+                }
+            }
+        }
+        best.map(|(c, _)| c)
+    }
+
+    /// The cells of the band `[lo, hi]` connected to `seed` (4-neighbours), as a mask over
+    /// cells; empty if the seed cell is not in the band.
+    pub(crate) fn component(&self, seed: (usize, usize), lo: f64, hi: f64) -> Vec<bool> {
+        let m = self.n - 1;
+        let mut seen = vec![false; m * m];
+        if !self.cell_in_band(seed.0, seed.1, lo, hi) {
+            return seen;
+        }
+        let mut stack = vec![seed];
+        seen[seed.1 * m + seed.0] = true;
+        while let Some((i, j)) = stack.pop() {
+            let mut visit = |i: usize, j: usize| {
+                if !seen[j * m + i] && self.cell_in_band(i, j, lo, hi) {
+                    seen[j * m + i] = true;
+                    stack.push((i, j));
+                }
+            };
+            if i > 0 {
+                visit(i - 1, j);
+            }
+            if i + 1 < m {
+                visit(i + 1, j);
+            }
+            if j > 0 {
+                visit(i, j - 1);
+            }
+            if j + 1 < m {
+                visit(i, j + 1);
+            }
+        }
+        seen
+    }
+
+    /// The lattice points that are corners of the cells in `cells`.
+    fn corner_mask(&self, cells: &[bool]) -> Vec<bool> {
+        let m = self.n - 1;
+        let mut pts = vec![false; self.n * self.n];
+        for j in 0..m {
+            for i in 0..m {
+                if cells[j * m + i] {
+                    for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        pts[(j + b) * self.n + i + a] = true;
+                    }
+                }
+            }
+        }
+        pts
+    }
+
+    /// `|grad F|` at every corner of the cells in `cells`.
+    pub(crate) fn slopes(&self, cells: &[bool]) -> Vec<f64> {
+        let pts = self.corner_mask(cells);
+        (0..self.n * self.n)
+            .filter(|&k| pts[k])
+            .filter_map(|k| self.field.gradient(0.0, self.point(k % self.n, k / self.n)))
+            .map(|g| g.norm())
+            .filter(|g| g.is_finite())
+            .collect()
+    }
+
+    /// Bounds over the corners of the cells in `cells`, with margins (see [`Bounds`]);
+    /// `has_hessian = false` leaves `gamma3` out (and the gradient margin with it).
+    pub(crate) fn bounds(&self, cells: &[bool], has_hessian: bool) -> Option<Bounds> {
+        let pts = self.corner_mask(cells);
+        let mut hess_norm = vec![f64::NAN; self.n * self.n];
+        let (mut g1, mut g2, mut g3, mut n) = (f64::INFINITY, 0.0f64, 0.0f64, 0usize);
+        for k in (0..self.n * self.n).filter(|&k| pts[k]) {
+            let p = self.point(k % self.n, k / self.n);
+            let Some(g) = self.field.gradient(0.0, p) else {
+                continue;
+            };
+            n += 1;
+            g1 = g1.min(g.norm());
+            g2 = g2.max(g.norm());
+            if has_hessian {
+                if let Some(h) = self.field.hessian(0.0, p) {
+                    hess_norm[k] = sym_spectral_norm(&h);
+                    g3 = g3.max(hess_norm[k]);
+                }
+            }
+        }
+        if n == 0 {
+            return None;
+        }
+        let d = self.half_diagonal_m();
+        if !has_hessian {
+            return Some(Bounds {
+                gamma1: g1,
+                gamma2: g2,
+                gamma3: None,
+                points: n,
+            });
+        }
+        // Largest change of ||hess F|| per metre between neighbouring points of the set.
+        let hx = (self.region[1] - self.region[0]) / (self.n - 1) as f64;
+        let hy = (self.region[3] - self.region[2]) / (self.n - 1) as f64;
+        let mut lip = 0.0f64;
+        for j in 0..self.n {
+            for i in 0..self.n {
+                let a = hess_norm[j * self.n + i];
+                if a.is_nan() {
+                    continue;
+                }
+                if i + 1 < self.n && !hess_norm[j * self.n + i + 1].is_nan() {
+                    lip = lip.max((hess_norm[j * self.n + i + 1] - a).abs() / hx);
+                }
+                if j + 1 < self.n && !hess_norm[(j + 1) * self.n + i].is_nan() {
+                    lip = lip.max((hess_norm[(j + 1) * self.n + i] - a).abs() / hy);
+                }
+            }
+        }
+        let gamma3 = g3 + lip * d;
+        Some(Bounds {
+            gamma1: (g1 - gamma3 * d).max(0.0),
+            gamma2: g2 + gamma3 * d,
+            gamma3: Some(gamma3),
+            points: n,
+        })
+    }
+}

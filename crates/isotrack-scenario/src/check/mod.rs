@@ -1,0 +1,719 @@
+//! `isotrack check`: the paper's theory applied to a scenario, before flying it, and the same
+//! loop checked at the sensor's real rate.
+//!
+//! * Prop. 1 (circular fields, `radial_exp`): the paper's sufficient conditions and the exact
+//!   Routh-Hurwitz local condition, reported separately ([`isotrack_core::theory`]). The slope
+//!   `alpha` is the field's radial slope on the isoline, `|dF/dd| = k*s_d` for
+//!   `F = i0*exp(-k*d)` (the linearisation depends only on it).
+//! * Prop. 2 (any smooth field, `ki = 0`): `gamma1, gamma2, gamma3` bound the field over the
+//!   region the proof needs: the cells of a 601 x 601 lattice whose values lie between the start's
+//!   level and the tube `|F - s_d| <= tube_halfwidth` (default `c2`, the linear zone of `tanh`),
+//!   widened by the tube's half-width round the start's level, connected to the start (see
+//!   [`lattice`] for the cell test and the margins). The tube's own gammas are reported too. The
+//!   angle margin `phi` is chosen for each purpose: `min_kp` minimises the gain requirement over
+//!   `phi`; `error_bound` uses the largest `phi` at which the scenario's `kp` meets the
+//!   conditions. The bound is reported as applying (`bound_applies`) only when the conditions
+//!   hold, the start's heading is in the proposition's sector and the sampled loop is stable.
+//! * Sampled (every scenario with the PI-like law): the loop linearised about the isoline at the
+//!   sensor's period ([`sampled`], docs/SAMPLED.md), worst over the slopes found in the tube.
+//! * `verdict`: `fails` when a necessary local condition fails (the sampled loop, or Prop. 1's
+//!   exact condition), `holds` when a guarantee applies (Prop. 1 exact and the sampled loop
+//!   stable, or Prop. 2's bound), `not_applicable` otherwise.
+
+mod lattice;
+pub mod sampled;
+
+use crate::build::{build_vehicle, VehicleModel};
+use crate::field::FieldModel;
+use crate::schema::{ControllerKind, DerivativeKindName, FieldKind};
+use crate::Scenario;
+use isotrack_core::math::Vec2;
+use isotrack_core::theory::{
+    prop1_characteristic_polynomial, prop1_exact_local_condition, prop1_paper_conditions,
+    prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m, FieldBounds,
+};
+use isotrack_core::{FieldDerivatives, ScalarField};
+use isotrack_fields::grid::Interpolation;
+use isotrack_fields::AnalyticKind;
+use lattice::Lattice;
+use sampled::{EstimatorModel, HeadingDynamics, SampledLoop};
+use serde::Serialize;
+
+/// Lattice points per side for `isotrack check`.
+const CHECK_LATTICE: usize = 601;
+/// Lattice points per side for the quick check behind `run`'s warnings.
+const WARN_LATTICE: usize = 151;
+
+/// Prop. 1 report. All `None` when the field is not circular.
+#[derive(Clone, Debug, Serialize)]
+pub struct Prop1Report {
+    /// Whether Prop. 1 applies (a `radial_exp` field).
+    pub applicable: bool,
+    /// Radial slope on the isoline, field units per metre.
+    pub alpha: Option<f64>,
+    /// Isoline radius `r_d`, m.
+    pub r_d_m: Option<f64>,
+    /// `kp(kp - 2) v alpha > ki` and `v alpha > c1`.
+    pub paper_conditions_hold: Option<bool>,
+    /// Routh-Hurwitz on the linearisation (necessary and sufficient locally).
+    pub exact_local_condition_holds: Option<bool>,
+    /// `[a2, a1, a0]` of `l^3 + a2 l^2 + a1 l + a0`.
+    pub characteristic_polynomial: Option<[f64; 3]>,
+    /// Why not applicable, or remarks.
+    pub note: String,
+}
+
+impl Prop1Report {
+    fn not_applicable(note: String) -> Self {
+        Self {
+            applicable: false,
+            alpha: None,
+            r_d_m: None,
+            paper_conditions_hold: None,
+            exact_local_condition_holds: None,
+            characteristic_polynomial: None,
+            note,
+        }
+    }
+}
+
+/// Prop. 2 report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Prop2Report {
+    /// Prop. 2 is stated for `ki = 0`.
+    pub applicable: bool,
+    /// Half-width of the tube `|F - s_d| <= tube_halfwidth`.
+    pub tube_halfwidth: f64,
+    /// The level band `[lo, hi]` of the region the gammas bound (start to tube).
+    pub region_levels: Option<[f64; 2]>,
+    /// Lattice points of the region (start to tube).
+    pub samples_in_region: usize,
+    /// Lattice points of the tube component round the target isoline.
+    pub samples_in_tube: usize,
+    /// `min |grad F|` over the region, less the lattice margin.
+    pub gamma1: Option<f64>,
+    /// `max |grad F|` over the region, plus the lattice margin.
+    pub gamma2: Option<f64>,
+    /// `max ||hess F||` over the region, plus the lattice margin (`null` for bilinear grids,
+    /// which have no Hessian).
+    pub gamma3: Option<f64>,
+    /// The same bounds over the tube alone.
+    pub tube_gamma1: Option<f64>,
+    /// See `tube_gamma1`.
+    pub tube_gamma2: Option<f64>,
+    /// See `tube_gamma1`.
+    pub tube_gamma3: Option<f64>,
+    /// The scenario's gains meet the (unit-consistent) conditions at some angle margin.
+    pub conditions_hold: bool,
+    /// Whether the bound is proved for this scenario: the conditions hold, the start's heading
+    /// lies in the sector, and the sampled loop is stable.
+    pub bound_applies: bool,
+    /// Predicted `limsup |eps|` (null when the conditions fail).
+    pub error_bound: Option<f64>,
+    /// The angle margin used for `error_bound`, rad.
+    pub error_bound_phi_rad: Option<f64>,
+    /// The smallest `kp` meeting the conditions (over all angle margins).
+    pub min_kp: Option<f64>,
+    /// The angle margin that gives `min_kp`, rad.
+    pub min_kp_phi_rad: Option<f64>,
+    /// `min_kp` by the paper's printed form.
+    pub paper_min_kp: Option<f64>,
+    /// `error_bound` by the paper's printed form (at `error_bound_phi_rad`; null whenever
+    /// `error_bound` is).
+    pub paper_error_bound: Option<f64>,
+    /// The initial angle `phi(t0)` between `-grad F` and the heading (paper Fig. 1(c)), rad.
+    pub initial_phi_rad: Option<f64>,
+    /// Whether `phi(t0)` lies in the sector `[-pi + phi, -phi]` the proposition assumes (at
+    /// `error_bound_phi_rad`).
+    pub initial_heading_in_sector: Option<bool>,
+    /// Remarks.
+    pub note: String,
+}
+
+/// The sampled-data check (docs/SAMPLED.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct SampledReport {
+    /// Whether it applies (the PI-like law).
+    pub applicable: bool,
+    /// The linear vehicle model: `dubins` or `fixed_wing_course_loop`.
+    pub vehicle_model: Option<&'static str>,
+    /// Sensor period `T`, s.
+    pub period_s: f64,
+    /// Sensor delay, s.
+    pub delay_s: f64,
+    /// The slopes `|grad F|` the loop was checked at: `[min, max]` (5th percentile to maximum
+    /// over the tube).
+    pub slope_range: Option<[f64; 2]>,
+    /// Isoline curvature used, 1/m (`1/r_d` on circular fields, 0 elsewhere).
+    pub curvature_per_m: Option<f64>,
+    /// Largest spectral radius of the one-period map over the slopes (< 1: stable).
+    pub spectral_radius: Option<f64>,
+    /// Whether the sampled loop is stable at every slope.
+    pub stable: Option<bool>,
+    /// The largest `kp` that keeps it stable, other gains fixed (null if none).
+    pub max_kp: Option<f64>,
+    /// The longest sensor period that keeps it stable (null if none).
+    pub max_period_s: Option<f64>,
+    /// Whether the sensor rate is what makes it unstable (a faster sensor would make it
+    /// stable).
+    pub rate_is_the_limit: Option<bool>,
+    /// Remarks.
+    pub note: String,
+}
+
+/// The combined verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// A guarantee applies (Prop. 1 exact condition with a stable sampled loop, or Prop. 2's
+    /// bound).
+    Holds,
+    /// A necessary local condition fails.
+    Fails,
+    /// Nothing fails, but no proposition gives a guarantee here.
+    NotApplicable,
+}
+
+impl Verdict {
+    /// The snake_case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Fails => "fails",
+            Verdict::NotApplicable => "not_applicable",
+        }
+    }
+}
+
+/// The full report.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckReport {
+    /// The combined verdict.
+    pub verdict: Verdict,
+    /// One sentence on why.
+    pub verdict_reason: String,
+    /// Prop. 1.
+    pub prop1: Prop1Report,
+    /// Prop. 2.
+    pub prop2: Prop2Report,
+    /// The sampled-data check.
+    pub sampled: SampledReport,
+    /// Warnings about the scenario (the same `run` prints).
+    pub warnings: Vec<String>,
+}
+
+/// The region over which the field is sampled: the grid, the domain, or a box round the
+/// analytic field's features and the start.
+fn region(s: &Scenario) -> [f64; 4] {
+    let f = s.file();
+    let start = Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0));
+    let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
+        r[0] = r[0].min(p.x - m);
+        r[1] = r[1].max(p.x + m);
+        r[2] = r[2].min(p.y - m);
+        r[3] = r[3].max(p.y + m);
+        r
+    };
+    let empty = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    match s.field() {
+        FieldModel::Grid(g) => g.grid().extent_m(),
+        FieldModel::Analytic(a) => {
+            if let Some(d) = a.domain_m {
+                return d;
+            }
+            match &a.kind {
+                AnalyticKind::RadialExp(r) => {
+                    let rd =
+                        radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level()).unwrap_or(10.0);
+                    grow(grow(empty, r.center_m, 3.0 * rd), start, 1.0)
+                }
+                AnalyticKind::GaussianPlumes(p) => {
+                    p.plumes.iter().fold(grow(empty, start, 1.0), |r, pl| {
+                        grow(r, pl.center_m, 4.0 * pl.sigma_m[0].max(pl.sigma_m[1]))
+                    })
+                }
+                AnalyticKind::LinearRamp(_) => grow(empty, start, 100.0),
+            }
+        }
+    }
+}
+
+/// The gains and speed the theory needs.
+struct Law {
+    kp: f64,
+    ki: f64,
+    c1: f64,
+    c2: f64,
+    v: f64,
+}
+
+fn law(s: &Scenario) -> Law {
+    let f = s.file();
+    let c = &f.controller;
+    Law {
+        kp: c.kp.unwrap_or(0.0),
+        ki: c.ki.unwrap_or(0.0),
+        c1: c.c1.unwrap_or(0.0),
+        c2: c.c2.unwrap_or(1.0),
+        // The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed
+        // in calm air).
+        v: f.vehicle
+            .speed_mps
+            .or(f.vehicle.airspeed_mps)
+            .unwrap_or(0.0),
+    }
+}
+
+fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
+    let f = s.file();
+    let level = s.level();
+    let (v, kp, ki, c1, c2) = (l.v, l.kp, l.ki, l.c1, l.c2);
+    match (f.field.kind, s.field()) {
+        (Some(FieldKind::RadialExp), FieldModel::Analytic(a)) => {
+            let AnalyticKind::RadialExp(r) = &a.kind else {
+                unreachable!("radial_exp builds RadialExp")
+            };
+            match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
+                Some(rd) => {
+                    let alpha = r.decay_per_m * level;
+                    Prop1Report {
+                        applicable: true,
+                        alpha: Some(alpha),
+                        r_d_m: Some(rd),
+                        paper_conditions_hold: Some(prop1_paper_conditions(alpha, v, kp, ki, c1)),
+                        exact_local_condition_holds: Some(prop1_exact_local_condition(alpha, v, rd, kp, ki, c1, c2)),
+                        characteristic_polynomial: Some(prop1_characteristic_polynomial(alpha, v, rd, kp, ki, c1, c2)),
+                        note: "alpha = k*s_d, the radial slope on the isoline; the paper's conditions are sufficient, the Routh-Hurwitz one is exact (locally)".into(),
+                    }
+                }
+                None => Prop1Report::not_applicable(format!(
+                    "level {level} is not attained by the field (0 < level < i0 is needed)"
+                )),
+            }
+        }
+        _ => Prop1Report::not_applicable(
+            "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
+        ),
+    }
+}
+
+/// The isoline's curvature the sampled check uses: `1/r_d` on a circular field, else 0.
+fn curvature(s: &Scenario) -> f64 {
+    match s.field() {
+        FieldModel::Analytic(a) => match &a.kind {
+            AnalyticKind::RadialExp(r) => {
+                radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())
+                    .map_or(0.0, |rd| 1.0 / rd)
+            }
+            _ => 0.0,
+        },
+        FieldModel::Grid(_) => 0.0,
+    }
+}
+
+/// The slope range the sampled check covers: the 5th percentile .. maximum of `slopes` (the
+/// lowest slopes sit at saddles, where the isoline branches and no linearisation holds; a loop
+/// with a tiny slope is slow, not unstable).
+fn slope_range(mut slopes: Vec<f64>) -> Option<[f64; 2]> {
+    slopes.retain(|g| g.is_finite() && *g > 0.0);
+    if slopes.is_empty() {
+        return None;
+    }
+    slopes.sort_by(f64::total_cmp);
+    let lo = slopes[(slopes.len() - 1) * 5 / 100];
+    let hi = *slopes.last()?;
+    Some([lo, hi])
+}
+
+/// `count` slopes spread geometrically over `range`.
+fn spread(range: [f64; 2], count: usize) -> Vec<f64> {
+    let [lo, hi] = range;
+    if hi <= lo || count < 2 {
+        return vec![hi];
+    }
+    (0..count)
+        .map(|k| lo * (hi / lo).powf(k as f64 / (count - 1) as f64))
+        .collect()
+}
+
+/// The sampled-data report, worst over `slope_range`.
+fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> SampledReport {
+    let f = s.file();
+    let period_s = 1.0 / f.sensor.rate_hz.unwrap_or(100.0);
+    let delay_s = f.sensor.delay_s.unwrap_or(0.0);
+    let mut rep = SampledReport {
+        applicable: false,
+        vehicle_model: None,
+        period_s,
+        delay_s,
+        slope_range,
+        curvature_per_m: None,
+        spectral_radius: None,
+        stable: None,
+        max_kp: None,
+        max_period_s: None,
+        rate_is_the_limit: None,
+        note: String::new(),
+    };
+    if f.controller.kind.unwrap_or(ControllerKind::PiIsoline) != ControllerKind::PiIsoline {
+        rep.note =
+            "the sampled-data check models the PI-like law (controller.kind = \"pi_isoline\")"
+                .into();
+        return rep;
+    }
+    let Some(range) = slope_range else {
+        rep.note = "no slope in the tube: the level is not attained in the region".into();
+        return rep;
+    };
+    let mut notes = vec![];
+    let c = &f.controller;
+    let estimator = match c
+        .derivative
+        .unwrap_or(DerivativeKindName::BackwardDifference)
+    {
+        DerivativeKindName::BackwardDifference => EstimatorModel::BackwardDifference,
+        DerivativeKindName::FilteredDifference => EstimatorModel::FilteredDifference {
+            tau_s: c.derivative_tau_s.unwrap_or(0.1),
+        },
+        DerivativeKindName::Levant => {
+            notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
+            EstimatorModel::BackwardDifference
+        }
+    };
+    let (heading, model) = match build_vehicle(f) {
+        Ok(VehicleModel::Dubins(_)) => (HeadingDynamics::Dubins, "dubins"),
+        Ok(VehicleModel::FixedWing(w)) => (
+            HeadingDynamics::CourseLoop(w.course_loop_model()),
+            "fixed_wing_course_loop",
+        ),
+        Err(e) => {
+            rep.note = format!("the vehicle cannot be built: {}", e.message);
+            return rep;
+        }
+    };
+    if c.max_turn_rate_radps.is_some() {
+        notes.push("the turn-rate limit is a saturation the linear model leaves out (it holds while the limit is not reached)".into());
+    }
+    let kappa = curvature(s);
+    let base = SampledLoop {
+        speed_mps: l.v,
+        slope: range[1],
+        curvature_per_m: kappa,
+        kp: l.kp,
+        ki: l.ki,
+        c1: l.c1,
+        c2: l.c2,
+        period_s,
+        delay_s,
+        estimator,
+        heading,
+    };
+    let slopes = spread(range, 12);
+    let rho = sampled::worst_spectral_radius(&base, &slopes);
+    rep.applicable = true;
+    rep.vehicle_model = Some(model);
+    rep.curvature_per_m = Some(kappa);
+    rep.spectral_radius = rho.is_finite().then_some(rho);
+    rep.stable = Some(rho < 1.0);
+    rep.max_kp = sampled::max_kp(&base, &slopes);
+    rep.max_period_s = sampled::max_period_s(&base, &slopes);
+    rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
+    if !rho.is_finite() {
+        notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
+    }
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The start: position and level.
+fn start(s: &Scenario) -> Vec2 {
+    let f = s.file();
+    Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0))
+}
+
+/// What the lattice gives the checks: bounds over the start-to-tube region and the tube, and
+/// the tube's slopes.
+struct Regions {
+    levels: Option<[f64; 2]>,
+    region: Option<lattice::Bounds>,
+    tube: Option<lattice::Bounds>,
+    slope_range: Option<[f64; 2]>,
+}
+
+fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
+    let field = s.field();
+    let level = s.level();
+    let p0 = start(s);
+    let lat = Lattice::new(field, region(s), n);
+    let has_hessian =
+        !matches!(field, FieldModel::Grid(g) if g.interpolation() == Interpolation::Bilinear);
+    let (lo, hi) = (level - tube, level + tube);
+    let tube_cells = lat
+        .nearest_band_cell(p0, lo, hi)
+        .map(|seed| lat.component(seed, lo, hi));
+    let slope_range = tube_cells.as_ref().and_then(|c| slope_range(lat.slopes(c)));
+    if !with_bounds {
+        return Regions {
+            levels: None,
+            region: None,
+            tube: None,
+            slope_range,
+        };
+    }
+    let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
+    let (levels, region_bounds) = match (field.value(0.0, p0), lat.cell_of(p0)) {
+        (Some(s0), Some(cell)) => {
+            let levels = [(s0 - tube).min(lo), (s0 + tube).max(hi)];
+            let cells = lat.component(cell, levels[0], levels[1]);
+            (Some(levels), lat.bounds(&cells, has_hessian))
+        }
+        _ => (None, None),
+    };
+    Regions {
+        levels,
+        region: region_bounds,
+        tube: tube_bounds,
+        slope_range,
+    }
+}
+
+fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
+    let f = s.file();
+    let c = &f.controller;
+    let (v, kp, ki, c1, c2) = (l.v, l.kp, l.ki, l.c1, l.c2);
+    let phis: Vec<f64> = (1..1000)
+        .map(|k| k as f64 * std::f64::consts::FRAC_PI_2 / 1000.0)
+        .collect();
+    let mut rep = Prop2Report {
+        applicable: ki == 0.0,
+        tube_halfwidth: tube,
+        region_levels: r.levels,
+        samples_in_region: r.region.map_or(0, |b| b.points),
+        samples_in_tube: r.tube.map_or(0, |b| b.points),
+        gamma1: r.region.map(|b| b.gamma1),
+        gamma2: r.region.map(|b| b.gamma2),
+        gamma3: r.region.and_then(|b| b.gamma3),
+        tube_gamma1: r.tube.map(|b| b.gamma1),
+        tube_gamma2: r.tube.map(|b| b.gamma2),
+        tube_gamma3: r.tube.and_then(|b| b.gamma3),
+        conditions_hold: false,
+        bound_applies: false,
+        error_bound: None,
+        error_bound_phi_rad: None,
+        min_kp: None,
+        min_kp_phi_rad: None,
+        paper_min_kp: None,
+        paper_error_bound: None,
+        initial_phi_rad: None,
+        initial_heading_in_sector: None,
+        note: String::new(),
+    };
+    let mut notes = vec![];
+    if !rep.applicable {
+        notes
+            .push("Prop. 2 is stated for ki = 0; the numbers are for the P part alone".to_string());
+    }
+    let p0 = start(s);
+    let Some(region) = r.region else {
+        notes.push(if r.tube.is_none() {
+            format!("no lattice cell has |F - s_d| <= {tube}: the level is not attained in the region")
+        } else {
+            "the start lies outside the field or the sampled region: the region where the bound is proved cannot be formed".to_string()
+        });
+        rep.note = notes.join("; ");
+        return rep;
+    };
+    if r.tube.is_none() {
+        notes.push(format!(
+            "no lattice cell has |F - s_d| <= {tube}: the level is not attained in the region"
+        ));
+    }
+    let Some(gamma3) = region.gamma3 else {
+        notes.push("bilinear interpolation has no continuous gradient and no Hessian, so gamma3 is undefined and Prop. 2 cannot be checked (use field.interpolation = \"bicubic\")".into());
+        rep.note = notes.join("; ");
+        return rep;
+    };
+    let b = FieldBounds {
+        gamma1: region.gamma1,
+        gamma2: region.gamma2,
+        gamma3,
+    };
+    let best = phis
+        .iter()
+        .filter_map(|&phi| prop2_min_kp(&b, v, c1, c2, phi).map(|k| (k, phi)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    rep.min_kp = best.map(|x| x.0);
+    rep.min_kp_phi_rad = best.map(|x| x.1);
+    rep.paper_min_kp = phis
+        .iter()
+        .filter_map(|&phi| prop2_paper_min_kp(&b, v, kp, c1, c2, phi).0)
+        .min_by(|a, b| a.total_cmp(b));
+    // The largest margin at which kp works gives the tightest bound.
+    if let Some(&phi) = phis
+        .iter()
+        .rev()
+        .find(|&&phi| prop2_error_bound(&b, v, kp, c1, c2, phi).is_some())
+    {
+        rep.error_bound_phi_rad = Some(phi);
+        if rep.applicable {
+            rep.conditions_hold = true;
+            rep.error_bound = prop2_error_bound(&b, v, kp, c1, c2, phi);
+            rep.paper_error_bound = rep
+                .error_bound
+                .and(prop2_paper_min_kp(&b, v, kp, c1, c2, phi).1);
+        }
+    }
+    // The initial heading condition phi(t0) in [-pi + phi, -phi].
+    if let Some(g) = s.field().gradient(0.0, p0).filter(|g| g.norm() > 0.0) {
+        let h = Vec2::from_angle(f.initial.heading_rad.unwrap_or(0.0));
+        let minus_n = -g;
+        // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
+        // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
+        let mut phi0 = minus_n.cross(h).atan2(minus_n.dot(h));
+        if c.higher_side == Some(isotrack_core::control::HigherSide::Left) {
+            phi0 = -phi0;
+        }
+        rep.initial_phi_rad = Some(phi0);
+        if let Some(m) = rep.error_bound_phi_rad {
+            rep.initial_heading_in_sector = Some(phi0 <= -m && phi0 >= -std::f64::consts::PI + m);
+        }
+    }
+    if v * b.gamma1 <= c1 {
+        notes.push(format!(
+            "v*gamma1 = {:.4} <= c1 = {c1}: somewhere between the start and the tube the sliding surface cannot be reached (decrease c1, or start nearer the isoline)",
+            v * b.gamma1
+        ));
+    }
+    if let Some(eb) = rep.error_bound {
+        if eb > tube {
+            notes.push(format!("the bound {eb:.4} exceeds the tube {tube}: the gammas may not hold along the orbit"));
+        }
+    }
+    if rep.conditions_hold && rep.initial_heading_in_sector == Some(false) {
+        notes.push("the start's heading is outside the sector [-pi + phi, -phi] the proposition assumes: the bound is not proved from this start".into());
+    }
+    if c2 != 1.0 {
+        notes.push("c2 != 1: the paper's printed form differs from the unit-consistent one (paper_* fields)".into());
+    }
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The combined verdict and its reason.
+fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
+    let at = format!("T = {} s", sm.period_s);
+    if sm.stable == Some(false) {
+        let rho = sm.spectral_radius.map_or_else(
+            || "no equilibrium".to_string(),
+            |r| format!("spectral radius {r:.4}"),
+        );
+        return (
+            Verdict::Fails,
+            format!("the loop sampled at {at} is unstable ({rho})"),
+        );
+    }
+    if p1.exact_local_condition_holds == Some(false) {
+        return (
+            Verdict::Fails,
+            "Prop. 1's exact local condition fails: the tracking orbit is unstable".into(),
+        );
+    }
+    if p1.exact_local_condition_holds == Some(true) && sm.stable == Some(true) {
+        return (
+            Verdict::Holds,
+            format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable: locally exponentially stable"),
+        );
+    }
+    if p2.bound_applies {
+        return (
+            Verdict::Holds,
+            format!(
+                "Prop. 2's bound applies: limsup|eps| <= {:.6}",
+                p2.error_bound.unwrap_or(f64::NAN)
+            ),
+        );
+    }
+    let why = if !sm.applicable {
+        "the propositions are for the PI-like law"
+    } else if p2.conditions_hold {
+        "Prop. 2's conditions hold but its bound is not proved from this start"
+    } else {
+        "Prop. 1 is for circular fields and Prop. 2's conditions do not hold"
+    };
+    (
+        Verdict::NotApplicable,
+        format!("no guarantee: {why}; nothing checked fails"),
+    )
+}
+
+/// Warnings about a scenario: noise through a raw backward difference, and a sampled loop that
+/// is unstable. `run` prints them (and writes them to summary.json); `check` reports them.
+fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
+    let f = s.file();
+    let mut w = vec![];
+    let noise = f.sensor.noise_std.unwrap_or(0.0);
+    let rate = f.sensor.rate_hz.unwrap_or(100.0);
+    if noise > 0.0
+        && f.controller
+            .derivative
+            .unwrap_or(DerivativeKindName::BackwardDifference)
+            == DerivativeKindName::BackwardDifference
+    {
+        w.push(format!(
+            "sensor noise (sensor.noise_std = {noise}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
+            std::f64::consts::SQRT_2 * noise * rate
+        ));
+    }
+    if sampled.stable == Some(false) {
+        let fix_kp = sampled
+            .max_kp
+            .map(|k| format!("kp <= {k:.4}"))
+            .unwrap_or_else(|| "no kp".into());
+        let fix_t = sampled.max_period_s.map_or_else(
+            || "no sensor rate".to_string(),
+            |t| format!("a sensor rate >= {:.4} Hz", 1.0 / t),
+        );
+        w.push(format!(
+            "the loop sampled at {} Hz is unstable (spectral radius {}): it is stable with {fix_kp} or with {fix_t}",
+            rate,
+            sampled.spectral_radius.map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
+        ));
+    }
+    w
+}
+
+/// The warnings `run` prints: the same as `check` reports, from a coarser lattice.
+pub fn warnings(s: &Scenario) -> Vec<String> {
+    let l = law(s);
+    let tube = s.file().controller.c2.unwrap_or(1.0);
+    let r = regions(s, tube, WARN_LATTICE, false);
+    warnings_from(s, &sampled_report(s, &l, r.slope_range))
+}
+
+/// Runs the checks; `tube_halfwidth` defaults to `c2`.
+pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
+    let l = law(s);
+    let tube = tube_halfwidth.unwrap_or(l.c2);
+    let r = regions(s, tube, CHECK_LATTICE, true);
+    let prop1 = prop1_report(s, &l);
+    let sampled = sampled_report(s, &l, r.slope_range);
+    let mut prop2 = prop2_report(s, &l, tube, &r);
+    prop2.bound_applies = prop2.applicable
+        && prop2.conditions_hold
+        && prop2.initial_heading_in_sector == Some(true)
+        && sampled.stable == Some(true);
+    let (verdict, verdict_reason) = verdict(&prop1, &prop2, &sampled);
+    CheckReport {
+        verdict,
+        verdict_reason,
+        warnings: warnings_from(s, &sampled),
+        prop1,
+        prop2,
+        sampled,
+    }
+}

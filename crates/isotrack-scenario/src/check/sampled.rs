@@ -1,0 +1,420 @@
+//! The sampled-data check: the PI-like law's loop linearised about the tracked isoline *at the
+//! sensor's period*, with the command held between samples, the derivative estimator, the
+//! sensor delay and (for the UAV) the course and roll loops. The derivation, with the matrices,
+//! is docs/SAMPLED.md; in short:
+//!
+//! * Plant (continuous, linear about the isoline of slope `alpha = |grad F|` and curvature
+//!   `kappa`): `z1` is the offset from the isoline towards lower values (m), `z2` the heading
+//!   error (rad), `eps = -alpha z1`, and
+//!   `z1' = v z2`, `z2' = dw - v kappa^2 z1` (Dubins: `dw` is the turn-rate command's deviation
+//!   from the isoline's `v kappa`), or for the UAV `z2' = (g/Va) b - v kappa^2 z1` with the bank
+//!   `b` from the closed roll loop, the course loop's PI on the course command `h_c` and
+//!   `h_c' = dw` (course-rate guidance).
+//! * Sampling: the plant is discretised exactly with the command held (zero-order hold) over the
+//!   sensor period `T`; a delay `tau = m T + r` (`0 <= r < T`) becomes `m` samples of buffer plus
+//!   the fractional part `r` through `Phi(T - r)`, `Gamma(T - r)` (the modified z-transform).
+//! * Law at each sample, exactly as [`isotrack_core::control::PiIsoline`] runs it:
+//!   `eps'_k` from the estimator, `e_k = eps'_k + (c1/c2) g eps_k`,
+//!   `sigma_k = sigma_{k-1} + T e_k`, `u_k = kp e_k + ki sigma_k`, where `g` is the slope of
+//!   `tanh` at the equilibrium (1 when `ki > 0`; `1 - (v kappa/(kp c1))^2` for the P law's
+//!   offset orbit).
+//!
+//! The loop is stable when the spectral radius of the one-period map is below 1. Written with
+//! nalgebra's matrix exponential and Schur eigenvalues; the closed-loop matrix is assembled by
+//! applying the (linear) one-period update to the unit vectors, so the code that builds it reads
+//! like the controller it models.
+
+use isotrack_vehicles::fixed_wing::gains::CourseLoopModel;
+use nalgebra::{DMatrix, DVector};
+
+/// What lies between the turn-rate command and the heading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HeadingDynamics {
+    /// Dubins robot: `heading' = omega` (paper eq. (5)).
+    Dubins,
+    /// Fixed-wing UAV: `omega` integrated into the course command, then the closed course and
+    /// roll loops of the autopilot.
+    CourseLoop(CourseLoopModel),
+}
+
+/// The derivative estimator as the linear model sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EstimatorModel {
+    /// `(eps_k - eps_{k-1}) / T`.
+    BackwardDifference,
+    /// The backward difference through `y_k = a y_{k-1} + (1 - a) d_k`, `a = exp(-T/tau_s)`.
+    FilteredDifference {
+        /// Filter time constant, s.
+        tau_s: f64,
+    },
+}
+
+/// One operating point of the sampled loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledLoop {
+    /// Vehicle speed `v`, m/s.
+    pub speed_mps: f64,
+    /// Field slope across the isoline `alpha = |grad F|`, field units per metre.
+    pub slope: f64,
+    /// Isoline curvature `kappa`, 1/m (0: straight).
+    pub curvature_per_m: f64,
+    /// Proportional gain.
+    pub kp: f64,
+    /// Integral gain.
+    pub ki: f64,
+    /// `c1`, field units per second.
+    pub c1: f64,
+    /// `c2`, field units.
+    pub c2: f64,
+    /// Sensor period `T`, s.
+    pub period_s: f64,
+    /// Sensor delay, s.
+    pub delay_s: f64,
+    /// Derivative estimator.
+    pub estimator: EstimatorModel,
+    /// Vehicle heading dynamics.
+    pub heading: HeadingDynamics,
+}
+
+/// Continuous plant `x' = A x + B u`, `eps = C x`.
+fn plant(l: &SampledLoop) -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
+    let v = l.speed_mps;
+    let k2 = l.curvature_per_m * l.curvature_per_m;
+    match l.heading {
+        HeadingDynamics::Dubins => {
+            // x = [z1, z2]
+            let a = DMatrix::from_row_slice(2, 2, &[0.0, v, -v * k2, 0.0]);
+            let b = DVector::from_vec(vec![0.0, 1.0]);
+            let c = DVector::from_vec(vec![-l.slope, 0.0]);
+            (a, b, c)
+        }
+        HeadingDynamics::CourseLoop(m) => {
+            // x = [z1, z2, b, b', xi, h_c]
+            let w = m.roll_natural_frequency_radps;
+            let (w2, zw2) = (w * w, 2.0 * m.roll_damping_ratio * w);
+            let gv = m.g_over_airspeed_per_s;
+            #[rustfmt::skip]
+            let a = DMatrix::from_row_slice(6, 6, &[
+                0.0,     v,                  0.0, 0.0,  0.0,               0.0,
+                -v * k2, 0.0,                gv,  0.0,  0.0,               0.0,
+                0.0,     0.0,                0.0, 1.0,  0.0,               0.0,
+                0.0,     -w2 * m.kp_chi,     -w2, -zw2, w2 * m.ki_chi,     w2 * m.kp_chi,
+                0.0,     -1.0,               0.0, 0.0,  0.0,               1.0,
+                0.0,     0.0,                0.0, 0.0,  0.0,               0.0,
+            ]);
+            let mut b = DVector::zeros(6);
+            b[5] = 1.0;
+            let mut c = DVector::zeros(6);
+            c[0] = -l.slope;
+            (a, b, c)
+        }
+    }
+}
+
+/// Zero-order-hold discretisation over `tau`: `(Phi, Gamma)` from
+/// `exp([[A, B], [0, 0]] tau) = [[Phi, Gamma], [0, 1]]`.
+fn zoh(a: &DMatrix<f64>, b: &DVector<f64>, tau: f64) -> (DMatrix<f64>, DVector<f64>) {
+    let n = a.nrows();
+    let mut m = DMatrix::zeros(n + 1, n + 1);
+    m.view_mut((0, 0), (n, n)).copy_from(&(a * tau));
+    m.view_mut((0, n), (n, 1)).copy_from(&(b * tau));
+    let e = m.exp();
+    (
+        e.view((0, 0), (n, n)).into_owned(),
+        e.view((0, n), (n, 1)).column(0).into_owned(),
+    )
+}
+
+impl SampledLoop {
+    /// The slope of `c1*tanh(eps/c2)` at the equilibrium, relative to `c1/c2`: 1 with an
+    /// integral term (`eps* = 0`); with `ki = 0` on a curved isoline the P law settles where
+    /// `kp c1 tanh(eps*/c2) = v kappa`, so `1 - (v kappa / (kp c1))^2`; `None` when no such
+    /// orbit exists.
+    pub fn tanh_slope(&self) -> Option<f64> {
+        if self.ki != 0.0 || self.curvature_per_m == 0.0 {
+            return Some(1.0);
+        }
+        let q = self.speed_mps * self.curvature_per_m / (self.kp * self.c1);
+        (q.abs() < 1.0).then_some(1.0 - q * q)
+    }
+
+    /// The one-period closed-loop matrix `M` (`X_{k+1} = M X_k`), state
+    /// `[x (plant), w_k .. w_{k-m} (delay line), eps_{k-1}, (y_{k-1} filter), (sigma_{k-1})]`;
+    /// `None` when the P law has no equilibrium orbit or a parameter is not finite.
+    pub fn closed_loop_matrix(&self) -> Option<DMatrix<f64>> {
+        let t = self.period_s;
+        if !(t > 0.0 && t.is_finite() && self.delay_s >= 0.0 && self.delay_s.is_finite()) {
+            return None;
+        }
+        let g = self.tanh_slope()?;
+        let (a, b, c) = plant(self);
+        let n = a.nrows();
+        let (phi, gamma) = zoh(&a, &b, t);
+        // Delay tau = m T + r; a remainder within 1e-9 T of a whole period is rounded away.
+        let ratio = self.delay_s / t;
+        let mut m = ratio.floor();
+        let mut r = self.delay_s - m * t;
+        if r > t * (1.0 - 1e-9) {
+            m += 1.0;
+            r = 0.0;
+        } else if r < t * 1e-9 {
+            r = 0.0;
+        }
+        if m > 10_000.0 {
+            return None;
+        }
+        let m = m as usize;
+        let frac = (r > 0.0).then(|| zoh(&a, &b, t - r));
+        let filtered = matches!(self.estimator, EstimatorModel::FilteredDifference { .. });
+        let integral = self.ki != 0.0;
+        let i_buf = n;
+        let i_prev = i_buf + m + 1;
+        let i_filt = i_prev + 1;
+        let i_sigma = i_filt + usize::from(filtered);
+        let dim = i_sigma + usize::from(integral);
+        let c_row = c.transpose();
+        let (c1c2, kp, ki) = (self.c1 / self.c2 * g, self.kp, self.ki);
+        let step = |xk: &DVector<f64>| -> DVector<f64> {
+            let x = xk.rows(0, n).into_owned();
+            let eps = xk[i_buf + m];
+            let d = (eps - xk[i_prev]) / t;
+            let eps_dot = match self.estimator {
+                EstimatorModel::BackwardDifference => d,
+                EstimatorModel::FilteredDifference { tau_s } => {
+                    let a = (-t / tau_s).exp();
+                    a * xk[i_filt] + (1.0 - a) * d
+                }
+            };
+            let e = eps_dot + c1c2 * eps;
+            let sigma = if integral { xk[i_sigma] + t * e } else { 0.0 };
+            let u = kp * e + ki * sigma;
+            let x_next = &phi * &x + &gamma * u;
+            let w_next = match &frac {
+                None => (&c_row * &x_next)[0],
+                Some((phi_r, gamma_r)) => (&c_row * (phi_r * &x + gamma_r * u))[0],
+            };
+            let mut out = DVector::zeros(dim);
+            out.rows_mut(0, n).copy_from(&x_next);
+            out[i_buf] = w_next;
+            for j in 1..=m {
+                out[i_buf + j] = xk[i_buf + j - 1];
+            }
+            out[i_prev] = eps;
+            if filtered {
+                out[i_filt] = eps_dot;
+            }
+            if integral {
+                out[i_sigma] = sigma;
+            }
+            out
+        };
+        let mut mat = DMatrix::zeros(dim, dim);
+        for j in 0..dim {
+            let mut unit = DVector::zeros(dim);
+            unit[j] = 1.0;
+            mat.set_column(j, &step(&unit));
+        }
+        mat.iter().all(|x| x.is_finite()).then_some(mat)
+    }
+
+    /// Spectral radius of the one-period map (`+inf` when there is no equilibrium).
+    pub fn spectral_radius(&self) -> f64 {
+        self.closed_loop_matrix().map_or(f64::INFINITY, |m| {
+            m.complex_eigenvalues()
+                .iter()
+                .map(|z| z.norm())
+                .fold(0.0, f64::max)
+        })
+    }
+}
+
+/// The worst (largest) spectral radius over the slopes `slopes`.
+pub fn worst_spectral_radius(l: &SampledLoop, slopes: &[f64]) -> f64 {
+    slopes
+        .iter()
+        .map(|&alpha| SampledLoop { slope: alpha, ..*l }.spectral_radius())
+        .fold(0.0, |acc: f64, r| {
+            if r.is_nan() {
+                f64::INFINITY
+            } else {
+                acc.max(r)
+            }
+        })
+}
+
+fn stable(l: &SampledLoop, slopes: &[f64]) -> bool {
+    worst_spectral_radius(l, slopes) < 1.0
+}
+
+/// Bisection on a boundary between `lo` (stable) and `hi` (unstable), geometric midpoints.
+fn refine(mut lo: f64, mut hi: f64, is_stable: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..50 {
+        let mid = (lo * hi).sqrt();
+        if is_stable(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi / lo < 1.0 + 1e-6 {
+            break;
+        }
+    }
+    lo
+}
+
+/// The largest `kp` (other gains fixed) for which the loop is stable at every slope: the top of
+/// the stable set on a logarithmic scan of `1e-3 .. 1e6`, refined by bisection to 1e-6
+/// relative. `None` when no scanned `kp` is stable.
+pub fn max_kp(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
+    let at = |kp: f64| stable(&SampledLoop { kp, ..*l }, slopes);
+    let grid: Vec<f64> = (0..=180)
+        .map(|j| 10f64.powf(-3.0 + j as f64 / 20.0))
+        .collect();
+    let top = grid.iter().rposition(|&kp| at(kp))?;
+    Some(match grid.get(top + 1) {
+        Some(&hi) => refine(grid[top], hi, at),
+        None => grid[top],
+    })
+}
+
+/// The longest sensor period for which the loop is stable at every slope, with every shorter
+/// period stable too: the end of the stable interval that starts at `1e-4` s on a logarithmic
+/// scan up to `1e3` s, refined by bisection. `None` when even `1e-4` s is unstable (the
+/// continuous-time loop is).
+pub fn max_period_s(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
+    let at = |period_s: f64| stable(&SampledLoop { period_s, ..*l }, slopes);
+    let grid: Vec<f64> = (0..=140)
+        .map(|j| 10f64.powf(-4.0 + j as f64 / 20.0))
+        .collect();
+    if !at(grid[0]) {
+        return None;
+    }
+    match grid.iter().position(|&t| !at(t)) {
+        Some(first_bad) => Some(refine(grid[first_bad - 1], grid[first_bad], at)),
+        None => grid.last().copied(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dubins(kp: f64, ki: f64, period_s: f64) -> SampledLoop {
+        SampledLoop {
+            speed_mps: 0.5,
+            slope: 1.0,
+            curvature_per_m: 0.0,
+            kp,
+            ki,
+            c1: 0.2,
+            c2: 1.0,
+            period_s,
+            delay_s: 0.0,
+            estimator: EstimatorModel::BackwardDifference,
+            heading: HeadingDynamics::Dubins,
+        }
+    }
+
+    /// The characteristic polynomial of the straight-isoline Dubins loop with the P law and a
+    /// backward difference, derived by hand from transfer functions (docs/SAMPLED.md):
+    /// `G(z) = -alpha v T^2 (z + 1) / (2 (z - 1)^2)`, `K(z) = kp((1 + cT) z - 1)/(T z)`,
+    /// `c = c1/c2`, so `1 - G K = 0` is
+    /// `2 z (z - 1)^2 + alpha v T kp (z + 1)((1 + cT) z - 1) = 0`.
+    #[test]
+    fn eigenvalues_are_the_roots_of_the_hand_derived_polynomial() {
+        for (kp, t) in [(10.0, 0.01), (10.0, 1.0), (2.0, 0.3), (50.0, 0.05)] {
+            let l = dubins(kp, 0.0, t);
+            let m = l.closed_loop_matrix().unwrap();
+            let (av, c) = (l.slope * l.speed_mps, l.c1 / l.c2);
+            let p = |z: nalgebra::Complex<f64>| {
+                let one = nalgebra::Complex::new(1.0, 0.0);
+                (z - one) * (z - one) * z * 2.0
+                    + (z + one) * (z * (1.0 + c * t) - one) * (av * t * kp)
+            };
+            let eig = m.complex_eigenvalues();
+            // The nonzero eigenvalues (the redundant delay-line state adds a zero) are the
+            // polynomial's three roots.
+            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-9).collect();
+            assert_eq!(nonzero.len(), 3, "{eig:?}");
+            for z in nonzero {
+                assert!(
+                    p(*z).norm() < 1e-9 * (1.0 + kp),
+                    "kp {kp} T {t}: p({z}) = {}",
+                    p(*z)
+                );
+            }
+        }
+    }
+
+    /// As `T -> 0` the sampled loop's stability agrees with the continuous-time Routh-Hurwitz
+    /// condition of Prop. 1 on the circular field (slope alpha, radius r_d).
+    #[test]
+    fn fast_sampling_agrees_with_the_continuous_time_condition() {
+        let r_d = 10.0 * std::f64::consts::LN_2;
+        for (kp, ki) in [
+            (10.0, 1.0),
+            (2.0, 1.0),
+            (1.0, 1.0),
+            (0.5, 0.05),
+            (10.0, 0.0),
+        ] {
+            let l = SampledLoop {
+                curvature_per_m: 1.0 / r_d,
+                ..dubins(kp, ki, 1e-3)
+            };
+            let continuous =
+                isotrack_core::theory::prop1_exact_local_condition(1.0, 0.5, r_d, kp, ki, 0.2, 1.0);
+            assert_eq!(l.spectral_radius() < 1.0, continuous, "kp {kp} ki {ki}");
+        }
+    }
+
+    #[test]
+    fn the_papers_gains_fail_at_one_hertz_and_hold_at_a_hundred() {
+        // Issue 10: kp = 10, ki = 1, c1 = 0.2, c2 = 1 on the circular field never settles at
+        // 1 Hz and tracks at 100 Hz.
+        let r_d = 10.0 * std::f64::consts::LN_2;
+        let at = |t| SampledLoop {
+            curvature_per_m: 1.0 / r_d,
+            ..dubins(10.0, 1.0, t)
+        };
+        assert!(at(1.0).spectral_radius() > 1.0);
+        assert!(at(0.01).spectral_radius() < 1.0);
+        let t_max = max_period_s(&at(0.01), &[1.0]).unwrap();
+        assert!(t_max > 0.01 && t_max < 1.0, "{t_max}");
+        assert!(at(t_max * 0.999).spectral_radius() < 1.0);
+        assert!(at(t_max * 1.001).spectral_radius() > 1.0);
+        // With ki = 1 no kp is stable at 1 Hz (the integral needs kp large, the sampling kp
+        // small); the P law has a window, whose top sits where the spectral radius crosses 1
+        // and below the small-cT estimate alpha v T kp = 2 (kp = 4).
+        assert_eq!(max_kp(&at(1.0), &[1.0]), None);
+        let p_law = SampledLoop { ki: 0.0, ..at(1.0) };
+        let kp_max = max_kp(&p_law, &[1.0]).unwrap();
+        assert!(kp_max > 1.0 && kp_max < 4.0, "{kp_max}");
+        let rho = SampledLoop {
+            kp: kp_max,
+            ..p_law
+        }
+        .spectral_radius();
+        assert!((rho - 1.0).abs() < 1e-4, "{rho}");
+    }
+
+    #[test]
+    fn a_whole_sample_of_delay_equals_a_longer_delay_line() {
+        // A delay of exactly 2 T and one of 2 T minus a hair give (nearly) the same spectrum;
+        // both are less stable than no delay.
+        let base = dubins(3.0, 0.0, 0.1);
+        let r0 = base.spectral_radius();
+        let r2 = SampledLoop {
+            delay_s: 0.2,
+            ..base
+        }
+        .spectral_radius();
+        let r2m = SampledLoop {
+            delay_s: 0.2 - 1e-7,
+            ..base
+        }
+        .spectral_radius();
+        assert!(r2 > r0, "{r0} {r2}");
+        assert!((r2 - r2m).abs() < 1e-4, "{r2} {r2m}");
+    }
+}
