@@ -745,3 +745,54 @@ fn check_uses_the_uav_airspeed() {
         "{note}"
     );
 }
+
+/// `run` warns on stderr and in summary.json about noise through a backward difference and a
+/// loop that is unstable at the sensor's rate; `check` gives the verdict first and says whether
+/// the rate is the limit.
+#[test]
+fn run_and_check_warn_about_noise_and_an_unstable_sampled_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let sets = [
+        "--set",
+        "sensor.rate_hz=1",
+        "--set",
+        "sensor.noise_std=0.01",
+    ];
+    let o = isotrack(&[&["run", "--out", out.to_str().unwrap()][..], &sets[..]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("warning: sensor noise"), "{err}");
+    assert!(
+        err.contains("warning: the loop sampled at 1 Hz is unstable"),
+        "{err}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let w = summary["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 2, "{w:?}");
+    // The default at 100 Hz without noise: no warning.
+    let quiet = dir.path().join("q");
+    let o = isotrack(&["run", "--out", quiet.to_str().unwrap()]);
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(quiet.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["warnings"].as_array().unwrap().len(), 0);
+
+    let o = isotrack(&[&["check"][..], &sets[..]].concat());
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.starts_with("verdict: fails"), "{text}");
+    assert!(text.contains("sensor rate: the limit"), "{text}");
+    let o = isotrack(&[&["check", "--json"][..], &sets[..]].concat());
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["verdict"], "fails");
+    assert_eq!(j["sampled"]["stable"], false);
+    assert!(j["sampled"]["max_period_s"].as_f64().unwrap() < 1.0);
+    assert!(j["sampled"]["spectral_radius"].as_f64().unwrap() > 1.0);
+    assert_eq!(j["prop2"]["bound_applies"], false);
+    assert!(
+        j["sampled"]["max_kp"].is_null(),
+        "ki = 1 at 1 Hz: no kp is stable"
+    );
+}

@@ -174,3 +174,54 @@ fn prop2_on_a_gridded_circular_field() {
     let sim = steady_max(&g);
     assert!(sim <= bg, "simulated {sim} > bound {bg}");
 }
+
+/// Issue 10, item 3: a tube thinner than one lattice cell stays one connected component (the
+/// fill runs over cells whose corner range meets the band, not over lattice points inside it);
+/// bilinear grids report no gamma3; `paper_error_bound` is null whenever `error_bound` is.
+#[test]
+fn prop2_regions_are_sound() {
+    // A ramp F = x + 0.3 y: the region is the start +- 100 m, lattice cells of 0.33 m, so the
+    // value changes by about 0.4 across a cell and a tube of +-0.05 holds almost no lattice
+    // point. The level-0 line crosses the whole region: its cells touch about 2 x 600 corners.
+    let ramp = sc(
+        "[field]\nkind = \"linear_ramp\"\ngradient_per_m = [1.0, 0.3]\n[controller]\nlevel = 0.0\nki = 0.0\n",
+        &[],
+    );
+    let r = check(&ramp, Some(0.05));
+    assert!(
+        r.prop2.samples_in_tube >= 1200,
+        "{}",
+        r.prop2.samples_in_tube
+    );
+    // The ramp's gradient is exactly |(1, 0.3)| everywhere and its Hessian zero: no margin.
+    let g = 1.09f64.sqrt();
+    assert!((r.prop2.tube_gamma1.unwrap() - g).abs() < 1e-12);
+    assert!((r.prop2.tube_gamma2.unwrap() - g).abs() < 1e-12);
+    assert_eq!(r.prop2.tube_gamma3, Some(0.0));
+
+    // ki = 1 (the default): Prop. 2 does not apply, so neither bound is reported.
+    let r = check(&sc("", &[]), None);
+    assert!(!r.prop2.applicable);
+    assert!(r.prop2.error_bound.is_none() && r.prop2.paper_error_bound.is_none());
+
+    // A bilinear grid has no Hessian.
+    let dir = tempfile::tempdir().unwrap();
+    let csv: String = (0..20)
+        .map(|j| {
+            (0..20)
+                .map(|i| format!("{}", (i * i + j * j) as f64 * 0.1))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    std::fs::write(dir.path().join("bowl.csv"), csv).unwrap();
+    let text = "[field]\nkind = \"grid\"\npath = \"bowl.csv\"\ninterpolation = \"bilinear\"\n[initial]\nx_m = 5.0\ny_m = 5.0\n[controller]\nlevel = 10.0\nki = 0.0\n";
+    let r = check(
+        &parse_scenario_in(text, "bowl.toml", &[], dir.path()).unwrap(),
+        None,
+    );
+    assert!(r.prop2.gamma1.is_some() && r.prop2.gamma3.is_none());
+    assert!(!r.prop2.conditions_hold && !r.prop2.bound_applies);
+    assert!(r.prop2.note.contains("bilinear"), "{}", r.prop2.note);
+}

@@ -130,3 +130,38 @@ fn flags_the_issue_cases() {
     // ... and the simulation agrees: it never settles at 1 Hz.
     assert!(!settles(&s));
 }
+
+/// The fixed-wing UAV at 30 m/s and 1 Hz (the paper's Fig. 3 scenario): the model with the
+/// autopilot's course and roll loops puts the largest stable kp between the scenario's kp = 8
+/// (marginal at the steepest slope, and it tracks) and 16 (which the simulated UAV cannot hold:
+/// it flies off the map); kp = 4 is stable and tracks.
+#[test]
+fn predicts_the_fixed_wing_uav_at_one_hertz() {
+    let at = |kp: f64| {
+        scenario(
+            Some("scenarios/paper-fig3-uav.toml"),
+            &[format!("controller.kp={kp}")],
+        )
+    };
+    let r = check(&at(8.0), None).sampled;
+    assert_eq!(r.vehicle_model, Some("fixed_wing_course_loop"));
+    let kp_max = r.max_kp.unwrap();
+    assert!(kp_max > 4.0 && kp_max < 16.0, "{kp_max}");
+    assert_eq!(check(&at(4.0), None).sampled.stable, Some(true));
+    assert!(settles(&at(4.0)));
+    assert_eq!(check(&at(16.0), None).sampled.stable, Some(false));
+    assert!(!settles(&at(16.0)));
+}
+
+/// A bang-bang law (sliding mode, |omega| = 1 rad/s) over 600 s spends exactly
+/// `1^2 * 600 s = 600 rad^2/s`: the command at the final sample is never integrated.
+#[test]
+fn control_effort_counts_only_integrated_steps() {
+    let s = scenario(None, &["controller.kind=sliding_mode".into()]);
+    let r = s.run(&mut NoTrace);
+    assert!(
+        (r.metrics.control_effort - 600.0).abs() < 1e-9,
+        "{}",
+        r.metrics.control_effort
+    );
+}
