@@ -8,7 +8,7 @@ use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stati
 use serde_json::json;
 use std::io::Write;
 
-/// Writes a grid as CSV in the `shared/data` layout (no header, row 0 south), numbers in
+/// Writes a grid as CSV in the `data/` layout (no header, row 0 south), numbers in
 /// shortest round-trip form.
 pub fn write_grid_csv(path: &std::path::Path, g: &Grid2) -> std::io::Result<()> {
     let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);

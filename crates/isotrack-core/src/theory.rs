@@ -1,4 +1,4 @@
-//! Closed forms from the paper and from our derivations (`../shared/reference/baselines.md`,
+//! Closed forms from the paper and from our derivations (docs/BASELINES.md,
 //! section 0), usable on board (`no_std`) and as independent oracles in tests.
 //!
 //! Notation: Dubins robot at speed `v`, circular field with isoline radius `r_d` and radial slope

@@ -1,7 +1,7 @@
 //! The methods Dong & You compare themselves with, as baselines behind the same trait.
 //!
 //! Each law is stated with its inputs, its source and how far it is trusted
-//! (`shared/reference/baselines.md`): **verified** means checked in the primary text,
+//! (docs/BASELINES.md): **verified** means checked in the primary text,
 //! **reconstructed** means rebuilt from abstracts and secondary sources. Every law is written
 //! for [`HigherSide::Right`](super::HigherSide) (the paper's convention) and goes through the
 //! shared [`OutputStage`] (direction and turn-rate limit); every `eps'` comes from the shared

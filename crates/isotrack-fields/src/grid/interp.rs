@@ -1,7 +1,7 @@
 //! Bilinear and C1 bicubic (Catmull-Rom / Keys) interpolation with analytic derivatives.
 //!
 //! Written by hand: no crate found offers bicubic interpolation with a Hessian (interpn has value
-//! and gradient only; see `shared/reference/crates.md`), and the no-data and border rules are
+//! and gradient only, checked for this project), and the no-data and border rules are
 //! ours: outside the node extent, or where a node the stencil needs is NaN, the field has no
 //! value.
 

@@ -1,6 +1,6 @@
 //! Regular grids of field values and their interpolation.
 //!
-//! Layout (the same as `shared/data`): `values[iy*nx + ix]`, row `iy = 0` is the southernmost,
+//! Layout (the same as the bundled `data/`): `values[iy*nx + ix]`, row `iy = 0` is the southernmost,
 //! column `ix = 0` the westernmost; node `(ix, iy)` sits at
 //! `(origin_m.x + ix*dx, origin_m.y + iy*dy)` (cell centres). `NaN` marks no-data.
 

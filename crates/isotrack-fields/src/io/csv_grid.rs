@@ -1,4 +1,4 @@
-//! CSV grids (the `shared/data` layout): no header, one row per line, row 0 = south.
+//! CSV grids (the layout of the bundled `data/`): no header, one row per line, row 0 = south.
 
 use super::{plain_grid, FilePosition, LoadError, LoadedGrid};
 use std::path::Path;

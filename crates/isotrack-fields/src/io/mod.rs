@@ -1,6 +1,6 @@
 //! Grid loaders: CSV, NumPy `.npy`, ESRI ASCII grid, GeoTIFF.
 //!
-//! Every loader returns a [`LoadedGrid`] oriented as in `shared/data` (row 0 south, column 0
+//! Every loader returns a [`LoadedGrid`] oriented as in the bundled `data/` (row 0 south, column 0
 //! west) with its native georeference converted to local metres ([`crate::georef`]), and every
 //! failure a [`LoadError`] naming the file and the line or byte offset.
 

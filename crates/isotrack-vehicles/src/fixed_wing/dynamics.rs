@@ -1,5 +1,5 @@
 //! The 12-state rigid-body model with the Aerosonde forces and moments (Beard & McLain 2012,
-//! chapters 3-4; `shared/reference/fixed-wing.md` section 2).
+//! chapters 3-4; docs/FIXED-WING.md section 2).
 //!
 //! State `x = [pn, pe, pd, u, v, w, phi, theta, psi, p, q, r]` (NED position; `u, v, w` the
 //! ground velocity in body axes; Euler angles; body rates). Inputs `[de, da, dr, dt]`: surfaces in

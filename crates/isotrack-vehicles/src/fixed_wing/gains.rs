@@ -1,5 +1,5 @@
 //! Autopilot gains from the model by Beard & McLain's successive-loop-closure formulas
-//! (chapter 6; `compute_gains.m`; `shared/reference/fixed-wing.md` section 3).
+//! (chapter 6; `compute_gains.m`; docs/FIXED-WING.md section 3).
 
 use super::params::Aerosonde;
 use super::trim::Trim;
@@ -150,7 +150,7 @@ mod tests {
         );
     }
 
-    /// The gain table of `shared/reference/fixed-wing.md` section 3 at 30 m/s, both rows.
+    /// The gain table of docs/FIXED-WING.md section 3 at 30 m/s, both rows.
     #[test]
     fn reproduces_the_gain_table_at_30() {
         let p = Aerosonde::beard_mclain_2012();

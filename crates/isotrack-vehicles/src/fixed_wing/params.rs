@@ -64,7 +64,7 @@ pub struct Aerosonde {
 }
 
 impl Aerosonde {
-    /// The 2012 set (`shared/reference/fixed-wing.md` section 1, column "2012/ecen674").
+    /// The 2012 set (docs/FIXED-WING.md section 1, column "2012/ecen674").
     pub const fn beard_mclain_2012() -> Self {
         Self {
             mass_kg: 13.5,

@@ -111,7 +111,7 @@ pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
 mod tests {
     use super::*;
 
-    /// The trim table of `shared/reference/fixed-wing.md` section 4, to 1e-4.
+    /// The trim table of docs/FIXED-WING.md section 4, to 1e-4.
     #[test]
     fn reproduces_the_trim_table() {
         let p = Aerosonde::beard_mclain_2012();
