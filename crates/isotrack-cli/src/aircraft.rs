@@ -71,6 +71,19 @@ pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// The largest integration step of `replay`, s.
+const REPLAY_STEP_S: f64 = 0.01;
+
+/// The most integration steps one `replay` takes: 1e8 steps of 0.01 s (about 12 days of
+/// flight, a minute or two of CPU); time stamps 0 and 1e12 once ran on without output.
+const MAX_REPLAY_STEPS: u64 = 100_000_000;
+
+/// The largest `--inputs` file, bytes (256 MiB).
+const MAX_REPLAY_INPUT_BYTES: u64 = 256 << 20;
+
+/// The initial altitudes `replay` accepts, m.
+pub const REPLAY_ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
+
 /// The columns `replay` writes.
 pub const REPLAY_COLUMNS: [&str; 16] = [
     "t_s",
@@ -98,10 +111,32 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         code: exit::DATAERR,
         message: format!("{shown}: {m}"),
     };
-    let bytes = std::fs::read(&a.inputs).map_err(|e| Failure {
-        code: exit::NOINPUT,
-        message: format!("cannot read {shown}: {e}"),
-    })?;
+    let (lo, hi) = REPLAY_ALTITUDE_RANGE_M;
+    if !(a.altitude_m.is_finite() && (lo..=hi).contains(&a.altitude_m)) {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: format!(
+                "--altitude-m must be a finite number in [{lo}, {hi}] m, got {}",
+                a.altitude_m
+            ),
+        });
+    }
+    if crate::output::same_file(&a.inputs, &a.out) {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: format!(
+                "--out {} is the input file {shown}: it would be overwritten",
+                a.out.display()
+            ),
+        });
+    }
+    let bytes =
+        isotrack_fields::io::read_limited(&a.inputs, MAX_REPLAY_INPUT_BYTES).map_err(|e| {
+            Failure {
+                code: exit::NOINPUT,
+                message: format!("cannot read {shown}: {e}"),
+            }
+        })?;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_reader(bytes.as_slice());
@@ -166,6 +201,14 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
     if rows.is_empty() {
         return Err(data("no input rows".into()));
     }
+    let span_s = rows[rows.len() - 1].0 - rows[0].0;
+    // Finite: every time stamp is checked finite and increasing above.
+    if span_s / REPLAY_STEP_S > MAX_REPLAY_STEPS as f64 {
+        return Err(data(format!(
+            "the time stamps span {span_s:e} s: more than {MAX_REPLAY_STEPS} steps of {REPLAY_STEP_S} s ({:e} s); split the file",
+            MAX_REPLAY_STEPS as f64 * REPLAY_STEP_S
+        )));
+    }
     let uav = FixedWing::new(FixedWingConfig {
         airspeed_mps: a.airspeed_mps,
         altitude_m: a.altitude_m,
@@ -213,9 +256,9 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         let (t, d) = rows[k];
         write_row(&mut out, t, &x).map_err(cant)?;
         if let Some(&(t_next, _)) = rows.get(k + 1) {
-            // Hold `d` over [t, t_next) in steps of at most 0.01 s.
+            // Hold `d` over [t, t_next) in steps of at most REPLAY_STEP_S.
             let span = t_next - t;
-            let n = (span / 0.01).ceil().max(1.0) as usize;
+            let n = (span / REPLAY_STEP_S).ceil().max(1.0) as usize;
             let h = span / n as f64;
             for _ in 0..n {
                 uav.step_open_loop(&mut x, &d, h);

@@ -161,6 +161,9 @@ pub struct MergeArgs {
     /// Merged output directory.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Replace the `results.csv` of an existing sweep in `--out`.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `isotrack trim`.
@@ -215,9 +218,9 @@ pub struct InterpolateArgs {
     /// Interpolation method.
     #[arg(long, value_enum, default_value_t = Method::Kriging)]
     pub method: Method,
-    /// Grid spacing, m.
-    #[arg(long, value_name = "M", default_value_t = 10_000.0)]
-    pub spacing_m: f64,
+    /// Grid spacing, m (default: 1/100 of the longer side of the stations' bounding box).
+    #[arg(long, value_name = "M")]
+    pub spacing_m: Option<f64>,
     /// IDW power.
     #[arg(long, default_value_t = 2.0)]
     pub idw_power: f64,

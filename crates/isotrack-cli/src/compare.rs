@@ -3,9 +3,10 @@
 use crate::cli::CompareArgs;
 use crate::exit;
 use crate::output::{num, run_to_trace, scenario_toml, write_summary};
+use crate::run::invalid;
 use crate::run::Failure;
 use isotrack_scenario::schema::{ControllerKind, ControllerSection};
-use isotrack_scenario::{apply_overrides, build_derived, load_scenario, Scenario, ScenarioError};
+use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult};
 use std::io::Write;
 use std::path::Path;
@@ -23,16 +24,6 @@ pub const COMPARISON_COLUMNS: [&str; 10] = [
     "steady_state_max_isoline_distance_m",
     "steady_state_rms_isoline_distance_m",
 ];
-
-fn invalid(e: ScenarioError) -> Failure {
-    Failure {
-        code: match e {
-            ScenarioError::Io { .. } => exit::NOINPUT,
-            ScenarioError::Invalid(_) => exit::DATAERR,
-        },
-        message: e.to_string(),
-    }
-}
 
 /// The scenario with `kind` as its controller: the scenario's own section when it already uses
 /// that kind; otherwise the kind's defaults with the shared keys (level, turning side, turn-rate
@@ -59,15 +50,23 @@ pub fn variant(
         };
     }
     let prefix = format!("{}.", kind.name());
-    let sets: Vec<String> = gains
+    let sets: Vec<Assignment> = gains
         .iter()
         .filter_map(|g| {
-            g.strip_prefix(&prefix)
-                .map(|rest| format!("controller.{rest}"))
+            g.strip_prefix(&prefix).map(|rest| Assignment {
+                arg: format!("controller.{rest}"),
+                label: format!("--gain {g}"),
+            })
         })
         .collect();
-    let file = apply_overrides(&file, &sets).map_err(invalid)?;
-    build_derived(file, &format!("{origin} [{}]", kind.name()), Path::new(".")).map_err(invalid)
+    let file = apply_assignments(&file, &sets).map_err(invalid)?;
+    build_derived(
+        file,
+        &format!("{origin} [{}]", kind.name()),
+        Path::new("."),
+        &sets,
+    )
+    .map_err(invalid)
 }
 
 fn cell(x: Option<f64>) -> String {

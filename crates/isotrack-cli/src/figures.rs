@@ -16,6 +16,10 @@ fn failure(e: PlotError) -> Failure {
             code: exit::NOINPUT,
             message: m,
         },
+        PlotError::Data(m) => Failure {
+            code: exit::DATAERR,
+            message: m,
+        },
         PlotError::Draw { .. } => Failure {
             code: exit::CANTCREAT,
             message: e.to_string(),

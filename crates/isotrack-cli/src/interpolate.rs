@@ -4,7 +4,9 @@ use crate::cli::{InterpolateArgs, Method};
 use crate::exit;
 use crate::run::Failure;
 use isotrack_fields::grid::Grid2;
-use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stations};
+use isotrack_fields::stations::{
+    Idw, OrdinaryKriging, StationGridError, StationInterpolator, Stations,
+};
 use serde_json::json;
 use std::io::Write;
 
@@ -27,10 +29,19 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         code: exit::DATAERR,
         message: m,
     };
-    if !(a.spacing_m.is_finite() && a.spacing_m > 0.0) {
+    if let Some(sp) = a.spacing_m.filter(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(Failure {
             code: exit::USAGE,
-            message: format!("--spacing-m must be > 0, got {}", a.spacing_m),
+            message: format!("--spacing-m must be a finite number > 0, got {sp}"),
+        });
+    }
+    if !(a.idw_power.is_finite() && a.idw_power > 0.0) {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: format!(
+                "--idw-power must be a finite number > 0, got {}",
+                a.idw_power
+            ),
         });
     }
     let stations = Stations::from_csv(&a.stations, &a.value_column).map_err(|e| Failure {
@@ -42,30 +53,36 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         message: e.to_string(),
     })?;
     let extent = stations.extent_m();
+    let spacing_m = a.spacing_m.unwrap_or(stations.default_spacing_m());
     let n = stations.values.len();
     let projection = stations.projection;
     let (grid, method) = match a.method {
         Method::Idw => {
             let idw = Idw::new(stations, a.idw_power);
             (
-                idw.to_grid(extent, a.spacing_m),
+                idw.to_grid(extent, spacing_m),
                 json!({"method": "idw", "power": a.idw_power}),
             )
         }
         Method::Kriging => {
-            let ok = OrdinaryKriging::new(stations).ok_or_else(|| {
-                data("the kriging system is singular (duplicate stations?)".into())
-            })?;
+            let ok = OrdinaryKriging::new(stations)
+                .map_err(|e| data(format!("{}: {e}", a.stations.display())))?;
             let v = ok.variogram();
             (
-                ok.to_grid(extent, a.spacing_m),
+                ok.to_grid(extent, spacing_m),
                 json!({"method": "ordinary_kriging", "variogram": {
                     "model": format!("{:?}", v.model).to_lowercase(),
                     "nugget": v.nugget, "partial_sill": v.sill, "range_m": v.range_m}}),
             )
         }
     };
-    let grid = grid.map_err(|e| data(e.to_string()))?;
+    let grid = grid.map_err(|e| match e {
+        StationGridError::TooFine { .. } => Failure {
+            code: exit::USAGE,
+            message: format!("--spacing-m: {e}"),
+        },
+        StationGridError::Grid(_) => data(e.to_string()),
+    })?;
     let cant = |e: std::io::Error| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
@@ -100,7 +117,7 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         a.out.display(),
         grid.nx(),
         grid.ny(),
-        a.spacing_m,
+        spacing_m,
         side.display()
     );
     Ok(())

@@ -17,12 +17,15 @@ pub mod sweep;
 pub mod exit {
     /// Success: the run executed, whatever its outcome.
     pub const OK: u8 = 0;
-    /// Command-line usage error (clap's own errors exit with 2).
+    /// Command-line usage error: a malformed command line (clap's errors are mapped here) or an
+    /// option value out of its range (`--shard 4/3`, `--spacing-m 0`, `--airspeed-mps 80`).
     pub const USAGE: u8 = 64;
     /// Invalid input data: a malformed or invalid scenario or override.
     pub const DATAERR: u8 = 65;
     /// An input file does not exist or cannot be read.
     pub const NOINPUT: u8 = 66;
+    /// An operating-system error: threads or other resources could not be had.
+    pub const OSERR: u8 = 71;
     /// An output file or directory cannot be created or written.
     pub const CANTCREAT: u8 = 73;
 }

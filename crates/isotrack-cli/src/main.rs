@@ -4,7 +4,19 @@ use isotrack_cli::cli::{Cli, Command};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // clap's own errors exit 2 by default; every usage error of isotrack exits 64 (one table,
+    // README "Exit codes"), so they are mapped here. Help and version exit 0.
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() {
+                isotrack_cli::exit::USAGE
+            } else {
+                isotrack_cli::exit::OK
+            });
+        }
+    };
     let result = match &cli.command {
         Command::Run(args) => isotrack_cli::run::run(args),
         Command::Show(args) => isotrack_cli::run::show(args),

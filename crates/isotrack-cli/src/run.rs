@@ -15,15 +15,20 @@ pub struct Failure {
     pub message: String,
 }
 
-/// Loads the scenario named by the arguments.
-pub fn load(args: &ScenarioArgs) -> Result<Scenario, Failure> {
-    load_scenario(args.scenario.as_deref(), &args.set).map_err(|e| Failure {
+/// A scenario error as a failure: 66 when the file cannot be read, 65 when it is invalid.
+pub fn invalid(e: ScenarioError) -> Failure {
+    Failure {
         code: match e {
             ScenarioError::Io { .. } => exit::NOINPUT,
             ScenarioError::Invalid(_) => exit::DATAERR,
         },
         message: e.to_string(),
-    })
+    }
+}
+
+/// Loads the scenario named by the arguments.
+pub fn load(args: &ScenarioArgs) -> Result<Scenario, Failure> {
+    load_scenario(args.scenario.as_deref(), &args.set).map_err(invalid)
 }
 
 fn fmt_opt(x: Option<f64>) -> String {
@@ -60,10 +65,12 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
             .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
         f.metrics.convergence_tolerance.unwrap_or_default()
     );
+    // Non-finite values print as in summary.json (null there, n/a here), never as `inf`.
+    let finite = |x: f64| Some(x).filter(|v| v.is_finite());
     out += &format!(
-        "path {:.1} m   control effort {:.4} rad^2/s   chattering {} rad/s^2\n",
-        m.path_length_m,
-        m.control_effort,
+        "path {} m   control effort {} rad^2/s   chattering {} rad/s^2\n",
+        fmt_opt(finite(m.path_length_m)),
+        fmt_opt(finite(m.control_effort)),
         fmt_opt(m.chattering_radps2)
     );
     out

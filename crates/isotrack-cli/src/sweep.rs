@@ -15,6 +15,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::NoTrace;
+#[allow(unused_imports)]
+use rayon::iter::IntoParallelIterator;
 use rayon::prelude::*;
 use serde_json::json;
 use std::collections::{BTreeMap, BTreeSet};
@@ -49,13 +51,15 @@ fn csv_line(fields: &[String]) -> String {
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
-/// One run's row (as a CSV line with its newline).
-fn run_row(plan: &SweepPlan, base: &Scenario, id: u64) -> String {
+/// One run's row (as a CSV line with its newline). A run whose values make an invalid scenario
+/// is recorded (`invalid_scenario`, the reason in `outcome_detail`), never fatal to the sweep.
+fn run_row(plan: &SweepPlan, base: &Scenario, id: u64, sweep_name: &str) -> String {
     let vals = plan.run_values(id);
     let mut fields = vec![id.to_string()];
     fields.extend(vals.iter().map(|v| v.trim_matches('"').to_string()));
     let opt = |x: Option<f64>| x.map(num).unwrap_or_default();
-    match base.derive(&plan.run_overrides(id), &format!("sweep run {id}")) {
+    let origin = format!("sweep {sweep_name} run {id}");
+    match base.derive_with(&plan.run_assignments(id, &origin), &origin) {
         Ok(s) => {
             let r = s.run(&mut NoTrace);
             let m = &r.metrics;
@@ -104,10 +108,61 @@ fn parse_shard(s: &str) -> Result<(u64, u64), Failure> {
     Ok((k, n))
 }
 
-/// Reads the complete rows of `results.csv`: `(header, rows by run_id)`. A trailing line
+/// The `outcome` values a row may hold.
+const OUTCOMES: [&str; 4] = ["completed", "diverged", "left_field", "invalid_scenario"];
+
+/// Checks one stored row against the sweep's header: its field count, its `run_id` within the
+/// plan (`total` runs), a known outcome and numbers (or empty cells) in the numeric metric
+/// columns. Rows are trusted on `--resume` and `merge` only after this.
+fn check_row(header: &[String], line: &str, total: u64) -> Result<u64, String> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes());
+    let rec = r
+        .records()
+        .next()
+        .and_then(Result::ok)
+        .ok_or("not a CSV row")?;
+    if rec.len() != header.len() {
+        return Err(format!(
+            "{} fields where the header has {}",
+            rec.len(),
+            header.len()
+        ));
+    }
+    let id: u64 = rec[0]
+        .parse()
+        .map_err(|_| format!("run_id `{}` is not a run number", &rec[0]))?;
+    if id >= total {
+        return Err(format!("run_id {id} is beyond this sweep's {total} runs"));
+    }
+    for (name, cell) in header.iter().zip(rec.iter()) {
+        match name.as_str() {
+            "outcome" if !OUTCOMES.contains(&cell) => {
+                return Err(format!("outcome `{cell}` is not one of {OUTCOMES:?}"))
+            }
+            "outcome" | "outcome_detail" | "run_id" => {}
+            n if METRIC_COLUMNS.contains(&n)
+                && !cell.is_empty()
+                && cell.parse::<f64>().is_err() =>
+            {
+                return Err(format!("{n} = `{cell}` is not a number"))
+            }
+            _ => {}
+        }
+    }
+    Ok(id)
+}
+
+/// Reads the complete rows of `results.csv`: `(header, rows by run_id)`, each row checked by
+/// [`check_row`] (a damaged row is an error naming its line, never carried on). A trailing line
 /// without its newline (a run cut off mid-write) is dropped, and the file truncated to the last
 /// complete line when `repair` is set.
-fn read_results(path: &Path, repair: bool) -> Result<(String, BTreeMap<u64, String>), Failure> {
+fn read_results(
+    path: &Path,
+    repair: bool,
+    total: u64,
+) -> Result<(String, BTreeMap<u64, String>), Failure> {
     let text = std::fs::read_to_string(path).map_err(|e| {
         fail(
             exit::NOINPUT,
@@ -137,25 +192,34 @@ fn read_results(path: &Path, repair: bool) -> Result<(String, BTreeMap<u64, Stri
     }
     let mut lines = complete.split_inclusive('\n');
     let header = lines.next().unwrap_or("").to_string();
-    let mut rows = BTreeMap::new();
-    for line in lines {
-        // Rows are written whole; a line that does not parse is a damaged file, not ours to
-        // guess at.
-        let id: u64 = line
-            .split(',')
-            .next()
-            .and_then(|v| v.parse().ok())
-            .ok_or_else(|| {
-                fail(
-                    exit::DATAERR,
-                    format!("{}: damaged row `{}`", path.display(), line.trim_end()),
-                )
-            })?;
-        if rows.insert(id, line.to_string()).is_some() {
-            return Err(fail(
+    let columns: Vec<String> = if header.is_empty() {
+        vec![]
+    } else {
+        csv_fields(&header).ok_or_else(|| {
+            fail(
                 exit::DATAERR,
-                format!("{}: run {id} appears twice", path.display()),
-            ));
+                format!("{}:1: the header is not a CSV line", path.display()),
+            )
+        })?
+    };
+    let mut rows = BTreeMap::new();
+    for (i, line) in lines.enumerate() {
+        // Rows are written whole; a line that does not check is a damaged file, not ours to
+        // guess at.
+        let damaged = |why: String| {
+            let shown: String = line.trim_end().chars().take(120).collect();
+            fail(
+                exit::DATAERR,
+                format!(
+                    "{}:{}: damaged row ({why}): `{shown}`; remove the line (or the file) and --resume",
+                    path.display(),
+                    i + 2
+                ),
+            )
+        };
+        let id = check_row(&columns, line, total).map_err(damaged)?;
+        if rows.insert(id, line.to_string()).is_some() {
+            return Err(damaged(format!("run {id} appears twice")));
         }
     }
     Ok((header, rows))
@@ -182,53 +246,129 @@ fn write_sorted(path: &Path, header: &str, rows: &BTreeMap<u64, String>) -> Resu
     std::fs::rename(&tmp, path).map_err(cant)
 }
 
-/// `isotrack sweep`.
-pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
-    let plan = SweepPlan::load(&a.sweep).map_err(|e| {
+/// Fields of one CSV line (`None` if it does not parse).
+fn csv_fields(line: &str) -> Option<Vec<String>> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes());
+    let rec = r.records().next()?.ok()?;
+    Some(rec.iter().map(str::to_string).collect())
+}
+
+/// The digest that names a sweep: SHA-256 of the sweep file's bytes and of the resolved base
+/// scenario (every default filled in, so a changed default or scenario file changes it too).
+/// Stored in `sweep.json`; `--resume` and `merge` refuse rows made under another digest.
+fn sweep_digest(sweep_file: &[u8], base_toml: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update((sweep_file.len() as u64).to_le_bytes());
+    h.update(sweep_file);
+    h.update(base_toml.as_bytes());
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The most worker threads per core `--threads` may ask for: beyond a few per core, threads
+/// only add scheduling and memory (100 000 threads once stalled a sweep before its first row).
+const MAX_THREADS_PER_CORE: usize = 8;
+
+/// The thread count to use for `--threads` (capped, with a note on stderr).
+fn thread_count(requested: Option<usize>) -> Option<usize> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cap = MAX_THREADS_PER_CORE * cores;
+    requested.map(|t| {
+        if t > cap {
+            eprintln!(
+                "note: --threads {t} capped to {cap} ({MAX_THREADS_PER_CORE} per core on {cores} cores); results do not depend on it"
+            );
+        }
+        t.clamp(1, cap)
+    })
+}
+
+/// Reads `DIR/sweep.json`.
+fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
+    let path = dir.join("sweep.json");
+    let text = isotrack_fields::io::read_text_limited(&path, 1 << 20).map_err(|e| {
         fail(
-            if e.message.starts_with("cannot read") {
-                exit::NOINPUT
-            } else {
-                exit::DATAERR
-            },
-            e.to_string(),
+            exit::NOINPUT,
+            format!("{}: no readable sweep.json ({e})", dir.display()),
         )
     })?;
-    let base =
-        load_scenario(Some(&plan.scenario), &[]).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
+}
+
+/// `isotrack sweep`.
+pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
+    let sweep_bytes =
+        isotrack_fields::io::read_limited(&a.sweep, isotrack_scenario::MAX_SCENARIO_FILE_BYTES)
+            .map_err(|e| {
+                fail(
+                    exit::NOINPUT,
+                    format!("{}: cannot read: {e}", a.sweep.display()),
+                )
+            })?;
+    let text = String::from_utf8(sweep_bytes.clone()).map_err(|_| {
+        fail(
+            exit::DATAERR,
+            format!("{}: not UTF-8 text", a.sweep.display()),
+        )
+    })?;
+    let plan = SweepPlan::parse(&text, &a.sweep).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    let base = load_scenario(Some(&plan.scenario), &[]).map_err(crate::run::invalid)?;
+    let name = a.sweep.display().to_string();
     // The base overrides must make a valid scenario on their own.
+    let base_assign = plan.run_assignments(0, &name);
     let base = base
-        .derive(&plan.base, &a.sweep.display().to_string())
-        .map_err(|e| fail(exit::DATAERR, format!("{}: [base]: {e}", a.sweep.display())))?;
+        .derive_with(&base_assign[..plan.base.len()], &name)
+        .map_err(|e| fail(exit::DATAERR, format!("{name}: [base]: {e}")))?;
+    // Unknown keys and wrong types are the sweep file's errors: found before anything runs.
+    plan.check_keys(&base, &name)
+        .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     let (k, n) = match &a.shard {
         Some(s) => parse_shard(s)?,
         None => (1, 1),
     };
     let total = plan.total();
-    let ids: Vec<u64> = (0..total).filter(|id| id % n == k - 1).collect();
+    let shard_runs = total / n + u64::from(total % n >= k);
     let cant = |e: std::io::Error| {
         fail(
             exit::CANTCREAT,
             format!("cannot write {}: {e}", a.out.display()),
         )
     };
+    let base_toml = crate::output::scenario_toml(&base);
+    let digest = sweep_digest(&sweep_bytes, &base_toml);
     std::fs::create_dir_all(&a.out).map_err(cant)?;
     let results = a.out.join("results.csv");
     let mut header: Vec<String> = vec!["run_id".into()];
     header.extend(plan.varied_keys());
     header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
     let header_line = csv_line(&header);
-    let done: BTreeMap<u64, String> = if results.exists() {
-        if !a.resume {
+    if results.exists() && !a.resume {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} exists: pass --resume to continue that sweep, or another --out",
+                results.display()
+            ),
+        ));
+    }
+    if results.exists() && a.resume {
+        let stored = read_manifest(&a.out)?;
+        if stored["digest"].as_str() != Some(digest.as_str()) {
             return Err(fail(
-                exit::CANTCREAT,
+                exit::DATAERR,
                 format!(
-                    "{} exists: pass --resume to continue that sweep, or another --out",
-                    results.display()
+                    "{}: made by a different sweep (the sweep file or its resolved base scenario changed since; digest {} here, {} now): start a new --out",
+                    a.out.display(),
+                    stored["digest"].as_str().unwrap_or("missing"),
+                    digest
                 ),
             ));
         }
-        let (h, rows) = read_results(&results, true)?;
+    }
+    let done: BTreeMap<u64, String> = if results.exists() {
+        let (h, rows) = read_results(&results, true, total)?;
         if h.is_empty() {
             std::fs::write(&results, &header_line).map_err(cant)?;
         } else if h != header_line {
@@ -240,24 +380,31 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
                 ),
             ));
         }
+        if let Some(id) = rows.keys().find(|id| *id % n != k - 1) {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: run {id} is not in shard {k}/{n}: resume with the shard it was started with",
+                    results.display()
+                ),
+            ));
+        }
         rows
     } else {
-        std::fs::write(&results, &header_line).map_err(cant)?;
         BTreeMap::new()
     };
-    // Keep the resolved sweep next to its results.
-    std::fs::copy(&a.sweep, a.out.join("sweep.toml")).map_err(cant)?;
-    std::fs::write(
-        a.out.join("base_scenario.toml"),
-        crate::output::scenario_toml(&base),
-    )
-    .map_err(cant)?;
+    // The sweep, its digest and its plan, kept next to the results (written before the first row, so
+    // every results.csv has the sweep.json that says which sweep made it; on --resume only
+    // after its rows and digest are checked).
+    std::fs::write(a.out.join("sweep.toml"), &sweep_bytes).map_err(cant)?;
+    std::fs::write(a.out.join("base_scenario.toml"), &base_toml).map_err(cant)?;
     let manifest = json!({
-        "sweep": a.sweep.display().to_string(),
+        "sweep": name,
         "scenario": plan.scenario.display().to_string(),
+        "digest": digest,
         "total_runs": total,
         "shard": [k, n],
-        "shard_runs": ids.len(),
+        "shard_runs": shard_runs,
         "columns": header,
     });
     std::fs::write(
@@ -266,23 +413,22 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     )
     .map_err(cant)?;
 
-    let pending: Vec<u64> = ids
-        .iter()
-        .copied()
-        .filter(|id| !done.contains_key(id))
-        .collect();
-    let pb = ProgressBar::new(pending.len() as u64);
+    if !results.exists() {
+        std::fs::write(&results, &header_line).map_err(cant)?;
+    }
+    let new_runs = shard_runs - done.len() as u64;
+    let pb = ProgressBar::new(new_runs);
     pb.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, ETA {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let pool = {
         let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = a.threads {
-            b = b.num_threads(t.max(1));
+        if let Some(t) = thread_count(a.threads) {
+            b = b.num_threads(t);
         }
         b.build()
-            .map_err(|e| fail(exit::USAGE, format!("cannot start threads: {e}")))?
+            .map_err(|e| fail(exit::OSERR, format!("cannot start threads: {e}")))?
     };
     let started = std::time::Instant::now();
     let (tx, rx) = std::sync::mpsc::channel::<String>();
@@ -299,10 +445,16 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             }
             f.sync_all().map_err(cant)
         });
+        // The shard's ids are generated, not listed up front: memory stays flat however
+        // large the sweep.
         pool.install(|| {
-            pending.par_iter().for_each_with(tx, |tx, &id| {
-                let _ = tx.send(run_row(&plan, &base, id));
-            })
+            (0..shard_runs)
+                .into_par_iter()
+                .map(|i| i * n + (k - 1))
+                .filter(|id| !done.contains_key(id))
+                .for_each_with(tx, |tx, id| {
+                    let _ = tx.send(run_row(&plan, &base, id, &name));
+                })
         });
         writer
             .join()
@@ -310,14 +462,14 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     });
     write_result?;
     pb.finish_and_clear();
-    let (h, rows) = read_results(&results, false)?;
+    let (h, rows) = read_results(&results, false, total)?;
     write_sorted(&results, &h, &rows)?;
     println!(
         "{} runs ({} new) of {} in {:.2} s -> {}",
         rows.len(),
-        pending.len(),
+        new_runs,
         if n > 1 {
-            format!("shard {k}/{n} ({} of {total})", ids.len())
+            format!("shard {k}/{n} ({shard_runs} of {total})")
         } else {
             format!("{total}")
         },
@@ -327,35 +479,63 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// `isotrack merge`.
+/// `isotrack merge`: the shards of one sweep (same digest) into one directory; refuses missing,
+/// duplicate or damaged rows, and an `--out` holding another sweep's results unless `--force`.
 pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
     let mut header: Option<String> = None;
-    let mut total: Option<u64> = None;
+    let mut first: Option<(u64, String, serde_json::Value)> = None;
     let mut all: BTreeMap<u64, String> = BTreeMap::new();
     let mut dupes = BTreeSet::new();
+    let out_results = a.out.join("results.csv");
     for d in &a.dirs {
-        let m: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(d.join("sweep.json")).map_err(|e| {
-                fail(
-                    exit::NOINPUT,
-                    format!("{}: no sweep.json ({e})", d.display()),
-                )
-            })?)
-            .map_err(|e| fail(exit::DATAERR, format!("{}/sweep.json: {e}", d.display())))?;
+        if crate::output::same_file(&d.join("results.csv"), &out_results) {
+            return Err(fail(
+                exit::USAGE,
+                format!("--out {} is one of the inputs", a.out.display()),
+            ));
+        }
+    }
+    if out_results.exists() && !a.force {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} exists: pass --force to replace it, or another --out",
+                out_results.display()
+            ),
+        ));
+    }
+    for d in &a.dirs {
+        let m = read_manifest(d)?;
         let t = m["total_runs"].as_u64().ok_or_else(|| {
             fail(
                 exit::DATAERR,
                 format!("{}/sweep.json: no total_runs", d.display()),
             )
         })?;
-        if total.is_some_and(|x| x != t) {
-            return Err(fail(
+        let digest = m["digest"].as_str().map(str::to_string).ok_or_else(|| {
+            fail(
                 exit::DATAERR,
-                format!("{}: a different sweep ({t} runs)", d.display()),
-            ));
+                format!(
+                    "{}/sweep.json: no digest (made by an older isotrack): run that shard again",
+                    d.display()
+                ),
+            )
+        })?;
+        match &first {
+            Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
+                return Err(fail(
+                    exit::DATAERR,
+                    format!(
+                        "{}: a different sweep from {} (sweep file, base scenario or seed differ: digest {digest} vs {d0})",
+                        d.display(),
+                        a.dirs[0].display()
+                    ),
+                ));
+            }
+            Some(_) => {}
+            None => first = Some((t, digest, m)),
         }
-        total = Some(t);
-        let (h, rows) = read_results(&d.join("results.csv"), false)?;
+        let (h, rows) = read_results(&d.join("results.csv"), false, t)?;
         if header.as_ref().is_some_and(|x| *x != h) {
             return Err(fail(
                 exit::DATAERR,
@@ -369,7 +549,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             }
         }
     }
-    let total = total.unwrap_or(0);
+    let (total, _, mut manifest) = first.unwrap_or((0, String::new(), json!({})));
     if !dupes.is_empty() {
         let list: Vec<String> = dupes.iter().take(10).map(|i| i.to_string()).collect();
         return Err(fail(
@@ -381,14 +561,17 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             ),
         ));
     }
-    let missing: Vec<u64> = (0..total).filter(|i| !all.contains_key(i)).collect();
-    if !missing.is_empty() {
-        let list: Vec<String> = missing.iter().take(10).map(|i| i.to_string()).collect();
+    let n_missing = total - all.len() as u64;
+    if n_missing > 0 {
+        let list: Vec<String> = (0..total)
+            .filter(|i| !all.contains_key(i))
+            .take(10)
+            .map(|i| i.to_string())
+            .collect();
         return Err(fail(
             exit::DATAERR,
             format!(
-                "{} of {total} runs are missing (e.g. {}): finish or --resume those shards first",
-                missing.len(),
+                "{n_missing} of {total} runs are missing (e.g. {}): finish or --resume those shards first",
                 list.join(", ")
             ),
         ));
@@ -400,38 +583,30 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
         )
     };
     std::fs::create_dir_all(&a.out).map_err(cant)?;
-    write_sorted(
-        &a.out.join("results.csv"),
-        header.as_deref().unwrap_or(""),
-        &all,
-    )?;
+    write_sorted(&out_results, header.as_deref().unwrap_or(""), &all)?;
     if let Some(first) = a.dirs.first() {
         for f in ["sweep.toml", "base_scenario.toml"] {
-            if first.join(f).exists() {
+            if first.join(f).exists() && !crate::output::same_file(&first.join(f), &a.out.join(f)) {
                 std::fs::copy(first.join(f), a.out.join(f)).map_err(cant)?;
             }
         }
-        let mut m: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(first.join("sweep.json")).unwrap_or_default(),
-        )
-        .unwrap_or(json!({}));
-        m["shard"] = json!([1, 1]);
-        m["shard_runs"] = json!(total);
-        m["merged_from"] = json!(a
+        manifest["shard"] = json!([1, 1]);
+        manifest["shard_runs"] = json!(total);
+        manifest["merged_from"] = json!(a
             .dirs
             .iter()
             .map(|d| d.display().to_string())
             .collect::<Vec<_>>());
         std::fs::write(
             a.out.join("sweep.json"),
-            serde_json::to_string_pretty(&m).unwrap_or_default() + "\n",
+            serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n",
         )
         .map_err(cant)?;
     }
     println!(
         "merged {total} runs from {} directories -> {}",
         a.dirs.len(),
-        a.out.join("results.csv").display()
+        out_results.display()
     );
     Ok(())
 }

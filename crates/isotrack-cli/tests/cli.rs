@@ -271,7 +271,7 @@ fn unwritable_output() {
 #[test]
 fn bad_command_line() {
     let o = isotrack(&["run", "--frobnicate"]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(64));
     assert!(!stderr(&o).contains("panicked"));
 }
 
@@ -550,7 +550,7 @@ fn run_plot_and_plot_command_write_images() {
         .unwrap()
         .contains("<svg"));
     // --plot needs --out; a non-run directory is a clear error.
-    assert_eq!(isotrack(&["run", "--plot"]).status.code(), Some(2));
+    assert_eq!(isotrack(&["run", "--plot"]).status.code(), Some(64));
     assert_fails(
         &isotrack(&["plot", dir.path().to_str().unwrap()]),
         66,
@@ -641,6 +641,7 @@ fn sweeps_are_identical_across_threads_and_shards_and_merge_checks_coverage() {
             &shards[1],
             "--out",
             merged.to_str().unwrap(),
+            "--force",
         ]),
         65,
         &["missing"],
@@ -654,6 +655,7 @@ fn sweeps_are_identical_across_threads_and_shards_and_merge_checks_coverage() {
             &shards[2],
             "--out",
             merged.to_str().unwrap(),
+            "--force",
         ]),
         65,
         &["more than one"],
@@ -692,6 +694,7 @@ fn a_damaged_sweep_resumes_to_the_same_results() {
     let mut damaged = lines[..6].join("\n") + "\n";
     damaged += &lines[6][..lines[6].len() / 2];
     std::fs::write(part.join("results.csv"), damaged).unwrap();
+    std::fs::copy(full.join("sweep.json"), part.join("sweep.json")).unwrap();
     let o = isotrack(&["sweep", &sw, "--out", part.to_str().unwrap(), "--resume"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(

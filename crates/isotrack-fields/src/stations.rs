@@ -29,7 +29,7 @@ impl Stations {
     /// bounding box, reference latitude at its middle); values from `value_column`. Rows with an
     /// empty or `NaN` value are skipped; anything else malformed is an error naming the line.
     pub fn from_csv(path: &Path, value_column: &str) -> Result<Self, LoadError> {
-        let bytes = std::fs::read(path)
+        let bytes = crate::io::read_limited(path, MAX_STATION_FILE_BYTES)
             .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
         Self::from_csv_bytes(path, &bytes, value_column)
     }
@@ -101,12 +101,29 @@ impl Stations {
                 continue;
             }
             let (x, y, v) = (num(xc)?, num(yc)?, num(vc)?);
+            let at = |c: usize, m: String| {
+                LoadError::new(path, Some(FilePosition::Line(line, Some(c + 1))), m)
+            };
             if !(x.is_finite() && y.is_finite() && v.is_finite()) {
                 return Err(LoadError::new(
                     path,
                     Some(FilePosition::Line(line, None)),
                     "non-finite coordinate or value",
                 ));
+            }
+            if v.abs() > MAX_ABS_VALUE {
+                return Err(at(vc, format!("value {v:e} is beyond +-{MAX_ABS_VALUE:e} (the limit of a grid's values): rescale the column")));
+            }
+            if lonlat {
+                if !(-180.0..=360.0).contains(&x) {
+                    return Err(at(xc, format!("longitude {x} deg is outside [-180, 360]")));
+                }
+                if !(-90.0..=90.0).contains(&y) {
+                    return Err(at(yc, format!("latitude {y} deg is outside [-90, 90]")));
+                }
+            } else if x.abs() > MAX_COORDINATE_M || y.abs() > MAX_COORDINATE_M {
+                let c = if x.abs() > MAX_COORDINATE_M { xc } else { yc };
+                return Err(at(c, format!("coordinate beyond +-{MAX_COORDINATE_M:e} m")));
             }
             raw.push((x, y, v));
         }
@@ -118,6 +135,7 @@ impl Stations {
             ));
         }
         let (positions_m, projection) = if lonlat {
+            unwrap_longitudes(path, &mut raw)?;
             let lon0 = raw.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
             let lat0 = raw.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
             let lat1 = raw.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
@@ -131,11 +149,27 @@ impl Stations {
         } else {
             (raw.iter().map(|r| Vec2::new(r.0, r.1)).collect(), None)
         };
-        Ok(Self {
+        let stations = Self {
             positions_m,
             values: raw.iter().map(|r| r.2).collect(),
             projection,
-        })
+        };
+        let e = stations.extent_m();
+        if e[1] - e[0] <= 0.0 && e[3] - e[2] <= 0.0 {
+            return Err(LoadError::new(
+                path,
+                None,
+                "every station is at the same point: there is no area to interpolate over",
+            ));
+        }
+        Ok(stations)
+    }
+
+    /// The default grid spacing for these stations: 1/100 of the longer side of their
+    /// bounding box (so a grid of about 101 nodes along it), m.
+    pub fn default_spacing_m(&self) -> f64 {
+        let e = self.extent_m();
+        (e[1] - e[0]).max(e[3] - e[2]) / 100.0
     }
 
     /// `[x_min, x_max, y_min, y_max]` of the stations, m.
@@ -158,18 +192,121 @@ pub trait StationInterpolator {
     fn predict(&self, p: Vec2) -> f64;
 
     /// Evaluates onto a regular grid covering `[x_min, x_max, y_min, y_max]` with spacing
-    /// `spacing_m` (the node count rounds up so the extent is covered).
-    fn to_grid(&self, extent_m: [f64; 4], spacing_m: f64) -> Result<Grid2, crate::grid::GridError> {
-        let nx = (((extent_m[1] - extent_m[0]) / spacing_m).ceil() as usize + 1).max(2);
-        let ny = (((extent_m[3] - extent_m[2]) / spacing_m).ceil() as usize + 1).max(2);
-        Grid2::from_fn(
+    /// `spacing_m` (the node count rounds up so the extent is covered), at most
+    /// [`MAX_INTERPOLATED_NODES`] nodes.
+    fn to_grid(&self, extent_m: [f64; 4], spacing_m: f64) -> Result<Grid2, StationGridError> {
+        let (nx, ny) = grid_shape(extent_m, spacing_m)?;
+        Ok(Grid2::from_fn(
             nx,
             ny,
             Vec2::new(extent_m[0], extent_m[2]),
             [spacing_m, spacing_m],
             |p| self.predict(p),
-        )
+        )?)
     }
+}
+
+/// The most nodes an interpolated grid may have: 4096 x 4096. Each node costs one prediction
+/// over every station, and the grid is an input to a run, not an image.
+pub const MAX_INTERPOLATED_NODES: usize = 1 << 24;
+
+/// The largest station file read, bytes (256 MiB).
+pub const MAX_STATION_FILE_BYTES: u64 = 256 << 20;
+
+/// The largest `|x_m|`, `|y_m|` of a station, m (about 1.6 x the Earth's circumference).
+pub const MAX_COORDINATE_M: f64 = 6.4e7;
+
+use crate::grid::MAX_ABS_VALUE;
+
+/// Why station values could not be put on a grid.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StationGridError {
+    /// The spacing makes more than [`MAX_INTERPOLATED_NODES`] nodes.
+    #[error("a spacing of {spacing_m} m makes {nodes:.3e} nodes over the stations' {width_m:.4} m x {height_m:.4} m; at most {max} are allowed: use a spacing of at least {min_spacing_m} m", max = MAX_INTERPOLATED_NODES)]
+    TooFine {
+        /// The spacing asked for, m.
+        spacing_m: f64,
+        /// The nodes it would make.
+        nodes: f64,
+        /// Bounding box width, m.
+        width_m: f64,
+        /// Bounding box height, m.
+        height_m: f64,
+        /// The smallest spacing that fits (rounded up to 3 significant digits), m.
+        min_spacing_m: f64,
+    },
+    /// The grid itself.
+    #[error(transparent)]
+    Grid(#[from] crate::grid::GridError),
+}
+
+/// Nodes along one side of `length_m` at `spacing_m` (rounded up, at least 2), as `f64`.
+fn nodes_along(length_m: f64, spacing_m: f64) -> f64 {
+    ((length_m / spacing_m).ceil() + 1.0).max(2.0)
+}
+
+/// The node counts `(nx, ny)` covering `extent_m` at `spacing_m`, or the smallest spacing that
+/// fits [`MAX_INTERPOLATED_NODES`]. Counted in `f64` first: a spacing of 1e-3 m over 100 km is
+/// 1e16 nodes, which `usize` arithmetic would wrap or try to allocate.
+pub fn grid_shape(extent_m: [f64; 4], spacing_m: f64) -> Result<(usize, usize), StationGridError> {
+    let (w, h) = (extent_m[1] - extent_m[0], extent_m[3] - extent_m[2]);
+    let count = |s: f64| nodes_along(w, s) * nodes_along(h, s);
+    let nodes = count(spacing_m);
+    if nodes.is_finite() && nodes <= MAX_INTERPOLATED_NODES as f64 {
+        return Ok((
+            nodes_along(w, spacing_m) as usize,
+            nodes_along(h, spacing_m) as usize,
+        ));
+    }
+    // (w/s + 2)(h/s + 2) <= N bounds the rounded-up count; solve for s, then round up to 3
+    // significant digits and step until it fits.
+    let n = MAX_INTERPOLATED_NODES as f64;
+    let (a, b, c) = (n - 4.0, 2.0 * (w + h), w * h);
+    let mut s = (b + (b * b + 4.0 * a * c).sqrt()) / (2.0 * a);
+    let mag = 10f64.powf(s.log10().floor() - 2.0);
+    s = (s / mag).ceil() * mag;
+    while count(s) > n {
+        s += mag;
+    }
+    Err(StationGridError::TooFine {
+        spacing_m,
+        nodes,
+        width_m: w,
+        height_m: h,
+        min_spacing_m: s,
+    })
+}
+
+/// Longitudes across the antimeridian: when the stations span more than 180 deg, those west of
+/// 0 are taken +360 (179.5 and -179.5 become 179.5 and 180.5, one degree apart); if they still
+/// span more than 180 deg no local projection holds, and that is an error.
+fn unwrap_longitudes(path: &Path, raw: &mut [(f64, f64, f64)]) -> Result<(), LoadError> {
+    let span = |r: &[(f64, f64, f64)]| {
+        let lo = r.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let hi = r.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        hi - lo
+    };
+    if span(raw) <= 180.0 {
+        return Ok(());
+    }
+    let mut shifted: Vec<_> = raw.to_vec();
+    for p in &mut shifted {
+        if p.0 < 0.0 {
+            p.0 += 360.0;
+        }
+    }
+    if span(&shifted) <= 180.0 {
+        raw.copy_from_slice(&shifted);
+        return Ok(());
+    }
+    Err(LoadError::new(
+        path,
+        None,
+        format!(
+            "the stations span {:.1} deg of longitude even across the antimeridian: a local (equirectangular) projection does not hold over more than 180 deg",
+            span(&shifted).min(span(raw))
+        ),
+    ))
 }
 
 /// Inverse-distance weighting (Shepard): `z(p) = sum w_i z_i / sum w_i`, `w_i = 1/d_i^power`;
@@ -348,6 +485,37 @@ impl Variogram {
     }
 }
 
+/// Why ordinary kriging cannot be set up, each cause named.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum KrigingError {
+    /// Two stations at one position (their rows of the kriging matrix are equal).
+    #[error("stations {first} and {second} (data rows, 1-based) are both at {position_m:?} m: the kriging system is singular; average or drop one")]
+    DuplicateStations {
+        /// First station, 1-based.
+        first: usize,
+        /// Second station, 1-based.
+        second: usize,
+        /// Their position, m.
+        position_m: [f64; 2],
+    },
+    /// The values' variance overflows `f64`.
+    #[error("the station values' variance overflows: rescale the column")]
+    VarianceOverflow,
+    /// The kriging matrix is singular for another reason (e.g. a degenerate fitted variogram).
+    #[error("the kriging system is singular for these stations and the fitted variogram; try --method idw")]
+    Singular,
+}
+
+/// The first pair of stations at the same position, by index (sorted scan, O(n log n)).
+fn first_duplicate(p: &[Vec2]) -> Option<(usize, usize)> {
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    idx.sort_by(|&a, &b| p[a].x.total_cmp(&p[b].x).then(p[a].y.total_cmp(&p[b].y)));
+    idx.windows(2)
+        .filter(|w| p[w[0]] == p[w[1]])
+        .map(|w| (w[0].min(w[1]), w[0].max(w[1])))
+        .min()
+}
+
 /// Ordinary kriging with a fitted [`Variogram`], in dual form: solving once
 /// `[Gamma 1; 1^T 0] [b; mu] = [z; 0]` (`Gamma_ij = gamma(|x_i - x_j|)`), the predictor is
 /// `z(p) = sum_i b_i gamma(|p - x_i|) + mu`, the same as the usual weights-per-point form
@@ -361,15 +529,25 @@ pub struct OrdinaryKriging {
 }
 
 impl OrdinaryKriging {
-    /// Fits the variogram and solves the kriging system. `None` if the system is singular
-    /// (e.g. duplicate stations).
-    pub fn new(stations: Stations) -> Option<Self> {
+    /// Fits the variogram and solves the kriging system.
+    pub fn new(stations: Stations) -> Result<Self, KrigingError> {
+        if let Some((i, j)) = first_duplicate(&stations.positions_m) {
+            let p = stations.positions_m[i];
+            return Err(KrigingError::DuplicateStations {
+                first: i + 1,
+                second: j + 1,
+                position_m: [p.x, p.y],
+            });
+        }
         let variogram = Variogram::fit(&stations);
+        if !(variogram.nugget + variogram.sill).is_finite() {
+            return Err(KrigingError::VarianceOverflow);
+        }
         Self::with_variogram(stations, variogram)
     }
 
     /// Kriging with a given variogram.
-    pub fn with_variogram(stations: Stations, variogram: Variogram) -> Option<Self> {
+    pub fn with_variogram(stations: Stations, variogram: Variogram) -> Result<Self, KrigingError> {
         let n = stations.values.len();
         let mut k = DMatrix::<f64>::zeros(n + 1, n + 1);
         for i in 0..n {
@@ -384,11 +562,11 @@ impl OrdinaryKriging {
         for i in 0..n {
             rhs[i] = stations.values[i];
         }
-        let sol = k.lu().solve(&rhs)?;
+        let sol = k.lu().solve(&rhs).ok_or(KrigingError::Singular)?;
         if sol.iter().any(|v| !v.is_finite()) {
-            return None;
+            return Err(KrigingError::Singular);
         }
-        Some(Self {
+        Ok(Self {
             b: sol.iter().take(n).copied().collect(),
             mu: sol[n],
             stations,
@@ -543,5 +721,76 @@ mod tests {
             .unwrap_err()
             .message
             .contains("at least 3"));
+    }
+
+    fn parse(text: &str) -> Result<Stations, LoadError> {
+        Stations::from_csv_bytes(Path::new("s.csv"), text.as_bytes(), "v")
+    }
+
+    /// Regression (hostile inputs): latitudes of 500 deg and longitudes of 1000 deg were
+    /// accepted; each is now an error naming the line and column.
+    #[test]
+    fn lon_lat_ranges_are_checked() {
+        let e = parse("lon_deg,lat_deg,v\n0,0,1\n1,500,2\n2,1,3\n").unwrap_err();
+        assert_eq!(e.position, Some(FilePosition::Line(3, Some(2))), "{e}");
+        assert!(e.message.contains("latitude 500"), "{e}");
+        let e = parse("lon_deg,lat_deg,v\n1000,0,1\n1,5,2\n2,1,3\n").unwrap_err();
+        assert!(e.message.contains("longitude 1000"), "{e}");
+    }
+
+    /// Regression (hostile inputs): stations at lon +-179.5 made a grid 25 000 km wide; across
+    /// the antimeridian they are one degree apart: 111 km x cos(lat) (1 deg of the equirectangular
+    /// projection on the 6 371 km sphere).
+    #[test]
+    fn antimeridian_stations_are_one_degree_apart() {
+        let s = parse("lon_deg,lat_deg,v\n179.5,0,1\n-179.5,0,2\n179.5,1,3\n").unwrap();
+        let e = s.extent_m();
+        let one_deg_m = crate::georef::EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+        let want = one_deg_m * 0.5f64.to_radians().cos();
+        assert!((e[1] - e[0] - want).abs() < 1e-6, "width {}", e[1] - e[0]);
+        let e = parse("lon_deg,lat_deg,v\n-120,0,1\n0,0,2\n120,1,3\n").unwrap_err();
+        assert!(e.message.contains("180 deg"), "{e}");
+    }
+
+    /// Regression (hostile inputs): a spacing of 1e-3 m over 100 m tried to allocate 69 GB;
+    /// now an error naming the smallest spacing that fits, which itself fits.
+    #[test]
+    fn too_fine_a_spacing_names_the_one_that_fits() {
+        let ext = [0.0, 100.0, 0.0, 100.0];
+        let e = grid_shape(ext, 1e-3).unwrap_err();
+        let StationGridError::TooFine { min_spacing_m, .. } = e else {
+            panic!("{e}")
+        };
+        // (100/s + 1)^2 <= 2^24 needs s >= 100/4095 = 0.02442 m.
+        assert!(
+            (0.02442..0.0246).contains(&min_spacing_m),
+            "{min_spacing_m}"
+        );
+        let (nx, ny) = grid_shape(ext, min_spacing_m).unwrap();
+        assert!(nx * ny <= MAX_INTERPOLATED_NODES);
+        assert!(grid_shape(ext, 0.999 * 100.0 / 4095.0).is_err());
+        assert_eq!(grid_shape(ext, 1.0).unwrap(), (101, 101));
+    }
+
+    /// Regression (hostile inputs): duplicate stations are named; values near 1e300 are refused
+    /// at their line (they were reported as "singular (duplicate stations?)"); the default
+    /// spacing is 1/100 of the longer side (it was a fixed 10 km: a 2 x 2 grid over 100 m).
+    #[test]
+    fn kriging_errors_name_their_cause() {
+        let s = parse("x_m,y_m,v\n0,0,1\n5,5,2\n0,0,3\n9,1,4\n").unwrap();
+        let e = OrdinaryKriging::new(s).unwrap_err();
+        assert_eq!(
+            e,
+            KrigingError::DuplicateStations {
+                first: 1,
+                second: 3,
+                position_m: [0.0, 0.0]
+            }
+        );
+        let e = parse("x_m,y_m,v\n0,0,1e300\n5,5,2\n9,1,4\n").unwrap_err();
+        assert_eq!(e.position, Some(FilePosition::Line(2, Some(3))), "{e}");
+        let s = parse("x_m,y_m,v\n0,0,1\n100,0,2\n0,40,4\n").unwrap();
+        assert_eq!(s.default_spacing_m(), 1.0);
+        assert!(parse("x_m,y_m,v\n3,3,1\n3,3,2\n3,3,4\n").is_err());
     }
 }

@@ -141,8 +141,55 @@ impl Raster {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
                 (a.min(*v), b.max(*v))
             });
-        (lo.is_finite() && hi.is_finite()).then_some((lo, if hi > lo { hi } else { lo + 1.0 }))
+        // Colours and the colour bar need a finite, non-empty span (values beyond
+        // MAX_AXIS_ABS are left to the caller's data check; here they fall back).
+        (lo.is_finite() && hi.is_finite() && lo.abs().max(hi.abs()) <= MAX_AXIS_ABS).then(|| {
+            let w = if hi > lo { hi - lo } else { 1.0 };
+            let w = w.max(1e-9 * lo.abs().max(hi.abs()));
+            (lo, lo + w)
+        })
     }
+}
+
+/// The largest `|value|` an axis may reach. Beyond it widths and pads overflow to infinity and
+/// plotters' tick search never ends (a trace at 1e308 once hung `isotrack plot`); the error
+/// names the quantity instead.
+pub const MAX_AXIS_ABS: f64 = 1.0e100;
+
+/// An axis range for data spanning `[lo, hi]` (finite values only; `None` when there are
+/// none): at least `min_width` wide (and 1e-9 of its magnitude, so the ticks stay distinct in
+/// `f64`), padded by `pad_frac` of its width on each side; an error naming `what` beyond
+/// [`MAX_AXIS_ABS`].
+fn padded_axis(
+    what: &str,
+    lo: f64,
+    hi: f64,
+    pad_frac: f64,
+    min_width: f64,
+) -> Result<Option<(f64, f64)>, PlotError> {
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+        return Ok(None);
+    }
+    let mag = lo.abs().max(hi.abs());
+    if mag > MAX_AXIS_ABS {
+        return Err(PlotError::Data(format!(
+            "{what} reaches {:e}, beyond the +-{MAX_AXIS_ABS:e} a plot can show",
+            if lo.abs() > hi.abs() { lo } else { hi }
+        )));
+    }
+    let width = (hi - lo).max(min_width).max(1e-9 * mag);
+    let mid = 0.5 * (lo + hi);
+    let half = 0.5 * width * (1.0 + 2.0 * pad_frac);
+    Ok(Some((mid - half, mid + half)))
+}
+
+/// Finite `(min, max)` of some values (`(inf, -inf)` when there are none).
+fn finite_bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        })
 }
 
 /// Data range `[x0, x1, y0, y1]` grown to the aspect ratio of a `pw x ph` pixel area (equal
@@ -314,25 +361,24 @@ pub fn trajectory_figure(
     let first = runs
         .first()
         .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
-    let mut r = [
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for run in runs {
-        for t in &run.trace {
-            r = [
-                r[0].min(t.x_m),
-                r[1].max(t.x_m),
-                r[2].min(t.y_m),
-                r[3].max(t.y_m),
-            ];
-        }
-    }
-    let pad = 0.12 * (r[1] - r[0]).max(r[3] - r[2]).max(1.0);
+    let points = || runs.iter().flat_map(|r| r.trace.iter());
+    let (x0, x1) = finite_bounds(points().map(|t| t.x_m));
+    let (y0, y1) = finite_bounds(points().map(|t| t.y_m));
+    // Both axes padded by the same 12 % of the larger extent (at least 1 m).
+    let side = (x1 - x0).max(y1 - y0).max(1.0);
+    let axis = |what: &str, lo: f64, hi: f64| {
+        padded_axis(what, lo, hi, 0.0, 0.0).map(|r| {
+            r.map(|(a, b)| {
+                let pad = 0.12 * side;
+                (a - pad, b + pad)
+            })
+        })
+    };
+    let no_positions = || PlotError::Data("no trace row has a finite position".into());
+    let (xa, xb) = axis("x_m", x0, x1)?.ok_or_else(no_positions)?;
+    let (ya, yb) = axis("y_m", y0, y1)?.ok_or_else(no_positions)?;
     let (pw, ph) = plot_area();
-    let range = equal_scale([r[0] - pad, r[1] + pad, r[2] - pad, r[3] + pad], pw, ph);
+    let range = equal_scale([xa, xb, ya, yb], pw, ph);
     let arrow = 0.06 * (range[1] - range[0]);
     render!(path, format, (MAP_W, MAP_H), |root| {
         (|| -> DrawResult {
@@ -453,9 +499,19 @@ pub fn timeseries_figure(
     let t_end = runs
         .iter()
         .filter_map(|r| r.trace.last().map(|t| t.t_s))
+        .filter(|t| t.is_finite())
         .fold(0.0f64, f64::max)
         .max(1e-9);
+    padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
     let ss = first.steady_state_start_s();
+    // Every panel's range is checked before drawing, so absurd data is a data error (not a
+    // failed drawing).
+    let mut ranges = Vec::with_capacity(list.len());
+    for (name, get) in &list {
+        let series: Vec<Vec<(f64, f64)>> = runs.iter().map(get).collect();
+        let (lo, hi) = finite_bounds(series.iter().flatten().map(|p| p.1));
+        ranges.push(padded_axis(name, lo, hi, 0.08, 1e-12)?.unwrap_or((-1.0, 1.0)));
+    }
     let height = 80 + 300 * list.len() as u32;
     render!(path, format, (1100, height), |root| {
         (|| -> DrawResult {
@@ -464,21 +520,7 @@ pub fn timeseries_figure(
             let areas = root.split_evenly((list.len(), 1));
             for (k, ((name, get), area)) in list.iter().zip(areas.iter()).enumerate() {
                 let series: Vec<Vec<(f64, f64)>> = runs.iter().map(get).collect();
-                let (lo, hi) = series
-                    .iter()
-                    .flatten()
-                    .map(|p| p.1)
-                    .filter(|v| v.is_finite())
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                        (a.min(v), b.max(v))
-                    });
-                let (lo, hi) = if lo.is_finite() {
-                    (lo, hi)
-                } else {
-                    (-1.0, 1.0)
-                };
-                let pad = 0.08 * (hi - lo).max(1e-12);
-                let (lo, hi) = (lo - pad, hi + pad);
+                let (lo, hi) = ranges[k];
                 let mut chart = ChartBuilder::on(area)
                     .margin(12)
                     .x_label_area_size(45)
@@ -543,8 +585,8 @@ pub fn sweep_figure(
     path: &Path,
     format: Format,
 ) -> Result<(), PlotError> {
-    let err = |m: String| PlotError::Input(format!("{}: {m}", results_csv.display()));
-    let mut rdr = csv::Reader::from_path(results_csv).map_err(|e| err(e.to_string()))?;
+    let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
+    let mut rdr = csv::Reader::from_reader(crate::open_input(results_csv)?);
     let headers = rdr.headers().map_err(|e| err(e.to_string()))?.clone();
     let col = |n: &str| {
         headers.iter().position(|h| h == n).ok_or_else(|| {
@@ -570,14 +612,11 @@ pub fn sweep_figure(
     if pts.is_empty() {
         return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
     }
-    let (x0, x1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-        (a.0.min(p.0), a.1.max(p.0))
-    });
-    let (y0, y1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-        (a.0.min(p.1), a.1.max(p.1))
-    });
-    let px = 0.05 * (x1 - x0).max(1e-9);
-    let py = 0.05 * (y1 - y0).max(1e-12);
+    let (x0, x1) = finite_bounds(pts.iter().map(|p| p.0));
+    let (y0, y1) = finite_bounds(pts.iter().map(|p| p.1));
+    let bad = || err("no finite values".into());
+    let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, 1e-9)?.ok_or_else(bad)?;
+    let (ya, yb) = padded_axis(metric, y0, y1, 0.05, 1e-12)?.ok_or_else(bad)?;
     let title = format!(
         "{metric} against {x_key} ({} runs{})",
         pts.len(),
@@ -595,7 +634,7 @@ pub fn sweep_figure(
                 .caption(&title, ("sans-serif", 22))
                 .x_label_area_size(50)
                 .y_label_area_size(90)
-                .build_cartesian_2d(x0 - px..x1 + px, y0 - py..y1 + py)
+                .build_cartesian_2d(xa..xb, ya..yb)
                 .map_err(s)?;
             chart
                 .configure_mesh()

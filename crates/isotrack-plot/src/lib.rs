@@ -23,9 +23,13 @@ pub use run_data::RunData;
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
-    /// A run directory or one of its files is missing or malformed.
+    /// A run directory or one of its files is missing or cannot be read.
     #[error("{0}")]
     Input(String),
+    /// A file was read but its content cannot be plotted (malformed, or values no axis can
+    /// show).
+    #[error("{0}")]
+    Data(String),
     /// Drawing or writing the image failed.
     #[error("cannot draw {path}: {message}")]
     Draw {
@@ -34,6 +38,30 @@ pub enum PlotError {
         /// What failed.
         message: String,
     },
+}
+
+/// The largest file a plot reads, bytes (a trace of 4 GiB is some 40 million rows, far beyond
+/// what a figure can show); non-regular files (`/dev/zero`, pipes) are refused.
+pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+
+/// Opens `path` for a streaming reader after checking it is a regular file of at most
+/// [`MAX_INPUT_BYTES`].
+pub(crate) fn open_input(path: &std::path::Path) -> Result<std::fs::File, PlotError> {
+    let cannot = |m: String| PlotError::Input(format!("{}: {m}", path.display()));
+    let f = std::fs::File::open(path).map_err(|e| cannot(e.to_string()))?;
+    let meta = f.metadata().map_err(|e| cannot(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(cannot(
+            "not a regular file (a device, pipe or directory)".into(),
+        ));
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(cannot(format!(
+            "{} bytes is more than the {MAX_INPUT_BYTES} a plot reads",
+            meta.len()
+        )));
+    }
+    Ok(f)
 }
 
 /// Registers the bundled font (idempotent).

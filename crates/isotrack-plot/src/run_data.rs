@@ -23,16 +23,21 @@ pub struct RunData {
 impl RunData {
     /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml`.
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
-        let err = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
+        let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
+        let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
         let summary: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.join("summary.json"))
-                .map_err(|e| err(format!("summary.json: {e} (is this a run directory?)")))?,
+            &isotrack_fields::io::read_text_limited(&dir.join("summary.json"), 16 << 20)
+                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?,
         )
         .map_err(|e| err(format!("summary.json: {e}")))?;
-        let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[])
-            .map_err(|e| err(format!("scenario.toml: {e}")))?;
-        let mut rdr = csv::Reader::from_path(dir.join("trace.csv"))
-            .map_err(|e| err(format!("trace.csv: {e}")))?;
+        let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
+            let m = format!("scenario.toml: {e}");
+            match e {
+                isotrack_scenario::ScenarioError::Io { .. } => cannot(m),
+                isotrack_scenario::ScenarioError::Invalid(_) => err(m),
+            }
+        })?;
+        let mut rdr = csv::Reader::from_reader(crate::open_input(&dir.join("trace.csv"))?);
         let headers = rdr
             .headers()
             .map_err(|e| err(format!("trace.csv: {e}")))?
@@ -80,9 +85,17 @@ impl RunData {
             });
         }
         if trace.is_empty() {
-            return Err(err(
-                "trace.csv has no rows (was the trace turned off?)".into()
-            ));
+            let why = if scenario.file().output.record_rate_hz == Some(0.0) {
+                "the trace was turned off (output.record_rate_hz = 0)".to_string()
+            } else {
+                format!(
+                    "the run ended at t = {} s: {} ({})",
+                    summary["t_end_s"],
+                    summary["outcome"].as_str().unwrap_or("?"),
+                    summary["outcome_detail"].as_str().unwrap_or("no detail")
+                )
+            };
+            return Err(err(format!("trace.csv has no rows: {why}")));
         }
         let name = dir.file_name().map_or_else(
             || dir.display().to_string(),

@@ -236,7 +236,9 @@ impl Scenario {
             dt,
             self.file.sim.seed.unwrap_or(0),
         )
-        .expect("validated by resolve")
+        // `resolve_sensor` calls this constructor with the same values (the seed aside, which
+        // cannot make it fail), and every `Scenario` comes out of `resolve`.
+        .expect("validated by resolve: Sensor::new")
     }
 
     /// Integration step, s.
@@ -266,7 +268,9 @@ impl Scenario {
             self.convergence_min_dwell_s(),
             self.level(),
         )
-        .expect("validated by resolve")
+        // `resolve_sim` and `resolve_output` apply the same `whole_steps` rule to the duration
+        // and recording period, the only inputs that can make it fail.
+        .expect("validated by resolve: StepPlan::new")
     }
 
     /// Runs the scenario, recording the trace into `sink`.

@@ -134,18 +134,11 @@ fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Is
     let col = f.value_column.clone().unwrap_or_default();
     let st = Stations::from_csv(&path, &col).map_err(|e| issue("field.path", e.to_string()))?;
     let ext = st.extent_m();
-    let spacing = f
-        .grid_spacing_m
-        .unwrap_or(((ext[1] - ext[0]).max(ext[3] - ext[2]) / 100.0).max(1e-6));
+    let spacing = f.grid_spacing_m.unwrap_or(st.default_spacing_m());
     let grid = match f.method.unwrap_or(StationMethod::Kriging) {
         StationMethod::Idw => Idw::new(st, f.idw_power.unwrap_or(2.0)).to_grid(ext, spacing),
         StationMethod::Kriging => OrdinaryKriging::new(st)
-            .ok_or_else(|| {
-                issue(
-                    "field.path",
-                    "the kriging system is singular (duplicate stations?)".into(),
-                )
-            })?
+            .map_err(|e| issue("field.path", format!("{}: {e}", path.display())))?
             .to_grid(ext, spacing),
     }
     .map_err(|e| issue("field.grid_spacing_m", e.to_string()))?;

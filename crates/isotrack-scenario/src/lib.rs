@@ -22,9 +22,10 @@ pub mod schema;
 pub mod sweep;
 
 pub use build::ControllerModel;
+use load::locate_derived;
 pub use load::{
-    apply_overrides, build_derived, load_scenario, parse_scenario, parse_scenario_in,
-    ErrorLocation, LocatedIssue, ScenarioError,
+    apply_assignments, build_derived, load_scenario, parse_scenario, parse_scenario_in, Assignment,
+    ErrorLocation, LocatedIssue, ScenarioError, MAX_SCENARIO_FILE_BYTES,
 };
 pub use schema::ScenarioFile;
 
@@ -67,22 +68,24 @@ impl Scenario {
     /// field, vehicle and true isoline are shared with `self` (not rebuilt, files not re-read)
     /// when the variant leaves their sections and the level unchanged: sweeps stay cheap and
     /// their memory flat.
+    ///
+    /// Problems are located at the override (`{origin}: KEY=VALUE`) or as inherited from `self`.
     pub fn derive(&self, overrides: &[String], origin: &str) -> Result<Self, ScenarioError> {
-        let file = apply_overrides(&self.file, overrides)?;
-        let located = |issues: Vec<resolve::Issue>| {
-            ScenarioError::Invalid(
-                issues
-                    .into_iter()
-                    .map(|i| load::LocatedIssue {
-                        location: ErrorLocation::Default {
-                            origin: origin.to_string(),
-                        },
-                        key: Some(i.key),
-                        message: i.message,
-                    })
-                    .collect(),
-            )
-        };
+        let assignments: Vec<Assignment> = overrides
+            .iter()
+            .map(|o| Assignment::new(o.clone(), origin))
+            .collect();
+        self.derive_with(&assignments, origin)
+    }
+
+    /// As [`Scenario::derive`], each assignment carrying its own label for messages.
+    pub fn derive_with(
+        &self,
+        assignments: &[Assignment],
+        origin: &str,
+    ) -> Result<Self, ScenarioError> {
+        let file = apply_assignments(&self.file, assignments)?;
+        let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
         let mut file = resolve::resolve(file).map_err(located)?;
         let field = if file.field == self.file.field {
             self.field.clone()

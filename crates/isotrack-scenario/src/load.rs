@@ -30,6 +30,19 @@ pub enum ErrorLocation {
         /// The file as given, or `<built-in default>`.
         origin: String,
     },
+    /// In an assignment that did not come from `--set`: a sweep's `[base]`, `[grid]` or
+    /// `[random]` value, a `compare --gain`; the label names it (e.g.
+    /// `sweep s.toml run 3, [grid] controller.kp=1.0`).
+    Assigned {
+        /// Where the assignment came from and what it was.
+        label: String,
+    },
+    /// In a value a derived scenario inherited from the scenario it was derived from (its file
+    /// or its defaults).
+    Inherited {
+        /// The derived scenario, e.g. `sweep s.toml run 3`.
+        origin: String,
+    },
 }
 
 impl fmt::Display for ErrorLocation {
@@ -48,6 +61,10 @@ impl fmt::Display for ErrorLocation {
             ErrorLocation::File { path, .. } => write!(f, "{path}"),
             ErrorLocation::Override { arg } => write!(f, "--set {arg}"),
             ErrorLocation::Default { origin } => write!(f, "{origin} (default value)"),
+            ErrorLocation::Assigned { label } => write!(f, "{label}"),
+            ErrorLocation::Inherited { origin } => {
+                write!(f, "{origin} (a value of the base scenario or its default)")
+            }
         }
     }
 }
@@ -65,10 +82,38 @@ pub struct LocatedIssue {
 
 impl fmt::Display for LocatedIssue {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // User text (keys, `--set` arguments, quoted values) is clipped: a message stays a
+        // message whatever was typed.
+        let at = clip(&self.location.to_string());
+        let message = clip_quoted(&self.message);
         match &self.key {
-            Some(k) => write!(f, "{}: `{k}`: {}", self.location, self.message),
-            None => write!(f, "{}: {}", self.location, self.message),
+            Some(k) => write!(f, "{at}: `{}`: {message}", clip(k)),
+            None => write!(f, "{at}: {message}"),
         }
+    }
+}
+
+/// `message` with every backtick-quoted span clipped by [`clip`], then the whole clipped to a
+/// few times [`MAX_ECHO_CHARS`].
+fn clip_quoted(message: &str) -> String {
+    let clipped: Vec<String> = message
+        .split('`')
+        .enumerate()
+        .map(|(i, part)| {
+            if i % 2 == 1 {
+                clip(part)
+            } else {
+                part.to_string()
+            }
+        })
+        .collect();
+    let joined = clipped.join("`");
+    let max = 5 * MAX_ECHO_CHARS;
+    if joined.chars().count() > max {
+        let head: String = joined.chars().take(max).collect();
+        format!("{head}...")
+    } else {
+        joined
     }
 }
 
@@ -98,6 +143,24 @@ impl ScenarioError {
     }
 }
 
+/// The largest scenario (or sweep) file read, bytes (1 MiB: the longest bundled one is 2 kB).
+pub const MAX_SCENARIO_FILE_BYTES: u64 = 1 << 20;
+
+/// The most characters of user text (a key, a value, a file's line) echoed in one message: a
+/// 10 MB key once made a 20 MB error.
+pub const MAX_ECHO_CHARS: usize = 200;
+
+/// `text` cut to [`MAX_ECHO_CHARS`] characters, with the number left out said.
+pub fn clip(text: &str) -> String {
+    let n = text.chars().count();
+    if n <= MAX_ECHO_CHARS {
+        text.to_string()
+    } else {
+        let head: String = text.chars().take(MAX_ECHO_CHARS).collect();
+        format!("{head}... ({} more characters)", n - MAX_ECHO_CHARS)
+    }
+}
+
 /// Loads a scenario file (or the built-in default when `path` is `None`), applies the `--set`
 /// overrides in order, fills defaults and validates.
 pub fn load_scenario(path: Option<&Path>, overrides: &[String]) -> Result<Scenario, ScenarioError> {
@@ -105,10 +168,12 @@ pub fn load_scenario(path: Option<&Path>, overrides: &[String]) -> Result<Scenar
         None => parse_scenario_in("", "<built-in default>", overrides, Path::new(".")),
         Some(p) => {
             let shown = p.display().to_string();
-            let text = std::fs::read_to_string(p).map_err(|source| ScenarioError::Io {
-                path: shown.clone(),
-                source,
-            })?;
+            let text = isotrack_fields::io::read_text_limited(p, MAX_SCENARIO_FILE_BYTES).map_err(
+                |source| ScenarioError::Io {
+                    path: shown.clone(),
+                    source,
+                },
+            )?;
             let base = p.parent().unwrap_or(Path::new("."));
             let base = if base.as_os_str().is_empty() {
                 Path::new(".")
@@ -169,7 +234,8 @@ pub fn parse_scenario_in(
         toml::from_str(text).map_err(|e| located(e.span(), None, e.message().to_string()))?;
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {
-        let key = apply_one(&mut table, arg)?;
+        let at = ErrorLocation::Override { arg: arg.clone() };
+        let key = apply_one(&mut table, arg, at)?;
         set_keys.push((key, arg.clone()));
     }
     let file: ScenarioFile = toml::Value::Table(table)
@@ -186,18 +252,43 @@ pub fn parse_scenario_in(
     })
 }
 
-/// Applies `KEY=VALUE` overrides to a (typically resolved) scenario file; errors name the
-/// argument. Used to derive variants of a scenario (e.g. one per controller in `compare`).
-pub fn apply_overrides(
+/// One `KEY=VALUE` assignment and the label its errors carry (where it came from: a sweep's
+/// `[grid]`, a `compare --gain`, ...), so a message names its true source.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Assignment {
+    /// `KEY=VALUE`.
+    pub arg: String,
+    /// Where it came from, shown in messages in place of `--set KEY=VALUE`.
+    pub label: String,
+}
+
+impl Assignment {
+    /// An assignment labelled `{source}: {arg}`.
+    pub fn new(arg: impl Into<String>, source: &str) -> Self {
+        let arg = arg.into();
+        Self {
+            label: format!("{source}: {arg}"),
+            arg,
+        }
+    }
+}
+
+/// Applies assignments to a (typically resolved) scenario file; errors carry the assignment's
+/// label. Used to derive variants of a scenario (one per controller in `compare`, one per run
+/// in a sweep).
+pub fn apply_assignments(
     file: &ScenarioFile,
-    overrides: &[String],
+    assignments: &[Assignment],
 ) -> Result<ScenarioFile, ScenarioError> {
     let mut table = match toml::Value::try_from(file) {
         Ok(toml::Value::Table(t)) => t,
         _ => toml::Table::new(),
     };
-    for arg in overrides {
-        apply_one(&mut table, arg)?;
+    for a in assignments {
+        let at = ErrorLocation::Assigned {
+            label: a.label.clone(),
+        };
+        apply_one(&mut table, &a.arg, at)?;
     }
     toml::Value::Table(table)
         .try_into()
@@ -213,36 +304,68 @@ pub fn apply_overrides(
 }
 
 /// Resolves and builds a derived scenario file (files relative to `base_dir`); problems are
-/// reported against `origin`.
+/// located at the assignment that set the key, else reported against `origin`.
 pub fn build_derived(
     file: ScenarioFile,
     origin: &str,
     base_dir: &Path,
+    assignments: &[Assignment],
 ) -> Result<Scenario, ScenarioError> {
-    Scenario::from_file(file, base_dir).map_err(|issues| {
-        ScenarioError::Invalid(
-            issues
-                .into_iter()
-                .map(|i| LocatedIssue {
-                    location: ErrorLocation::Default {
-                        origin: origin.to_string(),
+    Scenario::from_file(file, base_dir)
+        .map_err(|issues| locate_derived(issues, origin, assignments))
+}
+
+/// Locates the issues of a derived scenario: at the assignment that set the key (or a table
+/// holding it), else as inherited from the scenario it was derived from.
+pub(crate) fn locate_derived(
+    issues: Vec<Issue>,
+    origin: &str,
+    assignments: &[Assignment],
+) -> ScenarioError {
+    ScenarioError::Invalid(
+        issues
+            .into_iter()
+            .map(|i| {
+                let set = assignments.iter().rev().find(|a| {
+                    let k = a.arg.split_once('=').map_or("", |(k, _)| k.trim());
+                    key_covers(k, &i.key)
+                });
+                LocatedIssue {
+                    location: match set {
+                        Some(a) => ErrorLocation::Assigned {
+                            label: a.label.clone(),
+                        },
+                        None => ErrorLocation::Inherited {
+                            origin: origin.to_string(),
+                        },
                     },
                     key: Some(i.key),
                     message: i.message,
-                })
-                .collect(),
-        )
-    })
+                }
+            })
+            .collect(),
+    )
+}
+
+/// Whether an assignment to `set` is the source of a problem with `issue_key`: the same key,
+/// a table holding it, or a key inside it.
+fn key_covers(set: &str, issue_key: &str) -> bool {
+    issue_key == set
+        || issue_key.starts_with(&format!("{set}."))
+        || issue_key.starts_with(&format!("{set}["))
+        || set.starts_with(&format!("{issue_key}."))
 }
 
 /// Applies one `KEY=VALUE` to `table` and checks the schema still holds; returns the key.
 /// Errors name the argument.
-fn apply_one(table: &mut toml::Table, arg: &str) -> Result<String, ScenarioError> {
+fn apply_one(
+    table: &mut toml::Table,
+    arg: &str,
+    at: ErrorLocation,
+) -> Result<String, ScenarioError> {
     let fail = |key: Option<String>, message: String| {
         ScenarioError::Invalid(vec![LocatedIssue {
-            location: ErrorLocation::Override {
-                arg: arg.to_string(),
-            },
+            location: at.clone(),
             key,
             message,
         }])
@@ -304,12 +427,10 @@ fn locate_issue(
     set_keys: &[(String, String)],
 ) -> LocatedIssue {
     // The latest override that set this key (or a table containing it, or a key inside it).
-    let over = set_keys.iter().rev().find(|(k, _)| {
-        issue.key == *k
-            || issue.key.starts_with(&format!("{k}."))
-            || issue.key.starts_with(&format!("{k}["))
-            || k.starts_with(&format!("{}.", issue.key))
-    });
+    let over = set_keys
+        .iter()
+        .rev()
+        .find(|(k, _)| key_covers(k, &issue.key));
     let location = if let Some((_, arg)) = over {
         ErrorLocation::Override { arg: arg.clone() }
     } else if let Some(span) = span_of(doc, &issue.key) {

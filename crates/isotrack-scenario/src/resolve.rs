@@ -3,6 +3,7 @@
 
 use crate::schema::*;
 use isotrack_core::control::HigherSide;
+use isotrack_sim::{whole_steps, Sensor, SensorConfig, SensorError, StepPlan, StepPlanError};
 
 /// A problem with one key's value.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -29,18 +30,18 @@ impl Checker {
         if x.is_finite() {
             true
         } else {
-            self.fail(key, format!("must be a finite number, got {x}"));
+            self.fail(key, format!("must be a finite number, got {}", Num(x)));
             false
         }
     }
     fn positive(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x <= 0.0 {
-            self.fail(key, format!("must be > 0, got {x}"));
+            self.fail(key, format!("must be > 0, got {}", Num(x)));
         }
     }
     fn non_negative(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x < 0.0 {
-            self.fail(key, format!("must be >= 0, got {x}"));
+            self.fail(key, format!("must be >= 0, got {}", Num(x)));
         }
     }
     /// Rejects every present key of `section` that is not in `allowed` for the chosen
@@ -59,6 +60,44 @@ impl Checker {
                     format!("does not apply to {choice}"),
                 );
             }
+        }
+    }
+    /// A finite number within `[lo, hi]` (the physical range of the key).
+    fn within(&mut self, key: &str, x: f64, lo: f64, hi: f64, unit: &str) -> bool {
+        if !self.finite(key, x) {
+            return false;
+        }
+        if !(lo..=hi).contains(&x) {
+            self.fail(
+                key,
+                format!(
+                    "must be in [{}, {}] {unit}, got {}",
+                    Num(lo),
+                    Num(hi),
+                    Num(x)
+                ),
+            );
+            return false;
+        }
+        true
+    }
+    /// A position coordinate, m, within [`ranges::MAX_COORDINATE_M`].
+    fn coordinate(&mut self, key: &str, x: f64) {
+        let m = ranges::MAX_COORDINATE_M;
+        self.within(key, x, -m, m, "m");
+    }
+    /// A wind or drift vector, m/s, each component within [`ranges::MAX_WIND_MPS`].
+    fn speeds(&mut self, key: &str, xs: &[f64]) {
+        let m = ranges::MAX_WIND_MPS;
+        if xs.iter().any(|x| !(x.is_finite() && x.abs() <= m)) {
+            self.fail(
+                key,
+                format!(
+                    "must hold finite numbers within [-{}, {}] m/s, got {xs:?}",
+                    Num(m),
+                    Num(m)
+                ),
+            );
         }
     }
     fn all_finite(&mut self, key: &str, xs: &[f64]) {
@@ -437,28 +476,77 @@ fn resolve_derivative(c: &mut Checker, ct: &mut ControllerSection) {
 /// scenario are read later, when the [`crate::Scenario`] is built.
 pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     let mut c = Checker::default();
+    let dt = resolve_sim(&mut c, &mut f.sim);
+    resolve_field(&mut c, &mut f.field);
+    resolve_vehicle(&mut c, &mut f.vehicle, dt);
+    resolve_initial(&mut c, &mut f.initial);
+    resolve_sensor(&mut c, &mut f.sensor, dt);
+    resolve_controller(&mut c, &mut f.controller);
+    resolve_metrics(&mut c, &mut f);
+    resolve_output(&mut c, &mut f);
+    if c.issues.is_empty() {
+        Ok(f)
+    } else {
+        Err(c.issues)
+    }
+}
 
-    // [sim]
-    let dt = *f.sim.dt_s.get_or_insert(0.01);
-    c.positive("sim.dt_s", dt);
-    let duration = *f.sim.duration_s.get_or_insert(600.0);
-    c.positive("sim.duration_s", duration);
-    f.sim.seed.get_or_insert(0);
-    if dt > 0.0 && duration > 0.0 && dt.is_finite() && duration.is_finite() {
-        let n = duration / dt;
-        if (n - n.round()).abs() > 1e-9 * n.round().max(1.0) {
-            c.fail(
-                "sim.duration_s",
-                format!("must be a whole number of steps of sim.dt_s = {dt} s, got {duration} s"),
-            );
-        } else if n.round() > 1.0e10 {
-            c.fail("sim.duration_s", format!("{n} steps is more than 1e10"));
+/// A number in messages: plain when short, scientific when huge or tiny, so `1e307` is not
+/// echoed as 308 digits.
+pub(crate) struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a.is_finite() && a != 0.0 && !(1e-6..1e9).contains(&a) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
         }
     }
+}
 
-    // [field]
-    let fk = *f.field.kind.get_or_insert(FieldKind::RadialExp);
-    let fd = &mut f.field;
+/// The physical ranges of the keys that are not bounded by their meaning (README, "Scenario
+/// files"): wide enough for any robot or aircraft, narrow enough that positions, path lengths
+/// and step counts stay far from `f64` overflow.
+pub mod ranges {
+    /// Largest `|initial.x_m|`, `|initial.y_m|`, `|field.center_m|`, domain and source
+    /// coordinates, m (about 1.6 x the Earth's circumference).
+    pub const MAX_COORDINATE_M: f64 = 6.4e7;
+    /// Largest `vehicle.speed_mps` of the Dubins robot, m/s (well past any aircraft).
+    pub const MAX_SPEED_MPS: f64 = 1.0e3;
+    /// The Aerosonde model's airspeed range, m/s (`vehicle.airspeed_mps`, `isotrack trim`,
+    /// `isotrack replay`).
+    pub const AIRSPEED_RANGE_MPS: (f64, f64) =
+        isotrack_vehicles::fixed_wing::trim::AIRSPEED_RANGE_MPS;
+    /// The held altitudes of the fixed-wing UAV, m: above the 50 m take-off zone, at most
+    /// 20 km (the model's atmosphere is constant).
+    pub const ALTITUDE_RANGE_M: (f64, f64) = (50.0, 20_000.0);
+    /// Largest `|vehicle.wind_mps|` component and `|field.drift_mps|` component, m/s.
+    pub const MAX_WIND_MPS: f64 = 1.0e2;
+}
+
+/// `[sim]`; returns the step (s) for the sections whose checks depend on it.
+fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
+    let dt = *sim.dt_s.get_or_insert(0.01);
+    c.positive("sim.dt_s", dt);
+    let duration = *sim.duration_s.get_or_insert(600.0);
+    c.positive("sim.duration_s", duration);
+    sim.seed.get_or_insert(0);
+    if dt > 0.0 && duration > 0.0 && dt.is_finite() && duration.is_finite() {
+        if let Err(reason) = whole_steps(duration, dt) {
+            c.fail(
+                "sim.duration_s",
+                format!("{} s {reason} of sim.dt_s = {} s", Num(duration), Num(dt)),
+            );
+        }
+    }
+    dt
+}
+
+/// `[field]`: the keys allowed for the chosen kind, its defaults and checks.
+fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
+    let fk = *fd.kind.get_or_insert(FieldKind::RadialExp);
     let (kind_name, allowed): (&str, &[&str]) = match fk {
         FieldKind::RadialExp => (
             "radial_exp",
@@ -507,7 +595,9 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
         FieldKind::RadialExp => {
             c.positive("field.i0", *fd.i0.get_or_insert(20.0));
             c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
-            c.all_finite("field.center_m", fd.center_m.get_or_insert([0.0, 0.0]));
+            for x in *fd.center_m.get_or_insert([0.0, 0.0]) {
+                c.coordinate("field.center_m", x);
+            }
         }
         FieldKind::GaussianPlumes => {
             c.finite("field.background", *fd.background.get_or_insert(0.0));
@@ -516,7 +606,9 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
                 c.fail("field.sources", "must hold at least one source");
             }
             for (i, s) in sources.iter().enumerate() {
-                c.all_finite(&format!("field.sources[{i}].center_m"), &s.center_m);
+                for x in s.center_m {
+                    c.coordinate(&format!("field.sources[{i}].center_m"), x);
+                }
                 c.finite(&format!("field.sources[{i}].amplitude"), s.amplitude);
                 c.finite(&format!("field.sources[{i}].rotation_rad"), s.rotation_rad);
                 for sg in s.sigma_m {
@@ -535,7 +627,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
                 );
             }
         }
-        FieldKind::Grid => resolve_grid(&mut c, fd),
+        FieldKind::Grid => resolve_grid(c, fd),
         FieldKind::Stations => {
             if fd.path.as_deref().is_none_or(str::is_empty) {
                 c.fail("field.path", "is required for field.kind = \"stations\"");
@@ -570,10 +662,12 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
         }
     }
     if let Some(v) = fd.drift_mps {
-        c.all_finite("field.drift_mps", &v);
+        c.speeds("field.drift_mps", &v);
     }
     if let Some(d) = fd.domain_m {
-        c.all_finite("field.domain_m", &d);
+        for x in d {
+            c.coordinate("field.domain_m", x);
+        }
         if !(d[0] < d[1] && d[2] < d[3]) {
             c.fail(
                 "field.domain_m",
@@ -581,10 +675,11 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
             );
         }
     }
+}
 
-    // [vehicle]
-    let vk = *f.vehicle.kind.get_or_insert(VehicleKind::Dubins);
-    let vd = &mut f.vehicle;
+/// `[vehicle]`: the keys allowed for the chosen kind, its defaults and physical ranges.
+fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
+    let vk = *vd.kind.get_or_insert(VehicleKind::Dubins);
     let (vname, vallowed): (&str, &[&str]) = match vk {
         VehicleKind::Dubins => ("dubins", &["speed_mps"]),
         VehicleKind::FixedWing => (
@@ -615,83 +710,100 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     );
     match vk {
         VehicleKind::Dubins => {
-            c.positive("vehicle.speed_mps", *vd.speed_mps.get_or_insert(0.5));
+            let v = *vd.speed_mps.get_or_insert(0.5);
+            c.positive("vehicle.speed_mps", v);
+            if v > ranges::MAX_SPEED_MPS {
+                c.fail(
+                    "vehicle.speed_mps",
+                    format!("must be <= {} m/s, got {}", ranges::MAX_SPEED_MPS, Num(v)),
+                );
+            }
         }
         VehicleKind::FixedWing => {
             let va = *vd.airspeed_mps.get_or_insert(30.0);
             c.positive("vehicle.airspeed_mps", va);
-            if va.is_finite() && !(15.0..=45.0).contains(&va) {
+            let (lo, hi) = ranges::AIRSPEED_RANGE_MPS;
+            if va.is_finite() && !(lo..=hi).contains(&va) {
                 c.fail(
                     "vehicle.airspeed_mps",
-                    format!("the Aerosonde model is valid for 15..45 m/s, got {va}"),
+                    format!(
+                        "the Aerosonde model is valid for {}..{} m/s, got {}",
+                        Num(lo),
+                        Num(hi),
+                        Num(va)
+                    ),
                 );
             }
             let h = *vd.altitude_m.get_or_insert(100.0);
-            if c.finite("vehicle.altitude_m", h) && h <= 50.0 {
+            let (lo, hi) = ranges::ALTITUDE_RANGE_M;
+            if c.finite("vehicle.altitude_m", h) && !(h > lo && h <= hi) {
                 c.fail(
                     "vehicle.altitude_m",
-                    format!("must be above the 50 m take-off zone, got {h}"),
+                    format!(
+                        "must be above the {lo} m take-off zone and at most {hi} m, got {}",
+                        Num(h)
+                    ),
                 );
             }
-            c.all_finite("vehicle.wind_mps", vd.wind_mps.get_or_insert([0.0, 0.0]));
+            let w = *vd.wind_mps.get_or_insert([0.0, 0.0]);
+            c.speeds("vehicle.wind_mps", &w);
             vd.gusts.get_or_insert(false);
             vd.trim_feedforward.get_or_insert(true);
             vd.ecen674_gains.get_or_insert(false);
             if dt > 0.02 {
-                c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {dt}"));
+                c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {}", Num(dt)));
             }
         }
     }
+}
 
-    // [initial]
-    c.finite("initial.x_m", *f.initial.x_m.get_or_insert(10.0));
-    c.finite("initial.y_m", *f.initial.y_m.get_or_insert(0.0));
+/// `[initial]`: the pose, within [`ranges::MAX_COORDINATE_M`].
+fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
+    c.coordinate("initial.x_m", *init.x_m.get_or_insert(10.0));
+    c.coordinate("initial.y_m", *init.y_m.get_or_insert(0.0));
     c.finite(
         "initial.heading_rad",
-        *f.initial
-            .heading_rad
-            .get_or_insert(-std::f64::consts::FRAC_PI_2),
+        *init.heading_rad.get_or_insert(-std::f64::consts::FRAC_PI_2),
     );
+}
 
-    // [sensor]
-    let rate = *f
-        .sensor
+/// `[sensor]`: decided by [`Sensor::new`] itself, the constructor the builder calls, so a value
+/// that passes here cannot fail there.
+fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64) {
+    let rate = *sn
         .rate_hz
         .get_or_insert(if dt > 0.0 { 1.0 / dt } else { 1.0 });
     c.positive("sensor.rate_hz", rate);
-    c.non_negative("sensor.noise_std", *f.sensor.noise_std.get_or_insert(0.0));
-    let delay = *f.sensor.delay_s.get_or_insert(0.0);
+    let noise = *sn.noise_std.get_or_insert(0.0);
+    c.non_negative("sensor.noise_std", noise);
+    let delay = *sn.delay_s.get_or_insert(0.0);
     c.non_negative("sensor.delay_s", delay);
-    if dt > 0.0 && dt.is_finite() && rate > 0.0 && rate.is_finite() {
-        let n = 1.0 / (rate * dt);
-        if n < 1.0 - 1e-9 || (n - n.round()).abs() > 1e-9 * n.round().max(1.0) {
-            c.fail(
-                "sensor.rate_hz",
-                format!(
-                    "the sample period must be a whole number (>= 1) of steps of sim.dt_s = {dt} s; got {rate} Hz"
-                ),
-            );
-        }
-        if delay.is_finite() && delay > 0.0 {
-            let m = delay / dt;
-            if (m - m.round()).abs() > 1e-9 * m.round().max(1.0) {
-                c.fail(
-                    "sensor.delay_s",
-                    format!("must be a whole number of steps of sim.dt_s = {dt} s, got {delay} s"),
-                );
-            }
-        }
+    let all_finite = [dt, rate, delay].iter().all(|x| x.is_finite());
+    if !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
+        return; // already reported
     }
+    let cfg = SensorConfig {
+        rate_hz: rate,
+        noise_std: noise,
+        delay_s: delay,
+    };
+    match Sensor::new(cfg, dt, 0) {
+        Ok(_) => {}
+        Err(e @ SensorError::RateNotMultiple { .. }) => c.fail(
+            "sensor.rate_hz",
+            format!("{e}; the period must be a whole number >= 1 of sim.dt_s steps"),
+        ),
+        Err(e) => c.fail("sensor.delay_s", e.to_string()),
+    }
+}
 
-    // [controller]
-    resolve_controller(&mut c, &mut f.controller);
-
-    // [metrics]
+/// `[metrics]`.
+fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
     let frac = *f.metrics.steady_state_fraction.get_or_insert(0.2);
     if c.finite("metrics.steady_state_fraction", frac) && !(frac > 0.0 && frac <= 1.0) {
         c.fail(
             "metrics.steady_state_fraction",
-            format!("must be in (0, 1], got {frac}"),
+            format!("must be in (0, 1], got {}", Num(frac)),
         );
     }
     let level = f.controller.level.unwrap_or(0.0);
@@ -713,27 +825,34 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
         {
             c.fail(
                 "metrics.convergence_min_dwell_s",
-                format!("must be in [0, sim.duration_s = {duration}] s, got {dwell}"),
+                format!(
+                    "must be in [0, sim.duration_s = {}] s, got {}",
+                    Num(duration),
+                    Num(dwell)
+                ),
             );
         }
     }
+}
 
-    // [output]
+/// `[output]`, and the step plan: decided by [`StepPlan::new`] itself, the constructor the
+/// builder calls.
+fn resolve_output(c: &mut Checker, f: &mut ScenarioFile) {
     let rec = *f.output.record_rate_hz.get_or_insert(10.0);
     c.non_negative("output.record_rate_hz", rec);
-    if rec > 0.0 && rec.is_finite() && dt > 0.0 && dt.is_finite() {
-        let n = 1.0 / (rec * dt);
-        if n < 1.0 - 1e-9 || (n - n.round()).abs() > 1e-9 * n.round().max(1.0) {
-            c.fail(
-                "output.record_rate_hz",
-                format!("the recording period must be a whole number (>= 1) of steps of sim.dt_s = {dt} s; got {rec} Hz"),
-            );
-        }
+    let (dt, duration) = (
+        f.sim.dt_s.unwrap_or(0.01),
+        f.sim.duration_s.unwrap_or(600.0),
+    );
+    let sane = |x: f64| x.is_finite() && x > 0.0;
+    if !(sane(dt) && sane(duration) && rec.is_finite() && rec >= 0.0) {
+        return; // already reported
     }
-
-    if c.issues.is_empty() {
-        Ok(f)
-    } else {
-        Err(c.issues)
+    let plan = StepPlan::new(dt, duration, rec, 0.2, 0.1, 0.0, 0.0);
+    if let Err(e @ StepPlanError::RecordRateNotMultiple { .. }) = plan {
+        c.fail(
+            "output.record_rate_hz",
+            format!("{e}; the period must be a whole number >= 1 of sim.dt_s steps"),
+        );
     }
 }

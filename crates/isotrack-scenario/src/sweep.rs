@@ -22,6 +22,7 @@
 //! ChaCha8 stream seeded by `seed` on stream `id`: a pure function of the seed and the run's
 //! index, whatever the thread count or shard.
 
+use crate::{Assignment, ScenarioError};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -51,7 +52,12 @@ pub struct SweepPlan {
     pub seed: u64,
     /// Random keys, sorted.
     pub random: Vec<(String, Dist)>,
+    /// Runs: the grid product times `draws`, at most [`MAX_RUNS`].
+    total: u64,
 }
+
+/// The most runs a sweep may hold: 1e9 rows of `results.csv` are about 200 GB already.
+pub const MAX_RUNS: u64 = 1_000_000_000;
 
 /// A sweep-file problem, naming the file and key.
 #[derive(Debug, thiserror::Error)]
@@ -205,6 +211,18 @@ impl SweepPlan {
                 return Err(err(format!("`{k}` is both in [grid] and [random]")));
             }
         }
+        // Checked: an overflowing product once wrapped to a small count and skipped runs.
+        let total = grid
+            .iter()
+            .try_fold(draws, |acc, (_, v)| acc.checked_mul(v.len() as u64))
+            .filter(|&t| t <= MAX_RUNS)
+            .ok_or_else(|| {
+                let sizes: Vec<String> = grid.iter().map(|(_, v)| v.len().to_string()).collect();
+                err(format!(
+                    "the sweep has more than {MAX_RUNS} runs (grid lists of {} values x {draws} random runs); split it",
+                    if sizes.is_empty() { "no".to_string() } else { sizes.join(" x ") }
+                ))
+            })?;
         Ok(Self {
             scenario,
             base,
@@ -212,16 +230,13 @@ impl SweepPlan {
             draws,
             seed,
             random,
+            total,
         })
     }
 
-    /// Number of runs.
+    /// Number of runs (at most [`MAX_RUNS`]).
     pub fn total(&self) -> u64 {
-        self.grid
-            .iter()
-            .map(|(_, v)| v.len() as u64)
-            .product::<u64>()
-            * self.draws
+        self.total
     }
 
     /// The varied keys, in column order (grid, then random).
@@ -265,14 +280,73 @@ impl SweepPlan {
 
     /// The overrides of run `id`: the base, then the varied keys.
     pub fn run_overrides(&self, id: u64) -> Vec<String> {
-        let mut o = self.base.clone();
-        o.extend(
-            self.varied_keys()
-                .iter()
-                .zip(self.run_values(id))
-                .map(|(k, v)| format!("{k}={v}")),
-        );
+        self.run_assignments(id, "")
+            .into_iter()
+            .map(|a| a.arg)
+            .collect()
+    }
+
+    /// The overrides of run `id`, each labelled with its section for messages:
+    /// `{origin}, [grid] controller.kp=1.0`.
+    pub fn run_assignments(&self, id: u64, origin: &str) -> Vec<Assignment> {
+        let label = |section: &str, arg: &str| format!("{origin}, [{section}] {arg}");
+        let mut o: Vec<Assignment> = self
+            .base
+            .iter()
+            .map(|arg| Assignment {
+                label: label("base", arg),
+                arg: arg.clone(),
+            })
+            .collect();
+        let n_grid = self.grid.len();
+        for (i, (k, v)) in self
+            .varied_keys()
+            .iter()
+            .zip(self.run_values(id))
+            .enumerate()
+        {
+            let arg = format!("{k}={v}");
+            let section = if i < n_grid { "grid" } else { "random" };
+            o.push(Assignment {
+                label: label(section, &arg),
+                arg,
+            });
+        }
         o
+    }
+
+    /// Checks every key of the sweep against the scenario schema before anything runs: each
+    /// `[base]` value, every `[grid]` value, and each `[random]` key with a number. Unknown keys
+    /// and wrong types are errors of the sweep file; values the schema accepts but a run's
+    /// scenario rejects are recorded per run (`invalid_scenario`).
+    pub fn check_keys(&self, base: &crate::Scenario, origin: &str) -> Result<(), ScenarioError> {
+        let mut each: Vec<Assignment> = vec![];
+        for arg in &self.base {
+            each.push(Assignment {
+                arg: arg.clone(),
+                label: format!("{origin} [base] {arg}"),
+            });
+        }
+        for (k, list) in &self.grid {
+            for v in list {
+                let arg = format!("{k}={}", value_literal(v));
+                each.push(Assignment {
+                    label: format!("{origin} [grid] {arg}"),
+                    arg,
+                });
+            }
+        }
+        for (k, _) in &self.random {
+            let arg = format!("{k}=0.5");
+            each.push(Assignment {
+                label: format!("{origin} [random] {k}"),
+                arg,
+            });
+        }
+        for a in each {
+            crate::apply_assignments(base.file(), std::slice::from_ref(&a))?;
+        }
+        Ok(())
     }
 }
 
@@ -307,6 +381,21 @@ mod tests {
         assert_eq!(p.run_values(18), p.run_values(18));
         assert_ne!(p.run_values(18)[2], p.run_values(19)[2]);
         assert_eq!(p.run_overrides(0)[0], "sim.duration_s=10.0");
+    }
+
+    #[test]
+    fn run_count_overflow_is_an_error_not_a_wrap() {
+        // 3 x 6148914691236517206 wraps to 2 in u64 arithmetic; 2^64 runs wrap to 0.
+        let e = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0]\n[random]\nruns = 6148914691236517206\n")
+            .unwrap_err();
+        assert!(e.message.contains("more than 1000000000 runs"), "{e}");
+        let keys: String = (0..64).map(|i| format!("k{i} = [1, 2]\n")).collect();
+        let e = plan(&format!("scenario = \"x\"\n[grid]\n{keys}")).unwrap_err();
+        assert!(e.message.contains("more than"), "{e}");
+        // At the limit exactly: accepted.
+        let ok =
+            plan("scenario = \"x\"\n[grid]\na = [1, 2]\n[random]\nruns = 500000000\n").unwrap();
+        assert_eq!(ok.total(), MAX_RUNS);
     }
 
     #[test]

@@ -20,7 +20,9 @@ mod simulation;
 mod trace;
 
 pub use metrics::{Metrics, MetricsConfig, RunMetrics};
-pub use sensor::{Sensor, SensorConfig, SensorError};
+pub use sensor::{
+    whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
+};
 pub use simulation::{
     simulate, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, StepPlan, StepPlanError,
 };

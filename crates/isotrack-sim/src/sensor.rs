@@ -20,29 +20,80 @@ pub struct SensorConfig {
 /// Why a [`SensorConfig`] cannot run at a given step size.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SensorError {
-    /// The sample period is not a whole number of steps.
-    #[error("the sample period 1/{rate_hz} s is not a whole number of steps of {dt_s} s")]
+    /// The sample period is not a whole number (>= 1) of steps, or too many.
+    #[error("the sample period 1/{rate_hz} s {reason} of {dt_s} s")]
     RateNotMultiple {
         /// Requested rate, Hz.
         rate_hz: f64,
         /// Step, s.
         dt_s: f64,
+        /// What is wrong with it.
+        reason: StepsError,
     },
-    /// The delay is not a whole number of steps.
-    #[error("the delay {delay_s} s is not a whole number of steps of {dt_s} s")]
+    /// The delay is not a whole number of steps, or too many.
+    #[error("the delay {delay_s} s {reason} of {dt_s} s")]
     DelayNotMultiple {
         /// Requested delay, s.
         delay_s: f64,
         /// Step, s.
         dt_s: f64,
+        /// What is wrong with it.
+        reason: StepsError,
+    },
+    /// The delay holds more samples in flight than [`MAX_SAMPLES_IN_FLIGHT`].
+    #[error(
+        "the delay {delay_s} s holds {in_flight} samples in flight at {rate_hz} Hz; at most {max} are allowed (delay <= {max_delay_s} s at this rate)",
+        max = MAX_SAMPLES_IN_FLIGHT,
+        max_delay_s = MAX_SAMPLES_IN_FLIGHT as f64 / rate_hz
+    )]
+    DelayTooLong {
+        /// Requested delay, s.
+        delay_s: f64,
+        /// Sampling rate, Hz.
+        rate_hz: f64,
+        /// Samples the delay would hold.
+        in_flight: u64,
     },
 }
 
-/// Converts a duration to a whole number of steps, if it is one (to 1e-9 relative).
-pub(crate) fn whole_steps(duration_s: f64, dt_s: f64) -> Option<u64> {
+/// The most samples a delay may hold in flight (16 Mi values, 128 MiB): the delay line stores
+/// one value per sample, not per step, so this bounds its memory whatever the step size.
+pub const MAX_SAMPLES_IN_FLIGHT: u64 = 1 << 24;
+
+/// The most steps any duration may span (a run, a sample period, a delay, a recording period):
+/// 1e10 steps is 28 hours at the default 0.01 s step and well inside `f64`'s exact integers, so
+/// step counts and step times stay exact.
+pub const MAX_STEPS: u64 = 10_000_000_000;
+
+/// Why a duration is not a usable step count.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum StepsError {
+    /// Not a whole number of steps (to 1e-9 relative), or negative, or not a number.
+    #[error("is not a whole number of steps")]
+    NotWhole,
+    /// More than [`MAX_STEPS`] steps.
+    #[error("is more than {MAX_STEPS} steps")]
+    TooMany,
+}
+
+/// Converts a duration to a whole number of steps, if it is one (to 1e-9 relative) and at most
+/// [`MAX_STEPS`]. The single rule used by validation and by the builders, so the two agree.
+pub fn whole_steps(duration_s: f64, dt_s: f64) -> Result<u64, StepsError> {
     let n = duration_s / dt_s;
     let r = n.round();
-    ((n - r).abs() <= 1e-9 * r.max(1.0) && (0.0..9.0e15).contains(&r)).then_some(r as u64)
+    if !(n.is_finite() && r >= 0.0 && (n - r).abs() <= 1e-9 * r.max(1.0)) {
+        // A huge finite count is "too many" before it is "not whole": at 1e17 steps every f64
+        // is whole, and the honest complaint is the size.
+        return Err(if n > MAX_STEPS as f64 {
+            StepsError::TooMany
+        } else {
+            StepsError::NotWhole
+        });
+    }
+    if r > MAX_STEPS as f64 {
+        return Err(StepsError::TooMany);
+    }
+    Ok(r as u64)
 }
 
 /// Samples the true field value every `rate_hz`, delays it by `delay_s`, adds seeded Gaussian
@@ -58,7 +109,12 @@ pub struct Sensor {
     /// Steps until the next sample (a countdown instead of `k % every`: a 64-bit division per
     /// step costs more than the rest of the sensor).
     countdown: u64,
-    delay_steps: usize,
+    delay_steps: u64,
+    /// Steps until the true value is next stored: only the values of steps `j` with
+    /// `(j + delay_steps) % every == 0` are ever delivered, so only those are kept.
+    store_countdown: u64,
+    /// Steps until the first delayed value exists (counts `delay_steps` down to 0).
+    warmup: u64,
     noise_std: f64,
     history: VecDeque<f64>,
     rng: ChaCha8Rng,
@@ -68,21 +124,41 @@ impl Sensor {
     /// A sensor for steps of `dt_s`, its noise seeded by `seed`.
     pub fn new(cfg: SensorConfig, dt_s: f64, seed: u64) -> Result<Self, SensorError> {
         let every = whole_steps(1.0 / cfg.rate_hz, dt_s)
-            .filter(|&n| n >= 1)
-            .ok_or(SensorError::RateNotMultiple {
+            .and_then(|n| {
+                if n >= 1 {
+                    Ok(n)
+                } else {
+                    Err(StepsError::NotWhole)
+                }
+            })
+            .map_err(|reason| SensorError::RateNotMultiple {
                 rate_hz: cfg.rate_hz,
                 dt_s,
+                reason,
             })?;
-        let delay_steps = whole_steps(cfg.delay_s, dt_s).ok_or(SensorError::DelayNotMultiple {
-            delay_s: cfg.delay_s,
-            dt_s,
-        })? as usize;
+        let delay_steps =
+            whole_steps(cfg.delay_s, dt_s).map_err(|reason| SensorError::DelayNotMultiple {
+                delay_s: cfg.delay_s,
+                dt_s,
+                reason,
+            })?;
+        let in_flight = delay_steps.div_ceil(every);
+        if in_flight > MAX_SAMPLES_IN_FLIGHT {
+            return Err(SensorError::DelayTooLong {
+                delay_s: cfg.delay_s,
+                rate_hz: cfg.rate_hz,
+                in_flight,
+            });
+        }
         Ok(Self {
             every,
             countdown: 0,
             delay_steps,
+            store_countdown: (every - delay_steps % every) % every,
+            warmup: delay_steps,
             noise_std: cfg.noise_std,
-            history: VecDeque::with_capacity(delay_steps + 1),
+            // Grows as needed: a long delay allocates only what a run reaches.
+            history: VecDeque::with_capacity((in_flight as usize + 1).min(4096)),
             rng: ChaCha8Rng::seed_from_u64(seed),
         })
     }
@@ -105,10 +181,22 @@ impl Sensor {
         let delayed = if self.delay_steps == 0 {
             true_value
         } else {
-            self.history.push_back(true_value);
-            if self.history.len() <= self.delay_steps {
+            if self.store_countdown == 0 {
+                self.history.push_back(true_value);
+                self.store_countdown = self.every - 1;
+            } else {
+                self.store_countdown -= 1;
+            }
+            if self.warmup > 0 {
+                self.warmup -= 1;
                 return None;
             }
+            if !sample_now {
+                return None;
+            }
+            // The front is the value of step `k - delay_steps`: stored steps and sample steps
+            // are both `every` apart, and the first stored one is the first with
+            // `j + delay_steps` a multiple of `every`.
             self.history.pop_front()?
         };
         if !sample_now {
@@ -150,6 +238,62 @@ mod tests {
         assert_eq!(got[0], (20, 0.0));
         assert_eq!(got[1], (30, 10.0));
         assert_eq!(got.len(), 8);
+    }
+
+    /// Against the definition: a sample at step `k` (a multiple of the period, `k >= d`) reports
+    /// the true value of step `k - d`, for delays shorter than, equal to and longer than the
+    /// sample period and not multiples of it.
+    #[test]
+    fn delay_line_delivers_the_value_of_step_k_minus_d() {
+        for every in [1u64, 3, 10] {
+            for d in [0u64, 1, 2, 3, 7, 10, 23, 30] {
+                let cfg = SensorConfig {
+                    rate_hz: 100.0 / every as f64,
+                    noise_std: 0.0,
+                    delay_s: d as f64 * 0.01,
+                };
+                let mut s = Sensor::new(cfg, 0.01, 1).unwrap();
+                for k in 0..200u64 {
+                    let got = s.observe(k as f64, k as f64 * 2.0 + 1.0).map(|m| m.value);
+                    let want = (k % every == 0 && k >= d).then(|| (k - d) as f64 * 2.0 + 1.0);
+                    assert_eq!(got, want, "every {every}, delay {d}, step {k}");
+                }
+                assert!(s.history.len() as u64 <= d.div_ceil(every) + 1);
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_a_delay_beyond_the_samples_in_flight_bound() {
+        let cfg = |delay_s| SensorConfig {
+            rate_hz: 100.0,
+            noise_std: 0.0,
+            delay_s,
+        };
+        // 1e16 s at 0.01 s steps: 1e18 steps; before the bound this panicked in the builder.
+        assert!(matches!(
+            Sensor::new(cfg(1.0e16), 0.01, 1),
+            Err(SensorError::DelayNotMultiple {
+                reason: StepsError::TooMany,
+                ..
+            })
+        ));
+        assert!(matches!(
+            Sensor::new(cfg(1.1e7), 0.001, 1),
+            Err(SensorError::DelayNotMultiple {
+                reason: StepsError::TooMany,
+                ..
+            })
+        ));
+        assert!(matches!(
+            Sensor::new(cfg(1.0e6), 0.01, 1),
+            Err(SensorError::DelayTooLong {
+                in_flight: 100_000_000,
+                ..
+            })
+        ));
+        let ok = Sensor::new(cfg(1.0e5), 0.01, 1).unwrap();
+        assert!(ok.history.capacity() < 10_000, "allocates lazily");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The simulation loop.
 
 use crate::metrics::{Metrics, MetricsConfig, RunMetrics};
-use crate::sensor::{whole_steps, Sensor};
+use crate::sensor::{whole_steps, Sensor, StepsError};
 use crate::trace::{TraceRow, TraceSink};
 use isotrack_core::control::GroundTruth;
 use isotrack_core::{IsolineController, ScalarField, Vehicle};
@@ -52,21 +52,25 @@ pub struct StepPlan {
 /// Why durations do not make a [`StepPlan`].
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StepPlanError {
-    /// Duration not a whole number of steps.
-    #[error("the duration {duration_s} s is not a whole number of steps of {dt_s} s")]
+    /// Duration not a whole number of steps, or too many.
+    #[error("the duration {duration_s} s {reason} of {dt_s} s")]
     DurationNotMultiple {
         /// Duration, s.
         duration_s: f64,
         /// Step, s.
         dt_s: f64,
+        /// What is wrong with it.
+        reason: StepsError,
     },
-    /// Recording period not a whole number of steps.
-    #[error("the recording period 1/{rate_hz} s is not a whole number of steps of {dt_s} s")]
+    /// Recording period not a whole number (>= 1) of steps, or too many.
+    #[error("the recording period 1/{rate_hz} s {reason} of {dt_s} s")]
     RecordRateNotMultiple {
         /// Rate, Hz.
         rate_hz: f64,
         /// Step, s.
         dt_s: f64,
+        /// What is wrong with it.
+        reason: StepsError,
     },
 }
 
@@ -84,16 +88,27 @@ impl StepPlan {
         convergence_min_dwell_s: f64,
         level: f64,
     ) -> Result<Self, StepPlanError> {
-        let n_steps = whole_steps(duration_s, dt_s)
-            .ok_or(StepPlanError::DurationNotMultiple { duration_s, dt_s })?;
+        let n_steps =
+            whole_steps(duration_s, dt_s).map_err(|reason| StepPlanError::DurationNotMultiple {
+                duration_s,
+                dt_s,
+                reason,
+            })?;
         let record_every = if record_rate_hz == 0.0 {
             0
         } else {
             whole_steps(1.0 / record_rate_hz, dt_s)
-                .filter(|&n| n >= 1)
-                .ok_or(StepPlanError::RecordRateNotMultiple {
+                .and_then(|n| {
+                    if n >= 1 {
+                        Ok(n)
+                    } else {
+                        Err(StepsError::NotWhole)
+                    }
+                })
+                .map_err(|reason| StepPlanError::RecordRateNotMultiple {
                     rate_hz: record_rate_hz,
                     dt_s,
+                    reason,
                 })?
         };
         let ss = ((1.0 - steady_state_fraction) * n_steps as f64).ceil() as u64;
@@ -208,6 +223,23 @@ where
                 "the field has no value at ({:.6}, {:.6}) m, t = {t} s",
                 pose.position.x, pose.position.y
             ));
+            if k == 0 && plan.record_every > 0 {
+                // The start itself is off the field: the trace still shows where the vehicle
+                // was (the field value and error unknown, NaN), so a plot can say why.
+                let row = TraceRow {
+                    t_s: t,
+                    x_m: pose.position.x,
+                    y_m: pose.position.y,
+                    heading_rad: pose.heading_rad,
+                    s: f64::NAN,
+                    error: f64::NAN,
+                    omega_radps: omega,
+                    s_measured: None,
+                    telemetry: vehicle.telemetry(&x),
+                };
+                sink.record(&row);
+                last_recorded_step = Some(0);
+            }
             break;
         };
         if k > 0 {

@@ -50,7 +50,32 @@ pub enum GridError {
         /// Row.
         iy: usize,
     },
+    /// A value beyond [`MAX_ABS_VALUE`].
+    #[error("value {value:e} at column {ix}, row {iy} is beyond +-{max:e}: the interpolation's differences and products would overflow; rescale the data", max = MAX_ABS_VALUE)]
+    TooLarge {
+        /// Column.
+        ix: usize,
+        /// Row.
+        iy: usize,
+        /// The value.
+        value: f64,
+    },
+    /// More nodes than [`MAX_NODES`].
+    #[error("{nx} x {ny} nodes is more than the {max} a grid may hold ({gib} GiB of values)", max = MAX_NODES, gib = (MAX_NODES * 8) >> 30)]
+    TooManyNodes {
+        /// Columns.
+        nx: usize,
+        /// Rows.
+        ny: usize,
+    },
 }
+
+/// The most nodes a grid may hold: 2^28 (16384 x 16384), 2 GiB of values.
+pub const MAX_NODES: usize = 1 << 28;
+
+/// The largest `|value|` a grid may hold: bicubic weights, gradients and Hessians multiply and
+/// subtract values, and `1e308 - (-1e308)` is already infinite.
+pub const MAX_ABS_VALUE: f64 = 1.0e100;
 
 /// A regular 2-D grid of values.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,6 +99,9 @@ impl Grid2 {
         if nx < 2 || ny < 2 {
             return Err(GridError::TooSmall { nx, ny });
         }
+        if nx.checked_mul(ny).is_none_or(|n| n > MAX_NODES) {
+            return Err(GridError::TooManyNodes { nx, ny });
+        }
         if values.len() != nx * ny {
             return Err(GridError::SizeMismatch {
                 len: values.len(),
@@ -91,6 +119,13 @@ impl Grid2 {
             return Err(GridError::Infinite {
                 ix: i % nx,
                 iy: i / nx,
+            });
+        }
+        if let Some(i) = values.iter().position(|v| v.abs() > MAX_ABS_VALUE) {
+            return Err(GridError::TooLarge {
+                ix: i % nx,
+                iy: i / nx,
+                value: values[i],
             });
         }
         if values.iter().all(|v| v.is_nan()) {
@@ -113,6 +148,9 @@ impl Grid2 {
         spacing_m: [f64; 2],
         f: impl Fn(Vec2) -> f64,
     ) -> Result<Self, GridError> {
+        if nx.checked_mul(ny).is_none_or(|n| n > MAX_NODES) {
+            return Err(GridError::TooManyNodes { nx, ny });
+        }
         let mut values = Vec::with_capacity(nx * ny);
         for iy in 0..ny {
             for ix in 0..nx {

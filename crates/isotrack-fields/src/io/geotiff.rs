@@ -67,7 +67,14 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     let (w, h) = dec.dimensions().map_err(tiff_err)?;
     let (nx, ny) = (w as usize, h as usize);
     match dec.colortype().map_err(tiff_err)? {
-        ColorType::Gray(_) => {}
+        ColorType::Gray(8 | 16 | 32 | 64) => {}
+        ColorType::Gray(bits) => {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!("{bits}-bit samples are not supported: need 8, 16, 32 or 64 bits per sample (one band)"),
+            ))
+        }
         other => {
             return Err(LoadError::new(
                 path,
@@ -127,7 +134,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             path,
             None,
             format!(
-                "{} samples for {nx} x {ny} pixels (more than one band?)",
+                "{} samples for {nx} x {ny} pixels: the image data does not match its size",
                 values.len()
             ),
         ));

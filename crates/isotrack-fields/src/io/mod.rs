@@ -101,6 +101,47 @@ impl LoadError {
     }
 }
 
+/// The largest grid file read, bytes (4 GiB: a grid of [`crate::grid::MAX_NODES`] float64
+/// values is 2 GiB; text formats take about twice that).
+pub const MAX_GRID_FILE_BYTES: u64 = 4 << 30;
+
+/// Reads a whole file of at most `max_bytes`, refusing what is not a regular file (a FIFO,
+/// `/dev/zero`, a directory) before reading a byte: such "files" never end, or end anywhere.
+/// The size is checked from the metadata and again while reading (a file that grows is cut off
+/// with an error, not read on).
+pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let f = std::fs::File::open(path)?;
+    let meta = f.metadata()?;
+    if !meta.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device, pipe or directory)",
+        ));
+    }
+    let too_big = |n: u64| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("{n} bytes is more than the {max_bytes} this reader accepts"),
+        )
+    };
+    if meta.len() > max_bytes {
+        return Err(too_big(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    f.take(max_bytes + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// As [`read_limited`], as UTF-8 text.
+pub fn read_text_limited(path: &Path, max_bytes: u64) -> std::io::Result<String> {
+    String::from_utf8(read_limited(path, max_bytes)?)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
 /// A grid as read, with the georeference the file carried.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadedGrid {
@@ -131,8 +172,16 @@ pub fn load_grid_variable(
         )),
     };
     if format == GridFormat::NetCdf {
-        if !path.exists() {
-            return Err(LoadError::new(path, None, "cannot read: no such file"));
+        match std::fs::metadata(path) {
+            Err(e) => return Err(LoadError::new(path, None, format!("cannot read: {e}"))),
+            Ok(m) if !m.is_file() => {
+                return Err(LoadError::new(
+                    path,
+                    None,
+                    "cannot read: not a regular file (a device, pipe or directory)",
+                ))
+            }
+            Ok(_) => {}
         }
         #[cfg(feature = "netcdf")]
         return netcdf::parse(path, variable);
@@ -146,8 +195,8 @@ pub fn load_grid_variable(
             ));
         }
     }
-    let bytes =
-        std::fs::read(path).map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
     parse_grid(path, &bytes, format)
 }
 

@@ -120,6 +120,16 @@ pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedGrid, L
     }
     let (ydim, xdim) = (&dims[dims.len() - 2], &dims[dims.len() - 1]);
     let (ny, nx) = (ydim.len(), xdim.len());
+    // Checked before reading: the header's sizes are the file's claim, not a promise.
+    if nx
+        .checked_mul(ny)
+        .is_none_or(|n| n > crate::grid::MAX_NODES)
+    {
+        return Err(LoadError::grid(
+            path,
+            crate::grid::GridError::TooManyNodes { nx, ny },
+        ));
+    }
     let mut values: Vec<f64> = var
         .get_values::<f64, _>(..)
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;

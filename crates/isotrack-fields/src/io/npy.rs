@@ -30,6 +30,24 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             format!("unsupported dtype {dtype:?}: need a plain numeric dtype"),
         ));
     };
+    // The dtype first: an object array (`|O`, pickled Python objects) has no fixed item size,
+    // and reading it as numbers once reported a "truncated file".
+    let numeric = matches!(
+        (ts.type_char(), ts.size_field()),
+        (TypeChar::Float, 4 | 8) | (TypeChar::Int | TypeChar::Uint, 1 | 2 | 4 | 8)
+    );
+    if !numeric {
+        let hint = if ts.type_char() == TypeChar::Object {
+            " (Python objects, stored pickled): save a numeric array, e.g. `np.save(f, a.astype(float))`"
+        } else {
+            ""
+        };
+        return Err(LoadError::new(
+            path,
+            None,
+            format!("unsupported dtype `{ts}`{hint}; need float64, float32 or an integer type"),
+        ));
+    }
     // The header's shape is untrusted: refuse a data size beyond the file before reading.
     let item = ts.num_bytes().unwrap_or(8) as u128;
     if (ny as u128) * (nx as u128) * item > bytes.len() as u128 {

@@ -315,3 +315,90 @@ fn geotiffs_written_by_gdal_load_like_the_csv() {
     assert!(e.message.contains("JPEG"), "{e}");
     assert!(e.to_string().contains("jpeg_u8.tif"), "{e}");
 }
+
+/// Regression (hostile inputs): an object array is named as such, not "truncated".
+#[test]
+fn npy_object_dtype_is_named() {
+    let e = err_of("o.npy", &npy_bytes("|O", "(2, 2)", false, &[0u8; 32]));
+    assert!(
+        e.message.contains("`|O`") && e.message.contains("Python objects"),
+        "{e}"
+    );
+    assert!(!e.message.contains("truncated"), "{e}");
+}
+
+/// A minimal little-endian baseline TIFF: 2 x 2 pixels of `bits` bits, one band, one strip.
+fn tiff_with_bits(bits: u16) -> Vec<u8> {
+    let data_at = 8u32;
+    let data = [0u8; 4];
+    let ifd_at = data_at + data.len() as u32;
+    let mut b = vec![b'I', b'I', 42, 0];
+    b.extend(ifd_at.to_le_bytes());
+    b.extend(data);
+    // (tag, type SHORT=3 / LONG=4, count, value)
+    let entries: [(u16, u16, u32, u32); 9] = [
+        (256, 3, 1, 2),               // ImageWidth
+        (257, 3, 1, 2),               // ImageLength
+        (258, 3, 1, u32::from(bits)), // BitsPerSample
+        (259, 3, 1, 1),               // Compression: none
+        (262, 3, 1, 1),               // Photometric: BlackIsZero
+        (273, 4, 1, data_at),         // StripOffsets
+        (277, 3, 1, 1),               // SamplesPerPixel
+        (278, 3, 1, 2),               // RowsPerStrip
+        (279, 4, 1, 4),               // StripByteCounts
+    ];
+    b.extend((entries.len() as u16).to_le_bytes());
+    for (tag, ty, count, value) in entries {
+        b.extend(tag.to_le_bytes());
+        b.extend(ty.to_le_bytes());
+        b.extend(count.to_le_bytes());
+        b.extend(value.to_le_bytes());
+    }
+    b.extend(0u32.to_le_bytes());
+    b
+}
+
+/// Regression (hostile inputs): a 7-bit GeoTIFF is refused for its bit depth, not as "more than
+/// one band?"; the same file at 8 bits reads.
+#[test]
+fn geotiff_odd_bit_depth_is_named() {
+    let e = err_of("b7.tif", &tiff_with_bits(7));
+    assert!(e.message.contains("7-bit samples"), "{e}");
+    let (_d, p) = tmp("b8.tif", &tiff_with_bits(8));
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!((g.grid.nx(), g.grid.ny()), (2, 2));
+}
+
+/// Regression (hostile inputs): values beyond the grid limit are an error naming the value and
+/// the node (a 1e308 grid once ran and reported "the field has no value at (1, 1)").
+#[test]
+fn grid_values_beyond_the_limit_are_refused() {
+    let e = err_of("big.csv", b"0,1e308\n2,3\n");
+    assert!(
+        e.message.contains("1e308") && e.message.contains("column 1, row 0"),
+        "{e}"
+    );
+    let (_d, p) = tmp("ok.csv", b"0,1e99\n2,3\n");
+    assert!(load_grid(&p, None).is_ok());
+}
+
+/// Regression (hostile inputs): devices, pipes and directories are refused before a byte is
+/// read (`/dev/zero` once grew the process to 18.7 GB), and files beyond the limit too.
+#[test]
+fn non_regular_and_oversized_files_are_refused() {
+    #[cfg(unix)]
+    {
+        let e = load_grid(Path::new("/dev/zero"), Some(GridFormat::Csv)).unwrap_err();
+        assert!(e.message.contains("not a regular file"), "{e}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let e = load_grid(dir.path(), Some(GridFormat::Npy)).unwrap_err();
+    assert!(e.message.contains("not a regular file"), "{e}");
+    let (_d, p) = tmp("g.csv", &[b'1'; 100]);
+    let e = read_limited(&p, 99).unwrap_err();
+    assert!(
+        e.to_string().contains("100 bytes is more than the 99"),
+        "{e}"
+    );
+    assert_eq!(read_limited(&p, 100).unwrap().len(), 100);
+}

@@ -29,7 +29,34 @@ pub enum TrimError {
     /// Bad airspeed.
     #[error("airspeed must be finite and > 0, got {0}")]
     BadAirspeed(f64),
+    /// Outside [`AIRSPEED_RANGE_MPS`].
+    #[error("the Aerosonde model is valid for {lo}..{hi} m/s, got {0}", lo = AIRSPEED_RANGE_MPS.0, hi = AIRSPEED_RANGE_MPS.1)]
+    OutOfRange(f64),
+    /// The trim needs an input beyond its actuator's limit, or an angle of attack past the
+    /// model's stall blending.
+    #[error("no feasible trim at {airspeed_mps} m/s: {what} = {value:.4} is beyond {limit}")]
+    Infeasible {
+        /// Airspeed, m/s.
+        airspeed_mps: f64,
+        /// The quantity.
+        what: &'static str,
+        /// Its trim value.
+        value: f64,
+        /// The limit, as text with units.
+        limit: &'static str,
+    },
 }
+
+/// The airspeeds the Aerosonde model and its autopilot are used at, m/s: every trim in it is
+/// within the actuators' limits and below the stall blending (from 15 to 45 m/s: throttle
+/// 0.213 to 0.595, elevator -0.324 to -0.025 rad, alpha 0.365 to -0.029 rad, alpha0 = 0.47);
+/// `run`, `trim` and `replay` all accept exactly this range.
+pub const AIRSPEED_RANGE_MPS: (f64, f64) = (15.0, 45.0);
+
+/// Throttle range.
+const THROTTLE_RANGE: (f64, f64) = (0.0, 1.0);
+/// Surface limit, rad (45 deg, the autopilot's `surface_max_rad`).
+const SURFACE_MAX_RAD: f64 = std::f64::consts::FRAC_PI_4;
 
 /// The trim state vector at altitude `h` (position at the origin, heading `psi`).
 pub fn trim_state(t: &Trim, altitude_m: f64, psi_rad: f64) -> State12 {
@@ -54,6 +81,9 @@ pub fn trim_state(t: &Trim, altitude_m: f64, psi_rad: f64) -> State12 {
 pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
     if !(airspeed_mps.is_finite() && airspeed_mps > 0.0) {
         return Err(TrimError::BadAirspeed(airspeed_mps));
+    }
+    if !(AIRSPEED_RANGE_MPS.0..=AIRSPEED_RANGE_MPS.1).contains(&airspeed_mps) {
+        return Err(TrimError::OutOfRange(airspeed_mps));
     }
     let gm = super::dynamics::Derived::new(p);
     let trim_of = |z: [f64; 3]| Trim {
@@ -103,6 +133,25 @@ pub fn trim(p: &Aerosonde, airspeed_mps: f64) -> Result<Trim, TrimError> {
     let r = residual(z);
     if !r.iter().all(|v| v.abs() < 1e-9) || !z.iter().all(|v| v.is_finite()) {
         return Err(TrimError::NoConvergence(airspeed_mps));
+    }
+    let infeasible = |what, value, limit| TrimError::Infeasible {
+        airspeed_mps,
+        what,
+        value,
+        limit,
+    };
+    if !(THROTTLE_RANGE.0..=THROTTLE_RANGE.1).contains(&z[2]) {
+        return Err(infeasible("throttle delta_t", z[2], "[0, 1]"));
+    }
+    if z[1].abs() > SURFACE_MAX_RAD {
+        return Err(infeasible("elevator delta_e (rad)", z[1], "+-pi/4 rad"));
+    }
+    if z[0].abs() >= p.alpha0 {
+        return Err(infeasible(
+            "alpha (rad)",
+            z[0],
+            "the stall blending angle alpha0 = 0.47 rad",
+        ));
     }
     Ok(trim_of(z))
 }

@@ -1,0 +1,551 @@
+//! Hostile inputs (issue 16): each reproducer from the report, as a regression test. Every one
+//! of these once panicked, hung, aborted or wrote a silently wrong file.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn isotrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+/// A failure with the exit code, no panic, every needle in stderr.
+fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "stderr: {e}");
+    assert!(!e.contains("panicked"), "panic: {e}");
+    for n in needles {
+        assert!(e.contains(n), "expected `{n}` in: {e}");
+    }
+}
+
+/// Item 1: Values validation accepted and the builder rejected (exit 101 in build.rs): now refused
+/// by validation, which calls the builder's own constructors.
+#[test]
+fn step_counts_beyond_the_limit_are_invalid_not_a_panic() {
+    for (set, key) in [
+        ("sensor.delay_s=1e16", "sensor.delay_s"),
+        ("sensor.delay_s=9e13", "sensor.delay_s"),
+        ("sensor.delay_s=1e6", "sensor.delay_s"),
+        ("sensor.rate_hz=1e-14", "sensor.rate_hz"),
+        ("output.record_rate_hz=1e-14", "output.record_rate_hz"),
+        ("sim.duration_s=1e300", "sim.duration_s"),
+    ] {
+        let o = isotrack(&["run", "--set", set]);
+        assert_fails(&o, 65, &[key]);
+    }
+}
+
+/// Item 1: In a sweep grid an invalid value is one recorded run, not a dead sweep.
+#[test]
+fn an_invalid_grid_value_is_recorded_not_fatal() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 5.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsensor.delay_s = [0.0, 1e16]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2);
+    assert!(rows[0].contains(",completed,"), "{}", rows[0]);
+    assert!(rows[1].contains(",invalid_scenario,"), "{}", rows[1]);
+    // 17. The true source is named: the sweep's grid, not `--set` or "(default value)".
+    assert!(
+        rows[1].contains("[grid] sensor.delay_s=1e16")
+            || rows[1].contains("[grid] sensor.delay_s=10000000000000000"),
+        "{}",
+        rows[1]
+    );
+    assert!(!rows[1].contains("default value") && !rows[1].contains("--set"));
+}
+
+/// Item 2: A spacing that would make 1e10 nodes (69 GB) is an error naming the spacing that fits,
+/// on the command line and in a scenario.
+#[test]
+fn interpolation_grids_are_capped() {
+    let d = tempfile::tempdir().unwrap();
+    let mut text = String::from("x_m,y_m,v\n");
+    for i in 0..20 {
+        let (x, y) = ((i * 37 % 100) as f64, (i * 61 % 100) as f64);
+        text += &format!("{x},{y},{}\n", 1.0 + (i % 7) as f64);
+    }
+    let st = write(d.path(), "st.csv", &text);
+    let g = d.path().join("g.csv");
+    let o = isotrack(&[
+        "interpolate",
+        &st,
+        "--value-column",
+        "v",
+        "--spacing-m",
+        "1e-3",
+        "--method",
+        "idw",
+        "--out",
+        g.to_str().unwrap(),
+    ]);
+    assert_fails(&o, 64, &["--spacing-m", "at least 0.0"]);
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        "[field]\nkind = \"stations\"\npath = \"st.csv\"\nvalue_column = \"v\"\nmethod = \"idw\"\ngrid_spacing_m = 1e-3\n",
+    );
+    let o = isotrack(&["check", &sc]);
+    assert_fails(&o, 65, &["field.grid_spacing_m", "at least"]);
+    // 12. Without --spacing-m: 1/100 of the 96 m bounding box, not a 2 x 2 grid at 10 km.
+    let o = isotrack(&[
+        "interpolate",
+        &st,
+        "--value-column",
+        "v",
+        "--method",
+        "idw",
+        "--out",
+        g.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let side: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("g.json")).unwrap()).unwrap();
+    let shape = &side["shape_rows_cols"];
+    assert!(
+        shape[0].as_u64().unwrap() > 90 && shape[1].as_u64().unwrap() > 90,
+        "{shape}"
+    );
+}
+
+/// Item 3: `plot` on a trace at +-1e308 hung, on `inf` it panicked in plotters: a clear error, or
+/// the non-finite rows left out.
+#[test]
+fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=5",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trace = run.join("trace.csv");
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let edit = |col: usize, v: &str| -> String {
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let mut f: Vec<String> = lines[5].split(',').map(str::to_string).collect();
+        f[col] = v.to_string();
+        lines[5] = f.join(",");
+        lines.join("\n") + "\n"
+    };
+    std::fs::write(&trace, edit(1, "1e308")).unwrap();
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--out",
+        d.path().join("p").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 65, &["x_m reaches 1e308"]);
+    std::fs::write(&trace, edit(4, "-1e308")).unwrap();
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--out",
+        d.path().join("p").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 65, &["reaches -1e308"]);
+    std::fs::write(&trace, edit(1, "inf")).unwrap();
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--out",
+        d.path().join("p").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Item 4, 10, 15: `replay`: a span of 1e12 s is refused up front; the output may not be the input
+/// (even spelled differently); a NaN altitude is refused at the door.
+#[test]
+fn replay_bounds_its_work_and_protects_its_input() {
+    let d = tempfile::tempdir().unwrap();
+    let head = "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n";
+    let long = write(
+        d.path(),
+        "long.csv",
+        &format!("{head}0,0,0,0,0.4\n1e12,0,0,0,0.4\n"),
+    );
+    let out = d.path().join("o.csv");
+    let o = isotrack(&["replay", "--inputs", &long, "--out", out.to_str().unwrap()]);
+    assert_fails(&o, 65, &["1e12 s", "steps"]);
+    let ok_text = format!("{head}0,-0.07,0,0,0.4\n1,-0.07,0,0,0.4\n");
+    let ok = write(d.path(), "ok.csv", &ok_text);
+    let alias = d.path().join(".").join("ok.csv");
+    for target in [ok.clone(), alias.display().to_string()] {
+        let o = isotrack(&["replay", "--inputs", &ok, "--out", &target]);
+        assert_fails(&o, 64, &["is the input file"]);
+        assert_eq!(std::fs::read_to_string(&ok).unwrap(), ok_text);
+    }
+    let o = isotrack(&[
+        "replay",
+        "--inputs",
+        &ok,
+        "--out",
+        out.to_str().unwrap(),
+        "--altitude-m",
+        "nan",
+    ]);
+    assert_fails(&o, 64, &["--altitude-m"]);
+    assert!(!out.exists());
+}
+
+/// Item 5: `--threads 100000` is capped (with a note), and the rows are those of one thread.
+#[test]
+fn threads_are_capped() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 2.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0]\n",
+    );
+    let (a, b) = (d.path().join("a"), d.path().join("b"));
+    let o = isotrack(&[
+        "sweep",
+        &sw,
+        "--out",
+        a.to_str().unwrap(),
+        "--threads",
+        "100000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("capped to"), "{}", stderr(&o));
+    let o = isotrack(&["sweep", &sw, "--out", b.to_str().unwrap(), "--threads", "1"]);
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read(a.join("results.csv")).unwrap(),
+        std::fs::read(b.join("results.csv")).unwrap()
+    );
+}
+
+/// Item 6: Devices and directories are refused before reading: as a scenario, a grid, stations.
+#[cfg(unix)]
+#[test]
+fn non_regular_files_are_refused() {
+    let o = isotrack(&["run", "/dev/zero"]);
+    assert_fails(&o, 66, &["not a regular file"]);
+    let d = tempfile::tempdir().unwrap();
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        "[field]\nkind = \"grid\"\npath = \"/dev/zero\"\nformat = \"csv\"\n",
+    );
+    let o = isotrack(&["run", &sc]);
+    assert_fails(&o, 65, &["field.path", "not a regular file"]);
+    let o = isotrack(&[
+        "interpolate",
+        "/dev/zero",
+        "--value-column",
+        "v",
+        "--out",
+        d.path().join("g.csv").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 66, &["not a regular file"]);
+    let big = d.path().join("big.toml");
+    std::fs::write(&big, vec![b'#'; 2 << 20]).unwrap();
+    let o = isotrack(&["run", big.to_str().unwrap()]);
+    assert_fails(&o, 66, &["more than the 1048576"]);
+}
+
+/// Item 7: Run counts that overflow u64 wrapped to 2 (or 0) runs and exited 0.
+#[test]
+fn sweep_run_count_overflow_is_an_error() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0]\n[random]\nruns = 6148914691236517206\ninitial.x_m = { uniform = [0.0, 1.0] }\n",
+    );
+    let o = isotrack(&["sweep", &sw, "--out", d.path().join("o").to_str().unwrap()]);
+    assert_fails(&o, 65, &["more than 1000000000 runs"]);
+    let keys: String = (0..64).map(|i| format!("sim.k{i} = [1, 2]\n")).collect();
+    let sw = write(
+        d.path(),
+        "s2.toml",
+        &format!("scenario = \"sc.toml\"\n[grid]\n{keys}"),
+    );
+    let o = isotrack(&["sweep", &sw, "--out", d.path().join("o2").to_str().unwrap()]);
+    assert_fails(&o, 65, &["more than"]);
+}
+
+/// Item 8, 9: Resume and merge validate rows (field count, id range) and compare the sweep's
+/// digest; merge will not overwrite a sweep's results without `--force`.
+#[test]
+fn resume_and_merge_trust_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 2.0\n");
+    let grid =
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\ncontroller.ki = [0.0, 1.0]\n";
+    let sw = write(d.path(), "s.toml", grid);
+    let p = |n: &str| d.path().join(n).display().to_string();
+    assert!(isotrack(&["sweep", &sw, "--out", &p("full")])
+        .status
+        .success());
+    let results = d.path().join("full/results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    for (bad_row, needle) in [
+        ("3,1,2\n", "3 fields where the header has 17"),
+        (
+            "11,5.0,0.0,completed,,,,,,,,,,,2.0,1,\n",
+            "run_id 11 is beyond this sweep's 4 runs",
+        ),
+        (
+            "2,5.0,0.0,completed,,,,,,,,,,,abc,1,\n",
+            "t_end_s = `abc` is not a number",
+        ),
+        (
+            "2,5.0,0.0,exploded,,,,,,,,,,,2.0,1,\n",
+            "outcome `exploded`",
+        ),
+    ] {
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines.truncate(3);
+        let text = lines.join("\n") + "\n" + bad_row;
+        std::fs::write(&results, &text).unwrap();
+        let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+        assert_fails(&o, 65, &["results.csv:4: damaged row", needle]);
+        assert_eq!(
+            std::fs::read_to_string(&results).unwrap(),
+            text,
+            "left as it was"
+        );
+    }
+    std::fs::write(&results, &good).unwrap();
+    // A changed sweep file: resume refuses (digest), merge refuses to mix shards.
+    let changed = write(d.path(), "s2.toml", &grid.replace("10.0", "12.0"));
+    let o = isotrack(&["sweep", &changed, "--out", &p("full"), "--resume"]);
+    assert_fails(&o, 65, &["made by a different sweep"]);
+    assert!(
+        isotrack(&["sweep", &sw, "--out", &p("a"), "--shard", "1/2"])
+            .status
+            .success()
+    );
+    assert!(
+        isotrack(&["sweep", &changed, "--out", &p("b"), "--shard", "2/2"])
+            .status
+            .success()
+    );
+    let o = isotrack(&["merge", &p("a"), &p("b"), "--out", &p("m")]);
+    assert_fails(&o, 65, &["a different sweep"]);
+    assert!(
+        isotrack(&["sweep", &sw, "--out", &p("c"), "--shard", "2/2"])
+            .status
+            .success()
+    );
+    // A damaged shard row is refused by merge too.
+    let c_results = d.path().join("c/results.csv");
+    let c_text = std::fs::read_to_string(&c_results).unwrap();
+    std::fs::write(&c_results, format!("{c_text}9,1,2\n")).unwrap();
+    let o = isotrack(&["merge", &p("a"), &p("c"), "--out", &p("m")]);
+    assert_fails(&o, 65, &["damaged row"]);
+    std::fs::write(&c_results, &c_text).unwrap();
+    // --out an existing sweep: refused without --force, and never one of the inputs.
+    let o = isotrack(&["merge", &p("a"), &p("c"), "--out", &p("full")]);
+    assert_fails(&o, 73, &["--force"]);
+    assert_eq!(std::fs::read_to_string(&results).unwrap(), good);
+    let o = isotrack(&["merge", &p("a"), &p("c"), "--out", &p("a"), "--force"]);
+    assert_fails(&o, 64, &["one of the inputs"]);
+    let o = isotrack(&["merge", &p("a"), &p("c"), "--out", &p("full"), "--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read_to_string(&results).unwrap(),
+        good,
+        "same bits as one process"
+    );
+}
+
+/// Item 11: Trims outside the actuators' limits or the model's range exited 0; `trim`, `replay` and
+/// `run` accept the same airspeeds (15..45 m/s).
+#[test]
+fn trim_replay_and_run_share_the_airspeed_range() {
+    let d = tempfile::tempdir().unwrap();
+    let inputs = write(
+        d.path(),
+        "in.csv",
+        "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n0,-0.07,0,0,0.4\n1,-0.07,0,0,0.4\n",
+    );
+    let out = d.path().join("o.csv");
+    for v in ["5", "14.9", "45.1", "80", "1000"] {
+        assert_fails(
+            &isotrack(&["trim", "--airspeed-mps", v]),
+            64,
+            &["15..45 m/s"],
+        );
+        let o = isotrack(&[
+            "replay",
+            "--inputs",
+            &inputs,
+            "--out",
+            out.to_str().unwrap(),
+            "--airspeed-mps",
+            v,
+        ]);
+        assert_fails(&o, 64, &["15..45 m/s"]);
+        let set = format!("vehicle.airspeed_mps={v}");
+        let o = isotrack(&[
+            "check",
+            "--set",
+            "vehicle.kind=fixed_wing",
+            "--set",
+            &set,
+            "--set",
+            "sim.dt_s=0.01",
+        ]);
+        assert_fails(&o, 65, &["15..45 m/s"]);
+    }
+    for v in ["15", "45"] {
+        assert!(isotrack(&["trim", "--airspeed-mps", v]).status.success());
+    }
+}
+
+/// Item 13, 14: Physical ranges: 1e308 m/s is refused; a start off the field writes the initial
+/// state, and `plot` says why the run ended.
+#[test]
+fn physical_ranges_and_runs_that_end_at_t_zero() {
+    let o = isotrack(&["run", "--set", "vehicle.speed_mps=1e308"]);
+    assert_fails(
+        &o,
+        65,
+        &["vehicle.speed_mps", "must be <= 1000 m/s, got 1e308"],
+    );
+    let o = isotrack(&["run", "--set", "initial.x_m=1e308"]);
+    assert_fails(&o, 65, &["initial.x_m"]);
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("r");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "field.domain_m=[50.0, 60.0, 50.0, 60.0]",
+        "--out",
+        run.to_str().unwrap(),
+        "--plot",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let trace = std::fs::read_to_string(run.join("trace.csv")).unwrap();
+    let rows: Vec<&str> = trace.lines().skip(1).collect();
+    assert_eq!(rows, ["0.0,10.0,0.0,-1.5707963267948966,NaN,NaN,0.0,"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("left_field at t = 0.00 s"), "{stdout}");
+}
+
+/// Item 16: A 10 MB key made a 20 MB error; messages echo at most a few hundred characters.
+#[test]
+fn huge_keys_are_clipped_in_messages() {
+    let d = tempfile::tempdir().unwrap();
+    let key = "k".repeat(1_000_000);
+    let sc = write(d.path(), "sc.toml", &format!("[sim]\n{key} = 1\n"));
+    let o = isotrack(&["run", &sc]);
+    assert_fails(&o, 65, &["more characters"]);
+    assert!(stderr(&o).len() < 3000, "{} bytes", stderr(&o).len());
+    // (One argument is limited to 128 kB by the OS.)
+    let o = isotrack(&["run", "--set", &format!("sim.{}=1", &key[..100_000])]);
+    assert_fails(&o, 65, &["more characters"]);
+    assert!(stderr(&o).len() < 3000, "{} bytes", stderr(&o).len());
+}
+
+/// Item 17: Unknown keys in a sweep are the sweep file's error, found before any run; `--gain`
+/// problems are labelled `--gain`, not `--set` or "(default value)".
+#[test]
+fn sweep_keys_are_checked_up_front_and_labelled() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kpp = [1.0]\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        65,
+        &["[grid] controller.kpp=1.0", "unknown field `kpp`"],
+    );
+    assert!(!stderr(&o).contains("--set"));
+    assert!(!out.join("results.csv").exists(), "nothing ran");
+    let sw = write(
+        d.path(),
+        "s2.toml",
+        "scenario = \"sc.toml\"\n[random]\nruns = 2\ncontroller.kind = { uniform = [0.0, 1.0] }\n",
+    );
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_fails(&o, 65, &["[random] controller.kind"]);
+    let sc = write(d.path(), "c.toml", "sim.duration_s = 2.0\n");
+    let o = isotrack(&[
+        "compare",
+        &sc,
+        "--controllers",
+        "sliding_mode",
+        "--gain",
+        "sliding_mode.gamma=-1",
+    ]);
+    assert_fails(
+        &o,
+        65,
+        &["--gain sliding_mode.gamma=-1", "controller.gamma"],
+    );
+    assert!(!stderr(&o).contains("default value"), "{}", stderr(&o));
+}
+
+/// Item 18: Exit codes: a sweep whose scenario file is missing exits 66 (it was 65); wrong causes
+/// are now the right ones.
+#[test]
+fn exit_codes_and_causes() {
+    let d = tempfile::tempdir().unwrap();
+    let sw = write(d.path(), "s.toml", "scenario = \"missing.toml\"\n");
+    let o = isotrack(&["sweep", &sw, "--out", d.path().join("o").to_str().unwrap()]);
+    assert_fails(&o, 66, &["missing.toml"]);
+    let o = isotrack(&[
+        "sweep",
+        d.path().join("none.toml").to_str().unwrap(),
+        "--out",
+        d.path().join("o").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 66, &["none.toml"]);
+    let st = write(d.path(), "st.csv", "x_m,y_m,v\n0,0,1e300\n5,5,2\n9,1,4\n");
+    let o = isotrack(&[
+        "interpolate",
+        &st,
+        "--value-column",
+        "v",
+        "--out",
+        d.path().join("g.csv").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 65, &["st.csv:2: field 3", "1e300"]);
+    assert!(!stderr(&o).contains("singular"));
+    let g = write(d.path(), "g.csv", "0,1e308\n2,3\n");
+    let _ = g;
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        "[field]\nkind = \"grid\"\npath = \"g.csv\"\n",
+    );
+    let o = isotrack(&["run", &sc]);
+    assert_fails(&o, 65, &["1e308", "column 1, row 0"]);
+}
