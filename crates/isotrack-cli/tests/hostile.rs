@@ -436,6 +436,20 @@ fn physical_ranges_and_runs_that_end_at_t_zero() {
     );
     let o = isotrack(&["run", "--set", "initial.x_m=1e308"]);
     assert_fails(&o, 65, &["initial.x_m"]);
+    // The same classes elsewhere: field values beyond the grids' limit (they made "no value"
+    // at the start), a trace of 1e9 rows (100 GB) from a long duration.
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "field.kind=linear_ramp",
+        "--set",
+        "field.gradient_per_m=[1e308, 1.0]",
+    ]);
+    assert_fails(&o, 65, &["field.gradient_per_m", "1e308"]);
+    let o = isotrack(&["run", "--set", "controller.level=1e308"]);
+    assert_fails(&o, 65, &["controller.level"]);
+    let o = isotrack(&["run", "--set", "sim.duration_s=1e8"]);
+    assert_fails(&o, 65, &["output.record_rate_hz", "trace rows"]);
     let d = tempfile::tempdir().unwrap();
     let run = d.path().join("r");
     let o = isotrack(&[

@@ -81,6 +81,11 @@ impl Checker {
         }
         true
     }
+    /// A field value (or level, or slope per metre) within [`ranges::MAX_FIELD_VALUE`].
+    fn field_value(&mut self, key: &str, x: f64) {
+        let m = ranges::MAX_FIELD_VALUE;
+        self.within(key, x, -m, m, "field units");
+    }
     /// A position coordinate, m, within [`ranges::MAX_COORDINATE_M`].
     fn coordinate(&mut self, key: &str, x: f64) {
         let m = ranges::MAX_COORDINATE_M;
@@ -280,7 +285,7 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     let allowed = controller_allowed(kind);
     let choice = format!("controller.kind = \"{}\"", kind.name());
     c.inapplicable("controller", &choice, allowed, &controller_keys_present(ct));
-    c.finite("controller.level", *ct.level.get_or_insert(10.0));
+    c.field_value("controller.level", *ct.level.get_or_insert(10.0));
     ct.higher_side.get_or_insert(HigherSide::Right);
     let bang_bang = matches!(
         kind,
@@ -513,6 +518,15 @@ pub mod ranges {
     /// Largest `|initial.x_m|`, `|initial.y_m|`, `|field.center_m|`, domain and source
     /// coordinates, m (about 1.6 x the Earth's circumference).
     pub const MAX_COORDINATE_M: f64 = 6.4e7;
+    /// Largest `|value|` of an analytic field's parameters (`i0`, `background`, `amplitude`,
+    /// `offset`, `gradient_per_m` per metre) and of `controller.level`: the grids' limit, so
+    /// values, differences and slopes stay finite (`isotrack_fields::grid::MAX_ABS_VALUE`).
+    pub const MAX_FIELD_VALUE: f64 = isotrack_fields::grid::MAX_ABS_VALUE;
+    /// Smallest plume width `sigma_m`, m: narrower plumes overflow `d^2/sigma^2`.
+    pub const MIN_LENGTH_M: f64 = 1.0e-9;
+    /// The most trace rows a run may write (`sim.duration_s * output.record_rate_hz`): about
+    /// 10 GB of CSV.
+    pub const MAX_TRACE_ROWS: u64 = 100_000_000;
     /// Largest `vehicle.speed_mps` of the Dubins robot, m/s (well past any aircraft).
     pub const MAX_SPEED_MPS: f64 = 1.0e3;
     /// The Aerosonde model's airspeed range, m/s (`vehicle.airspeed_mps`, `isotrack trim`,
@@ -593,14 +607,16 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
     c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
     match fk {
         FieldKind::RadialExp => {
-            c.positive("field.i0", *fd.i0.get_or_insert(20.0));
+            let i0 = *fd.i0.get_or_insert(20.0);
+            c.positive("field.i0", i0);
+            c.field_value("field.i0", i0);
             c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
             for x in *fd.center_m.get_or_insert([0.0, 0.0]) {
                 c.coordinate("field.center_m", x);
             }
         }
         FieldKind::GaussianPlumes => {
-            c.finite("field.background", *fd.background.get_or_insert(0.0));
+            c.field_value("field.background", *fd.background.get_or_insert(0.0));
             let sources = fd.sources.get_or_insert_with(default_plumes);
             if sources.is_empty() {
                 c.fail("field.sources", "must hold at least one source");
@@ -609,17 +625,26 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
                 for x in s.center_m {
                     c.coordinate(&format!("field.sources[{i}].center_m"), x);
                 }
-                c.finite(&format!("field.sources[{i}].amplitude"), s.amplitude);
+                c.field_value(&format!("field.sources[{i}].amplitude"), s.amplitude);
                 c.finite(&format!("field.sources[{i}].rotation_rad"), s.rotation_rad);
                 for sg in s.sigma_m {
-                    c.positive(&format!("field.sources[{i}].sigma_m"), sg);
+                    let key = format!("field.sources[{i}].sigma_m");
+                    c.within(
+                        &key,
+                        sg,
+                        ranges::MIN_LENGTH_M,
+                        ranges::MAX_COORDINATE_M,
+                        "m",
+                    );
                 }
             }
         }
         FieldKind::LinearRamp => {
-            c.finite("field.offset", *fd.offset.get_or_insert(0.0));
+            c.field_value("field.offset", *fd.offset.get_or_insert(0.0));
             let g = *fd.gradient_per_m.get_or_insert([0.0, 1.0]);
-            c.all_finite("field.gradient_per_m", &g);
+            for gi in g {
+                c.field_value("field.gradient_per_m", gi);
+            }
             if g == [0.0, 0.0] {
                 c.fail(
                     "field.gradient_per_m",
@@ -848,11 +873,24 @@ fn resolve_output(c: &mut Checker, f: &mut ScenarioFile) {
     if !(sane(dt) && sane(duration) && rec.is_finite() && rec >= 0.0) {
         return; // already reported
     }
-    let plan = StepPlan::new(dt, duration, rec, 0.2, 0.1, 0.0, 0.0);
-    if let Err(e @ StepPlanError::RecordRateNotMultiple { .. }) = plan {
-        c.fail(
+    match StepPlan::new(dt, duration, rec, 0.2, 0.1, 0.0, 0.0) {
+        Err(e @ StepPlanError::RecordRateNotMultiple { .. }) => c.fail(
             "output.record_rate_hz",
             format!("{e}; the period must be a whole number >= 1 of sim.dt_s steps"),
-        );
+        ),
+        Ok(plan) if plan.record_every > 0 => {
+            let rows = plan.n_steps / plan.record_every + 1;
+            if rows > ranges::MAX_TRACE_ROWS {
+                c.fail(
+                    "output.record_rate_hz",
+                    format!(
+                        "{rows} trace rows over sim.duration_s = {} s is more than {}; lower the rate (0 turns the trace off)",
+                        Num(duration),
+                        ranges::MAX_TRACE_ROWS
+                    ),
+                );
+            }
+        }
+        _ => {}
     }
 }

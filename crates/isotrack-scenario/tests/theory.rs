@@ -195,11 +195,11 @@ fn outcomes_left_field_and_diverged() {
     assert!(r.metrics.convergence_time_s.is_none());
     assert!(r.end_position_m.iter().all(|v| v.is_finite()));
 
-    // A slope of 1e300 per m times kp = 1e10 overflows the command: recorded, not a panic.
+    // A slope of 1e100 per m times kp = 1e300 overflows the command: recorded, not a panic.
     let r = run(&[
         ("field.kind", "linear_ramp".into()),
-        ("field.gradient_per_m", "[0.0, 1e300]".into()),
-        ("controller.kp", "1e10".into()),
+        ("field.gradient_per_m", "[0.0, 1e100]".into()),
+        ("controller.kp", "1e300".into()),
     ]);
     assert_eq!(r.outcome, Outcome::Diverged);
     assert!(r.end_position_m.iter().all(|v| v.is_finite()));

@@ -101,13 +101,14 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     // value takes at least two bytes), and refuse products that overflow.
     let declared = nx
         .checked_mul(ny)
-        .filter(|n| *n <= bytes.len() / 2 + 1)
+        .filter(|n| *n <= bytes.len() / 2 + 1 && *n <= crate::grid::MAX_NODES)
         .ok_or_else(|| {
             err(
                 1,
                 format!(
-                    "ncols x nrows = {nx} x {ny} values cannot fit in a {}-byte file",
-                    bytes.len()
+                    "ncols x nrows = {nx} x {ny} values cannot fit in a {}-byte file (or exceed the {} nodes a grid may hold)",
+                    bytes.len(),
+                    crate::grid::MAX_NODES
                 ),
             )
         })?;

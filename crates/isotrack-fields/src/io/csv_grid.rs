@@ -46,6 +46,16 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             })?;
             values.push(v);
         }
+        if values.len() > crate::grid::MAX_NODES {
+            return Err(LoadError::new(
+                path,
+                Some(FilePosition::Line(line, None)),
+                format!(
+                    "more than the {} nodes a grid may hold",
+                    crate::grid::MAX_NODES
+                ),
+            ));
+        }
         ny += 1;
     }
     let Some(nx) = nx else {

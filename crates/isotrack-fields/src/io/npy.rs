@@ -48,6 +48,15 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             format!("unsupported dtype `{ts}`{hint}; need float64, float32 or an integer type"),
         ));
     }
+    if nx
+        .checked_mul(ny)
+        .is_none_or(|n| n > crate::grid::MAX_NODES)
+    {
+        return Err(LoadError::grid(
+            path,
+            crate::grid::GridError::TooManyNodes { nx, ny },
+        ));
+    }
     // The header's shape is untrusted: refuse a data size beyond the file before reading.
     let item = ts.num_bytes().unwrap_or(8) as u128;
     if (ny as u128) * (nx as u128) * item > bytes.len() as u128 {

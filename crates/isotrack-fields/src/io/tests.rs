@@ -402,3 +402,19 @@ fn non_regular_and_oversized_files_are_refused() {
     );
     assert_eq!(read_limited(&p, 100).unwrap().len(), 100);
 }
+
+/// Regression (hostile inputs): a header claiming more nodes than a grid may hold is refused
+/// before anything is allocated, whatever the format.
+#[test]
+fn declared_sizes_beyond_the_node_limit_are_refused() {
+    let e = err_of(
+        "h.npy",
+        &npy_bytes("|u1", "(70000, 70000)", false, &[0u8; 16]),
+    );
+    assert!(e.message.contains("more than the 268435456"), "{e}");
+    let e = err_of(
+        "h.asc",
+        b"ncols 70000\nnrows 70000\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n",
+    );
+    assert!(e.message.contains("ncols x nrows"), "{e}");
+}
