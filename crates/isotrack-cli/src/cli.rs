@@ -142,8 +142,15 @@ pub struct SweepArgs {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Continue an interrupted sweep in DIR: keep the complete rows, run the rest.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "force")]
     pub resume: bool,
+    /// Start over in a DIR that already holds a sweep (its results are replaced).
+    #[arg(long)]
+    pub force: bool,
+    /// Override a key of the base scenario before the sweep's own keys (repeatable); part of
+    /// the sweep's digest.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
     /// Run only the K-th of N disjoint shards (runs with id % N == K - 1), e.g. `--shard 2/8`.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,

@@ -314,7 +314,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         )
     })?;
     let plan = SweepPlan::parse(&text, &a.sweep).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let base = load_scenario(Some(&plan.scenario), &[]).map_err(crate::run::invalid)?;
+    let base = load_scenario(Some(&plan.scenario), &a.set).map_err(crate::run::invalid)?;
     let name = a.sweep.display().to_string();
     // The base overrides must make a valid scenario on their own.
     let base_assign = plan.run_assignments(0, &name);
@@ -338,17 +338,23 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     };
     let base_toml = crate::output::scenario_toml(&base);
     let digest = sweep_digest(&sweep_bytes, &base_toml);
+    for note in plan.duplicate_notes() {
+        eprintln!("note: {note}");
+    }
     std::fs::create_dir_all(&a.out).map_err(cant)?;
     let results = a.out.join("results.csv");
     let mut header: Vec<String> = vec!["run_id".into()];
     header.extend(plan.varied_keys());
     header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
     let header_line = csv_line(&header);
+    if results.exists() && a.force {
+        std::fs::remove_file(&results).map_err(cant)?;
+    }
     if results.exists() && !a.resume {
         return Err(fail(
             exit::CANTCREAT,
             format!(
-                "{} exists: pass --resume to continue that sweep, or another --out",
+                "{} exists: pass --resume to continue that sweep, --force to start over, or another --out",
                 results.display()
             ),
         ));
@@ -464,7 +470,16 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     pb.finish_and_clear();
     let (h, rows) = read_results(&results, false, total)?;
     write_sorted(&results, &h, &rows)?;
-    println!(
+    let outcome_col = header.iter().position(|c| c == "outcome");
+    let invalid = rows
+        .values()
+        .filter(|line| {
+            csv_fields(line)
+                .zip(outcome_col)
+                .is_some_and(|(f, i)| f.get(i).map(String::as_str) == Some("invalid_scenario"))
+        })
+        .count();
+    let summary = format!(
         "{} runs ({} new) of {} in {:.2} s -> {}",
         rows.len(),
         new_runs,
@@ -476,6 +491,16 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         started.elapsed().as_secs_f64(),
         results.display()
     );
+    if invalid > 0 {
+        // Every run is recorded, but a sweep with invalid runs did not do what it was asked.
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{summary}; {invalid} of them invalid (outcome invalid_scenario; the reason is in outcome_detail)"
+            ),
+        ));
+    }
+    println!("{summary}");
     Ok(())
 }
 

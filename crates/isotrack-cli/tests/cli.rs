@@ -558,6 +558,12 @@ fn run_plot_and_plot_command_write_images() {
     );
 }
 
+/// The test sweep holds invalid runs on purpose (`ki = -1`): every run is recorded, and the
+/// sweep exits 65 naming how many were invalid.
+fn assert_sweep_with_invalid_runs(o: &Output) {
+    assert_fails(o, 65, &["of them invalid (outcome invalid_scenario"]);
+}
+
 fn sweep_file(dir: &Path, runs: u32, duration: f64) -> String {
     let scen = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -586,7 +592,7 @@ fn sweeps_are_identical_across_threads_and_shards_and_merge_checks_coverage() {
         "--threads",
         "2",
     ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_sweep_with_invalid_runs(&o);
     let one = dir.path().join("one");
     isotrack(&[
         "sweep",
@@ -603,11 +609,9 @@ fn sweeps_are_identical_across_threads_and_shards_and_merge_checks_coverage() {
     assert!(!text.to_lowercase().contains("nan"));
     // ki = -1 is invalid: recorded as such, not a crash.
     assert!(text.contains("invalid_scenario"));
-    assert!(text
-        .lines()
-        .next()
-        .unwrap()
-        .starts_with("run_id,controller.ki,controller.kp,initial.x_m,sensor.noise_std,outcome"));
+    assert!(text.lines().next().unwrap().starts_with(
+        "run_id,controller.ki,controller.kp,initial.x_m,sensor.noise_std,sim.seed,outcome"
+    ));
     // Three shards, merged: identical.
     let mut shards = vec![];
     for k in 1..=3 {
@@ -620,7 +624,7 @@ fn sweeps_are_identical_across_threads_and_shards_and_merge_checks_coverage() {
             "--shard",
             &format!("{k}/3"),
         ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        assert_sweep_with_invalid_runs(&o);
         shards.push(d.to_str().unwrap().to_string());
     }
     let merged = dir.path().join("merged");
@@ -696,7 +700,7 @@ fn a_damaged_sweep_resumes_to_the_same_results() {
     std::fs::write(part.join("results.csv"), damaged).unwrap();
     std::fs::copy(full.join("sweep.json"), part.join("sweep.json")).unwrap();
     let o = isotrack(&["sweep", &sw, "--out", part.to_str().unwrap(), "--resume"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_sweep_with_invalid_runs(&o);
     assert_eq!(
         reference,
         std::fs::read_to_string(part.join("results.csv")).unwrap()
@@ -724,7 +728,7 @@ fn a_sigkilled_sweep_resumes_to_the_same_results() {
         let _ = child.wait();
     }
     let o = isotrack(&["sweep", &sw, "--out", killed.to_str().unwrap(), "--resume"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    assert_sweep_with_invalid_runs(&o);
     assert_eq!(
         reference,
         std::fs::read(killed.join("results.csv")).unwrap()

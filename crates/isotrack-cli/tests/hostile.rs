@@ -60,7 +60,8 @@ fn an_invalid_grid_value_is_recorded_not_fatal() {
     );
     let out = d.path().join("out");
     let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    // Every run recorded; the sweep exits 65 naming how many were invalid (issue 15 item 3).
+    assert_fails(&o, 65, &["2 runs (2 new) of 2", "1 of them invalid"]);
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(rows.len(), 2);
@@ -309,21 +310,35 @@ fn resume_and_merge_trust_nothing() {
         .success());
     let results = d.path().join("full/results.csv");
     let good = std::fs::read_to_string(&results).unwrap();
+    // Damaged copies of row 2: (column, new value).
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let row2: Vec<&str> = good.lines().nth(3).unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let with = |c: usize, v: &str| {
+        let mut r = row2.clone();
+        r[c] = v;
+        r.join(",") + "\n"
+    };
+    let n = header.len();
     for (bad_row, needle) in [
-        ("3,1,2\n", "3 fields where the header has 17"),
         (
-            "11,5.0,0.0,completed,,,,,,,,,,,2.0,1,\n",
-            "run_id 11 is beyond this sweep's 4 runs",
+            "3,1,2\n".to_string(),
+            format!("3 fields where the header has {n}"),
         ),
         (
-            "2,5.0,0.0,completed,,,,,,,,,,,abc,1,\n",
-            "t_end_s = `abc` is not a number",
+            with(0, "11"),
+            "run_id 11 is beyond this sweep's 4 runs".into(),
         ),
         (
-            "2,5.0,0.0,exploded,,,,,,,,,,,2.0,1,\n",
-            "outcome `exploded`",
+            with(col("t_end_s"), "abc"),
+            "t_end_s = `abc` is not a number".into(),
+        ),
+        (
+            with(col("outcome"), "exploded"),
+            "outcome `exploded`".into(),
         ),
     ] {
+        let (bad_row, needle) = (bad_row.as_str(), needle.as_str());
         let mut lines: Vec<&str> = good.lines().collect();
         lines.truncate(3);
         let text = lines.join("\n") + "\n" + bad_row;
@@ -452,18 +467,21 @@ fn physical_ranges_and_runs_that_end_at_t_zero() {
     assert_fails(&o, 65, &["output.record_rate_hz", "trace rows"]);
     let d = tempfile::tempdir().unwrap();
     let run = d.path().join("r");
-    let o = isotrack(&[
-        "run",
-        "--set",
-        "field.domain_m=[50.0, 60.0, 50.0, 60.0]",
-        "--out",
-        run.to_str().unwrap(),
-        "--plot",
-    ]);
+    // A 5 x 5 grid of no-data but one corner: the start (2, 2) is on the grid, with no value.
+    let mut g = vec![vec!["NaN"; 5]; 5];
+    g[0][0] = "1";
+    let text: String = g.iter().map(|r| r.join(",") + "\n").collect();
+    write(d.path(), "g.csv", &text);
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        "[field]\nkind = \"grid\"\npath = \"g.csv\"\n[initial]\nx_m = 2.0\ny_m = 2.0\n",
+    );
+    let o = isotrack(&["run", &sc, "--out", run.to_str().unwrap(), "--plot"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let trace = std::fs::read_to_string(run.join("trace.csv")).unwrap();
     let rows: Vec<&str> = trace.lines().skip(1).collect();
-    assert_eq!(rows, ["0.0,10.0,0.0,-1.5707963267948966,NaN,NaN,0.0,"]);
+    assert_eq!(rows, ["0.0,2.0,2.0,-1.5707963267948966,NaN,NaN,0.0,"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("left_field at t = 0.00 s"), "{stdout}");
 }
@@ -562,4 +580,30 @@ fn exit_codes_and_causes() {
     );
     let o = isotrack(&["run", &sc]);
     assert_fails(&o, 65, &["1e308", "column 1, row 0"]);
+}
+
+/// Issue 15 item 10: a start off a grid without a georeference names the extent and the keys
+/// that set it (it ran and ended at t = 0 with no hint).
+#[test]
+fn a_start_outside_the_field_names_its_extent() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "g.csv", "0,1,2\n1,2,3\n2,3,4\n");
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        "[field]\nkind = \"grid\"\npath = \"g.csv\"\n",
+    );
+    let o = isotrack(&["run", &sc]);
+    assert_fails(
+        &o,
+        65,
+        &[
+            "initial.x_m",
+            "the start (10, 0) m is outside",
+            "x in [0, 2] m",
+            "field.spacing_m",
+        ],
+    );
+    let o = isotrack(&["run", "--set", "field.domain_m=[50.0, 60.0, 50.0, 60.0]"]);
+    assert_fails(&o, 65, &["initial.x_m", "field.domain_m"]);
 }

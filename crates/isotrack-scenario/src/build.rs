@@ -122,6 +122,22 @@ impl Scenario {
         self.file.controller.level.unwrap_or_default()
     }
 
+    /// The turn-rate limit every controller's output stage applies, rad/s:
+    /// `controller.max_turn_rate_radps` when set; otherwise, for `vehicle.kind = "fixed_wing"`,
+    /// what the airframe can fly, `g*tan(phi_max)/V` (0.274 rad/s at 30 m/s and the autopilot's
+    /// 40 deg bank limit), so a noisy measurement cannot command hundreds of rad/s; otherwise
+    /// none. (Not written into the resolved file: it follows the airspeed, which a sweep or
+    /// `--set` may change.)
+    pub fn max_turn_rate_radps(&self) -> Option<f64> {
+        self.file
+            .controller
+            .max_turn_rate_radps
+            .or(match &*self.vehicle {
+                VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
+                VehicleModel::Dubins(_) => None,
+            })
+    }
+
     /// The controller, at rest.
     pub fn controller(&self) -> ControllerModel {
         let c = &self.file.controller;
@@ -139,10 +155,10 @@ impl Scenario {
         };
         let output = OutputStage {
             higher_side: c.higher_side.unwrap_or_default(),
-            max_turn_rate_radps: c.max_turn_rate_radps,
+            max_turn_rate_radps: self.max_turn_rate_radps(),
         };
         let level = self.level();
-        let u_max = c.max_turn_rate_radps.unwrap_or(1.0);
+        let u_max = self.max_turn_rate_radps().unwrap_or(1.0);
         let pid = PidParams {
             level,
             kp: c.kp.unwrap_or(3.0),

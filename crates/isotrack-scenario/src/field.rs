@@ -44,6 +44,41 @@ impl FieldDerivatives for FieldModel {
     }
 }
 
+/// Checks that the start lies on the field: inside a grid's node extent or an analytic
+/// field's `domain_m`. A start outside once ended the run at t = 0 with `left_field` and no
+/// hint; the issue names the extent and the keys that set it.
+pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(), Issue> {
+    let (x, y) = (
+        file.initial.x_m.unwrap_or(10.0),
+        file.initial.y_m.unwrap_or(0.0),
+    );
+    let (e, set_by) = match field {
+        FieldModel::Grid(g) => (
+            g.grid().extent_m(),
+            "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
+        ),
+        FieldModel::Analytic(_) => match file.field.domain_m {
+            Some(d) => (d, "field.domain_m"),
+            None => return Ok(()),
+        },
+    };
+    if (e[0]..=e[1]).contains(&x) && (e[2]..=e[3]).contains(&y) {
+        return Ok(());
+    }
+    let key = if (e[0]..=e[1]).contains(&x) {
+        "initial.y_m"
+    } else {
+        "initial.x_m"
+    };
+    Err(Issue {
+        key: key.into(),
+        message: format!(
+            "the start ({x}, {y}) m is outside the field, which spans x in [{}, {}] m and y in [{}, {}] m, set by {set_by}",
+            e[0], e[1], e[2], e[3]
+        ),
+    })
+}
+
 /// The true isoline of a field, for the distance metric.
 #[derive(Clone, Debug)]
 pub enum IsolineOracle {

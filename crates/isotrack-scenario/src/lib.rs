@@ -55,6 +55,7 @@ impl Scenario {
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
         let field = build_field(&mut file.field, base_dir).map_err(|i| vec![i])?;
+        field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         Ok(Self {
             file,
@@ -92,6 +93,7 @@ impl Scenario {
         } else {
             Arc::new(build_field(&mut file.field, Path::new(".")).map_err(|i| located(vec![i]))?)
         };
+        field::check_start(&file, &field).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
         let vehicle = if same_vehicle {
             self.vehicle.clone()

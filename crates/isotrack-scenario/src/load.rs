@@ -235,7 +235,14 @@ pub fn parse_scenario_in(
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {
         let at = ErrorLocation::Override { arg: arg.clone() };
+        let before = controller_kind_of(&table);
         let key = apply_one(&mut table, arg, at)?;
+        if controller_kind_of(&table) != before {
+            // `--set controller.kind=...` switches controllers: the file's keys for the old
+            // kind go; later overrides are checked against the new kind.
+            crate::resolve::drop_inapplicable_controller_keys(&mut table);
+            set_keys.retain(|(k, _)| !k.starts_with("controller."));
+        }
         set_keys.push((key, arg.clone()));
     }
     let file: ScenarioFile = toml::Value::Table(table)
@@ -284,11 +291,18 @@ pub fn apply_assignments(
         Ok(toml::Value::Table(t)) => t,
         _ => toml::Table::new(),
     };
+    let mut switches_controller = false;
     for a in assignments {
         let at = ErrorLocation::Assigned {
             label: a.label.clone(),
         };
-        apply_one(&mut table, &a.arg, at)?;
+        let key = apply_one(&mut table, &a.arg, at)?;
+        switches_controller |= key == "controller.kind" || key == "controller";
+    }
+    if switches_controller {
+        // A sweep across controllers: each run keeps only the keys its controller takes
+        // (README, "Sweeps"), after all its assignments, whatever their order.
+        crate::resolve::drop_inapplicable_controller_keys(&mut table);
     }
     toml::Value::Table(table)
         .try_into()
@@ -386,6 +400,15 @@ fn apply_one(
         .try_into::<ScenarioFile>()
         .map_err(|e| fail(Some(key.clone()), e.message().trim().to_string()))?;
     Ok(key)
+}
+
+/// The `controller.kind` a scenario table names (`None` when unset: the default).
+fn controller_kind_of(table: &toml::Table) -> Option<String> {
+    table
+        .get("controller")?
+        .get("kind")?
+        .as_str()
+        .map(str::to_string)
 }
 
 /// `VALUE` as a TOML value; a bare word that is not TOML (`dubins`) is taken as a string.

@@ -240,6 +240,35 @@ fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 22]
     ]
 }
 
+/// Switching controllers: removes from a scenario table's `[controller]` the keys that do not
+/// apply to its `kind` (the shared `kind`, `level`, `higher_side`, `max_turn_rate_radps` stay).
+/// Applied when `--set controller.kind=...` changes the kind (the file's gains for the old kind
+/// go, so the new kind's defaults apply), and to each run of a sweep that varies
+/// `controller.kind`. Returns the dropped keys.
+pub fn drop_inapplicable_controller_keys(table: &mut toml::Table) -> Vec<String> {
+    let Some(toml::Value::Table(ct)) = table.get_mut("controller") else {
+        return vec![];
+    };
+    let kind = match ct.get("kind").and_then(|k| k.as_str()) {
+        Some(name) => match ControllerKind::from_name(name) {
+            Some(k) => k,
+            None => return vec![], // an unknown kind is reported by the schema
+        },
+        None => ControllerKind::PiIsoline,
+    };
+    let allowed = controller_allowed(kind);
+    let shared = ["kind", "level", "higher_side", "max_turn_rate_radps"];
+    let dropped: Vec<String> = ct
+        .keys()
+        .filter(|k| !shared.contains(&k.as_str()) && !allowed.contains(&k.as_str()))
+        .cloned()
+        .collect();
+    for k in &dropped {
+        ct.remove(k);
+    }
+    dropped
+}
+
 /// The keys each controller kind takes besides `kind`, `level`, `higher_side`,
 /// `max_turn_rate_radps`.
 fn controller_allowed(kind: ControllerKind) -> &'static [&'static str] {
@@ -485,7 +514,8 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     resolve_field(&mut c, &mut f.field);
     resolve_vehicle(&mut c, &mut f.vehicle, dt);
     resolve_initial(&mut c, &mut f.initial);
-    resolve_sensor(&mut c, &mut f.sensor, dt);
+    let duration = f.sim.duration_s.unwrap_or(600.0);
+    resolve_sensor(&mut c, &mut f.sensor, dt, duration);
     resolve_controller(&mut c, &mut f.controller);
     resolve_metrics(&mut c, &mut f);
     resolve_output(&mut c, &mut f);
@@ -794,7 +824,7 @@ fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
 
 /// `[sensor]`: decided by [`Sensor::new`] itself, the constructor the builder calls, so a value
 /// that passes here cannot fail there.
-fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64) {
+fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: f64) {
     let rate = *sn
         .rate_hz
         .get_or_insert(if dt > 0.0 { 1.0 / dt } else { 1.0 });
@@ -806,6 +836,17 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64) {
     let all_finite = [dt, rate, delay].iter().all(|x| x.is_finite());
     if !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
         return; // already reported
+    }
+    if delay > duration_s {
+        c.fail(
+            "sensor.delay_s",
+            format!(
+                "{} s is longer than the run (sim.duration_s = {} s): no measurement would arrive",
+                Num(delay),
+                Num(duration_s)
+            ),
+        );
+        return;
     }
     let cfg = SensorConfig {
         rate_hz: rate,

@@ -54,6 +54,24 @@ pub struct SweepPlan {
     pub random: Vec<(String, Dist)>,
     /// Runs: the grid product times `draws`, at most [`MAX_RUNS`].
     total: u64,
+    /// Whether each run gets its own `sim.seed` (no `sim.seed` in `[base]`, `[grid]` or
+    /// `[random]`), see [`derived_seed`].
+    pub derives_seed: bool,
+}
+
+/// The `sim.seed` of run `id` of a sweep that does not set `sim.seed` itself:
+/// SplitMix64 (Steele, Lea & Flood 2014) of the sweep's `random.seed` and the run id, kept to
+/// 63 bits (TOML integers are signed). Distinct runs get distinct noise and gusts, and a run's
+/// seed does not depend on the thread count or shard.
+pub fn derived_seed(sweep_seed: u64, id: u64) -> u64 {
+    // SplitMix64's finaliser, written out: it is a few lines, and a crate for it would add a
+    // dependency for one function.
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    mix(sweep_seed.wrapping_add(mix(id.wrapping_add(0x9E37_79B9_7F4A_7C15)))) >> 1
 }
 
 /// The most runs a sweep may hold: 1e9 rows of `results.csv` are about 200 GB already.
@@ -223,6 +241,12 @@ impl SweepPlan {
                     if sizes.is_empty() { "no".to_string() } else { sizes.join(" x ") }
                 ))
             })?;
+        let sets_seed = |k: &str| k == "sim.seed" || k == "sim";
+        let derives_seed = !(base
+            .iter()
+            .any(|b| sets_seed(b.split_once('=').map_or("", |(k, _)| k.trim())))
+            || grid.iter().any(|(k, _)| sets_seed(k))
+            || random.iter().any(|(k, _)| sets_seed(k)));
         Ok(Self {
             scenario,
             base,
@@ -231,6 +255,7 @@ impl SweepPlan {
             seed,
             random,
             total,
+            derives_seed,
         })
     }
 
@@ -239,13 +264,39 @@ impl SweepPlan {
         self.total
     }
 
-    /// The varied keys, in column order (grid, then random).
+    /// The varied keys, in column order (grid, then random, then `sim.seed` when it is
+    /// derived per run).
     pub fn varied_keys(&self) -> Vec<String> {
         self.grid
             .iter()
             .map(|g| g.0.clone())
             .chain(self.random.iter().map(|r| r.0.clone()))
+            .chain(self.derives_seed.then(|| "sim.seed".to_string()))
             .collect()
+    }
+
+    /// Notes on runs that will come out identical: a `[grid]` list holding one value twice, or
+    /// several draws per grid point with nothing random in them (a fixed `sim.seed` and no
+    /// `[random]` key).
+    pub fn duplicate_notes(&self) -> Vec<String> {
+        let mut notes = vec![];
+        for (k, list) in &self.grid {
+            let lits: Vec<String> = list.iter().map(value_literal).collect();
+            for (i, a) in lits.iter().enumerate() {
+                if lits[..i].contains(a) {
+                    notes.push(format!(
+                        "[grid] {k} lists {a} more than once: those runs are duplicates"
+                    ));
+                }
+            }
+        }
+        if self.draws > 1 && self.random.is_empty() && !self.derives_seed {
+            notes.push(format!(
+                "random.runs = {} with no [random] key and sim.seed set by the sweep: the {} draws of each grid point are identical",
+                self.draws, self.draws
+            ));
+        }
+        notes
     }
 
     /// The values of the varied keys for run `id` (as override literals), in [`varied_keys`]
@@ -274,6 +325,9 @@ impl SweepPlan {
                 }
             };
             vals.push(format!("{v:?}"));
+        }
+        if self.derives_seed {
+            vals.push(derived_seed(self.seed, id).to_string());
         }
         vals
     }
@@ -306,7 +360,13 @@ impl SweepPlan {
             .enumerate()
         {
             let arg = format!("{k}={v}");
-            let section = if i < n_grid { "grid" } else { "random" };
+            let section = if i < n_grid {
+                "grid"
+            } else if i < n_grid + self.random.len() {
+                "random"
+            } else {
+                "derived seed"
+            };
             o.push(Assignment {
                 label: label(section, &arg),
                 arg,
@@ -370,8 +430,9 @@ mod tests {
         assert_eq!(p.total(), 24);
         assert_eq!(
             p.varied_keys(),
-            ["controller.ki", "controller.kp", "initial.x_m"]
+            ["controller.ki", "controller.kp", "initial.x_m", "sim.seed"]
         );
+        assert_eq!(p.run_values(5)[3], derived_seed(9, 5).to_string());
         // id = grid_index * 4 + draw; grid index: ki slowest, kp fastest (sorted keys).
         let v = p.run_values(4 * 4 + 2); // grid 4 = (ki index 1, kp index 1)
         assert_eq!(&v[..2], ["1.0", "2.0"]);
@@ -381,6 +442,28 @@ mod tests {
         assert_eq!(p.run_values(18), p.run_values(18));
         assert_ne!(p.run_values(18)[2], p.run_values(19)[2]);
         assert_eq!(p.run_overrides(0)[0], "sim.duration_s=10.0");
+    }
+
+    /// The derived seed is SplitMix64: its published sequence from state 0 starts
+    /// 0xE220A8397B1DCDAF, 0x6E789E6AA1B965F4 (Vigna's reference `splitmix64.c`). Run 0's inner
+    /// mix is the first; a sweep seed that lands the outer mix on state 2*golden gives the
+    /// second, halved to 63 bits.
+    #[test]
+    fn derived_seeds_are_splitmix64() {
+        const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+        let sweep_seed = GOLDEN.wrapping_mul(2).wrapping_sub(0xE220_A839_7B1D_CDAF);
+        assert_eq!(derived_seed(sweep_seed, 0), 0x6E78_9E6A_A1B9_65F4 >> 1);
+        let seeds: std::collections::BTreeSet<u64> =
+            (0..10_000).map(|i| derived_seed(7, i)).collect();
+        assert_eq!(seeds.len(), 10_000);
+        assert!(seeds.iter().all(|s| *s <= i64::MAX as u64));
+        // Set by the sweep: not derived.
+        let p = plan("scenario = \"x\"\n[base]\nsim.seed = 3\n[random]\nruns = 2\n").unwrap();
+        assert!(!p.derives_seed);
+        assert!(p.duplicate_notes()[0].contains("identical"));
+        let p = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [1.0, 2.0, 1.0]\n").unwrap();
+        assert!(p.derives_seed);
+        assert!(p.duplicate_notes()[0].contains("1.0 more than once"));
     }
 
     #[test]

@@ -134,13 +134,18 @@ fn flags_the_issue_cases() {
 /// The fixed-wing UAV at 30 m/s and 1 Hz (the paper's Fig. 3 scenario): the model with the
 /// autopilot's course and roll loops puts the largest stable kp between the scenario's kp = 8
 /// (marginal at the steepest slope, and it tracks) and 16 (which the simulated UAV cannot hold:
-/// it flies off the map); kp = 4 is stable and tracks.
+/// it flies off the map); kp = 4 is stable and tracks. The linear model leaves saturation
+/// out, so the simulations lift the airframe's default turn-rate limit (0.27 rad/s), which
+/// would otherwise hold the kp = 16 loop in a bounded cycle.
 #[test]
 fn predicts_the_fixed_wing_uav_at_one_hertz() {
     let at = |kp: f64| {
         scenario(
             Some("scenarios/paper-fig3-uav.toml"),
-            &[format!("controller.kp={kp}")],
+            &[
+                format!("controller.kp={kp}"),
+                "controller.max_turn_rate_radps=100.0".into(),
+            ],
         )
     };
     let r = check(&at(8.0), None).sampled;

@@ -311,3 +311,48 @@ fn drifting_plume_is_tracked_while_slower_than_the_vehicle() {
     let (e_fast, _) = steady(0.6);
     assert!(e_fast > 1.0, "a plume faster than the robot: {e_fast}");
 }
+
+/// Issue 15 item 8: the fixed-wing UAV's turn-rate limit by default is what the airframe flies
+/// at the autopilot's 40 deg bank limit, g*tan(phi_max)/V (Beard & McLain eq. (9.14), g = 9.8
+/// as in their code): 0.2741 rad/s at 30 m/s; an explicit `max_turn_rate_radps` wins; the
+/// Dubins robot has none. The noisy default run then never commands beyond it.
+#[test]
+fn the_uav_turn_rate_limit_is_the_airframes() {
+    let uav = |sets: &[&str]| {
+        let mut all = vec![
+            "vehicle.kind=fixed_wing".to_string(),
+            "sim.dt_s=0.01".into(),
+        ];
+        all.extend(sets.iter().map(|s| s.to_string()));
+        isotrack_scenario::load_scenario(None, &all).unwrap()
+    };
+    let want = |v: f64| 9.8 * 40f64.to_radians().tan() / v;
+    assert!((want(30.0) - 0.274106).abs() < 1e-6);
+    let s = uav(&[]);
+    assert!((s.max_turn_rate_radps().unwrap() - want(30.0)).abs() < 1e-12);
+    let s = uav(&["vehicle.airspeed_mps=20.0"]);
+    assert!((s.max_turn_rate_radps().unwrap() - want(20.0)).abs() < 1e-12);
+    let s = uav(&["controller.max_turn_rate_radps=0.1"]);
+    assert_eq!(s.max_turn_rate_radps(), Some(0.1));
+    let s = isotrack_scenario::load_scenario(None, &[]).unwrap();
+    assert_eq!(s.max_turn_rate_radps(), None);
+    // Noise on, 20 s: every recorded command within the limit.
+    let s = uav(&[
+        "sensor.noise_std=0.5",
+        "sim.duration_s=20.0",
+        "sensor.rate_hz=1.0",
+    ]);
+    struct Max(f64);
+    impl isotrack_sim::TraceSink for Max {
+        fn record(&mut self, r: &isotrack_sim::TraceRow) {
+            self.0 = self.0.max(r.omega_radps.abs());
+        }
+    }
+    let mut m = Max(0.0);
+    s.run(&mut m);
+    assert!(
+        m.0 > 0.0 && m.0 <= want(30.0) + 1e-12,
+        "max |omega| {}",
+        m.0
+    );
+}

@@ -396,7 +396,7 @@ fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> Sampl
             return rep;
         }
     };
-    if c.max_turn_rate_radps.is_some() {
+    if s.max_turn_rate_radps().is_some() {
         notes.push("the turn-rate limit is a saturation the linear model leaves out (it holds while the limit is not reached)".into());
     }
     let kappa = curvature(s);

@@ -119,6 +119,13 @@ impl FixedWing {
     pub fn gains(&self) -> &Gains {
         &self.gains
     }
+    /// The turn rate the airframe can fly in a coordinated turn at the autopilot's bank limit:
+    /// `chi'_max = g*tan(phi_max)/V_a` (Beard & McLain 2012, eq. (9.14) with the bank limit of
+    /// the roll loop), rad/s: 0.2741 at 30 m/s and 40 deg. Commands beyond it only saturate
+    /// the roll loop.
+    pub fn airframe_turn_rate_limit_radps(&self) -> f64 {
+        self.params.g * self.ap.roll_max_rad.tan() / self.trim.airspeed_mps
+    }
     /// The closed lateral loops as linear dynamics (for the sampled-data check).
     pub fn course_loop_model(&self) -> CourseLoopModel {
         course_loop_model(&self.params, &self.trim, &self.gains)

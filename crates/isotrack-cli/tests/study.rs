@@ -1,0 +1,229 @@
+//! A first study's rough edges (issue 15): sweeps that cannot silently lie, controllers switched
+//! by an override, the UAV's own turn-rate limit.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn isotrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+/// `results.csv` as a header and rows of fields.
+fn read_rows(dir: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
+    let h = r.headers().unwrap().iter().map(str::to_string).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(str::to_string).collect())
+        .collect();
+    (h, rows)
+}
+
+/// Item 1: three draws without a random key were three identical rows (noise reused
+/// `sim.seed`); each run now gets its own seed, a column of results.csv. A sweep that fixes
+/// `sim.seed` and draws several times is told its draws are identical.
+#[test]
+fn each_run_gets_its_own_seed_unless_the_sweep_sets_one() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "sim.duration_s = 20.0\n[sensor]\nnoise_std = 0.05\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[random]\nruns = 3\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (h, rows) = read_rows(&out);
+    let seed = h
+        .iter()
+        .position(|c| c == "sim.seed")
+        .expect("a sim.seed column");
+    let effort = h.iter().position(|c| c == "control_effort").unwrap();
+    let seeds: std::collections::BTreeSet<&str> = rows.iter().map(|r| r[seed].as_str()).collect();
+    assert_eq!(seeds.len(), 3, "distinct seeds: {seeds:?}");
+    let efforts: std::collections::BTreeSet<&str> =
+        rows.iter().map(|r| r[effort].as_str()).collect();
+    assert_eq!(
+        efforts.len(),
+        3,
+        "distinct noise, distinct runs: {efforts:?}"
+    );
+    // The seed of a run is the one shown: re-running run 1 alone with it gives the same row.
+    let one = d.path().join("one");
+    let set = format!("sim.seed={}", rows[1][seed]);
+    let o = isotrack(&[
+        "run",
+        &write(
+            d.path(),
+            "sc2.toml",
+            "sim.duration_s = 20.0\n[sensor]\nnoise_std = 0.05\n",
+        ),
+        "--set",
+        &set,
+        "--out",
+        one.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(one.join("summary.json")).unwrap()).unwrap();
+    let e: f64 = rows[1][effort].parse().unwrap();
+    assert_eq!(summary["control_effort"].as_f64().unwrap(), e);
+
+    let sw = write(
+        d.path(),
+        "fixed.toml",
+        "scenario = \"sc.toml\"\n[base]\nsim.seed = 4\n[random]\nruns = 3\n",
+    );
+    let out = d.path().join("fixed");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("draws of each grid point are identical"),
+        "{}",
+        stderr(&o)
+    );
+    let (h, _) = read_rows(&out);
+    assert!(!h.iter().any(|c| c == "sim.seed"), "{h:?}");
+}
+
+/// Item 3: `controller.kind` in `[grid]` gave invalid rows ("`controller.kp` does not apply")
+/// and exit 0; keys that do not apply to a run's controller are dropped for that run.
+#[test]
+fn a_sweep_across_controllers_runs_every_point() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 20.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kind = [\"pi_isoline\", \"sliding_mode\", \"pid\"]\ncontroller.kp = [5.0, 10.0]\ncontroller.gamma = [0.3]\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (h, rows) = read_rows(&out);
+    let outcome = h.iter().position(|c| c == "outcome").unwrap();
+    assert_eq!(rows.len(), 6);
+    for r in &rows {
+        assert_eq!(r[outcome], "completed", "{r:?}");
+    }
+    // The kp of a pid point is used (two kp values: two different runs), and the sliding
+    // mode ignores it (two identical runs).
+    let effort = h.iter().position(|c| c == "control_effort").unwrap();
+    let kind = h.iter().position(|c| c == "controller.kind").unwrap();
+    let of = |k: &str| -> Vec<&str> {
+        rows.iter()
+            .filter(|r| r[kind] == k)
+            .map(|r| r[effort].as_str())
+            .collect()
+    };
+    assert_ne!(of("pid")[0], of("pid")[1]);
+    assert_eq!(of("sliding_mode")[0], of("sliding_mode")[1]);
+}
+
+/// Item 4: `sweep --set` changes the base scenario (and the digest); `--force` starts over.
+#[test]
+fn sweep_set_and_force() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 20.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0]\n",
+    );
+    let out = d.path().join("o");
+    let o = out.to_str().unwrap();
+    let r = isotrack(&["sweep", &sw, "--out", o, "--set", "sim.duration_s=3.0"]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let (h, rows) = read_rows(&out);
+    let t_end = h.iter().position(|c| c == "t_end_s").unwrap();
+    assert_eq!(rows[0][t_end], "3.0");
+    // A different --set is a different sweep: resume refuses, --force starts over.
+    let r = isotrack(&["sweep", &sw, "--out", o, "--resume"]);
+    assert_eq!(r.status.code(), Some(65), "{}", stderr(&r));
+    let r = isotrack(&["sweep", &sw, "--out", o]);
+    assert_eq!(r.status.code(), Some(73), "{}", stderr(&r));
+    let r = isotrack(&["sweep", &sw, "--out", o, "--force"]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let (_, rows) = read_rows(&out);
+    assert_eq!(rows[0][t_end], "20.0");
+    let r = isotrack(&["sweep", &sw, "--out", o, "--force", "--resume"]);
+    assert_eq!(r.status.code(), Some(64));
+    // A missing scenario: 66 from every command.
+    let missing = d.path().join("nope.toml");
+    let m = missing.to_str().unwrap();
+    for args in [
+        vec!["run", m],
+        vec!["show", m],
+        vec!["check", m],
+        vec!["compare", m],
+    ] {
+        assert_eq!(isotrack(&args).status.code(), Some(66), "{args:?}");
+    }
+    let sw = write(d.path(), "m.toml", "scenario = \"nope.toml\"\n");
+    assert_eq!(
+        isotrack(&["sweep", &sw, "--out", o]).status.code(),
+        Some(66)
+    );
+}
+
+/// Item 9: `show --set controller.kind=sliding_mode` on a file with the paper's gains failed
+/// with five "does not apply"; switching the kind drops the old kind's keys.
+#[test]
+fn switching_controllers_by_an_override() {
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig2b-circular.toml"
+    );
+    let o = isotrack(&["show", scen, "--set", "controller.kind=sliding_mode"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    let c = t["controller"].as_table().unwrap();
+    assert_eq!(c["kind"].as_str(), Some("sliding_mode"));
+    assert_eq!(c["gamma"].as_float(), Some(0.2));
+    assert!(!c.contains_key("kp") && !c.contains_key("c1"), "{c:?}");
+    // Keys given after the switch are checked against the new kind.
+    let o = isotrack(&[
+        "show",
+        scen,
+        "--set",
+        "controller.kind=sliding_mode",
+        "--set",
+        "controller.kp=3",
+    ]);
+    assert_eq!(o.status.code(), Some(65));
+    assert!(stderr(&o).contains("does not apply to controller.kind = \"sliding_mode\""));
+}
+
+/// Item 12: a delay longer than the run aborted allocating 800 GB; now a validation error.
+#[test]
+fn a_delay_longer_than_the_run_is_an_error() {
+    let o = isotrack(&["run", "--set", "sensor.delay_s=1e9"]);
+    assert_eq!(o.status.code(), Some(65));
+    assert!(stderr(&o).contains("longer than the run"), "{}", stderr(&o));
+    // 14: in the form the user gave, not 300 digits.
+    let o = isotrack(&["run", "--set", "sim.duration_s=1e300"]);
+    assert_eq!(o.status.code(), Some(65));
+    let e = stderr(&o);
+    assert!(e.contains("1e300 s is more than 10000000000 steps"), "{e}");
+    assert!(e.len() < 400, "{e}");
+}
