@@ -117,6 +117,11 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
     for kind in kinds {
         let s = variant(&base, kind, &a.gain, &origin)?;
+        // A baseline outside its own stated gain condition is said, not only run.
+        let warnings = isotrack_scenario::check::baselines::baseline_warnings(&s);
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
         let r = if let Some(dir) = &a.out {
             let d = dir.join(kind.name());
             std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;

@@ -227,3 +227,40 @@ fn a_delay_longer_than_the_run_is_an_error() {
     assert!(e.contains("1e300 s is more than 10000000000 steps"), "{e}");
     assert!(e.len() < 400, "{e}");
 }
+
+/// Item 9: `compare` warns when a baseline's gains violate its own stated condition (here the
+/// sliding modes' and SOSM's turn-rate amplitude below what the circle's curvature needs, about
+/// v/r_d = 0.1 rad/s, docs/BASELINES.md); the default limit of 1 rad/s draws no warning.
+#[test]
+fn compare_warns_on_baseline_conditions() {
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig2b-circular.toml"
+    );
+    let args = |limit: &str| {
+        isotrack(&[
+            "compare",
+            scen,
+            "--set",
+            &format!("controller.max_turn_rate_radps={limit}"),
+            "--set",
+            "sim.duration_s=5.0",
+            "--controllers",
+            "sliding_mode,suboptimal_sosm,pi_isoline",
+        ])
+    };
+    let o = args("0.08");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("warning: sliding_mode: the turn-rate limit 0.0800"),
+        "{e}"
+    );
+    assert!(e.contains("warning: suboptimal_sosm:"), "{e}");
+    let o = args("1.0");
+    assert!(
+        !stderr(&o).contains("warning: sliding_mode"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -20,6 +20,7 @@
 //!   exact condition), `holds` when a guarantee applies (Prop. 1 exact and the sampled loop
 //!   stable, or Prop. 2's bound), `not_applicable` otherwise.
 
+pub mod baselines;
 mod lattice;
 pub mod sampled;
 
@@ -252,6 +253,16 @@ struct Law {
     v: f64,
 }
 
+/// The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed in calm
+/// air), m/s.
+fn speed_mps(s: &Scenario) -> f64 {
+    let f = s.file();
+    f.vehicle
+        .speed_mps
+        .or(f.vehicle.airspeed_mps)
+        .unwrap_or(0.0)
+}
+
 fn law(s: &Scenario) -> Law {
     let f = s.file();
     let c = &f.controller;
@@ -260,12 +271,7 @@ fn law(s: &Scenario) -> Law {
         ki: c.ki.unwrap_or(0.0),
         c1: c.c1.unwrap_or(0.0),
         c2: c.c2.unwrap_or(1.0),
-        // The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed
-        // in calm air).
-        v: f.vehicle
-            .speed_mps
-            .or(f.vehicle.airspeed_mps)
-            .unwrap_or(0.0),
+        v: speed_mps(s),
     }
 }
 
@@ -692,7 +698,9 @@ pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
     let tube = s.file().controller.c2.unwrap_or(1.0);
     let r = regions(s, tube, WARN_LATTICE, false);
-    warnings_from(s, &sampled_report(s, &l, r.slope_range))
+    let mut w = warnings_from(s, &sampled_report(s, &l, r.slope_range));
+    w.extend(baselines::baseline_warnings(s));
+    w
 }
 
 /// Runs the checks; `tube_halfwidth` defaults to `c2`.
