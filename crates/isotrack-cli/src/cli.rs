@@ -104,9 +104,13 @@ pub struct PlotArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// For a sweep directory (one with `results.csv`): the swept key on the x axis (default: the
-    /// first varied key).
+    /// first varied key). A vector key (`vehicle.wind_mps`) is plotted by its norm, or one
+    /// component by `vehicle.wind_mps[0]`.
     #[arg(long, value_name = "KEY")]
     pub x: Option<String>,
+    /// For a sweep directory: one line per value of this column (e.g. `controller.kind`).
+    #[arg(long, value_name = "KEY")]
+    pub group: Option<String>,
     /// For a sweep directory: the metric on the y axis.
     #[arg(
         long,

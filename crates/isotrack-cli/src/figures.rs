@@ -64,6 +64,19 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     };
     let out = a.out.clone().unwrap_or_else(|| a.runs[0].clone());
     let results = a.runs[0].join("results.csv");
+    for d in &a.runs {
+        let is_run = d.join("summary.json").is_file();
+        let is_sweep = d.join("results.csv").is_file();
+        if !is_run && !is_sweep {
+            return Err(Failure {
+                code: exit::NOINPUT,
+                message: format!(
+                    "{} is neither a run directory (summary.json, trace.csv, scenario.toml, from `isotrack run --out`) nor a sweep directory (results.csv, from `isotrack sweep --out`)",
+                    d.display()
+                ),
+            });
+        }
+    }
     if a.runs.len() == 1 && results.exists() {
         // A sweep: a metric against a swept parameter.
         let x = match &a.x {
@@ -83,13 +96,19 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
             code: exit::CANTCREAT,
             message: format!("cannot create {}: {e}", out.display()),
         })?;
+        let safe = |k: &str| k.replace(['.', '[', ']'], "_");
         let file = out.join(format!(
-            "sweep_{}_vs_{}.{}",
+            "sweep_{}_vs_{}{}.{}",
             a.metric,
-            x.replace('.', "_"),
+            safe(&x),
+            a.group
+                .as_deref()
+                .map(|g| format!("_by_{}", safe(g)))
+                .unwrap_or_default(),
             format.extension()
         ));
-        isotrack_plot::sweep_figure(&results, &x, &a.metric, &file, format).map_err(failure)?;
+        isotrack_plot::sweep_figure(&results, &x, &a.metric, a.group.as_deref(), &file, format)
+            .map_err(failure)?;
         println!("wrote {}", file.display());
         return Ok(());
     }

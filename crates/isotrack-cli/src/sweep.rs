@@ -54,9 +54,8 @@ fn csv_line(fields: &[String]) -> String {
 /// One run's row (as a CSV line with its newline). A run whose values make an invalid scenario
 /// is recorded (`invalid_scenario`, the reason in `outcome_detail`), never fatal to the sweep.
 fn run_row(plan: &SweepPlan, base: &Scenario, id: u64, sweep_name: &str) -> String {
-    let vals = plan.run_values(id);
     let mut fields = vec![id.to_string()];
-    fields.extend(vals.iter().map(|v| v.trim_matches('"').to_string()));
+    fields.extend(plan.run_cells(id));
     let opt = |x: Option<f64>| x.map(num).unwrap_or_default();
     let origin = format!("sweep {sweep_name} run {id}");
     match base.derive_with(&plan.run_assignments(id, &origin), &origin) {
@@ -344,7 +343,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     std::fs::create_dir_all(&a.out).map_err(cant)?;
     let results = a.out.join("results.csv");
     let mut header: Vec<String> = vec!["run_id".into()];
-    header.extend(plan.varied_keys());
+    header.extend(plan.columns());
     header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
     let header_line = csv_line(&header);
     if results.exists() && a.force {

@@ -264,3 +264,87 @@ fn compare_warns_on_baseline_conditions() {
         stderr(&o)
     );
 }
+
+/// Item 5: vector keys are numeric columns `KEY[i]`; `plot SWEEP --x KEY --group KEY` draws the
+/// mean and one standard deviation per x value and group (checked here against the rows), by
+/// the vector's norm or one component; a directory that is neither a run nor a sweep says what
+/// was looked for.
+#[test]
+fn sweep_summary_plots() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 20.0\n[sensor]\nnoise_std = 0.05\n[controller]\nderivative = \"filtered_difference\"\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nfield.drift_mps = [[0.0, 0.0], [0.03, 0.04]]\ncontroller.kind = [\"pi_isoline\", \"pid\"]\n[random]\nruns = 3\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (h, rows) = read_rows(&out);
+    let c = |n: &str| {
+        h.iter()
+            .position(|x| x == n)
+            .unwrap_or_else(|| panic!("{n} in {h:?}"))
+    };
+    let (dx, dy, kind, y) = (
+        c("field.drift_mps[0]"),
+        c("field.drift_mps[1]"),
+        c("controller.kind"),
+        c("steady_state_rms_error"),
+    );
+    // By hand: the pid runs at drift norm 0.05 m/s.
+    let ys: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[kind] == "pid" && r[dx] == "0.03" && r[dy] == "0.04")
+        .map(|r| r[y].parse().unwrap())
+        .collect();
+    assert_eq!(ys.len(), 3);
+    let mean = ys.iter().sum::<f64>() / 3.0;
+    let std = (ys.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+    let (lines, skipped) = isotrack_plot::sweep_summary(
+        &out.join("results.csv"),
+        "field.drift_mps",
+        "steady_state_rms_error",
+        Some("controller.kind"),
+    )
+    .unwrap();
+    assert_eq!(skipped, 0);
+    let pid = &lines.iter().find(|l| l.0 == "pid").unwrap().1;
+    assert_eq!(pid.len(), 2);
+    let (x, m, sd, n) = pid[1];
+    assert!((x - 0.05).abs() < 1e-15 && n == 3, "{:?}", pid[1]);
+    assert!((m - mean).abs() <= 1e-12 * mean.abs() && (sd - std).abs() <= 1e-9 * std.max(1e-30));
+    assert!(sd > 0.0, "derived seeds give the draws different noise");
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--x",
+        "field.drift_mps",
+        "--metric",
+        "steady_state_rms_error",
+        "--group",
+        "controller.kind",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let png = out.join("sweep_steady_state_rms_error_vs_field_drift_mps_by_controller_kind.png");
+    assert!(std::fs::metadata(&png).unwrap().len() > 10_000);
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--x",
+        "field.drift_mps[1]",
+        "--format",
+        "svg",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let empty = d.path().join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let o = isotrack(&["plot", empty.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(66));
+    assert!(
+        stderr(&o).contains("neither a run directory (summary.json"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -576,62 +576,143 @@ pub fn timeseries_figure(
     })
 }
 
-/// A sweep's metric against one swept parameter, from `results.csv` (one point per run;
-/// runs without the metric, e.g. never converged, are left out and counted in the title).
+/// One group of a sweep summary: `(x, mean, std, n)` per distinct x, sorted by x.
+pub type SummaryLine = (String, Vec<(f64, f64, f64, usize)>);
+
+/// Reads a sweep's `results.csv` into summary lines: for each group (the `group` column's value,
+/// or one group) and each distinct x, the mean, the sample standard deviation and the count of
+/// the metric over the runs that have it. `x_key` is a column, or a vector key stored as columns
+/// `KEY[0]`, `KEY[1]`, ... (its norm is used), or one of those columns. Also returns the runs
+/// left out (no finite metric or x).
+pub fn sweep_summary(
+    results_csv: &Path,
+    x_key: &str,
+    metric: &str,
+    group: Option<&str>,
+) -> Result<(Vec<SummaryLine>, usize), PlotError> {
+    let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
+    let mut rdr = csv::Reader::from_reader(crate::open_input(results_csv)?);
+    let headers = rdr.headers().map_err(|e| err(e.to_string()))?.clone();
+    let names = || headers.iter().collect::<Vec<_>>().join(", ");
+    let col = |n: &str| {
+        headers
+            .iter()
+            .position(|h| h == n)
+            .ok_or_else(|| err(format!("no column `{n}`; columns: {}", names())))
+    };
+    // x: a column, or the components of a vector key (its norm).
+    let x_cols: Vec<usize> = match headers.iter().position(|h| h == x_key) {
+        Some(i) => vec![i],
+        None => {
+            let comps: Vec<usize> = (0..)
+                .map_while(|k| headers.iter().position(|h| h == format!("{x_key}[{k}]")))
+                .collect();
+            if comps.is_empty() {
+                return Err(err(format!(
+                    "no column `{x_key}` (nor `{x_key}[0]`, ...); columns: {}",
+                    names()
+                )));
+            }
+            comps
+        }
+    };
+    let yi = col(metric)?;
+    let gi = group.map(col).transpose()?;
+    let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<u64, Vec<f64>>> =
+        Default::default();
+    let mut skipped = 0;
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| err(e.to_string()))?;
+        let num = |i: usize| {
+            rec.get(i)
+                .and_then(|v| v.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+        };
+        let x = if x_cols.len() == 1 {
+            num(x_cols[0])
+        } else {
+            x_cols
+                .iter()
+                .map(|&i| num(i).map(|v| v * v))
+                .sum::<Option<f64>>()
+                .map(f64::sqrt)
+        };
+        match (x, num(yi)) {
+            (Some(x), Some(y)) => {
+                let g = gi.and_then(|i| rec.get(i)).unwrap_or("").to_string();
+                // Keyed by the bits of x (+0.0 for -0.0): the same x value, one point.
+                let key = if x == 0.0 {
+                    0.0f64.to_bits()
+                } else {
+                    x.to_bits()
+                };
+                by.entry(g).or_default().entry(key).or_default().push(y);
+            }
+            _ => skipped += 1,
+        }
+    }
+    if by.is_empty() {
+        return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
+    }
+    let lines = by
+        .into_iter()
+        .map(|(g, xs)| {
+            let mut pts: Vec<(f64, f64, f64, usize)> = xs
+                .into_iter()
+                .map(|(k, ys)| {
+                    let n = ys.len();
+                    let mean = ys.iter().sum::<f64>() / n as f64;
+                    let var = if n > 1 {
+                        ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1) as f64
+                    } else {
+                        0.0
+                    };
+                    (f64::from_bits(k), mean, var.sqrt(), n)
+                })
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            (g, pts)
+        })
+        .collect();
+    Ok((lines, skipped))
+}
+
+/// A sweep summary figure: the metric's mean against `x_key` with an error bar of one sample
+/// standard deviation at each x value, one line per `group` value (README, "Sweeps").
 pub fn sweep_figure(
     results_csv: &Path,
     x_key: &str,
     metric: &str,
+    group: Option<&str>,
     path: &Path,
     format: Format,
 ) -> Result<(), PlotError> {
     let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
-    let mut rdr = csv::Reader::from_reader(crate::open_input(results_csv)?);
-    let headers = rdr.headers().map_err(|e| err(e.to_string()))?.clone();
-    let col = |n: &str| {
-        headers.iter().position(|h| h == n).ok_or_else(|| {
-            err(format!(
-                "no column `{n}`; columns: {}",
-                headers.iter().collect::<Vec<_>>().join(", ")
-            ))
-        })
-    };
-    let (xi, yi) = (col(x_key)?, col(metric)?);
-    let mut pts = vec![];
-    let mut skipped = 0;
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| err(e.to_string()))?;
-        match (
-            rec.get(xi).and_then(|v| v.parse::<f64>().ok()),
-            rec.get(yi).and_then(|v| v.parse::<f64>().ok()),
-        ) {
-            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => pts.push((x, y)),
-            _ => skipped += 1,
-        }
-    }
-    if pts.is_empty() {
-        return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
-    }
-    let (x0, x1) = finite_bounds(pts.iter().map(|p| p.0));
-    let (y0, y1) = finite_bounds(pts.iter().map(|p| p.1));
+    let (lines, skipped) = sweep_summary(results_csv, x_key, metric, group)?;
+    let all = || lines.iter().flat_map(|l| l.1.iter());
+    let (x0, x1) = finite_bounds(all().map(|p| p.0));
+    let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
+    let (_, y1) = finite_bounds(all().map(|p| p.1 + p.2));
     let bad = || err("no finite values".into());
     let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, 1e-9)?.ok_or_else(bad)?;
-    let (ya, yb) = padded_axis(metric, y0, y1, 0.05, 1e-12)?.ok_or_else(bad)?;
+    let (ya, yb) = padded_axis(metric, y0, y1, 0.08, 1e-12)?.ok_or_else(bad)?;
+    let runs: usize = all().map(|p| p.3).sum();
     let title = format!(
-        "{metric} against {x_key} ({} runs{})",
-        pts.len(),
+        "{metric} against {x_key}: mean +- 1 std over {runs} runs{}",
         if skipped > 0 {
-            format!(", {skipped} without a value")
+            format!(" ({skipped} without a value)")
         } else {
             String::new()
         }
     );
+    // A long title gets a smaller font rather than running off the image.
+    let title_px = (22.0 * 75.0 / title.chars().count().max(75) as f64).max(12.0);
     render!(path, format, (1000, 700), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
             let mut chart = ChartBuilder::on(&root)
                 .margin(20)
-                .caption(&title, ("sans-serif", 22))
+                .caption(&title, ("sans-serif", title_px))
                 .x_label_area_size(50)
                 .y_label_area_size(90)
                 .build_cartesian_2d(xa..xb, ya..yb)
@@ -644,12 +725,41 @@ pub fn sweep_figure(
                 .axis_desc_style(("sans-serif", 16))
                 .draw()
                 .map_err(s)?;
-            chart
-                .draw_series(
-                    pts.iter()
-                        .map(|&(x, y)| Circle::new((x, y), 4, colour(1).mix(0.6).filled())),
-                )
-                .map_err(s)?;
+            for (i, (g, pts)) in lines.iter().enumerate() {
+                let c = colour(i + 1);
+                let label = match group {
+                    Some(k) => format!("{k} = {g}"),
+                    None => metric.to_string(),
+                };
+                chart
+                    .draw_series(LineSeries::new(
+                        pts.iter().map(|p| (p.0, p.1)),
+                        c.stroke_width(2),
+                    ))
+                    .map_err(s)?
+                    .label(label)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+                chart
+                    .draw_series(pts.iter().map(|p| {
+                        ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), 8)
+                    }))
+                    .map_err(s)?;
+                chart
+                    .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
+                    .map_err(s)?;
+            }
+            if group.is_some() {
+                chart
+                    .configure_series_labels()
+                    .position(SeriesLabelPosition::UpperRight)
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 15))
+                    .draw()
+                    .map_err(s)?;
+            }
             Ok(())
         })()
     })

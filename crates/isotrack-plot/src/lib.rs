@@ -17,7 +17,10 @@
 mod draw;
 mod run_data;
 
-pub use draw::{field_map, sweep_figure, timeseries_figure, trajectory_figure, Format, Panels};
+pub use draw::{
+    field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure, Format, Panels,
+    SummaryLine,
+};
 pub use run_data::RunData;
 
 /// Why a figure could not be made.

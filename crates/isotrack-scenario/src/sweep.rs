@@ -108,6 +108,23 @@ fn flatten(
     }
 }
 
+/// The common length of a `[grid]` list whose values are all arrays of numbers (`None` for a
+/// list of scalars).
+fn array_len(list: &[toml::Value]) -> Option<usize> {
+    let first = list.first()?.as_array()?.len();
+    list.iter()
+        .all(|v| v.as_array().is_some_and(|a| a.len() == first))
+        .then_some(first)
+}
+
+/// A TOML value as a CSV cell: strings unquoted, numbers as TOML writes them.
+fn cell(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
 /// A TOML value as an override `VALUE` (round-trips through `--set` parsing).
 pub fn value_literal(v: &toml::Value) -> String {
     match v {
@@ -170,6 +187,12 @@ impl SweepPlan {
                     .as_array()
                     .filter(|a| !a.is_empty())
                     .ok_or_else(|| err(format!("grid.{k}: must be a non-empty list of values")))?;
+                let arrays = list.iter().filter(|v| v.is_array()).count();
+                if arrays > 0 && array_len(list).is_none() {
+                    return Err(err(format!(
+                        "grid.{k}: a list of arrays needs arrays of one length, and nothing else"
+                    )));
+                }
                 grid.push((k, list.clone()));
             }
         }
@@ -273,6 +296,45 @@ impl SweepPlan {
             .chain(self.random.iter().map(|r| r.0.clone()))
             .chain(self.derives_seed.then(|| "sim.seed".to_string()))
             .collect()
+    }
+
+    /// The `results.csv` columns of the varied keys: as [`varied_keys`](Self::varied_keys),
+    /// with a `[grid]` key whose values are arrays (`vehicle.wind_mps = [[0, 0], [3, 0]]`) split
+    /// into numeric columns `key[0]`, `key[1]`, ... (not one string column).
+    pub fn columns(&self) -> Vec<String> {
+        let mut cols = vec![];
+        for (k, list) in &self.grid {
+            match array_len(list) {
+                Some(n) => cols.extend((0..n).map(|i| format!("{k}[{i}]"))),
+                None => cols.push(k.clone()),
+            }
+        }
+        cols.extend(self.random.iter().map(|r| r.0.clone()));
+        if self.derives_seed {
+            cols.push("sim.seed".into());
+        }
+        cols
+    }
+
+    /// The cells of run `id` under [`columns`](Self::columns) (strings unquoted, arrays split).
+    pub fn run_cells(&self, id: u64) -> Vec<String> {
+        let mut g = id / self.draws;
+        let mut picked = vec![None; self.grid.len()];
+        for (i, (_, list)) in self.grid.iter().enumerate().rev() {
+            let n = list.len() as u64;
+            picked[i] = Some(&list[(g % n) as usize]);
+            g /= n;
+        }
+        let mut cells = vec![];
+        for v in picked.into_iter().flatten() {
+            match v {
+                toml::Value::Array(a) => cells.extend(a.iter().map(cell)),
+                other => cells.push(cell(other)),
+            }
+        }
+        let n_grid = self.grid.len();
+        cells.extend(self.run_values(id).into_iter().skip(n_grid));
+        cells
     }
 
     /// Notes on runs that will come out identical: a `[grid]` list holding one value twice, or
