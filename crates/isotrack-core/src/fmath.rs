@@ -33,6 +33,10 @@ mod imp {
     pub fn atan2(y: f64, x: f64) -> f64 {
         y.atan2(x)
     }
+    #[inline]
+    pub fn floor(x: f64) -> f64 {
+        x.floor()
+    }
 }
 
 #[cfg(not(feature = "std"))]
@@ -64,6 +68,10 @@ mod imp {
     #[inline]
     pub fn atan2(y: f64, x: f64) -> f64 {
         libm::atan2(y, x)
+    }
+    #[inline]
+    pub fn floor(x: f64) -> f64 {
+        libm::floor(x)
     }
 }
 

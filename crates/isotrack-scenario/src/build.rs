@@ -5,8 +5,8 @@ use crate::schema::*;
 use crate::Scenario;
 use isotrack_core::control::{
     AntiWindup, GradientReference, GradientReferenceParams, GroundTruth, OutputStage, PiIsoline,
-    PiIsolineParams, Pid, PidCrossing, PidCrossingParams, PidParams, SlidingMode,
-    SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
+    PiIsolineParams, Pid, PidCrossing, PidCrossingParams, PidParams, Search, SearchParams,
+    SearchPattern, SlidingMode, SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
 };
 use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
@@ -100,6 +100,41 @@ macro_rules! each_controller {
     };
 }
 
+/// The controller a run flies: the tracking law, or the tracking law behind a search phase.
+/// (An enum, not a box: the step loop stays monomorphic.)
+enum Tracker {
+    Tracking(ControllerModel),
+    Searching(Search<ControllerModel>),
+}
+
+impl IsolineController for Tracker {
+    #[inline]
+    fn update(&mut self, m: &Measurement) -> f64 {
+        match self {
+            Tracker::Tracking(c) => c.update(m),
+            Tracker::Searching(c) => c.update(m),
+        }
+    }
+    fn reset(&mut self) {
+        match self {
+            Tracker::Tracking(c) => c.reset(),
+            Tracker::Searching(c) => c.reset(),
+        }
+    }
+    fn needs_ground_truth(&self) -> bool {
+        match self {
+            Tracker::Tracking(c) => c.needs_ground_truth(),
+            Tracker::Searching(c) => c.needs_ground_truth(),
+        }
+    }
+    fn update_with_truth(&mut self, m: &Measurement, truth: &GroundTruth) -> f64 {
+        match self {
+            Tracker::Tracking(c) => c.update_with_truth(m, truth),
+            Tracker::Searching(c) => c.update_with_truth(m, truth),
+        }
+    }
+}
+
 impl IsolineController for ControllerModel {
     #[inline]
     fn update(&mut self, m: &Measurement) -> f64 {
@@ -136,6 +171,45 @@ impl Scenario {
                 VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
                 VehicleModel::Dubins(_) => None,
             })
+    }
+
+    /// The search phase before tracking (`controller.search`), with its defaults applied:
+    /// spacing the minimum turning diameter `2*v/omega_max` (`omega_max` the turn-rate limit,
+    /// 1 rad/s without one), lawnmower legs 10 spacings, hand-over at 1 % of `|level|` (0.01
+    /// for level 0). `None` without a search.
+    pub fn search(&self) -> Option<SearchParams> {
+        let c = &self.file.controller;
+        let v = self
+            .file
+            .vehicle
+            .speed_mps
+            .or(self.file.vehicle.airspeed_mps)
+            .unwrap_or(0.5);
+        let w_max = self.max_turn_rate_radps().unwrap_or(1.0);
+        let spacing_m = c.search_spacing_m.unwrap_or(2.0 * v / w_max);
+        let pattern = match c.search.unwrap_or_default() {
+            SearchKind::None => return None,
+            SearchKind::Spiral => SearchPattern::Spiral {
+                spacing_m,
+                speed_mps: v,
+                max_turn_rate_radps: w_max,
+            },
+            SearchKind::Lawnmower => SearchPattern::Lawnmower {
+                leg_m: c.search_leg_m.unwrap_or(10.0 * spacing_m),
+                spacing_m,
+                speed_mps: v,
+            },
+        };
+        let level = self.level();
+        let handover_delta = c.search_handover.unwrap_or(if level != 0.0 {
+            0.01 * level.abs()
+        } else {
+            0.01
+        });
+        Some(SearchParams {
+            pattern,
+            handover_delta,
+        })
     }
 
     /// The controller, at rest.
@@ -311,7 +385,10 @@ impl Scenario {
             isoline_distance: Some(&dist),
             gradient: Some(&grad),
         };
-        let mut controller = self.controller();
+        let mut controller = match self.search() {
+            Some(params) => Tracker::Searching(Search::new(self.controller(), params)),
+            None => Tracker::Tracking(self.controller()),
+        };
         let mut sensor = self.sensor();
         let plan = self.plan();
         let i = &self.file.initial;

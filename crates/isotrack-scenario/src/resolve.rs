@@ -257,7 +257,16 @@ pub fn drop_inapplicable_controller_keys(table: &mut toml::Table) -> Vec<String>
         None => ControllerKind::PiIsoline,
     };
     let allowed = controller_allowed(kind);
-    let shared = ["kind", "level", "higher_side", "max_turn_rate_radps"];
+    let shared = [
+        "kind",
+        "level",
+        "higher_side",
+        "max_turn_rate_radps",
+        "search",
+        "search_spacing_m",
+        "search_leg_m",
+        "search_handover",
+    ];
     let dropped: Vec<String> = ct
         .keys()
         .filter(|k| !shared.contains(&k.as_str()) && !allowed.contains(&k.as_str()))
@@ -309,7 +318,48 @@ fn controller_allowed(kind: ControllerKind) -> &'static [&'static str] {
     }
 }
 
+/// `controller.search*`: any controller may search first. Defaults that follow other keys
+/// (spacing, leg, hand-over) are left unset and applied by `Scenario::search`.
+fn resolve_search(c: &mut Checker, ct: &mut ControllerSection) {
+    let kind = *ct.search.get_or_insert(SearchKind::None);
+    let name = match kind {
+        SearchKind::None => "none",
+        SearchKind::Spiral => "spiral",
+        SearchKind::Lawnmower => "lawnmower",
+    };
+    let applies = |key: &str| match key {
+        "search_leg_m" => kind == SearchKind::Lawnmower,
+        _ => kind != SearchKind::None,
+    };
+    for (key, v) in [
+        ("search_spacing_m", ct.search_spacing_m),
+        ("search_leg_m", ct.search_leg_m),
+        ("search_handover", ct.search_handover),
+    ] {
+        let Some(v) = v else { continue };
+        let full = format!("controller.{key}");
+        if !applies(key) {
+            c.fail(
+                &full,
+                format!("does not apply to controller.search = \"{name}\""),
+            );
+        } else if key == "search_handover" {
+            c.positive(&full, v);
+            c.field_value(&full, v);
+        } else {
+            c.within(
+                &full,
+                v,
+                ranges::MIN_LENGTH_M,
+                ranges::MAX_COORDINATE_M,
+                "m",
+            );
+        }
+    }
+}
+
 fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
+    resolve_search(c, ct);
     let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
     let allowed = controller_allowed(kind);
     let choice = format!("controller.kind = \"{}\"", kind.name());

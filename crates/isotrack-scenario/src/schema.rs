@@ -393,6 +393,19 @@ pub enum DerivativeKindName {
     Levant,
 }
 
+/// Search patterns flown before tracking (`controller.search`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SearchKind {
+    /// No search: the tracking law from the start (default).
+    #[default]
+    None,
+    /// An Archimedean spiral, arms `search_spacing_m` apart.
+    Spiral,
+    /// A lawnmower: legs of `search_leg_m`, `search_spacing_m` apart.
+    Lawnmower,
+}
+
 /// `[controller]`.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -480,6 +493,21 @@ pub struct ControllerSection {
     /// `levant`: bound `L` on `|s''|`, field units/s^2 (default 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub derivative_lipschitz: Option<f64>,
+    /// A search pattern flown before tracking, any controller (default `none`): it hands over
+    /// once the measurement has moved by `search_handover` from its first sample.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchKind>,
+    /// Spiral arm spacing or lawnmower leg spacing, m (default: the minimum turning diameter
+    /// `2*v/omega_max`, `omega_max` the turn-rate limit or 1 rad/s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_spacing_m: Option<f64>,
+    /// `lawnmower`: leg length, m (default 10 x the spacing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_leg_m: Option<f64>,
+    /// Hand over once `|s - s_first| >= search_handover`, field units (default 1 % of
+    /// `|level|`, or 0.01 for level 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_handover: Option<f64>,
 }
 
 /// `[sim]`.

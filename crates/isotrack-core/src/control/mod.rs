@@ -10,12 +10,14 @@
 
 mod baselines;
 mod pi_isoline;
+mod search;
 
 pub use baselines::{
     GradientReference, GradientReferenceParams, Pid, PidCrossing, PidCrossingParams, PidParams,
     SlidingMode, SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
 };
 pub use pi_isoline::{AntiWindup, PiIsoline, PiIsolineParams};
+pub use search::{Search, SearchParams, SearchPattern};
 
 /// One sensor sample: all a coordinate-free controller ever sees.
 #[derive(Clone, Copy, Debug, PartialEq)]
