@@ -118,6 +118,30 @@ pub struct PlotArgs {
         default_value = "steady_state_max_abs_error"
     )]
     pub metric: String,
+    /// Figure options.
+    #[command(flatten)]
+    pub look: FigureOptions,
+}
+
+/// How figures look (`plot`, `run --plot`, `figures`).
+#[derive(Debug, Clone, Args)]
+pub struct FigureOptions {
+    /// Figure size in pixels at 100 dpi, `WxH` (default: 1100x900 for maps in PNG, about half
+    /// in SVG, sized for a single journal column).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Base font size, pixels at 100 dpi (default 16 in PNG, 13 in SVG).
+    #[arg(long, value_name = "PX")]
+    pub font_size: Option<f64>,
+    /// The figure title, replacing the default (`--title ""` for none: a caption says it).
+    #[arg(long, value_name = "TEXT")]
+    pub title: Option<String>,
+    /// Heat-map colour map: viridis, gray, bone or copper.
+    #[arg(long, value_name = "NAME", default_value = "viridis")]
+    pub colormap: String,
+    /// PNG resolution in dots per inch: scales every pixel dimension (300 for print).
+    #[arg(long, value_name = "DPI", default_value_t = 100.0)]
+    pub dpi: f64,
 }
 
 /// `isotrack figures`.
@@ -135,6 +159,9 @@ pub struct FiguresArgs {
     /// Where the runs behind the figures go (trace, summary, scenario per run).
     #[arg(long, value_name = "DIR", default_value = "target/figure-runs")]
     pub runs: PathBuf,
+    /// Figure options (`--title` replaces every figure's title).
+    #[command(flatten)]
+    pub look: FigureOptions,
 }
 
 /// `isotrack sweep`.
@@ -268,4 +295,7 @@ pub struct RunArgs {
     /// (needs `--out`).
     #[arg(long, requires = "out")]
     pub plot: bool,
+    /// Figure options for `--plot`.
+    #[command(flatten)]
+    pub look: FigureOptions,
 }

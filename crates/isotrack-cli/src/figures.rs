@@ -1,11 +1,12 @@
 //! `isotrack plot`, `isotrack run --plot` and `isotrack figures`.
 
-use crate::cli::{FiguresArgs, ImageFormat, PlotArgs};
+use crate::cli::{FigureOptions, FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
 use crate::output::{run_to_trace, scenario_toml, write_summary};
 use crate::run::Failure;
 use isotrack_plot::{
-    field_map, timeseries_figure, trajectory_figure, Format, Panels, PlotError, RunData,
+    field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, PlotError, RunData,
+    Style,
 };
 use isotrack_scenario::{load_scenario, Scenario};
 use std::path::{Path, PathBuf};
@@ -28,7 +29,47 @@ fn failure(e: PlotError) -> Failure {
 }
 
 /// Plots run directories into `out`; returns the files written.
-pub fn plot_dirs(runs: &[PathBuf], format: Format, out: &Path) -> Result<Vec<String>, Failure> {
+/// The figure style from the options, every value checked (a usage error names the flag).
+pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
+    let usage = |m: String| Failure {
+        code: exit::USAGE,
+        message: m,
+    };
+    let mut st = Style::new(format);
+    if let Some(sz) = &o.size {
+        let parsed = sz
+            .split_once(['x', 'X'])
+            .and_then(|(w, h)| Some((w.trim().parse::<u32>().ok()?, h.trim().parse::<u32>().ok()?)))
+            .filter(|(w, h)| (200..=10_000).contains(w) && (150..=10_000).contains(h));
+        st.size_px = Some(parsed.ok_or_else(|| {
+            usage(format!(
+                "--size {sz}: expected WxH in pixels, 200..10000 x 150..10000 (e.g. 800x600)"
+            ))
+        })?);
+    }
+    if let Some(f) = o.font_size {
+        if !(f.is_finite() && (4.0..=200.0).contains(&f)) {
+            return Err(usage(format!("--font-size must be 4..200 px, got {f}")));
+        }
+        st.font_px = Some(f);
+    }
+    if !(o.dpi.is_finite() && (25.0..=1200.0).contains(&o.dpi)) {
+        return Err(usage(format!("--dpi must be 25..1200, got {}", o.dpi)));
+    }
+    st.dpi = o.dpi;
+    st.colormap = Colormap::from_name(&o.colormap).ok_or_else(|| {
+        usage(format!(
+            "--colormap {}: expected viridis, gray, bone or copper",
+            o.colormap
+        ))
+    })?;
+    st.title = o.title.clone();
+    Ok(st)
+}
+
+/// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
+pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
+    let format = st.format;
     let data: Vec<RunData> = runs
         .iter()
         .map(|d| RunData::load(d))
@@ -51,8 +92,8 @@ pub fn plot_dirs(runs: &[PathBuf], format: Format, out: &Path) -> Result<Vec<Str
     let ext = format.extension();
     let traj = out.join(format!("trajectory.{ext}"));
     let ts = out.join(format!("timeseries.{ext}"));
-    trajectory_figure(&data, &traj, format, &title).map_err(failure)?;
-    timeseries_figure(&data, &ts, format, &title, Panels::default()).map_err(failure)?;
+    trajectory_figure(&data, &traj, st, &title).map_err(failure)?;
+    timeseries_figure(&data, &ts, st, &title, Panels::default()).map_err(failure)?;
     Ok(vec![traj.display().to_string(), ts.display().to_string()])
 }
 
@@ -62,6 +103,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         ImageFormat::Png => Format::Png,
         ImageFormat::Svg => Format::Svg,
     };
+    let st = style(&a.look, format)?;
     let out = a.out.clone().unwrap_or_else(|| a.runs[0].clone());
     let results = a.runs[0].join("results.csv");
     for d in &a.runs {
@@ -107,12 +149,12 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
                 .unwrap_or_default(),
             format.extension()
         ));
-        isotrack_plot::sweep_figure(&results, &x, &a.metric, a.group.as_deref(), &file, format)
+        isotrack_plot::sweep_figure(&results, &x, &a.metric, a.group.as_deref(), &file, &st)
             .map_err(failure)?;
         println!("wrote {}", file.display());
         return Ok(());
     }
-    let written = plot_dirs(&a.runs, format, &out)?;
+    let written = plot_dirs(&a.runs, &st, &out)?;
     println!("wrote {}", written.join(", "));
     Ok(())
 }
@@ -158,6 +200,10 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
     } else {
         vec![Format::Png]
     };
+    let styles: Vec<Style> = formats
+        .iter()
+        .map(|&f| style(&a.look, f))
+        .collect::<Result<_, _>>()?;
     let sc = |n: &str| a.scenarios.join(n);
     let set = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
     let mut written = vec![];
@@ -174,19 +220,20 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         isotrack_scenario::field::FieldModel::Grid(g) => g.grid().extent_m(),
         isotrack_scenario::field::FieldModel::Analytic(_) => [-25.0, 25.0, -25.0, 25.0],
     };
-    for &f in &formats {
+    for st in &styles {
+        let f = st.format;
         field_map(
             &fig2a,
             g,
             &file("fig1a", f),
-            f,
+            st,
             "Fig. 1(a): NO2 map (kriged from 74 stations), level 10 bold",
         )
         .map_err(failure)?;
         trajectory_figure(
             std::slice::from_ref(&run2a),
             &file("fig2a", f),
-            f,
+            st,
             "Fig. 2(a): Dubins robot on the real map",
         )
         .map_err(failure)?;
@@ -243,18 +290,19 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         &runs_dir.join("fig3"),
         "fixed-wing UAV, 30 m/s, 1 Hz",
     )?;
-    for &f in &formats {
+    for st in &styles {
+        let f = st.format;
         trajectory_figure(
             &runs2b,
             &file("fig2b", f),
-            f,
+            st,
             "Fig. 2(b): circular field, several initial states",
         )
         .map_err(failure)?;
         timeseries_figure(
             &runs2c,
             &file("fig2c", f),
-            f,
+            st,
             "Fig. 2(c): tracking error for several (kp, ki)",
             Panels {
                 error: true,
@@ -267,14 +315,14 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         trajectory_figure(
             std::slice::from_ref(&run3),
             &file("fig3b", f),
-            f,
+            st,
             "Fig. 3(b): fixed-wing UAV on the pollution map",
         )
         .map_err(failure)?;
         timeseries_figure(
             std::slice::from_ref(&run3),
             &file("fig3c", f),
-            f,
+            st,
             "Fig. 3(c): UAV tracking error and measurement rate",
             Panels {
                 error: true,

@@ -118,11 +118,8 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             );
         }
         if args.plot {
-            let written = crate::figures::plot_dirs(
-                std::slice::from_ref(dir),
-                isotrack_plot::Format::Png,
-                dir,
-            )?;
+            let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+            let written = crate::figures::plot_dirs(std::slice::from_ref(dir), &st, dir)?;
             if !args.quiet {
                 println!("plotted     {}", written.join(", "));
             }

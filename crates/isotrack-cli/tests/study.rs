@@ -348,3 +348,61 @@ fn sweep_summary_plots() {
         stderr(&o)
     );
 }
+
+/// Item 7: the figure options reach the images from the command line, and bad values are
+/// usage errors.
+#[test]
+fn figure_options_on_the_command_line() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("r");
+    let r = run.to_str().unwrap();
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=10",
+        "--out",
+        r,
+        "--plot",
+        "--size",
+        "800x600",
+        "--dpi",
+        "150",
+        "--title",
+        "",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let png = std::fs::read(run.join("trajectory.png")).unwrap();
+    // PNG IHDR: width and height, big-endian, at bytes 16..24.
+    let w = u32::from_be_bytes(png[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(png[20..24].try_into().unwrap());
+    assert_eq!((w, h), (1200, 900));
+    let out = d.path().join("svg");
+    let o = isotrack(&[
+        "plot",
+        r,
+        "--format",
+        "svg",
+        "--out",
+        out.to_str().unwrap(),
+        "--colormap",
+        "gray",
+        "--font-size",
+        "18",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(out.join("trajectory.svg")).unwrap();
+    assert_eq!(svg.matches("<image").count(), 1);
+    for bad in [
+        vec!["--size", "10x10"],
+        vec!["--size", "wide"],
+        vec!["--dpi", "0"],
+        vec!["--font-size", "nan"],
+        vec!["--colormap", "jet"],
+    ] {
+        let mut args = vec!["plot", r];
+        args.extend(bad.iter().copied());
+        let o = isotrack(&args);
+        assert_eq!(o.status.code(), Some(64), "{bad:?}: {}", stderr(&o));
+    }
+}

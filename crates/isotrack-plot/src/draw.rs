@@ -1,13 +1,13 @@
 //! The figures themselves, drawn with plotters on a PNG or SVG backend.
 
 use crate::run_data::RunData;
+use crate::style::{tick_label, tick_step, Style};
 use crate::{fonts, PlotError};
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
 use isotrack_scenario::Scenario;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::colors::colormaps::ViridisRGB;
 use std::path::Path;
 
 /// Image format.
@@ -205,76 +205,139 @@ fn equal_scale(r: [f64; 4], pw: f64, ph: f64) -> [f64; 4] {
     ]
 }
 
-/// Layout of a map figure (pixels).
-const MAP_W: u32 = 1100;
-const MAP_H: u32 = 900;
-const BAR_W: u32 = 150;
-const MARGIN: u32 = 20;
-const Y_LABEL: u32 = 80;
-const X_LABEL: u32 = 60;
-const CAPTION: u32 = 50;
-
-fn plot_area() -> (f64, f64) {
-    (
-        (MAP_W - BAR_W - 2 * MARGIN - Y_LABEL) as f64,
-        (MAP_H - 2 * MARGIN - X_LABEL - CAPTION) as f64,
-    )
+/// Layout of a map figure, in output pixels, from its size and font.
+struct MapLayout {
+    w: u32,
+    h: u32,
+    bar_w: u32,
+    margin: u32,
+    right_pad: u32,
+    y_label: u32,
+    x_label: u32,
+    caption: u32,
 }
 
-/// Draws the heat map, isolines and colour bar; returns the chart for overlays.
+impl MapLayout {
+    fn new(st: &Style, title: &str) -> Self {
+        let (w, h) = st.size((1100, 900), (560, 460));
+        let f = st.base_font();
+        Self {
+            w,
+            h,
+            bar_w: (0.03 * w as f64 + 8.0 * f) as u32,
+            margin: f.round() as u32,
+            // Room for the last x tick label, which centres on the plot's right edge.
+            right_pad: (1.5 * f) as u32,
+            y_label: (4.8 * f) as u32,
+            x_label: (3.4 * f) as u32,
+            caption: if title.is_empty() {
+                0
+            } else {
+                (2.4 * f) as u32
+            },
+        }
+    }
+    /// The plotting area, pixels.
+    fn plot_area(&self) -> (f64, f64) {
+        let w =
+            self.w as f64 - (self.bar_w + 2 * self.margin + self.right_pad + self.y_label) as f64;
+        let h = self.h as f64 - (2 * self.margin + self.x_label + self.caption) as f64;
+        (w.max(50.0), h.max(50.0))
+    }
+}
+
+/// Where a legend goes: the corner of `range` holding the fewest of `points`, so it covers as
+/// little data as it can.
+fn emptiest_corner(
+    points: impl Iterator<Item = (f64, f64)>,
+    range: [f64; 4],
+) -> SeriesLabelPosition {
+    let (mx, my) = (0.5 * (range[0] + range[1]), 0.5 * (range[2] + range[3]));
+    // [upper left, upper right, lower left, lower right]
+    let mut n = [0usize; 4];
+    for (x, y) in points {
+        if x.is_finite() && y.is_finite() {
+            n[usize::from(y < my) * 2 + usize::from(x >= mx)] += 1;
+        }
+    }
+    // Upper right first on a tie (the usual place).
+    let order = [1usize, 0, 3, 2];
+    let best = order.iter().copied().min_by_key(|&i| n[i]).unwrap_or(1);
+    match best {
+        0 => SeriesLabelPosition::UpperLeft,
+        1 => SeriesLabelPosition::UpperRight,
+        2 => SeriesLabelPosition::LowerLeft,
+        _ => SeriesLabelPosition::LowerRight,
+    }
+}
+
+type MapChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// Draws the heat map (one raster image, in SVG too), the isolines and the colour bar; returns
+/// the chart for overlays.
 fn draw_map<'a, DB: DrawingBackend + 'a>(
     root: &'a DrawingArea<DB, Shift>,
     sc: &Scenario,
     range: [f64; 4],
     title: &str,
-    raster_cells: usize,
-) -> Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-    String,
-> {
+    st: &Style,
+) -> Result<MapChart<'a, DB>, String> {
+    let lay = MapLayout::new(st, title);
     root.fill(&WHITE).map_err(s)?;
-    let (left, right) = root.split_horizontally(MAP_W - BAR_W);
-    let (pw, ph) = plot_area();
-    let nx = raster_cells;
-    let ny = ((raster_cells as f64) * ph / pw).round().max(2.0) as usize;
-    let raster = Raster::sample(sc, range, nx, ny);
-    let (vmin, vmax) = raster.range().unwrap_or((0.0, 1.0));
+    let (left, right) = root.split_horizontally(lay.w - lay.bar_w);
     let mut chart = ChartBuilder::on(&left)
-        .margin(MARGIN)
-        .caption(title, ("sans-serif", 26))
-        .x_label_area_size(X_LABEL)
-        .y_label_area_size(Y_LABEL)
+        .margin(lay.margin)
+        .margin_right(lay.margin + lay.right_pad)
+        .caption(title, st.font(1.6))
+        .x_label_area_size(lay.x_label)
+        .y_label_area_size(lay.y_label)
         .build_cartesian_2d(range[0]..range[1], range[2]..range[3])
         .map_err(s)?;
+    let (xs, ys) = (
+        tick_step(range[0], range[1], 10),
+        tick_step(range[2], range[3], 10),
+    );
     chart
         .configure_mesh()
         .disable_mesh()
         .x_desc("x, east (m)")
         .y_desc("y, north (m)")
-        .label_style(("sans-serif", 16))
-        .axis_desc_style(("sans-serif", 18))
+        .x_label_formatter(&|v| tick_label(*v, xs))
+        .y_label_formatter(&|v| tick_label(*v, ys))
+        .label_style(st.font(1.0))
+        .axis_desc_style(st.font(1.1))
         .draw()
         .map_err(s)?;
-    chart
-        .draw_series(
-            (0..raster.ny)
-                .flat_map(|j| (0..raster.nx).map(move |i| (i, j)))
-                .filter_map(|(i, j)| {
-                    let v = raster.values[j * raster.nx + i]?;
-                    let x = raster.x0 + i as f64 * raster.dx;
-                    let y = raster.y0 + j as f64 * raster.dy;
-                    let c = ViridisRGB::get_color_normalized(v, vmin, vmax);
-                    Some(Rectangle::new(
-                        [(x, y), (x + raster.dx, y + raster.dy)],
-                        c.filled(),
-                    ))
-                }),
-        )
-        .map_err(s)?;
+    // The raster: one value per `cell` pixels, drawn as one image (an SVG used to hold 5 000
+    // rectangles, most of a megabyte).
+    let (pw, ph) = chart.plotting_area().dim_in_pixel();
+    let cell = match st.format {
+        Format::Png => 2,
+        Format::Svg => 3,
+    };
+    let (nx, ny) = ((pw / cell).max(2) as usize, (ph / cell).max(2) as usize);
+    let raster = Raster::sample(sc, range, nx, ny);
+    let (vmin, vmax) = raster.range().unwrap_or((0.0, 1.0));
+    let mut buf = vec![255u8; (pw * ph * 3) as usize];
+    for py in 0..ph {
+        // Image row 0 is the top (north) edge; raster row 0 the south.
+        let j = ((ph - 1 - py) as usize * ny / ph as usize).min(ny - 1);
+        for px in 0..pw {
+            let i = (px as usize * nx / pw as usize).min(nx - 1);
+            if let Some(v) = raster.values[j * nx + i] {
+                let c = st.colormap.colour(v, vmin, vmax);
+                let o = ((py * pw + px) * 3) as usize;
+                buf[o..o + 3].copy_from_slice(&[c.0, c.1, c.2]);
+            }
+        }
+    }
+    if let Some(img) = BitMapElement::with_owned_buffer((range[0], range[3]), (pw, ph), buf) {
+        chart.draw_series(std::iter::once(img)).map_err(s)?;
+    }
     // Isolines: a few thin ones, the target bold.
     let level = sc.level();
     let iso = |lv: f64| {
@@ -295,40 +358,56 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         let segs = iso(lv);
         chart
             .draw_series(segs.segments().iter().map(|(a, b)| {
-                PathElement::new(vec![(a.x, a.y), (b.x, b.y)], WHITE.mix(0.6).stroke_width(1))
+                PathElement::new(
+                    vec![(a.x, a.y), (b.x, b.y)],
+                    WHITE.mix(0.6).stroke_width(st.px(1.0)),
+                )
             }))
             .map_err(s)?;
     }
     let segs = iso(level);
+    let bold = st.px(3.0);
     chart
         .draw_series(
             segs.segments().iter().map(|(a, b)| {
-                PathElement::new(vec![(a.x, a.y), (b.x, b.y)], BLACK.stroke_width(3))
+                PathElement::new(vec![(a.x, a.y), (b.x, b.y)], BLACK.stroke_width(bold))
             }),
         )
         .map_err(s)?
-        .label(format!("isoline s_d = {level}"))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
-    // Colour bar.
+        .label(format!("isoline s_d = {}", tick_label(level, 0.0)))
+        .legend(move |(x, y)| {
+            PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(bold))
+        });
+    // Colour bar, its ticks as fine as the field's span needs (a nearly flat field still gets
+    // distinct labels).
     let units = sc
         .file()
         .field
         .units
         .clone()
         .unwrap_or_else(|| "field value".into());
+    // The bar 1.6 font sizes wide, its labels and unit to its left.
+    let f = st.base_font();
+    let bar_label = (4.6 * f) as u32;
+    let bar_right = lay
+        .bar_w
+        .saturating_sub(bar_label + (1.6 * f) as u32 + (0.5 * f) as u32);
     let mut bar = ChartBuilder::on(&right)
-        .margin_top(MARGIN + CAPTION)
-        .margin_bottom(MARGIN + X_LABEL)
-        .margin_right(10)
-        .y_label_area_size(90)
+        .margin_top(lay.margin + lay.caption)
+        .margin_bottom(lay.margin + lay.x_label)
+        .margin_left((0.5 * f) as u32)
+        .margin_right(bar_right)
+        .y_label_area_size(bar_label)
         .build_cartesian_2d(0.0..1.0, vmin..vmax)
         .map_err(s)?;
+    let vs = tick_step(vmin, vmax, 10);
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
         .y_desc(units)
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
+        .y_label_formatter(&|v| tick_label(*v, vs))
+        .label_style(st.font(0.9))
+        .axis_desc_style(st.font(1.0))
         .draw()
         .map_err(s)?;
     let n = 100;
@@ -337,27 +416,21 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         let b = vmin + (vmax - vmin) * (k + 1) as f64 / n as f64;
         Rectangle::new(
             [(0.0, a), (1.0, b)],
-            ViridisRGB::get_color_normalized(0.5 * (a + b), vmin, vmax).filled(),
+            st.colormap.colour(0.5 * (a + b), vmin, vmax).filled(),
         )
     }))
     .map_err(s)?;
     Ok(chart)
 }
 
-fn raster_cells(format: Format) -> usize {
-    match format {
-        Format::Png => 220,
-        Format::Svg => 70,
-    }
-}
-
 /// Trajectories of one or more runs over the (first run's) field. Written to `path`.
 pub fn trajectory_figure(
     runs: &[RunData],
     path: &Path,
-    format: Format,
+    st: &Style,
     title: &str,
 ) -> Result<(), PlotError> {
+    let title = st.title(title);
     let first = runs
         .first()
         .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
@@ -377,23 +450,29 @@ pub fn trajectory_figure(
     let no_positions = || PlotError::Data("no trace row has a finite position".into());
     let (xa, xb) = axis("x_m", x0, x1)?.ok_or_else(no_positions)?;
     let (ya, yb) = axis("y_m", y0, y1)?.ok_or_else(no_positions)?;
-    let (pw, ph) = plot_area();
+    let lay = MapLayout::new(st, title);
+    let (pw, ph) = lay.plot_area();
     let range = equal_scale([xa, xb, ya, yb], pw, ph);
     let arrow = 0.06 * (range[1] - range[0]);
-    render!(path, format, (MAP_W, MAP_H), |root| {
+    let legend_at = emptiest_corner(points().map(|t| (t.x_m, t.y_m)), range);
+    render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let mut chart = draw_map(&root, &first.scenario, range, title, raster_cells(format))?;
+            let mut chart = draw_map(&root, &first.scenario, range, title, st)?;
+            let (w2, w3) = (st.px(2.0), st.px(3.0));
             for (i, run) in runs.iter().enumerate() {
                 let c = colour(i);
                 chart
                     .draw_series(LineSeries::new(
-                        run.trace.iter().map(|t| (t.x_m, t.y_m)),
-                        c.stroke_width(2),
+                        run.trace
+                            .iter()
+                            .filter(|t| t.x_m.is_finite() && t.y_m.is_finite())
+                            .map(|t| (t.x_m, t.y_m)),
+                        c.stroke_width(w2),
                     ))
                     .map_err(s)?
                     .label(run.name.clone())
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                     });
                 let (a, b) = (run.trace[0], run.trace[run.trace.len() - 1]);
                 let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
@@ -404,26 +483,27 @@ pub fn trajectory_figure(
                 };
                 chart
                     .draw_series([
-                        PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(3)),
-                        PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(3)),
+                        PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(w3)),
+                        PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(w3)),
                     ])
                     .map_err(s)?;
+                let r = st.px(7.0);
                 chart
-                    .draw_series([Circle::new((a.x_m, a.y_m), 7, c.filled())])
+                    .draw_series([Circle::new((a.x_m, a.y_m), r, c.filled())])
                     .map_err(s)?;
                 chart
-                    .draw_series([Circle::new((a.x_m, a.y_m), 7, WHITE.stroke_width(2))])
+                    .draw_series([Circle::new((a.x_m, a.y_m), r, WHITE.stroke_width(w2))])
                     .map_err(s)?;
                 chart
-                    .draw_series([TriangleMarker::new((b.x_m, b.y_m), 9, c.filled())])
+                    .draw_series([TriangleMarker::new((b.x_m, b.y_m), st.px(9.0), c.filled())])
                     .map_err(s)?;
             }
             chart
                 .configure_series_labels()
-                .label_font(("sans-serif", 16))
+                .label_font(st.font(1.0))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
+                .position(legend_at)
                 .draw()
                 .map_err(s)?;
             Ok(())
@@ -436,17 +516,19 @@ pub fn field_map(
     sc: &Scenario,
     range: [f64; 4],
     path: &Path,
-    format: Format,
+    st: &Style,
     title: &str,
 ) -> Result<(), PlotError> {
-    let (pw, ph) = plot_area();
+    let title = st.title(title);
+    let lay = MapLayout::new(st, title);
+    let (pw, ph) = lay.plot_area();
     let range = equal_scale(range, pw, ph);
-    render!(path, format, (MAP_W, MAP_H), |root| {
+    render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let mut chart = draw_map(&root, sc, range, title, raster_cells(format))?;
+            let mut chart = draw_map(&root, sc, range, title, st)?;
             chart
                 .configure_series_labels()
-                .label_font(("sans-serif", 16))
+                .label_font(st.font(1.0))
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .draw()
@@ -456,42 +538,90 @@ pub fn field_map(
     })
 }
 
+/// `(t, value)` points of one line.
+type Series = Vec<(f64, f64)>;
+
+/// One time-series panel: its axis label and its series per run (the second, when present, is
+/// drawn thin and light: the measured value under the true one).
+struct Panel {
+    label: &'static str,
+    series: fn(&RunData) -> [Series; 2],
+}
+
+/// Whether a run's measurements differ from the true values (noise or delay): then the
+/// measured value is drawn too.
+fn measured_differs(r: &RunData) -> bool {
+    r.trace.iter().any(|t| {
+        t.s_measured
+            .is_some_and(|m| (m - t.s).abs() > 1e-12 * t.s.abs().max(1.0))
+    })
+}
+
 /// Time series of one or more runs: the chosen panels, steady-state window shaded.
 pub fn timeseries_figure(
     runs: &[RunData],
     path: &Path,
-    format: Format,
+    st: &Style,
     title: &str,
     panels: Panels,
 ) -> Result<(), PlotError> {
+    let title = st.title(title);
     let first = runs
         .first()
         .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
-    type Getter = fn(&RunData) -> Vec<(f64, f64)>;
-    let mut list: Vec<(&str, Getter)> = Vec::new();
+    let mut list: Vec<Panel> = Vec::new();
     if panels.error {
-        list.push(("error eps = s - s_d", |r| {
-            r.trace.iter().map(|t| (t.t_s, t.error)).collect()
-        }));
+        list.push(Panel {
+            label: "error \u{3b5} = s \u{2212} s_d",
+            series: |r| [r.trace.iter().map(|t| (t.t_s, t.error)).collect(), vec![]],
+        });
     }
     if panels.measurement {
-        list.push(("measurement s", |r| {
-            r.trace.iter().map(|t| (t.t_s, t.s)).collect()
-        }));
+        let noisy = runs.iter().any(measured_differs);
+        list.push(Panel {
+            label: if noisy {
+                "s: true (bold), measured (light)"
+            } else {
+                "true field value s"
+            },
+            series: |r| {
+                let truth = r.trace.iter().map(|t| (t.t_s, t.s)).collect();
+                let measured = if measured_differs(r) {
+                    r.trace
+                        .iter()
+                        .filter_map(|t| t.s_measured.map(|m| (t.t_s, m)))
+                        .collect()
+                } else {
+                    vec![]
+                };
+                [truth, measured]
+            },
+        });
     }
     if panels.measurement_rate {
-        list.push(("measurement rate ds/dt (units/s)", |r| {
-            r.trace
-                .windows(2)
-                .filter(|w| w[1].t_s > w[0].t_s)
-                .map(|w| (w[1].t_s, (w[1].s - w[0].s) / (w[1].t_s - w[0].t_s)))
-                .collect()
-        }));
+        list.push(Panel {
+            label: "ds/dt (units/s)",
+            series: |r| {
+                let rate = r
+                    .trace
+                    .windows(2)
+                    .filter(|w| w[1].t_s > w[0].t_s)
+                    .map(|w| (w[1].t_s, (w[1].s - w[0].s) / (w[1].t_s - w[0].t_s)))
+                    .collect();
+                [rate, vec![]]
+            },
+        });
     }
     if panels.omega {
-        list.push(("turn rate omega (rad/s)", |r| {
-            r.trace.iter().map(|t| (t.t_s, t.omega_radps)).collect()
-        }));
+        list.push(Panel {
+            label: "turn rate \u{3c9} (rad/s)",
+            series: |r| {
+                [
+                    r.trace.iter().map(|t| (t.t_s, t.omega_radps)).collect(),
+                    vec![],
+                ]
+            },
+        });
     }
     if list.is_empty() {
         return Err(PlotError::Input("no panels selected".into()));
@@ -506,33 +636,49 @@ pub fn timeseries_figure(
     let ss = first.steady_state_start_s();
     // Every panel's range is checked before drawing, so absurd data is a data error (not a
     // failed drawing).
-    let mut ranges = Vec::with_capacity(list.len());
-    for (name, get) in &list {
-        let series: Vec<Vec<(f64, f64)>> = runs.iter().map(get).collect();
-        let (lo, hi) = finite_bounds(series.iter().flatten().map(|p| p.1));
-        ranges.push(padded_axis(name, lo, hi, 0.08, 1e-12)?.unwrap_or((-1.0, 1.0)));
+    let mut data = Vec::with_capacity(list.len());
+    for p in &list {
+        let series: Vec<[Vec<(f64, f64)>; 2]> = runs.iter().map(p.series).collect();
+        let (lo, hi) = finite_bounds(series.iter().flatten().flatten().map(|q| q.1));
+        let range = padded_axis(p.label, lo, hi, 0.08, 1e-12)?.unwrap_or((-1.0, 1.0));
+        data.push((series, range));
     }
-    let height = 80 + 300 * list.len() as u32;
-    render!(path, format, (1100, height), |root| {
+    let n = list.len() as u32;
+    let (w, h) = match st.size_px {
+        Some(_) => st.size((1100, 980), (560, 520)),
+        None => st.size((1100, 80 + 300 * n), (560, 40 + 160 * n)),
+    };
+    let f = st.base_font();
+    let ts = tick_step(0.0, t_end, 10);
+    render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
-            let root = root.titled(title, ("sans-serif", 26)).map_err(s)?;
-            let areas = root.split_evenly((list.len(), 1));
-            for (k, ((name, get), area)) in list.iter().zip(areas.iter()).enumerate() {
-                let series: Vec<Vec<(f64, f64)>> = runs.iter().map(get).collect();
-                let (lo, hi) = ranges[k];
+            let body = if title.is_empty() {
+                root.clone()
+            } else {
+                root.titled(title, st.font(1.6)).map_err(s)?
+            };
+            let areas = body.split_evenly((list.len(), 1));
+            for (k, ((p, (series, (lo, hi))), area)) in
+                list.iter().zip(&data).zip(areas.iter()).enumerate()
+            {
+                let (lo, hi) = (*lo, *hi);
                 let mut chart = ChartBuilder::on(area)
-                    .margin(12)
-                    .x_label_area_size(45)
-                    .y_label_area_size(90)
+                    .margin((0.75 * f) as u32)
+                    .margin_right((2.0 * f) as u32)
+                    .x_label_area_size((2.8 * f) as u32)
+                    .y_label_area_size((5.6 * f) as u32)
                     .build_cartesian_2d(0.0..t_end, lo..hi)
                     .map_err(s)?;
+                let ys = tick_step(lo, hi, 8);
                 chart
                     .configure_mesh()
                     .x_desc("time (s)")
-                    .y_desc(*name)
-                    .label_style(("sans-serif", 15))
-                    .axis_desc_style(("sans-serif", 16))
+                    .y_desc(p.label)
+                    .x_label_formatter(&|v| tick_label(*v, ts))
+                    .y_label_formatter(&|v| tick_label(*v, ys))
+                    .label_style(st.font(0.95))
+                    .axis_desc_style(st.font(1.0))
                     .light_line_style(WHITE.mix(0.0))
                     .draw()
                     .map_err(s)?;
@@ -551,22 +697,39 @@ pub fn timeseries_figure(
                             )
                         });
                 }
-                for (i, (run, pts)) in runs.iter().zip(series).enumerate() {
+                let (w1, w2, w3) = (st.px(1.0), st.px(2.0), st.px(3.0));
+                // Values outside the panel (a non-finite row) are left out, never drawn over
+                // the neighbouring panel.
+                let inside = move |q: &&(f64, f64)| q.1.is_finite() && q.1 >= lo && q.1 <= hi;
+                for (i, (run, [main, extra])) in runs.iter().zip(series).enumerate() {
                     let c = colour(i);
+                    if !extra.is_empty() {
+                        chart
+                            .draw_series(LineSeries::new(
+                                extra.iter().filter(inside).copied(),
+                                c.mix(0.4).stroke_width(w1),
+                            ))
+                            .map_err(s)?;
+                    }
                     chart
-                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+                        .draw_series(LineSeries::new(
+                            main.iter().filter(inside).copied(),
+                            c.stroke_width(w2),
+                        ))
                         .map_err(s)?
                         .label(run.name.clone())
                         .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                         });
                 }
                 if k == 0 {
+                    let pts = series.iter().flat_map(|sr| sr[0].iter().copied());
                     chart
                         .configure_series_labels()
-                        .label_font(("sans-serif", 15))
+                        .label_font(st.font(0.95))
                         .background_style(WHITE.mix(0.85))
                         .border_style(BLACK)
+                        .position(emptiest_corner(pts, [0.0, t_end, lo, hi]))
                         .draw()
                         .map_err(s)?;
                 }
@@ -685,7 +848,7 @@ pub fn sweep_figure(
     metric: &str,
     group: Option<&str>,
     path: &Path,
-    format: Format,
+    st: &Style,
 ) -> Result<(), PlotError> {
     let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
     let (lines, skipped) = sweep_summary(results_csv, x_key, metric, group)?;
@@ -697,36 +860,47 @@ pub fn sweep_figure(
     let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, 1e-9)?.ok_or_else(bad)?;
     let (ya, yb) = padded_axis(metric, y0, y1, 0.08, 1e-12)?.ok_or_else(bad)?;
     let runs: usize = all().map(|p| p.3).sum();
-    let title = format!(
-        "{metric} against {x_key}: mean +- 1 std over {runs} runs{}",
+    let default_title = format!(
+        "{metric} against {x_key}: mean \u{b1} 1 std over {runs} runs{}",
         if skipped > 0 {
             format!(" ({skipped} without a value)")
         } else {
             String::new()
         }
     );
+    let title = st.title(&default_title);
+    let (w, h) = st.size((1000, 700), (560, 400));
+    let f = st.base_font();
     // A long title gets a smaller font rather than running off the image.
-    let title_px = (22.0 * 75.0 / title.chars().count().max(75) as f64).max(12.0);
-    render!(path, format, (1000, 700), |root| {
+    let chars = title.chars().count() as f64;
+    let title_rel = (1.4 * (w as f64 / (0.62 * f)) / chars.max(1.0)).clamp(0.75, 1.4);
+    let (xs, ys) = (tick_step(xa, xb, 10), tick_step(ya, yb, 8));
+    let points = lines.iter().flat_map(|l| l.1.iter().map(|p| (p.0, p.1)));
+    let legend_at = emptiest_corner(points, [xa, xb, ya, yb]);
+    render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
             let mut chart = ChartBuilder::on(&root)
-                .margin(20)
-                .caption(&title, ("sans-serif", title_px))
-                .x_label_area_size(50)
-                .y_label_area_size(90)
+                .margin(f as u32)
+                .margin_right((2.0 * f) as u32)
+                .caption(title, st.font(title_rel))
+                .x_label_area_size((3.2 * f) as u32)
+                .y_label_area_size((5.6 * f) as u32)
                 .build_cartesian_2d(xa..xb, ya..yb)
                 .map_err(s)?;
             chart
                 .configure_mesh()
                 .x_desc(x_key)
                 .y_desc(metric)
-                .label_style(("sans-serif", 15))
-                .axis_desc_style(("sans-serif", 16))
+                .x_label_formatter(&|v| tick_label(*v, xs))
+                .y_label_formatter(&|v| tick_label(*v, ys))
+                .label_style(st.font(0.95))
+                .axis_desc_style(st.font(1.0))
                 .draw()
                 .map_err(s)?;
             for (i, (g, pts)) in lines.iter().enumerate() {
                 let c = colour(i + 1);
+                let (w2, r4, bar) = (st.px(2.0), st.px(4.0), st.px(8.0));
                 let label = match group {
                     Some(k) => format!("{k} = {g}"),
                     None => metric.to_string(),
@@ -734,29 +908,29 @@ pub fn sweep_figure(
                 chart
                     .draw_series(LineSeries::new(
                         pts.iter().map(|p| (p.0, p.1)),
-                        c.stroke_width(2),
+                        c.stroke_width(w2),
                     ))
                     .map_err(s)?
                     .label(label)
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w2))
                     });
                 chart
                     .draw_series(pts.iter().map(|p| {
-                        ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), 8)
+                        ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), bar)
                     }))
                     .map_err(s)?;
                 chart
-                    .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 4, c.filled())))
+                    .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), r4, c.filled())))
                     .map_err(s)?;
             }
             if group.is_some() {
                 chart
                     .configure_series_labels()
-                    .position(SeriesLabelPosition::UpperRight)
+                    .position(legend_at)
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
-                    .label_font(("sans-serif", 15))
+                    .label_font(st.font(0.95))
                     .draw()
                     .map_err(s)?;
             }

@@ -16,12 +16,14 @@
 
 mod draw;
 mod run_data;
+mod style;
 
 pub use draw::{
     field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure, Format, Panels,
     SummaryLine,
 };
 pub use run_data::RunData;
+pub use style::{tick_label, tick_step, Colormap, Style, DEFAULT_FONT_FAMILY};
 
 /// Why a figure could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -79,7 +81,9 @@ pub(crate) fn fonts() {
             plotters::style::FontStyle::Oblique,
         ] {
             // The font is valid (a test checks rendering); a failure would only lose labels.
-            let _ = plotters::style::register_font("sans-serif", style, FONT);
+            for family in ["sans-serif", crate::style::DEFAULT_FONT_FAMILY] {
+                let _ = plotters::style::register_font(family, style, FONT);
+            }
         }
     });
 }

@@ -1,7 +1,9 @@
 //! Figures render as valid PNG and SVG images of the expected size with non-trivial content
 //! (no pixel-exact comparison).
 
-use isotrack_plot::{field_map, timeseries_figure, trajectory_figure, Format, Panels, RunData};
+use isotrack_plot::{
+    field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, RunData, Style,
+};
 use isotrack_scenario::parse_scenario;
 use isotrack_sim::TraceRow;
 use std::path::Path;
@@ -40,7 +42,6 @@ fn make_run(dir: &Path, sets: &[&str]) -> RunData {
 fn check_png(path: &Path, w: u32, h: u32) {
     let img = image::open(path).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (w, h), "{}", path.display());
-    assert!(w >= 800);
     let mut colours = std::collections::HashSet::new();
     for p in img.pixels() {
         colours.insert(p.0);
@@ -87,19 +88,20 @@ fn trajectory_timeseries_and_map_render_in_png_and_svg() {
         &["sim.duration_s=60", "initial.x_m=-9", "initial.y_m=3"],
     );
     for f in [Format::Png, Format::Svg] {
+        let st = Style::new(f);
         let traj = dir.path().join(format!("trajectory.{}", f.extension()));
-        trajectory_figure(&[a.clone(), b.clone()], &traj, f, "two runs").unwrap();
+        trajectory_figure(&[a.clone(), b.clone()], &traj, &st, "two runs").unwrap();
         let ts = dir.path().join(format!("timeseries.{}", f.extension()));
         timeseries_figure(
             &[a.clone(), b.clone()],
             &ts,
-            f,
+            &st,
             "two runs",
             Panels::default(),
         )
         .unwrap();
         let map = dir.path().join(format!("map.{}", f.extension()));
-        field_map(&a.scenario, [-20.0, 20.0, -20.0, 20.0], &map, f, "map").unwrap();
+        field_map(&a.scenario, [-20.0, 20.0, -20.0, 20.0], &map, &st, "map").unwrap();
         match f {
             Format::Png => {
                 check_png(&traj, 1100, 900);
@@ -109,7 +111,7 @@ fn trajectory_timeseries_and_map_render_in_png_and_svg() {
             Format::Svg => {
                 check_svg(
                     &traj,
-                    1100,
+                    560,
                     &[
                         "x, east (m)",
                         "y, north (m)",
@@ -118,11 +120,168 @@ fn trajectory_timeseries_and_map_render_in_png_and_svg() {
                         "\nb\n</text>",
                     ],
                 );
-                check_svg(&ts, 1100, &["time (s)", "steady-state window"]);
-                check_svg(&map, 1100, &["field value"]);
+                check_svg(&ts, 560, &["time (s)", "steady-state window"]);
+                check_svg(&map, 560, &["field value"]);
             }
         }
     }
+}
+
+/// The SVG's `<text>` contents (tick labels, titles, legends).
+fn svg_texts(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = t.split_once('>')?.1;
+            Some(body.split("</text>").next()?.trim().to_string())
+        })
+        .collect()
+}
+
+/// Issue 15 item 6: paper-ready figures. Ticks without a trailing `.0` and never `-0`; Greek
+/// symbols; the middle panel says it plots the true s and draws the measured s too when noise
+/// is on; the heat map is one embedded image, not thousands of rectangles; a nearly flat field
+/// gets distinct colour-bar ticks.
+#[test]
+fn figures_fit_for_a_paper() {
+    let dir = tempfile::tempdir().unwrap();
+    let noisy = make_run(
+        &dir.path().join("n"),
+        &[
+            "sim.duration_s=60",
+            "sensor.noise_std=0.05",
+            "controller.derivative=filtered_difference",
+        ],
+    );
+    let st = Style::new(Format::Svg);
+    let ts = dir.path().join("ts.svg");
+    timeseries_figure(
+        std::slice::from_ref(&noisy),
+        &ts,
+        &st,
+        "noisy",
+        Panels::default(),
+    )
+    .unwrap();
+    let texts = svg_texts(&ts);
+    for t in &texts {
+        let n = t.replace('\u{2212}', "-");
+        if n.parse::<f64>().is_ok() {
+            assert!(!n.ends_with(".0"), "tick `{t}`");
+            assert_ne!(n, "-0", "tick `{t}`");
+        }
+    }
+    let joined = texts.join("|");
+    assert!(joined.contains("\u{3b5} = s \u{2212} s_d"), "{joined}");
+    assert!(joined.contains("\u{3c9} (rad/s)"), "{joined}");
+    assert!(
+        joined.contains("s: true (bold), measured (light)"),
+        "{joined}"
+    );
+    // The time axis ends at 60 s: its last tick is drawn.
+    assert!(texts.iter().any(|t| t == "60"), "{joined}");
+    let traj = dir.path().join("traj.svg");
+    trajectory_figure(std::slice::from_ref(&noisy), &traj, &st, "noisy").unwrap();
+    let svg = std::fs::read_to_string(&traj).unwrap();
+    assert_eq!(
+        svg.matches("<image").count(),
+        1,
+        "the heat map is one image"
+    );
+    assert!(
+        svg.matches("<rect").count() < 300,
+        "{} rects",
+        svg.matches("<rect").count()
+    );
+    assert!(svg.len() < 400_000, "{} bytes", svg.len());
+    // A nearly flat field: 10 .. 10.001 over the map; the colour-bar ticks differ.
+    let flat = make_run(
+        &dir.path().join("f"),
+        &[
+            "field.kind=linear_ramp",
+            "field.offset=10.0",
+            "field.gradient_per_m=[0.0, 0.00001]",
+            "controller.level=10.00005",
+            "initial.x_m=0.0",
+            "initial.y_m=0.0",
+            "sim.duration_s=5",
+        ],
+    );
+    let map = dir.path().join("flat.svg");
+    field_map(
+        &flat.scenario,
+        [-50.0, 50.0, -50.0, 50.0],
+        &map,
+        &st,
+        "flat",
+    )
+    .unwrap();
+    let ticks: Vec<String> = svg_texts(&map)
+        .into_iter()
+        .filter(|t| t.starts_with("10.000"))
+        .collect();
+    let distinct: std::collections::BTreeSet<&String> = ticks.iter().collect();
+    assert!(
+        ticks.len() >= 3 && distinct.len() == ticks.len(),
+        "{ticks:?}"
+    );
+}
+
+/// Issue 15 item 7: `--size`, `--dpi`, `--font-size`, `--title`, `--colormap` act on the image.
+#[test]
+fn figure_options_act() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = make_run(&dir.path().join("a"), &["sim.duration_s=30"]);
+    let mut st = Style::new(Format::Png);
+    st.size_px = Some((800, 600));
+    st.dpi = 200.0;
+    st.colormap = Colormap::Gray;
+    let p = dir.path().join("t.png");
+    trajectory_figure(std::slice::from_ref(&a), &p, &st, "t").unwrap();
+    check_png(&p, 1600, 1200);
+    // Grey scale: the heat map's pixels have r = g = b (the lines are coloured).
+    let img = image::open(&p).unwrap().to_rgb8();
+    let grey = img
+        .pixels()
+        .filter(|px| px.0[0] == px.0[1] && px.0[1] == px.0[2])
+        .count();
+    assert!(grey as f64 > 0.5 * (1600.0 * 1200.0), "{grey}");
+    // --font-size scales every text by the same factor (20 px against the SVG default 13).
+    let max_font = |font: Option<f64>, title: Option<String>| {
+        let mut st = Style::new(Format::Svg);
+        st.title = title;
+        st.font_px = font;
+        let p = dir.path().join("t.svg");
+        timeseries_figure(
+            std::slice::from_ref(&a),
+            &p,
+            &st,
+            "a default title",
+            Panels::default(),
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        let max = svg
+            .split("font-size=\"")
+            .skip(1)
+            .filter_map(|t| t.split('"').next()?.parse::<f64>().ok())
+            .fold(0.0, f64::max);
+        (max, svg)
+    };
+    let (base, svg) = max_font(None, None);
+    assert!(svg.contains("a default title"));
+    let (big, svg) = max_font(Some(20.0), Some(String::new()));
+    assert!(
+        !svg.contains("a default title"),
+        "--title \"\" drops the title"
+    );
+    // Without the title the largest text is a label (1.0 x base) instead of the title (1.6 x).
+    let want = 20.0 / 13.0 * 1.0 / 1.6;
+    assert!(
+        (big / base - want).abs() < 0.05 * want,
+        "{big} / {base} vs {want}"
+    );
 }
 
 #[test]

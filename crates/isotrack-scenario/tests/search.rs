@@ -28,7 +28,10 @@ fn a_spiral_finds_a_plume_the_tracking_law_alone_never_reaches() {
     let spiral = flat(
         [15.0, 0.0],
         1.0,
-        &["controller.search=spiral", "controller.search_spacing_m=2.0"],
+        &[
+            "controller.search=spiral",
+            "controller.search_spacing_m=2.0",
+        ],
     );
     assert!(spiral.metrics.convergence_time_s.is_some());
     assert!(spiral.metrics.steady_state_max_abs_error.unwrap() < 1e-6);
@@ -40,11 +43,17 @@ fn a_lawnmower_finds_it_sooner_than_circling() {
     let mower = flat(
         [10.0, 8.0],
         0.0,
-        &["controller.search=lawnmower", "controller.search_spacing_m=2.0"],
+        &[
+            "controller.search=lawnmower",
+            "controller.search_spacing_m=2.0",
+        ],
     );
     let t_mower = mower.metrics.convergence_time_s.unwrap();
     assert!(mower.metrics.steady_state_max_abs_error.unwrap() < 1e-6);
-    assert!(alone.metrics.convergence_time_s.is_none_or(|t| t > 2.0 * t_mower));
+    assert!(alone
+        .metrics
+        .convergence_time_s
+        .is_none_or(|t| t > 2.0 * t_mower));
 }
 
 /// Off by default, and its keys are refused without it (or, for the leg, without a lawnmower).
@@ -53,11 +62,18 @@ fn off_by_default_and_keys_checked() {
     let s = parse_scenario("", "<test>", &[]).unwrap();
     assert!(s.search().is_none());
     let e = parse_scenario("", "<test>", &["controller.search_spacing_m=2.0".into()]).unwrap_err();
-    assert!(e.to_string().contains("does not apply to controller.search = \"none\""), "{e}");
+    assert!(
+        e.to_string()
+            .contains("does not apply to controller.search = \"none\""),
+        "{e}"
+    );
     let e = parse_scenario(
         "",
         "<test>",
-        &["controller.search=spiral".into(), "controller.search_leg_m=5.0".into()],
+        &[
+            "controller.search=spiral".into(),
+            "controller.search_leg_m=5.0".into(),
+        ],
     )
     .unwrap_err();
     assert!(e.to_string().contains("search_leg_m"), "{e}");
