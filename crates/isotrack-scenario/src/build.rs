@@ -368,6 +368,17 @@ impl Scenario {
         match self.field() {
             FieldModel::Analytic(f) => self.run_on(f, sink),
             FieldModel::Grid(f) => self.run_on(f, sink),
+            FieldModel::Series(f) => {
+                let mut r = self.run_on(&**f, sink);
+                // Past the last frame with `after_last_frame = "end"`: say the data ended.
+                let end = f.last_frame_run_time_s();
+                if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
+                    r.outcome_detail = Some(format!(
+                        "the field's data ended: its last frame is at t = {end} s of the run (field.after_last_frame = \"end\")"
+                    ));
+                }
+                r
+            }
         }
     }
 

@@ -4,19 +4,24 @@ use crate::resolve::Issue;
 use crate::schema::*;
 use isotrack_core::math::{Mat2, Vec2};
 use isotrack_core::{FieldDerivatives, ScalarField};
-use isotrack_fields::grid::{GridField, Interpolation};
-use isotrack_fields::io::{load_grid_variable, GridFormat};
+use isotrack_fields::grid::{
+    AfterLastFrame, Grid2, GridField, GridSeries, Interpolation, TimeInterpolation,
+};
+use isotrack_fields::io::{load_series, GridFormat};
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
 use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// Every field a scenario can name.
 #[derive(Clone, Debug)]
 pub enum FieldModel {
     /// `radial_exp`, `gaussian_plumes`, `linear_ramp`.
     Analytic(AnalyticField),
-    /// `grid`.
+    /// `grid`, one frame.
     Grid(GridField),
+    /// `grid`, a time series of frames (shared: a sweep loads it once).
+    Series(Arc<GridSeries>),
 }
 
 impl ScalarField for FieldModel {
@@ -25,6 +30,7 @@ impl ScalarField for FieldModel {
         match self {
             FieldModel::Analytic(f) => f.value(t_s, p),
             FieldModel::Grid(f) => f.value(t_s, p),
+            FieldModel::Series(f) => f.value(t_s, p),
         }
     }
 }
@@ -34,12 +40,14 @@ impl FieldDerivatives for FieldModel {
         match self {
             FieldModel::Analytic(f) => f.gradient(t_s, p),
             FieldModel::Grid(f) => f.gradient(t_s, p),
+            FieldModel::Series(f) => f.gradient(t_s, p),
         }
     }
     fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2> {
         match self {
             FieldModel::Analytic(f) => f.hessian(t_s, p),
             FieldModel::Grid(f) => f.hessian(t_s, p),
+            FieldModel::Series(f) => f.hessian(t_s, p),
         }
     }
 }
@@ -55,6 +63,10 @@ pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(),
     let (e, set_by) = match field {
         FieldModel::Grid(g) => (
             g.grid().extent_m(),
+            "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
+        ),
+        FieldModel::Series(g) => (
+            g.extent_m(),
             "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
         ),
         FieldModel::Analytic(_) => match file.field.domain_m {
@@ -86,6 +98,8 @@ pub enum IsolineOracle {
     Newton(AnalyticField, f64),
     /// Marching-squares segments (gridded fields).
     Segments(IsolineSegments),
+    /// The isoline of a time series at the query time (see [`MovingIsoline`]).
+    Moving(Arc<MovingIsoline>),
 }
 
 impl IsolineOracle {
@@ -94,6 +108,9 @@ impl IsolineOracle {
         match field {
             FieldModel::Analytic(f) => IsolineOracle::Newton(f.clone(), level),
             FieldModel::Grid(g) => IsolineOracle::Segments(IsolineSegments::for_grid(g, level, 4)),
+            FieldModel::Series(s) => {
+                IsolineOracle::Moving(Arc::new(MovingIsoline::new(s.clone(), level)))
+            }
         }
     }
     /// Distance from `p` to the isoline at time `t_s`, m.
@@ -101,7 +118,95 @@ impl IsolineOracle {
         match self {
             IsolineOracle::Newton(f, level) => newton_distance(f, t_s, p, *level),
             IsolineOracle::Segments(s) => s.distance(p),
+            IsolineOracle::Moving(m) => m.distance(t_s, p),
         }
+    }
+}
+
+/// The isoline of a grid time series as it moves: the marching-squares isoline of the
+/// time-interpolated field (the same blend of frames the run sees), recomputed every
+/// `bucket_s` of run time (1/8 of the shortest frame interval, in run time) at the bucket's
+/// middle, and cached (the 64 most recent). Between recomputations the isoline is taken as
+/// fixed: the metric's time resolution.
+pub struct MovingIsoline {
+    series: Arc<GridSeries>,
+    level: f64,
+    bucket_s: f64,
+    cache: Mutex<Vec<(i64, Arc<Option<IsolineSegments>>)>>,
+}
+
+impl std::fmt::Debug for MovingIsoline {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "MovingIsoline(level {}, every {} s)",
+            self.level, self.bucket_s
+        )
+    }
+}
+
+impl MovingIsoline {
+    /// The isoline of `level` in `series`.
+    pub fn new(series: Arc<GridSeries>, level: f64) -> Self {
+        let t = series.times_s();
+        let min_gap = t
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        let bucket_s = if min_gap.is_finite() {
+            min_gap / 8.0 / series.field_time_scale()
+        } else {
+            f64::INFINITY
+        };
+        Self {
+            series,
+            level,
+            bucket_s,
+            cache: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// Run-time resolution of the moving isoline, s.
+    pub fn bucket_s(&self) -> f64 {
+        self.bucket_s
+    }
+
+    /// The isoline at run time `t_s` (`None` where the series has ended).
+    pub fn at(&self, t_s: f64) -> Arc<Option<IsolineSegments>> {
+        let b = if self.bucket_s.is_finite() {
+            (t_s / self.bucket_s).floor() as i64
+        } else {
+            0
+        };
+        if let Ok(c) = self.cache.lock() {
+            if let Some((_, seg)) = c.iter().find(|(k, _)| *k == b) {
+                return seg.clone();
+            }
+        }
+        let mid = if self.bucket_s.is_finite() {
+            (b as f64 + 0.5) * self.bucket_s
+        } else {
+            0.0
+        };
+        let seg = Arc::new(self.series.grid_at(mid).map(|g| {
+            IsolineSegments::for_grid(
+                &GridField::new(g, self.series.interpolation()),
+                self.level,
+                4,
+            )
+        }));
+        if let Ok(mut c) = self.cache.lock() {
+            if c.len() >= 64 {
+                c.remove(0);
+            }
+            c.push((b, seg.clone()));
+        }
+        seg
+    }
+
+    /// Distance from `p` to the isoline at run time `t_s`, m.
+    pub fn distance(&self, t_s: f64, p: Vec2) -> Option<f64> {
+        self.at(t_s).as_ref().as_ref()?.distance(p)
     }
 }
 
@@ -144,13 +249,18 @@ pub fn build_field(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, 
             offset: f.offset.unwrap_or_default(),
             gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
         })),
-        FieldKind::Grid => FieldModel::Grid(build_grid(f, base_dir)?),
+        FieldKind::Grid => build_grid(f, base_dir)?,
         FieldKind::Stations => FieldModel::Grid(build_stations(f, base_dir)?),
     })
 }
 
 fn resolve_path(f: &FieldSection, base_dir: &Path) -> PathBuf {
-    let mut path = PathBuf::from(f.path.clone().unwrap_or_default());
+    resolve_one(f.path.as_deref().unwrap_or_default(), base_dir)
+}
+
+/// A file named by the scenario, relative to its directory.
+fn resolve_one(p: &str, base_dir: &Path) -> PathBuf {
+    let mut path = PathBuf::from(p);
     if path.is_relative() {
         path = base_dir.join(path);
     }
@@ -193,22 +303,12 @@ fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Is
     Ok(GridField::new(grid, interp))
 }
 
-fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue> {
+/// One frame as the scenario asks: cropped, re-georeferenced, values transformed.
+fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
     };
-    let path = resolve_path(f, base_dir);
-    let format = f.format.map(|g| match g {
-        GridFormatName::Csv => GridFormat::Csv,
-        GridFormatName::Npy => GridFormat::Npy,
-        GridFormatName::Asc => GridFormat::Asc,
-        GridFormatName::Geotiff => GridFormat::GeoTiff,
-        GridFormatName::Netcdf => GridFormat::NetCdf,
-    });
-    let loaded = load_grid_variable(&path, format, f.variable.as_deref())
-        .map_err(|e| issue("field.path", e.to_string()))?;
-    let mut grid = loaded.grid;
     if let Some([c0, c1, r0, r1]) = f.crop_cells {
         if c1 >= grid.nx() || r1 >= grid.ny() {
             return Err(issue(
@@ -251,13 +351,117 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue>
             })
             .map_err(|e| issue("field.path", format!("after the value transform: {e}")))?;
     }
+    Ok(grid)
+}
+
+/// A `grid` field: one frame (a [`GridField`]) or a time series (a [`GridSeries`]) from
+/// `field.path` (a 3-D `.npy` or a NetCDF with a time axis gives several frames) or
+/// `field.paths` (one frame per file). Paths are recorded back as absolute.
+fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue> {
+    let issue = |key: &str, message: String| Issue {
+        key: key.to_string(),
+        message,
+    };
+    let format = f.format.map(|g| match g {
+        GridFormatName::Csv => GridFormat::Csv,
+        GridFormatName::Npy => GridFormat::Npy,
+        GridFormatName::Asc => GridFormat::Asc,
+        GridFormatName::Geotiff => GridFormat::GeoTiff,
+        GridFormatName::Netcdf => GridFormat::NetCdf,
+    });
+    let (raw, file_times) = match f.paths.clone() {
+        Some(list) => {
+            let mut frames = Vec::with_capacity(list.len());
+            let mut abs = Vec::with_capacity(list.len());
+            for (k, p) in list.iter().enumerate() {
+                let path = resolve_one(p, base_dir);
+                let s = load_series(&path, format, f.variable.as_deref())
+                    .map_err(|e| issue("field.paths", format!("file {k}: {e}")))?;
+                if s.frames.len() != 1 {
+                    return Err(issue(
+                        "field.paths",
+                        format!(
+                            "file {k} ({}) holds {} frames; each file of field.paths must hold one",
+                            path.display(),
+                            s.frames.len()
+                        ),
+                    ));
+                }
+                frames.extend(s.frames);
+                abs.push(path.display().to_string());
+            }
+            f.paths = Some(abs);
+            (frames, None)
+        }
+        None => {
+            let path = resolve_path(f, base_dir);
+            let s = load_series(&path, format, f.variable.as_deref())
+                .map_err(|e| issue("field.path", e.to_string()))?;
+            f.path = Some(path.display().to_string());
+            (s.frames, s.frame_times_s)
+        }
+    };
+    let n = raw.len();
+    let mut frames = Vec::with_capacity(n);
+    for (k, g) in raw.into_iter().enumerate() {
+        frames.push(prepare_frame(f, g).map_err(|mut i| {
+            if n > 1 {
+                i.message = format!("frame {k}: {}", i.message);
+            }
+            i
+        })?);
+    }
     // Record what was used, so the resolved scenario reproduces the run from anywhere.
-    f.path = Some(path.display().to_string());
-    f.spacing_m = Some(grid.spacing_m());
-    f.origin_m = Some([grid.origin_m().x, grid.origin_m().y]);
+    f.spacing_m = Some(frames[0].spacing_m());
+    f.origin_m = Some([frames[0].origin_m().x, frames[0].origin_m().y]);
     let interp = match f.interpolation.unwrap_or(InterpolationName::Bicubic) {
         InterpolationName::Bilinear => Interpolation::Bilinear,
         InterpolationName::Bicubic => Interpolation::Bicubic,
     };
-    Ok(GridField::new(grid, interp))
+    let times: Option<Vec<f64>> = match (&f.frame_times_s, f.frame_interval_s, file_times) {
+        (Some(t), _, _) => Some(t.clone()),
+        (None, Some(dt), _) => Some((0..n).map(|k| k as f64 * dt).collect()),
+        (None, None, file) => file,
+    };
+    let times = match times {
+        Some(t) => t,
+        None if n == 1 => {
+            let g = frames.into_iter().next().ok_or_else(|| issue("field.path", "no frame".into()))?;
+            return Ok(FieldModel::Grid(GridField::new(g, interp)));
+        }
+        None => {
+            return Err(issue(
+                "field.frame_interval_s",
+                format!("the file holds {n} frames and no frame times: give field.frame_interval_s or field.frame_times_s"),
+            ))
+        }
+    };
+    if times.len() != n {
+        return Err(issue(
+            "field.frame_times_s",
+            format!("{} frame times for {n} frames", times.len()),
+        ));
+    }
+    let ti = match f.time_interpolation.unwrap_or_default() {
+        TimeInterpolationName::Nearest => TimeInterpolation::Nearest,
+        TimeInterpolationName::Linear => TimeInterpolation::Linear,
+        TimeInterpolationName::Cubic => TimeInterpolation::Cubic,
+    };
+    let after = match f.after_last_frame.unwrap_or_default() {
+        AfterLastFrameName::Hold => AfterLastFrame::Hold,
+        AfterLastFrameName::End => AfterLastFrame::End,
+    };
+    // Field time is measured from the first frame; the origin counts from there.
+    let t0 = times[0];
+    let series = GridSeries::new(
+        frames,
+        times.iter().map(|t| t - t0).collect(),
+        interp,
+        ti,
+        f.time_origin_s.unwrap_or(0.0),
+        f.time_scale.unwrap_or(1.0),
+        after,
+    )
+    .map_err(|e| issue("field.frame_times_s", e.to_string()))?;
+    Ok(FieldModel::Series(Arc::new(series)))
 }

@@ -138,7 +138,7 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
 }
 
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 24] {
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 31] {
     [
         ("i0", fd.i0.is_some()),
         ("decay_per_m", fd.decay_per_m.is_some()),
@@ -164,14 +164,76 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 24] {
         ("value_log10", fd.value_log10.is_some()),
         ("value_scale", fd.value_scale.is_some()),
         ("value_offset", fd.value_offset.is_some()),
+        ("paths", fd.paths.is_some()),
+        ("frame_times_s", fd.frame_times_s.is_some()),
+        ("frame_interval_s", fd.frame_interval_s.is_some()),
+        ("time_interpolation", fd.time_interpolation.is_some()),
+        ("time_origin_s", fd.time_origin_s.is_some()),
+        ("time_scale", fd.time_scale.is_some()),
+        ("after_last_frame", fd.after_last_frame.is_some()),
     ]
 }
 
 /// Defaults and checks of a `grid` field (the file itself is read when the scenario is built).
-fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
-    if fd.path.as_deref().is_none_or(str::is_empty) {
-        c.fail("field.path", "is required for field.kind = \"grid\"");
+/// The time-series keys of a `grid` field.
+fn resolve_frames(c: &mut Checker, fd: &mut FieldSection) {
+    if let Some(paths) = &fd.paths {
+        if paths.is_empty() || paths.iter().any(|p| p.is_empty()) {
+            c.fail("field.paths", "must list at least one file, none empty");
+        }
+        match &fd.frame_times_s {
+            None => c.fail(
+                "field.frame_times_s",
+                "is required with field.paths (one time per file)",
+            ),
+            Some(t) if t.len() != paths.len() => c.fail(
+                "field.frame_times_s",
+                format!(
+                    "has {} times for {} files in field.paths",
+                    t.len(),
+                    paths.len()
+                ),
+            ),
+            _ => {}
+        }
     }
+    if let Some(t) = &fd.frame_times_s {
+        if let Some(k) = (0..t.len()).find(|&k| !t[k].is_finite() || (k > 0 && t[k] <= t[k - 1])) {
+            c.fail(
+                "field.frame_times_s",
+                format!(
+                    "must be finite and strictly increasing (time {k} is {})",
+                    Num(t[k])
+                ),
+            );
+        }
+        if fd.frame_interval_s.is_some() {
+            c.fail(
+                "field.frame_interval_s",
+                "give field.frame_times_s or field.frame_interval_s, not both",
+            );
+        }
+    }
+    if let Some(dt) = fd.frame_interval_s {
+        c.positive("field.frame_interval_s", dt);
+    }
+    fd.time_interpolation
+        .get_or_insert(TimeInterpolationName::Linear);
+    c.finite("field.time_origin_s", *fd.time_origin_s.get_or_insert(0.0));
+    c.positive("field.time_scale", *fd.time_scale.get_or_insert(1.0));
+    fd.after_last_frame.get_or_insert(AfterLastFrameName::Hold);
+}
+
+fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
+    match (fd.path.as_deref(), &fd.paths) {
+        (Some(_), Some(_)) => c.fail("field.paths", "give field.path or field.paths, not both"),
+        (None | Some(""), None) => c.fail(
+            "field.path",
+            "is required for field.kind = \"grid\" (or field.paths)",
+        ),
+        _ => {}
+    }
+    resolve_frames(c, fd);
     if let Some(sp) = fd.spacing_m {
         for v in sp {
             c.positive("field.spacing_m", v);
@@ -672,6 +734,7 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
             &[
                 "path",
                 "format",
+                "variable",
                 "spacing_m",
                 "origin_m",
                 "interpolation",
@@ -680,6 +743,13 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
                 "value_log10",
                 "value_scale",
                 "value_offset",
+                "paths",
+                "frame_times_s",
+                "frame_interval_s",
+                "time_interpolation",
+                "time_origin_s",
+                "time_scale",
+                "after_last_frame",
             ],
         ),
     };

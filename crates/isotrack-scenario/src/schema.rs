@@ -135,6 +135,30 @@ pub enum InterpolationName {
     Bicubic,
 }
 
+/// Interpolation between the frames of a time series (`field.time_interpolation`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeInterpolationName {
+    /// The frame nearest in time.
+    Nearest,
+    /// Linear between the two frames around the time (default).
+    #[default]
+    Linear,
+    /// Catmull-Rom over four frames.
+    Cubic,
+}
+
+/// What a time series does past its last frame (`field.after_last_frame`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AfterLastFrameName {
+    /// The last frame holds (default).
+    #[default]
+    Hold,
+    /// The field ends: outcome `left_field`, the detail says the data ended.
+    End,
+}
+
 /// `[field]`.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -226,6 +250,29 @@ pub struct FieldSection {
     /// `v -> value_scale * [log10](max(v, value_floor)) + value_offset`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub value_offset: Option<f64>,
+    /// `grid`: a time series as a list of 2-D files, one frame each (instead of `path`),
+    /// relative to the scenario file; needs `frame_times_s`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paths: Option<Vec<String>>,
+    /// `grid`: the frame times, s (field time, strictly increasing): one per file of `paths`,
+    /// or one per frame of a 3-D `.npy` / NetCDF (replacing the file's own times).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_times_s: Option<Vec<f64>>,
+    /// `grid`: frames this many seconds apart, from 0 (for a 3-D `.npy`, which has no times).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_interval_s: Option<f64>,
+    /// `grid` time series: `nearest`, `linear` (default) or `cubic` between frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_interpolation: Option<TimeInterpolationName>,
+    /// `grid` time series: the field time at run time 0, s after the first frame (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_origin_s: Option<f64>,
+    /// `grid` time series: seconds of field time per second of run time (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_scale: Option<f64>,
+    /// `grid` time series: `hold` (default) or `end` past the last frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after_last_frame: Option<AfterLastFrameName>,
 }
 
 /// One Gaussian source of a `gaussian_plumes` field.

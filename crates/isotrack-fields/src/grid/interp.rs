@@ -32,7 +32,7 @@ pub struct GridField {
 /// Catmull-Rom weights for the nodes at offsets -1, 0, 1, 2 and their first and second
 /// derivatives with respect to the cell coordinate `t` in `[0, 1]`.
 #[inline]
-fn keys_weights(t: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+pub(super) fn keys_weights(t: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
     let t2 = t * t;
     let t3 = t2 * t;
     (

@@ -5,8 +5,10 @@
 //! `(origin_m.x + ix*dx, origin_m.y + iy*dy)` (cell centres). `NaN` marks no-data.
 
 mod interp;
+mod series;
 
 pub use interp::{GridField, Interpolation};
+pub use series::{AfterLastFrame, GridSeries, SeriesError, TimeInterpolation};
 
 use isotrack_core::math::Vec2;
 

@@ -7,7 +7,6 @@
 mod asc;
 mod csv_grid;
 mod geotiff;
-#[cfg(feature = "netcdf")]
 mod netcdf;
 mod npy;
 
@@ -29,7 +28,8 @@ pub enum GridFormat {
     /// GeoTIFF: one band, any integer or float sample type; `ModelPixelScale`/`ModelTiepoint`
     /// georeference, geographic (degrees) or projected (metres); GDAL no-data tag honoured.
     GeoTiff,
-    /// NetCDF with CF lon/lat (or metre) coordinates; needs the cargo feature `netcdf`.
+    /// NetCDF (3 classic or 4/HDF5) with CF lon/lat (or metre) coordinates, optionally a
+    /// time axis (read by the pure-Rust `netcdf-reader`).
     NetCdf,
 }
 
@@ -142,6 +142,99 @@ pub fn read_text_limited(path: &Path, max_bytes: u64) -> std::io::Result<String>
         .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
 }
 
+/// The most values a time series of frames may hold, over all frames: 2^30 (8 GiB of values).
+pub const MAX_SERIES_NODES: usize = 1 << 30;
+
+/// Frames of a grid time series as read: one or more grids of one geometry, the frame times the
+/// file gave (seconds after the first frame; `None` when it gives none: a 3-D `.npy`), and the
+/// georeference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedSeries {
+    /// The frames, in file order.
+    pub frames: Vec<Grid2>,
+    /// Frame times, s after the first frame, when the file carries them.
+    pub frame_times_s: Option<Vec<f64>>,
+    /// What the file said about its coordinates.
+    pub georeference: Georeference,
+}
+
+/// The one frame of a series, or an error saying the file is a time series.
+pub(crate) fn single_frame(path: &Path, s: LoadedSeries) -> Result<LoadedGrid, LoadError> {
+    if s.frames.len() != 1 {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "{} frames: a time series (a scenario reads them all with field.kind = \"grid\")",
+                s.frames.len()
+            ),
+        ));
+    }
+    let grid = s
+        .frames
+        .into_iter()
+        .next()
+        .ok_or_else(|| LoadError::new(path, None, "no frame"))?;
+    Ok(LoadedGrid {
+        grid,
+        georeference: s.georeference,
+    })
+}
+
+/// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
+/// (`[time, rows, cols]`) and a NetCDF variable with a time dimension, which give one per time.
+pub fn load_series(
+    path: &Path,
+    format: Option<GridFormat>,
+    variable: Option<&str>,
+) -> Result<LoadedSeries, LoadError> {
+    let format = match format.or_else(|| GridFormat::from_extension(path)) {
+        Some(f) => f,
+        None => return Err(LoadError::new(
+            path,
+            None,
+            "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
+        )),
+    };
+    match format {
+        GridFormat::NetCdf => {
+            // Opened by the reader itself (it maps the file); checked like every other input.
+            match std::fs::metadata(path) {
+                Err(e) => return Err(LoadError::new(path, None, format!("cannot read: {e}"))),
+                Ok(m) if !m.is_file() => {
+                    return Err(LoadError::new(
+                        path,
+                        None,
+                        "cannot read: not a regular file (a device, pipe or directory)",
+                    ))
+                }
+                Ok(m) if m.len() > MAX_GRID_FILE_BYTES => {
+                    return Err(LoadError::new(
+                        path,
+                        None,
+                        format!("cannot read: {} bytes is more than the {MAX_GRID_FILE_BYTES} this reader accepts", m.len()),
+                    ))
+                }
+                Ok(_) => {}
+            }
+            netcdf::parse(path, variable)
+        }
+        GridFormat::Npy => {
+            let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
+                .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+            npy::parse_series(path, &bytes)
+        }
+        _ => {
+            let g = load_grid(path, Some(format))?;
+            Ok(LoadedSeries {
+                frames: vec![g.grid],
+                frame_times_s: None,
+                georeference: g.georeference,
+            })
+        }
+    }
+}
+
 /// A grid as read, with the georeference the file carried.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadedGrid {
@@ -172,28 +265,7 @@ pub fn load_grid_variable(
         )),
     };
     if format == GridFormat::NetCdf {
-        match std::fs::metadata(path) {
-            Err(e) => return Err(LoadError::new(path, None, format!("cannot read: {e}"))),
-            Ok(m) if !m.is_file() => {
-                return Err(LoadError::new(
-                    path,
-                    None,
-                    "cannot read: not a regular file (a device, pipe or directory)",
-                ))
-            }
-            Ok(_) => {}
-        }
-        #[cfg(feature = "netcdf")]
-        return netcdf::parse(path, variable);
-        #[cfg(not(feature = "netcdf"))]
-        {
-            let _ = variable;
-            return Err(LoadError::new(
-                path,
-                None,
-                "NetCDF support is not built in: rebuild with `--features isotrack-fields/netcdf` (needs libnetcdf-dev)",
-            ));
-        }
+        return single_frame(path, load_series(path, Some(format), variable)?);
     }
     let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
         .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;

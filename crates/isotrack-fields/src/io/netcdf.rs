@@ -1,41 +1,25 @@
-//! NetCDF grids (CF conventions) through the system libnetcdf (cargo feature `netcdf`).
+//! NetCDF grids and grid time series (CF conventions), read by the pure-Rust `netcdf-reader`
+//! crate: NetCDF-3 classic and 64-bit offset, NetCDF-4/HDF5 with zlib. No system library.
 //!
-//! The variable is the one named, or the first with two non-trivial dimensions that is not a
-//! coordinate variable. Its last two dimensions are (y, x); leading dimensions must have length 1
-//! (one time step). Coordinates are the 1-D variables named like those dimensions: longitude /
-//! latitude (CF `units = degrees_east / degrees_north`, `standard_name`, or the names
-//! lon/longitude and lat/latitude) are projected to local metres ([`crate::georef`]); coordinates
-//! in metres are used as they are. They must be regularly spaced; decreasing axes are flipped.
+//! The variable is the one named, or the first with two non-trivial spatial dimensions that is
+//! not a coordinate variable. Its last two dimensions are (y, x); one leading dimension longer
+//! than 1 is time (its frames), any others must have length 1. Coordinates are the 1-D variables
+//! named like those dimensions: longitude / latitude (CF `units = degrees_east / degrees_north`,
+//! `standard_name`, or the names lon/longitude and lat/latitude) are projected to local metres
+//! ([`crate::georef`]); coordinates in metres are used as they are. They must be regularly
+//! spaced; decreasing axes are flipped. The time coordinate's CF `units = "<unit> since <date>"`
+//! (seconds, minutes, hours or days) gives the frame times, in seconds after the first frame.
 //! `_FillValue` / `missing_value` become no-data; `scale_factor` / `add_offset` are applied.
 
-use super::{LoadError, LoadedGrid};
+use super::{LoadError, LoadedSeries};
 use crate::georef::{lonlat_spacing_m, Georeference};
 use crate::grid::Grid2;
 use isotrack_core::Vec2;
-use netcdf::AttributeValue;
+use netcdf_reader::{NcFile, NcVariable};
 use std::path::Path;
 
-fn attr_f64(v: &netcdf::Variable<'_>, name: &str) -> Option<f64> {
-    match v.attribute_value(name)?.ok()? {
-        AttributeValue::Double(x) => Some(x),
-        AttributeValue::Float(x) => Some(f64::from(x)),
-        AttributeValue::Short(x) => Some(f64::from(x)),
-        AttributeValue::Int(x) => Some(f64::from(x)),
-        AttributeValue::Schar(x) => Some(f64::from(x)),
-        AttributeValue::Uchar(x) => Some(f64::from(x)),
-        AttributeValue::Ushort(x) => Some(f64::from(x)),
-        AttributeValue::Uint(x) => Some(f64::from(x)),
-        AttributeValue::Doubles(x) => x.first().copied(),
-        AttributeValue::Floats(x) => x.first().map(|v| f64::from(*v)),
-        _ => None,
-    }
-}
-
-fn attr_str(v: &netcdf::Variable<'_>, name: &str) -> Option<String> {
-    match v.attribute_value(name)?.ok()? {
-        AttributeValue::Str(s) => Some(s),
-        _ => None,
-    }
+fn attr_str(v: &NcVariable, name: &str) -> Option<String> {
+    v.attribute(name)?.value.as_string()
 }
 
 #[derive(PartialEq)]
@@ -45,7 +29,7 @@ enum Axis {
     Metres,
 }
 
-fn axis_kind(v: &netcdf::Variable<'_>) -> Axis {
+fn axis_kind(v: &NcVariable) -> Axis {
     let units = attr_str(v, "units")
         .unwrap_or_default()
         .to_ascii_lowercase();
@@ -91,95 +75,138 @@ fn regular(values: &[f64]) -> Result<(f64, f64), String> {
     Ok((values[0], step))
 }
 
-pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedGrid, LoadError> {
+/// Seconds per unit of a CF time `units` attribute (`hours since 2019-03-01 00:00:00`).
+pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
+    let unit = units.split_whitespace().next()?.to_ascii_lowercase();
+    if !units.to_ascii_lowercase().contains(" since ") {
+        return None;
+    }
+    Some(match unit.as_str() {
+        "seconds" | "second" | "secs" | "sec" | "s" => 1.0,
+        "minutes" | "minute" | "mins" | "min" => 60.0,
+        "hours" | "hour" | "hrs" | "hr" | "h" => 3600.0,
+        "days" | "day" | "d" => 86_400.0,
+        _ => return None,
+    })
+}
+
+pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
-    let file = netcdf::open(path).map_err(|e| err(format!("cannot open as NetCDF: {e}")))?;
-    let dim_names: Vec<String> = file.dimensions().map(|d| d.name()).collect();
+    let nc = |e: netcdf_reader::Error| err(format!("cannot read as NetCDF: {e}"));
+    let file = NcFile::open(path).map_err(nc)?;
+    let vars = file.variables().map_err(nc)?;
+    let dim_names: Vec<&str> = file
+        .dimensions()
+        .map_err(nc)?
+        .iter()
+        .map(|d| d.name.as_str())
+        .collect();
+    let names = || vars.iter().map(|v| v.name()).collect::<Vec<_>>();
     let var = match variable {
-        Some(n) => file.variable(n).ok_or_else(|| {
-            err(format!(
-                "no variable `{n}`; the file has {:?}",
-                file.variables().map(|v| v.name()).collect::<Vec<_>>()
-            ))
-        })?,
-        None => file
-            .variables()
+        Some(n) => vars
+            .iter()
+            .find(|v| v.name() == n)
+            .ok_or_else(|| err(format!("no variable `{n}`; the file has {:?}", names())))?,
+        None => vars
+            .iter()
             .find(|v| {
                 !dim_names.contains(&v.name())
-                    && v.dimensions().iter().filter(|d| d.len() > 1).count() == 2
+                    && v.dimensions().len() >= 2
+                    && v.dimensions()[v.dimensions().len() - 2..]
+                        .iter()
+                        .all(|d| d.size > 1)
             })
             .ok_or_else(|| err("no 2-D data variable (give field.variable)".into()))?,
     };
     let dims = var.dimensions();
-    if dims.len() < 2 || dims[..dims.len() - 2].iter().any(|d| d.len() != 1) {
+    let lead = &dims[..dims.len().saturating_sub(2)];
+    let long_lead: Vec<_> = lead.iter().filter(|d| d.size != 1).collect();
+    if dims.len() < 2 || long_lead.len() > 1 {
         return Err(err(format!(
-            "variable `{}` has dimensions {:?}; need (..., y, x) with any leading dimension of length 1",
+            "variable `{}` has dimensions {:?}; need (y, x), or (time, y, x) with any other leading dimension of length 1",
             var.name(),
-            dims.iter().map(|d| (d.name(), d.len())).collect::<Vec<_>>()
+            dims.iter().map(|d| (d.name.as_str(), d.size)).collect::<Vec<_>>()
         )));
     }
     let (ydim, xdim) = (&dims[dims.len() - 2], &dims[dims.len() - 1]);
-    let (ny, nx) = (ydim.len(), xdim.len());
+    let (ny, nx) = (ydim.size as usize, xdim.size as usize);
+    let n_frames = long_lead.first().map_or(1, |d| d.size as usize);
     // Checked before reading: the header's sizes are the file's claim, not a promise.
-    if nx
-        .checked_mul(ny)
-        .is_none_or(|n| n > crate::grid::MAX_NODES)
+    let nodes = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
+    if nodes
+        .and_then(|n| n.checked_mul(n_frames))
+        .is_none_or(|n| n > super::MAX_SERIES_NODES)
     {
         return Err(LoadError::grid(
             path,
             crate::grid::GridError::TooManyNodes { nx, ny },
         ));
     }
-    let mut values: Vec<f64> = var
-        .get_values::<f64, _>(..)
+    let data = file
+        .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
-    if values.len() != nx * ny {
-        return Err(err(format!("{} values for {ny} x {nx}", values.len())));
+    let values: Vec<f64> = data
+        .iter()
+        .map(|v| if v.is_finite() { *v } else { f64::NAN })
+        .collect();
+    if values.len() != nx * ny * n_frames {
+        return Err(err(format!(
+            "{} values for {n_frames} x {ny} x {nx}",
+            values.len()
+        )));
     }
-    let fill = attr_f64(&var, "_FillValue");
-    let missing = attr_f64(&var, "missing_value");
-    let scale = attr_f64(&var, "scale_factor").unwrap_or(1.0);
-    let offset = attr_f64(&var, "add_offset").unwrap_or(0.0);
-    for v in &mut values {
-        if Some(*v) == fill || Some(*v) == missing || !v.is_finite() {
-            *v = f64::NAN;
-        } else {
-            *v = *v * scale + offset;
-        }
-    }
-    let coord = |name: String| -> Result<Option<(Vec<f64>, Axis)>, LoadError> {
-        match file.variable(&name) {
+    let coord = |name: &str| -> Result<Option<(Vec<f64>, &NcVariable)>, LoadError> {
+        match vars
+            .iter()
+            .find(|v| v.name() == name && v.dimensions().len() == 1)
+        {
             None => Ok(None),
             Some(c) => {
-                let vals = c
-                    .get_values::<f64, _>(..)
+                let vals = file
+                    .read_variable_unpacked(name)
                     .map_err(|e| err(format!("cannot read coordinate `{name}`: {e}")))?;
-                Ok(Some((vals, axis_kind(&c))))
+                Ok(Some((vals.iter().copied().collect(), c)))
             }
         }
     };
-    let xc = coord(xdim.name())?;
-    let yc = coord(ydim.name())?;
-    let (mut grid_values, mut georeference, mut origin, mut spacing) =
-        (values, Georeference::None, Vec2::default(), [1.0, 1.0]);
-    if let (Some((xs, xk)), Some((ys, yk))) = (xc, yc) {
+    // Frame times from the CF time coordinate, seconds after the first frame.
+    let frame_times_s = match long_lead.first() {
+        None => None,
+        Some(tdim) => match coord(&tdim.name)? {
+            None => None,
+            Some((t, tv)) => {
+                let units = attr_str(tv, "units").unwrap_or_default();
+                let unit_s = cf_time_unit_s(&units).ok_or_else(|| {
+                    err(format!(
+                        "time coordinate `{}` has units `{units}`; need `<seconds|minutes|hours|days> since <date>`",
+                        tdim.name
+                    ))
+                })?;
+                Some(t.iter().map(|v| (v - t[0]) * unit_s).collect())
+            }
+        },
+    };
+    let xc = coord(&xdim.name)?;
+    let yc = coord(&ydim.name)?;
+    let (mut georeference, mut origin, mut spacing) =
+        (Georeference::None, Vec2::default(), [1.0, 1.0]);
+    let (mut flip_y, mut flip_x) = (false, false);
+    if let (Some((xs, xv)), Some((ys, yv))) = (xc, yc) {
         let (mut x0, mut dx) =
-            regular(&xs).map_err(|m| err(format!("coordinate `{}`: {m}", xdim.name())))?;
+            regular(&xs).map_err(|m| err(format!("coordinate `{}`: {m}", xdim.name)))?;
         let (mut y0, mut dy) =
-            regular(&ys).map_err(|m| err(format!("coordinate `{}`: {m}", ydim.name())))?;
+            regular(&ys).map_err(|m| err(format!("coordinate `{}`: {m}", ydim.name)))?;
         if dy < 0.0 {
-            super::flip_rows(&mut grid_values, nx, ny);
+            flip_y = true;
             y0 += dy * (ny - 1) as f64;
             dy = -dy;
         }
         if dx < 0.0 {
-            for row in grid_values.chunks_mut(nx) {
-                row.reverse();
-            }
+            flip_x = true;
             x0 += dx * (nx - 1) as f64;
             dx = -dx;
         }
-        if xk == Axis::Lon && yk == Axis::Lat {
+        if axis_kind(xv) == Axis::Lon && axis_kind(yv) == Axis::Lat {
             let ref_lat = y0 + 0.5 * dy * (ny - 1) as f64;
             spacing = lonlat_spacing_m(dx, dy, ref_lat);
             georeference = Georeference::LonLat {
@@ -195,41 +222,85 @@ pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedGrid, L
             georeference = Georeference::Metres { epsg: None };
         }
     }
-    let grid =
-        Grid2::new(nx, ny, origin, spacing, grid_values).map_err(|e| LoadError::grid(path, e))?;
-    Ok(LoadedGrid { grid, georeference })
+    let mut frames = Vec::with_capacity(n_frames);
+    for (k, chunk) in values.chunks_exact(nx * ny).enumerate() {
+        let mut v = chunk.to_vec();
+        if flip_y {
+            super::flip_rows(&mut v, nx, ny);
+        }
+        if flip_x {
+            for row in v.chunks_mut(nx) {
+                row.reverse();
+            }
+        }
+        let g = Grid2::new(nx, ny, origin, spacing, v)
+            .map_err(|e| LoadError::new(path, None, format!("frame {k}: {e}")))?;
+        frames.push(g);
+    }
+    Ok(LoadedSeries {
+        frames,
+        frame_times_s,
+        georeference,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use netcdf3::{DataSet, FileWriter, Version};
+
+    /// Writes a NetCDF-3 classic file: lat (north first), lon, optional time, and a variable
+    /// `v(time?, lat, lon)` stored as f32 halved with `scale_factor = 2` and a fill value.
+    fn write_nc(path: &Path, times_h: Option<&[f64]>, frames: &[Vec<f32>]) {
+        let mut ds = DataSet::new();
+        ds.add_fixed_dim("lat", 4).unwrap();
+        ds.add_fixed_dim("lon", 3).unwrap();
+        ds.add_var_f64("lat", &["lat"]).unwrap();
+        ds.add_var_attr_string("lat", "units", "degrees_north")
+            .unwrap();
+        ds.add_var_f64("lon", &["lon"]).unwrap();
+        ds.add_var_attr_string("lon", "units", "degrees_east")
+            .unwrap();
+        let dims: Vec<&str> = if let Some(t) = times_h {
+            ds.add_fixed_dim("time", t.len()).unwrap();
+            ds.add_var_f64("time", &["time"]).unwrap();
+            ds.add_var_attr_string("time", "units", "hours since 2019-03-01 00:00:00")
+                .unwrap();
+            vec!["time", "lat", "lon"]
+        } else {
+            vec!["lat", "lon"]
+        };
+        ds.add_var_f32("v", &dims).unwrap();
+        ds.add_var_attr_f32("v", "_FillValue", vec![-999.0])
+            .unwrap();
+        ds.add_var_attr_f32("v", "scale_factor", vec![2.0]).unwrap();
+        let mut w = FileWriter::create_new(path).unwrap();
+        w.set_def(&ds, Version::Classic, 0).unwrap();
+        w.write_var_f64("lat", &[51.0, 50.5, 50.0, 49.5]).unwrap();
+        w.write_var_f64("lon", &[10.0, 10.5, 11.0]).unwrap();
+        if let Some(t) = times_h {
+            w.write_var_f64("time", t).unwrap();
+        }
+        let all: Vec<f32> = frames.iter().flatten().copied().collect();
+        w.write_var_f32("v", &all).unwrap();
+        w.close().unwrap();
+    }
+
+    /// Frame `k`, north row first, halved: (30 - 10 r + c + 100 k) / 2, with a fill at north
+    /// row 1, column 1.
+    fn frame(k: usize) -> Vec<f32> {
+        let mut raw: Vec<f32> = (0..4)
+            .flat_map(|r| (0..3).map(move |c| ((30 - 10 * r + c + 100 * k as i32) as f32) / 2.0))
+            .collect();
+        raw[4] = -999.0;
+        raw
+    }
 
     #[test]
-    fn reads_a_cf_lonlat_grid_with_fill_and_flip() {
+    fn reads_a_cf_lonlat_grid_with_fill_scale_and_flip() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("g.nc");
-        {
-            let mut f = netcdf::create(&p).unwrap();
-            f.add_dimension("lat", 4).unwrap();
-            f.add_dimension("lon", 3).unwrap();
-            let mut lat = f.add_variable::<f64>("lat", &["lat"]).unwrap();
-            lat.put_attribute("units", "degrees_north").unwrap();
-            // North first: decreasing latitude.
-            lat.put_values(&[51.0, 50.5, 50.0, 49.5], ..).unwrap();
-            let mut lon = f.add_variable::<f64>("lon", &["lon"]).unwrap();
-            lon.put_attribute("units", "degrees_east").unwrap();
-            lon.put_values(&[10.0, 10.5, 11.0], ..).unwrap();
-            let mut v = f.add_variable::<f32>("pm25", &["lat", "lon"]).unwrap();
-            v.set_fill_value(-999.0f32).unwrap();
-            v.put_attribute("scale_factor", 2.0f32).unwrap();
-            // row r (north first) = 30 - 10 r + col, stored halved (scale_factor 2).
-            let raw: Vec<f32> = (0..4)
-                .flat_map(|r| (0..3).map(move |c| ((30 - 10 * r + c) as f32) / 2.0))
-                .collect();
-            let mut raw = raw;
-            raw[4] = -999.0; // north row 1, column 1 -> NaN
-            v.put_values(&raw, ..).unwrap();
-        }
+        write_nc(&p, None, &[frame(0)]);
         let g = crate::io::load_grid(&p, None).unwrap();
         assert_eq!((g.grid.nx(), g.grid.ny()), (3, 4));
         assert_eq!(g.grid.at(0, 0), 0.0, "south-west after the flip");
@@ -239,35 +310,57 @@ mod tests {
             lon0_deg, lat0_deg, ..
         } = g.georeference
         else {
-            panic!()
+            panic!("{:?}", g.georeference)
         };
         assert_eq!((lon0_deg, lat0_deg), (10.0, 49.5));
-        let [dx, dy] = g.grid.spacing_m();
-        assert!((dy - 55_597.54).abs() < 1.0, "{dy}");
-        assert!(
-            (dx - 55_597.54 * 50.25f64.to_radians().cos()).abs() < 1.0,
-            "{dx}"
-        );
     }
 
+    /// A time axis: one frame per time, the CF `hours since` read as seconds after the first.
     #[test]
-    fn errors_name_the_file() {
+    fn reads_frames_and_cf_times() {
         let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("junk.nc");
-        std::fs::write(&p, b"CDF\x01garbage").unwrap();
+        let p = dir.path().join("t.nc");
+        write_nc(&p, Some(&[6.0, 7.0, 9.0]), &[frame(0), frame(1), frame(2)]);
+        let s = crate::io::load_series(&p, None, None).unwrap();
+        assert_eq!(s.frames.len(), 3);
+        assert_eq!(s.frame_times_s, Some(vec![0.0, 3600.0, 10800.0]));
+        assert_eq!(s.frames[2].at(0, 0), 200.0);
         let e = crate::io::load_grid(&p, None).unwrap_err();
-        assert!(e.to_string().contains("junk.nc"), "{e}");
-        let p2 = dir.path().join("one.nc");
-        {
-            let mut f = netcdf::create(&p2).unwrap();
-            f.add_dimension("t", 3).unwrap();
-            f.add_dimension("y", 2).unwrap();
-            f.add_dimension("x", 2).unwrap();
-            f.add_variable::<f64>("v", &["t", "y", "x"]).unwrap();
+        assert!(e.message.contains("3 frames"), "{e}");
+        assert_eq!(cf_time_unit_s("days since 1970-01-01"), Some(86_400.0));
+        assert_eq!(cf_time_unit_s("fortnights since 1970-01-01"), None);
+        assert_eq!(cf_time_unit_s("hours"), None);
+    }
+
+    /// The bundled ERA5 file (NetCDF-4/HDF5, zlib) equals its `.npy` twin (float32) frame by
+    /// frame, and its frame times are hourly.
+    #[test]
+    fn the_bundled_era5_netcdf_equals_its_npy() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/era5_t2m_uk");
+        let nc = crate::io::load_series(&dir.join("era5_t2m_uk.nc"), None, Some("t2m")).unwrap();
+        let npy = crate::io::load_series(&dir.join("era5_t2m_uk.npy"), None, None).unwrap();
+        assert_eq!(nc.frames.len(), 168);
+        assert_eq!(npy.frames.len(), 168);
+        let t = nc.frame_times_s.unwrap();
+        assert_eq!(t[1], 3600.0);
+        assert_eq!(t[167], 167.0 * 3600.0);
+        for (a, b) in nc.frames.iter().zip(&npy.frames) {
+            assert_eq!((a.nx(), a.ny()), (49, 33));
+            for iy in 0..33 {
+                for ix in 0..49 {
+                    assert!((a.at(ix, iy) - b.at(ix, iy)).abs() < 1e-4, "{ix} {iy}");
+                }
+            }
         }
-        let e = crate::io::load_grid_variable(&p2, None, Some("v")).unwrap_err();
-        assert!(e.message.contains("length 1"), "{e}");
-        let e = crate::io::load_grid_variable(&p2, None, Some("w")).unwrap_err();
-        assert!(e.message.contains("no variable"), "{e}");
+        let Georeference::LonLat {
+            lon0_deg,
+            lat0_deg,
+            dlon_deg,
+            ..
+        } = nc.georeference
+        else {
+            panic!()
+        };
+        assert_eq!((lon0_deg, lat0_deg, dlon_deg), (-10.0, 50.0, 0.25));
     }
 }

@@ -1,10 +1,21 @@
-//! NumPy `.npy` grids: 2-D, shape `(rows, cols)`, row 0 = south, C or Fortran order.
+//! NumPy `.npy` grids: 2-D, shape `(rows, cols)`, or a time series of frames, 3-D, shape
+//! `(time, rows, cols)`; row 0 = south, C or Fortran order.
 
-use super::{plain_grid, FilePosition, LoadError, LoadedGrid};
+use super::{FilePosition, LoadError, LoadedGrid, LoadedSeries};
+use crate::georef::Georeference;
+use crate::grid::Grid2;
+use isotrack_core::Vec2;
 use npyz::{DType, NpyFile, Order, TypeChar};
 use std::path::Path;
 
+/// A 2-D array (a 3-D one is refused here: use [`parse_series`]).
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
+    super::single_frame(path, parse_series(path, bytes)?)
+}
+
+/// A 2-D array as one frame, or a 3-D `(time, rows, cols)` array as frames (no frame times: the
+/// file has none).
+pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, LoadError> {
     let npy = NpyFile::new(bytes).map_err(|e| {
         LoadError::new(
             path,
@@ -13,14 +24,17 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
         )
     })?;
     let shape = npy.shape().to_vec();
-    if shape.len() != 2 {
-        return Err(LoadError::new(
-            path,
-            None,
-            format!("expected a 2-D array, found shape {shape:?}"),
-        ));
-    }
-    let (ny, nx) = (shape[0] as usize, shape[1] as usize);
+    let (nt, ny, nx) = match shape[..] {
+        [r, c] => (1, r as usize, c as usize),
+        [t, r, c] => (t as usize, r as usize, c as usize),
+        _ => {
+            return Err(LoadError::new(
+                path,
+                None,
+                format!("expected a 2-D (rows, cols) or 3-D (time, rows, cols) array, found shape {shape:?}"),
+            ))
+        }
+    };
     let order = npy.order();
     let dtype = npy.dtype();
     let DType::Plain(ts) = &dtype else {
@@ -48,9 +62,10 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             format!("unsupported dtype `{ts}`{hint}; need float64, float32 or an integer type"),
         ));
     }
-    if nx
-        .checked_mul(ny)
-        .is_none_or(|n| n > crate::grid::MAX_NODES)
+    let frame = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
+    if frame
+        .and_then(|n| n.checked_mul(nt))
+        .is_none_or(|n| n > super::MAX_SERIES_NODES)
     {
         return Err(LoadError::grid(
             path,
@@ -59,7 +74,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     }
     // The header's shape is untrusted: refuse a data size beyond the file before reading.
     let item = ts.num_bytes().unwrap_or(8) as u128;
-    if (ny as u128) * (nx as u128) * item > bytes.len() as u128 {
+    if (nt as u128) * (ny as u128) * (nx as u128) * item > bytes.len() as u128 {
         return Err(LoadError::new(
             path,
             None,
@@ -140,7 +155,8 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             ))
         }
     };
-    if values.len() != nx * ny {
+    let n = nx * ny;
+    if values.len() != n * nt {
         return Err(LoadError::new(
             path,
             None,
@@ -151,13 +167,33 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
         ));
     }
     if order == Order::Fortran {
-        let mut c = vec![0.0; nx * ny];
-        for iy in 0..ny {
-            for ix in 0..nx {
-                c[iy * nx + ix] = values[ix * ny + iy];
+        // Element [k][iy][ix] sits at ix*ny*nt + iy*nt + k.
+        let mut c = vec![0.0; n * nt];
+        for k in 0..nt {
+            for iy in 0..ny {
+                for ix in 0..nx {
+                    c[k * n + iy * nx + ix] = values[ix * ny * nt + iy * nt + k];
+                }
             }
         }
         values = c;
     }
-    plain_grid(path, nx, ny, values)
+    let frames = values
+        .chunks_exact(n)
+        .enumerate()
+        .map(|(k, v)| {
+            Grid2::new(nx, ny, Vec2::default(), [1.0, 1.0], v.to_vec()).map_err(|e| {
+                if nt > 1 {
+                    LoadError::new(path, None, format!("frame {k}: {e}"))
+                } else {
+                    LoadError::grid(path, e)
+                }
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(LoadedSeries {
+        frames,
+        frame_times_s: None,
+        georeference: Georeference::None,
+    })
 }

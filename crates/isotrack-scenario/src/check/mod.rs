@@ -223,6 +223,7 @@ fn region(s: &Scenario) -> [f64; 4] {
     ];
     match s.field() {
         FieldModel::Grid(g) => g.grid().extent_m(),
+        FieldModel::Series(g) => g.extent_m(),
         FieldModel::Analytic(a) => {
             if let Some(d) = a.domain_m {
                 return d;
@@ -318,7 +319,7 @@ fn curvature(s: &Scenario) -> f64 {
             }
             _ => 0.0,
         },
-        FieldModel::Grid(_) => 0.0,
+        FieldModel::Grid(_) | FieldModel::Series(_) => 0.0,
     }
 }
 
@@ -456,8 +457,8 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
     let level = s.level();
     let p0 = start(s);
     let lat = Lattice::new(field, region(s), n);
-    let has_hessian =
-        !matches!(field, FieldModel::Grid(g) if g.interpolation() == Interpolation::Bilinear);
+    let has_hessian = !matches!(field, FieldModel::Grid(g) if g.interpolation() == Interpolation::Bilinear)
+        && !matches!(field, FieldModel::Series(g) if g.interpolation() == Interpolation::Bilinear);
     let (lo, hi) = (level - tube, level + tube);
     let tube_cells = lat
         .nearest_band_cell(p0, lo, hi)
