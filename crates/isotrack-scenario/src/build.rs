@@ -322,6 +322,11 @@ impl Scenario {
                 rate_hz: s.rate_hz.unwrap_or(1.0 / dt),
                 noise_std: s.noise_std.unwrap_or(0.0),
                 delay_s: s.delay_s.unwrap_or(0.0),
+                time_constant_s: s.time_constant_s.unwrap_or(0.0),
+                range: s.range,
+                resolution: s.resolution.unwrap_or(0.0),
+                dropout_probability: s.dropout_probability.unwrap_or(0.0),
+                bias_drift_per_sqrt_s: s.bias_drift_per_sqrt_s.unwrap_or(0.0),
             },
             dt,
             self.file.sim.seed.unwrap_or(0),
@@ -358,6 +363,10 @@ impl Scenario {
             self.convergence_min_dwell_s(),
             self.level(),
         )
+        .map(|p| match f.metrics.track_loss_band {
+            Some(b) => p.with_track_loss_band(b),
+            None => p,
+        })
         // `resolve_sim` and `resolve_output` apply the same `whole_steps` rule to the duration
         // and recording period, the only inputs that can make it fail.
         .expect("validated by resolve: StepPlan::new")

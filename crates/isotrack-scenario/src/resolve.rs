@@ -953,6 +953,32 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
     c.non_negative("sensor.noise_std", noise);
     let delay = *sn.delay_s.get_or_insert(0.0);
     c.non_negative("sensor.delay_s", delay);
+    let tau = *sn.time_constant_s.get_or_insert(0.0);
+    c.non_negative("sensor.time_constant_s", tau);
+    let resolution = *sn.resolution.get_or_insert(0.0);
+    c.non_negative("sensor.resolution", resolution);
+    let p = *sn.dropout_probability.get_or_insert(0.0);
+    if c.finite("sensor.dropout_probability", p) && !(0.0..1.0).contains(&p) {
+        c.fail(
+            "sensor.dropout_probability",
+            format!("must be in [0, 1), got {}", Num(p)),
+        );
+    }
+    let drift = *sn.bias_drift_per_sqrt_s.get_or_insert(0.0);
+    c.non_negative("sensor.bias_drift_per_sqrt_s", drift);
+    if let Some([lo, hi]) = sn.range {
+        c.all_finite("sensor.range", &[lo, hi]);
+        if lo >= hi || lo.is_nan() || hi.is_nan() {
+            c.fail(
+                "sensor.range",
+                format!(
+                    "must be [min, max] with min < max, got [{}, {}]",
+                    Num(lo),
+                    Num(hi)
+                ),
+            );
+        }
+    }
     let all_finite = [dt, rate, delay].iter().all(|x| x.is_finite());
     if !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
         return; // already reported
@@ -972,6 +998,7 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
         rate_hz: rate,
         noise_std: noise,
         delay_s: delay,
+        ..SensorConfig::default()
     };
     match Sensor::new(cfg, dt, 0) {
         Ok(_) => {}
@@ -1002,6 +1029,19 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
         "metrics.convergence_tolerance",
         *f.metrics.convergence_tolerance.get_or_insert(tol_default),
     );
+    if let Some(b) = f.metrics.track_loss_band {
+        let tol = f.metrics.convergence_tolerance.unwrap_or(0.0);
+        if c.finite("metrics.track_loss_band", b) && b < tol {
+            c.fail(
+                "metrics.track_loss_band",
+                format!(
+                    "must be >= metrics.convergence_tolerance = {}, got {}",
+                    Num(tol),
+                    Num(b)
+                ),
+            );
+        }
+    }
     // The dwell's default follows the duration (10 %), which a sweep or `--set` may change
     // after this file was resolved, so it is left unset here and applied by `Scenario::plan`.
     if let Some(dwell) = f.metrics.convergence_min_dwell_s {

@@ -359,6 +359,21 @@ pub struct SensorSection {
     /// Transport delay, s (default 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub delay_s: Option<f64>,
+    /// First-order response time constant, s (default 0: instantaneous).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_constant_s: Option<f64>,
+    /// Output range `[min, max]`, field units: readings saturate (default none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<[f64; 2]>,
+    /// Output resolution, field units: readings are rounded to it (default 0: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<f64>,
+    /// Probability a sample is lost, in [0, 1) (default 0); counted in `samples_dropped`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropout_probability: Option<f64>,
+    /// Bias random walk, field units per sqrt(s) (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bias_drift_per_sqrt_s: Option<f64>,
 }
 
 /// Controller kinds.
@@ -588,6 +603,10 @@ pub struct MetricsSection {
     /// convergence time to be reported, s (default 10 % of `sim.duration_s`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub convergence_min_dwell_s: Option<f64>,
+    /// The track-loss band on `|eps|`, field units: once within the tolerance, leaving this
+    /// band counts as a track loss (default 5 x the tolerance).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub track_loss_band: Option<f64>,
 }
 
 /// `[output]`.

@@ -100,3 +100,38 @@ fn the_data_can_end() {
     assert!((r.t_end_s - 1200.0).abs() <= 0.01, "{}", r.t_end_s);
     assert!(r.outcome_detail.unwrap().contains("data ended"));
 }
+
+/// Sensor dynamics in a run: every sample is delivered or counted as dropped (exactly, for a
+/// seeded run), the keys are recorded in the resolved scenario, and a lagged, quantised,
+/// saturating, drifting sensor still lets the default scenario track.
+#[test]
+fn sensor_dynamics_in_a_run() {
+    let sets: Vec<String> = [
+        "sensor.dropout_probability=0.1",
+        "sensor.time_constant_s=0.5",
+        "sensor.resolution=0.001",
+        "sensor.range=[0.0, 50.0]",
+        "sensor.bias_drift_per_sqrt_s=0.0001",
+        "controller.derivative=filtered_difference",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let s = load_scenario(None, &sets).unwrap();
+    let r = s.run(&mut NoTrace);
+    assert_eq!(r.samples + r.samples_dropped, 60_001);
+    assert!(
+        (5_000..7_000).contains(&r.samples_dropped),
+        "{}",
+        r.samples_dropped
+    );
+    assert_eq!(r, s.run(&mut NoTrace), "seeded: the same run again");
+    assert_eq!(s.file().sensor.time_constant_s, Some(0.5));
+    assert!(
+        r.metrics.steady_state_max_abs_error.unwrap() < 0.1,
+        "{:?}",
+        r.metrics
+    );
+    let e = load_scenario(None, &["sensor.dropout_probability=1.0".into()]).unwrap_err();
+    assert!(e.to_string().contains("sensor.dropout_probability"), "{e}");
+}

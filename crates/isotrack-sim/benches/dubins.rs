@@ -23,8 +23,7 @@ fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &m
     let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
     let cfg = SensorConfig {
         rate_hz: 100.0,
-        noise_std: 0.0,
-        delay_s: 0.0,
+        ..SensorConfig::default()
     };
     let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
     let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 60.0, 10.0).unwrap();

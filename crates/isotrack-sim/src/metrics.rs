@@ -15,6 +15,10 @@ pub struct MetricsConfig {
     /// up to the end of the run, for a convergence time to be reported. A limit cycle that
     /// happens to be inside the band at the very end is not convergence.
     pub convergence_min_dwell_steps: u64,
+    /// The track-loss band on `|eps|`, field units (>= the tolerance): once the error has been
+    /// within the tolerance, leaving this band is a track loss (re-acquired when back within
+    /// the tolerance).
+    pub track_loss_band: f64,
 }
 
 /// Accumulates the metrics of one run step by step.
@@ -36,6 +40,10 @@ pub struct Metrics {
     iso_n: u64,
     iso_max: f64,
     iso_sum_sq: f64,
+    ss_in_band: u64,
+    /// Whether the error is tracked: within the tolerance once, and not out of the band since.
+    tracking: bool,
+    track_losses: u64,
 }
 
 /// The metrics of a finished run. `None` (JSON `null`) where a metric is undefined: no step
@@ -68,6 +76,13 @@ pub struct RunMetrics {
     pub steady_state_max_isoline_distance_m: Option<f64>,
     /// RMS distance to the true isoline over the steady-state window, m.
     pub steady_state_rms_isoline_distance_m: Option<f64>,
+    /// Share of the steady-state window's steps with `|eps| <= convergence tolerance` (how much
+    /// of the time a moving isoline was held), in `[0, 1]`.
+    pub time_in_band_fraction: Option<f64>,
+    /// Times the error left the track-loss band after having been within the tolerance
+    /// (`metrics.track_loss_band`, default 5 x the tolerance); re-acquired when back within
+    /// the tolerance.
+    pub track_losses: u64,
 }
 
 impl Metrics {
@@ -90,6 +105,9 @@ impl Metrics {
             iso_n: 0,
             iso_max: 0.0,
             iso_sum_sq: 0.0,
+            ss_in_band: 0,
+            tracking: false,
+            track_losses: 0,
         }
     }
 
@@ -97,11 +115,21 @@ impl Metrics {
     #[inline]
     pub fn observe(&mut self, k: u64, eps: f64, omega: f64) {
         self.last_step = k;
-        if eps.abs() >= self.cfg.convergence_tolerance {
+        let a = eps.abs();
+        let within = a < self.cfg.convergence_tolerance;
+        if !within {
             self.last_violation = Some(k);
+        }
+        // A NaN error (no value) counts as outside the band.
+        if self.tracking && (a > self.cfg.track_loss_band || a.is_nan()) {
+            self.tracking = false;
+            self.track_losses += 1;
+        } else if !self.tracking && within {
+            self.tracking = true;
         }
         if k >= self.cfg.steady_state_start_step {
             self.ss_n += 1;
+            self.ss_in_band += u64::from(a <= self.cfg.convergence_tolerance);
             self.ss_max_abs = self.ss_max_abs.max(eps.abs());
             self.ss_sum += eps;
             self.ss_sum_sq += eps * eps;
@@ -179,6 +207,8 @@ impl Metrics {
             steady_state_max_isoline_distance_m: (self.iso_n > 0).then_some(self.iso_max),
             steady_state_rms_isoline_distance_m: (self.iso_n > 0)
                 .then(|| (self.iso_sum_sq / self.iso_n as f64).sqrt()),
+            time_in_band_fraction: have_ss.then(|| self.ss_in_band as f64 / n),
+            track_losses: self.track_losses,
         }
     }
 }
@@ -195,6 +225,7 @@ mod tests {
             steady_state_start_step: 6,
             convergence_tolerance: 0.1,
             convergence_min_dwell_steps: 0,
+            track_loss_band: 0.5,
         });
         // eps: 1, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02 (10 steps)
         let eps = [1.0, 0.5, 0.2, 0.05, 0.3, 0.05, 0.02, -0.04, 0.06, -0.02];
@@ -231,6 +262,7 @@ mod tests {
             steady_state_start_step: 100,
             convergence_tolerance: 0.1,
             convergence_min_dwell_steps: 0,
+            track_loss_band: 0.5,
         });
         m.observe(0, 0.0, 0.0);
         m.observe(1, 5.0, 0.0);
@@ -239,6 +271,28 @@ mod tests {
         assert_eq!(r.steady_state_max_abs_error, None);
         assert_eq!(r.chattering_radps2, None);
         assert_eq!(m.finish(false).convergence_time_s, None);
+    }
+
+    /// In-band share and track losses by hand: tolerance 0.1, band 0.5.
+    #[test]
+    fn band_share_and_track_losses() {
+        let mut m = Metrics::new(MetricsConfig {
+            dt_s: 1.0,
+            steady_state_start_step: 4,
+            convergence_tolerance: 0.1,
+            convergence_min_dwell_steps: 0,
+            track_loss_band: 0.5,
+        });
+        // Not tracked yet at 1.0 (no loss); acquired at 0.05; 0.3 stays in the band; 0.8 is a
+        // loss; 0.2 is not a re-acquisition; 0.0 is; 0.9 is a second loss.
+        let eps = [1.0, 0.05, 0.3, 0.8, 0.2, 0.0, 0.9, 0.05];
+        for (k, e) in eps.iter().enumerate() {
+            m.observe(k as u64, *e, 0.0);
+        }
+        let r = m.finish(true);
+        assert_eq!(r.track_losses, 2);
+        // Window steps 4..=7: 0.2, 0.0, 0.9, 0.05 -> 2 of 4 within 0.1.
+        assert_eq!(r.time_in_band_fraction, Some(0.5));
     }
 
     #[test]
@@ -250,6 +304,7 @@ mod tests {
                 steady_state_start_step: 0,
                 convergence_tolerance: 0.1,
                 convergence_min_dwell_steps: dwell,
+                track_loss_band: 0.5,
             });
             for k in 0..10u64 {
                 m.observe(k, if k < 5 { 1.0 } else { 0.0 }, 0.0);

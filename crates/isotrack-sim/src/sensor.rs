@@ -15,6 +15,35 @@ pub struct SensorConfig {
     pub noise_std: f64,
     /// Transport delay, seconds (>= 0): a whole number of simulation steps.
     pub delay_s: f64,
+    /// First-order response time constant, s (0: instantaneous): the sensing element follows
+    /// the true value by `y' = (x - y)/tau` (metal-oxide gas sensors: 10-30 s), integrated
+    /// exactly over each step (`y += (1 - exp(-dt/tau)) (x - y)`), starting settled.
+    pub time_constant_s: f64,
+    /// Output range `[min, max]` (saturation), field units.
+    pub range: Option<[f64; 2]>,
+    /// Output resolution, field units (0: none): readings are rounded to a multiple of it.
+    pub resolution: f64,
+    /// Probability that a sample is lost (the controller holds its last command).
+    pub dropout_probability: f64,
+    /// Bias random walk, field units per sqrt(s): the bias moves by `sigma*sqrt(T)*N(0,1)`
+    /// at each sample `T` apart, starting at 0.
+    pub bias_drift_per_sqrt_s: f64,
+}
+
+impl Default for SensorConfig {
+    /// An ideal sensor at 1 Hz: no noise, delay, lag, limits, quantisation, dropouts or bias.
+    fn default() -> Self {
+        Self {
+            rate_hz: 1.0,
+            noise_std: 0.0,
+            delay_s: 0.0,
+            time_constant_s: 0.0,
+            range: None,
+            resolution: 0.0,
+            dropout_probability: 0.0,
+            bias_drift_per_sqrt_s: 0.0,
+        }
+    }
 }
 
 /// Why a [`SensorConfig`] cannot run at a given step size.
@@ -96,6 +125,13 @@ pub fn whole_steps(duration_s: f64, dt_s: f64) -> Result<u64, StepsError> {
     Ok(r as u64)
 }
 
+/// A ChaCha8 generator for `seed` on its own stream.
+fn stream(seed: u64, id: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream(id);
+    r
+}
+
 /// Samples the true field value every `rate_hz`, delays it by `delay_s`, adds seeded Gaussian
 /// noise: `s_meas(t_k) = F(p(t_k - delay)) + noise_std * n_k`, `n_k ~ N(0, 1)` from a ChaCha8
 /// stream seeded by the run's seed, so a run is reproducible bit for bit.
@@ -118,6 +154,21 @@ pub struct Sensor {
     noise_std: f64,
     history: VecDeque<f64>,
     rng: ChaCha8Rng,
+    /// `1 - exp(-dt/tau)` (1 for an instantaneous sensor).
+    lag_gain: f64,
+    /// The sensing element's state (`None` before the first step: it starts settled).
+    lagged: Option<f64>,
+    range: Option<[f64; 2]>,
+    resolution: f64,
+    dropout_probability: f64,
+    /// Bias step per sample, field units (`sigma*sqrt(T)`).
+    bias_step: f64,
+    bias: f64,
+    /// Dropouts and bias walk draw from their own streams, so turning one on leaves the
+    /// noise of every other sample as it was.
+    dropout_rng: ChaCha8Rng,
+    bias_rng: ChaCha8Rng,
+    dropped: u64,
 }
 
 impl Sensor {
@@ -160,6 +211,20 @@ impl Sensor {
             // Grows as needed: a long delay allocates only what a run reaches.
             history: VecDeque::with_capacity((in_flight as usize + 1).min(4096)),
             rng: ChaCha8Rng::seed_from_u64(seed),
+            lag_gain: if cfg.time_constant_s > 0.0 {
+                -(-dt_s / cfg.time_constant_s).exp_m1()
+            } else {
+                1.0
+            },
+            lagged: None,
+            range: cfg.range,
+            resolution: cfg.resolution,
+            dropout_probability: cfg.dropout_probability,
+            bias_step: cfg.bias_drift_per_sqrt_s * (every as f64 * dt_s).sqrt(),
+            bias: 0.0,
+            dropout_rng: stream(seed, 1),
+            bias_rng: stream(seed, 2),
+            dropped: 0,
         })
     }
 
@@ -168,10 +233,23 @@ impl Sensor {
         self.every
     }
 
+    /// Samples lost to dropouts so far.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
     /// Called at every step `k = 0, 1, 2, ...`, in order and exactly once each, with the step's
     /// time and the true value at the vehicle. Returns the measurement on sample steps (`k` a
     /// multiple of the sample period) once the delay has filled, `None` otherwise.
     pub fn observe(&mut self, t_s: f64, true_value: f64) -> Option<Measurement> {
+        // The sensing element's lag acts on the true value at every step.
+        let true_value = if self.lag_gain < 1.0 {
+            let y = self.lagged.get_or_insert(true_value);
+            *y += self.lag_gain * (true_value - *y);
+            *y
+        } else {
+            true_value
+        };
         let sample_now = self.countdown == 0;
         self.countdown = if sample_now {
             self.every - 1
@@ -208,10 +286,25 @@ impl Sensor {
         } else {
             0.0
         };
-        Some(Measurement {
-            t_s,
-            value: delayed + noise,
-        })
+        if self.bias_step > 0.0 {
+            let n: f64 = StandardNormal.sample(&mut self.bias_rng);
+            self.bias += self.bias_step * n;
+        }
+        let mut value = delayed + noise + self.bias;
+        if self.resolution > 0.0 {
+            value = (value / self.resolution).round() * self.resolution;
+        }
+        if let Some([lo, hi]) = self.range {
+            value = value.clamp(lo, hi);
+        }
+        if self.dropout_probability > 0.0 {
+            let u: f64 = rand::RngExt::random(&mut self.dropout_rng);
+            if u < self.dropout_probability {
+                self.dropped += 1;
+                return None;
+            }
+        }
+        Some(Measurement { t_s, value })
     }
 }
 
@@ -225,6 +318,7 @@ mod tests {
             rate_hz: 10.0,
             noise_std: 0.0,
             delay_s: 0.2,
+            ..SensorConfig::default()
         };
         let mut s = Sensor::new(cfg, 0.01, 1).unwrap();
         assert_eq!(s.steps_per_sample(), 10);
@@ -251,6 +345,7 @@ mod tests {
                     rate_hz: 100.0 / every as f64,
                     noise_std: 0.0,
                     delay_s: d as f64 * 0.01,
+                    ..SensorConfig::default()
                 };
                 let mut s = Sensor::new(cfg, 0.01, 1).unwrap();
                 for k in 0..200u64 {
@@ -269,6 +364,7 @@ mod tests {
             rate_hz: 100.0,
             noise_std: 0.0,
             delay_s,
+            ..SensorConfig::default()
         };
         // 1e16 s at 0.01 s steps: 1e18 steps; before the bound this panicked in the builder.
         assert!(matches!(
@@ -296,18 +392,125 @@ mod tests {
         assert!(ok.history.capacity() < 10_000, "allocates lazily");
     }
 
+    /// The first-order lag against its closed form: a unit step at t = 0 read through
+    /// `tau = 2 s` is `1 - exp(-t/tau)` at every sample, exactly (the discretisation is exact for
+    /// a step held over each step).
+    #[test]
+    fn first_order_step_response_is_the_closed_form() {
+        let cfg = SensorConfig {
+            rate_hz: 10.0,
+            time_constant_s: 2.0,
+            ..SensorConfig::default()
+        };
+        let mut s = Sensor::new(cfg, 0.01, 1).unwrap();
+        // Settled at 0 before the step: the first step sees 0, then 1 from step 1 on.
+        let mut got = vec![];
+        for k in 0..1001u64 {
+            let x = if k == 0 { 0.0 } else { 1.0 };
+            if let Some(m) = s.observe(k as f64 * 0.01, x) {
+                got.push((k, m.value));
+            }
+        }
+        for (k, v) in got {
+            let want = 1.0 - (-(k as f64 * 0.01) / 2.0).exp();
+            assert!((v - want).abs() < 1e-12, "step {k}: {v} vs {want}");
+        }
+    }
+
+    /// Quantisation rounds to the resolution, then the range saturates.
+    #[test]
+    fn resolution_and_range() {
+        let cfg = SensorConfig {
+            rate_hz: 100.0,
+            resolution: 0.25,
+            range: Some([-1.0, 2.0]),
+            ..SensorConfig::default()
+        };
+        let mut s = Sensor::new(cfg, 0.01, 1).unwrap();
+        let read = |s: &mut Sensor, x| s.observe(0.0, x).unwrap().value;
+        assert_eq!(read(&mut s, 0.37), 0.25);
+        assert_eq!(read(&mut s, 0.38), 0.5);
+        assert_eq!(read(&mut s, -3.0), -1.0);
+        assert_eq!(read(&mut s, 7.1), 2.0);
+    }
+
+    /// Dropouts: the count equals the draws below `p` on the sensor's own stream (stream 1 of
+    /// the seed), reproduced here independently; noise on other samples is unchanged.
+    #[test]
+    fn dropouts_are_exact_and_leave_the_noise_alone() {
+        let base = SensorConfig {
+            rate_hz: 100.0,
+            noise_std: 0.3,
+            ..SensorConfig::default()
+        };
+        let with = SensorConfig {
+            dropout_probability: 0.2,
+            ..base
+        };
+        let (mut a, mut b) = (
+            Sensor::new(base, 0.01, 9).unwrap(),
+            Sensor::new(with, 0.01, 9).unwrap(),
+        );
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        rng.set_stream(1);
+        let mut want_dropped = 0;
+        for k in 0..5000u64 {
+            let ma = a.observe(k as f64, 1.0).unwrap();
+            let u: f64 = rand::RngExt::random(&mut rng);
+            let mb = b.observe(k as f64, 1.0);
+            if u < 0.2 {
+                want_dropped += 1;
+                assert!(mb.is_none());
+            } else {
+                assert_eq!(mb.unwrap().value, ma.value, "same noise draw");
+            }
+        }
+        assert_eq!(b.dropped(), want_dropped);
+        assert!((800..1200).contains(&want_dropped), "{want_dropped}");
+    }
+
+    /// The bias walk has variance `sigma^2 * t`: over 400 seeded sensors, at t = 100 s the
+    /// sample variance of the reading is 0.01^2 * 100 = 0.01 within 15 %.
+    #[test]
+    fn bias_random_walk_variance() {
+        let cfg = SensorConfig {
+            rate_hz: 1.0,
+            bias_drift_per_sqrt_s: 0.01,
+            ..SensorConfig::default()
+        };
+        let finals: Vec<f64> = (0..400u64)
+            .map(|seed| {
+                let mut s = Sensor::new(cfg, 0.1, seed).unwrap();
+                let mut last = 0.0;
+                for k in 0..1000u64 {
+                    if let Some(m) = s.observe(k as f64 * 0.1, 0.0) {
+                        last = m.value;
+                    }
+                }
+                last
+            })
+            .collect();
+        let n = finals.len() as f64;
+        let mean = finals.iter().sum::<f64>() / n;
+        let var = finals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        // 100 samples 1 s apart: t = 100 s of walk.
+        assert!((var - 0.01).abs() < 0.15 * 0.01, "{var}");
+    }
+
     #[test]
     fn rejects_incommensurate_rate() {
         let cfg = SensorConfig {
             rate_hz: 30.0,
             noise_std: 0.0,
             delay_s: 0.0,
+            ..SensorConfig::default()
         };
         assert!(Sensor::new(cfg, 0.01, 1).is_err());
         let cfg = SensorConfig {
             rate_hz: 1000.0,
             noise_std: 0.0,
             delay_s: 0.0,
+            ..SensorConfig::default()
         };
         assert!(Sensor::new(cfg, 0.01, 1).is_err(), "faster than the step");
     }
@@ -318,6 +521,7 @@ mod tests {
             rate_hz: 100.0,
             noise_std: 0.5,
             delay_s: 0.0,
+            ..SensorConfig::default()
         };
         let draw = |seed| {
             let mut s = Sensor::new(cfg, 0.01, seed).unwrap();

@@ -47,6 +47,9 @@ pub struct StepPlan {
     pub convergence_min_dwell_steps: u64,
     /// The level `s_d` the error is measured from.
     pub level: f64,
+    /// The track-loss band on `|eps|` (default 5 x the tolerance; see
+    /// [`StepPlan::with_track_loss_band`]).
+    pub track_loss_band: f64,
 }
 
 /// Why durations do not make a [`StepPlan`].
@@ -121,7 +124,14 @@ impl StepPlan {
             convergence_min_dwell_steps: ((convergence_min_dwell_s / dt_s).ceil().max(0.0) as u64)
                 .min(n_steps),
             level,
+            track_loss_band: 5.0 * convergence_tolerance,
         })
+    }
+
+    /// The plan with another track-loss band (>= the tolerance).
+    pub fn with_track_loss_band(mut self, band: f64) -> Self {
+        self.track_loss_band = band.max(self.convergence_tolerance);
+        self
     }
 }
 
@@ -138,6 +148,9 @@ pub struct RunResult {
     pub steps: u64,
     /// Measurements delivered to the controller.
     pub samples: u64,
+    /// Samples the sensor lost to dropouts (`sensor.dropout_probability`); the controller held
+    /// its last command through each.
+    pub samples_dropped: u64,
     /// Last valid position `[x, y]`, m.
     pub end_position_m: [f64; 2],
     /// The metrics.
@@ -195,6 +208,7 @@ where
         steady_state_start_step: plan.steady_state_start_step,
         convergence_tolerance: plan.convergence_tolerance,
         convergence_min_dwell_steps: plan.convergence_min_dwell_steps,
+        track_loss_band: plan.track_loss_band,
     });
     let mut omega = 0.0_f64;
     let mut s_measured: Option<f64> = None;
@@ -315,6 +329,7 @@ where
         outcome_detail: detail,
         t_end_s: last_valid_step as f64 * plan.dt_s,
         steps: last_valid_step,
+        samples_dropped: sensor.dropped(),
         samples,
         end_position_m: [end_pos.x, end_pos.y],
         metrics: metrics.finish(outcome == Outcome::Completed),
