@@ -171,6 +171,22 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     for w in &r.warnings {
         println!("warning: {w}");
     }
+    let m = &r.moving;
+    if m.time_varying {
+        let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4}"));
+        println!(
+            "moving isoline: speed max {} m/s, 95th percentile {} m/s; vehicle {} m/s: {}",
+            f(m.isoline_speed_max_mps),
+            f(m.isoline_speed_p95_mps),
+            m.vehicle_speed_mps,
+            match m.trackable {
+                Some(true) => "trackable (the vehicle is faster everywhere sampled)",
+                Some(false) =>
+                    "NOT trackable everywhere (the isoline outruns the vehicle somewhere)",
+                None => "no sample in the tube",
+            }
+        );
+    }
     let p1 = &r.prop1;
     println!("Prop. 1 (circular field, local exponential stability)");
     if p1.applicable {

@@ -135,3 +135,20 @@ fn sensor_dynamics_in_a_run() {
     let e = load_scenario(None, &["sensor.dropout_probability=1.0".into()]).unwrap_err();
     assert!(e.to_string().contains("sensor.dropout_probability"), "{e}");
 }
+
+/// `check` on the bundled ERA5 scenario: the isotherm moves (metres per second, well below the
+/// UAV's 30 m/s), so it is trackable; the report says how it was sampled.
+#[test]
+fn check_reports_the_isoline_speed() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/era5-isotherm-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let m = isotrack_scenario::check::check(&s, None).moving;
+    assert!(m.time_varying);
+    let (max, p95) = (
+        m.isoline_speed_max_mps.unwrap(),
+        m.isoline_speed_p95_mps.unwrap(),
+    );
+    assert!(p95 > 0.1 && p95 <= max && max < 30.0, "{m:?}");
+    assert_eq!(m.trackable, Some(true));
+    assert!(m.samples > 100);
+}

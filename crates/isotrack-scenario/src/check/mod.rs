@@ -22,6 +22,7 @@
 
 pub mod baselines;
 mod lattice;
+pub mod moving;
 pub mod sampled;
 
 use crate::build::{build_vehicle, VehicleModel};
@@ -199,6 +200,8 @@ pub struct CheckReport {
     pub prop2: Prop2Report,
     /// The sampled-data check.
     pub sampled: SampledReport,
+    /// The isoline's own speed, for fields that move.
+    pub moving: moving::MovingReport,
     /// Warnings about the scenario (the same `run` prints).
     pub warnings: Vec<String>,
 }
@@ -717,9 +720,11 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         && prop2.initial_heading_in_sector == Some(true)
         && sampled.stable == Some(true);
     let (verdict, verdict_reason) = verdict(&prop1, &prop2, &sampled);
+    let moving = moving::moving_report(s, tube, region(s));
     CheckReport {
         verdict,
         verdict_reason,
+        moving,
         warnings: warnings_from(s, &sampled),
         prop1,
         prop2,

@@ -1,0 +1,134 @@
+//! `isotrack check` for fields that move (issue 11): how fast the isoline moves, from the field,
+//! against the vehicle's speed.
+//!
+//! The isoline `F(t, p) = s_d` moves along its normal at `|dF/dt| / |grad F|` (differentiate
+//! `F(t, p(t)) = s_d` along the normal). Sampled on a lattice over the check's region, at the
+//! points within the tube `|F - s_d| <= tube`, at 48 times spread over the run; `dF/dt` by a
+//! central difference of 1 s (the field is smooth in time: linear between frames, or a drift).
+//! The vehicle can keep up when the isoline is slower than it everywhere sampled (`trackable`).
+
+use super::speed_mps;
+use crate::field::FieldModel;
+use crate::Scenario;
+use isotrack_core::{FieldDerivatives, ScalarField, Vec2};
+use serde::Serialize;
+
+/// The moving-isoline check.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MovingReport {
+    /// Whether the field changes with time (a grid time series, or a drifting analytic field).
+    pub time_varying: bool,
+    /// Largest isoline speed sampled in the tube over the run, m/s.
+    pub isoline_speed_max_mps: Option<f64>,
+    /// 95th percentile of the sampled isoline speeds, m/s.
+    pub isoline_speed_p95_mps: Option<f64>,
+    /// The vehicle's speed (the Dubins robot's, or the UAV's airspeed), m/s.
+    pub vehicle_speed_mps: f64,
+    /// Whether the vehicle is faster than the isoline everywhere sampled (`null` for a field
+    /// that does not move, or when no point of the tube was sampled).
+    pub trackable: Option<bool>,
+    /// Samples behind the statistics (lattice points in the tube, over all times).
+    pub samples: usize,
+    /// What was sampled, and how.
+    pub note: String,
+}
+
+/// Lattice side and sample times of the check.
+const SIDE: usize = 101;
+const TIMES: usize = 48;
+
+/// The moving-isoline report of a scenario, with the tube half-width `tube` (field units).
+pub fn moving_report(s: &Scenario, tube: f64, region: [f64; 4]) -> MovingReport {
+    let field = s.field();
+    let v = speed_mps(s);
+    let time_varying = match field {
+        FieldModel::Series(_) => true,
+        FieldModel::Analytic(a) => a.drift_mps != Vec2::default(),
+        FieldModel::Grid(_) => false,
+    };
+    if !time_varying {
+        return MovingReport {
+            time_varying,
+            isoline_speed_max_mps: None,
+            isoline_speed_p95_mps: None,
+            vehicle_speed_mps: v,
+            trackable: None,
+            samples: 0,
+            note: "the field does not change with time".into(),
+        };
+    }
+    let duration = s.file().sim.duration_s.unwrap_or(600.0);
+    let level = s.level();
+    let h = 1.0_f64.min(0.25 * duration);
+    let mut speeds = vec![];
+    for k in 0..TIMES {
+        let t = duration * (k as f64 + 0.5) / TIMES as f64;
+        for j in 0..SIDE {
+            for i in 0..SIDE {
+                let p = Vec2::new(
+                    region[0] + (region[1] - region[0]) * i as f64 / (SIDE - 1) as f64,
+                    region[2] + (region[3] - region[2]) * j as f64 / (SIDE - 1) as f64,
+                );
+                let (Some(f), Some(g)) = (field.value(t, p), field.gradient(t, p)) else {
+                    continue;
+                };
+                if (f - level).abs() > tube || g.norm() == 0.0 {
+                    continue;
+                }
+                let (Some(a), Some(b)) = (field.value(t + h, p), field.value(t - h, p)) else {
+                    continue;
+                };
+                speeds.push(((a - b) / (2.0 * h)).abs() / g.norm());
+            }
+        }
+    }
+    speeds.retain(|x| x.is_finite());
+    speeds.sort_by(f64::total_cmp);
+    let n = speeds.len();
+    let max = speeds.last().copied();
+    let p95 = (n > 0).then(|| speeds[((0.95 * (n - 1) as f64).round() as usize).min(n - 1)]);
+    MovingReport {
+        time_varying,
+        isoline_speed_max_mps: max,
+        isoline_speed_p95_mps: p95,
+        vehicle_speed_mps: v,
+        trackable: max.map(|m| m < v),
+        samples: n,
+        note: format!(
+            "|dF/dt|/|grad F| at {SIDE} x {SIDE} lattice points in the tube |F - s_d| <= {tube}, at {TIMES} times over the {duration} s run (dF/dt by a central difference of {h} s)"
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::parse_scenario;
+
+    /// A linear ramp drifting at 0.3 m/s across its gradient moves its isolines at exactly
+    /// 0.3 m/s (the drift's component along the gradient): trackable by a 0.5 m/s robot, not by
+    /// a 0.2 m/s one.
+    #[test]
+    fn a_drifting_ramp_moves_at_the_drift_speed() {
+        let s = |v: f64| {
+            parse_scenario(
+                "[field]\nkind = \"linear_ramp\"\ngradient_per_m = [0.0, 1.0]\ndrift_mps = [0.4, 0.3]\ndomain_m = [-50.0, 50.0, -50.0, 50.0]\n[initial]\nx_m = 0.0\ny_m = 0.0\n[controller]\nlevel = 0.0\n",
+                "<test>",
+                &[format!("vehicle.speed_mps={v}")],
+            )
+            .unwrap()
+        };
+        let r = super::moving_report(&s(0.5), 1.0, [-50.0, 50.0, -50.0, 50.0]);
+        assert!(r.time_varying);
+        assert!(
+            (r.isoline_speed_max_mps.unwrap() - 0.3).abs() < 1e-9,
+            "{r:?}"
+        );
+        assert!((r.isoline_speed_p95_mps.unwrap() - 0.3).abs() < 1e-9);
+        assert_eq!(r.trackable, Some(true));
+        let r = super::moving_report(&s(0.2), 1.0, [-50.0, 50.0, -50.0, 50.0]);
+        assert_eq!(r.trackable, Some(false));
+        let still = parse_scenario("", "<test>", &[]).unwrap();
+        let r = super::moving_report(&still, 1.0, [-20.0, 20.0, -20.0, 20.0]);
+        assert!(!r.time_varying && r.trackable.is_none());
+    }
+}
