@@ -219,6 +219,7 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
     let g = match fig2a.field() {
         isotrack_scenario::field::FieldModel::Grid(g) => g.grid().extent_m(),
         isotrack_scenario::field::FieldModel::Series(g) => g.extent_m(),
+        isotrack_scenario::field::FieldModel::Puff(_) => [-25.0, 25.0, -25.0, 25.0],
         isotrack_scenario::field::FieldModel::Analytic(_) => [-25.0, 25.0, -25.0, 25.0],
     };
     for st in &styles {

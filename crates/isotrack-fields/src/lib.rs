@@ -15,6 +15,7 @@ pub mod georef;
 pub mod grid;
 pub mod io;
 pub mod isoline;
+pub mod puff;
 pub mod stations;
 
 pub use analytic::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};

@@ -377,6 +377,7 @@ impl Scenario {
         match self.field() {
             FieldModel::Analytic(f) => self.run_on(f, sink),
             FieldModel::Grid(f) => self.run_on(f, sink),
+            FieldModel::Puff(f) => self.run_on(&**f, sink),
             FieldModel::Series(f) => {
                 let mut r = self.run_on(&**f, sink);
                 // Past the last frame with `after_last_frame = "end"`: say the data ended.

@@ -9,6 +9,7 @@ use isotrack_fields::grid::{
 };
 use isotrack_fields::io::{load_series, GridFormat};
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
+use isotrack_fields::puff::{PuffPlume, PuffPlumeParams};
 use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -22,6 +23,8 @@ pub enum FieldModel {
     Grid(GridField),
     /// `grid`, a time series of frames (shared: a sweep loads it once).
     Series(Arc<GridSeries>),
+    /// `puff_plume` (its meander seeded by `sim.seed`).
+    Puff(Arc<PuffPlume>),
 }
 
 impl ScalarField for FieldModel {
@@ -31,6 +34,7 @@ impl ScalarField for FieldModel {
             FieldModel::Analytic(f) => f.value(t_s, p),
             FieldModel::Grid(f) => f.value(t_s, p),
             FieldModel::Series(f) => f.value(t_s, p),
+            FieldModel::Puff(f) => f.value(t_s, p),
         }
     }
 }
@@ -41,6 +45,7 @@ impl FieldDerivatives for FieldModel {
             FieldModel::Analytic(f) => f.gradient(t_s, p),
             FieldModel::Grid(f) => f.gradient(t_s, p),
             FieldModel::Series(f) => f.gradient(t_s, p),
+            FieldModel::Puff(f) => f.gradient(t_s, p),
         }
     }
     fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2> {
@@ -48,6 +53,7 @@ impl FieldDerivatives for FieldModel {
             FieldModel::Analytic(f) => f.hessian(t_s, p),
             FieldModel::Grid(f) => f.hessian(t_s, p),
             FieldModel::Series(f) => f.hessian(t_s, p),
+            FieldModel::Puff(f) => f.hessian(t_s, p),
         }
     }
 }
@@ -69,7 +75,7 @@ pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(),
             g.extent_m(),
             "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
         ),
-        FieldModel::Analytic(_) => match file.field.domain_m {
+        FieldModel::Analytic(_) | FieldModel::Puff(_) => match file.field.domain_m {
             Some(d) => (d, "field.domain_m"),
             None => return Ok(()),
         },
@@ -100,6 +106,9 @@ pub enum IsolineOracle {
     Segments(IsolineSegments),
     /// The isoline of a time series at the query time (see [`MovingIsoline`]).
     Moving(Arc<MovingIsoline>),
+    /// No isoline distance (a puff plume: its instantaneous isolines are filaments; the
+    /// distance to the mean field's isoline is left for later).
+    None,
 }
 
 impl IsolineOracle {
@@ -111,6 +120,7 @@ impl IsolineOracle {
             FieldModel::Series(s) => {
                 IsolineOracle::Moving(Arc::new(MovingIsoline::new(s.clone(), level)))
             }
+            FieldModel::Puff(_) => IsolineOracle::None,
         }
     }
     /// Distance from `p` to the isoline at time `t_s`, m.
@@ -119,6 +129,7 @@ impl IsolineOracle {
             IsolineOracle::Newton(f, level) => newton_distance(f, t_s, p, *level),
             IsolineOracle::Segments(s) => s.distance(p),
             IsolineOracle::Moving(m) => m.distance(t_s, p),
+            IsolineOracle::None => None,
         }
     }
 }
@@ -215,8 +226,9 @@ fn v2(a: [f64; 2]) -> Vec2 {
 }
 
 /// Builds the field of a resolved `[field]` section; grid paths are taken relative to
-/// `base_dir` and recorded back into the section as absolute paths.
-pub fn build_field(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue> {
+/// `base_dir` and recorded back into the section as absolute paths; `seed` (`sim.seed`) seeds
+/// a puff plume's meander.
+pub fn build_field(f: &mut FieldSection, base_dir: &Path, seed: u64) -> Result<FieldModel, Issue> {
     let analytic = |kind| {
         FieldModel::Analytic(AnalyticField {
             kind,
@@ -250,6 +262,20 @@ pub fn build_field(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, 
             gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
         })),
         FieldKind::Grid => build_grid(f, base_dir)?,
+        FieldKind::PuffPlume => FieldModel::Puff(Arc::new(PuffPlume::new(PuffPlumeParams {
+            source_m: v2(f.source_m.unwrap_or_default()),
+            release_rate_hz: f.release_rate_hz.unwrap_or(2.0),
+            puff_mass: f.puff_mass.unwrap_or(10.0),
+            puff_sigma0_m: f.puff_sigma0_m.unwrap_or(0.5),
+            diffusivity_m2ps: f.diffusivity_m2ps.unwrap_or(0.05),
+            wind_mps: v2(f.wind_mps.unwrap_or([0.5, 0.0])),
+            meander_std_mps: f.meander_std_mps.unwrap_or(0.1),
+            meander_correlation_s: f.meander_correlation_s.unwrap_or(20.0),
+            max_age_s: f.max_age_s.unwrap_or(120.0),
+            background: f.background.unwrap_or(0.0),
+            seed,
+            domain_m: f.domain_m,
+        }))),
         FieldKind::Stations => FieldModel::Grid(build_stations(f, base_dir)?),
     })
 }

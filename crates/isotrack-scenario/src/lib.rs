@@ -54,7 +54,8 @@ impl Scenario {
     /// `base_dir`.
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
-        let field = build_field(&mut file.field, base_dir).map_err(|i| vec![i])?;
+        let seed = file.sim.seed.unwrap_or(0);
+        let field = build_field(&mut file.field, base_dir, seed).map_err(|i| vec![i])?;
         field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         Ok(Self {
@@ -88,10 +89,16 @@ impl Scenario {
         let file = apply_assignments(&self.file, assignments)?;
         let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
         let mut file = resolve::resolve(file).map_err(located)?;
-        let field = if file.field == self.file.field {
+        // A puff plume's meander follows sim.seed: a new seed is a new field.
+        let seeded =
+            matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
+        let field = if file.field == self.file.field && !seeded {
             self.field.clone()
         } else {
-            Arc::new(build_field(&mut file.field, Path::new(".")).map_err(|i| located(vec![i]))?)
+            let seed = file.sim.seed.unwrap_or(0);
+            Arc::new(
+                build_field(&mut file.field, Path::new("."), seed).map_err(|i| located(vec![i]))?,
+            )
         };
         field::check_start(&file, &field).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;

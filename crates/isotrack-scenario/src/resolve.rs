@@ -138,7 +138,7 @@ pub fn default_plumes() -> Vec<PlumeSpec> {
 }
 
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 31] {
+fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 40] {
     [
         ("i0", fd.i0.is_some()),
         ("decay_per_m", fd.decay_per_m.is_some()),
@@ -171,10 +171,63 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 31] {
         ("time_origin_s", fd.time_origin_s.is_some()),
         ("time_scale", fd.time_scale.is_some()),
         ("after_last_frame", fd.after_last_frame.is_some()),
+        ("source_m", fd.source_m.is_some()),
+        ("release_rate_hz", fd.release_rate_hz.is_some()),
+        ("puff_mass", fd.puff_mass.is_some()),
+        ("puff_sigma0_m", fd.puff_sigma0_m.is_some()),
+        ("diffusivity_m2ps", fd.diffusivity_m2ps.is_some()),
+        ("wind_mps", fd.wind_mps.is_some()),
+        ("meander_std_mps", fd.meander_std_mps.is_some()),
+        ("meander_correlation_s", fd.meander_correlation_s.is_some()),
+        ("max_age_s", fd.max_age_s.is_some()),
     ]
 }
 
 /// Defaults and checks of a `grid` field (the file itself is read when the scenario is built).
+/// `puff_plume`: defaults and ranges. The puffs alive at once (`release_rate_hz * max_age_s`)
+/// are bounded, so a query stays cheap.
+fn resolve_puff(c: &mut Checker, fd: &mut FieldSection) {
+    for x in *fd.source_m.get_or_insert([0.0, 0.0]) {
+        c.coordinate("field.source_m", x);
+    }
+    let rate = *fd.release_rate_hz.get_or_insert(2.0);
+    c.positive("field.release_rate_hz", rate);
+    let mass = *fd.puff_mass.get_or_insert(10.0);
+    c.positive("field.puff_mass", mass);
+    c.field_value("field.puff_mass", mass);
+    c.within(
+        "field.puff_sigma0_m",
+        *fd.puff_sigma0_m.get_or_insert(0.5),
+        ranges::MIN_LENGTH_M,
+        ranges::MAX_COORDINATE_M,
+        "m",
+    );
+    c.non_negative(
+        "field.diffusivity_m2ps",
+        *fd.diffusivity_m2ps.get_or_insert(0.05),
+    );
+    let w = *fd.wind_mps.get_or_insert([0.5, 0.0]);
+    c.speeds("field.wind_mps", &w);
+    c.speeds(
+        "field.meander_std_mps",
+        &[*fd.meander_std_mps.get_or_insert(0.1)],
+    );
+    c.non_negative("field.meander_std_mps", fd.meander_std_mps.unwrap_or(0.0));
+    c.positive(
+        "field.meander_correlation_s",
+        *fd.meander_correlation_s.get_or_insert(20.0),
+    );
+    let age = *fd.max_age_s.get_or_insert(120.0);
+    c.positive("field.max_age_s", age);
+    c.field_value("field.background", *fd.background.get_or_insert(0.0));
+    if rate.is_finite() && age.is_finite() && rate * age > 100_000.0 {
+        c.fail(
+            "field.max_age_s",
+            format!("release_rate_hz x max_age_s = {} puffs alive at once; at most 100000 (each query visits them all)", Num(rate * age)),
+        );
+    }
+}
+
 /// The time-series keys of a `grid` field.
 fn resolve_frames(c: &mut Checker, fd: &mut FieldSection) {
     if let Some(paths) = &fd.paths {
@@ -729,6 +782,22 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
                 "interpolation",
             ],
         ),
+        FieldKind::PuffPlume => (
+            "puff_plume",
+            &[
+                "source_m",
+                "release_rate_hz",
+                "puff_mass",
+                "puff_sigma0_m",
+                "diffusivity_m2ps",
+                "wind_mps",
+                "meander_std_mps",
+                "meander_correlation_s",
+                "max_age_s",
+                "background",
+                "domain_m",
+            ],
+        ),
         FieldKind::Grid => (
             "grid",
             &[
@@ -803,6 +872,7 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
             }
         }
         FieldKind::Grid => resolve_grid(c, fd),
+        FieldKind::PuffPlume => resolve_puff(c, fd),
         FieldKind::Stations => {
             if fd.path.as_deref().is_none_or(str::is_empty) {
                 c.fail("field.path", "is required for field.kind = \"stations\"");

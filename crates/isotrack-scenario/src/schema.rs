@@ -97,6 +97,9 @@ pub enum FieldKind {
     /// Scattered station values (`path`, a CSV) interpolated onto a grid (IDW or ordinary
     /// kriging), then interpolated like a `grid`.
     Stations,
+    /// Puffs released at a source, carried by a meandering wind, growing by diffusion
+    /// (Farrell et al. 2002, in 2-D).
+    PuffPlume,
 }
 
 /// Station interpolation methods.
@@ -250,6 +253,33 @@ pub struct FieldSection {
     /// `v -> value_scale * [log10](max(v, value_floor)) + value_offset`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub value_offset: Option<f64>,
+    /// `puff_plume`: source position, m (default [0, 0]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source_m: Option<[f64; 2]>,
+    /// `puff_plume`: puffs released per second (default 2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub release_rate_hz: Option<f64>,
+    /// `puff_plume`: mass of a puff, field units x m^2 (default 10).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub puff_mass: Option<f64>,
+    /// `puff_plume`: initial puff width, m (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub puff_sigma0_m: Option<f64>,
+    /// `puff_plume`: diffusivity, m^2/s (default 0.05).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diffusivity_m2ps: Option<f64>,
+    /// `puff_plume`: mean wind `[east, north]`, m/s (default [0.5, 0]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wind_mps: Option<[f64; 2]>,
+    /// `puff_plume`: meander standard deviation per component, m/s (default 0.1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub meander_std_mps: Option<f64>,
+    /// `puff_plume`: meander correlation time, s (default 20).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub meander_correlation_s: Option<f64>,
+    /// `puff_plume`: puffs older than this are dropped, s (default 120).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_age_s: Option<f64>,
     /// `grid`: a time series as a list of 2-D files, one frame each (instead of `path`),
     /// relative to the scenario file; needs `frame_times_s`.
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -152,3 +152,20 @@ fn check_reports_the_isoline_speed() {
     assert_eq!(m.trackable, Some(true));
     assert!(m.samples > 100);
 }
+
+/// The puff plume: the same seed, the same run; another seed (also through `derive`, as a
+/// sweep does) another meander and another run; the bundled edge-tracking scenario holds the
+/// plume's edge most of the time.
+#[test]
+fn puff_plume_runs_are_seeded() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/puff-plume-edge.toml");
+    let s = load_scenario(Some(&p), &["sim.duration_s=120.0".into()]).unwrap();
+    let a = s.run(&mut NoTrace);
+    assert_eq!(a, s.run(&mut NoTrace));
+    let other = s.derive(&["sim.seed=5".into()], "<test>").unwrap();
+    assert_ne!(a, other.run(&mut NoTrace), "the meander follows sim.seed");
+    let again = other.derive(&["sim.seed=0".into()], "<test>").unwrap();
+    assert_eq!(a, again.run(&mut NoTrace));
+    let m = isotrack_scenario::check::check(&s, None).moving;
+    assert!(m.time_varying && m.isoline_speed_max_mps.is_some(), "{m:?}");
+}

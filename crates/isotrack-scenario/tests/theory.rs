@@ -240,7 +240,13 @@ fn bundled_scenarios_complete() {
             "{} is not deterministic",
             p.display()
         );
-        assert!(r.metrics.convergence_time_s.is_some(), "{}", p.display());
+        if s.file().field.kind == Some(isotrack_scenario::schema::FieldKind::PuffPlume) {
+            // A patchy plume never settles for good: it is held most of the time instead.
+            let f = r.metrics.time_in_band_fraction.unwrap();
+            assert!(f > 0.7, "{}: {f}", p.display());
+        } else {
+            assert!(r.metrics.convergence_time_s.is_some(), "{}", p.display());
+        }
         n += 1;
     }
     assert!(n >= 8, "{n} scenarios");

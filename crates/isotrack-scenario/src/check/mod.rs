@@ -227,6 +227,15 @@ fn region(s: &Scenario) -> [f64; 4] {
     match s.field() {
         FieldModel::Grid(g) => g.grid().extent_m(),
         FieldModel::Series(g) => g.extent_m(),
+        FieldModel::Puff(pf) => {
+            if let Some(d) = s.file().field.domain_m {
+                return d;
+            }
+            // The plume's reach over its puffs' lifetime downwind, and the start.
+            let pp = pf.params();
+            let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
+            grow(grow(empty, pp.source_m, reach), start, 10.0)
+        }
         FieldModel::Analytic(a) => {
             if let Some(d) = a.domain_m {
                 return d;
@@ -322,7 +331,7 @@ fn curvature(s: &Scenario) -> f64 {
             }
             _ => 0.0,
         },
-        FieldModel::Grid(_) | FieldModel::Series(_) => 0.0,
+        FieldModel::Grid(_) | FieldModel::Series(_) | FieldModel::Puff(_) => 0.0,
     }
 }
 

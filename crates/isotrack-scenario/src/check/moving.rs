@@ -42,7 +42,7 @@ pub fn moving_report(s: &Scenario, tube: f64, region: [f64; 4]) -> MovingReport 
     let field = s.field();
     let v = speed_mps(s);
     let time_varying = match field {
-        FieldModel::Series(_) => true,
+        FieldModel::Series(_) | FieldModel::Puff(_) => true,
         FieldModel::Analytic(a) => a.drift_mps != Vec2::default(),
         FieldModel::Grid(_) => false,
     };

@@ -1,0 +1,337 @@
+//! A plume of puffs in wind: the filament/puff model of Farrell, Murlis, Long, Li & Carde,
+//! "Filament-based atmospheric dispersion model to achieve short time-scale structure of odor
+//! plumes", Environmental Fluid Mechanics 2 (2002), in 2-D.
+//!
+//! Puffs leave the source at `release_rate_hz`, each a Gaussian of mass `puff_mass` and width
+//! `sigma(a)^2 = sigma0^2 + 2 K a` at age `a` (Fickian growth, diffusivity `K`). All puffs are
+//! carried by the same wind `u(t) = U + u'(t)`: the mean wind `U` plus a meander `u'`, a
+//! stationary Gaussian process with exponential correlation `sigma_u^2 exp(-|tau|/T)` per
+//! component (Ornstein-Uhlenbeck statistics), synthesised as a sum of `J = 64` random cosines
+//! with frequencies drawn from its Cauchy spectrum (random Fourier features) so that its
+//! integral is closed-form: a puff released at `t_i` is at `p_s + W(t) - W(t_i)`,
+//! `W(t) = U t + integral_0^t u'`. The field is then a pure function of `(t, p)`: no state,
+//! deterministic for a seed, any query order, shared by threads.
+//!
+//! `C(t, p) = background + sum_i m / (2 pi sigma_i^2) exp(-|p - p_i|^2 / (2 sigma_i^2))`.
+//! Its long-run mean without meander is the 2-D Gaussian plume of a continuous source
+//! `q = m * release_rate` in a wind `U` along `x`:
+//! `C_mean(x, y) = q / (U sqrt(2 pi) sigma_y(x)) exp(-y^2 / (2 sigma_y(x)^2))`,
+//! `sigma_y^2 = sigma0^2 + 2 K x / U` (tested).
+//!
+//! Cost: every live puff (released within `max_age_s`) is visited per query, those beyond
+//! 6 sigma skipped after one distance test: `O(release_rate * max_age)` per query (300 puffs, a
+//! few microseconds). No spatial index: the puffs move every instant, and an index rebuilt per
+//! query costs more than the distance tests it saves at these counts.
+
+use isotrack_core::math::{Mat2, Vec2};
+use isotrack_core::{FieldDerivatives, ScalarField};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+/// Puff-plume parameters (SI units; concentration in field units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PuffPlumeParams {
+    /// Source position, m.
+    pub source_m: Vec2,
+    /// Puffs released per second.
+    pub release_rate_hz: f64,
+    /// Mass of a puff: its concentration integrates to this over the plane (field units x m^2).
+    pub puff_mass: f64,
+    /// Initial puff width `sigma0`, m.
+    pub puff_sigma0_m: f64,
+    /// Diffusivity `K`, m^2/s.
+    pub diffusivity_m2ps: f64,
+    /// Mean wind `[east, north]`, m/s.
+    pub wind_mps: Vec2,
+    /// Meander standard deviation per component `sigma_u`, m/s.
+    pub meander_std_mps: f64,
+    /// Meander correlation time `T`, s.
+    pub meander_correlation_s: f64,
+    /// A puff older than this is dropped, s.
+    pub max_age_s: f64,
+    /// Background concentration.
+    pub background: f64,
+    /// Seed of the meander.
+    pub seed: u64,
+    /// `[x_min, x_max, y_min, y_max]`, m: outside it the field has no value.
+    pub domain_m: Option<[f64; 4]>,
+}
+
+/// The random Fourier components of one meander component: `(omega, phase)`.
+const COMPONENTS: usize = 64;
+
+/// Release times per cached chunk of `W(t_i)`.
+const CHUNK: usize = 4096;
+/// Chunks cached (4 Mi releases: 24 days at 2 Hz); later releases are computed each time.
+const MAX_CHUNKS: usize = 1024;
+
+/// The puff plume (see the module docs).
+#[derive(Debug)]
+pub struct PuffPlume {
+    p: PuffPlumeParams,
+    /// Per axis: frequencies (rad/s) and phases.
+    modes: [[(f64, f64); COMPONENTS]; 2],
+    amp: f64,
+    /// `W(t_i)` at the release times, computed a chunk at a time on first use (each costs 128
+    /// sines; a query visits hundreds of puffs): a pure cache, the values are those of
+    /// `displacement`.
+    released: Vec<std::sync::OnceLock<Box<[Vec2]>>>,
+}
+
+impl Clone for PuffPlume {
+    fn clone(&self) -> Self {
+        Self::new(self.p)
+    }
+}
+
+impl PartialEq for PuffPlume {
+    fn eq(&self, other: &Self) -> bool {
+        self.p == other.p
+    }
+}
+
+impl PuffPlume {
+    /// The plume for `p`.
+    pub fn new(p: PuffPlumeParams) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(p.seed);
+        rng.set_stream(7);
+        let mut modes = [[(0.0, 0.0); COMPONENTS]; 2];
+        let scale = 1.0 / p.meander_correlation_s.max(1e-9);
+        for axis in modes.iter_mut() {
+            for m in axis.iter_mut() {
+                let u: f64 = rand::RngExt::random(&mut rng);
+                let v: f64 = rand::RngExt::random(&mut rng);
+                // |Cauchy(0, 1/T)| by inversion; kept away from 0 (a mode that never moves).
+                let omega = (scale * (std::f64::consts::PI * (u - 0.5)).tan())
+                    .abs()
+                    .max(1e-9);
+                *m = (omega, 2.0 * std::f64::consts::PI * v);
+            }
+        }
+        Self {
+            amp: p.meander_std_mps * (2.0 / COMPONENTS as f64).sqrt(),
+            p,
+            modes,
+            released: (0..MAX_CHUNKS)
+                .map(|_| std::sync::OnceLock::new())
+                .collect(),
+        }
+    }
+
+    /// `W(t_i)` of release `i` (cached by chunk).
+    fn released_displacement(&self, i: usize) -> Vec2 {
+        let interval = 1.0 / self.p.release_rate_hz;
+        let (c, j) = (i / CHUNK, i % CHUNK);
+        match self.released.get(c) {
+            Some(cell) => cell.get_or_init(|| {
+                (0..CHUNK)
+                    .map(|k| self.displacement(((c * CHUNK + k) as f64) * interval))
+                    .collect()
+            })[j],
+            None => self.displacement(i as f64 * interval),
+        }
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &PuffPlumeParams {
+        &self.p
+    }
+
+    /// The meander velocity `u'(t)`, m/s.
+    pub fn meander_mps(&self, t_s: f64) -> Vec2 {
+        let c = |axis: &[(f64, f64); COMPONENTS]| {
+            axis.iter().map(|(w, ph)| (w * t_s + ph).cos()).sum::<f64>()
+        };
+        Vec2::new(self.amp * c(&self.modes[0]), self.amp * c(&self.modes[1]))
+    }
+
+    /// `W(t) = U t + integral_0^t u'`, m.
+    fn displacement(&self, t_s: f64) -> Vec2 {
+        let c = |axis: &[(f64, f64); COMPONENTS]| {
+            axis.iter()
+                .map(|(w, ph)| ((w * t_s + ph).sin() - ph.sin()) / w)
+                .sum::<f64>()
+        };
+        self.p.wind_mps * t_s
+            + Vec2::new(self.amp * c(&self.modes[0]), self.amp * c(&self.modes[1]))
+    }
+
+    /// Runs `f(mass/(2 pi s^2) exp(..), offset d = p - p_i, s^2)` over the live puffs at `t`.
+    fn each_puff(&self, t_s: f64, p: Vec2, mut f: impl FnMut(f64, Vec2, f64)) {
+        if t_s < 0.0 || t_s.is_nan() || self.p.release_rate_hz <= 0.0 {
+            return;
+        }
+        let interval = 1.0 / self.p.release_rate_hz;
+        let w_now = self.displacement(t_s);
+        // Puffs released at t_i = i * interval, 0 <= t_i <= t, age <= max_age.
+        let last = (t_s / interval).floor() as i64;
+        let first = ((t_s - self.p.max_age_s) / interval).ceil().max(0.0) as i64;
+        for i in first..=last {
+            let ti = i as f64 * interval;
+            let age = t_s - ti;
+            let s2 = self.p.puff_sigma0_m.powi(2) + 2.0 * self.p.diffusivity_m2ps * age;
+            let centre = self.p.source_m + (w_now - self.released_displacement(i as usize));
+            let d = p - centre;
+            let r2 = d.dot(d);
+            if r2 > 36.0 * s2 {
+                continue;
+            }
+            let g = self.p.puff_mass / (2.0 * std::f64::consts::PI * s2) * (-0.5 * r2 / s2).exp();
+            f(g, d, s2);
+        }
+    }
+
+    /// The long-run mean without meander, the 2-D Gaussian plume (module docs), for a wind along
+    /// `+x` from the source; `None` upwind of it.
+    pub fn gaussian_plume_mean(&self, p: Vec2) -> Option<f64> {
+        let u = self.p.wind_mps.norm();
+        let e = self.p.wind_mps * (1.0 / u);
+        let d = p - self.p.source_m;
+        let (x, y) = (d.dot(e), e.x * d.y - e.y * d.x);
+        if x <= 0.0 || u <= 0.0 {
+            return None;
+        }
+        let q = self.p.puff_mass * self.p.release_rate_hz;
+        let s2 = self.p.puff_sigma0_m.powi(2) + 2.0 * self.p.diffusivity_m2ps * x / u;
+        Some(
+            self.p.background
+                + q / (u * (2.0 * std::f64::consts::PI * s2).sqrt()) * (-0.5 * y * y / s2).exp(),
+        )
+    }
+}
+
+impl PuffPlume {
+    fn inside(&self, p: Vec2) -> bool {
+        self.p
+            .domain_m
+            .is_none_or(|d| (d[0]..=d[1]).contains(&p.x) && (d[2]..=d[3]).contains(&p.y))
+    }
+}
+
+impl ScalarField for PuffPlume {
+    fn value(&self, t_s: f64, p: Vec2) -> Option<f64> {
+        if !self.inside(p) {
+            return None;
+        }
+        let mut c = self.p.background;
+        self.each_puff(t_s, p, |g, _, _| c += g);
+        Some(c)
+    }
+}
+
+impl FieldDerivatives for PuffPlume {
+    fn gradient(&self, t_s: f64, p: Vec2) -> Option<Vec2> {
+        if !self.inside(p) {
+            return None;
+        }
+        let mut gr = Vec2::new(0.0, 0.0);
+        self.each_puff(t_s, p, |g, d, s2| gr = gr - d * (g / s2));
+        Some(gr)
+    }
+    fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2> {
+        if !self.inside(p) {
+            return None;
+        }
+        let mut h = [[0.0; 2]; 2];
+        self.each_puff(t_s, p, |g, d, s2| {
+            // d2/dx_i dx_j of g = g (d_i d_j / s2^2 - delta_ij / s2).
+            let dd = [d.x, d.y];
+            for (i, row) in h.iter_mut().enumerate() {
+                for (j, hij) in row.iter_mut().enumerate() {
+                    let delta = if i == j { 1.0 } else { 0.0 };
+                    *hij += g * (dd[i] * dd[j] / (s2 * s2) - delta / s2);
+                }
+            }
+        });
+        Some(h)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> PuffPlumeParams {
+        PuffPlumeParams {
+            source_m: Vec2::new(0.0, 0.0),
+            release_rate_hz: 2.0,
+            puff_mass: 10.0,
+            puff_sigma0_m: 0.5,
+            diffusivity_m2ps: 0.05,
+            wind_mps: Vec2::new(1.0, 0.0),
+            meander_std_mps: 0.0,
+            meander_correlation_s: 10.0,
+            max_age_s: 200.0,
+            background: 0.0,
+            seed: 3,
+            domain_m: None,
+        }
+    }
+
+    /// Without meander, the time average over 200 s at points 10-40 m downwind equals the
+    /// Gaussian-plume formula within 2 % (on the axis and one plume width off it).
+    #[test]
+    fn long_run_mean_is_the_gaussian_plume() {
+        let f = PuffPlume::new(params());
+        for (x, k) in [(10.0f64, 0.0f64), (20.0, 0.0), (40.0, 0.0), (20.0, 1.0)] {
+            let sy = (0.25 + 2.0 * 0.05 * x).sqrt();
+            let p = Vec2::new(x, k * sy);
+            let n = 20_000;
+            let mean = (0..n)
+                .map(|j| f.value(200.0 + 200.0 * j as f64 / n as f64, p).unwrap())
+                .sum::<f64>()
+                / n as f64;
+            let want = f.gaussian_plume_mean(p).unwrap();
+            assert!(
+                (mean - want).abs() < 0.02 * want,
+                "({x}, {k} sy): {mean} vs {want}"
+            );
+        }
+    }
+
+    /// The meander has the stated spread, and the field is a pure function of (t, p): the same
+    /// seed gives the same values in any query order, another seed others.
+    #[test]
+    fn meander_statistics_and_determinism() {
+        let mut p = params();
+        p.meander_std_mps = 0.4;
+        let f = PuffPlume::new(p);
+        let n = 20_000;
+        let xs: Vec<f64> = (0..n).map(|k| f.meander_mps(k as f64 * 5.0).x).collect();
+        let var = xs.iter().map(|v| v * v).sum::<f64>() / n as f64;
+        assert!((var.sqrt() - 0.4).abs() < 0.06, "std {}", var.sqrt());
+        let q = Vec2::new(15.0, 1.0);
+        let a: Vec<f64> = (0..50).map(|k| f.value(k as f64, q).unwrap()).collect();
+        let b: Vec<f64> = (0..50)
+            .rev()
+            .map(|k| f.value(k as f64, q).unwrap())
+            .collect();
+        assert_eq!(a, b.into_iter().rev().collect::<Vec<_>>());
+        let g = PuffPlume::new(PuffPlumeParams { seed: 4, ..p });
+        assert_ne!(a[40], g.value(40.0, q).unwrap());
+    }
+
+    /// Gradient and Hessian against central differences.
+    #[test]
+    fn derivatives_match_differences() {
+        let mut p = params();
+        p.meander_std_mps = 0.3;
+        let f = PuffPlume::new(p);
+        let (t, x) = (30.0, Vec2::new(12.0, 0.7));
+        let h = 1e-4;
+        let v = |q: Vec2| f.value(t, q).unwrap();
+        let g = f.gradient(t, x).unwrap();
+        let gx = (v(x + Vec2::new(h, 0.0)) - v(x - Vec2::new(h, 0.0))) / (2.0 * h);
+        let gy = (v(x + Vec2::new(0.0, h)) - v(x - Vec2::new(0.0, h))) / (2.0 * h);
+        assert!((g.x - gx).abs() < 1e-6 * gx.abs().max(1.0), "{} {gx}", g.x);
+        assert!((g.y - gy).abs() < 1e-6 * gy.abs().max(1.0), "{} {gy}", g.y);
+        let hm = f.hessian(t, x).unwrap();
+        let gr = |q: Vec2| f.gradient(t, q).unwrap();
+        let hxy = (gr(x + Vec2::new(0.0, h)).x - gr(x - Vec2::new(0.0, h)).x) / (2.0 * h);
+        assert!(
+            (hm[0][1] - hxy).abs() < 1e-5 * hxy.abs().max(1.0),
+            "{} {hxy}",
+            hm[0][1]
+        );
+    }
+}
