@@ -108,6 +108,10 @@ pub struct PlotArgs {
     /// component by `vehicle.wind_mps[0]`.
     #[arg(long, value_name = "KEY")]
     pub x: Option<String>,
+    /// Also write `animation.gif` of the (first) run: the field, its isoline and the vehicle
+    /// over time (48 frames).
+    #[arg(long)]
+    pub animate: bool,
     /// For a sweep directory: one line per value of this column (e.g. `controller.kind`).
     #[arg(long, value_name = "KEY")]
     pub group: Option<String>,

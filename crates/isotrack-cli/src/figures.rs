@@ -154,7 +154,19 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         println!("wrote {}", file.display());
         return Ok(());
     }
-    let written = plot_dirs(&a.runs, &st, &out)?;
+    let mut written = plot_dirs(&a.runs, &st, &out)?;
+    if a.animate {
+        let run = RunData::load(&a.runs[0]).map_err(failure)?;
+        let gif = out.join("animation.gif");
+        let title = run
+            .scenario
+            .file()
+            .name
+            .clone()
+            .unwrap_or_else(|| run.name.clone());
+        isotrack_plot::animation_gif(&run, &gif, &st, &title, 48, 120).map_err(failure)?;
+        written.push(gif.display().to_string());
+    }
     println!("wrote {}", written.join(", "));
     Ok(())
 }

@@ -406,3 +406,42 @@ fn figure_options_on_the_command_line() {
         assert_eq!(o.status.code(), Some(64), "{bad:?}: {}", stderr(&o));
     }
 }
+
+/// Issue 11 item 7: a run on a field that moves is plotted with its isoline at several times,
+/// and `--animate` writes a GIF of the field, isoline and vehicle over time.
+#[test]
+fn a_moving_field_is_plotted_over_time() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("r");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "field.drift_mps=[0.05, 0.0]",
+        "--set",
+        "sim.duration_s=60",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.path().join("p");
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--animate",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(out.join("trajectory.svg")).unwrap();
+    for t in ["isoline at t = 0 s", "isoline at t = 48 s", "at t = 60 s"] {
+        assert!(svg.contains(t), "no `{t}`");
+    }
+    let gif = std::fs::read(out.join("animation.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    // One graphic-control extension (21 F9) per frame.
+    let frames = gif.windows(2).filter(|w| w == &[0x21, 0xF9]).count();
+    assert!(frames >= 48, "{frames} frames");
+}

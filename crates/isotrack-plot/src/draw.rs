@@ -110,7 +110,7 @@ struct Raster {
 }
 
 impl Raster {
-    fn sample(sc: &Scenario, range: [f64; 4], nx: usize, ny: usize) -> Self {
+    fn sample(sc: &Scenario, range: [f64; 4], nx: usize, ny: usize, t_s: f64) -> Self {
         let dx = (range[1] - range[0]) / nx as f64;
         let dy = (range[3] - range[2]) / ny as f64;
         let mut values = Vec::with_capacity(nx * ny);
@@ -120,7 +120,7 @@ impl Raster {
                     range[0] + (i as f64 + 0.5) * dx,
                     range[2] + (j as f64 + 0.5) * dy,
                 );
-                values.push(sc.field().value(0.0, p));
+                values.push(sc.field().value(t_s, p));
             }
         }
         Self {
@@ -132,6 +132,15 @@ impl Raster {
             ny,
             values,
         }
+    }
+    /// The sample whose cell centre is nearest `p`.
+    fn at(&self, p: Vec2) -> Option<f64> {
+        let i = ((p.x - self.x0) / self.dx - 0.5).round();
+        let j = ((p.y - self.y0) / self.dy - 0.5).round();
+        if i < 0.0 || j < 0.0 || i >= self.nx as f64 || j >= self.ny as f64 {
+            return None;
+        }
+        self.values[j as usize * self.nx + i as usize]
     }
     fn range(&self) -> Option<(f64, f64)> {
         let (lo, hi) = self
@@ -277,6 +286,30 @@ type MapChart<'a, DB> = ChartContext<
     Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
 >;
 
+/// When a map is drawn: the time of its heat map and bold target isoline, and earlier times
+/// whose target isolines are drawn too (a field that moves: coloured from light, earliest, to
+/// dark).
+#[derive(Clone, Debug, Default)]
+struct MapTimes {
+    at_s: f64,
+    earlier_s: Vec<f64>,
+}
+
+impl MapTimes {
+    /// For a scenario and the end of its run: the field at the end, and for a field that moves
+    /// its isolines at 0, 1/5, ..., 4/5 of the run.
+    fn for_run(sc: &Scenario, t_end_s: f64) -> Self {
+        if sc.is_time_varying() && t_end_s > 0.0 {
+            Self {
+                at_s: t_end_s,
+                earlier_s: (0..5).map(|k| t_end_s * k as f64 / 5.0).collect(),
+            }
+        } else {
+            Self::default()
+        }
+    }
+}
+
 /// Draws the heat map (one raster image, in SVG too), the isolines and the colour bar; returns
 /// the chart for overlays.
 fn draw_map<'a, DB: DrawingBackend + 'a>(
@@ -285,6 +318,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     range: [f64; 4],
     title: &str,
     st: &Style,
+    times: &MapTimes,
 ) -> Result<MapChart<'a, DB>, String> {
     let lay = MapLayout::new(st, title);
     root.fill(&WHITE).map_err(s)?;
@@ -320,7 +354,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         Format::Svg => 3,
     };
     let (nx, ny) = ((pw / cell).max(2) as usize, (ph / cell).max(2) as usize);
-    let raster = Raster::sample(sc, range, nx, ny);
+    let raster = Raster::sample(sc, range, nx, ny, times.at_s);
     let (vmin, vmax) = raster.range().unwrap_or((0.0, 1.0));
     let mut buf = vec![255u8; (pw * ph * 3) as usize];
     for py in 0..ph {
@@ -340,6 +374,17 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     }
     // Isolines: a few thin ones, the target bold.
     let level = sc.level();
+    let iso_at = |lv: f64, t: f64| {
+        IsolineSegments::from_samples(
+            Vec2::new(raster.x0 + 0.5 * raster.dx, raster.y0 + 0.5 * raster.dy),
+            raster.dx.min(raster.dy),
+            raster.nx,
+            raster.ny,
+            lv,
+            |p| sc.field().value(t, p),
+        )
+    };
+    // At the map's own time the raster's values are the samples (no second evaluation).
     let iso = |lv: f64| {
         IsolineSegments::from_samples(
             Vec2::new(raster.x0 + 0.5 * raster.dx, raster.y0 + 0.5 * raster.dy),
@@ -347,9 +392,23 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
             raster.nx,
             raster.ny,
             lv,
-            |p| sc.field().value(0.0, p),
+            |p| raster.at(p),
         )
     };
+    // A field that moves: the target isoline at earlier times, light (early) to dark.
+    let n_earlier = times.earlier_s.len();
+    for (k, &t) in times.earlier_s.iter().enumerate() {
+        let shade = (200.0 - 150.0 * k as f64 / n_earlier.max(1) as f64) as u8;
+        let c = RGBColor(shade, shade, 255);
+        let w = st.px(2.0);
+        chart
+            .draw_series(iso_at(level, t).segments().iter().map(move |(a, b)| {
+                PathElement::new(vec![(a.x, a.y), (b.x, b.y)], c.stroke_width(w))
+            }))
+            .map_err(s)?
+            .label(format!("isoline at t = {} s", tick_label(t, 1.0)))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w)));
+    }
     for k in 1..=5 {
         let lv = vmin + (vmax - vmin) * k as f64 / 6.0;
         if ((lv - level) / (vmax - vmin)).abs() < 0.05 {
@@ -374,7 +433,15 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
             }),
         )
         .map_err(s)?
-        .label(format!("isoline s_d = {}", tick_label(level, 0.0)))
+        .label(if n_earlier > 0 {
+            format!(
+                "isoline s_d = {} at t = {} s",
+                tick_label(level, 0.0),
+                tick_label(times.at_s, 1.0)
+            )
+        } else {
+            format!("isoline s_d = {}", tick_label(level, 0.0))
+        })
         .legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(bold))
         });
@@ -457,7 +524,9 @@ pub fn trajectory_figure(
     let legend_at = emptiest_corner(points().map(|t| (t.x_m, t.y_m)), range);
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let mut chart = draw_map(&root, &first.scenario, range, title, st)?;
+            let t_end = first.trace.last().map_or(0.0, |t| t.t_s);
+            let times = MapTimes::for_run(&first.scenario, t_end);
+            let mut chart = draw_map(&root, &first.scenario, range, title, st, &times)?;
             let (w2, w3) = (st.px(2.0), st.px(3.0));
             for (i, run) in runs.iter().enumerate() {
                 let c = colour(i);
@@ -511,6 +580,82 @@ pub fn trajectory_figure(
     })
 }
 
+/// An animated GIF of one run over time: at each of `frames` times through the run, the field
+/// (heat map and target isoline at that time: a field that moves is seen moving), the path so
+/// far and the vehicle. `delay_ms` between frames.
+pub fn animation_gif(
+    run: &RunData,
+    path: &Path,
+    st: &Style,
+    title: &str,
+    frames: usize,
+    delay_ms: u32,
+) -> Result<(), PlotError> {
+    let title = st.title(title);
+    let tr = &run.trace;
+    let (x0, x1) = finite_bounds(tr.iter().map(|t| t.x_m));
+    let (y0, y1) = finite_bounds(tr.iter().map(|t| t.y_m));
+    let side = (x1 - x0).max(y1 - y0).max(1.0);
+    let no_positions = || PlotError::Data("no trace row has a finite position".into());
+    let (xa, xb) = padded_axis("x_m", x0, x1, 0.0, 0.0)?.ok_or_else(no_positions)?;
+    let (ya, yb) = padded_axis("y_m", y0, y1, 0.0, 0.0)?.ok_or_else(no_positions)?;
+    let pad = 0.12 * side;
+    // GIF frames are small: a third of the map's default pixels unless --size says otherwise.
+    let mut small = st.clone();
+    if small.size_px.is_none() {
+        small.size_px = Some((660, 540));
+        small.font_px = Some(small.font_px.unwrap_or(11.0));
+    }
+    let lay = MapLayout::new(&small, title);
+    let (pw, ph) = lay.plot_area();
+    let range = equal_scale([xa - pad, xb + pad, ya - pad, yb + pad], pw, ph);
+    let t_end = tr.last().map_or(0.0, |t| t.t_s);
+    let frames = frames.clamp(1, 1000);
+    let res: DrawResult = (|| {
+        fonts();
+        let root = BitMapBackend::gif(path, (lay.w, lay.h), delay_ms)
+            .map_err(s)?
+            .into_drawing_area();
+        for k in 0..frames {
+            let t = if frames == 1 {
+                t_end
+            } else {
+                t_end * k as f64 / (frames - 1) as f64
+            };
+            let times = MapTimes {
+                at_s: t,
+                earlier_s: vec![],
+            };
+            let frame_title = format!("{title}  t = {} s", tick_label(t, 1.0));
+            let mut chart = draw_map(&root, &run.scenario, range, &frame_title, &small, &times)?;
+            let upto: Vec<(f64, f64)> = tr
+                .iter()
+                .take_while(|r| r.t_s <= t)
+                .filter(|r| r.x_m.is_finite() && r.y_m.is_finite())
+                .map(|r| (r.x_m, r.y_m))
+                .collect();
+            let c = colour(0);
+            chart
+                .draw_series(LineSeries::new(
+                    upto.iter().copied(),
+                    c.stroke_width(small.px(2.0)),
+                ))
+                .map_err(s)?;
+            if let Some(&last) = upto.last() {
+                chart
+                    .draw_series([Circle::new(last, small.px(5.0), c.filled())])
+                    .map_err(s)?;
+            }
+            root.present().map_err(s)?;
+        }
+        Ok(())
+    })();
+    res.map_err(|message| PlotError::Draw {
+        path: path.display().to_string(),
+        message,
+    })
+}
+
 /// A field alone over `range` (`[x0, x1, y0, y1]`, m), with its isolines.
 pub fn field_map(
     sc: &Scenario,
@@ -525,7 +670,7 @@ pub fn field_map(
     let range = equal_scale(range, pw, ph);
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let mut chart = draw_map(&root, sc, range, title, st)?;
+            let mut chart = draw_map(&root, sc, range, title, st, &MapTimes::default())?;
             chart
                 .configure_series_labels()
                 .label_font(st.font(1.0))

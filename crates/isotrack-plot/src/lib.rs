@@ -19,8 +19,8 @@ mod run_data;
 mod style;
 
 pub use draw::{
-    field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure, Format, Panels,
-    SummaryLine,
+    animation_gif, field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure,
+    Format, Panels, SummaryLine,
 };
 pub use run_data::RunData;
 pub use style::{tick_label, tick_step, Colormap, Style, DEFAULT_FONT_FAMILY};

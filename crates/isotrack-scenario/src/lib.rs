@@ -122,6 +122,16 @@ impl Scenario {
         })
     }
 
+    /// Whether the field changes with time: a grid time series, a puff plume, or an analytic
+    /// field with a drift.
+    pub fn is_time_varying(&self) -> bool {
+        match &*self.field {
+            FieldModel::Series(_) | FieldModel::Puff(_) => true,
+            FieldModel::Analytic(a) => a.drift_mps != isotrack_core::Vec2::default(),
+            FieldModel::Grid(_) => false,
+        }
+    }
+
     /// Whether the vehicle flies (its trace has altitude, airspeed and roll).
     pub fn is_flying(&self) -> bool {
         matches!(*self.vehicle, build::VehicleModel::FixedWing(_))

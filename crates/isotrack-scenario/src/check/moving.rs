@@ -8,7 +8,6 @@
 //! The vehicle can keep up when the isoline is slower than it everywhere sampled (`trackable`).
 
 use super::speed_mps;
-use crate::field::FieldModel;
 use crate::Scenario;
 use isotrack_core::{FieldDerivatives, ScalarField, Vec2};
 use serde::Serialize;
@@ -41,11 +40,7 @@ const TIMES: usize = 48;
 pub fn moving_report(s: &Scenario, tube: f64, region: [f64; 4]) -> MovingReport {
     let field = s.field();
     let v = speed_mps(s);
-    let time_varying = match field {
-        FieldModel::Series(_) | FieldModel::Puff(_) => true,
-        FieldModel::Analytic(a) => a.drift_mps != Vec2::default(),
-        FieldModel::Grid(_) => false,
-    };
+    let time_varying = s.is_time_varying();
     if !time_varying {
         return MovingReport {
             time_varying,
