@@ -14,8 +14,9 @@ fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
 secs="${SECONDS_PER_TARGET:-60}"
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scenario sweep grid stations)
+[ ${#targets[@]} -eq 0 ] && targets=(scenario sweep grid stations series)
 for t in "${targets[@]}"; do
   echo "== fuzzing $t for ${secs}s"
-  (cd fuzz && cargo +nightly fuzz run "$t" -- -max_total_time="$secs" -rss_limit_mb=4096)
+  mkdir -p "fuzz/corpus/$t"
+  (cd fuzz && cargo +nightly fuzz run "$t" "corpus/$t" "seeds/$t" -- -max_total_time="$secs" -rss_limit_mb=4096)
 done

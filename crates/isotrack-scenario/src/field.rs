@@ -106,8 +106,7 @@ pub enum IsolineOracle {
     Segments(IsolineSegments),
     /// The isoline of a time series at the query time (see [`MovingIsoline`]).
     Moving(Arc<MovingIsoline>),
-    /// No isoline distance (a puff plume: its instantaneous isolines are filaments; the
-    /// distance to the mean field's isoline is left for later).
+    /// No isoline distance (a field without one: a puff plume in still air).
     None,
 }
 
@@ -120,7 +119,7 @@ impl IsolineOracle {
             FieldModel::Series(s) => {
                 IsolineOracle::Moving(Arc::new(MovingIsoline::new(s.clone(), level)))
             }
-            FieldModel::Puff(_) => IsolineOracle::None,
+            FieldModel::Puff(pf) => mean_plume_isoline(pf, level),
         }
     }
     /// Distance from `p` to the isoline at time `t_s`, m.
@@ -132,6 +131,28 @@ impl IsolineOracle {
             IsolineOracle::None => None,
         }
     }
+}
+
+/// The isoline metric of a puff plume: the distance to the isoline of its long-run mean field
+/// without meander (the Gaussian-plume formula; a plume's instantaneous isolines are filaments
+/// and puffs), by marching squares over the plume's reach (400 cells along the wind).
+fn mean_plume_isoline(pf: &PuffPlume, level: f64) -> IsolineOracle {
+    let pp = pf.params();
+    let u = pp.wind_mps.norm();
+    if u <= 0.0 {
+        return IsolineOracle::None;
+    }
+    let reach = u * pp.max_age_s;
+    let width = 4.0 * (pp.puff_sigma0_m.powi(2) + 2.0 * pp.diffusivity_m2ps * pp.max_age_s).sqrt();
+    let h = (reach / 400.0).max(1e-3);
+    let n = ((2.0 * (reach + width)) / h).ceil() as usize + 1;
+    let origin = pp.source_m - Vec2::new(reach + width, reach + width);
+    if n > 4000 {
+        return IsolineOracle::None;
+    }
+    IsolineOracle::Segments(IsolineSegments::from_samples(origin, h, n, n, level, |p| {
+        pf.gaussian_plume_mean(p)
+    }))
 }
 
 /// The isoline of a grid time series as it moves: the marching-squares isoline of the

@@ -169,3 +169,24 @@ fn puff_plume_runs_are_seeded() {
     let m = isotrack_scenario::check::check(&s, None).moving;
     assert!(m.time_varying && m.isoline_speed_max_mps.is_some(), "{m:?}");
 }
+
+/// The puff plume's isoline metric is the distance to the isoline of its long-run mean (the
+/// Gaussian plume): at x = 20 m downwind the level-3 isoline is at
+/// `y = sy sqrt(2 ln(C0/3))`, `sy^2 = 0.25 + 2*0.05*20/0.5`, `C0 = 20/(0.5 sqrt(2 pi) sy)`.
+#[test]
+fn puff_isoline_metric_is_the_mean_plume() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/puff-plume-edge.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let sy = (0.25f64 + 2.0 * 0.05 * 20.0 / 0.5).sqrt();
+    let c0 = 20.0 / (0.5 * (2.0 * std::f64::consts::PI).sqrt() * sy);
+    let y = sy * (2.0 * (c0 / 3.0).ln()).sqrt();
+    let iso = s.isoline();
+    let on = iso
+        .distance(0.0, isotrack_core::Vec2::new(20.0, y))
+        .unwrap();
+    assert!(on < 0.05, "{on}");
+    let off = iso
+        .distance(0.0, isotrack_core::Vec2::new(20.0, y + 1.0))
+        .unwrap();
+    assert!((off - 1.0).abs() < 0.1, "{off}");
+}

@@ -181,6 +181,28 @@ pub(crate) fn single_frame(path: &Path, s: LoadedSeries) -> Result<LoadedGrid, L
     })
 }
 
+/// Parses the bytes of a file that may hold a time series (a 3-D `.npy`, a NetCDF with a time
+/// axis; other formats give one frame). The fuzz targets' entry point.
+pub fn parse_series_bytes(
+    name: &Path,
+    bytes: &[u8],
+    format: GridFormat,
+    variable: Option<&str>,
+) -> Result<LoadedSeries, LoadError> {
+    match format {
+        GridFormat::NetCdf => netcdf::parse_bytes(name, bytes, variable),
+        GridFormat::Npy => npy::parse_series(name, bytes),
+        other => {
+            let g = parse_grid(name, bytes, other)?;
+            Ok(LoadedSeries {
+                frames: vec![g.grid],
+                frame_times_s: None,
+                georeference: g.georeference,
+            })
+        }
+    }
+}
+
 /// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
 /// (`[time, rows, cols]`) and a NetCDF variable with a time dimension, which give one per time.
 pub fn load_series(

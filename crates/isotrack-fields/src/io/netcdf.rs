@@ -91,9 +91,29 @@ pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
 }
 
 pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries, LoadError> {
+    let file = NcFile::open(path)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read as NetCDF: {e}")))?;
+    parse_file(path, &file, variable)
+}
+
+/// As [`parse`], from the file's bytes (`name` names it in errors; the fuzz targets' entry).
+pub(super) fn parse_bytes(
+    name: &Path,
+    bytes: &[u8],
+    variable: Option<&str>,
+) -> Result<LoadedSeries, LoadError> {
+    let file = NcFile::from_bytes(bytes)
+        .map_err(|e| LoadError::new(name, None, format!("cannot read as NetCDF: {e}")))?;
+    parse_file(name, &file, variable)
+}
+
+fn parse_file(
+    path: &Path,
+    file: &NcFile,
+    variable: Option<&str>,
+) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
     let nc = |e: netcdf_reader::Error| err(format!("cannot read as NetCDF: {e}"));
-    let file = NcFile::open(path).map_err(nc)?;
     let vars = file.variables().map_err(nc)?;
     let dim_names: Vec<&str> = file
         .dimensions()
