@@ -178,19 +178,20 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
         }
         values = c;
     }
-    let frames = values
-        .chunks_exact(n)
-        .enumerate()
-        .map(|(k, v)| {
-            Grid2::new(nx, ny, Vec2::default(), [1.0, 1.0], v.to_vec()).map_err(|e| {
-                if nt > 1 {
-                    LoadError::new(path, None, format!("frame {k}: {e}"))
-                } else {
-                    LoadError::grid(path, e)
-                }
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    // Frames split off the end one at a time: the values are never held twice over.
+    let mut frames = Vec::with_capacity(nt);
+    for k in (0..nt).rev() {
+        let v = values.split_off(k * n);
+        let g = Grid2::new(nx, ny, Vec2::default(), [1.0, 1.0], v).map_err(|e| {
+            if nt > 1 {
+                LoadError::new(path, None, format!("frame {k}: {e}"))
+            } else {
+                LoadError::grid(path, e)
+            }
+        })?;
+        frames.push(g);
+    }
+    frames.reverse();
     Ok(LoadedSeries {
         frames,
         frame_times_s: None,
