@@ -66,11 +66,17 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
         f.metrics.convergence_tolerance.unwrap_or_default()
     );
     // Non-finite values print as in summary.json (null there, n/a here), never as `inf`.
-    let finite = |x: f64| Some(x).filter(|v| v.is_finite());
+    let fixed = |x: f64, digits: usize| {
+        if x.is_finite() {
+            format!("{x:.digits$}")
+        } else {
+            "n/a".to_string()
+        }
+    };
     out += &format!(
         "path {} m   control effort {} rad^2/s   chattering {} rad/s^2\n",
-        fmt_opt(finite(m.path_length_m)),
-        fmt_opt(finite(m.control_effort)),
+        fixed(m.path_length_m, 1),
+        fixed(m.control_effort, 4),
         fmt_opt(m.chattering_radps2)
     );
     out
