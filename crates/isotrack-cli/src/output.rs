@@ -134,8 +134,14 @@ pub fn write_summary(
         warnings,
         scenario: scenario.file(),
     };
-    let text = serde_json::to_string_pretty(&s).map_err(std::io::Error::other)?;
+    let text = summary_to_json(&s).map_err(std::io::Error::other)?;
     std::fs::write(path, text + "\n")
+}
+
+/// `summary.json`'s text (pretty-printed; non-finite metrics are `null`): one rendering for the
+/// file and for the Python package.
+pub fn summary_to_json(s: &Summary<'_>) -> serde_json::Result<String> {
+    serde_json::to_string_pretty(s)
 }
 
 /// The resolved scenario as TOML (reads back as the same scenario).

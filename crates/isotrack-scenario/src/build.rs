@@ -374,12 +374,27 @@ impl Scenario {
 
     /// Runs the scenario, recording the trace into `sink`.
     pub fn run<S: TraceSink + ?Sized>(&self, sink: &mut S) -> RunResult {
+        let mut controller = match self.search() {
+            Some(params) => Tracker::Searching(Search::new(self.controller(), params)),
+            None => Tracker::Tracking(self.controller()),
+        };
+        self.run_with(&mut controller, sink)
+    }
+
+    /// Runs the scenario with another controller in the loop (a user's own law, from Python
+    /// say): the same field, vehicle, sensor, plan and metrics; the controller sees only the
+    /// measurements.
+    pub fn run_with<C: IsolineController + ?Sized, S: TraceSink + ?Sized>(
+        &self,
+        controller: &mut C,
+        sink: &mut S,
+    ) -> RunResult {
         match self.field() {
-            FieldModel::Analytic(f) => self.run_on(f, sink),
-            FieldModel::Grid(f) => self.run_on(f, sink),
-            FieldModel::Puff(f) => self.run_on(&**f, sink),
+            FieldModel::Analytic(f) => self.run_on(f, controller, sink),
+            FieldModel::Grid(f) => self.run_on(f, controller, sink),
+            FieldModel::Puff(f) => self.run_on(&**f, controller, sink),
             FieldModel::Series(f) => {
-                let mut r = self.run_on(&**f, sink);
+                let mut r = self.run_on(&**f, controller, sink);
                 // Past the last frame with `after_last_frame = "end"`: say the data ended.
                 let end = f.last_frame_run_time_s();
                 if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
@@ -394,9 +409,14 @@ impl Scenario {
 
     /// Runs the scenario on a given field (dispatched once, so the loop is monomorphised per
     /// field type).
-    fn run_on<F: ScalarField + FieldDerivatives + Sync, S: TraceSink + ?Sized>(
+    fn run_on<
+        F: ScalarField + FieldDerivatives + Sync,
+        C: IsolineController + ?Sized,
+        S: TraceSink + ?Sized,
+    >(
         &self,
         field: &F,
+        controller: &mut C,
         sink: &mut S,
     ) -> RunResult {
         let iso = self.isoline();
@@ -405,10 +425,6 @@ impl Scenario {
         let oracles = Oracles {
             isoline_distance: Some(&dist),
             gradient: Some(&grad),
-        };
-        let mut controller = match self.search() {
-            Some(params) => Tracker::Searching(Search::new(self.controller(), params)),
-            None => Tracker::Tracking(self.controller()),
         };
         let mut sensor = self.sensor();
         let plan = self.plan();
@@ -428,7 +444,7 @@ impl Scenario {
                     field,
                     vehicle,
                     x0,
-                    &mut controller,
+                    controller,
                     &mut sensor,
                     &plan,
                     &oracles,
@@ -441,7 +457,7 @@ impl Scenario {
                     field,
                     &**vehicle,
                     x0,
-                    &mut controller,
+                    controller,
                     &mut sensor,
                     &plan,
                     &oracles,

@@ -1,0 +1,108 @@
+"""isotrack from Python: the same engine, scenarios and outputs as the ``isotrack`` command.
+
+>>> import isotrack
+>>> run = isotrack.Scenario.default().run()
+>>> run.summary["outcome"]
+'completed'
+>>> run.trace["error"][-1]          # numpy arrays named as trace.csv's columns
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, Optional
+
+import numpy as np
+
+from . import _native
+
+__all__ = ["Scenario", "Run", "ScenarioError", "check", "__version__"]
+
+__version__: str = _native.version()
+
+#: An invalid scenario or override; the message is the one the CLI prints (file, line, column,
+#: key, or the offending assignment).
+ScenarioError = _native.ScenarioError
+
+
+class Run:
+    """A finished run.
+
+    ``summary`` is a dict with exactly the keys of ``summary.json``; ``trace`` a dict of 1-D numpy
+    arrays named as the columns of ``trace.csv`` (``s_measured`` is NaN where no sample arrived).
+    """
+
+    def __init__(self, summary: Dict[str, Any], trace: Dict[str, np.ndarray]):
+        self.summary = summary
+        self.trace = trace
+
+    def to_pandas(self):
+        """The trace as a pandas DataFrame (needs pandas)."""
+        try:
+            import pandas as pd
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Run.to_pandas() needs pandas: pip install pandas") from e
+        return pd.DataFrame(self.trace)
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return f"Run(outcome={s['outcome']!r}, t_end_s={s['t_end_s']}, rows={len(self.trace['t_s'])})"
+
+
+class Scenario:
+    """A resolved scenario (every default filled in), immutable: ``set`` returns a new one."""
+
+    def __init__(self, native: "_native.Scenario"):
+        self._native = native
+
+    @staticmethod
+    def default() -> "Scenario":
+        """The built-in default: the paper's Fig. 2(b) setting."""
+        return Scenario(_native.Scenario.default())
+
+    @staticmethod
+    def from_file(path: str) -> "Scenario":
+        """A scenario file (TOML); the files it names are relative to it."""
+        return Scenario(_native.Scenario.from_file(str(path)))
+
+    @staticmethod
+    def from_toml(text: str) -> "Scenario":
+        """Scenario text (TOML); the files it names are relative to the current directory."""
+        return Scenario(_native.Scenario.from_toml(text))
+
+    def set(self, key: str, value: Any) -> "Scenario":
+        """A new scenario with the dotted ``key`` set to ``value`` (the rules of ``--set``)."""
+        return Scenario(self._native.set(key, value))
+
+    def to_toml(self) -> str:
+        """The resolved scenario as TOML (what ``isotrack show`` prints)."""
+        return self._native.to_toml()
+
+    def run(self, record_rate_hz: Optional[float] = None, controller: Any = None) -> Run:
+        """Runs the scenario.
+
+        ``controller``: any object with ``update(t_s, value) -> omega`` (rad/s, positive turns
+        left) and optionally ``reset()``: it replaces the scenario's controller and sees only what
+        a coordinate-free controller sees, the time and the measured value of each sample. An
+        exception inside it ends the run and is raised here with its traceback.
+        """
+        summary, trace = self._native.run(record_rate_hz, controller)
+        return Run(json.loads(summary), dict(trace))
+
+    def field_values(self, x, y, t: float = 0.0) -> np.ndarray:
+        """The field at points ``(x, y)`` (m) at time ``t`` (s), NaN where it has no value;
+        vectorised over numpy arrays of any one shape (for plotting with matplotlib)."""
+        xa = np.ascontiguousarray(x, dtype=np.float64)
+        ya = np.ascontiguousarray(y, dtype=np.float64)
+        if xa.shape != ya.shape:
+            raise ValueError(f"x and y differ in shape ({xa.shape} and {ya.shape})")
+        v = self._native.field_values(xa.ravel(), ya.ravel(), float(t))
+        return v.reshape(xa.shape)
+
+    def __repr__(self) -> str:
+        return f"Scenario({self.to_toml().splitlines()[0] if self.to_toml() else ''})"
+
+
+def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[str, Any]:
+    """``isotrack check --json`` for a scenario, as a dict."""
+    return json.loads(scenario._native.check_json(tube_halfwidth))
