@@ -8,6 +8,50 @@ use isotrack_core::Vec2;
 use npyz::{DType, NpyFile, Order, TypeChar};
 use std::path::Path;
 
+/// The longest `.npy` header accepted, bytes (a real one is under 200).
+const MAX_NPY_HEADER: usize = 4096;
+
+/// Checks a `.npy` header before the `npyz` parser sees it: its Python-literal grammar
+/// backtracks exponentially on some crafted digit runs (a fuzzed header once kept it busy for
+/// more than 20 minutes). A real header is a short dict of a dtype string, a boolean and a
+/// shape tuple: length, characters and digit runs are bounded here.
+fn check_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let bad = |m: String| LoadError::new(path, Some(FilePosition::Offset(0)), m);
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err(bad("not a valid .npy file: no NumPy magic".into()));
+    }
+    let (len, start) = match bytes[6] {
+        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
+        v => return Err(bad(format!("not a valid .npy file: version {v}"))),
+    };
+    if len > MAX_NPY_HEADER || start + len > bytes.len() {
+        return Err(bad(format!(
+            "not a valid .npy file: a header of {len} bytes (at most {MAX_NPY_HEADER}, within the file)"
+        )));
+    }
+    let header = &bytes[start..start + len];
+    let allowed = |c: u8| c.is_ascii_alphanumeric() || b" \t\n\r{}()[]':,<>|=_.-+\"".contains(&c);
+    if let Some(c) = header.iter().find(|&&c| !allowed(c)) {
+        return Err(bad(format!(
+            "not a valid .npy file: byte {c:#04x} in the header"
+        )));
+    }
+    let mut run = 0;
+    for &c in header {
+        run = if c.is_ascii_digit() { run + 1 } else { 0 };
+        if run > 20 {
+            return Err(bad(
+                "not a valid .npy file: a number of more than 20 digits in the header".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A 2-D array (a 3-D one is refused here: use [`parse_series`]).
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
     super::single_frame(path, parse_series(path, bytes)?)
@@ -16,6 +60,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
 /// A 2-D array as one frame, or a 3-D `(time, rows, cols)` array as frames (no frame times: the
 /// file has none).
 pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, LoadError> {
+    check_header(path, bytes)?;
     let npy = NpyFile::new(bytes).map_err(|e| {
         LoadError::new(
             path,

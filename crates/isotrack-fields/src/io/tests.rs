@@ -418,3 +418,25 @@ fn declared_sizes_beyond_the_node_limit_are_refused() {
     );
     assert!(e.message.contains("ncols x nrows"), "{e}");
 }
+
+/// Regression (fuzzing, series target): a crafted `.npy` header kept the Python-literal parser
+/// busy for more than 20 minutes; headers are checked first (length, characters, digit runs).
+#[test]
+fn npy_headers_are_checked_before_parsing() {
+    let long_digits = format!(
+        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({}e{}, 2), }}",
+        "9".repeat(30),
+        "1".repeat(30)
+    );
+    let mut b = b"\x93NUMPY\x01\x00".to_vec();
+    b.extend((long_digits.len() as u16).to_le_bytes());
+    b.extend(long_digits.as_bytes());
+    let t = std::time::Instant::now();
+    let e = err_of("d.npy", &b);
+    assert!(e.message.contains("more than 20 digits"), "{e}");
+    assert!(t.elapsed().as_secs() < 5);
+    let e = err_of("c.npy", b"\x93NUMPY\x01\x00\x05\x00{\x01\x02\x03}");
+    assert!(e.message.contains("byte 0x01"), "{e}");
+    let e = err_of("l.npy", b"\x93NUMPY\x01\x00\xff\xff{}");
+    assert!(e.message.contains("header of 65535 bytes"), "{e}");
+}
