@@ -60,3 +60,15 @@ fn degenerate_inputs_are_errors() {
         assert!(e.to_string().contains(name), "{e}");
     }
 }
+
+/// A fuzzed `.npy` header of nested brackets kept the Python-literal parser busy for 17 s per
+/// parse (fuzz artifact `slow-unit-4361...`, grid target): refused at once by the header check.
+#[test]
+fn nested_npy_headers_are_refused_fast() {
+    let bytes = include_bytes!("fuzz/slow-npy-nested-header.bin");
+    // The fuzz target's first byte picks the format (1 = npy).
+    let t = std::time::Instant::now();
+    let e = parse_grid(Path::new("slow.npy"), &bytes[1..], GridFormat::Npy).unwrap_err();
+    assert!(e.message.contains("not a valid .npy file"), "{e}");
+    assert!(t.elapsed().as_secs_f64() < 1.0);
+}

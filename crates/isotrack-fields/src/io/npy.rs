@@ -34,11 +34,18 @@ fn check_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
         )));
     }
     let header = &bytes[start..start + len];
-    let allowed = |c: u8| c.is_ascii_alphanumeric() || b" \t\n\r{}()[]':,<>|=_.-+\"".contains(&c);
+    let allowed = |c: u8| c.is_ascii_alphanumeric() || b" \t\n\r{}()':,<>|=_.-+\"".contains(&c);
     if let Some(c) = header.iter().find(|&&c| !allowed(c)) {
         return Err(bad(format!(
             "not a valid .npy file: byte {c:#04x} in the header"
         )));
+    }
+    // One dict holding one shape tuple: nesting is what makes the parser backtrack.
+    let count = |c: u8| header.iter().filter(|&&x| x == c).count();
+    if count(b'{') != 1 || count(b'}') != 1 || count(b'(') > 1 || count(b')') > 1 {
+        return Err(bad(
+            "not a valid .npy file: the header is not one dict with one shape tuple".into(),
+        ));
     }
     let mut run = 0;
     for &c in header {
