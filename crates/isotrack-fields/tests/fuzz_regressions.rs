@@ -72,3 +72,18 @@ fn nested_npy_headers_are_refused_fast() {
     assert!(e.message.contains("not a valid .npy file"), "{e}");
     assert!(t.elapsed().as_secs_f64() < 1.0);
 }
+
+/// A fuzzed 3-D `.npy` of shape (199998000098, 700000007, 0) passed the size checks (zero
+/// values) and aborted allocating 2e11 frames (series target): frames need 2 x 2 values.
+#[test]
+fn zero_width_series_are_refused() {
+    let bytes = include_bytes!("fuzz/npy-zero-width-series.bin");
+    let e = isotrack_fields::io::parse_series_bytes(
+        Path::new("z.npy"),
+        &bytes[1..],
+        GridFormat::Npy,
+        None,
+    )
+    .unwrap_err();
+    assert!(e.message.contains("at least 2 x 2"), "{e}");
+}

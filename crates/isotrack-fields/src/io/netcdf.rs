@@ -151,6 +151,12 @@ fn parse_file(
     let (ydim, xdim) = (&dims[dims.len() - 2], &dims[dims.len() - 1]);
     let (ny, nx) = (ydim.size as usize, xdim.size as usize);
     let n_frames = long_lead.first().map_or(1, |d| d.size as usize);
+    if nx < 2 || ny < 2 || n_frames < 1 {
+        return Err(err(format!(
+            "variable `{}` is {n_frames} x {ny} x {nx}: a frame needs at least 2 x 2 values",
+            var.name()
+        )));
+    }
     // Checked before reading: the header's sizes are the file's claim, not a promise.
     let nodes = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
     if nodes

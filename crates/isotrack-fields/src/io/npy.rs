@@ -114,6 +114,13 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             format!("unsupported dtype `{ts}`{hint}; need float64, float32 or an integer type"),
         ));
     }
+    if nx < 2 || ny < 2 || nt < 1 {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!("shape {shape:?}: a frame needs at least 2 x 2 values, and a series one frame"),
+        ));
+    }
     let frame = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
     if frame
         .and_then(|n| n.checked_mul(nt))
