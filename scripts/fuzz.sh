@@ -5,6 +5,7 @@
 # add the input as a regression test (crates/isotrack-fields/tests/fuzz_regressions.rs).
 #   scripts/fuzz.sh            # every target, 60 s each
 #   SECONDS_PER_TARGET=600 scripts/fuzz.sh grid
+#   FUZZ_FLAGS="-s none -O" scripts/fuzz.sh   # no sanitizer: 5-10x the executions (safe Rust)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! rustup toolchain list | grep -q '^nightly'; then
@@ -18,5 +19,5 @@ targets=("$@")
 for t in "${targets[@]}"; do
   echo "== fuzzing $t for ${secs}s"
   mkdir -p "fuzz/corpus/$t"
-  (cd fuzz && cargo +nightly fuzz run "$t" "corpus/$t" "seeds/$t" -- -max_total_time="$secs" -rss_limit_mb=4096)
+  (cd fuzz && cargo +nightly fuzz run ${FUZZ_FLAGS:-} "$t" "corpus/$t" "seeds/$t" -- -max_total_time="$secs" -timeout=10 -rss_limit_mb=4096)
 done

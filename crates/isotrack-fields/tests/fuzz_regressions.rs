@@ -87,3 +87,18 @@ fn zero_width_series_are_refused() {
     .unwrap_err();
     assert!(e.message.contains("at least 2 x 2"), "{e}");
 }
+
+/// A fuzzed classic NetCDF header declaring 2^31 attribute values made netcdf-reader abort out
+/// of memory (series target): classic headers are checked against the file first.
+#[test]
+fn netcdf_headers_are_checked_before_allocation() {
+    let bytes = include_bytes!("fuzz/netcdf-huge-attribute.bin");
+    let e = isotrack_fields::io::parse_series_bytes(
+        Path::new("h.nc"),
+        &bytes[1..],
+        GridFormat::NetCdf,
+        None,
+    )
+    .unwrap_err();
+    assert!(e.message.contains("not a valid NetCDF file"), "{e}");
+}

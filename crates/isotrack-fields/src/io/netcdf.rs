@@ -91,9 +91,137 @@ pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
 }
 
 pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries, LoadError> {
-    let file = NcFile::open(path)
-        .map_err(|e| LoadError::new(path, None, format!("cannot read as NetCDF: {e}")))?;
-    parse_file(path, &file, variable)
+    // Read (size-limited by the caller) rather than mapped: the classic header is checked
+    // before the reader sees it.
+    let bytes = super::read_limited(path, super::MAX_GRID_FILE_BYTES)
+        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    parse_bytes(path, &bytes, variable)
+}
+
+/// Checks a classic (CDF-1, -2, -5) header's counts and sizes against the bytes that hold it,
+/// before `netcdf-reader` allocates what they declare: a fuzzed header declaring 2^31 attribute
+/// values made it abort (out of memory). NetCDF-4 (HDF5) files are passed through.
+fn check_classic_header(bytes: &[u8]) -> Result<(), String> {
+    if bytes.len() < 4 || &bytes[..3] != b"CDF" {
+        return Ok(()); // HDF5 or not NetCDF: the reader says which
+    }
+    let wide = match bytes[3] {
+        1 | 2 => false,
+        5 => true,
+        v => return Err(format!("unknown classic NetCDF version {v}")),
+    };
+    let offset64 = bytes[3] != 1;
+    struct Cur<'a> {
+        b: &'a [u8],
+        at: usize,
+    }
+    impl Cur<'_> {
+        fn take(&mut self, n: usize) -> Result<&[u8], String> {
+            let end = self
+                .at
+                .checked_add(n)
+                .filter(|e| *e <= self.b.len())
+                .ok_or_else(|| {
+                    format!(
+                        "the header declares {n} bytes at offset {} beyond the file",
+                        self.at
+                    )
+                })?;
+            let s = &self.b[self.at..end];
+            self.at = end;
+            Ok(s)
+        }
+        fn u32(&mut self) -> Result<u64, String> {
+            let s = self.take(4)?;
+            Ok(u32::from_be_bytes([s[0], s[1], s[2], s[3]]) as u64)
+        }
+        fn u64(&mut self) -> Result<u64, String> {
+            let s = self.take(8)?;
+            let mut a = [0u8; 8];
+            a.copy_from_slice(s);
+            Ok(u64::from_be_bytes(a))
+        }
+        fn count(&mut self, wide: bool) -> Result<u64, String> {
+            if wide {
+                self.u64()
+            } else {
+                self.u32()
+            }
+        }
+        /// A name: its length, then the characters padded to 4 bytes.
+        fn name(&mut self, wide: bool) -> Result<(), String> {
+            let n = self.count(wide)?;
+            let padded = n.checked_add(3).ok_or("name length overflows")? / 4 * 4;
+            self.take(usize::try_from(padded).map_err(|_| "name too long")?)?;
+            Ok(())
+        }
+        /// A list header: tag (0 absent, or the expected tag) and element count, each element
+        /// at least `min_bytes` long (so a count the file cannot hold is refused).
+        fn list(&mut self, tag: u64, wide: bool, min_bytes: u64) -> Result<u64, String> {
+            let t = self.u32()?;
+            let n = self.count(wide)?;
+            if t == 0 && n == 0 {
+                return Ok(0);
+            }
+            if t != tag {
+                return Err(format!("list tag {t:#x} where {tag:#x} was expected"));
+            }
+            let left = (self.b.len() - self.at) as u64;
+            if n.saturating_mul(min_bytes) > left {
+                return Err(format!(
+                    "the header declares {n} entries; the file cannot hold them"
+                ));
+            }
+            Ok(n)
+        }
+        fn attrs(&mut self, wide: bool) -> Result<(), String> {
+            let n = self.list(0x0C, wide, 12)?;
+            for _ in 0..n {
+                self.name(wide)?;
+                let ty = self.u32()?;
+                let size = match ty {
+                    1 | 2 | 7 => 1,
+                    3 | 8 => 2,
+                    4 | 5 | 9 => 4,
+                    6 | 10 | 11 => 8,
+                    t => return Err(format!("unknown attribute type {t}")),
+                };
+                let count = self.count(wide)?;
+                let bytes = count
+                    .checked_mul(size)
+                    .and_then(|b| b.checked_add(3))
+                    .ok_or("attribute size overflows")?
+                    / 4
+                    * 4;
+                self.take(usize::try_from(bytes).map_err(|_| "attribute too large")?)?;
+            }
+            Ok(())
+        }
+    }
+    let mut c = Cur { b: bytes, at: 4 };
+    c.count(wide)?; // numrecs
+    let ndims = c.list(0x0A, wide, 8)?;
+    for _ in 0..ndims {
+        c.name(wide)?;
+        c.count(wide)?;
+    }
+    c.attrs(wide)?;
+    let nvars = c.list(0x0B, wide, 16)?;
+    for _ in 0..nvars {
+        c.name(wide)?;
+        let nd = c.count(wide)?;
+        let per = if wide { 8 } else { 4 };
+        c.take(usize::try_from(nd.saturating_mul(per)).map_err(|_| "too many dimensions")?)?;
+        c.attrs(wide)?;
+        c.u32()?; // type
+        c.count(wide)?; // vsize
+        if offset64 {
+            c.u64()?;
+        } else {
+            c.u32()?;
+        }
+    }
+    Ok(())
 }
 
 /// As [`parse`], from the file's bytes (`name` names it in errors; the fuzz targets' entry).
@@ -102,6 +230,13 @@ pub(super) fn parse_bytes(
     bytes: &[u8],
     variable: Option<&str>,
 ) -> Result<LoadedSeries, LoadError> {
+    check_classic_header(bytes).map_err(|m| {
+        LoadError::new(
+            name,
+            Some(super::FilePosition::Offset(0)),
+            format!("not a valid NetCDF file: {m}"),
+        )
+    })?;
     let file = NcFile::from_bytes(bytes)
         .map_err(|e| LoadError::new(name, None, format!("cannot read as NetCDF: {e}")))?;
     parse_file(name, &file, variable)
