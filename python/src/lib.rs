@@ -262,6 +262,23 @@ impl IsolineController for PyController {
     fn reset(&mut self) {}
 }
 
+/// A sweep from its file's text: `(header, rows)` of `results.csv`'s cells in `run_id` order;
+/// `name` names the sweep in messages and anchors its relative `scenario` path.
+#[pyfunction]
+#[pyo3(signature = (text, name, threads=None))]
+fn sweep_cells(
+    py: Python<'_>,
+    text: &str,
+    name: &str,
+    threads: Option<usize>,
+) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
+    py.detach(|| isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads))
+        .map_err(|f| match f.code {
+            66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
+            _ => ScenarioErrorPy::new_err(f.message),
+        })
+}
+
 /// The isotrack version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -273,5 +290,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenario>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
     Ok(())
 }

@@ -118,3 +118,29 @@ def test_set_and_to_toml_round_trip():
     sc = isotrack.Scenario.default().set("controller.kind", "sliding_mode")
     again = isotrack.Scenario.from_toml(sc.to_toml())
     assert again.run().summary == sc.run().summary
+
+
+def test_sweep_equals_results_csv():
+    """``isotrack.sweep`` gives the cells of the CLI's results.csv, column by column."""
+    with tempfile.TemporaryDirectory() as d:
+        Path(d, "sc.toml").write_text("sim.duration_s = 10.0\n")
+        sw = Path(d, "s.toml")
+        sw.write_text(
+            'scenario = "sc.toml"\n[grid]\ncontroller.kind = ["pi_isoline", "sliding_mode"]\n'
+            "controller.kp = [5.0, 10.0, -1.0]\n[random]\nruns = 2\ninitial.x_m = { uniform = [5.0, 12.0] }\n"
+        )
+        out = Path(d, "out")
+        subprocess.run([cli(), "sweep", str(sw), "--out", str(out)], capture_output=True)
+        with open(out / "results.csv") as f:
+            rows = list(csv.DictReader(f))
+        got = isotrack.sweep(str(sw), threads=2)
+    assert list(got) == list(rows[0].keys())
+    assert len(got["run_id"]) == len(rows) == 12
+    for col in got:
+        want = [r[col] for r in rows]
+        if got[col].dtype == np.float64:
+            exp = np.array([float(c) if c != "" else np.nan for c in want])
+            assert np.array_equal(got[col], exp, equal_nan=True), col
+        else:
+            assert list(got[col]) == want, col
+    assert "invalid_scenario" in list(got["outcome"])

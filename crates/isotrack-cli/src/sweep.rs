@@ -88,6 +88,48 @@ fn run_row(plan: &SweepPlan, base: &Scenario, id: u64, sweep_name: &str) -> Stri
     csv_line(&fields)
 }
 
+/// A whole sweep in memory, for library callers (the Python package): the sweep file's text
+/// (`name` names it in messages; its `scenario` path is relative to `dir`), `threads` workers
+/// (capped as for `--threads`). Returns the `results.csv` header and rows as fields, in
+/// `run_id` order: the same cells the CLI writes.
+pub fn sweep_in_memory(
+    text: &str,
+    name: &Path,
+    threads: Option<usize>,
+) -> Result<(Vec<String>, Vec<Vec<String>>), Failure> {
+    let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    let base = load_scenario(Some(&plan.scenario), &[]).map_err(crate::run::invalid)?;
+    let label = name.display().to_string();
+    let base_assign = plan.run_assignments(0, &label);
+    let base = base
+        .derive_with(&base_assign[..plan.base.len()], &label)
+        .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
+    plan.check_keys(&base, &label)
+        .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    let mut header: Vec<String> = vec!["run_id".into()];
+    header.extend(plan.columns());
+    header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
+    let pool = {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(t) = thread_count(threads) {
+            b = b.num_threads(t);
+        }
+        b.build()
+            .map_err(|e| fail(exit::OSERR, format!("cannot start threads: {e}")))?
+    };
+    let lines: Vec<String> = pool.install(|| {
+        (0..plan.total())
+            .into_par_iter()
+            .map(|id| run_row(&plan, &base, id, &label))
+            .collect()
+    });
+    let rows = lines
+        .iter()
+        .map(|l| csv_fields(l).unwrap_or_default())
+        .collect();
+    Ok((header, rows))
+}
+
 /// Parses `K/N`.
 fn parse_shard(s: &str) -> Result<(u64, u64), Failure> {
     let bad = || {

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["Scenario", "Run", "ScenarioError", "check", "__version__"]
+__all__ = ["Scenario", "Run", "ScenarioError", "check", "sweep", "__version__"]
 
 __version__: str = _native.version()
 
@@ -106,3 +106,29 @@ class Scenario:
 def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[str, Any]:
     """``isotrack check --json`` for a scenario, as a dict."""
     return json.loads(scenario._native.check_json(tube_halfwidth))
+
+
+def sweep(path_or_toml_text: str, threads: Optional[int] = None, progress: bool = False) -> Dict[str, np.ndarray]:
+    """Runs a sweep (a sweep file's path, or its TOML text, whose ``scenario`` is then relative
+    to the current directory) and returns one numpy array per column of ``results.csv``, in
+    ``run_id`` order: float64 for numeric columns (NaN for an empty cell), str otherwise. The
+    same cells as ``isotrack sweep`` writes. ``progress`` is accepted for the interface; the runs
+    are reported only when done."""
+    import os
+
+    if os.path.isfile(path_or_toml_text):
+        with open(path_or_toml_text, encoding="utf-8") as f:
+            text, name = f.read(), path_or_toml_text
+    else:
+        text, name = path_or_toml_text, os.path.join(os.getcwd(), "<toml>")
+    header, rows = _native.sweep_cells(text, name, threads)
+    out: Dict[str, np.ndarray] = {}
+    for k, col in enumerate(header):
+        cells = [r[k] for r in rows]
+        try:
+            out[col] = np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
+        except ValueError:
+            out[col] = np.array(cells, dtype=str)
+    if progress:
+        print(f"{len(rows)} runs")
+    return out
