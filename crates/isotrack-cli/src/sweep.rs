@@ -88,6 +88,38 @@ fn run_row(plan: &SweepPlan, base: &Scenario, id: u64, sweep_name: &str) -> Stri
     csv_line(&fields)
 }
 
+/// The base scenario of a sweep: its file with `sets`, then the sweep's `[base]`, which must
+/// make a valid scenario on its own; then every key of the sweep checked against the schema
+/// (unknown keys and wrong types are the sweep file's errors, found before anything runs).
+fn sweep_base(plan: &SweepPlan, sets: &[String], label: &str) -> Result<Scenario, Failure> {
+    let base = load_scenario(Some(&plan.scenario), sets).map_err(crate::run::invalid)?;
+    let base_assign = plan.run_assignments(0, label);
+    let base = base
+        .derive_with(&base_assign[..plan.base.len()], label)
+        .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
+    plan.check_keys(&base, label)
+        .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    Ok(base)
+}
+
+/// The `results.csv` header of a sweep.
+fn results_header(plan: &SweepPlan) -> Vec<String> {
+    let mut header: Vec<String> = vec!["run_id".into()];
+    header.extend(plan.columns());
+    header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
+    header
+}
+
+/// A worker pool of `threads` (capped; all cores by default).
+fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = thread_count(threads) {
+        b = b.num_threads(t);
+    }
+    b.build()
+        .map_err(|e| fail(exit::OSERR, format!("cannot start threads: {e}")))
+}
+
 /// A whole sweep in memory, for library callers (the Python package): the sweep file's text
 /// (`name` names it in messages; its `scenario` path is relative to `dir`), `threads` workers
 /// (capped as for `--threads`). Returns the `results.csv` header and rows as fields, in
@@ -98,25 +130,10 @@ pub fn sweep_in_memory(
     threads: Option<usize>,
 ) -> Result<(Vec<String>, Vec<Vec<String>>), Failure> {
     let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let base = load_scenario(Some(&plan.scenario), &[]).map_err(crate::run::invalid)?;
     let label = name.display().to_string();
-    let base_assign = plan.run_assignments(0, &label);
-    let base = base
-        .derive_with(&base_assign[..plan.base.len()], &label)
-        .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
-    plan.check_keys(&base, &label)
-        .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let mut header: Vec<String> = vec!["run_id".into()];
-    header.extend(plan.columns());
-    header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
-    let pool = {
-        let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = thread_count(threads) {
-            b = b.num_threads(t);
-        }
-        b.build()
-            .map_err(|e| fail(exit::OSERR, format!("cannot start threads: {e}")))?
-    };
+    let base = sweep_base(&plan, &[], &label)?;
+    let header = results_header(&plan);
+    let pool = worker_pool(threads)?;
     let lines: Vec<String> = pool.install(|| {
         (0..plan.total())
             .into_par_iter()
@@ -355,16 +372,8 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         )
     })?;
     let plan = SweepPlan::parse(&text, &a.sweep).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let base = load_scenario(Some(&plan.scenario), &a.set).map_err(crate::run::invalid)?;
     let name = a.sweep.display().to_string();
-    // The base overrides must make a valid scenario on their own.
-    let base_assign = plan.run_assignments(0, &name);
-    let base = base
-        .derive_with(&base_assign[..plan.base.len()], &name)
-        .map_err(|e| fail(exit::DATAERR, format!("{name}: [base]: {e}")))?;
-    // Unknown keys and wrong types are the sweep file's errors: found before anything runs.
-    plan.check_keys(&base, &name)
-        .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    let base = sweep_base(&plan, &a.set, &name)?;
     let (k, n) = match &a.shard {
         Some(s) => parse_shard(s)?,
         None => (1, 1),
@@ -384,9 +393,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     }
     std::fs::create_dir_all(&a.out).map_err(cant)?;
     let results = a.out.join("results.csv");
-    let mut header: Vec<String> = vec!["run_id".into()];
-    header.extend(plan.columns());
-    header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
+    let header = results_header(&plan);
     let header_line = csv_line(&header);
     if results.exists() && a.force {
         std::fs::remove_file(&results).map_err(cant)?;
@@ -469,14 +476,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, ETA {eta}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let pool = {
-        let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = thread_count(a.threads) {
-            b = b.num_threads(t);
-        }
-        b.build()
-            .map_err(|e| fail(exit::OSERR, format!("cannot start threads: {e}")))?
-    };
+    let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();
     let (tx, rx) = std::sync::mpsc::channel::<String>();
     let write_result: Result<(), Failure> = std::thread::scope(|scope| {

@@ -1,35 +1,11 @@
 //! The `isotrack` binary end to end: outputs, overrides, and every bad-input path (clear
 //! message, non-zero exit, never a panic).
 
+mod common;
+
+use common::{assert_fails, isotrack, stderr, write};
 use std::path::Path;
 use std::process::{Command, Output};
-
-fn isotrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p.display().to_string()
-}
-
-/// Checks a failure: the exit code, no panic, and the message contains every `needle`.
-fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
-    let e = stderr(o);
-    assert_eq!(o.status.code(), Some(code), "stderr: {e}");
-    assert!(!e.contains("panicked"), "panic: {e}");
-    for n in needles {
-        assert!(e.contains(n), "expected `{n}` in: {e}");
-    }
-}
 
 #[test]
 fn default_run_prints_a_summary() {

@@ -1,35 +1,9 @@
 //! Hostile inputs (issue 16): each reproducer from the report, as a regression test. Every one
 //! of these once panicked, hung, aborted or wrote a silently wrong file.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn isotrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p.display().to_string()
-}
-
-/// A failure with the exit code, no panic, every needle in stderr.
-fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
-    let e = stderr(o);
-    assert_eq!(o.status.code(), Some(code), "stderr: {e}");
-    assert!(!e.contains("panicked"), "panic: {e}");
-    for n in needles {
-        assert!(e.contains(n), "expected `{n}` in: {e}");
-    }
-}
+use common::{assert_fails, isotrack, stderr, write};
 
 /// Item 1: Values validation accepted and the builder rejected (exit 101 in build.rs): now refused
 /// by validation, which calls the builder's own constructors.

@@ -1,25 +1,10 @@
 //! A first study's rough edges (issue 15): sweeps that cannot silently lie, controllers switched
 //! by an override, the UAV's own turn-rate limit.
 
+mod common;
+
+use common::{isotrack, stderr, write};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn isotrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> String {
-    let p = dir.join(name);
-    std::fs::write(&p, text).unwrap();
-    p.display().to_string()
-}
 
 /// `results.csv` as a header and rows of fields.
 fn read_rows(dir: &Path) -> (Vec<String>, Vec<Vec<String>>) {

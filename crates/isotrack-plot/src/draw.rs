@@ -133,6 +133,17 @@ impl Raster {
             values,
         }
     }
+    /// The level-`lv` isoline of `f` sampled at the raster's cell centres.
+    fn isoline(&self, lv: f64, f: impl Fn(Vec2) -> Option<f64>) -> IsolineSegments {
+        IsolineSegments::from_samples(
+            Vec2::new(self.x0 + 0.5 * self.dx, self.y0 + 0.5 * self.dy),
+            self.dx.min(self.dy),
+            self.nx,
+            self.ny,
+            lv,
+            f,
+        )
+    }
     /// The sample whose cell centre is nearest `p`.
     fn at(&self, p: Vec2) -> Option<f64> {
         let i = ((p.x - self.x0) / self.dx - 0.5).round();
@@ -374,27 +385,9 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     }
     // Isolines: a few thin ones, the target bold.
     let level = sc.level();
-    let iso_at = |lv: f64, t: f64| {
-        IsolineSegments::from_samples(
-            Vec2::new(raster.x0 + 0.5 * raster.dx, raster.y0 + 0.5 * raster.dy),
-            raster.dx.min(raster.dy),
-            raster.nx,
-            raster.ny,
-            lv,
-            |p| sc.field().value(t, p),
-        )
-    };
+    let iso_at = |lv: f64, t: f64| raster.isoline(lv, |p| sc.field().value(t, p));
     // At the map's own time the raster's values are the samples (no second evaluation).
-    let iso = |lv: f64| {
-        IsolineSegments::from_samples(
-            Vec2::new(raster.x0 + 0.5 * raster.dx, raster.y0 + 0.5 * raster.dy),
-            raster.dx.min(raster.dy),
-            raster.nx,
-            raster.ny,
-            lv,
-            |p| raster.at(p),
-        )
-    };
+    let iso = |lv: f64| raster.isoline(lv, |p| raster.at(p));
     // A field that moves: the target isoline at earlier times, light (early) to dark.
     let n_earlier = times.earlier_s.len();
     for (k, &t) in times.earlier_s.iter().enumerate() {

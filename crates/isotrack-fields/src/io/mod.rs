@@ -203,6 +203,19 @@ pub fn parse_series_bytes(
     }
 }
 
+/// The format given, or the one the extension names.
+fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, LoadError> {
+    format
+        .or_else(|| GridFormat::from_extension(path))
+        .ok_or_else(|| {
+            LoadError::new(
+                path,
+                None,
+                "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
+            )
+        })
+}
+
 /// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
 /// (`[time, rows, cols]`) and a NetCDF variable with a time dimension, which give one per time.
 pub fn load_series(
@@ -210,37 +223,10 @@ pub fn load_series(
     format: Option<GridFormat>,
     variable: Option<&str>,
 ) -> Result<LoadedSeries, LoadError> {
-    let format = match format.or_else(|| GridFormat::from_extension(path)) {
-        Some(f) => f,
-        None => return Err(LoadError::new(
-            path,
-            None,
-            "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
-        )),
-    };
+    let format = format_of(path, format)?;
     match format {
-        GridFormat::NetCdf => {
-            // Opened by the reader itself (it maps the file); checked like every other input.
-            match std::fs::metadata(path) {
-                Err(e) => return Err(LoadError::new(path, None, format!("cannot read: {e}"))),
-                Ok(m) if !m.is_file() => {
-                    return Err(LoadError::new(
-                        path,
-                        None,
-                        "cannot read: not a regular file (a device, pipe or directory)",
-                    ))
-                }
-                Ok(m) if m.len() > MAX_GRID_FILE_BYTES => {
-                    return Err(LoadError::new(
-                        path,
-                        None,
-                        format!("cannot read: {} bytes is more than the {MAX_GRID_FILE_BYTES} this reader accepts", m.len()),
-                    ))
-                }
-                Ok(_) => {}
-            }
-            netcdf::parse(path, variable)
-        }
+        // Read through `read_limited` like every other file (regular files, size cap).
+        GridFormat::NetCdf => netcdf::parse(path, variable),
         GridFormat::Npy => {
             let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
                 .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
@@ -278,14 +264,7 @@ pub fn load_grid_variable(
     format: Option<GridFormat>,
     variable: Option<&str>,
 ) -> Result<LoadedGrid, LoadError> {
-    let format = match format.or_else(|| GridFormat::from_extension(path)) {
-        Some(f) => f,
-        None => return Err(LoadError::new(
-            path,
-            None,
-            "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
-        )),
-    };
+    let format = format_of(path, format)?;
     if format == GridFormat::NetCdf {
         return single_frame(path, load_series(path, Some(format), variable)?);
     }

@@ -105,12 +105,12 @@ fn check_classic_header(bytes: &[u8]) -> Result<(), String> {
     if bytes.len() < 4 || &bytes[..3] != b"CDF" {
         return Ok(()); // HDF5 or not NetCDF: the reader says which
     }
-    let wide = match bytes[3] {
-        1 | 2 => false,
-        5 => true,
-        v => return Err(format!("unknown classic NetCDF version {v}")),
-    };
-    let offset64 = bytes[3] != 1;
+    let version = bytes[3];
+    if ![1, 2, 5].contains(&version) {
+        return Err(format!("unknown classic NetCDF version {version}"));
+    }
+    // CDF-5 counts are 64-bit; CDF-2 and CDF-5 offsets are.
+    let (wide, offset64) = (version == 5, version != 1);
     struct Cur<'a> {
         b: &'a [u8],
         at: usize,
