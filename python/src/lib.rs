@@ -13,6 +13,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::Path;
 
+mod env;
+
 pyo3::create_exception!(
     _native,
     ScenarioErrorPy,
@@ -106,7 +108,11 @@ impl PyScenario {
                 if obj.bind(py).hasattr("reset")? {
                     obj.call_method0(py, "reset")?;
                 }
-                let mut c = PyController { obj, error: None };
+                let mut c = PyController {
+                    obj,
+                    error: None,
+                    max_turn_rate_radps: scenario.max_turn_rate_radps(),
+                };
                 let r = py.detach(|| scenario.run_with(&mut c, &mut rows));
                 (r, c.error)
             }
@@ -232,12 +238,14 @@ fn trace_columns<'py>(
     Ok(d)
 }
 
-/// A Python object as a coordinate-free controller: `update(t_s, value) -> omega`. The first
-/// exception is kept (and raised when the run returns); the run then ends as `diverged` (the
-/// command is NaN), the loop's own way of stopping.
+/// A Python object as a coordinate-free controller: `update(t_s, value) -> omega`, clipped to
+/// the scenario's turn-rate limit as every built-in law's output is. The first exception is kept
+/// (and raised when the run returns); the run then ends as `diverged` (the command is NaN), the
+/// loop's own way of stopping.
 struct PyController {
     obj: Py<PyAny>,
     error: Option<PyErr>,
+    max_turn_rate_radps: Option<f64>,
 }
 
 impl IsolineController for PyController {
@@ -251,7 +259,11 @@ impl IsolineController for PyController {
                 .call_method1(py, "update", (m.t_s, m.value))
                 .and_then(|r| r.extract::<f64>(py))
             {
-                Ok(w) => w,
+                Ok(w) => match self.max_turn_rate_radps {
+                    // NaN passes (and ends the run as `diverged`).
+                    Some(m) => w.clamp(-m, m),
+                    None => w,
+                },
                 Err(e) => {
                     self.error = Some(e);
                     f64::NAN
@@ -288,6 +300,7 @@ fn version() -> &'static str {
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenario>()?;
+    m.add_class::<env::PyEnvBatch>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;

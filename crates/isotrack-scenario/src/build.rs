@@ -315,6 +315,11 @@ impl Scenario {
 
     /// The sensor, seeded by `sim.seed`.
     pub fn sensor(&self) -> Sensor {
+        self.sensor_seeded(self.file.sim.seed.unwrap_or(0))
+    }
+
+    /// The sensor, its noise and dropouts seeded by `seed`.
+    pub fn sensor_seeded(&self, seed: u64) -> Sensor {
         let s = &self.file.sensor;
         let dt = self.dt_s();
         Sensor::new(
@@ -329,7 +334,7 @@ impl Scenario {
                 bias_drift_per_sqrt_s: s.bias_drift_per_sqrt_s.unwrap_or(0.0),
             },
             dt,
-            self.file.sim.seed.unwrap_or(0),
+            seed,
         )
         // `resolve_sensor` calls this constructor with the same values (the seed aside, which
         // cannot make it fail), and every `Scenario` comes out of `resolve`.
@@ -389,22 +394,27 @@ impl Scenario {
         controller: &mut C,
         sink: &mut S,
     ) -> RunResult {
-        match self.field() {
+        let r = match self.field() {
             FieldModel::Analytic(f) => self.run_on(f, controller, sink),
             FieldModel::Grid(f) => self.run_on(f, controller, sink),
             FieldModel::Puff(f) => self.run_on(&**f, controller, sink),
-            FieldModel::Series(f) => {
-                let mut r = self.run_on(&**f, controller, sink);
-                // Past the last frame with `after_last_frame = "end"`: say the data ended.
-                let end = f.last_frame_run_time_s();
-                if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
-                    r.outcome_detail = Some(format!(
-                        "the field's data ended: its last frame is at t = {end} s of the run (field.after_last_frame = \"end\")"
-                    ));
-                }
-                r
+            FieldModel::Series(f) => self.run_on(&**f, controller, sink),
+        };
+        self.explain_end(r)
+    }
+
+    /// A run's result with its end explained in the scenario's terms: past the last frame of a
+    /// time series with `after_last_frame = "end"`, a `left_field` says the data ended.
+    pub(crate) fn explain_end(&self, mut r: RunResult) -> RunResult {
+        if let FieldModel::Series(f) = self.field() {
+            let end = f.last_frame_run_time_s();
+            if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
+                r.outcome_detail = Some(format!(
+                    "the field's data ended: its last frame is at t = {end} s of the run (field.after_last_frame = \"end\")"
+                ));
             }
         }
+        r
     }
 
     /// Runs the scenario on a given field (dispatched once, so the loop is monomorphised per
@@ -426,14 +436,13 @@ impl Scenario {
             isoline_distance: Some(&dist),
             gradient: Some(&grad),
         };
-        let mut sensor = self.sensor();
+        let sensor = self.sensor();
         let plan = self.plan();
-        let i = &self.file.initial;
-        let (x, y, h) = (
-            i.x_m.unwrap_or(0.0),
-            i.y_m.unwrap_or(0.0),
-            i.heading_rad.unwrap_or(0.0),
-        );
+        let crate::episode::Start {
+            x_m: x,
+            y_m: y,
+            heading_rad: h,
+        } = self.start();
         match &*self.vehicle {
             VehicleModel::Dubins(vehicle) => {
                 let x0 = DubinsState {
@@ -441,27 +450,13 @@ impl Scenario {
                     heading_rad: h,
                 };
                 simulate(
-                    field,
-                    vehicle,
-                    x0,
-                    controller,
-                    &mut sensor,
-                    &plan,
-                    &oracles,
-                    sink,
+                    field, vehicle, x0, controller, sensor, &plan, &oracles, sink,
                 )
             }
             VehicleModel::FixedWing(vehicle) => {
                 let x0 = vehicle.initial_state(x, y, h);
                 simulate(
-                    field,
-                    &**vehicle,
-                    x0,
-                    controller,
-                    &mut sensor,
-                    &plan,
-                    &oracles,
-                    sink,
+                    field, &**vehicle, x0, controller, sensor, &plan, &oracles, sink,
                 )
             }
         }

@@ -15,6 +15,7 @@
 
 pub mod build;
 pub mod check;
+pub mod episode;
 pub mod field;
 pub mod load;
 pub mod resolve;
@@ -22,6 +23,7 @@ pub mod schema;
 pub mod sweep;
 
 pub use build::ControllerModel;
+pub use episode::{ScenarioEpisode, Start};
 use load::locate_derived;
 pub use load::{
     apply_assignments, build_derived, load_scenario, parse_scenario, parse_scenario_in, Assignment,

@@ -25,14 +25,14 @@ fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &m
         rate_hz: 100.0,
         ..SensorConfig::default()
     };
-    let mut sensor = Sensor::new(cfg, 0.01, 0).unwrap();
+    let sensor = Sensor::new(cfg, 0.01, 0).unwrap();
     let plan = StepPlan::new(0.01, 600.0, record_rate_hz, 0.2, 0.1, 60.0, 10.0).unwrap();
     simulate(
         field,
         &vehicle,
         x0,
         &mut c,
-        &mut sensor,
+        sensor,
         &plan,
         &Oracles::default(),
         sink,

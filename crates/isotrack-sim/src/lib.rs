@@ -24,6 +24,7 @@ pub use sensor::{
     whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
 };
 pub use simulation::{
-    simulate, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, StepPlan, StepPlanError,
+    simulate, Episode, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample,
+    StepPlan, StepPlanError,
 };
 pub use trace::{NoTrace, TraceRow, TraceSink};

@@ -4,7 +4,8 @@ use crate::metrics::{Metrics, MetricsConfig, RunMetrics};
 use crate::sensor::{whole_steps, Sensor, StepsError};
 use crate::trace::{TraceRow, TraceSink};
 use isotrack_core::control::GroundTruth;
-use isotrack_core::{IsolineController, ScalarField, Vehicle};
+use isotrack_core::math::Pose2;
+use isotrack_core::{IsolineController, Measurement, ScalarField, Vec2, Vehicle};
 use serde::Serialize;
 
 /// How a run ended.
@@ -181,7 +182,8 @@ pub struct Oracles<'a> {
 /// the isoline-distance metrics; `oracles.gradient` feeds [`GroundTruth`] to a reference
 /// controller that asks for it (`needs_ground_truth`), and no other.
 ///
-/// [`GroundTruth`]: isotrack_core::control::GroundTruth
+/// This is [`Episode`] driven by `controller`: the loop pauses at each delivered sample and the
+/// controller's answer is the command held until the next one.
 ///
 /// Generic over every part so the loop is monomorphised: no dynamic dispatch in the hot path.
 #[allow(clippy::too_many_arguments)]
@@ -190,7 +192,7 @@ pub fn simulate<F, V, C, S>(
     vehicle: &V,
     x0: V::State,
     controller: &mut C,
-    sensor: &mut Sensor,
+    sensor: Sensor,
     plan: &StepPlan,
     oracles: &Oracles<'_>,
     sink: &mut S,
@@ -201,137 +203,370 @@ where
     C: IsolineController + ?Sized,
     S: TraceSink + ?Sized,
 {
-    let mut x = x0;
     let wants_truth = controller.needs_ground_truth();
-    let mut metrics = Metrics::new(MetricsConfig {
-        dt_s: plan.dt_s,
-        steady_state_start_step: plan.steady_state_start_step,
-        convergence_tolerance: plan.convergence_tolerance,
-        convergence_min_dwell_steps: plan.convergence_min_dwell_steps,
-        track_loss_band: plan.track_loss_band,
-    });
-    let mut omega = 0.0_f64;
-    let mut s_measured: Option<f64> = None;
-    let mut samples = 0u64;
-    let mut outcome = Outcome::Completed;
-    let mut detail = None;
-    let mut last_row: Option<TraceRow> = None;
-    let mut last_recorded_step: Option<u64> = None;
-    let mut last_valid_step = 0u64;
-    let mut prev_pos = vehicle.pose(&x).position;
-    // Countdown to the next recorded step (not `k % record_every`: see `Sensor`).
-    let mut record_countdown = 0u64;
-    let mut end_pos = prev_pos;
-
-    for k in 0..=plan.n_steps {
-        let t = k as f64 * plan.dt_s;
-        let pose = vehicle.pose(&x);
-        if !pose.is_finite() {
-            outcome = Outcome::Diverged;
-            detail = Some(format!("non-finite vehicle state at t = {t} s"));
-            break;
-        }
-        let Some(s) = field.value(t, pose.position) else {
-            outcome = Outcome::LeftField;
-            detail = Some(format!(
-                "the field has no value at ({:.6}, {:.6}) m, t = {t} s",
-                pose.position.x, pose.position.y
-            ));
-            if k == 0 && plan.record_every > 0 {
-                // The start itself is off the field: the trace still shows where the vehicle
-                // was (the field value and error unknown, NaN), so a plot can say why.
-                let row = TraceRow {
-                    t_s: t,
-                    x_m: pose.position.x,
-                    y_m: pose.position.y,
-                    heading_rad: pose.heading_rad,
-                    s: f64::NAN,
-                    error: f64::NAN,
-                    omega_radps: omega,
-                    s_measured: None,
-                    telemetry: vehicle.telemetry(&x),
-                };
-                sink.record(&row);
-                last_recorded_step = Some(0);
-            }
-            break;
-        };
-        if k > 0 {
-            metrics.add_path((pose.position - prev_pos).norm());
-        }
-        prev_pos = pose.position;
-        if let Some(m) = sensor.observe(t, s) {
-            samples += 1;
-            s_measured = Some(m.value);
-            let w = if wants_truth {
-                let truth = GroundTruth {
-                    pose,
-                    speed_mps: vehicle.speed_mps(&x),
-                    value: s,
-                    derivatives: oracles.gradient.and_then(|g| g(t, pose.position)),
-                };
-                controller.update_with_truth(&m, &truth)
-            } else {
-                controller.update(&m)
+    let mut episode = Episode::new(vehicle, x0, sensor, plan);
+    episode.drive(field, vehicle, oracles, sink, |sample| {
+        if wants_truth {
+            let truth = GroundTruth {
+                pose: sample.pose,
+                speed_mps: sample.speed_mps,
+                value: sample.true_value,
+                derivatives: oracles
+                    .gradient
+                    .and_then(|g| g(sample.measurement.t_s, sample.pose.position)),
             };
-            if !w.is_finite() {
-                outcome = Outcome::Diverged;
-                detail = Some(format!("non-finite turn-rate command at t = {t} s"));
+            controller.update_with_truth(&sample.measurement, &truth)
+        } else {
+            controller.update(&sample.measurement)
+        }
+    });
+    episode.finish(sink)
+}
+
+/// A delivered sample, at which an [`Episode`] waits for its command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// What the controller sees: the sample time and measured value.
+    pub measurement: Measurement,
+    /// The true pose at the sample step (ground truth: never for a coordinate-free law).
+    pub pose: Pose2,
+    /// The true ground speed, m/s (ground truth).
+    pub speed_mps: f64,
+    /// The true, noise-free field value at the pose (ground truth).
+    pub true_value: f64,
+}
+
+/// One run of the loop, paused at each delivered sample for the command to hold until the next
+/// one: the form [`simulate`] drives with a controller, and an external agent (a reinforcement
+/// learning environment, say) drives one command at a time. The step order is the crate's:
+/// [`run_to_sample`](Self::run_to_sample) performs steps 1-2 (and 3-5 of the steps without a
+/// sample) up to the next sample; [`command`](Self::command) completes that step (3-5).
+///
+/// The episode owns its state; the field, vehicle and oracles are lent to each call, so that one
+/// shared field serves many episodes.
+#[derive(Clone, Debug)]
+pub struct Episode<X> {
+    x: X,
+    sensor: Sensor,
+    plan: StepPlan,
+    metrics: Metrics,
+    /// The current step.
+    k: u64,
+    omega: f64,
+    s_measured: Option<f64>,
+    samples: u64,
+    /// How it ended, once it has.
+    ended: Option<(Outcome, Option<String>)>,
+    /// The sample step waiting for its command: `(t, pose, s)`.
+    pending: Option<(f64, Pose2, f64)>,
+    last_row: Option<TraceRow>,
+    last_recorded_step: Option<u64>,
+    last_valid_step: u64,
+    prev_pos: Vec2,
+    /// Countdown to the next recorded step (not `k % record_every`: see `Sensor`).
+    record_countdown: u64,
+    end_pos: Vec2,
+}
+
+impl<X: Clone> Episode<X> {
+    /// An episode of `plan` for `vehicle` from `x0`, behind `sensor`, at step 0 (nothing run).
+    pub fn new<V: Vehicle<State = X>>(vehicle: &V, x0: X, sensor: Sensor, plan: &StepPlan) -> Self {
+        let metrics = Metrics::new(MetricsConfig {
+            dt_s: plan.dt_s,
+            steady_state_start_step: plan.steady_state_start_step,
+            convergence_tolerance: plan.convergence_tolerance,
+            convergence_min_dwell_steps: plan.convergence_min_dwell_steps,
+            track_loss_band: plan.track_loss_band,
+        });
+        let p0 = vehicle.pose(&x0).position;
+        Self {
+            x: x0,
+            sensor,
+            plan: *plan,
+            metrics,
+            k: 0,
+            omega: 0.0,
+            s_measured: None,
+            samples: 0,
+            ended: None,
+            pending: None,
+            last_row: None,
+            last_recorded_step: None,
+            last_valid_step: 0,
+            prev_pos: p0,
+            record_countdown: 0,
+            end_pos: p0,
+        }
+    }
+
+    /// Steps until the sensor delivers a sample (returned; the episode then waits for
+    /// [`command`](Self::command)) or the run ends (`None`; see [`outcome`](Self::outcome)).
+    /// Called while a sample waits, it returns that sample again.
+    pub fn run_to_sample<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sink: &mut S,
+    ) -> Option<Sample>
+    where
+        F: ScalarField + ?Sized,
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        if let Some((t, pose, s)) = self.pending {
+            return Some(Sample {
+                measurement: Measurement {
+                    t_s: t,
+                    value: self.s_measured.unwrap_or(f64::NAN),
+                },
+                pose,
+                speed_mps: vehicle.speed_mps(&self.x),
+                true_value: s,
+            });
+        }
+        self.advance(field, vehicle, oracles, sink, |_| None)
+    }
+
+    /// Runs the episode to its end, answering every sample with `controller(sample)`: what
+    /// [`simulate`] does. (One loop with the answer inlined, not `run_to_sample` and `command`
+    /// in turn: pausing at every sample costs the 100 Hz loop about a tenth of its speed.)
+    #[inline]
+    pub fn drive<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sink: &mut S,
+        mut controller: impl FnMut(&Sample) -> f64,
+    ) where
+        F: ScalarField + ?Sized,
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        if let Some(sample) = self.run_to_sample(field, vehicle, oracles, sink) {
+            let w = controller(&sample);
+            self.command(w, vehicle, oracles, sink);
+        }
+        self.advance(field, vehicle, oracles, sink, |s| Some(controller(s)));
+    }
+
+    /// The loop: steps until `answer` returns `None` for a delivered sample (which then waits,
+    /// and is returned) or the run ends (`None`). `answer` returning `Some(omega)` commands the
+    /// sample and goes on.
+    #[inline(always)]
+    fn advance<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sink: &mut S,
+        mut answer: impl FnMut(&Sample) -> Option<f64>,
+    ) -> Option<Sample>
+    where
+        F: ScalarField + ?Sized,
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        while self.ended.is_none() {
+            let k = self.k;
+            let t = k as f64 * self.plan.dt_s;
+            let pose = vehicle.pose(&self.x);
+            if !pose.is_finite() {
+                self.end(
+                    Outcome::Diverged,
+                    format!("non-finite vehicle state at t = {t} s"),
+                );
                 break;
             }
-            omega = w;
+            let Some(s) = field.value(t, pose.position) else {
+                self.end(
+                    Outcome::LeftField,
+                    format!(
+                        "the field has no value at ({:.6}, {:.6}) m, t = {t} s",
+                        pose.position.x, pose.position.y
+                    ),
+                );
+                if k == 0 && self.plan.record_every > 0 {
+                    // The start itself is off the field: the trace still shows where the vehicle
+                    // was (the field value and error unknown, NaN), so a plot can say why.
+                    sink.record(&TraceRow {
+                        t_s: t,
+                        x_m: pose.position.x,
+                        y_m: pose.position.y,
+                        heading_rad: pose.heading_rad,
+                        s: f64::NAN,
+                        error: f64::NAN,
+                        omega_radps: self.omega,
+                        s_measured: None,
+                        telemetry: vehicle.telemetry(&self.x),
+                    });
+                    self.last_recorded_step = Some(0);
+                }
+                break;
+            };
+            if k > 0 {
+                self.metrics
+                    .add_path((pose.position - self.prev_pos).norm());
+            }
+            self.prev_pos = pose.position;
+            if let Some(m) = self.sensor.observe(t, s) {
+                self.samples += 1;
+                self.s_measured = Some(m.value);
+                let sample = Sample {
+                    measurement: m,
+                    pose,
+                    speed_mps: vehicle.speed_mps(&self.x),
+                    true_value: s,
+                };
+                match answer(&sample) {
+                    None => {
+                        self.pending = Some((t, pose, s));
+                        return Some(sample);
+                    }
+                    Some(w) if !w.is_finite() => {
+                        self.end(
+                            Outcome::Diverged,
+                            format!("non-finite turn-rate command at t = {t} s"),
+                        );
+                        break;
+                    }
+                    Some(w) => self.omega = w,
+                }
+            }
+            self.complete_step(t, pose, s, vehicle, oracles, sink);
         }
-        let eps = s - plan.level;
-        metrics.observe(k, eps, omega);
+        None
+    }
+
+    /// Answers the waiting sample with the turn-rate command `omega_radps` (held until the next
+    /// sample) and completes its step. A non-finite command ends the run as `diverged`. Without a
+    /// waiting sample it does nothing.
+    #[inline]
+    pub fn command<V, S>(
+        &mut self,
+        omega_radps: f64,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sink: &mut S,
+    ) where
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        let Some((t, pose, s)) = self.pending.take() else {
+            return;
+        };
+        if !omega_radps.is_finite() {
+            self.end(
+                Outcome::Diverged,
+                format!("non-finite turn-rate command at t = {t} s"),
+            );
+            return;
+        }
+        self.omega = omega_radps;
+        self.complete_step(t, pose, s, vehicle, oracles, sink);
+    }
+
+    /// Steps 4-5 of step `k`: metrics, trace, and the vehicle's move (none past the last step).
+    #[inline(always)]
+    fn complete_step<V, S>(
+        &mut self,
+        t: f64,
+        pose: Pose2,
+        s: f64,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sink: &mut S,
+    ) where
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        let k = self.k;
+        let eps = s - self.plan.level;
+        self.metrics.observe(k, eps, self.omega);
         if let Some(dist) = oracles.isoline_distance {
-            if metrics.in_window(k) {
+            if self.metrics.in_window(k) {
                 if let Some(d) = dist(t, pose.position) {
-                    metrics.observe_isoline_distance(d);
+                    self.metrics.observe_isoline_distance(d);
                 }
             }
         }
-        last_valid_step = k;
-        end_pos = pose.position;
-        let row = TraceRow {
-            t_s: t,
-            x_m: pose.position.x,
-            y_m: pose.position.y,
-            heading_rad: pose.heading_rad,
-            s,
-            error: eps,
-            omega_radps: omega,
-            s_measured,
-            telemetry: vehicle.telemetry(&x),
-        };
-        if plan.record_every > 0 {
-            if record_countdown == 0 {
+        self.last_valid_step = k;
+        self.end_pos = pose.position;
+        if self.plan.record_every > 0 {
+            // Only a recording run keeps its rows (the last valid one goes into the trace at the
+            // end): without a trace, no row is built.
+            let row = TraceRow {
+                t_s: t,
+                x_m: pose.position.x,
+                y_m: pose.position.y,
+                heading_rad: pose.heading_rad,
+                s,
+                error: eps,
+                omega_radps: self.omega,
+                s_measured: self.s_measured,
+                telemetry: vehicle.telemetry(&self.x),
+            };
+            if self.record_countdown == 0 {
                 sink.record(&row);
-                last_recorded_step = Some(k);
-                record_countdown = plan.record_every;
+                self.last_recorded_step = Some(k);
+                self.record_countdown = self.plan.record_every;
             }
-            record_countdown -= 1;
+            self.record_countdown -= 1;
+            self.last_row = Some(row);
         }
-        last_row = Some(row);
-        if k == plan.n_steps {
-            break;
+        if k == self.plan.n_steps {
+            self.ended = Some((Outcome::Completed, None));
+            return;
         }
-        metrics.integrate_command(omega);
-        vehicle.step(&mut x, omega, plan.dt_s);
+        self.metrics.integrate_command(self.omega);
+        vehicle.step(&mut self.x, self.omega, self.plan.dt_s);
+        self.k += 1;
     }
-    // Always keep the last valid state in the trace.
-    if plan.record_every > 0 && last_recorded_step != Some(last_valid_step) {
-        if let Some(row) = last_row {
-            sink.record(&row);
-        }
+
+    fn end(&mut self, outcome: Outcome, detail: String) {
+        self.ended = Some((outcome, Some(detail)));
+        self.pending = None;
     }
-    RunResult {
-        outcome,
-        outcome_detail: detail,
-        t_end_s: last_valid_step as f64 * plan.dt_s,
-        steps: last_valid_step,
-        samples_dropped: sensor.dropped(),
-        samples,
-        end_position_m: [end_pos.x, end_pos.y],
-        metrics: metrics.finish(outcome == Outcome::Completed),
+
+    /// How the run ended, once it has (`None` while it runs).
+    pub fn outcome(&self) -> Option<Outcome> {
+        self.ended.as_ref().map(|(o, _)| *o)
+    }
+
+    /// Time of the current step, s.
+    pub fn t_s(&self) -> f64 {
+        self.k as f64 * self.plan.dt_s
+    }
+
+    /// The vehicle's state.
+    pub fn state(&self) -> &X {
+        &self.x
+    }
+
+    /// The command being held, rad/s.
+    pub fn omega_radps(&self) -> f64 {
+        self.omega
+    }
+
+    /// Ends the episode (a run still going ends as it stands, as `completed` would at its end)
+    /// and returns its result; the last valid state is always in the trace.
+    pub fn finish<S: TraceSink + ?Sized>(self, sink: &mut S) -> RunResult {
+        if self.plan.record_every > 0 && self.last_recorded_step != Some(self.last_valid_step) {
+            if let Some(row) = &self.last_row {
+                sink.record(row);
+            }
+        }
+        let (outcome, detail) = self.ended.unwrap_or((Outcome::Completed, None));
+        RunResult {
+            outcome,
+            outcome_detail: detail,
+            t_end_s: self.last_valid_step as f64 * self.plan.dt_s,
+            steps: self.last_valid_step,
+            samples_dropped: self.sensor.dropped(),
+            samples: self.samples,
+            end_position_m: [self.end_pos.x, self.end_pos.y],
+            metrics: self.metrics.finish(outcome == Outcome::Completed),
+        }
     }
 }

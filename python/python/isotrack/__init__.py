@@ -83,8 +83,11 @@ class Scenario:
 
         ``controller``: any object with ``update(t_s, value) -> omega`` (rad/s, positive turns
         left) and optionally ``reset()``: it replaces the scenario's controller and sees only what
-        a coordinate-free controller sees, the time and the measured value of each sample. An
-        exception inside it ends the run and is raised here with its traceback.
+        a coordinate-free controller sees, the time and the measured value of each sample. Its
+        command is held until the next sample and clipped to the scenario's turn-rate limit
+        (``controller.max_turn_rate_radps``, or the airframe's for the fixed-wing UAV), as the
+        built-in laws' are. An exception inside it ends the run and is raised here with its
+        traceback.
         """
         summary, trace = self._native.run(record_rate_hz, controller)
         return Run(json.loads(summary), dict(trace))
@@ -99,8 +102,26 @@ class Scenario:
         v = self._native.field_values(xa.ravel(), ya.ravel(), float(t))
         return v.reshape(xa.shape)
 
+    # Immutable: copies share it. Pickled as its resolved TOML (file paths in it are absolute),
+    # so that Gymnasium can copy an environment's arguments and send them to worker processes.
+    def __copy__(self) -> "Scenario":
+        return self
+
+    def __deepcopy__(self, memo) -> "Scenario":
+        return self
+
+    def __reduce__(self):
+        return (Scenario.from_toml, (self.to_toml(),))
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Scenario) and self.to_toml() == other.to_toml()
+
+    def __hash__(self) -> int:
+        return hash(self.to_toml())
+
     def __repr__(self) -> str:
-        return f"Scenario({self.to_toml().splitlines()[0] if self.to_toml() else ''})"
+        first = next((line for line in self.to_toml().splitlines() if line.startswith("name")), "")
+        return f"Scenario({first})" if first else "Scenario(<unnamed>)"
 
 
 def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[str, Any]:

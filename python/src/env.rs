@@ -1,0 +1,333 @@
+//! The reinforcement-learning environment's engine: a batch of scenario episodes stepped in
+//! one call (numpy in, numpy out), for `isotrack.gym.IsolineEnv` (a batch of one) and
+//! `isotrack.gym.IsolineVectorEnv`. The Python side draws the random starts and seeds (from
+//! Gymnasium's generators) and does the autoreset bookkeeping; everything per step is here.
+//!
+//! Per environment and step (one sensor sample, see `Episode`):
+//! - action: the turn-rate command `omega`, rad/s, clipped to `[-omega_max, omega_max]` and held
+//!   until the next delivered sample;
+//! - observation: `[eps_m, deps_m]`, the measured error `eps_m = s_measured - s_d` and its
+//!   sampled difference `(eps_m,k - eps_m,k-1) / (t_k - t_k-1)` (1/s; 0 at the first sample),
+//!   exactly what a coordinate-free controller can compute;
+//! - reward: `-|eps_k| / error_scale - effort_weight * (omega / omega_max)^2`, with `eps_k` the
+//!   true (noise-free) error at the new sample; on a terminating step (`left_field`,
+//!   `diverged`) also `-termination_penalty` (default: the worst reward a step can have under
+//!   the error cap `MAX_SCALED_ERROR`, times the steps left, so that ending a run early never
+//!   scores better than flying it out).
+
+use crate::{PyScenario, ScenarioErrorPy};
+use isotrack_scenario::{Scenario, ScenarioEpisode, Start};
+use isotrack_sim::{Outcome, RunResult};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// The scaled error counted by the default termination penalty per step left: a run that ends
+/// early pays as if every remaining step had `|eps| = MAX_SCALED_ERROR * error_scale` at full
+/// effort.
+const MAX_SCALED_ERROR: f64 = 10.0;
+
+/// The turn-rate bound of the action space when the scenario has no limit, rad/s (the same
+/// default the search phase uses).
+const DEFAULT_MAX_TURN_RATE_RADPS: f64 = 1.0;
+
+/// One environment of the batch.
+struct Slot {
+    episode: Option<ScenarioEpisode>,
+    /// The last observation, returned again once the episode has ended.
+    obs: [f64; 2],
+    /// Time of the last sample, s.
+    t_s: f64,
+    /// The true error at the last sample (field units).
+    true_error: f64,
+    /// Samples delivered so far.
+    samples: u64,
+}
+
+/// A batch of `num_envs` episodes of one scenario.
+#[pyclass(name = "EnvBatch", module = "isotrack._native")]
+pub struct PyEnvBatch {
+    scenario: Scenario,
+    slots: Vec<Slot>,
+    level: f64,
+    max_turn_rate_radps: f64,
+    error_scale: f64,
+    effort_weight: f64,
+    termination_penalty: Option<f64>,
+    /// Samples a full run delivers at most (for the default termination penalty).
+    samples_per_run: f64,
+}
+
+fn invalid(name: &str, v: f64, why: &str) -> PyErr {
+    PyValueError::new_err(format!("{name} must be {why}, got {v}"))
+}
+
+#[pymethods]
+impl PyEnvBatch {
+    #[new]
+    #[pyo3(signature = (scenario, num_envs, max_turn_rate_radps=None, error_scale=None, effort_weight=0.01, termination_penalty=None))]
+    fn new(
+        scenario: &PyScenario,
+        num_envs: usize,
+        max_turn_rate_radps: Option<f64>,
+        error_scale: Option<f64>,
+        effort_weight: f64,
+        termination_penalty: Option<f64>,
+    ) -> PyResult<Self> {
+        let s = scenario.inner.clone();
+        if num_envs == 0 {
+            return Err(PyValueError::new_err("num_envs must be at least 1"));
+        }
+        let omax = max_turn_rate_radps
+            .or(s.max_turn_rate_radps())
+            .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
+        if !(omax.is_finite() && omax > 0.0) {
+            return Err(invalid("max_turn_rate_radps", omax, "finite and > 0"));
+        }
+        let scale = error_scale.or(s.file().controller.c2).unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(invalid("error_scale", scale, "finite and > 0"));
+        }
+        if !(effort_weight.is_finite() && effort_weight >= 0.0) {
+            return Err(invalid("effort_weight", effort_weight, "finite and >= 0"));
+        }
+        if let Some(p) = termination_penalty {
+            if !(p.is_finite() && p >= 0.0) {
+                return Err(invalid("termination_penalty", p, "finite and >= 0"));
+            }
+        }
+        let f = s.file();
+        let duration = f.sim.duration_s.unwrap_or(600.0);
+        let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+        let slots = (0..num_envs)
+            .map(|_| Slot {
+                episode: None,
+                obs: [0.0; 2],
+                t_s: 0.0,
+                true_error: 0.0,
+                samples: 0,
+            })
+            .collect();
+        Ok(Self {
+            level: s.level(),
+            scenario: s,
+            slots,
+            max_turn_rate_radps: omax,
+            error_scale: scale,
+            effort_weight,
+            termination_penalty,
+            samples_per_run: (duration * rate).floor() + 1.0,
+        })
+    }
+
+    /// Number of environments.
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// The action bound, rad/s.
+    #[getter]
+    fn max_turn_rate_radps(&self) -> f64 {
+        self.max_turn_rate_radps
+    }
+
+    /// The reward's error scale (field units).
+    #[getter]
+    fn error_scale(&self) -> f64 {
+        self.error_scale
+    }
+
+    /// The scenario's own start `(x_m, y_m, heading_rad)`.
+    #[getter]
+    fn start(&self) -> (f64, f64, f64) {
+        let s = self.scenario.start();
+        (s.x_m, s.y_m, s.heading_rad)
+    }
+
+    /// The default radius of the random start disc: 1 % of the distance the vehicle flies in the
+    /// scenario's duration, m.
+    #[getter]
+    fn default_start_radius_m(&self) -> f64 {
+        let d = self.scenario.file().sim.duration_s.unwrap_or(600.0);
+        0.01 * d * self.scenario.start_speed_mps(self.scenario.start())
+    }
+
+    /// The sensor period, s.
+    #[getter]
+    fn sensor_period_s(&self) -> f64 {
+        1.0 / self
+            .scenario
+            .file()
+            .sensor
+            .rate_hz
+            .unwrap_or(1.0 / self.scenario.dt_s())
+    }
+
+    /// Whether the field has a value at `(x, y)` (m) at t = 0.
+    fn has_value(&self, x_m: f64, y_m: f64) -> bool {
+        use isotrack_core::ScalarField;
+        self.scenario
+            .field()
+            .value(0.0, isotrack_core::Vec2::new(x_m, y_m))
+            .is_some()
+    }
+
+    /// Starts environment `i` from `(x_m, y_m, heading_rad)` with the sensor seeded by
+    /// `sensor_seed` (`sim.seed` if `None`), and steps it to its first sample: returns the first
+    /// observation. Raises `ValueError` if the run ends before any sample (a start off the field).
+    #[pyo3(signature = (i, x_m, y_m, heading_rad, sensor_seed=None))]
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        i: usize,
+        x_m: f64,
+        y_m: f64,
+        heading_rad: f64,
+        sensor_seed: Option<u64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let n = self.slots.len();
+        let level = self.level;
+        let slot = self
+            .slots
+            .get_mut(i)
+            .ok_or_else(|| PyValueError::new_err(format!("environment {i} of {n}")))?;
+        let start = Start {
+            x_m,
+            y_m,
+            heading_rad,
+        };
+        let mut e = self.scenario.episode(Some(start), sensor_seed);
+        let Some(sample) = e.run_to_sample() else {
+            let r = e.result();
+            return Err(PyValueError::new_err(format!(
+                "the run from ({x_m}, {y_m}) m ended before its first sample: {} ({})",
+                r.outcome.as_str(),
+                r.outcome_detail.unwrap_or_default()
+            )));
+        };
+        slot.obs = [sample.measurement.value - level, 0.0];
+        slot.t_s = sample.measurement.t_s;
+        slot.true_error = sample.true_value - level;
+        slot.samples = 1;
+        slot.episode = Some(e);
+        Ok(PyArray1::from_slice(py, &slot.obs))
+    }
+
+    /// Steps every environment where `active` is true by one sample with its action (rad/s):
+    /// `(obs[n, 2], reward[n], terminated[n], truncated[n], t_s[n])`. Inactive or ended
+    /// environments keep their last observation, with reward 0 and both flags false.
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: PyReadonlyArray1<'py, f64>,
+        active: PyReadonlyArray1<'py, bool>,
+    ) -> PyResult<(
+        Bound<'py, PyAny>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<f64>>,
+    )> {
+        let (a, act) = (actions.as_slice()?, active.as_slice()?);
+        let n = self.slots.len();
+        if a.len() != n || act.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "expected {n} actions and {n} active flags, got {} and {}",
+                a.len(),
+                act.len()
+            )));
+        }
+        let mut obs = vec![0.0; 2 * n];
+        let mut reward = vec![0.0; n];
+        let mut terminated = vec![false; n];
+        let mut truncated = vec![false; n];
+        let mut t = vec![0.0; n];
+        let this = &mut *self;
+        py.detach(|| {
+            for i in 0..n {
+                if act[i] {
+                    let (r, term, trunc) = this.step_one(i, a[i]);
+                    reward[i] = r;
+                    terminated[i] = term;
+                    truncated[i] = trunc;
+                }
+                obs[2 * i..2 * i + 2].copy_from_slice(&this.slots[i].obs);
+                t[i] = this.slots[i].t_s;
+            }
+        });
+        let obs = PyArray1::from_vec(py, obs).reshape([n, 2])?.into_any();
+        Ok((
+            obs,
+            PyArray1::from_vec(py, reward),
+            PyArray1::from_vec(py, terminated),
+            PyArray1::from_vec(py, truncated),
+            PyArray1::from_vec(py, t),
+        ))
+    }
+
+    /// The `summary.json`-style result of environment `i`'s episode so far (JSON text): outcome,
+    /// times, and every metric. Raises `ValueError` before its first reset.
+    fn result_json(&self, i: usize) -> PyResult<String> {
+        let e = self
+            .slots
+            .get(i)
+            .and_then(|s| s.episode.as_ref())
+            .ok_or_else(|| PyValueError::new_err(format!("environment {i} was never reset")))?;
+        let r: RunResult = e.result();
+        serde_json::to_string(&r).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
+    }
+}
+
+impl PyEnvBatch {
+    /// One step of environment `i`: `(reward, terminated, truncated)`.
+    fn step_one(&mut self, i: usize, action: f64) -> (f64, bool, bool) {
+        let omax = self.max_turn_rate_radps;
+        let slot = &mut self.slots[i];
+        let Some(e) = slot.episode.as_mut() else {
+            return (0.0, false, false);
+        };
+        if e.outcome().is_some() {
+            return (0.0, false, false);
+        }
+        // NaN stays NaN (and ends the run as `diverged`); infinities clip to the bound.
+        let omega = action.clamp(-omax, omax);
+        // A NaN command (which ends the run) costs the full effort, not a NaN reward.
+        let effort = self.effort_weight * (omega / omax).powi(2).min(1.0);
+        let effort = if effort.is_nan() {
+            self.effort_weight
+        } else {
+            effort
+        };
+        e.command(omega);
+        match e.run_to_sample() {
+            Some(sample) => {
+                let eps_m = sample.measurement.value - self.level;
+                let dt = sample.measurement.t_s - slot.t_s;
+                slot.obs = [eps_m, (eps_m - slot.obs[0]) / dt];
+                slot.t_s = sample.measurement.t_s;
+                slot.true_error = sample.true_value - self.level;
+                slot.samples += 1;
+                (
+                    -slot.true_error.abs() / self.error_scale - effort,
+                    false,
+                    false,
+                )
+            }
+            None => {
+                let r = -slot.true_error.abs() / self.error_scale - effort;
+                match e.outcome() {
+                    Some(Outcome::Completed) | None => (r, false, true),
+                    Some(_) => {
+                        let left = (self.samples_per_run - slot.samples as f64).max(0.0);
+                        let penalty = self
+                            .termination_penalty
+                            .unwrap_or((MAX_SCALED_ERROR + self.effort_weight) * left);
+                        (r - penalty, true, false)
+                    }
+                }
+            }
+        }
+    }
+}
