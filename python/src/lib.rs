@@ -277,14 +277,15 @@ impl IsolineController for PyController {
 /// A sweep from its file's text: `(header, rows)` of `results.csv`'s cells in `run_id` order;
 /// `name` names the sweep in messages and anchors its relative `scenario` path.
 #[pyfunction]
-#[pyo3(signature = (text, name, threads=None))]
+#[pyo3(signature = (text, name, threads=None, progress=false))]
 fn sweep_cells(
     py: Python<'_>,
     text: &str,
     name: &str,
     threads: Option<usize>,
+    progress: bool,
 ) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
-    py.detach(|| isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads))
+    py.detach(|| isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads, progress))
         .map_err(|f| match f.code {
             66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
             _ => ScenarioErrorPy::new_err(f.message),

@@ -134,6 +134,9 @@ def test_sweep_equals_results_csv():
         with open(out / "results.csv") as f:
             rows = list(csv.DictReader(f))
         got = isotrack.sweep(str(sw), threads=2)
+        # One thread, with the progress bar: the same cells (deterministic on any thread count).
+        again = isotrack.sweep(str(sw), threads=1, progress=True)
+    assert all(np.array_equal(got[c], again[c], equal_nan=True) if got[c].dtype == np.float64 else list(got[c]) == list(again[c]) for c in got)
     assert list(got) == list(rows[0].keys())
     assert len(got["run_id"]) == len(rows) == 12
     for col in got:

@@ -128,23 +128,44 @@ pub fn sweep_in_memory(
     text: &str,
     name: &Path,
     threads: Option<usize>,
+    progress: bool,
 ) -> Result<(Vec<String>, Vec<Vec<String>>), Failure> {
     let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     let label = name.display().to_string();
     let base = sweep_base(&plan, &[], &label)?;
     let header = results_header(&plan);
     let pool = worker_pool(threads)?;
+    let pb = if progress {
+        runs_progress_bar(plan.total())
+    } else {
+        ProgressBar::hidden()
+    };
     let lines: Vec<String> = pool.install(|| {
         (0..plan.total())
             .into_par_iter()
-            .map(|id| run_row(&plan, &base, id, &label))
+            .map(|id| {
+                let row = run_row(&plan, &base, id, &label);
+                pb.inc(1);
+                row
+            })
             .collect()
     });
+    pb.finish();
     let rows = lines
         .iter()
         .map(|l| csv_fields(l).unwrap_or_default())
         .collect();
     Ok((header, rows))
+}
+
+/// The sweep's progress bar on stderr (hidden when stderr is not a terminal).
+fn runs_progress_bar(runs: u64) -> ProgressBar {
+    let pb = ProgressBar::new(runs);
+    pb.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
 }
 
 /// Parses `K/N`.
@@ -471,11 +492,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         std::fs::write(&results, &header_line).map_err(cant)?;
     }
     let new_runs = shard_runs - done.len() as u64;
-    let pb = ProgressBar::new(new_runs);
-    pb.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let pb = runs_progress_bar(new_runs);
     let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();
     let (tx, rx) = std::sync::mpsc::channel::<String>();

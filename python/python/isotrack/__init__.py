@@ -133,8 +133,8 @@ def sweep(path_or_toml_text: str, threads: Optional[int] = None, progress: bool 
     """Runs a sweep (a sweep file's path, or its TOML text, whose ``scenario`` is then relative
     to the current directory) and returns one numpy array per column of ``results.csv``, in
     ``run_id`` order: float64 for numeric columns (NaN for an empty cell), str otherwise. The
-    same cells as ``isotrack sweep`` writes. ``progress`` is accepted for the interface; the runs
-    are reported only when done."""
+    same cells as ``isotrack sweep`` writes. ``progress=True`` shows the CLI's progress bar on
+    stderr (when stderr is a terminal)."""
     import os
 
     if os.path.isfile(path_or_toml_text):
@@ -142,7 +142,7 @@ def sweep(path_or_toml_text: str, threads: Optional[int] = None, progress: bool 
             text, name = f.read(), path_or_toml_text
     else:
         text, name = path_or_toml_text, os.path.join(os.getcwd(), "<toml>")
-    header, rows = _native.sweep_cells(text, name, threads)
+    header, rows = _native.sweep_cells(text, name, threads, bool(progress))
     out: Dict[str, np.ndarray] = {}
     for k, col in enumerate(header):
         cells = [r[k] for r in rows]
@@ -150,6 +150,4 @@ def sweep(path_or_toml_text: str, threads: Optional[int] = None, progress: bool 
             out[col] = np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
         except ValueError:
             out[col] = np.array(cells, dtype=str)
-    if progress:
-        print(f"{len(rows)} runs")
     return out

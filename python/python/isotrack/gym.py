@@ -170,12 +170,14 @@ class IsolineEnv(gymnasium.Env):
         self._running = False
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
+        """Starts a run (see the module documentation): ``(observation, info)``."""
         super().reset(seed=seed)
         obs, start = self._starts.reset(0, self.np_random, options)
         self._running = True
         return obs, {"t_s": 0.0, "start": start}
 
     def step(self, action):
+        """One sample: ``(observation, reward, terminated, truncated, info)``."""
         if not self._running:
             raise RuntimeError("the run has ended (or never started): call reset()")
         self._action[0] = np.asarray(action, dtype=np.float64).reshape(-1)[0]
@@ -242,6 +244,7 @@ class IsolineVectorEnv(VectorEnv):
         seed: Optional[Union[int, Sequence[Optional[int]]]] = None,
         options: Optional[Dict[str, Any]] = None,
     ):
+        """Starts every run: ``(observations[num_envs, 2], info)``."""
         if seed is None:
             seeds: Sequence[Optional[int]] = [None] * self.num_envs
         elif isinstance(seed, (int, np.integer)):
@@ -264,6 +267,8 @@ class IsolineVectorEnv(VectorEnv):
         return obs, {"t_s": np.zeros(self.num_envs), "start": starts}
 
     def step(self, actions):
+        """One sample in every run (next-step autoreset): arrays of observations, rewards,
+        terminated and truncated flags, and the info dict."""
         if not self._started:
             raise RuntimeError("call reset() before step()")
         a = np.ascontiguousarray(actions, dtype=np.float64).reshape(self.num_envs)
