@@ -45,6 +45,47 @@ pub enum Command {
     /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
     /// as a CSV grid with a JSON sidecar.
     Interpolate(InterpolateArgs),
+    /// Run a benchmark suite (default: the bundled `suites/standard-v1.toml`): every controller
+    /// on every task and scoring seed; writes `leaderboard.csv`, `leaderboard.md`, `index.html`
+    /// and per-task results into DIR.
+    Benchmark(BenchmarkArgs),
+    /// Make one self-contained HTML page of run directories: the field, the paths with a time
+    /// slider, and the error, measurement and turn-rate plots on the same cursor.
+    Report(ReportArgs),
+}
+
+/// `isotrack benchmark`.
+#[derive(Debug, Args)]
+pub struct BenchmarkArgs {
+    /// The suite file (default: `suites/standard-v1.toml` of this repository).
+    pub suite: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Comma-separated controllers (default: the suite's).
+    #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
+    pub controllers: Vec<String>,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Reuse the task results already in DIR whose suite, controllers and gains are unchanged.
+    #[arg(long)]
+    pub resume: bool,
+    /// Rerun the tuning of the built-in laws on the suite's tuning seeds (else the gains the
+    /// suite records); `DIR/suite.toml` records the new gains.
+    #[arg(long)]
+    pub tune: bool,
+}
+
+/// `isotrack report`.
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// Run directories (from `run --out`, `compare --out`, ...); several are overlaid.
+    #[arg(required = true, value_name = "RUN_DIR")]
+    pub runs: Vec<PathBuf>,
+    /// The HTML file to write.
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
 }
 
 /// `isotrack check`.

@@ -5,7 +5,7 @@ use crate::exit;
 use crate::output::{num, run_to_trace, scenario_toml, write_summary};
 use crate::run::invalid;
 use crate::run::Failure;
-use isotrack_scenario::schema::{ControllerKind, ControllerSection};
+use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult};
 use std::io::Write;
@@ -35,20 +35,7 @@ pub fn variant(
     origin: &str,
 ) -> Result<Scenario, Failure> {
     let mut file = base.file().clone();
-    let orig = file.controller.clone();
-    if orig.kind != Some(kind) {
-        let takes_derivative = kind != ControllerKind::GradientReference;
-        file.controller = ControllerSection {
-            kind: Some(kind),
-            level: orig.level,
-            higher_side: orig.higher_side,
-            max_turn_rate_radps: orig.max_turn_rate_radps,
-            derivative: orig.derivative.filter(|_| takes_derivative),
-            derivative_tau_s: orig.derivative_tau_s.filter(|_| takes_derivative),
-            derivative_lipschitz: orig.derivative_lipschitz.filter(|_| takes_derivative),
-            ..ControllerSection::default()
-        };
-    }
+    file.controller = file.controller.switched_to(kind);
     let prefix = format!("{}.", kind.name());
     let sets: Vec<Assignment> = gains
         .iter()

@@ -5,6 +5,7 @@
 #![deny(missing_docs)]
 
 pub mod aircraft;
+pub mod bench;
 pub mod cli;
 pub mod compare;
 pub mod figures;

@@ -29,6 +29,8 @@ fn main() -> ExitCode {
         Command::Trim(args) => isotrack_cli::aircraft::trim(args),
         Command::Replay(args) => isotrack_cli::aircraft::replay(args),
         Command::Interpolate(args) => isotrack_cli::interpolate::interpolate(args),
+        Command::Benchmark(args) => isotrack_cli::bench::benchmark(args),
+        Command::Report(args) => isotrack_cli::bench::report(args),
     };
     match result {
         Ok(()) => ExitCode::from(isotrack_cli::exit::OK),

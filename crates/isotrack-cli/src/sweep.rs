@@ -111,7 +111,8 @@ fn results_header(plan: &SweepPlan) -> Vec<String> {
 }
 
 /// A worker pool of `threads` (capped; all cores by default).
-fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
+/// The worker pool for `--threads` (capped at 8 per core, see `thread_count`).
+pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(t) = thread_count(threads) {
         b = b.num_threads(t);

@@ -124,6 +124,28 @@ impl Scenario {
         })
     }
 
+    /// This scenario flown by the built-in law `kind` (see
+    /// [`schema::ControllerSection::switched_to`]: the law's defaults, the shared keys kept);
+    /// the field, vehicle and isoline are shared, not rebuilt.
+    pub fn with_controller_kind(
+        &self,
+        kind: schema::ControllerKind,
+    ) -> Result<Self, ScenarioError> {
+        if self.file.controller.kind == Some(kind) {
+            return Ok(self.clone());
+        }
+        let mut file = self.file.clone();
+        file.controller = file.controller.switched_to(kind);
+        let origin = format!("controller.kind = \"{}\"", kind.name());
+        let file = resolve::resolve(file).map_err(|issues| locate_derived(issues, &origin, &[]))?;
+        Ok(Self {
+            file,
+            field: self.field.clone(),
+            vehicle: self.vehicle.clone(),
+            isoline: self.isoline.clone(),
+        })
+    }
+
     /// Whether the field changes with time: a grid time series, a puff plume, or an analytic
     /// field with a drift.
     pub fn is_time_varying(&self) -> bool {

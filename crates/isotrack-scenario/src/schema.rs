@@ -602,6 +602,30 @@ pub struct ControllerSection {
     pub search_handover: Option<f64>,
 }
 
+impl ControllerSection {
+    /// The section for another kind: unchanged when it already is `kind`; otherwise the kind's
+    /// defaults with the keys every law shares carried over (level, turning side, turn-rate
+    /// limit, and, for the laws that differentiate the measurement, the derivative estimator).
+    /// A gain of one law (`kp` of the PI-like law, say) is not the same gain of another (`kp` of
+    /// the PID), so none is carried. Used by `compare` and the benchmark.
+    pub fn switched_to(&self, kind: ControllerKind) -> ControllerSection {
+        if self.kind == Some(kind) {
+            return self.clone();
+        }
+        let takes_derivative = kind != ControllerKind::GradientReference;
+        ControllerSection {
+            kind: Some(kind),
+            level: self.level,
+            higher_side: self.higher_side,
+            max_turn_rate_radps: self.max_turn_rate_radps,
+            derivative: self.derivative.filter(|_| takes_derivative),
+            derivative_tau_s: self.derivative_tau_s.filter(|_| takes_derivative),
+            derivative_lipschitz: self.derivative_lipschitz.filter(|_| takes_derivative),
+            ..ControllerSection::default()
+        }
+    }
+}
+
 /// `[sim]`.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]

@@ -1,0 +1,129 @@
+//! The benchmark's files: `leaderboard.csv`, `leaderboard.md`, and per task `tasks/ID/results.csv`
+//! (every scored run) and `tasks/ID/task.json` (what `--resume` reuses and the HTML page draws).
+
+use crate::run::{task_file, BenchError, BenchResult, RunRow};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The columns of `leaderboard.csv`: `rank, controller, overall`, then one per task id.
+pub fn leaderboard_csv(r: &BenchResult) -> String {
+    let mut s = String::from("rank,controller,overall");
+    for t in &r.tasks {
+        s.push(',');
+        s.push_str(&t.id);
+    }
+    s.push('\n');
+    for (rank, (c, overall)) in r.overall.iter().enumerate() {
+        let _ = write!(s, "{},{},{:.2}", rank + 1, csv_cell(c), overall);
+        for t in &r.tasks {
+            let v = t.scores.iter().find(|(n, _)| n == c).map_or(0.0, |x| x.1);
+            let _ = write!(s, ",{v:.2}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The leaderboard as a Markdown table (ranked), and a table of the tasks.
+pub fn leaderboard_md(r: &BenchResult) -> String {
+    let mut s = format!(
+        "| rank | controller | overall |{}\n|---|---|---|{}\n",
+        r.tasks
+            .iter()
+            .map(|t| format!(" {} |", t.id))
+            .collect::<String>(),
+        "---|".repeat(r.tasks.len())
+    );
+    for (rank, (c, overall)) in r.overall.iter().enumerate() {
+        let _ = write!(s, "| {} | {} | **{:.1}** |", rank + 1, c, overall);
+        for t in &r.tasks {
+            let v = t.scores.iter().find(|(n, _)| n == c).map_or(0.0, |x| x.1);
+            let _ = write!(s, " {v:.1} |");
+        }
+        s.push('\n');
+    }
+    s.push_str("\n| task | what |\n|---|---|\n");
+    for t in &r.tasks {
+        let _ = writeln!(s, "| {} | {} |", t.id, t.title.replace('|', "\\|"));
+    }
+    s
+}
+
+/// The columns of a task's `results.csv`.
+pub const RESULTS_COLUMNS: [&str; 15] = [
+    "controller",
+    "seed",
+    "outcome",
+    "score",
+    "capture",
+    "band",
+    "distance",
+    "losses",
+    "effort",
+    "convergence_time_s",
+    "time_in_band_fraction",
+    "steady_state_rms_isoline_distance_m",
+    "track_losses",
+    "control_effort",
+    "steady_state_rms_error",
+];
+
+/// A task's `results.csv`: one row per scored run.
+pub fn results_csv(runs: &[RunRow]) -> String {
+    let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:?}"));
+    let mut s = RESULTS_COLUMNS.join(",") + "\n";
+    for r in runs {
+        let p = r.score.parts;
+        let _ = writeln!(
+            s,
+            "{},{},{},{:?},{:?},{:?},{:?},{:?},{:?},{},{},{},{},{:?},{}",
+            csv_cell(&r.controller),
+            r.seed,
+            r.outcome,
+            r.score.total,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4],
+            opt(r.convergence_time_s),
+            opt(r.time_in_band_fraction),
+            opt(r.steady_state_rms_isoline_distance_m),
+            r.track_losses,
+            r.control_effort,
+            opt(r.steady_state_rms_error),
+        );
+    }
+    s
+}
+
+fn csv_cell(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Writes `leaderboard.csv`, `leaderboard.md` and each task's `results.csv` and `task.json`
+/// under `dir`.
+pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
+    let io = |p: &Path, e: std::io::Error| BenchError::Io {
+        path: p.display().to_string(),
+        message: e.to_string(),
+    };
+    let write = |p: &Path, text: &str| -> Result<(), BenchError> {
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+        }
+        std::fs::write(p, text).map_err(|e| io(p, e))
+    };
+    write(&dir.join("leaderboard.csv"), &leaderboard_csv(r))?;
+    write(&dir.join("leaderboard.md"), &leaderboard_md(r))?;
+    for t in &r.tasks {
+        let json = task_file(dir, &t.id);
+        write(&json.with_file_name("results.csv"), &results_csv(&t.runs))?;
+        write(&json, &serde_json::to_string(t).unwrap_or_default())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,122 @@
+//! The controllers a benchmark scores: the built-in laws by name, and your own.
+//!
+//! Your own law, from Rust: implement [`IsolineController`] (it receives only
+//! `Measurement { t_s, value }`) and register a factory, one line:
+//!
+//! ```
+//! use isotrack_bench::Registry;
+//! use isotrack_core::{IsolineController, Measurement};
+//!
+//! /// omega = k * (s - s_d): a bare proportional law.
+//! struct Proportional { level: f64, k: f64 }
+//! impl IsolineController for Proportional {
+//!     fn update(&mut self, m: &Measurement) -> f64 { self.k * (m.value - self.level) }
+//!     fn reset(&mut self) {}
+//! }
+//!
+//! let mut registry = Registry::builtin();
+//! registry.register("my_proportional", |s: &isotrack_scenario::Scenario| {
+//!     Box::new(Proportional { level: s.level(), k: 0.5 }) as Box<dyn IsolineController + Send>
+//! });
+//! assert!(registry.get("my_proportional").is_some());
+//! ```
+//!
+//! The factory gets each run's scenario (its level `s_d`, turn-rate limit, ... but never the
+//! vehicle's position: the controller itself sees only the measurements). The benchmark clips its
+//! command to the scenario's turn-rate limit as the built-in laws' output stage does. A
+//! registered controller is scored with the gains its factory gives (the built-in laws are
+//! tuned; yours is what you made it).
+
+use isotrack_core::{IsolineController, Measurement};
+use isotrack_scenario::schema::ControllerKind;
+use isotrack_scenario::Scenario;
+use std::sync::Arc;
+
+/// Makes a controller for one run.
+pub trait ControllerFactory: Send + Sync {
+    /// A fresh controller for a run of `scenario`.
+    fn make(&self, scenario: &Scenario) -> Box<dyn IsolineController + Send>;
+}
+
+impl<F> ControllerFactory for F
+where
+    F: Fn(&Scenario) -> Box<dyn IsolineController + Send> + Send + Sync,
+{
+    fn make(&self, scenario: &Scenario) -> Box<dyn IsolineController + Send> {
+        self(scenario)
+    }
+}
+
+/// A controller a benchmark can score.
+#[derive(Clone)]
+pub enum Entrant {
+    /// A built-in law (`controller.kind`), tuned per task.
+    Builtin(ControllerKind),
+    /// A registered controller, scored as its factory makes it.
+    Custom(Arc<dyn ControllerFactory>),
+}
+
+/// Named controllers.
+#[derive(Clone, Default)]
+pub struct Registry {
+    entries: Vec<(String, Entrant)>,
+}
+
+impl Registry {
+    /// The built-in coordinate-free laws (and `gradient_reference`, which is not coordinate-free
+    /// and is scored only when a suite names it).
+    pub fn builtin() -> Self {
+        Self {
+            entries: ControllerKind::ALL
+                .iter()
+                .map(|k| (k.name().to_string(), Entrant::Builtin(*k)))
+                .collect(),
+        }
+    }
+
+    /// Registers (or replaces) a controller under `name`.
+    pub fn register(&mut self, name: &str, factory: impl ControllerFactory + 'static) {
+        self.entries.retain(|(n, _)| n != name);
+        self.entries
+            .push((name.to_string(), Entrant::Custom(Arc::new(factory))));
+    }
+
+    /// The controller named `name`.
+    pub fn get(&self, name: &str) -> Option<&Entrant> {
+        self.entries.iter().find(|(n, _)| n == name).map(|(_, e)| e)
+    }
+
+    /// Every name, built-in first, in registration order.
+    pub fn names(&self) -> Vec<&str> {
+        self.entries.iter().map(|(n, _)| n.as_str()).collect()
+    }
+
+    /// The registered (not built-in) names.
+    pub fn custom_names(&self) -> Vec<&str> {
+        self.entries
+            .iter()
+            .filter(|(_, e)| matches!(e, Entrant::Custom(_)))
+            .map(|(n, _)| n.as_str())
+            .collect()
+    }
+}
+
+/// A registered controller behind the turn-rate limit of its run (the built-in laws' output
+/// stage does the same for them).
+pub(crate) struct Clipped {
+    pub(crate) inner: Box<dyn IsolineController + Send>,
+    pub(crate) max_turn_rate_radps: Option<f64>,
+}
+
+impl IsolineController for Clipped {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let w = self.inner.update(m);
+        match self.max_turn_rate_radps {
+            Some(l) => w.clamp(-l, l),
+            None => w,
+        }
+    }
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+}

@@ -1,0 +1,136 @@
+//! `isotrack benchmark` and `isotrack report`.
+
+use crate::cli::{BenchmarkArgs, ReportArgs};
+use crate::exit;
+use crate::run::Failure;
+use crate::sweep::worker_pool;
+use isotrack_bench::leaderboard::{leaderboard_md, write_files};
+use isotrack_bench::{run_benchmark, BenchError, Options, Registry, Suite};
+use std::path::{Path, PathBuf};
+
+fn fail(code: u8, message: String) -> Failure {
+    Failure { code, message }
+}
+
+/// Where the bundled standard suite is: `suites/standard-v1.toml` under the working directory,
+/// else under the repository the binary was built in (`target/<profile>/isotrack`).
+fn default_suite() -> Result<PathBuf, Failure> {
+    let rel = Path::new("suites").join("standard-v1.toml");
+    if rel.is_file() {
+        return Ok(rel);
+    }
+    if let Ok(exe) = std::env::current_exe() {
+        for up in exe.ancestors().skip(1).take(4) {
+            let p = up.join(&rel);
+            if p.is_file() {
+                return Ok(p);
+            }
+        }
+    }
+    Err(fail(
+        exit::NOINPUT,
+        "no suite given and suites/standard-v1.toml not found here or beside the binary: run from the isotrack repository or pass the suite file".into(),
+    ))
+}
+
+fn bench_failure(e: BenchError) -> Failure {
+    match e {
+        BenchError::UnknownController(_) => fail(exit::USAGE, e.to_string()),
+        BenchError::Io { .. } => fail(exit::CANTCREAT, e.to_string()),
+        BenchError::Task { ref message, .. } if message.contains("No such file") => {
+            fail(exit::NOINPUT, e.to_string())
+        }
+        _ => fail(exit::DATAERR, e.to_string()),
+    }
+}
+
+/// `isotrack benchmark [SUITE] --out DIR [--controllers a,b] [--threads N] [--resume] [--tune]`.
+pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
+    let path = match &a.suite {
+        Some(p) => p.clone(),
+        None => default_suite()?,
+    };
+    if !path.exists() {
+        return Err(fail(
+            exit::NOINPUT,
+            format!("{}: no such suite file", path.display()),
+        ));
+    }
+    let suite = Suite::load(&path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    if !a.resume && a.out.join("leaderboard.csv").exists() {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
+                a.out.display()
+            ),
+        ));
+    }
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
+    let registry = Registry::builtin();
+    let opts = Options {
+        controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
+        tune: a.tune,
+        resume_from: a.resume.then(|| a.out.clone()),
+    };
+    let pool = worker_pool(a.threads)?;
+    let started = std::time::Instant::now();
+    let progress = |i: usize, n: usize, id: &str| {
+        eprintln!(
+            "[{:>6.1} s] task {}/{n}: {id}",
+            started.elapsed().as_secs_f64(),
+            i + 1
+        )
+    };
+    let result = pool
+        .install(|| run_benchmark(&suite, &registry, &opts, &progress))
+        .map_err(bench_failure)?;
+    write_files(&result, &a.out).map_err(bench_failure)?;
+    let html = a.out.join("index.html");
+    std::fs::write(&html, isotrack_html::benchmark_page(&result))
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
+    // The suite as run: the gains every built-in law ran with recorded per task.
+    let mut as_run = suite.clone();
+    for (task, res) in as_run.tasks.iter_mut().zip(&result.tasks) {
+        task.tuned = res.gains.clone();
+        // Absolute, so that DIR/suite.toml runs from where it is.
+        let abs =
+            std::path::absolute(suite.scenario_path(task)).unwrap_or(suite.scenario_path(task));
+        task.scenario = abs.display().to_string();
+    }
+    let header = format!(
+        "The suite as run by isotrack {} ({}): the tuned gains of each task are the ones its\nscores used{}.",
+        env!("CARGO_PKG_VERSION"),
+        path.display(),
+        if a.tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
+    );
+    let suite_out = a.out.join("suite.toml");
+    std::fs::write(&suite_out, as_run.to_toml(&header))
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
+    print!("{}", leaderboard_md(&result));
+    eprintln!(
+        "{} tasks in {:.1} s: {}",
+        result.tasks.len(),
+        started.elapsed().as_secs_f64(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// `isotrack report RUN_DIR... --out report.html`.
+pub fn report(a: &ReportArgs) -> Result<(), Failure> {
+    let dirs: Vec<&Path> = a.runs.iter().map(|p| p.as_path()).collect();
+    let html = isotrack_html::report_page(&dirs).map_err(|e| match e {
+        isotrack_html::ReportError::Input(m) => fail(exit::NOINPUT, m),
+        isotrack_html::ReportError::Data(m) => fail(exit::DATAERR, m),
+    })?;
+    if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", parent.display())))?;
+    }
+    std::fs::write(&a.out, html)
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
+    eprintln!("wrote {}", a.out.display());
+    Ok(())
+}
