@@ -1,0 +1,368 @@
+//! `isotrack benchmark` and `isotrack report` end to end: the files, their columns and values,
+//! resume, exit codes; and the HTML pages in a real browser (headless Chromium): the DOM they
+//! build, no script error, and a screenshot that is not blank.
+
+mod common;
+use common::{assert_fails, isotrack, stderr, write};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A two-task suite over the repository's scenarios (short runs).
+fn mini_suite(dir: &Path) -> String {
+    let scen = repo().join("scenarios");
+    write(
+        dir,
+        "mini.toml",
+        &format!(
+            r#"name = "mini"
+version = 1
+controllers = ["pi_isoline", "sliding_mode_smooth"]
+tuning_seeds = [11]
+scoring_seeds = [1, 2]
+
+[[task]]
+id = "circular"
+title = "circular field, 10 Hz"
+scenario = "{s}/paper-fig2b-circular.toml"
+set = ["sim.duration_s=60.0", "sensor.rate_hz=10.0", "controller.max_turn_rate_radps=1.0"]
+length_m = 6.93
+vary = {{ "initial.heading_rad" = {{ uniform = [-3.0, 3.0] }} }}
+
+[[task]]
+id = "volcano"
+title = "volcano DEM"
+scenario = "{s}/volcano.toml"
+set = ["sim.duration_s=200.0"]
+length_m = 313.0
+"#,
+            s = scen.display()
+        ),
+    )
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+#[test]
+fn benchmark_writes_the_leaderboard_and_resumes() {
+    let d = tempfile::tempdir().unwrap();
+    let suite = mini_suite(d.path());
+    let out = d.path().join("out");
+    let o = isotrack(&[
+        "benchmark",
+        &suite,
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "2",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let md = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        md.starts_with("| rank | controller | overall | circular | volcano |"),
+        "{md}"
+    );
+    let csv = read(&out.join("leaderboard.csv"));
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], "rank,controller,overall,circular,volcano");
+    assert_eq!(lines.len(), 3);
+    // Overall = mean of the task scores; ranked best first.
+    let rows: Vec<Vec<f64>> = lines[1..]
+        .iter()
+        .map(|l| l.split(',').skip(2).map(|v| v.parse().unwrap()).collect())
+        .collect();
+    for r in &rows {
+        assert!((r[0] - (r[1] + r[2]) / 2.0).abs() < 0.011, "{r:?}");
+        assert!(r.iter().all(|v| (0.0..=100.0).contains(v)));
+    }
+    assert!(rows[0][0] >= rows[1][0]);
+    // Each task's results: one row per controller and scoring seed; score = the weighted parts.
+    let res = read(&out.join("tasks/circular/results.csv"));
+    let mut it = res.lines();
+    assert_eq!(
+        it.next().unwrap(),
+        "controller,seed,outcome,score,capture,band,distance,losses,effort,convergence_time_s,time_in_band_fraction,steady_state_rms_isoline_distance_m,track_losses,control_effort,steady_state_rms_error"
+    );
+    let runs: Vec<Vec<&str>> = it.map(|l| l.split(',').collect()).collect();
+    assert_eq!(runs.len(), 4);
+    for r in &runs {
+        let v = |i: usize| r[i].parse::<f64>().unwrap();
+        let weighted = 100.0 * (0.2 * v(4) + 0.3 * v(5) + 0.3 * v(6) + 0.1 * v(7) + 0.1 * v(8));
+        assert!((v(3) - weighted).abs() < 1e-9, "{r:?}");
+    }
+    // The page names every controller and task; the suite as run loads again.
+    let html = read(&out.join("index.html"));
+    for n in ["pi_isoline", "sliding_mode_smooth", "circular", "volcano"] {
+        assert!(html.contains(n), "{n}");
+    }
+    assert!(
+        !html.contains("http://") || !html.contains("<script src"),
+        "no external script"
+    );
+    let as_run = out.join("suite.toml");
+    assert!(read(&as_run).contains("[task.tuned.pi_isoline]"));
+    // Again without --resume: refused; with --resume: the same results, reused.
+    let again = isotrack(&["benchmark", &suite, "--out", out.to_str().unwrap()]);
+    assert_fails(&again, 73, &["already holds a benchmark", "--resume"]);
+    let before = std::fs::metadata(out.join("tasks/circular/task.json"))
+        .unwrap()
+        .modified()
+        .unwrap();
+    let resumed = isotrack(&[
+        "benchmark",
+        &suite,
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+        "--threads",
+        "1",
+    ]);
+    assert_eq!(resumed.status.code(), Some(0), "{}", stderr(&resumed));
+    assert_eq!(read(&out.join("leaderboard.csv")), csv);
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("tasks/circular/task.json"))).unwrap();
+    assert_eq!(json["runs"].as_array().unwrap().len(), 4);
+    let _ = before;
+    // The suite as run (absolute scenario paths, the gains recorded) gives the same scores.
+    let out2 = d.path().join("out2");
+    let o = isotrack(&[
+        "benchmark",
+        as_run.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(read(&out2.join("leaderboard.csv")), csv);
+}
+
+#[test]
+fn benchmark_exit_codes() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let out = out.to_str().unwrap();
+    assert_fails(
+        &isotrack(&["benchmark", "/nonexistent/suite.toml", "--out", out]),
+        66,
+        &["no such suite file"],
+    );
+    let bad = write(d.path(), "bad.toml", "name = \"x\"\nversion = 1\n");
+    assert_fails(
+        &isotrack(&["benchmark", &bad, "--out", out]),
+        65,
+        &["bad.toml", "missing field"],
+    );
+    let suite = mini_suite(d.path());
+    assert_fails(
+        &isotrack(&["benchmark", &suite, "--out", out, "--controllers", "nope"]),
+        64,
+        &["unknown controller \"nope\""],
+    );
+    let missing_scenario = write(
+        d.path(),
+        "m.toml",
+        "name = \"x\"\nversion = 1\ncontrollers = [\"pi_isoline\"]\ntuning_seeds = []\nscoring_seeds = [1]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"nope.toml\"\nlength_m = 1.0\n",
+    );
+    let o = isotrack(&["benchmark", &missing_scenario, "--out", out]);
+    assert!(
+        matches!(o.status.code(), Some(65) | Some(66)),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("task a"), "{}", stderr(&o));
+}
+
+#[test]
+fn report_of_runs_and_its_errors() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=60",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let page = d.path().join("r/report.html");
+    let o = isotrack(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let html = read(&page);
+    assert!(
+        html.contains("id=\"play\"") && html.contains("id=\"time\"") && html.contains("\"runs\"")
+    );
+    // The trace is in the page: 601 rows at 10 Hz over 60 s.
+    let t0 = html.find("\"t\":[").unwrap();
+    let t = &html[t0 + 5..t0 + 5 + html[t0 + 5..].find(']').unwrap()];
+    assert_eq!(t.split(',').count(), 601);
+    assert_fails(
+        &isotrack(&["report", "/nonexistent", "--out", page.to_str().unwrap()]),
+        66,
+        &["summary.json"],
+    );
+}
+
+/// Headless Chromium, if installed (`.ci/run` installs it and sets ISOTRACK_REQUIRE_BROWSER=1,
+/// so that CI fails rather than skips).
+fn chromium() -> Option<String> {
+    for c in ["chromium", "chromium-browser", "google-chrome"] {
+        if Command::new(c)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+        {
+            return Some(c.to_string());
+        }
+    }
+    assert!(
+        std::env::var_os("ISOTRACK_REQUIRE_BROWSER").is_none(),
+        "ISOTRACK_REQUIRE_BROWSER is set but no chromium is installed"
+    );
+    eprintln!("skipped: no chromium on PATH");
+    None
+}
+
+/// Loads a page headless: (the DOM after its scripts ran, the browser's log).
+fn load(browser: &str, page: &Path, profile: &Path, extra: &[&str]) -> (String, String) {
+    let url = format!("file://{}", page.canonicalize().unwrap().display());
+    let o = Command::new("timeout")
+        .arg("120")
+        .arg(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=5000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(&url)
+        .output()
+        .unwrap();
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// A screenshot that is not blank: many distinct colours (the heat map), not all white.
+fn assert_not_blank(png: &Path) {
+    let img = image::open(png).unwrap().to_rgb8();
+    let mut colours = std::collections::HashSet::new();
+    for p in img.pixels() {
+        colours.insert(p.0);
+    }
+    assert!(
+        colours.len() > 200,
+        "{} colours in {}",
+        colours.len(),
+        png.display()
+    );
+}
+
+fn assert_no_script_error(log: &str) {
+    for line in log.lines() {
+        assert!(
+            !line.contains("Uncaught") && !line.contains(":CONSOLE"),
+            "browser console: {line}"
+        );
+    }
+}
+
+#[test]
+fn html_pages_in_a_real_browser() {
+    let Some(browser) = chromium() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let suite = mini_suite(d.path());
+    let out = d.path().join("bench");
+    let o = isotrack(&["benchmark", &suite, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let index = out.join("index.html");
+    let (dom, log) = load(&browser, &index, &d.path().join("p1"), &["--dump-dom"]);
+    assert!(
+        dom.contains("data-ready=\"1\""),
+        "the page's script did not finish: {log}"
+    );
+    assert_no_script_error(&log);
+    assert!(dom.contains("ready: 2 controllers, 2 tasks"));
+    for c in ["pi_isoline", "sliding_mode_smooth"] {
+        // One leaderboard row and one row per task table.
+        assert_eq!(
+            dom.matches(&format!("<tr data-controller=\"{c}\"")).count(),
+            3,
+            "{c}"
+        );
+    }
+    for t in ["circular", "volcano"] {
+        assert!(dom.contains(&format!("data-task=\"{t}\"")), "{t}");
+        assert!(dom.contains(&format!("data-col=\"{t}\"")), "{t}");
+    }
+    let shot = d.path().join("index.png");
+    load(
+        &browser,
+        &index,
+        &d.path().join("p2"),
+        &[
+            "--window-size=1200,1600",
+            &format!("--screenshot={}", shot.display()),
+        ],
+    );
+    assert_not_blank(&shot);
+
+    let run = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=60",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let report = d.path().join("report.html");
+    let o = isotrack(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let (dom, log) = load(&browser, &report, &d.path().join("p3"), &["--dump-dom"]);
+    assert!(
+        dom.contains("data-ready=\"1\""),
+        "the report's script did not finish: {log}"
+    );
+    assert_no_script_error(&log);
+    assert!(dom.contains("ready: 1 run(s)"));
+    for s in ["error", "s_measured", "omega"] {
+        assert!(dom.contains(&format!("data-series=\"{s}\"")), "{s}");
+    }
+    let shot = d.path().join("report.png");
+    load(
+        &browser,
+        &report,
+        &d.path().join("p4"),
+        &[
+            "--window-size=1280,900",
+            &format!("--screenshot={}", shot.display()),
+        ],
+    );
+    assert_not_blank(&shot);
+}
