@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::Path;
 
+mod bench;
 mod env;
 
 pyo3::create_exception!(
@@ -77,6 +78,18 @@ impl PyScenario {
             inner,
             origin: self.origin.clone(),
         })
+    }
+
+    /// The level `s_d` the scenario tracks (field units).
+    #[getter]
+    fn level(&self) -> f64 {
+        self.inner.level()
+    }
+
+    /// The turn-rate limit applied to every controller's command, rad/s (`None`: no limit).
+    #[getter]
+    fn max_turn_rate_radps(&self) -> Option<f64> {
+        self.inner.max_turn_rate_radps()
     }
 
     /// The resolved scenario as TOML (what `isotrack show` prints).
@@ -305,5 +318,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::benchmark_json, m)?)?;
     Ok(())
 }

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["Scenario", "Run", "ScenarioError", "check", "sweep", "__version__"]
+__all__ = ["Scenario", "Run", "ScenarioError", "benchmark", "check", "sweep", "__version__"]
 
 __version__: str = _native.version()
 
@@ -77,6 +77,16 @@ class Scenario:
     def to_toml(self) -> str:
         """The resolved scenario as TOML (what ``isotrack show`` prints)."""
         return self._native.to_toml()
+
+    @property
+    def level(self) -> float:
+        """The level ``s_d`` the scenario tracks (field units)."""
+        return self._native.level
+
+    @property
+    def max_turn_rate_radps(self) -> Optional[float]:
+        """The turn-rate limit applied to every controller's command, rad/s (None: no limit)."""
+        return self._native.max_turn_rate_radps
 
     def run(self, record_rate_hz: Optional[float] = None, controller: Any = None) -> Run:
         """Runs the scenario.
@@ -151,3 +161,51 @@ def sweep(path_or_toml_text: str, threads: Optional[int] = None, progress: bool 
         except ValueError:
             out[col] = np.array(cells, dtype=str)
     return out
+
+
+def benchmark(
+    controller_factory,
+    suite: Optional[str] = None,
+    name: str = "python",
+    controllers: Optional[list] = None,
+    tune: bool = False,
+    out: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Scores your controller with isotrack's benchmark, on the same tasks and seeds as the
+    built-in laws (the ``isotrack benchmark`` command's engine).
+
+    ``controller_factory(scenario)`` is called once per run with that run's :class:`Scenario`
+    (read ``scenario.level``, ``scenario.max_turn_rate_radps``; never the vehicle's position) and
+    returns an object with ``update(t_s, value) -> omega``. Its commands are clipped to the
+    task's turn-rate limit. It is scored with the gains it sets itself (the built-in laws run
+    with the suite's tuned gains, or retuned with ``tune=True``).
+
+    ``suite``: a suite file (default ``suites/standard-v1.toml`` under the current directory: run
+    from the isotrack repository, or pass the path). ``controllers``: which to score (default:
+    the suite's built-in laws and yours). ``out``: a directory to write ``leaderboard.csv``,
+    ``leaderboard.md``, ``index.html`` and per-task results into.
+
+    Returns a dict: ``overall`` (``[name, score]`` pairs, best first), ``tasks`` (per task:
+    ``scores``, ``runs`` with every scored run, ``gains``, ...), ``controllers``, ``suite``,
+    ``version``. An exception in your controller is raised here with its traceback.
+    """
+    import os
+
+    if suite is None:
+        suite = os.path.join("suites", "standard-v1.toml")
+        if not os.path.isfile(suite):
+            raise FileNotFoundError(
+                "no suite given and suites/standard-v1.toml is not under the current directory: "
+                "run from the isotrack repository or pass suite=PATH"
+            )
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+    text = _native.benchmark_json(
+        lambda native: controller_factory(Scenario(native)),
+        name,
+        str(suite),
+        list(controllers) if controllers is not None else None,
+        bool(tune),
+        None if out is None else str(out),
+    )
+    return json.loads(text)

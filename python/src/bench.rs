@@ -1,0 +1,137 @@
+//! `isotrack.benchmark`: a Python controller scored by the benchmark on the same tasks and seeds
+//! as the built-in laws.
+
+use crate::{PyScenario, ScenarioErrorPy};
+use isotrack_bench::leaderboard::write_files;
+use isotrack_bench::{run_benchmark, ControllerFactory, Options, Registry, Suite};
+use isotrack_core::{IsolineController, Measurement};
+use isotrack_scenario::Scenario;
+use pyo3::exceptions::PyFileNotFoundError;
+use pyo3::prelude::*;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+/// The first Python exception of a benchmark (raised when it returns).
+type FirstError = Arc<Mutex<Option<PyErr>>>;
+
+fn keep(errors: &FirstError, e: PyErr) {
+    if let Ok(mut slot) = errors.lock() {
+        slot.get_or_insert(e);
+    }
+}
+
+/// A Python callable `factory(scenario) -> controller`, called once per run.
+struct PyFactory {
+    factory: Py<PyAny>,
+    errors: FirstError,
+}
+
+impl ControllerFactory for PyFactory {
+    fn make(&self, scenario: &Scenario) -> Box<dyn IsolineController + Send> {
+        let obj = Python::attach(|py| {
+            let native = Py::new(
+                py,
+                PyScenario {
+                    inner: scenario.clone(),
+                    origin: "<benchmark>".into(),
+                },
+            )?;
+            self.factory.call1(py, (native,))
+        });
+        let obj = match obj {
+            Ok(o) => Some(o),
+            Err(e) => {
+                keep(&self.errors, e);
+                None
+            }
+        };
+        Box::new(BenchController {
+            obj,
+            errors: self.errors.clone(),
+        })
+    }
+}
+
+/// A Python controller in a benchmark run: `update(t_s, value) -> omega`. An exception ends the
+/// run (a NaN command: `diverged`) and is raised when the benchmark returns.
+struct BenchController {
+    obj: Option<Py<PyAny>>,
+    errors: FirstError,
+}
+
+impl IsolineController for BenchController {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let Some(obj) = self.obj.take() else {
+            return f64::NAN;
+        };
+        Python::attach(|py| {
+            match obj
+                .call_method1(py, "update", (m.t_s, m.value))
+                .and_then(|r| r.extract::<f64>(py))
+            {
+                Ok(w) => {
+                    self.obj = Some(obj);
+                    w
+                }
+                Err(e) => {
+                    keep(&self.errors, e);
+                    f64::NAN
+                }
+            }
+        })
+    }
+    fn reset(&mut self) {}
+}
+
+/// Runs a suite with the Python controller `factory` registered as `name`: the result as JSON
+/// (suite, controllers, per-task scores, runs and pictures, overall ranking); with `out`, the
+/// leaderboard files and `index.html` written there as `isotrack benchmark` writes them.
+#[pyfunction]
+#[pyo3(signature = (factory, name, suite_path, controllers=None, tune=false, out=None))]
+pub fn benchmark_json(
+    py: Python<'_>,
+    factory: Py<PyAny>,
+    name: &str,
+    suite_path: &str,
+    controllers: Option<Vec<String>>,
+    tune: bool,
+    out: Option<&str>,
+) -> PyResult<String> {
+    let path = Path::new(suite_path);
+    if !path.exists() {
+        return Err(PyFileNotFoundError::new_err(format!(
+            "{suite_path}: no such suite file"
+        )));
+    }
+    let suite = Suite::load(path).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
+    let errors: FirstError = Arc::new(Mutex::new(None));
+    let mut registry = Registry::builtin();
+    registry.register(
+        name,
+        PyFactory {
+            factory,
+            errors: errors.clone(),
+        },
+    );
+    let opts = Options {
+        controllers,
+        tune,
+        resume_from: None,
+    };
+    let result = py
+        .detach(|| run_benchmark(&suite, &registry, &opts, &|_, _, _| {}))
+        .map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
+    if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
+        return Err(e);
+    }
+    if let Some(dir) = out {
+        let dir = Path::new(dir);
+        write_files(&result, dir).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
+        std::fs::write(
+            dir.join("index.html"),
+            isotrack_html::benchmark_page(&result),
+        )
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+    }
+    serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
+}
