@@ -19,9 +19,9 @@ use isotrack_sim::NoTrace;
 use rayon::iter::IntoParallelIterator;
 use rayon::prelude::*;
 use serde_json::json;
-use std::collections::{BTreeMap, BTreeSet};
+
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The metric columns of `results.csv`, after `run_id` and the varied keys.
 pub const METRIC_COLUMNS: [&str; 14] = [
@@ -234,79 +234,149 @@ fn check_row(header: &[String], line: &str, total: u64) -> Result<u64, String> {
     Ok(id)
 }
 
-/// Reads the complete rows of `results.csv`: `(header, rows by run_id)`, each row checked by
-/// [`check_row`] (a damaged row is an error naming its line, never carried on). A trailing line
-/// without its newline (a run cut off mid-write) is dropped, and the file truncated to the last
-/// complete line when `repair` is set.
-fn read_results(
+/// One row of a results file: its run id and where its line is (not the line: a sweep's
+/// memory must not grow with its run count).
+#[derive(Clone, Copy, Debug)]
+struct RowRef {
+    id: u64,
+    /// Which of the indexed files.
+    file: usize,
+    offset: u64,
+    len: usize,
+    /// 1-based line number, for messages.
+    line: u64,
+}
+
+/// A results file, indexed: its header, where each row is, and how many rows are
+/// `invalid_scenario`.
+struct ResultsIndex {
+    header: String,
+    rows: Vec<RowRef>,
+    invalid: u64,
+}
+
+/// Indexes `path` (file number `file` for [`RowRef::file`]) in one streaming pass, checking
+/// every row (field count, `run_id` below `total`, known outcome, numeric metrics). A cut-off last
+/// line (a killed sweep) is left out, and with `repair` cut from the file.
+fn index_results(
     path: &Path,
+    file: usize,
     repair: bool,
     total: u64,
-) -> Result<(String, BTreeMap<u64, String>), Failure> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
+) -> Result<ResultsIndex, Failure> {
+    use std::io::BufRead;
+    let cannot = |e: std::io::Error| {
         fail(
             exit::NOINPUT,
             format!("cannot read {}: {e}", path.display()),
         )
-    })?;
-    let complete = match text.rfind('\n') {
-        Some(i) => &text[..=i],
-        None => "",
     };
-    if repair && complete.len() != text.len() {
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .map_err(|e| {
-                fail(
-                    exit::CANTCREAT,
-                    format!("cannot repair {}: {e}", path.display()),
-                )
-            })?;
-        f.set_len(complete.len() as u64).map_err(|e| {
+    let mut rdr = std::io::BufReader::new(std::fs::File::open(path).map_err(cannot)?);
+    let mut line = String::new();
+    let mut offset = rdr.read_line(&mut line).map_err(cannot)? as u64;
+    let cut_at = |at: u64| -> Result<(), Failure> {
+        if !repair {
+            return Ok(());
+        }
+        let repair_fail = |e: std::io::Error| {
             fail(
                 exit::CANTCREAT,
                 format!("cannot repair {}: {e}", path.display()),
             )
-        })?;
+        };
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(repair_fail)?
+            .set_len(at)
+            .map_err(repair_fail)
+    };
+    if !line.ends_with('\n') {
+        // No complete header: an empty file, or one cut before its first newline.
+        cut_at(0)?;
+        return Ok(ResultsIndex {
+            header: String::new(),
+            rows: vec![],
+            invalid: 0,
+        });
     }
-    let mut lines = complete.split_inclusive('\n');
-    let header = lines.next().unwrap_or("").to_string();
-    let columns: Vec<String> = if header.is_empty() {
-        vec![]
-    } else {
-        csv_fields(&header).ok_or_else(|| {
+    let header = std::mem::take(&mut line);
+    let columns: Vec<String> = csv_fields(&header).ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!("{}:1: the header is not a CSV line", path.display()),
+        )
+    })?;
+    let outcome_col = columns.iter().position(|c| c == "outcome");
+    let mut rows = vec![];
+    let mut invalid = 0;
+    for number in 2u64.. {
+        line.clear();
+        let n = rdr.read_line(&mut line).map_err(|e| {
             fail(
                 exit::DATAERR,
-                format!("{}:1: the header is not a CSV line", path.display()),
+                format!("{}:{number}: damaged row ({e})", path.display()),
             )
-        })?
-    };
-    let mut rows = BTreeMap::new();
-    for (i, line) in lines.enumerate() {
+        })?;
+        if n == 0 {
+            break;
+        }
+        if !line.ends_with('\n') {
+            cut_at(offset)?;
+            break;
+        }
         // Rows are written whole; a line that does not check is a damaged file, not ours to
         // guess at.
-        let damaged = |why: String| {
+        let id = check_row(&columns, &line, total).map_err(|why| {
             let shown: String = line.trim_end().chars().take(120).collect();
             fail(
                 exit::DATAERR,
                 format!(
-                    "{}:{}: damaged row ({why}): `{shown}`; remove the line (or the file) and --resume",
-                    path.display(),
-                    i + 2
+                    "{}:{number}: damaged row ({why}): `{shown}`; remove the line (or the file) and --resume",
+                    path.display()
                 ),
             )
-        };
-        let id = check_row(&columns, line, total).map_err(damaged)?;
-        if rows.insert(id, line.to_string()).is_some() {
-            return Err(damaged(format!("run {id} appears twice")));
+        })?;
+        if outcome_col.is_some_and(|c| {
+            csv_fields(&line)
+                .is_some_and(|f| f.get(c).map(String::as_str) == Some("invalid_scenario"))
+        }) {
+            invalid += 1;
         }
+        rows.push(RowRef {
+            id,
+            file,
+            offset,
+            len: n,
+            line: number,
+        });
+        offset += n as u64;
     }
-    Ok((header, rows))
+    Ok(ResultsIndex {
+        header,
+        rows,
+        invalid,
+    })
 }
 
-/// Writes `rows` sorted by id under `header` atomically (temporary file, then rename).
-fn write_sorted(path: &Path, header: &str, rows: &BTreeMap<u64, String>) -> Result<(), Failure> {
+/// Sorts `rows` by run id; the ids that appear more than once (first occurrences listed).
+fn sort_rows(rows: &mut [RowRef]) -> Vec<RowRef> {
+    rows.sort_by_key(|r| (r.id, r.file, r.offset));
+    rows.windows(2)
+        .filter(|w| w[0].id == w[1].id)
+        .map(|w| w[1])
+        .collect()
+}
+
+/// Writes the sorted `rows` (read back from `sources`, by [`RowRef::file`]) under `header` to
+/// `path` atomically (temporary file, then rename). Memory: one line at a time.
+fn write_sorted(
+    path: &Path,
+    header: &str,
+    rows: &[RowRef],
+    sources: &[PathBuf],
+) -> Result<(), Failure> {
+    use std::io::{Read, Seek, SeekFrom};
     let tmp = path.with_extension("csv.tmp");
     let cant = |e: std::io::Error| {
         fail(
@@ -314,10 +384,29 @@ fn write_sorted(path: &Path, header: &str, rows: &BTreeMap<u64, String>) -> Resu
             format!("cannot write {}: {e}", path.display()),
         )
     };
+    let mut inputs = sources
+        .iter()
+        .map(|p| {
+            std::fs::File::open(p)
+                .map(std::io::BufReader::new)
+                .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
+        })
+        .collect::<Result<Vec<_>, Failure>>()?;
     let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(cant)?);
     f.write_all(header.as_bytes()).map_err(cant)?;
-    for line in rows.values() {
-        f.write_all(line.as_bytes()).map_err(cant)?;
+    let mut at = vec![u64::MAX; inputs.len()];
+    let mut buf = Vec::new();
+    for r in rows {
+        let src = &mut inputs[r.file];
+        // Rows finish roughly in id order, so most reads follow on from the last: seek (which
+        // drops the reader's buffer) only when they do not.
+        if at[r.file] != r.offset {
+            src.seek(SeekFrom::Start(r.offset)).map_err(cant)?;
+        }
+        buf.resize(r.len, 0);
+        src.read_exact(&mut buf).map_err(cant)?;
+        at[r.file] = r.offset + r.len as u64;
+        f.write_all(&buf).map_err(cant)?;
     }
     f.into_inner()
         .map_err(|e| cant(e.into_error()))?
@@ -443,11 +532,12 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             ));
         }
     }
-    let done: BTreeMap<u64, String> = if results.exists() {
-        let (h, rows) = read_results(&results, true, total)?;
-        if h.is_empty() {
+    // The runs already done (their ids only, sorted).
+    let done: Vec<u64> = if results.exists() {
+        let idx = index_results(&results, 0, true, total)?;
+        if idx.header.is_empty() {
             std::fs::write(&results, &header_line).map_err(cant)?;
-        } else if h != header_line {
+        } else if idx.header != header_line {
             return Err(fail(
                 exit::DATAERR,
                 format!(
@@ -456,18 +546,31 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
                 ),
             ));
         }
-        if let Some(id) = rows.keys().find(|id| *id % n != k - 1) {
+        let mut rows = idx.rows;
+        if let Some(d) = sort_rows(&mut rows).first() {
             return Err(fail(
                 exit::DATAERR,
                 format!(
-                    "{}: run {id} is not in shard {k}/{n}: resume with the shard it was started with",
-                    results.display()
+                    "{}:{}: damaged row (run {} appears twice); remove the line (or the file) and --resume",
+                    results.display(),
+                    d.line,
+                    d.id
                 ),
             ));
         }
-        rows
+        if let Some(r) = rows.iter().find(|r| r.id % n != k - 1) {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: run {} is not in shard {k}/{n}: resume with the shard it was started with",
+                    results.display(),
+                    r.id
+                ),
+            ));
+        }
+        rows.iter().map(|r| r.id).collect()
     } else {
-        BTreeMap::new()
+        vec![]
     };
     // The sweep, its digest and its plan, kept next to the results (written before the first row, so
     // every results.csv has the sweep.json that says which sweep made it; on --resume only
@@ -516,7 +619,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             (0..shard_runs)
                 .into_par_iter()
                 .map(|i| i * n + (k - 1))
-                .filter(|id| !done.contains_key(id))
+                .filter(|id| done.binary_search(id).is_err())
                 .for_each_with(tx, |tx, id| {
                     let _ = tx.send(run_row(&plan, &base, id, &name));
                 })
@@ -527,17 +630,21 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     });
     write_result?;
     pb.finish_and_clear();
-    let (h, rows) = read_results(&results, false, total)?;
-    write_sorted(&results, &h, &rows)?;
-    let outcome_col = header.iter().position(|c| c == "outcome");
-    let invalid = rows
-        .values()
-        .filter(|line| {
-            csv_fields(line)
-                .zip(outcome_col)
-                .is_some_and(|(f, i)| f.get(i).map(String::as_str) == Some("invalid_scenario"))
-        })
-        .count();
+    let idx = index_results(&results, 0, false, total)?;
+    let mut rows = idx.rows;
+    if let Some(d) = sort_rows(&mut rows).first() {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}:{}: run {} appears twice",
+                results.display(),
+                d.line,
+                d.id
+            ),
+        ));
+    }
+    write_sorted(&results, &idx.header, &rows, std::slice::from_ref(&results))?;
+    let invalid = idx.invalid;
     let summary = format!(
         "{} runs ({} new) of {} in {:.2} s -> {}",
         rows.len(),
@@ -568,8 +675,8 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
 pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
     let mut header: Option<String> = None;
     let mut first: Option<(u64, String, serde_json::Value)> = None;
-    let mut all: BTreeMap<u64, String> = BTreeMap::new();
-    let mut dupes = BTreeSet::new();
+    let mut all: Vec<RowRef> = vec![];
+    let mut sources: Vec<PathBuf> = vec![];
     let out_results = a.out.join("results.csv");
     for d in &a.dirs {
         if crate::output::same_file(&d.join("results.csv"), &out_results) {
@@ -619,20 +726,20 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             Some(_) => {}
             None => first = Some((t, digest, m)),
         }
-        let (h, rows) = read_results(&d.join("results.csv"), false, t)?;
-        if header.as_ref().is_some_and(|x| *x != h) {
+        let path = d.join("results.csv");
+        let idx = index_results(&path, sources.len(), false, t)?;
+        if header.as_ref().is_some_and(|x| *x != idx.header) {
             return Err(fail(
                 exit::DATAERR,
                 format!("{}: different columns", d.display()),
             ));
         }
-        header = Some(h);
-        for (id, line) in rows {
-            if all.insert(id, line).is_some() {
-                dupes.insert(id);
-            }
-        }
+        header = Some(idx.header);
+        all.extend(idx.rows);
+        sources.push(path);
     }
+    let mut dupes: Vec<u64> = sort_rows(&mut all).iter().map(|r| r.id).collect();
+    dupes.dedup();
     let (total, _, mut manifest) = first.unwrap_or((0, String::new(), json!({})));
     if !dupes.is_empty() {
         let list: Vec<String> = dupes.iter().take(10).map(|i| i.to_string()).collect();
@@ -647,11 +754,16 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
     }
     let n_missing = total - all.len() as u64;
     if n_missing > 0 {
-        let list: Vec<String> = (0..total)
-            .filter(|i| !all.contains_key(i))
-            .take(10)
-            .map(|i| i.to_string())
-            .collect();
+        // The gaps in the sorted ids.
+        let mut list: Vec<String> = vec![];
+        let mut next = 0u64;
+        for id in all.iter().map(|r| r.id).chain(std::iter::once(total)) {
+            while next < id && list.len() < 10 {
+                list.push(next.to_string());
+                next += 1;
+            }
+            next = id + 1;
+        }
         return Err(fail(
             exit::DATAERR,
             format!(
@@ -667,7 +779,12 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
         )
     };
     std::fs::create_dir_all(&a.out).map_err(cant)?;
-    write_sorted(&out_results, header.as_deref().unwrap_or(""), &all)?;
+    write_sorted(
+        &out_results,
+        header.as_deref().unwrap_or(""),
+        &all,
+        &sources,
+    )?;
     if let Some(first) = a.dirs.first() {
         for f in ["sweep.toml", "base_scenario.toml"] {
             if first.join(f).exists() && !crate::output::same_file(&first.join(f), &a.out.join(f)) {
