@@ -107,8 +107,8 @@ class _Starts:
             # Uniform in the disc: radius ~ R*sqrt(u).
             rho = self.radius_m * np.sqrt(rng.uniform())
             phi = rng.uniform(-np.pi, np.pi)
-            x, y = x0 + rho * np.cos(phi), y0 + rho * np.sin(phi)
-            h = rng.uniform(-np.pi, np.pi) if self.random_heading else h0
+            x, y = float(x0 + rho * np.cos(phi)), float(y0 + rho * np.sin(phi))
+            h = float(rng.uniform(-np.pi, np.pi)) if self.random_heading else h0
             seed = int(rng.integers(0, 2**63))
             if not self.batch.has_value(x, y):
                 continue
