@@ -225,3 +225,66 @@ fn prop2_regions_are_sound() {
     assert!(!r.prop2.conditions_hold && !r.prop2.bound_applies);
     assert!(r.prop2.note.contains("bilinear"), "{}", r.prop2.note);
 }
+
+/// The circular field's gammas have closed forms: `|grad F| = k F` and `||hess F|| = k F / r`
+/// (the tangential term `F'/r` dominates the radial `k^2 F` for `r < 1/k = 10` m), with
+/// `F = 20 exp(-0.1 r)`, `k = 0.1`. On the default tube `F in [9, 11]`: `gamma1 = 0.9`,
+/// `gamma2 = 1.1`, `gamma3 = 1.1 / (10 ln(20/11)) = 0.18400`; on the operating region
+/// `F in [lo, 11]`: `gamma1 = 0.1 lo`. The lattice's bounds are conservative (gamma1 lower,
+/// gamma2 and gamma3 higher), and by no more than their margin for what lies between lattice
+/// points (a few per cent here). Prop. 2's bound, recomputed by hand from the reported gammas and
+/// margin angle, is the reported one; it is no tighter than the same formula with the exact gammas
+/// at its best angle, and at most 15 % looser.
+#[test]
+fn prop2_gammas_and_bound_match_the_circular_closed_forms() {
+    let s = sc("", &["controller.ki=0"]);
+    let r = check(&s, None).prop2;
+    let g3_exact = 1.1 / (10.0 * (20.0f64 / 11.0).ln());
+    assert!((g3_exact - 0.18400).abs() < 1e-5);
+    let within = |got: f64, exact: f64, conservative_above: bool, rel: f64| {
+        let ok = if conservative_above {
+            got >= exact - 1e-12 && got <= exact * (1.0 + rel)
+        } else {
+            got <= exact + 1e-12 && got >= exact * (1.0 - rel)
+        };
+        assert!(ok, "got {got}, closed form {exact}");
+    };
+    within(r.tube_gamma1.unwrap(), 0.9, false, 0.05);
+    within(r.tube_gamma2.unwrap(), 1.1, true, 0.05);
+    within(r.tube_gamma3.unwrap(), g3_exact, true, 0.06);
+    let [lo, hi] = r.region_levels.unwrap();
+    assert!((hi - 11.0).abs() < 1e-12);
+    within(r.gamma1.unwrap(), 0.1 * lo, false, 0.05);
+    within(r.gamma2.unwrap(), 1.1, true, 0.05);
+    within(r.gamma3.unwrap(), g3_exact, true, 0.06);
+
+    // The bound by hand: c2 atanh(k2 / (kp c2)), k2 = (c2 g3 v + c1 g2) / (c1 g1 sin phi).
+    let (v, kp, c1, c2) = (0.5, 10.0, 0.2, 1.0);
+    let k2 = |g1: f64, g2: f64, g3: f64, phi: f64| (c2 * g3 * v + c1 * g2) / (c1 * g1 * phi.sin());
+    let phi = r.error_bound_phi_rad.unwrap();
+    let by_hand =
+        c2 * (k2(r.gamma1.unwrap(), r.gamma2.unwrap(), r.gamma3.unwrap(), phi) / (kp * c2)).atanh();
+    let bound = r.error_bound.unwrap();
+    assert!(
+        (bound - by_hand).abs() < 1e-12 * bound,
+        "{bound} vs {by_hand}"
+    );
+    // The same formula with the exact gammas, at its best angle (both gain conditions met).
+    let (g1, g2, g3) = (0.1 * lo, 1.1, g3_exact);
+    let exact_best = (1..20_000)
+        .map(|i| i as f64 / 20_000.0 * std::f64::consts::FRAC_PI_2)
+        .filter_map(|phi| {
+            let reach = v * g1 * phi.cos() - c1;
+            let k1 = g3 * v / (g1 * phi.sin() * reach);
+            let k = k2(g1, g2, g3, phi);
+            (reach > 0.0 && kp > k1.max(k / c2) && k / (kp * c2) < 1.0)
+                .then(|| c2 * (k / (kp * c2)).atanh())
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        bound >= exact_best && bound <= 1.15 * exact_best,
+        "bound {bound}, closed-form gammas give {exact_best}"
+    );
+    // And it covers the exact P-law orbit error, |eps*| = 0.0359 (baselines.md section 0).
+    assert!(bound > 0.0359 && steady_max(&s) <= bound);
+}
