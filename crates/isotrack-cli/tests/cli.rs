@@ -692,16 +692,35 @@ fn a_sigkilled_sweep_resumes_to_the_same_results() {
     isotrack(&["sweep", &sw, "--out", full.to_str().unwrap()]);
     let reference = std::fs::read(full.join("results.csv")).unwrap();
     let killed = dir.path().join("killed");
-    for delay_ms in [30u64, 120, 250] {
+    let results = killed.join("results.csv");
+    let rows = || {
+        std::fs::read_to_string(&results)
+            .map(|t| t.lines().count().saturating_sub(1))
+            .unwrap_or(0)
+    };
+    // Three kills, each once the sweep has written more rows than before but not all of them:
+    // the kill provably lands mid-run, and the file it leaves is incomplete (no final sort).
+    let mut before = 0;
+    for _ in 0..3 {
         let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
             .args(["sweep", &sw, "--out", killed.to_str().unwrap(), "--resume"])
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())
             .spawn()
             .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let started = std::time::Instant::now();
+        while rows() < before + 5 && started.elapsed().as_secs() < 60 {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
         let _ = child.kill(); // SIGKILL
         let _ = child.wait();
+        let after = rows();
+        assert!(
+            after > before && after < 240,
+            "the kill did not land mid-run: {before} -> {after} of 240 rows"
+        );
+        assert_ne!(std::fs::read(&results).unwrap(), reference);
+        before = after;
     }
     let o = isotrack(&["sweep", &sw, "--out", killed.to_str().unwrap(), "--resume"]);
     assert_sweep_with_invalid_runs(&o);
