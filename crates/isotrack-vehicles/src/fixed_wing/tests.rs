@@ -198,3 +198,89 @@ fn roll_loop_step_to_the_bank_limit() {
         peak.to_degrees()
     );
 }
+
+/// A +50 m altitude step goes through the altitude state machine's climb zone (h below
+/// h_c - 10 m: airspeed held by pitch, fixed throttle), then the hold zone: the UAV climbs the 40 m
+/// to 140 m no faster than `Va sin(theta_max)` allows, its airspeed within 15 % of the command
+/// throughout (the pitch loop holds it), and settles within 0.5 m of 150 m. A -40 m step (to
+/// 60 m: lower would be the take-off zone below 50 m) goes through the descend zone and settles
+/// likewise; its airspeed is not bounded here: with the throttle at 0 the descent overspeeds by
+/// about 9 m/s before the pitch loop catches it (found by this test; an open question for the
+/// autopilot, not yet changed).
+#[test]
+fn altitude_steps_run_through_the_climb_and_descend_zones() {
+    let v = uav(FixedWingConfig::default());
+    for (target, boundary) in [(150.0, 140.0), (60.0, 70.0)] {
+        let mut s = v.initial_state(0.0, 0.0, FRAC_PI_2);
+        let mut cmd = hold(&v, &s);
+        cmd.altitude_m = target;
+        let mut crossed_at: Option<f64> = None;
+        let mut worst_va: f64 = 0.0;
+        fly(&v, &mut s, &cmd, 150.0, |t, s| {
+            let h = -s.x[2];
+            let in_zone = if target > 100.0 {
+                h <= boundary
+            } else {
+                h >= boundary
+            };
+            if in_zone {
+                worst_va = worst_va.max((v.air_data(s).va_mps - 30.0).abs());
+            } else if crossed_at.is_none() {
+                crossed_at = Some(t);
+            }
+        });
+        let t = crossed_at.unwrap_or_else(|| panic!("never left the zone towards {target} m"));
+        // 30 m through the zone (100 -> 140 m, or 100 -> 70 m) at no more than Va sin(theta_max).
+        let fastest = 30.0 / (30.0 * v.ap.theta_max_rad.sin());
+        assert!(
+            (fastest..100.0).contains(&t),
+            "{target} m: left the zone after {t} s"
+        );
+        if target > 100.0 {
+            assert!(
+                worst_va < 0.15 * 30.0,
+                "{target} m: airspeed off by {worst_va} in the zone"
+            );
+        }
+        assert!(
+            (-s.x[2] - target).abs() < 0.5,
+            "settled at {} m, not {target}",
+            -s.x[2]
+        );
+    }
+}
+
+/// Dryden gusts move the aircraft: a gusty flight differs from the calm one (same start and
+/// commands), its altitude wanders by more than a centimetre, and stays within 5 m.
+#[test]
+fn gusts_differ_from_calm_flight() {
+    let fly_with = |gusts: bool| {
+        let v = uav(FixedWingConfig {
+            gusts,
+            seed: 5,
+            ..FixedWingConfig::default()
+        });
+        let mut s = v.initial_state(0.0, 0.0, 0.0);
+        let cmd = hold(&v, &s);
+        let mut wander: f64 = 0.0;
+        fly(&v, &mut s, &cmd, 60.0, |t, s| {
+            if t > 10.0 {
+                wander = wander.max((-s.x[2] - 100.0).abs());
+            }
+        });
+        (s.x, wander)
+    };
+    let (calm, calm_wander) = fly_with(false);
+    let (gusty, gusty_wander) = fly_with(true);
+    assert_ne!(calm, gusty);
+    assert!(calm_wander < 0.05, "calm altitude wanders {calm_wander} m");
+    assert!(
+        (0.01..5.0).contains(&gusty_wander),
+        "gusty altitude wanders {gusty_wander} m"
+    );
+    let drift = ((calm[0] - gusty[0]).powi(2) + (calm[1] - gusty[1]).powi(2)).sqrt();
+    assert!(
+        drift > 0.1,
+        "gusts moved the track by only {drift} m in 60 s"
+    );
+}
