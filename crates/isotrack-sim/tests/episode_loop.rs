@@ -220,6 +220,10 @@ fn leaving_the_field_ends_the_run_at_the_last_valid_step() {
         .unwrap()
         .contains("no value at (1.100000, 0.000000) m"));
     assert!((rows.last().unwrap().t_s - 1.0).abs() < 1e-12);
+    assert!(
+        rows.iter().all(|row| row.s.is_finite()),
+        "no row for the step off the field"
+    );
     assert!((r.metrics.path_length_m - 1.0).abs() < 1e-12);
     assert_eq!(r.metrics.convergence_time_s, None);
     // Starting off the field: one row with the start and NaN value and error.
@@ -228,6 +232,9 @@ fn leaving_the_field_ends_the_run_at_the_last_valid_step() {
     assert!(seen.is_empty());
     assert_eq!(rows.len(), 1);
     assert!(rows[0].s.is_nan() && rows[0].error.is_nan() && rows[0].x_m == 2.0);
+    // Without a trace, not even that row.
+    let (_, rows, _) = run(1.0, 2.0, 10.0, 0.0, |_, _| 0.0);
+    assert!(rows.is_empty());
 }
 
 /// A non-finite command ends the run at its sample (`diverged`, the step before is the last
@@ -349,7 +356,10 @@ fn metrics_boundaries_and_track_losses() {
     // Tracked at 0.05; 0.5 is on the band's edge (kept); 0.6 is a loss; 0.3 is no re-acquisition;
     // 0.05 re-acquires; NaN is a second loss.
     let mut m = metrics(100, 0);
-    for (k, e) in [0.05, 0.5, 0.6, 0.3, 0.05, f64::NAN].iter().enumerate() {
+    for (k, e) in [0.05, 0.5, 0.05, 0.6, 0.05, 0.3, 0.05, f64::NAN]
+        .iter()
+        .enumerate()
+    {
         m.observe(k as u64, *e, 0.0);
     }
     assert_eq!(m.finish(true).track_losses, 2);
@@ -373,6 +383,14 @@ fn metrics_chattering_and_sign_changes() {
     let r = m.finish(true);
     assert_eq!(r.sign_changes_per_s, Some(2.0 / 2.0));
     assert_eq!(r.chattering_radps2, Some(4.0 / 2.0));
+    // A zero command has no sign: -1, 0, -1 and 1, 0, 1 change sign nowhere.
+    for ws in [[-1.0, 0.0, -1.0], [1.0, 0.0, 1.0]] {
+        let mut m = metrics(0, 0);
+        for (k, w) in ws.iter().enumerate() {
+            m.observe(k as u64, 0.0, *w);
+        }
+        assert_eq!(m.finish(true).sign_changes_per_s, Some(0.0), "{ws:?}");
+    }
     // A one-step window has no duration: no rates.
     let mut m = metrics(0, 0);
     m.observe(0, 0.0, 1.0);
@@ -396,6 +414,12 @@ fn metrics_accumulators_and_dwell() {
     assert_eq!(r.steady_state_rms_isoline_distance_m, Some(12.5f64.sqrt()));
     assert_eq!(r.control_effort, (4.0 + 1.0) * 0.5);
     assert_eq!(r.path_length_m, 4.0);
+    // No isoline distance observed: none reported.
+    let mut m = metrics(0, 0);
+    m.observe(0, 0.0, 0.0);
+    let r = m.finish(true);
+    assert_eq!(r.steady_state_max_isoline_distance_m, None);
+    assert_eq!(r.steady_state_rms_isoline_distance_m, None);
     // Never outside the tolerance: converged at 0 once the run lasted the dwell, not before.
     let run = |dwell: u64, steps: u64, violation_at: Option<u64>| {
         let mut m = metrics(0, dwell);
@@ -433,5 +457,7 @@ fn whole_steps_edges() {
         Err(StepsError::TooMany)
     );
     assert_eq!(whole_steps(1e300, 1.0), Err(StepsError::TooMany));
+    // An infinite count is too many, not "not whole".
+    assert_eq!(whole_steps(1e300, 1e-300), Err(StepsError::TooMany));
     assert_eq!(whole_steps(f64::NAN, 1.0), Err(StepsError::NotWhole));
 }
