@@ -461,3 +461,48 @@ fn whole_steps_edges() {
     assert_eq!(whole_steps(1e300, 1e-300), Err(StepsError::TooMany));
     assert_eq!(whole_steps(f64::NAN, 1.0), Err(StepsError::NotWhole));
 }
+
+/// A robot standing on the isoline (speed 0, x = s_d): converged from t = 0 when the run
+/// completes; a run that ends early reports no convergence time.
+#[test]
+fn convergence_is_reported_for_completed_runs_only() {
+    let go = |x_max: f64| {
+        let mut c = Scripted {
+            f: |t: f64, _| if t > 1.05 { f64::NAN } else { 0.0 },
+            seen: vec![],
+        };
+        simulate(
+            &Ramp { x_max },
+            &Euler { v: 0.0 },
+            start(0.5),
+            &mut c,
+            sensor(10.0),
+            &plan(1.0, 0.0),
+            &Oracles::default(),
+            &mut NoTrace,
+        )
+    };
+    let r = go(f64::INFINITY);
+    assert_eq!(r.outcome, Outcome::Completed);
+    assert_eq!(r.metrics.convergence_time_s, Some(0.0));
+    assert_eq!(r.metrics.time_in_band_fraction, Some(1.0));
+    // The same, cut short by a NaN command at t = 1.1 s in a 2 s run.
+    let mut c = Scripted {
+        f: |t: f64, _| if t > 1.05 { f64::NAN } else { 0.0 },
+        seen: vec![],
+    };
+    let r = simulate(
+        &Ramp {
+            x_max: f64::INFINITY,
+        },
+        &Euler { v: 0.0 },
+        start(0.5),
+        &mut c,
+        sensor(10.0),
+        &plan(2.0, 0.0),
+        &Oracles::default(),
+        &mut NoTrace,
+    );
+    assert_eq!(r.outcome, Outcome::Diverged);
+    assert_eq!(r.metrics.convergence_time_s, None);
+}
