@@ -187,4 +187,35 @@ mod tests {
         let e = d.update(1.0, 2.0);
         assert_eq!(d.update(1.0, 100.0), e);
     }
+
+    /// The filtered difference by hand: the first difference raw, then
+    /// `a*previous + (1 - a)*raw` with `a = exp(-dt/tau)`.
+    #[test]
+    fn filtered_difference_by_hand() {
+        let mut d = DerivativeEstimator::new(DerivativeKind::FilteredDifference { tau_s: 0.5 });
+        d.update(0.0, 0.0);
+        assert_eq!(d.update(0.1, 0.3), 0.3 / 0.1);
+        let a = crate::fmath::exp(-0.2 / 0.5);
+        let want = a * 3.0 + (1.0 - a) * ((0.5 - 0.3) / 0.2);
+        assert_relative_eq!(d.update(0.3, 0.5), want, epsilon = 1e-14);
+    }
+
+    /// Levant's differentiator, one explicit Euler step by hand from z0 = x(0), z1 = 0:
+    /// err = z0 - x, z0' = z1 - 1.5 sqrt(L) sqrt(|err|) sgn(err), z1' = -1.1 L sgn(err);
+    /// the estimate is z1 + dt z1'. With no error (err = 0) nothing moves.
+    #[test]
+    fn levant_step_by_hand() {
+        let l = 4.0;
+        let mut d = DerivativeEstimator::new(DerivativeKind::Levant { lipschitz: l });
+        d.update(0.0, 1.0);
+        // err = 1 - 1.25 = -0.25 < 0: sgn = -1.
+        let z1 = d.update(0.5, 1.25);
+        assert_relative_eq!(z1, 0.0 + 0.5 * (1.1 * l), epsilon = 1e-14);
+        // z0 = 1 + 0.5 * (0 + 1.5 * 2 * 0.5) = 1.75; next err = 1.75 - 1.0 = 0.75 > 0.
+        let z1b = d.update(1.0, 1.0);
+        assert_relative_eq!(z1b, z1 - 0.5 * 1.1 * l, epsilon = 1e-14);
+        let mut still = DerivativeEstimator::new(DerivativeKind::Levant { lipschitz: l });
+        still.update(0.0, 2.0);
+        assert_eq!(still.update(0.5, 2.0), 0.0);
+    }
 }

@@ -76,3 +76,34 @@ mod imp {
 }
 
 pub use imp::*;
+
+#[cfg(test)]
+mod tests {
+    /// Each function against values known to 15 digits, on either math path (`std` or `libm`).
+    #[test]
+    fn elementary_functions_by_value() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 4.0 * f64::EPSILON * b.abs().max(1.0);
+        assert!(close(super::tanh(0.5), 0.462_117_157_260_009_8));
+        assert!(close(super::exp(1.0), core::f64::consts::E));
+        assert!(close(super::exp(-2.0), 0.135_335_283_236_612_7));
+        assert!(close(super::sqrt(2.0), core::f64::consts::SQRT_2));
+        let (s, c) = super::sincos(core::f64::consts::FRAC_PI_6);
+        assert!(close(s, 0.5) && close(c, 0.866_025_403_784_438_6));
+        let (s, c) = super::sincos(-2.0);
+        assert!(close(s, -0.909_297_426_825_681_7) && close(c, -0.416_146_836_547_142_4));
+        assert_eq!(
+            (super::round(2.5), super::round(-2.5), super::round(1.4)),
+            (3.0, -3.0, 1.0)
+        );
+        assert!(
+            close(super::ln(core::f64::consts::E), 1.0)
+                && close(super::ln(10.0), core::f64::consts::LN_10)
+        );
+        assert!(close(super::atan2(1.0, 1.0), core::f64::consts::FRAC_PI_4));
+        assert!(close(
+            super::atan2(1.0, -1.0),
+            3.0 * core::f64::consts::FRAC_PI_4
+        ));
+        assert_eq!((super::floor(-1.5), super::floor(2.7)), (-2.0, 2.0));
+    }
+}

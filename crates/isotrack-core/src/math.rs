@@ -153,4 +153,22 @@ mod tests {
         assert_eq!(saturate(0.3, Some(1.0)), 0.3);
         assert_eq!(saturate(5.0, None), 5.0);
     }
+
+    /// Vec2's operations on numbers worked by hand.
+    #[test]
+    fn vec2_operations_by_hand() {
+        let (a, b) = (Vec2::new(3.0, 4.0), Vec2::new(-2.0, 5.0));
+        assert_eq!(a.dot(b), 3.0 * -2.0 + 4.0 * 5.0);
+        assert_eq!(a.cross(b), 3.0 * 5.0 - 4.0 * -2.0);
+        assert_eq!(b.cross(a), -23.0);
+        assert_eq!(a.norm(), 5.0);
+        assert_eq!(a.perp(), Vec2::new(-4.0, 3.0));
+        assert_eq!(a.perp().dot(a), 0.0);
+        let u = Vec2::from_angle(core::f64::consts::FRAC_PI_3);
+        assert!((u.x - 0.5).abs() < 1e-15 && (u.y - 0.75f64.sqrt()).abs() < 1e-15);
+        assert!(a.is_finite());
+        assert!(
+            !Vec2::new(f64::NAN, 0.0).is_finite() && !Vec2::new(0.0, f64::INFINITY).is_finite()
+        );
+    }
 }

@@ -290,6 +290,65 @@ mod tests {
         }
         assert_eq!(c.sigma(), 0.0);
     }
+
+    /// Back-calculation by hand: with a constant error (eps' = 0 after the first sample) the
+    /// law's raw output u = kp e + ki sigma is saturated at 1 rad/s, and each step integrates
+    /// `dt (e + (sat(u) - u) / (ki Tt))` with u from the previous sigma.
+    #[test]
+    fn back_calculation_by_hand() {
+        let mut p = params();
+        p.anti_windup = AntiWindup::BackCalculation {
+            tracking_time_s: 2.0,
+        };
+        p.output.max_turn_rate_radps = Some(1.0);
+        let mut c = PiIsoline::new(p);
+        let e = 0.2 * crate::fmath::tanh(3.0); // eps = 3
+        let mut sigma = 0.0;
+        for k in 0..5 {
+            let w = c.update(&Measurement {
+                t_s: 0.1 * k as f64,
+                value: 13.0,
+            });
+            if k > 0 {
+                let u = 10.0 * e + 1.0 * sigma;
+                let u_sat = u.clamp(-1.0, 1.0);
+                sigma += 0.1 * (e + (u_sat - u) / (1.0 * 2.0));
+            }
+            assert_relative_eq!(c.sigma(), sigma, epsilon = 1e-14);
+            assert_eq!(w, 1.0);
+        }
+        assert!(
+            c.sigma() < 4.0 * 0.1 * e,
+            "the excess bled off the integral"
+        );
+    }
+
+    /// The trait's defaults: a coordinate-free law asks for no ground truth, and given some
+    /// anyway it answers as from the measurement alone.
+    #[test]
+    fn trait_defaults_ignore_ground_truth() {
+        let mut a = PiIsoline::new(params());
+        let mut b = PiIsoline::new(params());
+        assert!(!a.needs_ground_truth());
+        let truth = crate::control::GroundTruth {
+            pose: crate::math::Pose2 {
+                position: crate::math::Vec2::new(1.0, 2.0),
+                heading_rad: 0.3,
+            },
+            speed_mps: 0.5,
+            value: 12.5,
+            derivatives: None,
+        };
+        for k in 0..3 {
+            let m = Measurement {
+                t_s: k as f64,
+                value: 12.0 - k as f64,
+            };
+            let wa = a.update_with_truth(&m, &truth);
+            assert!(wa != 0.0);
+            assert_eq!(wa, b.update(&m));
+        }
+    }
 }
 
 #[cfg(test)]
