@@ -171,4 +171,38 @@ mod tests {
             !Vec2::new(f64::NAN, 0.0).is_finite() && !Vec2::new(0.0, f64::INFINITY).is_finite()
         );
     }
+
+    /// Vector arithmetic, pose finiteness, angle wrapping and saturation at their edges.
+    #[test]
+    fn arithmetic_wrapping_and_saturation_edges() {
+        let (a, b) = (Vec2::new(3.0, 4.0), Vec2::new(-2.0, 5.0));
+        assert_eq!(a + b, Vec2::new(1.0, 9.0));
+        assert_eq!(a - b, Vec2::new(5.0, -1.0));
+        assert_eq!(-a, Vec2::new(-3.0, -4.0));
+        assert_eq!(a * 2.0, Vec2::new(6.0, 8.0));
+        let ok = Pose2 {
+            position: a,
+            heading_rad: 1.0,
+        };
+        assert!(ok.is_finite());
+        assert!(!Pose2 {
+            heading_rad: f64::NAN,
+            ..ok
+        }
+        .is_finite());
+        assert!(!Pose2 {
+            position: Vec2::new(f64::NAN, 0.0),
+            ..ok
+        }
+        .is_finite());
+        let pi = core::f64::consts::PI;
+        assert!((wrap_angle(3.0 * pi + 0.25) - (-pi + 0.25)).abs() < 1e-12);
+        assert!((wrap_angle(-3.0 * pi - 0.25) - (pi - 0.25)).abs() < 1e-12);
+        assert!((wrap_angle(7.0) - (7.0 - 2.0 * pi)).abs() < 1e-12);
+        assert_eq!(saturate(1.0, Some(1.0)), 1.0);
+        assert_eq!(saturate(-1.0, Some(1.0)), -1.0);
+        assert_eq!(saturate(1.5, Some(1.0)), 1.0);
+        assert_eq!(saturate(-1.5, Some(1.0)), -1.0);
+        assert_eq!(saturate(-1.5, None), -1.5);
+    }
 }

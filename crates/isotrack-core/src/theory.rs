@@ -171,6 +171,81 @@ mod tests {
             1.0, 1.0, 10.0, 0.05, 0.05, 0.5, 1.0
         ));
     }
+
+    /// Prop. 1's polynomial by hand (alpha = 1, v = 0.5, r_d = ln 2 / 0.1, the paper's gains):
+    /// `s^3 + kp a v s^2 + (a v kp c1/c2 + a v ki + v^2/r_d^2) s + a v ki c1/c2`.
+    #[test]
+    fn prop1_polynomial_and_conditions_by_hand() {
+        let r = 2f64.ln() / 0.1;
+        let [a2, a1, a0] = prop1_characteristic_polynomial(1.0, 0.5, r, 10.0, 1.0, 0.2, 2.0);
+        assert_eq!(a2, 10.0 * 0.5);
+        assert!((a1 - (0.5 * 10.0 * 0.2 / 2.0 + 0.5 * 1.0 + 0.25 / (r * r))).abs() < 1e-15);
+        assert!((a0 - 0.5 * 1.0 * 0.2 / 2.0).abs() < 1e-15);
+        // Routh-Hurwitz for s^3 + a2 s^2 + a1 s + a0: all positive and a2 a1 > a0.
+        assert!(prop1_exact_local_condition(
+            1.0, 0.5, r, 10.0, 1.0, 0.2, 2.0
+        ));
+        // a2 a1 < a0: kp tiny, ki large.
+        assert!(!prop1_exact_local_condition(
+            1.0, 0.5, r, 0.01, 100.0, 0.2, 1.0
+        ));
+        // ki = 0: the second-order conditions only (a0 = 0 is no failure).
+        assert!(prop1_exact_local_condition(
+            1.0, 0.5, r, 10.0, 0.0, 0.2, 1.0
+        ));
+        assert!(!prop1_exact_local_condition(
+            1.0, 0.5, r, -1.0, 0.0, 0.2, 1.0
+        ));
+        // The paper's sufficient conditions: kp (kp - 2) v a > ki, v a > c1 > 0.
+        assert!(prop1_paper_conditions(1.0, 0.5, 10.0, 1.0, 0.2));
+        assert!(!prop1_paper_conditions(1.0, 0.5, 10.0, 40.0, 0.2)); // 40 = kp (kp - 2) v a
+        assert!(prop1_paper_conditions(1.0, 0.5, 10.0, 39.9, 0.2));
+        assert!(!prop1_paper_conditions(1.0, 0.5, 10.0, 1.0, 0.5)); // v a = c1
+        assert!(!prop1_paper_conditions(1.0, 0.5, 10.0, 1.0, 0.0));
+    }
+
+    /// The isoline radius ln(I0/s_d)/k exists only for 0 < s_d < I0 and k > 0.
+    #[test]
+    fn isoline_radius_domain() {
+        assert_eq!(
+            radial_exp_isoline_radius_m(20.0, 0.1, 10.0),
+            Some(2f64.ln() / 0.1)
+        );
+        for (i0, k, l) in [
+            (20.0, 0.1, 0.0),
+            (20.0, 0.1, 20.0),
+            (20.0, 0.0, 10.0),
+            (20.0, 0.1, 25.0),
+        ] {
+            assert_eq!(radial_exp_isoline_radius_m(i0, k, l), None, "{i0} {k} {l}");
+        }
+        assert_eq!(
+            radial_exp_p_orbit(20.0, 0.1, 10.0, 0.0, 10.0, 0.2, 1.0),
+            None
+        );
+        assert_eq!(
+            radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 0.0, 0.2, 1.0),
+            None
+        );
+        assert_eq!(
+            radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 10.0, 0.0, 1.0),
+            None
+        );
+        assert_eq!(
+            radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 10.0, 0.2, 0.0),
+            None
+        );
+        // The paper's P law: |eps*| = c2 atanh(v / (kp c1 d*)) at the orbit d*.
+        let o = radial_exp_p_orbit(20.0, 0.1, 10.0, 0.5, 10.0, 0.2, 1.0).unwrap();
+        assert!((o.error + (0.5f64 / (10.0 * 0.2 * o.radius_m)).atanh()).abs() < 1e-12);
+        assert!((o.error - (20.0 * (-0.1 * o.radius_m).exp() - 10.0)).abs() < 1e-15);
+        assert!((o.error - -0.035_896_6).abs() < 1e-6, "{}", o.error);
+        // A weak law still has an orbit, far out: g(d) = c1 tanh(-s_d/c2) + v/(kp d) = 0.
+        let far = radial_exp_p_orbit(20.0, 0.1, 10.0, 50.0, 0.01, 0.001, 1.0).unwrap();
+        let g = 0.001 * ((20.0 * (-0.1 * far.radius_m).exp() - 10.0) / 1.0).tanh()
+            + 50.0 / (0.01 * far.radius_m);
+        assert!(g.abs() < 1e-9 && far.radius_m > 1e6, "{far:?}");
+    }
 }
 
 /// Bounds of the field over the operating region, Prop. 2's assumption (paper eq. (20)):

@@ -28,7 +28,12 @@ pub enum AntiWindup {
         band: f64,
     },
     /// Back-calculation against the turn-rate limit:
-    /// `sigma' = e + (u_sat - u)/(ki*T_t)`. Needs `max_turn_rate_radps` to have any effect.
+    /// `sigma' = e + (u_sat - u)/(ki*T_t)`, `u = kp*e + ki*sigma`. Needs `max_turn_rate_radps`
+    /// to have any effect. While saturated this is a leak towards
+    /// `sigma_ss = T_t*e + (u_sat - kp*e)/ki` with time constant `T_t`, stepped exactly over the
+    /// sample interval: `sigma <- sigma_ss + (sigma - sigma_ss)*exp(-dt/T_t)`. (Explicit Euler
+    /// multiplies `sigma - sigma_ss` by `1 - dt/T_t` and diverges once `dt > 2*T_t`: the
+    /// property test found NaN commands at `dt = 1.55 s`, `T_t = 0.01 s`.)
     BackCalculation {
         /// Tracking time constant `T_t`, seconds (> 0).
         tracking_time_s: f64,
@@ -161,16 +166,18 @@ impl IsolineController for PiIsoline {
                 }
             }
             AntiWindup::BackCalculation { tracking_time_s } => {
-                // Evaluate the unsaturated output with the previous sigma, then bleed the
-                // excess back into the integrator.
+                // The unsaturated output with the previous sigma decides whether the loop is
+                // saturated over this interval; saturated, sigma relaxes exactly towards its
+                // equilibrium (see `AntiWindup::BackCalculation`), else it integrates `e`.
                 let u = p.kp * e + p.ki * sigma;
                 let u_sat = crate::math::saturate(u, p.output.max_turn_rate_radps);
-                let bleed = if p.ki > 0.0 {
-                    (u_sat - u) / (p.ki * tracking_time_s)
+                if p.ki > 0.0 && u_sat != u {
+                    let sigma_ss = tracking_time_s * e + (u_sat - p.kp * e) / p.ki;
+                    let decay = crate::fmath::exp(-dt / tracking_time_s);
+                    sigma = sigma_ss + (sigma - sigma_ss) * decay;
                 } else {
-                    0.0
-                };
-                sigma += dt * (e + bleed);
+                    sigma += dt * e;
+                }
             }
         }
         self.sigma = sigma;
@@ -292,8 +299,8 @@ mod tests {
     }
 
     /// Back-calculation by hand: with a constant error (eps' = 0 after the first sample) the
-    /// law's raw output u = kp e + ki sigma is saturated at 1 rad/s, and each step integrates
-    /// `dt (e + (sat(u) - u) / (ki Tt))` with u from the previous sigma.
+    /// law's raw output u = kp e + ki sigma is saturated at 1 rad/s, and each step relaxes
+    /// sigma exactly towards sigma_ss = Tt e + (u_sat - kp e)/ki with time constant Tt.
     #[test]
     fn back_calculation_by_hand() {
         let mut p = params();
@@ -310,9 +317,12 @@ mod tests {
                 value: 13.0,
             });
             if k > 0 {
+                // Saturated (u = 10 e + sigma > 1): exact relaxation towards
+                // sigma_ss = Tt e + (1 - kp e) / ki over dt = 0.1 s, Tt = 2 s.
                 let u = 10.0 * e + 1.0 * sigma;
-                let u_sat = u.clamp(-1.0, 1.0);
-                sigma += 0.1 * (e + (u_sat - u) / (1.0 * 2.0));
+                assert!(u > 1.0);
+                let sigma_ss = 2.0 * e + (1.0 - 10.0 * e) / 1.0;
+                sigma = sigma_ss + (sigma - sigma_ss) * (-0.1f64 / 2.0).exp();
             }
             assert_relative_eq!(c.sigma(), sigma, epsilon = 1e-14);
             assert_eq!(w, 1.0);
@@ -321,6 +331,33 @@ mod tests {
             c.sigma() < 4.0 * 0.1 * e,
             "the excess bled off the integral"
         );
+    }
+
+    /// The proptest's failing case (kept): a 1.55 s sample interval against a 0.01 s tracking
+    /// time, huge measurements, a 0.001 rad/s limit. Explicit Euler multiplied sigma by
+    /// |1 - dt/Tt| = 154 per sample, to infinity and NaN; the exact step stays finite.
+    #[test]
+    fn back_calculation_is_stable_for_any_sample_interval() {
+        let mut p = params();
+        p.kp = 0.001;
+        p.ki = 93.13172049213503;
+        p.c1 = 0.001;
+        p.c2 = 0.001;
+        p.level = 0.0;
+        p.output.max_turn_rate_radps = Some(0.001);
+        p.anti_windup = AntiWindup::BackCalculation {
+            tracking_time_s: 0.01,
+        };
+        let mut c = PiIsoline::new(p);
+        let values = [251130458.66864976, -155986695.2969847, 0.0, 0.0, 0.0, 0.0];
+        for (k, v) in values.iter().cycle().take(200).enumerate() {
+            let w = c.update(&Measurement {
+                t_s: 1.5502517567745357 * k as f64,
+                value: *v,
+            });
+            assert!(w.is_finite() && w.abs() <= 0.001, "sample {k}: {w}");
+            assert!(c.sigma().is_finite(), "sample {k}: sigma {}", c.sigma());
+        }
     }
 
     /// The trait's defaults: a coordinate-free law asks for no ground truth, and given some
