@@ -308,6 +308,7 @@ mod tests {
             tracking_time_s: 2.0,
         };
         p.output.max_turn_rate_radps = Some(1.0);
+        p.ki = 0.5;
         let mut c = PiIsoline::new(p);
         let e = 0.2 * crate::fmath::tanh(3.0); // eps = 3
         let mut sigma = 0.0;
@@ -319,9 +320,9 @@ mod tests {
             if k > 0 {
                 // Saturated (u = 10 e + sigma > 1): exact relaxation towards
                 // sigma_ss = Tt e + (1 - kp e) / ki over dt = 0.1 s, Tt = 2 s.
-                let u = 10.0 * e + 1.0 * sigma;
+                let u = 10.0 * e + 0.5 * sigma;
                 assert!(u > 1.0);
-                let sigma_ss = 2.0 * e + (1.0 - 10.0 * e) / 1.0;
+                let sigma_ss = 2.0 * e + (1.0 - 10.0 * e) / 0.5;
                 sigma = sigma_ss + (sigma - sigma_ss) * (-0.1f64 / 2.0).exp();
             }
             assert_relative_eq!(c.sigma(), sigma, epsilon = 1e-14);
@@ -358,6 +359,96 @@ mod tests {
             assert!(w.is_finite() && w.abs() <= 0.001, "sample {k}: {w}");
             assert!(c.sigma().is_finite(), "sample {k}: sigma {}", c.sigma());
         }
+    }
+
+    /// Clamp by hand: sigma integrates e dt and is held within |ki sigma| <= limit.
+    #[test]
+    fn clamp_by_hand() {
+        let mut p = params();
+        p.ki = 0.5;
+        p.anti_windup = AntiWindup::Clamp { limit_radps: 0.05 };
+        let mut c = PiIsoline::new(p);
+        let e = 0.2 * crate::fmath::tanh(2.0);
+        let mut sigma: f64 = 0.0;
+        for k in 0..8 {
+            c.update(&Measurement {
+                t_s: 0.1 * k as f64,
+                value: 12.0,
+            });
+            if k > 0 {
+                sigma = (sigma + 0.1 * e).min(0.05 / 0.5);
+            }
+            assert_relative_eq!(c.sigma(), sigma, epsilon = 1e-15);
+        }
+        assert_eq!(c.sigma(), 0.1, "held at the clamp");
+        // ki = 0: no integral action to clamp, sigma integrates freely.
+        p.ki = 0.0;
+        let mut c = PiIsoline::new(p);
+        for k in 0..8 {
+            c.update(&Measurement {
+                t_s: 0.1 * k as f64,
+                value: 12.0,
+            });
+        }
+        assert_relative_eq!(c.sigma(), 0.7 * e, epsilon = 1e-15);
+    }
+
+    /// Conditional integration by hand: only while |eps| < band (strictly).
+    #[test]
+    fn conditional_by_hand() {
+        let mut p = params();
+        p.anti_windup = AntiWindup::Conditional { band: 1.0 };
+        for (value, integrates) in [(12.0, false), (11.0, false), (10.5, true), (9.6, true)] {
+            let mut c = PiIsoline::new(p);
+            for k in 0..3 {
+                c.update(&Measurement {
+                    t_s: 0.5 * k as f64,
+                    value,
+                });
+            }
+            let e = 0.2 * crate::fmath::tanh(value - 10.0);
+            let want = if integrates { 1.0 * e } else { 0.0 };
+            assert_relative_eq!(c.sigma(), want, epsilon = 1e-15);
+        }
+    }
+
+    /// c2 scales the error inside tanh; a repeated time does not integrate; a NaN sample
+    /// answers kp e_last + ki sigma; reset forgets everything; last_e is the sliding variable.
+    #[test]
+    fn scaling_repeats_nan_and_reset() {
+        let mut p = params();
+        p.c2 = 2.0;
+        let mut c = PiIsoline::new(p);
+        let w0 = c.update(&Measurement {
+            t_s: 0.0,
+            value: 13.0,
+        });
+        let e = 0.2 * crate::fmath::tanh(3.0 / 2.0);
+        assert_relative_eq!(w0, 10.0 * e, epsilon = 1e-15);
+        assert_relative_eq!(c.last_e(), e, epsilon = 1e-15);
+        c.update(&Measurement {
+            t_s: 1.0,
+            value: 13.0,
+        });
+        assert_relative_eq!(c.sigma(), 1.0 * e, epsilon = 1e-15);
+        c.update(&Measurement {
+            t_s: 1.0,
+            value: 13.0,
+        });
+        assert_relative_eq!(c.sigma(), 1.0 * e, epsilon = 1e-15);
+        let w = c.update(&Measurement {
+            t_s: 2.0,
+            value: f64::NAN,
+        });
+        assert_relative_eq!(w, 10.0 * c.last_e() + 1.0 * c.sigma(), epsilon = 1e-15);
+        assert_relative_eq!(c.last_e(), e, epsilon = 1e-15);
+        c.reset();
+        assert_eq!((c.sigma(), c.last_e()), (0.0, 0.0));
+        let again = c.update(&Measurement {
+            t_s: 5.0,
+            value: 13.0,
+        });
+        assert_relative_eq!(again, 10.0 * e, epsilon = 1e-15);
     }
 
     /// The trait's defaults: a coordinate-free law asks for no ground truth, and given some
