@@ -576,4 +576,145 @@ mod tests {
         // Heading a little north of west: turn left.
         assert!(c.update_with_truth(&m, &truth(core::f64::consts::PI - 0.2)) > 0.0);
     }
+
+    /// The suboptimal second-order sliding mode, sample by sample by hand (level 0, u_max 1,
+    /// alpha* 0.5, backward difference, dt 1 s): sigma_M is the first sample, then the sample
+    /// before each sign change of sigma'; omega = alpha u_max sgn(sigma - sigma_M/2) with
+    /// alpha = alpha* when (sigma - sigma_M/2)(sigma_M - sigma) > 0, else 1.
+    #[test]
+    fn suboptimal_sosm_by_hand() {
+        let p = SuboptimalSosmParams {
+            level: 0.0,
+            max_turn_rate_radps: 1.0,
+            alpha_star: 0.5,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        let sigmas = [1.0, 0.8, 0.5, 0.6, 0.2, 0.4, 0.35];
+        // k=0: sM=1, (0.5)(0)=0 -> alpha 1, sgn(0.5) = 1.
+        // k=1: sigma' < 0, sM=1, (0.3)(0.2) > 0 -> 0.5 sgn(0.3) = 0.5.
+        // k=2: sM=1, sgn(0.5 - 0.5) = 0.
+        // k=3: sigma' turns > 0: sM = 0.5, (0.35)(-0.1) < 0 -> sgn(0.35) = 1.
+        // k=4: sigma' turns < 0: sM = 0.6, sgn(0.2 - 0.3) = -1.
+        // k=5: turns > 0: sM = 0.2, sgn(0.4 - 0.1) = 1.
+        // k=6: turns < 0: sM = 0.4, (0.15)(0.05) > 0 -> 0.5 sgn(0.15) = 0.5.
+        let want = [1.0, 0.5, 0.0, 1.0, -1.0, 1.0, 0.5];
+        let mut c = SuboptimalSosm::new(p);
+        for round in 0..2 {
+            for (k, (s, w)) in sigmas.iter().zip(want).enumerate() {
+                let got = c.update(&Measurement {
+                    t_s: k as f64,
+                    value: *s,
+                });
+                assert_eq!(got, w, "round {round}, sample {k}");
+            }
+            c.reset();
+        }
+        // Mirrored for higher values on the left.
+        let mut l = SuboptimalSosm::new(SuboptimalSosmParams {
+            output: OutputStage {
+                higher_side: HigherSide::Left,
+                max_turn_rate_radps: None,
+            },
+            ..p
+        });
+        for (k, (s, w)) in sigmas.iter().zip(want).enumerate() {
+            let got = l.update(&Measurement {
+                t_s: k as f64,
+                value: *s,
+            });
+            assert_eq!(got, -w, "left, sample {k}");
+        }
+    }
+
+    /// The guiding-vector-field reference by hand: gradient g = (0, 2), Hessian diag(0.5, 0),
+    /// value s_d + 1, heading 3 rad, v = 2, ke = 0.5, k_heading = 1. n = (0, 1),
+    /// tau = (-1, 0), distance (s - s_d)/|g| = 0.5, m = tau - ke d n = (-1, -0.25),
+    /// err = wrap(3 - atan2(-0.25, -1)), feed-forward v tau'H tau / |g| = 2 * 0.5 / 2 = 0.5,
+    /// omega = 0.5 - err.
+    #[test]
+    fn gradient_reference_by_hand() {
+        let p = GradientReferenceParams {
+            level: 10.0,
+            ke: 0.5,
+            k_heading: 1.0,
+            output: out(None),
+        };
+        let mut c = GradientReference::new(p);
+        assert!(c.needs_ground_truth());
+        let m = Measurement {
+            t_s: 0.0,
+            value: 11.0,
+        };
+        assert_eq!(c.update(&m), 0.0);
+        let truth = |derivatives| GroundTruth {
+            pose: crate::math::Pose2 {
+                position: Vec2::new(0.0, 0.0),
+                heading_rad: 3.0,
+            },
+            speed_mps: 2.0,
+            value: 11.0,
+            derivatives,
+        };
+        let h: crate::math::Mat2 = [[0.5, 0.0], [0.0, 0.0]];
+        let w = c.update_with_truth(&m, &truth(Some((Vec2::new(0.0, 2.0), h))));
+        let err = crate::math::wrap_angle(3.0 - (-0.25f64).atan2(-1.0));
+        assert!((err - (3.0 - (-0.25f64).atan2(-1.0) - 2.0 * core::f64::consts::PI)).abs() < 1e-12);
+        assert!((w - (0.5 - err)).abs() < 1e-12, "{w} vs {}", 0.5 - err);
+        // No gradient, or a zero one: no command.
+        assert_eq!(c.update_with_truth(&m, &truth(None)), 0.0);
+        assert_eq!(
+            c.update_with_truth(&m, &truth(Some((Vec2::new(0.0, 0.0), h)))),
+            0.0
+        );
+        // Limited by the output stage.
+        let mut lim = GradientReference::new(GradientReferenceParams {
+            output: out(Some(0.1)),
+            ..p
+        });
+        assert_eq!(
+            lim.update_with_truth(&m, &truth(Some((Vec2::new(0.0, 2.0), h)))),
+            0.1
+        );
+    }
+
+    /// reset() returns every baseline to its first-sample behaviour.
+    #[test]
+    fn resets_forget_the_past() {
+        let seq = [7.0, 7.4, 8.1, 9.5, 10.2, 10.1];
+        let check = |c: &mut dyn IsolineController| {
+            let mut first = [0.0; 6];
+            for (k, v) in seq.iter().enumerate() {
+                first[k] = c.update(&Measurement {
+                    t_s: k as f64,
+                    value: *v,
+                });
+            }
+            c.reset();
+            for (k, v) in seq.iter().enumerate() {
+                let again = c.update(&Measurement {
+                    t_s: 10.0 + k as f64,
+                    value: *v,
+                });
+                assert_eq!(again, first[k], "sample {k}");
+            }
+        };
+        check(&mut SlidingMode::new(SlidingModeParams {
+            level: 10.0,
+            max_turn_rate_radps: 0.5,
+            gamma: 0.2,
+            delta: 1.0,
+            boundary_layer: Some(0.05),
+            output: out(None),
+            derivative: DerivativeKind::FilteredDifference { tau_s: 1.0 },
+        }));
+        check(&mut Pid::new(PidParams {
+            level: 10.0,
+            kp: 3.0,
+            ki: 0.2,
+            kd: 10.0,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        }));
+    }
 }
