@@ -33,3 +33,30 @@ pub struct Telemetry {
     /// Roll angle, rad, positive right wing down.
     pub roll_rad: f64,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{Pose2, Vec2};
+
+    struct Still;
+    impl Vehicle for Still {
+        type State = ();
+        fn step(&self, _: &mut (), _: f64, _: f64) {}
+        fn pose(&self, _: &()) -> Pose2 {
+            Pose2 {
+                position: Vec2::new(0.0, 0.0),
+                heading_rad: 0.0,
+            }
+        }
+        fn speed_mps(&self, _: &()) -> f64 {
+            0.0
+        }
+    }
+
+    /// A vehicle that does not fly reports no telemetry by default.
+    #[test]
+    fn telemetry_defaults_to_none() {
+        assert_eq!(Still.telemetry(&()), None);
+    }
+}

@@ -451,6 +451,48 @@ mod tests {
         assert_relative_eq!(again, 10.0 * e, epsilon = 1e-15);
     }
 
+    /// Back-calculation off the limit integrates e dt like the plain law; with ki = 0 there is no
+    /// integral action to bleed, so sigma integrates e dt even on the limit. A sample whose time
+    /// runs backwards integrates nothing.
+    #[test]
+    fn back_calculation_unsaturated_no_ki_and_backward_time() {
+        let mut p = params();
+        p.anti_windup = AntiWindup::BackCalculation {
+            tracking_time_s: 0.5,
+        };
+        p.output.max_turn_rate_radps = Some(100.0);
+        let mut c = PiIsoline::new(p);
+        let e = 0.2 * crate::fmath::tanh(0.3);
+        for k in 0..4 {
+            c.update(&Measurement {
+                t_s: 0.25 * k as f64,
+                value: 10.3,
+            });
+        }
+        assert_relative_eq!(c.sigma(), 0.75 * e, epsilon = 1e-15);
+        // ki = 0 and saturated (limit 0.01 < kp e): still plain integration.
+        p.ki = 0.0;
+        p.output.max_turn_rate_radps = Some(0.01);
+        let mut c = PiIsoline::new(p);
+        for k in 0..4 {
+            let w = c.update(&Measurement {
+                t_s: 0.25 * k as f64,
+                value: 10.3,
+            });
+            assert_eq!(w, 0.01);
+        }
+        assert_relative_eq!(c.sigma(), 0.75 * e, epsilon = 1e-15);
+        // Time running backwards: no integration (and the estimate holds).
+        let mut c = PiIsoline::new(params());
+        for t in [1.0, 2.0, 1.5] {
+            c.update(&Measurement {
+                t_s: t,
+                value: 10.3,
+            });
+        }
+        assert_relative_eq!(c.sigma(), 1.0 * e, epsilon = 1e-15);
+    }
+
     /// The trait's defaults: a coordinate-free law asks for no ground truth, and given some
     /// anyway it answers as from the measurement alone.
     #[test]
