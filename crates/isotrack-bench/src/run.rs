@@ -445,39 +445,61 @@ const PICTURE_GRID: usize = 64;
 
 fn field_picture(base: &Scenario, trajectories: &[Trajectory]) -> FieldPicture {
     let start = base.start();
-    let (mut x0, mut y0, mut x1, mut y1) = (start.x_m, start.y_m, start.x_m, start.y_m);
-    for p in trajectories.iter().flat_map(|t| t.points.iter()) {
-        x0 = x0.min(p[0]);
-        y0 = y0.min(p[1]);
-        x1 = x1.max(p[0]);
-        y1 = y1.max(p[1]);
-    }
-    // A square with a margin, so the isoline around the paths shows.
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let half = (0.5 * (x1 - x0).max(y1 - y0)).max(1.0) * 1.15;
-    let (x0, y0) = (cx - half, cy - half);
-    let h = 2.0 * half / (PICTURE_GRID - 1) as f64;
-    let field = base.field();
-    let at = |p: Vec2| field.value(0.0, p).filter(|v| v.is_finite());
-    let mut values = Vec::with_capacity(PICTURE_GRID * PICTURE_GRID);
-    for j in 0..PICTURE_GRID {
-        for i in 0..PICTURE_GRID {
-            values.push(at(Vec2::new(x0 + i as f64 * h, y0 + j as f64 * h)));
+    let points = std::iter::once([start.x_m, start.y_m])
+        .chain(trajectories.iter().flat_map(|t| t.points.iter().copied()));
+    // The start is finite (a resolved scenario's), so there is always a square to draw.
+    FieldPicture::around(base, points, PICTURE_GRID).expect("a finite start point")
+}
+
+impl FieldPicture {
+    /// The field of `scenario` at t = 0 on an `n x n` grid over a square round `points` (their
+    /// bounding box, widened by 15 %, at least 2 m across), with its isoline `s_d`; `None` when
+    /// no point is finite.
+    pub fn around(
+        scenario: &Scenario,
+        points: impl IntoIterator<Item = [f64; 2]>,
+        n: usize,
+    ) -> Option<FieldPicture> {
+        let (mut x0, mut y0, mut x1, mut y1) =
+            (f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY);
+        for [x, y] in points
+            .into_iter()
+            .filter(|p| p[0].is_finite() && p[1].is_finite())
+        {
+            x0 = x0.min(x);
+            y0 = y0.min(y);
+            x1 = x1.max(x);
+            y1 = y1.max(y);
         }
-    }
-    let level = base.level();
-    let iso =
-        IsolineSegments::from_samples(Vec2::new(x0, y0), h, PICTURE_GRID, PICTURE_GRID, level, at);
-    FieldPicture {
-        bounds_m: [x0, y0, x0 + 2.0 * half, y0 + 2.0 * half],
-        n: PICTURE_GRID,
-        values,
-        isoline: iso
-            .segments()
-            .iter()
-            .map(|(a, b)| [a.x, a.y, b.x, b.y])
-            .collect(),
-        level,
+        if !(x0.is_finite() && y0.is_finite()) {
+            return None;
+        }
+        // A square with a margin, so the isoline around the paths shows.
+        let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let half = (0.5 * (x1 - x0).max(y1 - y0)).max(1.0) * 1.15;
+        let (x0, y0) = (cx - half, cy - half);
+        let h = 2.0 * half / (n - 1) as f64;
+        let field = scenario.field();
+        let at = |p: Vec2| field.value(0.0, p).filter(|v| v.is_finite());
+        let mut values = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                values.push(at(Vec2::new(x0 + i as f64 * h, y0 + j as f64 * h)));
+            }
+        }
+        let level = scenario.level();
+        let iso = IsolineSegments::from_samples(Vec2::new(x0, y0), h, n, n, level, at);
+        Some(FieldPicture {
+            bounds_m: [x0, y0, x0 + 2.0 * half, y0 + 2.0 * half],
+            n,
+            values,
+            isoline: iso
+                .segments()
+                .iter()
+                .map(|(a, b)| [a.x, a.y, b.x, b.y])
+                .collect(),
+            level,
+        })
     }
 }
 

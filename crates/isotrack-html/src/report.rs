@@ -1,8 +1,6 @@
 //! `isotrack report`: runs as one interactive page.
 
 use crate::{escape, page, script_json};
-use isotrack_core::{ScalarField, Vec2};
-use isotrack_fields::isoline::IsolineSegments;
 use isotrack_plot::{PlotError, RunData};
 use serde::Serialize;
 use std::path::Path;
@@ -130,47 +128,10 @@ fn picture(
     scenario: &isotrack_scenario::Scenario,
     runs: &[RunJson],
 ) -> Option<isotrack_bench::run::FieldPicture> {
-    let pts = runs.iter().flat_map(|r| {
-        r.x.iter()
-            .zip(&r.y)
-            .filter(|(x, y)| x.is_finite() && y.is_finite())
-    });
-    let (mut x0, mut y0, mut x1, mut y1) =
-        (f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY);
-    for (x, y) in pts {
-        x0 = x0.min(*x);
-        y0 = y0.min(*y);
-        x1 = x1.max(*x);
-        y1 = y1.max(*y);
-    }
-    if !(x0.is_finite() && y0.is_finite()) {
-        return None;
-    }
-    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let half = (0.5 * (x1 - x0).max(y1 - y0)).max(1.0) * 1.15;
-    let (x0, y0) = (cx - half, cy - half);
-    let h = 2.0 * half / (GRID - 1) as f64;
-    let field = scenario.field();
-    let at = |p: Vec2| field.value(0.0, p).filter(|v| v.is_finite());
-    let mut values = Vec::with_capacity(GRID * GRID);
-    for j in 0..GRID {
-        for i in 0..GRID {
-            values.push(at(Vec2::new(x0 + i as f64 * h, y0 + j as f64 * h)));
-        }
-    }
-    let level = scenario.level();
-    let iso = IsolineSegments::from_samples(Vec2::new(x0, y0), h, GRID, GRID, level, at);
-    Some(isotrack_bench::run::FieldPicture {
-        bounds_m: [x0, y0, x0 + 2.0 * half, y0 + 2.0 * half],
-        n: GRID,
-        values,
-        isoline: iso
-            .segments()
-            .iter()
-            .map(|(a, b)| [a.x, a.y, b.x, b.y])
-            .collect(),
-        level,
-    })
+    let points = runs
+        .iter()
+        .flat_map(|r| r.x.iter().zip(&r.y).map(|(x, y)| [*x, *y]));
+    isotrack_bench::run::FieldPicture::around(scenario, points, GRID)
 }
 
 const REPORT_JS: &str = r##"
