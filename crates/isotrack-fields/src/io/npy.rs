@@ -56,6 +56,57 @@ fn check_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
             ));
         }
     }
+    check_shape(path, header)
+}
+
+/// Checks the header's shape tuple before `npyz` multiplies it out: `npyz` takes the product of
+/// the dimensions unchecked, which overflows (a panic in debug builds, a wrapped size in release)
+/// on a fuzzed shape such as `(199998000098, 700000007, 0)`. A zero or one-wide frame is refused
+/// here too, because the product is formed before any later check could see the zero.
+fn check_shape(path: &Path, header: &[u8]) -> Result<(), LoadError> {
+    let (Some(open), Some(close)) = (
+        header.iter().position(|&c| c == b'('),
+        header.iter().position(|&c| c == b')'),
+    ) else {
+        // No tuple: npyz reports the missing shape itself.
+        return Ok(());
+    };
+    if close < open {
+        return Err(LoadError::new(
+            path,
+            Some(FilePosition::Offset(0)),
+            "not a valid .npy file: the shape tuple is malformed".to_string(),
+        ));
+    }
+    let text = String::from_utf8_lossy(&header[open + 1..close]);
+    let mut dims = Vec::new();
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        // Trailing `L` of Python 2 longs is accepted by npyz as well.
+        let digits = part.trim_end_matches('L');
+        match digits.parse::<u64>() {
+            Ok(d) => dims.push(d),
+            // Anything else is npyz's to report (its message names the token).
+            Err(_) => return Ok(()),
+        }
+    }
+    if (2..=3).contains(&dims.len()) && dims[dims.len() - 2..].iter().any(|&d| d < 2) {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!("shape {dims:?}: a frame needs at least 2 x 2 values, and a series one frame"),
+        ));
+    }
+    if dims
+        .iter()
+        .try_fold(1u64, |n, &d| n.checked_mul(d))
+        .is_none()
+    {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!("shape {dims:?}: the number of values overflows 64 bits"),
+        ));
+    }
     Ok(())
 }
 
