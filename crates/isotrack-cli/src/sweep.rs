@@ -14,7 +14,7 @@ use crate::run::Failure;
 use indicatif::{ProgressBar, ProgressStyle};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::{load_scenario, Scenario};
-use isotrack_sim::NoTrace;
+use isotrack_sim::LANES;
 #[allow(unused_imports)]
 use rayon::iter::IntoParallelIterator;
 use rayon::prelude::*;
@@ -51,41 +51,66 @@ fn csv_line(fields: &[String]) -> String {
     String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
-/// One run's row (as a CSV line with its newline). A run whose values make an invalid scenario
-/// is recorded (`invalid_scenario`, the reason in `outcome_detail`), never fatal to the sweep.
-fn run_row(plan: &SweepPlan, base: &Scenario, id: u64, sweep_name: &str) -> String {
-    let mut fields = vec![id.to_string()];
-    fields.extend(plan.run_cells(id));
+/// The rows of runs `ids` (CSV lines with their newlines, in `ids` order). A run whose values
+/// make an invalid scenario is recorded (`invalid_scenario`, the reason in `outcome_detail`),
+/// never fatal to the sweep. The valid runs are run together ([`Scenario::run_batch`]: runs
+/// sharing the field, vehicle and plan step in SIMD lanes, each with the result it has alone).
+fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) -> Vec<String> {
+    let derived: Vec<Result<Scenario, String>> = ids
+        .iter()
+        .map(|&id| {
+            let origin = format!("sweep {sweep_name} run {id}");
+            base.derive_with(&plan.run_assignments(id, &origin), &origin)
+                .map_err(|e| e.to_string().replace('\n', " "))
+        })
+        .collect();
+    let valid: Vec<Scenario> = derived
+        .iter()
+        .filter_map(|d| d.as_ref().ok())
+        .cloned()
+        .collect();
+    let mut results = Scenario::run_batch(&valid).into_iter();
     let opt = |x: Option<f64>| x.map(num).unwrap_or_default();
-    let origin = format!("sweep {sweep_name} run {id}");
-    match base.derive_with(&plan.run_assignments(id, &origin), &origin) {
-        Ok(s) => {
-            let r = s.run(&mut NoTrace);
-            let m = &r.metrics;
-            fields.extend([
-                r.outcome.as_str().to_string(),
-                opt(m.convergence_time_s),
-                opt(m.steady_state_max_abs_error),
-                opt(m.steady_state_rms_error),
-                opt(m.steady_state_mean_error),
-                opt(m.steady_state_max_isoline_distance_m),
-                opt(m.steady_state_rms_isoline_distance_m),
-                num(m.path_length_m),
-                num(m.control_effort),
-                opt(m.chattering_radps2),
-                opt(m.sign_changes_per_s),
-                num(r.t_end_s),
-                r.samples.to_string(),
-                r.outcome_detail.unwrap_or_default(),
-            ]);
-        }
-        Err(e) => {
-            fields.push("invalid_scenario".into());
-            fields.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len() - 2));
-            fields.push(e.to_string().replace('\n', " "));
-        }
-    }
-    csv_line(&fields)
+    ids.iter()
+        .zip(derived)
+        .map(|(&id, d)| {
+            let mut fields = vec![id.to_string()];
+            fields.extend(plan.run_cells(id));
+            // run_batch answers every valid scenario, in order.
+            let result = d.and_then(|_| {
+                results
+                    .next()
+                    .ok_or_else(|| "the batch returned no result for this run".to_string())
+            });
+            match result {
+                Ok(r) => {
+                    let m = &r.metrics;
+                    fields.extend([
+                        r.outcome.as_str().to_string(),
+                        opt(m.convergence_time_s),
+                        opt(m.steady_state_max_abs_error),
+                        opt(m.steady_state_rms_error),
+                        opt(m.steady_state_mean_error),
+                        opt(m.steady_state_max_isoline_distance_m),
+                        opt(m.steady_state_rms_isoline_distance_m),
+                        num(m.path_length_m),
+                        num(m.control_effort),
+                        opt(m.chattering_radps2),
+                        opt(m.sign_changes_per_s),
+                        num(r.t_end_s),
+                        r.samples.to_string(),
+                        r.outcome_detail.unwrap_or_default(),
+                    ]);
+                }
+                Err(e) => {
+                    fields.push("invalid_scenario".into());
+                    fields.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len() - 2));
+                    fields.push(e);
+                }
+            }
+            csv_line(&fields)
+        })
+        .collect()
 }
 
 /// The base scenario of a sweep: its file with `sets`, then the sweep's `[base]`, which must
@@ -141,13 +166,16 @@ pub fn sweep_in_memory(
     } else {
         ProgressBar::hidden()
     };
+    let total = plan.total();
     let lines: Vec<String> = pool.install(|| {
-        (0..plan.total())
+        (0..total.div_ceil(LANES as u64))
             .into_par_iter()
-            .map(|id| {
-                let row = run_row(&plan, &base, id, &label);
-                pb.inc(1);
-                row
+            .flat_map_iter(|c| {
+                let ids: Vec<u64> =
+                    (c * LANES as u64..((c + 1) * LANES as u64).min(total)).collect();
+                let rows = run_rows(&plan, &base, &ids, &label);
+                pb.inc(rows.len() as u64);
+                rows
             })
             .collect()
     });
@@ -615,13 +643,19 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         });
         // The shard's ids are generated, not listed up front: memory stays flat however
         // large the sweep.
+        // Runs go in groups of LANES consecutive ones (stepped together, see run_rows).
         pool.install(|| {
-            (0..shard_runs)
+            (0..shard_runs.div_ceil(LANES as u64))
                 .into_par_iter()
-                .map(|i| i * n + (k - 1))
-                .filter(|id| done.binary_search(id).is_err())
-                .for_each_with(tx, |tx, id| {
-                    let _ = tx.send(run_row(&plan, &base, id, &name));
+                .for_each_with(tx, |tx, c| {
+                    let ids: Vec<u64> = (c * LANES as u64
+                        ..((c + 1) * LANES as u64).min(shard_runs))
+                        .map(|i| i * n + (k - 1))
+                        .filter(|id| done.binary_search(id).is_err())
+                        .collect();
+                    for row in run_rows(&plan, &base, &ids, &name) {
+                        let _ = tx.send(row);
+                    }
                 })
         });
         writer

@@ -12,6 +12,22 @@ pub trait ScalarField {
     /// no value (outside its domain, a no-data cell). A vehicle reaching such a point ends its run
     /// with the outcome `left_field`.
     fn value(&self, t_s: f64, p: Vec2) -> Option<f64>;
+
+    /// [`value`](Self::value) at `N` points `(x[i], y[i])` (metres) at once, `NaN` where the
+    /// field has no value: what a batched sweep asks for every step of `N` runs. The default asks
+    /// each point in turn; a field whose formula vectorises (the analytic ones) overrides it
+    /// with the same arithmetic in lanes, so the answers are those of `value` bit for bit.
+    #[inline]
+    fn value_lanes<const N: usize>(&self, t_s: f64, x: &[f64; N], y: &[f64; N]) -> [f64; N]
+    where
+        Self: Sized,
+    {
+        let mut out = [f64::NAN; N];
+        for i in 0..N {
+            out[i] = self.value(t_s, Vec2::new(x[i], y[i])).unwrap_or(f64::NAN);
+        }
+        out
+    }
 }
 
 /// Spatial derivatives of a field, for analysis and metrics only.

@@ -1,29 +1,14 @@
-//! Elementary functions for the `no_std` core: the platform's (`std`, i.e. the system libm,
-//! several times faster for `tanh`) when the `std` feature is on, the pure-Rust `libm` crate
-//! otherwise. Same results to within an ulp or two; bit-identity holds within one build.
+//! Elementary functions for the `no_std` core. `exp`, `tanh` and `sin_cos` are those of
+//! [`crate::lanes`] on every build (one set of numbers for a run stepped alone and in a batch);
+//! the others are the platform's (`std`) when the `std` feature is on, the pure-Rust `libm`
+//! crate otherwise: the same results to within an ulp, bit-identity within one build.
 
 #[cfg(feature = "std")]
 mod imp {
     extern crate std;
     #[inline]
-    pub fn tanh(x: f64) -> f64 {
-        x.tanh()
-    }
-    #[inline]
-    pub fn exp(x: f64) -> f64 {
-        x.exp()
-    }
-    #[inline]
     pub fn sqrt(x: f64) -> f64 {
         x.sqrt()
-    }
-    #[inline]
-    pub fn sincos(x: f64) -> (f64, f64) {
-        x.sin_cos()
-    }
-    #[inline]
-    pub fn round(x: f64) -> f64 {
-        x.round()
     }
     #[inline]
     pub fn ln(x: f64) -> f64 {
@@ -42,24 +27,8 @@ mod imp {
 #[cfg(not(feature = "std"))]
 mod imp {
     #[inline]
-    pub fn tanh(x: f64) -> f64 {
-        libm::tanh(x)
-    }
-    #[inline]
-    pub fn exp(x: f64) -> f64 {
-        libm::exp(x)
-    }
-    #[inline]
     pub fn sqrt(x: f64) -> f64 {
         libm::sqrt(x)
-    }
-    #[inline]
-    pub fn sincos(x: f64) -> (f64, f64) {
-        libm::sincos(x)
-    }
-    #[inline]
-    pub fn round(x: f64) -> f64 {
-        libm::round(x)
     }
     #[inline]
     pub fn ln(x: f64) -> f64 {
@@ -77,6 +46,10 @@ mod imp {
 
 pub use imp::*;
 
+// exp, tanh and sin_cos are the branch-free ones of `lanes` on both paths: the same numbers as
+// a batched run's lanes, and faster than the platform's (no call, inlined).
+pub use crate::lanes::{exp, sin_cos as sincos, tanh};
+
 #[cfg(test)]
 mod tests {
     /// Each function against values known to 15 digits, on either math path (`std` or `libm`).
@@ -91,10 +64,6 @@ mod tests {
         assert!(close(s, 0.5) && close(c, 0.866_025_403_784_438_6));
         let (s, c) = super::sincos(-2.0);
         assert!(close(s, -0.909_297_426_825_681_7) && close(c, -0.416_146_836_547_142_4));
-        assert_eq!(
-            (super::round(2.5), super::round(-2.5), super::round(1.4)),
-            (3.0, -3.0, 1.0)
-        );
         assert!(
             close(super::ln(core::f64::consts::E), 1.0)
                 && close(super::ln(10.0), core::f64::consts::LN_10)

@@ -22,6 +22,7 @@ pub mod control;
 pub mod estimate;
 pub mod field;
 mod fmath;
+pub mod lanes;
 pub mod math;
 pub mod theory;
 pub mod vehicle;

@@ -104,9 +104,10 @@ impl Pose2 {
 }
 
 /// Wraps an angle to `(-pi, pi]`.
+#[inline]
 pub fn wrap_angle(angle_rad: f64) -> f64 {
     use core::f64::consts::{PI, TAU};
-    let mut a = angle_rad - TAU * crate::fmath::round(angle_rad / TAU);
+    let mut a = angle_rad - TAU * crate::lanes::round(angle_rad / TAU);
     if a <= -PI {
         a += TAU;
     } else if a > PI {

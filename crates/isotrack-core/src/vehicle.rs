@@ -14,12 +14,35 @@ pub trait Vehicle {
     fn step(&self, state: &mut Self::State, omega_radps: f64, dt_s: f64);
     /// Position and course of the state; the sensor samples the field at this position.
     fn pose(&self, state: &Self::State) -> Pose2;
+    /// The position of the state, metres: `pose(state).position`, which a vehicle may give
+    /// without computing the rest of the pose (the batched loop asks for it every step).
+    #[inline]
+    fn position(&self, state: &Self::State) -> crate::math::Vec2 {
+        self.pose(state).position
+    }
     /// Ground speed in m/s (for metrics such as path length per unit time).
     fn speed_mps(&self, state: &Self::State) -> f64;
     /// Extra quantities a flying vehicle reports (altitude, airspeed, roll); `None` for a
     /// ground robot.
     fn telemetry(&self, _state: &Self::State) -> Option<Telemetry> {
         None
+    }
+    /// [`step`](Self::step) of `N` runs at once, each with its own command: what a batched
+    /// sweep does every step. The default steps each in turn; a vehicle whose step vectorises
+    /// (the Dubins robot) overrides it with the same arithmetic in lanes, so each state is the
+    /// one `step` gives, bit for bit.
+    #[inline]
+    fn step_lanes<const N: usize>(
+        &self,
+        states: &mut [Self::State; N],
+        omega_radps: &[f64; N],
+        dt_s: f64,
+    ) where
+        Self: Sized,
+    {
+        for (s, &w) in states.iter_mut().zip(omega_radps) {
+            self.step(s, w, dt_s);
+        }
     }
 }
 

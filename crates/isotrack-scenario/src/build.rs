@@ -102,7 +102,7 @@ macro_rules! each_controller {
 
 /// The controller a run flies: the tracking law, or the tracking law behind a search phase.
 /// (An enum, not a box: the step loop stays monomorphic.)
-enum Tracker {
+pub(crate) enum Tracker {
     Tracking(ControllerModel),
     Searching(Search<ControllerModel>),
 }
@@ -133,6 +133,26 @@ impl IsolineController for Tracker {
             Tracker::Searching(c) => c.update_with_truth(m, truth),
         }
     }
+    /// Lanes all tracking (no search phase) take [`ControllerModel`]'s lane form.
+    #[inline]
+    fn update_lanes<const N: usize>(
+        ctrls: &mut [Option<&mut Self>; N],
+        ms: &[Measurement; N],
+    ) -> [f64; N] {
+        let mut inner: [Option<&mut ControllerModel>; N] = [const { None }; N];
+        let mut all_tracking = true;
+        for (slot, c) in inner.iter_mut().zip(ctrls.iter_mut()) {
+            match c.as_deref_mut() {
+                Some(Tracker::Tracking(m)) => *slot = Some(m),
+                Some(Tracker::Searching(_)) => all_tracking = false,
+                None => {}
+            }
+        }
+        if all_tracking {
+            return ControllerModel::update_lanes(&mut inner, ms);
+        }
+        one_by_one(ctrls, ms)
+    }
 }
 
 impl IsolineController for ControllerModel {
@@ -149,6 +169,40 @@ impl IsolineController for ControllerModel {
     fn update_with_truth(&mut self, m: &Measurement, t: &GroundTruth) -> f64 {
         each_controller!(self, c => c.update_with_truth(m, t))
     }
+    /// Lanes of PI-like laws take [`PiIsoline`]'s lane form; any other mix, one by one.
+    #[inline]
+    fn update_lanes<const N: usize>(
+        ctrls: &mut [Option<&mut Self>; N],
+        ms: &[Measurement; N],
+    ) -> [f64; N] {
+        let mut pis: [Option<&mut PiIsoline>; N] = [const { None }; N];
+        let mut all_pi = true;
+        for (slot, c) in pis.iter_mut().zip(ctrls.iter_mut()) {
+            match c.as_deref_mut() {
+                Some(ControllerModel::PiIsoline(p)) => *slot = Some(p),
+                Some(_) => all_pi = false,
+                None => {}
+            }
+        }
+        if all_pi {
+            return PiIsoline::update_lanes(&mut pis, ms);
+        }
+        one_by_one(ctrls, ms)
+    }
+}
+
+/// [`IsolineController::update_lanes`] as its default does it: each controller in turn.
+fn one_by_one<C: IsolineController, const N: usize>(
+    ctrls: &mut [Option<&mut C>; N],
+    ms: &[Measurement; N],
+) -> [f64; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        if let Some(c) = ctrls[i].as_deref_mut() {
+            out[i] = c.update(&ms[i]);
+        }
+    }
+    out
 }
 
 impl Scenario {
@@ -379,11 +433,16 @@ impl Scenario {
 
     /// Runs the scenario, recording the trace into `sink`.
     pub fn run<S: TraceSink + ?Sized>(&self, sink: &mut S) -> RunResult {
-        let mut controller = match self.search() {
+        let mut controller = self.tracker();
+        self.run_with(&mut controller, sink)
+    }
+
+    /// The controller a run of this scenario flies (behind its search phase, if any).
+    pub(crate) fn tracker(&self) -> Tracker {
+        match self.search() {
             Some(params) => Tracker::Searching(Search::new(self.controller(), params)),
             None => Tracker::Tracking(self.controller()),
-        };
-        self.run_with(&mut controller, sink)
+        }
     }
 
     /// Runs the scenario with another controller in the loop (a user's own law, from Python

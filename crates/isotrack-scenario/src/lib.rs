@@ -13,6 +13,7 @@
 //!   running it ([`Scenario::run`]).
 #![deny(missing_docs)]
 
+mod batch;
 pub mod build;
 pub mod check;
 pub mod episode;

@@ -8,7 +8,8 @@ use isotrack_core::ScalarField;
 use isotrack_fields::grid::{Grid2, GridField, Interpolation};
 use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
 use isotrack_sim::{
-    simulate, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TraceRow, TraceSink,
+    simulate, simulate_batch, BatchRun, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TraceRow,
+    TraceSink,
 };
 use isotrack_vehicles::{Dubins, DubinsState};
 use std::hint::black_box;
@@ -51,6 +52,61 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
             black_box(run_on(&analytic, 10.0, &mut rows))
+        })
+    });
+    g.finish();
+
+    // The same run, 8 of them from spread starts: stepped together in lanes, and one by one.
+    let starts: Vec<DubinsState> = (0..8)
+        .map(|i| DubinsState {
+            position_m: Vec2::new(10.0 - i as f64, 0.5 * i as f64),
+            heading_rad: -std::f64::consts::FRAC_PI_2 + 0.3 * i as f64,
+        })
+        .collect();
+    let plan = StepPlan::new(0.01, 600.0, 0.0, 0.2, 0.1, 60.0, 10.0).unwrap();
+    let sensor = || {
+        let cfg = SensorConfig {
+            rate_hz: 100.0,
+            ..SensorConfig::default()
+        };
+        Sensor::new(cfg, 0.01, 0).unwrap()
+    };
+    let vehicle = Dubins { speed_mps: 0.5 };
+    let mut g = c.benchmark_group("dubins_circular_600s_x8");
+    g.throughput(Throughput::Elements(8 * 60_000));
+    g.bench_function("batched", |b| {
+        b.iter(|| {
+            let runs = starts
+                .iter()
+                .map(|&x0| BatchRun {
+                    x0,
+                    controller: PiIsoline::new(PiIsolineParams::paper_fig2b(10.0)),
+                    sensor: sensor(),
+                    oracles: Oracles::default(),
+                })
+                .collect();
+            black_box(simulate_batch(&analytic, &vehicle, &plan, runs))
+        })
+    });
+    g.bench_function("one_by_one", |b| {
+        b.iter(|| {
+            starts
+                .iter()
+                .map(|&x0| {
+                    let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
+                    simulate(
+                        &analytic,
+                        &vehicle,
+                        x0,
+                        &mut c,
+                        sensor(),
+                        &plan,
+                        &Oracles::default(),
+                        &mut NoTrace,
+                    )
+                    .steps
+                })
+                .sum::<u64>()
         })
     });
     g.finish();

@@ -14,11 +14,13 @@
 //! 5. `x_{k+1} = vehicle.step(x_k, omega, dt)`.
 #![deny(missing_docs)]
 
+mod batch;
 mod metrics;
 mod sensor;
 mod simulation;
 mod trace;
 
+pub use batch::{simulate_batch, BatchRun, LANES};
 pub use metrics::{Metrics, MetricsConfig, RunMetrics};
 pub use sensor::{
     whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,

@@ -1,5 +1,6 @@
 //! The Dubins robot of the paper, eq. (5): `p' = v [cos(theta), sin(theta)]`, `theta' = omega`.
 
+use isotrack_core::lanes;
 use isotrack_core::math::{wrap_angle, Pose2, Vec2};
 use isotrack_core::Vehicle;
 
@@ -30,20 +31,62 @@ pub struct Dubins {
     pub speed_mps: f64,
 }
 
-impl Vehicle for Dubins {
-    type State = DubinsState;
-
-    fn step(&self, s: &mut DubinsState, omega_radps: f64, dt_s: f64) {
-        let th = s.heading_rad;
-        let (s1, c1) = th.sin_cos();
-        let (sa, ca) = (0.5 * omega_radps * dt_s).sin_cos();
+impl Dubins {
+    /// Simpson's rule over the step from `(sin, cos)` of the heading and of `a = omega*dt/2`.
+    #[inline(always)]
+    fn advance(
+        &self,
+        s: &mut DubinsState,
+        omega_radps: f64,
+        dt_s: f64,
+        (s1, c1): (f64, f64),
+        (sa, ca): (f64, f64),
+    ) {
         // Rotate (c1, s1) by a, then by a again.
         let (c2, s2) = (c1 * ca - s1 * sa, s1 * ca + c1 * sa);
         let (c4, s4) = (c2 * ca - s2 * sa, s2 * ca + c2 * sa);
         let k = self.speed_mps * dt_s / 6.0;
         s.position_m.x += k * (c1 + 4.0 * c2 + c4);
         s.position_m.y += k * (s1 + 4.0 * s2 + s4);
-        s.heading_rad = th + omega_radps * dt_s;
+        s.heading_rad += omega_radps * dt_s;
+    }
+}
+
+impl Vehicle for Dubins {
+    type State = DubinsState;
+
+    fn step(&self, s: &mut DubinsState, omega_radps: f64, dt_s: f64) {
+        let (s1, c1) = lanes::sin_cos(s.heading_rad);
+        let (sa, ca) = lanes::sin_cos(0.5 * omega_radps * dt_s);
+        self.advance(s, omega_radps, dt_s, (s1, c1), (sa, ca));
+    }
+
+    /// The step of `N` robots with their `sin_cos` in lanes (vectorised); each state is what
+    /// [`step`](Vehicle::step) gives it, bit for bit.
+    #[inline(always)]
+    fn step_lanes<const N: usize>(
+        &self,
+        states: &mut [DubinsState; N],
+        omega_radps: &[f64; N],
+        dt_s: f64,
+    ) {
+        let mut th = [0.0; N];
+        let mut half = [0.0; N];
+        for i in 0..N {
+            th[i] = states[i].heading_rad;
+            half[i] = 0.5 * omega_radps[i] * dt_s;
+        }
+        let (s1, c1) = lanes::sin_cos_lanes(th);
+        let (sa, ca) = lanes::sin_cos_lanes(half);
+        for i in 0..N {
+            self.advance(
+                &mut states[i],
+                omega_radps[i],
+                dt_s,
+                (s1[i], c1[i]),
+                (sa[i], ca[i]),
+            );
+        }
     }
 
     fn pose(&self, s: &DubinsState) -> Pose2 {
@@ -51,6 +94,11 @@ impl Vehicle for Dubins {
             position: s.position_m,
             heading_rad: wrap_angle(s.heading_rad),
         }
+    }
+
+    #[inline]
+    fn position(&self, s: &DubinsState) -> Vec2 {
+        s.position_m
     }
 
     fn speed_mps(&self, _s: &DubinsState) -> f64 {

@@ -61,6 +61,27 @@ pub trait IsolineController {
     fn update_with_truth(&mut self, m: &Measurement, _truth: &GroundTruth) -> f64 {
         self.update(m)
     }
+    /// [`update`](Self::update) of up to `N` controllers at once, one measurement each (the
+    /// lanes holding `None` are skipped and answer 0): what a batched sweep does at a sample
+    /// step. The default updates each in turn; a law whose arithmetic vectorises (the PI-like
+    /// law's `tanh`) overrides it, with each answer and state equal, bit for bit, to what
+    /// `update` gives.
+    #[inline]
+    fn update_lanes<const N: usize>(
+        ctrls: &mut [Option<&mut Self>; N],
+        ms: &[Measurement; N],
+    ) -> [f64; N]
+    where
+        Self: Sized,
+    {
+        let mut out = [0.0; N];
+        for i in 0..N {
+            if let Some(c) = ctrls[i].as_deref_mut() {
+                out[i] = c.update(&ms[i]);
+            }
+        }
+        out
+    }
 }
 
 /// Which side of the vehicle the higher field values lie on once it tracks the isoline.

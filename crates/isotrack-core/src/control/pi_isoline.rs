@@ -131,12 +131,19 @@ impl PiIsoline {
     }
 }
 
-impl IsolineController for PiIsoline {
-    fn update(&mut self, m: &Measurement) -> f64 {
+impl PiIsoline {
+    /// `eps = s - s_d` and the estimate of `eps'` from a sample (the estimator advances).
+    #[inline(always)]
+    fn error_and_rate(&mut self, m: &Measurement) -> (f64, f64) {
+        let eps = m.value - self.params.level;
+        (eps, self.estimator.update(m.t_s, eps))
+    }
+
+    /// The rest of the law once `e = eps' + c1 tanh(eps/c2)` is known: `sigma` (with the
+    /// anti-windup scheme) and the command through the output stage.
+    #[inline(always)]
+    fn integrate_and_command(&mut self, m: &Measurement, eps: f64, e: f64) -> f64 {
         let p = &self.params;
-        let eps = m.value - p.level;
-        let eps_dot = self.estimator.update(m.t_s, eps);
-        let e = eps_dot + p.c1 * crate::fmath::tanh(eps / p.c2);
         if !e.is_finite() {
             // A non-finite measurement: hold the integral and command nothing new from it. The
             // clock does not advance either, so the next finite sample integrates the whole
@@ -182,6 +189,41 @@ impl IsolineController for PiIsoline {
         }
         self.sigma = sigma;
         p.output.apply(p.kp * e + p.ki * self.sigma)
+    }
+}
+
+impl IsolineController for PiIsoline {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        let (eps, eps_dot) = self.error_and_rate(m);
+        let e = eps_dot + self.params.c1 * crate::fmath::tanh(eps / self.params.c2);
+        self.integrate_and_command(m, eps, e)
+    }
+
+    /// The law of `N` controllers with the `tanh` in lanes (each its own gains): the answers
+    /// and states of [`update`](IsolineController::update), bit for bit.
+    #[inline]
+    fn update_lanes<const N: usize>(
+        ctrls: &mut [Option<&mut Self>; N],
+        ms: &[Measurement; N],
+    ) -> [f64; N] {
+        let mut eps = [0.0; N];
+        let mut eps_dot = [0.0; N];
+        let mut arg = [0.0; N];
+        for i in 0..N {
+            if let Some(c) = ctrls[i].as_deref_mut() {
+                (eps[i], eps_dot[i]) = c.error_and_rate(&ms[i]);
+                arg[i] = eps[i] / c.params.c2;
+            }
+        }
+        let th = crate::lanes::tanh_lanes(arg);
+        let mut out = [0.0; N];
+        for i in 0..N {
+            if let Some(c) = ctrls[i].as_deref_mut() {
+                let e = eps_dot[i] + c.params.c1 * th[i];
+                out[i] = c.integrate_and_command(&ms[i], eps[i], e);
+            }
+        }
+        out
     }
 
     fn reset(&mut self) {

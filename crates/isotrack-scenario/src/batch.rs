@@ -1,0 +1,130 @@
+//! Running many scenarios at once: those that share their field, vehicle and plan (the runs
+//! of a sweep that vary starts, seeds, gains or sensors) are stepped together in SIMD lanes
+//! ([`isotrack_sim::simulate_batch`]); each result is the one [`Scenario::run`] gives.
+
+use crate::build::VehicleModel;
+use crate::field::FieldModel;
+use crate::Scenario;
+use isotrack_core::math::Vec2;
+use isotrack_core::{FieldDerivatives, ScalarField};
+use isotrack_sim::{simulate_batch, BatchRun, Oracles, RunResult, LANES};
+use isotrack_vehicles::DubinsState;
+use std::sync::Arc;
+
+impl Scenario {
+    /// Runs every scenario of `runs` (no trace) and returns their results in order, each
+    /// bit-identical to `run(&mut NoTrace)` of that scenario. Consecutive scenarios that share
+    /// their field and vehicle (the same built objects, as [`Scenario::derive`] variants do
+    /// when neither changes) and their step plan are stepped [`LANES`] at a time.
+    pub fn run_batch(runs: &[Scenario]) -> Vec<RunResult> {
+        let mut out = Vec::with_capacity(runs.len());
+        let mut rest = runs;
+        while let Some(first) = rest.first() {
+            let n = rest
+                .iter()
+                .take(LANES)
+                .take_while(|s| s.batches_with(first))
+                .count();
+            let (group, tail) = rest.split_at(n);
+            out.extend(first.run_group(group));
+            rest = tail;
+        }
+        out
+    }
+
+    /// Whether `self` can be stepped in the same lanes as `other`.
+    fn batches_with(&self, other: &Scenario) -> bool {
+        let same_vehicle = match (&*self.vehicle, &*other.vehicle) {
+            // A Dubins robot is its speed (derive rebuilds it when sim.seed changes, which only
+            // a UAV's gusts depend on).
+            (VehicleModel::Dubins(a), VehicleModel::Dubins(b)) => a == b,
+            _ => Arc::ptr_eq(&self.vehicle, &other.vehicle),
+        };
+        Arc::ptr_eq(&self.field, &other.field) && same_vehicle && self.plan() == other.plan()
+    }
+
+    /// One group of [`batches_with`](Self::batches_with) scenarios (`self` the first), each
+    /// with its own start, controller, sensor and isoline oracle.
+    fn run_group(&self, group: &[Scenario]) -> Vec<RunResult> {
+        let results = match self.field() {
+            FieldModel::Analytic(f) => run_on(f, group),
+            FieldModel::Grid(f) => run_on(f, group),
+            FieldModel::Puff(f) => run_on(&**f, group),
+            FieldModel::Series(f) => run_on(&**f, group),
+        };
+        group
+            .iter()
+            .zip(results)
+            .map(|(s, r)| s.explain_end(r))
+            .collect()
+    }
+}
+
+/// The group on its (shared) field, dispatched once on the vehicle.
+fn run_on<F: ScalarField + FieldDerivatives + Sync>(
+    field: &F,
+    group: &[Scenario],
+) -> Vec<RunResult> {
+    let first = &group[0];
+    let plan = first.plan();
+    let dists: Vec<_> = group
+        .iter()
+        .map(|s| {
+            let iso = s.isoline();
+            move |t: f64, p: Vec2| iso.distance(t, p)
+        })
+        .collect();
+    let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
+    let oracles = |i: usize| Oracles {
+        isoline_distance: Some(&dists[i]),
+        gradient: Some(&grad),
+    };
+    match &*first.vehicle {
+        VehicleModel::Dubins(vehicle) => {
+            let runs = group
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    let st = s.start();
+                    batch_run(
+                        s,
+                        DubinsState {
+                            position_m: Vec2::new(st.x_m, st.y_m),
+                            heading_rad: st.heading_rad,
+                        },
+                        oracles(i),
+                    )
+                })
+                .collect();
+            simulate_batch(field, vehicle, &plan, runs)
+        }
+        VehicleModel::FixedWing(vehicle) => {
+            let runs = group
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    let st = s.start();
+                    batch_run(
+                        s,
+                        vehicle.initial_state(st.x_m, st.y_m, st.heading_rad),
+                        oracles(i),
+                    )
+                })
+                .collect();
+            simulate_batch(field, &**vehicle, &plan, runs)
+        }
+    }
+}
+
+fn batch_run<'a, X>(
+    s: &Scenario,
+    x0: X,
+    oracles: Oracles<'a>,
+) -> BatchRun<'a, X, crate::build::Tracker> {
+    BatchRun {
+        x0,
+        controller: s.tracker(),
+        sensor: s.sensor(),
+        oracles,
+    }
+}
