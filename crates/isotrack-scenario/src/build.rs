@@ -134,7 +134,7 @@ impl IsolineController for Tracker {
         }
     }
     /// Lanes all tracking (no search phase) take [`ControllerModel`]'s lane form.
-    #[inline]
+    #[inline(always)]
     fn update_lanes<const N: usize>(
         ctrls: &mut [Option<&mut Self>; N],
         ms: &[Measurement; N],
@@ -170,7 +170,7 @@ impl IsolineController for ControllerModel {
         each_controller!(self, c => c.update_with_truth(m, t))
     }
     /// Lanes of PI-like laws take [`PiIsoline`]'s lane form; any other mix, one by one.
-    #[inline]
+    #[inline(always)]
     fn update_lanes<const N: usize>(
         ctrls: &mut [Option<&mut Self>; N],
         ms: &[Measurement; N],

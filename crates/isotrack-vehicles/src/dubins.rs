@@ -89,6 +89,7 @@ impl Vehicle for Dubins {
         }
     }
 
+    #[inline]
     fn pose(&self, s: &DubinsState) -> Pose2 {
         Pose2 {
             position: s.position_m,

@@ -201,7 +201,7 @@ impl IsolineController for PiIsoline {
 
     /// The law of `N` controllers with the `tanh` in lanes (each its own gains): the answers
     /// and states of [`update`](IsolineController::update), bit for bit.
-    #[inline]
+    #[inline(always)]
     fn update_lanes<const N: usize>(
         ctrls: &mut [Option<&mut Self>; N],
         ms: &[Measurement; N],

@@ -46,7 +46,8 @@ pub struct AirData {
 /// Rotation body -> vehicle (NED) of Euler angles, row-major.
 #[inline]
 pub fn r_body_to_ned(phi: f64, theta: f64, psi: f64) -> [[f64; 3]; 3] {
-    r_from_sincos(phi.sin_cos(), theta.sin_cos(), psi.sin_cos())
+    let (s, c) = isotrack_core::lanes::sin_cos_lanes([phi, theta, psi, 0.0]);
+    r_from_sincos((s[0], c[0]), (s[1], c[1]), (s[2], c[2]))
 }
 
 /// [`r_body_to_ned`] from `(sin, cos)` of the three angles.
@@ -179,9 +180,12 @@ pub fn derivatives(
     let (u, v, w) = (x[3], x[4], x[5]);
     let (phi, theta, psi) = (x[6], x[7], x[8]);
     let (pr, qr, rr) = (x[9], x[10], x[11]);
-    let (sf, cf) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    let r = r_from_sincos((sf, cf), (st, ct), psi.sin_cos());
+    // The three Euler angles' sines and cosines in one lane-wise call (isotrack_core::lanes:
+    // vectorised, and no libm call on the RK4's four evaluations per step).
+    let (s3, c3) = isotrack_core::lanes::sin_cos_lanes([phi, theta, psi, 0.0]);
+    let (sf, cf) = (s3[0], c3[0]);
+    let (st, ct) = (s3[1], c3[1]);
+    let r = r_from_sincos((sf, cf), (st, ct), (s3[2], c3[2]));
     let (air, sa, ca) = air_data_sc(x, wind, &r);
     let (va, alpha, beta) = (air.va_mps, air.alpha_rad, air.beta_rad);
     let m = p.mass_kg;

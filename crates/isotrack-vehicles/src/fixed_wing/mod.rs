@@ -146,7 +146,8 @@ impl FixedWing {
         let chi = FRAC_PI_2 - heading_rad;
         let [wn, we, _] = self.steady_ned();
         // Crab: air velocity Va (cos psi, sin psi) + wind must point along chi.
-        let cross = -wn * chi.sin() + we * chi.cos();
+        let (sc, cc) = isotrack_core::lanes::sin_cos(chi);
+        let cross = -wn * sc + we * cc;
         let crab = (-(cross / self.cfg.airspeed_mps)).clamp(-1.0, 1.0).asin();
         let psi = chi + crab;
         let mut x = trim_state(&self.trim, self.cfg.altitude_m, psi);
