@@ -370,7 +370,10 @@ mod tests {
                 let p = Vec2::new(x, y);
                 let h = 1e-5;
                 if (p - Vec2::new(1.0, -2.0)).norm() < 1e-3 { continue; }
-                if let Some(hs) = f.hessian(0.0, p) {
+                // Defined everywhere but at a radial field's centre (excluded above).
+                let hs = f.hessian(0.0, p);
+                prop_assert!(hs.is_some(), "no Hessian at {:?}", p);
+                if let Some(hs) = hs {
                     let gx = (f.gradient(0.0, p + Vec2::new(h, 0.0)).unwrap() - f.gradient(0.0, p - Vec2::new(h, 0.0)).unwrap()) * (0.5 / h);
                     let gy = (f.gradient(0.0, p + Vec2::new(0.0, h)).unwrap() - f.gradient(0.0, p - Vec2::new(0.0, h)).unwrap()) * (0.5 / h);
                     let scale = 1.0 + hs[0][0].abs() + hs[1][1].abs() + hs[0][1].abs();
@@ -416,5 +419,72 @@ mod tests {
         assert!(f.value(0.0, Vec2::new(1.5, 0.5)).is_none());
         assert!(f.gradient(0.0, Vec2::new(1.5, 0.5)).is_none());
         assert!(f.value(0.0, Vec2::new(f64::NAN, 0.5)).is_none());
+    }
+
+    /// The plumes by the textbook formula, written independently of `inverse_covariance`:
+    /// `b + sum A exp(-(u^2/sx^2 + v^2/sy^2)/2)` with `(u, v)` the offset in the plume's own
+    /// axes, `u = cos(r) dx + sin(r) dy`, `v = -sin(r) dx + cos(r) dy`.
+    #[test]
+    fn plume_values_by_hand() {
+        let f = plumes();
+        let AnalyticKind::GaussianPlumes(g) = &f.kind else {
+            unreachable!()
+        };
+        for (x, y) in [(0.0, 0.0), (3.0, -2.0), (15.0, 8.0), (7.5, 4.0), (-20.0, 11.0)] {
+            let mut want = g.background;
+            for pl in &g.plumes {
+                let (dx, dy) = (x - pl.center_m.x, y - pl.center_m.y);
+                let (sr, cr) = (pl.rotation_rad.sin(), pl.rotation_rad.cos());
+                let (u, v) = (cr * dx + sr * dy, -sr * dx + cr * dy);
+                let q = (u / pl.sigma_m[0]).powi(2) + (v / pl.sigma_m[1]).powi(2);
+                want += pl.amplitude * (-0.5 * q).exp();
+            }
+            let got = f.value(0.0, Vec2::new(x, y)).unwrap();
+            assert!((got - want).abs() < 1e-12 * want.abs(), "({x}, {y}): {got} vs {want}");
+        }
+        // At a source: the background plus its amplitude plus the other plume's tail.
+        let at0 = f.value(0.0, Vec2::new(0.0, 0.0)).unwrap();
+        assert!(at0 > 21.0 && at0 < 21.0 + 12.0, "{at0}");
+        // The radial field's Hessian in closed form at (d, 0) from its centre: f'' = k^2 F
+        // along the radius, f'/d = -k F/d across it.
+        let r = fields().remove(0);
+        let (d, k) = (5.0f64, 0.1f64);
+        let fv = 20.0 * (-k * d).exp();
+        let h = r.hessian(0.0, Vec2::new(1.0 + d, -2.0)).unwrap();
+        assert!((h[0][0] - k * k * fv).abs() < 1e-12);
+        assert!((h[1][1] + k * fv / d).abs() < 1e-12);
+        assert!(h[0][1].abs() < 1e-15 && h[1][0].abs() < 1e-15);
+        assert!(r.hessian(0.0, Vec2::new(1.0, -2.0)).is_none(), "undefined at the centre");
+    }
+
+    /// The lanes form is the scalar one, bit for bit, for every kind, with a domain and a
+    /// drift, and NaN where the field has no value.
+    #[test]
+    fn value_lanes_equal_value_bit_for_bit() {
+        let xs = [0.0, 3.5, -12.0, 15.0, 1.0, 40.0, f64::NAN, -0.7];
+        let ys = [0.0, -2.0, 9.0, 8.0, -2.0, 1.0, 0.0, 33.0];
+        for mut f in fields() {
+            for (domain, drift) in [
+                (None, Vec2::default()),
+                (Some([-20.0, 20.0, -20.0, 20.0]), Vec2::new(0.3, -0.1)),
+            ] {
+                f.domain_m = domain;
+                f.drift_mps = drift;
+                for t in [0.0, 7.0] {
+                    let lanes = f.value_lanes(t, &xs, &ys);
+                    for i in 0..8 {
+                        let one = f.value(t, Vec2::new(xs[i], ys[i])).unwrap_or(f64::NAN);
+                        assert_eq!(lanes[i].to_bits(), one.to_bits(), "{:?} lane {i}", f.kind);
+                    }
+                }
+            }
+        }
+        // A field without plumes is its background, as `value` says.
+        let empty = AnalyticField::new(AnalyticKind::GaussianPlumes(GaussianPlumes {
+            background: 2.5,
+            plumes: vec![],
+        }));
+        assert_eq!(empty.value_lanes(0.0, &[1.0], &[2.0]), [2.5]);
+        assert_eq!(empty.value(0.0, Vec2::new(1.0, 2.0)), Some(2.5));
     }
 }

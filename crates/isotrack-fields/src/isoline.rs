@@ -313,4 +313,79 @@ mod tests {
                 .is_none()
         );
     }
+
+    /// A ramp `F = x` sampled on a 41 x 21 lattice of 0.5 m from (-3, 1): the level-4.3 set is
+    /// the line `x = 4.3`, so every distance is `|x - 4.3|`, near and far (the ring search),
+    /// inside and outside the sampled box.
+    #[test]
+    fn straight_isoline_distances_by_hand() {
+        let origin = Vec2::new(-3.0, 1.0);
+        let iso = IsolineSegments::from_samples(origin, 0.5, 41, 21, 4.3, |p| Some(p.x));
+        // One segment per row of cells, each on the line, spanning its cell's height.
+        assert_eq!(iso.segments().len(), 20);
+        for &(a, b) in iso.segments() {
+            assert!((a.x - 4.3).abs() < 1e-12 && (b.x - 4.3).abs() < 1e-12);
+            assert!(((a.y - b.y).abs() - 0.5).abs() < 1e-12);
+            assert!(a.y >= 1.0 - 1e-12 && a.y <= 11.0 + 1e-12);
+        }
+        for (x, y) in [
+            (4.3, 5.0),
+            (4.0, 2.2),
+            (-3.0, 1.0),
+            (17.0, 10.9),
+            (-2.5, 8.0),
+            (10.0, 6.0),
+            (5.1, 1.0),
+        ] {
+            let d = iso.distance(Vec2::new(x, y)).unwrap();
+            assert!((d - (x - 4.3f64).abs()).abs() < 1e-12, "({x}, {y}): {d}");
+        }
+        // Beyond the box's top: the distance to the line's end point.
+        let d = iso.distance(Vec2::new(4.3 + 3.0, 15.0)).unwrap();
+        assert!((d - 5.0).abs() < 1e-12, "{d}");
+        // The same line from a grid through `for_grid` (its extent and refinement): a ramp of
+        // 2 per metre in x over [10, 18] x [-4, 4], level 30 at x = 15.
+        let g = Grid2::from_fn(5, 3, Vec2::new(10.0, -4.0), [2.0, 4.0], |p| 2.0 * p.x).unwrap();
+        let gf = GridField::new(g, Interpolation::Bilinear);
+        let iso = IsolineSegments::for_grid(&gf, 30.0, 4);
+        // h = min(2, 4)/4 = 0.5: 17 x 17 samples, 16 rows of cells crossing x = 15.
+        assert_eq!(iso.segments().len(), 16);
+        for (x, y) in [(15.0, 0.0), (11.0, -3.9), (18.0, 4.0), (14.2, 1.3)] {
+            let d = iso.distance(Vec2::new(x, y)).unwrap();
+            assert!((d - (x - 15.0f64).abs()).abs() < 1e-12, "({x}, {y}): {d}");
+        }
+    }
+
+    /// A node exactly at the level counts as above it (`F >= level`), so an isoline through a
+    /// row of nodes is found once, not twice or never.
+    #[test]
+    fn a_level_through_nodes_is_crossed_once() {
+        let iso = IsolineSegments::from_samples(Vec2::default(), 1.0, 3, 2, 1.0, |p| Some(p.x));
+        // Level 1 passes through the middle column of nodes: the left cell's right edge.
+        assert_eq!(iso.segments().len(), 1, "{:?}", iso.segments());
+        let (a, b) = iso.segments()[0];
+        assert_eq!((a.x, b.x), (1.0, 1.0));
+    }
+
+    /// Newton on a steeper circular field (`|grad F| = 10` on the isoline, where a step of
+    /// `(F - level) * grad F` instead of `/ |grad F|^2` overshoots), and a flat field (no
+    /// gradient: no answer).
+    #[test]
+    fn newton_distance_on_a_steep_field_and_a_flat_one() {
+        let f = AnalyticField::new(AnalyticKind::RadialExp(RadialExp {
+            i0: 200.0,
+            decay_per_m: 0.1,
+            center_m: Vec2::new(0.0, 0.0),
+        }));
+        let r = 10.0 * std::f64::consts::LN_2;
+        for (d, a) in [(3.0, 0.2), (8.0, 1.0), (12.0, -2.0)] {
+            let dist = newton_distance(&f, 0.0, Vec2::from_angle(a) * d, 100.0).unwrap();
+            assert!((dist - (d - r).abs()).abs() < 1e-9, "{d}: {dist}");
+        }
+        let flat = AnalyticField::new(AnalyticKind::LinearRamp(crate::analytic::LinearRamp {
+            offset: 3.0,
+            gradient_per_m: Vec2::new(0.0, 0.0),
+        }));
+        assert_eq!(newton_distance(&flat, 0.0, Vec2::new(1.0, 1.0), 5.0), None);
+    }
 }

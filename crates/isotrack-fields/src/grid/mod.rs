@@ -267,3 +267,101 @@ impl Grid2 {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `v(ix, iy) = 10 iy + ix` on a 4 x 3 grid at (100, 200) with 2 m x 5 m cells.
+    fn grid() -> Grid2 {
+        Grid2::from_fn(4, 3, Vec2::new(100.0, 200.0), [2.0, 5.0], |p| {
+            (p.y - 200.0) / 5.0 * 10.0 + (p.x - 100.0) / 2.0
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn nodes_extent_and_range_by_hand() {
+        let g = grid();
+        assert_eq!(g.at(3, 2), 23.0);
+        assert_eq!(g.at(1, 2), 21.0);
+        assert_eq!(g.node_m(3, 1), Vec2::new(106.0, 205.0));
+        assert_eq!(g.extent_m(), [100.0, 106.0, 200.0, 210.0]);
+        assert_eq!(g.value_range(), (0.0, 23.0));
+        let mut v = g.values().to_vec();
+        v[0] = f64::NAN;
+        v[11] = f64::NAN;
+        let h = Grid2::new(4, 3, g.origin_m(), g.spacing_m(), v).unwrap();
+        assert_eq!(h.value_range(), (1.0, 22.0));
+        assert_eq!(h.nodata_count(), 2);
+    }
+
+    #[test]
+    fn too_many_nodes_is_an_error() {
+        let e = Grid2::from_fn(MAX_NODES / 2 + 1, 2, Vec2::default(), [1.0, 1.0], |_| 0.0);
+        assert!(matches!(e, Err(GridError::TooManyNodes { .. })));
+        let e = Grid2::from_fn(usize::MAX, 2, Vec2::default(), [1.0, 1.0], |_| 0.0);
+        assert!(matches!(e, Err(GridError::TooManyNodes { .. })));
+    }
+
+    #[test]
+    fn georeference_is_replaced_or_refused() {
+        let g = grid()
+            .with_georeference(Vec2::new(-1.0, 2.0), [0.5, 0.25])
+            .unwrap();
+        assert_eq!(g.node_m(2, 2), Vec2::new(0.0, 2.5));
+        assert_eq!(g.at(2, 2), 22.0);
+        for (o, s) in [
+            (Vec2::new(0.0, 0.0), [0.0, 1.0]),
+            (Vec2::new(0.0, 0.0), [1.0, -1.0]),
+            (Vec2::new(0.0, 0.0), [f64::INFINITY, 1.0]),
+            (Vec2::new(f64::NAN, 0.0), [1.0, 1.0]),
+        ] {
+            assert!(
+                matches!(
+                    grid().with_georeference(o, s),
+                    Err(GridError::BadGeoreference { .. })
+                ),
+                "{o:?} {s:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn map_values_keeps_nodata_and_drops_non_finite() {
+        let mut v = grid().values().to_vec();
+        v[5] = f64::NAN;
+        let g = Grid2::new(4, 3, Vec2::default(), [1.0, 1.0], v).unwrap();
+        // 1/(v - 1): v = 1 (node (1, 0)) gives infinity, which becomes no-data.
+        let m = g.map_values(|x| 1.0 / (x - 1.0)).unwrap();
+        assert_eq!(m.at(0, 0), -1.0);
+        assert!(m.at(1, 0).is_nan(), "infinite -> no-data");
+        assert!(m.at(1, 1).is_nan(), "no-data stays");
+        assert_eq!(m.at(3, 2), 1.0 / 22.0);
+        assert_eq!(m.nodata_count(), 2);
+        assert!(matches!(
+            grid().map_values(|_| f64::NAN),
+            Err(GridError::AllNoData)
+        ));
+    }
+
+    #[test]
+    fn crop_by_hand() {
+        let g = grid();
+        let c = g.crop(1, 2, 1, 2).unwrap();
+        assert_eq!((c.nx(), c.ny()), (2, 2));
+        assert_eq!(c.values(), &[11.0, 12.0, 21.0, 22.0]);
+        assert_eq!(c.origin_m(), Vec2::new(102.0, 205.0));
+        assert_eq!(c.spacing_m(), [2.0, 5.0]);
+        // Upper bounds past the grid are clamped to its last node.
+        let c = g.crop(2, 99, 0, 99).unwrap();
+        assert_eq!((c.nx(), c.ny()), (2, 3));
+        assert_eq!(c.values(), &[2.0, 3.0, 12.0, 13.0, 22.0, 23.0]);
+        for (a, b, c_, d) in [(2, 2, 0, 2), (0, 3, 1, 1), (3, 1, 0, 2), (4, 9, 0, 2)] {
+            assert!(
+                matches!(g.crop(a, b, c_, d), Err(GridError::TooSmall { .. })),
+                "{a} {b} {c_} {d}"
+            );
+        }
+    }
+}
