@@ -430,7 +430,13 @@ mod tests {
         let AnalyticKind::GaussianPlumes(g) = &f.kind else {
             unreachable!()
         };
-        for (x, y) in [(0.0, 0.0), (3.0, -2.0), (15.0, 8.0), (7.5, 4.0), (-20.0, 11.0)] {
+        for (x, y) in [
+            (0.0, 0.0),
+            (3.0, -2.0),
+            (15.0, 8.0),
+            (7.5, 4.0),
+            (-20.0, 11.0),
+        ] {
             let mut want = g.background;
             for pl in &g.plumes {
                 let (dx, dy) = (x - pl.center_m.x, y - pl.center_m.y);
@@ -440,7 +446,10 @@ mod tests {
                 want += pl.amplitude * (-0.5 * q).exp();
             }
             let got = f.value(0.0, Vec2::new(x, y)).unwrap();
-            assert!((got - want).abs() < 1e-12 * want.abs(), "({x}, {y}): {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-12 * want.abs(),
+                "({x}, {y}): {got} vs {want}"
+            );
         }
         // At a source: the background plus its amplitude plus the other plume's tail.
         let at0 = f.value(0.0, Vec2::new(0.0, 0.0)).unwrap();
@@ -454,7 +463,10 @@ mod tests {
         assert!((h[0][0] - k * k * fv).abs() < 1e-12);
         assert!((h[1][1] + k * fv / d).abs() < 1e-12);
         assert!(h[0][1].abs() < 1e-15 && h[1][0].abs() < 1e-15);
-        assert!(r.hessian(0.0, Vec2::new(1.0, -2.0)).is_none(), "undefined at the centre");
+        assert!(
+            r.hessian(0.0, Vec2::new(1.0, -2.0)).is_none(),
+            "undefined at the centre"
+        );
     }
 
     /// The lanes form is the scalar one, bit for bit, for every kind, with a domain and a

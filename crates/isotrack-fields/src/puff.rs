@@ -426,4 +426,84 @@ mod tests {
             hm[0][1]
         );
     }
+
+    /// Without meander every puff is where the wind put it: `c(t, p) = b + sum over puffs
+    /// released at t_i = i/rate, 0 <= t - t_i <= max_age, of m/(2 pi s^2) exp(-|p - src -
+    /// U (t - t_i)|^2 / (2 s^2))`, `s^2 = s0^2 + 2 D (t - t_i)`: summed here by hand over every
+    /// puff (the field keeps only those within 6 sigma, a relative difference below 1e-7).
+    #[test]
+    fn values_by_the_puff_sum_by_hand() {
+        let mut pp = params();
+        pp.background = 0.3;
+        pp.max_age_s = 30.0;
+        pp.source_m = Vec2::new(2.0, -1.0);
+        pp.wind_mps = Vec2::new(0.8, 0.3);
+        let f = PuffPlume::new(pp);
+        for (t, x, y) in [
+            (12.3, 5.0, 0.0),
+            (45.0, 20.0, 4.0),
+            (45.0, 10.0, 3.5),
+            (0.0, 2.0, -1.0),
+        ] {
+            let mut want = pp.background;
+            let mut i = 0;
+            while i as f64 / pp.release_rate_hz <= t {
+                let age = t - i as f64 / pp.release_rate_hz;
+                if age <= pp.max_age_s {
+                    let s2 = pp.puff_sigma0_m.powi(2) + 2.0 * pp.diffusivity_m2ps * age;
+                    let c = pp.source_m + pp.wind_mps * age;
+                    let r2 = (x - c.x).powi(2) + (y - c.y).powi(2);
+                    want +=
+                        pp.puff_mass / (2.0 * std::f64::consts::PI * s2) * (-0.5 * r2 / s2).exp();
+                }
+                i += 1;
+            }
+            let got = f.value(t, Vec2::new(x, y)).unwrap();
+            assert!(
+                (got - want).abs() <= 1e-7 * want.abs(),
+                "t {t} ({x}, {y}): {got} vs {want}"
+            );
+        }
+        // Before the first release, only the background.
+        assert_eq!(f.value(-1.0, Vec2::new(2.0, -1.0)), Some(0.3));
+    }
+
+    /// The meander's displacement is the integral of its velocity: `W(t) = U t + int_0^t u'`,
+    /// checked against Simpson's rule on `meander_mps` (computed apart, from the cosines).
+    #[test]
+    fn displacement_integrates_the_meander() {
+        let mut pp = params();
+        pp.meander_std_mps = 0.4;
+        pp.meander_correlation_s = 5.0;
+        let f = PuffPlume::new(pp);
+        for t in [0.0, 3.7, 20.0, 61.0] {
+            let n = 4000;
+            let h = t / n as f64;
+            let mut acc = Vec2::new(0.0, 0.0);
+            for k in 0..=n {
+                let w = if k == 0 || k == n {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                acc = acc + f.meander_mps(k as f64 * h) * (w * h / 3.0);
+            }
+            let want = pp.wind_mps * t + acc;
+            let got = f.displacement(t);
+            // Simpson's error here is below 1e-7 m.
+            assert!((got - want).norm() < 1e-6, "t {t}: {got:?} vs {want:?}");
+        }
+    }
+
+    /// Two plumes are equal when their parameters are, whatever else they cache.
+    #[test]
+    fn equality_is_by_parameters() {
+        let a = PuffPlume::new(params());
+        assert!(a == a.clone());
+        let mut p2 = params();
+        p2.seed = 4;
+        assert!(a != PuffPlume::new(p2));
+    }
 }
