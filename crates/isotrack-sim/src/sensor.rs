@@ -241,6 +241,7 @@ impl Sensor {
     /// Called at every step `k = 0, 1, 2, ...`, in order and exactly once each, with the step's
     /// time and the true value at the vehicle. Returns the measurement on sample steps (`k` a
     /// multiple of the sample period) once the delay has filled, `None` otherwise.
+    #[inline(always)]
     pub fn observe(&mut self, t_s: f64, true_value: f64) -> Option<Measurement> {
         // The sensing element's lag acts on the true value at every step.
         let true_value = if self.lag_gain < 1.0 {
