@@ -66,7 +66,7 @@ impl DerivativeEstimator {
     ///
     /// A sample whose time does not advance (`t_s <= ` the previous one) leaves the estimate
     /// unchanged.
-    #[inline]
+    #[inline(always)]
     pub fn update(&mut self, t_s: f64, x: f64) -> f64 {
         let Some((t_prev, x_prev)) = self.last else {
             self.last = Some((t_s, x));

@@ -196,6 +196,7 @@ impl AnalyticField {
 }
 
 impl ScalarField for AnalyticField {
+    #[inline]
     fn value(&self, t_s: f64, p: Vec2) -> Option<f64> {
         if !self.inside(p) {
             return None;

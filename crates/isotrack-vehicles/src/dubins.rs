@@ -55,6 +55,7 @@ impl Dubins {
 impl Vehicle for Dubins {
     type State = DubinsState;
 
+    #[inline]
     fn step(&self, s: &mut DubinsState, omega_radps: f64, dt_s: f64) {
         let (s1, c1) = lanes::sin_cos(s.heading_rad);
         let (sa, ca) = lanes::sin_cos(0.5 * omega_radps * dt_s);

@@ -193,6 +193,7 @@ impl PiIsoline {
 }
 
 impl IsolineController for PiIsoline {
+    #[inline]
     fn update(&mut self, m: &Measurement) -> f64 {
         let (eps, eps_dot) = self.error_and_rate(m);
         let e = eps_dot + self.params.c1 * crate::fmath::tanh(eps / self.params.c2);
