@@ -184,3 +184,13 @@ fn scenarios_that_differ_in_field_are_not_grouped_but_still_right() {
     });
     check(&runs);
 }
+
+#[test]
+fn the_fixed_wing_uav_steps_lane_by_lane_with_the_same_results() {
+    // The 6-DOF UAV has no lane form: its runs (one airframe, three headings: one group) step
+    // each state in turn inside the batch, each with the result it has alone.
+    let runs = variants_of(Some("paper-fig3-uav"), &["sim.duration_s=20"], 3, |i| {
+        vec![format!("initial.heading_rad={}", 0.3 * i as f64)]
+    });
+    check(&runs);
+}
