@@ -166,4 +166,35 @@ mod tests {
             "heading east and turning left goes north"
         );
     }
+
+    /// Eight robots stepped in lanes are each where `step` puts it, bit for bit (turn rates of
+    /// both signs, zero, and a heading far past 2 pi), and the pose wraps the heading.
+    #[test]
+    fn lanes_step_each_robot_as_step_does() {
+        let d = Dubins { speed_mps: 0.7 };
+        let omega = [0.0, 0.3, -1.2, 2.5, -0.01, 1.0, 0.05, -3.0];
+        let mut lanes: [DubinsState; 8] = core::array::from_fn(|i| DubinsState {
+            position_m: Vec2::new(i as f64, -2.0 * i as f64),
+            heading_rad: -3.0 + 1.7 * i as f64 + if i == 7 { 40.0 } else { 0.0 },
+        });
+        let mut alone = lanes;
+        for _ in 0..500 {
+            d.step_lanes(&mut lanes, &omega, 0.02);
+            for (s, &w) in alone.iter_mut().zip(&omega) {
+                d.step(s, w, 0.02);
+            }
+        }
+        for (a, b) in lanes.iter().zip(&alone) {
+            assert_eq!(a.position_m.x.to_bits(), b.position_m.x.to_bits());
+            assert_eq!(a.position_m.y.to_bits(), b.position_m.y.to_bits());
+            assert_eq!(a.heading_rad.to_bits(), b.heading_rad.to_bits());
+            assert_eq!(d.position(a), a.position_m);
+            let h = d.pose(a).heading_rad;
+            assert!(h > -PI && h <= PI);
+            assert!((h - wrap_angle(a.heading_rad)).abs() == 0.0);
+        }
+        // 500 steps of 0.02 s at the heading's rate: the heading advanced by omega * 10 s.
+        assert!((alone[1].heading_rad - (-3.0 + 1.7 + 0.3 * 10.0)).abs() < 1e-12);
+        assert_eq!(d.speed_mps(&alone[0]), 0.7);
+    }
 }
