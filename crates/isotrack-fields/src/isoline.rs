@@ -388,4 +388,79 @@ mod tests {
         }));
         assert_eq!(newton_distance(&flat, 0.0, Vec2::new(1.0, 1.0), 5.0), None);
     }
+
+    /// Saddles decided by the centre's value where only the mean (not a sum or a quotient)
+    /// gives the right side: sum -0.1 (mean -0.025 below level 0) and, at level 1, sum 4.2
+    /// (mean 1.05 above).
+    #[test]
+    fn saddle_centre_is_the_mean_of_the_corners() {
+        let cell = |v: [f64; 4], level: f64| {
+            IsolineSegments::from_samples(Vec2::default(), 1.0, 2, 2, level, move |p| {
+                Some(match (p.x as i32, p.y as i32) {
+                    (0, 0) => v[0],
+                    (1, 0) => v[1],
+                    (1, 1) => v[2],
+                    _ => v[3],
+                })
+            })
+        };
+        let cut = |iso: IsolineSegments| {
+            let mut c: Vec<(f64, f64)> = iso
+                .segments()
+                .iter()
+                .map(|&s| cut_corner(s))
+                .map(|c| (c.x, c.y))
+                .collect();
+            c.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            c
+        };
+        // Mean -0.025 < 0 = level: c1's side, the corners c0 and c2 are cut off.
+        assert_eq!(
+            cut(cell([0.9, -1.0, 0.9, -0.9], 0.0)),
+            vec![(0.0, 0.0), (1.0, 1.0)]
+        );
+        // Mean 1.05 >= 1: c0's side, c1 and c3 are cut off.
+        assert_eq!(
+            cut(cell([1.6, 0.4, 1.8, 0.4], 1.0)),
+            vec![(0.0, 1.0), (1.0, 0.0)]
+        );
+    }
+
+    /// The bucket index answers what a search of every segment answers: a circle of radius 7
+    /// sampled on a 0.25 m lattice, queried inside, outside and far away.
+    #[test]
+    fn indexed_distance_equals_brute_force() {
+        let f = |p: Vec2| Some(p.norm());
+        let iso = IsolineSegments::from_samples(Vec2::new(-10.0, -9.0), 0.25, 81, 73, 7.0, f);
+        let brute = |p: Vec2| {
+            iso.segments()
+                .iter()
+                .map(|&(a, b)| {
+                    let ab = b - a;
+                    let t = ((p - a).dot(ab) / ab.dot(ab)).clamp(0.0, 1.0);
+                    (a + ab * t - p).norm()
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        for k in 0..60 {
+            let a = k as f64 * 0.37;
+            let r = 0.5 + 0.3 * k as f64;
+            let p = Vec2::from_angle(a) * r + Vec2::new(0.3, -0.2);
+            let d = iso.distance(p).unwrap();
+            assert_eq!(d, brute(p), "{p:?}");
+            assert!((d - (p.norm() - 7.0).abs()).abs() < 0.01, "{p:?}: {d}");
+        }
+    }
+
+    /// `for_grid` samples the grid to its last column: a level 0.1 m inside the east edge
+    /// (x = 17.8 of [10, 18]) is found.
+    #[test]
+    fn for_grid_reaches_the_last_column() {
+        let g = Grid2::from_fn(5, 3, Vec2::new(10.0, -4.0), [2.0, 4.0], |p| 2.0 * p.x).unwrap();
+        let gf = GridField::new(g, Interpolation::Bilinear);
+        let iso = IsolineSegments::for_grid(&gf, 35.6, 4);
+        assert_eq!(iso.segments().len(), 16);
+        let d = iso.distance(Vec2::new(17.0, 0.0)).unwrap();
+        assert!((d - 0.8).abs() < 1e-12, "{d}");
+    }
 }

@@ -357,6 +357,15 @@ mod tests {
         let c = g.crop(2, 99, 0, 99).unwrap();
         assert_eq!((c.nx(), c.ny()), (2, 3));
         assert_eq!(c.values(), &[2.0, 3.0, 12.0, 13.0, 22.0, 23.0]);
+        // The error names the size asked for: 1 x 3 nodes.
+        assert!(matches!(
+            g.crop(2, 2, 0, 2),
+            Err(GridError::TooSmall { nx: 1, ny: 3 })
+        ));
+        assert!(matches!(
+            g.crop(0, 3, 2, 2),
+            Err(GridError::TooSmall { nx: 4, ny: 1 })
+        ));
         for (a, b, c_, d) in [(2, 2, 0, 2), (0, 3, 1, 1), (3, 1, 0, 2), (4, 9, 0, 2)] {
             assert!(
                 matches!(g.crop(a, b, c_, d), Err(GridError::TooSmall { .. })),

@@ -440,3 +440,23 @@ fn npy_headers_are_checked_before_parsing() {
     let e = err_of("l.npy", b"\x93NUMPY\x01\x00\xff\xff{}");
     assert!(e.message.contains("header of 65535 bytes"), "{e}");
 }
+
+/// `read_text_limited` reads a text file whole, and refuses bytes that are not UTF-8 and a file
+/// over the limit (with the limit's size in the message).
+#[test]
+fn text_is_read_whole_within_its_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("t.txt");
+    std::fs::write(&p, "level = 10\nname = \"é\"\n").unwrap();
+    assert_eq!(
+        read_text_limited(&p, 1000).unwrap(),
+        "level = 10\nname = \"é\"\n"
+    );
+    // Exactly at the limit is fine; one byte under it is not.
+    let n = std::fs::metadata(&p).unwrap().len();
+    assert!(read_text_limited(&p, n).is_ok());
+    assert!(read_text_limited(&p, n - 1).is_err());
+    std::fs::write(&p, [0x66u8, 0xff, 0xfe]).unwrap();
+    let e = read_text_limited(&p, 1000).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
+}
