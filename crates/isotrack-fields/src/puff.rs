@@ -464,8 +464,13 @@ mod tests {
                 "t {t} ({x}, {y}): {got} vs {want}"
             );
         }
-        // Before the first release, only the background.
+        // Before the first release, only the background; and a source that releases nothing
+        // leaves only the background at any time.
         assert_eq!(f.value(-1.0, Vec2::new(2.0, -1.0)), Some(0.3));
+        pp.release_rate_hz = 0.0;
+        let none = PuffPlume::new(pp);
+        assert_eq!(none.value(10.0, Vec2::new(2.0, -1.0)), Some(0.3));
+        assert_eq!(none.value(0.0, Vec2::new(2.0, -1.0)), Some(0.3));
     }
 
     /// The meander's displacement is the integral of its velocity: `W(t) = U t + int_0^t u'`,
