@@ -513,7 +513,7 @@ mod tests {
     }
 
     /// The mean plume by the formula, in the wind's frame worked out by hand: wind (0.6, 0.8)
-    /// (speed 1), source (2, -1); the point (5.4, 4.3) is 5.6 m downwind and 1.1 m to the left.
+    /// (speed 1), source (2, -1); the point (5.4, 4.4) is 6.36 m downwind and 0.52 m to the left.
     /// `C = b + q / (u sqrt(2 pi s^2)) exp(-y^2 / (2 s^2))`, `s^2 = s0^2 + 2 D x / u`; upwind
     /// and in still air there is none. The domain bounds the field, edges included.
     #[test]
@@ -523,12 +523,12 @@ mod tests {
         pp.source_m = Vec2::new(2.0, -1.0);
         pp.background = 0.2;
         let f = PuffPlume::new(pp);
-        // d = (3.4, 5.3): along = 0.6*3.4 + 0.8*5.3 = 6.28; across = 0.6*5.3 - 0.8*3.4 = 0.46.
-        let (x, y) = (6.28f64, 0.46f64);
+        // d = (3.4, 5.4): along = 0.6*3.4 + 0.8*5.4 = 6.36; across = 0.6*5.4 - 0.8*3.4 = 0.52.
+        let (x, y) = (6.36f64, 0.52f64);
         let s2 = 0.25 + 2.0 * 0.05 * x;
         let want =
             0.2 + 10.0 * 2.0 / (2.0 * std::f64::consts::PI * s2).sqrt() * (-0.5 * y * y / s2).exp();
-        let got = f.gaussian_plume_mean(Vec2::new(5.4, 4.3)).unwrap();
+        let got = f.gaussian_plume_mean(Vec2::new(5.4, 4.4)).unwrap();
         assert!((got - want).abs() < 1e-12, "{got} vs {want}");
         assert_eq!(f.gaussian_plume_mean(Vec2::new(1.0, -2.0)), None, "upwind");
         pp.wind_mps = Vec2::new(0.0, 0.0);
