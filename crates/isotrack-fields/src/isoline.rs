@@ -240,6 +240,30 @@ mod tests {
         }
     }
 
+    /// One unit cell with corner values `v` (c0 = (0,0), c1 = (1,0), c2 = (1,1), c3 = (0,1)).
+    fn saddle_cell(v: [f64; 4], level: f64) -> IsolineSegments {
+        IsolineSegments::from_samples(Vec2::default(), 1.0, 2, 2, level, move |p| {
+            Some(match (p.x as i32, p.y as i32) {
+                (0, 0) => v[0],
+                (1, 0) => v[1],
+                (1, 1) => v[2],
+                _ => v[3],
+            })
+        })
+    }
+
+    /// The corners a cell's segments cut off, sorted.
+    fn cut_corners(iso: IsolineSegments) -> Vec<(f64, f64)> {
+        let mut c: Vec<(f64, f64)> = iso
+            .segments()
+            .iter()
+            .map(|&s| cut_corner(s))
+            .map(|c| (c.x, c.y))
+            .collect();
+        c.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        c
+    }
+
     /// The corner a segment cuts off: the one both of its end points' edges touch.
     fn cut_corner(seg: (Vec2, Vec2)) -> Vec2 {
         let corners = [
@@ -259,35 +283,15 @@ mod tests {
     fn saddle_cells_join_by_the_centre_value() {
         // One cell, corners c0 = (0,0), c1 = (1,0), c2 = (1,1), c3 = (0,1); c0 and c2 high,
         // c1 and c3 low: a saddle for level 0.
-        let cell = |v: [f64; 4], level: f64| {
-            IsolineSegments::from_samples(Vec2::default(), 1.0, 2, 2, level, move |p| {
-                Some(match (p.x as i32, p.y as i32) {
-                    (0, 0) => v[0],
-                    (1, 0) => v[1],
-                    (1, 1) => v[2],
-                    _ => v[3],
-                })
-            })
-        };
-        let corners = |iso: IsolineSegments| {
-            let mut c: Vec<(f64, f64)> = iso
-                .segments()
-                .iter()
-                .map(|&s| cut_corner(s))
-                .map(|c| (c.x, c.y))
-                .collect();
-            c.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            c
-        };
         // Centre (2 - 1 + 2 - 1)/4 = 0.5 >= 0: on c0's side, c0 and c2 connect, the segments
         // cut off c1 = (1, 0) and c3 = (0, 1).
         assert_eq!(
-            corners(cell([2.0, -1.0, 2.0, -1.0], 0.0)),
+            cut_corners(saddle_cell([2.0, -1.0, 2.0, -1.0], 0.0)),
             vec![(0.0, 1.0), (1.0, 0.0)]
         );
         // Centre (1 - 2 + 1 - 2)/4 = -0.5 < 0: on c1's side, the segments cut off c0 and c2.
         assert_eq!(
-            corners(cell([1.0, -2.0, 1.0, -2.0], 0.0)),
+            cut_corners(saddle_cell([1.0, -2.0, 1.0, -2.0], 0.0)),
             vec![(0.0, 0.0), (1.0, 1.0)]
         );
     }
@@ -394,34 +398,14 @@ mod tests {
     /// (mean 1.05 above).
     #[test]
     fn saddle_centre_is_the_mean_of_the_corners() {
-        let cell = |v: [f64; 4], level: f64| {
-            IsolineSegments::from_samples(Vec2::default(), 1.0, 2, 2, level, move |p| {
-                Some(match (p.x as i32, p.y as i32) {
-                    (0, 0) => v[0],
-                    (1, 0) => v[1],
-                    (1, 1) => v[2],
-                    _ => v[3],
-                })
-            })
-        };
-        let cut = |iso: IsolineSegments| {
-            let mut c: Vec<(f64, f64)> = iso
-                .segments()
-                .iter()
-                .map(|&s| cut_corner(s))
-                .map(|c| (c.x, c.y))
-                .collect();
-            c.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            c
-        };
         // Mean -0.025 < 0 = level: c1's side, the corners c0 and c2 are cut off.
         assert_eq!(
-            cut(cell([0.9, -1.0, 0.9, -0.9], 0.0)),
+            cut_corners(saddle_cell([0.9, -1.0, 0.9, -0.9], 0.0)),
             vec![(0.0, 0.0), (1.0, 1.0)]
         );
         // Mean 1.05 >= 1: c0's side, c1 and c3 are cut off.
         assert_eq!(
-            cut(cell([1.6, 0.4, 1.8, 0.4], 1.0)),
+            cut_corners(saddle_cell([1.6, 0.4, 1.8, 0.4], 1.0)),
             vec![(0.0, 1.0), (1.0, 0.0)]
         );
     }

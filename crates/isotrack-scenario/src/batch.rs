@@ -81,50 +81,40 @@ fn run_on<F: ScalarField + FieldDerivatives + Sync>(
     };
     match &*first.vehicle {
         VehicleModel::Dubins(vehicle) => {
-            let runs = group
-                .iter()
-                .enumerate()
-                .map(|(i, s)| {
-                    let st = s.start();
-                    batch_run(
-                        s,
-                        DubinsState {
-                            position_m: Vec2::new(st.x_m, st.y_m),
-                            heading_rad: st.heading_rad,
-                        },
-                        oracles(i),
-                    )
-                })
-                .collect();
-            simulate_batch(field, vehicle, &plan, runs)
+            let x0 = |s: &Scenario| {
+                let st = s.start();
+                DubinsState {
+                    position_m: Vec2::new(st.x_m, st.y_m),
+                    heading_rad: st.heading_rad,
+                }
+            };
+            simulate_batch(field, vehicle, &plan, batch_runs(group, oracles, x0))
         }
         VehicleModel::FixedWing(vehicle) => {
-            let runs = group
-                .iter()
-                .enumerate()
-                .map(|(i, s)| {
-                    let st = s.start();
-                    batch_run(
-                        s,
-                        vehicle.initial_state(st.x_m, st.y_m, st.heading_rad),
-                        oracles(i),
-                    )
-                })
-                .collect();
-            simulate_batch(field, &**vehicle, &plan, runs)
+            let x0 = |s: &Scenario| {
+                let st = s.start();
+                vehicle.initial_state(st.x_m, st.y_m, st.heading_rad)
+            };
+            simulate_batch(field, &**vehicle, &plan, batch_runs(group, oracles, x0))
         }
     }
 }
 
-fn batch_run<'a, X>(
-    s: &Scenario,
-    x0: X,
-    oracles: Oracles<'a>,
-) -> BatchRun<'a, X, crate::build::Tracker> {
-    BatchRun {
-        x0,
-        controller: s.tracker(),
-        sensor: s.sensor(),
-        oracles,
-    }
+/// Each run of `group` with `x0(scenario)` as its initial state, its own controller and sensor,
+/// and `oracles(i)`.
+fn batch_runs<'a, X>(
+    group: &[Scenario],
+    oracles: impl Fn(usize) -> Oracles<'a>,
+    x0: impl Fn(&Scenario) -> X,
+) -> Vec<BatchRun<'a, X, crate::build::Tracker>> {
+    group
+        .iter()
+        .enumerate()
+        .map(|(i, s)| BatchRun {
+            x0: x0(s),
+            controller: s.tracker(),
+            sensor: s.sensor(),
+            oracles: oracles(i),
+        })
+        .collect()
 }

@@ -151,7 +151,7 @@ impl IsolineController for Tracker {
         if all_tracking {
             return ControllerModel::update_lanes(&mut inner, ms);
         }
-        one_by_one(ctrls, ms)
+        isotrack_core::control::update_each(ctrls, ms)
     }
 }
 
@@ -187,22 +187,8 @@ impl IsolineController for ControllerModel {
         if all_pi {
             return PiIsoline::update_lanes(&mut pis, ms);
         }
-        one_by_one(ctrls, ms)
+        isotrack_core::control::update_each(ctrls, ms)
     }
-}
-
-/// [`IsolineController::update_lanes`] as its default does it: each controller in turn.
-fn one_by_one<C: IsolineController, const N: usize>(
-    ctrls: &mut [Option<&mut C>; N],
-    ms: &[Measurement; N],
-) -> [f64; N] {
-    let mut out = [0.0; N];
-    for i in 0..N {
-        if let Some(c) = ctrls[i].as_deref_mut() {
-            out[i] = c.update(&ms[i]);
-        }
-    }
-    out
 }
 
 impl Scenario {

@@ -74,14 +74,24 @@ pub trait IsolineController {
     where
         Self: Sized,
     {
-        let mut out = [0.0; N];
-        for i in 0..N {
-            if let Some(c) = ctrls[i].as_deref_mut() {
-                out[i] = c.update(&ms[i]);
-            }
-        }
-        out
+        update_each(ctrls, ms)
     }
+}
+
+/// [`IsolineController::update_lanes`]'s default: each controller in turn, `None` lanes
+/// answering 0. For laws that forward to a lane form only when every lane allows it.
+#[inline]
+pub fn update_each<C: IsolineController, const N: usize>(
+    ctrls: &mut [Option<&mut C>; N],
+    ms: &[Measurement; N],
+) -> [f64; N] {
+    let mut out = [0.0; N];
+    for i in 0..N {
+        if let Some(c) = ctrls[i].as_deref_mut() {
+            out[i] = c.update(&ms[i]);
+        }
+    }
+    out
 }
 
 /// Which side of the vehicle the higher field values lie on once it tracks the isoline.
