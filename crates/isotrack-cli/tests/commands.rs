@@ -3,7 +3,7 @@
 //! sidecar, and the default run's steady error.
 
 mod common;
-use common::{isotrack, stderr, write};
+use common::{axis_fit, isotrack, polylines, stderr, svg_texts, write};
 use std::path::Path;
 
 fn ok(args: &[&str]) -> String {
@@ -234,4 +234,93 @@ fn default_run_summary_values() {
     let p = s["end_position_m"].as_array().unwrap();
     let r = p[0].as_f64().unwrap().hypot(p[1].as_f64().unwrap());
     assert!((r - 2f64.ln() / 0.1).abs() < 1e-9, "{r}");
+}
+
+/// The trajectory figure's target isoline, in the figure's own coordinates: its points, mapped
+/// back to metres through the axes' tick labels, lie on the circle `|p| = ln(2)/0.1` (where
+/// `20 exp(-0.1 r) = 10`), all the way round.
+#[test]
+fn the_plotted_isoline_is_the_circle_of_the_level() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("r");
+    let svg_dir = d.path().join("svg");
+    ok(&[
+        "run",
+        "--set",
+        "sim.duration_s=60",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    ok(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--out",
+        svg_dir.to_str().unwrap(),
+    ]);
+    let svg = std::fs::read_to_string(svg_dir.join("trajectory.svg")).unwrap();
+    let texts = svg_texts(&svg);
+    let numeric = |anchor: &str| -> Vec<(f64, f64, f64)> {
+        texts
+            .iter()
+            .filter(|t| t.2 == anchor)
+            .filter_map(|t| Some((t.0, t.1, t.3.parse::<f64>().ok()?)))
+            .collect()
+    };
+    // x ticks: centred labels below the plot (the lowest row of numbers); y ticks: right-aligned
+    // labels left of it (the leftmost column; the colour bar's are further right).
+    let xs = numeric("middle");
+    let y_row = xs.iter().map(|t| t.1).fold(0.0, f64::max);
+    let x_ticks: Vec<(f64, f64)> = xs
+        .iter()
+        .filter(|t| t.1 == y_row)
+        .map(|t| (t.2, t.0))
+        .collect();
+    let ys = numeric("end");
+    let x_col = ys.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let y_ticks: Vec<(f64, f64)> = ys
+        .iter()
+        .filter(|t| t.0 == x_col)
+        .map(|t| (t.2, t.1))
+        .collect();
+    let (ax, bx) = axis_fit(&x_ticks);
+    let (ay, by) = axis_fit(&y_ticks);
+    assert!(
+        bx > 0.0 && by < 0.0,
+        "x east to the right, y north up: {bx}, {by}"
+    );
+    // Equal scales (a circle looks round), to within the labels' whole-pixel positions.
+    assert!((bx + by).abs() < 0.02 * bx, "{bx} vs {by} px/m");
+    let r_level = 2f64.ln() / 0.1;
+    // The isoline: black, 3 px wide, outside the legend box (whose sample line is black too).
+    let mut n = 0;
+    let mut octants = [false; 8];
+    for line in polylines(&svg, "#000000", "3") {
+        let metres: Vec<(f64, f64)> = line
+            .iter()
+            .map(|&(px, py)| ((px - ax) / bx, (py - ay) / by))
+            .collect();
+        let legend = line.len() == 2 && line[0].1 == line[1].1;
+        if legend {
+            continue;
+        }
+        for (x, y) in metres {
+            let r = x.hypot(y);
+            // One pixel is 1/16 m here; the tick fits add a little.
+            assert!(
+                (r - r_level).abs() < 0.12,
+                "isoline point at r = {r} m, not {r_level}"
+            );
+            let k = ((y.atan2(x) + std::f64::consts::PI) / std::f64::consts::FRAC_PI_4) as usize;
+            octants[k.min(7)] = true;
+            n += 1;
+        }
+    }
+    assert!(n > 100, "{n} isoline points");
+    assert!(
+        octants.iter().all(|&o| o),
+        "the circle is drawn all the way round: {octants:?}"
+    );
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{isotrack, stderr, write};
+use common::{axis_fit, isotrack, polylines, stderr, svg_texts, write};
 use std::path::Path;
 
 /// `results.csv` as a header and rows of fields.
@@ -301,6 +301,54 @@ fn sweep_summary_plots() {
     assert!((x - 0.05).abs() < 1e-15 && n == 3, "{:?}", pid[1]);
     assert!((m - mean).abs() <= 1e-12 * mean.abs() && (sd - std).abs() <= 1e-9 * std.max(1e-30));
     assert!(sd > 0.0, "derived seeds give the draws different noise");
+    // The SVG draws those means where the axes say: each group's line, mapped back through the
+    // tick labels, passes through (x, mean) of every x value.
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--x",
+        "field.drift_mps",
+        "--metric",
+        "steady_state_rms_error",
+        "--group",
+        "controller.kind",
+        "--format",
+        "svg",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(
+        out.join("sweep_steady_state_rms_error_vs_field_drift_mps_by_controller_kind.svg"),
+    )
+    .unwrap();
+    let texts = svg_texts(&svg);
+    let ticks = |anchor: &str, horizontal: bool| -> Vec<(f64, f64)> {
+        texts
+            .iter()
+            .filter(|t| t.2 == anchor)
+            .filter_map(|t| {
+                let v: f64 = t.3.parse().ok()?;
+                Some((v, if horizontal { t.0 } else { t.1 }))
+            })
+            .collect()
+    };
+    let (ax, bx) = axis_fit(&ticks("middle", true));
+    let (ay, by) = axis_fit(&ticks("end", false));
+    let (px_per_x, px_per_y) = (bx.abs(), by.abs());
+    for (colour, group) in [("#1F77B4", "pi_isoline"), ("#FF7F0E", "pid")] {
+        let means = &lines.iter().find(|l| l.0 == group).unwrap().1;
+        // The group's data line (the legend's sample is the short one inside the legend box).
+        let drawn = polylines(&svg, colour, "2");
+        let line = drawn
+            .iter()
+            .max_by_key(|l| (l[l.len() - 1].0 - l[0].0) as i64)
+            .unwrap();
+        assert_eq!(line.len(), means.len(), "{group}: one vertex per x value");
+        for (&(px, py), &(x, m, _, _)) in line.iter().zip(means.iter()) {
+            let (xd, yd) = ((px - ax) / bx, (py - ay) / by);
+            assert!((xd - x).abs() < 1.0 / px_per_x, "{group}: x {xd} vs {x}");
+            assert!((yd - m).abs() < 1.0 / px_per_y, "{group}: mean {yd} vs {m}");
+        }
+    }
     let o = isotrack(&[
         "plot",
         out.to_str().unwrap(),

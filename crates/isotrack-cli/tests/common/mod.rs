@@ -34,3 +34,54 @@ pub fn assert_fails(o: &Output, code: i32, needles: &[&str]) {
         assert!(e.contains(n), "expected `{n}` in: {e}");
     }
 }
+
+/// The `<text>` elements of an SVG: (x, y, text-anchor, content).
+pub fn svg_texts(svg: &str) -> Vec<(f64, f64, String, String)> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(tag[at..at + tag[at..].find('"')?].to_string())
+    };
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (tag, rest) = t.split_once('>')?;
+            let content = rest.split("</text>").next()?.trim().to_string();
+            let x = attr(tag, "x")?.parse().ok()?;
+            let y = attr(tag, "y")?.parse().ok()?;
+            Some((x, y, attr(tag, "text-anchor").unwrap_or_default(), content))
+        })
+        .collect()
+}
+
+/// Least-squares line `pixel = a + b*value` through an axis's tick labels.
+pub fn axis_fit(ticks: &[(f64, f64)]) -> (f64, f64) {
+    assert!(ticks.len() >= 3, "{ticks:?}");
+    let n = ticks.len() as f64;
+    let (mv, mp) = (
+        ticks.iter().map(|t| t.0).sum::<f64>() / n,
+        ticks.iter().map(|t| t.1).sum::<f64>() / n,
+    );
+    let b = ticks.iter().map(|t| (t.0 - mv) * (t.1 - mp)).sum::<f64>()
+        / ticks.iter().map(|t| (t.0 - mv).powi(2)).sum::<f64>();
+    (mp - b * mv, b)
+}
+
+/// The points of the SVG's polylines drawn with `stroke` at `width`.
+pub fn polylines(svg: &str, stroke: &str, width: &str) -> Vec<Vec<(f64, f64)>> {
+    let needle = format!("stroke=\"{stroke}\" stroke-width=\"{width}\" points=\"");
+    svg.split("<polyline")
+        .skip(1)
+        .filter_map(|p| {
+            let at = p.find(&needle)? + needle.len();
+            let pts = &p[at..at + p[at..].find('"')?];
+            Some(
+                pts.split_whitespace()
+                    .map(|xy| {
+                        let (x, y) = xy.split_once(',').unwrap();
+                        (x.parse().unwrap(), y.parse().unwrap())
+                    })
+                    .collect(),
+            )
+        })
+        .collect()
+}
