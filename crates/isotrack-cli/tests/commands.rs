@@ -261,6 +261,8 @@ fn the_plotted_isoline_is_the_circle_of_the_level() {
         svg_dir.to_str().unwrap(),
     ]);
     let svg = std::fs::read_to_string(svg_dir.join("trajectory.svg")).unwrap();
+    // The README's "a trajectory SVG is about 0.2 MB" (the heat map is one embedded raster).
+    assert!(svg.len() < 300_000, "{} bytes", svg.len());
     let texts = svg_texts(&svg);
     let numeric = |anchor: &str| -> Vec<(f64, f64, f64)> {
         texts
