@@ -422,15 +422,20 @@ impl Variogram {
     /// (log-spaced over the lag span) the model is linear in `(c0, c)`, solved in closed form
     /// with `c0, c >= 0`; the best weighted residual wins.
     pub fn fit(stations: &Stations) -> Self {
-        let all = Self::empirical(stations, 15);
-        let emp: Vec<_> = all.iter().copied().filter(|e| e.2 >= 30).collect();
-        let emp = if emp.len() >= 3 { emp } else { all };
-        let hmax = emp.iter().map(|e| e.0).fold(0.0, f64::max).max(1e-9);
         let var = {
             let n = stations.values.len() as f64;
             let m = stations.values.iter().sum::<f64>() / n;
             stations.values.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0)
         };
+        Self::fit_empirical(Self::empirical(stations, 15), var)
+    }
+
+    /// [`fit`](Self::fit) to the lag classes `all` (`(h_k, gamma_k, n_k)`) of data whose
+    /// sample variance is `var` (the sill of the fallback, a flat variogram).
+    fn fit_empirical(all: Vec<(f64, f64, usize)>, var: f64) -> Self {
+        let emp: Vec<_> = all.iter().copied().filter(|e| e.2 >= 30).collect();
+        let emp = if emp.len() >= 3 { emp } else { all };
+        let hmax = emp.iter().map(|e| e.0).fold(0.0, f64::max).max(1e-9);
         let mut best = Variogram {
             model: VariogramModel::Exponential,
             nugget: 0.0,
@@ -603,6 +608,186 @@ mod tests {
             "/../../data/no2_germany_stations/no2_germany_stations.csv"
         );
         Stations::from_csv(Path::new(p), "no2_ugm3").unwrap()
+    }
+
+    fn csv(text: &str) -> Result<Stations, LoadError> {
+        Stations::from_csv_bytes(Path::new("t.csv"), text.as_bytes(), "v")
+    }
+
+    #[test]
+    fn variogram_models_by_their_formulas() {
+        let (c0, c, a) = (0.5, 2.0, 10.0);
+        let exp = Variogram {
+            model: VariogramModel::Exponential,
+            nugget: c0,
+            sill: c,
+            range_m: a,
+        };
+        let sph = Variogram {
+            model: VariogramModel::Spherical,
+            ..exp
+        };
+        assert_eq!(exp.gamma(0.0), 0.0);
+        for h in [0.5, 2.5, 5.0, 10.0, 30.0] {
+            let e = c0 + c * (1.0 - (-3.0 * h / a).exp());
+            assert!((exp.gamma(h) - e).abs() < 1e-14, "exponential at {h}");
+            let r: f64 = h / a;
+            let s = if r < 1.0 {
+                1.5 * r - 0.5 * r.powi(3)
+            } else {
+                1.0
+            };
+            assert!(
+                (sph.gamma(h) - (c0 + c * s)).abs() < 1e-14,
+                "spherical at {h}"
+            );
+        }
+        // The spherical model reaches its sill exactly at the range, and stays there.
+        assert_eq!(sph.gamma(a), c0 + c);
+        assert!(sph.gamma(0.999 * a) < c0 + c);
+    }
+
+    /// A linear trend `z = g x` along a line of stations 1 m apart: every pair at distance d
+    /// has semivariance `0.5 (g d)^2`. Cutoff = diagonal / 3 = 3 m, two classes of 1.5 m:
+    /// the 9 pairs at 1 m, the 8 at 2 m; pairs at 3 m and more are beyond the cutoff.
+    #[test]
+    fn empirical_variogram_of_a_linear_trend() {
+        let g = 2.0;
+        let rows: String = (0..10)
+            .map(|i| format!("{i},0,{}\n", g * i as f64))
+            .collect();
+        let s = csv(&format!("x_m,y_m,v\n{rows}")).unwrap();
+        let emp = Variogram::empirical(&s, 2);
+        assert_eq!(
+            emp,
+            vec![(1.0, 0.5 * g * g, 9), (2.0, 0.5 * (2.0 * g).powi(2), 8)]
+        );
+        // Coincident stations (distance 0) are left out; a pair at 2.5 m falls in the second class.
+        let s = csv("x_m,y_m,v\n0,0,1\n0,0,3\n2.5,0,4\n9,0,0\n").unwrap();
+        let emp = Variogram::empirical(&s, 2);
+        // Pairs below the 3 m cutoff and above 0: (0,0)-(2.5,0) twice, values 1-4 and 3-4.
+        assert_eq!(emp, vec![(2.5, (4.5 + 0.5) / 2.0, 2)]);
+    }
+
+    /// Lag classes that follow an exponential model exactly at one of the trial ranges are fitted
+    /// exactly (the weighted least squares has zero residual there).
+    #[test]
+    fn fit_recovers_an_exact_model() {
+        let (c0, c) = (0.3, 1.7);
+        let hs: Vec<f64> = (1..=12).map(|k| 100.0 * k as f64).collect();
+        let hmax = 1200.0;
+        let a = hmax * 0.05 * 60f64.powf(120.0 / 199.0); // trial range k = 120
+        for model in [VariogramModel::Exponential, VariogramModel::Spherical] {
+            let truth = Variogram {
+                model,
+                nugget: c0,
+                sill: c,
+                range_m: a,
+            };
+            let emp: Vec<(f64, f64, usize)> = hs.iter().map(|&h| (h, truth.gamma(h), 40)).collect();
+            let v = Variogram::fit_empirical(emp, 5.0);
+            assert_eq!(v.model, model);
+            assert!((v.range_m - a).abs() < 1e-9 * a, "{} vs {a}", v.range_m);
+            assert!(
+                (v.nugget - c0).abs() < 1e-9 && (v.sill - c).abs() < 1e-9,
+                "{v:?}"
+            );
+        }
+        // Fewer than three classes with 30 pairs: all classes are used (here, the same fit).
+        let truth = Variogram {
+            model: VariogramModel::Exponential,
+            nugget: c0,
+            sill: c,
+            range_m: a,
+        };
+        let emp: Vec<_> = hs.iter().map(|&h| (h, truth.gamma(h), 5)).collect();
+        let v = Variogram::fit_empirical(emp, 5.0);
+        assert!((v.range_m - a).abs() < 1e-9 * a && (v.sill - c).abs() < 1e-9);
+    }
+
+    #[test]
+    fn grid_shape_counts_nodes_and_names_the_finest_spacing_that_fits() {
+        assert_eq!(grid_shape([0.0, 10.0, 0.0, 5.0], 1.0).unwrap(), (11, 6));
+        // Rounded up: 10/3 -> 4 cells, 5/3 -> 2 cells.
+        assert_eq!(grid_shape([0.0, 10.0, 0.0, 5.0], 3.0).unwrap(), (5, 3));
+        assert_eq!(grid_shape([-2.0, 8.0, 1.0, 6.0], 1.0).unwrap(), (11, 6));
+        // A degenerate side still gets two nodes.
+        assert_eq!(grid_shape([0.0, 10.0, 3.0, 3.0], 1.0).unwrap(), (11, 2));
+        let n = MAX_INTERPOLATED_NODES as f64;
+        let (w, h) = (1.0e5, 4.0e4);
+        let count = |s: f64| nodes_along(w, s) * nodes_along(h, s);
+        match grid_shape([0.0, w, 0.0, h], 1e-3) {
+            Err(StationGridError::TooFine {
+                min_spacing_m,
+                nodes,
+                width_m,
+                height_m,
+                ..
+            }) => {
+                assert_eq!((width_m, height_m), (w, h));
+                assert!((nodes - count(1e-3)).abs() < 1e-6 * nodes);
+                assert!(count(min_spacing_m) <= n, "the named spacing fits");
+                // Three significant digits, and the next smaller one does not fit.
+                let mag = 10f64.powf(min_spacing_m.log10().floor() - 2.0);
+                let digits = min_spacing_m / mag;
+                assert!((digits - digits.round()).abs() < 1e-6, "{min_spacing_m}");
+                assert!(
+                    count(min_spacing_m - mag) > n,
+                    "{min_spacing_m} is the finest"
+                );
+                assert!(grid_shape([0.0, w, 0.0, h], min_spacing_m).is_ok());
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn default_spacing_is_a_hundredth_of_the_longer_side() {
+        let s = csv("x_m,y_m,v\n-50,10,1\n150,20,2\n0,60,3\n").unwrap();
+        assert_eq!(s.default_spacing_m(), 2.0);
+        let s = csv("x_m,y_m,v\n5,-100,1\n6,200,2\n7,0,3\n").unwrap();
+        assert_eq!(s.default_spacing_m(), 3.0);
+    }
+
+    #[test]
+    fn rows_without_a_value_are_skipped_and_limits_are_inclusive() {
+        let s = csv("x_m,y_m,v\n0,0,1\n1,0,NA\n2,0,nan\n3,0,\n4,0,NaN\n5,1,2\n6,2,3\n").unwrap();
+        assert_eq!(s.values, vec![1.0, 2.0, 3.0]);
+        // Values and coordinates at their limits are accepted; beyond them refused, naming the
+        // column.
+        let big = MAX_ABS_VALUE;
+        let m = MAX_COORDINATE_M;
+        assert!(csv(&format!("x_m,y_m,v\n0,0,{big:e}\n1,0,{:e}\n2,1,0\n", -big)).is_ok());
+        let e = csv(&format!("x_m,y_m,v\n0,0,{:e}\n1,0,1\n2,1,0\n", 2.0 * big)).unwrap_err();
+        assert!(e.to_string().contains("t.csv:2: field 3"), "{e}");
+        assert!(csv(&format!("x_m,y_m,v\n{m:e},0,1\n0,{:e},1\n2,1,0\n", -m)).is_ok());
+        let e = csv(&format!("x_m,y_m,v\n0,{:e},1\n1,0,1\n2,1,0\n", 2.0 * m)).unwrap_err();
+        assert!(e.to_string().contains(":2: field 2"), "{e}");
+        let e = csv(&format!("x_m,y_m,v\n{:e},0,1\n1,0,1\n2,1,0\n", -2.0 * m)).unwrap_err();
+        assert!(e.to_string().contains(":2: field 1"), "{e}");
+        for bad in ["inf,0,1", "0,nan,1", "0,0,inf"] {
+            let e = csv(&format!("x_m,y_m,v\n{bad}\n1,0,1\n2,1,0\n")).unwrap_err();
+            assert!(e.to_string().contains("non-finite"), "{bad}: {e}");
+        }
+        // Stations on one vertical or horizontal line span an area's side: accepted.
+        assert!(csv("x_m,y_m,v\n3,0,1\n3,5,2\n3,9,3\n").is_ok());
+        assert!(csv("x_m,y_m,v\n0,3,1\n5,3,2\n9,3,3\n").is_ok());
+        assert!(csv("x_m,y_m,v\n3,3,1\n3,3,2\n3,3,3\n").is_err());
+    }
+
+    /// Longitudes spanning exactly 180 deg are kept as they are (no shift across the
+    /// antimeridian): the westernmost station is the projection's origin.
+    #[test]
+    fn a_span_of_exactly_180_degrees_is_not_shifted() {
+        let s = Stations::from_csv_bytes(
+            Path::new("t.csv"),
+            b"lon_deg,lat_deg,v\n-90,0,1\n90,0,2\n0,10,3\n",
+            "v",
+        )
+        .unwrap();
+        assert_eq!(s.projection.unwrap().0, -90.0);
+        assert_eq!(s.positions_m[0].x, 0.0);
+        assert!(s.positions_m[1].x > 0.0);
     }
 
     #[test]
