@@ -284,3 +284,106 @@ fn gusts_differ_from_calm_flight() {
         "gusts moved the track by only {drift} m in 60 s"
     );
 }
+
+/// The `Vehicle` interface of the UAV by closed forms: the airframe's turn-rate limit
+/// `g tan(40 deg)/V`, the start (trimmed, crabbed so the ground course is the heading given,
+/// the trim deflections), the NED ground velocity against nalgebra's rotation, the pose
+/// (x east, y north, heading counter-clockwise from east), the horizontal ground speed and the
+/// telemetry (altitude = -p_d).
+#[test]
+fn the_vehicle_interface_by_closed_forms() {
+    use isotrack_core::vehicle::Vehicle;
+    use nalgebra::{Rotation3, Vector3};
+    let v = uav(FixedWingConfig::default());
+    let limit = 9.81 * 40f64.to_radians().tan() / 30.0;
+    assert!((v.airframe_turn_rate_limit_radps() - limit).abs() < 2e-3 * limit);
+    let v45 = uav(FixedWingConfig {
+        airspeed_mps: 45.0,
+        ..FixedWingConfig::default()
+    });
+    let ratio = v.airframe_turn_rate_limit_radps() / v45.airframe_turn_rate_limit_radps();
+    assert!(
+        (ratio - 1.5).abs() < 1e-12,
+        "inverse in the airspeed: {ratio}"
+    );
+
+    // A start in a 6 m/s wind from the west (blowing east), flying north over the ground.
+    let windy = uav(FixedWingConfig {
+        wind_mps: [6.0, 0.0],
+        ..FixedWingConfig::default()
+    });
+    let s = windy.initial_state(120.0, -40.0, FRAC_PI_2);
+    let pose = windy.pose(&s);
+    assert_eq!((pose.position.x, pose.position.y), (120.0, -40.0));
+    assert!(
+        (pose.heading_rad - FRAC_PI_2).abs() < 1e-12,
+        "{}",
+        pose.heading_rad
+    );
+    assert!((-s.x[2] - 100.0).abs() < 1e-12);
+    let g = FixedWing::ground_velocity(&s.x);
+    // Crabbed west of north: ground speed sqrt(30^2 - 6^2) due north, none east or down.
+    let along = (30.0f64 * 30.0 - 36.0).sqrt();
+    assert!(
+        (g[0] - along).abs() < 1e-9 && g[1].abs() < 1e-9 && g[2].abs() < 1e-6,
+        "{g:?}"
+    );
+    assert!((windy.speed_mps(&s) - along).abs() < 1e-9);
+    assert!(
+        (s.x[8] + (6.0f64 / 30.0).asin()).abs() < 1e-12,
+        "yaw {}",
+        s.x[8]
+    );
+    assert_eq!(s.deltas.elevator_rad, windy.trim.delta_e_rad);
+    assert_eq!(s.deltas.throttle, windy.trim.delta_t);
+    let t = windy.telemetry(&s).unwrap();
+    assert!((t.altitude_m - 100.0).abs() < 1e-12);
+    assert!((t.airspeed_mps - 30.0).abs() < 1e-9, "{}", t.airspeed_mps);
+    assert_eq!(t.roll_rad, s.x[6]);
+
+    // Ground velocity of an arbitrary attitude: R(phi, theta, psi) (u, v, w).
+    let mut x = s.x;
+    x[3..12].copy_from_slice(&[25.0, -3.0, 4.0, 0.3, -0.2, 2.5, 0.0, 0.0, 0.0]);
+    let want = Rotation3::from_euler_angles(x[6], x[7], x[8]) * Vector3::new(x[3], x[4], x[5]);
+    let got = FixedWing::ground_velocity(&x);
+    for i in 0..3 {
+        assert!((got[i] - want[i]).abs() < 1e-12, "{got:?} vs {want:?}");
+    }
+    let mut st = s.clone();
+    st.x = x;
+    assert!((windy.speed_mps(&st) - want[0].hypot(want[1])).abs() < 1e-12);
+    // The ground course follows the velocity, continuous with the previous value (one turn
+    // up), and holds it when there is no horizontal motion.
+    let course = want[1].atan2(want[0]);
+    let tau = 2.0 * std::f64::consts::PI;
+    assert!((FixedWing::ground_course(&x, 0.1) - course).abs() < 1e-12);
+    assert!((FixedWing::ground_course(&x, tau + 0.1) - (course + tau)).abs() < 1e-12);
+    let mut still = x;
+    still[3..6].copy_from_slice(&[0.0, 0.0, 0.0]);
+    assert_eq!(FixedWing::ground_course(&still, 0.7), 0.7);
+    st.course_rad = course;
+    let pose = windy.pose(&st);
+    assert!((pose.heading_rad - isotrack_core::math::wrap_angle(FRAC_PI_2 - course)).abs() < 1e-12);
+    assert_eq!((pose.position.x, pose.position.y), (st.x[1], st.x[0]));
+}
+
+/// The bare airframe at its trim deflections flies on, trimmed: 1 s open loop moves it 30 m
+/// along its course and changes altitude and airspeed by almost nothing.
+#[test]
+fn open_loop_flight_at_trim_stays_trimmed() {
+    let v = uav(FixedWingConfig::default());
+    let s = v.initial_state(0.0, 0.0, FRAC_PI_2); // flying north
+    let mut x = s.x;
+    for _ in 0..100 {
+        v.step_open_loop(&mut x, &s.deltas, 0.01);
+    }
+    assert!(
+        (x[0] - 30.0).abs() < 1e-3 && x[1].abs() < 1e-6,
+        "{} m north, {} m east",
+        x[0],
+        x[1]
+    );
+    assert!((-x[2] - 100.0).abs() < 1e-3, "altitude {}", -x[2]);
+    let u = (x[3] * x[3] + x[4] * x[4] + x[5] * x[5]).sqrt();
+    assert!((u - 30.0).abs() < 1e-4, "airspeed {u}");
+}
