@@ -293,6 +293,68 @@ pub fn rk4_step(
 mod tests {
     use super::*;
 
+    /// The stall blend by Beard & McLain's eq. (4.10) written out, on both sides of the
+    /// origin (below `-alpha0` the second exponential is small and the blend's form matters).
+    #[test]
+    fn stall_blend_by_its_formula_for_negative_and_positive_alpha() {
+        let p = Aerosonde::beard_mclain_2012();
+        for alpha in [-0.7, -0.6, -0.5, -0.47, -0.3, 0.0, 0.3, 0.5, 0.6, 0.7] {
+            let a: f64 = (-p.stall_m * (alpha - p.alpha0)).exp();
+            let b: f64 = (p.stall_m * (alpha + p.alpha0)).exp();
+            let want = (1.0 + a + b) / ((1.0 + a) * (1.0 + b));
+            let got = stall_blend(&p, alpha);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.max(1e-300),
+                "{alpha}: {got} vs {want}"
+            );
+            let lin = p.c_l0 + p.c_l_alpha * alpha;
+            let flat = 2.0 * f64::signum(alpha) * alpha.sin().powi(2) * alpha.cos();
+            let cl = (1.0 - want) * lin + want * if alpha == 0.0 { 0.0 } else { flat };
+            assert!(
+                (lift_coefficient(&p, alpha) - cl).abs() < 1e-12,
+                "C_L at {alpha}"
+            );
+        }
+    }
+
+    /// Air data at the edges: no air motion gives Va = 0 with alpha = beta = 0 (and finite
+    /// derivatives: only gravity and the propeller act); flying backwards through the air
+    /// (u_r < 0) keeps Beard's alpha = atan(w_r/u_r), with cos(alpha) = |u_r|/sqrt(u_r^2 + w_r^2).
+    #[test]
+    fn air_data_without_air_motion_and_backwards() {
+        let p = Aerosonde::beard_mclain_2012();
+        let dv = Derived::new(&p);
+        let wind = WindSample {
+            steady_ned_mps: [3.0, -2.0, 0.0],
+            gust_body_mps: [0.0; 3],
+        };
+        // Level, heading north: body axes = NED, so body velocity = wind is still air.
+        let mut x = [0.0; 12];
+        x[2] = -100.0;
+        x[3..6].copy_from_slice(&[3.0, -2.0, 0.0]);
+        let r = r_body_to_ned(0.0, 0.0, 0.0);
+        let air = air_data(&x, &wind, &r);
+        assert_eq!((air.va_mps, air.alpha_rad, air.beta_rad), (0.0, 0.0, 0.0));
+        let d = Deltas {
+            throttle: 0.5,
+            ..Deltas::default()
+        };
+        let f = derivatives(&p, &dv, &x, &d, &wind);
+        assert!(f.iter().all(|v| v.is_finite()), "{f:?}");
+        let thrust = 0.5 * p.rho * p.s_prop * p.c_prop * (p.k_motor * 0.5).powi(2);
+        assert!((f[3] - thrust / p.mass_kg).abs() < 1e-12, "{}", f[3]);
+        assert!(
+            (f[5] - p.g).abs() < 1e-12,
+            "free fall in still air: {}",
+            f[5]
+        );
+        // Backwards: u_r = -10, w_r = 2.
+        x[3..6].copy_from_slice(&[3.0 - 10.0, -2.0, 2.0]);
+        let air = air_data(&x, &wind, &r);
+        assert!((air.alpha_rad - (2.0f64 / -10.0).atan()).abs() < 1e-15);
+        assert!((air.va_mps - 104f64.sqrt()).abs() < 1e-12);
+    }
+
     #[test]
     fn stall_blend_reference_values() {
         let p = Aerosonde::beard_mclain_2012();
