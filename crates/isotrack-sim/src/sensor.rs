@@ -291,7 +291,15 @@ impl Sensor {
             let n: f64 = StandardNormal.sample(&mut self.bias_rng);
             self.bias += self.bias_step * n;
         }
-        let mut value = delayed + noise + self.bias;
+        // Noise and bias are added only when present: `x + 0.0` is not free on the step's chain
+        // of dependent operations (and the same number but for the sign of a zero).
+        let mut value = delayed;
+        if self.noise_std > 0.0 {
+            value += noise;
+        }
+        if self.bias != 0.0 {
+            value += self.bias;
+        }
         if self.resolution > 0.0 {
             value = (value / self.resolution).round() * self.resolution;
         }

@@ -196,7 +196,10 @@ impl IsolineController for PiIsoline {
     #[inline]
     fn update(&mut self, m: &Measurement) -> f64 {
         let (eps, eps_dot) = self.error_and_rate(m);
-        let e = eps_dot + self.params.c1 * crate::fmath::tanh(eps / self.params.c2);
+        // eps * (1/c2): the reciprocal does not depend on the sample, so it is computed off
+        // the step's chain of dependent operations, which then holds a multiply instead of a
+        // division (exact for the paper's c2 = 1; within an ulp of eps/c2 otherwise).
+        let e = eps_dot + self.params.c1 * crate::fmath::tanh(eps * (1.0 / self.params.c2));
         self.integrate_and_command(m, eps, e)
     }
 
@@ -213,7 +216,7 @@ impl IsolineController for PiIsoline {
         for i in 0..N {
             if let Some(c) = ctrls[i].as_deref_mut() {
                 (eps[i], eps_dot[i]) = c.error_and_rate(&ms[i]);
-                arg[i] = eps[i] / c.params.c2;
+                arg[i] = eps[i] * (1.0 / c.params.c2);
             }
         }
         let th = crate::lanes::tanh_lanes(arg);
