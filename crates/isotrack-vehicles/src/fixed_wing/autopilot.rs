@@ -19,7 +19,7 @@
 //! Limits: bank +-40 deg, pitch command +-40 deg in altitude hold, surfaces +-45 deg, throttle
 //! [0, 1]. No yaw damper (`delta_r = 0`), as in the original.
 
-use super::dynamics::{AirData, Deltas, State12};
+use super::dynamics::{Deltas, State12};
 use super::gains::Gains;
 use super::trim::Trim;
 use isotrack_core::math::wrap_angle;
@@ -128,7 +128,7 @@ impl Default for AutopilotConfig {
     }
 }
 
-/// One autopilot update at sample time `ts`: true state, its air data and ground course
+/// One autopilot update at sample time `ts`: true state, its airspeed `va_mps` and ground course
 /// `course_rad` (continuous) in; actuator deflections out.
 #[allow(clippy::too_many_arguments)]
 pub fn autopilot(
@@ -137,7 +137,7 @@ pub fn autopilot(
     g: &Gains,
     trim: &Trim,
     x: &State12,
-    air: &AirData,
+    va_mps: f64,
     course_rad: f64,
     cmd: &Commands,
     ts: f64,
@@ -186,7 +186,7 @@ pub fn autopilot(
     } else {
         (0.0, 0.0)
     };
-    let e_va = cmd.airspeed_mps - air.va_mps;
+    let e_va = cmd.airspeed_mps - va_mps;
     let (dt, theta_c) = match zone {
         Zone::TakeOff => (0.5, cfg.theta_max_rad),
         Zone::Climb | Zone::Descend => {

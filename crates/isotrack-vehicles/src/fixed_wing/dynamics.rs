@@ -44,14 +44,14 @@ pub struct AirData {
 }
 
 /// Rotation body -> vehicle (NED) of Euler angles, row-major.
-#[inline]
+#[inline(always)]
 pub fn r_body_to_ned(phi: f64, theta: f64, psi: f64) -> [[f64; 3]; 3] {
     let (s, c) = isotrack_core::lanes::sin_cos_lanes([phi, theta, psi, 0.0]);
     r_from_sincos((s[0], c[0]), (s[1], c[1]), (s[2], c[2]))
 }
 
 /// [`r_body_to_ned`] from `(sin, cos)` of the three angles.
-#[inline]
+#[inline(always)]
 fn r_from_sincos(
     (sf, cf): (f64, f64),
     (st, ct): (f64, f64),
@@ -95,7 +95,7 @@ pub fn stall_blend(p: &Aerosonde, alpha: f64) -> f64 {
     stall_blend_k(p, (p.stall_m * p.alpha0).exp(), alpha)
 }
 
-#[inline]
+#[inline(always)]
 fn stall_blend_k(p: &Aerosonde, k: f64, alpha: f64) -> f64 {
     let e = (p.stall_m * alpha).exp();
     let (a, b) = (k / e, k * e);
@@ -111,7 +111,7 @@ pub fn lift_coefficient(p: &Aerosonde, alpha: f64) -> f64 {
 }
 
 /// [`lift_coefficient`] with `e^{M alpha0}`, `sin(alpha)`, `cos(alpha)` already known.
-#[inline]
+#[inline(always)]
 fn lift_coefficient_sc(p: &Aerosonde, k: f64, alpha: f64, sa: f64, ca: f64) -> f64 {
     let s = stall_blend_k(p, k, alpha);
     let sign = if alpha > 0.0 {
@@ -124,6 +124,27 @@ fn lift_coefficient_sc(p: &Aerosonde, k: f64, alpha: f64, sa: f64, ca: f64) -> f
     (1.0 - s) * (p.c_l0 + p.c_l_alpha * alpha) + s * 2.0 * sign * sa * sa * ca
 }
 
+/// The airspeed `|v_body - wind_body|` of state `x` in `wind`, m/s: [`air_data`]'s `va_mps`
+/// without the angles (the autopilot needs only the airspeed).
+#[inline(always)]
+pub fn airspeed_mps(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> f64 {
+    let (ur, vr, wr) = air_relative_body(x, wind, r);
+    (ur * ur + vr * vr + wr * wr).sqrt()
+}
+
+/// The air-relative velocity in body axes `(u_r, v_r, w_r)`: the body velocity less the wind
+/// (steady wind rotated by `R_ned->body = R^T`, plus the body-axis gusts), m/s.
+#[inline(always)]
+fn air_relative_body(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> (f64, f64, f64) {
+    let [wn, we, wd] = wind.steady_ned_mps;
+    let wb = [
+        r[0][0] * wn + r[1][0] * we + r[2][0] * wd + wind.gust_body_mps[0],
+        r[0][1] * wn + r[1][1] * we + r[2][1] * wd + wind.gust_body_mps[1],
+        r[0][2] * wn + r[1][2] * we + r[2][2] * wd + wind.gust_body_mps[2],
+    ];
+    (x[3] - wb[0], x[4] - wb[1], x[5] - wb[2])
+}
+
 /// Air data of state `x` in `wind`.
 #[inline]
 pub fn air_data(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> AirData {
@@ -133,16 +154,9 @@ pub fn air_data(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> AirData {
 /// [`air_data`] with `(sin(alpha), cos(alpha))` from the air-relative velocities: for
 /// `alpha = atan(w_r/u_r)`, `cos(alpha) = |u_r|/sqrt(u_r^2 + w_r^2)` and
 /// `sin(alpha) = (w_r/u_r) cos(alpha)` (no trigonometric call).
-#[inline]
+#[inline(always)]
 fn air_data_sc(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> (AirData, f64, f64) {
-    let [wn, we, wd] = wind.steady_ned_mps;
-    // R_ned->body = R_body->ned^T.
-    let wb = [
-        r[0][0] * wn + r[1][0] * we + r[2][0] * wd + wind.gust_body_mps[0],
-        r[0][1] * wn + r[1][1] * we + r[2][1] * wd + wind.gust_body_mps[1],
-        r[0][2] * wn + r[1][2] * we + r[2][2] * wd + wind.gust_body_mps[2],
-    ];
-    let (ur, vr, wr) = (x[3] - wb[0], x[4] - wb[1], x[5] - wb[2]);
+    let (ur, vr, wr) = air_relative_body(x, wind, r);
     let va = (ur * ur + vr * vr + wr * wr).sqrt();
     let beta = if va > 0.0 {
         (vr / va).clamp(-1.0, 1.0).asin()
@@ -170,6 +184,19 @@ fn air_data_sc(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> (AirData, f
 
 /// The state derivative `f(x, delta, wind)`; forces and moments evaluated at `x`.
 pub fn derivatives(
+    p: &Aerosonde,
+    dv: &Derived,
+    x: &State12,
+    d: &Deltas,
+    wind: &WindSample,
+) -> State12 {
+    derivatives_inline(p, dv, x, d, wind)
+}
+
+/// [`derivatives`], always inlined: the closed-loop step is compiled for several instruction
+/// sets (`FixedWing::step_with_commands`), and its callees must be inlined to be compiled with it.
+#[inline(always)]
+fn derivatives_inline(
     p: &Aerosonde,
     dv: &Derived,
     x: &State12,
@@ -273,6 +300,19 @@ pub fn rk4_step(
     wind: &WindSample,
     dt_s: f64,
 ) {
+    rk4_step_inline(p, gm, x, d, wind, dt_s);
+}
+
+/// [`rk4_step`], always inlined (see [`derivatives_inline`]).
+#[inline(always)]
+pub(crate) fn rk4_step_inline(
+    p: &Aerosonde,
+    gm: &Derived,
+    x: &mut State12,
+    d: &Deltas,
+    wind: &WindSample,
+    dt_s: f64,
+) {
     let add = |a: &State12, k: &State12, h: f64| {
         let mut o = *a;
         for i in 0..12 {
@@ -280,10 +320,10 @@ pub fn rk4_step(
         }
         o
     };
-    let k1 = derivatives(p, gm, x, d, wind);
-    let k2 = derivatives(p, gm, &add(x, &k1, 0.5 * dt_s), d, wind);
-    let k3 = derivatives(p, gm, &add(x, &k2, 0.5 * dt_s), d, wind);
-    let k4 = derivatives(p, gm, &add(x, &k3, dt_s), d, wind);
+    let k1 = derivatives_inline(p, gm, x, d, wind);
+    let k2 = derivatives_inline(p, gm, &add(x, &k1, 0.5 * dt_s), d, wind);
+    let k3 = derivatives_inline(p, gm, &add(x, &k2, 0.5 * dt_s), d, wind);
+    let k4 = derivatives_inline(p, gm, &add(x, &k3, dt_s), d, wind);
     for i in 0..12 {
         x[i] += dt_s / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }

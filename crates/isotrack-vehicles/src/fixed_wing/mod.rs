@@ -192,6 +192,7 @@ impl FixedWing {
     }
 
     /// NED ground velocity `[pn', pe', pd']`.
+    #[inline(always)]
     pub fn ground_velocity(x: &State12) -> [f64; 3] {
         let r = r_body_to_ned(x[6], x[7], x[8]);
         [
@@ -202,6 +203,7 @@ impl FixedWing {
     }
 
     /// The ground course, continuous with `previous` (rad clockwise from north).
+    #[inline(always)]
     fn ground_course(x: &State12, previous: f64) -> f64 {
         let v = Self::ground_velocity(x);
         if v[0] * v[0] + v[1] * v[1] < 1e-12 {
@@ -219,24 +221,7 @@ impl FixedWing {
     /// Advances `s` by `dt_s` with the course command given directly (guidance bypassed): used by
     /// the turn-rate interface and by tests of the autopilot.
     pub fn step_with_commands(&self, s: &mut FixedWingState, cmd: &Commands, dt_s: f64) {
-        if let Some(g) = s.gusts.as_mut() {
-            s.wind.gust_body_mps = g.step(dt_s);
-        }
-        let air = self.air_data(s);
-        let d = autopilot(
-            &mut s.autopilot,
-            &self.ap,
-            &self.gains,
-            &self.trim,
-            &s.x,
-            &air,
-            s.course_rad,
-            cmd,
-            dt_s,
-        );
-        s.deltas = d;
-        rk4_step(&self.params, &self.derived, &mut s.x, &d, &s.wind, dt_s);
-        s.course_rad = Self::ground_course(&s.x, s.course_rad);
+        step_closed_loop(self, s, cmd, dt_s);
     }
 
     /// Advances the bare airframe (no autopilot) with deflections `d` held, no gusts.
@@ -247,6 +232,38 @@ impl FixedWing {
         };
         rk4_step(&self.params, &self.derived, x, d, &wind, dt_s);
     }
+}
+
+/// One closed-loop step: gusts, the autopilot (on the airspeed and ground course), RK4 with the
+/// deflections held, the new ground course. Compiled for AVX-512, AVX2 and NEON besides the
+/// baseline and picked at run time (`multiversion`): the Euler angles' `sin_cos` in lanes
+/// (`isotrack_core::lanes`) then runs as one vector operation. The same numbers on every path
+/// (IEEE operations only, no fused multiply-add).
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "aarch64+neon"
+))]
+fn step_closed_loop(v: &FixedWing, s: &mut FixedWingState, cmd: &Commands, dt_s: f64) {
+    if let Some(g) = s.gusts.as_mut() {
+        s.wind.gust_body_mps = g.step(dt_s);
+    }
+    let r = r_body_to_ned(s.x[6], s.x[7], s.x[8]);
+    let va = dynamics::airspeed_mps(&s.x, &s.wind, &r);
+    let d = autopilot(
+        &mut s.autopilot,
+        &v.ap,
+        &v.gains,
+        &v.trim,
+        &s.x,
+        va,
+        s.course_rad,
+        cmd,
+        dt_s,
+    );
+    s.deltas = d;
+    dynamics::rk4_step_inline(&v.params, &v.derived, &mut s.x, &d, &s.wind, dt_s);
+    s.course_rad = FixedWing::ground_course(&s.x, s.course_rad);
 }
 
 impl Vehicle for FixedWing {
