@@ -1,6 +1,7 @@
 //! Throughput of the simulation loop on the paper's Fig. 2(b) scenario (Dubins robot, circular
 //! field, PI-like law, 100 Hz sensing, dt = 0.01 s, 600 s = 60 000 steps), on the analytic field
-//! and on a grid sampled from it.
+//! and on a grid sampled from it; and the same step as one flat loop (`dubins_flat_loop_600s`),
+//! the floor a single run can reach.
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use isotrack_core::control::{PiIsoline, PiIsolineParams};
 use isotrack_core::math::Vec2;
@@ -130,5 +131,54 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The floor of one run: the Fig. 2(b) step written as one flat loop with nothing but its chain
+/// (field, backward difference, PI-like law, RK4 Dubins step by angle addition; no sensor model,
+/// metrics, outcomes or trace), with elementary functions `exp`, `tanh`, `sin_cos`.
+#[inline(always)]
+fn flat_loop(
+    n: usize,
+    exp: impl Fn(f64) -> f64,
+    tanh: impl Fn(f64) -> f64,
+    sin_cos: impl Fn(f64) -> (f64, f64),
+) -> f64 {
+    let (i0, k, level) = (20.0, 0.1, 10.0);
+    let (v, kp, ki, c1, c2, dt) = (0.5, 10.0, 1.0, 0.2, 1.0, 0.01);
+    let (mut x, mut y, mut th): (f64, f64, f64) =
+        (black_box(10.0), 0.0, -std::f64::consts::FRAC_PI_2);
+    let (mut sigma, mut prev, mut worst) = (0.0, 0.0, 0.0f64);
+    for i in 0..=n {
+        let eps = i0 * exp(-k * (x * x + y * y).sqrt()) - level;
+        let mut e = c1 * tanh(eps / c2);
+        if i > 0 {
+            e += (eps - prev) / dt;
+            sigma += e * dt;
+        }
+        prev = eps;
+        worst = worst.max(eps.abs());
+        let w = kp * e + ki * sigma;
+        let (s0, c0) = sin_cos(th);
+        let (sa, ca) = sin_cos(0.5 * w * dt);
+        let (s1, c1h) = (s0 * ca + c0 * sa, c0 * ca - s0 * sa);
+        let (s2, c2h) = (s1 * ca + c1h * sa, c1h * ca - s1 * sa);
+        x += v * dt / 6.0 * (c0 + 4.0 * c1h + c2h);
+        y += v * dt / 6.0 * (s0 + 4.0 * s1 + s2);
+        th += w * dt;
+    }
+    worst
+}
+
+fn floor(c: &mut Criterion) {
+    use isotrack_core::lanes;
+    let mut g = c.benchmark_group("dubins_flat_loop_600s");
+    g.throughput(Throughput::Elements(60_000));
+    g.bench_function("platform_libm", |b| {
+        b.iter(|| black_box(flat_loop(60_000, f64::exp, f64::tanh, f64::sin_cos)))
+    });
+    g.bench_function("lanes", |b| {
+        b.iter(|| black_box(flat_loop(60_000, lanes::exp, lanes::tanh, lanes::sin_cos)))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, floor);
 criterion_main!(benches);
