@@ -229,6 +229,28 @@ mod tests {
         Grid2::from_fn(21, 17, Vec2::new(-3.0, 2.0), [0.7, 1.3], quad).unwrap()
     }
 
+    /// Two rows or two columns: the border is extrapolated linearly (`2 f0 - f1`), so a
+    /// plane is reproduced exactly by bicubic interpolation, on both sides and along both axes.
+    #[test]
+    fn two_node_sides_extrapolate_linearly() {
+        let plane = |p: Vec2| 1.0 + 2.0 * p.x - 3.0 * p.y;
+        for (nx, ny) in [(5, 2), (2, 5), (2, 2)] {
+            let g = Grid2::from_fn(nx, ny, Vec2::new(0.0, 0.0), [1.0, 1.0], plane).unwrap();
+            let f = GridField::new(g, Interpolation::Bicubic);
+            assert_eq!(f.interpolation(), Interpolation::Bicubic);
+            for (x, y) in [(0.5, 0.5), (0.25, 0.75), (0.9, 0.1), (0.0, 0.0), (1.0, 1.0)] {
+                let p = Vec2::new(x, y);
+                let v = f.value(0.0, p).unwrap();
+                assert!((v - plane(p)).abs() < 1e-12, "{nx}x{ny} at ({x}, {y}): {v}");
+            }
+        }
+        let g = Grid2::from_fn(3, 3, Vec2::new(0.0, 0.0), [1.0, 1.0], plane).unwrap();
+        assert_eq!(
+            GridField::new(g, Interpolation::Bilinear).interpolation(),
+            Interpolation::Bilinear
+        );
+    }
+
     #[test]
     fn weights_partition_unity() {
         for k in 0..=10 {
