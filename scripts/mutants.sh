@@ -15,4 +15,9 @@ command -v cargo-mutants >/dev/null 2>&1 || cargo install --locked cargo-mutants
 file=$1
 shift
 mkdir -p out/mutants
+# Tests built with light optimisation and no debug info: the end-to-end tests run several times
+# faster than at opt-level 0, which matters when they run once per mutant.
+export CARGO_PROFILE_DEV_OPT_LEVEL=${CARGO_PROFILE_DEV_OPT_LEVEL:-1}
+export CARGO_PROFILE_DEV_DEBUG=${CARGO_PROFILE_DEV_DEBUG:-0}
+export CARGO_PROFILE_TEST_DEBUG=${CARGO_PROFILE_TEST_DEBUG:-0}
 cargo mutants --file "$file" -j "${JOBS:-2}" --timeout 120 -o out/mutants "$@"
