@@ -373,6 +373,41 @@ mod prop2_tests {
         assert!((pb.unwrap() - bound).abs() < 1e-12);
     }
 
+    /// Prop. 2's terms, minimum gain and bound evaluated by hand from the stated formulas
+    /// (unit-consistent form) at one point, and the printed form's at another `c2`.
+    #[test]
+    fn prop2_by_hand() {
+        let b = FieldBounds {
+            gamma1: 0.8,
+            gamma2: 1.3,
+            gamma3: 0.25,
+        };
+        let (v, c1, c2, phi) = (0.5, 0.2, 2.0, 0.9f64);
+        let (s, c) = (phi.sin(), phi.cos());
+        let k1 = b.gamma3 * v / (b.gamma1 * s * (v * b.gamma1 * c - c1));
+        let k2 = (c2 * b.gamma3 * v + c1 * b.gamma2) / (c1 * b.gamma1 * s);
+        let min = k1.max(k2 / c2);
+        let got = prop2_min_kp(&b, v, c1, c2, phi).unwrap();
+        assert!((got - min).abs() < 1e-12 * min, "{got} vs {min}");
+        for kp in [1.01 * min, 2.0 * min, 10.0 * min] {
+            let want = c2 * (k2 / (kp * c2)).atanh();
+            let bound = prop2_error_bound(&b, v, kp, c1, c2, phi).unwrap();
+            assert!(
+                (bound - want).abs() < 1e-12 * want,
+                "kp {kp}: {bound} vs {want}"
+            );
+        }
+        // Below the minimum gain: no bound.
+        assert!(prop2_error_bound(&b, v, 0.99 * min, c1, c2, phi).is_none());
+        // The printed form: min over (k1, k2), bound atanh(k2 / kp) (no c2).
+        let kp = 3.0 * k1.max(k2);
+        let (pmin, pb) = prop2_paper_min_kp(&b, v, kp, c1, c2, phi);
+        assert!((pmin.unwrap() - k1.max(k2)).abs() < 1e-12 * k1.max(k2));
+        assert!((pb.unwrap() - (k2 / kp).atanh()).abs() < 1e-12);
+        let (_, none) = prop2_paper_min_kp(&b, v, 0.5 * k1.max(k2), c1, c2, phi);
+        assert!(none.is_none());
+    }
+
     #[test]
     fn unreachable_surface_has_no_min_kp() {
         let b = FieldBounds {
