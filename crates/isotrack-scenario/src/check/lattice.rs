@@ -244,3 +244,124 @@ impl<'a> Lattice<'a> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isotrack_fields::{AnalyticField, AnalyticKind, LinearRamp, RadialExp};
+    use std::collections::BTreeSet;
+
+    fn ramp() -> FieldModel {
+        // F = 3 + 2x - y: |grad F| = sqrt(5) everywhere, no curvature.
+        FieldModel::Analytic(AnalyticField::new(AnalyticKind::LinearRamp(LinearRamp {
+            offset: 3.0,
+            gradient_per_m: Vec2::new(2.0, -1.0),
+        })))
+    }
+
+    /// On a 5 x 5 lattice over [0, 4]^2 (1 m cells), cell (i, j) spans F in
+    /// [2 + 2i - j, 5 + 2i - j], so it meets the band [6, 6.5] iff 1 <= 2i - j <= 4: eight
+    /// cells, one component. Its bounds are the ramp's slope exactly (no curvature, no margin).
+    #[test]
+    fn a_ramps_band_cells_and_bounds_by_hand() {
+        let f = ramp();
+        let l = Lattice::new(&f, [0.0, 4.0, 0.0, 4.0], 5);
+        assert_eq!(l.point(0, 0), Vec2::new(0.0, 0.0));
+        assert_eq!(l.point(4, 2), Vec2::new(4.0, 2.0));
+        assert!((l.half_diagonal_m() - 0.5 * 2f64.sqrt()).abs() < 1e-15);
+        assert_eq!(l.cell_of(Vec2::new(2.5, 1.2)), Some((2, 1)));
+        assert_eq!(
+            l.cell_of(Vec2::new(4.0, 4.0)),
+            Some((3, 3)),
+            "the last edge is in"
+        );
+        assert_eq!(l.cell_of(Vec2::new(-0.1, 1.0)), None);
+        assert_eq!(l.cell_of(Vec2::new(1.0, 4.1)), None);
+        let (lo, hi) = (6.0, 6.5);
+        let by_hand: BTreeSet<(usize, usize)> = (0..4)
+            .flat_map(|i| (0..4).map(move |j| (i, j)))
+            .filter(|&(i, j)| (1..=4).contains(&(2 * i as i64 - j as i64)))
+            .collect();
+        assert_eq!(by_hand.len(), 8);
+        let mask = l.component((2, 1), lo, hi);
+        let got: BTreeSet<(usize, usize)> = (0..16)
+            .filter(|&k| mask[k])
+            .map(|k| (k % 4, k / 4))
+            .collect();
+        assert_eq!(got, by_hand);
+        // Not in the band: an empty component, and no bounds over it.
+        let none = l.component((0, 3), lo, hi);
+        assert!(none.iter().all(|&c| !c));
+        assert_eq!(l.bounds(&none, true), None);
+        // The band cell nearest the origin, by cell centre: (1, 0), centre (1.5, 0.5).
+        assert_eq!(
+            l.nearest_band_cell(Vec2::new(0.0, 0.0), lo, hi),
+            Some((1, 0))
+        );
+        assert_eq!(
+            l.nearest_band_cell(Vec2::new(4.0, 4.0), lo, hi),
+            Some((3, 3))
+        );
+        assert_eq!(l.nearest_band_cell(Vec2::new(0.0, 0.0), 100.0, 101.0), None);
+        // Bounds over the corners of the eight cells.
+        let corners: BTreeSet<(usize, usize)> = by_hand
+            .iter()
+            .flat_map(|&(i, j)| [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)])
+            .collect();
+        let b = l.bounds(&mask, true).unwrap();
+        let s5 = 5f64.sqrt();
+        assert_eq!(b.points, corners.len());
+        assert!(
+            (b.gamma1 - s5).abs() < 1e-12 && (b.gamma2 - s5).abs() < 1e-12,
+            "{b:?}"
+        );
+        assert_eq!(b.gamma3, Some(0.0));
+        let b = l.bounds(&mask, false).unwrap();
+        assert_eq!(b.gamma3, None);
+        let slopes = l.slopes(&mask);
+        assert_eq!(slopes.len(), corners.len());
+        assert!(slopes.iter().all(|s| (s - s5).abs() < 1e-12));
+    }
+
+    /// On a curved field and a coarse lattice, the bounds with their margins hold between the
+    /// lattice points: over a dense sampling of the component's cells, min |grad F| >= gamma1,
+    /// max |grad F| <= gamma2 and max ||hess F|| <= gamma3 (the paper's field, 1 m cells, a
+    /// band away from the source, where `||hess F||` is smooth enough for its finite-difference
+    /// Lipschitz estimate).
+    #[test]
+    fn margins_cover_what_lies_between_lattice_points() {
+        let f = FieldModel::Analytic(AnalyticField::new(AnalyticKind::RadialExp(
+            RadialExp::paper(),
+        )));
+        let l = Lattice::new(&f, [-15.5, 16.5, -15.5, 16.5], 33);
+        let (lo, hi) = (9.0, 11.0);
+        let seed = l.cell_of(Vec2::new(6.93, 0.0)).unwrap();
+        let mask = l.component(seed, lo, hi);
+        let b = l.bounds(&mask, true).unwrap();
+        let g3 = b.gamma3.unwrap();
+        assert!(g3 > 0.0 && b.gamma1 < b.gamma2);
+        let (mut gmin, mut gmax, mut hmax) = (f64::INFINITY, 0.0f64, 0.0f64);
+        for (k, _) in mask.iter().enumerate().filter(|c| *c.1) {
+            let (i, j) = (k % 32, k / 32);
+            let (a, c) = (l.point(i, j), l.point(i + 1, j + 1));
+            for u in 0..=20 {
+                for v in 0..=20 {
+                    let p = Vec2::new(
+                        a.x + (c.x - a.x) * u as f64 / 20.0,
+                        a.y + (c.y - a.y) * v as f64 / 20.0,
+                    );
+                    if let Some(g) = f.gradient(0.0, p) {
+                        gmin = gmin.min(g.norm());
+                        gmax = gmax.max(g.norm());
+                    }
+                    if let Some(h) = f.hessian(0.0, p) {
+                        hmax = hmax.max(sym_spectral_norm(&h));
+                    }
+                }
+            }
+        }
+        assert!(b.gamma1 <= gmin, "gamma1 {} > min {gmin}", b.gamma1);
+        assert!(b.gamma2 >= gmax, "gamma2 {} < max {gmax}", b.gamma2);
+        assert!(g3 >= hmax, "gamma3 {g3} < max {hmax}");
+    }
+}
