@@ -231,6 +231,26 @@ mod tests {
 
     /// Two rows or two columns: the border is extrapolated linearly (`2 f0 - f1`), so a
     /// plane is reproduced exactly by bicubic interpolation, on both sides and along both axes.
+    /// Bilinear interpolation reproduces a bilinear function `1 + 3x + 5y + 2xy` exactly, with
+    /// its gradient `(3 + 2y, 5 + 2x)` and cross derivative 2, on an anisotropic grid
+    /// (0.5 m by 2 m cells).
+    #[test]
+    fn bilinear_derivatives_of_a_bilinear_function() {
+        let f = |p: Vec2| 1.0 + 3.0 * p.x + 5.0 * p.y + 2.0 * p.x * p.y;
+        let g = Grid2::from_fn(9, 6, Vec2::new(-1.0, 2.0), [0.5, 2.0], f).unwrap();
+        let field = GridField::new(g, Interpolation::Bilinear);
+        for (x, y) in [(0.3, 3.1), (1.6, 7.9), (-0.8, 11.5), (2.2, 4.0)] {
+            let p = Vec2::new(x, y);
+            assert!((field.value(0.0, p).unwrap() - f(p)).abs() < 1e-12);
+            let gr = field.gradient(0.0, p).unwrap();
+            assert!((gr.x - (3.0 + 2.0 * y)).abs() < 1e-12, "{gr:?} at {p:?}");
+            assert!((gr.y - (5.0 + 2.0 * x)).abs() < 1e-12, "{gr:?} at {p:?}");
+            let h = field.hessian(0.0, p).unwrap();
+            assert!((h[0][1] - 2.0).abs() < 1e-12 && (h[1][0] - 2.0).abs() < 1e-12);
+            assert_eq!((h[0][0], h[1][1]), (0.0, 0.0));
+        }
+    }
+
     #[test]
     fn two_node_sides_extrapolate_linearly() {
         let plane = |p: Vec2| 1.0 + 2.0 * p.x - 3.0 * p.y;
