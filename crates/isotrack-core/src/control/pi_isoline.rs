@@ -258,6 +258,26 @@ mod tests {
         assert_relative_eq!(w, 10.0 * 0.2 * crate::fmath::tanh(2.0), epsilon = 1e-12);
     }
 
+    /// `c2` scales the error inside the tanh: with c2 = 4, the first command is
+    /// `kp c1 tanh(eps/4)`, in the scalar and the lane form alike.
+    #[test]
+    fn c2_scales_the_error_inside_the_tanh() {
+        let p = PiIsolineParams {
+            c2: 4.0,
+            ..params()
+        };
+        let m = Measurement {
+            t_s: 0.0,
+            value: 13.0,
+        };
+        let want = 10.0 * 0.2 * libm::tanh(3.0 / 4.0);
+        let w = PiIsoline::new(p).update(&m);
+        assert_relative_eq!(w, want, epsilon = 1e-12);
+        let (mut a, mut b) = (PiIsoline::new(p), PiIsoline::new(p));
+        let out = PiIsoline::update_lanes(&mut [Some(&mut a), Some(&mut b)], &[m, m]);
+        assert_eq!(out, [w, w]);
+    }
+
     #[test]
     fn a_non_finite_sample_does_not_advance_the_clock() {
         // eps = 2 at t = 0 and t = 2, a NaN at t = 1. The integral must cover the whole
