@@ -756,7 +756,36 @@ fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
 /// `[field]`: the keys allowed for the chosen kind, its defaults and checks.
 fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
     let fk = *fd.kind.get_or_insert(FieldKind::RadialExp);
-    let (kind_name, allowed): (&str, &[&str]) = match fk {
+    let (kind_name, allowed) = field_kind_keys(fk);
+    let choice = format!("field.kind = \"{kind_name}\"");
+    c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
+    match fk {
+        FieldKind::RadialExp => resolve_radial_exp(c, fd),
+        FieldKind::GaussianPlumes => resolve_gaussian_plumes(c, fd),
+        FieldKind::LinearRamp => resolve_linear_ramp(c, fd),
+        FieldKind::Grid => resolve_grid(c, fd),
+        FieldKind::PuffPlume => resolve_puff(c, fd),
+        FieldKind::Stations => resolve_stations(c, fd),
+    }
+    if let Some(v) = fd.drift_mps {
+        c.speeds("field.drift_mps", &v);
+    }
+    if let Some(d) = fd.domain_m {
+        for x in d {
+            c.coordinate("field.domain_m", x);
+        }
+        if !(d[0] < d[1] && d[2] < d[3]) {
+            c.fail(
+                "field.domain_m",
+                format!("must be [x_min, x_max, y_min, y_max] with min < max, got {d:?}"),
+            );
+        }
+    }
+}
+
+/// A field kind's name and the `[field]` keys that apply to it.
+fn field_kind_keys(kind: FieldKind) -> (&'static str, &'static [&'static str]) {
+    match kind {
         FieldKind::RadialExp => (
             "radial_exp",
             &["i0", "decay_per_m", "center_m", "domain_m", "drift_mps"],
@@ -821,105 +850,93 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
                 "after_last_frame",
             ],
         ),
-    };
-    let choice = format!("field.kind = \"{kind_name}\"");
-    c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
-    match fk {
-        FieldKind::RadialExp => {
-            let i0 = *fd.i0.get_or_insert(20.0);
-            c.positive("field.i0", i0);
-            c.field_value("field.i0", i0);
-            c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
-            for x in *fd.center_m.get_or_insert([0.0, 0.0]) {
-                c.coordinate("field.center_m", x);
-            }
-        }
-        FieldKind::GaussianPlumes => {
-            c.field_value("field.background", *fd.background.get_or_insert(0.0));
-            let sources = fd.sources.get_or_insert_with(default_plumes);
-            if sources.is_empty() {
-                c.fail("field.sources", "must hold at least one source");
-            }
-            for (i, s) in sources.iter().enumerate() {
-                for x in s.center_m {
-                    c.coordinate(&format!("field.sources[{i}].center_m"), x);
-                }
-                c.field_value(&format!("field.sources[{i}].amplitude"), s.amplitude);
-                c.finite(&format!("field.sources[{i}].rotation_rad"), s.rotation_rad);
-                for sg in s.sigma_m {
-                    let key = format!("field.sources[{i}].sigma_m");
-                    c.within(
-                        &key,
-                        sg,
-                        ranges::MIN_LENGTH_M,
-                        ranges::MAX_COORDINATE_M,
-                        "m",
-                    );
-                }
-            }
-        }
-        FieldKind::LinearRamp => {
-            c.field_value("field.offset", *fd.offset.get_or_insert(0.0));
-            let g = *fd.gradient_per_m.get_or_insert([0.0, 1.0]);
-            for gi in g {
-                c.field_value("field.gradient_per_m", gi);
-            }
-            if g == [0.0, 0.0] {
-                c.fail(
-                    "field.gradient_per_m",
-                    "must not be zero (a flat field has no isolines)",
-                );
-            }
-        }
-        FieldKind::Grid => resolve_grid(c, fd),
-        FieldKind::PuffPlume => resolve_puff(c, fd),
-        FieldKind::Stations => {
-            if fd.path.as_deref().is_none_or(str::is_empty) {
-                c.fail("field.path", "is required for field.kind = \"stations\"");
-            }
-            if fd.value_column.as_deref().is_none_or(str::is_empty) {
-                c.fail(
-                    "field.value_column",
-                    "is required for field.kind = \"stations\"",
-                );
-            }
-            let m = *fd.method.get_or_insert(StationMethod::Kriging);
-            if m == StationMethod::Idw {
-                c.positive("field.idw_power", *fd.idw_power.get_or_insert(2.0));
-            } else if fd.idw_power.is_some() {
-                c.fail(
-                    "field.idw_power",
-                    "does not apply to field.method = \"kriging\"",
-                );
-            }
-            if let Some(g) = fd.grid_spacing_m {
-                c.positive("field.grid_spacing_m", g);
-            }
-            if let Some(sp) = fd.spacing_m {
-                for v in sp {
-                    c.positive("field.spacing_m", v);
-                }
-            }
-            if let Some(o) = fd.origin_m {
-                c.all_finite("field.origin_m", &o);
-            }
-            fd.interpolation.get_or_insert(InterpolationName::Bicubic);
-        }
     }
-    if let Some(v) = fd.drift_mps {
-        c.speeds("field.drift_mps", &v);
+}
+
+/// `field.kind = "radial_exp"`: `F = i0 exp(-decay |p - center|)`.
+fn resolve_radial_exp(c: &mut Checker, fd: &mut FieldSection) {
+    let i0 = *fd.i0.get_or_insert(20.0);
+    c.positive("field.i0", i0);
+    c.field_value("field.i0", i0);
+    c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
+    for x in *fd.center_m.get_or_insert([0.0, 0.0]) {
+        c.coordinate("field.center_m", x);
     }
-    if let Some(d) = fd.domain_m {
-        for x in d {
-            c.coordinate("field.domain_m", x);
+}
+
+/// `field.kind = "gaussian_plumes"`: a background and at least one source.
+fn resolve_gaussian_plumes(c: &mut Checker, fd: &mut FieldSection) {
+    c.field_value("field.background", *fd.background.get_or_insert(0.0));
+    let sources = fd.sources.get_or_insert_with(default_plumes);
+    if sources.is_empty() {
+        c.fail("field.sources", "must hold at least one source");
+    }
+    for (i, s) in sources.iter().enumerate() {
+        for x in s.center_m {
+            c.coordinate(&format!("field.sources[{i}].center_m"), x);
         }
-        if !(d[0] < d[1] && d[2] < d[3]) {
-            c.fail(
-                "field.domain_m",
-                format!("must be [x_min, x_max, y_min, y_max] with min < max, got {d:?}"),
+        c.field_value(&format!("field.sources[{i}].amplitude"), s.amplitude);
+        c.finite(&format!("field.sources[{i}].rotation_rad"), s.rotation_rad);
+        for sg in s.sigma_m {
+            let key = format!("field.sources[{i}].sigma_m");
+            c.within(
+                &key,
+                sg,
+                ranges::MIN_LENGTH_M,
+                ranges::MAX_COORDINATE_M,
+                "m",
             );
         }
     }
+}
+
+/// `field.kind = "linear_ramp"`: `F = offset + g . p` with `g != 0`.
+fn resolve_linear_ramp(c: &mut Checker, fd: &mut FieldSection) {
+    c.field_value("field.offset", *fd.offset.get_or_insert(0.0));
+    let g = *fd.gradient_per_m.get_or_insert([0.0, 1.0]);
+    for gi in g {
+        c.field_value("field.gradient_per_m", gi);
+    }
+    if g == [0.0, 0.0] {
+        c.fail(
+            "field.gradient_per_m",
+            "must not be zero (a flat field has no isolines)",
+        );
+    }
+}
+
+/// `field.kind = "stations"`: the file and column, the method and the grid it is put on.
+fn resolve_stations(c: &mut Checker, fd: &mut FieldSection) {
+    if fd.path.as_deref().is_none_or(str::is_empty) {
+        c.fail("field.path", "is required for field.kind = \"stations\"");
+    }
+    if fd.value_column.as_deref().is_none_or(str::is_empty) {
+        c.fail(
+            "field.value_column",
+            "is required for field.kind = \"stations\"",
+        );
+    }
+    let m = *fd.method.get_or_insert(StationMethod::Kriging);
+    if m == StationMethod::Idw {
+        c.positive("field.idw_power", *fd.idw_power.get_or_insert(2.0));
+    } else if fd.idw_power.is_some() {
+        c.fail(
+            "field.idw_power",
+            "does not apply to field.method = \"kriging\"",
+        );
+    }
+    if let Some(g) = fd.grid_spacing_m {
+        c.positive("field.grid_spacing_m", g);
+    }
+    if let Some(sp) = fd.spacing_m {
+        for v in sp {
+            c.positive("field.spacing_m", v);
+        }
+    }
+    if let Some(o) = fd.origin_m {
+        c.all_finite("field.origin_m", &o);
+    }
+    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
 }
 
 /// `[vehicle]`: the keys allowed for the chosen kind, its defaults and physical ranges.
