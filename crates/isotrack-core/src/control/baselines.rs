@@ -487,6 +487,43 @@ mod tests {
         assert!((w - 0.5 * 0.1).abs() < 1e-12, "{w}");
     }
 
+    /// The trait's default `update_lanes` (and `update_each`): each law updated in turn with its
+    /// own measurement, the `None` lanes answering 0 and left alone.
+    #[test]
+    fn default_lane_update_is_each_law_in_turn() {
+        let p = PidParams {
+            level: 10.0,
+            kp: 2.0,
+            ki: 0.5,
+            kd: 3.0,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        let (mut a, mut b) = (Pid::new(p), Pid::new(p));
+        let (mut a1, mut b1) = (Pid::new(p), Pid::new(p));
+        for k in 0..4 {
+            let t_s = 0.5 * k as f64;
+            let ms = [
+                Measurement {
+                    t_s,
+                    value: 12.0 - k as f64,
+                },
+                Measurement { t_s, value: 99.0 },
+                Measurement {
+                    t_s,
+                    value: 7.0 + 0.5 * k as f64,
+                },
+            ];
+            let got = Pid::update_lanes(&mut [Some(&mut a), None, Some(&mut b)], &ms);
+            let want = [a1.update(&ms[0]), 0.0, b1.update(&ms[2])];
+            assert_eq!(got, want, "sample {k}");
+            assert!(got[0] != 0.0 && got[2] != 0.0);
+            let each = crate::control::update_each(&mut [Some(&mut a1), None], &[ms[0], ms[1]]);
+            let again = a.update(&ms[0]);
+            assert_eq!(each, [again, 0.0]);
+        }
+    }
+
     #[test]
     fn pid_law_by_hand() {
         let mut c = Pid::new(PidParams {

@@ -400,6 +400,67 @@ mod tests {
         );
     }
 
+    /// Back-calculation switching between saturated and free intervals: a negative error winds
+    /// the integral down against the limit, then a positive one leaves the raw output
+    /// `kp e + ki sigma` inside the limit while `kp e - ki sigma` would not be (where a wrong sign
+    /// or sum in `u` would call the interval saturated). Followed by hand through every sample.
+    #[test]
+    fn back_calculation_decides_saturation_from_kp_e_plus_ki_sigma() {
+        let (kp, ki, c1, tt, lim) = (2.0, 2.0, 0.2, 2.0, 1.0);
+        let mut p = params();
+        p.kp = kp;
+        p.ki = ki;
+        p.anti_windup = AntiWindup::BackCalculation {
+            tracking_time_s: tt,
+        };
+        p.output.max_turn_rate_radps = Some(lim);
+        let mut c = PiIsoline::new(p);
+        // eps: -0.45 for 12 s, up by 0.1 per second to 0.45, held.
+        let eps_of = |k: usize| match k {
+            0..=11 => -0.45,
+            12..=20 => -0.45 + 0.1 * (k - 11) as f64,
+            _ => 0.45,
+        };
+        let (mut sigma, mut prev, mut t_prev): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        let (mut free, mut saturated, mut only_with_plus) = (0, 0, 0);
+        for k in 0..29 {
+            let t = k as f64;
+            let eps = eps_of(k);
+            let eps_dot = if k == 0 {
+                0.0
+            } else {
+                (eps - prev) / (t - t_prev)
+            };
+            let e = eps_dot + c1 * crate::fmath::tanh(eps);
+            let dt = if k == 0 { 0.0 } else { t - t_prev };
+            let u = kp * e + ki * sigma;
+            let u_sat = u.clamp(-lim, lim);
+            if u_sat != u {
+                saturated += 1;
+                let ss = tt * e + (u_sat - kp * e) / ki;
+                sigma = ss + (sigma - ss) * crate::fmath::exp(-dt / tt);
+            } else {
+                free += 1;
+                if (kp * e - ki * sigma).abs() > lim {
+                    only_with_plus += 1;
+                }
+                sigma += dt * e;
+            }
+            let w = c.update(&Measurement {
+                t_s: t,
+                value: 10.0 + eps,
+            });
+            assert_relative_eq!(c.sigma(), sigma, epsilon = 1e-12);
+            assert_relative_eq!(w, (kp * e + ki * sigma).clamp(-lim, lim), epsilon = 1e-12);
+            (prev, t_prev) = (eps, t);
+        }
+        assert!(
+            free > 5 && saturated > 5,
+            "{free} free, {saturated} saturated"
+        );
+        assert!(only_with_plus >= 3, "{only_with_plus}");
+    }
+
     /// The proptest's failing case (kept): a 1.55 s sample interval against a 0.01 s tracking
     /// time, huge measurements, a 0.001 rad/s limit. Explicit Euler multiplied sigma by
     /// |1 - dt/Tt| = 154 per sample, to infinity and NaN; the exact step stays finite.
