@@ -264,6 +264,19 @@ mod tests {
                 assert!((v - plane(p)).abs() < 1e-12, "{nx}x{ny} at ({x}, {y}): {v}");
             }
         }
+        // Three and four nodes a side: every cell is a border cell or the one interior one,
+        // and each reproduces the plane.
+        for n in [3, 4] {
+            let g = Grid2::from_fn(n, n, Vec2::new(0.0, 0.0), [1.0, 1.0], plane).unwrap();
+            let f = GridField::new(g, Interpolation::Bicubic);
+            for i in 0..n - 1 {
+                for j in 0..n - 1 {
+                    let p = Vec2::new(i as f64 + 0.3, j as f64 + 0.6);
+                    let v = f.value(0.0, p).unwrap();
+                    assert!((v - plane(p)).abs() < 1e-12, "{n}x{n} cell ({i}, {j}): {v}");
+                }
+            }
+        }
         let g = Grid2::from_fn(3, 3, Vec2::new(0.0, 0.0), [1.0, 1.0], plane).unwrap();
         assert_eq!(
             GridField::new(g, Interpolation::Bilinear).interpolation(),

@@ -366,6 +366,49 @@ mod tests {
         assert_eq!(n.value(15.1, p), Some(20.0 + 3.0));
     }
 
+    /// The accessors; a later interval on an offset time base (frames at 1 h, 2 h, 3 h, the
+    /// run starting at field time 1.5 h, 60 s of field time per run second); a single frame
+    /// read at exactly its own time.
+    #[test]
+    fn accessors_later_intervals_and_a_single_frame() {
+        let times = [3600.0, 7200.0, 10800.0];
+        let s = GridSeries::new(
+            frames(&times, |t| t / 3600.0),
+            times.to_vec(),
+            Interpolation::Bilinear,
+            TimeInterpolation::Linear,
+            5400.0,
+            60.0,
+            AfterLastFrame::Hold,
+        )
+        .unwrap();
+        assert_eq!(s.frames().len(), 3);
+        assert_eq!(s.times_s(), &times);
+        assert_eq!(s.field_time_scale(), 60.0);
+        assert_eq!(s.interpolation(), Interpolation::Bilinear);
+        assert_eq!(s.extent_m(), [0.0, 5.0, 0.0, 4.0]);
+        assert_eq!(s.field_time_s(30.0), 7200.0);
+        let p = Vec2::new(1.0, 2.0);
+        // Run 0 s: 1.5 h, halfway between the first two frames; run 45 s: 7200 + 900 s into
+        // the second interval (a = 2.25 h).
+        assert!((s.value(0.0, p).unwrap() - (1.5 + 5.0)).abs() < 1e-12);
+        assert!((s.value(45.0, p).unwrap() - (2.25 + 5.0)).abs() < 1e-12);
+        assert!((s.time_derivative(45.0, p).unwrap() - 60.0 / 3600.0).abs() < 1e-15);
+        let one = GridSeries::new(
+            frames(&[50.0], |_| 4.0),
+            vec![50.0],
+            Interpolation::Bicubic,
+            TimeInterpolation::Cubic,
+            50.0,
+            1.0,
+            AfterLastFrame::Hold,
+        )
+        .unwrap();
+        for t in [0.0, 10.0] {
+            assert!((one.value(t, p).unwrap() - 9.0).abs() < 1e-12, "t = {t}");
+        }
+    }
+
     /// Time origin and scale map run time to field time; `End` ends the field past its last
     /// frame.
     #[test]
