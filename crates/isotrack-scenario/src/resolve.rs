@@ -473,6 +473,8 @@ fn resolve_search(c: &mut Checker, ct: &mut ControllerSection) {
     }
 }
 
+/// `[controller]`: the keys allowed for the chosen law, the shared output stage, the law's gains
+/// and the derivative estimator.
 fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     resolve_search(c, ct);
     let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
@@ -493,6 +495,17 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     if let Some(m) = ct.max_turn_rate_radps {
         c.positive("controller.max_turn_rate_radps", m);
     }
+    resolve_gains(c, ct, kind);
+    if !matches!(
+        kind,
+        ControllerKind::GradientReference | ControllerKind::Schedule
+    ) {
+        resolve_derivative(c, ct);
+    }
+}
+
+/// The gains of the chosen law (with its defaults) and their ranges.
+fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKind) {
     let pos = |c: &mut Checker, key: &str, v: &mut Option<f64>, d: f64| {
         c.positive(key, *v.get_or_insert(d))
     };
@@ -553,35 +566,32 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
             pos(c, "controller.ke", &mut ct.ke, 0.5);
             pos(c, "controller.k_heading", &mut ct.k_heading, 1.0);
         }
-        ControllerKind::Schedule => {
-            let sched = ct.course_rate_radps.get_or_insert_with(Vec::new);
-            if sched.is_empty() {
-                c.fail(
-                    "controller.course_rate_radps",
-                    "must hold at least one [t_s, omega_radps] pair",
-                );
-            }
-            for (i, [t, w]) in sched.iter().enumerate() {
-                if !(t.is_finite() && w.is_finite()) {
-                    c.fail(
-                        &format!("controller.course_rate_radps[{i}]"),
-                        "must be finite",
-                    );
-                }
-                if i > 0 && *t <= sched[i - 1][0] {
-                    c.fail(
-                        &format!("controller.course_rate_radps[{i}]"),
-                        "times must increase",
-                    );
-                }
-            }
-        }
+        ControllerKind::Schedule => resolve_schedule(c, ct),
     }
-    if !matches!(
-        kind,
-        ControllerKind::GradientReference | ControllerKind::Schedule
-    ) {
-        resolve_derivative(c, ct);
+}
+
+/// `controller.kind = "schedule"`: `[t_s, omega_radps]` pairs, finite, times increasing.
+fn resolve_schedule(c: &mut Checker, ct: &mut ControllerSection) {
+    let sched = ct.course_rate_radps.get_or_insert_with(Vec::new);
+    if sched.is_empty() {
+        c.fail(
+            "controller.course_rate_radps",
+            "must hold at least one [t_s, omega_radps] pair",
+        );
+    }
+    for (i, [t, w]) in sched.iter().enumerate() {
+        if !(t.is_finite() && w.is_finite()) {
+            c.fail(
+                &format!("controller.course_rate_radps[{i}]"),
+                "must be finite",
+            );
+        }
+        if i > 0 && *t <= sched[i - 1][0] {
+            c.fail(
+                &format!("controller.course_rate_radps[{i}]"),
+                "times must increase",
+            );
+        }
     }
 }
 
