@@ -6,7 +6,7 @@
 
 use crate::georef::lonlat_to_local_m;
 use crate::grid::Grid2;
-use crate::io::{FilePosition, LoadError};
+use crate::io::{FilePosition, LineNumbers, LoadError};
 use isotrack_core::Vec2;
 use nalgebra::{DMatrix, DVector};
 use std::path::Path;
@@ -73,16 +73,17 @@ impl Stations {
             )
         })?;
         let mut raw = Vec::new();
+        let mut lines = LineNumbers::new(bytes);
         for rec in rdr.records() {
             let rec = rec.map_err(|e| {
                 LoadError::new(
                     path,
                     e.position()
-                        .map(|p| FilePosition::Line(p.line() as usize, None)),
+                        .map(|p| FilePosition::Line(lines.line_of(p.byte()), None)),
                     e.to_string(),
                 )
             })?;
-            let line = rec.position().map_or(0, |p| p.line() as usize);
+            let line = rec.position().map_or(0, |p| lines.line_of(p.byte()));
             let num = |c: usize| -> Result<f64, LoadError> {
                 let tok = rec.get(c).unwrap_or("");
                 tok.parse::<f64>().map_err(|_| {
@@ -773,6 +774,13 @@ mod tests {
         assert!(csv("x_m,y_m,v\n3,0,1\n3,5,2\n3,9,3\n").is_ok());
         assert!(csv("x_m,y_m,v\n0,3,1\n5,3,2\n9,3,3\n").is_ok());
         assert!(csv("x_m,y_m,v\n3,3,1\n3,3,2\n3,3,3\n").is_err());
+    }
+
+    /// A blank line does not shift the line an error names.
+    #[test]
+    fn errors_after_a_blank_line_name_the_files_line() {
+        let e = csv("x_m,y_m,v\n0,0,1\n\n1,abc,2\n2,1,3\n").unwrap_err();
+        assert!(e.to_string().contains("t.csv:4: field 2"), "{e}");
     }
 
     /// Longitudes spanning exactly 180 deg are kept as they are (no shift across the

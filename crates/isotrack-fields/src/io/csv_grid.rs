@@ -1,6 +1,6 @@
 //! CSV grids (the layout of the bundled `data/`): no header, one row per line, row 0 = south.
 
-use super::{plain_grid, FilePosition, LoadError, LoadedGrid};
+use super::{plain_grid, FilePosition, LineNumbers, LoadError, LoadedGrid};
 use std::path::Path;
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
@@ -12,16 +12,17 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     let mut values = Vec::new();
     let mut nx: Option<usize> = None;
     let mut ny = 0usize;
+    let mut lines = LineNumbers::new(bytes);
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
-            let line = e.position().map(|p| p.line() as usize);
+            let line = e.position().map(|p| lines.line_of(p.byte()));
             LoadError::new(
                 path,
                 line.map(|l| FilePosition::Line(l, None)),
                 format!("{e}"),
             )
         })?;
-        let line = rec.position().map_or(ny + 1, |p| p.line() as usize);
+        let line = rec.position().map_or(ny + 1, |p| lines.line_of(p.byte()));
         if rec.len() == 1 && rec[0].is_empty() {
             continue; // blank line
         }

@@ -290,6 +290,46 @@ pub fn parse_grid(name: &Path, bytes: &[u8], format: GridFormat) -> Result<Loade
     }
 }
 
+/// Line numbers of byte offsets in a text, for the `csv` readers: the `csv` crate's own
+/// `Position::line` skips blank lines, so an error after one would name the wrong line. Offsets
+/// must come in increasing order (records do); each newline is counted once.
+pub(crate) struct LineNumbers<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    line: usize,
+}
+
+impl<'a> LineNumbers<'a> {
+    /// Lines of `bytes`, the first numbered 1.
+    pub(crate) fn new(bytes: &'a [u8]) -> Self {
+        Self {
+            bytes,
+            offset: 0,
+            line: 1,
+        }
+    }
+
+    /// The 1-based line of the record starting at byte `offset` (at or after the previous
+    /// offset asked for). `csv` reports a record after blank lines at the first of them, so
+    /// line breaks at `offset` are skipped first.
+    pub(crate) fn line_of(&mut self, offset: u64) -> usize {
+        let mut end = usize::try_from(offset)
+            .unwrap_or(usize::MAX)
+            .min(self.bytes.len());
+        while end < self.bytes.len() && matches!(self.bytes[end], b'\n' | b'\r') {
+            end += 1;
+        }
+        if end > self.offset {
+            self.line += self.bytes[self.offset..end]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            self.offset = end;
+        }
+        self.line
+    }
+}
+
 /// Builds a grid with no georeference (1 m spacing, origin at 0).
 pub(crate) fn plain_grid(
     path: &Path,

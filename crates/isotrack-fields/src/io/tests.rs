@@ -165,6 +165,72 @@ fn asc_errors() {
     assert_eq!(e.position, Some(FilePosition::Line(1, None)));
 }
 
+/// The header's other forms: cell-centre origins (`xllcenter`, `yllcenter`), separate `dx`/`dy`
+/// (rectangular cells), keys in any case; and each header error names its own line.
+#[test]
+fn asc_centre_origin_rectangular_cells_and_header_lines() {
+    let text = "NCOLS 3\nnrows 2\nxllcenter 100\nYLLCENTER 200\ndx 10\ndy 20\n3 4 5\n0 1 2\n";
+    let (_d, p) = tmp("c.asc", text.as_bytes());
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!(g.grid.origin_m(), Vec2::new(100.0, 200.0));
+    assert_eq!(g.grid.spacing_m(), [10.0, 20.0]);
+    assert_eq!((g.grid.at(0, 0), g.grid.at(2, 1)), (0.0, 5.0));
+    // Corner origins move by half a cell each way (10 by 20 cells).
+    let text = "ncols 3\nnrows 2\nxllcorner 100\nyllcorner 200\ndx 10\ndy 20\n3 4 5\n0 1 2\n";
+    let (_d, p) = tmp("k.asc", text.as_bytes());
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.origin_m(),
+        Vec2::new(105.0, 210.0)
+    );
+    // dx alone is not a cell size.
+    let e = err_of(
+        "dx.asc",
+        b"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ndx 1\n1 2\n3 4\n",
+    );
+    assert!(e.message.contains("cellsize"), "{e}");
+    // Errors on header lines 2, 3 and 4 name those lines.
+    let e = err_of("n.asc", b"ncols 2\nnrows 1.5\n");
+    assert_eq!(e.position, Some(FilePosition::Line(2, None)), "{e}");
+    assert!(e.message.contains("whole number >= 2"), "{e}");
+    let e = err_of("v.asc", b"ncols 2\nnrows 2\nxllcorner\n");
+    assert_eq!(e.position, Some(FilePosition::Line(3, None)), "{e}");
+    let e = err_of("u.asc", b"ncols 2\nnrows 2\nxllcorner 0\nfoo 1\n");
+    assert_eq!(e.position, Some(FilePosition::Line(4, None)), "{e}");
+    let e = err_of("w.asc", b"ncols 2\nnrows 2\nxllcorner abc\n");
+    assert_eq!(e.position, Some(FilePosition::Line(3, None)), "{e}");
+    // Counts: 2 and just below 1e8 are whole numbers; 1, 2.5 and 1e8 are not.
+    for bad in ["1", "2.5", "100000000"] {
+        let e = err_of("c.asc", format!("ncols {bad}\n").as_bytes());
+        assert!(e.message.contains("whole number >= 2"), "{bad}: {e}");
+    }
+    // One value too many, on data line 2 (file line 7).
+    let e = err_of(
+        "m.asc",
+        b"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4 5\n",
+    );
+    assert_eq!(e.position, Some(FilePosition::Line(7, None)), "{e}");
+    assert!(e.message.contains("more than"), "{e}");
+    // Truncated: the error names the last line read.
+    let e = err_of(
+        "t.asc",
+        b"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3\n",
+    );
+    assert_eq!(e.position, Some(FilePosition::Line(7, None)), "{e}");
+}
+
+/// Blank lines are skipped, and errors after them still name the file's own line.
+#[test]
+fn csv_blank_lines_and_line_numbers() {
+    let (_d, p) = tmp("b.csv", b"1,2\n\n3,4\n");
+    let g = load_grid(&p, None).unwrap();
+    assert_eq!((g.grid.nx(), g.grid.ny()), (2, 2));
+    assert_eq!(g.grid.values(), &[1.0, 2.0, 3.0, 4.0]);
+    let e = err_of("r.csv", b"1,2\n\n3,4,5\n");
+    assert_eq!(e.position, Some(FilePosition::Line(3, None)), "{e}");
+    let e = err_of("t.csv", b"1,2\n3,4\n\n5,x\n");
+    assert_eq!(e.position, Some(FilePosition::Line(4, Some(2))), "{e}");
+}
+
 /// Writes a one-band float GeoTIFF with the tags GDAL writes.
 fn geotiff_bytes(geographic: bool, nodata: Option<&str>) -> Vec<u8> {
     use tiff::encoder::{colortype::Gray64Float, TiffEncoder};
