@@ -395,6 +395,33 @@ mod tests {
         assert!((air.va_mps - 104f64.sqrt()).abs() < 1e-12);
     }
 
+    /// `airspeed_mps` is `air_data`'s `va_mps` (and `|v_body - wind_body|` by nalgebra) for
+    /// states with sideslip, climb, wind and gusts.
+    #[test]
+    fn airspeed_alone_equals_the_air_datas() {
+        use nalgebra::{Rotation3, Vector3};
+        let wind = WindSample {
+            steady_ned_mps: [4.0, -3.0, 1.0],
+            gust_body_mps: [0.5, -1.5, 0.7],
+        };
+        for (i, att) in [[0.1, 0.05, 1.0], [-0.4, 0.2, -2.0], [0.0, -0.1, 3.0]]
+            .iter()
+            .enumerate()
+        {
+            let mut x = [0.0; 12];
+            x[3..6].copy_from_slice(&[28.0 - i as f64, 3.0 + i as f64, -2.0]);
+            x[6..9].copy_from_slice(att);
+            let r = r_body_to_ned(att[0], att[1], att[2]);
+            let va = airspeed_mps(&x, &wind, &r);
+            assert_eq!(va, air_data(&x, &wind, &r).va_mps);
+            let rot = Rotation3::from_euler_angles(att[0], att[1], att[2]);
+            let wb = rot.inverse() * Vector3::from(wind.steady_ned_mps)
+                + Vector3::from(wind.gust_body_mps);
+            let want = (Vector3::new(x[3], x[4], x[5]) - wb).norm();
+            assert!((va - want).abs() < 1e-12, "{va} vs {want}");
+        }
+    }
+
     #[test]
     fn stall_blend_reference_values() {
         let p = Aerosonde::beard_mclain_2012();
