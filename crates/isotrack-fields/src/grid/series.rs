@@ -409,6 +409,75 @@ mod tests {
         }
     }
 
+    /// The blended grid and Hessian: frames of `F = a(t) + b(t) (x^2 + 3 x y - y^2)` (bicubic is
+    /// exact for quadratics) blend linearly in time, node by node and in the Hessian
+    /// `b(t) [[2, 3], [3, -2]]`; cubic in time repeats the end frames (clamped indices).
+    #[test]
+    fn blended_grids_and_hessians() {
+        let times = [0.0, 10.0, 20.0, 30.0];
+        let (a, b) = (|t: f64| 1.0 + 0.1 * t, |t: f64| 2.0 - 0.05 * t);
+        let quad = |p: Vec2| p.x * p.x + 3.0 * p.x * p.y - p.y * p.y;
+        let frames: Vec<Grid2> = times
+            .iter()
+            .map(|&t| {
+                Grid2::from_fn(7, 6, Vec2::new(-3.0, -2.0), [1.0, 1.0], |p| {
+                    a(t) + b(t) * quad(p)
+                })
+                .unwrap()
+            })
+            .collect();
+        let s = GridSeries::new(
+            frames,
+            times.to_vec(),
+            Interpolation::Bicubic,
+            TimeInterpolation::Linear,
+            0.0,
+            1.0,
+            AfterLastFrame::Hold,
+        )
+        .unwrap();
+        let p = Vec2::new(0.4, 0.7);
+        for t in [0.0, 4.0, 15.0, 27.5] {
+            let h = s.hessian(t, p).unwrap();
+            let want = [[2.0 * b(t), 3.0 * b(t)], [3.0 * b(t), -2.0 * b(t)]];
+            for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                assert!(
+                    (h[i][j] - want[i][j]).abs() < 1e-9,
+                    "t {t}: {h:?} vs {want:?}"
+                );
+            }
+            let g = s.grid_at(t).unwrap();
+            for (ix, iy) in [(0, 0), (3, 2), (6, 5), (2, 4)] {
+                let q = g.node_m(ix, iy);
+                let want = a(t) + b(t) * quad(q);
+                assert!(
+                    (g.at(ix, iy) - want).abs() < 1e-9,
+                    "t {t} node ({ix}, {iy})"
+                );
+            }
+        }
+        // Cubic in time, in the first interval: frame -1 is frame 0 repeated; a field linear in
+        // time is then still reproduced at the frames themselves.
+        let frames = |k: f64| {
+            Grid2::from_fn(4, 4, Vec2::new(0.0, 0.0), [1.0, 1.0], move |p| k + p.x).unwrap()
+        };
+        let c = GridSeries::new(
+            vec![frames(0.0), frames(1.0), frames(2.0)],
+            vec![0.0, 1.0, 2.0],
+            Interpolation::Bilinear,
+            TimeInterpolation::Cubic,
+            0.0,
+            1.0,
+            AfterLastFrame::Hold,
+        )
+        .unwrap();
+        let p = Vec2::new(1.5, 1.5);
+        for (t, want) in [(0.0, 1.5), (1.0, 2.5), (2.0, 3.5)] {
+            assert!((c.value(t, p).unwrap() - want).abs() < 1e-12, "t = {t}");
+            assert!((c.grid_at(t).unwrap().at(1, 1) - (want - 0.5)).abs() < 1e-12);
+        }
+    }
+
     /// Time origin and scale map run time to field time; `End` ends the field past its last
     /// frame.
     #[test]
