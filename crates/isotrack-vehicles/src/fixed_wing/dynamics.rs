@@ -457,8 +457,25 @@ mod tests {
     /// attitudes, rates, winds, gusts and all four controls; agreement to 1e-9 relative.
     #[test]
     fn derivatives_match_an_independent_newton_euler_formulation() {
+        // The 2012 airframe, and the same with the coefficients it sets to 0 given values (the
+        // book's C_L_q = 7.95 among them): the model must hold for any parameters, and a zero
+        // coefficient would hide a wrong sign or product in its term.
+        let other = Aerosonde {
+            c_l_q: 7.95,
+            c_d_q: 0.1,
+            c_d_de: 0.0135,
+            c_y0: 0.01,
+            c_ell0: 0.004,
+            c_n0: -0.003,
+            ..Aerosonde::beard_mclain_2012()
+        };
+        for p in [Aerosonde::beard_mclain_2012(), other] {
+            newton_euler_check(p);
+        }
+    }
+
+    fn newton_euler_check(p: Aerosonde) {
         use nalgebra::{Matrix3, Rotation3, Vector3};
-        let p = Aerosonde::beard_mclain_2012();
         let dv = Derived::new(&p);
         let oracle = |x: &State12, d: &Deltas, wind: &WindSample| -> State12 {
             let rot = Rotation3::from_euler_angles(x[6], x[7], x[8]);
