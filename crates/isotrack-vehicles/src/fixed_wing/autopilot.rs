@@ -226,3 +226,37 @@ pub fn autopilot(
         throttle: dt.clamp(0.0, 1.0),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The loop's PI by hand: a trapezoid integral, and while saturated the integral is pulled
+    /// back by `ts/ki (u_sat - u)` (the 2012 code's anti-windup); with `ki = 0` no pull (and no
+    /// division by zero).
+    #[test]
+    fn pi_loop_by_hand() {
+        let mut s = PiState::default();
+        // e = 1 after 0: integral 0.5 * 0.1 * (1 + 0) = 0.05; u = 2 * 1 + 0.5 * 0.05 = 2.025,
+        // saturated at 1: integral += 0.1 / 0.5 * (1 - 2.025).
+        let u = s.update(1.0, 2.0, 0.5, 0.0, -1.0, 1.0, 0.1);
+        assert_eq!(u, 1.0);
+        assert!(
+            (s.integral - (0.05 + 0.2 * (1.0 - 2.025))).abs() < 1e-15,
+            "{}",
+            s.integral
+        );
+        assert_eq!(s.e_prev, 1.0);
+        // Unsaturated: e = 0.2: integral += 0.5 * 0.1 * (0.2 + 1); u = 0.4 + 0.5 I + 0.1.
+        let i0 = s.integral;
+        let u = s.update(0.2, 2.0, 0.5, 0.1, -1.0, 1.0, 0.1);
+        let i1 = i0 + 0.05 * 1.2;
+        assert!((s.integral - i1).abs() < 1e-15);
+        assert!((u - (0.4 + 0.5 * i1 + 0.1)).abs() < 1e-15);
+        // ki = 0: the integral still accumulates (unused), no pull.
+        let mut p = PiState::default();
+        let u = p.update(3.0, 1.0, 0.0, 0.0, -1.0, 1.0, 0.1);
+        assert_eq!(u, 1.0);
+        assert!((p.integral - 0.15).abs() < 1e-15);
+    }
+}

@@ -361,6 +361,38 @@ fn the_vehicle_interface_by_closed_forms() {
     let mut still = x;
     still[3..6].copy_from_slice(&[0.0, 0.0, 0.0]);
     assert_eq!(FixedWing::ground_course(&still, 0.7), 0.7);
+    // Below 1e-6 m/s of horizontal speed the course is held; above, it follows the velocity.
+    let mut level = x;
+    level[6..9].copy_from_slice(&[0.0, 0.0, 0.0]);
+    level[3..6].copy_from_slice(&[1e-7, 0.0, 0.0]);
+    assert_eq!(FixedWing::ground_course(&level, 0.7), 0.7);
+    level[3..6].copy_from_slice(&[1e-3, 1e-5, 0.0]);
+    let c = FixedWing::ground_course(&level, 0.7);
+    assert!((c - 1e-5f64.atan2(1e-3)).abs() < 1e-12, "{c}");
+    // A start in an oblique wind: crabbed so that the ground velocity lies along the heading
+    // given, at the wind triangle's speed sqrt(Va^2 - w_cross^2) + w_along.
+    let oblique = uav(FixedWingConfig {
+        wind_mps: [3.0, -4.0],
+        ..FixedWingConfig::default()
+    });
+    let heading = 0.5f64;
+    let s = oblique.initial_state(0.0, 0.0, heading);
+    let gv = FixedWing::ground_velocity(&s.x);
+    let (east, north) = (gv[1], gv[0]);
+    assert!(
+        (north.atan2(east) - heading).abs() < 1e-12,
+        "course {}",
+        north.atan2(east)
+    );
+    let (c, sn) = (heading.cos(), heading.sin());
+    let along = 3.0 * c - 4.0 * sn;
+    let cross = -3.0 * sn - 4.0 * c;
+    let speed = (30.0f64 * 30.0 - cross * cross).sqrt() + along;
+    assert!(
+        (east.hypot(north) - speed).abs() < 1e-9,
+        "{} vs {speed}",
+        east.hypot(north)
+    );
     st.course_rad = course;
     let pose = windy.pose(&st);
     assert!((pose.heading_rad - isotrack_core::math::wrap_angle(FRAC_PI_2 - course)).abs() < 1e-12);
