@@ -458,6 +458,99 @@ mod tests {
     }
 
     #[test]
+    fn cf_time_units_by_name() {
+        for (u, s) in [
+            ("seconds since 1970-01-01", 1.0),
+            ("s since 2000-01-01 00:00:00", 1.0),
+            ("Minutes since 2019-03-01", 60.0),
+            ("min since 2019-03-01", 60.0),
+            ("hours since 2019-03-01 00:00:00", 3600.0),
+            ("hr since 2019-03-01", 3600.0),
+            ("DAYS since 1900-01-01", 86_400.0),
+            ("d since 1900-01-01", 86_400.0),
+        ] {
+            assert_eq!(cf_time_unit_s(u), Some(s), "{u}");
+        }
+        for bad in [
+            "fortnights since 2000-01-01",
+            "hours",
+            "hours after 2000",
+            "",
+        ] {
+            assert_eq!(cf_time_unit_s(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn regular_axes_within_a_millionth_of_a_step() {
+        assert_eq!(regular(&[10.0, 12.0, 14.0, 16.0]), Ok((10.0, 2.0)));
+        assert_eq!(regular(&[5.0, 4.5, 4.0]), Ok((5.0, -0.5)));
+        // Off by 1e-7 of a step (within 1e-6 * step * n): accepted; by 1e-4: refused.
+        assert!(regular(&[0.0, 1.0 + 1e-7, 2.0, 3.0]).is_ok());
+        let e = regular(&[0.0, 1.0001, 2.0, 3.0]).unwrap_err();
+        assert!(e.contains("value 1"), "{e}");
+        assert!(regular(&[0.0, 1.0, 2.5, 3.0]).is_err());
+        assert!(regular(&[7.0]).unwrap_err().contains("at least 2"));
+        assert!(regular(&[]).is_err());
+    }
+
+    /// Axes known by their names, `standard_name` or CF units, in either spelling: each file
+    /// reads as lon/lat (projected) or metres as its coordinates say.
+    #[test]
+    fn axes_are_known_by_name_standard_name_or_units() {
+        use netcdf3::{DataSet, FileWriter, Version};
+        // An axis: its name and its attributes.
+        type Axis<'a> = (&'a str, &'a [(&'a str, &'a str)]);
+        let write = |x: Axis, y: Axis| {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("a.nc");
+            let mut ds = DataSet::new();
+            ds.add_fixed_dim(y.0, 3).unwrap();
+            ds.add_fixed_dim(x.0, 4).unwrap();
+            for (name, attrs) in [y, x] {
+                ds.add_var_f64(name, &[name]).unwrap();
+                for (k, v) in attrs {
+                    ds.add_var_attr_string(name, k, v).unwrap();
+                }
+            }
+            ds.add_var_f64("v", &[y.0, x.0]).unwrap();
+            let mut w = FileWriter::create_new(&p).unwrap();
+            w.set_def(&ds, Version::Classic, 0).unwrap();
+            w.write_var_f64(y.0, &[50.0, 50.5, 51.0]).unwrap();
+            w.write_var_f64(x.0, &[10.0, 10.5, 11.0, 11.5]).unwrap();
+            w.write_var_f64("v", &[0.0; 12]).unwrap();
+            w.close().unwrap();
+            let g = crate::io::load_grid(&p, None).unwrap();
+            (g.georeference, dir)
+        };
+        let lonlat = |g: &Georeference| matches!(g, Georeference::LonLat { .. });
+        let cases: [(Axis, Axis, bool); 6] = [
+            (("lon", &[]), ("lat", &[]), true),
+            (("longitude", &[]), ("latitude", &[]), true),
+            (
+                ("x", &[("units", "degrees_east")]),
+                ("y", &[("units", "degrees_north")]),
+                true,
+            ),
+            (
+                ("x", &[("units", "degree_east")]),
+                ("y", &[("units", "degree_north")]),
+                true,
+            ),
+            (
+                ("i", &[("standard_name", "longitude")]),
+                ("j", &[("standard_name", "latitude")]),
+                true,
+            ),
+            (("x", &[("units", "m")]), ("y", &[("units", "m")]), false),
+        ];
+        for (x, y, want) in cases {
+            let (g, _dir) = write(x, y);
+            assert_eq!(lonlat(&g), want, "{} / {}: {g:?}", x.0, y.0);
+        }
+    }
+
+    #[test]
     fn reads_a_cf_lonlat_grid_with_fill_scale_and_flip() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("g.nc");
