@@ -233,6 +233,12 @@ fn csv_blank_lines_and_line_numbers() {
 
 /// Writes a one-band float GeoTIFF with the tags GDAL writes.
 fn geotiff_bytes(geographic: bool, nodata: Option<&str>) -> Vec<u8> {
+    geotiff_bytes_tied(geographic, nodata, (0.0, 0.0))
+}
+
+/// [`geotiff_bytes`] with its tie point at raster position `(i, j)` (column, row from the top)
+/// instead of the corner, the model position moved to match: the same georeference.
+fn geotiff_bytes_tied(geographic: bool, nodata: Option<&str>, (ti, tj): (f64, f64)) -> Vec<u8> {
     use tiff::encoder::{colortype::Gray64Float, TiffEncoder};
     let mut buf = std::io::Cursor::new(Vec::new());
     {
@@ -253,7 +259,10 @@ fn geotiff_bytes(geographic: bool, nodata: Option<&str>) -> Vec<u8> {
             .write_tag(Tag::ModelPixelScaleTag, &[sx, sy, 0.0][..])
             .unwrap();
         img.encoder()
-            .write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, tx, ty, 0.0][..])
+            .write_tag(
+                Tag::ModelTiepointTag,
+                &[ti, tj, 0.0, tx + ti * sx, ty - tj * sy, 0.0][..],
+            )
             .unwrap();
         let keys: Vec<u16> = if geographic {
             vec![1, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326]
@@ -286,6 +295,19 @@ fn geotiff_projected_reads_georeference() {
     );
     assert_eq!(g.grid.at(2, 3), 32.0);
     assert!(g.grid.at(1, 1).is_nan(), "GDAL no-data 11");
+}
+
+/// A tie point inside the raster (column 1, row 2) instead of its corner gives the same grid.
+#[test]
+fn geotiff_tie_point_inside_the_raster() {
+    for geographic in [false, true] {
+        let (_d, a) = tmp("a.tif", &geotiff_bytes(geographic, None));
+        let (_e, b) = tmp("b.tif", &geotiff_bytes_tied(geographic, None, (1.0, 2.0)));
+        let (a, b) = (load_grid(&a, None).unwrap(), load_grid(&b, None).unwrap());
+        assert_eq!(a.georeference, b.georeference);
+        assert_eq!(a.grid.origin_m(), b.grid.origin_m());
+        assert_eq!(a.grid.spacing_m(), b.grid.spacing_m());
+    }
 }
 
 #[test]
