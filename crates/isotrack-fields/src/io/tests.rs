@@ -529,6 +529,74 @@ fn npy_headers_are_checked_before_parsing() {
     assert!(e.message.contains("header of 65535 bytes"), "{e}");
 }
 
+/// The header checks at their bounds: the magic and minimum length, version 2's 4-byte
+/// length, the header's size limit and extent, one dict with at most one tuple, digit runs of
+/// 20 (accepted) and 21 (refused), and the shape checks of frames and series.
+#[test]
+fn npy_header_checks_at_their_bounds() {
+    let f8 = |n: usize| -> Vec<u8> { (0..n).flat_map(|k| (k as f64).to_le_bytes()).collect() };
+    // A valid 2 x 2 grid, and the same in format version 2 (4-byte header length).
+    let v1 = npy_bytes("<f8", "(2, 2)", false, &f8(4));
+    let (_d, p) = tmp("v1.npy", &v1);
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        &[0.0, 1.0, 2.0, 3.0]
+    );
+    let hlen = u16::from_le_bytes([v1[8], v1[9]]) as usize;
+    let mut v2 = b"\x93NUMPY\x02\x00".to_vec();
+    v2.extend((hlen as u32).to_le_bytes());
+    v2.extend(&v1[10..]);
+    let (_d, p) = tmp("v2.npy", &v2);
+    assert_eq!(
+        load_grid(&p, None).unwrap().grid.values(),
+        &[0.0, 1.0, 2.0, 3.0]
+    );
+    // Too short for the magic and length; version 2 without its 4 length bytes; version 4.
+    for (name, b) in [
+        ("short.npy", b"\x93NUMPY\x01".to_vec()),
+        ("v2short.npy", b"\x93NUMPY\x02\x00\x00\x00".to_vec()),
+        ("v4.npy", b"\x93NUMPY\x04\x00\x00\x00\x00\x00".to_vec()),
+    ] {
+        let e = err_of(name, &b);
+        assert!(e.message.contains("not a valid .npy file"), "{name}: {e}");
+    }
+    // A header running past the file's end.
+    let mut cut = v1.clone();
+    cut.truncate(40);
+    let e = err_of("cut.npy", &cut);
+    assert!(e.message.contains("within the file"), "{e}");
+    // Two dicts, or two tuples: refused before the parser.
+    for shape in ["(2, 2), 'x': {}", "(2, 2), 'x': (1,)"] {
+        let e = err_of("two.npy", &npy_bytes("<f8", shape, false, &f8(4)));
+        assert!(
+            e.message.contains("one dict with one shape tuple"),
+            "{shape}: {e}"
+        );
+    }
+    // Digit runs: 20 digits are a number (here a too-large frame), 21 are refused outright.
+    let e = err_of(
+        "d20.npy",
+        &npy_bytes("<f8", &format!("(2, {})", "9".repeat(20)), false, &[]),
+    );
+    assert!(!e.message.contains("more than 20 digits"), "{e}");
+    let e = err_of(
+        "d21.npy",
+        &npy_bytes("<f8", &format!("(2, 1{})", "0".repeat(20)), false, &[]),
+    );
+    assert!(e.message.contains("more than 20 digits"), "{e}");
+    // A frame must be at least 2 x 2; a series at least one frame; data must fit the file.
+    for shape in ["(1, 5)", "(5, 1)", "(3, 1, 4)", "(0, 2, 2)"] {
+        let e = err_of("s.npy", &npy_bytes("<f8", shape, false, &f8(8)));
+        assert!(e.message.contains("at least 2 x 2"), "{shape}: {e}");
+    }
+    let e = err_of("t.npy", &npy_bytes("<f8", "(3, 2)", false, &f8(5)));
+    assert!(e.message.contains("truncated"), "{e}");
+    // Exactly the data the shape needs: read (2 frames of 2 x 2 as a series).
+    let b = npy_bytes("<f8", "(2, 2, 2)", false, &f8(8));
+    let s = parse_series_bytes(std::path::Path::new("s.npy"), &b, GridFormat::Npy, None);
+    assert!(s.is_ok(), "{:?}", s.err());
+}
+
 /// `read_text_limited` reads a text file whole, and refuses bytes that are not UTF-8 and a file
 /// over the limit (with the limit's size in the message).
 #[test]
