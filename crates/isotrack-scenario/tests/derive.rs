@@ -1,0 +1,58 @@
+//! Derived scenarios (what a sweep builds per run): equality follows the file, and a derived
+//! scenario rebuilds exactly what its overrides change; the moving isoline's time resolution.
+
+use isotrack_core::math::Vec2;
+use isotrack_fields::grid::{AfterLastFrame, Grid2, GridSeries, Interpolation, TimeInterpolation};
+use isotrack_scenario::field::MovingIsoline;
+use isotrack_scenario::parse_scenario;
+use isotrack_sim::NoTrace;
+use std::sync::Arc;
+
+#[test]
+fn equality_follows_the_resolved_file() {
+    let base = parse_scenario("", "<test>", &[]).unwrap();
+    let kp5 = base.derive(&["controller.kp=5".into()], "<test>").unwrap();
+    let kp5_again = base.derive(&["controller.kp=5".into()], "<test>").unwrap();
+    assert!(kp5 != base);
+    assert!(kp5 == kp5_again);
+    assert!(base == parse_scenario("", "<test>", &[]).unwrap());
+}
+
+/// A derived scenario with another speed flies at it: over 10 s a Dubins robot's path is
+/// `v * 10 s` (summed as chords of its arcs, within 0.1 mm).
+#[test]
+fn a_derived_vehicle_is_rebuilt() {
+    let base = parse_scenario("", "<test>", &["sim.duration_s=10".into()]).unwrap();
+    for (sets, v) in [
+        (vec![], 0.5),
+        (vec!["vehicle.speed_mps=1.25".to_string()], 1.25),
+    ] {
+        let s = base.derive(&sets, "<test>").unwrap();
+        let path = s.run(&mut NoTrace).metrics.path_length_m;
+        assert!((path - 10.0 * v).abs() < 1e-4, "{sets:?}: path {path} m");
+    }
+}
+
+/// The moving isoline is recomputed every 1/8 of the shortest frame interval, in run time:
+/// frames 3600 s and 1800 s apart at 60 s of field time per run second give 1800/8/60 s.
+#[test]
+fn moving_isoline_bucket_is_an_eighth_of_the_shortest_frame_gap() {
+    let frame =
+        |k: f64| Grid2::from_fn(4, 4, Vec2::new(0.0, 0.0), [1.0, 1.0], move |p| k + p.x).unwrap();
+    let series = GridSeries::new(
+        vec![frame(0.0), frame(1.0), frame(2.0)],
+        vec![0.0, 3600.0, 5400.0],
+        Interpolation::Bilinear,
+        TimeInterpolation::Linear,
+        0.0,
+        60.0,
+        AfterLastFrame::Hold,
+    )
+    .unwrap();
+    let m = MovingIsoline::new(Arc::new(series), 1.5);
+    assert!(
+        (m.bucket_s() - 1800.0 / 8.0 / 60.0).abs() < 1e-12,
+        "{}",
+        m.bucket_s()
+    );
+}
