@@ -301,20 +301,24 @@ fn sweep_summary_plots() {
     assert!((x - 0.05).abs() < 1e-15 && n == 3, "{:?}", pid[1]);
     assert!((m - mean).abs() <= 1e-12 * mean.abs() && (sd - std).abs() <= 1e-9 * std.max(1e-30));
     assert!(sd > 0.0, "derived seeds give the draws different noise");
+    // The summary plot of the mean metric by drift and controller, in one format.
+    let summary_plot = |format: &str| {
+        isotrack(&[
+            "plot",
+            out.to_str().unwrap(),
+            "--x",
+            "field.drift_mps",
+            "--metric",
+            "steady_state_rms_error",
+            "--group",
+            "controller.kind",
+            "--format",
+            format,
+        ])
+    };
     // The SVG draws those means where the axes say: each group's line, mapped back through the
     // tick labels, passes through (x, mean) of every x value.
-    let o = isotrack(&[
-        "plot",
-        out.to_str().unwrap(),
-        "--x",
-        "field.drift_mps",
-        "--metric",
-        "steady_state_rms_error",
-        "--group",
-        "controller.kind",
-        "--format",
-        "svg",
-    ]);
+    let o = summary_plot("svg");
     assert!(o.status.success(), "{}", stderr(&o));
     let svg = std::fs::read_to_string(
         out.join("sweep_steady_state_rms_error_vs_field_drift_mps_by_controller_kind.svg"),
@@ -349,16 +353,7 @@ fn sweep_summary_plots() {
             assert!((yd - m).abs() < 1.0 / px_per_y, "{group}: mean {yd} vs {m}");
         }
     }
-    let o = isotrack(&[
-        "plot",
-        out.to_str().unwrap(),
-        "--x",
-        "field.drift_mps",
-        "--metric",
-        "steady_state_rms_error",
-        "--group",
-        "controller.kind",
-    ]);
+    let o = summary_plot("png");
     assert!(o.status.success(), "{}", stderr(&o));
     let png = out.join("sweep_steady_state_rms_error_vs_field_drift_mps_by_controller_kind.png");
     assert!(std::fs::metadata(&png).unwrap().len() > 10_000);

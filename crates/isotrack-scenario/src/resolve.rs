@@ -287,15 +287,7 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
         _ => {}
     }
     resolve_frames(c, fd);
-    if let Some(sp) = fd.spacing_m {
-        for v in sp {
-            c.positive("field.spacing_m", v);
-        }
-    }
-    if let Some(o) = fd.origin_m {
-        c.all_finite("field.origin_m", &o);
-    }
-    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+    resolve_grid_georeference(c, fd);
     if let Some([c0, c1, r0, r1]) = fd.crop_cells {
         if c0 >= c1 || r0 >= r1 {
             c.fail(
@@ -915,6 +907,20 @@ fn resolve_linear_ramp(c: &mut Checker, fd: &mut FieldSection) {
     }
 }
 
+/// A grid's `spacing_m` and `origin_m` overrides (checked when given) and its interpolation
+/// (bicubic by default): shared by `grid` and `stations`.
+fn resolve_grid_georeference(c: &mut Checker, fd: &mut FieldSection) {
+    if let Some(sp) = fd.spacing_m {
+        for v in sp {
+            c.positive("field.spacing_m", v);
+        }
+    }
+    if let Some(o) = fd.origin_m {
+        c.all_finite("field.origin_m", &o);
+    }
+    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+}
+
 /// `field.kind = "stations"`: the file and column, the method and the grid it is put on.
 fn resolve_stations(c: &mut Checker, fd: &mut FieldSection) {
     if fd.path.as_deref().is_none_or(str::is_empty) {
@@ -938,15 +944,7 @@ fn resolve_stations(c: &mut Checker, fd: &mut FieldSection) {
     if let Some(g) = fd.grid_spacing_m {
         c.positive("field.grid_spacing_m", g);
     }
-    if let Some(sp) = fd.spacing_m {
-        for v in sp {
-            c.positive("field.spacing_m", v);
-        }
-    }
-    if let Some(o) = fd.origin_m {
-        c.all_finite("field.origin_m", &o);
-    }
-    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+    resolve_grid_georeference(c, fd);
 }
 
 /// `[vehicle]`: the keys allowed for the chosen kind, its defaults and physical ranges.

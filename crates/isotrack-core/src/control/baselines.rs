@@ -487,18 +487,23 @@ mod tests {
         assert!((w - 0.5 * 0.1).abs() < 1e-12, "{w}");
     }
 
-    /// The trait's default `update_lanes` (and `update_each`): each law updated in turn with its
-    /// own measurement, the `None` lanes answering 0 and left alone.
-    #[test]
-    fn default_lane_update_is_each_law_in_turn() {
-        let p = PidParams {
+    /// A PID on level 10 with kp 2, ki 0.5, kd 3, no limit, backward difference.
+    fn pid_params() -> PidParams {
+        PidParams {
             level: 10.0,
             kp: 2.0,
             ki: 0.5,
             kd: 3.0,
             output: out(None),
             derivative: DerivativeKind::BackwardDifference,
-        };
+        }
+    }
+
+    /// The trait's default `update_lanes` (and `update_each`): each law updated in turn with its
+    /// own measurement, the `None` lanes answering 0 and left alone.
+    #[test]
+    fn default_lane_update_is_each_law_in_turn() {
+        let p = pid_params();
         let (mut a, mut b) = (Pid::new(p), Pid::new(p));
         let (mut a1, mut b1) = (Pid::new(p), Pid::new(p));
         for k in 0..4 {
@@ -526,14 +531,7 @@ mod tests {
 
     #[test]
     fn pid_law_by_hand() {
-        let mut c = Pid::new(PidParams {
-            level: 10.0,
-            kp: 2.0,
-            ki: 0.5,
-            kd: 3.0,
-            output: out(None),
-            derivative: DerivativeKind::BackwardDifference,
-        });
+        let mut c = Pid::new(pid_params());
         c.update(&Measurement {
             t_s: 0.0,
             value: 9.0,
