@@ -1,23 +1,38 @@
 #!/usr/bin/env bash
-# Mutation testing (cargo-mutants) of one source file: every mutant of FILE is built and the tests
-# of its package run against it; a mutant the tests do not catch is a claim nothing guards.
-#   scripts/mutants.sh crates/isotrack-sim/src/metrics.rs [more cargo-mutants options]
-#   JOBS=1 scripts/mutants.sh ...            (parallel builds, default 2)
-# Results in out/mutants/mutants.out/ (caught.txt, missed.txt, unviable.txt, timeout.txt).
+# Mutation testing (cargo-mutants): every mutant is built and the tests of its package run against
+# it; a mutant the tests do not catch is a claim nothing guards.
+#   scripts/mutants.sh crates/isotrack-sim/src/metrics.rs [more cargo-mutants options]   one file
+#   scripts/mutants.sh isotrack-sim [more cargo-mutants options]                          one crate
+#   JOBS=1 TIMEOUT=30 OUT=out/mutants-sim scripts/mutants.sh ...
+#     (parallel builds, default 2; seconds per test run, default 120; output folder)
+# Results in $OUT/mutants.out/ (caught.txt, missed.txt, unviable.txt, timeout.txt).
 # docs/MUTANTS.md records the per-crate counts and the survivors judged harmless.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ $# -lt 1 ] || [ ! -f "$1" ]; then
-  echo "usage: scripts/mutants.sh FILE [cargo-mutants options]" >&2
+usage() {
+  echo "usage: scripts/mutants.sh FILE|CRATE [cargo-mutants options]" >&2
   exit 64
+}
+[ $# -ge 1 ] || usage
+target=$1
+shift
+if [ -f "$target" ]; then
+  case "$target" in
+    crates/*/src/*) package=$(echo "$target" | cut -d/ -f2) ;;
+    *) usage ;;
+  esac
+  select=(--file "$target")
+elif [ -d "crates/$target" ]; then
+  package=$target
+  select=(--package "$target")
+else
+  usage
 fi
 command -v cargo-mutants >/dev/null 2>&1 || cargo install --locked cargo-mutants
-file=$1
-shift
-mkdir -p out/mutants
-# Tests built with light optimisation and no debug info: the end-to-end tests run several times
-# faster than at opt-level 0, which matters when they run once per mutant.
-export CARGO_PROFILE_DEV_OPT_LEVEL=${CARGO_PROFILE_DEV_OPT_LEVEL:-1}
-export CARGO_PROFILE_DEV_DEBUG=${CARGO_PROFILE_DEV_DEBUG:-0}
-export CARGO_PROFILE_TEST_DEBUG=${CARGO_PROFILE_TEST_DEBUG:-0}
-cargo mutants --file "$file" -j "${JOBS:-2}" --timeout 120 -o out/mutants "$@"
+out=${OUT:-out/mutants}
+mkdir -p "$out"
+# The `mutants` profile (workspace Cargo.toml) builds every crate at full optimisation except the
+# mutated one, which is rebuilt once per mutant and so stays at opt-level 1: the end-to-end tests
+# spend their time in optimised code and each rebuild stays short.
+cargo mutants "${select[@]}" -j "${JOBS:-2}" --timeout "${TIMEOUT:-120}" -o "$out" --profile mutants \
+  --cargo-arg=--config --cargo-arg="profile.mutants.package.$package.opt-level=1" "$@"

@@ -458,15 +458,23 @@ mod tests {
     #[test]
     fn derivatives_match_an_independent_newton_euler_formulation() {
         // The 2012 airframe, and the same with the coefficients it sets to 0 given values (the
-        // book's C_L_q = 7.95 among them): the model must hold for any parameters, and a zero
-        // coefficient would hide a wrong sign or product in its term.
+        // book's C_L_q = 7.95 among them; the others are made up, of the size of their neighbours):
+        // the model must hold for any parameters, and a zero coefficient would hide a wrong sign or
+        // product in its term.
         let other = Aerosonde {
             c_l_q: 7.95,
             c_d_q: 0.1,
             c_d_de: 0.0135,
             c_y0: 0.01,
+            c_y_p: 0.02,
+            c_y_r: 0.03,
+            c_y_da: -0.015,
             c_ell0: 0.004,
             c_n0: -0.003,
+            // Propeller torque (the book's K_Tp, K_Omega; 0 in the 2012 code): about 0.9 N m
+            // at full throttle, the order of the aileron's roll moment.
+            k_tp: 1.0e-3,
+            k_omega: 30.0,
             ..Aerosonde::beard_mclain_2012()
         };
         for p in [Aerosonde::beard_mclain_2012(), other] {
