@@ -1,6 +1,6 @@
 //! Reading scenario files and `--set` overrides, with errors that say where.
 
-use crate::resolve::Issue;
+use crate::resolve::{drop_inapplicable_keys, Issue, KINDED_SECTIONS};
 use crate::schema::ScenarioFile;
 use crate::Scenario;
 use std::fmt;
@@ -235,13 +235,19 @@ pub fn parse_scenario_in(
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {
         let at = ErrorLocation::Override { arg: arg.clone() };
-        let before = controller_kind_of(&table);
+        let before = kinds_of(&table);
         let key = apply_one(&mut table, arg, at)?;
-        if controller_kind_of(&table) != before {
-            // `--set controller.kind=...` switches controllers: the file's keys for the old
-            // kind go; later overrides are checked against the new kind.
-            crate::resolve::drop_inapplicable_controller_keys(&mut table);
-            set_keys.retain(|(k, _)| !k.starts_with("controller."));
+        let after = kinds_of(&table);
+        for (section, _) in KINDED_SECTIONS
+            .iter()
+            .zip(before.iter().zip(&after))
+            .filter(|(_, (b, a))| b != a)
+        {
+            // `--set controller.kind=...` switches controllers (and so for fields and
+            // vehicles): the file's keys for the old kind go; later overrides are checked
+            // against the new kind.
+            drop_inapplicable_keys(&mut table, section);
+            set_keys.retain(|(k, _)| !k.starts_with(&format!("{section}.")));
         }
         set_keys.push((key, arg.clone()));
     }
@@ -291,18 +297,20 @@ pub fn apply_assignments(
         Ok(toml::Value::Table(t)) => t,
         _ => toml::Table::new(),
     };
-    let mut switches_controller = false;
+    let mut switches = [false; KINDED_SECTIONS.len()];
     for a in assignments {
         let at = ErrorLocation::Assigned {
             label: a.label.clone(),
         };
         let key = apply_one(&mut table, &a.arg, at)?;
-        switches_controller |= key == "controller.kind" || key == "controller";
+        for (s, section) in switches.iter_mut().zip(KINDED_SECTIONS) {
+            *s |= key == format!("{section}.kind") || key == section;
+        }
     }
-    if switches_controller {
-        // A sweep across controllers: each run keeps only the keys its controller takes
-        // (README, "Sweeps"), after all its assignments, whatever their order.
-        crate::resolve::drop_inapplicable_controller_keys(&mut table);
+    for (_, section) in switches.iter().zip(KINDED_SECTIONS).filter(|(s, _)| **s) {
+        // A sweep across controllers (or fields, or vehicles): each run keeps only the keys
+        // its kind takes (README, "Sweeps"), after all its assignments, whatever their order.
+        drop_inapplicable_keys(&mut table, section);
     }
     toml::Value::Table(table)
         .try_into()
@@ -402,13 +410,16 @@ fn apply_one(
     Ok(key)
 }
 
-/// The `controller.kind` a scenario table names (`None` when unset: the default).
-fn controller_kind_of(table: &toml::Table) -> Option<String> {
-    table
-        .get("controller")?
-        .get("kind")?
-        .as_str()
-        .map(str::to_string)
+/// The `kind` of each of [`KINDED_SECTIONS`] a scenario table names (`None` when unset: the
+/// default).
+fn kinds_of(table: &toml::Table) -> [Option<String>; KINDED_SECTIONS.len()] {
+    KINDED_SECTIONS.map(|section| {
+        table
+            .get(section)?
+            .get("kind")?
+            .as_str()
+            .map(str::to_string)
+    })
 }
 
 /// `VALUE` as a TOML value; a bare word that is not TOML (`dubins`) is taken as a string.
@@ -631,5 +642,210 @@ mod tests {
     fn dotted_keys_in_file_are_located() {
         let e = err("controller.kp = -3\n", &[]);
         assert_eq!(file_line(&e[0]), Some(1));
+    }
+
+    #[test]
+    fn locations_display_as_documented() {
+        let file = |line, column| ErrorLocation::File {
+            path: "s.toml".into(),
+            line,
+            column,
+        };
+        assert_eq!(file(Some(3), Some(6)).to_string(), "s.toml:3:6");
+        assert_eq!(file(Some(3), None).to_string(), "s.toml:3");
+        assert_eq!(file(None, None).to_string(), "s.toml");
+        let arg = "controller.kp=0".to_string();
+        assert_eq!(
+            ErrorLocation::Override { arg }.to_string(),
+            "--set controller.kp=0"
+        );
+        let origin = "s.toml".to_string();
+        assert_eq!(
+            ErrorLocation::Default { origin }.to_string(),
+            "s.toml (default value)"
+        );
+        let label = "sweep s.toml run 3, [grid] controller.kp=0".to_string();
+        assert_eq!(
+            ErrorLocation::Assigned {
+                label: label.clone()
+            }
+            .to_string(),
+            label
+        );
+        let origin = "sweep s.toml run 3".to_string();
+        assert_eq!(
+            ErrorLocation::Inherited { origin }.to_string(),
+            "sweep s.toml run 3 (a value of the base scenario or its default)"
+        );
+        let issue = |key: Option<&str>| LocatedIssue {
+            location: file(Some(2), Some(1)),
+            key: key.map(str::to_string),
+            message: "must be > 0, got 0".into(),
+        };
+        assert_eq!(
+            issue(Some("controller.kp")).to_string(),
+            "s.toml:2:1: `controller.kp`: must be > 0, got 0"
+        );
+        assert_eq!(issue(None).to_string(), "s.toml:2:1: must be > 0, got 0");
+    }
+
+    /// User text is echoed up to MAX_ECHO_CHARS characters; backtick-quoted spans are clipped
+    /// each, and a whole message at five times that.
+    #[test]
+    fn echoes_are_clipped() {
+        let at_limit = "é".repeat(MAX_ECHO_CHARS);
+        assert_eq!(clip(&at_limit), at_limit);
+        let over = "é".repeat(MAX_ECHO_CHARS + 7);
+        assert_eq!(clip(&over), format!("{at_limit}... (7 more characters)"));
+        let quoted = format!("unknown key `{over}` here");
+        assert_eq!(
+            clip_quoted(&quoted),
+            format!("unknown key `{at_limit}... (7 more characters)` here")
+        );
+        let plain = "x".repeat(5 * MAX_ECHO_CHARS);
+        assert_eq!(clip_quoted(&plain), plain);
+        let long = "x".repeat(5 * MAX_ECHO_CHARS + 1);
+        assert_eq!(clip_quoted(&long), format!("{plain}..."));
+    }
+
+    #[test]
+    fn an_assignment_covers_its_key_its_table_and_the_keys_inside() {
+        assert!(key_covers("controller.kp", "controller.kp"));
+        assert!(key_covers("controller", "controller.kp"));
+        assert!(key_covers("field.sources", "field.sources[1].sigma_m"));
+        assert!(key_covers("controller.kp.x", "controller.kp"));
+        assert!(!key_covers("controller.k", "controller.kp"));
+        // A problem with a whole table is placed at an assignment inside it.
+        assert!(key_covers("controller.kp", "controller"));
+        assert!(!key_covers("controller.kpx", "controller.kp"));
+        assert!(!key_covers("sim", "sensor.rate_hz"));
+    }
+
+    #[test]
+    fn line_and_column_count_characters() {
+        let text = "a = 1\n# é é\nkp = 2\n";
+        assert_eq!(line_col(text, 0), (1, 1));
+        let kp = text.find("kp").unwrap();
+        assert_eq!(line_col(text, kp), (3, 1));
+        let second = text.rfind('é').unwrap();
+        // "# é " before it: 4 characters (6 bytes).
+        assert_eq!(line_col(text, second), (2, 5));
+        assert_eq!(line_col(text, 10_000), (4, 1));
+    }
+
+    /// A problem is placed at the `--set` that set its key (or its table), else at its line in
+    /// the file, else at the defaults; a nested array element is found by its index.
+    #[test]
+    fn problems_are_placed_at_their_source() {
+        let e = err("", &["controller={ kp = 0.0 }"]);
+        assert_eq!(
+            e[0].location,
+            ErrorLocation::Override {
+                arg: "controller={ kp = 0.0 }".into()
+            }
+        );
+        let text = "[field]\nkind = \"gaussian_plumes\"\n\n[[field.sources]]\ncenter_m = [0.0, 0.0]\namplitude = 1.0\nsigma_m = [1.0, 1.0]\nrotation_rad = 0.0\n\n[[field.sources]]\ncenter_m = [0.0, 0.0]\namplitude = 1.0\nsigma_m = [1.0, 0.0]\nrotation_rad = 0.0\n";
+        let e = err(text, &[]);
+        assert_eq!(e[0].key.as_deref(), Some("field.sources[1].sigma_m"));
+        assert_eq!(file_line(&e[0]), Some(13));
+        // record_rate_hz's default (10 Hz) is not a whole number of 0.03 s steps: the
+        // defaults are at fault.
+        let e = err("[sim]\ndt_s = 0.03\n", &[]);
+        assert_eq!(e[0].key.as_deref(), Some("output.record_rate_hz"));
+        assert_eq!(
+            e[0].location,
+            ErrorLocation::Default {
+                origin: "s.toml".into()
+            }
+        );
+    }
+
+    /// `--set controller.kind=...` switches laws: the file's keys for the old law are dropped,
+    /// and later overrides are checked against the new one.
+    #[test]
+    fn switching_the_controller_drops_the_old_laws_keys() {
+        let pid = "[controller]\nkind = \"pid\"\nkd = 5.0\n";
+        let s = parse_scenario(pid, "s.toml", &["controller.kind=pi_isoline".into()]).unwrap();
+        assert_eq!(s.file().controller.kd, None);
+        assert_eq!(s.file().controller.kp, Some(10.0));
+        let sets = [
+            "controller.kp=2".into(),
+            "controller.kind=sliding_mode".into(),
+        ];
+        let s = parse_scenario("", "s.toml", &sets).unwrap();
+        assert_eq!(s.file().controller.kp, None);
+        let e = err("", &["controller.kind=sliding_mode", "controller.kp=2"]);
+        assert_eq!(e[0].key.as_deref(), Some("controller.kp"));
+        assert_eq!(
+            e[0].location,
+            ErrorLocation::Override {
+                arg: "controller.kp=2".into()
+            }
+        );
+    }
+
+    /// A sweep across kinds: each derived run drops the resolved keys of the old kind (the
+    /// Dubins robot's speed, the radial field's peak) and takes the new kind's defaults.
+    #[test]
+    fn derived_scenarios_switch_kinds() {
+        let base = parse_scenario("", "s.toml", &[]).unwrap();
+        let s = base
+            .derive(&["vehicle.kind=fixed_wing".into()], "run 1")
+            .unwrap();
+        assert_eq!(s.file().vehicle.speed_mps, None);
+        assert_eq!(s.file().vehicle.airspeed_mps, Some(30.0));
+        let s = base
+            .derive(&["field.kind=linear_ramp".into()], "run 2")
+            .unwrap();
+        assert_eq!(s.file().field.i0, None);
+        assert_eq!(s.file().field.gradient_per_m, Some([0.0, 1.0]));
+        let s = base
+            .derive(&["controller.kind=pid".into()], "run 3")
+            .unwrap();
+        assert_eq!(
+            (s.file().controller.c1, s.file().controller.kd),
+            (None, Some(10.0))
+        );
+        // And with `--set` on a file: the file's keys of the old kind go.
+        let s = parse_scenario(
+            "[vehicle]\nspeed_mps = 2.0\n",
+            "s.toml",
+            &["vehicle.kind=fixed_wing".into()],
+        )
+        .unwrap();
+        assert_eq!(s.file().vehicle.speed_mps, None);
+        // Keys every kind shares stay.
+        let s = parse_scenario(
+            "[field]\nunits = \"ppm\"\n",
+            "s.toml",
+            &["field.kind=linear_ramp".into()],
+        )
+        .unwrap();
+        assert_eq!(s.file().field.units.as_deref(), Some("ppm"));
+    }
+
+    /// A derived scenario's problem is placed at the assignment that set the key, else said to
+    /// be inherited.
+    #[test]
+    fn derived_problems_name_the_assignment_or_the_base() {
+        let base = parse_scenario("[sim]\ndt_s = 0.05\n", "s.toml", &[]).unwrap();
+        let e = base
+            .derive(&["controller.kp=0".into()], "sweep s.toml run 3")
+            .unwrap_err();
+        assert_eq!(
+            e.issues()[0].location.to_string(),
+            "sweep s.toml run 3: controller.kp=0"
+        );
+        // The fixed-wing UAV needs dt <= 0.02 s: the base's 0.05 s is at fault, not the kind.
+        let e = base
+            .derive(&["vehicle.kind=fixed_wing".into()], "sweep s.toml run 3")
+            .unwrap_err();
+        assert_eq!(e.issues()[0].key.as_deref(), Some("sim.dt_s"));
+        assert_eq!(
+            e.issues()[0].location,
+            ErrorLocation::Inherited {
+                origin: "sweep s.toml run 3".into()
+            }
+        );
     }
 }

@@ -347,42 +347,65 @@ fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 22]
     ]
 }
 
-/// Switching controllers: removes from a scenario table's `[controller]` the keys that do not
-/// apply to its `kind` (the shared `kind`, `level`, `higher_side`, `max_turn_rate_radps` stay).
-/// Applied when `--set controller.kind=...` changes the kind (the file's gains for the old kind
-/// go, so the new kind's defaults apply), and to each run of a sweep that varies
-/// `controller.kind`. Returns the dropped keys.
-pub fn drop_inapplicable_controller_keys(table: &mut toml::Table) -> Vec<String> {
-    let Some(toml::Value::Table(ct)) = table.get_mut("controller") else {
+/// The sections whose keys depend on their `kind`.
+pub const KINDED_SECTIONS: [&str; 3] = ["field", "vehicle", "controller"];
+
+/// Switching kinds: removes from a scenario table's `[section]` (one of [`KINDED_SECTIONS`]) the
+/// keys that do not apply to its `kind` (the keys every kind shares stay: `field.units`, the
+/// controller's `level`, `higher_side`, `max_turn_rate_radps` and search keys). Applied when
+/// `--set SECTION.kind=...` changes the kind (the file's keys for the old kind go, so the new
+/// kind's defaults apply), and to each run of a sweep that varies a kind: a resolved scenario
+/// holds every default of its kind, which another kind would refuse. Returns the dropped keys.
+pub fn drop_inapplicable_keys(table: &mut toml::Table, section: &str) -> Vec<String> {
+    let Some(toml::Value::Table(sec)) = table.get_mut(section) else {
         return vec![];
     };
-    let kind = match ct.get("kind").and_then(|k| k.as_str()) {
-        Some(name) => match ControllerKind::from_name(name) {
-            Some(k) => k,
-            None => return vec![], // an unknown kind is reported by the schema
+    let kind = sec.get("kind");
+    let (allowed, shared): (&[&str], &[&str]) = match section {
+        "field" => match kind_or(kind, FieldKind::RadialExp) {
+            Some(k) => (field_kind_keys(k).1, &["kind", "units"]),
+            None => return vec![],
         },
-        None => ControllerKind::PiIsoline,
+        "vehicle" => match kind_or(kind, VehicleKind::Dubins) {
+            Some(k) => (vehicle_kind_keys(k).1, &["kind"]),
+            None => return vec![],
+        },
+        "controller" => match kind_or(kind, ControllerKind::PiIsoline) {
+            Some(k) => (
+                controller_allowed(k),
+                &[
+                    "kind",
+                    "level",
+                    "higher_side",
+                    "max_turn_rate_radps",
+                    "search",
+                    "search_spacing_m",
+                    "search_leg_m",
+                    "search_handover",
+                ],
+            ),
+            None => return vec![],
+        },
+        _ => return vec![],
     };
-    let allowed = controller_allowed(kind);
-    let shared = [
-        "kind",
-        "level",
-        "higher_side",
-        "max_turn_rate_radps",
-        "search",
-        "search_spacing_m",
-        "search_leg_m",
-        "search_handover",
-    ];
-    let dropped: Vec<String> = ct
+    let dropped: Vec<String> = sec
         .keys()
         .filter(|k| !shared.contains(&k.as_str()) && !allowed.contains(&k.as_str()))
         .cloned()
         .collect();
     for k in &dropped {
-        ct.remove(k);
+        sec.remove(k);
     }
     dropped
+}
+
+/// The kind a section's `kind` value names, `default` when unset; `None` for an unknown kind
+/// (which the schema reports).
+fn kind_or<K: serde::de::DeserializeOwned>(kind: Option<&toml::Value>, default: K) -> Option<K> {
+    match kind {
+        None => Some(default),
+        Some(k) => k.clone().try_into().ok(),
+    }
 }
 
 /// The keys each controller kind takes besides `kind`, `level`, `higher_side`,
@@ -950,20 +973,7 @@ fn resolve_stations(c: &mut Checker, fd: &mut FieldSection) {
 /// `[vehicle]`: the keys allowed for the chosen kind, its defaults and physical ranges.
 fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
     let vk = *vd.kind.get_or_insert(VehicleKind::Dubins);
-    let (vname, vallowed): (&str, &[&str]) = match vk {
-        VehicleKind::Dubins => ("dubins", &["speed_mps"]),
-        VehicleKind::FixedWing => (
-            "fixed_wing",
-            &[
-                "airspeed_mps",
-                "altitude_m",
-                "wind_mps",
-                "gusts",
-                "trim_feedforward",
-                "ecen674_gains",
-            ],
-        ),
-    };
+    let (vname, vallowed) = vehicle_kind_keys(vk);
     c.inapplicable(
         "vehicle",
         &format!("vehicle.kind = \"{vname}\""),
@@ -1024,6 +1034,24 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
                 c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {}", Num(dt)));
             }
         }
+    }
+}
+
+/// A vehicle kind's name and the `[vehicle]` keys that apply to it.
+fn vehicle_kind_keys(kind: VehicleKind) -> (&'static str, &'static [&'static str]) {
+    match kind {
+        VehicleKind::Dubins => ("dubins", &["speed_mps"]),
+        VehicleKind::FixedWing => (
+            "fixed_wing",
+            &[
+                "airspeed_mps",
+                "altitude_m",
+                "wind_mps",
+                "gusts",
+                "trim_feedforward",
+                "ecen674_gains",
+            ],
+        ),
     }
 }
 

@@ -570,4 +570,125 @@ mod tests {
                 .contains("runs")
         );
     }
+
+    /// The `results.csv` cells: strings unquoted, numbers as TOML writes them, arrays split into
+    /// one numeric column per element, random values and the derived seed after the grid.
+    #[test]
+    fn columns_and_cells() {
+        let p = plan(
+            "scenario = \"x\"\n[grid]\nvehicle.wind_mps = [[0.0, 0.0], [3.0, -1.5]]\ncontroller.kind = [\"pid\", \"sliding_mode\"]\n[random]\nruns = 2\nseed = 4\ninitial.x_m = { normal = [5.0, 0.0] }\n",
+        )
+        .unwrap();
+        assert_eq!(p.total(), 8);
+        assert_eq!(
+            p.columns(),
+            [
+                "controller.kind",
+                "vehicle.wind_mps[0]",
+                "vehicle.wind_mps[1]",
+                "initial.x_m",
+                "sim.seed"
+            ]
+        );
+        // Run 7: grid point 3 (kind 1, wind 1), draw 1; a normal with std 0 draws its mean.
+        let seed = derived_seed(4, 7).to_string();
+        assert_eq!(
+            p.run_cells(7),
+            ["sliding_mode", "3.0", "-1.5", "5.0", seed.as_str()]
+        );
+        assert_eq!(
+            p.run_values(7),
+            ["\"sliding_mode\"", "[3.0, -1.5]", "5.0", seed.as_str()]
+        );
+        assert_eq!(p.run_cells(0)[..3], ["pid", "0.0", "0.0"]);
+        // Each override is labelled with its section.
+        let labels: Vec<String> = p
+            .run_assignments(7, "sweep s.toml run 7")
+            .into_iter()
+            .map(|a| a.label)
+            .collect();
+        assert_eq!(
+            labels,
+            [
+                "sweep s.toml run 7, [grid] controller.kind=\"sliding_mode\"",
+                "sweep s.toml run 7, [grid] vehicle.wind_mps=[3.0, -1.5]",
+                "sweep s.toml run 7, [random] initial.x_m=5.0",
+                format!("sweep s.toml run 7, [derived seed] sim.seed={seed}").as_str(),
+            ]
+        );
+    }
+
+    /// A uniform draw lies in [a, b) with mean (a + b)/2; a normal one has its mean and std.
+    #[test]
+    fn random_draws_follow_their_distributions() {
+        let p = plan(
+            "scenario = \"x\"\n[random]\nruns = 4000\nseed = 1\na = { uniform = [2.0, 6.0] }\nb = { normal = [-1.0, 0.5] }\n",
+        )
+        .unwrap();
+        let (mut ua, mut nb, mut nb2) = (vec![], 0.0, 0.0);
+        for id in 0..p.total() {
+            let v = p.run_values(id);
+            let a: f64 = v[0].parse().unwrap();
+            let b: f64 = v[1].parse().unwrap();
+            ua.push(a);
+            nb += b;
+            nb2 += b * b;
+        }
+        let n = p.total() as f64;
+        assert!(ua.iter().all(|a| (2.0..6.0).contains(a)));
+        let mean_a = ua.iter().sum::<f64>() / n;
+        // Standard errors: 4/sqrt(12 n) = 0.018 and 0.5/sqrt(n) = 0.008; 4 of them allowed.
+        assert!((mean_a - 4.0).abs() < 0.08, "{mean_a}");
+        let mean_b = nb / n;
+        let std_b = (nb2 / n - mean_b * mean_b).sqrt();
+        assert!((mean_b + 1.0).abs() < 0.032, "{mean_b}");
+        assert!((std_b - 0.5).abs() < 0.03, "{std_b}");
+    }
+
+    /// `sim.seed` (or the whole `[sim]` table) set in any section stops the derived seed.
+    #[test]
+    fn a_seed_set_anywhere_is_not_derived() {
+        for text in [
+            "scenario = \"x\"\n[base]\nsim.seed = 3\n",
+            "scenario = \"x\"\n[base]\nsim = { seed = 3 }\n",
+            "scenario = \"x\"\n[grid]\nsim.seed = [1, 2]\n",
+            "scenario = \"x\"\n[random]\nruns = 2\nsim.seed = { uniform = [0, 9] }\n",
+        ] {
+            let p = plan(text).unwrap();
+            assert!(!p.derives_seed, "{text}");
+            let seeds = p.columns().iter().filter(|c| *c == "sim.seed").count();
+            assert_eq!(seeds, usize::from(!text.contains("[base]")), "{text}");
+            let labels = p.run_assignments(0, "").into_iter().map(|a| a.label);
+            assert!(labels.filter(|l| l.contains("derived seed")).count() == 0);
+        }
+        let p = plan("scenario = \"x\"\n[grid]\nsim.dt_s = [0.01]\n").unwrap();
+        assert_eq!(p.columns(), ["sim.dt_s", "sim.seed"]);
+    }
+
+    /// Every key is checked against the schema before a run, and the error names the section.
+    #[test]
+    fn check_keys_refuses_unknown_keys_by_section() {
+        let base = crate::parse_scenario("", "<test>", &[]).unwrap();
+        for (text, label) in [
+            (
+                "[base]\ncontroller.kz = 1.0\n",
+                "s.toml [base] controller.kz=1.0",
+            ),
+            (
+                "[grid]\ncontroller.kp = [1.0, \"x\"]\n",
+                "s.toml [grid] controller.kp=\"x\"",
+            ),
+            (
+                "[random]\nruns = 2\nvehicle.nope = { uniform = [0, 1] }\n",
+                "s.toml [random] vehicle.nope",
+            ),
+        ] {
+            let p = plan(&format!("scenario = \"x\"\n{text}")).unwrap();
+            let e = p.check_keys(&base, "s.toml").unwrap_err();
+            let at = e.issues()[0].location.to_string();
+            assert_eq!(at, label, "{text}");
+        }
+        let p = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [1.0, 2.0]\n[random]\nruns = 2\ninitial.x_m = { uniform = [0, 1] }\n").unwrap();
+        assert!(p.check_keys(&base, "s.toml").is_ok());
+    }
 }
