@@ -172,4 +172,29 @@ mod tests {
         assert!((cpda - 0.103052).abs() < 1e-6, "{cpda}");
         assert!((p.aspect_ratio() - 15.245).abs() < 1e-3);
     }
+
+    /// The lateral coefficients, as published for the 2012 airframe (docs/FIXED-WING.md,
+    /// section 1: Beard & McLain's Aerosonde table).
+    #[test]
+    fn lateral_coefficients_are_the_published_table() {
+        let p = Aerosonde::beard_mclain_2012();
+        let got = [
+            [p.c_y0, p.c_y_beta, p.c_y_p, p.c_y_r, p.c_y_da, p.c_y_dr],
+            [
+                p.c_ell0,
+                p.c_ell_beta,
+                p.c_ell_p,
+                p.c_ell_r,
+                p.c_ell_da,
+                p.c_ell_dr,
+            ],
+            [p.c_n0, p.c_n_beta, p.c_n_p, p.c_n_r, p.c_n_da, p.c_n_dr],
+        ];
+        let want = [
+            [0.0, -0.98, 0.0, 0.0, 0.0, -0.17],
+            [0.0, -0.12, -0.26, 0.14, 0.08, 0.105],
+            [0.0, 0.25, 0.022, -0.35, 0.06, -0.032],
+        ];
+        assert_eq!(got, want);
+    }
 }

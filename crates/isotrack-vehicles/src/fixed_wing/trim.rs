@@ -189,4 +189,26 @@ mod tests {
             );
         }
     }
+
+    /// A non-positive or non-finite airspeed is a bad value; a finite one outside the model's
+    /// [15, 45] m/s is out of its range; both ends of the range trim.
+    #[test]
+    fn airspeeds_are_refused_by_kind() {
+        let p = Aerosonde::beard_mclain_2012();
+        for va in [0.0, -30.0, f64::NAN, f64::INFINITY] {
+            assert!(
+                matches!(trim(&p, va), Err(TrimError::BadAirspeed(_))),
+                "{va}"
+            );
+        }
+        for va in [14.99, 45.01, 1e-3] {
+            assert!(
+                matches!(trim(&p, va), Err(TrimError::OutOfRange(_))),
+                "{va}"
+            );
+        }
+        for va in [AIRSPEED_RANGE_MPS.0, AIRSPEED_RANGE_MPS.1] {
+            assert!(trim(&p, va).is_ok(), "{va}");
+        }
+    }
 }
