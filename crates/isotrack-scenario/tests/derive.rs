@@ -56,3 +56,45 @@ fn moving_isoline_bucket_is_an_eighth_of_the_shortest_frame_gap() {
         m.bucket_s()
     );
 }
+
+/// A run's result as text (every metric, outcome and count), to compare runs whole.
+fn fingerprint(s: &isotrack_scenario::Scenario) -> String {
+    format!("{:?}", s.run(&mut NoTrace))
+}
+
+/// What a derived scenario shares with its base (the field, read once for a sweep) and what it
+/// rebuilds: a new seed is a new puff plume (its meander) and a new gusty UAV (its gusts), the
+/// same field otherwise; a changed field key is a new field. Each derived run equals the same
+/// scenario parsed afresh.
+#[test]
+fn derived_scenarios_share_exactly_what_is_unchanged() {
+    let base = parse_scenario("", "<test>", &["sim.duration_s=5".into()]).unwrap();
+    for sets in [["controller.kp=5"], ["sim.seed=5"]] {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let d = base.derive(&sets, "<test>").unwrap();
+        assert!(std::ptr::eq(base.field(), d.field()), "{sets:?}");
+    }
+    let d = base.derive(&["field.i0=30".into()], "<test>").unwrap();
+    assert!(!std::ptr::eq(base.field(), d.field()));
+    let fresh = parse_scenario(
+        "",
+        "<test>",
+        &["sim.duration_s=5".into(), "field.i0=30".into()],
+    )
+    .unwrap();
+    assert_eq!(fingerprint(&d), fingerprint(&fresh));
+    assert_ne!(fingerprint(&d), fingerprint(&base));
+
+    for text in [
+        "[field]\nkind = \"puff_plume\"\n[initial]\nx_m = 5.0\ny_m = 2.0\n[controller]\nlevel = 3.0\n",
+        "[vehicle]\nkind = \"fixed_wing\"\ngusts = true\n[field]\ni0 = 20.0\ndecay_per_m = 0.001\n[controller]\nlevel = 10.0\n[initial]\nx_m = 693.0\n",
+    ] {
+        let sets = ["sim.duration_s=5".to_string()];
+        let base = parse_scenario(text, "<test>", &sets).unwrap();
+        let d = base.derive(&["sim.seed=9".into()], "<test>").unwrap();
+        let fresh =
+            parse_scenario(text, "<test>", &[sets[0].clone(), "sim.seed=9".into()]).unwrap();
+        assert_eq!(fingerprint(&d), fingerprint(&fresh), "{text}");
+        assert_ne!(fingerprint(&d), fingerprint(&base), "{text}");
+    }
+}
