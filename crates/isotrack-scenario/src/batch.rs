@@ -118,3 +118,23 @@ fn batch_runs<'a, X>(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::parse_scenario;
+
+    /// Derived runs that differ in seed, start or gains share their lanes (a Dubins robot is
+    /// its speed: rebuilt for a new seed, still the same robot); a new speed, field or plan
+    /// does not.
+    #[test]
+    fn runs_batch_when_field_vehicle_and_plan_agree() {
+        let base = parse_scenario("", "<test>", &["sim.duration_s=5".into()]).unwrap();
+        let d = |set: &str| base.derive(&[set.to_string()], "<test>").unwrap();
+        for set in ["sim.seed=4", "initial.x_m=9", "controller.kp=3"] {
+            assert!(d(set).batches_with(&base), "{set}");
+        }
+        for set in ["vehicle.speed_mps=1", "field.i0=30", "sim.duration_s=6"] {
+            assert!(!d(set).batches_with(&base), "{set}");
+        }
+    }
+}

@@ -98,3 +98,43 @@ fn derived_scenarios_share_exactly_what_is_unchanged() {
         assert_ne!(fingerprint(&d), fingerprint(&base), "{text}");
     }
 }
+
+/// The true isoline is shared while the field and the level are; a new level or a new field
+/// gets its own.
+#[test]
+fn the_isoline_follows_the_field_and_the_level() {
+    let base = parse_scenario("", "<test>", &["sim.duration_s=5".into()]).unwrap();
+    let kp = base.derive(&["controller.kp=5".into()], "<test>").unwrap();
+    assert!(std::ptr::eq(base.isoline(), kp.isoline()));
+    for set in ["controller.level=5", "field.i0=30"] {
+        let d = base.derive(&[set.into()], "<test>").unwrap();
+        assert!(!std::ptr::eq(base.isoline(), d.isoline()), "{set}");
+    }
+}
+
+/// Switching the law keeps the field and vehicle and takes the new law's defaults; the same kind
+/// is the scenario itself.
+#[test]
+fn with_controller_kind_switches_the_law() {
+    use isotrack_scenario::schema::ControllerKind;
+    let base = parse_scenario("", "<test>", &[]).unwrap();
+    let sm = base
+        .with_controller_kind(ControllerKind::SlidingMode)
+        .unwrap();
+    assert_eq!(sm.file().controller.kind, Some(ControllerKind::SlidingMode));
+    assert_eq!(sm.file().controller.gamma, Some(0.2));
+    assert_eq!(sm.file().controller.kp, None);
+    assert!(std::ptr::eq(base.field(), sm.field()));
+    let same = base
+        .with_controller_kind(ControllerKind::PiIsoline)
+        .unwrap();
+    assert!(same == base);
+}
+
+#[test]
+fn only_the_fixed_wing_uav_flies() {
+    let dubins = parse_scenario("", "<test>", &[]).unwrap();
+    assert!(!dubins.is_flying());
+    let uav = parse_scenario("[vehicle]\nkind = \"fixed_wing\"\n", "<test>", &[]).unwrap();
+    assert!(uav.is_flying());
+}
