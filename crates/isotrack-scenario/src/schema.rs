@@ -612,7 +612,10 @@ impl ControllerSection {
         if self.kind == Some(kind) {
             return self.clone();
         }
-        let takes_derivative = kind != ControllerKind::GradientReference;
+        let takes_derivative = !matches!(
+            kind,
+            ControllerKind::GradientReference | ControllerKind::Schedule
+        );
         ControllerSection {
             kind: Some(kind),
             level: self.level,

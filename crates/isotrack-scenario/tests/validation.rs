@@ -705,3 +705,60 @@ fn all_problems_are_reported_together() {
     let got = refused("[sim]\ndt_s = 0.0\n[controller]\nkp = 0.0\n[sensor]\nnoise_std = -1.0\n");
     assert_eq!(got, ["controller.kp", "sensor.noise_std", "sim.dt_s"]);
 }
+
+/// The names of the laws are the README's, and each reads back as its kind.
+#[test]
+fn controller_kind_names_round_trip() {
+    let names = [
+        "pi_isoline",
+        "schedule",
+        "sliding_mode",
+        "sliding_mode_smooth",
+        "suboptimal_sosm",
+        "pid",
+        "pid_crossing",
+        "gradient_reference",
+    ];
+    for name in names {
+        let kind: ControllerKind = toml::Value::String(name.into()).try_into().unwrap();
+        assert_eq!(kind.name(), name);
+        if kind != ControllerKind::Schedule {
+            assert_eq!(ControllerKind::from_name(name), Some(kind));
+        }
+    }
+    assert_eq!(ControllerKind::from_name("bogus"), None);
+    assert_eq!(ControllerKind::ALL.len(), names.len() - 1);
+}
+
+/// Switching laws carries the shared keys and the estimator (to the laws that differentiate
+/// the measurement), never a gain; the same kind is the section itself.
+#[test]
+fn switched_to_carries_the_shared_keys_only() {
+    let pi = resolved(
+        "[controller]\nlevel = 5.0\nmax_turn_rate_radps = 0.8\nhigher_side = \"left\"\nkp = 3.0\nderivative = \"levant\"\nderivative_lipschitz = 2.0\n",
+    )
+    .unwrap()
+    .controller;
+    let pid = pi.switched_to(ControllerKind::Pid);
+    assert_eq!(pid.kind, Some(ControllerKind::Pid));
+    assert_eq!(
+        (pid.level, pid.max_turn_rate_radps, pid.higher_side),
+        (Some(5.0), Some(0.8), Some(HigherSide::Left))
+    );
+    assert_eq!(pid.derivative, Some(DerivativeKindName::Levant));
+    assert_eq!(pid.derivative_lipschitz, Some(2.0));
+    assert_eq!((pid.kp, pid.ki, pid.c1), (None, None, None));
+    for kind in [ControllerKind::GradientReference, ControllerKind::Schedule] {
+        let other = pi.switched_to(kind);
+        assert_eq!(other.derivative, None, "{kind:?}");
+        assert_eq!(other.derivative_lipschitz, None, "{kind:?}");
+        assert_eq!(other.level, Some(5.0));
+    }
+    assert_eq!(pi.switched_to(ControllerKind::PiIsoline), pi);
+    // Every switched section resolves (the schedule needs its pairs).
+    for kind in ControllerKind::ALL {
+        let mut f: ScenarioFile = toml::from_str("").unwrap();
+        f.controller = pi.switched_to(kind);
+        assert!(resolve(f).is_ok(), "{kind:?}");
+    }
+}
