@@ -134,4 +134,18 @@ mod tests {
         );
         assert!(sosm_conditions(1.0, 9.0, 1.0, 1.0, 4.0, Some(0.5))[0].contains("alpha_star"));
     }
+
+    /// Condition (b) with a large `mu`: v = 1, gamma = 0.5, delta = 1 (mu = 0.5), |grad F| >= 1,
+    /// ||hess F|| <= 0.2 need `u_bar > (0.2 + 0.25)/sqrt(1 - 0.25) = 0.5196` rad/s.
+    #[test]
+    fn sliding_mode_condition_b_by_hand() {
+        let need = 0.45 / 0.75f64.sqrt();
+        assert!(sliding_mode_conditions(1.0, need + 1e-3, 0.5, 1.0, 1.0, Some(0.2)).is_empty());
+        let w = sliding_mode_conditions(1.0, need - 1e-3, 0.5, 1.0, 1.0, Some(0.2));
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("0.5196"), "{}", w[0]);
+        // Condition (a): mu = v*|grad F| exactly is not below it.
+        let w = sliding_mode_conditions(0.5, 1.0, 0.5, 1.0, 1.0, Some(0.2));
+        assert!(w[0].contains("condition (a)"), "{}", w[0]);
+    }
 }
