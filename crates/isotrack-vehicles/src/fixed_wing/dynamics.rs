@@ -475,6 +475,7 @@ mod tests {
             // at full throttle, the order of the aileron's roll moment.
             k_tp: 1.0e-3,
             k_omega: 30.0,
+            c_prop: 0.9,
             ..Aerosonde::beard_mclain_2012()
         };
         for p in [Aerosonde::beard_mclain_2012(), other] {
