@@ -211,4 +211,27 @@ mod tests {
             assert!(trim(&p, va).is_ok(), "{va}");
         }
     }
+
+    /// A trim beyond an actuator is refused by name: an airframe pitching up with `C_m0 = 1`
+    /// needs about `-C_m0 / C_m_de = 1 rad` of elevator (more than pi/4), a weak motor more than
+    /// full throttle.
+    #[test]
+    fn trims_beyond_the_actuators_are_infeasible() {
+        let nose_up = Aerosonde {
+            c_m0: 1.0,
+            ..Aerosonde::beard_mclain_2012()
+        };
+        let weak = Aerosonde {
+            k_motor: 30.0,
+            ..Aerosonde::beard_mclain_2012()
+        };
+        for (p, want) in [(nose_up, "elevator"), (weak, "throttle")] {
+            match trim(&p, 30.0) {
+                Err(TrimError::Infeasible { what, .. }) => {
+                    assert!(what.starts_with(want), "{what}")
+                }
+                other => panic!("{want}: {other:?}"),
+            }
+        }
+    }
 }
