@@ -145,9 +145,8 @@ mod tests {
                 }
             }
         }
-        for i in 0..3 {
-            let sd = (acc[i] / (n - skip) as f64).sqrt();
-            let want = params.sigma_mps[i];
+        for (i, (a, want)) in acc.iter().zip(params.sigma_mps).enumerate() {
+            let sd = (a / (n - skip) as f64).sqrt();
             assert!(
                 (sd - want).abs() < 0.06 * want,
                 "component {i}: std {sd} vs {want}"
