@@ -388,6 +388,15 @@ mod tests {
             let (u, x) = worst(tanh, libm::tanh, &points(lo, hi, 200_000));
             assert!(u <= 2, "tanh({x}): {u} ulp");
         }
+        // Below TANH_TINY the series is what both forms compute (the short chain is the point).
+        for x in points(-0.999 * TANH_TINY, 0.999 * TANH_TINY, 10_000) {
+            assert_eq!(tanh(x).to_bits(), tanh_tiny(x).to_bits(), "{x}");
+            assert_eq!(
+                tanh_lanes([x; 4])[0].to_bits(),
+                tanh_tiny(x).to_bits(),
+                "{x}"
+            );
+        }
         // The series below TANH_TINY (a tracking run's usual error), on both sides of the switch.
         for (lo, hi) in [(1e-12, 1e-6), (0.99 * TANH_TINY, 1.01 * TANH_TINY)] {
             let (u, x) = worst(tanh, libm::tanh, &points(lo, hi, 100_000));
@@ -492,11 +501,18 @@ mod tests {
                 "{x}"
             );
         }
-        // A lane beyond the reduction range takes libm's path; the others are unchanged.
-        let x = [1.0, 1e7, -2.0, f64::NAN];
+        // A lane beyond the reduction range takes libm's path; the others are unchanged: lane 0
+        // is an angle where the Cody-Waite path and libm differ in the last bit, so it shows
+        // which path it took; 1e15 is far past the range, where Cody-Waite's products are inexact.
+        let differs = points(0.5, 10.0, 100_000)
+            .into_iter()
+            .find(|&x| sin_cos(x) != libm::sincos(x))
+            .expect("an angle where the two paths round differently");
+        let x = [differs, 1e15, -2.0, f64::NAN];
         let (s, c) = sin_cos_lanes(x);
-        assert_eq!((s[1], c[1]), libm::sincos(1e7));
-        assert_eq!((s[0], c[0]), sin_cos(1.0));
+        assert_eq!((s[1], c[1]), libm::sincos(1e15));
+        assert_eq!((s[0], c[0]), sin_cos(differs));
+        assert_ne!((s[0], c[0]), libm::sincos(differs));
         assert!(s[3].is_nan() && c[3].is_nan());
     }
 }
