@@ -218,5 +218,7 @@ mod tests {
         let mut still = DerivativeEstimator::new(DerivativeKind::Levant { lipschitz: l });
         still.update(0.0, 2.0);
         assert_eq!(still.update(0.5, 2.0), 0.0);
+        // ... and from rest it answers the next move (err = 2 - 3 = -1: z1 = 0.5 * 1.1 L).
+        assert_relative_eq!(still.update(1.0, 3.0), 0.5 * 1.1 * l, epsilon = 1e-14);
     }
 }

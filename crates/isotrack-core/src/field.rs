@@ -38,3 +38,25 @@ pub trait FieldDerivatives: ScalarField {
     /// value or is not twice differentiable.
     fn hessian(&self, t_s: f64, p: Vec2) -> Option<Mat2>;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `F = x + 2y` on the half-plane `x >= 0` (no value elsewhere).
+    struct HalfPlane;
+    impl ScalarField for HalfPlane {
+        fn value(&self, _t_s: f64, p: Vec2) -> Option<f64> {
+            (p.x >= 0.0).then_some(p.x + 2.0 * p.y)
+        }
+    }
+
+    /// The default `value_lanes` asks each point: its value, `NaN` where there is none.
+    #[test]
+    fn default_value_lanes_asks_each_point() {
+        let v = HalfPlane.value_lanes(0.0, &[1.0, -1.0, 3.0], &[0.5, 0.0, -2.0]);
+        assert_eq!(v[0], 2.0);
+        assert!(v[1].is_nan());
+        assert_eq!(v[2], -1.0);
+    }
+}

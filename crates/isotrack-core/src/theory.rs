@@ -340,6 +340,45 @@ pub fn prop2_paper_min_kp(
 }
 
 #[cfg(test)]
+mod prop1_by_hand_tests {
+    use super::*;
+
+    /// `kp (kp - 2) v alpha > ki` and `v alpha > c1 > 0` by hand: kp 3, v 0.5, alpha 2 give
+    /// 3 and 1.
+    #[test]
+    fn prop1_paper_conditions_by_hand() {
+        assert!(prop1_paper_conditions(2.0, 0.5, 3.0, 2.9, 0.9));
+        assert!(!prop1_paper_conditions(2.0, 0.5, 3.0, 3.1, 0.9));
+        assert!(!prop1_paper_conditions(2.0, 0.5, 3.0, 2.9, 1.1));
+        assert!(!prop1_paper_conditions(2.0, 0.5, 3.0, 2.9, 0.0));
+    }
+
+    /// The P-law's orbit solves `c1 tanh((F(d) - s_d)/c2) + v/(kp d) = 0` (evaluated here with
+    /// libm), outside the isoline; no orbit without speed or gains.
+    #[test]
+    fn p_orbit_solves_its_equation() {
+        let (i0, k, level, v, kp, c1, c2) = (20.0, 0.1, 10.0, 2.0, 4.0, 0.3, 2.0);
+        let o = radial_exp_p_orbit(i0, k, level, v, kp, c1, c2).unwrap();
+        let f = |d: f64| i0 * libm::exp(-k * d);
+        let residual = c1 * libm::tanh((f(o.radius_m) - level) / c2) + v / (kp * o.radius_m);
+        assert!(residual.abs() < 1e-12, "{residual}");
+        assert!(o.radius_m > libm::log(2.0) / k);
+        assert!((o.error - (f(o.radius_m) - level)).abs() < 1e-12);
+        for (v, kp, c1, c2) in [
+            (0.0, 4.0, 0.3, 2.0),
+            (2.0, 0.0, 0.3, 2.0),
+            (2.0, 4.0, 0.0, 2.0),
+            (2.0, 4.0, 0.3, 0.0),
+        ] {
+            assert!(
+                radial_exp_p_orbit(i0, k, level, v, kp, c1, c2).is_none(),
+                "{v} {kp} {c1} {c2}"
+            );
+        }
+    }
+}
+
+#[cfg(test)]
 mod prop2_tests {
     use super::*;
 
@@ -417,5 +456,47 @@ mod prop2_tests {
         };
         // v*gamma1 = 0.05 < c1 = 0.2 at any phi.
         assert!(prop2_min_kp(&b, 0.5, 0.2, 1.0, 0.3).is_none());
+    }
+
+    /// At the edges of Prop. 2's conditions the terms do not exist: no angle margin
+    /// (`sin(phi) = 0`), no gradient (`gamma1 = 0`), or a surface exactly unreachable
+    /// (`v gamma1 cos(phi) = c1`).
+    #[test]
+    fn prop2_terms_vanish_at_the_edges() {
+        let b = FieldBounds {
+            gamma1: 0.5,
+            gamma2: 1.0,
+            gamma3: 0.1,
+        };
+        assert!(prop2_terms(&b, 1.0, 0.1, 1.0, 0.0).is_none());
+        let flat = FieldBounds { gamma1: 0.0, ..b };
+        assert!(prop2_terms(&flat, 1.0, -0.1, 1.0, 0.5).is_none());
+        let phi = 0.5;
+        let c1 = 1.0 * b.gamma1 * crate::fmath::sincos(phi).1;
+        assert!(prop2_terms(&b, 1.0, c1, 1.0, phi).is_none());
+        assert!(prop2_terms(&b, 1.0, 0.9 * c1, 1.0, phi).is_some());
+    }
+
+    /// The printed bound needs `kp` strictly above the printed minimum: at the minimum (here
+    /// the first term, `k1 > k2`) and just below it there is no bound.
+    #[test]
+    fn printed_bound_needs_kp_above_its_minimum() {
+        // A surface barely reachable (v gamma1 cos(phi) = 0.439 just above c1 = 0.42):
+        // k1 = gamma3 v/(gamma1 s (v gamma1 c - c1)) dominates.
+        let b = FieldBounds {
+            gamma1: 0.5,
+            gamma2: 0.6,
+            gamma3: 0.2,
+        };
+        let (v, c1, c2, phi) = (1.0, 0.42, 1.0, 0.5);
+        let (k1, k2) = prop2_terms(&b, v, c1, c2, phi).unwrap();
+        assert!(k1 > k2, "{k1} {k2}");
+        let (min, _) = prop2_paper_min_kp(&b, v, 100.0, c1, c2, phi);
+        assert_eq!(min, Some(k1));
+        assert_eq!(prop2_paper_min_kp(&b, v, k1, c1, c2, phi).1, None);
+        assert_eq!(prop2_paper_min_kp(&b, v, 0.99 * k1, c1, c2, phi).1, None);
+        let (_, bound) = prop2_paper_min_kp(&b, v, 2.0 * k1, c1, c2, phi);
+        let want = libm::atanh(k2 / (2.0 * k1));
+        assert!((bound.unwrap() - want).abs() < 1e-15);
     }
 }

@@ -82,4 +82,31 @@ mod tests {
     fn telemetry_defaults_to_none() {
         assert_eq!(Still.telemetry(&()), None);
     }
+
+    /// A point moving along x at the commanded rate (state: its x, m).
+    struct Slider;
+    impl Vehicle for Slider {
+        type State = f64;
+        fn step(&self, x: &mut f64, omega_radps: f64, dt_s: f64) {
+            *x += omega_radps * dt_s;
+        }
+        fn pose(&self, x: &f64) -> Pose2 {
+            Pose2 {
+                position: Vec2::new(*x, -1.0),
+                heading_rad: 0.0,
+            }
+        }
+        fn speed_mps(&self, _: &f64) -> f64 {
+            1.0
+        }
+    }
+
+    /// The defaults: `position` is the pose's, `step_lanes` steps each state with its command.
+    #[test]
+    fn default_position_and_lane_step() {
+        assert_eq!(Slider.position(&2.5), Vec2::new(2.5, -1.0));
+        let mut xs = [0.0, 1.0, -2.0];
+        Slider.step_lanes(&mut xs, &[1.0, -3.0, 0.5], 0.5);
+        assert_eq!(xs, [0.5, -0.5, -1.75]);
+    }
 }

@@ -487,6 +487,54 @@ mod tests {
         assert!((w - 0.5 * 0.1).abs() < 1e-12, "{w}");
     }
 
+    /// The boundary-layer sliding mode by hand, inside and outside chi's linear zone:
+    /// `omega = U sat((s' + chi(eps))/phi)`, `chi = gamma eps` for `|eps| <= delta`, else
+    /// `gamma delta sgn(eps)` (gamma 0.3, delta 2, phi 0.5, U 0.8).
+    #[test]
+    fn smooth_sliding_mode_by_hand() {
+        let p = SlidingModeParams {
+            level: 10.0,
+            max_turn_rate_radps: 0.8,
+            gamma: 0.3,
+            delta: 2.0,
+            boundary_layer: Some(0.5),
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        // eps = -0.6, s' = 0.4: sigma = 0.4 - 0.18 = 0.22, omega = 0.8 * 0.44.
+        // eps = -3.5, s' = 0.5: sigma = 0.5 - 0.6 = -0.1, omega = 0.8 * -0.2.
+        for (v0, v1, want) in [(9.0, 9.4, 0.8 * 0.44), (6.0, 6.5, 0.8 * -0.2)] {
+            let mut c = SlidingMode::new(p);
+            c.update(&Measurement {
+                t_s: 0.0,
+                value: v0,
+            });
+            let w = c.update(&Measurement {
+                t_s: 1.0,
+                value: v1,
+            });
+            assert!((w - want).abs() < 1e-12, "{v0} -> {v1}: {w} vs {want}");
+        }
+    }
+
+    /// The suboptimal SOSM's first command: `alpha = 1` (no extremum yet), so
+    /// `omega = U sgn(sigma - sigma_M/2)` with `sigma_M = sigma`: the sign of the error.
+    #[test]
+    fn sosm_first_command_is_the_sign_of_the_error() {
+        let p = SuboptimalSosmParams {
+            level: 5.0,
+            max_turn_rate_radps: 0.6,
+            alpha_star: 0.5,
+            output: out(None),
+            derivative: DerivativeKind::BackwardDifference,
+        };
+        for (value, want) in [(4.0, -0.6), (8.0, 0.6)] {
+            let mut c = SuboptimalSosm::new(p);
+            let w = c.update(&Measurement { t_s: 0.0, value });
+            assert_eq!(w, want, "{value}");
+        }
+    }
+
     /// A PID on level 10 with kp 2, ki 0.5, kd 3, no limit, backward difference.
     fn pid_params() -> PidParams {
         PidParams {
