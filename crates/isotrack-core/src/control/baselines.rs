@@ -535,6 +535,65 @@ mod tests {
         }
     }
 
+    /// PID-with-crossing's kick by hand: no PID gains, a crossing from below at t = 0.1 s
+    /// turns at 0.5 rad/s (towards the lower side, `+`) until 0.32 rad are done: the six
+    /// samples 0.1 .. 0.6 s (0.05 rad each), then nothing; after `reset` the same again.
+    #[test]
+    fn crossing_kick_by_hand() {
+        let mut p = pid_params();
+        (p.kp, p.ki, p.kd) = (0.0, 0.0, 0.0);
+        let mut c = PidCrossing::new(PidCrossingParams {
+            pid: p,
+            crossing_angle_rad: 0.32,
+            crossing_period_s: 20.0,
+            turn_rate_radps: 0.5,
+        });
+        let want = [0.0, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.0, 0.0, 0.0];
+        for _ in 0..2 {
+            let mut got = [f64::NAN; 10];
+            for (k, g) in got.iter_mut().enumerate() {
+                let value = if k == 0 { 9.0 } else { 11.0 };
+                *g = c.update(&Measurement {
+                    t_s: 0.1 * k as f64,
+                    value,
+                });
+            }
+            assert_eq!(got, want);
+            c.reset();
+        }
+    }
+
+    /// The gradient-reference law by hand in general position (every term non-zero): gradient (6, 8), Hessian
+    /// [[2, 0.5], [0.5, 1]], value 25 on level 16, heading 1 rad, v = 1.5, ke = 0.5,
+    /// k_heading = 0.7: n = (0.6, 0.8), tau = (-0.8, 0.6), m = tau - 0.5 * 0.9 n = (-1.07, 0.24),
+    /// tau^T H tau = 1.16, omega = 1.5 * 1.16/10 - 0.7 * wrap(1 - atan2(0.24, -1.07)).
+    #[test]
+    fn gradient_reference_in_general_position() {
+        let mut c = GradientReference::new(GradientReferenceParams {
+            level: 16.0,
+            ke: 0.5,
+            k_heading: 0.7,
+            output: out(None),
+        });
+        let truth = GroundTruth {
+            pose: crate::math::Pose2 {
+                position: Vec2::new(3.0, 4.0),
+                heading_rad: 1.0,
+            },
+            speed_mps: 1.5,
+            value: 25.0,
+            derivatives: Some((Vec2::new(6.0, 8.0), [[2.0, 0.5], [0.5, 1.0]])),
+        };
+        let m = Measurement {
+            t_s: 0.0,
+            value: 25.0,
+        };
+        let err = 1.0 - libm::atan2(0.24, -1.07);
+        let want = 1.5 * 1.16 / 10.0 - 0.7 * err;
+        let got = c.update_with_truth(&m, &truth);
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
+
     /// A PID on level 10 with kp 2, ki 0.5, kd 3, no limit, backward difference.
     fn pid_params() -> PidParams {
         PidParams {
