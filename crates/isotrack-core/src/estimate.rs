@@ -218,6 +218,11 @@ mod tests {
         let mut still = DerivativeEstimator::new(DerivativeKind::Levant { lipschitz: l });
         still.update(0.0, 2.0);
         assert_eq!(still.update(0.5, 2.0), 0.0);
+        // With z0 on the sample exactly (err = 0), z1 holds: z0 = 1 + 0.5 * 1.5 = 1.75 above.
+        let mut e = DerivativeEstimator::new(DerivativeKind::Levant { lipschitz: l });
+        e.update(0.0, 1.0);
+        let z1 = e.update(0.5, 1.25);
+        assert_eq!(e.update(1.0, 1.75), z1);
         // ... and from rest it answers the next move (err = 2 - 3 = -1: z1 = 0.5 * 1.1 L).
         assert_relative_eq!(still.update(1.0, 3.0), 0.5 * 1.1 * l, epsilon = 1e-14);
     }
