@@ -355,6 +355,19 @@ mod prop1_by_hand_tests {
 
     /// The P-law's orbit solves `c1 tanh((F(d) - s_d)/c2) + v/(kp d) = 0` (evaluated here with
     /// libm), outside the isoline; no orbit without speed or gains.
+    /// With `ki = 0` both `a2 = kp alpha v` and `a1` must be positive: a small negative `kp`
+    /// leaves `a1 = alpha v kp c1/c2 + v^2/r^2` positive but `a2` negative: unstable.
+    #[test]
+    fn p_law_needs_both_coefficients_positive() {
+        let (alpha, v, r, c1, c2) = (0.5, 1.0, 1.0, 0.2, 1.0);
+        let [a2, a1, _] = prop1_characteristic_polynomial(alpha, v, r, -0.01, 0.0, c1, c2);
+        assert!(a2 < 0.0 && a1 > 0.0, "{a2} {a1}");
+        assert!(!prop1_exact_local_condition(
+            alpha, v, r, -0.01, 0.0, c1, c2
+        ));
+        assert!(prop1_exact_local_condition(alpha, v, r, 0.01, 0.0, c1, c2));
+    }
+
     #[test]
     fn p_orbit_solves_its_equation() {
         let (i0, k, level, v, kp, c1, c2) = (20.0, 0.1, 10.0, 2.0, 4.0, 0.3, 2.0);

@@ -201,6 +201,8 @@ mod tests {
         };
         // Leg 20 s, turn rate 0.5 rad/s for 2*pi s.
         assert_eq!(p.turn_rate_radps(10.0), 0.0);
+        // The turn starts at the leg's end exactly (20 s).
+        assert_eq!(p.turn_rate_radps(20.0), 0.5);
         assert_eq!(p.turn_rate_radps(21.0), 0.5);
         let period = 20.0 + 2.0 * core::f64::consts::PI;
         assert_eq!(p.turn_rate_radps(period + 1.0), 0.0);
@@ -244,5 +246,50 @@ mod tests {
         assert_eq!(s.update(&m(3.0, 3.0)), -3.0, "stays handed over");
         s.reset();
         assert_eq!(s.update(&m(4.0, 3.0)), 0.7);
+    }
+
+    /// A law that flies on ground truth (its command: ten times the true speed).
+    struct Truthy;
+    impl IsolineController for Truthy {
+        fn update(&mut self, _m: &Measurement) -> f64 {
+            0.0
+        }
+        fn reset(&mut self) {}
+        fn needs_ground_truth(&self) -> bool {
+            true
+        }
+        fn update_with_truth(&mut self, _m: &Measurement, t: &GroundTruth) -> f64 {
+            10.0 * t.speed_mps
+        }
+    }
+
+    /// The search asks for ground truth when its law does, and hands the truth to it once it has
+    /// handed over (before that it flies its pattern).
+    #[test]
+    fn ground_truth_passes_through_to_the_law() {
+        let pattern = SearchPattern::Spiral {
+            spacing_m: 1.0,
+            speed_mps: 1.0,
+            max_turn_rate_radps: 0.7,
+        };
+        let params = SearchParams {
+            pattern,
+            handover_delta: 0.5,
+        };
+        assert!(!Search::new(Echo, params).needs_ground_truth());
+        let mut s = Search::new(Truthy, params);
+        assert!(s.needs_ground_truth());
+        let truth = GroundTruth {
+            pose: crate::math::Pose2 {
+                position: crate::math::Vec2::new(0.0, 0.0),
+                heading_rad: 0.0,
+            },
+            speed_mps: 0.25,
+            value: 3.0,
+            derivatives: None,
+        };
+        let m = |t_s, value| Measurement { t_s, value };
+        assert_eq!(s.update_with_truth(&m(0.0, 3.0), &truth), 0.7);
+        assert_eq!(s.update_with_truth(&m(1.0, 2.0), &truth), 2.5);
     }
 }
