@@ -507,3 +507,57 @@ impl Scenario {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::parse_scenario;
+    use isotrack_core::control::{IsolineController, Measurement};
+
+    /// Samples that wind up a law's state (the PI-like law's integral, the estimator's memory).
+    fn wind_up(c: &mut impl IsolineController) -> f64 {
+        let mut last = 0.0;
+        for k in 0..20 {
+            last = c.update(&Measurement {
+                t_s: 0.1 * k as f64,
+                value: 7.0 + 0.05 * k as f64,
+            });
+        }
+        last
+    }
+
+    /// `reset` brings the law (alone, or behind a search) back to rest: the same answers as a
+    /// fresh one.
+    #[test]
+    fn controllers_reset_to_rest() {
+        for text in [
+            "",
+            "[controller]\nsearch = \"spiral\"\nsearch_handover = 0.1\n",
+        ] {
+            let s = parse_scenario(text, "<test>", &[]).unwrap();
+            let fresh = wind_up(&mut s.tracker());
+            let mut t = s.tracker();
+            wind_up(&mut t);
+            t.reset();
+            assert_eq!(wind_up(&mut t), fresh, "{text}");
+            let fresh = wind_up(&mut s.controller());
+            let mut c = s.controller();
+            wind_up(&mut c);
+            c.reset();
+            assert_eq!(wind_up(&mut c), fresh, "{text}");
+        }
+    }
+
+    /// The convergence dwell defaults to 10 % of the run.
+    #[test]
+    fn convergence_dwell_defaults_to_a_tenth_of_the_run() {
+        let s = parse_scenario("[sim]\nduration_s = 50.0\n", "<test>", &[]).unwrap();
+        assert_eq!(s.convergence_min_dwell_s(), 5.0);
+        let s = parse_scenario(
+            "[sim]\nduration_s = 50.0\n[metrics]\nconvergence_min_dwell_s = 7.0\n",
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        assert_eq!(s.convergence_min_dwell_s(), 7.0);
+    }
+}
