@@ -288,3 +288,22 @@ fn prop2_gammas_and_bound_match_the_circular_closed_forms() {
     // And it covers the exact P-law orbit error, |eps*| = 0.0359 (baselines.md section 0).
     assert!(bound > 0.0359 && steady_max(&s) <= bound);
 }
+
+/// Prop. 2's note on the start's heading appears exactly when the conditions hold but the heading
+/// lies outside the proposition's sector `[-pi + phi, -phi]` (relative to the gradient).
+#[test]
+fn prop2_notes_a_heading_outside_the_sector_only() {
+    for heading in ["-1.5707963267948966", "1.5707963267948966"] {
+        let s = sc(
+            "",
+            &["controller.ki=0", &format!("initial.heading_rad={heading}")],
+        );
+        let r = check(&s, None).prop2;
+        assert!(r.conditions_hold, "{heading}");
+        // From (10, 0) the gradient points to the centre: south (-pi/2) is the tangent the law
+        // turns onto, north (+pi/2) the opposite one.
+        let inside = heading.starts_with('-');
+        assert_eq!(r.initial_heading_in_sector, Some(inside), "{heading}");
+        assert_eq!(r.note.contains("sector"), !inside, "{heading}: {}", r.note);
+    }
+}

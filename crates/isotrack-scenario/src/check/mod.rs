@@ -740,3 +740,22 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         sampled,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The slope range: from the 5th percentile (index `(n - 1) * 5 / 100` of the sorted finite
+    /// positive slopes) to the largest; none without a positive slope.
+    #[test]
+    fn slope_range_is_the_5th_percentile_to_the_max() {
+        // 20 slopes 1..20 (shuffled, with a NaN, a zero and a negative one left out): index 0.
+        let mut slopes: Vec<f64> = (1..=20).rev().map(f64::from).collect();
+        slopes.extend([f64::NAN, 0.0, -3.0]);
+        assert_eq!(slope_range(slopes), Some([1.0, 20.0]));
+        // 101 slopes 1..101: index 5.
+        let slopes: Vec<f64> = (1..=101).map(f64::from).collect();
+        assert_eq!(slope_range(slopes), Some([6.0, 101.0]));
+        assert_eq!(slope_range(vec![0.0, -1.0, f64::NAN]), None);
+    }
+}
