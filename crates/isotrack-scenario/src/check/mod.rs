@@ -758,4 +758,39 @@ mod tests {
         assert_eq!(slope_range(slopes), Some([6.0, 101.0]));
         assert_eq!(slope_range(vec![0.0, -1.0, f64::NAN]), None);
     }
+
+    /// The sampled region per field kind, by its rule: a puff plume's reach downwind
+    /// (`|wind| max_age + 4 sigma0 + 10` = 72 m by default) round the source; three isoline radii
+    /// round a radial field's centre (`ln 2 / 0.1` m); four widths round each plume; 100 m round
+    /// the start for a ramp; each grown to hold the start (10, 0) with its margin; the domain
+    /// when there is one.
+    #[test]
+    fn region_by_field_kind() {
+        let r = |text: &str| region(&crate::parse_scenario(text, "<test>", &[]).unwrap());
+        assert_eq!(
+            r("[field]\nkind = \"puff_plume\"\n"),
+            [-72.0, 72.0, -72.0, 72.0]
+        );
+        assert_eq!(
+            r("[field]\nkind = \"puff_plume\"\n[initial]\nx_m = 70.0\n"),
+            [-72.0, 80.0, -72.0, 72.0]
+        );
+        let rd = 3.0 * std::f64::consts::LN_2 / 0.1;
+        let got = r("");
+        for (g, w) in got.iter().zip([-rd, rd, -rd, rd]) {
+            assert!((g - w).abs() < 1e-12, "{got:?}");
+        }
+        assert_eq!(
+            r("[field]\nkind = \"gaussian_plumes\"\n"),
+            [-48.0, 54.0, -48.0, 48.0]
+        );
+        assert_eq!(
+            r("[field]\nkind = \"linear_ramp\"\n"),
+            [-90.0, 110.0, -100.0, 100.0]
+        );
+        assert_eq!(
+            r("[field]\ndomain_m = [-50.0, 40.0, -30.0, 20.0]\n"),
+            [-50.0, 40.0, -30.0, 20.0]
+        );
+    }
 }
