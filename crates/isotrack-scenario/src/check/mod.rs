@@ -793,4 +793,38 @@ mod tests {
             [-50.0, 40.0, -30.0, 20.0]
         );
     }
+
+    /// Slopes spread geometrically; a single slope when the range is empty or one is asked.
+    #[test]
+    fn spread_is_geometric() {
+        let got = spread([1.0, 100.0], 3);
+        assert_eq!(got.len(), 3);
+        for (g, w) in got.iter().zip([1.0, 10.0, 100.0]) {
+            assert!((g - w).abs() < 1e-12 * w, "{got:?}");
+        }
+        assert_eq!(spread([5.0, 5.0], 4), [5.0]);
+        assert_eq!(spread([1.0, 2.0], 1), [2.0]);
+    }
+
+    /// The curvature the sampled check uses: `1/r_d` of a circular field (`0.1/ln 2` by
+    /// default), 0 otherwise; and the P law that cannot hold that turn (`v kappa >= kp c1`) is
+    /// said to have no equilibrium.
+    #[test]
+    fn curvature_and_the_p_law_turn() {
+        let sc = |text: &str, sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            crate::parse_scenario(text, "<test>", &sets).unwrap()
+        };
+        let k = curvature(&sc("", &[]));
+        assert!((k - 0.1 / std::f64::consts::LN_2).abs() < 1e-12, "{k}");
+        assert_eq!(
+            curvature(&sc("[field]\nkind = \"gaussian_plumes\"\n", &[])),
+            0.0
+        );
+        // v kappa = 0.072 against kp c1 = 0.06 (kp 0.3) and 2 (kp 10).
+        let weak = check(&sc("", &["controller.ki=0", "controller.kp=0.3"]), None).sampled;
+        assert!(weak.note.contains("no equilibrium"), "{}", weak.note);
+        let strong = check(&sc("", &["controller.ki=0"]), None).sampled;
+        assert!(!strong.note.contains("no equilibrium"), "{}", strong.note);
+    }
 }
