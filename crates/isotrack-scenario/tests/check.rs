@@ -307,3 +307,73 @@ fn prop2_notes_a_heading_outside_the_sector_only() {
         assert_eq!(r.note.contains("sector"), !inside, "{heading}: {}", r.note);
     }
 }
+
+/// The verdict and its reason, one scenario per branch: Prop. 1 on the circular field; Prop. 2's
+/// bound on a ramp from a start heading into its sector (west: `phi0 = -pi/2`); the same ramp
+/// from a heading outside it; a field neither covers; a baseline law; a loop the sensor's rate
+/// makes unstable.
+#[test]
+fn verdicts_by_branch() {
+    use isotrack_scenario::check::Verdict;
+    let ramp = "[field]\nkind = \"linear_ramp\"\n";
+    for (text, sets, verdict, reason) in [
+        (
+            "",
+            vec![],
+            Verdict::Holds,
+            "Prop. 1's exact condition holds",
+        ),
+        (
+            ramp,
+            vec!["controller.ki=0", "initial.heading_rad=3.141592653589793"],
+            Verdict::Holds,
+            "Prop. 2's bound applies",
+        ),
+        (
+            ramp,
+            vec!["controller.ki=0", "initial.heading_rad=-2.356"],
+            Verdict::NotApplicable,
+            "Prop. 2's conditions hold but its bound is not proved from this start",
+        ),
+        (
+            "[field]\nkind = \"gaussian_plumes\"\n",
+            vec![],
+            Verdict::NotApplicable,
+            "Prop. 1 is for circular fields and Prop. 2's conditions do not hold",
+        ),
+        (
+            "",
+            vec!["controller.kind=sliding_mode"],
+            Verdict::NotApplicable,
+            "the propositions are for the PI-like law",
+        ),
+        (
+            "",
+            vec!["sensor.rate_hz=1", "controller.kp=50"],
+            Verdict::Fails,
+            "is unstable (spectral radius",
+        ),
+    ] {
+        let r = check(&sc(text, &sets), None);
+        assert_eq!(r.verdict, verdict, "{text} {sets:?}: {}", r.verdict_reason);
+        assert!(r.verdict_reason.contains(reason), "{}", r.verdict_reason);
+    }
+    // A baseline law is outside both propositions (not a failed Prop. 1).
+    let sm = check(&sc("", &["controller.kind=sliding_mode"]), None);
+    assert!(!sm.prop1.applicable && !sm.prop2.applicable);
+}
+
+/// Noise through a raw backward difference is warned about, with the derivative's noise
+/// `sqrt(2) noise_std rate` (0.1 at 100 Hz: 14.1); not with a filtered estimator or no noise.
+#[test]
+fn noise_through_a_backward_difference_is_warned_about() {
+    let w = check(&sc("", &["sensor.noise_std=0.1"]), None).warnings;
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("1.414e1"), "{}", w[0]);
+    let filtered = [
+        "sensor.noise_std=0.1",
+        "controller.derivative=filtered_difference",
+    ];
+    assert!(check(&sc("", &filtered), None).warnings.is_empty());
+    assert!(check(&sc("", &[]), None).warnings.is_empty());
+}

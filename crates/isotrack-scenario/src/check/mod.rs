@@ -276,6 +276,16 @@ fn speed_mps(s: &Scenario) -> f64 {
         .unwrap_or(0.0)
 }
 
+/// Whether the scenario flies the paper's PI-like law (the propositions and the sampled check
+/// are about it; the baselines have their own conditions, [`baselines`]).
+fn is_pi_isoline(s: &Scenario) -> bool {
+    s.file()
+        .controller
+        .kind
+        .unwrap_or(ControllerKind::PiIsoline)
+        == ControllerKind::PiIsoline
+}
+
 fn law(s: &Scenario) -> Law {
     let f = s.file();
     let c = &f.controller;
@@ -290,6 +300,11 @@ fn law(s: &Scenario) -> Law {
 
 fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
     let f = s.file();
+    if !is_pi_isoline(s) {
+        return Prop1Report::not_applicable(
+            "Prop. 1 is for the PI-like law (controller.kind = \"pi_isoline\")".into(),
+        );
+    }
     let level = s.level();
     let (v, kp, ki, c1, c2) = (l.v, l.kp, l.ki, l.c1, l.c2);
     match (f.field.kind, s.field()) {
@@ -379,7 +394,7 @@ fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> Sampl
         rate_is_the_limit: None,
         note: String::new(),
     };
-    if f.controller.kind.unwrap_or(ControllerKind::PiIsoline) != ControllerKind::PiIsoline {
+    if !is_pi_isoline(s) {
         rep.note =
             "the sampled-data check models the PI-like law (controller.kind = \"pi_isoline\")"
                 .into();
@@ -509,7 +524,7 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
         .map(|k| k as f64 * std::f64::consts::FRAC_PI_2 / 1000.0)
         .collect();
     let mut rep = Prop2Report {
-        applicable: ki == 0.0,
+        applicable: ki == 0.0 && is_pi_isoline(s),
         tube_halfwidth: tube,
         region_levels: r.levels,
         samples_in_region: r.region.map_or(0, |b| b.points),
@@ -533,7 +548,11 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
         note: String::new(),
     };
     let mut notes = vec![];
-    if !rep.applicable {
+    if !is_pi_isoline(s) {
+        notes.push(
+            "Prop. 2 is for the PI-like law (controller.kind = \"pi_isoline\"); the field's bounds are reported for the baselines' conditions".to_string(),
+        );
+    } else if !rep.applicable {
         notes
             .push("Prop. 2 is stated for ki = 0; the numbers are for the P part alone".to_string());
     }
