@@ -370,6 +370,9 @@ fn noise_through_a_backward_difference_is_warned_about() {
     let w = check(&sc("", &["sensor.noise_std=0.1"]), None).warnings;
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(w[0].contains("1.414e1"), "{}", w[0]);
+    // `run` prints the same (the quick check behind it).
+    let quick = isotrack_scenario::check::warnings(&sc("", &["sensor.noise_std=0.1"]));
+    assert_eq!(quick, w);
     let filtered = [
         "sensor.noise_std=0.1",
         "controller.derivative=filtered_difference",

@@ -762,3 +762,24 @@ fn switched_to_carries_the_shared_keys_only() {
         assert!(resolve(f).is_ok(), "{kind:?}");
     }
 }
+
+/// A start outside the field's domain names the coordinate that is out (both: `x`).
+#[test]
+fn a_start_outside_the_domain_names_its_coordinate() {
+    let domain = "[field]\ndomain_m = [-20.0, 20.0, -20.0, 20.0]\n";
+    for (start, key) in [
+        ("x_m = 10.0\ny_m = 30.0", Some("initial.y_m")),
+        ("x_m = 30.0\ny_m = 0.0", Some("initial.x_m")),
+        ("x_m = 30.0\ny_m = 30.0", Some("initial.x_m")),
+        ("x_m = 20.0\ny_m = -20.0", None),
+    ] {
+        let text = format!("{domain}[initial]\n{start}\n");
+        let got = isotrack_scenario::parse_scenario(&text, "<test>", &[]);
+        let keys: Vec<Option<String>> = match &got {
+            Ok(_) => vec![],
+            Err(e) => e.issues().iter().map(|i| i.key.clone()).collect(),
+        };
+        let want: Vec<Option<String>> = key.iter().map(|k| Some(k.to_string())).collect();
+        assert_eq!(keys, want, "{start}");
+    }
+}
