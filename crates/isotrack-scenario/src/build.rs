@@ -547,6 +547,24 @@ mod tests {
         }
     }
 
+    /// Only the gradient-reference law flies on ground truth, with or without a search.
+    #[test]
+    fn only_the_gradient_reference_law_needs_ground_truth() {
+        for (text, wants) in [
+            ("", false),
+            ("[controller]\nsearch = \"spiral\"\n", false),
+            ("[controller]\nkind = \"gradient_reference\"\n", true),
+            (
+                "[controller]\nkind = \"gradient_reference\"\nsearch = \"spiral\"\n",
+                true,
+            ),
+        ] {
+            let s = parse_scenario(text, "<test>", &[]).unwrap();
+            assert_eq!(s.tracker().needs_ground_truth(), wants, "{text}");
+            assert_eq!(s.controller().needs_ground_truth(), wants, "{text}");
+        }
+    }
+
     /// The convergence dwell defaults to 10 % of the run.
     #[test]
     fn convergence_dwell_defaults_to_a_tenth_of_the_run() {
