@@ -563,6 +563,14 @@ mod tests {
                 .message
                 .contains("random.k")
         );
+        for dist in ["uniform = [1, 1]", "normal = [0, -1]", "uniform = [0, inf]"] {
+            let e = plan(&format!(
+                "scenario = \"x\"\n[random]\nruns = 2\nk = {{ {dist} }}\n"
+            ))
+            .unwrap_err();
+            assert!(e.message.contains("random.k"), "{dist}: {e}");
+        }
+        assert!(plan("scenario = \"x\"\n[random]\nruns = 2\nk = { normal = [0, 0] }\n").is_ok());
         assert!(
             plan("scenario = \"x\"\n[random]\nk = { normal = [0, 1] }\n")
                 .unwrap_err()

@@ -783,3 +783,23 @@ fn a_start_outside_the_domain_names_its_coordinate() {
         assert_eq!(keys, want, "{start}");
     }
 }
+
+/// Numbers in messages: plain when ordinary, scientific when huge or tiny (a value of 1e300 is
+/// not echoed as 301 digits).
+#[test]
+fn numbers_in_messages_stay_short() {
+    for (text, shown) in [
+        ("[initial]\nx_m = 1e300\n", "got 1e300"),
+        ("[controller]\nkp = 0.0\n", "got 0"),
+        ("[controller]\nkp = -0.5\n", "got -0.5"),
+        ("[sensor]\nnoise_std = -1e-7\n", "got -1e-7"),
+    ] {
+        let issues = resolved(text).unwrap_err();
+        assert!(
+            issues[0].message.contains(shown),
+            "{text}: {}",
+            issues[0].message
+        );
+        assert!(issues[0].message.len() < 120, "{}", issues[0].message);
+    }
+}
