@@ -299,6 +299,22 @@ pub fn max_period_s(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
 mod tests {
     use super::*;
 
+    /// The tanh's slope at the equilibrium: 1 with an integral or on a straight isoline; with
+    /// the P law on a curve `1 - q^2`, `q = v kappa/(kp c1)` (0.5 * 0.1/(1 * 0.2) = 0.25 gives
+    /// 0.9375); no orbit from `q = 1` on (0.5 * 0.4 = 1 * 0.2 exactly).
+    #[test]
+    fn tanh_slope_at_the_p_laws_orbit() {
+        let p = |curvature_per_m: f64, ki: f64| SampledLoop {
+            curvature_per_m,
+            ..dubins(1.0, ki, 0.01)
+        };
+        assert_eq!(p(0.1, 0.0).tanh_slope(), Some(0.9375));
+        assert_eq!(p(0.1, 1.0).tanh_slope(), Some(1.0));
+        assert_eq!(p(0.0, 0.0).tanh_slope(), Some(1.0));
+        assert_eq!(p(0.4, 0.0).tanh_slope(), None);
+        assert_eq!(p(-0.1, 0.0).tanh_slope(), Some(0.9375));
+    }
+
     fn dubins(kp: f64, ki: f64, period_s: f64) -> SampledLoop {
         SampledLoop {
             speed_mps: 0.5,
