@@ -389,3 +389,23 @@ fn noise_through_a_backward_difference_is_warned_about() {
     assert!(check(&sc("", &filtered), None).warnings.is_empty());
     assert!(check(&sc("", &[]), None).warnings.is_empty());
 }
+
+/// The baselines' own conditions on the circular field (tube gradients about 0.9 .. 1.1, v = 0.5):
+/// the defaults' `mu = gamma delta = 0.2` is below `v min|grad F|`; `gamma = 1` puts it at 1,
+/// above, and the sliding mode is warned about by name (condition (a)); the paper's law has none.
+#[test]
+fn baseline_conditions_are_warned_by_name() {
+    use isotrack_scenario::check::baselines::baseline_warnings;
+    assert!(baseline_warnings(&sc("", &[])).is_empty());
+    assert!(baseline_warnings(&sc("", &["controller.kind=sliding_mode"])).is_empty());
+    let w = baseline_warnings(&sc(
+        "",
+        &["controller.kind=sliding_mode_smooth", "controller.gamma=1"],
+    ));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].starts_with("sliding_mode_smooth:") && w[0].contains("condition (a)"),
+        "{}",
+        w[0]
+    );
+}
