@@ -37,6 +37,15 @@ fn check(cases: &[(&str, &[&str])]) {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
+/// [`check`] for cases whose text is built (`format!`).
+fn check_built(cases: &[(String, Vec<&str>)]) {
+    let cases: Vec<(&str, &[&str])> = cases
+        .iter()
+        .map(|(t, v)| (t.as_str(), v.as_slice()))
+        .collect();
+    check(&cases);
+}
+
 /// The README's defaults: the paper's Fig. 2(b) setting (Table III gains, start (10, 0, -pi/2)).
 #[test]
 fn an_empty_file_resolves_to_the_documented_defaults() {
@@ -329,11 +338,7 @@ fn puff_plume_ranges() {
     .into_iter()
     .map(|(k, v)| (format!("{p}{k}\n"), v))
     .collect();
-    let cases: Vec<(&str, &[&str])> = cases
-        .iter()
-        .map(|(t, v)| (t.as_str(), v.as_slice()))
-        .collect();
-    check(&cases);
+    check_built(&cases);
 }
 
 #[test]
@@ -453,11 +458,7 @@ fn grid_and_stations_keys() {
             vec!["field.crop_cells"],
         ),
     ];
-    let cases: Vec<(&str, &[&str])> = text
-        .iter()
-        .map(|(t, v)| (t.as_str(), v.as_slice()))
-        .collect();
-    check(&cases);
+    check_built(&text);
 }
 
 #[test]
@@ -516,11 +517,7 @@ fn vehicle_ranges() {
         (format!("{fw}[sim]\ndt_s = 0.025\n"), vec!["sim.dt_s"]),
         ("[sim]\ndt_s = 0.05\n".into(), vec![]),
     ];
-    let cases: Vec<(&str, &[&str])> = text
-        .iter()
-        .map(|(t, v)| (t.as_str(), v.as_slice()))
-        .collect();
-    check(&cases);
+    check_built(&text);
 }
 
 #[test]
