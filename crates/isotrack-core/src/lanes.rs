@@ -38,6 +38,7 @@
 #![allow(clippy::excessive_precision)]
 
 mod exp2_table;
+use exp2_table::{EXP2_J, EXP2_J_TAIL};
 
 /// Rounds to the nearest integer (ties to even) by the 1.5 * 2^52 shift, returning the rounded
 /// value and its integer; valid for `|x| < 2^51`.
@@ -80,34 +81,72 @@ fn pow2i(k: i64) -> f64 {
 /// `|r| <= ln2/2`) and the scale factor is formed beside it, not after it.
 #[inline(always)]
 pub fn exp(x: f64) -> f64 {
-    use exp2_table::{EXP2_J, EXP2_J_TAIL};
+    let (p, j, m) = exp_reduced(x);
+    // Where the result and `scale * p` are normal (|m| <= 900, checked in `tests`), scaling by
+    // 2^m before the sum gives the same double as after it (exact either way), one multiply
+    // sooner: the loop's critical path runs through here. [`exp_lanes`] takes the other form
+    // everywhere, the same numbers.
+    let y = if (-900..=900).contains(&m) {
+        let scale = EXP2_J[j] * pow2i(m);
+        scale + scale * p
+    } else {
+        exp_scaled(p, j, m)
+    };
+    exp_special(x, y)
+}
+
+/// The reduction of [`exp`]: `x = (128 m + j) ln2/128 + r` (Cody-Waite with a 34-bit high part
+/// of `ln2/128`, so `|r| <= ln2/256`), and `p = e^r - 1 + tail_j` (the table's rounding
+/// error carried). Returns `(p, j, m)`; `e^x = 2^m EXP2_J[j] (1 + p)`.
+#[inline(always)]
+fn exp_reduced(x: f64) -> (f64, usize, i64) {
+    // Clamped so that the reduction and the scaling stay finite; the true over/underflow is
+    // selected at the end.
+    let xc = x.clamp(EXP_UNDER - 1.0, EXP_OVER);
     const N_INV_LN2: f64 = 184.664_965_233_787_3; // 128 / ln2
     const LN2_N_HI: f64 = 0.005_415_212_347_998_022; // ln2/128 to 34 bits: 0x1.62e42fef8p-8
     const LN2_N_LO: f64 = 1.265_508_608_332_543_8e-13; // ln2/128 - LN2_N_HI
-    const OVER: f64 = 7.097_827_128_933_839_730_96e2;
-    const UNDER: f64 = -7.451_332_191_019_412_076_24e2;
     const C2: f64 = 1.0 / 2.0;
     const C3: f64 = 1.0 / 6.0;
     const C4: f64 = 1.0 / 24.0;
     const C5: f64 = 1.0 / 120.0;
-    // Clamped so that the reduction and the scaling stay finite; the true over/underflow is
-    // selected at the end.
-    let xc = x.clamp(UNDER - 1.0, OVER);
     let (kf, k) = round_shift(xc * N_INV_LN2);
     // Exact: |k| < 2^18, so kf * LN2_N_HI has at most 52 bits, and it is within a factor 2 of xc.
     let r = (xc - kf * LN2_N_HI) - kf * LN2_N_LO;
     let j = (k & 127) as usize;
-    let m = k >> 7; // floor(k / 128)
-                    // 2^m in two halves, so that a subnormal result is rounded once, at the last product; the
-                    // first half goes into the scale, off the polynomial's path.
-    let m1 = m >> 1;
-    let scale = EXP2_J[j] * pow2i(m1);
     let r2 = r * r;
     // e^r - 1 + tail, Estrin: (tail + r) + r^2 (C2 + C3 r) + r^4 (C4 + C5 r).
     let p = (EXP2_J_TAIL[j] + r) + (r2 * (C2 + C3 * r) + (r2 * r2) * (C4 + C5 * r));
-    let y = (scale + scale * p) * pow2i(m - m1);
-    let y = if x > OVER { f64::INFINITY } else { y };
-    let y = if x < UNDER { 0.0 } else { y };
+    (p, j, k >> 7) // m = floor(k / 128)
+}
+
+/// `2^m EXP2_J[j] (1 + p)` for any `m` of [`exp_reduced`]: `2^m` in two halves, so that a
+/// subnormal result is rounded once, at the last product.
+#[inline(always)]
+fn exp_scaled(p: f64, j: usize, m: i64) -> f64 {
+    let m1 = m >> 1;
+    let scale = EXP2_J[j] * pow2i(m1);
+    (scale + scale * p) * pow2i(m - m1)
+}
+
+/// [`exp`] without its shortcut's branch (the same numbers): what a vectorised loop of lanes
+/// computes.
+#[inline(always)]
+fn exp_branch_free(x: f64) -> f64 {
+    let (p, j, m) = exp_reduced(x);
+    exp_special(x, exp_scaled(p, j, m))
+}
+
+/// Above this [`exp`] overflows to `inf`.
+const EXP_OVER: f64 = 7.097_827_128_933_839_730_96e2;
+/// Below this [`exp`] underflows to 0.
+const EXP_UNDER: f64 = -7.451_332_191_019_412_076_24e2;
+
+/// The special cases of [`exp`] selected over its value `y` for `x`: overflow, underflow, NaN.
+#[inline(always)]
+fn exp_special(x: f64, y: f64) -> f64 {
+    let y = if x > EXP_OVER { f64::INFINITY } else { y };
+    let y = if x < EXP_UNDER { 0.0 } else { y };
     if x.is_nan() {
         x
     } else {
@@ -163,7 +202,8 @@ fn tanh_small(x: f64) -> f64 {
 #[inline(always)]
 fn tanh_big(x: f64) -> f64 {
     // Above 22, 2/(e^(2a) + 1) < 2^-63: the answer is 1 (and e^(2a) may overflow).
-    let e = exp(2.0 * x.abs().min(22.0));
+    // Branch-free: `tanh_lanes` computes this form in every lane.
+    let e = exp_branch_free(2.0 * x.abs().min(22.0));
     let big = 1.0 - 2.0 / (e + 1.0);
     if x < 0.0 {
         -big
@@ -285,7 +325,7 @@ fn sin_cos_kernels(r: f64, y: f64) -> (f64, f64) {
 pub fn exp_lanes<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     for i in 0..N {
-        out[i] = exp(x[i]);
+        out[i] = exp_branch_free(x[i]);
     }
     out
 }
@@ -570,6 +610,20 @@ mod tests {
         }
         assert!(round(f64::NAN).is_nan());
         assert_eq!(round(f64::INFINITY), f64::INFINITY);
+    }
+
+    #[test]
+    fn exp_scales_alike_on_both_sides_of_its_shortcut() {
+        // The scalar exp scales before the sum for |m| <= 900 (|x| up to about 624), the lanes
+        // after it: the same doubles over the whole range, the edges of the shortcut included.
+        let edge = 900.0 * core::f64::consts::LN_2;
+        let mut xs = points(-745.2, 709.8, 100_000);
+        xs.extend(points(-edge - 0.01, -edge + 0.01, 2000));
+        xs.extend(points(edge - 0.01, edge + 0.01, 2000));
+        for x in xs {
+            assert_eq!(exp(x).to_bits(), exp_branch_free(x).to_bits(), "{x}");
+            assert_eq!(exp(x).to_bits(), exp_lanes([x])[0].to_bits(), "{x}");
+        }
     }
 
     #[test]

@@ -132,7 +132,14 @@ pub struct OutputStage {
 impl OutputStage {
     /// Applies the direction and the limit to the law's raw output `u` (written for
     /// [`HigherSide::Right`]).
+    #[inline]
     pub fn apply(&self, u: f64) -> f64 {
-        crate::math::saturate(self.higher_side.sign() * u, self.max_turn_rate_radps)
+        // `sign * u` as a choice between `u` and `-u` (the same number): no multiply on the
+        // loop's chain of dependent operations.
+        let directed = match self.higher_side {
+            HigherSide::Right => u,
+            HigherSide::Left => -u,
+        };
+        crate::math::saturate(directed, self.max_turn_rate_radps)
     }
 }

@@ -198,8 +198,14 @@ impl IsolineController for PiIsoline {
         let (eps, eps_dot) = self.error_and_rate(m);
         // eps * (1/c2): the reciprocal does not depend on the sample, so it is computed off
         // the step's chain of dependent operations, which then holds a multiply instead of a
-        // division (exact for the paper's c2 = 1; within an ulp of eps/c2 otherwise).
-        let e = eps_dot + self.params.c1 * crate::fmath::tanh(eps * (1.0 / self.params.c2));
+        // division (within an ulp of eps/c2). For the paper's c2 = 1 the multiply is skipped
+        // (it is exact there): a branch, not a select, so that it leaves the chain too.
+        let tanh_term = if self.params.c2 == 1.0 {
+            crate::fmath::tanh(eps)
+        } else {
+            crate::fmath::tanh(eps * (1.0 / self.params.c2))
+        };
+        let e = eps_dot + self.params.c1 * tanh_term;
         self.integrate_and_command(m, eps, e)
     }
 
