@@ -18,8 +18,9 @@
 //! Algorithms: `exp` as in ARM's optimized-routines (Szabolcs Nagy): Cody-Waite reduction
 //! `x = k ln2/128 + r`, a 128-entry table of `2^(j/128)` with its rounding error, and the
 //! Taylor polynomial of degree 5 on `|r| <= ln2/256` (no division). The rest as in FreeBSD's
-//! msun (Sun's fdlibm, K. C. Ng et al.): `sin_cos` by Cody-Waite reduction modulo `pi/2` (three 33-bit
-//! parts of `pi/2`) and the `__kernel_sin` / `__kernel_cos` polynomials; `tanh` by its Taylor
+//! msun (Sun's fdlibm, K. C. Ng et al.): `sin_cos` by Cody-Waite reduction modulo `pi/2`
+//! (three 33-bit parts of `pi/2`) and the `__kernel_sin` / `__kernel_cos` polynomials
+//! (`sin_cos_small_angle`, for a step's turn angle, by the Taylor series below `2^-5`); `tanh` by its Taylor
 //! series to `x^5` below `|x| = 2^-10`, Cephes' rational approximation below `|x| = 0.625`
 //! (S. L. Moshier, Cephes Math Library, `tanh.c`) and `1 - 2/(exp(2|x|) + 1)` above. The
 //! polynomials on the simulation step's critical path (`exp`'s, the sine and cosine kernels')
@@ -220,9 +221,7 @@ const SINCOS_MAX: f64 = 8.234_496e5; // 2^19 * pi/2
 #[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     let a = x.abs();
-    if a < SINCOS_SMALL {
-        sin_cos_small(x)
-    } else if a <= core::f64::consts::FRAC_PI_4 {
+    if a <= core::f64::consts::FRAC_PI_4 {
         // No reduction (k = 0, no low part): the numbers of the reduced path, sooner.
         sin_cos_kernels(x, 0.0)
     } else if a > SINCOS_MAX {
@@ -261,8 +260,19 @@ fn sin_cos_reduced(x: f64) -> (f64, f64) {
     (s, c)
 }
 
-/// Below this `|x|`, [`sin_cos`] is [`sin_cos_small`]: the Dubins step's half turn angle
-/// `omega dt / 2` is there on every step of a tracking run.
+/// `(sin x, cos x)` for an angle that is nearly always below `2^-5` in magnitude, such as a
+/// step's turn angle `omega dt / 2`: there by [`sin_cos_small`] (a third of the operations and
+/// half the chain of dependent ones), elsewhere [`sin_cos`]. Each within 1 ulp, as `sin_cos`.
+#[inline(always)]
+pub fn sin_cos_small_angle(x: f64) -> (f64, f64) {
+    if x.abs() < SINCOS_SMALL {
+        sin_cos_small(x)
+    } else {
+        sin_cos(x)
+    }
+}
+
+/// Below this `|x|`, [`sin_cos_small_angle`] is [`sin_cos_small`].
 const SINCOS_SMALL: f64 = 1.0 / 32.0;
 
 /// `(sin x, cos x)` for `|x| < 2^-5` by their Taylor series, `sin x = x + x^3 (-1/6 + x^2/120 -
@@ -353,21 +363,8 @@ pub fn tanh_lanes<const N: usize>(x: [f64; N]) -> [f64; N] {
 pub fn sin_cos_lanes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut s = [0.0; N];
     let mut c = [0.0; N];
-    if x.iter().all(|v| v.abs() < SINCOS_SMALL) {
-        // The common case of a turn angle: the short series alone.
-        for i in 0..N {
-            (s[i], c[i]) = sin_cos_small(x[i]);
-        }
-        return (s, c);
-    }
     for i in 0..N {
-        let small = sin_cos_small(x[i]);
-        let reduced = sin_cos_reduced(x[i]);
-        (s[i], c[i]) = if x[i].abs() < SINCOS_SMALL {
-            small
-        } else {
-            reduced
-        };
+        (s[i], c[i]) = sin_cos_reduced(x[i]);
     }
     // The rare lane beyond the Cody-Waite range: libm's full reduction, outside the vector loop.
     if x.iter().any(|v| v.abs() > SINCOS_MAX) {
@@ -376,6 +373,29 @@ pub fn sin_cos_lanes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
                 (s[i], c[i]) = libm::sincos(x[i]);
             }
         }
+    }
+    (s, c)
+}
+
+/// [`sin_cos_small_angle`] of each lane: when every lane is below `2^-5` (a batch of turn
+/// angles, nearly always) the short series alone, else each lane's own form.
+#[inline(always)]
+pub fn sin_cos_small_angle_lanes<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
+    let mut s = [0.0; N];
+    let mut c = [0.0; N];
+    if x.iter().all(|v| v.abs() < SINCOS_SMALL) {
+        for i in 0..N {
+            (s[i], c[i]) = sin_cos_small(x[i]);
+        }
+        return (s, c);
+    }
+    let (sr, cr) = sin_cos_lanes(x);
+    for i in 0..N {
+        (s[i], c[i]) = if x[i].abs() < SINCOS_SMALL {
+            sin_cos_small(x[i])
+        } else {
+            (sr[i], cr[i])
+        };
     }
     (s, c)
 }
@@ -588,8 +608,17 @@ mod tests {
             ds * 200 < xs.len() && dc * 200 < xs.len(),
             "{ds} sin, {dc} cos differ"
         );
-        assert_eq!(sin_cos(-0.0).0.to_bits(), (-0.0f64).to_bits());
-        assert_eq!(sin_cos(0.0), (0.0, 1.0));
+        assert_eq!(sin_cos_small_angle(-0.0).0.to_bits(), (-0.0f64).to_bits());
+        assert_eq!(sin_cos_small_angle(0.0), (0.0, 1.0));
+        // Above 2^-5, the general form.
+        assert_eq!(sin_cos_small_angle(0.04), sin_cos(0.04));
+        assert_eq!(sin_cos_small_angle(-3.0), sin_cos(-3.0));
+        // Within 1 ulp of libm on and around its range.
+        let sin = |x: f64| sin_cos_small_angle(x).0;
+        let cos = |x: f64| sin_cos_small_angle(x).1;
+        let xs = points(-0.04, 0.04, 200_000);
+        assert!(worst(sin, libm::sin, &xs).0 <= 1);
+        assert!(worst(cos, libm::cos, &xs).0 <= 1);
     }
 
     #[test]
@@ -645,28 +674,26 @@ mod tests {
                 );
             }
         }
-        // The scalar shortcuts: the series below 2^-5 (in lanes too when some lanes are above),
-        // and no reduction up to pi/4, the reduced path's arithmetic.
+        // Small angles in lanes: all below 2^-5, and mixed with larger ones.
+        let all_small = [0.01, -0.02, 1e-9, -0.0, 0.0312, 0.0, -0.031, 3e-4];
         let mixed = [0.01, 0.5, -0.02, 3.0, 1e-9, -0.0, 0.0312, 0.0313];
-        let (s, c) = sin_cos_lanes(mixed);
-        for i in 0..8 {
-            let (si, ci) = sin_cos(mixed[i]);
-            assert_eq!(
-                (s[i].to_bits(), c[i].to_bits()),
-                (si.to_bits(), ci.to_bits())
-            );
+        for xs8 in [all_small, mixed] {
+            let (s, c) = sin_cos_small_angle_lanes(xs8);
+            for i in 0..8 {
+                let (si, ci) = sin_cos_small_angle(xs8[i]);
+                assert_eq!(
+                    (s[i].to_bits(), c[i].to_bits()),
+                    (si.to_bits(), ci.to_bits())
+                );
+            }
         }
+        // The scalar shortcut (no reduction below pi/4) is the reduced path's arithmetic.
         for x in points(
             -core::f64::consts::FRAC_PI_4,
             core::f64::consts::FRAC_PI_4,
             10_000,
         ) {
-            let reduced = if x.abs() < SINCOS_SMALL {
-                sin_cos_small(x)
-            } else {
-                sin_cos_reduced(x)
-            };
-            let (a, b) = (sin_cos(x), reduced);
+            let (a, b) = (sin_cos(x), sin_cos_reduced(x));
             assert_eq!(
                 (a.0.to_bits(), a.1.to_bits()),
                 (b.0.to_bits(), b.1.to_bits()),

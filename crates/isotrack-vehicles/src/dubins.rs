@@ -60,7 +60,7 @@ impl Vehicle for Dubins {
         let (s1, c1) = lanes::sin_cos(s.heading_rad);
         // omega (dt/2): one multiply on the loop's chain instead of two; the same double as
         // (omega/2) dt, since halving is exact.
-        let (sa, ca) = lanes::sin_cos(omega_radps * (0.5 * dt_s));
+        let (sa, ca) = lanes::sin_cos_small_angle(omega_radps * (0.5 * dt_s));
         self.advance(s, omega_radps, dt_s, (s1, c1), (sa, ca));
     }
 
@@ -80,7 +80,7 @@ impl Vehicle for Dubins {
             half[i] = omega_radps[i] * (0.5 * dt_s);
         }
         let (s1, c1) = lanes::sin_cos_lanes(th);
-        let (sa, ca) = lanes::sin_cos_lanes(half);
+        let (sa, ca) = lanes::sin_cos_small_angle_lanes(half);
         for i in 0..N {
             self.advance(
                 &mut states[i],
