@@ -34,5 +34,11 @@ mkdir -p "$out"
 # The `mutants` profile (workspace Cargo.toml) builds every crate at full optimisation except the
 # mutated one, which is rebuilt once per mutant and so stays at opt-level 1: the end-to-end tests
 # spend their time in optimised code and each rebuild stays short.
+# With cargo-nextest the tests of a mutant stop at the first failure (and run across the
+# package's test binaries in parallel); without it, `cargo test` (doc tests included).
+tool=()
+if command -v cargo-nextest >/dev/null 2>&1; then
+  tool=(--test-tool=nextest)
+fi
 cargo mutants "${select[@]}" -j "${JOBS:-2}" --timeout "${TIMEOUT:-120}" -o "$out" --profile mutants \
-  --cargo-arg=--config --cargo-arg="profile.mutants.package.$package.opt-level=1" "$@"
+  "${tool[@]}" --cargo-arg=--config --cargo-arg="profile.mutants.package.$package.opt-level=1" "$@"

@@ -1,0 +1,19 @@
+//! The scenario layer's integration tests, one module per subject, in one test binary: one
+//! build and link per change instead of fifteen (mutation testing rebuilds it for every mutant),
+//! and cargo runs all of them in parallel.
+
+mod baselines;
+mod batch;
+mod check;
+mod derive;
+mod episode;
+mod fixed_wing;
+mod keys;
+mod properties;
+mod readme;
+mod sampled;
+mod search;
+mod series;
+mod stations;
+mod theory;
+mod validation;
