@@ -50,6 +50,36 @@ pub fn r_body_to_ned(phi: f64, theta: f64, psi: f64) -> [[f64; 3]; 3] {
     r_from_sincos((s[0], c[0]), (s[1], c[1]), (s[2], c[2]))
 }
 
+/// The sines and cosines of a state's Euler angles `(phi, theta, psi)`, computed once in lanes
+/// and shared by what needs them at that state (the rotation, gravity, the kinematics).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EulerSinCos {
+    /// The angles they are of, rad.
+    pub angles: [f64; 3],
+    sin: [f64; 4],
+    cos: [f64; 4],
+}
+
+impl EulerSinCos {
+    /// Of the angles `x[6..9]` of state `x`.
+    #[inline(always)]
+    pub fn of(x: &State12) -> Self {
+        let (sin, cos) = isotrack_core::lanes::sin_cos_lanes([x[6], x[7], x[8], 0.0]);
+        Self {
+            angles: [x[6], x[7], x[8]],
+            sin,
+            cos,
+        }
+    }
+
+    /// Rotation body -> NED ([`r_body_to_ned`]).
+    #[inline(always)]
+    pub fn rotation(&self) -> [[f64; 3]; 3] {
+        let (s, c) = (self.sin, self.cos);
+        r_from_sincos((s[0], c[0]), (s[1], c[1]), (s[2], c[2]))
+    }
+}
+
 /// [`r_body_to_ned`] from `(sin, cos)` of the three angles.
 #[inline(always)]
 fn r_from_sincos(
@@ -203,16 +233,28 @@ fn derivatives_inline(
     d: &Deltas,
     wind: &WindSample,
 ) -> State12 {
-    let gm = &dv.gammas;
-    let (u, v, w) = (x[3], x[4], x[5]);
-    let (phi, theta, psi) = (x[6], x[7], x[8]);
-    let (pr, qr, rr) = (x[9], x[10], x[11]);
     // The three Euler angles' sines and cosines in one lane-wise call (isotrack_core::lanes:
     // vectorised, and no libm call on the RK4's four evaluations per step).
-    let (s3, c3) = isotrack_core::lanes::sin_cos_lanes([phi, theta, psi, 0.0]);
+    derivatives_with(p, dv, x, d, wind, &EulerSinCos::of(x))
+}
+
+/// [`derivatives`] with the sines and cosines of `x`'s Euler angles already known.
+#[inline(always)]
+fn derivatives_with(
+    p: &Aerosonde,
+    dv: &Derived,
+    x: &State12,
+    d: &Deltas,
+    wind: &WindSample,
+    euler: &EulerSinCos,
+) -> State12 {
+    let gm = &dv.gammas;
+    let (u, v, w) = (x[3], x[4], x[5]);
+    let (pr, qr, rr) = (x[9], x[10], x[11]);
+    let (s3, c3) = (euler.sin, euler.cos);
     let (sf, cf) = (s3[0], c3[0]);
     let (st, ct) = (s3[1], c3[1]);
-    let r = r_from_sincos((sf, cf), (st, ct), (s3[2], c3[2]));
+    let r = euler.rotation();
     let (air, sa, ca) = air_data_sc(x, wind, &r);
     let (va, alpha, beta) = (air.va_mps, air.alpha_rad, air.beta_rad);
     let m = p.mass_kg;
@@ -300,10 +342,11 @@ pub fn rk4_step(
     wind: &WindSample,
     dt_s: f64,
 ) {
-    rk4_step_inline(p, gm, x, d, wind, dt_s);
+    rk4_step_inline(p, gm, x, d, wind, dt_s, &EulerSinCos::of(x));
 }
 
-/// [`rk4_step`], always inlined (see [`derivatives_inline`]).
+/// [`rk4_step`], always inlined (see [`derivatives_inline`]), with the sines and cosines of
+/// `x`'s Euler angles given (`euler`, of `x`).
 #[inline(always)]
 pub(crate) fn rk4_step_inline(
     p: &Aerosonde,
@@ -312,6 +355,7 @@ pub(crate) fn rk4_step_inline(
     d: &Deltas,
     wind: &WindSample,
     dt_s: f64,
+    euler: &EulerSinCos,
 ) {
     let add = |a: &State12, k: &State12, h: f64| {
         let mut o = *a;
@@ -320,7 +364,8 @@ pub(crate) fn rk4_step_inline(
         }
         o
     };
-    let k1 = derivatives_inline(p, gm, x, d, wind);
+    // The first stage is at `x` itself, whose angles' sines and cosines the caller has.
+    let k1 = derivatives_with(p, gm, x, d, wind, euler);
     let k2 = derivatives_inline(p, gm, &add(x, &k1, 0.5 * dt_s), d, wind);
     let k3 = derivatives_inline(p, gm, &add(x, &k2, 0.5 * dt_s), d, wind);
     let k4 = derivatives_inline(p, gm, &add(x, &k3, dt_s), d, wind);

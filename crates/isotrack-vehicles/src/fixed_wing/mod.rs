@@ -20,7 +20,7 @@ pub mod trim;
 pub mod wind;
 
 use autopilot::{autopilot, AutopilotConfig, AutopilotState, Commands};
-use dynamics::{air_data, r_body_to_ned, rk4_step, Deltas, State12, WindSample};
+use dynamics::{air_data, r_body_to_ned, rk4_step, Deltas, EulerSinCos, State12, WindSample};
 use gains::{compute_gains, course_loop_model, CourseLoopModel, Gains};
 use isotrack_core::math::{wrap_angle, Pose2, Vec2};
 use isotrack_core::vehicle::Telemetry;
@@ -90,6 +90,9 @@ pub struct FixedWingState {
     /// The wind acting over the last step.
     pub wind: WindSample,
     gusts: Option<Dryden>,
+    /// The sines and cosines of `x`'s Euler angles as the last step left them: the next step
+    /// starts from them (used only while `x`'s angles are still theirs).
+    euler: Option<EulerSinCos>,
 }
 
 impl FixedWing {
@@ -185,6 +188,7 @@ impl FixedWing {
                 gust_body_mps: [0.0; 3],
             },
             gusts,
+            euler: None,
         };
         s.course_rad = Self::ground_course(&s.x, chi);
         s.course_cmd_rad = s.course_rad;
@@ -205,7 +209,16 @@ impl FixedWing {
     /// The ground course, continuous with `previous` (rad clockwise from north).
     #[inline(always)]
     fn ground_course(x: &State12, previous: f64) -> f64 {
-        let v = Self::ground_velocity(x);
+        Self::ground_course_with(x, &r_body_to_ned(x[6], x[7], x[8]), previous)
+    }
+
+    /// [`ground_course`](Self::ground_course) with `x`'s rotation body -> NED known.
+    #[inline(always)]
+    fn ground_course_with(x: &State12, r: &[[f64; 3]; 3], previous: f64) -> f64 {
+        let v = [
+            r[0][0] * x[3] + r[0][1] * x[4] + r[0][2] * x[5],
+            r[1][0] * x[3] + r[1][1] * x[4] + r[1][2] * x[5],
+        ];
         if v[0] * v[0] + v[1] * v[1] < 1e-12 {
             return previous;
         }
@@ -248,7 +261,12 @@ fn step_closed_loop(v: &FixedWing, s: &mut FixedWingState, cmd: &Commands, dt_s:
     if let Some(g) = s.gusts.as_mut() {
         s.wind.gust_body_mps = g.step(dt_s);
     }
-    let r = r_body_to_ned(s.x[6], s.x[7], s.x[8]);
+    // The attitude's sines and cosines: the last step's, unless the state was changed since.
+    let euler = match s.euler {
+        Some(e) if e.angles == [s.x[6], s.x[7], s.x[8]] => e,
+        _ => EulerSinCos::of(&s.x),
+    };
+    let r = euler.rotation();
     let va = dynamics::airspeed_mps(&s.x, &s.wind, &r);
     let d = autopilot(
         &mut s.autopilot,
@@ -262,8 +280,10 @@ fn step_closed_loop(v: &FixedWing, s: &mut FixedWingState, cmd: &Commands, dt_s:
         dt_s,
     );
     s.deltas = d;
-    dynamics::rk4_step_inline(&v.params, &v.derived, &mut s.x, &d, &s.wind, dt_s);
-    s.course_rad = FixedWing::ground_course(&s.x, s.course_rad);
+    dynamics::rk4_step_inline(&v.params, &v.derived, &mut s.x, &d, &s.wind, dt_s, &euler);
+    let end = EulerSinCos::of(&s.x);
+    s.course_rad = FixedWing::ground_course_with(&s.x, &end.rotation(), s.course_rad);
+    s.euler = Some(end);
 }
 
 impl Vehicle for FixedWing {
