@@ -33,10 +33,12 @@ impl Default for DrydenParams {
 /// The gust generator's state.
 #[derive(Clone, Debug)]
 pub struct Dryden {
-    params: DrydenParams,
-    va_mps: f64,
     /// Output gains `s sqrt(2 Va/L_u)`, `s sqrt(3 Va/L)` (v, w), precomputed.
     gain: [f64; 3],
+    /// The filters' break frequencies `Va/L_u`, `Va/L_v`, `Va/L_w`, 1/s, precomputed.
+    rate: [f64; 3],
+    /// `(dt, sqrt(dt))` of the last step: the noise's scale, recomputed only when `dt` changes.
+    sqrt_dt: (f64, f64),
     xu: f64,
     xv: [f64; 2],
     xw: [f64; 2],
@@ -57,8 +59,8 @@ impl Dryden {
                 sv * (3.0 * va_mps / lv).sqrt(),
                 sw * (3.0 * va_mps / lw).sqrt(),
             ],
-            params,
-            va_mps,
+            rate: [va_mps / lu, va_mps / lv, va_mps / lw],
+            sqrt_dt: (0.0, 0.0),
             xu: 0.0,
             xv: [0.0; 2],
             xw: [0.0; 2],
@@ -68,26 +70,26 @@ impl Dryden {
 
     /// Advances by `dt_s` and returns the body-axis gusts `[u, v, w]`, m/s.
     pub fn step(&mut self, dt_s: f64) -> [f64; 3] {
-        let va = self.va_mps;
-        let [lu, lv, lw] = self.params.length_m;
+        let [au, av, aw] = self.rate;
         let [gu_k, gv_k, gw_k] = self.gain;
-        let sq = dt_s.sqrt();
+        if self.sqrt_dt.0 != dt_s {
+            self.sqrt_dt = (dt_s, dt_s.sqrt());
+        }
+        let sq = self.sqrt_dt.1;
         let mut n = || -> f64 { StandardNormal.sample(&mut self.rng) };
         let (nu, nv, nw) = (n(), n(), n());
         // u: x' = -a x + w, y = s sqrt(2 Va/L) x.
-        let a = va / lu;
-        self.xu += -a * self.xu * dt_s + sq * nu;
+        self.xu += -au * self.xu * dt_s + sq * nu;
         let gu = gu_k * self.xu;
         // v, w: x1' = x2, x2' = -a^2 x1 - 2a x2 + w, y = K (a/sqrt(3) x1 + x2).
-        let second = |x: &mut [f64; 2], l: f64, k: f64, noise: f64| {
-            let a = va / l;
+        let second = |x: &mut [f64; 2], a: f64, k: f64, noise: f64| {
             let (x1, x2) = (x[0], x[1]);
             x[0] += x2 * dt_s;
             x[1] += (-a * a * x1 - 2.0 * a * x2) * dt_s + sq * noise;
             k * (a * 0.577_350_269_189_625_8 * x[0] + x[1]) // 1/sqrt(3)
         };
-        let gv = second(&mut self.xv, lv, gv_k, nv);
-        let gw = second(&mut self.xw, lw, gw_k, nw);
+        let gv = second(&mut self.xv, av, gv_k, nv);
+        let gw = second(&mut self.xw, aw, gw_k, nw);
         [gu, gv, gw]
     }
 }
