@@ -126,4 +126,52 @@ mod tests {
         let r = super::moving_report(&still, 1.0, [-20.0, 20.0, -20.0, 20.0]);
         assert!(!r.time_varying && r.trackable.is_none());
     }
+
+    /// The documented sampling, recomputed here: a ramp `F = y + o(t)` (frames every 0.5 s,
+    /// offsets `o = t^3` at the frames, linear between them, the first frame held before t = 0)
+    /// has isolines moving at `|o(t + h) - o(t - h)| / 2h` by the central difference, with
+    /// `h = min(1 s, duration/4) = 0.5 s` for a 2 s run, at the 48 times `2 (k + 1/2)/48`. The
+    /// largest is at the last time, the 95th percentile at the 46th (every lattice point of a
+    /// time has its speed).
+    #[test]
+    fn a_series_isoline_speed_is_the_central_difference_at_the_48_times() {
+        let d = tempfile::tempdir().unwrap();
+        let frame_t: Vec<f64> = (0..7).map(|i| 0.5 * i as f64).collect();
+        let mut names = vec![];
+        for (i, t) in frame_t.iter().enumerate() {
+            let rows: Vec<String> = (0..5)
+                .map(|j| vec![format!("{}", j as f64 + t * t * t); 5].join(","))
+                .collect();
+            let name = format!("f{i}.csv");
+            std::fs::write(d.path().join(&name), rows.join("\n") + "\n").unwrap();
+            names.push(format!("\"{name}\""));
+        }
+        let times: Vec<String> = frame_t.iter().map(|t| format!("{t:?}")).collect();
+        let text = format!(
+            "[field]\nkind = \"grid\"\npaths = [{}]\nframe_times_s = [{}]\ninterpolation = \"bilinear\"\n[initial]\nx_m = 2.0\ny_m = 2.0\n[controller]\nlevel = 2.0\n[sim]\nduration_s = 2.0\n",
+            names.join(", "),
+            times.join(", ")
+        );
+        let s = crate::parse_scenario_in(&text, "s.toml", &[], d.path()).unwrap();
+        let r = super::moving_report(&s, 1e9, [0.0, 4.0, 0.0, 4.0]);
+        // The offset between frames, the first held before t = 0.
+        let o = |t: f64| {
+            let t = t.max(0.0);
+            let i = ((t / 0.5).floor() as usize).min(5);
+            let (t0, t1) = (frame_t[i], frame_t[i + 1]);
+            let w = (t - t0) / (t1 - t0);
+            (1.0 - w) * t0.powi(3) + w * t1.powi(3)
+        };
+        let h = 0.5;
+        let speed = |k: usize| {
+            let t = 2.0 * (k as f64 + 0.5) / 48.0;
+            (o(t + h) - o(t - h)) / (2.0 * h)
+        };
+        let max = r.isoline_speed_max_mps.unwrap();
+        assert!((max - speed(47)).abs() < 1e-9, "{max} vs {}", speed(47));
+        let p95 = r.isoline_speed_p95_mps.unwrap();
+        assert!((p95 - speed(45)).abs() < 1e-9, "{p95} vs {}", speed(45));
+        assert_eq!(r.samples, 48 * 101 * 101);
+        assert!(r.note.contains("central difference of 0.5 s"), "{}", r.note);
+    }
 }
