@@ -133,6 +133,19 @@ mod tests {
             1
         );
         assert!(sosm_conditions(1.0, 9.0, 1.0, 1.0, 4.0, Some(0.5))[0].contains("alpha_star"));
+        // Each term of the amplitude bound where it is the larger one (Fb = 0.5, G1 = 1):
+        // alpha = 0.2, G2 = 2: Fb/(alpha G1) = 2.5 over 4 Fb/(3 G1 - alpha G2) = 0.769;
+        // alpha = 0.9, G2 = 3: 4 Fb/(3 - 2.7) = 6.667 over Fb/(alpha G1) = 0.556.
+        for (alpha, g2, need) in [(0.2, 2.0, 2.5), (0.9, 3.0, 2.0 / 0.3)] {
+            let w = sosm_conditions(1.0, need - 0.01, alpha, 1.0, g2, Some(0.5));
+            assert_eq!(w.len(), 1, "alpha {alpha}: {w:?}");
+            assert!(w[0].contains(&format!("{need:.4}")), "{w:?}");
+            assert!(sosm_conditions(1.0, need + 0.01, alpha, 1.0, g2, Some(0.5)).is_empty());
+        }
+        // Fb scales with v^2 and G1, G2 with v: v = 2 doubles the bound (Fb/(alpha G1) = 5).
+        let w = sosm_conditions(2.0, 4.99, 0.2, 1.0, 2.0, Some(0.5));
+        assert!(w.len() == 1 && w[0].contains("5.0000"), "{w:?}");
+        assert!(sosm_conditions(2.0, 5.01, 0.2, 1.0, 2.0, Some(0.5)).is_empty());
     }
 
     /// Condition (b) with a large `mu`: v = 1, gamma = 0.5, delta = 1 (mu = 0.5), |grad F| >= 1,
