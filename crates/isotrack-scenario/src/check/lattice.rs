@@ -323,6 +323,68 @@ mod tests {
         assert!(slopes.iter().all(|s| (s - s5).abs() < 1e-12));
     }
 
+    /// The margins by hand on the paper's field `F = 20 e^{-r/10}`: at a corner `|grad F| = F/10`
+    /// and `||hess F|| = max(F/100, F/(10 r))` (radial and tangential curvatures); `lip` is the
+    /// largest change of `||hess F||` per metre between corners next to each other,
+    /// `gamma3 = max ||hess F|| + lip d`, `gamma1 = min |grad F| - gamma3 d`,
+    /// `gamma2 = max |grad F| + gamma3 d`, `d` half a cell's diagonal (1 m cells here).
+    #[test]
+    fn margins_by_hand_on_the_circular_field() {
+        let f = FieldModel::Analytic(AnalyticField::new(AnalyticKind::RadialExp(
+            RadialExp::paper(),
+        )));
+        let n = 7;
+        let l = Lattice::new(&f, [2.0, 8.0, -3.0, 3.0], n);
+        let mask = l.component(l.cell_of(Vec2::new(6.93, 0.0)).unwrap(), 8.0, 12.0);
+        let b = l.bounds(&mask, true).unwrap();
+        let value = |i: usize, j: usize| {
+            let (x, y) = (2.0 + i as f64, -3.0 + j as f64);
+            let r = x.hypot(y);
+            (20.0 * (-r / 10.0).exp(), r)
+        };
+        let corner = |i: usize, j: usize| {
+            let cell = |a: usize, b: usize| a < n - 1 && b < n - 1 && mask[b * (n - 1) + a];
+            cell(i, j)
+                || (i > 0 && cell(i - 1, j))
+                || (j > 0 && cell(i, j - 1))
+                || (i > 0 && j > 0 && cell(i - 1, j - 1))
+        };
+        let hess = |i: usize, j: usize| {
+            let (v, r) = value(i, j);
+            (v / 100.0).max(v / (10.0 * r))
+        };
+        let (mut g1, mut g2, mut g3, mut lip, mut count) =
+            (f64::INFINITY, 0.0f64, 0.0f64, 0.0f64, 0);
+        for j in 0..n {
+            for i in 0..n {
+                if !corner(i, j) {
+                    continue;
+                }
+                count += 1;
+                let g = value(i, j).0 / 10.0;
+                (g1, g2, g3) = (g1.min(g), g2.max(g), g3.max(hess(i, j)));
+                if i + 1 < n && corner(i + 1, j) {
+                    lip = lip.max((hess(i + 1, j) - hess(i, j)).abs());
+                }
+                if j + 1 < n && corner(i, j + 1) {
+                    lip = lip.max((hess(i, j + 1) - hess(i, j)).abs());
+                }
+            }
+        }
+        let d = 0.5 * 2f64.sqrt();
+        let gamma3 = g3 + lip * d;
+        assert_eq!(b.points, count);
+        assert!(count > 8 && lip > 0.0, "{count} corners, lip {lip}");
+        assert!(
+            g1 - gamma3 * d > 0.1,
+            "the margin leaves gamma1 positive here"
+        );
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+        assert!(close(b.gamma3.unwrap(), gamma3), "{b:?} vs {gamma3}");
+        assert!(close(b.gamma1, (g1 - gamma3 * d).max(0.0)), "{b:?}");
+        assert!(close(b.gamma2, g2 + gamma3 * d), "{b:?}");
+    }
+
     /// On a curved field and a coarse lattice, the bounds with their margins hold between the
     /// lattice points: over a dense sampling of the component's cells, min |grad F| >= gamma1,
     /// max |grad F| <= gamma2 and max ||hess F|| <= gamma3 (the paper's field, 1 m cells, a
