@@ -69,6 +69,7 @@ impl Dryden {
     }
 
     /// Advances by `dt_s` and returns the body-axis gusts `[u, v, w]`, m/s.
+    #[inline(always)]
     pub fn step(&mut self, dt_s: f64) -> [f64; 3] {
         let [au, av, aw] = self.rate;
         let [gu_k, gv_k, gw_k] = self.gain;
