@@ -131,6 +131,7 @@ impl Default for AutopilotConfig {
 /// One autopilot update at sample time `ts`: true state, its airspeed `va_mps` and ground course
 /// `course_rad` (continuous) in; actuator deflections out.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub fn autopilot(
     st: &mut AutopilotState,
     cfg: &AutopilotConfig,
