@@ -348,6 +348,73 @@ impl Sensor {
 mod tests {
     use super::*;
 
+    /// The ideal sensor's shortcut gives what the general path gives: the same sensor with a
+    /// range that clips nothing (which takes the general path) reports the same samples at the
+    /// same steps, bit for bit, at 100 Hz and every third step.
+    #[test]
+    fn the_ideal_shortcut_is_the_general_path() {
+        for rate_hz in [100.0, 100.0 / 3.0] {
+            let ideal = SensorConfig {
+                rate_hz,
+                ..SensorConfig::default()
+            };
+            let general = SensorConfig {
+                range: Some([f64::NEG_INFINITY, f64::INFINITY]),
+                ..ideal
+            };
+            let mut a = Sensor::new(ideal, 0.01, 3).unwrap();
+            let mut b = Sensor::new(general, 0.01, 3).unwrap();
+            assert!(a.ideal && !b.ideal);
+            let mut delivered = 0;
+            for k in 0..300u64 {
+                let (t, v) = (k as f64 * 0.01, (k as f64 * 0.37).sin() * 1e3);
+                let (ma, mb) = (a.observe(t, v), b.observe(t, v));
+                assert_eq!(
+                    ma.map(|m| (m.t_s.to_bits(), m.value.to_bits())),
+                    mb.map(|m| (m.t_s.to_bits(), m.value.to_bits())),
+                    "step {k}"
+                );
+                delivered += usize::from(ma.is_some());
+            }
+            assert_eq!(delivered, if rate_hz == 100.0 { 300 } else { 100 });
+        }
+        // Each feature on its own leaves the shortcut.
+        let base = SensorConfig::default();
+        for cfg in [
+            SensorConfig {
+                noise_std: 0.1,
+                ..base
+            },
+            SensorConfig {
+                delay_s: 0.02,
+                ..base
+            },
+            SensorConfig {
+                time_constant_s: 0.5,
+                ..base
+            },
+            SensorConfig {
+                resolution: 0.01,
+                ..base
+            },
+            SensorConfig {
+                range: Some([0.0, 1.0]),
+                ..base
+            },
+            SensorConfig {
+                dropout_probability: 0.1,
+                ..base
+            },
+            SensorConfig {
+                bias_drift_per_sqrt_s: 0.1,
+                ..base
+            },
+        ] {
+            assert!(!Sensor::new(cfg, 0.01, 0).unwrap().ideal, "{cfg:?}");
+        }
+        assert!(Sensor::new(base, 0.01, 0).unwrap().ideal);
+    }
+
     #[test]
     fn samples_at_rate_with_delay() {
         let cfg = SensorConfig {
