@@ -331,6 +331,58 @@ mod tests {
         }
     }
 
+    /// The UAV's continuous plant against its transfer function derived by hand from the
+    /// block diagram (docs/SAMPLED.md; Laplace, zero initial state): `h_c = u/s`, the course
+    /// loop's PI `b_c = (kp_chi + ki_chi/s)(h_c - z2)`, the roll loop
+    /// `b = w^2/(s^2 + 2 zeta w s + w^2) b_c`, the kinematics `z2 = (g/Va) s/(s^2 + v^2 kappa^2) b`
+    /// and `z1 = v z2/s`, so with `L = P R (kp_chi + ki_chi/s)`:
+    /// `eps/u = -alpha v L / ((1 + L) s^2)`. At real `s` away from the poles,
+    /// `C (sI - A)^-1 B` equals it.
+    #[test]
+    fn the_uav_plant_is_its_block_diagram() {
+        let m = CourseLoopModel {
+            roll_natural_frequency_radps: 7.0,
+            roll_damping_ratio: 0.8,
+            kp_chi: 2.5,
+            ki_chi: 0.3,
+            g_over_airspeed_per_s: 9.81 / 30.0,
+        };
+        let l = SampledLoop {
+            speed_mps: 30.0,
+            slope: 0.2,
+            curvature_per_m: 0.004,
+            heading: HeadingDynamics::CourseLoop(m),
+            ..dubins(8.0, 0.5, 1.0)
+        };
+        let (a, b, c) = plant(&l);
+        for s in [0.37, 1.3, 4.1] {
+            let resolvent = (DMatrix::identity(6, 6) * s - &a).try_inverse().unwrap();
+            let got = c.dot(&(resolvent * &b));
+            let (w, z) = (7.0, 0.8);
+            let roll = w * w / (s * s + 2.0 * z * w * s + w * w);
+            let kin = (9.81 / 30.0) * s / (s * s + 30.0f64.powi(2) * 0.004f64.powi(2));
+            let loop_gain = kin * roll * (2.5 + 0.3 / s);
+            let want = -0.2 * 30.0 * loop_gain / ((1.0 + loop_gain) * s * s);
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs(),
+                "s = {s}: {got} vs {want}"
+            );
+        }
+        // The Dubins plant likewise: eps/u = -alpha v / (s^2 + v^2 kappa^2).
+        let l = SampledLoop {
+            curvature_per_m: 0.3,
+            ..dubins(1.0, 0.0, 0.1)
+        };
+        let (a, b, c) = plant(&l);
+        for s in [0.37, 1.3] {
+            let resolvent = (DMatrix::identity(2, 2) * s - &a).try_inverse().unwrap();
+            let got = c.dot(&(resolvent * &b));
+            // alpha = 1, v = 0.5, kappa = 0.3.
+            let want = -0.5 / (s * s + 0.25 * 0.09);
+            assert!((got - want).abs() <= 1e-12 * want.abs(), "{got} vs {want}");
+        }
+    }
+
     /// The characteristic polynomial of the straight-isoline Dubins loop with the P law and a
     /// backward difference, derived by hand from transfer functions (docs/SAMPLED.md):
     /// `G(z) = -alpha v T^2 (z + 1) / (2 (z - 1)^2)`, `K(z) = kp((1 + cT) z - 1)/(T z)`,
