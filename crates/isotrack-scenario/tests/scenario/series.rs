@@ -101,6 +101,47 @@ fn the_data_can_end() {
     assert!(r.outcome_detail.unwrap().contains("data ended"));
 }
 
+/// Only a run that ends because the data ended is explained so: a robot that drives off a
+/// series' grid while frames remain ends with the position it left at, and a run that
+/// completes carries no detail.
+#[test]
+fn only_the_data_ending_is_explained_as_such() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, v) in [("a.csv", 0.0), ("b.csv", 1.0)] {
+        let rows: Vec<String> = (0..11)
+            .map(|j| vec![format!("{}", j as f64 + v); 11].join(","))
+            .collect();
+        std::fs::write(d.path().join(name), rows.join("\n") + "\n").unwrap();
+    }
+    // F = y + t/100 on [0, 10]^2 for 100 s of frames; the robot starts at (5, 5) heading east
+    // at 0.5 m/s with a P law too weak to turn it (kp = 1e-6): it leaves at x = 10 near t = 10 s.
+    let text = |extra: &str| {
+        format!(
+            "[field]\nkind = \"grid\"\npaths = [\"a.csv\", \"b.csv\"]\nframe_times_s = [0.0, 100.0]\nafter_last_frame = \"end\"\ninterpolation = \"bilinear\"\n[initial]\nx_m = 5.0\ny_m = 5.0\nheading_rad = 0.0\n[controller]\nlevel = 5.0\nkp = 1e-6\nki = 0.0\n[sim]\nduration_s = 50.0\n{extra}"
+        )
+    };
+    let s = parse_scenario_in(&text(""), "s.toml", &[], d.path()).unwrap();
+    let r = s.run(&mut NoTrace);
+    assert_eq!(r.outcome, isotrack_sim::Outcome::LeftField);
+    assert!(r.t_end_s > 9.0 && r.t_end_s < 11.0, "{}", r.t_end_s);
+    let detail = r.outcome_detail.unwrap();
+    assert!(
+        detail.contains("no value at") && !detail.contains("data ended"),
+        "{detail}"
+    );
+    // Inside the grid for the whole run (heading north from the middle, 5 s): completed.
+    let s = parse_scenario_in(
+        &text("").replace("duration_s = 50.0", "duration_s = 5.0"),
+        "s.toml",
+        &["initial.heading_rad=1.5707963267948966".into()],
+        d.path(),
+    )
+    .unwrap();
+    let r = s.run(&mut NoTrace);
+    assert_eq!(r.outcome, isotrack_sim::Outcome::Completed);
+    assert_eq!(r.outcome_detail, None);
+}
+
 /// Sensor dynamics in a run: every sample is delivered or counted as dropped (exactly, for a
 /// seeded run), the keys are recorded in the resolved scenario, and a lagged, quantised,
 /// saturating, drifting sensor still lets the default scenario track.
