@@ -331,6 +331,21 @@ mod tests {
         }
     }
 
+    /// The worst spectral radius over slopes is the largest of the radii at each slope, whatever
+    /// slope the loop was built with.
+    #[test]
+    fn the_worst_radius_is_over_the_slopes_given() {
+        let l = dubins(10.0, 1.0, 0.1);
+        let at = |alpha: f64| SampledLoop { slope: alpha, ..l }.spectral_radius();
+        let (r_low, r_high) = (at(0.2), at(3.0));
+        assert!(r_low != r_high, "{r_low} {r_high}");
+        let worst = worst_spectral_radius(&l, &[0.2, 3.0]);
+        assert_eq!(worst, r_low.max(r_high));
+        assert_eq!(worst_spectral_radius(&l, &[0.2]), r_low);
+        assert_eq!(worst_spectral_radius(&l, &[3.0]), r_high);
+        assert_eq!(worst_spectral_radius(&l, &[]), 0.0);
+    }
+
     /// The UAV's continuous plant against its transfer function derived by hand from the
     /// block diagram (docs/SAMPLED.md; Laplace, zero initial state): `h_c = u/s`, the course
     /// loop's PI `b_c = (kp_chi + ki_chi/s)(h_c - z2)`, the roll loop
