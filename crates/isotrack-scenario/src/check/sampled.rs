@@ -429,6 +429,45 @@ mod tests {
         }
     }
 
+    /// A delay of `m` whole periods multiplies the loop gain by `z^-m`: the polynomial above
+    /// becomes `2 z^(1+m) (z - 1)^2 + alpha v T kp (z + 1)((1 + cT) z - 1)`, whose `3 + m`
+    /// roots are the matrix's nonzero eigenvalues. A delay within `1e-9 T` of a whole period
+    /// (either side) is that whole period.
+    #[test]
+    fn whole_periods_of_delay_multiply_the_loop_by_z_to_the_minus_m() {
+        let (kp, t) = (3.0, 0.1);
+        for m in [1usize, 2] {
+            for delay in [
+                m as f64 * t,
+                m as f64 * t * (1.0 - 1e-12),
+                m as f64 * t + 1e-13,
+            ] {
+                let l = SampledLoop {
+                    delay_s: delay,
+                    ..dubins(kp, 0.0, t)
+                };
+                let (av, c) = (l.slope * l.speed_mps, l.c1 / l.c2);
+                let p = |z: nalgebra::Complex<f64>| {
+                    let one = nalgebra::Complex::new(1.0, 0.0);
+                    (z - one) * (z - one) * z.powu(1 + m as u32) * 2.0
+                        + (z + one) * (z * (1.0 + c * t) - one) * (av * t * kp)
+                };
+                let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
+                let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-6).collect();
+                assert_eq!(nonzero.len(), 3 + m, "m {m}, delay {delay}: {eig:?}");
+                for z in nonzero {
+                    assert!(p(*z).norm() < 1e-9, "m {m}: p({z}) = {}", p(*z));
+                }
+            }
+        }
+        // A delay far beyond the delay line's capacity has no model.
+        let l = SampledLoop {
+            delay_s: 1e4 * 0.1 + 0.1,
+            ..dubins(kp, 0.0, t)
+        };
+        assert!(l.closed_loop_matrix().is_none());
+    }
+
     /// As `T -> 0` the sampled loop's stability agrees with the continuous-time Routh-Hurwitz
     /// condition of Prop. 1 on the circular field (slope alpha, radius r_d).
     #[test]
