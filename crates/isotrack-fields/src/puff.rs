@@ -90,6 +90,20 @@ pub struct PuffPlume {
     /// sines; a query visits hundreds of puffs): a pure cache, the values are those of
     /// `displacement`.
     released: Vec<std::sync::OnceLock<Chunk>>,
+    /// `sin(phase)` of each mode, per axis (the `W(0)` term of every displacement).
+    sin_phase: [[f64; COMPONENTS]; 2],
+    /// This plume's identity for the per-thread cache of `W(t)` ([`LAST_W`]).
+    id: u64,
+}
+
+/// Identities of plumes (a clone is a new plume: its own cache key).
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+std::thread_local! {
+    /// The last `(plume id, t bits, W(t))` this thread computed: a query at the same time as the
+    /// previous one (a lattice or a moving isoline sampled at one time, thousands of points)
+    /// reuses its 256 sines. A pure cache: the values are `displacement`'s.
+    static LAST_W: std::cell::Cell<Option<(u64, u64, Vec2)>> = const { std::cell::Cell::new(None) };
 }
 
 impl Clone for PuffPlume {
@@ -122,10 +136,18 @@ impl PuffPlume {
                 *m = (omega, 2.0 * std::f64::consts::PI * v);
             }
         }
+        let mut sin_phase = [[0.0; COMPONENTS]; 2];
+        for (axis, sines) in modes.iter().zip(sin_phase.iter_mut()) {
+            for ((_, ph), s) in axis.iter().zip(sines.iter_mut()) {
+                *s = ph.sin();
+            }
+        }
         Self {
             amp: p.meander_std_mps * (2.0 / COMPONENTS as f64).sqrt(),
             p,
             modes,
+            sin_phase,
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             released: (0..MAX_CHUNKS)
                 .map(|_| std::sync::OnceLock::new())
                 .collect(),
@@ -173,13 +195,27 @@ impl PuffPlume {
 
     /// `W(t) = U t + integral_0^t u'`, m.
     fn displacement(&self, t_s: f64) -> Vec2 {
-        let c = |axis: &[(f64, f64); COMPONENTS]| {
-            axis.iter()
-                .map(|(w, ph)| ((w * t_s + ph).sin() - ph.sin()) / w)
+        let c = |axis: usize| {
+            self.modes[axis]
+                .iter()
+                .zip(&self.sin_phase[axis])
+                .map(|((w, ph), sin_ph)| ((w * t_s + ph).sin() - sin_ph) / w)
                 .sum::<f64>()
         };
-        self.p.wind_mps * t_s
-            + Vec2::new(self.amp * c(&self.modes[0]), self.amp * c(&self.modes[1]))
+        self.p.wind_mps * t_s + Vec2::new(self.amp * c(0), self.amp * c(1))
+    }
+
+    /// [`displacement`](Self::displacement) at the query time, through this thread's cache of
+    /// the last one.
+    fn displacement_now(&self, t_s: f64) -> Vec2 {
+        LAST_W.with(|last| match last.get() {
+            Some((id, bits, w)) if id == self.id && bits == t_s.to_bits() => w,
+            _ => {
+                let w = self.displacement(t_s);
+                last.set(Some((self.id, t_s.to_bits(), w)));
+                w
+            }
+        })
     }
 
     /// Runs `f(mass/(2 pi s^2) exp(..), offset d = p - p_i, s^2)` over the live puffs at `t`.
@@ -188,7 +224,7 @@ impl PuffPlume {
             return;
         }
         let interval = 1.0 / self.p.release_rate_hz;
-        let w_now = self.displacement(t_s);
+        let w_now = self.displacement_now(t_s);
         // Puffs released at t_i = i * interval, 0 <= t_i <= t, age <= max_age.
         let last = (t_s / interval).floor() as i64;
         let first = ((t_s - self.p.max_age_s) / interval).ceil().max(0.0) as i64;
@@ -510,6 +546,48 @@ mod tests {
         let mut p2 = params();
         p2.seed = 4;
         assert!(a != PuffPlume::new(p2));
+    }
+
+    /// The per-thread cache of `W(t)` is invisible: queries interleaved over two plumes (two
+    /// seeds) and repeated times give what each plume gives without a cache
+    /// (`displacement`, and a fresh plume for every value), on this thread and another.
+    #[test]
+    fn the_displacement_cache_changes_no_value() {
+        let pa = PuffPlumeParams {
+            meander_std_mps: 0.3,
+            ..params()
+        };
+        let p2 = PuffPlumeParams { seed: 4, ..pa };
+        let (a, b) = (PuffPlume::new(pa), PuffPlume::new(p2));
+        let queries = [
+            (0, 30.0),
+            (0, 30.0),
+            (1, 30.0),
+            (0, 30.0),
+            (1, 45.5),
+            (0, 45.5),
+            (0, 30.0),
+        ];
+        let check = |a: &PuffPlume, b: &PuffPlume| {
+            for (k, &(which, t)) in queries.iter().enumerate() {
+                let (plume, fresh_params) = if which == 0 { (a, pa) } else { (b, p2) };
+                assert_eq!(
+                    plume.displacement_now(t),
+                    plume.displacement(t),
+                    "query {k}"
+                );
+                let p = Vec2::new(1.5, 0.1);
+                let fresh = PuffPlume::new(fresh_params).value(t, p);
+                assert!(fresh.unwrap() > 0.1, "query {k}: {fresh:?}");
+                assert_eq!(plume.value(t, p), fresh, "query {k}");
+            }
+        };
+        check(&a, &b);
+        std::thread::scope(|s| {
+            s.spawn(|| check(&a, &b));
+        });
+        // The two plumes do move differently.
+        assert_ne!(a.displacement(30.0), b.displacement(30.0));
     }
 
     /// The mean plume by the formula, in the wind's frame worked out by hand: wind (0.6, 0.8)
