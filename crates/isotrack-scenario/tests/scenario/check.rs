@@ -317,6 +317,68 @@ fn prop2_notes_a_heading_outside_the_sector_only() {
     }
 }
 
+/// The sector's edges and the mirror for a law with the higher values on its left: from
+/// (10, 0) on the circular field `-grad F` points east, and with `ki = 0` the bound's angle is
+/// `phi = 0.7713` (the report's), so the sector is `[-pi + phi, -phi] = [-2.3703, -0.7713]`;
+/// headings either side of its lower edge, and north for the "left" law (its phi0 mirrored
+/// to -pi/2).
+#[test]
+fn prop2_sector_edges_and_the_left_mirror() {
+    let at = |heading: f64, extra: &[&str]| {
+        let mut sets = vec![
+            "controller.ki=0".to_string(),
+            format!("initial.heading_rad={heading}"),
+        ];
+        sets.extend(extra.iter().map(|s| s.to_string()));
+        let sets: Vec<&str> = sets.iter().map(|s| s.as_str()).collect();
+        check(&sc("", &sets), None).prop2
+    };
+    let phi = at(-1.5, &[]).error_bound_phi_rad.unwrap();
+    assert!((phi - 0.7713).abs() < 1e-4, "{phi}");
+    let edge = -std::f64::consts::PI + phi;
+    for (heading, inside) in [
+        (edge + 0.02, true),
+        (edge - 0.02, false),
+        (-phi - 0.02, true),
+        (-phi + 0.02, false),
+    ] {
+        let r = at(heading, &[]);
+        assert!((r.initial_phi_rad.unwrap() - heading).abs() < 1e-12);
+        assert_eq!(
+            r.initial_heading_in_sector,
+            Some(inside),
+            "heading {heading}"
+        );
+    }
+    let r = at(
+        std::f64::consts::FRAC_PI_2,
+        &["controller.higher_side=\"left\""],
+    );
+    assert!(
+        (r.initial_phi_rad.unwrap() + std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+        "{r:?}"
+    );
+    assert_eq!(r.initial_heading_in_sector, Some(true));
+}
+
+/// The region from the start to the tube spans the levels from the start's value to the tube's
+/// far edge: from (2, 0), `F = 20 e^-0.2 = 16.37` above the tube [9, 11], so [9, 17.37]; from
+/// (20, 0), `F = 20 e^-2 = 2.71` below it, so [1.71, 11].
+#[test]
+fn prop2_region_levels_reach_the_start() {
+    for (x, want) in [
+        (2.0, [9.0, 20.0 * (-0.2f64).exp() + 1.0]),
+        (20.0, [20.0 * (-2.0f64).exp() - 1.0, 11.0]),
+    ] {
+        let r = check(&sc("", &[&format!("initial.x_m={x}")]), None).prop2;
+        let got = r.region_levels.unwrap();
+        assert!(
+            (got[0] - want[0]).abs() < 1e-12 && (got[1] - want[1]).abs() < 1e-12,
+            "x = {x}: {got:?} vs {want:?}"
+        );
+    }
+}
+
 /// The verdict and its reason, one scenario per branch: Prop. 1 on the circular field; Prop. 2's
 /// bound on a ramp from a start heading into its sector (west: `phi0 = -pi/2`); the same ramp
 /// from a heading outside it; a field neither covers; a baseline law; a loop the sensor's rate
