@@ -232,6 +232,33 @@ fn puff_isoline_metric_is_the_mean_plume() {
     assert!((off - 1.0).abs() < 0.1, "{off}");
 }
 
+/// The mean plume's isoline is drawn over the plume's reach and width, `u T` downwind plus
+/// `4 sqrt(sigma0^2 + 2 K T)` about the source: a wide, short-lived plume (u = 1 m/s, T = 20 s,
+/// K = 5.62 m^2/s: a window of +-80 m) still has its level-0.2 isoline at x = 60 m, where the
+/// 2-D Gaussian plume puts it at `y = s sqrt(2 ln(C0/0.2))`, `s^2 = 0.25 + 2 K x/u`,
+/// `C0 = 20/(u sqrt(2 pi) s)`.
+#[test]
+fn a_wide_plumes_isoline_is_drawn_to_its_width() {
+    let s = isotrack_scenario::parse_scenario(
+        "[field]\nkind = \"puff_plume\"\nwind_mps = [1.0, 0.0]\nmax_age_s = 20.0\ndiffusivity_m2ps = 5.62\nmeander_std_mps = 0.0\n[controller]\nlevel = 0.2\n[initial]\nx_m = 5.0\n",
+        "<test>",
+        &[],
+    )
+    .unwrap();
+    let x = 60.0;
+    let sy = (0.25f64 + 2.0 * 5.62 * x).sqrt();
+    let c0 = 20.0 / ((2.0 * std::f64::consts::PI).sqrt() * sy);
+    let y = sy * (2.0 * (c0 / 0.2).ln()).sqrt();
+    assert!((y - 24.0).abs() < 1.0, "{y}");
+    let iso = s.isoline();
+    let on = iso.distance(0.0, isotrack_core::Vec2::new(x, y)).unwrap();
+    assert!(on < 0.05, "{on}");
+    let off = iso
+        .distance(0.0, isotrack_core::Vec2::new(x, y + 1.0))
+        .unwrap();
+    assert!((off - 1.0).abs() < 0.1, "{off}");
+}
+
 /// Field time counts from the first frame, whatever the frames' own times: frames at 100 s and
 /// 200 s (constant 1 and 3) give 1 at t = 0, 2 at t = 50 s and 3 at t = 100 s.
 #[test]
