@@ -272,6 +272,12 @@ fn field_time_starts_at_the_first_frame() {
     }
     let text = "[field]\nkind = \"grid\"\npaths = [\"a.csv\", \"b.csv\"]\nframe_times_s = [100.0, 200.0]\ninterpolation = \"bilinear\"\n[initial]\nx_m = 1.5\ny_m = 1.5\n[controller]\nlevel = 2.0\n";
     let s = parse_scenario_in(text, "s.toml", &[], d.path()).unwrap();
+    // The isoline moves with the frames, recomputed every eighth of the 100 s between them.
+    let iso = format!("{:?}", s.isoline());
+    assert!(
+        iso.contains("MovingIsoline(level 2, every 12.5 s)"),
+        "{iso}"
+    );
     let FieldModel::Series(series) = s.field() else {
         panic!("not a series")
     };
