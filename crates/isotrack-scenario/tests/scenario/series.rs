@@ -259,6 +259,59 @@ fn a_wide_plumes_isoline_is_drawn_to_its_width() {
     assert!((off - 1.0).abs() < 0.1, "{off}");
 }
 
+/// The value transform with each of its keys alone (floor, log10, scale, offset: each one on
+/// its own is applied), a bad frame of a series named by its index, and several files without
+/// times refused.
+#[test]
+fn value_transform_keys_alone_and_frame_errors() {
+    use isotrack_core::{math::Vec2, ScalarField};
+    let d = tempfile::tempdir().unwrap();
+    let write = |name: &str, v: f64| {
+        let row = vec![format!("{v}"); 4].join(",");
+        std::fs::write(d.path().join(name), format!("{row}\n{row}\n{row}\n{row}\n")).unwrap();
+    };
+    write("hundred.csv", 100.0);
+    write("zero.csv", 0.0);
+    let base = "[field]\nkind = \"grid\"\npath = \"hundred.csv\"\ninterpolation = \"bilinear\"\n[initial]\nx_m = 1.5\ny_m = 1.5\n[controller]\nlevel = 1.0\n";
+    let p = Vec2::new(1.5, 1.5);
+    for (set, want) in [
+        ("field.value_floor=150.0", 150.0),
+        ("field.value_log10=true", 2.0),
+        ("field.value_scale=0.5", 50.0),
+        ("field.value_offset=-30.0", 70.0),
+    ] {
+        let s = parse_scenario_in(base, "s.toml", &[set.into()], d.path()).unwrap();
+        let got = s.field().value(0.0, p).unwrap();
+        assert!((got - want).abs() < 1e-12, "{set}: {got}");
+    }
+    // A series whose second frame cannot take the log: the message names the frame.
+    let series = "[field]\nkind = \"grid\"\npaths = [\"hundred.csv\", \"zero.csv\"]\nframe_times_s = [0.0, 10.0]\nvalue_log10 = true\n[initial]\nx_m = 1.5\ny_m = 1.5\n[controller]\nlevel = 1.0\n";
+    let e = parse_scenario_in(series, "s.toml", &[], d.path())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("frame 1: the grid has values <= 0"), "{e}");
+    // One frame alone: no frame number.
+    let one = base.replace("hundred.csv", "zero.csv");
+    let e = parse_scenario_in(&one, "s.toml", &["field.value_log10=true".into()], d.path())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("the grid has values <= 0") && !e.contains("frame 0"),
+        "{e}"
+    );
+    // Two files and no times.
+    let untimed = series
+        .replace("frame_times_s = [0.0, 10.0]\n", "")
+        .replace("value_log10 = true\n", "");
+    let e = parse_scenario_in(&untimed, "s.toml", &[], d.path())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("field.frame_times_s`: is required with field.paths"),
+        "{e}"
+    );
+}
+
 /// Field time counts from the first frame, whatever the frames' own times: frames at 100 s and
 /// 200 s (constant 1 and 3) give 1 at t = 0, 2 at t = 50 s and 3 at t = 100 s.
 #[test]
