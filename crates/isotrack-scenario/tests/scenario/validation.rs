@@ -800,3 +800,24 @@ fn numbers_in_messages_stay_short() {
         assert!(issues[0].message.len() < 120, "{}", issues[0].message);
     }
 }
+
+/// An override's error stays located at its `--set` when a later override switches a kind
+/// (the switch forgets only the switched section's earlier overrides), and a key of another
+/// kind set on a derived scenario is refused, not dropped.
+#[test]
+fn overrides_keep_their_location_across_a_kind_switch() {
+    let sets: Vec<String> = ["sensor.noise_std=-1", "controller.kind=\"sliding_mode\""]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let e = isotrack_scenario::parse_scenario("", "s.toml", &sets)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--set sensor.noise_std=-1"), "{e}");
+    let s = isotrack_scenario::parse_scenario("", "s.toml", &[]).unwrap();
+    let e = s
+        .derive(&["controller.boundary_layer=0.1".into()], "<test>")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("boundary_layer"), "{e}");
+}
