@@ -40,6 +40,48 @@ fn write_npy(dir: &Path, name: &str, nx: usize, ny: usize, f: impl Fn(usize, usi
     std::fs::write(dir.join(name), bytes).unwrap();
 }
 
+/// A 3-D `.npy` of `frames` frames of `ny x nx` (shape (frames, rows, cols)), frame `k` holding
+/// `f(k)` everywhere.
+fn write_npy_frames(dir: &Path, name: &str, frames: usize, f: impl Fn(usize) -> f64) {
+    let (nx, ny) = (4, 4);
+    let dict =
+        format!("{{'descr': '<f8', 'fortran_order': False, 'shape': ({frames}, {ny}, {nx}), }}");
+    let unpadded = 10 + dict.len() + 1;
+    let header = format!("{dict}{}\n", " ".repeat((64 - unpadded % 64) % 64));
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend((header.len() as u16).to_le_bytes());
+    bytes.extend(header.as_bytes());
+    for k in 0..frames {
+        for _ in 0..nx * ny {
+            bytes.extend(f(k).to_le_bytes());
+        }
+    }
+    std::fs::write(dir.join(name), bytes).unwrap();
+}
+
+/// A file of several frames needs their times (from the file, `frame_interval_s` or
+/// `frame_times_s`); a file of one frame is a plain grid without them.
+#[test]
+fn a_file_of_frames_needs_their_times() {
+    use isotrack_scenario::field::FieldModel;
+    let d = tempfile::tempdir().unwrap();
+    write_npy_frames(d.path(), "two.npy", 2, |k| k as f64);
+    write_npy_frames(d.path(), "one.npy", 1, |_| 5.0);
+    let err = grid_scenario(d.path(), "path = \"two.npy\"", (1.5, 1.5))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("holds 2 frames and no frame times"), "{err}");
+    let s = grid_scenario(
+        d.path(),
+        "path = \"two.npy\"\nframe_interval_s = 10.0",
+        (1.5, 1.5),
+    )
+    .unwrap();
+    assert!(matches!(s.field(), FieldModel::Series(_)));
+    let s = grid_scenario(d.path(), "path = \"one.npy\"", (1.5, 1.5)).unwrap();
+    assert!(matches!(s.field(), FieldModel::Grid(_)));
+}
+
 /// The scenario of `[field]` lines `field` (files relative to `dir`), starting at `start`.
 fn grid_scenario(dir: &Path, field: &str, start: (f64, f64)) -> Result<Scenario, ScenarioError> {
     let text = format!(
