@@ -89,4 +89,40 @@ fn off_by_default_and_keys_checked() {
             speed_mps: 0.5
         }
     );
+    // With a turn-rate limit and another speed: spacing 2*2/0.5 = 8 m, legs 10*8 = 80 m; the
+    // spiral starts at that limit. Level -4: hand-over at 1 % of |level|.
+    let sets = |kind: &str| -> Vec<String> {
+        [
+            format!("controller.search={kind}"),
+            "controller.max_turn_rate_radps=0.5".into(),
+            "vehicle.speed_mps=2.0".into(),
+            "controller.level=-4.0".into(),
+        ]
+        .into()
+    };
+    let p = parse_scenario("", "<test>", &sets("lawnmower"))
+        .unwrap()
+        .search()
+        .unwrap();
+    assert_eq!(p.handover_delta, 0.04);
+    assert_eq!(
+        p.pattern,
+        isotrack_core::control::SearchPattern::Lawnmower {
+            leg_m: 80.0,
+            spacing_m: 8.0,
+            speed_mps: 2.0
+        }
+    );
+    let p = parse_scenario("", "<test>", &sets("spiral"))
+        .unwrap()
+        .search()
+        .unwrap();
+    assert_eq!(
+        p.pattern,
+        isotrack_core::control::SearchPattern::Spiral {
+            spacing_m: 8.0,
+            speed_mps: 2.0,
+            max_turn_rate_radps: 0.5
+        }
+    );
 }
