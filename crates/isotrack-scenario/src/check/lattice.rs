@@ -107,7 +107,8 @@ impl<'a> Lattice<'a> {
         Some(((fx as usize).min(self.n - 2), (fy as usize).min(self.n - 2)))
     }
 
-    /// The band's cell nearest `p` (by cell centre).
+    /// The band's cell nearest `p` (by cell centre); of cells at the same distance, the first in
+    /// row-major order (lowest `j`, then lowest `i`), so the choice never depends on rounding luck.
     pub(crate) fn nearest_band_cell(&self, p: Vec2, lo: f64, hi: f64) -> Option<(usize, usize)> {
         let mut best: Option<((usize, usize), f64)> = None;
         for j in 0..self.n - 1 {
@@ -277,6 +278,8 @@ mod tests {
         );
         assert_eq!(l.cell_of(Vec2::new(-0.1, 1.0)), None);
         assert_eq!(l.cell_of(Vec2::new(1.0, 4.1)), None);
+        assert_eq!(l.cell_of(Vec2::new(4.1, 1.0)), None, "past the last column");
+        assert_eq!(l.cell_of(Vec2::new(4.9, 4.9)), None);
         let (lo, hi) = (6.0, 6.5);
         let by_hand: BTreeSet<(usize, usize)> = (0..4)
             .flat_map(|i| (0..4).map(move |j| (i, j)))
@@ -289,6 +292,9 @@ mod tests {
             .map(|k| (k % 4, k / 4))
             .collect();
         assert_eq!(got, by_hand);
+        // The same component from a seed in the top row (whose index is not its mirror's).
+        let from_corner = l.component((3, 3), lo, hi);
+        assert_eq!(from_corner, mask);
         // Not in the band: an empty component, and no bounds over it.
         let none = l.component((0, 3), lo, hi);
         assert!(none.iter().all(|&c| !c));
@@ -383,6 +389,72 @@ mod tests {
         assert!(close(b.gamma3.unwrap(), gamma3), "{b:?} vs {gamma3}");
         assert!(close(b.gamma1, (g1 - gamma3 * d).max(0.0)), "{b:?}");
         assert!(close(b.gamma2, g2 + gamma3 * d), "{b:?}");
+        // The slopes are |grad F| = F/10 at exactly those corners (as a sorted list).
+        let mut by_hand: Vec<f64> = (0..n * n)
+            .filter(|&k| corner(k % n, k / n))
+            .map(|k| value(k % n, k / n).0 / 10.0)
+            .collect();
+        let mut got = l.slopes(&mask);
+        by_hand.sort_by(f64::total_cmp);
+        got.sort_by(f64::total_cmp);
+        assert_eq!(got.len(), by_hand.len());
+        for (a, b) in got.iter().zip(&by_hand) {
+            assert!(close(*a, *b), "{got:?} vs {by_hand:?}");
+        }
+    }
+
+    /// A cell's range is the min and max of its four corners: on `F = x + 2y` over [0, 4]^2
+    /// (1 m cells) cell (i, j) spans `[i + 2j, i + 2j + 3]`, the top from its far corner and the
+    /// bottom from its near one; on `F = -x - 2y` the other way round.
+    #[test]
+    fn a_cells_range_is_its_corners_min_and_max() {
+        for sign in [1.0, -1.0] {
+            let f =
+                FieldModel::Analytic(AnalyticField::new(AnalyticKind::LinearRamp(LinearRamp {
+                    offset: 0.0,
+                    gradient_per_m: Vec2::new(sign, 2.0 * sign),
+                })));
+            let l = Lattice::new(&f, [0.0, 4.0, 0.0, 4.0], 5);
+            for j in 0..4 {
+                for i in 0..4 {
+                    let near = (i + 2 * j) as f64;
+                    let want = if sign > 0.0 {
+                        (near, near + 3.0)
+                    } else {
+                        (-near - 3.0, -near)
+                    };
+                    assert_eq!(l.cell_range(i, j), Some(want), "cell ({i}, {j})");
+                }
+            }
+        }
+    }
+
+    /// The nearest band cell against a brute-force search over cell centres
+    /// `((i + 1/2) h, (j + 1/2) h)` worked out here, probed on a quarter-metre grid that puts many
+    /// points exactly halfway between two centres: ties go to the first cell in row-major order.
+    #[test]
+    fn nearest_band_cell_by_centre_ties_to_the_first() {
+        let f = ramp();
+        let l = Lattice::new(&f, [0.0, 4.0, 0.0, 4.0], 5);
+        let (lo, hi) = (6.0, 6.5);
+        let band: Vec<(usize, usize)> = (0..4)
+            .flat_map(|j| (0..4).map(move |i| (i, j)))
+            .filter(|&(i, j)| (1..=4).contains(&(2 * i as i64 - j as i64)))
+            .collect();
+        let mut ties = 0;
+        for u in -4..=20 {
+            for v in -4..=20 {
+                let p = Vec2::new(u as f64 * 0.25, v as f64 * 0.25);
+                let d = |&(i, j): &(usize, usize)| {
+                    (i as f64 + 0.5 - p.x).powi(2) + (j as f64 + 0.5 - p.y).powi(2)
+                };
+                let best = band.iter().map(d).fold(f64::INFINITY, f64::min);
+                let first = *band.iter().find(|c| d(c) == best).unwrap();
+                ties += usize::from(band.iter().filter(|c| d(c) == best).count() > 1);
+                assert_eq!(l.nearest_band_cell(p, lo, hi), Some(first), "probe {p:?}");
+            }
+        }
+        assert!(ties > 20, "only {ties} probes were ties");
     }
 
     /// On a curved field and a coarse lattice, the bounds with their margins hold between the
