@@ -161,4 +161,46 @@ mod tests {
         let w = sliding_mode_conditions(0.5, 1.0, 0.5, 1.0, 1.0, Some(0.2));
         assert!(w[0].contains("condition (a)"), "{}", w[0]);
     }
+
+    /// Both conditions where `v` and `|grad F|` are not 1, so every product and quotient shows:
+    /// v = 2, min|grad F| = 0.5, ||hess F|| <= 0.25, gamma = 0.3, delta = 1 (mu = 0.3):
+    /// (a) 0.3 < v*0.5 = 1 holds; (b) needs u_bar > (2*0.25 + 0.3*0.3/2)/sqrt(0.25 - 0.09/4)
+    /// = 0.545/sqrt(0.2275) = 1.14263 rad/s. With gamma = 2 (mu = 2), (a) fails: 2 >= 1,
+    /// though 2 < v/min|grad F| = 4.
+    #[test]
+    fn sliding_mode_conditions_away_from_unit_speed_and_slope() {
+        let need = 0.545 / 0.2275f64.sqrt();
+        assert!((need - 1.142_63).abs() < 1e-5);
+        let w = sliding_mode_conditions(2.0, need - 1e-3, 0.3, 1.0, 0.5, Some(0.25));
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains(&format!("{need:.4}")), "{}", w[0]);
+        assert!(sliding_mode_conditions(2.0, need + 1e-3, 0.3, 1.0, 0.5, Some(0.25)).is_empty());
+        let a = sliding_mode_conditions(2.0, 100.0, 2.0, 1.0, 0.5, Some(0.25));
+        assert_eq!(a.len(), 1, "{a:?}");
+        assert!(
+            a[0].contains("condition (a)") && a[0].contains("= 1.0000"),
+            "{}",
+            a[0]
+        );
+        // Without a Hessian bound only (a) can be checked.
+        assert!(sliding_mode_conditions(2.0, 1e-3, 0.3, 1.0, 0.5, None).is_empty());
+    }
+
+    /// The SOSM at v = 2 with |grad F| in [0.5, 1.5]: G1 = 1, G2 = 3, Fb = 4*0.5 = 2. alpha = 0.9
+    /// is below 3 G1/G2 = 1; U > max(2/0.9, 8/(3 - 2.7)) = 26.667. The admissible alpha is open at
+    /// both ends: 0 and 3 G1/G2 itself (0.75 with v = 1, |grad F| in [1, 4]) are refused.
+    #[test]
+    fn sosm_conditions_away_from_unit_speed() {
+        let need = 8.0 / 0.3;
+        let w = sosm_conditions(2.0, need - 0.01, 0.9, 0.5, 1.5, Some(0.5));
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains(&format!("{need:.4}")), "{}", w[0]);
+        assert!(sosm_conditions(2.0, need + 0.01, 0.9, 0.5, 1.5, Some(0.5)).is_empty());
+        for (alpha, grad_max) in [(0.0, 2.0), (0.75, 4.0)] {
+            let w = sosm_conditions(1.0, 1e9, alpha, 1.0, grad_max, Some(0.5));
+            assert_eq!(w.len(), 1, "alpha {alpha}: {w:?}");
+            assert!(w[0].contains("alpha_star"), "{}", w[0]);
+        }
+        assert!(sosm_conditions(1.0, 1e9, 0.74, 1.0, 4.0, Some(0.5)).is_empty());
+    }
 }

@@ -469,5 +469,17 @@ fn baseline_conditions_are_warned_by_name() {
         w[0].starts_with("sliding_mode_smooth:") && w[0].contains("condition (a)"),
         "{}",
         w[0]
-    );
+    ); // The suboptimal SOSM: alpha* = 0.5 is inside (0, min(1, 3 G1/G2 ~ 2.5)) and U = 1 rad/s
+       // far above its bound, max(Fb/(alpha* G1), 4 Fb/(3 G1 - alpha* G2)) ~ 0.2 rad/s with
+       // Fb = v^2 ||hess F|| ~ 0.25*0.184 and G1 ~ 0.45; U = 0.05 rad/s is below it.
+    assert!(baseline_warnings(&sc("", &["controller.kind=suboptimal_sosm"])).is_empty());
+    let w = baseline_warnings(&sc(
+        "",
+        &[
+            "controller.kind=suboptimal_sosm",
+            "controller.max_turn_rate_radps=0.05",
+        ],
+    ));
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].contains("amplitude U = 0.0500"), "{}", w[0]);
 }
