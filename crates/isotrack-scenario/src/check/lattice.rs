@@ -333,18 +333,39 @@ mod tests {
     /// and `||hess F|| = max(F/100, F/(10 r))` (radial and tangential curvatures); `lip` is the
     /// largest change of `||hess F||` per metre between corners next to each other,
     /// `gamma3 = max ||hess F|| + lip d`, `gamma1 = min |grad F| - gamma3 d`,
-    /// `gamma2 = max |grad F| + gamma3 d`, `d` half a cell's diagonal (1 m cells here).
+    /// `gamma2 = max |grad F| + gamma3 d`, `d` half a cell's diagonal.
     #[test]
     fn margins_by_hand_on_the_circular_field() {
         let f = FieldModel::Analytic(AnalyticField::new(AnalyticKind::RadialExp(
             RadialExp::paper(),
         )));
         let n = 7;
-        let l = Lattice::new(&f, [2.0, 8.0, -3.0, 3.0], n);
-        let mask = l.component(l.cell_of(Vec2::new(6.93, 0.0)).unwrap(), 8.0, 12.0);
+        // 1 m square cells across the isoline in x, then 1 m x 0.5 m cells across it in y (where
+        // ||hess F|| changes fastest per metre along y, so the y spacing sets `lip`).
+        for (region, seed, y_sets_lip) in [
+            ([2.0, 8.0, -3.0, 3.0], Vec2::new(6.93, 0.0), false),
+            ([-3.0, 3.0, 4.0, 7.0], Vec2::new(0.0, 6.93), true),
+        ] {
+            margins_by_hand_on(&f, n, region, seed, y_sets_lip);
+        }
+    }
+
+    fn margins_by_hand_on(
+        f: &FieldModel,
+        n: usize,
+        region: [f64; 4],
+        seed: Vec2,
+        y_sets_lip: bool,
+    ) {
+        let l = Lattice::new(f, region, n);
+        let mask = l.component(l.cell_of(seed).unwrap(), 8.0, 12.0);
         let b = l.bounds(&mask, true).unwrap();
+        let (hx, hy) = (
+            (region[1] - region[0]) / (n - 1) as f64,
+            (region[3] - region[2]) / (n - 1) as f64,
+        );
         let value = |i: usize, j: usize| {
-            let (x, y) = (2.0 + i as f64, -3.0 + j as f64);
+            let (x, y) = (region[0] + hx * i as f64, region[2] + hy * j as f64);
             let r = x.hypot(y);
             (20.0 * (-r / 10.0).exp(), r)
         };
@@ -359,8 +380,8 @@ mod tests {
             let (v, r) = value(i, j);
             (v / 100.0).max(v / (10.0 * r))
         };
-        let (mut g1, mut g2, mut g3, mut lip, mut count) =
-            (f64::INFINITY, 0.0f64, 0.0f64, 0.0f64, 0);
+        let (mut g1, mut g2, mut g3, mut lip_x, mut lip_y, mut count) =
+            (f64::INFINITY, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0);
         for j in 0..n {
             for i in 0..n {
                 if !corner(i, j) {
@@ -370,14 +391,16 @@ mod tests {
                 let g = value(i, j).0 / 10.0;
                 (g1, g2, g3) = (g1.min(g), g2.max(g), g3.max(hess(i, j)));
                 if i + 1 < n && corner(i + 1, j) {
-                    lip = lip.max((hess(i + 1, j) - hess(i, j)).abs());
+                    lip_x = lip_x.max((hess(i + 1, j) - hess(i, j)).abs() / hx);
                 }
                 if j + 1 < n && corner(i, j + 1) {
-                    lip = lip.max((hess(i, j + 1) - hess(i, j)).abs());
+                    lip_y = lip_y.max((hess(i, j + 1) - hess(i, j)).abs() / hy);
                 }
             }
         }
-        let d = 0.5 * 2f64.sqrt();
+        assert_eq!(lip_y > lip_x, y_sets_lip, "lip x {lip_x}, y {lip_y}");
+        let lip = lip_x.max(lip_y);
+        let d = 0.5 * hx.hypot(hy);
         let gamma3 = g3 + lip * d;
         assert_eq!(b.points, count);
         assert!(count > 8 && lip > 0.0, "{count} corners, lip {lip}");
