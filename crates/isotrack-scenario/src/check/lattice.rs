@@ -228,10 +228,12 @@ impl<'a> Lattice<'a> {
                 if a.is_nan() {
                     continue;
                 }
-                if i + 1 < self.n && !hess_norm[j * self.n + i + 1].is_nan() {
+                // A neighbour outside the set has a NaN norm, so its difference is NaN, which
+                // `f64::max` passes over (it returns the other argument).
+                if i + 1 < self.n {
                     lip = lip.max((hess_norm[j * self.n + i + 1] - a).abs() / hx);
                 }
-                if j + 1 < self.n && !hess_norm[(j + 1) * self.n + i].is_nan() {
+                if j + 1 < self.n {
                     lip = lip.max((hess_norm[(j + 1) * self.n + i] - a).abs() / hy);
                 }
             }
@@ -340,10 +342,12 @@ mod tests {
             RadialExp::paper(),
         )));
         let n = 7;
-        // 1 m square cells across the isoline in x, then 1 m x 0.5 m cells across it in y (where
-        // ||hess F|| changes fastest per metre along y, so the y spacing sets `lip`).
+        // 1 m square cells and 0.5 m x 1 m cells across the isoline in x, then 1 m x 0.5 m cells
+        // across it in y (where ||hess F|| changes fastest per metre along y, so the y spacing
+        // sets `lip`).
         for (region, seed, y_sets_lip) in [
             ([2.0, 8.0, -3.0, 3.0], Vec2::new(6.93, 0.0), false),
+            ([4.0, 7.0, -3.0, 3.0], Vec2::new(6.93, 0.0), false),
             ([-3.0, 3.0, 4.0, 7.0], Vec2::new(0.0, 6.93), true),
         ] {
             margins_by_hand_on(&f, n, region, seed, y_sets_lip);
