@@ -823,6 +823,7 @@ mod tests {
         }
         assert_eq!(spread([5.0, 5.0], 4), [5.0]);
         assert_eq!(spread([1.0, 2.0], 1), [2.0]);
+        assert_eq!(spread([1.0, 4.0], 2), [1.0, 4.0], "two slopes are the ends");
     }
 
     /// The curvature the sampled check uses: `1/r_d` of a circular field (`0.1/ln 2` by
@@ -843,7 +844,45 @@ mod tests {
         // v kappa = 0.072 against kp c1 = 0.06 (kp 0.3) and 2 (kp 10).
         let weak = check(&sc("", &["controller.ki=0", "controller.kp=0.3"]), None).sampled;
         assert!(weak.note.contains("no equilibrium"), "{}", weak.note);
+        // No sample rate gives the P law an equilibrium it lacks: not the rate's fault.
+        assert_eq!(weak.stable, Some(false));
+        assert_eq!(weak.spectral_radius, None);
+        assert_eq!(weak.rate_is_the_limit, Some(false), "{weak:?}");
         let strong = check(&sc("", &["controller.ki=0"]), None).sampled;
         assert!(!strong.note.contains("no equilibrium"), "{}", strong.note);
+    }
+
+    /// The heading condition needs a direction to measure from: starting on the peak of a
+    /// single Gaussian plume (zero gradient there), the start's `phi(t0)` is left out rather
+    /// than read off `atan2(0, 0)`; a metre away it is there.
+    #[test]
+    fn no_initial_phi_where_the_gradient_vanishes() {
+        let text = |x: f64| {
+            format!(
+                "[field]\nkind = \"gaussian_plumes\"\nsources = [{{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [10.0, 10.0], rotation_rad = 0.0 }}]\n[initial]\nx_m = {x:?}\ny_m = 0.0\n"
+            )
+        };
+        let peak = crate::parse_scenario(&text(0.0), "<test>", &[]).unwrap();
+        assert_eq!(check(&peak, None).prop2.initial_phi_rad, None);
+        let off = crate::parse_scenario(&text(1.0), "<test>", &[]).unwrap();
+        assert!(check(&off, None).prop2.initial_phi_rad.is_some());
+    }
+
+    /// A tube thinner than the bound: the bound is reported with a note that it exceeds the
+    /// tube the gammas were taken on (the default scenario's P part, ki = 0, where Prop. 2
+    /// applies; c2 = 1, tube 1e-4 round s_d = 10).
+    #[test]
+    fn a_bound_wider_than_its_tube_is_noted() {
+        let s = crate::parse_scenario("", "<test>", &["controller.ki=0".to_string()]).unwrap();
+        let wide = check(&s, None).prop2;
+        let thin = check(&s, Some(1e-4)).prop2;
+        let eb = thin.error_bound.unwrap_or_else(|| panic!("{thin:?}"));
+        assert!(eb > 1e-4, "{eb}");
+        assert!(
+            thin.note.contains("exceeds the tube 0.0001"),
+            "{}",
+            thin.note
+        );
+        assert!(!wide.note.contains("exceeds the tube"), "{}", wide.note);
     }
 }
