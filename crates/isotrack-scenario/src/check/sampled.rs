@@ -460,6 +460,31 @@ mod tests {
                 }
             }
         }
+        // Rounded, not approximated: the same matrix as the whole period, to the bit.
+        for m in [1.0, 2.0] {
+            let at = |delay_s: f64| {
+                SampledLoop {
+                    delay_s,
+                    ..dubins(kp, 0.0, t)
+                }
+                .closed_loop_matrix()
+                .unwrap()
+            };
+            let exact = at(m * t);
+            assert_eq!(at(m * t * (1.0 - 1e-12)), exact, "{m} T from below");
+            assert_eq!(at(m * t + 1e-13), exact, "{m} T from above");
+        }
+        let none = dubins(kp, 0.0, t).closed_loop_matrix().unwrap();
+        assert_eq!(
+            SampledLoop {
+                delay_s: 1e-13,
+                ..dubins(kp, 0.0, t)
+            }
+            .closed_loop_matrix()
+            .unwrap(),
+            none,
+            "a hair of delay is none"
+        );
         // A delay far beyond the delay line's capacity has no model.
         let l = SampledLoop {
             delay_s: 1e4 * 0.1 + 0.1,
@@ -538,5 +563,156 @@ mod tests {
         .spectral_radius();
         assert!(r2 > r0, "{r0} {r2}");
         assert!((r2 - r2m).abs() < 1e-4, "{r2} {r2m}");
+    }
+
+    /// No model for a period or delay that is not a finite number in range.
+    #[test]
+    fn parameters_out_of_range_have_no_model() {
+        for t in [0.0, -0.1, f64::INFINITY, f64::NAN] {
+            assert!(
+                dubins(3.0, 0.0, t).closed_loop_matrix().is_none(),
+                "T = {t}"
+            );
+        }
+        for delay_s in [-0.1, f64::INFINITY, f64::NAN] {
+            let l = SampledLoop {
+                delay_s,
+                ..dubins(3.0, 0.0, 0.1)
+            };
+            assert!(l.closed_loop_matrix().is_none(), "delay {delay_s}");
+        }
+        assert!(dubins(3.0, 0.0, 0.1).closed_loop_matrix().is_some());
+    }
+
+    /// The P law on a curved isoline, by hand: the plant `z1'' = -w^2 z1 + v dw` (`w = v kappa`)
+    /// held over `T` is `G(z) = -alpha v (1 - cos wT)(z + 1) / (w^2 (z^2 - 2 z cos wT + 1))`
+    /// (the ZOH transform of `-alpha v / (s^2 + w^2)`, which is the straight case's
+    /// `-alpha v T^2 (z + 1)/(2 (z - 1)^2)` as `w -> 0`); the law's gain on `eps` is
+    /// `c = (c1/c2)(1 - q^2)`, `q = v kappa/(kp c1)`. So `1 - G K = 0` is
+    /// `w^2 T z (z^2 - 2 z cos wT + 1) + alpha v kp (1 - cos wT)(z + 1)((1 + cT) z - 1) = 0`.
+    /// With c2 = 0.5 and q = 0.25 (`c = 0.4 * 0.9375`) neither factor is 1.
+    #[test]
+    fn the_p_law_on_a_curve_has_the_hand_derived_polynomial() {
+        for (kp, t) in [(1.0, 0.1), (1.0, 1.0), (2.0, 0.5), (5.0, 0.05)] {
+            let l = SampledLoop {
+                curvature_per_m: 0.1 * kp,
+                c2: 0.5,
+                ..dubins(kp, 0.0, t)
+            };
+            let q = l.speed_mps * l.curvature_per_m / (kp * l.c1);
+            assert!((q - 0.25).abs() < 1e-15);
+            let c = l.c1 / l.c2 * (1.0 - q * q);
+            let (av, w) = (l.slope * l.speed_mps, l.speed_mps * l.curvature_per_m);
+            let cos = (w * t).cos();
+            let p = |z: nalgebra::Complex<f64>| {
+                let one = nalgebra::Complex::new(1.0, 0.0);
+                z * (z * z - z * (2.0 * cos) + one) * (w * w * t)
+                    + (z + one) * (z * (1.0 + c * t) - one) * (av * kp * (1.0 - cos))
+            };
+            let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
+            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-9).collect();
+            assert_eq!(nonzero.len(), 3, "{eig:?}");
+            for z in nonzero {
+                assert!(
+                    p(*z).norm() < 1e-12 * (1.0 + kp),
+                    "kp {kp} T {t}: p({z}) = {}",
+                    p(*z)
+                );
+            }
+        }
+    }
+
+    /// The filtered difference by hand on the straight isoline: the estimator
+    /// `D(z) = (1 - a)(z - 1) / (T (z - a))`, `a = exp(-T/tau)`, so the law is
+    /// `K(z) = kp ((1 - a)(z - 1) + cT (z - a)) / (T (z - a))` and `1 - G K = 0` is
+    /// `2 (z - 1)^2 (z - a) + alpha v T kp (z + 1)((1 - a)(z - 1) + cT (z - a)) = 0`, a cubic
+    /// (the other two eigenvalues are zero); filter time constants on both sides of the period.
+    #[test]
+    fn the_filtered_difference_has_the_hand_derived_polynomial() {
+        for (kp, t, tau_s) in [(3.0, 0.1, 0.05), (3.0, 0.1, 0.3), (1.0, 1.0, 0.25)] {
+            let l = SampledLoop {
+                estimator: EstimatorModel::FilteredDifference { tau_s },
+                ..dubins(kp, 0.0, t)
+            };
+            let (av, c, a) = (l.slope * l.speed_mps, l.c1 / l.c2, (-t / tau_s).exp());
+            let p = |z: nalgebra::Complex<f64>| {
+                let one = nalgebra::Complex::new(1.0, 0.0);
+                let za = z - one * a;
+                (z - one) * (z - one) * za * 2.0
+                    + (z + one) * ((z - one) * (1.0 - a) + za * (c * t)) * (av * t * kp)
+            };
+            let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
+            // The two zero eigenvalues form a Jordan block that rounding splits into a pair of
+            // about 1e-8.
+            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-6).collect();
+            assert_eq!(nonzero.len(), 3, "{eig:?}");
+            for z in nonzero {
+                assert!(
+                    p(*z).norm() < 1e-10 * (1.0 + kp),
+                    "kp {kp} T {t} tau {tau_s}: p({z}) = {}",
+                    p(*z)
+                );
+            }
+        }
+    }
+
+    /// The bisection stops once `hi/lo < 1 + 1e-6`: from a scan step of `10^(1/20)` that is
+    /// `ceil(log2(ln(10^(1/20)) / ln(1 + 1e-6))) = 17` halvings of the log-interval (each an
+    /// eigenvalue problem per slope), and it returns the stable end within 1e-6 of the boundary.
+    #[test]
+    fn refine_stops_at_a_millionth() {
+        let want = (0.05 * std::f64::consts::LN_10 / 1e-6f64.ln_1p())
+            .log2()
+            .ceil();
+        assert_eq!(want, 17.0);
+        let boundary = 1.05;
+        let calls = std::cell::Cell::new(0);
+        let got = refine(1.0, 10f64.powf(0.05), |x| {
+            calls.set(calls.get() + 1);
+            x < boundary
+        });
+        assert_eq!(calls.get() as f64, want);
+        assert!(got < boundary && boundary / got < 1.0 + 1e-6, "{got}");
+    }
+
+    /// A fractional delay against the double integrator in closed form: on the straight
+    /// isoline `z1' = v z2`, `z2' = u`, so `u` held for `tau` moves `z2` by `u tau` and `z1` by
+    /// `v z2 tau + v u tau^2/2`. The sample taken `r` before each period's end is
+    /// `eps_{k+1} = -alpha z1((k + 1)T - r)`, reached from `kT` over `T - r`; the law is
+    /// `u_k = kp ((eps_k - eps_{k-1})/T + c eps_k)`. Twenty periods from one state, by hand and
+    /// by the matrix, with `r` a quarter and three quarters of the period.
+    #[test]
+    fn a_fractional_delay_matches_the_double_integrator_by_hand() {
+        let (kp, t) = (3.0, 0.2);
+        for r in [0.25 * t, 0.75 * t] {
+            let l = SampledLoop {
+                delay_s: t + r,
+                ..dubins(kp, 0.0, t)
+            };
+            let (v, alpha, c) = (l.speed_mps, l.slope, l.c1 / l.c2);
+            let m = l.closed_loop_matrix().unwrap();
+            // [z1, z2, w_k, w_{k-1}, eps_{k-1}]: one whole period of delay line.
+            assert_eq!(m.nrows(), 5);
+            let x0 = DVector::from_vec(vec![0.7, -0.2, -0.5, -0.6, -0.65]);
+            let (mut z1, mut z2, mut w0, mut w1, mut prev) = (x0[0], x0[1], x0[2], x0[3], x0[4]);
+            let mut x = x0;
+            for k in 0..20 {
+                let eps = w1;
+                let u = kp * ((eps - prev) / t + c * eps);
+                let tau = t - r;
+                let w_next = -alpha * (z1 + v * z2 * tau + v * u * tau * tau / 2.0);
+                (z1, z2) = (z1 + v * z2 * t + v * u * t * t / 2.0, z2 + u * t);
+                (w0, w1, prev) = (w_next, w0, eps);
+                x = &m * x;
+                let hand = [z1, z2, w0, w1, prev];
+                for (i, h) in hand.iter().enumerate() {
+                    assert!(
+                        (x[i] - h).abs() < 1e-12 * (1.0 + h.abs()),
+                        "r {r}, step {k}, state {i}: {} vs {h}",
+                        x[i]
+                    );
+                }
+            }
+        }
     }
 }
