@@ -621,6 +621,17 @@ mod tests {
         assert!(e[0].message.contains("kz"));
         let e = err("", &["controller.kp"]);
         assert!(e[0].message.contains("KEY=VALUE"));
+        // An empty part anywhere in the dotted key is refused before the table is touched.
+        for arg in ["=1", "controller..kp=1", "controller.=1", ".kp=1", " . =1"] {
+            let e = err("", &[arg]);
+            assert_eq!(e.len(), 1, "{arg}");
+            assert!(
+                e[0].message.contains("expected a dotted key"),
+                "{arg}: {}",
+                e[0]
+            );
+            assert_eq!(e[0].key, None, "{arg}");
+        }
     }
 
     #[test]

@@ -523,6 +523,17 @@ mod tests {
         let p = plan("scenario = \"x\"\n[base]\nsim.seed = 3\n[random]\nruns = 2\n").unwrap();
         assert!(!p.derives_seed);
         assert!(p.duplicate_notes()[0].contains("identical"));
+        // One draw, or draws that differ by a [random] key: nothing identical to note, even
+        // with the seed fixed.
+        let p =
+            plan("scenario = \"x\"\n[base]\nsim.seed = 3\n[grid]\ncontroller.kp = [1.0, 2.0]\n")
+                .unwrap();
+        assert!(!p.derives_seed);
+        assert_eq!(p.duplicate_notes(), Vec::<String>::new());
+        let p = plan("scenario = \"x\"\n[base]\nsim.seed = 3\n[random]\nruns = 2\ninitial.x_m = { uniform = [-1.0, 1.0] }\n")
+            .unwrap();
+        assert!(!p.derives_seed);
+        assert_eq!(p.duplicate_notes(), Vec::<String>::new());
         let p = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [1.0, 2.0, 1.0]\n").unwrap();
         assert!(p.derives_seed);
         assert!(p.duplicate_notes()[0].contains("1.0 more than once"));

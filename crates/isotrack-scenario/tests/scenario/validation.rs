@@ -275,6 +275,8 @@ fn analytic_field_ranges() {
         ("[field]\ndomain_m = [-100.0, 100.0, -100.0, 100.0]\n", &[]),
         ("[field]\ndomain_m = [1.0, 1.0, -100.0, 100.0]\n", &["field.domain_m"]),
         ("[field]\ndomain_m = [-100.0, 100.0, 2.0, 1.0]\n", &["field.domain_m"]),
+        ("[field]\ndomain_m = [-100.0, 100.0, 1.0, 1.0]\n", &["field.domain_m"]),
+        ("[field]\ndomain_m = [2.0, 1.0, -100.0, 100.0]\n", &["field.domain_m"]),
         (
             "[field]\ndomain_m = [-7e7, 100.0, -100.0, 100.0]\n",
             &["field.domain_m"],
