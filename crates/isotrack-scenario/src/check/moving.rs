@@ -81,7 +81,8 @@ pub fn moving_report(s: &Scenario, tube: f64, region: [f64; 4]) -> MovingReport 
     speeds.sort_by(f64::total_cmp);
     let n = speeds.len();
     let max = speeds.last().copied();
-    let p95 = (n > 0).then(|| speeds[((0.95 * (n - 1) as f64).round() as usize).min(n - 1)]);
+    // Nearest rank: 0.95 (n - 1) <= n - 1 rounds to at most n - 1, a valid index.
+    let p95 = (n > 0).then(|| speeds[(0.95 * (n - 1) as f64).round() as usize]);
     MovingReport {
         time_varying,
         isoline_speed_max_mps: max,
@@ -127,51 +128,132 @@ mod tests {
         assert!(!r.time_varying && r.trackable.is_none());
     }
 
-    /// The documented sampling, recomputed here: a ramp `F = y + o(t)` (frames every 0.5 s,
-    /// offsets `o = t^3` at the frames, linear between them, the first frame held before t = 0)
-    /// has isolines moving at `|o(t + h) - o(t - h)| / 2h` by the central difference, with
-    /// `h = min(1 s, duration/4) = 0.5 s` for a 2 s run, at the 48 times `2 (k + 1/2)/48`. The
-    /// largest is at the last time, the 95th percentile at the 46th (every lattice point of a
-    /// time has its speed).
-    #[test]
-    fn a_series_isoline_speed_is_the_central_difference_at_the_48_times() {
-        let d = tempfile::tempdir().unwrap();
-        let frame_t: Vec<f64> = (0..7).map(|i| 0.5 * i as f64).collect();
+    /// A grid time series `F = y + o_i` on a 5 x 5 grid (1 m cells from the origin, so the data
+    /// cover [0, 4] m x [0, 4] m), frames every 0.5 s with offsets `o_i`, bilinear, s_d = 2, a
+    /// 2 s run.
+    fn ramp_series(d: &std::path::Path, offsets: &[f64]) -> crate::Scenario {
         let mut names = vec![];
-        for (i, t) in frame_t.iter().enumerate() {
+        for (i, o) in offsets.iter().enumerate() {
             let rows: Vec<String> = (0..5)
-                .map(|j| vec![format!("{}", j as f64 + t * t * t); 5].join(","))
+                .map(|j| vec![format!("{}", j as f64 + o); 5].join(","))
                 .collect();
             let name = format!("f{i}.csv");
-            std::fs::write(d.path().join(&name), rows.join("\n") + "\n").unwrap();
+            std::fs::write(d.join(&name), rows.join("\n") + "\n").unwrap();
             names.push(format!("\"{name}\""));
         }
-        let times: Vec<String> = frame_t.iter().map(|t| format!("{t:?}")).collect();
+        let times: Vec<String> = (0..offsets.len())
+            .map(|i| format!("{:?}", 0.5 * i as f64))
+            .collect();
         let text = format!(
             "[field]\nkind = \"grid\"\npaths = [{}]\nframe_times_s = [{}]\ninterpolation = \"bilinear\"\n[initial]\nx_m = 2.0\ny_m = 2.0\n[controller]\nlevel = 2.0\n[sim]\nduration_s = 2.0\n",
             names.join(", "),
             times.join(", ")
         );
-        let s = crate::parse_scenario_in(&text, "s.toml", &[], d.path()).unwrap();
-        let r = super::moving_report(&s, 1e9, [0.0, 4.0, 0.0, 4.0]);
-        // The offset between frames, the first held before t = 0.
+        crate::parse_scenario_in(&text, "s.toml", &[], d).unwrap()
+    }
+
+    /// The frame times and cubic offsets `o = t^3` of [`cubic_speed`]'s series.
+    const CUBIC_FRAMES_S: [f64; 7] = [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0];
+
+    /// The isoline speed of the cubic series at the k-th of the 48 times, recomputed by hand:
+    /// `|o(t + h) - o(t - h)| / 2h` with `h = min(1 s, duration/4) = 0.5 s` for the 2 s run, the
+    /// offset linear between frames and the first frame held before t = 0.
+    fn cubic_speed(k: usize) -> f64 {
         let o = |t: f64| {
             let t = t.max(0.0);
             let i = ((t / 0.5).floor() as usize).min(5);
-            let (t0, t1) = (frame_t[i], frame_t[i + 1]);
+            let (t0, t1) = (CUBIC_FRAMES_S[i], CUBIC_FRAMES_S[i + 1]);
             let w = (t - t0) / (t1 - t0);
             (1.0 - w) * t0.powi(3) + w * t1.powi(3)
         };
         let h = 0.5;
-        let speed = |k: usize| {
-            let t = 2.0 * (k as f64 + 0.5) / 48.0;
-            (o(t + h) - o(t - h)) / (2.0 * h)
-        };
+        let t = 2.0 * (k as f64 + 0.5) / 48.0;
+        (o(t + h) - o(t - h)) / (2.0 * h)
+    }
+
+    /// The documented sampling, recomputed here: the cubic series' isolines move at
+    /// [`cubic_speed`] at the 48 times `2 (k + 1/2)/48`. The largest is at the last time, the
+    /// 95th percentile (nearest rank `round(0.95 (n - 1))`) at the 46th (every lattice point of
+    /// a time has its speed).
+    #[test]
+    fn a_series_isoline_speed_is_the_central_difference_at_the_48_times() {
+        let d = tempfile::tempdir().unwrap();
+        let offsets = CUBIC_FRAMES_S.map(|t| t * t * t);
+        let s = ramp_series(d.path(), &offsets);
+        let r = super::moving_report(&s, 1e9, [0.0, 4.0, 0.0, 4.0]);
         let max = r.isoline_speed_max_mps.unwrap();
-        assert!((max - speed(47)).abs() < 1e-9, "{max} vs {}", speed(47));
+        assert!(
+            (max - cubic_speed(47)).abs() < 1e-9,
+            "{max} vs {}",
+            cubic_speed(47)
+        );
         let p95 = r.isoline_speed_p95_mps.unwrap();
-        assert!((p95 - speed(45)).abs() < 1e-9, "{p95} vs {}", speed(45));
+        assert!(
+            (p95 - cubic_speed(45)).abs() < 1e-9,
+            "{p95} vs {}",
+            cubic_speed(45)
+        );
         assert_eq!(r.samples, 48 * 101 * 101);
         assert!(r.note.contains("central difference of 0.5 s"), "{}", r.note);
+    }
+
+    /// The lattice runs from the region's low corner to its high one: on [-100, 0] m x
+    /// [-100, 0] m only its last point, the data's corner (0, 0), has a value, so each time
+    /// gives one speed (n = 48, the 95th percentile at rank round(0.95 x 47) = 45); a region off
+    /// the data gives no samples and no verdict.
+    #[test]
+    fn the_lattice_spans_the_region_corner_to_corner() {
+        let d = tempfile::tempdir().unwrap();
+        let s = ramp_series(d.path(), &CUBIC_FRAMES_S.map(|t| t * t * t));
+        let r = super::moving_report(&s, 1e9, [-100.0, 0.0, -100.0, 0.0]);
+        assert_eq!(r.samples, 48);
+        let max = r.isoline_speed_max_mps.unwrap();
+        assert!((max - cubic_speed(47)).abs() < 1e-9, "{max}");
+        let p95 = r.isoline_speed_p95_mps.unwrap();
+        assert!(
+            (p95 - cubic_speed(45)).abs() < 1e-9,
+            "{p95} vs {}",
+            cubic_speed(45)
+        );
+        let r = super::moving_report(&s, 1e9, [10.0, 20.0, 10.0, 20.0]);
+        assert!(r.time_varying);
+        assert_eq!(r.samples, 0);
+        assert_eq!(r.isoline_speed_max_mps, None);
+        assert_eq!(r.isoline_speed_p95_mps, None);
+        assert_eq!(r.trackable, None);
+    }
+
+    /// A ramp `F = y` drifting at 0.5 m/s along y (`F(t, p) = y - 0.5 t`), s_d = 0, a 48 s run,
+    /// the robot at `v` m/s. Sampled on whole-metre points at the times k + 1/2 with h = 1 s,
+    /// every step is exact in binary.
+    fn drifting_ramp(v: f64) -> crate::Scenario {
+        parse_scenario(
+            "[field]\nkind = \"linear_ramp\"\ngradient_per_m = [0.0, 1.0]\ndrift_mps = [0.0, 0.5]\n[initial]\nx_m = 0.0\ny_m = 0.0\n[controller]\nlevel = 0.0\n[sim]\nduration_s = 48.0\n",
+            "<test>",
+            &[format!("vehicle.speed_mps={v}")],
+        )
+        .unwrap()
+    }
+
+    /// The tube is closed, `|F - s_d| <= tube`: on the drifting ramp at t = k + 1/2 and tube
+    /// 1/4, `|y - k/2 - 1/4| <= 1/4` holds on whole metres only at one row (y = k/2 for even k,
+    /// (k + 1)/2 for odd), exactly on the tube's edge: 101 points at each of the 48 times.
+    #[test]
+    fn the_tube_includes_its_edges() {
+        let r = super::moving_report(&drifting_ramp(1.0), 0.25, [-50.0, 50.0, -50.0, 50.0]);
+        assert_eq!(r.samples, 48 * 101);
+        assert_eq!(r.isoline_speed_max_mps, Some(0.5));
+    }
+
+    /// Trackable means strictly faster: the drifting ramp's isolines move at exactly 0.5 m/s,
+    /// which a 0.5 m/s robot cannot outrun.
+    #[test]
+    fn an_isoline_as_fast_as_the_vehicle_is_not_trackable() {
+        let region = [-50.0, 50.0, -50.0, 50.0];
+        let r = super::moving_report(&drifting_ramp(0.5), 1e9, region);
+        assert_eq!(r.isoline_speed_max_mps, Some(0.5));
+        assert_eq!(r.trackable, Some(false));
+        let r = super::moving_report(&drifting_ramp(0.5 + 1e-12), 1e9, region);
+        assert_eq!(r.trackable, Some(true));
     }
 }
