@@ -365,3 +365,31 @@ fn the_puff_plume_isoline_is_the_mean_plumes() {
     let far = s.isoline().distance(0.0, Vec2::new(x, 20.0)).unwrap();
     assert!(far > 15.0, "{far}");
 }
+
+/// The mean plume's isoline window ends exactly `u T + 4 sqrt(sigma0^2 + 2 K T)` downwind of the
+/// source, on a lattice of `u T / 400` m (here u = 1 m/s, T = 400 s, sigma0 = 5 m,
+/// K = 0.09375 m^2/s: 400 + 40 = 440 m on a 1 m lattice, every number exact). The level-0.2
+/// isoline still runs there: at x = 440 m the 2-D Gaussian plume puts it at
+/// `y = s sqrt(2 ln(C0/0.2))`, `s^2 = 25 + 2 K x/u = 107.5`, `C0 = 20/(u sqrt(2 pi) s)`. It is
+/// drawn up to the window's edge and not a lattice cell beyond.
+#[test]
+fn the_mean_plumes_isoline_ends_at_the_windows_edge() {
+    use isotrack_core::math::Vec2;
+    let s = isotrack_scenario::parse_scenario(
+        "[field]\nkind = \"puff_plume\"\nwind_mps = [1.0, 0.0]\nmax_age_s = 400.0\npuff_sigma0_m = 5.0\ndiffusivity_m2ps = 0.09375\nmeander_std_mps = 0.0\n[controller]\nlevel = 0.2\n[initial]\nx_m = 5.0\n",
+        "<test>",
+        &[],
+    )
+    .unwrap();
+    let x = 440.0;
+    let s2: f64 = 25.0 + 2.0 * 0.09375 * x;
+    let c0 = 20.0 / (2.0 * std::f64::consts::PI * s2).sqrt();
+    let y = (2.0 * s2 * (c0 / 0.2).ln()).sqrt();
+    assert!((y - 17.0).abs() < 0.1, "{y}");
+    let iso = s.isoline();
+    let on = iso.distance(0.0, Vec2::new(x, y)).unwrap();
+    assert!(on < 0.02, "{on} m from the isoline at the window's edge");
+    // One metre past the edge the nearest point is the isoline's end, about 1 m back.
+    let past = iso.distance(0.0, Vec2::new(x + 1.0, y)).unwrap();
+    assert!((past - 1.0).abs() < 0.02, "{past}");
+}
