@@ -140,6 +140,23 @@ fn only_the_data_ending_is_explained_as_such() {
     let r = s.run(&mut NoTrace);
     assert_eq!(r.outcome, isotrack_sim::Outcome::Completed);
     assert_eq!(r.outcome_detail, None);
+    // The last frame one step after the step that found no value: the next step would still
+    // have had data, so the robot left the grid, the data did not end.
+    let half_second_steps = text("dt_s = 0.5\n[output]\nrecord_rate_hz = 0.0\n");
+    let s = parse_scenario_in(&half_second_steps, "s.toml", &[], d.path()).unwrap();
+    let left = s.run(&mut NoTrace).t_end_s;
+    let last_frame = left + 0.5;
+    let text_last = half_second_steps.replace(
+        "frame_times_s = [0.0, 100.0]",
+        &format!("frame_times_s = [0.0, {last_frame:?}]"),
+    );
+    let r = parse_scenario_in(&text_last, "s.toml", &[], d.path())
+        .unwrap()
+        .run(&mut NoTrace);
+    assert_eq!(r.outcome, isotrack_sim::Outcome::LeftField);
+    assert_eq!(r.t_end_s, left, "the same step leaves the grid");
+    let detail = r.outcome_detail.unwrap();
+    assert!(!detail.contains("data ended"), "{detail}");
 }
 
 /// Sensor dynamics in a run: every sample is delivered or counted as dropped (exactly, for a
