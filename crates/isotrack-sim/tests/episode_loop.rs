@@ -2,7 +2,8 @@
 //! field `F(x, y) = x` (no value beyond `x_max`), a unicycle stepped by Euler
 //! (`x += v cos(h) dt`, `y += v sin(h) dt`, `h += omega dt`; NaN beyond a turn-rate limit), and
 //! scripted controllers. Step order, sample timing, held commands, the trace and its last row,
-//! every outcome with its step and detail, and the metrics the loop feeds.
+//! every outcome with its step and detail, the metrics the loop feeds, and the batched loop
+//! (`simulate_batch`) against each run alone.
 
 use isotrack_core::vehicle::Telemetry;
 use isotrack_core::{IsolineController, Measurement, Pose2, ScalarField, Vec2, Vehicle};
@@ -505,4 +506,143 @@ fn convergence_is_reported_for_completed_runs_only() {
     );
     assert_eq!(r.outcome, Outcome::Diverged);
     assert_eq!(r.metrics.convergence_time_s, None);
+}
+
+/// A law by hand: `-kp (s - 1/2)` from a sample; from ground truth (when it asks for it) a
+/// different mix of the true value, gradient, heading, speed and time, so a lane that took the
+/// wrong path shows; from `blow_up_at_s` on, `blow_up` (NaN: a non-finite command; 2e6: the
+/// unicycle's state goes NaN at the next step).
+#[derive(Clone, Copy)]
+struct Law {
+    kp: f64,
+    truth: bool,
+    blow_up_at_s: f64,
+    blow_up: f64,
+}
+impl IsolineController for Law {
+    fn update(&mut self, m: &Measurement) -> f64 {
+        if m.t_s >= self.blow_up_at_s {
+            return self.blow_up;
+        }
+        -self.kp * (m.value - 0.5)
+    }
+    fn needs_ground_truth(&self) -> bool {
+        self.truth
+    }
+    fn update_with_truth(
+        &mut self,
+        m: &Measurement,
+        truth: &isotrack_core::control::GroundTruth,
+    ) -> f64 {
+        let gx = truth.derivatives.map_or(0.0, |(g, _)| g.x);
+        -self.kp * (truth.value - 0.5) * gx - 0.3 * truth.pose.heading_rad
+            + 0.01 * truth.speed_mps
+            + 0.001 * m.t_s
+    }
+    fn reset(&mut self) {}
+}
+
+/// `simulate_batch` promises each run the result `simulate` gives it alone, bit for bit: 12
+/// runs (a full group of 8 and a group of 4) with their own starts, gains, sensor rates,
+/// dropouts and noise, three asking for ground truth, on a ramp that ends at x = 1.2 m, ending
+/// every way a run can (completed, one on the isoline from the start and so converged at
+/// t = 0, left the field at different steps, a non-finite command, a
+/// non-finite state), each compared with its run alone.
+#[test]
+fn a_batch_gives_each_run_its_result_alone() {
+    let field = Ramp { x_max: 1.2 };
+    let vehicle = Euler { v: 1.0 };
+    let plan = plan(2.0, 0.0);
+    let dist = |_t: f64, p: Vec2| Some((p.x - 0.5).abs());
+    let gradient = |_t: f64, _p: Vec2| Some((Vec2::new(1.0, 0.0), [[0.0; 2]; 2]));
+    let oracles = || Oracles {
+        isoline_distance: Some(&dist),
+        gradient: Some(&gradient),
+    };
+    let case = |i: usize| {
+        let x0 = if i == 11 {
+            // North along the isoline x = 1/2 from the start: converged at once.
+            Unicycle {
+                x: 0.5,
+                y: 0.0,
+                h: std::f64::consts::FRAC_PI_2,
+            }
+        } else {
+            Unicycle {
+                x: -1.0 + 0.2 * i as f64,
+                y: 0.1 * i as f64,
+                h: 0.4 * (i % 3) as f64 - 0.4,
+            }
+        };
+        let (blow_up_at_s, blow_up) = match i {
+            3 => (0.7, f64::NAN),
+            2 => (1.2, 2e6),
+            _ => (f64::INFINITY, 0.0),
+        };
+        let law = Law {
+            kp: if i == 11 { 0.0 } else { 0.5 + 0.1 * i as f64 },
+            truth: i % 3 == 1,
+            blow_up_at_s,
+            blow_up,
+        };
+        let config = SensorConfig {
+            rate_hz: [10.0, 5.0, 2.5][i % 3],
+            dropout_probability: if i.is_multiple_of(4) { 0.2 } else { 0.0 },
+            noise_std: if i.is_multiple_of(5) { 0.01 } else { 0.0 },
+            ..SensorConfig::default()
+        };
+        (x0, law, Sensor::new(config, DT, 7 + i as u64).unwrap())
+    };
+    let runs = (0..12)
+        .map(|i| {
+            let (x0, controller, sensor) = case(i);
+            isotrack_sim::BatchRun {
+                x0,
+                controller,
+                sensor,
+                oracles: oracles(),
+            }
+        })
+        .collect();
+    let batch = isotrack_sim::simulate_batch(&field, &vehicle, &plan, runs);
+    assert_eq!(batch.len(), 12);
+    for (i, got) in batch.iter().enumerate() {
+        let (x0, mut law, sensor) = case(i);
+        let alone = simulate(
+            &field,
+            &vehicle,
+            x0,
+            &mut law,
+            sensor,
+            &plan,
+            &oracles(),
+            &mut NoTrace,
+        );
+        assert_eq!(*got, alone, "run {i}");
+    }
+    // Every way to end is among them, and the ends differ in time.
+    let ended = |o: Outcome, detail: &str| {
+        batch
+            .iter()
+            .any(|r| r.outcome == o && r.outcome_detail.as_deref().unwrap_or("").contains(detail))
+    };
+    assert!(ended(Outcome::Completed, ""));
+    assert_eq!(batch[11].outcome, Outcome::Completed);
+    assert_eq!(batch[11].metrics.convergence_time_s, Some(0.0));
+    assert!(ended(Outcome::LeftField, "no value at"));
+    assert!(ended(
+        Outcome::Diverged,
+        "non-finite turn-rate command at t = 0.7"
+    ));
+    assert!(ended(Outcome::Diverged, "non-finite vehicle state"));
+    let left: std::collections::BTreeSet<u64> = batch
+        .iter()
+        .filter(|r| r.outcome == Outcome::LeftField)
+        .map(|r| r.steps)
+        .collect();
+    assert!(left.len() >= 2, "{left:?}");
+    assert!(batch.iter().any(|r| r.samples_dropped > 0));
+    // The empty batch is empty.
+    let none: Vec<isotrack_sim::BatchRun<'_, Unicycle, Law>> = vec![];
+    assert!(isotrack_sim::simulate_batch(&field, &vehicle, &plan, none).is_empty());
 }
