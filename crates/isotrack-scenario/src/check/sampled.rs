@@ -398,6 +398,25 @@ mod tests {
         }
     }
 
+    /// Asserts that the closed-loop matrix of `l` has `count` eigenvalues of modulus above
+    /// `zero_below` (the rest are the zeros of redundant states) and that each is a root of the
+    /// hand-derived polynomial `p`, to `tol`.
+    fn assert_nonzero_eigenvalues_are_roots(
+        l: &SampledLoop,
+        zero_below: f64,
+        count: usize,
+        tol: f64,
+        p: impl Fn(nalgebra::Complex<f64>) -> nalgebra::Complex<f64>,
+        label: &str,
+    ) {
+        let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
+        let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > zero_below).collect();
+        assert_eq!(nonzero.len(), count, "{label}: {eig:?}");
+        for z in nonzero {
+            assert!(p(*z).norm() < tol, "{label}: p({z}) = {}", p(*z));
+        }
+    }
+
     /// The characteristic polynomial of the straight-isoline Dubins loop with the P law and a
     /// backward difference, derived by hand from transfer functions (docs/SAMPLED.md):
     /// `G(z) = -alpha v T^2 (z + 1) / (2 (z - 1)^2)`, `K(z) = kp((1 + cT) z - 1)/(T z)`,
@@ -407,25 +426,16 @@ mod tests {
     fn eigenvalues_are_the_roots_of_the_hand_derived_polynomial() {
         for (kp, t) in [(10.0, 0.01), (10.0, 1.0), (2.0, 0.3), (50.0, 0.05)] {
             let l = dubins(kp, 0.0, t);
-            let m = l.closed_loop_matrix().unwrap();
             let (av, c) = (l.slope * l.speed_mps, l.c1 / l.c2);
             let p = |z: nalgebra::Complex<f64>| {
                 let one = nalgebra::Complex::new(1.0, 0.0);
                 (z - one) * (z - one) * z * 2.0
                     + (z + one) * (z * (1.0 + c * t) - one) * (av * t * kp)
             };
-            let eig = m.complex_eigenvalues();
             // The nonzero eigenvalues (the redundant delay-line state adds a zero) are the
             // polynomial's three roots.
-            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-9).collect();
-            assert_eq!(nonzero.len(), 3, "{eig:?}");
-            for z in nonzero {
-                assert!(
-                    p(*z).norm() < 1e-9 * (1.0 + kp),
-                    "kp {kp} T {t}: p({z}) = {}",
-                    p(*z)
-                );
-            }
+            let label = format!("kp {kp} T {t}");
+            assert_nonzero_eigenvalues_are_roots(&l, 1e-9, 3, 1e-9 * (1.0 + kp), p, &label);
         }
     }
 
@@ -452,12 +462,8 @@ mod tests {
                     (z - one) * (z - one) * z.powu(1 + m as u32) * 2.0
                         + (z + one) * (z * (1.0 + c * t) - one) * (av * t * kp)
                 };
-                let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
-                let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-6).collect();
-                assert_eq!(nonzero.len(), 3 + m, "m {m}, delay {delay}: {eig:?}");
-                for z in nonzero {
-                    assert!(p(*z).norm() < 1e-9, "m {m}: p({z}) = {}", p(*z));
-                }
+                let label = format!("m {m}, delay {delay}");
+                assert_nonzero_eigenvalues_are_roots(&l, 1e-6, 3 + m, 1e-9, p, &label);
             }
         }
         // Rounded, not approximated: the same matrix as the whole period, to the bit.
@@ -609,16 +615,8 @@ mod tests {
                 z * (z * z - z * (2.0 * cos) + one) * (w * w * t)
                     + (z + one) * (z * (1.0 + c * t) - one) * (av * kp * (1.0 - cos))
             };
-            let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
-            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-9).collect();
-            assert_eq!(nonzero.len(), 3, "{eig:?}");
-            for z in nonzero {
-                assert!(
-                    p(*z).norm() < 1e-12 * (1.0 + kp),
-                    "kp {kp} T {t}: p({z}) = {}",
-                    p(*z)
-                );
-            }
+            let label = format!("kp {kp} T {t}");
+            assert_nonzero_eigenvalues_are_roots(&l, 1e-9, 3, 1e-12 * (1.0 + kp), p, &label);
         }
     }
 
@@ -641,18 +639,10 @@ mod tests {
                 (z - one) * (z - one) * za * 2.0
                     + (z + one) * ((z - one) * (1.0 - a) + za * (c * t)) * (av * t * kp)
             };
-            let eig = l.closed_loop_matrix().unwrap().complex_eigenvalues();
             // The two zero eigenvalues form a Jordan block that rounding splits into a pair of
             // about 1e-8.
-            let nonzero: Vec<_> = eig.iter().filter(|z| z.norm() > 1e-6).collect();
-            assert_eq!(nonzero.len(), 3, "{eig:?}");
-            for z in nonzero {
-                assert!(
-                    p(*z).norm() < 1e-10 * (1.0 + kp),
-                    "kp {kp} T {t} tau {tau_s}: p({z}) = {}",
-                    p(*z)
-                );
-            }
+            let label = format!("kp {kp} T {t} tau {tau_s}");
+            assert_nonzero_eigenvalues_are_roots(&l, 1e-6, 3, 1e-10 * (1.0 + kp), p, &label);
         }
     }
 

@@ -249,6 +249,25 @@ fn puff_isoline_metric_is_the_mean_plume() {
     assert!((off - 1.0).abs() < 0.1, "{off}");
 }
 
+/// A puff plume in a 1 m/s wind along x without meander (the default release: 2 puffs of 10
+/// per second), tracked at level 0.2, with further `[field]` keys `extra`.
+fn plume_at_level_0_2(extra: &str) -> isotrack_scenario::Scenario {
+    isotrack_scenario::parse_scenario(
+        &format!("[field]\nkind = \"puff_plume\"\nwind_mps = [1.0, 0.0]\nmeander_std_mps = 0.0\n{extra}[controller]\nlevel = 0.2\n[initial]\nx_m = 5.0\n"),
+        "<test>",
+        &[],
+    )
+    .unwrap()
+}
+
+/// Where the 2-D Gaussian plume of [`plume_at_level_0_2`] crosses 0.2 at `x` m downwind: `y =
+/// s sqrt(2 ln(C0/0.2))`, `s^2 = sigma0^2 + 2 K x/u`, `C0 = 20/(u sqrt(2 pi) s)`, u = 1 m/s.
+fn gaussian_plume_isoline_y(sigma0_m: f64, diffusivity_m2ps: f64, x: f64) -> f64 {
+    let s2 = sigma0_m * sigma0_m + 2.0 * diffusivity_m2ps * x;
+    let c0 = 20.0 / (2.0 * std::f64::consts::PI * s2).sqrt();
+    (2.0 * s2 * (c0 / 0.2).ln()).sqrt()
+}
+
 /// The mean plume's isoline is drawn over the plume's reach and width, `u T` downwind plus
 /// `4 sqrt(sigma0^2 + 2 K T)` about the source: a wide, short-lived plume (u = 1 m/s, T = 20 s,
 /// K = 5.62 m^2/s: a window of +-80 m) still has its level-0.2 isoline at x = 60 m, where the
@@ -256,16 +275,9 @@ fn puff_isoline_metric_is_the_mean_plume() {
 /// `C0 = 20/(u sqrt(2 pi) s)`.
 #[test]
 fn a_wide_plumes_isoline_is_drawn_to_its_width() {
-    let s = isotrack_scenario::parse_scenario(
-        "[field]\nkind = \"puff_plume\"\nwind_mps = [1.0, 0.0]\nmax_age_s = 20.0\ndiffusivity_m2ps = 5.62\nmeander_std_mps = 0.0\n[controller]\nlevel = 0.2\n[initial]\nx_m = 5.0\n",
-        "<test>",
-        &[],
-    )
-    .unwrap();
+    let s = plume_at_level_0_2("max_age_s = 20.0\ndiffusivity_m2ps = 5.62\n");
     let x = 60.0;
-    let sy = (0.25f64 + 2.0 * 5.62 * x).sqrt();
-    let c0 = 20.0 / ((2.0 * std::f64::consts::PI).sqrt() * sy);
-    let y = sy * (2.0 * (c0 / 0.2).ln()).sqrt();
+    let y = gaussian_plume_isoline_y(0.5, 5.62, x);
     assert!((y - 24.0).abs() < 1.0, "{y}");
     let iso = s.isoline();
     let on = iso.distance(0.0, isotrack_core::Vec2::new(x, y)).unwrap();
@@ -392,16 +404,10 @@ fn the_puff_plume_isoline_is_the_mean_plumes() {
 #[test]
 fn the_mean_plumes_isoline_ends_at_the_windows_edge() {
     use isotrack_core::math::Vec2;
-    let s = isotrack_scenario::parse_scenario(
-        "[field]\nkind = \"puff_plume\"\nwind_mps = [1.0, 0.0]\nmax_age_s = 400.0\npuff_sigma0_m = 5.0\ndiffusivity_m2ps = 0.09375\nmeander_std_mps = 0.0\n[controller]\nlevel = 0.2\n[initial]\nx_m = 5.0\n",
-        "<test>",
-        &[],
-    )
-    .unwrap();
+    let s =
+        plume_at_level_0_2("max_age_s = 400.0\npuff_sigma0_m = 5.0\ndiffusivity_m2ps = 0.09375\n");
     let x = 440.0;
-    let s2: f64 = 25.0 + 2.0 * 0.09375 * x;
-    let c0 = 20.0 / (2.0 * std::f64::consts::PI * s2).sqrt();
-    let y = (2.0 * s2 * (c0 / 0.2).ln()).sqrt();
+    let y = gaussian_plume_isoline_y(5.0, 0.09375, x);
     assert!((y - 17.0).abs() < 0.1, "{y}");
     let iso = s.isoline();
     let on = iso.distance(0.0, Vec2::new(x, y)).unwrap();
