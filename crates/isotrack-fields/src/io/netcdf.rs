@@ -2,8 +2,9 @@
 //! crate: NetCDF-3 classic and 64-bit offset, NetCDF-4/HDF5 with zlib. No system library.
 //!
 //! The variable is the one named, or the first with two non-trivial spatial dimensions that is
-//! not a coordinate variable. Its last two dimensions are (y, x); one leading dimension longer
-//! than 1 is time (its frames), any others must have length 1. Coordinates are the 1-D variables
+//! neither a coordinate variable nor a CF bounds variable (named by a `bounds` attribute). Its
+//! last two dimensions are (y, x); one leading dimension longer than 1 is time (its frames), any
+//! others must have length 1. Coordinates are the 1-D variables
 //! named like those dimensions: longitude / latitude (CF `units = degrees_east / degrees_north`,
 //! `standard_name`, or the names lon/longitude and lat/latitude) are projected to local metres
 //! ([`crate::georef`]); coordinates in metres are used as they are. They must be regularly
@@ -257,6 +258,13 @@ fn parse_file(
         .map(|d| d.name.as_str())
         .collect();
     let names = || vars.iter().map(|v| v.name()).collect::<Vec<_>>();
+    // CF cell bounds (`lat_bnds(lat, nv)`, named by a coordinate's `bounds` or `climatology`
+    // attribute) are 2-D too, and xarray writes them before the data: never the data variable.
+    let bounds: Vec<String> = vars
+        .iter()
+        .flat_map(|v| [attr_str(v, "bounds"), attr_str(v, "climatology")])
+        .flatten()
+        .collect();
     let var = match variable {
         Some(n) => vars
             .iter()
@@ -266,6 +274,7 @@ fn parse_file(
             .iter()
             .find(|v| {
                 !dim_names.contains(&v.name())
+                    && !bounds.iter().any(|b| b == v.name())
                     && v.dimensions().len() >= 2
                     && v.dimensions()[v.dimensions().len() - 2..]
                         .iter()

@@ -1,0 +1,111 @@
+//! NetCDF files written by xarray (scripts/make-netcdf-fixtures.py, `tests/fixtures/netcdf`):
+//! every engine, format, layout and coordinate kind loads to exactly the grid and frame times
+//! of the same data written by numpy as `.npy` / CSV.
+
+use isotrack_core::Vec2;
+use isotrack_fields::georef::Georeference;
+use isotrack_fields::io::{load_grid, load_series};
+use std::path::{Path, PathBuf};
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/netcdf")
+}
+
+/// The fixtures the script wrote (its MANIFEST), so a file missing from the directory fails.
+fn manifest() -> Vec<String> {
+    std::fs::read_to_string(dir().join("MANIFEST.txt"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(str::to_owned)
+        .collect()
+}
+
+/// Equal values, NaN (no-data) at the same nodes.
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x == y || (x.is_nan() && y.is_nan()))
+}
+
+#[test]
+fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
+    let names = manifest();
+    // Two engines; NETCDF4 (5 layouts x 2 coordinate kinds + a 2-D file) for each, and for
+    // netCDF4 also NETCDF4_CLASSIC (10) and NETCDF3_64BIT (4).
+    assert_eq!(names.len(), 11 + 10 + 4 + 11, "{names:?}");
+    let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
+    assert_eq!(npy.frames.len(), 3);
+    assert_eq!((npy.frames[0].nx(), npy.frames[0].ny()), (6, 5));
+    // The script's values: 10 + (3 i + 7 j + 40 t) / 8, node (t 0, row 1, column 2) missing.
+    assert_eq!(npy.frames[2].at(5, 4), 10.0 + (15.0 + 28.0 + 80.0) / 8.0);
+    assert!(npy.frames[0].at(2, 1).is_nan());
+    let csv = load_grid(&dir().join("frame0.csv"), None).unwrap();
+    assert!(same(csv.grid.values(), npy.frames[0].values()));
+    let times: Vec<f64> = std::fs::read_to_string(dir().join("times_s.csv"))
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    // 06:00, 07:00 and 09:00.
+    assert_eq!(times, [0.0, 3600.0, 10800.0]);
+    for name in &names {
+        let s = load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{e}"));
+        let two_d = name.ends_with("_2d.nc");
+        let want_frames = if two_d { &npy.frames[..1] } else { &npy.frames };
+        assert_eq!(s.frames.len(), want_frames.len(), "{name}");
+        for (k, (got, want)) in s.frames.iter().zip(want_frames).enumerate() {
+            assert_eq!((got.nx(), got.ny()), (6, 5), "{name} frame {k}");
+            assert!(
+                same(got.values(), want.values()),
+                "{name} frame {k}: {:?}\nwant {:?}",
+                got.values(),
+                want.values()
+            );
+        }
+        if two_d {
+            assert_eq!(s.frame_times_s, None, "{name}");
+            let g = load_grid(&dir().join(name), None).unwrap();
+            assert!(same(g.grid.values(), csv.grid.values()), "{name}");
+        } else {
+            assert_eq!(s.frame_times_s.as_deref(), Some(&times[..]), "{name}");
+        }
+        if name.contains("_lonlat_") {
+            // lon 10.0 (0.5) 12.5, lat 50.0 (0.25) 51.0 stored north first.
+            assert_eq!(
+                s.georeference,
+                Georeference::LonLat {
+                    lon0_deg: 10.0,
+                    lat0_deg: 50.0,
+                    dlon_deg: 0.5,
+                    dlat_deg: 0.25,
+                    ref_lat_deg: 50.5
+                },
+                "{name}"
+            );
+        } else {
+            // x 500000 (1000) 505000 m, y 4600000 (2000) 4608000 m.
+            assert_eq!(
+                s.georeference,
+                Georeference::Metres { epsg: None },
+                "{name}"
+            );
+            assert_eq!(s.frames[0].origin_m(), Vec2::new(500_000.0, 4_600_000.0));
+            assert_eq!(s.frames[0].spacing_m(), [1000.0, 2000.0], "{name}");
+        }
+    }
+}
+
+/// Regression (issue 30): a coordinate with more attributes than HDF5 keeps in its object
+/// header (netCDF-4's own four, plus CF units, standard_name, long_name, axis, comment, bounds)
+/// is stored densely; netcdf-reader 0.7 failed on it ("child 'lat' ... unexpected end of
+/// data"). The fixtures hold such coordinates; this names one file from each engine so the
+/// failure, if it returns, says what it is.
+#[test]
+fn coordinates_with_many_cf_attributes_load() {
+    for name in ["netcdf4_nc4_lonlat_contig.nc", "h5netcdf_nc4_xy_zlib9.nc"] {
+        let s = load_series(&dir().join(name), None, Some("v"));
+        assert!(s.is_ok(), "{name}: {}", s.unwrap_err());
+    }
+}

@@ -1,0 +1,181 @@
+#!/usr/bin/env python3
+"""Writes the NetCDF test fixtures with xarray, the way today's climate tools write them.
+
+Run from the repository root in a virtual environment (not needed by CI: the outputs are
+committed, and this script documents how they were made):
+
+    python3 -m venv target/fixenv
+    target/fixenv/bin/pip install xarray netCDF4 h5netcdf h5py numpy
+    target/fixenv/bin/python scripts/make-netcdf-fixtures.py
+
+The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
+  * engines netCDF4 (netCDF-C) and h5netcdf (h5py), formats NETCDF4, NETCDF4_CLASSIC and
+    NETCDF3_64BIT (h5netcdf writes NETCDF4 only);
+  * coordinates lon/lat (latitude stored north first, as ERA5 does) or projected x/y in metres
+    (with a `crs` grid-mapping variable), each with a bounds variable (`lat_bnds`, ...);
+  * CF attributes on every variable: axis, standard_name, long_name, units, comment, bounds
+    (enough of them that HDF5 moves a coordinate's attributes to dense storage, the case
+    netcdf-reader 0.7 could not read);
+  * layouts: contiguous (a fixed time axis: HDF5 cannot store an unlimited one contiguously),
+    chunked, zlib levels 1 and 9 (level 9 with shuffle), all with an unlimited time axis, plus
+    an int16 variable packed with scale_factor / add_offset; NetCDF-3 has contiguous and
+    record (unlimited) layouts;
+  * a 2-D file (no time axis) per engine.
+
+Every file holds the same data: 3 frames of 5 x 6 nodes, v = 10 + 0.125 * k for small
+integers k (exact in float32, float64 and the packed int16), one node missing (NaN / fill).
+Its twins, written here too: `series.npy` (time, rows south first, columns), `frame0.csv`
+(the first frame, rows south first) and `times_s.csv` (the frame times in seconds after the
+first: 0, 3600, 10800). The loader test requires every file to give exactly these.
+"""
+import os
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+OUT = os.path.join(os.path.dirname(__file__), "..", "crates", "isotrack-fields", "tests",
+                   "fixtures", "netcdf")
+NT, NY, NX = 3, 5, 6
+LON0, DLON = 10.0, 0.5          # lon = 10.0, 10.5, ..., 12.5
+LAT0, DLAT = 50.0, 0.25         # lat (south to north) = 50.0, ..., 51.0; stored north first
+X0, DX = 500_000.0, 1000.0      # x = 500000, ..., 505000 m
+Y0, DY = 4_600_000.0, 2000.0    # y = 4600000, ..., 4608000 m (stored south first)
+TIMES = pd.to_datetime(["2020-01-01T06:00", "2020-01-01T07:00", "2020-01-01T09:00"])
+TIME_UNITS = "hours since 2020-01-01 00:00:00"
+
+
+def values():
+    """(time, rows south first, cols): 10 + 0.125 * (3 i + 7 j + 40 t), node (t0, j1, i2) NaN."""
+    t, j, i = np.mgrid[0:NT, 0:NY, 0:NX]
+    v = 10.0 + 0.125 * (3 * i + 7 * j + 40 * t)
+    v[0, 1, 2] = np.nan
+    return v
+
+
+def cf(axis, standard_name, long_name, units, comment):
+    a = dict(standard_name=standard_name, long_name=long_name, comment=comment)
+    if axis:
+        a["axis"] = axis
+    if units:
+        a["units"] = units
+    return a
+
+
+def bounds(centres, step):
+    return np.stack([centres - 0.5 * step, centres + 0.5 * step], axis=1)
+
+
+def dataset(coords, with_time):
+    v = values()
+    if coords == "lonlat":
+        xn, yn = "lon", "lat"
+        xs = LON0 + DLON * np.arange(NX)
+        ys = (LAT0 + DLAT * np.arange(NY))[::-1]  # north first
+        v = v[:, ::-1, :]
+        xa = cf("X", "longitude", "longitude", "degrees_east", "cell centres")
+        ya = cf("Y", "latitude", "latitude", "degrees_north", "cell centres, north first")
+        (dx, dy) = (DLON, -DLAT)
+    else:
+        xn, yn = "x", "y"
+        xs = X0 + DX * np.arange(NX)
+        ys = Y0 + DY * np.arange(NY)
+        xa = cf("X", "projection_x_coordinate", "easting", "m", "UTM zone 33N")
+        ya = cf("Y", "projection_y_coordinate", "northing", "m", "UTM zone 33N")
+        (dx, dy) = (DX, DY)
+    xa["bounds"] = xn + "_bnds"
+    ya["bounds"] = yn + "_bnds"
+    va = cf(None, "air_temperature", "air temperature", "K", "synthetic: 10 + k / 8")
+    data_vars = {}
+    coord_vars = {
+        xn: (xn, xs, xa),
+        yn: (yn, ys, ya),
+    }
+    data_vars[xn + "_bnds"] = ((xn, "nv"), bounds(xs, dx),
+                               dict(long_name=xn + " cell bounds", comment="edges", units=xa["units"]))
+    data_vars[yn + "_bnds"] = ((yn, "nv"), bounds(ys, dy),
+                               dict(long_name=yn + " cell bounds", comment="edges", units=ya["units"]))
+    if coords == "xy":
+        va["grid_mapping"] = "crs"
+        data_vars["crs"] = ((), np.int32(0),
+                            dict(grid_mapping_name="transverse_mercator", long_name="CRS",
+                                 comment="EPSG:32633", epsg_code="EPSG:32633"))
+    if with_time:
+        data_vars["v"] = (("time", yn, xn), v, va)
+        coord_vars["time"] = ("time", TIMES, cf("T", "time", "time", None, "hourly, one gap"))
+        coord_vars["time"][2]["bounds"] = "time_bnds"
+        tb = np.stack([TIMES - pd.Timedelta("30min"), TIMES + pd.Timedelta("30min")], axis=1)
+        data_vars["time_bnds"] = (("time", "nv"), tb, dict(long_name="time bounds", comment="+-30 min"))
+    else:
+        data_vars["v"] = ((yn, xn), v[0], va)
+    ds = xr.Dataset(data_vars, coords=coord_vars)
+    ds.attrs = dict(Conventions="CF-1.11", title="isotrack NetCDF fixture",
+                    comment="written by scripts/make-netcdf-fixtures.py")
+    return ds
+
+
+def encoding(ds, layout, with_time, fmt):
+    enc = {"time": dict(units=TIME_UNITS, calendar="standard")} if with_time else {}
+    if with_time:
+        enc["time_bnds"] = dict(units=TIME_UNITS, calendar="standard")
+    v = {}
+    if layout == "contig":
+        v["contiguous"] = True
+    elif layout in ("chunk", "zlib1", "zlib9", "packed"):
+        v["chunksizes"] = (1, 3, 4) if with_time else (3, 4)
+        if layout == "zlib1":
+            v.update(zlib=True, complevel=1)
+        elif layout == "zlib9":
+            v.update(zlib=True, complevel=9, shuffle=True)
+        elif layout == "packed":
+            v.update(dtype="int16", scale_factor=0.125, add_offset=10.0, _FillValue=-32767,
+                     zlib=True, complevel=4)
+    if layout not in ("packed",):
+        v["dtype"] = "float32" if "f4" in layout or fmt == "NETCDF3_64BIT" else "float64"
+    enc["v"] = v
+    return enc
+
+
+def write(engine, fmt, coords, layout, with_time=True):
+    ds = dataset(coords, with_time)
+    enc = encoding(ds, layout, with_time, fmt)
+    unlimited = ["time"] if with_time and layout != "contig" else None
+    tag = {"NETCDF4": "nc4", "NETCDF4_CLASSIC": "nc4classic", "NETCDF3_64BIT": "nc3"}[fmt]
+    name = f"{engine}_{tag}_{coords}_{layout}{'' if with_time else '_2d'}.nc"
+    path = os.path.join(OUT, name)
+    if os.path.exists(path):
+        os.remove(path)
+    ds.to_netcdf(path, engine=engine, format=fmt, encoding=enc, unlimited_dims=unlimited)
+    return name
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    for f in os.listdir(OUT):
+        if f.endswith(".nc"):
+            os.remove(os.path.join(OUT, f))
+    v = values()
+    np.save(os.path.join(OUT, "series.npy"), v)
+    np.savetxt(os.path.join(OUT, "frame0.csv"), v[0], delimiter=",", fmt="%.3f")
+    secs = (TIMES - TIMES[0]).total_seconds().to_numpy()
+    np.savetxt(os.path.join(OUT, "times_s.csv"), secs, fmt="%.1f")
+    names = []
+    for engine in ("netcdf4", "h5netcdf"):
+        formats = ("NETCDF4", "NETCDF4_CLASSIC", "NETCDF3_64BIT") if engine == "netcdf4" else ("NETCDF4",)
+        for fmt in formats:
+            layouts = (("contig", "unlim") if fmt == "NETCDF3_64BIT"
+                       else ("contig", "chunk", "zlib1", "zlib9", "packed"))
+            for coords in ("lonlat", "xy"):
+                for layout in layouts:
+                    names.append(write(engine, fmt, coords, layout))
+        names.append(write(engine, formats[0], "lonlat", "contig", with_time=False))
+    with open(os.path.join(OUT, "MANIFEST.txt"), "w") as m:
+        m.write("# written by scripts/make-netcdf-fixtures.py; the loader test reads every file listed\n")
+        for n in sorted(names):
+            m.write(n + "\n")
+    for f in sorted(os.listdir(OUT)):
+        print(f, os.path.getsize(os.path.join(OUT, f)))
+
+
+if __name__ == "__main__":
+    main()
