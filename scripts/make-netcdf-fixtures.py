@@ -117,7 +117,7 @@ def dataset(coords, with_time):
 def encoding(ds, layout, with_time, fmt):
     enc = {"time": dict(units=TIME_UNITS, calendar="standard")} if with_time else {}
     if with_time:
-        enc["time_bnds"] = dict(units=TIME_UNITS, calendar="standard")
+        enc["time_bnds"] = dict(units=TIME_UNITS, calendar="standard", dtype="float64")
     v = {}
     if layout == "contig":
         v["contiguous"] = True
@@ -149,6 +149,23 @@ def write(engine, fmt, coords, layout, with_time=True):
     return name
 
 
+def unwritten(frames):
+    """A decompression bomb: `frames` x 16000 x 16000 float64, chunked and zlib-compressed but
+    never written, so every chunk is absent and the ~10 KB file declares 8 GB of fill values
+    per four frames. The loader must refuse it before allocating (issue 30, item 3)."""
+    import netCDF4
+
+    name = f"unwritten_{frames}x16000x16000.nc"
+    path = os.path.join(OUT, name)
+    with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
+        nc.createDimension("time", frames)
+        nc.createDimension("y", 16000)
+        nc.createDimension("x", 16000)
+        nc.createVariable("v", "f8", ("time", "y", "x"), zlib=True, complevel=4,
+                          chunksizes=(1, 1000, 1000))
+    return name
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     for f in os.listdir(OUT):
@@ -169,6 +186,8 @@ def main():
                 for layout in layouts:
                     names.append(write(engine, fmt, coords, layout))
         names.append(write(engine, formats[0], "lonlat", "contig", with_time=False))
+    for frames in (1, 4, 5):
+        unwritten(frames)  # not in the manifest: they must not load
     with open(os.path.join(OUT, "MANIFEST.txt"), "w") as m:
         m.write("# written by scripts/make-netcdf-fixtures.py; the loader test reads every file listed\n")
         for n in sorted(names):

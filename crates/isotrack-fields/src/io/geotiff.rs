@@ -66,16 +66,9 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     let mut dec = Decoder::new(Cursor::new(bytes)).map_err(tiff_err)?;
     let (w, h) = dec.dimensions().map_err(tiff_err)?;
     let (nx, ny) = (w as usize, h as usize);
-    // The header's size is a claim: checked before any pixel is decoded.
-    if nx
-        .checked_mul(ny)
-        .is_none_or(|n| n > crate::grid::MAX_NODES)
-    {
-        return Err(LoadError::grid(
-            path,
-            crate::grid::GridError::TooManyNodes { nx, ny },
-        ));
-    }
+    // The header's size is a claim: checked before any pixel is decoded (a compressed image
+    // declares what it likes).
+    super::check_series_size(path, 1, nx, ny, super::memory_budget_bytes())?;
     match dec.colortype().map_err(tiff_err)? {
         ColorType::Gray(8 | 16 | 32 | 64) => {}
         ColorType::Gray(bits) => {

@@ -142,8 +142,86 @@ pub fn read_text_limited(path: &Path, max_bytes: u64) -> std::io::Result<String>
         .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
 }
 
-/// The most values a time series of frames may hold, over all frames: 2^30 (8 GiB of values).
+/// The most values a time series of frames may hold, over all frames: 2^30 (8 GiB of values),
+/// and fewer when the memory this process may use holds fewer ([`series_node_limit`]).
 pub const MAX_SERIES_NODES: usize = 1 << 30;
+
+/// Bytes of memory a loader holds per value at its peak: the file's own values (up to 8 bytes),
+/// their float64 copy, and the float64 frames built from them (NetCDF through `netcdf-reader`;
+/// the other formats hold less).
+pub const BYTES_PER_LOADED_VALUE: u64 = 24;
+
+/// The memory this process may still use, bytes, where the system says: the smaller of Linux's
+/// `MemAvailable` (`/proc/meminfo`) and the room left under a cgroup v2 limit (`memory.max` less
+/// `memory.current`, as a Slurm job or a container sets). `None` where neither is known.
+/// Read by hand: two text files, no crate needed for them.
+pub fn memory_budget_bytes() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        let line = t.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        kib.checked_mul(1024)
+    });
+    let read_u64 = |f: &str| -> Option<u64> {
+        std::fs::read_to_string(Path::new("/sys/fs/cgroup").join(f))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    let cgroup = read_u64("memory.max")
+        .map(|max| max.saturating_sub(read_u64("memory.current").unwrap_or(0)));
+    match (meminfo, cgroup) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}
+
+/// The most values (frames x nodes) a loader reads with `budget_bytes` of memory:
+/// [`MAX_SERIES_NODES`], or fewer when the budget at [`BYTES_PER_LOADED_VALUE`] holds fewer.
+pub fn series_node_limit(budget_bytes: Option<u64>) -> usize {
+    let by_memory = budget_bytes.map_or(u64::MAX, |b| b / BYTES_PER_LOADED_VALUE);
+    MAX_SERIES_NODES.min(usize::try_from(by_memory).unwrap_or(usize::MAX))
+}
+
+/// Checks a series' declared size (`frames` of `nx` x `ny` nodes, from a file's header) before
+/// anything is allocated for it: each frame within [`crate::grid::MAX_NODES`], and frames x
+/// nodes within [`series_node_limit`] of `budget_bytes`. The error names all three counts.
+pub(crate) fn check_series_size(
+    path: &Path,
+    frames: usize,
+    nx: usize,
+    ny: usize,
+    budget_bytes: Option<u64>,
+) -> Result<(), LoadError> {
+    let frame = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
+    if frame.is_none() {
+        return Err(LoadError::grid(
+            path,
+            crate::grid::GridError::TooManyNodes { nx, ny },
+        ));
+    }
+    let limit = series_node_limit(budget_bytes);
+    let total = frame.and_then(|n| n.checked_mul(frames));
+    if total.is_none_or(|n| n > limit) {
+        let total = total.map_or_else(|| "more than 2^64".into(), |n| n.to_string());
+        let why = match budget_bytes {
+            Some(b) if limit < MAX_SERIES_NODES => format!(
+                "the {:.1} GiB of memory this process may use holds {limit} at {BYTES_PER_LOADED_VALUE} bytes each while loading",
+                b as f64 / f64::from(1u32 << 30)
+            ),
+            _ => format!("a series holds at most {MAX_SERIES_NODES}"),
+        };
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "{frames} {} of {ny} x {nx} nodes = {total} values: too many to load ({why})",
+                if frames == 1 { "frame" } else { "frames" }
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// Frames of a grid time series as read: one or more grids of one geometry, the frame times the
 /// file gave (seconds after the first frame; `None` when it gives none: a 3-D `.npy`), and the

@@ -231,6 +231,17 @@ pub(super) fn parse_bytes(
     bytes: &[u8],
     variable: Option<&str>,
 ) -> Result<LoadedSeries, LoadError> {
+    parse_bytes_within(name, bytes, variable, super::memory_budget_bytes())
+}
+
+/// As [`parse_bytes`], with `budget_bytes` of memory to load the variable in
+/// ([`super::check_series_size`]).
+pub(super) fn parse_bytes_within(
+    name: &Path,
+    bytes: &[u8],
+    variable: Option<&str>,
+    budget_bytes: Option<u64>,
+) -> Result<LoadedSeries, LoadError> {
     check_classic_header(bytes).map_err(|m| {
         LoadError::new(
             name,
@@ -240,13 +251,14 @@ pub(super) fn parse_bytes(
     })?;
     let file = NcFile::from_bytes(bytes)
         .map_err(|e| LoadError::new(name, None, format!("cannot read as NetCDF: {e}")))?;
-    parse_file(name, &file, variable)
+    parse_file(name, &file, variable, budget_bytes)
 }
 
 fn parse_file(
     path: &Path,
     file: &NcFile,
     variable: Option<&str>,
+    budget_bytes: Option<u64>,
 ) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
     let nc = |e: netcdf_reader::Error| err(format!("cannot read as NetCDF: {e}"));
@@ -301,24 +313,25 @@ fn parse_file(
             var.name()
         )));
     }
-    // Checked before reading: the header's sizes are the file's claim, not a promise.
-    let nodes = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
-    if nodes
-        .and_then(|n| n.checked_mul(n_frames))
-        .is_none_or(|n| n > super::MAX_SERIES_NODES)
-    {
-        return Err(LoadError::grid(
-            path,
-            crate::grid::GridError::TooManyNodes { nx, ny },
-        ));
-    }
+    // Checked before reading: the header's sizes are the file's claim, not a promise (a
+    // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
+    super::check_series_size(path, n_frames, nx, ny, budget_bytes)?;
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
-    let values: Vec<f64> = data
-        .iter()
-        .map(|v| if v.is_finite() { *v } else { f64::NAN })
-        .collect();
+    // Taken over rather than copied (the array is in standard order as read).
+    let mut values: Vec<f64> = if data.is_standard_layout() {
+        let (mut v, offset) = data.into_raw_vec_and_offset();
+        v.drain(..offset.unwrap_or(0).min(v.len()));
+        v
+    } else {
+        data.iter().copied().collect()
+    };
+    for v in &mut values {
+        if !v.is_finite() {
+            *v = f64::NAN;
+        }
+    }
     if values.len() != nx * ny * n_frames {
         return Err(err(format!(
             "{} values for {n_frames} x {ny} x {nx}",
@@ -392,9 +405,12 @@ fn parse_file(
             georeference = Georeference::Metres { epsg: None };
         }
     }
+    // Frames split off the end, the rest shrunk each time: one frame more than the values at
+    // most, not a second copy of them all.
     let mut frames = Vec::with_capacity(n_frames);
-    for (k, chunk) in values.chunks_exact(nx * ny).enumerate() {
-        let mut v = chunk.to_vec();
+    for k in (0..n_frames).rev() {
+        let mut v = values.split_off(k * nx * ny);
+        values.shrink_to_fit();
         if flip_y {
             super::flip_rows(&mut v, nx, ny);
         }
@@ -407,6 +423,7 @@ fn parse_file(
             .map_err(|e| LoadError::new(path, None, format!("frame {k}: {e}")))?;
         frames.push(g);
     }
+    frames.reverse();
     Ok(LoadedSeries {
         frames,
         frame_times_s,

@@ -172,16 +172,7 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             format!("shape {shape:?}: a frame needs at least 2 x 2 values, and a series one frame"),
         ));
     }
-    let frame = nx.checked_mul(ny).filter(|n| *n <= crate::grid::MAX_NODES);
-    if frame
-        .and_then(|n| n.checked_mul(nt))
-        .is_none_or(|n| n > super::MAX_SERIES_NODES)
-    {
-        return Err(LoadError::grid(
-            path,
-            crate::grid::GridError::TooManyNodes { nx, ny },
-        ));
-    }
+    super::check_series_size(path, nt, nx, ny, super::memory_budget_bytes())?;
     // The header's shape is untrusted: refuse a data size beyond the file before reading.
     let item = ts.num_bytes().unwrap_or(8) as u128;
     if (nt as u128) * (ny as u128) * (nx as u128) * item > bytes.len() as u128 {

@@ -616,3 +616,65 @@ fn text_is_read_whole_within_its_limit() {
     let e = read_text_limited(&p, 1000).unwrap_err();
     assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
 }
+
+fn netcdf_fixture(name: &str) -> (std::path::PathBuf, Vec<u8>) {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/netcdf")
+        .join(name);
+    let b = std::fs::read(&p).unwrap();
+    (p, b)
+}
+
+/// The limit in values: 2^30, or the budget at 24 bytes a value when that is fewer.
+#[test]
+fn series_node_limit_follows_the_memory_budget() {
+    assert_eq!(series_node_limit(None), 1 << 30);
+    assert_eq!(series_node_limit(Some(24 * 1000)), 1000);
+    assert_eq!(series_node_limit(Some(24 * 1000 + 23)), 1000);
+    assert_eq!(series_node_limit(Some(u64::MAX)), 1 << 30);
+    #[cfg(target_os = "linux")]
+    assert!(memory_budget_bytes().is_some_and(|b| b > 0));
+}
+
+/// Regression (issue 30): a 8 KB NetCDF-4 file, chunked and zlib-compressed but never written,
+/// declares 4 frames of 16000 x 16000 fill values; it aborted the process allocating 8.2 GB.
+/// With 8 GiB to spend (24 bytes a value: 357 913 941 values) it is refused before reading,
+/// and the error counts frames x nodes.
+#[test]
+fn an_unwritten_netcdf_series_is_refused_by_frames_times_nodes() {
+    let (p, b) = netcdf_fixture("unwritten_4x16000x16000.nc");
+    let e = super::netcdf::parse_bytes_within(&p, &b, None, Some(8 << 30)).unwrap_err();
+    assert!(
+        e.message
+            .contains("4 frames of 16000 x 16000 nodes = 1024000000 values"),
+        "{e}"
+    );
+    assert!(e.message.contains("8.0 GiB"), "{e}");
+    assert!(e.message.contains("357913941"), "{e}");
+    // One frame (256 000 000 values) is more than 4 GiB holds (178 956 970).
+    let (p1, b1) = netcdf_fixture("unwritten_1x16000x16000.nc");
+    let e = super::netcdf::parse_bytes_within(&p1, &b1, None, Some(4 << 30)).unwrap_err();
+    assert!(e.message.contains("1 frame of 16000 x 16000"), "{e}");
+    // Five frames are beyond 2^30 values on any machine, through the public loader.
+    let (p5, _) = netcdf_fixture("unwritten_5x16000x16000.nc");
+    let e = load_series(&p5, None, None).unwrap_err();
+    assert!(
+        e.message
+            .contains("5 frames of 16000 x 16000 nodes = 1280000000 values"),
+        "{e}"
+    );
+    assert!(e.message.contains("too many to load"), "{e}");
+    let e = super::netcdf::parse_bytes_within(&p5, &std::fs::read(&p5).unwrap(), None, None)
+        .unwrap_err();
+    assert!(e.message.contains("at most 1073741824"), "{e}");
+}
+
+/// The budget is exact: a 3 x 5 x 6 fixture (90 values) loads with 90 x 24 bytes, not 89 x 24.
+#[test]
+fn the_memory_budget_is_applied_at_its_bound() {
+    let (p, b) = netcdf_fixture("netcdf4_nc4_lonlat_zlib1.nc");
+    let s = super::netcdf::parse_bytes_within(&p, &b, None, Some(90 * 24)).unwrap();
+    assert_eq!(s.frames.len(), 3);
+    let e = super::netcdf::parse_bytes_within(&p, &b, None, Some(89 * 24)).unwrap_err();
+    assert!(e.message.contains("= 90 values"), "{e}");
+}
