@@ -2,6 +2,7 @@
 (bit for bit), the vector environment against single environments, resets, ends and rewards."""
 
 import math
+import os
 import warnings
 from pathlib import Path
 
@@ -525,3 +526,27 @@ def test_stable_baselines3_trains_ppo_on_the_vector_env():
     assert lengths == {20}
     action, _ = model.predict(env.reset(), deterministic=True)
     assert action.shape == (8, 1) and np.all(np.abs(action) <= 1.0)
+
+
+def test_bytes_per_env_is_not_below_the_resident_memory_of_an_environment():
+    """The limit's estimate holds: the resident memory that 20 000 reset environments add
+    (the default scenario and the 6-DOF UAV, the biggest loop state) is at most `bytes_per_env`
+    each."""
+    import gc
+
+    def resident_bytes():
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+    if not os.path.exists("/proc/self/statm"):
+        pytest.skip("resident memory is read from /proc (Linux)")
+    n = 20_000
+    for sc in (isotrack.Scenario.default(), isotrack.Scenario.from_file(str(ROOT / "scenarios" / "paper-fig3-uav.toml"))):
+        gc.collect()
+        before = resident_bytes()
+        vec = IsolineVectorEnv(sc, num_envs=n)
+        vec.reset(seed=0)
+        gc.collect()
+        per_env = (resident_bytes() - before) / n
+        assert 0 < per_env <= vec.bytes_per_env, (per_env, vec.bytes_per_env)
+        del vec
