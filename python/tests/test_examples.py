@@ -37,3 +37,12 @@ def test_training_loop_improves_on_its_start():
     pytest.importorskip("gymnasium")
     r = load("train_vector").main(iterations=6, num_envs=8, duration_s=10.0)
     assert np.isfinite(r["best_return"]) and r["best_return"] >= r["first_return"]
+
+
+def test_sb3_example_trains():
+    pytest.importorskip("stable_baselines3")
+    import torch
+
+    torch.set_num_threads(1)
+    r = load("train_sb3").main(timesteps=2048, num_envs=4)
+    assert np.isfinite(r["before"]) and np.isfinite(r["after"])

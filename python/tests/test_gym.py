@@ -2,6 +2,7 @@
 (bit for bit), the vector environment against single environments, resets, ends and rewards."""
 
 import math
+import os
 import warnings
 from pathlib import Path
 
@@ -34,27 +35,58 @@ class PaperLaw:
 
 class PaperController:
     """The same law as a controller for Scenario.run: it forms the observation the environment
-    gives (eps = value - s_d, its backward difference) and answers with the same arithmetic."""
+    gives (eps = value - s_d, its backward difference) and answers with the same arithmetic. The
+    run's last sample (at `last_t_s`) ends the episode before an agent can answer it, and the
+    environment holds the command over that step: so does this controller."""
 
-    def __init__(self):
+    def __init__(self, last_t_s):
         self.law = PaperLaw()
         self.prev = None
+        self.last_t_s = last_t_s
+        self.omega = None
 
     def update(self, t_s, value):
+        if t_s == self.last_t_s:
+            return self.omega
         eps = value - LEVEL
         deps = 0.0 if self.prev is None else (eps - self.prev[1]) / (t_s - self.prev[0])
         self.prev = (t_s, eps)
-        return self.law.act(eps, deps)
+        self.omega = self.law.act(eps, deps)
+        return self.omega
+
+
+def checker_warnings(env):
+    """The warnings Gymnasium's `check_env` gives for `env` (every render mode included; without
+    matplotlib, which `"human"` needs, the render checks are skipped)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        skip_render_check = False
+    except ImportError:
+        skip_render_check = True
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env, skip_render_check=skip_render_check)
+    return sorted({str(w.message) for w in caught})
 
 
 def test_gymnasium_env_checker_passes():
-    env = IsolineEnv()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # unbounded observation, non-normalised action: by design
-        check_env(env)
+    """`check_env` passes on the environment made through Gymnasium (so that it also renders in
+    both declared modes); its only warnings are the two unbounded observation limits, and none
+    at all where the sensor's range bounds the observation."""
     made = gymnasium.make("isotrack/Isoline-v0", scenario=isotrack.Scenario.default())
     assert made.spec.id == "isotrack/Isoline-v0"
     assert made.unwrapped.action_space.high[0] == 1.0  # no limit in the scenario: 1 rad/s
+    assert made.unwrapped.action_space.dtype == np.float32
+    assert made.unwrapped.metadata["render_fps"] == 100.0  # one step per sample at 100 Hz
+    assert checker_warnings(made.unwrapped) == [
+        "\x1b[33mWARN: A Box observation space maximum value is infinity. This is probably too high.\x1b[0m",
+        "\x1b[33mWARN: A Box observation space minimum value is -infinity. This is probably too low.\x1b[0m",
+    ]
+    ranged = isotrack.Scenario.default().set("sensor.range", [5.0, 15.0])
+    made = gymnasium.make("isotrack/Isoline-v0", scenario=ranged)
+    assert checker_warnings(made.unwrapped) == []
     vec = gymnasium.make_vec("isotrack/Isoline-v0", num_envs=3, vectorization_mode="vector_entry_point")
     assert isinstance(vec.unwrapped, IsolineVectorEnv) and vec.num_envs == 3
 
@@ -75,8 +107,9 @@ def test_env_answered_by_the_paper_law_is_scenario_run():
         if terminated or truncated:
             break
     assert truncated and not terminated and info["outcome"] == "completed"
-    assert steps == 60_001  # one step answers each sample, t = 0 ... 600 s at 100 Hz
-    want = sc.run(controller=PaperController()).summary
+    assert steps == 60_000  # samples at t = 0 ... 600 s at 100 Hz: the reset gives the first
+    assert info["t_s"] == 600.0
+    want = sc.run(controller=PaperController(last_t_s=600.0)).summary
     for key, value in info["result"].items():
         assert want[key] == value, key
     assert want["steady_state_max_abs_error"] < 1e-9
@@ -133,6 +166,7 @@ def test_leaving_the_field_terminates_with_the_penalty():
     assert terminated and not truncated and info["outcome"] == "left_field"
     samples_per_run = 3000.0 * 10 + 1
     left = samples_per_run - (steps + 1)  # the reset delivered the first sample
+    assert left > 0  # it left the field before the end
     assert reward < -(10.0 + 0.01) * left * 0.999
     with pytest.raises(RuntimeError, match="reset"):
         env.step([0.0])
@@ -226,3 +260,293 @@ def test_scenario_pickles_for_worker_processes():
     back = pickle.loads(pickle.dumps(sc))
     assert back == sc and copy.deepcopy(sc) is sc
     assert back.run().summary["end_position_m"] == sc.run().summary["end_position_m"]
+
+
+def run_episode(env, action=0.0, **reset):
+    """Steps `env` with a constant action to the end of its episode: the infos' sample times,
+    the rewards and the observations of every step."""
+    obs, info = env.reset(**reset)
+    times, rewards, observations = [info["t_s"]], [], [obs]
+    while True:
+        obs, reward, terminated, truncated, info = env.step(np.array([action]))
+        times.append(info["t_s"])
+        rewards.append(reward)
+        observations.append(obs)
+        if terminated or truncated:
+            return times, rewards, observations, terminated, truncated, info
+
+
+@pytest.mark.parametrize("duration_s, rate_hz", [(20.0, 10.0), (3.0, 100.0), (7.5, 2.0)])
+def test_episode_of_duration_d_at_rate_r_takes_d_times_r_steps(duration_s, rate_hz):
+    """Samples at t = 0, 1/R, ..., D: the reset delivers the first, so an episode is D*R steps,
+    the k-th step's sample at k/R, the last at D truncates it; no sample (time, observation or
+    reward) comes twice. (It took D*R + 1, the last repeating the one before.)"""
+    sc = isotrack.Scenario.default().set("sim.duration_s", duration_s).set("sensor.rate_hz", rate_hz)
+    times, rewards, observations, terminated, truncated, info = run_episode(IsolineEnv(sc), 0.3, seed=4)
+    steps = round(duration_s * rate_hz)
+    assert len(times) - 1 == steps and truncated and not terminated and info["outcome"] == "completed"
+    assert times == pytest.approx([k / rate_hz for k in range(steps + 1)], abs=1e-9)
+    assert info["t_s"] == duration_s
+    assert np.all(np.diff(times) > 0)
+    assert len({tuple(o) for o in observations}) == len(observations)  # moving, no repeats
+    assert rewards[-1] != rewards[-2]
+    # The vector environment ends its runs at the same step.
+    vec = IsolineVectorEnv(sc, num_envs=3)
+    vec.reset(seed=4)
+    for k in range(1, steps + 1):
+        _, _, term, trunc, vinfo = vec.step(np.full((3, 1), 0.3))
+        assert not term.any() and trunc.all() == (k == steps) and trunc.any() == (k == steps), k
+    assert list(vinfo["outcome"]) == ["completed"] * 3
+
+
+def test_bad_actions_raise_clearly():
+    """Actions are arrays of real numbers of exactly the action space's shape: nothing else is
+    reshaped, read as NaN or truncated."""
+    env = IsolineEnv()
+    env.reset(seed=0)
+    for bad, error in [
+        (None, TypeError),
+        ("0.1", TypeError),
+        (["a"], TypeError),
+        ([True], TypeError),
+        ([object()], TypeError),
+        ([1 + 2j], TypeError),
+        (0.1, ValueError),  # a scalar: shape () is not (1,)
+        ([0.1, 0.2], ValueError),
+        ([[0.1]], ValueError),
+        ([], ValueError),
+        ([[0.1], [0.2, 0.3]], ValueError),  # ragged
+    ]:
+        with pytest.raises(error, match="action"):
+            env.step(bad)
+    # None of them stepped the run: the next good step is the first.
+    obs, reward, terminated, truncated, info = env.step(np.array([0.0], dtype=np.float32))
+    assert info["t_s"] == 0.01 and not terminated
+    vec = IsolineVectorEnv(num_envs=3)
+    vec.reset(seed=0)
+    for bad, error in [(None, TypeError), (np.zeros(3), ValueError), (np.zeros((3, 2)), ValueError),
+                       (np.zeros((1, 3)), ValueError), (np.zeros((2, 1)), ValueError), (np.zeros(3, dtype=bool)[:, None], TypeError)]:
+        with pytest.raises(error, match="action"):
+            vec.step(bad)
+    _, _, _, _, vinfo = vec.step(np.zeros((3, 1), dtype=np.int64))
+    assert list(vinfo["t_s"]) == [0.01] * 3
+
+
+def test_num_envs_must_be_a_whole_number_within_the_limit(monkeypatch):
+    for bad in (1.5, 2.0, "3", None, True):
+        with pytest.raises(TypeError, match="num_envs must be an int"):
+            IsolineVectorEnv(num_envs=bad)
+    for bad in (0, -1):
+        with pytest.raises(ValueError, match="num_envs must be at least 1"):
+            IsolineVectorEnv(num_envs=bad)
+    with pytest.raises(ValueError, match="16777216 environments"):
+        IsolineVectorEnv(num_envs=isotrack.gym.MAX_NUM_ENVS + 1)
+    assert IsolineVectorEnv(num_envs=np.int64(2)).num_envs == 2
+    # Sized by memory: 10^7 environments with 16 GiB available need more than its half.
+    per_env = IsolineVectorEnv(num_envs=1).bytes_per_env
+    assert 4096 < per_env < 65536
+    monkeypatch.setattr(isotrack.gym, "_available_memory_bytes", lambda: 16 * 2**30)
+    fit = 8 * 2**30 // per_env
+    with pytest.raises(MemoryError, match=f"at most {fit} environments fit"):
+        IsolineVectorEnv(num_envs=10**7)
+    with pytest.raises(MemoryError):
+        IsolineVectorEnv(num_envs=fit + 1)
+    assert IsolineVectorEnv(num_envs=1000).num_envs == 1000  # only what fits is refused
+
+
+def test_reset_mask_resets_only_those_and_is_checked():
+    """`options={"reset_mask": m}` resets the sub-environments where m is true (with the seeds
+    s + i) and leaves the others' runs going; a mask of another length, type or dtype, or all
+    false, raises as in Gymnasium's own vector environments."""
+    sc = isotrack.Scenario.default().set("sim.duration_s", 1.0)
+    vec = IsolineVectorEnv(sc, num_envs=3)
+    vec.reset(seed=1)
+    for _ in range(5):
+        before, *_ = vec.step(np.full((3, 1), 0.2))
+    obs, info = vec.reset(seed=7, options={"reset_mask": np.array([True, False, True])})
+    assert list(info["_start"]) == [True, False, True]
+    for i in (0, 2):
+        single, single_info = IsolineEnv(sc).reset(seed=7 + i)
+        assert np.array_equal(obs[i], single) and tuple(info["start"][i]) == single_info["start"]
+    assert np.array_equal(obs[1], before[1])
+    _, _, _, _, info = vec.step(np.zeros((3, 1)))
+    assert list(info["t_s"]) == pytest.approx([0.01, 0.06, 0.01])  # env 1 went on
+    for mask, error in [
+        (np.array([True, False]), ValueError),
+        (np.ones(4, dtype=bool), ValueError),
+        ([True, True, True], TypeError),
+        (np.ones(3, dtype=np.int64), TypeError),
+        (np.zeros(3, dtype=bool), ValueError),
+    ]:
+        with pytest.raises(error, match="reset_mask"):
+            vec.reset(options={"reset_mask": mask})
+
+
+def test_same_step_and_disabled_autoreset():
+    """SAME_STEP: the ending step returns the new run's first observation and the last one in
+    `final_obs` (what a single environment's last step gives); DISABLED: stepping an ended run
+    raises until a `reset_mask` reset. Each mode is declared in `metadata["autoreset_mode"]`."""
+    from gymnasium.vector import AutoresetMode
+
+    sc = isotrack.Scenario.default().set("sim.duration_s", 0.5)
+    follow = IsolineEnv(sc)
+    _, _, observations, _, _, _ = run_episode(follow, 0.1, seed=3)
+    vec = IsolineVectorEnv(sc, num_envs=2, autoreset_mode=AutoresetMode.SAME_STEP)
+    assert vec.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    vec.reset(seed=3)
+    for k in range(50):
+        obs, reward, term, trunc, info = vec.step(np.full((2, 1), 0.1))
+    assert trunc.all() and list(info["_final_obs"]) == [True, True]
+    assert np.array_equal(info["final_obs"][0], observations[-1])
+    assert list(info["final_info"]["outcome"]) == ["completed"] * 2
+    # The new run's first observation: the single environment's next reset from its generator.
+    again, again_info = follow.reset()
+    assert np.array_equal(obs[0], again) and tuple(info["start"][0]) == again_info["start"]
+    _, _, term, trunc, info = vec.step(np.full((2, 1), 0.1))
+    assert not (term | trunc).any() and list(info["t_s"]) == [0.01, 0.01]
+
+    off = IsolineVectorEnv(sc, num_envs=2, autoreset_mode="Disabled")
+    assert off.metadata["autoreset_mode"] == AutoresetMode.DISABLED
+    off.reset(seed=3)
+    for _ in range(50):
+        off.step(np.zeros((2, 1)))
+    with pytest.raises(RuntimeError, match="reset_mask"):
+        off.step(np.zeros((2, 1)))
+    off.reset(options={"reset_mask": np.array([True, True])})
+    _, _, _, _, info = off.step(np.zeros((2, 1)))
+    assert list(info["t_s"]) == [0.01, 0.01]
+
+
+def test_observation_bounds_follow_the_sensor_range():
+    """With `sensor.range = [lo, hi]` the measurement is clamped: eps in [lo - s_d, hi - s_d] and
+    |deps| <= (hi - lo) * rate; a noisy run that hits both ends stays inside the space."""
+    sc = (
+        isotrack.Scenario.default()
+        .set("sensor.range", [9.5, 10.5])
+        .set("sensor.noise_std", 2.0)
+        .set("sim.duration_s", 5.0)
+    )
+    env = IsolineEnv(sc)
+    space = env.observation_space
+    assert space.low[0] == -0.5 and space.high[0] == 0.5
+    assert space.high[1] == pytest.approx(1.0 * 100.0, rel=1e-8) and space.low[1] == -space.high[1]
+    _, _, observations, *_ = run_episode(env, 0.0, seed=2)
+    obs = np.array(observations)
+    assert all(space.contains(o) for o in obs)
+    assert obs[:, 0].min() == -0.5 and obs[:, 0].max() == 0.5  # the clamp is reached
+    assert np.abs(obs[:, 1]).max() == pytest.approx(100.0)  # a jump from one end to the other
+
+
+def test_rgb_frame_shows_field_isoline_and_vehicle():
+    """The frame is north up and centred on the vehicle, 2 * half_width across: its white
+    pixels are where the circular field crosses the level, |p| = 10 ln 2 m (to within the pixel
+    grid); the centre is the vehicle (red); the path is drawn."""
+    half = 8.0
+    env = IsolineEnv(render_mode="rgb_array", render_half_width_m=half)
+    env.reset(seed=0, options={"start": (10.0, 0.0, math.pi / 2)})
+    frame = env.render()
+    assert frame.shape == (256, 256, 3) and frame.dtype == np.uint8
+    assert tuple(frame[128, 128]) == (220, 20, 20)
+    rows, cols = np.nonzero(np.all(frame == 255, axis=-1))
+    px = 2 * half / 256
+    x = 10.0 - half + (cols + 0.5) * px
+    y = half - (rows + 0.5) * px
+    r = np.hypot(x, y)
+    assert len(r) > 100 and np.all(np.abs(r - 10 * math.log(2)) < 1.5 * px)
+    # West of x = 10 - 6.93 is above the level (brighter, yellow end), east below (violet end).
+    assert frame[128, 10, 1] > 200 and frame[128, 250, 1] < 60
+    for _ in range(1000):  # 10 s north at 0.5 m/s: to (10, 5)
+        env.step([0.0])
+    moved = env.render()
+    rows, cols = np.nonzero(np.all(moved == (255, 140, 0), axis=-1))
+    x = 10.0 - half + (cols + 0.5) * px
+    y = 5.0 + half - (rows + 0.5) * px
+    # The path behind it: the segment x = 10, y in [0, 5] (80 pixels, 5 hidden by the vehicle).
+    assert np.all(np.abs(x - 10.0) < px) and np.all((y > -px) & (y < 5.0))
+    assert len(rows) >= 80 - 5 - 1
+    with pytest.raises(ValueError, match="render_mode"):
+        IsolineEnv(render_mode="ascii")
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert IsolineEnv().render() is None  # no mode: nothing, with Gymnasium's warning
+
+
+def test_human_render_draws_into_a_matplotlib_figure():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    env = IsolineEnv(render_mode="human")
+    before = len(plt.get_fignums())
+    env.reset(seed=0)
+    assert env.render() is None and len(plt.get_fignums()) == before + 1
+    env.step([0.1])
+    image = env._renderer._image.get_array()
+    assert image.shape == (256, 256, 3)
+    env.close()
+    assert len(plt.get_fignums()) == before
+
+
+def test_stable_baselines3_trains_ppo_on_the_vector_env():
+    """SB3's adapter: SB3's own checker passes on the single environment; PPO trains a few
+    thousand steps on `SB3VecEnv` (8 runs stepped in Rust), every logged episode D*R = 20 steps;
+    a run's end comes with SB3's `terminal_observation` (the single environment's last) and
+    `TimeLimit.truncated`, and the next observation is the new run's first."""
+    pytest.importorskip("stable_baselines3")
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from isotrack.gym import SB3VecEnv
+
+    torch.set_num_threads(1)
+    sc = isotrack.Scenario.default().set("sim.duration_s", 2.0).set("sensor.rate_hz", 10.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its advice on unbounded observations
+        sb3_check_env(IsolineEnv(sc))
+
+    raw = SB3VecEnv(sc, num_envs=2)
+    raw.seed(5)
+    obs = raw.reset()
+    single = IsolineEnv(sc)
+    _, _, observations, *_ = run_episode(single, 0.0, seed=5)
+    assert np.array_equal(obs[0], observations[0])
+    for k in range(20):
+        obs, rewards, dones, infos = raw.step(np.zeros((2, 1), dtype=np.float32))
+        assert dones.all() == (k == 19) and rewards.dtype == np.float32
+    assert infos[0]["TimeLimit.truncated"] and infos[0]["outcome"] == "completed"
+    assert np.array_equal(infos[0]["terminal_observation"], observations[-1])
+    assert np.array_equal(obs[0], single.reset()[0])
+
+    env = VecMonitor(SB3VecEnv(sc, num_envs=8))
+    model = PPO("MlpPolicy", env, n_steps=64, batch_size=128, n_epochs=2, seed=0, device="cpu")
+    model.learn(total_timesteps=4096)
+    assert model.num_timesteps >= 4096
+    lengths = {ep["l"] for ep in model.ep_info_buffer}
+    assert lengths == {20}
+    action, _ = model.predict(env.reset(), deterministic=True)
+    assert action.shape == (8, 1) and np.all(np.abs(action) <= 1.0)
+
+
+def test_bytes_per_env_is_not_below_the_resident_memory_of_an_environment():
+    """The limit's estimate holds: the resident memory that 20 000 reset environments add
+    (the default scenario and the 6-DOF UAV, the biggest loop state) is at most `bytes_per_env`
+    each."""
+    import gc
+
+    def resident_bytes():
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+    if not os.path.exists("/proc/self/statm"):
+        pytest.skip("resident memory is read from /proc (Linux)")
+    n = 20_000
+    for sc in (isotrack.Scenario.default(), isotrack.Scenario.from_file(str(ROOT / "scenarios" / "paper-fig3-uav.toml"))):
+        gc.collect()
+        before = resident_bytes()
+        vec = IsolineVectorEnv(sc, num_envs=n)
+        vec.reset(seed=0)
+        gc.collect()
+        per_env = (resident_bytes() - before) / n
+        assert 0 < per_env <= vec.bytes_per_env, (per_env, vec.bytes_per_env)
+        del vec

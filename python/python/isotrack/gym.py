@@ -3,23 +3,31 @@ vehicles and sensors.
 
 ``IsolineEnv(scenario)`` is one run of a scenario, registered as ``isotrack/Isoline-v0``;
 ``IsolineVectorEnv(scenario, num_envs)`` steps ``num_envs`` of them in one call into the Rust
-engine (numpy in, numpy out), with Gymnasium's vector API and next-step autoreset. Sub-environment
+engine (numpy in, numpy out), with Gymnasium's vector API (next-step autoreset by default;
+same-step and disabled on request, declared in ``metadata["autoreset_mode"]``). Sub-environment
 ``i`` of a vector environment reset with ``seed=s`` is the same run, step for step, as an
-``IsolineEnv`` reset with ``seed=s + i``.
+``IsolineEnv`` reset with ``seed=s + i``. ``SB3VecEnv`` is the vector environment with
+Stable-Baselines3's ``VecEnv`` API (needs stable-baselines3).
 
 The environment's definition (the same for both):
 
 * **step**: one sensor sample. The command is held from one delivered sample to the next, so a step
-  spans ``1 / sensor.rate_hz`` seconds (more when the sensor drops a sample).
-* **action**: the turn-rate command ``omega`` (rad/s, positive turns left), a ``Box`` of shape
-  ``(1,)`` within ``[-omega_max, omega_max]``: the scenario's turn-rate limit
+  spans ``1 / sensor.rate_hz`` seconds (more when the sensor drops a sample). The reset delivers
+  the sample at t = 0, so a run of ``sim.duration_s = D`` at ``R`` Hz is ``D * R`` steps, the
+  last one's sample at ``t = D`` (it ends the run: the command is held over that last step).
+* **action**: the turn-rate command ``omega`` (rad/s, positive turns left), a float32 ``Box`` of
+  shape ``(1,)`` within ``[-omega_max, omega_max]``: the scenario's turn-rate limit
   (``controller.max_turn_rate_radps``, or the airframe's for the fixed-wing UAV), else 1 rad/s,
-  or the ``max_turn_rate_radps`` argument. Actions beyond it are clipped; a NaN ends the run as
-  ``diverged``.
+  or the ``max_turn_rate_radps`` argument. ``step`` takes an array of exactly that shape of any
+  real dtype (float64 keeps its precision; another shape, ``None`` or a non-numeric value
+  raises ``ValueError``/``TypeError``). Actions beyond the bound are clipped; a NaN ends the run
+  as ``diverged``.
 * **observation**: ``[eps_m, deps_m]``, float64: the measured error ``eps_m = s_measured - s_d``
   (field units) and its sampled difference ``(eps_m[k] - eps_m[k-1]) / (t[k] - t[k-1])`` (field
   units per second, 0 at the first sample). That is all a coordinate-free controller can know:
-  no position, heading or gradient.
+  no position, heading or gradient. The bounds are finite where the sensor has a ``range =
+  [lo, hi]`` (``eps_m`` in ``[lo - s_d, hi - s_d]``, ``|deps_m| <= (hi - lo) * rate_hz``), else
+  infinite (a field value has no bound a noisy sensor respects).
 * **reward**: ``-|eps| / error_scale - effort_weight * (omega / omega_max)**2``, with ``eps`` the
   true (noise-free) error at the new sample, ``error_scale`` the scenario controller's ``c2``
   (the paper's error scale; 1 if unset) unless given, ``effort_weight`` 0.01 unless given.
@@ -39,6 +47,17 @@ The environment's definition (the same for both):
   ground truth for logs and plots, never part of the observation); at the end of a run
   ``outcome`` (``completed``, ``left_field``, ``diverged``) and ``result`` (the run's outcome and
   metrics, as in ``summary.json``).
+* **rendering** (``IsolineEnv(render_mode=...)``, ``metadata["render_fps"]`` = the sensor rate,
+  one frame per step): ``"rgb_array"`` returns a ``uint8[256, 256, 3]`` top-down frame, north
+  up, centred on the vehicle and ``2 * render_half_width_m`` across (default ten turn radii):
+  the field (a colour ramp over the frame's values; dark grey off the field), the isoline
+  ``s = s_d`` (white), the path since the reset (orange) and the vehicle (red, a tick along its
+  heading). numpy only. ``"human"`` draws the same frames in a matplotlib window at every reset
+  and step, pausing one sample period (real time; matplotlib needed).
+* **limits**: a vector environment holds at most ``MAX_NUM_ENVS`` (2^24) sub-environments,
+  and at most as many as fit in half the memory available when it is built
+  (``bytes_per_env``, an upper estimate of about 8 KiB each with its numpy generator): more raises ``MemoryError``
+  saying how many fit. ``num_envs`` must be an int (``1.5`` raises ``TypeError``).
 
 Gymnasium is an optional dependency: ``pip install "./python[gym]"``.
 """
@@ -46,6 +65,7 @@ Gymnasium is an optional dependency: ``pip install "./python[gym]"``.
 from __future__ import annotations
 
 import json
+import os
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -61,20 +81,104 @@ except ImportError as e:  # pragma: no cover - depends on the environment
 
 from . import Scenario, _native
 
-__all__ = ["IsolineEnv", "IsolineVectorEnv", "ENV_ID"]
+__all__ = ["IsolineEnv", "IsolineVectorEnv", "SB3VecEnv", "ENV_ID", "MAX_NUM_ENVS"]
 
 #: The registered id: ``gymnasium.make("isotrack/Isoline-v0", scenario=...)``.
 ENV_ID = "isotrack/Isoline-v0"
 
+#: Most sub-environments one vector environment holds, whatever the memory (2^24).
+MAX_NUM_ENVS = 1 << 24
+
+#: What one sub-environment holds on the Python side, bytes: its numpy ``Generator`` (with its
+#: bit generator and seed sequence) and its share of the batched arrays, rounded up (measured
+#: with ``tracemalloc`` over 2 x 10^4 generators: 0.85 KiB).
+_PY_BYTES_PER_ENV = 2048
+
+#: Share of the memory available when a vector environment is built that its environments may
+#: take.
+_MEMORY_SHARE = 0.5
+
 #: Redraws of a random start before giving up (a start disc mostly off the field).
 _MAX_START_DRAWS = 1000
 
+#: Side of a rendered frame, pixels.
+_FRAME_PX = 256
+
+
+def _available_memory_bytes() -> Optional[int]:
+    """The memory the process may still use: ``MemAvailable`` of ``/proc/meminfo`` (Linux), else
+    the free physical pages (``os.sysconf``), else ``None`` (unknown: only ``MAX_NUM_ENVS``
+    bounds ``num_envs``)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _check_num_envs(num_envs: Any) -> int:
+    """``num_envs`` as an int in ``[1, MAX_NUM_ENVS]``; a ``TypeError`` for anything but an
+    integer (``1.5``, ``"3"``, ``True``)."""
+    if isinstance(num_envs, (bool, np.bool_)) or not isinstance(num_envs, (int, np.integer)):
+        raise TypeError(f"num_envs must be an int, got {num_envs!r} ({type(num_envs).__name__})")
+    n = int(num_envs)
+    if n < 1:
+        raise ValueError(f"num_envs must be at least 1, got {n}")
+    if n > MAX_NUM_ENVS:
+        raise ValueError(f"num_envs = {n} is more than the {MAX_NUM_ENVS} environments one vector environment holds")
+    return n
+
+
+def _check_memory(num_envs: int, bytes_per_env: int, available: Optional[int]) -> None:
+    """Refuses ``num_envs`` environments of ``bytes_per_env`` each when they need more than
+    ``_MEMORY_SHARE`` of ``available`` bytes (a clear error instead of an allocation failure that
+    aborts the interpreter)."""
+    if available is None:
+        return
+    need = num_envs * bytes_per_env
+    budget = int(_MEMORY_SHARE * available)
+    if need > budget:
+        raise MemoryError(
+            f"num_envs = {num_envs} needs about {need / 2**30:.2f} GiB ({bytes_per_env} bytes per environment), "
+            f"more than half the {available / 2**30:.2f} GiB of memory available: at most "
+            f"{max(budget // bytes_per_env, 0)} environments fit"
+        )
+
 
 def _spaces(batch: "_native.EnvBatch") -> Tuple[spaces.Box, spaces.Box]:
+    """The action space (float32, ``[-omega_max, omega_max]``) and the observation space
+    (float64; finite where the sensor's ``range`` bounds the measurement)."""
     w = batch.max_turn_rate_radps
-    action = spaces.Box(low=-w, high=w, shape=(1,), dtype=np.float64)
-    observation = spaces.Box(low=-np.inf, high=np.inf, shape=(2,), dtype=np.float64)
+    action = spaces.Box(low=-w, high=w, shape=(1,), dtype=np.float32)
+    bounds = batch.observation_bounds
+    if bounds is None:
+        observation = spaces.Box(low=-np.inf, high=np.inf, shape=(2,), dtype=np.float64)
+    else:
+        observation = spaces.Box(low=np.array(bounds[0]), high=np.array(bounds[1]), dtype=np.float64)
     return action, observation
+
+
+def _check_actions(actions: Any, shape: Tuple[int, ...]) -> np.ndarray:
+    """``actions`` as a float64 array of exactly ``shape``: a ``TypeError`` for what is not an
+    array of real numbers (``None``, strings, booleans, objects), a ``ValueError`` for another
+    shape (never reshaped). Values are not checked: beyond the bound they clip, NaN ends the run."""
+    if actions is None:
+        raise TypeError(f"the action must be an array of shape {shape} of turn rates (rad/s), got None")
+    try:
+        a = np.asarray(actions)
+    except (ValueError, TypeError) as e:
+        raise ValueError(f"the action must be an array of shape {shape}, got {actions!r}: {e}") from None
+    if a.dtype.kind not in "iuf":
+        raise TypeError(f"the action must be an array of real numbers (rad/s), got dtype {a.dtype}")
+    if a.shape != shape:
+        raise ValueError(f"the action must have shape {shape}, got shape {a.shape}")
+    return a.astype(np.float64)
 
 
 class _Starts:
@@ -87,13 +191,14 @@ class _Starts:
         self.radius_m = r
         self.random_heading = bool(random_heading)
         self.batch = batch
+        self.origin = batch.start
 
     def reset(
         self, i: int, rng: np.random.Generator, options: Optional[Dict[str, Any]]
     ) -> Tuple[np.ndarray, Tuple[float, float, float]]:
         """Resets sub-environment ``i`` from a start drawn with ``rng``: its observation and
         its start ``(x_m, y_m, heading_rad)``."""
-        x0, y0, h0 = self.batch.start
+        x0, y0, h0 = self.origin
         fixed = (options or {}).get("start")
         if isinstance(fixed, str):
             if fixed != "scenario":
@@ -126,12 +231,111 @@ def _make_batch(scenario: Optional[Scenario], num_envs: int, **reward: Any) -> "
     scenario = Scenario.default() if scenario is None else scenario
     if not isinstance(scenario, Scenario):
         raise TypeError(f"scenario must be an isotrack.Scenario, got {type(scenario).__name__}")
-    return _native.EnvBatch(scenario._native, int(num_envs), **reward)
+    return _native.EnvBatch(scenario._native, num_envs, **reward)
+
+
+class _Renderer:
+    """Top-down frames of one sub-environment: the field round the vehicle (a colour ramp, dark
+    grey off the field), the isoline ``s = s_d`` (white: pixels where the field crosses the level),
+    the path since the reset (orange) and the vehicle (red, with a heading tick). numpy only;
+    ``"human"`` shows the frames in a matplotlib window."""
+
+    _LOW = np.array([68.0, 1.0, 84.0])  # the ends of viridis
+    _HIGH = np.array([253.0, 231.0, 37.0])
+
+    def __init__(self, scenario: Scenario, batch: "_native.EnvBatch", mode: Optional[str], half_width_m: Optional[float]):
+        if mode not in (None, "rgb_array", "human"):
+            raise ValueError(f'render_mode must be None, "rgb_array" or "human", got {mode!r}')
+        if half_width_m is None:
+            half_width_m = 10.0 * batch.speed_mps / batch.max_turn_rate_radps  # ten turn radii
+        if not (np.isfinite(half_width_m) and half_width_m > 0.0):
+            raise ValueError(f"render_half_width_m must be finite and > 0, got {half_width_m}")
+        if mode == "human":
+            try:
+                import matplotlib.pyplot  # noqa: F401
+            except ImportError as e:
+                raise gymnasium.error.DependencyNotInstalled(
+                    'render_mode="human" needs matplotlib: pip install matplotlib'
+                ) from e
+        self.mode, self.scenario, self.batch, self.half_width_m = mode, scenario, batch, float(half_width_m)
+        self.level = scenario.level
+        self.path: List[Tuple[float, float]] = []
+        self._figure: Any = None
+
+    def record(self, i: int, reset: bool) -> None:
+        """Notes sub-environment ``i``'s position (after a step, or a reset when ``reset``)."""
+        if self.mode is None:
+            return
+        if reset:
+            self.path = []
+        x, y, _, _ = self.batch.pose(i)
+        self.path.append((x, y))
+        if self.mode == "human":
+            self.show(self.frame(i))
+
+    def frame(self, i: int) -> np.ndarray:
+        """The frame, ``uint8[256, 256, 3]``, north up, centred on the vehicle, ``2 *
+        half_width_m`` across."""
+        x, y, heading, t = self.batch.pose(i)
+        n, w = _FRAME_PX, self.half_width_m
+        centres = (np.arange(n) + 0.5) / n * 2.0 * w - w
+        xs, ys = np.meshgrid(x + centres, y - centres)
+        v = self.scenario.field_values(xs.ravel(), ys.ravel(), t).reshape(n, n)
+        on = np.isfinite(v)
+        img = np.full((n, n, 3), 40, dtype=np.uint8)
+        if on.any():
+            lo, hi = float(v[on].min()), float(v[on].max())
+            g = (v - lo) / (hi - lo) if hi > lo else np.full_like(v, 0.5)
+            ramp = self._LOW + np.clip(np.nan_to_num(g), 0.0, 1.0)[..., None] * (self._HIGH - self._LOW)
+            img[on] = ramp[on].astype(np.uint8)
+            above = v >= self.level
+            edge = np.zeros((n, n), dtype=bool)
+            edge[:, :-1] |= (above[:, 1:] != above[:, :-1]) & on[:, 1:] & on[:, :-1]
+            edge[:-1, :] |= (above[1:, :] != above[:-1, :]) & on[1:, :] & on[:-1, :]
+            img[edge] = 255
+        scale = n / (2.0 * w)  # pixels per metre
+        if self.path:
+            p = np.array(self.path)
+            cols = np.floor((p[:, 0] - x + w) * scale).astype(np.int64)
+            rows = np.floor((y + w - p[:, 1]) * scale).astype(np.int64)
+            inside = (cols >= 0) & (cols < n) & (rows >= 0) & (rows < n)
+            img[rows[inside], cols[inside]] = (255, 140, 0)
+        c = n // 2
+        rr, cc = np.mgrid[-4:5, -4:5]
+        disc = rr**2 + cc**2 <= 16
+        img[c + rr[disc], c + cc[disc]] = (220, 20, 20)
+        tick = np.arange(5, 14)
+        img[np.clip(c - np.round(tick * np.sin(heading)).astype(int), 0, n - 1),
+            np.clip(c + np.round(tick * np.cos(heading)).astype(int), 0, n - 1)] = (220, 20, 20)
+        return img
+
+    def show(self, frame: np.ndarray) -> None:
+        """Draws ``frame`` in the matplotlib window (opened on the first frame); with an
+        interactive backend it pauses one sample period of simulated time per frame."""
+        import matplotlib.pyplot as plt
+
+        if self._figure is None:
+            self._figure, ax = plt.subplots(figsize=(4, 4))
+            self._image = ax.imshow(frame)
+            ax.set_axis_off()
+        else:
+            self._image.set_data(frame)
+        if getattr(self._figure.canvas, "required_interactive_framework", None) is None:
+            self._figure.canvas.draw()  # a non-interactive backend (Agg): no window to show
+        else:
+            plt.pause(self.batch.sensor_period_s)
+
+    def close(self) -> None:
+        if self._figure is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._figure)
+            self._figure = None
 
 
 class IsolineEnv(gymnasium.Env):
     """One run of a scenario as a Gymnasium environment (see the module documentation for the
-    action, observation, reward, termination and reset rules).
+    action, observation, reward, termination, reset and rendering rules).
 
     Args:
         scenario: the scenario (``Scenario.default()``, the paper's Fig. 2(b) setting, if None).
@@ -141,9 +345,13 @@ class IsolineEnv(gymnasium.Env):
         error_scale: the reward's error scale, field units (default: the controller's ``c2``).
         effort_weight: weight of the effort term ``(omega / omega_max)**2`` (default 0.01).
         termination_penalty: what ending as ``left_field``/``diverged`` costs (default: see above).
+        render_mode: ``None``, ``"rgb_array"`` (``render()`` returns a ``uint8[256, 256, 3]``
+            frame) or ``"human"`` (a matplotlib window, updated at every reset and step).
+        render_half_width_m: half the side of the rendered square, m (default: ten turn radii,
+            ``10 * speed / omega_max``).
     """
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array", "human"]}
 
     def __init__(
         self,
@@ -154,7 +362,10 @@ class IsolineEnv(gymnasium.Env):
         error_scale: Optional[float] = None,
         effort_weight: float = 0.01,
         termination_penalty: Optional[float] = None,
+        render_mode: Optional[str] = None,
+        render_half_width_m: Optional[float] = None,
     ):
+        scenario = Scenario.default() if scenario is None else scenario
         self._batch = _make_batch(
             scenario,
             1,
@@ -165,23 +376,28 @@ class IsolineEnv(gymnasium.Env):
         )
         self._starts = _Starts(self._batch, start_radius_m, random_heading)
         self.action_space, self.observation_space = _spaces(self._batch)
-        self._action = np.zeros(1, dtype=np.float64)
+        self.metadata = {**type(self).metadata, "render_fps": 1.0 / self._batch.sensor_period_s}
+        self.render_mode = render_mode
+        self._renderer = _Renderer(scenario, self._batch, render_mode, render_half_width_m)
         self._active = np.ones(1, dtype=bool)
         self._running = False
+        self._reset_once = False
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
         """Starts a run (see the module documentation): ``(observation, info)``."""
         super().reset(seed=seed)
         obs, start = self._starts.reset(0, self.np_random, options)
-        self._running = True
+        self._running = self._reset_once = True
+        self._renderer.record(0, reset=True)
         return obs, {"t_s": 0.0, "start": start}
 
     def step(self, action):
-        """One sample: ``(observation, reward, terminated, truncated, info)``."""
+        """One sample: ``(observation, reward, terminated, truncated, info)``. ``action``: an
+        array of shape ``(1,)`` (any real dtype; float64 keeps its precision)."""
+        a = _check_actions(action, (1,))
         if not self._running:
             raise RuntimeError("the run has ended (or never started): call reset()")
-        self._action[0] = np.asarray(action, dtype=np.float64).reshape(-1)[0]
-        obs, reward, terminated, truncated, t = self._batch.step(self._action, self._active)
+        obs, reward, terminated, truncated, t = self._batch.step(a, self._active)
         term, trunc = bool(terminated[0]), bool(truncated[0])
         info: Dict[str, Any] = {"t_s": float(t[0])}
         if term or trunc:
@@ -189,20 +405,67 @@ class IsolineEnv(gymnasium.Env):
             result = json.loads(self._batch.result_json(0))
             info["outcome"] = result["outcome"]
             info["result"] = result
+        self._renderer.record(0, reset=False)
         return obs[0].copy(), float(reward[0]), term, trunc, info
+
+    def render(self):
+        """``"rgb_array"``: the current frame (``uint8[256, 256, 3]``); ``"human"``: draws it;
+        ``None``: nothing (with Gymnasium's warning)."""
+        if self.render_mode is None:
+            gymnasium.logger.warn('render() without a render_mode: make the environment with render_mode="rgb_array"')
+            return None
+        if not self._reset_once:
+            raise RuntimeError("call reset() before render()")
+        frame = self._renderer.frame(0)
+        if self.render_mode == "human":
+            self._renderer.show(frame)
+            return None
+        return frame
+
+    def close(self) -> None:
+        """Closes the ``"human"`` window, if any."""
+        self._renderer.close()
 
     def result(self) -> Dict[str, Any]:
         """The current run's outcome and metrics so far (as in ``summary.json``)."""
         return json.loads(self._batch.result_json(0))
 
 
+_AUTORESET_MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
+
+
+def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
+    """``options["reset_mask"]`` checked as Gymnasium's own vector environments do."""
+    if not isinstance(mask, np.ndarray):
+        raise TypeError(f"options['reset_mask'] must be a numpy array, got {type(mask).__name__}")
+    if mask.shape != (num_envs,):
+        raise ValueError(f"options['reset_mask'] must have shape ({num_envs},), got {mask.shape}")
+    if mask.dtype != np.bool_:
+        raise TypeError(f"options['reset_mask'] must have dtype bool, got {mask.dtype}")
+    if not mask.any():
+        raise ValueError("options['reset_mask'] must reset at least one sub-environment (all False)")
+    return mask
+
+
 class IsolineVectorEnv(VectorEnv):
     """``num_envs`` runs of a scenario stepped together in Rust, one call per step, with
-    Gymnasium's vector API (next-step autoreset: the step after a run ends resets it and returns
-    its first observation with reward 0). Arguments as :class:`IsolineEnv`.
+    Gymnasium's vector API. Arguments as :class:`IsolineEnv`, and:
+
+    Args:
+        num_envs: the number of sub-environments, an int in ``[1, MAX_NUM_ENVS]`` whose memory
+            (``num_envs * bytes_per_env``, about 8 KiB each) fits in half the memory available
+            when it is built (else ``MemoryError``, naming how many fit).
+        autoreset_mode: ``AutoresetMode.NEXT_STEP`` (default: the step after a run ends resets
+            it and returns its first observation with reward 0), ``SAME_STEP`` (the ending step
+            resets it at once and returns the new run's first observation; the last one is
+            ``info["final_obs"][i]``, its info ``info["final_info"]``) or ``DISABLED`` (stepping
+            an ended run raises; reset it with ``options={"reset_mask": mask}``). Declared in
+            ``metadata["autoreset_mode"]``.
 
     ``reset(seed=s)`` seeds sub-environment ``i`` with ``s + i`` (a list gives one seed each), as
-    ``gymnasium.vector.SyncVectorEnv`` does; ``options`` apply to every sub-environment.
+    ``gymnasium.vector.SyncVectorEnv`` does; ``options`` apply to every sub-environment, and
+    ``options={"reset_mask": mask}`` (a bool array of shape ``(num_envs,)``) resets only those
+    where ``mask`` is true (the others keep their runs and observations).
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -217,26 +480,54 @@ class IsolineVectorEnv(VectorEnv):
         error_scale: Optional[float] = None,
         effort_weight: float = 0.01,
         termination_penalty: Optional[float] = None,
+        autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
     ):
-        if int(num_envs) < 1:
-            raise ValueError(f"num_envs must be at least 1, got {num_envs}")
+        n = _check_num_envs(num_envs)
+        mode = AutoresetMode(autoreset_mode)
         self._batch = _make_batch(
             scenario,
-            num_envs,
+            1,
+            max_turn_rate_radps=max_turn_rate_radps,
+            error_scale=error_scale,
+            effort_weight=effort_weight,
+            termination_penalty=termination_penalty,
+        )
+        self.bytes_per_env = self._batch.bytes_per_env + _PY_BYTES_PER_ENV
+        _check_memory(n, self.bytes_per_env, _available_memory_bytes())
+        self._batch = _make_batch(
+            scenario,
+            n,
             max_turn_rate_radps=max_turn_rate_radps,
             error_scale=error_scale,
             effort_weight=effort_weight,
             termination_penalty=termination_penalty,
         )
         self._starts = _Starts(self._batch, start_radius_m, random_heading)
-        self.num_envs = int(num_envs)
+        self.num_envs = n
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode, "render_fps": 1.0 / self._batch.sensor_period_s}
         self.single_action_space, self.single_observation_space = _spaces(self._batch)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self._rngs: List[np.random.Generator] = [seeding.np_random()[0] for _ in range(self.num_envs)]
+        self.action_space = batch_space(self.single_action_space, n)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        # One generator per sub-environment, made at its first reset (seeded or not).
+        self._rngs: List[Optional[np.random.Generator]] = [None] * n
         self._options: Optional[Dict[str, Any]] = None
-        self._autoreset = np.zeros(self.num_envs, dtype=bool)
-        self._started = False
+        self._obs = np.zeros((n, 2), dtype=np.float64)
+        self._ended = np.zeros(n, dtype=bool)
+        self._reset_done = np.zeros(n, dtype=bool)
+
+    def _rng(self, i: int) -> np.random.Generator:
+        rng = self._rngs[i]
+        if rng is None:
+            rng = self._rngs[i] = seeding.np_random()[0]
+        return rng
+
+    def _reset_some(self, indices: np.ndarray, options: Optional[Dict[str, Any]]) -> Tuple[np.ndarray, np.ndarray]:
+        """Resets the sub-environments ``indices``: their observations and starts."""
+        obs = np.empty((len(indices), 2), dtype=np.float64)
+        starts = np.empty((len(indices), 3), dtype=np.float64)
+        for k, i in enumerate(indices.tolist()):
+            obs[k], starts[k] = self._starts.reset(i, self._rng(i), options)
+        return obs, starts
 
     def reset(
         self,
@@ -244,56 +535,106 @@ class IsolineVectorEnv(VectorEnv):
         seed: Optional[Union[int, Sequence[Optional[int]]]] = None,
         options: Optional[Dict[str, Any]] = None,
     ):
-        """Starts every run: ``(observations[num_envs, 2], info)``."""
+        """Starts every run (or those of ``options["reset_mask"]``): ``(observations[num_envs,
+        2], info)`` with ``info["start"]`` (and ``info["_start"]``, which were reset)."""
+        n = self.num_envs
+        if options is not None and "reset_mask" in options:
+            options = dict(options)
+            mask = _check_reset_mask(options.pop("reset_mask"), n)
+        else:
+            mask = np.ones(n, dtype=bool)
         if seed is None:
-            seeds: Sequence[Optional[int]] = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
+            seeds: Sequence[Optional[int]] = [None] * n
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
+            seeds = [int(seed) + i for i in range(n)]
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
         else:
             seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"expected {self.num_envs} seeds, got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None:
-                self._rngs[i] = seeding.np_random(s)[0]
+            if len(seeds) != n:
+                raise ValueError(f"expected {n} seeds, got {len(seeds)}")
+        indices = np.flatnonzero(mask)
+        for i in indices.tolist():
+            if seeds[i] is not None:
+                s = seeds[i]
+                self._rngs[i] = seeding.np_random(int(s) if isinstance(s, np.integer) else s)[0]
         self._options = options
-        obs = np.empty((self.num_envs, 2), dtype=np.float64)
-        starts = np.empty((self.num_envs, 3), dtype=np.float64)
-        for i in range(self.num_envs):
-            obs[i], starts[i] = self._starts.reset(i, self._rngs[i], options)
-        self._autoreset[:] = False
-        self._started = True
-        return obs, {"t_s": np.zeros(self.num_envs), "start": starts}
+        fresh, fresh_starts = self._reset_some(indices, options)
+        self._obs[indices] = fresh
+        starts = np.zeros((n, 3), dtype=np.float64)
+        starts[indices] = fresh_starts
+        self._ended[indices] = False
+        self._reset_done[indices] = True
+        return self._obs.copy(), {"t_s": np.zeros(n), "start": starts, "_start": mask.copy()}
 
     def step(self, actions):
-        """One sample in every run (next-step autoreset): arrays of observations, rewards,
-        terminated and truncated flags, and the info dict."""
-        if not self._started:
-            raise RuntimeError("call reset() before step()")
-        a = np.ascontiguousarray(actions, dtype=np.float64).reshape(self.num_envs)
-        resetting = self._autoreset
-        if resetting.any():
-            fresh = {int(i): self._starts.reset(int(i), self._rngs[i], self._options) for i in np.flatnonzero(resetting)}
-            obs, reward, terminated, truncated, t = self._batch.step(a, ~resetting)
-            starts = np.zeros((self.num_envs, 3))
-            for i, (o, start) in fresh.items():
-                obs[i], starts[i] = o, start
-                t[i] = 0.0
-            info: Dict[str, Any] = {"t_s": t, "start": starts, "_start": resetting.copy()}
-        else:
-            obs, reward, terminated, truncated, t = self._batch.step(a, ~resetting)
-            info = {"t_s": t}
+        """One sample in every run: arrays of observations, rewards, terminated and truncated
+        flags, and the info dict (autoreset as ``metadata["autoreset_mode"]``). ``actions``: an
+        array of shape ``(num_envs, 1)`` (any real dtype; float64 keeps its precision)."""
+        n = self.num_envs
+        a = _check_actions(actions, (n, 1)).reshape(n)
+        if not self._reset_done.all():
+            raise RuntimeError("call reset() before step() (every sub-environment)")
+        mode = self.metadata["autoreset_mode"]
+        resetting = self._ended.copy()
+        if mode == AutoresetMode.DISABLED and resetting.any():
+            raise RuntimeError(
+                f"sub-environments {np.flatnonzero(resetting)[:10].tolist()} have ended: reset them with "
+                "reset(options={'reset_mask': mask}) (autoreset_mode DISABLED)"
+            )
+        obs, reward, terminated, truncated, t = self._batch.step(a, ~resetting)
+        info: Dict[str, Any] = {"t_s": t}
+        if resetting.any():  # NEXT_STEP: the runs that ended at the last step start again now
+            idx = np.flatnonzero(resetting)
+            obs[idx], fresh_starts = self._reset_some(idx, self._options)
+            t[idx] = 0.0
+            starts = np.zeros((n, 3))
+            starts[idx] = fresh_starts
+            info.update({"start": starts, "_start": resetting})
         ended = terminated | truncated
         if ended.any():
-            outcome = np.full(self.num_envs, "", dtype=object)
-            result = np.full(self.num_envs, None, dtype=object)
-            for i in np.flatnonzero(ended):
-                r = json.loads(self._batch.result_json(int(i)))
-                outcome[i], result[i] = r["outcome"], r
-            info.update({"outcome": outcome, "_outcome": ended.copy(), "result": result, "_result": ended.copy()})
-        self._autoreset = ended
-        return obs, reward, terminated, truncated, info
+            end_info = self._end_info(ended)
+            if mode == AutoresetMode.SAME_STEP:
+                idx = np.flatnonzero(ended)
+                final_obs = np.full(n, None, dtype=object)
+                for i in idx.tolist():
+                    final_obs[i] = obs[i].copy()
+                final_info = {"t_s": np.where(ended, t, 0.0), "_t_s": ended.copy(), **end_info}
+                info.update({"final_obs": final_obs, "_final_obs": ended.copy(), "final_info": final_info, "_final_info": ended.copy()})
+                obs[idx], fresh_starts = self._reset_some(idx, self._options)
+                t[idx] = 0.0
+                starts = np.zeros((n, 3))
+                starts[idx] = fresh_starts
+                info.update({"start": starts, "_start": ended.copy()})
+                ended = np.zeros(n, dtype=bool)
+            else:
+                info.update(end_info)
+        self._ended = ended
+        self._obs = obs
+        return obs.copy(), reward, terminated, truncated, info
+
+    def _end_info(self, ended: np.ndarray) -> Dict[str, Any]:
+        """``outcome`` and ``result`` of the runs that ended (with their masks)."""
+        n = self.num_envs
+        outcome = np.full(n, "", dtype=object)
+        result = np.full(n, None, dtype=object)
+        for i in np.flatnonzero(ended).tolist():
+            r = json.loads(self._batch.result_json(i))
+            outcome[i], result[i] = r["outcome"], r
+        return {
+            "outcome": outcome,
+            "_outcome": ended.copy(),
+            "result": result,
+            "_result": ended.copy(),
+        }
+
+
+def __getattr__(name: str) -> Any:
+    """``SB3VecEnv`` is built on first use (importing stable-baselines3 imports torch)."""
+    if name == "SB3VecEnv":
+        from ._sb3 import SB3VecEnv
+
+        return SB3VecEnv
+    raise AttributeError(f"module 'isotrack.gym' has no attribute {name!r}")
 
 
 def _register() -> None:
