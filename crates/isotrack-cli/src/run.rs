@@ -259,30 +259,74 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         sm.period_s, sm.delay_s
     );
     if sm.applicable {
-        let range = sm
-            .slope_range
-            .map_or_else(|| "n/a".to_string(), |[a, b]| format!("{a:.4} .. {b:.4}"));
-        println!(
-            "  model {}, slopes |grad F| {range}: spectral radius {} -> {}",
-            sm.vehicle_model.unwrap_or("n/a"),
-            f(sm.spectral_radius),
-            match sm.stable {
-                Some(true) => "stable",
-                Some(false) => "UNSTABLE",
-                None => "n/a",
-            }
-        );
-        println!(
-            "  largest stable kp {}   longest stable sensor period {} s",
-            f(sm.max_kp),
-            f(sm.max_period_s)
-        );
-        println!("  {}", sensor_rate_line(sm));
+        print_sampled(sm);
     }
     if !sm.note.is_empty() {
         println!("  note: {}", sm.note);
     }
     Ok(())
+}
+
+/// The sampled loop's lines of `isotrack check`: the radius at the isoline's slopes and over the
+/// tube, the stable `kp` set, the rate, and the discrete loop's margins.
+fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
+    let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.6}"));
+    let range = |r: Option<[f64; 2]>| {
+        r.map_or_else(|| "n/a".to_string(), |[a, b]| format!("{a:.4} .. {b:.4}"))
+    };
+    let state = |stable: Option<bool>| match stable {
+        Some(true) => "stable",
+        Some(false) => "UNSTABLE",
+        None => "not computed",
+    };
+    println!(
+        "  model {}, on the isoline (slopes |grad F| {}{}): spectral radius {} -> {}",
+        sm.vehicle_model.unwrap_or("n/a"),
+        range(sm.slope_range),
+        if sm.slope_exact == Some(true) {
+            ", exact"
+        } else {
+            ""
+        },
+        f(sm.spectral_radius),
+        state(sm.stable)
+    );
+    println!(
+        "  over the whole tube (slopes {}): spectral radius {} -> {}",
+        range(sm.tube_slope_range),
+        f(sm.tube_spectral_radius),
+        state(sm.stable_over_tube)
+    );
+    if let Some(set) = &sm.kp_intervals {
+        let set: Vec<String> = set
+            .iter()
+            .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
+            .collect();
+        println!(
+            "  stable kp: {}   nearest stable kp {}   longest stable sensor period {} s",
+            if set.is_empty() {
+                "none".to_string()
+            } else {
+                set.join(" or ")
+            },
+            f(sm.nearest_stable_kp),
+            f(sm.max_period_s)
+        );
+    }
+    if sm.stable.is_some() {
+        println!("  {}", sensor_rate_line(sm));
+    }
+    if let Some(d) = &sm.discrete_loop {
+        println!(
+            "  discrete loop at slope {:.4}: gain margin {} ({} dB at {} rad/s), phase margin {} deg (at {} rad/s)",
+            d.slope,
+            f(d.gain_margin),
+            f(d.gain_margin_db),
+            f(d.phase_crossover_radps),
+            f(d.phase_margin_deg),
+            f(d.gain_crossover_radps)
+        );
+    }
 }
 
 /// One line: is the sensor rate the limit?

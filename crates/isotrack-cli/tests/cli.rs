@@ -261,6 +261,30 @@ fn check_json_has_the_documented_keys() {
     assert_eq!(j["prop2"]["conditions_hold"], true);
     assert!(j["prop2"]["error_bound"].as_f64().unwrap() > 0.0);
     assert!(j["prop2"]["min_kp"].as_f64().unwrap() > 0.0);
+    // The discrete loop (issue 29): the stable kp set, the matrices, the polynomial, margins.
+    let sm = &j["sampled"];
+    assert!(
+        sm["kp_intervals"].as_array().unwrap()[0]
+            .as_array()
+            .unwrap()
+            .len()
+            == 2
+    );
+    assert_eq!(sm["slope_exact"], true);
+    assert_eq!(sm["stable_over_tube"], true);
+    let d = &sm["discrete_loop"];
+    for key in [
+        "phi",
+        "gamma",
+        "c",
+        "closed_loop",
+        "characteristic_polynomial",
+    ] {
+        assert!(d[key].is_array(), "{key}");
+    }
+    assert!(d["gain_margin"].as_f64().unwrap() > 1.0);
+    assert!(d["phase_margin_deg"].as_f64().unwrap() > 0.0);
+    assert!(j["prop2"]["bound_withheld"].as_array().unwrap().is_empty());
     // Not circular: prop1 fields are null; ki > 0: Prop. 2 does not apply, bound null.
     let o = isotrack(&["check", "--json", "--set", "field.kind=linear_ramp"]);
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -269,7 +293,16 @@ fn check_json_has_the_documented_keys() {
     assert_eq!(j["prop2"]["conditions_hold"], false);
     // Human output.
     let o = isotrack(&["check"]);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("Routh-Hurwitz"));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("Routh-Hurwitz"));
+    for line in [
+        "on the isoline",
+        "over the whole tube",
+        "stable kp: [",
+        "gain margin",
+    ] {
+        assert!(text.contains(line), "{line}: {text}");
+    }
 }
 
 #[test]

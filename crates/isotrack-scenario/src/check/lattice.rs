@@ -185,6 +185,40 @@ impl<'a> Lattice<'a> {
             .collect()
     }
 
+    /// `|grad F|` where the isoline `F = level` crosses an edge of a cell in `cells` (the
+    /// crossing placed by linear interpolation between the edge's two corners): the slopes on
+    /// the isoline itself, as against [`Lattice::slopes`] over the whole band.
+    pub(crate) fn isoline_slopes(&self, cells: &[bool], level: f64) -> Vec<f64> {
+        let m = self.n - 1;
+        let value = |i: usize, j: usize| self.values[j * self.n + i] - level;
+        let mut out = vec![];
+        for j in 0..m {
+            for i in 0..m {
+                if !cells[j * m + i] {
+                    continue;
+                }
+                for (a, b) in [
+                    ((i, j), (i + 1, j)),
+                    ((i, j + 1), (i + 1, j + 1)),
+                    ((i, j), (i, j + 1)),
+                    ((i + 1, j), (i + 1, j + 1)),
+                ] {
+                    let (fa, fb) = (value(a.0, a.1), value(b.0, b.1));
+                    if !(fa * fb <= 0.0 && fa != fb) {
+                        continue;
+                    }
+                    let (pa, pb) = (self.point(a.0, a.1), self.point(b.0, b.1));
+                    let p = pa + (pb - pa) * (fa / (fa - fb));
+                    if let Some(g) = self.field.gradient(0.0, p) {
+                        out.push(g.norm());
+                    }
+                }
+            }
+        }
+        out.retain(|g| g.is_finite());
+        out
+    }
+
     /// Bounds over the corners of the cells in `cells`, with margins (see [`Bounds`]);
     /// `has_hessian = false` leaves `gamma3` out (and the gradient margin with it).
     pub(crate) fn bounds(&self, cells: &[bool], has_hessian: bool) -> Option<Bounds> {

@@ -43,7 +43,7 @@ use serde::Serialize;
 
 /// Lattice points per side for `isotrack check`.
 const CHECK_LATTICE: usize = 601;
-/// Lattice points per side for the quick check behind `run`'s warnings.
+/// Lattice points per side for the baselines' quick warnings ([`baselines`]).
 const WARN_LATTICE: usize = 151;
 
 /// Prop. 1 report. All `None` when the field is not circular.
@@ -108,8 +108,15 @@ pub struct Prop2Report {
     /// The scenario's gains meet the (unit-consistent) conditions at some angle margin.
     pub conditions_hold: bool,
     /// Whether the bound is proved for this scenario: the conditions hold, the start's heading
-    /// lies in the sector, and the sampled loop is stable.
+    /// lies in the sector, the sampled loop is stable over the whole tube, and the sensor has no
+    /// effect the check leaves out (`sensor_not_modelled`).
     pub bound_applies: bool,
+    /// Why the bound is not claimed although the conditions hold and the start is in the
+    /// sector (each reason one line; empty otherwise).
+    pub bound_withheld: Vec<String>,
+    /// The sensor's effects the checks do not model (quantisation, bias drift, saturation
+    /// within the levels crossed, dropouts), each with its key and value.
+    pub sensor_not_modelled: Vec<String>,
     /// Predicted `limsup |eps|` (null when the conditions fail).
     pub error_bound: Option<f64>,
     /// The angle margin used for `error_bound`, rad.
@@ -143,22 +150,49 @@ pub struct SampledReport {
     pub period_s: f64,
     /// Sensor delay, s.
     pub delay_s: f64,
-    /// The slopes `|grad F|` the loop was checked at: `[min, max]` (5th percentile to maximum
-    /// over the tube).
+    /// The isoline's own slopes `|grad F|`, which decide `stable`: `[min, max]` (on a circular
+    /// field exactly `k*s_d`; elsewhere the 5th percentile to the maximum where the isoline
+    /// crosses the lattice's edges in the tube).
     pub slope_range: Option<[f64; 2]>,
+    /// Whether `slope_range` is the field's exact slope on the isoline (circular fields) rather
+    /// than read off the lattice.
+    pub slope_exact: Option<bool>,
+    /// The slopes over the whole tube `|F - s_d| <= tube_halfwidth`: `[min, max]` (5th
+    /// percentile to maximum at the tube's lattice points).
+    pub tube_slope_range: Option<[f64; 2]>,
     /// Isoline curvature used, 1/m (`1/r_d` on circular fields, 0 elsewhere).
     pub curvature_per_m: Option<f64>,
-    /// Largest spectral radius of the one-period map over the slopes (< 1: stable).
+    /// Largest spectral radius of the one-period map over the isoline's slopes (< 1: stable;
+    /// null when there is no equilibrium or the model is not computed).
     pub spectral_radius: Option<f64>,
-    /// Whether the sampled loop is stable at every slope.
+    /// Whether the sampled loop is stable at the isoline's slopes (null: not computed).
     pub stable: Option<bool>,
-    /// The largest `kp` that keeps it stable, other gains fixed (null if none).
+    /// Largest spectral radius over the tube's slopes.
+    pub tube_spectral_radius: Option<f64>,
+    /// Whether the loop is stable at every slope of the tube (what a guarantee over the tube,
+    /// such as Prop. 2's bound, needs).
+    pub stable_over_tube: Option<bool>,
+    /// The stable set of `kp` at the isoline's slopes (other gains fixed): disjoint intervals
+    /// `[lo, hi]`, ends refined to 1e-6 relative, scanned over `1e-3 .. 1e6` (null: not
+    /// computed; empty: no `kp` is stable).
+    pub kp_intervals: Option<Vec<[f64; 2]>>,
+    /// The stable `kp` nearest the scenario's (by ratio; the scenario's own when stable).
+    pub nearest_stable_kp: Option<f64>,
+    /// The largest `kp` that keeps it stable, other gains fixed (the top of `kp_intervals`; null
+    /// if none).
     pub max_kp: Option<f64>,
-    /// The longest sensor period that keeps it stable (null if none).
+    /// The longest sensor period that keeps it stable, every computed shorter one stable too
+    /// (null if none, or not computed).
     pub max_period_s: Option<f64>,
+    /// The shortest period `max_period_s` examined, s: `1e-4`, or `delay / 64` when longer
+    /// (shorter periods need more delay-line states than the check builds).
+    pub period_scanned_from_s: Option<f64>,
     /// Whether the sensor rate is what makes it unstable (a faster sensor would make it
     /// stable).
     pub rate_is_the_limit: Option<bool>,
+    /// The discrete loop analysed, at the isoline slope with the largest radius: state
+    /// matrices, characteristic polynomial, gain and phase margins (docs/SAMPLED.md).
+    pub discrete_loop: Option<sampled::LoopAnalysis>,
     /// Remarks.
     pub note: String,
 }
@@ -375,8 +409,28 @@ fn spread(range: [f64; 2], count: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The sampled-data report, worst over `slope_range`.
-fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> SampledReport {
+/// The isoline's own slopes where the field gives them exactly: `k*s_d` on a circular field
+/// (`F = i0 exp(-k d)`, so `|dF/dd| = k F`); `None` elsewhere (read off the lattice).
+fn exact_isoline_slope(s: &Scenario) -> Option<f64> {
+    match s.field() {
+        FieldModel::Analytic(a) => match &a.kind {
+            AnalyticKind::RadialExp(r) => {
+                radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())
+                    .map(|_| r.decay_per_m * s.level())
+            }
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The sampled-data report: stability at the isoline's own slopes (`r.isoline_slope_range`)
+/// and, separately, over the tube's (`r.slope_range`). With `full = false` (the warnings of
+/// `run`) the stable `kp` set and the period limit are computed only when the loop is unstable
+/// (they are the advice), and the discrete loop's margins not at all; every number computed is
+/// the same as with `full = true`.
+fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledReport {
+    let slope_range = r.isoline_slope_range;
     let f = s.file();
     let period_s = 1.0 / f.sensor.rate_hz.unwrap_or(100.0);
     let delay_s = f.sensor.delay_s.unwrap_or(0.0);
@@ -386,12 +440,20 @@ fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> Sampl
         period_s,
         delay_s,
         slope_range,
+        slope_exact: None,
+        tube_slope_range: r.slope_range,
         curvature_per_m: None,
         spectral_radius: None,
         stable: None,
+        tube_spectral_radius: None,
+        stable_over_tube: None,
+        kp_intervals: None,
+        nearest_stable_kp: None,
         max_kp: None,
         max_period_s: None,
+        period_scanned_from_s: None,
         rate_is_the_limit: None,
+        discrete_loop: None,
         note: String::new(),
     };
     if !is_pi_isoline(s) {
@@ -447,16 +509,66 @@ fn sampled_report(s: &Scenario, l: &Law, slope_range: Option<[f64; 2]>) -> Sampl
         estimator,
         heading,
     };
-    let slopes = spread(range, 12);
-    let rho = sampled::worst_spectral_radius(&base, &slopes);
     rep.applicable = true;
     rep.vehicle_model = Some(model);
     rep.curvature_per_m = Some(kappa);
+    rep.slope_exact = Some(exact_isoline_slope(s).is_some());
+    let slopes = spread(range, 6);
+    let Some(rho) = sampled::worst_radius(&base, &slopes) else {
+        notes.push(format!(
+            "not computed: the delay {delay_s} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
+            (delay_s / period_s).ceil(),
+            sampled::MAX_DELAY_STATES
+        ));
+        rep.note = notes.join("; ");
+        return rep;
+    };
     rep.spectral_radius = rho.is_finite().then_some(rho);
     rep.stable = Some(rho < 1.0);
-    rep.max_kp = sampled::max_kp(&base, &slopes);
-    rep.max_period_s = sampled::max_period_s(&base, &slopes);
+    if let Some(tube) = r.slope_range {
+        let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
+        rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
+        rep.stable_over_tube = Some(rho_tube < 1.0);
+    }
+    if full || rho >= 1.0 {
+        let intervals = sampled::kp_intervals(&base, &slopes).unwrap_or_default();
+        rep.max_kp = intervals.last().map(|i| i[1]);
+        rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
+        rep.kp_intervals = Some(intervals);
+        let limit = sampled::period_limit(&base, &slopes);
+        rep.max_period_s = limit.max_period_s;
+        rep.period_scanned_from_s = Some(limit.scanned_from_s);
+        if limit.scanned_from_s > 1e-4 {
+            notes.push(format!(
+                "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
+                limit.scanned_from_s,
+                sampled::MAX_DELAY_STATES
+            ));
+        }
+    }
     rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
+    if full {
+        // The isoline slope with the largest radius (the only one on a circular field).
+        let worst = slopes
+            .iter()
+            .copied()
+            .max_by(|a, b| {
+                let at = |alpha: f64| {
+                    SampledLoop {
+                        slope: alpha,
+                        ..base
+                    }
+                    .spectral_radius()
+                };
+                at(*a).total_cmp(&at(*b))
+            })
+            .unwrap_or(range[1]);
+        rep.discrete_loop = SampledLoop {
+            slope: worst,
+            ..base
+        }
+        .analysis();
+    }
     if !rho.is_finite() {
         notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
     }
@@ -470,13 +582,14 @@ fn start(s: &Scenario) -> Vec2 {
     Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0))
 }
 
-/// What the lattice gives the checks: bounds over the start-to-tube region and the tube, and
-/// the tube's slopes.
+/// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
+/// tube's slopes and the isoline's own.
 struct Regions {
     levels: Option<[f64; 2]>,
     region: Option<lattice::Bounds>,
     tube: Option<lattice::Bounds>,
     slope_range: Option<[f64; 2]>,
+    isoline_slope_range: Option<[f64; 2]>,
 }
 
 fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
@@ -491,12 +604,19 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
         .nearest_band_cell(p0, lo, hi)
         .map(|seed| lat.component(seed, lo, hi));
     let slope_range = tube_cells.as_ref().and_then(|c| slope_range(lat.slopes(c)));
+    let isoline_slope_range = match exact_isoline_slope(s) {
+        Some(alpha) => Some([alpha, alpha]),
+        None => tube_cells
+            .as_ref()
+            .and_then(|c| self::slope_range(lat.isoline_slopes(c, level))),
+    };
     if !with_bounds {
         return Regions {
             levels: None,
             region: None,
             tube: None,
             slope_range,
+            isoline_slope_range,
         };
     }
     let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
@@ -513,6 +633,7 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
         region: region_bounds,
         tube: tube_bounds,
         slope_range,
+        isoline_slope_range,
     }
 }
 
@@ -537,6 +658,8 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
         tube_gamma3: r.tube.and_then(|b| b.gamma3),
         conditions_hold: false,
         bound_applies: false,
+        bound_withheld: vec![],
+        sensor_not_modelled: vec![],
         error_bound: None,
         error_bound_phi_rad: None,
         min_kp: None,
@@ -642,17 +765,42 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
     rep
 }
 
-/// The combined verdict and its reason.
+/// The combined verdict and its reason (docs/SAMPLED.md, "The verdict").
 fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
+    let (verdict, mut reason) = verdict_alone(p1, p2, sm);
+    if verdict != Verdict::Fails && !p2.bound_withheld.is_empty() {
+        // The sensor's effects are named once: in the reason when it is theirs.
+        let said = reason.contains("models an ideal sensor");
+        let rest: Vec<&str> = p2
+            .bound_withheld
+            .iter()
+            .filter(|w| !(said && p2.sensor_not_modelled.contains(w)))
+            .map(String::as_str)
+            .collect();
+        reason.push_str(&if rest.is_empty() {
+            "; Prop. 2's bound is withheld for the same reason".to_string()
+        } else {
+            format!("; Prop. 2's bound is withheld: {}", rest.join("; "))
+        });
+    }
+    (verdict, reason)
+}
+
+fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
     let at = format!("T = {} s", sm.period_s);
-    if sm.stable == Some(false) {
-        let rho = sm.spectral_radius.map_or_else(
+    let radius = |r: Option<f64>| {
+        r.map_or_else(
             || "no equilibrium".to_string(),
             |r| format!("spectral radius {r:.4}"),
-        );
+        )
+    };
+    if sm.stable == Some(false) {
         return (
             Verdict::Fails,
-            format!("the loop sampled at {at} is unstable ({rho})"),
+            format!(
+                "the loop sampled at {at} is unstable on the isoline ({})",
+                radius(sm.spectral_radius)
+            ),
         );
     }
     if p1.exact_local_condition_holds == Some(false) {
@@ -661,10 +809,19 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
             "Prop. 1's exact local condition fails: the tracking orbit is unstable".into(),
         );
     }
+    if !p2.sensor_not_modelled.is_empty() {
+        return (
+            Verdict::NotApplicable,
+            format!(
+                "no guarantee: the check models an ideal sensor, and {}; nothing checked fails",
+                p2.sensor_not_modelled.join("; ")
+            ),
+        );
+    }
     if p1.exact_local_condition_holds == Some(true) && sm.stable == Some(true) {
         return (
             Verdict::Holds,
-            format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable: locally exponentially stable"),
+            format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable at the isoline's slope k*s_d: locally exponentially stable"),
         );
     }
     if p2.bound_applies {
@@ -673,6 +830,25 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
             format!(
                 "Prop. 2's bound applies: limsup|eps| <= {:.6}",
                 p2.error_bound.unwrap_or(f64::NAN)
+            ),
+        );
+    }
+    if sm.applicable && sm.stable.is_none() {
+        return (
+            Verdict::NotApplicable,
+            format!(
+                "no guarantee: the sampled loop was not computed ({})",
+                sm.note
+            ),
+        );
+    }
+    if sm.stable_over_tube == Some(false) {
+        return (
+            Verdict::NotApplicable,
+            format!(
+                "not guaranteed: the loop sampled at {at} is stable on the isoline ({}) but not over the whole tube ({}); nothing checked fails",
+                radius(sm.spectral_radius),
+                radius(sm.tube_spectral_radius)
             ),
         );
     }
@@ -687,6 +863,33 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
         Verdict::NotApplicable,
         format!("no guarantee: {why}; nothing checked fails"),
     )
+}
+
+/// The sensor's effects the checks leave out, each with what it does to a guarantee: the
+/// propositions and the sampled loop assume every sample is the field's value (with the lag and
+/// delay the sampled loop models). Quantisation, a drifting bias, saturation inside the levels
+/// the robot crosses (`levels`; unknown levels count) and lost samples each break that.
+fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
+    let c = &s.file().sensor;
+    let mut out = vec![];
+    if let Some(q) = c.resolution.filter(|&q| q > 0.0) {
+        out.push(format!("sensor.resolution = {q} quantises the readings (not modelled: the loop can settle anywhere within a quantum, or cycle)"));
+    }
+    if let Some(b) = c.bias_drift_per_sqrt_s.filter(|&b| b > 0.0) {
+        out.push(format!("sensor.bias_drift_per_sqrt_s = {b} lets the readings drift (not modelled: a bias moves the level tracked)"));
+    }
+    if let Some([lo, hi]) = c.range {
+        let covered = levels.is_some_and(|[a, b]| lo <= a && b <= hi);
+        if !covered {
+            out.push(format!("sensor.range = [{lo}, {hi}] saturates the readings within the levels the robot crosses (not modelled)"));
+        }
+    }
+    if let Some(p) = c.dropout_probability.filter(|&p| p > 0.0) {
+        out.push(format!(
+            "sensor.dropout_probability = {p} loses samples (not modelled)"
+        ));
+    }
+    out
 }
 
 /// Warnings about a scenario: noise through a raw backward difference, and a sampled loop that
@@ -707,30 +910,60 @@ fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
             std::f64::consts::SQRT_2 * noise * rate
         ));
     }
-    if sampled.stable == Some(false) {
-        let fix_kp = sampled
-            .max_kp
-            .map(|k| format!("kp <= {k:.4}"))
-            .unwrap_or_else(|| "no kp".into());
-        let fix_t = sampled.max_period_s.map_or_else(
-            || "no sensor rate".to_string(),
-            |t| format!("a sensor rate >= {:.4} Hz", 1.0 / t),
-        );
-        w.push(format!(
-            "the loop sampled at {} Hz is unstable (spectral radius {}): it is stable with {fix_kp} or with {fix_t}",
-            rate,
-            sampled.spectral_radius.map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
-        ));
+    if let Some(line) = sampled_warning(sampled, rate) {
+        w.push(line);
     }
     w
 }
 
-/// The warnings `run` prints: the same as `check` reports, from a coarser lattice.
+/// The warning about the sampled loop: unstable (with the stable `kp` set, the nearest stable
+/// `kp`, and the sensor rate that would do when the rate is the limit) or not computed.
+fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
+    if sm.applicable && sm.stable.is_none() {
+        return Some(format!(
+            "the loop sampled at {rate} Hz was not checked: {}",
+            sm.note
+        ));
+    }
+    if sm.stable != Some(false) {
+        return None;
+    }
+    let intervals = sm.kp_intervals.as_deref().unwrap_or_default();
+    let mut fixes = vec![];
+    if let Some(k) = sm.nearest_stable_kp {
+        let set: Vec<String> = intervals
+            .iter()
+            .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
+            .collect();
+        fixes.push(format!(
+            "for kp in {} (nearest: kp = {k:.4}, on the edge; go further in for margin)",
+            set.join(" or ")
+        ));
+    }
+    if let (Some(true), Some(t)) = (sm.rate_is_the_limit, sm.max_period_s) {
+        fixes.push(format!("with a sensor rate >= {:.4} Hz", 1.0 / t));
+    }
+    let fix = if fixes.is_empty() {
+        "no kp is stable at this rate and a faster sensor does not help (change ki, c1 or c2)"
+            .to_string()
+    } else {
+        format!("it is stable {}", fixes.join(", or "))
+    };
+    Some(format!(
+        "the loop sampled at {rate} Hz is unstable (spectral radius {}): {fix}",
+        sm.spectral_radius
+            .map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
+    ))
+}
+
+/// The warnings `run` prints: the same as `check` reports, from the same lattice and the same
+/// sampled-loop computation (issue 29: a coarser lattice once gave `run` a different slope
+/// range, and a different answer, than `check`).
 pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
     let tube = s.file().controller.c2.unwrap_or(1.0);
-    let r = regions(s, tube, WARN_LATTICE, false);
-    let mut w = warnings_from(s, &sampled_report(s, &l, r.slope_range));
+    let r = regions(s, tube, CHECK_LATTICE, false);
+    let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
     w.extend(baselines::baseline_warnings(s));
     w
 }
@@ -741,12 +974,23 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let tube = tube_halfwidth.unwrap_or(l.c2);
     let r = regions(s, tube, CHECK_LATTICE, true);
     let prop1 = prop1_report(s, &l);
-    let sampled = sampled_report(s, &l, r.slope_range);
+    let sampled = sampled_report(s, &l, &r, true);
     let mut prop2 = prop2_report(s, &l, tube, &r);
-    prop2.bound_applies = prop2.applicable
-        && prop2.conditions_hold
-        && prop2.initial_heading_in_sector == Some(true)
-        && sampled.stable == Some(true);
+    prop2.sensor_not_modelled = sensor_not_modelled(s, prop2.region_levels);
+    if prop2.applicable && prop2.conditions_hold && prop2.initial_heading_in_sector == Some(true) {
+        let w = &mut prop2.bound_withheld;
+        match (sampled.stable, sampled.stable_over_tube) {
+            (Some(true), Some(true)) => {}
+            (Some(true), _) => w.push(format!(
+                "the sampled loop is stable on the isoline but not over the whole tube (spectral radius {})",
+                sampled.tube_spectral_radius.map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
+            )),
+            (Some(false), _) => w.push("the sampled loop is unstable".into()),
+            (None, _) => w.push("the sampled loop was not computed".into()),
+        }
+        w.extend(prop2.sensor_not_modelled.iter().cloned());
+        prop2.bound_applies = w.is_empty();
+    }
     let (verdict, verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let moving = moving::moving_report(s, tube, region(s));
     CheckReport {

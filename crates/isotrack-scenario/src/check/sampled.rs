@@ -246,7 +246,8 @@ fn stable(l: &SampledLoop, slopes: &[f64]) -> bool {
     worst_spectral_radius(l, slopes) < 1.0
 }
 
-/// Bisection on a boundary between `lo` (stable) and `hi` (unstable), geometric midpoints.
+/// Bisection on a boundary between `lo` (stable) and `hi` (unstable), geometric midpoints;
+/// `lo` may lie on either side of `hi` (the bottom of a stable interval is refined from above).
 fn refine(mut lo: f64, mut hi: f64, is_stable: impl Fn(f64) -> bool) -> f64 {
     for _ in 0..50 {
         let mid = (lo * hi).sqrt();
@@ -255,7 +256,7 @@ fn refine(mut lo: f64, mut hi: f64, is_stable: impl Fn(f64) -> bool) -> f64 {
         } else {
             hi = mid;
         }
-        if hi / lo < 1.0 + 1e-6 {
+        if hi.max(lo) / hi.min(lo) < 1.0 + 1e-6 {
             break;
         }
     }
@@ -292,6 +293,275 @@ pub fn max_period_s(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
     match grid.iter().position(|&t| !at(t)) {
         Some(first_bad) => Some(refine(grid[first_bad - 1], grid[first_bad], at)),
         None => grid.last().copied(),
+    }
+}
+
+/// The most whole periods of delay line a model is built with. A sensor delay of `m` periods
+/// adds `m` states and the eigenproblem costs `O(dim^3)`; past this many (a delay longer than
+/// 64 sensor periods) the radius is reported as not computed rather than paid for (issue 29:
+/// `max_period_s` once built thousands of states per scanned period).
+pub const MAX_DELAY_STATES: f64 = 64.0;
+
+impl SampledLoop {
+    /// The spectral radius, or `None` (not computed) when the delay spans more than
+    /// [`MAX_DELAY_STATES`] sensor periods; `+inf` as [`SampledLoop::spectral_radius`].
+    pub fn radius(&self) -> Option<f64> {
+        if self.delay_s / self.period_s > MAX_DELAY_STATES {
+            return None;
+        }
+        Some(self.spectral_radius())
+    }
+}
+
+/// [`worst_spectral_radius`] with the delay-line cap: `None` when the model is not computed
+/// (the cap depends on the period and the delay only, so it is all slopes or none).
+pub fn worst_radius(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
+    l.radius()?;
+    Some(worst_spectral_radius(l, slopes))
+}
+
+/// The `kp` scan: `10^(-3 + j/20)`, `j = 0..=180` (`1e-3 .. 1e6`, 20 points a decade).
+fn kp_grid() -> Vec<f64> {
+    (0..=180)
+        .map(|j| 10f64.powf(-3.0 + j as f64 / 20.0))
+        .collect()
+}
+
+/// The stable set of `kp` (other gains fixed), as disjoint intervals `[lo, hi]` in increasing
+/// order: the runs of stable points of the scan `1e-3 .. 1e6` (20 a decade), each end refined by
+/// bisection to 1e-6 relative (an end at the scan's limit is that limit: stable beyond it is not
+/// examined). A stable window narrower than one scan step (12 %) can be missed. `None` when the
+/// model is not computed ([`MAX_DELAY_STATES`]).
+pub fn kp_intervals(l: &SampledLoop, slopes: &[f64]) -> Option<Vec<[f64; 2]>> {
+    l.radius()?;
+    let at = |kp: f64| stable(&SampledLoop { kp, ..*l }, slopes);
+    let grid = kp_grid();
+    let ok: Vec<bool> = grid.iter().map(|&kp| at(kp)).collect();
+    let mut out = vec![];
+    let mut j = 0;
+    while j < grid.len() {
+        if !ok[j] {
+            j += 1;
+            continue;
+        }
+        let first = j;
+        while j + 1 < grid.len() && ok[j + 1] {
+            j += 1;
+        }
+        let lo = match first {
+            0 => grid[0],
+            _ => refine(grid[first], grid[first - 1], at),
+        };
+        let hi = match grid.get(j + 1) {
+            Some(&bad) => refine(grid[j], bad, at),
+            None => grid[j],
+        };
+        out.push([lo, hi]);
+        j += 1;
+    }
+    Some(out)
+}
+
+/// The stable `kp` nearest `kp` (by ratio, `|ln(x/kp)|`: gains are compared by factors), from
+/// `intervals`; `kp` itself when it lies in one, `None` when there is none.
+pub fn nearest_stable_kp(kp: f64, intervals: &[[f64; 2]]) -> Option<f64> {
+    intervals
+        .iter()
+        .map(|&[lo, hi]| kp.clamp(lo, hi))
+        .min_by(|a, b| (a / kp).ln().abs().total_cmp(&(b / kp).ln().abs()))
+}
+
+/// [`period_limit`]'s answer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PeriodLimit {
+    /// The longest stable period with every computed shorter one stable, s (`None`: the
+    /// shortest computed period is unstable already).
+    pub max_period_s: Option<f64>,
+    /// The shortest period examined, s: `1e-4`, or `delay / MAX_DELAY_STATES` when that is
+    /// longer (shorter periods would need more delay-line states and are not computed).
+    pub scanned_from_s: f64,
+}
+
+/// The longest sensor period for which the loop is stable at every slope, with every shorter
+/// period stable too, over the periods that can be computed: a logarithmic scan from
+/// `max(1e-4, delay/MAX_DELAY_STATES)` s up to `1e3` s (20 a decade), the first unstable one
+/// refined by bisection. Holding the delay fixed, a short period means a long delay line; the
+/// cap keeps every eigenproblem at most `MAX_DELAY_STATES` states larger than without delay.
+pub fn period_limit(l: &SampledLoop, slopes: &[f64]) -> PeriodLimit {
+    let from = (l.delay_s / MAX_DELAY_STATES).max(1e-4);
+    let at = |period_s: f64| stable(&SampledLoop { period_s, ..*l }, slopes);
+    let grid: Vec<f64> = std::iter::once(from)
+        .chain(
+            (0..=140)
+                .map(|j| 10f64.powf(-4.0 + j as f64 / 20.0))
+                .filter(|&t| t > from),
+        )
+        .collect();
+    let max_period_s = if at(grid[0]) {
+        match grid.iter().position(|&t| !at(t)) {
+            Some(first_bad) => Some(refine(grid[first_bad - 1], grid[first_bad], at)),
+            None => grid.last().copied(),
+        }
+    } else {
+        None
+    };
+    PeriodLimit {
+        max_period_s,
+        scanned_from_s: from,
+    }
+}
+
+/// The discrete loop the check analysed, as control toolboxes describe it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LoopAnalysis {
+    /// The slope `|grad F|` the loop was built at.
+    pub slope: f64,
+    /// The plant held over one period: `x_{k+1} = phi x_k + gamma u_k` (row-major rows).
+    pub phi: Vec<Vec<f64>>,
+    /// See `phi`.
+    pub gamma: Vec<f64>,
+    /// The measured output `eps = c x`.
+    pub c: Vec<f64>,
+    /// The one-period closed-loop map `X_{k+1} = M X_k` (rows; state as
+    /// [`SampledLoop::closed_loop_matrix`]).
+    pub closed_loop: Vec<Vec<f64>>,
+    /// `det(z I - M)`, coefficients from `z^n` down to `z^0`.
+    pub characteristic_polynomial: Vec<f64>,
+    /// The gain margin: the factor on the loop gain `L(z)` (broken at the turn-rate command,
+    /// `1 + L = 0` on the closed loop) that puts a pole on the unit circle, at the phase
+    /// crossover (`arg L = -180 deg`) whose margin is nearest 1 (as `margin` does); `None`
+    /// without a phase crossover in `(0, pi/T]`.
+    pub gain_margin: Option<f64>,
+    /// `20 log10(gain_margin)`, dB.
+    pub gain_margin_db: Option<f64>,
+    /// The phase crossover's frequency, rad/s.
+    pub phase_crossover_radps: Option<f64>,
+    /// The phase margin `180 + arg L` (deg, in `(-180, 180]`) at the gain crossover
+    /// (`|L| = 1`) with the smallest margin; `None` without a gain crossover in `(0, pi/T]`.
+    pub phase_margin_deg: Option<f64>,
+    /// The gain crossover's frequency, rad/s.
+    pub gain_crossover_radps: Option<f64>,
+}
+
+/// Real coefficients (highest power first) of `prod (z - r_i)` over `roots`.
+fn poly_from_roots(roots: &[nalgebra::Complex<f64>]) -> Vec<f64> {
+    let mut c = vec![nalgebra::Complex::new(1.0, 0.0)];
+    for r in roots {
+        let mut next = c.clone();
+        next.push(nalgebra::Complex::new(0.0, 0.0));
+        for (i, ci) in c.iter().enumerate() {
+            next[i + 1] -= ci * r;
+        }
+        c = next;
+    }
+    c.iter().map(|z| z.re).collect()
+}
+
+/// Horner's rule at complex `z`.
+fn poly_at(p: &[f64], z: nalgebra::Complex<f64>) -> nalgebra::Complex<f64> {
+    p.iter()
+        .fold(nalgebra::Complex::new(0.0, 0.0), |acc, &c| acc * z + c)
+}
+
+/// `L(z) = N(z)/D(z)` on the unit circle at `z = exp(j w T)`.
+fn loop_gain_at(n: &[f64], d: &[f64], w: f64, t: f64) -> nalgebra::Complex<f64> {
+    let z = nalgebra::Complex::from_polar(1.0, w * t);
+    poly_at(n, z) / poly_at(d, z)
+}
+
+/// Crossings of `f` (sign change) along `ws`, each refined by 60 bisections.
+fn crossings(ws: &[f64], f: impl Fn(f64) -> f64) -> Vec<f64> {
+    let mut out = vec![];
+    for pair in ws.windows(2) {
+        let (mut a, mut b) = (pair[0], pair[1]);
+        let (fa, fb) = (f(a), f(b));
+        if !(fa.is_finite() && fb.is_finite()) || fa.signum() == fb.signum() {
+            continue;
+        }
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if f(m).signum() == fa.signum() {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        out.push(0.5 * (a + b));
+    }
+    out
+}
+
+impl SampledLoop {
+    /// The discrete loop and its margins; `None` without a model.
+    ///
+    /// The loop gain: the slope `alpha` scales the plant's output, and nothing else in the
+    /// loop depends on it, so `det(zI - M(lambda alpha)) = D(z) + lambda N(z)` (the feedback
+    /// is rank one; the open loop's own modes do not depend on `alpha`), and
+    /// `1 + L = det(zI - M)/D` gives `L = N/D` with `N = p_2 - p_1`, `D = 2 p_1 - p_2` from the
+    /// characteristic polynomials at `alpha` and `2 alpha`. The margins are read off
+    /// `L(exp(j w T))` on 4000 logarithmically spaced frequencies in `[1e-5, 1] pi/T`, each
+    /// crossing refined by bisection; crossings at the open loop's poles on the unit circle
+    /// (`|L|` unbounded) are not margins and are left out.
+    pub fn analysis(&self) -> Option<LoopAnalysis> {
+        let m = self.closed_loop_matrix()?;
+        let m2 = SampledLoop {
+            slope: 2.0 * self.slope,
+            ..*self
+        }
+        .closed_loop_matrix()?;
+        let p1 = poly_from_roots(m.complex_eigenvalues().as_slice());
+        let p2 = poly_from_roots(m2.complex_eigenvalues().as_slice());
+        let n: Vec<f64> = p2.iter().zip(&p1).map(|(b, a)| b - a).collect();
+        let d: Vec<f64> = p2.iter().zip(&p1).map(|(b, a)| 2.0 * a - b).collect();
+        let t = self.period_s;
+        let nyquist = std::f64::consts::PI / t;
+        let ws: Vec<f64> = (0..4000)
+            .map(|k| nyquist * 10f64.powf(-5.0 + 5.0 * k as f64 / 3999.0))
+            .collect();
+        let l = |w: f64| loop_gain_at(&n, &d, w, t);
+        let bounded = |w: f64| l(w).norm() < 1e8;
+        // Phase crossovers: L real and negative. At pi/T, L is real (z = -1).
+        let mut phase_x: Vec<f64> = crossings(&ws, |w| l(w).im)
+            .into_iter()
+            .filter(|&w| l(w).re < 0.0 && bounded(w))
+            .collect();
+        if l(nyquist).re < 0.0 && bounded(nyquist) {
+            phase_x.push(nyquist);
+        }
+        let gm = phase_x
+            .iter()
+            .map(|&w| (1.0 / l(w).norm(), w))
+            .min_by(|a, b| a.0.ln().abs().total_cmp(&b.0.ln().abs()));
+        let pm = crossings(&ws, |w| l(w).norm().ln())
+            .into_iter()
+            .filter(|&w| bounded(w))
+            .map(|w| {
+                let z = l(w);
+                let mut pm = 180.0 + z.im.atan2(z.re).to_degrees();
+                if pm > 180.0 {
+                    pm -= 360.0;
+                }
+                (pm, w)
+            })
+            .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+        let (a, b, c) = plant(self);
+        let (phi, gamma) = zoh(&a, &b, t);
+        let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
+            x.row_iter().map(|r| r.iter().copied().collect()).collect()
+        };
+        Some(LoopAnalysis {
+            slope: self.slope,
+            phi: rows(&phi),
+            gamma: gamma.iter().copied().collect(),
+            c: c.iter().copied().collect(),
+            closed_loop: rows(&m),
+            characteristic_polynomial: p1,
+            gain_margin: gm.map(|g| g.0),
+            gain_margin_db: gm.map(|g| 20.0 * g.0.log10()),
+            phase_crossover_radps: gm.map(|g| g.1),
+            phase_margin_deg: pm.map(|p| p.0),
+            gain_crossover_radps: pm.map(|p| p.1),
+        })
     }
 }
 

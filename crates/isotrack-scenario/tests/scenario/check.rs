@@ -422,7 +422,7 @@ fn verdicts_by_branch() {
             "",
             vec!["sensor.rate_hz=1", "controller.kp=50"],
             Verdict::Fails,
-            "is unstable (spectral radius",
+            "is unstable on the isoline (spectral radius",
         ),
     ] {
         let r = check(&sc(text, &sets), None);

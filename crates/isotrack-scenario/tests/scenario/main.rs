@@ -17,3 +17,4 @@ mod series;
 mod stations;
 mod theory;
 mod validation;
+mod verdict;
