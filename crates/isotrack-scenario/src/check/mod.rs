@@ -184,7 +184,7 @@ pub struct SampledReport {
     /// The longest sensor period that keeps it stable, every computed shorter one stable too
     /// (null if none, or not computed).
     pub max_period_s: Option<f64>,
-    /// The shortest period `max_period_s` examined, s: `1e-4`, or `delay / 64` when longer
+    /// The shortest period `max_period_s` examined, s: `1e-4`, or `delay / 32` when longer
     /// (shorter periods need more delay-line states than the check builds).
     pub period_scanned_from_s: Option<f64>,
     /// Whether the sensor rate is what makes it unstable (a faster sensor would make it
@@ -513,7 +513,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     rep.vehicle_model = Some(model);
     rep.curvature_per_m = Some(kappa);
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
-    let slopes = spread(range, 6);
+    let slopes = spread(range, 4);
     let Some(rho) = sampled::worst_radius(&base, &slopes) else {
         notes.push(format!(
             "not computed: the delay {delay_s} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",

@@ -298,9 +298,11 @@ pub fn max_period_s(l: &SampledLoop, slopes: &[f64]) -> Option<f64> {
 
 /// The most whole periods of delay line a model is built with. A sensor delay of `m` periods
 /// adds `m` states and the eigenproblem costs `O(dim^3)`; past this many (a delay longer than
-/// 64 sensor periods) the radius is reported as not computed rather than paid for (issue 29:
-/// `max_period_s` once built thousands of states per scanned period).
-pub const MAX_DELAY_STATES: f64 = 64.0;
+/// 32 sensor periods) the radius is reported as not computed rather than paid for (issue 29:
+/// `max_period_s` once built thousands of states per scanned period). 32 keeps the worst
+/// case of `run`'s warning (an unstable loop, whose advice scans `kp` and the period: about 200
+/// eigenproblems per slope, 4 slopes) at a few tenths of a second.
+pub const MAX_DELAY_STATES: f64 = 32.0;
 
 impl SampledLoop {
     /// The spectral radius, or `None` (not computed) when the delay spans more than

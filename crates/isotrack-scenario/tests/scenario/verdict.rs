@@ -295,20 +295,20 @@ fn straight_polynomial(kp: f64, t: f64, m: usize) -> Vec<f64> {
     add(&left, &mul(&[g, g], &[1.0 + C1 * t, -1.0]))
 }
 
-/// Issue 29 item 6: the delay line is capped at 64 whole periods. Up to the cap the radius is
-/// the largest root of the hand polynomial of degree 67; one period more and it is not
-/// computed; the period scan starts at `delay/64`; a scenario whose delay spans more than 64
+/// Issue 29 item 6: the delay line is capped at 32 whole periods. Up to the cap the radius is
+/// the largest root of the hand polynomial of degree 35; one period more and it is not
+/// computed; the period scan starts at `delay/32`; a scenario whose delay spans more than 32
 /// periods says "not computed" in `check` and in `run`'s warning, and its verdict is not
 /// `holds`.
 #[test]
 fn the_delay_line_is_capped_and_past_the_cap_not_computed() {
-    assert_eq!(MAX_DELAY_STATES, 64.0);
+    assert_eq!(MAX_DELAY_STATES, 32.0);
     let (kp, t) = (0.05, 0.1);
-    let l = straight(kp, t, 64.0 * t);
-    let want = max_modulus(&straight_polynomial(kp, t, 64));
+    let l = straight(kp, t, 32.0 * t);
+    let want = max_modulus(&straight_polynomial(kp, t, 32));
     let got = l.radius().unwrap();
     assert!((got - want).abs() < 1e-9, "{got} vs {want}");
-    assert_eq!(straight(kp, t, 65.0 * t).radius(), None);
+    assert_eq!(straight(kp, t, 33.0 * t).radius(), None);
     assert_eq!(period_limit(&l, &[1.0]).scanned_from_s, 0.1);
     assert_eq!(
         period_limit(&straight(kp, t, 0.0), &[1.0]).scanned_from_s,
@@ -325,14 +325,14 @@ fn the_delay_line_is_capped_and_past_the_cap_not_computed() {
     );
     assert_eq!(r.verdict.as_str(), "not_applicable", "{}", r.verdict_reason);
     assert!(warnings(&s).iter().any(|w| w.contains("not checked")));
-    // 0.25 s at 2 Hz is computed, with the scan starting at 0.25/64 s.
+    // 0.25 s at 2 Hz is computed, with the scan starting at 0.25/32 s.
     let r = check(
         &circular(&["sensor.delay_s=0.25", "sensor.rate_hz=2"]),
         None,
     )
     .sampled;
     assert!(r.stable.is_some());
-    assert_eq!(r.period_scanned_from_s, Some(0.25 / 64.0));
+    assert_eq!(r.period_scanned_from_s, Some(0.25 / 32.0));
 }
 
 /// Issue 29 item 6 (what users of control tools expect): the margins of the sampled loop, on
