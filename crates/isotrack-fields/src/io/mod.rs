@@ -7,6 +7,7 @@
 mod asc;
 mod csv_grid;
 mod geotiff;
+mod geotiff_lzw;
 mod netcdf;
 mod npy;
 
