@@ -57,6 +57,17 @@ def main():
     write("tiled_deflate_f32.tif", "float32", compress="deflate", tiled=True,
           blockxsize=16, blockysize=16)
     write("bigtiff_deflate_f64.tif", "float64", compress="deflate", BIGTIFF="YES")
+    # Tiled LZW as GDAL 3.x writes it: libtiff stops reading a tile once it has its bytes, so
+    # GDAL's tiles may lack the LZW end-of-information code (issue 30, item 2).
+    for name, dtype, pred in [("tiled_lzw_f32.tif", "float32", None),
+                              ("tiled_lzw_pred3_f32.tif", "float32", 3),
+                              ("tiled_lzw_i16.tif", "int16", None),
+                              ("tiled_lzw_pred2_i16.tif", "int16", 2),
+                              ("tiled_lzw_pred2_u8.tif", "uint8", 2)]:
+        opts = dict(compress="lzw", tiled=True, blockxsize=16, blockysize=16)
+        if pred:
+            opts["predictor"] = pred
+        write(name, dtype, **opts)
     write("jpeg_u8.tif", "uint8", compress="jpeg")
     # Cloud-Optimised GeoTIFF with overviews: full resolution first, then 2x and 4x.
     with rasterio.open(os.path.join(OUT, "uncompressed_f64.tif")) as src:

@@ -515,7 +515,10 @@ fn task_digest(
     h.update(toml::to_string(task).unwrap_or_default());
     h.update(format!("{:?}{:?}", suite.scoring_seeds, controllers));
     h.update(serde_json::to_string(gains).unwrap_or_default());
-    if let Ok(t) = std::fs::read(suite.scenario_path(task)) {
+    if let Ok(t) = isotrack_fields::io::read_limited(
+        &suite.scenario_path(task),
+        isotrack_scenario::MAX_SCENARIO_FILE_BYTES,
+    ) {
         h.update(t);
     }
     h.finalize()
@@ -530,6 +533,7 @@ pub fn task_file(dir: &Path, id: &str) -> std::path::PathBuf {
 }
 
 fn read_task(dir: &Path, id: &str) -> Option<TaskResult> {
-    let text = std::fs::read_to_string(task_file(dir, id)).ok()?;
+    // A task file is a few KB; anything that is not a regular file is not one of ours.
+    let text = isotrack_fields::io::read_text_limited(&task_file(dir, id), 64 << 20).ok()?;
     serde_json::from_str(&text).ok()
 }

@@ -133,19 +133,21 @@ impl Suite {
             location: None,
             message,
         };
-        let meta = std::fs::metadata(path).map_err(|e| err(e.to_string()))?;
-        if !meta.is_file() {
-            return Err(err("not a regular file".into()));
-        }
-        if meta.len() > MAX_SUITE_FILE_BYTES {
-            return Err(err(format!(
-                "{} bytes: a suite file is at most {MAX_SUITE_FILE_BYTES} bytes",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let text = Self::read(path).map_err(|e| err(e.to_string()))?;
+        Self::from_text(path, &text)
+    }
+
+    /// The text of a suite file: a regular file (never waiting on a FIFO) of at most
+    /// [`MAX_SUITE_FILE_BYTES`]. An error here is the file's, not its contents'.
+    pub fn read(path: &Path) -> std::io::Result<String> {
+        isotrack_fields::io::read_text_limited(path, MAX_SUITE_FILE_BYTES)
+    }
+
+    /// Parses and checks the text of the suite file `path` (its directory anchors the
+    /// scenarios).
+    pub fn from_text(path: &Path, text: &str) -> Result<Self, SuiteError> {
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        Self::parse(&text, &path.display().to_string(), &dir)
+        Self::parse(text, &path.display().to_string(), &dir)
     }
 
     /// Parses and checks suite text; `name` names it in errors, `dir` anchors its scenarios.

@@ -56,7 +56,14 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
             format!("{}: no such suite file", path.display()),
         ));
     }
-    let suite = Suite::load(&path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    // Unreadable (missing, a FIFO, a directory, too big) is 66; what it says is 65.
+    let text = Suite::read(&path).map_err(|e| {
+        fail(
+            exit::NOINPUT,
+            format!("{}: cannot read: {e}", path.display()),
+        )
+    })?;
+    let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     if !a.resume && a.out.join("leaderboard.csv").exists() {
         return Err(fail(
             exit::CANTCREAT,

@@ -124,10 +124,11 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         let x = match &a.x {
             Some(x) => x.clone(),
             None => {
-                let mut r = csv::Reader::from_path(&results).map_err(|e| Failure {
+                let f = isotrack_fields::io::open_regular(&results).map_err(|e| Failure {
                     code: exit::NOINPUT,
                     message: format!("{}: {e}", results.display()),
                 })?;
+                let mut r = csv::Reader::from_reader(f);
                 r.headers()
                     .ok()
                     .and_then(|h| h.get(1).map(str::to_string))

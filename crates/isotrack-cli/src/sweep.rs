@@ -299,7 +299,7 @@ fn index_results(
             format!("cannot read {}: {e}", path.display()),
         )
     };
-    let mut rdr = std::io::BufReader::new(std::fs::File::open(path).map_err(cannot)?);
+    let mut rdr = std::io::BufReader::new(isotrack_fields::io::open_regular(path).map_err(cannot)?);
     let mut line = String::new();
     let mut offset = rdr.read_line(&mut line).map_err(cannot)? as u64;
     let cut_at = |at: u64| -> Result<(), Failure> {
@@ -415,7 +415,7 @@ fn write_sorted(
     let mut inputs = sources
         .iter()
         .map(|p| {
-            std::fs::File::open(p)
+            isotrack_fields::io::open_regular(p)
                 .map(std::io::BufReader::new)
                 .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
         })

@@ -581,3 +581,73 @@ fn a_start_outside_the_field_names_its_extent() {
     let o = isotrack(&["run", "--set", "field.domain_m=[50.0, 60.0, 50.0, 60.0]"]);
     assert_fails(&o, 65, &["initial.x_m", "field.domain_m"]);
 }
+
+/// Regression (issue 30, item 4): a FIFO given as any input waited for a writer for ever.
+/// Every input path refuses it without opening it: 66 for a file named on the command line,
+/// 65 (naming the key) for one a scenario names. Each call is killed after 20 s, so a
+/// regression fails here rather than hanging the suite.
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_refused_by_every_input_path_without_waiting() {
+    use common::{fifo, isotrack_within};
+    let d = tempfile::tempdir().unwrap();
+    let out = |n: &str| d.path().join(n).display().to_string();
+    let p = fifo(d.path(), "p.toml");
+    let csv = fifo(d.path(), "p.csv");
+    let not_regular = ["not a regular file"];
+    // run SCENARIO
+    assert_fails(&isotrack_within(&["run", &p], 20), 66, &not_regular);
+    // field.path
+    let sc = write(
+        d.path(),
+        "sc.toml",
+        &format!("[field]\nkind = \"grid\"\npath = \"{csv}\"\nformat = \"csv\"\n"),
+    );
+    assert_fails(
+        &isotrack_within(&["run", &sc], 20),
+        65,
+        &["field.path", "not a regular file"],
+    );
+    // sweep SWEEP, and a sweep whose scenario is a FIFO
+    assert_fails(
+        &isotrack_within(&["sweep", &p, "--out", &out("s1")], 20),
+        66,
+        &not_regular,
+    );
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        "scenario = \"p.toml\"\n[grid]\nsim.seed = [1, 2]\n",
+    );
+    let o = isotrack_within(&["sweep", &sw, "--out", &out("s2")], 20);
+    assert!(matches!(o.status.code(), Some(65 | 66)), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a regular file"), "{}", stderr(&o));
+    // replay --inputs
+    assert_fails(
+        &isotrack_within(&["replay", "--inputs", &csv, "--out", &out("r.csv")], 20),
+        66,
+        &not_regular,
+    );
+    // interpolate STATIONS
+    assert_fails(
+        &isotrack_within(
+            &[
+                "interpolate",
+                &csv,
+                "--value-column",
+                "v",
+                "--out",
+                &out("g.csv"),
+            ],
+            20,
+        ),
+        66,
+        &not_regular,
+    );
+    // benchmark SUITE: the file cannot be read (66), not an invalid suite (65)
+    assert_fails(
+        &isotrack_within(&["benchmark", &p, "--out", &out("b")], 20),
+        66,
+        &not_regular,
+    );
+}

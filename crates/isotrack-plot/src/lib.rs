@@ -53,13 +53,8 @@ pub const MAX_INPUT_BYTES: u64 = 4 << 30;
 /// [`MAX_INPUT_BYTES`].
 pub(crate) fn open_input(path: &std::path::Path) -> Result<std::fs::File, PlotError> {
     let cannot = |m: String| PlotError::Input(format!("{}: {m}", path.display()));
-    let f = std::fs::File::open(path).map_err(|e| cannot(e.to_string()))?;
+    let f = isotrack_fields::io::open_regular(path).map_err(|e| cannot(e.to_string()))?;
     let meta = f.metadata().map_err(|e| cannot(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(cannot(
-            "not a regular file (a device, pipe or directory)".into(),
-        ));
-    }
     if meta.len() > MAX_INPUT_BYTES {
         return Err(cannot(format!(
             "{} bytes is more than the {MAX_INPUT_BYTES} a plot reads",

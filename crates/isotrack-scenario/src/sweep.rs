@@ -140,7 +140,8 @@ impl SweepPlan {
             path: path.display().to_string(),
             message: m,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+        let text = isotrack_fields::io::read_text_limited(path, crate::MAX_SCENARIO_FILE_BYTES)
+            .map_err(|e| err(format!("cannot read: {e}")))?;
         Self::parse(&text, path)
     }
 

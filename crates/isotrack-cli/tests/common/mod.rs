@@ -85,3 +85,38 @@ pub fn polylines(svg: &str, stroke: &str, width: &str) -> Vec<Vec<(f64, f64)>> {
         })
         .collect()
 }
+
+/// Runs the `isotrack` binary with `args` and no standard input, killed after `secs` seconds: a
+/// regression that makes it wait (on a FIFO, say) fails the test instead of hanging it.
+pub fn isotrack_within(args: &[&str], secs: u64) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("wait").is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(secs) {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("isotrack {args:?} still running after {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("output")
+}
+
+/// Makes a FIFO (named pipe) at `dir/name` with `mkfifo`; returns its path.
+#[cfg(unix)]
+pub fn fifo(dir: &Path, name: &str) -> String {
+    let p = dir.join(name);
+    let ok = Command::new("mkfifo")
+        .arg(&p)
+        .status()
+        .expect("mkfifo runs");
+    assert!(ok.success(), "mkfifo {}", p.display());
+    p.display().to_string()
+}

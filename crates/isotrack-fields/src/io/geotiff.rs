@@ -6,6 +6,7 @@
 //! classic TIFF or BigTIFF; Cloud-Optimised GeoTIFFs (the first image, which COG puts at full
 //! resolution, is read and the overviews after it are ignored); one band of uint8..uint64,
 //! int8..int64, float16/32/64. JPEG and other lossy or exotic codecs are refused by name.
+//! LZW chunks without an end code (GDAL 3.x's tiles) are decoded by [`super::geotiff_lzw`].
 
 use super::{flip_rows, FilePosition, LoadError, LoadedGrid};
 use crate::georef::{lonlat_spacing_m, Georeference};
@@ -118,7 +119,14 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             .find(|e| e[0] == id && e[1] == 0)
             .map(|e| e[3])
     };
-    let img = dec.read_image().map_err(tiff_err)?;
+    let img = match dec.read_image() {
+        Ok(img) => img,
+        Err(e) if super::geotiff_lzw::is_missing_end_code(&e) => DecodingResult::F64(
+            super::geotiff_lzw::decode(bytes, nx, ny)
+                .map_err(|m| LoadError::new(path, None, format!("invalid LZW GeoTIFF: {m}")))?,
+        ),
+        Err(e) => return Err(tiff_err(e)),
+    };
     let mut values: Vec<f64> = match img {
         DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
         DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),

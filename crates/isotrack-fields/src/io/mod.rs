@@ -7,6 +7,7 @@
 mod asc;
 mod csv_grid;
 mod geotiff;
+mod geotiff_lzw;
 mod netcdf;
 mod npy;
 
@@ -105,20 +106,44 @@ impl LoadError {
 /// values is 2 GiB; text formats take about twice that).
 pub const MAX_GRID_FILE_BYTES: u64 = 4 << 30;
 
+/// Opens an input file for reading, refusing what is not a regular file (a FIFO, a device, a
+/// directory) without blocking: the type is looked up (`stat`) before the file is opened,
+/// since opening a FIFO for reading waits for a writer, possibly for ever. On Unix the open
+/// itself is non-blocking too (`O_NONBLOCK`, which regular files ignore), and the opened file
+/// is checked again, so a FIFO swapped in between the two is refused rather than waited on.
+/// Every input path of isotrack opens its files through here.
+pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
+    let not_regular = || {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a device, pipe or directory)",
+        )
+    };
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
+    let mut opts = std::fs::OpenOptions::new();
+    opts.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        opts.custom_flags(libc::O_NONBLOCK);
+    }
+    let f = opts.open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(not_regular());
+    }
+    Ok(f)
+}
+
 /// Reads a whole file of at most `max_bytes`, refusing what is not a regular file (a FIFO,
 /// `/dev/zero`, a directory) before reading a byte: such "files" never end, or end anywhere.
 /// The size is checked from the metadata and again while reading (a file that grows is cut off
 /// with an error, not read on).
 pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
-    let f = std::fs::File::open(path)?;
+    let f = open_regular(path)?;
     let meta = f.metadata()?;
-    if !meta.is_file() {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a regular file (a device, pipe or directory)",
-        ));
-    }
     let too_big = |n: u64| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,

@@ -385,6 +385,11 @@ fn geotiffs_written_by_gdal_load_like_the_csv() {
         "zstd_f32.tif",
         "zstd_pred2_i16.tif",
         "tiled_deflate_f32.tif",
+        "tiled_lzw_f32.tif",
+        "tiled_lzw_pred3_f32.tif",
+        "tiled_lzw_i16.tif",
+        "tiled_lzw_pred2_i16.tif",
+        "tiled_lzw_pred2_u8.tif",
         "bigtiff_deflate_f64.tif",
         "cog_deflate_f32.tif",
     ] {
@@ -677,4 +682,17 @@ fn the_memory_budget_is_applied_at_its_bound() {
     assert_eq!(s.frames.len(), 3);
     let e = super::netcdf::parse_bytes_within(&p, &b, None, Some(89 * 24)).unwrap_err();
     assert!(e.message.contains("= 90 values"), "{e}");
+}
+
+/// GDAL's tiled LZW without end codes (issue 30, item 2) cut short anywhere in its tiles is
+/// an error naming the file, never a panic or a grid of zeros.
+#[test]
+fn tiled_lzw_cut_short_is_an_error() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/geotiff/tiled_lzw_f32.tif");
+    let full = std::fs::read(&p).unwrap();
+    assert!(parse_grid(&p, &full, GridFormat::GeoTiff).is_ok());
+    for cut in (full.len() / 2..full.len()).step_by(97) {
+        let e = parse_grid(&p, &full[..cut], GridFormat::GeoTiff).unwrap_err();
+        assert!(e.to_string().contains("tiled_lzw_f32.tif"), "{cut}: {e}");
+    }
 }
