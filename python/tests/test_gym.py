@@ -276,17 +276,20 @@ def run_episode(env, action=0.0, **reset):
             return times, rewards, observations, terminated, truncated, info
 
 
-@pytest.mark.parametrize("duration_s, rate_hz", [(20.0, 10.0), (3.0, 100.0), (7.5, 2.0)])
+@pytest.mark.parametrize("duration_s, rate_hz", [(20.0, 10.0), (3.0, 100.0), (7.5, 2.0), (1.05, 10.0)])
 def test_episode_of_duration_d_at_rate_r_takes_d_times_r_steps(duration_s, rate_hz):
-    """Samples at t = 0, 1/R, ..., D: the reset delivers the first, so an episode is D*R steps,
-    the k-th step's sample at k/R, the last at D truncates it; no sample (time, observation or
-    reward) comes twice. (It took D*R + 1, the last repeating the one before.)"""
+    """Samples at t = k/R for k = 0 ... floor(D*R): the reset delivers the first, so an episode
+    is floor(D*R) steps (D*R when whole), the k-th step's sample at k/R; the last sample
+    truncates it (the run then flies to D with the command held); no sample (time, observation
+    or reward) comes twice. (It took one step more, the last repeating the one before.)"""
     sc = isotrack.Scenario.default().set("sim.duration_s", duration_s).set("sensor.rate_hz", rate_hz)
     times, rewards, observations, terminated, truncated, info = run_episode(IsolineEnv(sc), 0.3, seed=4)
-    steps = round(duration_s * rate_hz)
+    steps = math.floor(duration_s * rate_hz + 1e-9)
     assert len(times) - 1 == steps and truncated and not terminated and info["outcome"] == "completed"
     assert times == pytest.approx([k / rate_hz for k in range(steps + 1)], abs=1e-9)
-    assert info["t_s"] == duration_s
+    assert info["t_s"] == pytest.approx(steps / rate_hz, abs=1e-12)
+    assert info["result"]["t_end_s"] == pytest.approx(duration_s, abs=1e-12)  # flown to D
+    assert info["result"]["samples"] == steps + 1
     assert np.all(np.diff(times) > 0)
     assert len({tuple(o) for o in observations}) == len(observations)  # moving, no repeats
     assert rewards[-1] != rewards[-2]
