@@ -232,6 +232,11 @@ def test_vector_env_seeds_and_spaces():
     assert len({tuple(o) for o in a}) == 5  # different seeds, different starts
     with pytest.raises(ValueError, match="expected 5 seeds"):
         vec.reset(seed=[1, 2])
+    for bad in ("abcde", 1.5, True):
+        with pytest.raises(TypeError, match="seed must be"):
+            vec.reset(seed=bad)
+    with pytest.raises(ValueError, match=r"x_m, y_m, heading_rad"):
+        vec.reset(options={"start": (1.0, 2.0)})
     with pytest.raises(ValueError, match="num_envs"):
         IsolineVectorEnv(num_envs=0)
     with pytest.raises(RuntimeError, match="reset"):
@@ -520,6 +525,17 @@ def test_stable_baselines3_trains_ppo_on_the_vector_env():
     assert infos[0]["TimeLimit.truncated"] and infos[0]["outcome"] == "completed"
     assert np.array_equal(infos[0]["terminal_observation"], observations[-1])
     assert np.array_equal(obs[0], single.reset()[0])
+
+    # The single environment in SB3's own DummyVecEnv: the same episode ends.
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    dummy = DummyVecEnv([lambda: IsolineEnv(sc)])
+    dummy.seed(5)
+    assert np.array_equal(dummy.reset()[0], observations[0])
+    for k in range(20):
+        _, _, dones, infos = dummy.step(np.zeros((1, 1), dtype=np.float32))
+        assert dones[0] == (k == 19)
+    assert infos[0]["TimeLimit.truncated"] and np.array_equal(infos[0]["terminal_observation"], observations[-1])
 
     env = VecMonitor(SB3VecEnv(sc, num_envs=8))
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=128, n_epochs=2, seed=0, device="cpu")
