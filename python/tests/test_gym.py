@@ -80,10 +80,8 @@ def test_gymnasium_env_checker_passes():
     assert made.unwrapped.action_space.high[0] == 1.0  # no limit in the scenario: 1 rad/s
     assert made.unwrapped.action_space.dtype == np.float32
     assert made.unwrapped.metadata["render_fps"] == 100.0  # one step per sample at 100 Hz
-    assert checker_warnings(made.unwrapped) == [
-        "\x1b[33mWARN: A Box observation space maximum value is infinity. This is probably too high.\x1b[0m",
-        "\x1b[33mWARN: A Box observation space minimum value is -infinity. This is probably too low.\x1b[0m",
-    ]
+    found = checker_warnings(made.unwrapped)
+    assert len(found) == 2 and all("observation space" in w and "infinity" in w for w in found), found
     ranged = isotrack.Scenario.default().set("sensor.range", [5.0, 15.0])
     made = gymnasium.make("isotrack/Isoline-v0", scenario=ranged)
     assert checker_warnings(made.unwrapped) == []
