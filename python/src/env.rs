@@ -14,6 +14,10 @@
 //!   `diverged`) also `-termination_penalty` (default: the worst reward a step can have under
 //!   the error cap `MAX_SCALED_ERROR`, times the steps left, so that ending a run early never
 //!   scores better than flying it out).
+//!
+//! The run's last sample (at the last multiple of the sensor period within `sim.duration_s`)
+//! ends the episode as truncated; the run then flies to its end with the last command held, so
+//! an episode of `D` s at `R` Hz is `floor(D * R)` steps after the reset's first sample.
 
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_scenario::{Scenario, ScenarioEpisode, Start};
@@ -136,15 +140,15 @@ impl PyEnvBatch {
         let duration = f.sim.duration_s.unwrap_or(600.0);
         let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
         let plan = s.plan();
-        if (duration * rate).floor() < 1.0 {
+        // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
+        // values): the last sample step is the last multiple of `every` within the run.
+        let every = s.sensor().steps_per_sample();
+        if plan.n_steps < every {
             return Err(PyValueError::new_err(format!(
                 "an episode needs at least one step: sim.duration_s = {duration} s holds no sensor \
                  sample after the first at {rate} Hz"
             )));
         }
-        // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
-        // values): the last sample step is the last multiple of `every` within the run.
-        let every = s.sensor().steps_per_sample();
         let last_sample_t_s = (plan.n_steps / every * every) as f64 * plan.dt_s;
         let mut slots = Vec::new();
         slots.try_reserve_exact(num_envs).map_err(|_| {

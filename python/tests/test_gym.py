@@ -248,6 +248,9 @@ def test_bad_arguments_raise_clearly():
         IsolineEnv(error_scale=0.0)
     with pytest.raises(TypeError, match="isotrack.Scenario"):
         IsolineEnv(scenario="default")
+    short = isotrack.Scenario.default().set("sim.duration_s", 0.05).set("sensor.rate_hz", 10.0)
+    with pytest.raises(ValueError, match="at least one step"):  # 0.05 s at 10 Hz: 0 steps
+        IsolineEnv(short)
     env = IsolineEnv()
     with pytest.raises(ValueError, match="start"):
         env.reset(options={"start": "elsewhere"})
