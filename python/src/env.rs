@@ -14,6 +14,10 @@
 //!   `diverged`) also `-termination_penalty` (default: the worst reward a step can have under
 //!   the error cap `MAX_SCALED_ERROR`, times the steps left, so that ending a run early never
 //!   scores better than flying it out).
+//!
+//! The run's last sample (at the last multiple of the sensor period within `sim.duration_s`)
+//! ends the episode as truncated; the run then flies to its end with the last command held, so
+//! an episode of `D` s at `R` Hz is `floor(D * R)` steps after the reset's first sample.
 
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_scenario::{Scenario, ScenarioEpisode, Start};
@@ -83,9 +87,10 @@ pub struct PyEnvBatch {
     termination_penalty: Option<f64>,
     /// Samples a full run delivers at most (for the default termination penalty).
     samples_per_run: f64,
-    /// Time of the run's last step, s (`n_steps * dt_s`, the arithmetic of the loop's own
-    /// `k * dt_s`): a sample there is the run's last, and ends the episode as `truncated`.
-    last_step_t_s: f64,
+    /// Time of the run's last sample step, s: the last multiple of the sensor period within
+    /// `sim.duration_s` (`k * dt_s`, the arithmetic of the loop's own sample times). A sample
+    /// there is the run's last, and ends the episode.
+    last_sample_t_s: f64,
 }
 
 fn invalid(name: &str, v: f64, why: &str) -> PyErr {
@@ -135,12 +140,16 @@ impl PyEnvBatch {
         let duration = f.sim.duration_s.unwrap_or(600.0);
         let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
         let plan = s.plan();
-        if (duration * rate).floor() < 1.0 {
+        // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
+        // values): the last sample step is the last multiple of `every` within the run.
+        let every = s.sensor().steps_per_sample();
+        if plan.n_steps < every {
             return Err(PyValueError::new_err(format!(
                 "an episode needs at least one step: sim.duration_s = {duration} s holds no sensor \
                  sample after the first at {rate} Hz"
             )));
         }
+        let last_sample_t_s = (plan.n_steps / every * every) as f64 * plan.dt_s;
         let mut slots = Vec::new();
         slots.try_reserve_exact(num_envs).map_err(|_| {
             PyMemoryError::new_err(format!("no memory for {num_envs} environments"))
@@ -155,7 +164,7 @@ impl PyEnvBatch {
             effort_weight,
             termination_penalty,
             samples_per_run: (duration * rate).floor() + 1.0,
-            last_step_t_s: plan.n_steps as f64 * plan.dt_s,
+            last_sample_t_s,
         })
     }
 
@@ -375,6 +384,12 @@ impl PyEnvBatch {
     /// One step of environment `i`: `(reward, terminated, truncated)`.
     fn step_one(&mut self, i: usize, action: f64) -> (f64, bool, bool) {
         let omax = self.max_turn_rate_radps;
+        let (level, scale, last_sample_t_s) = (self.level, self.error_scale, self.last_sample_t_s);
+        let penalty = |samples: u64| {
+            let left = (self.samples_per_run - samples as f64).max(0.0);
+            self.termination_penalty
+                .unwrap_or((MAX_SCALED_ERROR + self.effort_weight) * left)
+        };
         let slot = &mut self.slots[i];
         let Some(e) = slot.episode.as_mut() else {
             return (0.0, false, false);
@@ -392,40 +407,35 @@ impl PyEnvBatch {
             effort
         };
         e.command(omega);
-        match e.run_to_sample() {
-            Some(sample) => {
-                let eps_m = sample.measurement.value - self.level;
-                let dt = sample.measurement.t_s - slot.t_s;
-                slot.obs = [eps_m, (eps_m - slot.obs[0]) / dt];
-                slot.t_s = sample.measurement.t_s;
-                slot.true_error = sample.true_value - self.level;
-                slot.samples += 1;
-                slot.pose = pose_of(&sample);
-                // The run's last step: no command after it moves the vehicle, so the episode
-                // ends here (truncated), the command held over the last step.
-                let last = sample.measurement.t_s == self.last_step_t_s;
-                if last {
-                    e.command(omega);
-                }
-                (
-                    -slot.true_error.abs() / self.error_scale - effort,
-                    false,
-                    last,
-                )
-            }
-            None => {
-                let r = -slot.true_error.abs() / self.error_scale - effort;
-                match e.outcome() {
-                    Some(Outcome::Completed) | None => (r, false, true),
-                    Some(_) => {
-                        let left = (self.samples_per_run - slot.samples as f64).max(0.0);
-                        let penalty = self
-                            .termination_penalty
-                            .unwrap_or((MAX_SCALED_ERROR + self.effort_weight) * left);
-                        (r - penalty, true, false)
-                    }
-                }
-            }
+        let Some(sample) = e.run_to_sample() else {
+            // Ended without a new sample: off the field, diverged, or (the sensor dropping the
+            // last samples) at the end of the run.
+            let r = -slot.true_error.abs() / scale - effort;
+            return match e.outcome() {
+                Some(Outcome::Completed) | None => (r, false, true),
+                Some(_) => (r - penalty(slot.samples), true, false),
+            };
+        };
+        let eps_m = sample.measurement.value - level;
+        let dt = sample.measurement.t_s - slot.t_s;
+        slot.obs = [eps_m, (eps_m - slot.obs[0]) / dt];
+        slot.t_s = sample.measurement.t_s;
+        slot.true_error = sample.true_value - level;
+        slot.samples += 1;
+        slot.pose = pose_of(&sample);
+        let r = -slot.true_error.abs() / scale - effort;
+        if sample.measurement.t_s < last_sample_t_s {
+            return (r, false, false);
+        }
+        // The run's last sample: no later command would reach the vehicle, so the episode ends
+        // here, the command held to the end of the run (to `sim.duration_s`).
+        e.command(omega);
+        while e.run_to_sample().is_some() {
+            e.command(omega);
+        }
+        match e.outcome() {
+            Some(Outcome::Completed) | None => (r, false, true),
+            Some(_) => (r - penalty(slot.samples), true, false),
         }
     }
 }

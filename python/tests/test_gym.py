@@ -80,10 +80,8 @@ def test_gymnasium_env_checker_passes():
     assert made.unwrapped.action_space.high[0] == 1.0  # no limit in the scenario: 1 rad/s
     assert made.unwrapped.action_space.dtype == np.float32
     assert made.unwrapped.metadata["render_fps"] == 100.0  # one step per sample at 100 Hz
-    assert checker_warnings(made.unwrapped) == [
-        "\x1b[33mWARN: A Box observation space maximum value is infinity. This is probably too high.\x1b[0m",
-        "\x1b[33mWARN: A Box observation space minimum value is -infinity. This is probably too low.\x1b[0m",
-    ]
+    found = checker_warnings(made.unwrapped)
+    assert len(found) == 2 and all("observation space" in w and "infinity" in w for w in found), found
     ranged = isotrack.Scenario.default().set("sensor.range", [5.0, 15.0])
     made = gymnasium.make("isotrack/Isoline-v0", scenario=ranged)
     assert checker_warnings(made.unwrapped) == []
@@ -232,6 +230,11 @@ def test_vector_env_seeds_and_spaces():
     assert len({tuple(o) for o in a}) == 5  # different seeds, different starts
     with pytest.raises(ValueError, match="expected 5 seeds"):
         vec.reset(seed=[1, 2])
+    for bad in ("abcde", 1.5, True):
+        with pytest.raises(TypeError, match="seed must be"):
+            vec.reset(seed=bad)
+    with pytest.raises(ValueError, match=r"x_m, y_m, heading_rad"):
+        vec.reset(options={"start": (1.0, 2.0)})
     with pytest.raises(ValueError, match="num_envs"):
         IsolineVectorEnv(num_envs=0)
     with pytest.raises(RuntimeError, match="reset"):
@@ -245,6 +248,9 @@ def test_bad_arguments_raise_clearly():
         IsolineEnv(error_scale=0.0)
     with pytest.raises(TypeError, match="isotrack.Scenario"):
         IsolineEnv(scenario="default")
+    short = isotrack.Scenario.default().set("sim.duration_s", 0.05).set("sensor.rate_hz", 10.0)
+    with pytest.raises(ValueError, match="at least one step"):  # 0.05 s at 10 Hz: 0 steps
+        IsolineEnv(short)
     env = IsolineEnv()
     with pytest.raises(ValueError, match="start"):
         env.reset(options={"start": "elsewhere"})
@@ -276,17 +282,20 @@ def run_episode(env, action=0.0, **reset):
             return times, rewards, observations, terminated, truncated, info
 
 
-@pytest.mark.parametrize("duration_s, rate_hz", [(20.0, 10.0), (3.0, 100.0), (7.5, 2.0)])
+@pytest.mark.parametrize("duration_s, rate_hz", [(20.0, 10.0), (3.0, 100.0), (7.5, 2.0), (1.05, 10.0)])
 def test_episode_of_duration_d_at_rate_r_takes_d_times_r_steps(duration_s, rate_hz):
-    """Samples at t = 0, 1/R, ..., D: the reset delivers the first, so an episode is D*R steps,
-    the k-th step's sample at k/R, the last at D truncates it; no sample (time, observation or
-    reward) comes twice. (It took D*R + 1, the last repeating the one before.)"""
+    """Samples at t = k/R for k = 0 ... floor(D*R): the reset delivers the first, so an episode
+    is floor(D*R) steps (D*R when whole), the k-th step's sample at k/R; the last sample
+    truncates it (the run then flies to D with the command held); no sample (time, observation
+    or reward) comes twice. (It took one step more, the last repeating the one before.)"""
     sc = isotrack.Scenario.default().set("sim.duration_s", duration_s).set("sensor.rate_hz", rate_hz)
     times, rewards, observations, terminated, truncated, info = run_episode(IsolineEnv(sc), 0.3, seed=4)
-    steps = round(duration_s * rate_hz)
+    steps = math.floor(duration_s * rate_hz + 1e-9)
     assert len(times) - 1 == steps and truncated and not terminated and info["outcome"] == "completed"
     assert times == pytest.approx([k / rate_hz for k in range(steps + 1)], abs=1e-9)
-    assert info["t_s"] == duration_s
+    assert info["t_s"] == pytest.approx(steps / rate_hz, abs=1e-12)
+    assert info["result"]["t_end_s"] == pytest.approx(duration_s, abs=1e-12)  # flown to D
+    assert info["result"]["samples"] == steps + 1
     assert np.all(np.diff(times) > 0)
     assert len({tuple(o) for o in observations}) == len(observations)  # moving, no repeats
     assert rewards[-1] != rewards[-2]
@@ -517,6 +526,17 @@ def test_stable_baselines3_trains_ppo_on_the_vector_env():
     assert infos[0]["TimeLimit.truncated"] and infos[0]["outcome"] == "completed"
     assert np.array_equal(infos[0]["terminal_observation"], observations[-1])
     assert np.array_equal(obs[0], single.reset()[0])
+
+    # The single environment in SB3's own DummyVecEnv: the same episode ends.
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    dummy = DummyVecEnv([lambda: IsolineEnv(sc)])
+    dummy.seed(5)
+    assert np.array_equal(dummy.reset()[0], observations[0])
+    for k in range(20):
+        _, _, dones, infos = dummy.step(np.zeros((1, 1), dtype=np.float32))
+        assert dones[0] == (k == 19)
+    assert infos[0]["TimeLimit.truncated"] and np.array_equal(infos[0]["terminal_observation"], observations[-1])
 
     env = VecMonitor(SB3VecEnv(sc, num_envs=8))
     model = PPO("MlpPolicy", env, n_steps=64, batch_size=128, n_epochs=2, seed=0, device="cpu")

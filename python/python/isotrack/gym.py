@@ -13,8 +13,10 @@ The environment's definition (the same for both):
 
 * **step**: one sensor sample. The command is held from one delivered sample to the next, so a step
   spans ``1 / sensor.rate_hz`` seconds (more when the sensor drops a sample). The reset delivers
-  the sample at t = 0, so a run of ``sim.duration_s = D`` at ``R`` Hz is ``D * R`` steps, the
-  last one's sample at ``t = D`` (it ends the run: the command is held over that last step).
+  the sample at t = 0, so a run of ``sim.duration_s = D`` at ``R`` Hz is ``floor(D * R)`` steps
+  (``D * R`` when whole), the last one's sample at ``t = floor(D * R) / R``: it ends the episode
+  (truncated), and the run flies on to ``D`` with the last action held. (Should the sensor drop
+  the last samples, the step that reaches ``D`` without one repeats the last observation.)
 * **action**: the turn-rate command ``omega`` (rad/s, positive turns left), a float32 ``Box`` of
   shape ``(1,)`` within ``[-omega_max, omega_max]``: the scenario's turn-rate limit
   (``controller.max_turn_rate_radps``, or the airframe's for the fixed-wing UAV), else 1 rad/s,
@@ -205,7 +207,10 @@ class _Starts:
                 raise ValueError(f'options["start"] must be "scenario" or (x_m, y_m, heading_rad), got {fixed!r}')
             return self.batch.reset(i, x0, y0, h0, None), (x0, y0, h0)
         if fixed is not None:
-            x, y, h = (float(v) for v in fixed)
+            try:
+                x, y, h = (float(v) for v in fixed)
+            except (TypeError, ValueError):
+                raise ValueError(f'options["start"] must be "scenario" or (x_m, y_m, heading_rad), got {fixed!r}') from None
             return self.batch.reset(i, x, y, h, int(rng.integers(0, 2**63))), (x, y, h)
         last_error = None
         for _ in range(_MAX_START_DRAWS):
@@ -548,6 +553,8 @@ class IsolineVectorEnv(VectorEnv):
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
             seeds = [int(seed) + i for i in range(n)]
             self._np_random, self._np_random_seed = seeding.np_random(int(seed))
+        elif isinstance(seed, (str, bytes, float, bool, np.bool_)) or not hasattr(seed, "__len__"):
+            raise TypeError(f"seed must be None, an int or a sequence of {n} ints (or None), got {seed!r}")
         else:
             seeds = list(seed)
             if len(seeds) != n:
