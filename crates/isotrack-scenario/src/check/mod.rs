@@ -32,13 +32,14 @@ use crate::Scenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::theory::{
     prop1_characteristic_polynomial, prop1_exact_local_condition, prop1_paper_conditions,
-    prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m, FieldBounds,
+    prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m,
+    radial_exp_p_orbit, CircularOrbit, FieldBounds,
 };
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_fields::grid::Interpolation;
 use isotrack_fields::AnalyticKind;
 use lattice::Lattice;
-use sampled::{EstimatorModel, HeadingDynamics, SampledLoop};
+use sampled::{EstimatorModel, HeadingDynamics, SampledLoop, SensorLag};
 use serde::Serialize;
 
 /// Lattice points per side for `isotrack check`.
@@ -160,7 +161,8 @@ pub struct SampledReport {
     /// The slopes over the whole tube `|F - s_d| <= tube_halfwidth`: `[min, max]` (5th
     /// percentile to maximum at the tube's lattice points).
     pub tube_slope_range: Option<[f64; 2]>,
-    /// Isoline curvature used, 1/m (`1/r_d` on circular fields, 0 elsewhere).
+    /// Isoline curvature used, 1/m (`1/r_d` on circular fields, `1/d*` on the P law's orbit
+    /// there, 0 elsewhere).
     pub curvature_per_m: Option<f64>,
     /// Largest spectral radius of the one-period map over the isoline's slopes (< 1: stable;
     /// null when there is no equilibrium or the model is not computed).
@@ -384,6 +386,67 @@ fn curvature(s: &Scenario) -> f64 {
     }
 }
 
+/// The orbit the P law (`ki = 0`) settles on in a circular field and the field's own level set
+/// through it.
+struct PLawOrbit {
+    /// The orbit: radius `d*` and steady error `eps*`.
+    orbit: CircularOrbit,
+    /// The field's slope there, `|dF/dd| = k F(d*)`.
+    slope: f64,
+}
+
+impl PLawOrbit {
+    /// The loop linearised on the orbit: the slope and the curvature `1/d*` of the level set
+    /// through it (the tanh's slope there follows from the curvature,
+    /// [`SampledLoop::tanh_slope`]).
+    fn operating_point(&self, l: SampledLoop) -> SampledLoop {
+        SampledLoop {
+            slope: self.slope,
+            curvature_per_m: 1.0 / self.orbit.radius_m,
+            ..l
+        }
+    }
+
+    fn note(&self) -> String {
+        format!(
+            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m",
+            self.orbit.radius_m,
+            self.orbit.error,
+            self.slope,
+            1.0 / self.orbit.radius_m
+        )
+    }
+}
+
+/// The P law's orbit on a circular field ([`radial_exp_p_orbit`]): `None` with an integral
+/// term, on other fields, or when no orbit exists.
+fn p_law_orbit(s: &Scenario, l: &Law) -> Option<PLawOrbit> {
+    let FieldModel::Analytic(a) = s.field() else {
+        return None;
+    };
+    let AnalyticKind::RadialExp(r) = &a.kind else {
+        return None;
+    };
+    if l.ki != 0.0 {
+        return None;
+    }
+    let orbit = radial_exp_p_orbit(r.i0, r.decay_per_m, s.level(), l.v, l.kp, l.c1, l.c2)?;
+    Some(PLawOrbit {
+        orbit,
+        slope: r.decay_per_m * (orbit.error + s.level()),
+    })
+}
+
+/// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
+fn sensor_lag(s: &Scenario) -> Option<SensorLag> {
+    let f = s.file();
+    let tau = f.sensor.time_constant_s.unwrap_or(0.0);
+    (tau > 0.0).then(|| SensorLag {
+        time_constant_s: tau,
+        step_s: f.sim.dt_s.unwrap_or(0.01),
+    })
+}
+
 /// The slope range the sampled check covers: the 5th percentile .. maximum of `slopes` (the
 /// lowest slopes sit at saddles, where the isoline branches and no linearisation holds; a loop
 /// with a tiny slope is slow, not unstable).
@@ -508,12 +571,20 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         delay_s,
         estimator,
         heading,
+        sensor_lag: sensor_lag(s),
+    };
+    let slopes = spread(range, 4);
+    let (base, slopes) = match p_law_orbit(s, l) {
+        Some(o) => {
+            notes.push(o.note());
+            (o.operating_point(base), vec![o.slope])
+        }
+        None => (base, slopes),
     };
     rep.applicable = true;
     rep.vehicle_model = Some(model);
-    rep.curvature_per_m = Some(kappa);
+    rep.curvature_per_m = Some(base.curvature_per_m);
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
-    let slopes = spread(range, 4);
     let Some(rho) = sampled::worst_radius(&base, &slopes) else {
         notes.push(format!(
             "not computed: the delay {delay_s} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
@@ -1071,10 +1142,15 @@ mod tests {
     }
 
     /// The curvature the sampled check uses: `1/r_d` of a circular field (`0.1/ln 2` by
-    /// default), 0 otherwise; and the P law that cannot hold that turn (`v kappa >= kp c1`) is
-    /// said to have no equilibrium.
+    /// default), 0 otherwise; and the P law's orbit (issue 29): with `ki = 0` and `kp = 0.3`
+    /// (`kp c1 = 0.06` cannot hold the isoline's turn `v/r_d = 0.072`) the robot settles
+    /// further out, where `kp c1 tanh(eps/c2) = -v/d` with `eps = 20 exp(-0.1 d) - 10`. Solved
+    /// here by Newton's method on `h(d) = 0.06 tanh(20 e^(-0.1 d) - 10) + 0.5/d` from
+    /// `d = 9`: `d* = 8.8537 m`, `eps* = -1.7487` (what the simulation settles on, tested in
+    /// tests/scenario/sampled.rs). The loop is checked there: curvature `1/d*`, slope
+    /// `0.1 F(d*)`, and stable.
     #[test]
-    fn curvature_and_the_p_law_turn() {
+    fn curvature_and_the_p_law_orbit() {
         let sc = |text: &str, sets: &[&str]| {
             let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
             crate::parse_scenario(text, "<test>", &sets).unwrap()
@@ -1085,15 +1161,31 @@ mod tests {
             curvature(&sc("[field]\nkind = \"gaussian_plumes\"\n", &[])),
             0.0
         );
-        // v kappa = 0.072 against kp c1 = 0.06 (kp 0.3) and 2 (kp 10).
+        let h = |d: f64| 0.06 * (20.0 * (-0.1 * d).exp() - 10.0).tanh() + 0.5 / d;
+        let mut d = 9.0;
+        for _ in 0..50 {
+            let dh = (h(d + 1e-7) - h(d - 1e-7)) / 2e-7;
+            d -= h(d) / dh;
+        }
+        let eps = 20.0 * (-0.1 * d).exp() - 10.0;
+        assert!(
+            (d - 8.8537).abs() < 1e-4 && (eps + 1.7487).abs() < 1e-4,
+            "{d} {eps}"
+        );
         let weak = check(&sc("", &["controller.ki=0", "controller.kp=0.3"]), None).sampled;
-        assert!(weak.note.contains("no equilibrium"), "{}", weak.note);
-        // No sample rate gives the P law an equilibrium it lacks: not the rate's fault.
-        assert_eq!(weak.stable, Some(false));
-        assert_eq!(weak.spectral_radius, None);
-        assert_eq!(weak.rate_is_the_limit, Some(false), "{weak:?}");
-        let strong = check(&sc("", &["controller.ki=0"]), None).sampled;
-        assert!(!strong.note.contains("no equilibrium"), "{}", strong.note);
+        let kappa = weak.curvature_per_m.unwrap();
+        assert!((kappa - 1.0 / d).abs() < 1e-9, "{kappa} vs {}", 1.0 / d);
+        assert!(weak
+            .note
+            .contains("orbit of radius 8.8537 m where eps = -1.7487"));
+        assert!(weak
+            .note
+            .contains(&format!("slope {:.6}", 0.1 * (eps + 10.0))));
+        assert_eq!(weak.stable, Some(true), "{weak:?}");
+        // With the integral the orbit is the isoline itself.
+        let pi = check(&sc("", &[]), None).sampled;
+        assert_eq!(pi.curvature_per_m, Some(k));
+        assert!(!pi.note.contains("orbit"), "{}", pi.note);
     }
 
     /// The heading condition needs a direction to measure from: starting on the peak of a

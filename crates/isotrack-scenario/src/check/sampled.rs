@@ -7,12 +7,16 @@
 //!   `kappa`): `z1` is the offset from the isoline towards lower values (m), `z2` the heading
 //!   error (rad), `eps = -alpha z1`, and
 //!   `z1' = v z2`, `z2' = dw - v kappa^2 z1` (Dubins: `dw` is the turn-rate command's deviation
-//!   from the isoline's `v kappa`), or for the UAV `z2' = (g/Va) b - v kappa^2 z1` with the bank
-//!   `b` from the closed roll loop, the course loop's PI on the course command `h_c` and
-//!   `h_c' = dw` (course-rate guidance).
+//!   from the isoline's `v kappa`), or for the UAV `z2' = (g/Va) sec^2(b*) b - v kappa^2 z1` with
+//!   the bank deviation `b` from the closed roll loop about the steady bank `b*`, the course
+//!   loop's PI on the course command `h_c` relative to the isoline's tangent and
+//!   `h_c' = dw - v kappa^2 z1` (course-rate guidance).
+//! * Sensor lag (optional): the reading `y` follows `eps` as the simulator steps it, at every
+//!   simulation step `h`: `y += (1 - exp(-h/tau)) (eps - y)` ([`SensorLag`]).
 //! * Sampling: the plant is discretised exactly with the command held (zero-order hold) over the
-//!   sensor period `T`; a delay `tau = m T + r` (`0 <= r < T`) becomes `m` samples of buffer plus
-//!   the fractional part `r` through `Phi(T - r)`, `Gamma(T - r)` (the modified z-transform).
+//!   sensor period `T` (with a lag, as `T/h` sub-steps of plant then lag); a delay
+//!   `tau_d = m T + r` (`0 <= r < T`) becomes `m` samples of buffer plus the fractional part `r`
+//!   through `Phi(T - r)`, `Gamma(T - r)` (the modified z-transform).
 //! * Law at each sample, exactly as [`isotrack_core::control::PiIsoline`] runs it:
 //!   `eps'_k` from the estimator, `e_k = eps'_k + (c1/c2) g eps_k`,
 //!   `sigma_k = sigma_{k-1} + T e_k`, `u_k = kp e_k + ki sigma_k`, where `g` is the slope of
@@ -74,6 +78,116 @@ pub struct SampledLoop {
     pub estimator: EstimatorModel,
     /// Vehicle heading dynamics.
     pub heading: HeadingDynamics,
+    /// The sensing element's first-order lag (`None`: instantaneous).
+    pub sensor_lag: Option<SensorLag>,
+}
+
+/// The sensing element's first-order lag as the simulator runs it (`isotrack_sim::Sensor`): at
+/// every simulation step `h`, once the vehicle has moved, `y += (1 - exp(-h/tau)) (x - y)` with
+/// `x` the true value at the new position (the exact update of `y' = (x - y)/tau` for `x` held
+/// over the step at its new value); the samples and the delay line carry `y`, not `x`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorLag {
+    /// Time constant `tau`, s (> 0).
+    pub time_constant_s: f64,
+    /// The simulation step `h` the lag is updated at, s (> 0). A period that is not a whole
+    /// number of steps is split into `round(T/h)` (at least 1) equal steps.
+    pub step_s: f64,
+}
+
+/// The plant as the sampler sees it with the command held: the continuous plant and, with a
+/// lagged sensor, the lag stepped as the simulator steps it. The state is `x` (the plant's) or
+/// `[x, y]` (`y` the lagged reading); [`output`](Self::output) reads what is sampled.
+struct HeldPlant {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+    c: DVector<f64>,
+    /// With a lag: the sub-step `h` (a whole fraction of the period) and `1 - exp(-h/tau)`.
+    lag: Option<(f64, f64)>,
+}
+
+impl HeldPlant {
+    /// `None` when the lag's parameters are not positive finite numbers.
+    fn new(l: &SampledLoop) -> Option<Self> {
+        let (a, b, c) = plant(l);
+        let lag = match l.sensor_lag {
+            None => None,
+            Some(SensorLag {
+                time_constant_s: tau,
+                step_s,
+            }) => {
+                let ok = |x: f64| x > 0.0 && x.is_finite();
+                if !(ok(tau) && ok(step_s)) {
+                    return None;
+                }
+                let steps = (l.period_s / step_s).round().max(1.0);
+                let h = l.period_s / steps;
+                Some((h, -(-h / tau).exp_m1()))
+            }
+        };
+        Some(Self { a, b, c, lag })
+    }
+
+    /// The state's dimension.
+    fn dim(&self) -> usize {
+        self.a.nrows() + usize::from(self.lag.is_some())
+    }
+
+    /// The row that gives the sampled value: `C` (`eps = -alpha z1`), or the lagged `y`.
+    fn output(&self) -> DVector<f64> {
+        match self.lag {
+            None => self.c.clone(),
+            Some(_) => {
+                let mut out = DVector::zeros(self.dim());
+                out[self.a.nrows()] = 1.0;
+                out
+            }
+        }
+    }
+
+    /// `(Phi, Gamma)` over `duration_s` with the command held. Without a lag, the zero-order
+    /// hold; with one, `round(duration/h)` sub-steps of the simulator's order (plant over `h`,
+    /// then `y += g (C x - y)`): one sub-step is
+    /// `[[Phi_h, 0], [g C Phi_h, 1 - g]]`, `[Gamma_h, g C Gamma_h]`, raised to the power by
+    /// squaring.
+    fn over(&self, duration_s: f64) -> (DMatrix<f64>, DVector<f64>) {
+        let Some((h, g)) = self.lag else {
+            return zoh(&self.a, &self.b, duration_s);
+        };
+        let n = self.a.nrows();
+        let (phi_h, gamma_h) = zoh(&self.a, &self.b, h);
+        let mut step_a = DMatrix::zeros(n + 1, n + 1);
+        step_a.view_mut((0, 0), (n, n)).copy_from(&phi_h);
+        let c_phi = self.c.transpose() * &phi_h * g;
+        step_a.view_mut((n, 0), (1, n)).copy_from(&c_phi);
+        step_a[(n, n)] = 1.0 - g;
+        let mut step_b = DVector::zeros(n + 1);
+        step_b.rows_mut(0, n).copy_from(&gamma_h);
+        step_b[n] = g * self.c.dot(&gamma_h);
+        affine_power(step_a, step_b, (duration_s / h).round() as u64)
+    }
+}
+
+/// The map `x -> A x + B u` applied `k` times (`u` held): `(A^k, (A^(k-1) + .. + 1) B)`, by
+/// squaring (powers of one map commute, so the order of composition does not matter).
+fn affine_power(
+    mut a: DMatrix<f64>,
+    mut b: DVector<f64>,
+    mut k: u64,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let n = a.nrows();
+    let mut acc_a = DMatrix::identity(n, n);
+    let mut acc_b = DVector::zeros(n);
+    while k > 0 {
+        if k & 1 == 1 {
+            acc_b = &a * acc_b + &b;
+            acc_a = &a * acc_a;
+        }
+        b = &a * &b + &b;
+        a = &a * &a;
+        k >>= 1;
+    }
+    (acc_a, acc_b)
 }
 
 /// Continuous plant `x' = A x + B u`, `eps = C x`.
@@ -89,10 +203,11 @@ fn plant(l: &SampledLoop) -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
             (a, b, c)
         }
         HeadingDynamics::CourseLoop(m) => {
-            // x = [z1, z2, b, b', xi, h_c]
+            // x = [z1, z2, b, b', xi, h_c]; h_c = chi_c - (the isoline's tangent) turns with
+            // the tangent as z2 does, so it carries the same curvature term.
             let w = m.roll_natural_frequency_radps;
             let (w2, zw2) = (w * w, 2.0 * m.roll_damping_ratio * w);
-            let gv = m.g_over_airspeed_per_s;
+            let gv = course_rate_per_bank(&m, v * l.curvature_per_m);
             #[rustfmt::skip]
             let a = DMatrix::from_row_slice(6, 6, &[
                 0.0,     v,                  0.0, 0.0,  0.0,               0.0,
@@ -100,7 +215,7 @@ fn plant(l: &SampledLoop) -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
                 0.0,     0.0,                0.0, 1.0,  0.0,               0.0,
                 0.0,     -w2 * m.kp_chi,     -w2, -zw2, w2 * m.ki_chi,     w2 * m.kp_chi,
                 0.0,     -1.0,               0.0, 0.0,  0.0,               1.0,
-                0.0,     0.0,                0.0, 0.0,  0.0,               0.0,
+                -v * k2, 0.0,                0.0, 0.0,  0.0,               0.0,
             ]);
             let mut b = DVector::zeros(6);
             b[5] = 1.0;
@@ -109,6 +224,15 @@ fn plant(l: &SampledLoop) -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
             (a, b, c)
         }
     }
+}
+
+/// The course rate per radian of bank about a steady turn of rate `turn_radps`: the coordinated
+/// turn `chi' = (g/Va) tan(b)` linearised at the steady bank `tan(b*) = turn/(g/Va)` is
+/// `(g/Va) sec^2(b*) = (g/Va) (1 + tan^2(b*))` (Beard & McLain 2012, eq. (9.14) with `Vg = Va`).
+fn course_rate_per_bank(m: &CourseLoopModel, turn_radps: f64) -> f64 {
+    let gv = m.g_over_airspeed_per_s;
+    let tan_bank = turn_radps / gv;
+    gv * (1.0 + tan_bank * tan_bank)
 }
 
 /// Zero-order-hold discretisation over `tau`: `(Phi, Gamma)` from
@@ -147,9 +271,9 @@ impl SampledLoop {
             return None;
         }
         let g = self.tanh_slope()?;
-        let (a, b, c) = plant(self);
-        let n = a.nrows();
-        let (phi, gamma) = zoh(&a, &b, t);
+        let held = HeldPlant::new(self)?;
+        let n = held.dim();
+        let (phi, gamma) = held.over(t);
         // Delay tau = m T + r; a remainder within 1e-9 T of a whole period is rounded away.
         let ratio = self.delay_s / t;
         let mut m = ratio.floor();
@@ -164,7 +288,7 @@ impl SampledLoop {
             return None;
         }
         let m = m as usize;
-        let frac = (r > 0.0).then(|| zoh(&a, &b, t - r));
+        let frac = (r > 0.0).then(|| held.over(t - r));
         let filtered = matches!(self.estimator, EstimatorModel::FilteredDifference { .. });
         let integral = self.ki != 0.0;
         let i_buf = n;
@@ -172,7 +296,7 @@ impl SampledLoop {
         let i_filt = i_prev + 1;
         let i_sigma = i_filt + usize::from(filtered);
         let dim = i_sigma + usize::from(integral);
-        let c_row = c.transpose();
+        let c_row = held.output().transpose();
         let (c1c2, kp, ki) = (self.c1 / self.c2 * g, self.kp, self.ki);
         let step = |xk: &DVector<f64>| -> DVector<f64> {
             let x = xk.rows(0, n).into_owned();
@@ -600,6 +724,7 @@ mod tests {
             delay_s: 0.0,
             estimator: EstimatorModel::BackwardDifference,
             heading: HeadingDynamics::Dubins,
+            sensor_lag: None,
         }
     }
 
@@ -618,12 +743,16 @@ mod tests {
         assert_eq!(worst_spectral_radius(&l, &[]), 0.0);
     }
 
-    /// The UAV's continuous plant against its transfer function derived by hand from the
-    /// block diagram (docs/SAMPLED.md; Laplace, zero initial state): `h_c = u/s`, the course
-    /// loop's PI `b_c = (kp_chi + ki_chi/s)(h_c - z2)`, the roll loop
-    /// `b = w^2/(s^2 + 2 zeta w s + w^2) b_c`, the kinematics `z2 = (g/Va) s/(s^2 + v^2 kappa^2) b`
-    /// and `z1 = v z2/s`, so with `L = P R (kp_chi + ki_chi/s)`:
-    /// `eps/u = -alpha v L / ((1 + L) s^2)`. At real `s` away from the poles,
+    /// The UAV's continuous plant against its transfer function derived by hand in the ground
+    /// frame (docs/SAMPLED.md; Laplace, zero initial state), not from the model's states: the
+    /// course loop is a servo from the course command to the course, `chi' = G b` with the roll
+    /// loop `b = R(s) b_c`, `R = w^2/(s^2 + 2 zeta w s + w^2)`, and the course PI
+    /// `b_c = P(s)(chi_c - chi)`, `P = kp_chi + ki_chi/s`, so `chi = T(s) chi_c` with
+    /// `T = G R P/(s + G R P)`; guidance integrates the turn-rate command into `chi_c`, so the
+    /// UAV turns at `T(s)` times the commanded rate, and the turn rate drives the offset as it
+    /// drives the Dubins robot's: `eps/u = -alpha v T(s)/(s^2 + v^2 kappa^2)`. `G` is the
+    /// coordinated turn's `(g/Va) sec^2(b*)` at the steady bank, `tan(b*) = v kappa/(g/Va)`
+    /// (`30 * 0.004 / 0.327`, `sec^2 = 1.1346`). At real `s` away from the poles,
     /// `C (sI - A)^-1 B` equals it.
     #[test]
     fn the_uav_plant_is_its_block_diagram() {
@@ -642,14 +771,17 @@ mod tests {
             ..dubins(8.0, 0.5, 1.0)
         };
         let (a, b, c) = plant(&l);
+        let tan_bank: f64 = 30.0 * 0.004 / (9.81 / 30.0);
+        let sec2 = 1.0 / tan_bank.atan().cos().powi(2);
+        assert!((sec2 - 1.1346).abs() < 1e-4, "{sec2}");
         for s in [0.37, 1.3, 4.1] {
             let resolvent = (DMatrix::identity(6, 6) * s - &a).try_inverse().unwrap();
             let got = c.dot(&(resolvent * &b));
             let (w, z) = (7.0, 0.8);
             let roll = w * w / (s * s + 2.0 * z * w * s + w * w);
-            let kin = (9.81 / 30.0) * s / (s * s + 30.0f64.powi(2) * 0.004f64.powi(2));
-            let loop_gain = kin * roll * (2.5 + 0.3 / s);
-            let want = -0.2 * 30.0 * loop_gain / ((1.0 + loop_gain) * s * s);
+            let open = (9.81 / 30.0) * sec2 * roll * (2.5 + 0.3 / s);
+            let servo = open / (s + open);
+            let want = -0.2 * 30.0 * servo / (s * s + 30.0f64.powi(2) * 0.004f64.powi(2));
             assert!(
                 (got - want).abs() <= 1e-12 * want.abs(),
                 "s = {s}: {got} vs {want}"
@@ -976,5 +1108,104 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A lagged sensor stepped once per period (`h = T`) on the straight isoline, by hand: the
+    /// reading `y_k = a y_{k-1} + (1 - a) eps_k` (`a = exp(-T/tau)`, updated after the move, so
+    /// with `eps_k`) is `Y = (1 - a) z/(z - a) E`; with `G` and `K` of the worked case,
+    /// `1 - G L K = 0` is
+    /// `2 (z - 1)^2 (z - a) + alpha v T kp (1 - a)(z + 1)((1 + cT) z - 1) = 0`, a cubic.
+    #[test]
+    fn a_lag_stepped_once_per_period_has_the_hand_derived_polynomial() {
+        for (kp, t, tau) in [(3.0, 0.1, 0.05), (3.0, 0.1, 0.4), (1.0, 1.0, 2.5)] {
+            let l = SampledLoop {
+                sensor_lag: Some(SensorLag {
+                    time_constant_s: tau,
+                    step_s: t,
+                }),
+                ..dubins(kp, 0.0, t)
+            };
+            let (av, c, a) = (l.slope * l.speed_mps, l.c1 / l.c2, (-t / tau).exp());
+            let p = |z: nalgebra::Complex<f64>| {
+                let one = nalgebra::Complex::new(1.0, 0.0);
+                (z - one) * (z - one) * (z - one * a) * 2.0
+                    + (z + one) * (z * (1.0 + c * t) - one) * (av * t * kp * (1.0 - a))
+            };
+            let label = format!("kp {kp} T {t} tau {tau}");
+            assert_nonzero_eigenvalues_are_roots(&l, 1e-6, 3, 1e-10 * (1.0 + kp), p, &label);
+        }
+    }
+
+    /// A lagged sensor stepped four times per period, behind a delay of one period and two
+    /// steps, against the simulator's order written out by hand on the double integrator
+    /// (straight isoline): at each step `h` the robot moves (`z1 += v z2 h + v u h^2/2`,
+    /// `z2 += u h`) and then the reading follows, `y += (1 - exp(-h/tau)) (-alpha z1 - y)`; the
+    /// value delivered at the next sample is the reading two steps before it, `r = 2 h`, and the
+    /// law uses the one a period older still. Twenty periods from one state, by hand and by
+    /// the matrix.
+    #[test]
+    fn a_lag_between_samples_matches_the_simulators_order_by_hand() {
+        let (kp, t, h, tau) = (2.0, 0.2, 0.05, 0.3);
+        let l = SampledLoop {
+            delay_s: t + 2.0 * h,
+            sensor_lag: Some(SensorLag {
+                time_constant_s: tau,
+                step_s: h,
+            }),
+            ..dubins(kp, 0.0, t)
+        };
+        let (v, alpha, c) = (l.speed_mps, l.slope, l.c1 / l.c2);
+        let g = 1.0 - (-h / tau).exp();
+        let m = l.closed_loop_matrix().unwrap();
+        // [z1, z2, y, w_k, w_{k-1}, eps_{k-1}]
+        assert_eq!(m.nrows(), 6);
+        let x0 = DVector::from_vec(vec![0.7, -0.2, -0.6, -0.5, -0.65, -0.62]);
+        let (mut z1, mut z2, mut y) = (x0[0], x0[1], x0[2]);
+        let (mut w0, mut w1, mut prev) = (x0[3], x0[4], x0[5]);
+        let mut x = x0;
+        for k in 0..20 {
+            let eps = w1;
+            let u = kp * ((eps - prev) / t + c * eps);
+            let mut w_next = f64::NAN;
+            for j in 1..=4 {
+                (z1, z2) = (z1 + v * z2 * h + v * u * h * h / 2.0, z2 + u * h);
+                y += g * (-alpha * z1 - y);
+                if j == 2 {
+                    w_next = y;
+                }
+            }
+            (w0, w1, prev) = (w_next, w0, eps);
+            x = &m * x;
+            let hand = [z1, z2, y, w0, w1, prev];
+            for (i, want) in hand.iter().enumerate() {
+                assert!(
+                    (x[i] - want).abs() < 1e-12 * (1.0 + want.abs()),
+                    "step {k}, state {i}: {} vs {want}",
+                    x[i]
+                );
+            }
+        }
+    }
+
+    /// A lag leaves the loop without a model when its time constant or step is not a positive
+    /// finite number; a period that is not a whole number of steps is split into
+    /// `round(T/h)` equal ones (0.1 s at steps of 0.03 s: three of 1/30 s).
+    #[test]
+    fn a_lag_needs_a_positive_time_constant_and_step() {
+        let lagged = |time_constant_s: f64, step_s: f64| SampledLoop {
+            sensor_lag: Some(SensorLag {
+                time_constant_s,
+                step_s,
+            }),
+            ..dubins(3.0, 0.0, 0.1)
+        };
+        for (tau, h) in [(0.0, 0.01), (-1.0, 0.01), (f64::NAN, 0.01), (1.0, 0.0)] {
+            assert!(lagged(tau, h).closed_loop_matrix().is_none(), "{tau} {h}");
+        }
+        assert!(lagged(1.0, f64::INFINITY).closed_loop_matrix().is_none());
+        assert_eq!(
+            lagged(1.0, 0.03).closed_loop_matrix(),
+            lagged(1.0, 0.1 / 3.0).closed_loop_matrix()
+        );
     }
 }
