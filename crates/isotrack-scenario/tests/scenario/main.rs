@@ -8,6 +8,7 @@ mod check;
 mod derive;
 mod episode;
 mod fixed_wing;
+mod isoline;
 mod keys;
 mod properties;
 mod readme;
