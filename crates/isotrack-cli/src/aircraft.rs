@@ -34,39 +34,48 @@ pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
             "w_mps": t.w_mps,
             "gains": g,
         });
-        println!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
-        println!(
+        outln!(
             "wings-level trim at {} m/s (gamma = 0, Aerosonde 2012 parameters)",
             t.airspeed_mps
         );
-        println!(
+        outln!(
             "  alpha = theta = {:.7} rad   delta_e = {:.7} rad   delta_t = {:.6}",
-            t.alpha_rad, t.delta_e_rad, t.delta_t
+            t.alpha_rad,
+            t.delta_e_rad,
+            t.delta_t
         );
-        println!(
+        outln!(
             "  u = {:.5} m/s   w = {:.5} m/s   delta_a = delta_r = 0",
-            t.u_mps, t.w_mps
+            t.u_mps,
+            t.w_mps
         );
-        println!("autopilot gains");
-        println!(
+        outln!("autopilot gains");
+        outln!(
             "  roll    kp_phi {:.5}  kd_phi {:.5}  ki_phi {:.5}",
-            g.kp_phi, g.kd_phi, g.ki_phi
+            g.kp_phi,
+            g.kd_phi,
+            g.ki_phi
         );
-        println!("  course  kp_chi {:.5}  ki_chi {:.5}", g.kp_chi, g.ki_chi);
-        println!(
+        outln!("  course  kp_chi {:.5}  ki_chi {:.5}", g.kp_chi, g.ki_chi);
+        outln!(
             "  pitch   kp_theta {:.5}  kd_theta {:.5}  K_theta_DC {:.5}",
-            g.kp_theta, g.kd_theta, g.k_theta_dc
+            g.kp_theta,
+            g.kd_theta,
+            g.k_theta_dc
         );
-        println!(
+        outln!(
             "  airspeed (throttle) kp_v {:.5}  ki_v {:.5}",
-            g.kp_v, g.ki_v
+            g.kp_v,
+            g.ki_v
         );
-        println!(
+        outln!(
             "  airspeed (pitch)    kp_v2 {:.5}  ki_v2 {:.5}",
-            g.kp_v2, g.ki_v2
+            g.kp_v2,
+            g.ki_v2
         );
-        println!("  altitude kp_h {:.5}  ki_h {:.5}", g.kp_h, g.ki_h);
+        outln!("  altitude kp_h {:.5}  ki_h {:.5}", g.kp_h, g.ki_h);
     }
     Ok(())
 }
@@ -269,6 +278,6 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         }
     }
     out.flush().map_err(cant)?;
-    println!("wrote {} ({} rows)", a.out.display(), rows.len());
+    outln!("wrote {} ({} rows)", a.out.display(), rows.len());
     Ok(())
 }

@@ -84,7 +84,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();
     let progress = |i: usize, n: usize, id: &str| {
-        eprintln!(
+        errln!(
             "[{:>6.1} s] task {}/{n}: {id}",
             started.elapsed().as_secs_f64(),
             i + 1
@@ -115,8 +115,8 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let suite_out = a.out.join("suite.toml");
     std::fs::write(&suite_out, as_run.to_toml(&header))
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
-    print!("{}", leaderboard_md(&result));
-    eprintln!(
+    out!("{}", leaderboard_md(&result));
+    errln!(
         "{} tasks in {:.1} s: {}",
         result.tasks.len(),
         started.elapsed().as_secs_f64(),
@@ -138,6 +138,6 @@ pub fn report(a: &ReportArgs) -> Result<(), Failure> {
     }
     std::fs::write(&a.out, html)
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
-    eprintln!("wrote {}", a.out.display());
+    errln!("wrote {}", a.out.display());
     Ok(())
 }

@@ -107,7 +107,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         // A baseline outside its own stated gain condition is said, not only run.
         let warnings = isotrack_scenario::check::baselines::baseline_warnings(&s);
         for w in &warnings {
-            eprintln!("warning: {w}");
+            errln!("warning: {w}");
         }
         let r = if let Some(dir) = &a.out {
             let d = dir.join(kind.name());
@@ -128,13 +128,13 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         };
         results.push((kind, r));
     }
-    println!(
+    outln!(
         "| controller | outcome | convergence (s) | steady max\\|eps\\| | steady rms | chattering (rad/s^2) | sign changes/s | effort (rad^2/s) | max isoline dist (m) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    outln!("|---|---|---|---|---|---|---|---|---|");
     for (k, r) in &results {
         let m = &r.metrics;
-        println!(
+        outln!(
             "| {}{} | {} | {} | {} | {} | {} | {} | {:.3} | {} |",
             k.name(),
             if *k == ControllerKind::GradientReference {
@@ -178,7 +178,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         w.write_all(text.as_bytes())
             .and_then(|_| w.flush())
             .map_err(|e| cant(&p, e))?;
-        println!(
+        outln!(
             "\nwrote {} and one run directory per controller",
             p.display()
         );

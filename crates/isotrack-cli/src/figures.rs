@@ -152,7 +152,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         ));
         isotrack_plot::sweep_figure(&results, &x, &a.metric, a.group.as_deref(), &file, &st)
             .map_err(failure)?;
-        println!("wrote {}", file.display());
+        outln!("wrote {}", file.display());
         return Ok(());
     }
     let mut written = plot_dirs(&a.runs, &st, &out)?;
@@ -168,7 +168,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         isotrack_plot::animation_gif(&run, &gif, &st, &title, 48, 120).map_err(failure)?;
         written.push(gif.display().to_string());
     }
-    println!("wrote {}", written.join(", "));
+    outln!("wrote {}", written.join(", "));
     Ok(())
 }
 
@@ -350,6 +350,6 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         written
             .extend(["fig2b", "fig2c", "fig3b", "fig3c"].map(|n| file(n, f).display().to_string()));
     }
-    println!("wrote {}", written.join("\n      "));
+    outln!("wrote {}", written.join("\n      "));
     Ok(())
 }

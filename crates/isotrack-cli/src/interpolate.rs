@@ -112,7 +112,7 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n",
     )
     .map_err(cant)?;
-    println!(
+    outln!(
         "wrote {} ({} x {} nodes, {} m spacing, values {lo:.4} .. {hi:.4}) and {}",
         a.out.display(),
         grid.nx(),

@@ -3,7 +3,11 @@
 //! The thin command-line layer: argument parsing ([`cli`]), the commands, and the run outputs
 //! ([`output`]: `trace.csv`, `summary.json`, the resolved `scenario.toml`).
 #![deny(missing_docs)]
+// Every line printed goes through `console` (a closed pipe never panics): issue 30, item 13.
+#![deny(clippy::print_stdout, clippy::print_stderr)]
 
+#[macro_use]
+pub mod console;
 pub mod aircraft;
 pub mod bench;
 pub mod cli;
@@ -27,6 +31,7 @@ pub mod exit {
     pub const NOINPUT: u8 = 66;
     /// An operating-system error: threads or other resources could not be had.
     pub const OSERR: u8 = 71;
-    /// An output file or directory cannot be created or written.
+    /// An output file or directory cannot be created or written (standard output included,
+    /// unless its reader closed it: that exits [`OK`]), or is locked by another command.
     pub const CANTCREAT: u8 = 73;
 }

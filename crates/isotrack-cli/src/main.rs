@@ -32,10 +32,18 @@ fn main() -> ExitCode {
         Command::Benchmark(args) => isotrack_cli::bench::benchmark(args),
         Command::Report(args) => isotrack_cli::bench::report(args),
     };
+    // A reader that closed standard output is not an error (exit 0); another failure to write
+    // it is exit 73 unless the command failed first (see `isotrack_cli::console`).
     match result {
-        Ok(()) => ExitCode::from(isotrack_cli::exit::OK),
+        Ok(()) => match isotrack_cli::console::stdout_failure() {
+            None => ExitCode::from(isotrack_cli::exit::OK),
+            Some(why) => {
+                isotrack_cli::errln!("error: cannot write standard output: {why}");
+                ExitCode::from(isotrack_cli::exit::CANTCREAT)
+            }
+        },
         Err(f) => {
-            eprintln!("error: {}", f.message);
+            isotrack_cli::errln!("error: {}", f.message);
             ExitCode::from(f.code)
         }
     }

@@ -87,7 +87,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
     let warnings = isotrack_scenario::check::warnings(&scenario);
     for w in &warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     let name = args.scenario.scenario.as_ref().map_or_else(
         || "<built-in default: paper Fig. 2(b)>".to_string(),
@@ -115,8 +115,8 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         std::fs::write(&resolved, scenario_toml(&scenario))
             .map_err(|e| cant(&resolved.display().to_string(), e))?;
         if !args.quiet {
-            print!("{}", human_summary(&name, &scenario, &result));
-            println!(
+            out!("{}", human_summary(&name, &scenario, &result));
+            outln!(
                 "wrote       {}, {}, {}",
                 trace.display(),
                 summary.display(),
@@ -127,14 +127,14 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
             let written = crate::figures::plot_dirs(std::slice::from_ref(dir), &st, dir)?;
             if !args.quiet {
-                println!("plotted     {}", written.join(", "));
+                outln!("plotted     {}", written.join(", "));
             }
         }
         result
     } else {
         let result = scenario.run(&mut NoTrace);
         if !args.quiet {
-            print!("{}", human_summary(&name, &scenario, &result));
+            out!("{}", human_summary(&name, &scenario, &result));
         }
         result
     };
@@ -145,7 +145,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 /// `isotrack show`.
 pub fn show(args: &ScenarioArgs) -> Result<(), Failure> {
     let scenario = load(args)?;
-    print!("{}", scenario_toml(&scenario));
+    out!("{}", scenario_toml(&scenario));
     Ok(())
 }
 
@@ -170,17 +170,17 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
     let r = isotrack_scenario::check::check(&scenario, args.tube_halfwidth);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+        outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
         return Ok(());
     }
-    println!("verdict: {} ({})", r.verdict.as_str(), r.verdict_reason);
+    outln!("verdict: {} ({})", r.verdict.as_str(), r.verdict_reason);
     for w in &r.warnings {
-        println!("warning: {w}");
+        outln!("warning: {w}");
     }
     let m = &r.moving;
     if m.time_varying {
         let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4}"));
-        println!(
+        outln!(
             "moving isoline: speed max {} m/s, 95th percentile {} m/s; vehicle {} m/s: {}",
             f(m.isoline_speed_max_mps),
             f(m.isoline_speed_p95_mps),
@@ -194,29 +194,29 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         );
     }
     let p1 = &r.prop1;
-    println!("Prop. 1 (circular field, local exponential stability)");
+    outln!("Prop. 1 (circular field, local exponential stability)");
     if p1.applicable {
-        println!(
+        outln!(
             "  alpha = {:.6}  r_d = {:.4} m",
             p1.alpha.unwrap_or(f64::NAN),
             p1.r_d_m.unwrap_or(f64::NAN)
         );
-        println!(
+        outln!(
             "  paper's sufficient conditions kp(kp-2)v*alpha > ki, v*alpha > c1: {}",
             yes_no(p1.paper_conditions_hold)
         );
-        println!(
+        outln!(
             "  exact Routh-Hurwitz condition:                               {}",
             yes_no(p1.exact_local_condition_holds)
         );
     } else {
-        println!("  not applicable: {}", p1.note);
+        outln!("  not applicable: {}", p1.note);
     }
     let p2 = &r.prop2;
     let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.6}"));
-    println!("Prop. 2 (smooth field, ki = 0: gain conditions and error bound)");
+    outln!("Prop. 2 (smooth field, ki = 0: gain conditions and error bound)");
     if let Some([lo, hi]) = p2.region_levels {
-        println!(
+        outln!(
             "  start to tube, {lo:.4} <= F <= {hi:.4} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
             p2.samples_in_region,
             f(p2.gamma1),
@@ -224,7 +224,7 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
             f(p2.gamma3)
         );
     }
-    println!(
+    outln!(
         "  tube |F - s_d| <= {} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
         p2.tube_halfwidth,
         p2.samples_in_tube,
@@ -232,37 +232,38 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         f(p2.tube_gamma2),
         f(p2.tube_gamma3)
     );
-    println!(
+    outln!(
         "  conditions hold: {}   bound applies: {}   predicted limsup|eps| <= {}   smallest kp: {}",
         if p2.conditions_hold { "yes" } else { "NO" },
         if p2.bound_applies { "yes" } else { "NO" },
         f(p2.error_bound),
         f(p2.min_kp)
     );
-    println!(
+    outln!(
         "  paper's printed form: smallest kp {}, bound {}",
         f(p2.paper_min_kp),
         f(p2.paper_error_bound)
     );
     if let Some(phi0) = p2.initial_phi_rad {
-        println!(
+        outln!(
             "  initial phi(t0) = {phi0:.4} rad; in the assumed sector: {}",
             yes_no(p2.initial_heading_in_sector)
         );
     }
     if !p2.note.is_empty() {
-        println!("  note: {}", p2.note);
+        outln!("  note: {}", p2.note);
     }
     let sm = &r.sampled;
-    println!(
+    outln!(
         "Sampled loop (linearised at the sensor's period T = {} s, delay {} s)",
-        sm.period_s, sm.delay_s
+        sm.period_s,
+        sm.delay_s
     );
     if sm.applicable {
         print_sampled(sm);
     }
     if !sm.note.is_empty() {
-        println!("  note: {}", sm.note);
+        outln!("  note: {}", sm.note);
     }
     Ok(())
 }
@@ -279,7 +280,7 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
         Some(false) => "UNSTABLE",
         None => "not computed",
     };
-    println!(
+    outln!(
         "  model {}, on the isoline (slopes |grad F| {}{}): spectral radius {} -> {}",
         sm.vehicle_model.unwrap_or("n/a"),
         range(sm.slope_range),
@@ -291,7 +292,7 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
         f(sm.spectral_radius),
         state(sm.stable)
     );
-    println!(
+    outln!(
         "  over the whole tube (slopes {}): spectral radius {} -> {}",
         range(sm.tube_slope_range),
         f(sm.tube_spectral_radius),
@@ -302,7 +303,7 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
             .iter()
             .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
             .collect();
-        println!(
+        outln!(
             "  stable kp: {}   nearest stable kp {}   longest stable sensor period {} s",
             if set.is_empty() {
                 "none".to_string()
@@ -314,10 +315,10 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
         );
     }
     if sm.stable.is_some() {
-        println!("  {}", sensor_rate_line(sm));
+        outln!("  {}", sensor_rate_line(sm));
     }
     if let Some(d) = &sm.discrete_loop {
-        println!(
+        outln!(
             "  discrete loop at slope {:.4}: gain margin {} ({} dB at {} rad/s), phase margin {} deg (at {} rad/s)",
             d.slope,
             f(d.gain_margin),

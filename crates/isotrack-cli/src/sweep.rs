@@ -70,7 +70,10 @@ fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) ->
         .cloned()
         .collect();
     let mut results = Scenario::run_batch(&valid).into_iter();
-    let opt = |x: Option<f64>| x.map(num).unwrap_or_default();
+    // A metric that is not a finite number is written as an empty cell (as summary.json writes
+    // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
+    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
+    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
     ids.iter()
         .zip(derived)
         .map(|(&id, d)| {
@@ -93,11 +96,11 @@ fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) ->
                         opt(m.steady_state_mean_error),
                         opt(m.steady_state_max_isoline_distance_m),
                         opt(m.steady_state_rms_isoline_distance_m),
-                        num(m.path_length_m),
-                        num(m.control_effort),
+                        fin(m.path_length_m),
+                        fin(m.control_effort),
                         opt(m.chattering_radps2),
                         opt(m.sign_changes_per_s),
-                        num(r.t_end_s),
+                        fin(r.t_end_s),
                         r.samples.to_string(),
                         r.outcome_detail.unwrap_or_default(),
                     ]);
@@ -219,10 +222,35 @@ fn parse_shard(s: &str) -> Result<(u64, u64), Failure> {
 /// The `outcome` values a row may hold.
 const OUTCOMES: [&str; 4] = ["completed", "diverged", "left_field", "invalid_scenario"];
 
-/// Checks one stored row against the sweep's header: its field count, its `run_id` within the
-/// plan (`total` runs), a known outcome and numbers (or empty cells) in the numeric metric
-/// columns. Rows are trusted on `--resume` and `merge` only after this.
-fn check_row(header: &[String], line: &str, total: u64) -> Result<u64, String> {
+/// The metric columns that hold a quantity that cannot be negative (times, maxima, RMS values,
+/// lengths, efforts, rates).
+const NON_NEGATIVE_COLUMNS: [&str; 10] = [
+    "convergence_time_s",
+    "steady_state_max_abs_error",
+    "steady_state_rms_error",
+    "steady_state_max_isoline_distance_m",
+    "steady_state_rms_isoline_distance_m",
+    "path_length_m",
+    "control_effort",
+    "chattering_radps2",
+    "sign_changes_per_s",
+    "t_end_s",
+];
+
+/// What a stored row must be: the sweep's header, its run count and its plan (the varied
+/// columns of run `id` are recomputed from the plan and must match).
+struct RowRules<'a> {
+    header: &'a [String],
+    total: u64,
+    plan: &'a SweepPlan,
+}
+
+/// Checks one stored row against the sweep: its field count, its `run_id` within the plan, the
+/// plan's columns recomputed from the run id, a known outcome and metric values isotrack can
+/// have written ([`check_metrics`]). Rows are trusted on `--resume` and `merge` only after
+/// this.
+fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
+    let header = rules.header;
     let mut r = csv::ReaderBuilder::new()
         .has_headers(false)
         .from_reader(line.as_bytes());
@@ -240,26 +268,124 @@ fn check_row(header: &[String], line: &str, total: u64) -> Result<u64, String> {
     }
     let id: u64 = rec[0]
         .parse()
-        .map_err(|_| format!("run_id `{}` is not a run number", &rec[0]))?;
-    if id >= total {
-        return Err(format!("run_id {id} is beyond this sweep's {total} runs"));
+        .map_err(|_| format!("run_id `{}` is not a run number", clip(&rec[0])))?;
+    if id >= rules.total {
+        return Err(format!(
+            "run_id {id} is beyond this sweep's {} runs",
+            rules.total
+        ));
     }
-    for (name, cell) in header.iter().zip(rec.iter()) {
-        match name.as_str() {
-            "outcome" if !OUTCOMES.contains(&cell) => {
-                return Err(format!("outcome `{cell}` is not one of {OUTCOMES:?}"))
-            }
-            "outcome" | "outcome_detail" | "run_id" => {}
-            n if METRIC_COLUMNS.contains(&n)
-                && !cell.is_empty()
-                && cell.parse::<f64>().is_err() =>
-            {
-                return Err(format!("{n} = `{cell}` is not a number"))
-            }
-            _ => {}
+    for ((name, cell), want) in header[1..]
+        .iter()
+        .zip(rec.iter().skip(1))
+        .zip(rules.plan.run_cells(id))
+    {
+        if cell != want {
+            return Err(format!(
+                "{name} = `{}` where the sweep's plan gives run {id} `{}`",
+                clip(cell),
+                clip(&want)
+            ));
         }
     }
+    let cell = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .and_then(|i| rec.get(i))
+            .unwrap_or("")
+    };
+    let outcome = cell("outcome");
+    if !OUTCOMES.contains(&outcome) {
+        return Err(format!(
+            "outcome `{}` is not one of {OUTCOMES:?}",
+            clip(outcome)
+        ));
+    }
+    check_metrics(outcome, &cell)?;
     Ok(id)
+}
+
+/// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a
+/// run's row has `t_end_s` and `samples`; every number is finite (non-finite metrics are
+/// written empty), the quantities that cannot be negative are not, an RMS is at most its
+/// maximum and `|mean|` at most the maximum (to rounding), the convergence time at most the run's
+/// end, and `samples` a whole number of at most one per step ([`isotrack_sim::MAX_STEPS`] + 1).
+fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
+    let numeric = &METRIC_COLUMNS[1..METRIC_COLUMNS.len() - 1];
+    if outcome == "invalid_scenario" {
+        if let Some(n) = numeric.iter().find(|n| !cell(n).is_empty()) {
+            return Err(format!("{n} holds a value in an invalid_scenario row"));
+        }
+        return Ok(());
+    }
+    for n in ["t_end_s", "samples"] {
+        if cell(n).is_empty() {
+            return Err(format!("{n} is empty in a `{outcome}` row"));
+        }
+    }
+    let mut value = std::collections::HashMap::new();
+    for &n in numeric.iter().filter(|n| **n != "samples") {
+        let c = cell(n);
+        if c.is_empty() {
+            continue;
+        }
+        let v: f64 = c
+            .parse()
+            .map_err(|_| format!("{n} = `{}` is not a number", clip(c)))?;
+        if !v.is_finite() {
+            return Err(format!("{n} = `{c}` is not a finite number"));
+        }
+        if v < 0.0 && NON_NEGATIVE_COLUMNS.contains(&n) {
+            return Err(format!("{n} = `{c}` is negative"));
+        }
+        value.insert(n, v);
+    }
+    let samples = cell("samples");
+    match samples.parse::<u64>() {
+        Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 => {}
+        _ => {
+            return Err(format!(
+                "samples = `{}` is not a whole number of samples (at most {})",
+                clip(samples),
+                isotrack_sim::MAX_STEPS + 1
+            ))
+        }
+    }
+    // Rounding: an RMS of equal values may exceed their maximum by an ulp or so.
+    let at_most = |a: &str, b: &str, what: &str| -> Result<(), String> {
+        match (value.get(a), value.get(b)) {
+            (Some(x), Some(y)) if x.abs() > y * (1.0 + 1e-12) => {
+                Err(format!("{a} = {x:?} exceeds {b} = {y:?} ({what})"))
+            }
+            _ => Ok(()),
+        }
+    };
+    at_most(
+        "steady_state_rms_error",
+        "steady_state_max_abs_error",
+        "an RMS is at most the maximum",
+    )?;
+    at_most(
+        "steady_state_mean_error",
+        "steady_state_max_abs_error",
+        "|mean| is at most the maximum",
+    )?;
+    at_most(
+        "steady_state_rms_isoline_distance_m",
+        "steady_state_max_isoline_distance_m",
+        "an RMS is at most the maximum",
+    )?;
+    at_most(
+        "convergence_time_s",
+        "t_end_s",
+        "convergence happens within the run",
+    )
+}
+
+/// User text from a damaged file, clipped for a message.
+fn clip(text: &str) -> String {
+    isotrack_scenario::load::clip(text)
 }
 
 /// One row of a results file: its run id and where its line is (not the line: a sweep's
@@ -291,6 +417,7 @@ fn index_results(
     file: usize,
     repair: bool,
     total: u64,
+    plan: &SweepPlan,
 ) -> Result<ResultsIndex, Failure> {
     use std::io::BufRead;
     let cannot = |e: std::io::Error| {
@@ -355,7 +482,12 @@ fn index_results(
         }
         // Rows are written whole; a line that does not check is a damaged file, not ours to
         // guess at.
-        let id = check_row(&columns, &line, total).map_err(|why| {
+        let rules = RowRules {
+            header: &columns,
+            total,
+            plan,
+        };
+        let id = check_row(&rules, &line).map_err(|why| {
             let shown: String = line.trim_end().chars().take(120).collect();
             fail(
                 exit::DATAERR,
@@ -474,7 +606,7 @@ fn thread_count(requested: Option<usize>) -> Option<usize> {
     let cap = MAX_THREADS_PER_CORE * cores;
     requested.map(|t| {
         if t > cap {
-            eprintln!(
+            errln!(
                 "note: --threads {t} capped to {cap} ({MAX_THREADS_PER_CORE} per core on {cores} cores); results do not depend on it"
             );
         }
@@ -492,6 +624,62 @@ fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
         )
     })?;
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
+}
+
+/// The file in an output directory whose operating-system lock marks the directory as being
+/// written (README, "Sweeps"). The lock, not the file, is what counts: it is released when its
+/// holder exits in any way (SIGKILL and a crashed node included), so a file left behind is
+/// never a stale lock.
+pub const LOCK_FILE: &str = ".isotrack.lock";
+
+/// Takes the exclusive lock of output directory `dir` (an advisory `flock`-style lock on
+/// [`LOCK_FILE`], std's `File::try_lock`): held until the returned file is dropped or the
+/// process ends. A second sweep or merge writing the same directory (a requeued Slurm task
+/// while the old one still runs) exits 73 instead of running everything again beside it.
+pub fn lock_output_dir(dir: &Path) -> Result<std::fs::File, Failure> {
+    let path = dir.join(LOCK_FILE);
+    let cant = |e: std::io::Error| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot lock {}: {e}", path.display()),
+        )
+    };
+    let f = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(cant)?;
+    match f.try_lock() {
+        Ok(()) => Ok(f),
+        Err(std::fs::TryLockError::WouldBlock) => Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{}: another isotrack sweep or merge is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
+                dir.display()
+            ),
+        )),
+        Err(std::fs::TryLockError::Error(e)) => Err(cant(e)),
+    }
+}
+
+/// Refuses to read shard directory `dir` while a sweep still writes it (it holds the lock of
+/// [`lock_output_dir`]): its rows are not all there yet. A directory without a lock file was
+/// never locked (nothing to wait for).
+fn check_not_being_written(dir: &Path) -> Result<(), Failure> {
+    let Ok(f) = std::fs::File::open(dir.join(LOCK_FILE)) else {
+        return Ok(());
+    };
+    match f.try_lock_shared() {
+        Err(std::fs::TryLockError::WouldBlock) => Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{}: a sweep is still writing this directory (it holds the lock on {LOCK_FILE}); merge once it has ended",
+                dir.display()
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `isotrack sweep`.
@@ -528,9 +716,11 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     let base_toml = crate::output::scenario_toml(&base);
     let digest = sweep_digest(&sweep_bytes, &base_toml);
     for note in plan.duplicate_notes() {
-        eprintln!("note: {note}");
+        errln!("note: {note}");
     }
     std::fs::create_dir_all(&a.out).map_err(cant)?;
+    // Held to the end of the sweep (dropped on return, released by the OS on any exit).
+    let _lock = lock_output_dir(&a.out)?;
     let results = a.out.join("results.csv");
     let header = results_header(&plan);
     let header_line = csv_line(&header);
@@ -562,7 +752,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     }
     // The runs already done (their ids only, sorted).
     let done: Vec<u64> = if results.exists() {
-        let idx = index_results(&results, 0, true, total)?;
+        let idx = index_results(&results, 0, true, total, &plan)?;
         if idx.header.is_empty() {
             std::fs::write(&results, &header_line).map_err(cant)?;
         } else if idx.header != header_line {
@@ -664,7 +854,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     });
     write_result?;
     pb.finish_and_clear();
-    let idx = index_results(&results, 0, false, total)?;
+    let idx = index_results(&results, 0, false, total, &plan)?;
     let mut rows = idx.rows;
     if let Some(d) = sort_rows(&mut rows).first() {
         return Err(fail(
@@ -700,8 +890,33 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             ),
         ));
     }
-    println!("{summary}");
+    outln!("{summary}");
     Ok(())
+}
+
+/// The plan of shard directory `dir`, from its `sweep.toml`, after checking that its
+/// `sweep.toml` and `base_scenario.toml` are those its `sweep.json` digest names (a shard whose
+/// files were edited is refused: its rows' plan columns are checked against this plan).
+fn shard_plan(dir: &Path, digest: &str) -> Result<SweepPlan, Failure> {
+    let read = |name: &str| {
+        let p = dir.join(name);
+        isotrack_fields::io::read_limited(&p, isotrack_scenario::MAX_SCENARIO_FILE_BYTES)
+            .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
+    };
+    let (sweep_bytes, base) = (read("sweep.toml")?, read("base_scenario.toml")?);
+    let base = String::from_utf8_lossy(&base);
+    if sweep_digest(&sweep_bytes, &base) != digest {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited; run it again",
+                dir.display()
+            ),
+        ));
+    }
+    let path = dir.join("sweep.toml");
+    let text = String::from_utf8_lossy(&sweep_bytes);
+    SweepPlan::parse(&text, &path).map_err(|e| fail(exit::DATAERR, e.to_string()))
 }
 
 /// `isotrack merge`: the shards of one sweep (same digest) into one directory; refuses missing,
@@ -729,7 +944,16 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             ),
         ));
     }
+    let cant = |e: std::io::Error| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", a.out.display()),
+        )
+    };
+    std::fs::create_dir_all(&a.out).map_err(cant)?;
+    let _lock = lock_output_dir(&a.out)?;
     for d in &a.dirs {
+        check_not_being_written(d)?;
         let m = read_manifest(d)?;
         let t = m["total_runs"].as_u64().ok_or_else(|| {
             fail(
@@ -746,6 +970,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
                 ),
             )
         })?;
+        let plan = shard_plan(d, &digest)?;
         match &first {
             Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
                 return Err(fail(
@@ -761,7 +986,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             None => first = Some((t, digest, m)),
         }
         let path = d.join("results.csv");
-        let idx = index_results(&path, sources.len(), false, t)?;
+        let idx = index_results(&path, sources.len(), false, t, &plan)?;
         if header.as_ref().is_some_and(|x| *x != idx.header) {
             return Err(fail(
                 exit::DATAERR,
@@ -806,13 +1031,6 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
             ),
         ));
     }
-    let cant = |e: std::io::Error| {
-        fail(
-            exit::CANTCREAT,
-            format!("cannot write {}: {e}", a.out.display()),
-        )
-    };
-    std::fs::create_dir_all(&a.out).map_err(cant)?;
     write_sorted(
         &out_results,
         header.as_deref().unwrap_or(""),
@@ -838,7 +1056,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
         )
         .map_err(cant)?;
     }
-    println!(
+    outln!(
         "merged {total} runs from {} directories -> {}",
         a.dirs.len(),
         out_results.display()

@@ -24,6 +24,7 @@ pub mod field;
 mod fmath;
 pub mod lanes;
 pub mod math;
+pub mod numtext;
 pub mod theory;
 pub mod vehicle;
 

@@ -105,6 +105,22 @@ impl Checker {
             );
         }
     }
+    /// A sensor setting in field units (`resolution`, `noise_std`, `bias_drift_per_sqrt_s`):
+    /// 0 (off) or within [`isotrack_sim::SENSOR_VALUE_RANGE`], so no reading overflows.
+    fn sensor_setting(&mut self, key: &str, x: f64) {
+        let (lo, hi) = isotrack_sim::SENSOR_VALUE_RANGE;
+        if self.finite(key, x) && x != 0.0 && !(lo..=hi).contains(&x) {
+            self.fail(
+                key,
+                format!(
+                    "must be 0 (off) or in [{}, {}] field units, got {}",
+                    Num(lo),
+                    Num(hi),
+                    Num(x)
+                ),
+            );
+        }
+    }
     fn all_finite(&mut self, key: &str, xs: &[f64]) {
         if xs.iter().any(|x| !x.is_finite()) {
             self.fail(key, format!("must hold finite numbers, got {xs:?}"));
@@ -716,20 +732,10 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     }
 }
 
-/// A number in messages: plain when short, scientific when huge or tiny, so `1e307` is not
-/// echoed as 308 digits.
-pub(crate) struct Num(pub f64);
-
-impl std::fmt::Display for Num {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a.is_finite() && a != 0.0 && !(1e-6..1e9).contains(&a) {
-            write!(f, "{:e}", self.0)
-        } else {
-            write!(f, "{}", self.0)
-        }
-    }
-}
+/// A number in messages: the one formatting of every message (six significant digits, plain
+/// when ordinary, scientific when huge or tiny, so `1e307` is not echoed as 308 digits nor a
+/// computed `0.0024500000000000004` as 17).
+pub(crate) use isotrack_core::numtext::Num;
 
 /// The physical ranges of the keys that are not bounded by their meaning (README, "Scenario
 /// files"): wide enough for any robot or aircraft, narrow enough that positions, path lengths
@@ -1073,13 +1079,13 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
         .get_or_insert(if dt > 0.0 { 1.0 / dt } else { 1.0 });
     c.positive("sensor.rate_hz", rate);
     let noise = *sn.noise_std.get_or_insert(0.0);
-    c.non_negative("sensor.noise_std", noise);
+    c.sensor_setting("sensor.noise_std", noise);
     let delay = *sn.delay_s.get_or_insert(0.0);
     c.non_negative("sensor.delay_s", delay);
     let tau = *sn.time_constant_s.get_or_insert(0.0);
     c.non_negative("sensor.time_constant_s", tau);
     let resolution = *sn.resolution.get_or_insert(0.0);
-    c.non_negative("sensor.resolution", resolution);
+    c.sensor_setting("sensor.resolution", resolution);
     let p = *sn.dropout_probability.get_or_insert(0.0);
     if c.finite("sensor.dropout_probability", p) && !(0.0..1.0).contains(&p) {
         c.fail(
@@ -1088,7 +1094,7 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
         );
     }
     let drift = *sn.bias_drift_per_sqrt_s.get_or_insert(0.0);
-    c.non_negative("sensor.bias_drift_per_sqrt_s", drift);
+    c.sensor_setting("sensor.bias_drift_per_sqrt_s", drift);
     if let Some([lo, hi]) = sn.range {
         c.all_finite("sensor.range", &[lo, hi]);
         if lo >= hi || lo.is_nan() || hi.is_nan() {
@@ -1129,6 +1135,8 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
             "sensor.rate_hz",
             format!("{e}; the period must be a whole number >= 1 of sim.dt_s steps"),
         ),
+        // Reported above, with the key's own message.
+        Err(SensorError::OutOfRange { .. }) => {}
         Err(e) => c.fail("sensor.delay_s", e.to_string()),
     }
 }

@@ -24,6 +24,7 @@ pub use batch::{simulate_batch, BatchRun, LANES};
 pub use metrics::{Metrics, MetricsConfig, RunMetrics};
 pub use sensor::{
     whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
+    SENSOR_VALUE_RANGE,
 };
 pub use simulation::{
     simulate, Episode, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample,

@@ -83,6 +83,31 @@ pub enum SensorError {
         /// Samples the delay would hold.
         in_flight: u64,
     },
+    /// A setting in field units outside [`SENSOR_VALUE_RANGE`] (`resolution` may also be 0).
+    #[error("{value:e} field units is outside [{lo:e}, {hi:e}]", lo = SENSOR_VALUE_RANGE.0, hi = SENSOR_VALUE_RANGE.1)]
+    OutOfRange {
+        /// The setting: `resolution`, `noise_std` or `bias_drift_per_sqrt_s`.
+        key: &'static str,
+        /// Its value.
+        value: f64,
+    },
+}
+
+/// The range of the sensor's settings in field units besides 0 (`resolution`, `noise_std`,
+/// `bias_drift_per_sqrt_s`, field units or field units per sqrt(s)). Field values are bounded
+/// by 1e100 (`isotrack_fields::grid::MAX_ABS_VALUE`), so with settings in this range
+/// `value/resolution` stays within 1e200 and `noise_std * n` within 1e101: no reading
+/// overflows. (A resolution of 1e-310 made every reading `inf` while the run "completed".)
+pub const SENSOR_VALUE_RANGE: (f64, f64) = (1e-100, 1e100);
+
+/// Checks one setting against [`SENSOR_VALUE_RANGE`] (0 is allowed: the feature is off).
+fn in_sensor_range(key: &'static str, value: f64) -> Result<(), SensorError> {
+    let (lo, hi) = SENSOR_VALUE_RANGE;
+    if value == 0.0 || (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(SensorError::OutOfRange { key, value })
+    }
 }
 
 /// The most samples a delay may hold in flight (16 Mi values, 128 MiB): the delay line stores
@@ -178,6 +203,9 @@ pub struct Sensor {
 impl Sensor {
     /// A sensor for steps of `dt_s`, its noise seeded by `seed`.
     pub fn new(cfg: SensorConfig, dt_s: f64, seed: u64) -> Result<Self, SensorError> {
+        in_sensor_range("resolution", cfg.resolution)?;
+        in_sensor_range("noise_std", cfg.noise_std)?;
+        in_sensor_range("bias_drift_per_sqrt_s", cfg.bias_drift_per_sqrt_s)?;
         let every = whole_steps(1.0 / cfg.rate_hz, dt_s)
             .and_then(|n| {
                 if n >= 1 {

@@ -545,6 +545,18 @@ fn sensor_ranges() {
             &["sensor.time_constant_s"],
         ),
         ("[sensor]\nresolution = -1.0\n", &["sensor.resolution"]),
+        // Issue 30 item 14: a resolution of 1e-310 made every reading `inf` (value/resolution
+        // overflows) and the run "completed"; the settings in field units are bounded.
+        ("[sensor]\nresolution = 1e-310\n", &["sensor.resolution"]),
+        ("[sensor]\nresolution = 1e-101\n", &["sensor.resolution"]),
+        ("[sensor]\nresolution = 1e-100\n", &[]),
+        ("[sensor]\nresolution = 1e101\n", &["sensor.resolution"]),
+        ("[sensor]\nnoise_std = 1e300\n", &["sensor.noise_std"]),
+        ("[sensor]\nnoise_std = 5e-324\n", &["sensor.noise_std"]),
+        (
+            "[sensor]\nbias_drift_per_sqrt_s = 1e200\n",
+            &["sensor.bias_drift_per_sqrt_s"],
+        ),
         (
             "[sensor]\nbias_drift_per_sqrt_s = -1.0\n",
             &["sensor.bias_drift_per_sqrt_s"],

@@ -1,0 +1,99 @@
+//! Standard output and standard error, written so that a reader that goes away never crashes a
+//! command (issue 30, item 13).
+//!
+//! `println!` panics when its write fails: `isotrack check | head -c1` closes the pipe after one
+//! byte, the next `println!` meets `EPIPE` (Rust ignores `SIGPIPE`, so the write returns the
+//! error) and the process dies with exit 101 and a backtrace. Every line the commands print goes
+//! through [`out!`](crate::out), [`outln!`](crate::outln) and [`errln!`](crate::errln) instead,
+//! which write through [`write_out`] / [`write_err`]:
+//!
+//! * a closed pipe (`BrokenPipe`) on either stream: the reader is gone, so nothing more is
+//!   written to that stream and the command finishes its work (files it writes are written
+//!   whole); the process then exits 0 (README, "Exit codes": output nobody reads is not an
+//!   error, as for `yes | head`);
+//! * any other write error on standard output (`isotrack show > /full/disk`): nothing more is
+//!   written there and the process exits 73 (an output cannot be written), saying why on
+//!   standard error.
+//!
+//! `main` asks [`stdout_failure`] once the command has returned. The crate denies
+//! `clippy::print_stdout` and `clippy::print_stderr`, so this module is the only way out.
+
+use std::fmt;
+use std::io::{ErrorKind, Write};
+use std::sync::Mutex;
+
+/// What went wrong on a stream: nothing yet, its reader closed it, or another error.
+#[derive(Clone, Debug, Default, PartialEq)]
+enum StreamState {
+    #[default]
+    Open,
+    Closed,
+    Failed(String),
+}
+
+/// The state of standard output and standard error (one lock each: lines from the sweep's
+/// threads stay whole).
+static STDOUT: Mutex<StreamState> = Mutex::new(StreamState::Open);
+static STDERR: Mutex<StreamState> = Mutex::new(StreamState::Open);
+
+fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<'_>) {
+    let mut st = state.lock().unwrap_or_else(|p| p.into_inner());
+    if *st != StreamState::Open {
+        return;
+    }
+    if let Err(e) = w.write_fmt(args).and_then(|()| w.flush()) {
+        *st = if e.kind() == ErrorKind::BrokenPipe {
+            StreamState::Closed
+        } else {
+            StreamState::Failed(e.to_string())
+        };
+    }
+}
+
+/// Writes to standard output (see the module docs for what a failed write does).
+pub fn write_out(args: fmt::Arguments<'_>) {
+    write_to(&STDOUT, &mut std::io::stdout().lock(), args);
+}
+
+/// Writes to standard error (a closed or failing standard error silences it: there is nowhere
+/// left to say anything).
+pub fn write_err(args: fmt::Arguments<'_>) {
+    write_to(&STDERR, &mut std::io::stderr().lock(), args);
+}
+
+/// Why standard output could not be written, when the reason is not a reader that went away:
+/// `main` turns it into exit 73. `None` when everything printed was written, or when the reader
+/// closed the pipe (not an error).
+pub fn stdout_failure() -> Option<String> {
+    match &*STDOUT.lock().unwrap_or_else(|p| p.into_inner()) {
+        StreamState::Failed(why) => Some(why.clone()),
+        StreamState::Open | StreamState::Closed => None,
+    }
+}
+
+/// `print!` that never panics (see [`crate::console`]).
+#[macro_export]
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::console::write_out(format_args!($($arg)*))
+    };
+}
+
+/// `println!` that never panics (see [`crate::console`]).
+#[macro_export]
+macro_rules! outln {
+    () => {
+        $crate::console::write_out(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::console::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `eprintln!` that never panics (see [`crate::console`]).
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::console::write_err(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}

@@ -1,0 +1,193 @@
+//! Issue 30, item 18: two sweeps writing one directory (a requeued Slurm task while the old one
+//! still runs) are refused by an operating-system lock, released on any exit; `--resume` and
+//! `merge` refuse rows whose values isotrack cannot have written, and recompute the plan's
+//! columns from the run id.
+mod common;
+use common::{assert_fails, isotrack, stderr, write};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const LOCK: &str = ".isotrack.lock";
+
+/// Whether some process holds the lock of sweep directory `dir` (probed with a shared lock,
+/// released at once).
+fn locked(dir: &Path) -> bool {
+    match std::fs::File::open(dir.join(LOCK)) {
+        Ok(f) => matches!(f.try_lock_shared(), Err(std::fs::TryLockError::WouldBlock)),
+        Err(_) => false,
+    }
+}
+
+/// A sweep long enough to be caught running (4000 default 600 s runs, several seconds on two
+/// busy cores), while it runs: a second sweep on its directory exits 73 (with `--resume` or
+/// `--force`: nothing deleted), and a merge of it too; killed with SIGKILL it leaves no stale
+/// lock: `--resume` then takes the directory and finishes with every run once.
+#[test]
+fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig2b-circular.toml"
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!(
+            "scenario = {scen:?}\n[random]\nruns = 4000\nseed = 5\ninitial.x_m = {{ uniform = [-12.0, 12.0] }}\n"
+        ),
+    );
+    let out = d.path().join("out");
+    let out_s = out.display().to_string();
+    let mut first = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sweep", &sw, "--out", &out_s, "--threads", "1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !locked(&out) {
+        assert!(t0.elapsed() < Duration::from_secs(60), "never locked");
+        assert!(first.try_wait().unwrap().is_none(), "ended before caught");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    for extra in [&["--resume"][..], &["--force"][..]] {
+        let mut args = vec!["sweep", &sw, "--out", &out_s];
+        args.extend(extra);
+        let o = isotrack(&args);
+        assert_fails(&o, 73, &["another isotrack sweep or merge is writing"]);
+    }
+    assert!(out.join("results.csv").exists(), "--force deleted nothing");
+    let o = isotrack(&[
+        "merge",
+        &out_s,
+        "--out",
+        &d.path().join("m").display().to_string(),
+    ]);
+    assert_fails(&o, 73, &["a sweep is still writing this directory"]);
+    assert!(
+        first.try_wait().unwrap().is_none(),
+        "the first sweep must still be running for this test to mean anything"
+    );
+    first.kill().unwrap();
+    first.wait().unwrap();
+    assert!(!locked(&out), "a killed holder leaves no lock");
+    let o = isotrack(&["sweep", &sw, "--out", &out_s, "--resume"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert_eq!(results.lines().count(), 4001);
+    let ids: Vec<u64> = results
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(
+        ids,
+        (0..4000).collect::<Vec<u64>>(),
+        "each run once, in order"
+    );
+}
+
+/// Rows a sweep cannot have written are refused by `--resume` and by `merge`, naming the file
+/// and line: non-finite numbers, negative times and maxima, an RMS above its maximum, a sample
+/// count that is not a whole number, metrics in an invalid_scenario row, and varied columns
+/// that are not what the plan gives the row's run id.
+#[test]
+fn resume_and_merge_refuse_values_isotrack_cannot_write() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 2.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\ncontroller.ki = [0.0, 1.0]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    assert!(isotrack(&["sweep", &sw, "--out", &p("full")])
+        .status
+        .success());
+    let results = d.path().join("full/results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let row2: Vec<&str> = good.lines().nth(3).unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let with = |changes: &[(&str, &str)]| {
+        let mut r = row2.clone();
+        for (c, v) in changes {
+            r[col(c)] = v;
+        }
+        r.join(",")
+    };
+    // Run 2 is (ki = 1.0, kp = 5.0): the plan's columns in sorted key order.
+    assert_eq!((row2[0], row2[1], row2[2]), ("2", "1.0", "5.0"));
+    let cases: Vec<(String, &str)> = vec![
+        (
+            with(&[("steady_state_max_abs_error", "NaN")]),
+            "steady_state_max_abs_error = `NaN` is not a finite number",
+        ),
+        (
+            with(&[("path_length_m", "inf")]),
+            "path_length_m = `inf` is not a finite number",
+        ),
+        (with(&[("t_end_s", "-2.0")]), "t_end_s = `-2.0` is negative"),
+        (
+            with(&[("steady_state_max_isoline_distance_m", "-1e-3")]),
+            "steady_state_max_isoline_distance_m = `-1e-3` is negative",
+        ),
+        (
+            with(&[("samples", "2.5")]),
+            "samples = `2.5` is not a whole number",
+        ),
+        (
+            with(&[("samples", "-1")]),
+            "samples = `-1` is not a whole number",
+        ),
+        (
+            with(&[("samples", "99999999999")]),
+            "samples = `99999999999` is not a whole number",
+        ),
+        (
+            with(&[("steady_state_rms_error", "1e9")]),
+            "steady_state_rms_error = 1000000000.0 exceeds steady_state_max_abs_error",
+        ),
+        (
+            with(&[("convergence_time_s", "3.0")]),
+            "convergence_time_s = 3.0 exceeds t_end_s",
+        ),
+        (
+            with(&[("outcome", "invalid_scenario")]),
+            "holds a value in an invalid_scenario row",
+        ),
+        (
+            with(&[("controller.kp", "7.0")]),
+            "controller.kp = `7.0` where the sweep's plan gives run 2 `5.0`",
+        ),
+    ];
+    for (bad_row, needle) in &cases {
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[3] = bad_row;
+        let text = lines.join("\n") + "\n";
+        std::fs::write(&results, &text).unwrap();
+        let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+        assert_fails(&o, 65, &["full/results.csv:4: damaged row", needle]);
+        assert_eq!(
+            std::fs::read_to_string(&results).unwrap(),
+            text,
+            "untouched"
+        );
+        let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &["full/results.csv:4: damaged row", needle]);
+    }
+    std::fs::write(&results, &good).unwrap();
+    // A shard whose sweep.toml was edited after the fact no longer matches its digest.
+    let edited = good.replace("10.0", "11.0");
+    assert_ne!(edited, good);
+    std::fs::write(
+        d.path().join("full/sweep.toml"),
+        std::fs::read_to_string(d.path().join("s.toml"))
+            .unwrap()
+            .replace("10.0", "11.0"),
+    )
+    .unwrap();
+    let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+    assert_fails(&o, 65, &["the shard was edited"]);
+}
