@@ -1,14 +1,16 @@
 //! `isotrack.benchmark`: a Python controller scored by the benchmark on the same tasks and seeds
 //! as the built-in laws.
 
+use crate::guard::interruptible;
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_bench::leaderboard::write_files;
-use isotrack_bench::{run_benchmark, ControllerFactory, Options, Registry, Suite};
+use isotrack_bench::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_core::{IsolineController, Measurement};
 use isotrack_scenario::Scenario;
-use pyo3::exceptions::PyFileNotFoundError;
+use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The first Python exception of a benchmark (raised when it returns).
@@ -24,6 +26,7 @@ fn keep(errors: &FirstError, e: PyErr) {
 struct PyFactory {
     factory: Py<PyAny>,
     errors: FirstError,
+    cancel: Arc<AtomicBool>,
 }
 
 impl ControllerFactory for PyFactory {
@@ -48,19 +51,25 @@ impl ControllerFactory for PyFactory {
         Box::new(BenchController {
             obj,
             errors: self.errors.clone(),
+            cancel: self.cancel.clone(),
         })
     }
 }
 
 /// A Python controller in a benchmark run: `update(t_s, value) -> omega`. An exception ends the
-/// run (a NaN command: `diverged`) and is raised when the benchmark returns.
+/// run (a NaN command: `diverged`) and is raised when the benchmark returns; so does a cancel
+/// (Ctrl-C: a run in flight ends at its next sample).
 struct BenchController {
     obj: Option<Py<PyAny>>,
     errors: FirstError,
+    cancel: Arc<AtomicBool>,
 }
 
 impl IsolineController for BenchController {
     fn update(&mut self, m: &Measurement) -> f64 {
+        if self.cancel.load(Ordering::Relaxed) {
+            return f64::NAN;
+        }
         let Some(obj) = self.obj.take() else {
             return f64::NAN;
         };
@@ -97,6 +106,7 @@ pub fn benchmark_json(
     tune: bool,
     out: Option<&str>,
 ) -> PyResult<String> {
+    check_name(&Registry::builtin(), name)?;
     let path = Path::new(suite_path);
     if !path.exists() {
         return Err(PyFileNotFoundError::new_err(format!(
@@ -105,22 +115,29 @@ pub fn benchmark_json(
     }
     let suite = Suite::load(path).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
     let errors: FirstError = Arc::new(Mutex::new(None));
+    let cancel = Arc::new(AtomicBool::new(false));
     let mut registry = Registry::builtin();
     registry.register(
         name,
         PyFactory {
             factory,
             errors: errors.clone(),
+            cancel: cancel.clone(),
         },
     );
     let opts = Options {
         controllers,
         tune,
         resume_from: None,
+        cancel: Some(cancel.clone()),
     };
-    let result = py
-        .detach(|| run_benchmark(&suite, &registry, &opts, &|_, _, _| {}))
-        .map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
+    let result = interruptible(py, &cancel, || {
+        run_benchmark(&suite, &registry, &opts, &|_, _, _| {})
+    })?
+    .map_err(|e| match e {
+        BenchError::Interrupted => PyKeyboardInterrupt::new_err(e.to_string()),
+        _ => ScenarioErrorPy::new_err(e.to_string()),
+    })?;
     if let Some(e) = errors.lock().ok().and_then(|mut s| s.take()) {
         return Err(e);
     }
@@ -134,4 +151,26 @@ pub fn benchmark_json(
         .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
     }
     serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
+}
+
+/// A name for the Python controller's row: not a built-in law's (it would replace that row),
+/// not empty, nothing that breaks a Markdown table row or a line (`|`, control characters).
+fn check_name(builtin: &Registry, name: &str) -> PyResult<()> {
+    let shown = isotrack_scenario::load::clip(name);
+    let why = if name.trim().is_empty() {
+        Some("is empty".to_string())
+    } else if builtin.get(name).is_some() {
+        Some(format!(
+            "is a built-in law's (the built-in laws: {}); choose another",
+            builtin.names().join(", ")
+        ))
+    } else if name.contains('|') || name.chars().any(char::is_control) {
+        Some("contains `|` or a control character (a newline, a tab), which would break the leaderboard's table".into())
+    } else {
+        None
+    };
+    match why {
+        Some(w) => Err(PyValueError::new_err(format!("name {shown:?} {w}"))),
+        None => Ok(()),
+    }
 }

@@ -4,24 +4,34 @@
 //! built-in controller. The engine runs with the GIL released (a Python controller takes it
 //! back for each of its samples only).
 
+use guard::{interruptible, no_panic, SignalWatch};
 use isotrack_core::{IsolineController, Measurement, ScalarField, Vec2};
 use isotrack_scenario::{load_scenario, parse_scenario, Scenario, ScenarioError};
 use isotrack_sim::{RunResult, TraceRow};
 use numpy::{PyArray1, PyReadonlyArray1};
-use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::Path;
+use std::sync::atomic::AtomicBool;
 
 mod bench;
 mod env;
+mod guard;
+mod tools;
 
-pyo3::create_exception!(
-    _native,
-    ScenarioErrorPy,
-    PyException,
-    "An invalid scenario or override: the message the CLI prints (file, line, column, key)."
-);
+/// The Python exception, named `isotrack.ScenarioError` in tracebacks.
+mod py_errors {
+    use pyo3::exceptions::PyValueError;
+    pyo3::create_exception!(
+        isotrack,
+        ScenarioError,
+        PyValueError,
+        "An invalid scenario or override: the message the CLI prints (file, line, column, key). \
+         A `ValueError`."
+    );
+}
+pub(crate) use py_errors::ScenarioError as ScenarioErrorPy;
 
 fn scenario_err(e: ScenarioError) -> PyErr {
     ScenarioErrorPy::new_err(e.to_string())
@@ -39,7 +49,7 @@ impl PyScenario {
     /// The built-in default: the paper's Fig. 2(b) setting.
     #[staticmethod]
     fn default() -> PyResult<Self> {
-        let inner = load_scenario(None, &[]).map_err(scenario_err)?;
+        let inner = no_panic(|| load_scenario(None, &[]).map_err(scenario_err))?;
         Ok(Self {
             inner,
             origin: "<built-in default>".into(),
@@ -49,7 +59,7 @@ impl PyScenario {
     /// A scenario file (TOML); files it names are relative to it.
     #[staticmethod]
     fn from_file(path: &str) -> PyResult<Self> {
-        let inner = load_scenario(Some(Path::new(path)), &[]).map_err(scenario_err)?;
+        let inner = no_panic(|| load_scenario(Some(Path::new(path)), &[]).map_err(scenario_err))?;
         Ok(Self {
             inner,
             origin: path.to_string(),
@@ -59,7 +69,7 @@ impl PyScenario {
     /// Scenario text (TOML); files it names are relative to the current directory.
     #[staticmethod]
     fn from_toml(text: &str) -> PyResult<Self> {
-        let inner = parse_scenario(text, "<toml>", &[]).map_err(scenario_err)?;
+        let inner = no_panic(|| parse_scenario(text, "<toml>", &[]).map_err(scenario_err))?;
         Ok(Self {
             inner,
             origin: "<toml>".into(),
@@ -67,16 +77,20 @@ impl PyScenario {
     }
 
     /// A new scenario with the dotted `key` set to `value` (the rules of `--set`; errors are
-    /// raised as `isotrack.ScenarioError` with the CLI's message).
+    /// raised as `isotrack.ScenarioError` with the CLI's message). The key is checked to be a
+    /// dotted key and the value converted to TOML here: neither is ever read as TOML text.
     fn set(&self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let literal = toml_literal(value)?;
-        let inner = self
-            .inner
-            .derive(&[format!("{key}={literal}")], &self.origin)
-            .map_err(scenario_err)?;
-        Ok(Self {
-            inner,
-            origin: self.origin.clone(),
+        no_panic(|| {
+            check_key(key)?;
+            let literal = toml_value(key, value, 0)?.to_string();
+            let inner = self
+                .inner
+                .derive(&[format!("{key}={literal}")], &self.origin)
+                .map_err(scenario_err)?;
+            Ok(Self {
+                inner,
+                origin: self.origin.clone(),
+            })
         })
     }
 
@@ -97,7 +111,7 @@ impl PyScenario {
         isotrack_cli::output::scenario_toml(&self.inner)
     }
 
-    /// Runs the scenario: `(summary_json, trace_columns)`. `record_rate_hz` overrides
+    /// Runs the scenario: `(summary_json, trace_columns, scenario_flown)`. `record_rate_hz` overrides
     /// `output.record_rate_hz`; `controller` (an object with `update(t_s, value) -> omega` and
     /// an optional `reset()`) replaces the scenario's controller.
     #[pyo3(signature = (record_rate_hz=None, controller=None))]
@@ -106,17 +120,69 @@ impl PyScenario {
         py: Python<'py>,
         record_rate_hz: Option<f64>,
         controller: Option<Py<PyAny>>,
-    ) -> PyResult<(String, Bound<'py, PyDict>)> {
+    ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
+        no_panic(|| self.run_inner(py, record_rate_hz, controller))
+    }
+
+    /// The field's values at `(x, y)` (numpy arrays of one shape, m) at time `t` (s, within the
+    /// run: `0 <= t <= sim.duration_s`); NaN where the field has no value.
+    #[pyo3(signature = (x, y, t=0.0))]
+    fn field_values<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray1<'py, f64>,
+        y: PyReadonlyArray1<'py, f64>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        no_panic(|| self.field_values_inner(py, x, y, t))
+    }
+
+    /// `isotrack check --json` for this scenario; `tube_halfwidth` (field units) > 0.
+    #[pyo3(signature = (tube_halfwidth=None))]
+    fn check_json(&self, py: Python<'_>, tube_halfwidth: Option<f64>) -> PyResult<String> {
+        if let Some(h) = tube_halfwidth {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(PyValueError::new_err(format!(
+                    "tube_halfwidth must be a finite number > 0 (field units), got {h}"
+                )));
+            }
+        }
+        no_panic(|| {
+            let r = py.detach(|| isotrack_scenario::check::check(&self.inner, tube_halfwidth));
+            serde_json::to_string(&r).map_err(|e| PyValueError::new_err(e.to_string()))
+        })
+    }
+}
+
+impl PyScenario {
+    fn run_inner<'py>(
+        &self,
+        py: Python<'py>,
+        record_rate_hz: Option<f64>,
+        controller: Option<Py<PyAny>>,
+    ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
         let scenario = match record_rate_hz {
+            Some(r) if !r.is_finite() => {
+                return Err(ScenarioErrorPy::new_err(format!(
+                    "`output.record_rate_hz`: {r} is not a finite number"
+                )))
+            }
             Some(r) => self
                 .inner
-                .derive(&[format!("output.record_rate_hz={r:?}")], &self.origin)
+                .derive(
+                    &[format!("output.record_rate_hz={}", toml::Value::Float(r))],
+                    &self.origin,
+                )
                 .map_err(scenario_err)?,
             None => self.inner.clone(),
         };
         let mut rows: Vec<TraceRow> = Vec::new();
+        let mut watch = SignalWatch::new();
         let (result, failure) = match controller {
-            None => (py.detach(|| scenario.run(&mut rows)), None),
+            None => (
+                py.detach(|| scenario.run_watched(&mut rows, &mut || watch.keep_going())),
+                None,
+            ),
             Some(obj) => {
                 if obj.bind(py).hasattr("reset")? {
                     obj.call_method0(py, "reset")?;
@@ -126,27 +192,45 @@ impl PyScenario {
                     error: None,
                     max_turn_rate_radps: scenario.max_turn_rate_radps(),
                 };
-                let r = py.detach(|| scenario.run_with(&mut c, &mut rows));
+                let r = py.detach(|| {
+                    scenario.run_with_watched(&mut c, &mut rows, &mut || watch.keep_going())
+                });
                 (r, c.error)
             }
         };
-        if let Some(e) = failure {
+        // The controller's own exception (a KeyboardInterrupt inside it, too) first, then one
+        // that stopped the run, then any signal that came at its very end.
+        if let Some(e) = failure.or(watch.error) {
             return Err(e);
         }
+        py.check_signals()?;
+        let Some(result) = result else {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                "the run was stopped",
+            ));
+        };
         let summary = summary_json(&scenario, &self.origin, &result)?;
-        Ok((summary, trace_columns(py, &rows, scenario.is_flying())?))
+        let trace = trace_columns(py, &rows, scenario.is_flying())?;
+        let flown = PyScenario {
+            inner: scenario,
+            origin: self.origin.clone(),
+        };
+        Ok((summary, trace, flown))
     }
 
-    /// The field's values at `(x, y)` (numpy arrays of one shape, m) at time `t` (s); NaN where
-    /// the field has no value.
-    #[pyo3(signature = (x, y, t=0.0))]
-    fn field_values<'py>(
+    fn field_values_inner<'py>(
         &self,
         py: Python<'py>,
         x: PyReadonlyArray1<'py, f64>,
         y: PyReadonlyArray1<'py, f64>,
         t: f64,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let duration = self.inner.file().sim.duration_s.unwrap_or(600.0);
+        if !(0.0..=duration).contains(&t) {
+            return Err(PyValueError::new_err(format!(
+                "t = {t} s is outside the run: 0 <= t <= sim.duration_s = {duration} s"
+            )));
+        }
         let (x, y) = (x.as_slice()?, y.as_slice()?);
         if x.len() != y.len() {
             return Err(PyValueError::new_err(format!(
@@ -156,42 +240,105 @@ impl PyScenario {
             )));
         }
         let field = self.inner.field();
-        let v: Vec<f64> = py.detach(|| {
-            x.iter()
-                .zip(y)
-                .map(|(&a, &b)| field.value(t, Vec2::new(a, b)).unwrap_or(f64::NAN))
-                .collect()
+        let mut watch = SignalWatch::new();
+        // In blocks, so that Ctrl-C is answered between them (a puff plume's value sums
+        // hundreds of puffs: a million points take a while).
+        let v: Option<Vec<f64>> = py.detach(|| {
+            let mut v = Vec::with_capacity(x.len());
+            for (xs, ys) in x.chunks(1024).zip(y.chunks(1024)) {
+                if !watch.keep_going() {
+                    return None;
+                }
+                v.extend(
+                    xs.iter()
+                        .zip(ys)
+                        .map(|(&a, &b)| field.value(t, Vec2::new(a, b)).unwrap_or(f64::NAN)),
+                );
+            }
+            Some(v)
         });
+        if let Some(e) = watch.error {
+            return Err(e);
+        }
+        let v = v.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))?;
         Ok(PyArray1::from_vec(py, v))
-    }
-
-    /// `isotrack check --json` for this scenario.
-    #[pyo3(signature = (tube_halfwidth=None))]
-    fn check_json(&self, py: Python<'_>, tube_halfwidth: Option<f64>) -> PyResult<String> {
-        let r = py.detach(|| isotrack_scenario::check::check(&self.inner, tube_halfwidth));
-        serde_json::to_string(&r).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 }
 
-/// A Python value as a TOML literal for `--set` (numbers, booleans, strings, lists of them).
-fn toml_literal(v: &Bound<'_, PyAny>) -> PyResult<String> {
+/// The most dotted parts of a key (`isotrack_scenario`'s limit for `--set`) and the deepest
+/// nesting of lists in a value (a scenario's deepest value is a list of pairs).
+const MAX_KEY_PARTS: usize = isotrack_scenario::load::MAX_KEY_PARTS;
+const MAX_VALUE_DEPTH: usize = 8;
+
+/// A `Scenario.set` key: dotted parts of letters, digits, `_` and `-` (TOML's bare keys), at
+/// most [`MAX_KEY_PARTS`] of them. Anything else is refused here, so that no key is ever read
+/// as TOML (`"sim.duration_s = 7 #"` once set the duration to 7).
+fn check_key(key: &str) -> PyResult<()> {
+    let shown = isotrack_scenario::load::clip(key);
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.len() > MAX_KEY_PARTS {
+        return Err(ScenarioErrorPy::new_err(format!(
+            "`{shown}`: a key has at most {MAX_KEY_PARTS} dotted parts, this one has {}",
+            parts.len()
+        )));
+    }
+    let bare = |p: &str| {
+        !p.is_empty()
+            && p.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    };
+    if !parts.iter().all(|p| bare(p)) {
+        return Err(ScenarioErrorPy::new_err(format!(
+            "`{shown}`: not a dotted key such as controller.kp (letters, digits, `_` and `-` \
+             between the dots)"
+        )));
+    }
+    Ok(())
+}
+
+/// A Python value as a TOML value for `--set`: booleans, integers (64-bit), finite floats,
+/// strings, and lists or tuples of them nested at most [`MAX_VALUE_DEPTH`] deep (a list that
+/// holds itself is refused, not followed).
+fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
+    let bad = |what: String| ScenarioErrorPy::new_err(format!("`{key}`: {what}"));
+    if depth > MAX_VALUE_DEPTH {
+        return Err(bad(format!(
+            "lists nested more than {MAX_VALUE_DEPTH} deep (or a list that holds itself)"
+        )));
+    }
     if let Ok(b) = v.extract::<bool>() {
-        return Ok(b.to_string());
+        return Ok(toml::Value::Boolean(b));
     }
-    if let Ok(i) = v.extract::<i64>() {
-        return Ok(i.to_string());
-    }
-    if let Ok(f) = v.extract::<f64>() {
-        return Ok(format!("{f:?}"));
+    if v.is_instance_of::<pyo3::types::PyInt>() {
+        return match v.extract::<i64>() {
+            Ok(i) => Ok(toml::Value::Integer(i)),
+            Err(_) => Err(bad(format!(
+                "{} does not fit in a 64-bit integer",
+                v.repr()?
+            ))),
+        };
     }
     if let Ok(s) = v.extract::<String>() {
-        return Ok(format!("{s:?}"));
+        return Ok(toml::Value::String(s));
     }
-    if let Ok(items) = v.extract::<Vec<Bound<'_, PyAny>>>() {
-        let parts: PyResult<Vec<String>> = items.iter().map(toml_literal).collect();
-        return Ok(format!("[{}]", parts?.join(", ")));
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let items: PyResult<Vec<toml::Value>> = v
+            .try_iter()?
+            .map(|item| toml_value(key, &item?, depth + 1))
+            .collect();
+        return Ok(toml::Value::Array(items?));
     }
-    Err(PyValueError::new_err(format!(
+    // A numpy integer is not a Python int, but converts through `__index__`.
+    if let Ok(i) = v.extract::<i64>() {
+        return Ok(toml::Value::Integer(i));
+    }
+    if let Ok(f) = v.extract::<f64>() {
+        if !f.is_finite() {
+            return Err(bad(format!("{f} is not a finite number")));
+        }
+        return Ok(toml::Value::Float(f));
+    }
+    Err(bad(format!(
         "cannot use {} as a scenario value (numbers, booleans, strings or lists of them)",
         v.repr()?
     )))
@@ -289,6 +436,7 @@ impl IsolineController for PyController {
 
 /// A sweep from its file's text: `(header, rows)` of `results.csv`'s cells in `run_id` order;
 /// `name` names the sweep in messages and anchors its relative `scenario` path.
+/// Ctrl-C stops it between batches of runs.
 #[pyfunction]
 #[pyo3(signature = (text, name, threads=None, progress=false))]
 fn sweep_cells(
@@ -298,11 +446,17 @@ fn sweep_cells(
     threads: Option<usize>,
     progress: bool,
 ) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
-    py.detach(|| isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads, progress))
-        .map_err(|f| match f.code {
-            66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
-            _ => ScenarioErrorPy::new_err(f.message),
-        })
+    let cancel = AtomicBool::new(false);
+    interruptible(py, &cancel, || {
+        isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads, progress, &cancel)
+    })?
+    .map_err(|f| match f.code {
+        66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
+        isotrack_cli::sweep::INTERRUPTED => {
+            pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message)
+        }
+        _ => ScenarioErrorPy::new_err(f.message),
+    })
 }
 
 /// The isotrack version.
@@ -313,11 +467,21 @@ fn version() -> &'static str {
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // numpy's C API now, once: fetched lazily it may be fetched while a KeyboardInterrupt is
+    // pending, and rust-numpy then panics ("Failed to access NumPy array API capsule").
+    PyArray1::<f64>::zeros(m.py(), 0, false);
     m.add_class::<PyScenario>()?;
     m.add_class::<env::PyEnvBatch>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
     m.add_function(wrap_pyfunction!(bench::benchmark_json, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::write_run, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::plot, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::report, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::controller_variant, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::controller_kinds, m)?)?;
+    m.add_function(wrap_pyfunction!(tools::sweep_cells_with, m)?)?;
     Ok(())
 }

@@ -39,6 +39,9 @@ pub enum BenchError {
     /// `--resume` on results of another suite or controller set.
     #[error("{0}")]
     Mismatch(String),
+    /// Stopped by [`Options::cancel`] before it finished.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// One scored run.
@@ -139,6 +142,18 @@ pub struct Options {
     pub tune: bool,
     /// Reuse task results found here (`DIR/tasks/ID/task.json`) when their digest matches.
     pub resume_from: Option<std::path::PathBuf>,
+    /// Set to `true` (from another thread: a front end's Ctrl-C) to stop the benchmark before
+    /// its next run; it then returns [`BenchError::Interrupted`]. A tuning under way finishes
+    /// its law first.
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+}
+
+impl Options {
+    fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+    }
 }
 
 /// The controllers a run scores.
@@ -177,6 +192,9 @@ pub fn run_benchmark(
     let controllers = controllers_of(suite, reg, o)?;
     let mut tasks = Vec::with_capacity(suite.tasks.len());
     for (i, task) in suite.tasks.iter().enumerate() {
+        if o.cancelled() {
+            return Err(BenchError::Interrupted);
+        }
         progress(i, suite.tasks.len(), &task.id);
         tasks.push(run_task(suite, task, reg, &controllers, o)?);
     }
@@ -223,6 +241,9 @@ fn run_task(
     let mut gains: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     for c in controllers {
         if let Some(Entrant::Builtin(kind)) = reg.get(c) {
+            if o.cancelled() {
+                return Err(BenchError::Interrupted);
+            }
             let g = if o.tune {
                 tune(&base, task, *kind, &suite.tuning_seeds)
             } else {
@@ -247,9 +268,10 @@ fn run_task(
         .par_iter()
         .map(|(c, seed)| {
             let entrant = reg.get(c).expect("checked by controllers_of");
-            scored_run(&base, task, c, entrant, gains.get(*c), *seed)
+            (!o.cancelled()).then(|| scored_run(&base, task, c, entrant, gains.get(*c), *seed))
         })
-        .collect();
+        .collect::<Option<_>>()
+        .ok_or(BenchError::Interrupted)?;
     let scores = controllers
         .iter()
         .map(|c| {
@@ -269,9 +291,10 @@ fn run_task(
         .par_iter()
         .map(|c| {
             let entrant = reg.get(c).expect("checked by controllers_of");
-            trajectory(&base, task, c, entrant, gains.get(c), seed0)
+            (!o.cancelled()).then(|| trajectory(&base, task, c, entrant, gains.get(c), seed0))
         })
-        .collect();
+        .collect::<Option<_>>()
+        .ok_or(BenchError::Interrupted)?;
     let picture = field_picture(&base, &trajectories);
     Ok(TaskResult {
         id: task.id.clone(),

@@ -80,6 +80,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
         tune: a.tune,
         resume_from: a.resume.then(|| a.out.clone()),
+        cancel: None,
     };
     let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();

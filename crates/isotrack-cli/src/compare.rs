@@ -56,6 +56,25 @@ pub fn variant(
     .map_err(invalid)
 }
 
+/// Checks that each `--gain` is `KIND.KEY=VALUE` with a known kind.
+pub fn check_gains(gains: &[String]) -> Result<(), Failure> {
+    for g in gains {
+        let ok = g
+            .split_once('.')
+            .and_then(|(k, rest)| ControllerKind::from_name(k).map(|_| rest.contains('=')));
+        if ok != Some(true) {
+            return Err(Failure {
+                code: exit::USAGE,
+                message: format!(
+                    "--gain {}: expected KIND.KEY=VALUE, e.g. sliding_mode.gamma=0.3",
+                    isotrack_scenario::load::clip(g)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn cell(x: Option<f64>) -> String {
     x.map_or_else(String::new, num)
 }
@@ -83,19 +102,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             })
             .collect::<Result<_, _>>()?
     };
-    for g in &a.gain {
-        let ok = g
-            .split_once('.')
-            .and_then(|(k, rest)| ControllerKind::from_name(k).map(|_| rest.contains('=')));
-        if ok != Some(true) {
-            return Err(Failure {
-                code: exit::USAGE,
-                message: format!(
-                    "--gain {g}: expected KIND.KEY=VALUE, e.g. sliding_mode.gamma=0.3"
-                ),
-            });
-        }
-    }
+    check_gains(&a.gain)?;
     let origin = a.scenario.display().to_string();
     let cant = |what: &Path, e: std::io::Error| Failure {
         code: exit::CANTCREAT,

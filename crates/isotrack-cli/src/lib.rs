@@ -12,6 +12,7 @@ pub mod aircraft;
 pub mod bench;
 pub mod cli;
 pub mod compare;
+pub mod entry;
 pub mod figures;
 pub mod interpolate;
 pub mod output;

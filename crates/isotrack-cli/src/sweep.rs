@@ -14,7 +14,7 @@ use crate::run::Failure;
 use indicatif::{ProgressBar, ProgressStyle};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::{load_scenario, Scenario};
-use isotrack_sim::LANES;
+use isotrack_sim::{RunResult, LANES};
 #[allow(unused_imports)]
 use rayon::iter::IntoParallelIterator;
 use rayon::prelude::*;
@@ -41,6 +41,10 @@ pub const METRIC_COLUMNS: [&str; 14] = [
     "outcome_detail",
 ];
 
+/// The failure code of a sweep stopped through `sweep_in_memory`'s `cancel` (128 + SIGINT, the
+/// shells' convention; library callers report it as their own interruption).
+pub const INTERRUPTED: u8 = 130;
+
 fn fail(code: u8, message: String) -> Failure {
     Failure { code, message }
 }
@@ -58,11 +62,7 @@ fn csv_line(fields: &[String]) -> String {
 fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) -> Vec<String> {
     let derived: Vec<Result<Scenario, String>> = ids
         .iter()
-        .map(|&id| {
-            let origin = format!("sweep {sweep_name} run {id}");
-            base.derive_with(&plan.run_assignments(id, &origin), &origin)
-                .map_err(|e| e.to_string().replace('\n', " "))
-        })
+        .map(|&id| run_scenario(plan, base, id, sweep_name))
         .collect();
     let valid: Vec<Scenario> = derived
         .iter()
@@ -70,50 +70,70 @@ fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) ->
         .cloned()
         .collect();
     let mut results = Scenario::run_batch(&valid).into_iter();
-    // A metric that is not a finite number is written as an empty cell (as summary.json writes
-    // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
-    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
-    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
     ids.iter()
         .zip(derived)
         .map(|(&id, d)| {
-            let mut fields = vec![id.to_string()];
-            fields.extend(plan.run_cells(id));
             // run_batch answers every valid scenario, in order.
             let result = d.and_then(|_| {
                 results
                     .next()
                     .ok_or_else(|| "the batch returned no result for this run".to_string())
             });
-            match result {
-                Ok(r) => {
-                    let m = &r.metrics;
-                    fields.extend([
-                        r.outcome.as_str().to_string(),
-                        opt(m.convergence_time_s),
-                        opt(m.steady_state_max_abs_error),
-                        opt(m.steady_state_rms_error),
-                        opt(m.steady_state_mean_error),
-                        opt(m.steady_state_max_isoline_distance_m),
-                        opt(m.steady_state_rms_isoline_distance_m),
-                        fin(m.path_length_m),
-                        fin(m.control_effort),
-                        opt(m.chattering_radps2),
-                        opt(m.sign_changes_per_s),
-                        fin(r.t_end_s),
-                        r.samples.to_string(),
-                        r.outcome_detail.unwrap_or_default(),
-                    ]);
-                }
-                Err(e) => {
-                    fields.push("invalid_scenario".into());
-                    fields.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len() - 2));
-                    fields.push(e);
-                }
-            }
-            csv_line(&fields)
+            csv_line(&row_fields(plan, id, result))
         })
         .collect()
+}
+
+/// The scenario of run `id` of a sweep (its base with the run's assignments), or why it is
+/// invalid, on one line.
+pub fn run_scenario(
+    plan: &SweepPlan,
+    base: &Scenario,
+    id: u64,
+    sweep_name: &str,
+) -> Result<Scenario, String> {
+    let origin = format!("sweep {sweep_name} run {id}");
+    base.derive_with(&plan.run_assignments(id, &origin), &origin)
+        .map_err(|e| e.to_string().replace('\n', " "))
+}
+
+/// The `results.csv` fields of run `id`: its id, the plan's cells, then the
+/// [`METRIC_COLUMNS`] of its result, or of an invalid scenario (outcome `invalid_scenario`,
+/// the reason in `outcome_detail`).
+pub fn row_fields(plan: &SweepPlan, id: u64, result: Result<RunResult, String>) -> Vec<String> {
+    // A metric that is not a finite number is written as an empty cell (as summary.json writes
+    // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
+    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
+    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
+    let mut fields = vec![id.to_string()];
+    fields.extend(plan.run_cells(id));
+    match result {
+        Ok(r) => {
+            let m = &r.metrics;
+            fields.extend([
+                r.outcome.as_str().to_string(),
+                opt(m.convergence_time_s),
+                opt(m.steady_state_max_abs_error),
+                opt(m.steady_state_rms_error),
+                opt(m.steady_state_mean_error),
+                opt(m.steady_state_max_isoline_distance_m),
+                opt(m.steady_state_rms_isoline_distance_m),
+                fin(m.path_length_m),
+                fin(m.control_effort),
+                opt(m.chattering_radps2),
+                opt(m.sign_changes_per_s),
+                fin(r.t_end_s),
+                r.samples.to_string(),
+                r.outcome_detail.unwrap_or_default(),
+            ]);
+        }
+        Err(e) => {
+            fields.push("invalid_scenario".into());
+            fields.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len() - 2));
+            fields.push(e);
+        }
+    }
+    fields
 }
 
 /// The base scenario of a sweep: its file with `sets`, then the sweep's `[base]`, which must
@@ -152,17 +172,22 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure>
 /// A whole sweep in memory, for library callers (the Python package): the sweep file's text
 /// (`name` names it in messages; its `scenario` path is relative to `dir`), `threads` workers
 /// (capped as for `--threads`). Returns the `results.csv` header and rows as fields, in
-/// `run_id` order: the same cells the CLI writes.
+/// `run_id` order: the same cells the CLI writes. Setting `cancel` (from another thread: a
+/// front end's Ctrl-C) stops it before its next batch of runs, with a failure saying so.
 pub fn sweep_in_memory(
     text: &str,
     name: &Path,
     threads: Option<usize>,
     progress: bool,
+    cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<(Vec<String>, Vec<Vec<String>>), Failure> {
-    let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let label = name.display().to_string();
-    let base = sweep_base(&plan, &[], &label)?;
-    let header = results_header(&plan);
+    let cancelled = || cancel.load(std::sync::atomic::Ordering::Relaxed);
+    let PreparedSweep {
+        plan,
+        base,
+        header,
+        label,
+    } = PreparedSweep::new(text, name)?;
     let pool = worker_pool(threads)?;
     let pb = if progress {
         runs_progress_bar(plan.total())
@@ -174,6 +199,9 @@ pub fn sweep_in_memory(
         (0..total.div_ceil(LANES as u64))
             .into_par_iter()
             .flat_map_iter(|c| {
+                if cancelled() {
+                    return Vec::new();
+                }
                 let ids: Vec<u64> =
                     (c * LANES as u64..((c + 1) * LANES as u64).min(total)).collect();
                 let rows = run_rows(&plan, &base, &ids, &label);
@@ -183,11 +211,44 @@ pub fn sweep_in_memory(
             .collect()
     });
     pb.finish();
+    if cancelled() {
+        return Err(fail(INTERRUPTED, "interrupted".into()));
+    }
     let rows = lines
         .iter()
         .map(|l| csv_fields(l).unwrap_or_default())
         .collect();
     Ok((header, rows))
+}
+
+/// A sweep read and checked, ready to run run by run (the Python package runs a sweep with a
+/// Python controller this way: [`run_scenario`], then [`row_fields`]).
+pub struct PreparedSweep {
+    /// The plan.
+    pub plan: SweepPlan,
+    /// The base scenario (its file, then `[base]`).
+    pub base: Scenario,
+    /// The `results.csv` header.
+    pub header: Vec<String>,
+    /// The sweep's name in messages.
+    pub label: String,
+}
+
+impl PreparedSweep {
+    /// The sweep file's text (`name` names it in messages; its `scenario` path is relative to
+    /// `name`'s directory), parsed and checked as `isotrack sweep` checks it before running.
+    pub fn new(text: &str, name: &Path) -> Result<Self, Failure> {
+        let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+        let label = name.display().to_string();
+        let base = sweep_base(&plan, &[], &label)?;
+        let header = results_header(&plan);
+        Ok(Self {
+            plan,
+            base,
+            header,
+            label,
+        })
+    }
 }
 
 /// The sweep's progress bar on stderr (hidden when stderr is not a terminal).

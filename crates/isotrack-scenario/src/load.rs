@@ -146,6 +146,10 @@ impl ScenarioError {
 /// The largest scenario (or sweep) file read, bytes (1 MiB: the longest bundled one is 2 kB).
 pub const MAX_SCENARIO_FILE_BYTES: u64 = 1 << 20;
 
+/// The most dotted parts of a `--set` key (every scenario key has two, `controller.kp`; the
+/// rest is room for a clear "unknown field" message).
+pub const MAX_KEY_PARTS: usize = 8;
+
 /// The most characters of user text (a key, a value, a file's line) echoed in one message: a
 /// 10 MB key once made a 20 MB error.
 pub const MAX_ECHO_CHARS: usize = 200;
@@ -396,6 +400,15 @@ fn apply_one(
         .split_once('=')
         .ok_or_else(|| fail(None, "expected KEY=VALUE".into()))?;
     let key = key.trim().to_string();
+    // Before anything walks the key: a 60 000-part key once nested 60 000 tables and
+    // overflowed the stack.
+    let parts = key.split('.').count();
+    if parts > MAX_KEY_PARTS {
+        return Err(fail(
+            None,
+            format!("a key has at most {MAX_KEY_PARTS} dotted parts, this one has {parts}"),
+        ));
+    }
     if key.is_empty() || key.split('.').any(|p| p.trim().is_empty()) {
         return Err(fail(
             None,
@@ -858,5 +871,25 @@ mod tests {
                 origin: "sweep s.toml run 3".into()
             }
         );
+    }
+
+    /// A 60 000-part `--set` key overflowed the stack (issue 30): refused before it is walked,
+    /// in a file's overrides and in a derived scenario alike; eight parts is still a key.
+    #[test]
+    fn keys_with_too_many_parts_are_refused() {
+        let long = format!("{}=1", vec!["a"; 60_000].join("."));
+        let e = err("", &[long.as_str()]);
+        assert!(
+            e[0].message
+                .contains("a key has at most 8 dotted parts, this one has 60000"),
+            "{}",
+            e[0]
+        );
+        let base = parse_scenario("", "s.toml", &[]).unwrap();
+        let e = base.derive(&[long], "x").unwrap_err();
+        assert!(e.to_string().contains("at most 8 dotted parts"), "{e}");
+        let eight = format!("controller.{}=1", ["a"; 7].join("."));
+        let e = err("", &[eight.as_str()]);
+        assert!(e[0].message.contains("unknown field"), "{}", e[0]);
     }
 }

@@ -1,13 +1,14 @@
 """Type stubs for the isotrack package."""
 
-from typing import Any, Callable, Dict, List, Optional, Protocol
+import os
+from typing import Any, Callable, Dict, List, Optional, Protocol, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
 
-class ScenarioError(Exception):
+class ScenarioError(ValueError):
     """An invalid scenario or override; the message is the CLI's (file, line, column, key)."""
 
 class Controller(Protocol):
@@ -19,8 +20,18 @@ class Controller(Protocol):
 class Run:
     summary: Dict[str, Any]
     trace: Dict[str, npt.NDArray[np.float64]]
-    def __init__(self, summary: Dict[str, Any], trace: Dict[str, npt.NDArray[np.float64]]) -> None: ...
+    scenario: Optional[Scenario]
+    def __init__(
+        self,
+        summary: Dict[str, Any],
+        trace: Dict[str, npt.NDArray[np.float64]],
+        scenario: Optional[Scenario] = ...,
+        _summary_json: Optional[str] = ...,
+    ) -> None: ...
     def to_pandas(self) -> Any: ...
+    def save(self, directory: Union[str, os.PathLike[str]]) -> str: ...
+
+RunDirs = Union[str, os.PathLike[str], Run, Sequence[Union[str, os.PathLike[str], Run]]]
 
 class Scenario:
     @staticmethod
@@ -45,8 +56,31 @@ class Scenario:
 def check(scenario: Scenario, tube_halfwidth: Optional[float] = ...) -> Dict[str, Any]: ...
 
 def sweep(
-    path_or_toml_text: str, threads: Optional[int] = ..., progress: bool = ...
+    path_or_toml_text: Union[str, os.PathLike[str]],
+    threads: Optional[int] = ...,
+    progress: bool = ...,
+    controller_factory: Optional[Callable[[Scenario], Controller]] = ...,
 ) -> Dict[str, npt.NDArray[Any]]: ...
+
+def plot(
+    runs: RunDirs,
+    out: Optional[str] = ...,
+    format: str = ...,
+    animate: bool = ...,
+    x: Optional[str] = ...,
+    group: Optional[str] = ...,
+    metric: Optional[str] = ...,
+) -> str: ...
+
+def report(runs: RunDirs, out: str) -> str: ...
+
+def compare(
+    scenario: Scenario,
+    controllers: Optional[List[str]] = ...,
+    gains: Optional[List[str]] = ...,
+    record_rate_hz: Optional[float] = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Run]: ...
 
 def benchmark(
     controller_factory: Callable[[Scenario], Controller],

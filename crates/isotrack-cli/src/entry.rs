@@ -1,0 +1,59 @@
+//! The command line as a function: parse arguments, dispatch, map failures to exit codes. The
+//! `isotrack` binary is this over the process's arguments; the Python package's `isotrack`
+//! command calls the same function through its native module (one build for both).
+
+use crate::cli::{Cli, Command};
+use clap::Parser;
+use std::ffi::OsString;
+
+/// Runs the command line `args` (the program name first) and returns its exit code (README,
+/// "Exit codes"); errors are printed on stderr as `error: ...`.
+pub fn main_with<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    // clap's own errors exit 2 by default; every usage error of isotrack exits 64 (one table,
+    // README "Exit codes"), so they are mapped here. Help and version exit 0.
+    let cli = match Cli::try_parse_from(args) {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                crate::exit::USAGE
+            } else {
+                crate::exit::OK
+            };
+        }
+    };
+    let result = match &cli.command {
+        Command::Run(args) => crate::run::run(args),
+        Command::Show(args) => crate::run::show(args),
+        Command::Check(args) => crate::run::check(args),
+        Command::Compare(args) => crate::compare::compare(args),
+        Command::Plot(args) => crate::figures::plot(args),
+        Command::Figures(args) => crate::figures::figures(args),
+        Command::Sweep(args) => crate::sweep::sweep(args),
+        Command::Merge(args) => crate::sweep::merge(args),
+        Command::Trim(args) => crate::aircraft::trim(args),
+        Command::Replay(args) => crate::aircraft::replay(args),
+        Command::Interpolate(args) => crate::interpolate::interpolate(args),
+        Command::Benchmark(args) => crate::bench::benchmark(args),
+        Command::Report(args) => crate::bench::report(args),
+    };
+    // A reader that closed standard output is not an error (exit 0); another failure to write
+    // it is exit 73 unless the command failed first (see `crate::console`).
+    match result {
+        Ok(()) => match crate::console::stdout_failure() {
+            None => crate::exit::OK,
+            Some(why) => {
+                crate::errln!("error: cannot write standard output: {why}");
+                crate::exit::CANTCREAT
+            }
+        },
+        Err(f) => {
+            crate::errln!("error: {}", f.message);
+            f.code
+        }
+    }
+}
