@@ -2,7 +2,7 @@
 the paper's field stepped in Rust per call, SB3's `VecEnv` API through `isotrack.gym.SB3VecEnv`.
 
     pip install "./python[examples]" stable-baselines3    # from the repository root (brings torch)
-    python examples/python/train_sb3.py [timesteps]        # 100 000 steps: a few minutes on a CPU
+    python examples/python/train_sb3.py [timesteps]        # default 100 000 steps
 
 Prints the mean episode return before and after training (the same seeds for both), each
 episode a 60 s run at 10 Hz (600 steps). The policy sees only (eps_m, deps_m).
