@@ -283,6 +283,7 @@ fn straight(kp: f64, period_s: f64, delay_s: f64) -> SampledLoop {
         delay_s,
         estimator: EstimatorModel::BackwardDifference,
         heading: HeadingDynamics::Dubins,
+        sensor_lag: None,
     }
 }
 
