@@ -43,7 +43,7 @@ impl SignalWatch {
             return false;
         }
         self.calls = self.calls.wrapping_add(1);
-        if self.calls % 64 != 0 || self.last.elapsed() < SIGNAL_PERIOD {
+        if !self.calls.is_multiple_of(64) || self.last.elapsed() < SIGNAL_PERIOD {
             return true;
         }
         self.last = Instant::now();
