@@ -240,12 +240,12 @@ impl PyScenario {
             )));
         }
         let field = self.inner.field();
-        let mut watch = SignalWatch::new();
-        // In blocks, so that Ctrl-C is answered between them (a puff plume's value sums
-        // hundreds of puffs: a million points take a while).
+        // In blocks of a millisecond or so, so that Ctrl-C is answered between them (a puff
+        // plume's value sums hundreds of puffs: a million points take seconds).
+        let mut watch = SignalWatch::reading_the_clock_every(1);
         let v: Option<Vec<f64>> = py.detach(|| {
             let mut v = Vec::with_capacity(x.len());
-            for (xs, ys) in x.chunks(1024).zip(y.chunks(1024)) {
+            for (xs, ys) in x.chunks(256).zip(y.chunks(256)) {
                 if !watch.keep_going() {
                     return None;
                 }
