@@ -23,27 +23,36 @@ const SIGNAL_PERIOD: Duration = Duration::from_millis(20);
 pub(crate) struct SignalWatch {
     last: Instant,
     calls: u32,
+    stride: u32,
     /// The exception a signal handler raised.
     pub(crate) error: Option<PyErr>,
 }
 
 impl SignalWatch {
+    /// A watch for calls a few microseconds apart (a run's samples): the clock is read every
+    /// 64 calls.
     pub(crate) fn new() -> Self {
+        Self::reading_the_clock_every(64)
+    }
+
+    /// A watch that reads the clock every `stride` calls (1 for calls a millisecond apart).
+    pub(crate) fn reading_the_clock_every(stride: u32) -> Self {
         Self {
             last: Instant::now(),
             calls: 0,
+            stride: stride.max(1),
             error: None,
         }
     }
 
     /// Whether to go on: `false` once a signal handler raised (the exception is kept). Cheap:
-    /// the clock is read every 64 calls, the GIL taken every [`SIGNAL_PERIOD`].
+    /// the clock is read every `stride` calls, the GIL taken every [`SIGNAL_PERIOD`].
     pub(crate) fn keep_going(&mut self) -> bool {
         if self.error.is_some() {
             return false;
         }
         self.calls = self.calls.wrapping_add(1);
-        if self.calls % 64 != 0 || self.last.elapsed() < SIGNAL_PERIOD {
+        if !self.calls.is_multiple_of(self.stride) || self.last.elapsed() < SIGNAL_PERIOD {
             return true;
         }
         self.last = Instant::now();

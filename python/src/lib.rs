@@ -240,12 +240,12 @@ impl PyScenario {
             )));
         }
         let field = self.inner.field();
-        let mut watch = SignalWatch::new();
-        // In blocks, so that Ctrl-C is answered between them (a puff plume's value sums
-        // hundreds of puffs: a million points take a while).
+        // In blocks of a millisecond or so, so that Ctrl-C is answered between them (a puff
+        // plume's value sums hundreds of puffs: a million points take seconds).
+        let mut watch = SignalWatch::reading_the_clock_every(1);
         let v: Option<Vec<f64>> = py.detach(|| {
             let mut v = Vec::with_capacity(x.len());
-            for (xs, ys) in x.chunks(1024).zip(y.chunks(1024)) {
+            for (xs, ys) in x.chunks(256).zip(y.chunks(256)) {
                 if !watch.keep_going() {
                     return None;
                 }
@@ -296,6 +296,16 @@ fn check_key(key: &str) -> PyResult<()> {
     Ok(())
 }
 
+/// A value's `repr` for a message, clipped (a million-element list once made a megabyte error),
+/// or its type when it has no `repr` (an int past Python's digit limit).
+fn shown(v: &Bound<'_, PyAny>) -> String {
+    let text = v
+        .repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| format!("a {}", v.get_type()));
+    isotrack_scenario::load::clip(&text)
+}
+
 /// A Python value as a TOML value for `--set`: booleans, integers (64-bit), finite floats,
 /// strings, and lists or tuples of them nested at most [`MAX_VALUE_DEPTH`] deep (a list that
 /// holds itself is refused, not followed).
@@ -314,7 +324,7 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
             Ok(i) => Ok(toml::Value::Integer(i)),
             Err(_) => Err(bad(format!(
                 "{} does not fit in a 64-bit integer",
-                v.repr()?
+                shown(v)
             ))),
         };
     }
@@ -340,7 +350,7 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
     }
     Err(bad(format!(
         "cannot use {} as a scenario value (numbers, booleans, strings or lists of them)",
-        v.repr()?
+        shown(v)
     )))
 }
 

@@ -288,3 +288,15 @@ def test_benchmark_names_that_would_lie_are_refused(tmp_path):
     for name in ["pi_isoline", "sliding_mode", "gradient_reference", "", "  ", "a|b", "a\nb", "a\tb"]:
         with pytest.raises(ValueError, match="name"):
             isotrack.benchmark(lambda sc: Zero(), suite=str(tmp_path / "none.toml"), name=name)
+
+
+def test_unusable_values_are_named_briefly():
+    sc = isotrack.Scenario.default()
+    with pytest.raises(isotrack.ScenarioError, match="cannot use None as a scenario value") as e:
+        sc.set("sim.seed", None)
+    with pytest.raises(isotrack.ScenarioError, match="cannot use") as e:
+        sc.set("field", {str(i): i for i in range(100_000)})
+    assert len(str(e.value)) < 1000
+    with pytest.raises(isotrack.ScenarioError, match="does not fit in a 64-bit integer") as e:
+        sc.set("sim.seed", 10**100_000)
+    assert len(str(e.value)) < 1000
