@@ -299,18 +299,13 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
         state(sm.stable_over_tube)
     );
     if let Some(set) = &sm.kp_intervals {
-        let set: Vec<String> = set
-            .iter()
-            .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
-            .collect();
         outln!(
             "  stable kp: {}   nearest stable kp {}   longest stable sensor period {} s",
-            if set.is_empty() {
-                "none".to_string()
-            } else {
-                set.join(" or ")
-            },
-            f(sm.nearest_stable_kp),
+            isotrack_scenario::check::kp_intervals_text(set),
+            sm.nearest_stable_kp.map_or_else(
+                || "n/a".to_string(),
+                |k| isotrack_scenario::check::nearest_kp_text(k, set)
+            ),
             f(sm.max_period_s)
         );
     }

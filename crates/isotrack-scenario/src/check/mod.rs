@@ -987,6 +987,51 @@ fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
     w
 }
 
+/// `x` rounded to 5 significant digits towards `+inf` (`up`) or `-inf`, as text with those
+/// digits: an interval's printed ends are rounded inwards, so a value copied from the text is
+/// inside the interval (a value rounded outwards can be the unstable `kp` the user has).
+fn round_sig_text(x: f64, up: bool) -> String {
+    if !(x.is_finite() && x > 0.0) {
+        return format!("{x}");
+    }
+    let exponent = x.log10().floor() as i32;
+    let scale = 10f64.powi(exponent - 4);
+    let mantissa = if up {
+        (x / scale).ceil()
+    } else {
+        (x / scale).floor()
+    };
+    let decimals = (4 - exponent).max(0) as usize;
+    format!("{:.*}", decimals, mantissa * scale)
+}
+
+/// The stable `kp` set as text, `[lo, hi] or ...`, each end rounded inwards
+/// ([`round_sig_text`]).
+pub fn kp_intervals_text(intervals: &[[f64; 2]]) -> String {
+    let set: Vec<String> = intervals
+        .iter()
+        .map(|&[a, b]| {
+            format!(
+                "[{}, {}]",
+                round_sig_text(a, true),
+                round_sig_text(b, false)
+            )
+        })
+        .collect();
+    if set.is_empty() {
+        "none".to_string()
+    } else {
+        set.join(" or ")
+    }
+}
+
+/// The nearest stable `kp` as text, rounded into the interval it belongs to (up at a lower
+/// end, down at an upper end).
+pub fn nearest_kp_text(k: f64, intervals: &[[f64; 2]]) -> String {
+    let at_lower_end = intervals.iter().any(|&[a, _]| a == k);
+    round_sig_text(k, at_lower_end)
+}
+
 /// The warning about the sampled loop: unstable (with the stable `kp` set, the nearest stable
 /// `kp`, and the sensor rate that would do when the rate is the limit) or not computed.
 fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
@@ -1002,13 +1047,10 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     let intervals = sm.kp_intervals.as_deref().unwrap_or_default();
     let mut fixes = vec![];
     if let Some(k) = sm.nearest_stable_kp {
-        let set: Vec<String> = intervals
-            .iter()
-            .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
-            .collect();
         fixes.push(format!(
-            "for kp in {} (nearest: kp = {k:.4}, on the edge; go further in for margin)",
-            set.join(" or ")
+            "for kp in {} (nearest: kp = {}, on the edge; go further in for margin)",
+            kp_intervals_text(intervals),
+            nearest_kp_text(k, intervals)
         ));
     }
     if let (Some(true), Some(t)) = (sm.rate_is_the_limit, sm.max_period_s) {
@@ -1149,6 +1191,22 @@ mod tests {
     /// `d = 9`: `d* = 8.8537 m`, `eps* = -1.7487` (what the simulation settles on, tested in
     /// tests/scenario/sampled.rs). The loop is checked there: curvature `1/d*`, slope
     /// `0.1 F(d*)`, and stable.
+    #[test]
+    fn printed_kp_interval_ends_are_rounded_inwards() {
+        // The review's case: 0.6435443639... rounded to 0.6435 fell below the interval.
+        assert_eq!(round_sig_text(0.6435443639879408, true), "0.64355");
+        assert_eq!(round_sig_text(0.6435443639879408, false), "0.64354");
+        assert_eq!(round_sig_text(13.548751, false), "13.548");
+        assert_eq!(round_sig_text(13.548751, true), "13.549");
+        assert_eq!(round_sig_text(29623.4, false), "29623");
+        assert_eq!(round_sig_text(0.010612345, true), "0.010613");
+        let set = [[0.6435443639879408, 6.681712]];
+        assert_eq!(kp_intervals_text(&set), "[0.64355, 6.6817]");
+        assert_eq!(nearest_kp_text(set[0][0], &set), "0.64355");
+        assert_eq!(nearest_kp_text(set[0][1], &set), "6.6817");
+        assert_eq!(kp_intervals_text(&[]), "none");
+    }
+
     #[test]
     fn curvature_and_the_p_law_orbit() {
         let sc = |text: &str, sets: &[&str]| {
