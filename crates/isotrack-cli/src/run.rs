@@ -271,7 +271,18 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
 /// The sampled loop's lines of `isotrack check`: the radius at the isoline's slopes and over the
 /// tube, the stable `kp` set, the rate, and the discrete loop's margins.
 fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
-    let f = |x: Option<f64>| x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.6}"));
+    let f = |x: Option<f64>| {
+        x.map_or_else(
+            || "n/a".to_string(),
+            |v| {
+                if v.abs() < 1e4 {
+                    format!("{v:.6}")
+                } else {
+                    format!("{v:.6e}")
+                }
+            },
+        )
+    };
     let range = |r: Option<[f64; 2]>| {
         r.map_or_else(|| "n/a".to_string(), |[a, b]| format!("{a:.4} .. {b:.4}"))
     };

@@ -15,10 +15,13 @@
 //!   conditions. The bound is reported as applying (`bound_applies`) only when the conditions
 //!   hold, the start's heading is in the proposition's sector and the sampled loop is stable.
 //! * Sampled (every scenario with the PI-like law): the loop linearised about the isoline at the
-//!   sensor's period ([`sampled`], docs/SAMPLED.md), worst over the slopes found in the tube.
-//! * `verdict`: `fails` when a necessary local condition fails (the sampled loop, or Prop. 1's
-//!   exact condition), `holds` when a guarantee applies (Prop. 1 exact and the sampled loop
-//!   stable, or Prop. 2's bound), `not_applicable` otherwise.
+//!   sensor's period ([`sampled`], docs/SAMPLED.md), worst over the isoline's own slopes (exact
+//!   on circular fields) and, reported separately, over the tube's.
+//! * `verdict`: `fails` when a necessary local condition fails (the sampled loop on the
+//!   isoline, or Prop. 1's exact condition), `holds` when a guarantee applies (Prop. 1 exact and
+//!   the sampled loop stable, or Prop. 2's bound) and the sensor has no effect the checks leave
+//!   out, `not_applicable` otherwise (stable on the isoline but not over the tube is "not
+//!   guaranteed", never `fails`).
 
 pub mod baselines;
 mod lattice;
@@ -862,7 +865,7 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
     let radius = |r: Option<f64>| {
         r.map_or_else(
             || "no equilibrium".to_string(),
-            |r| format!("spectral radius {r:.4}"),
+            |r| format!("spectral radius {}", fmt_radius(r)),
         )
     };
     if sm.stable == Some(false) {
@@ -934,6 +937,16 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
         Verdict::NotApplicable,
         format!("no guarantee: {why}; nothing checked fails"),
     )
+}
+
+/// A spectral radius for a sentence: 4 decimals, or 4 significant digits in scientific notation
+/// from 1e4 up (an unstable loop's radius can be astronomically large).
+fn fmt_radius(r: f64) -> String {
+    if r.abs() < 1e4 {
+        format!("{r:.4}")
+    } else {
+        format!("{r:.4e}")
+    }
 }
 
 /// The sensor's effects the checks leave out, each with what it does to a guarantee: the
@@ -1064,8 +1077,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     };
     Some(format!(
         "the loop sampled at {rate} Hz is unstable (spectral radius {}): {fix}",
-        sm.spectral_radius
-            .map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
+        sm.spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
     ))
 }
 
@@ -1096,7 +1108,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
             (Some(true), Some(true)) => {}
             (Some(true), _) => w.push(format!(
                 "the sampled loop is stable on the isoline but not over the whole tube (spectral radius {})",
-                sampled.tube_spectral_radius.map_or_else(|| "inf".into(), |r| format!("{r:.4}"))
+                sampled.tube_spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
             )),
             (Some(false), _) => w.push("the sampled loop is unstable".into()),
             (None, _) => w.push("the sampled loop was not computed".into()),
