@@ -24,7 +24,7 @@ fn default_suite() -> Result<PathBuf, Failure> {
     }
     if let Ok(exe) = std::env::current_exe() {
         for up in exe.ancestors().skip(1).take(4) {
-            let p = up.join(&rel);
+            let p = up.join(rel);
             if p.is_file() {
                 return Ok(p);
             }
