@@ -4,9 +4,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --locked -p isotrack-cli
-out=out/standard-v1
+out=out/standard-v2
 rm -rf "$out"
-target/release/isotrack benchmark suites/standard-v1.toml --out "$out" >/dev/null
+target/release/isotrack benchmark suites/standard-v2.toml --out "$out" >/dev/null
 awk -v board="$out/leaderboard.md" '
   /<!-- leaderboard:begin -->/ { print; while ((getline line < board) > 0) print line; skip = 1; next }
   /<!-- leaderboard:end -->/ { skip = 0 }

@@ -41,7 +41,7 @@ fn main() {
         .nth(1)
         .map(PathBuf::from)
         .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../suites/standard-v1.toml")
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../suites/standard-v2.toml")
         });
     let suite = match Suite::load(&suite_path) {
         Ok(s) => s,
@@ -51,8 +51,9 @@ fn main() {
         }
     };
     let mut registry = Registry::builtin();
-    // The one registration line: a name and a factory from the run's scenario.
-    registry.register("tanh_pd", |s: &Scenario| {
+    // The one registration line: a name and a factory from the run's scenario (a built-in
+    // law's name, an empty one or one with '|' is refused).
+    let registered = registry.register("tanh_pd", |s: &Scenario| {
         Box::new(TanhPd {
             level: s.level(),
             kp: 2.0,
@@ -61,6 +62,10 @@ fn main() {
             prev: None,
         }) as Box<dyn IsolineController + Send>
     });
+    if let Err(e) = registered {
+        eprintln!("error: {e}");
+        std::process::exit(64);
+    }
     let opts = Options {
         controllers: Some(vec!["pi_isoline".into(), "tanh_pd".into()]),
         ..Options::default()

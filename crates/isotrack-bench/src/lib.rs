@@ -21,7 +21,7 @@ pub mod score;
 pub mod suite;
 pub mod tune;
 
-pub use registry::{ControllerFactory, Entrant, Registry};
+pub use registry::{check_name, ControllerFactory, Entrant, NameError, Registry};
 pub use run::{run_benchmark, BenchError, BenchResult, Options, TaskResult};
-pub use score::{Score, ScoreContext};
-pub use suite::{Suite, SuiteError, Task};
+pub use score::{Score, ScoreContext, Scoring};
+pub use suite::{Seg, Suite, SuiteError, Task};

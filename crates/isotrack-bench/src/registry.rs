@@ -15,11 +15,23 @@
 //! }
 //!
 //! let mut registry = Registry::builtin();
-//! registry.register("my_proportional", |s: &isotrack_scenario::Scenario| {
-//!     Box::new(Proportional { level: s.level(), k: 0.5 }) as Box<dyn IsolineController + Send>
-//! });
+//! registry
+//!     .register("my_proportional", |s: &isotrack_scenario::Scenario| {
+//!         Box::new(Proportional { level: s.level(), k: 0.5 }) as Box<dyn IsolineController + Send>
+//!     })
+//!     .expect("a name of its own");
 //! assert!(registry.get("my_proportional").is_some());
+//! // A built-in law's name is refused: its row would show your scores.
+//! let copy = |s: &isotrack_scenario::Scenario| {
+//!     Box::new(Proportional { level: s.level(), k: 0.5 }) as Box<dyn IsolineController + Send>
+//! };
+//! assert!(registry.register("pi_isoline", copy).is_err());
 //! ```
+//!
+//! A name must be usable as a leaderboard row ([`check_name`]): not empty, at most
+//! [`MAX_NAME_CHARS`] characters, no leading or trailing whitespace, no `|`, line break or
+//! control character (they break the Markdown table and the CSV), and not a built-in law's name
+//! in any case (`PI_Isoline` would pass for `pi_isoline`).
 //!
 //! The factory gets each run's scenario (its level `s_d`, turn-rate limit, ... but never the
 //! vehicle's position: the controller itself sees only the measurements). The benchmark clips its
@@ -74,11 +86,19 @@ impl Registry {
         }
     }
 
-    /// Registers (or replaces) a controller under `name`.
-    pub fn register(&mut self, name: &str, factory: impl ControllerFactory + 'static) {
+    /// Registers a controller under `name`, replacing one registered before under the same
+    /// name. Refuses a name [`check_name`] refuses (a built-in law's, an empty one, one that
+    /// breaks the leaderboard's Markdown or CSV): the registry is then unchanged.
+    pub fn register(
+        &mut self,
+        name: &str,
+        factory: impl ControllerFactory + 'static,
+    ) -> Result<(), NameError> {
+        check_name(name)?;
         self.entries.retain(|(n, _)| n != name);
         self.entries
             .push((name.to_string(), Entrant::Custom(Arc::new(factory))));
+        Ok(())
     }
 
     /// The controller named `name`.
@@ -99,6 +119,54 @@ impl Registry {
             .map(|(n, _)| n.as_str())
             .collect()
     }
+}
+
+/// The longest name a registered controller may have, characters.
+pub const MAX_NAME_CHARS: usize = 64;
+
+/// Why a name cannot be registered ([`Registry::register`], [`check_name`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum NameError {
+    /// The name is empty.
+    #[error("controller name is empty: give your controller a name for its leaderboard row")]
+    Empty,
+    /// The name is a built-in law's (compared ignoring case).
+    #[error("controller name {0:?} is the name of the built-in law {1:?}: the leaderboard would show your scores as the built-in law's; choose another name")]
+    Builtin(String, &'static str),
+    /// The name is longer than [`MAX_NAME_CHARS`].
+    #[error("controller name of {0} characters: at most {max}", max = MAX_NAME_CHARS)]
+    TooLong(usize),
+    /// The name holds a character that breaks a leaderboard table.
+    #[error("controller name {0:?} contains {1:?}: names are rows of Markdown and CSV tables; use no '|', line breaks or control characters")]
+    BadChar(String, char),
+    /// The name starts or ends with whitespace (it would pass for another name).
+    #[error("controller name {0:?} starts or ends with whitespace")]
+    Whitespace(String),
+}
+
+/// Checks a name for a registered controller: what [`Registry::register`] refuses.
+pub fn check_name(name: &str) -> Result<(), NameError> {
+    let n = name.chars().count();
+    if n == 0 {
+        return Err(NameError::Empty);
+    }
+    if n > MAX_NAME_CHARS {
+        return Err(NameError::TooLong(n));
+    }
+    let breaks = |c: char| c == '|' || c.is_control() || c == '\u{2028}' || c == '\u{2029}';
+    if let Some(c) = name.chars().find(|&c| breaks(c)) {
+        return Err(NameError::BadChar(name.to_string(), c));
+    }
+    if name.trim() != name {
+        return Err(NameError::Whitespace(name.to_string()));
+    }
+    if let Some(k) = ControllerKind::ALL
+        .iter()
+        .find(|k| k.name().eq_ignore_ascii_case(name))
+    {
+        return Err(NameError::Builtin(name.to_string(), k.name()));
+    }
+    Ok(())
 }
 
 /// A registered controller behind the turn-rate limit of its run (the built-in laws' output

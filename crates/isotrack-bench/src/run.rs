@@ -2,12 +2,12 @@
 //! the scoring seeds, and the pictures of each task.
 
 use crate::registry::{Clipped, Entrant, Registry};
-use crate::score::{score, Score, ScoreContext};
-use crate::suite::{seed_overrides, Suite, Task};
+use crate::score::{score, Score, ScoreContext, Scoring};
+use crate::suite::{seed_overrides, task_path, Seg, Suite, SuiteError, Task};
 use crate::tune::tune;
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
-use isotrack_scenario::{load_scenario, Scenario};
+use isotrack_scenario::{load_scenario, Assignment, ErrorLocation, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, RunResult, TraceRow, TraceSink};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -17,7 +17,8 @@ use std::path::Path;
 /// What went wrong running a benchmark.
 #[derive(Debug, thiserror::Error)]
 pub enum BenchError {
-    /// A task's scenario does not load (the message names the file, line and key).
+    /// A task's scenario file cannot be read (the message names the suite file and line
+    /// that names it).
     #[error("task {task}: {message}")]
     Task {
         /// The task id.
@@ -25,9 +26,17 @@ pub enum BenchError {
         /// Why.
         message: String,
     },
+    /// The suite cannot run as written: a task's scenario or overrides are invalid, or a run it
+    /// defines (a law with its recorded gains, a seed's `vary` draws) makes an invalid
+    /// scenario. Found before any run starts; located at the suite file's line.
+    #[error("{0}")]
+    Suite(SuiteError),
     /// A controller name that is not registered.
     #[error("unknown controller {0:?} (built in: pi_isoline, sliding_mode, sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference)")]
     UnknownController(String),
+    /// A controller named twice in [`Options::controllers`].
+    #[error("controller {0:?} is named twice")]
+    DuplicateController(String),
     /// Reading or writing results.
     #[error("{path}: {message}")]
     Io {
@@ -125,6 +134,9 @@ pub struct BenchResult {
     pub suite: String,
     /// Suite version.
     pub version: u32,
+    /// The score formula.
+    #[serde(default)]
+    pub scoring: Scoring,
     /// Controllers, in order.
     pub controllers: Vec<String>,
     /// Per task.
@@ -171,9 +183,12 @@ pub fn controllers_of(
             .chain(reg.custom_names().iter().map(|s| s.to_string()))
             .collect(),
     };
-    for n in &names {
+    for (i, n) in names.iter().enumerate() {
         if reg.get(n).is_none() {
             return Err(BenchError::UnknownController(n.clone()));
+        }
+        if names[..i].contains(n) {
+            return Err(BenchError::DuplicateController(n.clone()));
         }
     }
     Ok(names)
@@ -183,6 +198,10 @@ pub fn controllers_of(
 /// `progress(task_index, task_count, task_id)` is called as each task starts. Results do not
 /// depend on the thread count: every run is a pure function of its task, controller, gains and
 /// seed, and every mean is taken in a fixed order.
+///
+/// Before any run starts, every task's scenario is loaded and every run it defines is built
+/// ([`check_runs`]): a suite with an invalid run fails as a whole with
+/// [`BenchError::Suite`], never as runs scored 0.
 pub fn run_benchmark(
     suite: &Suite,
     reg: &Registry,
@@ -190,13 +209,19 @@ pub fn run_benchmark(
     progress: &(dyn Fn(usize, usize, &str) + Sync),
 ) -> Result<BenchResult, BenchError> {
     let controllers = controllers_of(suite, reg, o)?;
+    let bases = suite
+        .tasks
+        .iter()
+        .map(|t| task_base(suite, t))
+        .collect::<Result<Vec<_>, _>>()?;
+    check_runs(suite, reg, &controllers, &bases, o.tune)?;
     let mut tasks = Vec::with_capacity(suite.tasks.len());
-    for (i, task) in suite.tasks.iter().enumerate() {
+    for (i, (task, base)) in suite.tasks.iter().zip(bases).enumerate() {
         if o.cancelled() {
             return Err(BenchError::Interrupted);
         }
         progress(i, suite.tasks.len(), &task.id);
-        tasks.push(run_task(suite, task, reg, &controllers, o)?);
+        tasks.push(run_task(suite, task, base, reg, &controllers, o)?);
     }
     let mut overall: Vec<(String, f64)> = controllers
         .iter()
@@ -213,6 +238,7 @@ pub fn run_benchmark(
     Ok(BenchResult {
         suite: suite.name.clone(),
         version: suite.version,
+        scoring: suite.scoring,
         controllers,
         tasks,
         overall,
@@ -220,24 +246,159 @@ pub fn run_benchmark(
 }
 
 /// The task's base scenario: its file with the task's overrides, recording no trace (the
-/// scores need none).
+/// scores need none). Errors name the suite file's line of the task's `scenario` (or of the
+/// `set` entry at fault) and the scenario file's own line.
 pub fn task_base(suite: &Suite, task: &Task) -> Result<Scenario, BenchError> {
     let mut sets = task.set.clone();
     sets.push("output.record_rate_hz=0.0".into());
-    load_scenario(Some(&suite.scenario_path(task)), &sets).map_err(|e| BenchError::Task {
-        task: task.id.clone(),
-        message: e.to_string(),
+    let ti = suite
+        .tasks
+        .iter()
+        .position(|t| t.id == task.id)
+        .unwrap_or(0);
+    load_scenario(Some(&suite.scenario_path(task)), &sets).map_err(|e| {
+        let scenario_line = suite.error_at(&task_path(ti, &["scenario"]), String::new());
+        match &e {
+            ScenarioError::Io { .. } => BenchError::Task {
+                task: task.id.clone(),
+                message: format!("{scenario_line}{e}"),
+            },
+            ScenarioError::Invalid(issues) => {
+                // An issue at a `set` entry is located there, anything else at `scenario`.
+                let set_at = issues.iter().find_map(|i| match &i.location {
+                    ErrorLocation::Override { arg } => task.set.iter().position(|s| s == arg),
+                    _ => None,
+                });
+                let path = match set_at {
+                    Some(j) => {
+                        let mut p = task_path(ti, &["set"]);
+                        p.push(Seg::Index(j));
+                        p
+                    }
+                    None => task_path(ti, &["scenario"]),
+                };
+                BenchError::Suite(suite.error_at(&path, format!("task {}: {e}", task.id)))
+            }
+        }
     })
+}
+
+/// Builds every run the suite defines for `controllers` before any runs (the recorded gains of
+/// each built-in law, each scoring seed's draws, and each tuning seed's when `tuning`): the
+/// first that makes an invalid scenario is a [`BenchError::Suite`] located at the suite key
+/// it comes from (the `[task.tuned.LAW]` gain, the `vary` key, the task's `scenario`).
+/// `bases` are the tasks' [`task_base`]s, in order.
+pub fn check_runs(
+    suite: &Suite,
+    reg: &Registry,
+    controllers: &[String],
+    bases: &[Scenario],
+    tuning: bool,
+) -> Result<(), BenchError> {
+    let seeds: Vec<u64> = suite
+        .scoring_seeds
+        .iter()
+        .chain(suite.tuning_seeds.iter().filter(|_| tuning))
+        .copied()
+        .collect();
+    for (ti, (task, base)) in suite.tasks.iter().zip(bases).enumerate() {
+        for c in controllers {
+            let Some(entrant) = reg.get(c) else {
+                return Err(BenchError::UnknownController(c.clone()));
+            };
+            let gains = task.tuned.get(c);
+            for &seed in &seeds {
+                if let Err(e) = prepare(base, task, entrant, gains, seed) {
+                    return Err(BenchError::Suite(locate_run_error(
+                        suite, ti, c, entrant, gains, seed, &e,
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where in the suite file a run's problem comes from, and what it is.
+fn locate_run_error(
+    suite: &Suite,
+    ti: usize,
+    controller: &str,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+    e: &ScenarioError,
+) -> SuiteError {
+    let task = &suite.tasks[ti];
+    let assignments = run_assignments(task, entrant, gains, seed);
+    let n_gains = match entrant {
+        Entrant::Builtin(_) => gains.map_or(0, |g| g.len()),
+        Entrant::Custom(_) => 0,
+    };
+    let issue = e.issues().first();
+    let at = issue.and_then(|i| match &i.location {
+        ErrorLocation::Assigned { label } => assignments.iter().position(|a| &a.label == label),
+        _ => None,
+    });
+    let (path, what) = match at {
+        Some(j) if j < n_gains => {
+            let (k, v) = gains
+                .and_then(|g| g.iter().nth(j))
+                .map_or((String::new(), f64::NAN), |(k, v)| (k.clone(), *v));
+            (
+                task_path(ti, &["tuned", controller, &k]),
+                format!("tuned {controller}.{k} = {v:?}"),
+            )
+        }
+        Some(j) if j < n_gains + task.vary.len() => {
+            let k = task
+                .vary
+                .keys()
+                .nth(j - n_gains)
+                .cloned()
+                .unwrap_or_default();
+            (
+                task_path(ti, &["vary", &k]),
+                format!("{controller}, seed {seed}: vary {}", assignments[j].arg),
+            )
+        }
+        Some(_) => (
+            vec![Seg::Key("scoring_seeds".into())],
+            format!("{controller}, seed {seed}"),
+        ),
+        None => (
+            task_path(ti, &["scenario"]),
+            format!("{controller}, seed {seed}"),
+        ),
+    };
+    let why = match issue {
+        Some(i) => {
+            let more = e.issues().len() - 1;
+            let key = i
+                .key
+                .as_deref()
+                .map(|k| format!("`{k}`: "))
+                .unwrap_or_default();
+            let more = if more > 0 {
+                format!(" (and {more} more)")
+            } else {
+                String::new()
+            };
+            format!("{key}{}{more}", i.message)
+        }
+        None => e.to_string(),
+    };
+    suite.error_at(&path, format!("task {}, {what}: {why}", task.id))
 }
 
 fn run_task(
     suite: &Suite,
     task: &Task,
+    base: Scenario,
     reg: &Registry,
     controllers: &[String],
     o: &Options,
 ) -> Result<TaskResult, BenchError> {
-    let base = task_base(suite, task)?;
     let mut gains: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     for c in controllers {
         if let Some(Entrant::Builtin(kind)) = reg.get(c) {
@@ -245,7 +406,7 @@ fn run_task(
                 return Err(BenchError::Interrupted);
             }
             let g = if o.tune {
-                tune(&base, task, *kind, &suite.tuning_seeds)
+                tune(&base, task, *kind, &suite.tuning_seeds, suite.scoring)
             } else {
                 task.tuned.get(c).cloned().unwrap_or_default()
             };
@@ -268,7 +429,8 @@ fn run_task(
         .par_iter()
         .map(|(c, seed)| {
             let entrant = reg.get(c).expect("checked by controllers_of");
-            (!o.cancelled()).then(|| scored_run(&base, task, c, entrant, gains.get(*c), *seed))
+            (!o.cancelled())
+                .then(|| scored_run(&base, task, c, entrant, gains.get(*c), *seed, suite.scoring))
         })
         .collect::<Option<_>>()
         .ok_or(BenchError::Interrupted)?;
@@ -326,8 +488,41 @@ pub fn run_overrides(
     o
 }
 
-/// Runs one (task, controller, seed) into `sink`: the scenario, and its result (`Err` with the
-/// message when the overrides make an invalid scenario).
+/// [`run_overrides`] as assignments labelled `task ID: KEY=VALUE`, in the same order.
+fn run_assignments(
+    task: &Task,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+) -> Vec<Assignment> {
+    let origin = format!("task {}", task.id);
+    run_overrides(task, entrant, gains, seed)
+        .into_iter()
+        .map(|a| Assignment::new(a, &origin))
+        .collect()
+}
+
+/// The scenario of one (task, controller, seed): the task's base flown by the controller (a
+/// built-in law switched in with its gains), with the seed's draws and `sim.seed`.
+pub fn prepare(
+    base: &Scenario,
+    task: &Task,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+) -> Result<Scenario, ScenarioError> {
+    let flown = match entrant {
+        Entrant::Builtin(kind) => base.with_controller_kind(*kind)?,
+        Entrant::Custom(_) => base.clone(),
+    };
+    flown.derive_with(
+        &run_assignments(task, entrant, gains, seed),
+        &format!("task {}", task.id),
+    )
+}
+
+/// Runs one (task, controller, seed) into `sink`: the scenario ([`prepare`]), and its result
+/// (`Err` with the message when the overrides make an invalid scenario).
 pub fn run_one<S: TraceSink + ?Sized>(
     base: &Scenario,
     task: &Task,
@@ -336,18 +531,7 @@ pub fn run_one<S: TraceSink + ?Sized>(
     seed: u64,
     sink: &mut S,
 ) -> Result<(Scenario, RunResult), String> {
-    let flown = match entrant {
-        Entrant::Builtin(kind) => base
-            .with_controller_kind(*kind)
-            .map_err(|e| e.to_string())?,
-        Entrant::Custom(_) => base.clone(),
-    };
-    let s = flown
-        .derive(
-            &run_overrides(task, entrant, gains, seed),
-            &format!("task {}", task.id),
-        )
-        .map_err(|e| e.to_string())?;
+    let s = prepare(base, task, entrant, gains, seed).map_err(|e| e.to_string())?;
     let r = match entrant {
         Entrant::Builtin(_) => s.run(sink),
         Entrant::Custom(f) => {
@@ -361,13 +545,14 @@ pub fn run_one<S: TraceSink + ?Sized>(
     Ok((s, r))
 }
 
-/// The score context of a run of `s`.
-pub fn context(s: &Scenario, task: &Task) -> ScoreContext {
+/// The score context of a run of `s`, scored by `scoring`.
+pub fn context(s: &Scenario, task: &Task, scoring: Scoring) -> ScoreContext {
     let plan = s.plan();
     ScoreContext {
         steady_start_s: plan.steady_state_start_step as f64 * plan.dt_s,
         length_m: task.length_m,
         speed_mps: s.start_speed_mps(s.start()),
+        scoring,
     }
 }
 
@@ -378,6 +563,7 @@ fn scored_run(
     entrant: &Entrant,
     gains: Option<&BTreeMap<String, f64>>,
     seed: u64,
+    scoring: Scoring,
 ) -> RunRow {
     match run_one(base, task, entrant, gains, seed, &mut NoTrace) {
         Ok((s, r)) => {
@@ -392,7 +578,7 @@ fn scored_run(
                 track_losses: m.track_losses,
                 control_effort: m.control_effort,
                 steady_state_rms_error: m.steady_state_rms_error,
-                score: score(&r, &context(&s, task)),
+                score: score(&r, &context(&s, task, scoring)),
             }
         }
         Err(_) => RunRow {
@@ -536,7 +722,10 @@ fn task_digest(
     let mut h = Sha256::new();
     h.update(env!("CARGO_PKG_VERSION"));
     h.update(toml::to_string(task).unwrap_or_default());
-    h.update(format!("{:?}{:?}", suite.scoring_seeds, controllers));
+    h.update(format!(
+        "{:?}{:?}{:?}",
+        suite.scoring_seeds, controllers, suite.scoring
+    ));
     h.update(serde_json::to_string(gains).unwrap_or_default());
     if let Ok(t) = isotrack_fields::io::read_limited(
         &suite.scenario_path(task),

@@ -2,7 +2,8 @@
 //!
 //! ```toml
 //! name = "standard"
-//! version = 1
+//! version = 2
+//! scoring = 2                                    # the score formula (docs/BENCHMARK.md)
 //! controllers = ["pi_isoline", "sliding_mode"]   # the built-in laws it scores
 //! tuning_seeds = [9001, 9002, 9003]              # gains are tuned on these ...
 //! scoring_seeds = [1, 2, 3, 4, 5]                # ... and scored on these (disjoint)
@@ -22,7 +23,16 @@
 //! Run `seed` of a task: the scenario with the task's `set`, the controller and its tuned gains,
 //! each `vary` key drawn from a ChaCha8 stream seeded by `seed` (keys in sorted order), and
 //! `sim.seed = seed` (sensor noise, gusts, dropouts).
+//!
+//! A suite is checked as a whole before anything runs: [`Suite::parse`] refuses what the file
+//! alone shows (no or duplicate controllers, unknown laws, duplicate seeds, task ids that differ
+//! only in case, a `vary` or `set` of `sim.seed`, gains for a law that is not built in), and
+//! [`run_benchmark`](crate::run_benchmark) refuses every run its scenarios cannot make (invalid or
+//! misspelt gains, `vary` keys that are not scenario keys or draw invalid values) before the
+//! first run starts. Each error names the suite file, line and column of the key.
 
+use crate::score::Scoring;
+use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::sweep::Dist;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -30,6 +40,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
 
 /// Suite files larger than this are refused (a suite is a page of text).
 pub const MAX_SUITE_FILE_BYTES: u64 = 1 << 20;
@@ -97,6 +108,10 @@ pub struct Suite {
     pub name: String,
     /// Its version: results of different versions do not compare.
     pub version: u32,
+    /// The score formula ([`Scoring`]): `1` the original one, `2` (the default) the one that
+    /// gives nothing for holding an isoline that was never captured.
+    #[serde(default)]
+    pub scoring: Scoring,
     /// What it measures.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<String>,
@@ -112,9 +127,60 @@ pub struct Suite {
     /// The directory the suite file is in (scenario paths are relative to it).
     #[serde(skip)]
     pub dir: PathBuf,
-    /// The file's text (for the results' digest).
+    /// The file's text (for the results' digest, and to locate errors).
     #[serde(skip)]
     pub text: String,
+    /// The suite file as named in errors.
+    #[serde(skip)]
+    pub origin: String,
+}
+
+/// One step of the path to a key of a suite file: a key, or an index into an array (of values
+/// or of `[[task]]` tables).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Seg {
+    /// A key.
+    Key(String),
+    /// An array index.
+    Index(usize),
+}
+
+/// The path `task[i].rest...`.
+pub(crate) fn task_path(i: usize, rest: &[&str]) -> Vec<Seg> {
+    let mut p = vec![Seg::Key("task".into()), Seg::Index(i)];
+    p.extend(rest.iter().map(|k| Seg::Key(k.to_string())));
+    p
+}
+
+/// 1-based line and column of the key at `path` in TOML `text` (of its deepest part found: a
+/// table's header when the key itself is missing), `None` if the text does not parse.
+pub(crate) fn locate_in(text: &str, path: &[Seg]) -> Option<(usize, usize)> {
+    let doc = DeTable::parse(text).ok()?;
+    let mut table: &DeTable<'_> = doc.get_ref();
+    let mut value: Option<&toml::Spanned<DeValue<'_>>> = None;
+    let mut found: Option<std::ops::Range<usize>> = None;
+    for seg in path {
+        let next = match (seg, value.map(|v| v.get_ref())) {
+            (Seg::Key(k), None | Some(DeValue::Table(_))) => {
+                if let Some(DeValue::Table(t)) = value.map(|v| v.get_ref()) {
+                    table = t;
+                }
+                table
+                    .iter()
+                    .find(|(key, _)| key.get_ref().as_ref() == k.as_str())
+                    .map(|(key, v)| (key.span(), v))
+            }
+            (Seg::Index(i), Some(DeValue::Array(a))) => a.get(*i).map(|v| (v.span(), v)),
+            _ => None,
+        };
+        let Some((span, v)) = next else { break };
+        // An element of an array of tables spans nothing useful: keep its first key's place.
+        if !(matches!(v.get_ref(), DeValue::Table(_)) && matches!(seg, Seg::Index(_))) {
+            found = Some(span);
+        }
+        value = Some(v);
+    }
+    found.map(|s| line_col(text, s.start))
 }
 
 /// 1-based line and column of a byte offset.
@@ -126,6 +192,15 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 }
 
 impl Suite {
+    /// A [`SuiteError`] at the key `path` of this suite's file.
+    pub fn error_at(&self, path: &[Seg], message: String) -> SuiteError {
+        SuiteError {
+            path: self.origin.clone(),
+            location: locate_in(&self.text, path),
+            message,
+        }
+    }
+
     /// Reads and checks a suite file.
     pub fn load(path: &Path) -> Result<Self, SuiteError> {
         let err = |message: String| SuiteError {
@@ -159,69 +234,84 @@ impl Suite {
         })?;
         suite.dir = dir.to_path_buf();
         suite.text = text.to_string();
-        suite.check().map_err(|message| SuiteError {
-            path: name.to_string(),
-            location: None,
-            message,
-        })?;
+        suite.origin = name.to_string();
+        suite
+            .check()
+            .map_err(|(path, message)| suite.error_at(&path, message))?;
         Ok(suite)
     }
 
-    fn check(&self) -> Result<(), String> {
+    /// What the file alone shows to be wrong: the message and the path of the key.
+    fn check(&self) -> Result<(), (Vec<Seg>, String)> {
+        let top = |k: &str| vec![Seg::Key(k.into())];
+        let at = |k: &str, i: usize| vec![Seg::Key(k.into()), Seg::Index(i)];
         if self.tasks.is_empty() {
-            return Err("the suite has no [[task]]".into());
+            return Err((vec![], "the suite has no [[task]]".into()));
         }
-        if self.scoring_seeds.is_empty() {
-            return Err("scoring_seeds is empty".into());
-        }
-        if let Some(s) = self
-            .tuning_seeds
-            .iter()
-            .find(|s| self.scoring_seeds.contains(s))
-        {
-            return Err(format!(
-                "seed {s} is both a tuning and a scoring seed: the two sets must be disjoint, or the scores measure the tuning"
+        if self.controllers.is_empty() {
+            return Err((
+                top("controllers"),
+                "controllers is empty: name the built-in laws the suite scores".into(),
             ));
         }
-        let mut ids = std::collections::BTreeSet::new();
-        for t in &self.tasks {
-            let ok = !t.id.is_empty()
-                && t.id.len() <= 64
-                && t.id
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
-            if !ok {
-                return Err(format!(
-                    "task id {:?}: use 1-64 letters, digits, '-' or '_'",
-                    clip(&t.id)
+        // Sets, not pairwise scans: a 1 MiB file can hold 10^5 seeds.
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, c) in self.controllers.iter().enumerate() {
+            if ControllerKind::from_name(c).is_none() {
+                return Err((
+                    at("controllers", i),
+                    format!(
+                        "controllers: {:?} is not a built-in law ({})",
+                        clip(c),
+                        builtin_names()
+                    ),
                 ));
             }
-            if !ids.insert(t.id.as_str()) {
-                return Err(format!("task id {:?} appears twice", t.id));
-            }
-            if !(t.length_m.is_finite() && t.length_m > 0.0) {
-                return Err(format!(
-                    "task {}: length_m must be finite and > 0, got {}",
-                    t.id, t.length_m
+            if !seen.insert(c.as_str()) {
+                return Err((
+                    at("controllers", i),
+                    format!("controllers: {c:?} appears twice"),
                 ));
             }
-            for (k, d) in &t.vary {
-                let [a, b] = match d {
-                    DistSpec::Uniform(v) | DistSpec::Normal(v) => *v,
-                };
-                let bad = match d {
-                    DistSpec::Uniform(_) => !(a.is_finite() && b.is_finite() && a <= b),
-                    DistSpec::Normal(_) => !(a.is_finite() && b.is_finite() && b >= 0.0),
-                };
-                if bad {
-                    return Err(format!("task {}: vary {k}: bad distribution {d:?}", t.id));
-                }
+        }
+        if self.scoring_seeds.is_empty() {
+            return Err((top("scoring_seeds"), "scoring_seeds is empty".into()));
+        }
+        for key in ["tuning_seeds", "scoring_seeds"] {
+            let seeds = if key == "tuning_seeds" {
+                &self.tuning_seeds
+            } else {
+                &self.scoring_seeds
+            };
+            let mut seen = std::collections::BTreeSet::new();
+            if let Some(i) = (0..seeds.len()).find(|&i| !seen.insert(seeds[i])) {
+                return Err((
+                    at(key, i),
+                    format!(
+                        "{key}: seed {} appears twice (a repeated seed is the same run counted again)",
+                        seeds[i]
+                    ),
+                ));
             }
-            for (c, gains) in &t.tuned {
-                if let Some((k, v)) = gains.iter().find(|(_, v)| !v.is_finite()) {
-                    return Err(format!("task {}: tuned {c}.{k} = {v} is not finite", t.id));
-                }
-            }
+        }
+        let tuning: std::collections::BTreeSet<u64> = self.tuning_seeds.iter().copied().collect();
+        if let Some(i) =
+            (0..self.scoring_seeds.len()).find(|&i| tuning.contains(&self.scoring_seeds[i]))
+        {
+            return Err((
+                at("scoring_seeds", i),
+                format!(
+                    "seed {} is both a tuning and a scoring seed: the two sets must be disjoint, or the scores measure the tuning",
+                    self.scoring_seeds[i]
+                ),
+            ));
+        }
+        // Task ids by their lower case, to the first task with it.
+        let mut ids: BTreeMap<String, usize> = BTreeMap::new();
+        for (i, t) in self.tasks.iter().enumerate() {
+            let earlier = ids.get(&t.id.to_ascii_lowercase()).map(|&j| &self.tasks[j]);
+            check_task(i, t, earlier)?;
+            ids.insert(t.id.to_ascii_lowercase(), i);
         }
         Ok(())
     }
@@ -244,6 +334,112 @@ impl Suite {
         out.push_str(&body);
         out
     }
+}
+
+/// The built-in law names, for messages.
+fn builtin_names() -> String {
+    ControllerKind::ALL
+        .iter()
+        .map(|k| k.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The checks of task `i` that need no scenario; `earlier` is a task before it whose id is the
+/// same ignoring case, if any.
+fn check_task(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg>, String)> {
+    let ok = !t.id.is_empty()
+        && t.id.len() <= 64
+        && t.id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_');
+    if !ok {
+        return Err((
+            task_path(i, &["id"]),
+            format!(
+                "task id {:?}: use 1-64 letters, digits, '-' or '_'",
+                clip(&t.id)
+            ),
+        ));
+    }
+    // Ids name directories (`tasks/ID`): on a case-insensitive file system two ids that
+    // differ only in case would share one.
+    if let Some(o) = earlier {
+        let what = if o.id == t.id {
+            format!("task id {:?} appears twice", t.id)
+        } else {
+            format!(
+                "task id {:?} differs from task id {:?} only in case: ids name directories, which a case-insensitive file system would merge",
+                t.id, o.id
+            )
+        };
+        return Err((task_path(i, &["id"]), what));
+    }
+    if !(t.length_m.is_finite() && t.length_m > 0.0) {
+        return Err((
+            task_path(i, &["length_m"]),
+            format!(
+                "task {}: length_m must be finite and > 0, got {}",
+                t.id, t.length_m
+            ),
+        ));
+    }
+    let seed_note = "every run's sim.seed is its seed (tuning_seeds, scoring_seeds)";
+    if let Some(j) = t.set.iter().position(|a| {
+        a.split_once('=')
+            .is_some_and(|(k, _)| k.trim() == "sim.seed")
+    }) {
+        return Err((
+            vec![
+                Seg::Key("task".into()),
+                Seg::Index(i),
+                Seg::Key("set".into()),
+                Seg::Index(j),
+            ],
+            format!("task {}: set sim.seed has no effect: {seed_note}", t.id),
+        ));
+    }
+    for (k, d) in &t.vary {
+        if k.trim() == "sim.seed" {
+            return Err((
+                task_path(i, &["vary", k]),
+                format!("task {}: vary sim.seed: {seed_note}", t.id),
+            ));
+        }
+        let [a, b] = match d {
+            DistSpec::Uniform(v) | DistSpec::Normal(v) => *v,
+        };
+        let bad = match d {
+            DistSpec::Uniform(_) => !(a.is_finite() && b.is_finite() && a <= b),
+            DistSpec::Normal(_) => !(a.is_finite() && b.is_finite() && b >= 0.0),
+        };
+        if bad {
+            return Err((
+                task_path(i, &["vary", k]),
+                format!("task {}: vary {}: bad distribution {d:?}", t.id, clip(k)),
+            ));
+        }
+    }
+    for (c, gains) in &t.tuned {
+        if ControllerKind::from_name(c).is_none() {
+            return Err((
+                task_path(i, &["tuned", c]),
+                format!(
+                    "task {}: tuned gains for {:?}, which is not a built-in law ({}): only the built-in laws run with recorded gains",
+                    t.id,
+                    clip(c),
+                    builtin_names()
+                ),
+            ));
+        }
+        if let Some((k, v)) = gains.iter().find(|(_, v)| !v.is_finite()) {
+            return Err((
+                task_path(i, &["tuned", c, k]),
+                format!("task {}: tuned {c}.{} = {v} is not finite", t.id, clip(k)),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The overrides a seed draws for a task's `vary` keys (sorted keys, one ChaCha8 stream per

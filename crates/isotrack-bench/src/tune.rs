@@ -9,7 +9,7 @@
 
 use crate::registry::Entrant;
 use crate::run::{context, run_one};
-use crate::score::score;
+use crate::score::{score, Scoring};
 use crate::suite::Task;
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::Scenario;
@@ -56,12 +56,14 @@ fn resolved(s: &Scenario, key: &str) -> Option<f64> {
     v.get("controller")?.get(key)?.as_float()
 }
 
-/// Tunes `kind` on `task` over `seeds`: the gains to record (`KEY = value`).
+/// Tunes `kind` on `task` over `seeds`, by the score formula `scoring`: the gains to record
+/// (`KEY = value`).
 pub fn tune(
     base: &Scenario,
     task: &Task,
     kind: ControllerKind,
     seeds: &[u64],
+    scoring: Scoring,
 ) -> BTreeMap<String, f64> {
     let entrant = Entrant::Builtin(kind);
     let mut gains: BTreeMap<String, f64> = BTreeMap::new();
@@ -82,7 +84,7 @@ pub fn tune(
             .par_iter()
             .map(
                 |seed| match run_one(base, task, &entrant, Some(g), *seed, &mut NoTrace) {
-                    Ok((s, r)) => score(&r, &context(&s, task)).total,
+                    Ok((s, r)) => score(&r, &context(&s, task, scoring)).total,
                     Err(_) => f64::NEG_INFINITY,
                 },
             )

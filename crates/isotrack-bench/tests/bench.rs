@@ -1,10 +1,11 @@
-//! The benchmark: the score formula by hand, suite errors, seed draws, determinism over thread
-//! counts, a registered controller on the same footing as the built-in laws, and the tuning.
+//! The benchmark: the score formulas by hand, suite errors, seed draws, determinism over thread
+//! counts, a registered controller on the same footing as the built-in laws (and the names it
+//! may not take), and the tuning.
 
 use isotrack_bench::run::{context, run_one, task_base};
-use isotrack_bench::score::{score, ScoreContext};
+use isotrack_bench::score::{score, ScoreContext, Scoring};
 use isotrack_bench::suite::seed_overrides;
-use isotrack_bench::{run_benchmark, Entrant, Options, Registry, Suite};
+use isotrack_bench::{run_benchmark, BenchError, Entrant, NameError, Options, Registry, Suite};
 use isotrack_core::IsolineController;
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_sim::{NoTrace, Outcome, RunMetrics, RunResult};
@@ -16,10 +17,16 @@ fn scenarios() -> PathBuf {
 
 /// Two short tasks, two laws, one tuning seed and two scoring seeds.
 fn mini_suite(extra: &str) -> Suite {
+    mini_suite_with("", extra)
+}
+
+/// [`mini_suite`] with `head` among the top-level keys and `first` in the first task.
+fn mini_suite_with(head: &str, first: &str) -> Suite {
     let text = format!(
         r#"
 name = "mini"
 version = 1
+{head}
 controllers = ["pi_isoline", "sliding_mode"]
 tuning_seeds = [11]
 scoring_seeds = [1, 2]
@@ -31,6 +38,7 @@ scenario = "paper-fig2b-circular.toml"
 set = ["sim.duration_s=60.0", "sensor.rate_hz=10.0", "controller.max_turn_rate_radps=1.0"]
 length_m = 6.93
 vary = {{ "initial.x_m" = {{ uniform = [8.0, 12.0] }}, "initial.heading_rad" = {{ uniform = [-3.0, 3.0] }} }}
+{first}
 
 [[task]]
 id = "plumes"
@@ -38,7 +46,6 @@ title = "Gaussian plumes"
 scenario = "gaussian-plumes-pm25.toml"
 set = ["sim.duration_s=60.0", "controller.max_turn_rate_radps=1.0"]
 length_m = 15.9
-{extra}
 "#
     );
     Suite::parse(&text, "mini.toml", &scenarios()).unwrap()
@@ -74,16 +81,22 @@ fn metrics() -> RunMetrics {
     }
 }
 
-/// The documented formula, by hand: capture 1 - 60/240 = 0.75, band 0.8, distance
+/// The context of the hand-worked scores: steady window from 240 s, L = 5 m, v = 0.5 m/s.
+fn ctx(scoring: Scoring) -> ScoreContext {
+    ScoreContext {
+        steady_start_s: 240.0,
+        length_m: 5.0,
+        speed_mps: 0.5,
+        scoring,
+    }
+}
+
+/// The documented formula 1, by hand: capture 1 - 60/240 = 0.75, band 0.8, distance
 /// 1/(1 + 0.5/5) = 10/11, losses 1/2, effort: mean omega^2 = 20/300, w_ref^2 = (0.5/5)^2 = 0.01,
 /// so 0.01/(1/15) = 0.15.
 #[test]
 fn score_is_the_documented_formula() {
-    let ctx = ScoreContext {
-        steady_start_s: 240.0,
-        length_m: 5.0,
-        speed_mps: 0.5,
-    };
+    let ctx = ctx(Scoring::V1);
     let s = score(&result(metrics(), Outcome::Completed, 300.0), &ctx);
     let parts = [0.75, 0.8, 10.0 / 11.0, 0.5, 0.15];
     for (got, want) in s.parts.iter().zip(parts) {
@@ -103,18 +116,120 @@ fn score_is_the_documented_formula() {
     }
 }
 
+/// The metrics of a law that never came near the isoline: no convergence, never in the band,
+/// so no track loss either; it barely turns (effort 1/300 rad^2/s over 300 s, within
+/// w_ref^2 = 0.01); its steady RMS distance is 5 m = L.
+fn never_captured() -> RunMetrics {
+    RunMetrics {
+        convergence_time_s: None,
+        time_in_band_fraction: Some(0.0),
+        track_losses: 0,
+        control_effort: 1.0,
+        steady_state_rms_isoline_distance_m: Some(5.0),
+        ..metrics()
+    }
+}
+
+/// Formula 1 paid a law that never captured the isoline: distance 1/(1 + 5/5) = 1/2, losses
+/// 1/(1 + 0) = 1, effort 1, so 100 * (0.3/2 + 0.1 + 0.1) = 35. Formula 2 scales distance,
+/// losses and effort by held = band = 0: the score is 0.
+#[test]
+fn formula_2_gives_nothing_for_an_isoline_never_captured() {
+    let r = result(never_captured(), Outcome::Completed, 300.0);
+    let v1 = score(&r, &ctx(Scoring::V1));
+    assert!((v1.total - 35.0).abs() < 1e-9, "{v1:?}");
+    assert_eq!(v1.parts, [0.0, 0.0, 0.5, 1.0, 1.0]);
+    let v2 = score(&r, &ctx(Scoring::V2));
+    assert_eq!(v2.total, 0.0, "{v2:?}");
+    assert_eq!(v2.parts, [0.0; 5]);
+}
+
+/// A good run that converged at t = 0: capture 1, band 1, distance 10/11 (0.5 m at L = 5 m),
+/// no loss, effort 0.15 (as in the formula-1 test): formula 2 gives exactly formula 1's
+/// 100 * (0.2 + 0.3 + 0.3*10/11 + 0.1 + 0.1*0.15) = 89.77... (held = 1 once converged); so it does
+/// for a run that converged later (t_c = 60 s, band 0.8, one loss).
+#[test]
+fn formula_2_equals_formula_1_once_converged() {
+    let good = RunMetrics {
+        convergence_time_s: Some(0.0),
+        time_in_band_fraction: Some(1.0),
+        track_losses: 0,
+        ..metrics()
+    };
+    let r = result(good, Outcome::Completed, 300.0);
+    let want = 100.0 * (0.2 + 0.3 + 0.3 * 10.0 / 11.0 + 0.1 + 0.1 * 0.15);
+    for scoring in [Scoring::V1, Scoring::V2] {
+        let s = score(&r, &ctx(scoring));
+        assert!((s.total - want).abs() < 1e-9, "{scoring:?} {s:?}");
+    }
+    let later = result(metrics(), Outcome::Completed, 300.0);
+    assert_eq!(
+        score(&later, &ctx(Scoring::V1)),
+        score(&later, &ctx(Scoring::V2))
+    );
+}
+
+/// Not converged but in the band for 40 % of the steady window, one track loss: formula 2 pays
+/// distance, losses and effort at 40 %: parts [0, 0.4, 0.4*10/11, 0.4*0.5, 0.4*0.15].
+#[test]
+fn formula_2_scales_the_holding_parts_by_the_band_share() {
+    let m = RunMetrics {
+        convergence_time_s: None,
+        time_in_band_fraction: Some(0.4),
+        ..metrics()
+    };
+    let s = score(&result(m, Outcome::Completed, 300.0), &ctx(Scoring::V2));
+    let want = [0.0, 0.4, 0.4 * 10.0 / 11.0, 0.4 * 0.5, 0.4 * 0.15];
+    for (got, w) in s.parts.iter().zip(want) {
+        assert!((got - w).abs() < 1e-12, "{:?}", s.parts);
+    }
+    let total = 100.0 * (0.3 * 0.4 + 0.4 * (0.3 * 10.0 / 11.0 + 0.1 * 0.5 + 0.1 * 0.15));
+    assert!((s.total - total).abs() < 1e-9);
+}
+
+/// The PI-like law with kp = 1e-9 and ki = 0 barely turns (|omega| <= 1e-9 * |eps|), so it
+/// drives almost straight away from the isoline and never holds it. Run through the benchmark:
+/// formula 1 pays it at least the effort part, 10 (its mean omega^2 is far below w_ref^2); formula
+/// 2 scores it about 0 on every seed.
+#[test]
+fn a_law_that_never_captures_scores_about_0_with_formula_2() {
+    let run = |scoring: i64| {
+        let suite = mini_suite_with(
+            &format!("scoring = {scoring}"),
+            "[task.tuned.pi_isoline]\nkp = 1e-9\nki = 0.0\n",
+        );
+        let opts = Options {
+            controllers: Some(vec!["pi_isoline".into()]),
+            ..Options::default()
+        };
+        run_benchmark(&suite, &Registry::builtin(), &opts, &|_, _, _| {}).unwrap()
+    };
+    let (v1, v2) = (run(1), run(2));
+    assert_eq!((v1.scoring, v2.scoring), (Scoring::V1, Scoring::V2));
+    let circ1 = &v1.tasks[0];
+    assert_eq!(circ1.gains["pi_isoline"]["kp"], 1e-9);
+    for row in &circ1.runs {
+        assert_eq!(row.outcome, "completed");
+        assert_eq!(row.convergence_time_s, None);
+        assert!(row.score.total >= 10.0, "{row:?}");
+    }
+    for row in &v2.tasks[0].runs {
+        assert!(row.score.total < 1.0, "{row:?}");
+    }
+}
+
 #[test]
 fn suite_errors_are_located_and_seeds_disjoint() {
     let dir = scenarios();
     let e = Suite::parse(
-        "name = \"x\"\nversion = 1\ncontrollers = []\ntuning_seeds = [1]\nscoring_seeds = [2]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\nspeed = 3\n",
+        "name = \"x\"\nversion = 1\ncontrollers = [\"pid\"]\ntuning_seeds = [1]\nscoring_seeds = [2]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\nspeed = 3\n",
         "bad.toml",
         &dir,
     )
     .unwrap_err();
     assert_eq!(e.location.map(|l| l.0), Some(11), "{e}");
     assert!(e.to_string().starts_with("bad.toml:11:"), "{e}");
-    let overlap = "name = \"x\"\nversion = 1\ncontrollers = []\ntuning_seeds = [1, 2]\nscoring_seeds = [2, 3]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\n";
+    let overlap = "name = \"x\"\nversion = 1\ncontrollers = [\"pid\"]\ntuning_seeds = [1, 2]\nscoring_seeds = [2, 3]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\n";
     let e = Suite::parse(overlap, "o.toml", &dir).unwrap_err();
     assert!(
         e.message
@@ -191,7 +306,8 @@ fn a_registered_controller_is_scored_like_the_builtin_laws() {
     let mut reg = Registry::builtin();
     reg.register("my_copy", |s: &isotrack_scenario::Scenario| {
         Box::new(s.controller()) as Box<dyn IsolineController + Send>
-    });
+    })
+    .unwrap();
     let opts = Options {
         controllers: Some(vec!["pi_isoline".into(), "my_copy".into()]),
         ..Options::default()
@@ -200,6 +316,7 @@ fn a_registered_controller_is_scored_like_the_builtin_laws() {
     for t in &r.tasks {
         assert_eq!(t.scores[0].1, t.scores[1].1, "task {}", t.id);
         assert!(t.gains.contains_key("pi_isoline") && !t.gains.contains_key("my_copy"));
+        assert!(t.runs.iter().all(|r| r.outcome == "completed"));
     }
     assert_eq!(r.controllers, ["pi_isoline", "my_copy"]);
     // The suite's own list plus every registered controller by default.
@@ -226,13 +343,13 @@ fn tuning_never_worsens_the_tuning_score() {
             .iter()
             .map(|s| {
                 let (sc, r) = run_one(&base, task, &e, g, *s, &mut NoTrace).unwrap();
-                score(&r, &context(&sc, task)).total
+                score(&r, &context(&sc, task, Scoring::V2)).total
             })
             .sum::<f64>()
             / seeds.len() as f64
     };
     for kind in [ControllerKind::PiIsoline, ControllerKind::SlidingMode] {
-        let tuned = isotrack_bench::tune::tune(&base, task, kind, seeds);
+        let tuned = isotrack_bench::tune::tune(&base, task, kind, seeds, Scoring::V2);
         assert_eq!(tuned.keys().map(|k| k.as_str()).collect::<Vec<_>>(), {
             let mut k = isotrack_bench::tune::tuned_keys(kind).to_vec();
             k.sort();
@@ -256,4 +373,193 @@ fn tuning_never_worsens_the_tuning_score() {
         isotrack_bench::tune::candidates("alpha_star", 0.5),
         [0.5, 0.25, 1.0, 0.125]
     );
+}
+
+/// A one-task suite over the circular scenario: `top` lines after `name`, then the task with
+/// `task` lines after its `length_m`. Line numbers: `name` is line 1, `top` starts at line 2.
+fn one_task(top: &str, task: &str) -> String {
+    format!(
+        "name = \"x\"\n{top}\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"paper-fig2b-circular.toml\"\nset = [\"sim.duration_s=20.0\"]\nlength_m = 6.93\n{task}"
+    )
+}
+
+const TOP: &str =
+    "version = 1\ncontrollers = [\"pi_isoline\", \"pid\"]\ntuning_seeds = [7]\nscoring_seeds = [1, 2]";
+
+fn parse_err(text: &str) -> isotrack_bench::SuiteError {
+    Suite::parse(text, "s.toml", &scenarios()).unwrap_err()
+}
+
+/// What the file alone shows is refused at its line: no controllers, a law named twice or not
+/// built in, a seed twice, ids equal ignoring case, `vary`/`set` of `sim.seed`, gains for a law
+/// that is not built in.
+#[test]
+fn suite_checks_name_the_line() {
+    let cases: [(String, usize, &str); 9] = [
+        (
+            one_task(&TOP.replace("[\"pi_isoline\", \"pid\"]", "[]"), ""),
+            3,
+            "controllers is empty",
+        ),
+        (
+            one_task(&TOP.replace("\"pid\"]", "\"pi_isoline\"]"), ""),
+            3,
+            "\"pi_isoline\" appears twice",
+        ),
+        (
+            one_task(&TOP.replace("\"pid\"]", "\"my_law\"]"), ""),
+            3,
+            "\"my_law\" is not a built-in law",
+        ),
+        (
+            one_task(&TOP.replace("[1, 2]", "[1, 2, 1]"), ""),
+            5,
+            "scoring_seeds: seed 1 appears twice",
+        ),
+        (
+            one_task(&TOP.replace("[7]", "[7, 7]"), ""),
+            4,
+            "tuning_seeds: seed 7 appears twice",
+        ),
+        (
+            one_task(TOP, "vary = { \"sim.seed\" = { uniform = [0.0, 9.0] } }\n"),
+            12,
+            "vary sim.seed",
+        ),
+        (
+            one_task(TOP, "").replace("\"sim.duration_s=20.0\"", "\"sim.seed=3\""),
+            10,
+            "set sim.seed has no effect",
+        ),
+        (
+            one_task(TOP, "[task.tuned.my_law]\nkp = 1.0\n"),
+            12,
+            "tuned gains for \"my_law\", which is not a built-in law",
+        ),
+        (
+            one_task(TOP, "")
+                + "[[task]]\nid = \"A\"\ntitle = \"b\"\nscenario = \"paper-fig2b-circular.toml\"\nlength_m = 1.0\n",
+            13,
+            "task id \"A\" differs from task id \"a\" only in case",
+        ),
+    ];
+    for (text, line, says) in cases {
+        let e = parse_err(&text);
+        assert_eq!(e.location.map(|l| l.0), Some(line), "{e}\n{text}");
+        assert!(e.to_string().starts_with(&format!("s.toml:{line}:")), "{e}");
+        assert!(e.message.contains(says), "{e}");
+    }
+    // A valid one parses; `scoring` takes 1 or 2 only.
+    let ok = Suite::parse(&one_task(TOP, ""), "s.toml", &scenarios()).unwrap();
+    assert_eq!(ok.scoring, Scoring::V2);
+    let e = parse_err(&one_task(&format!("{TOP}\nscoring = 3"), ""));
+    assert_eq!(e.location.map(|l| l.0), Some(6), "{e}");
+    assert!(e.message.contains("the score formulas are 1 and 2"), "{e}");
+}
+
+/// What only the scenario shows is refused before any run, at the suite key it comes from: a
+/// gain out of range or misspelt (at the gain's line), a `vary` key that is not a scenario key
+/// or draws invalid values (at the `vary` key's line), a `set` entry (at its line).
+#[test]
+fn runs_the_scenario_refuses_fail_the_suite_at_their_line() {
+    let run = |text: &str| {
+        let suite = Suite::parse(text, "s.toml", &scenarios()).unwrap();
+        match run_benchmark(
+            &suite,
+            &Registry::builtin(),
+            &Options::default(),
+            &|_, _, _| panic!("a run started"),
+        ) {
+            Err(BenchError::Suite(e)) => e,
+            other => panic!("{:?}", other.map(|r| r.overall)),
+        }
+    };
+    let cases: [(String, usize, &str); 6] = [
+        (
+            one_task(TOP, "[task.tuned.pi_isoline]\nkp = -5.0\nki = 1.0\n"),
+            13,
+            "tuned pi_isoline.kp = -5.0: `controller.kp`",
+        ),
+        (
+            one_task(TOP, "[task.tuned.pid]\nkd = 1.0\nkpp = 2.0\n"),
+            14,
+            "tuned pid.kpp = 2.0",
+        ),
+        (
+            one_task(
+                TOP,
+                "vary = { \"initial.heading\" = { uniform = [0.0, 1.0] } }\n",
+            ),
+            12,
+            "vary initial.heading=",
+        ),
+        (
+            one_task(
+                TOP,
+                "[task.vary.\"sensor.rate_hz\"]\nuniform = [-2.0, -1.0]\n",
+            ),
+            12,
+            "`sensor.rate_hz`",
+        ),
+        (
+            one_task(TOP, "").replace("\"sim.duration_s=20.0\"", "\"sim.duration_s=-1.0\""),
+            10,
+            "task a: ",
+        ),
+        (
+            one_task(TOP, "").replace("\"sim.duration_s=20.0\"", "\"sim.durations=1.0\""),
+            10,
+            "sim.durations",
+        ),
+    ];
+    for (text, line, says) in cases {
+        let e = run(&text);
+        assert_eq!(e.location.map(|l| l.0), Some(line), "{e}\n{text}");
+        assert!(e.to_string().starts_with(&format!("s.toml:{line}:")), "{e}");
+        assert!(e.message.contains(says), "{e}");
+    }
+}
+
+/// A registered controller may not take a built-in law's name (its row would replace the law's),
+/// an empty name, or one that breaks the Markdown table or CSV; the registry is then unchanged.
+#[test]
+fn registry_refuses_names_that_would_lie() {
+    let make = |s: &isotrack_scenario::Scenario| {
+        Box::new(s.controller()) as Box<dyn IsolineController + Send>
+    };
+    let mut reg = Registry::builtin();
+    let names_before = reg.names().len();
+    let long = "x".repeat(65);
+    let cases: [(&str, NameError); 9] = [
+        (
+            "pi_isoline",
+            NameError::Builtin("pi_isoline".into(), "pi_isoline"),
+        ),
+        ("PID", NameError::Builtin("PID".into(), "pid")),
+        ("", NameError::Empty),
+        ("a|b", NameError::BadChar("a|b".into(), '|')),
+        ("a\nb", NameError::BadChar("a\nb".into(), '\n')),
+        ("a\u{7}", NameError::BadChar("a\u{7}".into(), '\u{7}')),
+        (
+            "a\u{2028}b",
+            NameError::BadChar("a\u{2028}b".into(), '\u{2028}'),
+        ),
+        (" mine", NameError::Whitespace(" mine".into())),
+        (&long, NameError::TooLong(65)),
+    ];
+    for (name, want) in cases {
+        assert_eq!(reg.register(name, make), Err(want), "{name:?}");
+    }
+    assert_eq!(reg.names().len(), names_before);
+    assert!(matches!(reg.get("pi_isoline"), Some(Entrant::Builtin(_))));
+    // The messages say what was wrong.
+    let e = reg.register("pi_isoline", make).unwrap_err().to_string();
+    assert!(e.contains("built-in law \"pi_isoline\""), "{e}");
+    let e = reg.register("a|b", make).unwrap_err().to_string();
+    assert!(e.contains("'|'") && e.contains("Markdown"), "{e}");
+    // A name of its own (64 characters, Unicode) is fine, and registering it again replaces it.
+    let ok = "é".repeat(64);
+    reg.register(&ok, make).unwrap();
+    reg.register(&ok, make).unwrap();
+    assert_eq!(reg.custom_names(), [ok.as_str()]);
 }

@@ -12,16 +12,19 @@ fn fail(code: u8, message: String) -> Failure {
     Failure { code, message }
 }
 
-/// Where the bundled standard suite is: `suites/standard-v1.toml` under the working directory,
-/// else under the repository the binary was built in (`target/<profile>/isotrack`).
+/// The bundled standard suite, relative to the repository.
+pub const STANDARD_SUITE: &str = "suites/standard-v2.toml";
+
+/// Where the bundled standard suite is: [`STANDARD_SUITE`] under the working directory, else
+/// under the repository the binary was built in (`target/<profile>/isotrack`).
 fn default_suite() -> Result<PathBuf, Failure> {
-    let rel = Path::new("suites").join("standard-v1.toml");
+    let rel = Path::new(STANDARD_SUITE);
     if rel.is_file() {
-        return Ok(rel);
+        return Ok(rel.to_path_buf());
     }
     if let Ok(exe) = std::env::current_exe() {
         for up in exe.ancestors().skip(1).take(4) {
-            let p = up.join(&rel);
+            let p = up.join(rel);
             if p.is_file() {
                 return Ok(p);
             }
@@ -29,13 +32,15 @@ fn default_suite() -> Result<PathBuf, Failure> {
     }
     Err(fail(
         exit::NOINPUT,
-        "no suite given and suites/standard-v1.toml not found here or beside the binary: run from the isotrack repository or pass the suite file".into(),
+        format!("no suite given and {STANDARD_SUITE} not found here or beside the binary: run from the isotrack repository or pass the suite file"),
     ))
 }
 
 fn bench_failure(e: BenchError) -> Failure {
     match e {
-        BenchError::UnknownController(_) => fail(exit::USAGE, e.to_string()),
+        BenchError::UnknownController(_) | BenchError::DuplicateController(_) => {
+            fail(exit::USAGE, e.to_string())
+        }
         BenchError::Io { .. } => fail(exit::CANTCREAT, e.to_string()),
         BenchError::Task { ref message, .. } if message.contains("No such file") => {
             fail(exit::NOINPUT, e.to_string())

@@ -45,7 +45,7 @@ pub enum Command {
     /// Interpolate scattered station values onto a grid (IDW or ordinary kriging) and write it
     /// as a CSV grid with a JSON sidecar.
     Interpolate(InterpolateArgs),
-    /// Run a benchmark suite (default: the bundled `suites/standard-v1.toml`): every controller
+    /// Run a benchmark suite (default: the bundled `suites/standard-v2.toml`): every controller
     /// on every task and scoring seed; writes `leaderboard.csv`, `leaderboard.md`, `index.html`
     /// and per-task results into DIR.
     Benchmark(BenchmarkArgs),
@@ -57,7 +57,7 @@ pub enum Command {
 /// `isotrack benchmark`.
 #[derive(Debug, Args)]
 pub struct BenchmarkArgs {
-    /// The suite file (default: `suites/standard-v1.toml` of this repository).
+    /// The suite file (default: `suites/standard-v2.toml` of this repository).
     pub suite: Option<PathBuf>,
     /// Output directory.
     #[arg(long, value_name = "DIR")]

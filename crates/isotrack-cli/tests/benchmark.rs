@@ -171,6 +171,66 @@ fn benchmark_exit_codes() {
     assert!(stderr(&o).contains("task a"), "{}", stderr(&o));
 }
 
+/// A one-task suite `NAME.toml` in `dir` (the circular scenario, 20 s) with `top` lines after
+/// `name` (line 1) and `task` lines after the task's `length_m` (line 11; `top` is 4 lines).
+fn one_task(dir: &Path, name: &str, top: &str, task: &str) -> String {
+    let scen = repo().join("scenarios/paper-fig2b-circular.toml");
+    write(
+        dir,
+        &format!("{name}.toml"),
+        &format!(
+            "name = \"x\"\n{top}\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"{}\"\nset = [\"sim.duration_s=20.0\"]\nlength_m = 6.93\n{task}",
+            scen.display()
+        ),
+    )
+}
+
+const TOP: &str =
+    "version = 1\ncontrollers = [\"pi_isoline\", \"pid\"]\ntuning_seeds = [7]\nscoring_seeds = [1, 2]";
+
+/// Issue 30 item 17: each of these suites used to exit 0 with every run `invalid_scenario` and
+/// score 0, or run a law twice, or count a seed twice; now each exits 65 naming the suite file,
+/// line and column, and nothing is written.
+#[test]
+fn benchmark_refuses_invalid_suites_at_their_line() {
+    let d = tempfile::tempdir().unwrap();
+    let second = "[[task]]\nid = \"A\"\ntitle = \"b\"\nscenario = \"s.toml\"\nlength_m = 1.0\n";
+    let cases: [(&str, String, &str, &str); 8] = [
+        ("kp", TOP.into(), "[task.tuned.pi_isoline]\nkp = -5.0\n", "kp.toml:13:1: task a, tuned pi_isoline.kp = -5.0: `controller.kp`: must be > 0"),
+        ("misspelt", TOP.into(), "[task.tuned.pid]\nkpp = 2.0\n", "misspelt.toml:13:1: task a, tuned pid.kpp = 2.0: `controller.kpp`: unknown field `kpp`"),
+        ("unknown_law", TOP.into(), "[task.tuned.my_law]\nkp = 2.0\n", "unknown_law.toml:12:13: task a: tuned gains for \"my_law\", which is not a built-in law"),
+        ("vary_seed", TOP.into(), "vary = { \"sim.seed\" = { uniform = [0.0, 9.0] } }\n", "vary_seed.toml:12:10: task a: vary sim.seed"),
+        ("no_controllers", TOP.replace("[\"pi_isoline\", \"pid\"]", "[]"), "", "no_controllers.toml:3:1: controllers is empty"),
+        ("twice", TOP.replace("\"pid\"]", "\"pi_isoline\"]"), "", "twice.toml:3:30: controllers: \"pi_isoline\" appears twice"),
+        ("seeds", TOP.replace("[1, 2]", "[1, 2, 2]"), "", "seeds.toml:5:24: scoring_seeds: seed 2 appears twice"),
+        ("ids", TOP.into(), second, "ids.toml:13:1: task id \"A\" differs from task id \"a\" only in case"),
+    ];
+    for (name, top, task, says) in cases {
+        let suite = one_task(d.path(), name, &top, task);
+        let out = d.path().join(format!("out-{name}"));
+        let o = isotrack(&["benchmark", &suite, "--out", out.to_str().unwrap()]);
+        assert_fails(&o, 65, &[says]);
+        assert!(!out.join("leaderboard.csv").exists(), "{name}");
+    }
+}
+
+/// A controller named twice on the command line is a usage error (64), not a doubled row.
+#[test]
+fn benchmark_refuses_a_controller_named_twice() {
+    let d = tempfile::tempdir().unwrap();
+    let suite = one_task(d.path(), "ok", TOP, "");
+    let out = d.path().join("o");
+    let o = isotrack(&[
+        "benchmark",
+        &suite,
+        "--out",
+        out.to_str().unwrap(),
+        "--controllers",
+        "pid,pid",
+    ]);
+    assert_fails(&o, 64, &["controller \"pid\" is named twice"]);
+}
+
 #[test]
 fn report_of_runs_and_its_errors() {
     let d = tempfile::tempdir().unwrap();

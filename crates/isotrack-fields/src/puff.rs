@@ -1,6 +1,20 @@
-//! A plume of puffs in wind: the filament/puff model of Farrell, Murlis, Long, Li & Carde,
+//! A plume of puffs in wind, after the filament/puff model of Farrell, Murlis, Long, Li & Carde,
 //! "Filament-based atmospheric dispersion model to achieve short time-scale structure of odor
-//! plumes", Environmental Fluid Mechanics 2 (2002), in 2-D.
+//! plumes", Environmental Fluid Mechanics 2 (2002), simplified to 2-D.
+//!
+//! What it leaves out of that model (and of its implementations such as pompy):
+//!
+//! * **Centre-relative dispersion.** There each puff also takes its own random walk about the
+//!   plume's centre line (pompy's `centre_rel_diff_scale`), which tears the plume into the
+//!   patchy filaments a real odour plume shows. Here a puff moves only with the wind, so puffs
+//!   stay in release order along one meandering ribbon, widening only by their Fickian growth.
+//! * **A spatially varying wind.** There the wind is a field over the domain (with its own
+//!   noise), so different parts of the plume move differently. Here one wind `u(t)`, uniform in
+//!   space, moves every puff at once: the whole plume sways together.
+//!
+//! Its long-run mean without meander is still the Gaussian plume of its own parameters (below,
+//! tested), but its intermittency and small-scale structure are weaker than in a real plume or
+//! in Farrell et al.'s: a tracker that copes here may still be defeated by real filaments.
 //!
 //! Puffs leave the source at `release_rate_hz`, each a Gaussian of mass `puff_mass` and width
 //! `sigma(a)^2 = sigma0^2 + 2 K a` at age `a` (Fickian growth, diffusivity `K`). All puffs are

@@ -10,7 +10,7 @@ pub fn benchmark_page(r: &BenchResult) -> String {
     let title = format!("isotrack benchmark: {} v{}", r.suite, r.version);
     let body = format!(
         r#"<h1>{t}</h1>
-<p class="sub">{n} controllers on {m} tasks. Score per run in [0, 100]: 100 &times; (0.20 capture + 0.30 in band + 0.30 isoline distance + 0.10 track losses + 0.10 effort), 0 for a run that leaves the field or diverges; a task's score is the mean over its scoring seeds, the overall score the mean over tasks. Click a column to sort.</p>
+<p class="sub">{n} controllers on {m} tasks. Score per run in [0, 100] (formula {v}): {f}, 0 for a run that leaves the field or diverges; a task's score is the mean over its scoring seeds, the overall score the mean over tasks. Click a column to sort.</p>
 <h2>Leaderboard</h2>
 <table id="leaderboard"></table>
 <div id="tasks"></div>
@@ -18,6 +18,8 @@ pub fn benchmark_page(r: &BenchResult) -> String {
         t = escape(&title),
         n = r.controllers.len(),
         m = r.tasks.len(),
+        v = i64::from(r.scoring),
+        f = escape(r.scoring.formula()),
     );
     page(&title, &body, &script_json(r), BENCH_JS)
 }

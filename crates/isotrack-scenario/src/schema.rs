@@ -97,8 +97,9 @@ pub enum FieldKind {
     /// Scattered station values (`path`, a CSV) interpolated onto a grid (IDW or ordinary
     /// kriging), then interpolated like a `grid`.
     Stations,
-    /// Puffs released at a source, carried by a meandering wind, growing by diffusion
-    /// (Farrell et al. 2002, in 2-D).
+    /// Puffs released at a source, carried by a meandering wind, growing by diffusion (after
+    /// Farrell et al. 2002, simplified: 2-D, one spatially uniform wind for every puff, no
+    /// centre-relative dispersion; see `isotrack_fields::puff`).
     PuffPlume,
 }
 

@@ -1,4 +1,17 @@
 //! The sensor: the only path from the world to a controller.
+//!
+//! Per simulation step `dt` the true value `x_k` passes through, in order: the sensing element's
+//! first-order lag, the transport delay, sampling at the rate, additive noise and bias drift,
+//! quantisation, the range, and dropouts ([`Sensor::observe`]).
+//!
+//! The lag (`time_constant_s = tau`) updates `y_k = y_{k-1} + (1 - exp(-dt/tau)) (x_k - y_{k-1})`:
+//! the exact solution of `y' = (x - y)/tau` when the input is held at `x_k` over the step, so a
+//! step input is followed exactly (`1 - exp(-t/tau)` at every step). It is not exact for an input
+//! that changes within a step: on a ramp `x = r t` it settles at a lag
+//! `x_k - y_k = r dt / (exp(dt/tau) - 1) = r (tau - dt/2 + dt^2/(12 tau) - ...)`, about
+//! `r (tau - dt/2)`, where the continuous lag is `r tau` (derived from the update: a constant lag
+//! `e` needs `e = (1 - a)(r dt + e)`, `a = 1 - exp(-dt/tau)`; tested). With `dt << tau` the
+//! difference, `r dt / 2`, is small: 0.005 r at the default `dt = 0.01 s`.
 
 use isotrack_core::Measurement;
 use rand::SeedableRng;
@@ -17,7 +30,9 @@ pub struct SensorConfig {
     pub delay_s: f64,
     /// First-order response time constant, s (0: instantaneous): the sensing element follows
     /// the true value by `y' = (x - y)/tau` (metal-oxide gas sensors: 10-30 s), integrated
-    /// exactly over each step (`y += (1 - exp(-dt/tau)) (x - y)`), starting settled.
+    /// over each step as `y += (1 - exp(-dt/tau)) (x - y)`, starting settled: exact for an input
+    /// held over the step; on a ramp of slope `r` it lags by `r (tau - dt/2)` (to first order in
+    /// `dt/tau`), not the continuous `r tau` (module docs).
     pub time_constant_s: f64,
     /// Output range `[min, max]` (saturation), field units.
     pub range: Option<[f64; 2]>,
@@ -545,6 +560,36 @@ mod tests {
         for (k, v) in got {
             let want = 1.0 - (-(k as f64 * 0.01) / 2.0).exp();
             assert!((v - want).abs() < 1e-12, "step {k}: {v} vs {want}");
+        }
+    }
+
+    /// The lag on a ramp `x_k = r k dt`, against the value derived by hand from the update
+    /// `y_k = y_{k-1} + a (x_k - y_{k-1})`, `a = 1 - exp(-dt/tau)`: a constant lag `e = x_k - y_k`
+    /// satisfies `e = (1 - a)(r dt + e)`, so `e = r dt (1 - a)/a = r dt / (exp(dt/tau) - 1)`,
+    /// whose expansion is `r (tau - dt/2 + dt^2/(12 tau) - ...)`. At dt = 0.1 s, tau = 0.3 s,
+    /// r = 2: e = 0.2/(e^(1/3) - 1) = 0.505545..., within r dt^2/(12 tau) = 0.00556 of
+    /// r (tau - dt/2) = 0.5 and 0.1 short of the continuous lag r tau = 0.6 (about r dt/2).
+    #[test]
+    fn first_order_lag_on_a_ramp_is_r_tau_minus_half_a_step() {
+        for (dt, tau, r) in [(0.1, 0.3, 2.0), (0.01, 2.0, 0.5)] {
+            let cfg = SensorConfig {
+                rate_hz: 1.0 / dt,
+                time_constant_s: tau,
+                ..SensorConfig::default()
+            };
+            let mut s = Sensor::new(cfg, dt, 1).unwrap();
+            // 60 time constants: the start's transient, (1 - a)^k = exp(-k dt/tau), is gone.
+            let steps = (60.0 * tau / dt) as u64;
+            let mut lag = f64::NAN;
+            for k in 0..=steps {
+                let x = r * k as f64 * dt;
+                lag = x - s.observe(k as f64 * dt, x).unwrap().value;
+            }
+            let exact = r * dt / ((dt / tau).exp() - 1.0);
+            assert!((lag - exact).abs() < 1e-9 * r * tau, "{lag} vs {exact}");
+            let first_order = r * (tau - dt / 2.0);
+            assert!((lag - first_order).abs() <= 1.01 * r * dt * dt / (12.0 * tau));
+            assert!(((r * tau - lag) - r * dt / 2.0).abs() <= 1.01 * r * dt * dt / (12.0 * tau));
         }
     }
 
