@@ -15,7 +15,7 @@ fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
 secs="${SECONDS_PER_TARGET:-60}"
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(scenario sweep grid stations series suite)
+[ ${#targets[@]} -eq 0 ] && targets=(scenario sweep grid stations series suite netcdf4)
 for t in "${targets[@]}"; do
   echo "== fuzzing $t for ${secs}s"
   mkdir -p "fuzz/corpus/$t"

@@ -82,7 +82,9 @@ pub(super) fn decode(bytes: &[u8], nx: usize, ny: usize) -> Result<Vec<f64>, Str
     let tiled = dec.get_chunk_type() == ChunkType::Tile;
     let (cw, ch) = dec.chunk_dimensions();
     let (cw, ch) = (cw as usize, ch as usize);
-    if cw == 0 || ch == 0 || cw.saturating_mul(ch) > crate::grid::MAX_NODES {
+    // A chunk's size is the header's claim too: no larger than the image or 2^24 pixels
+    // (GDAL's largest default tiles are 512 x 512), so a 2 x 2 image cannot ask for 2 GiB.
+    if cw == 0 || ch == 0 || cw.saturating_mul(ch) > (nx * ny).max(1 << 24) {
         return Err(format!("chunks of {cw} x {ch} pixels"));
     }
     let across = nx.div_ceil(cw);
