@@ -76,6 +76,31 @@ fn interpolation_grids_are_capped() {
         g.to_str().unwrap(),
     ]);
     assert_fails(&o, 64, &["--spacing-m", "at least 0.0"]);
+    // Issue 30 item 19: the smallest spacing is said in six significant digits at most (not
+    // `0.0024500000000000004`), rounded up, so the spacing it names is accepted.
+    let e = stderr(&o);
+    let least = e
+        .split("at least ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    let digits = least.trim_start_matches(['0', '.']).replace('.', "");
+    assert!(digits.len() <= 6, "{least}: {e}");
+    let o = isotrack(&[
+        "interpolate",
+        &st,
+        "--value-column",
+        "v",
+        "--spacing-m",
+        least,
+        "--method",
+        "idw",
+        "--out",
+        g.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{least}: {}", stderr(&o));
     let sc = write(
         d.path(),
         "sc.toml",

@@ -218,12 +218,17 @@ pub const MAX_STATION_FILE_BYTES: u64 = 256 << 20;
 pub const MAX_COORDINATE_M: f64 = 6.4e7;
 
 use crate::grid::MAX_ABS_VALUE;
+use isotrack_core::numtext::{Num, NumUp};
 
 /// Why station values could not be put on a grid.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StationGridError {
     /// The spacing makes more than [`MAX_INTERPOLATED_NODES`] nodes.
-    #[error("a spacing of {spacing_m} m makes {nodes:.3e} nodes over the stations' {width_m:.4} m x {height_m:.4} m; at most {max} are allowed: use a spacing of at least {min_spacing_m} m", max = MAX_INTERPOLATED_NODES)]
+    #[error(
+        "a spacing of {} m makes {} nodes over the stations' {} m x {} m; at most {max} are allowed: use a spacing of at least {} m",
+        Num(*.spacing_m), Num(*.nodes), Num(*.width_m), Num(*.height_m), NumUp(*.min_spacing_m),
+        max = MAX_INTERPOLATED_NODES
+    )]
     TooFine {
         /// The spacing asked for, m.
         spacing_m: f64,

@@ -492,10 +492,16 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
         InterpolationName::Bilinear => Interpolation::Bilinear,
         InterpolationName::Bicubic => Interpolation::Bicubic,
     };
-    let times: Option<Vec<f64>> = match (&f.frame_times_s, f.frame_interval_s, file_times) {
-        (Some(t), _, _) => Some(t.clone()),
-        (None, Some(dt), _) => Some((0..n).map(|k| k as f64 * dt).collect()),
-        (None, None, file) => file,
+    // Where the times come from, to blame the right key when they cannot make a series: a bad
+    // time axis read from a file is the file's (`field.path`), not a default's.
+    let (times, times_key, from_file) = match (&f.frame_times_s, f.frame_interval_s, file_times) {
+        (Some(t), _, _) => (Some(t.clone()), "field.frame_times_s", false),
+        (None, Some(dt), _) => (
+            Some((0..n).map(|k| k as f64 * dt).collect()),
+            "field.frame_interval_s",
+            false,
+        ),
+        (None, None, file) => (file, "field.path", true),
     };
     let times = match times {
         Some(t) => t,
@@ -536,6 +542,17 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
         f.time_scale.unwrap_or(1.0),
         after,
     )
-    .map_err(|e| issue("field.frame_times_s", e.to_string()))?;
+    .map_err(|e| {
+        let e = e.to_string();
+        let e = if from_file {
+            format!(
+                "the time axis read from {}: {e}",
+                f.path.as_deref().unwrap_or("the file")
+            )
+        } else {
+            e
+        };
+        issue(times_key, e)
+    })?;
     Ok(FieldModel::Series(Arc::new(series)))
 }

@@ -77,9 +77,13 @@ fn regular(values: &[f64]) -> Result<(f64, f64), String> {
 }
 
 /// Seconds per unit of a CF time `units` attribute (`hours since 2019-03-01 00:00:00`).
+/// The reference date must be a calendar date (`YYYY-MM-DD`, optionally a time `hh:mm:ss` and
+/// a zone): `hours since 99999999-99-99` is refused, not read as hours from nowhere.
 pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
     let unit = units.split_whitespace().next()?.to_ascii_lowercase();
-    if !units.to_ascii_lowercase().contains(" since ") {
+    let lower = units.to_ascii_lowercase();
+    let (_, reference) = lower.split_once(" since ")?;
+    if !cf_reference_date_ok(reference) {
         return None;
     }
     Some(match unit.as_str() {
@@ -89,6 +93,47 @@ pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
         "days" | "day" | "d" => 86_400.0,
         _ => return None,
     })
+}
+
+/// Whether a CF reference time (`1900-01-01`, `2019-03-01 00:00:00.0`, `1970-01-01T00:00:00Z`,
+/// `2000-1-1 0:0:0 UTC`) is a date of a calendar: year of 1 to 4 digits, month 1-12, day 1-31,
+/// and if given hour 0-24, minute 0-59, second 0-60 (leap second; fractions allowed). A zone
+/// after the time is not read.
+fn cf_reference_date_ok(reference: &str) -> bool {
+    let reference = reference.trim();
+    let (date, rest) = match reference.find([' ', 't']) {
+        Some(i) => (&reference[..i], reference[i + 1..].trim()),
+        None => (reference, ""),
+    };
+    let number = |s: &str, max_len: usize, lo: u32, hi: u32| {
+        !s.is_empty()
+            && s.len() <= max_len
+            && s.bytes().all(|b| b.is_ascii_digit())
+            && s.parse::<u32>().is_ok_and(|v| (lo..=hi).contains(&v))
+    };
+    let d: Vec<&str> = date.split('-').collect();
+    if !(d.len() == 3
+        && number(d[0], 4, 0, 9999)
+        && number(d[1], 2, 1, 12)
+        && number(d[2], 2, 1, 31))
+    {
+        return false;
+    }
+    let time = rest.split([' ', 'z', '+']).next().unwrap_or("");
+    if time.is_empty() {
+        return true;
+    }
+    let t: Vec<&str> = time.split(':').collect();
+    let second_ok = |s: &str| {
+        let whole = s.split('.').next().unwrap_or("");
+        number(whole, 2, 0, 60) && s.parse::<f64>().is_ok_and(|v| v < 61.0)
+    };
+    match t.as_slice() {
+        [h] => number(h, 2, 0, 24),
+        [h, m] => number(h, 2, 0, 24) && number(m, 2, 0, 59),
+        [h, m, s] => number(h, 2, 0, 24) && number(m, 2, 0, 59) && second_ok(s),
+        _ => false,
+    }
 }
 
 pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries, LoadError> {
@@ -609,6 +654,27 @@ mod tests {
         assert!(e.message.contains("3 frames"), "{e}");
         assert_eq!(cf_time_unit_s("days since 1970-01-01"), Some(86_400.0));
         assert_eq!(cf_time_unit_s("fortnights since 1970-01-01"), None);
+        // Issue 30 item 19: the reference must be a date.
+        for bad in [
+            "hours since 99999999-99-99",
+            "hours since 2019-13-01",
+            "hours since 2019-03-32",
+            "hours since 2019-03-01 25:00:00",
+            "hours since 2019-03-01 00:61:00",
+            "hours since yesterday",
+            "hours since ",
+        ] {
+            assert_eq!(cf_time_unit_s(bad), None, "{bad}");
+        }
+        for good in [
+            "hours since 1900-01-01 00:00:00.0",
+            "seconds since 1970-01-01T00:00:00Z",
+            "days since 2000-1-1 0:0:0 UTC",
+            "minutes since 2019-03-01 12:30",
+            "hours since 2019-03-01 00:00:00 +00:00",
+        ] {
+            assert!(cf_time_unit_s(good).is_some(), "{good}");
+        }
         assert_eq!(cf_time_unit_s("hours"), None);
     }
 

@@ -416,3 +416,43 @@ fn the_mean_plumes_isoline_ends_at_the_windows_edge() {
     let past = iso.distance(0.0, Vec2::new(x + 1.0, y)).unwrap();
     assert!((past - 1.0).abs() < 0.02, "{past}");
 }
+
+/// Issue 30 item 19: a time axis read from a file that cannot make a series (times not
+/// increasing) is blamed on the file (`field.path`, naming it), not on
+/// `field.frame_times_s (default value)`, which the scenario never set.
+#[test]
+fn a_bad_time_axis_in_a_file_is_the_files() {
+    use netcdf3::{DataSet, FileWriter, Version};
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("bad_times.nc");
+    let mut ds = DataSet::new();
+    ds.add_fixed_dim("time", 3).unwrap();
+    ds.add_fixed_dim("lat", 3).unwrap();
+    ds.add_fixed_dim("lon", 3).unwrap();
+    ds.add_var_f64("time", &["time"]).unwrap();
+    ds.add_var_attr_string("time", "units", "hours since 2019-03-01 00:00:00")
+        .unwrap();
+    ds.add_var_f64("lat", &["lat"]).unwrap();
+    ds.add_var_attr_string("lat", "units", "degrees_north")
+        .unwrap();
+    ds.add_var_f64("lon", &["lon"]).unwrap();
+    ds.add_var_attr_string("lon", "units", "degrees_east")
+        .unwrap();
+    ds.add_var_f64("v", &["time", "lat", "lon"]).unwrap();
+    let mut w = FileWriter::create_new(&path).unwrap();
+    w.set_def(&ds, Version::Classic, 0).unwrap();
+    w.write_var_f64("time", &[0.0, 2.0, 1.0]).unwrap();
+    w.write_var_f64("lat", &[50.0, 50.01, 50.02]).unwrap();
+    w.write_var_f64("lon", &[10.0, 10.01, 10.02]).unwrap();
+    w.write_var_f64("v", &(0..27).map(f64::from).collect::<Vec<_>>())
+        .unwrap();
+    w.close().unwrap();
+    let text = "[field]\nkind = \"grid\"\npath = \"bad_times.nc\"\nvariable = \"v\"\n[initial]\nx_m = 700.0\ny_m = 1100.0\n";
+    let e = isotrack_scenario::parse_scenario_in(text, "s.toml", &[], d.path())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`field.path`"), "{e}");
+    assert!(e.contains("bad_times.nc"), "{e}");
+    assert!(!e.contains("frame_times_s"), "{e}");
+    assert!(e.contains("the time axis read from"), "{e}");
+}
