@@ -19,19 +19,43 @@ mod report;
 pub use benchmark::benchmark_page;
 pub use report::{report_page, ReportError};
 
-/// Text escaped for HTML.
+/// Text escaped for HTML element content and quoted attribute values (`&`, `<`, `>`, `"`, `'`).
 pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+        .replace('\'', "&#39;")
 }
 
-/// JSON safe inside `<script>`: `</` cannot close the element.
+/// JSON safe inside `<script type="application/json">`: every `<`, `>` and `&` is written as
+/// `\u003c`, `\u003e`, `\u0026`, and U+2028 / U+2029 as `\u2028` / `\u2029`.
+///
+/// Escaping only `</` is not enough: `<!--` followed by `<script` puts the HTML parser in the
+/// "script data double escaped" state (WHATWG HTML, 13.2.5.20 ff.), where `</script>` no
+/// longer closes the element, so the data swallows the page's scripts. With no `<` left in
+/// the element's text no tag or comment can start in it. These characters occur in JSON only
+/// inside strings, where `\uXXXX` is the same character to `JSON.parse`, so the data is
+/// unchanged. (U+2028/9 are line terminators to pre-2019 JavaScript.)
 pub(crate) fn script_json<T: serde::Serialize>(v: &T) -> String {
-    serde_json::to_string(v)
-        .unwrap_or_else(|_| "null".into())
-        .replace("</", "<\\/")
+    let json = serde_json::to_string(v).unwrap_or_else(|_| "null".into());
+    escape_script_json(&json)
+}
+
+/// The escaping of [`script_json`] on JSON text.
+fn escape_script_json(json: &str) -> String {
+    let mut out = String::with_capacity(json.len() + json.len() / 16);
+    for c in json.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '>' => out.push_str("\\u003e"),
+            '&' => out.push_str("\\u0026"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The page shell: title, CSS, the data, the shared script, the page's script.
@@ -76,6 +100,7 @@ canvas { border: 1px solid #bbb; }
 #tooltip { position: fixed; pointer-events: none; background: rgba(20,20,20,0.85); color: #fff; padding: 3px 7px; border-radius: 3px; font-size: 0.85em; display: none; z-index: 10; }
 .charts svg { display: block; margin-bottom: 6px; }
 .note { color: #555; font-size: 0.88em; }
+.mapbox { max-width: 522px; }
 "##;
 
 /// Shared by both pages: the colour map, the heat map, the colours of controllers.
@@ -91,7 +116,8 @@ function viridis(u) {
 }
 const PALETTE = ["#e41a1c","#ff7f00","#f781bf","#a65628","#984ea3","#4daf4a","#377eb8","#999999","#00bcd4","#000000"];
 function colour(i) { return PALETTE[i % PALETTE.length]; }
-// The field as a heat map on a canvas: values n x n (row 0 at y_min), bounds [x0,y0,x1,y1].
+// The field as a heat map on a canvas: values n x n (row 0 at y_min), bounds [x0,y0,x1,y1],
+// coloured over pic.range [lo, hi] if given (else the values' own range).
 // Returns a function from metres to canvas pixels.
 function drawField(canvas, pic) {
   const ctx = canvas.getContext("2d"), W = canvas.width, H = canvas.height;
@@ -101,7 +127,8 @@ function drawField(canvas, pic) {
   const vals = pic.values.filter(v => v !== null && isFinite(v));
   if (vals.length > 0) {
     let lo = Infinity, hi = -Infinity;
-    for (const v of vals) { if (v < lo) lo = v; if (v > hi) hi = v; }
+    if (pic.range) [lo, hi] = pic.range;
+    else for (const v of vals) { if (v < lo) lo = v; if (v > hi) hi = v; }
     const n = pic.n, img = ctx.createImageData(n, n);
     for (let j = 0; j < n; j++) for (let i = 0; i < n; i++) {
       const v = pic.values[j * n + i], o = ((n - 1 - j) * n + i) * 4;
@@ -146,3 +173,52 @@ function el(tag, attrs, text) {
   return e;
 }
 "##;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hostile strings the pages must carry as data, not markup.
+    const HOSTILE: [&str; 8] = [
+        "<!--<script>",
+        "</script><script>alert(1)</script>",
+        "<img src=x onerror=alert(1)>",
+        "a\u{2028}b\u{2029}c",
+        "\"quotes\" 'single' `back`",
+        "]]> <![CDATA[",
+        "&amp; &lt; \\u003c \\",
+        "<\\/script>",
+    ];
+
+    /// No character that can start markup or end the element is left, and the JSON parses
+    /// back to exactly the input.
+    #[test]
+    fn script_json_leaves_no_markup_and_round_trips() {
+        for s in HOSTILE {
+            let v = serde_json::json!({ "name": s, "list": [s, s], s: 1.5 });
+            let j = script_json(&v);
+            for bad in ['<', '>', '&', '\u{2028}', '\u{2029}'] {
+                assert!(!j.contains(bad), "{bad:?} left in {j}");
+            }
+            let back: serde_json::Value = serde_json::from_str(&j).unwrap();
+            assert_eq!(back, v, "{j}");
+        }
+        // By hand: each character's escape.
+        assert_eq!(
+            escape_script_json("\"<!--<a&b>\u{2028}\u{2029}\""),
+            r#""\u003c!--\u003ca\u0026b\u003e\u2028\u2029""#
+        );
+        // An escaped backslash before `<` stays a backslash and a `<`.
+        let j = script_json(&"\\<");
+        assert_eq!(j, r#""\\\u003c""#);
+        assert_eq!(serde_json::from_str::<String>(&j).unwrap(), "\\<");
+    }
+
+    #[test]
+    fn escape_covers_content_and_both_quotes() {
+        assert_eq!(
+            escape("<a href='x' title=\"y\">&</a>"),
+            "&lt;a href=&#39;x&#39; title=&quot;y&quot;&gt;&amp;&lt;/a&gt;"
+        );
+    }
+}

@@ -1,7 +1,11 @@
 //! `isotrack report`: runs as one interactive page.
 
 use crate::{escape, page, script_json};
+use isotrack_bench::run::FieldPicture;
+use isotrack_core::{ScalarField, Vec2};
+use isotrack_fields::isoline::IsolineSegments;
 use isotrack_plot::{PlotError, RunData};
+use isotrack_scenario::Scenario;
 use serde::Serialize;
 use std::path::Path;
 
@@ -19,8 +23,17 @@ pub enum ReportError {
 /// Points per run kept in a page (a longer trace is thinned evenly; the last row is kept).
 pub const MAX_POINTS: usize = 5000;
 
-/// Samples per side of the heat map.
+/// Samples per side of the heat map of a field that does not move.
 const GRID: usize = 120;
+
+/// Frames of a field that moves, evenly over the run (the first at t = 0, the last at its end).
+pub const FRAMES: usize = 32;
+
+/// Samples per side of each frame of a field that moves.
+pub const FRAME_GRID: usize = 80;
+
+/// Quantisation of a frame's values: 0 = no value, `1..=QMAX` over the frames' common range.
+const QMAX: f64 = 65534.0;
 
 #[derive(Serialize)]
 struct RunJson {
@@ -39,9 +52,25 @@ struct RunJson {
 #[derive(Serialize)]
 struct ReportJson {
     runs: Vec<RunJson>,
-    picture: Option<isotrack_bench::run::FieldPicture>,
+    /// The field at t = 0 (for a field that moves: only its square and lattice, the values
+    /// and isolines are in `frames`).
+    picture: Option<FieldPicture>,
+    frames: Option<FramesJson>,
     units: String,
     level: f64,
+}
+
+/// A field that moves, at [`FRAMES`] times on the picture's lattice, compactly: each frame's
+/// values as little-endian `u16`, base64 (`0` no value, `q` in `1..=65535` the value
+/// `lo + (q - 1) / 65534 (hi - lo)`, one range for every frame so that colours compare), and
+/// its isoline `s_d` as segments `[x0, y0, x1, y1]` in `u16` (`0..=65535` over the square's
+/// `bounds_m`), base64.
+#[derive(Serialize)]
+struct FramesJson {
+    t_s: Vec<f64>,
+    range: [f64; 2],
+    values: Vec<String>,
+    isolines: Vec<String>,
 }
 
 fn finite(v: f64) -> Option<f64> {
@@ -49,9 +78,11 @@ fn finite(v: f64) -> Option<f64> {
 }
 
 /// The report page of run directories (as written by `isotrack run --out`, `compare --out`):
-/// the first run's field at t = 0 as a heat map with the target isoline, every run's path, a
-/// time slider with play/pause moving each vehicle along its path, and the error, measurement
-/// and turn-rate plots sharing the slider's cursor; hovering shows values with units.
+/// the first run's field as a heat map with the target isoline (at t = 0; a field that moves
+/// at [`FRAMES`] times over the run on [`FRAME_GRID`]² samples, the frame nearest the slider
+/// shown), every run's path, a time slider with play/pause moving each vehicle along its path,
+/// and the error, measurement and turn-rate plots sharing the slider's cursor; hovering shows
+/// values with units.
 pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
     let mut runs = vec![];
     let mut data: Vec<RunData> = vec![];
@@ -89,7 +120,21 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
         .first()
         .ok_or_else(|| ReportError::Input("no run directory given".into()))?;
     let scenario = &first.scenario;
-    let picture = picture(scenario, &runs);
+    let t_end = runs
+        .iter()
+        .filter_map(|r| r.t.last().copied())
+        .fold(0.0, f64::max);
+    let moving = scenario.is_time_varying();
+    let mut picture = picture(scenario, &runs, if moving { FRAME_GRID } else { GRID });
+    let frames = match &mut picture {
+        Some(pic) if moving => {
+            let f = frames(scenario, pic, t_end);
+            pic.values.clear();
+            pic.isoline.clear();
+            Some(f)
+        }
+        _ => None,
+    };
     let units = scenario
         .file()
         .field
@@ -108,7 +153,7 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
 <p class="sub" id="summary"></p>
 <div class="controls"><button id="play" type="button">Play</button> <input id="time" type="range" min="0" max="1000" value="0" step="1" aria-label="time"> <span id="clock">t = 0 s</span></div>
 <div class="task">
-<div><canvas id="map" width="520" height="520" aria-label="paths over the field"></canvas><div class="legend" id="legend"></div><p class="note" id="mapnote"></p></div>
+<div class="mapbox"><canvas id="map" width="520" height="520" aria-label="paths over the field"></canvas><div class="legend" id="legend"></div><p class="note" id="mapnote"></p></div>
 <div class="charts" id="charts"></div>
 </div>
 <div id="tooltip"></div>
@@ -119,19 +164,93 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
         level: scenario.level(),
         runs,
         picture,
+        frames,
         units,
     };
     Ok(page(&title, &body, &script_json(&json), REPORT_JS))
 }
 
-fn picture(
-    scenario: &isotrack_scenario::Scenario,
-    runs: &[RunJson],
-) -> Option<isotrack_bench::run::FieldPicture> {
+fn picture(scenario: &Scenario, runs: &[RunJson], n: usize) -> Option<FieldPicture> {
     let points = runs
         .iter()
         .flat_map(|r| r.x.iter().zip(&r.y).map(|(x, y)| [*x, *y]));
-    isotrack_bench::run::FieldPicture::around(scenario, points, GRID)
+    FieldPicture::around(scenario, points, n)
+}
+
+/// The field on `pic`'s lattice at [`FRAMES`] times from 0 to `t_end_s`, with its isolines.
+fn frames(scenario: &Scenario, pic: &FieldPicture, t_end_s: f64) -> FramesJson {
+    let n = pic.n;
+    let [x0, y0, x1, y1] = pic.bounds_m;
+    let h = (x1 - x0) / (n - 1) as f64;
+    let t_s: Vec<f64> = (0..FRAMES)
+        .map(|k| t_end_s * k as f64 / (FRAMES - 1) as f64)
+        .collect();
+    let field = scenario.field();
+    let samples: Vec<Vec<Option<f64>>> = t_s
+        .iter()
+        .map(|&t| {
+            let mut v = Vec::with_capacity(n * n);
+            for j in 0..n {
+                for i in 0..n {
+                    let p = Vec2::new(x0 + i as f64 * h, y0 + j as f64 * h);
+                    v.push(field.value(t, p).filter(|v| v.is_finite()));
+                }
+            }
+            v
+        })
+        .collect();
+    let (lo, hi) = samples
+        .iter()
+        .flatten()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 1.0) };
+    let quantise = |v: &Option<f64>| match v {
+        Some(v) if hi > lo => 1 + ((v - lo) / (hi - lo) * QMAX).round().clamp(0.0, QMAX) as u16,
+        Some(_) => 1,
+        None => 0,
+    };
+    let to_u16 =
+        |x: f64, a: f64, b: f64| ((x - a) / (b - a) * 65535.0).round().clamp(0.0, 65535.0) as u16;
+    let isolines = samples
+        .iter()
+        .map(|v| {
+            // The sample at lattice point p (p = origin + (i h, j h) exactly).
+            let at = |p: Vec2| {
+                let i = ((p.x - x0) / h).round() as usize;
+                let j = ((p.y - y0) / h).round() as usize;
+                v.get(j * n + i).copied().flatten()
+            };
+            let iso = IsolineSegments::from_samples(Vec2::new(x0, y0), h, n, n, pic.level, at);
+            let words = iso.segments().iter().flat_map(|(a, b)| {
+                [
+                    to_u16(a.x, x0, x1),
+                    to_u16(a.y, y0, y1),
+                    to_u16(b.x, x0, x1),
+                    to_u16(b.y, y0, y1),
+                ]
+            });
+            base64_u16(words)
+        })
+        .collect();
+    FramesJson {
+        values: samples
+            .iter()
+            .map(|v| base64_u16(v.iter().map(quantise)))
+            .collect(),
+        isolines,
+        t_s,
+        range: [lo, hi],
+    }
+}
+
+/// `u16` words, little-endian, as base64.
+fn base64_u16(words: impl Iterator<Item = u16>) -> String {
+    use base64::Engine;
+    let bytes: Vec<u8> = words.flat_map(u16::to_le_bytes).collect();
+    base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
 const REPORT_JS: &str = r##"
@@ -155,17 +274,44 @@ const REPORT_JS: &str = r##"
   document.getElementById("summary").textContent = runs.map(r =>
     r.name + ": " + r.outcome + ", steady max |eps| = " + fmt(r.summary.steady_state_max_abs_error) +
     " " + units + ", convergence " + (r.summary.convergence_time_s === null ? "never" : fmt(r.summary.convergence_time_s, 1) + " s")).join("; ");
-  // The map.
-  const map = document.getElementById("map"), mctx = map.getContext("2d");
-  const pic = D.picture;
-  let toPx = null, base = null;
-  if (pic) {
+  // The map: the field at t = 0, or for a field that moves the frame nearest the cursor.
+  const map = document.getElementById("map"), mctx = map.getContext("2d", { willReadFrequently: true });
+  const mapnote = document.getElementById("mapnote");
+  const frames = D.frames;
+  let pic = D.picture, toPx = null, base = null, shown = -1;
+  // Little-endian u16 words from base64.
+  function words(b64) {
+    const s = atob(b64), out = new Uint16Array(s.length >> 1);
+    for (let k = 0; k < out.length; k++) out[k] = s.charCodeAt(2 * k) | (s.charCodeAt(2 * k + 1) << 8);
+    return out;
+  }
+  const framePics = [];
+  function framePic(k) {
+    if (framePics[k]) return framePics[k];
+    const [lo, hi] = frames.range, [x0, y0, x1, y1] = D.picture.bounds_m;
+    const values = Array.from(words(frames.values[k]), q => q === 0 ? null : lo + (q - 1) / 65534 * (hi - lo));
+    const w = words(frames.isolines[k]), isoline = [];
+    const X = q => x0 + q / 65535 * (x1 - x0), Y = q => y0 + q / 65535 * (y1 - y0);
+    for (let m = 0; m + 3 < w.length; m += 4) isoline.push([X(w[m]), Y(w[m + 1]), X(w[m + 2]), Y(w[m + 3])]);
+    framePics[k] = { bounds_m: D.picture.bounds_m, n: D.picture.n, values: values, isoline: isoline, range: frames.range };
+    return framePics[k];
+  }
+  const width = pic ? fmt(pic.bounds_m[2] - pic.bounds_m[0], 1) + " m" : "";
+  function showField(t) {
+    if (!D.picture) return;
+    const last = frames ? frames.t_s.length - 1 : 0, tLast = frames ? frames.t_s[last] : 0;
+    const k = tLast > 0 ? Math.min(last, Math.max(0, Math.round(t / tLast * last))) : 0;
+    if (k === shown) return;
+    shown = k;
+    pic = frames ? framePic(k) : D.picture;
     toPx = drawField(map, pic);
     base = mctx.getImageData(0, 0, map.width, map.height);
-    document.getElementById("mapnote").textContent = "isoline s_d = " + fmt(D.level) + " " + units + " dashed (field at t = 0); width " + fmt(pic.bounds_m[2] - pic.bounds_m[0], 1) + " m";
-  } else {
-    document.getElementById("mapnote").textContent = "no path to draw";
+    mapnote.textContent = frames
+      ? "field and isoline s_d = " + fmt(D.level) + " " + units + " (dashed) at t = " + fmt(frames.t_s[k], 1) + " s, the frame nearest the cursor (" +
+        frames.t_s.length + " frames over the run, " + pic.n + " x " + pic.n + " samples; colours from " + fmt(frames.range[0]) + " to " + fmt(frames.range[1]) + " " + units + "); width " + width
+      : "isoline s_d = " + fmt(D.level) + " " + units + " dashed (field at t = 0); width " + width;
   }
+  if (!pic) mapnote.textContent = "no path to draw";
   const legend = document.getElementById("legend");
   runs.forEach((r, i) => {
     const item = el("span", { "data-run": r.name }, r.name + " (" + r.outcome + ")");
@@ -174,6 +320,7 @@ const REPORT_JS: &str = r##"
   });
   function drawMap(t) {
     if (!pic) return;
+    showField(t);
     mctx.putImageData(base, 0, 0);
     runs.forEach((r, i) => {
       drawPath(mctx, toPx, r.x, r.y, colour(i), 1.5);
@@ -275,3 +422,69 @@ const REPORT_JS: &str = r##"
   document.body.setAttribute("data-ready", "1");
 })();
 "##;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+
+    fn words(b64: &str) -> Vec<u16> {
+        base64::engine::general_purpose::STANDARD
+            .decode(b64)
+            .unwrap()
+            .chunks(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect()
+    }
+
+    /// A field that moves: the paper's circular field drifting at (0.2, 0.1) m/s. Every frame's
+    /// decoded values are `20 exp(-0.1 |p - v t|)` at its time to the 16-bit quantum, and every
+    /// isoline end point lies on the circle of radius `10 ln 2` round the moved centre (to
+    /// the lattice's chord error and the 16-bit position quantum).
+    #[test]
+    fn frames_of_a_drifting_field_are_the_field_at_their_times() {
+        let sc =
+            isotrack_scenario::parse_scenario("", "<test>", &["field.drift_mps=[0.2, 0.1]".into()])
+                .unwrap();
+        assert!(sc.is_time_varying());
+        let pic = FieldPicture::around(&sc, [[-15.0, -15.0], [25.0, 25.0]], 41).unwrap();
+        let f = frames(&sc, &pic, 100.0);
+        assert_eq!(f.t_s.len(), FRAMES);
+        assert_eq!((f.t_s[0], f.t_s[FRAMES - 1]), (0.0, 100.0));
+        let [x0, y0, x1, y1] = pic.bounds_m;
+        let h = (x1 - x0) / 40.0;
+        let [lo, hi] = f.range;
+        let drift = Vec2::new(0.2, 0.1);
+        for (k, &t) in f.t_s.iter().enumerate() {
+            let q = words(&f.values[k]);
+            assert_eq!(q.len(), 41 * 41);
+            for j in 0..41 {
+                for i in 0..41 {
+                    let p = Vec2::new(x0 + i as f64 * h, y0 + j as f64 * h);
+                    let want = 20.0 * (-0.1 * (p - drift * t).norm()).exp();
+                    let got = lo + (q[j * 41 + i] as f64 - 1.0) / 65534.0 * (hi - lo);
+                    assert!(
+                        (got - want).abs() <= 0.5 * (hi - lo) / 65534.0 + 1e-12,
+                        "{t} {p:?}"
+                    );
+                }
+            }
+            let w = words(&f.isolines[k]);
+            assert!(
+                w.len() >= 4 * 20 && w.len().is_multiple_of(4),
+                "{t}: {}",
+                w.len()
+            );
+            let r = 10.0 * std::f64::consts::LN_2;
+            for c in w.chunks(2) {
+                let p = Vec2::new(
+                    x0 + c[0] as f64 / 65535.0 * (x1 - x0),
+                    y0 + c[1] as f64 / 65535.0 * (y1 - y0),
+                );
+                let d = (p - drift * t).norm() - r;
+                assert!(d.abs() < 0.05, "{t}: {p:?} is {d} m off the circle");
+            }
+        }
+        assert!((hi - 20.0).abs() < 1.0 && lo > 0.0, "{lo} {hi}");
+    }
+}

@@ -1,7 +1,7 @@
 //! The figures themselves, drawn with plotters on a PNG or SVG backend.
 
 use crate::run_data::RunData;
-use crate::style::{tick_label, tick_step, Style};
+use crate::style::{tick_label, tick_step, value_label, Style};
 use crate::{fonts, PlotError};
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
@@ -229,12 +229,55 @@ fn equal_scale(r: [f64; 4], pw: f64, ph: f64) -> [f64; 4] {
 struct MapLayout {
     w: u32,
     h: u32,
+    /// The colour bar's part of the width: a half-font gap, `bar_label`, the bar, a margin.
     bar_w: u32,
+    /// The colour bar's label area (its unit and tick labels), left of the bar.
+    bar_label: u32,
     margin: u32,
     right_pad: u32,
     y_label: u32,
     x_label: u32,
     caption: u32,
+}
+
+/// Tick labels on the colour bar, at most (plotters' default for an axis).
+const BAR_LABELS: usize = 11;
+
+/// Longest tick mark plotters draws, px (5 % of the plotting area's smaller side, at most
+/// 5 px: on the narrow bar about 1 px). Labels end two tick lengths from the axis.
+const BAR_TICK_PX: u32 = 5;
+
+/// The colour bar's unit: the field's `units`, else "field value".
+fn bar_units(sc: &Scenario) -> String {
+    sc.file()
+        .field
+        .units
+        .clone()
+        .unwrap_or_else(|| "field value".into())
+}
+
+/// Width the colour bar's label area needs for values `[vmin, vmax]`, px: the unit's text
+/// height (it is drawn rotated, at the area's left edge), a gap, the widest tick label as
+/// measured in its font, and two of the longest tick marks (plotters leaves two tick lengths
+/// between a label and its axis); at least the default 4.6 font sizes.
+fn bar_label_width(st: &Style, units: &str, vmin: f64, vmax: f64) -> u32 {
+    use plotters::coord::ranged1d::Ranged;
+    use plotters::coord::types::RangedCoordf64;
+    let f = st.base_font();
+    let vs = tick_step(vmin, vmax, 10);
+    let label_font = FontDesc::from(st.font(0.9));
+    let widest = RangedCoordf64::from(vmin..vmax)
+        .key_points(BAR_LABELS)
+        .iter()
+        .filter_map(|v| label_font.box_size(&tick_label(*v, vs)).ok())
+        .map(|(w, _)| w)
+        .max()
+        .unwrap_or(0);
+    let desc = FontDesc::from(st.font(1.0))
+        .box_size(units)
+        .map_or(0, |(_, h)| h);
+    let need = desc + (0.4 * f) as u32 + widest + 2 * BAR_TICK_PX;
+    need.max((4.6 * f) as u32)
 }
 
 impl MapLayout {
@@ -245,6 +288,7 @@ impl MapLayout {
             w,
             h,
             bar_w: (0.03 * w as f64 + 8.0 * f) as u32,
+            bar_label: (4.6 * f) as u32,
             margin: f.round() as u32,
             // Room for the last x tick label, which centres on the plot's right edge.
             right_pad: (1.5 * f) as u32,
@@ -257,6 +301,36 @@ impl MapLayout {
             },
         }
     }
+    /// The bar's right margin: what the bar's part of the width leaves after the half-font gap,
+    /// the label area and the 1.6-font-wide bar.
+    fn bar_right(&self, f: f64, bar_label: u32) -> u32 {
+        self.bar_w
+            .saturating_sub(bar_label + (1.6 * f) as u32 + (0.5 * f) as u32)
+    }
+
+    /// Makes room for the colour bar's tick labels of `sc` over `range` at the times `at_s`
+    /// (sampled coarsely: the map's own samples are finer, so [`draw_map`] measures again):
+    /// a wider label area takes the bar's right margin first (down to half a font size), then
+    /// width from the map. Unchanged when the labels fit the default.
+    fn fit_bar_labels(&mut self, st: &Style, sc: &Scenario, range: [f64; 4], at_s: &[f64]) {
+        let units = bar_units(sc);
+        let need = at_s
+            .iter()
+            .filter_map(|&t| Raster::sample(sc, range, 48, 48, t).range())
+            .map(|(lo, hi)| bar_label_width(st, &units, lo, hi))
+            .max()
+            .unwrap_or(0);
+        if need > self.bar_label {
+            let f = st.base_font();
+            let spare = self
+                .bar_right(f, self.bar_label)
+                .saturating_sub((0.5 * f) as u32);
+            let extra = need - self.bar_label;
+            self.bar_w += extra.saturating_sub(spare);
+            self.bar_label = need;
+        }
+    }
+
     /// The plotting area, pixels.
     fn plot_area(&self) -> (f64, f64) {
         let w =
@@ -264,6 +338,23 @@ impl MapLayout {
         let h = self.h as f64 - (2 * self.margin + self.x_label + self.caption) as f64;
         (w.max(50.0), h.max(50.0))
     }
+}
+
+/// The layout of a map of `sc` over the data range `data` (`[x0, x1, y0, y1]`, m), its colour
+/// bar sized for the field at the times `at_s`, and the range grown to the plotting area's
+/// aspect ratio (equal scales).
+fn map_layout(
+    st: &Style,
+    title: &str,
+    sc: &Scenario,
+    data: [f64; 4],
+    at_s: &[f64],
+) -> (MapLayout, [f64; 4]) {
+    let mut lay = MapLayout::new(st, title);
+    let (pw, ph) = lay.plot_area();
+    lay.fit_bar_labels(st, sc, equal_scale(data, pw, ph), at_s);
+    let (pw, ph) = lay.plot_area();
+    (lay, equal_scale(data, pw, ph))
 }
 
 /// Where a legend goes: the corner of `range` holding the fewest of `points`, so it covers as
@@ -327,11 +418,10 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     root: &'a DrawingArea<DB, Shift>,
     sc: &Scenario,
     range: [f64; 4],
-    title: &str,
+    (title, lay): (&str, &MapLayout),
     st: &Style,
     times: &MapTimes,
 ) -> Result<MapChart<'a, DB>, String> {
-    let lay = MapLayout::new(st, title);
     root.fill(&WHITE).map_err(s)?;
     let (left, right) = root.split_horizontally(lay.w - lay.bar_w);
     let mut chart = ChartBuilder::on(&left)
@@ -429,29 +519,23 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         .label(if n_earlier > 0 {
             format!(
                 "isoline s_d = {} at t = {} s",
-                tick_label(level, 0.0),
+                value_label(level),
                 tick_label(times.at_s, 1.0)
             )
         } else {
-            format!("isoline s_d = {}", tick_label(level, 0.0))
+            format!("isoline s_d = {}", value_label(level))
         })
         .legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(bold))
         });
     // Colour bar, its ticks as fine as the field's span needs (a nearly flat field still gets
     // distinct labels).
-    let units = sc
-        .file()
-        .field
-        .units
-        .clone()
-        .unwrap_or_else(|| "field value".into());
-    // The bar 1.6 font sizes wide, its labels and unit to its left.
+    let units = bar_units(sc);
+    // The bar 1.6 font sizes wide, its labels and unit to its left, as wide as the labels
+    // measure (more than the layout planned pushes the bar into its right margin).
     let f = st.base_font();
-    let bar_label = (4.6 * f) as u32;
-    let bar_right = lay
-        .bar_w
-        .saturating_sub(bar_label + (1.6 * f) as u32 + (0.5 * f) as u32);
+    let bar_label = lay.bar_label.max(bar_label_width(st, &units, vmin, vmax));
+    let bar_right = lay.bar_right(f, bar_label);
     let mut bar = ChartBuilder::on(&right)
         .margin_top(lay.margin + lay.caption)
         .margin_bottom(lay.margin + lay.x_label)
@@ -464,6 +548,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
+        .y_labels(BAR_LABELS)
         .y_desc(units)
         .y_label_formatter(&|v| tick_label(*v, vs))
         .label_style(st.font(0.9))
@@ -510,16 +595,14 @@ pub fn trajectory_figure(
     let no_positions = || PlotError::Data("no trace row has a finite position".into());
     let (xa, xb) = axis("x_m", x0, x1)?.ok_or_else(no_positions)?;
     let (ya, yb) = axis("y_m", y0, y1)?.ok_or_else(no_positions)?;
-    let lay = MapLayout::new(st, title);
-    let (pw, ph) = lay.plot_area();
-    let range = equal_scale([xa, xb, ya, yb], pw, ph);
+    let t_end = first.trace.last().map_or(0.0, |t| t.t_s);
+    let times = MapTimes::for_run(&first.scenario, t_end);
+    let (lay, range) = map_layout(st, title, &first.scenario, [xa, xb, ya, yb], &[times.at_s]);
     let arrow = 0.06 * (range[1] - range[0]);
     let legend_at = emptiest_corner(points().map(|t| (t.x_m, t.y_m)), range);
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let t_end = first.trace.last().map_or(0.0, |t| t.t_s);
-            let times = MapTimes::for_run(&first.scenario, t_end);
-            let mut chart = draw_map(&root, &first.scenario, range, title, st, &times)?;
+            let mut chart = draw_map(&root, &first.scenario, range, (title, &lay), st, &times)?;
             let (w2, w3) = (st.px(2.0), st.px(3.0));
             for (i, run) in runs.iter().enumerate() {
                 let c = colour(i);
@@ -599,11 +682,17 @@ pub fn animation_gif(
         small.size_px = Some((660, 540));
         small.font_px = Some(small.font_px.unwrap_or(11.0));
     }
-    let lay = MapLayout::new(&small, title);
-    let (pw, ph) = lay.plot_area();
-    let range = equal_scale([xa - pad, xb + pad, ya - pad, yb + pad], pw, ph);
     let t_end = tr.last().map_or(0.0, |t| t.t_s);
     let frames = frames.clamp(1, 1000);
+    // One layout for every frame: its colour bar sized for the field at the start, the middle
+    // and the end.
+    let (lay, range) = map_layout(
+        &small,
+        title,
+        &run.scenario,
+        [xa - pad, xb + pad, ya - pad, yb + pad],
+        &[0.0, 0.5 * t_end, t_end],
+    );
     let res: DrawResult = (|| {
         fonts();
         let root = BitMapBackend::gif(path, (lay.w, lay.h), delay_ms)
@@ -620,7 +709,14 @@ pub fn animation_gif(
                 earlier_s: vec![],
             };
             let frame_title = format!("{title}  t = {} s", tick_label(t, 1.0));
-            let mut chart = draw_map(&root, &run.scenario, range, &frame_title, &small, &times)?;
+            let mut chart = draw_map(
+                &root,
+                &run.scenario,
+                range,
+                (&frame_title, &lay),
+                &small,
+                &times,
+            )?;
             let upto: Vec<(f64, f64)> = tr
                 .iter()
                 .take_while(|r| r.t_s <= t)
@@ -658,12 +754,10 @@ pub fn field_map(
     title: &str,
 ) -> Result<(), PlotError> {
     let title = st.title(title);
-    let lay = MapLayout::new(st, title);
-    let (pw, ph) = lay.plot_area();
-    let range = equal_scale(range, pw, ph);
+    let (lay, range) = map_layout(st, title, sc, range, &[0.0]);
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
-            let mut chart = draw_map(&root, sc, range, title, st, &MapTimes::default())?;
+            let mut chart = draw_map(&root, sc, range, (title, &lay), st, &MapTimes::default())?;
             chart
                 .configure_series_labels()
                 .label_font(st.font(1.0))

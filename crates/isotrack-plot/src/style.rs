@@ -189,6 +189,19 @@ fn trim_sci(t: &str) -> String {
     }
 }
 
+/// A value as the user wrote it (a level, a setting): the shortest decimal that reads back
+/// as the same `f64`, in scientific notation outside `[1e-4, 1e6)` (as [`tick_label`]).
+pub fn value_label(v: f64) -> String {
+    let mag = v.abs();
+    if mag != 0.0 && mag.is_finite() && !(1e-4..1e6).contains(&mag) {
+        format!("{v:e}")
+    } else if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v}")
+    }
+}
+
 /// The spacing of about `n` ticks over `[lo, hi]` (a 1, 2 or 5 times a power of ten), which
 /// [`tick_label`] needs to pick its precision.
 pub fn tick_step(lo: f64, hi: f64, n: usize) -> f64 {
@@ -228,5 +241,20 @@ mod tests {
         assert_eq!(tick_label(2e-5, 1e-5), "2e-5");
         assert_eq!(tick_step(0.0, 600.0, 10), 50.0);
         assert_eq!(tick_step(10.0, 10.001, 10), 1e-4);
+    }
+
+    /// A level reads back as written, however many digits (a tick label would round
+    /// -12344.9995 to -12344.999 and 0.0001 to 0).
+    #[test]
+    fn value_labels_keep_every_digit() {
+        assert_eq!(value_label(10.0), "10");
+        assert_eq!(value_label(3.0), "3");
+        assert_eq!(value_label(-12344.9995), "-12344.9995");
+        assert_eq!(value_label(0.0001), "0.0001");
+        assert_eq!(value_label(12345.1), "12345.1");
+        assert_eq!(value_label(-0.0), "0");
+        assert_eq!(value_label(2.5e-7), "2.5e-7");
+        assert_eq!(value_label(1.5e7), "1.5e7");
+        assert_eq!(value_label(0.1 + 0.2), "0.30000000000000004");
     }
 }

@@ -290,3 +290,120 @@ fn a_directory_without_a_run_is_a_clear_error() {
     let e = RunData::load(dir.path()).unwrap_err().to_string();
     assert!(e.contains("summary.json"), "{e}");
 }
+
+/// A text element of an SVG: (x, font size, text-anchor, rotated, content).
+fn svg_text_boxes(svg: &str) -> Vec<(f64, f64, String, bool, String)> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(tag[at..at + tag[at..].find('"')?].to_string())
+    };
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (tag, rest) = t.split_once('>')?;
+            Some((
+                attr(tag, "x")?.parse().ok()?,
+                attr(tag, "font-size")?.parse().ok()?,
+                attr(tag, "text-anchor").unwrap_or_default(),
+                tag.contains("rotate("),
+                rest.split("</text>").next()?.trim().to_string(),
+            ))
+        })
+        .collect()
+}
+
+/// Width of a number in DejaVu Sans, in ems, from the font's advance widths in its 2048
+/// units per em (digits 1303, '.' 651, '-' 739, 'e' 1260): independent of plotters' layout.
+fn dejavu_number_em(s: &str) -> f64 {
+    s.chars()
+        .map(|c| match c {
+            '0'..='9' => 1303.0,
+            '.' => 651.0,
+            '-' | '\u{2212}' => 739.0,
+            'e' => 1260.0,
+            _ => 1434.0,
+        })
+        .sum::<f64>()
+        / 2048.0
+}
+
+/// Issue 30 item 12: colour-bar tick labels as wide as `-12344.9975` (a field of -12345 with a
+/// 1e-4 per metre slope) fit between the bar's unit, drawn rotated at the left of the label
+/// area, and the bar: each label's left end (its right end minus its width in the font's
+/// metrics) is right of the unit's text, its right end left of the bar, and the bar inside the
+/// image. (The old fixed 4.6-font-size area put these labels over the unit.)
+#[test]
+fn wide_colour_bar_labels_fit_between_unit_and_bar() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = make_run(
+        &dir.path().join("w"),
+        &[
+            "field.kind=linear_ramp",
+            "field.offset=-12345.0",
+            "field.gradient_per_m=[0.0001, 0.00005]",
+            "field.units=\"kelvin above absolute zero\"",
+            "controller.level=-12344.9995",
+            "initial.x_m=0.0",
+            "initial.y_m=0.0",
+            "sim.duration_s=5",
+        ],
+    );
+    for (w, h) in [(560, 460), (420, 340)] {
+        let mut st = Style::new(Format::Svg);
+        st.size_px = Some((w, h));
+        let path = dir.path().join(format!("w{w}.svg"));
+        field_map(&run.scenario, [-15.0, 15.0, -5.0, 25.0], &path, &st, "wide").unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        let texts = svg_text_boxes(&svg);
+        let unit = texts
+            .iter()
+            .find(|t| t.4 == "kelvin above absolute zero")
+            .expect("the bar's unit");
+        assert!(unit.3, "the unit is drawn rotated");
+        // The level in the legend, every digit (a tick label would give -12344.999).
+        assert!(
+            texts.iter().any(|t| t.4 == "isoline s_d = -12344.9995"),
+            "{texts:?}"
+        );
+        // Rotated, its glyphs span one font size (ascent + descent) from its anchor.
+        let unit_right = unit.0 + 1.2 * unit.1;
+        let labels: Vec<_> = texts
+            .iter()
+            .filter(|t| t.0 > unit.0 && t.2 == "end" && t.4.starts_with("-1234"))
+            .collect();
+        assert!(labels.len() >= 3, "{texts:?}");
+        // The bar: the colour rectangles right of the labels.
+        let bar_x = svg
+            .split("<rect")
+            .filter_map(|r| {
+                let x: f64 = r.split(" x=\"").nth(1)?.split('"').next()?.parse().ok()?;
+                let width: f64 = r
+                    .split(" width=\"")
+                    .nth(1)?
+                    .split('"')
+                    .next()?
+                    .parse()
+                    .ok()?;
+                (x > unit.0 && width < 60.0).then_some((x, x + width))
+            })
+            .fold((f64::INFINITY, 0.0f64), |(a, b), (x0, x1)| {
+                (a.min(x0), b.max(x1))
+            });
+        assert!(bar_x.1 <= w as f64, "{w}: bar ends at {}", bar_x.1);
+        for l in &labels {
+            let left = l.0 - dejavu_number_em(&l.4) * l.1;
+            assert!(
+                left >= unit_right,
+                "{w}: {:?} starts at {left:.1}, the unit ends at {unit_right:.1}",
+                l.4
+            );
+            assert!(
+                l.0 <= bar_x.0,
+                "{w}: {:?} ends at {} inside the bar at {}",
+                l.4,
+                l.0,
+                bar_x.0
+            );
+        }
+    }
+}
