@@ -106,7 +106,7 @@ pub fn benchmark_json(
     tune: bool,
     out: Option<&str>,
 ) -> PyResult<String> {
-    check_name(&Registry::builtin(), name)?;
+    check_name(name)?;
     let path = Path::new(suite_path);
     if !path.exists() {
         return Err(PyFileNotFoundError::new_err(format!(
@@ -117,14 +117,16 @@ pub fn benchmark_json(
     let errors: FirstError = Arc::new(Mutex::new(None));
     let cancel = Arc::new(AtomicBool::new(false));
     let mut registry = Registry::builtin();
-    registry.register(
-        name,
-        PyFactory {
-            factory,
-            errors: errors.clone(),
-            cancel: cancel.clone(),
-        },
-    );
+    registry
+        .register(
+            name,
+            PyFactory {
+                factory,
+                errors: errors.clone(),
+                cancel: cancel.clone(),
+            },
+        )
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let opts = Options {
         controllers,
         tune,
@@ -155,22 +157,6 @@ pub fn benchmark_json(
 
 /// A name for the Python controller's row: not a built-in law's (it would replace that row),
 /// not empty, nothing that breaks a Markdown table row or a line (`|`, control characters).
-fn check_name(builtin: &Registry, name: &str) -> PyResult<()> {
-    let shown = isotrack_scenario::load::clip(name);
-    let why = if name.trim().is_empty() {
-        Some("is empty".to_string())
-    } else if builtin.get(name).is_some() {
-        Some(format!(
-            "is a built-in law's (the built-in laws: {}); choose another",
-            builtin.names().join(", ")
-        ))
-    } else if name.contains('|') || name.chars().any(char::is_control) {
-        Some("contains `|` or a control character (a newline, a tab), which would break the leaderboard's table".into())
-    } else {
-        None
-    };
-    match why {
-        Some(w) => Err(PyValueError::new_err(format!("name {shown:?} {w}"))),
-        None => Ok(()),
-    }
+fn check_name(name: &str) -> PyResult<()> {
+    isotrack_bench::check_name(name).map_err(|e| PyValueError::new_err(e.to_string()))
 }

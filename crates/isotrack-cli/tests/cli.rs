@@ -271,7 +271,9 @@ fn check_json_has_the_documented_keys() {
             == 2
     );
     assert_eq!(sm["slope_exact"], true);
+    // With ki = 0 the P law is checked on its orbit, outside the isoline.
     assert_eq!(sm["stable_over_tube"], true);
+    assert!(sm["p_law_orbit_error"].as_f64().unwrap() < 0.0);
     let d = &sm["discrete_loop"];
     for key in [
         "phi",

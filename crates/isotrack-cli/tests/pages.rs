@@ -122,10 +122,15 @@ length_m = 6.93
     );
     let suite = isotrack_bench::Suite::parse(&suite_text, "hostile-suite.toml", d.path()).unwrap();
     let mut reg = isotrack_bench::Registry::builtin();
-    let controller = hostile("controller");
-    reg.register(&controller, |s: &isotrack_scenario::Scenario| {
+    // A controller's name is a leaderboard row: the registry refuses `|`, U+2028/9 and names
+    // over 64 characters (isotrack_bench::check_name), so the hostile one is the markup that
+    // fits its rules.
+    let factory = |s: &isotrack_scenario::Scenario| {
         Box::new(Proportional(s.level())) as Box<dyn IsolineController + Send>
-    });
+    };
+    assert!(reg.register(&hostile("controller"), factory).is_err());
+    let controller = "c <!--<script></script><img src=x onerror=a()>'\"]]>".to_string();
+    reg.register(&controller, factory).unwrap();
     let result =
         isotrack_bench::run_benchmark(&suite, &reg, &Default::default(), &|_, _, _| {}).unwrap();
     let page = d.path().join("index.html");

@@ -288,7 +288,7 @@ def benchmark(
     task's turn-rate limit. It is scored with the gains it sets itself (the built-in laws run
     with the suite's tuned gains, or retuned with ``tune=True``).
 
-    ``suite``: a suite file (default ``suites/standard-v1.toml`` under the current directory: run
+    ``suite``: a suite file (default ``suites/standard-v2.toml`` under the current directory: run
     from the isotrack repository, or pass the path). ``controllers``: which to score (default:
     the suite's built-in laws and yours). ``out``: a directory to write ``leaderboard.csv``,
     ``leaderboard.md``, ``index.html`` and per-task results into.
@@ -304,10 +304,10 @@ def benchmark(
     import os
 
     if suite is None:
-        suite = os.path.join("suites", "standard-v1.toml")
+        suite = os.path.join("suites", "standard-v2.toml")
         if not os.path.isfile(suite):
             raise FileNotFoundError(
-                "no suite given and suites/standard-v1.toml is not under the current directory: "
+                "no suite given and suites/standard-v2.toml is not under the current directory: "
                 "run from the isotrack repository or pass suite=PATH"
             )
     if out is not None:

@@ -177,6 +177,10 @@ pub struct SampledReport {
     /// Whether the loop is stable at every slope of the tube (what a guarantee over the tube,
     /// such as Prop. 2's bound, needs).
     pub stable_over_tube: Option<bool>,
+    /// With `ki = 0` on a circular field: the steady error `eps*` of the orbit the P law settles
+    /// on (the isoline itself is no equilibrium; the loop is checked on the orbit and
+    /// `slope_range` is the field's slope there). Null otherwise.
+    pub p_law_orbit_error: Option<f64>,
     /// The stable set of `kp` at the isoline's slopes (other gains fixed): disjoint intervals
     /// `[lo, hi]`, ends refined to 1e-6 relative, scanned over `1e-3 .. 1e6` (null: not
     /// computed; empty: no `kp` is stable).
@@ -513,6 +517,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         stable: None,
         tube_spectral_radius: None,
         stable_over_tube: None,
+        p_law_orbit_error: None,
         kp_intervals: None,
         nearest_stable_kp: None,
         max_kp: None,
@@ -580,6 +585,8 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     let (base, slopes) = match p_law_orbit(s, l) {
         Some(o) => {
             notes.push(o.note());
+            rep.p_law_orbit_error = Some(o.orbit.error);
+            rep.slope_range = Some([o.slope, o.slope]);
             (o.operating_point(base), vec![o.slope])
         }
         None => (base, slopes),
@@ -892,7 +899,10 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             ),
         );
     }
-    if p1.exact_local_condition_holds == Some(true) && sm.stable == Some(true) {
+    if p1.exact_local_condition_holds == Some(true)
+        && sm.stable == Some(true)
+        && sm.p_law_orbit_error.is_none()
+    {
         return (
             Verdict::Holds,
             format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable at the isoline's slope k*s_d: locally exponentially stable"),
@@ -904,6 +914,15 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             format!(
                 "Prop. 2's bound applies: limsup|eps| <= {:.6}",
                 p2.error_bound.unwrap_or(f64::NAN)
+            ),
+        );
+    }
+    if let (Some(e), Some(true)) = (sm.p_law_orbit_error, sm.stable) {
+        return (
+            Verdict::NotApplicable,
+            format!(
+                "not on the isoline: with ki = 0 the P law settles on an orbit where eps = {e:.4} (the isoline is no equilibrium), stable there when sampled at {at} ({}); an integral term (ki > 0) removes the offset",
+                radius(sm.spectral_radius)
             ),
         );
     }

@@ -647,11 +647,14 @@ impl SampledLoop {
         let l = |w: f64| loop_gain_at(&n, &d, w, t);
         let bounded = |w: f64| l(w).norm() < 1e8;
         // Phase crossovers: L real and negative. At pi/T, L is real (z = -1).
+        // A crossover where |L| is rounding noise (below 1e-8, a "gain margin" above 1e8, e.g.
+        // at pi/T on a lagged loop) is no margin: left out (the review saw 2e14 reported).
+        let significant = |w: f64| bounded(w) && l(w).norm() > 1e-8;
         let mut phase_x: Vec<f64> = crossings(&ws, |w| l(w).im)
             .into_iter()
-            .filter(|&w| l(w).re < 0.0 && bounded(w))
+            .filter(|&w| l(w).re < 0.0 && significant(w))
             .collect();
-        if l(nyquist).re < 0.0 && bounded(nyquist) {
+        if l(nyquist).re < 0.0 && significant(nyquist) {
             phase_x.push(nyquist);
         }
         let gm = phase_x

@@ -202,8 +202,20 @@ fn the_circular_p_law_boundary_at_one_hertz_is_the_hand_derived_one() {
     };
     let r = check(&at(3.1), None);
     let sm = &r.sampled;
-    assert_eq!(sm.slope_range, Some([1.0, 1.0]));
+    // Checked on the orbit: the field's slope there, 0.1 F(d*), by hand.
+    let d = orbit_radius(3.1);
+    let [lo, hi] = sm.slope_range.unwrap();
+    let alpha = 0.1 * 20.0 * (-0.1 * d).exp();
+    assert!(
+        (lo / alpha - 1.0).abs() < 1e-6 && lo == hi,
+        "{lo} {hi} vs {alpha}"
+    );
     assert_eq!(sm.slope_exact, Some(true));
+    assert!(
+        (sm.p_law_orbit_error.unwrap() - (20.0 * (-0.1 * d).exp() - 10.0)).abs() < 1e-6,
+        "{:?}",
+        sm.p_law_orbit_error
+    );
     let set = sm.kp_intervals.clone().unwrap();
     assert_eq!(set.len(), 1, "{set:?}");
     assert!((set[0][1] / top - 1.0).abs() < 2e-6, "{set:?} vs {top}");
@@ -213,10 +225,16 @@ fn the_circular_p_law_boundary_at_one_hertz_is_the_hand_derived_one() {
     );
     assert_eq!(sm.max_kp, Some(set[0][1]));
     assert_eq!(sm.stable, Some(true));
-    // The tube reaches slope 1.11, where 3.1 is past the boundary: reported, not a failure.
+    // The tube reaches slope 1.11, where 3.1 is past the boundary: reported, not a failure;
+    // and never "locally exponentially stable" on an isoline the P law cannot hold (the
+    // review's kp = 0.05 said so while settling 43 m outside).
     assert_eq!(sm.stable_over_tube, Some(false));
     assert_ne!(r.verdict.as_str(), "fails", "{}", r.verdict_reason);
-    assert_eq!(r.verdict.as_str(), "holds", "{}", r.verdict_reason);
+    assert!(
+        !r.verdict_reason.contains("locally exponentially stable"),
+        "{}",
+        r.verdict_reason
+    );
     let r = check(&at(3.4), None);
     assert_eq!(r.sampled.stable, Some(false));
     assert_eq!(r.verdict.as_str(), "fails");
@@ -262,11 +280,17 @@ fn the_stable_kp_set_is_an_interval_with_the_hand_derived_ends() {
     assert!((set[0][1] / hi - 1.0).abs() < 2e-6, "{set:?} vs {hi}");
     assert_eq!(sm.nearest_stable_kp, Some(set[0][0]));
     let w = r.warnings.iter().find(|w| w.contains("unstable")).unwrap();
+    // Printed inwards (5 significant digits: lo up, hi down), so a copied value is stable.
+    let (lo_text, hi_text) = (
+        format!("{:.5}", (lo * 1e5).ceil() / 1e5),
+        format!("{:.4}", (hi * 1e4).floor() / 1e4),
+    );
     assert!(
-        w.contains(&format!("for kp in [{:.4}, {:.4}]", lo, hi)),
+        w.contains(&format!("for kp in [{lo_text}, {hi_text}]")),
         "{w}"
     );
-    assert!(w.contains(&format!("nearest: kp = {lo:.4}")), "{w}");
+    assert!(w.contains(&format!("nearest: kp = {lo_text}")), "{w}");
+    assert!(rho(lo_text.parse().unwrap()) < 1.0 && rho(hi_text.parse().unwrap()) < 1.0);
     assert!(!w.contains("no sensor rate") && !w.contains("kp <="), "{w}");
     // A loop no kp and no rate stabilises says so, not "no sensor rate".
     let r = check(
