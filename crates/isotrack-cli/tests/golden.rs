@@ -44,7 +44,7 @@ const HEADER: &str = "\
 #   run/NAME/*           isotrack run scenarios/NAME.toml --out OUT/run/NAME --quiet  (every file)
 #   run/default/*        isotrack run --out OUT/run/default --quiet  (the built-in default);
 #                        run/default/stdout.txt: the stdout of a plain `isotrack run`
-#   check/NAME.json      stdout of isotrack check scenarios/NAME.toml --json  (default: no file)
+#   check/NAME.json      stdout of isotrack check scenarios/NAME.toml --json  (default.json: no file)
 #   sweep/whole/*        isotrack sweep sweeps/fig2b-gains.toml --out OUT/sweep/whole
 #   sweep/shard-1/*      the same with --out OUT/sweep/shard-1 --shard 1/2 --threads 1
 #   sweep/shard-2/*      the same with --out OUT/sweep/shard-2 --shard 2/2 --threads 2; then its
