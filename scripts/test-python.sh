@@ -2,6 +2,7 @@
 # The Python package's tests: a fresh virtual environment in target/pyenv, the package built
 # and installed from ./python (maturin, through pip), then pytest. Needs python3 (>= 3.9) with
 # venv; the tests compare against the CLI built by `cargo test --release` / `cargo build --release`.
+# Arguments select tests (`scripts/test-python.sh python/tests/test_golden.py`); default: all.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=target/pyenv
@@ -12,4 +13,4 @@ fi
 "$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" matplotlib
 "$venv/bin/pip" install -q ./python
 [ -x target/release/isotrack ] || cargo build --release --locked -p isotrack-cli
-ISOTRACK_BIN="$PWD/target/release/isotrack" "$venv/bin/python" -m pytest -q python/tests
+ISOTRACK_BIN="$PWD/target/release/isotrack" "$venv/bin/python" -m pytest -q "${@:-python/tests}"
