@@ -75,6 +75,18 @@ pub(crate) fn interruptible<T: Send>(
     cancel: &AtomicBool,
     work: impl FnOnce() -> T + Send,
 ) -> PyResult<T> {
+    interruptible_ticking(py, cancel, work, &mut |_| Ok(()))
+}
+
+/// [`interruptible`], calling `tick` on this thread (the GIL held) every [`SIGNAL_PERIOD`] while
+/// `work` runs and once when it has returned (a progress display); an exception `tick` raises
+/// stops `work` as a `KeyboardInterrupt` does, and is raised.
+pub(crate) fn interruptible_ticking<T: Send>(
+    py: Python<'_>,
+    cancel: &AtomicBool,
+    work: impl FnOnce() -> T + Send,
+    tick: &mut dyn FnMut(Python<'_>) -> PyResult<()>,
+) -> PyResult<T> {
     let mut interrupted: Option<PyErr> = None;
     // `done` is set (and the condition variable notified) when `work` has returned.
     let done = (Mutex::new(false), Condvar::new());
@@ -95,14 +107,14 @@ pub(crate) fn interruptible<T: Send>(
                     .unwrap_or_else(|p| p.into_inner());
                 *guard
             });
-            if finished {
-                break;
-            }
             if interrupted.is_none() {
-                if let Err(e) = py.check_signals() {
+                if let Err(e) = py.check_signals().and_then(|()| tick(py)) {
                     cancel.store(true, Ordering::Relaxed);
                     interrupted = Some(e);
                 }
+            }
+            if finished {
+                break;
             }
         }
         py.detach(|| handle.join())
