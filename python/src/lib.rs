@@ -452,6 +452,9 @@ impl IsolineController for PyController {
     fn reset(&mut self) {}
 }
 
+/// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
+pub(crate) type SweepCells = (Vec<String>, Vec<&'static str>, Vec<Vec<String>>);
+
 /// A sweep from its file's text: `(header, kinds, rows)`: `results.csv`'s header, each
 /// column's kind ([`column_kinds`]) and its cells in `run_id` order; `name` names the sweep in
 /// messages and anchors its relative `scenario` path. `progress(done, total)`, a Python
@@ -465,7 +468,7 @@ fn sweep_cells(
     name: &str,
     threads: Option<usize>,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(Vec<String>, Vec<&'static str>, Vec<Vec<String>>)> {
+) -> PyResult<SweepCells> {
     use std::sync::atomic::{AtomicU64, Ordering};
     let prepared =
         isotrack_cli::sweep::PreparedSweep::new(text, Path::new(name)).map_err(sweep_failure)?;

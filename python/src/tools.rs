@@ -223,7 +223,7 @@ pub fn sweep_cells_with(
     name: &str,
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(Vec<String>, Vec<&'static str>, Vec<Vec<String>>)> {
+) -> PyResult<crate::SweepCells> {
     use isotrack_cli::sweep::{row_fields, run_scenario, PreparedSweep};
     let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
     let kinds = crate::column_kinds(&sweep.plan);
