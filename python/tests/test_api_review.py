@@ -339,3 +339,28 @@ def test_vector_env_renders_one_frame_per_sub_environment():
         gym.IsolineVectorEnv(num_envs=2, render_mode="human")
     with pytest.warns(UserWarning, match="render_mode"):
         assert gym.IsolineVectorEnv(num_envs=2).render() is None
+
+
+# --- ROBUSTNESS.md class 1: outputs that are not regular files ---------------------------------
+
+
+def test_outputs_that_are_fifos_are_refused_without_blocking(tmp_path):
+    """A FIFO where a run directory's file, a report or a figure goes would block the write
+    until someone reads it (it once hung `Run.save` and `report` for good): refused at once."""
+    import time
+
+    run = short(seconds=1.0).run()
+    (tmp_path / "run").mkdir()
+    os.mkfifo(tmp_path / "run" / "trace.csv")
+    os.mkfifo(tmp_path / "page.html")
+    good = run.save(tmp_path / "good")
+    (tmp_path / "fig").mkdir()
+    os.mkfifo(tmp_path / "fig" / "trajectory.png")
+    t0 = time.monotonic()
+    with pytest.raises(OSError, match="trace.csv: not a regular file"):
+        run.save(tmp_path / "run")
+    with pytest.raises(OSError, match="page.html: not a regular file"):
+        isotrack.report([good], str(tmp_path / "page.html"))
+    with pytest.raises(OSError, match="trajectory.png: not a regular file"):
+        isotrack.plot([good], out=str(tmp_path / "fig"))
+    assert time.monotonic() - t0 < 5.0

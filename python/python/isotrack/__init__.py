@@ -107,6 +107,23 @@ def _coordinates(name: str, v: Any) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
+def _refuse_non_regular(paths: "list[str]") -> None:
+    """An ``OSError`` for an output path that exists and is not a regular file (a FIFO would
+    block the write until someone reads it, a device would swallow it): checked before anything
+    is written, so that nothing blocks and nothing is half written."""
+    import os
+    import stat
+
+    for p in paths:
+        try:
+            mode = os.stat(p).st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            continue
+        if not stat.S_ISREG(mode):
+            kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO, a device or a socket"
+            raise OSError(f"{p}: not a regular file ({kind}): not written")
+
+
 def _frozen(a: Any) -> np.ndarray:
     """A read-only view of a read-only array: neither it nor anything made from it can write to
     the data a :class:`Run` saves (numpy refuses to make the view writeable again)."""
@@ -176,6 +193,9 @@ class Run:
         path = _check_path("directory", directory)
         if self._scenario is None:
             raise ValueError("this Run was not made by Scenario.run(): it has no scenario to save")
+        import os
+
+        _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
         _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
         return path
 
@@ -498,6 +518,7 @@ def benchmark(
             )
     if out is not None:
         os.makedirs(out, exist_ok=True)
+        _refuse_non_regular([os.path.join(out, f) for f in ("leaderboard.csv", "leaderboard.md", "index.html")])
     text = _native.benchmark_json(
         lambda native: _check_controller("controller_factory(scenario)", controller_factory(Scenario(native))),
         name,
@@ -565,6 +586,10 @@ def plot(
         if v is not None and not isinstance(v, str):
             raise TypeError(f"{arg} must be a column name (str) or None, got {v!r:.80} ({_type_name(v)})")
     dirs = _run_dirs(runs, None if out is None else os.path.join(os.fspath(out), "runs"))
+    ext = "svg" if format == "svg" else "png"
+    _refuse_non_regular(
+        [os.path.join(out if out is not None else dirs[0], f) for f in (f"trajectory.{ext}", f"timeseries.{ext}", "animation.gif")]
+    )
     _native.plot(dirs, None if out is None else os.fspath(out), format == "svg", bool(animate), x, group, metric)
     return os.fspath(out) if out is not None else dirs[0]
 
@@ -577,6 +602,7 @@ def report(runs, out: str) -> str:
     import os
 
     out = _check_path("out", out)
+    _refuse_non_regular([out])
     dirs = _run_dirs(runs, out + "_runs")
     _native.report(dirs, out)
     return out

@@ -218,7 +218,7 @@ class _Starts:
             return self.batch.reset(i, x0, y0, h0, None), (x0, y0, h0)
         if fixed is not None:
             try:
-                x, y, h = (float(v) for v in fixed)
+                x, y, h = (_check_number('options["start"]', v) for v in fixed)  # no strings
             except (TypeError, ValueError):
                 raise ValueError(f'options["start"] must be "scenario" or (x_m, y_m, heading_rad), got {fixed!r}') from None
             return self.batch.reset(i, x, y, h, int(rng.integers(0, 2**63))), (x, y, h)
