@@ -55,6 +55,20 @@ def test_trace_is_read_only_and_save_writes_what_was_simulated(tmp_path):
     assert float(first[header.index("error")]) == float(run.trace["error"][0])
 
 
+def test_a_run_pickles_and_stays_read_only(tmp_path):
+    import pickle
+
+    run = short(seconds=1.0).run()
+    back = pickle.loads(pickle.dumps(run))
+    assert back.summary == run.summary and back.scenario == run.scenario
+    assert all(np.array_equal(back.trace[k], run.trace[k], equal_nan=True) for k in run.trace)
+    with pytest.raises(ValueError, match="read-only"):
+        back.trace["x_m"][0] = 0.0
+    back.save(tmp_path / "a")
+    run.save(tmp_path / "b")
+    assert (tmp_path / "a" / "trace.csv").read_bytes() == (tmp_path / "b" / "trace.csv").read_bytes()
+
+
 def test_a_run_made_from_your_arrays_leaves_them_yours(tmp_path):
     """Run(summary, trace) copies: the caller's arrays stay writeable, the run's are not."""
     a = np.arange(3.0)
@@ -310,6 +324,18 @@ def test_progress_lines_are_rate_bounded():
     for d in range(0, 1001):
         p(d, 1000)
     assert [x.split(" runs")[0] for x in out.getvalue().splitlines()] == ["sweep: 0/1000", "sweep: 1000/1000"]
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    tty = Terminal()
+    p = isotrack._Progress(tty)
+    p(0, 4)
+    p(4, 4)
+    # On a terminal: one line redrawn in place, ended once.
+    assert tty.getvalue().startswith("\rsweep: 0/4 runs") and tty.getvalue().count("\n") == 1
+    assert tty.getvalue().endswith("\n") and "\rsweep: 4/4 runs (100 %)" in tty.getvalue()
 
 
 # --- 8. The vector environment renders ---------------------------------------------------------

@@ -199,6 +199,11 @@ class Run:
         _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
         return path
 
+    def __reduce__(self):
+        # Pickled as its parts (MappingProxyType itself does not pickle): multiprocessing workers
+        # can return runs.
+        return (Run._from_native, (self._summary_json, {k: np.array(v) for k, v in self._trace.items()}, self._scenario))
+
     def to_pandas(self):
         """The trace as a pandas DataFrame (needs pandas; a copy, free to edit)."""
         try:
@@ -465,6 +470,8 @@ def sweep(
         )
     else:
         header, kinds, rows = _native.sweep_cells(text, name, threads, show)
+    if len(kinds) != len(header):  # pragma: no cover - the engine's invariant
+        raise RuntimeError(f"internal error in isotrack: {len(header)} columns but {len(kinds)} kinds")
     return {col: _sweep_column(kinds[k], [r[k] for r in rows]) for k, col in enumerate(header)}
 
 
