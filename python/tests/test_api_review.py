@@ -149,6 +149,7 @@ def test_wrong_types_and_missing_paths_name_the_argument(tmp_path):
         (lambda: isotrack.Scenario.from_toml(b"x = 1"), TypeError, "text"),
         (lambda: sc.set(5, 1.0), TypeError, "key"),
         (lambda: sc.run(record_rate_hz="10"), TypeError, "record_rate_hz"),
+        (lambda: sc.run(record_rate_hz=10**400), ValueError, "record_rate_hz"),
         (lambda: sc.run(controller=5), TypeError, "controller"),
         (lambda: sc.run(controller=lambda t, v: 0.0), TypeError, "controller"),
         (lambda: sc.field_values("a", "b"), TypeError, "x"),

@@ -60,7 +60,10 @@ def _check_number(name: str, v: Any, optional: bool = False) -> Optional[float]:
         return None
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name} must be a number, got {v!r:.80} ({_type_name(v)})")
-    return float(v)
+    try:
+        return float(v)
+    except OverflowError:
+        raise ValueError(f"{name}: an integer of {int(v).bit_length()} bits is beyond any float") from None
 
 
 def _check_flag(name: str, v: Any) -> bool:
