@@ -207,6 +207,11 @@ def test_wrong_types_for_the_environments_name_the_argument():
             with pytest.raises(kind) as e:
                 make(**kwargs)
             assert word in str(e.value), (kwargs, e.value)
+    for env in (gym.IsolineEnv(), gym.IsolineVectorEnv(num_envs=2)):
+        with pytest.raises(TypeError, match="options"):
+            env.reset(options=5)
+        with pytest.raises(TypeError, match="seed"):
+            env.reset(seed="1")
 
 
 # --- 4. compare() refuses to compare nothing, or a law twice ----------------------------------

@@ -425,6 +425,7 @@ class IsolineEnv(gymnasium.Env):
         """Starts a run (see the module documentation): ``(observation, info)``. ``seed``: None
         or an int >= 0 (numpy's too, taken exactly)."""
         super().reset(seed=_check_seed(seed))
+        options = _check_options(options)
         obs, start = self._starts.reset(0, self.np_random, options)
         self._running = self._reset_once = True
         self._renderer.record(0, reset=True)
@@ -485,6 +486,13 @@ def _check_seed(seed: Any, name: str = "seed") -> Optional[int]:
     if s < 0:
         raise ValueError(f"{name} must be >= 0, got {s}")
     return s
+
+
+def _check_options(options: Any) -> Optional[Dict[str, Any]]:
+    """A reset's ``options``: ``None`` or a dict (a ``TypeError`` naming ``options`` otherwise)."""
+    if options is not None and not isinstance(options, dict):
+        raise TypeError(f"options must be None or a dict, got {options!r:.80} ({type(options).__name__})")
+    return options
 
 
 def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
@@ -603,6 +611,7 @@ class IsolineVectorEnv(VectorEnv):
         """Starts every run (or those of ``options["reset_mask"]``): ``(observations[num_envs,
         2], info)`` with ``info["start"]`` (and ``info["_start"]``, which were reset)."""
         n = self.num_envs
+        options = _check_options(options)
         if options is not None and "reset_mask" in options:
             options = dict(options)
             mask = _check_reset_mask(options.pop("reset_mask"), n)
