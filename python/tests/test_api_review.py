@@ -108,6 +108,8 @@ def test_sweep_column_dtypes_are_fixed_by_the_sweep_file(tmp_path):
     # Every run completes: no run has a detail.
     ok = isotrack.sweep(sweep_file(tmp_path, 'controller.kp = [5.0, 10.0]\nname = ["1", "2"]\n'))
     assert list(ok["outcome"]) == ["completed"] * 4
+    # `samples` is a masked array whether or not a run was invalid (nothing masked here).
+    assert isinstance(ok["samples"], np.ma.MaskedArray) and not ok["samples"].mask.any()
     assert ok["outcome_detail"].dtype.kind == "U" and list(ok["outcome_detail"]) == [""] * 4
     # A swept string key stays text even when its values look like integers.
     assert ok["name"].dtype.kind == "U" and list(ok["name"]) == ["1", "2", "1", "2"]

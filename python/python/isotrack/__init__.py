@@ -336,15 +336,19 @@ def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[st
     return json.loads(scenario._native.check_json(_check_number("tube_halfwidth", tube_halfwidth, optional=True)))
 
 
-def _sweep_column(kind: str, cells: list) -> np.ndarray:
+def _sweep_column(kind: str, cells: list, masked: bool = False) -> np.ndarray:
     """One ``results.csv`` column as numpy, by the column's kind (from the sweep's plan, never
-    guessed from the cells): ``"int"`` int64 (a masked array where a cell is empty: the
-    ``samples`` of an invalid scenario), ``"float"`` float64 (NaN for an empty cell), ``"bool"``
-    bool, ``"str"`` str (``""`` for an empty cell)."""
+    guessed from the cells): ``"int"`` int64 (with ``masked``, always a masked array, masked
+    where a cell is empty: the ``samples`` of an invalid scenario), ``"float"`` float64 (NaN
+    for an empty cell), ``"bool"`` bool, ``"str"`` str (``""`` for an empty cell)."""
     if kind == "int":
         values = np.array([int(c) if c != "" else 0 for c in cells], dtype=np.int64)
-        empty = [c == "" for c in cells]
-        return np.ma.masked_array(values, mask=empty) if any(empty) else values
+        empty = np.array([c == "" for c in cells], dtype=bool)
+        if masked:
+            return np.ma.masked_array(values, mask=empty)
+        if empty.any():  # pragma: no cover - only `samples` has empty integer cells
+            raise RuntimeError("internal error in isotrack: an empty cell in an integer column")
+        return values
     if kind == "float":
         return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
     if kind == "bool":
@@ -439,8 +443,8 @@ def sweep(
     """Runs a sweep (a sweep file's path, or its TOML text, whose ``scenario`` is then relative
     to the current directory) and returns one numpy array per column of ``results.csv``, in
     ``run_id`` order: int64 for integer columns (``run_id``, ``sim.seed``, ``samples``, and any
-    swept key whose values are integers; ``samples`` is a masked array where a run was an
-    invalid scenario), float64 for the other numeric columns (NaN for an empty cell), str
+    swept key whose values are integers; ``samples`` is always a masked array, masked where a
+    run was an invalid scenario), float64 for the other numeric columns (NaN for an empty cell), str
     otherwise. The same cells as ``isotrack sweep`` writes, exactly: setting a row's swept keys
     (``sim.seed`` included) on the sweep's scenario and running it gives the row's metrics
     again. Every column's dtype follows from the sweep file alone, whatever its runs give:
@@ -475,7 +479,7 @@ def sweep(
         header, kinds, rows = _native.sweep_cells(text, name, threads, show)
     if len(kinds) != len(header):  # pragma: no cover - the engine's invariant
         raise RuntimeError(f"internal error in isotrack: {len(header)} columns but {len(kinds)} kinds")
-    return {col: _sweep_column(kinds[k], [r[k] for r in rows]) for k, col in enumerate(header)}
+    return {col: _sweep_column(kinds[k], [r[k] for r in rows], masked=col == "samples") for k, col in enumerate(header)}
 
 
 def benchmark(
