@@ -143,3 +143,37 @@ fn panic_error(payload: &(dyn std::any::Any + Send)) -> PyErr {
         "internal error in isotrack (a bug: please report it with the call that caused it): {what}"
     ))
 }
+
+/// Runs `work` on a thread of its own, the GIL released, while this thread answers signals
+/// every [`SIGNAL_PERIOD`]. For pure computations that cannot be cancelled (`check`): on
+/// `KeyboardInterrupt` the caller gets the exception at once and the thread finishes alone, its
+/// answer dropped (it writes nothing). A panic in `work` is a `RuntimeError`.
+pub(crate) fn detached<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    let (tx, rx) = channel();
+    std::thread::Builder::new()
+        .name("isotrack-detached".into())
+        .spawn(move || {
+            let _ = tx.send(catch_unwind(AssertUnwindSafe(work)));
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
+    let mut rx = rx;
+    loop {
+        // The receiver goes to the GIL-free side and back (it is `Send`, not `Sync`).
+        let (answer, back) = py.detach(move || (rx.recv_timeout(SIGNAL_PERIOD), rx));
+        rx = back;
+        match answer {
+            Ok(Ok(v)) => return Ok(v),
+            Ok(Err(panic)) => return Err(panic_error(panic.as_ref())),
+            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err(
+                    "internal error in isotrack: a worker thread ended without an answer",
+                ))
+            }
+        }
+    }
+}

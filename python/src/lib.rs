@@ -147,10 +147,13 @@ impl PyScenario {
                 )));
             }
         }
-        no_panic(|| {
-            let r = py.detach(|| isotrack_scenario::check::check(&self.inner, tube_halfwidth));
-            serde_json::to_string(&r).map_err(|e| PyValueError::new_err(e.to_string()))
-        })
+        // Ctrl-C answered at once (a puff plume's check over a long run takes minutes); the
+        // check itself cannot be cancelled and finishes on its own thread, its answer dropped.
+        let scenario = self.inner.clone();
+        guard::detached(py, move || {
+            serde_json::to_string(&isotrack_scenario::check::check(&scenario, tube_halfwidth))
+        })?
+        .map_err(|e| PyValueError::new_err(e.to_string()))
     }
 }
 

@@ -398,3 +398,31 @@ def test_outputs_that_are_fifos_are_refused_without_blocking(tmp_path):
     with pytest.raises(OSError, match="trajectory.png: not a regular file"):
         isotrack.plot([good], out=str(tmp_path / "fig"))
     assert time.monotonic() - t0 < 5.0
+
+
+# --- ROBUSTNESS.md class 4: Ctrl-C in check() -------------------------------------------------
+
+
+def test_ctrl_c_answers_a_long_check():
+    """A puff plume's check over 4e5 s takes about ten seconds (its moving-isoline report grows
+    with the duration): a SIGINT at 0.3 s is answered within 2 s."""
+    import signal
+    import threading
+    import time
+
+    sc = (
+        isotrack.Scenario.from_file(str(ROOT / "scenarios" / "puff-plume-edge.toml"))
+        .set("output.record_rate_hz", 0.0)
+        .set("sim.duration_s", 4e5)
+    )
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    t0 = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            isotrack.check(sc)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - t0 < 2.0
+    # The module still answers.
+    assert isotrack.check(isotrack.Scenario.default())["verdict"]
