@@ -427,3 +427,20 @@ def test_ctrl_c_answers_a_long_check():
     assert time.monotonic() - t0 < 2.0
     # The module still answers.
     assert isotrack.check(isotrack.Scenario.default())["verdict"]
+
+
+# --- ROBUSTNESS.md class 2: sizes -------------------------------------------------------------
+
+
+def test_toml_text_is_bounded_like_files():
+    """Scenario and sweep text from Python are held to the CLI's 1 MiB file limit (a 50 MB
+    scenario name was once accepted)."""
+    big = 'name = "' + "a" * (2 << 20) + '"\n'
+    with pytest.raises(ValueError, match="larger than 1048576 bytes"):
+        isotrack.Scenario.from_toml(big)
+    with pytest.raises(ValueError, match="larger than 1048576 bytes"):
+        isotrack.sweep('scenario = "x.toml"\n' + big)
+    # Multi-byte characters count as their bytes.
+    with pytest.raises(ValueError, match="larger than"):
+        isotrack.Scenario.from_toml('name = "' + "\u00e9" * (600 << 10) + '"\n')
+    assert isotrack.Scenario.from_toml('name = "' + "a" * 1000 + '"\n').to_toml()

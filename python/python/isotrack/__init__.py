@@ -127,6 +127,16 @@ def _refuse_non_regular(paths: "list[str]") -> None:
             raise OSError(f"{p}: not a regular file ({kind}): not written")
 
 
+#: The largest scenario or sweep text read, bytes (the CLI's limit for scenario and sweep files).
+_MAX_TEXT_BYTES = 1 << 20
+
+
+def _check_text_size(name: str, text: str) -> None:
+    """A ``ValueError`` for TOML text larger than the CLI reads from a file (1 MiB)."""
+    if len(text) > _MAX_TEXT_BYTES or (len(text) * 4 > _MAX_TEXT_BYTES and len(text.encode("utf-8")) > _MAX_TEXT_BYTES):
+        raise ValueError(f"{name}: larger than {_MAX_TEXT_BYTES} bytes, not scenario or sweep text")
+
+
 def _frozen(a: Any) -> np.ndarray:
     """A read-only view of a read-only array: neither it nor anything made from it can write to
     the data a :class:`Run` saves (numpy refuses to make the view writeable again)."""
@@ -252,6 +262,7 @@ class Scenario:
         """Scenario text (TOML); the files it names are relative to the current directory."""
         if not isinstance(text, str):
             raise TypeError(f"text must be scenario text (a str), got {_type_name(text)}")
+        _check_text_size("text", text)
         return Scenario(_native.Scenario.from_toml(text))
 
     def set(self, key: str, value: Any) -> "Scenario":
@@ -431,6 +442,7 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
             raise ValueError(f"{path}: larger than {_MAX_SWEEP_FILE_BYTES} bytes, not a sweep file")
         with open(path, encoding="utf-8") as f:
             return f.read(), path
+    _check_text_size("path_or_toml_text", path_or_toml_text)
     return path_or_toml_text, os.path.join(os.getcwd(), "<toml>")
 
 
