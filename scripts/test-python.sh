@@ -11,6 +11,8 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/pip" install -q --upgrade pip
 "$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" matplotlib
-"$venv/bin/pip" install -q ./python
+# -v: cargo's crate-by-crate progress (a cold build takes many minutes), not a silent wait.
+echo "building the isotrack Python extension (cargo's progress follows)" >&2
+"$venv/bin/pip" install -v ./python
 [ -x target/release/isotrack ] || cargo build --release --locked -p isotrack-cli
 ISOTRACK_BIN="$PWD/target/release/isotrack" "$venv/bin/python" -m pytest -q "${@:-python/tests}"

@@ -334,6 +334,23 @@ impl PyEnvBatch {
         Ok((s.pose[0], s.pose[1], s.pose[2], s.t_s))
     }
 
+    /// Every environment's true state at its last sample, `float64[num_envs, 4]` of rows
+    /// `(x_m, y_m, heading_rad, t_s)`, NaN for one never reset (for rendering a vector
+    /// environment in one call; never part of the observation).
+    fn poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v: Vec<f64> = self
+            .slots
+            .iter()
+            .flat_map(|s| match s.episode {
+                Some(_) => [s.pose[0], s.pose[1], s.pose[2], s.t_s],
+                None => [f64::NAN; 4],
+            })
+            .collect();
+        Ok(PyArray1::from_vec(py, v)
+            .reshape([self.slots.len(), 4])?
+            .into_any())
+    }
+
     /// Bounds of the observation `[eps_m, deps_m]` where the sensor has a `range = [lo, hi]`
     /// (the measurement is clamped to it): `eps_m` in `[lo - s_d, hi - s_d]` and `|deps_m| <=
     /// (hi - lo) / period` (samples are at least a sensor period apart), widened by a relative

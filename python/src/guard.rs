@@ -75,6 +75,18 @@ pub(crate) fn interruptible<T: Send>(
     cancel: &AtomicBool,
     work: impl FnOnce() -> T + Send,
 ) -> PyResult<T> {
+    interruptible_ticking(py, cancel, work, &mut |_| Ok(()))
+}
+
+/// [`interruptible`], calling `tick` on this thread (the GIL held) every [`SIGNAL_PERIOD`] while
+/// `work` runs and once when it has returned (a progress display); an exception `tick` raises
+/// stops `work` as a `KeyboardInterrupt` does, and is raised.
+pub(crate) fn interruptible_ticking<T: Send>(
+    py: Python<'_>,
+    cancel: &AtomicBool,
+    work: impl FnOnce() -> T + Send,
+    tick: &mut dyn FnMut(Python<'_>) -> PyResult<()>,
+) -> PyResult<T> {
     let mut interrupted: Option<PyErr> = None;
     // `done` is set (and the condition variable notified) when `work` has returned.
     let done = (Mutex::new(false), Condvar::new());
@@ -95,14 +107,14 @@ pub(crate) fn interruptible<T: Send>(
                     .unwrap_or_else(|p| p.into_inner());
                 *guard
             });
-            if finished {
-                break;
-            }
             if interrupted.is_none() {
-                if let Err(e) = py.check_signals() {
+                if let Err(e) = py.check_signals().and_then(|()| tick(py)) {
                     cancel.store(true, Ordering::Relaxed);
                     interrupted = Some(e);
                 }
+            }
+            if finished {
+                break;
             }
         }
         py.detach(|| handle.join())
@@ -130,4 +142,38 @@ fn panic_error(payload: &(dyn std::any::Any + Send)) -> PyErr {
     PyRuntimeError::new_err(format!(
         "internal error in isotrack (a bug: please report it with the call that caused it): {what}"
     ))
+}
+
+/// Runs `work` on a thread of its own, the GIL released, while this thread answers signals
+/// every [`SIGNAL_PERIOD`]. For pure computations that cannot be cancelled (`check`): on
+/// `KeyboardInterrupt` the caller gets the exception at once and the thread finishes alone, its
+/// answer dropped (it writes nothing). A panic in `work` is a `RuntimeError`.
+pub(crate) fn detached<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    let (tx, rx) = channel();
+    std::thread::Builder::new()
+        .name("isotrack-detached".into())
+        .spawn(move || {
+            let _ = tx.send(catch_unwind(AssertUnwindSafe(work)));
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
+    let mut rx = rx;
+    loop {
+        // The receiver goes to the GIL-free side and back (it is `Send`, not `Sync`).
+        let (answer, back) = py.detach(move || (rx.recv_timeout(SIGNAL_PERIOD), rx));
+        rx = back;
+        match answer {
+            Ok(Ok(v)) => return Ok(v),
+            Ok(Err(panic)) => return Err(panic_error(panic.as_ref())),
+            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err(
+                    "internal error in isotrack: a worker thread ended without an answer",
+                ))
+            }
+        }
+    }
 }

@@ -4,7 +4,7 @@
 //! built-in controller. The engine runs with the GIL released (a Python controller takes it
 //! back for each of its samples only).
 
-use guard::{interruptible, no_panic, SignalWatch};
+use guard::{no_panic, SignalWatch};
 use isotrack_core::{IsolineController, Measurement, ScalarField, Vec2};
 use isotrack_scenario::{load_scenario, parse_scenario, Scenario, ScenarioError};
 use isotrack_sim::{RunResult, TraceRow};
@@ -147,10 +147,13 @@ impl PyScenario {
                 )));
             }
         }
-        no_panic(|| {
-            let r = py.detach(|| isotrack_scenario::check::check(&self.inner, tube_halfwidth));
-            serde_json::to_string(&r).map_err(|e| PyValueError::new_err(e.to_string()))
-        })
+        // Ctrl-C answered at once (a puff plume's check over a long run takes minutes); the
+        // check itself cannot be cancelled and finishes on its own thread, its answer dropped.
+        let scenario = self.inner.clone();
+        guard::detached(py, move || {
+            serde_json::to_string(&isotrack_scenario::check::check(&scenario, tube_halfwidth))
+        })?
+        .map_err(|e| PyValueError::new_err(e.to_string()))
     }
 }
 
@@ -323,7 +326,7 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
         return match v.extract::<i64>() {
             Ok(i) => Ok(toml::Value::Integer(i)),
             Err(_) => Err(bad(format!(
-                "{} does not fit in a 64-bit integer",
+                "{} does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)",
                 shown(v)
             ))),
         };
@@ -338,9 +341,17 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
             .collect();
         return Ok(toml::Value::Array(items?));
     }
-    // A numpy integer is not a Python int, but converts through `__index__`.
-    if let Ok(i) = v.extract::<i64>() {
-        return Ok(toml::Value::Integer(i));
+    // A numpy integer (`np.int64`, `np.uint64`, ...) is not a Python int: taken exactly through
+    // `operator.index`, never through a float (which rounds past 2**53).
+    if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
+        let exact = v.py().import("operator")?.call_method1("index", (v,))?;
+        return match exact.extract::<i64>() {
+            Ok(i) => Ok(toml::Value::Integer(i)),
+            Err(_) => Err(bad(format!(
+                "{} does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)",
+                shown(v)
+            ))),
+        };
     }
     if let Ok(f) = v.extract::<f64>() {
         if !f.is_finite() {
@@ -444,29 +455,130 @@ impl IsolineController for PyController {
     fn reset(&mut self) {}
 }
 
-/// A sweep from its file's text: `(header, rows)` of `results.csv`'s cells in `run_id` order;
-/// `name` names the sweep in messages and anchors its relative `scenario` path.
+/// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
+pub(crate) type SweepCells = (Vec<String>, Vec<&'static str>, Vec<Vec<String>>);
+
+/// A sweep from its file's text: `(header, kinds, rows)`: `results.csv`'s header, each
+/// column's kind ([`column_kinds`]) and its cells in `run_id` order; `name` names the sweep in
+/// messages and anchors its relative `scenario` path. `progress(done, total)`, a Python
+/// callable, is called on this thread about every 20 ms while the runs go and once at the end.
 /// Ctrl-C stops it between batches of runs.
 #[pyfunction]
-#[pyo3(signature = (text, name, threads=None, progress=false))]
+#[pyo3(signature = (text, name, threads=None, progress=None))]
 fn sweep_cells(
     py: Python<'_>,
     text: &str,
     name: &str,
     threads: Option<usize>,
-    progress: bool,
-) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
+    progress: Option<Py<PyAny>>,
+) -> PyResult<SweepCells> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let prepared =
+        isotrack_cli::sweep::PreparedSweep::new(text, Path::new(name)).map_err(sweep_failure)?;
+    let kinds = column_kinds(&prepared.plan);
     let cancel = AtomicBool::new(false);
-    interruptible(py, &cancel, || {
-        isotrack_cli::sweep::sweep_in_memory(text, Path::new(name), threads, progress, &cancel)
-    })?
-    .map_err(|f| match f.code {
+    let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));
+    let report = |d: u64, t: u64| {
+        done.fetch_max(d, Ordering::Relaxed);
+        total.store(t, Ordering::Relaxed);
+    };
+    let mut shown = None;
+    let mut tick = |py: Python<'_>| -> PyResult<()> {
+        let now = (done.load(Ordering::Relaxed), total.load(Ordering::Relaxed));
+        match &progress {
+            Some(cb) if shown != Some(now) => {
+                shown = Some(now);
+                cb.call1(py, now).map(drop)
+            }
+            _ => Ok(()),
+        }
+    };
+    let (header, rows) = guard::interruptible_ticking(
+        py,
+        &cancel,
+        || {
+            isotrack_cli::sweep::sweep_in_memory(
+                text,
+                Path::new(name),
+                threads,
+                progress
+                    .is_some()
+                    .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
+                &cancel,
+            )
+        },
+        &mut tick,
+    )?
+    .map_err(sweep_failure)?;
+    Ok((header, kinds, rows))
+}
+
+/// A sweep's failure as the Python exception of its kind.
+fn sweep_failure(f: isotrack_cli::run::Failure) -> PyErr {
+    match f.code {
         66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
         isotrack_cli::sweep::INTERRUPTED => {
             pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message)
         }
         _ => ScenarioErrorPy::new_err(f.message),
-    })
+    }
+}
+
+/// The kind of each `results.csv` column of a sweep, from the plan (never from the cells, so
+/// that a column's kind does not depend on which runs it holds): `"int"` for `run_id`,
+/// `samples`, a derived `sim.seed` and a swept key whose values are all integers; `"float"` for
+/// the metrics, `[random]` keys and swept keys of numbers; `"bool"` for swept booleans; `"str"`
+/// for `outcome`, `outcome_detail` and any other swept key.
+pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'static str> {
+    let kind = |values: &mut dyn Iterator<Item = Option<&toml::Value>>| {
+        let (mut ints, mut floats, mut bools, mut n) = (0, 0, 0, 0);
+        for v in values {
+            n += 1;
+            match v {
+                Some(toml::Value::Integer(_)) => ints += 1,
+                Some(toml::Value::Float(_)) => floats += 1,
+                Some(toml::Value::Boolean(_)) => bools += 1,
+                _ => {}
+            }
+        }
+        if n > 0 && ints == n {
+            "int"
+        } else if n > 0 && ints + floats == n {
+            "float"
+        } else if n > 0 && bools == n {
+            "bool"
+        } else {
+            "str"
+        }
+    };
+    let mut kinds = vec!["int"];
+    for (_, list) in &plan.grid {
+        let width = list.first().and_then(|v| v.as_array()).map(|a| a.len());
+        let split = width.is_some_and(|w| {
+            list.iter()
+                .all(|v| v.as_array().is_some_and(|a| a.len() == w))
+        });
+        match width {
+            Some(w) if split => kinds.extend(
+                (0..w).map(|i| kind(&mut list.iter().map(|v| v.as_array().and_then(|a| a.get(i))))),
+            ),
+            _ => kinds.push(kind(&mut list.iter().map(Some))),
+        }
+    }
+    kinds.extend(plan.random.iter().map(|_| "float"));
+    if plan.derives_seed {
+        kinds.push("int");
+    }
+    kinds.extend(
+        isotrack_cli::sweep::METRIC_COLUMNS
+            .iter()
+            .map(|c| match *c {
+                "outcome" | "outcome_detail" => "str",
+                "samples" => "int",
+                _ => "float",
+            }),
+    );
+    kinds
 }
 
 /// The isotrack version.

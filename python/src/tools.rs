@@ -212,20 +212,32 @@ pub fn controller_kinds() -> Vec<&'static str> {
 /// A sweep flown by a Python controller: `factory(scenario)` is called for each run with that
 /// run's scenario and returns an object with `update(t_s, value) -> omega` (and an optional
 /// `reset()`); the runs go one after another on this thread. Returns `results.csv`'s header and
-/// rows as `sweep_cells` does; the first exception of a factory or controller is raised, and
-/// Ctrl-C stops it within a sample.
+/// kinds and rows as `sweep_cells` does (`progress(done, total)` called before the first run
+/// and after each); the first exception of a factory or controller is raised, and Ctrl-C stops
+/// it within a sample.
 #[pyfunction]
+#[pyo3(signature = (text, name, factory, progress=None))]
 pub fn sweep_cells_with(
     py: Python<'_>,
     text: &str,
     name: &str,
     factory: Py<PyAny>,
-) -> PyResult<(Vec<String>, Vec<Vec<String>>)> {
+    progress: Option<Py<PyAny>>,
+) -> PyResult<crate::SweepCells> {
     use isotrack_cli::sweep::{row_fields, run_scenario, PreparedSweep};
     let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
+    let kinds = crate::column_kinds(&sweep.plan);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
-    for id in 0..sweep.plan.total() {
+    let total = sweep.plan.total();
+    let report = |done: u64| -> PyResult<()> {
+        match &progress {
+            Some(cb) => cb.call1(py, (done, total)).map(drop),
+            None => Ok(()),
+        }
+    };
+    report(0)?;
+    for id in 0..total {
         let result = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
             Err(e) => Err(e),
             Ok(scenario) => {
@@ -258,6 +270,7 @@ pub fn sweep_cells_with(
             }
         };
         rows.push(row_fields(&sweep.plan, id, result));
+        report(id + 1)?;
     }
-    Ok((sweep.header, rows))
+    Ok((sweep.header, kinds, rows))
 }

@@ -172,13 +172,16 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure>
 /// A whole sweep in memory, for library callers (the Python package): the sweep file's text
 /// (`name` names it in messages; its `scenario` path is relative to `dir`), `threads` workers
 /// (capped as for `--threads`). Returns the `results.csv` header and rows as fields, in
-/// `run_id` order: the same cells the CLI writes. Setting `cancel` (from another thread: a
-/// front end's Ctrl-C) stops it before its next batch of runs, with a failure saying so.
+/// `run_id` order: the same cells the CLI writes. `progress(done, total)`, if given, is called
+/// once before the first run (`done = 0`) and after each batch of runs, from the worker
+/// threads (the front end shows it its own way: the Python package on `sys.stderr`). Setting
+/// `cancel` (from another thread: a front end's Ctrl-C) stops it before its next batch of runs,
+/// with a failure saying so.
 pub fn sweep_in_memory(
     text: &str,
     name: &Path,
     threads: Option<usize>,
-    progress: bool,
+    progress: Option<&(dyn Fn(u64, u64) + Sync)>,
     cancel: &std::sync::atomic::AtomicBool,
 ) -> Result<(Vec<String>, Vec<Vec<String>>), Failure> {
     let cancelled = || cancel.load(std::sync::atomic::Ordering::Relaxed);
@@ -189,12 +192,11 @@ pub fn sweep_in_memory(
         label,
     } = PreparedSweep::new(text, name)?;
     let pool = worker_pool(threads)?;
-    let pb = if progress {
-        runs_progress_bar(plan.total())
-    } else {
-        ProgressBar::hidden()
-    };
     let total = plan.total();
+    let done = std::sync::atomic::AtomicU64::new(0);
+    if let Some(p) = progress {
+        p(0, total);
+    }
     let lines: Vec<String> = pool.install(|| {
         (0..total.div_ceil(LANES as u64))
             .into_par_iter()
@@ -205,12 +207,17 @@ pub fn sweep_in_memory(
                 let ids: Vec<u64> =
                     (c * LANES as u64..((c + 1) * LANES as u64).min(total)).collect();
                 let rows = run_rows(&plan, &base, &ids, &label);
-                pb.inc(rows.len() as u64);
+                if let Some(p) = progress {
+                    let n = rows.len() as u64;
+                    p(
+                        done.fetch_add(n, std::sync::atomic::Ordering::Relaxed) + n,
+                        total,
+                    );
+                }
                 rows
             })
             .collect()
     });
-    pb.finish();
     if cancelled() {
         return Err(fail(INTERRUPTED, "interrupted".into()));
     }

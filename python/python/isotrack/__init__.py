@@ -10,7 +10,7 @@
 from __future__ import annotations
 
 import json
-from typing import Any, Callable, Dict, Optional
+from typing import Any, Callable, Dict, Mapping, Optional
 
 import numpy as np
 
@@ -36,12 +36,123 @@ __version__: str = _native.version()
 ScenarioError = _native.ScenarioError
 
 
+def _type_name(v: Any) -> str:
+    return type(v).__name__
+
+
+def _check_path(name: str, v: Any) -> str:
+    """``v`` as a path (a ``str`` or an ``os.PathLike``), else a ``TypeError`` naming ``name``."""
+    import os
+
+    if isinstance(v, str):
+        return v
+    if isinstance(v, os.PathLike):
+        p = os.fspath(v)
+        if isinstance(p, str):
+            return p
+    raise TypeError(f"{name} must be a path (str or os.PathLike), got {v!r:.80} ({_type_name(v)})")
+
+
+def _check_number(name: str, v: Any, optional: bool = False) -> Optional[float]:
+    """``v`` as a float: a Python or numpy real number (never a bool, a string or ``None`` unless
+    ``optional``), else a ``TypeError`` naming ``name``."""
+    if v is None and optional:
+        return None
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number, got {v!r:.80} ({_type_name(v)})")
+    try:
+        return float(v)
+    except OverflowError:
+        raise ValueError(f"{name}: an integer of {int(v).bit_length()} bits is beyond any float") from None
+
+
+def _check_flag(name: str, v: Any) -> bool:
+    """``v`` as a bool (``True``/``False``, numpy's too), else a ``TypeError`` naming ``name``."""
+    if not isinstance(v, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False, got {v!r:.80} ({_type_name(v)})")
+    return bool(v)
+
+
+def _check_scenario(name: str, v: Any) -> "Scenario":
+    if not isinstance(v, Scenario):
+        raise TypeError(f"{name} must be an isotrack.Scenario, got {v!r:.80} ({_type_name(v)})")
+    return v
+
+
+def _check_names(name: str, v: Any) -> Optional[list]:
+    """``v`` as a list of strings (``None`` passes), else a ``TypeError`` naming ``name`` (a
+    single string too: it is not read as a list of its characters)."""
+    if v is None:
+        return None
+    if isinstance(v, (str, bytes)) or not hasattr(v, "__iter__"):
+        raise TypeError(f"{name} must be a list of strings, got {v!r:.80} ({_type_name(v)})")
+    items = list(v)
+    for x in items:
+        if not isinstance(x, str):
+            raise TypeError(f"{name} must be a list of strings, holds {x!r:.80} ({_type_name(x)})")
+    return items
+
+
+def _check_controller(name: str, v: Any) -> Any:
+    if not callable(getattr(v, "update", None)):
+        raise TypeError(
+            f"{name} must be an object with update(t_s, value) -> omega, got {v!r:.80} ({_type_name(v)})"
+        )
+    return v
+
+
+def _coordinates(name: str, v: Any) -> np.ndarray:
+    """Coordinates as a float64 array: real numbers only (a ``TypeError`` naming ``name`` for
+    strings, objects, booleans, complex numbers)."""
+    a = np.asarray(v)
+    if a.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must be real numbers (m), got {v!r:.80} (dtype {a.dtype})")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _refuse_non_regular(paths: "list[str]") -> None:
+    """An ``OSError`` for an output path that exists and is not a regular file (a FIFO would
+    block the write until someone reads it, a device would swallow it): checked before anything
+    is written, so that nothing blocks and nothing is half written."""
+    import os
+    import stat
+
+    for p in paths:
+        try:
+            mode = os.stat(p).st_mode
+        except (FileNotFoundError, NotADirectoryError):
+            continue
+        if not stat.S_ISREG(mode):
+            kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO, a device or a socket"
+            raise OSError(f"{p}: not a regular file ({kind}): not written")
+
+
+#: The largest scenario or sweep text read, bytes (the CLI's limit for scenario and sweep files).
+_MAX_TEXT_BYTES = 1 << 20
+
+
+def _check_text_size(name: str, text: str) -> None:
+    """A ``ValueError`` for TOML text larger than the CLI reads from a file (1 MiB)."""
+    if len(text) > _MAX_TEXT_BYTES or (len(text) * 4 > _MAX_TEXT_BYTES and len(text.encode("utf-8")) > _MAX_TEXT_BYTES):
+        raise ValueError(f"{name}: larger than {_MAX_TEXT_BYTES} bytes, not scenario or sweep text")
+
+
+def _frozen(a: Any) -> np.ndarray:
+    """A read-only view of a read-only array: neither it nor anything made from it can write to
+    the data a :class:`Run` saves (numpy refuses to make the view writeable again)."""
+    a = np.asarray(a)
+    a.flags.writeable = False
+    return a.view()
+
+
 class Run:
     """A finished run.
 
-    ``summary`` is a dict with exactly the keys of ``summary.json``; ``trace`` a dict of 1-D numpy
-    arrays named as the columns of ``trace.csv`` (``s_measured`` is NaN where no sample arrived);
-    ``scenario`` the scenario flown (``record_rate_hz`` applied).
+    ``summary`` is a dict with exactly the keys of ``summary.json``; ``trace`` a read-only mapping
+    of read-only 1-D numpy arrays named as the columns of ``trace.csv`` (``s_measured`` is NaN
+    where no sample arrived; ``run.trace["error"].copy()`` to edit one); ``scenario`` the
+    scenario flown (``record_rate_hz`` applied). A run cannot be edited: ``summary`` is a fresh
+    dict at every access, and :meth:`save` always writes what was simulated.
     """
 
     def __init__(
@@ -51,42 +162,83 @@ class Run:
         scenario: Optional["Scenario"] = None,
         _summary_json: Optional[str] = None,
     ):
-        self.summary = summary
-        self.trace = trace
-        self.scenario = scenario
-        self._summary_json = _summary_json
+        if scenario is not None:
+            _check_scenario("scenario", scenario)
+        text = _summary_json if _summary_json is not None else json.dumps(summary, indent=2)
+        # Copies: the caller's arrays stay theirs (and writeable).
+        self._init(text, {str(k): np.array(v, dtype=np.float64) for k, v in dict(trace).items()}, scenario)
+
+    @classmethod
+    def _from_native(cls, summary_json: str, trace: Dict[str, np.ndarray], scenario: "Scenario") -> "Run":
+        """A run from the engine's answer (its arrays taken, not copied)."""
+        run = cls.__new__(cls)
+        run._init(summary_json, trace, scenario)
+        return run
+
+    def _init(self, summary_json: str, trace: Dict[str, np.ndarray], scenario: Optional["Scenario"]) -> None:
+        import types
+
+        self._summary_json = summary_json
+        self._trace = {k: _frozen(v) for k, v in trace.items()}
+        self._trace_view = types.MappingProxyType(self._trace)
+        self._scenario = scenario
+
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """The keys of ``summary.json`` (a fresh dict at every access)."""
+        return json.loads(self._summary_json)
+
+    @property
+    def trace(self) -> "Mapping[str, np.ndarray]":
+        """The columns of ``trace.csv``, read-only numpy arrays."""
+        return self._trace_view
+
+    @property
+    def scenario(self) -> Optional["Scenario"]:
+        """The scenario flown (``record_rate_hz`` applied)."""
+        return self._scenario
 
     def save(self, directory) -> str:
         """Writes the run directory ``isotrack run --out DIR`` writes: ``trace.csv`` (numbers
         that read back bit for bit), ``summary.json`` and the resolved ``scenario.toml``; what
         :func:`plot`, :func:`report` and the ``isotrack`` command take. Creates the directory;
         returns its path."""
+        path = _check_path("directory", directory)
+        if self._scenario is None:
+            raise ValueError("this Run was not made by Scenario.run(): it has no scenario to save")
         import os
 
-        if self.scenario is None:
-            raise ValueError("this Run was not made by Scenario.run(): it has no scenario to save")
-        text = self._summary_json if self._summary_json is not None else json.dumps(self.summary, indent=2)
-        path = os.fspath(directory)
-        _native.write_run(path, text, self.scenario._native, self.trace)
+        _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
+        _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
         return path
 
+    def __reduce__(self):
+        # Pickled as its parts (MappingProxyType itself does not pickle): multiprocessing workers
+        # can return runs.
+        return (Run._from_native, (self._summary_json, {k: np.array(v) for k, v in self._trace.items()}, self._scenario))
+
     def to_pandas(self):
-        """The trace as a pandas DataFrame (needs pandas)."""
+        """The trace as a pandas DataFrame (needs pandas; a copy, free to edit)."""
         try:
             import pandas as pd
         except ImportError as e:  # pragma: no cover - depends on the environment
             raise ImportError("Run.to_pandas() needs pandas: pip install pandas") from e
-        return pd.DataFrame(self.trace)
+        return pd.DataFrame({k: v.copy() for k, v in self._trace.items()})
 
     def __repr__(self) -> str:
         s = self.summary
-        return f"Run(outcome={s['outcome']!r}, t_end_s={s['t_end_s']}, rows={len(self.trace['t_s'])})"
+        return f"Run(outcome={s['outcome']!r}, t_end_s={s['t_end_s']}, rows={len(self._trace['t_s'])})"
 
 
 class Scenario:
     """A resolved scenario (every default filled in), immutable: ``set`` returns a new one."""
 
     def __init__(self, native: "_native.Scenario"):
+        if not isinstance(native, _native.Scenario):
+            raise TypeError(
+                "make a Scenario with Scenario.default(), Scenario.from_file(path) or "
+                f"Scenario.from_toml(text), not Scenario({native!r:.80})"
+            )
         self._native = native
 
     @staticmethod
@@ -96,12 +248,21 @@ class Scenario:
 
     @staticmethod
     def from_file(path: str) -> "Scenario":
-        """A scenario file (TOML); the files it names are relative to it."""
-        return Scenario(_native.Scenario.from_file(str(path)))
+        """A scenario file (TOML); the files it names are relative to it. A path that does not
+        exist is a ``FileNotFoundError``; one that is not a path a ``TypeError``."""
+        import os
+
+        p = _check_path("path", path)
+        if not os.path.lexists(p):
+            raise FileNotFoundError(f"{p}: no such scenario file")
+        return Scenario(_native.Scenario.from_file(p))
 
     @staticmethod
     def from_toml(text: str) -> "Scenario":
         """Scenario text (TOML); the files it names are relative to the current directory."""
+        if not isinstance(text, str):
+            raise TypeError(f"text must be scenario text (a str), got {_type_name(text)}")
+        _check_text_size("text", text)
         return Scenario(_native.Scenario.from_toml(text))
 
     def set(self, key: str, value: Any) -> "Scenario":
@@ -111,6 +272,8 @@ class Scenario:
         TOML text. ``value``: a bool, a 64-bit integer (numpy's too), a finite float, a str, or
         a list or tuple of them nested at most 8 deep. Anything else raises
         :class:`ScenarioError` (a ``ValueError``) saying what was wrong."""
+        if not isinstance(key, str):
+            raise TypeError(f"key must be a dotted key (a str), got {key!r:.80} ({_type_name(key)})")
         return Scenario(self._native.set(key, value))
 
     def to_toml(self) -> str:
@@ -138,19 +301,21 @@ class Scenario:
         built-in laws' are. An exception inside it ends the run and is raised here with its
         traceback.
         """
-        summary, trace, flown = self._native.run(record_rate_hz, controller)
-        return Run(json.loads(summary), dict(trace), Scenario(flown), summary)
+        rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
+        if controller is not None:
+            _check_controller("controller", controller)
+        summary, trace, flown = self._native.run(rate, controller)
+        return Run._from_native(summary, dict(trace), Scenario(flown))
 
     def field_values(self, x, y, t: float = 0.0) -> np.ndarray:
         """The field at points ``(x, y)`` (m) at time ``t`` (s, within the run:
         ``0 <= t <= sim.duration_s``, else ``ValueError``), NaN where it has no value;
         vectorised over numpy arrays of any one shape (for plotting with matplotlib). Ctrl-C
         stops it."""
-        xa = np.ascontiguousarray(x, dtype=np.float64)
-        ya = np.ascontiguousarray(y, dtype=np.float64)
+        xa, ya = _coordinates("x", x), _coordinates("y", y)
         if xa.shape != ya.shape:
             raise ValueError(f"x and y differ in shape ({xa.shape} and {ya.shape})")
-        v = self._native.field_values(xa.ravel(), ya.ravel(), float(t))
+        v = self._native.field_values(xa.ravel(), ya.ravel(), _check_number("t", t))
         return v.reshape(xa.shape)
 
     # Immutable: copies share it. Pickled as its resolved TOML (file paths in it are absolute),
@@ -178,35 +343,70 @@ class Scenario:
 def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[str, Any]:
     """``isotrack check --json`` for a scenario, as a dict; ``tube_halfwidth`` (field units,
     default the controller's ``c2``) must be a finite number > 0 (``ValueError``)."""
-    return json.loads(scenario._native.check_json(tube_halfwidth))
+    _check_scenario("scenario", scenario)
+    return json.loads(scenario._native.check_json(_check_number("tube_halfwidth", tube_halfwidth, optional=True)))
 
 
-#: Columns of ``results.csv`` that hold integers whatever their cells: the run's id, its seed
-#: (63 bits: a float64 would round it and re-running the row would give another run) and the
-#: sample count.
-_INT_COLUMNS = frozenset({"run_id", "sim.seed", "samples"})
-
-
-def _is_int_cell(c: str) -> bool:
-    """A cell written from an integer (isotrack writes every float with a '.' or an exponent)."""
-    digits = c[1:] if c[:1] in "+-" else c
-    return digits.isdigit()
-
-
-def _sweep_column(name: str, cells: list) -> np.ndarray:
-    """One ``results.csv`` column as numpy: int64 for integers (a masked array where a cell is
-    empty: the ``samples`` of an invalid scenario), float64 for numbers (NaN for an empty cell),
-    str otherwise."""
-    filled = [c for c in cells if c != ""]
-    if all(_is_int_cell(c) for c in filled) and (name in _INT_COLUMNS or len(filled) == len(cells)):
+def _sweep_column(kind: str, cells: list, masked: bool = False) -> np.ndarray:
+    """One ``results.csv`` column as numpy, by the column's kind (from the sweep's plan, never
+    guessed from the cells): ``"int"`` int64 (with ``masked``, always a masked array, masked
+    where a cell is empty: the ``samples`` of an invalid scenario), ``"float"`` float64 (NaN
+    for an empty cell), ``"bool"`` bool, ``"str"`` str (``""`` for an empty cell)."""
+    if kind == "int":
         values = np.array([int(c) if c != "" else 0 for c in cells], dtype=np.int64)
-        if len(filled) == len(cells):
-            return values
-        return np.ma.masked_array(values, mask=[c == "" for c in cells])
-    try:
+        empty = np.array([c == "" for c in cells], dtype=bool)
+        if masked:
+            return np.ma.masked_array(values, mask=empty)
+        if empty.any():  # pragma: no cover - only `samples` has empty integer cells
+            raise RuntimeError("internal error in isotrack: an empty cell in an integer column")
+        return values
+    if kind == "float":
         return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
-    except ValueError:
-        return np.array(cells, dtype=str)
+    if kind == "bool":
+        return np.array([c == "true" for c in cells], dtype=np.bool_)
+    return np.array(cells, dtype=np.str_) if cells else np.array([], dtype="<U1")
+
+
+class _Progress:
+    """A sweep's progress on ``sys.stderr`` (what Jupyter and log files capture): on a terminal
+    one line redrawn in place at most ten times a second; elsewhere (a notebook, a file, a pipe)
+    whole lines, at most one every ``LINE_PERIOD_S`` seconds, plus the first and the last."""
+
+    LINE_PERIOD_S = 5.0
+
+    def __init__(self, stream: Any = None):
+        import sys
+        import time
+
+        self.stream = sys.stderr if stream is None else stream
+        try:
+            self.tty = bool(self.stream.isatty())
+        except (AttributeError, ValueError, OSError):
+            self.tty = False
+        self.t0 = time.monotonic()
+        self.last = -float("inf")
+        self.shown_done: Optional[int] = None
+
+    def __call__(self, done: int, total: int) -> None:
+        import time
+
+        if self.stream is None:  # no standard error at all (pythonw)
+            return
+        now = time.monotonic()
+        final = done >= total
+        period = 0.1 if self.tty else self.LINE_PERIOD_S
+        if not final and self.shown_done is not None and now - self.last < period:
+            return
+        if final and self.shown_done == done:
+            return
+        self.last, self.shown_done = now, done
+        pct = 100.0 * done / total if total else 100.0
+        text = f"sweep: {done}/{total} runs ({pct:.0f} %), {now - self.t0:.1f} s"
+        if self.tty:
+            self.stream.write("\r" + text + ("\n" if final else ""))
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
 
 
 #: The largest sweep file read (the CLI's limit for scenario and sweep files).
@@ -220,6 +420,11 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
     import os
     import stat
 
+    if not isinstance(path_or_toml_text, (str, os.PathLike)):
+        raise TypeError(
+            f"path_or_toml_text must be a sweep file's path or its TOML text, got {path_or_toml_text!r:.80} "
+            f"({_type_name(path_or_toml_text)})"
+        )
     if isinstance(path_or_toml_text, os.PathLike) or (
         "\n" not in path_or_toml_text and "=" not in path_or_toml_text
     ) or os.path.lexists(path_or_toml_text):
@@ -237,6 +442,7 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
             raise ValueError(f"{path}: larger than {_MAX_SWEEP_FILE_BYTES} bytes, not a sweep file")
         with open(path, encoding="utf-8") as f:
             return f.read(), path
+    _check_text_size("path_or_toml_text", path_or_toml_text)
     return path_or_toml_text, os.path.join(os.getcwd(), "<toml>")
 
 
@@ -249,26 +455,43 @@ def sweep(
     """Runs a sweep (a sweep file's path, or its TOML text, whose ``scenario`` is then relative
     to the current directory) and returns one numpy array per column of ``results.csv``, in
     ``run_id`` order: int64 for integer columns (``run_id``, ``sim.seed``, ``samples``, and any
-    swept key whose values are integers; ``samples`` is a masked array where a run was an
-    invalid scenario), float64 for the other numeric columns (NaN for an empty cell), str
+    swept key whose values are integers; ``samples`` is always a masked array, masked where a
+    run was an invalid scenario), float64 for the other numeric columns (NaN for an empty cell), str
     otherwise. The same cells as ``isotrack sweep`` writes, exactly: setting a row's swept keys
     (``sim.seed`` included) on the sweep's scenario and running it gives the row's metrics
-    again. ``progress=True`` shows the CLI's progress bar on stderr (when stderr is a
-    terminal).
+    again. Every column's dtype follows from the sweep file alone, whatever its runs give:
+    ``outcome`` and ``outcome_detail`` are str (``""`` where a run has no detail), a swept key
+    of booleans is bool, of other text str. ``progress=True`` shows the progress on
+    ``sys.stderr``: one line redrawn in place on a terminal, else (Jupyter, a log file) a line
+    at most every 5 s, and the first and last.
 
     ``controller_factory(scenario)``: fly every run with your own controller instead of the
     scenario's: it is called once per run with that run's :class:`Scenario` and returns an
     object with ``update(t_s, value) -> omega`` (and optionally ``reset()``), as
-    ``Scenario.run(controller=...)`` takes; the runs then go one after another (``threads`` and
-    ``progress`` do not apply) and an exception inside it is raised here."""
+    ``Scenario.run(controller=...)`` takes; the runs then go one after another (``threads``
+    does not apply) and an exception inside it is raised here.
+
+    ``threads``: an int >= 1 (default: all cores; capped at 8 per core). Arguments of the wrong
+    type are a ``TypeError`` naming the argument."""
+    if threads is not None:
+        if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)):
+            raise TypeError(f"threads must be an int >= 1 or None, got {threads!r:.80} ({_type_name(threads)})")
+        if threads < 1:
+            raise ValueError(f"threads must be >= 1, got {threads}")
+        threads = min(int(threads), 1 << 16)  # the engine caps it at 8 per core anyway
+    show = _Progress() if _check_flag("progress", progress) else None
+    if controller_factory is not None and not callable(controller_factory):
+        raise TypeError(f"controller_factory must be callable (scenario -> controller), got {_type_name(controller_factory)}")
     text, name = _sweep_text(path_or_toml_text)
     if controller_factory is not None:
-        header, rows = _native.sweep_cells_with(
-            text, name, lambda native: controller_factory(Scenario(native))
+        header, kinds, rows = _native.sweep_cells_with(
+            text, name, lambda native: _check_controller("controller_factory(scenario)", controller_factory(Scenario(native))), show
         )
     else:
-        header, rows = _native.sweep_cells(text, name, threads, bool(progress))
-    return {col: _sweep_column(col, [r[k] for r in rows]) for k, col in enumerate(header)}
+        header, kinds, rows = _native.sweep_cells(text, name, threads, show)
+    if len(kinds) != len(header):  # pragma: no cover - the engine's invariant
+        raise RuntimeError(f"internal error in isotrack: {len(header)} columns but {len(kinds)} kinds")
+    return {col: _sweep_column(kinds[k], [r[k] for r in rows], masked=col == "samples") for k, col in enumerate(header)}
 
 
 def benchmark(
@@ -303,6 +526,15 @@ def benchmark(
     """
     import os
 
+    if not callable(controller_factory):
+        raise TypeError(f"controller_factory must be callable (scenario -> controller), got {_type_name(controller_factory)}")
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a str, got {name!r:.80} ({_type_name(name)})")
+    controllers = _check_names("controllers", controllers)
+    tune = _check_flag("tune", tune)
+    out = None if out is None else _check_path("out", out)
+    if suite is not None:
+        suite = _check_path("suite", suite)  # a missing file: FileNotFoundError (after the name)
     if suite is None:
         suite = os.path.join("suites", "standard-v2.toml")
         if not os.path.isfile(suite):
@@ -312,13 +544,14 @@ def benchmark(
             )
     if out is not None:
         os.makedirs(out, exist_ok=True)
+        _refuse_non_regular([os.path.join(out, f) for f in ("leaderboard.csv", "leaderboard.md", "index.html")])
     text = _native.benchmark_json(
-        lambda native: controller_factory(Scenario(native)),
+        lambda native: _check_controller("controller_factory(scenario)", controller_factory(Scenario(native))),
         name,
-        str(suite),
-        list(controllers) if controllers is not None else None,
-        bool(tune),
-        None if out is None else str(out),
+        suite,
+        controllers,
+        tune,
+        out,
     )
     return json.loads(text)
 
@@ -329,7 +562,22 @@ def _run_dirs(runs, scratch: Optional[str]) -> list:
 
     if isinstance(runs, (str, os.PathLike, Run)):
         runs = [runs]
+    if isinstance(runs, bytes) or not hasattr(runs, "__iter__"):
+        raise TypeError(
+            f"runs must be a run directory, a Run, or a list of them, got {runs!r:.80} ({_type_name(runs)})"
+        )
+    runs = list(runs)
+    if not runs:
+        raise ValueError("runs is empty: give at least one run directory or Run")
     dirs = []
+    for i, r in enumerate(runs):
+        if isinstance(r, Run):
+            continue
+        d = _check_path(f"runs[{i}]", r)
+        if not os.path.lexists(d):
+            raise FileNotFoundError(f"runs[{i}]: {d}: no such run directory")
+        if not os.path.isdir(d):
+            raise NotADirectoryError(f"runs[{i}]: {d}: not a run directory")
     for i, r in enumerate(runs):
         if isinstance(r, Run):
             if scratch is None:
@@ -357,8 +605,17 @@ def plot(
     import os
 
     if format not in ("png", "svg"):
-        raise ValueError(f"format must be 'png' or 'svg', got {format!r}")
+        raise ValueError(f"format must be 'png' or 'svg', got {format!r:.80}")
+    out = None if out is None else _check_path("out", out)
+    animate = _check_flag("animate", animate)
+    for arg, v in (("x", x), ("group", group), ("metric", metric)):
+        if v is not None and not isinstance(v, str):
+            raise TypeError(f"{arg} must be a column name (str) or None, got {v!r:.80} ({_type_name(v)})")
     dirs = _run_dirs(runs, None if out is None else os.path.join(os.fspath(out), "runs"))
+    ext = "svg" if format == "svg" else "png"
+    _refuse_non_regular(
+        [os.path.join(out if out is not None else dirs[0], f) for f in (f"trajectory.{ext}", f"timeseries.{ext}", "animation.gif")]
+    )
     _native.plot(dirs, None if out is None else os.fspath(out), format == "svg", bool(animate), x, group, metric)
     return os.fspath(out) if out is not None else dirs[0]
 
@@ -370,7 +627,8 @@ def report(runs, out: str) -> str:
     ``OUT_runs/``). Returns ``out``."""
     import os
 
-    out = os.fspath(out)
+    out = _check_path("out", out)
+    _refuse_non_regular([out])
     dirs = _run_dirs(runs, out + "_runs")
     _native.report(dirs, out)
     return out
@@ -386,15 +644,30 @@ def compare(
     """``isotrack compare``: the scenario flown by each built-in law (default: all of them) on
     the same field, start, sensor and turn-rate limit, as the command flies them (a law's
     defaults with the scenario's level, side, limit and estimator; ``gains`` as ``--gain``:
-    ``["sliding_mode.gamma=0.3"]``). Returns ``{law: Run}`` in order; with ``out``, each run is
+    ``["sliding_mode.gamma=0.3"]``); ``controllers`` empty or naming a law twice is a
+    ``ValueError`` (a comparison of nothing, or a dict that would drop a run). Returns
+    ``{law: Run}`` in order; with ``out``, each run is
     also saved as ``out/LAW`` (run directories for :func:`plot` and :func:`report`)."""
     import os
 
-    kinds = list(controllers) if controllers is not None else _native.controller_kinds()
-    runs: Dict[str, Run] = {}
+    _check_scenario("scenario", scenario)
+    kinds = _check_names("controllers", controllers)
+    if kinds is None:
+        kinds = _native.controller_kinds()
+    elif not kinds:
+        raise ValueError("controllers is empty: name at least one built-in law (or pass None for all)")
+    seen = set()
     for k in kinds:
-        variant = Scenario(_native.controller_variant(scenario._native, str(k), list(gains or [])))
-        runs[k] = variant.run(record_rate_hz=record_rate_hz)
+        if k.strip() in seen:
+            raise ValueError(f"controllers names {k.strip()!r:.80} twice: each law is flown once")
+        seen.add(k.strip())
+    gains = _check_names("gains", gains) or []
+    rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
+    out = None if out is None else _check_path("out", out)
+    variants = [Scenario(_native.controller_variant(scenario._native, k, gains)) for k in kinds]
+    runs: Dict[str, Run] = {}
+    for k, variant in zip(kinds, variants):
+        runs[k] = variant.run(record_rate_hz=rate)
         if out is not None:
             runs[k].save(os.path.join(os.fspath(out), str(k)))
     return runs

@@ -1,7 +1,7 @@
 """Type stubs for the isotrack package."""
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Protocol, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -18,9 +18,12 @@ class Controller(Protocol):
     def update(self, t_s: float, value: float) -> float: ...
 
 class Run:
-    summary: Dict[str, Any]
-    trace: Dict[str, npt.NDArray[np.float64]]
-    scenario: Optional[Scenario]
+    @property
+    def summary(self) -> Dict[str, Any]: ...
+    @property
+    def trace(self) -> Mapping[str, npt.NDArray[np.float64]]: ...
+    @property
+    def scenario(self) -> Optional[Scenario]: ...
     def __init__(
         self,
         summary: Dict[str, Any],

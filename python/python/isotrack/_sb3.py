@@ -97,7 +97,10 @@ class SB3VecEnv(VecEnv):
         return [False for _ in self._get_indices(indices)]
 
     def get_images(self) -> Sequence[Optional[np.ndarray]]:
-        raise NotImplementedError("SB3VecEnv does not render: render an isotrack.gym.IsolineEnv")
+        """One frame per run (``render_mode="rgb_array"``, as ``IsolineVectorEnv`` draws them)."""
+        if self.venv.render_mode != "rgb_array":
+            raise NotImplementedError('SB3VecEnv renders with render_mode="rgb_array" only')
+        return list(self.venv.render())
 
     def _get_indices(self, indices: Union[None, int, Iterable[int]]) -> Iterable[int]:
         if indices is None:

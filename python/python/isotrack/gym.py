@@ -21,9 +21,9 @@ The environment's definition (the same for both):
   shape ``(1,)`` within ``[-omega_max, omega_max]``: the scenario's turn-rate limit
   (``controller.max_turn_rate_radps``, or the airframe's for the fixed-wing UAV), else 1 rad/s,
   or the ``max_turn_rate_radps`` argument. ``step`` takes an array of exactly that shape of any
-  real dtype (float64 keeps its precision; another shape, ``None`` or a non-numeric value
-  raises ``ValueError``/``TypeError``). Actions beyond the bound are clipped; a NaN ends the run
-  as ``diverged``.
+  real dtype (float64 keeps its precision). Finite actions beyond the bound are clipped; an
+  invalid action raises, as Gymnasium's convention is, and steps nothing: another shape or a
+  NaN or infinite value ``ValueError``, ``None`` or a non-numeric value ``TypeError``.
 * **observation**: ``[eps_m, deps_m]``, float64: the measured error ``eps_m = s_measured - s_d``
   (field units) and its sampled difference ``(eps_m[k] - eps_m[k-1]) / (t[k] - t[k-1])`` (field
   units per second, 0 at the first sample). That is all a coordinate-free controller can know:
@@ -50,7 +50,8 @@ The environment's definition (the same for both):
   ``outcome`` (``completed``, ``left_field``, ``diverged``) and ``result`` (the run's outcome and
   metrics, as in ``summary.json``).
 * **rendering** (``IsolineEnv(render_mode=...)``, ``metadata["render_fps"]`` = the sensor rate,
-  one frame per step): ``"rgb_array"`` returns a ``uint8[256, 256, 3]`` top-down frame, north
+  one frame per step; ``IsolineVectorEnv(render_mode="rgb_array")`` returns a tuple of one such
+  frame per sub-environment): ``"rgb_array"`` returns a ``uint8[256, 256, 3]`` top-down frame, north
   up, centred on the vehicle and ``2 * render_half_width_m`` across (default ten turn radii):
   the field (a colour ramp over the frame's values; dark grey off the field), the isoline
   ``s = s_d`` (white), the path since the reset (orange) and the vehicle (red, a tick along its
@@ -81,7 +82,7 @@ try:
 except ImportError as e:  # pragma: no cover - depends on the environment
     raise ImportError('isotrack.gym needs gymnasium >= 1.0: pip install "gymnasium>=1.0"') from e
 
-from . import Scenario, _native
+from . import Scenario, _check_flag, _check_number, _native
 
 __all__ = ["IsolineEnv", "IsolineVectorEnv", "SB3VecEnv", "ENV_ID", "MAX_NUM_ENVS"]
 
@@ -169,7 +170,8 @@ def _spaces(batch: "_native.EnvBatch") -> Tuple[spaces.Box, spaces.Box]:
 def _check_actions(actions: Any, shape: Tuple[int, ...]) -> np.ndarray:
     """``actions`` as a float64 array of exactly ``shape``: a ``TypeError`` for what is not an
     array of real numbers (``None``, strings, booleans, objects), a ``ValueError`` for another
-    shape (never reshaped). Values are not checked: beyond the bound they clip, NaN ends the run."""
+    shape (never reshaped) or a value that is not finite (NaN, infinity: Gymnasium's convention,
+    an invalid action raises; nothing is stepped). Finite values beyond the bound clip."""
     if actions is None:
         raise TypeError(f"the action must be an array of shape {shape} of turn rates (rad/s), got None")
     try:
@@ -180,18 +182,26 @@ def _check_actions(actions: Any, shape: Tuple[int, ...]) -> np.ndarray:
         raise TypeError(f"the action must be an array of real numbers (rad/s), got dtype {a.dtype}")
     if a.shape != shape:
         raise ValueError(f"the action must have shape {shape}, got shape {a.shape}")
-    return a.astype(np.float64)
+    a = a.astype(np.float64)
+    bad = ~np.isfinite(a)
+    if bad.any():
+        where = np.argwhere(bad)[:10, 0].tolist()
+        what = f"sub-environments {where}" if len(shape) == 2 else "the action"
+        raise ValueError(
+            f"the action must be a finite turn rate (rad/s): {what} got {a[bad][0]} (nothing was stepped)"
+        )
+    return a
 
 
 class _Starts:
     """How resets draw their starts (one rule for both environments)."""
 
     def __init__(self, batch: "_native.EnvBatch", start_radius_m: Optional[float], random_heading: bool):
-        r = batch.default_start_radius_m if start_radius_m is None else float(start_radius_m)
+        r = batch.default_start_radius_m if start_radius_m is None else _check_number("start_radius_m", start_radius_m)
         if not (np.isfinite(r) and r >= 0.0):
             raise ValueError(f"start_radius_m must be finite and >= 0, got {start_radius_m}")
         self.radius_m = r
-        self.random_heading = bool(random_heading)
+        self.random_heading = _check_flag("random_heading", random_heading)
         self.batch = batch
         self.origin = batch.start
 
@@ -208,7 +218,7 @@ class _Starts:
             return self.batch.reset(i, x0, y0, h0, None), (x0, y0, h0)
         if fixed is not None:
             try:
-                x, y, h = (float(v) for v in fixed)
+                x, y, h = (_check_number('options["start"]', v) for v in fixed)  # no strings
             except (TypeError, ValueError):
                 raise ValueError(f'options["start"] must be "scenario" or (x_m, y_m, heading_rad), got {fixed!r}') from None
             return self.batch.reset(i, x, y, h, int(rng.integers(0, 2**63))), (x, y, h)
@@ -236,7 +246,8 @@ def _make_batch(scenario: Optional[Scenario], num_envs: int, **reward: Any) -> "
     scenario = Scenario.default() if scenario is None else scenario
     if not isinstance(scenario, Scenario):
         raise TypeError(f"scenario must be an isotrack.Scenario, got {type(scenario).__name__}")
-    return _native.EnvBatch(scenario._native, num_envs, **reward)
+    checked = {k: _check_number(k, v, optional=k != "effort_weight") for k, v in reward.items()}
+    return _native.EnvBatch(scenario._native, num_envs, **checked)
 
 
 class _Renderer:
@@ -248,11 +259,21 @@ class _Renderer:
     _LOW = np.array([68.0, 1.0, 84.0])  # the ends of viridis
     _HIGH = np.array([253.0, 231.0, 37.0])
 
-    def __init__(self, scenario: Scenario, batch: "_native.EnvBatch", mode: Optional[str], half_width_m: Optional[float]):
-        if mode not in (None, "rgb_array", "human"):
-            raise ValueError(f'render_mode must be None, "rgb_array" or "human", got {mode!r}')
+    def __init__(
+        self,
+        scenario: Scenario,
+        batch: "_native.EnvBatch",
+        mode: Optional[str],
+        half_width_m: Optional[float],
+        modes: Sequence[str] = ("rgb_array", "human"),
+    ):
+        if mode is not None and mode not in modes:
+            shown = " or ".join(f'"{m}"' for m in modes)
+            raise ValueError(f"render_mode must be None or {shown}, got {mode!r:.80}")
         if half_width_m is None:
             half_width_m = 10.0 * batch.speed_mps / batch.max_turn_rate_radps  # ten turn radii
+        if isinstance(half_width_m, (bool, np.bool_)) or not isinstance(half_width_m, (int, float, np.integer, np.floating)):
+            raise TypeError(f"render_half_width_m must be a number (m), got {half_width_m!r:.80}")
         if not (np.isfinite(half_width_m) and half_width_m > 0.0):
             raise ValueError(f"render_half_width_m must be finite and > 0, got {half_width_m}")
         if mode == "human":
@@ -264,7 +285,8 @@ class _Renderer:
                 ) from e
         self.mode, self.scenario, self.batch, self.half_width_m = mode, scenario, batch, float(half_width_m)
         self.level = scenario.level
-        self.path: List[Tuple[float, float]] = []
+        # The path of each sub-environment since its reset (kept only when rendering).
+        self.paths: List[List[Tuple[float, float]]] = [[] for _ in range(batch.num_envs)] if mode else []
         self._figure: Any = None
 
     def record(self, i: int, reset: bool) -> None:
@@ -272,11 +294,22 @@ class _Renderer:
         if self.mode is None:
             return
         if reset:
-            self.path = []
+            self.paths[i] = []
         x, y, _, _ = self.batch.pose(i)
-        self.path.append((x, y))
+        self.paths[i].append((x, y))
         if self.mode == "human":
             self.show(self.frame(i))
+
+    def record_all(self, reset: np.ndarray, moved: np.ndarray) -> None:
+        """Notes every sub-environment's position in one call: a new path where ``reset``, one
+        more point where ``moved``."""
+        if self.mode is None:
+            return
+        poses = self.batch.poses()
+        for i in np.flatnonzero(reset | moved).tolist():
+            if reset[i]:
+                self.paths[i] = []
+            self.paths[i].append((float(poses[i, 0]), float(poses[i, 1])))
 
     def frame(self, i: int) -> np.ndarray:
         """The frame, ``uint8[256, 256, 3]``, north up, centred on the vehicle, ``2 *
@@ -299,8 +332,8 @@ class _Renderer:
             edge[:-1, :] |= (above[1:, :] != above[:-1, :]) & on[1:, :] & on[:-1, :]
             img[edge] = 255
         scale = n / (2.0 * w)  # pixels per metre
-        if self.path:
-            p = np.array(self.path)
+        if self.paths[i]:
+            p = np.array(self.paths[i])
             cols = np.floor((p[:, 0] - x + w) * scale).astype(np.int64)
             rows = np.floor((y + w - p[:, 1]) * scale).astype(np.int64)
             inside = (cols >= 0) & (cols < n) & (rows >= 0) & (rows < n)
@@ -389,8 +422,10 @@ class IsolineEnv(gymnasium.Env):
         self._reset_once = False
 
     def reset(self, *, seed: Optional[int] = None, options: Optional[Dict[str, Any]] = None):
-        """Starts a run (see the module documentation): ``(observation, info)``."""
-        super().reset(seed=seed)
+        """Starts a run (see the module documentation): ``(observation, info)``. ``seed``: None
+        or an int >= 0 (numpy's too, taken exactly)."""
+        super().reset(seed=_check_seed(seed))
+        options = _check_options(options)
         obs, start = self._starts.reset(0, self.np_random, options)
         self._running = self._reset_once = True
         self._renderer.record(0, reset=True)
@@ -439,6 +474,27 @@ class IsolineEnv(gymnasium.Env):
 _AUTORESET_MODES = (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP, AutoresetMode.DISABLED)
 
 
+def _check_seed(seed: Any, name: str = "seed") -> Optional[int]:
+    """A reset's seed exactly: ``None``, or a Python or numpy integer >= 0 as a Python int (never
+    through a float). A ``TypeError`` for anything else (floats, booleans, strings), a
+    ``ValueError`` for a negative one."""
+    if seed is None:
+        return None
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"{name} must be None or an int >= 0, got {seed!r:.80} ({type(seed).__name__})")
+    s = int(seed)
+    if s < 0:
+        raise ValueError(f"{name} must be >= 0, got {s}")
+    return s
+
+
+def _check_options(options: Any) -> Optional[Dict[str, Any]]:
+    """A reset's ``options``: ``None`` or a dict (a ``TypeError`` naming ``options`` otherwise)."""
+    if options is not None and not isinstance(options, dict):
+        raise TypeError(f"options must be None or a dict, got {options!r:.80} ({type(options).__name__})")
+    return options
+
+
 def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
     """``options["reset_mask"]`` checked as Gymnasium's own vector environments do."""
     if not isinstance(mask, np.ndarray):
@@ -466,6 +522,12 @@ class IsolineVectorEnv(VectorEnv):
             ``info["final_obs"][i]``, its info ``info["final_info"]``) or ``DISABLED`` (stepping
             an ended run raises; reset it with ``options={"reset_mask": mask}``). Declared in
             ``metadata["autoreset_mode"]``.
+        render_mode: ``None`` or ``"rgb_array"``: ``render()`` returns a tuple of ``num_envs``
+            frames, ``uint8[256, 256, 3]`` each, drawn as :class:`IsolineEnv` draws them (each
+            sub-environment's path since its own reset); ``np.stack(vec.render())`` is
+            ``uint8[num_envs, 256, 256, 3]``. Drawing costs about a field evaluation per
+            pixel per sub-environment: render a few environments, not thousands.
+        render_half_width_m: as :class:`IsolineEnv`'s.
 
     ``reset(seed=s)`` seeds sub-environment ``i`` with ``s + i`` (a list gives one seed each), as
     ``gymnasium.vector.SyncVectorEnv`` does; ``options`` apply to every sub-environment, and
@@ -473,7 +535,7 @@ class IsolineVectorEnv(VectorEnv):
     where ``mask`` is true (the others keep their runs and observations).
     """
 
-    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+    metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(
         self,
@@ -486,6 +548,8 @@ class IsolineVectorEnv(VectorEnv):
         effort_weight: float = 0.01,
         termination_penalty: Optional[float] = None,
         autoreset_mode: Union[AutoresetMode, str] = AutoresetMode.NEXT_STEP,
+        render_mode: Optional[str] = None,
+        render_half_width_m: Optional[float] = None,
     ):
         n = _check_num_envs(num_envs)
         mode = AutoresetMode(autoreset_mode)
@@ -508,6 +572,10 @@ class IsolineVectorEnv(VectorEnv):
             termination_penalty=termination_penalty,
         )
         self._starts = _Starts(self._batch, start_radius_m, random_heading)
+        self.render_mode = render_mode
+        self._renderer = _Renderer(
+            Scenario.default() if scenario is None else scenario, self._batch, render_mode, render_half_width_m, modes=("rgb_array",)
+        )
         self.num_envs = n
         self.metadata = {**type(self).metadata, "autoreset_mode": mode, "render_fps": 1.0 / self._batch.sensor_period_s}
         self.single_action_space, self.single_observation_space = _spaces(self._batch)
@@ -543,6 +611,7 @@ class IsolineVectorEnv(VectorEnv):
         """Starts every run (or those of ``options["reset_mask"]``): ``(observations[num_envs,
         2], info)`` with ``info["start"]`` (and ``info["_start"]``, which were reset)."""
         n = self.num_envs
+        options = _check_options(options)
         if options is not None and "reset_mask" in options:
             options = dict(options)
             mask = _check_reset_mask(options.pop("reset_mask"), n)
@@ -551,19 +620,19 @@ class IsolineVectorEnv(VectorEnv):
         if seed is None:
             seeds: Sequence[Optional[int]] = [None] * n
         elif isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
-            seeds = [int(seed) + i for i in range(n)]
-            self._np_random, self._np_random_seed = seeding.np_random(int(seed))
+            first = _check_seed(seed)
+            seeds = [first + i for i in range(n)]
+            self._np_random, self._np_random_seed = seeding.np_random(first)
         elif isinstance(seed, (str, bytes, float, bool, np.bool_)) or not hasattr(seed, "__len__"):
-            raise TypeError(f"seed must be None, an int or a sequence of {n} ints (or None), got {seed!r}")
+            raise TypeError(f"seed must be None, an int or a sequence of {n} ints (or None), got {seed!r:.80}")
         else:
-            seeds = list(seed)
+            seeds = [_check_seed(s, f"seed[{k}]") for k, s in enumerate(seed)]
             if len(seeds) != n:
                 raise ValueError(f"expected {n} seeds, got {len(seeds)}")
         indices = np.flatnonzero(mask)
         for i in indices.tolist():
             if seeds[i] is not None:
-                s = seeds[i]
-                self._rngs[i] = seeding.np_random(int(s) if isinstance(s, np.integer) else s)[0]
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
         self._options = options
         fresh, fresh_starts = self._reset_some(indices, options)
         self._obs[indices] = fresh
@@ -571,6 +640,7 @@ class IsolineVectorEnv(VectorEnv):
         starts[indices] = fresh_starts
         self._ended[indices] = False
         self._reset_done[indices] = True
+        self._renderer.record_all(mask, np.zeros(n, dtype=bool))
         return self._obs.copy(), {"t_s": np.zeros(n), "start": starts, "_start": mask.copy()}
 
     def step(self, actions):
@@ -590,6 +660,7 @@ class IsolineVectorEnv(VectorEnv):
             )
         obs, reward, terminated, truncated, t = self._batch.step(a, ~resetting)
         info: Dict[str, Any] = {"t_s": t}
+        fresh = resetting.copy()  # the sub-environments that start a new run at this step
         if resetting.any():  # NEXT_STEP: the runs that ended at the last step start again now
             idx = np.flatnonzero(resetting)
             obs[idx], fresh_starts = self._reset_some(idx, self._options)
@@ -612,12 +683,27 @@ class IsolineVectorEnv(VectorEnv):
                 starts = np.zeros((n, 3))
                 starts[idx] = fresh_starts
                 info.update({"start": starts, "_start": ended.copy()})
+                fresh |= ended
                 ended = np.zeros(n, dtype=bool)
             else:
                 info.update(end_info)
         self._ended = ended
         self._obs = obs
+        self._renderer.record_all(fresh, ~fresh)
         return obs.copy(), reward, terminated, truncated, info
+
+    def render(self) -> Optional[Tuple[np.ndarray, ...]]:
+        """``render_mode="rgb_array"``: one frame per sub-environment, a tuple of ``num_envs``
+        ``uint8[256, 256, 3]`` arrays (Gymnasium's vector convention, as ``SyncVectorEnv``
+        returns; ``np.stack`` makes them ``uint8[num_envs, 256, 256, 3]``), each as
+        :class:`IsolineEnv` draws it; ``None`` without a render mode (with Gymnasium's
+        warning)."""
+        if self.render_mode is None:
+            gymnasium.logger.warn('render() without a render_mode: make the environment with render_mode="rgb_array"')
+            return None
+        if not self._reset_done.all():
+            raise RuntimeError("call reset() before render() (every sub-environment)")
+        return tuple(self._renderer.frame(i) for i in range(self.num_envs))
 
     def _end_info(self, ended: np.ndarray) -> Dict[str, Any]:
         """``outcome`` and ``result`` of the runs that ended (with their masks)."""
