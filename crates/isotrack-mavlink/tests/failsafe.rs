@@ -1,0 +1,77 @@
+//! The companion's failsafes on a lost link or sensor, against a stand-in vehicle that goes
+//! quiet: the setpoints stop and HOLD is commanded (PX4 AUTO.LOITER: main mode 4, sub mode 3).
+//! Real time is needed here (a silence is a duration); the timeouts are short, the waits long,
+//! and nothing asserts how long anything took.
+
+use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions};
+use isotrack_mavlink::link::Link;
+use isotrack_scenario::load_scenario;
+use isotrack_sim::NoTrace;
+use mavlink::dialects::common::*;
+use std::time::{Duration, Instant};
+
+fn heartbeat() -> MavMessage {
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_FIXED_WING,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+/// A vehicle that answers the companion's first message with a heartbeat, then sends
+/// heartbeats every 50 ms if `keep_beating`, and reports the first DO_SET_MODE it receives
+/// (parameters 2 and 3); gives up after 60 s.
+fn quiet_vehicle(
+    keep_beating: bool,
+) -> (
+    std::net::SocketAddr,
+    std::thread::JoinHandle<Option<(f32, f32)>>,
+) {
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let h = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut sent = false;
+        while t0.elapsed() < Duration::from_secs(60) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        return Some((c.param2, c.param3));
+                    }
+                }
+            }
+            if link.has_peer() && (!sent || keep_beating) {
+                link.send(&heartbeat()).unwrap();
+                sent = true;
+            }
+        }
+        None
+    });
+    (addr, h)
+}
+
+fn fly_against(keep_beating: bool) -> (FlyEnd, Option<(f32, f32)>) {
+    let s = load_scenario(None, &[]).unwrap();
+    let (addr, vehicle) = quiet_vehicle(keep_beating);
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 0.5;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    (r.end, vehicle.join().unwrap())
+}
+
+#[test]
+fn link_loss_fails_safe_to_hold() {
+    let (end, mode) = fly_against(false);
+    assert_eq!(end, FlyEnd::LinkLost);
+    assert_eq!(mode, Some((4.0, 3.0)));
+}
+
+#[test]
+fn sensor_loss_fails_safe_to_hold() {
+    let (end, mode) = fly_against(true);
+    assert_eq!(end, FlyEnd::SensorLost);
+    assert_eq!(mode, Some((4.0, 3.0)));
+}
