@@ -9,7 +9,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 "$venv/bin/pip" install -q --upgrade pip
-"$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" matplotlib pymavlink
+"$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" matplotlib pymavlink "mavsdk>=4"
 "$venv/bin/pip" install -q ./python
 [ -x target/release/isotrack ] || cargo build --release --locked -p isotrack-cli
 ISOTRACK_BIN="$PWD/target/release/isotrack" "$venv/bin/python" -m pytest -q python/tests

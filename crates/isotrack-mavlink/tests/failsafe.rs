@@ -75,3 +75,49 @@ fn sensor_loss_fails_safe_to_hold() {
     assert_eq!(end, FlyEnd::SensorLost);
     assert_eq!(mode, Some((4.0, 3.0)));
 }
+
+/// The vehicle's own offboard failsafe: a companion that arms it, switches it to OFFBOARD, sends
+/// one setpoint and falls silent leaves it in HOLD (real time at 20x; the run is 20 simulated
+/// seconds, the timeout 1).
+#[test]
+fn sitl_holds_when_offboard_setpoints_stop() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let s = load_scenario(None, &["sim.duration_s=20".to_string()]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::RealTime { speedup: 20.0 };
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let mut c = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
+    let command = |cmd, p1, p2| {
+        MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: p1,
+            param2: p2,
+            command: cmd,
+            target_system: 1,
+            target_component: 1,
+            ..Default::default()
+        })
+    };
+    c.send(&command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0))
+        .unwrap();
+    c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        body_yaw_rate: -0.1,
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    }))
+    .unwrap();
+    c.send(&command(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0)).unwrap();
+    let report = vehicle.join().unwrap();
+    let i = report.events.iter().position(|e| e.contains("mode OFFBOARD"));
+    let j = report.events.iter().position(|e| e.contains("failsafe"));
+    assert!(i.is_some() && j > i, "{:?}", report.events);
+    // Its last turn rates are HOLD's: half the 0.2 rad/s default loiter limit, to the left.
+    assert_eq!(report.flown.last().unwrap().1, 0.1);
+}
