@@ -97,7 +97,7 @@ def test_mavsdk_ground_station_watches_arms_and_turns_the_vehicle():
     assert abs(pos.relative_altitude_m - 100.0) < 1.0
     assert abs(pos.absolute_altitude_m - (HOME[2] + 100.0)) < 1.0
     # Offboard: the commanded turn rate, then held by the autopilot at about -20 deg of roll.
-    want = 9.81 * math.tan(math.radians(20.0)) / 30.0
+    want = 9.8 * math.tan(math.radians(20.0)) / 30.0
     last = rows[-1]
     assert abs(float(last["omega_radps"]) - want) < 1e-5, last["omega_radps"]
     assert abs(math.degrees(float(last["roll_rad"])) + 20.0) < 2.0, last["roll_rad"]

@@ -10,8 +10,8 @@
 
 use isotrack_core::Measurement;
 
-/// Standard gravity used in the coordinated-turn relation, m/s^2 (the Aerosonde model's `g`).
-pub const G_MPS2: f64 = 9.81;
+/// Gravity in the coordinated-turn relation, m/s^2: 9.8, the `g` of the simulated Aerosonde (Beard & McLain 2012), so that the relation is the airframe's own.
+pub const G_MPS2: f64 = 9.8;
 
 /// The bank limit of the fixed-wing setpoints, rad: 40 deg, the roll loop's limit of the
 /// simulated autopilot (Beard & McLain 2012, Sec. 6.5).
@@ -104,10 +104,10 @@ mod tests {
     use super::*;
 
     /// A 30 m/s aircraft turning at 0.2741 rad/s banks 40 deg: tan(40 deg) = 0.8391 =
-    /// 0.2741 * 30 / 9.81. Left turn (omega > 0) = negative roll.
+    /// 0.2741 * 30 / 9.8. Left turn (omega > 0) = negative roll.
     #[test]
     fn coordinated_turn_at_the_bank_limit() {
-        let w = 9.81 * 40f64.to_radians().tan() / 30.0;
+        let w = 9.8 * 40f64.to_radians().tan() / 30.0;
         assert!((w - 0.274_1).abs() < 1e-4);
         assert!((roll_of_turn_rate(w, 30.0) + 40f64.to_radians()).abs() < 1e-12);
         assert_eq!(roll_of_turn_rate(10.0, 30.0), -BANK_LIMIT_RAD);

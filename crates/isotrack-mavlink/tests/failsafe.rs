@@ -113,9 +113,13 @@ fn sitl_holds_when_offboard_setpoints_stop() {
         ..Default::default()
     }))
     .unwrap();
-    c.send(&command(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0)).unwrap();
+    c.send(&command(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0))
+        .unwrap();
     let report = vehicle.join().unwrap();
-    let i = report.events.iter().position(|e| e.contains("mode OFFBOARD"));
+    let i = report
+        .events
+        .iter()
+        .position(|e| e.contains("mode OFFBOARD"));
     let j = report.events.iter().position(|e| e.contains("failsafe"));
     assert!(i.is_some() && j > i, "{:?}", report.events);
     // Its last turn rates are HOLD's: half the 0.2 rad/s default loiter limit, to the left.
