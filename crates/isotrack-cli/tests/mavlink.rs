@@ -185,3 +185,54 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Real time (20x): the vehicle does not wait for the companion, which answers every sample all
+/// the same; the run completes and the companion sees it end. (No assertion on how long it
+/// took.)
+#[test]
+fn a_real_time_flight_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "sitl",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--speedup",
+            "20",
+            "--set",
+        ])
+        .arg("sim.duration_s=30")
+        .arg("--out")
+        .arg(dir.path().join("sitl"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(sitl.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let port = line
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string();
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("end         vehicle_ended"), "{out}");
+    let s = sitl.wait_with_output().unwrap();
+    assert!(s.status.success());
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "completed");
+    assert_eq!(summary["samples"], 3001);
+}
