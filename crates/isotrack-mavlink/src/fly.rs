@@ -211,6 +211,8 @@ struct Fly<'a> {
     /// The command in force (None: neutral, before the law has control).
     current: Option<f64>,
     last_answer_ms: Option<u32>,
+    /// The vehicle refused to arm or to switch to OFFBOARD.
+    refused: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -339,6 +341,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         mode: None,
         current: None,
         last_answer_ms: None,
+        refused: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -424,6 +427,10 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         }
         let active = fly.armed && fly.mode == Some(Mode::Offboard);
         // Taking control: arm, then OFFBOARD, retried every 0.5 s.
+        if opts.take_control && !active && fly.refused {
+            fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
+            break 'flight FlyEnd::ControlRefused;
+        }
         if opts.take_control && !active && fly.target.is_some() && Instant::now() >= next_control {
             control_tries += 1;
             if control_tries > 20 {
@@ -651,6 +658,19 @@ fn handle(
             fly.event(format!("{:?}: {:?}", a.command, a.result));
             if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
                 fly.armed = true;
+            }
+            let control = matches!(
+                a.command,
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM | MavCmd::MAV_CMD_DO_SET_MODE
+            );
+            // A refusal, not a "still working on it".
+            if control
+                && !matches!(
+                    a.result,
+                    MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS
+                )
+            {
+                fly.refused = true;
             }
         }
         MavMessage::LOCAL_POSITION_NED(p) => {
