@@ -52,6 +52,84 @@ pub enum Command {
     /// Make one self-contained HTML page of run directories: the field, the paths with a time
     /// slider, and the error, measurement and turn-rate plots on the same cursor.
     Report(ReportArgs),
+    /// Play a scenario's vehicle, field and sensor as a MAVLink 2 vehicle (a simulated
+    /// autopilot for `isotrack fly`, a ground station or an SDK); docs/FLYING.md.
+    Sitl(SitlArgs),
+    /// Fly a scenario's law as a MAVLink 2 companion computer: measurements in, attitude or
+    /// yaw-rate setpoints out, with failsafes; docs/FLYING.md.
+    Fly(FlyArgs),
+}
+
+/// `isotrack sitl`.
+#[derive(Debug, Args)]
+pub struct SitlArgs {
+    /// The scenario.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// The link: `udpin:HOST:PORT` (listen; answer whoever writes) or `udpout:HOST:PORT`.
+    #[arg(long, value_name = "URL")]
+    pub mavlink: String,
+    /// Simulated seconds per wall-clock second (default 1: real time).
+    #[arg(long, value_name = "X", conflicts_with = "lockstep")]
+    pub speedup: Option<f64>,
+    /// Advance one sensor period only when the companion has answered the last sample (tests).
+    #[arg(long)]
+    pub lockstep: bool,
+    /// The vehicle's MAVLink system id.
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub system_id: u8,
+    /// Write the simulation's own `trace.csv`, `summary.json` and `scenario.toml` into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+/// The mode `isotrack fly` switches the vehicle to when a failsafe trips.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FailsafeArg {
+    /// Hold (PX4 AUTO.LOITER).
+    Hold,
+    /// Return home (PX4 AUTO.RTL).
+    Return,
+}
+
+/// `isotrack fly`.
+#[derive(Debug, Args)]
+pub struct FlyArgs {
+    /// The scenario (its controller is the law flown).
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// The link to the autopilot: `udpin:HOST:PORT` or `udpout:HOST:PORT`.
+    #[arg(long, value_name = "URL")]
+    pub mavlink: String,
+    /// The measurement: a NAMED_VALUE_FLOAT name (`ISO_S`, or `mavlink:NAME`), or
+    /// `udp:HOST:PORT` for text lines `t_s,value` from a sensor not wired to the autopilot.
+    #[arg(long, value_name = "SOURCE", default_value = "ISO_S")]
+    pub sensor: String,
+    /// Arm the vehicle and switch it to OFFBOARD (else wait for the pilot to).
+    #[arg(long)]
+    pub take_control: bool,
+    /// Write `trace.csv` (received positions, measurements, commands), `summary.json`,
+    /// `scenario.toml` and the raw MAVLink log `mavlink.tlog` into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Fail safe after this much vehicle time since the first measurement, s.
+    #[arg(long, value_name = "S")]
+    pub max_duration_s: Option<f64>,
+    /// Fail safe after this long without a message from the vehicle or a measurement, s.
+    #[arg(long, value_name = "S", default_value_t = 3.0)]
+    pub timeout_s: f64,
+    /// Fail safe farther than this from the first received position, m.
+    #[arg(long, value_name = "M")]
+    pub fence_m: Option<f64>,
+    /// The mode a failsafe switches to.
+    #[arg(long, value_enum, default_value_t = FailsafeArg::Hold)]
+    pub failsafe: FailsafeArg,
+    /// Setpoints per second between answers (PX4's offboard mode needs >= 2).
+    #[arg(long, value_name = "HZ", default_value_t = 10.0)]
+    pub setpoint_rate_hz: f64,
+    /// This companion's MAVLink system id (component 191, an onboard computer).
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub system_id: u8,
 }
 
 /// `isotrack benchmark`.

@@ -40,6 +40,8 @@ where
         Command::Interpolate(args) => crate::interpolate::interpolate(args),
         Command::Benchmark(args) => crate::bench::benchmark(args),
         Command::Report(args) => crate::bench::report(args),
+        Command::Sitl(args) => crate::mavlink::sitl(args),
+        Command::Fly(args) => crate::mavlink::fly(args),
     };
     // A reader that closed standard output is not an error (exit 0); another failure to write
     // it is exit 73 unless the command failed first (see `crate::console`).

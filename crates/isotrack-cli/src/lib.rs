@@ -15,6 +15,7 @@ pub mod compare;
 pub mod entry;
 pub mod figures;
 pub mod interpolate;
+pub mod mavlink;
 pub mod output;
 pub mod run;
 pub mod sweep;

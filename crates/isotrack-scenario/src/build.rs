@@ -101,9 +101,13 @@ macro_rules! each_controller {
 }
 
 /// The controller a run flies: the tracking law, or the tracking law behind a search phase.
-/// (An enum, not a box: the step loop stays monomorphic.)
-pub(crate) enum Tracker {
+/// (An enum, not a box: the step loop stays monomorphic.) Public so that a companion computer
+/// (`isotrack fly`) flies exactly the law a run of the scenario flies.
+#[derive(Clone, Debug)]
+pub enum Tracker {
+    /// The tracking law alone (`controller.search = "none"`).
     Tracking(ControllerModel),
+    /// The tracking law behind its search phase.
     Searching(Search<ControllerModel>),
 }
 
@@ -423,8 +427,9 @@ impl Scenario {
         self.run_with(&mut controller, sink)
     }
 
-    /// The controller a run of this scenario flies (behind its search phase, if any).
-    pub(crate) fn tracker(&self) -> Tracker {
+    /// The controller a run of this scenario flies (behind its search phase, if any): its law,
+    /// output stage (turn-rate limit, side), anti-windup and derivative estimator, at rest.
+    pub fn tracker(&self) -> Tracker {
         match self.search() {
             Some(params) => Tracker::Searching(Search::new(self.controller(), params)),
             None => Tracker::Tracking(self.controller()),

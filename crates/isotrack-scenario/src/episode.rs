@@ -9,7 +9,7 @@ use crate::build::VehicleModel;
 use crate::field::FieldModel;
 use crate::Scenario;
 use isotrack_core::{Vec2, Vehicle};
-use isotrack_sim::{Episode, NoTrace, Oracles, Outcome, RunResult, Sample};
+use isotrack_sim::{Episode, NoTrace, Oracles, Outcome, RunResult, Sample, TraceSink};
 use isotrack_vehicles::{DubinsState, FixedWingState};
 
 /// Where and how a run starts: position, m, and heading, rad (counter-clockwise from +x).
@@ -134,13 +134,20 @@ impl ScenarioEpisode {
     /// or to the end of the run (`None`: see [`outcome`](Self::outcome)). An agent may read
     /// only `measurement` of the sample; the rest is ground truth (for rewards and logs).
     pub fn run_to_sample(&mut self) -> Option<Sample> {
+        self.run_to_sample_traced(&mut NoTrace)
+    }
+
+    /// [`run_to_sample`](Self::run_to_sample), recording the trace rows of the steps it runs into
+    /// `sink` (at the scenario's `output.record_rate_hz`): what a simulated vehicle reports as
+    /// telemetry between samples (`isotrack sitl`).
+    pub fn run_to_sample_traced<S: TraceSink + ?Sized>(&mut self, sink: &mut S) -> Option<Sample> {
         let s = &self.scenario;
         with_field!(s, field => with_oracles!(s, o => match (&mut self.state, &*s.vehicle) {
             (VehicleEpisode::Dubins(e), VehicleModel::Dubins(v)) => {
-                e.run_to_sample(field, v, &o, &mut NoTrace)
+                e.run_to_sample(field, v, &o, sink)
             }
             (VehicleEpisode::FixedWing(e), VehicleModel::FixedWing(v)) => {
-                e.run_to_sample(field, &**v, &o, &mut NoTrace)
+                e.run_to_sample(field, &**v, &o, sink)
             }
             _ => unreachable!("an episode's state is built for its scenario's vehicle"),
         }))
@@ -150,16 +157,45 @@ impl ScenarioEpisode {
     /// the scenario's turn-rate limit is the caller's to apply). A non-finite command ends the run
     /// as `diverged`.
     pub fn command(&mut self, omega_radps: f64) {
+        self.command_traced(omega_radps, &mut NoTrace)
+    }
+
+    /// [`command`](Self::command), recording the sample step's trace row (if it is one) into
+    /// `sink`.
+    pub fn command_traced<S: TraceSink + ?Sized>(&mut self, omega_radps: f64, sink: &mut S) {
         let s = &self.scenario;
         with_oracles!(s, o => match (&mut self.state, &*s.vehicle) {
             (VehicleEpisode::Dubins(e), VehicleModel::Dubins(v)) => {
-                e.command(omega_radps, v, &o, &mut NoTrace)
+                e.command(omega_radps, v, &o, sink)
             }
             (VehicleEpisode::FixedWing(e), VehicleModel::FixedWing(v)) => {
-                e.command(omega_radps, &**v, &o, &mut NoTrace)
+                e.command(omega_radps, &**v, &o, sink)
             }
             _ => unreachable!("an episode's state is built for its scenario's vehicle"),
         })
+    }
+
+    /// The time of the current step, s.
+    pub fn t_s(&self) -> f64 {
+        match &self.state {
+            VehicleEpisode::Dubins(e) => e.t_s(),
+            VehicleEpisode::FixedWing(e) => e.t_s(),
+        }
+    }
+
+    /// The scenario this episode runs.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// Ends the episode and returns its result, the last valid state's row into `sink` if the
+    /// trace does not have it yet (as [`Scenario::run`] ends its trace).
+    pub fn finish_traced<S: TraceSink + ?Sized>(self, sink: &mut S) -> RunResult {
+        let r = match self.state {
+            VehicleEpisode::Dubins(e) => e.finish(sink),
+            VehicleEpisode::FixedWing(e) => e.finish(sink),
+        };
+        self.scenario.explain_end(r)
     }
 
     /// How the run ended, once it has.

@@ -24,7 +24,7 @@ pub mod schema;
 pub mod sweep;
 mod watch;
 
-pub use build::ControllerModel;
+pub use build::{ControllerModel, Tracker};
 pub use episode::{ScenarioEpisode, Start};
 use load::locate_derived;
 pub use load::{

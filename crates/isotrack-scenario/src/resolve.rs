@@ -725,6 +725,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     resolve_controller(&mut c, &mut f.controller);
     resolve_metrics(&mut c, &mut f);
     resolve_output(&mut c, &mut f);
+    resolve_sitl(&mut c, &f.sitl);
     if c.issues.is_empty() {
         Ok(f)
     } else {
@@ -1058,6 +1059,26 @@ fn vehicle_kind_keys(kind: VehicleKind) -> (&'static str, &'static [&'static str
                 "ecen674_gains",
             ],
         ),
+    }
+}
+
+/// `[sitl]`: the home position, when given, within the ranges of [`SitlSection`] (a latitude
+/// short of the poles, where the east-west scale `cos(lat)` of the local-to-WGS84 mapping
+/// vanishes).
+fn resolve_sitl(c: &mut Checker, s: &SitlSection) {
+    for (key, v, lo, hi) in [
+        ("sitl.home_lat_deg", s.home_lat_deg, -89.0, 89.0),
+        ("sitl.home_lon_deg", s.home_lon_deg, -180.0, 180.0),
+        ("sitl.home_alt_m", s.home_alt_m, -1000.0, 10000.0),
+    ] {
+        if let Some(v) = v {
+            if c.finite(key, v) && !(lo..=hi).contains(&v) {
+                c.fail(
+                    key,
+                    format!("must be in [{}, {}], got {}", Num(lo), Num(hi), Num(v)),
+                );
+            }
+        }
     }
 }
 

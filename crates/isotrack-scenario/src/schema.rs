@@ -50,6 +50,11 @@
 //!
 //! [output]
 //! record_rate_hz = 10.0        # trace rows per second; 0 turns the trace off
+//!
+//! [sitl]                       # isotrack sitl: where local metres are on the Earth (WGS84)
+//! home_lat_deg = 47.397742     # the local origin's latitude, deg (default: PX4's SITL home)
+//! home_lon_deg = 8.545594      # its longitude, deg
+//! home_alt_m = 488.0           # its altitude above mean sea level, m
 //! ```
 
 use serde::{Deserialize, Serialize};
@@ -80,6 +85,9 @@ pub struct ScenarioFile {
     pub metrics: MetricsSection,
     /// Output settings.
     pub output: OutputSection,
+    /// Where `isotrack sitl` puts the run on the Earth (written only when set).
+    #[serde(skip_serializing_if = "SitlSection::is_unset")]
+    pub sitl: SitlSection,
 }
 
 /// Field kinds.
@@ -674,4 +682,48 @@ pub struct OutputSection {
     /// Trace rows per second (default 10); 0 turns the trace off.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub record_rate_hz: Option<f64>,
+}
+
+/// `[sitl]`: the home position of `isotrack sitl`, the point on the Earth where the local origin
+/// `(x, y) = (0, 0)` is (the MAVLink messages carry WGS84 latitude, longitude and altitude).
+/// Defaults (PX4's SITL home, Zurich): 47.397742 deg, 8.545594 deg, 488 m. Not filled into the
+/// resolved file (a run that never flies over MAVLink does not need them).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SitlSection {
+    /// Latitude of the local origin, deg, in [-89, 89] (default 47.397742).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub home_lat_deg: Option<f64>,
+    /// Longitude of the local origin, deg, in [-180, 180] (default 8.545594).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub home_lon_deg: Option<f64>,
+    /// Altitude of the local origin above mean sea level, m, in [-1000, 10000] (default 488).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub home_alt_m: Option<f64>,
+}
+
+impl SitlSection {
+    /// Default home latitude, deg (PX4's SITL home).
+    pub const DEFAULT_HOME_LAT_DEG: f64 = 47.397742;
+    /// Default home longitude, deg.
+    pub const DEFAULT_HOME_LON_DEG: f64 = 8.545594;
+    /// Default home altitude above mean sea level, m.
+    pub const DEFAULT_HOME_ALT_M: f64 = 488.0;
+
+    /// Whether no key of the section is set (it is then left out of the resolved file).
+    pub fn is_unset(&self) -> bool {
+        *self == SitlSection::default()
+    }
+    /// The home latitude, deg.
+    pub fn home_lat_deg(&self) -> f64 {
+        self.home_lat_deg.unwrap_or(Self::DEFAULT_HOME_LAT_DEG)
+    }
+    /// The home longitude, deg.
+    pub fn home_lon_deg(&self) -> f64 {
+        self.home_lon_deg.unwrap_or(Self::DEFAULT_HOME_LON_DEG)
+    }
+    /// The home altitude above mean sea level, m.
+    pub fn home_alt_m(&self) -> f64 {
+        self.home_alt_m.unwrap_or(Self::DEFAULT_HOME_ALT_M)
+    }
 }

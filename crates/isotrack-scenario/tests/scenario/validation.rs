@@ -835,3 +835,40 @@ fn overrides_keep_their_location_across_a_kind_switch() {
         .to_string();
     assert!(e.contains("boundary_layer"), "{e}");
 }
+
+/// `[sitl]`: the home position's ranges (README), at and past each bound; unset, the section
+/// stays out of the resolved file and the defaults are PX4's SITL home.
+#[test]
+fn sitl_home_ranges() {
+    check(&[
+        (
+            "[sitl]\nhome_lat_deg = 89.0\nhome_lon_deg = -180.0\nhome_alt_m = 10000.0\n",
+            &[],
+        ),
+        (
+            "[sitl]\nhome_lat_deg = -89.0\nhome_lon_deg = 180.0\nhome_alt_m = -1000.0\n",
+            &[],
+        ),
+        ("[sitl]\nhome_lat_deg = 89.01\n", &["sitl.home_lat_deg"]),
+        ("[sitl]\nhome_lat_deg = nan\n", &["sitl.home_lat_deg"]),
+        ("[sitl]\nhome_lon_deg = 180.5\n", &["sitl.home_lon_deg"]),
+        ("[sitl]\nhome_alt_m = -1000.5\n", &["sitl.home_alt_m"]),
+        ("[sitl]\nhome_alt_m = inf\n", &["sitl.home_alt_m"]),
+    ]);
+    let f = resolved("").unwrap();
+    assert!(f.sitl.is_unset());
+    assert_eq!(
+        (
+            f.sitl.home_lat_deg(),
+            f.sitl.home_lon_deg(),
+            f.sitl.home_alt_m()
+        ),
+        (47.397742, 8.545594, 488.0)
+    );
+    assert!(!toml::to_string(&f).unwrap().contains("[sitl]"));
+    let f = resolved("[sitl]\nhome_alt_m = 12.5\n").unwrap();
+    assert!(toml::to_string(&f)
+        .unwrap()
+        .contains("[sitl]\nhome_alt_m = 12.5"));
+    assert!(toml::from_str::<ScenarioFile>("[sitl]\nhome_height_m = 3.0\n").is_err());
+}

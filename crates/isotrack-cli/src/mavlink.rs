@@ -1,0 +1,258 @@
+//! `isotrack sitl` and `isotrack fly`: the MAVLink bridge (crate `isotrack-mavlink`) on the
+//! command line.
+
+use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
+use crate::exit;
+use crate::output::{scenario_toml, write_summary, TraceWriter};
+use crate::run::{load, Failure};
+use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyError, FlyOptions, SensorSource};
+use isotrack_mavlink::link::LinkError;
+use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
+use isotrack_sim::{NoTrace, TraceSink};
+use serde::Serialize;
+use std::path::Path;
+
+fn usage(message: String) -> Failure {
+    Failure {
+        code: exit::USAGE,
+        message,
+    }
+}
+
+fn cant(what: &Path, e: std::io::Error) -> Failure {
+    Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", what.display()),
+    }
+}
+
+fn link_failure(e: LinkError) -> Failure {
+    match e {
+        LinkError::Address(m) => usage(format!("--mavlink {m}")),
+        LinkError::Io(m) => Failure {
+            code: exit::OSERR,
+            message: m,
+        },
+    }
+}
+
+fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => {
+            Err(usage(format!("{flag} must be a number > 0, got {x}")))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// `isotrack sitl`.
+pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
+    positive("--speedup", args.speedup)?;
+    let scenario = load(&args.scenario)?;
+    let mut opts = SitlOptions::new(&args.mavlink);
+    opts.system_id = args.system_id;
+    opts.pace = if args.lockstep {
+        Pace::Lockstep
+    } else {
+        Pace::RealTime {
+            speedup: args.speedup.unwrap_or(1.0),
+        }
+    };
+    opts.stop = isotrack_mavlink::interrupt_flag();
+    let mut writer = match &args.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+            let p = dir.join("trace.csv");
+            Some(TraceWriter::create(&p, scenario.is_flying()).map_err(|e| cant(&p, e))?)
+        }
+        None => None,
+    };
+    let sink: &mut dyn TraceSink = match writer.as_mut() {
+        Some(w) => w,
+        None => &mut NoTrace,
+    };
+    let report = run_sitl(&scenario, &opts, sink, &mut |a| {
+        errln!("isotrack sitl: vehicle on {a} ({})", args.mavlink);
+    })
+    .map_err(|e| match e {
+        SitlError::Link(l) => link_failure(l),
+        SitlError::Scenario(m) => Failure {
+            code: exit::DATAERR,
+            message: m,
+        },
+        SitlError::Io(e) => Failure {
+            code: exit::OSERR,
+            message: format!("link: {e}"),
+        },
+    })?;
+    for e in &report.events {
+        errln!("isotrack sitl: {e}");
+    }
+    if let (Some(dir), Some(w)) = (&args.out, writer) {
+        w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
+        let p = dir.join("summary.json");
+        write_summary(
+            &p,
+            &scenario,
+            args.scenario.scenario.as_deref(),
+            &report.result,
+            &report.events,
+        )
+        .map_err(|e| cant(&p, e))?;
+        let p = dir.join("scenario.toml");
+        std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
+    }
+    outln!(
+        "outcome     {} at t = {} s ({} samples, {} setpoints refused{})",
+        report.result.outcome.as_str(),
+        report.result.t_end_s,
+        report.result.samples,
+        report.setpoints_refused,
+        if report.interrupted {
+            ", interrupted"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// The content of a flight's `summary.json`.
+#[derive(Serialize)]
+struct FlySummary<'a> {
+    isotrack_version: &'static str,
+    scenario_path: Option<String>,
+    /// `completed` when the vehicle ended its run, `failsafe` otherwise.
+    outcome: &'static str,
+    outcome_detail: String,
+    end_reason: &'static str,
+    failsafe: bool,
+    failsafe_acknowledged: bool,
+    t_end_s: Option<f64>,
+    samples: u64,
+    commands: usize,
+    events: &'a [String],
+    frames_in: u64,
+    frames_out: u64,
+    junk_datagrams: u64,
+    scenario: &'a isotrack_scenario::ScenarioFile,
+}
+
+/// `isotrack fly`.
+pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
+    positive("--max-duration-s", args.max_duration_s)?;
+    positive("--timeout-s", Some(args.timeout_s))?;
+    positive("--fence-m", args.fence_m)?;
+    if !(args.setpoint_rate_hz.is_finite() && (2.0..=1000.0).contains(&args.setpoint_rate_hz)) {
+        return Err(usage(format!(
+            "--setpoint-rate-hz must be in [2, 1000] (PX4's offboard mode needs 2 Hz), got {}",
+            args.setpoint_rate_hz
+        )));
+    }
+    let sensor = SensorSource::parse(&args.sensor).map_err(usage)?;
+    let scenario = load(&args.scenario)?;
+    let mut opts = FlyOptions::new(&args.mavlink);
+    opts.sensor = sensor;
+    opts.take_control = args.take_control;
+    opts.max_duration_s = args.max_duration_s;
+    opts.timeout_s = args.timeout_s;
+    opts.fence_m = args.fence_m;
+    opts.setpoint_rate_hz = args.setpoint_rate_hz;
+    opts.system_id = args.system_id;
+    opts.failsafe = match args.failsafe {
+        FailsafeArg::Hold => FailsafeAction::Hold,
+        FailsafeArg::Return => FailsafeAction::Return,
+    };
+    opts.stop = isotrack_mavlink::interrupt_flag();
+    let mut writer = match &args.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+            let p = dir.join("trace.csv");
+            Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
+        }
+        None => None,
+    };
+    let sink: &mut dyn TraceSink = match writer.as_mut() {
+        Some(w) => w,
+        None => &mut NoTrace,
+    };
+    let log_path = args.out.as_ref().map(|d| d.join("mavlink.tlog"));
+    let mut log_error = None;
+    let report = run_fly(&scenario, &opts, sink, &mut |link| {
+        errln!(
+            "isotrack fly: companion on {} ({})",
+            link.local_addr()?,
+            args.mavlink
+        );
+        if let Some(p) = &log_path {
+            if let Err(e) = link.log_to(p) {
+                log_error = Some(e.to_string());
+                return Err(e);
+            }
+        }
+        Ok(())
+    });
+    let report = match report {
+        Ok(r) => r,
+        Err(FlyError::Io(e)) if log_error.is_some() => {
+            return Err(cant(log_path.as_deref().unwrap_or(Path::new("?")), e))
+        }
+        Err(FlyError::Link(l)) => return Err(link_failure(l)),
+        Err(FlyError::Scenario(m)) => {
+            return Err(Failure {
+                code: exit::DATAERR,
+                message: m,
+            })
+        }
+        Err(FlyError::Io(e)) => {
+            return Err(Failure {
+                code: exit::OSERR,
+                message: format!("link: {e}"),
+            })
+        }
+    };
+    for e in &report.events {
+        errln!("isotrack fly: {e}");
+    }
+    if let (Some(dir), Some(w)) = (&args.out, writer) {
+        w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
+        let s = FlySummary {
+            isotrack_version: env!("CARGO_PKG_VERSION"),
+            scenario_path: args
+                .scenario
+                .scenario
+                .as_ref()
+                .map(|p| p.display().to_string()),
+            outcome: if report.end.is_failsafe() {
+                "failsafe"
+            } else {
+                "completed"
+            },
+            outcome_detail: report.events.last().cloned().unwrap_or_default(),
+            end_reason: report.end.as_str(),
+            failsafe: report.end.is_failsafe(),
+            failsafe_acknowledged: report.failsafe_acknowledged,
+            t_end_s: report.t_last_s,
+            samples: report.samples,
+            commands: report.commands.len(),
+            events: &report.events,
+            frames_in: report.link.frames_in,
+            frames_out: report.link.frames_out,
+            junk_datagrams: report.link.junk_datagrams,
+            scenario: scenario.file(),
+        };
+        let p = dir.join("summary.json");
+        let text = serde_json::to_string_pretty(&s).map_err(|e| cant(&p, e.into()))?;
+        std::fs::write(&p, text + "\n").map_err(|e| cant(&p, e))?;
+        let p = dir.join("scenario.toml");
+        std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
+    }
+    let _ = write_summary;
+    outln!(
+        "end         {} ({} measurements, {} law commands)",
+        report.end.as_str(),
+        report.samples,
+        report.commands.len()
+    );
+    Ok(())
+}

@@ -1,0 +1,238 @@
+//! `isotrack sitl` and `isotrack fly` as processes: usage and data errors with their exit codes,
+//! and a lockstep flight over UDP loopback whose run directory `plot` and `report` read.
+
+mod common;
+use common::{assert_fails, isotrack, stderr};
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+
+#[test]
+fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
+    let out = "udpout:127.0.0.1:9";
+    for (args, code, needle) in [
+        (
+            vec!["fly", "--mavlink", "tcpout:127.0.0.1:5760"],
+            64,
+            "only UDP",
+        ),
+        (vec!["fly", "--mavlink", "nonsense"], 64, "expected udpin"),
+        (
+            vec!["fly", "--mavlink", "carrier:pigeon"],
+            64,
+            "unknown link kind",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--speedup", "0"],
+            64,
+            "--speedup",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--speedup", "nan"],
+            64,
+            "--speedup",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--timeout-s=-1"],
+            64,
+            "--timeout-s",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--fence-m", "inf"],
+            64,
+            "--fence-m",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--max-duration-s", "0"],
+            64,
+            "--max-duration-s",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--setpoint-rate-hz", "1"],
+            64,
+            "2 Hz",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--sensor", "serial:/dev/ttyS0"],
+            64,
+            "serial",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--sensor", "ELEVENCHARS"],
+            64,
+            "1 to 10",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--speedup", "2", "--lockstep"],
+            64,
+            "cannot be used",
+        ),
+        (
+            vec![
+                "fly",
+                "--mavlink",
+                out,
+                "--set",
+                "controller.kind=gradient_reference",
+            ],
+            65,
+            "gradient",
+        ),
+        (
+            vec![
+                "sitl",
+                "--mavlink",
+                out,
+                "--set",
+                "sim.dt_s=0.0005",
+                "--set",
+                "sensor.rate_hz=2000",
+            ],
+            65,
+            "1000 Hz",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=95"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+    ] {
+        let o = isotrack(&args);
+        assert_fails(&o, code, &[needle]);
+    }
+}
+
+/// `sitl --lockstep` and `fly --take-control --out DIR` as two processes on ports of their own
+/// (the vehicle binds port 0 and says which): the flight's run directory holds one trace row
+/// per sample (20 s at 100 Hz: 2001), a summary that says the vehicle ended the run, and a
+/// telemetry log of whole MAVLink 2 frames; `plot` and `report` read it.
+#[test]
+fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sim_dir, fly_dir) = (dir.path().join("sitl"), dir.path().join("fly"));
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "sitl",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--lockstep",
+            "--set",
+        ])
+        .arg("sim.duration_s=20")
+        .arg("--out")
+        .arg(&sim_dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(sitl.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let port = line
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{line}"));
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "fly",
+            "--take-control",
+            "--timeout-s",
+            "60",
+            "--set",
+            "sim.duration_s=20",
+        ])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .arg("--out")
+        .arg(&fly_dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(sitl.wait().unwrap().success());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fly_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["end_reason"], "vehicle_ended");
+    assert_eq!(summary["outcome"], "completed");
+    assert_eq!(summary["samples"], 2001);
+    assert_eq!(summary["commands"], 2001);
+    let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
+    assert_eq!(trace.lines().count(), 1 + 2001);
+    // The telemetry log: (8-byte time, frame) records; each frame starts with MAVLink 2's 0xFD
+    // and is 12 bytes + its payload length (+13 when signed) long.
+    let log = std::fs::read(fly_dir.join("mavlink.tlog")).unwrap();
+    let (mut at, mut frames) = (0, 0);
+    while at < log.len() {
+        let f = &log[at + 8..];
+        assert_eq!(f[0], 0xFD, "a frame at byte {}", at + 8);
+        let len = 12 + f[1] as usize + if f[2] & 1 == 1 { 13 } else { 0 };
+        at += 8 + len;
+        frames += 1;
+    }
+    assert_eq!(at, log.len());
+    // At least the 2001 measurements received and the 2001 answers sent.
+    assert!(frames >= 2 * 2001, "{frames}");
+    let o = isotrack(&["plot", fly_dir.to_str().unwrap(), sim_dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(fly_dir.join("trajectory.png").exists());
+    let page = dir.path().join("report.html");
+    let o = isotrack(&[
+        "report",
+        fly_dir.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Real time (20x): the vehicle does not wait for the companion, which answers every sample all
+/// the same; the run completes and the companion sees it end. (No assertion on how long it
+/// took.)
+#[test]
+fn a_real_time_flight_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "sitl",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--speedup",
+            "20",
+            "--set",
+        ])
+        .arg("sim.duration_s=30")
+        .arg("--out")
+        .arg(dir.path().join("sitl"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(sitl.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let port = line
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string();
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("end         vehicle_ended"), "{out}");
+    let s = sitl.wait_with_output().unwrap();
+    assert!(s.status.success());
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "completed");
+    assert_eq!(summary["samples"], 3001);
+}

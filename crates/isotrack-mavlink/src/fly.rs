@@ -1,0 +1,684 @@
+//! `isotrack fly`: the companion computer. It runs the scenario's own law
+//! ([`Scenario::tracker`]: search phase, anti-windup, turn-rate limit, derivative estimator) on
+//! the measurements it receives, and only on them (coordinate-free: positions are logged and
+//! checked against the fence, never given to the law), and sends the command as the vehicle's
+//! setpoint: a fixed wing's coordinated-turn roll `phi = -atan(omega V / g)` within the bank
+//! limit, a ground vehicle's yaw rate, both as `SET_ATTITUDE_TARGET`, stamped with the time of
+//! the measurement they answer, and repeated at a steady rate (PX4's offboard mode needs 2 Hz).
+//!
+//! Control: with `take_control` it arms and switches to OFFBOARD (holding the measurements
+//! until it has control, so the law starts at the first one); without, it waits for the pilot
+//! to do so, answering with neutral setpoints meanwhile. Failsafes (each logged): Ctrl-C
+//! ([`FlyOptions::stop`]), `max_duration_s` of vehicle time, no message from the vehicle or no
+//! measurement for `timeout_s` of wall time, leaving the fence: the setpoints stop and the
+//! vehicle is switched to HOLD (or RETURN).
+
+use crate::link::{Link, LinkError, LinkStats, Received};
+use crate::mirror::Transport;
+use crate::vehicle_state::{Mode, PX4_MAIN_AUTO, PX4_MAIN_OFFBOARD, PX4_SUB_LOITER, PX4_SUB_RTL};
+use crate::wire;
+use isotrack_core::{IsolineController, Measurement};
+use isotrack_scenario::Scenario;
+use isotrack_sim::{TraceRow, TraceSink};
+use mavlink::dialects::common::*;
+use std::collections::VecDeque;
+use std::net::UdpSocket;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The `time_boot_ms` of a setpoint that answers no measurement (sent before the first one).
+pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
+
+/// Where the measurements come from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum SensorSource {
+    /// `NAMED_VALUE_FLOAT` messages of the vehicle with this name (at most 10 characters).
+    Named(String),
+    /// Text lines `t_s,value` in UDP datagrams received on this address (`udp:HOST:PORT`).
+    UdpLines(String),
+}
+
+impl SensorSource {
+    /// Parses `--sensor`: `NAME`, `mavlink:NAME` or `udp:HOST:PORT`.
+    pub fn parse(s: &str) -> Result<Self, String> {
+        if let Some(a) = s.strip_prefix("udp:") {
+            return Ok(SensorSource::UdpLines(a.to_string()));
+        }
+        if s.starts_with("serial:") {
+            return Err(format!(
+                "--sensor {s}: serial sensors are not supported yet (use udp:HOST:PORT)"
+            ));
+        }
+        let name = s.strip_prefix("mavlink:").unwrap_or(s);
+        if name.is_empty() || name.len() > 10 || !name.is_ascii() {
+            return Err(format!(
+                "--sensor {s}: a NAMED_VALUE_FLOAT name is 1 to 10 ASCII characters"
+            ));
+        }
+        Ok(SensorSource::Named(name.to_string()))
+    }
+}
+
+/// The mode a failsafe switches to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FailsafeAction {
+    /// HOLD (PX4 AUTO.LOITER).
+    Hold,
+    /// RETURN (PX4 AUTO.RTL).
+    Return,
+}
+
+/// Options of [`run_fly`].
+#[derive(Clone, Debug)]
+pub struct FlyOptions {
+    /// The link address (see [`crate::link`]).
+    pub url: String,
+    /// Where the measurements come from.
+    pub sensor: SensorSource,
+    /// Arm and switch to OFFBOARD (else wait for the pilot to).
+    pub take_control: bool,
+    /// End after this much vehicle time since the first measurement, s.
+    pub max_duration_s: Option<f64>,
+    /// Fail safe after this long without a message from the vehicle or a measurement, wall s.
+    pub timeout_s: f64,
+    /// Fail safe when farther than this from the first received position, m.
+    pub fence_m: Option<f64>,
+    /// The mode a failsafe switches to.
+    pub failsafe: FailsafeAction,
+    /// Setpoints per wall-clock second besides the answers (>= 2 for PX4's offboard mode).
+    pub setpoint_rate_hz: f64,
+    /// This companion's system id (component 191, an onboard computer).
+    pub system_id: u8,
+    /// Set from outside (Ctrl-C) to stop.
+    pub stop: Arc<AtomicBool>,
+}
+
+impl FlyOptions {
+    /// Defaults: `ISO_S`, no take-over, a 3 s timeout, no fence, HOLD, 10 Hz setpoints, system
+    /// 1 (the vehicle's own system, as a companion computer is).
+    pub fn new(url: &str) -> Self {
+        Self {
+            url: url.to_string(),
+            sensor: SensorSource::Named(wire::MEASUREMENT_NAME.into()),
+            take_control: false,
+            max_duration_s: None,
+            timeout_s: 3.0,
+            fence_m: None,
+            failsafe: FailsafeAction::Hold,
+            setpoint_rate_hz: 10.0,
+            system_id: 1,
+            stop: Arc::new(AtomicBool::new(false)),
+        }
+    }
+}
+
+/// How a flight ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlyEnd {
+    /// The vehicle reported the end of its run (`MAV_STATE_POWEROFF`).
+    VehicleEnded,
+    /// Stopped from outside (Ctrl-C): failsafe.
+    Interrupted,
+    /// `max_duration_s` reached: failsafe.
+    MaxDuration,
+    /// No message from the vehicle for `timeout_s`: failsafe.
+    LinkLost,
+    /// No measurement for `timeout_s`: failsafe.
+    SensorLost,
+    /// Outside the fence: failsafe.
+    Fence,
+    /// The law's command was not finite: failsafe.
+    LawNotFinite,
+    /// The vehicle refused to arm or to switch to OFFBOARD.
+    ControlRefused,
+}
+
+impl FlyEnd {
+    /// Its name in the summary (`end_reason`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FlyEnd::VehicleEnded => "vehicle_ended",
+            FlyEnd::Interrupted => "interrupted",
+            FlyEnd::MaxDuration => "max_duration",
+            FlyEnd::LinkLost => "link_lost",
+            FlyEnd::SensorLost => "sensor_lost",
+            FlyEnd::Fence => "fence",
+            FlyEnd::LawNotFinite => "law_not_finite",
+            FlyEnd::ControlRefused => "control_refused",
+        }
+    }
+    /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
+    pub fn is_failsafe(self) -> bool {
+        !matches!(self, FlyEnd::VehicleEnded | FlyEnd::ControlRefused)
+    }
+}
+
+/// What a flight did.
+#[derive(Clone, Debug)]
+pub struct FlyReport {
+    /// How it ended.
+    pub end: FlyEnd,
+    /// Per measurement answered by the law: its wire time, ms, and the command, rad/s.
+    pub commands: Vec<(u32, f64)>,
+    /// Measurements received.
+    pub samples: u64,
+    /// Vehicle time of the first and last measurement, s.
+    pub t_first_s: Option<f64>,
+    /// Vehicle time of the last measurement, s.
+    pub t_last_s: Option<f64>,
+    /// Events (control, failsafes), in order.
+    pub events: Vec<String>,
+    /// Whether the vehicle acknowledged the failsafe mode.
+    pub failsafe_acknowledged: bool,
+    /// The link's counters.
+    pub link: LinkStats,
+}
+
+/// Why a flight could not start.
+#[derive(Debug)]
+pub enum FlyError {
+    /// The link or the sensor address.
+    Link(LinkError),
+    /// The scenario's law cannot fly coordinate-free (it needs ground truth).
+    Scenario(String),
+    /// The socket failed.
+    Io(std::io::Error),
+}
+
+impl std::fmt::Display for FlyError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FlyError::Link(e) => e.fmt(f),
+            FlyError::Scenario(m) => f.write_str(m),
+            FlyError::Io(e) => write!(f, "link: {e}"),
+        }
+    }
+}
+
+fn name_of(c: &[u8]) -> &[u8] {
+    let n = c.iter().position(|&b| b == 0).unwrap_or(c.len());
+    &c[..n]
+}
+
+struct Fly<'a> {
+    link: Link,
+    opts: &'a FlyOptions,
+    transport: Transport,
+    target: Option<(u32, u8)>,
+    armed: bool,
+    mode: Option<Mode>,
+    /// The command in force (None: neutral, before the law has control).
+    current: Option<f64>,
+    last_answer_ms: Option<u32>,
+    /// The vehicle refused to arm or to switch to OFFBOARD.
+    refused: bool,
+    events: Vec<String>,
+    t0: Instant,
+}
+
+impl Fly<'_> {
+    fn event(&mut self, what: String) {
+        let t = self.t0.elapsed().as_secs_f64();
+        self.events.push(format!("wall {t:.3} s: {what}"));
+    }
+
+    fn send(&mut self, m: MavMessage) -> Result<(), FlyError> {
+        self.link.send(&m).map(|_| ()).map_err(FlyError::Io)
+    }
+
+    fn heartbeat(&mut self) -> Result<(), FlyError> {
+        self.send(MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            custom_mode: 0,
+            mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+            base_mode: MavModeFlag::empty(),
+            system_status: MavState::MAV_STATE_ACTIVE,
+            mavlink_version: 3,
+        }))
+    }
+
+    fn command(&mut self, cmd: MavCmd, p: [f32; 3]) -> Result<(), FlyError> {
+        let Some((sys, comp)) = self.target else {
+            return Ok(());
+        };
+        self.send(MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: p[0],
+            param2: p[1],
+            param3: p[2],
+            command: cmd,
+            target_system: sys as u8,
+            target_component: comp,
+            ..Default::default()
+        }))
+    }
+
+    /// The setpoint of the command in force, stamped `ms`.
+    fn setpoint(&mut self, ms: u32) -> Result<(), FlyError> {
+        let Some((sys, comp)) = self.target else {
+            return Ok(());
+        };
+        let w = self.current.unwrap_or(0.0);
+        let ignore_rates = AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
+            | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
+            | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE;
+        let (q, yaw_rate, mask) = match self.transport {
+            Transport::FixedWing { airspeed_mps } => (
+                wire::quaternion_of_roll(wire::roll_of_turn_rate(w, airspeed_mps)),
+                0.0,
+                ignore_rates
+                    | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE,
+            ),
+            Transport::Ground => (
+                [1.0, 0.0, 0.0, 0.0],
+                wire::yaw_rate_of_turn_rate(w),
+                ignore_rates | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+            ),
+        };
+        self.send(MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+            time_boot_ms: ms,
+            q,
+            body_roll_rate: 0.0,
+            body_pitch_rate: 0.0,
+            body_yaw_rate: yaw_rate,
+            thrust: 0.0,
+            target_system: sys as u8,
+            target_component: comp,
+            type_mask: mask,
+        }))
+    }
+
+    fn set_mode_params(mode: Mode) -> [f32; 3] {
+        let (main, sub) = match mode {
+            Mode::Offboard => (PX4_MAIN_OFFBOARD, 0),
+            Mode::Return => (PX4_MAIN_AUTO, PX4_SUB_RTL),
+            _ => (PX4_MAIN_AUTO, PX4_SUB_LOITER),
+        };
+        // param1: MAV_MODE_FLAG_CUSTOM_MODE_ENABLED.
+        [1.0, main as f32, sub as f32]
+    }
+}
+
+/// Flies `scenario`'s law over `opts.url`, recording one trace row per answered measurement
+/// (received position, measured value as `s`, the command) into `sink`; `on_ready` is told the
+/// local address once the link is open. `log` receives nothing here: see [`Link::log_to`] via
+/// `link_setup`, called on the link before the flight starts (the raw MAVLink log).
+pub fn run_fly<S: TraceSink + ?Sized>(
+    scenario: &Scenario,
+    opts: &FlyOptions,
+    sink: &mut S,
+    link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
+) -> Result<FlyReport, FlyError> {
+    let mut law = scenario.tracker();
+    if law.needs_ground_truth() {
+        return Err(FlyError::Scenario(
+            "controller.kind = \"gradient_reference\" needs the field's gradient at the vehicle: it cannot fly on measurements alone".into(),
+        ));
+    }
+    crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
+    let mut link = Link::open(&opts.url, opts.system_id, 191).map_err(FlyError::Link)?;
+    link_setup(&mut link).map_err(FlyError::Io)?;
+    let lines = match &opts.sensor {
+        SensorSource::UdpLines(a) => {
+            let s = UdpSocket::bind(a)
+                .map_err(|e| FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {e}"))))?;
+            s.set_nonblocking(true).map_err(FlyError::Io)?;
+            Some(s)
+        }
+        SensorSource::Named(_) => None,
+    };
+    let wanted: Vec<u8> = match &opts.sensor {
+        SensorSource::Named(n) => n.as_bytes().to_vec(),
+        SensorSource::UdpLines(_) => Vec::new(),
+    };
+    let level = scenario.level();
+    let mut fly = Fly {
+        link,
+        opts,
+        transport: Transport::of(scenario),
+        target: None,
+        armed: false,
+        mode: None,
+        current: None,
+        last_answer_ms: None,
+        refused: false,
+        events: Vec::new(),
+        t0: Instant::now(),
+    };
+    let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
+    let period = Duration::from_secs_f64(1.0 / opts.setpoint_rate_hz.max(2.0));
+    let mut queue: VecDeque<(u32, f64)> = VecDeque::new();
+    let mut commands = Vec::new();
+    let (mut samples, mut t_first, mut t_last) = (0u64, None::<f64>, None::<f64>);
+    let mut last_link = Instant::now();
+    let mut last_sensor = Instant::now();
+    let mut next_setpoint = Instant::now();
+    let mut next_heartbeat = Instant::now();
+    let mut next_control = Instant::now();
+    let mut control_tries = 0u32;
+    let mut was_armed = false;
+    let mut pos: Option<(f64, f64)> = None;
+    let mut heading = 0.0;
+    let mut home: Option<(f64, f64)> = None;
+    let mut vehicle_done = false;
+    let mut buf = [0u8; 2048];
+    let end = 'flight: loop {
+        if opts.stop.load(Ordering::Relaxed) {
+            break 'flight FlyEnd::Interrupted;
+        }
+        let now = Instant::now();
+        if now >= next_heartbeat {
+            fly.heartbeat()?;
+            next_heartbeat = now + Duration::from_secs(1);
+        }
+        let had_target = fly.target.is_some();
+        for r in fly
+            .link
+            .poll(Duration::from_millis(10))
+            .map_err(FlyError::Io)?
+        {
+            handle(
+                &mut fly,
+                &r,
+                &wanted,
+                &mut queue,
+                &mut last_link,
+                &mut last_sensor,
+                &mut pos,
+                &mut heading,
+                &mut vehicle_done,
+            );
+        }
+        if !had_target && fly.target.is_some() {
+            // The sensor's silence counts from the vehicle's first message.
+            last_sensor = Instant::now();
+        }
+        if let Some(s) = &lines {
+            while let Ok((n, _)) = s.recv_from(&mut buf) {
+                for line in String::from_utf8_lossy(&buf[..n]).lines() {
+                    let mut it = line.split(',');
+                    let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
+                        continue;
+                    };
+                    if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
+                        if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
+                            queue.push_back((ms, v));
+                            last_sensor = Instant::now();
+                        }
+                    }
+                }
+            }
+        }
+        // The fence, on the received position (never given to the law).
+        if let Some(p) = pos {
+            let h = *home.get_or_insert(p);
+            if let Some(f) = opts.fence_m {
+                let d = ((p.0 - h.0).powi(2) + (p.1 - h.1).powi(2)).sqrt();
+                if d > f {
+                    fly.event(format!("fence: {d:.1} m from the start, beyond {f} m"));
+                    break 'flight FlyEnd::Fence;
+                }
+            }
+        }
+        if fly.armed != was_armed {
+            // Armed: ask for OFFBOARD at once.
+            was_armed = fly.armed;
+            next_control = Instant::now();
+        }
+        let active = fly.armed && fly.mode == Some(Mode::Offboard);
+        // Taking control: arm, then OFFBOARD, retried every 0.5 s.
+        if opts.take_control && !active && fly.refused {
+            fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
+            break 'flight FlyEnd::ControlRefused;
+        }
+        if opts.take_control && !active && fly.target.is_some() && Instant::now() >= next_control {
+            control_tries += 1;
+            if control_tries > 20 {
+                fly.event("the vehicle did not arm or switch to OFFBOARD in 10 s".into());
+                break 'flight FlyEnd::ControlRefused;
+            }
+            if !fly.armed {
+                fly.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
+            } else {
+                // PX4 wants setpoints before the switch.
+                fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+                fly.command(
+                    MavCmd::MAV_CMD_DO_SET_MODE,
+                    Fly::set_mode_params(Mode::Offboard),
+                )?;
+            }
+            next_control = Instant::now() + Duration::from_millis(500);
+        }
+        let holding = opts.take_control && !active;
+        if !holding {
+            while let Some((ms, v)) = queue.pop_front() {
+                if let Some(last) = fly.last_answer_ms {
+                    if ms < last {
+                        continue;
+                    }
+                    if ms == last {
+                        // A repeat (the vehicle lost our answer?): the same answer again.
+                        fly.setpoint(ms)?;
+                        continue;
+                    }
+                }
+                let m = Measurement {
+                    t_s: wire::time_s(ms),
+                    value: v,
+                };
+                let first = *t_first.get_or_insert(m.t_s);
+                if let Some(max) = opts.max_duration_s {
+                    if m.t_s - first >= max {
+                        fly.event(format!(
+                            "max duration {max} s reached at vehicle time {} s",
+                            m.t_s
+                        ));
+                        break 'flight FlyEnd::MaxDuration;
+                    }
+                }
+                samples += 1;
+                t_last = Some(m.t_s);
+                if active {
+                    let w = law.update(&m);
+                    if !w.is_finite() {
+                        fly.event(format!(
+                            "the law's command is not finite at t = {} s",
+                            m.t_s
+                        ));
+                        break 'flight FlyEnd::LawNotFinite;
+                    }
+                    commands.push((ms, w));
+                    fly.current = Some(w);
+                } else {
+                    fly.current = None;
+                }
+                fly.setpoint(ms)?;
+                fly.last_answer_ms = Some(ms);
+                next_setpoint = Instant::now() + period;
+                let (x, y) = pos.unwrap_or((f64::NAN, f64::NAN));
+                sink.record(&TraceRow {
+                    t_s: m.t_s,
+                    x_m: x,
+                    y_m: y,
+                    heading_rad: heading,
+                    s: v,
+                    error: v - level,
+                    omega_radps: fly.current.unwrap_or(0.0),
+                    s_measured: Some(v),
+                    telemetry: None,
+                });
+            }
+        } else if queue.len() > 100_000 {
+            queue.pop_front();
+        }
+        if vehicle_done {
+            fly.event("the vehicle ended its run".into());
+            break 'flight FlyEnd::VehicleEnded;
+        }
+        let now = Instant::now();
+        if fly.target.is_some() && now >= next_setpoint {
+            fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            next_setpoint = now + period;
+        }
+        if now.duration_since(last_link) > timeout {
+            fly.event(format!(
+                "no message from the vehicle for {} s",
+                opts.timeout_s
+            ));
+            break 'flight FlyEnd::LinkLost;
+        }
+        if now.duration_since(last_sensor) > timeout {
+            fly.event(format!("no measurement for {} s", opts.timeout_s));
+            break 'flight FlyEnd::SensorLost;
+        }
+    };
+    let mut acknowledged = false;
+    if end.is_failsafe() {
+        let mode = match opts.failsafe {
+            FailsafeAction::Hold => Mode::Hold,
+            FailsafeAction::Return => Mode::Return,
+        };
+        fly.event(format!(
+            "failsafe ({}): setpoints stopped, {} commanded",
+            end.as_str(),
+            mode.name()
+        ));
+        // Up to 5 tries, 0.3 s apart, until the vehicle acknowledges or reports the mode.
+        'tries: for _ in 0..5 {
+            fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(mode))?;
+            let until = Instant::now() + Duration::from_millis(300);
+            while Instant::now() < until {
+                for r in fly
+                    .link
+                    .poll(Duration::from_millis(20))
+                    .map_err(FlyError::Io)?
+                {
+                    if Some((r.header.system_id, r.header.component_id)) != fly.target {
+                        continue;
+                    }
+                    match &r.msg {
+                        MavMessage::COMMAND_ACK(a)
+                            if a.command == MavCmd::MAV_CMD_DO_SET_MODE
+                                && a.result == MavResult::MAV_RESULT_ACCEPTED =>
+                        {
+                            acknowledged = true;
+                        }
+                        MavMessage::HEARTBEAT(h)
+                            if Mode::from_custom_mode(h.custom_mode) == Some(mode) =>
+                        {
+                            acknowledged = true;
+                        }
+                        _ => {}
+                    }
+                }
+                if acknowledged {
+                    break 'tries;
+                }
+            }
+        }
+        fly.event(if acknowledged {
+            format!("the vehicle is in {}", mode.name())
+        } else {
+            format!("the vehicle did not confirm {}", mode.name())
+        });
+    }
+    Ok(FlyReport {
+        end,
+        commands,
+        samples,
+        t_first_s: t_first,
+        t_last_s: t_last,
+        events: fly.events,
+        failsafe_acknowledged: acknowledged,
+        link: fly.link.stats,
+    })
+}
+
+/// Handles one received message.
+#[allow(clippy::too_many_arguments)]
+fn handle(
+    fly: &mut Fly<'_>,
+    r: &Received,
+    wanted: &[u8],
+    queue: &mut VecDeque<(u32, f64)>,
+    last_link: &mut Instant,
+    last_sensor: &mut Instant,
+    pos: &mut Option<(f64, f64)>,
+    heading: &mut f64,
+    vehicle_done: &mut bool,
+) {
+    let from = (r.header.system_id, r.header.component_id);
+    if fly.target.is_none() {
+        if let MavMessage::HEARTBEAT(h) = &r.msg {
+            if h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
+                && from != (fly.opts.system_id as u32, 191)
+            {
+                fly.target = Some(from);
+                fly.event(format!("vehicle: system {}, component {}", from.0, from.1));
+            }
+        }
+    }
+    let Some(target) = fly.target else { return };
+    // The measurement may come from another component of the vehicle's system.
+    if from.0 != target.0 {
+        return;
+    }
+    if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+        if !wanted.is_empty() && name_of(&n.name[..]) == wanted && n.value.is_finite() {
+            queue.push_back((n.time_boot_ms, n.value as f64));
+            *last_sensor = Instant::now();
+        }
+        return;
+    }
+    if from != target {
+        return;
+    }
+    *last_link = Instant::now();
+    match &r.msg {
+        MavMessage::HEARTBEAT(h) => {
+            let armed = h
+                .base_mode
+                .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+            let mode = Mode::from_custom_mode(h.custom_mode);
+            if armed != fly.armed || mode != fly.mode {
+                fly.event(format!(
+                    "vehicle {} in {}",
+                    if armed { "armed" } else { "disarmed" },
+                    mode.map_or("an unknown mode", |m| m.name())
+                ));
+            }
+            fly.armed = armed;
+            fly.mode = mode;
+            if h.system_status == MavState::MAV_STATE_POWEROFF {
+                *vehicle_done = true;
+            }
+        }
+        MavMessage::COMMAND_ACK(a) => {
+            let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
+            fly.event(format!("{:?}: {:?}", a.command, a.result));
+            if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
+                fly.armed = true;
+            }
+            let control = matches!(
+                a.command,
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM | MavCmd::MAV_CMD_DO_SET_MODE
+            );
+            // A refusal, not a "still working on it".
+            if control
+                && !matches!(
+                    a.result,
+                    MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS
+                )
+            {
+                fly.refused = true;
+            }
+        }
+        MavMessage::LOCAL_POSITION_NED(p) => {
+            *pos = Some((p.y as f64, p.x as f64));
+        }
+        MavMessage::ATTITUDE(a) => {
+            *heading = isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);
+        }
+        _ => {}
+    }
+}

@@ -1,0 +1,94 @@
+//! Local metres <-> WGS84 latitude and longitude about a home position.
+//!
+//! The same projection as the field loaders' georeference
+//! (`isotrack_fields::georef`): **equirectangular about the home latitude** `phi_0`, with the mean
+//! Earth radius `R = 6 371 008.8 m`:
+//!
+//! ```text
+//! lat = lat_0 + y / R,        lon = lon_0 + x / (R cos(lat_0))      (radians)
+//! ```
+//!
+//! `x` east and `y` north of home, m. Exact at home; the east-west scale is off by
+//! `cos(lat)/cos(lat_0) - 1` elsewhere (3e-5 over 5 km at 47 deg): a local flying area, not
+//! navigation across a continent.
+
+use isotrack_fields::georef::EARTH_RADIUS_M;
+
+/// Where the local origin is on the Earth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Home {
+    /// Latitude, deg.
+    pub lat_deg: f64,
+    /// Longitude, deg.
+    pub lon_deg: f64,
+    /// Altitude above mean sea level, m.
+    pub alt_m: f64,
+}
+
+impl Home {
+    /// The home of a scenario (`sitl.home_lat_deg`, `home_lon_deg`, `home_alt_m`, defaults
+    /// applied).
+    pub fn of(s: &isotrack_scenario::Scenario) -> Self {
+        let h = &s.file().sitl;
+        Self {
+            lat_deg: h.home_lat_deg(),
+            lon_deg: h.home_lon_deg(),
+            alt_m: h.home_alt_m(),
+        }
+    }
+
+    /// `(lat, lon)` in degrees of the point `x_m` east, `y_m` north of home.
+    pub fn to_lat_lon_deg(&self, x_m: f64, y_m: f64) -> (f64, f64) {
+        let lat = self.lat_deg + (y_m / EARTH_RADIUS_M).to_degrees();
+        let lon =
+            self.lon_deg + (x_m / (EARTH_RADIUS_M * self.lat_deg.to_radians().cos())).to_degrees();
+        (lat, wrap_lon_deg(lon))
+    }
+
+    /// `(x east, y north)` in metres of the point at `(lat, lon)` degrees (the inverse of
+    /// [`to_lat_lon_deg`](Self::to_lat_lon_deg)).
+    pub fn to_local_m(&self, lat_deg: f64, lon_deg: f64) -> (f64, f64) {
+        let dlon = wrap_lon_deg(lon_deg - self.lon_deg);
+        (
+            EARTH_RADIUS_M * self.lat_deg.to_radians().cos() * dlon.to_radians(),
+            EARTH_RADIUS_M * (lat_deg - self.lat_deg).to_radians(),
+        )
+    }
+}
+
+/// A longitude wrapped to `[-180, 180)` degrees.
+fn wrap_lon_deg(lon: f64) -> f64 {
+    (lon + 180.0).rem_euclid(360.0) - 180.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One degree of latitude is `R pi / 180` = 111 195.08 m; one degree of longitude at 60 deg is
+    /// half that.
+    #[test]
+    fn a_degree_is_r_pi_over_180() {
+        let h = Home {
+            lat_deg: 60.0,
+            lon_deg: 10.0,
+            alt_m: 0.0,
+        };
+        let m_per_deg = 6_371_008.8 * std::f64::consts::PI / 180.0;
+        let (lat, lon) = h.to_lat_lon_deg(0.5 * m_per_deg, m_per_deg);
+        assert!((lat - 61.0).abs() < 1e-12, "{lat}");
+        assert!((lon - 11.0).abs() < 1e-9, "{lon}");
+        let (x, y) = h.to_local_m(61.0, 11.0);
+        assert!((x - 0.5 * m_per_deg).abs() < 1e-6 && (y - m_per_deg).abs() < 1e-6);
+        // Across the antimeridian.
+        let h = Home {
+            lat_deg: 0.0,
+            lon_deg: 179.9999,
+            alt_m: 0.0,
+        };
+        let (_, lon) = h.to_lat_lon_deg(0.0002 * m_per_deg, 0.0);
+        assert!((lon + 179.9999).abs() < 1e-9, "{lon}");
+        let (x, _) = h.to_local_m(0.0, -179.9999);
+        assert!((x - 0.0002 * m_per_deg).abs() < 1e-6, "{x}");
+    }
+}

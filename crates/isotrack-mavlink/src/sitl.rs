@@ -1,0 +1,626 @@
+//! `isotrack sitl`: a scenario's vehicle, field and sensor as a MAVLink 2 vehicle.
+//!
+//! The loop is the scenario's own ([`isotrack_scenario::ScenarioEpisode`]): at each sensor sample
+//! the vehicle sends the measurement (`NAMED_VALUE_FLOAT` [`wire::MEASUREMENT_NAME`]) and holds,
+//! until the next sample, the turn rate its mode gives ([`Mode`]): in OFFBOARD (armed), the last
+//! valid setpoint of the companion that took control. Telemetry is sent at the scenario's
+//! recording rate (`output.record_rate_hz`, every sample if 0): `GLOBAL_POSITION_INT`,
+//! `LOCAL_POSITION_NED`, `ATTITUDE`, `VFR_HUD`; once per simulated second `HEARTBEAT`,
+//! `SYS_STATUS`, `SYSTEM_TIME` and `HOME_POSITION`.
+//!
+//! Pacing: [`Pace::RealTime`] keeps simulated time at `speedup` x the wall clock, and the
+//! setpoint in force at a sample is held to the next one; the offboard failsafe switches to HOLD
+//! when no valid setpoint came for [`SitlOptions::setpoint_timeout_s`] of simulated time.
+//! [`Pace::Lockstep`] sends a sample and waits until the companion answers it (a valid
+//! `SET_ATTITUDE_TARGET` whose `time_boot_ms` is the sample's), so the flight does not depend
+//! on the machine's speed.
+
+use crate::geo::Home;
+use crate::link::{Link, LinkError, LinkStats, Received};
+use crate::mirror::Transport;
+use crate::vehicle_state::Mode;
+use crate::wire;
+use isotrack_core::math::{wrap_angle, Pose2};
+use isotrack_scenario::Scenario;
+use isotrack_sim::{RunResult, TraceRow, TraceSink};
+use mavlink::dialects::common::*;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// How simulated time goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Pace {
+    /// `speedup` simulated seconds per wall-clock second.
+    RealTime {
+        /// Simulated seconds per wall-clock second (> 0).
+        speedup: f64,
+    },
+    /// One sensor period per answer of the companion.
+    Lockstep,
+}
+
+/// Options of [`run_sitl`].
+#[derive(Clone, Debug)]
+pub struct SitlOptions {
+    /// The link address (see [`crate::link`]).
+    pub url: String,
+    /// How simulated time goes.
+    pub pace: Pace,
+    /// The vehicle's MAVLink system id (component 1, the autopilot).
+    pub system_id: u8,
+    /// Simulated seconds without a valid setpoint, in OFFBOARD, before the vehicle holds
+    /// (real time only).
+    pub setpoint_timeout_s: f64,
+    /// Set from outside (Ctrl-C) to end the run where it stands.
+    pub stop: Arc<AtomicBool>,
+}
+
+impl SitlOptions {
+    /// Defaults: real time, system 1, a 1 s setpoint timeout (PX4's `COM_OF_LOSS_T`).
+    pub fn new(url: &str) -> Self {
+        Self {
+            url: url.to_string(),
+            pace: Pace::RealTime { speedup: 1.0 },
+            system_id: 1,
+            setpoint_timeout_s: 1.0,
+            stop: Arc::new(AtomicBool::new(false)),
+        }
+    }
+}
+
+/// What a simulated flight did.
+#[derive(Clone, Debug)]
+pub struct SitlReport {
+    /// The run's result (as `isotrack run` reports it).
+    pub result: RunResult,
+    /// Per sample: its wire time, ms, and the turn rate the vehicle flew from it, rad/s.
+    pub flown: Vec<(u32, f64)>,
+    /// Mode changes, failsafes and refused commands, in order, with their simulated time.
+    pub events: Vec<String>,
+    /// Setpoints that moved nothing: not finite, not for this system, not from the companion in
+    /// control, or of the wrong kind.
+    pub setpoints_refused: u64,
+    /// The link's counters.
+    pub link: LinkStats,
+    /// Whether the run was stopped from outside before its end.
+    pub interrupted: bool,
+}
+
+/// Why a simulated flight could not start.
+#[derive(Debug)]
+pub enum SitlError {
+    /// The link (see [`LinkError`]).
+    Link(LinkError),
+    /// The scenario cannot be flown over MAVLink (a sensor faster than the millisecond clock,
+    /// a run longer than `time_boot_ms` counts).
+    Scenario(String),
+    /// The socket failed while flying.
+    Io(std::io::Error),
+}
+
+impl std::fmt::Display for SitlError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SitlError::Link(e) => e.fmt(f),
+            SitlError::Scenario(m) => f.write_str(m),
+            SitlError::Io(e) => write!(f, "link: {e}"),
+        }
+    }
+}
+
+/// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
+/// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
+pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
+    let f = s.file();
+    let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+    if rate > 1000.0 {
+        return Err(format!(
+            "sensor.rate_hz = {rate}: MAVLink stamps samples to the millisecond, so at most 1000 Hz"
+        ));
+    }
+    let d = f.sim.duration_s.unwrap_or(600.0);
+    if wire::time_ms(d).is_none() {
+        return Err(format!(
+            "sim.duration_s = {d}: longer than MAVLink's time_boot_ms counts ({} s)",
+            u32::MAX as f64 / 1000.0
+        ));
+    }
+    Ok(())
+}
+
+/// The autopilot's state between samples.
+struct Autopilot {
+    system_id: u8,
+    armed: bool,
+    mode: Mode,
+    /// The companion in control (the last to arm or set a mode): `(system, component)`.
+    owner: Option<(u32, u8)>,
+    /// The last valid setpoint of the owner: turn rate, rad/s, and the simulated time it came.
+    setpoint: Option<(f64, f64)>,
+    transport: Transport,
+    loiter_radps: f64,
+    turn_limit_radps: f64,
+    events: Vec<String>,
+    refused: u64,
+}
+
+impl Autopilot {
+    fn event(&mut self, t_s: f64, what: String) {
+        self.events.push(format!("t = {t_s} s: {what}"));
+    }
+
+    /// The turn rate the vehicle holds from a sample at `pose`.
+    fn turn_rate(&self, pose: Option<Pose2>) -> f64 {
+        if !self.armed {
+            return 0.0;
+        }
+        match self.mode {
+            Mode::Manual => 0.0,
+            Mode::Hold => self.loiter_radps,
+            Mode::Offboard => self.setpoint.map_or(0.0, |(w, _)| w),
+            Mode::Return => {
+                let Some(p) = pose else { return 0.0 };
+                let d = p.position.norm();
+                if d < 2.0 * self.loiter_radius_m() {
+                    return self.loiter_radps;
+                }
+                // Bearing to home, proportional steering saturated at the turn-rate limit.
+                let bearing = (-p.position.y).atan2(-p.position.x);
+                let e = wrap_angle(bearing - p.heading_rad);
+                (2.0 * e).clamp(-self.turn_limit_radps, self.turn_limit_radps)
+            }
+        }
+    }
+
+    fn loiter_radius_m(&self) -> f64 {
+        match self.transport {
+            Transport::FixedWing { airspeed_mps } => airspeed_mps / self.loiter_radps,
+            Transport::Ground => 1.0,
+        }
+    }
+
+    /// Handles a command; returns the acknowledgement's result.
+    fn command(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
+        match c.command {
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+                if c.param1 == 1.0 {
+                    self.armed = true;
+                    self.owner = Some(from);
+                    self.event(t_s, format!("armed by system {}", from.0));
+                    MavResult::MAV_RESULT_ACCEPTED
+                } else if c.param1 == 0.0 {
+                    self.armed = false;
+                    self.event(t_s, format!("disarmed by system {}", from.0));
+                    MavResult::MAV_RESULT_ACCEPTED
+                } else {
+                    MavResult::MAV_RESULT_DENIED
+                }
+            }
+            MavCmd::MAV_CMD_DO_SET_MODE => match Mode::from_px4(c.param2, c.param3) {
+                Some(m) if c.param1 as u32 & 1 == 1 => {
+                    if m != self.mode {
+                        self.event(t_s, format!("mode {} by system {}", m.name(), from.0));
+                    }
+                    self.mode = m;
+                    if m == Mode::Offboard {
+                        self.owner = Some(from);
+                    }
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                _ => {
+                    self.event(
+                        t_s,
+                        format!(
+                            "refused mode (base {}, main {}, sub {}) from system {}",
+                            c.param1, c.param2, c.param3, from.0
+                        ),
+                    );
+                    MavResult::MAV_RESULT_DENIED
+                }
+            },
+            _ => MavResult::MAV_RESULT_UNSUPPORTED,
+        }
+    }
+
+    /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
+    /// (or of anyone, while no companion is in control).
+    fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
+        if s.target_system != self.system_id || self.owner.is_some_and(|o| o != from) {
+            self.refused += 1;
+            return None;
+        }
+        let m = s.type_mask;
+        let attitude =
+            !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE);
+        let yaw_rate =
+            !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE);
+        let w = match self.transport {
+            Transport::FixedWing { airspeed_mps } if attitude => {
+                wire::roll_of_quaternion(s.q).map(|r| wire::turn_rate_of_roll(r, airspeed_mps))
+            }
+            Transport::FixedWing { .. } | Transport::Ground if yaw_rate => {
+                wire::turn_rate_of_yaw_rate(s.body_yaw_rate)
+            }
+            _ => None,
+        };
+        match w {
+            Some(w) if w.is_finite() => {
+                self.setpoint = Some((w, t_s));
+                Some(s.time_boot_ms)
+            }
+            _ => {
+                self.refused += 1;
+                None
+            }
+        }
+    }
+}
+
+/// A received frame's sender.
+fn sender(r: &Received) -> (u32, u8) {
+    (r.header.system_id, r.header.component_id)
+}
+
+struct Sitl<'a> {
+    link: Link,
+    ap: Autopilot,
+    home: Home,
+    scenario: &'a Scenario,
+    stop: Arc<AtomicBool>,
+    /// The next whole simulated second at which the 1 Hz group goes out.
+    next_slow_s: f64,
+    last_heartbeat_wall: Instant,
+    speed_mps: f64,
+}
+
+impl Sitl<'_> {
+    fn send(&mut self, m: MavMessage) -> Result<(), SitlError> {
+        self.link.send(&m).map(|_| ()).map_err(SitlError::Io)
+    }
+
+    fn heartbeat(&mut self, ended: bool) -> Result<(), SitlError> {
+        let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+        if self.ap.armed {
+            base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+        }
+        let flying = self.scenario.is_flying();
+        self.last_heartbeat_wall = Instant::now();
+        self.send(MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            custom_mode: self.ap.mode.custom_mode(),
+            mavtype: if flying {
+                MavType::MAV_TYPE_FIXED_WING
+            } else {
+                MavType::MAV_TYPE_GROUND_ROVER
+            },
+            autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+            base_mode: base,
+            system_status: if ended {
+                MavState::MAV_STATE_POWEROFF
+            } else {
+                MavState::MAV_STATE_ACTIVE
+            },
+            mavlink_version: 3,
+        }))
+    }
+
+    fn statustext(&mut self, severity: MavSeverity, text: &str) -> Result<(), SitlError> {
+        let mut bytes = [0u8; 50];
+        for (b, c) in bytes.iter_mut().zip(text.bytes()) {
+            *b = c;
+        }
+        self.send(MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+            severity,
+            text: bytes.into(),
+        }))
+    }
+
+    /// The once-a-second group, when `t_s` has reached it.
+    fn slow_group(&mut self, t_s: f64) -> Result<(), SitlError> {
+        if t_s < self.next_slow_s {
+            return Ok(());
+        }
+        self.next_slow_s = t_s.floor() + 1.0;
+        let ms = wire::time_ms(t_s).unwrap_or(u32::MAX);
+        self.heartbeat(false)?;
+        let sensors = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_GPS
+            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO;
+        self.send(MavMessage::SYS_STATUS(SYS_STATUS_DATA {
+            onboard_control_sensors_present: sensors,
+            onboard_control_sensors_enabled: sensors,
+            onboard_control_sensors_health: sensors,
+            load: 0,
+            voltage_battery: u16::MAX,
+            current_battery: -1,
+            battery_remaining: -1,
+            ..Default::default()
+        }))?;
+        let unix_us = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_micros() as u64);
+        self.send(MavMessage::SYSTEM_TIME(SYSTEM_TIME_DATA {
+            time_unix_usec: unix_us,
+            time_boot_ms: ms,
+        }))?;
+        let h = self.home;
+        self.send(MavMessage::HOME_POSITION(HOME_POSITION_DATA {
+            latitude: (h.lat_deg * 1e7).round() as i32,
+            longitude: (h.lon_deg * 1e7).round() as i32,
+            altitude: (h.alt_m * 1e3).round() as i32,
+            q: [1.0, 0.0, 0.0, 0.0],
+            ..Default::default()
+        }))
+    }
+
+    /// The telemetry of one trace row.
+    fn telemetry(&mut self, r: &TraceRow) -> Result<(), SitlError> {
+        self.slow_group(r.t_s)?;
+        let ms = wire::time_ms(r.t_s).unwrap_or(u32::MAX);
+        let (lat, lon) = self.home.to_lat_lon_deg(r.x_m, r.y_m);
+        let t = r.telemetry;
+        let alt_rel = t.map_or(0.0, |t| t.altitude_m);
+        let airspeed = t.map_or(self.speed_mps, |t| t.airspeed_mps);
+        let roll = t.map_or(0.0, |t| t.roll_rad);
+        // Yaw: the ground course, clockwise from north.
+        let yaw = wrap_angle(std::f64::consts::FRAC_PI_2 - r.heading_rad);
+        let (vn, ve) = (self.speed_mps * yaw.cos(), self.speed_mps * yaw.sin());
+        let hdg_deg = yaw.to_degrees().rem_euclid(360.0);
+        self.send(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+            time_boot_ms: ms,
+            lat: (lat * 1e7).round() as i32,
+            lon: (lon * 1e7).round() as i32,
+            alt: ((self.home.alt_m + alt_rel) * 1e3).round() as i32,
+            relative_alt: (alt_rel * 1e3).round() as i32,
+            vx: (vn * 100.0).round().clamp(-32767.0, 32767.0) as i16,
+            vy: (ve * 100.0).round().clamp(-32767.0, 32767.0) as i16,
+            vz: 0,
+            hdg: ((hdg_deg * 100.0).round() as u16) % 36000,
+        }))?;
+        self.send(MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+            time_boot_ms: ms,
+            x: r.y_m as f32,
+            y: r.x_m as f32,
+            z: -alt_rel as f32,
+            vx: vn as f32,
+            vy: ve as f32,
+            vz: 0.0,
+        }))?;
+        self.send(MavMessage::ATTITUDE(ATTITUDE_DATA {
+            time_boot_ms: ms,
+            roll: roll as f32,
+            pitch: 0.0,
+            yaw: yaw as f32,
+            rollspeed: 0.0,
+            pitchspeed: 0.0,
+            yawspeed: (-r.omega_radps) as f32,
+        }))?;
+        self.send(MavMessage::VFR_HUD(VFR_HUD_DATA {
+            airspeed: airspeed as f32,
+            groundspeed: self.speed_mps as f32,
+            alt: (self.home.alt_m + alt_rel) as f32,
+            climb: 0.0,
+            heading: hdg_deg.round() as i16 % 360,
+            throttle: 50,
+        }))?;
+        Ok(())
+    }
+
+    /// Handles what arrives within `timeout`; returns the time stamps of valid setpoints.
+    fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<u32>, SitlError> {
+        let got = self.link.poll(timeout).map_err(SitlError::Io)?;
+        let mut answers = Vec::new();
+        let me = (self.ap.system_id as u32, 1u8);
+        for r in got {
+            let from = sender(&r);
+            if from == me {
+                continue;
+            }
+            match &r.msg {
+                MavMessage::COMMAND_LONG(c) => {
+                    if c.target_system != self.ap.system_id {
+                        continue;
+                    }
+                    let result = self.ap.command(t_s, from, c);
+                    self.send(MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                        command: c.command,
+                        result,
+                    }))?;
+                    // The new state at once (PX4 also reports it in the next heartbeat).
+                    self.heartbeat(false)?;
+                }
+                MavMessage::SET_ATTITUDE_TARGET(s) => {
+                    if let Some(ms) = self.ap.setpoint(t_s, from, s) {
+                        answers.push(ms);
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(answers)
+    }
+}
+
+/// A trace sink that keeps the rows for telemetry and passes them on.
+struct Tee<'a, S: ?Sized> {
+    rows: Vec<TraceRow>,
+    sink: &'a mut S,
+}
+
+impl<S: TraceSink + ?Sized> TraceSink for Tee<'_, S> {
+    fn record(&mut self, row: &TraceRow) {
+        self.rows.push(*row);
+        self.sink.record(row);
+    }
+}
+
+/// Runs `scenario` as a MAVLink vehicle on `opts.url`, recording its trace into `sink`;
+/// `on_ready` is told the local address once the link is open (the port of `udpin:HOST:0`).
+/// Waits for the first message of a peer before the run starts.
+pub fn run_sitl<S: TraceSink + ?Sized>(
+    scenario: &Scenario,
+    opts: &SitlOptions,
+    sink: &mut S,
+    on_ready: &mut dyn FnMut(SocketAddr),
+) -> Result<SitlReport, SitlError> {
+    check_wire_times(scenario).map_err(SitlError::Scenario)?;
+    let link = Link::open(&opts.url, opts.system_id, 1).map_err(SitlError::Link)?;
+    on_ready(link.local_addr().map_err(SitlError::Io)?);
+    let transport = Transport::of(scenario);
+    let turn_limit = scenario.max_turn_rate_radps().unwrap_or(0.2);
+    let start = scenario.start();
+    let speed = scenario.start_speed_mps(start);
+    let mut sitl = Sitl {
+        link,
+        ap: Autopilot {
+            system_id: opts.system_id,
+            armed: false,
+            mode: Mode::Manual,
+            owner: None,
+            setpoint: None,
+            transport,
+            loiter_radps: 0.5 * turn_limit,
+            turn_limit_radps: turn_limit,
+            events: Vec::new(),
+            refused: 0,
+        },
+        home: Home::of(scenario),
+        scenario,
+        stop: opts.stop.clone(),
+        next_slow_s: 0.0,
+        last_heartbeat_wall: Instant::now(),
+        speed_mps: speed,
+    };
+    // A `udpin:` link learns its peer from the first message.
+    while !sitl.link.has_peer() {
+        if sitl.stop.load(Ordering::Relaxed) {
+            break;
+        }
+        sitl.handle_inbound(0.0, Duration::from_millis(100))?;
+    }
+    let mut ep = scenario.episode(None, None);
+    let mut flown = Vec::new();
+    let wall0 = Instant::now();
+    let mut interrupted = false;
+    loop {
+        if sitl.stop.load(Ordering::Relaxed) {
+            interrupted = true;
+            break;
+        }
+        let mut tee = Tee {
+            rows: Vec::new(),
+            sink: &mut *sink,
+        };
+        let sample = ep.run_to_sample_traced(&mut tee);
+        let rows = std::mem::take(&mut tee.rows);
+        for r in &rows {
+            if let Pace::RealTime { speedup } = opts.pace {
+                wait_until(
+                    &mut sitl,
+                    r.t_s,
+                    wall0 + Duration::from_secs_f64(r.t_s / speedup),
+                )?;
+            }
+            sitl.telemetry(r)?;
+        }
+        let Some(sample) = sample else { break };
+        let t = sample.measurement.t_s;
+        let ms = wire::time_ms(t).unwrap_or(u32::MAX);
+        if let Pace::RealTime { speedup } = opts.pace {
+            wait_until(&mut sitl, t, wall0 + Duration::from_secs_f64(t / speedup))?;
+        }
+        sitl.slow_group(t)?;
+        let mut name = [0u8; 10];
+        for (b, c) in name.iter_mut().zip(wire::MEASUREMENT_NAME.bytes()) {
+            *b = c;
+        }
+        let iso = MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+            time_boot_ms: ms,
+            value: sample.measurement.value as f32,
+            name: name.into(),
+        });
+        sitl.send(iso.clone())?;
+        match opts.pace {
+            Pace::Lockstep => loop {
+                if sitl.stop.load(Ordering::Relaxed) {
+                    interrupted = true;
+                    break;
+                }
+                let answers = sitl.handle_inbound(t, Duration::from_millis(50))?;
+                if answers.contains(&ms) {
+                    break;
+                }
+                if sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
+                    // A lost datagram must not stall the run: the sample goes again with the
+                    // heartbeat (the companion answers a repeat with its answer again).
+                    sitl.heartbeat(false)?;
+                    sitl.send(iso.clone())?;
+                }
+            },
+            Pace::RealTime { .. } => {
+                sitl.handle_inbound(t, Duration::ZERO)?;
+                if sitl.ap.mode == Mode::Offboard
+                    && sitl.ap.armed
+                    && sitl
+                        .ap
+                        .setpoint
+                        .is_none_or(|(_, at)| t - at > opts.setpoint_timeout_s)
+                {
+                    sitl.ap.mode = Mode::Hold;
+                    let what = format!(
+                        "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
+                        opts.setpoint_timeout_s
+                    );
+                    sitl.ap.event(t, what.clone());
+                    sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, &what)?;
+                    sitl.heartbeat(false)?;
+                }
+            }
+        }
+        if interrupted {
+            break;
+        }
+        let w = sitl.ap.turn_rate(Some(sample.pose));
+        flown.push((ms, w));
+        let mut tee = Tee {
+            rows: Vec::new(),
+            sink: &mut *sink,
+        };
+        ep.command_traced(w, &mut tee);
+        let rows = std::mem::take(&mut tee.rows);
+        for r in &rows {
+            sitl.telemetry(r)?;
+        }
+    }
+    let t_end = ep.t_s();
+    let mut tee = Tee {
+        rows: Vec::new(),
+        sink: &mut *sink,
+    };
+    let result = ep.finish_traced(&mut tee);
+    let text = format!("isotrack sitl: run ended ({})", result.outcome.as_str());
+    sitl.ap.event(t_end, text.clone());
+    sitl.statustext(MavSeverity::MAV_SEVERITY_NOTICE, &text)?;
+    for _ in 0..3 {
+        sitl.heartbeat(true)?;
+    }
+    Ok(SitlReport {
+        result,
+        flown,
+        events: sitl.ap.events,
+        setpoints_refused: sitl.ap.refused,
+        link: sitl.link.stats,
+        interrupted,
+    })
+}
+
+/// Waits (handling what arrives) until the wall clock reaches `deadline`.
+fn wait_until(sitl: &mut Sitl<'_>, t_s: f64, deadline: Instant) -> Result<(), SitlError> {
+    loop {
+        let now = Instant::now();
+        if now >= deadline || sitl.stop.load(Ordering::Relaxed) {
+            return Ok(());
+        }
+        sitl.handle_inbound(t_s, (deadline - now).min(Duration::from_millis(20)))?;
+    }
+}

@@ -1,0 +1,148 @@
+//! What the numbers become on the wire: MAVLink carries times as whole milliseconds (`u32`
+//! `time_boot_ms`) and values as `f32`, so the companion's law sees the measurement rounded, and
+//! the vehicle the setpoint rounded. Both ends and the in-process mirror
+//! ([`crate::mirror`]) use these functions, so a lockstep flight and the mirror do the same
+//! arithmetic, bit for bit.
+//!
+//! Frames: isotrack's turn rate `omega` is positive to the left (counter-clockwise seen from
+//! above, x east, y north); MAVLink's body frame is forward-right-down, so a left turn is a
+//! negative roll (left wing down) and a negative body yaw rate.
+
+use isotrack_core::Measurement;
+
+/// Gravity in the coordinated-turn relation, m/s^2: 9.8, the `g` of the simulated Aerosonde (Beard & McLain 2012), so that the relation is the airframe's own.
+pub const G_MPS2: f64 = 9.8;
+
+/// The bank limit of the fixed-wing setpoints, rad: 40 deg, the roll loop's limit of the
+/// simulated autopilot (Beard & McLain 2012, Sec. 6.5).
+pub const BANK_LIMIT_RAD: f64 = 40.0 * std::f64::consts::PI / 180.0;
+
+/// The name of the `NAMED_VALUE_FLOAT` that carries the measurement (`--sensor` default).
+pub const MEASUREMENT_NAME: &str = "ISO_S";
+
+/// Milliseconds since boot of a time in seconds, as `time_boot_ms` carries it: rounded to the
+/// nearest millisecond; `None` past `u32::MAX` ms (49.7 days) or for a negative or non-finite
+/// time.
+pub fn time_ms(t_s: f64) -> Option<u32> {
+    let ms = (t_s * 1000.0).round();
+    (ms.is_finite() && (0.0..=u32::MAX as f64).contains(&ms)).then_some(ms as u32)
+}
+
+/// Seconds of a `time_boot_ms`.
+pub fn time_s(ms: u32) -> f64 {
+    ms as f64 / 1000.0
+}
+
+/// A measurement as the companion receives it over MAVLink: the time to the millisecond, the
+/// value to `f32` (a value outside `f32`'s range becomes infinite, as `f32` casts do).
+pub fn on_wire(m: Measurement) -> Measurement {
+    Measurement {
+        t_s: time_s(time_ms(m.t_s).unwrap_or(u32::MAX)),
+        value: m.value as f32 as f64,
+    }
+}
+
+/// The coordinated-turn roll of a turn rate: `phi = -atan(omega V / g)` (Beard & McLain 2012,
+/// eq. (9.14); minus: a left turn banks left, negative in MAVLink's frame), within
+/// [`BANK_LIMIT_RAD`], rad.
+pub fn roll_of_turn_rate(omega_radps: f64, airspeed_mps: f64) -> f64 {
+    (-(omega_radps * airspeed_mps / G_MPS2).atan()).clamp(-BANK_LIMIT_RAD, BANK_LIMIT_RAD)
+}
+
+/// The turn rate of a coordinated turn at roll `phi`: `omega = -g tan(phi) / V`, rad/s (the
+/// inverse of [`roll_of_turn_rate`] inside the bank limit; `phi` is clamped to it first).
+pub fn turn_rate_of_roll(roll_rad: f64, airspeed_mps: f64) -> f64 {
+    -G_MPS2 * roll_rad.clamp(-BANK_LIMIT_RAD, BANK_LIMIT_RAD).tan() / airspeed_mps
+}
+
+/// The attitude quaternion `[w, x, y, z]` (body to NED) of a roll with zero pitch and yaw, as
+/// `SET_ATTITUDE_TARGET` carries it (`f32`).
+pub fn quaternion_of_roll(roll_rad: f64) -> [f32; 4] {
+    let h = 0.5 * roll_rad;
+    [h.cos() as f32, h.sin() as f32, 0.0, 0.0]
+}
+
+/// The roll of an attitude quaternion `[w, x, y, z]`, rad:
+/// `atan2(2(w x + y z), 1 - 2(x^2 + y^2))` (the ZYX Euler roll). `None` for a quaternion that is
+/// not finite or not of unit norm within 1 % (a corrupt or hostile setpoint moves nothing).
+pub fn roll_of_quaternion(q: [f32; 4]) -> Option<f64> {
+    let [w, x, y, z] = q.map(f64::from);
+    let n2 = w * w + x * x + y * y + z * z;
+    if !n2.is_finite() || !(0.98..=1.02).contains(&n2) {
+        return None;
+    }
+    Some((2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y)))
+}
+
+/// The body yaw rate (MAVLink: positive clockwise seen from above) of a turn rate, as `f32`.
+pub fn yaw_rate_of_turn_rate(omega_radps: f64) -> f32 {
+    (-omega_radps) as f32
+}
+
+/// The turn rate of a body yaw rate; `None` if it is not finite.
+pub fn turn_rate_of_yaw_rate(yaw_rate_radps: f32) -> Option<f64> {
+    yaw_rate_radps
+        .is_finite()
+        .then_some(-(yaw_rate_radps as f64))
+}
+
+/// The turn rate a fixed-wing vehicle flies for the companion's command `omega`: through the
+/// roll setpoint on the wire (`f32` quaternion) and back.
+pub fn fixed_wing_round_trip(omega_radps: f64, airspeed_mps: f64) -> f64 {
+    let q = quaternion_of_roll(roll_of_turn_rate(omega_radps, airspeed_mps));
+    roll_of_quaternion(q).map_or(0.0, |r| turn_rate_of_roll(r, airspeed_mps))
+}
+
+/// The turn rate a ground vehicle flies for the companion's command `omega`: through the `f32`
+/// yaw rate and back.
+pub fn ground_round_trip(omega_radps: f64) -> f64 {
+    turn_rate_of_yaw_rate(yaw_rate_of_turn_rate(omega_radps)).unwrap_or(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 30 m/s aircraft turning at 0.2741 rad/s banks 40 deg: tan(40 deg) = 0.8391 =
+    /// 0.2741 * 30 / 9.8. Left turn (omega > 0) = negative roll.
+    #[test]
+    fn coordinated_turn_at_the_bank_limit() {
+        let w = 9.8 * 40f64.to_radians().tan() / 30.0;
+        assert!((w - 0.274_1).abs() < 1e-4);
+        assert!((roll_of_turn_rate(w, 30.0) + 40f64.to_radians()).abs() < 1e-12);
+        assert_eq!(roll_of_turn_rate(10.0, 30.0), -BANK_LIMIT_RAD);
+        assert!((turn_rate_of_roll(-40f64.to_radians(), 30.0) - w).abs() < 1e-12);
+        // The round trip through f32 keeps 6-7 digits.
+        let back = fixed_wing_round_trip(0.1, 30.0);
+        assert!((back - 0.1).abs() < 1e-6, "{back}");
+        assert_eq!(ground_round_trip(0.25), 0.25);
+    }
+
+    /// A quaternion of a 30 deg roll: [cos 15 deg, sin 15 deg, 0, 0].
+    #[test]
+    fn quaternions() {
+        let q = quaternion_of_roll(30f64.to_radians());
+        assert!((q[0] as f64 - 15f64.to_radians().cos()).abs() < 1e-7);
+        let r = roll_of_quaternion(q).unwrap();
+        assert!((r - 30f64.to_radians()).abs() < 1e-6);
+        assert_eq!(roll_of_quaternion([f32::NAN, 0.0, 0.0, 0.0]), None);
+        assert_eq!(roll_of_quaternion([0.0; 4]), None);
+        assert_eq!(roll_of_quaternion([2.0, 0.0, 0.0, 0.0]), None);
+        assert_eq!(turn_rate_of_yaw_rate(f32::INFINITY), None);
+    }
+
+    /// Times go to the nearest millisecond; beyond u32 they are refused.
+    #[test]
+    fn times() {
+        assert_eq!(time_ms(0.3), Some(300));
+        assert_eq!(time_ms(1.0004), Some(1000));
+        assert_eq!(time_ms(-1.0), None);
+        assert_eq!(time_ms(5e6), None);
+        let m = on_wire(Measurement {
+            t_s: 0.1 * 3.0,
+            value: 0.1,
+        });
+        assert_eq!(m.t_s, 0.3);
+        assert_eq!(m.value, 0.1f32 as f64);
+    }
+}

@@ -1,0 +1,164 @@
+//! The companion's failsafes on a lost link or sensor, against a stand-in vehicle that goes
+//! quiet: the setpoints stop and HOLD is commanded (PX4 AUTO.LOITER: main mode 4, sub mode 3).
+//! Real time is needed here (a silence is a duration); the timeouts are short, the waits long,
+//! and nothing asserts how long anything took.
+
+use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions};
+use isotrack_mavlink::link::Link;
+use isotrack_scenario::load_scenario;
+use isotrack_sim::NoTrace;
+use mavlink::dialects::common::*;
+use std::time::{Duration, Instant};
+
+fn heartbeat() -> MavMessage {
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_FIXED_WING,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+/// A vehicle that answers the companion's first message with a heartbeat, then sends
+/// heartbeats every 50 ms if `keep_beating`, and reports the first DO_SET_MODE it receives
+/// (parameters 2 and 3); gives up after 60 s.
+fn quiet_vehicle(
+    keep_beating: bool,
+) -> (
+    std::net::SocketAddr,
+    std::thread::JoinHandle<Option<(f32, f32)>>,
+) {
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let h = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut sent = false;
+        while t0.elapsed() < Duration::from_secs(60) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        return Some((c.param2, c.param3));
+                    }
+                }
+            }
+            if link.has_peer() && (!sent || keep_beating) {
+                link.send(&heartbeat()).unwrap();
+                sent = true;
+            }
+        }
+        None
+    });
+    (addr, h)
+}
+
+fn fly_against(keep_beating: bool) -> (FlyEnd, Option<(f32, f32)>) {
+    let s = load_scenario(None, &[]).unwrap();
+    let (addr, vehicle) = quiet_vehicle(keep_beating);
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 0.5;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    (r.end, vehicle.join().unwrap())
+}
+
+#[test]
+fn link_loss_fails_safe_to_hold() {
+    let (end, mode) = fly_against(false);
+    assert_eq!(end, FlyEnd::LinkLost);
+    assert_eq!(mode, Some((4.0, 3.0)));
+}
+
+#[test]
+fn sensor_loss_fails_safe_to_hold() {
+    let (end, mode) = fly_against(true);
+    assert_eq!(end, FlyEnd::SensorLost);
+    assert_eq!(mode, Some((4.0, 3.0)));
+}
+
+/// The vehicle's own offboard failsafe: a companion that arms it, switches it to OFFBOARD, sends
+/// one setpoint and falls silent leaves it in HOLD (real time at 20x; the run is 20 simulated
+/// seconds, the timeout 1).
+#[test]
+fn sitl_holds_when_offboard_setpoints_stop() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let s = load_scenario(None, &["sim.duration_s=20".to_string()]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::RealTime { speedup: 20.0 };
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let mut c = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
+    let command = |cmd, p1, p2| {
+        MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: p1,
+            param2: p2,
+            command: cmd,
+            target_system: 1,
+            target_component: 1,
+            ..Default::default()
+        })
+    };
+    c.send(&command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0))
+        .unwrap();
+    c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        body_yaw_rate: -0.1,
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    }))
+    .unwrap();
+    c.send(&command(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0))
+        .unwrap();
+    let report = vehicle.join().unwrap();
+    let i = report
+        .events
+        .iter()
+        .position(|e| e.contains("mode OFFBOARD"));
+    let j = report.events.iter().position(|e| e.contains("failsafe"));
+    assert!(i.is_some() && j > i, "{:?}", report.events);
+    // Its last turn rates are HOLD's: half the 0.2 rad/s default loiter limit, to the left.
+    assert_eq!(report.flown.last().unwrap().1, 0.1);
+}
+
+/// A vehicle that refuses to arm: `--take-control` gives up at once (`control_refused`), and
+/// never runs the law.
+#[test]
+fn a_refused_arming_ends_the_flight() {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(60) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
+                        link.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                            command: c.command,
+                            result: MavResult::MAV_RESULT_DENIED,
+                        }))
+                        .unwrap();
+                        return true;
+                    }
+                }
+            }
+            if link.has_peer() {
+                link.send(&heartbeat()).unwrap();
+            }
+        }
+        false
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.take_control = true;
+    o.timeout_s = 30.0;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert!(vehicle.join().unwrap());
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(r.commands.is_empty());
+}

@@ -1,0 +1,90 @@
+//! `fly` with a sensor not wired to the autopilot (`--sensor udp:HOST:PORT`, lines `t_s,value`)
+//! and without `--take-control`: against a stand-in vehicle whose pilot has already armed it
+//! and switched it to OFFBOARD, every line is answered by a setpoint stamped with its time and
+//! carrying the law's command for it (the scenario's tracker fed the same measurements), as the
+//! coordinated-turn roll of the Fig. 3 UAV.
+
+use isotrack_core::{IsolineController, Measurement};
+use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, SensorSource};
+use isotrack_mavlink::link::Link;
+use isotrack_mavlink::wire;
+use isotrack_scenario::load_scenario;
+use isotrack_sim::NoTrace;
+use mavlink::dialects::common::*;
+use std::net::UdpSocket;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[test]
+fn udp_lines_are_answered_with_the_laws_roll() {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let mut vehicle = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = vehicle.local_addr().unwrap();
+    // The sensor's port: bound here first to find a free one, then handed to fly.
+    let probe = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let sensor_addr = probe.local_addr().unwrap();
+    drop(probe);
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.sensor = SensorSource::parse(&format!("udp:{sensor_addr}")).unwrap();
+    o.timeout_s = 2.0;
+    o.max_duration_s = Some(4.0);
+    let sc = s.clone();
+    let companion =
+        std::thread::spawn(move || run_fly(&sc, &o, &mut NoTrace, &mut |_| Ok(())).unwrap());
+    let values = [12.0, 11.5, 11.2, 10.9, 10.7, 10.6];
+    let sensor = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mut answers: Vec<(u32, [f32; 4])> = Vec::new();
+    let mut next = 0;
+    let t0 = Instant::now();
+    let mut beats = 0;
+    while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
+        for r in vehicle.poll(Duration::from_millis(20)).unwrap() {
+            if let MavMessage::SET_ATTITUDE_TARGET(a) = &r.msg {
+                // Only the answer to the last line sent (not the setpoints repeated meanwhile,
+                // stamped NOT_AN_ANSWER_MS before the first).
+                if next == 0 || a.time_boot_ms != 1000 * (next as u32 - 1) {
+                    continue;
+                }
+                if answers.last().map(|x| x.0) != Some(a.time_boot_ms) {
+                    answers.push((a.time_boot_ms, a.q));
+                }
+            }
+        }
+        if vehicle.has_peer() {
+            // The pilot's vehicle: armed, in OFFBOARD (PX4 main mode 6), reported ten times
+            // before the first line, so the companion knows it has control.
+            vehicle
+                .send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                    custom_mode: 6 << 16,
+                    mavtype: MavType::MAV_TYPE_FIXED_WING,
+                    autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+                    base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                        | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                    system_status: MavState::MAV_STATE_ACTIVE,
+                    mavlink_version: 3,
+                }))
+                .unwrap();
+            beats += 1;
+            // One line a second of sensor time, once the previous one is answered.
+            if beats > 10 && answers.len() == next && next < values.len() {
+                let line = format!("{}.0,{}\n", next, values[next]);
+                sensor.send_to(line.as_bytes(), sensor_addr).unwrap();
+                next += 1;
+            }
+        }
+    }
+    let report = companion.join().unwrap();
+    assert_eq!(report.end, FlyEnd::MaxDuration, "{:?}", report.events);
+    assert_eq!(answers.len(), 4, "{answers:?}");
+    let mut law = s.tracker();
+    for (k, (ms, q)) in answers.iter().enumerate() {
+        assert_eq!(*ms, 1000 * k as u32);
+        let w = law.update(&Measurement {
+            t_s: k as f64,
+            value: values[k],
+        });
+        let roll = wire::roll_of_turn_rate(w, 30.0);
+        assert_eq!(*q, wire::quaternion_of_roll(roll), "sample {k}");
+    }
+}
