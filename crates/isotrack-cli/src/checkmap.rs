@@ -9,6 +9,7 @@ use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
     StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS,
 };
+use isotrack_scenario::load::clip;
 use isotrack_scenario::Scenario;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -52,7 +53,8 @@ fn usage(message: String) -> Failure {
 fn parse_range(flag: &str, text: &str) -> Result<[f64; 2], Failure> {
     let bad = || {
         usage(format!(
-            "{flag} {text}: expected LO:HI, two numbers with 0 < LO < HI"
+            "{flag} {}: expected LO:HI, two numbers with 0 < LO < HI",
+            clip(text)
         ))
     };
     let (a, b) = text.split_once(':').ok_or_else(bad)?;
@@ -104,7 +106,8 @@ pub fn precheck(
         Some(t) => {
             let bad = || {
                 usage(format!(
-                    "--map-size {t}: expected NxM (points along kp x along the rate), e.g. 61x41"
+                    "--map-size {}: expected NxM (points along kp x along the rate), e.g. 61x41",
+                    clip(t)
                 ))
             };
             let (a, b) = t.split_once(['x', 'X']).ok_or_else(bad)?;

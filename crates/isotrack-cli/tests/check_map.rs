@@ -302,6 +302,11 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
         assert_fails(&o, code, &[needle]);
         assert!(!Path::new(out).exists(), "{args:?} wrote {out}");
     }
+    // A huge value is echoed clipped (README: at most 200 characters of any value).
+    let huge = "9".repeat(100_000);
+    let o = isotrack(&["check", "--map", "--out", out, "--kp-range", &huge]);
+    assert_fails(&o, 64, &["--kp-range", "more characters"]);
+    assert!(stderr(&o).len() < 1000, "{}", stderr(&o).len());
     // A regular file where the directory goes.
     let file = common::write(d.path(), "file", "x");
     let o = isotrack(&["check", "--map", "--out", &file, "--map-size", "3x3"]);

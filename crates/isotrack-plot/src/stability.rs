@@ -211,7 +211,14 @@ fn chart<DB: DrawingBackend>(
     // The verification runs: shape by behaviour, white where the chart agrees, red where not.
     let r = st.px(5.0);
     let red = RGBColor(214, 39, 40);
-    let fill = |p: &VerifyPoint| if p.agrees == Some(false) { red } else { WHITE };
+    let grey = RGBColor(150, 150, 150);
+    // Red: the run disagrees with the chart; grey: not compared (not computed there).
+    let mark = |p: &VerifyPoint, agree: RGBColor| match p.agrees {
+        Some(false) => red,
+        None => grey,
+        Some(true) => agree,
+    };
+    let fill = |p: &VerifyPoint| mark(p, WHITE);
     let shown = |b: Behaviour| verify.iter().filter(move |p| p.behaviour == b);
     let edge = st.px(1.5);
     if verify.iter().any(|p| p.behaviour == Behaviour::Converged) {
@@ -227,7 +234,7 @@ fn chart<DB: DrawingBackend>(
     }
     if verify.iter().any(|p| p.behaviour == Behaviour::LimitCycle) {
         ch.draw_series(shown(Behaviour::LimitCycle).map(|p| {
-            let c = if p.agrees == Some(false) { red } else { BLACK };
+            let c = mark(p, BLACK);
             TriangleMarker::new((p.kp, p.rate_hz), r + 1, c.filled())
         }))
         .map_err(s)?
@@ -236,7 +243,7 @@ fn chart<DB: DrawingBackend>(
     }
     if verify.iter().any(|p| p.behaviour == Behaviour::Diverged) {
         ch.draw_series(shown(Behaviour::Diverged).map(|p| {
-            let c = if p.agrees == Some(false) { red } else { BLACK };
+            let c = mark(p, BLACK);
             Cross::new((p.kp, p.rate_hz), r, c.stroke_width(st.px(2.5)))
         }))
         .map_err(s)?
@@ -248,6 +255,15 @@ fn chart<DB: DrawingBackend>(
             .map_err(s)?
             .label("red: the run disagrees with the chart")
             .legend(move |(x, y)| Circle::new((x + 10, y), r, red.filled()));
+    }
+    if verify
+        .iter()
+        .any(|p| p.agrees.is_none() && p.behaviour != Behaviour::Invalid)
+    {
+        ch.draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())
+            .map_err(s)?
+            .label("grey: not compared (cell not computed)")
+            .legend(move |(x, y)| Circle::new((x + 10, y), r, grey.filled()));
     }
     // The scenario's own point.
     let (kp, rate) = map.scenario_point;

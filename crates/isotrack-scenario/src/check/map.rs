@@ -15,6 +15,7 @@
 
 use super::{law, regions, sampled, Law, LoopSetup, CHECK_LATTICE};
 use crate::Scenario;
+use isotrack_core::numtext::Num;
 use isotrack_sim::{Outcome, TraceRow, TraceSink};
 use serde::Serialize;
 
@@ -205,7 +206,9 @@ impl MapGrid {
         let range = |name: &str, [lo, hi]: [f64; 2]| -> Result<(), String> {
             if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
                 return Err(format!(
-                    "{name} must be LO:HI with 0 < LO < HI (finite), got {lo}:{hi}"
+                    "{name} must be LO:HI with 0 < LO < HI (finite), got {}:{}",
+                    Num(lo),
+                    Num(hi)
                 ));
             }
             Ok(())
@@ -215,8 +218,10 @@ impl MapGrid {
         let top = 1.0 / dt_s;
         if self.rate_range_hz[1] > top * (1.0 + 1e-9) {
             return Err(format!(
-                "--rate-range: {} Hz is faster than the simulation step allows (sim.dt_s = {dt_s} s: at most {top} Hz)",
-                self.rate_range_hz[1]
+                "--rate-range: {} Hz is faster than the simulation step allows (sim.dt_s = {} s: at most {} Hz)",
+                Num(self.rate_range_hz[1]),
+                Num(dt_s),
+                Num(top)
             ));
         }
         for (name, n) in [("kp", self.kp_points), ("rate", self.rate_points)] {

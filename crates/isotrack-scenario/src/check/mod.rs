@@ -184,7 +184,9 @@ pub struct SampledReport {
     pub p_law_orbit_error: Option<f64>,
     /// The stable set of `kp` at the isoline's slopes (other gains fixed): disjoint intervals
     /// `[lo, hi]`, ends refined to 1e-6 relative, scanned over `1e-3 .. 1e6` (null: not
-    /// computed; empty: no `kp` is stable).
+    /// computed; empty: no `kp` is stable). With `p_law_orbit_error` set, the scan holds the
+    /// scenario's orbit (its slope and curvature) while it varies `kp`: approximate away from
+    /// the scenario's `kp` (the note says so; `check --map` uses each `kp`'s own orbit).
     pub kp_intervals: Option<Vec<[f64; 2]>>,
     /// The stable `kp` nearest the scenario's (by ratio; the scenario's own when stable).
     pub nearest_stable_kp: Option<f64>,
@@ -418,7 +420,7 @@ impl PLawOrbit {
 
     fn note(&self) -> String {
         format!(
-            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m",
+            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m; the kp scan (kp_intervals, max_kp, nearest_stable_kp) holds this orbit while it varies kp, which is approximate away from this kp (the orbit moves with kp; check --map checks each kp on its own orbit)",
             self.orbit.radius_m,
             self.orbit.error,
             self.slope,
