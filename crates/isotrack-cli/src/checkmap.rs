@@ -66,12 +66,20 @@ fn parse_range(flag: &str, text: &str) -> Result<[f64; 2], Failure> {
     Ok([lo, hi])
 }
 
+/// The chart's options as given on the command line (each `None` when not given).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MapOptions {
+    /// `--kp-range`.
+    pub kp_range: Option<[f64; 2]>,
+    /// `--rate-range`, Hz.
+    pub rate_range_hz: Option<[f64; 2]>,
+    /// `--map-size` (points along kp, along the rate).
+    pub size: Option<(usize, usize)>,
+}
+
 /// The map options checked before the scenario is loaded: `--map` needs `--out`, the options
-/// of the chart need `--map`, the values parse. Returns `(kp range, rate range, size)`.
-#[allow(clippy::type_complexity)]
-pub fn precheck(
-    args: &CheckArgs,
-) -> Result<(Option<[f64; 2]>, Option<[f64; 2]>, Option<(usize, usize)>), Failure> {
+/// of the chart need `--map`, the values parse.
+pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
     if !args.map {
         for (given, flag) in [
             (args.out.is_some(), "--out"),
@@ -86,7 +94,7 @@ pub fn precheck(
                 )));
             }
         }
-        return Ok((None, None, None));
+        return Ok(MapOptions::default());
     }
     if args.out.is_none() {
         return Err(usage("--map needs --out DIR".into()));
@@ -121,7 +129,11 @@ pub fn precheck(
             return Err(usage(format!("--verify {n}: 1 to {MAX_VERIFY_RUNS} runs")));
         }
     }
-    Ok((kp, rate, size))
+    Ok(MapOptions {
+        kp_range: kp,
+        rate_range_hz: rate,
+        size,
+    })
 }
 
 /// What `check --map` wrote (named in `check --json`'s `map`).
@@ -220,7 +232,7 @@ fn write_csv(
 pub fn write_map(
     args: &CheckArgs,
     scenario: &Scenario,
-    parsed: (Option<[f64; 2]>, Option<[f64; 2]>, Option<(usize, usize)>),
+    parsed: MapOptions,
 ) -> Result<MapReport, Failure> {
     let dir = args
         .out
@@ -231,7 +243,11 @@ pub fn write_map(
         message: format!("no stability chart: {note}"),
     })?;
     let mut grid = MapGrid::default_for(&family);
-    let (kp, rate, size) = parsed;
+    let MapOptions {
+        kp_range: kp,
+        rate_range_hz: rate,
+        size,
+    } = parsed;
     if let Some(r) = kp {
         grid.kp_range = r;
     }

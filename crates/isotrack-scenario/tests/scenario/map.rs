@@ -96,6 +96,12 @@ fn the_p_law_boundary_at_one_hertz_is_within_a_cell_of_jurys() {
         map.slope_basis,
         "the P law's orbit at each kp (ki = 0 on a circular field: the isoline is no equilibrium)"
     );
+    // `check`'s own kp scan holds the scenario's orbit, and says so.
+    let note = check(&s, None).sampled.note;
+    assert!(
+        note.contains("holds this orbit while it varies kp") && note.contains("check --map"),
+        "{note}"
+    );
 }
 
 /// Issue 29, test (2): a lagged sensor on the paper's scenario (kp 10, ki 1, 100 Hz). The
