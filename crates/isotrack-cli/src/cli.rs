@@ -178,6 +178,35 @@ pub struct CheckArgs {
     /// Half-width of the tube |F - s_d| <= H over which gamma1..3 are taken (default: c2).
     #[arg(long, value_name = "H")]
     pub tube_halfwidth: Option<f64>,
+    /// Write the stability chart into `--out DIR`: the sampled loop's spectral radius over kp x
+    /// sensor rate (`stability_map.csv`, `.png`, `.svg`).
+    #[arg(long)]
+    pub map: bool,
+    /// Output directory of `--map` (created if missing, as `run --out`).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// The chart's kp range `LO:HI` (default: 1/100 to 100 times the scenario's kp).
+    #[arg(long, value_name = "LO:HI", allow_hyphen_values = true)]
+    pub kp_range: Option<String>,
+    /// The chart's sensor-rate range in Hz, `LO:HI` (default: 1/10 to 10 times the
+    /// scenario's rate, at most 1/sim.dt_s).
+    #[arg(long, value_name = "LO:HI", allow_hyphen_values = true)]
+    pub rate_range: Option<String>,
+    /// The chart's points, `NxM`: N along kp, M along the rate (default 61x41; 2..400 each, at
+    /// most 40000 cells).
+    #[arg(long, value_name = "NxM")]
+    pub map_size: Option<String>,
+    /// Simulate N points spread over the chart, classify each run (converged, limit cycle,
+    /// diverged) against the chart, write `verify.csv` and mark them on the chart (1..1000).
+    #[arg(long, value_name = "N")]
+    pub verify: Option<usize>,
+    /// Worker threads for the chart and `--verify` (default: all cores). Results do not depend
+    /// on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// How the chart looks.
+    #[command(flatten)]
+    pub look: FigureOptions,
 }
 
 /// `isotrack compare`.

@@ -10,6 +10,7 @@
 pub mod console;
 pub mod aircraft;
 pub mod bench;
+pub mod checkmap;
 pub mod cli;
 pub mod compare;
 pub mod entry;

@@ -167,10 +167,30 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
             });
         }
     }
+    let parsed = crate::checkmap::precheck(args)?;
     let scenario = load(&args.scenario)?;
     let r = isotrack_scenario::check::check(&scenario, args.tube_halfwidth);
+    let map = if args.map {
+        Some(crate::checkmap::write_map(args, &scenario, parsed)?)
+    } else {
+        None
+    };
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&r).unwrap_or_default());
+        let text = match &map {
+            // Without --map the JSON is the report alone, unchanged; with it, a `map` key names
+            // the files written and the chart's counts.
+            Some(m) => {
+                #[derive(serde::Serialize)]
+                struct WithMap<'a> {
+                    #[serde(flatten)]
+                    report: &'a isotrack_scenario::check::CheckReport,
+                    map: &'a crate::checkmap::MapReport,
+                }
+                serde_json::to_string_pretty(&WithMap { report: &r, map: m }).unwrap_or_default()
+            }
+            None => serde_json::to_string_pretty(&r).unwrap_or_default(),
+        };
+        outln!("{text}");
         return Ok(());
     }
     outln!("verdict: {} ({})", r.verdict.as_str(), r.verdict_reason);
@@ -264,6 +284,9 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     }
     if !sm.note.is_empty() {
         outln!("  note: {}", sm.note);
+    }
+    if let Some(m) = &map {
+        crate::checkmap::print_report(m);
     }
     Ok(())
 }

@@ -9,13 +9,16 @@
 //!   end marker, equal axis scales, axes in metres, legend when several runs are overlaid);
 //! * [`timeseries_figure`]: error, measurement and turn rate against time, the steady-state
 //!   window shaded;
-//! * [`field_map`]: a field alone (the paper's Fig. 1(a)).
+//! * [`field_map`]: a field alone (the paper's Fig. 1(a));
+//! * [`stability_map_figure`]: `isotrack check --map`'s chart of the sampled loop's spectral
+//!   radius over `kp` x sensor rate.
 //!
 //! PNG or SVG; the font (DejaVu Sans, `assets/`) is compiled in, so no system font is needed.
 #![deny(missing_docs)]
 
 mod draw;
 mod run_data;
+mod stability;
 mod style;
 
 pub use draw::{
@@ -23,6 +26,7 @@ pub use draw::{
     Format, Panels, SummaryLine,
 };
 pub use run_data::RunData;
+pub use stability::{boundary_segments, stability_map_figure};
 pub use style::{tick_label, tick_step, Colormap, Style, DEFAULT_FONT_FAMILY};
 
 /// Why a figure could not be made.

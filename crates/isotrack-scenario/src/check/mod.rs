@@ -25,6 +25,7 @@
 
 pub mod baselines;
 mod lattice;
+pub mod map;
 pub mod moving;
 pub mod sampled;
 
@@ -183,7 +184,9 @@ pub struct SampledReport {
     pub p_law_orbit_error: Option<f64>,
     /// The stable set of `kp` at the isoline's slopes (other gains fixed): disjoint intervals
     /// `[lo, hi]`, ends refined to 1e-6 relative, scanned over `1e-3 .. 1e6` (null: not
-    /// computed; empty: no `kp` is stable).
+    /// computed; empty: no `kp` is stable). With `p_law_orbit_error` set, the scan holds the
+    /// scenario's orbit (its slope and curvature) while it varies `kp`: approximate away from
+    /// the scenario's `kp` (the note says so; `check --map` uses each `kp`'s own orbit).
     pub kp_intervals: Option<Vec<[f64; 2]>>,
     /// The stable `kp` nearest the scenario's (by ratio; the scenario's own when stable).
     pub nearest_stable_kp: Option<f64>,
@@ -301,6 +304,7 @@ fn region(s: &Scenario) -> [f64; 4] {
 }
 
 /// The gains and speed the theory needs.
+#[derive(Clone, Copy)]
 struct Law {
     kp: f64,
     ki: f64,
@@ -416,7 +420,7 @@ impl PLawOrbit {
 
     fn note(&self) -> String {
         format!(
-            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m",
+            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m; the kp scan (kp_intervals, max_kp, nearest_stable_kp) holds this orbit while it varies kp, which is approximate away from this kp (the orbit moves with kp; check --map checks each kp on its own orbit)",
             self.orbit.radius_m,
             self.orbit.error,
             self.slope,
@@ -494,6 +498,106 @@ fn exact_isoline_slope(s: &Scenario) -> Option<f64> {
     }
 }
 
+/// The sampled loop a scenario's law is checked with, before its gain and sensor period are
+/// applied: the vehicle's heading dynamics, the estimator, the lag, the isoline's slopes and
+/// curvature. [`sampled_report`] and the stability map ([`map`]) both go through
+/// [`LoopSetup::at`]: one computation for the verdict and for every cell of the chart.
+#[derive(Clone)]
+struct LoopSetup {
+    /// The loop at the scenario's own gains and period, on the isoline.
+    base: SampledLoop,
+    /// The isoline's slopes `[min, max]` (before the P law's orbit).
+    range: [f64; 2],
+    /// The linear vehicle model's name.
+    model: &'static str,
+    /// Remarks on what is modelled.
+    notes: Vec<String>,
+}
+
+impl LoopSetup {
+    /// `Err(note)` when the sampled check does not apply (another law, no slope in the tube, a
+    /// vehicle that cannot be built).
+    fn new(s: &Scenario, l: &Law, r: &Regions) -> Result<Self, String> {
+        let f = s.file();
+        if !is_pi_isoline(s) {
+            return Err(
+                "the sampled-data check models the PI-like law (controller.kind = \"pi_isoline\")"
+                    .into(),
+            );
+        }
+        let Some(range) = r.isoline_slope_range else {
+            return Err("no slope in the tube: the level is not attained in the region".into());
+        };
+        let mut notes = vec![];
+        let c = &f.controller;
+        let estimator = match c
+            .derivative
+            .unwrap_or(DerivativeKindName::BackwardDifference)
+        {
+            DerivativeKindName::BackwardDifference => EstimatorModel::BackwardDifference,
+            DerivativeKindName::FilteredDifference => EstimatorModel::FilteredDifference {
+                tau_s: c.derivative_tau_s.unwrap_or(0.1),
+            },
+            DerivativeKindName::Levant => {
+                notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
+                EstimatorModel::BackwardDifference
+            }
+        };
+        let (heading, model) = match build_vehicle(f) {
+            Ok(VehicleModel::Dubins(_)) => (HeadingDynamics::Dubins, "dubins"),
+            Ok(VehicleModel::FixedWing(w)) => (
+                HeadingDynamics::CourseLoop(w.course_loop_model()),
+                "fixed_wing_course_loop",
+            ),
+            Err(e) => return Err(format!("the vehicle cannot be built: {}", e.message)),
+        };
+        if s.max_turn_rate_radps().is_some() {
+            notes.push("the turn-rate limit is a saturation the linear model leaves out (it holds while the limit is not reached)".into());
+        }
+        let base = SampledLoop {
+            speed_mps: l.v,
+            slope: range[1],
+            curvature_per_m: curvature(s),
+            kp: l.kp,
+            ki: l.ki,
+            c1: l.c1,
+            c2: l.c2,
+            period_s: 1.0 / f.sensor.rate_hz.unwrap_or(100.0),
+            delay_s: f.sensor.delay_s.unwrap_or(0.0),
+            estimator,
+            heading,
+            sensor_lag: sensor_lag(s),
+        };
+        Ok(Self {
+            base,
+            range,
+            model,
+            notes,
+        })
+    }
+
+    /// The loop at gain `l.kp` (the rest of `l` as the scenario's) and sensor period
+    /// `period_s`, with the slopes it is checked at: the isoline's own (4 spread over `range`),
+    /// or with `ki = 0` on a circular field the slope and curvature of the orbit the P law
+    /// settles on *at this `kp`* (returned too).
+    fn at(
+        &self,
+        s: &Scenario,
+        l: &Law,
+        period_s: f64,
+    ) -> (SampledLoop, Vec<f64>, Option<PLawOrbit>) {
+        let base = SampledLoop {
+            kp: l.kp,
+            period_s,
+            ..self.base
+        };
+        match p_law_orbit(s, l) {
+            Some(o) => (o.operating_point(base), vec![o.slope], Some(o)),
+            None => (base, spread(self.range, 4), None),
+        }
+    }
+}
+
 /// The sampled-data report: stability at the isoline's own slopes (`r.isoline_slope_range`)
 /// and, separately, over the tube's (`r.slope_range`). With `full = false` (the warnings of
 /// `run`) the stable `kp` set and the period limit are computed only when the loop is unstable
@@ -527,70 +631,25 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         discrete_loop: None,
         note: String::new(),
     };
-    if !is_pi_isoline(s) {
-        rep.note =
-            "the sampled-data check models the PI-like law (controller.kind = \"pi_isoline\")"
-                .into();
-        return rep;
-    }
-    let Some(range) = slope_range else {
-        rep.note = "no slope in the tube: the level is not attained in the region".into();
-        return rep;
-    };
-    let mut notes = vec![];
-    let c = &f.controller;
-    let estimator = match c
-        .derivative
-        .unwrap_or(DerivativeKindName::BackwardDifference)
-    {
-        DerivativeKindName::BackwardDifference => EstimatorModel::BackwardDifference,
-        DerivativeKindName::FilteredDifference => EstimatorModel::FilteredDifference {
-            tau_s: c.derivative_tau_s.unwrap_or(0.1),
-        },
-        DerivativeKindName::Levant => {
-            notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
-            EstimatorModel::BackwardDifference
-        }
-    };
-    let (heading, model) = match build_vehicle(f) {
-        Ok(VehicleModel::Dubins(_)) => (HeadingDynamics::Dubins, "dubins"),
-        Ok(VehicleModel::FixedWing(w)) => (
-            HeadingDynamics::CourseLoop(w.course_loop_model()),
-            "fixed_wing_course_loop",
-        ),
-        Err(e) => {
-            rep.note = format!("the vehicle cannot be built: {}", e.message);
+    let setup = match LoopSetup::new(s, l, r) {
+        Ok(x) => x,
+        Err(note) => {
+            rep.note = note;
             return rep;
         }
     };
-    if s.max_turn_rate_radps().is_some() {
-        notes.push("the turn-rate limit is a saturation the linear model leaves out (it holds while the limit is not reached)".into());
+    let LoopSetup {
+        range,
+        model,
+        mut notes,
+        ..
+    } = setup.clone();
+    let (base, slopes, orbit) = setup.at(s, l, period_s);
+    if let Some(o) = &orbit {
+        notes.push(o.note());
+        rep.p_law_orbit_error = Some(o.orbit.error);
+        rep.slope_range = Some([o.slope, o.slope]);
     }
-    let kappa = curvature(s);
-    let base = SampledLoop {
-        speed_mps: l.v,
-        slope: range[1],
-        curvature_per_m: kappa,
-        kp: l.kp,
-        ki: l.ki,
-        c1: l.c1,
-        c2: l.c2,
-        period_s,
-        delay_s,
-        estimator,
-        heading,
-        sensor_lag: sensor_lag(s),
-    };
-    let slopes = spread(range, 4);
-    let (base, slopes) = match p_law_orbit(s, l) {
-        Some(o) => {
-            notes.push(o.note());
-            rep.p_law_orbit_error = Some(o.orbit.error);
-            rep.slope_range = Some([o.slope, o.slope]);
-            (o.operating_point(base), vec![o.slope])
-        }
-        None => (base, slopes),
-    };
     rep.applicable = true;
     rep.vehicle_model = Some(model);
     rep.curvature_per_m = Some(base.curvature_per_m);

@@ -10,6 +10,7 @@ mod episode;
 mod fixed_wing;
 mod isoline;
 mod keys;
+mod map;
 mod properties;
 mod readme;
 mod sampled;

@@ -1,0 +1,376 @@
+//! `isotrack check --map --out DIR [--verify N]`: the stability chart and its verification
+//! runs (docs/SAMPLED.md, "The stability chart").
+
+use crate::cli::CheckArgs;
+use crate::exit;
+use crate::output::{num, same_file};
+use crate::run::Failure;
+use isotrack_scenario::check::map::{
+    agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
+    StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS,
+};
+use isotrack_scenario::load::clip;
+use isotrack_scenario::Scenario;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// The columns of `stability_map.csv`.
+pub const MAP_COLUMNS: [&str; 8] = [
+    "kp",
+    "sensor_rate_hz",
+    "sensor_period_s",
+    "spectral_radius",
+    "stable",
+    "status",
+    "slope_min",
+    "slope_max",
+];
+
+/// The columns of `verify.csv`.
+pub const VERIFY_COLUMNS: [&str; 11] = [
+    "run",
+    "kp",
+    "sensor_rate_hz",
+    "spectral_radius",
+    "predicted",
+    "outcome",
+    "agrees",
+    "near_boundary",
+    "error_range",
+    "mean_abs_turn_radps",
+    "detail",
+];
+
+fn usage(message: String) -> Failure {
+    Failure {
+        code: exit::USAGE,
+        message,
+    }
+}
+
+/// `LO:HI` as two numbers.
+fn parse_range(flag: &str, text: &str) -> Result<[f64; 2], Failure> {
+    let bad = || {
+        usage(format!(
+            "{flag} {}: expected LO:HI, two numbers with 0 < LO < HI",
+            clip(text)
+        ))
+    };
+    let (a, b) = text.split_once(':').ok_or_else(bad)?;
+    let lo: f64 = a.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = b.trim().parse().map_err(|_| bad())?;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+        return Err(bad());
+    }
+    Ok([lo, hi])
+}
+
+/// The chart's options as given on the command line (each `None` when not given).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MapOptions {
+    /// `--kp-range`.
+    pub kp_range: Option<[f64; 2]>,
+    /// `--rate-range`, Hz.
+    pub rate_range_hz: Option<[f64; 2]>,
+    /// `--map-size` (points along kp, along the rate).
+    pub size: Option<(usize, usize)>,
+}
+
+/// The map options checked before the scenario is loaded: `--map` needs `--out`, the options
+/// of the chart need `--map`, the values parse.
+pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
+    if !args.map {
+        for (given, flag) in [
+            (args.out.is_some(), "--out"),
+            (args.kp_range.is_some(), "--kp-range"),
+            (args.rate_range.is_some(), "--rate-range"),
+            (args.map_size.is_some(), "--map-size"),
+            (args.verify.is_some(), "--verify"),
+        ] {
+            if given {
+                return Err(usage(format!(
+                    "{flag} is an option of --map (check --map --out DIR)"
+                )));
+            }
+        }
+        return Ok(MapOptions::default());
+    }
+    if args.out.is_none() {
+        return Err(usage("--map needs --out DIR".into()));
+    }
+    let kp = args
+        .kp_range
+        .as_deref()
+        .map(|t| parse_range("--kp-range", t))
+        .transpose()?;
+    let rate = args
+        .rate_range
+        .as_deref()
+        .map(|t| parse_range("--rate-range", t))
+        .transpose()?;
+    let size = match args.map_size.as_deref() {
+        None => None,
+        Some(t) => {
+            let bad = || {
+                usage(format!(
+                    "--map-size {}: expected NxM (points along kp x along the rate), e.g. 61x41",
+                    clip(t)
+                ))
+            };
+            let (a, b) = t.split_once(['x', 'X']).ok_or_else(bad)?;
+            let n: usize = a.trim().parse().map_err(|_| bad())?;
+            let m: usize = b.trim().parse().map_err(|_| bad())?;
+            Some((n, m))
+        }
+    };
+    if let Some(n) = args.verify {
+        if !(1..=MAX_VERIFY_RUNS).contains(&n) {
+            return Err(usage(format!("--verify {n}: 1 to {MAX_VERIFY_RUNS} runs")));
+        }
+    }
+    Ok(MapOptions {
+        kp_range: kp,
+        rate_range_hz: rate,
+        size,
+    })
+}
+
+/// What `check --map` wrote (named in `check --json`'s `map`).
+#[derive(Debug, Serialize)]
+pub struct MapReport {
+    /// The files written.
+    pub files: Vec<String>,
+    /// The grid.
+    pub grid: MapGrid,
+    /// Which slopes the chart uses.
+    pub slope_basis: &'static str,
+    /// Cells by status.
+    pub cells_stable: usize,
+    /// See `cells_stable`.
+    pub cells_unstable: usize,
+    /// See `cells_stable` (no equilibrium counts as unstable too; listed for clarity).
+    pub cells_no_equilibrium: usize,
+    /// See `cells_stable`.
+    pub cells_not_computed: usize,
+    /// `--verify`'s agreement (null without `--verify`).
+    pub verify: Option<Agreement>,
+}
+
+/// The output paths in `dir`; refuses a path that exists and is not a regular file (a FIFO
+/// would block the write) and one that is the scenario file itself.
+fn output_path(dir: &Path, name: &str, scenario: Option<&Path>) -> Result<PathBuf, Failure> {
+    let p = dir.join(name);
+    if let Ok(meta) = std::fs::metadata(&p) {
+        if !meta.is_file() {
+            return Err(Failure {
+                code: exit::CANTCREAT,
+                message: format!("cannot write {}: not a regular file", p.display()),
+            });
+        }
+        if scenario.is_some_and(|s| same_file(s, &p)) {
+            return Err(usage(format!(
+                "{} is the scenario file: an output cannot be one of the inputs",
+                p.display()
+            )));
+        }
+    }
+    Ok(p)
+}
+
+fn cell_row(map: &StabilityMap, idx: usize) -> Vec<String> {
+    let nk = map.kps.len();
+    let (kp, rate) = (map.kps[idx % nk], map.rates_hz[idx / nk]);
+    let c = &map.cells[idx];
+    vec![
+        num(kp),
+        num(rate),
+        num(1.0 / rate),
+        c.spectral_radius.map(num).unwrap_or_default(),
+        c.status.stable().map(|b| b.to_string()).unwrap_or_default(),
+        c.status.as_str().to_string(),
+        num(c.slope_range[0]),
+        num(c.slope_range[1]),
+    ]
+}
+
+fn verify_row(k: usize, p: &VerifyPoint) -> Vec<String> {
+    vec![
+        k.to_string(),
+        num(p.kp),
+        num(p.rate_hz),
+        p.cell.spectral_radius.map(num).unwrap_or_default(),
+        p.cell.status.as_str().to_string(),
+        p.behaviour.as_str().to_string(),
+        p.agrees.map(|b| b.to_string()).unwrap_or_default(),
+        p.near_boundary.to_string(),
+        p.error_range.map(num).unwrap_or_default(),
+        p.mean_abs_turn_radps.map(num).unwrap_or_default(),
+        p.detail.clone(),
+    ]
+}
+
+fn write_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl Iterator<Item = Vec<String>>,
+) -> Result<(), Failure> {
+    let cant = |e: String| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", path.display()),
+    };
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    w.write_record(header).map_err(|e| cant(e.to_string()))?;
+    for r in rows {
+        w.write_record(&r).map_err(|e| cant(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| cant(e.to_string()))?;
+    std::fs::write(path, bytes).map_err(|e| cant(e.to_string()))
+}
+
+/// Computes and writes the chart (and `--verify`), returns what was written.
+pub fn write_map(
+    args: &CheckArgs,
+    scenario: &Scenario,
+    parsed: MapOptions,
+) -> Result<MapReport, Failure> {
+    let dir = args
+        .out
+        .as_deref()
+        .ok_or_else(|| usage("--map needs --out DIR".into()))?;
+    let family = LoopFamily::new(scenario, args.tube_halfwidth).map_err(|note| Failure {
+        code: exit::DATAERR,
+        message: format!("no stability chart: {note}"),
+    })?;
+    let mut grid = MapGrid::default_for(&family);
+    let MapOptions {
+        kp_range: kp,
+        rate_range_hz: rate,
+        size,
+    } = parsed;
+    if let Some(r) = kp {
+        grid.kp_range = r;
+    }
+    if let Some(r) = rate {
+        grid.rate_range_hz = r;
+    }
+    if let Some((n, m)) = size {
+        grid.kp_points = n;
+        grid.rate_points = m;
+    }
+    grid.validate(family.dt_s()).map_err(usage)?;
+    if let Some(n) = args.verify {
+        let steps = n as f64 * steps_per_run(scenario);
+        if steps > MAX_VERIFY_STEPS {
+            return Err(usage(format!(
+                "--verify {n}: {n} runs of {} steps each is {steps:.3e} simulation steps; at most {MAX_VERIFY_STEPS:e} (fewer runs or a shorter sim.duration_s)",
+                steps_per_run(scenario)
+            )));
+        }
+    }
+    let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+    let st_svg = crate::figures::style(&args.look, isotrack_plot::Format::Svg)?;
+    let cant = |what: &Path, e: String| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", what.display()),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
+    let input = args.scenario.scenario.as_deref();
+    let csv_path = output_path(dir, "stability_map.csv", input)?;
+    let png_path = output_path(dir, "stability_map.png", input)?;
+    let svg_path = output_path(dir, "stability_map.svg", input)?;
+    let verify_path = match args.verify {
+        Some(_) => Some(output_path(dir, "verify.csv", input)?),
+        None => None,
+    };
+    let pool = crate::sweep::worker_pool(args.threads)?;
+    // Each cell is a pure function of its point: the same bits on any thread count.
+    let points = StabilityMap::points(&grid);
+    let cells = pool.install(|| {
+        points
+            .par_iter()
+            .map(|&(k, r)| family.cell(k, r))
+            .collect::<Vec<_>>()
+    });
+    let map = StabilityMap::from_cells(&family, grid, cells);
+    let verified: Vec<VerifyPoint> = match args.verify {
+        Some(n) => {
+            let seed = scenario.file().sim.seed.unwrap_or(0);
+            let at = verify_points(&grid, family.dt_s(), n, seed);
+            pool.install(|| {
+                at.par_iter()
+                    .map(|&(k, r)| verify_point(&family, &map, k, r))
+                    .collect()
+            })
+        }
+        None => vec![],
+    };
+    write_csv(
+        &csv_path,
+        &MAP_COLUMNS,
+        (0..map.cells.len()).map(|i| cell_row(&map, i)),
+    )?;
+    let mut files = vec![csv_path.display().to_string()];
+    for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
+        isotrack_plot::stability_map_figure(&map, &verified, path, style)
+            .map_err(|e| cant(path, e.to_string()))?;
+        files.push(path.display().to_string());
+    }
+    let verify = match &verify_path {
+        Some(p) => {
+            write_csv(
+                p,
+                &VERIFY_COLUMNS,
+                verified.iter().enumerate().map(|(k, v)| verify_row(k, v)),
+            )?;
+            files.push(p.display().to_string());
+            Some(agreement(&verified))
+        }
+        None => None,
+    };
+    let count = |st: isotrack_scenario::check::map::CellStatus| {
+        map.cells.iter().filter(|c| c.status == st).count()
+    };
+    use isotrack_scenario::check::map::CellStatus as S;
+    Ok(MapReport {
+        files,
+        grid,
+        slope_basis: map.slope_basis,
+        cells_stable: count(S::Stable),
+        cells_unstable: count(S::Unstable),
+        cells_no_equilibrium: count(S::NoEquilibrium),
+        cells_not_computed: count(S::NotComputed),
+        verify,
+    })
+}
+
+/// The lines `check --map` prints after the report.
+pub fn print_report(m: &MapReport) {
+    let g = &m.grid;
+    outln!(
+        "Stability chart: {} x {} points, kp {} .. {}, sensor rate {} .. {} Hz, radius on {}: {} stable, {} unstable, {} without equilibrium, {} not computed",
+        g.kp_points,
+        g.rate_points,
+        g.kp_range[0],
+        g.kp_range[1],
+        g.rate_range_hz[0],
+        g.rate_range_hz[1],
+        m.slope_basis,
+        m.cells_stable,
+        m.cells_unstable,
+        m.cells_no_equilibrium,
+        m.cells_not_computed
+    );
+    if let Some(a) = &m.verify {
+        outln!(
+            "  verify: {} runs compared, {} agree ({}); disagreements within one grid cell of the boundary {}, further {}; not compared {}",
+            a.compared,
+            a.agree,
+            a.percent.map_or_else(|| "n/a".into(), |p| format!("{p:.1} %")),
+            a.disagreements_near_boundary,
+            a.disagreements_far,
+            a.not_compared
+        );
+    }
+    outln!("  wrote {}", m.files.join(", "));
+}

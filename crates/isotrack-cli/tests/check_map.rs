@@ -1,0 +1,333 @@
+//! `isotrack check --map --out DIR [--verify N]` end to end (issue 29): the files and their
+//! documented shape, `check --json` unchanged without `--map`, the same bytes on any thread
+//! count, and every bad input with the README's exit code.
+
+mod common;
+use common::{assert_fails, isotrack, isotrack_within, stderr};
+use std::collections::BTreeSet;
+use std::path::Path;
+
+const MAP_COLUMNS: [&str; 8] = [
+    "kp",
+    "sensor_rate_hz",
+    "sensor_period_s",
+    "spectral_radius",
+    "stable",
+    "status",
+    "slope_min",
+    "slope_max",
+];
+
+const VERIFY_COLUMNS: [&str; 11] = [
+    "run",
+    "kp",
+    "sensor_rate_hz",
+    "spectral_radius",
+    "predicted",
+    "outcome",
+    "agrees",
+    "near_boundary",
+    "error_range",
+    "mean_abs_turn_radps",
+    "detail",
+];
+
+fn scenario() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig2b-circular.toml")
+        .display()
+        .to_string()
+}
+
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Test (4): the chart's CSV parses back with the documented columns, one row per grid point
+/// (the grid's ends exact, spaced evenly in log), `stable` is `spectral_radius < 1`, the period
+/// is `1/rate`; the pictures are real images; `--json` names the files and is otherwise the
+/// report `check --json` prints without `--map`.
+#[test]
+fn the_chart_is_a_tidy_csv_and_two_pictures() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("chart");
+    let sc = scenario();
+    let args = [
+        "check",
+        sc.as_str(),
+        "--set",
+        "controller.ki=0",
+        "--map",
+        "--out",
+        out.to_str().unwrap(),
+        "--kp-range",
+        "0.5:50",
+        "--rate-range",
+        "1:100",
+        "--map-size",
+        "7x5",
+        "--json",
+    ];
+    let o = isotrack(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut with: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let map = with.as_object_mut().unwrap().remove("map").unwrap();
+    let plain = isotrack(&["check", sc.as_str(), "--set", "controller.ki=0", "--json"]);
+    let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert!(plain.get("map").is_none());
+    assert_eq!(with, plain, "the report is the same with and without --map");
+    let files: Vec<&str> = map["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    for name in [
+        "stability_map.csv",
+        "stability_map.png",
+        "stability_map.svg",
+    ] {
+        let p = out.join(name);
+        assert!(files.contains(&p.to_str().unwrap()), "{files:?}");
+    }
+    assert!(map["verify"].is_null());
+
+    let (header, rows) = read_csv(&out.join("stability_map.csv"));
+    assert_eq!(header, MAP_COLUMNS);
+    assert_eq!(rows.len(), 35);
+    let col = |name: &str| MAP_COLUMNS.iter().position(|c| *c == name).unwrap();
+    let f = |r: &Vec<String>, name: &str| r[col(name)].parse::<f64>().unwrap();
+    let kps: BTreeSet<u64> = rows.iter().map(|r| f(r, "kp").to_bits()).collect();
+    let rates: BTreeSet<u64> = rows
+        .iter()
+        .map(|r| f(r, "sensor_rate_hz").to_bits())
+        .collect();
+    assert_eq!((kps.len(), rates.len()), (7, 5));
+    let mut kps: Vec<f64> = kps.into_iter().map(f64::from_bits).collect();
+    kps.sort_by(f64::total_cmp);
+    assert_eq!((kps[0], kps[6]), (0.5, 50.0));
+    for w in kps.windows(2) {
+        assert!(
+            (w[1] / w[0] / 100f64.powf(1.0 / 6.0) - 1.0).abs() < 1e-12,
+            "{w:?}"
+        );
+    }
+    let mut stable = 0;
+    for r in &rows {
+        assert!((f(r, "sensor_period_s") * f(r, "sensor_rate_hz") - 1.0).abs() < 1e-15);
+        let rho = f(r, "spectral_radius");
+        assert_eq!(r[col("stable")], (rho < 1.0).to_string(), "{r:?}");
+        let status = &r[col("status")];
+        assert_eq!(status, if rho < 1.0 { "stable" } else { "unstable" });
+        stable += usize::from(rho < 1.0);
+        // The P law on a circular field: the orbit's slope, one value per kp.
+        assert_eq!(r[col("slope_min")], r[col("slope_max")]);
+    }
+    assert!(
+        stable > 0 && stable < 35,
+        "both sides on the chart: {stable}"
+    );
+    assert_eq!(map["cells_stable"], stable);
+
+    let img = image::open(out.join("stability_map.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(img.dimensions(), (1000, 800));
+    let colours: BTreeSet<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    assert!(colours.len() > 20, "{} colours", colours.len());
+    let svg = std::fs::read_to_string(out.join("stability_map.svg")).unwrap();
+    assert!(svg.contains("spectral radius") && svg.contains("the P law"));
+}
+
+/// `--verify`: `verify.csv` has the documented columns and one row per run, each outcome one
+/// of the documented ones; the chart and the runs are the same bytes on one thread and on
+/// three; the JSON counts agree with the file.
+#[test]
+fn verify_writes_its_runs_and_is_the_same_on_any_thread_count() {
+    let d = tempfile::tempdir().unwrap();
+    let sc = scenario();
+    let run = |dir: &str, threads: &str| {
+        let out = d.path().join(dir);
+        let o = isotrack(&[
+            "check",
+            sc.as_str(),
+            "--set",
+            "controller.ki=0",
+            "--set",
+            "sim.duration_s=200",
+            "--map",
+            "--out",
+            out.to_str().unwrap(),
+            "--kp-range",
+            "0.3:30",
+            "--rate-range",
+            "1:10",
+            "--map-size",
+            "9x5",
+            "--verify",
+            "10",
+            "--threads",
+            threads,
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (out, j)
+    };
+    let (one, j) = run("one", "1");
+    let (three, _) = run("three", "3");
+    for name in ["stability_map.csv", "verify.csv"] {
+        assert_eq!(
+            std::fs::read(one.join(name)).unwrap(),
+            std::fs::read(three.join(name)).unwrap(),
+            "{name}"
+        );
+    }
+    let (header, rows) = read_csv(&one.join("verify.csv"));
+    assert_eq!(header, VERIFY_COLUMNS);
+    assert_eq!(rows.len(), 10);
+    let mut agree = 0;
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r[0], k.to_string());
+        assert!(["converged", "limit_cycle", "diverged", "invalid"].contains(&r[5].as_str()));
+        assert!(["stable", "unstable", "no_equilibrium", "not_computed"].contains(&r[4].as_str()));
+        agree += usize::from(r[6] == "true");
+    }
+    let v = &j["map"]["verify"];
+    assert_eq!(v["agree"], agree);
+    assert_eq!(v["compared"], 10);
+}
+
+/// Test (5): bad inputs give the README's exit codes, with a message naming the flag, before
+/// anything is written: 64 for the command line (an option of `--map` without it, `--map`
+/// without `--out`, a malformed or empty range, a rate faster than the simulation steps, a
+/// grid too large, a verify count out of range or too many steps in all); 73 for an output
+/// that cannot be written (a file where the directory should be, a FIFO where a file goes,
+/// refused at once rather than blocking); 65 for a scenario the chart does not apply to.
+#[test]
+fn bad_map_inputs_have_the_readmes_exit_codes() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let out = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, i32, &str)> = vec![
+        (vec!["--out", out], 64, "--out is an option of --map"),
+        (vec!["--verify", "5"], 64, "--verify is an option of --map"),
+        (vec!["--map"], 64, "--map needs --out"),
+        (
+            vec!["--map", "--out", out, "--kp-range", "5:1"],
+            64,
+            "--kp-range",
+        ),
+        (
+            vec!["--map", "--out", out, "--kp-range", "0:1"],
+            64,
+            "--kp-range",
+        ),
+        (
+            vec!["--map", "--out", out, "--kp-range", "abc"],
+            64,
+            "--kp-range",
+        ),
+        (
+            vec!["--map", "--out", out, "--rate-range", "1:nan"],
+            64,
+            "--rate-range",
+        ),
+        (
+            vec!["--map", "--out", out, "--rate-range", "1:1000"],
+            64,
+            "at most 100 Hz",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "1000x1000"],
+            64,
+            "--map-size",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "300x300"],
+            64,
+            "at most 40000",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "1x5"],
+            64,
+            "--map-size",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "7by5"],
+            64,
+            "--map-size",
+        ),
+        (vec!["--map", "--out", out, "--verify", "0"], 64, "--verify"),
+        (
+            vec!["--map", "--out", out, "--verify", "100000"],
+            64,
+            "--verify",
+        ),
+        (
+            vec![
+                "--map",
+                "--out",
+                out,
+                "--verify",
+                "1000",
+                "--set",
+                "sim.duration_s=30000",
+            ],
+            64,
+            "simulation steps",
+        ),
+        (
+            vec![
+                "--map",
+                "--out",
+                out,
+                "--set",
+                "controller.kind=sliding_mode",
+            ],
+            65,
+            "PI-like law",
+        ),
+    ];
+    for (args, code, needle) in cases {
+        let mut all = vec!["check"];
+        all.extend(args.iter());
+        let o = isotrack(&all);
+        assert_fails(&o, code, &[needle]);
+        assert!(!Path::new(out).exists(), "{args:?} wrote {out}");
+    }
+    // A huge value is echoed clipped (README: at most 200 characters of any value).
+    let huge = "9".repeat(100_000);
+    let o = isotrack(&["check", "--map", "--out", out, "--kp-range", &huge]);
+    assert_fails(&o, 64, &["--kp-range", "more characters"]);
+    assert!(stderr(&o).len() < 1000, "{}", stderr(&o).len());
+    // A regular file where the directory goes.
+    let file = common::write(d.path(), "file", "x");
+    let o = isotrack(&["check", "--map", "--out", &file, "--map-size", "3x3"]);
+    assert_fails(&o, 73, &["cannot write"]);
+    // A FIFO where the CSV goes: refused at once, never opened.
+    #[cfg(unix)]
+    {
+        let dir = d.path().join("fifo");
+        std::fs::create_dir(&dir).unwrap();
+        common::fifo(&dir, "stability_map.csv");
+        let o = isotrack_within(
+            &[
+                "check",
+                "--map",
+                "--out",
+                dir.to_str().unwrap(),
+                "--map-size",
+                "3x3",
+            ],
+            60,
+        );
+        assert_fails(&o, 73, &["not a regular file"]);
+    }
+}

@@ -1,0 +1,571 @@
+//! The stability chart of `isotrack check --map` (docs/SAMPLED.md, "The stability chart"): the
+//! sampled loop's spectral radius over a grid of `kp` x sensor rate, each cell computed exactly
+//! as `isotrack check` computes `sampled.spectral_radius` for the scenario with that `kp` and
+//! that rate ([`LoopFamily::cell`] goes through the check's own loop set-up and
+//! [`sampled::worst_radius`](super::sampled::worst_radius)), and `--verify`: closed-loop
+//! simulations at points spread over the chart, each classified from its own run.
+//!
+//! * Slopes: the isoline's own (as the verdict), never the tube's. With `ki = 0` on a circular
+//!   field each `kp` is checked on the orbit the P law settles on *at that `kp`* (as `check` of
+//!   the scenario with that `kp` does).
+//! * A cell whose delay spans more than [`MAX_DELAY_STATES`](super::sampled::MAX_DELAY_STATES)
+//!   sensor periods is not computed ([`CellStatus::NotComputed`]), never guessed.
+//! * Bounded: at most [`MAX_AXIS_POINTS`] points an axis and [`MAX_CELLS`] cells; at most
+//!   [`MAX_VERIFY_RUNS`] verification runs and [`MAX_VERIFY_STEPS`] simulation steps in all.
+
+use super::{law, regions, sampled, Law, LoopSetup, CHECK_LATTICE};
+use crate::Scenario;
+use isotrack_core::numtext::Num;
+use isotrack_sim::{Outcome, TraceRow, TraceSink};
+use serde::Serialize;
+
+/// The most points on either axis of the chart.
+pub const MAX_AXIS_POINTS: usize = 400;
+/// The most cells (`kp` points x rate points) of one chart: each is one eigenproblem per
+/// isoline slope, up to `MAX_DELAY_STATES` states larger than the loop without delay.
+pub const MAX_CELLS: usize = 40_000;
+/// The most `--verify` runs.
+pub const MAX_VERIFY_RUNS: usize = 1000;
+/// The most simulation steps of all `--verify` runs together (runs x steps per run).
+pub const MAX_VERIFY_STEPS: f64 = 2e9;
+
+/// A cell's state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CellStatus {
+    /// Spectral radius below 1.
+    Stable,
+    /// Spectral radius 1 or more.
+    Unstable,
+    /// With `ki = 0` the P law has no orbit to settle on (radius infinite; `check` reports
+    /// `spectral_radius` null and `stable` false).
+    NoEquilibrium,
+    /// The delay spans more than `MAX_DELAY_STATES` sensor periods: not computed.
+    NotComputed,
+}
+
+impl CellStatus {
+    /// The snake_case name (CSV `status`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Stable => "stable",
+            Self::Unstable => "unstable",
+            Self::NoEquilibrium => "no_equilibrium",
+            Self::NotComputed => "not_computed",
+        }
+    }
+
+    /// `Some(stable)`, `None` when not computed.
+    pub fn stable(self) -> Option<bool> {
+        match self {
+            Self::Stable => Some(true),
+            Self::Unstable | Self::NoEquilibrium => Some(false),
+            Self::NotComputed => None,
+        }
+    }
+}
+
+/// One cell of the chart.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Cell {
+    /// The largest spectral radius over the slopes (finite; `None` when not computed or
+    /// infinite).
+    pub spectral_radius: Option<f64>,
+    /// Stable, unstable, no equilibrium, not computed.
+    pub status: CellStatus,
+    /// The slopes the cell was checked at, `[min, max]` (the P law's orbit's at this `kp`).
+    pub slope_range: [f64; 2],
+}
+
+/// The scenario's sampled loop with `kp` and the sensor rate free: what `check` computes, for
+/// any `(kp, rate)`.
+pub struct LoopFamily {
+    scenario: Scenario,
+    law: Law,
+    setup: LoopSetup,
+    on_orbit: bool,
+}
+
+impl LoopFamily {
+    /// The scenario's loop; `tube_halfwidth` as for [`super::check`] (the isoline's slopes are
+    /// read off the lattice within that tube on fields other than circular ones). `Err` with
+    /// the check's note when the sampled check does not apply.
+    pub fn new(s: &Scenario, tube_halfwidth: Option<f64>) -> Result<Self, String> {
+        let l = law(s);
+        let tube = tube_halfwidth.unwrap_or(l.c2);
+        let r = regions(s, tube, CHECK_LATTICE, false);
+        let setup = LoopSetup::new(s, &l, &r)?;
+        let on_orbit = super::p_law_orbit(s, &l).is_some();
+        Ok(Self {
+            scenario: s.clone(),
+            law: l,
+            setup,
+            on_orbit,
+        })
+    }
+
+    /// The cell at `(kp, rate_hz)`: the same computation as `check`'s
+    /// `sampled.spectral_radius` for the scenario with `controller.kp = kp` and
+    /// `sensor.rate_hz = rate_hz`.
+    pub fn cell(&self, kp: f64, rate_hz: f64) -> Cell {
+        let l = Law { kp, ..self.law };
+        let (lp, slopes, _) = self.setup.at(&self.scenario, &l, 1.0 / rate_hz);
+        let lo = slopes.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = slopes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (spectral_radius, status) = match sampled::worst_radius(&lp, &slopes) {
+            None => (None, CellStatus::NotComputed),
+            Some(r) if r.is_finite() => (
+                Some(r),
+                if r < 1.0 {
+                    CellStatus::Stable
+                } else {
+                    CellStatus::Unstable
+                },
+            ),
+            Some(_) => (None, CellStatus::NoEquilibrium),
+        };
+        Cell {
+            spectral_radius,
+            status,
+            slope_range: [lo, hi],
+        }
+    }
+
+    /// The scenario's own `kp`.
+    pub fn kp(&self) -> f64 {
+        self.law.kp
+    }
+
+    /// The scenario's own sensor rate, Hz.
+    pub fn rate_hz(&self) -> f64 {
+        1.0 / self.setup.base.period_s
+    }
+
+    /// The simulation step `sim.dt_s`, s: the fastest sensor rate is `1/dt`.
+    pub fn dt_s(&self) -> f64 {
+        self.scenario.file().sim.dt_s.unwrap_or(0.01)
+    }
+
+    /// The sensor delay, s.
+    pub fn delay_s(&self) -> f64 {
+        self.setup.base.delay_s
+    }
+
+    /// `ki`, `c1`, `c2` (held fixed over the chart).
+    pub fn other_gains(&self) -> [f64; 3] {
+        [self.law.ki, self.law.c1, self.law.c2]
+    }
+
+    /// Which slopes the chart uses, in words (figure caption, JSON, docs).
+    pub fn slope_basis(&self) -> &'static str {
+        if self.on_orbit {
+            "the P law's orbit at each kp (ki = 0 on a circular field: the isoline is no equilibrium)"
+        } else {
+            "the isoline's own slopes (as the verdict; not the tube's)"
+        }
+    }
+
+    /// The scenario.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+}
+
+/// The chart's grid: `kp` and sensor rate, each spaced logarithmically from the first end to
+/// the second (both included).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MapGrid {
+    /// `[lo, hi]` of `kp`.
+    pub kp_range: [f64; 2],
+    /// `[lo, hi]` of the sensor rate, Hz.
+    pub rate_range_hz: [f64; 2],
+    /// Points along `kp`.
+    pub kp_points: usize,
+    /// Points along the rate.
+    pub rate_points: usize,
+}
+
+impl MapGrid {
+    /// The default grid round the scenario's point: `kp` from 1/100 to 100 times the
+    /// scenario's (61 points, 15 a decade), the rate from 1/10 to 10 times the scenario's but
+    /// at most `1/dt` (41 points).
+    pub fn default_for(f: &LoopFamily) -> Self {
+        let (kp, rate) = (f.kp(), f.rate_hz());
+        Self {
+            kp_range: [kp / 100.0, kp * 100.0],
+            rate_range_hz: [rate / 10.0, (rate * 10.0).min(1.0 / f.dt_s()).max(rate)],
+            kp_points: 61,
+            rate_points: 41,
+        }
+    }
+
+    /// Checks the grid: ranges of positive finite numbers with `lo < hi`, rates at most
+    /// `1/dt` (the sensor cannot sample faster than the simulation steps), 2 to
+    /// [`MAX_AXIS_POINTS`] points an axis and at most [`MAX_CELLS`] cells.
+    pub fn validate(&self, dt_s: f64) -> Result<(), String> {
+        let range = |name: &str, [lo, hi]: [f64; 2]| -> Result<(), String> {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+                return Err(format!(
+                    "{name} must be LO:HI with 0 < LO < HI (finite), got {}:{}",
+                    Num(lo),
+                    Num(hi)
+                ));
+            }
+            Ok(())
+        };
+        range("--kp-range", self.kp_range)?;
+        range("--rate-range", self.rate_range_hz)?;
+        let top = 1.0 / dt_s;
+        if self.rate_range_hz[1] > top * (1.0 + 1e-9) {
+            return Err(format!(
+                "--rate-range: {} Hz is faster than the simulation step allows (sim.dt_s = {} s: at most {} Hz)",
+                Num(self.rate_range_hz[1]),
+                Num(dt_s),
+                Num(top)
+            ));
+        }
+        for (name, n) in [("kp", self.kp_points), ("rate", self.rate_points)] {
+            if !(2..=MAX_AXIS_POINTS).contains(&n) {
+                return Err(format!(
+                    "--map-size: {n} {name} points; each axis needs 2 to {MAX_AXIS_POINTS}"
+                ));
+            }
+        }
+        let cells = self.kp_points * self.rate_points;
+        if cells > MAX_CELLS {
+            return Err(format!(
+                "--map-size {}x{} is {cells} cells; at most {MAX_CELLS} (each is an eigenproblem per slope)",
+                self.kp_points, self.rate_points
+            ));
+        }
+        Ok(())
+    }
+
+    /// The `kp` points.
+    pub fn kps(&self) -> Vec<f64> {
+        log_points(self.kp_range, self.kp_points)
+    }
+
+    /// The rate points, Hz.
+    pub fn rates_hz(&self) -> Vec<f64> {
+        log_points(self.rate_range_hz, self.rate_points)
+    }
+}
+
+/// `n >= 2` points from `lo` to `hi` (both exact), evenly spaced in `ln`.
+fn log_points([lo, hi]: [f64; 2], n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| match i {
+            0 => lo,
+            _ if i == n - 1 => hi,
+            _ => lo * (hi / lo).powf(i as f64 / (n - 1) as f64),
+        })
+        .collect()
+}
+
+/// The chart: the grid and its cells (`cells[j * kp_points + i]` at `kps[i]`, `rates_hz[j]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StabilityMap {
+    /// The grid.
+    pub grid: MapGrid,
+    /// The `kp` points.
+    pub kps: Vec<f64>,
+    /// The rate points, Hz.
+    pub rates_hz: Vec<f64>,
+    /// The cells, row by row of rate.
+    pub cells: Vec<Cell>,
+    /// The scenario's own `(kp, rate_hz)`.
+    pub scenario_point: (f64, f64),
+    /// Which slopes ([`LoopFamily::slope_basis`]).
+    pub slope_basis: &'static str,
+    /// `ki`, `c1`, `c2`, held fixed.
+    pub other_gains: [f64; 3],
+    /// The sensor delay, s.
+    pub delay_s: f64,
+}
+
+impl StabilityMap {
+    /// The chart from cells computed elsewhere (in parallel: each is
+    /// [`LoopFamily::cell`] at its point, in the order of `cells`).
+    pub fn from_cells(f: &LoopFamily, grid: MapGrid, cells: Vec<Cell>) -> Self {
+        Self {
+            kps: grid.kps(),
+            rates_hz: grid.rates_hz(),
+            grid,
+            cells,
+            scenario_point: (f.kp(), f.rate_hz()),
+            slope_basis: f.slope_basis(),
+            other_gains: f.other_gains(),
+            delay_s: f.delay_s(),
+        }
+    }
+
+    /// The points of the grid in the order of `cells`.
+    pub fn points(grid: &MapGrid) -> Vec<(f64, f64)> {
+        let (kps, rates) = (grid.kps(), grid.rates_hz());
+        rates
+            .iter()
+            .flat_map(|&r| kps.iter().map(move |&k| (k, r)))
+            .collect()
+    }
+
+    /// The chart computed here, one cell after another.
+    pub fn compute(f: &LoopFamily, grid: MapGrid) -> Self {
+        let cells = Self::points(&grid)
+            .into_iter()
+            .map(|(k, r)| f.cell(k, r))
+            .collect();
+        Self::from_cells(f, grid, cells)
+    }
+
+    /// The cell at `kps[i]`, `rates_hz[j]`.
+    pub fn at(&self, i: usize, j: usize) -> &Cell {
+        &self.cells[j * self.kps.len() + i]
+    }
+
+    /// Where stability changes along `kp` at rate row `j`: the pairs of neighbouring `kp`
+    /// points `(kps[i], kps[i + 1])` whose cells are computed and differ.
+    pub fn kp_crossings(&self, j: usize) -> Vec<(f64, f64)> {
+        (0..self.kps.len() - 1)
+            .filter_map(|i| {
+                let (a, b) = (
+                    self.at(i, j).status.stable(),
+                    self.at(i + 1, j).status.stable(),
+                );
+                match (a, b) {
+                    (Some(x), Some(y)) if x != y => Some((self.kps[i], self.kps[i + 1])),
+                    _ => None,
+                }
+            })
+            .collect()
+    }
+
+    /// Whether `(kp, rate_hz)` lies within one grid cell of the boundary: among the grid
+    /// points of the cell that holds it, widened by one point on every side (up to 4 x 4
+    /// points), some are stable and some are not (unstable, no equilibrium or not computed).
+    pub fn near_boundary(&self, kp: f64, rate_hz: f64) -> bool {
+        let span = |xs: &[f64], x: f64| -> (usize, usize) {
+            let n = xs.len();
+            let i = xs.iter().rposition(|&v| v <= x).unwrap_or(0).min(n - 2);
+            (i.saturating_sub(1), (i + 2).min(n - 1))
+        };
+        let (i0, i1) = span(&self.kps, kp);
+        let (j0, j1) = span(&self.rates_hz, rate_hz);
+        let mut seen = [false; 2];
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                seen[usize::from(self.at(i, j).status == CellStatus::Stable)] = true;
+            }
+        }
+        seen[0] && seen[1]
+    }
+}
+
+/// What a `--verify` run did, judged from its own trace over the steady-state window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Behaviour {
+    /// Completed, the error stayed put (`max - min <= 0.05 c2`) and the turn rate is an
+    /// orbit's (mean `|omega| < 1` rad/s).
+    Converged,
+    /// Completed but not converged: an oscillation, a spin or a drift.
+    LimitCycle,
+    /// The run did not complete (`diverged`, `left_field`).
+    Diverged,
+    /// The point makes no valid scenario (the reason in `detail`).
+    Invalid,
+}
+
+impl Behaviour {
+    /// The snake_case name (CSV `outcome`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Converged => "converged",
+            Self::LimitCycle => "limit_cycle",
+            Self::Diverged => "diverged",
+            Self::Invalid => "invalid",
+        }
+    }
+}
+
+/// The steady-state window's error range and mean turn rate.
+struct Window {
+    from_s: f64,
+    lo: f64,
+    hi: f64,
+    turn_sum: f64,
+    rows: u64,
+}
+
+impl TraceSink for Window {
+    fn record(&mut self, row: &TraceRow) {
+        if row.t_s >= self.from_s {
+            self.lo = self.lo.min(row.error);
+            self.hi = self.hi.max(row.error);
+            self.turn_sum += row.omega_radps.abs();
+            self.rows += 1;
+        }
+    }
+}
+
+/// One `--verify` point: where, what the chart predicts there, what the simulation did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VerifyPoint {
+    /// `kp`.
+    pub kp: f64,
+    /// Sensor rate, Hz (a whole number of simulation steps per period).
+    pub rate_hz: f64,
+    /// The chart's computation at this very point.
+    pub cell: Cell,
+    /// What the simulation did.
+    pub behaviour: Behaviour,
+    /// `max - min` of the error over the steady-state window.
+    pub error_range: Option<f64>,
+    /// Mean `|omega|` over the steady-state window, rad/s.
+    pub mean_abs_turn_radps: Option<f64>,
+    /// The run's `outcome` (`completed`, `diverged`, `left_field`) or why it is invalid.
+    pub detail: String,
+    /// Whether prediction (stable) and behaviour (converged) agree; `None` when not computed
+    /// or invalid.
+    pub agrees: Option<bool>,
+    /// Within one grid cell of the chart's boundary ([`StabilityMap::near_boundary`]).
+    pub near_boundary: bool,
+}
+
+/// `count` verification points spread over the grid's rectangle (in `ln kp`, `ln rate`): the
+/// Halton sequence in bases 2 and 3 (points 1..=count), shifted modulo 1 by two numbers drawn
+/// from `seed` (a Cranley-Patterson rotation, SplitMix64 of the seed). Each rate is moved to
+/// the nearest rate the simulation can sample at, `1/(k dt)`, kept in the grid's rate range
+/// when one lies there.
+pub fn verify_points(grid: &MapGrid, dt_s: f64, count: usize, seed: u64) -> Vec<(f64, f64)> {
+    let halton = |mut i: u64, base: u64| {
+        let (mut f, mut r) = (1.0, 0.0);
+        while i > 0 {
+            f /= base as f64;
+            r += f * (i % base) as f64;
+            i /= base;
+        }
+        r
+    };
+    let shift = |k: u64| crate::sweep::derived_seed(seed, k) as f64 / 2f64.powi(63);
+    let (s1, s2) = (shift(0), shift(1));
+    let [k0, k1] = grid.kp_range;
+    let [r0, r1] = grid.rate_range_hz;
+    // Whole steps per period that keep the rate within [r0, r1].
+    let steps_lo = (1.0 / (r1 * dt_s) - 1e-9).ceil().max(1.0);
+    let steps_hi = (1.0 / (r0 * dt_s) + 1e-9).floor();
+    (1..=count as u64)
+        .map(|i| {
+            let u = (halton(i, 2) + s1).fract();
+            let v = (halton(i, 3) + s2).fract();
+            let kp = k0 * (k1 / k0).powf(u);
+            let rate = r0 * (r1 / r0).powf(v);
+            let mut steps = (1.0 / (rate * dt_s)).round().max(1.0);
+            if steps_lo <= steps_hi {
+                steps = steps.clamp(steps_lo, steps_hi);
+            }
+            (kp, 1.0 / (steps * dt_s))
+        })
+        .collect()
+}
+
+/// Runs the scenario at `(kp, rate_hz)` (recording at the sensor's rate) and classifies it
+/// ([`Behaviour`]); `map` places it against the boundary.
+pub fn verify_point(f: &LoopFamily, map: &StabilityMap, kp: f64, rate_hz: f64) -> VerifyPoint {
+    let cell = f.cell(kp, rate_hz);
+    let mut p = VerifyPoint {
+        kp,
+        rate_hz,
+        cell,
+        behaviour: Behaviour::Invalid,
+        error_range: None,
+        mean_abs_turn_radps: None,
+        detail: String::new(),
+        agrees: None,
+        near_boundary: map.near_boundary(kp, rate_hz),
+    };
+    let sets = [
+        format!("controller.kp={kp:?}"),
+        format!("sensor.rate_hz={rate_hz:?}"),
+        format!("output.record_rate_hz={rate_hz:?}"),
+    ];
+    let s = match f.scenario.derive(&sets, "--verify") {
+        Ok(s) => s,
+        Err(e) => {
+            p.detail = e.to_string();
+            return p;
+        }
+    };
+    let file = s.file();
+    let duration = file.sim.duration_s.unwrap_or(0.0);
+    let frac = file.metrics.steady_state_fraction.unwrap_or(0.2);
+    let c2 = file.controller.c2.unwrap_or(1.0);
+    let mut w = Window {
+        from_s: (1.0 - frac) * duration,
+        lo: f64::INFINITY,
+        hi: f64::NEG_INFINITY,
+        turn_sum: 0.0,
+        rows: 0,
+    };
+    let r = s.run(&mut w);
+    p.detail = r.outcome.as_str().to_string();
+    if w.rows > 0 {
+        p.error_range = Some(w.hi - w.lo);
+        p.mean_abs_turn_radps = Some(w.turn_sum / w.rows as f64);
+    }
+    p.behaviour = if r.outcome != Outcome::Completed {
+        Behaviour::Diverged
+    } else if p.error_range.is_some_and(|e| e <= 0.05 * c2)
+        && p.mean_abs_turn_radps.is_some_and(|t| t < 1.0)
+    {
+        Behaviour::Converged
+    } else {
+        Behaviour::LimitCycle
+    };
+    p.agrees = cell
+        .status
+        .stable()
+        .map(|st| st == (p.behaviour == Behaviour::Converged));
+    p
+}
+
+/// The simulation steps of one run of `s` (`duration / dt`).
+pub fn steps_per_run(s: &Scenario) -> f64 {
+    let f = s.file();
+    f.sim.duration_s.unwrap_or(0.0) / f.sim.dt_s.unwrap_or(0.01)
+}
+
+/// Agreement over verified points.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Agreement {
+    /// Points whose prediction was computed and whose run was valid.
+    pub compared: usize,
+    /// Of those, where prediction and behaviour agree.
+    pub agree: usize,
+    /// `100 agree / compared` (null when nothing was compared).
+    pub percent: Option<f64>,
+    /// Disagreements within one grid cell of the boundary.
+    pub disagreements_near_boundary: usize,
+    /// Disagreements further away.
+    pub disagreements_far: usize,
+    /// Points not compared (not computed, invalid).
+    pub not_compared: usize,
+}
+
+/// Counts [`Agreement`].
+pub fn agreement(points: &[VerifyPoint]) -> Agreement {
+    let compared: Vec<&VerifyPoint> = points.iter().filter(|p| p.agrees.is_some()).collect();
+    let agree = compared.iter().filter(|p| p.agrees == Some(true)).count();
+    let near = compared
+        .iter()
+        .filter(|p| p.agrees == Some(false) && p.near_boundary)
+        .count();
+    Agreement {
+        compared: compared.len(),
+        agree,
+        percent: (!compared.is_empty()).then(|| 100.0 * agree as f64 / compared.len() as f64),
+        disagreements_near_boundary: near,
+        disagreements_far: compared.len() - agree - near,
+        not_compared: points.len() - compared.len(),
+    }
+}
