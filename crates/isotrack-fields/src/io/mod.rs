@@ -66,6 +66,10 @@ pub struct LoadError {
     pub position: Option<FilePosition>,
     /// What is wrong.
     pub message: String,
+    /// The file itself could not be read (missing, not a regular file, no permission, beyond
+    /// the size limit), as opposed to what it holds: exit 66 rather than 65 (README, "Exit
+    /// codes").
+    pub unreadable: bool,
 }
 
 impl fmt::Display for LoadError {
@@ -95,6 +99,14 @@ impl LoadError {
             path: path.display().to_string(),
             position,
             message: message.into(),
+            unreadable: false,
+        }
+    }
+    /// The file could not be read at all (see [`LoadError::unreadable`]).
+    pub(crate) fn cannot_read(path: &Path, e: std::io::Error) -> Self {
+        Self {
+            unreadable: true,
+            ..Self::new(path, None, format!("cannot read: {e}"))
         }
     }
     pub(crate) fn grid(path: &Path, e: GridError) -> Self {
@@ -306,17 +318,101 @@ pub fn parse_series_bytes(
     }
 }
 
-/// The format given, or the one the extension names.
+impl GridFormat {
+    /// The format's name as `field.format` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Csv => "csv",
+            Self::Npy => "npy",
+            Self::Asc => "asc",
+            Self::GeoTiff => "geotiff",
+            Self::NetCdf => "netcdf",
+        }
+    }
+
+    /// The binary format whose signature `head` (a file's first bytes) starts with: NetCDF-3
+    /// (`CDF` and version 1, 2 or 5), HDF5 (NetCDF-4), TIFF or BigTIFF (either byte order),
+    /// NumPy `.npy`. `None` for anything else (the text formats have no signature).
+    pub fn from_signature(head: &[u8]) -> Option<Self> {
+        const HDF5: &[u8] = b"\x89HDF\r\n\x1a\n";
+        let netcdf3 = head.len() >= 4 && head.starts_with(b"CDF") && matches!(head[3], 1 | 2 | 5);
+        if netcdf3 || head.starts_with(HDF5) {
+            Some(Self::NetCdf)
+        } else if [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
+            .iter()
+            .any(|m| head.starts_with(*m))
+        {
+            Some(Self::GeoTiff)
+        } else if head.starts_with(b"\x93NUMPY") {
+            Some(Self::Npy)
+        } else {
+            None
+        }
+    }
+
+    /// Whether the format is binary, with a signature [`GridFormat::from_signature`] knows.
+    fn has_signature(self) -> bool {
+        matches!(self, Self::Npy | Self::GeoTiff | Self::NetCdf)
+    }
+}
+
+/// The format of grid file `path` (README, `field.format`), one rule for a file and for a
+/// symbolic link to one (`data.nc -> /store/blob`, `x.csv -> y.nc`):
+///
+/// 1. the file's **content** first: when its first bytes are a binary format's signature
+///    (NetCDF-3, HDF5/NetCDF-4, TIFF/BigTIFF, `.npy`), that is its format, whatever the name;
+///    a `format` given (`field.format`) that says otherwise is an error naming both;
+/// 2. else the `format` given;
+/// 3. else the extension of the name as written (`csv`/`txt`, `asc`, ...), else the
+///    extension of the file a symbolic link resolves to;
+/// 4. a binary extension (`.nc`, `.npy`, `.tif`) on a file without its signature is an error
+///    saying so (not a parser's complaint about byte 0).
 fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, LoadError> {
-    format
-        .or_else(|| GridFormat::from_extension(path))
-        .ok_or_else(|| {
-            LoadError::new(
+    use std::io::Read;
+    let mut head = Vec::with_capacity(8);
+    open_regular(path)
+        .and_then(|f| f.take(8).read_to_end(&mut head))
+        .map_err(|e| LoadError::cannot_read(path, e))?;
+    let content = GridFormat::from_signature(&head);
+    match (format, content) {
+        (Some(given), Some(c)) if given != c => {
+            return Err(LoadError::new(
                 path,
                 None,
-                "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
-            )
-        })
+                format!(
+                    "field.format = \"{}\" but the file is {} (its first bytes are the {} signature): drop field.format or name the right file",
+                    given.name(),
+                    c.name(),
+                    c.name()
+                ),
+            ))
+        }
+        (_, Some(c)) => return Ok(c),
+        (Some(given), None) => return Ok(given),
+        (None, None) => {}
+    }
+    let by_name = GridFormat::from_extension(path).or_else(|| {
+        std::fs::canonicalize(path)
+            .ok()
+            .and_then(|t| GridFormat::from_extension(&t))
+    });
+    match by_name {
+        Some(f) if f.has_signature() => Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "named as {} but its first bytes are not a {} signature (the content decides the format of binary files): is the link or the name wrong?",
+                f.name(),
+                f.name()
+            ),
+        )),
+        Some(f) => Ok(f),
+        None => Err(LoadError::new(
+            path,
+            None,
+            "cannot tell the format from the content or the extension; give it (field.format = csv, npy, asc, geotiff, netcdf)",
+        )),
+    }
 }
 
 /// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
@@ -332,7 +428,7 @@ pub fn load_series(
         GridFormat::NetCdf => netcdf::parse(path, variable),
         GridFormat::Npy => {
             let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
-                .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+                .map_err(|e| LoadError::cannot_read(path, e))?;
             npy::parse_series(path, &bytes)
         }
         _ => {
@@ -371,8 +467,8 @@ pub fn load_grid_variable(
     if format == GridFormat::NetCdf {
         return single_frame(path, load_series(path, Some(format), variable)?);
     }
-    let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
-        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    let bytes =
+        read_limited(path, MAX_GRID_FILE_BYTES).map_err(|e| LoadError::cannot_read(path, e))?;
     parse_grid(path, &bytes, format)
 }
 
