@@ -131,10 +131,11 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         let x = match &a.x {
             Some(x) => x.clone(),
             None => {
-                let f = isotrack_fields::io::open_regular(&results).map_err(|e| Failure {
-                    code: exit::NOINPUT,
-                    message: format!("{}: {e}", results.display()),
-                })?;
+                let f = isotrack_fields::io::open_limited(&results, isotrack_plot::MAX_INPUT_BYTES)
+                    .map_err(|e| Failure {
+                        code: exit::NOINPUT,
+                        message: format!("{}: {e}", results.display()),
+                    })?;
                 let mut r = csv::Reader::from_reader(f);
                 r.headers()
                     .ok()

@@ -487,7 +487,9 @@ fn index_results(
             format!("cannot read {}: {e}", path.display()),
         )
     };
-    let mut rdr = std::io::BufReader::new(isotrack_fields::io::open_regular(path).map_err(cannot)?);
+    let mut rdr = std::io::BufReader::new(
+        isotrack_fields::io::open_limited(path, MAX_RESULTS_FILE_BYTES).map_err(cannot)?,
+    );
     let mut line = String::new();
     let mut offset = rdr.read_line(&mut line).map_err(cannot)? as u64;
     let cut_at = |at: u64| -> Result<(), Failure> {
@@ -686,6 +688,11 @@ fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     })?;
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
 }
+
+/// The largest `results.csv` that `--resume` and `merge` read, bytes (1 TiB: a billion runs at
+/// a kilobyte a row), counted on the bytes read: a `/proc` file or a file that grows is stopped
+/// there.
+pub const MAX_RESULTS_FILE_BYTES: u64 = 1 << 40;
 
 /// The file in an output directory whose operating-system lock marks the directory as being
 /// written (README, "Sweeps"). The lock, not the file, is what counts: it is released when its

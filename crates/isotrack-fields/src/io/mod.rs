@@ -150,8 +150,9 @@ pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
 
 /// Reads a whole file of at most `max_bytes`, refusing what is not a regular file (a FIFO,
 /// `/dev/zero`, a directory) before reading a byte: such "files" never end, or end anywhere.
-/// The size is checked from the metadata and again while reading (a file that grows is cut off
-/// with an error, not read on).
+/// The size is checked from the metadata and again on the bytes actually read (a `/proc` file
+/// that declares 0 bytes, or a file that grows, is stopped with an error one byte past the
+/// limit, not read on).
 pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let f = open_regular(path)?;
@@ -171,6 +172,67 @@ pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
         return Err(too_big(bytes.len() as u64));
     }
     Ok(bytes)
+}
+
+/// A regular file read as a stream, at most `max_bytes` of it: a read past the limit is an
+/// error (`InvalidData`), never a silent cut. The limit counts the bytes actually read, not the
+/// size the file declares: a `/proc` file declares 0 bytes and can produce gigabytes
+/// (`/proc/self/pagemap`), and a file can grow while it is read.
+#[derive(Debug)]
+pub struct LimitedReader {
+    inner: std::fs::File,
+    left: u64,
+    max_bytes: u64,
+}
+
+impl LimitedReader {
+    /// The limit this reader enforces, bytes.
+    pub fn max_bytes(&self) -> u64 {
+        self.max_bytes
+    }
+}
+
+impl std::io::Read for LimitedReader {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        if self.left == 0 {
+            // At the limit: one more byte means the file is longer than allowed.
+            let mut probe = [0u8; 1];
+            return match self.inner.read(&mut probe)? {
+                0 => Ok(0),
+                _ => Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("more than the {} bytes this reader accepts", self.max_bytes),
+                )),
+            };
+        }
+        let n = buf
+            .len()
+            .min(usize::try_from(self.left).unwrap_or(usize::MAX));
+        let got = self.inner.read(&mut buf[..n])?;
+        self.left -= got as u64;
+        Ok(got)
+    }
+}
+
+/// Opens a regular file ([`open_regular`]) for streaming through a [`LimitedReader`] of
+/// `max_bytes`; a declared size beyond it is refused at once.
+pub fn open_limited(path: &Path, max_bytes: u64) -> std::io::Result<LimitedReader> {
+    let f = open_regular(path)?;
+    let len = f.metadata()?.len();
+    if len > max_bytes {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("{len} bytes is more than the {max_bytes} this reader accepts"),
+        ));
+    }
+    Ok(LimitedReader {
+        inner: f,
+        left: max_bytes,
+        max_bytes,
+    })
 }
 
 /// As [`read_limited`], as UTF-8 text.
@@ -388,7 +450,7 @@ fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, Load
             ))
         }
         (_, Some(c)) => return Ok(c),
-        (Some(given), None) => return Ok(given),
+        (Some(given), None) => return check_head(path, given, &head).map(|()| given),
         (None, None) => {}
     }
     let by_name = GridFormat::from_extension(path).or_else(|| {
@@ -406,13 +468,44 @@ fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, Load
                 f.name()
             ),
         )),
-        Some(f) => Ok(f),
+        Some(f) => check_head(path, f, &head).map(|()| f),
         None => Err(LoadError::new(
             path,
             None,
             "cannot tell the format from the content or the extension; give it (field.format = csv, npy, asc, geotiff, netcdf)",
         )),
     }
+}
+
+/// Refuses at once, from its first bytes, a file that cannot be `format`: a binary format
+/// without its signature, or a text format (CSV, ESRI ASCII) starting with a NUL byte (binary
+/// data, such as `/proc/self/pagemap`, which would otherwise be read up to the 4 GiB limit
+/// before failing).
+fn check_head(path: &Path, format: GridFormat, head: &[u8]) -> Result<(), LoadError> {
+    if format.has_signature() {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "not a {} file: its first bytes are not the {} signature",
+                format.name(),
+                format.name()
+            ),
+        ));
+    }
+    if head.contains(&0) {
+        return Err(LoadError::new(
+            path,
+            Some(FilePosition::Offset(
+                head.iter().position(|&b| b == 0).unwrap_or(0) as u64,
+            )),
+            format!(
+                "a NUL byte: binary data, not a {} grid (text)",
+                format.name()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
