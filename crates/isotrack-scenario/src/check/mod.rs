@@ -1102,7 +1102,9 @@ pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
             }
         }
         let slope_term = l.v * g_max;
-        if !(slope_term < FLAT_START_FRACTION * level_term) {
+        // Not flat (a NaN slope counts as not flat).
+        let flat = slope_term < FLAT_START_FRACTION * level_term;
+        if !flat {
             return None;
         }
         if worst
