@@ -167,8 +167,12 @@ pub const MAX_KEY_PARTS: usize = 8;
 /// 10 MB key once made a 20 MB error.
 pub const MAX_ECHO_CHARS: usize = 200;
 
-/// `text` cut to [`MAX_ECHO_CHARS`] characters, with the number left out said.
+/// `text` with its terminal controls escaped ([`isotrack_core::numtext::Escaped`]: a message
+/// raised to Python or written to a file shows them as `\x1b`, as the console does), cut to
+/// [`MAX_ECHO_CHARS`] characters, with the number left out said.
 pub fn clip(text: &str) -> String {
+    let escaped = isotrack_core::numtext::Escaped(text).to_string();
+    let text = escaped.as_str();
     let n = text.chars().count();
     if n <= MAX_ECHO_CHARS {
         text.to_string()
@@ -875,6 +879,7 @@ mod tests {
             clip_quoted(&quoted),
             format!("unknown key `{at_limit}... (7 more characters)` here")
         );
+        assert_eq!(clip("a\u{1b}[2Jb\u{202e}"), "a\\x1b[2Jb\\u{202e}");
         let plain = "x".repeat(5 * MAX_ECHO_CHARS);
         assert_eq!(clip_quoted(&plain), plain);
         let long = "x".repeat(5 * MAX_ECHO_CHARS + 1);
