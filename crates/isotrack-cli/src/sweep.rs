@@ -702,8 +702,9 @@ pub const LOCK_FILE: &str = ".isotrack.lock";
 
 /// Takes the exclusive lock of output directory `dir` (an advisory `flock`-style lock on
 /// [`LOCK_FILE`], std's `File::try_lock`): held until the returned file is dropped or the
-/// process ends. A second sweep or merge writing the same directory (a requeued Slurm task
-/// while the old one still runs) exits 73 instead of running everything again beside it.
+/// process ends. A second sweep, merge or benchmark writing the same directory (a requeued
+/// Slurm task while the old one still runs) exits 73 instead of running everything again
+/// beside it.
 pub fn lock_output_dir(dir: &Path) -> Result<std::fs::File, Failure> {
     let path = dir.join(LOCK_FILE);
     let cant = |e: std::io::Error| {

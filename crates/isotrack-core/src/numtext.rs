@@ -98,14 +98,14 @@ impl fmt::Display for EchoList<'_> {
 }
 
 /// Whether a terminal would act on `c` rather than show it: C0 controls but tab and newline,
-/// DEL, C1 controls, and the Unicode bidirectional controls (LRM, RLM, ALM, the embeddings and
-/// overrides U+202A-U+202E, the isolates U+2066-U+2069) and other format characters that
-/// hide text (zero-width joiners, BOM).
+/// DEL, C1 controls, and the Unicode bidirectional controls that reorder what follows (ALM
+/// U+061C, LRM and RLM U+200E-U+200F, the embeddings and overrides U+202A-U+202E, the isolates
+/// U+2066-U+2069). Joiners (U+200C, U+200D), which some scripts and emoji need, pass.
 pub fn is_terminal_control(c: char) -> bool {
     matches!(c,
         '\u{0}'..='\u{8}' | '\u{b}'..='\u{1f}' | '\u{7f}'..='\u{9f}'
-        | '\u{61c}' | '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
-        | '\u{2060}'..='\u{2069}' | '\u{feff}')
+        | '\u{61c}' | '\u{200e}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
+        | '\u{2066}'..='\u{2069}')
 }
 
 /// User text for a message, with every [`is_terminal_control`] character escaped: `\x1b` for
@@ -404,6 +404,8 @@ mod tests {
             ("evil\u{202e}txt.csv", "evil\\u{202e}txt.csv"),
             ("iso\u{2066}late", "iso\\u{2066}late"),
             ("tab\tnew\nline é ü 中", "tab\tnew\nline é ü 中"),
+            ("می\u{200c}خواهم", "می\u{200c}خواهم"),
+            ("rlm\u{200f}", "rlm\\u{200f}"),
             ("", ""),
         ] {
             assert_eq!(format!("{}", Escaped(raw)), shown);
