@@ -17,8 +17,8 @@ use std::path::Path;
 /// What went wrong running a benchmark.
 #[derive(Debug, thiserror::Error)]
 pub enum BenchError {
-    /// A task's scenario file cannot be read (the message names the suite file and line
-    /// that names it).
+    /// A task's scenario file, or a file it names (`field.path`), cannot be read: missing, a
+    /// FIFO, a directory, a device (the message names the suite file and line that names it).
     #[error("task {task}: {message}")]
     Task {
         /// The task id.
@@ -258,12 +258,9 @@ pub fn task_base(suite: &Suite, task: &Task) -> Result<Scenario, BenchError> {
         .unwrap_or(0);
     load_scenario(Some(&suite.scenario_path(task)), &sets).map_err(|e| {
         let scenario_line = suite.error_at(&task_path(ti, &["scenario"]), String::new());
+        let unreadable = e.is_unreadable_input();
         match &e {
-            ScenarioError::Io { .. } => BenchError::Task {
-                task: task.id.clone(),
-                message: format!("{scenario_line}{e}"),
-            },
-            ScenarioError::Invalid(issues) => {
+            ScenarioError::Invalid(issues) if !unreadable => {
                 // An issue at a `set` entry is located there, anything else at `scenario`.
                 let set_at = issues.iter().find_map(|i| match &i.location {
                     ErrorLocation::Override { arg } => task.set.iter().position(|s| s == arg),
@@ -279,6 +276,11 @@ pub fn task_base(suite: &Suite, task: &Task) -> Result<Scenario, BenchError> {
                 };
                 BenchError::Suite(suite.error_at(&path, format!("task {}: {e}", task.id)))
             }
+            // The scenario file, or a file it names, cannot be read: exit 66 in the CLI.
+            _ => BenchError::Task {
+                task: task.id.clone(),
+                message: format!("{scenario_line}{e}"),
+            },
         }
     })
 }

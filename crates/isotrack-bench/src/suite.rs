@@ -380,7 +380,8 @@ fn check_task(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg
             task_path(i, &["length_m"]),
             format!(
                 "task {}: length_m must be finite and > 0, got {}",
-                t.id, t.length_m
+                t.id,
+                isotrack_core::numtext::Echo(t.length_m)
             ),
         ));
     }

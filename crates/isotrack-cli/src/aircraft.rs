@@ -5,6 +5,7 @@ use crate::cli::{ReplayArgs, TrimArgs};
 use crate::exit;
 use crate::output::num;
 use crate::run::Failure;
+use isotrack_core::numtext::Echo;
 use isotrack_vehicles::fixed_wing::dynamics::{air_data, r_body_to_ned, Deltas, WindSample};
 use isotrack_vehicles::fixed_wing::gains::compute_gains;
 use isotrack_vehicles::fixed_wing::params::Aerosonde;
@@ -34,7 +35,7 @@ pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
             "w_mps": t.w_mps,
             "gains": g,
         });
-        outln!("{}", serde_json::to_string_pretty(&j).unwrap_or_default());
+        out_data!("{}\n", serde_json::to_string_pretty(&j).unwrap_or_default());
     } else {
         outln!(
             "wings-level trim at {} m/s (gamma = 0, Aerosonde 2012 parameters)",
@@ -126,7 +127,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
             code: exit::USAGE,
             message: format!(
                 "--altitude-m must be a finite number in [{lo}, {hi}] m, got {}",
-                a.altitude_m
+                Echo(a.altitude_m)
             ),
         });
     }

@@ -42,9 +42,9 @@ fn bench_failure(e: BenchError) -> Failure {
             fail(exit::USAGE, e.to_string())
         }
         BenchError::Io { .. } => fail(exit::CANTCREAT, e.to_string()),
-        BenchError::Task { ref message, .. } if message.contains("No such file") => {
-            fail(exit::NOINPUT, e.to_string())
-        }
+        // A task's scenario (or a file it names) cannot be read: missing, a FIFO, a
+        // directory, a device: 66, as for `sweep`'s base scenario.
+        BenchError::Task { .. } => fail(exit::NOINPUT, e.to_string()),
         _ => fail(exit::DATAERR, e.to_string()),
     }
 }
@@ -69,6 +69,11 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         )
     })?;
     let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
+    // One writer per directory, as for `sweep` and `merge`: held to the end of the command
+    // (dropped on every return), released by the OS however the process ends.
+    let _lock = crate::sweep::lock_output_dir(&a.out)?;
     if !a.resume && a.out.join("leaderboard.csv").exists() {
         return Err(fail(
             exit::CANTCREAT,
@@ -78,8 +83,6 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
             ),
         ));
     }
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),

@@ -17,6 +17,13 @@
 //!
 //! `main` asks [`stdout_failure`] once the command has returned. The crate denies
 //! `clippy::print_stdout` and `clippy::print_stderr`, so this module is the only way out.
+//!
+//! Text written by [`out!`](crate::out), [`outln!`](crate::outln) and [`errln!`](crate::errln)
+//! is escaped on the way ([`isotrack_core::numtext::Escaped`]): a control character a terminal
+//! would obey (ESC, BEL, CR, other C0 and C1 controls, bidi overrides) in a file name, key,
+//! value or task name the user gave is shown as `\x1b`, `\u{202e}`, never acted on. Data
+//! printed for programs (`show`'s TOML, `--json`) goes through [`out_data!`](crate::out_data)
+//! unchanged: its own format escapes what it must.
 
 use std::fmt;
 use std::io::{ErrorKind, Write};
@@ -36,12 +43,18 @@ enum StreamState {
 static STDOUT: Mutex<StreamState> = Mutex::new(StreamState::Open);
 static STDERR: Mutex<StreamState> = Mutex::new(StreamState::Open);
 
-fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<'_>) {
+fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<'_>, escape: bool) {
     let mut st = state.lock().unwrap_or_else(|p| p.into_inner());
     if *st != StreamState::Open {
         return;
     }
-    if let Err(e) = w.write_fmt(args).and_then(|()| w.flush()) {
+    let written = if escape {
+        let text = args.to_string();
+        write!(w, "{}", isotrack_core::numtext::Escaped(&text))
+    } else {
+        w.write_fmt(args)
+    };
+    if let Err(e) = written.and_then(|()| w.flush()) {
         *st = if e.kind() == ErrorKind::BrokenPipe {
             StreamState::Closed
         } else {
@@ -50,15 +63,21 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
     }
 }
 
-/// Writes to standard output (see the module docs for what a failed write does).
+/// Writes text to standard output, terminal controls escaped (see the module docs for what a
+/// failed write does).
 pub fn write_out(args: fmt::Arguments<'_>) {
-    write_to(&STDOUT, &mut std::io::stdout().lock(), args);
+    write_to(&STDOUT, &mut std::io::stdout().lock(), args, true);
+}
+
+/// Writes data (TOML, JSON) to standard output as it is: its format escapes what it must.
+pub fn write_out_data(args: fmt::Arguments<'_>) {
+    write_to(&STDOUT, &mut std::io::stdout().lock(), args, false);
 }
 
 /// Writes to standard error (a closed or failing standard error silences it: there is nowhere
 /// left to say anything).
 pub fn write_err(args: fmt::Arguments<'_>) {
-    write_to(&STDERR, &mut std::io::stderr().lock(), args);
+    write_to(&STDERR, &mut std::io::stderr().lock(), args, true);
 }
 
 /// Why standard output could not be written, when the reason is not a reader that went away:
@@ -76,6 +95,15 @@ pub fn stdout_failure() -> Option<String> {
 macro_rules! out {
     ($($arg:tt)*) => {
         $crate::console::write_out(format_args!($($arg)*))
+    };
+}
+
+/// `print!` of data for programs (TOML, JSON), written unescaped, that never panics (see
+/// [`crate::console`]).
+#[macro_export]
+macro_rules! out_data {
+    ($($arg:tt)*) => {
+        $crate::console::write_out_data(format_args!($($arg)*))
     };
 }
 

@@ -18,12 +18,16 @@ where
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) => {
-            let _ = e.print();
-            return if e.use_stderr() {
-                crate::exit::USAGE
-            } else {
-                crate::exit::OK
-            };
+            // Through the console like every other line: the user's arguments echoed in a
+            // usage error are escaped, and help or version text that cannot be written
+            // (`isotrack --help > /dev/full`) is an I/O error, not a success.
+            let text = e.render().to_string();
+            if e.use_stderr() {
+                crate::console::write_err(format_args!("{text}"));
+                return crate::exit::USAGE;
+            }
+            crate::console::write_out(format_args!("{text}"));
+            return stdout_exit_code();
         }
     };
     let result = match &cli.command {
@@ -46,16 +50,22 @@ where
     // A reader that closed standard output is not an error (exit 0); another failure to write
     // it is exit 73 unless the command failed first (see `crate::console`).
     match result {
-        Ok(()) => match crate::console::stdout_failure() {
-            None => crate::exit::OK,
-            Some(why) => {
-                crate::errln!("error: cannot write standard output: {why}");
-                crate::exit::CANTCREAT
-            }
-        },
+        Ok(()) => stdout_exit_code(),
         Err(f) => {
             crate::errln!("error: {}", f.message);
             f.code
+        }
+    }
+}
+
+/// The exit code of a command that did its work: 0, or 73 when standard output could not be
+/// written for another reason than a reader that closed it (see `crate::console`).
+fn stdout_exit_code() -> u8 {
+    match crate::console::stdout_failure() {
+        None => crate::exit::OK,
+        Some(why) => {
+            crate::errln!("error: cannot write standard output: {why}");
+            crate::exit::CANTCREAT
         }
     }
 }

@@ -4,6 +4,7 @@ use crate::cli::{FigureOptions, FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
 use crate::output::{run_to_trace, scenario_toml, write_summary};
 use crate::run::Failure;
+use isotrack_core::numtext::Echo;
 use isotrack_plot::{
     field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, PlotError, RunData,
     Style,
@@ -49,12 +50,18 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
     }
     if let Some(f) = o.font_size {
         if !(f.is_finite() && (4.0..=200.0).contains(&f)) {
-            return Err(usage(format!("--font-size must be 4..200 px, got {f}")));
+            return Err(usage(format!(
+                "--font-size must be 4..200 px, got {}",
+                Echo(f)
+            )));
         }
         st.font_px = Some(f);
     }
     if !(o.dpi.is_finite() && (25.0..=1200.0).contains(&o.dpi)) {
-        return Err(usage(format!("--dpi must be 25..1200, got {}", o.dpi)));
+        return Err(usage(format!(
+            "--dpi must be 25..1200, got {}",
+            Echo(o.dpi)
+        )));
     }
     st.dpi = o.dpi;
     st.colormap = Colormap::from_name(&o.colormap).ok_or_else(|| {
@@ -124,10 +131,11 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         let x = match &a.x {
             Some(x) => x.clone(),
             None => {
-                let f = isotrack_fields::io::open_regular(&results).map_err(|e| Failure {
-                    code: exit::NOINPUT,
-                    message: format!("{}: {e}", results.display()),
-                })?;
+                let f = isotrack_fields::io::open_limited(&results, isotrack_plot::MAX_INPUT_BYTES)
+                    .map_err(|e| Failure {
+                        code: exit::NOINPUT,
+                        message: format!("{}: {e}", results.display()),
+                    })?;
                 let mut r = csv::Reader::from_reader(f);
                 r.headers()
                     .ok()

@@ -3,6 +3,7 @@
 use crate::cli::{InterpolateArgs, Method};
 use crate::exit;
 use crate::run::Failure;
+use isotrack_core::numtext::Echo;
 use isotrack_fields::grid::Grid2;
 use isotrack_fields::stations::{
     Idw, OrdinaryKriging, StationGridError, StationInterpolator, Stations,
@@ -32,7 +33,7 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
     if let Some(sp) = a.spacing_m.filter(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(Failure {
             code: exit::USAGE,
-            message: format!("--spacing-m must be a finite number > 0, got {sp}"),
+            message: format!("--spacing-m must be a finite number > 0, got {}", Echo(sp)),
         });
     }
     if !(a.idw_power.is_finite() && a.idw_power > 0.0) {
@@ -40,12 +41,12 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
             code: exit::USAGE,
             message: format!(
                 "--idw-power must be a finite number > 0, got {}",
-                a.idw_power
+                Echo(a.idw_power)
             ),
         });
     }
     let stations = Stations::from_csv(&a.stations, &a.value_column).map_err(|e| Failure {
-        code: if e.message.starts_with("cannot read") {
+        code: if e.unreadable {
             exit::NOINPUT
         } else {
             exit::DATAERR

@@ -3,6 +3,7 @@
 use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
 use crate::output::{run_to_trace, scenario_toml, write_summary};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, RunResult};
 
@@ -15,12 +16,14 @@ pub struct Failure {
     pub message: String,
 }
 
-/// A scenario error as a failure: 66 when the file cannot be read, 65 when it is invalid.
+/// A scenario error as a failure: 66 when the file, or a file it names (`field.path`), cannot
+/// be read (missing, a FIFO, a directory, a device, too big), 65 when what it holds is invalid.
 pub fn invalid(e: ScenarioError) -> Failure {
     Failure {
-        code: match e {
-            ScenarioError::Io { .. } => exit::NOINPUT,
-            ScenarioError::Invalid(_) => exit::DATAERR,
+        code: if e.is_unreadable_input() {
+            exit::NOINPUT
+        } else {
+            exit::DATAERR
         },
         message: e.to_string(),
     }
@@ -63,7 +66,7 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
         "convergence {} (|eps| < {})\n",
         m.convergence_time_s
             .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
-        f.metrics.convergence_tolerance.unwrap_or_default()
+        Echo(f.metrics.convergence_tolerance.unwrap_or_default())
     );
     // Non-finite values print as in summary.json (null there, n/a here), never as `inf`.
     let fixed = |x: f64, digits: usize| {
@@ -145,7 +148,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 /// `isotrack show`.
 pub fn show(args: &ScenarioArgs) -> Result<(), Failure> {
     let scenario = load(args)?;
-    out!("{}", scenario_toml(&scenario));
+    out_data!("{}", scenario_toml(&scenario));
     Ok(())
 }
 
@@ -163,7 +166,7 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         if !(h.is_finite() && h > 0.0) {
             return Err(Failure {
                 code: exit::USAGE,
-                message: format!("--tube-halfwidth must be > 0, got {h}"),
+                message: format!("--tube-halfwidth must be > 0, got {}", Echo(h)),
             });
         }
     }
@@ -190,7 +193,7 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
             }
             None => serde_json::to_string_pretty(&r).unwrap_or_default(),
         };
-        outln!("{text}");
+        out_data!("{text}\n");
         return Ok(());
     }
     outln!("verdict: {} ({})", r.verdict.as_str(), r.verdict_reason);
@@ -204,7 +207,7 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
             "moving isoline: speed max {} m/s, 95th percentile {} m/s; vehicle {} m/s: {}",
             f(m.isoline_speed_max_mps),
             f(m.isoline_speed_p95_mps),
-            m.vehicle_speed_mps,
+            Echo(m.vehicle_speed_mps),
             match m.trackable {
                 Some(true) => "trackable (the vehicle is faster everywhere sampled)",
                 Some(false) =>
@@ -246,7 +249,7 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     }
     outln!(
         "  tube |F - s_d| <= {} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",
-        p2.tube_halfwidth,
+        Echo(p2.tube_halfwidth),
         p2.samples_in_tube,
         f(p2.tube_gamma1),
         f(p2.tube_gamma2),
@@ -276,8 +279,8 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     let sm = &r.sampled;
     outln!(
         "Sampled loop (linearised at the sensor's period T = {} s, delay {} s)",
-        sm.period_s,
-        sm.delay_s
+        Num(sm.period_s),
+        Num(sm.delay_s)
     );
     if sm.applicable {
         print_sampled(sm);
@@ -364,11 +367,13 @@ fn sensor_rate_line(sm: &isotrack_scenario::check::SampledReport) -> String {
     let rate = 1.0 / sm.period_s;
     match (sm.rate_is_the_limit, sm.max_period_s) {
         (Some(true), Some(t)) => format!(
-            "sensor rate: the limit: {rate} Hz is too slow for these gains; {:.4} Hz or faster is stable",
+            "sensor rate: the limit: {} Hz is too slow for these gains; {:.4} Hz or faster is stable",
+            Num(rate),
             1.0 / t
         ),
         (_, Some(t)) if sm.stable == Some(true) => format!(
-            "sensor rate: not the limit: stable at {rate} Hz and down to {:.4} Hz",
+            "sensor rate: not the limit: stable at {} Hz and down to {:.4} Hz",
+            Num(rate),
             1.0 / t
         ),
         _ => "sensor rate: not the limit: the loop is unstable at any rate (change the gains)".to_string(),

@@ -494,7 +494,9 @@ fn index_results(
             format!("cannot read {}: {e}", path.display()),
         )
     };
-    let mut rdr = std::io::BufReader::new(isotrack_fields::io::open_regular(path).map_err(cannot)?);
+    let mut rdr = std::io::BufReader::new(
+        isotrack_fields::io::open_limited(path, MAX_RESULTS_FILE_BYTES).map_err(cannot)?,
+    );
     let mut line = String::new();
     let mut offset = rdr.read_line(&mut line).map_err(cannot)? as u64;
     let cut_at = |at: u64| -> Result<(), Failure> {
@@ -694,6 +696,11 @@ fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
 }
 
+/// The largest `results.csv` that `--resume` and `merge` read, bytes (1 TiB: a billion runs at
+/// a kilobyte a row), counted on the bytes read: a `/proc` file or a file that grows is stopped
+/// there.
+pub const MAX_RESULTS_FILE_BYTES: u64 = 1 << 40;
+
 /// The file in an output directory whose operating-system lock marks the directory as being
 /// written (README, "Sweeps"). The lock, not the file, is what counts: it is released when its
 /// holder exits in any way (SIGKILL and a crashed node included), so a file left behind is
@@ -702,8 +709,9 @@ pub const LOCK_FILE: &str = ".isotrack.lock";
 
 /// Takes the exclusive lock of output directory `dir` (an advisory `flock`-style lock on
 /// [`LOCK_FILE`], std's `File::try_lock`): held until the returned file is dropped or the
-/// process ends. A second sweep or merge writing the same directory (a requeued Slurm task
-/// while the old one still runs) exits 73 instead of running everything again beside it.
+/// process ends. A second sweep, merge or benchmark writing the same directory (a requeued
+/// Slurm task while the old one still runs) exits 73 instead of running everything again
+/// beside it.
 pub fn lock_output_dir(dir: &Path) -> Result<std::fs::File, Failure> {
     let path = dir.join(LOCK_FILE);
     let cant = |e: std::io::Error| {
@@ -723,7 +731,7 @@ pub fn lock_output_dir(dir: &Path) -> Result<std::fs::File, Failure> {
         Err(std::fs::TryLockError::WouldBlock) => Err(fail(
             exit::CANTCREAT,
             format!(
-                "{}: another isotrack sweep or merge is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
+                "{}: another isotrack sweep, merge or benchmark is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
                 dir.display()
             ),
         )),

@@ -140,3 +140,38 @@ fn a_full_standard_output_exits_73() {
     assert!(e.contains("cannot write standard output"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
 }
+
+/// Hostile review of issue 30: `isotrack --help > /dev/full` (and `--version`, a command's
+/// `--help`) exited 0 although nothing was written: clap printed the text and ignored the
+/// error. The text goes through the console like every other line: 73 on a full disk, 0 on
+/// a closed pipe.
+#[cfg(target_os = "linux")]
+#[test]
+fn help_and_version_on_a_full_standard_output_exit_73() {
+    for args in [
+        &["--help"][..],
+        &["--version"],
+        &["-V"],
+        &["run", "--help"],
+        &["help", "sweep"],
+    ] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .expect("/dev/full");
+        let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args(args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(73), "{args:?}: {e}");
+        assert!(e.contains("cannot write standard output"), "{e}");
+        assert_quiet_success(args, false);
+        assert_quiet_success(args, true);
+    }
+    // And the help still reaches a working standard output.
+    let o = isotrack(&["--help"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Usage: isotrack"));
+}

@@ -55,7 +55,11 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         let mut args = vec!["sweep", &sw, "--out", &out_s];
         args.extend(extra);
         let o = isotrack(&args);
-        assert_fails(&o, 73, &["another isotrack sweep or merge is writing"]);
+        assert_fails(
+            &o,
+            73,
+            &["another isotrack sweep, merge or benchmark is writing"],
+        );
     }
     assert!(out.join("results.csv").exists(), "--force deleted nothing");
     let o = isotrack(&[

@@ -1,13 +1,25 @@
-//! Numbers in messages (issue 30, item 19): the one formatting every error, warning and note
-//! uses for a number it echoes or computes.
+//! Numbers and user text in messages (issue 30, items 19 and the hostile review's leftovers):
+//! the one formatting every error, warning and note uses for a number it echoes or computes,
+//! and for a string the user wrote.
 //!
-//! `f64`'s own `Display` prints the shortest string that reads back to the same bits, so a
-//! computed bound comes out as `0.0024500000000000004` and `1e300` as 301 digits. [`Num`]
-//! rounds to [`SIGNIFICANT_DIGITS`] significant digits, drops trailing zeros, and writes plain
-//! decimals for magnitudes in `[1e-6, 1e9)`, scientific (`1e300`, `-2.5e-7`) outside. A bound
-//! the user is told to respect is rounded away from the forbidden side: [`NumUp`] for "at
-//! least" (rounded towards `+inf`, so the printed value itself is allowed), [`NumDown`] for
-//! "at most".
+//! Two kinds of number, two rules:
+//!
+//! * A value the **user wrote** ([`Echo`]) is echoed exactly: the shortest decimal that reads
+//!   back to the same `f64` (Rust's `{}`), in exponent form (`{:e}`) when its magnitude is
+//!   outside `[1e-5, 1e16)`, so `1.0000001` is never shown as `1` and `1e-300` is never 300
+//!   digits. At most 24 characters (17 significant digits, a sign, a point and `e-308`).
+//! * A value the **program computed** ([`Num`], [`NumUp`], [`NumDown`]) is rounded to
+//!   [`SIGNIFICANT_DIGITS`] significant digits, trailing zeros dropped, plain decimals for
+//!   magnitudes in `[1e-6, 1e9)` and scientific (`1e300`, `-2.5e-7`) outside: at most 14
+//!   characters. `f64`'s own `Display` prints a computed bound as `0.0024500000000000004` and
+//!   `1e300` as 301 digits. A bound the user is told to respect is rounded away from the
+//!   forbidden side: [`NumUp`] for "at least" (rounded towards `+inf`, so the printed value
+//!   itself is allowed), [`NumDown`] for "at most".
+//!
+//! User text (file names, keys, values, task names) goes through [`Escaped`]: control
+//! characters that a terminal obeys (C0 but tab and newline, DEL, C1, and the Unicode bidi
+//! controls that reorder what follows) are written as escapes (`\x1b`, `\u{202e}`), so a
+//! message shows what was typed instead of acting on the terminal.
 
 use core::fmt;
 
@@ -49,6 +61,74 @@ impl fmt::Display for NumUp {
 impl fmt::Display for NumDown {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write_number(f, self.0, Rounding::Down)
+    }
+}
+
+/// A value the user wrote, for a message: the shortest decimal that reads back to the same
+/// `f64`, in exponent form when its magnitude is outside `[1e-5, 1e16)` (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Echo(pub f64);
+
+impl fmt::Display for Echo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if !x.is_finite() || x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
+/// A list of values the user wrote (`[1, 2.5]`), each as [`Echo`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EchoList<'a>(pub &'a [f64]);
+
+impl fmt::Display for EchoList<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("[")?;
+        for (i, x) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            write!(f, "{}", Echo(*x))?;
+        }
+        f.write_str("]")
+    }
+}
+
+/// Whether a terminal would act on `c` rather than show it: C0 controls but tab and newline,
+/// DEL, C1 controls, and the Unicode bidirectional controls that reorder what follows (ALM
+/// U+061C, LRM and RLM U+200E-U+200F, the embeddings and overrides U+202A-U+202E, the isolates
+/// U+2066-U+2069). Joiners (U+200C, U+200D), which some scripts and emoji need, pass.
+pub fn is_terminal_control(c: char) -> bool {
+    matches!(c,
+        '\u{0}'..='\u{8}' | '\u{b}'..='\u{1f}' | '\u{7f}'..='\u{9f}'
+        | '\u{61c}' | '\u{200e}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
+        | '\u{2066}'..='\u{2069}')
+}
+
+/// User text for a message, with every [`is_terminal_control`] character escaped: `\x1b` for
+/// C0 and DEL, `\u{85}` / `\u{202e}` above.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Escaped<'a>(pub &'a str);
+
+impl fmt::Display for Escaped<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = self.0;
+        let mut start = 0;
+        for (i, c) in s.char_indices() {
+            if is_terminal_control(c) {
+                f.write_str(&s[start..i])?;
+                if (c as u32) < 0x80 {
+                    write!(f, "\\x{:02x}", c as u32)?;
+                } else {
+                    write!(f, "\\u{{{:x}}}", c as u32)?;
+                }
+                start = i + c.len_utf8();
+            }
+        }
+        f.write_str(&s[start..])
     }
 }
 
@@ -248,6 +328,87 @@ mod tests {
                 let down: f64 = format!("{}", NumDown(x)).parse().unwrap();
                 assert!(down <= x && x <= up, "{down} <= {x} <= {up}");
             }
+        }
+    }
+
+    /// A value the user wrote is echoed as written (shortest round trip), never rounded to
+    /// six digits (`1.0000001` once read "got 1"), and never as hundreds of digits
+    /// (`1e-300` once printed as a 300-digit decimal); at most 24 characters.
+    #[test]
+    fn echoes_keep_the_users_value_exactly_and_short() {
+        for (x, shown) in [
+            (1.0000001, "1.0000001"),
+            (0.1, "0.1"),
+            (-2.5, "-2.5"),
+            (1.0, "1"),
+            (0.0, "0"),
+            (1e-300, "1e-300"),
+            (1e300, "1e300"),
+            (1.2345678901234568e-300, "1.2345678901234568e-300"),
+            (0.00001, "0.00001"),
+            (0.000001, "1e-6"),
+            (9e15, "9000000000000000"),
+            (1e16, "1e16"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            let text = format!("{}", Echo(x));
+            assert_eq!(text, shown, "{x:e}");
+            if x.is_finite() {
+                assert_eq!(text.parse::<f64>().unwrap(), x, "round trip of {text}");
+            }
+        }
+        for x in [
+            -1.2345678901234567e-300,
+            -9.999999999999998e15,
+            -0.000012345678901234567,
+            f64::MIN_POSITIVE,
+            -f64::MAX,
+        ] {
+            let text = format!("{}", Echo(x));
+            assert!(text.len() <= 24, "{text}");
+            assert_eq!(text.parse::<f64>().unwrap(), x, "round trip of {text}");
+        }
+        assert_eq!(
+            format!("{}", EchoList(&[1.0000001, 1e-300])),
+            "[1.0000001, 1e-300]"
+        );
+    }
+
+    /// Computed values stay short: 14 characters at most, whatever the magnitude.
+    #[test]
+    fn computed_values_are_short() {
+        for x in [
+            1.0 / 1e-300,
+            1e-300,
+            -1.0 / 3.0e-7,
+            123456789.123,
+            -0.00000123456789,
+        ] {
+            let text = format!("{}", Num(x));
+            assert!(text.len() <= 14, "{text}");
+        }
+        assert_eq!(format!("{}", Num(1.0 / 1e-300)), "1e300");
+    }
+
+    /// Control characters a terminal would obey are shown as escapes; other text, tabs,
+    /// newlines and non-ASCII letters pass as they are.
+    #[test]
+    fn terminal_controls_are_escaped() {
+        for (raw, shown) in [
+            ("a\x1b[31mred", "a\\x1b[31mred"),
+            ("bell\x07", "bell\\x07"),
+            ("over\rwrite", "over\\x0dwrite"),
+            ("del\x7f", "del\\x7f"),
+            ("c1\u{9b}31m", "c1\\u{9b}31m"),
+            ("evil\u{202e}txt.csv", "evil\\u{202e}txt.csv"),
+            ("iso\u{2066}late", "iso\\u{2066}late"),
+            ("tab\tnew\nline é ü 中", "tab\tnew\nline é ü 中"),
+            ("می\u{200c}خواهم", "می\u{200c}خواهم"),
+            ("rlm\u{200f}", "rlm\\u{200f}"),
+            ("", ""),
+        ] {
+            assert_eq!(format!("{}", Escaped(raw)), shown);
         }
     }
 }

@@ -30,7 +30,7 @@ impl Stations {
     /// empty or `NaN` value are skipped; anything else malformed is an error naming the line.
     pub fn from_csv(path: &Path, value_column: &str) -> Result<Self, LoadError> {
         let bytes = crate::io::read_limited(path, MAX_STATION_FILE_BYTES)
-            .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+            .map_err(|e| LoadError::cannot_read(path, e))?;
         Self::from_csv_bytes(path, &bytes, value_column)
     }
 
@@ -117,10 +117,16 @@ impl Stations {
             }
             if lonlat {
                 if !(-180.0..=360.0).contains(&x) {
-                    return Err(at(xc, format!("longitude {x} deg is outside [-180, 360]")));
+                    return Err(at(
+                        xc,
+                        format!("longitude {} deg is outside [-180, 360]", Echo(x)),
+                    ));
                 }
                 if !(-90.0..=90.0).contains(&y) {
-                    return Err(at(yc, format!("latitude {y} deg is outside [-90, 90]")));
+                    return Err(at(
+                        yc,
+                        format!("latitude {} deg is outside [-90, 90]", Echo(y)),
+                    ));
                 }
             } else if x.abs() > MAX_COORDINATE_M || y.abs() > MAX_COORDINATE_M {
                 let c = if x.abs() > MAX_COORDINATE_M { xc } else { yc };
@@ -218,7 +224,7 @@ pub const MAX_STATION_FILE_BYTES: u64 = 256 << 20;
 pub const MAX_COORDINATE_M: f64 = 6.4e7;
 
 use crate::grid::MAX_ABS_VALUE;
-use isotrack_core::numtext::{Num, NumUp};
+use isotrack_core::numtext::{Echo, Num, NumUp};
 
 /// Why station values could not be put on a grid.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -53,19 +53,14 @@ pub enum PlotError {
 /// what a figure can show); non-regular files (`/dev/zero`, pipes) are refused.
 pub const MAX_INPUT_BYTES: u64 = 4 << 30;
 
-/// Opens `path` for a streaming reader after checking it is a regular file of at most
-/// [`MAX_INPUT_BYTES`].
-pub(crate) fn open_input(path: &std::path::Path) -> Result<std::fs::File, PlotError> {
-    let cannot = |m: String| PlotError::Input(format!("{}: {m}", path.display()));
-    let f = isotrack_fields::io::open_regular(path).map_err(|e| cannot(e.to_string()))?;
-    let meta = f.metadata().map_err(|e| cannot(e.to_string()))?;
-    if meta.len() > MAX_INPUT_BYTES {
-        return Err(cannot(format!(
-            "{} bytes is more than the {MAX_INPUT_BYTES} a plot reads",
-            meta.len()
-        )));
-    }
-    Ok(f)
+/// Opens `path` for a streaming reader after checking it is a regular file; at most
+/// [`MAX_INPUT_BYTES`] are read from it, counted on the bytes read (a `/proc` file declares 0
+/// bytes), and a read past them is an error.
+pub(crate) fn open_input(
+    path: &std::path::Path,
+) -> Result<isotrack_fields::io::LimitedReader, PlotError> {
+    isotrack_fields::io::open_limited(path, MAX_INPUT_BYTES)
+        .map_err(|e| PlotError::Input(format!("{}: {e}", path.display())))
 }
 
 /// Registers the bundled font (idempotent).

@@ -32,9 +32,10 @@ impl RunData {
         .map_err(|e| err(format!("summary.json: {e}")))?;
         let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
             let m = format!("scenario.toml: {e}");
-            match e {
-                isotrack_scenario::ScenarioError::Io { .. } => cannot(m),
-                isotrack_scenario::ScenarioError::Invalid(_) => err(m),
+            if e.is_unreadable_input() {
+                cannot(m)
+            } else {
+                err(m)
             }
         })?;
         let mut rdr = csv::Reader::from_reader(crate::open_input(&dir.join("trace.csv"))?);

@@ -43,6 +43,7 @@ pub fn build_vehicle(f: &ScenarioFile) -> Result<VehicleModel, crate::resolve::I
             .map_err(|e| crate::resolve::Issue {
                 key: "vehicle.airspeed_mps".into(),
                 message: e.to_string(),
+                unreadable: false,
             })?,
         )),
     })

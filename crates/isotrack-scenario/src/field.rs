@@ -3,6 +3,7 @@
 use crate::resolve::Issue;
 use crate::schema::*;
 use isotrack_core::math::{Mat2, Vec2};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_fields::grid::{
     AfterLastFrame, Grid2, GridField, GridSeries, Interpolation, TimeInterpolation,
@@ -90,9 +91,10 @@ pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(),
     };
     Err(Issue {
         key: key.into(),
+        unreadable: false,
         message: format!(
-            "the start ({x}, {y}) m is outside the field, which spans x in [{}, {}] m and y in [{}, {}] m, set by {set_by}",
-            e[0], e[1], e[2], e[3]
+            "the start ({}, {}) m is outside the field, which spans x in [{}, {}] m and y in [{}, {}] m, set by {set_by}",
+            Echo(x), Echo(y), Num(e[0]), Num(e[1]), Num(e[2]), Num(e[3])
         ),
     })
 }
@@ -341,6 +343,16 @@ fn resolve_one(p: &str, base_dir: &Path) -> PathBuf {
     path.canonicalize().unwrap_or(path)
 }
 
+/// A file's load error as an issue of `key`: a file that cannot be read at all (missing, a
+/// FIFO, a directory, beyond its size limit) is marked so (exit 66), what it holds is 65.
+fn load_issue(key: &str, prefix: &str, e: isotrack_fields::io::LoadError) -> Issue {
+    Issue {
+        key: key.to_string(),
+        message: format!("{prefix}{e}"),
+        unreadable: e.unreadable,
+    }
+}
+
 /// Stations: read, interpolate onto a grid over their bounding box, then georeference
 /// overrides as for `grid`.
 fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue> {
@@ -348,10 +360,11 @@ fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Is
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
+        unreadable: false,
     };
     let path = resolve_path(f, base_dir);
     let col = f.value_column.clone().unwrap_or_default();
-    let st = Stations::from_csv(&path, &col).map_err(|e| issue("field.path", e.to_string()))?;
+    let st = Stations::from_csv(&path, &col).map_err(|e| load_issue("field.path", "", e))?;
     let ext = st.extent_m();
     let spacing = f.grid_spacing_m.unwrap_or(st.default_spacing_m());
     let grid = match f.method.unwrap_or(StationMethod::Kriging) {
@@ -382,6 +395,7 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
+        unreadable: false,
     };
     if let Some([c0, c1, r0, r1]) = f.crop_cells {
         if c1 >= grid.nx() || r1 >= grid.ny() {
@@ -411,7 +425,7 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
             "field.value_log10",
             format!(
                 "the grid has values <= 0 (min {}); set field.value_floor to a positive value",
-                grid.value_range().0
+                Num(grid.value_range().0)
             ),
         ));
     }
@@ -435,6 +449,7 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
+        unreadable: false,
     };
     let format = f.format.map(|g| match g {
         GridFormatName::Csv => GridFormat::Csv,
@@ -450,7 +465,7 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
             for (k, p) in list.iter().enumerate() {
                 let path = resolve_one(p, base_dir);
                 let s = load_series(&path, format, f.variable.as_deref())
-                    .map_err(|e| issue("field.paths", format!("file {k}: {e}")))?;
+                    .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
                 if s.frames.len() != 1 {
                     return Err(issue(
                         "field.paths",
@@ -470,7 +485,7 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
         None => {
             let path = resolve_path(f, base_dir);
             let s = load_series(&path, format, f.variable.as_deref())
-                .map_err(|e| issue("field.path", e.to_string()))?;
+                .map_err(|e| load_issue("field.path", "", e))?;
             f.path = Some(path.display().to_string());
             (s.frames, s.frame_times_s)
         }

@@ -1,7 +1,7 @@
 //! Reading scenario files and `--set` overrides, with errors that say where.
 
 use crate::resolve::{drop_inapplicable_keys, Issue, KINDED_SECTIONS};
-use crate::schema::ScenarioFile;
+use crate::schema::{ControllerKind, ScenarioFile};
 use crate::Scenario;
 use std::fmt;
 use std::ops::Range;
@@ -78,6 +78,9 @@ pub struct LocatedIssue {
     pub key: Option<String>,
     /// What is wrong.
     pub message: String,
+    /// A file the key names could not be read at all (missing, not a regular file, beyond its
+    /// size limit): the command exits 66, not 65 ([`ScenarioError::is_unreadable_input`]).
+    pub unreadable: bool,
 }
 
 impl fmt::Display for LocatedIssue {
@@ -134,6 +137,16 @@ pub enum ScenarioError {
 }
 
 impl ScenarioError {
+    /// Whether a file could not be read at all: the scenario file itself, or a file it names
+    /// (`field.path`, `field.paths`) that is missing, a FIFO, a directory, a device or beyond
+    /// its size limit. Commands exit 66 for these, 65 for what a file holds.
+    pub fn is_unreadable_input(&self) -> bool {
+        match self {
+            ScenarioError::Io { .. } => true,
+            ScenarioError::Invalid(v) => v.iter().any(|i| i.unreadable),
+        }
+    }
+
     /// The located problems (empty for I/O errors).
     pub fn issues(&self) -> &[LocatedIssue] {
         match self {
@@ -154,8 +167,12 @@ pub const MAX_KEY_PARTS: usize = 8;
 /// 10 MB key once made a 20 MB error.
 pub const MAX_ECHO_CHARS: usize = 200;
 
-/// `text` cut to [`MAX_ECHO_CHARS`] characters, with the number left out said.
+/// `text` with its terminal controls escaped ([`isotrack_core::numtext::Escaped`]: a message
+/// raised to Python or written to a file shows them as `\x1b`, as the console does), cut to
+/// [`MAX_ECHO_CHARS`] characters, with the number left out said.
 pub fn clip(text: &str) -> String {
+    let escaped = isotrack_core::numtext::Escaped(text).to_string();
+    let text = escaped.as_str();
     let n = text.chars().count();
     if n <= MAX_ECHO_CHARS {
         text.to_string()
@@ -222,6 +239,7 @@ pub fn parse_scenario_in(
             },
             key,
             message,
+            unreadable: false,
         }])
     };
 
@@ -231,7 +249,11 @@ pub fn parse_scenario_in(
     // 2. Schema: unknown keys and wrong types, located by the error's span.
     if let Err(e) = toml::from_str::<ScenarioFile>(text) {
         let key = e.span().and_then(|s| key_at(doc.get_ref(), &s, ""));
-        return Err(located(e.span(), key, e.message().trim().to_string()));
+        let kind = toml::from_str::<toml::Table>(text)
+            .ok()
+            .and_then(|t| controller_kind(&t));
+        let message = did_you_mean(e.message().trim(), key.as_deref(), kind);
+        return Err(located(e.span(), key, message));
     }
     // 3. Overrides, one at a time so that an error names its argument.
     let mut table: toml::Table =
@@ -325,6 +347,7 @@ pub fn apply_assignments(
                 },
                 key: None,
                 message: e.message().to_string(),
+                unreadable: false,
             }])
         })
 }
@@ -367,6 +390,7 @@ pub(crate) fn locate_derived(
                     },
                     key: Some(i.key),
                     message: i.message,
+                    unreadable: i.unreadable,
                 }
             })
             .collect(),
@@ -394,6 +418,7 @@ fn apply_one(
             location: at.clone(),
             key,
             message,
+            unreadable: false,
         }])
     };
     let (key, raw) = arg
@@ -419,8 +444,96 @@ fn apply_one(
         .map_err(|m| fail(Some(key.clone()), m))?;
     toml::Value::Table(table.clone())
         .try_into::<ScenarioFile>()
-        .map_err(|e| fail(Some(key.clone()), e.message().trim().to_string()))?;
+        .map_err(|e| {
+            let message = did_you_mean(e.message().trim(), Some(&key), controller_kind(table));
+            fail(Some(key.clone()), message)
+        })?;
     Ok(key)
+}
+
+/// The controller kind a scenario table names (`None` when it names none or an unknown one).
+fn controller_kind(table: &toml::Table) -> Option<ControllerKind> {
+    let kind = table.get("controller")?.get("kind")?.clone();
+    kind.try_into().ok()
+}
+
+/// The names closest to `typed` among `candidates`: those at one edit (Damerau-Levenshtein)
+/// or with a Jaro-Winkler similarity of at least 0.8 (a prefix such as `speed` for
+/// `speed_mps`), the best first, at most three. `strsim`'s measures, as clap uses for
+/// subcommands.
+pub fn closest_names<'a>(typed: &str, candidates: &[&'a str]) -> Vec<&'a str> {
+    let mut scored: Vec<(usize, f64, &str)> = candidates
+        .iter()
+        .map(|c| {
+            (
+                strsim::damerau_levenshtein(typed, c),
+                strsim::jaro_winkler(typed, c),
+                *c,
+            )
+        })
+        .filter(|&(d, jw, _)| d <= 1 || jw >= 0.8)
+        .collect();
+    scored.sort_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+    let Some(&(d0, jw0, _)) = scored.first() else {
+        return vec![];
+    };
+    // The best, and those as good (a typo one edit from several names names them all).
+    scored
+        .iter()
+        .take_while(|&&(d, jw, _)| d == d0 && (d0 <= 1 || (jw0 - jw).abs() < 1e-9))
+        .take(3)
+        .map(|s| s.2)
+        .collect()
+}
+
+/// A schema error with a suggestion: for `unknown field `X`, expected one of `a`, `b`` (the
+/// schema's own list of the section's keys, as serde writes it), the nearest of those keys;
+/// in `[controller]` the list and the suggestion are the keys of the controller kind the
+/// scenario names (`kind`, default `pi_isoline`), not every law's.
+fn did_you_mean(message: &str, key: Option<&str>, kind: Option<ControllerKind>) -> String {
+    let Some(rest) = message.strip_prefix("unknown field `") else {
+        return message.to_string();
+    };
+    let Some((typed, tail)) = rest.split_once('`') else {
+        return message.to_string();
+    };
+    let listed: Vec<&str> = tail
+        .split_once("expected one of ")
+        .or_else(|| tail.split_once("expected "))
+        .map(|(_, list)| {
+            list.split(", ")
+                .map(|k| k.trim().trim_matches('`'))
+                .filter(|k| !k.is_empty())
+                .collect()
+        })
+        .unwrap_or_default();
+    let in_controller = key.is_some_and(|k| k.starts_with("controller."));
+    let (keys, head) = if in_controller {
+        let kind = kind.unwrap_or(ControllerKind::PiIsoline);
+        let keys = crate::resolve::controller_keys(kind);
+        let head = format!(
+            "unknown field `{typed}` for controller.kind = \"{}\", expected one of {}",
+            kind.name(),
+            keys.iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        (keys, head)
+    } else {
+        (listed, message.to_string())
+    };
+    match closest_names(typed, &keys).as_slice() {
+        [] => head,
+        [one] => format!("{head}; did you mean `{one}`?"),
+        [init @ .., last] => format!(
+            "{head}; did you mean {} or `{last}`?",
+            init.iter()
+                .map(|k| format!("`{k}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
 }
 
 /// The `kind` of each of [`KINDED_SECTIONS`] a scenario table names (`None` when unset: the
@@ -496,6 +609,7 @@ fn locate_issue(
         location,
         key: Some(issue.key),
         message: issue.message,
+        unreadable: issue.unreadable,
     }
 }
 
@@ -597,6 +711,44 @@ mod tests {
         assert_eq!(file_line(&e[0]), Some(6));
         assert!(e[0].message.contains("kz"), "{}", e[0]);
         assert_eq!(e[0].key.as_deref(), Some("controller.kz"));
+    }
+
+    /// Hostile review of issue 30: an unknown key gets the nearest valid key of its section
+    /// (the schema's list), in `[controller]` of the kind the scenario names.
+    #[test]
+    fn unknown_keys_get_a_did_you_mean() {
+        let e = err("[sim]\ndt_sec = 0.01\n", &[]);
+        assert!(e[0].message.ends_with("; did you mean `dt_s`?"), "{}", e[0]);
+        assert!(e[0].message.contains("expected one of `dt_s`"), "{}", e[0]);
+        // [controller]: the PI-like law's keys, not every law's (kd is the PID's).
+        let e = err("[controller]\nkq = 2\n", &[]);
+        assert!(
+            e[0].message
+                .contains("for controller.kind = \"pi_isoline\""),
+            "{}",
+            e[0]
+        );
+        assert!(
+            e[0].message.ends_with("did you mean `kp` or `ki`?"),
+            "{}",
+            e[0]
+        );
+        assert!(!e[0].message.contains("`kd`"), "{}", e[0]);
+        let e = err("[controller]\nkind = \"sliding_mode\"\ngama = 2\n", &[]);
+        assert!(e[0].message.ends_with("did you mean `gamma`?"), "{}", e[0]);
+        assert!(!e[0].message.contains("`kp`"), "{}", e[0]);
+        // Through --set too, with the kind set before it.
+        let e = err("", &["controller.kind=pid", "controller.kdd=1"]);
+        assert!(e[0].message.ends_with("did you mean `kd`?"), "{}", e[0]);
+        let e = err("", &["vehicle.speed=1"]);
+        assert!(
+            e[0].message.ends_with("did you mean `speed_mps`?"),
+            "{}",
+            e[0]
+        );
+        // Nothing near: no suggestion.
+        let e = err("[sim]\nzzzzzz = 1\n", &[]);
+        assert!(!e[0].message.contains("did you mean"), "{}", e[0]);
     }
 
     #[test]
@@ -705,6 +857,7 @@ mod tests {
             location: file(Some(2), Some(1)),
             key: key.map(str::to_string),
             message: "must be > 0, got 0".into(),
+            unreadable: false,
         };
         assert_eq!(
             issue(Some("controller.kp")).to_string(),
@@ -726,6 +879,7 @@ mod tests {
             clip_quoted(&quoted),
             format!("unknown key `{at_limit}... (7 more characters)` here")
         );
+        assert_eq!(clip("a\u{1b}[2Jb\u{202e}"), "a\\x1b[2Jb\\u{202e}");
         let plain = "x".repeat(5 * MAX_ECHO_CHARS);
         assert_eq!(clip_quoted(&plain), plain);
         let long = "x".repeat(5 * MAX_ECHO_CHARS + 1);

@@ -12,6 +12,9 @@ pub struct Issue {
     pub key: String,
     /// What is wrong.
     pub message: String,
+    /// A file the key names could not be read at all (missing, not a regular file, beyond its
+    /// size limit): exit 66, not 65 (README, "Exit codes").
+    pub unreadable: bool,
 }
 
 #[derive(Default)]
@@ -24,24 +27,25 @@ impl Checker {
         self.issues.push(Issue {
             key: key.to_string(),
             message: message.into(),
+            unreadable: false,
         });
     }
     fn finite(&mut self, key: &str, x: f64) -> bool {
         if x.is_finite() {
             true
         } else {
-            self.fail(key, format!("must be a finite number, got {}", Num(x)));
+            self.fail(key, format!("must be a finite number, got {}", Echo(x)));
             false
         }
     }
     fn positive(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x <= 0.0 {
-            self.fail(key, format!("must be > 0, got {}", Num(x)));
+            self.fail(key, format!("must be > 0, got {}", Echo(x)));
         }
     }
     fn non_negative(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x < 0.0 {
-            self.fail(key, format!("must be >= 0, got {}", Num(x)));
+            self.fail(key, format!("must be >= 0, got {}", Echo(x)));
         }
     }
     /// Rejects every present key of `section` that is not in `allowed` for the chosen
@@ -72,9 +76,9 @@ impl Checker {
                 key,
                 format!(
                     "must be in [{}, {}] {unit}, got {}",
-                    Num(lo),
-                    Num(hi),
-                    Num(x)
+                    Echo(lo),
+                    Echo(hi),
+                    Echo(x)
                 ),
             );
             return false;
@@ -98,9 +102,10 @@ impl Checker {
             self.fail(
                 key,
                 format!(
-                    "must hold finite numbers within [-{}, {}] m/s, got {xs:?}",
-                    Num(m),
-                    Num(m)
+                    "must hold finite numbers within [-{}, {}] m/s, got {}",
+                    Echo(m),
+                    Echo(m),
+                    EchoList(xs)
                 ),
             );
         }
@@ -114,16 +119,19 @@ impl Checker {
                 key,
                 format!(
                     "must be 0 (off) or in [{}, {}] field units, got {}",
-                    Num(lo),
-                    Num(hi),
-                    Num(x)
+                    Echo(lo),
+                    Echo(hi),
+                    Echo(x)
                 ),
             );
         }
     }
     fn all_finite(&mut self, key: &str, xs: &[f64]) {
         if xs.iter().any(|x| !x.is_finite()) {
-            self.fail(key, format!("must hold finite numbers, got {xs:?}"));
+            self.fail(
+                key,
+                format!("must hold finite numbers, got {}", EchoList(xs)),
+            );
         }
     }
 }
@@ -272,7 +280,7 @@ fn resolve_frames(c: &mut Checker, fd: &mut FieldSection) {
                 "field.frame_times_s",
                 format!(
                     "must be finite and strictly increasing (time {k} is {})",
-                    Num(t[k])
+                    Echo(t[k])
                 ),
             );
         }
@@ -320,7 +328,7 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
         if fd.value_log10 == Some(true) && fl <= 0.0 {
             c.fail(
                 "field.value_floor",
-                format!("must be > 0 with value_log10 = true, got {fl}"),
+                format!("must be > 0 with value_log10 = true, got {}", Echo(fl)),
             );
         }
     }
@@ -387,19 +395,7 @@ pub fn drop_inapplicable_keys(table: &mut toml::Table, section: &str) -> Vec<Str
             None => return vec![],
         },
         "controller" => match kind_or(kind, ControllerKind::PiIsoline) {
-            Some(k) => (
-                controller_allowed(k),
-                &[
-                    "kind",
-                    "level",
-                    "higher_side",
-                    "max_turn_rate_radps",
-                    "search",
-                    "search_spacing_m",
-                    "search_leg_m",
-                    "search_handover",
-                ],
-            ),
+            Some(k) => (controller_allowed(k), &CONTROLLER_SHARED_KEYS),
             None => return vec![],
         },
         _ => return vec![],
@@ -422,6 +418,27 @@ fn kind_or<K: serde::de::DeserializeOwned>(kind: Option<&toml::Value>, default: 
         None => Some(default),
         Some(k) => k.clone().try_into().ok(),
     }
+}
+
+/// The `[controller]` keys every kind takes: the kind, the level, the output stage and the
+/// search before tracking.
+const CONTROLLER_SHARED_KEYS: [&str; 8] = [
+    "kind",
+    "level",
+    "higher_side",
+    "max_turn_rate_radps",
+    "search",
+    "search_spacing_m",
+    "search_leg_m",
+    "search_handover",
+];
+
+/// Every `[controller]` key that applies to `kind`: the shared ones, then the law's own (the
+/// lists [`drop_inapplicable_keys`] and validation use), for "did you mean" suggestions.
+pub(crate) fn controller_keys(kind: ControllerKind) -> Vec<&'static str> {
+    let mut keys = CONTROLLER_SHARED_KEYS.to_vec();
+    keys.extend_from_slice(controller_allowed(kind));
+    keys
 }
 
 /// The keys each controller kind takes besides `kind`, `level`, `higher_side`,
@@ -563,7 +580,7 @@ fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKi
             if c.finite("controller.alpha_star", a) && !(a > 0.0 && a <= 1.0) {
                 c.fail(
                     "controller.alpha_star",
-                    format!("must be in (0, 1], got {a}"),
+                    format!("must be in (0, 1], got {}", Echo(a)),
                 );
             }
         }
@@ -736,7 +753,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
 /// A number in messages: the one formatting of every message (six significant digits, plain
 /// when ordinary, scientific when huge or tiny, so `1e307` is not echoed as 308 digits nor a
 /// computed `0.0024500000000000004` as 17).
-pub(crate) use isotrack_core::numtext::Num;
+pub(crate) use isotrack_core::numtext::{Echo, EchoList, Num};
 
 /// The physical ranges of the keys that are not bounded by their meaning (README, "Scenario
 /// files"): wide enough for any robot or aircraft, narrow enough that positions, path lengths
@@ -778,7 +795,7 @@ fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
         if let Err(reason) = whole_steps(duration, dt) {
             c.fail(
                 "sim.duration_s",
-                format!("{} s {reason} of sim.dt_s = {} s", Num(duration), Num(dt)),
+                format!("{} s {reason} of sim.dt_s = {} s", Echo(duration), Echo(dt)),
             );
         }
     }
@@ -809,7 +826,10 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
         if !(d[0] < d[1] && d[2] < d[3]) {
             c.fail(
                 "field.domain_m",
-                format!("must be [x_min, x_max, y_min, y_max] with min < max, got {d:?}"),
+                format!(
+                    "must be [x_min, x_max, y_min, y_max] with min < max, got {}",
+                    EchoList(&d)
+                ),
             );
         }
     }
@@ -1002,7 +1022,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
             if v > ranges::MAX_SPEED_MPS {
                 c.fail(
                     "vehicle.speed_mps",
-                    format!("must be <= {} m/s, got {}", ranges::MAX_SPEED_MPS, Num(v)),
+                    format!("must be <= {} m/s, got {}", ranges::MAX_SPEED_MPS, Echo(v)),
                 );
             }
         }
@@ -1015,9 +1035,9 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
                     "vehicle.airspeed_mps",
                     format!(
                         "the Aerosonde model is valid for {}..{} m/s, got {}",
-                        Num(lo),
-                        Num(hi),
-                        Num(va)
+                        Echo(lo),
+                        Echo(hi),
+                        Echo(va)
                     ),
                 );
             }
@@ -1027,8 +1047,10 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
                 c.fail(
                     "vehicle.altitude_m",
                     format!(
-                        "must be above the {lo} m take-off zone and at most {hi} m, got {}",
-                        Num(h)
+                        "must be above the {} m take-off zone and at most {} m, got {}",
+                        Echo(lo),
+                        Echo(hi),
+                        Echo(h)
                     ),
                 );
             }
@@ -1038,7 +1060,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
             vd.trim_feedforward.get_or_insert(true);
             vd.ecen674_gains.get_or_insert(false);
             if dt > 0.02 {
-                c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {}", Num(dt)));
+                c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {}", Echo(dt)));
             }
         }
     }
@@ -1111,7 +1133,7 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
     if c.finite("sensor.dropout_probability", p) && !(0.0..1.0).contains(&p) {
         c.fail(
             "sensor.dropout_probability",
-            format!("must be in [0, 1), got {}", Num(p)),
+            format!("must be in [0, 1), got {}", Echo(p)),
         );
     }
     let drift = *sn.bias_drift_per_sqrt_s.get_or_insert(0.0);
@@ -1123,8 +1145,8 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
                 "sensor.range",
                 format!(
                     "must be [min, max] with min < max, got [{}, {}]",
-                    Num(lo),
-                    Num(hi)
+                    Echo(lo),
+                    Echo(hi)
                 ),
             );
         }
@@ -1138,8 +1160,8 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
             "sensor.delay_s",
             format!(
                 "{} s is longer than the run (sim.duration_s = {} s): no measurement would arrive",
-                Num(delay),
-                Num(duration_s)
+                Echo(delay),
+                Echo(duration_s)
             ),
         );
         return;
@@ -1168,7 +1190,7 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
     if c.finite("metrics.steady_state_fraction", frac) && !(frac > 0.0 && frac <= 1.0) {
         c.fail(
             "metrics.steady_state_fraction",
-            format!("must be in (0, 1], got {}", Num(frac)),
+            format!("must be in (0, 1], got {}", Echo(frac)),
         );
     }
     let level = f.controller.level.unwrap_or(0.0);
@@ -1188,8 +1210,8 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
                 "metrics.track_loss_band",
                 format!(
                     "must be >= metrics.convergence_tolerance = {}, got {}",
-                    Num(tol),
-                    Num(b)
+                    Echo(tol),
+                    Echo(b)
                 ),
             );
         }
@@ -1205,8 +1227,8 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
                 "metrics.convergence_min_dwell_s",
                 format!(
                     "must be in [0, sim.duration_s = {}] s, got {}",
-                    Num(duration),
-                    Num(dwell)
+                    Echo(duration),
+                    Echo(dwell)
                 ),
             );
         }
@@ -1238,7 +1260,7 @@ fn resolve_output(c: &mut Checker, f: &mut ScenarioFile) {
                     "output.record_rate_hz",
                     format!(
                         "{rows} trace rows over sim.duration_s = {} s is more than {}; lower the rate (0 turns the trace off)",
-                        Num(duration),
+                        Echo(duration),
                         ranges::MAX_TRACE_ROWS
                     ),
                 );

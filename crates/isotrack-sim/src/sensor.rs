@@ -13,6 +13,7 @@
 //! `e` needs `e = (1 - a)(r dt + e)`, `a = 1 - exp(-dt/tau)`; tested). With `dt << tau` the
 //! difference, `r dt / 2`, is small: 0.005 r at the default `dt = 0.01 s`.
 
+use isotrack_core::numtext::{Echo, NumDown};
 use isotrack_core::Measurement;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -65,7 +66,7 @@ impl Default for SensorConfig {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SensorError {
     /// The sample period is not a whole number (>= 1) of steps, or too many.
-    #[error("the sample period 1/{rate_hz} s {reason} of {dt_s} s")]
+    #[error("the sample period 1/{} s {reason} of {} s", Echo(*.rate_hz), Echo(*.dt_s))]
     RateNotMultiple {
         /// Requested rate, Hz.
         rate_hz: f64,
@@ -75,7 +76,7 @@ pub enum SensorError {
         reason: StepsError,
     },
     /// The delay is not a whole number of steps, or too many.
-    #[error("the delay {delay_s} s {reason} of {dt_s} s")]
+    #[error("the delay {} s {reason} of {} s", Echo(*.delay_s), Echo(*.dt_s))]
     DelayNotMultiple {
         /// Requested delay, s.
         delay_s: f64,
@@ -86,9 +87,11 @@ pub enum SensorError {
     },
     /// The delay holds more samples in flight than [`MAX_SAMPLES_IN_FLIGHT`].
     #[error(
-        "the delay {delay_s} s holds {in_flight} samples in flight at {rate_hz} Hz; at most {max} are allowed (delay <= {max_delay_s} s at this rate)",
-        max = MAX_SAMPLES_IN_FLIGHT,
-        max_delay_s = MAX_SAMPLES_IN_FLIGHT as f64 / rate_hz
+        "the delay {} s holds {in_flight} samples in flight at {} Hz; at most {max} are allowed (delay <= {} s at this rate)",
+        Echo(*.delay_s),
+        Echo(*.rate_hz),
+        NumDown(MAX_SAMPLES_IN_FLIGHT as f64 / *.rate_hz),
+        max = MAX_SAMPLES_IN_FLIGHT
     )]
     DelayTooLong {
         /// Requested delay, s.
@@ -99,7 +102,7 @@ pub enum SensorError {
         in_flight: u64,
     },
     /// A setting in field units outside [`SENSOR_VALUE_RANGE`] (`resolution` may also be 0).
-    #[error("{value:e} field units is outside [{lo:e}, {hi:e}]", lo = SENSOR_VALUE_RANGE.0, hi = SENSOR_VALUE_RANGE.1)]
+    #[error("{} field units is outside [{}, {}]", Echo(*.value), Echo(SENSOR_VALUE_RANGE.0), Echo(SENSOR_VALUE_RANGE.1))]
     OutOfRange {
         /// The setting: `resolution`, `noise_std` or `bias_drift_per_sqrt_s`.
         key: &'static str,

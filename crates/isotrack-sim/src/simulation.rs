@@ -5,6 +5,7 @@ use crate::sensor::{whole_steps, Sensor, StepsError};
 use crate::trace::{TraceRow, TraceSink};
 use isotrack_core::control::GroundTruth;
 use isotrack_core::math::Pose2;
+use isotrack_core::numtext::Echo;
 use isotrack_core::{IsolineController, Measurement, ScalarField, Vec2, Vehicle};
 use serde::Serialize;
 
@@ -57,7 +58,7 @@ pub struct StepPlan {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StepPlanError {
     /// Duration not a whole number of steps, or too many.
-    #[error("the duration {duration_s} s {reason} of {dt_s} s")]
+    #[error("the duration {} s {reason} of {} s", Echo(*.duration_s), Echo(*.dt_s))]
     DurationNotMultiple {
         /// Duration, s.
         duration_s: f64,
@@ -67,7 +68,7 @@ pub enum StepPlanError {
         reason: StepsError,
     },
     /// Recording period not a whole number (>= 1) of steps, or too many.
-    #[error("the recording period 1/{rate_hz} s {reason} of {dt_s} s")]
+    #[error("the recording period 1/{} s {reason} of {} s", Echo(*.rate_hz), Echo(*.dt_s))]
     RecordRateNotMultiple {
         /// Rate, Hz.
         rate_hz: f64,

@@ -66,6 +66,10 @@ pub struct LoadError {
     pub position: Option<FilePosition>,
     /// What is wrong.
     pub message: String,
+    /// The file itself could not be read (missing, not a regular file, no permission, beyond
+    /// the size limit), as opposed to what it holds: exit 66 rather than 65 (README, "Exit
+    /// codes").
+    pub unreadable: bool,
 }
 
 impl fmt::Display for LoadError {
@@ -95,6 +99,14 @@ impl LoadError {
             path: path.display().to_string(),
             position,
             message: message.into(),
+            unreadable: false,
+        }
+    }
+    /// The file could not be read at all (see [`LoadError::unreadable`]).
+    pub(crate) fn cannot_read(path: &Path, e: std::io::Error) -> Self {
+        Self {
+            unreadable: true,
+            ..Self::new(path, None, format!("cannot read: {e}"))
         }
     }
     pub(crate) fn grid(path: &Path, e: GridError) -> Self {
@@ -138,8 +150,9 @@ pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
 
 /// Reads a whole file of at most `max_bytes`, refusing what is not a regular file (a FIFO,
 /// `/dev/zero`, a directory) before reading a byte: such "files" never end, or end anywhere.
-/// The size is checked from the metadata and again while reading (a file that grows is cut off
-/// with an error, not read on).
+/// The size is checked from the metadata and again on the bytes actually read (a `/proc` file
+/// that declares 0 bytes, or a file that grows, is stopped with an error one byte past the
+/// limit, not read on).
 pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let f = open_regular(path)?;
@@ -159,6 +172,67 @@ pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
         return Err(too_big(bytes.len() as u64));
     }
     Ok(bytes)
+}
+
+/// A regular file read as a stream, at most `max_bytes` of it: a read past the limit is an
+/// error (`InvalidData`), never a silent cut. The limit counts the bytes actually read, not the
+/// size the file declares: a `/proc` file declares 0 bytes and can produce gigabytes
+/// (`/proc/self/pagemap`), and a file can grow while it is read.
+#[derive(Debug)]
+pub struct LimitedReader {
+    inner: std::fs::File,
+    left: u64,
+    max_bytes: u64,
+}
+
+impl LimitedReader {
+    /// The limit this reader enforces, bytes.
+    pub fn max_bytes(&self) -> u64 {
+        self.max_bytes
+    }
+}
+
+impl std::io::Read for LimitedReader {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        if self.left == 0 {
+            // At the limit: one more byte means the file is longer than allowed.
+            let mut probe = [0u8; 1];
+            return match self.inner.read(&mut probe)? {
+                0 => Ok(0),
+                _ => Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("more than the {} bytes this reader accepts", self.max_bytes),
+                )),
+            };
+        }
+        let n = buf
+            .len()
+            .min(usize::try_from(self.left).unwrap_or(usize::MAX));
+        let got = self.inner.read(&mut buf[..n])?;
+        self.left -= got as u64;
+        Ok(got)
+    }
+}
+
+/// Opens a regular file ([`open_regular`]) for streaming through a [`LimitedReader`] of
+/// `max_bytes`; a declared size beyond it is refused at once.
+pub fn open_limited(path: &Path, max_bytes: u64) -> std::io::Result<LimitedReader> {
+    let f = open_regular(path)?;
+    let len = f.metadata()?.len();
+    if len > max_bytes {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("{len} bytes is more than the {max_bytes} this reader accepts"),
+        ));
+    }
+    Ok(LimitedReader {
+        inner: f,
+        left: max_bytes,
+        max_bytes,
+    })
 }
 
 /// As [`read_limited`], as UTF-8 text.
@@ -306,17 +380,132 @@ pub fn parse_series_bytes(
     }
 }
 
-/// The format given, or the one the extension names.
+impl GridFormat {
+    /// The format's name as `field.format` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Csv => "csv",
+            Self::Npy => "npy",
+            Self::Asc => "asc",
+            Self::GeoTiff => "geotiff",
+            Self::NetCdf => "netcdf",
+        }
+    }
+
+    /// The binary format whose signature `head` (a file's first bytes) starts with: NetCDF-3
+    /// (`CDF` and version 1, 2 or 5), HDF5 (NetCDF-4), TIFF or BigTIFF (either byte order),
+    /// NumPy `.npy`. `None` for anything else (the text formats have no signature).
+    pub fn from_signature(head: &[u8]) -> Option<Self> {
+        const HDF5: &[u8] = b"\x89HDF\r\n\x1a\n";
+        let netcdf3 = head.len() >= 4 && head.starts_with(b"CDF") && matches!(head[3], 1 | 2 | 5);
+        if netcdf3 || head.starts_with(HDF5) {
+            Some(Self::NetCdf)
+        } else if [b"II*\0", b"MM\0*", b"II+\0", b"MM\0+"]
+            .iter()
+            .any(|m| head.starts_with(*m))
+        {
+            Some(Self::GeoTiff)
+        } else if head.starts_with(b"\x93NUMPY") {
+            Some(Self::Npy)
+        } else {
+            None
+        }
+    }
+
+    /// Whether the format is binary, with a signature [`GridFormat::from_signature`] knows.
+    fn has_signature(self) -> bool {
+        matches!(self, Self::Npy | Self::GeoTiff | Self::NetCdf)
+    }
+}
+
+/// The format of grid file `path` (README, `field.format`), one rule for a file and for a
+/// symbolic link to one (`data.nc -> /store/blob`, `x.csv -> y.nc`):
+///
+/// 1. the file's **content** first: when its first bytes are a binary format's signature
+///    (NetCDF-3, HDF5/NetCDF-4, TIFF/BigTIFF, `.npy`), that is its format, whatever the name;
+///    a `format` given (`field.format`) that says otherwise is an error naming both;
+/// 2. else the `format` given;
+/// 3. else the extension of the name as written (`csv`/`txt`, `asc`, ...), else the
+///    extension of the file a symbolic link resolves to;
+/// 4. a binary extension (`.nc`, `.npy`, `.tif`) on a file without its signature is an error
+///    saying so (not a parser's complaint about byte 0).
 fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, LoadError> {
-    format
-        .or_else(|| GridFormat::from_extension(path))
-        .ok_or_else(|| {
-            LoadError::new(
+    use std::io::Read;
+    let mut head = Vec::with_capacity(8);
+    open_regular(path)
+        .and_then(|f| f.take(8).read_to_end(&mut head))
+        .map_err(|e| LoadError::cannot_read(path, e))?;
+    let content = GridFormat::from_signature(&head);
+    match (format, content) {
+        (Some(given), Some(c)) if given != c => {
+            return Err(LoadError::new(
                 path,
                 None,
-                "cannot tell the format from the extension; give it (csv, npy, asc, geotiff, netcdf)",
-            )
-        })
+                format!(
+                    "field.format = \"{}\" but the file is {} (its first bytes are the {} signature): drop field.format or name the right file",
+                    given.name(),
+                    c.name(),
+                    c.name()
+                ),
+            ))
+        }
+        (_, Some(c)) => return Ok(c),
+        (Some(given), None) => return check_head(path, given, &head).map(|()| given),
+        (None, None) => {}
+    }
+    let by_name = GridFormat::from_extension(path).or_else(|| {
+        std::fs::canonicalize(path)
+            .ok()
+            .and_then(|t| GridFormat::from_extension(&t))
+    });
+    match by_name {
+        Some(f) if f.has_signature() => Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "named as {} but its first bytes are not a {} signature (the content decides the format of binary files): is the link or the name wrong?",
+                f.name(),
+                f.name()
+            ),
+        )),
+        Some(f) => check_head(path, f, &head).map(|()| f),
+        None => Err(LoadError::new(
+            path,
+            None,
+            "cannot tell the format from the content or the extension; give it (field.format = csv, npy, asc, geotiff, netcdf)",
+        )),
+    }
+}
+
+/// Refuses at once, from its first bytes, a file that cannot be `format`: a binary format
+/// without its signature, or a text format (CSV, ESRI ASCII) starting with a NUL byte (binary
+/// data, such as `/proc/self/pagemap`, which would otherwise be read up to the 4 GiB limit
+/// before failing).
+fn check_head(path: &Path, format: GridFormat, head: &[u8]) -> Result<(), LoadError> {
+    if format.has_signature() {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "not a {} file: its first bytes are not the {} signature",
+                format.name(),
+                format.name()
+            ),
+        ));
+    }
+    if head.contains(&0) {
+        return Err(LoadError::new(
+            path,
+            Some(FilePosition::Offset(
+                head.iter().position(|&b| b == 0).unwrap_or(0) as u64,
+            )),
+            format!(
+                "a NUL byte: binary data, not a {} grid (text)",
+                format.name()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Loads a grid file as a series of frames: every format gives one frame, except a 3-D `.npy`
@@ -332,7 +521,7 @@ pub fn load_series(
         GridFormat::NetCdf => netcdf::parse(path, variable),
         GridFormat::Npy => {
             let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
-                .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+                .map_err(|e| LoadError::cannot_read(path, e))?;
             npy::parse_series(path, &bytes)
         }
         _ => {
@@ -371,8 +560,8 @@ pub fn load_grid_variable(
     if format == GridFormat::NetCdf {
         return single_frame(path, load_series(path, Some(format), variable)?);
     }
-    let bytes = read_limited(path, MAX_GRID_FILE_BYTES)
-        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+    let bytes =
+        read_limited(path, MAX_GRID_FILE_BYTES).map_err(|e| LoadError::cannot_read(path, e))?;
     parse_grid(path, &bytes, format)
 }
 

@@ -70,7 +70,10 @@ fn regular(values: &[f64]) -> Result<(f64, f64), String> {
         if (v - (values[0] + k as f64 * step)).abs()
             > 1e-6 * step.abs().max(1e-12) * values.len() as f64
         {
-            return Err(format!("not regularly spaced (value {k} is {v})"));
+            return Err(format!(
+                "not regularly spaced (value {k} is {})",
+                isotrack_core::numtext::Echo(*v)
+            ));
         }
     }
     Ok((values[0], step))
@@ -140,7 +143,7 @@ pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries,
     // Read (size-limited by the caller) rather than mapped: the classic header is checked
     // before the reader sees it.
     let bytes = super::read_limited(path, super::MAX_GRID_FILE_BYTES)
-        .map_err(|e| LoadError::new(path, None, format!("cannot read: {e}")))?;
+        .map_err(|e| LoadError::cannot_read(path, e))?;
     parse_bytes(path, &bytes, variable)
 }
 

@@ -696,3 +696,136 @@ fn tiled_lzw_cut_short_is_an_error() {
         assert!(e.to_string().contains("tiled_lzw_f32.tif"), "{cut}: {e}");
     }
 }
+
+/// The same grid, bit for bit (no-data `NaN`s included), and the same georeference.
+fn assert_same(a: &LoadedGrid, b: &LoadedGrid) {
+    let bits = |g: &LoadedGrid| {
+        g.grid
+            .values()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(a), bits(b));
+    assert_eq!((a.grid.nx(), a.grid.ny()), (b.grid.nx(), b.grid.ny()));
+    assert_eq!(a.georeference, b.georeference);
+}
+
+/// Hostile review of issue 30: a symbolic link to a grid. The format comes from the file's
+/// signature first (NetCDF, HDF5, TIFF, npy), then `field.format`, then the extension of the
+/// name as written, then the link target's; a `field.format` that contradicts the signature is
+/// an error naming both, and a binary extension without its signature is refused from the
+/// first bytes.
+#[cfg(unix)]
+#[test]
+fn symlinked_grids_follow_their_content() {
+    use std::os::unix::fs::symlink;
+    let d = tempfile::tempdir().unwrap();
+    let nc = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/netcdf/h5netcdf_nc4_lonlat_contig_2d.nc");
+    let npy = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/volcano/volcano.npy");
+    let csv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/volcano/volcano.csv");
+    let want_nc = load_grid(&nc, None).unwrap();
+    let want_npy = load_grid(&npy, None).unwrap();
+    // `data.nc -> /store/blob`: a blob without an extension, read by its name's extension and
+    // confirmed by its content.
+    let blob = d.path().join("blob");
+    std::fs::copy(&nc, &blob).unwrap();
+    let link = d.path().join("data.nc");
+    symlink(&blob, &link).unwrap();
+    assert_same(&load_grid(&link, None).unwrap(), &want_nc);
+    // The blob itself has no extension: its signature says NetCDF.
+    assert_same(&load_grid(&blob, None).unwrap(), &want_nc);
+    // `x.csv -> y.nc` and `x.csv -> volcano.npy`: the content wins over the name.
+    let x = d.path().join("x.csv");
+    symlink(&nc, &x).unwrap();
+    assert_same(&load_grid(&x, None).unwrap(), &want_nc);
+    let xn = d.path().join("xn.csv");
+    symlink(&npy, &xn).unwrap();
+    assert_same(&load_grid(&xn, None).unwrap(), &want_npy);
+    // A format given that the content contradicts: an error naming both.
+    let e = load_grid(&x, Some(GridFormat::Csv)).unwrap_err();
+    assert!(
+        e.message
+            .contains("field.format = \"csv\" but the file is netcdf"),
+        "{e}"
+    );
+    // `latest -> volcano.csv`: no extension on the link, the target's (a text format).
+    let latest = d.path().join("latest");
+    symlink(&csv, &latest).unwrap();
+    assert_same(
+        &load_grid(&latest, None).unwrap(),
+        &load_grid(&csv, None).unwrap(),
+    );
+    // `data.nc -> volcano.csv`: a binary extension on text: refused from the first bytes.
+    let fake = d.path().join("fake.nc");
+    symlink(&csv, &fake).unwrap();
+    let e = load_grid(&fake, None).unwrap_err();
+    assert!(
+        e.message
+            .contains("named as netcdf but its first bytes are not a netcdf signature"),
+        "{e}"
+    );
+    let e = load_grid(&csv, Some(GridFormat::Npy)).unwrap_err();
+    assert!(
+        e.message
+            .contains("not a npy file: its first bytes are not the npy signature"),
+        "{e}"
+    );
+}
+
+#[test]
+fn signatures_name_their_formats() {
+    for (head, want) in [
+        (&b"CDF\x01\0\0\0\0"[..], Some(GridFormat::NetCdf)),
+        (b"CDF\x02", Some(GridFormat::NetCdf)),
+        (b"CDF\x05", Some(GridFormat::NetCdf)),
+        (b"CDF\x03", None),
+        (b"\x89HDF\r\n\x1a\n", Some(GridFormat::NetCdf)),
+        (b"II*\0", Some(GridFormat::GeoTiff)),
+        (b"MM\0*", Some(GridFormat::GeoTiff)),
+        (b"II+\0", Some(GridFormat::GeoTiff)),
+        (b"MM\0+", Some(GridFormat::GeoTiff)),
+        (b"\x93NUMPY\x01\0", Some(GridFormat::Npy)),
+        (b"1,2,3\n", None),
+        (b"", None),
+    ] {
+        assert_eq!(GridFormat::from_signature(head), want, "{head:?}");
+    }
+}
+
+/// Hostile review of issue 30: a `/proc` file declares 0 bytes and can produce gigabytes
+/// (`/proc/self/pagemap`, read as a CSV grid, once took 11 s and 4 GiB of memory before
+/// failing). Binary content is refused from its first bytes, and every streaming read stops
+/// one byte past its limit, counted on the bytes read.
+#[cfg(target_os = "linux")]
+#[test]
+fn proc_files_are_read_within_their_limit() {
+    use std::io::Read;
+    let pagemap = Path::new("/proc/self/pagemap");
+    if pagemap.exists() {
+        let t = std::time::Instant::now();
+        let e = load_grid(pagemap, Some(GridFormat::Csv)).unwrap_err();
+        assert!(e.message.contains("NUL byte"), "{e}");
+        assert!(t.elapsed().as_secs() < 2);
+    }
+    let maps = Path::new("/proc/self/maps");
+    if maps.exists() {
+        assert_eq!(std::fs::metadata(maps).unwrap().len(), 0);
+        // A limit below what it produces: an error, not a cut.
+        let e = read_limited(maps, 16).unwrap_err();
+        assert!(e.to_string().contains("more than the 16"), "{e}");
+        let mut r = open_limited(maps, 16).unwrap();
+        let mut buf = Vec::new();
+        let e = r.read_to_end(&mut buf).unwrap_err();
+        assert!(e.to_string().contains("more than the 16 bytes"), "{e}");
+        assert_eq!(buf.len(), 16);
+        // Within the limit it reads the whole file.
+        let mut all = Vec::new();
+        open_limited(maps, 1 << 30)
+            .unwrap()
+            .read_to_end(&mut all)
+            .unwrap();
+        assert!(all.len() > 16);
+    }
+}

@@ -31,9 +31,10 @@ pub mod sampled;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
-use crate::schema::{ControllerKind, DerivativeKindName, FieldKind};
+use crate::schema::{ControllerKind, DerivativeKindName, FieldKind, SearchKind};
 use crate::Scenario;
 use isotrack_core::math::Vec2;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::theory::{
     prop1_characteristic_polynomial, prop1_exact_local_condition, prop1_paper_conditions,
     prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m,
@@ -373,7 +374,8 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
                     }
                 }
                 None => Prop1Report::not_applicable(format!(
-                    "level {level} is not attained by the field (0 < level < i0 is needed)"
+                    "level {} is not attained by the field (0 < level < i0 is needed)",
+                    Echo(level)
                 )),
             }
         }
@@ -656,7 +658,8 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
     let Some(rho) = sampled::worst_radius(&base, &slopes) else {
         notes.push(format!(
-            "not computed: the delay {delay_s} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
+            "not computed: the delay {} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
+            Echo(delay_s),
             (delay_s / period_s).ceil(),
             sampled::MAX_DELAY_STATES
         ));
@@ -822,7 +825,7 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
     let p0 = start(s);
     let Some(region) = r.region else {
         notes.push(if r.tube.is_none() {
-            format!("no lattice cell has |F - s_d| <= {tube}: the level is not attained in the region")
+            format!("no lattice cell has |F - s_d| <= {}: the level is not attained in the region", Echo(tube))
         } else {
             "the start lies outside the field or the sampled region: the region where the bound is proved cannot be formed".to_string()
         });
@@ -831,7 +834,8 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
     };
     if r.tube.is_none() {
         notes.push(format!(
-            "no lattice cell has |F - s_d| <= {tube}: the level is not attained in the region"
+            "no lattice cell has |F - s_d| <= {}: the level is not attained in the region",
+            Echo(tube)
         ));
     }
     let Some(gamma3) = region.gamma3 else {
@@ -886,13 +890,17 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
     }
     if v * b.gamma1 <= c1 {
         notes.push(format!(
-            "v*gamma1 = {:.4} <= c1 = {c1}: somewhere between the start and the tube the sliding surface cannot be reached (decrease c1, or start nearer the isoline)",
-            v * b.gamma1
+            "v*gamma1 = {:.4} <= c1 = {}: somewhere between the start and the tube the sliding surface cannot be reached (decrease c1, or start nearer the isoline)",
+            v * b.gamma1,
+            Echo(c1)
         ));
     }
     if let Some(eb) = rep.error_bound {
         if eb > tube {
-            notes.push(format!("the bound {eb:.4} exceeds the tube {tube}: the gammas may not hold along the orbit"));
+            notes.push(format!(
+                "the bound {eb:.4} exceeds the tube {}: the gammas may not hold along the orbit",
+                Echo(tube)
+            ));
         }
     }
     if rep.conditions_hold && rep.initial_heading_in_sector == Some(false) {
@@ -927,7 +935,7 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
 }
 
 fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
-    let at = format!("T = {} s", sm.period_s);
+    let at = format!("T = {} s", Num(sm.period_s));
     let radius = |r: Option<f64>| {
         r.map_or_else(
             || "no equilibrium".to_string(),
@@ -1035,20 +1043,21 @@ fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
     let c = &s.file().sensor;
     let mut out = vec![];
     if let Some(q) = c.resolution.filter(|&q| q > 0.0) {
-        out.push(format!("sensor.resolution = {q} quantises the readings (not modelled: the loop can settle anywhere within a quantum, or cycle)"));
+        out.push(format!("sensor.resolution = {} quantises the readings (not modelled: the loop can settle anywhere within a quantum, or cycle)", Echo(q)));
     }
     if let Some(b) = c.bias_drift_per_sqrt_s.filter(|&b| b > 0.0) {
-        out.push(format!("sensor.bias_drift_per_sqrt_s = {b} lets the readings drift (not modelled: a bias moves the level tracked)"));
+        out.push(format!("sensor.bias_drift_per_sqrt_s = {} lets the readings drift (not modelled: a bias moves the level tracked)", Echo(b)));
     }
     if let Some([lo, hi]) = c.range {
         let covered = levels.is_some_and(|[a, b]| lo <= a && b <= hi);
         if !covered {
-            out.push(format!("sensor.range = [{lo}, {hi}] saturates the readings within the levels the robot crosses (not modelled)"));
+            out.push(format!("sensor.range = [{}, {}] saturates the readings within the levels the robot crosses (not modelled)", Echo(lo), Echo(hi)));
         }
     }
     if let Some(p) = c.dropout_probability.filter(|&p| p > 0.0) {
         out.push(format!(
-            "sensor.dropout_probability = {p} loses samples (not modelled)"
+            "sensor.dropout_probability = {} loses samples (not modelled)",
+            Echo(p)
         ));
     }
     out
@@ -1068,14 +1077,107 @@ fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
             == DerivativeKindName::BackwardDifference
     {
         w.push(format!(
-            "sensor noise (sensor.noise_std = {noise}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
+            "sensor noise (sensor.noise_std = {}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
+            Echo(noise),
             std::f64::consts::SQRT_2 * noise * rate
         ));
     }
     if let Some(line) = sampled_warning(sampled, rate) {
         w.push(line);
     }
+    if let Some(flat) = flat_start(s) {
+        w.push(flat.warning());
+    }
     w
+}
+
+/// How far below escaping a flat start is: [`flat_start`] warns when `v * |grad F|` near the
+/// start stays under this fraction of `c1 * tanh(|eps0| / c2)` (README, `controller.search`).
+pub const FLAT_START_FRACTION: f64 = 0.01;
+
+/// A start on a flat background, found by [`flat_start`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatStart {
+    /// The largest `v * |grad F|` near the start, over the times sampled, field units/s.
+    pub slope_term: f64,
+    /// `c1 * tanh(|eps0| / c2)` where `slope_term` was largest, field units/s.
+    pub level_term: f64,
+    /// The radius sampled round the start, m: two turning radii `v / omega0`.
+    pub radius_m: f64,
+}
+
+impl FlatStart {
+    fn warning(&self) -> String {
+        format!(
+            "flat background at the start: within {} m of it v*|grad F| is at most {} field units/s, under {} % of c1*tanh(|eps|/c2) = {}, so the law's error never changes sign and the vehicle circles where it starts for the whole run; fly a search first: controller.search = \"spiral\" or \"lawnmower\"",
+            Num(self.radius_m),
+            Num(self.slope_term),
+            FLAT_START_FRACTION * 100.0,
+            Num(self.level_term)
+        )
+    }
+}
+
+/// A start where the PI-like law can only circle (hostile review of issue 30; README,
+/// `controller.search`). The law's error is `e = eps' + c1*tanh(eps/c2)` with `eps' = grad F .
+/// velocity`, at most `v*|grad F|` in size; while `v*|grad F| < c1*tanh(|eps|/c2)` the error
+/// keeps its sign, `omega = kp*e + ki*sigma` keeps its sign, and the vehicle turns on a circle
+/// of radius about `v/omega0` (`omega0 = kp*c1*tanh(|eps0|/c2)`, capped by the turn-rate
+/// limit) without ever heading up the gradient. This is the local form of Prop. 2's
+/// `v*gamma1 > c1`. Flat: at the start and at 16 points on the circles of one and two turning
+/// radii round it, `v*|grad F|` stays under [`FLAT_START_FRACTION`] of `c1*tanh(|eps0|/c2)`
+/// at every one of the times 0, D/4, D/2, 3D/4 and D of the run's duration D (a puff plume
+/// that reaches the start later is not flat). Only for the PI-like law without a search
+/// (`controller.search = "none"`); `None` when the start is on the level, outside the field,
+/// or not flat.
+pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
+    let f = s.file();
+    if !is_pi_isoline(s) || f.controller.search.unwrap_or_default() != SearchKind::None {
+        return None;
+    }
+    let l = law(s);
+    let p0 = start(s);
+    let level = s.level();
+    let duration = f.sim.duration_s.unwrap_or(0.0);
+    let field = s.field();
+    let mut worst: Option<FlatStart> = None;
+    for k in 0..=4 {
+        let t = duration * f64::from(k) / 4.0;
+        let eps0 = field.value(t, p0)? - level;
+        let level_term = l.c1 * (eps0.abs() / l.c2).tanh();
+        let omega0 = (l.kp * level_term).min(s.max_turn_rate_radps().unwrap_or(f64::INFINITY));
+        if !(level_term > 0.0 && omega0 > 0.0 && l.v > 0.0) {
+            return None;
+        }
+        let r = l.v / omega0;
+        let mut g_max = field.gradient(t, p0).map_or(0.0, |g| g.norm());
+        for ring in [r, 2.0 * r] {
+            for j in 0..8 {
+                let a = std::f64::consts::TAU * f64::from(j) / 8.0;
+                let p = p0 + Vec2::from_angle(a) * ring;
+                if let Some(g) = field.gradient(t, p) {
+                    g_max = g_max.max(g.norm());
+                }
+            }
+        }
+        let slope_term = l.v * g_max;
+        // Not flat (a NaN slope counts as not flat).
+        let flat = slope_term < FLAT_START_FRACTION * level_term;
+        if !flat {
+            return None;
+        }
+        if worst
+            .as_ref()
+            .is_none_or(|w| slope_term / level_term > w.slope_term / w.level_term)
+        {
+            worst = Some(FlatStart {
+                slope_term,
+                level_term,
+                radius_m: 2.0 * r,
+            });
+        }
+    }
+    worst
 }
 
 /// `x` rounded to 5 significant digits towards `+inf` (`up`) or `-inf`, as text with those
@@ -1128,7 +1230,8 @@ pub fn nearest_kp_text(k: f64, intervals: &[[f64; 2]]) -> String {
 fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     if sm.applicable && sm.stable.is_none() {
         return Some(format!(
-            "the loop sampled at {rate} Hz was not checked: {}",
+            "the loop sampled at {} Hz was not checked: {}",
+            Echo(rate),
             sm.note
         ));
     }
@@ -1154,7 +1257,8 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
         format!("it is stable {}", fixes.join(", or "))
     };
     Some(format!(
-        "the loop sampled at {rate} Hz is unstable (spectral radius {}): {fix}",
+        "the loop sampled at {} Hz is unstable (spectral radius {}): {fix}",
+        Echo(rate),
         sm.spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
     ))
 }
@@ -1210,6 +1314,97 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points
+    /// and times [`flat_start`] samples), computed without its threshold.
+    fn start_ratio(s: &Scenario) -> f64 {
+        let f = s.file();
+        let l = law(s);
+        let p0 = start(s);
+        let duration = f.sim.duration_s.unwrap_or(0.0);
+        let mut worst: f64 = 0.0;
+        for k in 0..=4 {
+            let t = duration * f64::from(k) / 4.0;
+            let eps0 = s.field().value(t, p0).unwrap() - s.level();
+            let level_term = l.c1 * (eps0.abs() / l.c2).tanh();
+            let omega0 = (l.kp * level_term).min(s.max_turn_rate_radps().unwrap_or(f64::INFINITY));
+            let r = l.v / omega0;
+            let mut g = s.field().gradient(t, p0).map_or(0.0, |g| g.norm());
+            for ring in [r, 2.0 * r] {
+                for j in 0..8 {
+                    let a = std::f64::consts::TAU * f64::from(j) / 8.0;
+                    if let Some(gg) = s.field().gradient(t, p0 + Vec2::from_angle(a) * ring) {
+                        g = g.max(gg.norm());
+                    }
+                }
+            }
+            worst = worst.max(l.v * g / level_term);
+        }
+        worst
+    }
+
+    /// Hostile review of issue 30: a start far from a Gaussian plume (the law circles for the
+    /// whole run) is warned about, pointing to `controller.search`; with a search, or near the
+    /// plume, it is not; no bundled scenario is (each is more than 10 times the threshold
+    /// from it).
+    #[test]
+    fn a_flat_start_is_warned_about_and_the_bundled_ones_are_not() {
+        let plume = "[field]\nkind = \"gaussian_plumes\"\nbackground = 0.0\nsources = [{ center_m = [0.0, 0.0], amplitude = 10.0, sigma_m = [5.0, 5.0], rotation_rad = 0.0 }]\n[controller]\nlevel = 5.0\n[sim]\nduration_s = 100.0\n";
+        let far = crate::parse_scenario(plume, "<test>", &["initial.x_m=60.0".into()]).unwrap();
+        let flat = flat_start(&far).expect("60 m from a 5 m plume is flat");
+        // exp(-60^2/50) = 5.4e-32: the slope term is nothing next to c1*tanh(5) = 0.19998.
+        assert!(
+            (flat.level_term - 0.2 * 5f64.tanh()).abs() < 1e-12,
+            "{flat:?}"
+        );
+        assert!(flat.slope_term < 1e-25, "{flat:?}");
+        let w = warnings(&far);
+        assert!(
+            w.iter()
+                .any(|w| w.starts_with("flat background at the start")
+                    && w.contains("controller.search")),
+            "{w:?}"
+        );
+        assert!(check(&far, None)
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("flat background")));
+        // The run indeed circles: it ends within two turning radii of the start.
+        let r = far.run(&mut isotrack_sim::NoTrace);
+        let end = r.end_position_m;
+        assert!(
+            (Vec2::new(end[0], end[1]) - Vec2::new(60.0, 0.0)).norm() <= flat.radius_m,
+            "{end:?} {flat:?}"
+        );
+        // With a search, or started 5 m from the centre, no warning.
+        let searching = crate::parse_scenario(
+            plume,
+            "<test>",
+            &["initial.x_m=60.0".into(), "controller.search=spiral".into()],
+        )
+        .unwrap();
+        assert_eq!(flat_start(&searching), None);
+        let near = crate::parse_scenario(plume, "<test>", &["initial.x_m=5.0".into()]).unwrap();
+        assert_eq!(flat_start(&near), None);
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios");
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let s = crate::load_scenario(Some(&p), &[]).unwrap();
+            if !is_pi_isoline(&s)
+                || s.file().controller.search.unwrap_or_default() != SearchKind::None
+            {
+                continue;
+            }
+            let ratio = start_ratio(&s);
+            eprintln!("{}: ratio {ratio}", p.display());
+            assert!(
+                ratio > 10.0 * FLAT_START_FRACTION,
+                "{}: {ratio}",
+                p.display()
+            );
+            assert_eq!(flat_start(&s), None, "{}", p.display());
+        }
+    }
 
     /// The slope range: from the 5th percentile (index `(n - 1) * 5 / 100` of the sorted finite
     /// positive slopes) to the largest; none without a positive slope.

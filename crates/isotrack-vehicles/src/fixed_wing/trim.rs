@@ -2,6 +2,7 @@
 
 use super::dynamics::{derivatives, Deltas, State12, WindSample};
 use super::params::Aerosonde;
+use isotrack_core::numtext::Echo;
 
 /// A trim condition.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,17 +25,17 @@ pub struct Trim {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TrimError {
     /// Newton's method did not converge.
-    #[error("no trim found at {0} m/s (Newton's method did not converge)")]
+    #[error("no trim found at {} m/s (Newton's method did not converge)", Echo(*.0))]
     NoConvergence(f64),
     /// Bad airspeed.
-    #[error("airspeed must be finite and > 0, got {0}")]
+    #[error("airspeed must be finite and > 0, got {}", Echo(*.0))]
     BadAirspeed(f64),
     /// Outside [`AIRSPEED_RANGE_MPS`].
-    #[error("the Aerosonde model is valid for {lo}..{hi} m/s, got {0}", lo = AIRSPEED_RANGE_MPS.0, hi = AIRSPEED_RANGE_MPS.1)]
+    #[error("the Aerosonde model is valid for {lo}..{hi} m/s, got {}", Echo(*.0), lo = AIRSPEED_RANGE_MPS.0, hi = AIRSPEED_RANGE_MPS.1)]
     OutOfRange(f64),
     /// The trim needs an input beyond its actuator's limit, or an angle of attack past the
     /// model's stall blending.
-    #[error("no feasible trim at {airspeed_mps} m/s: {what} = {value:.4} is beyond {limit}")]
+    #[error("no feasible trim at {} m/s: {what} = {value:.4} is beyond {limit}", Echo(*.airspeed_mps))]
     Infeasible {
         /// Airspeed, m/s.
         airspeed_mps: f64,
