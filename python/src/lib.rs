@@ -360,8 +360,14 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
     }
     // A numpy integer (`np.int64`, `np.uint64`, ...) is not a Python int: taken exactly through
     // `operator.index`, never through a float (which rounds past 2**53).
-    if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
-        let exact = v.py().import("operator")?.call_method1("index", (v,))?;
+    // A numpy array has `__index__` but refuses it unless it is a 0-d integer array: then it is
+    // no integer, and is read as a float below (or refused, naming the key).
+    let exact = if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
+        v.py().import("operator")?.call_method1("index", (v,)).ok()
+    } else {
+        None
+    };
+    if let Some(exact) = exact {
         return match exact.extract::<i64>() {
             Ok(i) => Ok(toml::Value::Integer(i)),
             Err(_) => Err(bad(format!(

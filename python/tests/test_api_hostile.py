@@ -136,7 +136,7 @@ def test_nan_first_command_keeps_start_row():
 # 10. compare names exactly a law; benchmark(controllers=[]) refused.
 @pytest.mark.parametrize("bad", ["pi_isoline\n", " pi_isoline", "pi_isoline "])
 def test_compare_refuses_names_with_blanks(bad):
-    with pytest.raises(ValueError, match="not a built-in law"):
+    with pytest.raises(ValueError, match="not exactly a built-in law"):
         isotrack.compare(short(), controllers=[bad])
 
 
@@ -326,3 +326,11 @@ def test_set_echoes_floats_shortest():
     for v in (0.1, 1e16, 2.5e-7, 3.0, 10.0):
         sc = isotrack.Scenario.from_toml(short().set("controller.kp", v).to_toml())
         assert sc == short().set("controller.kp", v)
+
+
+def test_set_arrays_inside_lists_name_the_key():
+    # An array that is not 0-d is refused naming the key (numpy's TypeError before).
+    with pytest.raises(isotrack.ScenarioError, match="controller.kp"):
+        short().set("controller.kp", np.array([3.0, 4.0]))
+    with pytest.raises(isotrack.ScenarioError, match="sim.seed"):
+        short().set("sim.seed", [np.array([1, 2])])

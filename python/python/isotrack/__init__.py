@@ -848,7 +848,9 @@ def compare(
         if k not in known:
             # Exactly a law's name: " pi_isoline" would be a dict key and an out/ directory
             # name with a blank in it.
-            raise ValueError(f"controllers: {k!r:.80} is not a built-in law (one of {', '.join(known)})")
+            raise ValueError(
+                f"unknown controller {k!r:.80}: not exactly a built-in law's name (known: {', '.join(known)})"
+            )
         if k in seen:
             raise ValueError(f"controllers names {k!r:.80} twice: each law is flown once")
         seen.add(k)
