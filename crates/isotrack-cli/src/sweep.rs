@@ -723,7 +723,7 @@ pub fn lock_output_dir(dir: &Path) -> Result<std::fs::File, Failure> {
         Err(std::fs::TryLockError::WouldBlock) => Err(fail(
             exit::CANTCREAT,
             format!(
-                "{}: another isotrack sweep or merge (or benchmark) is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
+                "{}: another isotrack sweep or merge is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
                 dir.display()
             ),
         )),
