@@ -145,3 +145,19 @@ pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::md_cell;
+
+    /// Each character that would break a Markdown table cell or inject HTML, escaped; the rest
+    /// as written.
+    #[test]
+    fn markdown_cells_are_escaped() {
+        assert_eq!(md_cell("a|b"), "a\\|b");
+        assert_eq!(md_cell("<!--<script>"), "&lt;!--&lt;script>");
+        assert_eq!(md_cell("two\nlines\r\t"), "two lines  ");
+        assert_eq!(md_cell("R&D"), "R&amp;D");
+        assert_eq!(md_cell("circular field, 10 Hz"), "circular field, 10 Hz");
+    }
+}
