@@ -3,7 +3,6 @@
 
 use crate::guard::interruptible;
 use crate::{PyScenario, ScenarioErrorPy};
-use isotrack_bench::leaderboard::write_files;
 use isotrack_bench::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_core::{IsolineController, Measurement};
 use isotrack_scenario::Scenario;
@@ -76,7 +75,7 @@ impl IsolineController for BenchController {
         Python::attach(|py| {
             match obj
                 .call_method1(py, "update", (m.t_s, m.value))
-                .and_then(|r| r.extract::<f64>(py))
+                .and_then(|r| crate::command_value(r.bind(py)))
             {
                 Ok(w) => {
                     self.obj = Some(obj);
@@ -96,7 +95,8 @@ impl IsolineController for BenchController {
 /// (suite, controllers, per-task scores, runs and pictures, overall ranking); with `out`, the
 /// leaderboard files and `index.html` written there as `isotrack benchmark` writes them.
 #[pyfunction]
-#[pyo3(signature = (factory, name, suite_path, controllers=None, tune=false, out=None))]
+#[pyo3(signature = (factory, name, suite_path, controllers=None, tune=false, out=None, resume=false))]
+#[allow(clippy::too_many_arguments)]
 pub fn benchmark_json(
     py: Python<'_>,
     factory: Py<PyAny>,
@@ -105,6 +105,7 @@ pub fn benchmark_json(
     controllers: Option<Vec<String>>,
     tune: bool,
     out: Option<&str>,
+    resume: bool,
 ) -> PyResult<String> {
     check_name(name)?;
     let path = Path::new(suite_path);
@@ -114,6 +115,12 @@ pub fn benchmark_json(
         )));
     }
     let suite = Suite::load(path).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
+    // As `isotrack benchmark --out`: an existing benchmark refused unless `resume`, the
+    // directory locked while this writes it.
+    let _lock = out
+        .map(|d| isotrack_cli::bench::open_out_dir(Path::new(d), resume))
+        .transpose()
+        .map_err(crate::tools::failure)?;
     let errors: FirstError = Arc::new(Mutex::new(None));
     let cancel = Arc::new(AtomicBool::new(false));
     let mut registry = Registry::builtin();
@@ -130,7 +137,7 @@ pub fn benchmark_json(
     let opts = Options {
         controllers,
         tune,
-        resume_from: None,
+        resume_from: out.filter(|_| resume).map(std::path::PathBuf::from),
         cancel: Some(cancel.clone()),
     };
     let result = interruptible(py, &cancel, || {
@@ -144,13 +151,8 @@ pub fn benchmark_json(
         return Err(e);
     }
     if let Some(dir) = out {
-        let dir = Path::new(dir);
-        write_files(&result, dir).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?;
-        std::fs::write(
-            dir.join("index.html"),
-            isotrack_html::benchmark_page(&result),
-        )
-        .map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+        isotrack_cli::bench::write_outputs(&suite, path, &result, Path::new(dir), tune)
+            .map_err(crate::tools::failure)?;
     }
     serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
 }

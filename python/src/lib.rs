@@ -82,7 +82,7 @@ impl PyScenario {
     fn set(&self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
         no_panic(|| {
             check_key(key)?;
-            let literal = toml_value(key, value, 0)?.to_string();
+            let literal = toml_literal(&toml_value(key, value, 0)?);
             let inner = self
                 .inner
                 .derive(&[format!("{key}={literal}")], &self.origin)
@@ -143,7 +143,7 @@ impl PyScenario {
         if let Some(h) = tube_halfwidth {
             if !(h.is_finite() && h > 0.0) {
                 return Err(PyValueError::new_err(format!(
-                    "tube_halfwidth must be a finite number > 0 (field units), got {h}"
+                    "tube_halfwidth must be a finite number > 0 (field units), got {h:?}"
                 )));
             }
         }
@@ -167,13 +167,16 @@ impl PyScenario {
         let scenario = match record_rate_hz {
             Some(r) if !r.is_finite() => {
                 return Err(ScenarioErrorPy::new_err(format!(
-                    "`output.record_rate_hz`: {r} is not a finite number"
+                    "`output.record_rate_hz`: {r:?} is not a finite number"
                 )))
             }
             Some(r) => self
                 .inner
                 .derive(
-                    &[format!("output.record_rate_hz={}", toml::Value::Float(r))],
+                    &[format!(
+                        "output.record_rate_hz={}",
+                        toml_literal(&toml::Value::Float(r))
+                    )],
                     &self.origin,
                 )
                 .map_err(scenario_err)?,
@@ -231,7 +234,7 @@ impl PyScenario {
         let duration = self.inner.file().sim.duration_s.unwrap_or(600.0);
         if !(0.0..=duration).contains(&t) {
             return Err(PyValueError::new_err(format!(
-                "t = {t} s is outside the run: 0 <= t <= sim.duration_s = {duration} s"
+                "t = {t:?} s is outside the run: 0 <= t <= sim.duration_s = {duration:?} s"
             )));
         }
         let (x, y) = (x.as_slice()?, y.as_slice()?);
@@ -299,6 +302,20 @@ fn check_key(key: &str) -> PyResult<()> {
     Ok(())
 }
 
+/// A value as a TOML literal for `--set`, its floats in the shortest form that reads back
+/// exactly (`1e300`, not the 301 digits the `toml` crate writes, which every error message
+/// would echo): Rust's `{:?}` of a finite `f64`, which TOML reads (`1e300`, `0.1`, `10.0`).
+fn toml_literal(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) if f.is_finite() => format!("{f:?}"),
+        toml::Value::Array(items) => {
+            let parts: Vec<String> = items.iter().map(toml_literal).collect();
+            format!("[{}]", parts.join(", "))
+        }
+        other => other.to_string(),
+    }
+}
+
 /// A value's `repr` for a message, clipped (a million-element list once made a megabyte error),
 /// or its type when it has no `repr` (an int past Python's digit limit).
 fn shown(v: &Bound<'_, PyAny>) -> String {
@@ -343,8 +360,14 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
     }
     // A numpy integer (`np.int64`, `np.uint64`, ...) is not a Python int: taken exactly through
     // `operator.index`, never through a float (which rounds past 2**53).
-    if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
-        let exact = v.py().import("operator")?.call_method1("index", (v,))?;
+    // A numpy array has `__index__` but refuses it unless it is a 0-d integer array: then it is
+    // no integer, and is read as a float below (or refused, naming the key).
+    let exact = if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
+        v.py().import("operator")?.call_method1("index", (v,)).ok()
+    } else {
+        None
+    };
+    if let Some(exact) = exact {
         return match exact.extract::<i64>() {
             Ok(i) => Ok(toml::Value::Integer(i)),
             Err(_) => Err(bad(format!(
@@ -438,7 +461,7 @@ impl IsolineController for PyController {
             match self
                 .obj
                 .call_method1(py, "update", (m.t_s, m.value))
-                .and_then(|r| r.extract::<f64>(py))
+                .and_then(|r| command_value(r.bind(py)))
             {
                 Ok(w) => match self.max_turn_rate_radps {
                     // NaN passes (and ends the run as `diverged`).
@@ -453,6 +476,22 @@ impl IsolineController for PyController {
         })
     }
     fn reset(&mut self) {}
+}
+
+/// A controller's `update` answer as a turn rate (rad/s): a real number, never a bool (`True`
+/// would fly 1 rad/s; every numeric argument of the package refuses bools too).
+pub(crate) fn command_value(r: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let is_bool = r.is_instance_of::<pyo3::types::PyBool>()
+        || r.get_type()
+            .fully_qualified_name()
+            .is_ok_and(|n| n == "numpy.bool" || n == "numpy.bool_");
+    if is_bool {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "controller.update() must return a turn rate (a number, rad/s), got {} (a bool)",
+            shown(r)
+        )));
+    }
+    r.extract::<f64>()
 }
 
 /// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
@@ -497,15 +536,18 @@ fn sweep_cells(
         py,
         &cancel,
         || {
-            isotrack_cli::sweep::sweep_in_memory(
-                text,
-                Path::new(name),
-                threads,
-                progress
-                    .is_some()
-                    .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
-                &cancel,
-            )
+            // Nothing printed (the threads cap's note is Python's warning, see `sweep`).
+            isotrack_cli::console::quietly(|| {
+                isotrack_cli::sweep::sweep_in_memory(
+                    text,
+                    Path::new(name),
+                    threads,
+                    progress
+                        .is_some()
+                        .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
+                    &cancel,
+                )
+            })
         },
         &mut tick,
     )?

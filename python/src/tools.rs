@@ -16,7 +16,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// A command-line failure as the Python exception of its exit code (README, "Exit codes").
-fn failure(f: Failure) -> PyErr {
+pub(crate) fn failure(f: Failure) -> PyErr {
     match f.code {
         isotrack_cli::exit::USAGE => PyValueError::new_err(f.message),
         isotrack_cli::exit::DATAERR => ScenarioErrorPy::new_err(f.message),
@@ -155,7 +155,7 @@ pub fn plot(
         },
     };
     crate::guard::no_panic(|| {
-        py.detach(|| isotrack_cli::figures::plot(&args))
+        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::figures::plot(&args)))
             .map_err(failure)
     })
 }
@@ -170,7 +170,7 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
     }
     let args = ReportArgs { runs, out };
     crate::guard::no_panic(|| {
-        py.detach(|| isotrack_cli::bench::report(&args))
+        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::bench::report(&args)))
             .map_err(failure)
     })
 }

@@ -24,18 +24,36 @@ pub fn leaderboard_csv(r: &BenchResult) -> String {
     s
 }
 
+/// Text as one Markdown table cell, shown as written: `|` escaped (`\|`, it would end the
+/// cell), `<` and `&` as HTML entities (`<!--` would hide the rest of the table in a renderer,
+/// `<script>` run), a line break or any other control character as a space (it would end the
+/// row). Every Markdown table isotrack writes puts its text through this one function.
+pub fn md_cell(text: &str) -> String {
+    let mut s = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '|' => s.push_str("\\|"),
+            '<' => s.push_str("&lt;"),
+            '&' => s.push_str("&amp;"),
+            c if c.is_control() => s.push(' '),
+            c => s.push(c),
+        }
+    }
+    s
+}
+
 /// The leaderboard as a Markdown table (ranked), and a table of the tasks.
 pub fn leaderboard_md(r: &BenchResult) -> String {
     let mut s = format!(
         "| rank | controller | overall |{}\n|---|---|---|{}\n",
         r.tasks
             .iter()
-            .map(|t| format!(" {} |", t.id))
+            .map(|t| format!(" {} |", md_cell(&t.id)))
             .collect::<String>(),
         "---|".repeat(r.tasks.len())
     );
     for (rank, (c, overall)) in r.overall.iter().enumerate() {
-        let _ = write!(s, "| {} | {} | **{:.1}** |", rank + 1, c, overall);
+        let _ = write!(s, "| {} | {} | **{:.1}** |", rank + 1, md_cell(c), overall);
         for t in &r.tasks {
             let v = t.scores.iter().find(|(n, _)| n == c).map_or(0.0, |x| x.1);
             let _ = write!(s, " {v:.1} |");
@@ -44,7 +62,7 @@ pub fn leaderboard_md(r: &BenchResult) -> String {
     }
     s.push_str("\n| task | what |\n|---|---|\n");
     for t in &r.tasks {
-        let _ = writeln!(s, "| {} | {} |", t.id, t.title.replace('|', "\\|"));
+        let _ = writeln!(s, "| {} | {} |", md_cell(&t.id), md_cell(&t.title));
     }
     s
 }
@@ -126,4 +144,20 @@ pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
         write(&json, &serde_json::to_string(t).unwrap_or_default())?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::md_cell;
+
+    /// Each character that would break a Markdown table cell or inject HTML, escaped; the rest
+    /// as written.
+    #[test]
+    fn markdown_cells_are_escaped() {
+        assert_eq!(md_cell("a|b"), "a\\|b");
+        assert_eq!(md_cell("<!--<script>"), "&lt;!--&lt;script>");
+        assert_eq!(md_cell("two\nlines\r\t"), "two lines  ");
+        assert_eq!(md_cell("R&D"), "R&amp;D");
+        assert_eq!(md_cell("circular field, 10 Hz"), "circular field, 10 Hz");
+    }
 }

@@ -69,20 +69,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         )
     })?;
     let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
-    // One writer per directory, as for `sweep` and `merge`: held to the end of the command
-    // (dropped on every return), released by the OS however the process ends.
-    let _lock = crate::sweep::lock_output_dir(&a.out)?;
-    if !a.resume && a.out.join("leaderboard.csv").exists() {
-        return Err(fail(
-            exit::CANTCREAT,
-            format!(
-                "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
-                a.out.display()
-            ),
-        ));
-    }
+    let _lock = open_out_dir(&a.out, a.resume)?;
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
@@ -102,9 +89,53 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let result = pool
         .install(|| run_benchmark(&suite, &registry, &opts, &progress))
         .map_err(bench_failure)?;
-    write_files(&result, &a.out).map_err(bench_failure)?;
-    let html = a.out.join("index.html");
-    std::fs::write(&html, isotrack_html::benchmark_page(&result))
+    write_outputs(&suite, &path, &result, &a.out, a.tune)?;
+    out!("{}", leaderboard_md(&result));
+    errln!(
+        "{} tasks in {:.1} s: {}",
+        result.tasks.len(),
+        started.elapsed().as_secs_f64(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// Makes benchmark output directory `out` ready: refuses one that already holds a benchmark
+/// (`leaderboard.csv`) unless `resume`, creates it, and takes its operating-system lock
+/// ([`crate::sweep::lock_output_dir`], held while the returned file lives): a second benchmark
+/// writing the same directory fails instead of overwriting it.
+pub fn open_out_dir(out: &Path, resume: bool) -> Result<std::fs::File, Failure> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", out.display())))?;
+    // One writer per directory, as for `sweep` and `merge`: the lock is taken before the
+    // directory is looked at, held to the end of the command by the caller, and released by the
+    // OS however the process ends.
+    let lock = crate::sweep::lock_output_dir(out)?;
+    if !resume && out.join("leaderboard.csv").exists() {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
+                out.display()
+            ),
+        ));
+    }
+    Ok(lock)
+}
+
+/// Writes a finished benchmark into `out`: the leaderboard files, `index.html` and
+/// `suite.toml` (the suite `path` as run, with the gains each task's scores used; `tune`: they
+/// were tuned afresh).
+pub fn write_outputs(
+    suite: &Suite,
+    path: &Path,
+    result: &isotrack_bench::BenchResult,
+    out: &Path,
+    tune: bool,
+) -> Result<(), Failure> {
+    write_files(result, out).map_err(bench_failure)?;
+    let html = out.join("index.html");
+    std::fs::write(&html, isotrack_html::benchmark_page(result))
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
     // The suite as run: the gains every built-in law ran with recorded per task.
     let mut as_run = suite.clone();
@@ -119,18 +150,11 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         "The suite as run by isotrack {} ({}): the tuned gains of each task are the ones its\nscores used{}.",
         env!("CARGO_PKG_VERSION"),
         path.display(),
-        if a.tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
+        if tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
     );
-    let suite_out = a.out.join("suite.toml");
+    let suite_out = out.join("suite.toml");
     std::fs::write(&suite_out, as_run.to_toml(&header))
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
-    out!("{}", leaderboard_md(&result));
-    errln!(
-        "{} tasks in {:.1} s: {}",
-        result.tasks.len(),
-        started.elapsed().as_secs_f64(),
-        a.out.display()
-    );
     Ok(())
 }
 

@@ -43,7 +43,30 @@ enum StreamState {
 static STDOUT: Mutex<StreamState> = Mutex::new(StreamState::Open);
 static STDERR: Mutex<StreamState> = Mutex::new(StreamState::Open);
 
+std::thread_local! {
+    /// Set while [`quietly`] runs a command's function on this thread: nothing is printed.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with everything it would print on this thread dropped: the library callers' way
+/// (the Python package's `plot`, `report`, `sweep`), which return what they wrote instead of
+/// printing "wrote ..." or notes into a user's program.
+pub fn quietly<R>(f: impl FnOnce() -> R) -> R {
+    let before = QUIET.with(|q| q.replace(true));
+    struct Restore(bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            QUIET.with(|q| q.set(self.0));
+        }
+    }
+    let _restore = Restore(before);
+    f()
+}
+
 fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<'_>, escape: bool) {
+    if QUIET.with(|q| q.get()) {
+        return;
+    }
     let mut st = state.lock().unwrap_or_else(|p| p.into_inner());
     if *st != StreamState::Open {
         return;

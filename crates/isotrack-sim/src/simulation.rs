@@ -430,6 +430,7 @@ impl<X: Clone> Episode<X> {
                             Outcome::Diverged,
                             format!("non-finite turn-rate command at t = {t} s"),
                         );
+                        self.record_start(t, pose, s, vehicle, sink);
                         break;
                     }
                     Some(w) => self.omega = w,
@@ -462,6 +463,7 @@ impl<X: Clone> Episode<X> {
                 Outcome::Diverged,
                 format!("non-finite turn-rate command at t = {t} s"),
             );
+            self.record_start(t, pose, s, vehicle, sink);
             return;
         }
         self.omega = omega_radps;
@@ -523,6 +525,31 @@ impl<X: Clone> Episode<X> {
         self.metrics.integrate_command(self.omega);
         vehicle.step(&mut self.x, self.omega, self.plan.dt_s);
         self.k += 1;
+    }
+
+    /// A run that ends at its very first sample (a non-finite first command) still has its
+    /// start in the trace: the vehicle where it was, the field value, the error, the command
+    /// held before the sample (the non-finite one never flew), so that a trace is never empty.
+    fn record_start<V, S>(&mut self, t: f64, pose: Pose2, s: f64, vehicle: &V, sink: &mut S)
+    where
+        V: Vehicle<State = X>,
+        S: TraceSink + ?Sized,
+    {
+        if self.k != 0 || self.plan.record_every == 0 || self.last_recorded_step.is_some() {
+            return;
+        }
+        sink.record(&TraceRow {
+            t_s: t,
+            x_m: pose.position.x,
+            y_m: pose.position.y,
+            heading_rad: pose.heading_rad,
+            s,
+            error: s - self.plan.level,
+            omega_radps: self.omega,
+            s_measured: self.s_measured,
+            telemetry: vehicle.telemetry(&self.x),
+        });
+        self.last_recorded_step = Some(0);
     }
 
     fn end(&mut self, outcome: Outcome, detail: String) {

@@ -238,6 +238,23 @@ fn leaving_the_field_ends_the_run_at_the_last_valid_step() {
     assert!(rows.is_empty());
 }
 
+/// A non-finite first command (t = 0) ends the run before any step, but the trace still holds
+/// the start: the vehicle at x0, the field's value there, the error from the level (0.5), the
+/// command held before any sample (0), the measured value; without a trace, no row.
+#[test]
+fn a_run_diverging_at_its_first_sample_keeps_its_start_row() {
+    let (r, rows, seen) = run(f64::INFINITY, 0.25, 10.0, 10.0, |_, _| f64::NAN);
+    assert_eq!((r.outcome, r.steps), (Outcome::Diverged, 0));
+    assert_eq!(seen.len(), 1);
+    assert_eq!(rows.len(), 1);
+    let row = &rows[0];
+    assert_eq!((row.t_s, row.x_m, row.omega_radps), (0.0, 0.25, 0.0));
+    assert_eq!(row.error, row.s - 0.5);
+    assert_eq!(row.s_measured, Some(seen[0].1));
+    let (_, rows, _) = run(f64::INFINITY, 0.25, 10.0, 0.0, |_, _| f64::NAN);
+    assert!(rows.is_empty());
+}
+
 /// A non-finite command ends the run at its sample (`diverged`, the step before is the last
 /// valid one); so does a non-finite vehicle state, one step later.
 #[test]

@@ -145,6 +145,37 @@ def _frozen(a: Any) -> np.ndarray:
     return a.view()
 
 
+def _controller_class(controller: Any) -> str:
+    """A Python controller's class, ``module.QualName``, on one line (for summary.json)."""
+    cls = type(controller)
+    name = f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', cls.__name__)}"
+    return " ".join(name.split())[:200]
+
+
+def _python_summary(summary_json: str, name: str) -> str:
+    """``summary.json`` of a run flown by a Python controller: ``controller`` (top level) and
+    ``scenario.controller`` say ``kind = "python"`` and its class, not the scenario's built-in
+    law (which did not fly; its level and turn-rate limit did apply and are kept)."""
+    s = json.loads(summary_json)
+    flown = {"kind": "python", "class": name}
+    scenario = s.get("scenario")
+    if isinstance(scenario, dict):
+        law = scenario.get("controller") or {}
+        kept = {k: law[k] for k in ("level", "max_turn_rate_radps") if k in law}
+        scenario["controller"] = {**flown, **kept}
+    s["controller"] = flown
+    return json.dumps(s, indent=2, allow_nan=False)
+
+
+def _python_controller_note(name: str) -> str:
+    """The comment that heads ``scenario.toml`` of a run a Python controller flew."""
+    return (
+        f"# This run was flown by a Python controller ({name}), not by the [controller] law below\n"
+        "# (its level and turn-rate limit applied): `isotrack run` on this file flies that built-in\n"
+        "# law instead and cannot replay this run without the Python controller.\n"
+    )
+
+
 class Run:
     """A finished run.
 
@@ -164,15 +195,27 @@ class Run:
     ):
         if scenario is not None:
             _check_scenario("scenario", scenario)
-        text = _summary_json if _summary_json is not None else json.dumps(summary, indent=2)
+        try:
+            # Never the invalid JSON tokens NaN or Infinity.
+            text = _summary_json if _summary_json is not None else json.dumps(summary, indent=2, allow_nan=False)
+        except ValueError as e:
+            raise ValueError(f"summary: {e} (summary.json holds null for a non-finite number)") from None
         # Copies: the caller's arrays stay theirs (and writeable).
         self._init(text, {str(k): np.array(v, dtype=np.float64) for k, v in dict(trace).items()}, scenario)
+        # Made by hand, not by a simulation: :meth:`save` refuses it (a run directory is what
+        # the engine flew, never a forgery).
+        self._simulated = False
 
     @classmethod
-    def _from_native(cls, summary_json: str, trace: Dict[str, np.ndarray], scenario: "Scenario") -> "Run":
-        """A run from the engine's answer (its arrays taken, not copied)."""
+    def _from_native(
+        cls, summary_json: str, trace: Dict[str, np.ndarray], scenario: "Scenario", python_controller: Optional[str] = None
+    ) -> "Run":
+        """A run from the engine's answer (its arrays taken, not copied); ``python_controller``
+        names the class of the Python controller that flew it (None: the scenario's own law)."""
         run = cls.__new__(cls)
         run._init(summary_json, trace, scenario)
+        run._simulated = True
+        run._python_controller = python_controller
         return run
 
     def _init(self, summary_json: str, trace: Dict[str, np.ndarray], scenario: Optional["Scenario"]) -> None:
@@ -182,6 +225,7 @@ class Run:
         self._trace = {k: _frozen(v) for k, v in trace.items()}
         self._trace_view = types.MappingProxyType(self._trace)
         self._scenario = scenario
+        self._python_controller: Optional[str] = None
 
     @property
     def summary(self) -> Dict[str, Any]:
@@ -204,18 +248,36 @@ class Run:
         :func:`plot`, :func:`report` and the ``isotrack`` command take. Creates the directory;
         returns its path."""
         path = _check_path("directory", directory)
-        if self._scenario is None:
-            raise ValueError("this Run was not made by Scenario.run(): it has no scenario to save")
+        if path == "":
+            raise ValueError("directory is empty: name the run directory to write (as `isotrack run --out DIR`)")
+        if self._scenario is None or not getattr(self, "_simulated", False):
+            raise ValueError(
+                "this Run was not made by a simulation (Scenario.run(), compare()): it is not saved "
+                "as a run directory (which holds only what the engine flew)"
+            )
         import os
 
         _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
         _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
+        if self._python_controller is not None:
+            # The [controller] table is the scenario's built-in law, which did not fly: said at
+            # the top of the file, so that nobody replays it with the CLI as if it were this run.
+            toml_path = os.path.join(path, "scenario.toml")
+            with open(toml_path, encoding="utf-8") as f:
+                body = f.read()
+            with open(toml_path, "w", encoding="utf-8") as f:
+                f.write(_python_controller_note(self._python_controller) + body)
         return path
 
     def __reduce__(self):
         # Pickled as its parts (MappingProxyType itself does not pickle): multiprocessing workers
         # can return runs.
-        return (Run._from_native, (self._summary_json, {k: np.array(v) for k, v in self._trace.items()}, self._scenario))
+        if not getattr(self, "_simulated", False):
+            return (Run, (self.summary, {k: np.array(v) for k, v in self._trace.items()}, self._scenario))
+        return (
+            Run._from_native,
+            (self._summary_json, {k: np.array(v) for k, v in self._trace.items()}, self._scenario, self._python_controller),
+        )
 
     def to_pandas(self):
         """The trace as a pandas DataFrame (needs pandas; a copy, free to edit)."""
@@ -227,11 +289,56 @@ class Run:
 
     def __repr__(self) -> str:
         s = self.summary
-        return f"Run(outcome={s['outcome']!r}, t_end_s={s['t_end_s']}, rows={len(self._trace['t_s'])})"
+        s = s if isinstance(s, dict) else {}
+        rows = len(self._trace["t_s"]) if "t_s" in self._trace else 0
+        return f"Run(outcome={s.get('outcome')!r:.80}, t_end_s={s.get('t_end_s')!r:.40}, rows={rows})"
+
+
+#: SHA-256 of data files already hashed, by (path, size, modification time): a scenario made
+#: again and again (``set``, every run of a sweep) hashes each file once.
+_DIGESTS: Dict[tuple, str] = {}
+
+
+def _data_files(toml_text: str) -> "list[str]":
+    """The data files a resolved scenario reads: its string values that are absolute paths of
+    regular files (``to_toml`` writes them absolute)."""
+    import os
+    import re
+
+    files = []
+    for m in re.finditer(r'^[A-Za-z0-9_.-]+\s*=\s*("(?:[^"\\]|\\.)*")\s*$', toml_text, re.M):
+        try:
+            v = json.loads(m.group(1))
+        except ValueError:
+            continue
+        if isinstance(v, str) and os.path.isabs(v) and os.path.isfile(v) and v not in files:
+            files.append(v)
+    return files
+
+
+def _sha256(path: str, cached: bool = True) -> str:
+    import hashlib
+    import os
+
+    st = os.stat(path)
+    key = (path, st.st_size, st.st_mtime_ns)
+    if cached and key in _DIGESTS:
+        return _DIGESTS[key]
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    _DIGESTS[key] = h.hexdigest()
+    return _DIGESTS[key]
 
 
 class Scenario:
-    """A resolved scenario (every default filled in), immutable: ``set`` returns a new one."""
+    """A resolved scenario (every default filled in), immutable: ``set`` returns a new one.
+
+    It pickles as its resolved TOML with the SHA-256 of every data file it read (taken when
+    it was made); unpickling (a multiprocessing worker) reads the files again and raises
+    ``ValueError`` if one changed since (``FileNotFoundError`` if one is gone): a worker never
+    flies another field than the one the parent holds."""
 
     def __init__(self, native: "_native.Scenario"):
         if not isinstance(native, _native.Scenario):
@@ -240,6 +347,23 @@ class Scenario:
                 f"Scenario.from_toml(text), not Scenario({native!r:.80})"
             )
         self._native = native
+        self._digests = {p: _sha256(p) for p in _data_files(native.to_toml())}
+
+    @staticmethod
+    def _unpickle(text: str, digests: Dict[str, str]) -> "Scenario":
+        """A pickled scenario, its data files checked against the digests taken when it was
+        made (read afresh, never from the cache)."""
+        import os
+
+        for p, want in digests.items():
+            if not os.path.isfile(p):
+                raise FileNotFoundError(f"{p}: the scenario's data file is gone since the scenario was pickled")
+            if _sha256(p, cached=False) != want:
+                raise ValueError(
+                    f"{p}: the scenario's data file changed since the scenario was made (SHA-256 "
+                    f"{want[:16]}... then): unpickled, it would fly another field"
+                )
+        return Scenario.from_toml(text)
 
     @staticmethod
     def default() -> "Scenario":
@@ -274,7 +398,17 @@ class Scenario:
         :class:`ScenarioError` (a ``ValueError``) saying what was wrong."""
         if not isinstance(key, str):
             raise TypeError(f"key must be a dotted key (a str), got {key!r:.80} ({_type_name(key)})")
-        return Scenario(self._native.set(key, value))
+        if isinstance(value, np.ndarray) and value.ndim == 0:
+            value = value[()]  # a 0-d array is its scalar (np.array(3.0) as 3.0, np.array(5) as 5)
+        new = Scenario(self._native.set(key, value))
+        # Held to the CLI's limit for scenario text, so that what is set also pickles (a pickled
+        # scenario is its TOML) and saves as a scenario file the CLI reads.
+        if len(new.to_toml().encode("utf-8")) > _MAX_TEXT_BYTES:
+            raise ScenarioError(
+                f"`{key:.80}`: the scenario would be larger than {_MAX_TEXT_BYTES} bytes of TOML "
+                "(the limit of a scenario file)"
+            )
+        return new
 
     def to_toml(self) -> str:
         """The resolved scenario as TOML (what ``isotrack show`` prints)."""
@@ -305,7 +439,10 @@ class Scenario:
         if controller is not None:
             _check_controller("controller", controller)
         summary, trace, flown = self._native.run(rate, controller)
-        return Run._from_native(summary, dict(trace), Scenario(flown))
+        if controller is None:
+            return Run._from_native(summary, dict(trace), Scenario(flown))
+        name = _controller_class(controller)
+        return Run._from_native(_python_summary(summary, name), dict(trace), Scenario(flown), name)
 
     def field_values(self, x, y, t: float = 0.0) -> np.ndarray:
         """The field at points ``(x, y)`` (m) at time ``t`` (s, within the run:
@@ -327,7 +464,7 @@ class Scenario:
         return self
 
     def __reduce__(self):
-        return (Scenario.from_toml, (self.to_toml(),))
+        return (Scenario._unpickle, (self.to_toml(), dict(self._digests)))
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Scenario) and self.to_toml() == other.to_toml()
@@ -336,8 +473,17 @@ class Scenario:
         return hash(self.to_toml())
 
     def __repr__(self) -> str:
-        first = next((line for line in self.to_toml().splitlines() if line.startswith("name")), "")
-        return f"Scenario({first})" if first else "Scenario(<unnamed>)"
+        text = self.to_toml()
+        name = None
+        try:
+            import tomllib  # Python >= 3.11
+
+            name = tomllib.loads(text).get("name")
+        except ImportError:  # pragma: no cover - Python < 3.11: the name's line as written
+            first = next((line for line in text.splitlines() if line.startswith("name")), "")
+            return f"Scenario({first[:100]})" if first else "Scenario(<unnamed>)"
+        # One line, whatever the name holds (its newlines shown as \n by repr).
+        return f"Scenario(name = {name!r:.100})" if isinstance(name, str) else "Scenario(<unnamed>)"
 
 
 def check(scenario: Scenario, tube_halfwidth: Optional[float] = None) -> Dict[str, Any]:
@@ -402,11 +548,15 @@ class _Progress:
         self.last, self.shown_done = now, done
         pct = 100.0 * done / total if total else 100.0
         text = f"sweep: {done}/{total} runs ({pct:.0f} %), {now - self.t0:.1f} s"
-        if self.tty:
-            self.stream.write("\r" + text + ("\n" if final else ""))
-        else:
-            self.stream.write(text + "\n")
-        self.stream.flush()
+        try:
+            if self.tty:
+                self.stream.write("\r" + text + ("\n" if final else ""))
+            else:
+                self.stream.write(text + "\n")
+            self.stream.flush()
+        except Exception:  # noqa: BLE001 - a broken stderr (closed pipe, full disk, closed file)
+            # Progress is never worth the sweep's results: no more progress, the sweep goes on.
+            self.stream = None
 
 
 #: The largest sweep file read (the CLI's limit for scenario and sweep files).
@@ -425,8 +575,16 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
             f"path_or_toml_text must be a sweep file's path or its TOML text, got {path_or_toml_text!r:.80} "
             f"({_type_name(path_or_toml_text)})"
         )
+    if isinstance(path_or_toml_text, str) and not path_or_toml_text.strip():
+        raise ValueError("path_or_toml_text is empty: give a sweep file's path or its TOML text")
+    one_line = isinstance(path_or_toml_text, str) and "\n" not in path_or_toml_text
     if isinstance(path_or_toml_text, os.PathLike) or (
-        "\n" not in path_or_toml_text and "=" not in path_or_toml_text
+        one_line
+        and (
+            "=" not in path_or_toml_text
+            # A file name with `=` (`out/kp=1.toml`): no TOML line ends in `.toml` outside quotes.
+            or (path_or_toml_text.rstrip().endswith(".toml") and not any(q in path_or_toml_text for q in "\"'"))
+        )
     ) or os.path.lexists(path_or_toml_text):
         path = os.fspath(path_or_toml_text)
         try:
@@ -478,7 +636,18 @@ def sweep(
             raise TypeError(f"threads must be an int >= 1 or None, got {threads!r:.80} ({_type_name(threads)})")
         if threads < 1:
             raise ValueError(f"threads must be >= 1, got {threads}")
-        threads = min(int(threads), 1 << 16)  # the engine caps it at 8 per core anyway
+        import os
+
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        if threads > 8 * cores:
+            import warnings
+
+            warnings.warn(
+                f"threads={int(threads)} capped to {8 * cores} (8 per core on {cores} cores); results do not depend on it",
+                stacklevel=2,
+            )
+            threads = 8 * cores
+        threads = int(threads)
     show = _Progress() if _check_flag("progress", progress) else None
     if controller_factory is not None and not callable(controller_factory):
         raise TypeError(f"controller_factory must be callable (scenario -> controller), got {_type_name(controller_factory)}")
@@ -501,6 +670,7 @@ def benchmark(
     controllers: Optional[list] = None,
     tune: bool = False,
     out: Optional[str] = None,
+    resume: bool = False,
 ) -> Dict[str, Any]:
     """Scores your controller with isotrack's benchmark, on the same tasks and seeds as the
     built-in laws (the ``isotrack benchmark`` command's engine).
@@ -514,7 +684,10 @@ def benchmark(
     ``suite``: a suite file (default ``suites/standard-v2.toml`` under the current directory: run
     from the isotrack repository, or pass the path). ``controllers``: which to score (default:
     the suite's built-in laws and yours). ``out``: a directory to write ``leaderboard.csv``,
-    ``leaderboard.md``, ``index.html`` and per-task results into.
+    ``leaderboard.md``, ``index.html``, ``suite.toml`` (the suite as run, with the gains
+    its scores used) and per-task results into, as ``isotrack benchmark --out``: a directory
+    that already holds a benchmark is refused (``OSError``) unless ``resume=True`` (its task
+    results reused), and one that another benchmark or sweep is writing (its lock held) too.
 
     Returns a dict: ``overall`` (``[name, score]`` pairs, best first), ``tasks`` (per task:
     ``scores``, ``runs`` with every scored run, ``gains``, ...), ``controllers``, ``suite``,
@@ -531,7 +704,10 @@ def benchmark(
     if not isinstance(name, str):
         raise TypeError(f"name must be a str, got {name!r:.80} ({_type_name(name)})")
     controllers = _check_names("controllers", controllers)
+    if controllers is not None and not controllers:
+        raise ValueError("controllers is empty: name at least one controller to score (or pass None for all)")
     tune = _check_flag("tune", tune)
+    resume = _check_flag("resume", resume)
     out = None if out is None else _check_path("out", out)
     if suite is not None:
         suite = _check_path("suite", suite)  # a missing file: FileNotFoundError (after the name)
@@ -543,8 +719,11 @@ def benchmark(
                 "run from the isotrack repository or pass suite=PATH"
             )
     if out is not None:
-        os.makedirs(out, exist_ok=True)
-        _refuse_non_regular([os.path.join(out, f) for f in ("leaderboard.csv", "leaderboard.md", "index.html")])
+        if out == "":
+            raise ValueError("out is empty: name the benchmark directory to write")
+        _refuse_non_regular(
+            [os.path.join(out, f) for f in ("leaderboard.csv", "leaderboard.md", "index.html", "suite.toml")]
+        )
     text = _native.benchmark_json(
         lambda native: _check_controller("controller_factory(scenario)", controller_factory(Scenario(native))),
         name,
@@ -552,6 +731,7 @@ def benchmark(
         controllers,
         tune,
         out,
+        resume,
     )
     return json.loads(text)
 
@@ -612,6 +792,12 @@ def plot(
         if v is not None and not isinstance(v, str):
             raise TypeError(f"{arg} must be a column name (str) or None, got {v!r:.80} ({_type_name(v)})")
     dirs = _run_dirs(runs, None if out is None else os.path.join(os.fspath(out), "runs"))
+    sweep_options = [a for a, v in (("x", x), ("group", group), ("metric", metric)) if v is not None]
+    if sweep_options and not (len(dirs) == 1 and os.path.isfile(os.path.join(dirs[0], "results.csv"))):
+        raise TypeError(
+            f"{', '.join(sweep_options)}: options of a sweep directory's plot (results.csv), "
+            "not of run directories: not ignored"
+        )
     ext = "svg" if format == "svg" else "png"
     _refuse_non_regular(
         [os.path.join(out if out is not None else dirs[0], f) for f in (f"trajectory.{ext}", f"timeseries.{ext}", "animation.gif")]
@@ -656,11 +842,18 @@ def compare(
         kinds = _native.controller_kinds()
     elif not kinds:
         raise ValueError("controllers is empty: name at least one built-in law (or pass None for all)")
+    known = list(_native.controller_kinds())
     seen = set()
     for k in kinds:
-        if k.strip() in seen:
-            raise ValueError(f"controllers names {k.strip()!r:.80} twice: each law is flown once")
-        seen.add(k.strip())
+        if k not in known:
+            # Exactly a law's name: " pi_isoline" would be a dict key and an out/ directory
+            # name with a blank in it.
+            raise ValueError(
+                f"unknown controller {k!r:.80}: not exactly a built-in law's name (known: {', '.join(known)})"
+            )
+        if k in seen:
+            raise ValueError(f"controllers names {k!r:.80} twice: each law is flown once")
+        seen.add(k)
     gains = _check_names("gains", gains) or []
     rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
     out = None if out is None else _check_path("out", out)

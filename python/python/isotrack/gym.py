@@ -44,7 +44,10 @@ The environment's definition (the same for both):
   sensor's noise and dropouts are seeded from the same generator. ``options={"start": (x_m,
   y_m, heading_rad)}`` fixes the start; ``options={"start": "scenario"}`` is the scenario's own
   run (its start and ``sim.seed``): answered by the scenario's controller it is
-  ``Scenario.run()``, bit for bit.
+  ``Scenario.run()``, bit for bit, when the scenario has a turn-rate limit (the action space's
+  bound is then that limit). Without one, the environment clips actions to its bound (1 rad/s,
+  or the ``max_turn_rate_radps`` argument) where ``Scenario.run()`` does not clip: the two
+  differ once the law commands more than that.
 * **info**: ``t_s`` (time of the sample, s); at a reset ``start`` (``(x_m, y_m, heading_rad)``,
   ground truth for logs and plots, never part of the observation); at the end of a run
   ``outcome`` (``completed``, ``left_field``, ``diverged``) and ``result`` (the run's outcome and
@@ -84,7 +87,18 @@ except ImportError as e:  # pragma: no cover - depends on the environment
 
 from . import Scenario, _check_flag, _check_number, _native
 
-__all__ = ["IsolineEnv", "IsolineVectorEnv", "SB3VecEnv", "ENV_ID", "MAX_NUM_ENVS"]
+def _have_sb3() -> bool:
+    """Whether stable-baselines3 is installed (looked up, not imported: it imports torch)."""
+    import importlib.util
+
+    try:
+        return importlib.util.find_spec("stable_baselines3") is not None
+    except (ImportError, ValueError):
+        return False
+
+
+# ``SB3VecEnv`` only where it imports: ``from isotrack.gym import *`` never fails.
+__all__ = ["IsolineEnv", "IsolineVectorEnv", "ENV_ID", "MAX_NUM_ENVS"] + (["SB3VecEnv"] if _have_sb3() else [])
 
 #: The registered id: ``gymnasium.make("isotrack/Isoline-v0", scenario=...)``.
 ENV_ID = "isotrack/Isoline-v0"
@@ -272,6 +286,12 @@ class _Renderer:
             raise ValueError(f"render_mode must be None or {shown}, got {mode!r:.80}")
         if half_width_m is None:
             half_width_m = 10.0 * batch.speed_mps / batch.max_turn_rate_radps  # ten turn radii
+            if not (np.isfinite(half_width_m) and half_width_m > 0.0):
+                # Not the caller's render_half_width_m (they gave none): the turn-rate limit's.
+                raise ValueError(
+                    f"max_turn_rate_radps = {batch.max_turn_rate_radps!r} rad/s gives turn radii of "
+                    f"{half_width_m!r} m: pass render_half_width_m (or a larger limit)"
+                )
         if isinstance(half_width_m, (bool, np.bool_)) or not isinstance(half_width_m, (int, float, np.integer, np.floating)):
             raise TypeError(f"render_half_width_m must be a number (m), got {half_width_m!r:.80}")
         if not (np.isfinite(half_width_m) and half_width_m > 0.0):
@@ -488,10 +508,15 @@ def _check_seed(seed: Any, name: str = "seed") -> Optional[int]:
     return s
 
 
-def _check_options(options: Any) -> Optional[Dict[str, Any]]:
-    """A reset's ``options``: ``None`` or a dict (a ``TypeError`` naming ``options`` otherwise)."""
+def _check_options(options: Any, known: Sequence[str] = ("start",)) -> Optional[Dict[str, Any]]:
+    """A reset's ``options``: ``None`` or a dict of the ``known`` keys (a ``TypeError`` naming
+    ``options`` otherwise, a ``ValueError`` naming a key it does not know: a misspelt
+    ``"strat"`` is not ignored)."""
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be None or a dict, got {options!r:.80} ({type(options).__name__})")
+    for k in options or {}:
+        if k not in known:
+            raise ValueError(f"options: unknown key {k!r:.80} (known: {', '.join(repr(x) for x in known)})")
     return options
 
 
@@ -611,7 +636,7 @@ class IsolineVectorEnv(VectorEnv):
         """Starts every run (or those of ``options["reset_mask"]``): ``(observations[num_envs,
         2], info)`` with ``info["start"]`` (and ``info["_start"]``, which were reset)."""
         n = self.num_envs
-        options = _check_options(options)
+        options = _check_options(options, ("start", "reset_mask"))
         if options is not None and "reset_mask" in options:
             options = dict(options)
             mask = _check_reset_mask(options.pop("reset_mask"), n)
@@ -623,7 +648,8 @@ class IsolineVectorEnv(VectorEnv):
             first = _check_seed(seed)
             seeds = [first + i for i in range(n)]
             self._np_random, self._np_random_seed = seeding.np_random(first)
-        elif isinstance(seed, (str, bytes, float, bool, np.bool_)) or not hasattr(seed, "__len__"):
+        elif isinstance(seed, (str, bytes, float, bool, np.bool_)) or not isinstance(seed, (list, tuple, np.ndarray)):
+            # A sequence in order only: a dict's keys or a set's order are not seeds.
             raise TypeError(f"seed must be None, an int or a sequence of {n} ints (or None), got {seed!r:.80}")
         else:
             seeds = [_check_seed(s, f"seed[{k}]") for k, s in enumerate(seed)]
@@ -724,7 +750,13 @@ class IsolineVectorEnv(VectorEnv):
 def __getattr__(name: str) -> Any:
     """``SB3VecEnv`` is built on first use (importing stable-baselines3 imports torch)."""
     if name == "SB3VecEnv":
-        from ._sb3 import SB3VecEnv
+        try:
+            from ._sb3 import SB3VecEnv
+        except ImportError as e:
+            # An AttributeError, so that hasattr() and getattr(..., default) answer False.
+            raise AttributeError(
+                f"isotrack.gym.SB3VecEnv needs stable-baselines3 (pip install stable-baselines3): {e}"
+            ) from e
 
         return SB3VecEnv
     raise AttributeError(f"module 'isotrack.gym' has no attribute {name!r}")
