@@ -90,7 +90,9 @@ pub struct Prop2Report {
     pub applicable: bool,
     /// Half-width of the tube `|F - s_d| <= tube_halfwidth`.
     pub tube_halfwidth: f64,
-    /// The level band `[lo, hi]` of the region the gammas bound (start to tube).
+    /// The level band `[lo, hi]` of the region the gammas bound: from the start's level, widened
+    /// by the tube's half-width `H` beyond it, to the tube's far edge,
+    /// `[min(s0, s_d) - H, max(s0, s_d) + H]`.
     pub region_levels: Option<[f64; 2]>,
     /// Lattice points of the region (start to tube).
     pub samples_in_region: usize,
@@ -670,7 +672,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     // stability is within rounding of neutral (P_ORBIT_MIN_LOOP_GAIN): not decided.
     if let Some(o) = &orbit {
         let gain = l.kp * o.slope * l.v * period_s;
-        if !(gain >= P_ORBIT_MIN_LOOP_GAIN) {
+        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
             notes.push(format!(
                 "not computed: the orbit lies where the field is nearly flat, and the loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}: its damping (about half that per period) is within rounding of zero, so the spectral radius cannot tell stable from unstable"
             ));
@@ -701,10 +703,15 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
             // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
             // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
             let at_kp = |kp: f64| {
-                p_law_orbit_at(s, l, kp).map(|o| SampledLoop { kp, ..o.operating_point(base) })
+                p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
+                    kp,
+                    ..o.operating_point(base)
+                })
             };
             let gain_ok = |kp: f64| {
-                at_kp(kp).is_some_and(|m| m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN)
+                at_kp(kp).is_some_and(|m| {
+                    m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN
+                })
             };
             // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
             // the points examined are those from the first one that reaches the floor.
@@ -790,7 +797,13 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
             if !along.is_empty() {
                 let n = along.len().min(200);
                 let picks: Vec<f64> = (0..n)
-                    .map(|i| along[if n < 2 { 0 } else { i * (along.len() - 1) / (n - 1) }])
+                    .map(|i| {
+                        along[if n < 2 {
+                            0
+                        } else {
+                            i * (along.len() - 1) / (n - 1)
+                        }]
+                    })
                     .collect();
                 let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
                 rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
@@ -1073,10 +1086,10 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
                 || "others".to_string(),
                 |x| format!("{:.0} % of its slopes", 100.0 * x),
             );
-            let (place, stretch) = if f.steepest_unstable {
-                ("steepest", "steepest")
+            let place = if f.steepest_unstable {
+                "steepest"
             } else {
-                ("shallowest", "shallowest")
+                "shallowest"
             };
             let expect = match f.period_samples {
                 Some(p) if p < 2.5 => {
@@ -1088,7 +1101,7 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             return (
                 Verdict::NotApplicable,
                 format!(
-                    "not guaranteed: the loop sampled at {at} is unstable with the isoline's {place} slope frozen ({}) but stable at {others}; the slope varies along the isoline, so this is no proof of divergence: expect {expect}, bounded or not (losing the isoline), where it is {stretch}",
+                    "not guaranteed: the loop sampled at {at} is unstable with the isoline's {place} slope frozen ({}) but stable at {others}; the slope varies along the isoline, so this is no proof of divergence: expect {expect}, bounded or not (losing the isoline), where it is {place}",
                     radius(sm.spectral_radius)
                 ),
             );

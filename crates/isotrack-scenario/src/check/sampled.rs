@@ -273,7 +273,10 @@ impl SampledLoop {
             steady_bank_rad: tan_bank.atan(),
             sec2_steady_bank: 1.0 + tan_bank * tan_bank,
             g_over_airspeed_per_s: gv,
-            course_rate_per_bank_per_s: course_rate_per_bank(&m, self.speed_mps * self.curvature_per_m),
+            course_rate_per_bank_per_s: course_rate_per_bank(
+                &m,
+                self.speed_mps * self.curvature_per_m,
+            ),
             roll_natural_frequency_radps: m.roll_natural_frequency_radps,
             roll_damping_ratio: m.roll_damping_ratio,
             kp_chi: m.kp_chi,
@@ -738,10 +741,7 @@ impl SampledLoop {
         // A pole crosses the unit circle exactly where `1 + lambda L(exp(j w T)) = 0`, i.e. at
         // a phase crossover with `lambda = 1/|L|`; so a stable loop stays stable for the
         // factors between the nearest such `lambda` below 1 and the nearest above.
-        let stable_now = m
-            .complex_eigenvalues()
-            .iter()
-            .all(|z| z.norm() < 1.0);
+        let stable_now = m.complex_eigenvalues().iter().all(|z| z.norm() < 1.0);
         let factors: Vec<f64> = phase_x.iter().map(|&w| 1.0 / l(w).norm()).collect();
         let gm_lower = factors
             .iter()
