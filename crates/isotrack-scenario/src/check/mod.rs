@@ -1326,8 +1326,21 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     } else {
         format!("it is stable {}", fixes.join(", or "))
     };
+    // On a lattice isoline unstable at only some of its slopes, say which (the verdict's "not
+    // guaranteed").
+    let frozen = match sm.frozen {
+        Some(f) if f.some_stable => format!(
+            " with the isoline's {} slope frozen (stable at others)",
+            if f.steepest_unstable {
+                "steepest"
+            } else {
+                "shallowest"
+            }
+        ),
+        _ => String::new(),
+    };
     Some(format!(
-        "the loop sampled at {rate} Hz is unstable (spectral radius {}): {fix}",
+        "the loop sampled at {rate} Hz is unstable{frozen} (spectral radius {}): {fix}",
         sm.spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
     ))
 }

@@ -189,6 +189,14 @@ fn the_uav_on_the_map_is_not_guaranteed_where_the_isoline_is_steepest() {
         );
         let f = r.sampled.isoline_stable_fraction.unwrap();
         assert!(f > 0.0 && f < 1.0, "kp {kp}: {f}");
+        // `run`'s warning (the same one) says where, too.
+        assert!(
+            r.warnings
+                .iter()
+                .any(|w| w.contains("unstable with the isoline's steepest slope frozen")),
+            "kp {kp}: {:?}",
+            r.warnings
+        );
     }
     let r = at(9.0).run(&mut NoTrace);
     assert_eq!(r.outcome, isotrack_sim::Outcome::Completed);
