@@ -255,18 +255,32 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         f(p2.tube_gamma2),
         f(p2.tube_gamma3)
     );
+    // A withheld bound is no claim: say so, and print no number that reads as one.
+    let withheld = !p2.bound_withheld.is_empty();
+    let bound = match p2.error_bound {
+        Some(b) if p2.bound_applies => format!("predicted limsup|eps| <= {b:.6}"),
+        Some(b) => format!("limsup|eps| <= {b:.6} only from a start in the sector (see note)"),
+        None if withheld => "NO bound on limsup|eps| is claimed (withheld, below)".to_string(),
+        None => "no bound (the conditions do not hold)".to_string(),
+    };
     outln!(
-        "  conditions hold: {}   bound applies: {}   predicted limsup|eps| <= {}   smallest kp: {}",
+        "  conditions hold: {}   bound applies: {}   {bound}   smallest kp: {}",
         if p2.conditions_hold { "yes" } else { "NO" },
         if p2.bound_applies { "yes" } else { "NO" },
-        f(p2.error_bound),
         f(p2.min_kp)
     );
     outln!(
         "  paper's printed form: smallest kp {}, bound {}",
         f(p2.paper_min_kp),
-        f(p2.paper_error_bound)
+        if withheld {
+            "not claimed".to_string()
+        } else {
+            f(p2.paper_error_bound)
+        }
     );
+    for w in &p2.bound_withheld {
+        outln!("  withheld: {w}");
+    }
     if let Some(phi0) = p2.initial_phi_rad {
         outln!(
             "  initial phi(t0) = {phi0:.4} rad; in the assumed sector: {}",
@@ -349,6 +363,19 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
     if sm.stable.is_some() {
         outln!("  {}", sensor_rate_line(sm));
     }
+    if let Some(c) = &sm.course_loop {
+        outln!(
+            "  course loop: steady bank b* = {:.4} deg, sec^2(b*) = {:.6}, G = (g/Va) sec^2(b*) = {:.6} 1/s (g/Va = {:.6}); roll loop omega {:.4} rad/s, zeta {:.4}; course PI kp_chi {:.4}, ki_chi {:.4}",
+            c.steady_bank_rad.to_degrees(),
+            c.sec2_steady_bank,
+            c.course_rate_per_bank_per_s,
+            c.g_over_airspeed_per_s,
+            c.roll_natural_frequency_radps,
+            c.roll_damping_ratio,
+            c.kp_chi,
+            c.ki_chi
+        );
+    }
     if let Some(d) = &sm.discrete_loop {
         outln!(
             "  discrete loop at slope {:.4}: gain margin {} ({} dB at {} rad/s), phase margin {} deg (at {} rad/s)",
@@ -359,6 +386,20 @@ fn print_sampled(sm: &isotrack_scenario::check::SampledReport) {
             f(d.phase_margin_deg),
             f(d.gain_crossover_radps)
         );
+        if d.conditionally_stable == Some(true) {
+            let db = |g: Option<f64>| {
+                g.map_or_else(|| "n/a".to_string(), |g| format!("{:.2}", 20.0 * g.log10()))
+            };
+            outln!(
+                "  conditionally stable: stable for loop-gain factors from {} ({} dB) to {} ({} dB); it goes unstable if the gain is REDUCED by the factor {} (lower gain margin) or raised by {} (upper)",
+                f(d.gain_margin_lower),
+                db(d.gain_margin_lower),
+                f(d.gain_margin_upper),
+                db(d.gain_margin_upper),
+                f(d.gain_margin_lower),
+                f(d.gain_margin_upper)
+            );
+        }
     }
 }
 

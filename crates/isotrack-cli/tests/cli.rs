@@ -251,6 +251,34 @@ fn bad_command_line() {
     assert!(!stderr(&o).contains("panicked"));
 }
 
+/// A withheld Prop. 2 bound is no claim (review): the text says so and prints no bound, the
+/// JSON's `error_bound` is null and the conditional value has its own key.
+#[test]
+fn check_claims_no_withheld_bound() {
+    let sets = [
+        "--set",
+        "controller.ki=0",
+        "--set",
+        "controller.kp=20",
+        "--set",
+        "sensor.resolution=0.5",
+    ];
+    let o = isotrack(&[&["check"][..], &sets[..]].concat());
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        text.contains("NO bound on limsup|eps| is claimed"),
+        "{text}"
+    );
+    assert!(!text.contains("limsup|eps| <= 0.17"), "{text}");
+    assert!(text.contains("bound not claimed"), "{text}");
+    let o = isotrack(&[&["check", "--json"][..], &sets[..]].concat());
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["prop2"]["error_bound"].is_null(), "{}", j["prop2"]);
+    assert!(j["prop2"]["paper_error_bound"].is_null());
+    let b = j["prop2"]["error_bound_if_not_withheld"].as_f64().unwrap();
+    assert!((b / 0.17721 - 1.0).abs() < 1e-3, "{b}");
+}
+
 #[test]
 fn check_json_has_the_documented_keys() {
     let o = isotrack(&["check", "--json", "--set", "controller.ki=0"]);

@@ -92,7 +92,9 @@ pub struct Prop2Report {
     pub applicable: bool,
     /// Half-width of the tube `|F - s_d| <= tube_halfwidth`.
     pub tube_halfwidth: f64,
-    /// The level band `[lo, hi]` of the region the gammas bound (start to tube).
+    /// The level band `[lo, hi]` of the region the gammas bound: from the start's level, widened
+    /// by the tube's half-width `H` beyond it, to the tube's far edge,
+    /// `[min(s0, s_d) - H, max(s0, s_d) + H]`.
     pub region_levels: Option<[f64; 2]>,
     /// Lattice points of the region (start to tube).
     pub samples_in_region: usize,
@@ -123,8 +125,13 @@ pub struct Prop2Report {
     /// The sensor's effects the checks do not model (quantisation, bias drift, saturation
     /// within the levels crossed, dropouts), each with its key and value.
     pub sensor_not_modelled: Vec<String>,
-    /// Predicted `limsup |eps|` (null when the conditions fail).
+    /// Predicted `limsup |eps|`: null when the conditions fail or the bound is withheld
+    /// (`bound_withheld` not empty: no bound is claimed then).
     pub error_bound: Option<f64>,
+    /// While the bound is withheld: the value the conditions give, which holds only if every
+    /// reason in `bound_withheld` were removed (an ideal sensor, a loop stable over the tube).
+    /// Not a claim; null otherwise.
+    pub error_bound_if_not_withheld: Option<f64>,
     /// The angle margin used for `error_bound`, rad.
     pub error_bound_phi_rad: Option<f64>,
     /// The smallest `kp` meeting the conditions (over all angle margins).
@@ -185,10 +192,16 @@ pub struct SampledReport {
     pub p_law_orbit_error: Option<f64>,
     /// The stable set of `kp` at the isoline's slopes (other gains fixed): disjoint intervals
     /// `[lo, hi]`, ends refined to 1e-6 relative, scanned over `1e-3 .. 1e6` (null: not
-    /// computed; empty: no `kp` is stable). With `p_law_orbit_error` set, the scan holds the
-    /// scenario's orbit (its slope and curvature) while it varies `kp`: approximate away from
-    /// the scenario's `kp` (the note says so; `check --map` uses each `kp`'s own orbit).
+    /// computed; empty: no `kp` is stable). With `p_law_orbit_error` set, every `kp` of the
+    /// scan is checked on its own orbit (radius, slope, curvature and `g` at that `kp`), from
+    /// `kp_scanned_from` up.
     pub kp_intervals: Option<Vec<[f64; 2]>>,
+    /// The smallest `kp` the `kp_intervals` scan examined: `1e-3`, or with the P law's orbit
+    /// (recomputed at every `kp`) the first scan point where the orbit's loop gain
+    /// `kp*alpha(kp)*v*T` reaches `1e-8`: below it the orbit lies where the field is flat and
+    /// the loop's damping is within rounding of zero, so stability is not decided there (an
+    /// interval's end at this value is the scan's limit). Null when not scanned.
+    pub kp_scanned_from: Option<f64>,
     /// The stable `kp` nearest the scenario's (by ratio; the scenario's own when stable).
     pub nearest_stable_kp: Option<f64>,
     /// The largest `kp` that keeps it stable, other gains fixed (the top of `kp_intervals`; null
@@ -206,6 +219,18 @@ pub struct SampledReport {
     /// The discrete loop analysed, at the isoline slope with the largest radius: state
     /// matrices, characteristic polynomial, gain and phase margins (docs/SAMPLED.md).
     pub discrete_loop: Option<sampled::LoopAnalysis>,
+    /// The fixed-wing UAV's course-loop model at the operating point: steady bank `b*`,
+    /// `sec^2(b*)`, `G = (g/Va) sec^2(b*)`, the roll loop's frequency and damping and the course
+    /// gains (null for the Dubins robot).
+    pub course_loop: Option<sampled::CourseLoopNumbers>,
+    /// Where the isoline's slopes are read off the lattice (not exact): the fraction of its
+    /// crossings, from the 5th percentile of slope up, at which the loop with the slope frozen
+    /// is stable (200 quantiles of the crossings' slopes). Null on circular fields (one exact
+    /// slope) or when not computed.
+    pub isoline_stable_fraction: Option<f64>,
+    /// How the loop is unstable at some of the isoline's frozen slopes, for the verdict.
+    #[serde(skip)]
+    frozen: Option<FrozenInstability>,
     /// Remarks.
     pub note: String,
 }
@@ -422,10 +447,14 @@ impl PLawOrbit {
 
     fn note(&self) -> String {
         format!(
-            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {:.6} and curvature {:.6} 1/m; the kp scan (kp_intervals, max_kp, nearest_stable_kp) holds this orbit while it varies kp, which is approximate away from this kp (the orbit moves with kp; check --map checks each kp on its own orbit)",
+            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {} and curvature {:.6} 1/m",
             self.orbit.radius_m,
             self.orbit.error,
-            self.slope,
+            if self.slope >= 1e-3 {
+                format!("{:.6}", self.slope)
+            } else {
+                format!("{:.4e}", self.slope)
+            },
             1.0 / self.orbit.radius_m
         )
     }
@@ -434,20 +463,58 @@ impl PLawOrbit {
 /// The P law's orbit on a circular field ([`radial_exp_p_orbit`]): `None` with an integral
 /// term, on other fields, or when no orbit exists.
 fn p_law_orbit(s: &Scenario, l: &Law) -> Option<PLawOrbit> {
+    p_law_orbit_at(s, l, l.kp)
+}
+
+/// [`p_law_orbit`] with the proportional gain `kp` in place of the scenario's: the orbit moves
+/// with `kp` (further out, where the field is flatter, as `kp` falls), so a `kp` scan
+/// recomputes it at every `kp` it examines.
+fn p_law_orbit_at(s: &Scenario, l: &Law, kp: f64) -> Option<PLawOrbit> {
+    if !circular_p_law(s, l) {
+        return None;
+    }
     let FieldModel::Analytic(a) = s.field() else {
         return None;
     };
     let AnalyticKind::RadialExp(r) = &a.kind else {
         return None;
     };
-    if l.ki != 0.0 {
-        return None;
-    }
-    let orbit = radial_exp_p_orbit(r.i0, r.decay_per_m, s.level(), l.v, l.kp, l.c1, l.c2)?;
+    let orbit = radial_exp_p_orbit(r.i0, r.decay_per_m, s.level(), l.v, kp, l.c1, l.c2)?;
+    // k F(d*) from F itself, not from eps* + s_d: far out, eps* ~ -s_d and the sum cancels
+    // to nothing (kp = 0.001 on the paper's field: F = 5e-108, the sum 0).
     Some(PLawOrbit {
         orbit,
-        slope: r.decay_per_m * (orbit.error + s.level()),
+        slope: r.decay_per_m * r.i0 * (-r.decay_per_m * orbit.radius_m).exp(),
     })
+}
+
+/// Whether the loop is the P law (`ki = 0`) on a circular field, where it settles on an orbit
+/// off the isoline rather than on it.
+fn circular_p_law(s: &Scenario, l: &Law) -> bool {
+    l.ki == 0.0
+        && matches!(s.field(), FieldModel::Analytic(a) if matches!(a.kind, AnalyticKind::RadialExp(_)))
+}
+
+/// The P law's orbit is examined only where its loop gain `kp*alpha*v*T` (`alpha` the field's
+/// slope on the orbit) reaches this: the loop's damping per period is about half the gain
+/// (`1 - rho = kp alpha v T / 2` for small gains, the continuous loop's `kp alpha v / 2` times
+/// `T`), and below about `1e-8` it is within a few orders of the eigenvalues' rounding
+/// (`~1e-15`): at small `kp` the orbit lies far out where the field is flat (`alpha` falls as
+/// `exp(-k d*)`), and a scan that went on there fragmented the stable set into rounding noise.
+const P_ORBIT_MIN_LOOP_GAIN: f64 = 1e-8;
+
+/// How the loop is unstable at the isoline's own (lattice-read) slopes, each frozen.
+#[derive(Clone, Copy, Debug)]
+struct FrozenInstability {
+    /// Stable at one of the isoline's slopes at least (so the isoline is not unstable
+    /// throughout).
+    some_stable: bool,
+    /// Unstable at the steepest slope.
+    steepest_unstable: bool,
+    /// The growing mode's period in samples at the worst slope, `2 pi / |arg z|` of the
+    /// dominant eigenvalue `z` (2: the command alternates every sample; `None` for a real
+    /// positive `z`, a drift).
+    period_samples: Option<f64>,
 }
 
 /// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
@@ -625,12 +692,16 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         stable_over_tube: None,
         p_law_orbit_error: None,
         kp_intervals: None,
+        kp_scanned_from: None,
         nearest_stable_kp: None,
         max_kp: None,
         max_period_s: None,
         period_scanned_from_s: None,
         rate_is_the_limit: None,
         discrete_loop: None,
+        course_loop: None,
+        isoline_stable_fraction: None,
+        frozen: None,
         note: String::new(),
     };
     let setup = match LoopSetup::new(s, l, r) {
@@ -656,6 +727,19 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     rep.vehicle_model = Some(model);
     rep.curvature_per_m = Some(base.curvature_per_m);
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
+    rep.course_loop = base.course_loop_numbers();
+    // The P law's orbit far out, where the field is flat: its loop barely acts, and its
+    // stability is within rounding of neutral (P_ORBIT_MIN_LOOP_GAIN): not decided.
+    if let Some(o) = &orbit {
+        let gain = l.kp * o.slope * l.v * period_s;
+        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
+            notes.push(format!(
+                "not computed: the orbit lies where the field is nearly flat, and the loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}: its damping (about half that per period) is within rounding of zero, so the spectral radius cannot tell stable from unstable"
+            ));
+            rep.note = notes.join("; ");
+            return rep;
+        }
+    }
     let Some(rho) = sampled::worst_radius(&base, &slopes) else {
         notes.push(format!(
             "not computed: the delay {} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
@@ -674,7 +758,43 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         rep.stable_over_tube = Some(rho_tube < 1.0);
     }
     if full || rho >= 1.0 {
-        let intervals = sampled::kp_intervals(&base, &slopes).unwrap_or_default();
+        let intervals = if circular_p_law(s, l) {
+            // The orbit, and with it the slope, curvature and tanh's slope, recomputed at every
+            // kp examined (issue: holding the scenario's orbit put kp = 0.05's stable set at
+            // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
+            // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
+            let at_kp = |kp: f64| {
+                p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
+                    kp,
+                    ..o.operating_point(base)
+                })
+            };
+            let gain_ok = |kp: f64| {
+                at_kp(kp).is_some_and(|m| {
+                    m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN
+                })
+            };
+            // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
+            // the points examined are those from the first one that reaches the floor.
+            let from = sampled::kp_grid_from(0.0)
+                .into_iter()
+                .find(|&kp| gain_ok(kp));
+            let grid = from.map_or_else(Vec::new, sampled::kp_grid_from);
+            rep.kp_scanned_from = grid.first().copied();
+            if let Some(&first) = grid.first() {
+                if first > 1e-3 {
+                    notes.push(format!(
+                        "the stable kp set is scanned from kp = {first:.4e} up, the orbit recomputed at each kp: below it the orbit lies where the field is nearly flat (loop gain kp*alpha*v*T below {P_ORBIT_MIN_LOOP_GAIN:e}) and stability is not decided"
+                    ));
+                }
+            }
+            sampled::kp_intervals_over(&grid, |kp| {
+                at_kp(kp).is_some_and(|m| m.spectral_radius() < 1.0)
+            })
+        } else {
+            rep.kp_scanned_from = Some(1e-3);
+            sampled::kp_intervals(&base, &slopes).unwrap_or_default()
+        };
         rep.max_kp = intervals.last().map(|i| i[1]);
         rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
         rep.kp_intervals = Some(intervals);
@@ -690,6 +810,67 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         }
     }
     rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
+    // Off circular fields the isoline's slope varies along it, and the loop is checked with
+    // each slope frozen: unstable at some of them is no proof of divergence (the loop passes
+    // through the steep stretch), and the verdict says what it is.
+    if orbit.is_none() && exact_isoline_slope(s).is_none() {
+        let radius_at = |alpha: f64| {
+            SampledLoop {
+                slope: alpha,
+                ..base
+            }
+            .spectral_radius()
+        };
+        if rho >= 1.0 {
+            let worst = slopes
+                .iter()
+                .copied()
+                .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
+                .unwrap_or(range[1]);
+            let period_samples = SampledLoop {
+                slope: worst,
+                ..base
+            }
+            .closed_loop_matrix()
+            .and_then(|m| {
+                m.complex_eigenvalues()
+                    .iter()
+                    .copied()
+                    .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+            })
+            .map(|z| z.im.atan2(z.re).abs())
+            .filter(|&arg| arg > 1e-9)
+            .map(|arg| 2.0 * std::f64::consts::PI / arg);
+            rep.frozen = Some(FrozenInstability {
+                some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
+                steepest_unstable: radius_at(range[1]) >= 1.0,
+                period_samples,
+            });
+        }
+        if full {
+            let mut along: Vec<f64> = r
+                .isoline_slopes
+                .iter()
+                .copied()
+                .filter(|&a| a >= range[0])
+                .collect();
+            along.sort_by(f64::total_cmp);
+            if !along.is_empty() {
+                let n = along.len().min(200);
+                let picks: Vec<f64> = (0..n)
+                    .map(|i| {
+                        along[if n < 2 {
+                            0
+                        } else {
+                            i * (along.len() - 1) / (n - 1)
+                        }]
+                    })
+                    .collect();
+                let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
+                rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
+            }
+        }
+    }
     if full {
         // The isoline slope with the largest radius (the only one on a circular field).
         let worst = slopes
@@ -728,6 +909,9 @@ fn start(s: &Scenario) -> Vec2 {
 /// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
 /// tube's slopes and the isoline's own.
 struct Regions {
+    /// The isoline's slopes at its lattice crossings in the tube (empty where the slope is
+    /// exact).
+    isoline_slopes: Vec<f64>,
     levels: Option<[f64; 2]>,
     region: Option<lattice::Bounds>,
     tube: Option<lattice::Bounds>,
@@ -747,14 +931,23 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
         .nearest_band_cell(p0, lo, hi)
         .map(|seed| lat.component(seed, lo, hi));
     let slope_range = tube_cells.as_ref().and_then(|c| slope_range(lat.slopes(c)));
-    let isoline_slope_range = match exact_isoline_slope(s) {
-        Some(alpha) => Some([alpha, alpha]),
+    let isoline_slopes: Vec<f64> = match exact_isoline_slope(s) {
+        Some(_) => vec![],
         None => tube_cells
             .as_ref()
-            .and_then(|c| self::slope_range(lat.isoline_slopes(c, level))),
+            .map(|c| lat.isoline_slopes(c, level))
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|g| g.is_finite() && *g > 0.0)
+            .collect(),
+    };
+    let isoline_slope_range = match exact_isoline_slope(s) {
+        Some(alpha) => Some([alpha, alpha]),
+        None => self::slope_range(isoline_slopes.clone()),
     };
     if !with_bounds {
         return Regions {
+            isoline_slopes,
             levels: None,
             region: None,
             tube: None,
@@ -765,6 +958,15 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
     let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
     let (levels, region_bounds) = match (field.value(0.0, p0), lat.cell_of(p0)) {
         (Some(s0), Some(cell)) => {
+            // The levels from the start's, widened by the tube's half-width H on its far side,
+            // to the tube's far edge: [min(s0, s_d) - H, max(s0, s_d) + H]. Prop. 2 (Dong & You)
+            // assumes its bounds over the whole plane, and its proof uses them wherever the robot
+            // goes. From the sector `phi(t0) in [-pi + phi, -phi]` the robot can first move away
+            // from the isoline (`s' = -v |grad F| cos phi` takes either sign there) before it
+            // turns in, so the band stops not at the start's level but H beyond it; past the
+            // isoline, `|e|` is non-increasing outside `rho` and the error stays within the
+            // bound, which the note compares with the tube. A margin, not a proof: the levels
+            // the transient reaches are not bounded by the check.
             let levels = [(s0 - tube).min(lo), (s0 + tube).max(hi)];
             let cells = lat.component(cell, levels[0], levels[1]);
             (Some(levels), lat.bounds(&cells, has_hessian))
@@ -772,6 +974,7 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
         _ => (None, None),
     };
     Regions {
+        isoline_slopes,
         levels,
         region: region_bounds,
         tube: tube_bounds,
@@ -804,6 +1007,7 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
         bound_withheld: vec![],
         sensor_not_modelled: vec![],
         error_bound: None,
+        error_bound_if_not_withheld: None,
         error_bound_phi_rad: None,
         min_kp: None,
         min_kp_phi_rad: None,
@@ -942,6 +1146,33 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             |r| format!("spectral radius {}", fmt_radius(r)),
         )
     };
+    if let (Some(false), Some(f)) = (sm.stable, sm.frozen) {
+        if f.some_stable {
+            let others = sm.isoline_stable_fraction.map_or_else(
+                || "others".to_string(),
+                |x| format!("{:.0} % of its slopes", 100.0 * x),
+            );
+            let place = if f.steepest_unstable {
+                "steepest"
+            } else {
+                "shallowest"
+            };
+            let expect = match f.period_samples {
+                Some(p) if p < 2.5 => {
+                    "a period-2 oscillation (the command alternating every sample)".to_string()
+                }
+                Some(p) => format!("an oscillation with a period of about {p:.1} samples"),
+                None => "a drift off the isoline".to_string(),
+            };
+            return (
+                Verdict::NotApplicable,
+                format!(
+                    "not guaranteed: the loop sampled at {at} is unstable with the isoline's {place} slope frozen ({}) but stable at {others}; the slope varies along the isoline, so this is no proof of divergence: expect {expect}, bounded or not (losing the isoline), where it is {place}",
+                    radius(sm.spectral_radius)
+                ),
+            );
+        }
+    }
     if sm.stable == Some(false) {
         return (
             Verdict::Fails,
@@ -1043,7 +1274,7 @@ fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
     let c = &s.file().sensor;
     let mut out = vec![];
     if let Some(q) = c.resolution.filter(|&q| q > 0.0) {
-        out.push(format!("sensor.resolution = {} quantises the readings (not modelled: the loop can settle anywhere within a quantum, or cycle)", Echo(q)));
+        out.push(format!("sensor.resolution = {} quantises the readings (not modelled: a quantised reading can freeze, and the law then turns forever on a small circle wherever it froze, however far from the isoline; or it settles anywhere within a quantum, or cycles)", Echo(q)));
     }
     if let Some(b) = c.bias_drift_per_sqrt_s.filter(|&b| b > 0.0) {
         out.push(format!("sensor.bias_drift_per_sqrt_s = {} lets the readings drift (not modelled: a bias moves the level tracked)", Echo(b)));
@@ -1256,8 +1487,21 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     } else {
         format!("it is stable {}", fixes.join(", or "))
     };
+    // On a lattice isoline unstable at only some of its slopes, say which (the verdict's "not
+    // guaranteed").
+    let frozen = match sm.frozen {
+        Some(f) if f.some_stable => format!(
+            " with the isoline's {} slope frozen (stable at others)",
+            if f.steepest_unstable {
+                "steepest"
+            } else {
+                "shallowest"
+            }
+        ),
+        _ => String::new(),
+    };
     Some(format!(
-        "the loop sampled at {} Hz is unstable (spectral radius {}): {fix}",
+        "the loop sampled at {} Hz is unstable{frozen} (spectral radius {}): {fix}",
         Echo(rate),
         sm.spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
     ))
@@ -1297,6 +1541,11 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         }
         w.extend(prop2.sensor_not_modelled.iter().cloned());
         prop2.bound_applies = w.is_empty();
+        if !prop2.bound_applies {
+            // Withheld: no bound is claimed. The conditional value is kept under its own key.
+            prop2.error_bound_if_not_withheld = prop2.error_bound.take();
+            prop2.paper_error_bound = None;
+        }
     }
     let (verdict, verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let moving = moving::moving_report(s, tube, region(s));

@@ -235,6 +235,56 @@ fn course_rate_per_bank(m: &CourseLoopModel, turn_radps: f64) -> f64 {
     gv * (1.0 + tan_bank * tan_bank)
 }
 
+/// The course-loop model's numbers at an operating point (the fixed-wing UAV), as the check
+/// used them: the steady bank of the turn that holds the isoline's curvature, its `sec^2`
+/// factor, the effective course rate per radian of bank, and the autopilot's roll and course
+/// loops (docs/SAMPLED.md).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct CourseLoopNumbers {
+    /// The steady bank `b*` of the turn at `v kappa`: `tan(b*) = v kappa / (g/Va)`, rad.
+    pub steady_bank_rad: f64,
+    /// `sec^2(b*) = 1 + tan^2(b*)`, the factor the steady bank puts on the course rate per bank.
+    pub sec2_steady_bank: f64,
+    /// `g/Va`, 1/s.
+    pub g_over_airspeed_per_s: f64,
+    /// The effective gain `G = (g/Va) sec^2(b*)`: course rate per radian of bank deviation,
+    /// 1/s (Beard & McLain 2012, eq. (9.14) linearised, `Vg = Va`).
+    pub course_rate_per_bank_per_s: f64,
+    /// The closed roll loop's natural frequency `w_phi`, rad/s.
+    pub roll_natural_frequency_radps: f64,
+    /// The closed roll loop's damping ratio `zeta_phi`.
+    pub roll_damping_ratio: f64,
+    /// The course loop's proportional gain `kp_chi`, rad of bank per rad of course error.
+    pub kp_chi: f64,
+    /// The course loop's integral gain `ki_chi`, rad of bank per rad*s of course error.
+    pub ki_chi: f64,
+}
+
+impl SampledLoop {
+    /// The course-loop numbers the model uses at this operating point; `None` for the Dubins
+    /// robot.
+    pub fn course_loop_numbers(&self) -> Option<CourseLoopNumbers> {
+        let HeadingDynamics::CourseLoop(m) = self.heading else {
+            return None;
+        };
+        let gv = m.g_over_airspeed_per_s;
+        let tan_bank = self.speed_mps * self.curvature_per_m / gv;
+        Some(CourseLoopNumbers {
+            steady_bank_rad: tan_bank.atan(),
+            sec2_steady_bank: 1.0 + tan_bank * tan_bank,
+            g_over_airspeed_per_s: gv,
+            course_rate_per_bank_per_s: course_rate_per_bank(
+                &m,
+                self.speed_mps * self.curvature_per_m,
+            ),
+            roll_natural_frequency_radps: m.roll_natural_frequency_radps,
+            roll_damping_ratio: m.roll_damping_ratio,
+            kp_chi: m.kp_chi,
+            ki_chi: m.ki_chi,
+        })
+    }
+}
+
 /// Zero-order-hold discretisation over `tau`: `(Phi, Gamma)` from
 /// `exp([[A, B], [0, 0]] tau) = [[Phi, Gamma], [0, 1]]`.
 fn zoh(a: &DMatrix<f64>, b: &DVector<f64>, tau: f64) -> (DMatrix<f64>, DVector<f64>) {
@@ -461,7 +511,20 @@ fn kp_grid() -> Vec<f64> {
 pub fn kp_intervals(l: &SampledLoop, slopes: &[f64]) -> Option<Vec<[f64; 2]>> {
     l.radius()?;
     let at = |kp: f64| stable(&SampledLoop { kp, ..*l }, slopes);
-    let grid = kp_grid();
+    Some(kp_intervals_over(&kp_grid(), at))
+}
+
+/// The `kp` scan's points from `from` up: `10^(-3 + j/20)` (`1e-3 .. 1e6`), those below `from`
+/// left out (the scan then starts at the first point at or above it).
+pub fn kp_grid_from(from: f64) -> Vec<f64> {
+    kp_grid().into_iter().filter(|&kp| kp >= from).collect()
+}
+
+/// The stable set over the scan `grid` (increasing) for any stability test `at`: the runs of
+/// stable points, each inner end refined by bisection to 1e-6 relative ([`kp_intervals`]; an
+/// end at the grid's first or last point is the scan's limit). Used with an operating point
+/// that moves with `kp` (the P law's orbit, recomputed at every `kp` examined).
+pub fn kp_intervals_over(grid: &[f64], at: impl Fn(f64) -> bool) -> Vec<[f64; 2]> {
     let ok: Vec<bool> = grid.iter().map(|&kp| at(kp)).collect();
     let mut out = vec![];
     let mut j = 0;
@@ -476,16 +539,16 @@ pub fn kp_intervals(l: &SampledLoop, slopes: &[f64]) -> Option<Vec<[f64; 2]>> {
         }
         let lo = match first {
             0 => grid[0],
-            _ => refine(grid[first], grid[first - 1], at),
+            _ => refine(grid[first], grid[first - 1], &at),
         };
         let hi = match grid.get(j + 1) {
-            Some(&bad) => refine(grid[j], bad, at),
+            Some(&bad) => refine(grid[j], bad, &at),
             None => grid[j],
         };
         out.push([lo, hi]);
         j += 1;
     }
-    Some(out)
+    out
 }
 
 /// The stable `kp` nearest `kp` (by ratio, `|ln(x/kp)|`: gains are compared by factors), from
@@ -562,6 +625,20 @@ pub struct LoopAnalysis {
     pub gain_margin_db: Option<f64>,
     /// The phase crossover's frequency, rad/s.
     pub phase_crossover_radps: Option<f64>,
+    /// For a stable loop, the stable range of factors on the loop gain round 1, as control
+    /// toolboxes report a conditionally stable loop's two margins: the lower gain margin is the
+    /// largest `1/|L|` below 1 over the phase crossovers (reduce the gain by that factor and a
+    /// pole reaches the unit circle), null when there is none (the loop stays stable down to
+    /// zero gain at these frequencies). A loop with a lower margin is *conditionally stable*.
+    /// Null for an unstable loop.
+    pub gain_margin_lower: Option<f64>,
+    /// The upper gain margin: the smallest `1/|L|` above 1 over the phase crossovers (raise the
+    /// gain by that factor and a pole reaches the unit circle); null when there is none, or for
+    /// an unstable loop.
+    pub gain_margin_upper: Option<f64>,
+    /// Whether the stable loop is conditionally stable (it has a lower gain margin: it goes
+    /// unstable if its gain is *reduced* by `gain_margin_lower`); null for an unstable loop.
+    pub conditionally_stable: Option<bool>,
     /// The phase margin `180 + arg L` (deg, in `(-180, 180]`) at the gain crossover
     /// (`|L| = 1`) with the smallest margin; `None` without a gain crossover in `(0, pi/T]`.
     pub phase_margin_deg: Option<f64>,
@@ -661,6 +738,23 @@ impl SampledLoop {
             .iter()
             .map(|&w| (1.0 / l(w).norm(), w))
             .min_by(|a, b| a.0.ln().abs().total_cmp(&b.0.ln().abs()));
+        // A pole crosses the unit circle exactly where `1 + lambda L(exp(j w T)) = 0`, i.e. at
+        // a phase crossover with `lambda = 1/|L|`; so a stable loop stays stable for the
+        // factors between the nearest such `lambda` below 1 and the nearest above.
+        let stable_now = m.complex_eigenvalues().iter().all(|z| z.norm() < 1.0);
+        let factors: Vec<f64> = phase_x.iter().map(|&w| 1.0 / l(w).norm()).collect();
+        let gm_lower = factors
+            .iter()
+            .copied()
+            .filter(|&g| g < 1.0)
+            .max_by(f64::total_cmp)
+            .filter(|_| stable_now);
+        let gm_upper = factors
+            .iter()
+            .copied()
+            .filter(|&g| g > 1.0)
+            .min_by(f64::total_cmp)
+            .filter(|_| stable_now);
         let pm = crossings(&ws, |w| l(w).norm().ln())
             .into_iter()
             .filter(|&w| bounded(w))
@@ -688,6 +782,9 @@ impl SampledLoop {
             gain_margin: gm.map(|g| g.0),
             gain_margin_db: gm.map(|g| 20.0 * g.0.log10()),
             phase_crossover_radps: gm.map(|g| g.1),
+            gain_margin_lower: gm_lower,
+            gain_margin_upper: gm_upper,
+            conditionally_stable: stable_now.then_some(gm_lower.is_some()),
             phase_margin_deg: pm.map(|p| p.0),
             gain_crossover_radps: pm.map(|p| p.1),
         })

@@ -361,11 +361,21 @@ fn prop2_sector_edges_and_the_left_mirror() {
     assert_eq!(r.initial_heading_in_sector, Some(true));
 }
 
-/// The region from the start to the tube spans the levels from the start's value to the tube's
-/// far edge: from (2, 0), `F = 20 e^-0.2 = 16.37` above the tube [9, 11], so [9, 17.37]; from
-/// (20, 0), `F = 20 e^-2 = 2.71` below it, so [1.71, 11].
+/// The region from the start to the tube spans the levels from the start's value, widened by
+/// the tube's half-width `H = 1` beyond it (the robot can first move away before it turns in),
+/// to the tube's far edge: from (2, 0), `F = 20 e^-0.2 = 16.37` above the tube [9, 11], so
+/// [9, 17.37]; from (20, 0), `F = 20 e^-2 = 2.71` below it, so [1.71, 11]. The README says the
+/// same (it once said "between the start's level and the tube").
 #[test]
 fn prop2_region_levels_reach_the_start() {
+    let readme = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md"),
+    )
+    .unwrap();
+    assert!(
+        readme.contains("`[min(s0, s_d) - H, max(s0, s_d) + H]`"),
+        "README.md's Prop. 2 region"
+    );
     for (x, want) in [
         (2.0, [9.0, 20.0 * (-0.2f64).exp() + 1.0]),
         (20.0, [20.0 * (-2.0f64).exp() - 1.0, 11.0]),

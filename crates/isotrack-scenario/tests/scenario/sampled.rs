@@ -158,6 +158,59 @@ fn predicts_the_fixed_wing_uav_at_one_hertz() {
     assert!(!settles(&at(16.0)));
 }
 
+/// The review of the UAV on the map: at `kp` 9 and 10 the loop is unstable with the
+/// isoline's steepest slope frozen but stable at most of its slopes, and the simulated UAV
+/// (turn-rate limit lifted) tracks, steady `max|eps|` 0.083 and 0.075 with a bounded
+/// oscillation in `omega`; it flies off from `kp = 11`. The check called both `fails`, as if
+/// the loop diverged: now "not guaranteed", saying what it is. On a circular field (one exact
+/// slope) unstable stays `fails`.
+#[test]
+fn the_uav_on_the_map_is_not_guaranteed_where_the_isoline_is_steepest() {
+    let at = |kp: f64| {
+        scenario(
+            Some("scenarios/paper-fig3-uav.toml"),
+            &[
+                format!("controller.kp={kp}"),
+                "controller.max_turn_rate_radps=100.0".into(),
+            ],
+        )
+    };
+    for kp in [9.0, 10.0] {
+        let r = check(&at(kp), None);
+        assert_eq!(r.sampled.stable, Some(false), "kp {kp}");
+        assert_eq!(r.verdict.as_str(), "not_applicable", "kp {kp}");
+        let why = &r.verdict_reason;
+        assert!(
+            why.contains("not guaranteed")
+                && why.contains("steepest slope frozen")
+                && why.contains("no proof of divergence")
+                && !why.contains("unstable on the isoline"),
+            "kp {kp}: {why}"
+        );
+        let f = r.sampled.isoline_stable_fraction.unwrap();
+        assert!(f > 0.0 && f < 1.0, "kp {kp}: {f}");
+        // `run`'s warning (the same one) says where, too.
+        assert!(
+            r.warnings
+                .iter()
+                .any(|w| w.contains("unstable with the isoline's steepest slope frozen")),
+            "kp {kp}: {:?}",
+            r.warnings
+        );
+    }
+    let r = at(9.0).run(&mut NoTrace);
+    assert_eq!(r.outcome, isotrack_sim::Outcome::Completed);
+    let e = r.metrics.steady_state_max_abs_error.unwrap();
+    assert!(e < 0.1, "kp 9: steady max|eps| {e}");
+    // The paper's gains at 1 Hz on the circle: unstable at its one exact slope, `fails`.
+    assert_eq!(
+        check(&scenario(None, &["sensor.rate_hz=1".into()]), None)
+            .verdict
+            .as_str(),
+        "fails"
+    );
+}
+
 /// A bang-bang law (sliding mode, |omega| = 1 rad/s) over 600 s spends exactly
 /// `1^2 * 600 s = 600 rad^2/s`: the command at the final sample is never integrated.
 #[test]
@@ -314,6 +367,17 @@ fn a_lagged_sensor_has_the_limit_an_independent_model_gives() {
         }
     }
     let tau_star = lo;
+    // The review's independent sampled model (transfer functions, the lag stepped in the
+    // simulator's order) puts the limit at 3.20644 s; docs/SAMPLED.md said "about 3.24".
+    assert!((tau_star - 3.20644).abs() < 2e-4, "{tau_star}");
+    let docs = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/SAMPLED.md"),
+    )
+    .unwrap();
+    assert!(
+        docs.contains("stability at `tau` = 3.206 s"),
+        "docs/SAMPLED.md"
+    );
     let (av, w2) = (0.5, (0.5 / R_D).powi(2));
     let (a1, a0) = (w2 + av * (10.0 * 0.2 + 1.0), av * 1.0 * 0.2);
     let tau_continuous = (av * 10.0 * a1 - a0) / (a1 * (a1 - w2));
@@ -365,6 +429,49 @@ fn the_uav_on_a_large_circle_agrees_with_simulation() {
     assert!(settles_on_an_orbit(&at(0.01)));
     assert_eq!(check(&at(0.03), None).sampled.stable, Some(false));
     assert!(!settles_on_an_orbit(&at(0.03)));
+}
+
+/// The review of the UAV's output: the course-loop model's numbers are reported, and a stable
+/// but conditionally stable loop says so with both gain margins. On the 700 m circle at 30 m/s
+/// the steady bank is `tan(b*) = v kappa/(g/Va) = 30 (1/700)/(9.8/30)`, so `sec^2(b*)` =
+/// 1.017212 and `G = (g/Va) sec^2(b*)` = 0.332289 1/s; the course loop is designed at
+/// `w_chi = w_phi/8`, `zeta_chi = 0.707` (`kp_chi = 2 zeta_chi w_chi Va/g`,
+/// `ki_chi = w_chi^2 Va/g`) with the roll loop at `zeta_phi = 1.2`. The review's independent
+/// transfer-function model, scanning a factor on the loop gain, finds it stable for factors
+/// 0.776802 .. 35.1106: the reported "gain margin 0.7768 (-2.19 dB)" is the lower margin of a
+/// conditionally stable loop.
+#[test]
+fn the_uav_reports_its_course_loop_and_both_gain_margins() {
+    let r = check(&uav_on_a_large_circle(&[]), None).sampled;
+    let c = r.course_loop.unwrap();
+    let gv: f64 = 9.8 / 30.0;
+    let tan_bank: f64 = 30.0 / 700.0 / gv;
+    let close = |got: f64, want: f64, what: &str| {
+        assert!((got / want - 1.0).abs() < 1e-9, "{what}: {got} vs {want}");
+    };
+    close(c.steady_bank_rad, tan_bank.atan(), "b*");
+    close(c.sec2_steady_bank, 1.0 + tan_bank * tan_bank, "sec^2");
+    assert!((c.sec2_steady_bank - 1.017212).abs() < 1e-6);
+    close(c.g_over_airspeed_per_s, gv, "g/Va");
+    close(
+        c.course_rate_per_bank_per_s,
+        gv * (1.0 + tan_bank * tan_bank),
+        "G",
+    );
+    close(c.roll_damping_ratio, 1.2, "zeta_phi");
+    let w_chi = c.roll_natural_frequency_radps / 8.0;
+    close(c.kp_chi, 2.0 * 0.707 * w_chi / gv, "kp_chi");
+    close(c.ki_chi, w_chi * w_chi / gv, "ki_chi");
+    assert!((c.roll_natural_frequency_radps - 16.7625388).abs() < 1e-6);
+    let d = r.discrete_loop.unwrap();
+    assert_eq!(r.stable, Some(true));
+    assert_eq!(d.conditionally_stable, Some(true));
+    let (lo, hi) = (d.gain_margin_lower.unwrap(), d.gain_margin_upper.unwrap());
+    assert!((lo / 0.776802 - 1.0).abs() < 1e-6, "{lo}");
+    assert!((hi / 35.1106 - 1.0).abs() < 1e-5, "{hi}");
+    // The Dubins robot has no course loop.
+    let dubins = check(&scenario(None, &[]), None).sampled;
+    assert!(dubins.course_loop.is_none());
 }
 
 /// Newton's method on the P law's balance on the paper's field, `h(d) = kp c1 tanh(F(d) - 10)
