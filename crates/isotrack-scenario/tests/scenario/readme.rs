@@ -69,9 +69,10 @@ fn the_bundled_scenario_table_is_what_the_runs_give() {
     printed(
         &readme,
         &format!(
-            "| `name-volcanic-ash` (log units) | completed | {:.3} | {:.2} m / - (0.25 m cells) |",
+            "| `name-volcanic-ash` (log units) | completed | {:.3} | {:.2} m / {:.2} m (0.25 m cells) |",
             ash.steady_state_max_abs_error.unwrap(),
-            ash.steady_state_max_isoline_distance_m.unwrap()
+            ash.steady_state_max_isoline_distance_m.unwrap(),
+            ash.steady_state_rms_isoline_distance_m.unwrap()
         ),
     );
 }
