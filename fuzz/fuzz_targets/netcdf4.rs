@@ -1,6 +1,7 @@
 //! The NetCDF reader (NetCDF-3 classic and NetCDF-4/HDF5 through `netcdf-reader`) must return a
 //! series or an error for any bytes, never panic, abort or allocate what a header merely
-//! declares. Seeds: the xarray fixture matrix (scripts/make-netcdf-fixtures.py).
+//! declares. Seeds: the xarray fixture matrix (crates/isotrack-fields/tests/fixtures/netcdf,
+//! written by scripts/make-netcdf-fixtures.py), which scripts/fuzz.sh passes as a seed directory.
 #![no_main]
 use isotrack_fields::io::{parse_series_bytes, GridFormat};
 use libfuzzer_sys::fuzz_target;

@@ -102,3 +102,45 @@ fn netcdf_headers_are_checked_before_allocation() {
     .unwrap_err();
     assert!(e.message.contains("not a valid NetCDF file"), "{e}");
 }
+
+/// Under `ulimit -v` (an address-space limit, as HPC login nodes set, and as the fuzz runs use:
+/// scripts/fuzz.sh) the memory budget is the room under the limit, not the machine's
+/// `MemAvailable`: the never-written 16000 x 16000 NetCDF-4 frame (256 000 000 values, 6.1 GB
+/// at 24 bytes each) is refused naming the memory, where it aborted allocating (fuzz target
+/// netcdf4, seeded with the fixtures). Run in a child process under `ulimit -v` 3 GiB.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_memory_budget_honours_an_address_space_limit() {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/netcdf/unwritten_1x16000x16000.nc");
+    if std::env::var_os("ISOTRACK_TEST_UNDER_ULIMIT").is_some() {
+        let budget = isotrack_fields::io::memory_budget_bytes().unwrap();
+        assert!(budget < 3 << 30, "{budget}");
+        let e = isotrack_fields::io::load_series(&p, None, None).unwrap_err();
+        assert!(
+            e.message
+                .contains("1 frame of 16000 x 16000 nodes = 256000000 values"),
+            "{e}"
+        );
+        assert!(
+            e.message.contains("GiB of memory this process may use"),
+            "{e}"
+        );
+        return;
+    }
+    let exe = std::env::current_exe().unwrap();
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 3145728 && exec \"$0\" --exact --test-threads=1 the_memory_budget_honours_an_address_space_limit")
+        .arg(&exe)
+        .env("ISOTRACK_TEST_UNDER_ULIMIT", "1")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed"));
+}

@@ -250,10 +250,12 @@ pub const MAX_SERIES_NODES: usize = 1 << 30;
 /// the other formats hold less).
 pub const BYTES_PER_LOADED_VALUE: u64 = 24;
 
-/// The memory this process may still use, bytes, where the system says: the smaller of Linux's
-/// `MemAvailable` (`/proc/meminfo`) and the room left under a cgroup v2 limit (`memory.max` less
-/// `memory.current`, as a Slurm job or a container sets). `None` where neither is known.
-/// Read by hand: two text files, no crate needed for them.
+/// The memory this process may still use, bytes, where the system says: the smallest of Linux's
+/// `MemAvailable` (`/proc/meminfo`), the room left under a cgroup v2 limit (`memory.max` less
+/// `memory.current`, as a Slurm job or a container sets) and the room left under an
+/// address-space limit (`ulimit -v`, as HPC login nodes and `prlimit` set: the soft limit in
+/// `/proc/self/limits` less the process's virtual size `VmSize` in `/proc/self/status`).
+/// `None` where none is known. Read by hand: text files, no crate needed for them.
 pub fn memory_budget_bytes() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
         let line = t.lines().find(|l| l.starts_with("MemAvailable:"))?;
@@ -269,10 +271,42 @@ pub fn memory_budget_bytes() -> Option<u64> {
     };
     let cgroup = read_u64("memory.max")
         .map(|max| max.saturating_sub(read_u64("memory.current").unwrap_or(0)));
-    match (meminfo, cgroup) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
-    }
+    [meminfo, cgroup, address_space_room_bytes()]
+        .into_iter()
+        .flatten()
+        .min()
+}
+
+/// The room left under this process's soft address-space limit (`RLIMIT_AS`, `ulimit -v`),
+/// bytes: the limit less the virtual size already mapped. `None` when unlimited or unknown.
+fn address_space_room_bytes() -> Option<u64> {
+    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let limit = parse_address_space_limit(&limits)?;
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    Some(limit.saturating_sub(parse_vm_size_bytes(&status)?))
+}
+
+/// The soft `Max address space` of a `/proc/PID/limits` text, bytes (`None` if `unlimited`).
+fn parse_address_space_limit(limits: &str) -> Option<u64> {
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
+    line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// `VmSize` of a `/proc/PID/status` text, bytes (the kernel writes it in kB = 1024 bytes).
+fn parse_vm_size_bytes(status: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with("VmSize:"))?;
+    let kib: u64 = line["VmSize:".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    kib.checked_mul(1024)
 }
 
 /// The most values (frames x nodes) a loader reads with `budget_bytes` of memory:

@@ -279,16 +279,29 @@ pub(super) fn parse_bytes(
     bytes: &[u8],
     variable: Option<&str>,
 ) -> Result<LoadedSeries, LoadError> {
-    parse_bytes_within(name, bytes, variable, super::memory_budget_bytes())
+    // The budget is asked for only when a file gets as far as its size check: reading it costs
+    // five files of /proc and /sys, more than refusing most malformed files.
+    parse_bytes_with(name, bytes, variable, super::memory_budget_bytes)
 }
 
 /// As [`parse_bytes`], with `budget_bytes` of memory to load the variable in
 /// ([`super::check_series_size`]).
+#[cfg(test)]
 pub(super) fn parse_bytes_within(
     name: &Path,
     bytes: &[u8],
     variable: Option<&str>,
     budget_bytes: Option<u64>,
+) -> Result<LoadedSeries, LoadError> {
+    parse_bytes_with(name, bytes, variable, || budget_bytes)
+}
+
+/// As [`parse_bytes`], the memory budget from `budget_bytes` when the size is checked.
+fn parse_bytes_with(
+    name: &Path,
+    bytes: &[u8],
+    variable: Option<&str>,
+    budget_bytes: impl FnOnce() -> Option<u64>,
 ) -> Result<LoadedSeries, LoadError> {
     check_classic_header(bytes).map_err(|m| {
         LoadError::new(
@@ -306,7 +319,7 @@ fn parse_file(
     path: &Path,
     file: &NcFile,
     variable: Option<&str>,
-    budget_bytes: Option<u64>,
+    budget_bytes: impl FnOnce() -> Option<u64>,
 ) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
     let nc = |e: netcdf_reader::Error| err(format!("cannot read as NetCDF: {e}"));
@@ -363,7 +376,7 @@ fn parse_file(
     }
     // Checked before reading: the header's sizes are the file's claim, not a promise (a
     // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
-    super::check_series_size(path, n_frames, nx, ny, budget_bytes)?;
+    super::check_series_size(path, n_frames, nx, ny, budget_bytes())?;
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
@@ -386,11 +399,13 @@ fn parse_file(
             values.len()
         )));
     }
+    // A coordinate variable is 1-D along the dimension of its own name (CF 1.11 section 1.3), so
+    // its size is the dimension's, already within the checked size: a variable `x(big)` named
+    // like the dimension `x` but along another, huge dimension is not read.
     let coord = |name: &str| -> Result<Option<(Vec<f64>, &NcVariable)>, LoadError> {
-        match vars
-            .iter()
-            .find(|v| v.name() == name && v.dimensions().len() == 1)
-        {
+        match vars.iter().find(|v| {
+            v.name() == name && v.dimensions().len() == 1 && v.dimensions()[0].name == name
+        }) {
             None => Ok(None),
             Some(c) => {
                 let vals = file
@@ -622,6 +637,37 @@ mod tests {
             let (g, _dir) = write(x, y);
             assert_eq!(lonlat(&g), want, "{} / {}: {g:?}", x.0, y.0);
         }
+    }
+
+    /// A variable named like a dimension but along another one (`x(other)` beside the dimension
+    /// `x`) is not that dimension's coordinate: its values do not describe the grid's columns
+    /// (in NetCDF-4 such a variable along a huge never-written dimension was read in full,
+    /// past the checked size). The grid loads without a georeference from it.
+    #[test]
+    fn a_variable_along_another_dimension_is_not_a_coordinate() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("c.nc");
+        let mut ds = DataSet::new();
+        ds.add_fixed_dim("y", 3).unwrap();
+        ds.add_fixed_dim("x", 4).unwrap();
+        ds.add_fixed_dim("other", 10).unwrap();
+        ds.add_var_f64("y", &["y"]).unwrap();
+        ds.add_var_f64("x", &["other"]).unwrap();
+        ds.add_var_f64("v", &["y", "x"]).unwrap();
+        let mut w = FileWriter::create_new(&p).unwrap();
+        w.set_def(&ds, Version::Classic, 0).unwrap();
+        w.write_var_f64("y", &[0.0, 5.0, 10.0]).unwrap();
+        let ten: Vec<f64> = (0..10).map(|k| 100.0 + 2.0 * k as f64).collect();
+        w.write_var_f64("x", &ten).unwrap();
+        w.write_var_f64("v", &[0.0; 12]).unwrap();
+        w.close().unwrap();
+        let g = crate::io::load_grid(&p, None).unwrap();
+        assert_eq!((g.grid.nx(), g.grid.ny()), (4, 3));
+        assert!(
+            matches!(g.georeference, Georeference::None),
+            "{:?}",
+            g.georeference
+        );
     }
 
     #[test]

@@ -829,3 +829,18 @@ fn proc_files_are_read_within_their_limit() {
         assert!(all.len() > 16);
     }
 }
+
+/// The address-space limit (`ulimit -v`) as `/proc/self/limits` and `/proc/self/status` write it.
+#[test]
+fn address_space_limit_and_virtual_size_are_read_from_proc() {
+    let limits = "Limit                     Soft Limit           Hard Limit           Units     \n\
+                  Max stack size            8388608              unlimited            bytes     \n\
+                  Max address space         3221225472           unlimited            bytes     \n";
+    assert_eq!(parse_address_space_limit(limits), Some(3 << 30));
+    let unlimited =
+        "Max address space         unlimited            unlimited            bytes     \n";
+    assert_eq!(parse_address_space_limit(unlimited), None);
+    let status = "Name:\tx\nVmPeak:\t  999 kB\nVmSize:\t   12345 kB\nVmRSS:\t 5 kB\n";
+    assert_eq!(parse_vm_size_bytes(status), Some(12345 * 1024));
+    assert_eq!(parse_vm_size_bytes("Name:\tx\n"), None);
+}
