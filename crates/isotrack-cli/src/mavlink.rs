@@ -5,7 +5,7 @@ use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
 use crate::output::{scenario_toml, write_summary, TraceWriter};
 use crate::run::{load, Failure};
-use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyError, FlyOptions, SensorSource};
+use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
 use isotrack_sim::{NoTrace, TraceSink};
@@ -225,8 +225,10 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
                 .map(|p| p.display().to_string()),
             outcome: if report.end.is_failsafe() {
                 "failsafe"
-            } else {
+            } else if report.end == FlyEnd::VehicleEnded {
                 "completed"
+            } else {
+                report.end.as_str()
             },
             outcome_detail: report.events.last().cloned().unwrap_or_default(),
             end_reason: report.end.as_str(),

@@ -132,6 +132,10 @@ pub enum FlyEnd {
     LawNotFinite,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     ControlRefused,
+    /// Once the companion had control, the vehicle left OFFBOARD or disarmed without the
+    /// companion asking (a pilot or the autopilot took over): the setpoints stop at once and
+    /// nothing is commanded, so the pilot's mode stands.
+    PilotTookOver,
 }
 
 impl FlyEnd {
@@ -146,11 +150,15 @@ impl FlyEnd {
             FlyEnd::Fence => "fence",
             FlyEnd::LawNotFinite => "law_not_finite",
             FlyEnd::ControlRefused => "control_refused",
+            FlyEnd::PilotTookOver => "pilot_took_over",
         }
     }
     /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
     pub fn is_failsafe(self) -> bool {
-        !matches!(self, FlyEnd::VehicleEnded | FlyEnd::ControlRefused)
+        !matches!(
+            self,
+            FlyEnd::VehicleEnded | FlyEnd::ControlRefused | FlyEnd::PilotTookOver
+        )
     }
 }
 
@@ -213,6 +221,8 @@ struct Fly<'a> {
     last_answer_ms: Option<u32>,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     refused: bool,
+    /// The vehicle has been armed and in OFFBOARD (the companion had control).
+    in_control: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -342,6 +352,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         current: None,
         last_answer_ms: None,
         refused: false,
+        in_control: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -426,6 +437,18 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             next_control = Instant::now();
         }
         let active = fly.armed && fly.mode == Some(Mode::Offboard);
+        if active {
+            fly.in_control = true;
+        } else if fly.in_control {
+            // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
+            // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
+            fly.event(format!(
+                "pilot_took_over: the vehicle is {} in {}, not commanded by the companion: setpoints stopped, nothing commanded",
+                if fly.armed { "armed" } else { "disarmed" },
+                fly.mode.map_or("an unknown mode", |m| m.name())
+            ));
+            break 'flight FlyEnd::PilotTookOver;
+        }
         // Taking control: arm, then OFFBOARD, retried every 0.5 s.
         if opts.take_control && !active && fly.refused {
             fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
@@ -653,7 +676,9 @@ fn handle(
                 *vehicle_done = true;
             }
         }
-        MavMessage::COMMAND_ACK(a) => {
+        // Acknowledgements go to every peer of the vehicle: once in control, they may answer
+        // someone else's command, and say nothing about ours.
+        MavMessage::COMMAND_ACK(a) if !fly.in_control => {
             let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
             fly.event(format!("{:?}: {:?}", a.command, a.result));
             if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
