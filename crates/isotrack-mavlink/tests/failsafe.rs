@@ -162,3 +162,86 @@ fn a_refused_arming_ends_the_flight() {
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(r.commands.is_empty());
 }
+
+/// Sends `cmd` from `link` to the vehicle and returns the result of its acknowledgement.
+fn ack_of(link: &mut Link, cmd: MavCmd, p1: f32, p2: f32) -> Option<MavResult> {
+    link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+        param1: p1,
+        param2: p2,
+        command: cmd,
+        target_system: 1,
+        target_component: 1,
+        ..Default::default()
+    }))
+    .unwrap();
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(10) {
+        for r in link.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::COMMAND_ACK(a) = &r.msg {
+                if a.command == cmd {
+                    return Some(a.result);
+                }
+            }
+        }
+    }
+    None
+}
+
+/// Once companion A (system 1, component 191) has armed the flying vehicle, a stranger B
+/// (system 7) can neither arm it (take it over), switch its mode, fly it by setpoints, nor
+/// disarm it without PX4's force code 21196; with the code, B's disarm is accepted.
+#[test]
+fn sitl_refuses_a_stranger_once_armed() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let url = format!("udpout:{addr}");
+    let mut a = Link::open(&url, 1, 191).unwrap();
+    let mut b = Link::open(&url, 7, 191).unwrap();
+    let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+    let mode = MavCmd::MAV_CMD_DO_SET_MODE;
+    let (accepted, denied) = (
+        Some(MavResult::MAV_RESULT_ACCEPTED),
+        Some(MavResult::MAV_RESULT_DENIED),
+    );
+    assert_eq!(ack_of(&mut a, arm, 1.0, 0.0), accepted);
+    assert_eq!(ack_of(&mut b, arm, 1.0, 0.0), denied, "B's arming");
+    assert_eq!(ack_of(&mut b, mode, 1.0, 6.0), denied, "B's OFFBOARD");
+    b.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        body_yaw_rate: -0.1,
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    }))
+    .unwrap();
+    assert_eq!(
+        ack_of(&mut b, arm, 0.0, 0.0),
+        denied,
+        "B's disarm, unforced"
+    );
+    assert_eq!(
+        ack_of(&mut b, arm, 0.0, 21196.0),
+        accepted,
+        "B's forced disarm"
+    );
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    assert_eq!(report.setpoints_refused, 1, "{:?}", report.events);
+    let owner_kept = !report
+        .events
+        .iter()
+        .any(|e| e.contains(": armed by system 7"));
+    assert!(owner_kept, "{:?}", report.events);
+}
