@@ -30,6 +30,55 @@ use std::time::{Duration, Instant};
 /// The `time_boot_ms` of a setpoint that answers no measurement (sent before the first one).
 pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 
+/// The largest step of the measurements' clock (`time_boot_ms`) between two measurements
+/// received, forwards or backwards, s: a larger one (a rebooted or spoofed clock) is a sensor
+/// fault, and fails safe (`sensor_clock_jump`).
+pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
+
+/// The measurements' clock as received: only a measurement newer than every one before it
+/// counts as one for the sensor-loss timer (the companion's own monotonic clock).
+struct SensorClock {
+    /// The newest `time_boot_ms` received.
+    newest_ms: Option<u32>,
+    /// When the newest measurement (or, before any, the vehicle's first message) arrived.
+    last: Instant,
+    /// A jump of the clock, to fail safe on.
+    fault: Option<String>,
+}
+
+impl SensorClock {
+    /// Takes in a received measurement: queued unless its time jumps.
+    fn receive(&mut self, queue: &mut VecDeque<(u32, f64)>, ms: u32, v: f64) {
+        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u32;
+        match self.newest_ms {
+            Some(n) if ms <= n => {
+                if n - ms > max_ms {
+                    self.fault.get_or_insert(format!(
+                        "the measurement's time jumped back from {} s to {} s (a rebooted or spoofed clock)",
+                        wire::time_s(n),
+                        wire::time_s(ms)
+                    ));
+                    return;
+                }
+                // A repeat (answered again) or a late one (dropped): no news of the sensor.
+                queue.push_back((ms, v));
+            }
+            Some(n) if ms - n > max_ms => {
+                self.fault.get_or_insert(format!(
+                    "the measurement's time jumped ahead from {} s to {} s (a spoofed clock)",
+                    wire::time_s(n),
+                    wire::time_s(ms)
+                ));
+            }
+            _ => {
+                self.newest_ms = Some(ms);
+                self.last = Instant::now();
+                queue.push_back((ms, v));
+            }
+        }
+    }
+}
+
 /// Where the measurements come from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SensorSource {
@@ -132,6 +181,8 @@ pub enum FlyEnd {
     LawNotFinite,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     ControlRefused,
+    /// The measurements' clock jumped by more than [`MAX_MEASUREMENT_STEP_S`]: failsafe.
+    SensorClockJump,
     /// Once the companion had control, the vehicle left OFFBOARD or disarmed without the
     /// companion asking (a pilot or the autopilot took over): the setpoints stop at once and
     /// nothing is commanded, so the pilot's mode stands.
@@ -150,6 +201,7 @@ impl FlyEnd {
             FlyEnd::Fence => "fence",
             FlyEnd::LawNotFinite => "law_not_finite",
             FlyEnd::ControlRefused => "control_refused",
+            FlyEnd::SensorClockJump => "sensor_clock_jump",
             FlyEnd::PilotTookOver => "pilot_took_over",
         }
     }
@@ -362,7 +414,12 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     let mut commands = Vec::new();
     let (mut samples, mut t_first, mut t_last) = (0u64, None::<f64>, None::<f64>);
     let mut last_link = Instant::now();
-    let mut last_sensor = Instant::now();
+    let mut clock = SensorClock {
+        newest_ms: None,
+        last: Instant::now(),
+        fault: None,
+    };
+    let mut first_wall: Option<Instant> = None;
     let mut next_setpoint = Instant::now();
     let mut next_heartbeat = Instant::now();
     let mut next_control = Instant::now();
@@ -394,7 +451,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &wanted,
                 &mut queue,
                 &mut last_link,
-                &mut last_sensor,
+                &mut clock,
                 &mut pos,
                 &mut heading,
                 &mut vehicle_done,
@@ -402,7 +459,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         }
         if !had_target && fly.target.is_some() {
             // The sensor's silence counts from the vehicle's first message.
-            last_sensor = Instant::now();
+            clock.last = Instant::now();
         }
         if let Some(s) = &lines {
             while let Ok((n, _)) = s.recv_from(&mut buf) {
@@ -413,8 +470,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     };
                     if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
                         if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
-                            queue.push_back((ms, v));
-                            last_sensor = Instant::now();
+                            clock.receive(&mut queue, ms, v);
                         }
                     }
                 }
@@ -490,6 +546,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     value: v,
                 };
                 let first = *t_first.get_or_insert(m.t_s);
+                first_wall.get_or_insert_with(Instant::now);
                 if let Some(max) = opts.max_duration_s {
                     if m.t_s - first >= max {
                         fly.event(format!(
@@ -550,7 +607,20 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             ));
             break 'flight FlyEnd::LinkLost;
         }
-        if now.duration_since(last_sensor) > timeout {
+        if let Some(what) = clock.fault.take() {
+            fly.event(what);
+            break 'flight FlyEnd::SensorClockJump;
+        }
+        if let (Some(max), Some(w)) = (opts.max_duration_s, first_wall) {
+            // The companion's own clock too: a vehicle clock that stalls cannot stretch the run.
+            if now.duration_since(w).as_secs_f64() >= max {
+                fly.event(format!(
+                    "max duration {max} s reached on the companion's clock"
+                ));
+                break 'flight FlyEnd::MaxDuration;
+            }
+        }
+        if now.duration_since(clock.last) > timeout {
             fly.event(format!("no measurement for {} s", opts.timeout_s));
             break 'flight FlyEnd::SensorLost;
         }
@@ -625,7 +695,7 @@ fn handle(
     wanted: &[u8],
     queue: &mut VecDeque<(u32, f64)>,
     last_link: &mut Instant,
-    last_sensor: &mut Instant,
+    clock: &mut SensorClock,
     pos: &mut Option<(f64, f64)>,
     heading: &mut f64,
     vehicle_done: &mut bool,
@@ -648,8 +718,7 @@ fn handle(
     }
     if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
         if !wanted.is_empty() && name_of(&n.name[..]) == wanted && n.value.is_finite() {
-            queue.push_back((n.time_boot_ms, n.value as f64));
-            *last_sensor = Instant::now();
+            clock.receive(queue, n.time_boot_ms, n.value as f64);
         }
         return;
     }

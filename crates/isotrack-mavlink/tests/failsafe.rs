@@ -245,3 +245,56 @@ fn sitl_refuses_a_stranger_once_armed() {
         .any(|e| e.contains(": armed by system 7"));
     assert!(owner_kept, "{:?}", report.events);
 }
+
+/// A vehicle that beats every 50 ms and sends `ISO_S` with the given `time_boot_ms`, one per
+/// beat, the last one again and again; stops after 10 s (or once told the companion ended).
+fn clocked_vehicle(times: Vec<u32>) -> FlyEnd {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let finished = done.clone();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut i = 0;
+        while t0.elapsed() < Duration::from_secs(10)
+            && !finished.load(std::sync::atomic::Ordering::SeqCst)
+        {
+            link.poll(Duration::from_millis(50)).unwrap();
+            if link.has_peer() {
+                link.send(&heartbeat()).unwrap();
+                let mut name = [0u8; 10];
+                name[..5].copy_from_slice(b"ISO_S");
+                link.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                    time_boot_ms: times[i.min(times.len() - 1)],
+                    value: 1.0,
+                    name: name.into(),
+                }))
+                .unwrap();
+                i += 1;
+            }
+        }
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 0.5;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    done.store(true, std::sync::atomic::Ordering::SeqCst);
+    vehicle.join().unwrap();
+    r.end
+}
+
+/// One measurement stamped 46 days ahead (a spoofed clock) is a sensor fault: failsafe at
+/// once, not a frozen clock whose later (older) measurements keep the sensor timer alive.
+#[test]
+fn a_clock_jump_ahead_fails_safe() {
+    let mut times = vec![1000, 2000, 4_000_000_000];
+    times.extend((3..400).map(|k| k * 1000));
+    assert_eq!(clocked_vehicle(times), FlyEnd::SensorClockJump);
+}
+
+/// The same time stamp again and again is no news from the sensor: sensor loss after the
+/// timeout, though the vehicle keeps talking.
+#[test]
+fn a_repeated_time_stamp_is_sensor_loss() {
+    assert_eq!(clocked_vehicle(vec![1000]), FlyEnd::SensorLost);
+}
