@@ -27,6 +27,21 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             "--speedup",
         ),
         (
+            vec!["sitl", "--mavlink", out, "--speedup", "1e-300"],
+            64,
+            "--speedup must be in [0.001, 1000]",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--timeout-s", "1e20"],
+            64,
+            "--timeout-s must be in [0, 86400]",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--max-duration-s", "1e300"],
+            64,
+            "--max-duration-s",
+        ),
+        (
             vec!["sitl", "--mavlink", out, "--speedup", "nan"],
             64,
             "--speedup",

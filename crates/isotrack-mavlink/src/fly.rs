@@ -408,7 +408,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         events: Vec::new(),
         t0: Instant::now(),
     };
-    let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
+    // Never a panic on a huge timeout (the CLI bounds it to a day).
+    let timeout =
+        Duration::try_from_secs_f64(opts.timeout_s.max(0.0)).unwrap_or(Duration::from_secs(86_400));
     let period = Duration::from_secs_f64(1.0 / opts.setpoint_rate_hz.max(2.0));
     let mut queue: VecDeque<(u32, f64)> = VecDeque::new();
     let mut commands = Vec::new();
