@@ -298,9 +298,14 @@ impl Autopilot {
             Transport::FixedWing { airspeed_mps } if attitude => {
                 wire::roll_of_quaternion(s.q).map(|r| wire::turn_rate_of_roll(r, airspeed_mps))
             }
-            Transport::FixedWing { .. } | Transport::Ground if yaw_rate => {
-                wire::turn_rate_of_yaw_rate(s.body_yaw_rate)
+            // A fixed wing turns by banking: the yaw rate's coordinated-turn roll
+            // atan(r V / g), within the bank limit, as the roll path.
+            Transport::FixedWing { airspeed_mps } if yaw_rate => {
+                wire::turn_rate_of_yaw_rate(s.body_yaw_rate).map(|w| {
+                    wire::turn_rate_of_roll(wire::roll_of_turn_rate(w, airspeed_mps), airspeed_mps)
+                })
             }
+            Transport::Ground if yaw_rate => wire::turn_rate_of_yaw_rate(s.body_yaw_rate),
             _ => None,
         };
         match w {

@@ -298,3 +298,57 @@ fn a_clock_jump_ahead_fails_safe() {
 fn a_repeated_time_stamp_is_sensor_loss() {
     assert_eq!(clocked_vehicle(vec![1000]), FlyEnd::SensorLost);
 }
+
+/// A fixed wing given yaw-rate setpoints (1e4 rad/s clockwise) turns as the roll path does:
+/// at the coordinated-turn rate of the 40 deg bank limit, to the right (isotrack's omega
+/// negative): -g tan(40 deg) / V.
+#[test]
+fn sitl_fixed_wing_yaw_rate_is_bank_limited() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let v_mps = s.file().vehicle.airspeed_mps.unwrap_or(30.0);
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let mut a = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
+    let setpoint = |ms| {
+        MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+            time_boot_ms: ms,
+            q: [1.0, 0.0, 0.0, 0.0],
+            body_yaw_rate: 1e4,
+            target_system: 1,
+            target_component: 1,
+            type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+            ..Default::default()
+        })
+    };
+    let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+    assert_eq!(
+        ack_of(&mut a, arm, 1.0, 0.0),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    a.send(&setpoint(u32::MAX)).unwrap();
+    let offboard = ack_of(&mut a, MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0);
+    assert_eq!(offboard, Some(MavResult::MAV_RESULT_ACCEPTED));
+    let (mut answered, t0) = (0, Instant::now());
+    while answered < 5 && t0.elapsed() < Duration::from_secs(30) {
+        for r in a.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+                a.send(&setpoint(n.time_boot_ms)).unwrap();
+                answered += 1;
+            }
+        }
+    }
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    let expected = -9.8 * 40f64.to_radians().tan() / v_mps;
+    let flown = report.flown.last().expect("a sample flown").1;
+    assert!((flown - expected).abs() < 1e-12, "{flown} vs {expected}");
+}
