@@ -275,6 +275,11 @@ struct Fly<'a> {
     refused: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
     in_control: bool,
+    /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
+    /// no `LOCAL_POSITION_NED` has come.
+    global_origin: Option<crate::geo::Home>,
+    /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
+    local_seen: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -405,6 +410,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         last_answer_ms: None,
         refused: false,
         in_control: false,
+        global_origin: None,
+        local_seen: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -430,6 +437,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     let mut pos: Option<(f64, f64)> = None;
     let mut heading = 0.0;
     let mut home: Option<(f64, f64)> = None;
+    let mut home_local = false;
+    // Since the vehicle's first message (the fence's wait for a position).
+    let mut clock_start = Instant::now();
     let mut vehicle_done = false;
     let mut buf = [0u8; 2048];
     let end = 'flight: loop {
@@ -462,6 +472,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         if !had_target && fly.target.is_some() {
             // The sensor's silence counts from the vehicle's first message.
             clock.last = Instant::now();
+            clock_start = Instant::now();
         }
         if let Some(s) = &lines {
             while let Ok((n, _)) = s.recv_from(&mut buf) {
@@ -479,6 +490,21 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             }
         }
         // The fence, on the received position (never given to the law).
+        if let (Some(f), None, true) = (opts.fence_m, pos, fly.target.is_some()) {
+            if clock_start.elapsed() > timeout {
+                fly.event(format!(
+                    "fence: no position from the vehicle for {} s, the fence of {f} m cannot be kept",
+                    opts.timeout_s
+                ));
+                break 'flight FlyEnd::Fence;
+            }
+        }
+        if fly.local_seen && !home_local {
+            // Positions were projected from GLOBAL_POSITION_INT: the fence re-anchors on the
+            // first local one.
+            home_local = true;
+            home = None;
+        }
         if let Some(p) = pos {
             let h = *home.get_or_insert(p);
             if let Some(f) = opts.fence_m {
@@ -769,8 +795,21 @@ fn handle(
                 fly.refused = true;
             }
         }
-        MavMessage::LOCAL_POSITION_NED(p) => {
+        // A non-finite position is no position (it would switch the fence off).
+        MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
+            fly.local_seen = true;
             *pos = Some((p.y as f64, p.x as f64));
+        }
+        MavMessage::GLOBAL_POSITION_INT(g) if !fly.local_seen => {
+            let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
+            if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
+                let o = *fly.global_origin.get_or_insert(crate::geo::Home {
+                    lat_deg: lat,
+                    lon_deg: lon,
+                    alt_m: 0.0,
+                });
+                *pos = Some(o.to_local_m(lat, lon));
+            }
         }
         MavMessage::ATTITUDE(a) => {
             *heading = isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);

@@ -352,3 +352,77 @@ fn sitl_fixed_wing_yaw_rate_is_bank_limited() {
     let flown = report.flown.last().expect("a sample flown").1;
     assert!((flown - expected).abs() < 1e-12, "{flown} vs {expected}");
 }
+
+/// A vehicle that beats every 50 ms with a new `ISO_S` and a position `k` metres north at
+/// beat `k` (beat 0: not finite if `nan_first`), as `LOCAL_POSITION_NED`, or only as
+/// `GLOBAL_POSITION_INT` if `global`; the companion's fence is 5 m.
+fn fenced_flight(nan_first: bool, global: bool) -> FlyEnd {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut k = 0u32;
+        while t0.elapsed() < Duration::from_secs(20) {
+            let got = link.poll(Duration::from_millis(50)).unwrap();
+            let over = got
+                .iter()
+                .any(|r| matches!(&r.msg, MavMessage::COMMAND_LONG(_)));
+            if over {
+                return;
+            }
+            if !link.has_peer() {
+                continue;
+            }
+            link.send(&heartbeat()).unwrap();
+            let mut name = [0u8; 10];
+            name[..5].copy_from_slice(b"ISO_S");
+            link.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                time_boot_ms: 1000 + 50 * k,
+                value: 1.0,
+                name: name.into(),
+            }))
+            .unwrap();
+            let north_m = if nan_first && k == 0 {
+                f32::NAN
+            } else {
+                k as f32
+            };
+            if global {
+                // 1 m north is 1 / (6371008.8 m) rad of latitude: 0.0899 microdegrees.
+                let lat_deg = 47.0 + (north_m as f64 / 6_371_008.8).to_degrees();
+                link.send(&MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+                    lat: (lat_deg * 1e7).round() as i32,
+                    lon: 85_000_000,
+                    ..Default::default()
+                }))
+                .unwrap();
+            } else {
+                link.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    x: north_m,
+                    ..Default::default()
+                }))
+                .unwrap();
+            }
+            k += 1;
+        }
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 5.0;
+    o.fence_m = Some(5.0);
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    vehicle.join().unwrap();
+    r.end
+}
+
+/// A non-finite first position does not switch the fence off.
+#[test]
+fn fence_survives_a_nan_first_position() {
+    assert_eq!(fenced_flight(true, false), FlyEnd::Fence);
+}
+
+/// With only `GLOBAL_POSITION_INT`, the fence works on it (projected about the first fix).
+#[test]
+fn fence_works_on_global_positions() {
+    assert_eq!(fenced_flight(false, true), FlyEnd::Fence);
+}
