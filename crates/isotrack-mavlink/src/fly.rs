@@ -181,6 +181,9 @@ pub enum FlyEnd {
     LawNotFinite,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     ControlRefused,
+    /// The vehicle reported `MAV_STATE_POWEROFF` without announcing the end of its run
+    /// (`STATUSTEXT` "isotrack sitl: run ended"): failsafe.
+    VehicleLost,
     /// The measurements' clock jumped by more than [`MAX_MEASUREMENT_STEP_S`]: failsafe.
     SensorClockJump,
     /// Once the companion had control, the vehicle left OFFBOARD or disarmed without the
@@ -202,6 +205,7 @@ impl FlyEnd {
             FlyEnd::LawNotFinite => "law_not_finite",
             FlyEnd::ControlRefused => "control_refused",
             FlyEnd::SensorClockJump => "sensor_clock_jump",
+            FlyEnd::VehicleLost => "vehicle_lost",
             FlyEnd::PilotTookOver => "pilot_took_over",
         }
     }
@@ -280,6 +284,8 @@ struct Fly<'a> {
     global_origin: Option<crate::geo::Home>,
     /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
     local_seen: bool,
+    /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
+    run_ended: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -412,6 +418,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         in_control: false,
         global_origin: None,
         local_seen: false,
+        run_ended: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -619,6 +626,10 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         } else if queue.len() > 100_000 {
             queue.pop_front();
         }
+        if vehicle_done && !fly.run_ended {
+            fly.event("the vehicle powered off without ending its run: vehicle lost".into());
+            break 'flight FlyEnd::VehicleLost;
+        }
         if vehicle_done {
             fly.event("the vehicle ended its run".into());
             break 'flight FlyEnd::VehicleEnded;
@@ -809,6 +820,11 @@ fn handle(
                     alt_m: 0.0,
                 });
                 *pos = Some(o.to_local_m(lat, lon));
+            }
+        }
+        MavMessage::STATUSTEXT(t) => {
+            if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") {
+                fly.run_ended = true;
             }
         }
         MavMessage::ATTITUDE(a) => {

@@ -426,3 +426,39 @@ fn fence_survives_a_nan_first_position() {
 fn fence_works_on_global_positions() {
     assert_eq!(fenced_flight(false, true), FlyEnd::Fence);
 }
+
+/// A vehicle that powers off (`MAV_STATE_POWEROFF`) without announcing the end of its run is
+/// lost: failsafe, HOLD commanded (PX4 main mode 4, sub mode 3).
+#[test]
+fn a_vehicle_powering_off_is_lost() {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut beats = 0;
+        while t0.elapsed() < Duration::from_secs(20) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        return Some((c.param2, c.param3));
+                    }
+                }
+            }
+            if link.has_peer() {
+                let mut h = heartbeat();
+                if let (MavMessage::HEARTBEAT(d), true) = (&mut h, beats >= 3) {
+                    d.system_status = MavState::MAV_STATE_POWEROFF;
+                }
+                link.send(&h).unwrap();
+                beats += 1;
+            }
+        }
+        None
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 10.0;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert_eq!(vehicle.join().unwrap(), Some((4.0, 3.0)));
+}
