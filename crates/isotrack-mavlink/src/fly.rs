@@ -822,10 +822,10 @@ fn handle(
                 *pos = Some(o.to_local_m(lat, lon));
             }
         }
-        MavMessage::STATUSTEXT(t) => {
-            if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") {
-                fly.run_ended = true;
-            }
+        MavMessage::STATUSTEXT(t)
+            if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
+        {
+            fly.run_ended = true;
         }
         MavMessage::ATTITUDE(a) => {
             *heading = isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);
