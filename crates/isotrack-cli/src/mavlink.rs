@@ -276,5 +276,14 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
+    if report.end.is_failsafe() && !report.failsafe_acknowledged {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): the vehicle did not confirm the failsafe mode",
+                report.end.as_str()
+            ),
+        });
+    }
     Ok(())
 }

@@ -251,3 +251,23 @@ fn a_real_time_flight_completes() {
     assert_eq!(summary["outcome"], "completed");
     assert_eq!(summary["samples"], 3001);
 }
+
+/// A failsafe with no vehicle to confirm it (nothing listens on the link) exits 69, and does
+/// not claim to have commanded HOLD.
+#[test]
+fn an_unconfirmed_failsafe_exits_69() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "fly",
+            "--mavlink",
+            "udpout:127.0.0.1:9",
+            "--timeout-s",
+            "0.3",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(69), "{err}");
+    assert!(!err.contains("HOLD commanded"), "{err}");
+    assert!(err.contains("link_lost"), "{err}");
+}

@@ -670,13 +670,21 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             FailsafeAction::Hold => Mode::Hold,
             FailsafeAction::Return => Mode::Return,
         };
-        fly.event(format!(
-            "failsafe ({}): setpoints stopped, {} commanded",
-            end.as_str(),
-            mode.name()
-        ));
+        fly.event(if fly.target.is_some() {
+            format!(
+                "failsafe ({}): setpoints stopped, {} commanded",
+                end.as_str(),
+                mode.name()
+            )
+        } else {
+            format!(
+                "failsafe ({}): no vehicle heard, nothing to command",
+                end.as_str()
+            )
+        });
         // Up to 5 tries, 0.3 s apart, until the vehicle acknowledges or reports the mode.
-        'tries: for _ in 0..5 {
+        let tries = if fly.target.is_some() { 5 } else { 0 };
+        'tries: for _ in 0..tries {
             fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(mode))?;
             let until = Instant::now() + Duration::from_millis(300);
             while Instant::now() < until {
@@ -710,6 +718,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         }
         fly.event(if acknowledged {
             format!("the vehicle is in {}", mode.name())
+        } else if fly.target.is_none() {
+            "no failsafe mode was sent".to_string()
         } else {
             format!("the vehicle did not confirm {}", mode.name())
         });
