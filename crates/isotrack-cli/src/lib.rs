@@ -32,6 +32,9 @@ pub mod exit {
     pub const DATAERR: u8 = 65;
     /// An input file does not exist or cannot be read.
     pub const NOINPUT: u8 = 66;
+    /// `fly`: a failsafe the vehicle did not confirm (no acknowledgement nor the mode in its
+    /// heartbeat), or no vehicle to command.
+    pub const UNAVAILABLE: u8 = 69;
     /// An operating-system error: threads or other resources could not be had.
     pub const OSERR: u8 = 71;
     /// An output file or directory cannot be created or written (standard output included,

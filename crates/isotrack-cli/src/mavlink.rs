@@ -5,7 +5,7 @@ use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
 use crate::output::{scenario_toml, write_summary, TraceWriter};
 use crate::run::{load, Failure};
-use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyError, FlyOptions, SensorSource};
+use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
 use isotrack_sim::{NoTrace, TraceSink};
@@ -45,9 +45,27 @@ fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
     }
 }
 
+/// Checks that `v`, if given, is in `[lo, hi]` (a duration beyond `hi` overflows the clocks).
+fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
+    match v {
+        Some(x) if !(x.is_finite() && (lo..=hi).contains(&x)) => {
+            Err(usage(format!("{flag} must be in [{lo}, {hi}], got {x}")))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The range of `--speedup`.
+pub const SPEEDUP_RANGE: (f64, f64) = (1e-3, 1e3);
+/// The largest `--timeout-s`, s (a day).
+pub const MAX_TIMEOUT_S: f64 = 86_400.0;
+/// The largest `--max-duration-s`, s: MAVLink's `time_boot_ms` span.
+pub const MAX_DURATION_S: f64 = u32::MAX as f64 / 1000.0;
+
 /// `isotrack sitl`.
 pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     positive("--speedup", args.speedup)?;
+    within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
     let scenario = load(&args.scenario)?;
     let mut opts = SitlOptions::new(&args.mavlink);
     opts.system_id = args.system_id;
@@ -142,6 +160,8 @@ struct FlySummary<'a> {
 pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     positive("--max-duration-s", args.max_duration_s)?;
     positive("--timeout-s", Some(args.timeout_s))?;
+    within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
+    within("--max-duration-s", args.max_duration_s, 0.0, MAX_DURATION_S)?;
     positive("--fence-m", args.fence_m)?;
     if !(args.setpoint_rate_hz.is_finite() && (2.0..=1000.0).contains(&args.setpoint_rate_hz)) {
         return Err(usage(format!(
@@ -225,8 +245,10 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
                 .map(|p| p.display().to_string()),
             outcome: if report.end.is_failsafe() {
                 "failsafe"
-            } else {
+            } else if report.end == FlyEnd::VehicleEnded {
                 "completed"
+            } else {
+                report.end.as_str()
             },
             outcome_detail: report.events.last().cloned().unwrap_or_default(),
             end_reason: report.end.as_str(),
@@ -254,5 +276,14 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
+    if report.end.is_failsafe() && !report.failsafe_acknowledged {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): the vehicle did not confirm the failsafe mode",
+                report.end.as_str()
+            ),
+        });
+    }
     Ok(())
 }

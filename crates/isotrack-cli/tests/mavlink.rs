@@ -27,6 +27,21 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             "--speedup",
         ),
         (
+            vec!["sitl", "--mavlink", out, "--speedup", "1e-300"],
+            64,
+            "--speedup must be in [0.001, 1000]",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--timeout-s", "1e20"],
+            64,
+            "--timeout-s must be in [0, 86400]",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--max-duration-s", "1e300"],
+            64,
+            "--max-duration-s",
+        ),
+        (
             vec!["sitl", "--mavlink", out, "--speedup", "nan"],
             64,
             "--speedup",
@@ -235,4 +250,24 @@ fn a_real_time_flight_completes() {
     .unwrap();
     assert_eq!(summary["outcome"], "completed");
     assert_eq!(summary["samples"], 3001);
+}
+
+/// A failsafe with no vehicle to confirm it (nothing listens on the link) exits 69, and does
+/// not claim to have commanded HOLD.
+#[test]
+fn an_unconfirmed_failsafe_exits_69() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "fly",
+            "--mavlink",
+            "udpout:127.0.0.1:9",
+            "--timeout-s",
+            "0.3",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(69), "{err}");
+    assert!(!err.contains("HOLD commanded"), "{err}");
+    assert!(err.contains("link_lost"), "{err}");
 }

@@ -30,6 +30,55 @@ use std::time::{Duration, Instant};
 /// The `time_boot_ms` of a setpoint that answers no measurement (sent before the first one).
 pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 
+/// The largest step of the measurements' clock (`time_boot_ms`) between two measurements
+/// received, forwards or backwards, s: a larger one (a rebooted or spoofed clock) is a sensor
+/// fault, and fails safe (`sensor_clock_jump`).
+pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
+
+/// The measurements' clock as received: only a measurement newer than every one before it
+/// counts as one for the sensor-loss timer (the companion's own monotonic clock).
+struct SensorClock {
+    /// The newest `time_boot_ms` received.
+    newest_ms: Option<u32>,
+    /// When the newest measurement (or, before any, the vehicle's first message) arrived.
+    last: Instant,
+    /// A jump of the clock, to fail safe on.
+    fault: Option<String>,
+}
+
+impl SensorClock {
+    /// Takes in a received measurement: queued unless its time jumps.
+    fn receive(&mut self, queue: &mut VecDeque<(u32, f64)>, ms: u32, v: f64) {
+        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u32;
+        match self.newest_ms {
+            Some(n) if ms <= n => {
+                if n - ms > max_ms {
+                    self.fault.get_or_insert(format!(
+                        "the measurement's time jumped back from {} s to {} s (a rebooted or spoofed clock)",
+                        wire::time_s(n),
+                        wire::time_s(ms)
+                    ));
+                    return;
+                }
+                // A repeat (answered again) or a late one (dropped): no news of the sensor.
+                queue.push_back((ms, v));
+            }
+            Some(n) if ms - n > max_ms => {
+                self.fault.get_or_insert(format!(
+                    "the measurement's time jumped ahead from {} s to {} s (a spoofed clock)",
+                    wire::time_s(n),
+                    wire::time_s(ms)
+                ));
+            }
+            _ => {
+                self.newest_ms = Some(ms);
+                self.last = Instant::now();
+                queue.push_back((ms, v));
+            }
+        }
+    }
+}
+
 /// Where the measurements come from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum SensorSource {
@@ -132,6 +181,15 @@ pub enum FlyEnd {
     LawNotFinite,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     ControlRefused,
+    /// The vehicle reported `MAV_STATE_POWEROFF` without announcing the end of its run
+    /// (`STATUSTEXT` "isotrack sitl: run ended"): failsafe.
+    VehicleLost,
+    /// The measurements' clock jumped by more than [`MAX_MEASUREMENT_STEP_S`]: failsafe.
+    SensorClockJump,
+    /// Once the companion had control, the vehicle left OFFBOARD or disarmed without the
+    /// companion asking (a pilot or the autopilot took over): the setpoints stop at once and
+    /// nothing is commanded, so the pilot's mode stands.
+    PilotTookOver,
 }
 
 impl FlyEnd {
@@ -146,11 +204,17 @@ impl FlyEnd {
             FlyEnd::Fence => "fence",
             FlyEnd::LawNotFinite => "law_not_finite",
             FlyEnd::ControlRefused => "control_refused",
+            FlyEnd::SensorClockJump => "sensor_clock_jump",
+            FlyEnd::VehicleLost => "vehicle_lost",
+            FlyEnd::PilotTookOver => "pilot_took_over",
         }
     }
     /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
     pub fn is_failsafe(self) -> bool {
-        !matches!(self, FlyEnd::VehicleEnded | FlyEnd::ControlRefused)
+        !matches!(
+            self,
+            FlyEnd::VehicleEnded | FlyEnd::ControlRefused | FlyEnd::PilotTookOver
+        )
     }
 }
 
@@ -213,6 +277,15 @@ struct Fly<'a> {
     last_answer_ms: Option<u32>,
     /// The vehicle refused to arm or to switch to OFFBOARD.
     refused: bool,
+    /// The vehicle has been armed and in OFFBOARD (the companion had control).
+    in_control: bool,
+    /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
+    /// no `LOCAL_POSITION_NED` has come.
+    global_origin: Option<crate::geo::Home>,
+    /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
+    local_seen: bool,
+    /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
+    run_ended: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -342,16 +415,27 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         current: None,
         last_answer_ms: None,
         refused: false,
+        in_control: false,
+        global_origin: None,
+        local_seen: false,
+        run_ended: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
-    let timeout = Duration::from_secs_f64(opts.timeout_s.max(0.0));
+    // Never a panic on a huge timeout (the CLI bounds it to a day).
+    let timeout =
+        Duration::try_from_secs_f64(opts.timeout_s.max(0.0)).unwrap_or(Duration::from_secs(86_400));
     let period = Duration::from_secs_f64(1.0 / opts.setpoint_rate_hz.max(2.0));
     let mut queue: VecDeque<(u32, f64)> = VecDeque::new();
     let mut commands = Vec::new();
     let (mut samples, mut t_first, mut t_last) = (0u64, None::<f64>, None::<f64>);
     let mut last_link = Instant::now();
-    let mut last_sensor = Instant::now();
+    let mut clock = SensorClock {
+        newest_ms: None,
+        last: Instant::now(),
+        fault: None,
+    };
+    let mut first_wall: Option<Instant> = None;
     let mut next_setpoint = Instant::now();
     let mut next_heartbeat = Instant::now();
     let mut next_control = Instant::now();
@@ -360,6 +444,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     let mut pos: Option<(f64, f64)> = None;
     let mut heading = 0.0;
     let mut home: Option<(f64, f64)> = None;
+    let mut home_local = false;
+    // Since the vehicle's first message (the fence's wait for a position).
+    let mut clock_start = Instant::now();
     let mut vehicle_done = false;
     let mut buf = [0u8; 2048];
     let end = 'flight: loop {
@@ -383,7 +470,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &wanted,
                 &mut queue,
                 &mut last_link,
-                &mut last_sensor,
+                &mut clock,
                 &mut pos,
                 &mut heading,
                 &mut vehicle_done,
@@ -391,7 +478,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         }
         if !had_target && fly.target.is_some() {
             // The sensor's silence counts from the vehicle's first message.
-            last_sensor = Instant::now();
+            clock.last = Instant::now();
+            clock_start = Instant::now();
         }
         if let Some(s) = &lines {
             while let Ok((n, _)) = s.recv_from(&mut buf) {
@@ -402,14 +490,28 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     };
                     if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
                         if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
-                            queue.push_back((ms, v));
-                            last_sensor = Instant::now();
+                            clock.receive(&mut queue, ms, v);
                         }
                     }
                 }
             }
         }
         // The fence, on the received position (never given to the law).
+        if let (Some(f), None, true) = (opts.fence_m, pos, fly.target.is_some()) {
+            if clock_start.elapsed() > timeout {
+                fly.event(format!(
+                    "fence: no position from the vehicle for {} s, the fence of {f} m cannot be kept",
+                    opts.timeout_s
+                ));
+                break 'flight FlyEnd::Fence;
+            }
+        }
+        if fly.local_seen && !home_local {
+            // Positions were projected from GLOBAL_POSITION_INT: the fence re-anchors on the
+            // first local one.
+            home_local = true;
+            home = None;
+        }
         if let Some(p) = pos {
             let h = *home.get_or_insert(p);
             if let Some(f) = opts.fence_m {
@@ -426,6 +528,18 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             next_control = Instant::now();
         }
         let active = fly.armed && fly.mode == Some(Mode::Offboard);
+        if active {
+            fly.in_control = true;
+        } else if fly.in_control {
+            // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
+            // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
+            fly.event(format!(
+                "pilot_took_over: the vehicle is {} in {}, not commanded by the companion: setpoints stopped, nothing commanded",
+                if fly.armed { "armed" } else { "disarmed" },
+                fly.mode.map_or("an unknown mode", |m| m.name())
+            ));
+            break 'flight FlyEnd::PilotTookOver;
+        }
         // Taking control: arm, then OFFBOARD, retried every 0.5 s.
         if opts.take_control && !active && fly.refused {
             fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
@@ -467,6 +581,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     value: v,
                 };
                 let first = *t_first.get_or_insert(m.t_s);
+                first_wall.get_or_insert_with(Instant::now);
                 if let Some(max) = opts.max_duration_s {
                     if m.t_s - first >= max {
                         fly.event(format!(
@@ -511,6 +626,10 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         } else if queue.len() > 100_000 {
             queue.pop_front();
         }
+        if vehicle_done && !fly.run_ended {
+            fly.event("the vehicle powered off without ending its run: vehicle lost".into());
+            break 'flight FlyEnd::VehicleLost;
+        }
         if vehicle_done {
             fly.event("the vehicle ended its run".into());
             break 'flight FlyEnd::VehicleEnded;
@@ -527,7 +646,20 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             ));
             break 'flight FlyEnd::LinkLost;
         }
-        if now.duration_since(last_sensor) > timeout {
+        if let Some(what) = clock.fault.take() {
+            fly.event(what);
+            break 'flight FlyEnd::SensorClockJump;
+        }
+        if let (Some(max), Some(w)) = (opts.max_duration_s, first_wall) {
+            // The companion's own clock too: a vehicle clock that stalls cannot stretch the run.
+            if now.duration_since(w).as_secs_f64() >= max {
+                fly.event(format!(
+                    "max duration {max} s reached on the companion's clock"
+                ));
+                break 'flight FlyEnd::MaxDuration;
+            }
+        }
+        if now.duration_since(clock.last) > timeout {
             fly.event(format!("no measurement for {} s", opts.timeout_s));
             break 'flight FlyEnd::SensorLost;
         }
@@ -538,13 +670,21 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             FailsafeAction::Hold => Mode::Hold,
             FailsafeAction::Return => Mode::Return,
         };
-        fly.event(format!(
-            "failsafe ({}): setpoints stopped, {} commanded",
-            end.as_str(),
-            mode.name()
-        ));
+        fly.event(if fly.target.is_some() {
+            format!(
+                "failsafe ({}): setpoints stopped, {} commanded",
+                end.as_str(),
+                mode.name()
+            )
+        } else {
+            format!(
+                "failsafe ({}): no vehicle heard, nothing to command",
+                end.as_str()
+            )
+        });
         // Up to 5 tries, 0.3 s apart, until the vehicle acknowledges or reports the mode.
-        'tries: for _ in 0..5 {
+        let tries = if fly.target.is_some() { 5 } else { 0 };
+        'tries: for _ in 0..tries {
             fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(mode))?;
             let until = Instant::now() + Duration::from_millis(300);
             while Instant::now() < until {
@@ -578,6 +718,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         }
         fly.event(if acknowledged {
             format!("the vehicle is in {}", mode.name())
+        } else if fly.target.is_none() {
+            "no failsafe mode was sent".to_string()
         } else {
             format!("the vehicle did not confirm {}", mode.name())
         });
@@ -602,7 +744,7 @@ fn handle(
     wanted: &[u8],
     queue: &mut VecDeque<(u32, f64)>,
     last_link: &mut Instant,
-    last_sensor: &mut Instant,
+    clock: &mut SensorClock,
     pos: &mut Option<(f64, f64)>,
     heading: &mut f64,
     vehicle_done: &mut bool,
@@ -625,8 +767,7 @@ fn handle(
     }
     if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
         if !wanted.is_empty() && name_of(&n.name[..]) == wanted && n.value.is_finite() {
-            queue.push_back((n.time_boot_ms, n.value as f64));
-            *last_sensor = Instant::now();
+            clock.receive(queue, n.time_boot_ms, n.value as f64);
         }
         return;
     }
@@ -653,7 +794,9 @@ fn handle(
                 *vehicle_done = true;
             }
         }
-        MavMessage::COMMAND_ACK(a) => {
+        // Acknowledgements go to every peer of the vehicle: once in control, they may answer
+        // someone else's command, and say nothing about ours.
+        MavMessage::COMMAND_ACK(a) if !fly.in_control => {
             let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
             fly.event(format!("{:?}: {:?}", a.command, a.result));
             if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
@@ -673,8 +816,26 @@ fn handle(
                 fly.refused = true;
             }
         }
-        MavMessage::LOCAL_POSITION_NED(p) => {
+        // A non-finite position is no position (it would switch the fence off).
+        MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
+            fly.local_seen = true;
             *pos = Some((p.y as f64, p.x as f64));
+        }
+        MavMessage::GLOBAL_POSITION_INT(g) if !fly.local_seen => {
+            let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
+            if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
+                let o = *fly.global_origin.get_or_insert(crate::geo::Home {
+                    lat_deg: lat,
+                    lon_deg: lon,
+                    alt_m: 0.0,
+                });
+                *pos = Some(o.to_local_m(lat, lon));
+            }
+        }
+        MavMessage::STATUSTEXT(t)
+            if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
+        {
+            fly.run_ended = true;
         }
         MavMessage::ATTITUDE(a) => {
             *heading = isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);

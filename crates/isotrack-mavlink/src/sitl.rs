@@ -130,13 +130,25 @@ pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
     Ok(())
 }
 
+/// The ground station's system id (QGroundControl's and MAVProxy's default): it may arm,
+/// change the mode and disarm as a pilot would, but never flies the vehicle by setpoints.
+pub const GCS_SYSTEM_ID: u8 = 255;
+
+/// `param2` of `MAV_CMD_COMPONENT_ARM_DISARM` that forces it (PX4, ArduPilot): needed to disarm
+/// a flying vehicle from another system than the one in control.
+pub const FORCE_CODE: f32 = 21196.0;
+
 /// The autopilot's state between samples.
 struct Autopilot {
     system_id: u8,
     armed: bool,
     mode: Mode,
-    /// The companion in control (the last to arm or set a mode): `(system, component)`.
+    /// The companion in control (the one that armed it or switched it to OFFBOARD, or, armed by
+    /// the ground station, the first to send a valid setpoint): `(system, component)`.
     owner: Option<(u32, u8)>,
+    /// A fixed wing (in flight whenever armed): a disarm from another system than the owner
+    /// needs PX4's force code.
+    flying: bool,
     /// The last valid setpoint of the owner: turn rate, rad/s, and the simulated time it came.
     setpoint: Option<(f64, f64)>,
     transport: Transport,
@@ -181,22 +193,65 @@ impl Autopilot {
         }
     }
 
+    /// Whether `from` may command the vehicle: anyone while it is disarmed or has no owner,
+    /// else its owner and the ground station ([`GCS_SYSTEM_ID`]).
+    fn may_command(&self, from: (u32, u8)) -> bool {
+        !self.armed || from.0 == GCS_SYSTEM_ID as u32 || self.owner.is_none_or(|o| o == from)
+    }
+
+    fn deny(&mut self, t_s: f64, from: (u32, u8), what: &str) -> MavResult {
+        self.event(
+            t_s,
+            format!(
+                "refused {what} from system {}, component {}",
+                from.0, from.1
+            ),
+        );
+        MavResult::MAV_RESULT_DENIED
+    }
+
     /// Handles a command; returns the acknowledgement's result.
     fn command(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
+        let gcs = from.0 == GCS_SYSTEM_ID as u32;
         match c.command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+                let forced = c.param2 == FORCE_CODE;
+                if !(c.param2 == 0.0 || forced) {
+                    return self.deny(t_s, from, "arm/disarm (param2 neither 0 nor 21196)");
+                }
                 if c.param1 == 1.0 {
-                    self.armed = true;
-                    self.owner = Some(from);
-                    self.event(t_s, format!("armed by system {}", from.0));
+                    if !self.may_command(from) {
+                        return self.deny(t_s, from, "arming (another system has control)");
+                    }
+                    if !self.armed {
+                        self.armed = true;
+                        // The ground station arms as a pilot: it takes no control.
+                        self.owner = (!gcs).then_some(from);
+                        self.event(t_s, format!("armed by system {}", from.0));
+                    }
                     MavResult::MAV_RESULT_ACCEPTED
                 } else if c.param1 == 0.0 {
+                    let owner = self.owner == Some(from);
+                    if self.armed && self.flying && !owner && !forced {
+                        return self.deny(
+                            t_s,
+                            from,
+                            "disarm in flight (not the owner: needs force code 21196)",
+                        );
+                    }
+                    if self.armed && !owner && !gcs && !forced {
+                        return self.deny(t_s, from, "disarm (another system has control)");
+                    }
                     self.armed = false;
+                    self.owner = None;
                     self.event(t_s, format!("disarmed by system {}", from.0));
                     MavResult::MAV_RESULT_ACCEPTED
                 } else {
                     MavResult::MAV_RESULT_DENIED
                 }
+            }
+            MavCmd::MAV_CMD_DO_SET_MODE if !self.may_command(from) => {
+                self.deny(t_s, from, "mode change (another system has control)")
             }
             MavCmd::MAV_CMD_DO_SET_MODE => match Mode::from_px4(c.param2, c.param3) {
                 Some(m) if c.param1 as u32 & 1 == 1 => {
@@ -204,7 +259,7 @@ impl Autopilot {
                         self.event(t_s, format!("mode {} by system {}", m.name(), from.0));
                     }
                     self.mode = m;
-                    if m == Mode::Offboard {
+                    if m == Mode::Offboard && !gcs && self.owner.is_none() {
                         self.owner = Some(from);
                     }
                     MavResult::MAV_RESULT_ACCEPTED
@@ -227,7 +282,10 @@ impl Autopilot {
     /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
     /// (or of anyone, while no companion is in control).
     fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
-        if s.target_system != self.system_id || self.owner.is_some_and(|o| o != from) {
+        if s.target_system != self.system_id
+            || self.owner.is_some_and(|o| o != from)
+            || from.0 == GCS_SYSTEM_ID as u32
+        {
             self.refused += 1;
             return None;
         }
@@ -240,13 +298,22 @@ impl Autopilot {
             Transport::FixedWing { airspeed_mps } if attitude => {
                 wire::roll_of_quaternion(s.q).map(|r| wire::turn_rate_of_roll(r, airspeed_mps))
             }
-            Transport::FixedWing { .. } | Transport::Ground if yaw_rate => {
-                wire::turn_rate_of_yaw_rate(s.body_yaw_rate)
+            // A fixed wing turns by banking: the yaw rate's coordinated-turn roll
+            // atan(r V / g), within the bank limit, as the roll path.
+            Transport::FixedWing { airspeed_mps } if yaw_rate => {
+                wire::turn_rate_of_yaw_rate(s.body_yaw_rate).map(|w| {
+                    wire::turn_rate_of_roll(wire::roll_of_turn_rate(w, airspeed_mps), airspeed_mps)
+                })
             }
+            Transport::Ground if yaw_rate => wire::turn_rate_of_yaw_rate(s.body_yaw_rate),
             _ => None,
         };
         match w {
             Some(w) if w.is_finite() => {
+                if self.armed && self.owner.is_none() {
+                    // Armed by the ground station: the first companion to fly it owns it.
+                    self.owner = Some(from);
+                }
                 self.setpoint = Some((w, t_s));
                 Some(s.time_boot_ms)
             }
@@ -477,6 +544,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
             armed: false,
             mode: Mode::Manual,
             owner: None,
+            flying: scenario.is_flying(),
             setpoint: None,
             transport,
             loiter_radps: 0.5 * turn_limit,

@@ -162,3 +162,303 @@ fn a_refused_arming_ends_the_flight() {
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(r.commands.is_empty());
 }
+
+/// Sends `cmd` from `link` to the vehicle and returns the result of its acknowledgement.
+fn ack_of(link: &mut Link, cmd: MavCmd, p1: f32, p2: f32) -> Option<MavResult> {
+    link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+        param1: p1,
+        param2: p2,
+        command: cmd,
+        target_system: 1,
+        target_component: 1,
+        ..Default::default()
+    }))
+    .unwrap();
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(10) {
+        for r in link.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::COMMAND_ACK(a) = &r.msg {
+                if a.command == cmd {
+                    return Some(a.result);
+                }
+            }
+        }
+    }
+    None
+}
+
+/// Once companion A (system 1, component 191) has armed the flying vehicle, a stranger B
+/// (system 7) can neither arm it (take it over), switch its mode, fly it by setpoints, nor
+/// disarm it without PX4's force code 21196; with the code, B's disarm is accepted.
+#[test]
+fn sitl_refuses_a_stranger_once_armed() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let url = format!("udpout:{addr}");
+    let mut a = Link::open(&url, 1, 191).unwrap();
+    let mut b = Link::open(&url, 7, 191).unwrap();
+    let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+    let mode = MavCmd::MAV_CMD_DO_SET_MODE;
+    let (accepted, denied) = (
+        Some(MavResult::MAV_RESULT_ACCEPTED),
+        Some(MavResult::MAV_RESULT_DENIED),
+    );
+    assert_eq!(ack_of(&mut a, arm, 1.0, 0.0), accepted);
+    assert_eq!(ack_of(&mut b, arm, 1.0, 0.0), denied, "B's arming");
+    assert_eq!(ack_of(&mut b, mode, 1.0, 6.0), denied, "B's OFFBOARD");
+    b.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        body_yaw_rate: -0.1,
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    }))
+    .unwrap();
+    assert_eq!(
+        ack_of(&mut b, arm, 0.0, 0.0),
+        denied,
+        "B's disarm, unforced"
+    );
+    assert_eq!(
+        ack_of(&mut b, arm, 0.0, 21196.0),
+        accepted,
+        "B's forced disarm"
+    );
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    assert_eq!(report.setpoints_refused, 1, "{:?}", report.events);
+    let owner_kept = !report
+        .events
+        .iter()
+        .any(|e| e.contains(": armed by system 7"));
+    assert!(owner_kept, "{:?}", report.events);
+}
+
+/// A vehicle that beats every 50 ms and sends `ISO_S` with the given `time_boot_ms`, one per
+/// beat, the last one again and again; stops after 10 s (or once told the companion ended).
+fn clocked_vehicle(times: Vec<u32>) -> FlyEnd {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let finished = done.clone();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut i = 0;
+        while t0.elapsed() < Duration::from_secs(10)
+            && !finished.load(std::sync::atomic::Ordering::SeqCst)
+        {
+            link.poll(Duration::from_millis(50)).unwrap();
+            if link.has_peer() {
+                link.send(&heartbeat()).unwrap();
+                let mut name = [0u8; 10];
+                name[..5].copy_from_slice(b"ISO_S");
+                link.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                    time_boot_ms: times[i.min(times.len() - 1)],
+                    value: 1.0,
+                    name: name.into(),
+                }))
+                .unwrap();
+                i += 1;
+            }
+        }
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 0.5;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    done.store(true, std::sync::atomic::Ordering::SeqCst);
+    vehicle.join().unwrap();
+    r.end
+}
+
+/// One measurement stamped 46 days ahead (a spoofed clock) is a sensor fault: failsafe at
+/// once, not a frozen clock whose later (older) measurements keep the sensor timer alive.
+#[test]
+fn a_clock_jump_ahead_fails_safe() {
+    let mut times = vec![1000, 2000, 4_000_000_000];
+    times.extend((3..400).map(|k| k * 1000));
+    assert_eq!(clocked_vehicle(times), FlyEnd::SensorClockJump);
+}
+
+/// The same time stamp again and again is no news from the sensor: sensor loss after the
+/// timeout, though the vehicle keeps talking.
+#[test]
+fn a_repeated_time_stamp_is_sensor_loss() {
+    assert_eq!(clocked_vehicle(vec![1000]), FlyEnd::SensorLost);
+}
+
+/// A fixed wing given yaw-rate setpoints (1e4 rad/s clockwise) turns as the roll path does:
+/// at the coordinated-turn rate of the 40 deg bank limit, to the right (isotrack's omega
+/// negative): -g tan(40 deg) / V.
+#[test]
+fn sitl_fixed_wing_yaw_rate_is_bank_limited() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let v_mps = s.file().vehicle.airspeed_mps.unwrap_or(30.0);
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let mut a = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
+    let setpoint = |ms| {
+        MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+            time_boot_ms: ms,
+            q: [1.0, 0.0, 0.0, 0.0],
+            body_yaw_rate: 1e4,
+            target_system: 1,
+            target_component: 1,
+            type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+            ..Default::default()
+        })
+    };
+    let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+    assert_eq!(
+        ack_of(&mut a, arm, 1.0, 0.0),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    a.send(&setpoint(u32::MAX)).unwrap();
+    let offboard = ack_of(&mut a, MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0);
+    assert_eq!(offboard, Some(MavResult::MAV_RESULT_ACCEPTED));
+    let (mut answered, t0) = (0, Instant::now());
+    while answered < 5 && t0.elapsed() < Duration::from_secs(30) {
+        for r in a.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+                a.send(&setpoint(n.time_boot_ms)).unwrap();
+                answered += 1;
+            }
+        }
+    }
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    let expected = -9.8 * 40f64.to_radians().tan() / v_mps;
+    let flown = report.flown.last().expect("a sample flown").1;
+    assert!((flown - expected).abs() < 1e-12, "{flown} vs {expected}");
+}
+
+/// A vehicle that beats every 50 ms with a new `ISO_S` and a position `k` metres north at
+/// beat `k` (beat 0: not finite if `nan_first`), as `LOCAL_POSITION_NED`, or only as
+/// `GLOBAL_POSITION_INT` if `global`; the companion's fence is 5 m.
+fn fenced_flight(nan_first: bool, global: bool) -> FlyEnd {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut k = 0u32;
+        while t0.elapsed() < Duration::from_secs(20) {
+            let got = link.poll(Duration::from_millis(50)).unwrap();
+            let over = got
+                .iter()
+                .any(|r| matches!(&r.msg, MavMessage::COMMAND_LONG(_)));
+            if over {
+                return;
+            }
+            if !link.has_peer() {
+                continue;
+            }
+            link.send(&heartbeat()).unwrap();
+            let mut name = [0u8; 10];
+            name[..5].copy_from_slice(b"ISO_S");
+            link.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                time_boot_ms: 1000 + 50 * k,
+                value: 1.0,
+                name: name.into(),
+            }))
+            .unwrap();
+            let north_m = if nan_first && k == 0 {
+                f32::NAN
+            } else {
+                k as f32
+            };
+            if global {
+                // 1 m north is 1 / (6371008.8 m) rad of latitude: 0.0899 microdegrees.
+                let lat_deg = 47.0 + (north_m as f64 / 6_371_008.8).to_degrees();
+                link.send(&MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+                    lat: (lat_deg * 1e7).round() as i32,
+                    lon: 85_000_000,
+                    ..Default::default()
+                }))
+                .unwrap();
+            } else {
+                link.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    x: north_m,
+                    ..Default::default()
+                }))
+                .unwrap();
+            }
+            k += 1;
+        }
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 5.0;
+    o.fence_m = Some(5.0);
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    vehicle.join().unwrap();
+    r.end
+}
+
+/// A non-finite first position does not switch the fence off.
+#[test]
+fn fence_survives_a_nan_first_position() {
+    assert_eq!(fenced_flight(true, false), FlyEnd::Fence);
+}
+
+/// With only `GLOBAL_POSITION_INT`, the fence works on it (projected about the first fix).
+#[test]
+fn fence_works_on_global_positions() {
+    assert_eq!(fenced_flight(false, true), FlyEnd::Fence);
+}
+
+/// A vehicle that powers off (`MAV_STATE_POWEROFF`) without announcing the end of its run is
+/// lost: failsafe, HOLD commanded (PX4 main mode 4, sub mode 3).
+#[test]
+fn a_vehicle_powering_off_is_lost() {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut beats = 0;
+        while t0.elapsed() < Duration::from_secs(20) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        return Some((c.param2, c.param3));
+                    }
+                }
+            }
+            if link.has_peer() {
+                let mut h = heartbeat();
+                if let (MavMessage::HEARTBEAT(d), true) = (&mut h, beats >= 3) {
+                    d.system_status = MavState::MAV_STATE_POWEROFF;
+                }
+                link.send(&h).unwrap();
+                beats += 1;
+            }
+        }
+        None
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 10.0;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert_eq!(vehicle.join().unwrap(), Some((4.0, 3.0)));
+}

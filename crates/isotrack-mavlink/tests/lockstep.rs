@@ -2,10 +2,12 @@
 //! a port of its own: the vehicle binds port 0), against the in-process mirror.
 
 use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, FlyReport};
+use isotrack_mavlink::link::Link;
 use isotrack_mavlink::mirror::{mirror, Rounding, Transport};
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions, SitlReport};
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::{NoTrace, TraceRow, TraceSink};
+use mavlink::dialects::common::*;
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::sync::mpsc;
@@ -168,4 +170,85 @@ fn interrupt_fails_safe_to_hold() {
         "{:?}",
         v.events
     );
+}
+
+/// Sends one command as a ground station (system 255) to the vehicle at `addr`, from a link
+/// of its own.
+fn pilot_command(addr: std::net::SocketAddr, command: MavCmd, p: [f32; 3]) {
+    let mut gcs = Link::open(&format!("udpout:{addr}"), 255, 190).unwrap();
+    gcs.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+        param1: p[0],
+        param2: p[1],
+        param3: p[2],
+        command,
+        target_system: 1,
+        target_component: 1,
+        ..Default::default()
+    }))
+    .unwrap();
+    // Keep the socket until the vehicle has read the command (its acknowledgement arrives).
+    let t0 = std::time::Instant::now();
+    while t0.elapsed() < std::time::Duration::from_secs(10) {
+        if gcs
+            .poll(std::time::Duration::from_millis(50))
+            .unwrap()
+            .iter()
+            .any(|r| matches!(&r.msg, MavMessage::COMMAND_ACK(a) if a.command == command))
+        {
+            return;
+        }
+    }
+}
+
+/// Whether the companion took the vehicle back after the pilot's `event`: an arming or an
+/// OFFBOARD switch by another system than the ground station, after it.
+fn taken_back(v: &SitlReport, event: &str) -> bool {
+    let i = v
+        .events
+        .iter()
+        .position(|e| e.contains(event))
+        .unwrap_or_else(|| panic!("no `{event}` in {:?}", v.events));
+    v.events[i + 1..]
+        .iter()
+        .any(|e| e.contains("armed by") || e.contains("mode OFFBOARD"))
+}
+
+/// A pilot (ground station, system 255) switches the flying vehicle to HOLD: the companion
+/// ends at once (`pilot_took_over`), never switches back to OFFBOARD and commands nothing.
+#[test]
+fn pilot_switch_to_hold_ends_the_flight() {
+    let s = scenario("paper-fig3-uav.toml", &[]);
+    let (v, f) = flight(
+        &s,
+        |_| {},
+        |addr| pilot_command(addr, MavCmd::MAV_CMD_DO_SET_MODE, [1.0, 4.0, 3.0]),
+    );
+    assert_eq!(f.end, FlyEnd::PilotTookOver, "{:?}", f.events);
+    assert!(!f.end.is_failsafe());
+    assert!(!taken_back(&v, "mode HOLD by system 255"), "{:?}", v.events);
+    assert!(
+        f.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        f.events
+    );
+}
+
+/// A pilot disarms the flying vehicle (with PX4's force code): the companion ends at once and
+/// does not arm it again.
+#[test]
+fn pilot_disarm_ends_the_flight() {
+    let s = scenario("paper-fig3-uav.toml", &[]);
+    let (v, f) = flight(
+        &s,
+        |_| {},
+        |addr| {
+            pilot_command(
+                addr,
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                [0.0, 21196.0, 0.0],
+            )
+        },
+    );
+    assert_eq!(f.end, FlyEnd::PilotTookOver, "{:?}", f.events);
+    assert!(!taken_back(&v, "disarmed by system 255"), "{:?}", v.events);
 }
