@@ -99,7 +99,10 @@ fn the_p_law_boundary_at_one_hertz_is_within_a_cell_of_jurys() {
     // `check`'s own kp scan puts each kp on its own orbit too: its interval's upper end lies in
     // the same grid cell as the chart's boundary.
     let hi = check(&s, None).sampled.kp_intervals.expect("scanned")[0][1];
-    assert!(a <= hi && hi <= b, "kp_intervals' end {hi} outside the chart's cell [{a}, {b}]");
+    assert!(
+        a <= hi && hi <= b,
+        "kp_intervals' end {hi} outside the chart's cell [{a}, {b}]"
+    );
 }
 
 /// Issue 29, test (2): a lagged sensor on the paper's scenario (kp 10, ki 1, 100 Hz). The
