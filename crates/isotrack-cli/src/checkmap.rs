@@ -3,7 +3,7 @@
 
 use crate::cli::CheckArgs;
 use crate::exit;
-use crate::output::{num, same_file};
+use crate::output::num;
 use crate::run::Failure;
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
@@ -158,8 +158,9 @@ pub struct MapReport {
 }
 
 /// The output paths in `dir`; refuses a path that exists and is not a regular file (a FIFO
-/// would block the write) and one that is the scenario file itself.
-fn output_path(dir: &Path, name: &str, scenario: Option<&Path>) -> Result<PathBuf, Failure> {
+/// would block the write) and one that is one of the inputs: the scenario file or a data file
+/// it names (`field.path`, `field.paths`; absolute once the scenario is built).
+fn output_path(dir: &Path, name: &str, inputs: &[PathBuf]) -> Result<PathBuf, Failure> {
     let p = dir.join(name);
     if let Ok(meta) = std::fs::metadata(&p) {
         if !meta.is_file() {
@@ -168,10 +169,11 @@ fn output_path(dir: &Path, name: &str, scenario: Option<&Path>) -> Result<PathBu
                 message: format!("cannot write {}: not a regular file", p.display()),
             });
         }
-        if scenario.is_some_and(|s| same_file(s, &p)) {
+        if let Some(input) = crate::output::input_at(inputs, &p) {
             return Err(usage(format!(
-                "{} is the scenario file: an output cannot be one of the inputs",
-                p.display()
+                "{} is an input ({}): an output cannot be one of the inputs",
+                p.display(),
+                input.display()
             )));
         }
     }
@@ -275,12 +277,12 @@ pub fn write_map(
         message: format!("cannot write {}: {e}", what.display()),
     };
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
-    let input = args.scenario.scenario.as_deref();
-    let csv_path = output_path(dir, "stability_map.csv", input)?;
-    let png_path = output_path(dir, "stability_map.png", input)?;
-    let svg_path = output_path(dir, "stability_map.svg", input)?;
+    let input = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
+    let csv_path = output_path(dir, "stability_map.csv", &input)?;
+    let png_path = output_path(dir, "stability_map.png", &input)?;
+    let svg_path = output_path(dir, "stability_map.svg", &input)?;
     let verify_path = match args.verify {
-        Some(_) => Some(output_path(dir, "verify.csv", input)?),
+        Some(_) => Some(output_path(dir, "verify.csv", &input)?),
         None => None,
     };
     let pool = crate::sweep::worker_pool(args.threads)?;

@@ -3,7 +3,7 @@
 use isotrack_scenario::{Scenario, ScenarioFile};
 use isotrack_sim::{RunResult, TraceRow, TraceSink};
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The columns of `trace.csv`, in order.
 pub const TRACE_COLUMNS: [&str; 8] = [
@@ -147,6 +147,24 @@ pub fn summary_to_json(s: &Summary<'_>) -> serde_json::Result<String> {
 /// The resolved scenario as TOML (reads back as the same scenario).
 pub fn scenario_toml(scenario: &Scenario) -> String {
     toml::to_string(scenario.file()).unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}
+
+/// The files a command reads for `scenario`: the scenario file (if any) and the data files its
+/// field names (`field.path`, `field.paths`: absolute once the scenario is built). An output
+/// that is one of them is refused (64), never written over.
+pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<PathBuf> {
+    let field = &scenario.file().field;
+    scenario_file
+        .map(Path::to_path_buf)
+        .into_iter()
+        .chain(field.path.iter().map(PathBuf::from))
+        .chain(field.paths.iter().flatten().map(PathBuf::from))
+        .collect()
+}
+
+/// The first of `inputs` that `output` is (the same file, through links), if any.
+pub fn input_at<'a>(inputs: &'a [PathBuf], output: &Path) -> Option<&'a PathBuf> {
+    inputs.iter().find(|i| same_file(i, output))
 }
 
 /// Whether two paths name the same existing file (same device and inode), not just the same

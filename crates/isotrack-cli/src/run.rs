@@ -101,6 +101,22 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             code: exit::CANTCREAT,
             message: format!("cannot write {what}: {e}"),
         };
+        // An output that is one of the inputs (the scenario file, the field's data) is refused
+        // before anything is written: a run directory never replaces what it was made from.
+        let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
+        for name in ["trace.csv", "summary.json", "scenario.toml"] {
+            let p = dir.join(name);
+            if let Some(input) = crate::output::input_at(&inputs, &p) {
+                return Err(Failure {
+                    code: exit::USAGE,
+                    message: format!(
+                        "{} is an input ({}): an output cannot be one of the inputs",
+                        p.display(),
+                        input.display()
+                    ),
+                });
+            }
+        }
         std::fs::create_dir_all(dir).map_err(|e| cant(&dir.display().to_string(), e))?;
         let trace = dir.join("trace.csv");
         let result =

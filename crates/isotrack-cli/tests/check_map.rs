@@ -331,3 +331,41 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
         assert_fails(&o, 73, &["not a regular file"]);
     }
 }
+
+/// A hostile review's data loss: a scenario whose grid file is `DIR/stability_map.csv` had its
+/// data replaced by the chart (exit 0). Every output is checked against the scenario's data files
+/// too: 64, and the grid left as it was.
+#[test]
+fn the_chart_never_overwrites_the_fields_data_file() {
+    let d = tempfile::tempdir().unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let out = d.path().join("o");
+    std::fs::create_dir_all(&out).unwrap();
+    let grid = out.join("stability_map.csv");
+    std::fs::copy(repo.join("data/volcano/volcano.csv"), &grid).unwrap();
+    let before = std::fs::read(&grid).unwrap();
+    let text = std::fs::read_to_string(repo.join("scenarios/volcano.toml"))
+        .unwrap()
+        .replace("../data/volcano/volcano.csv", grid.to_str().unwrap());
+    assert!(
+        text.contains(grid.to_str().unwrap()),
+        "the scenario names the grid"
+    );
+    let sc = d.path().join("v.toml");
+    std::fs::write(&sc, text).unwrap();
+    let o = isotrack(&[
+        "check",
+        sc.to_str().unwrap(),
+        "--map",
+        "--out",
+        out.to_str().unwrap(),
+        "--map-size",
+        "3x3",
+    ]);
+    assert_fails(&o, 64, &["an output cannot be one of the inputs"]);
+    assert_eq!(
+        std::fs::read(&grid).unwrap(),
+        before,
+        "the grid is untouched"
+    );
+}

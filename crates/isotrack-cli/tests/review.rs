@@ -365,3 +365,54 @@ fn a_flat_start_is_warned_about() {
     let o = isotrack(&["check", paper.to_str().unwrap()]);
     assert!(!stdout(&o).contains("flat background"), "{}", stdout(&o));
 }
+
+/// A hostile review's data loss (found on `check --map`, and `run --out` had it too): a scenario
+/// whose grid is `DIR/trace.csv`, or a run re-run into its own directory, had its input replaced
+/// by the output, exit 0. Now 64, and the inputs are left as they were.
+#[test]
+fn run_out_never_writes_over_its_inputs() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    std::fs::create_dir_all(&out).unwrap();
+    let grid = out.join("trace.csv");
+    std::fs::copy(repo().join("data/volcano/volcano.csv"), &grid).unwrap();
+    let before = std::fs::read(&grid).unwrap();
+    let text = std::fs::read_to_string(repo().join("scenarios/volcano.toml"))
+        .unwrap()
+        .replace("../data/volcano/volcano.csv", grid.to_str().unwrap());
+    let sc = d.path().join("v.toml");
+    std::fs::write(&sc, text).unwrap();
+    let o = isotrack(&["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_fails(&o, 64, &["an output cannot be one of the inputs"]);
+    assert_eq!(
+        std::fs::read(&grid).unwrap(),
+        before,
+        "the grid is untouched"
+    );
+    // A run directory's own scenario.toml run again into that directory, with an edit.
+    let run_dir = d.path().join("r");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=5",
+        "--out",
+        run_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let own = run_dir.join("scenario.toml");
+    let kept = std::fs::read(&own).unwrap();
+    let o = isotrack(&[
+        "run",
+        own.to_str().unwrap(),
+        "--set",
+        "sim.duration_s=6",
+        "--out",
+        run_dir.to_str().unwrap(),
+    ]);
+    assert_fails(&o, 64, &["scenario.toml", "one of the inputs"]);
+    assert_eq!(
+        std::fs::read(&own).unwrap(),
+        kept,
+        "the scenario file is untouched"
+    );
+}
