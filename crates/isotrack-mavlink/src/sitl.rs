@@ -215,10 +215,9 @@ impl Autopilot {
         let gcs = from.0 == GCS_SYSTEM_ID as u32;
         match c.command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+                // As PX4: forced exactly when param2 is the force code; any other value (0, or
+                // the NaN that MAVSDK puts in parameters it does not use) is an ordinary request.
                 let forced = c.param2 == FORCE_CODE;
-                if !(c.param2 == 0.0 || forced) {
-                    return self.deny(t_s, from, "arm/disarm (param2 neither 0 nor 21196)");
-                }
                 if c.param1 == 1.0 {
                     if !self.may_command(from) {
                         return self.deny(t_s, from, "arming (another system has control)");

@@ -213,7 +213,8 @@ fn sitl_refuses_a_stranger_once_armed() {
         Some(MavResult::MAV_RESULT_ACCEPTED),
         Some(MavResult::MAV_RESULT_DENIED),
     );
-    assert_eq!(ack_of(&mut a, arm, 1.0, 0.0), accepted);
+    // A's arming as MAVSDK sends it: the unused param2 is NaN (an ordinary, unforced request).
+    assert_eq!(ack_of(&mut a, arm, 1.0, f32::NAN), accepted);
     assert_eq!(ack_of(&mut b, arm, 1.0, 0.0), denied, "B's arming");
     assert_eq!(ack_of(&mut b, mode, 1.0, 6.0), denied, "B's OFFBOARD");
     b.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
