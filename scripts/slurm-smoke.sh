@@ -142,7 +142,7 @@ echo "slurm-smoke: submitted array job $job ($shards tasks)"
 per_shard=$((240 / shards))
 victim="${job}_1"
 partial=""
-for _ in $(seq 600); do
+for _ in $(seq 2400); do  # up to 2 min: a loaded machine starts the task late
   f="$work/out/shard-1/results.csv"
   if [ -f "$f" ]; then
     rows=$(($(wc -l < "$f") - 1))
@@ -165,7 +165,7 @@ for _ in $(seq 100); do
 done
 
 # --- Wait for the array to finish.
-for _ in $(seq 600); do
+for _ in $(seq 2400); do  # up to 2 min: a loaded machine starts the task late
   [ -z "$(squeue -h -j "$job" 2>/dev/null)" ] && break
   sleep 1
 done
