@@ -244,6 +244,17 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
             64,
             "at most 100 Hz",
         ),
+        // A hostile review's two hangs: a period beyond MAX_STEPS steps, and HI/LO overflowing.
+        (
+            vec!["--map", "--out", out, "--rate-range", "1e-50:2e-50"],
+            64,
+            "slower than a sensor period may be",
+        ),
+        (
+            vec!["--map", "--out", out, "--kp-range", "1e-310:1"],
+            64,
+            "HI/LO finite",
+        ),
         (
             vec!["--map", "--out", out, "--map-size", "1000x1000"],
             64,

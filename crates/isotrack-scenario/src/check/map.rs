@@ -193,20 +193,26 @@ impl MapGrid {
         let (kp, rate) = (f.kp(), f.rate_hz());
         Self {
             kp_range: [kp / 100.0, kp * 100.0],
-            rate_range_hz: [rate / 10.0, (rate * 10.0).min(1.0 / f.dt_s()).max(rate)],
+            rate_range_hz: [
+                (rate / 10.0).max(1.0 / (isotrack_sim::MAX_STEPS as f64 * f.dt_s())),
+                (rate * 10.0).min(1.0 / f.dt_s()).max(rate),
+            ],
             kp_points: 61,
             rate_points: 41,
         }
     }
 
-    /// Checks the grid: ranges of positive finite numbers with `lo < hi`, rates at most
-    /// `1/dt` (the sensor cannot sample faster than the simulation steps), 2 to
+    /// Checks the grid: ranges of positive finite numbers with `lo < hi` and `hi/lo` finite,
+    /// rates at most `1/dt` (the sensor cannot sample faster than the simulation steps) and at
+    /// least `1/(MAX_STEPS dt)` (as `sensor.rate_hz`), 2 to
     /// [`MAX_AXIS_POINTS`] points an axis and at most [`MAX_CELLS`] cells.
     pub fn validate(&self, dt_s: f64) -> Result<(), String> {
         let range = |name: &str, [lo, hi]: [f64; 2]| -> Result<(), String> {
-            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+            // HI/LO finite too: log spacing of a range wider than f64 overflows (a hostile
+            // review's hang in the figure's axis).
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi && (hi / lo).is_finite()) {
                 return Err(format!(
-                    "{name} must be LO:HI with 0 < LO < HI (finite), got {}:{}",
+                    "{name} must be LO:HI with 0 < LO < HI and HI/LO finite, got {}:{}",
                     Num(lo),
                     Num(hi)
                 ));
@@ -215,6 +221,18 @@ impl MapGrid {
         };
         range("--kp-range", self.kp_range)?;
         range("--rate-range", self.rate_range_hz)?;
+        // The slowest rate's period spans at most MAX_STEPS steps, as `sensor.rate_hz` (a
+        // hostile review's hang at 1e-50 Hz).
+        let bottom = 1.0 / (isotrack_sim::MAX_STEPS as f64 * dt_s);
+        if self.rate_range_hz[0] < bottom {
+            return Err(format!(
+                "--rate-range: {} Hz is slower than a sensor period may be (at most {} steps of sim.dt_s = {} s: at least {} Hz)",
+                Num(self.rate_range_hz[0]),
+                isotrack_sim::MAX_STEPS,
+                Num(dt_s),
+                Num(bottom)
+            ));
+        }
         let top = 1.0 / dt_s;
         if self.rate_range_hz[1] > top * (1.0 + 1e-9) {
             return Err(format!(
