@@ -5,6 +5,7 @@ use crate::cli::CheckArgs;
 use crate::exit;
 use crate::output::num;
 use crate::run::Failure;
+use isotrack_core::numtext::Echo;
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
     StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS,
@@ -262,6 +263,17 @@ pub fn write_map(
     }
     grid.validate(family.dt_s()).map_err(usage)?;
     if let Some(n) = args.verify {
+        // A run samples at 1/(k dt) only: a chart with no such rate cannot be verified (its
+        // runs would fall outside it: a hostile review's silent clamp).
+        let [lo, hi] = isotrack_scenario::check::map::whole_step_periods(&grid, family.dt_s());
+        if lo > hi {
+            return Err(usage(format!(
+                "--verify: no sensor rate in --rate-range {}:{} Hz is a whole number of sim.dt_s = {} s steps (rates 1/(k dt)): widen the range",
+                Echo(grid.rate_range_hz[0]),
+                Echo(grid.rate_range_hz[1]),
+                Echo(family.dt_s())
+            )));
+        }
         let steps = n as f64 * steps_per_run(scenario);
         if steps > MAX_VERIFY_STEPS {
             return Err(usage(format!(

@@ -255,6 +255,22 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
             64,
             "HI/LO finite",
         ),
+        // No rate 1/(k dt) in 60..65 Hz at dt 0.01 s: verify runs would fall outside the chart.
+        (
+            vec![
+                "--map",
+                "--out",
+                out,
+                "--rate-range",
+                "60:65",
+                "--map-size",
+                "3x3",
+                "--verify",
+                "3",
+            ],
+            64,
+            "whole number of sim.dt_s",
+        ),
         (
             vec!["--map", "--out", out, "--map-size", "1000x1000"],
             64,

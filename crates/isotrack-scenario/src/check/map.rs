@@ -450,6 +450,16 @@ pub struct VerifyPoint {
     pub near_boundary: bool,
 }
 
+/// The sensor periods, in whole simulation steps `[lo, hi]`, whose rates `1/(k dt)` lie in the
+/// grid's rate range; `lo > hi` when none does (then no simulation can sample inside the chart).
+pub fn whole_step_periods(grid: &MapGrid, dt_s: f64) -> [f64; 2] {
+    let [r0, r1] = grid.rate_range_hz;
+    [
+        (1.0 / (r1 * dt_s) - 1e-9).ceil().max(1.0),
+        (1.0 / (r0 * dt_s) + 1e-9).floor(),
+    ]
+}
+
 /// `count` verification points spread over the grid's rectangle (in `ln kp`, `ln rate`): the
 /// Halton sequence in bases 2 and 3 (points 1..=count), shifted modulo 1 by two numbers drawn
 /// from `seed` (a Cranley-Patterson rotation, SplitMix64 of the seed). Each rate is moved to
@@ -469,9 +479,7 @@ pub fn verify_points(grid: &MapGrid, dt_s: f64, count: usize, seed: u64) -> Vec<
     let (s1, s2) = (shift(0), shift(1));
     let [k0, k1] = grid.kp_range;
     let [r0, r1] = grid.rate_range_hz;
-    // Whole steps per period that keep the rate within [r0, r1].
-    let steps_lo = (1.0 / (r1 * dt_s) - 1e-9).ceil().max(1.0);
-    let steps_hi = (1.0 / (r0 * dt_s) + 1e-9).floor();
+    let [steps_lo, steps_hi] = whole_step_periods(grid, dt_s);
     (1..=count as u64)
         .map(|i| {
             let u = (halton(i, 2) + s1).fract();
