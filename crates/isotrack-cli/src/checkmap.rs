@@ -170,12 +170,8 @@ fn output_path(dir: &Path, name: &str, inputs: &[PathBuf]) -> Result<PathBuf, Fa
                 message: format!("cannot write {}: not a regular file", p.display()),
             });
         }
-        if let Some(input) = crate::output::input_at(inputs, &p) {
-            return Err(usage(format!(
-                "{} is an input ({}): an output cannot be one of the inputs",
-                p.display(),
-                input.display()
-            )));
+        if let Some(message) = crate::output::input_clash(inputs, &p) {
+            return Err(usage(message));
         }
     }
     Ok(p)

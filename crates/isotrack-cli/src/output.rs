@@ -162,9 +162,14 @@ pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<Pat
         .collect()
 }
 
-/// The first of `inputs` that `output` is (the same file, through links), if any.
-pub fn input_at<'a>(inputs: &'a [PathBuf], output: &Path) -> Option<&'a PathBuf> {
-    inputs.iter().find(|i| same_file(i, output))
+/// When `output` is one of `inputs` (the same file, through links): the message that refuses it.
+pub fn input_clash(inputs: &[PathBuf], output: &Path) -> Option<String> {
+    let input = inputs.iter().find(|i| same_file(i, output))?;
+    Some(format!(
+        "{} is an input ({}): an output cannot be one of the inputs",
+        output.display(),
+        input.display()
+    ))
 }
 
 /// Whether two paths name the same existing file (same device and inode), not just the same

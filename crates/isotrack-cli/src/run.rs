@@ -105,15 +105,10 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         // before anything is written: a run directory never replaces what it was made from.
         let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
         for name in ["trace.csv", "summary.json", "scenario.toml"] {
-            let p = dir.join(name);
-            if let Some(input) = crate::output::input_at(&inputs, &p) {
+            if let Some(message) = crate::output::input_clash(&inputs, &dir.join(name)) {
                 return Err(Failure {
                     code: exit::USAGE,
-                    message: format!(
-                        "{} is an input ({}): an output cannot be one of the inputs",
-                        p.display(),
-                        input.display()
-                    ),
+                    message,
                 });
             }
         }

@@ -6,6 +6,20 @@ use common::{assert_fails, isotrack, stderr};
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
+/// The port a `sitl` on `udpin:127.0.0.1:0` bound, from its first line on standard error
+/// ("... vehicle on 127.0.0.1:PORT ...").
+fn sitl_port(sitl: &mut std::process::Child) -> String {
+    let mut line = String::new();
+    BufReader::new(sitl.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    line.split("127.0.0.1:")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .unwrap_or_else(|| panic!("{line}"))
+        .to_string()
+}
+
 #[test]
 fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
     let out = "udpout:127.0.0.1:9";
@@ -139,15 +153,7 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut line = String::new();
-    BufReader::new(sitl.stderr.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let port = line
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .unwrap_or_else(|| panic!("{line}"));
+    let port = sitl_port(&mut sitl);
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
         .args([
             "fly",
@@ -223,16 +229,7 @@ fn a_real_time_flight_completes() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut line = String::new();
-    BufReader::new(sitl.stderr.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let port = line
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .unwrap_or_else(|| panic!("{line}"))
-        .to_string();
+    let port = sitl_port(&mut sitl);
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
         .args(["fly", "--take-control", "--timeout-s", "30"])
         .arg("--mavlink")

@@ -103,16 +103,7 @@ fn sitl_holds_when_offboard_setpoints_stop() {
     };
     c.send(&command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0))
         .unwrap();
-    c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
-        time_boot_ms: 0,
-        q: [1.0, 0.0, 0.0, 0.0],
-        body_yaw_rate: -0.1,
-        target_system: 1,
-        target_component: 1,
-        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
-        ..Default::default()
-    }))
-    .unwrap();
+    c.send(&yaw_rate_setpoint(-0.1)).unwrap();
     c.send(&command(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0))
         .unwrap();
     let report = vehicle.join().unwrap();
@@ -161,6 +152,19 @@ fn a_refused_arming_ends_the_flight() {
     assert!(vehicle.join().unwrap());
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(r.commands.is_empty());
+}
+
+/// A yaw-rate setpoint (attitude ignored) for system 1, component 1, rad/s.
+fn yaw_rate_setpoint(body_yaw_rate: f32) -> MavMessage {
+    MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        body_yaw_rate,
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    })
 }
 
 /// Sends `cmd` from `link` to the vehicle and returns the result of its acknowledgement.
@@ -217,16 +221,7 @@ fn sitl_refuses_a_stranger_once_armed() {
     assert_eq!(ack_of(&mut a, arm, 1.0, f32::NAN), accepted);
     assert_eq!(ack_of(&mut b, arm, 1.0, 0.0), denied, "B's arming");
     assert_eq!(ack_of(&mut b, mode, 1.0, 6.0), denied, "B's OFFBOARD");
-    b.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
-        time_boot_ms: 0,
-        q: [1.0, 0.0, 0.0, 0.0],
-        body_yaw_rate: -0.1,
-        target_system: 1,
-        target_component: 1,
-        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
-        ..Default::default()
-    }))
-    .unwrap();
+    b.send(&yaw_rate_setpoint(-0.1)).unwrap();
     assert_eq!(
         ack_of(&mut b, arm, 0.0, 0.0),
         denied,
