@@ -9,15 +9,15 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    match isotrack_bench::Suite::parse(text, "fuzz.toml", Path::new(".")) {
+    match isotrack_league::Suite::parse(text, "fuzz.toml", Path::new(".")) {
         Ok(suite) => {
             for task in suite.tasks.iter().take(8) {
                 for seed in suite.scoring_seeds.iter().take(4) {
-                    let _ = isotrack_bench::suite::seed_overrides(task, *seed);
+                    let _ = isotrack_league::suite::seed_overrides(task, *seed);
                 }
             }
             let again = suite.to_toml("as run");
-            let back = isotrack_bench::Suite::parse(&again, "again.toml", Path::new("."))
+            let back = isotrack_league::Suite::parse(&again, "again.toml", Path::new("."))
                 .unwrap_or_else(|e| panic!("the suite as run does not read back: {e}\n{again}"));
             assert_eq!(back.tasks, suite.tasks);
             assert_eq!(

@@ -15,7 +15,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-mod bench;
+mod league;
 mod env;
 mod guard;
 mod tools;
@@ -639,7 +639,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
-    m.add_function(wrap_pyfunction!(bench::benchmark_json, m)?)?;
+    m.add_function(wrap_pyfunction!(league::benchmark_json, m)?)?;
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;
     m.add_function(wrap_pyfunction!(tools::write_run, m)?)?;
     m.add_function(wrap_pyfunction!(tools::plot, m)?)?;

@@ -170,7 +170,7 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
     }
     let args = ReportArgs { runs, out };
     crate::guard::no_panic(|| {
-        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::bench::report(&args)))
+        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::league::report(&args)))
             .map_err(failure)
     })
 }

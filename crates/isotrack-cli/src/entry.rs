@@ -42,8 +42,8 @@ where
         Command::Trim(args) => crate::aircraft::trim(args),
         Command::Replay(args) => crate::aircraft::replay(args),
         Command::Interpolate(args) => crate::interpolate::interpolate(args),
-        Command::Benchmark(args) => crate::bench::benchmark(args),
-        Command::Report(args) => crate::bench::report(args),
+        Command::Benchmark(args) => crate::league::benchmark(args),
+        Command::Report(args) => crate::league::report(args),
         Command::Sitl(args) => crate::mavlink::sitl(args),
         Command::Fly(args) => crate::mavlink::fly(args),
     };

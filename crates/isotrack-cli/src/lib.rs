@@ -9,13 +9,13 @@
 #[macro_use]
 pub mod console;
 pub mod aircraft;
-pub mod bench;
 pub mod checkmap;
 pub mod cli;
 pub mod compare;
 pub mod entry;
 pub mod figures;
 pub mod interpolate;
+pub mod league;
 pub mod mavlink;
 pub mod output;
 pub mod run;

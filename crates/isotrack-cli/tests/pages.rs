@@ -120,10 +120,10 @@ length_m = 6.93
         title = toml_str(&hostile("title")),
         scenario = toml_str(&scenario.display().to_string()),
     );
-    let suite = isotrack_bench::Suite::parse(&suite_text, "hostile-suite.toml", d.path()).unwrap();
-    let mut reg = isotrack_bench::Registry::builtin();
+    let suite = isotrack_league::Suite::parse(&suite_text, "hostile-suite.toml", d.path()).unwrap();
+    let mut reg = isotrack_league::Registry::builtin();
     // A controller's name is a leaderboard row: the registry refuses `|`, U+2028/9 and names
-    // over 64 characters (isotrack_bench::check_name), so the hostile one is the markup that
+    // over 64 characters (isotrack_league::check_name), so the hostile one is the markup that
     // fits its rules.
     let factory = |s: &isotrack_scenario::Scenario| {
         Box::new(Proportional(s.level())) as Box<dyn IsolineController + Send>
@@ -132,7 +132,7 @@ length_m = 6.93
     let controller = "c <!--<script></script><img src=x onerror=a()>'\"]]>".to_string();
     reg.register(&controller, factory).unwrap();
     let result =
-        isotrack_bench::run_benchmark(&suite, &reg, &Default::default(), &|_, _, _| {}).unwrap();
+        isotrack_league::run_benchmark(&suite, &reg, &Default::default(), &|_, _, _| {}).unwrap();
     let page = d.path().join("index.html");
     std::fs::write(&page, isotrack_html::benchmark_page(&result)).unwrap();
     let dom = check_page(

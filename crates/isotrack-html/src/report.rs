@@ -1,9 +1,9 @@
 //! `isotrack report`: runs as one interactive page.
 
 use crate::{escape, page, script_json};
-use isotrack_bench::run::FieldPicture;
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
+use isotrack_league::run::FieldPicture;
 use isotrack_plot::{PlotError, RunData};
 use isotrack_scenario::Scenario;
 use serde::Serialize;

@@ -1,15 +1,15 @@
 //! Score your own Rust controller with the benchmark, beside the paper's law:
 //!
 //! ```sh
-//! cargo run --release -p isotrack-bench --example own_controller [SUITE.toml]
+//! cargo run --release -p isotrack-league --example own_controller [SUITE.toml]
 //! ```
 //!
 //! The law here is a saturated "PD on the measurement": `omega = kd*deps + kp*tanh(eps/c)`, with
 //! `eps = s - s_d` and `deps` its backward difference. It sees only `Measurement { t_s, value }`.
 
-use isotrack_bench::leaderboard::leaderboard_md;
-use isotrack_bench::{run_benchmark, Options, Registry, Suite};
 use isotrack_core::{IsolineController, Measurement};
+use isotrack_league::leaderboard::leaderboard_md;
+use isotrack_league::{run_benchmark, Options, Registry, Suite};
 use isotrack_scenario::Scenario;
 use std::path::PathBuf;
 

@@ -1,4 +1,4 @@
-//! # isotrack-bench
+//! # isotrack-league
 //!
 //! A graded benchmark for isoline trackers: a suite file lists tasks (a scenario, its
 //! overrides, what varies per seed), tuning seeds and scoring seeds; each built-in law is tuned

@@ -4,7 +4,7 @@
 //! `Measurement { t_s, value }`) and register a factory, one line:
 //!
 //! ```
-//! use isotrack_bench::Registry;
+//! use isotrack_league::Registry;
 //! use isotrack_core::{IsolineController, Measurement};
 //!
 //! /// omega = k * (s - s_d): a bare proportional law.

@@ -4,8 +4,8 @@ use crate::cli::{BenchmarkArgs, ReportArgs};
 use crate::exit;
 use crate::run::Failure;
 use crate::sweep::worker_pool;
-use isotrack_bench::leaderboard::{leaderboard_md, write_files};
-use isotrack_bench::{run_benchmark, BenchError, Options, Registry, Suite};
+use isotrack_league::leaderboard::{leaderboard_md, write_files};
+use isotrack_league::{run_benchmark, BenchError, Options, Registry, Suite};
 use std::path::{Path, PathBuf};
 
 fn fail(code: u8, message: String) -> Failure {
@@ -129,7 +129,7 @@ pub fn open_out_dir(out: &Path, resume: bool) -> Result<std::fs::File, Failure> 
 pub fn write_outputs(
     suite: &Suite,
     path: &Path,
-    result: &isotrack_bench::BenchResult,
+    result: &isotrack_league::BenchResult,
     out: &Path,
     tune: bool,
 ) -> Result<(), Failure> {

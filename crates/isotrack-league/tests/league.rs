@@ -2,11 +2,11 @@
 //! counts, a registered controller on the same footing as the built-in laws (and the names it
 //! may not take), and the tuning.
 
-use isotrack_bench::run::{context, run_one, task_base};
-use isotrack_bench::score::{score, ScoreContext, Scoring};
-use isotrack_bench::suite::seed_overrides;
-use isotrack_bench::{run_benchmark, BenchError, Entrant, NameError, Options, Registry, Suite};
 use isotrack_core::IsolineController;
+use isotrack_league::run::{context, run_one, task_base};
+use isotrack_league::score::{score, ScoreContext, Scoring};
+use isotrack_league::suite::seed_overrides;
+use isotrack_league::{run_benchmark, BenchError, Entrant, NameError, Options, Registry, Suite};
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_sim::{NoTrace, Outcome, RunMetrics, RunResult};
 use std::path::{Path, PathBuf};
@@ -320,7 +320,7 @@ fn a_registered_controller_is_scored_like_the_builtin_laws() {
     }
     assert_eq!(r.controllers, ["pi_isoline", "my_copy"]);
     // The suite's own list plus every registered controller by default.
-    let all = isotrack_bench::run::controllers_of(&suite, &reg, &Options::default()).unwrap();
+    let all = isotrack_league::run::controllers_of(&suite, &reg, &Options::default()).unwrap();
     assert_eq!(all, ["pi_isoline", "sliding_mode", "my_copy"]);
     let unknown = Options {
         controllers: Some(vec!["nope".into()]),
@@ -349,9 +349,9 @@ fn tuning_never_worsens_the_tuning_score() {
             / seeds.len() as f64
     };
     for kind in [ControllerKind::PiIsoline, ControllerKind::SlidingMode] {
-        let tuned = isotrack_bench::tune::tune(&base, task, kind, seeds, Scoring::V2);
+        let tuned = isotrack_league::tune::tune(&base, task, kind, seeds, Scoring::V2);
         assert_eq!(tuned.keys().map(|k| k.as_str()).collect::<Vec<_>>(), {
-            let mut k = isotrack_bench::tune::tuned_keys(kind).to_vec();
+            let mut k = isotrack_league::tune::tuned_keys(kind).to_vec();
             k.sort();
             k
         });
@@ -362,15 +362,15 @@ fn tuning_never_worsens_the_tuning_score() {
     }
     // The candidates: multiples of the current value, the current one first; from 0 a ladder.
     assert_eq!(
-        isotrack_bench::tune::candidates("kp", 10.0),
+        isotrack_league::tune::candidates("kp", 10.0),
         [10.0, 5.0, 20.0, 2.5, 40.0]
     );
     assert_eq!(
-        isotrack_bench::tune::candidates("ki", 0.0),
+        isotrack_league::tune::candidates("ki", 0.0),
         [0.0, 0.05, 0.2, 1.0]
     );
     assert_eq!(
-        isotrack_bench::tune::candidates("alpha_star", 0.5),
+        isotrack_league::tune::candidates("alpha_star", 0.5),
         [0.5, 0.25, 1.0, 0.125]
     );
 }
@@ -386,7 +386,7 @@ fn one_task(top: &str, task: &str) -> String {
 const TOP: &str =
     "version = 1\ncontrollers = [\"pi_isoline\", \"pid\"]\ntuning_seeds = [7]\nscoring_seeds = [1, 2]";
 
-fn parse_err(text: &str) -> isotrack_bench::SuiteError {
+fn parse_err(text: &str) -> isotrack_league::SuiteError {
     Suite::parse(text, "s.toml", &scenarios()).unwrap_err()
 }
 

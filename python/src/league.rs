@@ -3,7 +3,7 @@
 
 use crate::guard::interruptible;
 use crate::{PyScenario, ScenarioErrorPy};
-use isotrack_bench::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
+use isotrack_league::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_core::{IsolineController, Measurement};
 use isotrack_scenario::Scenario;
 use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyValueError};
@@ -118,7 +118,7 @@ pub fn benchmark_json(
     // As `isotrack benchmark --out`: an existing benchmark refused unless `resume`, the
     // directory locked while this writes it.
     let _lock = out
-        .map(|d| isotrack_cli::bench::open_out_dir(Path::new(d), resume))
+        .map(|d| isotrack_cli::league::open_out_dir(Path::new(d), resume))
         .transpose()
         .map_err(crate::tools::failure)?;
     let errors: FirstError = Arc::new(Mutex::new(None));
@@ -151,7 +151,7 @@ pub fn benchmark_json(
         return Err(e);
     }
     if let Some(dir) = out {
-        isotrack_cli::bench::write_outputs(&suite, path, &result, Path::new(dir), tune)
+        isotrack_cli::league::write_outputs(&suite, path, &result, Path::new(dir), tune)
             .map_err(crate::tools::failure)?;
     }
     serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
@@ -160,5 +160,5 @@ pub fn benchmark_json(
 /// A name for the Python controller's row: not a built-in law's (it would replace that row),
 /// not empty, nothing that breaks a Markdown table row or a line (`|`, control characters).
 fn check_name(name: &str) -> PyResult<()> {
-    isotrack_bench::check_name(name).map_err(|e| PyValueError::new_err(e.to_string()))
+    isotrack_league::check_name(name).map_err(|e| PyValueError::new_err(e.to_string()))
 }
