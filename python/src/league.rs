@@ -3,8 +3,8 @@
 
 use crate::guard::interruptible;
 use crate::{PyScenario, ScenarioErrorPy};
-use isotrack_league::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_core::{IsolineController, Measurement};
+use isotrack_league::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_scenario::Scenario;
 use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;

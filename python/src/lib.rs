@@ -15,9 +15,9 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-mod league;
 mod env;
 mod guard;
+mod league;
 mod tools;
 
 /// The Python exception, named `isotrack.ScenarioError` in tracebacks.
