@@ -1,7 +1,7 @@
 //! The figures themselves, drawn with plotters on a PNG or SVG backend.
 
 use crate::run_data::RunData;
-use crate::style::{tick_label, tick_step, value_label, Style};
+use crate::style::{tick_label, tick_step, value_label, Format, Style};
 use crate::{fonts, PlotError};
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
@@ -9,25 +9,6 @@ use isotrack_scenario::Scenario;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
-
-/// Image format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    /// PNG (raster).
-    Png,
-    /// SVG (vector; the heat map is coarser to keep files small).
-    Svg,
-}
-
-impl Format {
-    /// The file extension.
-    pub fn extension(self) -> &'static str {
-        match self {
-            Format::Png => "png",
-            Format::Svg => "svg",
-        }
-    }
-}
 
 /// Which time-series panels to draw, top to bottom.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! (log axis) x sensor rate (log axis, Hz), the boundary (radius 1) by marching squares on the
 //! grid, cells not computed hatched grey, the scenario's point, and `--verify` outcomes.
 
-use crate::draw::Format;
+use crate::style::Format;
 use crate::style::{tick_label, value_label, Style};
 use crate::{fonts, PlotError};
 use isotrack_scenario::check::map::{Behaviour, CellStatus, StabilityMap, VerifyPoint};

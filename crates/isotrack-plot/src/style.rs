@@ -3,7 +3,43 @@
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::{BlackWhite, Bone, Copper, ViridisRGB};
 
-use crate::draw::Format;
+/// Image format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// PNG (raster).
+    Png,
+    /// SVG (vector; the heat map is coarser to keep files small).
+    Svg,
+}
+
+impl Format {
+    /// The file extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Png => "png",
+            Format::Svg => "svg",
+        }
+    }
+}
+
+/// Registers the bundled font (idempotent).
+pub(crate) fn fonts() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        for style in [
+            plotters::style::FontStyle::Normal,
+            plotters::style::FontStyle::Bold,
+            plotters::style::FontStyle::Italic,
+            plotters::style::FontStyle::Oblique,
+        ] {
+            // The font is valid (a test checks rendering); a failure would only lose labels.
+            for family in ["sans-serif", DEFAULT_FONT_FAMILY] {
+                let _ = plotters::style::register_font(family, style, FONT);
+            }
+        }
+    });
+}
 
 /// The font family written into figures: DejaVu Sans (bundled, and used to lay text out), then
 /// common fallbacks for SVG viewers that lack it.
