@@ -6,9 +6,10 @@ use crate::exit;
 use crate::output::num;
 use crate::run::Failure;
 use isotrack_core::numtext::Echo;
-use isotrack_vehicles::fixed_wing::dynamics::{air_data, r_body_to_ned, Deltas, WindSample};
+use isotrack_vehicles::fixed_wing::dynamics::Deltas;
 use isotrack_vehicles::fixed_wing::gains::compute_gains;
 use isotrack_vehicles::fixed_wing::params::Aerosonde;
+use isotrack_vehicles::fixed_wing::replay::{self, REPLAY_COLUMNS};
 use isotrack_vehicles::fixed_wing::trim::{trim as solve_trim, trim_state};
 use isotrack_vehicles::{FixedWing, FixedWingConfig};
 use serde_json::json;
@@ -81,38 +82,11 @@ pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The largest integration step of `replay`, s.
-const REPLAY_STEP_S: f64 = 0.01;
-
-/// The most integration steps one `replay` takes: 1e8 steps of 0.01 s (about 12 days of
-/// flight, a minute or two of CPU); time stamps 0 and 1e12 once ran on without output.
-const MAX_REPLAY_STEPS: u64 = 100_000_000;
-
 /// The largest `--inputs` file, bytes (256 MiB).
 const MAX_REPLAY_INPUT_BYTES: u64 = 256 << 20;
 
 /// The initial altitudes `replay` accepts, m.
 pub const REPLAY_ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
-
-/// The columns `replay` writes.
-pub const REPLAY_COLUMNS: [&str; 16] = [
-    "t_s",
-    "north_m",
-    "east_m",
-    "altitude_m",
-    "airspeed_mps",
-    "alpha_rad",
-    "beta_rad",
-    "roll_rad",
-    "pitch_rad",
-    "yaw_rad",
-    "u_mps",
-    "v_mps",
-    "w_mps",
-    "p_radps",
-    "q_radps",
-    "r_radps",
-];
 
 /// `isotrack replay`.
 pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
@@ -208,17 +182,7 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
             },
         ));
     }
-    if rows.is_empty() {
-        return Err(data("no input rows".into()));
-    }
-    let span_s = rows[rows.len() - 1].0 - rows[0].0;
-    // Finite: every time stamp is checked finite and increasing above.
-    if span_s / REPLAY_STEP_S > MAX_REPLAY_STEPS as f64 {
-        return Err(data(format!(
-            "the time stamps span {span_s:e} s: more than {MAX_REPLAY_STEPS} steps of {REPLAY_STEP_S} s ({:e} s); split the file",
-            MAX_REPLAY_STEPS as f64 * REPLAY_STEP_S
-        )));
-    }
+    replay::validate(&rows).map_err(|e| data(e.to_string()))?;
     let uav = FixedWing::new(FixedWingConfig {
         airspeed_mps: a.airspeed_mps,
         altitude_m: a.altitude_m,
@@ -228,56 +192,22 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         code: exit::USAGE,
         message: e.to_string(),
     })?;
-    let mut x = trim_state(uav.trim(), a.altitude_m, 0.0);
+    let x0 = trim_state(uav.trim(), a.altitude_m, 0.0);
     let cant = |e: std::io::Error| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
     };
     let mut out = std::io::BufWriter::new(std::fs::File::create(&a.out).map_err(cant)?);
     writeln!(out, "{}", REPLAY_COLUMNS.join(",")).map_err(cant)?;
-    let write_row = |out: &mut dyn Write, t: f64, x: &[f64; 12]| -> std::io::Result<()> {
-        let r = r_body_to_ned(x[6], x[7], x[8]);
-        let air = air_data(x, &WindSample::default(), &r);
-        let vals = [
-            t,
-            x[0],
-            x[1],
-            -x[2],
-            air.va_mps,
-            air.alpha_rad,
-            air.beta_rad,
-            x[6],
-            x[7],
-            x[8],
-            x[3],
-            x[4],
-            x[5],
-            x[9],
-            x[10],
-            x[11],
-        ];
+    replay::replay(&uav, x0, &rows, |r| {
         writeln!(
             out,
             "{}",
-            vals.iter().map(|v| num(*v)).collect::<Vec<_>>().join(",")
+            r.iter().map(|v| num(*v)).collect::<Vec<_>>().join(",")
         )
-    };
-    for k in 0..rows.len() {
-        let (t, d) = rows[k];
-        write_row(&mut out, t, &x).map_err(cant)?;
-        if let Some(&(t_next, _)) = rows.get(k + 1) {
-            // Hold `d` over [t, t_next) in steps of at most REPLAY_STEP_S.
-            let span = t_next - t;
-            let n = (span / REPLAY_STEP_S).ceil().max(1.0) as usize;
-            let h = span / n as f64;
-            for _ in 0..n {
-                uav.step_open_loop(&mut x, &d, h);
-            }
-            if !x.iter().all(|v| v.is_finite()) {
-                return Err(data(format!("the state diverged after t = {t} s")));
-            }
-        }
-    }
+    })
+    .map_err(|e| data(e.to_string()))?
+    .map_err(cant)?;
     out.flush().map_err(cant)?;
     outln!("wrote {} ({} rows)", a.out.display(), rows.len());
     Ok(())

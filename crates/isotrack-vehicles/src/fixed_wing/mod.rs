@@ -16,6 +16,7 @@ pub mod autopilot;
 pub mod dynamics;
 pub mod gains;
 pub mod params;
+pub mod replay;
 pub mod trim;
 pub mod wind;
 
