@@ -135,6 +135,14 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         "delta_r_rad",
         "delta_t",
     ];
+    if let Some(dup) = cols
+        .iter()
+        .find(|c| headers.iter().filter(|h| h == *c).count() > 1)
+    {
+        return Err(data(format!(
+            "line 1: column `{dup}` appears more than once"
+        )));
+    }
     let idx: Vec<usize> = cols
         .iter()
         .map(|c| {
@@ -172,15 +180,14 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
                 )));
             }
         }
-        rows.push((
-            v[0],
-            Deltas {
-                elevator_rad: v[1],
-                aileron_rad: v[2],
-                rudder_rad: v[3],
-                throttle: v[4],
-            },
-        ));
+        let d = Deltas {
+            elevator_rad: v[1],
+            aileron_rad: v[2],
+            rudder_rad: v[3],
+            throttle: v[4],
+        };
+        replay::check_deltas(&d).map_err(|m| data(format!("line {line}: {m}")))?;
+        rows.push((v[0], d));
     }
     replay::validate(&rows).map_err(|e| data(e.to_string()))?;
     let uav = FixedWing::new(FixedWingConfig {

@@ -29,7 +29,12 @@ fn failure(e: PlotError) -> Failure {
     }
 }
 
-/// Plots run directories into `out`; returns the files written.
+/// The most pixels of one output image (about 150 MB of RGB): `--size` x (`--dpi`/100)^2.
+pub const MAX_OUTPUT_PIXELS: f64 = 5e7;
+
+/// The largest default figure size, px at 100 dpi (a map in PNG; `Style::pixel_size`).
+const DEFAULT_LARGEST_SIZE_PX: (u32, u32) = (1100, 900);
+
 /// The figure style from the options, every value checked (a usage error names the flag).
 pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
     let usage = |m: String| Failure {
@@ -64,6 +69,20 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
         )));
     }
     st.dpi = o.dpi;
+    // Each bounded alone, size and dpi multiply: a PNG's pixel count is bounded too (a hostile
+    // review: 10000x10000 at 600 dpi overflowed the drawing library's index, 300 dpi took 8 GB).
+    let (w, h) = st.size_px.unwrap_or(DEFAULT_LARGEST_SIZE_PX);
+    let scale = st.scale();
+    let pixels = f64::from(w) * scale * f64::from(h) * scale;
+    if pixels > MAX_OUTPUT_PIXELS {
+        return Err(usage(format!(
+            "--size {w}x{h} at --dpi {} makes a {:.0} x {:.0} px image ({:.1e} pixels): at most {MAX_OUTPUT_PIXELS:.0e}; lower --dpi or --size",
+            Echo(o.dpi),
+            f64::from(w) * scale,
+            f64::from(h) * scale,
+            pixels
+        )));
+    }
     st.colormap = Colormap::from_name(&o.colormap).ok_or_else(|| {
         usage(format!(
             "--colormap {}: expected viridis, gray, bone or copper",
@@ -209,9 +228,203 @@ fn load(path: &Path, sets: &[String]) -> Result<Scenario, Failure> {
     })
 }
 
-/// `isotrack figures`: the paper's figures from this project's own runs.
+/// A run behind a paper figure: a bundled scenario with `--set` overrides, its run directory
+/// (under `--runs`) and its legend label.
+struct PaperRun {
+    dir: &'static str,
+    scenario: &'static str,
+    sets: &'static [&'static str],
+    label: &'static str,
+}
+
+/// What a paper figure draws.
+enum PaperPlot {
+    /// The field alone (the first run's field, its extent), target isoline bold.
+    FieldMap,
+    /// The runs' paths over the field.
+    Trajectories,
+    /// The runs' time series, these panels.
+    TimeSeries(Panels),
+}
+
+/// One figure of the paper: the file stem, its title, what it draws and from which runs.
+struct PaperFigure {
+    stem: &'static str,
+    title: &'static str,
+    plot: PaperPlot,
+    runs: &'static [PaperRun],
+}
+
+const FIG2A_RUN: PaperRun = PaperRun {
+    dir: "fig2a",
+    scenario: "paper-fig2a-field.toml",
+    sets: &[],
+    label: "Dubins robot, kp = 10, ki = 0",
+};
+const FIG3_RUN: PaperRun = PaperRun {
+    dir: "fig3",
+    scenario: "paper-fig3-uav.toml",
+    sets: &[],
+    label: "fixed-wing UAV, 30 m/s, 1 Hz",
+};
+/// Fig. 2(b)'s initial states `(x, y, heading)` on the circular field, 200 s each.
+const FIG2B_RUNS: &[PaperRun] = &[
+    fig2b_run(
+        "fig2b_0",
+        &[
+            "initial.x_m=10",
+            "initial.y_m=0",
+            "initial.heading_rad=-1.5",
+            "sim.duration_s=200",
+        ],
+        "start (10, 0, -1.5)",
+    ),
+    fig2b_run(
+        "fig2b_1",
+        &[
+            "initial.x_m=0",
+            "initial.y_m=14",
+            "initial.heading_rad=0",
+            "sim.duration_s=200",
+        ],
+        "start (0, 14, 0)",
+    ),
+    fig2b_run(
+        "fig2b_2",
+        &[
+            "initial.x_m=-12",
+            "initial.y_m=-6",
+            "initial.heading_rad=1.2",
+            "sim.duration_s=200",
+        ],
+        "start (-12, -6, 1.2)",
+    ),
+    fig2b_run(
+        "fig2b_3",
+        &[
+            "initial.x_m=3",
+            "initial.y_m=-2",
+            "initial.heading_rad=2.5",
+            "sim.duration_s=200",
+        ],
+        "start (3, -2, 2.5)",
+    ),
+    fig2b_run(
+        "fig2b_4",
+        &[
+            "initial.x_m=-4",
+            "initial.y_m=9",
+            "initial.heading_rad=-2",
+            "sim.duration_s=200",
+        ],
+        "start (-4, 9, -2)",
+    ),
+];
+/// Fig. 2(c)'s gains `(kp, ki)` on the circular field, 200 s each.
+const FIG2C_RUNS: &[PaperRun] = &[
+    fig2b_run(
+        "fig2c_kp5_ki0",
+        &["controller.kp=5", "controller.ki=0", "sim.duration_s=200"],
+        "kp = 5, ki = 0",
+    ),
+    fig2b_run(
+        "fig2c_kp10_ki0",
+        &["controller.kp=10", "controller.ki=0", "sim.duration_s=200"],
+        "kp = 10, ki = 0",
+    ),
+    fig2b_run(
+        "fig2c_kp20_ki0",
+        &["controller.kp=20", "controller.ki=0", "sim.duration_s=200"],
+        "kp = 20, ki = 0",
+    ),
+    fig2b_run(
+        "fig2c_kp10_ki1",
+        &["controller.kp=10", "controller.ki=1", "sim.duration_s=200"],
+        "kp = 10, ki = 1",
+    ),
+];
+
+const fn fig2b_run(
+    dir: &'static str,
+    sets: &'static [&'static str],
+    label: &'static str,
+) -> PaperRun {
+    PaperRun {
+        dir,
+        scenario: "paper-fig2b-circular.toml",
+        sets,
+        label,
+    }
+}
+
+/// The paper's figures (Dong & You), in groups: a group's runs are run, then its figures drawn
+/// in every format, then the next group.
+const PAPER_FIGURES: &[&[PaperFigure]] = &[
+    &[
+        PaperFigure {
+            stem: "fig1a",
+            title: "Fig. 1(a): NO2 map (kriged from 74 stations), level 10 bold",
+            plot: PaperPlot::FieldMap,
+            runs: &[FIG2A_RUN],
+        },
+        PaperFigure {
+            stem: "fig2a",
+            title: "Fig. 2(a): Dubins robot on the real map",
+            plot: PaperPlot::Trajectories,
+            runs: &[FIG2A_RUN],
+        },
+    ],
+    &[
+        PaperFigure {
+            stem: "fig2b",
+            title: "Fig. 2(b): circular field, several initial states",
+            plot: PaperPlot::Trajectories,
+            runs: FIG2B_RUNS,
+        },
+        PaperFigure {
+            stem: "fig2c",
+            title: "Fig. 2(c): tracking error for several (kp, ki)",
+            plot: PaperPlot::TimeSeries(Panels {
+                error: true,
+                measurement: false,
+                measurement_rate: false,
+                omega: false,
+            }),
+            runs: FIG2C_RUNS,
+        },
+        PaperFigure {
+            stem: "fig3b",
+            title: "Fig. 3(b): fixed-wing UAV on the pollution map",
+            plot: PaperPlot::Trajectories,
+            runs: &[FIG3_RUN],
+        },
+        PaperFigure {
+            stem: "fig3c",
+            title: "Fig. 3(c): UAV tracking error and measurement rate",
+            plot: PaperPlot::TimeSeries(Panels {
+                error: true,
+                measurement: false,
+                measurement_rate: true,
+                omega: false,
+            }),
+            runs: &[FIG3_RUN],
+        },
+    ],
+];
+
+/// The extent a field map shows: a grid's own, else the paper's 50 m square.
+fn map_extent(s: &Scenario) -> [f64; 4] {
+    use isotrack_scenario::field::FieldModel;
+    match s.field() {
+        FieldModel::Grid(g) => g.grid().extent_m(),
+        FieldModel::Series(g) => g.extent_m(),
+        FieldModel::Puff(_) | FieldModel::Analytic(_) => [-25.0, 25.0, -25.0, 25.0],
+    }
+}
+
+/// `isotrack figures`: the paper's figures ([`PAPER_FIGURES`]) from this project's own runs;
+/// each run is made once (in the order first needed) and shared by the figures that use it.
 pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
-    let runs_dir = a.runs.clone();
     std::fs::create_dir_all(&a.out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", a.out.display()),
@@ -225,139 +438,70 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         .iter()
         .map(|&f| style(&a.look, f))
         .collect::<Result<_, _>>()?;
-    let sc = |n: &str| a.scenarios.join(n);
-    let set = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let mut done = PaperRuns::default();
     let mut written = vec![];
-    let file = |stem: &str, f: Format| a.out.join(format!("{stem}.{}", f.extension()));
-
-    // Fig. 2(a): the Dubins robot on the real concentration map; Fig. 1(a): that map.
-    let fig2a = load(&sc("paper-fig2a-field.toml"), &[])?;
-    let run2a = run_into(
-        &fig2a,
-        &runs_dir.join("fig2a"),
-        "Dubins robot, kp = 10, ki = 0",
-    )?;
-    let g = match fig2a.field() {
-        isotrack_scenario::field::FieldModel::Grid(g) => g.grid().extent_m(),
-        isotrack_scenario::field::FieldModel::Series(g) => g.extent_m(),
-        isotrack_scenario::field::FieldModel::Puff(_) => [-25.0, 25.0, -25.0, 25.0],
-        isotrack_scenario::field::FieldModel::Analytic(_) => [-25.0, 25.0, -25.0, 25.0],
-    };
-    for st in &styles {
-        let f = st.format;
-        field_map(
-            &fig2a,
-            g,
-            &file("fig1a", f),
-            st,
-            "Fig. 1(a): NO2 map (kriged from 74 stations), level 10 bold",
-        )
-        .map_err(failure)?;
-        trajectory_figure(
-            std::slice::from_ref(&run2a),
-            &file("fig2a", f),
-            st,
-            "Fig. 2(a): Dubins robot on the real map",
-        )
-        .map_err(failure)?;
-        written.extend(["fig1a", "fig2a"].map(|n| file(n, f).display().to_string()));
-    }
-
-    // Fig. 2(b): several initial states on the circular field.
-    let base = sc("paper-fig2b-circular.toml");
-    let starts = [
-        (10.0, 0.0, -1.5),
-        (0.0, 14.0, 0.0),
-        (-12.0, -6.0, 1.2),
-        (3.0, -2.0, 2.5),
-        (-4.0, 9.0, -2.0),
-    ];
-    let mut runs2b = vec![];
-    for (k, (x, y, h)) in starts.iter().enumerate() {
-        let s = load(
-            &base,
-            &set(&[
-                &format!("initial.x_m={x}"),
-                &format!("initial.y_m={y}"),
-                &format!("initial.heading_rad={h}"),
-                "sim.duration_s=200",
-            ]),
-        )?;
-        runs2b.push(run_into(
-            &s,
-            &runs_dir.join(format!("fig2b_{k}")),
-            &format!("start ({x}, {y}, {h})"),
-        )?);
-    }
-    // Fig. 2(c): tracking errors for several (kp, ki).
-    let mut runs2c = vec![];
-    for (kp, ki) in [(5.0, 0.0), (10.0, 0.0), (20.0, 0.0), (10.0, 1.0)] {
-        let s = load(
-            &base,
-            &set(&[
-                &format!("controller.kp={kp}"),
-                &format!("controller.ki={ki}"),
-                "sim.duration_s=200",
-            ]),
-        )?;
-        runs2c.push(run_into(
-            &s,
-            &runs_dir.join(format!("fig2c_kp{kp}_ki{ki}")),
-            &format!("kp = {kp}, ki = {ki}"),
-        )?);
-    }
-    // Fig. 3: the fixed-wing UAV.
-    let fig3 = load(&sc("paper-fig3-uav.toml"), &[])?;
-    let run3 = run_into(
-        &fig3,
-        &runs_dir.join("fig3"),
-        "fixed-wing UAV, 30 m/s, 1 Hz",
-    )?;
-    for st in &styles {
-        let f = st.format;
-        trajectory_figure(
-            &runs2b,
-            &file("fig2b", f),
-            st,
-            "Fig. 2(b): circular field, several initial states",
-        )
-        .map_err(failure)?;
-        timeseries_figure(
-            &runs2c,
-            &file("fig2c", f),
-            st,
-            "Fig. 2(c): tracking error for several (kp, ki)",
-            Panels {
-                error: true,
-                measurement: false,
-                measurement_rate: false,
-                omega: false,
-            },
-        )
-        .map_err(failure)?;
-        trajectory_figure(
-            std::slice::from_ref(&run3),
-            &file("fig3b", f),
-            st,
-            "Fig. 3(b): fixed-wing UAV on the pollution map",
-        )
-        .map_err(failure)?;
-        timeseries_figure(
-            std::slice::from_ref(&run3),
-            &file("fig3c", f),
-            st,
-            "Fig. 3(c): UAV tracking error and measurement rate",
-            Panels {
-                error: true,
-                measurement: false,
-                measurement_rate: true,
-                omega: false,
-            },
-        )
-        .map_err(failure)?;
-        written
-            .extend(["fig2b", "fig2c", "fig3b", "fig3c"].map(|n| file(n, f).display().to_string()));
+    for group in PAPER_FIGURES {
+        for run in group.iter().flat_map(|f| f.runs) {
+            if done.index(run.dir).is_none() {
+                let sets: Vec<String> = run.sets.iter().map(|s| s.to_string()).collect();
+                let s = load(&a.scenarios.join(run.scenario), &sets)?;
+                let d = run_into(&s, &a.runs.join(run.dir), run.label)?;
+                done.dirs.push(run.dir);
+                done.scenarios.push(s);
+                done.data.push(d);
+            }
+        }
+        for st in &styles {
+            for fig in group.iter() {
+                let path = a
+                    .out
+                    .join(format!("{}.{}", fig.stem, st.format.extension()));
+                draw_paper_figure(fig, &done, &path, st)?;
+                written.push(path.display().to_string());
+            }
+        }
     }
     outln!("wrote {}", written.join("\n      "));
     Ok(())
+}
+
+/// The runs made so far for the paper's figures, in the order first needed (so that a
+/// figure's runs, listed together, are one slice).
+#[derive(Default)]
+struct PaperRuns {
+    dirs: Vec<&'static str>,
+    scenarios: Vec<Scenario>,
+    data: Vec<RunData>,
+}
+
+impl PaperRuns {
+    fn index(&self, dir: &str) -> Option<usize> {
+        self.dirs.iter().position(|d| *d == dir)
+    }
+}
+
+/// Draws `fig` from its runs (already made) into `path`.
+fn draw_paper_figure(
+    fig: &PaperFigure,
+    done: &PaperRuns,
+    path: &Path,
+    st: &Style,
+) -> Result<(), Failure> {
+    // The table lists each figure's runs together and they are made in that order, so they
+    // are consecutive.
+    let first = fig
+        .runs
+        .first()
+        .and_then(|r| done.index(r.dir))
+        .unwrap_or(0);
+    let data = &done.data[first..(first + fig.runs.len()).min(done.data.len())];
+    match &fig.plot {
+        PaperPlot::FieldMap => {
+            let s = &done.scenarios[first];
+            field_map(s, map_extent(s), path, st, fig.title)
+        }
+        PaperPlot::Trajectories => trajectory_figure(data, path, st, fig.title),
+        PaperPlot::TimeSeries(panels) => timeseries_figure(data, path, st, fig.title, *panels),
+    }
+    .map_err(failure)
 }

@@ -519,6 +519,35 @@ fn replay_of_trim_inputs_stays_in_trim_and_bad_files_fail() {
         65,
         &["line 2", "delta_e_rad"],
     );
+    // Inputs the airframe model does not cover, and an ambiguous header (a hostile review:
+    // `delta_e_rad = 100` and `delta_t = -1` replayed as valid flights; a second `t_s` column
+    // was ignored).
+    for (name, text, want) in [
+        (
+            "e.csv",
+            "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n0,0,0,0,0.4\n1,100,0,0,0.4\n",
+            ["line 3", "delta_e_rad"],
+        ),
+        (
+            "t.csv",
+            "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n0,0,0,0,-1\n",
+            ["line 2", "delta_t"],
+        ),
+        (
+            "d.csv",
+            "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t,t_s\n0,0,0,0,0.4,5\n",
+            ["line 1", "t_s"],
+        ),
+    ] {
+        let bad = write(dir.path(), name, text);
+        let _ = std::fs::remove_file(&out);
+        assert_fails(
+            &isotrack(&["replay", "--inputs", &bad, "--out", out.to_str().unwrap()]),
+            65,
+            &want,
+        );
+        assert!(!out.exists(), "{name}: no output for a refused input");
+    }
 }
 
 #[test]

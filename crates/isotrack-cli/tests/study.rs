@@ -427,6 +427,12 @@ fn figure_options_on_the_command_line() {
         vec!["--dpi", "0"],
         vec!["--font-size", "nan"],
         vec!["--colormap", "jet"],
+        // Size and dpi multiply: 10000 x 10000 at 600 dpi is 3.6e9 pixels (a hostile review:
+        // a panic in the drawing library; 300 dpi took 8 GB); the default 1100 x 900 at 1200
+        // dpi (scale clamped to 8) is 6.3e7, past the 5e7 bound.
+        vec!["--size", "10000x10000", "--dpi", "600"],
+        vec!["--size", "10000x10000", "--dpi", "300"],
+        vec!["--dpi", "1200"],
     ] {
         let mut args = vec!["plot", r];
         args.extend(bad.iter().copied());

@@ -302,10 +302,15 @@ impl PuffPlume {
 }
 
 impl PuffPlume {
+    /// Inside the domain (everywhere when none is set); never at a non-finite point (no puff
+    /// is near NaN or infinity: the field is undefined there, as every other field).
     fn inside(&self, p: Vec2) -> bool {
-        self.p
-            .domain_m
-            .is_none_or(|d| (d[0]..=d[1]).contains(&p.x) && (d[2]..=d[3]).contains(&p.y))
+        p.x.is_finite()
+            && p.y.is_finite()
+            && self
+                .p
+                .domain_m
+                .is_none_or(|d| (d[0]..=d[1]).contains(&p.x) && (d[2]..=d[3]).contains(&p.y))
     }
 }
 
@@ -367,6 +372,23 @@ mod tests {
             seed: 3,
             domain_m: None,
         }
+    }
+
+    /// The field is undefined at a non-finite point, as every other field (a hostile review:
+    /// NaN and infinite coordinates read the background, 0).
+    #[test]
+    fn no_value_at_non_finite_points() {
+        let f = PuffPlume::new(params());
+        for p in [
+            Vec2::new(f64::NAN, 0.0),
+            Vec2::new(0.0, f64::NAN),
+            Vec2::new(f64::INFINITY, 0.0),
+            Vec2::new(0.0, f64::NEG_INFINITY),
+        ] {
+            assert_eq!(f.value(100.0, p), None, "{p:?}");
+            assert!(f.gradient(100.0, p).is_none(), "{p:?}");
+        }
+        assert!(f.value(100.0, Vec2::new(10.0, 0.0)).is_some());
     }
 
     /// Without meander, the time average over 200 s at points 10-40 m downwind equals the

@@ -122,12 +122,18 @@ impl Style {
         }
     }
 
-    /// The resolution factor: `dpi/100` for PNG, 1 for SVG (vector).
-    pub(crate) fn k(&self) -> f64 {
+    /// The resolution factor: `dpi/100` for PNG (within 0.25..8), 1 for SVG (vector): output
+    /// pixels per pixel at 100 dpi.
+    pub fn scale(&self) -> f64 {
         match self.format {
             Format::Png => (self.dpi / 100.0).clamp(0.25, 8.0),
             Format::Svg => 1.0,
         }
+    }
+
+    /// [`Style::scale`], short for the drawing code.
+    pub(crate) fn k(&self) -> f64 {
+        self.scale()
     }
 
     /// A length of `v` px at 100 dpi, in output pixels.

@@ -440,8 +440,8 @@ fn apply_one(
             "expected a dotted key such as controller.kp".into(),
         ));
     }
-    insert_dotted(table, &key, parse_override_value(raw.trim()))
-        .map_err(|m| fail(Some(key.clone()), m))?;
+    let value = parse_override_value(raw.trim()).map_err(|m| fail(Some(key.clone()), m))?;
+    insert_dotted(table, &key, value).map_err(|m| fail(Some(key.clone()), m))?;
     toml::Value::Table(table.clone())
         .try_into::<ScenarioFile>()
         .map_err(|e| {
@@ -548,13 +548,35 @@ fn kinds_of(table: &toml::Table) -> [Option<String>; KINDED_SECTIONS.len()] {
     })
 }
 
-/// `VALUE` as a TOML value; a bare word that is not TOML (`dubins`) is taken as a string.
-fn parse_override_value(raw: &str) -> toml::Value {
-    match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
-        Ok(mut t) => t
-            .remove("v")
-            .unwrap_or(toml::Value::String(raw.to_string())),
-        Err(_) => toml::Value::String(raw.to_string()),
+/// `VALUE` as one TOML value, parsed on its own (never spliced into TOML text, so a newline
+/// or a `#` cannot add a key or hide the rest); a bare word that is not TOML (`dubins`) is
+/// taken as a string; anything else that does not parse is refused.
+fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
+    match raw.parse::<toml::Value>() {
+        Ok(v) => Ok(v),
+        Err(_) if is_bare_word(raw) => Ok(toml::Value::String(raw.to_string())),
+        Err(e) => Err(format!(
+            "`{}` is not one TOML value ({}); quote a string, e.g. \"text\"",
+            clip_chars(&raw.escape_debug().to_string(), 80),
+            e.message().trim()
+        )),
+    }
+}
+
+/// Text taken as a string when it is not a TOML value (a kind, a path, a name, with spaces):
+/// one line, no comment sign, not the start of an array, table or quoted string.
+fn is_bare_word(raw: &str) -> bool {
+    !raw.is_empty()
+        && !raw.starts_with(['[', '{', '"', '\''])
+        && !raw.chars().any(|c| c.is_control() || c == '#')
+}
+
+/// The first `n` characters of `s`, with `...` when cut.
+fn clip_chars(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
+        s.to_string()
+    } else {
+        format!("{}...", s.chars().take(n).collect::<String>())
     }
 }
 

@@ -872,3 +872,27 @@ fn sitl_home_ranges() {
         .contains("[sitl]\nhome_alt_m = 12.5"));
     assert!(toml::from_str::<ScenarioFile>("[sitl]\nhome_height_m = 3.0\n").is_err());
 }
+
+/// A `--set` value is one TOML value, parsed on its own: a newline cannot add a second key and
+/// a `#` cannot hide the rest (a hostile review: `sim.duration_s=7.0\nsim.seed=3` set the
+/// duration and silently dropped the seed; `sim.duration_s=7 # c` was accepted); bare words
+/// (a kind, a name with spaces) stay strings.
+#[test]
+fn set_values_are_one_toml_value() {
+    let parse = |set: &str| isotrack_scenario::parse_scenario("", "s.toml", &[set.to_string()]);
+    for bad in [
+        "sim.duration_s=7.0\nsim.seed=3",
+        "sim.duration_s=7 # c",
+        "sim.duration_s=7\r\nsim.seed=3",
+        "name=[1, 2",
+    ] {
+        let e = parse(bad).unwrap_err().to_string();
+        assert!(e.contains("is not one TOML value"), "{bad:?}: {e}");
+    }
+    let s = parse("sim.duration_s=7").unwrap();
+    assert_eq!(s.file().sim.duration_s, Some(7.0));
+    let s = parse("name=my run").unwrap();
+    assert_eq!(s.file().name.as_deref(), Some("my run"));
+    let s = parse("vehicle.kind=dubins").unwrap();
+    assert_eq!(s.file().name, None);
+}

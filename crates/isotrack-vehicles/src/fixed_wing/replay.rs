@@ -15,6 +15,35 @@ pub const REPLAY_STEP_S: f64 = 0.01;
 /// a minute or two of CPU).
 pub const MAX_REPLAY_STEPS: u64 = 100_000_000;
 
+/// The largest control-surface deflection a replay accepts, rad: the autopilot's saturation
+/// (Beard & McLain 2012, sec. 6.3: `delta_a_max = delta_e_max = 45 deg`; docs/FIXED-WING.md);
+/// past it the linear aerodynamic coefficients are meaningless.
+pub const MAX_DEFLECTION_RAD: f64 = core::f64::consts::FRAC_PI_4;
+
+/// Whether `d` is a command the airframe model covers: each deflection within
+/// +-[`MAX_DEFLECTION_RAD`], the throttle in `[0, 1]`; the error names the first input out of
+/// range (`delta_e_rad`, `delta_a_rad`, `delta_r_rad`, `delta_t`).
+pub fn check_deltas(d: &Deltas) -> Result<(), String> {
+    for (name, v) in [
+        ("delta_e_rad", d.elevator_rad),
+        ("delta_a_rad", d.aileron_rad),
+        ("delta_r_rad", d.rudder_rad),
+    ] {
+        if !(v.abs() <= MAX_DEFLECTION_RAD) {
+            return Err(format!(
+                "`{name}` = {v} rad is outside +-{MAX_DEFLECTION_RAD:.4} rad (45 deg, the surfaces' limit)"
+            ));
+        }
+    }
+    if !(0.0..=1.0).contains(&d.throttle) {
+        return Err(format!(
+            "`delta_t` = {} is outside [0, 1] (throttle fraction)",
+            d.throttle
+        ));
+    }
+    Ok(())
+}
+
 /// The columns of one replay record ([`record`]), in order.
 pub const REPLAY_COLUMNS: [&str; 16] = [
     "t_s",
@@ -176,6 +205,67 @@ mod tests {
             "north {}",
             last[1]
         );
+    }
+
+    /// The surfaces' limit is 45 deg and the throttle a fraction: at the bounds accepted, past
+    /// them refused (a hostile review: `delta_e_rad = 100` flew a "valid" trajectory).
+    #[test]
+    fn deflections_and_throttle_within_their_limits() {
+        let at = Deltas {
+            elevator_rad: MAX_DEFLECTION_RAD,
+            aileron_rad: -MAX_DEFLECTION_RAD,
+            rudder_rad: 0.0,
+            throttle: 1.0,
+        };
+        assert_eq!(check_deltas(&at), Ok(()));
+        assert_eq!(
+            check_deltas(&Deltas {
+                throttle: 0.0,
+                ..at
+            }),
+            Ok(())
+        );
+        let past = MAX_DEFLECTION_RAD + 1e-9;
+        for (d, name) in [
+            (
+                Deltas {
+                    elevator_rad: past,
+                    ..at
+                },
+                "delta_e_rad",
+            ),
+            (
+                Deltas {
+                    aileron_rad: -past,
+                    ..at
+                },
+                "delta_a_rad",
+            ),
+            (
+                Deltas {
+                    rudder_rad: 100.0,
+                    ..at
+                },
+                "delta_r_rad",
+            ),
+            (
+                Deltas {
+                    throttle: -1e-12,
+                    ..at
+                },
+                "delta_t",
+            ),
+            (
+                Deltas {
+                    throttle: 1.0 + 1e-12,
+                    ..at
+                },
+                "delta_t",
+            ),
+        ] {
+            let e = check_deltas(&d).unwrap_err();
+            assert!(e.contains(name), "{e}");
+        }
     }
 
     #[test]
