@@ -1291,14 +1291,10 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
     (verdict, reason)
 }
 
-fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
-    let at = format!("T = {} s", Num(sm.period_s));
-    let radius = |r: Option<f64>| {
-        r.map_or_else(
-            || "no equilibrium".to_string(),
-            |r| format!("spectral radius {}", fmt_radius(r)),
-        )
-    };
+/// The verdict when the sampled loop is unstable on the isoline: "not guaranteed" when only
+/// some of a lattice isoline's frozen slopes are unstable, `fails` otherwise, each with the
+/// growing mode and what the check does not know (its size). `None` when it is not unstable.
+fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
     if let (Some(false), Some(f)) = (sm.stable, sm.frozen) {
         if f.some_stable {
             let others = sm.isoline_stable_fraction.map_or_else(
@@ -1311,13 +1307,13 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
                 "shallowest"
             };
             let expect = expected_motion(f.period_samples);
-            return (
+            return Some((
                 Verdict::NotApplicable,
                 format!(
                     "not guaranteed: the loop sampled at {at} is unstable with the isoline's {place} slope frozen ({}) but stable at {others}; the slope varies along the isoline, so this is no proof of divergence: expect {expect}, bounded or not (losing the isoline), where it is {place}",
-                    radius(sm.spectral_radius)
+                    radius_text(sm.spectral_radius)
                 ),
-            );
+            ));
         }
     }
     if sm.stable == Some(false) {
@@ -1331,13 +1327,21 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             ),
             None => String::new(),
         };
-        return (
+        return Some((
             Verdict::Fails,
             format!(
                 "the loop sampled at {at} is unstable on the isoline ({}){expect}",
-                radius(sm.spectral_radius)
+                radius_text(sm.spectral_radius)
             ),
-        );
+        ));
+    }
+    None
+}
+
+fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
+    let at = format!("T = {} s", Num(sm.period_s));
+    if let Some(v) = unstable_verdict(sm, &at) {
+        return v;
     }
     if p1.exact_local_condition_holds == Some(false) {
         return (
@@ -1377,7 +1381,7 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             Verdict::NotApplicable,
             format!(
                 "not on the isoline: with ki = 0 the P law settles on an orbit where eps = {e:.4} (the isoline is no equilibrium), stable there when sampled at {at} ({}); an integral term (ki > 0) removes the offset",
-                radius(sm.spectral_radius)
+                radius_text(sm.spectral_radius)
             ),
         );
     }
@@ -1395,8 +1399,8 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             Verdict::NotApplicable,
             format!(
                 "not guaranteed: the loop sampled at {at} is stable on the isoline ({}) but not over the whole tube ({}); nothing checked fails",
-                radius(sm.spectral_radius),
-                radius(sm.tube_spectral_radius)
+                radius_text(sm.spectral_radius),
+                radius_text(sm.tube_spectral_radius)
             ),
         );
     }
@@ -1412,6 +1416,14 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
     (
         Verdict::NotApplicable,
         format!("no guarantee: {why}; nothing checked fails"),
+    )
+}
+
+/// A spectral radius for the verdict's reason, or "no equilibrium".
+fn radius_text(r: Option<f64>) -> String {
+    r.map_or_else(
+        || "no equilibrium".to_string(),
+        |r| format!("spectral radius {}", fmt_radius(r)),
     )
 }
 
