@@ -9,6 +9,7 @@
 #[macro_use]
 pub mod console;
 pub mod aircraft;
+pub mod check_text;
 pub mod checkmap;
 pub mod cli;
 pub mod compare;

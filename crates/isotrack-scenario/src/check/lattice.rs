@@ -34,6 +34,9 @@ pub(crate) struct Bounds {
     pub gamma3: Option<f64>,
     /// Lattice points the bounds were taken over.
     pub points: usize,
+    /// `[min, max]` of the field's sampled values at those points (no margin: what the field
+    /// was seen to take there, not a bound between the points).
+    pub values: [f64; 2],
 }
 
 impl<'a> Lattice<'a> {
@@ -225,12 +228,15 @@ impl<'a> Lattice<'a> {
         let pts = self.corner_mask(cells);
         let mut hess_norm = vec![f64::NAN; self.n * self.n];
         let (mut g1, mut g2, mut g3, mut n) = (f64::INFINITY, 0.0f64, 0.0f64, 0usize);
+        let mut values = [f64::INFINITY, f64::NEG_INFINITY];
         for k in (0..self.n * self.n).filter(|&k| pts[k]) {
             let p = self.point(k % self.n, k / self.n);
             let Some(g) = self.field.gradient(0.0, p) else {
                 continue;
             };
             n += 1;
+            // `f64::min`/`max` pass over a NaN value.
+            values = [values[0].min(self.values[k]), values[1].max(self.values[k])];
             g1 = g1.min(g.norm());
             g2 = g2.max(g.norm());
             if has_hessian {
@@ -250,6 +256,7 @@ impl<'a> Lattice<'a> {
                 gamma2: g2,
                 gamma3: None,
                 points: n,
+                values,
             });
         }
         // Largest change of ||hess F|| per metre between neighbouring points of the set.
@@ -278,6 +285,7 @@ impl<'a> Lattice<'a> {
             gamma2: g2 + gamma3 * d,
             gamma3: Some(gamma3),
             points: n,
+            values,
         })
     }
 }

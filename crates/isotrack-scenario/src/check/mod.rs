@@ -96,6 +96,15 @@ pub struct Prop2Report {
     /// by the tube's half-width `H` beyond it, to the tube's far edge,
     /// `[min(s0, s_d) - H, max(s0, s_d) + H]`.
     pub region_levels: Option<[f64; 2]>,
+    /// `[min, max]` of the field's values sampled over the region (the text clips
+    /// `region_levels` to it: a band widened past what the field takes, e.g. below zero on a
+    /// concentration, is no level the robot crosses). Not in the JSON.
+    #[serde(skip)]
+    pub region_sampled_levels: Option<[f64; 2]>,
+    /// The start has no field value (no data there, e.g. a NaN cell of a grid): the region
+    /// cannot be formed and the conditions are not evaluated. Not in the JSON.
+    #[serde(skip)]
+    pub start_without_data: bool,
     /// Lattice points of the region (start to tube).
     pub samples_in_region: usize,
     /// Lattice points of the tube component round the target isoline.
@@ -231,6 +240,11 @@ pub struct SampledReport {
     /// How the loop is unstable at some of the isoline's frozen slopes, for the verdict.
     #[serde(skip)]
     frozen: Option<FrozenInstability>,
+    /// When the loop is unstable on the isoline: the growing mode's period in samples at the
+    /// worst slope (see [`growing_mode_period_samples`]; the inner `None`: a drift). For the
+    /// verdict's "what to expect".
+    #[serde(skip)]
+    unstable_mode_period_samples: Option<Option<f64>>,
     /// Remarks.
     pub note: String,
 }
@@ -517,6 +531,23 @@ struct FrozenInstability {
     period_samples: Option<f64>,
 }
 
+/// The period, in samples, of the loop's dominant mode at `slope`: `2 pi / |arg z|` of the
+/// eigenvalue `z` of largest modulus (2: the command alternates every sample; `None` for a
+/// real positive `z`, a drift, or no matrix).
+fn growing_mode_period_samples(base: &SampledLoop, slope: f64) -> Option<f64> {
+    SampledLoop { slope, ..*base }
+        .closed_loop_matrix()
+        .and_then(|m| {
+            m.complex_eigenvalues()
+                .iter()
+                .copied()
+                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        })
+        .map(|z| z.im.atan2(z.re).abs())
+        .filter(|&arg| arg > 1e-9)
+        .map(|arg| 2.0 * std::f64::consts::PI / arg)
+}
+
 /// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
 fn sensor_lag(s: &Scenario) -> Option<SensorLag> {
     let f = s.file();
@@ -702,6 +733,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         course_loop: None,
         isoline_stable_fraction: None,
         frozen: None,
+        unstable_mode_period_samples: None,
         note: String::new(),
     };
     let setup = match LoopSetup::new(s, l, r) {
@@ -752,6 +784,23 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     };
     rep.spectral_radius = rho.is_finite().then_some(rho);
     rep.stable = Some(rho < 1.0);
+    if rho >= 1.0 {
+        let worst = slopes
+            .iter()
+            .copied()
+            .max_by(|a, b| {
+                let at = |alpha: f64| {
+                    SampledLoop {
+                        slope: alpha,
+                        ..base
+                    }
+                    .spectral_radius()
+                };
+                at(*a).total_cmp(&at(*b))
+            })
+            .unwrap_or(base.slope);
+        rep.unstable_mode_period_samples = Some(growing_mode_period_samples(&base, worst));
+    }
     if let Some(tube) = r.slope_range {
         let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
         rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
@@ -827,20 +876,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
                 .copied()
                 .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
                 .unwrap_or(range[1]);
-            let period_samples = SampledLoop {
-                slope: worst,
-                ..base
-            }
-            .closed_loop_matrix()
-            .and_then(|m| {
-                m.complex_eigenvalues()
-                    .iter()
-                    .copied()
-                    .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-            })
-            .map(|z| z.im.atan2(z.re).abs())
-            .filter(|&arg| arg > 1e-9)
-            .map(|arg| 2.0 * std::f64::consts::PI / arg);
+            let period_samples = growing_mode_period_samples(&base, worst);
             rep.frozen = Some(FrozenInstability {
                 some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
                 steepest_unstable: radius_at(range[1]) >= 1.0,
@@ -917,6 +953,8 @@ struct Regions {
     tube: Option<lattice::Bounds>,
     slope_range: Option<[f64; 2]>,
     isoline_slope_range: Option<[f64; 2]>,
+    /// The field has no value at the start.
+    start_without_data: bool,
 }
 
 fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
@@ -953,6 +991,7 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
             tube: None,
             slope_range,
             isoline_slope_range,
+            start_without_data: false,
         };
     }
     let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
@@ -980,20 +1019,44 @@ fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
         tube: tube_bounds,
         slope_range,
         isoline_slope_range,
+        start_without_data: !field.value(0.0, p0).is_some_and(f64::is_finite),
     }
 }
 
+/// Prop. 2's report: the field sampled over the region and the tube, the gain conditions, the
+/// error bound, the start's heading and the remarks, each concept one function below (the
+/// reasons a bound is withheld are added by [`withhold_prop2_bound`] once the sampled loop and
+/// the sensor are known).
 fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
-    let f = s.file();
-    let c = &f.controller;
-    let (v, kp, ki, c1, c2) = (l.v, l.kp, l.ki, l.c1, l.c2);
-    let phis: Vec<f64> = (1..1000)
-        .map(|k| k as f64 * std::f64::consts::FRAC_PI_2 / 1000.0)
-        .collect();
-    let mut rep = Prop2Report {
-        applicable: ki == 0.0 && is_pi_isoline(s),
+    let mut rep = prop2_region_sampling(s, l, tube, r);
+    let mut notes = prop2_applicability_notes(s, &rep);
+    let Some(b) = prop2_field_bounds(s, tube, r, &mut notes) else {
+        rep.note = notes.join("; ");
+        return rep;
+    };
+    prop2_gain_constants(&mut rep, &b, l);
+    prop2_bound(&mut rep, &b, l);
+    prop2_initial_heading(&mut rep, s);
+    notes.extend(prop2_condition_notes(&rep, &b, l, tube));
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The angle margins `phi` in `(0, pi/2)` Prop. 2's conditions are scanned over: `k pi/2000`,
+/// `k = 1..999`.
+fn prop2_phis() -> impl DoubleEndedIterator<Item = f64> {
+    (1..1000).map(|k| k as f64 * std::f64::consts::FRAC_PI_2 / 1000.0)
+}
+
+/// Region sampling: the report with the lattice's numbers over the start-to-tube region and
+/// the tube (levels, sample counts, gammas), nothing decided yet.
+fn prop2_region_sampling(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
+    Prop2Report {
+        applicable: l.ki == 0.0 && is_pi_isoline(s),
         tube_halfwidth: tube,
         region_levels: r.levels,
+        region_sampled_levels: r.region.map(|b| b.values),
+        start_without_data: r.start_without_data,
         samples_in_region: r.region.map_or(0, |b| b.points),
         samples_in_tube: r.tube.map_or(0, |b| b.points),
         gamma1: r.region.map(|b| b.gamma1),
@@ -1016,88 +1079,123 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
         initial_phi_rad: None,
         initial_heading_in_sector: None,
         note: String::new(),
-    };
-    let mut notes = vec![];
-    if !is_pi_isoline(s) {
-        notes.push(
-            "Prop. 2 is for the PI-like law (controller.kind = \"pi_isoline\"); the field's bounds are reported for the baselines' conditions".to_string(),
-        );
-    } else if !rep.applicable {
-        notes
-            .push("Prop. 2 is stated for ki = 0; the numbers are for the P part alone".to_string());
     }
-    let p0 = start(s);
+}
+
+/// Whether Prop. 2 is stated for this law and these gains.
+fn prop2_applicability_notes(s: &Scenario, rep: &Prop2Report) -> Vec<String> {
+    if !is_pi_isoline(s) {
+        vec!["Prop. 2 is for the PI-like law (controller.kind = \"pi_isoline\"); the field's bounds are reported for the baselines' conditions".to_string()]
+    } else if !rep.applicable {
+        vec!["Prop. 2 is stated for ki = 0; the numbers are for the P part alone".to_string()]
+    } else {
+        vec![]
+    }
+}
+
+/// The gamma constants `gamma1..3` over the region as Prop. 2 takes them, or `None` (with the
+/// reason in `notes`) when the region cannot be formed or the field has no Hessian.
+fn prop2_field_bounds(
+    s: &Scenario,
+    tube: f64,
+    r: &Regions,
+    notes: &mut Vec<String>,
+) -> Option<FieldBounds> {
+    let no_level = || {
+        format!(
+            "no lattice cell has |F - s_d| <= {}: the level is not attained in the region",
+            Echo(tube)
+        )
+    };
     let Some(region) = r.region else {
         notes.push(if r.tube.is_none() {
-            format!("no lattice cell has |F - s_d| <= {}: the level is not attained in the region", Echo(tube))
+            no_level()
+        } else if r.start_without_data {
+            let p0 = start(s);
+            format!(
+                "the start ({}, {}) m has no field value (the field has no data there): the region where the bound is proved cannot be formed, and Prop. 2's conditions are not evaluated",
+                Echo(p0.x),
+                Echo(p0.y)
+            )
         } else {
             "the start lies outside the field or the sampled region: the region where the bound is proved cannot be formed".to_string()
         });
-        rep.note = notes.join("; ");
-        return rep;
+        return None;
     };
     if r.tube.is_none() {
-        notes.push(format!(
-            "no lattice cell has |F - s_d| <= {}: the level is not attained in the region",
-            Echo(tube)
-        ));
+        notes.push(no_level());
     }
     let Some(gamma3) = region.gamma3 else {
         notes.push("bilinear interpolation has no continuous gradient and no Hessian, so gamma3 is undefined and Prop. 2 cannot be checked (use field.interpolation = \"bicubic\")".into());
-        rep.note = notes.join("; ");
-        return rep;
+        return None;
     };
-    let b = FieldBounds {
+    Some(FieldBounds {
         gamma1: region.gamma1,
         gamma2: region.gamma2,
         gamma3,
-    };
-    let best = phis
-        .iter()
-        .filter_map(|&phi| prop2_min_kp(&b, v, c1, c2, phi).map(|k| (k, phi)))
+    })
+}
+
+/// The smallest `kp` meeting the conditions over all angle margins, unit-consistent and in the
+/// paper's printed form.
+fn prop2_gain_constants(rep: &mut Prop2Report, b: &FieldBounds, l: &Law) {
+    let (v, kp, c1, c2) = (l.v, l.kp, l.c1, l.c2);
+    let best = prop2_phis()
+        .filter_map(|phi| prop2_min_kp(b, v, c1, c2, phi).map(|k| (k, phi)))
         .min_by(|a, b| a.0.total_cmp(&b.0));
     rep.min_kp = best.map(|x| x.0);
     rep.min_kp_phi_rad = best.map(|x| x.1);
-    rep.paper_min_kp = phis
-        .iter()
-        .filter_map(|&phi| prop2_paper_min_kp(&b, v, kp, c1, c2, phi).0)
+    rep.paper_min_kp = prop2_phis()
+        .filter_map(|phi| prop2_paper_min_kp(b, v, kp, c1, c2, phi).0)
         .min_by(|a, b| a.total_cmp(b));
-    // The largest margin at which kp works gives the tightest bound.
-    if let Some(&phi) = phis
-        .iter()
+}
+
+/// The bound at the scenario's `kp`: the largest margin at which `kp` works gives the tightest
+/// bound.
+fn prop2_bound(rep: &mut Prop2Report, b: &FieldBounds, l: &Law) {
+    let (v, kp, c1, c2) = (l.v, l.kp, l.c1, l.c2);
+    if let Some(phi) = prop2_phis()
         .rev()
-        .find(|&&phi| prop2_error_bound(&b, v, kp, c1, c2, phi).is_some())
+        .find(|&phi| prop2_error_bound(b, v, kp, c1, c2, phi).is_some())
     {
         rep.error_bound_phi_rad = Some(phi);
         if rep.applicable {
             rep.conditions_hold = true;
-            rep.error_bound = prop2_error_bound(&b, v, kp, c1, c2, phi);
+            rep.error_bound = prop2_error_bound(b, v, kp, c1, c2, phi);
             rep.paper_error_bound = rep
                 .error_bound
-                .and(prop2_paper_min_kp(&b, v, kp, c1, c2, phi).1);
+                .and(prop2_paper_min_kp(b, v, kp, c1, c2, phi).1);
         }
     }
-    // The initial heading condition phi(t0) in [-pi + phi, -phi].
-    if let Some(g) = s.field().gradient(0.0, p0).filter(|g| g.norm() > 0.0) {
-        let h = Vec2::from_angle(f.initial.heading_rad.unwrap_or(0.0));
-        let minus_n = -g;
-        // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
-        // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
-        let mut phi0 = minus_n.cross(h).atan2(minus_n.dot(h));
-        if c.higher_side == Some(isotrack_core::control::HigherSide::Left) {
-            phi0 = -phi0;
-        }
-        rep.initial_phi_rad = Some(phi0);
-        if let Some(m) = rep.error_bound_phi_rad {
-            rep.initial_heading_in_sector = Some(phi0 <= -m && phi0 >= -std::f64::consts::PI + m);
-        }
+}
+
+/// The initial heading condition `phi(t0) in [-pi + phi, -phi]`.
+fn prop2_initial_heading(rep: &mut Prop2Report, s: &Scenario) {
+    let f = s.file();
+    let Some(g) = s.field().gradient(0.0, start(s)).filter(|g| g.norm() > 0.0) else {
+        return;
+    };
+    let h = Vec2::from_angle(f.initial.heading_rad.unwrap_or(0.0));
+    let minus_n = -g;
+    // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
+    // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
+    let mut phi0 = minus_n.cross(h).atan2(minus_n.dot(h));
+    if f.controller.higher_side == Some(isotrack_core::control::HigherSide::Left) {
+        phi0 = -phi0;
     }
-    if v * b.gamma1 <= c1 {
-        notes.push(format!(
-            "v*gamma1 = {:.4} <= c1 = {}: somewhere between the start and the tube the sliding surface cannot be reached (decrease c1, or start nearer the isoline)",
-            v * b.gamma1,
-            Echo(c1)
-        ));
+    rep.initial_phi_rad = Some(phi0);
+    if let Some(m) = rep.error_bound_phi_rad {
+        rep.initial_heading_in_sector = Some(phi0 <= -m && phi0 >= -std::f64::consts::PI + m);
+    }
+}
+
+/// The remarks on the conditions, each following from the condition that failed: the reach
+/// condition `v*gamma1 > c1` (advice that depends on why it fails), a bound wider than the
+/// tube, a start outside the sector, and `c2 != 1`.
+fn prop2_condition_notes(rep: &Prop2Report, b: &FieldBounds, l: &Law, tube: f64) -> Vec<String> {
+    let mut notes = vec![];
+    if let Some(n) = reach_condition_note(b.gamma1, rep.tube_gamma1, l.v, l.c1) {
+        notes.push(n);
     }
     if let Some(eb) = rep.error_bound {
         if eb > tube {
@@ -1110,11 +1208,66 @@ fn prop2_report(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2Report {
     if rep.conditions_hold && rep.initial_heading_in_sector == Some(false) {
         notes.push("the start's heading is outside the sector [-pi + phi, -phi] the proposition assumes: the bound is not proved from this start".into());
     }
-    if c2 != 1.0 {
+    if l.c2 != 1.0 {
         notes.push("c2 != 1: the paper's printed form differs from the unit-consistent one (paper_* fields)".into());
     }
-    rep.note = notes.join("; ");
-    rep
+    notes
+}
+
+/// The note when Prop. 2's reach condition `v*gamma1 > c1` fails, with advice that follows from
+/// why: with `gamma1 > 0` a smaller `c1` (below `v*gamma1`) meets it; with `gamma1 = 0` (the
+/// field is flat, within the lattice's margin, somewhere in the region) no `c1 > 0` does, so
+/// the advice is about where the flat part is (between the start and the tube, or in the tube
+/// itself), never "decrease c1".
+fn reach_condition_note(gamma1: f64, tube_gamma1: Option<f64>, v: f64, c1: f64) -> Option<String> {
+    if v * gamma1 > c1 {
+        return None;
+    }
+    Some(if gamma1 > 0.0 {
+        format!(
+            "v*gamma1 = {} <= c1 = {}: somewhere between the start and the tube the sliding surface cannot be reached (decrease c1 below v*gamma1 = {}, or start nearer the isoline)",
+            Num(v * gamma1),
+            Echo(c1),
+            Num(v * gamma1)
+        )
+    } else {
+        match tube_gamma1.filter(|&g| g > 0.0) {
+            Some(g) => format!(
+                "gamma1 = 0: |grad F| vanishes (within the lattice's margin) somewhere between the start and the tube, so v*gamma1 > c1 fails for every c1 > 0 and decreasing c1 does not help; start nearer the isoline (over the tube alone gamma1 = {}, v*gamma1 = {})",
+                Num(g),
+                Num(v * g)
+            ),
+            None => "gamma1 = 0: |grad F| vanishes (within the lattice's margin) in the tube round the isoline itself, so v*gamma1 > c1 fails for every c1 > 0 and decreasing c1 does not help; Prop. 2 gives no bound on this field with this tube".to_string(),
+        }
+    })
+}
+
+/// The reasons Prop. 2's bound is withheld although its conditions hold and the start is in
+/// the sector: the sampled loop (unstable, or stable on the isoline but not over the tube, or
+/// not computed) and the sensor's effects the checks leave out. A withheld bound is no claim:
+/// its value moves to `error_bound_if_not_withheld`.
+fn withhold_prop2_bound(prop2: &mut Prop2Report, sampled: &SampledReport) {
+    if !(prop2.applicable && prop2.conditions_hold && prop2.initial_heading_in_sector == Some(true))
+    {
+        return;
+    }
+    let w = &mut prop2.bound_withheld;
+    match (sampled.stable, sampled.stable_over_tube) {
+        (Some(true), Some(true)) => {}
+        (Some(true), _) => w.push(format!(
+            "the sampled loop is stable on the isoline but not over the whole tube (spectral radius {})",
+            sampled.tube_spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
+        )),
+        (Some(false), _) => w.push("the sampled loop is unstable".into()),
+        (None, _) => w.push("the sampled loop was not computed".into()),
+    }
+    w.extend(prop2.sensor_not_modelled.iter().cloned());
+    prop2.bound_applies = w.is_empty();
+    if !prop2.bound_applies {
+        // Withheld: no bound is claimed. The conditional value is kept under its own key.
+        prop2.error_bound_if_not_withheld = prop2.error_bound.take();
+        prop2.paper_error_bound = None;
+    }
 }
 
 /// The combined verdict and its reason (docs/SAMPLED.md, "The verdict").
@@ -1138,14 +1291,10 @@ fn verdict(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, 
     (verdict, reason)
 }
 
-fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
-    let at = format!("T = {} s", Num(sm.period_s));
-    let radius = |r: Option<f64>| {
-        r.map_or_else(
-            || "no equilibrium".to_string(),
-            |r| format!("spectral radius {}", fmt_radius(r)),
-        )
-    };
+/// The verdict when the sampled loop is unstable on the isoline: "not guaranteed" when only
+/// some of a lattice isoline's frozen slopes are unstable, `fails` otherwise, each with the
+/// growing mode and what the check does not know (its size). `None` when it is not unstable.
+fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
     if let (Some(false), Some(f)) = (sm.stable, sm.frozen) {
         if f.some_stable {
             let others = sm.isoline_stable_fraction.map_or_else(
@@ -1157,30 +1306,42 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             } else {
                 "shallowest"
             };
-            let expect = match f.period_samples {
-                Some(p) if p < 2.5 => {
-                    "a period-2 oscillation (the command alternating every sample)".to_string()
-                }
-                Some(p) => format!("an oscillation with a period of about {p:.1} samples"),
-                None => "a drift off the isoline".to_string(),
-            };
-            return (
+            let expect = expected_motion(f.period_samples);
+            return Some((
                 Verdict::NotApplicable,
                 format!(
                     "not guaranteed: the loop sampled at {at} is unstable with the isoline's {place} slope frozen ({}) but stable at {others}; the slope varies along the isoline, so this is no proof of divergence: expect {expect}, bounded or not (losing the isoline), where it is {place}",
-                    radius(sm.spectral_radius)
+                    radius_text(sm.spectral_radius)
                 ),
-            );
+            ));
         }
     }
     if sm.stable == Some(false) {
-        return (
+        // What the check knows: the loop linearised on the isoline has a growing mode, so the
+        // robot cannot settle there. Not how large the error gets: the nonlinear loop can hold
+        // the oscillation small or lose the isoline (docs/SAMPLED.md, "The verdict").
+        let expect = match sm.unstable_mode_period_samples {
+            Some(p) => format!(
+                ": the robot cannot settle on it; expect {}, whose size this linear check does not bound (it may stay small, held by the nonlinear terms, or grow until the isoline is lost)",
+                expected_motion(p)
+            ),
+            None => String::new(),
+        };
+        return Some((
             Verdict::Fails,
             format!(
-                "the loop sampled at {at} is unstable on the isoline ({})",
-                radius(sm.spectral_radius)
+                "the loop sampled at {at} is unstable on the isoline ({}){expect}",
+                radius_text(sm.spectral_radius)
             ),
-        );
+        ));
+    }
+    None
+}
+
+fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
+    let at = format!("T = {} s", Num(sm.period_s));
+    if let Some(v) = unstable_verdict(sm, &at) {
+        return v;
     }
     if p1.exact_local_condition_holds == Some(false) {
         return (
@@ -1220,7 +1381,7 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             Verdict::NotApplicable,
             format!(
                 "not on the isoline: with ki = 0 the P law settles on an orbit where eps = {e:.4} (the isoline is no equilibrium), stable there when sampled at {at} ({}); an integral term (ki > 0) removes the offset",
-                radius(sm.spectral_radius)
+                radius_text(sm.spectral_radius)
             ),
         );
     }
@@ -1238,13 +1399,15 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             Verdict::NotApplicable,
             format!(
                 "not guaranteed: the loop sampled at {at} is stable on the isoline ({}) but not over the whole tube ({}); nothing checked fails",
-                radius(sm.spectral_radius),
-                radius(sm.tube_spectral_radius)
+                radius_text(sm.spectral_radius),
+                radius_text(sm.tube_spectral_radius)
             ),
         );
     }
     let why = if !sm.applicable {
         "the propositions are for the PI-like law"
+    } else if p2.start_without_data {
+        "the start has no field value (the field has no data there), so Prop. 2's conditions are not evaluated"
     } else if p2.conditions_hold {
         "Prop. 2's conditions hold but its bound is not proved from this start"
     } else {
@@ -1254,6 +1417,26 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
         Verdict::NotApplicable,
         format!("no guarantee: {why}; nothing checked fails"),
     )
+}
+
+/// A spectral radius for the verdict's reason, or "no equilibrium".
+fn radius_text(r: Option<f64>) -> String {
+    r.map_or_else(
+        || "no equilibrium".to_string(),
+        |r| format!("spectral radius {}", fmt_radius(r)),
+    )
+}
+
+/// What an unstable mode of `period_samples` samples looks like in a run (`None`: a real
+/// positive eigenvalue, a drift).
+fn expected_motion(period_samples: Option<f64>) -> String {
+    match period_samples {
+        Some(p) if p < 2.5 => {
+            "a period-2 oscillation (the command alternating every sample)".to_string()
+        }
+        Some(p) => format!("an oscillation with a period of about {p:.1} samples"),
+        None => "a drift off the isoline".to_string(),
+    }
 }
 
 /// A spectral radius for a sentence: 4 decimals, or 4 significant digits in scientific notation
@@ -1528,25 +1711,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let sampled = sampled_report(s, &l, &r, true);
     let mut prop2 = prop2_report(s, &l, tube, &r);
     prop2.sensor_not_modelled = sensor_not_modelled(s, prop2.region_levels);
-    if prop2.applicable && prop2.conditions_hold && prop2.initial_heading_in_sector == Some(true) {
-        let w = &mut prop2.bound_withheld;
-        match (sampled.stable, sampled.stable_over_tube) {
-            (Some(true), Some(true)) => {}
-            (Some(true), _) => w.push(format!(
-                "the sampled loop is stable on the isoline but not over the whole tube (spectral radius {})",
-                sampled.tube_spectral_radius.map_or_else(|| "inf".into(), fmt_radius)
-            )),
-            (Some(false), _) => w.push("the sampled loop is unstable".into()),
-            (None, _) => w.push("the sampled loop was not computed".into()),
-        }
-        w.extend(prop2.sensor_not_modelled.iter().cloned());
-        prop2.bound_applies = w.is_empty();
-        if !prop2.bound_applies {
-            // Withheld: no bound is claimed. The conditional value is kept under its own key.
-            prop2.error_bound_if_not_withheld = prop2.error_bound.take();
-            prop2.paper_error_bound = None;
-        }
-    }
+    withhold_prop2_bound(&mut prop2, &sampled);
     let (verdict, verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let moving = moving::moving_report(s, tube, region(s));
     CheckReport {
