@@ -1,12 +1,12 @@
 //! The simulation loop.
 
-use crate::metrics::{Metrics, MetricsConfig, RunMetrics};
+use crate::kernel::{ask, Sensed, VehicleRun};
+use crate::metrics::RunMetrics;
 use crate::sensor::{whole_steps, Sensor, StepsError};
-use crate::trace::{TraceRow, TraceSink};
-use isotrack_core::control::GroundTruth;
+use crate::trace::TraceSink;
 use isotrack_core::math::Pose2;
 use isotrack_core::numtext::Echo;
-use isotrack_core::{IsolineController, Measurement, ScalarField, Vec2, Vehicle};
+use isotrack_core::{IsolineController, Measurement, ScalarField, Vehicle};
 use serde::Serialize;
 
 /// How a run ended.
@@ -187,6 +187,8 @@ pub struct Oracles<'a> {
 /// controller's answer is the command held until the next one.
 ///
 /// Generic over every part so the loop is monomorphised: no dynamic dispatch in the hot path.
+///
+/// [`GroundTruth`]: isotrack_core::control::GroundTruth
 #[allow(clippy::too_many_arguments)]
 pub fn simulate<F, V, C, S>(
     field: &F,
@@ -207,19 +209,7 @@ where
     let wants_truth = controller.needs_ground_truth();
     let mut episode = Episode::new(vehicle, x0, sensor, plan);
     episode.drive(field, vehicle, oracles, sink, |sample| {
-        if wants_truth {
-            let truth = GroundTruth {
-                pose: sample.pose,
-                speed_mps: sample.speed_mps,
-                value: sample.true_value,
-                derivatives: oracles
-                    .gradient
-                    .and_then(|g| g(sample.measurement.t_s, sample.pose.position)),
-            };
-            controller.update_with_truth(&sample.measurement, &truth)
-        } else {
-            controller.update(&sample.measurement)
-        }
+        ask(controller, wants_truth, sample, oracles.gradient)
     });
     episode.finish(sink)
 }
@@ -243,60 +233,28 @@ pub struct Sample {
 /// [`run_to_sample`](Self::run_to_sample) performs steps 1-2 (and 3-5 of the steps without a
 /// sample) up to the next sample; [`command`](Self::command) completes that step (3-5).
 ///
-/// The episode owns its state; the field, vehicle and oracles are lent to each call, so that one
-/// shared field serves many episodes.
+/// The episode owns the vehicle's state and the clock; the bookkeeping of each step is the
+/// step kernel's (`kernel::VehicleRun`, the same the batched loop runs in lanes). The field,
+/// vehicle and oracles are lent to each call, so that one shared field serves many episodes.
 #[derive(Clone, Debug)]
 pub struct Episode<X> {
     x: X,
-    sensor: Sensor,
-    plan: StepPlan,
-    metrics: Metrics,
     /// The current step.
     k: u64,
-    omega: f64,
-    s_measured: Option<f64>,
-    samples: u64,
-    /// How it ended, once it has.
-    ended: Option<(Outcome, Option<String>)>,
-    /// The sample step waiting for its command: `(t, pose, s)`.
-    pending: Option<(f64, Pose2, f64)>,
-    last_row: Option<TraceRow>,
-    last_recorded_step: Option<u64>,
-    last_valid_step: u64,
-    prev_pos: Vec2,
-    /// Countdown to the next recorded step (not `k % record_every`: see `Sensor`).
-    record_countdown: u64,
-    end_pos: Vec2,
+    run: VehicleRun<true>,
+    /// The sample waiting for its command.
+    pending: Option<Sample>,
 }
 
 impl<X: Clone> Episode<X> {
     /// An episode of `plan` for `vehicle` from `x0`, behind `sensor`, at step 0 (nothing run).
     pub fn new<V: Vehicle<State = X>>(vehicle: &V, x0: X, sensor: Sensor, plan: &StepPlan) -> Self {
-        let metrics = Metrics::new(MetricsConfig {
-            dt_s: plan.dt_s,
-            steady_state_start_step: plan.steady_state_start_step,
-            convergence_tolerance: plan.convergence_tolerance,
-            convergence_min_dwell_steps: plan.convergence_min_dwell_steps,
-            track_loss_band: plan.track_loss_band,
-        });
-        let p0 = vehicle.pose(&x0).position;
+        let run = VehicleRun::new(plan, sensor, vehicle.pose(&x0));
         Self {
             x: x0,
-            sensor,
-            plan: *plan,
-            metrics,
             k: 0,
-            omega: 0.0,
-            s_measured: None,
-            samples: 0,
-            ended: None,
+            run,
             pending: None,
-            last_row: None,
-            last_recorded_step: None,
-            last_valid_step: 0,
-            prev_pos: p0,
-            record_countdown: 0,
-            end_pos: p0,
         }
     }
 
@@ -315,16 +273,8 @@ impl<X: Clone> Episode<X> {
         V: Vehicle<State = X>,
         S: TraceSink + ?Sized,
     {
-        if let Some((t, pose, s)) = self.pending {
-            return Some(Sample {
-                measurement: Measurement {
-                    t_s: t,
-                    value: self.s_measured.unwrap_or(f64::NAN),
-                },
-                pose,
-                speed_mps: vehicle.speed_mps(&self.x),
-                true_value: s,
-            });
+        if let Some(sample) = self.pending {
+            return Some(sample);
         }
         self.advance(field, vehicle, oracles, sink, |_| None)
     }
@@ -369,74 +319,24 @@ impl<X: Clone> Episode<X> {
         V: Vehicle<State = X>,
         S: TraceSink + ?Sized,
     {
-        while self.ended.is_none() {
+        while self.run.is_running() {
             let k = self.k;
-            let t = k as f64 * self.plan.dt_s;
-            let pose = vehicle.pose(&self.x);
-            if !pose.is_finite() {
-                self.end(
-                    Outcome::Diverged,
-                    format!("non-finite vehicle state at t = {t} s"),
-                );
-                break;
-            }
-            let Some(s) = field.value(t, pose.position) else {
-                self.end(
-                    Outcome::LeftField,
-                    format!(
-                        "the field has no value at ({:.6}, {:.6}) m, t = {t} s",
-                        pose.position.x, pose.position.y
-                    ),
-                );
-                if k == 0 && self.plan.record_every > 0 {
-                    // The start itself is off the field: the trace still shows where the vehicle
-                    // was (the field value and error unknown, NaN), so a plot can say why.
-                    sink.record(&TraceRow {
-                        t_s: t,
-                        x_m: pose.position.x,
-                        y_m: pose.position.y,
-                        heading_rad: pose.heading_rad,
-                        s: f64::NAN,
-                        error: f64::NAN,
-                        omega_radps: self.omega,
-                        s_measured: None,
-                        telemetry: vehicle.telemetry(&self.x),
-                    });
-                    self.last_recorded_step = Some(0);
-                }
-                break;
-            };
-            if k > 0 {
-                self.metrics
-                    .add_path((pose.position - self.prev_pos).norm());
-            }
-            self.prev_pos = pose.position;
-            if let Some(m) = self.sensor.observe(t, s) {
-                self.samples += 1;
-                self.s_measured = Some(m.value);
-                let sample = Sample {
-                    measurement: m,
-                    pose,
-                    speed_mps: vehicle.speed_mps(&self.x),
-                    true_value: s,
-                };
-                match answer(&sample) {
-                    None => {
-                        self.pending = Some((t, pose, s));
+            let t = k as f64 * self.run.plan().dt_s;
+            let value_at = |p| field.value(t, p).unwrap_or(f64::NAN);
+            let command = match self.run.sense(vehicle, &self.x, k, t, value_at, sink) {
+                Sensed::Ended => break,
+                Sensed::Held => None,
+                Sensed::Sampled(m) => {
+                    let sample = self.run.sample(m, vehicle.speed_mps(&self.x));
+                    let command = answer(&sample);
+                    if command.is_none() {
+                        self.pending = Some(sample);
                         return Some(sample);
                     }
-                    Some(w) if !w.is_finite() => {
-                        self.end(
-                            Outcome::Diverged,
-                            format!("non-finite turn-rate command at t = {t} s"),
-                        );
-                        self.record_start(t, pose, s, vehicle, sink);
-                        break;
-                    }
-                    Some(w) => self.omega = w,
+                    command
                 }
-            }
-            self.complete_step(t, pose, s, vehicle, oracles, sink);
+            };
+            self.complete(command, t, vehicle, oracles, sink);
         }
         None
     }
@@ -455,28 +355,19 @@ impl<X: Clone> Episode<X> {
         V: Vehicle<State = X>,
         S: TraceSink + ?Sized,
     {
-        let Some((t, pose, s)) = self.pending.take() else {
-            return;
-        };
-        if !omega_radps.is_finite() {
-            self.end(
-                Outcome::Diverged,
-                format!("non-finite turn-rate command at t = {t} s"),
-            );
-            self.record_start(t, pose, s, vehicle, sink);
-            return;
+        if self.pending.take().is_some() {
+            let t = self.t_s();
+            self.complete(Some(omega_radps), t, vehicle, oracles, sink);
         }
-        self.omega = omega_radps;
-        self.complete_step(t, pose, s, vehicle, oracles, sink);
     }
 
-    /// Steps 4-5 of step `k`: metrics, trace, and the vehicle's move (none past the last step).
+    /// The kernel's rest of the current step (time `t_s`), then step 5: the vehicle's move (none
+    /// once the run ends).
     #[inline(always)]
-    fn complete_step<V, S>(
+    fn complete<V, S>(
         &mut self,
-        t: f64,
-        pose: Pose2,
-        s: f64,
+        command: Option<f64>,
+        t_s: f64,
         vehicle: &V,
         oracles: &Oracles<'_>,
         sink: &mut S,
@@ -485,86 +376,23 @@ impl<X: Clone> Episode<X> {
         S: TraceSink + ?Sized,
     {
         let k = self.k;
-        let eps = s - self.plan.level;
-        self.metrics.observe(k, eps, self.omega);
-        if let Some(dist) = oracles.isoline_distance {
-            if self.metrics.in_window(k) {
-                if let Some(d) = dist(t, pose.position) {
-                    self.metrics.observe_isoline_distance(d);
-                }
-            }
+        if self
+            .run
+            .complete(command, k, t_s, vehicle, &self.x, oracles, sink)
+        {
+            vehicle.step(&mut self.x, self.run.omega_radps(), self.run.plan().dt_s);
+            self.k += 1;
         }
-        self.last_valid_step = k;
-        self.end_pos = pose.position;
-        if self.plan.record_every > 0 {
-            // Only a recording run keeps its rows (the last valid one goes into the trace at the
-            // end): without a trace, no row is built.
-            let row = TraceRow {
-                t_s: t,
-                x_m: pose.position.x,
-                y_m: pose.position.y,
-                heading_rad: pose.heading_rad,
-                s,
-                error: eps,
-                omega_radps: self.omega,
-                s_measured: self.s_measured,
-                telemetry: vehicle.telemetry(&self.x),
-            };
-            if self.record_countdown == 0 {
-                sink.record(&row);
-                self.last_recorded_step = Some(k);
-                self.record_countdown = self.plan.record_every;
-            }
-            self.record_countdown -= 1;
-            self.last_row = Some(row);
-        }
-        if k == self.plan.n_steps {
-            self.ended = Some((Outcome::Completed, None));
-            return;
-        }
-        self.metrics.integrate_command(self.omega);
-        vehicle.step(&mut self.x, self.omega, self.plan.dt_s);
-        self.k += 1;
-    }
-
-    /// A run that ends at its very first sample (a non-finite first command) still has its
-    /// start in the trace: the vehicle where it was, the field value, the error, the command
-    /// held before the sample (the non-finite one never flew), so that a trace is never empty.
-    fn record_start<V, S>(&mut self, t: f64, pose: Pose2, s: f64, vehicle: &V, sink: &mut S)
-    where
-        V: Vehicle<State = X>,
-        S: TraceSink + ?Sized,
-    {
-        if self.k != 0 || self.plan.record_every == 0 || self.last_recorded_step.is_some() {
-            return;
-        }
-        sink.record(&TraceRow {
-            t_s: t,
-            x_m: pose.position.x,
-            y_m: pose.position.y,
-            heading_rad: pose.heading_rad,
-            s,
-            error: s - self.plan.level,
-            omega_radps: self.omega,
-            s_measured: self.s_measured,
-            telemetry: vehicle.telemetry(&self.x),
-        });
-        self.last_recorded_step = Some(0);
-    }
-
-    fn end(&mut self, outcome: Outcome, detail: String) {
-        self.ended = Some((outcome, Some(detail)));
-        self.pending = None;
     }
 
     /// How the run ended, once it has (`None` while it runs).
     pub fn outcome(&self) -> Option<Outcome> {
-        self.ended.as_ref().map(|(o, _)| *o)
+        self.run.outcome()
     }
 
     /// Time of the current step, s.
     pub fn t_s(&self) -> f64 {
-        self.k as f64 * self.plan.dt_s
+        self.k as f64 * self.run.plan().dt_s
     }
 
     /// The vehicle's state.
@@ -574,27 +402,12 @@ impl<X: Clone> Episode<X> {
 
     /// The command being held, rad/s.
     pub fn omega_radps(&self) -> f64 {
-        self.omega
+        self.run.omega_radps()
     }
 
     /// Ends the episode (a run still going ends as it stands, as `completed` would at its end)
     /// and returns its result; the last valid state is always in the trace.
     pub fn finish<S: TraceSink + ?Sized>(self, sink: &mut S) -> RunResult {
-        if self.plan.record_every > 0 && self.last_recorded_step != Some(self.last_valid_step) {
-            if let Some(row) = &self.last_row {
-                sink.record(row);
-            }
-        }
-        let (outcome, detail) = self.ended.unwrap_or((Outcome::Completed, None));
-        RunResult {
-            outcome,
-            outcome_detail: detail,
-            t_end_s: self.last_valid_step as f64 * self.plan.dt_s,
-            steps: self.last_valid_step,
-            samples_dropped: self.sensor.dropped(),
-            samples: self.samples,
-            end_position_m: [self.end_pos.x, self.end_pos.y],
-            metrics: self.metrics.finish(outcome == Outcome::Completed),
-        }
+        self.run.finish(sink)
     }
 }

@@ -663,3 +663,86 @@ fn a_batch_gives_each_run_its_result_alone() {
     let none: Vec<isotrack_sim::BatchRun<'_, Unicycle, Law>> = vec![];
     assert!(isotrack_sim::simulate_batch(&field, &vehicle, &plan, none).is_empty());
 }
+
+/// `F(x, y) = x` before `x_max`, and `poison` (NaN or infinite: a broken field's value, not
+/// `None`) from there on.
+struct Poisoned {
+    x_max: f64,
+    poison: f64,
+}
+impl ScalarField for Poisoned {
+    fn value(&self, _t: f64, p: Vec2) -> Option<f64> {
+        Some(if p.x < self.x_max { p.x } else { self.poison })
+    }
+}
+
+/// One rule for a field's value alone and in lanes: a value that is not finite is no value.
+/// Straight along x at 1 m/s from x0 = 0, 0.3, 0.6 (and one from 5 m, already in the poison):
+/// the field turns NaN (or +-inf) past x = 1.05, so the runs end as `left_field` at x = 1.1 m,
+/// steps 11, 8 and 5 (the last valid ones 10, 7 and 4), and the fourth at its start; exactly as
+/// on a field with no value there (`None`), run alone or batched.
+#[test]
+fn a_non_finite_field_value_ends_the_run_alone_and_in_a_batch() {
+    let vehicle = Euler { v: 1.0 };
+    let plan = plan(2.0, 0.0);
+    let starts = [0.0, 0.3, 0.6, 5.0];
+    let law = || Law {
+        kp: 0.0,
+        truth: false,
+        blow_up_at_s: f64::INFINITY,
+        blow_up: 0.0,
+    };
+    let alone = |field: &dyn ScalarField, x0: f64| {
+        simulate(
+            field,
+            &vehicle,
+            start(x0),
+            &mut law(),
+            sensor(10.0),
+            &plan,
+            &Oracles::default(),
+            &mut NoTrace,
+        )
+    };
+    let reference: Vec<RunResult> = starts
+        .iter()
+        .map(|&x0| alone(&Ramp { x_max: 1.05 }, x0))
+        .collect();
+    let steps: Vec<u64> = reference.iter().map(|r| r.steps).collect();
+    assert_eq!(steps, [10, 7, 4, 0]);
+    for (r, x) in reference
+        .iter()
+        .zip(["1.100000", "1.100000", "1.100000", "5.000000"])
+    {
+        assert_eq!(r.outcome, Outcome::LeftField);
+        let detail = r.outcome_detail.as_deref().unwrap();
+        assert!(
+            detail.contains(&format!("no value at ({x}, 0.000000) m")),
+            "{detail}"
+        );
+    }
+    for poison in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let field = Poisoned {
+            x_max: 1.05,
+            poison,
+        };
+        let runs = starts
+            .iter()
+            .map(|&x0| isotrack_sim::BatchRun {
+                x0: start(x0),
+                controller: law(),
+                sensor: sensor(10.0),
+                oracles: Oracles::default(),
+            })
+            .collect();
+        let batch = isotrack_sim::simulate_batch(&field, &vehicle, &plan, runs);
+        for (i, &x0) in starts.iter().enumerate() {
+            assert_eq!(
+                alone(&field, x0),
+                reference[i],
+                "alone, {poison}, x0 = {x0}"
+            );
+            assert_eq!(batch[i], reference[i], "batched, {poison}, x0 = {x0}");
+        }
+    }
+}
