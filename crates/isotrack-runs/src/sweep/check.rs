@@ -1,6 +1,6 @@
 //! The check of a stored `results.csv` row: `--resume` and `merge` trust a row only after it.
 
-use crate::sweep::rows::METRIC_COLUMNS;
+use crate::sweep::rows::numeric_columns;
 use isotrack_scenario::sweep::SweepPlan;
 
 /// The `outcome` values a row may hold.
@@ -99,7 +99,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
 /// maximum and `|mean|` at most the maximum (to rounding), the convergence time at most the run's
 /// end, and `samples` a whole number of at most one per step ([`isotrack_sim::MAX_STEPS`] + 1).
 fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
-    let numeric = &METRIC_COLUMNS[1..METRIC_COLUMNS.len() - 1];
+    let numeric = numeric_columns();
     if outcome == "invalid_scenario" {
         if let Some(n) = numeric.iter().find(|n| !cell(n).is_empty()) {
             return Err(format!("{n} holds a value in an invalid_scenario row"));

@@ -244,3 +244,20 @@ pub fn write_sorted(
         .map_err(cant)?;
     std::fs::rename(&tmp, path).map_err(cant)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Flagged;
+
+    /// Rows come in any order (a sweep's rows as they finish, shards one after the other): the
+    /// tally keeps the count and the smallest five ids, sorted.
+    #[test]
+    fn flagged_keeps_the_count_and_the_smallest_ids() {
+        let mut f = Flagged::default();
+        for id in [40, 7, 99, 3, 12, 8, 1, 500] {
+            f.add(id);
+        }
+        assert_eq!(f.count, 8);
+        assert_eq!(f.first_ids, [1, 3, 7, 8, 12]);
+    }
+}

@@ -5,8 +5,10 @@ use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
 
-/// The metric columns of `results.csv`, after `run_id` and the varied keys.
-pub const METRIC_COLUMNS: [&str; 14] = [
+/// The metric columns of `results.csv`, after `run_id` and the varied keys: the outcome, the
+/// metrics, `outcome_detail`, then `warnings` (what [`run_warnings`] says about the run's
+/// scenario; empty for most runs).
+pub const METRIC_COLUMNS: [&str; 15] = [
     "outcome",
     "convergence_time_s",
     "steady_state_max_abs_error",
@@ -21,7 +23,31 @@ pub const METRIC_COLUMNS: [&str; 14] = [
     "t_end_s",
     "samples",
     "outcome_detail",
+    "warnings",
 ];
+
+/// The numeric columns of [`METRIC_COLUMNS`] (all but `outcome`, `outcome_detail` and
+/// `warnings`).
+pub fn numeric_columns() -> &'static [&'static str] {
+    &METRIC_COLUMNS[1..METRIC_COLUMNS.len() - 2]
+}
+
+/// The warnings a sweep records for a run's scenario (its `warnings` cell; empty when none):
+/// the checks cheap enough to make for every run, today a start on a flat background where the
+/// PI-like law circles for the whole run ([`isotrack_scenario::check::flat_start`], the warning
+/// `isotrack run` prints). `isotrack check`'s sampled-loop warning needs a lattice scan of the
+/// field per run and is left to `isotrack run`/`check` on the run's scenario.
+pub fn run_warnings(scenario: &Scenario) -> String {
+    isotrack_scenario::check::flat_start(scenario).map_or_else(String::new, |f| {
+        format!(
+            "flat start: within {} m of it v*|grad F| is at most {} field units/s (under {} % of c1*tanh(|eps|/c2) = {}) so the vehicle circles where it starts; set controller.search",
+            num(f.radius_m),
+            num(f.slope_term),
+            isotrack_scenario::check::FLAT_START_FRACTION * 100.0,
+            num(f.level_term)
+        )
+    })
+}
 
 /// One CSV line of `fields`, with its newline.
 pub fn csv_line(fields: &[String]) -> String {
@@ -57,13 +83,14 @@ pub fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str
     ids.iter()
         .zip(derived)
         .map(|(&id, d)| {
+            let warnings = d.as_ref().map(run_warnings).unwrap_or_default();
             // run_batch answers every valid scenario, in order.
             let result = d.and_then(|_| {
                 results
                     .next()
                     .ok_or_else(|| "the batch returned no result for this run".to_string())
             });
-            csv_line(&row_fields(plan, id, result))
+            csv_line(&row_fields_warned(plan, id, result, warnings))
         })
         .collect()
 }
@@ -81,10 +108,21 @@ pub fn run_scenario(
         .map_err(|e| e.to_string().replace('\n', " "))
 }
 
+/// The `results.csv` fields of run `id` without warnings (a run with a controller of the
+/// caller's, which the scenario's warnings are not about): [`row_fields_warned`].
+pub fn row_fields(plan: &SweepPlan, id: u64, result: Result<RunResult, String>) -> Vec<String> {
+    row_fields_warned(plan, id, result, String::new())
+}
+
 /// The `results.csv` fields of run `id`: its id, the plan's cells, then the
 /// [`METRIC_COLUMNS`] of its result, or of an invalid scenario (outcome `invalid_scenario`,
-/// the reason in `outcome_detail`).
-pub fn row_fields(plan: &SweepPlan, id: u64, result: Result<RunResult, String>) -> Vec<String> {
+/// the reason in `outcome_detail`), and its `warnings` cell ([`run_warnings`]).
+pub fn row_fields_warned(
+    plan: &SweepPlan,
+    id: u64,
+    result: Result<RunResult, String>,
+    warnings: String,
+) -> Vec<String> {
     // A metric that is not a finite number is written as an empty cell (as summary.json writes
     // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
     let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
@@ -113,10 +151,11 @@ pub fn row_fields(plan: &SweepPlan, id: u64, result: Result<RunResult, String>) 
         }
         Err(e) => {
             fields.push("invalid_scenario".into());
-            fields.extend(std::iter::repeat_n(String::new(), METRIC_COLUMNS.len() - 2));
+            fields.extend(std::iter::repeat_n(String::new(), numeric_columns().len()));
             fields.push(e);
         }
     }
+    fields.push(warnings);
     fields
 }
 
