@@ -108,7 +108,7 @@ impl PyScenario {
 
     /// The resolved scenario as TOML (what `isotrack show` prints).
     fn to_toml(&self) -> String {
-        isotrack_cli::output::scenario_toml(&self.inner)
+        isotrack_runs::summary::scenario_toml(&self.inner)
     }
 
     /// Runs the scenario: `(summary_json, trace_columns, scenario_flown)`. `record_rate_hz` overrides
@@ -391,14 +391,14 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
 /// The content of `summary.json`, as the CLI writes it.
 fn summary_json(s: &Scenario, origin: &str, r: &RunResult) -> PyResult<String> {
     let warnings = isotrack_scenario::check::warnings(s);
-    let summary = isotrack_cli::output::Summary {
+    let summary = isotrack_runs::summary::Summary {
         isotrack_version: env!("CARGO_PKG_VERSION"),
         scenario_path: (!origin.starts_with('<')).then(|| origin.to_string()),
         result: r,
         warnings: &warnings,
         scenario: s.file(),
     };
-    isotrack_cli::output::summary_to_json(&summary)
+    isotrack_runs::summary::summary_to_json(&summary)
         .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
@@ -513,7 +513,7 @@ fn sweep_cells(
 ) -> PyResult<SweepCells> {
     use std::sync::atomic::{AtomicU64, Ordering};
     let prepared =
-        isotrack_cli::sweep::PreparedSweep::new(text, Path::new(name)).map_err(sweep_failure)?;
+        isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name)).map_err(sweep_failure)?;
     let kinds = column_kinds(&prepared.plan);
     let cancel = AtomicBool::new(false);
     let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));
@@ -537,17 +537,15 @@ fn sweep_cells(
         &cancel,
         || {
             // Nothing printed (the threads cap's note is Python's warning, see `sweep`).
-            isotrack_cli::console::quietly(|| {
-                isotrack_cli::sweep::sweep_in_memory(
-                    text,
-                    Path::new(name),
-                    threads,
-                    progress
-                        .is_some()
-                        .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
-                    &cancel,
-                )
-            })
+            isotrack_runs::sweep::prepared::sweep_in_memory(
+                text,
+                Path::new(name),
+                threads,
+                progress
+                    .is_some()
+                    .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
+                &cancel,
+            )
         },
         &mut tick,
     )?
@@ -556,10 +554,10 @@ fn sweep_cells(
 }
 
 /// A sweep's failure as the Python exception of its kind.
-fn sweep_failure(f: isotrack_cli::run::Failure) -> PyErr {
+fn sweep_failure(f: isotrack_runs::Failure) -> PyErr {
     match f.code {
         66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
-        isotrack_cli::sweep::INTERRUPTED => {
+        isotrack_runs::sweep::prepared::INTERRUPTED => {
             pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message)
         }
         _ => ScenarioErrorPy::new_err(f.message),
@@ -570,7 +568,7 @@ fn sweep_failure(f: isotrack_cli::run::Failure) -> PyErr {
 /// that a column's kind does not depend on which runs it holds): `"int"` for `run_id`,
 /// `samples`, a derived `sim.seed` and a swept key whose values are all integers; `"float"` for
 /// the metrics, `[random]` keys and swept keys of numbers; `"bool"` for swept booleans; `"str"`
-/// for `outcome`, `outcome_detail` and any other swept key.
+/// for `outcome`, `outcome_detail`, `warnings` and any other swept key.
 pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'static str> {
     let kind = |values: &mut dyn Iterator<Item = Option<&toml::Value>>| {
         let (mut ints, mut floats, mut bools, mut n) = (0, 0, 0, 0);
@@ -612,10 +610,10 @@ pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'
         kinds.push("int");
     }
     kinds.extend(
-        isotrack_cli::sweep::METRIC_COLUMNS
+        isotrack_runs::sweep::rows::METRIC_COLUMNS
             .iter()
             .map(|c| match *c {
-                "outcome" | "outcome_detail" => "str",
+                "outcome" | "outcome_detail" | "warnings" => "str",
                 "samples" => "int",
                 _ => "float",
             }),

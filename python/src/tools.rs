@@ -4,8 +4,9 @@
 
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_cli::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
-use isotrack_cli::output::{scenario_toml, TraceWriter};
-use isotrack_cli::run::Failure;
+use isotrack_runs::summary::scenario_toml;
+use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
+use isotrack_runs::{exit, Failure};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_sim::{TraceRow, TraceSink};
 use numpy::PyReadonlyArray1;
@@ -18,10 +19,10 @@ use std::path::{Path, PathBuf};
 /// A command-line failure as the Python exception of its exit code (README, "Exit codes").
 pub(crate) fn failure(f: Failure) -> PyErr {
     match f.code {
-        isotrack_cli::exit::USAGE => PyValueError::new_err(f.message),
-        isotrack_cli::exit::DATAERR => ScenarioErrorPy::new_err(f.message),
-        isotrack_cli::exit::NOINPUT => PyFileNotFoundError::new_err(f.message),
-        isotrack_cli::exit::CANTCREAT | isotrack_cli::exit::OSERR => PyOSError::new_err(f.message),
+        exit::USAGE => PyValueError::new_err(f.message),
+        exit::DATAERR => ScenarioErrorPy::new_err(f.message),
+        exit::NOINPUT => PyFileNotFoundError::new_err(f.message),
+        exit::CANTCREAT | exit::OSERR => PyOSError::new_err(f.message),
         _ => PyRuntimeError::new_err(f.message),
     }
 }
@@ -79,7 +80,7 @@ pub fn write_run(
         .collect::<PyResult<_>>()?;
     let telemetry: Option<Vec<Vec<f64>>> = flying
         .then(|| {
-            isotrack_cli::output::TELEMETRY_COLUMNS
+            TELEMETRY_COLUMNS
                 .iter()
                 .map(|c| column(trace, c, n))
                 .collect::<PyResult<_>>()
@@ -224,7 +225,8 @@ pub fn sweep_cells_with(
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<crate::SweepCells> {
-    use isotrack_cli::sweep::{row_fields, run_scenario, PreparedSweep};
+    use isotrack_runs::sweep::prepared::PreparedSweep;
+    use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
     let kinds = crate::column_kinds(&sweep.plan);
     let mut rows = Vec::new();

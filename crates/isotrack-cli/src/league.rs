@@ -104,13 +104,13 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
 /// (`leaderboard.csv`) unless `resume`, creates it, and takes its operating-system lock
 /// ([`crate::sweep::lock_output_dir`], held while the returned file lives): a second benchmark
 /// writing the same directory fails instead of overwriting it.
-pub fn open_out_dir(out: &Path, resume: bool) -> Result<std::fs::File, Failure> {
+pub fn open_out_dir(out: &Path, resume: bool) -> Result<crate::sweep::DirLock, Failure> {
     std::fs::create_dir_all(out)
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", out.display())))?;
     // One writer per directory, as for `sweep` and `merge`: the lock is taken before the
     // directory is looked at, held to the end of the command by the caller, and released by the
     // OS however the process ends.
-    let lock = crate::sweep::lock_output_dir(out)?;
+    let lock = crate::sweep::lock_output_dir(out, "benchmark")?;
     if !resume && out.join("leaderboard.csv").exists() {
         return Err(fail(
             exit::CANTCREAT,

@@ -7,14 +7,8 @@ use isotrack_core::numtext::Echo;
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, RunResult};
 
-/// A command's failure: the message and the exit code.
-#[derive(Debug)]
-pub struct Failure {
-    /// Exit code (see [`crate::exit`]).
-    pub code: u8,
-    /// What to print on stderr.
-    pub message: String,
-}
+/// A command's failure: the message and the exit code (see [`crate::exit`]).
+pub use isotrack_runs::Failure;
 
 /// A scenario error as a failure: 66 when the file, or a file it names (`field.path`), cannot
 /// be read (missing, a FIFO, a directory, a device, too big), 65 when what it holds is invalid.

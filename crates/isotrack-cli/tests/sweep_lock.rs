@@ -58,7 +58,7 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         assert_fails(
             &o,
             73,
-            &["another isotrack sweep, merge or benchmark is writing"],
+            &["another isotrack sweep pid", "is writing this directory"],
         );
     }
     assert!(out.join("results.csv").exists(), "--force deleted nothing");
@@ -68,7 +68,11 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         "--out",
         &d.path().join("m").display().to_string(),
     ]);
-    assert_fails(&o, 73, &["a sweep is still writing this directory"]);
+    assert_fails(
+        &o,
+        73,
+        &["an isotrack sweep pid", "is still writing this directory"],
+    );
     assert!(
         first.try_wait().unwrap().is_none(),
         "the first sweep must still be running for this test to mean anything"

@@ -36,7 +36,6 @@ use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::sweep::Dist;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -451,16 +450,7 @@ pub fn seed_overrides(task: &Task, seed: u64) -> Vec<String> {
         .vary
         .iter()
         .map(|(k, d)| {
-            let v = match d.dist() {
-                Dist::Uniform(a, b) => {
-                    let u: f64 = rand::RngExt::random(&mut rng);
-                    a + (b - a) * u
-                }
-                Dist::Normal(m, s) => {
-                    let n: f64 = StandardNormal.sample(&mut rng);
-                    m + s * n
-                }
-            };
+            let v = d.dist().sample(&mut rng);
             format!("{k}={v:?}")
         })
         .collect();

@@ -1,6 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
+use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
 use std::path::{Path, PathBuf};
@@ -49,16 +50,19 @@ impl RunData {
                 .position(|h| h == n)
                 .ok_or_else(|| err(format!("trace.csv has no column `{n}`")))
         };
+        // The numeric columns every trace has (TRACE_COLUMNS: `t_s` ... `omega_radps`), then the
+        // optional `s_measured` (empty before the first measurement).
+        let [t_s, x_m, y_m, heading_rad, s, error, omega_radps, s_measured] = TRACE_COLUMNS;
         let idx = [
-            col("t_s")?,
-            col("x_m")?,
-            col("y_m")?,
-            col("heading_rad")?,
-            col("s")?,
-            col("error")?,
-            col("omega_radps")?,
+            col(t_s)?,
+            col(x_m)?,
+            col(y_m)?,
+            col(heading_rad)?,
+            col(s)?,
+            col(error)?,
+            col(omega_radps)?,
         ];
-        let meas = headers.iter().position(|h| h == "s_measured");
+        let meas = headers.iter().position(|h| h == s_measured);
         let mut trace = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;

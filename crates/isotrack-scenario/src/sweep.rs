@@ -37,6 +37,25 @@ pub enum Dist {
     Normal(f64, f64),
 }
 
+impl Dist {
+    /// One draw from `rng`: uniform `a + (b - a) u` with `u` uniform on `[0, 1)` (one `f64`
+    /// from the stream), normal `m + s n` with `n` standard normal (`rand_distr`'s ziggurat).
+    /// The one sampler of sweeps' `[random]` keys and benchmark suites' `vary` keys: a value
+    /// depends only on the stream and the order of the draws.
+    pub fn sample(self, rng: &mut ChaCha8Rng) -> f64 {
+        match self {
+            Dist::Uniform(a, b) => {
+                let u: f64 = rand::RngExt::random(rng);
+                a + (b - a) * u
+            }
+            Dist::Normal(m, s) => {
+                let n: f64 = StandardNormal.sample(rng);
+                m + s * n
+            }
+        }
+    }
+}
+
 /// A parsed sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepPlan {
@@ -377,16 +396,7 @@ impl SweepPlan {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         rng.set_stream(id);
         for (_, d) in &self.random {
-            let v = match *d {
-                Dist::Uniform(a, b) => {
-                    let u: f64 = rand::RngExt::random(&mut rng);
-                    a + (b - a) * u
-                }
-                Dist::Normal(m, s) => {
-                    let n: f64 = StandardNormal.sample(&mut rng);
-                    m + s * n
-                }
-            };
+            let v = d.sample(&mut rng);
             vals.push(format!("{v:?}"));
         }
         if self.derives_seed {

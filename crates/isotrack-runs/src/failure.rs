@@ -1,0 +1,50 @@
+//! A command's failure (its message and exit code) and the exit codes.
+
+/// A command's failure: the message and the exit code.
+#[derive(Debug)]
+pub struct Failure {
+    /// Exit code (see [`exit`]).
+    pub code: u8,
+    /// What to print on stderr.
+    pub message: String,
+}
+
+/// A failure with exit code `code`.
+pub fn fail(code: u8, message: String) -> Failure {
+    Failure { code, message }
+}
+
+/// Process exit codes (BSD `sysexits.h`, the convention for command-line tools).
+pub mod exit {
+    /// Success: the run executed, whatever its outcome.
+    pub const OK: u8 = 0;
+    /// Command-line usage error: a malformed command line (clap's errors are mapped here) or an
+    /// option value out of its range (`--shard 4/3`, `--spacing-m 0`, `--airspeed-mps 80`).
+    pub const USAGE: u8 = 64;
+    /// Invalid input data: a malformed or invalid scenario or override.
+    pub const DATAERR: u8 = 65;
+    /// An input file does not exist or cannot be read.
+    pub const NOINPUT: u8 = 66;
+    /// `fly`: a failsafe the vehicle did not confirm (no acknowledgement nor the mode in its
+    /// heartbeat), or no vehicle to command.
+    pub const UNAVAILABLE: u8 = 69;
+    /// An operating-system error: threads or other resources could not be had.
+    pub const OSERR: u8 = 71;
+    /// An output file or directory cannot be created or written (standard output included,
+    /// unless its reader closed it: that exits [`OK`]), or is locked by another command.
+    pub const CANTCREAT: u8 = 73;
+}
+
+/// A scenario error as a failure: [`exit::NOINPUT`] when the file, or a file it names
+/// (`field.path`), cannot be read (missing, a FIFO, a directory, a device, too big),
+/// [`exit::DATAERR`] when what it holds is invalid.
+pub fn scenario_failure(e: isotrack_scenario::ScenarioError) -> Failure {
+    Failure {
+        code: if e.is_unreadable_input() {
+            exit::NOINPUT
+        } else {
+            exit::DATAERR
+        },
+        message: e.to_string(),
+    }
+}

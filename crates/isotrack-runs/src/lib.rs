@@ -1,0 +1,22 @@
+//! # isotrack-runs
+//!
+//! isotrack's run files and sweeps, below the command-line tool and above the scenario and
+//! simulation crates (ARCHITECTURE.md):
+//!
+//! * the run directory format: [`trace`] (`trace.csv`, its columns defined once for the writer
+//!   and for `isotrack-plot`'s reader), [`summary`] (`summary.json`, the resolved
+//!   `scenario.toml`);
+//! * the sweep engine, [`sweep`]: the results rows, plan execution, the manifest (`sweep.json`),
+//!   the resume index, merge and the output-directory lock;
+//! * [`files`]: which paths name one file.
+//!
+//! Failures carry the process exit code the command-line tool exits with ([`exit`]).
+#![deny(missing_docs)]
+
+pub mod failure;
+pub mod files;
+pub mod summary;
+pub mod sweep;
+pub mod trace;
+
+pub use failure::{exit, Failure};

@@ -1,0 +1,55 @@
+//! The manifest of a sweep directory: `sweep.json`, the digest that names a sweep, and the plan
+//! of a shard directory checked against its digest.
+
+use crate::failure::{exit, fail, Failure};
+use isotrack_scenario::sweep::SweepPlan;
+use std::path::Path;
+
+/// The digest that names a sweep: SHA-256 of the sweep file's bytes and of the resolved base
+/// scenario (every default filled in, so a changed default or scenario file changes it too).
+/// Stored in `sweep.json`; `--resume` and `merge` refuse rows made under another digest.
+pub fn sweep_digest(sweep_file: &[u8], base_toml: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update((sweep_file.len() as u64).to_le_bytes());
+    h.update(sweep_file);
+    h.update(base_toml.as_bytes());
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Reads `DIR/sweep.json`.
+pub fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
+    let path = dir.join("sweep.json");
+    let text = isotrack_fields::io::read_text_limited(&path, 1 << 20).map_err(|e| {
+        fail(
+            exit::NOINPUT,
+            format!("{}: no readable sweep.json ({e})", dir.display()),
+        )
+    })?;
+    serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
+}
+
+/// The plan of shard directory `dir`, from its `sweep.toml`, after checking that its
+/// `sweep.toml` and `base_scenario.toml` are those its `sweep.json` digest names (a shard whose
+/// files were edited is refused: its rows' plan columns are checked against this plan).
+pub fn shard_plan(dir: &Path, digest: &str) -> Result<SweepPlan, Failure> {
+    let read = |name: &str| {
+        let p = dir.join(name);
+        isotrack_fields::io::read_limited(&p, isotrack_scenario::MAX_SCENARIO_FILE_BYTES)
+            .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
+    };
+    let (sweep_bytes, base) = (read("sweep.toml")?, read("base_scenario.toml")?);
+    let base = String::from_utf8_lossy(&base);
+    if sweep_digest(&sweep_bytes, &base) != digest {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited; run it again",
+                dir.display()
+            ),
+        ));
+    }
+    let path = dir.join("sweep.toml");
+    let text = String::from_utf8_lossy(&sweep_bytes);
+    SweepPlan::parse(&text, &path).map_err(|e| fail(exit::DATAERR, e.to_string()))
+}

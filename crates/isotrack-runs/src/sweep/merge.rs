@@ -1,0 +1,188 @@
+//! Shards of one sweep merged into one directory (`isotrack merge`).
+
+use crate::failure::{exit, fail, Failure};
+use crate::files::same_file;
+use crate::sweep::index::{index_results, sort_rows, write_sorted, RowRef};
+use crate::sweep::lock::{check_not_being_written, lock_output_dir};
+use crate::sweep::manifest::{read_manifest, shard_plan};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// The shards read so far: the first one's run count, digest and manifest, the header, every
+/// row and the files they are in.
+#[derive(Default)]
+struct Shards {
+    first: Option<(u64, String, serde_json::Value)>,
+    header: Option<String>,
+    rows: Vec<RowRef>,
+    sources: Vec<PathBuf>,
+}
+
+/// Merges the shard directories `dirs` of one sweep (same digest) into `out`: refuses missing,
+/// duplicate or damaged rows, a shard a command still writes, and an `out` holding another
+/// sweep's results unless `force`. Returns the number of runs merged.
+pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> {
+    let out_results = out.join("results.csv");
+    for d in dirs {
+        if same_file(&d.join("results.csv"), &out_results) {
+            return Err(fail(
+                exit::USAGE,
+                format!("--out {} is one of the inputs", out.display()),
+            ));
+        }
+    }
+    if out_results.exists() && !force {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} exists: pass --force to replace it, or another --out",
+                out_results.display()
+            ),
+        ));
+    }
+    let cant = cant_write(out);
+    std::fs::create_dir_all(out).map_err(cant)?;
+    let _lock = lock_output_dir(out, "merge")?;
+    let mut shards = Shards::default();
+    for d in dirs {
+        read_shard(&mut shards, d, dirs)?;
+    }
+    let mut dupes: Vec<u64> = sort_rows(&mut shards.rows).iter().map(|r| r.id).collect();
+    dupes.dedup();
+    let (total, _, manifest) = shards.first.take().unwrap_or((0, String::new(), json!({})));
+    check_complete(&shards.rows, &dupes, total)?;
+    write_sorted(
+        &out_results,
+        shards.header.as_deref().unwrap_or(""),
+        &shards.rows,
+        &shards.sources,
+    )?;
+    write_merged_manifest(dirs, out, manifest, total)?;
+    Ok(total)
+}
+
+/// Reads shard directory `d` into `shards`: refused while being written, without a manifest
+/// or digest, edited since, from another sweep than the first shard, or with other columns.
+fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Failure> {
+    check_not_being_written(d)?;
+    let m = read_manifest(d)?;
+    let t = m["total_runs"].as_u64().ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!("{}/sweep.json: no total_runs", d.display()),
+        )
+    })?;
+    let digest = m["digest"].as_str().map(str::to_string).ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}/sweep.json: no digest (made by an older isotrack): run that shard again",
+                d.display()
+            ),
+        )
+    })?;
+    let plan = shard_plan(d, &digest)?;
+    match &shards.first {
+        Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: a different sweep from {} (sweep file, base scenario or seed differ: digest {digest} vs {d0})",
+                    d.display(),
+                    dirs[0].display()
+                ),
+            ));
+        }
+        Some(_) => {}
+        None => shards.first = Some((t, digest, m)),
+    }
+    let path = d.join("results.csv");
+    let idx = index_results(&path, shards.sources.len(), false, t, &plan)?;
+    if shards.header.as_ref().is_some_and(|x| *x != idx.header) {
+        return Err(fail(
+            exit::DATAERR,
+            format!("{}: different columns", d.display()),
+        ));
+    }
+    shards.header = Some(idx.header);
+    shards.rows.extend(idx.rows);
+    shards.sources.push(path);
+    Ok(())
+}
+
+/// Refuses runs that appear more than once (`dupes`) or are missing from the sorted `rows` of
+/// a sweep of `total` runs (the first ten listed).
+fn check_complete(rows: &[RowRef], dupes: &[u64], total: u64) -> Result<(), Failure> {
+    if !dupes.is_empty() {
+        let list: Vec<String> = dupes.iter().take(10).map(|i| i.to_string()).collect();
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{} runs appear in more than one input: {}",
+                dupes.len(),
+                list.join(", ")
+            ),
+        ));
+    }
+    let n_missing = total - rows.len() as u64;
+    if n_missing > 0 {
+        // The gaps in the sorted ids.
+        let mut list: Vec<String> = vec![];
+        let mut next = 0u64;
+        for id in rows.iter().map(|r| r.id).chain(std::iter::once(total)) {
+            while next < id && list.len() < 10 {
+                list.push(next.to_string());
+                next += 1;
+            }
+            next = id + 1;
+        }
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{n_missing} of {total} runs are missing (e.g. {}): finish or --resume those shards first",
+                list.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The first shard's `sweep.toml` and `base_scenario.toml` copied to `out`, and its manifest
+/// as one whole sweep (`shard = [1, 1]`, `merged_from` the shard directories).
+fn write_merged_manifest(
+    dirs: &[PathBuf],
+    out: &Path,
+    mut manifest: serde_json::Value,
+    total: u64,
+) -> Result<(), Failure> {
+    let Some(first) = dirs.first() else {
+        return Ok(());
+    };
+    let cant = cant_write(out);
+    for f in ["sweep.toml", "base_scenario.toml"] {
+        if first.join(f).exists() && !same_file(&first.join(f), &out.join(f)) {
+            std::fs::copy(first.join(f), out.join(f)).map_err(cant)?;
+        }
+    }
+    manifest["shard"] = json!([1, 1]);
+    manifest["shard_runs"] = json!(total);
+    manifest["merged_from"] = json!(dirs
+        .iter()
+        .map(|d| d.display().to_string())
+        .collect::<Vec<_>>());
+    std::fs::write(
+        out.join("sweep.json"),
+        serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n",
+    )
+    .map_err(cant)
+}
+
+/// The failure for an output in directory `out` that cannot be written.
+fn cant_write(out: &Path) -> impl Fn(std::io::Error) -> Failure + Copy + '_ {
+    move |e| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    }
+}

@@ -1,0 +1,168 @@
+//! The rows of `results.csv`: its columns, the row of one run, and runs run together.
+
+use crate::trace::num;
+use isotrack_scenario::sweep::SweepPlan;
+use isotrack_scenario::Scenario;
+use isotrack_sim::RunResult;
+
+/// The metric columns of `results.csv`, after `run_id` and the varied keys: the outcome, the
+/// metrics, `outcome_detail`, then `warnings` (what [`run_warnings`] says about the run's
+/// scenario; empty for most runs).
+pub const METRIC_COLUMNS: [&str; 15] = [
+    "outcome",
+    "convergence_time_s",
+    "steady_state_max_abs_error",
+    "steady_state_rms_error",
+    "steady_state_mean_error",
+    "steady_state_max_isoline_distance_m",
+    "steady_state_rms_isoline_distance_m",
+    "path_length_m",
+    "control_effort",
+    "chattering_radps2",
+    "sign_changes_per_s",
+    "t_end_s",
+    "samples",
+    "outcome_detail",
+    "warnings",
+];
+
+/// The numeric columns of [`METRIC_COLUMNS`] (all but `outcome`, `outcome_detail` and
+/// `warnings`).
+pub fn numeric_columns() -> &'static [&'static str] {
+    &METRIC_COLUMNS[1..METRIC_COLUMNS.len() - 2]
+}
+
+/// The warnings a sweep records for a run's scenario (its `warnings` cell; empty when none):
+/// the checks cheap enough to make for every run, today a start on a flat background where the
+/// PI-like law circles for the whole run ([`isotrack_scenario::check::flat_start`], the warning
+/// `isotrack run` prints). `isotrack check`'s sampled-loop warning needs a lattice scan of the
+/// field per run and is left to `isotrack run`/`check` on the run's scenario.
+pub fn run_warnings(scenario: &Scenario) -> String {
+    isotrack_scenario::check::flat_start(scenario).map_or_else(String::new, |f| {
+        format!(
+            "flat start: within {} m of it v*|grad F| is at most {} field units/s (under {} % of c1*tanh(|eps|/c2) = {}) so the vehicle circles where it starts; set controller.search",
+            num(f.radius_m),
+            num(f.slope_term),
+            isotrack_scenario::check::FLAT_START_FRACTION * 100.0,
+            num(f.level_term)
+        )
+    })
+}
+
+/// One CSV line of `fields`, with its newline.
+pub fn csv_line(fields: &[String]) -> String {
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    let _ = w.write_record(fields);
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// Fields of one CSV line (`None` if it does not parse).
+pub fn csv_fields(line: &str) -> Option<Vec<String>> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(line.as_bytes());
+    let rec = r.records().next()?.ok()?;
+    Some(rec.iter().map(str::to_string).collect())
+}
+
+/// The rows of runs `ids` (CSV lines with their newlines, in `ids` order). A run whose values
+/// make an invalid scenario is recorded (`invalid_scenario`, the reason in `outcome_detail`),
+/// never fatal to the sweep. The valid runs are run together ([`Scenario::run_batch`]: runs
+/// sharing the field, vehicle and plan step in SIMD lanes, each with the result it has alone).
+pub fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str) -> Vec<String> {
+    let derived: Vec<Result<Scenario, String>> = ids
+        .iter()
+        .map(|&id| run_scenario(plan, base, id, sweep_name))
+        .collect();
+    let valid: Vec<Scenario> = derived
+        .iter()
+        .filter_map(|d| d.as_ref().ok())
+        .cloned()
+        .collect();
+    let mut results = Scenario::run_batch(&valid).into_iter();
+    ids.iter()
+        .zip(derived)
+        .map(|(&id, d)| {
+            let warnings = d.as_ref().map(run_warnings).unwrap_or_default();
+            // run_batch answers every valid scenario, in order.
+            let result = d.and_then(|_| {
+                results
+                    .next()
+                    .ok_or_else(|| "the batch returned no result for this run".to_string())
+            });
+            csv_line(&row_fields_warned(plan, id, result, warnings))
+        })
+        .collect()
+}
+
+/// The scenario of run `id` of a sweep (its base with the run's assignments), or why it is
+/// invalid, on one line.
+pub fn run_scenario(
+    plan: &SweepPlan,
+    base: &Scenario,
+    id: u64,
+    sweep_name: &str,
+) -> Result<Scenario, String> {
+    let origin = format!("sweep {sweep_name} run {id}");
+    base.derive_with(&plan.run_assignments(id, &origin), &origin)
+        .map_err(|e| e.to_string().replace('\n', " "))
+}
+
+/// The `results.csv` fields of run `id` without warnings (a run with a controller of the
+/// caller's, which the scenario's warnings are not about): [`row_fields_warned`].
+pub fn row_fields(plan: &SweepPlan, id: u64, result: Result<RunResult, String>) -> Vec<String> {
+    row_fields_warned(plan, id, result, String::new())
+}
+
+/// The `results.csv` fields of run `id`: its id, the plan's cells, then the
+/// [`METRIC_COLUMNS`] of its result, or of an invalid scenario (outcome `invalid_scenario`,
+/// the reason in `outcome_detail`), and its `warnings` cell ([`run_warnings`]).
+pub fn row_fields_warned(
+    plan: &SweepPlan,
+    id: u64,
+    result: Result<RunResult, String>,
+    warnings: String,
+) -> Vec<String> {
+    // A metric that is not a finite number is written as an empty cell (as summary.json writes
+    // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
+    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
+    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
+    let mut fields = vec![id.to_string()];
+    fields.extend(plan.run_cells(id));
+    match result {
+        Ok(r) => {
+            let m = &r.metrics;
+            fields.extend([
+                r.outcome.as_str().to_string(),
+                opt(m.convergence_time_s),
+                opt(m.steady_state_max_abs_error),
+                opt(m.steady_state_rms_error),
+                opt(m.steady_state_mean_error),
+                opt(m.steady_state_max_isoline_distance_m),
+                opt(m.steady_state_rms_isoline_distance_m),
+                fin(m.path_length_m),
+                fin(m.control_effort),
+                opt(m.chattering_radps2),
+                opt(m.sign_changes_per_s),
+                fin(r.t_end_s),
+                r.samples.to_string(),
+                r.outcome_detail.unwrap_or_default(),
+            ]);
+        }
+        Err(e) => {
+            fields.push("invalid_scenario".into());
+            fields.extend(std::iter::repeat_n(String::new(), numeric_columns().len()));
+            fields.push(e);
+        }
+    }
+    fields.push(warnings);
+    fields
+}
+
+/// The `results.csv` header of a sweep.
+pub fn results_header(plan: &SweepPlan) -> Vec<String> {
+    let mut header: Vec<String> = vec!["run_id".into()];
+    header.extend(plan.columns());
+    header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
+    header
+}

@@ -1,0 +1,322 @@
+//! A sweep run into an output directory (`isotrack sweep`): read and checked
+//! ([`SweepJob::prepare`]), its directory opened, locked and checked for `--resume`
+//! ([`SweepJob::open_output`]), the missing runs run and appended ([`SweepJob::run_missing`]),
+//! then `results.csv` rewritten sorted ([`SweepJob::finish`]).
+
+use crate::failure::{exit, fail, Failure};
+use crate::summary::scenario_toml;
+use crate::sweep::index::{index_results, sort_rows, write_sorted};
+use crate::sweep::lock::{lock_output_dir, DirLock};
+use crate::sweep::manifest::{read_manifest, sweep_digest};
+use crate::sweep::prepared::sweep_base;
+use crate::sweep::rows::{csv_line, results_header, run_rows};
+use isotrack_scenario::sweep::SweepPlan;
+use isotrack_scenario::Scenario;
+use isotrack_sim::LANES;
+#[allow(unused_imports)]
+use rayon::iter::IntoParallelIterator;
+use rayon::prelude::*;
+use serde_json::json;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A sweep file read and checked, with its base scenario and digest: ready to run into a
+/// directory.
+pub struct SweepJob {
+    /// The sweep file's bytes (kept as `sweep.toml`).
+    pub sweep_bytes: Vec<u8>,
+    /// The plan.
+    pub plan: SweepPlan,
+    /// The sweep's name in messages (its path).
+    pub name: String,
+    /// The base scenario (its file with the `--set` overrides, then `[base]`).
+    pub base: Scenario,
+    /// The resolved base scenario as TOML (kept as `base_scenario.toml`).
+    pub base_toml: String,
+    /// The sweep's digest ([`sweep_digest`]).
+    pub digest: String,
+    /// The `results.csv` header.
+    pub header: Vec<String>,
+}
+
+/// An output directory opened for a sweep: locked, its `results.csv` holding at least the
+/// header, and the runs already done.
+pub struct SweepOutput {
+    /// The directory.
+    pub dir: PathBuf,
+    /// `DIR/results.csv`.
+    pub results: PathBuf,
+    /// The shard `(k, n)`: the runs with `id % n == k - 1`.
+    pub shard: (u64, u64),
+    /// How many runs the shard holds.
+    pub shard_runs: u64,
+    /// The ids already done (sorted).
+    pub done: Vec<u64>,
+    /// The directory's lock, held while this lives.
+    pub lock: DirLock,
+}
+
+/// What a finished sweep holds.
+pub struct SweepReport {
+    /// The rows of `results.csv` (the shard's runs).
+    pub rows: u64,
+    /// How many of them are `invalid_scenario`.
+    pub invalid: u64,
+    /// Runs that did not complete or ended with a warning: how many, and the first few ids.
+    pub flagged: crate::sweep::index::Flagged,
+}
+
+impl SweepJob {
+    /// Reads and checks sweep file `path`, its base scenario with `sets` applied.
+    pub fn prepare(path: &Path, sets: &[String]) -> Result<Self, Failure> {
+        let sweep_bytes =
+            isotrack_fields::io::read_limited(path, isotrack_scenario::MAX_SCENARIO_FILE_BYTES)
+                .map_err(|e| {
+                    fail(
+                        exit::NOINPUT,
+                        format!("{}: cannot read: {e}", path.display()),
+                    )
+                })?;
+        let text = String::from_utf8(sweep_bytes.clone())
+            .map_err(|_| fail(exit::DATAERR, format!("{}: not UTF-8 text", path.display())))?;
+        let plan = SweepPlan::parse(&text, path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+        let name = path.display().to_string();
+        let base = sweep_base(&plan, sets, &name)?;
+        let base_toml = scenario_toml(&base);
+        let digest = sweep_digest(&sweep_bytes, &base_toml);
+        let header = results_header(&plan);
+        Ok(Self {
+            sweep_bytes,
+            plan,
+            name,
+            base,
+            base_toml,
+            digest,
+            header,
+        })
+    }
+
+    /// Opens output directory `out` for shard `(k, n)`: creates and locks it; with an existing
+    /// `results.csv`, refuses it unless `resume` (or removes it with `force`), checks on
+    /// `--resume` that the same sweep made it and indexes its rows (a cut-off last line
+    /// dropped); then writes `sweep.toml`, `base_scenario.toml` and `sweep.json` (after those
+    /// checks, before the first new row) and the header of a new `results.csv`.
+    pub fn open_output(
+        &self,
+        out: &Path,
+        shard: (u64, u64),
+        resume: bool,
+        force: bool,
+    ) -> Result<SweepOutput, Failure> {
+        let (k, n) = shard;
+        let total = self.plan.total();
+        let shard_runs = total / n + u64::from(total % n >= k);
+        let cant = cant_write(out);
+        std::fs::create_dir_all(out).map_err(cant)?;
+        // Held to the end of the sweep (dropped with the output, released by the OS on any
+        // exit).
+        let lock = lock_output_dir(out, "sweep")?;
+        let results = out.join("results.csv");
+        if results.exists() && force {
+            std::fs::remove_file(&results).map_err(cant)?;
+        }
+        if results.exists() && !resume {
+            return Err(fail(
+                exit::CANTCREAT,
+                format!(
+                    "{} exists: pass --resume to continue that sweep, --force to start over, or another --out",
+                    results.display()
+                ),
+            ));
+        }
+        if results.exists() && resume {
+            self.check_same_sweep(out)?;
+        }
+        let done = if results.exists() {
+            self.resumed_ids(&results, shard)?
+        } else {
+            vec![]
+        };
+        self.write_manifest(out, shard, shard_runs)?;
+        if !results.exists() {
+            std::fs::write(&results, csv_line(&self.header)).map_err(cant)?;
+        }
+        Ok(SweepOutput {
+            dir: out.to_path_buf(),
+            results,
+            shard,
+            shard_runs,
+            done,
+            lock,
+        })
+    }
+
+    /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest.
+    fn check_same_sweep(&self, out: &Path) -> Result<(), Failure> {
+        let stored = read_manifest(out)?;
+        if stored["digest"].as_str() != Some(self.digest.as_str()) {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: made by a different sweep (the sweep file or its resolved base scenario changed since; digest {} here, {} now): start a new --out",
+                    out.display(),
+                    stored["digest"].as_str().unwrap_or("missing"),
+                    self.digest
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The runs already in `results` (their ids only, sorted), each row checked, a cut-off
+    /// last line cut, a header-less file given the header.
+    fn resumed_ids(&self, results: &Path, (k, n): (u64, u64)) -> Result<Vec<u64>, Failure> {
+        let cant = cant_write(results.parent().unwrap_or(Path::new(".")));
+        let idx = index_results(results, 0, true, self.plan.total(), &self.plan)?;
+        let header_line = csv_line(&self.header);
+        if idx.header.is_empty() {
+            std::fs::write(results, &header_line).map_err(cant)?;
+        } else if idx.header != header_line {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: its columns differ from this sweep's",
+                    results.display()
+                ),
+            ));
+        }
+        let mut rows = idx.rows;
+        if let Some(d) = sort_rows(&mut rows).first() {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}:{}: damaged row (run {} appears twice); remove the line (or the file) and --resume",
+                    results.display(),
+                    d.line,
+                    d.id
+                ),
+            ));
+        }
+        if let Some(r) = rows.iter().find(|r| r.id % n != k - 1) {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: run {} is not in shard {k}/{n}: resume with the shard it was started with",
+                    results.display(),
+                    r.id
+                ),
+            ));
+        }
+        Ok(rows.iter().map(|r| r.id).collect())
+    }
+
+    /// The sweep, its resolved base scenario and its manifest, kept next to the results
+    /// (written before the first row, so every `results.csv` has the `sweep.json` that says
+    /// which sweep made it).
+    fn write_manifest(
+        &self,
+        out: &Path,
+        (k, n): (u64, u64),
+        shard_runs: u64,
+    ) -> Result<(), Failure> {
+        let cant = cant_write(out);
+        std::fs::write(out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
+        std::fs::write(out.join("base_scenario.toml"), &self.base_toml).map_err(cant)?;
+        let manifest = json!({
+            "sweep": self.name,
+            "scenario": self.plan.scenario.display().to_string(),
+            "digest": self.digest,
+            "total_runs": self.plan.total(),
+            "shard": [k, n],
+            "shard_runs": shard_runs,
+            "columns": self.header,
+        });
+        std::fs::write(
+            out.join("sweep.json"),
+            serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n",
+        )
+        .map_err(cant)
+    }
+
+    /// Runs the shard's runs not yet done on `pool`, appending each row to `results.csv` as it
+    /// finishes (one whole line, then a flush) and calling `row_written` after each.
+    pub fn run_missing(
+        &self,
+        out: &SweepOutput,
+        pool: &rayon::ThreadPool,
+        row_written: &(dyn Fn() + Sync),
+    ) -> Result<(), Failure> {
+        let (k, n) = out.shard;
+        let cant = cant_write(&out.dir);
+        let (tx, rx) = std::sync::mpsc::channel::<String>();
+        std::thread::scope(|scope| {
+            let writer = scope.spawn(|| -> Result<(), Failure> {
+                let mut f = std::fs::OpenOptions::new()
+                    .append(true)
+                    .open(&out.results)
+                    .map_err(cant)?;
+                for line in rx {
+                    f.write_all(line.as_bytes()).map_err(cant)?;
+                    f.flush().map_err(cant)?;
+                    row_written();
+                }
+                f.sync_all().map_err(cant)
+            });
+            // The shard's ids are generated, not listed up front: memory stays flat however
+            // large the sweep.
+            // Runs go in groups of LANES consecutive ones (stepped together, see run_rows).
+            pool.install(|| {
+                (0..out.shard_runs.div_ceil(LANES as u64))
+                    .into_par_iter()
+                    .for_each_with(tx, |tx, c| {
+                        let ids: Vec<u64> = (c * LANES as u64
+                            ..((c + 1) * LANES as u64).min(out.shard_runs))
+                            .map(|i| i * n + (k - 1))
+                            .filter(|id| out.done.binary_search(id).is_err())
+                            .collect();
+                        for row in run_rows(&self.plan, &self.base, &ids, &self.name) {
+                            let _ = tx.send(row);
+                        }
+                    })
+            });
+            writer
+                .join()
+                .unwrap_or_else(|_| Err(fail(exit::CANTCREAT, "the results writer stopped".into())))
+        })
+    }
+
+    /// Rewrites `results.csv` sorted by `run_id` (atomically), after checking that no run
+    /// appears twice; what it holds.
+    pub fn finish(&self, out: &SweepOutput) -> Result<SweepReport, Failure> {
+        let results = &out.results;
+        let idx = index_results(results, 0, false, self.plan.total(), &self.plan)?;
+        let mut rows = idx.rows;
+        if let Some(d) = sort_rows(&mut rows).first() {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}:{}: run {} appears twice",
+                    results.display(),
+                    d.line,
+                    d.id
+                ),
+            ));
+        }
+        write_sorted(results, &idx.header, &rows, std::slice::from_ref(results))?;
+        Ok(SweepReport {
+            rows: rows.len() as u64,
+            invalid: idx.invalid,
+            flagged: idx.flagged,
+        })
+    }
+}
+
+/// The failure for an output in directory `out` that cannot be written.
+fn cant_write(out: &Path) -> impl Fn(std::io::Error) -> Failure + Copy + '_ {
+    move |e| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot write {}: {e}", out.display()),
+        )
+    }
+}

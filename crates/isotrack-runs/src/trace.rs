@@ -1,0 +1,103 @@
+//! `trace.csv`: its columns (defined once, for the writer here and for `isotrack-plot`'s
+//! reader) and the writer that streams it while a run goes.
+
+use isotrack_scenario::Scenario;
+use isotrack_sim::{RunResult, TraceRow, TraceSink};
+use std::path::Path;
+
+/// The columns of `trace.csv`, in order.
+pub const TRACE_COLUMNS: [&str; 8] = [
+    "t_s",
+    "x_m",
+    "y_m",
+    "heading_rad",
+    "s",
+    "error",
+    "omega_radps",
+    "s_measured",
+];
+
+/// The columns a flying vehicle adds to `trace.csv` (roll positive right wing down).
+pub const TELEMETRY_COLUMNS: [&str; 3] = ["altitude_m", "airspeed_mps", "roll_rad"];
+
+/// Streams `trace.csv` while the run goes: a header row, then one row per recorded step, so a
+/// long run's trace never has to fit in memory. Numbers are written in Rust's shortest
+/// round-trip form ([`num`]), so they read back bit-identical; `s_measured` is empty before the
+/// first measurement; a flying vehicle adds [`TELEMETRY_COLUMNS`]. The first write error is kept
+/// and returned by [`TraceWriter::finish`].
+pub struct TraceWriter {
+    w: csv::Writer<std::fs::File>,
+    flying: bool,
+    buf: Vec<String>,
+    error: Option<std::io::Error>,
+}
+
+impl TraceWriter {
+    /// Creates the file and writes the header.
+    pub fn create(path: &Path, flying: bool) -> std::io::Result<Self> {
+        let mut w = csv::Writer::from_path(path)?;
+        let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
+        if flying {
+            header.extend(TELEMETRY_COLUMNS);
+        }
+        w.write_record(&header)?;
+        Ok(Self {
+            w,
+            flying,
+            buf: Vec::with_capacity(header.len()),
+            error: None,
+        })
+    }
+
+    /// Flushes; the first error met while writing, if any.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        self.w.flush()
+    }
+}
+
+impl TraceSink for TraceWriter {
+    fn record(&mut self, r: &TraceRow) {
+        if self.error.is_some() {
+            return;
+        }
+        self.buf.clear();
+        for v in [
+            r.t_s,
+            r.x_m,
+            r.y_m,
+            r.heading_rad,
+            r.s,
+            r.error,
+            r.omega_radps,
+        ] {
+            self.buf.push(num(v));
+        }
+        self.buf.push(r.s_measured.map(num).unwrap_or_default());
+        if self.flying {
+            let t = r.telemetry.unwrap_or_default();
+            for v in [t.altitude_m, t.airspeed_mps, t.roll_rad] {
+                self.buf.push(num(v));
+            }
+        }
+        if let Err(e) = self.w.write_record(&self.buf) {
+            self.error = Some(e.into());
+        }
+    }
+}
+
+/// Runs `scenario`, streaming its trace into `path`.
+pub fn run_to_trace(scenario: &Scenario, path: &Path) -> std::io::Result<RunResult> {
+    let mut w = TraceWriter::create(path, scenario.is_flying())?;
+    let r = scenario.run(&mut w);
+    w.finish()?;
+    Ok(r)
+}
+
+/// A number as written in CSV outputs: the shortest string that reads back to the same `f64`,
+/// in scientific notation when that is shorter (`7.105427357601002e-15`, `0.5`, `600.0`).
+pub fn num(v: f64) -> String {
+    format!("{v:?}")
+}
