@@ -25,7 +25,7 @@ pub use draw::{
     animation_gif, field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure,
     Format, Panels, SummaryLine,
 };
-pub use run_data::RunData;
+pub use run_data::{same_field, RunData};
 pub use stability::{boundary_segments, stability_map_figure};
 pub use style::{tick_label, tick_step, Colormap, Style, DEFAULT_FONT_FAMILY};
 
