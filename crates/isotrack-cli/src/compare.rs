@@ -308,7 +308,7 @@ fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> Strin
     }
     let search = base.file().controller.search.unwrap_or_default();
     note += if search == isotrack_scenario::schema::SearchKind::None {
-        "A law circles where it starts when the field there gives it too little slope to act on (v|grad F| small next to what its gains ask: see the warnings above for the baselines' own conditions). A start nearer the isoline, or a search phase (controller.search = \"spiral\" or \"lawnmower\", flown by every law here), gives every law the same chance."
+        "A law circles where it starts when its command sits at the turn-rate limit (a linear law far from the level asks for kp*|eps|) or when the field there has too little slope for it to act on (v|grad F| small next to what its gains ask; the baselines' own conditions are in docs/BASELINES.md, and broken ones are warned about above). A start nearer the isoline, or a search phase (controller.search = \"spiral\" or \"lawnmower\", flown by every law here), gives every law the same chance."
     } else {
         "Every law flew the scenario's search (controller.search) before its own law; these still never reached the isoline within the run."
     };

@@ -1215,7 +1215,7 @@ pub fn nearest_valid_rates(rate_hz: f64, dt_s: f64) -> String {
         .map(|&k| {
             let exact = 1.0 / (k * dt_s);
             let valid = (0..17)
-                .filter_map(|d| format!("{:.*e}", d, exact).parse::<f64>().ok())
+                .filter_map(|d| format!("{exact:.d$e}").parse::<f64>().ok())
                 .find(|&v| whole_steps(1.0 / v, dt_s) == Ok(k as u64))
                 .unwrap_or(exact);
             format!(
