@@ -2,12 +2,12 @@
 
 use crate::cli::CompareArgs;
 use crate::exit;
-use crate::output::{num, run_to_trace, scenario_toml, write_summary};
+use crate::output::{num, scenario_toml, write_summary, TraceWriter};
 use crate::run::invalid;
 use crate::run::Failure;
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
-use isotrack_sim::{NoTrace, RunResult};
+use isotrack_sim::{NoTrace, RunResult, TraceRow, TraceSink};
 use std::io::Write;
 use std::path::Path;
 
@@ -75,6 +75,83 @@ pub fn check_gains(gains: &[String]) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Forwards the recorded rows to `inner` and watches the true error `eps` on them: whether it
+/// ever reached the level, i.e. came within the convergence tolerance or changed sign between
+/// recorded rows (so crossed the isoline); and how far the vehicle went from its start.
+struct Reach<'a> {
+    inner: &'a mut dyn TraceSink,
+    tolerance: f64,
+    /// The sign of the first finite `eps` (`true`: above the level).
+    first_above: Option<bool>,
+    reached: bool,
+    start: Option<(f64, f64)>,
+    /// The largest distance from the start in a recorded row, m.
+    farthest_m: f64,
+}
+
+/// A law's run as the table's note needs it: `None` when no row was recorded
+/// (`output.record_rate_hz = 0`: not known); else whether `eps` never reached the level and
+/// the largest distance from the start, m.
+type Reached = Option<(bool, f64)>;
+
+impl<'a> Reach<'a> {
+    fn new(inner: &'a mut dyn TraceSink, s: &Scenario) -> Self {
+        Self {
+            inner,
+            tolerance: s.file().metrics.convergence_tolerance.unwrap_or(0.0),
+            first_above: None,
+            reached: false,
+            start: None,
+            farthest_m: 0.0,
+        }
+    }
+    fn result(&self) -> Reached {
+        self.first_above.map(|_| (!self.reached, self.farthest_m))
+    }
+}
+
+impl TraceSink for Reach<'_> {
+    fn record(&mut self, row: &TraceRow) {
+        self.inner.record(row);
+        if row.x_m.is_finite() && row.y_m.is_finite() {
+            let (x0, y0) = *self.start.get_or_insert((row.x_m, row.y_m));
+            self.farthest_m = self.farthest_m.max((row.x_m - x0).hypot(row.y_m - y0));
+        }
+        let e = row.error;
+        if !e.is_finite() {
+            return;
+        }
+        if e.abs() <= self.tolerance {
+            self.reached = true;
+        }
+        match self.first_above {
+            None => self.first_above = Some(e > 0.0),
+            Some(above) if above != (e > 0.0) => self.reached = true,
+            Some(_) => {}
+        }
+    }
+}
+
+/// Runs `s` (its trace to `trace` if given); the result and what [`Reach`] saw.
+fn run_watched(s: &Scenario, trace: Option<&Path>) -> std::io::Result<(RunResult, Reached)> {
+    match trace {
+        Some(path) => {
+            let mut w = TraceWriter::create(path, s.is_flying())?;
+            let mut reach = Reach::new(&mut w, s);
+            let r = s.run(&mut reach);
+            let seen = reach.result();
+            w.finish()?;
+            Ok((r, seen))
+        }
+        None => {
+            let mut sink = NoTrace;
+            let mut reach = Reach::new(&mut sink, s);
+            let r = s.run(&mut reach);
+            Ok((r, reach.result()))
+        }
+    }
+}
+
 fn cell(x: Option<f64>) -> String {
     x.map_or_else(String::new, num)
 }
@@ -109,6 +186,9 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         message: format!("cannot write {}: {e}", what.display()),
     };
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
+    // The laws whose true error never reached the level (in the recorded rows), with how far
+    // each went from its start, m.
+    let mut never: Vec<(ControllerKind, f64)> = Vec::new();
     for kind in kinds {
         let s = variant(&base, kind, &a.gain, &origin)?;
         // A baseline outside its own stated gain condition is said, not only run.
@@ -119,7 +199,10 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         let r = if let Some(dir) = &a.out {
             let d = dir.join(kind.name());
             std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;
-            let r = run_to_trace(&s, &d.join("trace.csv")).map_err(|e| cant(&d, e))?;
+            let (r, n) = run_watched(&s, Some(&d.join("trace.csv"))).map_err(|e| cant(&d, e))?;
+            if let Some((true, far)) = n {
+                never.push((kind, far));
+            }
             write_summary(
                 &d.join("summary.json"),
                 &s,
@@ -131,7 +214,11 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             std::fs::write(d.join("scenario.toml"), scenario_toml(&s)).map_err(|e| cant(&d, e))?;
             r
         } else {
-            s.run(&mut NoTrace)
+            let (r, n) = run_watched(&s, None).map_err(|e| cant(Path::new("trace"), e))?;
+            if let Some((true, far)) = n {
+                never.push((kind, far));
+            }
+            r
         };
         results.push((kind, r));
     }
@@ -149,7 +236,11 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             } else {
                 ""
             },
-            r.outcome.as_str(),
+            if never.iter().any(|(n, _)| n == k) {
+                format!("{}, never reached s_d", r.outcome.as_str())
+            } else {
+                r.outcome.as_str().to_string()
+            },
             m.convergence_time_s
                 .map_or("never".into(), |t| format!("{t:.1}")),
             md(m.steady_state_max_abs_error),
@@ -160,6 +251,9 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             m.control_effort,
             md(m.steady_state_max_isoline_distance_m),
         );
+    }
+    if !never.is_empty() {
+        outln!("\n{}", never_reached_note(&base, &never));
     }
     if let Some(dir) = &a.out {
         let p = dir.join("comparison.csv");
@@ -191,4 +285,32 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// The note under the table for the laws that never reached the isoline: what their rows
+/// measure, how far each went from its start, and what gives every law a fair start;
+/// `pid_crossing` adds its turn only at a crossing of the level, so without one it flies
+/// exactly as `pid`.
+fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> String {
+    use isotrack_core::numtext::Num;
+    let tol = base.file().metrics.convergence_tolerance.unwrap_or(0.0);
+    let mut note = format!(
+        "never reached s_d: in every recorded row the true error kept its sign and stayed outside the convergence tolerance ({}), so these laws never found the isoline and their rows (effort, chattering, steady errors) measure circling or wandering, not tracking:\n",
+        Num(tol)
+    );
+    let pid_too = never.iter().any(|(k, _)| *k == ControllerKind::Pid);
+    for (k, far) in never {
+        note += &format!("- {}: at most {} m from its start", k.name(), Num(*far));
+        if *k == ControllerKind::PidCrossing && pid_too {
+            note += " (the same run as pid: pid_crossing adds its turn only at a crossing of the level, and there was none)";
+        }
+        note += "\n";
+    }
+    let search = base.file().controller.search.unwrap_or_default();
+    note += if search == isotrack_scenario::schema::SearchKind::None {
+        "A law circles where it starts when its command sits at the turn-rate limit (a linear law far from the level asks for kp*|eps|) or when the field there has too little slope for it to act on (v|grad F| small next to what its gains ask; the baselines' own conditions are in docs/BASELINES.md, and broken ones are warned about above). A start nearer the isoline, or a search phase (controller.search = \"spiral\" or \"lawnmower\", flown by every law here), gives every law the same chance."
+    } else {
+        "Every law flew the scenario's search (controller.search) before its own law; these still never reached the isoline within the run."
+    };
+    note
 }

@@ -84,7 +84,7 @@ pub(crate) fn page(title: &str, body: &str, data_json: &str, script: &str) -> St
 }
 
 const CSS: &str = r##"
-body { font-family: "DejaVu Sans", Arial, sans-serif; margin: 1.5em auto; max-width: 1180px; color: #222; padding: 0 1em; }
+body { font-family: "DejaVu Sans", Arial, sans-serif; margin: 1.5em auto; max-width: 1300px; color: #222; padding: 0 1em; }
 h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
 .sub { color: #666; margin-top: 0; }
 table { border-collapse: collapse; margin: 0.5em 0; font-size: 0.92em; }
@@ -100,7 +100,7 @@ canvas { border: 1px solid #bbb; }
 #tooltip { position: fixed; pointer-events: none; background: rgba(20,20,20,0.85); color: #fff; padding: 3px 7px; border-radius: 3px; font-size: 0.85em; display: none; z-index: 10; }
 .charts svg { display: block; margin-bottom: 6px; }
 .note { color: #555; font-size: 0.88em; }
-.mapbox { max-width: 522px; }
+.mapbox { max-width: 632px; }
 "##;
 
 /// Shared by both pages: the colour map, the heat map, the colours of controllers.
@@ -117,16 +117,23 @@ function viridis(u) {
 const PALETTE = ["#e41a1c","#ff7f00","#f781bf","#a65628","#984ea3","#4daf4a","#377eb8","#999999","#00bcd4","#000000"];
 function colour(i) { return PALETTE[i % PALETTE.length]; }
 // The field as a heat map on a canvas: values n x n (row 0 at y_min), bounds [x0,y0,x1,y1],
-// coloured over pic.range [lo, hi] if given (else the values' own range).
-// Returns a function from metres to canvas pixels.
-function drawField(canvas, pic) {
-  const ctx = canvas.getContext("2d"), W = canvas.width, H = canvas.height;
+// coloured over pic.range [lo, hi] if given (else the values' own range), and the isoline
+// pic.isoline dashed. With `frame` ({ units }) the map is drawn inside margins with axes in
+// metres and a colour bar in the field's units (the level marked on it); without, over the
+// whole canvas. Returns a function from metres to canvas pixels, its plot area in `.area`
+// ([left, top, side] px).
+function drawField(canvas, pic, frame) {
+  const ctx = canvas.getContext("2d");
+  const m = frame ? { l: 64, r: 104, t: 12, b: 46 } : { l: 0, r: 0, t: 0, b: 0 };
+  const W = canvas.width - m.l - m.r, H = canvas.height - m.t - m.b;
   const [x0, y0, x1, y1] = pic.bounds_m;
-  const toPx = (x, y) => [(x - x0) / (x1 - x0) * W, H - (y - y0) / (y1 - y0) * H];
-  ctx.fillStyle = "#ddd"; ctx.fillRect(0, 0, W, H);
+  const toPx = (x, y) => [m.l + (x - x0) / (x1 - x0) * W, m.t + H - (y - y0) / (y1 - y0) * H];
+  toPx.area = [m.l, m.t, W, H];
+  if (frame) { ctx.fillStyle = "#fff"; ctx.fillRect(0, 0, canvas.width, canvas.height); }
+  ctx.fillStyle = "#ddd"; ctx.fillRect(m.l, m.t, W, H);
+  let lo = Infinity, hi = -Infinity;
   const vals = pic.values.filter(v => v !== null && isFinite(v));
   if (vals.length > 0) {
-    let lo = Infinity, hi = -Infinity;
     if (pic.range) [lo, hi] = pic.range;
     else for (const v of vals) { if (v < lo) lo = v; if (v > hi) hi = v; }
     const n = pic.n, img = ctx.createImageData(n, n);
@@ -139,16 +146,133 @@ function drawField(canvas, pic) {
     const off = document.createElement("canvas"); off.width = n; off.height = n;
     off.getContext("2d").putImageData(img, 0, 0);
     ctx.imageSmoothingEnabled = true;
-    ctx.drawImage(off, 0, 0, W, H);
+    ctx.drawImage(off, m.l, m.t, W, H);
   }
-  ctx.strokeStyle = "#ffffff"; ctx.lineWidth = 2; ctx.setLineDash([6, 4]);
-  ctx.beginPath();
-  for (const s of pic.isoline) {
-    const a = toPx(s[0], s[1]), b = toPx(s[2], s[3]);
-    ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]);
+  // The isoline as polylines, so the dash pattern runs along it: stroked segment by segment
+  // (each a cell's chord, a few pixels long), every segment restarted the pattern and the
+  // line drew solid. A dark line under the white dashes keeps them visible on light colours.
+  const lines = isolinePolylines(pic.isoline, x1 - x0);
+  for (const [style, width, dash] of [["rgba(0,0,0,0.55)", 3.5, []], ["#ffffff", 2, [7, 5]]]) {
+    ctx.strokeStyle = style; ctx.lineWidth = width; ctx.setLineDash(dash);
+    ctx.beginPath();
+    for (const line of lines) {
+      line.forEach((p, k) => { const q = toPx(p[0], p[1]); if (k === 0) ctx.moveTo(q[0], q[1]); else ctx.lineTo(q[0], q[1]); });
+    }
+    ctx.stroke();
   }
-  ctx.stroke(); ctx.setLineDash([]);
+  ctx.setLineDash([]);
+  canvas.dataset.isolineLines = String(lines.length);
+  if (frame) drawFrame(canvas, ctx, m, W, H, pic, lo, hi, frame.units);
   return toPx;
+}
+// Segments [x0, y0, x1, y1] joined end to end into polylines ([[x, y], ...]): end points equal
+// to 1e-7 of `size` are one point (marching squares put a segment's end on a cell edge,
+// shared with the next cell's segment).
+function isolinePolylines(segs, size) {
+  const q = (size > 0 ? size : 1) * 1e-7;
+  const key = (x, y) => Math.round(x / q) + "," + Math.round(y / q);
+  const at = new Map();
+  segs.forEach((s, i) => {
+    for (const k of [key(s[0], s[1]), key(s[2], s[3])]) { if (!at.has(k)) at.set(k, []); at.get(k).push(i); }
+  });
+  const used = new Uint8Array(segs.length), lines = [];
+  // From point p, the next unused segment touching it: its far end (or null).
+  function next(p) {
+    const list = at.get(key(p[0], p[1])) || [];
+    for (const i of list) {
+      if (used[i]) continue;
+      used[i] = 1;
+      const s = segs[i];
+      return key(s[0], s[1]) === key(p[0], p[1]) ? [s[2], s[3]] : [s[0], s[1]];
+    }
+    return null;
+  }
+  segs.forEach((s, i) => {
+    if (used[i]) return;
+    used[i] = 1;
+    const fwd = [[s[0], s[1]], [s[2], s[3]]];
+    for (let p = next(fwd[fwd.length - 1]); p; p = next(p)) fwd.push(p);
+    const back = [];
+    for (let p = next(fwd[0]); p; p = next(p)) back.push(p);
+    lines.push(back.reverse().concat(fwd));
+  });
+  return lines;
+}
+// Ticks over [a, b]: multiples of 1, 2 or 5 x 10^k, about `count` of them.
+function niceTicks(a, b, count) {
+  if (!(b > a)) return { step: 0, ticks: [a] };
+  const raw = (b - a) / count, p = Math.pow(10, Math.floor(Math.log10(raw)));
+  const step = [1, 2, 5, 10].map(f => f * p).find(s => s >= raw * 0.999);
+  const ticks = [];
+  for (let k = Math.ceil(a / step - 1e-9); k * step <= b + 1e-9 * step; k++) ticks.push(k * step);
+  return { step: step, ticks: ticks };
+}
+// A tick's label: as many decimals as the step needs.
+function tickLabel(v, step) {
+  const d = Math.max(0, Math.min(8, -Math.floor(Math.log10(step) + 1e-9)));
+  const a = Math.abs(step);
+  if (a >= 1e5 || a < 1e-4) return v.toExponential(1);
+  return (Math.abs(v) < step * 1e-9 ? 0 : v).toFixed(d);
+}
+// Axes (x and y in metres) round the plot area and a colour bar of [lo, hi] `units` on its
+// right, the isoline's level marked on it. Their labels are also written to the canvas's
+// data-x-ticks, data-y-ticks, data-colour-ticks and data-colour-label (and its aria-label).
+function drawFrame(canvas, ctx, m, W, H, pic, lo, hi, units) {
+  const [x0, y0, x1, y1] = pic.bounds_m;
+  ctx.strokeStyle = "#444"; ctx.lineWidth = 1; ctx.strokeRect(m.l + 0.5, m.t + 0.5, W - 1, H - 1);
+  ctx.fillStyle = "#222"; ctx.font = "11px 'DejaVu Sans', Arial, sans-serif";
+  const xt = niceTicks(x0, x1, 5), yt = niceTicks(y0, y1, 5);
+  ctx.textAlign = "center"; ctx.textBaseline = "top";
+  const xl = xt.ticks.map(v => tickLabel(v, xt.step));
+  xt.ticks.forEach((v, k) => {
+    const px = m.l + (v - x0) / (x1 - x0) * W;
+    ctx.beginPath(); ctx.moveTo(px, m.t + H); ctx.lineTo(px, m.t + H + 5); ctx.stroke();
+    ctx.fillText(xl[k], px, m.t + H + 7);
+  });
+  ctx.fillText("x (m)", m.l + W / 2, m.t + H + 24);
+  ctx.textAlign = "right"; ctx.textBaseline = "middle";
+  const yl = yt.ticks.map(v => tickLabel(v, yt.step));
+  yt.ticks.forEach((v, k) => {
+    const py = m.t + H - (v - y0) / (y1 - y0) * H;
+    ctx.beginPath(); ctx.moveTo(m.l - 5, py); ctx.lineTo(m.l, py); ctx.stroke();
+    ctx.fillText(yl[k], m.l - 7, py);
+  });
+  ctx.save(); ctx.translate(14, m.t + H / 2); ctx.rotate(-Math.PI / 2);
+  ctx.textAlign = "center"; ctx.fillText("y (m)", 0, 0); ctx.restore();
+  // The colour bar.
+  const bx = m.l + W + 14, bw = 14;
+  const label = "field (" + units + ")";
+  let cl = [];
+  if (hi >= lo && isFinite(lo)) {
+    for (let py = 0; py < H; py++) {
+      const c = viridis(1 - py / Math.max(1, H - 1));
+      ctx.fillStyle = "rgb(" + c[0] + "," + c[1] + "," + c[2] + ")";
+      ctx.fillRect(bx, m.t + py, bw, 1);
+    }
+    ctx.strokeStyle = "#444"; ctx.strokeRect(bx + 0.5, m.t + 0.5, bw - 1, H - 1);
+    const ct = hi > lo ? niceTicks(lo, hi, 5) : { step: Math.abs(lo) || 1, ticks: [lo] };
+    const at = v => hi > lo ? m.t + H - (v - lo) / (hi - lo) * H : m.t + H / 2;
+    ctx.fillStyle = "#222"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
+    cl = ct.ticks.map(v => tickLabel(v, ct.step));
+    ct.ticks.forEach((v, k) => {
+      const py = at(v);
+      ctx.beginPath(); ctx.moveTo(bx + bw, py); ctx.lineTo(bx + bw + 4, py); ctx.stroke();
+      ctx.fillText(cl[k], bx + bw + 6, py);
+    });
+    if (pic.level >= lo && pic.level <= hi) {
+      const py = at(pic.level);
+      ctx.strokeStyle = "#fff"; ctx.lineWidth = 2; ctx.setLineDash([4, 3]);
+      ctx.beginPath(); ctx.moveTo(bx, py); ctx.lineTo(bx + bw, py); ctx.stroke(); ctx.setLineDash([]);
+    }
+  }
+  ctx.save(); ctx.translate(canvas.width - 8, m.t + H / 2); ctx.rotate(-Math.PI / 2);
+  ctx.fillStyle = "#222"; ctx.textAlign = "center"; ctx.textBaseline = "bottom";
+  ctx.fillText(label, 0, 0); ctx.restore();
+  canvas.dataset.xTicks = xl.join(" ");
+  canvas.dataset.yTicks = yl.join(" ");
+  canvas.dataset.colourTicks = cl.join(" ");
+  canvas.dataset.colourLabel = label;
+  canvas.setAttribute("aria-label", "paths over the field: x " + xl[0] + " to " + xl[xl.length - 1] + " m, y " + yl[0] + " to " + yl[yl.length - 1] + " m, colour " + label);
 }
 function drawPath(ctx, toPx, xs, ys, col, width) {
   ctx.strokeStyle = col; ctx.lineWidth = width; ctx.beginPath();

@@ -93,6 +93,9 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
         })?;
         data.push(r);
     }
+    // The page draws the first run's field under every path: runs over different fields (or
+    // isolines) are refused, naming both.
+    isotrack_plot::same_field(&data).map_err(|e| ReportError::Data(e.to_string()))?;
     for r in &data {
         let n = r.trace.len();
         let every = n.div_ceil(MAX_POINTS).max(1);
@@ -153,7 +156,7 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
 <p class="sub" id="summary"></p>
 <div class="controls"><button id="play" type="button">Play</button> <input id="time" type="range" min="0" max="1000" value="0" step="1" aria-label="time"> <span id="clock">t = 0 s</span></div>
 <div class="task">
-<div class="mapbox"><canvas id="map" width="520" height="520" aria-label="paths over the field"></canvas><div class="legend" id="legend"></div><p class="note" id="mapnote"></p></div>
+<div class="mapbox"><canvas id="map" width="628" height="518" aria-label="paths over the field"></canvas><div class="legend" id="legend"></div><p class="note" id="mapnote"></p></div>
 <div class="charts" id="charts"></div>
 </div>
 <div id="tooltip"></div>
@@ -304,7 +307,7 @@ const REPORT_JS: &str = r##"
     if (k === shown) return;
     shown = k;
     pic = frames ? framePic(k) : D.picture;
-    toPx = drawField(map, pic);
+    toPx = drawField(map, pic, { units: units });
     base = mctx.getImageData(0, 0, map.width, map.height);
     mapnote.textContent = frames
       ? "field and isoline s_d = " + fmt(D.level) + " " + units + " (dashed) at t = " + fmt(frames.t_s[k], 1) + " s, the frame nearest the cursor (" +
@@ -322,6 +325,9 @@ const REPORT_JS: &str = r##"
     if (!pic) return;
     showField(t);
     mctx.putImageData(base, 0, 0);
+    // Paths and vehicles inside the map's square only (not over its axes and colour bar).
+    const [al, at, aw, ah] = toPx.area;
+    mctx.save(); mctx.beginPath(); mctx.rect(al, at, aw, ah); mctx.clip();
     runs.forEach((r, i) => {
       drawPath(mctx, toPx, r.x, r.y, colour(i), 1.5);
       const k = indexAt(r, t);
@@ -331,11 +337,16 @@ const REPORT_JS: &str = r##"
         mctx.beginPath(); mctx.arc(p[0], p[1], 6, 0, 2 * Math.PI); mctx.fill(); mctx.stroke();
       }
     });
+    mctx.restore();
   }
   map.addEventListener("mousemove", ev => {
     if (!pic) return;
-    const rect = map.getBoundingClientRect();
-    const u = (ev.clientX - rect.left) / rect.width, v = (ev.clientY - rect.top) / rect.height;
+    const rect = map.getBoundingClientRect(), [al, at, aw, ah] = toPx.area;
+    // Canvas pixels under the pointer (the canvas may be scaled by the page), then the map's
+    // square.
+    const cx = (ev.clientX - rect.left) * map.width / rect.width, cy = (ev.clientY - rect.top) * map.height / rect.height;
+    const u = (cx - al) / aw, v = (cy - at) / ah;
+    if (!(u >= 0 && u <= 1 && v >= 0 && v <= 1)) { hideTip(); return; }
     const [x0, y0, x1, y1] = pic.bounds_m;
     const x = x0 + u * (x1 - x0), y = y1 - v * (y1 - y0);
     const i = Math.round(u * (pic.n - 1)), j = Math.round((1 - v) * (pic.n - 1));

@@ -549,7 +549,8 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     Ok(chart)
 }
 
-/// Trajectories of one or more runs over the (first run's) field. Written to `path`.
+/// Trajectories of one or more runs over their field (one field: runs over different fields,
+/// see [`crate::same_field`], are a [`PlotError::Data`]). Written to `path`.
 pub fn trajectory_figure(
     runs: &[RunData],
     path: &Path,
@@ -560,6 +561,8 @@ pub fn trajectory_figure(
     let first = runs
         .first()
         .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
+    // One field is drawn under every path: runs over different fields are refused.
+    crate::same_field(runs)?;
     let points = || runs.iter().flat_map(|r| r.trace.iter());
     let (x0, x1) = finite_bounds(points().map(|t| t.x_m));
     let (y0, y1) = finite_bounds(points().map(|t| t.y_m));

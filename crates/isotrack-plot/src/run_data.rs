@@ -121,3 +121,62 @@ impl RunData {
         (1.0 - f.metrics.steady_state_fraction.unwrap_or(0.2)) * f.sim.duration_s.unwrap_or(0.0)
     }
 }
+
+/// What decides the field a run's map shows: its `[field]` section (every key, file paths
+/// absolute as written in `scenario.toml`), `controller.level` (the isoline drawn), and for a
+/// puff plume `sim.seed` (its wind's meander), each as `(key, value as JSON text)`.
+fn field_identity(s: &isotrack_scenario::Scenario) -> Vec<(String, String)> {
+    let f = s.file();
+    let mut keys: Vec<(String, String)> = match serde_json::to_value(&f.field) {
+        Ok(serde_json::Value::Object(m)) => m
+            .into_iter()
+            .map(|(k, v)| (format!("field.{k}"), v.to_string()))
+            .collect(),
+        other => vec![("field".into(), format!("{other:?}"))],
+    };
+    keys.push(("controller.level".into(), format!("{:?}", s.level())));
+    if f.field.kind == Some(isotrack_scenario::schema::FieldKind::PuffPlume) {
+        keys.push(("sim.seed".into(), f.sim.seed.unwrap_or(0).to_string()));
+    }
+    keys
+}
+
+/// Checks that every run shows the same field and isoline (see `field_identity`: the
+/// `[field]` section, the level, a puff plume's seed), since a figure or page of several runs
+/// draws one field under every path. Otherwise a [`PlotError::Data`] naming the first run and
+/// the first that differs from it, and the first key that differs with both values.
+pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
+    let Some(first) = runs.first() else {
+        return Ok(());
+    };
+    let a = field_identity(&first.scenario);
+    for r in &runs[1..] {
+        let b = field_identity(&r.scenario);
+        if a == b {
+            continue;
+        }
+        let lookup = |set: &[(String, String)], k: &str| {
+            set.iter()
+                .find(|(key, _)| key == k)
+                .map_or_else(|| "unset".to_string(), |(_, v)| v.clone())
+        };
+        let key = a
+            .iter()
+            .chain(&b)
+            .map(|(k, _)| k.as_str())
+            .find(|k| lookup(&a, k) != lookup(&b, k))
+            .unwrap_or("field");
+        let clip = isotrack_scenario::load::clip;
+        return Err(PlotError::Data(format!(
+            "{} and {} are runs over different fields ({}: {} in {}, {} in {}): a figure of several runs draws one field and isoline under every path, so these are not drawn together; plot or report each run on its own",
+            first.dir.display(),
+            r.dir.display(),
+            key,
+            clip(&lookup(&a, key)),
+            first.name,
+            clip(&lookup(&b, key)),
+            r.name,
+        )));
+    }
+    Ok(())
+}

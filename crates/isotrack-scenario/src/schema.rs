@@ -614,9 +614,12 @@ pub struct ControllerSection {
 impl ControllerSection {
     /// The section for another kind: unchanged when it already is `kind`; otherwise the kind's
     /// defaults with the keys every law shares carried over (level, turning side, turn-rate
-    /// limit, and, for the laws that differentiate the measurement, the derivative estimator).
-    /// A gain of one law (`kp` of the PI-like law, say) is not the same gain of another (`kp` of
-    /// the PID), so none is carried. Used by `compare` and the benchmark.
+    /// limit, the search phase flown before tracking (`search`, `search_spacing_m`,
+    /// `search_leg_m`, `search_handover`), and, for the laws that differentiate the
+    /// measurement, the derivative estimator). A gain of one law (`kp` of the PI-like law, say)
+    /// is not the same gain of another (`kp` of the PID), so none is carried. Used by `compare`
+    /// and the benchmark: every law flies the same search (without it, from a start on a flat
+    /// background, only the law given one would ever find the isoline).
     pub fn switched_to(&self, kind: ControllerKind) -> ControllerSection {
         if self.kind == Some(kind) {
             return self.clone();
@@ -633,6 +636,10 @@ impl ControllerSection {
             derivative: self.derivative.filter(|_| takes_derivative),
             derivative_tau_s: self.derivative_tau_s.filter(|_| takes_derivative),
             derivative_lipschitz: self.derivative_lipschitz.filter(|_| takes_derivative),
+            search: self.search,
+            search_spacing_m: self.search_spacing_m,
+            search_leg_m: self.search_leg_m,
+            search_handover: self.search_handover,
             ..ControllerSection::default()
         }
     }

@@ -829,7 +829,7 @@ def compare(
 ) -> Dict[str, Run]:
     """``isotrack compare``: the scenario flown by each built-in law (default: all of them) on
     the same field, start, sensor and turn-rate limit, as the command flies them (a law's
-    defaults with the scenario's level, side, limit and estimator; ``gains`` as ``--gain``:
+    defaults with the scenario's level, side, limit, estimator and search phase; ``gains`` as ``--gain``:
     ``["sliding_mode.gamma=0.3"]``); ``controllers`` empty or naming a law twice is a
     ``ValueError`` (a comparison of nothing, or a dict that would drop a run). Returns
     ``{law: Run}`` in order; with ``out``, each run is

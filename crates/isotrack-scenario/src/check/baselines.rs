@@ -2,13 +2,17 @@
 //! scenario's field so `compare` and `run` can say when a baseline runs outside them.
 //!
 //! Both are the sufficient conditions that document derives (`[D]`) or reconstructs (`[R]`);
-//! the gradient and Hessian bounds come from the same lattice as Prop. 2, over the tube
-//! `|F - s_d| <= tube` round the target isoline (the linear zone `delta` for the sliding modes,
-//! `c2` = 1 for the suboptimal SOSM).
+//! the gradient and Hessian bounds `gamma1..3` are `isotrack check`'s own computation (the same
+//! 601 x 601 lattice and margins as Prop. 2), over the tube `|F - s_d| <= H` round the target
+//! isoline, `H` the linear zone `delta` for the sliding modes and 1 for the suboptimal SOSM: the
+//! numbers the `tube` line of `isotrack check --tube-halfwidth H` prints. (`check`'s first
+//! line, `start to tube`, bounds a larger region, from the start's level to the tube, and is
+//! not what these conditions use.) Each warning names its tube and gives its `gamma`s.
 
-use super::{regions, WARN_LATTICE};
+use super::{regions, CHECK_LATTICE};
 use crate::schema::ControllerKind;
 use crate::Scenario;
+use isotrack_core::numtext::{Echo, Num};
 
 /// Warnings for a baseline whose gains violate its stated condition on this scenario (empty
 /// for the paper's law and for laws without a stated condition, and when the bounds cannot be
@@ -18,26 +22,43 @@ pub fn baseline_warnings(s: &Scenario) -> Vec<String> {
     let kind = c.kind.unwrap_or(ControllerKind::PiIsoline);
     let v = super::speed_mps(s);
     let u_bar = s.max_turn_rate_radps().unwrap_or(1.0);
-    match kind {
+    // Which tube, and why that half-width.
+    let (tube, why) = match kind {
         ControllerKind::SlidingMode | ControllerKind::SlidingModeSmooth => {
-            let (gamma, delta) = (c.gamma.unwrap_or(0.2), c.delta.unwrap_or(1.0));
-            let Some(b) = regions(s, delta, WARN_LATTICE, true).tube else {
-                return vec![];
-            };
-            sliding_mode_conditions(v, u_bar, gamma, delta, b.gamma1, b.gamma3)
-                .into_iter()
-                .map(|w| w.replacen("sliding_mode:", &format!("{}:", kind.name()), 1))
-                .collect()
+            (c.delta.unwrap_or(1.0), "delta, the law's linear zone")
         }
-        ControllerKind::SuboptimalSosm => {
-            let alpha = c.alpha_star.unwrap_or(0.5);
-            let Some(b) = regions(s, 1.0, WARN_LATTICE, true).tube else {
-                return vec![];
-            };
-            sosm_conditions(v, u_bar, alpha, b.gamma1, b.gamma2, b.gamma3)
-        }
-        _ => vec![],
-    }
+        ControllerKind::SuboptimalSosm => (1.0, "1 field unit"),
+        _ => return vec![],
+    };
+    let Some(b) = regions(s, tube, CHECK_LATTICE, true).tube else {
+        return vec![];
+    };
+    let warnings = match kind {
+        ControllerKind::SuboptimalSosm => sosm_conditions(
+            v,
+            u_bar,
+            c.alpha_star.unwrap_or(0.5),
+            b.gamma1,
+            b.gamma2,
+            b.gamma3,
+        ),
+        _ => sliding_mode_conditions(v, u_bar, c.gamma.unwrap_or(0.2), tube, b.gamma1, b.gamma3)
+            .into_iter()
+            .map(|w| w.replacen("sliding_mode:", &format!("{}:", kind.name()), 1))
+            .collect(),
+    };
+    let gamma3 = b
+        .gamma3
+        .map_or_else(|| "none (no Hessian)".to_string(), |g| Num(g).to_string());
+    let region = format!(
+        "; gamma1 = {} <= |grad F| <= gamma2 = {}, ||hess F|| <= gamma3 = {}, over the tube |F - s_d| <= {} ({why}) round the isoline, lattice margins included: the `tube` line of `isotrack check --tube-halfwidth {}` (not its `start to tube` line, a larger region)",
+        Num(b.gamma1),
+        Num(b.gamma2),
+        gamma3,
+        Echo(tube),
+        Echo(tube),
+    );
+    warnings.into_iter().map(|w| w + &region).collect()
 }
 
 /// Matveev et al.'s sliding mode, `mu = gamma*delta`: (a) `mu < v*inf|grad F|` (the surface is
@@ -55,8 +76,9 @@ pub fn sliding_mode_conditions(
     let mut w = vec![];
     if mu >= v * grad_min {
         w.push(format!(
-            "sliding_mode: mu = gamma*delta = {mu:.4} is not below v*min|grad F| = {:.4} on the tube: the sliding surface may not be reachable (docs/BASELINES.md, condition (a))",
-            v * grad_min
+            "sliding_mode: mu = gamma*delta = {} is not below v*gamma1 = {}: the sliding surface may not be reachable (docs/BASELINES.md, condition (a))",
+            Num(mu),
+            Num(v * grad_min)
         ));
         return w;
     }
@@ -64,7 +86,9 @@ pub fn sliding_mode_conditions(
         let need = (v * h + gamma * mu / v) / (grad_min * grad_min - mu * mu / (v * v)).sqrt();
         if u_bar <= need {
             w.push(format!(
-                "sliding_mode: the turn-rate limit {u_bar:.4} rad/s is not above {need:.4} rad/s = (v*max||hess F|| + gamma*mu/v)/sqrt(min|grad F|^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))"
+                "sliding_mode: the turn-rate limit {} rad/s is not above {} rad/s = (v*gamma3 + gamma*mu/v)/sqrt(gamma1^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))",
+                Echo(u_bar),
+                Num(need)
             ));
         }
     }
@@ -86,8 +110,9 @@ pub fn sosm_conditions(
     let mut w = vec![];
     if !(alpha > 0.0 && alpha <= 1.0 && alpha < 3.0 * g1 / g2) {
         w.push(format!(
-            "suboptimal_sosm: alpha_star = {alpha} is not in (0, min(1, 3*G1/G2 = {:.4})) on the tube (docs/BASELINES.md, section 2)",
-            3.0 * g1 / g2
+            "suboptimal_sosm: alpha_star = {} is not in (0, min(1, 3*G1/G2 = {})), G1 = v*gamma1, G2 = v*gamma2 (docs/BASELINES.md, section 2)",
+            Echo(alpha),
+            Num(3.0 * g1 / g2)
         ));
         return w;
     }
@@ -96,7 +121,9 @@ pub fn sosm_conditions(
         let need = (fb / (alpha * g1)).max(4.0 * fb / (3.0 * g1 - alpha * g2));
         if u <= need {
             w.push(format!(
-                "suboptimal_sosm: the turn-rate amplitude U = {u:.4} rad/s is not above max(Fb/(alpha*G1), 4Fb/(3G1 - alpha*G2)) = {need:.4} rad/s on the tube (docs/BASELINES.md, section 2)"
+                "suboptimal_sosm: the turn-rate amplitude U = {} rad/s is not above max(Fb/(alpha*G1), 4Fb/(3G1 - alpha*G2)) = {} rad/s, Fb = v^2*gamma3, G1 = v*gamma1, G2 = v*gamma2 (docs/BASELINES.md, section 2)",
+                Echo(u),
+                Num(need)
             ));
         }
     }
@@ -139,12 +166,12 @@ mod tests {
         for (alpha, g2, need) in [(0.2, 2.0, 2.5), (0.9, 3.0, 2.0 / 0.3)] {
             let w = sosm_conditions(1.0, need - 0.01, alpha, 1.0, g2, Some(0.5));
             assert_eq!(w.len(), 1, "alpha {alpha}: {w:?}");
-            assert!(w[0].contains(&format!("{need:.4}")), "{w:?}");
+            assert!(w[0].contains(&Num(need).to_string()), "{w:?}");
             assert!(sosm_conditions(1.0, need + 0.01, alpha, 1.0, g2, Some(0.5)).is_empty());
         }
         // Fb scales with v^2 and G1, G2 with v: v = 2 doubles the bound (Fb/(alpha G1) = 5).
         let w = sosm_conditions(2.0, 4.99, 0.2, 1.0, 2.0, Some(0.5));
-        assert!(w.len() == 1 && w[0].contains("5.0000"), "{w:?}");
+        assert!(w.len() == 1 && w[0].contains("= 5 rad/s"), "{w:?}");
         assert!(sosm_conditions(2.0, 5.01, 0.2, 1.0, 2.0, Some(0.5)).is_empty());
     }
 
@@ -173,12 +200,12 @@ mod tests {
         assert!((need - 1.142_63).abs() < 1e-5);
         let w = sliding_mode_conditions(2.0, need - 1e-3, 0.3, 1.0, 0.5, Some(0.25));
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].contains(&format!("{need:.4}")), "{}", w[0]);
+        assert!(w[0].contains(&Num(need).to_string()), "{}", w[0]);
         assert!(sliding_mode_conditions(2.0, need + 1e-3, 0.3, 1.0, 0.5, Some(0.25)).is_empty());
         let a = sliding_mode_conditions(2.0, 100.0, 2.0, 1.0, 0.5, Some(0.25));
         assert_eq!(a.len(), 1, "{a:?}");
         assert!(
-            a[0].contains("condition (a)") && a[0].contains("= 1.0000"),
+            a[0].contains("condition (a)") && a[0].contains("v*gamma1 = 1:"),
             "{}",
             a[0]
         );
@@ -194,7 +221,7 @@ mod tests {
         let need = 8.0 / 0.3;
         let w = sosm_conditions(2.0, need - 0.01, 0.9, 0.5, 1.5, Some(0.5));
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].contains(&format!("{need:.4}")), "{}", w[0]);
+        assert!(w[0].contains(&Num(need).to_string()), "{}", w[0]);
         assert!(sosm_conditions(2.0, need + 0.01, 0.9, 0.5, 1.5, Some(0.5)).is_empty());
         for (alpha, grad_max) in [(0.0, 2.0), (0.75, 4.0)] {
             let w = sosm_conditions(1.0, 1e9, alpha, 1.0, grad_max, Some(0.5));

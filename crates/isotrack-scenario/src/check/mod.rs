@@ -49,8 +49,6 @@ use serde::Serialize;
 
 /// Lattice points per side for `isotrack check`.
 const CHECK_LATTICE: usize = 601;
-/// Lattice points per side for the baselines' quick warnings ([`baselines`]).
-const WARN_LATTICE: usize = 151;
 
 /// Prop. 1 report. All `None` when the field is not circular.
 #[derive(Clone, Debug, Serialize)]

@@ -463,7 +463,7 @@ fn noise_through_a_backward_difference_is_warned_about() {
 }
 
 /// The baselines' own conditions on the circular field (tube gradients about 0.9 .. 1.1, v = 0.5):
-/// the defaults' `mu = gamma delta = 0.2` is below `v min|grad F|`; `gamma = 1` puts it at 1,
+/// the defaults' `mu = gamma delta = 0.2` is below `v gamma1` (`gamma1` = min |grad F| on the tube); `gamma = 1` puts it at 1,
 /// above, and the sliding mode is warned about by name (condition (a)); the paper's law has none.
 #[test]
 fn baseline_conditions_are_warned_by_name() {
@@ -491,5 +491,5 @@ fn baseline_conditions_are_warned_by_name() {
         ],
     ));
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(w[0].contains("amplitude U = 0.0500"), "{}", w[0]);
+    assert!(w[0].contains("amplitude U = 0.05 rad/s"), "{}", w[0]);
 }

@@ -581,6 +581,66 @@ fn sensor_ranges() {
     ]);
 }
 
+/// The `Hz` values a refusal of `key` suggests, in order.
+fn suggested_rates(text: &str, key: &str) -> Vec<f64> {
+    let issues = resolved(text).expect_err(text);
+    let issue = issues.iter().find(|i| i.key == key).expect(key);
+    let m = &issue.message;
+    let tail = m
+        .split_once("the nearest valid rate")
+        .unwrap_or_else(|| panic!("{key} suggests no valid rate: {m}"))
+        .1;
+    tail.split(" Hz")
+        .filter_map(|part| part.rsplit(' ').next()?.parse::<f64>().ok())
+        .collect()
+}
+
+/// A sensor rate whose period is not a whole number of steps names the valid rates either side,
+/// `1/(k dt)`: 3 Hz at dt = 0.01 s is 33.3 steps, so 1/0.34 s = 2.941 Hz and 1/0.33 s = 3.030 Hz;
+/// at dt = 0.03 s, 0.7 Hz is 47.6 steps: 1/1.44 s and 1/1.41 s. Above 1/dt only 1/dt itself
+/// (one step) is near. Each suggested number, typed back as written, is accepted.
+#[test]
+fn an_invalid_rate_names_the_nearest_valid_rates() {
+    // (The trace's default 10 Hz is no whole number of 0.03 s steps either: off there.)
+    let cases: [(&str, f64, f64, &str, Vec<f64>); 4] = [
+        (
+            "sensor.rate_hz",
+            3.0,
+            0.01,
+            "",
+            vec![1.0 / 0.34, 1.0 / 0.33],
+        ),
+        (
+            "sensor.rate_hz",
+            0.7,
+            0.03,
+            "[output]\nrecord_rate_hz = 0.0\n",
+            vec![1.0 / 1.44, 1.0 / 1.41],
+        ),
+        ("sensor.rate_hz", 200.0, 0.01, "", vec![100.0]),
+        (
+            "output.record_rate_hz",
+            3.0,
+            0.01,
+            "",
+            vec![1.0 / 0.34, 1.0 / 0.33],
+        ),
+    ];
+    for (key, rate, dt, extra, want) in cases {
+        let (section, name) = key.split_once('.').unwrap();
+        let text = |r: f64| format!("{extra}[{section}]\n{name} = {r:?}\n[sim]\ndt_s = {dt:?}\n");
+        let got = suggested_rates(&text(rate), key);
+        assert_eq!(got.len(), want.len(), "{}: {got:?}", text(rate));
+        for (g, w) in got.iter().zip(&want) {
+            assert!(
+                (g / w - 1.0).abs() < 1e-8,
+                "{key} {rate}: suggested {g}, want {w}"
+            );
+            assert_eq!(refused(&text(*g)), Vec::<String>::new(), "{}", text(*g));
+        }
+    }
+}
+
 #[test]
 fn controller_ranges_and_kinds() {
     check(&[
@@ -766,6 +826,31 @@ fn switched_to_carries_the_shared_keys_only() {
         assert_eq!(other.level, Some(5.0));
     }
     assert_eq!(pi.switched_to(ControllerKind::PiIsoline), pi);
+    // The search phase is the scenario's, not a law's: every law flies it (compare's fairness:
+    // from a flat start only the law given a search could find the isoline).
+    let searching = resolved(
+        "[controller]\nsearch = \"lawnmower\"\nsearch_spacing_m = 3.0\nsearch_leg_m = 40.0\nsearch_handover = 0.5\n",
+    )
+    .unwrap()
+    .controller;
+    for kind in ControllerKind::ALL {
+        let other = searching.switched_to(kind);
+        assert_eq!(
+            (
+                other.search,
+                other.search_spacing_m,
+                other.search_leg_m,
+                other.search_handover
+            ),
+            (
+                Some(SearchKind::Lawnmower),
+                Some(3.0),
+                Some(40.0),
+                Some(0.5)
+            ),
+            "{kind:?}"
+        );
+    }
     // Every switched section resolves (the schedule needs its pairs).
     for kind in ControllerKind::ALL {
         let mut f: ScenarioFile = toml::from_str("").unwrap();
