@@ -120,7 +120,9 @@ std::thread_local! {
     static LAST_W: std::cell::Cell<Option<(u64, u64, Vec2)>> = const { std::cell::Cell::new(None) };
     /// `W(t_i)` of consecutive releases beyond the cached chunks, for the plume of the last
     /// query past them ([`PuffPlume::far_window`]). A pure cache, like [`LAST_W`].
-    static FAR_W: std::cell::Cell<FarWindow> = std::cell::Cell::new(FarWindow::default());
+    static FAR_W: std::cell::Cell<FarWindow> = const {
+        std::cell::Cell::new(FarWindow { id: None, start: 0, w: Vec::new() })
+    };
 }
 
 /// Releases `start..start + w.len()` of plume `id`: their `W(t_i)`.
