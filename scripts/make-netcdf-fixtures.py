@@ -20,7 +20,15 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     chunked, zlib levels 1 and 9 (level 9 with shuffle), all with an unlimited time axis, plus
     an int16 variable packed with scale_factor / add_offset; NetCDF-3 has contiguous and
     record (unlimited) layouts;
-  * a 2-D file (no time axis) per engine.
+  * a 2-D file (no time axis) per engine;
+  * projected x/y in kilometres (`<engine>_<format>_xykm_<layout>.nc`, one per format and
+    engine): the loader converts them to metres, the same grid as the `xy` files;
+  * not in the manifest: `refused_xy_ft.nc` (x/y in feet) and `refused_lon_y.nc` (longitude
+    beside a y in metres), which the loader must refuse naming the coordinate.
+
+Run with file names as arguments to (re)write only those (the others are left as they are):
+
+    target/fixenv/bin/python scripts/make-netcdf-fixtures.py netcdf4_nc4_xykm_contig.nc
 
 Every file holds the same data: 3 frames of 5 x 6 nodes, v = 10 + 0.125 * k for small
 integers k (exact in float32, float64 and the packed int16), one node missing (NaN / fill).
@@ -29,6 +37,7 @@ Its twins, written here too: `series.npy` (time, rows south first, columns), `fr
 first: 0, 3600, 10800). The loader test requires every file to give exactly these.
 """
 import os
+import sys
 
 import numpy as np
 import pandas as pd
@@ -77,12 +86,19 @@ def dataset(coords, with_time):
         ya = cf("Y", "latitude", "latitude", "degrees_north", "cell centres, north first")
         (dx, dy) = (DLON, -DLAT)
     else:
-        xn, yn = "x", "y"
-        xs = X0 + DX * np.arange(NX)
-        ys = Y0 + DY * np.arange(NY)
-        xa = cf("X", "projection_x_coordinate", "easting", "m", "UTM zone 33N")
-        ya = cf("Y", "projection_y_coordinate", "northing", "m", "UTM zone 33N")
-        (dx, dy) = (DX, DY)
+        # xy: metres; xykm: kilometres (X0 / 1000 = 500.0 and steps 1.0, 2.0: exact);
+        # xyft and lony: refused by the loader.
+        unit = {"xy": "m", "xykm": "km", "xyft": "ft", "lony": "m"}[coords]
+        scale = 1000.0 if unit == "km" else 1.0
+        xn, yn = ("lon", "y") if coords == "lony" else ("x", "y")
+        xs = (X0 + DX * np.arange(NX)) / scale
+        ys = (Y0 + DY * np.arange(NY)) / scale
+        xa = cf("X", "projection_x_coordinate", "easting", unit, "UTM zone 33N")
+        ya = cf("Y", "projection_y_coordinate", "northing", unit, "UTM zone 33N")
+        if coords == "lony":
+            xs = LON0 + DLON * np.arange(NX)
+            xa = cf("X", "longitude", "longitude", "degrees_east", "a longitude beside metres")
+        (dx, dy) = (xs[1] - xs[0], ys[1] - ys[0])
     xa["bounds"] = xn + "_bnds"
     ya["bounds"] = yn + "_bnds"
     va = cf(None, "air_temperature", "air temperature", "K", "synthetic: 10 + k / 8")
@@ -95,7 +111,7 @@ def dataset(coords, with_time):
                                dict(long_name=xn + " cell bounds", comment="edges", units=xa["units"]))
     data_vars[yn + "_bnds"] = ((yn, "nv"), bounds(ys, dy),
                                dict(long_name=yn + " cell bounds", comment="edges", units=ya["units"]))
-    if coords == "xy":
+    if coords != "lonlat":
         va["grid_mapping"] = "crs"
         data_vars["crs"] = ((), np.int32(0),
                             dict(grid_mapping_name="transverse_mercator", long_name="CRS",
@@ -136,12 +152,14 @@ def encoding(ds, layout, with_time, fmt):
     return enc
 
 
-def write(engine, fmt, coords, layout, with_time=True):
+def write(engine, fmt, coords, layout, with_time=True, name=None):
     ds = dataset(coords, with_time)
     enc = encoding(ds, layout, with_time, fmt)
     unlimited = ["time"] if with_time and layout != "contig" else None
     tag = {"NETCDF4": "nc4", "NETCDF4_CLASSIC": "nc4classic", "NETCDF3_64BIT": "nc3"}[fmt]
-    name = f"{engine}_{tag}_{coords}_{layout}{'' if with_time else '_2d'}.nc"
+    name = name or f"{engine}_{tag}_{coords}_{layout}{'' if with_time else '_2d'}.nc"
+    if ONLY and name not in ONLY:
+        return name
     path = os.path.join(OUT, name)
     if os.path.exists(path):
         os.remove(path)
@@ -166,10 +184,14 @@ def unwritten(frames):
     return name
 
 
+# File names given on the command line: only those are written (all when none).
+ONLY = set(sys.argv[1:])
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     for f in os.listdir(OUT):
-        if f.endswith(".nc"):
+        if f.endswith(".nc") and not ONLY:
             os.remove(os.path.join(OUT, f))
     v = values()
     np.save(os.path.join(OUT, "series.npy"), v)
@@ -186,8 +208,15 @@ def main():
                 for layout in layouts:
                     names.append(write(engine, fmt, coords, layout))
         names.append(write(engine, formats[0], "lonlat", "contig", with_time=False))
+        for fmt in formats:
+            layout = "unlim" if fmt == "NETCDF3_64BIT" else ("contig" if fmt == "NETCDF4" else "zlib1")
+            names.append(write(engine, fmt, "xykm", layout))
+    # Not in the manifest: they must be refused.
+    write("netcdf4", "NETCDF4", "xyft", "contig", name="refused_xy_ft.nc")
+    write("netcdf4", "NETCDF4", "lony", "contig", name="refused_lon_y.nc")
     for frames in (1, 4, 5):
-        unwritten(frames)  # not in the manifest: they must not load
+        if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
+            unwritten(frames)  # not in the manifest: they must not load
     with open(os.path.join(OUT, "MANIFEST.txt"), "w") as m:
         m.write("# written by scripts/make-netcdf-fixtures.py; the loader test reads every file listed\n")
         for n in sorted(names):

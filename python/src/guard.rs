@@ -152,14 +152,42 @@ pub(crate) fn detached<T: Send + 'static>(
     py: Python<'_>,
     work: impl FnOnce() -> T + Send + 'static,
 ) -> PyResult<T> {
+    detached_then(py, work, || ())
+}
+
+/// [`detached`] for work that writes (`plot`, `report` into a staging directory): on
+/// `KeyboardInterrupt` (or any exception a signal handler raises) `abandon` is called at once on
+/// this thread, and again on the work's thread when the work ends, so that what it wrote after
+/// the first call goes too. A lock orders the two: work that ends before the interrupt is
+/// cleaned up by the first call, work that ends after it by the second.
+pub(crate) fn detached_then<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send + 'static,
+    abandon: impl Fn() + Send + Sync + 'static,
+) -> PyResult<T> {
     use std::sync::mpsc::{channel, RecvTimeoutError};
+    use std::sync::Arc;
     let (tx, rx) = channel();
+    let abandon = Arc::new(abandon);
+    let abandoned = Arc::new(Mutex::new(false));
+    let (their_abandon, their_flag) = (abandon.clone(), abandoned.clone());
     std::thread::Builder::new()
         .name("isotrack-detached".into())
         .spawn(move || {
-            let _ = tx.send(catch_unwind(AssertUnwindSafe(work)));
+            let r = catch_unwind(AssertUnwindSafe(work));
+            let gone = their_flag.lock().unwrap_or_else(|p| p.into_inner());
+            if *gone {
+                their_abandon();
+            } else {
+                let _ = tx.send(r);
+            }
         })
         .map_err(|e| PyRuntimeError::new_err(format!("cannot start a thread: {e}")))?;
+    let interrupted = |e: PyErr| {
+        *abandoned.lock().unwrap_or_else(|p| p.into_inner()) = true;
+        abandon();
+        e
+    };
     let mut rx = rx;
     loop {
         // The receiver goes to the GIL-free side and back (it is `Send`, not `Sync`).
@@ -168,7 +196,7 @@ pub(crate) fn detached<T: Send + 'static>(
         match answer {
             Ok(Ok(v)) => return Ok(v),
             Ok(Err(panic)) => return Err(panic_error(panic.as_ref())),
-            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Timeout) => py.check_signals().map_err(interrupted)?,
             Err(RecvTimeoutError::Disconnected) => {
                 return Err(PyRuntimeError::new_err(
                     "internal error in isotrack: a worker thread ended without an answer",

@@ -86,7 +86,7 @@ impl PyScenario {
             let inner = self
                 .inner
                 .derive(&[format!("{key}={literal}")], &self.origin)
-                .map_err(scenario_err)?;
+                .map_err(|e| ScenarioErrorPy::new_err(as_written(&e.to_string(), value)))?;
             Ok(Self {
                 inner,
                 origin: self.origin.clone(),
@@ -314,6 +314,49 @@ fn toml_literal(v: &toml::Value) -> String {
         }
         other => other.to_string(),
     }
+}
+
+/// A scenario error about a float given for an integer key, as the user wrote it: serde
+/// echoes the float through its own formatting (`2.0**64` as `floating point
+/// `18446744073709552000.0``, digits the user never wrote), and does not say which integers
+/// the key takes. The float is echoed as Python's `repr` and the range named (TOML's integers
+/// are 64-bit signed, so an unsigned key takes 0 ..= 2**63-1).
+fn as_written(message: &str, value: &Bound<'_, PyAny>) -> String {
+    const FLOAT: &str = "invalid type: floating point `";
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        return message.to_string();
+    }
+    let Some(start) = message.find(FLOAT) else {
+        return message.to_string();
+    };
+    let rest = &message[start + FLOAT.len()..];
+    let Some(close) = rest.find('`') else {
+        return message.to_string();
+    };
+    let after = &rest[close + 1..];
+    let (expected, tail) = match after.strip_prefix(", expected ") {
+        Some(e) => {
+            let end = e
+                .find(|c: char| !c.is_ascii_alphanumeric())
+                .unwrap_or(e.len());
+            (&e[..end], &e[end..])
+        }
+        None => ("", after),
+    };
+    let range = match expected {
+        "u8" => "an integer in 0 ..= 255",
+        "u16" => "an integer in 0 ..= 65535",
+        "u32" => "an integer in 0 ..= 4294967295 (2**32-1)",
+        "u64" | "usize" => "an integer in 0 ..= 9223372036854775807 (2**63-1, TOML's largest)",
+        "i32" => "an integer in -2147483648 ..= 2147483647",
+        "i64" | "isize" => "an integer in -2**63 ..= 2**63-1",
+        _ => return message.to_string(),
+    };
+    format!(
+        "{}{} is a float; this key takes {range}, written without a decimal point{tail}",
+        &message[..start],
+        shown(value)
+    )
 }
 
 /// A value's `repr` for a message, clipped (a million-element list once made a megabyte error),

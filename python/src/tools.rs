@@ -116,7 +116,9 @@ pub fn write_run(
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
-/// a sweep directory takes `x`, `group` and `metric`.
+/// a sweep directory takes `x`, `group` and `metric`. Ctrl-C raises `KeyboardInterrupt` at
+/// once; the figures are rendered in a staging directory and moved into place whole
+/// ([`staged`]).
 #[pyfunction]
 #[pyo3(signature = (runs, out=None, svg=false, animate=false, x=None, group=None, metric=None))]
 #[allow(clippy::too_many_arguments)]
@@ -155,13 +157,93 @@ pub fn plot(
             dpi: 100.0,
         },
     };
-    crate::guard::no_panic(|| {
-        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::figures::plot(&args)))
-            .map_err(failure)
+    if !args.runs.iter().all(|d| d.is_dir()) {
+        // Refused at once, with the command's message (nothing is created for it).
+        return crate::guard::no_panic(|| {
+            py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::figures::plot(&args)))
+                .map_err(failure)
+        });
+    }
+    let dir = args.out.clone().unwrap_or_else(|| args.runs[0].clone());
+    staged(py, &dir, move |staging| {
+        let mut args = args;
+        args.out = Some(staging.to_path_buf());
+        isotrack_cli::figures::plot(&args)
     })
 }
 
-/// `isotrack report RUN_DIR... --out FILE`.
+/// A fresh staging directory in `dir`: `.isotrack-partial-PID-N`, hidden, removed once its
+/// files are moved out (or the work is abandoned).
+fn staging_dir(dir: &Path) -> PyResult<PathBuf> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let io = |p: &Path, e: std::io::Error| {
+        PyOSError::new_err(format!("cannot create {}: {e}", p.display()))
+    };
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    loop {
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let p = dir.join(format!(".isotrack-partial-{}-{n}", std::process::id()));
+        match std::fs::create_dir(&p) {
+            Ok(()) => return Ok(p),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(io(&p, e)),
+        }
+    }
+}
+
+/// Renders into a staging directory inside `dir` on a thread of its own while this thread
+/// answers Ctrl-C ([`crate::guard::detached_then`]), then moves each file written into `dir`
+/// (a rename within one directory: a file appears whole or not at all). On
+/// `KeyboardInterrupt` the staging directory is removed, at once and again when the render
+/// ends (it goes on, its output discarded, as `check`'s does), so no half-written file is ever
+/// under the name the caller asked for.
+fn staged(
+    py: Python<'_>,
+    dir: &Path,
+    render: impl FnOnce(&Path) -> Result<(), Failure> + Send + 'static,
+) -> PyResult<()> {
+    let staging = staging_dir(dir)?;
+    let (theirs, gone) = (staging.clone(), staging.clone());
+    let outcome = crate::guard::no_panic(|| {
+        crate::guard::detached_then(
+            py,
+            move || isotrack_cli::console::quietly(|| render(&theirs)),
+            move || {
+                let _ = std::fs::remove_dir_all(&gone);
+            },
+        )
+    });
+    let moved = match outcome {
+        Ok(Ok(())) => move_files(&staging, dir),
+        // Named as the caller named them, not by the staging directory.
+        Ok(Err(f)) => Err(failure(Failure {
+            message: f
+                .message
+                .replace(&staging.display().to_string(), &dir.display().to_string()),
+            ..f
+        })),
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staging);
+            return Err(e);
+        }
+    };
+    let _ = std::fs::remove_dir_all(&staging);
+    moved
+}
+
+/// Moves the files of `from` into `to` (renames: the same file system).
+fn move_files(from: &Path, to: &Path) -> PyResult<()> {
+    let io = |p: &Path, e: std::io::Error| PyOSError::new_err(format!("{}: {e}", p.display()));
+    for entry in std::fs::read_dir(from).map_err(|e| io(from, e))? {
+        let entry = entry.map_err(|e| io(from, e))?;
+        let target = to.join(entry.file_name());
+        std::fs::rename(entry.path(), &target).map_err(|e| io(&target, e))?;
+    }
+    Ok(())
+}
+
+/// `isotrack report RUN_DIR... --out FILE`, interruptible and staged as [`plot`].
 #[pyfunction]
 pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> {
     if runs.is_empty() {
@@ -169,10 +251,20 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
             "report needs at least one run directory",
         ));
     }
-    let args = ReportArgs { runs, out };
-    crate::guard::no_panic(|| {
-        py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::league::report(&args)))
-            .map_err(failure)
+    let name = out
+        .file_name()
+        .ok_or_else(|| PyValueError::new_err(format!("{}: not a file name", out.display())))?
+        .to_owned();
+    let dir = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
+    staged(py, &dir, move |staging| {
+        isotrack_cli::league::report(&ReportArgs {
+            runs,
+            out: staging.join(name),
+        })
     })
 }
 

@@ -118,6 +118,29 @@ std::thread_local! {
     /// previous one (a lattice or a moving isoline sampled at one time, thousands of points)
     /// reuses its 256 sines. A pure cache: the values are `displacement`'s.
     static LAST_W: std::cell::Cell<Option<(u64, u64, Vec2)>> = const { std::cell::Cell::new(None) };
+    /// `W(t_i)` of consecutive releases beyond the cached chunks, for the plume of the last
+    /// query past them ([`PuffPlume::far_window`]). A pure cache, like [`LAST_W`].
+    static FAR_W: std::cell::Cell<FarWindow> = const {
+        std::cell::Cell::new(FarWindow { id: None, start: 0, w: Vec::new() })
+    };
+}
+
+/// Releases `start..start + w.len()` of plume `id`: their `W(t_i)`.
+#[derive(Debug, Default)]
+struct FarWindow {
+    id: Option<u64>,
+    start: i64,
+    w: Vec<Vec2>,
+}
+
+/// The longest window of releases [`PuffPlume::far_window`] keeps, releases (2 MiB of `W(t_i)`;
+/// a scenario allows at most 100 000 puffs alive at once).
+const MAX_FAR_WINDOW: i64 = 1 << 17;
+
+#[cfg(test)]
+std::thread_local! {
+    /// `W(t)` evaluations (128 sines each) made on this thread: the cost the tests bound.
+    static DISPLACEMENTS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
 impl Clone for PuffPlume {
@@ -209,6 +232,8 @@ impl PuffPlume {
 
     /// `W(t) = U t + integral_0^t u'`, m.
     fn displacement(&self, t_s: f64) -> Vec2 {
+        #[cfg(test)]
+        DISPLACEMENTS.with(|n| n.set(n.get() + 1));
         let c = |axis: usize| {
             self.modes[axis]
                 .iter()
@@ -230,6 +255,44 @@ impl PuffPlume {
                 w
             }
         })
+    }
+
+    /// Calls `f(i, W(t_i))` for the releases `i` in `from..=to`, all beyond the cached chunks,
+    /// their `W(t_i)` from this thread's [`FAR_W`] window: a lattice of queries at one time
+    /// computes the live puffs' displacements once (not once per query: 240 puffs of 128
+    /// sines each made `check` of a run past the cache, 24 days at 2 Hz, take minutes), and a
+    /// run stepping forward computes each release's once. A range longer than
+    /// [`MAX_FAR_WINDOW`] is computed puff by puff.
+    fn far_window(&self, from: i64, to: i64, f: &mut impl FnMut(i64, Vec2)) {
+        let interval = 1.0 / self.p.release_rate_hz;
+        if to < from {
+            return;
+        }
+        if to - from >= MAX_FAR_WINDOW {
+            for i in from..=to {
+                f(i, self.displacement(i as f64 * interval));
+            }
+            return;
+        }
+        // Taken out of the cell while `f` runs (it never queries a plume, but nothing here
+        // relies on that), and put back after.
+        let mut win = FAR_W.with(|c| c.take());
+        if win.id != Some(self.id) || from < win.start || from > win.start + win.w.len() as i64 {
+            win.id = Some(self.id);
+            win.start = from;
+            win.w.clear();
+        } else {
+            win.w.drain(..(from - win.start) as usize);
+            win.start = from;
+        }
+        while win.start + (win.w.len() as i64) <= to {
+            let i = win.start + win.w.len() as i64;
+            win.w.push(self.displacement(i as f64 * interval));
+        }
+        for i in from..=to {
+            f(i, win.w[(i - from) as usize]);
+        }
+        FAR_W.with(|c| c.set(win));
     }
 
     /// Runs `f(mass/(2 pi s^2) exp(..), offset d = p - p_i, s^2)` over the live puffs at `t`.
@@ -259,10 +322,10 @@ impl PuffPlume {
         while i <= last {
             let (c, j) = (i as usize / CHUNK, i as usize % CHUNK);
             let Some(chunk) = self.chunk(c) else {
-                // Beyond the cache: each puff on its own.
-                puff(i, self.displacement(i as f64 * interval));
-                i += 1;
-                continue;
+                // Beyond the cache (so are all later releases): this thread's window of
+                // `W(t_i)`, shared by every query at this time and slid along by later ones.
+                self.far_window(i, last, &mut puff);
+                break;
             };
             // One block: skipped whole when the query is more than 6 sigma (of its oldest
             // puff, the widest) from its box.
@@ -473,6 +536,70 @@ mod tests {
                 "t {t}: {a} vs {b}"
             );
         }
+    }
+
+    /// Issue 30: `isotrack check` of a puff plume took 2 s at `sim.duration_s = 2e6` and more
+    /// than 190 s at 4e6, because past the cached chunks (2^22 releases, 24 days at 2 Hz) each
+    /// query computed every live puff's `W(t_i)` (128 sines) itself. Now a lattice of queries at
+    /// one time computes them once: 800 queries (value and gradient at 400 points) at a time
+    /// past the cache cost at most the live puffs' `W(t_i)` and `W(t)`, and a query 10 s later
+    /// only the 20 new releases'; the values equal the brute-force sum.
+    #[test]
+    fn queries_past_the_cache_compute_each_live_puff_once() {
+        let mut p = params();
+        p.meander_std_mps = 0.3;
+        let f = PuffPlume::new(p);
+        let interval = 1.0 / p.release_rate_hz;
+        let t = (MAX_CHUNKS * CHUNK) as f64 * interval + 1000.0;
+        let live = (p.max_age_s * p.release_rate_hz) as u64 + 1;
+        // Points at the centres of puffs of every age (computed before counting).
+        let centre =
+            |t: f64, i: i64| p.source_m + (f.displacement(t) - f.displacement(i as f64 * interval));
+        let last = (t / interval).floor() as i64;
+        let points: Vec<Vec2> = (0..400)
+            .map(|k| centre(t, last - k) + Vec2::new(0.1, -0.2))
+            .collect();
+        let brute = |t: f64, q: Vec2| {
+            let first = ((t - p.max_age_s) / interval).ceil() as i64;
+            (first..=(t / interval).floor() as i64)
+                .map(|i| {
+                    let s2 = p.puff_sigma0_m.powi(2)
+                        + 2.0 * p.diffusivity_m2ps * (t - i as f64 * interval);
+                    // As the plume sums: q - source - W(t), then + W(t_i) (at t ~ 2e6 s,
+                    // W is ~2e6 m and another order of the terms rounds otherwise).
+                    let d =
+                        (q - p.source_m - f.displacement(t)) + f.displacement(i as f64 * interval);
+                    let r2 = d.dot(d);
+                    if r2 <= 36.0 * s2 {
+                        p.puff_mass / (2.0 * std::f64::consts::PI * s2) * (-0.5 * r2 / s2).exp()
+                    } else {
+                        0.0
+                    }
+                })
+                .sum::<f64>()
+        };
+        let count = || DISPLACEMENTS.with(|n| n.get());
+        for (t, bound) in [(t, live + 1), (t + 10.0, 20 + 1), (t, live + 1)] {
+            let before = count();
+            let values: Vec<f64> = points.iter().map(|&q| f.value(t, q).unwrap()).collect();
+            for &q in &points {
+                f.gradient(t, q).unwrap();
+            }
+            let spent = count() - before;
+            assert!(
+                spent <= bound,
+                "t {t}: {spent} W(t) evaluations, at most {bound}"
+            );
+            for (q, v) in points.iter().zip(&values).step_by(37) {
+                let b = brute(t, *q);
+                assert_eq!(*v, b, "t {t} at {q:?}");
+            }
+        }
+        assert!(values_positive(&f, t, &points));
+    }
+
+    fn values_positive(f: &PuffPlume, t: f64, points: &[Vec2]) -> bool {
+        points.iter().all(|&q| f.value(t, q).unwrap() > 0.0)
     }
 
     /// Gradient and Hessian against central differences.

@@ -33,8 +33,10 @@ fn same(a: &[f64], b: &[f64]) -> bool {
 fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
     let names = manifest();
     // Two engines; NETCDF4 (5 layouts x 2 coordinate kinds + a 2-D file) for each, and for
-    // netCDF4 also NETCDF4_CLASSIC (10) and NETCDF3_64BIT (4).
-    assert_eq!(names.len(), 11 + 10 + 4 + 11, "{names:?}");
+    // netCDF4 also NETCDF4_CLASSIC (10) and NETCDF3_64BIT (4); x/y in km, one per format and
+    // engine (4).
+    assert_eq!(names.len(), 11 + 10 + 4 + 11 + 4, "{names:?}");
+    assert_eq!(names.iter().filter(|n| n.contains("_xykm_")).count(), 4);
     let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
     assert_eq!(npy.frames.len(), 3);
     assert_eq!((npy.frames[0].nx(), npy.frames[0].ny()), (6, 5));
@@ -52,6 +54,8 @@ fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
     assert_eq!(times, [0.0, 3600.0, 10800.0]);
     for name in &names {
         let s = load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{e}"));
+        // The data variable's CF units (issue 30: they were dropped).
+        assert_eq!(s.units.as_deref(), Some("K"), "{name}");
         let two_d = name.ends_with("_2d.nc");
         let want_frames = if two_d { &npy.frames[..1] } else { &npy.frames };
         assert_eq!(s.frames.len(), want_frames.len(), "{name}");
@@ -85,7 +89,8 @@ fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
                 "{name}"
             );
         } else {
-            // x 500000 (1000) 505000 m, y 4600000 (2000) 4608000 m.
+            // x 500000 (1000) 505000 m, y 4600000 (2000) 4608000 m; the `xykm` files hold
+            // x 500 (1) 505 km and y 4600 (2) 4608 km: converted to metres, the same grid.
             assert_eq!(
                 s.georeference,
                 Georeference::Metres { epsg: None },
@@ -107,5 +112,25 @@ fn coordinates_with_many_cf_attributes_load() {
     for name in ["netcdf4_nc4_lonlat_contig.nc", "h5netcdf_nc4_xy_zlib9.nc"] {
         let s = load_series(&dir().join(name), None, Some("v"));
         assert!(s.is_ok(), "{name}: {}", s.unwrap_err());
+    }
+}
+
+/// Issue 30: a coordinate in a unit that is neither a length isotrack converts (m, km) nor a
+/// longitude / latitude is refused naming the file and the variable, not read as metres; so is
+/// a longitude beside a y in metres (once read as metres, degrees and all).
+#[test]
+fn coordinates_in_other_units_are_refused_naming_them() {
+    for (name, what) in [
+        ("refused_xy_ft.nc", "coordinate `x` has units `ft`"),
+        (
+            "refused_lon_y.nc",
+            "`lon` (x, the last dimension: longitude) and `y` (y: a length)",
+        ),
+    ] {
+        let e = load_series(&dir().join(name), None, None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(name), "{text}");
+        assert!(text.contains(what), "{text}");
+        assert!(!e.unreadable, "{text}");
     }
 }

@@ -279,6 +279,19 @@ fn v2(a: [f64; 2]) -> Vec2 {
 /// `base_dir` and recorded back into the section as absolute paths; `seed` (`sim.seed`) seeds
 /// a puff plume's meander.
 pub fn build_field(f: &mut FieldSection, base_dir: &Path, seed: u64) -> Result<FieldModel, Issue> {
+    build_field_noting(f, base_dir, seed, &mut Vec::new())
+}
+
+/// As [`build_field`], pushing onto `notes` the warnings the files' contents give: a grid
+/// file's `units` (NetCDF's CF attribute) that differs from `field.units`, or that a value
+/// transform makes stale. A file's `units` is recorded as `field.units` when the scenario
+/// leaves it unset (and no `value_scale`, `value_offset` or `value_log10` changes the values).
+pub fn build_field_noting(
+    f: &mut FieldSection,
+    base_dir: &Path,
+    seed: u64,
+    notes: &mut Vec<String>,
+) -> Result<FieldModel, Issue> {
     let analytic = |kind| {
         FieldModel::Analytic(AnalyticField {
             kind,
@@ -311,7 +324,7 @@ pub fn build_field(f: &mut FieldSection, base_dir: &Path, seed: u64) -> Result<F
             offset: f.offset.unwrap_or_default(),
             gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
         })),
-        FieldKind::Grid => build_grid(f, base_dir)?,
+        FieldKind::Grid => build_grid(f, base_dir, notes)?,
         FieldKind::PuffPlume => FieldModel::Puff(Arc::new(PuffPlume::new(PuffPlumeParams {
             source_m: v2(f.source_m.unwrap_or_default()),
             release_rate_hz: f.release_rate_hz.unwrap_or(2.0),
@@ -350,6 +363,51 @@ fn load_issue(key: &str, prefix: &str, e: isotrack_fields::io::LoadError) -> Iss
         key: key.to_string(),
         message: format!("{prefix}{e}"),
         unreadable: e.unreadable,
+    }
+}
+
+/// `field.units` from the grid files' own `units` (issue 30: a NetCDF variable in `K` or
+/// `ug m-3` was shown with no unit): taken when the scenario leaves `field.units` unset and no
+/// value transform (`value_scale`, `value_offset`, `value_log10`) changes what the unit
+/// describes; a warning (in `notes`) when `field.units` is set to another unit, when a
+/// transform leaves the unit unknown, or when the files of `field.paths` disagree.
+fn adopt_file_units(
+    f: &mut FieldSection,
+    file_units: &[(String, String)],
+    notes: &mut Vec<String>,
+) {
+    use crate::load::clip;
+    let Some((path, units)) = file_units.first() else {
+        return;
+    };
+    if let Some((other, u)) = file_units.iter().find(|(_, u)| u != units) {
+        notes.push(format!(
+            "the grid files give their values in different units: `{}` ({}) and `{}` ({})",
+            clip(units),
+            clip(path),
+            clip(u),
+            clip(other)
+        ));
+    }
+    let transformed = f.value_scale.is_some_and(|v| v != 1.0)
+        || f.value_offset.is_some_and(|v| v != 0.0)
+        || f.value_log10 == Some(true);
+    match &f.units {
+        Some(given) if given.trim() != units => notes.push(format!(
+            "field.units = \"{}\" but {} gives its values in `{}` (the variable's `units` attribute){}: the figures and the report say \"{}\"",
+            clip(given),
+            clip(path),
+            clip(units),
+            if transformed { ", before field.value_scale / value_offset / value_log10" } else { "" },
+            clip(given)
+        )),
+        Some(_) => {}
+        None if transformed => notes.push(format!(
+            "{} gives its values in `{}` (the variable's `units` attribute), but field.value_scale / value_offset / value_log10 change them: set field.units to the unit of the transformed values (the figures and the report show none)",
+            clip(path),
+            clip(units)
+        )),
+        None => f.units = Some(clip(units)),
     }
 }
 
@@ -445,7 +503,11 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
 /// A `grid` field: one frame (a [`GridField`]) or a time series (a [`GridSeries`]) from
 /// `field.path` (a 3-D `.npy` or a NetCDF with a time axis gives several frames) or
 /// `field.paths` (one frame per file). Paths are recorded back as absolute.
-fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue> {
+fn build_grid(
+    f: &mut FieldSection,
+    base_dir: &Path,
+    notes: &mut Vec<String>,
+) -> Result<FieldModel, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
@@ -458,6 +520,8 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
         GridFormatName::Geotiff => GridFormat::GeoTiff,
         GridFormatName::Netcdf => GridFormat::NetCdf,
     });
+    // (file, its values' units) of the files that give one.
+    let mut file_units: Vec<(String, String)> = Vec::new();
     let (raw, file_times) = match f.paths.clone() {
         Some(list) => {
             let mut frames = Vec::with_capacity(list.len());
@@ -476,6 +540,7 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
                         ),
                     ));
                 }
+                file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
                 frames.extend(s.frames);
                 abs.push(path.display().to_string());
             }
@@ -487,9 +552,11 @@ fn build_grid(f: &mut FieldSection, base_dir: &Path) -> Result<FieldModel, Issue
             let s = load_series(&path, format, f.variable.as_deref())
                 .map_err(|e| load_issue("field.path", "", e))?;
             f.path = Some(path.display().to_string());
+            file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
             (s.frames, s.frame_times_s)
         }
     };
+    adopt_file_units(f, &file_units, notes);
     let n = raw.len();
     let mut frames = Vec::with_capacity(n);
     for (k, g) in raw.into_iter().enumerate() {

@@ -33,7 +33,7 @@ pub use load::{
 };
 pub use schema::ScenarioFile;
 
-use field::{build_field, FieldModel, IsolineOracle};
+use field::{build_field_noting, FieldModel, IsolineOracle};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -45,6 +45,8 @@ pub struct Scenario {
     field: Arc<FieldModel>,
     vehicle: Arc<build::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
+    /// Warnings from the field's files ([`field::build_field_noting`]).
+    field_notes: Arc<Vec<String>>,
 }
 
 impl PartialEq for Scenario {
@@ -59,7 +61,9 @@ impl Scenario {
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
         let seed = file.sim.seed.unwrap_or(0);
-        let field = build_field(&mut file.field, base_dir, seed).map_err(|i| vec![i])?;
+        let mut notes = Vec::new();
+        let field =
+            build_field_noting(&mut file.field, base_dir, seed, &mut notes).map_err(|i| vec![i])?;
         field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         Ok(Self {
@@ -67,6 +71,7 @@ impl Scenario {
             field: Arc::new(field),
             vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
+            field_notes: Arc::new(notes),
         })
     }
 
@@ -96,13 +101,14 @@ impl Scenario {
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
-        let field = if file.field == self.file.field && !seeded {
-            self.field.clone()
+        let (field, field_notes) = if file.field == self.file.field && !seeded {
+            (self.field.clone(), self.field_notes.clone())
         } else {
             let seed = file.sim.seed.unwrap_or(0);
-            Arc::new(
-                build_field(&mut file.field, Path::new("."), seed).map_err(|i| located(vec![i]))?,
-            )
+            let mut notes = Vec::new();
+            let field = build_field_noting(&mut file.field, Path::new("."), seed, &mut notes)
+                .map_err(|i| located(vec![i]))?;
+            (Arc::new(field), Arc::new(notes))
         };
         field::check_start(&file, &field).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
@@ -123,6 +129,7 @@ impl Scenario {
             field,
             vehicle,
             isoline,
+            field_notes,
         })
     }
 
@@ -145,6 +152,7 @@ impl Scenario {
             field: self.field.clone(),
             vehicle: self.vehicle.clone(),
             isoline: self.isoline.clone(),
+            field_notes: self.field_notes.clone(),
         })
     }
 
@@ -178,6 +186,12 @@ impl Scenario {
     /// scenario).
     pub fn file(&self) -> &ScenarioFile {
         &self.file
+    }
+
+    /// Warnings the field's files give (a grid file's `units` against `field.units`): part of
+    /// [`check::warnings`], which `run` prints and `check` reports.
+    pub fn field_warnings(&self) -> &[String] {
+        &self.field_notes
     }
 
     /// The built-in default: the paper's Fig. 2(b) setting (what an empty file resolves to).

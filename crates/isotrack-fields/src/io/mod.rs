@@ -367,6 +367,9 @@ pub struct LoadedSeries {
     pub frame_times_s: Option<Vec<f64>>,
     /// What the file said about its coordinates.
     pub georeference: Georeference,
+    /// The unit of the values, when the file gives one (NetCDF's CF `units` attribute of the
+    /// data variable, as written: `"K"`, `"ug m-3"`); `None` for the other formats.
+    pub units: Option<String>,
 }
 
 /// The one frame of a series, or an error saying the file is a time series.
@@ -409,6 +412,7 @@ pub fn parse_series_bytes(
                 frames: vec![g.grid],
                 frame_times_s: None,
                 georeference: g.georeference,
+                units: None,
             })
         }
     }
@@ -564,6 +568,7 @@ pub fn load_series(
                 frames: vec![g.grid],
                 frame_times_s: None,
                 georeference: g.georeference,
+                units: None,
             })
         }
     }

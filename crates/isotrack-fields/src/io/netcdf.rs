@@ -11,6 +11,10 @@
 //! spaced; decreasing axes are flipped. The time coordinate's CF `units = "<unit> since <date>"`
 //! (seconds, minutes, hours or days) gives the frame times, in seconds after the first frame.
 //! `_FillValue` / `missing_value` become no-data; `scale_factor` / `add_offset` are applied.
+//! Projected coordinates in kilometres (`units = "km"`) are converted to metres; a coordinate
+//! in any other unit (`ft`, `degrees` on an axis that is not longitude or latitude), or a
+//! longitude paired with a length, is refused naming it. The data variable's `units` is
+//! returned ([`LoadedSeries::units`]): a scenario without `field.units` takes it.
 
 use super::{LoadError, LoadedSeries};
 use crate::georef::{lonlat_spacing_m, Georeference};
@@ -23,17 +27,29 @@ fn attr_str(v: &NcVariable, name: &str) -> Option<String> {
     v.attribute(name)?.value.as_string()
 }
 
-#[derive(PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Axis {
     Lon,
     Lat,
-    Metres,
+    /// A length: metres per unit of the coordinate (1 for `m`, 1000 for `km`).
+    Length(f64),
 }
 
-fn axis_kind(v: &NcVariable) -> Axis {
-    let units = attr_str(v, "units")
-        .unwrap_or_default()
-        .to_ascii_lowercase();
+/// Metres per unit of a coordinate's CF `units` (UDUNITS spellings of metres and kilometres;
+/// no `units` at all is read as metres, as projected files often leave it out). `None` for
+/// any other unit: such a coordinate is refused, never read as metres.
+fn metres_per_unit(units: &str) -> Option<f64> {
+    match units.trim().to_ascii_lowercase().as_str() {
+        "" | "m" | "metre" | "metres" | "meter" | "meters" => Some(1.0),
+        "km" | "kilometre" | "kilometres" | "kilometer" | "kilometers" => Some(1000.0),
+        _ => None,
+    }
+}
+
+/// What a coordinate variable measures, or why it cannot be used (its `units`).
+fn axis_kind(v: &NcVariable) -> Result<Axis, String> {
+    let raw_units = attr_str(v, "units").unwrap_or_default();
+    let units = raw_units.trim().to_ascii_lowercase();
     let std = attr_str(v, "standard_name")
         .unwrap_or_default()
         .to_ascii_lowercase();
@@ -44,17 +60,30 @@ fn axis_kind(v: &NcVariable) -> Axis {
         || name == "lon"
         || name == "longitude"
     {
-        Axis::Lon
+        Ok(Axis::Lon)
     } else if units.starts_with("degrees_north")
         || units == "degree_north"
         || std == "latitude"
         || name == "lat"
         || name == "latitude"
     {
-        Axis::Lat
+        Ok(Axis::Lat)
     } else {
-        Axis::Metres
+        metres_per_unit(&units).map(Axis::Length).ok_or_else(|| {
+            format!(
+                "coordinate `{}` has units `{}`: need metres (`m`), kilometres (`km`), or degrees_east / degrees_north for longitude / latitude",
+                v.name(),
+                isotrack_core::numtext::Escaped(raw_units.trim())
+            )
+        })
     }
+}
+
+/// The data variable's CF `units`, trimmed (`None` when absent or empty).
+fn data_units(v: &NcVariable) -> Option<String> {
+    attr_str(v, "units")
+        .map(|u| u.trim().to_string())
+        .filter(|u| !u.is_empty())
 }
 
 /// First value and step of a regular axis, or why not.
@@ -438,10 +467,32 @@ fn parse_file(
         (Georeference::None, Vec2::default(), [1.0, 1.0]);
     let (mut flip_y, mut flip_x) = (false, false);
     if let (Some((xs, xv)), Some((ys, yv))) = (xc, yc) {
+        let kx = axis_kind(xv).map_err(err)?;
+        let ky = axis_kind(yv).map_err(err)?;
+        let (lonlat, [fx, fy]) = match (kx, ky) {
+            (Axis::Lon, Axis::Lat) => (true, [1.0, 1.0]),
+            (Axis::Length(fx), Axis::Length(fy)) => (false, [fx, fy]),
+            _ => {
+                let what = |a: Axis| match a {
+                    Axis::Lon => "longitude",
+                    Axis::Lat => "latitude",
+                    Axis::Length(_) => "a length",
+                };
+                return Err(err(format!(
+                    "coordinates `{}` (x, the last dimension: {}) and `{}` (y: {}) do not make a grid: need longitude and latitude, in that order, or two lengths",
+                    xdim.name,
+                    what(kx),
+                    ydim.name,
+                    what(ky)
+                )));
+            }
+        };
         let (mut x0, mut dx) =
             regular(&xs).map_err(|m| err(format!("coordinate `{}`: {m}", xdim.name)))?;
         let (mut y0, mut dy) =
             regular(&ys).map_err(|m| err(format!("coordinate `{}`: {m}", ydim.name)))?;
+        // Kilometres to metres (an exact power of ten: metres stay as they were).
+        (x0, dx, y0, dy) = (x0 * fx, dx * fx, y0 * fy, dy * fy);
         if dy < 0.0 {
             flip_y = true;
             y0 += dy * (ny - 1) as f64;
@@ -452,7 +503,7 @@ fn parse_file(
             x0 += dx * (nx - 1) as f64;
             dx = -dx;
         }
-        if axis_kind(xv) == Axis::Lon && axis_kind(yv) == Axis::Lat {
+        if lonlat {
             let ref_lat = y0 + 0.5 * dy * (ny - 1) as f64;
             spacing = lonlat_spacing_m(dx, dy, ref_lat);
             georeference = Georeference::LonLat {
@@ -491,6 +542,7 @@ fn parse_file(
         frames,
         frame_times_s,
         georeference,
+        units: data_units(var),
     })
 }
 

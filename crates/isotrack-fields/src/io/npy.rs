@@ -297,5 +297,6 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
         frames,
         frame_times_s: None,
         georeference: Georeference::None,
+        units: None,
     })
 }

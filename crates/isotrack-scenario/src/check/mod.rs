@@ -1479,7 +1479,7 @@ fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
 /// is unstable. `run` prints them (and writes them to summary.json); `check` reports them.
 fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
     let f = s.file();
-    let mut w = vec![];
+    let mut w = s.field_warnings().to_vec();
     let noise = f.sensor.noise_std.unwrap_or(0.0);
     let rate = f.sensor.rate_hz.unwrap_or(100.0);
     if noise > 0.0

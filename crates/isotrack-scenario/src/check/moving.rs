@@ -20,6 +20,12 @@
 //!   eighth of the release interval.
 //!
 //! The vehicle can keep up when the isoline is slower than it everywhere sampled (`trackable`).
+//!
+//! Its budget is fixed, whatever the run's duration: [`TIMES`] times of [`SIDE`] x [`SIDE`]
+//! points, each with at most three values and a gradient. A puff plume's value at a late time
+//! costs no more than at an early one (issue 30: past its cached releases, 24 days at 2 Hz,
+//! `check --set sim.duration_s=4e6` once took minutes; `isotrack_fields::puff` now shares the
+//! live puffs' displacements across a lattice at one time).
 
 use super::speed_mps;
 use crate::field::FieldModel;
@@ -48,9 +54,10 @@ pub struct MovingReport {
     pub note: String,
 }
 
-/// Lattice side and sample times of the check.
-const SIDE: usize = 101;
-const TIMES: usize = 48;
+/// Lattice side of the check, points.
+pub const SIDE: usize = 101;
+/// Sample times of the check, spread over the run.
+pub const TIMES: usize = 48;
 
 /// How `dF/dt` is estimated for the scenario's field (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]

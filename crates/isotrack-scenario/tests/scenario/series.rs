@@ -456,3 +456,55 @@ fn a_bad_time_axis_in_a_file_is_the_files() {
     assert!(!e.contains("frame_times_s"), "{e}");
     assert!(e.contains("the time axis read from"), "{e}");
 }
+
+/// Issue 30: a NetCDF variable's CF `units` (the xarray fixtures' `v` is in `K`) becomes
+/// `field.units` when the scenario leaves it unset, recorded in the resolved scenario (so the
+/// run directory's plots and report show it); a `field.units` that says otherwise is kept and
+/// warned about naming both; a value transform leaves it unset, with a warning.
+#[test]
+fn a_netcdf_variables_units_are_the_fields_unless_the_scenario_says_otherwise() {
+    let dir =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../isotrack-fields/tests/fixtures/netcdf");
+    let sc = |extra: &str| {
+        parse_scenario_in(
+            &format!(
+                "[field]\nkind = \"grid\"\npath = \"netcdf4_nc4_xy_contig.nc\"\n{extra}\n\
+                 [initial]\nx_m = 502000.0\ny_m = 4604000.0\n[controller]\nlevel = 12.0\n"
+            ),
+            "<test>",
+            &[],
+            &dir,
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let warnings = |s: &isotrack_scenario::Scenario| isotrack_scenario::check::warnings(s);
+    let units_warning = |w: &[String]| w.iter().find(|l| l.contains("`K`")).cloned();
+
+    let s = sc("");
+    assert_eq!(s.file().field.units.as_deref(), Some("K"));
+    assert_eq!(units_warning(&warnings(&s)), None);
+    // Recorded: the resolved scenario (what a run directory keeps) says it.
+    let toml = toml::to_string(s.file()).unwrap();
+    assert!(toml.contains("units = \"K\""), "{toml}");
+    // Derived without touching the field: same units, no warning.
+    let d = s.derive(&["sim.duration_s=10.0".into()], "<set>").unwrap();
+    assert_eq!(d.file().field.units.as_deref(), Some("K"));
+    assert_eq!(units_warning(&warnings(&d)), None);
+
+    let s = sc("units = \"degC\"");
+    assert_eq!(s.file().field.units.as_deref(), Some("degC"));
+    let w = units_warning(&warnings(&s)).expect("a warning naming both units");
+    assert!(w.contains("field.units = \"degC\""), "{w}");
+    assert!(w.contains("netcdf4_nc4_xy_contig.nc"), "{w}");
+    // The same through a derived scenario.
+    let d = sc("")
+        .derive(&["field.units=\"ppm\"".into()], "<set>")
+        .unwrap();
+    let w = units_warning(&warnings(&d)).expect("a warning naming both units");
+    assert!(w.contains("field.units = \"ppm\""), "{w}");
+
+    let s = sc("value_offset = 0.5");
+    assert_eq!(s.file().field.units, None);
+    let w = units_warning(&warnings(&s)).expect("a warning about the transform");
+    assert!(w.contains("value_offset"), "{w}");
+}
