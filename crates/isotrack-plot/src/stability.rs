@@ -42,10 +42,10 @@ pub fn radius_colour(r: f64) -> RGBColor {
     }
 }
 
-/// Tick values for a log axis from `lo` to `hi`: the powers of ten within it (every `step`-th
-/// when there are many), with 2 and 5 times them when they leave room, and, on a range of less
-/// than a decade, 1 to 9 times them, or failing that the ends themselves: never fewer than 2
-/// ticks. `room` is the most labels the axis holds without overlap.
+/// Tick values for a log axis from `lo` to `hi`: on a range of less than a decade 1 to 9 times
+/// the powers of ten within it (2, 3, 4, 5 on 2 .. 5); otherwise the powers of ten (every
+/// `step`-th when there are many) with 2 and 5 times them when they leave room; failing all,
+/// the ends and their geometric middle: never fewer than 2 ticks. `room` is the most labels the axis holds without overlap.
 pub fn log_ticks(lo: f64, hi: f64, room: usize) -> Vec<f64> {
     let room = room.max(2);
     let inside = |v: &f64| *v >= lo * (1.0 - 1e-9) && *v <= hi * (1.0 + 1e-9);
@@ -56,11 +56,21 @@ pub fn log_ticks(lo: f64, hi: f64, room: usize) -> Vec<f64> {
             .filter(inside)
             .collect()
     };
-    for mults in [
-        &[1.0, 2.0, 5.0][..],
-        &[1.0][..],
-        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0][..],
-    ] {
+    let fine_first = hi / lo < 10.0;
+    let order: [&[f64]; 3] = if fine_first {
+        [
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+            &[1.0, 2.0, 5.0],
+            &[1.0],
+        ]
+    } else {
+        [
+            &[1.0, 2.0, 5.0],
+            &[1.0],
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+        ]
+    };
+    for mults in order {
         let t = with(mults);
         if t.len() >= 2 && t.len() <= room {
             return t;
