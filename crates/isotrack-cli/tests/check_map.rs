@@ -533,7 +533,7 @@ fn ctrl_c_during_verify_keeps_the_chart() {
     let d = tempfile::tempdir().unwrap();
     let out = d.path().join("o");
     let sc = scenario();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
         .args([
             "check",
             sc.as_str(),

@@ -125,7 +125,7 @@ impl LoopFamily {
             * self.setup.range[1].abs().max(1.0)
             * l.c1.abs().max(1.0)
             / l.c2.abs().min(1.0);
-        if !(gain <= MAX_LOOP_GAIN) {
+        if gain.is_nan() || gain > MAX_LOOP_GAIN {
             return Cell {
                 spectral_radius: None,
                 status: CellStatus::NotComputed,
@@ -410,7 +410,9 @@ pub enum Behaviour {
     /// the sensor's own error (noise, quantisation, bias, lag) and a moving or bending
     /// isoline give, or
     /// it shrank by at least [`DECAY_RATIO`] from the first half; and the vehicle is neither
-    /// spinning nor dithering ([`spin_turn_rate_radps`]).
+    /// spinning nor dithering (mean `|omega|` below [`spin_turn_rate_radps`], or below the turn
+    /// rate the reading's own error drives through the law, `kp (c1 R/T + R/c2)` with `R` the
+    /// reading error's range from the sensor's settings, when that is larger).
     Converged,
     /// Completed but not converged: a sustained or growing oscillation, a spin or a dither.
     LimitCycle,
@@ -442,9 +444,9 @@ impl Behaviour {
 /// shrinks by 0.86 over a 60 s half; a sustained oscillation keeps its range, ratio ~1).
 pub const DECAY_RATIO: f64 = 0.9;
 
-/// The sensor's own error (reading minus the true value: noise, quantisation, bias, lag and
-/// delay) widens the settled error's range by up to about as much as its own range: a settled
-/// run's error range may be this many times the reading error's range.
+/// The sensor's own error (noise, quantisation, bias drift) widens the settled error's range by
+/// up to about as much as its own range: a settled run's error range may be this many times
+/// the reading error's range (`8 noise_std + resolution + 4 bias_drift sqrt(window)`).
 pub const SENSOR_FLOOR_FACTOR: f64 = 2.0;
 
 /// A spectral radius within this of 1 is "near the boundary" (`near_boundary`): there the
@@ -471,14 +473,12 @@ pub fn spin_turn_rate_radps(limit_radps: Option<f64>, period_s: f64, v_kappa_rad
     w
 }
 
-/// The steady-state window's two halves: error ranges, the reading error's range, turn rate.
+/// The steady-state window's two halves: error ranges, turn rate.
 struct Window {
     from_s: f64,
     mid_s: f64,
     /// `[lo, hi]` of the error in the first and the second half.
     halves: [[f64; 2]; 2],
-    /// `[lo, hi]` of the reading minus the true value in the second half.
-    reading: [f64; 2],
     turn_sum: f64,
     rows: u64,
 }
@@ -493,11 +493,6 @@ impl TraceSink for Window {
         r[0] = r[0].min(row.error);
         r[1] = r[1].max(row.error);
         if h == 1 {
-            if let Some(m) = row.s_measured {
-                let d = m - row.s;
-                self.reading[0] = self.reading[0].min(d);
-                self.reading[1] = self.reading[1].max(d);
-            }
             self.turn_sum += row.omega_radps.abs();
             self.rows += 1;
         }
@@ -616,7 +611,6 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         from_s,
         mid_s: 0.5 * (from_s + duration),
         halves: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
-        reading: [f64::INFINITY, f64::NEG_INFINITY],
         turn_sum: 0.0,
         rows: 0,
     };
@@ -645,7 +639,16 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     // error tracking the motion leaves, by the scenario's own measure), and rounding.
     let c2 = file.controller.c2.unwrap_or(1.0);
     let level = file.controller.level.unwrap_or(0.0);
-    let sensor_floor = SENSOR_FLOOR_FACTOR * range(w.reading).unwrap_or(0.0);
+    // The reading error's range from the sensor's own settings (not from the trace: the held
+    // reading lags the true value by the motion over a period, which on an oscillating run is
+    // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
+    // resolution, and 4 sqrt(window) times the bias drift.
+    let sn = &file.sensor;
+    let window_s = duration - from_s;
+    let rr = 8.0 * sn.noise_std.unwrap_or(0.0)
+        + sn.resolution.unwrap_or(0.0)
+        + 4.0 * sn.bias_drift_per_sqrt_s.unwrap_or(0.0) * window_s.max(0.0).sqrt();
+    let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
     let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
     // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
     // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
@@ -658,11 +661,16 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     let floor = sensor_floor
         .max(motion_floor)
         .max(1e-9 * level.abs().max(c2));
+    // The turn rate the reading's own error drives through the law (a noisy sensor makes a
+    // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
+    let c1 = file.controller.c1.unwrap_or(0.0);
+    let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
     let spin = spin_turn_rate_radps(
         s.max_turn_rate_radps(),
         1.0 / rate_hz,
         lp.speed_mps * lp.curvature_per_m.abs(),
-    );
+    )
+    .max(noise_turn);
     let settled = match (first, second) {
         (_, Some(b)) if b <= floor => true,
         (Some(a), Some(b)) => b <= DECAY_RATIO * a,

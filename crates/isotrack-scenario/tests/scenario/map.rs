@@ -217,7 +217,6 @@ fn verify_agrees_with_the_chart() {
         kp_points: 11,
         rate_points: 6,
     };
-    let map = StabilityMap::compute(&f, grid);
     let points: Vec<_> = verify_points(&grid, 0.01, 24, 0)
         .into_iter()
         .map(|(k, r)| verify_point(&f, k, r))
