@@ -8,7 +8,7 @@ use crate::run::Failure;
 use isotrack_core::numtext::Echo;
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
-    StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS,
+    StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS, NEAR_BOUNDARY_MARGIN,
 };
 use isotrack_scenario::load::clip;
 use isotrack_scenario::Scenario;
@@ -17,7 +17,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// The columns of `stability_map.csv`.
-pub const MAP_COLUMNS: [&str; 8] = [
+pub const MAP_COLUMNS: [&str; 9] = [
     "kp",
     "sensor_rate_hz",
     "sensor_period_s",
@@ -26,6 +26,7 @@ pub const MAP_COLUMNS: [&str; 8] = [
     "status",
     "slope_min",
     "slope_max",
+    "note",
 ];
 
 /// The columns of `verify.csv`.
@@ -81,6 +82,11 @@ pub struct MapOptions {
 /// The map options checked before the scenario is loaded: `--map` needs `--out`, the options
 /// of the chart need `--map`, the values parse.
 pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
+    if args.threads == Some(0) {
+        return Err(usage(
+            "--threads 0: at least 1 worker thread (leave --threads out for all cores)".into(),
+        ));
+    }
     if !args.map {
         for (given, flag) in [
             (args.out.is_some(), "--out"),
@@ -119,9 +125,15 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
                     clip(t)
                 ))
             };
-            let (a, b) = t.split_once(['x', 'X']).ok_or_else(bad)?;
-            let n: usize = a.trim().parse().map_err(|_| bad())?;
-            let m: usize = b.trim().parse().map_err(|_| bad())?;
+            // Exactly NxM: decimal digits, a lower-case `x`, decimal digits (no sign, space or
+            // `X`: a hostile review's `3X4` and `+3x4` were accepted silently).
+            let (a, b) = t.split_once('x').ok_or_else(bad)?;
+            let digits = |x: &str| !x.is_empty() && x.bytes().all(|c| c.is_ascii_digit());
+            if !(digits(a) && digits(b)) {
+                return Err(bad());
+            }
+            let n: usize = a.parse().map_err(|_| bad())?;
+            let m: usize = b.parse().map_err(|_| bad())?;
             Some((n, m))
         }
     };
@@ -156,6 +168,24 @@ pub struct MapReport {
     pub cells_not_computed: usize,
     /// `--verify`'s agreement (null without `--verify`).
     pub verify: Option<Agreement>,
+    /// The runs that disagree with the chart away from its boundary (spectral radius further
+    /// than `NEAR_BOUNDARY_MARGIN` from 1), each named.
+    pub disagreements_far: Vec<FarDisagreement>,
+}
+
+/// A `--verify` run that disagrees with the chart away from its boundary.
+#[derive(Debug, Serialize)]
+pub struct FarDisagreement {
+    /// The run's row in `verify.csv`.
+    pub run: usize,
+    /// `kp`.
+    pub kp: f64,
+    /// Sensor rate, Hz.
+    pub sensor_rate_hz: f64,
+    /// The chart's radius there (null when infinite).
+    pub spectral_radius: Option<f64>,
+    /// What the run did.
+    pub outcome: &'static str,
 }
 
 /// The output paths in `dir`; refuses a path that exists and is not a regular file (a FIFO
@@ -190,6 +220,7 @@ fn cell_row(map: &StabilityMap, idx: usize) -> Vec<String> {
         c.status.as_str().to_string(),
         num(c.slope_range[0]),
         num(c.slope_range[1]),
+        c.note.unwrap_or_default().to_string(),
     ]
 }
 
@@ -285,14 +316,24 @@ pub fn write_map(
         message: format!("cannot write {}: {e}", what.display()),
     };
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
+    // One writer per directory, as `sweep`, `merge` and `benchmark`: a second `check --map`
+    // on DIR exits 73 instead of interleaving its files with this one's. Held to the end.
+    let _lock = crate::sweep::lock_output_dir(dir)?;
     let input = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
     let csv_path = output_path(dir, "stability_map.csv", &input)?;
     let png_path = output_path(dir, "stability_map.png", &input)?;
     let svg_path = output_path(dir, "stability_map.svg", &input)?;
-    let verify_path = match args.verify {
-        Some(_) => Some(output_path(dir, "verify.csv", &input)?),
-        None => None,
-    };
+    // `verify.csv` belongs to the chart it was made with: an earlier run's is removed before
+    // anything is written (without --verify it would sit beside a chart it does not describe;
+    // with --verify and an interruption, beside a chart it was not made for).
+    let verify_path = output_path(dir, "verify.csv", &input)?;
+    if verify_path.exists() {
+        std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;
+        errln!(
+            "note: removed {} from an earlier check --map (it described another chart)",
+            verify_path.display()
+        );
+    }
     let pool = crate::sweep::worker_pool(args.threads)?;
     // Each cell is a pure function of its point: the same bits on any thread count.
     let points = StabilityMap::points(&grid);
@@ -303,17 +344,16 @@ pub fn write_map(
             .collect::<Vec<_>>()
     });
     let map = StabilityMap::from_cells(&family, grid, cells);
-    let verified: Vec<VerifyPoint> = match args.verify {
-        Some(n) => {
-            let seed = scenario.file().sim.seed.unwrap_or(0);
-            let at = verify_points(&grid, family.dt_s(), n, seed);
-            pool.install(|| {
-                at.par_iter()
-                    .map(|&(k, r)| verify_point(&family, &map, k, r))
-                    .collect()
-            })
+    // The chart is written before any verification run starts: an interrupted --verify keeps
+    // it (the figure without the runs' marks).
+    let draw = |verified: &[VerifyPoint]| -> Result<Vec<String>, Failure> {
+        let mut files = vec![];
+        for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
+            isotrack_plot::stability_map_figure(&map, verified, path, style)
+                .map_err(|e| cant(path, e.to_string()))?;
+            files.push(path.display().to_string());
         }
-        None => vec![],
+        Ok(files)
     };
     write_csv(
         &csv_path,
@@ -321,22 +361,60 @@ pub fn write_map(
         (0..map.cells.len()).map(|i| cell_row(&map, i)),
     )?;
     let mut files = vec![csv_path.display().to_string()];
-    for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
-        isotrack_plot::stability_map_figure(&map, &verified, path, style)
-            .map_err(|e| cant(path, e.to_string()))?;
-        files.push(path.display().to_string());
-    }
-    let verify = match &verify_path {
-        Some(p) => {
+    files.extend(draw(&[])?);
+    let verify = match args.verify {
+        Some(n) => {
+            let seed = scenario.file().sim.seed.unwrap_or(0);
+            let at = verify_points(&grid, family.dt_s(), n, seed);
+            // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; what is
+            // written stays, and the command exits 130 saying so.
+            let stop = isotrack_mavlink::interrupt_flag();
+            let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
+            let verified: Vec<Option<VerifyPoint>> = pool.install(|| {
+                at.par_iter()
+                    .map(|&(k, r)| (!stopped()).then(|| verify_point(&family, k, r)))
+                    .collect()
+            });
+            if stopped() || verified.iter().any(Option::is_none) {
+                return Err(Failure {
+                    code: crate::sweep::INTERRUPTED,
+                    message: format!(
+                        "interrupted during --verify: the chart is written ({}); the verification runs are not (no verify.csv)",
+                        files.join(", ")
+                    ),
+                });
+            }
+            let verified: Vec<VerifyPoint> = verified.into_iter().flatten().collect();
+            files = vec![csv_path.display().to_string()];
+            files.extend(draw(&verified)?);
             write_csv(
-                p,
+                &verify_path,
                 &VERIFY_COLUMNS,
                 verified.iter().enumerate().map(|(k, v)| verify_row(k, v)),
             )?;
-            files.push(p.display().to_string());
-            Some(agreement(&verified))
+            files.push(verify_path.display().to_string());
+            let a = agreement(&verified);
+            Some((a, verified))
         }
         None => None,
+    };
+    let (verify, far) = match verify {
+        Some((a, v)) => {
+            let far = v
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.agrees == Some(false) && !p.near_boundary)
+                .map(|(k, p)| FarDisagreement {
+                    run: k,
+                    kp: p.kp,
+                    sensor_rate_hz: p.rate_hz,
+                    spectral_radius: p.cell.spectral_radius,
+                    outcome: p.behaviour.as_str(),
+                })
+                .collect();
+            (Some(a), far)
+        }
+        None => (None, vec![]),
     };
     let count = |st: isotrack_scenario::check::map::CellStatus| {
         map.cells.iter().filter(|c| c.status == st).count()
@@ -351,20 +429,22 @@ pub fn write_map(
         cells_no_equilibrium: count(S::NoEquilibrium),
         cells_not_computed: count(S::NotComputed),
         verify,
+        disagreements_far: far,
     })
 }
 
-/// The lines `check --map` prints after the report.
+/// The lines `check --map` prints after the report (the user's numbers echoed as written:
+/// [`Echo`], never a 309-digit expansion of `1e308`).
 pub fn print_report(m: &MapReport) {
     let g = &m.grid;
     outln!(
         "Stability chart: {} x {} points, kp {} .. {}, sensor rate {} .. {} Hz, radius on {}: {} stable, {} unstable, {} without equilibrium, {} not computed",
         g.kp_points,
         g.rate_points,
-        g.kp_range[0],
-        g.kp_range[1],
-        g.rate_range_hz[0],
-        g.rate_range_hz[1],
+        Echo(g.kp_range[0]),
+        Echo(g.kp_range[1]),
+        Echo(g.rate_range_hz[0]),
+        Echo(g.rate_range_hz[1]),
         m.slope_basis,
         m.cells_stable,
         m.cells_unstable,
@@ -373,14 +453,26 @@ pub fn print_report(m: &MapReport) {
     );
     if let Some(a) = &m.verify {
         outln!(
-            "  verify: {} runs compared, {} agree ({}); disagreements within one grid cell of the boundary {}, further {}; not compared {}",
+            "  verify: {} runs compared, {} agree ({}); disagreements at spectral radius within {} of 1: {}, further: {}; left the field (not compared): {}; not compared in all: {}",
             a.compared,
             a.agree,
             a.percent.map_or_else(|| "n/a".into(), |p| format!("{p:.1} %")),
+            NEAR_BOUNDARY_MARGIN,
             a.disagreements_near_boundary,
             a.disagreements_far,
+            a.left_field,
             a.not_compared
         );
+        for d in &m.disagreements_far {
+            outln!(
+                "    far from the boundary: run {} at kp {}, {} Hz, spectral radius {}: {}",
+                d.run,
+                num(d.kp),
+                num(d.sensor_rate_hz),
+                d.spectral_radius.map_or_else(|| "n/a".into(), num),
+                d.outcome
+            );
+        }
     }
     outln!("  wrote {}", m.files.join(", "));
 }

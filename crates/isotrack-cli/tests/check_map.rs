@@ -7,7 +7,7 @@ use common::{assert_fails, isotrack, isotrack_within, stderr};
 use std::collections::BTreeSet;
 use std::path::Path;
 
-const MAP_COLUMNS: [&str; 8] = [
+const MAP_COLUMNS: [&str; 9] = [
     "kp",
     "sensor_rate_hz",
     "sensor_period_s",
@@ -16,6 +16,7 @@ const MAP_COLUMNS: [&str; 8] = [
     "status",
     "slope_min",
     "slope_max",
+    "note",
 ];
 
 const VERIFY_COLUMNS: [&str; 11] = [
@@ -195,7 +196,14 @@ fn verify_writes_its_runs_and_is_the_same_on_any_thread_count() {
     let mut agree = 0;
     for (k, r) in rows.iter().enumerate() {
         assert_eq!(r[0], k.to_string());
-        assert!(["converged", "limit_cycle", "diverged", "invalid"].contains(&r[5].as_str()));
+        assert!([
+            "converged",
+            "limit_cycle",
+            "diverged",
+            "left_field",
+            "invalid"
+        ]
+        .contains(&r[5].as_str()));
         assert!(["stable", "unstable", "no_equilibrium", "not_computed"].contains(&r[4].as_str()));
         agree += usize::from(r[6] == "true");
     }
@@ -290,6 +298,27 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
             vec!["--map", "--out", out, "--map-size", "7by5"],
             64,
             "--map-size",
+        ),
+        // A hostile review: accepted silently. Exactly NxM, decimal digits and a lower-case x.
+        (
+            vec!["--map", "--out", out, "--map-size", "3X4"],
+            64,
+            "--map-size",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "+3x4"],
+            64,
+            "--map-size",
+        ),
+        (
+            vec!["--map", "--out", out, "--map-size", "3x 4"],
+            64,
+            "--map-size",
+        ),
+        (
+            vec!["--map", "--out", out, "--threads", "0"],
+            64,
+            "--threads",
         ),
         (vec!["--map", "--out", out, "--verify", "0"], 64, "--verify"),
         (
@@ -395,4 +424,153 @@ fn the_chart_never_overwrites_the_fields_data_file() {
         before,
         "the grid is untouched"
     );
+}
+
+fn map_args<'a>(out: &'a str, sc: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut v = vec![
+        "check",
+        sc,
+        "--set",
+        "controller.ki=0",
+        "--set",
+        "sim.duration_s=100",
+        "--map",
+        "--out",
+        out,
+        "--kp-range",
+        "0.3:30",
+        "--rate-range",
+        "1:10",
+        "--map-size",
+        "5x3",
+    ];
+    v.extend_from_slice(extra);
+    v
+}
+
+/// A hostile review: `verify.csv` from an earlier `--verify` stayed beside a chart made
+/// without it (a reader mixes them). It is removed, with a note.
+#[test]
+fn a_stale_verify_csv_is_removed() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let (o, sc) = (out.to_str().unwrap(), scenario());
+    let r = isotrack(&map_args(o, &sc, &["--verify", "2"]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert!(out.join("verify.csv").exists());
+    let r = isotrack(&map_args(o, &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert!(
+        !out.join("verify.csv").exists(),
+        "a stale verify.csv stayed"
+    );
+    assert!(stderr(&r).contains("removed"), "{}", stderr(&r));
+    assert!(out.join("stability_map.csv").exists());
+}
+
+/// One writer per directory: while another holds `DIR/.isotrack.lock` (as `sweep` does),
+/// `check --map --out DIR` exits 73 and writes nothing.
+#[test]
+fn a_locked_output_directory_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    std::fs::create_dir_all(&out).unwrap();
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(out.join(".isotrack.lock"))
+        .unwrap();
+    lock.try_lock().unwrap();
+    let sc = scenario();
+    let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
+    assert_fails(&r, 73, &["lock"]);
+    assert!(!out.join("stability_map.csv").exists());
+    drop(lock);
+    let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+}
+
+/// A hostile review: `--kp-range 1:1e308` printed a 309-digit number. The user's numbers are
+/// echoed as written, and the cells past the float range are "not computed", with a note, not
+/// "no equilibrium".
+#[test]
+fn huge_ranges_are_echoed_as_written_and_not_called_no_equilibrium() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let sc = scenario();
+    let r = isotrack(&[
+        "check",
+        sc.as_str(),
+        "--set",
+        "controller.ki=0",
+        "--map",
+        "--out",
+        out.to_str().unwrap(),
+        "--kp-range",
+        "1:1e308",
+        "--map-size",
+        "3x2",
+    ]);
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    let text = String::from_utf8_lossy(&r.stdout).to_string();
+    assert!(text.contains("kp 1 .. 1e308"), "{text}");
+    assert!(!text.contains("0000000000"), "{text}");
+    let (_, rows) = read_csv(&out.join("stability_map.csv"));
+    let top: Vec<_> = rows.iter().filter(|r| r[0] == "1e308").collect();
+    assert_eq!(top.len(), 2);
+    for r in top {
+        assert_eq!(r[5], "not_computed", "{r:?}");
+        assert!(r[8].contains("overflow"), "{r:?}");
+    }
+}
+
+/// Ctrl-C during `--verify` keeps the chart, written before the runs start, says so and exits
+/// 130 (128 + SIGINT); no `verify.csv` is left (it would describe runs that did not all run).
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_verify_keeps_the_chart() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let sc = scenario();
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "check",
+            sc.as_str(),
+            "--set",
+            "sim.duration_s=20000",
+            "--map",
+            "--out",
+            out.to_str().unwrap(),
+            "--map-size",
+            "5x3",
+            "--verify",
+            "60",
+            "--threads",
+            "1",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let png = out.join("stability_map.png");
+    let svg = out.join("stability_map.svg");
+    for _ in 0..1200 {
+        if svg.exists() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(svg.exists(), "the chart is written before the runs");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+    assert!(png.exists() && out.join("stability_map.csv").exists());
+    assert!(!out.join("verify.csv").exists());
 }

@@ -22,6 +22,87 @@ fn log_tick(v: f64) -> String {
     tick_label(v, v.abs() / 10.0)
 }
 
+/// The chart's diverging colour for radius `r` (clipped to `[0, TOP]`): blue below 1 (dark at
+/// 0, light just below 1), red from 1 up (light just above 1, dark at 2 or more), so stable and
+/// unstable never share a colour (ColorBrewer RdBu's ends and its light steps).
+pub fn radius_colour(r: f64) -> RGBColor {
+    let lerp = |a: (u8, u8, u8), b: (u8, u8, u8), t: f64| {
+        let t = t.clamp(0.0, 1.0);
+        let m = |x: u8, y: u8| (f64::from(x) + t * (f64::from(y) - f64::from(x))).round() as u8;
+        RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
+    };
+    if r < 1.0 {
+        lerp((33, 102, 172), (209, 229, 240), r.max(0.0))
+    } else {
+        lerp(
+            (253, 219, 199),
+            (178, 24, 43),
+            (r.min(TOP) - 1.0) / (TOP - 1.0),
+        )
+    }
+}
+
+/// Tick values for a log axis from `lo` to `hi`: on a range of less than a decade 1 to 9 times
+/// the powers of ten within it (2, 3, 4, 5 on 2 .. 5); otherwise the powers of ten (every
+/// `step`-th when there are many) with 2 and 5 times them when they leave room; failing all,
+/// the ends and their geometric middle: never fewer than 2 ticks. `room` is the most labels the axis holds without overlap.
+pub fn log_ticks(lo: f64, hi: f64, room: usize) -> Vec<f64> {
+    let room = room.max(2);
+    let inside = |v: &f64| *v >= lo * (1.0 - 1e-9) && *v <= hi * (1.0 + 1e-9);
+    let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let with = |mults: &[f64]| -> Vec<f64> {
+        (e0..=e1)
+            .flat_map(|e| mults.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(inside)
+            .collect()
+    };
+    let fine_first = hi / lo < 10.0;
+    let order: [&[f64]; 3] = if fine_first {
+        [
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+            &[1.0, 2.0, 5.0],
+            &[1.0],
+        ]
+    } else {
+        [
+            &[1.0, 2.0, 5.0],
+            &[1.0],
+            &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+        ]
+    };
+    for mults in order {
+        let t = with(mults);
+        if t.len() >= 2 && t.len() <= room {
+            return t;
+        }
+    }
+    let decades = with(&[1.0]);
+    if decades.len() > room {
+        let step = decades.len().div_ceil(room);
+        return decades.into_iter().step_by(step).collect();
+    }
+    let fine = with(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+    if fine.len() >= 2 {
+        let step = fine.len().div_ceil(room);
+        return fine.into_iter().step_by(step).collect();
+    }
+    // Less than one step of 1..9 x 10^k: the ends and the geometric middle.
+    vec![lo, (lo * hi).sqrt(), hi]
+}
+
+/// A tick's label with the digits its neighbours need to differ.
+fn tick_text(v: f64, ticks: &[f64]) -> String {
+    let gap = ticks
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .fold(f64::INFINITY, f64::min);
+    if gap.is_finite() {
+        tick_label(v, gap.min(v.abs() / 10.0))
+    } else {
+        log_tick(v)
+    }
+}
+
 /// Segments of the level `rho = 1` by marching squares on the grid in `(ln kp, ln rate)`,
 /// linear interpolation along each edge; squares with a corner not computed are left out.
 /// Returns pairs of `(kp, rate)` points.
@@ -65,33 +146,6 @@ pub fn boundary_segments(map: &StabilityMap) -> Vec<[(f64, f64); 2]> {
     out
 }
 
-/// The corner of the chart with the fewest verification points and boundary points in its
-/// third of each axis (in `ln kp`, `ln rate`): where the legend hides the least.
-fn legend_corner(map: &StabilityMap, verify: &[VerifyPoint]) -> SeriesLabelPosition {
-    let [k0, k1] = map.grid.kp_range;
-    let [r0, r1] = map.grid.rate_range_hz;
-    let unit = |x: f64, lo: f64, hi: f64| (x / lo).ln() / (hi / lo).ln();
-    let mut pts: Vec<(f64, f64)> = verify.iter().map(|p| (p.kp, p.rate_hz)).collect();
-    pts.extend(boundary_segments(map).into_iter().flatten());
-    let count = |right: bool, top: bool| {
-        pts.iter()
-            .filter(|&&(k, r)| {
-                let (u, v) = (unit(k, k0, k1), unit(r, r0, r1));
-                (if right { u > 0.55 } else { u < 0.45 }) && (if top { v > 0.65 } else { v < 0.35 })
-            })
-            .count()
-    };
-    [
-        (SeriesLabelPosition::UpperRight, count(true, true)),
-        (SeriesLabelPosition::UpperLeft, count(false, true)),
-        (SeriesLabelPosition::LowerRight, count(true, false)),
-        (SeriesLabelPosition::LowerLeft, count(false, false)),
-    ]
-    .into_iter()
-    .min_by_key(|c| c.1)
-    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
-}
-
 /// Draws the chart (`verify`: the `--verify` points, possibly none) into `path`.
 pub fn stability_map_figure(
     map: &StabilityMap,
@@ -119,6 +173,19 @@ pub fn stability_map_figure(
     }
 }
 
+/// One legend entry's marker (drawn below the plot, never over the data).
+#[derive(Clone, Copy)]
+enum Key {
+    Line,
+    Converged,
+    LimitCycle,
+    Diverged,
+    LeftField,
+    Disagrees,
+    NotCompared,
+    Scenario,
+}
+
 fn chart<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     map: &StabilityMap,
@@ -133,43 +200,125 @@ fn chart<DB: DrawingBackend>(
     let title = st.title(default_title);
     let chars = title.chars().count() as f64;
     let title_rel = (1.4 * (w as f64 / (0.62 * f)) / chars.max(1.0)).clamp(0.7, 1.4);
+    let [k0, k1] = map.grid.kp_range;
+    let [r0, r1] = map.grid.rate_range_hz;
+    let (kp, rate) = map.scenario_point;
+    let outside = !(k0..=k1).contains(&kp) || !(r0..=r1).contains(&rate);
+    // The legend's entries (only those on the chart), drawn in rows below the plot.
+    let red = RGBColor(214, 39, 40);
+    let grey = RGBColor(150, 150, 150);
+    let orange = RGBColor(255, 127, 14);
+    let any = |b: Behaviour| verify.iter().any(|p| p.behaviour == b);
+    let mut keys: Vec<(Key, String)> = vec![(Key::Line, "spectral radius 1 (the boundary)".into())];
+    for (b, k, label) in [
+        (Behaviour::Converged, Key::Converged, "run converged"),
+        (
+            Behaviour::LimitCycle,
+            Key::LimitCycle,
+            "run in a limit cycle",
+        ),
+        (Behaviour::Diverged, Key::Diverged, "run diverged"),
+        (
+            Behaviour::LeftField,
+            Key::LeftField,
+            "run left the field (not compared)",
+        ),
+    ] {
+        if any(b) {
+            keys.push((k, label.into()));
+        }
+    }
+    if verify.iter().any(|p| p.agrees == Some(false)) {
+        keys.push((
+            Key::Disagrees,
+            "red: the run disagrees with the chart".into(),
+        ));
+    }
+    if verify.iter().any(|p| {
+        p.agrees.is_none() && !matches!(p.behaviour, Behaviour::Invalid | Behaviour::LeftField)
+    }) {
+        keys.push((
+            Key::NotCompared,
+            "grey: not compared (cell not computed)".into(),
+        ));
+    }
+    keys.push((
+        Key::Scenario,
+        format!(
+            "scenario: kp = {}, {} Hz{}",
+            value_label(kp),
+            value_label(rate),
+            if outside {
+                " (outside the chart: arrow at the edge)"
+            } else {
+                ""
+            }
+        ),
+    ));
     // The caption below the plot: what the chart shows (which slopes) and the fixed gains.
-    let caption = [
+    let mut caption = vec![
         format!("radius on {}", map.slope_basis),
         format!(
-            "ki = {}, c1 = {}, c2 = {}, delay {} s; black: radius 1; grey hatch: not computed",
+            "ki = {}, c1 = {}, c2 = {}, delay {} s; blue: stable (radius < 1), red: unstable; grey hatch: not computed",
             value_label(ki),
             value_label(c1),
             value_label(c2),
             value_label(map.delay_s)
         ),
     ];
-    let foot = (2.0 * 1.25 * 0.85 * f + 0.6 * f) as u32;
+    if outside {
+        caption.push(format!(
+            "the scenario's point (kp = {}, {} Hz) lies outside the chart's ranges: the arrow at the edge points towards it",
+            value_label(kp),
+            value_label(rate)
+        ));
+    }
+    let line_h = 1.25 * 0.85 * f;
+    let per_row = 3usize;
+    let key_rows = keys.len().div_ceil(per_row);
+    let foot = ((caption.len() + key_rows) as f64 * line_h + 1.2 * f) as u32;
     let (body, footer) = root.split_vertically(h - foot);
-    let bar_w = (7.5 * f) as u32;
+    let bar_w = (9.5 * f) as u32;
     let (left, right) = body.split_horizontally(w.saturating_sub(bar_w));
-    let [k0, k1] = map.grid.kp_range;
-    let [r0, r1] = map.grid.rate_range_hz;
+    // Axes a little wider than the grid (3 % of each log span a side): markers at the grid's
+    // edge are drawn whole.
+    let pad = |lo: f64, hi: f64| {
+        let e = (hi / lo).powf(0.03);
+        (lo / e, hi * e)
+    };
+    let (xk0, xk1) = pad(k0, k1);
+    let (yr0, yr1) = pad(r0, r1);
+    let (lw, _) = left.dim_in_pixel();
+    let xroom = ((lw as f64 - 6.0 * f) / (4.5 * f)).floor().max(2.0) as usize;
+    let yroom = 9;
+    let xt = log_ticks(k0, k1, xroom);
+    let yt = log_ticks(r0, r1, yroom);
     let mut ch = ChartBuilder::on(&left)
         .margin(f as u32)
         .margin_right((1.5 * f) as u32)
         .caption(title, st.font(title_rel))
         .x_label_area_size((3.2 * f) as u32)
         .y_label_area_size((4.8 * f) as u32)
-        .build_cartesian_2d((k0..k1).log_scale(), (r0..r1).log_scale())
+        .build_cartesian_2d(
+            (xk0..xk1).log_scale().with_key_points(xt.clone()),
+            (yr0..yr1).log_scale().with_key_points(yt.clone()),
+        )
         .map_err(s)?;
     ch.configure_mesh()
         .disable_mesh()
         .x_desc("kp (log scale)")
         .y_desc("sensor rate, Hz (log scale)")
-        .x_label_formatter(&|v| log_tick(*v))
-        .y_label_formatter(&|v| log_tick(*v))
+        .x_label_formatter(&|v| tick_text(*v, &xt))
+        .y_label_formatter(&|v| tick_text(*v, &yt))
         .label_style(st.font(0.95))
         .axis_desc_style(st.font(1.0))
         .draw()
         .map_err(s)?;
-    // The cells as one image: each pixel takes the nearest grid point in (ln kp, ln rate).
-    let (pw, ph) = ch.plotting_area().dim_in_pixel();
+    // The cells as one image over the grid's extent: each pixel takes the nearest grid point
+    // in (ln kp, ln rate).
+    let (px0, py0) = ch.backend_coord(&(k0, r1));
+    let (px1, py1) = ch.backend_coord(&(k1, r0));
+    let (pw, ph) = ((px1 - px0).max(1) as u32, (py1 - py0).max(1) as u32);
     let (nk, nr) = (map.kps.len(), map.rates_hz.len());
     let mut buf = vec![255u8; (pw * ph * 3) as usize];
     for py in 0..ph {
@@ -187,10 +336,8 @@ fn chart<DB: DrawingBackend>(
                         RGBColor(225, 225, 225)
                     }
                 }
-                CellStatus::NoEquilibrium => st.colormap.colour(TOP, 0.0, TOP),
-                _ => st
-                    .colormap
-                    .colour(c.spectral_radius.unwrap_or(TOP).min(TOP), 0.0, TOP),
+                CellStatus::NoEquilibrium => radius_colour(TOP),
+                _ => radius_colour(c.spectral_radius.unwrap_or(TOP)),
             };
             let o = ((py * pw + px) * 3) as usize;
             buf[o..o + 3].copy_from_slice(&[rgb.0, rgb.1, rgb.2]);
@@ -205,103 +352,90 @@ fn chart<DB: DrawingBackend>(
             .into_iter()
             .map(|[a, b]| PathElement::new(vec![a, b], BLACK.stroke_width(bold))),
     )
-    .map_err(s)?
-    .label("spectral radius 1 (the boundary)")
-    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(bold)));
+    .map_err(s)?;
     // The verification runs: shape by behaviour, white where the chart agrees, red where not.
     let r = st.px(5.0);
-    let red = RGBColor(214, 39, 40);
-    let grey = RGBColor(150, 150, 150);
-    // Red: the run disagrees with the chart; grey: not compared (not computed there).
     let mark = |p: &VerifyPoint, agree: RGBColor| match p.agrees {
         Some(false) => red,
         None => grey,
         Some(true) => agree,
     };
-    let fill = |p: &VerifyPoint| mark(p, WHITE);
     let shown = |b: Behaviour| verify.iter().filter(move |p| p.behaviour == b);
     let edge = st.px(1.5);
-    if verify.iter().any(|p| p.behaviour == Behaviour::Converged) {
-        ch.draw_series(shown(Behaviour::Converged).flat_map(|p| {
-            [
-                Circle::new((p.kp, p.rate_hz), r, fill(p).filled()),
-                Circle::new((p.kp, p.rate_hz), r, BLACK.stroke_width(edge)),
-            ]
-        }))
-        .map_err(s)?
-        .label("run converged")
-        .legend(move |(x, y)| Circle::new((x + 10, y), r, BLACK.stroke_width(edge)));
-    }
-    if verify.iter().any(|p| p.behaviour == Behaviour::LimitCycle) {
-        ch.draw_series(shown(Behaviour::LimitCycle).map(|p| {
-            let c = mark(p, BLACK);
-            TriangleMarker::new((p.kp, p.rate_hz), r + 1, c.filled())
-        }))
-        .map_err(s)?
-        .label("run in a limit cycle")
-        .legend(move |(x, y)| TriangleMarker::new((x + 10, y), r + 1, BLACK.filled()));
-    }
-    if verify.iter().any(|p| p.behaviour == Behaviour::Diverged) {
-        ch.draw_series(shown(Behaviour::Diverged).map(|p| {
-            let c = mark(p, BLACK);
-            Cross::new((p.kp, p.rate_hz), r, c.stroke_width(st.px(2.5)))
-        }))
-        .map_err(s)?
-        .label("run diverged")
-        .legend(move |(x, y)| Cross::new((x + 10, y), r, BLACK.stroke_width(edge)));
-    }
-    if verify.iter().any(|p| p.agrees == Some(false)) {
-        ch.draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())
-            .map_err(s)?
-            .label("red: the run disagrees with the chart")
-            .legend(move |(x, y)| Circle::new((x + 10, y), r, red.filled()));
-    }
-    if verify
-        .iter()
-        .any(|p| p.agrees.is_none() && p.behaviour != Behaviour::Invalid)
-    {
-        ch.draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())
-            .map_err(s)?
-            .label("grey: not compared (cell not computed)")
-            .legend(move |(x, y)| Circle::new((x + 10, y), r, grey.filled()));
-    }
-    // The scenario's own point.
-    let (kp, rate) = map.scenario_point;
-    let star = st.px(9.0);
-    ch.draw_series([
-        Circle::new(
-            (kp, rate),
-            star,
-            RGBColor(255, 127, 14).stroke_width(st.px(3.0)),
-        ),
-        Circle::new((kp, rate), st.px(2.5), RGBColor(255, 127, 14).filled()),
-    ])
-    .map_err(s)?
-    .label(format!(
-        "scenario: kp = {}, {} Hz",
-        value_label(kp),
-        value_label(rate)
-    ))
-    .legend(move |(x, y)| {
-        Circle::new(
-            (x + 10, y),
-            star.min(8),
-            RGBColor(255, 127, 14).stroke_width(3),
+    ch.draw_series(shown(Behaviour::Converged).flat_map(|p| {
+        [
+            Circle::new((p.kp, p.rate_hz), r, mark(p, WHITE).filled()),
+            Circle::new((p.kp, p.rate_hz), r, BLACK.stroke_width(edge)),
+        ]
+    }))
+    .map_err(s)?;
+    ch.draw_series(
+        shown(Behaviour::LimitCycle)
+            .map(|p| TriangleMarker::new((p.kp, p.rate_hz), r + 1, mark(p, BLACK).filled())),
+    )
+    .map_err(s)?;
+    ch.draw_series(shown(Behaviour::Diverged).map(|p| {
+        Cross::new(
+            (p.kp, p.rate_hz),
+            r,
+            mark(p, BLACK).stroke_width(st.px(2.5)),
         )
-    });
-    ch.configure_series_labels()
-        .position(legend_corner(map, verify))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(st.font(0.85))
-        .draw()
+    }))
+    .map_err(s)?;
+    ch.draw_series(shown(Behaviour::LeftField).map(|p| {
+        let (x, y) = (p.kp, p.rate_hz);
+        let q = r as i32;
+        EmptyElement::at((x, y)) + Rectangle::new([(-q, -q), (q, q)], grey.stroke_width(edge))
+    }))
+    .map_err(s)?;
+    // The scenario's own point; outside the chart, an arrow at the edge pointing to it.
+    let star = st.px(9.0);
+    if outside {
+        let (cx, cy) = (kp.clamp(k0, k1), rate.clamp(r0, r1));
+        let dx: i32 = if kp > k1 {
+            1
+        } else if kp < k0 {
+            -1
+        } else {
+            0
+        };
+        let dy: i32 = if rate > r1 {
+            -1
+        } else if rate < r0 {
+            1
+        } else {
+            0
+        };
+        let star = star as i32;
+        let l = 2 * star;
+        let tip = (dx * l, dy * l);
+        let back = (-dy * star / 2, dx * star / 2);
+        ch.draw_series(std::iter::once(
+            EmptyElement::at((cx, cy))
+                + PathElement::new(vec![(0, 0), tip], orange.stroke_width(st.px(3.0)))
+                + Polygon::new(
+                    vec![
+                        (tip.0 + dx * star / 2, tip.1 + dy * star / 2),
+                        (tip.0 + back.0, tip.1 + back.1),
+                        (tip.0 - back.0, tip.1 - back.1),
+                    ],
+                    orange.filled(),
+                ),
+        ))
         .map_err(s)?;
+    } else {
+        ch.draw_series([
+            Circle::new((kp, rate), star, orange.stroke_width(st.px(3.0))),
+            Circle::new((kp, rate), st.px(2.5), orange.filled()),
+        ])
+        .map_err(s)?;
+    }
     // Colour bar: radius 0 .. 2, the boundary at 1.
     let mut bar = ChartBuilder::on(&right)
         .margin_top((f + 2.4 * f * title_rel) as u32)
         .margin_bottom((f + 3.2 * f) as u32)
         .margin_left((0.5 * f) as u32)
-        .margin_right((2.0 * f) as u32)
+        .margin_right((1.0 * f) as u32)
         .y_label_area_size((3.6 * f) as u32)
         .build_cartesian_2d(0.0..1.0, 0.0..TOP)
         .map_err(s)?;
@@ -319,10 +453,7 @@ fn chart<DB: DrawingBackend>(
     bar.draw_series((0..n).map(|k| {
         let a = TOP * k as f64 / n as f64;
         let b = TOP * (k + 1) as f64 / n as f64;
-        Rectangle::new(
-            [(0.0, a), (1.0, b)],
-            st.colormap.colour(0.5 * (a + b), 0.0, TOP).filled(),
-        )
+        Rectangle::new([(0.0, a), (1.0, b)], radius_colour(0.5 * (a + b)).filled())
     }))
     .map_err(s)?;
     bar.draw_series(std::iter::once(PathElement::new(
@@ -330,14 +461,41 @@ fn chart<DB: DrawingBackend>(
         BLACK.stroke_width(bold),
     )))
     .map_err(s)?;
-    // The caption.
+    // The legend, then the caption, below the plot.
     let style = TextStyle::from(st.font(0.85)).color(&BLACK);
+    let col_w = (w as f64 - 2.0 * f) / per_row as f64;
+    for (k, (key, label)) in keys.iter().enumerate() {
+        let x = (f + (k % per_row) as f64 * col_w) as i32;
+        let y = ((k / per_row) as f64 * line_h + 0.3 * f) as i32;
+        let (mx, my) = (x + (0.9 * f) as i32, y + (0.45 * f) as i32);
+        let m = (0.45 * f) as i32;
+        let res = match key {
+            Key::Line => footer.draw(&PathElement::new(
+                vec![(mx - m - 4, my), (mx + m + 4, my)],
+                BLACK.stroke_width(bold),
+            )),
+            Key::Converged => footer.draw(&Circle::new((mx, my), m, BLACK.stroke_width(edge))),
+            Key::LimitCycle => footer.draw(&TriangleMarker::new((mx, my), m, BLACK.filled())),
+            Key::Diverged => footer.draw(&Cross::new((mx, my), m, BLACK.stroke_width(edge))),
+            Key::LeftField => footer.draw(&Rectangle::new(
+                [(mx - m, my - m), (mx + m, my + m)],
+                grey.stroke_width(edge),
+            )),
+            Key::Disagrees => footer.draw(&Circle::new((mx, my), m, red.filled())),
+            Key::NotCompared => footer.draw(&Circle::new((mx, my), m, grey.filled())),
+            Key::Scenario => footer.draw(&Circle::new((mx, my), m, orange.stroke_width(3))),
+        };
+        res.map_err(s)?;
+        footer
+            .draw_text(label, &style, (x + (2.0 * f) as i32, y))
+            .map_err(s)?;
+    }
     for (k, line) in caption.iter().enumerate() {
         footer
             .draw_text(
                 line,
                 &style,
-                (f as i32, (k as f64 * 1.25 * 0.85 * f) as i32),
+                (f as i32, ((key_rows + k) as f64 * line_h + 0.6 * f) as i32),
             )
             .map_err(s)?;
     }

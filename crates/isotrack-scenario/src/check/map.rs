@@ -15,7 +15,7 @@
 
 use super::{law, regions, sampled, Law, LoopSetup, CHECK_LATTICE};
 use crate::Scenario;
-use isotrack_core::numtext::Num;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_sim::{Outcome, TraceRow, TraceSink};
 use serde::Serialize;
 
@@ -40,7 +40,8 @@ pub enum CellStatus {
     /// With `ki = 0` the P law has no orbit to settle on (radius infinite; `check` reports
     /// `spectral_radius` null and `stable` false).
     NoEquilibrium,
-    /// The delay spans more than `MAX_DELAY_STATES` sensor periods: not computed.
+    /// Not computed: the delay spans more than `MAX_DELAY_STATES` sensor periods, or the
+    /// loop gain is beyond [`MAX_LOOP_GAIN`] (the cell's `note` says which).
     NotComputed,
 }
 
@@ -75,7 +76,15 @@ pub struct Cell {
     pub status: CellStatus,
     /// The slopes the cell was checked at, `[min, max]` (the P law's orbit's at this `kp`).
     pub slope_range: [f64; 2],
+    /// Why a cell is not computed (CSV `note`; `None` otherwise).
+    pub note: Option<&'static str>,
 }
+
+/// The largest loop gain `kp v T max(alpha, 1) max(c1, 1) / min(c2, 1)` a cell is computed at:
+/// beyond it the sampled matrices' products leave `f64` (`kp = 1e308` overflowed to an
+/// infinite radius, labelled "no equilibrium" by mistake), and the cell is
+/// [`CellStatus::NotComputed`] with a note, never guessed.
+pub const MAX_LOOP_GAIN: f64 = 1e100;
 
 /// The scenario's sampled loop with `kp` and the sensor rate free: what `check` computes, for
 /// any `(kp, rate)`.
@@ -109,11 +118,30 @@ impl LoopFamily {
     /// `sensor.rate_hz = rate_hz`.
     pub fn cell(&self, kp: f64, rate_hz: f64) -> Cell {
         let l = Law { kp, ..self.law };
-        let (lp, slopes, _) = self.setup.at(&self.scenario, &l, 1.0 / rate_hz);
+        let period_s = 1.0 / rate_hz;
+        let gain = kp
+            * self.setup.base.speed_mps.max(1.0)
+            * period_s.max(1.0)
+            * self.setup.range[1].abs().max(1.0)
+            * l.c1.abs().max(1.0)
+            / l.c2.abs().min(1.0);
+        if gain.is_nan() || gain > MAX_LOOP_GAIN {
+            return Cell {
+                spectral_radius: None,
+                status: CellStatus::NotComputed,
+                slope_range: self.setup.range,
+                note: Some("loop gain beyond 1e100: f64 would overflow"),
+            };
+        }
+        let (lp, slopes, _) = self.setup.at(&self.scenario, &l, period_s);
         let lo = slopes.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = slopes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let (spectral_radius, status) = match sampled::worst_radius(&lp, &slopes) {
-            None => (None, CellStatus::NotComputed),
+        let (spectral_radius, status, note) = match sampled::worst_radius(&lp, &slopes) {
+            None => (
+                None,
+                CellStatus::NotComputed,
+                Some("the delay spans more than 32 sensor periods"),
+            ),
             Some(r) if r.is_finite() => (
                 Some(r),
                 if r < 1.0 {
@@ -121,13 +149,27 @@ impl LoopFamily {
                 } else {
                     CellStatus::Unstable
                 },
+                None,
             ),
-            Some(_) => (None, CellStatus::NoEquilibrium),
+            Some(r) if r.is_nan() => (
+                None,
+                CellStatus::NotComputed,
+                Some("the eigenvalues are not finite numbers"),
+            ),
+            Some(_) if super::circular_p_law(&self.scenario, &l) => {
+                (None, CellStatus::NoEquilibrium, None)
+            }
+            Some(_) => (
+                None,
+                CellStatus::NotComputed,
+                Some("the spectral radius is not finite"),
+            ),
         };
         Cell {
             spectral_radius,
             status,
             slope_range: [lo, hi],
+            note,
         }
     }
 
@@ -213,8 +255,8 @@ impl MapGrid {
             if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi && (hi / lo).is_finite()) {
                 return Err(format!(
                     "{name} must be LO:HI with 0 < LO < HI and HI/LO finite, got {}:{}",
-                    Num(lo),
-                    Num(hi)
+                    Echo(lo),
+                    Echo(hi)
                 ));
             }
             Ok(())
@@ -227,7 +269,7 @@ impl MapGrid {
         if self.rate_range_hz[0] < bottom {
             return Err(format!(
                 "--rate-range: {} Hz is slower than a sensor period may be (at most {} steps of sim.dt_s = {} s: at least {} Hz)",
-                Num(self.rate_range_hz[0]),
+                Echo(self.rate_range_hz[0]),
                 isotrack_sim::MAX_STEPS,
                 Num(dt_s),
                 Num(bottom)
@@ -237,7 +279,7 @@ impl MapGrid {
         if self.rate_range_hz[1] > top * (1.0 + 1e-9) {
             return Err(format!(
                 "--rate-range: {} Hz is faster than the simulation step allows (sim.dt_s = {} s: at most {} Hz)",
-                Num(self.rate_range_hz[1]),
+                Echo(self.rate_range_hz[1]),
                 Num(dt_s),
                 Num(top)
             ));
@@ -357,39 +399,29 @@ impl StabilityMap {
             })
             .collect()
     }
-
-    /// Whether `(kp, rate_hz)` lies within one grid cell of the boundary: among the grid
-    /// points of the cell that holds it, widened by one point on every side (up to 4 x 4
-    /// points), some are stable and some are not (unstable, no equilibrium or not computed).
-    pub fn near_boundary(&self, kp: f64, rate_hz: f64) -> bool {
-        let span = |xs: &[f64], x: f64| -> (usize, usize) {
-            let n = xs.len();
-            let i = xs.iter().rposition(|&v| v <= x).unwrap_or(0).min(n - 2);
-            (i.saturating_sub(1), (i + 2).min(n - 1))
-        };
-        let (i0, i1) = span(&self.kps, kp);
-        let (j0, j1) = span(&self.rates_hz, rate_hz);
-        let mut seen = [false; 2];
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                seen[usize::from(self.at(i, j).status == CellStatus::Stable)] = true;
-            }
-        }
-        seen[0] && seen[1]
-    }
 }
 
-/// What a `--verify` run did, judged from its own trace over the steady-state window.
+/// What a `--verify` run did, judged from its own trace over the steady-state window
+/// (docs/SAMPLED.md, "`--verify N`": the rule, on the law's and the scenario's own scales).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Behaviour {
-    /// Completed, the error stayed put (`max - min <= 0.05 c2`) and the turn rate is an
-    /// orbit's (mean `|omega| < 1` rad/s).
+    /// Completed; over the window's second half the error's range is within the floor that
+    /// the sensor's own error (noise, quantisation, bias, lag) and a moving or bending
+    /// isoline give, or
+    /// it shrank by at least [`DECAY_RATIO`] from the first half; and the vehicle is neither
+    /// spinning nor dithering (mean `|omega|` below [`spin_turn_rate_radps`], or below the turn
+    /// rate the reading's own error drives through the law, `kp (c1 R/T + R/c2)` with `R` the
+    /// reading error's range from the sensor's settings, when that is larger).
     Converged,
-    /// Completed but not converged: an oscillation, a spin or a drift.
+    /// Completed but not converged: a sustained or growing oscillation, a spin or a dither.
     LimitCycle,
-    /// The run did not complete (`diverged`, `left_field`).
+    /// The run did not complete: its state diverged (`outcome = diverged`).
     Diverged,
+    /// The vehicle left the field's domain (`outcome = left_field`): not compared with the
+    /// chart (a loop can leave a bounded map while still converging, and an unstable one can
+    /// leave it before it oscillates); counted apart ([`Agreement::left_field`]).
+    LeftField,
     /// The point makes no valid scenario (the reason in `detail`).
     Invalid,
 }
@@ -401,25 +433,66 @@ impl Behaviour {
             Self::Converged => "converged",
             Self::LimitCycle => "limit_cycle",
             Self::Diverged => "diverged",
+            Self::LeftField => "left_field",
             Self::Invalid => "invalid",
         }
     }
 }
 
-/// The steady-state window's error range and mean turn rate.
+/// A run whose error range over the second half of the steady-state window is at most this
+/// fraction of the first half's is still converging (a loop at spectral radius 0.999 at 2.7 Hz
+/// shrinks by 0.86 over a 60 s half; a sustained oscillation keeps its range, ratio ~1).
+pub const DECAY_RATIO: f64 = 0.9;
+
+/// The sensor's own error (noise, quantisation, bias drift) widens the settled error's range by
+/// up to about as much as its own range: a settled run's error range may be this many times
+/// the reading error's range (`8 noise_std + resolution + 4 bias_drift sqrt(window)`).
+pub const SENSOR_FLOOR_FACTOR: f64 = 2.0;
+
+/// A spectral radius within this of 1 is "near the boundary" (`near_boundary`): there the
+/// loop's decay per sample is under 2 % and a run of finite length, or the linearisation,
+/// may disagree with the chart. Defined on the radius, not the grid: independent of
+/// `--map-size`.
+pub const NEAR_BOUNDARY_MARGIN: f64 = 0.02;
+
+/// The mean `|omega|` from which a run counts as spinning, dithering or oscillating rather than
+/// following an isoline, rad/s: the least of `pi/(8T)` (an eighth of a half turn per sensor
+/// period: the sampled loop's dither is at `pi/T`, and a loop that follows an isoline turns by
+/// `v kappa T`, a small angle, per sample), half the turn-rate limit (an unstable loop bangs
+/// between the limits, its mean `|omega|` near the limit) and, where the loop model knows the
+/// curvature `kappa` it is checked at (the circle, the P law's orbit), `4 v kappa`; never below
+/// `2 v kappa`, twice the turn the curve itself needs.
+pub fn spin_turn_rate_radps(limit_radps: Option<f64>, period_s: f64, v_kappa_radps: f64) -> f64 {
+    let mut w = std::f64::consts::PI / (8.0 * period_s);
+    if let Some(l) = limit_radps {
+        w = w.min(0.5 * l);
+    }
+    if v_kappa_radps > 0.0 {
+        w = w.min(4.0 * v_kappa_radps).max(2.0 * v_kappa_radps);
+    }
+    w
+}
+
+/// The steady-state window's two halves: error ranges, turn rate.
 struct Window {
     from_s: f64,
-    lo: f64,
-    hi: f64,
+    mid_s: f64,
+    /// `[lo, hi]` of the error in the first and the second half.
+    halves: [[f64; 2]; 2],
     turn_sum: f64,
     rows: u64,
 }
 
 impl TraceSink for Window {
     fn record(&mut self, row: &TraceRow) {
-        if row.t_s >= self.from_s {
-            self.lo = self.lo.min(row.error);
-            self.hi = self.hi.max(row.error);
+        if row.t_s < self.from_s {
+            return;
+        }
+        let h = usize::from(row.t_s >= self.mid_s);
+        let r = &mut self.halves[h];
+        r[0] = r[0].min(row.error);
+        r[1] = r[1].max(row.error);
+        if h == 1 {
             self.turn_sum += row.omega_radps.abs();
             self.rows += 1;
         }
@@ -437,17 +510,25 @@ pub struct VerifyPoint {
     pub cell: Cell,
     /// What the simulation did.
     pub behaviour: Behaviour,
-    /// `max - min` of the error over the steady-state window.
+    /// `max - min` of the error over the second half of the steady-state window.
     pub error_range: Option<f64>,
-    /// Mean `|omega|` over the steady-state window, rad/s.
+    /// Mean `|omega|` over the second half of the steady-state window, rad/s.
     pub mean_abs_turn_radps: Option<f64>,
-    /// The run's `outcome` (`completed`, `diverged`, `left_field`) or why it is invalid.
+    /// The run's `outcome` (`completed`, `diverged`, `left_field`) and the numbers the
+    /// classification used, or why the point is invalid.
     pub detail: String,
-    /// Whether prediction (stable) and behaviour (converged) agree; `None` when not computed
-    /// or invalid.
+    /// Whether prediction (stable) and behaviour (converged) agree; `None` when not computed,
+    /// invalid or left the field.
     pub agrees: Option<bool>,
-    /// Within one grid cell of the chart's boundary ([`StabilityMap::near_boundary`]).
+    /// The cell's spectral radius is within [`NEAR_BOUNDARY_MARGIN`] of 1 ([`near_boundary`]).
     pub near_boundary: bool,
+}
+
+/// Whether a cell lies near the boundary: its spectral radius within
+/// [`NEAR_BOUNDARY_MARGIN`] of 1 (a cell not computed or without equilibrium is not).
+pub fn near_boundary(cell: &Cell) -> bool {
+    cell.spectral_radius
+        .is_some_and(|r| (r - 1.0).abs() <= NEAR_BOUNDARY_MARGIN)
 }
 
 /// The sensor periods, in whole simulation steps `[lo, hi]`, whose rates `1/(k dt)` lie in the
@@ -496,8 +577,8 @@ pub fn verify_points(grid: &MapGrid, dt_s: f64, count: usize, seed: u64) -> Vec<
 }
 
 /// Runs the scenario at `(kp, rate_hz)` (recording at the sensor's rate) and classifies it
-/// ([`Behaviour`]); `map` places it against the boundary.
-pub fn verify_point(f: &LoopFamily, map: &StabilityMap, kp: f64, rate_hz: f64) -> VerifyPoint {
+/// ([`Behaviour`]).
+pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     let cell = f.cell(kp, rate_hz);
     let mut p = VerifyPoint {
         kp,
@@ -508,7 +589,7 @@ pub fn verify_point(f: &LoopFamily, map: &StabilityMap, kp: f64, rate_hz: f64) -
         mean_abs_turn_radps: None,
         detail: String::new(),
         agrees: None,
-        near_boundary: map.near_boundary(kp, rate_hz),
+        near_boundary: near_boundary(&cell),
     };
     let sets = [
         format!("controller.kp={kp:?}"),
@@ -525,29 +606,91 @@ pub fn verify_point(f: &LoopFamily, map: &StabilityMap, kp: f64, rate_hz: f64) -
     let file = s.file();
     let duration = file.sim.duration_s.unwrap_or(0.0);
     let frac = file.metrics.steady_state_fraction.unwrap_or(0.2);
-    let c2 = file.controller.c2.unwrap_or(1.0);
+    let from_s = (1.0 - frac) * duration;
     let mut w = Window {
-        from_s: (1.0 - frac) * duration,
-        lo: f64::INFINITY,
-        hi: f64::NEG_INFINITY,
+        from_s,
+        mid_s: 0.5 * (from_s + duration),
+        halves: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
         turn_sum: 0.0,
         rows: 0,
     };
     let r = s.run(&mut w);
     p.detail = r.outcome.as_str().to_string();
+    match r.outcome {
+        Outcome::Completed => {}
+        Outcome::LeftField => {
+            p.behaviour = Behaviour::LeftField;
+            return p;
+        }
+        _ => {
+            p.behaviour = Behaviour::Diverged;
+            p.agrees = cell.status.stable().map(|st| !st);
+            return p;
+        }
+    }
+    let range = |[lo, hi]: [f64; 2]| (hi >= lo).then_some(hi - lo);
+    let (first, second) = (range(w.halves[0]), range(w.halves[1]));
+    p.error_range = second;
     if w.rows > 0 {
-        p.error_range = Some(w.hi - w.lo);
         p.mean_abs_turn_radps = Some(w.turn_sum / w.rows as f64);
     }
-    p.behaviour = if r.outcome != Outcome::Completed {
-        Behaviour::Diverged
-    } else if p.error_range.is_some_and(|e| e <= 0.05 * c2)
-        && p.mean_abs_turn_radps.is_some_and(|t| t < 1.0)
-    {
+    // The floor a settled run's error range may reach: the reading error's own range (times
+    // SENSOR_FLOOR_FACTOR), on a moving isoline the scenario's convergence tolerance (the
+    // error tracking the motion leaves, by the scenario's own measure), and rounding.
+    let c2 = file.controller.c2.unwrap_or(1.0);
+    let level = file.controller.level.unwrap_or(0.0);
+    // The reading error's range from the sensor's own settings (not from the trace: the held
+    // reading lags the true value by the motion over a period, which on an oscillating run is
+    // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
+    // resolution, and 4 sqrt(window) times the bias drift.
+    let sn = &file.sensor;
+    let window_s = duration - from_s;
+    let rr = 8.0 * sn.noise_std.unwrap_or(0.0)
+        + sn.resolution.unwrap_or(0.0)
+        + 4.0 * sn.bias_drift_per_sqrt_s.unwrap_or(0.0) * window_s.max(0.0).sqrt();
+    let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
+    let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
+    // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
+    // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
+    // scenario's own convergence tolerance (the band it counts as on the isoline).
+    let motion_floor = if s.is_time_varying() || lp.curvature_per_m == 0.0 {
+        file.metrics.convergence_tolerance.unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let floor = sensor_floor
+        .max(motion_floor)
+        .max(1e-9 * level.abs().max(c2));
+    // The turn rate the reading's own error drives through the law (a noisy sensor makes a
+    // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
+    let c1 = file.controller.c1.unwrap_or(0.0);
+    let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
+    let spin = spin_turn_rate_radps(
+        s.max_turn_rate_radps(),
+        1.0 / rate_hz,
+        lp.speed_mps * lp.curvature_per_m.abs(),
+    )
+    .max(noise_turn);
+    let settled = match (first, second) {
+        (_, Some(b)) if b <= floor => true,
+        (Some(a), Some(b)) => b <= DECAY_RATIO * a,
+        _ => false,
+    };
+    let calm = p.mean_abs_turn_radps.is_some_and(|t| t < spin);
+    p.behaviour = if settled && calm {
         Behaviour::Converged
     } else {
         Behaviour::LimitCycle
     };
+    let g = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3e}"));
+    p.detail = format!(
+        "completed; error range {} then {} (floor {}), mean |omega| {} rad/s (spin from {})",
+        g(first),
+        g(second),
+        g(Some(floor)),
+        g(p.mean_abs_turn_radps),
+        g(Some(spin))
+    );
     p.agrees = cell
         .status
         .stable()
@@ -564,17 +707,20 @@ pub fn steps_per_run(s: &Scenario) -> f64 {
 /// Agreement over verified points.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Agreement {
-    /// Points whose prediction was computed and whose run was valid.
+    /// Points whose prediction was computed and whose run was valid and stayed on the field.
     pub compared: usize,
     /// Of those, where prediction and behaviour agree.
     pub agree: usize,
     /// `100 agree / compared` (null when nothing was compared).
     pub percent: Option<f64>,
-    /// Disagreements within one grid cell of the boundary.
+    /// Disagreements at a spectral radius within [`NEAR_BOUNDARY_MARGIN`] of 1.
     pub disagreements_near_boundary: usize,
-    /// Disagreements further away.
+    /// Disagreements further from radius 1 (each listed in `verify.csv`, `near_boundary`
+    /// false).
     pub disagreements_far: usize,
-    /// Points not compared (not computed, invalid).
+    /// Runs that left the field (not compared: [`Behaviour::LeftField`]).
+    pub left_field: usize,
+    /// Points not compared (not computed, invalid, left the field).
     pub not_compared: usize,
 }
 
@@ -592,6 +738,10 @@ pub fn agreement(points: &[VerifyPoint]) -> Agreement {
         percent: (!compared.is_empty()).then(|| 100.0 * agree as f64 / compared.len() as f64),
         disagreements_near_boundary: near,
         disagreements_far: compared.len() - agree - near,
+        left_field: points
+            .iter()
+            .filter(|p| p.behaviour == Behaviour::LeftField)
+            .count(),
         not_compared: points.len() - compared.len(),
     }
 }
