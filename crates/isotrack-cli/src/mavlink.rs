@@ -276,12 +276,27 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
-    if report.end.is_failsafe() && !report.failsafe_acknowledged {
+    let commanded = report.end.is_failsafe() || report.way_out_commanded;
+    if commanded && !report.failsafe_acknowledged {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: format!(
                 "failsafe ({}): the vehicle did not confirm the failsafe mode",
                 report.end.as_str()
+            ),
+        });
+    }
+    if commanded || report.end == FlyEnd::ControlRefused {
+        return Err(Failure {
+            code: exit::FAILSAFE,
+            message: format!(
+                "the flight was ended by a failsafe ({}){}",
+                report.end.as_str(),
+                if commanded {
+                    ", confirmed by the vehicle"
+                } else {
+                    ""
+                }
             ),
         });
     }

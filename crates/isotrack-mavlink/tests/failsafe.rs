@@ -117,43 +117,6 @@ fn sitl_holds_when_offboard_setpoints_stop() {
     assert_eq!(report.flown.last().unwrap().1, 0.1);
 }
 
-/// A vehicle that refuses to arm: `--take-control` gives up at once (`control_refused`), and
-/// never runs the law.
-#[test]
-fn a_refused_arming_ends_the_flight() {
-    let s = load_scenario(None, &[]).unwrap();
-    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
-    let addr = link.local_addr().unwrap();
-    let vehicle = std::thread::spawn(move || {
-        let t0 = Instant::now();
-        while t0.elapsed() < Duration::from_secs(60) {
-            for r in link.poll(Duration::from_millis(50)).unwrap() {
-                if let MavMessage::COMMAND_LONG(c) = &r.msg {
-                    if c.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
-                        link.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
-                            command: c.command,
-                            result: MavResult::MAV_RESULT_DENIED,
-                        }))
-                        .unwrap();
-                        return true;
-                    }
-                }
-            }
-            if link.has_peer() {
-                link.send(&heartbeat()).unwrap();
-            }
-        }
-        false
-    });
-    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
-    o.take_control = true;
-    o.timeout_s = 30.0;
-    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
-    assert!(vehicle.join().unwrap());
-    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
-    assert!(r.commands.is_empty());
-}
-
 /// A yaw-rate setpoint (attitude ignored) for system 1, component 1, rad/s.
 fn yaw_rate_setpoint(body_yaw_rate: f32) -> MavMessage {
     MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
