@@ -739,6 +739,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         // message from the vehicle for --timeout-s; at least 5 tries even then: the vehicle
         // may hear what it cannot answer).
         let mut tries = 0u32;
+        let mut way_refused = false;
         while fly.target.is_some() {
             let lost = Instant::now().duration_since(last_link) > timeout;
             if lost && tries >= 5 {
@@ -754,7 +755,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 }
             }
             let until = Instant::now() + Duration::from_millis(300);
-            while Instant::now() < until && !acknowledged {
+            while Instant::now() < until && !acknowledged && !way_refused {
                 for r in fly
                     .link
                     .poll(Duration::from_millis(20))
@@ -764,6 +765,23 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                         continue;
                     }
                     last_link = Instant::now();
+                    if let MavMessage::COMMAND_ACK(a) = &r.msg {
+                        let ours = match way {
+                            WayOut::Mode(_) => MavCmd::MAV_CMD_DO_SET_MODE,
+                            WayOut::Disarm => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                        };
+                        // A refusal (not "busy, try again"): retrying changes nothing.
+                        if a.command == ours
+                            && matches!(
+                                a.result,
+                                MavResult::MAV_RESULT_DENIED
+                                    | MavResult::MAV_RESULT_UNSUPPORTED
+                                    | MavResult::MAV_RESULT_FAILED
+                            )
+                        {
+                            way_refused = true;
+                        }
+                    }
                     acknowledged |= match (&r.msg, way) {
                         (MavMessage::COMMAND_ACK(a), WayOut::Mode(_)) => {
                             a.command == MavCmd::MAV_CMD_DO_SET_MODE
@@ -783,7 +801,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     };
                 }
             }
-            if acknowledged {
+            if acknowledged || way_refused {
                 break;
             }
         }
@@ -796,11 +814,12 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             "no failsafe mode was sent".to_string()
         } else {
             format!(
-                "the vehicle did not confirm the {} ({tries} tries, link lost)",
+                "the vehicle did not confirm the {} ({tries} tries, {})",
                 match way {
                     WayOut::Mode(m) => m.name(),
                     WayOut::Disarm => "disarm",
-                }
+                },
+                if way_refused { "refused" } else { "link lost" }
             )
         });
     }

@@ -156,9 +156,31 @@ struct Autopilot {
     turn_limit_radps: f64,
     events: Vec<String>,
     refused: u64,
+    /// Senders whose heartbeat says `MAV_TYPE_GCS` (MAVSDK's ground station is system 245, not
+    /// 255), the most recent [`MAX_GROUND_STATIONS`].
+    ground_stations: Vec<(u32, u8)>,
 }
 
+/// The most ground stations (by heartbeat) the vehicle remembers.
+pub const MAX_GROUND_STATIONS: usize = 8;
+
 impl Autopilot {
+    /// Whether `from` is a ground station: system [`GCS_SYSTEM_ID`], or a sender whose
+    /// heartbeat says `MAV_TYPE_GCS`.
+    fn is_gcs(&self, from: (u32, u8)) -> bool {
+        from.0 == GCS_SYSTEM_ID as u32 || self.ground_stations.contains(&from)
+    }
+
+    /// Remembers a ground station's heartbeat.
+    fn heard_gcs(&mut self, from: (u32, u8)) {
+        if !self.ground_stations.contains(&from) {
+            if self.ground_stations.len() == MAX_GROUND_STATIONS {
+                self.ground_stations.remove(0);
+            }
+            self.ground_stations.push(from);
+        }
+    }
+
     fn event(&mut self, t_s: f64, what: String) {
         self.events.push(format!("t = {t_s} s: {what}"));
     }
@@ -196,7 +218,7 @@ impl Autopilot {
     /// Whether `from` may command the vehicle: anyone while it is disarmed or has no owner,
     /// else its owner and the ground station ([`GCS_SYSTEM_ID`]).
     fn may_command(&self, from: (u32, u8)) -> bool {
-        !self.armed || from.0 == GCS_SYSTEM_ID as u32 || self.owner.is_none_or(|o| o == from)
+        !self.armed || self.is_gcs(from) || self.owner.is_none_or(|o| o == from)
     }
 
     fn deny(&mut self, t_s: f64, from: (u32, u8), what: &str) -> MavResult {
@@ -212,7 +234,7 @@ impl Autopilot {
 
     /// Handles a command; returns the acknowledgement's result.
     fn command(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
-        let gcs = from.0 == GCS_SYSTEM_ID as u32;
+        let gcs = self.is_gcs(from);
         match c.command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
                 // As PX4: forced exactly when param2 is the force code; any other value (0, or
@@ -279,11 +301,14 @@ impl Autopilot {
     }
 
     /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
-    /// (or of anyone, while no companion is in control).
+    /// in control, of any companion on board (a component of the vehicle's own system: as in
+    /// PX4, setpoints are not bound to who switched the mode), or of anyone while no companion
+    /// is in control; never of a ground station.
     fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
+        let on_board = from.0 == self.system_id as u32;
         if s.target_system != self.system_id
-            || self.owner.is_some_and(|o| o != from)
-            || from.0 == GCS_SYSTEM_ID as u32
+            || (self.owner.is_some_and(|o| o != from) && !on_board)
+            || self.is_gcs(from)
         {
             self.refused += 1;
             return None;
@@ -495,6 +520,9 @@ impl Sitl<'_> {
                     // The new state at once (PX4 also reports it in the next heartbeat).
                     self.heartbeat(false)?;
                 }
+                MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
+                    self.ap.heard_gcs(from);
+                }
                 MavMessage::SET_ATTITUDE_TARGET(s) => {
                     if let Some(ms) = self.ap.setpoint(t_s, from, s) {
                         answers.push(ms);
@@ -550,6 +578,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
             turn_limit_radps: turn_limit,
             events: Vec::new(),
             refused: 0,
+            ground_stations: Vec::new(),
         },
         home: Home::of(scenario),
         scenario,
