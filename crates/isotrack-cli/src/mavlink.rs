@@ -3,8 +3,9 @@
 
 use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
-use crate::output::{scenario_toml, write_summary, TraceWriter};
+use crate::output::{scenario_toml, summary_to_json, Summary, TraceWriter};
 use crate::run::{load, Failure};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
@@ -66,6 +67,8 @@ pub const MAX_DURATION_S: f64 = u32::MAX as f64 / 1000.0;
 pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     positive("--speedup", args.speedup)?;
     within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
+    positive("--timeout-s", Some(args.timeout_s))?;
+    within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
     let scenario = load(&args.scenario)?;
     let mut opts = SitlOptions::new(&args.mavlink);
     opts.system_id = args.system_id;
@@ -76,6 +79,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             speedup: args.speedup.unwrap_or(1.0),
         }
     };
+    opts.companion_timeout_s = args.timeout_s;
     opts.stop = isotrack_mavlink::interrupt_flag();
     let mut writer = match &args.out {
         Some(dir) => {
@@ -106,32 +110,69 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     for e in &report.events {
         errln!("isotrack sitl: {e}");
     }
+    // A run cut short is no `completed` run: `interrupted` (Ctrl-C, SIGTERM, SIGHUP), as
+    // `run` says, or `companion_lost` (lockstep, nobody answered for --timeout-s).
+    let cut = if report.interrupted {
+        Some((
+            "interrupted",
+            "stopped by a signal (Ctrl-C, SIGTERM or SIGHUP)".to_string(),
+        ))
+    } else if report.companion_lost {
+        Some((
+            "companion_lost",
+            format!(
+                "lockstep: no message from the companion for {} s",
+                Echo(args.timeout_s)
+            ),
+        ))
+    } else {
+        None
+    };
     if let (Some(dir), Some(w)) = (&args.out, writer) {
         w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
         let p = dir.join("summary.json");
-        write_summary(
-            &p,
-            &scenario,
-            args.scenario.scenario.as_deref(),
-            &report.result,
-            &report.events,
-        )
-        .map_err(|e| cant(&p, e))?;
+        let summary = Summary {
+            isotrack_version: env!("CARGO_PKG_VERSION"),
+            scenario_path: args
+                .scenario
+                .scenario
+                .as_ref()
+                .map(|p| p.display().to_string()),
+            result: &report.result,
+            warnings: &report.events,
+            scenario: scenario.file(),
+        };
+        let mut text = summary_to_json(&summary).map_err(|e| cant(&p, e.into()))?;
+        if let Some((outcome, detail)) = &cut {
+            let mut v: serde_json::Value =
+                serde_json::from_str(&text).map_err(|e| cant(&p, e.into()))?;
+            v["outcome"] = (*outcome).into();
+            v["outcome_detail"] = detail.clone().into();
+            text = serde_json::to_string_pretty(&v).map_err(|e| cant(&p, e.into()))?;
+        }
+        std::fs::write(&p, text + "\n").map_err(|e| cant(&p, e))?;
         let p = dir.join("scenario.toml");
         std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
     }
     outln!(
-        "outcome     {} at t = {} s ({} samples, {} setpoints refused{})",
-        report.result.outcome.as_str(),
-        report.result.t_end_s,
+        "outcome     {} at t = {} s ({} samples, {} setpoints refused)",
+        cut.as_ref().map_or(report.result.outcome.as_str(), |c| c.0),
+        Num(report.result.t_end_s),
         report.result.samples,
         report.setpoints_refused,
-        if report.interrupted {
-            ", interrupted"
-        } else {
-            ""
-        }
     );
+    if report.interrupted {
+        return Err(Failure {
+            code: crate::sweep::INTERRUPTED,
+            message: "interrupted".into(),
+        });
+    }
+    if report.companion_lost {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: cut.map(|c| c.1).unwrap_or_default(),
+        });
+    }
     Ok(())
 }
 
@@ -269,7 +310,6 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         let p = dir.join("scenario.toml");
         std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
     }
-    let _ = write_summary;
     outln!(
         "end         {} ({} measurements, {} law commands)",
         report.end.as_str(),

@@ -21,6 +21,7 @@ use crate::mirror::Transport;
 use crate::vehicle_state::Mode;
 use crate::wire;
 use isotrack_core::math::{wrap_angle, Pose2};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::Scenario;
 use isotrack_sim::{RunResult, TraceRow, TraceSink};
 use mavlink::dialects::common::*;
@@ -55,6 +56,9 @@ pub struct SitlOptions {
     pub setpoint_timeout_s: f64,
     /// Set from outside (Ctrl-C) to end the run where it stands.
     pub stop: Arc<AtomicBool>,
+    /// Lockstep: end the run when no message came from anyone for this long, wall s (the
+    /// companion is gone: it ended or failed safe, and nobody will answer the sample).
+    pub companion_timeout_s: f64,
 }
 
 impl SitlOptions {
@@ -66,6 +70,7 @@ impl SitlOptions {
             system_id: 1,
             setpoint_timeout_s: 1.0,
             stop: Arc::new(AtomicBool::new(false)),
+            companion_timeout_s: 10.0,
         }
     }
 }
@@ -86,6 +91,9 @@ pub struct SitlReport {
     pub link: LinkStats,
     /// Whether the run was stopped from outside before its end.
     pub interrupted: bool,
+    /// Whether a lockstep run ended because nobody answered for
+    /// [`SitlOptions::companion_timeout_s`].
+    pub companion_lost: bool,
 }
 
 /// Why a simulated flight could not start.
@@ -182,7 +190,7 @@ impl Autopilot {
     }
 
     fn event(&mut self, t_s: f64, what: String) {
-        self.events.push(format!("t = {t_s} s: {what}"));
+        self.events.push(format!("t = {} s: {what}", Num(t_s)));
     }
 
     /// The turn rate the vehicle holds from a sample at `pose`.
@@ -364,6 +372,10 @@ struct Sitl<'a> {
     next_slow_s: f64,
     last_heartbeat_wall: Instant,
     speed_mps: f64,
+    /// When the last valid frame of another sender came.
+    last_heard: Instant,
+    /// Telemetry (a position) has gone out.
+    telemetry_sent: bool,
 }
 
 impl Sitl<'_> {
@@ -447,6 +459,7 @@ impl Sitl<'_> {
     /// The telemetry of one trace row.
     fn telemetry(&mut self, r: &TraceRow) -> Result<(), SitlError> {
         self.slow_group(r.t_s)?;
+        self.telemetry_sent = true;
         let ms = wire::time_ms(r.t_s).unwrap_or(u32::MAX);
         let (lat, lon) = self.home.to_lat_lon_deg(r.x_m, r.y_m);
         let t = r.telemetry;
@@ -507,6 +520,7 @@ impl Sitl<'_> {
             if from == me {
                 continue;
             }
+            self.last_heard = Instant::now();
             match &r.msg {
                 MavMessage::COMMAND_LONG(c) => {
                     if c.target_system != self.ap.system_id {
@@ -586,6 +600,8 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         next_slow_s: 0.0,
         last_heartbeat_wall: Instant::now(),
         speed_mps: speed,
+        last_heard: Instant::now(),
+        telemetry_sent: false,
     };
     // A `udpin:` link learns its peer from the first message.
     while !sitl.link.has_peer() {
@@ -598,6 +614,9 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
     let mut flown = Vec::new();
     let wall0 = Instant::now();
     let mut interrupted = false;
+    let mut companion_lost = false;
+    let companion_timeout = Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
+        .unwrap_or(Duration::from_secs(86_400));
     loop {
         if sitl.stop.load(Ordering::Relaxed) {
             interrupted = true;
@@ -646,10 +665,36 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                 if answers.contains(&ms) {
                     break;
                 }
+                if sitl.last_heard.elapsed() > companion_timeout {
+                    let what = format!(
+                        "no message from anyone for {} s: the companion is gone, run ended",
+                        Echo(opts.companion_timeout_s)
+                    );
+                    sitl.ap.event(t, what);
+                    companion_lost = true;
+                    break;
+                }
                 if sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
                     // A lost datagram must not stall the run: the sample goes again with the
                     // heartbeat (the companion answers a repeat with its answer again).
                     sitl.heartbeat(false)?;
+                    if !sitl.telemetry_sent {
+                        // The first sample's position comes with its answer's step: a
+                        // companion that waits for a position before taking control gets
+                        // the sample's pose now.
+                        let p = sample.pose;
+                        sitl.telemetry(&TraceRow {
+                            t_s: t,
+                            x_m: p.position.x,
+                            y_m: p.position.y,
+                            heading_rad: p.heading_rad,
+                            s: sample.true_value,
+                            error: sample.true_value - scenario.level(),
+                            omega_radps: 0.0,
+                            s_measured: Some(sample.measurement.value),
+                            telemetry: None,
+                        })?;
+                    }
                     sitl.send(iso.clone())?;
                 }
             },
@@ -665,7 +710,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                     sitl.ap.mode = Mode::Hold;
                     let what = format!(
                         "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
-                        opts.setpoint_timeout_s
+                        Echo(opts.setpoint_timeout_s)
                     );
                     sitl.ap.event(t, what.clone());
                     sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, &what)?;
@@ -673,7 +718,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                 }
             }
         }
-        if interrupted {
+        if interrupted || companion_lost {
             break;
         }
         let w = sitl.ap.turn_rate(Some(sample.pose));
@@ -694,8 +739,15 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         sink: &mut *sink,
     };
     let result = ep.finish_traced(&mut tee);
-    let text = format!("isotrack sitl: run ended ({})", result.outcome.as_str());
-    sitl.ap.event(t_end, text.clone());
+    let how = if interrupted {
+        "interrupted"
+    } else if companion_lost {
+        "companion_lost"
+    } else {
+        result.outcome.as_str()
+    };
+    sitl.ap.event(t_end, format!("run ended ({how})"));
+    let text = format!("isotrack sitl: run ended ({how})");
     sitl.statustext(MavSeverity::MAV_SEVERITY_NOTICE, &text)?;
     for _ in 0..3 {
         sitl.heartbeat(true)?;
@@ -707,6 +759,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         setpoints_refused: sitl.ap.refused,
         link: sitl.link.stats,
         interrupted,
+        companion_lost,
     })
 }
 
