@@ -468,6 +468,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     // Since the vehicle's first message (the fence's wait for a position).
     let mut clock_start = Instant::now();
     let mut vehicle_done = false;
+    let mut mavlink1_logged = false;
     let mut buf = [0u8; 2048];
     let end = 'flight: loop {
         if opts.stop.load(Ordering::Relaxed) {
@@ -494,6 +495,12 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &mut pos,
                 &mut heading,
                 &mut vehicle_done,
+            );
+        }
+        if fly.link.stats.mavlink1_frames > 0 && !mavlink1_logged {
+            mavlink1_logged = true;
+            fly.event(
+                "MAVLink 1 frames received and ignored: this bridge speaks MAVLink 2 only (set the autopilot's link to MAVLink 2)".into(),
             );
         }
         if !had_target && fly.target.is_some() {

@@ -376,6 +376,8 @@ struct Sitl<'a> {
     last_heard: Instant,
     /// Telemetry (a position) has gone out.
     telemetry_sent: bool,
+    /// The first MAVLink 1 frame has been logged.
+    mavlink1_logged: bool,
 }
 
 impl Sitl<'_> {
@@ -513,6 +515,13 @@ impl Sitl<'_> {
     /// Handles what arrives within `timeout`; returns the time stamps of valid setpoints.
     fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<u32>, SitlError> {
         let got = self.link.poll(timeout).map_err(SitlError::Io)?;
+        if self.link.stats.mavlink1_frames > 0 && !self.mavlink1_logged {
+            self.mavlink1_logged = true;
+            self.ap.event(
+                t_s,
+                "MAVLink 1 frames received and ignored: this vehicle speaks MAVLink 2 only".into(),
+            );
+        }
         let mut answers = Vec::new();
         let me = (self.ap.system_id as u32, 1u8);
         for r in got {
@@ -602,6 +611,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         speed_mps: speed,
         last_heard: Instant::now(),
         telemetry_sent: false,
+        mavlink1_logged: false,
     };
     // A `udpin:` link learns its peer from the first message.
     while !sitl.link.has_peer() {

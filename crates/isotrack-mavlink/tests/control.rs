@@ -32,6 +32,8 @@ struct Script {
     quiet_beats: u32,
     /// A gimbal (component 154, `MAV_AUTOPILOT_GENERIC`) beats on the vehicle's system, first.
     gimbal: bool,
+    /// The vehicle also sends each heartbeat as a MAVLink 1 frame.
+    mavlink1: bool,
 }
 
 impl Default for Script {
@@ -43,6 +45,7 @@ impl Default for Script {
             hold_acked_at: 1,
             quiet_beats: 0,
             gimbal: false,
+            mavlink1: false,
         }
     }
 }
@@ -91,6 +94,7 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
     let url = format!("udpout:{addr}");
     let mut v = Link::open(&url, 1, 1).unwrap();
     let mut gimbal = Link::open(&url, 1, 154).unwrap();
+    let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let (mut armed, mut mode, mut holds) = (script.armed, 0u32, 0u32);
     let (mut beats, mut sent) = (0u32, 0u32);
     let mut got = Vec::new();
@@ -114,6 +118,25 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                 mode,
             ))
             .unwrap();
+        }
+        if script.mavlink1 {
+            let mut frame = Vec::new();
+            mavlink::write_v1_msg(
+                &mut frame,
+                mavlink::MavHeader {
+                    system_id: 1,
+                    component_id: 1,
+                    sequence: 0,
+                },
+                &heartbeat(
+                    MavType::MAV_TYPE_FIXED_WING,
+                    MavAutopilot::MAV_AUTOPILOT_PX4,
+                    armed,
+                    mode,
+                ),
+            )
+            .unwrap();
+            raw.send_to(&frame, addr).unwrap();
         }
         if beats >= script.quiet_beats {
             let mut name = [0u8; 10];
@@ -309,4 +332,18 @@ fn hold_is_retried_until_acknowledged() {
     assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
     assert!(r.failsafe_acknowledged, "{:?}", r.events);
     assert_eq!(got.iter().filter(|g| is_hold(g)).count(), 8, "{got:?}");
+}
+
+/// MAVLink 1 frames are not silently dropped: the companion logs once that it saw them.
+#[test]
+fn mavlink1_is_logged_once() {
+    let script = Script {
+        quiet_beats: u32::MAX,
+        mavlink1: true,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |_| {});
+    let n = r.events.iter().filter(|e| e.contains("MAVLink 1")).count();
+    assert_eq!(n, 1, "{:?}", r.events);
+    assert!(r.link.mavlink1_frames > 1);
 }
