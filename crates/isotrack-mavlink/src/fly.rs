@@ -35,6 +35,9 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
+/// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
+pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
+
 /// The measurements' clock as received: only a measurement newer than every one before it
 /// counts as one for the sensor-loss timer (the companion's own monotonic clock).
 struct SensorClock {
@@ -469,7 +472,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     let mut clock_start = Instant::now();
     let mut vehicle_done = false;
     let mut mavlink1_logged = false;
-    let mut buf = [0u8; 2048];
+    let mut partial: Vec<u8> = Vec::new();
+    let mut buf = vec![0u8; 65_536];
     let end = 'flight: loop {
         if opts.stop.load(Ordering::Relaxed) {
             break 'flight FlyEnd::Interrupted;
@@ -509,8 +513,26 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             clock_start = Instant::now();
         }
         if let Some(s) = &lines {
-            while let Ok((n, _)) = s.recv_from(&mut buf) {
-                for line in String::from_utf8_lossy(&buf[..n]).lines() {
+            // At most MAX_DATAGRAMS_PER_POLL datagrams a turn: a flood delays, never starves,
+            // the link. A line may span datagrams: the tail after the last newline waits for
+            // the rest (at most MAX_PARTIAL_LINE_BYTES, else dropped).
+            for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
+                let Ok((n, _)) = s.recv_from(&mut buf) else {
+                    break;
+                };
+                partial.extend_from_slice(&buf[..n]);
+                let Some(end) = partial.iter().rposition(|&b| b == b'\n') else {
+                    if partial.len() > MAX_PARTIAL_LINE_BYTES {
+                        partial.clear();
+                    }
+                    continue;
+                };
+                let text = String::from_utf8_lossy(&partial[..end]).into_owned();
+                partial.drain(..=end);
+                if partial.len() > MAX_PARTIAL_LINE_BYTES {
+                    partial.clear();
+                }
+                for line in text.lines() {
                     let mut it = line.split(',');
                     let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
                         continue;
@@ -656,9 +678,15 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 } else {
                     fly.current = None;
                 }
-                fly.setpoint(ms)?;
                 fly.last_answer_ms = Some(ms);
-                next_setpoint = Instant::now() + period;
+                // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for
+                // it); a UDP sensor's answers keep to --setpoint-rate-hz (the periodic
+                // setpoint carries the newest command): a fast sensor does not multiply the
+                // setpoints.
+                if lines.is_none() || Instant::now() >= next_setpoint {
+                    fly.setpoint(ms)?;
+                    next_setpoint = Instant::now() + period;
+                }
                 let (x, y) = pos.unwrap_or((f64::NAN, f64::NAN));
                 sink.record(&TraceRow {
                     t_s: m.t_s,
