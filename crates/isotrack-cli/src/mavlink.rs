@@ -56,6 +56,41 @@ fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     }
 }
 
+/// Readies run directory `dir` for `names`: none of them one of the inputs (64), the
+/// directory created and locked as sweeps lock theirs (73 while another command writes it), and
+/// none of them an existing non-regular file (a FIFO would block the write for ever: 73).
+/// Returns the lock, held until dropped.
+fn prepare_out(
+    dir: &Path,
+    args: &crate::cli::ScenarioArgs,
+    scenario: &isotrack_scenario::Scenario,
+    names: &[&str],
+) -> Result<std::fs::File, Failure> {
+    let inputs = crate::output::input_files(args.scenario.as_deref(), scenario);
+    for name in names {
+        if let Some(message) = crate::output::input_clash(&inputs, &dir.join(name)) {
+            return Err(usage(message));
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+    let lock = crate::sweep::lock_output_dir(dir)?;
+    for name in names {
+        let p = dir.join(name);
+        if let Ok(m) = std::fs::metadata(&p) {
+            if !m.is_file() {
+                return Err(Failure {
+                    code: exit::CANTCREAT,
+                    message: format!(
+                        "cannot write {}: not a regular file (a FIFO, a device or a directory)",
+                        p.display()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(lock)
+}
+
 /// The range of `--speedup`.
 pub const SPEEDUP_RANGE: (f64, f64) = (1e-3, 1e3);
 /// The largest `--timeout-s`, s (a day).
@@ -81,9 +116,17 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     };
     opts.companion_timeout_s = args.timeout_s;
     opts.stop = isotrack_mavlink::interrupt_flag();
+    let _lock = match &args.out {
+        Some(dir) => Some(prepare_out(
+            dir,
+            &args.scenario,
+            &scenario,
+            &["trace.csv", "summary.json", "scenario.toml"],
+        )?),
+        None => None,
+    };
     let mut writer = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
             let p = dir.join("trace.csv");
             Some(TraceWriter::create(&p, scenario.is_flying()).map_err(|e| cant(&p, e))?)
         }
@@ -225,9 +268,17 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Return => FailsafeAction::Return,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
+    let _lock = match &args.out {
+        Some(dir) => Some(prepare_out(
+            dir,
+            &args.scenario,
+            &scenario,
+            &["trace.csv", "summary.json", "scenario.toml", "mavlink.tlog"],
+        )?),
+        None => None,
+    };
     let mut writer = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
             let p = dir.join("trace.csv");
             Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
         }

@@ -387,3 +387,28 @@ fn an_interrupted_sitl_says_interrupted() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A FIFO where `fly --out` would write its trace is refused at once (73), not opened (which
+/// would block for ever without a reader).
+#[cfg(unix)]
+#[test]
+fn a_fifo_in_the_run_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fly");
+    std::fs::create_dir(&out).unwrap();
+    let ok = Command::new("mkfifo")
+        .arg(out.join("trace.csv"))
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = isotrack(&[
+        "fly",
+        "--mavlink",
+        "udpout:127.0.0.1:9",
+        "--timeout-s",
+        "0.3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_fails(&o, 73, &["not a regular file"]);
+}
