@@ -173,3 +173,41 @@ def test_hostile_traffic_neither_crashes_nor_moves_the_vehicle():
     assert abs(float(last["y_m"]) + 10.0) < 1e-9
     assert all(float(r["omega_radps"]) == 0.0 for r in rows)
     assert not [m for m in got if m.get_type() == "BAD_DATA"]
+
+
+def test_a_pymavlink_ground_station_hands_over_to_fly():
+    """docs/FLYING.md's ground-station workflow: `fly` waits (no --take-control), pymavlink as
+    the ground station (system 255) arms the vehicle and switches it to OFFBOARD, and fly's law
+    then flies it: its setpoints are accepted (the lockstep vehicle advances on them) until
+    --max-duration-s, a failsafe whose HOLD the vehicle confirms (exit 75)."""
+    with tempfile.TemporaryDirectory() as d:
+        p, port = start_sitl(d, "--timeout-s", "5")
+        fly = subprocess.Popen(
+            [cli(), "fly", "--mavlink", f"udpout:127.0.0.1:{port}", "--timeout-s", "20",
+             "--max-duration-s", "2"],
+            stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        try:
+            g = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255,
+                                           source_component=190)
+            g.mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_GCS,
+                                 mavutil.mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+            assert g.recv_match(type="HEARTBEAT", blocking=True, timeout=30) is not None
+            acks = []
+            for cmd, prm in [(400, [1, 0, 0]), (176, [1, 6, 0])]:
+                g.mav.command_long_send(1, 1, cmd, 0, *prm, 0, 0, 0, 0)
+                while True:
+                    m = g.recv_match(type="COMMAND_ACK", blocking=True, timeout=30)
+                    assert m is not None, "no COMMAND_ACK"
+                    if m.command == cmd:
+                        acks.append(m.result)
+                        break
+            assert acks == [0, 0]
+            out, err = fly.communicate(timeout=120)
+        finally:
+            for q in (fly, p):
+                if q.poll() is None:
+                    q.kill()
+        assert fly.returncode == 75, err
+        m = re.search(r"end         max_duration \((\d+) measurements, (\d+) law commands\)", out)
+        assert m and int(m.group(2)) > 0, out + err
+        p.wait(timeout=60)

@@ -318,7 +318,7 @@ pub fn write_map(
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
     // One writer per directory, as `sweep`, `merge` and `benchmark`: a second `check --map`
     // on DIR exits 73 instead of interleaving its files with this one's. Held to the end.
-    let _lock = crate::sweep::lock_output_dir(dir)?;
+    let _lock = crate::sweep::lock_output_dir(dir, "check --map")?;
     let input = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
     let csv_path = output_path(dir, "stability_map.csv", &input)?;
     let png_path = output_path(dir, "stability_map.png", &input)?;

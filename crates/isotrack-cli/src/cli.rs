@@ -78,6 +78,10 @@ pub struct SitlArgs {
     /// The vehicle's MAVLink system id.
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
+    /// `--lockstep`: end the run when nothing came from the companion (or anyone) for S
+    /// seconds of wall time.
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    pub timeout_s: f64,
     /// Write the simulation's own `trace.csv`, `summary.json` and `scenario.toml` into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,

@@ -3,8 +3,9 @@
 
 use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
-use crate::output::{scenario_toml, write_summary, TraceWriter};
+use crate::output::{scenario_toml, summary_to_json, Summary, TraceWriter};
 use crate::run::{load, Failure};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
@@ -55,6 +56,42 @@ fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     }
 }
 
+/// Readies run directory `dir` for `names`: none of them one of the inputs (64), the
+/// directory created and locked as sweeps lock theirs (73 while another command writes it), and
+/// none of them an existing non-regular file (a FIFO would block the write for ever: 73).
+/// Returns the lock, held until dropped.
+fn prepare_out(
+    dir: &Path,
+    args: &crate::cli::ScenarioArgs,
+    scenario: &isotrack_scenario::Scenario,
+    names: &[&str],
+    command: &str,
+) -> Result<crate::sweep::DirLock, Failure> {
+    let inputs = crate::output::input_files(args.scenario.as_deref(), scenario);
+    for name in names {
+        if let Some(message) = crate::output::input_clash(&inputs, &dir.join(name)) {
+            return Err(usage(message));
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+    let lock = crate::sweep::lock_output_dir(dir, command)?;
+    for name in names {
+        let p = dir.join(name);
+        if let Ok(m) = std::fs::metadata(&p) {
+            if !m.is_file() {
+                return Err(Failure {
+                    code: exit::CANTCREAT,
+                    message: format!(
+                        "cannot write {}: not a regular file (a FIFO, a device or a directory)",
+                        p.display()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(lock)
+}
+
 /// The range of `--speedup`.
 pub const SPEEDUP_RANGE: (f64, f64) = (1e-3, 1e3);
 /// The largest `--timeout-s`, s (a day).
@@ -66,6 +103,8 @@ pub const MAX_DURATION_S: f64 = u32::MAX as f64 / 1000.0;
 pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     positive("--speedup", args.speedup)?;
     within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
+    positive("--timeout-s", Some(args.timeout_s))?;
+    within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
     let scenario = load(&args.scenario)?;
     let mut opts = SitlOptions::new(&args.mavlink);
     opts.system_id = args.system_id;
@@ -76,10 +115,20 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             speedup: args.speedup.unwrap_or(1.0),
         }
     };
+    opts.companion_timeout_s = args.timeout_s;
     opts.stop = isotrack_mavlink::interrupt_flag();
+    let _lock = match &args.out {
+        Some(dir) => Some(prepare_out(
+            dir,
+            &args.scenario,
+            &scenario,
+            &["trace.csv", "summary.json", "scenario.toml"],
+            "sitl",
+        )?),
+        None => None,
+    };
     let mut writer = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
             let p = dir.join("trace.csv");
             Some(TraceWriter::create(&p, scenario.is_flying()).map_err(|e| cant(&p, e))?)
         }
@@ -106,32 +155,69 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     for e in &report.events {
         errln!("isotrack sitl: {e}");
     }
+    // A run cut short is no `completed` run: `interrupted` (Ctrl-C, SIGTERM, SIGHUP), as
+    // `run` says, or `companion_lost` (lockstep, nobody answered for --timeout-s).
+    let cut = if report.interrupted {
+        Some((
+            "interrupted",
+            "stopped by a signal (Ctrl-C, SIGTERM or SIGHUP)".to_string(),
+        ))
+    } else if report.companion_lost {
+        Some((
+            "companion_lost",
+            format!(
+                "lockstep: no message from the companion for {} s",
+                Echo(args.timeout_s)
+            ),
+        ))
+    } else {
+        None
+    };
     if let (Some(dir), Some(w)) = (&args.out, writer) {
         w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
         let p = dir.join("summary.json");
-        write_summary(
-            &p,
-            &scenario,
-            args.scenario.scenario.as_deref(),
-            &report.result,
-            &report.events,
-        )
-        .map_err(|e| cant(&p, e))?;
+        let summary = Summary {
+            isotrack_version: env!("CARGO_PKG_VERSION"),
+            scenario_path: args
+                .scenario
+                .scenario
+                .as_ref()
+                .map(|p| p.display().to_string()),
+            result: &report.result,
+            warnings: &report.events,
+            scenario: scenario.file(),
+        };
+        let mut text = summary_to_json(&summary).map_err(|e| cant(&p, e.into()))?;
+        if let Some((outcome, detail)) = &cut {
+            let mut v: serde_json::Value =
+                serde_json::from_str(&text).map_err(|e| cant(&p, e.into()))?;
+            v["outcome"] = (*outcome).into();
+            v["outcome_detail"] = detail.clone().into();
+            text = serde_json::to_string_pretty(&v).map_err(|e| cant(&p, e.into()))?;
+        }
+        std::fs::write(&p, text + "\n").map_err(|e| cant(&p, e))?;
         let p = dir.join("scenario.toml");
         std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
     }
     outln!(
-        "outcome     {} at t = {} s ({} samples, {} setpoints refused{})",
-        report.result.outcome.as_str(),
-        report.result.t_end_s,
+        "outcome     {} at t = {} s ({} samples, {} setpoints refused)",
+        cut.as_ref().map_or(report.result.outcome.as_str(), |c| c.0),
+        Num(report.result.t_end_s),
         report.result.samples,
         report.setpoints_refused,
-        if report.interrupted {
-            ", interrupted"
-        } else {
-            ""
-        }
     );
+    if report.interrupted {
+        return Err(Failure {
+            code: crate::sweep::INTERRUPTED,
+            message: "interrupted".into(),
+        });
+    }
+    if report.companion_lost {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: cut.map(|c| c.1).unwrap_or_default(),
+        });
+    }
     Ok(())
 }
 
@@ -184,9 +270,18 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Return => FailsafeAction::Return,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
+    let _lock = match &args.out {
+        Some(dir) => Some(prepare_out(
+            dir,
+            &args.scenario,
+            &scenario,
+            &["trace.csv", "summary.json", "scenario.toml", "mavlink.tlog"],
+            "fly",
+        )?),
+        None => None,
+    };
     let mut writer = match &args.out {
         Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
             let p = dir.join("trace.csv");
             Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
         }
@@ -269,19 +364,33 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         let p = dir.join("scenario.toml");
         std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
     }
-    let _ = write_summary;
     outln!(
         "end         {} ({} measurements, {} law commands)",
         report.end.as_str(),
         report.samples,
         report.commands.len()
     );
-    if report.end.is_failsafe() && !report.failsafe_acknowledged {
+    let commanded = report.end.is_failsafe() || report.way_out_commanded;
+    if commanded && !report.failsafe_acknowledged {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: format!(
                 "failsafe ({}): the vehicle did not confirm the failsafe mode",
                 report.end.as_str()
+            ),
+        });
+    }
+    if commanded || report.end == FlyEnd::ControlRefused {
+        return Err(Failure {
+            code: exit::FAILSAFE,
+            message: format!(
+                "the flight was ended by a failsafe ({}){}",
+                report.end.as_str(),
+                if commanded {
+                    ", confirmed by the vehicle"
+                } else {
+                    ""
+                }
             ),
         });
     }

@@ -268,3 +268,147 @@ fn an_unconfirmed_failsafe_exits_69() {
     assert!(!err.contains("HOLD commanded"), "{err}");
     assert!(err.contains("link_lost"), "{err}");
 }
+
+/// A lockstep `sitl` (`--timeout-s` as given) and a `fly --take-control --out` flying it, on a
+/// run long enough to be caught in flight: returned once the companion's trace has rows on
+/// disk.
+#[cfg(unix)]
+fn a_flight_under_way(
+    dir: &std::path::Path,
+    sitl_timeout_s: &str,
+) -> (std::process::Child, std::process::Child) {
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "sitl",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--lockstep",
+            "--timeout-s",
+            sitl_timeout_s,
+            "--set",
+            "sim.duration_s=100000",
+        ])
+        .arg("--out")
+        .arg(dir.join("sitl"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let fly = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .arg("--out")
+        .arg(dir.join("fly"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let trace = dir.join("fly/trace.csv");
+    let t0 = std::time::Instant::now();
+    while std::fs::metadata(&trace).map_or(0, |m| m.len()) < 20_000 {
+        assert!(
+            t0.elapsed() < std::time::Duration::from_secs(120),
+            "never flew"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    (sitl, fly)
+}
+
+#[cfg(unix)]
+fn signal(child: &std::process::Child, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+}
+
+/// The terminal closing (SIGHUP) stops `fly` as Ctrl-C does: HOLD commanded and confirmed,
+/// `interrupted`, exit 75 (ended by a failsafe); the lockstep `sitl`, answered no more, ends
+/// after its --timeout-s as `companion_lost`, exit 69.
+#[cfg(unix)]
+#[test]
+fn sighup_stops_fly_and_sitl_ends_without_its_companion() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sitl, fly) = a_flight_under_way(dir.path(), "1");
+    signal(&fly, "-HUP");
+    let o = fly.wait_with_output().unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(75), "{out}{err}");
+    assert!(out.contains("end         interrupted"), "{out}");
+    assert!(
+        err.contains("HOLD commanded") && err.contains("the vehicle is in HOLD"),
+        "{err}"
+    );
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("fly/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["end_reason"], "interrupted");
+    assert_eq!(summary["failsafe_acknowledged"], true);
+    let s = sitl.wait_with_output().unwrap();
+    let out = String::from_utf8_lossy(&s.stdout);
+    assert_eq!(s.status.code(), Some(69), "{out}");
+    assert!(out.contains("outcome     companion_lost"), "{out}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "companion_lost");
+}
+
+/// Ctrl-C (SIGINT) stops `sitl`: `interrupted` (not `completed`) on standard output and in
+/// `summary.json`, exit 130; its companion sees the run end.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_sitl_says_interrupted() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sitl, fly) = a_flight_under_way(dir.path(), "60");
+    signal(&sitl, "-INT");
+    let s = sitl.wait_with_output().unwrap();
+    let out = String::from_utf8_lossy(&s.stdout);
+    assert_eq!(s.status.code(), Some(130), "{out}");
+    assert!(out.contains("outcome     interrupted"), "{out}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "interrupted");
+    let o = fly.wait_with_output().unwrap();
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("end         vehicle_ended"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// A FIFO where `fly --out` would write its trace is refused at once (73), not opened (which
+/// would block for ever without a reader).
+#[cfg(unix)]
+#[test]
+fn a_fifo_in_the_run_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fly");
+    std::fs::create_dir(&out).unwrap();
+    let ok = Command::new("mkfifo")
+        .arg(out.join("trace.csv"))
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = isotrack(&[
+        "fly",
+        "--mavlink",
+        "udpout:127.0.0.1:9",
+        "--timeout-s",
+        "0.3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_fails(&o, 73, &["not a regular file"]);
+}

@@ -35,6 +35,9 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
+/// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
+pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
+
 /// The measurements' clock as received: only a measurement newer than every one before it
 /// counts as one for the sensor-loss timer (the companion's own monotonic clock).
 struct SensorClock {
@@ -116,6 +119,15 @@ pub enum FailsafeAction {
     Hold,
     /// RETURN (PX4 AUTO.RTL).
     Return,
+}
+
+/// What the companion commands when it lets go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum WayOut {
+    /// The failsafe mode.
+    Mode(Mode),
+    /// Disarm (a vehicle the companion armed on the ground).
+    Disarm,
 }
 
 /// Options of [`run_fly`].
@@ -233,8 +245,12 @@ pub struct FlyReport {
     pub t_last_s: Option<f64>,
     /// Events (control, failsafes), in order.
     pub events: Vec<String>,
-    /// Whether the vehicle acknowledged the failsafe mode.
+    /// Whether the vehicle acknowledged the failsafe mode (or, after a refused take-over, the
+    /// mode or the disarm commanded).
     pub failsafe_acknowledged: bool,
+    /// Whether anything was commanded on the way out (a failsafe's mode, or after a refused
+    /// take-over of an armed vehicle, HOLD/RETURN or a disarm).
+    pub way_out_commanded: bool,
     /// The link's counters.
     pub link: LinkStats,
 }
@@ -279,6 +295,11 @@ struct Fly<'a> {
     refused: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
     in_control: bool,
+    /// The companion has sent an arm command.
+    arm_sent: bool,
+    /// The vehicle was disarmed when first heard and armed on the companion's command: it is
+    /// still on the ground, and disarming it is the way out of a refused take-over.
+    armed_by_us: bool,
     /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
     /// no `LOCAL_POSITION_NED` has come.
     global_origin: Option<crate::geo::Home>,
@@ -416,6 +437,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         last_answer_ms: None,
         refused: false,
         in_control: false,
+        arm_sent: false,
+        armed_by_us: false,
         global_origin: None,
         local_seen: false,
         run_ended: false,
@@ -448,7 +471,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
     // Since the vehicle's first message (the fence's wait for a position).
     let mut clock_start = Instant::now();
     let mut vehicle_done = false;
-    let mut buf = [0u8; 2048];
+    let mut mavlink1_logged = false;
+    let mut partial: Vec<u8> = Vec::new();
+    let mut buf = vec![0u8; 65_536];
     let end = 'flight: loop {
         if opts.stop.load(Ordering::Relaxed) {
             break 'flight FlyEnd::Interrupted;
@@ -476,14 +501,38 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &mut vehicle_done,
             );
         }
+        if fly.link.stats.mavlink1_frames > 0 && !mavlink1_logged {
+            mavlink1_logged = true;
+            fly.event(
+                "MAVLink 1 frames received and ignored: this bridge speaks MAVLink 2 only (set the autopilot's link to MAVLink 2)".into(),
+            );
+        }
         if !had_target && fly.target.is_some() {
             // The sensor's silence counts from the vehicle's first message.
             clock.last = Instant::now();
             clock_start = Instant::now();
         }
         if let Some(s) = &lines {
-            while let Ok((n, _)) = s.recv_from(&mut buf) {
-                for line in String::from_utf8_lossy(&buf[..n]).lines() {
+            // At most MAX_DATAGRAMS_PER_POLL datagrams a turn: a flood delays, never starves,
+            // the link. A line may span datagrams: the tail after the last newline waits for
+            // the rest (at most MAX_PARTIAL_LINE_BYTES, else dropped).
+            for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
+                let Ok((n, _)) = s.recv_from(&mut buf) else {
+                    break;
+                };
+                partial.extend_from_slice(&buf[..n]);
+                let Some(end) = partial.iter().rposition(|&b| b == b'\n') else {
+                    if partial.len() > MAX_PARTIAL_LINE_BYTES {
+                        partial.clear();
+                    }
+                    continue;
+                };
+                let text = String::from_utf8_lossy(&partial[..end]).into_owned();
+                partial.drain(..=end);
+                if partial.len() > MAX_PARTIAL_LINE_BYTES {
+                    partial.clear();
+                }
+                for line in text.lines() {
                     let mut it = line.split(',');
                     let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
                         continue;
@@ -545,13 +594,35 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
             break 'flight FlyEnd::ControlRefused;
         }
-        if opts.take_control && !active && fly.target.is_some() && Instant::now() >= next_control {
+        // Nothing is armed before the sensor and the position are there: a take-over waits
+        // for the first measurement and the first position (each within --timeout-s, below).
+        let ready = clock.newest_ms.is_some() && pos.is_some();
+        if opts.take_control
+            && !active
+            && fly.target.is_some()
+            && !ready
+            && clock.newest_ms.is_some()
+            && clock_start.elapsed() > timeout
+        {
+            fly.event(format!(
+                "no position from the vehicle for {} s: control not taken",
+                opts.timeout_s
+            ));
+            break 'flight FlyEnd::SensorLost;
+        }
+        if opts.take_control
+            && !active
+            && ready
+            && fly.target.is_some()
+            && Instant::now() >= next_control
+        {
             control_tries += 1;
             if control_tries > 20 {
                 fly.event("the vehicle did not arm or switch to OFFBOARD in 10 s".into());
                 break 'flight FlyEnd::ControlRefused;
             }
             if !fly.armed {
+                fly.arm_sent = true;
                 fly.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
             } else {
                 // PX4 wants setpoints before the switch.
@@ -607,9 +678,15 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 } else {
                     fly.current = None;
                 }
-                fly.setpoint(ms)?;
                 fly.last_answer_ms = Some(ms);
-                next_setpoint = Instant::now() + period;
+                // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for
+                // it); a UDP sensor's answers keep to --setpoint-rate-hz (the periodic
+                // setpoint carries the newest command): a fast sensor does not multiply the
+                // setpoints.
+                if lines.is_none() || Instant::now() >= next_setpoint {
+                    fly.setpoint(ms)?;
+                    next_setpoint = Instant::now() + period;
+                }
                 let (x, y) = pos.unwrap_or((f64::NAN, f64::NAN));
                 sink.record(&TraceRow {
                     t_s: m.t_s,
@@ -664,30 +741,56 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             break 'flight FlyEnd::SensorLost;
         }
     };
+    // The way out: the failsafe mode; after a refused take-over, a disarm if the companion
+    // armed the vehicle on the ground, else the failsafe mode if it is armed.
+    let mode = match opts.failsafe {
+        FailsafeAction::Hold => Mode::Hold,
+        FailsafeAction::Return => Mode::Return,
+    };
+    let way_out = if end.is_failsafe() {
+        Some(WayOut::Mode(mode))
+    } else if end == FlyEnd::ControlRefused && fly.armed && fly.armed_by_us {
+        Some(WayOut::Disarm)
+    } else if end == FlyEnd::ControlRefused && fly.armed {
+        Some(WayOut::Mode(mode))
+    } else {
+        None
+    };
     let mut acknowledged = false;
-    if end.is_failsafe() {
-        let mode = match opts.failsafe {
-            FailsafeAction::Hold => Mode::Hold,
-            FailsafeAction::Return => Mode::Return,
+    if let Some(way) = way_out {
+        let what = match way {
+            WayOut::Mode(m) => format!("{} commanded", m.name()),
+            WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
         fly.event(if fly.target.is_some() {
-            format!(
-                "failsafe ({}): setpoints stopped, {} commanded",
-                end.as_str(),
-                mode.name()
-            )
+            format!("failsafe ({}): setpoints stopped, {what}", end.as_str())
         } else {
             format!(
                 "failsafe ({}): no vehicle heard, nothing to command",
                 end.as_str()
             )
         });
-        // Up to 5 tries, 0.3 s apart, until the vehicle acknowledges or reports the mode.
-        let tries = if fly.target.is_some() { 5 } else { 0 };
-        'tries: for _ in 0..tries {
-            fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(mode))?;
+        // Every 0.3 s until the vehicle acknowledges it or reports it, or the link is lost (no
+        // message from the vehicle for --timeout-s; at least 5 tries even then: the vehicle
+        // may hear what it cannot answer).
+        let mut tries = 0u32;
+        let mut way_refused = false;
+        while fly.target.is_some() {
+            let lost = Instant::now().duration_since(last_link) > timeout;
+            if lost && tries >= 5 {
+                break;
+            }
+            tries += 1;
+            match way {
+                WayOut::Mode(m) => {
+                    fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(m))?
+                }
+                WayOut::Disarm => {
+                    fly.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 0.0, 0.0])?
+                }
+            }
             let until = Instant::now() + Duration::from_millis(300);
-            while Instant::now() < until {
+            while Instant::now() < until && !acknowledged && !way_refused {
                 for r in fly
                     .link
                     .poll(Duration::from_millis(20))
@@ -696,32 +799,63 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     if Some((r.header.system_id, r.header.component_id)) != fly.target {
                         continue;
                     }
-                    match &r.msg {
-                        MavMessage::COMMAND_ACK(a)
-                            if a.command == MavCmd::MAV_CMD_DO_SET_MODE
-                                && a.result == MavResult::MAV_RESULT_ACCEPTED =>
+                    last_link = Instant::now();
+                    if let MavMessage::COMMAND_ACK(a) = &r.msg {
+                        let ours = match way {
+                            WayOut::Mode(_) => MavCmd::MAV_CMD_DO_SET_MODE,
+                            WayOut::Disarm => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                        };
+                        // A refusal (not "busy, try again"): retrying changes nothing.
+                        if a.command == ours
+                            && matches!(
+                                a.result,
+                                MavResult::MAV_RESULT_DENIED
+                                    | MavResult::MAV_RESULT_UNSUPPORTED
+                                    | MavResult::MAV_RESULT_FAILED
+                            )
                         {
-                            acknowledged = true;
+                            way_refused = true;
                         }
-                        MavMessage::HEARTBEAT(h)
-                            if Mode::from_custom_mode(h.custom_mode) == Some(mode) =>
-                        {
-                            acknowledged = true;
-                        }
-                        _ => {}
                     }
+                    acknowledged |= match (&r.msg, way) {
+                        (MavMessage::COMMAND_ACK(a), WayOut::Mode(_)) => {
+                            a.command == MavCmd::MAV_CMD_DO_SET_MODE
+                                && a.result == MavResult::MAV_RESULT_ACCEPTED
+                        }
+                        (MavMessage::COMMAND_ACK(a), WayOut::Disarm) => {
+                            a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
+                                && a.result == MavResult::MAV_RESULT_ACCEPTED
+                        }
+                        (MavMessage::HEARTBEAT(h), WayOut::Mode(m)) => {
+                            Mode::from_custom_mode(h.custom_mode) == Some(m)
+                        }
+                        (MavMessage::HEARTBEAT(h), WayOut::Disarm) => !h
+                            .base_mode
+                            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),
+                        _ => false,
+                    };
                 }
-                if acknowledged {
-                    break 'tries;
-                }
+            }
+            if acknowledged || way_refused {
+                break;
             }
         }
         fly.event(if acknowledged {
-            format!("the vehicle is in {}", mode.name())
+            match way {
+                WayOut::Mode(m) => format!("the vehicle is in {} ({tries} tries)", m.name()),
+                WayOut::Disarm => format!("the vehicle is disarmed ({tries} tries)"),
+            }
         } else if fly.target.is_none() {
             "no failsafe mode was sent".to_string()
         } else {
-            format!("the vehicle did not confirm {}", mode.name())
+            format!(
+                "the vehicle did not confirm the {} ({tries} tries, {})",
+                match way {
+                    WayOut::Mode(m) => m.name(),
+                    WayOut::Disarm => "disarm",
+                },
+                if way_refused { "refused" } else { "link lost" }
+            )
         });
     }
     Ok(FlyReport {
@@ -732,8 +866,46 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         t_last_s: t_last,
         events: fly.events,
         failsafe_acknowledged: acknowledged,
+        way_out_commanded: way_out.is_some(),
         link: fly.link.stats,
     })
+}
+
+/// Whether a heartbeat is a vehicle's autopilot: an autopilot (not `MAV_AUTOPILOT_INVALID`)
+/// of a vehicle type. A gimbal, camera, ground station or another companion on the vehicle's
+/// system also beats, some of them with the autopilot's `autopilot` field: never the vehicle.
+pub fn is_autopilot(h: &HEARTBEAT_DATA) -> bool {
+    use MavType::*;
+    h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
+        && matches!(
+            h.mavtype,
+            MAV_TYPE_FIXED_WING
+                | MAV_TYPE_QUADROTOR
+                | MAV_TYPE_COAXIAL
+                | MAV_TYPE_HELICOPTER
+                | MAV_TYPE_AIRSHIP
+                | MAV_TYPE_FREE_BALLOON
+                | MAV_TYPE_ROCKET
+                | MAV_TYPE_GROUND_ROVER
+                | MAV_TYPE_SURFACE_BOAT
+                | MAV_TYPE_SUBMARINE
+                | MAV_TYPE_HEXAROTOR
+                | MAV_TYPE_OCTOROTOR
+                | MAV_TYPE_TRICOPTER
+                | MAV_TYPE_FLAPPING_WING
+                | MAV_TYPE_KITE
+                | MAV_TYPE_VTOL_TAILSITTER_DUOROTOR
+                | MAV_TYPE_VTOL_TAILSITTER_QUADROTOR
+                | MAV_TYPE_VTOL_TILTROTOR
+                | MAV_TYPE_VTOL_FIXEDROTOR
+                | MAV_TYPE_VTOL_TAILSITTER
+                | MAV_TYPE_VTOL_TILTWING
+                | MAV_TYPE_DODECAROTOR
+                | MAV_TYPE_DECAROTOR
+                | MAV_TYPE_PARAFOIL
+                | MAV_TYPE_GENERIC_MULTIROTOR
+                | MAV_TYPE_GROUND_QUADRUPED
+        )
 }
 
 /// Handles one received message.
@@ -752,9 +924,7 @@ fn handle(
     let from = (r.header.system_id, r.header.component_id);
     if fly.target.is_none() {
         if let MavMessage::HEARTBEAT(h) = &r.msg {
-            if h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
-                && from != (fly.opts.system_id as u32, 191)
-            {
+            if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) {
                 fly.target = Some(from);
                 fly.event(format!("vehicle: system {}, component {}", from.0, from.1));
             }
@@ -781,6 +951,9 @@ fn handle(
                 .base_mode
                 .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
             let mode = Mode::from_custom_mode(h.custom_mode);
+            if armed && !fly.armed && fly.arm_sent && !fly.in_control {
+                fly.armed_by_us = true;
+            }
             if armed != fly.armed || mode != fly.mode {
                 fly.event(format!(
                     "vehicle {} in {}",
@@ -799,7 +972,10 @@ fn handle(
         MavMessage::COMMAND_ACK(a) if !fly.in_control => {
             let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
             fly.event(format!("{:?}: {:?}", a.command, a.result));
-            if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
+            if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && fly.arm_sent {
+                if !fly.armed {
+                    fly.armed_by_us = true;
+                }
                 fly.armed = true;
             }
             let control = matches!(

@@ -26,7 +26,7 @@ extern "C" fn on_interrupt(_: libc::c_int) {
     INTERRUPTED.store(true, Ordering::SeqCst);
 }
 
-/// A flag that Ctrl-C (SIGINT) and SIGTERM set instead of killing the process, so that `fly`
+/// A flag that Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal closed) set instead of killing the process, so that `fly`
 /// and `sitl` stop cleanly (the companion commands its failsafe mode first). A thread copies it
 /// into the returned flag every 50 ms.
 pub fn interrupt_flag() -> Arc<AtomicBool> {
@@ -38,6 +38,11 @@ pub fn interrupt_flag() -> Arc<AtomicBool> {
         );
         libc::signal(
             libc::SIGTERM,
+            on_interrupt as *const () as libc::sighandler_t,
+        );
+        // The terminal closing (SIGHUP) stops the same way: never a vehicle left with nobody.
+        libc::signal(
+            libc::SIGHUP,
             on_interrupt as *const () as libc::sighandler_t,
         );
     }

@@ -63,6 +63,8 @@ pub struct LinkStats {
     pub frames_in: u64,
     /// Frames sent.
     pub frames_out: u64,
+    /// MAVLink 1 frames (valid checksum) received and dropped: this bridge speaks MAVLink 2.
+    pub mavlink1_frames: u64,
 }
 
 /// One UDP MAVLink 2 link.
@@ -262,9 +264,12 @@ impl Link {
         let mut reader = MavlinkReader::new(datagram);
         // A datagram of n bytes holds at most n / 12 frames (the smallest MAVLink 2 frame).
         for _ in 0..=datagram.len() / 12 {
-            let raw = match reader.read_raw_message::<MavMessage>(MavlinkVersion::V2) {
+            let raw = match reader.read_any_raw_message::<MavMessage>() {
                 Ok(MAVLinkMessageRaw::V2(raw)) => raw,
-                Ok(MAVLinkMessageRaw::V1(_)) => continue,
+                Ok(MAVLinkMessageRaw::V1(_)) => {
+                    self.stats.mavlink1_frames += 1;
+                    continue;
+                }
                 Err(_) => break,
             };
             let Ok(msg) = MavMessage::parse(MavlinkVersion::V2, raw.message_id(), raw.payload())

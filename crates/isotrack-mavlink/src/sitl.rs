@@ -21,6 +21,7 @@ use crate::mirror::Transport;
 use crate::vehicle_state::Mode;
 use crate::wire;
 use isotrack_core::math::{wrap_angle, Pose2};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::Scenario;
 use isotrack_sim::{RunResult, TraceRow, TraceSink};
 use mavlink::dialects::common::*;
@@ -55,6 +56,9 @@ pub struct SitlOptions {
     pub setpoint_timeout_s: f64,
     /// Set from outside (Ctrl-C) to end the run where it stands.
     pub stop: Arc<AtomicBool>,
+    /// Lockstep: end the run when no message came from anyone for this long, wall s (the
+    /// companion is gone: it ended or failed safe, and nobody will answer the sample).
+    pub companion_timeout_s: f64,
 }
 
 impl SitlOptions {
@@ -66,6 +70,7 @@ impl SitlOptions {
             system_id: 1,
             setpoint_timeout_s: 1.0,
             stop: Arc::new(AtomicBool::new(false)),
+            companion_timeout_s: 10.0,
         }
     }
 }
@@ -86,6 +91,9 @@ pub struct SitlReport {
     pub link: LinkStats,
     /// Whether the run was stopped from outside before its end.
     pub interrupted: bool,
+    /// Whether a lockstep run ended because nobody answered for
+    /// [`SitlOptions::companion_timeout_s`].
+    pub companion_lost: bool,
 }
 
 /// Why a simulated flight could not start.
@@ -156,11 +164,33 @@ struct Autopilot {
     turn_limit_radps: f64,
     events: Vec<String>,
     refused: u64,
+    /// Senders whose heartbeat says `MAV_TYPE_GCS` (MAVSDK's ground station is system 245, not
+    /// 255), the most recent [`MAX_GROUND_STATIONS`].
+    ground_stations: Vec<(u32, u8)>,
 }
 
+/// The most ground stations (by heartbeat) the vehicle remembers.
+pub const MAX_GROUND_STATIONS: usize = 8;
+
 impl Autopilot {
+    /// Whether `from` is a ground station: system [`GCS_SYSTEM_ID`], or a sender whose
+    /// heartbeat says `MAV_TYPE_GCS`.
+    fn is_gcs(&self, from: (u32, u8)) -> bool {
+        from.0 == GCS_SYSTEM_ID as u32 || self.ground_stations.contains(&from)
+    }
+
+    /// Remembers a ground station's heartbeat.
+    fn heard_gcs(&mut self, from: (u32, u8)) {
+        if !self.ground_stations.contains(&from) {
+            if self.ground_stations.len() == MAX_GROUND_STATIONS {
+                self.ground_stations.remove(0);
+            }
+            self.ground_stations.push(from);
+        }
+    }
+
     fn event(&mut self, t_s: f64, what: String) {
-        self.events.push(format!("t = {t_s} s: {what}"));
+        self.events.push(format!("t = {} s: {what}", Num(t_s)));
     }
 
     /// The turn rate the vehicle holds from a sample at `pose`.
@@ -196,7 +226,7 @@ impl Autopilot {
     /// Whether `from` may command the vehicle: anyone while it is disarmed or has no owner,
     /// else its owner and the ground station ([`GCS_SYSTEM_ID`]).
     fn may_command(&self, from: (u32, u8)) -> bool {
-        !self.armed || from.0 == GCS_SYSTEM_ID as u32 || self.owner.is_none_or(|o| o == from)
+        !self.armed || self.is_gcs(from) || self.owner.is_none_or(|o| o == from)
     }
 
     fn deny(&mut self, t_s: f64, from: (u32, u8), what: &str) -> MavResult {
@@ -212,7 +242,7 @@ impl Autopilot {
 
     /// Handles a command; returns the acknowledgement's result.
     fn command(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
-        let gcs = from.0 == GCS_SYSTEM_ID as u32;
+        let gcs = self.is_gcs(from);
         match c.command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
                 // As PX4: forced exactly when param2 is the force code; any other value (0, or
@@ -279,11 +309,14 @@ impl Autopilot {
     }
 
     /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
-    /// (or of anyone, while no companion is in control).
+    /// in control, of any companion on board (a component of the vehicle's own system: as in
+    /// PX4, setpoints are not bound to who switched the mode), or of anyone while no companion
+    /// is in control; never of a ground station.
     fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
+        let on_board = from.0 == self.system_id as u32;
         if s.target_system != self.system_id
-            || self.owner.is_some_and(|o| o != from)
-            || from.0 == GCS_SYSTEM_ID as u32
+            || (self.owner.is_some_and(|o| o != from) && !on_board)
+            || self.is_gcs(from)
         {
             self.refused += 1;
             return None;
@@ -339,6 +372,12 @@ struct Sitl<'a> {
     next_slow_s: f64,
     last_heartbeat_wall: Instant,
     speed_mps: f64,
+    /// When the last valid frame of another sender came.
+    last_heard: Instant,
+    /// Telemetry (a position) has gone out.
+    telemetry_sent: bool,
+    /// The first MAVLink 1 frame has been logged.
+    mavlink1_logged: bool,
 }
 
 impl Sitl<'_> {
@@ -422,6 +461,7 @@ impl Sitl<'_> {
     /// The telemetry of one trace row.
     fn telemetry(&mut self, r: &TraceRow) -> Result<(), SitlError> {
         self.slow_group(r.t_s)?;
+        self.telemetry_sent = true;
         let ms = wire::time_ms(r.t_s).unwrap_or(u32::MAX);
         let (lat, lon) = self.home.to_lat_lon_deg(r.x_m, r.y_m);
         let t = r.telemetry;
@@ -475,6 +515,13 @@ impl Sitl<'_> {
     /// Handles what arrives within `timeout`; returns the time stamps of valid setpoints.
     fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<u32>, SitlError> {
         let got = self.link.poll(timeout).map_err(SitlError::Io)?;
+        if self.link.stats.mavlink1_frames > 0 && !self.mavlink1_logged {
+            self.mavlink1_logged = true;
+            self.ap.event(
+                t_s,
+                "MAVLink 1 frames received and ignored: this vehicle speaks MAVLink 2 only".into(),
+            );
+        }
         let mut answers = Vec::new();
         let me = (self.ap.system_id as u32, 1u8);
         for r in got {
@@ -482,6 +529,7 @@ impl Sitl<'_> {
             if from == me {
                 continue;
             }
+            self.last_heard = Instant::now();
             match &r.msg {
                 MavMessage::COMMAND_LONG(c) => {
                     if c.target_system != self.ap.system_id {
@@ -494,6 +542,9 @@ impl Sitl<'_> {
                     }))?;
                     // The new state at once (PX4 also reports it in the next heartbeat).
                     self.heartbeat(false)?;
+                }
+                MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
+                    self.ap.heard_gcs(from);
                 }
                 MavMessage::SET_ATTITUDE_TARGET(s) => {
                     if let Some(ms) = self.ap.setpoint(t_s, from, s) {
@@ -550,6 +601,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
             turn_limit_radps: turn_limit,
             events: Vec::new(),
             refused: 0,
+            ground_stations: Vec::new(),
         },
         home: Home::of(scenario),
         scenario,
@@ -557,6 +609,9 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         next_slow_s: 0.0,
         last_heartbeat_wall: Instant::now(),
         speed_mps: speed,
+        last_heard: Instant::now(),
+        telemetry_sent: false,
+        mavlink1_logged: false,
     };
     // A `udpin:` link learns its peer from the first message.
     while !sitl.link.has_peer() {
@@ -569,6 +624,9 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
     let mut flown = Vec::new();
     let wall0 = Instant::now();
     let mut interrupted = false;
+    let mut companion_lost = false;
+    let companion_timeout = Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
+        .unwrap_or(Duration::from_secs(86_400));
     loop {
         if sitl.stop.load(Ordering::Relaxed) {
             interrupted = true;
@@ -617,10 +675,36 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                 if answers.contains(&ms) {
                     break;
                 }
+                if sitl.last_heard.elapsed() > companion_timeout {
+                    let what = format!(
+                        "no message from anyone for {} s: the companion is gone, run ended",
+                        Echo(opts.companion_timeout_s)
+                    );
+                    sitl.ap.event(t, what);
+                    companion_lost = true;
+                    break;
+                }
                 if sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
                     // A lost datagram must not stall the run: the sample goes again with the
                     // heartbeat (the companion answers a repeat with its answer again).
                     sitl.heartbeat(false)?;
+                    if !sitl.telemetry_sent {
+                        // The first sample's position comes with its answer's step: a
+                        // companion that waits for a position before taking control gets
+                        // the sample's pose now.
+                        let p = sample.pose;
+                        sitl.telemetry(&TraceRow {
+                            t_s: t,
+                            x_m: p.position.x,
+                            y_m: p.position.y,
+                            heading_rad: p.heading_rad,
+                            s: sample.true_value,
+                            error: sample.true_value - scenario.level(),
+                            omega_radps: 0.0,
+                            s_measured: Some(sample.measurement.value),
+                            telemetry: None,
+                        })?;
+                    }
                     sitl.send(iso.clone())?;
                 }
             },
@@ -636,7 +720,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                     sitl.ap.mode = Mode::Hold;
                     let what = format!(
                         "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
-                        opts.setpoint_timeout_s
+                        Echo(opts.setpoint_timeout_s)
                     );
                     sitl.ap.event(t, what.clone());
                     sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, &what)?;
@@ -644,7 +728,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                 }
             }
         }
-        if interrupted {
+        if interrupted || companion_lost {
             break;
         }
         let w = sitl.ap.turn_rate(Some(sample.pose));
@@ -665,8 +749,15 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         sink: &mut *sink,
     };
     let result = ep.finish_traced(&mut tee);
-    let text = format!("isotrack sitl: run ended ({})", result.outcome.as_str());
-    sitl.ap.event(t_end, text.clone());
+    let how = if interrupted {
+        "interrupted"
+    } else if companion_lost {
+        "companion_lost"
+    } else {
+        result.outcome.as_str()
+    };
+    sitl.ap.event(t_end, format!("run ended ({how})"));
+    let text = format!("isotrack sitl: run ended ({how})");
     sitl.statustext(MavSeverity::MAV_SEVERITY_NOTICE, &text)?;
     for _ in 0..3 {
         sitl.heartbeat(true)?;
@@ -678,6 +769,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         setpoints_refused: sitl.ap.refused,
         link: sitl.link.stats,
         interrupted,
+        companion_lost,
     })
 }
 

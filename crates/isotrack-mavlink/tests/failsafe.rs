@@ -117,43 +117,6 @@ fn sitl_holds_when_offboard_setpoints_stop() {
     assert_eq!(report.flown.last().unwrap().1, 0.1);
 }
 
-/// A vehicle that refuses to arm: `--take-control` gives up at once (`control_refused`), and
-/// never runs the law.
-#[test]
-fn a_refused_arming_ends_the_flight() {
-    let s = load_scenario(None, &[]).unwrap();
-    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
-    let addr = link.local_addr().unwrap();
-    let vehicle = std::thread::spawn(move || {
-        let t0 = Instant::now();
-        while t0.elapsed() < Duration::from_secs(60) {
-            for r in link.poll(Duration::from_millis(50)).unwrap() {
-                if let MavMessage::COMMAND_LONG(c) = &r.msg {
-                    if c.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM {
-                        link.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
-                            command: c.command,
-                            result: MavResult::MAV_RESULT_DENIED,
-                        }))
-                        .unwrap();
-                        return true;
-                    }
-                }
-            }
-            if link.has_peer() {
-                link.send(&heartbeat()).unwrap();
-            }
-        }
-        false
-    });
-    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
-    o.take_control = true;
-    o.timeout_s = 30.0;
-    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
-    assert!(vehicle.join().unwrap());
-    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
-    assert!(r.commands.is_empty());
-}
-
 /// A yaw-rate setpoint (attitude ignored) for system 1, component 1, rad/s.
 fn yaw_rate_setpoint(body_yaw_rate: f32) -> MavMessage {
     MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
@@ -457,4 +420,50 @@ fn a_vehicle_powering_off_is_lost() {
     let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert_eq!(vehicle.join().unwrap(), Some((4.0, 3.0)));
+}
+
+/// A lockstep vehicle whose companion falls silent (it ended, or failed safe) ends its run
+/// after `companion_timeout_s` instead of waiting for an answer for ever.
+#[test]
+fn a_lockstep_vehicle_ends_when_the_companion_is_gone() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let s = load_scenario(None, &[]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    opts.companion_timeout_s = 0.5;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let (done_tx, done_rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let r = run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap();
+        done_tx.send(r).unwrap();
+    });
+    let addr = rx.recv().unwrap();
+    let mut c = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
+    let mut answered = 0;
+    let t0 = Instant::now();
+    c.send(&heartbeat()).unwrap();
+    while answered < 3 && t0.elapsed() < Duration::from_secs(30) {
+        for r in c.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+                let mut sp = yaw_rate_setpoint(0.0);
+                if let MavMessage::SET_ATTITUDE_TARGET(d) = &mut sp {
+                    d.time_boot_ms = n.time_boot_ms;
+                }
+                c.send(&sp).unwrap();
+                answered += 1;
+            }
+        }
+    }
+    // Silent from here on; a watchdog stops the vehicle if it never ends by itself.
+    let report = match done_rx.recv_timeout(Duration::from_secs(30)) {
+        Ok(r) => r,
+        Err(_) => {
+            stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            done_rx.recv().unwrap()
+        }
+    };
+    assert!(report.companion_lost, "{:?}", report.events);
+    assert!(!report.interrupted);
+    assert_eq!(report.flown.len(), 3, "{:?}", report.events);
 }

@@ -88,3 +88,95 @@ fn udp_lines_are_answered_with_the_laws_roll() {
         assert_eq!(*q, wire::quaternion_of_roll(roll), "sample {k}");
     }
 }
+
+/// A pilot's vehicle (armed, OFFBOARD) that records the time stamps of the setpoints it gets
+/// while `send` feeds the UDP sensor; returns (companion's report, stamps received).
+fn udp_flight(
+    send: impl FnOnce(&UdpSocket, std::net::SocketAddr) + Send + 'static,
+) -> (isotrack_mavlink::fly::FlyReport, Vec<u32>) {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut vehicle = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = vehicle.local_addr().unwrap();
+    let probe = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let sensor_addr = probe.local_addr().unwrap();
+    drop(probe);
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.sensor = SensorSource::parse(&format!("udp:{sensor_addr}")).unwrap();
+    o.timeout_s = 1.0;
+    let companion =
+        std::thread::spawn(move || run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap());
+    let sensor = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mut send = Some(send);
+    let (mut stamps, mut beats) = (Vec::new(), 0);
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
+        for r in vehicle.poll(Duration::from_millis(20)).unwrap() {
+            match &r.msg {
+                MavMessage::SET_ATTITUDE_TARGET(a) if a.time_boot_ms != u32::MAX => {
+                    stamps.push(a.time_boot_ms)
+                }
+                MavMessage::COMMAND_LONG(c) => {
+                    vehicle
+                        .send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                            command: c.command,
+                            result: MavResult::MAV_RESULT_ACCEPTED,
+                        }))
+                        .unwrap();
+                }
+                _ => {}
+            }
+        }
+        if vehicle.has_peer() {
+            vehicle
+                .send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                    custom_mode: 6 << 16,
+                    mavtype: MavType::MAV_TYPE_GROUND_ROVER,
+                    autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+                    base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                        | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                    system_status: MavState::MAV_STATE_ACTIVE,
+                    mavlink_version: 3,
+                }))
+                .unwrap();
+            beats += 1;
+            if beats == 10 {
+                if let Some(f) = send.take() {
+                    f(&sensor, sensor_addr);
+                }
+            }
+        }
+    }
+    (companion.join().unwrap(), stamps)
+}
+
+/// A line split across two datagrams is one measurement: `5.0,1` + `.5\n` is 1.5 at 5 s (the
+/// law's command for 1.5, not for 1).
+#[test]
+fn a_line_may_span_datagrams() {
+    let (r, _) = udp_flight(|s, a| {
+        s.send_to(b"5.0,1", a).unwrap();
+        s.send_to(b".5\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let w = law.update(&Measurement {
+        t_s: 5.0,
+        value: 1.5,
+    });
+    assert_eq!(r.commands, vec![(5000, w)], "{:?}", r.events);
+}
+
+/// 500 lines of a 1 kHz sensor in one datagram: the law runs on each, but the setpoints keep
+/// to --setpoint-rate-hz (here: the burst is answered by a handful, not 500).
+#[test]
+fn a_fast_sensor_does_not_multiply_setpoints() {
+    let (r, stamps) = udp_flight(|s, a| {
+        let text: String = (0..500)
+            .map(|k| format!("{},{}\n", k as f64 / 1000.0, 1.0))
+            .collect();
+        s.send_to(text.as_bytes(), a).unwrap();
+    });
+    assert_eq!(r.commands.len(), 500, "{:?}", r.events);
+    let mut distinct = stamps.clone();
+    distinct.dedup();
+    assert!(distinct.len() < 20, "{distinct:?}");
+}

@@ -28,6 +28,10 @@ pub mod exit {
     /// `fly`: a failsafe the vehicle did not confirm (no acknowledgement nor the mode in its
     /// heartbeat), or no vehicle to command.
     pub const UNAVAILABLE: u8 = 69;
+    /// `fly`: the flight was ended by a failsafe (or a refused take-over) and the vehicle
+    /// confirmed the way out (HOLD/RETURN, or the disarm): the vehicle is safe, the flight did
+    /// not complete (`EX_TEMPFAIL`).
+    pub const FAILSAFE: u8 = 75;
     /// An operating-system error: threads or other resources could not be had.
     pub const OSERR: u8 = 71;
     /// An output file or directory cannot be created or written (standard output included,

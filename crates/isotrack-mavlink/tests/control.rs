@@ -1,0 +1,349 @@
+//! Taking and letting go of control, against a scripted stand-in vehicle (system 1, component 1,
+//! PX4 modes) that records every command it receives: the companion locks onto the autopilot
+//! only, takes control only once the sensor and a position are there, and on a refused take-over
+//! or a failsafe commands its way out (disarm on the ground, else HOLD) until the vehicle
+//! confirms it. Real time is needed (a silence is a duration); nothing asserts how long
+//! anything took.
+
+use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, FlyReport};
+use isotrack_mavlink::link::Link;
+use isotrack_scenario::load_scenario;
+use isotrack_sim::NoTrace;
+use mavlink::dialects::common::*;
+use std::time::{Duration, Instant};
+
+/// PX4's custom_mode of OFFBOARD (main mode 6) and of AUTO.LOITER (main 4, sub 3).
+const OFFBOARD: u32 = 6 << 16;
+const LOITER: u32 = (4 << 16) | (3 << 24);
+
+/// How the stand-in behaves.
+#[derive(Clone)]
+struct Script {
+    /// Armed (by a pilot) from the start.
+    armed: bool,
+    /// The answer to an arm command.
+    arm: MavResult,
+    /// The answer to a switch to OFFBOARD.
+    offboard: MavResult,
+    /// The first failsafe mode commands (HOLD/RETURN) go unanswered: acknowledged from this
+    /// one on (1: the first).
+    hold_acked_at: u32,
+    /// Beats (50 ms) before the first measurement and position; `u32::MAX`: never.
+    quiet_beats: u32,
+    /// A gimbal (component 154, `MAV_AUTOPILOT_GENERIC`) beats on the vehicle's system, first.
+    gimbal: bool,
+    /// The vehicle also sends each heartbeat as a MAVLink 1 frame.
+    mavlink1: bool,
+}
+
+impl Default for Script {
+    fn default() -> Self {
+        Self {
+            armed: false,
+            arm: MavResult::MAV_RESULT_ACCEPTED,
+            offboard: MavResult::MAV_RESULT_ACCEPTED,
+            hold_acked_at: 1,
+            quiet_beats: 0,
+            gimbal: false,
+            mavlink1: false,
+        }
+    }
+}
+
+/// A command the stand-in received: command, param1..3, target component, and how many
+/// measurements it had sent before it.
+#[derive(Clone, Debug)]
+struct Got {
+    cmd: MavCmd,
+    p: [f32; 3],
+    target_component: u8,
+    measurements_before: u32,
+}
+
+fn heartbeat(mavtype: MavType, autopilot: MavAutopilot, armed: bool, mode: u32) -> MavMessage {
+    let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+    if armed {
+        base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+    }
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: mode,
+        mavtype,
+        autopilot,
+        base_mode: base,
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+/// Flies the default scenario's law against the stand-in (the companion listens, `udpin:`),
+/// until the companion ends; returns its report and the commands the stand-in received.
+fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Vec<Got>) {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut o = FlyOptions::new("udpin:127.0.0.1:0");
+    o.timeout_s = 2.0;
+    opts(&mut o);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let companion = std::thread::spawn(move || {
+        run_fly(&s, &o, &mut NoTrace, &mut |l| {
+            tx.send(l.local_addr()?).unwrap();
+            Ok(())
+        })
+        .unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let url = format!("udpout:{addr}");
+    let mut v = Link::open(&url, 1, 1).unwrap();
+    let mut gimbal = Link::open(&url, 1, 154).unwrap();
+    let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let (mut armed, mut mode, mut holds) = (script.armed, 0u32, 0u32);
+    let (mut beats, mut sent) = (0u32, 0u32);
+    let mut got = Vec::new();
+    let t0 = Instant::now();
+    while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
+        if script.gimbal {
+            gimbal
+                .send(&heartbeat(
+                    MavType::MAV_TYPE_GIMBAL,
+                    MavAutopilot::MAV_AUTOPILOT_GENERIC,
+                    false,
+                    0,
+                ))
+                .unwrap();
+        }
+        if !script.gimbal || beats > 0 {
+            v.send(&heartbeat(
+                MavType::MAV_TYPE_FIXED_WING,
+                MavAutopilot::MAV_AUTOPILOT_PX4,
+                armed,
+                mode,
+            ))
+            .unwrap();
+        }
+        if script.mavlink1 {
+            let mut frame = Vec::new();
+            mavlink::write_v1_msg(
+                &mut frame,
+                mavlink::MavHeader {
+                    system_id: 1,
+                    component_id: 1,
+                    sequence: 0,
+                },
+                &heartbeat(
+                    MavType::MAV_TYPE_FIXED_WING,
+                    MavAutopilot::MAV_AUTOPILOT_PX4,
+                    armed,
+                    mode,
+                ),
+            )
+            .unwrap();
+            raw.send_to(&frame, addr).unwrap();
+        }
+        if beats >= script.quiet_beats {
+            let mut name = [0u8; 10];
+            name[..5].copy_from_slice(b"ISO_S");
+            v.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                time_boot_ms: 1000 + 50 * sent,
+                value: 1.0,
+                name: name.into(),
+            }))
+            .unwrap();
+            v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                time_boot_ms: 1000 + 50 * sent,
+                ..Default::default()
+            }))
+            .unwrap();
+            sent += 1;
+        }
+        beats += 1;
+        for r in v.poll(Duration::from_millis(50)).unwrap() {
+            let MavMessage::COMMAND_LONG(c) = &r.msg else {
+                continue;
+            };
+            got.push(Got {
+                cmd: c.command,
+                p: [c.param1, c.param2, c.param3],
+                target_component: c.target_component,
+                measurements_before: sent,
+            });
+            // An autopilot answers commands to its own component (or to all, 0) only.
+            if c.target_system != 1 || !matches!(c.target_component, 0 | 1) {
+                continue;
+            }
+            let result = match c.command {
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM if c.param1 == 1.0 => {
+                    if script.arm == MavResult::MAV_RESULT_ACCEPTED {
+                        armed = true;
+                    }
+                    script.arm
+                }
+                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
+                    armed = false;
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                MavCmd::MAV_CMD_DO_SET_MODE if c.param2 == 6.0 => {
+                    if script.offboard == MavResult::MAV_RESULT_ACCEPTED {
+                        mode = OFFBOARD;
+                    }
+                    script.offboard
+                }
+                MavCmd::MAV_CMD_DO_SET_MODE => {
+                    holds += 1;
+                    if holds < script.hold_acked_at {
+                        continue;
+                    }
+                    mode = LOITER;
+                    MavResult::MAV_RESULT_ACCEPTED
+                }
+                _ => MavResult::MAV_RESULT_UNSUPPORTED,
+            };
+            v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                command: c.command,
+                result,
+            }))
+            .unwrap();
+        }
+    }
+    (companion.join().unwrap(), got)
+}
+
+fn is_hold(g: &Got) -> bool {
+    g.cmd == MavCmd::MAV_CMD_DO_SET_MODE && g.p[1] == 4.0 && g.p[2] == 3.0
+}
+
+fn is_disarm(g: &Got) -> bool {
+    g.cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && g.p[0] == 0.0
+}
+
+/// The companion armed the vehicle on the ground, then OFFBOARD was refused: it disarms it
+/// (no HOLD, no more setpoints), and the vehicle confirms.
+#[test]
+fn a_refused_offboard_disarms_what_the_companion_armed() {
+    let script = Script {
+        offboard: MavResult::MAV_RESULT_DENIED,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(got.iter().any(is_disarm), "{got:?}");
+    assert!(!got.iter().any(is_hold), "{got:?}");
+    assert!(
+        r.way_out_commanded && r.failsafe_acknowledged,
+        "{:?}",
+        r.events
+    );
+    assert!(r.commands.is_empty());
+}
+
+/// A vehicle a pilot armed (in flight) refuses OFFBOARD: the companion commands HOLD, never a
+/// disarm.
+#[test]
+fn a_refused_offboard_of_an_armed_vehicle_commands_hold() {
+    let script = Script {
+        armed: true,
+        offboard: MavResult::MAV_RESULT_DENIED,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(got.iter().any(is_hold), "{got:?}");
+    assert!(!got.iter().any(is_disarm), "{got:?}");
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+}
+
+/// A vehicle that refuses to arm stays disarmed: nothing more to command, the flight ends
+/// `control_refused`.
+#[test]
+fn a_refused_arming_commands_nothing_more() {
+    let script = Script {
+        arm: MavResult::MAV_RESULT_DENIED,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(!r.way_out_commanded);
+    assert!(!got.iter().any(|g| is_hold(g) || is_disarm(g)), "{got:?}");
+}
+
+/// A gimbal beating first on the vehicle's system (component 154) is not the vehicle: every
+/// command goes to the autopilot, component 1.
+#[test]
+fn a_gimbal_is_not_the_vehicle() {
+    let script = Script {
+        gimbal: true,
+        quiet_beats: u32::MAX,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(!got.is_empty());
+    assert!(got.iter().all(|g| g.target_component == 1), "{got:?}");
+    assert!(
+        r.events.iter().any(|e| e.contains("system 1, component 1")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// `--take-control` arms only once a measurement and a position have arrived (here after 20
+/// beats of silence).
+#[test]
+fn take_control_waits_for_the_sensor() {
+    let script = Script {
+        quiet_beats: 20,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    let arm = got
+        .iter()
+        .find(|g| g.cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && g.p[0] == 1.0)
+        .unwrap_or_else(|| panic!("no arm: {:?} {got:?}", r.events));
+    assert!(arm.measurements_before > 0, "{got:?}");
+}
+
+/// Without any measurement, `--take-control` never arms: sensor loss after the timeout.
+#[test]
+fn take_control_without_a_sensor_never_arms() {
+    let script = Script {
+        quiet_beats: u32::MAX,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(
+        !got.iter()
+            .any(|g| g.cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && g.p[0] == 1.0),
+        "{got:?}"
+    );
+}
+
+/// HOLD is commanded until the vehicle acknowledges it, not 5 times: a vehicle that answers the
+/// 8th is confirmed in HOLD.
+#[test]
+fn hold_is_retried_until_acknowledged() {
+    let script = Script {
+        quiet_beats: u32::MAX,
+        hold_acked_at: 8,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert_eq!(got.iter().filter(|g| is_hold(g)).count(), 8, "{got:?}");
+}
+
+/// MAVLink 1 frames are not silently dropped: the companion logs once that it saw them.
+#[test]
+fn mavlink1_is_logged_once() {
+    let script = Script {
+        quiet_beats: u32::MAX,
+        mavlink1: true,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |_| {});
+    let n = r.events.iter().filter(|e| e.contains("MAVLink 1")).count();
+    assert_eq!(n, 1, "{:?}", r.events);
+    assert!(r.link.mavlink1_frames > 1);
+}
