@@ -64,8 +64,18 @@ def strip_comments(text):
 
 
 def drop_test_modules(text):
-    m = re.search(r"#\[cfg\(test\)\]\s*(pub(\([^)]*\))?\s+)?mod\s+" + IDENT + r"\s*\{", text)
-    return text[: m.start()] if m else text
+    """Removes each `#[cfg(test)] mod NAME { ... }` block (brace-matched; comments and strings are
+    already stripped, so braces balance)."""
+    pat = re.compile(r"#\[cfg\(test\)\]\s*(pub(\([^)]*\))?\s+)?mod\s+" + IDENT + r"\s*\{")
+    while True:
+        m = pat.search(text)
+        if not m:
+            return text
+        depth, i = 1, m.end()
+        while i < len(text) and depth:
+            depth += {"{": 1, "}": -1}.get(text[i], 0)
+            i += 1
+        text = text[: m.start()] + text[i:]
 
 
 def parse_use_tree(s):
@@ -127,8 +137,11 @@ class Crate:
             rex = {}
             for m in re.finditer(r"\bpub(\([^)]*\))?\s+use\s+([^;]+);", text):
                 for p in parse_use_tree(m.group(2)):
-                    if p and p[-1] != "*" and p[0] not in ("crate", "super", "self") and \
+                    if not p or p[-1] == "*":
+                        continue
+                    if p[0] not in ("crate", "super", "self") and \
                             tuple(mod) + (p[0],) not in self.files:
+                        rex[p[-1]] = None  # another crate's item
                         continue
                     rex[p[-1]] = self.absolute(mod, p)
             self.reexports[mod] = rex
@@ -155,6 +168,8 @@ class Crate:
                 continue
             rex = self.reexports.get(mod, {})
             if seg in rex and depth < 16 and rex[seg] != list(mod) + [seg]:
+                if rex[seg] is None:
+                    return None  # re-exported from another crate: no edge in this one
                 return self.resolve(rex[seg] + path[i + 1:], depth + 1)
             return mod
         return mod
@@ -175,10 +190,18 @@ class Crate:
                             continue
                     targets.add(self.resolve(self.absolute(mod, [s for s in p if s != "*"])))
             body = re.sub(r"\buse\s+[^;]+;", "", text)
-            for m in re.finditer(r"\b(crate|super|self)((?:::" + IDENT + r")+)", body):
-                p = [m.group(1)] + m.group(2).split("::")[1:]
+            for m in re.finditer(r"(?<![\w:])(" + IDENT + r")((?:::" + IDENT + r")+)", body):
+                head = m.group(1)
+                if head in ("crate", "super", "self"):
+                    p = [head] + m.group(2).split("::")[1:]
+                elif tuple(mod) + (head,) in self.files:
+                    # a child module named bare (`moving::report(..)`, also inside macros)
+                    p = ["self", head] + m.group(2).split("::")[1:]
+                else:
+                    continue
                 targets.add(self.resolve(self.absolute(mod, p)))
             targets.discard(tuple(mod))
+            targets.discard(None)
             out[mod] = sorted(targets)
         return out
 

@@ -16,8 +16,8 @@
 //! (`multiversion`); all give the same numbers (no fused multiply-add is used).
 
 use crate::kernel::{ask, Sensed, VehicleRun};
+use crate::run::{Oracles, RunResult, StepPlan};
 use crate::sensor::Sensor;
-use crate::simulation::{Oracles, RunResult, StepPlan};
 use crate::trace::NoTrace;
 use isotrack_core::{IsolineController, Measurement, ScalarField, Vehicle};
 

@@ -15,8 +15,8 @@
 //! at a time or in lanes) or hands the sample out (an agent outside the loop).
 
 use crate::metrics::{Metrics, MetricsConfig};
+use crate::run::{GradientFn, Oracles, Outcome, RunResult, Sample, StepPlan};
 use crate::sensor::Sensor;
-use crate::simulation::{GradientFn, Oracles, Outcome, RunResult, Sample, StepPlan};
 use crate::trace::{TraceRow, TraceSink};
 use isotrack_core::control::GroundTruth;
 use isotrack_core::math::Pose2;

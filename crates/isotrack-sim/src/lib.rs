@@ -25,18 +25,19 @@
 mod batch;
 mod kernel;
 mod metrics;
+mod run;
 mod sensor;
 mod simulation;
 mod trace;
 
 pub use batch::{simulate_batch, BatchRun, LANES};
 pub use metrics::{Metrics, MetricsConfig, RunMetrics};
+pub use run::{
+    GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample, StepPlan, StepPlanError,
+};
 pub use sensor::{
     whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
     SENSOR_VALUE_RANGE,
 };
-pub use simulation::{
-    simulate, Episode, GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample,
-    StepPlan, StepPlanError,
-};
+pub use simulation::{simulate, Episode};
 pub use trace::{NoTrace, TraceRow, TraceSink};
