@@ -73,7 +73,8 @@ fn crossing(pa: Vec2, va: f64, pb: Vec2, vb: f64, level: f64) -> Option<Vec2> {
 
 impl IsolineSegments {
     /// Marching squares on values `f(x0 + i*h, y0 + j*h)` over `nx x ny` samples; `None`
-    /// samples (no value) produce no segments in their cells.
+    /// samples (no value) produce no segments in their cells. As
+    /// [`from_samples_xy`](Self::from_samples_xy) with `h` along both axes.
     pub fn from_samples(
         origin: Vec2,
         h: f64,
@@ -82,21 +83,34 @@ impl IsolineSegments {
         level: f64,
         f: impl Fn(Vec2) -> Option<f64>,
     ) -> Self {
-        let mut vals = Vec::with_capacity(nx * ny);
-        for j in 0..ny {
-            for i in 0..nx {
-                vals.push(f(origin + Vec2::new(i as f64 * h, j as f64 * h)).unwrap_or(f64::NAN));
-            }
-        }
-        let p = |i: usize, j: usize| origin + Vec2::new(i as f64 * h, j as f64 * h);
+        Self::from_samples_xy(origin, [h, h], nx, ny, level, f)
+    }
+
+    /// Marching squares on values `f(x0 + i*hx, y0 + j*hy)` over `nx x ny` samples; `None`
+    /// samples (no value) produce no segments in their cells. The lattice is walked one row of
+    /// cells at a time, holding two rows of samples (`16 nx` bytes): the memory is that of the
+    /// segments found (32 bytes each), never of the lattice, however many samples it has.
+    pub fn from_samples_xy(
+        origin: Vec2,
+        [hx, hy]: [f64; 2],
+        nx: usize,
+        ny: usize,
+        level: f64,
+        f: impl Fn(Vec2) -> Option<f64>,
+    ) -> Self {
+        let p = |i: usize, j: usize| origin + Vec2::new(i as f64 * hx, j as f64 * hy);
+        let row =
+            |j: usize| -> Vec<f64> { (0..nx).map(|i| f(p(i, j)).unwrap_or(f64::NAN)).collect() };
         let mut segments = Vec::new();
+        let mut below = if ny > 0 { row(0) } else { Vec::new() };
         for j in 0..ny.saturating_sub(1) {
+            let above = row(j + 1);
             for i in 0..nx.saturating_sub(1) {
                 let c = [
-                    (p(i, j), vals[j * nx + i]),
-                    (p(i + 1, j), vals[j * nx + i + 1]),
-                    (p(i + 1, j + 1), vals[(j + 1) * nx + i + 1]),
-                    (p(i, j + 1), vals[(j + 1) * nx + i]),
+                    (p(i, j), below[i]),
+                    (p(i + 1, j), below[i + 1]),
+                    (p(i + 1, j + 1), above[i + 1]),
+                    (p(i, j + 1), above[i]),
                 ];
                 if c.iter().any(|(_, v)| v.is_nan()) {
                     continue;
@@ -131,6 +145,7 @@ impl IsolineSegments {
                     _ => {}
                 }
             }
+            below = above;
         }
         Self::new(segments)
     }
@@ -143,16 +158,22 @@ impl IsolineSegments {
         }
     }
 
-    /// The level set of a gridded field, refined `refine` times per cell (>= 1).
+    /// The level set of a gridded field, refined `refine` times per cell (>= 1), on the
+    /// lattice [`grid_lattice`] plans (at most [`MAX_ISOLINE_SAMPLES`] samples): the work is
+    /// bounded by that count and the memory by the segments found (see
+    /// [`from_samples_xy`](Self::from_samples_xy)), whatever the grid's shape or spacing.
     pub fn for_grid(field: &GridField, level: f64, refine: usize) -> Self {
         let g = field.grid();
-        let refine = refine.max(1);
-        let [dx, dy] = g.spacing_m();
-        let h = dx.min(dy) / refine as f64;
         let [x0, x1, y0, y1] = g.extent_m();
-        let nx = ((x1 - x0) / h).floor() as usize + 1;
-        let ny = ((y1 - y0) / h).floor() as usize + 1;
-        Self::from_samples(Vec2::new(x0, y0), h, nx, ny, level, |p| field.value(0.0, p))
+        let lattice = grid_lattice(g.nx(), g.ny(), g.spacing_m(), [x0, x1, y0, y1], refine);
+        Self::from_samples_xy(
+            Vec2::new(x0, y0),
+            lattice.step_m,
+            lattice.nx,
+            lattice.ny,
+            level,
+            |p| field.value(0.0, p),
+        )
     }
 
     /// The segments.
@@ -200,6 +221,91 @@ impl IsolineSegments {
         }
         let d = to_segment(best.a, best.b, p).norm();
         d.is_finite().then_some(d)
+    }
+}
+
+/// The most samples [`IsolineSegments::for_grid`] takes of a grid: 2^22 (about 4.2 million
+/// field evaluations; at most 2^23 segments, 256 MiB, on a field that crosses the level in
+/// every cell, and a few thousand on a smooth one).
+pub const MAX_ISOLINE_SAMPLES: usize = 1 << 22;
+
+/// Where [`IsolineSegments::for_grid`] samples a grid: `nx x ny` points `step_m` apart from the
+/// grid's south-west corner.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice {
+    /// Spacing of the samples along x and y, m.
+    pub step_m: [f64; 2],
+    /// Samples along x.
+    pub nx: usize,
+    /// Samples along y.
+    pub ny: usize,
+}
+
+impl Lattice {
+    /// Samples in all, `nx * ny`.
+    pub fn samples(&self) -> usize {
+        self.nx.saturating_mul(self.ny)
+    }
+}
+
+/// The sampling lattice of a grid of `cols x rows` nodes `spacing_m = [dx, dy]` apart over
+/// `extent_m = [x0, x1, y0, y1]`, refined `refine` times per cell, within
+/// [`MAX_ISOLINE_SAMPLES`]:
+///
+/// 1. a square lattice of `h = min(dx, dy) / refine` over the extent, when it fits (every
+///    grid of up to 2^22 / refine^2 nodes of equal spacing);
+/// 2. otherwise each axis at its own spacing, `dx / r` and `dy / r` (`(cols - 1) r + 1` by
+///    `(rows - 1) r + 1` samples), for the largest `r` of `refine, refine/2, ..., 1` that
+///    fits (an anisotropic grid, `dx >> dy`, would take `dx/dy` times more samples square);
+/// 3. otherwise every `s`-th node along each axis, `s` the smallest power of two that fits
+///    (grids of more than 2^22 nodes: the isoline is that of the grid thinned `s` times,
+///    documented in the README's limits).
+///
+/// With `refine` a power of two (the callers' 4) every `r` and `s` is one, and the samples
+/// fall on the grid's own nodes and cell fractions exactly (`i (dx/r)` rounds as `(i/r) dx`),
+/// so the last column and row are sampled.
+pub fn grid_lattice(
+    cols: usize,
+    rows: usize,
+    [dx, dy]: [f64; 2],
+    [x0, x1, y0, y1]: [f64; 4],
+    refine: usize,
+) -> Lattice {
+    let cap = MAX_ISOLINE_SAMPLES as f64;
+    let refine = refine.max(1);
+    let h = dx.min(dy) / refine as f64;
+    let (nx, ny) = (((x1 - x0) / h).floor() + 1.0, ((y1 - y0) / h).floor() + 1.0);
+    if nx.is_finite() && ny.is_finite() && nx >= 1.0 && ny >= 1.0 && nx * ny <= cap {
+        return Lattice {
+            step_m: [h, h],
+            nx: nx as usize,
+            ny: ny as usize,
+        };
+    }
+    let (cx, cy) = (cols.saturating_sub(1), rows.saturating_sub(1));
+    let mut r = refine;
+    loop {
+        let (nx, ny) = (cx * r + 1, cy * r + 1);
+        if (nx as f64) * (ny as f64) <= cap {
+            return Lattice {
+                step_m: [dx / r as f64, dy / r as f64],
+                nx,
+                ny,
+            };
+        }
+        if r == 1 {
+            break;
+        }
+        r /= 2;
+    }
+    let mut s = 2usize;
+    while ((cx / s + 1) as f64) * ((cy / s + 1) as f64) > cap {
+        s *= 2;
+    }
+    Lattice {
+        step_m: [dx * s as f64, dy * s as f64],
+        nx: cx / s + 1,
+        ny: cy / s + 1,
     }
 }
 
@@ -558,5 +664,75 @@ mod tests {
         assert_eq!(iso.segments().len(), 16);
         let d = iso.distance(Vec2::new(17.0, 0.0)).unwrap();
         assert!((d - 0.8).abs() < 1e-12, "{d}");
+    }
+
+    /// The hostile review's reproducer (issue 30): a grid 2 km wide and 2 um high. Sampled
+    /// square at `min(dx, dy)/4` it took 8e9 x 9 samples (a 576 GB allocation, an abort);
+    /// each axis at its own spacing it takes 9 x 9, and the isoline of `F = x` at 1600 is the
+    /// line x = 1600, one segment per row of cells.
+    #[test]
+    fn an_anisotropic_grid_is_sampled_per_axis() {
+        let g = Grid2::from_fn(3, 3, Vec2::new(0.0, 0.0), [1000.0, 1e-6], |p| p.x).unwrap();
+        let gf = GridField::new(g, Interpolation::Bilinear);
+        let iso = IsolineSegments::for_grid(&gf, 1600.0, 4);
+        assert_eq!(iso.segments().len(), 8);
+        for &(a, b) in iso.segments() {
+            assert!((a.x - 1600.0).abs() < 1e-9 && (b.x - 1600.0).abs() < 1e-9);
+        }
+        let d = iso.distance(Vec2::new(100.0, 1e-6)).unwrap();
+        assert!((d - 1500.0).abs() < 1e-9, "{d}");
+    }
+
+    /// The lattices planned for grids at and beyond the documented limits stay within
+    /// [`MAX_ISOLINE_SAMPLES`] = 4 194 304; counts worked by hand.
+    #[test]
+    fn lattices_stay_within_the_sample_budget() {
+        let ext = |cols: usize, rows: usize, [dx, dy]: [f64; 2]| {
+            [0.0, (cols - 1) as f64 * dx, 0.0, (rows - 1) as f64 * dy]
+        };
+        let plan = |cols, rows, sp| grid_lattice(cols, rows, sp, ext(cols, rows, sp), 4);
+        // Small and square: unchanged, h = 0.5/4 over 40 m: 321 x 321.
+        let l = plan(81, 81, [0.5, 0.5]);
+        assert_eq!((l.step_m, l.nx, l.ny), ([0.125, 0.125], 321, 321));
+        // 3 x 3 nodes 1000 m by 0.01 m: per axis, 9 x 9 samples.
+        let l = plan(3, 3, [1000.0, 0.01]);
+        assert_eq!((l.step_m, l.nx, l.ny), ([250.0, 0.0025], 9, 9));
+        // 1025^2: square 4097^2 and per-axis r = 2 (2049^2 = 4 198 401) exceed 2^22; r = 1.
+        let l = plan(1025, 1025, [1.0, 1.0]);
+        assert_eq!((l.step_m, l.nx, l.ny), ([1.0, 1.0], 1025, 1025));
+        // 4000^2 (the 128 MB .npy): 4000^2 = 1.6e7 nodes > 2^22; every 2nd node, 2000^2.
+        let l = plan(4000, 4000, [1.0, 1.0]);
+        assert_eq!((l.step_m, l.nx, l.ny), ([2.0, 2.0], 2000, 2000));
+        // 16384^2 (2^28 nodes): every 8th node, 2048^2 = 2^22 exactly.
+        let l = plan(16384, 16384, [30.0, 30.0]);
+        assert_eq!((l.step_m, l.nx, l.ny), ([240.0, 240.0], 2048, 2048));
+        // 1 x 2^28: every 64th node, (2^28 - 1)/64 + 1 = 2^22.
+        let l = plan(1, 1 << 28, [1.0, 1.0]);
+        assert_eq!((l.nx, l.ny), (1, 1 << 22));
+        for l in [
+            plan(16000, 16000, [1.0, 1.0]),
+            plan(2, 1 << 27, [5.0, 1e-3]),
+            plan(1 << 14, 1 << 14, [1e-3, 1e3]),
+        ] {
+            assert!(l.samples() <= MAX_ISOLINE_SAMPLES, "{l:?}");
+            assert!(l.samples() > MAX_ISOLINE_SAMPLES / 8, "{l:?}");
+        }
+    }
+
+    /// The work is the lattice's samples, each evaluated once: 7 x 5 calls of `f`.
+    #[test]
+    fn every_sample_is_evaluated_once() {
+        let calls = std::cell::Cell::new(0usize);
+        let iso = IsolineSegments::from_samples_xy(Vec2::default(), [1.0, 2.0], 7, 5, 2.5, |p| {
+            calls.set(calls.get() + 1);
+            Some(p.x)
+        });
+        assert_eq!(calls.get(), 35);
+        // x = 2.5 crosses the 4 rows of cells, each 2 m high.
+        assert_eq!(iso.segments().len(), 4);
+        assert!(iso
+            .segments()
+            .iter()
+            .all(|&(a, b)| a.x == 2.5 && b.x == 2.5 && (a.y - b.y).abs() == 2.0));
     }
 }

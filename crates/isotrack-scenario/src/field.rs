@@ -184,10 +184,16 @@ fn mean_plume_isoline(pf: &PuffPlume, level: f64) -> IsolineOracle {
     }))
 }
 
+/// The most segments [`MovingIsoline`] keeps cached over all its isolines: 2^23 (256 MiB of
+/// segments, as many as one isoline of [`isotrack_fields::isoline::MAX_ISOLINE_SAMPLES`] can
+/// have).
+pub const MAX_CACHED_SEGMENTS: usize = 1 << 23;
+
 /// The isoline of a grid time series as it moves: the marching-squares isoline of the
 /// time-interpolated field (the same blend of frames the run sees), recomputed every
 /// `bucket_s` of run time (1/8 of the shortest frame interval, in run time) at the bucket's
-/// middle, and cached (the 64 most recent). Between recomputations the isoline is taken as
+/// middle, and cached (the 64 most recent, and no more than [`MAX_CACHED_SEGMENTS`]
+/// segments in all). Between recomputations the isoline is taken as
 /// fixed: the metric's time resolution.
 pub struct MovingIsoline {
     series: Arc<GridSeries>,
@@ -261,6 +267,16 @@ impl MovingIsoline {
                 c.remove(0);
             }
             c.push((b, seg.clone()));
+            // And at most MAX_CACHED_SEGMENTS in all (a noisy field's isoline can have 2^23
+            // segments: 64 of them would not fit in memory); the newest always stays.
+            let count = |c: &[(i64, Arc<Option<IsolineSegments>>)]| -> usize {
+                c.iter()
+                    .map(|(_, s)| s.as_ref().as_ref().map_or(0, |s| s.segments().len()))
+                    .sum()
+            };
+            while c.len() > 1 && count(&c) > MAX_CACHED_SEGMENTS {
+                c.remove(0);
+            }
         }
         seg
     }

@@ -14,7 +14,7 @@ use crate::grid::Grid2;
 use isotrack_core::Vec2;
 use std::io::Cursor;
 use std::path::Path;
-use tiff::decoder::{Decoder, DecodingResult};
+use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
@@ -23,6 +23,22 @@ const GT_MODEL_TYPE: u16 = 1024;
 const GT_RASTER_TYPE: u16 = 1025;
 const GEOGRAPHIC_TYPE: u16 = 2048;
 const PROJECTED_CS_TYPE: u16 = 3072;
+
+/// The `tiff` decoder's limits from isotrack's own (the README's limits table), not the
+/// crate's defaults (256 MiB decoded, which refuses a float32 image of 8200 x 8200 the README
+/// allows): the decoded image up to [`crate::grid::MAX_NODES`] samples of 8 bytes (2 GiB; the
+/// node count and the memory were already checked from the header by
+/// [`super::check_series_size`]), and a compressed chunk or a tag's values up to the file's
+/// own length (`file_len`, at most [`super::MAX_GRID_FILE_BYTES`]): nothing in a file is
+/// longer than the file.
+fn decoder_limits(file_len: u64) -> Limits {
+    let file = usize::try_from(file_len.min(super::MAX_GRID_FILE_BYTES)).unwrap_or(usize::MAX);
+    let mut limits = Limits::default();
+    limits.decoding_buffer_size = crate::grid::MAX_NODES.saturating_mul(8);
+    limits.intermediate_buffer_size = file.max(limits.intermediate_buffer_size);
+    limits.ifd_value_size = file.max(limits.ifd_value_size);
+    limits
+}
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
     let len = bytes.len() as u64;
@@ -64,7 +80,9 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             LoadError::new(path, None, format!("invalid TIFF: {e}"))
         }
     };
-    let mut dec = Decoder::new(Cursor::new(bytes)).map_err(tiff_err)?;
+    let mut dec = Decoder::new(Cursor::new(bytes))
+        .map_err(tiff_err)?
+        .with_limits(decoder_limits(len));
     let (w, h) = dec.dimensions().map_err(tiff_err)?;
     let (nx, ny) = (w as usize, h as usize);
     // The header's size is a claim: checked before any pixel is decoded (a compressed image
@@ -199,4 +217,26 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     };
     let grid = Grid2::new(nx, ny, origin, spacing, values).map_err(|e| LoadError::grid(path, e))?;
     Ok(LoadedGrid { grid, georeference })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 30: a float32 deflate GeoTIFF of 8300 x 8300 (275.6 MB decoded) was refused
+    /// ("decoder limits exceeded": the crate's default 256 MiB) though 2^28 nodes are allowed.
+    /// The limits admit the largest image the README allows, 2^28 float64 samples, and a
+    /// compressed chunk as long as the file.
+    #[test]
+    fn decoder_limits_admit_the_documented_grids() {
+        let l = decoder_limits(3 << 30);
+        assert!(l.decoding_buffer_size >= 8300 * 8300 * 4);
+        assert!(l.decoding_buffer_size >= (1usize << 28) * 8);
+        assert!(l.intermediate_buffer_size >= 3 << 30);
+        assert!(l.ifd_value_size >= 3 << 30);
+        // Never beyond the 4 GiB a grid file may have, whatever length is claimed.
+        assert_eq!(decoder_limits(u64::MAX).intermediate_buffer_size, 4 << 30);
+        // A small file keeps the crate's own floors.
+        assert_eq!(decoder_limits(1000).intermediate_buffer_size, 128 << 20);
+    }
 }

@@ -108,21 +108,48 @@ fn regular(values: &[f64]) -> Result<(f64, f64), String> {
     Ok((values[0], step))
 }
 
-/// Seconds per unit of a CF time `units` attribute (`hours since 2019-03-01 00:00:00`).
+/// A CF time unit, read from a `units` attribute by [`cf_time_unit_s`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum CfTimeUnit {
+    /// Seconds per unit (1, 60, 3600, 86 400): `v` units are `v * s` seconds.
+    Seconds(f64),
+    /// Units per second (1000 for milliseconds, 1e6 for microseconds): `v` units are
+    /// `v / n` seconds, one correctly rounded division, so `9 ms` is `0.009 s` bit for bit
+    /// (`9 * 0.001` is not: 0.001 has no exact binary form).
+    PerSecond(f64),
+}
+
+impl CfTimeUnit {
+    /// `v` of this unit in seconds.
+    pub(crate) fn to_s(self, v: f64) -> f64 {
+        match self {
+            CfTimeUnit::Seconds(s) => v * s,
+            CfTimeUnit::PerSecond(n) => v / n,
+        }
+    }
+}
+
+/// The unit of a CF time `units` attribute (`hours since 2019-03-01 00:00:00`): seconds,
+/// minutes, hours, days, and the sub-second milliseconds and microseconds xarray writes for
+/// sub-second axes, with udunits' names and abbreviations (`ms`, `msec`, `us`, `usec`, `µs`).
 /// The reference date must be a calendar date (`YYYY-MM-DD`, optionally a time `hh:mm:ss` and
 /// a zone): `hours since 99999999-99-99` is refused, not read as hours from nowhere.
-pub(crate) fn cf_time_unit_s(units: &str) -> Option<f64> {
-    let unit = units.split_whitespace().next()?.to_ascii_lowercase();
+pub(crate) fn cf_time_unit_s(units: &str) -> Option<CfTimeUnit> {
+    let unit = units.split_whitespace().next()?.to_lowercase();
     let lower = units.to_ascii_lowercase();
     let (_, reference) = lower.split_once(" since ")?;
     if !cf_reference_date_ok(reference) {
         return None;
     }
     Some(match unit.as_str() {
-        "seconds" | "second" | "secs" | "sec" | "s" => 1.0,
-        "minutes" | "minute" | "mins" | "min" => 60.0,
-        "hours" | "hour" | "hrs" | "hr" | "h" => 3600.0,
-        "days" | "day" | "d" => 86_400.0,
+        "seconds" | "second" | "secs" | "sec" | "s" => CfTimeUnit::Seconds(1.0),
+        "minutes" | "minute" | "mins" | "min" => CfTimeUnit::Seconds(60.0),
+        "hours" | "hour" | "hrs" | "hr" | "h" => CfTimeUnit::Seconds(3600.0),
+        "days" | "day" | "d" => CfTimeUnit::Seconds(86_400.0),
+        "milliseconds" | "millisecond" | "msecs" | "msec" | "ms" => CfTimeUnit::PerSecond(1e3),
+        "microseconds" | "microsecond" | "usecs" | "usec" | "us" | "\u{b5}s" | "\u{3bc}s" => {
+            CfTimeUnit::PerSecond(1e6)
+        }
         _ => return None,
     })
 }
@@ -453,11 +480,11 @@ fn parse_file(
                 let units = attr_str(tv, "units").unwrap_or_default();
                 let unit_s = cf_time_unit_s(&units).ok_or_else(|| {
                     err(format!(
-                        "time coordinate `{}` has units `{units}`; need `<seconds|minutes|hours|days> since <date>`",
+                        "time coordinate `{}` has units `{units}`; need `<days|hours|minutes|seconds|milliseconds|microseconds> since <date>`",
                         tdim.name
                     ))
                 })?;
-                Some(t.iter().map(|v| (v - t[0]) * unit_s).collect())
+                Some(t.iter().map(|v| unit_s.to_s(v - t[0])).collect())
             }
         },
     };
@@ -610,7 +637,7 @@ mod tests {
             ("DAYS since 1900-01-01", 86_400.0),
             ("d since 1900-01-01", 86_400.0),
         ] {
-            assert_eq!(cf_time_unit_s(u), Some(s), "{u}");
+            assert_eq!(cf_time_unit_s(u), Some(CfTimeUnit::Seconds(s)), "{u}");
         }
         for bad in [
             "fortnights since 2000-01-01",
@@ -722,6 +749,47 @@ mod tests {
         );
     }
 
+    /// Issue 30: xarray writes sub-second axes in `milliseconds since` / `microseconds since`;
+    /// udunits' abbreviations too. Times are converted by one division, so they are the
+    /// decimals themselves (`9 ms` = 0.009 s, where `9 * 0.001` is 0.009000000000000001).
+    #[test]
+    fn sub_second_cf_time_units() {
+        for (u, n) in [
+            ("milliseconds since 2019-03-01 00:00:00", 1e3),
+            ("millisecond since 2019-03-01", 1e3),
+            ("ms since 1970-01-01T00:00:00Z", 1e3),
+            ("msec since 1970-01-01", 1e3),
+            ("microseconds since 2019-03-01 00:00:00", 1e6),
+            ("us since 2019-03-01", 1e6),
+            ("usec since 2019-03-01", 1e6),
+            ("\u{b5}s since 2019-03-01", 1e6),
+        ] {
+            assert_eq!(cf_time_unit_s(u), Some(CfTimeUnit::PerSecond(n)), "{u}");
+        }
+        let ms = CfTimeUnit::PerSecond(1e3);
+        assert_eq!(ms.to_s(9.0), 0.009);
+        assert_eq!(ms.to_s(1001.0), 1.001);
+        assert_eq!(CfTimeUnit::PerSecond(1e6).to_s(250_000.0), 0.25);
+        // A file whose time axis is in milliseconds: frames 0, 9 and 1001 ms after the first.
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ms.nc");
+        let mut ds = DataSet::new();
+        ds.add_fixed_dim("time", 3).unwrap();
+        ds.add_fixed_dim("y", 2).unwrap();
+        ds.add_fixed_dim("x", 2).unwrap();
+        ds.add_var_f64("time", &["time"]).unwrap();
+        ds.add_var_attr_string("time", "units", "milliseconds since 2024-05-01 12:00:00")
+            .unwrap();
+        ds.add_var_f64("v", &["time", "y", "x"]).unwrap();
+        let mut w = FileWriter::create_new(&p).unwrap();
+        w.set_def(&ds, Version::Classic, 0).unwrap();
+        w.write_var_f64("time", &[5000.0, 5009.0, 6001.0]).unwrap();
+        w.write_var_f64("v", &[0.0; 12]).unwrap();
+        w.close().unwrap();
+        let s = crate::io::load_series(&p, None, None).unwrap();
+        assert_eq!(s.frame_times_s, Some(vec![0.0, 0.009, 1.001]));
+    }
+
     #[test]
     fn reads_a_cf_lonlat_grid_with_fill_scale_and_flip() {
         let dir = tempfile::tempdir().unwrap();
@@ -753,7 +821,10 @@ mod tests {
         assert_eq!(s.frames[2].at(0, 0), 200.0);
         let e = crate::io::load_grid(&p, None).unwrap_err();
         assert!(e.message.contains("3 frames"), "{e}");
-        assert_eq!(cf_time_unit_s("days since 1970-01-01"), Some(86_400.0));
+        assert_eq!(
+            cf_time_unit_s("days since 1970-01-01"),
+            Some(CfTimeUnit::Seconds(86_400.0))
+        );
         assert_eq!(cf_time_unit_s("fortnights since 1970-01-01"), None);
         // Issue 30 item 19: the reference must be a date.
         for bad in [
