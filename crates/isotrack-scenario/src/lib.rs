@@ -47,6 +47,34 @@ pub struct Scenario {
     isoline: Arc<OnceLock<IsolineOracle>>,
     /// Warnings from the field's files ([`field::build_field_noting`]).
     field_notes: Arc<Vec<String>>,
+    /// The `[field]` keys its files filled in (geometry, units), not the user's: a variant
+    /// that reads another file drops them, so that the new file's own are used.
+    file_filled_keys: Arc<Vec<String>>,
+}
+
+/// The keys set in `after` but not in `before` (`path`/`paths`, made absolute, excepted).
+fn filled_keys(before: &schema::FieldSection, after: &schema::FieldSection) -> Vec<String> {
+    let (b, a) = (field_table(before), field_table(after));
+    a.keys()
+        .filter(|k| !b.contains_key(*k) && *k != "path" && *k != "paths")
+        .cloned()
+        .collect()
+}
+
+fn field_table(f: &schema::FieldSection) -> toml::Table {
+    match toml::Value::try_from(f) {
+        Ok(toml::Value::Table(t)) => t,
+        _ => toml::Table::new(),
+    }
+}
+
+/// Whether assignment `arg` (`KEY=VALUE`) names another source for the field's data.
+fn names_another_field_source(arg: &str) -> bool {
+    let key = arg.split_once('=').map_or("", |(k, _)| k.trim());
+    matches!(
+        key,
+        "field" | "field.kind" | "field.path" | "field.paths" | "field.variable" | "field.format"
+    )
 }
 
 impl PartialEq for Scenario {
@@ -62,8 +90,10 @@ impl Scenario {
         let mut file = resolve::resolve(file)?;
         let seed = file.sim.seed.unwrap_or(0);
         let mut notes = Vec::new();
+        let given = file.field.clone();
         let field =
             build_field_noting(&mut file.field, base_dir, seed, &mut notes).map_err(|i| vec![i])?;
+        let filled = filled_keys(&given, &file.field);
         field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         Ok(Self {
@@ -72,6 +102,7 @@ impl Scenario {
             vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
             field_notes: Arc::new(notes),
+            file_filled_keys: Arc::new(filled),
         })
     }
 
@@ -95,20 +126,45 @@ impl Scenario {
         assignments: &[Assignment],
         origin: &str,
     ) -> Result<Self, ScenarioError> {
-        let file = apply_assignments(&self.file, assignments)?;
+        // Another file: the keys the old file filled in (its geometry, its units) are not the
+        // user's and must not override the new file's own (a hostile review: a sweep over
+        // `field.path` ran every file on the first one's grid).
+        let new_source = assignments
+            .iter()
+            .any(|a| names_another_field_source(&a.arg));
+        let file = if new_source && !self.file_filled_keys.is_empty() {
+            let mut base = self.file.clone();
+            let mut t = field_table(&base.field);
+            for k in self.file_filled_keys.iter() {
+                t.remove(k);
+            }
+            base.field = toml::Value::Table(t).try_into().unwrap_or(base.field);
+            apply_assignments(&base, assignments)?
+        } else {
+            apply_assignments(&self.file, assignments)?
+        };
         let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
         let mut file = resolve::resolve(file).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
-        let (field, field_notes) = if file.field == self.file.field && !seeded {
-            (self.field.clone(), self.field_notes.clone())
+        let (field, field_notes, file_filled_keys) = if file.field == self.file.field && !seeded {
+            (
+                self.field.clone(),
+                self.field_notes.clone(),
+                self.file_filled_keys.clone(),
+            )
         } else {
             let seed = file.sim.seed.unwrap_or(0);
             let mut notes = Vec::new();
+            let given = file.field.clone();
             let field = build_field_noting(&mut file.field, Path::new("."), seed, &mut notes)
                 .map_err(|i| located(vec![i]))?;
-            (Arc::new(field), Arc::new(notes))
+            let mut filled = filled_keys(&given, &file.field);
+            if !new_source {
+                filled.extend(self.file_filled_keys.iter().cloned());
+            }
+            (Arc::new(field), Arc::new(notes), Arc::new(filled))
         };
         field::check_start(&file, &field).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
@@ -130,6 +186,7 @@ impl Scenario {
             vehicle,
             isoline,
             field_notes,
+            file_filled_keys,
         })
     }
 
@@ -153,6 +210,7 @@ impl Scenario {
             vehicle: self.vehicle.clone(),
             isoline: self.isoline.clone(),
             field_notes: self.field_notes.clone(),
+            file_filled_keys: self.file_filled_keys.clone(),
         })
     }
 

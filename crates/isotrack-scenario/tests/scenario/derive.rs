@@ -138,3 +138,68 @@ fn only_the_fixed_wing_uav_flies() {
     let uav = parse_scenario("[vehicle]\nkind = \"fixed_wing\"\n", "<test>", &[]).unwrap();
     assert!(uav.is_flying());
 }
+
+/// A variant that reads another file takes that file's own geometry, not the one the first
+/// file filled in (a hostile review: a sweep over `field.path` ran every file on the first
+/// file's grid, silently). Two ESRI ASCII grids of the same values, cell 0.5 m and 1 m, origin
+/// (-20, -20) and (-40, -40): the variant on the second has the second's spacing and origin,
+/// exactly as a scenario loaded on it directly; a key the user sets stays the user's.
+#[test]
+fn a_variant_on_another_file_takes_its_geometry() {
+    let d = tempfile::tempdir().unwrap();
+    let asc = |name: &str, cell: f64| {
+        let n = 81;
+        let mut t = format!(
+            "ncols {n}\nnrows {n}\nxllcorner {}\nyllcorner {}\ncellsize {cell}\n",
+            -cell * n as f64 / 2.0,
+            -cell * n as f64 / 2.0
+        );
+        for j in 0..n {
+            let row: Vec<String> = (0..n)
+                .map(|i| {
+                    let (x, y) = (i as f64 - 40.0, j as f64 - 40.0);
+                    format!("{}", 20.0 * (-0.1 * (x * x + y * y).sqrt()).exp())
+                })
+                .collect();
+            t.push_str(&row.join(" "));
+            t.push('\n');
+        }
+        let p = d.path().join(name);
+        std::fs::write(&p, t).unwrap();
+        p.display().to_string()
+    };
+    let (a, b) = (asc("a.asc", 0.5), asc("b.asc", 1.0));
+    let sets = |p: &str| {
+        vec![
+            "field.kind=\"grid\"".to_string(),
+            format!("field.path=\"{p}\""),
+            "initial.x_m=5".into(),
+            "initial.y_m=0".into(),
+        ]
+    };
+    let base = parse_scenario("", "<test>", &sets(&a)).unwrap();
+    let direct = parse_scenario("", "<test>", &sets(&b)).unwrap();
+    let variant = base
+        .derive(&[format!("field.path=\"{b}\"")], "<test>")
+        .unwrap();
+    assert_eq!(direct.file().field.spacing_m, Some([1.0, 1.0]));
+    assert_eq!(
+        variant.file().field.spacing_m,
+        direct.file().field.spacing_m
+    );
+    assert_eq!(variant.file().field.origin_m, direct.file().field.origin_m);
+    // The user's own key, set with the new path, is kept.
+    let own = base
+        .derive(
+            &[
+                format!("field.path=\"{b}\""),
+                "field.spacing_m=[2.0, 2.0]".into(),
+            ],
+            "<test>",
+        )
+        .unwrap();
+    assert_eq!(own.file().field.spacing_m, Some([2.0, 2.0]));
+    // Without another file, the filled-in geometry stays.
+    let kp = base.derive(&["controller.kp=5".into()], "<test>").unwrap();
+    assert_eq!(kp.file().field.spacing_m, Some([0.5, 0.5]));
+}
