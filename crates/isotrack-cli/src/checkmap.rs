@@ -370,12 +370,33 @@ pub fn write_map(
             // written stays, and the command exits 130 saying so.
             let stop = isotrack_mavlink::interrupt_flag();
             let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
-            let verified: Vec<Option<VerifyPoint>> = pool.install(|| {
-                at.par_iter()
-                    .map(|&(k, r)| (!stopped()).then(|| verify_point(&family, k, r)))
-                    .collect()
-            });
-            if stopped() || verified.iter().any(Option::is_none) {
+            // The runs go on a thread of their own and this one answers Ctrl-C at once: a run
+            // in progress (it may take minutes) is abandoned, never awaited (a hostile review:
+            // 18 s to answer, a second Ctrl-C ignored); returning ends the process.
+            let family = std::sync::Arc::new(family);
+            let (tx, rx) = std::sync::mpsc::channel();
+            {
+                let (family, stop) = (family.clone(), stop.clone());
+                std::thread::spawn(move || {
+                    let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
+                    let verified: Vec<Option<VerifyPoint>> = pool.install(|| {
+                        at.par_iter()
+                            .map(|&(k, r)| (!stopped()).then(|| verify_point(&family, k, r)))
+                            .collect()
+                    });
+                    let _ = tx.send(verified);
+                });
+            }
+            let verified = loop {
+                match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+                    Ok(v) => break Some(v),
+                    Err(_) if stopped() => break None,
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break None,
+                }
+            };
+            let verified = verified.unwrap_or_default();
+            if stopped() || verified.is_empty() || verified.iter().any(Option::is_none) {
                 return Err(Failure {
                     code: crate::sweep::INTERRUPTED,
                     message: format!(
