@@ -377,6 +377,20 @@ fn parse_file(
     // Checked before reading: the header's sizes are the file's claim, not a promise (a
     // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
     super::check_series_size(path, n_frames, nx, ny, budget_bytes())?;
+    // A packing attribute that is not finite turns every value into NaN; say so, rather than
+    // "every value is NaN / no-data".
+    for a in ["scale_factor", "add_offset"] {
+        if let Some(x) = var
+            .attribute(a)
+            .and_then(|at| at.value.as_f64_vec())
+            .and_then(|v| v.into_iter().find(|x| !x.is_finite()))
+        {
+            return Err(err(format!(
+                "variable `{}`: attribute `{a}` is {x}, not a finite number",
+                isotrack_core::numtext::Escaped(var.name())
+            )));
+        }
+    }
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
@@ -544,6 +558,31 @@ mod tests {
             .collect();
         raw[4] = -999.0;
         raw
+    }
+
+    /// A packing attribute that is not finite (`add_offset = inf`, `scale_factor = nan`) is
+    /// named in the error, not reported as "every value is NaN / no-data".
+    #[test]
+    fn non_finite_packing_attribute_is_named() {
+        for (attr, value, shown) in [
+            ("add_offset", f64::INFINITY, "is inf"),
+            ("scale_factor", f64::NAN, "is NaN"),
+        ] {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("o.nc");
+            let mut ds = DataSet::new();
+            ds.add_fixed_dim("y", 3).unwrap();
+            ds.add_fixed_dim("x", 3).unwrap();
+            ds.add_var_f64("v", &["y", "x"]).unwrap();
+            ds.add_var_attr_f64("v", attr, vec![value]).unwrap();
+            let mut w = FileWriter::create_new(&p).unwrap();
+            w.set_def(&ds, Version::Classic, 0).unwrap();
+            w.write_var_f64("v", &[1.0; 9]).unwrap();
+            w.close().unwrap();
+            let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
+            assert!(e.contains(&format!("attribute `{attr}` {shown}")), "{e}");
+            assert!(!e.contains("every value is NaN"), "{e}");
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@
 use super::{regions, WARN_LATTICE};
 use crate::schema::ControllerKind;
 use crate::Scenario;
+use isotrack_core::numtext::{Num, NumUp};
 
 /// Warnings for a baseline whose gains violate its stated condition on this scenario (empty
 /// for the paper's law and for laws without a stated condition, and when the bounds cannot be
@@ -55,8 +56,9 @@ pub fn sliding_mode_conditions(
     let mut w = vec![];
     if mu >= v * grad_min {
         w.push(format!(
-            "sliding_mode: mu = gamma*delta = {mu:.4} is not below v*min|grad F| = {:.4} on the tube: the sliding surface may not be reachable (docs/BASELINES.md, condition (a))",
-            v * grad_min
+            "sliding_mode: mu = gamma*delta = {} is not below v*min|grad F| = {} on the tube: the sliding surface may not be reachable (docs/BASELINES.md, condition (a))",
+            Num(mu),
+            Num(v * grad_min)
         ));
         return w;
     }
@@ -64,7 +66,9 @@ pub fn sliding_mode_conditions(
         let need = (v * h + gamma * mu / v) / (grad_min * grad_min - mu * mu / (v * v)).sqrt();
         if u_bar <= need {
             w.push(format!(
-                "sliding_mode: the turn-rate limit {u_bar:.4} rad/s is not above {need:.4} rad/s = (v*max||hess F|| + gamma*mu/v)/sqrt(min|grad F|^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))"
+                "sliding_mode: the turn-rate limit {} rad/s is not above {} rad/s = (v*max||hess F|| + gamma*mu/v)/sqrt(min|grad F|^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))",
+                Num(u_bar),
+                NumUp(need)
             ));
         }
     }

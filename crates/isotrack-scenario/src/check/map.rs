@@ -15,7 +15,7 @@
 
 use super::{law, regions, sampled, Law, LoopSetup, CHECK_LATTICE};
 use crate::Scenario;
-use isotrack_core::numtext::Num;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_sim::{Outcome, TraceRow, TraceSink};
 use serde::Serialize;
 
@@ -213,8 +213,8 @@ impl MapGrid {
             if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi && (hi / lo).is_finite()) {
                 return Err(format!(
                     "{name} must be LO:HI with 0 < LO < HI and HI/LO finite, got {}:{}",
-                    Num(lo),
-                    Num(hi)
+                    Echo(lo),
+                    Echo(hi)
                 ));
             }
             Ok(())
@@ -227,7 +227,7 @@ impl MapGrid {
         if self.rate_range_hz[0] < bottom {
             return Err(format!(
                 "--rate-range: {} Hz is slower than a sensor period may be (at most {} steps of sim.dt_s = {} s: at least {} Hz)",
-                Num(self.rate_range_hz[0]),
+                Echo(self.rate_range_hz[0]),
                 isotrack_sim::MAX_STEPS,
                 Num(dt_s),
                 Num(bottom)
@@ -237,7 +237,7 @@ impl MapGrid {
         if self.rate_range_hz[1] > top * (1.0 + 1e-9) {
             return Err(format!(
                 "--rate-range: {} Hz is faster than the simulation step allows (sim.dt_s = {} s: at most {} Hz)",
-                Num(self.rate_range_hz[1]),
+                Echo(self.rate_range_hz[1]),
                 Num(dt_s),
                 Num(top)
             ));
