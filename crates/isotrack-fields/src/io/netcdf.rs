@@ -560,24 +560,29 @@ mod tests {
         raw
     }
 
-    /// A packing attribute that is not finite (`add_offset = inf`, `scale_factor = nan`) is
+    /// A packing attribute that is not finite (`add_offset = inf`, `scale_factor = -inf`) is
     /// named in the error, not reported as "every value is NaN / no-data".
     #[test]
     fn non_finite_packing_attribute_is_named() {
         for (attr, value, shown) in [
             ("add_offset", f64::INFINITY, "is inf"),
-            ("scale_factor", f64::NAN, "is NaN"),
+            // (NaN cannot be written: netcdf3's writer finds a variable by equality.)
+            ("scale_factor", f64::NEG_INFINITY, "is -inf"),
         ] {
             let dir = tempfile::tempdir().unwrap();
             let p = dir.path().join("o.nc");
             let mut ds = DataSet::new();
-            ds.add_fixed_dim("y", 3).unwrap();
-            ds.add_fixed_dim("x", 3).unwrap();
-            ds.add_var_f64("v", &["y", "x"]).unwrap();
-            ds.add_var_attr_f64("v", attr, vec![value]).unwrap();
+            ds.add_fixed_dim("lat", 4).unwrap();
+            ds.add_fixed_dim("lon", 3).unwrap();
+            ds.add_var_f64("lat", &["lat"]).unwrap();
+            ds.add_var_f64("lon", &["lon"]).unwrap();
+            ds.add_var_f32("v", &["lat", "lon"]).unwrap();
+            ds.add_var_attr_f32("v", attr, vec![value as f32]).unwrap();
             let mut w = FileWriter::create_new(&p).unwrap();
             w.set_def(&ds, Version::Classic, 0).unwrap();
-            w.write_var_f64("v", &[1.0; 9]).unwrap();
+            w.write_var_f64("lat", &[51.0, 50.5, 50.0, 49.5]).unwrap();
+            w.write_var_f64("lon", &[10.0, 10.5, 11.0]).unwrap();
+            w.write_var_f32("v", &[1.0; 12]).unwrap();
             w.close().unwrap();
             let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
             assert!(e.contains(&format!("attribute `{attr}` {shown}")), "{e}");

@@ -9,7 +9,7 @@
 use super::{regions, WARN_LATTICE};
 use crate::schema::ControllerKind;
 use crate::Scenario;
-use isotrack_core::numtext::{Num, NumUp};
+use isotrack_core::numtext::{Echo, Num, NumUp};
 
 /// Warnings for a baseline whose gains violate its stated condition on this scenario (empty
 /// for the paper's law and for laws without a stated condition, and when the bounds cannot be
@@ -67,7 +67,7 @@ pub fn sliding_mode_conditions(
         if u_bar <= need {
             w.push(format!(
                 "sliding_mode: the turn-rate limit {} rad/s is not above {} rad/s = (v*max||hess F|| + gamma*mu/v)/sqrt(min|grad F|^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))",
-                Num(u_bar),
+                Echo(u_bar),
                 NumUp(need)
             ));
         }
