@@ -63,10 +63,28 @@ pub fn check_gains(gains: &[String]) -> Result<(), Failure> {
             .split_once('.')
             .and_then(|(k, rest)| ControllerKind::from_name(k).map(|_| rest.contains('=')));
         if ok != Some(true) {
+            // Name the known kinds, and the nearest to what was typed (`--gain foo.kp=1`).
+            let names = ControllerKind::ALL.map(|k| k.name());
+            let typed = g.split_once('.').map_or(g.as_str(), |(k, _)| k);
+            let kind_note = if ControllerKind::from_name(typed).is_some() {
+                String::new()
+            } else {
+                let near = isotrack_scenario::load::closest_names(typed, &names);
+                format!(
+                    "; `{}` is not a controller kind{}; known kinds: {}",
+                    isotrack_scenario::load::clip(typed),
+                    if near.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (did you mean `{}`?)", near.join("`, `"))
+                    },
+                    names.join(", ")
+                )
+            };
             return Err(Failure {
                 code: exit::USAGE,
                 message: format!(
-                    "--gain {}: expected KIND.KEY=VALUE, e.g. sliding_mode.gamma=0.3",
+                    "--gain {}: expected KIND.KEY=VALUE, e.g. sliding_mode.gamma=0.3{kind_note}",
                     isotrack_scenario::load::clip(g)
                 ),
             });

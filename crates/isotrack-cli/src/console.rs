@@ -21,7 +21,8 @@
 //! Text written by [`out!`](crate::out), [`outln!`](crate::outln) and [`errln!`](crate::errln)
 //! is escaped on the way ([`isotrack_core::numtext::Escaped`]): a control character a terminal
 //! would obey (ESC, BEL, CR, other C0 and C1 controls, bidi overrides) in a file name, key,
-//! value or task name the user gave is shown as `\x1b`, `\u{202e}`, never acted on. Data
+//! value or task name the user gave is shown as `\x1b`, `\u{202e}`, never acted on, and a line
+//! longer than [`MAX_LINE_CHARS`] is cut there with `... (N more characters)`. Data
 //! printed for programs (`show`'s TOML, `--json`) goes through [`out_data!`](crate::out_data)
 //! unchanged: its own format escapes what it must.
 
@@ -73,7 +74,8 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
     }
     let written = if escape {
         let text = args.to_string();
-        write!(w, "{}", isotrack_core::numtext::Escaped(&text))
+        let text = isotrack_core::numtext::Escaped(&text).to_string();
+        w.write_all(clip_lines(&text, MAX_LINE_CHARS).as_bytes())
     } else {
         w.write_fmt(args)
     };
@@ -84,6 +86,27 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
             StreamState::Failed(e.to_string())
         };
     }
+}
+
+/// The longest line a message prints, in characters: the last bound on a message that echoes
+/// something long the user wrote (a 900 000-character path, a 40 000-character `--set` value),
+/// after the per-echo clip ([`isotrack_core::numtext::Clipped`]).
+pub const MAX_LINE_CHARS: usize = 1000;
+
+/// `text` with every line longer than `max` characters cut to its first `max` characters and
+/// `... (N more characters)`.
+pub fn clip_lines(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    if text.split('\n').all(|l| l.len() <= max) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len().min(16 * max));
+    for (i, line) in text.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        out.push_str(&isotrack_core::numtext::Clipped::with_limit(line, max).to_string());
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 /// Writes text to standard output, terminal controls escaped (see the module docs for what a

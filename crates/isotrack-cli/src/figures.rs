@@ -221,11 +221,10 @@ fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Fail
     Ok(d)
 }
 
+/// A bundled scenario of `--scenarios DIR`: 66 when it cannot be read (missing, a FIFO), 65
+/// when what it holds is invalid, as for every other command ([`crate::run::invalid`]).
 fn load(path: &Path, sets: &[String]) -> Result<Scenario, Failure> {
-    load_scenario(Some(path), sets).map_err(|e| Failure {
-        code: exit::DATAERR,
-        message: e.to_string(),
-    })
+    load_scenario(Some(path), sets).map_err(crate::run::invalid)
 }
 
 /// A run behind a paper figure: a bundled scenario with `--set` overrides, its run directory

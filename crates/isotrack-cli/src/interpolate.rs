@@ -3,7 +3,7 @@
 use crate::cli::{InterpolateArgs, Method};
 use crate::exit;
 use crate::run::Failure;
-use isotrack_core::numtext::Echo;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_fields::grid::Grid2;
 use isotrack_fields::stations::{
     Idw, OrdinaryKriging, StationGridError, StationInterpolator, Stations,
@@ -114,11 +114,13 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
     )
     .map_err(cant)?;
     outln!(
-        "wrote {} ({} x {} nodes, {} m spacing, values {lo:.4} .. {hi:.4}) and {}",
+        "wrote {} ({} x {} nodes, {} m spacing, values {} .. {}) and {}",
         a.out.display(),
         grid.nx(),
         grid.ny(),
-        spacing_m,
+        Num(spacing_m),
+        Num(lo),
+        Num(hi),
         side.display()
     );
     Ok(())

@@ -416,3 +416,287 @@ fn run_out_never_writes_over_its_inputs() {
         "the scenario file is untouched"
     );
 }
+
+/// The longest run of digits in `text`.
+fn longest_digit_run(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap_or(0)
+}
+
+/// Issue 30 item 19, hostile review: an echo of something long the user wrote (a 40 000-character
+/// `--set` value, a 5 000-character scenario path, a 100 000-character sweep path) is clipped:
+/// no line the command prints is longer than the console's 1 000-character bound plus its
+/// `... (N more characters)` tail, and the tail says how much was left out.
+#[test]
+fn long_echoes_are_clipped() {
+    let value = format!("field.center_m={}", "[".repeat(40_000));
+    let long_path = "a/".repeat(2_500) + "s.toml";
+    let sweep_path = "b".repeat(100_000);
+    for (args, code) in [
+        (vec!["run", "--set", value.as_str()], 65),
+        (vec!["run", long_path.as_str()], 66),
+        (vec!["show", long_path.as_str()], 66),
+        (
+            vec!["sweep", sweep_path.as_str(), "--out", "unused-dir"],
+            66,
+        ),
+    ] {
+        let o = isotrack(&args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(code), "{}", &e[..e.len().min(2000)]);
+        let longest = e.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+        assert!(
+            longest <= 1_040,
+            "{longest} characters: {}",
+            &e[..e.len().min(2000)]
+        );
+        assert!(
+            e.contains("more characters)"),
+            "{}",
+            &e[..e.len().min(2000)]
+        );
+        assert!(e.len() < 4_000, "{} bytes", e.len());
+    }
+}
+
+/// Computed numbers in warnings and notes are rounded (6 significant digits): the sliding-mode
+/// warning with `gamma = 1e300` says `mu = gamma*delta = 1e300` (gamma times the default
+/// `delta = 1`), not 301 digits; `interpolate --spacing-m 333.58524070059883` reports
+/// `333.585 m spacing`.
+#[test]
+fn computed_numbers_in_messages_are_rounded() {
+    let circular = repo().join("scenarios/paper-fig2b-circular.toml");
+    let run = [
+        "run",
+        "--set",
+        "controller.kind=sliding_mode",
+        "--set",
+        "controller.gamma=1e300",
+        "--set",
+        "sim.duration_s=1",
+    ];
+    let compare = [
+        "compare",
+        circular.to_str().unwrap(),
+        "--controllers",
+        "sliding_mode",
+        "--gain",
+        "sliding_mode.gamma=1e300",
+        "--set",
+        "sim.duration_s=1",
+    ];
+    let d = tempfile::tempdir().unwrap();
+    let cmp_out = d.path().join("cmp");
+    let compare: Vec<&str> = compare
+        .into_iter()
+        .chain(["--out", cmp_out.to_str().unwrap()])
+        .collect();
+    for args in [&run[..], &compare[..]] {
+        let o = isotrack(args);
+        let e = stderr(&o) + &stdout(&o);
+        assert!(e.contains("mu = gamma*delta = 1e300 "), "{e}");
+        assert!(longest_digit_run(&e) <= 17, "{e}");
+        assert!(e.lines().all(|l| l.len() < 400), "{e}");
+    }
+    let stations = write(
+        d.path(),
+        "st.csv",
+        "x_m,y_m,no2\n0,0,10\n1000,0,20\n0,1000,30\n1000,1000,40\n",
+    );
+    let out = d.path().join("g.csv");
+    let o = isotrack(&[
+        "interpolate",
+        &stations,
+        "--value-column",
+        "no2",
+        "--method",
+        "idw",
+        "--spacing-m",
+        "333.58524070059883",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s = stdout(&o);
+    assert!(s.contains(" 333.585 m spacing"), "{s}");
+    assert!(longest_digit_run(&s) <= 9, "{s}");
+}
+
+/// An SVG is well-formed XML whatever the title or run directory name holds: XML 1.0 forbids
+/// the C0 controls but tab, newline and carriage return even as character references, so
+/// `--title $'a\x01b'` and a run directory `rd\x01x` must leave no such byte in the file.
+#[test]
+fn svg_text_has_no_control_characters() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("rd\u{1}x");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=5",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for title in [None, Some("a\u{1}b\u{1f}c\u{8}")] {
+        let out = d.path().join(if title.is_some() { "t" } else { "n" });
+        let mut args = vec![
+            "plot",
+            run.to_str().unwrap(),
+            "--format",
+            "svg",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(t) = title {
+            args.extend(["--title", t]);
+        }
+        let o = isotrack(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let mut svgs = 0;
+        for f in std::fs::read_dir(&out).unwrap() {
+            let p = f.unwrap().path();
+            if p.extension().is_some_and(|e| e == "svg") {
+                svgs += 1;
+                let bytes = std::fs::read(&p).unwrap();
+                assert!(
+                    bytes
+                        .iter()
+                        .all(|&b| b >= 0x20 || matches!(b, b'\t' | b'\n' | b'\r')),
+                    "{} holds a control byte",
+                    p.display()
+                );
+                assert!(std::str::from_utf8(&bytes).unwrap().contains("<svg"));
+            }
+        }
+        assert!(svgs > 0);
+    }
+}
+
+/// `figures --scenarios DIR` whose scenario is missing or a FIFO: 66 (cannot open an input),
+/// as for every other command, not 65.
+#[test]
+fn figures_unreadable_scenario_is_66() {
+    let d = tempfile::tempdir().unwrap();
+    let missing = d.path().join("none");
+    std::fs::create_dir(&missing).unwrap();
+    let fifos = d.path().join("fifos");
+    std::fs::create_dir(&fifos).unwrap();
+    common::fifo(&fifos, "paper-fig2a-field.toml");
+    for dir in [&missing, &fifos] {
+        let o = isotrack_within(
+            &[
+                "figures",
+                "--scenarios",
+                dir.to_str().unwrap(),
+                "--out",
+                d.path().join("out").to_str().unwrap(),
+                "--runs",
+                d.path().join("runs").to_str().unwrap(),
+            ],
+            60,
+        );
+        assert_fails(&o, 66, &["paper-fig2a-field.toml"]);
+    }
+}
+
+/// Blame and wording: a step so small that the default sensor rate `1/dt` is infinite blames
+/// `sim.dt_s`, not the unwritten `sensor.rate_hz`; a suite seed beyond TOML's integers names
+/// the range and echoes the value; the PI-like law on a level the field does not attain says
+/// so in the verdict; `compare --gain foo.kp=1` names the known kinds.
+#[test]
+fn blame_and_wording() {
+    let o = isotrack(&["run", "--set", "sim.dt_s=1e-320"]);
+    assert_fails(&o, 65, &["`sim.dt_s`: got 1e-320"]);
+    assert!(!stderr(&o).contains("`sensor.rate_hz`"), "{}", stderr(&o));
+
+    let d = tempfile::tempdir().unwrap();
+    let suite = write(
+        d.path(),
+        "seed.toml",
+        "name = \"x\"\nversion = 1\ncontrollers = [\"pi_isoline\"]\ntuning_seeds = []\nscoring_seeds = [1, 9223372036854775808]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["benchmark", &suite, "--out", out.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        65,
+        &[
+            "seed.toml:5:",
+            "scoring_seeds: seeds are integers from 0 to 9223372036854775807",
+            "got 9223372036854775808",
+        ],
+    );
+    assert!(!stderr(&o).contains("expected u64"), "{}", stderr(&o));
+    let beyond_u64 = write(
+        d.path(),
+        "big.toml",
+        &std::fs::read_to_string(&suite)
+            .unwrap()
+            .replace("9223372036854775808", "18446744073709551616"),
+    );
+    let o = isotrack(&["benchmark", &beyond_u64, "--out", out.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        65,
+        &[
+            "big.toml:5:21: seeds are integers from 0 to 9223372036854775807",
+            "got 18446744073709551616",
+        ],
+    );
+    assert!(!out.join("leaderboard.csv").exists());
+
+    let volcano = repo().join("scenarios/volcano.toml");
+    let o = isotrack(&[
+        "check",
+        volcano.to_str().unwrap(),
+        "--set",
+        "controller.level=1000",
+    ]);
+    let s = stdout(&o);
+    let verdict = s
+        .lines()
+        .find(|l| l.contains("no guarantee"))
+        .unwrap_or_else(|| panic!("{s}"));
+    assert!(verdict.contains("not attained"), "{verdict}");
+    assert!(!verdict.contains("are for the PI-like law"), "{verdict}");
+
+    let o = isotrack(&["compare", volcano.to_str().unwrap(), "--gain", "foo.kp=1"]);
+    assert_fails(
+        &o,
+        64,
+        &[
+            "`foo` is not a controller kind",
+            "known kinds: ",
+            "sliding_mode",
+        ],
+    );
+    let o = isotrack(&[
+        "compare",
+        volcano.to_str().unwrap(),
+        "--gain",
+        "sliding_mod.gamma=1",
+    ]);
+    assert_fails(&o, 64, &["did you mean `sliding_mode`"]);
+}
+
+/// `check --map --kp-range 1e-320:1e300`: the refusal echoes the range as the user wrote it
+/// (`1e-320`), not the subnormal rounded to 6 digits (`9.99989e-321`).
+#[test]
+fn map_range_is_echoed_as_written() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("m");
+    let o = isotrack(&[
+        "check",
+        "--map",
+        "--kp-range",
+        "1e-320:1e300",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(matches!(o.status.code(), Some(64 | 65)), "{e}");
+    assert!(e.contains("got 1e-320:1e300"), "{e}");
+}

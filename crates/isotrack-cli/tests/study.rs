@@ -238,7 +238,7 @@ fn compare_warns_on_baseline_conditions() {
     assert!(o.status.success(), "{}", stderr(&o));
     let e = stderr(&o);
     assert!(
-        e.contains("warning: sliding_mode: the turn-rate limit 0.0800"),
+        e.contains("warning: sliding_mode: the turn-rate limit 0.08 rad/s"),
         "{e}"
     );
     assert!(e.contains("warning: suboptimal_sosm:"), "{e}");

@@ -132,6 +132,47 @@ impl fmt::Display for Escaped<'_> {
     }
 }
 
+/// How many characters of one string the user wrote a message echoes ([`Clipped`]).
+pub const ECHO_CHARS: usize = 200;
+
+/// User text for a message, [`Escaped`] and cut after its first [`ECHO_CHARS`] characters
+/// (or `limit`) with `... (N more characters)`: a 900 000-character path or a 40 000-character
+/// `--set` value is echoed as its start and its length, not in full.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clipped<'a> {
+    text: &'a str,
+    limit: usize,
+}
+
+#[allow(non_snake_case)]
+/// [`Clipped`] at [`ECHO_CHARS`] characters.
+pub fn Clipped(text: &str) -> Clipped<'_> {
+    Clipped::with_limit(text, ECHO_CHARS)
+}
+
+impl<'a> Clipped<'a> {
+    /// `text` cut after `limit` characters.
+    pub fn with_limit(text: &'a str, limit: usize) -> Self {
+        Self { text, limit }
+    }
+}
+
+impl fmt::Display for Clipped<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.text.char_indices().nth(self.limit) {
+            None => write!(f, "{}", Escaped(self.text)),
+            Some((cut, _)) => {
+                let more = self.text[cut..].chars().count();
+                write!(
+                    f,
+                    "{}... ({more} more characters)",
+                    Escaped(&self.text[..cut])
+                )
+            }
+        }
+    }
+}
+
 /// A small stack buffer for `core::fmt` (no allocation: this crate is `no_std`).
 struct Buf {
     bytes: [u8; 40],
@@ -275,6 +316,18 @@ mod tests {
     extern crate std;
     use super::*;
     use std::format;
+
+    /// A long echo is cut after its first 200 characters with the count of the rest; a short
+    /// one is only escaped.
+    #[test]
+    fn clipped_echoes() {
+        let long = "x".repeat(1000);
+        let shown = format!("{}", Clipped(&long));
+        assert_eq!(shown, "x".repeat(200) + "... (800 more characters)");
+        assert_eq!(format!("{}", Clipped("a\u{1b}b")), "a\\x1bb");
+        let cut = format!("{}", Clipped::with_limit("ééééé", 2));
+        assert_eq!(cut, "éé... (3 more characters)");
+    }
 
     /// Six significant digits, plain in [1e-6, 1e9), scientific outside, no trailing zeros;
     /// the reported `0.0024500000000000004` reads `0.00245`.

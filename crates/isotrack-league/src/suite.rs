@@ -226,10 +226,23 @@ impl Suite {
 
     /// Parses and checks suite text; `name` names it in errors, `dir` anchors its scenarios.
     pub fn parse(text: &str, name: &str, dir: &Path) -> Result<Self, SuiteError> {
-        let mut suite: Suite = toml::from_str(text).map_err(|e| SuiteError {
-            path: name.to_string(),
-            location: e.span().map(|s| line_col(text, s.start)),
-            message: e.message().trim().to_string(),
+        let mut suite: Suite = toml::from_str(text).map_err(|e| {
+            let mut message = e.message().trim().to_string();
+            // The only u64 values are seeds: say their range, echo what was written (serde's
+            // `invalid type: string "9223372036854775808", expected u64` says neither).
+            if message.ends_with("expected u64") {
+                let typed = e.span().and_then(|s| text.get(s)).unwrap_or("").trim();
+                message = format!(
+                    "seeds are integers from 0 to {} (sim.seed is a TOML integer), got {}",
+                    i64::MAX,
+                    isotrack_scenario::load::clip(typed)
+                );
+            }
+            SuiteError {
+                path: name.to_string(),
+                location: e.span().map(|s| line_col(text, s.start)),
+                message,
+            }
         })?;
         suite.dir = dir.to_path_buf();
         suite.text = text.to_string();
@@ -282,6 +295,17 @@ impl Suite {
             } else {
                 &self.scoring_seeds
             };
+            // Each seed becomes `sim.seed`, a TOML integer (64-bit signed).
+            if let Some(i) = (0..seeds.len()).find(|&i| seeds[i] > i64::MAX as u64) {
+                return Err((
+                    at(key, i),
+                    format!(
+                        "{key}: seeds are integers from 0 to {} (sim.seed is a TOML integer), got {}",
+                        i64::MAX,
+                        seeds[i]
+                    ),
+                ));
+            }
             let mut seen = std::collections::BTreeSet::new();
             if let Some(i) = (0..seeds.len()).find(|&i| !seen.insert(seeds[i])) {
                 return Err((

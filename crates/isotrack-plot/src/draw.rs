@@ -69,7 +69,9 @@ macro_rules! render {
             }
             Format::Svg => {
                 let $root = SVGBackend::new(path, $size).into_drawing_area();
-                $body.and_then(|_| $root.present().map_err(s))
+                $body
+                    .and_then(|_| $root.present().map_err(s))
+                    .and_then(|_| crate::style::svg_without_controls(path))
             }
         };
         res.map_err(|message| PlotError::Draw {

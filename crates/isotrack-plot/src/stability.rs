@@ -168,7 +168,11 @@ pub fn stability_map_figure(
         }
         Format::Svg => {
             let root = SVGBackend::new(path, (w, h)).into_drawing_area();
-            draw(chart(&root, map, verify, st).and_then(|_| root.present().map_err(s)))
+            draw(
+                chart(&root, map, verify, st)
+                    .and_then(|_| root.present().map_err(s))
+                    .and_then(|_| crate::style::svg_without_controls(path)),
+            )
         }
     }
 }

@@ -179,6 +179,28 @@ impl Style {
     }
 }
 
+/// Whether XML 1.0 forbids `c` in a document, even escaped (its `Char` production): the C0
+/// controls but tab, newline and carriage return, and U+FFFE, U+FFFF.
+pub(crate) fn forbidden_in_xml(c: char) -> bool {
+    matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}')
+}
+
+/// Rewrites the SVG file plotters wrote at `path` with every character XML forbids
+/// ([`forbidden_in_xml`]) replaced by U+FFFD: a `--title` or a run directory name holding
+/// `\x01` would otherwise make a file that is not well-formed XML (plotters writes text as
+/// it is, escaping only `<>&"'`). Leaves the file alone when it holds none.
+pub(crate) fn svg_without_controls(path: &std::path::Path) -> Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    if !text.chars().any(forbidden_in_xml) {
+        return Ok(());
+    }
+    let clean: String = text
+        .chars()
+        .map(|c| if forbidden_in_xml(c) { '\u{fffd}' } else { c })
+        .collect();
+    std::fs::write(path, clean).map_err(|e| e.to_string())
+}
+
 /// A tick label: the value at a precision that tells neighbouring ticks `step` apart, without a
 /// trailing `.0` and without `-0` (paper figures print `5`, `0.25`, `-3`, never `5.0` or `-0.0`).
 pub fn tick_label(v: f64, step: f64) -> String {

@@ -1117,9 +1117,23 @@ fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
 /// `[sensor]`: decided by [`Sensor::new`] itself, the constructor the builder calls, so a value
 /// that passes here cannot fail there.
 fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: f64) {
-    let rate = *sn
-        .rate_hz
-        .get_or_insert(if dt > 0.0 { 1.0 / dt } else { 1.0 });
+    // The default rate is one sample a step: a step so small that `1/dt` is infinite
+    // (`sim.dt_s = 1e-320`) is the step's fault, not the (unwritten) rate's.
+    let tiny_step = sn.rate_hz.is_none() && dt > 0.0 && !(1.0 / dt).is_finite();
+    if tiny_step {
+        c.fail(
+            "sim.dt_s",
+            format!(
+                "got {}: the default sensor.rate_hz = 1/sim.dt_s is not finite (give a larger step)",
+                Echo(dt)
+            ),
+        );
+    }
+    let rate = *sn.rate_hz.get_or_insert(if dt > 0.0 && !tiny_step {
+        1.0 / dt
+    } else {
+        1.0
+    });
     c.positive("sensor.rate_hz", rate);
     let noise = *sn.noise_std.get_or_insert(0.0);
     c.sensor_setting("sensor.noise_std", noise);
@@ -1152,7 +1166,7 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
         }
     }
     let all_finite = [dt, rate, delay].iter().all(|x| x.is_finite());
-    if !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
+    if tiny_step || !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
         return; // already reported
     }
     if delay > duration_s {

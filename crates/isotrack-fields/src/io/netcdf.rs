@@ -433,6 +433,20 @@ fn parse_file(
     // Checked before reading: the header's sizes are the file's claim, not a promise (a
     // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
     super::check_series_size(path, n_frames, nx, ny, budget_bytes())?;
+    // A packing attribute that is not finite turns every value into NaN; say so, rather than
+    // "every value is NaN / no-data".
+    for a in ["scale_factor", "add_offset"] {
+        if let Some(x) = var
+            .attribute(a)
+            .and_then(|at| at.value.as_f64_vec())
+            .and_then(|v| v.into_iter().find(|x| !x.is_finite()))
+        {
+            return Err(err(format!(
+                "variable `{}`: attribute `{a}` is {x}, not a finite number",
+                isotrack_core::numtext::Escaped(var.name())
+            )));
+        }
+    }
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
@@ -623,6 +637,36 @@ mod tests {
             .collect();
         raw[4] = -999.0;
         raw
+    }
+
+    /// A packing attribute that is not finite (`add_offset = inf`, `scale_factor = -inf`) is
+    /// named in the error, not reported as "every value is NaN / no-data".
+    #[test]
+    fn non_finite_packing_attribute_is_named() {
+        for (attr, value, shown) in [
+            ("add_offset", f64::INFINITY, "is inf"),
+            // (NaN cannot be written: netcdf3's writer finds a variable by equality.)
+            ("scale_factor", f64::NEG_INFINITY, "is -inf"),
+        ] {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("o.nc");
+            let mut ds = DataSet::new();
+            ds.add_fixed_dim("lat", 4).unwrap();
+            ds.add_fixed_dim("lon", 3).unwrap();
+            ds.add_var_f64("lat", &["lat"]).unwrap();
+            ds.add_var_f64("lon", &["lon"]).unwrap();
+            ds.add_var_f32("v", &["lat", "lon"]).unwrap();
+            ds.add_var_attr_f32("v", attr, vec![value as f32]).unwrap();
+            let mut w = FileWriter::create_new(&p).unwrap();
+            w.set_def(&ds, Version::Classic, 0).unwrap();
+            w.write_var_f64("lat", &[51.0, 50.5, 50.0, 49.5]).unwrap();
+            w.write_var_f64("lon", &[10.0, 10.5, 11.0]).unwrap();
+            w.write_var_f32("v", &[1.0; 12]).unwrap();
+            w.close().unwrap();
+            let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
+            assert!(e.contains(&format!("attribute `{attr}` {shown}")), "{e}");
+            assert!(!e.contains("every value is NaN"), "{e}");
+        }
     }
 
     #[test]

@@ -12,7 +12,7 @@
 use super::{regions, CHECK_LATTICE};
 use crate::schema::ControllerKind;
 use crate::Scenario;
-use isotrack_core::numtext::{Echo, Num};
+use isotrack_core::numtext::{Echo, Num, NumUp};
 
 /// Warnings for a baseline whose gains violate its stated condition on this scenario (empty
 /// for the paper's law and for laws without a stated condition, and when the bounds cannot be
@@ -88,7 +88,7 @@ pub fn sliding_mode_conditions(
             w.push(format!(
                 "sliding_mode: the turn-rate limit {} rad/s is not above {} rad/s = (v*gamma3 + gamma*mu/v)/sqrt(gamma1^2 - mu^2/v^2): it may not hold the surface (docs/BASELINES.md, condition (b))",
                 Echo(u_bar),
-                Num(need)
+                NumUp(need)
             ));
         }
     }

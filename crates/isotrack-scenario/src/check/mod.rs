@@ -1402,14 +1402,21 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
             ),
         );
     }
-    let why = if !sm.applicable {
-        "the propositions are for the PI-like law"
+    // The sampled check's own reason when the law is the PI-like one (a level the field does
+    // not attain, a vehicle that cannot be built): "the propositions are for the PI-like law"
+    // would be wrong there.
+    let why = if !sm.applicable
+        && (sm.note.is_empty() || sm.note.contains("models the PI-like law"))
+    {
+        "the propositions are for the PI-like law".to_string()
+    } else if !sm.applicable {
+        sm.note.clone()
     } else if p2.start_without_data {
-        "the start has no field value (the field has no data there), so Prop. 2's conditions are not evaluated"
+        "the start has no field value (the field has no data there), so Prop. 2's conditions are not evaluated".to_string()
     } else if p2.conditions_hold {
-        "Prop. 2's conditions hold but its bound is not proved from this start"
+        "Prop. 2's conditions hold but its bound is not proved from this start".to_string()
     } else {
-        "Prop. 1 is for circular fields and Prop. 2's conditions do not hold"
+        "Prop. 1 is for circular fields and Prop. 2's conditions do not hold".to_string()
     };
     (
         Verdict::NotApplicable,
