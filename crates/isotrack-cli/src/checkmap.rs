@@ -94,6 +94,14 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
             (args.rate_range.is_some(), "--rate-range"),
             (args.map_size.is_some(), "--map-size"),
             (args.verify.is_some(), "--verify"),
+            (args.threads.is_some(), "--threads"),
+            // The chart's look (a hostile review: `check --dpi 0` exited 0, the option unused;
+            // --colormap and --dpi are caught when they differ from their defaults).
+            (args.look.size.is_some(), "--size"),
+            (args.look.font_size.is_some(), "--font-size"),
+            (args.look.title.is_some(), "--title"),
+            (args.look.colormap != "viridis", "--colormap"),
+            (args.look.dpi.to_bits() != 100.0f64.to_bits(), "--dpi"),
         ] {
             if given {
                 return Err(usage(format!(

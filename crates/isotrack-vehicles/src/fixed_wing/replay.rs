@@ -29,7 +29,7 @@ pub fn check_deltas(d: &Deltas) -> Result<(), String> {
         ("delta_a_rad", d.aileron_rad),
         ("delta_r_rad", d.rudder_rad),
     ] {
-        if !(v.abs() <= MAX_DEFLECTION_RAD) {
+        if v.is_nan() || v.abs() > MAX_DEFLECTION_RAD {
             return Err(format!(
                 "`{name}` = {v} rad is outside +-{MAX_DEFLECTION_RAD:.4} rad (45 deg, the surfaces' limit)"
             ));
