@@ -307,6 +307,10 @@ struct Fly<'a> {
     local_seen: bool,
     /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
     run_ended: bool,
+    /// When the last finite position arrived.
+    position_at: Option<Instant>,
+    /// The companion has asked for OFFBOARD.
+    offboard_sent: bool,
     events: Vec<String>,
     t0: Instant,
 }
@@ -442,6 +446,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         global_origin: None,
         local_seen: false,
         run_ended: false,
+        position_at: None,
+        offboard_sent: false,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -459,6 +465,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         fault: None,
     };
     let mut first_wall: Option<Instant> = None;
+    let mut t_control: Option<f64> = None;
+    let mut skipping_line = false;
     let mut next_setpoint = Instant::now();
     let mut next_heartbeat = Instant::now();
     let mut next_control = Instant::now();
@@ -521,9 +529,23 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     break;
                 };
                 partial.extend_from_slice(&buf[..n]);
+                if skipping_line {
+                    // The rest of a dropped over-long line is no line.
+                    match partial.iter().position(|&b| b == b'\n') {
+                        Some(i) => {
+                            partial.drain(..=i);
+                            skipping_line = false;
+                        }
+                        None => {
+                            partial.clear();
+                            continue;
+                        }
+                    }
+                }
                 let Some(end) = partial.iter().rposition(|&b| b == b'\n') else {
                     if partial.len() > MAX_PARTIAL_LINE_BYTES {
                         partial.clear();
+                        skipping_line = true;
                     }
                     continue;
                 };
@@ -531,6 +553,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 partial.drain(..=end);
                 if partial.len() > MAX_PARTIAL_LINE_BYTES {
                     partial.clear();
+                    skipping_line = true;
                 }
                 for line in text.lines() {
                     let mut it = line.split(',');
@@ -550,6 +573,17 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             if clock_start.elapsed() > timeout {
                 fly.event(format!(
                     "fence: no position from the vehicle for {} s, the fence of {f} m cannot be kept",
+                    opts.timeout_s
+                ));
+                break 'flight FlyEnd::Fence;
+            }
+        }
+        if let (Some(f), Some(at)) = (opts.fence_m, fly.position_at) {
+            // The fence never silently switches off: positions that stop (or turn non-finite,
+            // which are dropped) end the flight.
+            if at.elapsed() > timeout {
+                fly.event(format!(
+                    "position_lost: no finite position from the vehicle for {} s, the fence of {f} m cannot be kept",
                     opts.timeout_s
                 ));
                 break 'flight FlyEnd::Fence;
@@ -579,6 +613,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         let active = fly.armed && fly.mode == Some(Mode::Offboard);
         if active {
             fly.in_control = true;
+            // --max-duration-s counts from here (the companion's clock).
+            first_wall.get_or_insert_with(Instant::now);
         } else if fly.in_control {
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
@@ -627,6 +663,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             } else {
                 // PX4 wants setpoints before the switch.
                 fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+                fly.offboard_sent = true;
                 fly.command(
                     MavCmd::MAV_CMD_DO_SET_MODE,
                     Fly::set_mode_params(Mode::Offboard),
@@ -642,8 +679,12 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                         continue;
                     }
                     if ms == last {
-                        // A repeat (the vehicle lost our answer?): the same answer again.
-                        fly.setpoint(ms)?;
+                        // A repeat (the vehicle lost our answer?): the same answer again, within
+                        // a UDP sensor's --setpoint-rate-hz.
+                        if lines.is_none() || Instant::now() >= next_setpoint {
+                            fly.setpoint(ms)?;
+                            next_setpoint = Instant::now() + period;
+                        }
                         continue;
                     }
                 }
@@ -651,9 +692,15 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     t_s: wire::time_s(ms),
                     value: v,
                 };
-                let first = *t_first.get_or_insert(m.t_s);
-                first_wall.get_or_insert_with(Instant::now);
-                if let Some(max) = opts.max_duration_s {
+                t_first.get_or_insert(m.t_s);
+                // --max-duration-s counts from the first measurement the law answers in
+                // control (vehicle time).
+                let first = if active {
+                    Some(*t_control.get_or_insert(m.t_s))
+                } else {
+                    None
+                };
+                if let (Some(max), Some(first)) = (opts.max_duration_s, first) {
                     if m.t_s - first >= max {
                         fly.event(format!(
                             "max duration {max} s reached at vehicle time {} s",
@@ -747,15 +794,25 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         FailsafeAction::Hold => Mode::Hold,
         FailsafeAction::Return => Mode::Return,
     };
-    let way_out = if end.is_failsafe() {
+    // Before the companion had control, a failsafe commands nothing on a vehicle it never
+    // controlled (a pilot's, or a disarmed one): only a vehicle it armed itself is disarmed, and
+    // one it asked for OFFBOARD is switched to the failsafe mode.
+    let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
+    let way_out = if end.is_failsafe() && (fly.in_control || fly.target.is_none()) {
         Some(WayOut::Mode(mode))
-    } else if end == FlyEnd::ControlRefused && fly.armed && fly.armed_by_us {
+    } else if stopping && fly.armed && fly.armed_by_us {
         Some(WayOut::Disarm)
-    } else if end == FlyEnd::ControlRefused && fly.armed {
+    } else if stopping && fly.armed && (end == FlyEnd::ControlRefused || fly.offboard_sent) {
         Some(WayOut::Mode(mode))
     } else {
         None
     };
+    if way_out.is_none() && end.is_failsafe() {
+        fly.event(format!(
+            "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",
+            end.as_str()
+        ));
+    }
     let mut acknowledged = false;
     if let Some(way) = way_out {
         let what = match way {
@@ -775,9 +832,23 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         // may hear what it cannot answer).
         let mut tries = 0u32;
         let mut way_refused = false;
+        let mut given_up = None;
+        // A signal from here on (the one that may have caused the failsafe is spent) ends the
+        // retries; so does their bound, 3 x --timeout-s within [3, 30] s.
+        opts.stop.store(false, Ordering::SeqCst);
+        let retry_end = Instant::now()
+            + Duration::from_secs_f64((3.0 * opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         while fly.target.is_some() {
             let lost = Instant::now().duration_since(last_link) > timeout;
             if lost && tries >= 5 {
+                break;
+            }
+            if opts.stop.load(Ordering::SeqCst) {
+                given_up = Some("stopped by a signal");
+                break;
+            }
+            if Instant::now() >= retry_end {
+                given_up = Some("retries' bound reached");
                 break;
             }
             tries += 1;
@@ -817,15 +888,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                             way_refused = true;
                         }
                     }
+                    // Confirmed by the vehicle's heartbeat only (an acknowledgement is a promise:
+                    // a vehicle may accept and stay in OFFBOARD).
                     acknowledged |= match (&r.msg, way) {
-                        (MavMessage::COMMAND_ACK(a), WayOut::Mode(_)) => {
-                            a.command == MavCmd::MAV_CMD_DO_SET_MODE
-                                && a.result == MavResult::MAV_RESULT_ACCEPTED
-                        }
-                        (MavMessage::COMMAND_ACK(a), WayOut::Disarm) => {
-                            a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
-                                && a.result == MavResult::MAV_RESULT_ACCEPTED
-                        }
                         (MavMessage::HEARTBEAT(h), WayOut::Mode(m)) => {
                             Mode::from_custom_mode(h.custom_mode) == Some(m)
                         }
@@ -854,7 +919,11 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     WayOut::Mode(m) => m.name(),
                     WayOut::Disarm => "disarm",
                 },
-                if way_refused { "refused" } else { "link lost" }
+                if way_refused {
+                    "refused"
+                } else {
+                    given_up.unwrap_or("link lost")
+                }
             )
         });
     }
@@ -995,6 +1064,7 @@ fn handle(
         // A non-finite position is no position (it would switch the fence off).
         MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
             fly.local_seen = true;
+            fly.position_at = Some(Instant::now());
             *pos = Some((p.y as f64, p.x as f64));
         }
         MavMessage::GLOBAL_POSITION_INT(g) if !fly.local_seen => {
@@ -1005,6 +1075,7 @@ fn handle(
                     lon_deg: lon,
                     alt_m: 0.0,
                 });
+                fly.position_at = Some(Instant::now());
                 *pos = Some(o.to_local_m(lat, lon));
             }
         }
