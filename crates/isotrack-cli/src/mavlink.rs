@@ -270,6 +270,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     opts.fence_m = args.fence_m;
     opts.setpoint_rate_hz = args.setpoint_rate_hz;
     opts.system_id = args.system_id;
+    opts.target_system = args.target_system;
     opts.failsafe = match args.failsafe {
         FailsafeArg::Hold => FailsafeAction::Hold,
         FailsafeArg::Return => FailsafeAction::Return,
@@ -375,6 +376,12 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
+    if report.end == FlyEnd::TwoVehicles {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+        });
+    }
     if report.end == FlyEnd::PilotTookOver {
         errln!("isotrack fly: pilot_took_over: the companion let go, nothing commanded");
     }

@@ -35,6 +35,10 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
+/// How long after the first autopilot heard a second one (another system or component) makes
+/// the vehicle ambiguous (`two_vehicles`), s.
+pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
+
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
@@ -151,6 +155,9 @@ pub struct FlyOptions {
     pub setpoint_rate_hz: f64,
     /// This companion's system id (component 191, an onboard computer).
     pub system_id: u8,
+    /// The vehicle's system id (`--target-system`); `None`: the first autopilot heard, and a
+    /// second one heard within [`TWO_VEHICLES_WINDOW_S`] of it ends the flight.
+    pub target_system: Option<u8>,
     /// Set from outside (Ctrl-C) to stop.
     pub stop: Arc<AtomicBool>,
 }
@@ -169,6 +176,7 @@ impl FlyOptions {
             failsafe: FailsafeAction::Hold,
             setpoint_rate_hz: 10.0,
             system_id: 1,
+            target_system: None,
             stop: Arc::new(AtomicBool::new(false)),
         }
     }
@@ -202,6 +210,9 @@ pub enum FlyEnd {
     /// companion asking (a pilot or the autopilot took over): the setpoints stop at once and
     /// nothing is commanded, so the pilot's mode stands.
     PilotTookOver,
+    /// Two autopilots were heard within [`TWO_VEHICLES_WINDOW_S`] (without
+    /// `FlyOptions::target_system`): which one to fly is ambiguous, nothing is commanded.
+    TwoVehicles,
 }
 
 impl FlyEnd {
@@ -219,13 +230,17 @@ impl FlyEnd {
             FlyEnd::SensorClockJump => "sensor_clock_jump",
             FlyEnd::VehicleLost => "vehicle_lost",
             FlyEnd::PilotTookOver => "pilot_took_over",
+            FlyEnd::TwoVehicles => "two_vehicles",
         }
     }
     /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
     pub fn is_failsafe(self) -> bool {
         !matches!(
             self,
-            FlyEnd::VehicleEnded | FlyEnd::ControlRefused | FlyEnd::PilotTookOver
+            FlyEnd::VehicleEnded
+                | FlyEnd::ControlRefused
+                | FlyEnd::PilotTookOver
+                | FlyEnd::TwoVehicles
         )
     }
 }
@@ -311,6 +326,10 @@ struct Fly<'a> {
     position_at: Option<Instant>,
     /// The companion has asked for OFFBOARD.
     offboard_sent: bool,
+    /// When the vehicle was first heard.
+    target_at: Option<Instant>,
+    /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
+    other_vehicle: Option<(u32, u8)>,
     events: Vec<String>,
     t0: Instant,
 }
@@ -448,6 +467,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         run_ended: false,
         position_at: None,
         offboard_sent: false,
+        target_at: None,
+        other_vehicle: None,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -508,6 +529,13 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &mut heading,
                 &mut vehicle_done,
             );
+        }
+        if let (Some(a), Some(b)) = (fly.target, fly.other_vehicle) {
+            fly.event(format!(
+                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
+                a.0, a.1, b.0, b.1
+            ));
+            break 'flight FlyEnd::TwoVehicles;
         }
         if fly.link.stats.mavlink1_frames > 0 && !mavlink1_logged {
             mavlink1_logged = true;
@@ -991,11 +1019,32 @@ fn handle(
     vehicle_done: &mut bool,
 ) {
     let from = (r.header.system_id, r.header.component_id);
-    if fly.target.is_none() {
-        if let MavMessage::HEARTBEAT(h) = &r.msg {
-            if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) {
-                fly.target = Some(from);
-                fly.event(format!("vehicle: system {}, component {}", from.0, from.1));
+    if let MavMessage::HEARTBEAT(h) = &r.msg {
+        let wanted_system = fly.opts.target_system.is_none_or(|n| from.0 == n as u32);
+        if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) && wanted_system {
+            match (fly.target, fly.target_at) {
+                (None, _) => {
+                    fly.target = Some(from);
+                    fly.target_at = Some(Instant::now());
+                    fly.event(format!(
+                        "vehicle: system {}, component {}{}",
+                        from.0,
+                        from.1,
+                        if fly.opts.target_system.is_some() {
+                            " (--target-system)"
+                        } else {
+                            " (the first autopilot heard)"
+                        }
+                    ));
+                }
+                (Some(t), Some(at))
+                    if t != from
+                        && fly.opts.target_system.is_none()
+                        && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
+                {
+                    fly.other_vehicle.get_or_insert(from);
+                }
+                _ => {}
             }
         }
     }

@@ -504,3 +504,60 @@ fn a_signal_ends_the_hold_retries() {
         r.events
     );
 }
+
+/// Two autopilots (systems 1 and 2) beating from the start: the companion refuses to pick
+/// (`two_vehicles`, naming both, nothing commanded); with `target_system` 2 it takes system 2.
+#[test]
+fn two_autopilots_are_refused_unless_one_is_picked() {
+    for pick in [None, Some(2u8)] {
+        let s = load_scenario(None, &[]).unwrap();
+        let mut o = FlyOptions::new("udpin:127.0.0.1:0");
+        o.timeout_s = 1.0;
+        o.target_system = pick;
+        let (tx, rx) = std::sync::mpsc::channel();
+        let companion = std::thread::spawn(move || {
+            run_fly(&s, &o, &mut NoTrace, &mut |l| {
+                tx.send(l.local_addr()?).unwrap();
+                Ok(())
+            })
+            .unwrap()
+        });
+        let url = format!("udpout:{}", rx.recv().unwrap());
+        let mut a = Link::open(&url, 1, 1).unwrap();
+        let mut b = Link::open(&url, 2, 1).unwrap();
+        let t0 = Instant::now();
+        while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
+            for l in [&mut a, &mut b] {
+                l.send(&heartbeat(
+                    MavType::MAV_TYPE_FIXED_WING,
+                    MavAutopilot::MAV_AUTOPILOT_PX4,
+                    false,
+                    0,
+                ))
+                .unwrap();
+                l.poll(Duration::from_millis(25)).unwrap();
+            }
+        }
+        let r = companion.join().unwrap();
+        match pick {
+            None => {
+                assert_eq!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+                let e = r.events.iter().find(|e| e.contains("two autopilots"));
+                assert!(
+                    e.is_some_and(|e| e.contains("system 1") && e.contains("system 2")),
+                    "{:?}",
+                    r.events
+                );
+                assert!(!r.way_out_commanded);
+            }
+            Some(_) => {
+                assert_ne!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+                assert!(
+                    r.events.iter().any(|e| e.contains("vehicle: system 2")),
+                    "{:?}",
+                    r.events
+                );
+            }
+        }
+    }
+}
