@@ -242,6 +242,11 @@ struct FlySummary<'a> {
     scenario: &'a isotrack_scenario::ScenarioFile,
 }
 
+/// `fly`'s exit code for a failsafe (Ctrl-C, `--max-duration-s`, a lost sensor or link, ...)
+/// before the companion had control of the vehicle: it stops and commands nothing (a pilot's
+/// or a disarmed vehicle keeps its mode), so no way out is claimed either way.
+pub const NOTHING_COMMANDED: u8 = 79;
+
 /// `isotrack fly`.
 pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     positive("--max-duration-s", args.max_duration_s)?;
@@ -265,6 +270,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     opts.fence_m = args.fence_m;
     opts.setpoint_rate_hz = args.setpoint_rate_hz;
     opts.system_id = args.system_id;
+    opts.target_system = args.target_system;
     opts.failsafe = match args.failsafe {
         FailsafeArg::Hold => FailsafeAction::Hold,
         FailsafeArg::Return => FailsafeAction::Return,
@@ -370,7 +376,25 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
-    let commanded = report.end.is_failsafe() || report.way_out_commanded;
+    if report.end == FlyEnd::TwoVehicles {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+        });
+    }
+    if report.end == FlyEnd::PilotTookOver {
+        errln!("isotrack fly: pilot_took_over: the companion let go, nothing commanded");
+    }
+    let commanded = report.way_out_commanded;
+    if report.end.is_failsafe() && !commanded {
+        return Err(Failure {
+            code: NOTHING_COMMANDED,
+            message: format!(
+                "failsafe ({}) before the companion had control of the vehicle: it stopped and commanded nothing (the vehicle's mode stands)",
+                report.end.as_str()
+            ),
+        });
+    }
     if commanded && !report.failsafe_acknowledged {
         return Err(Failure {
             code: exit::UNAVAILABLE,

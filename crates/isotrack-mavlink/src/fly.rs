@@ -35,6 +35,10 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
+/// How long after the first autopilot heard a second one (another system or component) makes
+/// the vehicle ambiguous (`two_vehicles`), s.
+pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
+
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
@@ -151,6 +155,9 @@ pub struct FlyOptions {
     pub setpoint_rate_hz: f64,
     /// This companion's system id (component 191, an onboard computer).
     pub system_id: u8,
+    /// The vehicle's system id (`--target-system`); `None`: the first autopilot heard, and a
+    /// second one heard within [`TWO_VEHICLES_WINDOW_S`] of it ends the flight.
+    pub target_system: Option<u8>,
     /// Set from outside (Ctrl-C) to stop.
     pub stop: Arc<AtomicBool>,
 }
@@ -169,6 +176,7 @@ impl FlyOptions {
             failsafe: FailsafeAction::Hold,
             setpoint_rate_hz: 10.0,
             system_id: 1,
+            target_system: None,
             stop: Arc::new(AtomicBool::new(false)),
         }
     }
@@ -202,6 +210,9 @@ pub enum FlyEnd {
     /// companion asking (a pilot or the autopilot took over): the setpoints stop at once and
     /// nothing is commanded, so the pilot's mode stands.
     PilotTookOver,
+    /// Two autopilots were heard within [`TWO_VEHICLES_WINDOW_S`] (without
+    /// `FlyOptions::target_system`): which one to fly is ambiguous, nothing is commanded.
+    TwoVehicles,
 }
 
 impl FlyEnd {
@@ -219,13 +230,17 @@ impl FlyEnd {
             FlyEnd::SensorClockJump => "sensor_clock_jump",
             FlyEnd::VehicleLost => "vehicle_lost",
             FlyEnd::PilotTookOver => "pilot_took_over",
+            FlyEnd::TwoVehicles => "two_vehicles",
         }
     }
     /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
     pub fn is_failsafe(self) -> bool {
         !matches!(
             self,
-            FlyEnd::VehicleEnded | FlyEnd::ControlRefused | FlyEnd::PilotTookOver
+            FlyEnd::VehicleEnded
+                | FlyEnd::ControlRefused
+                | FlyEnd::PilotTookOver
+                | FlyEnd::TwoVehicles
         )
     }
 }
@@ -307,6 +322,14 @@ struct Fly<'a> {
     local_seen: bool,
     /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
     run_ended: bool,
+    /// When the last finite position arrived.
+    position_at: Option<Instant>,
+    /// The companion has asked for OFFBOARD.
+    offboard_sent: bool,
+    /// When the vehicle was first heard.
+    target_at: Option<Instant>,
+    /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
+    other_vehicle: Option<(u32, u8)>,
     events: Vec<String>,
     t0: Instant,
 }
@@ -442,6 +465,10 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         global_origin: None,
         local_seen: false,
         run_ended: false,
+        position_at: None,
+        offboard_sent: false,
+        target_at: None,
+        other_vehicle: None,
         events: Vec::new(),
         t0: Instant::now(),
     };
@@ -459,6 +486,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         fault: None,
     };
     let mut first_wall: Option<Instant> = None;
+    let mut t_control: Option<f64> = None;
+    let mut skipping_line = false;
     let mut next_setpoint = Instant::now();
     let mut next_heartbeat = Instant::now();
     let mut next_control = Instant::now();
@@ -501,6 +530,13 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 &mut vehicle_done,
             );
         }
+        if let (Some(a), Some(b)) = (fly.target, fly.other_vehicle) {
+            fly.event(format!(
+                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
+                a.0, a.1, b.0, b.1
+            ));
+            break 'flight FlyEnd::TwoVehicles;
+        }
         if fly.link.stats.mavlink1_frames > 0 && !mavlink1_logged {
             mavlink1_logged = true;
             fly.event(
@@ -521,9 +557,23 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     break;
                 };
                 partial.extend_from_slice(&buf[..n]);
+                if skipping_line {
+                    // The rest of a dropped over-long line is no line.
+                    match partial.iter().position(|&b| b == b'\n') {
+                        Some(i) => {
+                            partial.drain(..=i);
+                            skipping_line = false;
+                        }
+                        None => {
+                            partial.clear();
+                            continue;
+                        }
+                    }
+                }
                 let Some(end) = partial.iter().rposition(|&b| b == b'\n') else {
                     if partial.len() > MAX_PARTIAL_LINE_BYTES {
                         partial.clear();
+                        skipping_line = true;
                     }
                     continue;
                 };
@@ -531,6 +581,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 partial.drain(..=end);
                 if partial.len() > MAX_PARTIAL_LINE_BYTES {
                     partial.clear();
+                    skipping_line = true;
                 }
                 for line in text.lines() {
                     let mut it = line.split(',');
@@ -550,6 +601,17 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             if clock_start.elapsed() > timeout {
                 fly.event(format!(
                     "fence: no position from the vehicle for {} s, the fence of {f} m cannot be kept",
+                    opts.timeout_s
+                ));
+                break 'flight FlyEnd::Fence;
+            }
+        }
+        if let (Some(f), Some(at)) = (opts.fence_m, fly.position_at) {
+            // The fence never silently switches off: positions that stop (or turn non-finite,
+            // which are dropped) end the flight.
+            if at.elapsed() > timeout {
+                fly.event(format!(
+                    "position_lost: no finite position from the vehicle for {} s, the fence of {f} m cannot be kept",
                     opts.timeout_s
                 ));
                 break 'flight FlyEnd::Fence;
@@ -579,6 +641,8 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         let active = fly.armed && fly.mode == Some(Mode::Offboard);
         if active {
             fly.in_control = true;
+            // --max-duration-s counts from here (the companion's clock).
+            first_wall.get_or_insert_with(Instant::now);
         } else if fly.in_control {
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
@@ -627,6 +691,7 @@ pub fn run_fly<S: TraceSink + ?Sized>(
             } else {
                 // PX4 wants setpoints before the switch.
                 fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+                fly.offboard_sent = true;
                 fly.command(
                     MavCmd::MAV_CMD_DO_SET_MODE,
                     Fly::set_mode_params(Mode::Offboard),
@@ -642,8 +707,12 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                         continue;
                     }
                     if ms == last {
-                        // A repeat (the vehicle lost our answer?): the same answer again.
-                        fly.setpoint(ms)?;
+                        // A repeat (the vehicle lost our answer?): the same answer again, within
+                        // a UDP sensor's --setpoint-rate-hz.
+                        if lines.is_none() || Instant::now() >= next_setpoint {
+                            fly.setpoint(ms)?;
+                            next_setpoint = Instant::now() + period;
+                        }
                         continue;
                     }
                 }
@@ -651,9 +720,15 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     t_s: wire::time_s(ms),
                     value: v,
                 };
-                let first = *t_first.get_or_insert(m.t_s);
-                first_wall.get_or_insert_with(Instant::now);
-                if let Some(max) = opts.max_duration_s {
+                t_first.get_or_insert(m.t_s);
+                // --max-duration-s counts from the first measurement the law answers in
+                // control (vehicle time).
+                let first = if active {
+                    Some(*t_control.get_or_insert(m.t_s))
+                } else {
+                    None
+                };
+                if let (Some(max), Some(first)) = (opts.max_duration_s, first) {
                     if m.t_s - first >= max {
                         fly.event(format!(
                             "max duration {max} s reached at vehicle time {} s",
@@ -747,15 +822,25 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         FailsafeAction::Hold => Mode::Hold,
         FailsafeAction::Return => Mode::Return,
     };
-    let way_out = if end.is_failsafe() {
+    // Before the companion had control, a failsafe commands nothing on a vehicle it never
+    // controlled (a pilot's, or a disarmed one): only a vehicle it armed itself is disarmed, and
+    // one it asked for OFFBOARD is switched to the failsafe mode.
+    let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
+    let way_out = if end.is_failsafe() && (fly.in_control || fly.target.is_none()) {
         Some(WayOut::Mode(mode))
-    } else if end == FlyEnd::ControlRefused && fly.armed && fly.armed_by_us {
+    } else if stopping && fly.armed && fly.armed_by_us {
         Some(WayOut::Disarm)
-    } else if end == FlyEnd::ControlRefused && fly.armed {
+    } else if stopping && fly.armed && (end == FlyEnd::ControlRefused || fly.offboard_sent) {
         Some(WayOut::Mode(mode))
     } else {
         None
     };
+    if way_out.is_none() && end.is_failsafe() {
+        fly.event(format!(
+            "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",
+            end.as_str()
+        ));
+    }
     let mut acknowledged = false;
     if let Some(way) = way_out {
         let what = match way {
@@ -775,9 +860,23 @@ pub fn run_fly<S: TraceSink + ?Sized>(
         // may hear what it cannot answer).
         let mut tries = 0u32;
         let mut way_refused = false;
+        let mut given_up = None;
+        // A signal from here on (the one that may have caused the failsafe is spent) ends the
+        // retries; so does their bound, 3 x --timeout-s within [3, 30] s.
+        opts.stop.store(false, Ordering::SeqCst);
+        let retry_end = Instant::now()
+            + Duration::from_secs_f64((3.0 * opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         while fly.target.is_some() {
             let lost = Instant::now().duration_since(last_link) > timeout;
             if lost && tries >= 5 {
+                break;
+            }
+            if opts.stop.load(Ordering::SeqCst) {
+                given_up = Some("stopped by a signal");
+                break;
+            }
+            if Instant::now() >= retry_end {
+                given_up = Some("retries' bound reached");
                 break;
             }
             tries += 1;
@@ -817,15 +916,9 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                             way_refused = true;
                         }
                     }
+                    // Confirmed by the vehicle's heartbeat only (an acknowledgement is a promise:
+                    // a vehicle may accept and stay in OFFBOARD).
                     acknowledged |= match (&r.msg, way) {
-                        (MavMessage::COMMAND_ACK(a), WayOut::Mode(_)) => {
-                            a.command == MavCmd::MAV_CMD_DO_SET_MODE
-                                && a.result == MavResult::MAV_RESULT_ACCEPTED
-                        }
-                        (MavMessage::COMMAND_ACK(a), WayOut::Disarm) => {
-                            a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
-                                && a.result == MavResult::MAV_RESULT_ACCEPTED
-                        }
                         (MavMessage::HEARTBEAT(h), WayOut::Mode(m)) => {
                             Mode::from_custom_mode(h.custom_mode) == Some(m)
                         }
@@ -854,7 +947,11 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                     WayOut::Mode(m) => m.name(),
                     WayOut::Disarm => "disarm",
                 },
-                if way_refused { "refused" } else { "link lost" }
+                if way_refused {
+                    "refused"
+                } else {
+                    given_up.unwrap_or("link lost")
+                }
             )
         });
     }
@@ -922,11 +1019,32 @@ fn handle(
     vehicle_done: &mut bool,
 ) {
     let from = (r.header.system_id, r.header.component_id);
-    if fly.target.is_none() {
-        if let MavMessage::HEARTBEAT(h) = &r.msg {
-            if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) {
-                fly.target = Some(from);
-                fly.event(format!("vehicle: system {}, component {}", from.0, from.1));
+    if let MavMessage::HEARTBEAT(h) = &r.msg {
+        let wanted_system = fly.opts.target_system.is_none_or(|n| from.0 == n as u32);
+        if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) && wanted_system {
+            match (fly.target, fly.target_at) {
+                (None, _) => {
+                    fly.target = Some(from);
+                    fly.target_at = Some(Instant::now());
+                    fly.event(format!(
+                        "vehicle: system {}, component {}{}",
+                        from.0,
+                        from.1,
+                        if fly.opts.target_system.is_some() {
+                            " (--target-system)"
+                        } else {
+                            " (the first autopilot heard)"
+                        }
+                    ));
+                }
+                (Some(t), Some(at))
+                    if t != from
+                        && fly.opts.target_system.is_none()
+                        && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
+                {
+                    fly.other_vehicle.get_or_insert(from);
+                }
+                _ => {}
             }
         }
     }
@@ -995,6 +1113,7 @@ fn handle(
         // A non-finite position is no position (it would switch the fence off).
         MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
             fly.local_seen = true;
+            fly.position_at = Some(Instant::now());
             *pos = Some((p.y as f64, p.x as f64));
         }
         MavMessage::GLOBAL_POSITION_INT(g) if !fly.local_seen => {
@@ -1005,6 +1124,7 @@ fn handle(
                     lon_deg: lon,
                     alt_m: 0.0,
                 });
+                fly.position_at = Some(Instant::now());
                 *pos = Some(o.to_local_m(lat, lon));
             }
         }

@@ -28,7 +28,8 @@ extern "C" fn on_interrupt(_: libc::c_int) {
 
 /// A flag that Ctrl-C (SIGINT), SIGTERM and SIGHUP (the terminal closed) set instead of killing the process, so that `fly`
 /// and `sitl` stop cleanly (the companion commands its failsafe mode first). A thread copies it
-/// into the returned flag every 50 ms.
+/// into the returned flag every 50 ms, again after each signal (whoever clears the flag hears the
+/// next one).
 pub fn interrupt_flag() -> Arc<AtomicBool> {
     // SAFETY: the handler only stores to an atomic (async-signal-safe).
     unsafe {
@@ -49,9 +50,9 @@ pub fn interrupt_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
     std::thread::spawn(move || loop {
-        if INTERRUPTED.load(Ordering::SeqCst) {
+        // Every signal sets the flag again (a second one ends the failsafe's retries).
+        if INTERRUPTED.swap(false, Ordering::SeqCst) {
             f.store(true, Ordering::SeqCst);
-            return;
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
     });

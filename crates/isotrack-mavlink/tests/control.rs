@@ -34,6 +34,14 @@ struct Script {
     gimbal: bool,
     /// The vehicle also sends each heartbeat as a MAVLink 1 frame.
     mavlink1: bool,
+    /// The mode (PX4 custom_mode) from the start.
+    start_mode: u32,
+    /// A pilot arms it and switches it to OFFBOARD at this beat.
+    offboard_at_beat: Option<u32>,
+    /// Positions turn to NaN from this beat on.
+    nan_positions_from: u32,
+    /// It acknowledges HOLD/RETURN but stays in its mode (a liar).
+    hold_lies: bool,
 }
 
 impl Default for Script {
@@ -46,6 +54,10 @@ impl Default for Script {
             quiet_beats: 0,
             gimbal: false,
             mavlink1: false,
+            start_mode: 0,
+            offboard_at_beat: None,
+            nan_positions_from: u32::MAX,
+            hold_lies: false,
         }
     }
 }
@@ -95,11 +107,15 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
     let mut v = Link::open(&url, 1, 1).unwrap();
     let mut gimbal = Link::open(&url, 1, 154).unwrap();
     let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
-    let (mut armed, mut mode, mut holds) = (script.armed, 0u32, 0u32);
+    let (mut armed, mut mode, mut holds) = (script.armed, script.start_mode, 0u32);
     let (mut beats, mut sent) = (0u32, 0u32);
     let mut got = Vec::new();
     let t0 = Instant::now();
     while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
+        if script.offboard_at_beat == Some(beats) {
+            armed = true;
+            mode = OFFBOARD;
+        }
         if script.gimbal {
             gimbal
                 .send(&heartbeat(
@@ -147,8 +163,15 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                 name: name.into(),
             }))
             .unwrap();
+            let p = if beats >= script.nan_positions_from {
+                f32::NAN
+            } else {
+                0.0
+            };
             v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
                 time_boot_ms: 1000 + 50 * sent,
+                x: p,
+                y: p,
                 ..Default::default()
             }))
             .unwrap();
@@ -191,7 +214,9 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                     if holds < script.hold_acked_at {
                         continue;
                     }
-                    mode = LOITER;
+                    if !script.hold_lies {
+                        mode = LOITER;
+                    }
                     MavResult::MAV_RESULT_ACCEPTED
                 }
                 _ => MavResult::MAV_RESULT_UNSUPPORTED,
@@ -271,6 +296,8 @@ fn a_gimbal_is_not_the_vehicle() {
     let script = Script {
         gimbal: true,
         quiet_beats: u32::MAX,
+        armed: true,
+        start_mode: OFFBOARD,
         ..Script::default()
     };
     let (r, got) = against(script, |_| {});
@@ -326,6 +353,8 @@ fn hold_is_retried_until_acknowledged() {
     let script = Script {
         quiet_beats: u32::MAX,
         hold_acked_at: 8,
+        armed: true,
+        start_mode: OFFBOARD,
         ..Script::default()
     };
     let (r, got) = against(script, |_| {});
@@ -346,4 +375,189 @@ fn mavlink1_is_logged_once() {
     let n = r.events.iter().filter(|e| e.contains("MAVLink 1")).count();
     assert_eq!(n, 1, "{:?}", r.events);
     assert!(r.link.mavlink1_frames > 1);
+}
+
+/// Sets `stop` (Ctrl-C) after `s` seconds.
+fn stop_after(o: &FlyOptions, s: f64) {
+    let stop = o.stop.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs_f64(s));
+        stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+}
+
+/// Ctrl-C after the companion armed the vehicle on the ground but before OFFBOARD (the
+/// vehicle keeps answering "in progress"): it disarms it, never a HOLD.
+#[test]
+fn an_interrupt_before_offboard_disarms_what_the_companion_armed() {
+    let script = Script {
+        offboard: MavResult::MAV_RESULT_IN_PROGRESS,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        stop_after(o, 2.0);
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(got.iter().any(is_disarm), "{got:?}");
+    assert!(!got.iter().any(is_hold), "{got:?}");
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+}
+
+/// A pilot-flown vehicle (armed, not in OFFBOARD) that the companion never controlled: a lost
+/// sensor stops the companion and commands nothing.
+#[test]
+fn a_pilots_vehicle_gets_no_hold_on_sensor_loss() {
+    let script = Script {
+        armed: true,
+        quiet_beats: u32::MAX,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(!got.iter().any(|g| is_hold(g) || is_disarm(g)), "{got:?}");
+}
+
+/// A disarmed vehicle: --max-duration-s does not count before control, and Ctrl-C commands
+/// nothing.
+#[test]
+fn a_disarmed_vehicle_gets_nothing_on_interrupt() {
+    let (r, got) = against(Script::default(), |o| {
+        o.max_duration_s = Some(0.3);
+        stop_after(o, 2.0);
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(got.is_empty(), "{got:?}");
+}
+
+/// --max-duration-s counts from when the companion has control: a pilot switches to OFFBOARD
+/// at beat 40 (2 s of measurements at 20 Hz later), and the law answers about 0.5 s / 50 ms =
+/// 10 measurements in control before the end (none, if it counted from the first one).
+#[test]
+fn max_duration_counts_from_control() {
+    let script = Script {
+        offboard_at_beat: Some(40),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.max_duration_s = Some(0.5));
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(r.commands.len() >= 5, "{:?} {:?}", r.commands, r.events);
+    assert!(got.iter().any(is_hold), "{got:?}");
+}
+
+/// Positions turning NaN in flight do not switch the fence off: position_lost after
+/// --timeout-s.
+#[test]
+fn the_fence_fails_safe_when_positions_stop() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        nan_positions_from: 10,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.fence_m = Some(1000.0));
+    assert_eq!(r.end, FlyEnd::Fence, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("position_lost")),
+        "{:?}",
+        r.events
+    );
+    assert!(got.iter().any(is_hold), "{got:?}");
+}
+
+/// A vehicle that acknowledges HOLD but stays in OFFBOARD has not confirmed it; the retries
+/// end at their bound (3 x 2 s, i.e. at most 6 s / 0.3 s = 20 tries, not the minute the
+/// stand-in lasts).
+#[test]
+fn an_acknowledged_hold_without_the_mode_is_not_confirmed() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        quiet_beats: u32::MAX,
+        hold_lies: true,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(got.iter().filter(|g| is_hold(g)).count() <= 21, "{got:?}");
+}
+
+/// A signal during the HOLD retries ends them (unconfirmed).
+#[test]
+fn a_signal_ends_the_hold_retries() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        quiet_beats: u32::MAX,
+        hold_acked_at: u32::MAX,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| stop_after(o, 3.5));
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("stopped by a signal")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// Two autopilots (systems 1 and 2) beating from the start: the companion refuses to pick
+/// (`two_vehicles`, naming both, nothing commanded); with `target_system` 2 it takes system 2.
+#[test]
+fn two_autopilots_are_refused_unless_one_is_picked() {
+    for pick in [None, Some(2u8)] {
+        let s = load_scenario(None, &[]).unwrap();
+        let mut o = FlyOptions::new("udpin:127.0.0.1:0");
+        o.timeout_s = 1.0;
+        o.target_system = pick;
+        let (tx, rx) = std::sync::mpsc::channel();
+        let companion = std::thread::spawn(move || {
+            run_fly(&s, &o, &mut NoTrace, &mut |l| {
+                tx.send(l.local_addr()?).unwrap();
+                Ok(())
+            })
+            .unwrap()
+        });
+        let url = format!("udpout:{}", rx.recv().unwrap());
+        let mut a = Link::open(&url, 1, 1).unwrap();
+        let mut b = Link::open(&url, 2, 1).unwrap();
+        let t0 = Instant::now();
+        while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
+            for l in [&mut a, &mut b] {
+                l.send(&heartbeat(
+                    MavType::MAV_TYPE_FIXED_WING,
+                    MavAutopilot::MAV_AUTOPILOT_PX4,
+                    false,
+                    0,
+                ))
+                .unwrap();
+                l.poll(Duration::from_millis(25)).unwrap();
+            }
+        }
+        let r = companion.join().unwrap();
+        match pick {
+            None => {
+                assert_eq!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+                let e = r.events.iter().find(|e| e.contains("two autopilots"));
+                assert!(
+                    e.is_some_and(|e| e.contains("system 1") && e.contains("system 2")),
+                    "{:?}",
+                    r.events
+                );
+                assert!(!r.way_out_commanded);
+            }
+            Some(_) => {
+                assert_ne!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+                assert!(
+                    r.events.iter().any(|e| e.contains("vehicle: system 2")),
+                    "{:?}",
+                    r.events
+                );
+            }
+        }
+    }
 }

@@ -10,12 +10,15 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
+/// A vehicle a pilot armed and switched to OFFBOARD (PX4 main mode 6): the companion has
+/// control from its first heartbeat, so a failsafe commands HOLD.
 fn heartbeat() -> MavMessage {
     MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: 0,
+        custom_mode: 6 << 16,
         mavtype: MavType::MAV_TYPE_FIXED_WING,
         autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
-        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
         system_status: MavState::MAV_STATE_ACTIVE,
         mavlink_version: 3,
     })

@@ -180,3 +180,31 @@ fn a_fast_sensor_does_not_multiply_setpoints() {
     distinct.dedup();
     assert!(distinct.len() < 20, "{distinct:?}");
 }
+
+/// 5000 lines with one time stamp: the repeats are answered within --setpoint-rate-hz (10 Hz
+/// for the second or so before the sensor is lost), not 5000 times.
+#[test]
+fn repeated_time_stamps_keep_to_the_setpoint_rate() {
+    let (_, stamps) = udp_flight(|s, a| {
+        let text: String = (0..5000).map(|_| "1.0,1\n").collect();
+        s.send_to(text.as_bytes(), a).unwrap();
+    });
+    let n = stamps.iter().filter(|&&t| t == 1000).count();
+    assert!((1..100).contains(&n), "{n} answers");
+}
+
+/// The tail of a dropped over-long line is no measurement: only the next whole line is.
+#[test]
+fn the_tail_of_an_over_long_line_is_dropped() {
+    let (r, _) = udp_flight(|s, a| {
+        s.send_to(&[b'9'; 2000], a).unwrap();
+        s.send_to(b"7.0,3\n", a).unwrap();
+        s.send_to(b"8.0,2\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let w = law.update(&Measurement {
+        t_s: 8.0,
+        value: 2.0,
+    });
+    assert_eq!(r.commands, vec![(8000, w)], "{:?}", r.events);
+}

@@ -84,7 +84,10 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
         }
         Err(std::fs::TryLockError::WouldBlock) => {
             let holder = read_holder(&mut f).map_or_else(
-                || "another isotrack sweep, merge or benchmark".to_string(),
+                || {
+                    "another isotrack command (sweep, merge, benchmark, check --map, fly or sitl)"
+                        .to_string()
+                },
                 |h| format!("another isotrack {h}"),
             );
             Err(fail(
