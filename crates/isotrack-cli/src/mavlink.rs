@@ -242,10 +242,8 @@ struct FlySummary<'a> {
     scenario: &'a isotrack_scenario::ScenarioFile,
 }
 
-/// `fly`'s exit code for a failsafe (Ctrl-C, `--max-duration-s`, a lost sensor or link, ...)
-/// before the companion had control of the vehicle: it stops and commands nothing (a pilot's
-/// or a disarmed vehicle keeps its mode), so no way out is claimed either way.
-pub const NOTHING_COMMANDED: u8 = 79;
+/// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
+pub const NOTHING_COMMANDED: u8 = exit::NOTHING_COMMANDED;
 
 /// `isotrack fly`.
 pub fn fly(args: &FlyArgs) -> Result<(), Failure> {

@@ -227,11 +227,23 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
         (vec!["--out", out], 64, "--out is an option of --map"),
         (vec!["--verify", "5"], 64, "--verify is an option of --map"),
         (vec!["--dpi", "0"], 64, "--dpi is an option of --map"),
-        (vec!["--colormap", "nope"], 64, "--colormap is an option of --map"),
+        (
+            vec!["--colormap", "nope"],
+            64,
+            "--colormap is an option of --map",
+        ),
         (vec!["--size", "0x0"], 64, "--size is an option of --map"),
         (vec!["--title", "t"], 64, "--title is an option of --map"),
-        (vec!["--font-size", "3"], 64, "--font-size is an option of --map"),
-        (vec!["--threads", "2"], 64, "--threads is an option of --map"),
+        (
+            vec!["--font-size", "3"],
+            64,
+            "--font-size is an option of --map",
+        ),
+        (
+            vec!["--threads", "2"],
+            64,
+            "--threads is an option of --map",
+        ),
         (vec!["--map"], 64, "--map needs --out"),
         (
             vec!["--map", "--out", out, "--kp-range", "5:1"],

@@ -32,6 +32,11 @@ pub mod exit {
     /// confirmed the way out (HOLD/RETURN, or the disarm): the vehicle is safe, the flight did
     /// not complete (`EX_TEMPFAIL`).
     pub const FAILSAFE: u8 = 75;
+    /// `fly`: a failsafe (Ctrl-C, `--max-duration-s`, a lost sensor or link, ...) before the
+    /// companion had control of the vehicle: it stops and commands nothing (a pilot's or a
+    /// disarmed vehicle keeps its mode), so no way out is claimed either way (outside
+    /// sysexits' range, which has no such meaning).
+    pub const NOTHING_COMMANDED: u8 = 79;
     /// An operating-system error: threads or other resources could not be had.
     pub const OSERR: u8 = 71;
     /// An output file or directory cannot be created or written (standard output included,
