@@ -23,8 +23,13 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
   * a 2-D file (no time axis) per engine;
   * projected x/y in kilometres (`<engine>_<format>_xykm_<layout>.nc`, one per format and
     engine): the loader converts them to metres, the same grid as the `xy` files;
-  * not in the manifest: `refused_xy_ft.nc` (x/y in feet) and `refused_lon_y.nc` (longitude
-    beside a y in metres), which the loader must refuse naming the coordinate.
+  * the same data stored (time, x, y) and (x, y) (`T` after the layout; xarray's
+    `.transpose`): the loader tells x from y by the coordinates and gives the same grid;
+  * not in the manifest: `refused_xy_ft.nc` (x/y in feet), `refused_lon_y.nc` (longitude
+    beside a y in metres), `refused_xy_two_units.nc` (x's units an NC_STRING array
+    ["km", "m"]), `refused_lonlat_m.nc` (lon / lat in metres) and `refused_xy_both_x.nc` (y
+    renamed `b` and marked axis X), which the loader must refuse naming the coordinate; `warned_xy_no_units.nc`
+    (x / y without units), read as metres with a warning.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -152,12 +157,21 @@ def encoding(ds, layout, with_time, fmt):
     return enc
 
 
-def write(engine, fmt, coords, layout, with_time=True, name=None):
+def write(engine, fmt, coords, layout, with_time=True, name=None, transposed=False, edit=None):
     ds = dataset(coords, with_time)
+    if transposed:
+        # The same data stored (time, x, y) / (x, y): xarray's `.transpose`, as users write it.
+        xn, yn = ("lon", "lat") if coords == "lonlat" else ("x", "y")
+        ds["v"] = ds["v"].transpose(*(["time"] if with_time else []), xn, yn)
+    if edit:
+        ds = edit(ds) or ds
     enc = encoding(ds, layout, with_time, fmt)
+    if transposed and "chunksizes" in enc["v"]:
+        enc["v"]["chunksizes"] = (1, 4, 3) if with_time else (4, 3)
     unlimited = ["time"] if with_time and layout != "contig" else None
     tag = {"NETCDF4": "nc4", "NETCDF4_CLASSIC": "nc4classic", "NETCDF3_64BIT": "nc3"}[fmt]
-    name = name or f"{engine}_{tag}_{coords}_{layout}{'' if with_time else '_2d'}.nc"
+    t = "T" if transposed else ""
+    name = name or f"{engine}_{tag}_{coords}_{layout}{t}{'' if with_time else '_2d'}.nc"
     if ONLY and name not in ONLY:
         return name
     path = os.path.join(OUT, name)
@@ -211,7 +225,42 @@ def main():
         for fmt in formats:
             layout = "unlim" if fmt == "NETCDF3_64BIT" else ("contig" if fmt == "NETCDF4" else "zlib1")
             names.append(write(engine, fmt, "xykm", layout))
+    # Stored (time, x, y) or (x, y) (`T` after the layout): the axes are known by their
+    # coordinates, so each loads to the same grid as its (time, y, x) twin.
+    names.append(write("netcdf4", "NETCDF4", "xy", "contig", transposed=True))
+    names.append(write("netcdf4", "NETCDF4", "xy", "zlib1", transposed=True))
+    names.append(write("netcdf4", "NETCDF3_64BIT", "xy", "unlim", transposed=True))
+    names.append(write("netcdf4", "NETCDF4_CLASSIC", "lonlat", "chunk", transposed=True))
+    names.append(write("netcdf4", "NETCDF4", "lonlat", "contig", with_time=False, transposed=True))
     # Not in the manifest: they must be refused.
+    def units(value):
+        def edit(ds):
+            ds["x"].attrs["units"] = value
+        return edit
+
+    def no_units(ds):
+        for c in ("x", "y"):
+            del ds[c].attrs["units"]
+            del ds[c + "_bnds"].attrs["units"]
+
+    def lonlat_in_metres(ds):
+        ds["lon"].attrs["units"] = "m"
+        ds["lat"].attrs["units"] = "m"
+        ds["lon_bnds"].attrs["units"] = "m"
+        ds["lat_bnds"].attrs["units"] = "m"
+
+    def both_x(ds):
+        # Dimensions `x` and `b`, b's coordinate marked axis X as well: which is y?
+        ds = ds.rename({"y": "b", "y_bnds": "b_bnds"})
+        ds["b"].attrs.update(axis="X", standard_name="projection_x_coordinate", bounds="b_bnds")
+        return ds
+
+    write("netcdf4", "NETCDF4", "xy", "contig", name="refused_xy_two_units.nc",
+          edit=units(["km", "m"]))
+    write("netcdf4", "NETCDF4", "lonlat", "contig", name="refused_lonlat_m.nc",
+          edit=lonlat_in_metres)
+    write("netcdf4", "NETCDF4", "xy", "contig", name="refused_xy_both_x.nc", edit=both_x)
+    write("netcdf4", "NETCDF4", "xy", "contig", name="warned_xy_no_units.nc", edit=no_units)
     write("netcdf4", "NETCDF4", "xyft", "contig", name="refused_xy_ft.nc")
     write("netcdf4", "NETCDF4", "lony", "contig", name="refused_lon_y.nc")
     for frames in (1, 4, 5):

@@ -34,8 +34,15 @@ fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
     let names = manifest();
     // Two engines; NETCDF4 (5 layouts x 2 coordinate kinds + a 2-D file) for each, and for
     // netCDF4 also NETCDF4_CLASSIC (10) and NETCDF3_64BIT (4); x/y in km, one per format and
-    // engine (4).
-    assert_eq!(names.len(), 11 + 10 + 4 + 11 + 4, "{names:?}");
+    // engine (4); stored (time, x, y) / (x, y) (`T`): 5.
+    assert_eq!(names.len(), 11 + 10 + 4 + 11 + 4 + 5, "{names:?}");
+    assert_eq!(
+        names
+            .iter()
+            .filter(|n| n.contains("T.nc") || n.contains("T_2d.nc"))
+            .count(),
+        5
+    );
     assert_eq!(names.iter().filter(|n| n.contains("_xykm_")).count(), 4);
     let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
     assert_eq!(npy.frames.len(), 3);
@@ -56,6 +63,7 @@ fn every_xarray_fixture_equals_its_npy_and_csv_twins() {
         let s = load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{e}"));
         // The data variable's CF units (issue 30: they were dropped).
         assert_eq!(s.units.as_deref(), Some("K"), "{name}");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
         let two_d = name.ends_with("_2d.nc");
         let want_frames = if two_d { &npy.frames[..1] } else { &npy.frames };
         assert_eq!(s.frames.len(), want_frames.len(), "{name}");
@@ -124,7 +132,22 @@ fn coordinates_in_other_units_are_refused_naming_them() {
         ("refused_xy_ft.nc", "coordinate `x` has units `ft`"),
         (
             "refused_lon_y.nc",
-            "`lon` (x, the last dimension: longitude) and `y` (y: a length)",
+            "`lon` (x: longitude) and `y` (y: a length)",
+        ),
+        // An NC_STRING array: which of the two?
+        (
+            "refused_xy_two_units.nc",
+            "`x` has 2 values for its `units` attribute",
+        ),
+        // Named lon / lat, units metres: a contradiction, not degrees.
+        (
+            "refused_lonlat_m.nc",
+            "coordinate `lon` is a longitude by its name or standard_name but has units `m`",
+        ),
+        // Two x axes: which one is y?
+        (
+            "refused_xy_both_x.nc",
+            "variable `v` has dimensions (b, x), both x",
         ),
     ] {
         let e = load_series(&dir().join(name), None, None).unwrap_err();
@@ -132,5 +155,23 @@ fn coordinates_in_other_units_are_refused_naming_them() {
         assert!(text.contains(name), "{text}");
         assert!(text.contains(what), "{text}");
         assert!(!e.unreadable, "{text}");
+    }
+}
+
+/// Issue 30: a projected x / y without `units` is read as metres (projected files often leave
+/// them out), but the reader says so, naming the file and each coordinate.
+#[test]
+fn coordinates_without_units_are_metres_with_a_warning() {
+    let name = "warned_xy_no_units.nc";
+    let s = load_series(&dir().join(name), None, None).unwrap();
+    assert_eq!(s.frames[0].origin_m(), Vec2::new(500_000.0, 4_600_000.0));
+    assert_eq!(s.frames[0].spacing_m(), [1000.0, 2000.0]);
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    for (w, c) in s.warnings.iter().zip(["x", "y"]) {
+        assert!(w.contains(name), "{w}");
+        assert!(
+            w.contains(&format!("coordinate `{c}` has no units: read as metres")),
+            "{w}"
+        );
     }
 }

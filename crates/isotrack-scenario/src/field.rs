@@ -556,6 +556,7 @@ fn build_grid(
                         ),
                     ));
                 }
+                notes.extend(s.warnings);
                 file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
                 frames.extend(s.frames);
                 abs.push(path.display().to_string());
@@ -568,6 +569,7 @@ fn build_grid(
             let s = load_series(&path, format, f.variable.as_deref())
                 .map_err(|e| load_issue("field.path", "", e))?;
             f.path = Some(path.display().to_string());
+            notes.extend(s.warnings);
             file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
             (s.frames, s.frame_times_s)
         }

@@ -370,6 +370,9 @@ pub struct LoadedSeries {
     /// The unit of the values, when the file gives one (NetCDF's CF `units` attribute of the
     /// data variable, as written: `"K"`, `"ug m-3"`); `None` for the other formats.
     pub units: Option<String>,
+    /// What the reader assumed that the file did not say, each naming the file (a NetCDF
+    /// projected coordinate without `units`, read as metres); empty for the other formats.
+    pub warnings: Vec<String>,
 }
 
 /// The one frame of a series, or an error saying the file is a time series.
@@ -413,6 +416,7 @@ pub fn parse_series_bytes(
                 frame_times_s: None,
                 georeference: g.georeference,
                 units: None,
+                warnings: Vec::new(),
             })
         }
     }
@@ -569,6 +573,7 @@ pub fn load_series(
                 frame_times_s: None,
                 georeference: g.georeference,
                 units: None,
+                warnings: Vec::new(),
             })
         }
     }

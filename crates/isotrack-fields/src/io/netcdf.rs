@@ -3,17 +3,21 @@
 //!
 //! The variable is the one named, or the first with two non-trivial spatial dimensions that is
 //! neither a coordinate variable nor a CF bounds variable (named by a `bounds` attribute). Its
-//! last two dimensions are (y, x); one leading dimension longer than 1 is time (its frames), any
-//! others must have length 1. Coordinates are the 1-D variables
+//! last two dimensions are (y, x) or (x, y), told apart by their names and their coordinates'
+//! CF `axis`, `standard_name` and `units` ((y, x) when nothing says; refused when both are
+//! the same axis or a dimension's signals disagree); one leading dimension longer than 1 is time
+//! (its frames), any others must have length 1. Coordinates are the 1-D variables
 //! named like those dimensions: longitude / latitude (CF `units = degrees_east / degrees_north`,
 //! `standard_name`, or the names lon/longitude and lat/latitude) are projected to local metres
 //! ([`crate::georef`]); coordinates in metres are used as they are. They must be regularly
 //! spaced; decreasing axes are flipped. The time coordinate's CF `units = "<unit> since <date>"`
 //! (seconds, minutes, hours or days) gives the frame times, in seconds after the first frame.
 //! `_FillValue` / `missing_value` become no-data; `scale_factor` / `add_offset` are applied.
-//! Projected coordinates in kilometres (`units = "km"`) are converted to metres; a coordinate
-//! in any other unit (`ft`, `degrees` on an axis that is not longitude or latitude), or a
-//! longitude paired with a length, is refused naming it. The data variable's `units` is
+//! Projected coordinates in kilometres (`units = "km"`) are converted to metres, without
+//! `units` they are metres (with a warning, [`LoadedSeries::warnings`]); a coordinate in any
+//! other unit (`ft`, `degrees` on an axis that is not longitude or latitude), with several
+//! `units` values, named longitude / latitude but in metres, or a longitude paired with a
+//! length, is refused naming it. The data variable's `units` is
 //! returned ([`LoadedSeries::units`]): a scenario without `field.units` takes it.
 
 use super::{LoadError, LoadedSeries};
@@ -27,6 +31,94 @@ fn attr_str(v: &NcVariable, name: &str) -> Option<String> {
     v.attribute(name)?.value.as_string()
 }
 
+/// A coordinate's text attribute (`units`, `standard_name`, `axis`): `None` when absent, the
+/// text when it is one (a `char` array or a single NC_STRING), an error naming the variable when
+/// it is several strings (`["km", "m"]`: which one?) or numbers.
+fn attr_text(v: &NcVariable, name: &str) -> Result<Option<String>, String> {
+    use netcdf_reader::NcAttrValue;
+    let Some(a) = v.attribute(name) else {
+        return Ok(None);
+    };
+    match &a.value {
+        NcAttrValue::Chars(s) => Ok(Some(s.clone())),
+        NcAttrValue::Strings(list) if list.len() == 1 => Ok(Some(list[0].clone())),
+        NcAttrValue::Strings(list) => Err(format!(
+            "`{}` has {} values for its `{name}` attribute: need one text",
+            v.name(),
+            list.len()
+        )),
+        _ => Err(format!(
+            "`{}` has a `{name}` attribute that is not a text",
+            v.name()
+        )),
+    }
+}
+
+/// Which horizontal axis a dimension is: x (easting, longitude) or y (northing, latitude).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Role {
+    X,
+    Y,
+}
+
+/// The role of a dimension, from its name and its coordinate variable's attributes (CF 1.11
+/// section 4: names x / lon / longitude and y / lat / latitude, `axis = "X" | "Y"`,
+/// `standard_name` projection_x/y_coordinate, longitude / latitude, grid_longitude /
+/// grid_latitude, `units` degrees_east / degrees_north). `Ok(None)` when nothing says; an error
+/// when the signals disagree (a `y` in degrees_east).
+fn dim_role(dim_name: &str, coord: Option<&NcVariable>) -> Result<Option<Role>, String> {
+    let mut says: Vec<(Role, String)> = Vec::new();
+    let by_name = |n: &str| match n.to_ascii_lowercase().as_str() {
+        "x" | "lon" | "longitude" => Some(Role::X),
+        "y" | "lat" | "latitude" => Some(Role::Y),
+        _ => None,
+    };
+    if let Some(r) = by_name(dim_name) {
+        says.push((r, format!("its name `{dim_name}`")));
+    }
+    if let Some(c) = coord {
+        if let Some(a) = attr_text(c, "axis")? {
+            match a.trim().to_ascii_uppercase().as_str() {
+                "X" => says.push((Role::X, "axis = X".into())),
+                "Y" => says.push((Role::Y, "axis = Y".into())),
+                _ => {}
+            }
+        }
+        if let Some(sn) = attr_text(c, "standard_name")? {
+            let sn = sn.trim().to_ascii_lowercase();
+            match sn.as_str() {
+                "projection_x_coordinate" | "longitude" | "grid_longitude" => {
+                    says.push((Role::X, format!("standard_name = {sn}")))
+                }
+                "projection_y_coordinate" | "latitude" | "grid_latitude" => {
+                    says.push((Role::Y, format!("standard_name = {sn}")))
+                }
+                _ => {}
+            }
+        }
+        if let Some(u) = attr_text(c, "units")? {
+            let u = u.trim().to_ascii_lowercase();
+            if u.starts_with("degrees_east") || u == "degree_east" {
+                says.push((Role::X, format!("units = {u}")));
+            } else if u.starts_with("degrees_north") || u == "degree_north" {
+                says.push((Role::Y, format!("units = {u}")));
+            }
+        }
+    }
+    let Some((first, why)) = says.first() else {
+        return Ok(None);
+    };
+    if let Some((_, other)) = says.iter().find(|(r, _)| r != first) {
+        return Err(format!(
+            "dimension `{}`: {why} says it is {}, {other} says {}",
+            isotrack_core::numtext::Escaped(dim_name),
+            if *first == Role::X { "x" } else { "y" },
+            if *first == Role::X { "y" } else { "x" },
+        ));
+    }
+    Ok(Some(*first))
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Axis {
     Lon,
@@ -35,39 +127,47 @@ enum Axis {
     Length(f64),
 }
 
-/// Metres per unit of a coordinate's CF `units` (UDUNITS spellings of metres and kilometres;
-/// no `units` at all is read as metres, as projected files often leave it out). `None` for
-/// any other unit: such a coordinate is refused, never read as metres.
+/// Metres per unit of a coordinate's CF `units` (UDUNITS spellings of metres and kilometres).
+/// `None` for any other unit: such a coordinate is refused, never read as metres.
 fn metres_per_unit(units: &str) -> Option<f64> {
     match units.trim().to_ascii_lowercase().as_str() {
-        "" | "m" | "metre" | "metres" | "meter" | "meters" => Some(1.0),
+        "m" | "metre" | "metres" | "meter" | "meters" => Some(1.0),
         "km" | "kilometre" | "kilometres" | "kilometer" | "kilometers" => Some(1000.0),
         _ => None,
     }
 }
 
-/// What a coordinate variable measures, or why it cannot be used (its `units`).
-fn axis_kind(v: &NcVariable) -> Result<Axis, String> {
-    let raw_units = attr_str(v, "units").unwrap_or_default();
+/// What a coordinate variable measures, or why it cannot be used (its `units`). A projected
+/// coordinate without `units` (or with empty ones) is read as metres, as projected files often
+/// leave them out, with a warning pushed onto `warnings` naming it.
+fn axis_kind(v: &NcVariable, warnings: &mut Vec<String>) -> Result<Axis, String> {
+    let raw_units = attr_text(v, "units")?.unwrap_or_default();
     let units = raw_units.trim().to_ascii_lowercase();
-    let std = attr_str(v, "standard_name")
+    let std = attr_text(v, "standard_name")?
         .unwrap_or_default()
+        .trim()
         .to_ascii_lowercase();
     let name = v.name().to_ascii_lowercase();
-    if units.starts_with("degrees_east")
-        || units == "degree_east"
-        || std == "longitude"
-        || name == "lon"
-        || name == "longitude"
-    {
+    let named_lon = std == "longitude" || name == "lon" || name == "longitude";
+    let named_lat = std == "latitude" || name == "lat" || name == "latitude";
+    if (named_lon || named_lat) && metres_per_unit(&units).is_some() {
+        return Err(format!(
+            "coordinate `{}` is a {} by its name or standard_name but has units `{}` (a length): which is it?",
+            isotrack_core::numtext::Escaped(v.name()),
+            if named_lon { "longitude" } else { "latitude" },
+            isotrack_core::numtext::Escaped(raw_units.trim())
+        ));
+    }
+    if units.starts_with("degrees_east") || units == "degree_east" || named_lon {
         Ok(Axis::Lon)
-    } else if units.starts_with("degrees_north")
-        || units == "degree_north"
-        || std == "latitude"
-        || name == "lat"
-        || name == "latitude"
-    {
+    } else if units.starts_with("degrees_north") || units == "degree_north" || named_lat {
         Ok(Axis::Lat)
+    } else if units.is_empty() {
+        warnings.push(format!(
+            "coordinate `{}` has no units: read as metres",
+            isotrack_core::numtext::Escaped(v.name())
+        ));
+        Ok(Axis::Length(1.0))
     } else {
         metres_per_unit(&units).map(Axis::Length).ok_or_else(|| {
             format!(
@@ -421,7 +521,37 @@ fn parse_file(
             dims.iter().map(|d| (d.name.as_str(), d.size)).collect::<Vec<_>>()
         )));
     }
-    let (ydim, xdim) = (&dims[dims.len() - 2], &dims[dims.len() - 1]);
+    // Which of the last two dimensions is x: by their names and coordinate variables' CF
+    // attributes. CF recommends (t, y, x), but xarray's `.transpose("x", "y")` and netCDF4
+    // write (x, y) as readily; read as (y, x) such a grid is mirrored about its diagonal
+    // with nothing to show it. Stored (x, y), each frame is transposed after reading.
+    let (a, b) = (&dims[dims.len() - 2], &dims[dims.len() - 1]);
+    let coord_var = |name: &str| {
+        vars.iter().find(|v| {
+            v.name() == name && v.dimensions().len() == 1 && v.dimensions()[0].name == name
+        })
+    };
+    let role = |d: &netcdf_reader::NcDimension| {
+        dim_role(&d.name, coord_var(&d.name))
+            .map_err(|m| err(format!("variable `{}`: {m}", var.name())))
+    };
+    let transposed = match (role(a)?, role(b)?) {
+        (Some(Role::Y), Some(Role::X))
+        | (Some(Role::Y), None)
+        | (None, Some(Role::X))
+        | (None, None) => false,
+        (Some(Role::X), Some(Role::Y)) | (Some(Role::X), None) | (None, Some(Role::Y)) => true,
+        (Some(ra), Some(_)) => {
+            return Err(err(format!(
+                "variable `{}` has dimensions ({}, {}), both {} by their names and coordinates: cannot tell x from y (name them x / y or lon / lat, or give their coordinates `axis = \"X\"` / `\"Y\"`)",
+                var.name(),
+                isotrack_core::numtext::Escaped(&a.name),
+                isotrack_core::numtext::Escaped(&b.name),
+                if ra == Role::X { "x" } else { "y" }
+            )))
+        }
+    };
+    let (ydim, xdim) = if transposed { (b, a) } else { (a, b) };
     let (ny, nx) = (ydim.size as usize, xdim.size as usize);
     let n_frames = long_lead.first().map_or(1, |d| d.size as usize);
     if nx < 2 || ny < 2 || n_frames < 1 {
@@ -469,6 +599,18 @@ fn parse_file(
             values.len()
         )));
     }
+    if transposed {
+        // Each frame stored x-major (value (ix, iy) at ix * ny + iy) to row-major (iy * nx + ix).
+        let mut row_major = vec![0.0; nx * ny];
+        for frame in values.chunks_mut(nx * ny) {
+            for (ix, column) in frame.chunks(ny).enumerate() {
+                for (iy, v) in column.iter().enumerate() {
+                    row_major[iy * nx + ix] = *v;
+                }
+            }
+            frame.copy_from_slice(&row_major);
+        }
+    }
     // A coordinate variable is 1-D along the dimension of its own name (CF 1.11 section 1.3), so
     // its size is the dimension's, already within the checked size: a variable `x(big)` named
     // like the dimension `x` but along another, huge dimension is not read.
@@ -507,9 +649,10 @@ fn parse_file(
     let (mut georeference, mut origin, mut spacing) =
         (Georeference::None, Vec2::default(), [1.0, 1.0]);
     let (mut flip_y, mut flip_x) = (false, false);
+    let mut warnings = Vec::new();
     if let (Some((xs, xv)), Some((ys, yv))) = (xc, yc) {
-        let kx = axis_kind(xv).map_err(err)?;
-        let ky = axis_kind(yv).map_err(err)?;
+        let kx = axis_kind(xv, &mut warnings).map_err(err)?;
+        let ky = axis_kind(yv, &mut warnings).map_err(err)?;
         let (lonlat, [fx, fy]) = match (kx, ky) {
             (Axis::Lon, Axis::Lat) => (true, [1.0, 1.0]),
             (Axis::Length(fx), Axis::Length(fy)) => (false, [fx, fy]),
@@ -520,7 +663,7 @@ fn parse_file(
                     Axis::Length(_) => "a length",
                 };
                 return Err(err(format!(
-                    "coordinates `{}` (x, the last dimension: {}) and `{}` (y: {}) do not make a grid: need longitude and latitude, in that order, or two lengths",
+                    "coordinates `{}` (x: {}) and `{}` (y: {}) do not make a grid: need longitude and latitude, or two lengths",
                     xdim.name,
                     what(kx),
                     ydim.name,
@@ -584,6 +727,10 @@ fn parse_file(
         frame_times_s,
         georeference,
         units: data_units(var),
+        warnings: warnings
+            .into_iter()
+            .map(|w| format!("{}: {w}", path.display()))
+            .collect(),
     })
 }
 

@@ -298,5 +298,6 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
         frame_times_s: None,
         georeference: Georeference::None,
         units: None,
+        warnings: Vec::new(),
     })
 }
