@@ -9,7 +9,8 @@
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::check::moving::MovingReport;
 use isotrack_scenario::check::{
-    kp_intervals_text, nearest_kp_text, CheckReport, Prop1Report, Prop2Report, SampledReport,
+    kp_intervals_text_scanned, nearest_kp_text, CheckReport, Prop1Report, Prop2Report,
+    SampledReport,
 };
 
 /// The whole text report, line by line (each line without its newline).
@@ -175,6 +176,14 @@ pub fn prop2_lines(p2: &Prop2Report) -> Vec<String> {
 /// that reads as one. A start without field data leaves the conditions unevaluated: no
 /// yes/no for them.
 fn prop2_conditions_line(p2: &Prop2Report) -> String {
+    if p2.ki_nonzero {
+        // Prop. 2 is stated for the P law: its conditions say nothing about a law with an
+        // integral term, so no yes/no (issue 29: "conditions hold: NO" read as a failure).
+        return format!(
+            "  conditions: not applicable (ki != 0: Prop. 2 is for ki = 0)   smallest kp of the P part alone: {}",
+            num(p2.min_kp)
+        );
+    }
     if p2.start_without_data && p2.gamma1.is_none() {
         return "  conditions: not evaluated (the start has no field value: the field has no data there)".to_string();
     }
@@ -248,10 +257,16 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
             state(sm.stable_over_tube)
         ),
     ];
+    if let Some(tau) = sm.slowest_time_constant_s {
+        out.push(format!(
+            "  slowest mode: time constant -T/ln(rho) = {} s",
+            Num(tau)
+        ));
+    }
     if let Some(set) = &sm.kp_intervals {
         out.push(format!(
             "  stable kp: {}   nearest stable kp {}   longest stable sensor period {} s",
-            kp_intervals_text(set),
+            kp_intervals_text_scanned(set, sm.kp_scanned_from),
             sm.nearest_stable_kp
                 .map_or_else(|| "n/a".to_string(), |k| nearest_kp_text(k, set)),
             num(sm.max_period_s)
@@ -322,7 +337,7 @@ fn discrete_loop_lines(sm: &SampledReport) -> Vec<String> {
             g.map_or_else(|| "n/a".to_string(), |g| format!("{:.2}", 20.0 * g.log10()))
         };
         out.push(format!(
-            "  conditionally stable: stable for loop-gain factors from {} ({} dB) to {} ({} dB); it goes unstable if the gain is REDUCED by the factor {} (lower gain margin) or raised by {} (upper)",
+            "  conditionally stable: stable for loop-gain factors (a factor scales kp and ki together) from {} ({} dB) to {} ({} dB); it goes unstable if the gain is REDUCED by the factor {} (lower gain margin) or raised by {} (upper)",
             num(d.gain_margin_lower),
             db(d.gain_margin_lower),
             num(d.gain_margin_upper),

@@ -221,6 +221,11 @@ fn chart<DB: DrawingBackend>(
             Key::LimitCycle,
             "run in a limit cycle",
         ),
+        (
+            Behaviour::Stalled,
+            Key::LimitCycle,
+            "run stalled off the level (triangle)",
+        ),
         (Behaviour::Diverged, Key::Diverged, "run diverged"),
         (
             Behaviour::LeftField,
@@ -375,6 +380,7 @@ fn chart<DB: DrawingBackend>(
     .map_err(s)?;
     ch.draw_series(
         shown(Behaviour::LimitCycle)
+            .chain(shown(Behaviour::Stalled))
             .map(|p| TriangleMarker::new((p.kp, p.rate_hz), r + 1, mark(p, BLACK).filled())),
     )
     .map_err(s)?;

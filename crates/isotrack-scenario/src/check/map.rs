@@ -416,6 +416,11 @@ pub enum Behaviour {
     Converged,
     /// Completed but not converged: a sustained or growing oscillation, a spin or a dither.
     LimitCycle,
+    /// Completed and calm (not spinning or dithering) but off the level: the mean `|eps|` over
+    /// the window's second half exceeds the scenario's convergence tolerance (or the floor,
+    /// when larger). Not converged: disagrees with a stable cell (issue 29: a run 9.99 from the
+    /// level, moving 0.6 m in 120 s, was "converged").
+    Stalled,
     /// The run did not complete: its state diverged (`outcome = diverged`).
     Diverged,
     /// The vehicle left the field's domain (`outcome = left_field`): not compared with the
@@ -432,6 +437,7 @@ impl Behaviour {
         match self {
             Self::Converged => "converged",
             Self::LimitCycle => "limit_cycle",
+            Self::Stalled => "stalled",
             Self::Diverged => "diverged",
             Self::LeftField => "left_field",
             Self::Invalid => "invalid",
@@ -473,13 +479,20 @@ pub fn spin_turn_rate_radps(limit_radps: Option<f64>, period_s: f64, v_kappa_rad
     w
 }
 
-/// The steady-state window's two halves: error ranges, turn rate.
+/// The steady-state window's two halves: error ranges, turn rate, mean `|eps|`.
 struct Window {
     from_s: f64,
     mid_s: f64,
     /// `[lo, hi]` of the error in the first and the second half.
     halves: [[f64; 2]; 2],
     turn_sum: f64,
+    /// Sum of `omega^2` over the second half (its RMS).
+    turn_sq_sum: f64,
+    /// Sum of `|eps - eps_ref|` over the second half (its mean).
+    abs_error_sum: f64,
+    /// The error the loop the chart checks settles at: 0 on the isoline, the P law's orbit
+    /// error `eps*` on a circular field with `ki = 0`.
+    error_ref: f64,
     rows: u64,
 }
 
@@ -494,6 +507,8 @@ impl TraceSink for Window {
         r[1] = r[1].max(row.error);
         if h == 1 {
             self.turn_sum += row.omega_radps.abs();
+            self.turn_sq_sum += row.omega_radps * row.omega_radps;
+            self.abs_error_sum += (row.error - self.error_ref).abs();
             self.rows += 1;
         }
     }
@@ -612,6 +627,13 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         mid_s: 0.5 * (from_s + duration),
         halves: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
         turn_sum: 0.0,
+        turn_sq_sum: 0.0,
+        abs_error_sum: 0.0,
+        error_ref: f
+            .setup
+            .at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz)
+            .2
+            .map_or(0.0, |o| o.orbit.error),
         rows: 0,
     };
     let r = s.run(&mut w);
@@ -676,19 +698,38 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         (Some(a), Some(b)) => b <= DECAY_RATIO * a,
         _ => false,
     };
-    let calm = p.mean_abs_turn_radps.is_some_and(|t| t < spin);
-    p.behaviour = if settled && calm {
+    // Calm: the RMS turn rate below the spin rate. The RMS, not the mean: a loop that bangs
+    // between large turn rates part of the time has a mean below the spin rate while it spins
+    // (issue 29: volcano at kp 48.8, 33.3 Hz, mean |omega| 12.1 < 13.09 with |omega| > 1 rad/s
+    // 35 % of the time); a vehicle following the isoline turns at about v*kappa throughout, so
+    // its RMS is about its mean.
+    let rms_turn = (w.rows > 0).then(|| (w.turn_sq_sum / w.rows as f64).sqrt());
+    let calm = rms_turn.is_some_and(|t| t < spin);
+    // On the level: the mean |eps| over the second half (from the P law's orbit error on a
+    // circular field with ki = 0: the equilibrium the chart checks) within the scenario's
+    // convergence tolerance (or the floor, when larger).
+    let mean_abs_error = (w.rows > 0).then(|| w.abs_error_sum / w.rows as f64);
+    let tolerance = file.metrics.convergence_tolerance.unwrap_or(0.0).max(floor);
+    let near = mean_abs_error.is_some_and(|e| e <= tolerance);
+    p.behaviour = if !calm {
+        Behaviour::LimitCycle
+    } else if !near {
+        Behaviour::Stalled
+    } else if settled {
         Behaviour::Converged
     } else {
         Behaviour::LimitCycle
     };
     let g = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |v| format!("{v:.3e}"));
     p.detail = format!(
-        "completed; error range {} then {} (floor {}), mean |omega| {} rad/s (spin from {})",
+        "completed; error range {} then {} (floor {}), mean |eps| {} (tolerance {}), mean |omega| {} rad/s, RMS {} (spin from {})",
         g(first),
         g(second),
         g(Some(floor)),
+        g(mean_abs_error),
+        g(Some(tolerance)),
         g(p.mean_abs_turn_radps),
+        g(rms_turn),
         g(Some(spin))
     );
     p.agrees = cell

@@ -326,3 +326,37 @@ fn an_overflowing_cell_is_not_computed_with_a_note() {
         assert_eq!(c.spectral_radius, None);
     }
 }
+
+/// Issue 29, 4: the classification looked at the error's range, never its size. At 0.1 m/s
+/// on the circular field the reach condition fails at the start and the integral winds up:
+/// the run's own steady error stays far outside the convergence tolerance, so the point is not
+/// `converged` (`stalled` when calm, `limit_cycle` when spinning) and disagrees with the
+/// stable cell.
+#[test]
+fn a_run_far_from_the_level_is_not_converged() {
+    let s = circular(&["vehicle.speed_mps=0.1"]);
+    let f = LoopFamily::new(&s, None).unwrap();
+    let p = verify_point(&f, 10.0, 100.0);
+    assert_eq!(p.cell.status, CellStatus::Stable, "{p:?}");
+    let tol = s.file().metrics.convergence_tolerance.unwrap();
+    let run = s.run(&mut isotrack_sim::NoTrace);
+    let late = run.metrics.steady_state_rms_error.unwrap();
+    assert!(late > 10.0 * tol, "{late} {tol}");
+    assert_ne!(p.behaviour, Behaviour::Converged, "{p:?}");
+    assert_eq!(p.agrees, Some(false), "{p:?}");
+}
+
+/// Issue 29, 4: a spin with a mean turn rate under the spin rate (volcano, kp 48.8 at 33.3 Hz,
+/// radius 1.31: mean |omega| 12.1 < 13.09 while it bangs between large turn rates) is a limit
+/// cycle by its RMS turn rate, in agreement with the unstable cell.
+#[test]
+fn an_intermittent_spin_is_a_limit_cycle() {
+    let s = bundled("volcano.toml", &[]);
+    let f = LoopFamily::new(&s, None).unwrap();
+    let dt = s.file().sim.dt_s.unwrap_or(0.01);
+    let rate = 1.0 / ((1.0 / (33.3 * dt)).round() * dt);
+    let p = verify_point(&f, 48.8, rate);
+    assert!(p.cell.spectral_radius.unwrap() > 1.0, "{p:?}");
+    assert_eq!(p.behaviour, Behaviour::LimitCycle, "{p:?}");
+    assert_eq!(p.agrees, Some(true), "{p:?}");
+}
