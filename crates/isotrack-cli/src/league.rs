@@ -62,7 +62,9 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         ));
     }
     // The suite as run goes to DIR/suite.toml: never over the suite being read (64).
-    if let Some(m) = crate::output::input_clash(&[path.clone()], &a.out.join("suite.toml")) {
+    if let Some(m) =
+        crate::output::input_clash(std::slice::from_ref(&path), &a.out.join("suite.toml"))
+    {
         return Err(fail(exit::USAGE, m));
     }
     // Unreadable (missing, a FIFO, a directory, too big) is 66; what it says is 65.
