@@ -139,6 +139,7 @@ pub fn benchmark_json(
         tune,
         resume_from: out.filter(|_| resume).map(std::path::PathBuf::from),
         cancel: Some(cancel.clone()),
+        save_to: None,
     };
     let result = interruptible(py, &cancel, || {
         run_benchmark(&suite, &registry, &opts, &|_, _, _| {})

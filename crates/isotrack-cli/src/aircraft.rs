@@ -204,7 +204,8 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
     };
-    let mut out = std::io::BufWriter::new(std::fs::File::create(&a.out).map_err(cant)?);
+    let mut out =
+        std::io::BufWriter::new(isotrack_runs::files::create_output(&a.out).map_err(cant)?);
     writeln!(out, "{}", REPLAY_COLUMNS.join(",")).map_err(cant)?;
     replay::replay(&uav, x0, &rows, |r| {
         writeln!(

@@ -203,6 +203,34 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", what.display()),
     };
+    // `--out D`: nothing written over an input (the scenario file, its field's data: exit 64),
+    // and one writer per directory (the lock, as sweeps: a second at once exits 73).
+    let _lock = match &a.out {
+        Some(dir) => {
+            let inputs = crate::output::input_files(Some(&a.scenario), &base);
+            let mut outputs = vec![dir.join("comparison.csv")];
+            for kind in &kinds {
+                for f in ["trace.csv", "summary.json", "scenario.toml"] {
+                    outputs.push(dir.join(kind.name()).join(f));
+                }
+            }
+            for o in &outputs {
+                if let Some(message) = crate::output::input_clash(&inputs, o) {
+                    return Err(Failure {
+                        code: exit::USAGE,
+                        message,
+                    });
+                }
+            }
+            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+            let lock = crate::sweep::lock_output_dir(dir, "compare")?;
+            for o in &outputs {
+                isotrack_runs::files::refuse_non_regular(o).map_err(|e| cant(o, e))?;
+            }
+            Some(lock)
+        }
+        None => None,
+    };
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
     // The laws whose true error never reached the level (in the recorded rows), with how far
     // each went from its start, m.
@@ -229,7 +257,11 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
                 &isotrack_scenario::check::warnings(&s),
             )
             .map_err(|e| cant(&d, e))?;
-            std::fs::write(d.join("scenario.toml"), scenario_toml(&s)).map_err(|e| cant(&d, e))?;
+            isotrack_runs::files::write_atomic(
+                &d.join("scenario.toml"),
+                scenario_toml(&s).as_bytes(),
+            )
+            .map_err(|e| cant(&d, e))?;
             r
         } else {
             let (r, n) = run_watched(&s, None).map_err(|e| cant(Path::new("trace"), e))?;
@@ -275,7 +307,9 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     }
     if let Some(dir) = &a.out {
         let p = dir.join("comparison.csv");
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&p).map_err(|e| cant(&p, e))?);
+        let mut w = std::io::BufWriter::new(
+            isotrack_runs::files::create_output(&p).map_err(|e| cant(&p, e))?,
+        );
         let mut text = COMPARISON_COLUMNS.join(",") + "\n";
         for (k, r) in &results {
             let m = &r.metrics;

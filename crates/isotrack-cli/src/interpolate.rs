@@ -14,7 +14,7 @@ use std::io::Write;
 /// Writes a grid as CSV in the `data/` layout (no header, row 0 south), numbers in
 /// shortest round-trip form.
 pub fn write_grid_csv(path: &std::path::Path, g: &Grid2) -> std::io::Result<()> {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut out = std::io::BufWriter::new(isotrack_runs::files::create_output(path)?);
     for iy in 0..g.ny() {
         let row: Vec<String> = (0..g.nx())
             .map(|ix| crate::output::num(g.at(ix, iy)))
@@ -88,8 +88,21 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
     };
+    let side = a.out.with_extension("json");
+    // Neither output replaces the stations file it is made from (64).
+    for o in [&a.out, &side] {
+        if let Some(message) = crate::output::input_clash(std::slice::from_ref(&a.stations), o) {
+            return Err(Failure {
+                code: exit::USAGE,
+                message,
+            });
+        }
+    }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(cant)?;
+    }
+    for o in [&a.out, &side] {
+        isotrack_runs::files::refuse_non_regular(o).map_err(cant)?;
     }
     write_grid_csv(&a.out, &grid).map_err(cant)?;
     let (lo, hi) = grid.value_range();
@@ -107,10 +120,9 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         "value_min": lo,
         "value_max": hi,
     });
-    let side = a.out.with_extension("json");
-    std::fs::write(
+    isotrack_runs::files::write_atomic(
         &side,
-        serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n",
+        (serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n").as_bytes(),
     )
     .map_err(cant)?;
     outln!(

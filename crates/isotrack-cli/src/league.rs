@@ -61,6 +61,12 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
             format!("{}: no such suite file", path.display()),
         ));
     }
+    // The suite as run goes to DIR/suite.toml: never over the suite being read (64).
+    if let Some(m) =
+        crate::output::input_clash(std::slice::from_ref(&path), &a.out.join("suite.toml"))
+    {
+        return Err(fail(exit::USAGE, m));
+    }
     // Unreadable (missing, a FIFO, a directory, too big) is 66; what it says is 65.
     let text = Suite::read(&path).map_err(|e| {
         fail(
@@ -76,6 +82,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         tune: a.tune,
         resume_from: a.resume.then(|| a.out.clone()),
         cancel: None,
+        save_to: Some(a.out.clone()),
     };
     let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();
@@ -165,11 +172,21 @@ pub fn report(a: &ReportArgs) -> Result<(), Failure> {
         isotrack_html::ReportError::Input(m) => fail(exit::NOINPUT, m),
         isotrack_html::ReportError::Data(m) => fail(exit::DATAERR, m),
     })?;
+    // The page never replaces a file it was made from (64): the run directories' files.
+    let inputs: Vec<std::path::PathBuf> = a
+        .runs
+        .iter()
+        .flat_map(|d| ["trace.csv", "summary.json", "scenario.toml"].map(|f| d.join(f)))
+        .collect();
+    if let Some(m) = crate::output::input_clash(&inputs, &a.out) {
+        return Err(fail(exit::USAGE, m));
+    }
     if let Some(parent) = a.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
             .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", parent.display())))?;
     }
-    std::fs::write(&a.out, html)
+    // Not into a FIFO nor through a link (73 at once): written atomically beside it.
+    isotrack_runs::files::write_atomic(&a.out, html.as_bytes())
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", a.out.display())))?;
     errln!("wrote {}", a.out.display());
     Ok(())

@@ -107,10 +107,34 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             }
         }
         std::fs::create_dir_all(dir).map_err(|e| cant(&dir.display().to_string(), e))?;
+        // One writer per run directory (as sweeps): a second `run --out D` at once exits 73.
+        let _lock = crate::sweep::lock_output_dir(dir, "run")?;
         let trace = dir.join("trace.csv");
-        let result =
-            run_to_trace(&scenario, &trace).map_err(|e| cant(&trace.display().to_string(), e))?;
         let summary = dir.join("summary.json");
+        let resolved = dir.join("scenario.toml");
+        for p in [&trace, &summary, &resolved] {
+            isotrack_runs::files::refuse_non_regular(p)
+                .map_err(|e| cant(&p.display().to_string(), e))?;
+        }
+        // The old summary goes first: a run interrupted from here on leaves a directory without
+        // a summary (which plot and report refuse), never the old summary beside a new trace.
+        match std::fs::remove_file(&summary) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(cant(&summary.display().to_string(), e))
+            }
+            _ => {}
+        }
+        // The trace streams into a temporary file renamed into place once whole; the summary,
+        // written last (atomically), marks the directory complete.
+        let trace_tmp = isotrack_runs::files::temp_beside(&trace);
+        let result = run_to_trace(&scenario, &trace_tmp)
+            .and_then(|r| std::fs::rename(&trace_tmp, &trace).map(|()| r))
+            .map_err(|e| {
+                let _ = std::fs::remove_file(&trace_tmp);
+                cant(&trace.display().to_string(), e)
+            })?;
+        isotrack_runs::files::write_atomic(&resolved, scenario_toml(&scenario).as_bytes())
+            .map_err(|e| cant(&resolved.display().to_string(), e))?;
         write_summary(
             &summary,
             &scenario,
@@ -119,9 +143,6 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             &warnings,
         )
         .map_err(|e| cant(&summary.display().to_string(), e))?;
-        let resolved = dir.join("scenario.toml");
-        std::fs::write(&resolved, scenario_toml(&scenario))
-            .map_err(|e| cant(&resolved.display().to_string(), e))?;
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &result));
             outln!(

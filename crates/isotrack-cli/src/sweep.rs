@@ -36,7 +36,11 @@ fn runs_progress_bar(runs: u64) -> ProgressBar {
     pb
 }
 
-/// Parses `K/N`.
+/// The most shards `--shard K/N` may split a sweep into (a job array of a million tasks).
+const MAX_SHARDS: u64 = 1_000_000;
+
+/// Parses `K/N`: decimal digits without sign, spaces or leading zeros, `1 <= K <= N <=`
+/// [`MAX_SHARDS`].
 fn parse_shard(s: &str) -> Result<(u64, u64), Failure> {
     let bad = || {
         fail(
@@ -45,10 +49,21 @@ fn parse_shard(s: &str) -> Result<(u64, u64), Failure> {
         )
     };
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
-    let (k, n): (u64, u64) = (
-        k.trim().parse().map_err(|_| bad())?,
-        n.trim().parse().map_err(|_| bad())?,
-    );
+    // Canonical digits only (`01/2` and `+1/2` once named shard 1 of 2), and a count a job
+    // array can have.
+    let canonical = |t: &str| {
+        !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit()) && (t == "0" || !t.starts_with('0'))
+    };
+    if !canonical(k) || !canonical(n) {
+        return Err(bad());
+    }
+    let (k, n): (u64, u64) = (k.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if n > MAX_SHARDS {
+        return Err(fail(
+            exit::USAGE,
+            format!("--shard {s}: at most {MAX_SHARDS} shards"),
+        ));
+    }
     if k == 0 || n == 0 || k > n {
         return Err(bad());
     }

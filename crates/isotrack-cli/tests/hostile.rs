@@ -277,7 +277,7 @@ fn non_regular_files_are_refused() {
 #[test]
 fn sweep_run_count_overflow_is_an_error() {
     let d = tempfile::tempdir().unwrap();
-    write(d.path(), "sc.toml", "");
+    write(d.path(), "sc.toml", "[sim]\n");
     let sw = write(
         d.path(),
         "s.toml",
@@ -506,7 +506,7 @@ fn huge_keys_are_clipped_in_messages() {
 #[test]
 fn sweep_keys_are_checked_up_front_and_labelled() {
     let d = tempfile::tempdir().unwrap();
-    write(d.path(), "sc.toml", "");
+    write(d.path(), "sc.toml", "[sim]\n");
     let sw = write(
         d.path(),
         "s.toml",

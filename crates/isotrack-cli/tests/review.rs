@@ -35,7 +35,9 @@ fn messages_echo_the_users_value_as_written() {
             .max()
             .unwrap_or(0);
         assert!(longest_digits <= 17, "{e}");
-        assert!(e.lines().all(|l| l.len() < 400), "{e}");
+        // The baselines' warnings name their tube and its gammas (about 470 characters); the
+        // console bounds every line at 1000.
+        assert!(e.lines().all(|l| l.len() < 1000), "{e}");
     }
     let o = isotrack(&["check", "--tube-halfwidth=-0.000000123456789"]);
     assert_fails(&o, 64, &["got -1.23456789e-7"]);
@@ -498,7 +500,9 @@ fn computed_numbers_in_messages_are_rounded() {
         let e = stderr(&o) + &stdout(&o);
         assert!(e.contains("mu = gamma*delta = 1e300 "), "{e}");
         assert!(longest_digit_run(&e) <= 17, "{e}");
-        assert!(e.lines().all(|l| l.len() < 400), "{e}");
+        // The baselines' warnings name their tube and its gammas (about 470 characters); the
+        // console bounds every line at 1000.
+        assert!(e.lines().all(|l| l.len() < 1000), "{e}");
     }
     let stations = write(
         d.path(),

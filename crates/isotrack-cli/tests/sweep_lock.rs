@@ -165,6 +165,24 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
             with(&[("outcome", "invalid_scenario")]),
             "holds a value in an invalid_scenario row",
         ),
+        // Issue 30 (runs-guard), item 3: a negative zero, subnormal values and a detail on a
+        // completed row are none of isotrack's.
+        (
+            with(&[("path_length_m", "-0.0")]),
+            "path_length_m = `-0.0` is negative",
+        ),
+        (
+            with(&[("convergence_time_s", "5e-324")]),
+            "convergence_time_s = `5e-324` is subnormal",
+        ),
+        (
+            with(&[("control_effort", "1e-320")]),
+            "control_effort = `1e-320` is subnormal",
+        ),
+        (
+            with(&[("outcome", "completed"), ("outcome_detail", "made up")]),
+            "outcome_detail holds text in a `completed` row",
+        ),
         (
             with(&[("controller.kp", "7.0")]),
             "controller.kp = `7.0` where the sweep's plan gives run 2 `5.0`",

@@ -1,7 +1,7 @@
 //! The benchmark's files: `leaderboard.csv`, `leaderboard.md`, and per task `tasks/ID/results.csv`
 //! (every scored run) and `tasks/ID/task.json` (what `--resume` reuses and the HTML page draws).
 
-use crate::run::{task_file, BenchError, BenchResult, RunRow};
+use crate::run::{task_file, BenchError, BenchResult, RunRow, TaskResult};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -139,11 +139,26 @@ pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
     write(&dir.join("leaderboard.csv"), &leaderboard_csv(r))?;
     write(&dir.join("leaderboard.md"), &leaderboard_md(r))?;
     for t in &r.tasks {
-        let json = task_file(dir, &t.id);
-        write(&json.with_file_name("results.csv"), &results_csv(&t.runs))?;
-        write(&json, &serde_json::to_string(t).unwrap_or_default())?;
+        write_task(t, dir)?;
     }
     Ok(())
+}
+
+/// Writes one finished task's `tasks/ID/results.csv` and `tasks/ID/task.json` under `dir`
+/// (`task.json` last: it is what `--resume` reuses), as the task finishes, so an interrupted
+/// benchmark keeps its finished tasks.
+pub fn write_task(t: &TaskResult, dir: &Path) -> Result<(), BenchError> {
+    let io = |p: &Path, e: std::io::Error| BenchError::Io {
+        path: p.display().to_string(),
+        message: e.to_string(),
+    };
+    let json = task_file(dir, &t.id);
+    if let Some(parent) = json.parent() {
+        std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+    }
+    let csv = json.with_file_name("results.csv");
+    std::fs::write(&csv, results_csv(&t.runs)).map_err(|e| io(&csv, e))?;
+    std::fs::write(&json, serde_json::to_string(t).unwrap_or_default()).map_err(|e| io(&json, e))
 }
 
 #[cfg(test)]

@@ -158,6 +158,9 @@ pub struct Options {
     /// its next run; it then returns [`BenchError::Interrupted`]. A tuning under way finishes
     /// its law first.
     pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// Write each task's results here (`DIR/tasks/ID/`) as soon as it finishes, so an
+    /// interrupted benchmark (Ctrl-C) keeps its finished tasks for `resume_from`.
+    pub save_to: Option<std::path::PathBuf>,
 }
 
 impl Options {
@@ -221,7 +224,11 @@ pub fn run_benchmark(
             return Err(BenchError::Interrupted);
         }
         progress(i, suite.tasks.len(), &task.id);
-        tasks.push(run_task(suite, task, base, reg, &controllers, o)?);
+        let t = run_task(suite, task, base, reg, &controllers, o)?;
+        if let Some(dir) = &o.save_to {
+            crate::leaderboard::write_task(&t, dir)?;
+        }
+        tasks.push(t);
     }
     let mut overall: Vec<(String, f64)> = controllers
         .iter()

@@ -976,7 +976,9 @@ pub fn is_autopilot(h: &HEARTBEAT_DATA) -> bool {
     h.autopilot != MavAutopilot::MAV_AUTOPILOT_INVALID
         && matches!(
             h.mavtype,
-            MAV_TYPE_FIXED_WING
+            // GENERIC: "a generic micro air vehicle", what MAVSDK's autopilot server announces.
+            MAV_TYPE_GENERIC
+                | MAV_TYPE_FIXED_WING
                 | MAV_TYPE_QUADROTOR
                 | MAV_TYPE_COAXIAL
                 | MAV_TYPE_HELICOPTER

@@ -21,3 +21,73 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
         }
     }
 }
+
+/// Refuses an existing `path` that is not a regular file (a symbolic link, a FIFO, a
+/// directory, a device): as read by `lstat` (`std::fs::symlink_metadata`), so a link is
+/// refused, not followed. An absent path is fine (it will be created). Opening a FIFO for
+/// writing would block until a reader comes; writing through a link would empty its target.
+pub fn refuse_non_regular(path: &Path) -> std::io::Result<()> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => Err(std::io::Error::other(format!(
+            "{} exists and is not a regular file (a link, FIFO, directory or device): refusing to write it",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Opens `path` for writing without following a link and without blocking on a FIFO
+/// (`O_NOFOLLOW | O_NONBLOCK` on Unix), creating it when absent; `truncate` empties it once it
+/// is known to be a regular file. Anything else ([`refuse_non_regular`]) is an error, so the
+/// caller exits 73 at once instead of hanging or writing through a link.
+pub fn open_regular(path: &Path, read: bool, truncate: bool) -> std::io::Result<std::fs::File> {
+    refuse_non_regular(path)?;
+    let mut o = std::fs::OpenOptions::new();
+    o.read(read).write(true).create(true).truncate(false);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        o.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK);
+    }
+    let f = o.open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(std::io::Error::other(format!(
+            "{} is not a regular file: refusing to write it",
+            path.display()
+        )));
+    }
+    if truncate {
+        f.set_len(0)?;
+    }
+    Ok(f)
+}
+
+/// The one way a command opens an output file for writing: [`open_regular`], emptied.
+pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
+    open_regular(path, false, true)
+}
+
+/// Writes `bytes` to `path` atomically: into a temporary file beside it (same directory), then
+/// renamed over it, so a reader (or a crash) sees the old file or the new one, never a mix. An
+/// existing `path` that is not a regular file is refused ([`refuse_non_regular`]).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    refuse_non_regular(path)?;
+    let tmp = temp_beside(path);
+    let result = create_output(&tmp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
+        .and_then(|()| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// A temporary name beside `path` for an atomic write: `.NAME.PID.tmp` in the same directory.
+pub fn temp_beside(path: &Path) -> std::path::PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}

@@ -22,7 +22,8 @@ pub struct Summary<'a> {
     pub scenario: &'a ScenarioFile,
 }
 
-/// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`).
+/// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`),
+/// atomically ([`crate::files::write_atomic`]): a reader sees no summary or a whole one.
 pub fn write_summary(
     path: &Path,
     scenario: &Scenario,
@@ -38,7 +39,7 @@ pub fn write_summary(
         scenario: scenario.file(),
     };
     let text = summary_to_json(&s).map_err(std::io::Error::other)?;
-    std::fs::write(path, text + "\n")
+    crate::files::write_atomic(path, (text + "\n").as_bytes())
 }
 
 /// `summary.json`'s text (pretty-printed; non-finite metrics are `null`): one rendering for the

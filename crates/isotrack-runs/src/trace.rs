@@ -33,9 +33,11 @@ pub struct TraceWriter {
 }
 
 impl TraceWriter {
-    /// Creates the file and writes the header.
+    /// Creates the file and writes the header. An existing path that is not a regular file (a
+    /// link, a FIFO) is refused ([`crate::files::create_output`]).
     pub fn create(path: &Path, flying: bool) -> std::io::Result<Self> {
-        let mut w = csv::Writer::from_path(path)?;
+        // Never into a FIFO (it would block) nor through a link: `files::create_output`.
+        let mut w = csv::Writer::from_writer(crate::files::create_output(path)?);
         let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
         if flying {
             header.extend(TELEMETRY_COLUMNS);

@@ -195,6 +195,24 @@ pub fn load_scenario(path: Option<&Path>, overrides: &[String]) -> Result<Scenar
                     source,
                 },
             )?;
+            // A file with nothing in it (whitespace and comments only) once ran the default
+            // scenario silently: an empty file is more likely a mistake than a wish.
+            let blank = text.lines().all(|l| {
+                let l = l.trim();
+                l.is_empty() || l.starts_with('#')
+            });
+            if blank {
+                return Err(ScenarioError::Invalid(vec![LocatedIssue {
+                    location: ErrorLocation::File {
+                        path: shown,
+                        line: None,
+                        column: None,
+                    },
+                    key: None,
+                    message: "empty scenario file; to run the default omit the argument".into(),
+                    unreadable: false,
+                }]));
+            }
             let base = p.parent().unwrap_or(Path::new("."));
             let base = if base.as_os_str().is_empty() {
                 Path::new(".")

@@ -94,8 +94,9 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
 }
 
 /// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a
-/// run's row has `t_end_s` and `samples`; every number is finite (non-finite metrics are
-/// written empty), the quantities that cannot be negative are not, an RMS is at most its
+/// `completed` row no `outcome_detail`; a run's row has `t_end_s` and `samples`; every number
+/// is finite (non-finite metrics are written empty) and not subnormal, the quantities that
+/// cannot be negative are not (nor `-0.0`), an RMS is at most its
 /// maximum and `|mean|` at most the maximum (to rounding), the convergence time at most the run's
 /// end, and `samples` a whole number of at most one per step ([`isotrack_sim::MAX_STEPS`] + 1).
 fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
@@ -105,6 +106,10 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
             return Err(format!("{n} holds a value in an invalid_scenario row"));
         }
         return Ok(());
+    }
+    // The detail says why a run did not complete: a completed row has none.
+    if outcome == "completed" && !cell("outcome_detail").is_empty() {
+        return Err("outcome_detail holds text in a `completed` row".to_string());
     }
     for n in ["t_end_s", "samples"] {
         if cell(n).is_empty() {
@@ -123,8 +128,17 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
         if !v.is_finite() {
             return Err(format!("{n} = `{c}` is not a finite number"));
         }
-        if v < 0.0 && NON_NEGATIVE_COLUMNS.contains(&n) {
+        // `-0.0` too: isotrack never writes a negative zero in these columns.
+        if v.is_sign_negative() && NON_NEGATIVE_COLUMNS.contains(&n) {
             return Err(format!("{n} = `{c}` is negative"));
+        }
+        // A subnormal (below 2.2e-308, `5e-324`) is no value a run produces: times are
+        // multiples of a step far above it, and sums of squares of it vanish.
+        if v != 0.0 && !v.is_normal() {
+            return Err(format!(
+                "{n} = `{c}` is subnormal (below {:e}): not a value a run produces",
+                f64::MIN_POSITIVE
+            ));
         }
         value.insert(n, v);
     }

@@ -65,13 +65,9 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
             format!("cannot lock {}: {e}", path.display()),
         )
     };
-    let mut f = std::fs::OpenOptions::new()
-        .create(true)
-        .truncate(false)
-        .read(true)
-        .write(true)
-        .open(&path)
-        .map_err(cant)?;
+    // Never through a link nor into a FIFO: a `.isotrack.lock` that is a link to a user's file
+    // would have that file emptied (the holder record replaces its content).
+    let mut f = crate::files::open_regular(&path, true, false).map_err(cant)?;
     match f.try_lock() {
         Ok(()) => {
             // The record is a courtesy for the message of the next one refused: failing to
@@ -106,7 +102,22 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
 /// [`lock_output_dir`]; the message names it): its rows are not all there yet. A directory
 /// without a lock file was never locked (nothing to wait for).
 pub fn check_not_being_written(dir: &Path) -> Result<(), Failure> {
-    let Ok(mut f) = std::fs::File::open(dir.join(LOCK_FILE)) else {
+    let path = dir.join(LOCK_FILE);
+    // Only a regular file is opened: a FIFO there would block the open.
+    match std::fs::symlink_metadata(&path) {
+        Ok(m) if m.file_type().is_file() => {}
+        Ok(_) => {
+            return Err(fail(
+                exit::CANTCREAT,
+                format!(
+                    "{}: {LOCK_FILE} is not a regular file (a link, FIFO, directory or device); remove it",
+                    dir.display()
+                ),
+            ))
+        }
+        Err(_) => return Ok(()),
+    }
+    let Ok(mut f) = std::fs::File::open(&path) else {
         return Ok(());
     };
     match f.try_lock_shared() {

@@ -200,7 +200,8 @@ mod tests {
         assert!((need - 1.142_63).abs() < 1e-5);
         let w = sliding_mode_conditions(2.0, need - 1e-3, 0.3, 1.0, 0.5, Some(0.25));
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].contains(&Num(need).to_string()), "{}", w[0]);
+        // The limit needed is rounded up (a rounded-down one would read as enough).
+        assert!(w[0].contains(&NumUp(need).to_string()), "{}", w[0]);
         assert!(sliding_mode_conditions(2.0, need + 1e-3, 0.3, 1.0, 0.5, Some(0.25)).is_empty());
         let a = sliding_mode_conditions(2.0, 100.0, 2.0, 1.0, 0.5, Some(0.25));
         assert_eq!(a.len(), 1, "{a:?}");
@@ -221,7 +222,8 @@ mod tests {
         let need = 8.0 / 0.3;
         let w = sosm_conditions(2.0, need - 0.01, 0.9, 0.5, 1.5, Some(0.5));
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].contains(&Num(need).to_string()), "{}", w[0]);
+        // The limit needed is rounded up (a rounded-down one would read as enough).
+        assert!(w[0].contains(&NumUp(need).to_string()), "{}", w[0]);
         assert!(sosm_conditions(2.0, need + 0.01, 0.9, 0.5, 1.5, Some(0.5)).is_empty());
         for (alpha, grad_max) in [(0.0, 2.0), (0.75, 4.0)] {
             let w = sosm_conditions(1.0, 1e9, alpha, 1.0, grad_max, Some(0.5));

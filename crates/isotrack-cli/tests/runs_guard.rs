@@ -1,0 +1,395 @@
+//! Issue 30 (runs-guard): the output-directory lock never writes through a link; `run --out`
+//! and `compare --out` take the lock and write their files atomically (no old summary beside a
+//! new trace); an output that is a FIFO exits 73 at once; an output that is an input exits 64.
+#![cfg(unix)]
+mod common;
+use common::{assert_fails, fifo, isotrack, isotrack_within, write};
+use std::path::Path;
+
+const SCEN: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/paper-fig2b-circular.toml"
+);
+
+/// A short run of the paper's Fig. 2(b) scenario (20 s instead of 600 s).
+const SHORT: &str = "sim.duration_s=20";
+
+/// Takes the directory lock of `dir` as another command would (holder `sweep pid 1`).
+fn hold_lock(dir: &Path) -> std::fs::File {
+    std::fs::create_dir_all(dir).unwrap();
+    let f = std::fs::File::create(dir.join(".isotrack.lock")).unwrap();
+    f.try_lock().unwrap();
+    f
+}
+
+/// Item 1: a `.isotrack.lock` that is a link to a user's file: `sweep`, `sweep --resume` and
+/// `merge` refuse the directory (73) and the file keeps its bytes.
+#[test]
+fn a_lock_file_that_is_a_link_is_refused_and_its_target_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let victim = write(d.path(), "victim.txt", "data\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!("scenario = {SCEN:?}\n[grid]\nsim.duration_s = [1.0]\n"),
+    );
+    let r = d.path().join("r");
+    std::fs::create_dir_all(&r).unwrap();
+    std::os::unix::fs::symlink(&victim, r.join(".isotrack.lock")).unwrap();
+    let rs = r.display().to_string();
+    for args in [
+        vec!["sweep", &sw, "--out", &rs],
+        vec!["sweep", &sw, "--out", &rs, "--resume"],
+    ] {
+        let o = isotrack_within(&args, 60);
+        assert_fails(&o, 73, &[".isotrack.lock", "not a regular file"]);
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "data\n");
+    }
+    // A merge into it, from a real shard.
+    let shard = d.path().join("shard");
+    let o = isotrack(&["sweep", &sw, "--out", &shard.display().to_string()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = isotrack_within(&["merge", &shard.display().to_string(), "--out", &rs], 60);
+    assert_fails(&o, 73, &[".isotrack.lock", "not a regular file"]);
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "data\n");
+    // A dangling link is not followed to create its target either.
+    let ghost = d.path().join("ghost.txt");
+    let r2 = d.path().join("r2");
+    std::fs::create_dir_all(&r2).unwrap();
+    std::os::unix::fs::symlink(&ghost, r2.join(".isotrack.lock")).unwrap();
+    let o = isotrack_within(&["sweep", &sw, "--out", &r2.display().to_string()], 60);
+    assert_fails(&o, 73, &[".isotrack.lock"]);
+    assert!(!ghost.exists());
+}
+
+/// Item 2: `run --out D` and `compare --out D` while another command holds D's lock exit 73
+/// and write nothing; a run that ends leaves trace, summary and scenario and no temporary file.
+#[test]
+fn run_and_compare_out_take_the_directory_lock() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let os = out.display().to_string();
+    let holder = hold_lock(&out);
+    let o = isotrack_within(&["run", SCEN, "--set", SHORT, "--out", &os], 60);
+    assert_fails(&o, 73, &["is writing this directory"]);
+    assert!(!out.join("trace.csv").exists() && !out.join("summary.json").exists());
+    let o = isotrack_within(
+        &[
+            "compare",
+            SCEN,
+            "--set",
+            SHORT,
+            "--controllers",
+            "pid",
+            "--out",
+            &os,
+        ],
+        60,
+    );
+    assert_fails(&o, 73, &["is writing this directory"]);
+    assert!(!out.join("comparison.csv").exists() && !out.join("pid").exists());
+    drop(holder);
+    let o = isotrack_within(&["run", SCEN, "--set", SHORT, "--out", &os, "--quiet"], 120);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            ".isotrack.lock",
+            "scenario.toml",
+            "summary.json",
+            "trace.csv"
+        ]
+    );
+}
+
+/// Item 2: a run killed mid-way over an old run directory leaves no summary (the old one is
+/// removed before anything is written), so the directory is not a mix plot and report accept.
+#[test]
+fn a_killed_run_leaves_no_stale_summary() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let os = out.display().to_string();
+    let o = isotrack_within(&["run", SCEN, "--set", SHORT, "--out", &os, "--quiet"], 120);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(out.join("summary.json").exists());
+    let old_trace = std::fs::read(out.join("trace.csv")).unwrap();
+    // A long run (1e6 s at dt 0.01 s: far longer than the test waits), killed once it writes.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["run", SCEN, "--set", "sim.duration_s=1000000", "--out", &os])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while out.join("summary.json").exists() {
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "the old summary was never removed"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "ended before caught");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!out.join("summary.json").exists());
+    // The trace in place is still the old one, whole: the new one streamed to a temporary file.
+    assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), old_trace);
+    let o = isotrack_within(
+        &[
+            "report",
+            &os,
+            "--out",
+            &d.path().join("r.html").display().to_string(),
+        ],
+        60,
+    );
+    assert_ne!(
+        o.status.code(),
+        Some(0),
+        "report accepted a directory without a summary"
+    );
+}
+
+/// Item 6: an output that is a FIFO exits 73 at once (never waits for a reader).
+#[test]
+fn fifo_outputs_exit_73_at_once() {
+    let d = tempfile::tempdir().unwrap();
+    for name in ["trace.csv", "summary.json"] {
+        let out = d.path().join(format!("run-{name}"));
+        std::fs::create_dir_all(&out).unwrap();
+        fifo(&out, name);
+        let o = isotrack_within(
+            &[
+                "run",
+                SCEN,
+                "--set",
+                SHORT,
+                "--out",
+                &out.display().to_string(),
+            ],
+            30,
+        );
+        assert_fails(&o, 73, &[name, "not a regular file"]);
+    }
+    // A good run directory for `report`.
+    let run = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        SCEN,
+        "--set",
+        SHORT,
+        "--out",
+        &run.display().to_string(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let f = fifo(d.path(), "report.html");
+    let o = isotrack_within(&["report", &run.display().to_string(), "--out", &f], 30);
+    assert_fails(&o, 73, &["not a regular file"]);
+    let stations = write(
+        d.path(),
+        "st.csv",
+        "x_m,y_m,v\n0,0,1\n100,0,2\n0,100,3\n100,100,4\n",
+    );
+    let f = fifo(d.path(), "grid.csv");
+    let o = isotrack_within(
+        &[
+            "interpolate",
+            &stations,
+            "--value-column",
+            "v",
+            "--method",
+            "idw",
+            "--spacing-m",
+            "25",
+            "--out",
+            &f,
+        ],
+        30,
+    );
+    assert_fails(&o, 73, &["not a regular file"]);
+    let head = "t_s,delta_e_rad,delta_a_rad,delta_r_rad,delta_t\n";
+    let inputs = write(
+        d.path(),
+        "in.csv",
+        &format!("{head}0,-0.07,0,0,0.4\n1,-0.07,0,0,0.4\n"),
+    );
+    let f = fifo(d.path(), "replay.csv");
+    let o = isotrack_within(&["replay", "--inputs", &inputs, "--out", &f], 30);
+    assert_fails(&o, 73, &["not a regular file"]);
+    let cmp = d.path().join("cmp");
+    std::fs::create_dir_all(&cmp).unwrap();
+    fifo(&cmp, "comparison.csv");
+    let o = isotrack_within(
+        &[
+            "compare",
+            SCEN,
+            "--set",
+            SHORT,
+            "--controllers",
+            "pid",
+            "--out",
+            &cmp.display().to_string(),
+        ],
+        30,
+    );
+    assert_fails(&o, 73, &["comparison.csv", "not a regular file"]);
+}
+
+/// Item 7: an output that is one of the command's inputs exits 64 and the input keeps its bytes.
+#[test]
+fn outputs_that_are_inputs_exit_64() {
+    let d = tempfile::tempdir().unwrap();
+    let st_text = "x_m,y_m,v\n0,0,1\n100,0,2\n0,100,3\n100,100,4\n";
+    let stations = write(d.path(), "stc.csv", st_text);
+    let o = isotrack(&[
+        "interpolate",
+        &stations,
+        "--value-column",
+        "v",
+        "--method",
+        "idw",
+        "--spacing-m",
+        "25",
+        "--out",
+        &stations,
+    ]);
+    assert_fails(&o, 64, &["is an input"]);
+    assert_eq!(std::fs::read_to_string(&stations).unwrap(), st_text);
+    let run = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        SCEN,
+        "--set",
+        SHORT,
+        "--out",
+        &run.display().to_string(),
+        "--quiet",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let trace = run.join("trace.csv");
+    let before = std::fs::read(&trace).unwrap();
+    let o = isotrack(&[
+        "report",
+        &run.display().to_string(),
+        "--out",
+        &trace.display().to_string(),
+    ]);
+    assert_fails(&o, 64, &["is an input"]);
+    assert_eq!(std::fs::read(&trace).unwrap(), before);
+    // compare: the scenario's field file is D/comparison.csv.
+    let cmp = d.path().join("cmp");
+    std::fs::create_dir_all(&cmp).unwrap();
+    let repo = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let field = cmp.join("comparison.csv");
+    std::fs::copy(
+        format!("{repo}/data/no2_germany_kriged/no2_germany_kriged.csv"),
+        &field,
+    )
+    .unwrap();
+    let field_text = std::fs::read(&field).unwrap();
+    let o = isotrack(&[
+        "compare",
+        &format!("{repo}/scenarios/paper-fig2a-field.toml"),
+        "--set",
+        &format!("field.path={:?}", field.display().to_string()),
+        "--controllers",
+        "pid",
+        "--out",
+        &cmp.display().to_string(),
+    ]);
+    assert_fails(&o, 64, &["is an input"]);
+    assert_eq!(std::fs::read(&field).unwrap(), field_text);
+    // benchmark: DIR/suite.toml is the suite being read.
+    let bench = d.path().join("bench");
+    std::fs::create_dir_all(&bench).unwrap();
+    let suite = bench.join("suite.toml");
+    std::fs::copy(format!("{repo}/suites/standard-v1.toml"), &suite).unwrap();
+    let suite_text = std::fs::read(&suite).unwrap();
+    let o = isotrack(&[
+        "benchmark",
+        &suite.display().to_string(),
+        "--out",
+        &bench.display().to_string(),
+    ]);
+    assert_fails(&o, 64, &["is an input"]);
+    assert_eq!(std::fs::read(&suite).unwrap(), suite_text);
+}
+
+/// Item 9: `--shard` takes canonical digits and at most a million shards; an empty scenario
+/// file (whitespace and comments only) is refused (65) instead of running the default.
+#[test]
+fn shard_counts_are_bounded_and_empty_scenarios_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!("scenario = {SCEN:?}\n[grid]\nsim.duration_s = [1.0]\n"),
+    );
+    let out = d.path().join("o").display().to_string();
+    for shard in [
+        "1/1000000000000",
+        "01/2",
+        "1/02",
+        "+1/2",
+        " 1/2",
+        "1/1000001",
+    ] {
+        let o = isotrack(&["sweep", &sw, "--out", &out, "--shard", shard]);
+        assert_fails(&o, 64, &["--shard"]);
+    }
+    let o = isotrack(&["sweep", &sw, "--out", &out, "--shard", "1/1000000"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    for text in ["", "\n  \n", "# nothing\n\n   # here\n"] {
+        let sc = write(d.path(), "empty.toml", text);
+        let o = isotrack(&["run", &sc]);
+        assert_fails(&o, 65, &["empty scenario file", "omit the argument"]);
+    }
+}
+
+/// Item 8: Ctrl-C of `benchmark` keeps the tasks that finished: once task 2 has started, task
+/// 1's `task.json` is on disk, and a SIGINT then leaves it there for `--resume`.
+#[test]
+fn an_interrupted_benchmark_keeps_its_finished_tasks() {
+    use std::io::BufRead;
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("b");
+    let suite = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "benchmark",
+            suite,
+            "--out",
+            &out.display().to_string(),
+            "--threads",
+            "1",
+        ])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut second = false;
+    for line in err.lines() {
+        if line.unwrap().contains("task 2/") {
+            second = true;
+            break;
+        }
+    }
+    assert!(second, "the benchmark never started task 2");
+    let ok = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    child.wait().unwrap();
+    let first = out.join("tasks").join("circular-100hz").join("task.json");
+    assert!(first.is_file(), "task 1's results were lost");
+    assert!(!out.join("leaderboard.csv").exists());
+}
