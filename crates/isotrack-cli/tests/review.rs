@@ -99,7 +99,7 @@ fn terminal_controls_in_user_text_are_escaped() {
     );
     let o = isotrack(&["run", &sc]);
     assert_eq!(o.status.code(), Some(66));
-    assert!(raw(&o).contains("no\\x1b[2Jsuch.csv"));
+    assert!(raw(&o).contains("no\\x1b[2Jsuch.csv"), "{}", raw(&o));
     // `show` is data (TOML): its own escapes, unchanged by the console.
     let o = isotrack(&["show", "--set", "field.units=a\u{1b}b"]);
     assert!(

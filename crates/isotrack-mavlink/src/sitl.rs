@@ -311,12 +311,13 @@ impl Autopilot {
     /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
     /// in control, of any companion on board (a component of the vehicle's own system: as in
     /// PX4, setpoints are not bound to who switched the mode), or of anyone while no companion
-    /// is in control; never of a ground station.
+    /// is in control (MAVSDK as a ground station flying offboard itself included); never of
+    /// system 255, the operator's ground station.
     fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
         let on_board = from.0 == self.system_id as u32;
         if s.target_system != self.system_id
             || (self.owner.is_some_and(|o| o != from) && !on_board)
-            || self.is_gcs(from)
+            || from.0 == GCS_SYSTEM_ID as u32
         {
             self.refused += 1;
             return None;

@@ -581,12 +581,13 @@ fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
     }
 }
 
-/// Text taken as a string when it is not a TOML value (a kind, a path, a name, with spaces):
-/// one line, no comment sign, not the start of an array, table or quoted string.
+/// Text taken as a string when it is not a TOML value (a kind, a path, a name, with spaces;
+/// other control characters are kept, and escaped wherever they are shown): one line, no
+/// comment sign, not the start of an array, table or quoted string.
 fn is_bare_word(raw: &str) -> bool {
     !raw.is_empty()
         && !raw.starts_with(['[', '{', '"', '\''])
-        && !raw.chars().any(|c| c.is_control() || c == '#')
+        && !raw.chars().any(|c| matches!(c, '\n' | '\r' | '#'))
 }
 
 /// The first `n` characters of `s`, with `...` when cut.
