@@ -555,8 +555,8 @@ fn sweep_cells(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<SweepCells> {
     use std::sync::atomic::{AtomicU64, Ordering};
-    let prepared =
-        isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name)).map_err(sweep_failure)?;
+    let prepared = isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name))
+        .map_err(sweep_failure)?;
     let kinds = column_kinds(&prepared.plan);
     let cancel = AtomicBool::new(false);
     let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));

@@ -4,10 +4,10 @@
 
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_cli::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
+use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
 use isotrack_runs::{exit, Failure};
-use isotrack_core::vehicle::Telemetry;
 use isotrack_sim::{TraceRow, TraceSink};
 use numpy::PyReadonlyArray1;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
