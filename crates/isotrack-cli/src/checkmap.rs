@@ -5,7 +5,7 @@ use crate::cli::CheckArgs;
 use crate::exit;
 use crate::output::num;
 use crate::run::Failure;
-use isotrack_core::numtext::Echo;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
     StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS, NEAR_BOUNDARY_MARGIN,
@@ -482,8 +482,8 @@ pub fn print_report(m: &MapReport) {
     );
     if let Some(a) = &m.verify {
         outln!(
-            "  verify: {} runs compared, {} agree ({}); disagreements at spectral radius within {} of 1: {}, further: {}; left the field (not compared): {}; not compared in all: {}",
-            a.compared,
+            "  verify: {} compared, {} agree ({}); disagreements at spectral radius within {} of 1: {}, further: {}; left the field (not compared): {}; not compared in all: {}",
+            if a.compared == 1 { "1 run".to_string() } else { format!("{} runs", a.compared) },
             a.agree,
             a.percent.map_or_else(|| "n/a".into(), |p| format!("{p:.1} %")),
             NEAR_BOUNDARY_MARGIN,
@@ -496,9 +496,10 @@ pub fn print_report(m: &MapReport) {
             outln!(
                 "    far from the boundary: run {} at kp {}, {} Hz, spectral radius {}: {}",
                 d.run,
-                num(d.kp),
-                num(d.sensor_rate_hz),
-                d.spectral_radius.map_or_else(|| "n/a".into(), num),
+                Num(d.kp),
+                Num(d.sensor_rate_hz),
+                d.spectral_radius
+                    .map_or_else(|| "n/a".into(), |r| Num(r).to_string()),
                 d.outcome
             );
         }
