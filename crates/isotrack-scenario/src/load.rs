@@ -575,7 +575,7 @@ fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
         Err(_) if is_bare_word(raw) => Ok(toml::Value::String(raw.to_string())),
         Err(e) => Err(format!(
             "`{}` is not one TOML value ({}); quote a string, e.g. \"text\"",
-            clip_chars(&raw.escape_debug().to_string(), 80),
+            clip(&raw.escape_debug().to_string()),
             e.message().trim()
         )),
     }
@@ -588,15 +588,6 @@ fn is_bare_word(raw: &str) -> bool {
     !raw.is_empty()
         && !raw.starts_with(['[', '{', '"', '\''])
         && !raw.chars().any(|c| matches!(c, '\n' | '\r' | '#'))
-}
-
-/// The first `n` characters of `s`, with `...` when cut.
-fn clip_chars(s: &str, n: usize) -> String {
-    if s.chars().count() <= n {
-        s.to_string()
-    } else {
-        format!("{}...", s.chars().take(n).collect::<String>())
-    }
 }
 
 fn insert_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
