@@ -28,6 +28,7 @@ mod metrics;
 mod run;
 mod sensor;
 mod simulation;
+pub mod team;
 mod trace;
 
 pub use batch::{simulate_batch, BatchRun, LANES};
@@ -40,4 +41,5 @@ pub use sensor::{
     SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
+pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult};
 pub use trace::{NoTrace, TraceRow, TraceSink};
