@@ -387,3 +387,137 @@ fn theory_verdict_matches_simulation() {
     eprintln!("{}", table.join("\n"));
     assert_eq!(disagree, 0, "{}", table.join("\n"));
 }
+
+/// The team metrics on the isoline extracted from the field sampled every 0.2 m (marching
+/// squares, stitched into a closed polyline) agree with the analytic circle's.
+#[test]
+fn polyline_isoline_gives_the_circle_metrics() {
+    use isotrack_fields::isoline::IsolineSegments;
+    use isotrack_sim::team::arc::{ArcProjection, PolylineArc};
+    let f = field();
+    let segs = IsolineSegments::from_samples(Vec2::new(-10.0, -10.0), 0.2, 101, 101, 10.0, |p| {
+        isotrack_core::ScalarField::value(&f, 0.0, p)
+    });
+    let mut loops = segs.closed_loops(1e-6);
+    assert_eq!(loops.len(), 1);
+    let poly = PolylineArc::new(loops.remove(0)).unwrap();
+    let circle = arc();
+    assert!((poly.length_m() / circle.length_m() - 1.0).abs() < 2e-3);
+    let v = vehicle(0.25, 0.75);
+    let plan = StepPlan::new(DT, 200.0, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig {
+            every_steps: 10,
+            ..TeamMetricsConfig::default()
+        },
+    };
+    let go = |a: &dyn ArcProjection| {
+        simulate_team(
+            &f,
+            &v,
+            &plan,
+            cfg,
+            members(&v, &cluster(), 100.0),
+            Some(a),
+            &Oracles::default(),
+            &mut [] as &mut [NoTrace],
+        )
+        .unwrap()
+        .team
+        .unwrap()
+    };
+    let (tp, tc) = (go(&poly), go(&circle));
+    assert!(
+        (tp.gap_cv.unwrap() - tc.gap_cv.unwrap()).abs() < 0.01,
+        "{tp:?} {tc:?}"
+    );
+    let (mp, mc) = (
+        tp.revisit_time_max_s.unwrap(),
+        tc.revisit_time_max_s.unwrap(),
+    );
+    assert!((mp - mc).abs() < 0.02 * mc, "{mp} {mc}");
+    assert_eq!(tp.order_preserved, tc.order_preserved);
+}
+
+/// The thread's CPU time (user + system), s, from `/proc/thread-self/stat` (clock ticks of
+/// 1/100 s): throughput measured on a loaded machine without counting the time other processes
+/// took (`None` off Linux).
+fn thread_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // Fields 14 and 15 of stat (utime, stime) are the 12th and 13th after the command.
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// Throughput of the 1000-robot ring (as benches/team.rs, 60 s at 100 Hz, range_balance on
+/// 10 Hz ranging, no team metrics) in vehicle-steps per second of this thread's CPU time and of
+/// wall time. Run by hand: `cargo test --release -p isotrack-sim --test team -- --ignored
+/// --nocapture throughput`.
+#[test]
+#[ignore]
+fn throughput_1000_ring() {
+    let n = 1000;
+    let r = 10.0 * 20f64.ln();
+    let v = vehicle(0.25, 0.75);
+    let members: Vec<_> = (0..n)
+        .map(|i| {
+            let th = -2.0 * PI * (i as f64 + 0.1 * (i % 3) as f64) / n as f64;
+            let x0 = DubinsState {
+                position_m: Vec2::new(r * th.cos(), r * th.sin()),
+                heading_rad: th - FRAC_PI_2,
+            };
+            TeamMember {
+                x0: v.state(x0, V0),
+                controller: PiIsoline::new(PiIsolineParams::paper_fig2b(1.0)),
+                sensor: Sensor::new(
+                    SensorConfig {
+                        rate_hz: 100.0,
+                        ..SensorConfig::default()
+                    },
+                    DT,
+                    i as u64,
+                )
+                .unwrap(),
+                ranging_seed: i as u64,
+            }
+        })
+        .collect();
+    let plan = StepPlan::new(DT, 60.0, 0.0, 0.2, 0.1, 10.0, 1.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let (c0, w0) = (thread_cpu_s(), std::time::Instant::now());
+    let res = simulate_team(
+        &field(),
+        &v,
+        &plan,
+        cfg,
+        members,
+        None,
+        &Oracles::default(),
+        &mut [] as &mut [NoTrace],
+    )
+    .unwrap();
+    let wall = w0.elapsed().as_secs_f64();
+    let steps: u64 = res.runs.iter().map(|r| r.steps).sum();
+    let cpu = c0.zip(thread_cpu_s()).map(|(a, b)| b - a);
+    eprintln!(
+        "{steps} vehicle-steps: wall {wall:.3} s ({:.2} M/s), thread CPU {cpu:?} s ({:?} M/s)",
+        steps as f64 / wall / 1e6,
+        cpu.map(|c| steps as f64 / c / 1e6)
+    );
+}

@@ -4,7 +4,8 @@
 //!
 //! Two implementations: [`CircleArc`] (analytic, the circular field's isolines) and
 //! [`PolylineArc`] (a closed polyline, e.g. an isoline extracted from a sampled field by
-//! marching squares and stitched: `isotrack_fields::isoline::closed_isoline_polyline`).
+//! marching squares and stitched into closed loops:
+//! `isotrack_fields::isoline::IsolineSegments::closed_loops`).
 
 use isotrack_core::Vec2;
 
