@@ -142,7 +142,7 @@ pub fn write_outputs(
 ) -> Result<(), Failure> {
     write_files(result, out).map_err(bench_failure)?;
     let html = out.join("index.html");
-    std::fs::write(&html, isotrack_html::benchmark_page(result))
+    std::fs::write(&html, isotrack_league::benchmark_page(result))
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
     // The suite as run: the gains every built-in law ran with recorded per task.
     let mut as_run = suite.clone();

@@ -134,7 +134,7 @@ length_m = 6.93
     let result =
         isotrack_league::run_benchmark(&suite, &reg, &Default::default(), &|_, _, _| {}).unwrap();
     let page = d.path().join("index.html");
-    std::fs::write(&page, isotrack_html::benchmark_page(&result)).unwrap();
+    std::fs::write(&page, isotrack_league::benchmark_page(&result)).unwrap();
     let dom = check_page(
         &browser,
         &page,

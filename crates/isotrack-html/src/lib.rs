@@ -3,8 +3,8 @@
 //! Self-contained HTML pages: the data as JSON in the page, inline CSS and JavaScript, no
 //! network and no CDN, so a page works from `file://` and can be mailed or archived.
 //!
-//! * [`benchmark_page`]: a benchmark's `index.html` (sortable leaderboard, per-task tables,
-//!   a picture of each task's paths over its field).
+//! * [`page`], [`escape`], [`script_json`]: the page shell and the escaping every page goes
+//!   through (the benchmark's `index.html` is built on them in `isotrack-league`).
 //! * [`report_page`]: one or more runs (field heat map with the target isoline, the paths, a
 //!   play/pause time slider, error / measurement / turn-rate plots on the same cursor, hover
 //!   values with units).
@@ -13,14 +13,12 @@
 //! either fetch scripts from the network or add more code than the pages themselves.
 #![deny(missing_docs)]
 
-mod benchmark;
 mod report;
 
-pub use benchmark::benchmark_page;
 pub use report::{report_page, ReportError};
 
 /// Text escaped for HTML element content and quoted attribute values (`&`, `<`, `>`, `"`, `'`).
-pub(crate) fn escape(s: &str) -> String {
+pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -37,7 +35,7 @@ pub(crate) fn escape(s: &str) -> String {
 /// the element's text no tag or comment can start in it. These characters occur in JSON only
 /// inside strings, where `\uXXXX` is the same character to `JSON.parse`, so the data is
 /// unchanged. (U+2028/9 are line terminators to pre-2019 JavaScript.)
-pub(crate) fn script_json<T: serde::Serialize>(v: &T) -> String {
+pub fn script_json<T: serde::Serialize>(v: &T) -> String {
     let json = serde_json::to_string(v).unwrap_or_else(|_| "null".into());
     escape_script_json(&json)
 }
@@ -58,8 +56,9 @@ fn escape_script_json(json: &str) -> String {
     out
 }
 
-/// The page shell: title, CSS, the data, the shared script, the page's script.
-pub(crate) fn page(title: &str, body: &str, data_json: &str, script: &str) -> String {
+/// The page shell: title, CSS, the data (`data_json`, from [`script_json`]), the shared script
+/// (`el`, `colour`, `fmt`, `drawField`, `drawPath`, the data as `ISO`), the page's script.
+pub fn page(title: &str, body: &str, data_json: &str, script: &str) -> String {
     format!(
         r#"<!DOCTYPE html>
 <html lang="en">

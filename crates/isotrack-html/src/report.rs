@@ -3,8 +3,7 @@
 use crate::{escape, page, script_json};
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
-use isotrack_league::run::FieldPicture;
-use isotrack_plot::{PlotError, RunData};
+use isotrack_plot::{FieldPicture, PlotError, RunData};
 use isotrack_scenario::Scenario;
 use serde::Serialize;
 use std::path::Path;

@@ -12,15 +12,18 @@
 //! * [`tune`]: the documented tuning procedure.
 //! * [`run`]: running a suite ([`run_benchmark`]), deterministic on any thread count.
 //! * [`leaderboard`]: `leaderboard.csv`, `leaderboard.md`, per-task `results.csv`.
+//! * [`page`]: the benchmark's `index.html` ([`benchmark_page`], on `isotrack-html`'s shell).
 #![deny(missing_docs)]
 
 pub mod leaderboard;
+pub mod page;
 pub mod registry;
 pub mod run;
 pub mod score;
 pub mod suite;
 pub mod tune;
 
+pub use page::benchmark_page;
 pub use registry::{check_name, ControllerFactory, Entrant, NameError, Registry};
 pub use run::{run_benchmark, BenchError, BenchResult, Options, TaskResult};
 pub use score::{Score, ScoreContext, Scoring};

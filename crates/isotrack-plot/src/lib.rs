@@ -10,6 +10,8 @@
 //! * [`timeseries_figure`]: error, measurement and turn rate against time, the steady-state
 //!   window shaded;
 //! * [`field_map`]: a field alone (the paper's Fig. 1(a));
+//! * [`FieldPicture`]: a field sampled on a grid round some paths, with its isoline (the data
+//!   the HTML pages draw);
 //! * [`stability_map_figure`]: `isotrack check --map`'s chart of the sampled loop's spectral
 //!   radius over `kp` x sensor rate.
 //!
@@ -18,6 +20,7 @@
 
 mod draw;
 mod error;
+mod picture;
 mod run_data;
 mod stability;
 mod style;
@@ -28,6 +31,7 @@ pub use draw::{
 };
 pub(crate) use error::open_input;
 pub use error::{PlotError, MAX_INPUT_BYTES};
+pub use picture::FieldPicture;
 pub use run_data::{same_field, RunData};
 pub use stability::{boundary_segments, stability_map_figure};
 pub(crate) use style::fonts;

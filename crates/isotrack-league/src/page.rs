@@ -1,7 +1,7 @@
 //! A benchmark's `index.html`.
 
-use crate::{escape, page, script_json};
-use isotrack_league::BenchResult;
+use crate::run::BenchResult;
+use isotrack_html::{escape, page, script_json};
 
 /// The page of a benchmark's results: the sortable leaderboard, then per task its picture (each
 /// controller's path on the first scoring seed over the field, the target isoline dashed) and
