@@ -174,6 +174,21 @@ pub struct ReportArgs {
     pub out: PathBuf,
 }
 
+/// A count written canonically: decimal digits, no sign, space or leading zero (`+5` and `05`
+/// are refused, as `--map-size` and `--shard` refuse them).
+fn canonical_count(text: &str) -> Result<usize, String> {
+    let ok = !text.is_empty()
+        && text.bytes().all(|b| b.is_ascii_digit())
+        && (text == "0" || !text.starts_with('0'));
+    if !ok {
+        return Err(
+            "expected a count in plain decimal digits (no sign, space or leading zero)".into(),
+        );
+    }
+    text.parse()
+        .map_err(|_| "expected a count that fits the machine's word".to_string())
+}
+
 /// `isotrack check`.
 #[derive(Debug, Args)]
 pub struct CheckArgs {
@@ -206,11 +221,11 @@ pub struct CheckArgs {
     pub map_size: Option<String>,
     /// Simulate N points spread over the chart, classify each run (converged, limit cycle,
     /// diverged) against the chart, write `verify.csv` and mark them on the chart (1..1000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = canonical_count)]
     pub verify: Option<usize>,
     /// Worker threads for the chart and `--verify` (default: all cores). Results do not depend
     /// on it.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = canonical_count)]
     pub threads: Option<usize>,
     /// How the chart looks.
     #[command(flatten)]

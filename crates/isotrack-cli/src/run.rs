@@ -198,13 +198,26 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     };
     if args.json {
         out_data!("{}\n", check_json(&r, map.as_ref()));
-        return Ok(());
+    } else {
+        for line in crate::check_text::render(&r) {
+            outln!("{line}");
+        }
+        if let Some(m) = &map {
+            crate::checkmap::print_report(m);
+        }
     }
-    for line in crate::check_text::render(&r) {
-        outln!("{line}");
-    }
-    if let Some(m) = &map {
-        crate::checkmap::print_report(m);
+    // Ctrl-C during --verify: the report above covers the runs that finished (marked
+    // partial); the command still says it was interrupted and exits 130.
+    if let Some(runs) = map.as_ref().and_then(|m| m.verify_runs.as_ref()) {
+        if runs.partial {
+            return Err(Failure {
+                code: crate::sweep::INTERRUPTED,
+                message: format!(
+                    "interrupted during --verify: {} of {} runs finished; the chart and verify.csv hold what was done (the report above is partial)",
+                    runs.finished, runs.requested
+                ),
+            });
+        }
     }
     Ok(())
 }

@@ -197,6 +197,19 @@ pub struct SampledReport {
     /// stable or not computed. A loop whose `tau` is a large part of the run's duration does not
     /// settle within the run, stable or not.
     pub slowest_time_constant_s: Option<f64>,
+    /// The time constant the run's settling follows, s: `-T/ln(rho)` of the loop at the
+    /// isoline's mean slope (the slopes of its lattice crossings from the 5th percentile up,
+    /// averaged: the vehicle passes them faster than the loop settles, so it sees their mean;
+    /// on a circular field the one exact slope, and then equal to `slowest_time_constant_s`).
+    /// The slow-mode warning is about this one. Null when the loop is not stable or not
+    /// computed.
+    pub isoline_time_constant_s: Option<f64>,
+    /// The isoline's mean slope `isoline_time_constant_s` is computed at (null with it).
+    pub isoline_mean_slope: Option<f64>,
+    /// Why the loop was not computed (null when it was): a delay past the delay-line cap, the
+    /// P law's orbit where the field is flat, or a loop gain past `f64`. `spectral_radius` and
+    /// `stable` are then null and no verdict claims stability.
+    pub not_computed: Option<String>,
     /// The law has an integral term (`ki != 0`): an unstable loop can wind the integral up into
     /// a spin rather than oscillate. Not in the JSON.
     #[serde(skip)]
@@ -528,6 +541,88 @@ fn circular_p_law(s: &Scenario, l: &Law) -> bool {
 /// `exp(-k d*)`), and a scan that went on there fragmented the stable set into rounding noise.
 const P_ORBIT_MIN_LOOP_GAIN: f64 = 1e-8;
 
+/// Why a loop is not computed: `check`, every cell of the chart and every `--verify` point go
+/// through [`not_computed`], so they agree on what is computed (issue 29: chart cells at the
+/// P law's flat orbit were coloured where `check` said "not computed").
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum NotComputed {
+    /// The loop gain `kp v T max(alpha, 1) max(c1, 1) / min(c2, 1)` is past
+    /// [`map::MAX_LOOP_GAIN`]: the sampled matrices' products leave `f64`.
+    Overflow,
+    /// The P law's orbit lies where the field is nearly flat: its loop gain `kp alpha v T` is
+    /// below [`P_ORBIT_MIN_LOOP_GAIN`].
+    FlatOrbit {
+        /// `kp alpha v T` on the orbit.
+        gain: f64,
+    },
+    /// The delay spans more than [`sampled::MAX_DELAY_STATES`] sensor periods.
+    Delay {
+        /// The delay, s.
+        delay_s: f64,
+        /// The delay in sensor periods.
+        periods: f64,
+    },
+}
+
+impl NotComputed {
+    /// The reason in a sentence (`check`'s `not_computed`, verdict and warning).
+    fn reason(self) -> String {
+        match self {
+            Self::Overflow => format!(
+                "the loop gain kp*v*T*max(alpha, 1)*max(c1, 1)/min(c2, 1) is beyond {:e}: the sampled matrices would overflow f64",
+                map::MAX_LOOP_GAIN
+            ),
+            Self::FlatOrbit { gain } => format!(
+                "the P law's orbit lies where the field is nearly flat: its loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}, so its damping (about half that per period) is within rounding of zero and the spectral radius cannot tell stable from unstable"
+            ),
+            Self::Delay { delay_s, periods } => format!(
+                "the delay of {} sensor periods ({} s) exceeds the {} periods the check models (one state each)",
+                Num(periods),
+                Echo(delay_s),
+                sampled::MAX_DELAY_STATES
+            ),
+        }
+    }
+
+    /// The reason in a few words (the chart's CSV `note`).
+    fn short(self) -> &'static str {
+        match self {
+            Self::Overflow => "loop gain beyond 1e100: f64 would overflow",
+            Self::FlatOrbit { .. } => {
+                "the P law's orbit is where the field is flat: loop gain kp*alpha*v*T below 1e-8, not decided"
+            }
+            Self::Delay { .. } => "the delay spans more than 32 sensor periods",
+        }
+    }
+}
+
+/// Whether the loop `lp` (with the P law's `orbit` when it has one) can be computed, and why
+/// not: the same test for `check`, the chart's cells and `--verify`.
+fn not_computed(lp: &SampledLoop, orbit: Option<&PLawOrbit>) -> Option<NotComputed> {
+    let gain = lp.kp
+        * lp.speed_mps.max(1.0)
+        * lp.period_s.max(1.0)
+        * lp.slope.abs().max(1.0)
+        * lp.c1.abs().max(1.0)
+        / lp.c2.abs().min(1.0);
+    if gain.is_nan() || gain > map::MAX_LOOP_GAIN {
+        return Some(NotComputed::Overflow);
+    }
+    if let Some(o) = orbit {
+        let gain = lp.kp * o.slope * lp.speed_mps * lp.period_s;
+        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
+            return Some(NotComputed::FlatOrbit { gain });
+        }
+    }
+    if lp.radius().is_none() {
+        return Some(NotComputed::Delay {
+            delay_s: lp.delay_s,
+            periods: lp.delay_s / lp.period_s,
+        });
+    }
+    None
+}
+
 /// How the loop is unstable at the isoline's own (lattice-read) slopes, each frozen.
 #[derive(Clone, Copy, Debug)]
 struct FrozenInstability {
@@ -731,6 +826,9 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         spectral_radius: None,
         stable: None,
         slowest_time_constant_s: None,
+        isoline_time_constant_s: None,
+        isoline_mean_slope: None,
+        not_computed: None,
         integral: l.ki != 0.0,
         tube_spectral_radius: None,
         stable_over_tube: None,
@@ -773,31 +871,46 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     rep.curvature_per_m = Some(base.curvature_per_m);
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
     rep.course_loop = base.course_loop_numbers();
-    // The P law's orbit far out, where the field is flat: its loop barely acts, and its
-    // stability is within rounding of neutral (P_ORBIT_MIN_LOOP_GAIN): not decided.
-    if let Some(o) = &orbit {
-        let gain = l.kp * o.slope * l.v * period_s;
-        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
-            notes.push(format!(
-                "not computed: the orbit lies where the field is nearly flat, and the loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}: its damping (about half that per period) is within rounding of zero, so the spectral radius cannot tell stable from unstable"
-            ));
-            rep.note = notes.join("; ");
-            return rep;
-        }
-    }
-    let Some(rho) = sampled::worst_radius(&base, &slopes) else {
-        notes.push(format!(
-            "not computed: the delay {} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
-            Echo(delay_s),
-            (delay_s / period_s).ceil(),
-            sampled::MAX_DELAY_STATES
-        ));
+    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
+    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
+    if let Some(why) = not_computed(&base, orbit.as_ref()) {
+        let reason = why.reason();
+        notes.push(format!("not computed: {reason}"));
+        rep.not_computed = Some(reason);
         rep.note = notes.join("; ");
         return rep;
-    };
+    }
+    let rho = sampled::worst_spectral_radius(&base, &slopes);
     rep.spectral_radius = rho.is_finite().then_some(rho);
     rep.stable = Some(rho < 1.0);
     rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
+    if rho < 1.0 {
+        // The time constant the run's settling follows: on a lattice isoline the loop at the
+        // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
+        // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
+        // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
+        // settled in 8 s).
+        let mean_slope = if orbit.is_some() || exact_isoline_slope(s).is_some() {
+            slopes.first().copied()
+        } else {
+            let along: Vec<f64> = r
+                .isoline_slopes
+                .iter()
+                .copied()
+                .filter(|&a| a >= range[0])
+                .collect();
+            (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
+        };
+        if let Some(alpha) = mean_slope {
+            let rho_mean = SampledLoop {
+                slope: alpha,
+                ..base
+            }
+            .spectral_radius();
+            rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
+            rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
+        }
+    }
     if rho >= 1.0 {
         let worst = slopes
             .iter()
@@ -943,7 +1056,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         }
         .analysis();
     }
-    if !rho.is_finite() {
+    if !rho.is_finite() && circular_p_law(s, l) {
         notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
     }
     rep.note = notes.join("; ");
@@ -1418,8 +1531,8 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
         return (
             Verdict::NotApplicable,
             format!(
-                "no guarantee: the sampled loop was not computed ({})",
-                sm.note
+                "no guarantee: the sampled loop was not computed: {}",
+                sm.not_computed.as_deref().unwrap_or(&sm.note)
             ),
         );
     }
@@ -1502,14 +1615,19 @@ pub const SETTLING_FRACTION: f64 = 0.2;
 /// (`tau > SETTLING_FRACTION * sim.duration_s`; issue 29). `run` and `check` both give it.
 fn slow_mode_warning(s: &Scenario, sm: &SampledReport) -> Option<String> {
     let duration = s.file().sim.duration_s.unwrap_or(0.0);
-    let tau = sm.slowest_time_constant_s?;
+    let tau = sm.isoline_time_constant_s?;
+    let alpha = sm.isoline_mean_slope?;
+    let at = if sm.slope_exact == Some(true) || sm.p_law_orbit_error.is_some() {
+        format!("at the isoline's slope {}", Num(alpha))
+    } else {
+        format!("at the isoline's mean slope {}", Num(alpha))
+    };
     (duration > 0.0 && tau > SETTLING_FRACTION * duration).then(|| {
-            format!(
-                "the sampled loop is stable but slow: its slowest mode decays with time constant -T/ln(rho) = {} s (spectral radius {}), more than a fifth of the run's duration {} s: the run may end before it settles on the isoline",
-                Num(tau),
-                sm.spectral_radius.map_or_else(|| "n/a".into(), |r| format!("{r:.6}")),
-                Echo(duration)
-            )
+        format!(
+            "the sampled loop is stable but slow: {at} its slowest mode decays with time constant -T/ln(rho) = {} s, more than a fifth of the run's duration {} s: the run may end before it settles on the isoline",
+            Num(tau),
+            Echo(duration)
+        )
     })
 }
 
@@ -1788,7 +1906,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
         return Some(format!(
             "the loop sampled at {} Hz was not checked: {}",
             Echo(rate),
-            sm.note
+            sm.not_computed.as_deref().unwrap_or(&sm.note)
         ));
     }
     if sm.stable != Some(false) {
