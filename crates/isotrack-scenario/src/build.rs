@@ -14,6 +14,48 @@ use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarFiel
 use isotrack_sim::{simulate, Oracles, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
 use isotrack_vehicles::{Dubins, DubinsState, FixedWing, FixedWingConfig};
 
+/// Integration step of a resolved scenario file, s (`sim.dt_s`, default 0.01).
+fn file_dt_s(f: &ScenarioFile) -> f64 {
+    f.sim.dt_s.unwrap_or(0.01)
+}
+
+/// Planned duration of a resolved scenario file, s (`sim.duration_s`, default 600).
+fn file_duration_s(f: &ScenarioFile) -> f64 {
+    f.sim.duration_s.unwrap_or(600.0)
+}
+
+/// Sampling rate of a resolved scenario file, Hz (`sensor.rate_hz`, default every step).
+fn file_sensor_rate_hz(f: &ScenarioFile) -> f64 {
+    f.sensor.rate_hz.unwrap_or(1.0 / file_dt_s(f))
+}
+
+/// The steps a run of a scenario spans, from its resolved file alone (no field built): what
+/// bounds the `t_end_s`, `samples` and `convergence_time_s` a run can report (`--resume` and
+/// `merge` check stored rows against them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSpan {
+    /// Integration step `dt`, s.
+    pub dt_s: f64,
+    /// Planned steps `N = duration / dt`: a run ends at `t_end_s = k dt` with `k <= N`.
+    pub n_steps: u64,
+    /// Steps between samples `m = 1 / (rate dt)`: samples fall on steps `0, m, 2m, ...`, so a
+    /// run that sensed steps `0..=k` delivered at most `floor(k / m) + 1`.
+    pub steps_per_sample: u64,
+}
+
+/// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
+/// `resolve` refuses).
+pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
+    let dt_s = file_dt_s(f);
+    Some(RunSpan {
+        dt_s,
+        n_steps: isotrack_sim::whole_steps(file_duration_s(f), dt_s).ok()?,
+        steps_per_sample: isotrack_sim::whole_steps(1.0 / file_sensor_rate_hz(f), dt_s)
+            .ok()?
+            .max(1),
+    })
+}
+
 /// Every vehicle a scenario can name.
 #[derive(Clone, Debug)]
 pub enum VehicleModel {
@@ -369,7 +411,7 @@ impl Scenario {
         let dt = self.dt_s();
         Sensor::new(
             SensorConfig {
-                rate_hz: s.rate_hz.unwrap_or(1.0 / dt),
+                rate_hz: file_sensor_rate_hz(&self.file),
                 noise_std: s.noise_std.unwrap_or(0.0),
                 delay_s: s.delay_s.unwrap_or(0.0),
                 time_constant_s: s.time_constant_s.unwrap_or(0.0),
@@ -388,7 +430,7 @@ impl Scenario {
 
     /// Integration step, s.
     pub fn dt_s(&self) -> f64 {
-        self.file.sim.dt_s.unwrap_or(0.01)
+        file_dt_s(&self.file)
     }
 
     /// How long the error must stay within the convergence tolerance, up to the end, for a
@@ -398,7 +440,7 @@ impl Scenario {
         let f = &self.file;
         f.metrics
             .convergence_min_dwell_s
-            .unwrap_or(0.1 * f.sim.duration_s.unwrap_or(600.0))
+            .unwrap_or(0.1 * file_duration_s(f))
     }
 
     /// The step plan (durations as step counts).
@@ -406,7 +448,7 @@ impl Scenario {
         let f = &self.file;
         StepPlan::new(
             self.dt_s(),
-            f.sim.duration_s.unwrap_or(600.0),
+            file_duration_s(f),
             f.output.record_rate_hz.unwrap_or(10.0),
             f.metrics.steady_state_fraction.unwrap_or(0.2),
             f.metrics.convergence_tolerance.unwrap_or(0.1),

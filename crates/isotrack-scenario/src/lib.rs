@@ -22,6 +22,7 @@ pub mod load;
 pub mod resolve;
 pub mod schema;
 pub mod sweep;
+pub mod tomltext;
 mod watch;
 
 pub use build::{ControllerModel, Tracker};
