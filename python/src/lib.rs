@@ -439,6 +439,7 @@ fn summary_json(s: &Scenario, origin: &str, r: &RunResult) -> PyResult<String> {
         scenario_path: (!origin.starts_with('<')).then(|| origin.to_string()),
         result: r,
         warnings: &warnings,
+        data_files: isotrack_runs::summary::data_file_digests(s),
         scenario: s.file(),
     };
     isotrack_runs::summary::summary_to_json(&summary)
@@ -664,6 +665,15 @@ pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'
     kinds
 }
 
+/// The SHA-256 of the file at `path`, lowercase hex: isotrack's one content digest
+/// ([`isotrack_runs::files::sha256_file`], also what a run records in `summary.json`'s
+/// `data_files`); `OSError` when it cannot be read.
+#[pyfunction]
+fn file_sha256(py: Python<'_>, path: std::path::PathBuf) -> PyResult<String> {
+    py.detach(|| isotrack_runs::files::sha256_file(&path))
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", path.display())))
+}
+
 /// The isotrack version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -679,6 +689,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::PyEnvBatch>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(file_sha256, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
     m.add_function(wrap_pyfunction!(league::benchmark_json, m)?)?;
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;

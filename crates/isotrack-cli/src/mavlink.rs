@@ -37,11 +37,14 @@ fn link_failure(e: LinkError) -> Failure {
     }
 }
 
+/// Checks that `v`, if given, is a finite number > 0 and not subnormal (`1e-310` s or Hz
+/// divides into infinity), echoed as written.
 fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
     match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => {
-            Err(usage(format!("{flag} must be a number > 0, got {x}")))
-        }
+        Some(x) if !(x.is_finite() && x > 0.0 && x.is_normal()) => Err(usage(format!(
+            "{flag} must be a number > 0 (not subnormal), got {}",
+            Echo(x)
+        ))),
         _ => Ok(()),
     }
 }
@@ -49,9 +52,12 @@ fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
 /// Checks that `v`, if given, is in `[lo, hi]` (a duration beyond `hi` overflows the clocks).
 fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     match v {
-        Some(x) if !(x.is_finite() && (lo..=hi).contains(&x)) => {
-            Err(usage(format!("{flag} must be in [{lo}, {hi}], got {x}")))
-        }
+        Some(x) if !(x.is_finite() && (lo..=hi).contains(&x)) => Err(usage(format!(
+            "{flag} must be in [{}, {}], got {}",
+            Echo(lo),
+            Echo(hi),
+            Echo(x)
+        ))),
         _ => Ok(()),
     }
 }
@@ -185,6 +191,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
                 .map(|p| p.display().to_string()),
             result: &report.result,
             warnings: &report.events,
+            data_files: isotrack_runs::summary::data_file_digests(&scenario),
             scenario: scenario.file(),
         };
         let mut text = summary_to_json(&summary).map_err(|e| cant(&p, e.into()))?;

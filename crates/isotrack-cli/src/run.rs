@@ -181,10 +181,13 @@ pub fn show(args: &ScenarioArgs) -> Result<(), Failure> {
 /// `isotrack check`.
 pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     if let Some(h) = args.tube_halfwidth {
-        if !(h.is_finite() && h > 0.0) {
+        if !(h.is_finite() && h > 0.0 && h.is_normal()) {
             return Err(Failure {
                 code: exit::USAGE,
-                message: format!("--tube-halfwidth must be > 0, got {}", Echo(h)),
+                message: format!(
+                    "--tube-halfwidth must be > 0 (not subnormal), got {}",
+                    Echo(h)
+                ),
             });
         }
     }

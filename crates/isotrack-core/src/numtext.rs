@@ -80,6 +80,33 @@ impl fmt::Display for Echo {
     }
 }
 
+/// A number written into a file that is read back (a TOML value, a CSV cell): the shortest
+/// decimal that reads back to the same `f64` bit for bit, in exponent form (`{:e}`: `1e-300`,
+/// `2.5e17`) when its magnitude is outside `[1e-5, 1e16)` (the rule of the `ryu` crate and of
+/// [`Echo`]: there the exponent form is the shorter one), else positional with at least one
+/// digit after the point (`0.5`, `600.0`), so it stays a float in TOML. Rust's `{}` alone writes
+/// `1e-300` as 300 digits and `1e300` as 301. Non-finite values as Rust writes them (`NaN`,
+/// `inf`; TOML's `nan`/`inf` are the caller's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TomlFloat(pub f64);
+
+impl fmt::Display for TomlFloat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if !x.is_finite() {
+            write!(f, "{x}")
+        } else if x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
+            if x % 1.0 == 0.0 {
+                write!(f, "{x}.0")
+            } else {
+                write!(f, "{x}")
+            }
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
 /// A list of values the user wrote (`[1, 2.5]`), each as [`Echo`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EchoList<'a>(pub &'a [f64]);
@@ -106,6 +133,20 @@ pub fn is_terminal_control(c: char) -> bool {
         '\u{0}'..='\u{8}' | '\u{b}'..='\u{1f}' | '\u{7f}'..='\u{9f}'
         | '\u{61c}' | '\u{200e}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
         | '\u{2066}'..='\u{2069}')
+}
+
+/// Whether `c` is invisible: a Unicode default-ignorable code point (the zero-width space
+/// U+200B, joiners U+200C-U+200D, marks U+200E-U+200F, the bidi controls, the word joiner and
+/// invisible operators U+2060-U+206F, the byte-order mark U+FEFF, the soft hyphen U+00AD,
+/// variation selectors, tags, Hangul fillers, ...). A name holding one looks like another
+/// name (`pi_isoline` and `pi_isoline` + U+200B print alike), so names refuse them.
+pub fn is_invisible(c: char) -> bool {
+    matches!(c,
+        '\u{ad}' | '\u{34f}' | '\u{61c}' | '\u{115f}' | '\u{1160}' | '\u{17b4}' | '\u{17b5}'
+        | '\u{180b}'..='\u{180f}' | '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
+        | '\u{2060}'..='\u{206f}' | '\u{3164}' | '\u{fe00}'..='\u{fe0f}' | '\u{feff}'
+        | '\u{ffa0}' | '\u{fff0}'..='\u{fff8}' | '\u{1bca0}'..='\u{1bca3}'
+        | '\u{1d173}'..='\u{1d17a}' | '\u{e0000}'..='\u{e0fff}')
 }
 
 /// User text for a message, with every [`is_terminal_control`] character escaped: `\x1b` for
@@ -462,6 +503,75 @@ mod tests {
             ("", ""),
         ] {
             assert_eq!(format!("{}", Escaped(raw)), shown);
+        }
+    }
+
+    /// Numbers written back into files: the exponent form outside [1e-5, 1e16) (`1e-300`, not
+    /// 300 digits), positional with a point inside; each reads back bit for bit, and is at most
+    /// 24 characters (17 significant digits, a sign, a point, `e-308`).
+    #[test]
+    fn toml_floats_are_short_and_round_trip() {
+        for (x, shown) in [
+            (1e-300, "1e-300"),
+            (-1e-300, "-1e-300"),
+            (1e300, "1e300"),
+            (5e-324, "5e-324"),
+            (f64::MAX, "1.7976931348623157e308"),
+            (0.1, "0.1"),
+            (600.0, "600.0"),
+            (0.0, "0.0"),
+            (-0.0, "-0.0"),
+            (1e-5, "0.00001"),
+            (9.99e-6, "9.99e-6"),
+            (1e16, "1e16"),
+            (9999999999999998.0, "9999999999999998.0"),
+            (1e-310, "1e-310"),
+            (1.0000001, "1.0000001"),
+        ] {
+            let t = format!("{}", TomlFloat(x));
+            assert_eq!(t, shown);
+            assert!(t.len() <= 24, "{t}");
+            let back: f64 = t.parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{t}");
+        }
+        // Every binade, both signs: bit for bit, at most 24 characters, a point or an exponent.
+        for exponent in 0..0x7ffu64 {
+            for mantissa in [
+                0u64,
+                1,
+                0x8_0000_0000_0001,
+                0xf_ffff_ffff_ffff,
+                0x1_2345_6789_abcd,
+            ] {
+                let x = f64::from_bits((exponent << 52) | mantissa);
+                for x in [x, -x] {
+                    let t = format!("{}", TomlFloat(x));
+                    assert_eq!(t.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{t}");
+                    assert!(t.len() <= 24 && (t.contains('.') || t.contains('e')), "{t}");
+                }
+            }
+        }
+    }
+
+    /// Zero-width and other invisible characters are invisible; letters, spaces, emoji and
+    /// visible punctuation are not.
+    #[test]
+    fn invisible_characters() {
+        for c in [
+            '\u{200b}',
+            '\u{200c}',
+            '\u{200d}',
+            '\u{2060}',
+            '\u{feff}',
+            '\u{ad}',
+            '\u{202e}',
+            '\u{e0041}',
+            '\u{fe0f}',
+        ] {
+            assert!(is_invisible(c), "{c:?}");
+        }
+        for c in ['a', ' ', '_', '|', 'é', '中', '\u{1f600}', '\u{2028}'] {
+            assert!(!is_invisible(c), "{c:?}");
         }
     }
 }

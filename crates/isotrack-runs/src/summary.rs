@@ -3,6 +3,7 @@
 use isotrack_scenario::{Scenario, ScenarioFile};
 use isotrack_sim::RunResult;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The content of `summary.json`.
@@ -18,6 +19,11 @@ pub struct Summary<'a> {
     /// Warnings about the scenario (also printed on stderr): noise through a backward
     /// difference, a sampled loop that `isotrack check` finds unstable.
     pub warnings: &'a [String],
+    /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
+    /// its absolute path ([`data_file_digests`]); left out when there are none. `plot` and
+    /// `report` refuse runs whose files differ (one overwritten in place between them).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub data_files: BTreeMap<String, String>,
     /// The fully resolved scenario.
     pub scenario: &'a ScenarioFile,
 }
@@ -36,6 +42,7 @@ pub fn write_summary(
         scenario_path: scenario_path.map(|p| p.display().to_string()),
         result,
         warnings,
+        data_files: data_file_digests(scenario),
         scenario: scenario.file(),
     };
     let text = summary_to_json(&s).map_err(std::io::Error::other)?;
@@ -48,7 +55,25 @@ pub fn summary_to_json(s: &Summary<'_>) -> serde_json::Result<String> {
     serde_json::to_string_pretty(s)
 }
 
-/// The resolved scenario as TOML (reads back as the same scenario).
+/// The resolved scenario as TOML (reads back as the same scenario, bit for bit; floats in
+/// their shortest form, [`isotrack_scenario::tomltext::to_toml`]).
 pub fn scenario_toml(scenario: &Scenario) -> String {
-    toml::to_string(scenario.file()).unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+    isotrack_scenario::tomltext::to_toml(scenario.file())
+        .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}
+
+/// The SHA-256 of each data file of `scenario`'s field (`field.path`, `field.paths`, absolute
+/// in a resolved scenario), by path ([`crate::files::sha256_file`]); a file that cannot be read
+/// now (gone since the field was built) is left out.
+pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
+    let f = &scenario.file().field;
+    f.path
+        .iter()
+        .chain(f.paths.iter().flatten())
+        .filter_map(|p| {
+            crate::files::sha256_file(Path::new(p))
+                .ok()
+                .map(|d| (p.clone(), d))
+        })
+        .collect()
 }

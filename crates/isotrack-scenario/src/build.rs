@@ -13,6 +13,34 @@ use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarFiel
 use isotrack_sim::{simulate, Oracles, RunResult, Sensor, StepPlan, TraceSink};
 use isotrack_vehicles::{Dubins, DubinsState, FixedWing};
 
+/// The steps a run of a scenario spans, from its resolved file alone (no field built): what
+/// bounds the `t_end_s`, `samples` and `convergence_time_s` a run can report (`--resume` and
+/// `merge` check stored rows against them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSpan {
+    /// Integration step `dt`, s.
+    pub dt_s: f64,
+    /// Planned steps `N = duration / dt`: a run ends at `t_end_s = k dt` with `k <= N`.
+    pub n_steps: u64,
+    /// Steps between samples `m = 1 / (rate dt)`: samples fall on steps `0, m, 2m, ...`, so a
+    /// run that sensed steps `0..=k` delivered at most `floor(k / m) + 1`.
+    pub steps_per_sample: u64,
+}
+
+/// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
+/// `resolve` refuses).
+pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
+    let sim = crate::spec::SimSpec::new(&f.sim).ok()?;
+    let rate_hz = crate::spec::sensor::sensor_config(&f.sensor).ok()?.rate_hz;
+    Some(RunSpan {
+        dt_s: sim.dt_s,
+        n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
+        steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
+            .ok()?
+            .max(1),
+    })
+}
+
 /// Every vehicle a scenario can name.
 #[derive(Clone, Debug)]
 pub enum VehicleModel {

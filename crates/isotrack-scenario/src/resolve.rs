@@ -45,11 +45,30 @@ impl Checker {
     fn positive(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x <= 0.0 {
             self.fail(key, format!("must be > 0, got {}", Echo(x)));
+        } else {
+            self.not_subnormal(key, x);
         }
     }
     fn non_negative(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x < 0.0 {
             self.fail(key, format!("must be >= 0, got {}", Echo(x)));
+        } else {
+            self.not_subnormal(key, x);
+        }
+    }
+    /// Refuses a subnormal `x` (non-zero, below `f64::MIN_POSITIVE` = 2.2e-308 in magnitude):
+    /// no gain, time or length anyone means, and a product or quotient of one underflows to 0
+    /// or overflows (`kp = 1e-310` was accepted as a law that never turns).
+    fn not_subnormal(&mut self, key: &str, x: f64) {
+        if x != 0.0 && x.is_finite() && !x.is_normal() {
+            self.fail(
+                key,
+                format!(
+                    "must not be subnormal (below {} in magnitude), got {}",
+                    Echo(f64::MIN_POSITIVE),
+                    Echo(x)
+                ),
+            );
         }
     }
     /// Rejects every present key of `section` that is not in `allowed` for the chosen

@@ -55,6 +55,8 @@ pub(crate) struct VehicleRun<const TRACE: bool> {
     /// The true field value there (finite).
     value: f64,
     last_valid_step: u64,
+    /// Where the vehicle started.
+    start: Vec2,
     end_pos: Vec2,
     last_row: Option<TraceRow>,
     last_recorded_step: Option<u64>,
@@ -83,6 +85,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
             pose: start,
             value: f64::NAN,
             last_valid_step: 0,
+            start: start.position,
             end_pos: start.position,
             last_row: None,
             last_recorded_step: None,
@@ -160,6 +163,8 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
         if k > 0 {
             self.metrics
                 .add_path((pose.position - self.pose.position).norm());
+            let d = pose.position - self.start;
+            self.metrics.observe_offset_sq(d.dot(d));
         }
         (self.pose, self.value) = (pose, value);
         match self.sensor.observe(t_s, value) {
