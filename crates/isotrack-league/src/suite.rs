@@ -544,11 +544,8 @@ pub fn seed_overrides(task: &Task, seed: u64) -> Vec<String> {
     o
 }
 
-/// Text clipped for messages.
+/// Text from the suite file for messages: escaped, then cut after 80 characters of what is
+/// shown ([`isotrack_core::numtext::Clipped`]; a line feed in a TOML key was printed raw).
 pub(crate) fn clip(s: &str) -> String {
-    if s.chars().count() > 80 {
-        s.chars().take(80).collect::<String>() + "..."
-    } else {
-        s.to_string()
-    }
+    isotrack_core::numtext::Clipped::with_limit(s, 80).to_string()
 }
