@@ -90,10 +90,12 @@ pub struct SitlArgs {
 /// The mode `isotrack fly` switches the vehicle to when a failsafe trips.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FailsafeArg {
-    /// Hold (PX4 AUTO.LOITER).
+    /// Hold (PX4 AUTO.LOITER; ArduCopter/ArduPlane LOITER, ArduRover HOLD).
     Hold,
-    /// Return home (PX4 AUTO.RTL).
+    /// Return home (PX4 AUTO.RTL; ArduPilot RTL).
     Return,
+    /// Loiter (PX4 AUTO.LOITER; ArduPilot LOITER).
+    Loiter,
 }
 
 /// `isotrack fly`.

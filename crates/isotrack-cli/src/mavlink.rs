@@ -6,10 +6,12 @@ use crate::exit;
 use crate::output::{scenario_toml, summary_to_json, Summary, TraceWriter};
 use crate::run::{load, Failure};
 use isotrack_core::numtext::{Echo, Num};
-use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
+use isotrack_mavlink::fly::{
+    run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource,
+};
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
-use isotrack_sim::{NoTrace, TraceSink};
+use isotrack_sim::{NoTrace, RunMetrics, TraceRow, TraceSink};
 use serde::Serialize;
 use std::path::Path;
 
@@ -246,7 +248,24 @@ struct FlySummary<'a> {
     frames_in: u64,
     frames_out: u64,
     junk_datagrams: u64,
+    measurements_out_of_order: u64,
+    measurements_repeated: u64,
+    /// The tracking metrics of the measured error series (`steady_state_max_abs_error`, ...),
+    /// as a simulated run's summary has them.
+    #[serde(flatten)]
+    metrics: &'a RunMetrics,
     scenario: &'a isotrack_scenario::ScenarioFile,
+}
+
+/// `fly --out`'s trace: flushed by the flight at a bounded interval.
+struct FlyTrace(Option<TraceWriter>);
+
+impl TraceSink for FlyTrace {
+    fn record(&mut self, row: &TraceRow) {
+        if let Some(w) = self.0.as_mut() {
+            w.record(row);
+        }
+    }
 }
 
 /// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
@@ -279,6 +298,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     opts.failsafe = match args.failsafe {
         FailsafeArg::Hold => FailsafeAction::Hold,
         FailsafeArg::Return => FailsafeAction::Return,
+        FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
     let _lock = match &args.out {
@@ -291,20 +311,25 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         )?),
         None => None,
     };
-    let mut writer = match &args.out {
+    let mut trace = FlyTrace(match &args.out {
         Some(dir) => {
+            // The scenario first: a flight killed mid-way leaves a directory `plot` reads.
+            let p = dir.join("scenario.toml");
+            isotrack_runs::files::write_atomic(&p, scenario_toml(&scenario).as_bytes())
+                .map_err(|e| cant(&p, e))?;
             let p = dir.join("trace.csv");
             Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
         }
         None => None,
-    };
-    let sink: &mut dyn TraceSink = match writer.as_mut() {
-        Some(w) => w,
-        None => &mut NoTrace,
-    };
+    });
     let log_path = args.out.as_ref().map(|d| d.join("mavlink.tlog"));
     let mut log_error = None;
-    let report = run_fly(&scenario, &opts, sink, &mut |link| {
+    let mut flush = |t: &mut FlyTrace| {
+        if let Some(w) = t.0.as_mut() {
+            w.flush();
+        }
+    };
+    let report = run_fly_flushing(&scenario, &opts, &mut trace, &mut flush, &mut |link| {
         errln!(
             "isotrack fly: companion on {} ({})",
             link.local_addr()?,
@@ -340,7 +365,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     for e in &report.events {
         errln!("isotrack fly: {e}");
     }
-    if let (Some(dir), Some(w)) = (&args.out, writer) {
+    if let (Some(dir), Some(w)) = (&args.out, trace.0) {
         w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
         let s = FlySummary {
             isotrack_version: env!("CARGO_PKG_VERSION"),
@@ -367,13 +392,16 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             frames_in: report.link.frames_in,
             frames_out: report.link.frames_out,
             junk_datagrams: report.link.junk_datagrams,
+            measurements_out_of_order: report.measurements_out_of_order,
+            measurements_repeated: report.measurements_repeated,
+            metrics: &report.metrics,
             scenario: scenario.file(),
         };
+        // At the end, whole or not at all (atomic).
         let p = dir.join("summary.json");
         let text = serde_json::to_string_pretty(&s).map_err(|e| cant(&p, e.into()))?;
-        std::fs::write(&p, text + "\n").map_err(|e| cant(&p, e))?;
-        let p = dir.join("scenario.toml");
-        std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
+        isotrack_runs::files::write_atomic(&p, (text + "\n").as_bytes())
+            .map_err(|e| cant(&p, e))?;
     }
     outln!(
         "end         {} ({} measurements, {} law commands)",
