@@ -46,7 +46,7 @@ impl ArcProjection for CircleArc {
     fn project(&self, p: Vec2) -> Option<ArcPoint> {
         let d = p - self.center_m;
         let n = d.norm();
-        if !(n > 0.0) || !n.is_finite() {
+        if !n.is_finite() || n <= 0.0 {
             return None;
         }
         let mut th = d.y.atan2(d.x);
