@@ -74,7 +74,10 @@ pub struct PolylineArc {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PolylineError {
     /// Fewer than 3 distinct vertices, a non-finite one, or zero length.
-    #[error("a closed isoline needs at least 3 finite vertices and a positive length (got {0} vertices)")]
+    #[error(
+        "a closed isoline needs at least 3 finite vertices and a positive length \
+         (got {0} vertices)"
+    )]
     Degenerate(usize),
 }
 
