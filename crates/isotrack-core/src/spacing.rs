@@ -11,10 +11,11 @@
 //! g_i' = k_v c (g_{i+1} - 2 g_i + g_{i-1}),
 //! ```
 //!
-//! the ring's discrete Laplacian. Its eigenvalues are `-lambda_m`, `lambda_m = 2 - 2 cos(2 pi m/N)`,
-//! `m = 0..N-1` (a circulant matrix: Gray, "Toeplitz and circulant matrices: a review", 2006,
-//! sec. 3.1); `m = 0` is the sum of the gaps, `L`, which is conserved; every other mode decays, the
-//! slowest (`m = 1`) with time constant `1/(k_v c lambda_1)`, so the gaps converge to `L/N`.
+//! the ring's discrete Laplacian. Its eigenvalues are `-lambda_m`,
+//! `lambda_m = 2 - 2 cos(2 pi m/N)`, `m = 0..N-1` (a circulant matrix: Gray, "Toeplitz and
+//! circulant matrices: a review", 2006, sec. 3.1); `m = 0` is the sum of the gaps, `L`, which is
+//! conserved; every other mode decays, the slowest (`m = 1`) with time constant
+//! `1/(k_v c lambda_1)`, so the gaps converge to `L/N`.
 //!
 //! Sampled at the ranging period `T` with a delay `d = (q + f) T` (`q` whole, `0 <= f < 1`), the
 //! speed set from the sample taken at `t_j = jT` is applied from `t_j + d` until the next sample's

@@ -196,7 +196,7 @@ impl IsolineSegments {
             return Vec::new();
         }
         let end = |e: usize| {
-            if e % 2 == 0 {
+            if e.is_multiple_of(2) {
                 segs[e / 2].0
             } else {
                 segs[e / 2].1

@@ -7,7 +7,8 @@
 //! [`complete`](VehicleRun::complete) says so. [`Episode`](crate::Episode) drives one
 //! (`simulate`, a traced run, an agent from outside); the batched loop drives
 //! [`LANES`](crate::LANES) at once, the field and the vehicle step in SIMD lanes; a team of
-//! vehicles sharing one clock and one field would drive a slice of them the same way. So every
+//! vehicles sharing one clock and one field ([`Group`](crate::team::Group)) drives one per
+//! vehicle the same way, the spacing law answering between sense and complete. So every
 //! way to run gives each vehicle the same numbers, bit for bit, and ends it by the same rules.
 //!
 //! The controller is not in it either: between [`sense`](VehicleRun::sense) and

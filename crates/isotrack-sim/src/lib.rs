@@ -19,7 +19,9 @@
 //! sensor, metrics, held command, sample count, end and trace of one vehicle; the vehicle's
 //! state, the clock and the field belong to its driver), whichever way a run is driven:
 //! [`Episode`] (one vehicle: [`simulate`], a traced run, an agent from outside) or
-//! [`simulate_batch`] (up to [`LANES`] vehicles, the field and step 5 in SIMD lanes).
+//! [`simulate_batch`] (up to [`LANES`] vehicles, the field and step 5 in SIMD lanes) or a
+//! [`team`] ([`Group`]: `N` vehicles on one clock, spreading out along one isoline by a spacing
+//! law from neighbour ranges; docs/TEAMS.md).
 #![deny(missing_docs)]
 
 mod batch;

@@ -46,7 +46,7 @@ impl ArcProjection for CircleArc {
     fn project(&self, p: Vec2) -> Option<ArcPoint> {
         let d = p - self.center_m;
         let n = d.norm();
-        if !(n > 0.0) || !n.is_finite() {
+        if !n.is_finite() || n <= 0.0 {
             return None;
         }
         let mut th = d.y.atan2(d.x);
@@ -74,7 +74,10 @@ pub struct PolylineArc {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PolylineError {
     /// Fewer than 3 distinct vertices, a non-finite one, or zero length.
-    #[error("a closed isoline needs at least 3 finite vertices and a positive length (got {0} vertices)")]
+    #[error(
+        "a closed isoline needs at least 3 finite vertices and a positive length \
+         (got {0} vertices)"
+    )]
     Degenerate(usize),
 }
 

@@ -122,6 +122,8 @@ struct Discovery {
 pub struct Group<'a, X, C> {
     n: usize,
     k: u64,
+    /// Vehicles whose run goes on.
+    running: usize,
     plan: StepPlan,
     cfg: TeamConfig,
     states: Vec<[X; LANES]>,
@@ -186,10 +188,12 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             RingMode::Listed => None,
             RingMode::Discover(d) => {
                 let ok = |x: f64| x.is_finite() && x >= 0.0;
-                if !(ok(d.settle_s) && d.probe_s > 0.0 && ok(d.probe_s))
-                    || !d.probe_speed_delta_mps.is_finite()
-                    || d.probe_speed_delta_mps == 0.0
-                {
+                let valid = ok(d.settle_s)
+                    && d.probe_s > 0.0
+                    && ok(d.probe_s)
+                    && d.probe_speed_delta_mps.is_finite()
+                    && d.probe_speed_delta_mps != 0.0;
+                if !valid {
                     return Err(TeamError::OutOfRange {
                         key: "ring.discover",
                         value: d.probe_s,
@@ -240,6 +244,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         Ok(Self {
             n,
             k: 0,
+            running: n,
             plan: *plan,
             cfg,
             states,
@@ -274,25 +279,39 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
 
     /// Whether any vehicle's run goes on.
     pub fn is_running(&self) -> bool {
-        self.runs.iter().any(|r| r.is_running())
+        self.running > 0
     }
 
-    /// Runs every step to the end.
+    /// Runs every step to the end (the loop compiled for AVX-512, AVX2 and the baseline, one
+    /// picked at run time, as the batched loop is: the same numbers on each).
     pub fn drive<F, V, S>(&mut self, field: &F, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
     where
         F: ScalarField,
         V: SpeedCommand<State = X>,
         S: TraceSink,
     {
-        while self.is_running() {
-            self.step(field, vehicle, oracles, sinks);
-        }
+        drive_lanes(self, field, vehicle, oracles, sinks);
     }
 
     /// One team step (module docs). `sinks` has one trace sink per vehicle (fewer: the rest
     /// record nothing).
     pub fn step<F, V, S>(&mut self, field: &F, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
     where
+        F: ScalarField,
+        V: SpeedCommand<State = X>,
+        S: TraceSink,
+    {
+        self.step_inline(field, vehicle, oracles, sinks);
+    }
+
+    #[inline(always)]
+    fn step_inline<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sinks: &mut [S],
+    ) where
         F: ScalarField,
         V: SpeedCommand<State = X>,
         S: TraceSink,
@@ -405,17 +424,20 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             }
         }
         // 5. Hold the speed commands and move, in lanes.
+        let mut running = 0;
         for (c, chunk) in self.states.iter_mut().enumerate() {
             let mut w = [0.0; LANES];
             for l in 0..LANES.min(n - c * LANES) {
                 let i = c * LANES + l;
                 if self.runs[i].is_running() {
                     vehicle.command_speed(&mut chunk[l], self.speed_cmd[i]);
+                    running += 1;
                 }
                 w[l] = self.omega[i];
             }
             vehicle.step_lanes(chunk, &w, dt);
         }
+        self.running = running;
         self.k += 1;
     }
 
@@ -586,6 +608,31 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             team: self.metrics.as_ref().map(|m| m.finish()),
             ring: self.ring,
         }
+    }
+}
+
+/// [`Group::drive`]'s loop, compiled for each target (the lanes' `sin_cos` and the field's
+/// formula vectorise wider with AVX2 / AVX-512; no fused multiply-add, so the same numbers).
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "aarch64+neon"
+))]
+fn drive_lanes<X, C, F, V, S>(
+    g: &mut Group<'_, X, C>,
+    field: &F,
+    vehicle: &V,
+    oracles: &Oracles<'_>,
+    sinks: &mut [S],
+) where
+    X: Clone,
+    C: IsolineController,
+    F: ScalarField,
+    V: SpeedCommand<State = X>,
+    S: TraceSink,
+{
+    while g.is_running() {
+        g.step_inline(field, vehicle, oracles, sinks);
     }
 }
 

@@ -124,7 +124,7 @@ impl Ranging {
         if !(cfg.noise_std_m >= 0.0 && cfg.noise_std_m.is_finite()) {
             return Err(bad("noise_std_m", cfg.noise_std_m, "finite and >= 0"));
         }
-        if !(cfg.max_range_m > 0.0) {
+        if cfg.max_range_m.is_nan() || cfg.max_range_m <= 0.0 {
             return Err(bad("max_range_m", cfg.max_range_m, "> 0"));
         }
         if !(0.0..=1.0).contains(&cfg.dropout_probability) {

@@ -156,7 +156,7 @@ impl RateFit {
             return None;
         }
         let den = self.n * self.stt - self.st * self.st;
-        if !(den > 0.0) {
+        if den.is_nan() || den <= 0.0 {
             return None;
         }
         Some((
