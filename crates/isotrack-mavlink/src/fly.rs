@@ -365,20 +365,7 @@ struct Flight<'a, S: ?Sized> {
     was_armed: bool,
     next_control: Instant,
     control_tries: u32,
-    // Positions (the fence, the trace; never the law).
-    /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
-    /// no `LOCAL_POSITION_NED` has come.
-    global_origin: Option<crate::geo::Home>,
-    /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
-    local_seen: bool,
-    pos: Option<(f64, f64)>,
-    /// When the last finite position arrived.
-    position_at: Option<Instant>,
-    home: Option<(f64, f64)>,
-    home_local: bool,
-    altitude_m: Option<f64>,
-    altitude_target_m: Option<f64>,
-    airspeed_mps: Option<f64>,
+    tel: Telemetry,
     // The sensor.
     lines: Option<UdpSocket>,
     wanted: Vec<u8>,
@@ -390,7 +377,34 @@ struct Flight<'a, S: ?Sized> {
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
     queue: VecDeque<(u32, f64)>,
-    // The law's answers.
+    ans: Answers,
+    next_setpoint: Instant,
+    next_heartbeat: Instant,
+}
+
+/// The vehicle's positions, altitude and airspeed as received (the fence, the trace, the fixed
+/// wing's altitude and airspeed holds; never the law).
+#[derive(Default)]
+struct Telemetry {
+    /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
+    /// no `LOCAL_POSITION_NED` has come.
+    global_origin: Option<crate::geo::Home>,
+    /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
+    local_seen: bool,
+    pos: Option<(f64, f64)>,
+    /// When the last finite position arrived.
+    position_at: Option<Instant>,
+    /// The fence's centre.
+    home: Option<(f64, f64)>,
+    home_local: bool,
+    altitude_m: Option<f64>,
+    altitude_target_m: Option<f64>,
+    airspeed_mps: Option<f64>,
+}
+
+/// The law's answers so far.
+#[derive(Default)]
+struct Answers {
     /// The command in force (None: neutral, before the law has control).
     current: Option<f64>,
     last_answer_ms: Option<u32>,
@@ -398,12 +412,12 @@ struct Flight<'a, S: ?Sized> {
     samples: u64,
     t_first: Option<f64>,
     t_last: Option<f64>,
+    /// Vehicle time of the first measurement answered in control.
     t_control: Option<f64>,
+    /// When the companion got control (its own clock).
     first_wall: Option<Instant>,
     out_of_order: u64,
     repeated: u64,
-    next_setpoint: Instant,
-    next_heartbeat: Instant,
 }
 
 /// Flies `scenario`'s law over `opts.url`, recording one trace row per answered measurement
@@ -441,16 +455,16 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
     Ok(FlyReport {
         end,
         metrics: f.record.metrics(completed),
-        commands: f.commands,
-        samples: f.samples,
-        t_first_s: f.t_first,
-        t_last_s: f.t_last,
+        commands: f.ans.commands,
+        samples: f.ans.samples,
+        t_first_s: f.ans.t_first,
+        t_last_s: f.ans.t_last,
         events: f.events,
         failsafe_acknowledged: acknowledged,
         way_out_commanded: way_out,
         link: f.link.stats,
-        measurements_out_of_order: f.out_of_order,
-        measurements_repeated: f.repeated,
+        measurements_out_of_order: f.ans.out_of_order,
+        measurements_repeated: f.ans.repeated,
     })
 }
 
@@ -463,8 +477,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         flush: &'a mut dyn FnMut(&mut S),
         link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
     ) -> Result<Self, FlyError> {
-        let law = scenario.tracker();
-        if law.needs_ground_truth() {
+        if scenario.tracker().needs_ground_truth() {
             return Err(FlyError::Scenario(
                 "controller.kind = \"gradient_reference\" needs the field's gradient at the vehicle: it cannot fly on measurements alone".into(),
             ));
@@ -472,25 +485,41 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
         let mut link = Link::open(&opts.url, opts.system_id, 191).map_err(FlyError::Link)?;
         link_setup(&mut link).map_err(FlyError::Io)?;
-        let (lines, wanted) = match &opts.sensor {
+        let lines = match &opts.sensor {
             SensorSource::UdpLines(a) => {
                 let s = UdpSocket::bind(a)
                     .map_err(|e| FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {e}"))))?;
                 s.set_nonblocking(true).map_err(FlyError::Io)?;
-                (Some(s), Vec::new())
+                Some(s)
             }
-            SensorSource::Named(n) => (None, n.as_bytes().to_vec()),
+            SensorSource::Named(_) => None,
+        };
+        Ok(Self::start(scenario, opts, sink, flush, link, lines))
+    }
+
+    /// The flight's state at its start, on an open link and sensor.
+    fn start(
+        scenario: &Scenario,
+        opts: &'a FlyOptions,
+        sink: &'a mut S,
+        flush: &'a mut dyn FnMut(&mut S),
+        link: Link,
+        lines: Option<UdpSocket>,
+    ) -> Self {
+        let wanted = match &opts.sensor {
+            SensorSource::Named(n) => n.as_bytes().to_vec(),
+            SensorSource::UdpLines(_) => Vec::new(),
         };
         let opts_udp = lines.is_some();
         let planned_s = opts
             .max_duration_s
             .unwrap_or(scenario.file().sim.duration_s.unwrap_or(600.0));
         let now = Instant::now();
-        Ok(Self {
+        Self {
             link,
             opts,
             transport: Transport::of(scenario),
-            law,
+            law: scenario.tracker(),
             level: scenario.level(),
             sink,
             flush,
@@ -520,15 +549,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             was_armed: false,
             next_control: now,
             control_tries: 0,
-            global_origin: None,
-            local_seen: false,
-            pos: None,
-            position_at: None,
-            home: None,
-            home_local: false,
-            altitude_m: None,
-            altitude_target_m: None,
-            airspeed_mps: None,
+            tel: Telemetry::default(),
             lines,
             wanted,
             partial: Vec::new(),
@@ -545,19 +566,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             },
             clock_start: now,
             queue: VecDeque::new(),
-            current: None,
-            last_answer_ms: None,
-            commands: Vec::new(),
-            samples: 0,
-            t_first: None,
-            t_last: None,
-            t_control: None,
-            first_wall: None,
-            out_of_order: 0,
-            repeated: 0,
+            ans: Answers::default(),
             next_setpoint: now,
             next_heartbeat: now,
-        })
+        }
     }
 
     fn event(&mut self, what: String) {
@@ -643,7 +655,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let now = Instant::now();
         if self.target.is_some() && now >= self.next_setpoint {
-            self.setpoint(self.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
             self.next_setpoint = now + self.period;
         }
         if now.duration_since(self.last_link) > self.timeout {
@@ -657,7 +669,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.event(what);
             return Ok(Some(FlyEnd::SensorClockJump));
         }
-        if let (Some(max), Some(w)) = (self.opts.max_duration_s, self.first_wall) {
+        if let (Some(max), Some(w)) = (self.opts.max_duration_s, self.ans.first_wall) {
             // The companion's own clock too: a vehicle clock that stalls cannot stretch the run.
             if now.duration_since(w).as_secs_f64() >= max {
                 self.event(format!(
@@ -706,18 +718,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let Some((sys, comp)) = self.target else {
             return Ok(());
         };
-        let w = self.current.unwrap_or(0.0);
+        let w = self.ans.current.unwrap_or(0.0);
         let ignore_rates = AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
             | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE;
         let (q, yaw_rate, thrust, mask) = match self.transport {
             Transport::FixedWing { airspeed_mps } => {
                 let roll = wire::roll_of_turn_rate(w, airspeed_mps);
-                let pitch =
-                    crate::setpoint::pitch_of_altitude(self.altitude_target_m, self.altitude_m);
+                let pitch = crate::setpoint::pitch_of_altitude(
+                    self.tel.altitude_target_m,
+                    self.tel.altitude_m,
+                );
                 (
                     crate::setpoint::quaternion_of_roll_pitch(roll, pitch),
                     0.0,
-                    crate::setpoint::thrust_of_airspeed(airspeed_mps, self.airspeed_mps) as f32,
+                    crate::setpoint::thrust_of_airspeed(airspeed_mps, self.tel.airspeed_mps) as f32,
                     ignore_rates
                         | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE,
                 )
@@ -804,7 +818,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// `timeout_s`, positions that stop, or farther than `fence_m` from the first one.
     fn check_fence(&mut self) -> Option<FlyEnd> {
         let timeout_s = self.opts.timeout_s;
-        if let (Some(f), None, true) = (self.opts.fence_m, self.pos, self.target.is_some()) {
+        if let (Some(f), None, true) = (self.opts.fence_m, self.tel.pos, self.target.is_some()) {
             if self.clock_start.elapsed() > self.timeout {
                 self.event(format!(
                     "fence: no position from the vehicle for {timeout_s} s, the fence of {f} m cannot be kept"
@@ -812,7 +826,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 return Some(FlyEnd::Fence);
             }
         }
-        if let (Some(f), Some(at)) = (self.opts.fence_m, self.position_at) {
+        if let (Some(f), Some(at)) = (self.opts.fence_m, self.tel.position_at) {
             // The fence never silently switches off: positions that stop (or turn non-finite,
             // which are dropped) end the flight.
             if at.elapsed() > self.timeout {
@@ -822,14 +836,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 return Some(FlyEnd::Fence);
             }
         }
-        if self.local_seen && !self.home_local {
+        if self.tel.local_seen && !self.tel.home_local {
             // Positions were projected from GLOBAL_POSITION_INT: the fence re-anchors on the
             // first local one.
-            self.home_local = true;
-            self.home = None;
+            self.tel.home_local = true;
+            self.tel.home = None;
         }
-        let p = self.pos?;
-        let h = *self.home.get_or_insert(p);
+        let p = self.tel.pos?;
+        let h = *self.tel.home.get_or_insert(p);
         let f = self.opts.fence_m?;
         let d = ((p.0 - h.0).powi(2) + (p.1 - h.1).powi(2)).sqrt();
         if d > f {
@@ -855,7 +869,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if self.active {
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
-            self.first_wall.get_or_insert_with(Instant::now);
+            self.ans.first_wall.get_or_insert_with(Instant::now);
         } else if self.in_control {
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
@@ -890,7 +904,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// `take_control`'s steps: nothing is armed before the sensor and the position are there
     /// (each within `timeout_s`); then arm, then OFFBOARD.
     fn take_control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
-        let ready = self.clock.newest_ms.is_some() && self.pos.is_some();
+        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
         if self.target.is_none() {
             return Ok(None);
         }
@@ -925,7 +939,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 return Ok(Some(FlyEnd::ControlRefused));
             };
             // PX4 wants setpoints before the switch.
-            self.setpoint(self.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
             self.offboard_sent = true;
             self.command(MavCmd::MAV_CMD_DO_SET_MODE, p)?;
         }
@@ -944,7 +958,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(None);
         }
         while let Some((ms, v)) = self.queue.pop_front() {
-            match self.last_answer_ms {
+            match self.ans.last_answer_ms {
                 Some(last) if ms < last => self.out_of_order(ms, last),
                 Some(last) if ms == last => self.repeat(ms)?,
                 _ => {
@@ -959,8 +973,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// A measurement older than one answered: dropped (counted, logged once).
     fn out_of_order(&mut self, ms: u32, last: u32) {
-        self.out_of_order += 1;
-        if self.out_of_order == 1 {
+        self.ans.out_of_order += 1;
+        if self.ans.out_of_order == 1 {
             self.event(format!(
                 "a measurement stamped {} s came after one stamped {} s: out of order, dropped (never given to the law; counted in measurements_out_of_order, logged once)",
                 wire::time_s(ms),
@@ -972,8 +986,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// A repeat (the vehicle lost the answer?): the same answer again, within a UDP sensor's
     /// `setpoint_rate_hz`; counted, logged once.
     fn repeat(&mut self, ms: u32) -> Result<(), FlyError> {
-        self.repeated += 1;
-        if self.repeated == 1 {
+        self.ans.repeated += 1;
+        if self.ans.repeated == 1 {
             self.event(format!(
                 "the measurement stamped {} s came again: answered again, not given to the law twice (counted in measurements_repeated, logged once)",
                 wire::time_s(ms)
@@ -992,11 +1006,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             t_s: wire::time_s(ms),
             value: v,
         };
-        self.t_first.get_or_insert(m.t_s);
+        self.ans.t_first.get_or_insert(m.t_s);
         // --max-duration-s counts from the first measurement the law answers in control
         // (vehicle time).
         if self.active {
-            let first = *self.t_control.get_or_insert(m.t_s);
+            let first = *self.ans.t_control.get_or_insert(m.t_s);
             if let Some(max) = self.opts.max_duration_s {
                 if m.t_s - first >= max {
                     self.event(format!(
@@ -1007,8 +1021,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 }
             }
         }
-        self.samples += 1;
-        self.t_last = Some(m.t_s);
+        self.ans.samples += 1;
+        self.ans.t_last = Some(m.t_s);
         if self.active {
             let w = self.law.update(&m);
             if !w.is_finite() {
@@ -1018,13 +1032,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 ));
                 return Ok(Some(FlyEnd::LawNotFinite));
             }
-            self.commands.push((ms, w));
-            self.current = Some(w);
+            self.ans.commands.push((ms, w));
+            self.ans.current = Some(w);
             self.record.observe(m.t_s, v - self.level, w);
         } else {
-            self.current = None;
+            self.ans.current = None;
         }
-        self.last_answer_ms = Some(ms);
+        self.ans.last_answer_ms = Some(ms);
         // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for it); a UDP
         // sensor's answers keep to --setpoint-rate-hz (the periodic setpoint carries the newest
         // command): a fast sensor does not multiply the setpoints.
@@ -1039,7 +1053,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             heading_rad: f64::NAN,
             s: v,
             error: v - self.level,
-            omega_radps: self.current.unwrap_or(0.0),
+            omega_radps: self.ans.current.unwrap_or(0.0),
             s_measured: Some(v),
             telemetry: None,
         };
@@ -1080,13 +1094,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             MavMessage::COMMAND_ACK(a) if !self.in_control => self.acknowledged(a),
             // A non-finite position is no position (it would switch the fence off).
             MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
-                self.local_seen = true;
+                self.tel.local_seen = true;
                 if p.z.is_finite() {
                     self.altitude(-p.z as f64);
                 }
                 self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
             }
-            MavMessage::GLOBAL_POSITION_INT(g) if !self.local_seen => self.global_position(g),
+            MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => self.global_position(g),
             MavMessage::STATUSTEXT(t)
                 if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
             {
@@ -1098,7 +1112,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.record.heading(a.time_boot_ms, heading);
             }
             MavMessage::VFR_HUD(v) if v.airspeed.is_finite() => {
-                self.airspeed_mps = Some(v.airspeed as f64);
+                self.tel.airspeed_mps = Some(v.airspeed as f64);
             }
             _ => {}
         }
@@ -1193,7 +1207,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     fn global_position(&mut self, g: &GLOBAL_POSITION_INT_DATA) {
         let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
         if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
-            let o = *self.global_origin.get_or_insert(crate::geo::Home {
+            let o = *self.tel.global_origin.get_or_insert(crate::geo::Home {
                 lat_deg: lat,
                 lon_deg: lon,
                 alt_m: 0.0,
@@ -1207,16 +1221,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// the altitude the fixed wing's pitch holds (not one from before: a vehicle's first
     /// reports may not be its flight's).
     fn altitude(&mut self, h_m: f64) {
-        self.altitude_m = Some(h_m);
-        if self.in_control && self.altitude_target_m.is_none() {
-            self.altitude_target_m = Some(h_m);
+        self.tel.altitude_m = Some(h_m);
+        if self.in_control && self.tel.altitude_target_m.is_none() {
+            self.tel.altitude_target_m = Some(h_m);
         }
     }
 
     /// A finite position (x east, y north), m, stamped `ms`.
     fn position(&mut self, ms: u32, p: (f64, f64)) {
-        self.position_at = Some(Instant::now());
-        self.pos = Some(p);
+        self.tel.position_at = Some(Instant::now());
+        self.tel.pos = Some(p);
         self.record.position(ms, p, self.in_control);
     }
 

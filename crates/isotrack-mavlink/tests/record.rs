@@ -149,9 +149,9 @@ fn trace_rows_have_the_position_of_their_time() {
 
 /// The metrics are the library's on the measured error: with `--max-duration-s` 10 and 20
 /// measurements 0.5 s apart (the default scenario samples every 10 ms step: the sampling
-/// period of the metrics), the steady-state window (the last 20 % of the planned 10 s: steps
-/// >= 800) holds measurements 16 to 19, and the control effort sums each command but the last
-/// over one sampling period (0.01 s).
+/// period of the metrics), the steady-state window (the last 20 % of the planned 10 s: from
+/// step 800) holds measurements 16 to 19, and the control effort sums each command but the
+/// last over one sampling period (0.01 s).
 #[test]
 fn metrics_are_of_the_measured_error() {
     let s = load_scenario(None, &[]).unwrap();
