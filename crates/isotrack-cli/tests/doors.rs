@@ -595,3 +595,53 @@ fn subnormal_gains_are_refused_naming_the_key() {
     let o = isotrack(&["show", "--set", "controller.ki=0.0"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+/// Issue 30 (doors30a), item 8, found by the hunt: command-line values that must be > 0
+/// accepted a subnormal (`fly --timeout-s 1e-310`: a timeout of no time at all;
+/// `check --tube-halfwidth 1e-310`, `interpolate --idw-power 1e-310`), and `sitl`/`fly`
+/// echoed the value with Rust's `{}`: `--speedup 1e-300` as 300 digits. Each is refused (64)
+/// with the value echoed as written.
+#[test]
+fn subnormal_command_line_values_are_refused_and_echoed_short() {
+    let d = tempfile::tempdir().unwrap();
+    let link = "udpout:127.0.0.1:9";
+    let stations = write(d.path(), "st.csv", "x_m,y_m,value\n0,0,1\n10,0,2\n0,10,3\n");
+    let out = d.path().join("g.csv").display().to_string();
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec!["fly", "--mavlink", link, "--timeout-s", "1e-310"],
+            "--timeout-s",
+        ),
+        (
+            vec!["fly", "--mavlink", link, "--max-duration-s", "1e-310"],
+            "--max-duration-s",
+        ),
+        (
+            vec!["sitl", "--mavlink", link, "--speedup", "1e-300"],
+            "--speedup",
+        ),
+        (
+            vec!["check", "--tube-halfwidth", "1e-310"],
+            "--tube-halfwidth",
+        ),
+        (
+            vec![
+                "interpolate",
+                &stations,
+                "--value-column",
+                "value",
+                "--idw-power",
+                "1e-310",
+                "--out",
+                &out,
+            ],
+            "--idw-power",
+        ),
+    ];
+    for (args, flag) in cases {
+        let o = isotrack(&args);
+        let value = args[args.iter().position(|a| *a == flag).unwrap() + 1];
+        assert_fails(&o, 64, &[flag, &format!("got {value}")]);
+        assert!(stderr(&o).len() < 400, "{}", stderr(&o));
+    }
+}
