@@ -251,6 +251,17 @@ fn suite_errors_are_located_and_seeds_disjoint() {
         .contains("length_m"));
 }
 
+/// Issue 30: a line feed in a suite's TOML key (`vary."a\nerror: forged"`) is echoed escaped,
+/// so the message stays one line; it was printed raw, starting a line of the file's author.
+#[test]
+fn suite_keys_are_echoed_on_one_line() {
+    let dir = scenarios();
+    let text = "name = \"x\"\nversion = 1\ncontrollers = [\"pid\"]\ntuning_seeds = [1]\nscoring_seeds = [2]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\nvary = { \"k\\nerror: forged\" = { uniform = [2.0, 1.0] } }\n";
+    let e = Suite::parse(text, "lf.toml", &dir).unwrap_err();
+    assert!(e.message.contains("vary k\\x0aerror: forged"), "{e}");
+    assert!(!e.to_string().contains('\n'), "{e}");
+}
+
 /// A seed's draws: the same for the same seed, within the uniform bounds, different seeds
 /// different; `sim.seed` is the seed.
 #[test]

@@ -969,6 +969,35 @@ mod tests {
         }
     }
 
+    /// Issue 30: a line feed in a unit read from the file (`units = "ft\nerror: forged"`) is
+    /// shown escaped: the error stays one line, where the line feed once reached the console.
+    #[test]
+    fn text_from_the_file_is_shown_on_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("lf.nc");
+        let mut ds = DataSet::new();
+        ds.add_fixed_dim("y", 3).unwrap();
+        ds.add_fixed_dim("x", 4).unwrap();
+        ds.add_var_f64("y", &["y"]).unwrap();
+        ds.add_var_attr_string("y", "units", "m").unwrap();
+        ds.add_var_f64("x", &["x"]).unwrap();
+        ds.add_var_attr_string("x", "units", "ft\nerror: forged")
+            .unwrap();
+        ds.add_var_f64("v", &["y", "x"]).unwrap();
+        let mut w = FileWriter::create_new(&p).unwrap();
+        w.set_def(&ds, Version::Classic, 0).unwrap();
+        w.write_var_f64("y", &[0.0, 1.0, 2.0]).unwrap();
+        w.write_var_f64("x", &[0.0, 1.0, 2.0, 3.0]).unwrap();
+        w.write_var_f64("v", &[0.0; 12]).unwrap();
+        w.close().unwrap();
+        let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
+        assert!(e.contains("units `ft\\x0aerror: forged`"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        // The path too, and any message (a reader crate's error quoting the file).
+        let e = LoadError::new(Path::new("a\nb.nc"), None, "c\rd\ne").to_string();
+        assert_eq!(e, "a\\x0ab.nc: c\\x0dd\\x0ae");
+    }
+
     #[test]
     fn cf_time_units_by_name() {
         for (u, s) in [
