@@ -803,7 +803,9 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     let need_s = tau
         .max(2.0 * osc.unwrap_or(0.0))
         .max(MIN_HALF_SAMPLES * period_s);
-    if cell.status.stable().is_some() && !(half_s >= need_s) {
+    // A NaN need (no time scale) counts as too short: judged only when the half covers it.
+    let covered = half_s.partial_cmp(&need_s).is_some_and(|o| o.is_ge());
+    if cell.status.stable().is_some() && !covered {
         let judged = p.behaviour.as_str();
         p.behaviour = Behaviour::Undetermined;
         p.detail = format!(
