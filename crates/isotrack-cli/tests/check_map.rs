@@ -679,7 +679,8 @@ fn counts_are_canonical_ranges_normal_and_titles_bounded() {
         "--out",
         o,
     ]);
-    assert_fails(&r, 64, &["controller.kp", "subnormal"]);
+    // A subnormal gain is an invalid scenario (65), refused by `resolve` before the map.
+    assert_fails(&r, 65, &["controller.kp", "subnormal"]);
     let title: String = std::iter::once('T')
         .chain(std::iter::once('\u{1b}'))
         .chain("x".repeat(5000).chars())
