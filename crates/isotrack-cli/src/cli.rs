@@ -66,7 +66,8 @@ pub struct SitlArgs {
     /// The scenario.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// The link: `udpin:HOST:PORT` (listen; answer whoever writes) or `udpout:HOST:PORT`.
+    /// The link: `udpin:HOST:PORT` (listen; answer whoever writes), `udpout:HOST:PORT`,
+    /// `tcpin:HOST:PORT` (listen), `tcpout:HOST:PORT` or `serial:DEVICE:BAUD`.
     #[arg(long, value_name = "URL")]
     pub mavlink: String,
     /// Simulated seconds per wall-clock second (default 1: real time).
@@ -79,7 +80,7 @@ pub struct SitlArgs {
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
     /// `--lockstep`: end the run when nothing came from the companion (or anyone) for S
-    /// seconds of wall time.
+    /// seconds of wall time. Also: a peer of `udpin:`/`tcpin:` silent this long is dropped.
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub timeout_s: f64,
     /// Write the simulation's own `trace.csv`, `summary.json` and `scenario.toml` into DIR.
@@ -104,7 +105,8 @@ pub struct FlyArgs {
     /// The scenario (its controller is the law flown).
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// The link to the autopilot: `udpin:HOST:PORT` or `udpout:HOST:PORT`.
+    /// The link to the autopilot: `udpin:HOST:PORT`, `udpout:HOST:PORT`, `tcpin:HOST:PORT`,
+    /// `tcpout:HOST:PORT` or `serial:DEVICE:BAUD`.
     #[arg(long, value_name = "URL")]
     pub mavlink: String,
     /// The measurement: a NAMED_VALUE_FLOAT name (`ISO_S`, or `mavlink:NAME`), or

@@ -10,7 +10,7 @@ use isotrack_mavlink::fly::{
     run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource,
 };
 use isotrack_mavlink::link::LinkError;
-use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
+use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
 use isotrack_sim::{NoTrace, RunMetrics, TraceRow, TraceSink};
 use serde::Serialize;
 use std::path::Path;
@@ -35,6 +35,14 @@ fn link_failure(e: LinkError) -> Failure {
         LinkError::Io(m) => Failure {
             code: exit::OSERR,
             message: m,
+        },
+        LinkError::Device(m) => Failure {
+            code: exit::NOINPUT,
+            message: format!("--mavlink {m}"),
+        },
+        LinkError::Unavailable(m) => Failure {
+            code: exit::UNAVAILABLE,
+            message: format!("--mavlink {m}"),
         },
     }
 }
@@ -146,8 +154,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         Some(w) => w,
         None => &mut NoTrace,
     };
-    let report = run_sitl(&scenario, &opts, sink, &mut |a| {
-        errln!("isotrack sitl: vehicle on {a} ({})", args.mavlink);
+    let report = run_sitl_on(&scenario, &opts, sink, &mut |l| {
+        errln!(
+            "isotrack sitl: vehicle on {} ({})",
+            l.describe(),
+            args.mavlink
+        );
     })
     .map_err(|e| match e {
         SitlError::Link(l) => link_failure(l),
@@ -209,11 +221,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
     }
     outln!(
-        "outcome     {} at t = {} s ({} samples, {} setpoints refused)",
+        "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",
         cut.as_ref().map_or(report.result.outcome.as_str(), |c| c.0),
         Num(report.result.t_end_s),
         report.result.samples,
         report.setpoints_refused,
+        report.setpoints_out_of_order,
     );
     if report.interrupted {
         return Err(Failure {
@@ -332,7 +345,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     let report = run_fly_flushing(&scenario, &opts, &mut trace, &mut flush, &mut |link| {
         errln!(
             "isotrack fly: companion on {} ({})",
-            link.local_addr()?,
+            link.describe(),
             args.mavlink
         );
         if let Some(p) = &log_path {

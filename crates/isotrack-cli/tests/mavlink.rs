@@ -25,9 +25,9 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
     let out = "udpout:127.0.0.1:9";
     for (args, code, needle) in [
         (
-            vec!["fly", "--mavlink", "tcpout:127.0.0.1:5760"],
+            vec!["fly", "--mavlink", "udp:127.0.0.1:5760"],
             64,
-            "only UDP",
+            "unknown link kind `udp`",
         ),
         (vec!["fly", "--mavlink", "nonsense"], 64, "expected udpin"),
         (

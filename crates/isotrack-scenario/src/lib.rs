@@ -35,7 +35,7 @@ pub use load::{
 };
 pub use schema::ScenarioFile;
 
-use field::{build_field_noting, FieldModel, IsolineOracle};
+use field::{build_field_located, FieldModel, IsolineOracle, LonLatFrame};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -59,6 +59,8 @@ pub struct Scenario {
     /// The `[field]` keys its files filled in (geometry, units), not the user's: a variant
     /// that reads another file drops them, so that the new file's own are used.
     file_filled_keys: Arc<Vec<String>>,
+    /// Where a lon/lat grid's local metres are on the Earth ([`field::build_field_located`]).
+    lonlat: Option<LonLatFrame>,
 }
 
 /// The keys set in `after` but not in `before` (`path`/`paths`, made absolute, excepted).
@@ -101,8 +103,9 @@ impl Scenario {
         let seed = spec::SimSpec::new(&file.sim).map_err(|i| vec![i])?.seed;
         let mut notes = Vec::new();
         let given = file.field.clone();
-        let field =
-            build_field_noting(&mut file.field, base_dir, seed, &mut notes).map_err(|i| vec![i])?;
+        let mut lonlat = None;
+        let field = build_field_located(&mut file.field, base_dir, seed, &mut notes, &mut lonlat)
+            .map_err(|i| vec![i])?;
         let filled = filled_keys(&given, &file.field);
         field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
@@ -117,6 +120,7 @@ impl Scenario {
             isoline: Arc::new(OnceLock::new()),
             field_notes: Arc::new(notes),
             file_filled_keys: Arc::new(filled),
+            lonlat,
         })
     }
 
@@ -166,6 +170,7 @@ impl Scenario {
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
+        let mut lonlat = self.lonlat;
         let (field, field_notes, file_filled_keys) = if file.field == self.file.field && !seeded {
             (
                 self.field.clone(),
@@ -178,8 +183,14 @@ impl Scenario {
                 .seed;
             let mut notes = Vec::new();
             let given = file.field.clone();
-            let field = build_field_noting(&mut file.field, Path::new("."), seed, &mut notes)
-                .map_err(|i| located(vec![i]))?;
+            let field = build_field_located(
+                &mut file.field,
+                Path::new("."),
+                seed,
+                &mut notes,
+                &mut lonlat,
+            )
+            .map_err(|i| located(vec![i]))?;
             let mut filled = filled_keys(&given, &file.field);
             if !new_source {
                 filled.extend(self.file_filled_keys.iter().cloned());
@@ -211,6 +222,7 @@ impl Scenario {
             isoline,
             field_notes,
             file_filled_keys,
+            lonlat,
         })
     }
 
@@ -241,7 +253,14 @@ impl Scenario {
             isoline: self.isoline.clone(),
             field_notes: self.field_notes.clone(),
             file_filled_keys: self.file_filled_keys.clone(),
+            lonlat: self.lonlat,
         })
+    }
+
+    /// Where the field's local metres are on the Earth, when its file is a longitude/latitude
+    /// grid whose spacing the scenario keeps ([`field::build_field_located`]).
+    pub fn lonlat_frame(&self) -> Option<LonLatFrame> {
+        self.lonlat
     }
 
     /// Whether the field changes with time: a grid time series, a puff plume, or an analytic
