@@ -372,7 +372,7 @@ pub fn write_map(
     files.extend(draw(&[])?);
     let verify = match args.verify {
         Some(n) => {
-            let seed = scenario.file().sim.seed.unwrap_or(0);
+            let seed = scenario.spec().sim.seed;
             let at = verify_points(&grid, family.dt_s(), n, seed);
             // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; what is
             // written stays, and the command exits 130 saying so.
