@@ -1595,14 +1595,10 @@ fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
     w.extend(slow_mode_warning(s, sampled));
     let noise = s.spec().sensor.noise_std;
     let rate = s.spec().sensor.rate_hz;
-    // (The laws that do not differentiate the measurement, `gradient_reference` and
-    // `schedule`, have no estimator (`None`) and are warned as before: see issue 31.)
-    if noise > 0.0
-        && matches!(
-            s.spec().controller.derivative(),
-            Some(DerivativeKind::BackwardDifference) | None
-        )
-    {
+    // Only a law that differentiates the measurement: `gradient_reference` and `schedule` have
+    // no estimator (`None`; the old fallback `unwrap_or(BackwardDifference)` warned them too,
+    // advising a `controller.derivative` resolve refuses for them: issue 31).
+    if noise > 0.0 && s.spec().controller.derivative() == Some(DerivativeKind::BackwardDifference) {
         w.push(format!(
             "sensor noise (sensor.noise_std = {}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
             Echo(noise),

@@ -291,3 +291,26 @@ fn show_is_not_fooled_by_a_multi_line_string() {
         "{shown}"
     );
 }
+
+/// The noise warning names the backward difference only for a law that has one: the old
+/// fallback `derivative.unwrap_or(BackwardDifference)` warned `gradient_reference` and
+/// `schedule` too (reachable: `compare` on gaussian-plumes-pm25, noise 0.01), advising a
+/// `controller.derivative` that resolve refuses for them.
+#[test]
+fn the_noise_warning_is_only_for_a_law_with_a_backward_difference() {
+    let noisy = "[sensor]\nnoise_std = 0.01\n[sim]\nduration_s = 1.0\n";
+    let warned = |controller: &str| {
+        let s =
+            parse_scenario(&format!("{noisy}[controller]\n{controller}"), "<test>", &[]).unwrap();
+        crate::check::warnings(&s)
+            .iter()
+            .any(|w| w.contains("through a backward difference"))
+    };
+    assert!(warned(""));
+    assert!(warned("kind = \"pid\"\n"));
+    assert!(!warned("derivative = \"levant\"\n"));
+    assert!(!warned("kind = \"gradient_reference\"\n"));
+    assert!(!warned(
+        "kind = \"schedule\"\ncourse_rate_radps = [[0.0, 0.1]]\n"
+    ));
+}
