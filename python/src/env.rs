@@ -137,7 +137,9 @@ impl PyEnvBatch {
         if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
             return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
         }
-        let scale = error_scale.or(s.file().controller.c2).unwrap_or(1.0);
+        let scale = error_scale
+            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
+            .unwrap_or(1.0);
         if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
             return Err(invalid("error_scale", scale, POSITIVE));
         }
@@ -149,9 +151,8 @@ impl PyEnvBatch {
                 return Err(invalid("termination_penalty", p, NON_NEGATIVE));
             }
         }
-        let f = s.file();
-        let duration = f.sim.duration_s.unwrap_or(600.0);
-        let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+        let duration = s.spec().sim.duration_s;
+        let rate = s.spec().sensor.rate_hz;
         let plan = s.plan();
         // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
         // values): the last sample step is the last multiple of `every` within the run.
@@ -210,7 +211,7 @@ impl PyEnvBatch {
     /// scenario's duration, m.
     #[getter]
     fn default_start_radius_m(&self) -> f64 {
-        let d = self.scenario.file().sim.duration_s.unwrap_or(600.0);
+        let d = self.scenario.spec().sim.duration_s;
         0.01 * d * self.scenario.start_speed_mps(self.scenario.start())
     }
 

@@ -231,7 +231,7 @@ impl PyScenario {
         y: PyReadonlyArray1<'py, f64>,
         t: f64,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let duration = self.inner.file().sim.duration_s.unwrap_or(600.0);
+        let duration = self.inner.spec().sim.duration_s;
         if !(0.0..=duration).contains(&t) {
             return Err(PyValueError::new_err(format!(
                 "t = {t:?} s is outside the run: 0 <= t <= sim.duration_s = {duration:?} s"

@@ -441,7 +441,7 @@ pub fn write_map(
     let mut verify_runs = None;
     let verify = match args.verify {
         Some(n) => {
-            let seed = scenario.file().sim.seed.unwrap_or(0);
+            let seed = scenario.spec().sim.seed;
             let at = verify_points(&grid, family.dt_s(), n, seed);
             // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; the runs that
             // finished are reported (marked partial) and written, and the command exits 130.

@@ -284,7 +284,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
 /// exactly as `pid`.
 fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> String {
     use isotrack_core::numtext::Num;
-    let tol = base.file().metrics.convergence_tolerance.unwrap_or(0.0);
+    let tol = base.spec().metrics.convergence_tolerance;
     let mut note = format!(
         "never reached s_d: at every step the true error kept its sign and stayed outside the convergence tolerance ({}), so these laws never found the isoline and their rows (effort, chattering, steady errors) measure circling or wandering, not tracking:\n",
         Num(tol)
@@ -297,8 +297,7 @@ fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> Strin
         }
         note += "\n";
     }
-    let search = base.file().controller.search.unwrap_or_default();
-    note += if search == isotrack_scenario::schema::SearchKind::None {
+    note += if base.search().is_none() {
         "A law circles where it starts when its command sits at the turn-rate limit (a linear law far from the level asks for kp*|eps|) or when the field there has too little slope for it to act on (v|grad F| small next to what its gains ask; the baselines' own conditions are in docs/BASELINES.md, and broken ones are warned about above). A start nearer the isoline, or a search phase (controller.search = \"spiral\" or \"lawnmower\", flown by every law here), gives every law the same chance."
     } else {
         "Every law flew the scenario's search (controller.search) before its own law; these still never reached the isoline within the run."

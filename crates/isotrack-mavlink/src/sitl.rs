@@ -141,14 +141,13 @@ impl std::fmt::Display for SitlError {
 /// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
 /// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
 pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
-    let f = s.file();
-    let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+    let rate = s.spec().sensor.rate_hz;
     if rate > 1000.0 {
         return Err(format!(
             "sensor.rate_hz = {rate}: MAVLink stamps samples to the millisecond, so at most 1000 Hz"
         ));
     }
-    let d = f.sim.duration_s.unwrap_or(600.0);
+    let d = s.spec().sim.duration_s;
     if wire::time_ms(d).is_none() {
         return Err(format!(
             "sim.duration_s = {d}: longer than MAVLink's time_boot_ms counts ({} s)",

@@ -117,8 +117,8 @@ impl RunData {
 
     /// Start of the steady-state window, s.
     pub fn steady_state_start_s(&self) -> f64 {
-        let f = self.scenario.file();
-        (1.0 - f.metrics.steady_state_fraction.unwrap_or(0.2)) * f.sim.duration_s.unwrap_or(0.0)
+        let spec = self.scenario.spec();
+        (1.0 - spec.metrics.steady_state_fraction) * spec.sim.duration_s
     }
 }
 

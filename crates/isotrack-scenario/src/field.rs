@@ -81,10 +81,8 @@ impl FieldDerivatives for FieldModel {
 /// field's `domain_m`. A start outside once ended the run at t = 0 with `left_field` and no
 /// hint; the issue names the extent and the keys that set it.
 pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(), Issue> {
-    let (x, y) = (
-        file.initial.x_m.unwrap_or(10.0),
-        file.initial.y_m.unwrap_or(0.0),
-    );
+    let start = crate::spec::sim::start(&file.initial)?;
+    let (x, y) = (start.x_m, start.y_m);
     let (e, set_by) = match field {
         FieldModel::Grid(g) => (
             g.grid().extent_m(),

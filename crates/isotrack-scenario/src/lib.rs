@@ -46,9 +46,6 @@ pub struct Scenario {
     /// The resolved keys: the user's, and every default resolution wrote (what `scenario.toml`
     /// records; sweeps and `--set` apply to it).
     file: ScenarioFile,
-    /// The user's own keys, before resolution (with the assignments a variant applied): what
-    /// `show` tells apart from the defaults.
-    given: Arc<ScenarioFile>,
     /// Every setting in force, typed ([`spec`]).
     spec: spec::ScenarioSpec,
     field: Arc<FieldModel>,
@@ -98,7 +95,6 @@ impl Scenario {
     /// Resolves `file` (defaults, checks) and builds its field, reading files relative to
     /// `base_dir`.
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
-        let given_file = Arc::new(file.clone());
         let mut file = resolve::resolve(file)?;
         let seed = spec::SimSpec::new(&file.sim).map_err(|i| vec![i])?.seed;
         let mut notes = Vec::new();
@@ -113,7 +109,6 @@ impl Scenario {
             .map_err(|i| vec![i])?;
         Ok(Self {
             file,
-            given: given_file,
             spec,
             field: Arc::new(field),
             vehicle: Arc::new(vehicle),
@@ -162,10 +157,6 @@ impl Scenario {
             apply_assignments(&self.file, assignments)?
         };
         let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
-        // The user's keys of the variant: its parent's with the assignments (the resolved
-        // variant's own when they do not apply to the parent's given keys alone).
-        let given =
-            Arc::new(apply_assignments(&self.given, assignments).unwrap_or_else(|_| file.clone()));
         let mut file = resolve::resolve(file).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
@@ -215,7 +206,6 @@ impl Scenario {
             .map_err(|i| located(vec![i]))?;
         Ok(Self {
             file,
-            given,
             spec,
             field,
             vehicle,
@@ -238,15 +228,12 @@ impl Scenario {
         }
         let mut file = self.file.clone();
         file.controller = file.controller.switched_to(kind);
-        let mut given = (*self.given).clone();
-        given.controller = given.controller.switched_to(kind);
         let origin = format!("controller.kind = \"{}\"", kind.name());
         let file = resolve::resolve(file).map_err(|issues| locate_derived(issues, &origin, &[]))?;
         let spec = spec::ScenarioSpec::new(&file, self.vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| locate_derived(vec![i], &origin, &[]))?;
         Ok(Self {
             file,
-            given: Arc::new(given),
             spec,
             field: self.field.clone(),
             vehicle: self.vehicle.clone(),
@@ -299,12 +286,6 @@ impl Scenario {
     /// [`Scenario::file`]).
     pub fn spec(&self) -> &spec::ScenarioSpec {
         &self.spec
-    }
-
-    /// The user's own keys (the file as given, with the assignments of a variant), before
-    /// resolution filled the defaults.
-    pub fn given(&self) -> &ScenarioFile {
-        &self.given
     }
 
     /// Warnings the field's files give (a grid file's `units` against `field.units`): part of

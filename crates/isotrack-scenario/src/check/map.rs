@@ -196,7 +196,7 @@ impl LoopFamily {
 
     /// The simulation step `sim.dt_s`, s: the fastest sensor rate is `1/dt`.
     pub fn dt_s(&self) -> f64 {
-        self.scenario.file().sim.dt_s.unwrap_or(0.01)
+        self.scenario.dt_s()
     }
 
     /// The sensor delay, s.
@@ -662,9 +662,9 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
             return p;
         }
     };
-    let file = s.file();
-    let duration = file.sim.duration_s.unwrap_or(0.0);
-    let frac = file.metrics.steady_state_fraction.unwrap_or(0.2);
+    let spec = s.spec();
+    let duration = spec.sim.duration_s;
+    let frac = spec.metrics.steady_state_fraction;
     let from_s = (1.0 - frac) * duration;
     let mut w = Window {
         from_s,
@@ -705,24 +705,24 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     // The floor a settled run's error range may reach: the reading error's own range (times
     // SENSOR_FLOOR_FACTOR), on a moving isoline the scenario's convergence tolerance (the
     // error tracking the motion leaves, by the scenario's own measure), and rounding.
-    let c2 = file.controller.c2.unwrap_or(1.0);
-    let level = file.controller.level.unwrap_or(0.0);
+    let c2 = f.law.c2;
+    let level = s.level();
     // The reading error's range from the sensor's own settings (not from the trace: the held
     // reading lags the true value by the motion over a period, which on an oscillating run is
     // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
     // resolution, and 4 sqrt(window) times the bias drift.
-    let sn = &file.sensor;
+    let sn = &spec.sensor;
     let window_s = duration - from_s;
-    let rr = 8.0 * sn.noise_std.unwrap_or(0.0)
-        + sn.resolution.unwrap_or(0.0)
-        + 4.0 * sn.bias_drift_per_sqrt_s.unwrap_or(0.0) * window_s.max(0.0).sqrt();
+    let rr = 8.0 * sn.noise_std
+        + sn.resolution
+        + 4.0 * sn.bias_drift_per_sqrt_s * window_s.max(0.0).sqrt();
     let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
     let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
     // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
     // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
     // scenario's own convergence tolerance (the band it counts as on the isoline).
     let motion_floor = if s.is_time_varying() || lp.curvature_per_m == 0.0 {
-        file.metrics.convergence_tolerance.unwrap_or(0.0)
+        spec.metrics.convergence_tolerance
     } else {
         0.0
     };
@@ -731,7 +731,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         .max(1e-9 * level.abs().max(c2));
     // The turn rate the reading's own error drives through the law (a noisy sensor makes a
     // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
-    let c1 = file.controller.c1.unwrap_or(0.0);
+    let c1 = f.law.c1;
     let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
     let spin = spin_turn_rate_radps(
         s.max_turn_rate_radps(),
@@ -755,7 +755,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     // circular field with ki = 0: the equilibrium the chart checks) within the scenario's
     // convergence tolerance (or the floor, when larger).
     let mean_abs_error = (w.rows > 0).then(|| w.abs_error_sum / w.rows as f64);
-    let tolerance = file.metrics.convergence_tolerance.unwrap_or(0.0).max(floor);
+    let tolerance = spec.metrics.convergence_tolerance.max(floor);
     let near = mean_abs_error.is_some_and(|e| e <= tolerance);
     p.behaviour = if !calm {
         Behaviour::LimitCycle
@@ -828,8 +828,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
 
 /// The simulation steps of one run of `s` (`duration / dt`).
 pub fn steps_per_run(s: &Scenario) -> f64 {
-    let f = s.file();
-    f.sim.duration_s.unwrap_or(0.0) / f.sim.dt_s.unwrap_or(0.01)
+    s.spec().sim.duration_s / s.dt_s()
 }
 
 /// Agreement over verified points.

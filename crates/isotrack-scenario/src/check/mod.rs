@@ -31,8 +31,10 @@ pub mod sampled;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
-use crate::schema::{ControllerKind, DerivativeKindName, FieldKind, SearchKind};
+use crate::schema::{ControllerKind, FieldKind};
+use crate::spec::LawSpec;
 use crate::Scenario;
+use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::theory::{
@@ -319,8 +321,7 @@ pub struct CheckReport {
 /// The region over which the field is sampled: the grid, the domain, or a box round the
 /// analytic field's features and the start.
 fn region(s: &Scenario) -> [f64; 4] {
-    let f = s.file();
-    let start = Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0));
+    let start = start(s);
     let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
         r[0] = r[0].min(p.x - m);
         r[1] = r[1].max(p.x + m);
@@ -380,31 +381,29 @@ struct Law {
 /// The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed in calm
 /// air), m/s.
 fn speed_mps(s: &Scenario) -> f64 {
-    let f = s.file();
-    f.vehicle
-        .speed_mps
-        .or(f.vehicle.airspeed_mps)
-        .unwrap_or(0.0)
+    s.spec().vehicle.speed_mps()
 }
 
 /// Whether the scenario flies the paper's PI-like law (the propositions and the sampled check
 /// are about it; the baselines have their own conditions, [`baselines`]).
 fn is_pi_isoline(s: &Scenario) -> bool {
-    s.file()
-        .controller
-        .kind
-        .unwrap_or(ControllerKind::PiIsoline)
-        == ControllerKind::PiIsoline
+    s.spec().controller.kind == ControllerKind::PiIsoline
 }
 
 fn law(s: &Scenario) -> Law {
-    let f = s.file();
-    let c = &f.controller;
+    // The check models the PI-like law (`is_pi_isoline`); for another law its verdicts do not
+    // apply, and it reads the PID's own `kp`, `ki`, no `c1` and a unit `c2`.
+    let (kp, ki, c1, c2) = match &s.spec().controller.law {
+        LawSpec::PiIsoline(p) => (p.kp, p.ki, p.c1, p.c2),
+        LawSpec::Pid(p) => (p.kp, p.ki, 0.0, 1.0),
+        LawSpec::PidCrossing(p) => (p.pid.kp, p.pid.ki, 0.0, 1.0),
+        _ => (0.0, 0.0, 0.0, 1.0),
+    };
     Law {
-        kp: c.kp.unwrap_or(0.0),
-        ki: c.ki.unwrap_or(0.0),
-        c1: c.c1.unwrap_or(0.0),
-        c2: c.c2.unwrap_or(1.0),
+        kp,
+        ki,
+        c1,
+        c2,
         v: speed_mps(s),
     }
 }
@@ -656,11 +655,10 @@ fn growing_mode_period_samples(base: &SampledLoop, slope: f64) -> Option<f64> {
 
 /// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
 fn sensor_lag(s: &Scenario) -> Option<SensorLag> {
-    let f = s.file();
-    let tau = f.sensor.time_constant_s.unwrap_or(0.0);
+    let tau = s.spec().sensor.time_constant_s;
     (tau > 0.0).then(|| SensorLag {
         time_constant_s: tau,
-        step_s: f.sim.dt_s.unwrap_or(0.01),
+        step_s: s.dt_s(),
     })
 }
 
@@ -735,16 +733,12 @@ impl LoopSetup {
             return Err("no slope in the tube: the level is not attained in the region".into());
         };
         let mut notes = vec![];
-        let c = &f.controller;
-        let estimator = match c
-            .derivative
-            .unwrap_or(DerivativeKindName::BackwardDifference)
-        {
-            DerivativeKindName::BackwardDifference => EstimatorModel::BackwardDifference,
-            DerivativeKindName::FilteredDifference => EstimatorModel::FilteredDifference {
-                tau_s: c.derivative_tau_s.unwrap_or(0.1),
-            },
-            DerivativeKindName::Levant => {
+        let estimator = match s.spec().controller.derivative() {
+            Some(DerivativeKind::BackwardDifference) | None => EstimatorModel::BackwardDifference,
+            Some(DerivativeKind::FilteredDifference { tau_s }) => {
+                EstimatorModel::FilteredDifference { tau_s }
+            }
+            Some(DerivativeKind::Levant { .. }) => {
                 notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
                 EstimatorModel::BackwardDifference
             }
@@ -768,8 +762,8 @@ impl LoopSetup {
             ki: l.ki,
             c1: l.c1,
             c2: l.c2,
-            period_s: 1.0 / f.sensor.rate_hz.unwrap_or(100.0),
-            delay_s: f.sensor.delay_s.unwrap_or(0.0),
+            period_s: 1.0 / s.spec().sensor.rate_hz,
+            delay_s: s.spec().sensor.delay_s,
             estimator,
             heading,
             sensor_lag: sensor_lag(s),
@@ -811,9 +805,8 @@ impl LoopSetup {
 /// the same as with `full = true`.
 fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledReport {
     let slope_range = r.isoline_slope_range;
-    let f = s.file();
-    let period_s = 1.0 / f.sensor.rate_hz.unwrap_or(100.0);
-    let delay_s = f.sensor.delay_s.unwrap_or(0.0);
+    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    let delay_s = s.spec().sensor.delay_s;
     let mut rep = SampledReport {
         applicable: false,
         vehicle_model: None,
@@ -1065,8 +1058,8 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
 
 /// The start: position and level.
 fn start(s: &Scenario) -> Vec2 {
-    let f = s.file();
-    Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0))
+    let st = s.spec().start;
+    Vec2::new(st.x_m, st.y_m)
 }
 
 /// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
@@ -1303,7 +1296,7 @@ fn prop2_initial_heading(rep: &mut Prop2Report, s: &Scenario) {
     let Some(g) = s.field().gradient(0.0, start(s)).filter(|g| g.norm() > 0.0) else {
         return;
     };
-    let h = Vec2::from_angle(f.initial.heading_rad.unwrap_or(0.0));
+    let h = Vec2::from_angle(s.spec().start.heading_rad);
     let minus_n = -g;
     // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
     // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
@@ -1614,7 +1607,7 @@ pub const SETTLING_FRACTION: f64 = 0.2;
 /// The warning when the loop's slowest mode is too slow for the run's duration
 /// (`tau > SETTLING_FRACTION * sim.duration_s`; issue 29). `run` and `check` both give it.
 fn slow_mode_warning(s: &Scenario, sm: &SampledReport) -> Option<String> {
-    let duration = s.file().sim.duration_s.unwrap_or(0.0);
+    let duration = s.spec().sim.duration_s;
     let tau = sm.isoline_time_constant_s?;
     let alpha = sm.isoline_mean_slope?;
     let at = if sm.slope_exact == Some(true) || sm.p_law_orbit_error.is_some() {
@@ -1715,18 +1708,15 @@ fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
 /// Warnings about a scenario: noise through a raw backward difference, and a sampled loop that
 /// is unstable. `run` prints them (and writes them to summary.json); `check` reports them.
 fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
-    let f = s.file();
     let mut w = s.field_warnings().to_vec();
     // The verdict is local: first whether the run has time to settle.
     w.extend(slow_mode_warning(s, sampled));
-    let noise = f.sensor.noise_std.unwrap_or(0.0);
-    let rate = f.sensor.rate_hz.unwrap_or(100.0);
-    if noise > 0.0
-        && f.controller
-            .derivative
-            .unwrap_or(DerivativeKindName::BackwardDifference)
-            == DerivativeKindName::BackwardDifference
-    {
+    let noise = s.spec().sensor.noise_std;
+    let rate = s.spec().sensor.rate_hz;
+    // Only a law that differentiates the measurement: `gradient_reference` and `schedule` have
+    // no estimator (`None`; the old fallback `unwrap_or(BackwardDifference)` warned them too,
+    // advising a `controller.derivative` resolve refuses for them: issue 31).
+    if noise > 0.0 && s.spec().controller.derivative() == Some(DerivativeKind::BackwardDifference) {
         w.push(format!(
             "sensor noise (sensor.noise_std = {}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
             Echo(noise),
@@ -1782,14 +1772,13 @@ impl FlatStart {
 /// (`controller.search = "none"`); `None` when the start is on the level, outside the field,
 /// or not flat.
 pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
-    let f = s.file();
-    if !is_pi_isoline(s) || f.controller.search.unwrap_or_default() != SearchKind::None {
+    if !is_pi_isoline(s) || s.search().is_some() {
         return None;
     }
     let l = law(s);
     let p0 = start(s);
     let level = s.level();
-    let duration = f.sim.duration_s.unwrap_or(0.0);
+    let duration = s.spec().sim.duration_s;
     let field = s.field();
     let mut worst: Option<FlatStart> = None;
     for k in 0..=4 {
@@ -1955,7 +1944,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
 /// range, and a different answer, than `check`).
 pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
-    let tube = s.file().controller.c2.unwrap_or(1.0);
+    let tube = l.c2;
     let r = regions(s, tube, CHECK_LATTICE, false);
     let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
     w.extend(baselines::baseline_warnings(s));
@@ -1971,11 +1960,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let sampled = sampled_report(s, &l, &r, true);
     let mut prop2 = prop2_report(s, &l, tube, &r);
     prop2.sensor_not_modelled = sensor_not_modelled(s, prop2.region_levels);
-    withhold_prop2_bound(
-        &mut prop2,
-        &sampled,
-        s.file().sensor.noise_std.unwrap_or(0.0),
-    );
+    withhold_prop2_bound(&mut prop2, &sampled, s.spec().sensor.noise_std);
     let (mut verdict, mut verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let tight = too_tight(s, &l, &sampled);
     if let Some(reason) = &tight {
@@ -2014,10 +1999,9 @@ mod tests {
     /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points
     /// and times [`flat_start`] samples), computed without its threshold.
     fn start_ratio(s: &Scenario) -> f64 {
-        let f = s.file();
         let l = law(s);
         let p0 = start(s);
-        let duration = f.sim.duration_s.unwrap_or(0.0);
+        let duration = s.spec().sim.duration_s;
         let mut worst: f64 = 0.0;
         for k in 0..=4 {
             let t = duration * f64::from(k) / 4.0;
@@ -2086,9 +2070,7 @@ mod tests {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
             let s = crate::load_scenario(Some(&p), &[]).unwrap();
-            if !is_pi_isoline(&s)
-                || s.file().controller.search.unwrap_or_default() != SearchKind::None
-            {
+            if !is_pi_isoline(&s) || s.search().is_some() {
                 continue;
             }
             let ratio = start_ratio(&s);

@@ -20,6 +20,7 @@
 
 pub mod controller;
 pub mod sensor;
+pub mod show;
 pub mod sim;
 pub mod vehicle;
 

@@ -209,3 +209,108 @@ fn an_unsettled_key_is_an_issue() {
     let e = ScenarioSpec::new(&ScenarioFile::default(), None).unwrap_err();
     assert_eq!(e.key, "sim.dt_s");
 }
+
+/// `show`: the fixed wing's turn-rate limit, the dwell, the band and the search geometry appear
+/// as commented-out keys in their sections (numbers from the formulas: 9.8*tan(40 deg)/30,
+/// 10 % of 600 s, 5 x 0.1, 2*30/0.274106, 10 spacings, 1 % of 10), the rate and tolerance
+/// marked derived; reading it back gives the same scenario, and showing that the same text.
+#[test]
+fn show_prints_every_value_in_force_and_reads_back_the_same() {
+    let text = "[vehicle]\nkind = \"fixed_wing\"\n[controller]\nsearch = \"lawnmower\"\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let resolved = toml::to_string(s.file()).unwrap();
+    let shown = show::with_derived(&s, &resolved);
+    let section_of = |needle: &str| {
+        let i = shown
+            .find(needle)
+            .unwrap_or_else(|| panic!("{needle} in\n{shown}"));
+        shown[..i]
+            .rfind("\n[")
+            .map(|j| shown[j + 1..].lines().next().unwrap().to_string())
+    };
+    let w: f64 = 9.8 * 40f64.to_radians().tan() / 30.0;
+    let spacing = 2.0 * 30.0 / w;
+    for (line, section) in [
+        (
+            format!("# max_turn_rate_radps = {w:?}  # derived"),
+            "[controller]",
+        ),
+        (
+            format!("# search_spacing_m = {spacing:?}  # derived"),
+            "[controller]",
+        ),
+        (
+            format!("# search_leg_m = {:?}  # derived", 10.0 * spacing),
+            "[controller]",
+        ),
+        ("# search_handover = 0.1  # derived".into(), "[controller]"),
+        (
+            "# convergence_min_dwell_s = 60.0  # derived".into(),
+            "[metrics]",
+        ),
+        ("# track_loss_band = 0.5  # derived".into(), "[metrics]"),
+        ("rate_hz = 100.0  # derived: 1/sim.dt_s".into(), "[sensor]"),
+        ("convergence_tolerance = 0.1  # derived".into(), "[metrics]"),
+        ("# home_lat_deg = 47.397742".into(), "[field]"),
+    ] {
+        if section != "[field]" {
+            assert_eq!(
+                section_of(&line).as_deref(),
+                Some(section),
+                "{line}\n{shown}"
+            );
+        } else {
+            assert!(shown.contains(&line), "{line}\n{shown}");
+        }
+    }
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file());
+    assert_eq!(again.spec(), s.spec());
+    let shown_again = show::with_derived(&again, &toml::to_string(again.file()).unwrap());
+    assert_eq!(shown_again, shown);
+    // A given value that is not the formula's is not marked.
+    let s = parse_scenario("[sensor]\nrate_hz = 50.0\n", "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    assert!(shown.lines().any(|l| l == "rate_hz = 50.0"), "{shown}");
+    assert!(!shown.contains("max_turn_rate_radps"), "{shown}");
+}
+
+/// A description holding lines that look like a section and a key stays text: `show` marks only
+/// the real ones, and its output reads back as the same scenario.
+#[test]
+fn show_is_not_fooled_by_a_multi_line_string() {
+    let text = "description = \"\"\"\nfoo\n[metrics]\nrate_hz = 1\n[sensor]\nrate_hz = 2\n\"\"\"\n[controller]\nsearch = \"spiral\"\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file(), "{shown}");
+    assert_eq!(shown.matches("# derived: 1/sim.dt_s").count(), 1, "{shown}");
+    assert_eq!(
+        shown.matches("# convergence_min_dwell_s").count(),
+        1,
+        "{shown}"
+    );
+}
+
+/// The noise warning names the backward difference only for a law that has one: the old
+/// fallback `derivative.unwrap_or(BackwardDifference)` warned `gradient_reference` and
+/// `schedule` too (reachable: `compare` on gaussian-plumes-pm25, noise 0.01), advising a
+/// `controller.derivative` that resolve refuses for them.
+#[test]
+fn the_noise_warning_is_only_for_a_law_with_a_backward_difference() {
+    let noisy = "[sensor]\nnoise_std = 0.01\n[sim]\nduration_s = 1.0\n";
+    let warned = |controller: &str| {
+        let s =
+            parse_scenario(&format!("{noisy}[controller]\n{controller}"), "<test>", &[]).unwrap();
+        crate::check::warnings(&s)
+            .iter()
+            .any(|w| w.contains("through a backward difference"))
+    };
+    assert!(warned(""));
+    assert!(warned("kind = \"pid\"\n"));
+    assert!(!warned("derivative = \"levant\"\n"));
+    assert!(!warned("kind = \"gradient_reference\"\n"));
+    assert!(!warned(
+        "kind = \"schedule\"\ncourse_rate_radps = [[0.0, 0.1]]\n"
+    ));
+}

@@ -269,7 +269,7 @@ fn a_stable_uav_cell_verifies_as_converged() {
 fn a_sustained_oscillation_with_a_large_c2_is_not_converged() {
     let s = bundled("topobathy-bc.toml", &[]);
     let f = LoopFamily::new(&s, None).unwrap();
-    let dt = s.file().sim.dt_s.unwrap_or(0.01);
+    let dt = s.dt_s();
     let rate = 1.0 / ((1.0 / (1.111 * dt)).round() * dt);
     let p = verify_point(&f, 26.8, rate);
     assert!(p.cell.spectral_radius.unwrap() > 1.2, "{p:?}");
@@ -363,7 +363,7 @@ fn a_run_far_from_the_level_is_not_converged() {
 fn an_intermittent_spin_is_a_limit_cycle() {
     let s = bundled("volcano.toml", &[]);
     let f = LoopFamily::new(&s, None).unwrap();
-    let dt = s.file().sim.dt_s.unwrap_or(0.01);
+    let dt = s.dt_s();
     let rate = 1.0 / ((1.0 / (33.3 * dt)).round() * dt);
     let p = verify_point(&f, 48.8, rate);
     assert!(p.cell.spectral_radius.unwrap() > 1.0, "{p:?}");
