@@ -16,9 +16,15 @@
 //! see [`SitlReport::setpoints_refused`]) stamped with the sample's `time_boot_ms` (`isotrack
 //! fly`'s answer), or stamped newer than every setpoint its sender sent before (a ground station
 //! or SDK that stamps setpoints with its own clock, as MAVSDK's Offboard plugin does: one sample
-//! per new setpoint). Nothing else advances the run: heartbeats, commands, requests for
-//! telemetry or parameters, refused setpoints, a setpoint repeated with the same stamp, or one
-//! stamped [`NOT_AN_ANSWER_MS`].
+//! per new setpoint), that came while the vehicle was armed in OFFBOARD (it follows setpoints).
+//! Nothing else advances the run: heartbeats, commands, requests for telemetry or parameters,
+//! refused setpoints, a setpoint repeated with the same stamp, one stamped
+//! [`NOT_AN_ANSWER_MS`], or any answer while the vehicle is disarmed or in MANUAL, HOLD or
+//! RETURN: while nobody flies it by setpoints (a companion waiting for the pilot answers with
+//! neutral setpoints) simulated time stands still, so the run does not fly itself to its end
+//! before a ground station has armed it and switched it to OFFBOARD. A companion that answers
+//! a sample before it has control answers it again once it has (`isotrack fly` repeats its
+//! setpoint at a steady rate, and the vehicle sends the sample again each wall-clock second).
 //!
 //! Out-of-order setpoints: a setpoint stamped older than the last one applied from the same
 //! sender (system, component), by at most [`REORDER_WINDOW_MS`], moves nothing and is counted
@@ -189,6 +195,9 @@ struct Applied {
     /// Whether it is newer than every setpoint its sender sent before (or its sender's
     /// first, or after its clock restarted).
     newer: bool,
+    /// Whether the vehicle followed setpoints when it came ([`Autopilot::follows_setpoints`]):
+    /// only then may it answer a lockstep sample.
+    followed: bool,
 }
 
 /// The autopilot's state between samples.
@@ -280,6 +289,14 @@ impl Autopilot {
         }
         self.stamps.push((from, ms));
         Some(newer)
+    }
+
+    /// Whether the vehicle follows setpoints: armed, in OFFBOARD (ArduPilot's GUIDED is the
+    /// same mode here). Only then does a lockstep run advance on an answer: while disarmed,
+    /// or in MANUAL, HOLD or RETURN, nobody flies it by setpoints, and simulated time stands
+    /// still (a disarmed vehicle does not move).
+    fn follows_setpoints(&self) -> bool {
+        self.armed && self.mode == Mode::Offboard
     }
 
     /// The turn rate the vehicle holds from a sample at `pose`.
@@ -447,6 +464,7 @@ impl Autopilot {
                 Some(Applied {
                     ms: s.time_boot_ms,
                     newer,
+                    followed: self.follows_setpoints(),
                 })
             }
             _ => {
@@ -796,7 +814,10 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
                     break;
                 }
                 let answers = sitl.handle_inbound(t, Duration::from_millis(50))?;
-                if answers.iter().any(|a| a.ms == ms || a.newer) {
+                if answers
+                    .iter()
+                    .any(|a| a.followed && (a.ms == ms || a.newer))
+                {
                     break;
                 }
                 if sitl.last_heard.elapsed() > companion_timeout {

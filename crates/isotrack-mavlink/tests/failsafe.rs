@@ -426,7 +426,9 @@ fn a_vehicle_powering_off_is_lost() {
 }
 
 /// A lockstep vehicle whose companion falls silent (it ended, or failed safe) ends its run
-/// after `companion_timeout_s` instead of waiting for an answer for ever.
+/// after `companion_timeout_s` instead of waiting for an answer for ever. The companion arms
+/// it and switches it to OFFBOARD first: a lockstep run advances only while the vehicle
+/// follows setpoints (before, its answers to a disarmed vehicle advanced the run).
 #[test]
 fn a_lockstep_vehicle_ends_when_the_companion_is_gone() {
     use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
@@ -446,6 +448,20 @@ fn a_lockstep_vehicle_ends_when_the_companion_is_gone() {
     let mut answered = 0;
     let t0 = Instant::now();
     c.send(&heartbeat()).unwrap();
+    let ok = Some(MavResult::MAV_RESULT_ACCEPTED);
+    assert_eq!(
+        ack_of(&mut c, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0),
+        ok
+    );
+    assert_eq!(ack_of(&mut c, MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0), ok);
+    // The first sample (t = 0) came while the commands were acknowledged: answered now,
+    // within the 0.5 s the vehicle waits for a message.
+    let mut sp = yaw_rate_setpoint(0.0);
+    if let MavMessage::SET_ATTITUDE_TARGET(d) = &mut sp {
+        d.time_boot_ms = 0;
+    }
+    c.send(&sp).unwrap();
+    answered += 1;
     while answered < 3 && t0.elapsed() < Duration::from_secs(30) {
         for r in c.poll(Duration::from_millis(50)).unwrap() {
             if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {

@@ -179,6 +179,74 @@ fn only_a_new_setpoint_advances_a_lockstep_run() {
     assert_eq!(r.setpoints_out_of_order, 0);
 }
 
+/// Simulated time stands still while nobody flies the vehicle by setpoints: a companion's
+/// answers (stamped with the sample's time, or newer) to a disarmed vehicle, to an armed one in
+/// MANUAL, or in HOLD, advance nothing; armed in OFFBOARD, one new setpoint advances one
+/// sample (10 ms). Only that sample is flown: the disarmed vehicle did not move on.
+#[test]
+fn a_lockstep_run_stands_still_until_the_vehicle_follows_setpoints() {
+    let (mut g, v, stop, _) = vehicle(245);
+    let mut newest = None;
+    let mut acks = Vec::new();
+    listen(&mut g, Duration::from_millis(200), &mut newest, &mut acks);
+    assert_eq!(newest, Some(0));
+    // Disarmed: the sample's own stamp, then newer ones.
+    for ms in [0, 1_000, 2_000] {
+        g.send(&setpoint(ms, 0.1)).unwrap();
+        listen(&mut g, Duration::from_millis(300), &mut newest, &mut acks);
+    }
+    assert_eq!(
+        newest,
+        Some(0),
+        "answers to a disarmed vehicle advanced the run"
+    );
+    fn ack(g: &mut Link, cmd: MavCmd, p: [f32; 3], newest: &mut Option<u32>) {
+        g.send(&command(cmd, p)).unwrap();
+        let mut acks = Vec::new();
+        let t0 = Instant::now();
+        while acks.is_empty() && t0.elapsed() < Duration::from_secs(10) {
+            listen(g, Duration::from_millis(50), newest, &mut acks);
+        }
+        assert_eq!(acks, [MavResult::MAV_RESULT_ACCEPTED], "{cmd:?}");
+    }
+    ack(
+        &mut g,
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+        [1.0, 0.0, 0.0],
+        &mut newest,
+    );
+    g.send(&setpoint(3_000, 0.1)).unwrap();
+    listen(&mut g, Duration::from_millis(300), &mut newest, &mut acks);
+    assert_eq!(newest, Some(0), "an answer in MANUAL advanced the run");
+    ack(
+        &mut g,
+        MavCmd::MAV_CMD_DO_SET_MODE,
+        [1.0, 6.0, 0.0],
+        &mut newest,
+    );
+    g.send(&setpoint(4_000, 0.2)).unwrap();
+    listen(&mut g, Duration::from_millis(300), &mut newest, &mut acks);
+    assert_eq!(
+        newest,
+        Some(10),
+        "armed in OFFBOARD: one setpoint, one sample"
+    );
+    // HOLD (PX4's AUTO, LOITER): the setpoints no longer fly it.
+    ack(
+        &mut g,
+        MavCmd::MAV_CMD_DO_SET_MODE,
+        [1.0, 4.0, 3.0],
+        &mut newest,
+    );
+    g.send(&setpoint(5_000, 0.2)).unwrap();
+    listen(&mut g, Duration::from_millis(300), &mut newest, &mut acks);
+    assert_eq!(newest, Some(10), "an answer in HOLD advanced the run");
+    stop.store(true, Ordering::SeqCst);
+    let r = v.join().unwrap();
+    assert_eq!(r.flown, vec![(0, -(0.2f32 as f64))], "{:?}", r.events);
+    assert!(!r.companion_lost);
+}
+
 /// Setpoints stamped older than the last one applied from their sender (UDP delivered them
 /// late) move nothing and are counted; one stamped a minute back is the sender's clock
 /// restarting: applied, and logged.
