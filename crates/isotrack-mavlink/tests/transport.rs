@@ -245,7 +245,9 @@ fn a_silent_peer_is_dropped_after_the_timeout() {
 
 /// `sitl` sets its link's peer timeout to `--timeout-s`: a ground station that fell silent is
 /// dropped while the run goes on (it hears nothing more), a companion that keeps answering
-/// stays.
+/// stays. The companion arms the vehicle and switches it to OFFBOARD first: a lockstep run
+/// advances only while the vehicle follows setpoints (before, its answers to the disarmed
+/// vehicle flew it).
 #[test]
 fn sitl_drops_a_silent_ground_station() {
     let s = load_scenario(None, &["sim.duration_s=600".to_string()]).unwrap();
@@ -262,6 +264,40 @@ fn sitl_drops_a_silent_ground_station() {
     gcs.send(&heartbeat()).unwrap();
     let mut c = Link::open(&format!("udpout:{addr}"), 1, 191).unwrap();
     c.send(&heartbeat()).unwrap();
+    for (cmd, p2) in [
+        (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0),
+        (MavCmd::MAV_CMD_DO_SET_MODE, 6.0),
+    ] {
+        c.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            param1: 1.0,
+            param2: p2,
+            command: cmd,
+            target_system: 1,
+            target_component: 1,
+            ..Default::default()
+        }))
+        .unwrap();
+        let t0 = Instant::now();
+        let mut ack = None;
+        while ack.is_none() && t0.elapsed() < Duration::from_secs(10) {
+            for r in c.poll(Duration::from_millis(20)).unwrap() {
+                if let MavMessage::COMMAND_ACK(a) = &r.msg {
+                    ack = (a.command == cmd).then_some(a.result);
+                }
+            }
+        }
+        assert_eq!(ack, Some(MavResult::MAV_RESULT_ACCEPTED), "{cmd:?}");
+    }
+    // The first sample (t = 0) may have come with the acknowledgements: answered now.
+    c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms: 0,
+        q: [1.0, 0.0, 0.0, 0.0],
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    }))
+    .unwrap();
     // The companion beats and answers every sample for 2 s of wall time.
     let t0 = Instant::now();
     while t0.elapsed() < Duration::from_secs(2) {
