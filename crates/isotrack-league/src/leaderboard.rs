@@ -1,7 +1,7 @@
 //! The benchmark's files: `leaderboard.csv`, `leaderboard.md`, and per task `tasks/ID/results.csv`
 //! (every scored run) and `tasks/ID/task.json` (what `--resume` reuses and the HTML page draws).
 
-use crate::run::{task_file, BenchError, BenchResult, RunRow, TaskResult};
+use crate::results::{task_file, BenchError, BenchResult, RunRow, TaskResult};
 use std::fmt::Write as _;
 use std::path::Path;
 

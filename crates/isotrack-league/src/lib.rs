@@ -16,8 +16,10 @@
 #![deny(missing_docs)]
 
 pub mod leaderboard;
+mod one_run;
 pub mod page;
 pub mod registry;
+mod results;
 pub mod run;
 pub mod score;
 pub mod suite;

@@ -1,6 +1,6 @@
 //! A benchmark's `index.html`.
 
-use crate::run::BenchResult;
+use crate::results::BenchResult;
 use isotrack_html::{escape, page, script_json};
 
 /// The page of a benchmark's results: the sortable leaderboard, then per task its picture (each

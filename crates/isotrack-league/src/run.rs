@@ -1,132 +1,19 @@
 //! Running a suite: tuning the built-in laws on the tuning seeds, scoring every controller on
 //! the scoring seeds, and the pictures of each task.
 
-use crate::registry::{Clipped, Entrant, Registry};
-use crate::score::{score, Score, ScoreContext, Scoring};
-use crate::suite::{seed_overrides, task_path, Seg, Suite, SuiteError, Task};
+use crate::one_run::run_assignments;
+pub use crate::one_run::{context, prepare, run_one, run_overrides};
+use crate::registry::{Entrant, Registry};
+pub use crate::results::{task_file, BenchError, BenchResult, RunRow, TaskResult, Trajectory};
+use crate::score::{score, Score, Scoring};
+use crate::suite::{task_path, Seg, Suite, SuiteError, Task};
 use crate::tune::tune;
 use isotrack_plot::FieldPicture;
-use isotrack_scenario::{load_scenario, Assignment, ErrorLocation, Scenario, ScenarioError};
-use isotrack_sim::{NoTrace, RunResult, TraceRow, TraceSink};
+use isotrack_scenario::{load_scenario, ErrorLocation, Scenario, ScenarioError};
+use isotrack_sim::{NoTrace, TraceRow, TraceSink};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// What went wrong running a benchmark.
-#[derive(Debug, thiserror::Error)]
-pub enum BenchError {
-    /// A task's scenario file, or a file it names (`field.path`), cannot be read: missing, a
-    /// FIFO, a directory, a device (the message names the suite file and line that names it).
-    #[error("task {task}: {message}")]
-    Task {
-        /// The task id.
-        task: String,
-        /// Why.
-        message: String,
-    },
-    /// The suite cannot run as written: a task's scenario or overrides are invalid, or a run it
-    /// defines (a law with its recorded gains, a seed's `vary` draws) makes an invalid
-    /// scenario. Found before any run starts; located at the suite file's line.
-    #[error("{0}")]
-    Suite(SuiteError),
-    /// A controller name that is not registered.
-    #[error("unknown controller {0:?} (built in: pi_isoline, sliding_mode, sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference)")]
-    UnknownController(String),
-    /// A controller named twice in [`Options::controllers`].
-    #[error("controller {0:?} is named twice")]
-    DuplicateController(String),
-    /// Reading or writing results.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// Why.
-        message: String,
-    },
-    /// `--resume` on results of another suite or controller set.
-    #[error("{0}")]
-    Mismatch(String),
-    /// Stopped by [`Options::cancel`] before it finished.
-    #[error("interrupted")]
-    Interrupted,
-}
-
-/// One scored run.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RunRow {
-    /// Controller name.
-    pub controller: String,
-    /// Scoring seed.
-    pub seed: u64,
-    /// `completed`, `left_field`, `diverged`, or `invalid_scenario`.
-    pub outcome: String,
-    /// Convergence time, s.
-    pub convergence_time_s: Option<f64>,
-    /// Share of the steady window within the tolerance.
-    pub time_in_band_fraction: Option<f64>,
-    /// Steady RMS distance to the true isoline, m.
-    pub steady_state_rms_isoline_distance_m: Option<f64>,
-    /// Track losses.
-    pub track_losses: u64,
-    /// `integral(omega^2 dt)`, rad^2/s.
-    pub control_effort: f64,
-    /// Steady RMS error (field units).
-    pub steady_state_rms_error: Option<f64>,
-    /// The score and its parts.
-    pub score: Score,
-}
-
-/// One controller's path for a task's picture (the first scoring seed), m.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Trajectory {
-    /// Controller name.
-    pub controller: String,
-    /// `[x, y]` points, m.
-    pub points: Vec<[f64; 2]>,
-    /// How the run ended.
-    pub outcome: String,
-}
-
-/// A task's results.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TaskResult {
-    /// Task id.
-    pub id: String,
-    /// Task title.
-    pub title: String,
-    /// Mean score per controller, in the run's controller order.
-    pub scores: Vec<(String, f64)>,
-    /// The gains each built-in law ran with (`controller.KEY`).
-    pub gains: BTreeMap<String, BTreeMap<String, f64>>,
-    /// Every scored run, controller by controller, seed by seed.
-    pub runs: Vec<RunRow>,
-    /// Paths for the picture.
-    pub trajectories: Vec<Trajectory>,
-    /// The field for the picture.
-    pub picture: FieldPicture,
-    /// The digest of what produced it (suite, controllers, gains, version): `--resume` reuses
-    /// a task's results only when it matches.
-    pub digest: String,
-}
-
-/// A benchmark's results.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct BenchResult {
-    /// Suite name.
-    pub suite: String,
-    /// Suite version.
-    pub version: u32,
-    /// The score formula.
-    #[serde(default)]
-    pub scoring: Scoring,
-    /// Controllers, in order.
-    pub controllers: Vec<String>,
-    /// Per task.
-    pub tasks: Vec<TaskResult>,
-    /// Overall score per controller (mean over tasks), best first.
-    pub overall: Vec<(String, f64)>,
-}
 
 /// How to run.
 #[derive(Clone, Debug, Default)]
@@ -462,92 +349,6 @@ fn run_task(
     })
 }
 
-/// The overrides of one run: the built-in law's gains, then the seed's draws (the law itself is
-/// set by [`Scenario::with_controller_kind`]).
-pub fn run_overrides(
-    task: &Task,
-    entrant: &Entrant,
-    gains: Option<&BTreeMap<String, f64>>,
-    seed: u64,
-) -> Vec<String> {
-    let mut o = vec![];
-    if let Entrant::Builtin(_) = entrant {
-        for (k, v) in gains.into_iter().flatten() {
-            o.push(format!("controller.{k}={v:?}"));
-        }
-    }
-    o.extend(seed_overrides(task, seed));
-    o
-}
-
-/// [`run_overrides`] as assignments labelled `task ID: KEY=VALUE`, in the same order.
-fn run_assignments(
-    task: &Task,
-    entrant: &Entrant,
-    gains: Option<&BTreeMap<String, f64>>,
-    seed: u64,
-) -> Vec<Assignment> {
-    let origin = format!("task {}", task.id);
-    run_overrides(task, entrant, gains, seed)
-        .into_iter()
-        .map(|a| Assignment::new(a, &origin))
-        .collect()
-}
-
-/// The scenario of one (task, controller, seed): the task's base flown by the controller (a
-/// built-in law switched in with its gains), with the seed's draws and `sim.seed`.
-pub fn prepare(
-    base: &Scenario,
-    task: &Task,
-    entrant: &Entrant,
-    gains: Option<&BTreeMap<String, f64>>,
-    seed: u64,
-) -> Result<Scenario, ScenarioError> {
-    let flown = match entrant {
-        Entrant::Builtin(kind) => base.with_controller_kind(*kind)?,
-        Entrant::Custom(_) => base.clone(),
-    };
-    flown.derive_with(
-        &run_assignments(task, entrant, gains, seed),
-        &format!("task {}", task.id),
-    )
-}
-
-/// Runs one (task, controller, seed) into `sink`: the scenario ([`prepare`]), and its result
-/// (`Err` with the message when the overrides make an invalid scenario).
-pub fn run_one<S: TraceSink + ?Sized>(
-    base: &Scenario,
-    task: &Task,
-    entrant: &Entrant,
-    gains: Option<&BTreeMap<String, f64>>,
-    seed: u64,
-    sink: &mut S,
-) -> Result<(Scenario, RunResult), String> {
-    let s = prepare(base, task, entrant, gains, seed).map_err(|e| e.to_string())?;
-    let r = match entrant {
-        Entrant::Builtin(_) => s.run(sink),
-        Entrant::Custom(f) => {
-            let mut c = Clipped {
-                inner: f.make(&s),
-                max_turn_rate_radps: s.max_turn_rate_radps(),
-            };
-            s.run_with(&mut c, sink)
-        }
-    };
-    Ok((s, r))
-}
-
-/// The score context of a run of `s`, scored by `scoring`.
-pub fn context(s: &Scenario, task: &Task, scoring: Scoring) -> ScoreContext {
-    let plan = s.plan();
-    ScoreContext {
-        steady_start_s: plan.steady_state_start_step as f64 * plan.dt_s,
-        length_m: task.length_m,
-        speed_mps: s.start_speed_mps(s.start()),
-        scoring,
-    }
-}
-
 fn scored_run(
     base: &Scenario,
     task: &Task,
@@ -677,11 +478,6 @@ fn task_digest(
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect::<String>()
-}
-
-/// The file a task's results are kept in under a benchmark's output directory.
-pub fn task_file(dir: &Path, id: &str) -> std::path::PathBuf {
-    dir.join("tasks").join(id).join("task.json")
 }
 
 fn read_task(dir: &Path, id: &str) -> Option<TaskResult> {

@@ -7,8 +7,8 @@
 //! the keys. Starting point: the task scenario's own gains when it uses the law, else the law's
 //! defaults.
 
+use crate::one_run::{context, run_one};
 use crate::registry::Entrant;
-use crate::run::{context, run_one};
 use crate::score::{score, Scoring};
 use crate::suite::Task;
 use isotrack_scenario::schema::ControllerKind;

@@ -6,7 +6,8 @@
 //! `nrows` rows of `ncols` values, **north row first**, whitespace-separated. Coordinates are
 //! taken as metres.
 
-use super::{flip_rows, FilePosition, LoadError, LoadedGrid};
+use super::error::{FilePosition, LoadError};
+use super::loaded::{flip_rows, LoadedGrid};
 use crate::georef::Georeference;
 use crate::grid::Grid2;
 use isotrack_core::Vec2;

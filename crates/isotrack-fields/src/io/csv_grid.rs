@@ -1,6 +1,7 @@
 //! CSV grids (the layout of the bundled `data/`): no header, one row per line, row 0 = south.
 
-use super::{plain_grid, FilePosition, LineNumbers, LoadError, LoadedGrid};
+use super::error::{FilePosition, LoadError};
+use super::loaded::{plain_grid, LineNumbers, LoadedGrid};
 use std::path::Path;
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {

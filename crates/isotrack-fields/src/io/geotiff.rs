@@ -8,7 +8,8 @@
 //! int8..int64, float16/32/64. JPEG and other lossy or exotic codecs are refused by name.
 //! LZW chunks without an end code (GDAL 3.x's tiles) are decoded by [`super::geotiff_lzw`].
 
-use super::{flip_rows, FilePosition, LoadError, LoadedGrid};
+use super::error::{FilePosition, LoadError};
+use super::loaded::{flip_rows, LoadedGrid};
 use crate::georef::{lonlat_spacing_m, Georeference};
 use crate::grid::Grid2;
 use isotrack_core::Vec2;
@@ -28,11 +29,12 @@ const PROJECTED_CS_TYPE: u16 = 3072;
 /// crate's defaults (256 MiB decoded, which refuses a float32 image of 8200 x 8200 the README
 /// allows): the decoded image up to [`crate::grid::MAX_NODES`] samples of 8 bytes (2 GiB; the
 /// node count and the memory were already checked from the header by
-/// [`super::check_series_size`]), and a compressed chunk or a tag's values up to the file's
-/// own length (`file_len`, at most [`super::MAX_GRID_FILE_BYTES`]): nothing in a file is
+/// [`super::limits::check_series_size`]), and a compressed chunk or a tag's values up to the file's
+/// own length (`file_len`, at most [`super::limits::MAX_GRID_FILE_BYTES`]): nothing in a file is
 /// longer than the file.
 fn decoder_limits(file_len: u64) -> Limits {
-    let file = usize::try_from(file_len.min(super::MAX_GRID_FILE_BYTES)).unwrap_or(usize::MAX);
+    let file =
+        usize::try_from(file_len.min(super::limits::MAX_GRID_FILE_BYTES)).unwrap_or(usize::MAX);
     let mut limits = Limits::default();
     limits.decoding_buffer_size = crate::grid::MAX_NODES.saturating_mul(8);
     limits.intermediate_buffer_size = file.max(limits.intermediate_buffer_size);
@@ -87,7 +89,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
     let (nx, ny) = (w as usize, h as usize);
     // The header's size is a claim: checked before any pixel is decoded (a compressed image
     // declares what it likes).
-    super::check_series_size(path, 1, nx, ny, super::memory_budget_bytes())?;
+    super::limits::check_series_size(path, 1, nx, ny, super::limits::memory_budget_bytes())?;
     match dec.colortype().map_err(tiff_err)? {
         ColorType::Gray(8 | 16 | 32 | 64) => {}
         ColorType::Gray(bits) => {

@@ -20,7 +20,8 @@
 //! length, is refused naming it. The data variable's `units` is
 //! returned ([`LoadedSeries::units`]): a scenario without `field.units` takes it.
 
-use super::{LoadError, LoadedSeries};
+use super::error::LoadError;
+use super::loaded::LoadedSeries;
 use crate::georef::{lonlat_spacing_m, Georeference};
 use crate::grid::Grid2;
 use isotrack_core::Vec2;
@@ -311,7 +312,7 @@ fn cf_reference_date_ok(reference: &str) -> bool {
 pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries, LoadError> {
     // Read (size-limited by the caller) rather than mapped: the classic header is checked
     // before the reader sees it.
-    let bytes = super::read_limited(path, super::MAX_GRID_FILE_BYTES)
+    let bytes = super::limits::read_limited(path, super::limits::MAX_GRID_FILE_BYTES)
         .map_err(|e| LoadError::cannot_read(path, e))?;
     parse_bytes(path, &bytes, variable)
 }
@@ -450,11 +451,11 @@ pub(super) fn parse_bytes(
 ) -> Result<LoadedSeries, LoadError> {
     // The budget is asked for only when a file gets as far as its size check: reading it costs
     // five files of /proc and /sys, more than refusing most malformed files.
-    parse_bytes_with(name, bytes, variable, super::memory_budget_bytes)
+    parse_bytes_with(name, bytes, variable, super::limits::memory_budget_bytes)
 }
 
 /// As [`parse_bytes`], with `budget_bytes` of memory to load the variable in
-/// ([`super::check_series_size`]).
+/// ([`super::limits::check_series_size`]).
 #[cfg(test)]
 pub(super) fn parse_bytes_within(
     name: &Path,
@@ -475,7 +476,7 @@ fn parse_bytes_with(
     check_classic_header(bytes).map_err(|m| {
         LoadError::new(
             name,
-            Some(super::FilePosition::Offset(0)),
+            Some(super::error::FilePosition::Offset(0)),
             format!("not a valid NetCDF file: {m}"),
         )
     })?;
@@ -619,6 +620,53 @@ fn parse_file(
     budget_bytes: impl FnOnce() -> Option<u64>,
 ) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
+    let var = data_variable(path, file, vars, variable)?;
+    let layout = frame_layout(path, var, vars)?;
+    let (nx, ny, n_frames) = (layout.nx, layout.ny, layout.n_frames);
+    // Checked before reading: the header's sizes are the file's claim, not a promise (a
+    // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
+    super::limits::check_series_size(path, n_frames, nx, ny, budget_bytes())?;
+    check_packing(path, var)?;
+    let units = data_units(var).map_err(err)?;
+    let values = read_values(path, file, var, &layout)?;
+    let frame_times_s = match layout.time {
+        None => None,
+        Some(tdim) => frame_times(path, file, vars, tdim)?,
+    };
+    let xc = coord_values(path, file, vars, &layout.xdim.name)?;
+    let yc = coord_values(path, file, vars, &layout.ydim.name)?;
+    let mut warnings = Vec::new();
+    let placement = match (xc, yc) {
+        (Some(x), Some(y)) => placement(path, x, y, &layout, &mut warnings)?,
+        _ => Placement::default(),
+    };
+    Ok(LoadedSeries {
+        frames: into_frames(path, values, &layout, &placement)?,
+        frame_times_s,
+        georeference: placement.georeference,
+        units,
+        warnings: warnings
+            .into_iter()
+            .map(|w| {
+                format!(
+                    "{}: {}",
+                    isotrack_core::numtext::Escaped(&path.display().to_string()),
+                    isotrack_core::numtext::Escaped(&w)
+                )
+            })
+            .collect(),
+    })
+}
+
+/// The data variable: the one named, or the first with two non-trivial trailing dimensions
+/// that is neither a coordinate variable nor a CF bounds variable.
+fn data_variable<'a>(
+    path: &Path,
+    file: &NcFile,
+    vars: &'a [NcVariable],
+    variable: Option<&str>,
+) -> Result<&'a NcVariable, LoadError> {
+    let err = |m: String| LoadError::new(path, None, m);
     let nc = |e: netcdf_reader::Error| {
         err(format!(
             "cannot read as NetCDF: {}",
@@ -639,11 +687,11 @@ fn parse_file(
         .flat_map(|v| [attr_str(v, "bounds"), attr_str(v, "climatology")])
         .flatten()
         .collect();
-    let var = match variable {
+    match variable {
         Some(n) => vars
             .iter()
             .find(|v| v.name() == n)
-            .ok_or_else(|| err(format!("no variable `{n}`; the file has {:?}", names())))?,
+            .ok_or_else(|| err(format!("no variable `{n}`; the file has {:?}", names()))),
         None => vars
             .iter()
             .find(|v| {
@@ -654,8 +702,31 @@ fn parse_file(
                         .iter()
                         .all(|d| d.size > 1)
             })
-            .ok_or_else(|| err("no 2-D data variable (give field.variable)".into()))?,
-    };
+            .ok_or_else(|| err("no 2-D data variable (give field.variable)".into())),
+    }
+}
+
+/// How a data variable's values make frames: its time dimension (the one leading dimension
+/// longer than 1, if any), its y and x dimensions, their sizes, and whether it is stored (x, y).
+struct Layout<'a> {
+    time: Option<&'a netcdf_reader::NcDimension>,
+    ydim: &'a netcdf_reader::NcDimension,
+    xdim: &'a netcdf_reader::NcDimension,
+    nx: usize,
+    ny: usize,
+    n_frames: usize,
+    transposed: bool,
+}
+
+/// The [`Layout`] of `var`, or an error when its dimensions are not (y, x), (x, y) or one of
+/// those after a time dimension (other leading dimensions of length 1), or a frame is smaller
+/// than 2 x 2.
+fn frame_layout<'a>(
+    path: &Path,
+    var: &'a NcVariable,
+    vars: &[NcVariable],
+) -> Result<Layout<'a>, LoadError> {
+    let err = |m: String| LoadError::new(path, None, m);
     let dims = var.dimensions();
     let lead = &dims[..dims.len().saturating_sub(2)];
     let long_lead: Vec<_> = lead.iter().filter(|d| d.size != 1).collect();
@@ -705,24 +776,49 @@ fn parse_file(
             var.name()
         )));
     }
-    // Checked before reading: the header's sizes are the file's claim, not a promise (a
-    // never-written chunked variable of 4 x 16000 x 16000 fill values is a 10 KB file).
-    super::check_series_size(path, n_frames, nx, ny, budget_bytes())?;
-    // A packing attribute that is not finite turns every value into NaN; say so, rather than
-    // "every value is NaN / no-data".
+    Ok(Layout {
+        time: long_lead.first().copied(),
+        ydim,
+        xdim,
+        nx,
+        ny,
+        n_frames,
+        transposed,
+    })
+}
+
+/// A packing attribute that is not finite turns every value into NaN; say so, rather than
+/// "every value is NaN / no-data".
+fn check_packing(path: &Path, var: &NcVariable) -> Result<(), LoadError> {
     for a in ["scale_factor", "add_offset"] {
         if let Some(x) = var
             .attribute(a)
             .and_then(|at| at.value.as_f64_vec())
             .and_then(|v| v.into_iter().find(|x| !x.is_finite()))
         {
-            return Err(err(format!(
-                "variable `{}`: attribute `{a}` is {x}, not a finite number",
-                isotrack_core::numtext::Escaped(var.name())
-            )));
+            return Err(LoadError::new(
+                path,
+                None,
+                format!(
+                    "variable `{}`: attribute `{a}` is {x}, not a finite number",
+                    isotrack_core::numtext::Escaped(var.name())
+                ),
+            ));
         }
     }
-    let units = data_units(var).map_err(err)?;
+    Ok(())
+}
+
+/// The data variable's values, unpacked and masked (not finite: NaN), each frame row-major
+/// (y, x) in file order.
+fn read_values(
+    path: &Path,
+    file: &NcFile,
+    var: &NcVariable,
+    layout: &Layout,
+) -> Result<Vec<f64>, LoadError> {
+    let err = |m: String| LoadError::new(path, None, m);
+    let (nx, ny, n_frames) = (layout.nx, layout.ny, layout.n_frames);
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
@@ -745,7 +841,7 @@ fn parse_file(
             values.len()
         )));
     }
-    if transposed {
+    if layout.transposed {
         // Each frame stored x-major (value (ix, iy) at ix * ny + iy) to row-major (iy * nx + ix).
         let mut row_major = vec![0.0; nx * ny];
         for frame in values.chunks_mut(nx * ny) {
@@ -757,134 +853,177 @@ fn parse_file(
             frame.copy_from_slice(&row_major);
         }
     }
-    // A coordinate variable is 1-D along the dimension of its own name (CF 1.11 section 1.3), so
-    // its size is the dimension's, already within the checked size: a variable `x(big)` named
-    // like the dimension `x` but along another, huge dimension is not read.
-    let coord = |name: &str| -> Result<Option<(Vec<f64>, &NcVariable)>, LoadError> {
-        match vars.iter().find(|v| {
-            v.name() == name && v.dimensions().len() == 1 && v.dimensions()[0].name == name
-        }) {
-            None => Ok(None),
-            Some(c) => {
-                let vals = file
-                    .read_variable_unpacked(name)
-                    .map_err(|e| err(format!("cannot read coordinate `{name}`: {e}")))?;
-                Ok(Some((vals.iter().copied().collect(), c)))
-            }
-        }
-    };
-    // Frame times from the CF time coordinate, seconds after the first frame.
-    let frame_times_s = match long_lead.first() {
-        None => None,
-        Some(tdim) => match coord(&tdim.name)? {
-            None => None,
-            Some((t, tv)) => {
-                let units = attr_text(tv, "units").map_err(err)?.unwrap_or_default();
-                let unit_s = cf_time_unit_s(&units).ok_or_else(|| {
-                    err(format!(
-                        "time coordinate `{}` has units `{}`; need `<days|hours|minutes|seconds|milliseconds|microseconds> since <date>`",
-                        isotrack_core::numtext::Escaped(&tdim.name),
-                        isotrack_core::numtext::Clipped(&units)
-                    ))
-                })?;
-                Some(t.iter().map(|v| unit_s.to_s(v - t[0])).collect())
-            }
-        },
-    };
-    let xc = coord(&xdim.name)?;
-    let yc = coord(&ydim.name)?;
-    let (mut georeference, mut origin, mut spacing) =
-        (Georeference::None, Vec2::default(), [1.0, 1.0]);
-    let (mut flip_y, mut flip_x) = (false, false);
-    let mut warnings = Vec::new();
-    if let (Some((xs, xv)), Some((ys, yv))) = (xc, yc) {
-        let kx = axis_kind(xv, &mut warnings).map_err(err)?;
-        let ky = axis_kind(yv, &mut warnings).map_err(err)?;
-        let (lonlat, [fx, fy]) = match (kx, ky) {
-            (Axis::Lon, Axis::Lat) => (true, [1.0, 1.0]),
-            (Axis::Length(fx), Axis::Length(fy)) => (false, [fx, fy]),
-            _ => {
-                let what = |a: Axis| match a {
-                    Axis::Lon => "longitude",
-                    Axis::Lat => "latitude",
-                    Axis::Length(_) => "a length",
-                };
-                return Err(err(format!(
-                    "coordinates `{}` (x: {}) and `{}` (y: {}) do not make a grid: need longitude and latitude, or two lengths",
-                    xdim.name,
-                    what(kx),
-                    ydim.name,
-                    what(ky)
-                )));
-            }
-        };
-        let (mut x0, mut dx) =
-            regular(&xs).map_err(|m| err(format!("coordinate `{}`: {m}", xdim.name)))?;
-        let (mut y0, mut dy) =
-            regular(&ys).map_err(|m| err(format!("coordinate `{}`: {m}", ydim.name)))?;
-        // Kilometres to metres (an exact power of ten: metres stay as they were).
-        (x0, dx, y0, dy) = (x0 * fx, dx * fx, y0 * fy, dy * fy);
-        if dy < 0.0 {
-            flip_y = true;
-            y0 += dy * (ny - 1) as f64;
-            dy = -dy;
-        }
-        if dx < 0.0 {
-            flip_x = true;
-            x0 += dx * (nx - 1) as f64;
-            dx = -dx;
-        }
-        if lonlat {
-            let ref_lat = y0 + 0.5 * dy * (ny - 1) as f64;
-            spacing = lonlat_spacing_m(dx, dy, ref_lat);
-            georeference = Georeference::LonLat {
-                lon0_deg: x0,
-                lat0_deg: y0,
-                dlon_deg: dx,
-                dlat_deg: dy,
-                ref_lat_deg: ref_lat,
-            };
-        } else {
-            origin = Vec2::new(x0, y0);
-            spacing = [dx, dy];
-            georeference = Georeference::Metres { epsg: None };
+    Ok(values)
+}
+
+/// The values of the coordinate variable of dimension `name`, with the variable; `None` when
+/// the file has none.
+///
+/// A coordinate variable is 1-D along the dimension of its own name (CF 1.11 section 1.3), so
+/// its size is the dimension's, already within the checked size: a variable `x(big)` named
+/// like the dimension `x` but along another, huge dimension is not read.
+fn coord_values<'a>(
+    path: &Path,
+    file: &NcFile,
+    vars: &'a [NcVariable],
+    name: &str,
+) -> Result<Option<(Vec<f64>, &'a NcVariable)>, LoadError> {
+    match vars
+        .iter()
+        .find(|v| v.name() == name && v.dimensions().len() == 1 && v.dimensions()[0].name == name)
+    {
+        None => Ok(None),
+        Some(c) => {
+            let vals = file.read_variable_unpacked(name).map_err(|e| {
+                LoadError::new(path, None, format!("cannot read coordinate `{name}`: {e}"))
+            })?;
+            Ok(Some((vals.iter().copied().collect(), c)))
         }
     }
+}
+
+/// Frame times from the CF time coordinate of `tdim`, seconds after the first frame; `None`
+/// when the file has no such coordinate.
+fn frame_times(
+    path: &Path,
+    file: &NcFile,
+    vars: &[NcVariable],
+    tdim: &netcdf_reader::NcDimension,
+) -> Result<Option<Vec<f64>>, LoadError> {
+    let err = |m: String| LoadError::new(path, None, m);
+    let Some((t, tv)) = coord_values(path, file, vars, &tdim.name)? else {
+        return Ok(None);
+    };
+    let units = attr_text(tv, "units").map_err(err)?.unwrap_or_default();
+    let unit_s = cf_time_unit_s(&units).ok_or_else(|| {
+        err(format!(
+            "time coordinate `{}` has units `{}`; need `<days|hours|minutes|seconds|milliseconds|microseconds> since <date>`",
+            isotrack_core::numtext::Escaped(&tdim.name),
+            isotrack_core::numtext::Clipped(&units)
+        ))
+    })?;
+    Ok(Some(t.iter().map(|v| unit_s.to_s(v - t[0])).collect()))
+}
+
+/// Where the frames lie, from the x and y coordinates: the georeference, the origin and
+/// spacing in local metres, and whether rows (y) or columns (x) run backwards in the file.
+struct Placement {
+    georeference: Georeference,
+    origin: Vec2,
+    spacing: [f64; 2],
+    flip_y: bool,
+    flip_x: bool,
+}
+
+impl Default for Placement {
+    /// No coordinates: no georeference, 1 m spacing from the origin.
+    fn default() -> Self {
+        Self {
+            georeference: Georeference::None,
+            origin: Vec2::default(),
+            spacing: [1.0, 1.0],
+            flip_y: false,
+            flip_x: false,
+        }
+    }
+}
+
+/// The [`Placement`] of the x coordinate `(xs, xv)` and y coordinate `(ys, yv)`: longitude and
+/// latitude (projected to local metres), or two lengths (kilometres converted to metres),
+/// regularly spaced.
+fn placement(
+    path: &Path,
+    (xs, xv): (Vec<f64>, &NcVariable),
+    (ys, yv): (Vec<f64>, &NcVariable),
+    layout: &Layout,
+    warnings: &mut Vec<String>,
+) -> Result<Placement, LoadError> {
+    let err = |m: String| LoadError::new(path, None, m);
+    let (xdim, ydim, nx, ny) = (layout.xdim, layout.ydim, layout.nx, layout.ny);
+    let kx = axis_kind(xv, warnings).map_err(err)?;
+    let ky = axis_kind(yv, warnings).map_err(err)?;
+    let (lonlat, [fx, fy]) = match (kx, ky) {
+        (Axis::Lon, Axis::Lat) => (true, [1.0, 1.0]),
+        (Axis::Length(fx), Axis::Length(fy)) => (false, [fx, fy]),
+        _ => {
+            let what = |a: Axis| match a {
+                Axis::Lon => "longitude",
+                Axis::Lat => "latitude",
+                Axis::Length(_) => "a length",
+            };
+            return Err(err(format!(
+                "coordinates `{}` (x: {}) and `{}` (y: {}) do not make a grid: need longitude and latitude, or two lengths",
+                xdim.name,
+                what(kx),
+                ydim.name,
+                what(ky)
+            )));
+        }
+    };
+    let (mut x0, mut dx) =
+        regular(&xs).map_err(|m| err(format!("coordinate `{}`: {m}", xdim.name)))?;
+    let (mut y0, mut dy) =
+        regular(&ys).map_err(|m| err(format!("coordinate `{}`: {m}", ydim.name)))?;
+    // Kilometres to metres (an exact power of ten: metres stay as they were).
+    (x0, dx, y0, dy) = (x0 * fx, dx * fx, y0 * fy, dy * fy);
+    let mut p = Placement::default();
+    if dy < 0.0 {
+        p.flip_y = true;
+        y0 += dy * (ny - 1) as f64;
+        dy = -dy;
+    }
+    if dx < 0.0 {
+        p.flip_x = true;
+        x0 += dx * (nx - 1) as f64;
+        dx = -dx;
+    }
+    if lonlat {
+        let ref_lat = y0 + 0.5 * dy * (ny - 1) as f64;
+        p.spacing = lonlat_spacing_m(dx, dy, ref_lat);
+        p.georeference = Georeference::LonLat {
+            lon0_deg: x0,
+            lat0_deg: y0,
+            dlon_deg: dx,
+            dlat_deg: dy,
+            ref_lat_deg: ref_lat,
+        };
+    } else {
+        p.origin = Vec2::new(x0, y0);
+        p.spacing = [dx, dy];
+        p.georeference = Georeference::Metres { epsg: None };
+    }
+    Ok(p)
+}
+
+/// The frames of `values` (row-major, frame after frame), flipped to south-to-north rows and
+/// west-to-east columns.
+fn into_frames(
+    path: &Path,
+    mut values: Vec<f64>,
+    layout: &Layout,
+    p: &Placement,
+) -> Result<Vec<Grid2>, LoadError> {
+    let (nx, ny, n_frames) = (layout.nx, layout.ny, layout.n_frames);
     // Frames split off the end, the rest shrunk each time: one frame more than the values at
     // most, not a second copy of them all.
     let mut frames = Vec::with_capacity(n_frames);
     for k in (0..n_frames).rev() {
         let mut v = values.split_off(k * nx * ny);
         values.shrink_to_fit();
-        if flip_y {
-            super::flip_rows(&mut v, nx, ny);
+        if p.flip_y {
+            super::loaded::flip_rows(&mut v, nx, ny);
         }
-        if flip_x {
+        if p.flip_x {
             for row in v.chunks_mut(nx) {
                 row.reverse();
             }
         }
-        let g = Grid2::new(nx, ny, origin, spacing, v)
+        let g = Grid2::new(nx, ny, p.origin, p.spacing, v)
             .map_err(|e| LoadError::new(path, None, format!("frame {k}: {e}")))?;
         frames.push(g);
     }
     frames.reverse();
-    Ok(LoadedSeries {
-        frames,
-        frame_times_s,
-        georeference,
-        units,
-        warnings: warnings
-            .into_iter()
-            .map(|w| {
-                format!(
-                    "{}: {}",
-                    isotrack_core::numtext::Escaped(&path.display().to_string()),
-                    isotrack_core::numtext::Escaped(&w)
-                )
-            })
-            .collect(),
-    })
+    Ok(frames)
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! NumPy `.npy` grids: 2-D, shape `(rows, cols)`, or a time series of frames, 3-D, shape
 //! `(time, rows, cols)`; row 0 = south, C or Fortran order.
 
-use super::{FilePosition, LoadError, LoadedGrid, LoadedSeries};
+use super::error::{FilePosition, LoadError};
+use super::loaded::{LoadedGrid, LoadedSeries};
 use crate::georef::Georeference;
 use crate::grid::Grid2;
 use isotrack_core::Vec2;
@@ -112,7 +113,7 @@ fn check_shape(path: &Path, header: &[u8]) -> Result<(), LoadError> {
 
 /// A 2-D array (a 3-D one is refused here: use [`parse_series`]).
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
-    super::single_frame(path, parse_series(path, bytes)?)
+    super::loaded::single_frame(path, parse_series(path, bytes)?)
 }
 
 /// A 2-D array as one frame, or a 3-D `(time, rows, cols)` array as frames (no frame times: the
@@ -172,7 +173,7 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             format!("shape {shape:?}: a frame needs at least 2 x 2 values, and a series one frame"),
         ));
     }
-    super::check_series_size(path, nt, nx, ny, super::memory_budget_bytes())?;
+    super::limits::check_series_size(path, nt, nx, ny, super::limits::memory_budget_bytes())?;
     // The header's shape is untrusted: refuse a data size beyond the file before reading.
     let item = ts.num_bytes().unwrap_or(8) as u128;
     if (nt as u128) * (ny as u128) * (nx as u128) * item > bytes.len() as u128 {

@@ -1,7 +1,9 @@
 //! Loader tests: every format reads the same grid; every malformed file is a clear error naming
 //! the file and the line or offset.
 
+use super::limits::{parse_address_space_limit, parse_vm_size_bytes};
 use super::*;
+use crate::georef::Georeference;
 use isotrack_core::Vec2;
 use std::io::Write;
 

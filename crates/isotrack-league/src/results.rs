@@ -1,0 +1,129 @@
+//! What a benchmark produces: its results (per task, per run) and its errors, and where a task's
+//! results are kept.
+
+use crate::score::{Score, Scoring};
+use crate::suite::SuiteError;
+use isotrack_plot::FieldPicture;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What went wrong running a benchmark.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// A task's scenario file, or a file it names (`field.path`), cannot be read: missing, a
+    /// FIFO, a directory, a device (the message names the suite file and line that names it).
+    #[error("task {task}: {message}")]
+    Task {
+        /// The task id.
+        task: String,
+        /// Why.
+        message: String,
+    },
+    /// The suite cannot run as written: a task's scenario or overrides are invalid, or a run it
+    /// defines (a law with its recorded gains, a seed's `vary` draws) makes an invalid
+    /// scenario. Found before any run starts; located at the suite file's line.
+    #[error("{0}")]
+    Suite(SuiteError),
+    /// A controller name that is not registered.
+    #[error("unknown controller {0:?} (built in: pi_isoline, sliding_mode, sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference)")]
+    UnknownController(String),
+    /// A controller named twice in [`Options::controllers`](crate::run::Options::controllers).
+    #[error("controller {0:?} is named twice")]
+    DuplicateController(String),
+    /// Reading or writing results.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// `--resume` on results of another suite or controller set.
+    #[error("{0}")]
+    Mismatch(String),
+    /// Stopped by [`Options::cancel`](crate::run::Options::cancel) before it finished.
+    #[error("interrupted")]
+    Interrupted,
+}
+
+/// One scored run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunRow {
+    /// Controller name.
+    pub controller: String,
+    /// Scoring seed.
+    pub seed: u64,
+    /// `completed`, `left_field`, `diverged`, or `invalid_scenario`.
+    pub outcome: String,
+    /// Convergence time, s.
+    pub convergence_time_s: Option<f64>,
+    /// Share of the steady window within the tolerance.
+    pub time_in_band_fraction: Option<f64>,
+    /// Steady RMS distance to the true isoline, m.
+    pub steady_state_rms_isoline_distance_m: Option<f64>,
+    /// Track losses.
+    pub track_losses: u64,
+    /// `integral(omega^2 dt)`, rad^2/s.
+    pub control_effort: f64,
+    /// Steady RMS error (field units).
+    pub steady_state_rms_error: Option<f64>,
+    /// The score and its parts.
+    pub score: Score,
+}
+
+/// One controller's path for a task's picture (the first scoring seed), m.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Trajectory {
+    /// Controller name.
+    pub controller: String,
+    /// `[x, y]` points, m.
+    pub points: Vec<[f64; 2]>,
+    /// How the run ended.
+    pub outcome: String,
+}
+
+/// A task's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TaskResult {
+    /// Task id.
+    pub id: String,
+    /// Task title.
+    pub title: String,
+    /// Mean score per controller, in the run's controller order.
+    pub scores: Vec<(String, f64)>,
+    /// The gains each built-in law ran with (`controller.KEY`).
+    pub gains: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Every scored run, controller by controller, seed by seed.
+    pub runs: Vec<RunRow>,
+    /// Paths for the picture.
+    pub trajectories: Vec<Trajectory>,
+    /// The field for the picture.
+    pub picture: FieldPicture,
+    /// The digest of what produced it (suite, controllers, gains, version): `--resume` reuses
+    /// a task's results only when it matches.
+    pub digest: String,
+}
+
+/// A benchmark's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchResult {
+    /// Suite name.
+    pub suite: String,
+    /// Suite version.
+    pub version: u32,
+    /// The score formula.
+    #[serde(default)]
+    pub scoring: Scoring,
+    /// Controllers, in order.
+    pub controllers: Vec<String>,
+    /// Per task.
+    pub tasks: Vec<TaskResult>,
+    /// Overall score per controller (mean over tasks), best first.
+    pub overall: Vec<(String, f64)>,
+}
+
+/// The file a task's results are kept in under a benchmark's output directory.
+pub fn task_file(dir: &Path, id: &str) -> std::path::PathBuf {
+    dir.join("tasks").join(id).join("task.json")
+}
