@@ -121,6 +121,11 @@ impl PyScenario {
         record_rate_hz: Option<f64>,
         controller: Option<Py<PyAny>>,
     ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
+        if self.inner.spec().team.is_some() {
+            return Err(PyValueError::new_err(
+                "[team]: Scenario.run() runs one vehicle; a team is run by `isotrack run` only, for now (docs/TEAMS.md)",
+            ));
+        }
         no_panic(|| self.run_inner(py, record_rate_hz, controller))
     }
 
@@ -440,6 +445,8 @@ fn summary_json(s: &Scenario, origin: &str, r: &RunResult) -> PyResult<String> {
         result: r,
         warnings: &warnings,
         data_files: isotrack_runs::summary::data_file_digests(s),
+        team: None,
+        vehicles: None,
         scenario: s.file(),
     };
     isotrack_runs::summary::summary_to_json(&summary)

@@ -124,6 +124,7 @@ fn md(x: Option<f64>) -> String {
 /// Runs the command.
 pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     let base = load_scenario(Some(&a.scenario), &a.set).map_err(invalid)?;
+    crate::run::refuse_team(&base, "compare")?;
     let kinds: Vec<ControllerKind> = if a.controllers.is_empty() {
         ControllerKind::ALL.to_vec()
     } else {

@@ -122,6 +122,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     positive("--timeout-s", Some(args.timeout_s))?;
     within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
     let scenario = load(&args.scenario)?;
+    crate::run::refuse_team(&scenario, "sitl")?;
     let mut opts = SitlOptions::new(&args.mavlink);
     opts.system_id = args.system_id;
     opts.pace = if args.lockstep {
@@ -206,6 +207,8 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             result: &report.result,
             warnings: &report.events,
             data_files: isotrack_runs::summary::data_file_digests(&scenario),
+            team: None,
+            vehicles: None,
             scenario: scenario.file(),
         };
         let mut text = summary_to_json(&summary).map_err(|e| cant(&p, e.into()))?;
@@ -299,6 +302,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     }
     let sensor = SensorSource::parse(&args.sensor).map_err(usage)?;
     let scenario = load(&args.scenario)?;
+    crate::run::refuse_team(&scenario, "fly")?;
     let mut opts = FlyOptions::new(&args.mavlink);
     opts.sensor = sensor;
     opts.take_control = args.take_control;

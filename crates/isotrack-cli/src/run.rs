@@ -2,7 +2,7 @@
 
 use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
-use crate::output::{run_to_trace, scenario_toml, write_summary};
+use crate::output::{run_to_trace, scenario_toml};
 use isotrack_core::numtext::Echo;
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, RunResult};
@@ -78,9 +78,70 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
     out
 }
 
+/// A team's lines after [`human_summary`] (vehicle 0's): the team metrics.
+pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
+    let mut out = format!("team        {} vehicles", t.runs.len());
+    match &t.team {
+        Some(m) => {
+            out += &format!(
+                "  gap_cv {}  time_to_even {}  revisit max {} s (ideal {:.2} s)  min separation {} m\n",
+                fmt_opt(m.gap_cv),
+                m.time_to_even_s
+                    .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
+                fmt_opt(m.revisit_time_max_s),
+                m.revisit_time_ideal_s,
+                fmt_opt(m.min_separation_m),
+            );
+        }
+        None => {
+            out += "  (no team metrics: the isoline's arc length is not known for this field)\n"
+        }
+    }
+    out
+}
+
+/// `team.spacing = "arc_reference"` needs the true isoline's arc length (a radial field that
+/// does not drift, for now): refused before anything is written (exit 65).
+pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
+    let arc_law = scenario.spec().team.as_ref().is_some_and(|t| {
+        matches!(
+            t.law,
+            isotrack_sim::team::spacing::SpacingLaw::ArcReference { .. }
+        )
+    });
+    if arc_law && scenario.team_arc().is_none() {
+        return Err(Failure {
+            code: exit::DATAERR,
+            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift only, for now".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a scenario with `[team]` in a command that runs one vehicle (`compare`, `sitl`,
+/// `fly`): exit 65, rather than flying one vehicle as if the section were not there.
+pub fn refuse_team(scenario: &Scenario, command: &str) -> Result<(), Failure> {
+    if scenario.spec().team.is_some() {
+        return Err(Failure {
+            code: exit::DATAERR,
+            message: format!(
+                "[team]: `isotrack {command}` runs one vehicle; a team is run by `isotrack run` only, for now (docs/TEAMS.md)"
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// `isotrack run`.
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
+    refuse_team_without_isoline(&scenario)?;
+    if args.plot && scenario.spec().team.is_some() {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: "--plot: figures of a team ([team]) are not drawn yet (docs/TEAMS.md)".into(),
+        });
+    }
     let warnings = isotrack_scenario::check::warnings(&scenario);
     for w in &warnings {
         errln!("warning: {w}");
@@ -126,24 +187,33 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         // The trace streams into a temporary file renamed into place once whole; the summary,
         // written last (atomically), marks the directory complete.
         let trace_tmp = isotrack_runs::files::temp_beside(&trace);
-        let result = run_to_trace(&scenario, &trace_tmp)
-            .and_then(|r| std::fs::rename(&trace_tmp, &trace).map(|()| r))
-            .map_err(|e| {
-                let _ = std::fs::remove_file(&trace_tmp);
-                cant(&trace.display().to_string(), e)
-            })?;
+        // A team (`[team]`) writes one trace with a `vehicle` column; its summary's top-level
+        // metrics are vehicle 0's, beside the `team` object and the `vehicles` array.
+        let (result, team) = match isotrack_runs::trace::run_team_to_trace(&scenario, &trace_tmp) {
+            Some(r) => r.map(|t| (t.runs[0].clone(), Some(t))),
+            None => run_to_trace(&scenario, &trace_tmp).map(|r| (r, None)),
+        }
+        .and_then(|r| std::fs::rename(&trace_tmp, &trace).map(|()| r))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&trace_tmp);
+            cant(&trace.display().to_string(), e)
+        })?;
         isotrack_runs::files::write_atomic(&resolved, scenario_toml(&scenario).as_bytes())
             .map_err(|e| cant(&resolved.display().to_string(), e))?;
-        write_summary(
+        isotrack_runs::summary::write_summary_team(
             &summary,
             &scenario,
             args.scenario.scenario.as_deref(),
             &result,
             &warnings,
+            team.as_ref(),
         )
         .map_err(|e| cant(&summary.display().to_string(), e))?;
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &result));
+            if let Some(t) = &team {
+                out!("{}", team_summary(t));
+            }
             outln!(
                 "wrote       {}, {}, {}",
                 trace.display(),
@@ -159,6 +229,16 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             }
         }
         result
+    } else if let Some(team) = scenario.run_team(&mut [] as &mut [NoTrace]) {
+        let team = team.map_err(|e| Failure {
+            code: exit::DATAERR,
+            message: e.to_string(),
+        })?;
+        if !args.quiet {
+            out!("{}", human_summary(&name, &scenario, &team.runs[0]));
+            out!("{}", team_summary(&team));
+        }
+        team.runs[0].clone()
     } else {
         let result = scenario.run(&mut NoTrace);
         if !args.quiet {

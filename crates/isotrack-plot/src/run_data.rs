@@ -31,6 +31,13 @@ impl RunData {
                 .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?,
         )
         .map_err(|e| err(format!("summary.json: {e}")))?;
+        // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
+        // would join into one path; refused until the team's figures are drawn.
+        if summary.get("team").is_some() {
+            return Err(err(
+                "a team's run (summary.json has a `team` object): figures and reports of teams are not drawn yet (docs/TEAMS.md)".into(),
+            ));
+        }
         let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
             let m = format!("scenario.toml: {e}");
             if e.is_unreadable_input() {

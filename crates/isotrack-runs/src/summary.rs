@@ -24,8 +24,60 @@ pub struct Summary<'a> {
     /// `report` refuse runs whose files differ (one overwritten in place between them).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub data_files: BTreeMap<String, String>,
+    /// A team's run (`[team]`): the team metrics; left out for one vehicle. The flattened
+    /// top-level metrics are then vehicle 0's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub team: Option<TeamJson<'a>>,
+    /// A team's run: every vehicle's outcome and metrics, in the listed order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vehicles: Option<&'a [RunResult]>,
     /// The fully resolved scenario.
     pub scenario: &'a ScenarioFile,
+}
+
+/// The `team` object of `summary.json`.
+#[derive(Debug, Serialize)]
+pub struct TeamJson<'a> {
+    /// Vehicles in the team.
+    pub vehicle_count: usize,
+    /// `team.spacing`.
+    pub spacing: &'static str,
+    /// Whether the spacing law uses only ranges and neighbour identities (`arc_reference`
+    /// does not: a reference).
+    pub coordinate_free: bool,
+    /// Each vehicle's `[ahead, behind]` neighbours at the end (`null`: none known).
+    pub neighbours: &'a [Option<[u32; 2]>],
+    /// The team metrics along the true isoline (`gap_cv`, `time_to_even_s`,
+    /// `revisit_time_max_s`, `revisit_time_mean_s`, `revisit_time_ideal_s`, `min_separation_m`,
+    /// `order_preserved`, ...); left out where the isoline has no arc-length projection
+    /// ([`TeamJson::metrics_note`] says so).
+    #[serde(flatten)]
+    pub metrics: Option<&'a isotrack_sim::team::metrics::TeamSummary>,
+    /// Why the metrics are left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub metrics_note: Option<&'static str>,
+}
+
+impl<'a> TeamJson<'a> {
+    /// The `team` object of a team run of `scenario`.
+    pub fn new(scenario: &Scenario, r: &'a isotrack_sim::TeamResult) -> Self {
+        let law = scenario
+            .spec()
+            .team
+            .as_ref()
+            .map(|t| t.law)
+            .unwrap_or(isotrack_sim::team::spacing::SpacingLaw::None);
+        Self {
+            vehicle_count: r.runs.len(),
+            spacing: law.name(),
+            coordinate_free: law.is_coordinate_free(),
+            neighbours: &r.ring,
+            metrics: r.team.as_ref(),
+            metrics_note: r.team.is_none().then_some(
+                "no team metrics: the isoline's arc length is known for a radial field that does not drift only, for now",
+            ),
+        }
+    }
 }
 
 /// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`),
@@ -37,12 +89,27 @@ pub fn write_summary(
     result: &RunResult,
     warnings: &[String],
 ) -> std::io::Result<()> {
+    write_summary_team(path, scenario, scenario_path, result, warnings, None)
+}
+
+/// [`write_summary`] for any run: with `team`, the top-level metrics are vehicle 0's (`result`),
+/// and the `team` object and `vehicles` array are added.
+pub fn write_summary_team(
+    path: &Path,
+    scenario: &Scenario,
+    scenario_path: Option<&Path>,
+    result: &RunResult,
+    warnings: &[String],
+    team: Option<&isotrack_sim::TeamResult>,
+) -> std::io::Result<()> {
     let s = Summary {
         isotrack_version: env!("CARGO_PKG_VERSION"),
         scenario_path: scenario_path.map(|p| p.display().to_string()),
         result,
         warnings,
         data_files: data_file_digests(scenario),
+        team: team.map(|t| TeamJson::new(scenario, t)),
+        vehicles: team.map(|t| t.runs.as_slice()),
         scenario: scenario.file(),
     };
     let text = summary_to_json(&s).map_err(std::io::Error::other)?;

@@ -20,6 +20,9 @@ pub const TRACE_COLUMNS: [&str; 8] = [
 /// The columns a flying vehicle adds to `trace.csv` (roll positive right wing down).
 pub const TELEMETRY_COLUMNS: [&str; 3] = ["altitude_m", "airspeed_mps", "roll_rad"];
 
+/// The column a team's trace adds (last): the vehicle's index in the team's listed order.
+pub const VEHICLE_COLUMN: &str = "vehicle";
+
 /// Streams `trace.csv` while the run goes: a header row, then one row per recorded step, so a
 /// long run's trace never has to fit in memory. Numbers are written in Rust's shortest
 /// round-trip form ([`num`]), so they read back bit-identical; `s_measured` is empty before the
@@ -28,6 +31,8 @@ pub const TELEMETRY_COLUMNS: [&str; 3] = ["altitude_m", "airspeed_mps", "roll_ra
 pub struct TraceWriter {
     w: csv::Writer<std::fs::File>,
     flying: bool,
+    /// A team's trace: rows end with the vehicle's index ([`VEHICLE_COLUMN`]).
+    team: bool,
     buf: Vec<String>,
     error: Option<std::io::Error>,
 }
@@ -36,16 +41,30 @@ impl TraceWriter {
     /// Creates the file and writes the header. An existing path that is not a regular file (a
     /// link, a FIFO) is refused ([`crate::files::create_output`]).
     pub fn create(path: &Path, flying: bool) -> std::io::Result<Self> {
+        Self::create_with(path, flying, false)
+    }
+
+    /// As [`TraceWriter::create`], for a team: the header ends with [`VEHICLE_COLUMN`], and rows
+    /// are written through [`TeamTraceSink`]s.
+    pub fn create_team(path: &Path, flying: bool) -> std::io::Result<Self> {
+        Self::create_with(path, flying, true)
+    }
+
+    fn create_with(path: &Path, flying: bool, team: bool) -> std::io::Result<Self> {
         // Never into a FIFO (it would block) nor through a link: `files::create_output`.
         let mut w = csv::Writer::from_writer(crate::files::create_output(path)?);
         let mut header: Vec<&str> = TRACE_COLUMNS.to_vec();
         if flying {
             header.extend(TELEMETRY_COLUMNS);
         }
+        if team {
+            header.push(VEHICLE_COLUMN);
+        }
         w.write_record(&header)?;
         Ok(Self {
             w,
             flying,
+            team,
             buf: Vec::with_capacity(header.len()),
             error: None,
         })
@@ -70,8 +89,9 @@ impl TraceWriter {
     }
 }
 
-impl TraceSink for TraceWriter {
-    fn record(&mut self, r: &TraceRow) {
+impl TraceWriter {
+    /// Writes one row, with `vehicle` in the last column of a team's trace.
+    fn write_row(&mut self, r: &TraceRow, vehicle: usize) {
         if self.error.is_some() {
             return;
         }
@@ -94,10 +114,61 @@ impl TraceSink for TraceWriter {
                 self.buf.push(num(v));
             }
         }
+        if self.team {
+            self.buf.push(vehicle.to_string());
+        }
         if let Err(e) = self.w.write_record(&self.buf) {
             self.error = Some(e.into());
         }
     }
+}
+
+impl TraceSink for TraceWriter {
+    fn record(&mut self, r: &TraceRow) {
+        self.write_row(r, 0);
+    }
+}
+
+/// One team member's sink into the team's one [`TraceWriter`] (made by
+/// [`TraceWriter::create_team`]): its rows carry its index. The team steps its vehicles in
+/// order, so the file holds, for each recorded step, vehicle 0's row, then 1's, ...
+pub struct TeamTraceSink<'a> {
+    writer: &'a std::cell::RefCell<TraceWriter>,
+    vehicle: usize,
+}
+
+impl<'a> TeamTraceSink<'a> {
+    /// One sink per vehicle of a team of `count`, all into `writer`.
+    pub fn for_team(writer: &'a std::cell::RefCell<TraceWriter>, count: usize) -> Vec<Self> {
+        (0..count).map(|vehicle| Self { writer, vehicle }).collect()
+    }
+}
+
+impl TraceSink for TeamTraceSink<'_> {
+    fn record(&mut self, r: &TraceRow) {
+        self.writer.borrow_mut().write_row(r, self.vehicle);
+    }
+}
+
+/// Runs `scenario`'s team (its `[team]` section), streaming one trace of every vehicle into
+/// `path` (a [`VEHICLE_COLUMN`] last). `None` without a team; a team the engine refuses is an
+/// `InvalidInput` error.
+pub fn run_team_to_trace(
+    scenario: &Scenario,
+    path: &Path,
+) -> Option<std::io::Result<isotrack_sim::TeamResult>> {
+    let count = scenario.spec().team.as_ref()?.count();
+    Some((|| {
+        let w = std::cell::RefCell::new(TraceWriter::create_team(path, scenario.is_flying())?);
+        let mut sinks = TeamTraceSink::for_team(&w, count);
+        let r = scenario
+            .run_team(&mut sinks)
+            .expect("the scenario has a team")
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.to_string()))?;
+        drop(sinks);
+        w.into_inner().finish()?;
+        Ok(r)
+    })())
 }
 
 /// Runs `scenario`, streaming its trace into `path`.

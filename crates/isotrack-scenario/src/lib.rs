@@ -23,6 +23,7 @@ pub mod resolve;
 pub mod schema;
 pub mod spec;
 pub mod sweep;
+mod team;
 pub mod tomltext;
 mod watch;
 

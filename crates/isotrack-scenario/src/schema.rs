@@ -88,6 +88,10 @@ pub struct ScenarioFile {
     /// Where `isotrack sitl` puts the run on the Earth (written only when set).
     #[serde(skip_serializing_if = "SitlSection::is_unset")]
     pub sitl: SitlSection,
+    /// A team of vehicles sharing the field and the clock (docs/TEAMS.md); absent: one vehicle,
+    /// and nothing of a run changes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub team: Option<TeamSection>,
 }
 
 /// Field kinds.
@@ -733,4 +737,135 @@ impl SitlSection {
     pub fn home_alt_m(&self) -> f64 {
         self.home_alt_m.unwrap_or(Self::DEFAULT_HOME_ALT_M)
     }
+}
+
+/// `[team]`: several vehicles on one isoline, spread by a spacing law (docs/TEAMS.md). Every
+/// key has a default (`crate::spec::team`); the starts are `starts` or `spread`, exactly one.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TeamSection {
+    /// Number of vehicles, 1 to `spec::team::MAX_COUNT`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub count: Option<u64>,
+    /// One start pose per vehicle, in the order of travel along the isoline (the listed ring).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub starts: Option<Vec<InitialSection>>,
+    /// The starts spread along an arc or a line.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spread: Option<TeamSpread>,
+    /// The spacing law: `none`, `range_balance` (coordinate-free) or `arc_reference` (the
+    /// true arc gaps: a reference, not coordinate-free). Default `range_balance`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spacing: Option<SpacingName>,
+    /// The spacing gain `k_v`, 1/s (default 0.5).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_v: Option<f64>,
+    /// Slowest speed the law may command, m/s (default half of `vehicle.speed_mps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_min_mps: Option<f64>,
+    /// Fastest speed the law may command, m/s (default twice `vehicle.speed_mps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_max_mps: Option<f64>,
+    /// How each vehicle knows its neighbours: `listed` (the listed order is the order of
+    /// travel) or `discovered` (from ranges and range rates after deployment). Default `listed`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ring: Option<RingName>,
+    /// Neighbour ranging.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranging: Option<TeamRangingSection>,
+}
+
+/// `team.spread`: `count` starts along an arc (`center_m`, `radius_m`, the first at
+/// `start_rad`, the next `step_rad` further counter-clockwise, each heading along the circle,
+/// clockwise when `clockwise`) or a line (the first at `x_m, y_m`, the next `step_m` further
+/// along `direction_rad`, all heading `heading_rad`).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TeamSpread {
+    /// `arc` or `line`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub along: Option<SpreadAlong>,
+    /// `arc`: centre, m (default `[0, 0]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub center_m: Option<[f64; 2]>,
+    /// `arc`: radius, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius_m: Option<f64>,
+    /// `arc`: angle of the first start, rad counter-clockwise from +x (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_rad: Option<f64>,
+    /// `arc`: angle between consecutive starts, rad (default `2 pi/count`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_rad: Option<f64>,
+    /// `arc`: travel clockwise (default true, the paper's direction around a maximum).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clockwise: Option<bool>,
+    /// `line`: first start, m (default `initial.x_m`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_m: Option<f64>,
+    /// `line`: first start, m (default `initial.y_m`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub y_m: Option<f64>,
+    /// `line`: every vehicle's heading, rad (default `initial.heading_rad`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_rad: Option<f64>,
+    /// `line`: distance between consecutive starts, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_m: Option<f64>,
+    /// `line`: direction of the line, rad (default: `heading_rad` + pi, behind each other).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction_rad: Option<f64>,
+}
+
+/// `team.spread.along`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpreadAlong {
+    /// Along a circular arc.
+    Arc,
+    /// Along a straight line.
+    Line,
+}
+
+/// `team.spacing`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpacingName {
+    /// Every vehicle at the nominal speed.
+    None,
+    /// `v0 + k_v (r_ahead - r_behind)` from ranges (coordinate-free).
+    RangeBalance,
+    /// The same law on the true arc gaps (a reference, not coordinate-free).
+    ArcReference,
+}
+
+/// `team.ring`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RingName {
+    /// The listed order is the order of travel.
+    Listed,
+    /// Found from ranges and range rates after deployment.
+    Discovered,
+}
+
+/// `team.ranging`: each vehicle ranges its two ring neighbours (e.g. UWB two-way ranging).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TeamRangingSection {
+    /// Ranging rate, Hz (default 10; its period a whole number of steps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rate_hz: Option<f64>,
+    /// Standard deviation of the range noise, m (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise_std_m: Option<f64>,
+    /// Beyond this distance a neighbour does not answer, m (default: no limit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_range_m: Option<f64>,
+    /// Probability a range is lost, in [0, 1] (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropout_probability: Option<f64>,
+    /// Delivery delay, s (default 0; a whole number of steps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_s: Option<f64>,
 }

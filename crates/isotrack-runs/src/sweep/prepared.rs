@@ -27,6 +27,12 @@ pub fn sweep_base(plan: &SweepPlan, sets: &[String], label: &str) -> Result<Scen
         .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
     plan.check_keys(&base, label)
         .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    if base.spec().team.is_some() {
+        return Err(fail(
+            exit::DATAERR,
+            format!("{label}: [team]: a sweep runs one vehicle a run; a team is run by `isotrack run` only, for now (docs/TEAMS.md)"),
+        ));
+    }
     Ok(base)
 }
 

@@ -104,8 +104,15 @@ pub fn run_scenario(
     sweep_name: &str,
 ) -> Result<Scenario, String> {
     let origin = format!("sweep {sweep_name} run {id}");
-    base.derive_with(&plan.run_assignments(id, &origin), &origin)
-        .map_err(|e| e.to_string().replace('\n', " "))
+    let s = base
+        .derive_with(&plan.run_assignments(id, &origin), &origin)
+        .map_err(|e| e.to_string().replace('\n', " "))?;
+    if s.spec().team.is_some() {
+        return Err(format!(
+            "{origin}: [team]: a sweep runs one vehicle a run; a team is run by `isotrack run` only, for now"
+        ));
+    }
+    Ok(s)
 }
 
 /// The `results.csv` fields of run `id` without warnings (a run with a controller of the

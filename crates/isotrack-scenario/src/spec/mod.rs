@@ -22,10 +22,12 @@ pub mod controller;
 pub mod sensor;
 pub mod show;
 pub mod sim;
+pub mod team;
 pub mod vehicle;
 
 pub use controller::{ControllerSpec, LawSpec, TurnRateLimit};
 pub use sim::{MetricsSpec, OutputSpec, SimSpec, SitlSpec};
+pub use team::TeamSpec;
 pub use vehicle::VehicleSpec;
 
 use crate::episode::Start;
@@ -52,8 +54,8 @@ pub struct ScenarioSpec {
     pub output: OutputSpec,
     /// `[sitl]`, the home position with its defaults.
     pub sitl: SitlSpec,
-    // A `[team]` section (several vehicles sharing one clock and one field) goes here, built
-    // like the others from its schema section.
+    /// `[team]`: several vehicles sharing one clock and one field (`None`: one vehicle).
+    pub team: Option<TeamSpec>,
 }
 
 impl ScenarioSpec {
@@ -75,6 +77,7 @@ impl ScenarioSpec {
         let metrics = MetricsSpec::new(&f.metrics, &sim)?;
         let output = OutputSpec::new(&f.output)?;
         let sitl = SitlSpec::new(&f.sitl);
+        let team = TeamSpec::new(&f.team, &vehicle, &sim, start)?;
         Ok(Self {
             sim,
             vehicle,
@@ -84,6 +87,7 @@ impl ScenarioSpec {
             metrics,
             output,
             sitl,
+            team,
         })
     }
 }

@@ -1,0 +1,228 @@
+//! Issue 32: `isotrack run` of a scenario with `[team]` (scenarios/team-circular-4.toml): one
+//! trace with a `vehicle` column, `summary.json` with a `team` object and a `vehicles` array;
+//! the `[team]` keys refused with their names (docs/ROBUSTNESS.md walk).
+mod common;
+use common::{assert_fails, isotrack, write};
+use std::f64::consts::{LN_2, PI};
+
+const TEAM: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../scenarios/team-circular-4.toml"
+);
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The bundled team: from a cluster (0.3 rad apart), range_balance spreads the four robots to a
+/// gap CV under 0.05; the ideal revisit time is `L/(N v0) = 2 pi (10 ln 2)/(4 * 0.5)` s; the
+/// trace starts at the spread's poses (`R (cos(-0.3 i), sin(-0.3 i))`), one row per vehicle per
+/// recorded step, in the listed order.
+#[test]
+fn team_circular_4_spreads_evenly() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("run");
+    let o = isotrack(&["run", TEAM, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let s = json(&out.join("summary.json"));
+    let t = &s["team"];
+    let gap_cv = t["gap_cv"].as_f64().unwrap();
+    assert!(gap_cv < 0.05, "gap_cv {gap_cv}");
+    assert!(t["time_to_even_s"].as_f64().is_some(), "{t}");
+    assert_eq!(t["vehicle_count"], 4);
+    assert_eq!(t["spacing"], "range_balance");
+    assert_eq!(t["coordinate_free"], true);
+    assert_eq!(t["order_preserved"], true);
+    let ideal = 2.0 * PI * 10.0 * LN_2 / (4.0 * 0.5);
+    let got = t["revisit_time_ideal_s"].as_f64().unwrap();
+    assert!((got - ideal).abs() < 1e-9, "{got} vs {ideal}");
+    let mx = t["revisit_time_max_s"].as_f64().unwrap();
+    assert!(mx < 1.1 * ideal, "{mx} vs {ideal}");
+    let [lo, hi] = [0, 1].map(|i| t["speed_range_mps"][i].as_f64().unwrap());
+    assert!(lo >= 0.25 && hi <= 0.75, "{lo} {hi}");
+    let vehicles = s["vehicles"].as_array().unwrap();
+    assert_eq!(vehicles.len(), 4);
+    for v in vehicles {
+        assert_eq!(v["outcome"], "completed", "{v}");
+    }
+    // The top-level metrics are vehicle 0's.
+    assert_eq!(s["path_length_m"], vehicles[0]["path_length_m"]);
+
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines = trace.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.last(), Some(&"vehicle"));
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (cv, cx, cy) = (col("vehicle"), col("x_m"), col("y_m"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len() % 4, 0);
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r[cv], (k % 4).to_string(), "row {k}");
+    }
+    let r = 10.0 * LN_2;
+    for (i, row) in rows.iter().take(4).enumerate() {
+        let th = -0.3 * i as f64;
+        let x: f64 = row[cx].parse().unwrap();
+        let y: f64 = row[cy].parse().unwrap();
+        assert!((x - r * th.cos()).abs() < 1e-9, "{x}");
+        assert!((y - r * th.sin()).abs() < 1e-9, "{y}");
+    }
+    // 300 s recorded at 10 Hz, t = 0 included.
+    assert_eq!(rows.len() / 4, 3001);
+
+    // `none`: the cluster stays a cluster (CV of the deployed gaps 0.3R, 0.3R, 0.3R, L - 0.9R:
+    // computed here from the angles).
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--set",
+        "team.spacing=\"none\"",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let gaps = [0.3, 0.3, 0.3, 2.0 * PI - 0.9];
+    let mean = 2.0 * PI / 4.0;
+    let sd = (gaps.iter().map(|g| (g - mean) * (g - mean)).sum::<f64>() / 4.0).sqrt();
+    let cv0 = sd / mean;
+    let got = json(&out.join("summary.json"))["team"]["gap_cv"]
+        .as_f64()
+        .unwrap();
+    assert!((got - cv0).abs() < 0.01, "{got} vs {cv0}");
+}
+
+/// Without `--out`, a team run prints the team's line.
+#[test]
+fn team_run_without_out_prints_the_team() {
+    let o = isotrack(&["run", TEAM, "--set", "sim.duration_s=10"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("team        4 vehicles"), "{text}");
+}
+
+/// The `[team]` keys refused with their names (exit 65), never a panic.
+#[test]
+fn bad_team_keys_are_refused_by_name() {
+    let d = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(TEAM).unwrap();
+    let cases: &[(&str, &[&str])] = &[
+        ("team.count=0", &["team.count", "[1, 10000]"]),
+        ("team.count=1000000", &["team.count", "[1, 10000]"]),
+        ("team.k_v=nan", &["team.k_v", "finite"]),
+        ("team.k_v=1e-310", &["team.k_v", "subnormal"]),
+        ("team.k_v=-1.0", &["team.k_v", ">= 0"]),
+        (
+            "team.v_min_mps=0.6",
+            &["team.v_min_mps", "vehicle.speed_mps"],
+        ),
+        ("team.v_max_mps=1e9", &["team.v_max_mps"]),
+        ("team.v_min_mps=inf", &["team.v_min_mps", "finite"]),
+        ("team.ranging.rate_hz=7.0", &["team.ranging.rate_hz"]),
+        ("team.ranging.delay_s=1e12", &["team.ranging.delay_s"]),
+        (
+            "team.ranging.dropout_probability=2.0",
+            &["dropout_probability"],
+        ),
+        (
+            "team.ranging.max_range_m=0.0",
+            &["team.ranging.max_range_m"],
+        ),
+        ("team.spread.radius_m=1e300", &["team.spread.radius_m"]),
+        ("team.spread.step_m=1.0", &["team.spread.step_m", "line"]),
+        ("team.ring=\"discovered\"", &["team.ring", "sim.duration_s"]),
+        ("team.spacing=\"sideways\"", &["sideways"]),
+        ("team.colour=1", &["colour"]),
+    ];
+    for (set, needles) in cases {
+        let o = isotrack(&["run", TEAM, "--set", set, "--set", "sim.duration_s=1"]);
+        assert_fails(&o, 65, needles);
+    }
+    // A starts list whose length is not the count; both starts and a spread.
+    let two = "starts = [{x_m = 1.0, y_m = 0.0, heading_rad = 0.0}, {x_m = 2.0, y_m = 0.0, heading_rad = 0.0}]\n";
+    let p = write(
+        d.path(),
+        "n.toml",
+        &base.replace("[team]\n", &format!("[team]\n{two}")),
+    );
+    assert_fails(&isotrack(&["run", &p]), 65, &["team.starts", "team.spread"]);
+    let p = write(
+        d.path(),
+        "m.toml",
+        &base
+            .replace("[team]\n", &format!("[team]\n{two}"))
+            .replace("spread = {", "# spread = {"),
+    );
+    assert_fails(&isotrack(&["run", &p]), 65, &["team.starts", "2 poses"]);
+    // A pose without its heading.
+    let p = write(
+        d.path(),
+        "h.toml",
+        &base
+            .replace(
+                "count = 4\n",
+                "count = 1\nstarts = [{x_m = 1.0, y_m = 0.0}]\n",
+            )
+            .replace("spread = {", "# spread = {"),
+    );
+    assert_fails(
+        &isotrack(&["run", &p]),
+        65,
+        &["team.starts[0].heading_rad", "required"],
+    );
+    // 20 000 starts (within the file size limit): refused by the count's bound, at once.
+    let many: String = (0..20_000)
+        .map(|i| format!("{{x_m = {i}.0, y_m = 0.0, heading_rad = 0.0}},"))
+        .collect();
+    let p = write(
+        d.path(),
+        "many.toml",
+        &base
+            .replace("count = 4\n", &format!("starts = [{many}]\n"))
+            .replace("spread = {", "# spread = {"),
+    );
+    assert_fails(&isotrack(&["run", &p]), 65, &["team.count", "[1, 10000]"]);
+    // Beyond the scenario file's 1 MiB limit (30 000 poses): unreadable, 66.
+    let many: String = (0..30_000)
+        .map(|i| format!("{{x_m = {i}.0, y_m = 0.0, heading_rad = 0.0}},"))
+        .collect();
+    let p = write(
+        d.path(),
+        "huge.toml",
+        &base.replace("count = 4\n", &format!("starts = [{many}]\n")),
+    );
+    assert_fails(&isotrack(&["run", &p]), 66, &["huge.toml"]);
+    // A fixed-wing team: refused, named (Dubins only for now).
+    let p = write(
+        d.path(),
+        "fw.toml",
+        &base.replace(
+            "kind = \"dubins\"\nspeed_mps = 0.5\n",
+            "kind = \"fixed_wing\"\n",
+        ),
+    );
+    assert_fails(&isotrack(&["run", &p]), 65, &["team", "dubins"]);
+    // arc_reference needs the isoline's arc length: a linear ramp has none (65, nothing written).
+    let field =
+        "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.1\ncenter_m = [0.0, 0.0]\n";
+    assert!(base.contains(field));
+    let p = write(
+        d.path(),
+        "lin.toml",
+        &base.replace(
+            field,
+            "[field]\nkind = \"linear_ramp\"\noffset = 0.0\ngradient_per_m = [1.0, 0.0]\n",
+        ),
+    );
+    let out = d.path().join("lin");
+    let o = isotrack(&[
+        "run",
+        &p,
+        "--set",
+        "team.spacing=\"arc_reference\"",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_fails(&o, 65, &["arc_reference"]);
+    assert!(!out.join("summary.json").exists());
+}

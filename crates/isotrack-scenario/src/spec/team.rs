@@ -1,0 +1,511 @@
+//! `[team]`: several vehicles on one clock and one field, spread along the isoline by a spacing
+//! law (docs/TEAMS.md, `isotrack_sim::team`). The defaults are written once here; the resolved
+//! file keeps the user's keys as given (the defaults below apply when it is read again).
+
+use super::sim::SimSpec;
+use super::vehicle::VehicleSpec;
+use crate::episode::Start;
+use crate::resolve::ranges::MAX_COORDINATE_M;
+use crate::resolve::{Echo, Issue};
+use crate::schema::{RingName, SpacingName, SpreadAlong, TeamSection};
+use isotrack_sim::team::ranging::{Ranging, RangingConfig};
+use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
+
+/// Largest `team.count`: the issue's scale target is a ring of 1 000 robots; ten times that
+/// keeps a run's memory (per vehicle: state, sensor, ranging queue) in megabytes.
+pub const MAX_COUNT: u64 = 10_000;
+/// Largest `team.count` with `team.ring = "discovered"`: each probe fits a range rate to every
+/// other vehicle (`O(N)` per sample) and the probes take `N` slots one after another.
+pub const MAX_DISCOVERED_COUNT: u64 = 64;
+/// Default `team.spacing`: the coordinate-free law.
+pub const SPACING: SpacingName = SpacingName::RangeBalance;
+/// Default `team.k_v`, 1/s: the engine's tested gain (four robots from a cluster on the paper's
+/// circle spread to `gap_cv < 0.05` within 300 s), far below the largest stable gain at 10 Hz
+/// ranging (`isotrack_core::spacing::max_stable_spacing_gain`: about 7 1/s there).
+pub const K_V_PER_S: f64 = 0.1;
+/// Default `team.v_min_mps` as a fraction of the nominal speed.
+pub const V_MIN_FRACTION: f64 = 0.5;
+/// Default `team.v_max_mps` as a multiple of the nominal speed.
+pub const V_MAX_FACTOR: f64 = 2.0;
+/// Default `team.ring`.
+pub const RING: RingName = RingName::Listed;
+/// Discovered ring: time all fly at `v0` before the probes, s.
+pub const DISCOVERY_SETTLE_S: f64 = 60.0;
+/// Discovered ring: length of each vehicle's probe slot, s.
+pub const DISCOVERY_PROBE_S: f64 = 10.0;
+/// Discovered ring: the probe's speed step as a fraction of `v0`.
+pub const DISCOVERY_PROBE_FRACTION: f64 = 0.25;
+
+/// `[team]` resolved: the starts in the listed order (the order of travel along the isoline for
+/// the listed ring), the law, the envelope and the ranging.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TeamSpec {
+    /// One start per vehicle.
+    pub starts: Vec<Start>,
+    /// The spacing law with its gain.
+    pub law: SpacingLaw,
+    /// Nominal speed `v0` (`vehicle.speed_mps`), m/s.
+    pub nominal_speed_mps: f64,
+    /// Slowest commanded speed, m/s.
+    pub v_min_mps: f64,
+    /// Fastest commanded speed, m/s.
+    pub v_max_mps: f64,
+    /// How the ring is known.
+    pub ring: RingMode,
+    /// Neighbour ranging.
+    pub ranging: RangingConfig,
+}
+
+impl TeamSpec {
+    /// Number of vehicles.
+    pub fn count(&self) -> usize {
+        self.starts.len()
+    }
+
+    /// Vehicle `i`'s sensor seed: `sim.seed` for vehicle 0 (a team of one senses as the single
+    /// run does), a SplitMix64 mix of the seed and `i` for the others.
+    pub fn sensor_seed(seed: u64, i: usize) -> u64 {
+        if i == 0 {
+            seed
+        } else {
+            splitmix(seed ^ splitmix(2 * i as u64))
+        }
+    }
+
+    /// Vehicle `i`'s ranging seed (a stream of its own, apart from every sensor's).
+    pub fn ranging_seed(seed: u64, i: usize) -> u64 {
+        splitmix(seed ^ splitmix(2 * i as u64 + 1))
+    }
+
+    /// From `[team]` (absent: `None`), the resolved vehicle, sim and `[initial]` start.
+    pub fn new(
+        t: &Option<TeamSection>,
+        vehicle: &VehicleSpec,
+        sim: &SimSpec,
+        initial: Start,
+    ) -> Result<Option<Self>, Issue> {
+        let Some(t) = t else { return Ok(None) };
+        let v0 = match vehicle {
+            VehicleSpec::Dubins { speed_mps } => *speed_mps,
+            VehicleSpec::FixedWing(_) => {
+                return Err(issue(
+                    "team",
+                    "is for vehicle.kind = \"dubins\" only for now (the fixed wing's airspeed command is not wired yet)".into(),
+                ))
+            }
+        };
+        let count = match (t.count, &t.starts) {
+            (Some(c), _) => c,
+            (None, Some(s)) => s.len() as u64,
+            (None, None) => return Err(issue("team.count", "is required".into())),
+        };
+        if !(1..=MAX_COUNT).contains(&count) {
+            return Err(issue(
+                "team.count",
+                format!("must be in [1, {MAX_COUNT}], got {count}"),
+            ));
+        }
+        let n = count as usize;
+        let starts = match (&t.starts, &t.spread) {
+            (Some(_), Some(_)) => {
+                return Err(issue(
+                    "team.starts",
+                    "and team.spread are both given: give one".into(),
+                ))
+            }
+            (Some(list), None) => {
+                if list.len() != n {
+                    return Err(issue(
+                        "team.starts",
+                        format!("has {} poses for team.count = {count}", list.len()),
+                    ));
+                }
+                list.iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let key = |k: &str| format!("team.starts[{i}].{k}");
+                        Ok(Start {
+                            x_m: coordinate(&key("x_m"), p.x_m)?,
+                            y_m: coordinate(&key("y_m"), p.y_m)?,
+                            heading_rad: finite(&key("heading_rad"), p.heading_rad)?,
+                        })
+                    })
+                    .collect::<Result<Vec<_>, Issue>>()?
+            }
+            (None, Some(sp)) => match sp.along {
+                None => {
+                    return Err(issue(
+                        "team.spread.along",
+                        "is required (\"arc\" or \"line\")".into(),
+                    ))
+                }
+                Some(SpreadAlong::Arc) => {
+                    for (k, set) in [
+                        ("x_m", sp.x_m.is_some()),
+                        ("y_m", sp.y_m.is_some()),
+                        ("heading_rad", sp.heading_rad.is_some()),
+                        ("step_m", sp.step_m.is_some()),
+                        ("direction_rad", sp.direction_rad.is_some()),
+                    ] {
+                        if set {
+                            return Err(issue(
+                                &format!("team.spread.{k}"),
+                                "applies to along = \"line\" only".into(),
+                            ));
+                        }
+                    }
+                    let c = sp.center_m.unwrap_or([0.0, 0.0]);
+                    let cx = coordinate("team.spread.center_m", Some(c[0]))?;
+                    let cy = coordinate("team.spread.center_m", Some(c[1]))?;
+                    let r = positive("team.spread.radius_m", sp.radius_m)?;
+                    if r > MAX_COORDINATE_M {
+                        return Err(issue(
+                            "team.spread.radius_m",
+                            format!(
+                                "must be at most {}, got {}",
+                                Echo(MAX_COORDINATE_M),
+                                Echo(r)
+                            ),
+                        ));
+                    }
+                    let th0 = finite("team.spread.start_rad", Some(sp.start_rad.unwrap_or(0.0)))?;
+                    let step = finite(
+                        "team.spread.step_rad",
+                        Some(sp.step_rad.unwrap_or(std::f64::consts::TAU / n as f64)),
+                    )?;
+                    let cw = sp.clockwise.unwrap_or(true);
+                    // The next start `step` further along the travel: the listed order is the
+                    // order of travel (the listed ring's `ahead(i) = i + 1`).
+                    let sign = if cw { -1.0 } else { 1.0 };
+                    (0..n)
+                        .map(|i| {
+                            let th = th0 + sign * step * i as f64;
+                            Start {
+                                x_m: cx + r * th.cos(),
+                                y_m: cy + r * th.sin(),
+                                heading_rad: th + sign * std::f64::consts::FRAC_PI_2,
+                            }
+                        })
+                        .collect()
+                }
+                Some(SpreadAlong::Line) => {
+                    for (k, set) in [
+                        ("center_m", sp.center_m.is_some()),
+                        ("radius_m", sp.radius_m.is_some()),
+                        ("start_rad", sp.start_rad.is_some()),
+                        ("step_rad", sp.step_rad.is_some()),
+                        ("clockwise", sp.clockwise.is_some()),
+                    ] {
+                        if set {
+                            return Err(issue(
+                                &format!("team.spread.{k}"),
+                                "applies to along = \"arc\" only".into(),
+                            ));
+                        }
+                    }
+                    let x = coordinate("team.spread.x_m", Some(sp.x_m.unwrap_or(initial.x_m)))?;
+                    let y = coordinate("team.spread.y_m", Some(sp.y_m.unwrap_or(initial.y_m)))?;
+                    let h = finite(
+                        "team.spread.heading_rad",
+                        Some(sp.heading_rad.unwrap_or(initial.heading_rad)),
+                    )?;
+                    let step = positive("team.spread.step_m", sp.step_m)?;
+                    let dir = finite(
+                        "team.spread.direction_rad",
+                        Some(sp.direction_rad.unwrap_or(h)),
+                    )?;
+                    let far = step * (n - 1) as f64;
+                    if !(x.abs() + far <= MAX_COORDINATE_M && y.abs() + far <= MAX_COORDINATE_M) {
+                        return Err(issue(
+                            "team.spread.step_m",
+                            format!(
+                                "puts the last start beyond {} m (step {} m x {} vehicles)",
+                                Echo(MAX_COORDINATE_M),
+                                Echo(step),
+                                n - 1
+                            ),
+                        ));
+                    }
+                    (0..n)
+                        .map(|i| Start {
+                            x_m: x + step * i as f64 * dir.cos(),
+                            y_m: y + step * i as f64 * dir.sin(),
+                            heading_rad: h,
+                        })
+                        .collect()
+                }
+            },
+            (None, None) if n == 1 => vec![initial],
+            (None, None) => {
+                return Err(issue(
+                    "team.starts",
+                    "or team.spread is required for more than one vehicle".into(),
+                ))
+            }
+        };
+        let k_v = non_negative("team.k_v", Some(t.k_v.unwrap_or(K_V_PER_S)))?;
+        let law = match t.spacing.unwrap_or(SPACING) {
+            SpacingName::None => SpacingLaw::None,
+            SpacingName::RangeBalance => SpacingLaw::RangeBalance { gain_per_s: k_v },
+            SpacingName::ArcReference => SpacingLaw::ArcReference { gain_per_s: k_v },
+        };
+        let v_min = positive(
+            "team.v_min_mps",
+            Some(t.v_min_mps.unwrap_or(V_MIN_FRACTION * v0)),
+        )?;
+        let v_max = positive(
+            "team.v_max_mps",
+            Some(t.v_max_mps.unwrap_or(V_MAX_FACTOR * v0)),
+        )?;
+        if v_min > v0 {
+            return Err(issue(
+                "team.v_min_mps",
+                format!(
+                    "must be at most vehicle.speed_mps = {}, got {}",
+                    Echo(v0),
+                    Echo(v_min)
+                ),
+            ));
+        }
+        let max = crate::resolve::ranges::MAX_SPEED_MPS;
+        if v_max < v0 || v_max > max {
+            return Err(issue(
+                "team.v_max_mps",
+                format!(
+                    "must be in [vehicle.speed_mps = {}, {}], got {}",
+                    Echo(v0),
+                    Echo(max),
+                    Echo(v_max)
+                ),
+            ));
+        }
+        let ring = match t.ring.unwrap_or(RING) {
+            RingName::Listed => RingMode::Listed,
+            RingName::Discovered => {
+                if count > MAX_DISCOVERED_COUNT {
+                    return Err(issue(
+                        "team.ring",
+                        format!("= \"discovered\" is for at most {MAX_DISCOVERED_COUNT} vehicles (O(N) per probe sample), got team.count = {count}"),
+                    ));
+                }
+                let d = DiscoveryConfig {
+                    settle_s: DISCOVERY_SETTLE_S,
+                    probe_s: DISCOVERY_PROBE_S,
+                    probe_speed_delta_mps: DISCOVERY_PROBE_FRACTION * v0,
+                };
+                let end = d.settle_s + d.probe_s * n as f64;
+                if end >= sim.duration_s {
+                    return Err(issue(
+                        "team.ring",
+                        format!(
+                            "= \"discovered\" needs {} s ({} s settling + {} s per vehicle) before the ring is known, but sim.duration_s = {}",
+                            Echo(end),
+                            Echo(d.settle_s),
+                            Echo(d.probe_s),
+                            Echo(sim.duration_s)
+                        ),
+                    ));
+                }
+                RingMode::Discover(d)
+            }
+        };
+        let r = t.ranging.clone().unwrap_or_default();
+        let dflt = RangingConfig::default();
+        let ranging = RangingConfig {
+            rate_hz: finite(
+                "team.ranging.rate_hz",
+                Some(r.rate_hz.unwrap_or(dflt.rate_hz)),
+            )?,
+            noise_std_m: non_negative(
+                "team.ranging.noise_std_m",
+                Some(r.noise_std_m.unwrap_or(dflt.noise_std_m)),
+            )?,
+            max_range_m: match r.max_range_m {
+                None => dflt.max_range_m,
+                v => positive("team.ranging.max_range_m", v)?,
+            },
+            dropout_probability: non_negative(
+                "team.ranging.dropout_probability",
+                Some(r.dropout_probability.unwrap_or(dflt.dropout_probability)),
+            )?,
+            delay_s: non_negative(
+                "team.ranging.delay_s",
+                Some(r.delay_s.unwrap_or(dflt.delay_s)),
+            )?,
+        };
+        // A delay past the run's end is no delay anyone means, and it would hold every range
+        // measured in the run in flight.
+        if ranging.delay_s > sim.duration_s {
+            return Err(issue(
+                "team.ranging.delay_s",
+                format!(
+                    "must be at most sim.duration_s = {}, got {}",
+                    Echo(sim.duration_s),
+                    Echo(ranging.delay_s)
+                ),
+            ));
+        }
+        // The rest (rate and delay whole numbers of steps, the probability in [0, 1]) as the
+        // ranging unit the run builds decides it, so a value that passes here cannot fail there.
+        Ranging::new(ranging, sim.dt_s, 0).map_err(|e| {
+            let msg = e.to_string();
+            let key = msg.split(' ').next().unwrap_or("team.ranging").to_string();
+            Issue {
+                message: msg
+                    .strip_prefix(&key)
+                    .map_or(msg.clone(), |m| m.trim_start().to_string()),
+                key,
+                unreadable: false,
+            }
+        })?;
+        Ok(Some(Self {
+            starts,
+            law,
+            nominal_speed_mps: v0,
+            v_min_mps: v_min,
+            v_max_mps: v_max,
+            ring,
+            ranging,
+        }))
+    }
+}
+
+/// SplitMix64's finaliser (Steele, Lea & Flood, "Fast splittable pseudorandom number
+/// generators", OOPSLA 2014): distinct inputs give well-mixed, distinct seeds.
+fn splitmix(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+fn issue(key: &str, message: String) -> Issue {
+    Issue {
+        key: key.to_string(),
+        message,
+        unreadable: false,
+    }
+}
+
+fn finite(key: &str, v: Option<f64>) -> Result<f64, Issue> {
+    let Some(x) = v else {
+        return Err(issue(key, "is required".into()));
+    };
+    if !x.is_finite() {
+        return Err(issue(
+            key,
+            format!("must be a finite number, got {}", Echo(x)),
+        ));
+    }
+    if x != 0.0 && !x.is_normal() {
+        return Err(issue(
+            key,
+            format!(
+                "must not be subnormal (below {} in magnitude), got {}",
+                Echo(f64::MIN_POSITIVE),
+                Echo(x)
+            ),
+        ));
+    }
+    Ok(x)
+}
+
+fn non_negative(key: &str, v: Option<f64>) -> Result<f64, Issue> {
+    let x = finite(key, v)?;
+    if x < 0.0 {
+        return Err(issue(key, format!("must be >= 0, got {}", Echo(x))));
+    }
+    Ok(x)
+}
+
+fn positive(key: &str, v: Option<f64>) -> Result<f64, Issue> {
+    let x = finite(key, v)?;
+    if x <= 0.0 {
+        return Err(issue(key, format!("must be > 0, got {}", Echo(x))));
+    }
+    Ok(x)
+}
+
+fn coordinate(key: &str, v: Option<f64>) -> Result<f64, Issue> {
+    let x = finite(key, v)?;
+    if x.abs() > MAX_COORDINATE_M {
+        return Err(issue(
+            key,
+            format!(
+                "must be within +-{} m, got {}",
+                Echo(MAX_COORDINATE_M),
+                Echo(x)
+            ),
+        ));
+    }
+    Ok(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parse_scenario;
+
+    fn team_of(text: &str) -> TeamSpec {
+        let s = parse_scenario(text, "<test>", &[]).unwrap();
+        s.spec().team.clone().unwrap()
+    }
+
+    /// An arc spread: start `i` at `R (cos(th0 - i step), sin(th0 - i step))` heading along the
+    /// clockwise travel (`th - pi/2`); the defaults from the README (v0/2, 2 v0, k_v 0.1, 10 Hz,
+    /// listed ring, range_balance).
+    #[test]
+    fn an_arc_spread_and_the_defaults() {
+        let t = team_of(
+            "[team]\ncount = 3\nspread = { along = \"arc\", radius_m = 2.0, start_rad = 1.0, step_rad = 0.5 }\n",
+        );
+        assert_eq!(t.count(), 3);
+        for (i, s) in t.starts.iter().enumerate() {
+            let th = 1.0 - 0.5 * i as f64;
+            assert!((s.x_m - 2.0 * th.cos()).abs() < 1e-12);
+            assert!((s.y_m - 2.0 * th.sin()).abs() < 1e-12);
+            assert!((s.heading_rad - (th - std::f64::consts::FRAC_PI_2)).abs() < 1e-12);
+        }
+        assert_eq!(
+            (t.v_min_mps, t.v_max_mps, t.nominal_speed_mps),
+            (0.25, 1.0, 0.5)
+        );
+        assert_eq!(t.law, SpacingLaw::RangeBalance { gain_per_s: 0.1 });
+        assert_eq!(t.ring, RingMode::Listed);
+        assert_eq!(t.ranging, RangingConfig::default());
+    }
+
+    /// A line spread: start `i` at `(x, y) + i step (cos dir, sin dir)`, every heading the
+    /// same; the default step direction is the heading.
+    #[test]
+    fn a_line_spread() {
+        let t = team_of(
+            "[team]\ncount = 3\nspread = { along = \"line\", x_m = 1.0, y_m = 2.0, heading_rad = 0.0, step_m = 1.5 }\n",
+        );
+        let xy: Vec<(f64, f64, f64)> = t
+            .starts
+            .iter()
+            .map(|s| (s.x_m, s.y_m, s.heading_rad))
+            .collect();
+        assert_eq!(xy, vec![(1.0, 2.0, 0.0), (2.5, 2.0, 0.0), (4.0, 2.0, 0.0)]);
+    }
+
+    /// No `[team]`: no team (the single run, unchanged).
+    #[test]
+    fn no_team_section_no_team() {
+        let s = parse_scenario("", "<test>", &[]).unwrap();
+        assert!(s.spec().team.is_none());
+    }
+
+    /// Distinct seeds for every vehicle's sensor and ranging, vehicle 0's sensor the run's.
+    #[test]
+    fn seeds_are_distinct() {
+        let mut all: Vec<u64> = (0..1000)
+            .flat_map(|i| [TeamSpec::sensor_seed(7, i), TeamSpec::ranging_seed(7, i)])
+            .collect();
+        assert_eq!(all[0], 7);
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), 2000);
+    }
+}
