@@ -9,8 +9,8 @@
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::check::moving::MovingReport;
 use isotrack_scenario::check::{
-    kp_intervals_text_scanned, nearest_kp_text, CheckReport, Prop1Report, Prop2Report,
-    SampledReport,
+    kp_intervals_text_scanned, nearest_kp_text, rate_advice_text, CheckReport, Prop1Report,
+    Prop2Report, SampledReport,
 };
 
 /// The whole text report, line by line (each line without its newline).
@@ -248,8 +248,13 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
     };
     let mut out = vec![
         format!(
-            "  model {}, on the isoline (slopes |grad F| {}{}): {}",
+            "  model {}, on the {} (slopes |grad F| {}{}): {}",
             sm.vehicle_model.unwrap_or("n/a"),
+            if sm.p_law_orbit_error.is_some() {
+                "orbit"
+            } else {
+                "isoline"
+            },
             range(sm.slope_range),
             if sm.slope_exact == Some(true) {
                 ", exact"
@@ -306,9 +311,9 @@ fn sensor_rate_line(sm: &SampledReport) -> String {
     let rate = 1.0 / sm.period_s;
     match (sm.stable, sm.rate_is_the_limit, sm.max_period_s) {
         (_, Some(true), Some(t)) => format!(
-            "sensor rate: the limit: {} Hz is too slow for these gains; {} Hz or faster is stable",
+            "sensor rate: the limit: {} Hz is too slow for these gains; {}",
             Num(rate),
-            Num(1.0 / t)
+            rate_advice_text(t, sm.sim_dt_s)
         ),
         (Some(true), _, Some(t)) => format!(
             "sensor rate: not the limit: stable at {} Hz and down to {} Hz",

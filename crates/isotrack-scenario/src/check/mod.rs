@@ -271,8 +271,47 @@ pub struct SampledReport {
     /// verdict's "what to expect".
     #[serde(skip)]
     unstable_mode_period_samples: Option<Option<f64>>,
+    /// The law differentiates with Levant's (nonlinear) differentiator, which the linear model
+    /// replaces by a backward difference: no stability claim follows (issue 29). Not in the
+    /// JSON (the note says it).
+    #[serde(skip)]
+    pub nonlinear_estimator: bool,
+    /// The simulation's step `sim.dt_s`, s: a sensor rate is `1/(k dt)` for a whole `k >= 1`,
+    /// so rate advice is capped at `1/dt` ([`rate_advice_text`]). Not in the JSON.
+    #[serde(skip)]
+    pub sim_dt_s: f64,
+    /// With a sensor lag, the loop is unstable and the same loop without the lag is stable: the
+    /// lag is what makes it unstable, and the advice names it. Not in the JSON.
+    #[serde(skip)]
+    pub lag_is_the_cause: bool,
     /// Remarks.
     pub note: String,
+}
+
+/// Advice on the sensor rate when the longest stable sensor period is `max_period_s` at the
+/// simulation step `dt_s` (issue 29: kp = 400 advised "100.202 Hz or faster" at dt = 0.01 s,
+/// a rate the simulation cannot sample at). The sensor's period is a whole number `k` of
+/// steps, so the stable rates are `1/(k dt)` with `k <= floor(max_period_s/dt)`; when that is
+/// 0 (the period needed is below one step) the advice says `sim.dt_s` must shrink too.
+pub fn rate_advice_text(max_period_s: f64, dt_s: f64) -> String {
+    let need = 1.0 / max_period_s;
+    let k = (max_period_s / dt_s * (1.0 + 1e-9)).floor();
+    if dt_s > 0.0 && k >= 1.0 {
+        format!(
+            "{} Hz or faster is stable (the period a whole number of sim.dt_s = {} s steps: sensor.rate_hz = 1/(k*sim.dt_s) with k <= {}, from {} Hz)",
+            Num(need),
+            Echo(dt_s),
+            Num(k),
+            Num(1.0 / (k * dt_s))
+        )
+    } else {
+        format!(
+            "{} Hz or faster is stable, above the fastest rate 1/sim.dt_s = {} Hz the simulation samples at: sim.dt_s must shrink to {} s or less too",
+            Num(need),
+            Num(1.0 / dt_s),
+            Num(max_period_s)
+        )
+    }
 }
 
 /// The combined verdict.
@@ -838,6 +877,13 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         isoline_stable_fraction: None,
         frozen: None,
         unstable_mode_period_samples: None,
+        sim_dt_s: s.dt_s(),
+        lag_is_the_cause: false,
+        nonlinear_estimator: is_pi_isoline(s)
+            && matches!(
+                s.spec().controller.derivative(),
+                Some(DerivativeKind::Levant { .. })
+            ),
         note: String::new(),
     };
     let setup = match LoopSetup::new(s, l, r) {
@@ -920,6 +966,15 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
             })
             .unwrap_or(base.slope);
         rep.unstable_mode_period_samples = Some(growing_mode_period_samples(&base, worst));
+        // Is the sensor's lag what makes it unstable? The same loop without it (issue 29: the
+        // advice said "change ki, c1 or c2" and never named the lag).
+        if base.sensor_lag.is_some() {
+            let without = SampledLoop {
+                sensor_lag: None,
+                ..base
+            };
+            rep.lag_is_the_cause = sampled::worst_spectral_radius(&without, &slopes) < 1.0;
+        }
     }
     if let Some(tube) = r.slope_range {
         let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
@@ -1363,11 +1418,23 @@ fn reach_condition_note(gamma1: f64, tube_gamma1: Option<f64>, v: f64, c1: f64) 
     })
 }
 
+/// The sensor's settings [`withhold_prop2_bound`] reads.
+struct SensorEffects {
+    noise_std: f64,
+    time_constant_s: f64,
+    delay_s: f64,
+}
+
+/// Why a loop with Levant's differentiator gets no stability claim (issue 29: kp = 10 at 5 Hz
+/// was "locally exponentially stable" while the run oscillated with eps -0.37 .. 0.44).
+const LEVANT_REASON: &str = "controller.derivative = \"levant\" is a nonlinear differentiator the linear sampled model does not cover (it can oscillate where the backward difference converges)";
+
 /// The reasons Prop. 2's bound is withheld although its conditions hold and the start is in
 /// the sector: the sampled loop (unstable, or stable on the isoline but not over the tube, or
 /// not computed) and the sensor's effects the checks leave out. A withheld bound is no claim:
 /// its value moves to `error_bound_if_not_withheld`.
-fn withhold_prop2_bound(prop2: &mut Prop2Report, sampled: &SampledReport, noise_std: f64) {
+fn withhold_prop2_bound(prop2: &mut Prop2Report, sampled: &SampledReport, sensor: &SensorEffects) {
+    let noise_std = sensor.noise_std;
     if !(prop2.applicable && prop2.conditions_hold && prop2.initial_heading_in_sector == Some(true))
     {
         return;
@@ -1390,6 +1457,24 @@ fn withhold_prop2_bound(prop2: &mut Prop2Report, sampled: &SampledReport, noise_
             "sensor.noise_std = {} adds noise to the readings (Prop. 2's bound is for noise-free measurements; the noise enters eps and its estimated derivative, and the error is not bounded by it)",
             Echo(noise_std)
         ));
+    }
+    // Prop. 2's proof has the measurement of F at the robot's position now: no lag, no delay
+    // (issue 29: kp = 20, ki = 0 with sensor.time_constant_s = 3 was "holds, limsup|eps| <=
+    // 0.177256" while the run's steady max|eps| was 1.508).
+    if sensor.time_constant_s > 0.0 {
+        w.push(format!(
+            "sensor.time_constant_s = {} lags the readings (Prop. 2's proof has no sensor lag)",
+            Echo(sensor.time_constant_s)
+        ));
+    }
+    if sensor.delay_s > 0.0 {
+        w.push(format!(
+            "sensor.delay_s = {} delays the readings (Prop. 2's proof has no delay)",
+            Echo(sensor.delay_s)
+        ));
+    }
+    if sampled.nonlinear_estimator {
+        w.push(LEVANT_REASON.to_string());
     }
     w.extend(prop2.sensor_not_modelled.iter().cloned());
     prop2.bound_applies = w.is_empty();
@@ -1465,7 +1550,12 @@ fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
         return Some((
             Verdict::Fails,
             format!(
-                "the loop sampled at {at} is unstable on the isoline ({}){expect}",
+                "the loop sampled at {at} is unstable {} ({}){expect}",
+                if sm.p_law_orbit_error.is_some() {
+                    "on the P law's orbit"
+                } else {
+                    "on the isoline"
+                },
                 radius_text(sm.spectral_radius)
             ),
         ));
@@ -1475,6 +1565,17 @@ fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
 
 fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
     let at = format!("T = {} s", Num(sm.period_s));
+    if sm.nonlinear_estimator {
+        // Levant's differentiator is nonlinear: neither "stable" nor "unstable" of the linear
+        // model carries over to the run.
+        return (
+            Verdict::NotApplicable,
+            format!(
+                "not guaranteed: {LEVANT_REASON}; the linear model with a backward difference gives {}",
+                radius_text(sm.spectral_radius)
+            ),
+        );
+    }
     if let Some(v) = unstable_verdict(sm, &at) {
         return v;
     }
@@ -1585,7 +1686,13 @@ fn expected_motion(period_samples: Option<f64>) -> String {
 /// from 1e4 up (an unstable loop's radius can be astronomically large).
 fn fmt_radius(r: f64) -> String {
     if r.abs() < 1e4 {
-        format!("{r:.4}")
+        // Enough decimals to show which side of 1 the radius is (issue 29: an unstable
+        // 1.00003 was printed `1.0000`), at most 12.
+        let mut d = 4;
+        while d < 12 && r != 1.0 && format!("{r:.d$}").parse::<f64>() == Ok(1.0) {
+            d += 1;
+        }
+        format!("{r:.d$}")
     } else {
         format!("{r:.4e}")
     }
@@ -1648,7 +1755,48 @@ fn settling_warnings(s: &Scenario, l: &Law, p2: &Prop2Report) -> Vec<String> {
             ));
         }
     }
+    w.extend(local_only_warning(s, l));
     w
+}
+
+/// How far from the isoline, in units of the law's scale `c2`, a start is "far" for a lagged or
+/// delayed loop: beyond `|eps0| > FAR_START_C2 * c2` the law's `tanh(eps/c2)` is saturated
+/// (`tanh 2 = 0.96`, slope `sech^2 2 = 0.07` of the linear one), so the loop linearised on the
+/// isoline says nothing about the motion there (README, `check`).
+pub const FAR_START_C2: f64 = 2.0;
+
+/// With a sensor lag or delay the sampled loop's stability is local: its basin of attraction is
+/// not computed, and a start far from the isoline ([`FAR_START_C2`]) can spin instead of
+/// converging (issue 29: time_constant_s = 2.5 on paper-fig2b was "holds" while the run from the
+/// scenario's start spun at about 100 rad/s with |eps| 2.2; from the isoline it converges).
+fn local_only_warning(s: &Scenario, l: &Law) -> Option<String> {
+    let sensor = &s.spec().sensor;
+    if !is_pi_isoline(s) || !(sensor.time_constant_s > 0.0 || sensor.delay_s > 0.0) {
+        return None;
+    }
+    let mut what = vec![];
+    if sensor.time_constant_s > 0.0 {
+        what.push(format!(
+            "sensor.time_constant_s = {}",
+            Echo(sensor.time_constant_s)
+        ));
+    }
+    if sensor.delay_s > 0.0 {
+        what.push(format!("sensor.delay_s = {}", Echo(sensor.delay_s)));
+    }
+    let eps0 = s.field().value(0.0, start(s)).map(|f| f - s.level());
+    let far = match eps0 {
+        Some(e) if e.abs() > FAR_START_C2 * l.c2 => format!(
+            "; not from this start: |eps0| = {} is {} c2 (over {FAR_START_C2} c2 the law's tanh(eps/c2) saturates and the loop linearised on the isoline does not describe the motion; a lagged loop can spin there)",
+            Num(e.abs()),
+            Num(e.abs() / l.c2)
+        ),
+        _ => String::new(),
+    };
+    Some(format!(
+        "with {} the guarantee is local: the sampled loop is linearised on the isoline and its basin of attraction is not computed{far}",
+        what.join(" and ")
+    ))
 }
 
 /// When the isoline is too tight for the vehicle: following a circle of curvature `kappa` at
@@ -1823,6 +1971,21 @@ pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
 /// `x` rounded to 5 significant digits towards `+inf` (`up`) or `-inf`, as text with those
 /// digits: an interval's printed ends are rounded inwards, so a value copied from the text is
 /// inside the interval (a value rounded outwards can be the unstable `kp` the user has).
+/// `x` to 6 significant digits, trailing zeros dropped (issue 29: the scan's start was printed
+/// `0.025118864315095794`).
+fn sig6_text(x: f64) -> String {
+    if !(x.is_finite() && x > 0.0) {
+        return format!("{x}");
+    }
+    let decimals = (5 - x.log10().floor() as i32).max(0) as usize;
+    let t = format!("{x:.decimals$}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    }
+}
+
 fn round_sig_text(x: f64, up: bool) -> String {
     if !(x.is_finite() && x > 0.0) {
         return format!("{x}");
@@ -1867,7 +2030,7 @@ pub fn kp_intervals_text_scanned(intervals: &[[f64; 2]], scanned_from: Option<f6
         .map(|&[a, b]| {
             let lo = match scanned_from {
                 Some(from) if a <= from * (1.0 + 1e-9) => {
-                    format!("below {from} (the scan's start)")
+                    format!("below {} (the scan's start)", sig6_text(from))
                 }
                 _ => round_sig_text(a, true),
             };
@@ -1911,7 +2074,16 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
         ));
     }
     if let (Some(true), Some(t)) = (sm.rate_is_the_limit, sm.max_period_s) {
-        fixes.push(format!("with a sensor rate >= {:.4} Hz", 1.0 / t));
+        fixes.push(format!(
+            "with a faster sensor: {}",
+            rate_advice_text(t, sm.sim_dt_s)
+        ));
+    }
+    if sm.lag_is_the_cause {
+        fixes.push(
+            "with less sensor lag (reduce sensor.time_constant_s: without the lag this loop is stable)"
+                .to_string(),
+        );
     }
     let fix = if fixes.is_empty() {
         "no kp is stable at this rate and a faster sensor does not help (change ki, c1 or c2)"
@@ -1960,7 +2132,12 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let sampled = sampled_report(s, &l, &r, true);
     let mut prop2 = prop2_report(s, &l, tube, &r);
     prop2.sensor_not_modelled = sensor_not_modelled(s, prop2.region_levels);
-    withhold_prop2_bound(&mut prop2, &sampled, s.spec().sensor.noise_std);
+    let sensor = SensorEffects {
+        noise_std: s.spec().sensor.noise_std,
+        time_constant_s: s.spec().sensor.time_constant_s,
+        delay_s: s.spec().sensor.delay_s,
+    };
+    withhold_prop2_bound(&mut prop2, &sampled, &sensor);
     let (mut verdict, mut verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let tight = too_tight(s, &l, &sampled);
     if let Some(reason) = &tight {
@@ -2367,6 +2544,22 @@ mod tests {
             .warnings
             .iter()
             .any(|w| w.contains("wind up")));
+    }
+
+    /// Issue 29 (fix29), 11: the scan's start to 6 significant digits (10^-1.6 =
+    /// 0.0251188643...), and a radius just above 1 printed with enough digits to be above 1.
+    #[test]
+    fn digits_are_rounded_and_a_radius_shows_its_side_of_one() {
+        let from = 10f64.powf(-1.6);
+        assert_eq!(
+            kp_intervals_text_scanned(&[[from, 2.0]], Some(from)),
+            "[below 0.0251189 (the scan's start), 2.0000]"
+        );
+        assert_eq!(sig6_text(0.001), "0.001");
+        assert_eq!(fmt_radius(1.00003), "1.00003");
+        assert_eq!(fmt_radius(0.99999_7), "0.999997");
+        assert_eq!(fmt_radius(1.0), "1.0000");
+        assert_eq!(fmt_radius(0.98), "0.9800");
     }
 
     /// Issue 29, 6: a fixed-wing UAV on the 6.93 m circle needs the turn rate

@@ -624,3 +624,170 @@ fn prop2_withdraws_its_bound_for_a_sensor_it_does_not_model() {
         assert!(e > 2.0 * bound, "{set}: {e} vs bound {bound}");
     }
 }
+
+/// Issue 29 (fix29), 1: Prop. 2's proof has no sensor lag or delay. kp = 20, ki = 0 with
+/// sensor.time_constant_s = 3 was "holds (Prop. 2's bound applies: limsup|eps| <= 0.177256)"
+/// while the run's steady max|eps| was 1.508: the bound is withheld with the key named, and
+/// the simulation (the independent number) exceeds the conditional bound.
+#[test]
+fn prop2_withholds_its_bound_with_a_lag_or_a_delay() {
+    let base = ["controller.ki=0", "controller.kp=20", "sensor.noise_std=0"];
+    let at = |extra: &str| {
+        let sets: Vec<&str> = base.iter().copied().chain([extra]).collect();
+        circular(&sets)
+    };
+    assert!(
+        check(&at("sensor.time_constant_s=0"), None)
+            .prop2
+            .bound_applies
+    );
+    for (set, key) in [
+        ("sensor.time_constant_s=3", "sensor.time_constant_s"),
+        ("sensor.delay_s=0.05", "sensor.delay_s"),
+    ] {
+        let r = check(&at(set), None);
+        assert!(r.prop2.conditions_hold, "{set}");
+        assert!(!r.prop2.bound_applies, "{set}");
+        assert_eq!(r.prop2.error_bound, None, "{set}");
+        assert!(
+            r.prop2.bound_withheld.iter().any(|w| w.contains(key)),
+            "{set}: {:?}",
+            r.prop2.bound_withheld
+        );
+        assert!(r.verdict_reason.contains(key), "{}", r.verdict_reason);
+        assert!(
+            !r.verdict_reason.contains("bound applies"),
+            "{}",
+            r.verdict_reason
+        );
+    }
+    let lagged = at("sensor.time_constant_s=3");
+    let bound = check(&lagged, None)
+        .prop2
+        .error_bound_if_not_withheld
+        .unwrap();
+    let e = lagged
+        .run(&mut NoTrace)
+        .metrics
+        .steady_state_max_abs_error
+        .unwrap();
+    assert!(e > 2.0 * bound, "{e} vs {bound}");
+}
+
+/// Issue 29 (fix29), 2: with a lag the verdict is local. The scenario starts at r = 10 m on
+/// F = 20 exp(-0.1 r): |eps0| = 10 - 20/e = 2.6424 = 2.64 c2 (c2 = 1), past the rule's 2 c2,
+/// so the warning says "not from this start"; started on the isoline (r_d = 10 ln 2) it does
+/// not. Neither warning without a lag.
+#[test]
+fn a_lagged_loop_is_said_to_be_local_and_not_from_a_far_start() {
+    let eps0 = 10.0 - 20.0 * (-1.0f64).exp();
+    assert!(eps0 > 2.0);
+    let far = check(&circular(&["sensor.time_constant_s=2.5"]), None);
+    let local = far
+        .warnings
+        .iter()
+        .find(|w| w.contains("guarantee is local"))
+        .expect("local warning");
+    assert!(local.contains("basin of attraction"), "{local}");
+    assert!(local.contains("not from this start"), "{local}");
+    assert!(local.contains(&format!("{eps0:.5}")), "{local}");
+    let rd = 10.0 * 2f64.ln();
+    let x = format!("initial.x_m={rd:?}");
+    let near = check(&circular(&["sensor.time_constant_s=2.5", x.as_str()]), None);
+    let w = near
+        .warnings
+        .iter()
+        .find(|w| w.contains("guarantee is local"))
+        .expect("local warning");
+    assert!(!w.contains("not from this start"), "{w}");
+    let delayed = check(&circular(&["sensor.delay_s=0.05"]), None);
+    assert!(delayed
+        .warnings
+        .iter()
+        .any(|w| w.contains("guarantee is local") && w.contains("sensor.delay_s")));
+    let ideal = check(&circular(&[]), None);
+    assert!(!ideal
+        .warnings
+        .iter()
+        .any(|w| w.contains("guarantee is local")));
+}
+
+/// Issue 29 (fix29), 3: Levant's differentiator is nonlinear. At kp = 10, 5 Hz the check said
+/// "locally exponentially stable" while the run oscillated (eps -0.37 .. 0.44) and the
+/// backward difference converges: the verdict is not_applicable, with the reason, never
+/// "exponentially". The simulation is the independent number.
+#[test]
+fn levant_gets_no_stability_claim() {
+    let levant = circular(&["controller.derivative=levant", "sensor.rate_hz=5"]);
+    let r = check(&levant, None);
+    assert_eq!(r.verdict.as_str(), "not_applicable");
+    assert!(r.verdict_reason.contains("levant"), "{}", r.verdict_reason);
+    assert!(
+        r.verdict_reason.contains("not guaranteed"),
+        "{}",
+        r.verdict_reason
+    );
+    assert!(
+        !r.verdict_reason.contains("exponentially"),
+        "{}",
+        r.verdict_reason
+    );
+    // The run does not settle as the linear model (radius 0.98 at T = 0.2 s) would have it:
+    // its steady error swings by more than 0.5 (the review's -0.37 .. 0.44).
+    let m = levant.run(&mut NoTrace).metrics;
+    assert!(m.steady_state_max_abs_error.unwrap() > 0.3, "{m:?}");
+}
+
+/// Issue 29 (fix29), 5: kp = 400 at 100 Hz needs a rate of 100.2 Hz, but at sim.dt_s = 0.01 the
+/// fastest rate is 1/dt = 100 Hz: the advice says sim.dt_s must shrink too.
+#[test]
+fn rate_advice_is_capped_at_the_simulation_step() {
+    let r = check(&circular(&["controller.kp=400"]), None);
+    let w = r
+        .warnings
+        .iter()
+        .find(|w| w.contains("is unstable"))
+        .expect("unstable warning");
+    assert!(w.contains("sim.dt_s must shrink"), "{w}");
+    assert!(w.contains("1/sim.dt_s = 100 Hz"), "{w}");
+    // Below the cap the advice is a whole number of steps: a longest stable period of 0.0349 s
+    // at dt = 0.01 s is k <= 3 steps, from 1/(3*0.01) = 33.3333 Hz.
+    let t = isotrack_scenario::check::rate_advice_text(0.0349, 0.01);
+    assert!(t.contains("k <= 3"), "{t}");
+    assert!(t.contains("33.3333 Hz"), "{t}");
+}
+
+/// Issue 29 (fix29), 10 and 12: kp = 20, ki = 0 with a 20 s lag is unstable on the P law's
+/// orbit (not "the isoline"), and stable without the lag: the advice names the lag.
+#[test]
+fn the_p_law_orbit_and_the_lag_are_named() {
+    let r = check(
+        &circular(&[
+            "controller.ki=0",
+            "controller.kp=20",
+            "sensor.time_constant_s=20",
+        ]),
+        None,
+    );
+    assert_eq!(r.verdict.as_str(), "fails");
+    assert!(
+        r.verdict_reason.contains("on the P law's orbit"),
+        "{}",
+        r.verdict_reason
+    );
+    assert!(
+        !r.verdict_reason.contains("on the isoline ("),
+        "{}",
+        r.verdict_reason
+    );
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("reduce sensor.time_constant_s")),
+        "{:?}",
+        r.warnings
+    );
+    // Without the lag the same loop is stable (Prop. 1's P-law orbit, checked above).
+    let ideal = check(&circular(&["controller.ki=0", "controller.kp=20"]), None);
+    assert_eq!(ideal.sampled.stable, Some(true));
+}
