@@ -109,9 +109,11 @@ pub fn write_run(
     }
     w.finish().map_err(|e| io(&path, e))?;
     let path = dir.join("summary.json");
-    std::fs::write(&path, format!("{summary_json}\n")).map_err(|e| io(&path, e))?;
+    isotrack_runs::files::write_atomic(&path, format!("{summary_json}\n").as_bytes())
+        .map_err(|e| io(&path, e))?;
     let path = dir.join("scenario.toml");
-    std::fs::write(&path, scenario_toml(&scenario.inner)).map_err(|e| io(&path, e))?;
+    isotrack_runs::files::write_atomic(&path, scenario_toml(&scenario.inner).as_bytes())
+        .map_err(|e| io(&path, e))?;
     Ok(())
 }
 

@@ -103,6 +103,12 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
         .map(|d| RunData::load(d))
         .collect::<Result<_, _>>()
         .map_err(failure)?;
+    // Runs over different fields, or a data file changed after a run: 65 naming it (before any
+    // figure is written).
+    isotrack_plot::same_field(&data).map_err(failure)?;
+    if let Some(n) = isotrack_plot::unrecorded_data_files_note(&data) {
+        errln!("warning: {n}");
+    }
     std::fs::create_dir_all(out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
@@ -168,10 +174,24 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
             code: exit::CANTCREAT,
             message: format!("cannot create {}: {e}", out.display()),
         })?;
-        let safe = |k: &str| k.replace(['.', '[', ']'], "_");
+        // A file name from column names: ASCII letters, digits, `_` and `-` only (`.`, `[`,
+        // `]`, a `/`, an escape character or a bidi control each become `_`), at most 100
+        // characters of each.
+        let safe = |k: &str| -> String {
+            k.chars()
+                .take(100)
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect()
+        };
         let file = out.join(format!(
             "sweep_{}_vs_{}{}.{}",
-            a.metric,
+            safe(&a.metric),
             safe(&x),
             a.group
                 .as_deref()
@@ -217,7 +237,11 @@ fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Fail
         &isotrack_scenario::check::warnings(scenario),
     )
     .map_err(cant)?;
-    std::fs::write(dir.join("scenario.toml"), scenario_toml(scenario)).map_err(cant)?;
+    isotrack_runs::files::write_atomic(
+        &dir.join("scenario.toml"),
+        scenario_toml(scenario).as_bytes(),
+    )
+    .map_err(cant)?;
     let mut d = RunData::load(dir).map_err(failure)?;
     d.name = name.to_string();
     Ok(d)

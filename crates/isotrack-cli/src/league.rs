@@ -142,7 +142,7 @@ pub fn write_outputs(
 ) -> Result<(), Failure> {
     write_files(result, out).map_err(bench_failure)?;
     let html = out.join("index.html");
-    std::fs::write(&html, isotrack_league::benchmark_page(result))
+    isotrack_runs::files::write_atomic(&html, isotrack_league::benchmark_page(result).as_bytes())
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
     // The suite as run: the gains every built-in law ran with recorded per task.
     let mut as_run = suite.clone();
@@ -173,7 +173,7 @@ pub fn write_outputs(
         if tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
     );
     let suite_out = out.join("suite.toml");
-    std::fs::write(&suite_out, as_run.to_toml(&header))
+    isotrack_runs::files::write_atomic(&suite_out, as_run.to_toml(&header).as_bytes())
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
     Ok(())
 }
@@ -181,10 +181,13 @@ pub fn write_outputs(
 /// `isotrack report RUN_DIR... --out report.html`.
 pub fn report(a: &ReportArgs) -> Result<(), Failure> {
     let dirs: Vec<&Path> = a.runs.iter().map(|p| p.as_path()).collect();
-    let html = isotrack_html::report_page(&dirs).map_err(|e| match e {
+    let (html, notes) = isotrack_html::report_page_with_notes(&dirs).map_err(|e| match e {
         isotrack_html::ReportError::Input(m) => fail(exit::NOINPUT, m),
         isotrack_html::ReportError::Data(m) => fail(exit::DATAERR, m),
     })?;
+    for n in notes {
+        errln!("warning: {n}");
+    }
     // The page never replaces a file it was made from (64): the run directories' files.
     let inputs: Vec<std::path::PathBuf> = a
         .runs

@@ -219,9 +219,11 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             v["outcome_detail"] = detail.clone().into();
             text = serde_json::to_string_pretty(&v).map_err(|e| cant(&p, e.into()))?;
         }
-        std::fs::write(&p, text + "\n").map_err(|e| cant(&p, e))?;
+        isotrack_runs::files::write_atomic(&p, (text + "\n").as_bytes())
+            .map_err(|e| cant(&p, e))?;
         let p = dir.join("scenario.toml");
-        std::fs::write(&p, scenario_toml(&scenario)).map_err(|e| cant(&p, e))?;
+        isotrack_runs::files::write_atomic(&p, scenario_toml(&scenario).as_bytes())
+            .map_err(|e| cant(&p, e))?;
     }
     outln!(
         "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",

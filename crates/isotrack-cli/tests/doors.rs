@@ -529,6 +529,15 @@ fn a_field_file_overwritten_in_place_is_another_field() {
     let dir = |n: &str| d.path().join(n).display().to_string();
     run_into(&scen, &d.path().join("before"), &["sim.duration_s=2"]);
     run_into(&scen, &d.path().join("same"), &["sim.duration_s=2"]);
+    // The same file, unchanged: drawn together.
+    let o = isotrack(&[
+        "report",
+        &dir("before"),
+        &dir("same"),
+        "--out",
+        &dir("ok.html"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // Every value 1 unit higher: the isoline moves.
     let higher: String = original
         .lines()
@@ -553,15 +562,6 @@ fn a_field_file_overwritten_in_place_is_another_field() {
     .unwrap();
     let digests = summary["data_files"].as_object().unwrap();
     assert_eq!(digests.len(), 1, "{summary}");
-    // The same file, unchanged: drawn together.
-    let o = isotrack(&[
-        "report",
-        &dir("before"),
-        &dir("same"),
-        "--out",
-        &dir("ok.html"),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     for cmd in ["report", "plot"] {
         let o = isotrack(&[
             cmd,
@@ -576,6 +576,43 @@ fn a_field_file_overwritten_in_place_is_another_field() {
             &["grid.csv", "overwritten in place", "different fields"],
         );
     }
+    // Issue 30 (fix30, item 2): runs that agree with each other but not with the file as it
+    // is now (it changed after them) are refused too, naming the file: the field drawn would
+    // be the new one.
+    for args in [
+        vec![
+            "report",
+            &dir("before"),
+            &dir("same"),
+            "--out",
+            &dir("y.html"),
+        ],
+        vec!["plot", &dir("before"), "--out", &dir("y-plot")],
+    ] {
+        let o = isotrack(&args);
+        assert_fails(&o, 65, &["grid.csv", "changed after the run"]);
+    }
+    // The file as it was: drawn; one run's summary without `data_files` beside one with them
+    // is drawn with a warning.
+    std::fs::write(&grid, &original).unwrap();
+    let p = d.path().join("same/summary.json");
+    let mut s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    s.as_object_mut().unwrap().remove("data_files");
+    std::fs::write(&p, s.to_string()).unwrap();
+    let o = isotrack(&[
+        "report",
+        &dir("before"),
+        &dir("same"),
+        "--out",
+        &dir("z.html"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("recorded no data_files"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// Issue 30 (doors30a), item 7: a subnormal gain (`kp = 1e-310`, a law that never turns) or
@@ -644,4 +681,61 @@ fn subnormal_command_line_values_are_refused_and_echoed_short() {
         assert_fails(&o, 64, &[flag, &format!("got {value}")]);
         assert!(stderr(&o).len() < 400, "{}", stderr(&o));
     }
+}
+
+/// Issue 30 (fix30), items 6, 10, 11, 12: an angle of 1e16 rad (a step's turn below one ulp:
+/// the robot drives straight) is refused, for the heading and a plume's rotation (the range is
+/// +-1000 rad); a subnormal `metrics.steady_state_fraction`, `controller.alpha_star` or
+/// `sensor.dropout_probability` is refused naming the key; a duration shorter than one step
+/// (1e-12 s against dt = 0.01 s: 0 steps) is refused; a calm puff plume written `-0.0` is
+/// stored as `0.0` (the same field as `0.0`).
+#[test]
+fn angles_bounded_subnormals_short_runs_and_negative_zero() {
+    for (set, key, needle) in [
+        ("initial.heading_rad=1e16", "initial.heading_rad", "must be in"),
+        ("initial.heading_rad=-1001", "initial.heading_rad", "must be in"),
+        (
+            "metrics.steady_state_fraction=1e-310",
+            "metrics.steady_state_fraction",
+            "subnormal",
+        ),
+        (
+            "sensor.dropout_probability=1e-310",
+            "sensor.dropout_probability",
+            "subnormal",
+        ),
+        ("sim.duration_s=1e-12", "sim.duration_s", "shorter than one step"),
+    ] {
+        let o = isotrack(&["show", "--set", set]);
+        assert_fails(&o, 65, &[key, needle]);
+    }
+    let o = isotrack(&["show", "--set", "initial.heading_rad=999.0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let d = tempfile::tempdir().unwrap();
+    let sosm = write(
+        d.path(),
+        "sosm.toml",
+        "[controller]\nkind = \"suboptimal_sosm\"\nalpha_star = 1e-310\n",
+    );
+    assert_fails(&isotrack(&["show", &sosm]), 65, &["controller.alpha_star", "subnormal"]);
+    let plume = write(
+        d.path(),
+        "plume.toml",
+        "[field]\nkind = \"gaussian_plumes\"\nsources = [{ center_m = [0.0, 0.0], amplitude = 10.0, sigma_m = [2.0, 2.0], rotation_rad = 1e16 }]\n",
+    );
+    assert_fails(
+        &isotrack(&["show", &plume]),
+        65,
+        &["field.sources[0].rotation_rad", "must be in"],
+    );
+    let puff = write(
+        d.path(),
+        "puff.toml",
+        "[field]\nkind = \"puff_plume\"\nmeander_std_mps = -0.0\n",
+    );
+    let o = isotrack(&["show", &puff]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("meander_std_mps = 0.0"), "{text}");
+    assert!(!text.contains("-0.0"), "{text}");
 }

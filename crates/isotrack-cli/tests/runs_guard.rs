@@ -393,3 +393,112 @@ fn an_interrupted_benchmark_keeps_its_finished_tasks() {
     assert!(first.is_file(), "task 1's results were lost");
     assert!(!out.join("leaderboard.csv").exists());
 }
+
+/// Issue 30 (fix30, item 1): every other file a command writes into its output directory
+/// (`sweep`'s and `merge`'s sweep.toml, base_scenario.toml, sweep.json; `benchmark`'s
+/// suite.toml, leaderboard.md, index.html, tasks/ID/task.json; `run --plot` and `plot`'s
+/// figures, `plot SWEEP`'s) was written through a symbolic link planted there (its target
+/// overwritten, exit 0) and waited on a FIFO. Each is refused with 73 at once, the link's
+/// target kept.
+#[test]
+fn every_output_file_refuses_a_link_and_a_fifo() {
+    let d = tempfile::tempdir().unwrap();
+    let w = d.path();
+    let sc = write(w, "sc.toml", "sim.duration_s = 2.0\n");
+    let sw = write(
+        w,
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsensor.rate_hz = [10.0, 100.0]\n",
+    );
+    let suite = write(
+        w,
+        "suite.toml",
+        "name = \"hs\"\nversion = 1\nscoring = 2\ncontrollers = [\"pi_isoline\"]\ntuning_seeds = [9]\nscoring_seeds = [1]\n[[task]]\nid = \"t1\"\ntitle = \"t\"\nscenario = \"sc.toml\"\nlength_m = 5.0\n",
+    );
+    let src = w.join("src").display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &src]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let run = w.join("run").display().to_string();
+    let o = isotrack(&["run", &sc, "--out", &run, "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let cases: Vec<(&str, Vec<&str>)> = vec![
+        ("sweep.toml", vec!["sweep", &sw, "--out"]),
+        ("base_scenario.toml", vec!["sweep", &sw, "--out"]),
+        ("sweep.json", vec!["sweep", &sw, "--out"]),
+        ("sweep.toml", vec!["merge", &src, "--out"]),
+        ("base_scenario.toml", vec!["merge", &src, "--out"]),
+        ("sweep.json", vec!["merge", &src, "--out"]),
+        (
+            "suite.toml",
+            vec!["benchmark", &suite, "--threads", "1", "--out"],
+        ),
+        (
+            "leaderboard.md",
+            vec!["benchmark", &suite, "--threads", "1", "--out"],
+        ),
+        (
+            "index.html",
+            vec!["benchmark", &suite, "--threads", "1", "--out"],
+        ),
+        (
+            "tasks/t1/task.json",
+            vec!["benchmark", &suite, "--threads", "1", "--out"],
+        ),
+        (
+            "trajectory.png",
+            vec!["run", &sc, "--plot", "--quiet", "--out"],
+        ),
+        (
+            "timeseries.svg",
+            vec!["plot", &run, "--format", "svg", "--out"],
+        ),
+        (
+            "sweep_steady_state_max_abs_error_vs_sensor_rate_hz.png",
+            vec!["plot", &src, "--x", "sensor.rate_hz", "--out"],
+        ),
+    ];
+    for (i, (name, args)) in cases.iter().enumerate() {
+        for kind in ["link", "fifo"] {
+            let out = w.join(format!("o{i}-{kind}"));
+            let file = out.join(name);
+            std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+            let victim = w.join(format!("victim{i}"));
+            std::fs::write(&victim, "VICTIM\n").unwrap();
+            if kind == "link" {
+                std::os::unix::fs::symlink(&victim, &file).unwrap();
+            } else {
+                fifo(
+                    file.parent().unwrap(),
+                    file.file_name().unwrap().to_str().unwrap(),
+                );
+            }
+            let os = out.display().to_string();
+            let mut a = args.clone();
+            a.push(&os);
+            let o = isotrack_within(&a, 120);
+            assert_fails(&o, 73, &["not a regular file"]);
+            assert_eq!(
+                std::fs::read_to_string(&victim).unwrap(),
+                "VICTIM\n",
+                "{args:?} {name} {kind}"
+            );
+        }
+    }
+    // `sweep --resume` over a finished sweep whose sweep.json became a link.
+    let re = w.join("re");
+    let o = isotrack(&["sweep", &sw, "--out", &re.display().to_string()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    // The link's target holds the manifest itself (so it is read as the sweep's), but is
+    // not written through.
+    let victim = w.join("victim-resume");
+    let manifest = std::fs::read_to_string(re.join("sweep.json")).unwrap();
+    std::fs::write(&victim, &manifest).unwrap();
+    std::fs::remove_file(re.join("sweep.json")).unwrap();
+    std::os::unix::fs::symlink(&victim, re.join("sweep.json")).unwrap();
+    let o = isotrack_within(
+        &["sweep", &sw, "--out", &re.display().to_string(), "--resume"],
+        60,
+    );
+    assert_fails(&o, 73, &["sweep.json", "not a regular file"]);
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), manifest);
+}

@@ -370,3 +370,106 @@ fn resume_of_an_older_sweep_directory_says_what_it_is() {
         results
     );
 }
+
+/// Issue 30 (fix30), items 3 to 5: rows and files `--resume` and `merge` kept although no run
+/// can have written them. The default Dubins robot (0.5 m/s) over 2 s at dt = 0.01 s drives
+/// 1 m: 1e6 m is refused; its turn rate changes sign at most once a step (100 /s): 1e9 is
+/// refused; `run_id` in other than canonical digits (`+2`, `02`) and a `warnings` cell with an
+/// escape or a bidi override are refused. `merge` checks the header as `--resume` does
+/// (swapped columns, a BOM, CRLF) and the manifest's shard (`[2, 1]`, a shard holding another
+/// shard's run); a line longer than any row (2 MiB) is refused (65) before it is held.
+#[test]
+fn resume_and_merge_refuse_impossible_rows_headers_and_shards() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 2.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\ncontroller.ki = [0.0, 1.0]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("full")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = d.path().join("full/results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let row2: Vec<&str> = good.lines().nth(3).unwrap().split(',').collect();
+    let with = |changes: &[(&str, &str)]| {
+        let mut r = row2.clone();
+        for (c, v) in changes {
+            r[col(c)] = v;
+        }
+        r.join(",")
+    };
+    let cases: Vec<(String, &str)> = vec![
+        (with(&[("path_length_m", "1e6")]), "m/s x t_end_s"),
+        (
+            with(&[("sign_changes_per_s", "1e9")]),
+            "exceeds one per step",
+        ),
+        (with(&[("run_id", "+2")]), "run_id `+2` is not a run number"),
+        (with(&[("run_id", "02")]), "run_id `02` is not a run number"),
+        (
+            with(&[("warnings", "ok\u{1b}[31m")]),
+            "warnings holds a control or format character",
+        ),
+        (
+            with(&[("warnings", "ok\u{202e}x")]),
+            "warnings holds a control or format character",
+        ),
+    ];
+    for (bad_row, needle) in &cases {
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[3] = bad_row;
+        std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+        let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+        assert_fails(&o, 65, &["full/results.csv:4: damaged row", needle]);
+        let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &["full/results.csv:4: damaged row", needle]);
+    }
+    // Headers: swapped columns, a BOM, CRLF, an escape.
+    let swapped = good
+        .replacen("path_length_m", "TMPX", 1)
+        .replacen("control_effort", "path_length_m", 1)
+        .replacen("TMPX", "control_effort", 1);
+    let first_nl = good.find('\n').unwrap();
+    let crlf = format!("{}\r{}", &good[..first_nl], &good[first_nl..]);
+    for bad in [
+        swapped,
+        format!("\u{feff}{good}"),
+        crlf,
+        good.replacen("run_id", "run_id\u{1b}", 1),
+    ] {
+        std::fs::write(&results, &bad).unwrap();
+        let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &["its columns differ"]);
+    }
+    std::fs::write(&results, &good).unwrap();
+    let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // The manifest's shard.
+    let manifest = std::fs::read_to_string(d.path().join("full/sweep.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    let with_shard = |k: u64, n: u64| {
+        let mut v = v.clone();
+        v["shard"] = serde_json::json!([k, n]);
+        serde_json::to_string_pretty(&v).unwrap()
+    };
+    std::fs::write(d.path().join("full/sweep.json"), with_shard(2, 1)).unwrap();
+    let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+    assert_fails(&o, 65, &["shard must be [k, n]"]);
+    std::fs::write(d.path().join("full/sweep.json"), with_shard(1, 2)).unwrap();
+    let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+    assert_fails(&o, 65, &["run 1 is not in shard 1/2"]);
+    std::fs::write(d.path().join("full/sweep.json"), &manifest).unwrap();
+    // One 2 MiB line: refused naming the line, for merge and --resume.
+    let mut lines: Vec<String> = good.lines().map(str::to_string).collect();
+    lines[3] = "9".repeat(2 << 20);
+    std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+    let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+    assert_fails(&o, 65, &["results.csv:4: a line longer than"]);
+    let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+    assert_fails(&o, 65, &["results.csv:4: a line longer than"]);
+    std::fs::write(&results, &good).unwrap();
+}

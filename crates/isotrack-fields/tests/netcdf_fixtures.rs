@@ -228,3 +228,25 @@ fn a_needed_attribute_that_is_not_utf8_is_refused_naming_it() {
         assert!(!e.unreadable, "{text}");
     }
 }
+
+/// Issue 30 (fix30), item 8: a `units` attribute with control characters (an escape sequence
+/// and a bidi override, a NUL inside) or a zero-width space was recorded escaped in the run's
+/// `scenario.toml` (and a re-run then disagreed with it). Refused like non-UTF-8 units, naming
+/// the variable and the attribute. (Files written with h5py by the hostile pass's mknc.py.)
+#[test]
+fn a_needed_attribute_with_control_characters_is_refused_naming_it() {
+    for name in [
+        "refused_ctrl_units_conc.nc",
+        "refused_nul_units_conc.nc",
+        "refused_zw_units_conc.nc",
+    ] {
+        let e = load_series(&dir().join(name), None, None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(name), "{text}");
+        assert!(
+            text.contains("variable `conc`: its `units` attribute holds a control or format character"),
+            "{text}"
+        );
+        assert!(!e.unreadable, "{text}");
+    }
+}

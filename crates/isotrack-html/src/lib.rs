@@ -15,7 +15,7 @@
 
 mod report;
 
-pub use report::{report_page, ReportError};
+pub use report::{report_page, report_page_with_notes, ReportError};
 
 /// Text escaped for HTML element content and quoted attribute values (`&`, `<`, `>`, `"`, `'`).
 pub fn escape(s: &str) -> String {

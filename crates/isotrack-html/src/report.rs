@@ -83,6 +83,12 @@ fn finite(v: f64) -> Option<f64> {
 /// and the error, measurement and turn-rate plots sharing the slider's cursor; hovering shows
 /// values with units.
 pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
+    report_page_with_notes(dirs).map(|(page, _)| page)
+}
+
+/// [`report_page`] and the notes a command shows beside it (runs without recorded data-file
+/// digests beside runs with them: `isotrack_plot::unrecorded_data_files_note`).
+pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), ReportError> {
     let mut runs = vec![];
     let mut data: Vec<RunData> = vec![];
     for d in dirs {
@@ -95,6 +101,9 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
     // The page draws the first run's field under every path: runs over different fields (or
     // isolines) are refused, naming both.
     isotrack_plot::same_field(&data).map_err(|e| ReportError::Data(e.to_string()))?;
+    let notes: Vec<String> = isotrack_plot::unrecorded_data_files_note(&data)
+        .into_iter()
+        .collect();
     for r in &data {
         let n = r.trace.len();
         let every = n.div_ceil(MAX_POINTS).max(1);
@@ -169,7 +178,7 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
         frames,
         units,
     };
-    Ok(page(&title, &body, &script_json(&json), REPORT_JS))
+    Ok((page(&title, &body, &script_json(&json), REPORT_JS), notes))
 }
 
 fn picture(scenario: &Scenario, runs: &[RunJson], n: usize) -> Option<FieldPicture> {

@@ -134,7 +134,7 @@ pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
         if let Some(parent) = p.parent() {
             std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
         }
-        std::fs::write(p, text).map_err(|e| io(p, e))
+        isotrack_runs::files::write_atomic(p, text.as_bytes()).map_err(|e| io(p, e))
     };
     write(&dir.join("leaderboard.csv"), &leaderboard_csv(r))?;
     write(&dir.join("leaderboard.md"), &leaderboard_md(r))?;
@@ -157,8 +157,14 @@ pub fn write_task(t: &TaskResult, dir: &Path) -> Result<(), BenchError> {
         std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
     }
     let csv = json.with_file_name("results.csv");
-    std::fs::write(&csv, results_csv(&t.runs)).map_err(|e| io(&csv, e))?;
-    std::fs::write(&json, serde_json::to_string(t).unwrap_or_default()).map_err(|e| io(&json, e))
+    // Never through a link nor into a FIFO: `isotrack_runs::files::write_atomic`.
+    isotrack_runs::files::write_atomic(&csv, results_csv(&t.runs).as_bytes())
+        .map_err(|e| io(&csv, e))?;
+    isotrack_runs::files::write_atomic(
+        &json,
+        serde_json::to_string(t).unwrap_or_default().as_bytes(),
+    )
+    .map_err(|e| io(&json, e))
 }
 
 #[cfg(test)]

@@ -414,6 +414,19 @@ fn check_task(
         };
         return Err((task_path(i, &["id"]), what));
     }
+    // The title heads the task's row of the leaderboard and its page: visible characters
+    // only, at most MAX_TITLE_CHARS.
+    let shown = |c: char| !(c.is_control() || isotrack_core::numtext::is_invisible(c));
+    if t.title.chars().count() > MAX_TITLE_CHARS || !t.title.chars().all(shown) {
+        return Err((
+            task_path(i, &["title"]),
+            format!(
+                "task {}: title {:?}: give at most {MAX_TITLE_CHARS} visible characters, without control or invisible (bidi, zero-width) characters",
+                t.id,
+                clip(&t.title)
+            ),
+        ));
+    }
     if !(t.length_m.is_finite() && t.length_m > 0.0) {
         return Err((
             task_path(i, &["length_m"]),
@@ -425,10 +438,11 @@ fn check_task(
         ));
     }
     let seed_note = "every run's sim.seed is its seed (tuning_seeds, scoring_seeds)";
-    if let Some(j) = t.set.iter().position(|a| {
-        a.split_once('=')
-            .is_some_and(|(k, _)| k.trim() == "sim.seed")
-    }) {
+    if let Some(j) = t
+        .set
+        .iter()
+        .position(|a| assigned_keys(a).iter().any(|k| k == "sim.seed"))
+    {
         return Err((
             vec![
                 Seg::Key("task".into()),
@@ -441,25 +455,85 @@ fn check_task(
     }
     // One value per key: a key set twice (the last would win unseen), or both set and drawn
     // (the draw would replace the set value unseen).
+    // Keys compared as TOML reads them: `sim . duration_s = 3` and `sim = { duration_s = 3 }`
+    // both set `sim.duration_s`.
     let mut set_keys: BTreeMap<String, usize> = BTreeMap::new();
     for (j, a) in t.set.iter().enumerate() {
-        let Some((k, _)) = a.split_once('=') else {
-            continue;
-        };
-        let k = k.trim().to_string();
         let at = vec![
             Seg::Key("task".into()),
             Seg::Index(i),
             Seg::Key("set".into()),
             Seg::Index(j),
         ];
-        if let Some(first) = set_keys.get(&k) {
+        for k in assigned_keys(a) {
+            check_set_key(t, &set_keys, &k, j, at.clone())?;
+            set_keys.insert(k, j);
+        }
+    }
+    for (c, gains) in &t.tuned {
+        if let Some((gain, j)) = gains
+            .keys()
+            .find_map(|g| set_keys.get(&format!("controller.{g}")).map(|j| (g, *j)))
+        {
+            return Err((
+                task_path(i, &["tuned", c, gain]),
+                format!(
+                    "task {}: set[{j}] assigns controller.{gain} and [task.tuned.{c}] gives {gain}: one value per gain (the tuned one would win unseen)",
+                    t.id
+                ),
+            ));
+        }
+    }
+    check_task_rest(i, t, controllers)
+}
+
+/// The longest task title, characters.
+pub const MAX_TITLE_CHARS: usize = 200;
+
+/// The leaf keys an assignment `KEY = VALUE` sets, dotted, as TOML reads it (`a . b = 1` and
+/// `a = { b = 1 }` both set `a.b`); the text before `=`, trimmed, when it is no TOML.
+fn assigned_keys(a: &str) -> Vec<String> {
+    fn leaves(prefix: &str, v: &toml::Value, out: &mut Vec<String>) {
+        match v {
+            toml::Value::Table(t) if !t.is_empty() => {
+                for (k, v) in t {
+                    leaves(&format!("{prefix}.{k}"), v, out);
+                }
+            }
+            _ => out.push(prefix.to_string()),
+        }
+    }
+    match a.parse::<toml::Table>() {
+        Ok(t) => {
+            let mut out = vec![];
+            for (k, v) in &t {
+                leaves(k, v, &mut out);
+            }
+            out
+        }
+        Err(_) => a
+            .split_once('=')
+            .map(|(k, _)| vec![k.trim().to_string()])
+            .unwrap_or_default(),
+    }
+}
+
+/// One set key `k` (from `set[j]`) against the keys set before it and the drawn ones.
+fn check_set_key(
+    t: &Task,
+    set_keys: &BTreeMap<String, usize>,
+    k: &str,
+    j: usize,
+    at: Vec<Seg>,
+) -> Result<(), (Vec<Seg>, String)> {
+    {
+        if let Some(first) = set_keys.get(k) {
             return Err((
                 at,
                 format!(
                     "task {}: set assigns {} twice (set[{first}] and set[{j}]): one value per key",
                     t.id,
-                    clip(&k)
+                    clip(k)
                 ),
             ));
         }
@@ -469,12 +543,21 @@ fn check_task(
                 format!(
                     "task {}: {} is both set and in vary: every run would draw it, replacing the set value",
                     t.id,
-                    clip(&k)
+                    clip(k)
                 ),
             ));
         }
-        set_keys.insert(k, j);
     }
+    Ok(())
+}
+
+/// The rest of [`check_task`]: the drawn keys and the tuned gains.
+fn check_task_rest(
+    i: usize,
+    t: &Task,
+    controllers: &[String],
+) -> Result<(), (Vec<Seg>, String)> {
+    let seed_note = "every run's sim.seed is its seed (tuning_seeds, scoring_seeds)";
     for (k, d) in &t.vary {
         if k.trim() == "sim.seed" {
             return Err((

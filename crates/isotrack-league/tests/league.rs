@@ -624,3 +624,55 @@ fn silent_suite_edits_are_refused_at_their_line() {
         assert!(e.message.contains(says), "{e}");
     }
 }
+
+/// Issue 30 (fix30), item 7: a key set twice spelt otherwise (`sim . duration_s`, an inline
+/// table `sim = { duration_s = 3.0 }`) is the same key; `set controller.kp` beside a tuned
+/// `kp` (the tuned one silently won) is refused; a title with a bidi override, a zero-width
+/// space, or of 100 000 characters is refused at its line.
+#[test]
+fn set_keys_are_compared_as_toml_reads_them_and_titles_bounded() {
+    let twice = |second: &str| {
+        one_task(TOP, "").replace(
+            "\"sim.duration_s=20.0\"]",
+            &format!("\"sim.duration_s=20.0\", {second}]"),
+        )
+    };
+    let long_title = "t".repeat(100_000);
+    let cases: Vec<(String, usize, &str)> = vec![
+        (
+            twice("\"sim . duration_s=3\""),
+            10,
+            "set assigns sim.duration_s twice (set[0] and set[1])",
+        ),
+        (
+            twice("\"sim={duration_s=3.0}\""),
+            10,
+            "set assigns sim.duration_s twice (set[0] and set[1])",
+        ),
+        (
+            twice("\"controller.kp=5.0\"") + "[task.tuned.pi_isoline]\nkp = 20.0\n",
+            13,
+            "assigns controller.kp and [task.tuned.pi_isoline] gives kp",
+        ),
+        (
+            one_task(TOP, "").replacen("title = \"a\"", "title = \"a\u{202e}b\"", 1),
+            8,
+            "without control or invisible",
+        ),
+        (
+            one_task(TOP, "").replacen("title = \"a\"", "title = \"a\u{200b}\"", 1),
+            8,
+            "without control or invisible",
+        ),
+        (
+            one_task(TOP, "").replacen("title = \"a\"", &format!("title = \"{long_title}\""), 1),
+            8,
+            "give at most 200 visible characters",
+        ),
+    ];
+    for (text, line, says) in cases {
+        let e = parse_err(&text);
+        assert!(e.message.contains(says), "{e}");
+        assert_eq!(e.location.map(|l| l.0), Some(line), "{e}");
+    }
+}

@@ -638,8 +638,31 @@ impl Link {
     /// Logs every frame sent and received into `path` as a telemetry log (`.tlog`: each frame
     /// after its time, microseconds since the Unix epoch, big-endian `u64`), the format
     /// QGroundControl, MAVProxy and pymavlink read.
+    /// An existing `path` that is not a regular file (a symbolic link, a FIFO) is refused, never
+    /// written through nor waited on (`O_NOFOLLOW | O_NONBLOCK`, then checked).
     pub fn log_to(&mut self, path: &Path) -> std::io::Result<()> {
-        self.log.file = Some(std::io::BufWriter::new(File::create(path)?));
+        let refuse = || {
+            std::io::Error::other(format!(
+                "{} exists and is not a regular file (a link, FIFO, directory or device): refusing to write it",
+                path.display()
+            ))
+        };
+        if matches!(std::fs::symlink_metadata(path), Ok(m) if !m.file_type().is_file()) {
+            return Err(refuse());
+        }
+        let mut o = std::fs::OpenOptions::new();
+        o.write(true).create(true).truncate(false);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            o.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK);
+        }
+        let f: File = o.open(path)?;
+        if !f.metadata()?.is_file() {
+            return Err(refuse());
+        }
+        f.set_len(0)?;
+        self.log.file = Some(std::io::BufWriter::new(f));
         Ok(())
     }
 

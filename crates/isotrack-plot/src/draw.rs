@@ -57,23 +57,47 @@ fn s<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
-/// Runs a drawing body on a PNG or a SVG backend of the given size, then writes the file.
+/// Draws a figure into a fresh temporary file beside `path` (same extension, so the encoder
+/// picks the same format; created by `isotrack_runs::files::create_output`), then renames it
+/// over `path`. An existing `path` that is not a regular file (a symbolic link, a FIFO) is
+/// refused at once: never written through, never waited on.
+pub(crate) fn draw_atomic(path: &Path, body: impl FnOnce(&Path) -> DrawResult) -> DrawResult {
+    isotrack_runs::files::refuse_non_regular(path).map_err(s)?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp{ext}", std::process::id()));
+    drop(isotrack_runs::files::create_output(&tmp).map_err(s)?);
+    let res = body(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(s));
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res
+}
+
+/// Runs a drawing body on a PNG or a SVG backend of the given size, then writes the file
+/// ([`draw_atomic`]).
 macro_rules! render {
     ($path:expr, $format:expr, $size:expr, |$root:ident| $body:expr) => {{
         fonts();
         let path: &Path = $path;
-        let res: DrawResult = match $format {
+        let res: DrawResult = draw_atomic(path, |tmp| match $format {
             Format::Png => {
-                let $root = BitMapBackend::new(path, $size).into_drawing_area();
+                let $root = BitMapBackend::new(tmp, $size).into_drawing_area();
                 $body.and_then(|_| $root.present().map_err(s))
             }
             Format::Svg => {
-                let $root = SVGBackend::new(path, $size).into_drawing_area();
+                let $root = SVGBackend::new(tmp, $size).into_drawing_area();
                 $body
                     .and_then(|_| $root.present().map_err(s))
-                    .and_then(|_| crate::style::svg_without_controls(path))
+                    .and_then(|_| crate::style::svg_without_controls(tmp))
             }
-        };
+        });
         res.map_err(|message| PlotError::Draw {
             path: path.display().to_string(),
             message,
@@ -682,7 +706,7 @@ pub fn animation_gif(
         [xa - pad, xb + pad, ya - pad, yb + pad],
         &[0.0, 0.5 * t_end, t_end],
     );
-    let res: DrawResult = (|| {
+    let res: DrawResult = draw_atomic(path, |path| {
         fonts();
         let root = BitMapBackend::gif(path, (lay.w, lay.h), delay_ms)
             .map_err(s)?
@@ -727,7 +751,7 @@ pub fn animation_gif(
             root.present().map_err(s)?;
         }
         Ok(())
-    })();
+    });
     res.map_err(|message| PlotError::Draw {
         path: path.display().to_string(),
         message,

@@ -32,7 +32,7 @@ pub use draw::{
 pub(crate) use error::open_input;
 pub use error::{PlotError, MAX_INPUT_BYTES};
 pub use picture::FieldPicture;
-pub use run_data::{same_field, RunData};
+pub use run_data::{data_files_unchanged, same_field, unrecorded_data_files_note, RunData};
 pub use stability::{boundary_segments, stability_map_figure};
 pub(crate) use style::fonts;
 pub use style::{tick_label, tick_step, Colormap, Format, Style, DEFAULT_FONT_FAMILY};

@@ -170,11 +170,67 @@ fn data_digests(r: &RunData) -> Vec<(String, String)> {
         .unwrap_or_default()
 }
 
+/// Checks that each data file a run recorded (`summary.json` `data_files`, SHA-256 by path)
+/// still holds what the run read: the field is drawn from the file as it is now, so a file
+/// changed after the run would draw another field under its path. Otherwise a
+/// [`PlotError::Data`] (65) naming the file, the run and both digests. Each file is hashed
+/// once (`isotrack_runs::files::sha256_file`); a file that cannot be read now is left to the
+/// scenario's own loading (which has already read it).
+pub fn data_files_unchanged(runs: &[RunData]) -> Result<(), PlotError> {
+    let mut now: std::collections::BTreeMap<String, Option<String>> = Default::default();
+    let clip = isotrack_scenario::load::clip;
+    for r in runs {
+        for (path, recorded) in data_digests(r) {
+            let current = now
+                .entry(path.clone())
+                .or_insert_with(|| isotrack_runs::files::sha256_file(Path::new(&path)).ok());
+            if let Some(current) = current {
+                if *current != recorded {
+                    return Err(PlotError::Data(format!(
+                        "{}: data file {} changed after the run (SHA-256 {} recorded in its summary.json, {} now): the field drawn would not be the one it ran over; re-run it",
+                        r.dir.display(),
+                        clip(&path),
+                        clip(&recorded.chars().take(16).collect::<String>()),
+                        &current[..16.min(current.len())],
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A note when some runs recorded their data files' digests (`data_files`) and others, with
+/// data files, did not (written before digests were recorded): those runs' fields cannot be
+/// checked against the others'. `None` otherwise.
+pub fn unrecorded_data_files_note(runs: &[RunData]) -> Option<String> {
+    let has_files = |r: &RunData| {
+        let f = &r.scenario.file().field;
+        f.path.is_some() || f.paths.as_ref().is_some_and(|p| !p.is_empty())
+    };
+    let recorded = |r: &RunData| r.summary.get("data_files").is_some_and(|v| v.is_object());
+    if !runs.iter().any(|r| has_files(r) && recorded(r)) {
+        return None;
+    }
+    let missing: Vec<&str> = runs
+        .iter()
+        .filter(|r| has_files(r) && !recorded(r))
+        .map(|r| r.name.as_str())
+        .collect();
+    (!missing.is_empty()).then(|| {
+        format!(
+            "{} recorded no data_files digests in summary.json (an older run): whether its data files held the same content as the other runs' is not checked",
+            isotrack_scenario::load::clip(&missing.join(", "))
+        )
+    })
+}
+
 /// Checks that every run shows the same field and isoline (see `field_identity`: the
 /// `[field]` section, the level, a meandering puff plume's seed; and the content of its data
 /// files where both runs recorded their digests), since a figure or page of several runs
 /// draws one field under every path. Otherwise a [`PlotError::Data`] naming the first run and
-/// the first that differs from it, and the first key that differs with both values.
+/// the first that differs from it, and the first key that differs with both values. Then each
+/// run's recorded data files against the files as they are now ([`data_files_unchanged`]).
 pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
     let Some(first) = runs.first() else {
         return Ok(());
@@ -230,5 +286,6 @@ pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
             r.name,
         )));
     }
-    Ok(())
+    // The runs agree with each other; each also with its data files as they are now.
+    data_files_unchanged(runs)
 }

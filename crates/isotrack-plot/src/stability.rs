@@ -161,20 +161,19 @@ pub fn stability_map_figure(
         })
     };
     let (w, h) = st.size((1000, 800), (560, 470));
-    match st.format {
+    // Never through a link nor into a FIFO: `draw::draw_atomic`.
+    draw(crate::draw::draw_atomic(path, |path| match st.format {
         Format::Png => {
             let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
-            draw(chart(&root, map, verify, st).and_then(|_| root.present().map_err(s)))
+            chart(&root, map, verify, st).and_then(|_| root.present().map_err(s))
         }
         Format::Svg => {
             let root = SVGBackend::new(path, (w, h)).into_drawing_area();
-            draw(
-                chart(&root, map, verify, st)
-                    .and_then(|_| root.present().map_err(s))
-                    .and_then(|_| crate::style::svg_without_controls(path)),
-            )
+            chart(&root, map, verify, st)
+                .and_then(|_| root.present().map_err(s))
+                .and_then(|_| crate::style::svg_without_controls(path))
         }
-    }
+    }))
 }
 
 /// One legend entry's marker (drawn below the plot, never over the data).

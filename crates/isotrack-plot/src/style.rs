@@ -182,7 +182,11 @@ impl Style {
 /// Whether XML 1.0 forbids `c` in a document, even escaped (its `Char` production): the C0
 /// controls but tab, newline and carriage return, and U+FFFE, U+FFFF.
 pub(crate) fn forbidden_in_xml(c: char) -> bool {
-    matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}')
+    // Also DEL, the C1 controls (NEL), and the bidirectional and zero-width format characters
+    // (issue 30): allowed by XML, but in a figure's text they reorder or hide what is drawn.
+    matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{7f}'..='\u{9f}'
+        | '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}' | '\u{feff}'
+        | '\u{fffe}' | '\u{ffff}')
 }
 
 /// Rewrites the SVG file plotters wrote at `path` with every character XML forbids

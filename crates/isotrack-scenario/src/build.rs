@@ -25,6 +25,10 @@ pub struct RunSpan {
     /// Steps between samples `m = 1 / (rate dt)`: samples fall on steps `0, m, 2m, ...`, so a
     /// run that sensed steps `0..=k` delivered at most `floor(k / m) + 1`.
     pub steps_per_sample: u64,
+    /// The fastest the vehicle moves over ground, m/s, where known: the Dubins robot's constant
+    /// `vehicle.speed_mps` (default 0.5; its path over `t` is `v t`); `None` for the fixed
+    /// wing (wind adds to its airspeed).
+    pub speed_max_mps: Option<f64>,
 }
 
 /// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
@@ -38,6 +42,12 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
             .ok()?
             .max(1),
+        speed_max_mps: match f.vehicle.kind {
+            None | Some(crate::schema::VehicleKind::Dubins) => {
+                Some(f.vehicle.speed_mps.unwrap_or(0.5)).filter(|v| v.is_finite() && *v >= 0.0)
+            }
+            Some(crate::schema::VehicleKind::FixedWing) => None,
+        },
     })
 }
 

@@ -260,6 +260,10 @@ fn resolve_puff(c: &mut Checker, fd: &mut FieldSection) {
         &[*fd.meander_std_mps.get_or_insert(0.1)],
     );
     c.non_negative("field.meander_std_mps", fd.meander_std_mps.unwrap_or(0.0));
+    // `-0.0` is calm as `0.0` is: stored as `0.0`, so two calm plumes are one field.
+    if let Some(m) = fd.meander_std_mps.as_mut().filter(|m| **m == 0.0) {
+        *m = 0.0;
+    }
     c.positive(
         "field.meander_correlation_s",
         *fd.meander_correlation_s.get_or_insert(20.0),
@@ -611,6 +615,8 @@ fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKi
                     "controller.alpha_star",
                     format!("must be in (0, 1], got {}", Echo(a)),
                 );
+            } else {
+                c.not_subnormal("controller.alpha_star", a);
             }
         }
         ControllerKind::Pid | ControllerKind::PidCrossing => {
@@ -819,6 +825,11 @@ pub mod ranges {
     pub const ALTITUDE_RANGE_M: (f64, f64) = (50.0, 20_000.0);
     /// Largest `|vehicle.wind_mps|` component and `|field.drift_mps|` component, m/s.
     pub const MAX_WIND_MPS: f64 = 1.0e2;
+    /// Largest `|initial.heading_rad|` and `|field.sources[i].rotation_rad|`, rad (about 159
+    /// turns): an angle is meant modulo 2 pi, and past about 1e16 rad a step's turn
+    /// `omega dt` is below one ulp of the heading (the turn vanishes); at 1e3 rad the ulp is
+    /// 1.1e-13 rad.
+    pub const MAX_ANGLE_RAD: f64 = 1.0e3;
 }
 
 /// `[sim]`; returns the step (s) for the sections whose checks depend on it.
@@ -829,7 +840,17 @@ fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
     c.positive("sim.duration_s", duration);
     sim.seed.get_or_insert(S::SEED);
     if dt > 0.0 && duration > 0.0 && dt.is_finite() && duration.is_finite() {
-        if let Err(reason) = whole_steps(duration, dt) {
+        if duration < dt {
+            // `1e-12` s would run 0 steps and be reported `completed`.
+            c.fail(
+                "sim.duration_s",
+                format!(
+                    "{} s is shorter than one step (sim.dt_s = {} s)",
+                    Echo(duration),
+                    Echo(dt)
+                ),
+            );
+        } else if let Err(reason) = whole_steps(duration, dt) {
             c.fail(
                 "sim.duration_s",
                 format!("{} s {reason} of sim.dt_s = {} s", Echo(duration), Echo(dt)),
@@ -965,7 +986,13 @@ fn resolve_gaussian_plumes(c: &mut Checker, fd: &mut FieldSection) {
             c.coordinate(&format!("field.sources[{i}].center_m"), x);
         }
         c.field_value(&format!("field.sources[{i}].amplitude"), s.amplitude);
-        c.finite(&format!("field.sources[{i}].rotation_rad"), s.rotation_rad);
+        c.within(
+            &format!("field.sources[{i}].rotation_rad"),
+            s.rotation_rad,
+            -ranges::MAX_ANGLE_RAD,
+            ranges::MAX_ANGLE_RAD,
+            "rad",
+        );
         for sg in s.sigma_m {
             let key = format!("field.sources[{i}].sigma_m");
             c.within(
@@ -1145,9 +1172,12 @@ fn resolve_sitl(c: &mut Checker, s: &SitlSection) {
 fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
     c.coordinate("initial.x_m", *init.x_m.get_or_insert(S::START_X_M));
     c.coordinate("initial.y_m", *init.y_m.get_or_insert(S::START_Y_M));
-    c.finite(
+    c.within(
         "initial.heading_rad",
         *init.heading_rad.get_or_insert(S::START_HEADING_RAD),
+        -ranges::MAX_ANGLE_RAD,
+        ranges::MAX_ANGLE_RAD,
+        "rad",
     );
 }
 
@@ -1186,6 +1216,8 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
             "sensor.dropout_probability",
             format!("must be in [0, 1), got {}", Echo(p)),
         );
+    } else {
+        c.not_subnormal("sensor.dropout_probability", p);
     }
     let drift = *sn
         .bias_drift_per_sqrt_s
@@ -1298,6 +1330,8 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
             "metrics.steady_state_fraction",
             format!("must be in (0, 1], got {}", Echo(frac)),
         );
+    } else {
+        c.not_subnormal("metrics.steady_state_fraction", frac);
     }
     let level = f.controller.level.unwrap_or(0.0);
     let tol_default = C::one_percent_of_level(level);

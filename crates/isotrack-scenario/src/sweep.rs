@@ -416,11 +416,14 @@ impl SweepPlan {
                 ));
             }
         }
+        // A std so small that `m + s z` rounds to `m` for every draw within 8 std (`1e-320`
+        // beside a mean of 1) draws the mean every time, as a std of 0 does.
+        let fixed = |m: f64, s: f64| s == 0.0 || (m + 8.0 * s == m && m - 8.0 * s == m);
         for (k, d) in &self.random {
             if let Dist::Normal(m, s) = d {
-                if *s == 0.0 {
+                if fixed(*m, *s) {
                     notes.push(format!(
-                        "random.{k} = {{ normal = [{m:?}, 0.0] }} draws {m:?} every time: nothing random in it"
+                        "random.{k} = {{ normal = [{m:?}, {s:?}] }} draws {m:?} every time: nothing random in it"
                     ));
                 }
             }
@@ -428,7 +431,7 @@ impl SweepPlan {
         let nothing_random = self
             .random
             .iter()
-            .all(|(_, d)| matches!(d, Dist::Normal(_, s) if *s == 0.0));
+            .all(|(_, d)| matches!(d, Dist::Normal(m, s) if fixed(*m, *s)));
         if self.draws > 1 && nothing_random && !self.derives_seed {
             notes.push(format!(
                 "random.runs = {} with no [random] key and sim.seed set by the sweep: the {} draws of each grid point are identical",
@@ -797,6 +800,19 @@ mod tests {
         assert!(
             notes.iter().any(|n| n.contains("nothing random")),
             "{notes:?}"
+        );
+        // Issue 30 (fix30), item 10: a std of 1e-320 beside a mean of 1 rounds away.
+        let p = plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-320] }\n").unwrap();
+        assert!(
+            p.duplicate_notes().iter().any(|n| n.contains("nothing random")),
+            "{:?}",
+            p.duplicate_notes()
+        );
+        let p = plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-3] }\n").unwrap();
+        assert!(
+            !p.duplicate_notes().iter().any(|n| n.contains("nothing random")),
+            "{:?}",
+            p.duplicate_notes()
         );
         assert!(notes.iter().any(|n| n.contains("identical")), "{notes:?}");
     }

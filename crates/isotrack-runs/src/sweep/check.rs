@@ -38,13 +38,16 @@ pub struct RowRules<'a> {
 }
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
-/// `sim.duration_s`, `sensor.rate_hz`, or their whole tables).
-const SPAN_KEYS: [&str; 5] = [
+/// `sim.duration_s`, `sensor.rate_hz`, the vehicle's kind and speed, or their whole tables).
+const SPAN_KEYS: [&str; 8] = [
     "sim",
     "sensor",
     "sim.dt_s",
     "sim.duration_s",
     "sensor.rate_hz",
+    "vehicle",
+    "vehicle.kind",
+    "vehicle.speed_mps",
 ];
 
 /// The [`RunSpan`] of each run of a sweep, from its resolved base scenario file: the base's
@@ -106,7 +109,10 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     }
     let id: u64 = rec[0]
         .parse()
-        .map_err(|_| format!("run_id `{}` is not a run number", clip(&rec[0])))?;
+        .ok()
+        // Canonical digits, as isotrack writes them (no `+0`, no `00`).
+        .filter(|id: &u64| id.to_string() == rec[0])
+        .ok_or_else(|| format!("run_id `{}` is not a run number", clip(&rec[0])))?;
     if id >= rules.total {
         return Err(format!(
             "run_id {id} is beyond this sweep's {} runs",
@@ -141,6 +147,19 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         ));
     }
     check_metrics(outcome, &cell)?;
+    // Text cells are isotrack's own messages: never a control character (an escape sequence,
+    // a line break) nor a bidirectional or zero-width format character.
+    for name in ["warnings", "outcome_detail"] {
+        if cell(name).chars().any(|c| {
+            c.is_control()
+                || isotrack_core::numtext::is_invisible(c)
+        }) {
+            return Err(format!(
+                "{name} holds a control or format character (`{}`)",
+                clip(cell(name))
+            ));
+        }
+    }
     if outcome != "invalid_scenario" {
         if let Some(span) = rules.spans.of(id) {
             let column = |name: &str| {
@@ -220,6 +239,29 @@ fn check_span<'c>(
                 Echo(t_end),
                 span.steps_per_sample,
                 Echo(dt)
+            ));
+        }
+    }
+    // Sign changes of a per-step quantity: at most one per step, `1 / dt` per second.
+    if let Some(r) = value("sign_changes_per_s") {
+        if r > (1.0 / dt) * (1.0 + 1e-9) {
+            return Err(format!(
+                "{}: sign_changes_per_s = {} exceeds one per step of {} s",
+                column("sign_changes_per_s"),
+                Echo(r),
+                Echo(dt)
+            ));
+        }
+    }
+    // A path no longer than the fastest speed over the run's time (+1 %).
+    if let (Some(v), Some(len)) = (span.speed_max_mps, value("path_length_m")) {
+        if len > v * t_end * 1.01 + 1e-9 {
+            return Err(format!(
+                "{}: path_length_m = {} m exceeds {} m/s x t_end_s = {} s",
+                column("path_length_m"),
+                Echo(len),
+                Echo(v),
+                Echo(t_end)
             ));
         }
     }

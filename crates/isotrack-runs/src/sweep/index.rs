@@ -13,6 +13,62 @@ use std::path::{Path, PathBuf};
 /// there.
 pub const MAX_RESULTS_FILE_BYTES: u64 = 1 << 40;
 
+/// The longest line of a `results.csv` that `--resume` and `merge` hold, bytes with its
+/// newline (1 MiB). A row isotrack writes is the run id, the plan's values, a dozen metrics and
+/// the outcome and warnings cells: a few kilobytes at most. A longer line is refused (65)
+/// before it is held, so one huge row cannot exhaust memory.
+pub const MAX_RESULTS_LINE_BYTES: u64 = 1 << 20;
+
+/// Reads one line of at most [`MAX_RESULTS_LINE_BYTES`] into `line` (appended), its length in
+/// bytes; `Ok(None)` for a line longer than that (nothing more than the limit is held).
+fn read_line_bounded(
+    rdr: &mut impl std::io::BufRead,
+    line: &mut String,
+) -> std::io::Result<Option<usize>> {
+    use std::io::{BufRead, Read};
+    let n = rdr
+        .by_ref()
+        .take(MAX_RESULTS_LINE_BYTES + 1)
+        .read_line(line)?;
+    if n as u64 > MAX_RESULTS_LINE_BYTES {
+        return Ok(None);
+    }
+    Ok(Some(n))
+}
+
+/// The first line of results file `path` with its newline (empty for a file without a
+/// complete one), at most [`MAX_RESULTS_LINE_BYTES`] held.
+pub fn read_header(path: &Path) -> Result<String, Failure> {
+    let cannot = |e: std::io::Error| {
+        fail(
+            exit::NOINPUT,
+            format!("cannot read {}: {e}", path.display()),
+        )
+    };
+    let mut rdr = std::io::BufReader::new(
+        isotrack_fields::io::open_limited(path, MAX_RESULTS_FILE_BYTES).map_err(cannot)?,
+    );
+    let mut line = String::new();
+    match read_line_bounded(&mut rdr, &mut line) {
+        Ok(Some(_)) if line.ends_with('\n') => Ok(line),
+        Ok(Some(_)) => Ok(String::new()),
+        Ok(None) => Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}:1: a line longer than {} bytes, longer than any row isotrack writes: a damaged file; remove the line (or the file)",
+                path.display(),
+                MAX_RESULTS_LINE_BYTES
+            ),
+        )),
+        // Not UTF-8: no header isotrack writes.
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidData => Err(fail(
+            exit::DATAERR,
+            format!("{}:1: the header is not UTF-8 text", path.display()),
+        )),
+        Err(e) => Err(cannot(e)),
+    }
+}
+
 /// One row of a results file: its run id and where its line is (not the line: a sweep's
 /// memory must not grow with its run count).
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +136,6 @@ pub fn index_results(
     plan: &SweepPlan,
     spans: &RunSpans<'_>,
 ) -> Result<ResultsIndex, Failure> {
-    use std::io::BufRead;
     let cannot = |e: std::io::Error| {
         fail(
             exit::NOINPUT,
@@ -91,7 +146,19 @@ pub fn index_results(
         isotrack_fields::io::open_limited(path, MAX_RESULTS_FILE_BYTES).map_err(cannot)?,
     );
     let mut line = String::new();
-    let mut offset = rdr.read_line(&mut line).map_err(cannot)? as u64;
+    let too_long = |number: u64| {
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}:{number}: a line longer than {} bytes, longer than any row isotrack writes: a damaged file; remove the line (or the file)",
+                path.display(),
+                MAX_RESULTS_LINE_BYTES
+            ),
+        )
+    };
+    let mut offset = read_line_bounded(&mut rdr, &mut line)
+        .map_err(cannot)?
+        .ok_or_else(|| too_long(1))? as u64;
     let cut_at = |at: u64| -> Result<(), Failure> {
         if !repair {
             return Ok(());
@@ -102,9 +169,7 @@ pub fn index_results(
                 format!("cannot repair {}: {e}", path.display()),
             )
         };
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
+        crate::files::open_regular(path, false, false)
             .map_err(repair_fail)?
             .set_len(at)
             .map_err(repair_fail)
@@ -133,12 +198,14 @@ pub fn index_results(
     let mut flagged = Flagged::default();
     for number in 2u64.. {
         line.clear();
-        let n = rdr.read_line(&mut line).map_err(|e| {
-            fail(
-                exit::DATAERR,
-                format!("{}:{number}: damaged row ({e})", path.display()),
-            )
-        })?;
+        let n = read_line_bounded(&mut rdr, &mut line)
+            .map_err(|e| {
+                fail(
+                    exit::DATAERR,
+                    format!("{}:{number}: damaged row ({e})", path.display()),
+                )
+            })?
+            .ok_or_else(|| too_long(number))?;
         if n == 0 {
             break;
         }
@@ -225,7 +292,7 @@ pub fn write_sorted(
                 .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
         })
         .collect::<Result<Vec<_>, Failure>>()?;
-    let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(cant)?);
+    let mut f = std::io::BufWriter::new(crate::files::create_output(&tmp).map_err(cant)?);
     f.write_all(header.as_bytes()).map_err(cant)?;
     let mut at = vec![u64::MAX; inputs.len()];
     let mut buf = Vec::new();

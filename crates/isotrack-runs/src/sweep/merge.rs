@@ -3,9 +3,10 @@
 use crate::failure::{exit, fail, Failure};
 use crate::files::same_file;
 use crate::sweep::check::RunSpans;
-use crate::sweep::index::{index_results, sort_rows, write_sorted, RowRef};
+use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
 use crate::sweep::manifest::{read_manifest, shard_plan};
+use crate::sweep::rows::{csv_line, results_header};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -84,6 +85,38 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     })?;
     let (plan, base) = shard_plan(d, &digest)?;
     let spans = RunSpans::new(&plan, &base);
+    // The columns this sweep writes: the manifest's (`columns`, where recorded) and the
+    // file's header must be exactly them, as `sweep --resume` checks (a renamed or swapped
+    // column would mislabel every value; a BOM, CRLF or control character is no header
+    // isotrack writes).
+    let expected = results_header(&plan);
+    if m.get("columns").is_some_and(|c| *c != json!(expected)) {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}/sweep.json: its columns differ from this sweep's",
+                d.display()
+            ),
+        ));
+    }
+    // The manifest's shard `[k, n]` (1 <= k <= n, as `--shard` takes) and every row of the
+    // shard in it (`id % n == k - 1`): a shard holding another's rows is damaged.
+    let shard = m
+        .get("shard")
+        .and_then(|s| s.as_array())
+        .and_then(|a| match a.as_slice() {
+            [k, n] => Some((k.as_u64()?, n.as_u64()?)),
+            _ => None,
+        });
+    let Some((k, n)) = shard.filter(|&(k, n)| (1..=n).contains(&k)) else {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}/sweep.json: shard must be [k, n] with 1 <= k <= n",
+                d.display()
+            ),
+        ));
+    };
     match &shards.first {
         Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
             return Err(fail(
@@ -99,7 +132,29 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
         None => shards.first = Some((t, digest, m)),
     }
     let path = d.join("results.csv");
+    let header = read_header(&path)?;
+    if !header.is_empty() && header != csv_line(&expected) {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: its columns differ from this sweep's (the header must be exactly the one isotrack writes: {})",
+                path.display(),
+                isotrack_scenario::load::clip(expected.join(",").as_str())
+            ),
+        ));
+    }
     let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans)?;
+    if let Some(r) = idx.rows.iter().find(|r| r.id % n != k - 1) {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}:{}: run {} is not in shard {k}/{n} that its sweep.json names",
+                path.display(),
+                r.line,
+                r.id
+            ),
+        ));
+    }
     if shards.header.as_ref().is_some_and(|x| *x != idx.header) {
         return Err(fail(
             exit::DATAERR,
@@ -163,7 +218,16 @@ fn write_merged_manifest(
     let cant = cant_write(out);
     for f in ["sweep.toml", "base_scenario.toml"] {
         if first.join(f).exists() && !same_file(&first.join(f), &out.join(f)) {
-            std::fs::copy(first.join(f), out.join(f)).map_err(cant)?;
+            // Read as a regular file of bounded size, written never through a link nor into a
+            // FIFO (73 at once).
+            let bytes =
+                isotrack_fields::io::read_limited(&first.join(f), 64 << 20).map_err(|e| {
+                    fail(
+                        exit::NOINPUT,
+                        format!("cannot read {}: {e}", first.join(f).display()),
+                    )
+                })?;
+            crate::files::write_atomic(&out.join(f), &bytes).map_err(cant)?;
         }
     }
     manifest["shard"] = json!([1, 1]);
@@ -172,9 +236,9 @@ fn write_merged_manifest(
         .iter()
         .map(|d| d.display().to_string())
         .collect::<Vec<_>>());
-    std::fs::write(
-        out.join("sweep.json"),
-        serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n",
+    crate::files::write_atomic(
+        &out.join("sweep.json"),
+        (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
     )
     .map_err(cant)
 }

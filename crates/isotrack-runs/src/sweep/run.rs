@@ -140,7 +140,8 @@ impl SweepJob {
         };
         self.write_manifest(out, shard, shard_runs)?;
         if !results.exists() {
-            std::fs::write(&results, csv_line(&self.header)).map_err(cant)?;
+            crate::files::write_atomic(&results, csv_line(&self.header).as_bytes())
+                .map_err(cant)?;
         }
         Ok(SweepOutput {
             dir: out.to_path_buf(),
@@ -191,7 +192,7 @@ impl SweepJob {
         let idx = index_results(results, 0, true, self.plan.total(), &self.plan, &spans)?;
         let header_line = csv_line(&self.header);
         if idx.header.is_empty() {
-            std::fs::write(results, &header_line).map_err(cant)?;
+            crate::files::write_atomic(results, header_line.as_bytes()).map_err(cant)?;
         } else if idx.header != header_line {
             let stored = csv_fields(&idx.header).unwrap_or_default();
             let missing: Vec<&str> = self
@@ -254,8 +255,10 @@ impl SweepJob {
         shard_runs: u64,
     ) -> Result<(), Failure> {
         let cant = cant_write(out);
-        std::fs::write(out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
-        std::fs::write(out.join("base_scenario.toml"), &self.base_toml).map_err(cant)?;
+        // Never through a link nor into a FIFO (73 at once): `files::write_atomic`.
+        crate::files::write_atomic(&out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
+        crate::files::write_atomic(&out.join("base_scenario.toml"), self.base_toml.as_bytes())
+            .map_err(cant)?;
         let manifest = json!({
             "sweep": self.name,
             "scenario": self.plan.scenario.display().to_string(),
@@ -265,9 +268,9 @@ impl SweepJob {
             "shard_runs": shard_runs,
             "columns": self.header,
         });
-        std::fs::write(
-            out.join("sweep.json"),
-            serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n",
+        crate::files::write_atomic(
+            &out.join("sweep.json"),
+            (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
         )
         .map_err(cant)
     }
@@ -285,9 +288,13 @@ impl SweepJob {
         let (tx, rx) = std::sync::mpsc::channel::<String>();
         std::thread::scope(|scope| {
             let writer = scope.spawn(|| -> Result<(), Failure> {
-                let mut f = std::fs::OpenOptions::new()
-                    .append(true)
-                    .open(&out.results)
+                // Not through a link, never blocking on a FIFO (`files::open_regular`), then
+                // appended to.
+                let mut f = crate::files::open_regular(&out.results, false, false)
+                    .and_then(|mut f| {
+                        use std::io::Seek;
+                        f.seek(std::io::SeekFrom::End(0)).map(|_| f)
+                    })
                     .map_err(cant)?;
                 for line in rx {
                     f.write_all(line.as_bytes()).map_err(cant)?;
