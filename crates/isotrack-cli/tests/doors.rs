@@ -692,8 +692,16 @@ fn subnormal_command_line_values_are_refused_and_echoed_short() {
 #[test]
 fn angles_bounded_subnormals_short_runs_and_negative_zero() {
     for (set, key, needle) in [
-        ("initial.heading_rad=1e16", "initial.heading_rad", "must be in"),
-        ("initial.heading_rad=-1001", "initial.heading_rad", "must be in"),
+        (
+            "initial.heading_rad=1e16",
+            "initial.heading_rad",
+            "must be in",
+        ),
+        (
+            "initial.heading_rad=-1001",
+            "initial.heading_rad",
+            "must be in",
+        ),
         (
             "metrics.steady_state_fraction=1e-310",
             "metrics.steady_state_fraction",
@@ -704,7 +712,11 @@ fn angles_bounded_subnormals_short_runs_and_negative_zero() {
             "sensor.dropout_probability",
             "subnormal",
         ),
-        ("sim.duration_s=1e-12", "sim.duration_s", "shorter than one step"),
+        (
+            "sim.duration_s=1e-12",
+            "sim.duration_s",
+            "shorter than one step",
+        ),
     ] {
         let o = isotrack(&["show", "--set", set]);
         assert_fails(&o, 65, &[key, needle]);
@@ -717,7 +729,11 @@ fn angles_bounded_subnormals_short_runs_and_negative_zero() {
         "sosm.toml",
         "[controller]\nkind = \"suboptimal_sosm\"\nalpha_star = 1e-310\n",
     );
-    assert_fails(&isotrack(&["show", &sosm]), 65, &["controller.alpha_star", "subnormal"]);
+    assert_fails(
+        &isotrack(&["show", &sosm]),
+        65,
+        &["controller.alpha_star", "subnormal"],
+    );
     let plume = write(
         d.path(),
         "plume.toml",

@@ -244,7 +244,9 @@ fn a_needed_attribute_with_control_characters_is_refused_naming_it() {
         let text = e.to_string();
         assert!(text.contains(name), "{text}");
         assert!(
-            text.contains("variable `conc`: its `units` attribute holds a control or format character"),
+            text.contains(
+                "variable `conc`: its `units` attribute holds a control or format character"
+            ),
             "{text}"
         );
         assert!(!e.unreadable, "{text}");

@@ -552,11 +552,7 @@ fn check_set_key(
 }
 
 /// The rest of [`check_task`]: the drawn keys and the tuned gains.
-fn check_task_rest(
-    i: usize,
-    t: &Task,
-    controllers: &[String],
-) -> Result<(), (Vec<Seg>, String)> {
+fn check_task_rest(i: usize, t: &Task, controllers: &[String]) -> Result<(), (Vec<Seg>, String)> {
     let seed_note = "every run's sim.seed is its seed (tuning_seeds, scoring_seeds)";
     for (k, d) in &t.vary {
         if k.trim() == "sim.seed" {

@@ -802,15 +802,21 @@ mod tests {
             "{notes:?}"
         );
         // Issue 30 (fix30), item 10: a std of 1e-320 beside a mean of 1 rounds away.
-        let p = plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-320] }\n").unwrap();
+        let p =
+            plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-320] }\n").unwrap();
         assert!(
-            p.duplicate_notes().iter().any(|n| n.contains("nothing random")),
+            p.duplicate_notes()
+                .iter()
+                .any(|n| n.contains("nothing random")),
             "{:?}",
             p.duplicate_notes()
         );
-        let p = plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-3] }\n").unwrap();
+        let p =
+            plan("scenario = \"x\"\n[random]\nruns = 2\nx = { normal = [1.0, 1e-3] }\n").unwrap();
         assert!(
-            !p.duplicate_notes().iter().any(|n| n.contains("nothing random")),
+            !p.duplicate_notes()
+                .iter()
+                .any(|n| n.contains("nothing random")),
             "{:?}",
             p.duplicate_notes()
         );

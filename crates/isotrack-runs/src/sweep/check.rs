@@ -150,10 +150,10 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     // Text cells are isotrack's own messages: never a control character (an escape sequence,
     // a line break) nor a bidirectional or zero-width format character.
     for name in ["warnings", "outcome_detail"] {
-        if cell(name).chars().any(|c| {
-            c.is_control()
-                || isotrack_core::numtext::is_invisible(c)
-        }) {
+        if cell(name)
+            .chars()
+            .any(|c| c.is_control() || isotrack_core::numtext::is_invisible(c))
+        {
             return Err(format!(
                 "{name} holds a control or format character (`{}`)",
                 clip(cell(name))
