@@ -926,18 +926,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             ));
             return Ok(Some(FlyEnd::ControlRefused));
         }
+        // Without a mode table for this vehicle nothing is commanded, not even the arming
+        // (an armed vehicle that fly cannot switch to OFFBOARD would only be disarmed again).
+        let Some(p) = self.firmware.set_mode_params(FlyMode::Offboard) else {
+            let what = format!(
+                "{}: no mode table here, control not taken",
+                self.firmware.name()
+            );
+            self.event(what);
+            return Ok(Some(FlyEnd::ControlRefused));
+        };
         if !self.armed {
             self.arm_sent = true;
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
         } else {
-            let Some(p) = self.firmware.set_mode_params(FlyMode::Offboard) else {
-                let what = format!(
-                    "{}: no mode table here, control not taken",
-                    self.firmware.name()
-                );
-                self.event(what);
-                return Ok(Some(FlyEnd::ControlRefused));
-            };
             // PX4 wants setpoints before the switch.
             self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
             self.offboard_sent = true;

@@ -711,3 +711,29 @@ fn px4_return_and_loiter_modes() {
         );
     }
 }
+
+/// An ArduPilot vehicle of a type without a mode table here (a submarine): `--take-control`
+/// commands nothing at all, not even the arming (it used to arm, find no table, then disarm),
+/// and the take-over ends refused.
+#[test]
+fn a_vehicle_without_a_mode_table_is_never_armed() {
+    let script = Script {
+        firmware: (
+            MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            MavType::MAV_TYPE_SUBMARINE,
+        ),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(
+        got.iter()
+            .all(|g| g.cmd != MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
+                && g.cmd != MavCmd::MAV_CMD_DO_SET_MODE),
+        "commanded: {:?}",
+        got.iter().map(|g| g.cmd).collect::<Vec<_>>()
+    );
+}
