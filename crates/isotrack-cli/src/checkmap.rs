@@ -8,7 +8,7 @@ use crate::run::Failure;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
-    StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS, NEAR_BOUNDARY_MARGIN,
+    StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS, NEAR_BOUNDARY_E_FOLDS,
 };
 use isotrack_scenario::load::clip;
 use isotrack_scenario::Scenario;
@@ -194,8 +194,8 @@ pub struct MapReport {
     /// `--verify`'s runs: requested, finished, and whether Ctrl-C cut them short (null without
     /// `--verify`).
     pub verify_runs: Option<VerifyRuns>,
-    /// The runs that disagree with the chart away from its boundary (spectral radius further
-    /// than `NEAR_BOUNDARY_MARGIN` from 1), each named.
+    /// The runs that disagree with the chart away from its boundary (the cell's mode changes
+    /// by more than `e^NEAR_BOUNDARY_E_FOLDS` over the run), each named.
     pub disagreements_far: Vec<FarDisagreement>,
 }
 
@@ -581,17 +581,21 @@ pub fn print_report(m: &MapReport) {
             }
         };
         outln!(
-            "  verify: {finished}{} compared, {} agree{}; disagreements at spectral radius within {} of 1: {}, further: {}; not compared: {} in all ({} left the field, {} saturated the turn-rate limit, which the linear chart leaves out, {} too short to judge against the loop's time scale)",
+            "  verify: {finished}{} compared, {} agree{} (predicted stable: {}; predicted unstable: {}); disagreements near the boundary (the mode changes by less than e^{} over the run): {}, further: {}; not compared: {} in all ({} left the field, {} saturated the turn-rate limit, which the linear chart leaves out, {} too short to judge against the loop's time scale, {} in cells not computed, {} invalid)",
             runs_word(a.compared),
             a.agree,
             a.percent.map_or_else(String::new, |p| format!(" ({p:.1} %)")),
-            NEAR_BOUNDARY_MARGIN,
+            side_text(a.predicted_stable),
+            side_text(a.predicted_unstable),
+            NEAR_BOUNDARY_E_FOLDS,
             a.disagreements_near_boundary,
             a.disagreements_far,
             a.not_compared,
             a.left_field,
             a.saturated,
-            a.undetermined
+            a.undetermined,
+            a.not_computed,
+            a.invalid
         );
         for d in &m.disagreements_far {
             outln!(
@@ -608,4 +612,12 @@ pub fn print_report(m: &MapReport) {
         }
     }
     outln!("  wrote {}", m.files.join(", "));
+}
+
+/// One prediction's agreement as text: `A of N agree (P %)`, or `none compared`.
+fn side_text(a: isotrack_scenario::check::map::SideAgreement) -> String {
+    match a.percent {
+        Some(p) => format!("{} of {} agree ({p:.1} %)", a.agree, a.compared),
+        None => "none compared".to_string(),
+    }
 }

@@ -489,11 +489,14 @@ pub const DECAY_RATIO: f64 = 0.9;
 /// the reading error's range (`8 noise_std + resolution + 4 bias_drift sqrt(window)`).
 pub const SENSOR_FLOOR_FACTOR: f64 = 2.0;
 
-/// A spectral radius within this of 1 is "near the boundary" (`near_boundary`): there the
-/// loop's decay per sample is under 2 % and a run of finite length, or the linearisation,
-/// may disagree with the chart. Defined on the radius, not the grid: independent of
-/// `--map-size`.
-pub const NEAR_BOUNDARY_MARGIN: f64 = 0.02;
+/// A cell is "near the boundary" (`near_boundary`) when its deciding mode grows or decays by
+/// less than `e^NEAR_BOUNDARY_E_FOLDS` (about 22 000) over the run's duration `D`:
+/// `|ln rho| * D / T <= NEAR_BOUNDARY_E_FOLDS` (`T` the sensor period). A rate per second, not
+/// per sample (issue 29: the old `|rho - 1| <= 0.02` a sample put almost every cell at 100 Hz
+/// "near", a decay of 2 % a sample being a factor e^1200 over a 600 s run). There a run of
+/// finite length, or the linearisation, may disagree with the chart. Defined on the radius,
+/// not the grid: independent of `--map-size`.
+pub const NEAR_BOUNDARY_E_FOLDS: f64 = 10.0;
 
 /// The mean `|omega|` from which a run counts as spinning, dithering or oscillating rather than
 /// following an isoline, rad/s: the least of `pi/(8T)` (an eighth of a half turn per sensor
@@ -579,15 +582,17 @@ pub struct VerifyPoint {
     /// Whether prediction (stable) and behaviour (converged) agree; `None` when not computed,
     /// invalid or left the field.
     pub agrees: Option<bool>,
-    /// The cell's spectral radius is within [`NEAR_BOUNDARY_MARGIN`] of 1 ([`near_boundary`]).
+    /// The cell's mode changes by less than `e^NEAR_BOUNDARY_E_FOLDS` over the run
+    /// ([`near_boundary`]).
     pub near_boundary: bool,
 }
 
-/// Whether a cell lies near the boundary: its spectral radius within
-/// [`NEAR_BOUNDARY_MARGIN`] of 1 (a cell not computed or without equilibrium is not).
-pub fn near_boundary(cell: &Cell) -> bool {
+/// Whether a cell sampled at period `period_s` lies near the boundary for a run of
+/// `duration_s`: `|ln rho| * duration_s / period_s <= NEAR_BOUNDARY_E_FOLDS` (a cell not
+/// computed or without equilibrium is not).
+pub fn near_boundary(cell: &Cell, period_s: f64, duration_s: f64) -> bool {
     cell.spectral_radius
-        .is_some_and(|r| (r - 1.0).abs() <= NEAR_BOUNDARY_MARGIN)
+        .is_some_and(|r| r > 0.0 && r.ln().abs() * duration_s / period_s <= NEAR_BOUNDARY_E_FOLDS)
 }
 
 /// The sensor periods, in whole simulation steps `[lo, hi]`, whose rates `1/(k dt)` lie in the
@@ -648,7 +653,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         mean_abs_turn_radps: None,
         detail: String::new(),
         agrees: None,
-        near_boundary: near_boundary(&cell),
+        near_boundary: near_boundary(&cell, 1.0 / rate_hz, f.scenario.spec().sim.duration_s),
     };
     let sets = [
         format!("controller.kp={kp:?}"),
@@ -840,7 +845,12 @@ pub struct Agreement {
     pub agree: usize,
     /// `100 agree / compared` (null when nothing was compared).
     pub percent: Option<f64>,
-    /// Disagreements at a spectral radius within [`NEAR_BOUNDARY_MARGIN`] of 1.
+    /// Agreement over the compared points the chart predicts stable.
+    pub predicted_stable: SideAgreement,
+    /// Agreement over the compared points the chart predicts unstable (or without
+    /// equilibrium).
+    pub predicted_unstable: SideAgreement,
+    /// Disagreements near the boundary ([`near_boundary`]).
     pub disagreements_near_boundary: usize,
     /// Disagreements further from radius 1 (each listed in `verify.csv`, `near_boundary`
     /// false).
@@ -851,8 +861,36 @@ pub struct Agreement {
     pub saturated: usize,
     /// Runs too short to judge (not compared: [`Behaviour::Undetermined`]).
     pub undetermined: usize,
-    /// Points not compared (not computed, invalid, left the field).
+    /// Points whose cell was not computed (not compared: no prediction).
+    pub not_computed: usize,
+    /// Points that make no valid scenario (not compared: [`Behaviour::Invalid`]).
+    pub invalid: usize,
+    /// Points not compared (not computed, invalid, left the field, saturated, too short).
     pub not_compared: usize,
+}
+
+/// Agreement over the compared points of one prediction (stable or unstable).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SideAgreement {
+    /// Compared points with this prediction.
+    pub compared: usize,
+    /// Of those, where the run agrees.
+    pub agree: usize,
+    /// `100 agree / compared` (null when none).
+    pub percent: Option<f64>,
+}
+
+fn side(points: &[&VerifyPoint], stable: bool) -> SideAgreement {
+    let of: Vec<&&VerifyPoint> = points
+        .iter()
+        .filter(|p| p.cell.status.stable() == Some(stable))
+        .collect();
+    let agree = of.iter().filter(|p| p.agrees == Some(true)).count();
+    SideAgreement {
+        compared: of.len(),
+        agree,
+        percent: (!of.is_empty()).then(|| 100.0 * agree as f64 / of.len() as f64),
+    }
 }
 
 /// Counts [`Agreement`].
@@ -868,11 +906,18 @@ pub fn agreement(points: &[VerifyPoint]) -> Agreement {
         compared: compared.len(),
         agree,
         percent: (!compared.is_empty()).then(|| 100.0 * agree as f64 / compared.len() as f64),
+        predicted_stable: side(&compared, true),
+        predicted_unstable: side(&compared, false),
         disagreements_near_boundary: near,
         disagreements_far: compared.len() - agree - near,
         left_field: count(Behaviour::LeftField),
         saturated: count(Behaviour::Saturated),
         undetermined: count(Behaviour::Undetermined),
+        not_computed: points
+            .iter()
+            .filter(|p| p.agrees.is_none() && p.cell.status == CellStatus::NotComputed)
+            .count(),
+        invalid: count(Behaviour::Invalid),
         not_compared: points.len() - compared.len(),
     }
 }

@@ -605,11 +605,12 @@ pub fn period_limit(l: &SampledLoop, slopes: &[f64]) -> PeriodLimit {
 pub struct LoopAnalysis {
     /// The slope `|grad F|` the loop was built at.
     pub slope: f64,
-    /// The plant held over one period: `x_{k+1} = phi x_k + gamma u_k` (row-major rows).
+    /// The plant held over one period: `x_{k+1} = phi x_k + gamma u_k` (row-major rows). With
+    /// a sensor lag `x` ends with the lagged reading `y`, stepped as the simulator steps it.
     pub phi: Vec<Vec<f64>>,
     /// See `phi`.
     pub gamma: Vec<f64>,
-    /// The measured output `eps = c x`.
+    /// The sampled output `c x`: `eps`, or with a lag the lagged reading `y`.
     pub c: Vec<f64>,
     /// The one-period closed-loop map `X_{k+1} = M X_k` (rows; state as
     /// [`SampledLoop::closed_loop_matrix`]).
@@ -767,8 +768,12 @@ impl SampledLoop {
                 (pm, w)
             })
             .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
-        let (a, b, c) = plant(self);
-        let (phi, gamma) = zoh(&a, &b, t);
+        // With a sensor lag the plant held over a period carries the lagged reading `y` as its
+        // last state, and `c` reads it (issue 29: `phi` was the 2 x 2 vehicle alone while
+        // `closed_loop` had the lag).
+        let held = HeldPlant::new(self)?;
+        let (phi, gamma) = held.over(t);
+        let c = held.output();
         let rows = |x: &DMatrix<f64>| -> Vec<Vec<f64>> {
             x.row_iter().map(|r| r.iter().copied().collect()).collect()
         };

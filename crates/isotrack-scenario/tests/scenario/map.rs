@@ -5,7 +5,7 @@
 use isotrack_scenario::check::check;
 use isotrack_scenario::check::map::{
     agreement, near_boundary, verify_point, verify_points, Behaviour, CellStatus, LoopFamily,
-    MapGrid, StabilityMap, NEAR_BOUNDARY_MARGIN,
+    MapGrid, StabilityMap, NEAR_BOUNDARY_E_FOLDS,
 };
 use isotrack_scenario::{load_scenario, Scenario};
 use std::path::Path;
@@ -316,10 +316,57 @@ fn near_boundary_is_the_radius_not_the_grid() {
     let f = LoopFamily::new(&s, None).unwrap();
     let c = f.cell(0.7, 1.0);
     let r = c.spectral_radius.unwrap();
-    assert!((r - 1.0).abs() > NEAR_BOUNDARY_MARGIN, "{r}");
-    assert!(!near_boundary(&c));
+    // 600 s at 1 Hz: 600 samples.
+    assert!(r.ln().abs() * 600.0 > NEAR_BOUNDARY_E_FOLDS, "{r}");
+    assert!(!near_boundary(&c, 1.0, 600.0));
     let c = f.cell(3.2727, 1.0);
-    assert!(near_boundary(&c), "{c:?}");
+    assert!(near_boundary(&c, 1.0, 600.0), "{c:?}");
+}
+
+/// Issue 29 (fix29), 6: nearness is per second, not per sample. At 100 Hz the paper's gains
+/// have a radius within 0.02 of 1 (the old rule's "near"), yet over the 600 s run (60 000
+/// samples) the mode decays by far more than e^10: not near. At 1 Hz the same radius would be.
+#[test]
+fn near_boundary_is_per_second() {
+    let s = circular(&[]);
+    let f = LoopFamily::new(&s, None).unwrap();
+    let c = f.cell(10.0, 100.0);
+    let r = c.spectral_radius.unwrap();
+    assert!((r - 1.0).abs() <= 0.02, "{r}");
+    assert!(r.ln().abs() * 60_000.0 > 10.0, "{r}");
+    assert!(!near_boundary(&c, 0.01, 600.0), "{r}");
+    assert!(near_boundary(&c, 1.0, 600.0) == (r.ln().abs() * 600.0 <= 10.0));
+}
+
+/// Issue 29 (fix29), 7 and 9: agreement per prediction, and the points in cells not computed
+/// counted by that reason. Hand-made points: 2 predicted stable (1 agrees), 1 predicted
+/// unstable (agrees), 1 not computed.
+#[test]
+fn agreement_is_split_by_prediction_and_names_not_computed() {
+    let s = circular(&["controller.ki=0", "sensor.rate_hz=1"]);
+    let f = LoopFamily::new(&s, None).unwrap();
+    let mut stable = verify_point(&f, 0.7, 1.0);
+    stable.agrees = Some(true);
+    let mut stable_bad = stable.clone();
+    stable_bad.agrees = Some(false);
+    let mut unstable = stable.clone();
+    unstable.cell.status = CellStatus::Unstable;
+    unstable.agrees = Some(true);
+    let mut nc = stable.clone();
+    nc.cell.status = CellStatus::NotComputed;
+    nc.agrees = None;
+    nc.behaviour = Behaviour::Converged;
+    let a = agreement(&[stable, stable_bad, unstable, nc]);
+    assert_eq!(
+        (a.predicted_stable.compared, a.predicted_stable.agree),
+        (2, 1)
+    );
+    assert_eq!(a.predicted_stable.percent, Some(50.0));
+    assert_eq!(
+        (a.predicted_unstable.compared, a.predicted_unstable.agree),
+        (1, 1)
+    );
+    assert_eq!((a.not_computed, a.not_compared), (1, 1));
 }
 
 /// `kp = 1e308` overflowed to an infinite radius and was labelled `no_equilibrium` (the P law

@@ -791,3 +791,25 @@ fn the_p_law_orbit_and_the_lag_are_named() {
     let ideal = check(&circular(&["controller.ki=0", "controller.kp=20"]), None);
     assert_eq!(ideal.sampled.stable, Some(true));
 }
+
+/// Issue 29 (fix29), 13: with a sensor lag `discrete_loop.phi` holds the lag's state as
+/// `closed_loop` does. At 100 Hz with sim.dt_s = 0.01 one simulation step per period: the
+/// lagged reading's own row ends in `exp(-h/tau)` (h = 0.01, tau = 3, by hand), and `c` reads
+/// that state.
+#[test]
+fn the_discrete_loop_holds_the_lag_state() {
+    let r = check(&circular(&["sensor.time_constant_s=3"]), None);
+    let d = r.sampled.discrete_loop.expect("discrete loop");
+    let n = d.phi.len();
+    assert_eq!(n, 3, "{:?}", d.phi);
+    assert_eq!(d.gamma.len(), 3);
+    assert_eq!(d.c, vec![0.0, 0.0, 1.0]);
+    let want = (-0.01f64 / 3.0).exp();
+    assert!(
+        (d.phi[2][2] - want).abs() < 1e-12,
+        "{} vs {want}",
+        d.phi[2][2]
+    );
+    let ideal = check(&circular(&[]), None).sampled.discrete_loop.unwrap();
+    assert_eq!(ideal.phi.len(), 2);
+}
