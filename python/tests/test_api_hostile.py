@@ -325,7 +325,12 @@ def test_benchmark_out_like_the_cli(tmp_path):
 
 # 9. Markdown cells escaped: `<`, `|`, newlines.
 def test_leaderboard_markdown_escaped(tmp_path):
-    suite = str(mini_suite(tmp_path, title="two\nlines | <b>"))
+    # A line feed in a title is refused by the suite (it would end a Markdown row) ...
+    lf = str(mini_suite(tmp_path, title="two\nlines | <b>"))
+    with pytest.raises(isotrack.ScenarioError, match="control or invisible"):
+        isotrack.benchmark(lambda s: Const(0.5), suite=lf, name="x", out=str(tmp_path / "a"))
+    # ... and the markup a title may hold is escaped in leaderboard.md.
+    suite = str(mini_suite(tmp_path, title="two lines | <b>"))
     out = tmp_path / "b"
     isotrack.benchmark(lambda s: Const(0.5), suite=suite, name="<!--<script>", out=str(out))
     md = (out / "leaderboard.md").read_text()
