@@ -181,6 +181,32 @@ fn heartbeat() -> MavMessage {
 }
 
 /// Reads until `link` has nothing more for `quiet`; how many frames came.
+/// A setpoint that answers the sample stamped `time_boot_ms` without steering (attitude ignored).
+fn neutral_setpoint(time_boot_ms: u32) -> MavMessage {
+    MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+        time_boot_ms,
+        q: [1.0, 0.0, 0.0, 0.0],
+        target_system: 1,
+        target_component: 1,
+        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+        ..Default::default()
+    })
+}
+
+/// For `wall` of wall time, the companion `c` beats and answers every sample it receives with
+/// [`neutral_setpoint`].
+fn answer_every_sample(c: &mut Link, wall: Duration) {
+    let t0 = Instant::now();
+    while t0.elapsed() < wall {
+        c.send(&heartbeat()).unwrap();
+        for r in c.poll(Duration::from_millis(20)).unwrap() {
+            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+                c.send(&neutral_setpoint(n.time_boot_ms)).unwrap();
+            }
+        }
+    }
+}
+
 fn frames_within(link: &mut Link, quiet: Duration) -> usize {
     let mut n = 0;
     loop {
@@ -289,52 +315,12 @@ fn sitl_drops_a_silent_ground_station() {
         assert_eq!(ack, Some(MavResult::MAV_RESULT_ACCEPTED), "{cmd:?}");
     }
     // The first sample (t = 0) may have come with the acknowledgements: answered now.
-    c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
-        time_boot_ms: 0,
-        q: [1.0, 0.0, 0.0, 0.0],
-        target_system: 1,
-        target_component: 1,
-        type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
-        ..Default::default()
-    }))
-    .unwrap();
+    c.send(&neutral_setpoint(0)).unwrap();
     // The companion beats and answers every sample for 2 s of wall time.
-    let t0 = Instant::now();
-    while t0.elapsed() < Duration::from_secs(2) {
-        c.send(&heartbeat()).unwrap();
-        for r in c.poll(Duration::from_millis(20)).unwrap() {
-            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
-                c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
-                    time_boot_ms: n.time_boot_ms,
-                    q: [1.0, 0.0, 0.0, 0.0],
-                    target_system: 1,
-                    target_component: 1,
-                    type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
-                    ..Default::default()
-                }))
-                .unwrap();
-            }
-        }
-    }
+    answer_every_sample(&mut c, Duration::from_secs(2));
     // The ground station, silent for 2 s (4 timeouts), was dropped: nothing more reaches it.
     frames_within(&mut gcs, Duration::from_millis(50));
-    let t1 = Instant::now();
-    while t1.elapsed() < Duration::from_millis(500) {
-        c.send(&heartbeat()).unwrap();
-        for r in c.poll(Duration::from_millis(20)).unwrap() {
-            if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
-                c.send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
-                    time_boot_ms: n.time_boot_ms,
-                    q: [1.0, 0.0, 0.0, 0.0],
-                    target_system: 1,
-                    target_component: 1,
-                    type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
-                    ..Default::default()
-                }))
-                .unwrap();
-            }
-        }
-    }
+    answer_every_sample(&mut c, Duration::from_millis(500));
     let late = frames_within(&mut gcs, Duration::from_millis(100));
     stop.store(true, Ordering::SeqCst);
     let v = vehicle.join().unwrap();

@@ -757,7 +757,7 @@ pub struct TeamSection {
     /// true arc gaps: a reference, not coordinate-free). Default `range_balance`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spacing: Option<SpacingName>,
-    /// The spacing gain `k_v`, 1/s (default 0.5).
+    /// The spacing gain `k_v`, 1/s (default [`crate::spec::team::K_V_PER_S`], 0.1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k_v: Option<f64>,
     /// Slowest speed the law may command, m/s (default half of `vehicle.speed_mps`).
