@@ -6,7 +6,8 @@ use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_cli::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::summary::scenario_toml;
-use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
+use isotrack_runs::rundir::RunDir;
+use isotrack_runs::trace::TELEMETRY_COLUMNS;
 use isotrack_runs::{exit, Failure};
 use isotrack_sim::{TraceRow, TraceSink};
 use numpy::PyReadonlyArray1;
@@ -66,10 +67,6 @@ pub fn write_run(
     trace: &Bound<'_, PyDict>,
 ) -> PyResult<()> {
     let dir = Path::new(dir);
-    let io = |what: &Path, e: std::io::Error| {
-        PyOSError::new_err(format!("cannot write {}: {e}", what.display()))
-    };
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let flying = scenario.inner.is_flying();
     let t = column(trace, "t_s", None)?;
     let n = Some(t.len());
@@ -86,8 +83,10 @@ pub fn write_run(
                 .collect::<PyResult<_>>()
         })
         .transpose()?;
-    let path = dir.join("trace.csv");
-    let mut w = TraceWriter::create(&path, flying).map_err(|e| io(&path, e))?;
+    // The one run-directory writer (no lock: a saved run writes none, as before).
+    let out = RunDir::open(dir, &[], &[], None).map_err(failure)?;
+    let mut file = out.trace(flying).map_err(failure)?;
+    let w = file.writer();
     for (i, &t_s) in t.iter().enumerate() {
         let m = cols[6][i];
         w.record(&TraceRow {
@@ -107,12 +106,8 @@ pub fn write_run(
             }),
         });
     }
-    w.finish().map_err(|e| io(&path, e))?;
-    let path = dir.join("summary.json");
-    std::fs::write(&path, format!("{summary_json}\n")).map_err(|e| io(&path, e))?;
-    let path = dir.join("scenario.toml");
-    std::fs::write(&path, scenario_toml(&scenario.inner)).map_err(|e| io(&path, e))?;
-    Ok(())
+    out.finish_json(file, &scenario_toml(&scenario.inner), summary_json)
+        .map_err(failure)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;

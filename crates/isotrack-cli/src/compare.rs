@@ -2,9 +2,10 @@
 
 use crate::cli::CompareArgs;
 use crate::exit;
-use crate::output::{num, scenario_toml, write_summary, TraceWriter};
+use crate::output::{scenario_toml, RunDir, Summary};
 use crate::run::invalid;
 use crate::run::Failure;
+use isotrack_runs::results::{result_cells, Column, RunRecord};
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult, TraceRow, TraceSink};
@@ -23,6 +24,19 @@ pub const COMPARISON_COLUMNS: [&str; 10] = [
     "control_effort",
     "steady_state_max_isoline_distance_m",
     "steady_state_rms_isoline_distance_m",
+];
+
+/// The result columns of `comparison.csv`, after `controller` ([`COMPARISON_COLUMNS`]).
+pub const COMPARISON_RESULT_COLUMNS: [Column; 9] = [
+    Column::Outcome,
+    Column::ConvergenceTimeS,
+    Column::SteadyStateMaxAbsError,
+    Column::SteadyStateRmsError,
+    Column::ChatteringRadps2,
+    Column::SignChangesPerS,
+    Column::ControlEffort,
+    Column::SteadyStateMaxIsolineDistanceM,
+    Column::SteadyStateRmsIsolineDistanceM,
 ];
 
 /// The scenario with `kind` as its controller: the scenario's own section when it already uses
@@ -150,28 +164,12 @@ impl TraceSink for Reach<'_> {
     }
 }
 
-/// Runs `s` (its trace to `trace` if given); the result and what [`Reach`] saw.
-fn run_watched(s: &Scenario, trace: Option<&Path>) -> std::io::Result<(RunResult, Reached)> {
-    match trace {
-        Some(path) => {
-            let mut w = TraceWriter::create(path, s.is_flying())?;
-            let mut reach = Reach::new(&mut w, s);
-            let r = s.run(&mut reach);
-            let seen = reach.result();
-            w.finish()?;
-            Ok((r, seen))
-        }
-        None => {
-            let mut sink = NoTrace;
-            let mut reach = Reach::new(&mut sink, s);
-            let r = s.run(&mut reach);
-            Ok((r, reach.result()))
-        }
-    }
-}
-
-fn cell(x: Option<f64>) -> String {
-    x.map_or_else(String::new, num)
+/// Runs `s`, its trace into `sink`; the result and what [`Reach`] saw.
+fn run_watched(s: &Scenario, sink: &mut dyn TraceSink) -> (RunResult, Reached) {
+    let mut reach = Reach::new(sink, s);
+    let r = s.run(&mut reach);
+    let seen = reach.result();
+    (r, seen)
 }
 
 fn md(x: Option<f64>) -> String {
@@ -243,28 +241,19 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             errln!("warning: {w}");
         }
         let r = if let Some(dir) = &a.out {
-            let d = dir.join(kind.name());
-            std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;
-            let (r, n) = run_watched(&s, Some(&d.join("trace.csv"))).map_err(|e| cant(&d, e))?;
+            // The directory's lock is held for all of them (above).
+            let out = RunDir::open(&dir.join(kind.name()), &[], &[], None)?;
+            let mut trace = out.trace(s.is_flying())?;
+            let (r, n) = run_watched(&s, trace.writer());
             if let Some((true, far)) = n {
                 never.push((kind, far));
             }
-            write_summary(
-                &d.join("summary.json"),
-                &s,
-                Some(&a.scenario),
-                &r,
-                &isotrack_scenario::check::warnings(&s),
-            )
-            .map_err(|e| cant(&d, e))?;
-            isotrack_runs::files::write_atomic(
-                &d.join("scenario.toml"),
-                scenario_toml(&s).as_bytes(),
-            )
-            .map_err(|e| cant(&d, e))?;
+            let warnings = isotrack_scenario::check::warnings(&s);
+            let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
+            out.finish(trace, &scenario_toml(&s), &summary)?;
             r
         } else {
-            let (r, n) = run_watched(&s, None).map_err(|e| cant(Path::new("trace"), e))?;
+            let (r, n) = run_watched(&s, &mut NoTrace);
             if let Some((true, far)) = n {
                 never.push((kind, far));
             }
@@ -312,20 +301,13 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         );
         let mut text = COMPARISON_COLUMNS.join(",") + "\n";
         for (k, r) in &results {
-            let m = &r.metrics;
-            text += &[
-                k.name().to_string(),
-                r.outcome.as_str().to_string(),
-                cell(m.convergence_time_s),
-                cell(m.steady_state_max_abs_error),
-                cell(m.steady_state_rms_error),
-                cell(m.chattering_radps2),
-                cell(m.sign_changes_per_s),
-                num(m.control_effort),
-                cell(m.steady_state_max_isoline_distance_m),
-                cell(m.steady_state_rms_isoline_distance_m),
-            ]
-            .join(",");
+            // The one row builder (isotrack-runs): the law's name, then its result's cells.
+            let mut row = vec![k.name().to_string()];
+            row.extend(result_cells(
+                &COMPARISON_RESULT_COLUMNS,
+                Ok(&RunRecord::of(r)),
+            ));
+            text += &row.join(",");
             text += "\n";
         }
         w.write_all(text.as_bytes())

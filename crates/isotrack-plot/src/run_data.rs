@@ -1,6 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
+use isotrack_runs::summary::{Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
@@ -15,8 +16,8 @@ pub struct RunData {
     pub dir: PathBuf,
     /// The trace.
     pub trace: Vec<TraceRow>,
-    /// `summary.json`.
-    pub summary: serde_json::Value,
+    /// `summary.json` (read by its one reader, [`Summary::from_json`]).
+    pub summary: Summary,
     /// The resolved scenario (its field rebuilt for the map).
     pub scenario: Scenario,
 }
@@ -26,11 +27,10 @@ impl RunData {
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
-        let summary: serde_json::Value = serde_json::from_str(
-            &isotrack_fields::io::read_text_limited(&dir.join("summary.json"), 16 << 20)
-                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?,
-        )
-        .map_err(|e| err(format!("summary.json: {e}")))?;
+        let text =
+            isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
+                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
+        let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
         let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
             let m = format!("scenario.toml: {e}");
             if e.is_unreadable_input() {
@@ -95,9 +95,11 @@ impl RunData {
             } else {
                 format!(
                     "the run ended at t = {} s: {} ({})",
-                    summary["t_end_s"],
-                    summary["outcome"].as_str().unwrap_or("?"),
-                    summary["outcome_detail"].as_str().unwrap_or("no detail")
+                    summary
+                        .t_end_s()
+                        .map_or(serde_json::Value::Null, serde_json::Value::from),
+                    summary.outcome(),
+                    summary.outcome_detail().unwrap_or("no detail")
                 )
             };
             return Err(err(format!("trace.csv has no rows: {why}")));

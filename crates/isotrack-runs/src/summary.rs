@@ -1,51 +1,244 @@
 //! `summary.json` and the resolved `scenario.toml` of a run directory.
+//!
+//! [`Summary`] is the one type of `summary.json`: every command that writes a run directory
+//! (`run`, `compare`, `figures`, `sitl`, `fly`, the Python package's `Run.save`) writes it
+//! through [`Summary::to_json`] ([`crate::rundir::RunDir`] writes it, atomically and last), and
+//! every reader (`isotrack-plot`, the HTML report) reads it through [`Summary::read`] /
+//! [`Summary::from_json`], whose errors name the file and the key.
 
-use isotrack_scenario::{Scenario, ScenarioFile};
+use crate::results::RunRecord;
+use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The content of `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct Summary<'a> {
+/// The largest `summary.json` read, bytes (a summary is a few kB; the scenario in it is capped at
+/// 1 MiB as a file).
+pub const MAX_SUMMARY_BYTES: u64 = 16 << 20;
+
+/// The content of `summary.json`: who wrote it, from which scenario file, how the run ended
+/// ([`Ended`], flattened: a simulated run's [`RunRecord`] or a flight's [`FlightRecord`]), and
+/// the resolved scenario. `S` is the scenario's type: the resolved scenario itself when written
+/// ([`Summary::of_run`]), its JSON when read back ([`Summary::read`]).
+///
+/// Non-finite or undefined numbers are `null` in the file and `None` here.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary<S = serde_json::Value> {
     /// isotrack's version.
-    pub isotrack_version: &'static str,
+    pub isotrack_version: String,
     /// The scenario file as given, or `null` for the built-in default.
     pub scenario_path: Option<String>,
-    /// The run's outcome and metrics (flattened: `outcome`, `steady_state_max_abs_error`, ...).
+    /// How the run ended, flattened into the top level (`outcome`, `t_end_s`, the metrics ...).
     #[serde(flatten)]
-    pub result: &'a RunResult,
-    /// Warnings about the scenario (also printed on stderr): noise through a backward
-    /// difference, a sampled loop that `isotrack check` finds unstable.
-    pub warnings: &'a [String],
+    pub ended: Ended,
     /// The fully resolved scenario.
-    pub scenario: &'a ScenarioFile,
+    pub scenario: S,
+    /// The controller that flew when it is not the scenario's own law (the Python package's
+    /// `{"kind": "python", "class": ...}`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<serde_json::Value>,
 }
 
-/// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`),
-/// atomically ([`crate::files::write_atomic`]): a reader sees no summary or a whole one.
-pub fn write_summary(
-    path: &Path,
-    scenario: &Scenario,
-    scenario_path: Option<&Path>,
-    result: &RunResult,
-    warnings: &[String],
-) -> std::io::Result<()> {
-    let s = Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION"),
-        scenario_path: scenario_path.map(|p| p.display().to_string()),
-        result,
-        warnings,
-        scenario: scenario.file(),
-    };
-    let text = summary_to_json(&s).map_err(std::io::Error::other)?;
-    crate::files::write_atomic(path, (text + "\n").as_bytes())
+/// How a run ended: a simulated run's record, or a flight's (`isotrack fly`: no metrics, the
+/// link's counters instead). Told apart by `end_reason`, which only a flight has.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Ended {
+    /// A flight flown by `isotrack fly`.
+    Flight(FlightRecord),
+    /// A run simulated by isotrack (also `sitl`'s, whose vehicle isotrack simulates).
+    Run(RunEnd),
 }
 
-/// `summary.json`'s text (pretty-printed; non-finite metrics are `null`): one rendering for the
-/// file and for the Python package.
-pub fn summary_to_json(s: &Summary<'_>) -> serde_json::Result<String> {
-    serde_json::to_string_pretty(s)
+/// A simulated run's end: its record (outcome and metrics) and the warnings about its scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunEnd {
+    /// Outcome and metrics.
+    #[serde(flatten)]
+    pub record: RunRecord,
+    /// Warnings about the scenario (also printed on stderr): noise through a backward
+    /// difference, a sampled loop that `isotrack check` finds unstable; for `sitl`, its events.
+    pub warnings: Vec<String>,
+}
+
+/// A flight's end (`isotrack fly --out`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlightRecord {
+    /// `completed` when the vehicle ended its run, `failsafe` after a failsafe, else the end
+    /// reason.
+    pub outcome: String,
+    /// The last event.
+    pub outcome_detail: String,
+    /// Why the flight ended.
+    pub end_reason: String,
+    /// Whether a failsafe ended it.
+    pub failsafe: bool,
+    /// Whether the vehicle confirmed the failsafe mode.
+    pub failsafe_acknowledged: bool,
+    /// Time of the last measurement, s.
+    pub t_end_s: Option<f64>,
+    /// Measurements received.
+    pub samples: u64,
+    /// Law commands sent.
+    pub commands: u64,
+    /// What happened, in order.
+    pub events: Vec<String>,
+    /// MAVLink frames received.
+    pub frames_in: u64,
+    /// MAVLink frames sent.
+    pub frames_out: u64,
+    /// Datagrams that were not MAVLink.
+    pub junk_datagrams: u64,
+}
+
+/// Why a `summary.json` cannot be read: the file and what is wrong, on one line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SummaryError {
+    /// Whether the file could not be read at all (missing, not a regular file, too big), as
+    /// opposed to read and found invalid.
+    pub unreadable: bool,
+    /// The message, naming the file (and the line and column or the key where known).
+    pub message: String,
+}
+
+impl std::fmt::Display for SummaryError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for SummaryError {}
+
+impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
+    /// The summary of a simulated run of `scenario` (`scenario_path`: the file it was read
+    /// from, `None` for the built-in default).
+    pub fn of_run(
+        scenario: &'a Scenario,
+        scenario_path: Option<&Path>,
+        result: &RunResult,
+        warnings: &[String],
+    ) -> Self {
+        Summary {
+            isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+            scenario_path: scenario_path.map(|p| p.display().to_string()),
+            ended: Ended::Run(RunEnd {
+                record: RunRecord::of(result),
+                warnings: warnings.to_vec(),
+            }),
+            scenario: scenario.file(),
+            controller: None,
+        }
+    }
+}
+
+impl<S: Serialize> Summary<S> {
+    /// `summary.json`'s text: pretty-printed, non-finite numbers `null`, a final newline.
+    pub fn to_json(&self) -> String {
+        // Serialising plain data into a String cannot fail (no map with non-string keys).
+        serde_json::to_string_pretty(self).unwrap_or_else(|_| "null".into()) + "\n"
+    }
+
+    /// Writes the summary to `path` atomically ([`crate::files::write_atomic`]): a reader sees
+    /// no summary or a whole one.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        crate::files::write_atomic(path, self.to_json().as_bytes())
+    }
+}
+
+impl Summary {
+    /// Reads `path` (a regular file of at most [`MAX_SUMMARY_BYTES`]).
+    pub fn read(path: &Path) -> Result<Summary, SummaryError> {
+        let text =
+            isotrack_fields::io::read_text_limited(path, MAX_SUMMARY_BYTES).map_err(|e| {
+                SummaryError {
+                    unreadable: true,
+                    message: format!("{}: {e}", path.display()),
+                }
+            })?;
+        Summary::from_json(&text).map_err(|e| SummaryError {
+            message: format!("{}: {}", path.display(), e.message),
+            ..e
+        })
+    }
+
+    /// Parses a summary's text. A flight's summary is told by its `end_reason` key; the error
+    /// names the line and column of bad JSON, or the key missing or of the wrong type.
+    pub fn from_json(text: &str) -> Result<Summary, SummaryError> {
+        let bad = |message: String| SummaryError {
+            unreadable: false,
+            message,
+        };
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        let serde_json::Value::Object(map) = &v else {
+            return Err(bad("not a JSON object".into()));
+        };
+        let ended = if map.contains_key("end_reason") {
+            serde_json::from_value::<FlightRecord>(v.clone()).map(Ended::Flight)
+        } else {
+            serde_json::from_value::<RunEnd>(v.clone()).map(Ended::Run)
+        }
+        .map_err(|e| bad(e.to_string()))?;
+        let field = |k: &str| map.get(k).cloned().unwrap_or(serde_json::Value::Null);
+        let string = |k: &str| -> Result<Option<String>, SummaryError> {
+            match field(k) {
+                serde_json::Value::Null => Ok(None),
+                serde_json::Value::String(s) => Ok(Some(s)),
+                other => Err(bad(format!("`{k}`: expected a string, got {other}"))),
+            }
+        };
+        Ok(Summary {
+            isotrack_version: string("isotrack_version")?
+                .ok_or_else(|| bad("missing field `isotrack_version`".into()))?,
+            scenario_path: string("scenario_path")?,
+            ended,
+            scenario: match map.get("scenario") {
+                Some(s @ serde_json::Value::Object(_)) => s.clone(),
+                Some(other) => {
+                    return Err(bad(format!(
+                        "`scenario`: expected an object, got {}",
+                        isotrack_scenario::load::clip(&other.to_string())
+                    )))
+                }
+                None => return Err(bad("missing field `scenario`".into())),
+            },
+            controller: map.get("controller").cloned(),
+        })
+    }
+}
+
+impl<S> Summary<S> {
+    /// The outcome (`completed`, `left_field`, `diverged`; `interrupted` or `companion_lost`
+    /// for a cut `sitl` run; a flight's).
+    pub fn outcome(&self) -> &str {
+        match &self.ended {
+            Ended::Run(r) => &r.record.outcome,
+            Ended::Flight(f) => &f.outcome,
+        }
+    }
+
+    /// Why the run ended so, when said.
+    pub fn outcome_detail(&self) -> Option<&str> {
+        match &self.ended {
+            Ended::Run(r) => r.record.outcome_detail.as_deref(),
+            Ended::Flight(f) => Some(&f.outcome_detail),
+        }
+    }
+
+    /// The time of the last valid step (a flight's last measurement), s.
+    pub fn t_end_s(&self) -> Option<f64> {
+        match &self.ended {
+            Ended::Run(r) => r.record.t_end_s,
+            Ended::Flight(f) => f.t_end_s,
+        }
+    }
+
+    /// The simulated run's record (`None` for a flight).
+    pub fn record(&self) -> Option<&RunRecord> {
+        match &self.ended {
+            Ended::Run(r) => Some(&r.record),
+            Ended::Flight(_) => None,
+        }
+    }
 }
 
 /// The resolved scenario as TOML (reads back as the same scenario).
