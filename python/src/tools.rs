@@ -3,7 +3,7 @@
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
 use crate::{PyScenario, ScenarioErrorPy};
-use isotrack_cli::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
+use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::rundir::RunDir;
@@ -34,7 +34,7 @@ pub(crate) fn failure(f: Failure) -> PyErr {
 #[pyfunction]
 pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
     let code = py.detach(|| {
-        std::panic::catch_unwind(|| isotrack_cli::entry::main_with(argv)).unwrap_or(101)
+        std::panic::catch_unwind(|| isotrack_commands::entry::main_with(argv)).unwrap_or(101)
     });
     let _ = std::io::stdout().flush();
     code
@@ -155,7 +155,7 @@ pub fn plot(
     if !args.runs.iter().all(|d| d.is_dir()) {
         // Refused at once, with the command's message (nothing is created for it).
         return crate::guard::no_panic(|| {
-            py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::figures::plot(&args)))
+            py.detach(|| isotrack_commands::console::quietly(|| isotrack_commands::figures::plot(&args)))
                 .map_err(failure)
         });
     }
@@ -163,7 +163,7 @@ pub fn plot(
     staged(py, &dir, move |staging| {
         let mut args = args;
         args.out = Some(staging.to_path_buf());
-        isotrack_cli::figures::plot(&args)
+        isotrack_commands::figures::plot(&args)
     })
 }
 
@@ -203,7 +203,7 @@ fn staged(
     let outcome = crate::guard::no_panic(|| {
         crate::guard::detached_then(
             py,
-            move || isotrack_cli::console::quietly(|| render(&theirs)),
+            move || isotrack_commands::console::quietly(|| render(&theirs)),
             move || {
                 let _ = std::fs::remove_dir_all(&gone);
             },
@@ -256,7 +256,7 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
         .unwrap_or(Path::new("."))
         .to_path_buf();
     staged(py, &dir, move |staging| {
-        isotrack_cli::league::report(&ReportArgs {
+        isotrack_commands::league::report(&ReportArgs {
             runs,
             out: staging.join(name),
         })
@@ -280,8 +280,8 @@ pub fn controller_variant(
             ControllerKind::ALL.map(|k| k.name()).join(", ")
         ))
     })?;
-    isotrack_cli::compare::check_gains(&gains).map_err(failure)?;
-    let inner = isotrack_cli::compare::variant(&scenario.inner, k, &gains, &scenario.origin)
+    isotrack_commands::compare::check_gains(&gains).map_err(failure)?;
+    let inner = isotrack_commands::compare::variant(&scenario.inner, k, &gains, &scenario.origin)
         .map_err(failure)?;
     Ok(PyScenario {
         inner,
