@@ -348,3 +348,17 @@ fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> Strin
     };
     note
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `comparison.csv`'s header is `controller` then the names of the columns its rows are
+    /// built from (the one row builder, isotrack-runs).
+    #[test]
+    fn the_header_names_the_built_columns() {
+        let names: Vec<&str> = COMPARISON_RESULT_COLUMNS.iter().map(|c| c.name()).collect();
+        assert_eq!(COMPARISON_COLUMNS[0], "controller");
+        assert_eq!(COMPARISON_COLUMNS[1..], names[..]);
+    }
+}
