@@ -29,7 +29,9 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     beside a y in metres), `refused_xy_two_units.nc` (x's units an NC_STRING array
     ["km", "m"]), `refused_lonlat_m.nc` (lon / lat in metres) and `refused_xy_both_x.nc` (y
     renamed `b` and marked axis X), which the loader must refuse naming the coordinate; `warned_xy_no_units.nc`
-    (x / y without units), read as metres with a warning.
+    (x / y without units), read as metres with a warning; `latin1_*.nc` (text attributes in
+    Latin-1, which must load) and `refused_latin1_units_*.nc` (a `units` in Latin-1, refused
+    naming the variable and the attribute): see `non_utf8`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -198,6 +200,55 @@ def unwritten(frames):
     return name
 
 
+def non_utf8():
+    """Text attributes that are not UTF-8, as older tools write them (a Latin-1 `comment`,
+    `history` or `units`: netCDF-C stores NC_CHAR bytes as they are given). Not in the
+    manifest. NetCDF-3 reads such bytes as U+FFFD; NetCDF-4 must do the same (issue 30), so
+    `latin1_*.nc` (Latin-1 `comment` / `long_name` on every variable and a Latin-1 global
+    `history`) load to the same grid and times as their twins, while `refused_latin1_*.nc`
+    (a Latin-1 `units` on the data variable `v`, on the coordinate `x`, on `time`) are refused
+    naming the variable and the attribute."""
+    import h5py
+    import netCDF4
+
+    latin1 = "caf\xe9 \xe0 25 \xb0C".encode("latin-1")
+
+    def comments(ds):
+        for name in list(ds.variables):
+            ds[name].attrs["comment"] = latin1
+        ds["v"].attrs["long_name"] = "temp\xe9rature".encode("latin-1")
+        ds.attrs["history"] = "cr\xe9\xe9 par un outil".encode("latin-1")
+
+    def units_v(ds):
+        ds["v"].attrs["units"] = "\xb0C".encode("latin-1")
+
+    def units_x(ds):
+        ds["x"].attrs["units"] = "m\xe8tres".encode("latin-1")
+
+    write("netcdf4", "NETCDF4", "xy", "contig", name="latin1_netcdf4_nc4_xy_contig.nc",
+          edit=comments)
+    write("netcdf4", "NETCDF4", "lonlat", "zlib1", name="latin1_netcdf4_nc4_lonlat_zlib1.nc",
+          edit=comments)
+    write("netcdf4", "NETCDF3_64BIT", "xy", "unlim", name="latin1_netcdf4_nc3_xy_unlim.nc",
+          edit=comments)
+    # h5netcdf refuses bytes that are not UTF-8; h5py writes them (a fixed-length string).
+    name = write("h5netcdf", "NETCDF4", "xy", "chunk", name="latin1_h5netcdf_nc4_xy_chunk.nc")
+    if not ONLY or name in ONLY:
+        with h5py.File(os.path.join(OUT, name), "a") as f:
+            for v in ("v", "x", "y", "time"):
+                f[v].attrs["comment"] = np.bytes_(latin1)
+            f.attrs["history"] = np.bytes_(latin1)
+    write("netcdf4", "NETCDF4", "xy", "contig", name="refused_latin1_units_v.nc", edit=units_v)
+    write("netcdf4", "NETCDF3_64BIT", "xy", "contig", name="refused_latin1_units_v_nc3.nc",
+          edit=units_v)
+    write("netcdf4", "NETCDF4", "xy", "contig", name="refused_latin1_units_x.nc", edit=units_x)
+    # xarray writes the time axis's units itself: set afterwards, with netCDF4.
+    name = write("netcdf4", "NETCDF4", "xy", "zlib1", name="refused_latin1_units_time.nc")
+    if not ONLY or name in ONLY:
+        with netCDF4.Dataset(os.path.join(OUT, name), "a") as nc:
+            nc["time"].setncattr("units", TIME_UNITS.encode() + b"\xa0")
+
+
 # File names given on the command line: only those are written (all when none).
 ONLY = set(sys.argv[1:])
 
@@ -263,6 +314,7 @@ def main():
     write("netcdf4", "NETCDF4", "xy", "contig", name="warned_xy_no_units.nc", edit=no_units)
     write("netcdf4", "NETCDF4", "xyft", "contig", name="refused_xy_ft.nc")
     write("netcdf4", "NETCDF4", "lony", "contig", name="refused_lon_y.nc")
+    non_utf8()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

@@ -94,7 +94,16 @@ pub struct PyEnvBatch {
 }
 
 fn invalid(name: &str, v: f64, why: &str) -> PyErr {
-    PyValueError::new_err(format!("{name} must be {why}, got {v}"))
+    PyValueError::new_err(format!(
+        "{name} must be {why}, got {}",
+        isotrack_core::numtext::Echo(v)
+    ))
+}
+
+/// Whether `x` is 0 or a normal number: a subnormal (below 2.2e-308, `1e-310`) is no setting
+/// anyone means, and dividing by one overflows (a reward of `-inf` from `error_scale = 1e-310`).
+fn zero_or_normal(x: f64) -> bool {
+    x == 0.0 || x.is_normal()
 }
 
 #[pymethods]
@@ -121,24 +130,29 @@ impl PyEnvBatch {
         let omax = max_turn_rate_radps
             .or(s.max_turn_rate_radps())
             .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
-        if !(omax.is_finite() && omax > 0.0) {
-            return Err(invalid("max_turn_rate_radps", omax, "finite and > 0"));
+        // Each a finite number, and not subnormal (a step of 1e-310 divides into infinity).
+        const POSITIVE: &str = "finite and > 0, not subnormal (at least 2.2250738585072014e-308)";
+        const NON_NEGATIVE: &str =
+            "finite and >= 0, 0 or not subnormal (at least 2.2250738585072014e-308)";
+        if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
+            return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
         }
-        let scale = error_scale.or(s.file().controller.c2).unwrap_or(1.0);
-        if !(scale.is_finite() && scale > 0.0) {
-            return Err(invalid("error_scale", scale, "finite and > 0"));
+        let scale = error_scale
+            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
+            .unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
+            return Err(invalid("error_scale", scale, POSITIVE));
         }
-        if !(effort_weight.is_finite() && effort_weight >= 0.0) {
-            return Err(invalid("effort_weight", effort_weight, "finite and >= 0"));
+        if !(effort_weight.is_finite() && effort_weight >= 0.0 && zero_or_normal(effort_weight)) {
+            return Err(invalid("effort_weight", effort_weight, NON_NEGATIVE));
         }
         if let Some(p) = termination_penalty {
-            if !(p.is_finite() && p >= 0.0) {
-                return Err(invalid("termination_penalty", p, "finite and >= 0"));
+            if !(p.is_finite() && p >= 0.0 && zero_or_normal(p)) {
+                return Err(invalid("termination_penalty", p, NON_NEGATIVE));
             }
         }
-        let f = s.file();
-        let duration = f.sim.duration_s.unwrap_or(600.0);
-        let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+        let duration = s.spec().sim.duration_s;
+        let rate = s.spec().sensor.rate_hz;
         let plan = s.plan();
         // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
         // values): the last sample step is the last multiple of `every` within the run.
@@ -197,7 +211,7 @@ impl PyEnvBatch {
     /// scenario's duration, m.
     #[getter]
     fn default_start_radius_m(&self) -> f64 {
-        let d = self.scenario.file().sim.duration_s.unwrap_or(600.0);
+        let d = self.scenario.spec().sim.duration_s;
         0.01 * d * self.scenario.start_speed_mps(self.scenario.start())
     }
 

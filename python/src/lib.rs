@@ -231,7 +231,7 @@ impl PyScenario {
         y: PyReadonlyArray1<'py, f64>,
         t: f64,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let duration = self.inner.file().sim.duration_s.unwrap_or(600.0);
+        let duration = self.inner.spec().sim.duration_s;
         if !(0.0..=duration).contains(&t) {
             return Err(PyValueError::new_err(format!(
                 "t = {t:?} s is outside the run: 0 <= t <= sim.duration_s = {duration:?} s"
@@ -659,6 +659,15 @@ pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'
     kinds
 }
 
+/// The SHA-256 of the file at `path`, lowercase hex: isotrack's one content digest
+/// ([`isotrack_runs::files::sha256_file`], also what a run records in `summary.json`'s
+/// `data_files`); `OSError` when it cannot be read.
+#[pyfunction]
+fn file_sha256(py: Python<'_>, path: std::path::PathBuf) -> PyResult<String> {
+    py.detach(|| isotrack_runs::files::sha256_file(&path))
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("{}: {e}", path.display())))
+}
+
 /// The isotrack version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -674,6 +683,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<env::PyEnvBatch>()?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(file_sha256, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_cells, m)?)?;
     m.add_function(wrap_pyfunction!(league::benchmark_json, m)?)?;
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;

@@ -263,6 +263,24 @@ def test_pickle_detects_changed_data_file(tmp_path):
         pickle.loads(blob)
 
 
+# Issue 30 (doors30a), item 6: one content digest, the Rust one, for pickled scenarios and for
+# the data files a run records in summary.json; it is SHA-256 (checked against hashlib).
+def test_one_content_digest_for_pickles_and_run_directories(tmp_path):
+    import hashlib
+
+    data = ROOT / "data/topobathy_bc/topobathy_bc.csv"
+    want = hashlib.sha256(data.read_bytes()).hexdigest()
+    assert isotrack._native.file_sha256(str(data)) == want
+    sc = isotrack.Scenario.from_file(str(ROOT / "scenarios" / "topobathy-bc.toml"))
+    assert list(sc._digests.values()) == [want]
+    run = sc.set("sim.duration_s", 1.0).run()
+    run.save(tmp_path / "r")
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert list(summary["data_files"].values()) == [want]
+    with pytest.raises(OSError):
+        isotrack._native.file_sha256(str(tmp_path / "missing.csv"))
+
+
 def mini_suite(tmp_path, title="circular field"):
     p = tmp_path / "mini.toml"
     p.write_text(

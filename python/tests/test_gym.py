@@ -251,6 +251,12 @@ def test_bad_arguments_raise_clearly():
         IsolineEnv(start_radius_m=-1.0)
     with pytest.raises(ValueError, match="error_scale"):
         IsolineEnv(error_scale=0.0)
+    # Issue 30 (doors30a), item 7: a subnormal scale divides the reward into infinity; a
+    # subnormal weight is no weight anyone means. Both refused, the value echoed short.
+    with pytest.raises(ValueError, match=r"error_scale must be .*subnormal.*got 1e-310$"):
+        IsolineEnv(error_scale=1e-310)
+    with pytest.raises(ValueError, match=r"effort_weight must be .*subnormal.*got 5e-324$"):
+        IsolineEnv(effort_weight=5e-324)
     with pytest.raises(TypeError, match="isotrack.Scenario"):
         IsolineEnv(scenario="default")
     short = isotrack.Scenario.default().set("sim.duration_s", 0.05).set("sensor.rate_hz", 10.0)

@@ -116,7 +116,8 @@ def test_mavsdk_autopilot_receives_the_laws_setpoints_from_fly():
     it, computed here independently: ki = 0, so omega = sat(kp (eps' + c1 tanh(eps / c2)))
     with eps = s - 10, eps' the backward difference (0 at the first sample), kp = 8, c1 = 0.05,
     c2 = 0.5, |omega| <= g tan(40 deg) / V; then roll = -atan(omega V / g), V = 30 m/s,
-    g = 9.8 m/s^2, as the quaternion [cos(roll/2), sin(roll/2), 0, 0]."""
+    g = 9.8 m/s^2, as the quaternion [cos(roll/2), sin(roll/2), 0, 0] (no altitude error:
+    pitch 0), with the trim thrust (no airspeed reported)."""
     import json
 
     from mavsdk.plugins import action_server, mavlink_direct_server
@@ -171,7 +172,10 @@ def test_mavsdk_autopilot_receives_the_laws_setpoints_from_fly():
         roll = -math.atan(w * 30.0 / 9.8)
         q = answers[1000 * k]["q"]
         assert abs(q[0] - math.cos(roll / 2)) < 1e-6 and abs(q[1] - math.sin(roll / 2)) < 1e-6, (k, q, roll)
+        # No altitude from this autopilot: no altitude error, pitch 0.
         assert q[2] == 0 and q[3] == 0
-        assert answers[1000 * k]["type_mask"] == 1 | 2 | 4 | 64  # attitude only
+        # Attitude and thrust (body rates ignored); no airspeed from it: the trim thrust 0.5.
+        assert answers[1000 * k]["type_mask"] == 1 | 2 | 4
+        assert answers[1000 * k]["thrust"] == 0.5
     # The measurement at t = 5 s is past --max-duration-s: no law answer for it.
     assert 5000 not in answers

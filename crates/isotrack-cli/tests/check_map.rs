@@ -197,6 +197,9 @@ fn verify_writes_its_runs_and_is_the_same_on_any_thread_count() {
     for (k, r) in rows.iter().enumerate() {
         assert_eq!(r[0], k.to_string());
         assert!([
+            "saturated",
+            "undetermined",
+            "stalled",
             "converged",
             "limit_cycle",
             "diverged",
@@ -209,7 +212,17 @@ fn verify_writes_its_runs_and_is_the_same_on_any_thread_count() {
     }
     let v = &j["map"]["verify"];
     assert_eq!(v["agree"], agree);
-    assert_eq!(v["compared"], 10);
+    let compared = rows.iter().filter(|r| !r[6].is_empty()).count();
+    assert_eq!(v["compared"], compared);
+    let undetermined = rows.iter().filter(|r| r[5] == "undetermined").count();
+    assert_eq!(v["undetermined"], undetermined);
+    assert_eq!(v["not_compared"], 10 - compared);
+    let runs = &j["map"]["verify_runs"];
+    assert_eq!(
+        (&runs["requested"], &runs["finished"]),
+        (&10.into(), &10.into())
+    );
+    assert_eq!(runs["partial"], false);
 }
 
 /// Test (5): bad inputs give the README's exit codes, with a message naming the flag, before
@@ -279,7 +292,7 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
         (
             vec!["--map", "--out", out, "--kp-range", "1e-310:1"],
             64,
-            "HI/LO finite",
+            "subnormal",
         ),
         // No rate 1/(k dt) in 60..65 Hz at dt 0.01 s: verify runs would fall outside the chart.
         (
@@ -543,8 +556,9 @@ fn huge_ranges_are_echoed_as_written_and_not_called_no_equilibrium() {
     }
 }
 
-/// Ctrl-C during `--verify` keeps the chart, written before the runs start, says so and exits
-/// 130 (128 + SIGINT); no `verify.csv` is left (it would describe runs that did not all run).
+/// Ctrl-C during `--verify` keeps the chart, written before the runs start, prints the report
+/// of the runs that finished, marked partial, writes them to `verify.csv` (as many rows as the
+/// report says finished) and exits 130 (128 + SIGINT) saying so (issue 29: no report at all).
 #[cfg(unix)]
 #[test]
 fn ctrl_c_during_verify_keeps_the_chart() {
@@ -590,5 +604,91 @@ fn ctrl_c_during_verify_keeps_the_chart() {
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
     assert!(png.exists() && out.join("stability_map.csv").exists());
-    assert!(!out.join("verify.csv").exists());
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    let line = text
+        .lines()
+        .find(|l| l.contains("verify: PARTIAL (interrupted)"))
+        .unwrap_or_else(|| panic!("no partial report: {text}"));
+    let finished: usize = line
+        .split("PARTIAL (interrupted): ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    assert!(line.contains("of 60 runs finished"), "{line}");
+    let (_, rows) = read_csv(&out.join("verify.csv"));
+    assert_eq!(rows.len(), finished, "{line}");
+}
+
+/// Issue 29: the chart's files were written through a symbolic link planted in DIR (the link's
+/// target overwritten). Each is refused (exit 73) and the target is left as it was.
+#[cfg(unix)]
+#[test]
+fn the_charts_files_never_follow_a_link() {
+    let sc = scenario();
+    for name in [
+        "stability_map.csv",
+        "stability_map.png",
+        "stability_map.svg",
+        "verify.csv",
+    ] {
+        let d = tempfile::tempdir().unwrap();
+        let out = d.path().join("o");
+        std::fs::create_dir_all(&out).unwrap();
+        let target = d.path().join("precious.txt");
+        std::fs::write(&target, "keep me").unwrap();
+        std::os::unix::fs::symlink(&target, out.join(name)).unwrap();
+        let o = isotrack(&map_args(out.to_str().unwrap(), &sc, &["--verify", "1"]));
+        assert_fails(&o, 73, &[name]);
+        assert_eq!(
+            std::fs::read_to_string(&target).unwrap(),
+            "keep me",
+            "{name}"
+        );
+    }
+}
+
+/// Issue 29: a hostile review's inputs the chart accepted: `--map-size 04x3`, `--verify +5`,
+/// `--verify 05`, `--threads +2` (counts are canonical digits, as `--shard`), a subnormal
+/// `controller.kp = 1e-310` (its default range kp/100 .. 100 kp is subnormal: the key is
+/// named) and `--kp-range 1e-310:1`. Each exits 64 with the reason. A 5000-character title
+/// with an escape character is drawn clipped and escaped, as every echoed text.
+#[test]
+fn counts_are_canonical_ranges_normal_and_titles_bounded() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let (o, sc) = (out.to_str().unwrap(), scenario());
+    for (extra, needle) in [
+        (vec!["--map-size", "04x3"], "--map-size"),
+        (vec!["--verify", "+5"], "--verify"),
+        (vec!["--verify", "05"], "--verify"),
+        (vec!["--threads", "+2"], "--threads"),
+        (vec!["--kp-range", "1e-310:1"], "subnormal"),
+    ] {
+        let mut args = vec!["check", sc.as_str(), "--map", "--out", o];
+        args.extend_from_slice(&extra);
+        let r = isotrack(&args);
+        assert_fails(&r, 64, &[needle]);
+    }
+    let r = isotrack(&[
+        "check",
+        &sc,
+        "--set",
+        "controller.kp=1e-310",
+        "--map",
+        "--out",
+        o,
+    ]);
+    // A subnormal gain is an invalid scenario (65), refused by `resolve` before the map.
+    assert_fails(&r, 65, &["controller.kp", "subnormal"]);
+    let title: String = std::iter::once('T')
+        .chain(std::iter::once('\u{1b}'))
+        .chain("x".repeat(5000).chars())
+        .collect();
+    let r = isotrack(&map_args(o, &sc, &["--title", &title]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    let svg = std::fs::read_to_string(out.join("stability_map.svg")).unwrap();
+    assert!(!svg.contains('\u{1b}'), "a raw escape character in the SVG");
+    assert!(svg.contains("more characters)"), "the title is clipped");
+    assert!(!svg.contains(&"x".repeat(1000)));
 }

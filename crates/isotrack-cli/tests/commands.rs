@@ -43,6 +43,60 @@ fn show_is_the_resolved_scenario_and_a_fixed_point() {
     assert!(set.lines().any(|l| l == "kp = 5.0"));
 }
 
+/// `show` prints every value in force (issue 31): the fixed wing's derived turn-rate limit
+/// `g*tan(40 deg)/V` = 9.8*tan(40 deg)/30 among them, and running `show`'s output gives the same
+/// run as the original, byte for byte (trace, summary, scenario.toml).
+#[test]
+fn running_shows_output_gives_the_identical_run() {
+    let d = tempfile::tempdir().unwrap();
+    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    for name in ["paper-fig3-uav", "circular-far-start-antiwindup"] {
+        let src = scenarios.join(format!("{name}.toml"));
+        let src = src.to_str().unwrap();
+        let sets = ["--set", "sim.duration_s=20.0"];
+        let shown = ok(&[&["show", src][..], &sets[..]].concat());
+        if name == "paper-fig3-uav" {
+            let w: f64 = 9.8 * 40f64.to_radians().tan() / 30.0;
+            let line = format!("# max_turn_rate_radps = {w:?}  # derived");
+            assert!(shown.contains(&line), "{line} in\n{shown}");
+        }
+        let p = write(d.path(), &format!("{name}-shown.toml"), &shown);
+        let (a, b) = (
+            d.path().join(format!("{name}-a")),
+            d.path().join(format!("{name}-b")),
+        );
+        let quiet = "--quiet";
+        ok(&[
+            &["run", src][..],
+            &sets[..],
+            &["--out", a.to_str().unwrap(), quiet],
+        ]
+        .concat());
+        ok(&["run", &p, "--out", b.to_str().unwrap(), quiet]);
+        for f in ["trace.csv", "summary.json", "scenario.toml"] {
+            let (x, y) = (
+                std::fs::read(a.join(f)).unwrap(),
+                std::fs::read(b.join(f)).unwrap(),
+            );
+            if f == "summary.json" {
+                // The summary names the file it ran: compare all else.
+                let strip = |v: &[u8]| {
+                    let mut j: serde_json::Value = serde_json::from_slice(v).unwrap();
+                    if let Some(o) = j.as_object_mut() {
+                        o.retain(|k, _| {
+                            !k.contains("source") && !k.contains("path") && k != "name"
+                        });
+                    }
+                    j
+                };
+                assert_eq!(strip(&x), strip(&y), "{name}: {f}");
+            } else {
+                assert!(x == y, "{name}: {f} differs");
+            }
+        }
+    }
+}
+
 /// `figures` writes the paper's six figures, each a real picture (many colours, not blank).
 #[test]
 fn figures_writes_six_nonblank_pngs() {

@@ -371,3 +371,277 @@ fn report_map_has_axes_a_colour_bar_and_a_dashed_isoline() {
     assert!(xt.split(' ').count() >= 3, "{xt}");
     assert!(attr("map", "aria-label").contains("colour field (ppm)"));
 }
+
+/// Issue 30 (doors30a), item 1: a tiny or huge float is written in its shortest round-trip
+/// form, never 300 digits: `1e-300` in `isotrack show`, in a run's `scenario.toml` and in a
+/// sweep's `results.csv` cell and `base_scenario.toml`; each reads back as the same `f64`, bit
+/// for bit.
+#[test]
+fn tiny_floats_are_written_short_and_read_back_exactly() {
+    let d = tempfile::tempdir().unwrap();
+    let tiny = 1e-300_f64;
+    let set = "initial.x_m=1e-300";
+    let read_x = |text: &str| -> f64 {
+        let t: toml::Table = toml::from_str(text).unwrap();
+        t["initial"]["x_m"].as_float().unwrap()
+    };
+    let o = isotrack(&["show", "--set", set]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let shown = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(shown.contains("x_m = 1e-300\n"), "{shown}");
+    assert!(shown.lines().all(|l| l.len() < 200), "{shown}");
+    assert_eq!(read_x(&shown).to_bits(), tiny.to_bits());
+    let run = d.path().join("run");
+    run_into(
+        &scenario("paper-fig2b-circular.toml"),
+        &run,
+        &["sim.duration_s=1", set],
+    );
+    let written = std::fs::read_to_string(run.join("scenario.toml")).unwrap();
+    assert!(written.contains("x_m = 1e-300\n"), "{written}");
+    assert_eq!(read_x(&written).to_bits(), tiny.to_bits());
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!(
+            "scenario = {:?}\n[base]\nsim.duration_s = 1.0\ncontroller.kp = 1e20\n[grid]\ninitial.x_m = [1e-300, 0.5]\n",
+            scenario("paper-fig2b-circular.toml")
+        ),
+    );
+    let out = d.path().join("sweep");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(matches!(o.status.code(), Some(0 | 65)), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let cell = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .to_string();
+    assert_eq!(cell, "1e-300", "{csv}");
+    assert_eq!(cell.parse::<f64>().unwrap().to_bits(), tiny.to_bits());
+    let base = std::fs::read_to_string(out.join("base_scenario.toml")).unwrap();
+    assert!(base.contains("kp = 1e20\n"), "{base}");
+    assert!(base.len() < 4000, "{} bytes", base.len());
+    // A resume reads the same cells back.
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+    assert!(matches!(o.status.code(), Some(0 | 65)), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("damaged"), "{}", stderr(&o));
+}
+
+/// Issue 30 (doors30a), item 3: `compare`'s "never reached" flag comes from the run's own
+/// metrics (every step), not from the trace's rows: with the trace off
+/// (`output.record_rate_hz = 0`) every law that circles from the far start is still flagged,
+/// with how far it went.
+#[test]
+fn compare_flags_never_reached_whatever_the_record_rate() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = write(d.path(), "far.toml", FAR_PLUME);
+    for rate in ["0", "0.1"] {
+        let o = isotrack(&[
+            "compare",
+            &scen,
+            "--controllers",
+            "pi_isoline,pid",
+            "--set",
+            "controller.max_turn_rate_radps=1",
+            "--set",
+            &format!("output.record_rate_hz={rate}"),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let table = String::from_utf8_lossy(&o.stdout);
+        for law in ["pi_isoline", "pid"] {
+            let row = table
+                .lines()
+                .find(|l| l.starts_with(&format!("| {law} ")))
+                .unwrap_or_else(|| panic!("no row {law}: {table}"));
+            assert!(
+                row.contains("| completed, never reached s_d |"),
+                "rate {rate}: {row}"
+            );
+            let far = number_after(&table, &format!("- {law}: at most "));
+            // Circling at 1 rad/s and 0.5 m/s: within a turning diameter, 1 m, of the start.
+            assert!(far > 0.0 && far <= 1.0 + 1e-9, "{law} went {far} m");
+        }
+    }
+}
+
+/// Issue 30 (doors30a), item 4: a puff plume without meander is one field whatever its seed
+/// (and its meander's correlation time): `report` and `plot` draw such runs together; with a
+/// meander, another seed is another field, refused naming `sim.seed`.
+#[test]
+fn puff_runs_without_meander_differ_only_in_seed_and_draw_together() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = scenario("puff-plume-edge.toml");
+    let dir = |n: &str| d.path().join(n).display().to_string();
+    let calm = ["sim.duration_s=2", "field.meander_std_mps=0"];
+    run_into(
+        &scen,
+        &d.path().join("a"),
+        &[&calm[..], &["sim.seed=1"]].concat(),
+    );
+    run_into(
+        &scen,
+        &d.path().join("b"),
+        &[&calm[..], &["sim.seed=2", "field.meander_correlation_s=5"]].concat(),
+    );
+    let o = isotrack(&["report", &dir("a"), &dir("b"), "--out", &dir("r.html")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = isotrack(&["plot", &dir("a"), &dir("b"), "--out", &dir("figs")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    run_into(
+        &scen,
+        &d.path().join("m1"),
+        &["sim.duration_s=2", "sim.seed=1"],
+    );
+    run_into(
+        &scen,
+        &d.path().join("m2"),
+        &["sim.duration_s=2", "sim.seed=2"],
+    );
+    let o = isotrack(&["report", &dir("m1"), &dir("m2"), "--out", &dir("r2.html")]);
+    assert_fails(&o, 65, &["sim.seed: 1 in m1, 2 in m2", "different fields"]);
+}
+
+/// Issue 30 (doors30a), item 6: a field file overwritten in place (same path, other content)
+/// between two runs makes them runs over different fields: each run records its data files'
+/// SHA-256 in `summary.json` (`data_files`), and `report`/`plot` refuse runs whose digests
+/// differ (65), naming the file.
+#[test]
+fn a_field_file_overwritten_in_place_is_another_field() {
+    let d = tempfile::tempdir().unwrap();
+    let src = format!(
+        "{}/../../data/no2_germany_kriged/no2_germany_kriged.csv",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let original = std::fs::read_to_string(&src).unwrap();
+    let grid = d.path().join("grid.csv");
+    std::fs::write(&grid, &original).unwrap();
+    let scen = std::fs::read_to_string(scenario("paper-fig2a-field.toml"))
+        .unwrap()
+        .replace(
+            "../data/no2_germany_kriged/no2_germany_kriged.csv",
+            "grid.csv",
+        );
+    let scen = write(d.path(), "s.toml", &scen);
+    let dir = |n: &str| d.path().join(n).display().to_string();
+    run_into(&scen, &d.path().join("before"), &["sim.duration_s=2"]);
+    run_into(&scen, &d.path().join("same"), &["sim.duration_s=2"]);
+    // Every value 1 unit higher: the isoline moves.
+    let higher: String = original
+        .lines()
+        .map(|l| {
+            l.split(',')
+                .map(|c| {
+                    c.trim()
+                        .parse::<f64>()
+                        .map_or(c.to_string(), |v| format!("{}", v + 1.0))
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    assert_ne!(higher, original);
+    std::fs::write(&grid, &higher).unwrap();
+    run_into(&scen, &d.path().join("after"), &["sim.duration_s=2"]);
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(d.path().join("after/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let digests = summary["data_files"].as_object().unwrap();
+    assert_eq!(digests.len(), 1, "{summary}");
+    // The same file, unchanged: drawn together.
+    let o = isotrack(&[
+        "report",
+        &dir("before"),
+        &dir("same"),
+        "--out",
+        &dir("ok.html"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for cmd in ["report", "plot"] {
+        let o = isotrack(&[
+            cmd,
+            &dir("before"),
+            &dir("after"),
+            "--out",
+            &dir(&format!("x-{cmd}")),
+        ]);
+        assert_fails(
+            &o,
+            65,
+            &["grid.csv", "overwritten in place", "different fields"],
+        );
+    }
+}
+
+/// Issue 30 (doors30a), item 7: a subnormal gain (`kp = 1e-310`, a law that never turns) or
+/// any other subnormal positive setting is refused naming the key, its value echoed short.
+#[test]
+fn subnormal_gains_are_refused_naming_the_key() {
+    for set in [
+        "controller.kp=1e-310",
+        "controller.ki=5e-324",
+        "controller.c1=1e-308",
+    ] {
+        let o = isotrack(&["show", "--set", set]);
+        let key = set.split('=').next().unwrap();
+        let value = set.split('=').nth(1).unwrap();
+        assert_fails(&o, 65, &[&format!("`{key}`"), "subnormal", value]);
+    }
+    let o = isotrack(&["show", "--set", "controller.ki=0.0"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+/// Issue 30 (doors30a), item 8, found by the hunt: command-line values that must be > 0
+/// accepted a subnormal (`fly --timeout-s 1e-310`: a timeout of no time at all;
+/// `check --tube-halfwidth 1e-310`, `interpolate --idw-power 1e-310`), and `sitl`/`fly`
+/// echoed the value with Rust's `{}`: `--speedup 1e-300` as 300 digits. Each is refused (64)
+/// with the value echoed as written.
+#[test]
+fn subnormal_command_line_values_are_refused_and_echoed_short() {
+    let d = tempfile::tempdir().unwrap();
+    let link = "udpout:127.0.0.1:9";
+    let stations = write(d.path(), "st.csv", "x_m,y_m,value\n0,0,1\n10,0,2\n0,10,3\n");
+    let out = d.path().join("g.csv").display().to_string();
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec!["fly", "--mavlink", link, "--timeout-s", "1e-310"],
+            "--timeout-s",
+        ),
+        (
+            vec!["fly", "--mavlink", link, "--max-duration-s", "1e-310"],
+            "--max-duration-s",
+        ),
+        (
+            vec!["sitl", "--mavlink", link, "--speedup", "1e-300"],
+            "--speedup",
+        ),
+        (
+            vec!["check", "--tube-halfwidth", "1e-310"],
+            "--tube-halfwidth",
+        ),
+        (
+            vec![
+                "interpolate",
+                &stations,
+                "--value-column",
+                "value",
+                "--idw-power",
+                "1e-310",
+                "--out",
+                &out,
+            ],
+            "--idw-power",
+        ),
+    ];
+    for (args, flag) in cases {
+        let o = isotrack(&args);
+        let value = args[args.iter().position(|a| *a == flag).unwrap() + 1];
+        assert_fails(&o, 64, &[flag, &format!("got {value}")]);
+        assert!(stderr(&o).len() < 400, "{}", stderr(&o));
+    }
+}

@@ -702,5 +702,6 @@ fn map_range_is_echoed_as_written() {
     ]);
     let e = stderr(&o);
     assert!(matches!(o.status.code(), Some(64 | 65)), "{e}");
-    assert!(e.contains("got 1e-320:1e300"), "{e}");
+    assert!(e.contains("1e-320"), "{e}");
+    assert!(!e.contains("9.99989e-321"), "{e}");
 }

@@ -217,3 +217,156 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
     let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
     assert_fails(&o, 65, &["the shard was edited"]);
 }
+
+/// Issue 30 (doors30a), item 2: bounds that need the run's own settings. At dt = 0.01 s over
+/// 2 s a run has N = 200 steps: it ends at t_end_s = k dt with k <= 200 (never 2.5 s, nor
+/// between steps: 1.005 s), converges at 0 or j dt with j >= 1 (never 0.005 s, half a step),
+/// and senses at most k / m + 1 samples at one sample every m = 1 step: 201 (202 cannot be),
+/// 101 when it ended at 1 s. In a sweep varying `sim.duration_s`, the bound is the row's own run's: t_end_s
+/// 2.0 is refused for a run of 1 s. Each refused naming file, line and column, on `--resume`
+/// and on `merge`.
+#[test]
+fn resume_and_merge_check_rows_against_the_runs_own_steps() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 2.0\n");
+    let p = |n: &str| d.path().join(n).display().to_string();
+    for (name, grid, row, cases) in [
+        (
+            "fixed",
+            "controller.kp = [5.0, 10.0]\ncontroller.ki = [0.0, 1.0]\n",
+            2usize,
+            vec![
+                (
+                    vec![("samples", "202")],
+                    "samples",
+                    "samples = 202 exceeds the 201",
+                ),
+                (
+                    vec![("t_end_s", "2.5")],
+                    "t_end_s",
+                    "t_end_s = 2.5 s is past the run's duration, 200 steps of 0.01 s",
+                ),
+                (
+                    vec![("t_end_s", "1.005"), ("convergence_time_s", "")],
+                    "t_end_s",
+                    "t_end_s = 1.005 s is not a whole number of the run's steps of 0.01 s",
+                ),
+                (
+                    vec![("convergence_time_s", "0.005")],
+                    "convergence_time_s",
+                    "convergence_time_s = 0.005 s is neither 0 nor a whole number",
+                ),
+                (
+                    vec![
+                        ("samples", "102"),
+                        ("t_end_s", "1.0"),
+                        ("convergence_time_s", ""),
+                    ],
+                    "samples",
+                    "samples = 102 exceeds the 101",
+                ),
+            ],
+        ),
+        (
+            "varied",
+            "sim.duration_s = [1.0, 2.0]\n",
+            0usize,
+            vec![(
+                vec![("t_end_s", "2.0"), ("convergence_time_s", "")],
+                "t_end_s",
+                "t_end_s = 2 s is past the run's duration, 100 steps of 0.01 s",
+            )],
+        ),
+    ] {
+        let sw = write(
+            d.path(),
+            &format!("{name}.toml"),
+            &format!("scenario = \"sc.toml\"\n[grid]\n{grid}"),
+        );
+        let o = isotrack(&["sweep", &sw, "--out", &p(name)]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let results = d.path().join(name).join("results.csv");
+        let good = std::fs::read_to_string(&results).unwrap();
+        let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+        let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+        // The untouched rows pass: a resume finds nothing to do.
+        let o = isotrack(&["sweep", &sw, "--out", &p(name), "--resume"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        for (changes, column, needle) in cases {
+            let mut r: Vec<&str> = good.lines().nth(row + 1).unwrap().split(',').collect();
+            for (c, v) in &changes {
+                r[col(c)] = v;
+            }
+            let bad = r.join(",");
+            let mut lines: Vec<&str> = good.lines().collect();
+            lines[row + 1] = &bad;
+            std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+            let at = format!("{name}/results.csv:{}: damaged row", row + 2);
+            let column = format!("column {} ({column})", col(column) + 1);
+            let o = isotrack(&["sweep", &sw, "--out", &p(name), "--resume"]);
+            assert_fails(&o, 65, &[&at, &column, needle]);
+            let o = isotrack(&["merge", &p(name), "--out", &p("m"), "--force"]);
+            assert_fails(&o, 65, &[&at, &column, needle]);
+        }
+        std::fs::write(&results, &good).unwrap();
+    }
+}
+
+/// Issue 30 (doors30a), item 5: a sweep directory an older isotrack wrote (no `sweep.json`,
+/// one without a digest, a `results.csv` without this version's `warnings` column) is refused
+/// on `--resume` with 65, saying what it is and what to do (a new `--out`, or `--force`).
+#[test]
+fn resume_of_an_older_sweep_directory_says_what_it_is() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 1.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let manifest = std::fs::read_to_string(out.join("sweep.json")).unwrap();
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let resume = || isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+    let older = "a sweep directory written by an older isotrack";
+    // sweep.json without its digest.
+    let mut m: serde_json::Value = serde_json::from_str(&manifest).unwrap();
+    m.as_object_mut().unwrap().remove("digest");
+    std::fs::write(out.join("sweep.json"), m.to_string()).unwrap();
+    assert_fails(
+        &resume(),
+        65,
+        &[older, "has no digest", "--force", "new --out"],
+    );
+    // No sweep.json at all.
+    std::fs::remove_file(out.join("sweep.json")).unwrap();
+    assert_fails(&resume(), 65, &[older, "no sweep.json", "--force"]);
+    // The columns of a version before `warnings`.
+    std::fs::write(out.join("sweep.json"), &manifest).unwrap();
+    let old: String = results
+        .lines()
+        .map(|l| {
+            l.strip_suffix(",warnings")
+                .or(l.strip_suffix(','))
+                .unwrap_or(l)
+                .to_string()
+                + "\n"
+        })
+        .collect();
+    assert_ne!(old, results);
+    std::fs::write(out.join("results.csv"), &old).unwrap();
+    assert_fails(
+        &resume(),
+        65,
+        &[older, "lacks the column `warnings`", "--force"],
+    );
+    // And --force starts it over.
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--force"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read_to_string(out.join("results.csv")).unwrap(),
+        results
+    );
+}

@@ -32,7 +32,7 @@ fn num(x: Option<f64>) -> String {
 /// 1e4 up (an unstable loop's radius can be astronomically large).
 fn radius(x: Option<f64>) -> String {
     x.map_or_else(
-        || "n/a".to_string(),
+        || "none".to_string(),
         |v| {
             if v.abs() < 1e4 {
                 format!("{v:.6}")
@@ -41,6 +41,20 @@ fn radius(x: Option<f64>) -> String {
             }
         },
     )
+}
+
+/// A spectral radius and what it means: `spectral radius R -> stable`, `no equilibrium ->
+/// UNSTABLE` (infinite), `not computed`.
+fn radius_state(r: Option<f64>, stable: Option<bool>) -> String {
+    match (r, stable) {
+        (_, None) => "not computed".to_string(),
+        (None, Some(false)) => "no equilibrium -> UNSTABLE".to_string(),
+        (r, Some(st)) => format!(
+            "spectral radius {} -> {}",
+            radius(r),
+            if st { "stable" } else { "UNSTABLE" }
+        ),
+    }
 }
 
 fn yes_no(b: Option<bool>) -> &'static str {
@@ -232,14 +246,9 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
             |[a, b]| format!("{} .. {}", Num(a), Num(b)),
         )
     };
-    let state = |stable: Option<bool>| match stable {
-        Some(true) => "stable",
-        Some(false) => "UNSTABLE",
-        None => "not computed",
-    };
     let mut out = vec![
         format!(
-            "  model {}, on the isoline (slopes |grad F| {}{}): spectral radius {} -> {}",
+            "  model {}, on the isoline (slopes |grad F| {}{}): {}",
             sm.vehicle_model.unwrap_or("n/a"),
             range(sm.slope_range),
             if sm.slope_exact == Some(true) {
@@ -247,29 +256,43 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
             } else {
                 ""
             },
-            radius(sm.spectral_radius),
-            state(sm.stable)
+            radius_state(sm.spectral_radius, sm.stable)
         ),
         format!(
-            "  over the whole tube (slopes {}): spectral radius {} -> {}",
+            "  over the whole tube (slopes {}): {}",
             range(sm.tube_slope_range),
-            radius(sm.tube_spectral_radius),
-            state(sm.stable_over_tube)
+            radius_state(sm.tube_spectral_radius, sm.stable_over_tube)
         ),
     ];
     if let Some(tau) = sm.slowest_time_constant_s {
+        // On a lattice isoline the worst slope's mode is that slope's frozen; the run's
+        // settling follows the loop at the mean slope (issue 29: 180.7 s against 8 s).
+        let mean = match (sm.isoline_time_constant_s, sm.isoline_mean_slope) {
+            (Some(t), Some(a)) if (t - tau).abs() > 0.1 * tau => format!(
+                " with the worst slope frozen; {} s at the isoline's mean slope {} (what the run's settling follows)",
+                Num(t),
+                Num(a)
+            ),
+            _ => String::new(),
+        };
         out.push(format!(
-            "  slowest mode: time constant -T/ln(rho) = {} s",
+            "  slowest mode: time constant -T/ln(rho) = {} s{mean}",
             Num(tau)
         ));
     }
     if let Some(set) = &sm.kp_intervals {
+        let nearest = match sm.nearest_stable_kp {
+            None => "none".to_string(),
+            Some(_) if sm.stable == Some(true) => "the scenario's own".to_string(),
+            Some(k) => nearest_kp_text(k, set),
+        };
+        let period = sm.max_period_s.map_or_else(
+            || "none (unstable at the shortest period examined)".to_string(),
+            |t| format!("{} s", Num(t)),
+        );
         out.push(format!(
-            "  stable kp: {}   nearest stable kp {}   longest stable sensor period {} s",
+            "  stable kp: {}   nearest stable kp: {nearest}   longest stable sensor period: {period}",
             kp_intervals_text_scanned(set, sm.kp_scanned_from),
-            sm.nearest_stable_kp
-                .map_or_else(|| "n/a".to_string(), |k| nearest_kp_text(k, set)),
-            num(sm.max_period_s)
         ));
     }
     if sm.stable.is_some() {
@@ -323,28 +346,47 @@ fn discrete_loop_lines(sm: &SampledReport) -> Vec<String> {
     let Some(d) = &sm.discrete_loop else {
         return vec![];
     };
+    let gain = match (d.gain_margin, d.gain_margin_db, d.phase_crossover_radps) {
+        (Some(g), Some(db), Some(w)) => format!(
+            "gain margin {} ({} dB at {} rad/s)",
+            Num(g),
+            decibels(db),
+            Num(w)
+        ),
+        _ => "no gain margin (no phase crossover up to pi/T)".to_string(),
+    };
+    let phase = match (d.phase_margin_deg, d.gain_crossover_radps) {
+        (Some(p), Some(w)) => format!("phase margin {} deg (at {} rad/s)", Num(p), Num(w)),
+        _ => "no phase margin (no gain crossover up to pi/T)".to_string(),
+    };
     let mut out = vec![format!(
-        "  discrete loop at slope {}: gain margin {} ({} dB at {} rad/s), phase margin {} deg (at {} rad/s)",
-        Num(d.slope),
-        num(d.gain_margin),
-        num(d.gain_margin_db),
-        num(d.phase_crossover_radps),
-        num(d.phase_margin_deg),
-        num(d.gain_crossover_radps)
+        "  discrete loop at slope {}: {gain}, {phase}",
+        Num(d.slope)
     )];
-    if d.conditionally_stable == Some(true) {
-        let db = |g: Option<f64>| {
-            g.map_or_else(|| "n/a".to_string(), |g| format!("{:.2}", 20.0 * g.log10()))
-        };
+    if let (Some(true), Some(lo)) = (d.conditionally_stable, d.gain_margin_lower) {
+        let upper = d.gain_margin_upper.map_or_else(
+            || "any factor above 1 (no upper gain margin found)".to_string(),
+            |g| format!("{} ({} dB)", Num(g), decibels(20.0 * g.log10())),
+        );
+        let raised = d
+            .gain_margin_upper
+            .map_or_else(String::new, |g| format!(" or raised by {} (upper)", Num(g)));
         out.push(format!(
-            "  conditionally stable: stable for loop-gain factors (a factor scales kp and ki together) from {} ({} dB) to {} ({} dB); it goes unstable if the gain is REDUCED by the factor {} (lower gain margin) or raised by {} (upper)",
-            num(d.gain_margin_lower),
-            db(d.gain_margin_lower),
-            num(d.gain_margin_upper),
-            db(d.gain_margin_upper),
-            num(d.gain_margin_lower),
-            num(d.gain_margin_upper)
+            "  conditionally stable: stable for loop-gain factors (a factor scales kp and ki together) from {} ({} dB) to {upper}; it goes unstable if the gain is REDUCED by the factor {} (lower gain margin){raised}",
+            Num(lo),
+            decibels(20.0 * lo.log10()),
+            Num(lo),
         ));
     }
     out
+}
+
+/// Decibels with two decimals, never `-0.00` (a margin that rounds to zero is `0.00`).
+fn decibels(db: f64) -> String {
+    let text = format!("{db:.2}");
+    if text == "-0.00" {
+        "0.00".to_string()
+    } else {
+        text
+    }
 }

@@ -65,6 +65,16 @@ fn parse_range(flag: &str, text: &str) -> Result<[f64; 2], Failure> {
     if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
         return Err(bad());
     }
+    // A subnormal end (below 2.2e-308) has lost its precision: its logarithmic spacing is
+    // not the number written (a hostile review's 1e-310).
+    if !lo.is_normal() {
+        return Err(usage(format!(
+            "{flag} {}: LO = {} is subnormal (below {:e}): give a normal positive number",
+            clip(text),
+            Echo(lo),
+            f64::MIN_POSITIVE
+        )));
+    }
     Ok([lo, hi])
 }
 
@@ -136,7 +146,12 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
             // Exactly NxM: decimal digits, a lower-case `x`, decimal digits (no sign, space or
             // `X`: a hostile review's `3X4` and `+3x4` were accepted silently).
             let (a, b) = t.split_once('x').ok_or_else(bad)?;
-            let digits = |x: &str| !x.is_empty() && x.bytes().all(|c| c.is_ascii_digit());
+            // No leading zero either (`04x3`), as `--shard` and the counts elsewhere.
+            let digits = |x: &str| {
+                !x.is_empty()
+                    && x.bytes().all(|c| c.is_ascii_digit())
+                    && (x == "0" || !x.starts_with('0'))
+            };
             if !(digits(a) && digits(b)) {
                 return Err(bad());
             }
@@ -174,11 +189,25 @@ pub struct MapReport {
     pub cells_no_equilibrium: usize,
     /// See `cells_stable`.
     pub cells_not_computed: usize,
-    /// `--verify`'s agreement (null without `--verify`).
+    /// `--verify`'s agreement (null without `--verify`): over the runs that finished.
     pub verify: Option<Agreement>,
+    /// `--verify`'s runs: requested, finished, and whether Ctrl-C cut them short (null without
+    /// `--verify`).
+    pub verify_runs: Option<VerifyRuns>,
     /// The runs that disagree with the chart away from its boundary (spectral radius further
     /// than `NEAR_BOUNDARY_MARGIN` from 1), each named.
     pub disagreements_far: Vec<FarDisagreement>,
+}
+
+/// How many `--verify` runs were asked for and finished.
+#[derive(Debug, Serialize)]
+pub struct VerifyRuns {
+    /// `--verify N`.
+    pub requested: usize,
+    /// The runs that finished (all of them unless interrupted).
+    pub finished: usize,
+    /// Ctrl-C (or SIGTERM) stopped the runs: the agreement is over the finished ones only.
+    pub partial: bool,
 }
 
 /// A `--verify` run that disagrees with the chart away from its boundary.
@@ -201,18 +230,43 @@ pub struct FarDisagreement {
 /// it names (`field.path`, `field.paths`; absolute once the scenario is built).
 fn output_path(dir: &Path, name: &str, inputs: &[PathBuf]) -> Result<PathBuf, Failure> {
     let p = dir.join(name);
-    if let Ok(meta) = std::fs::metadata(&p) {
-        if !meta.is_file() {
-            return Err(Failure {
-                code: exit::CANTCREAT,
-                message: format!("cannot write {}: not a regular file", p.display()),
-            });
-        }
-        if let Some(message) = crate::output::input_clash(inputs, &p) {
-            return Err(usage(message));
-        }
+    if let Some(message) = crate::output::input_clash(inputs, &p) {
+        return Err(usage(message));
     }
+    // Read with lstat: a symbolic link is refused, never written through (a hostile review:
+    // the chart's files followed a link planted in DIR).
+    isotrack_runs::files::refuse_non_regular(&p).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", p.display()),
+    })?;
     Ok(p)
+}
+
+/// Draws a figure into a temporary file beside `path` and renames it over `path` (as
+/// `isotrack_runs::files::write_atomic`): a link at `path` is replaced, never followed, and a
+/// reader sees the old figure or the new one.
+fn draw_atomic(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> Result<(), isotrack_plot::PlotError>,
+) -> Result<(), String> {
+    isotrack_runs::files::refuse_non_regular(path).map_err(|e| e.to_string())?;
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // The drawing library picks nothing from the name, but keep the extension anyway.
+    let tmp = isotrack_runs::files::temp_beside(path).with_extension(format!("tmp.{ext}"));
+    // An old temporary (or a link planted there) goes first; then the file is created here,
+    // without following a link, before the library opens it.
+    let _ = std::fs::remove_file(&tmp);
+    isotrack_runs::files::create_output(&tmp).map_err(|e| e.to_string())?;
+    let result = draw(&tmp)
+        .map_err(|e| e.to_string())
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
 }
 
 fn cell_row(map: &StabilityMap, idx: usize) -> Vec<String> {
@@ -263,7 +317,7 @@ fn write_csv(
         w.write_record(&r).map_err(|e| cant(e.to_string()))?;
     }
     let bytes = w.into_inner().map_err(|e| cant(e.to_string()))?;
-    std::fs::write(path, bytes).map_err(|e| cant(e.to_string()))
+    isotrack_runs::files::write_atomic(path, &bytes).map_err(|e| cant(e.to_string()))
 }
 
 /// Computes and writes the chart (and `--verify`), returns what was written.
@@ -286,8 +340,20 @@ pub fn write_map(
         rate_range_hz: rate,
         size,
     } = parsed;
-    if let Some(r) = kp {
-        grid.kp_range = r;
+    match kp {
+        Some(r) => grid.kp_range = r,
+        // The default range is the scenario's kp / 100 .. 100 kp: the key is named when it
+        // cannot make one (a hostile review's controller.kp = 1e-310, a subnormal number).
+        None if !(grid.kp_range[0].is_normal() && grid.kp_range[1].is_finite()) => {
+            return Err(usage(format!(
+                "controller.kp = {}: the chart's default kp range kp/100 .. 100*kp = {} .. {} is not a range of normal positive numbers (subnormal below {:e}); give --kp-range LO:HI",
+                Echo(family.kp()),
+                Echo(grid.kp_range[0]),
+                Echo(grid.kp_range[1]),
+                f64::MIN_POSITIVE
+            )));
+        }
+        None => {}
     }
     if let Some(r) = rate {
         grid.rate_range_hz = r;
@@ -357,8 +423,10 @@ pub fn write_map(
     let draw = |verified: &[VerifyPoint]| -> Result<Vec<String>, Failure> {
         let mut files = vec![];
         for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
-            isotrack_plot::stability_map_figure(&map, verified, path, style)
-                .map_err(|e| cant(path, e.to_string()))?;
+            draw_atomic(path, |tmp| {
+                isotrack_plot::stability_map_figure(&map, verified, tmp, style)
+            })
+            .map_err(|e| cant(path, e))?;
             files.push(path.display().to_string());
         }
         Ok(files)
@@ -370,60 +438,76 @@ pub fn write_map(
     )?;
     let mut files = vec![csv_path.display().to_string()];
     files.extend(draw(&[])?);
+    let mut verify_runs = None;
     let verify = match args.verify {
         Some(n) => {
-            let seed = scenario.file().sim.seed.unwrap_or(0);
+            let seed = scenario.spec().sim.seed;
             let at = verify_points(&grid, family.dt_s(), n, seed);
-            // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; what is
-            // written stays, and the command exits 130 saying so.
+            // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; the runs that
+            // finished are reported (marked partial) and written, and the command exits 130.
             let stop = isotrack_mavlink::interrupt_flag();
             let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
-            // The runs go on a thread of their own and this one answers Ctrl-C at once: a run
-            // in progress (it may take minutes) is abandoned, never awaited (a hostile review:
-            // 18 s to answer, a second Ctrl-C ignored); returning ends the process.
+            // The runs go on a thread of their own, each sent back as it finishes, and this
+            // one answers Ctrl-C at once: a run in progress (it may take minutes) is abandoned,
+            // never awaited (a hostile review: 18 s to answer, a second Ctrl-C ignored);
+            // returning ends the process.
             let family = std::sync::Arc::new(family);
-            let (tx, rx) = std::sync::mpsc::channel();
+            let (tx, rx) = std::sync::mpsc::channel::<(usize, VerifyPoint)>();
             {
                 let (family, stop) = (family.clone(), stop.clone());
                 std::thread::spawn(move || {
                     let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
-                    let verified: Vec<Option<VerifyPoint>> = pool.install(|| {
+                    pool.install(|| {
                         at.par_iter()
-                            .map(|&(k, r)| (!stopped()).then(|| verify_point(&family, k, r)))
-                            .collect()
+                            .enumerate()
+                            .for_each_with(tx, |tx, (i, &(k, r))| {
+                                if !stopped() {
+                                    let _ = tx.send((i, verify_point(&family, k, r)));
+                                }
+                            });
                     });
-                    let _ = tx.send(verified);
                 });
             }
-            let verified = loop {
+            let mut slots: Vec<Option<VerifyPoint>> = vec![None; n];
+            let mut left = n;
+            while left > 0 {
                 match rx.recv_timeout(std::time::Duration::from_millis(50)) {
-                    Ok(v) => break Some(v),
-                    Err(_) if stopped() => break None,
-                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break None,
+                    Ok((i, p)) => {
+                        if slots[i].replace(p).is_none() {
+                            left -= 1;
+                        }
+                    }
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) if !stopped() => {}
+                    Err(_) => break,
                 }
-            };
-            let verified = verified.unwrap_or_default();
-            if stopped() || verified.is_empty() || verified.iter().any(Option::is_none) {
-                return Err(Failure {
-                    code: crate::sweep::INTERRUPTED,
-                    message: format!(
-                        "interrupted during --verify: the chart is written ({}); the verification runs are not (no verify.csv)",
-                        files.join(", ")
-                    ),
-                });
             }
-            let verified: Vec<VerifyPoint> = verified.into_iter().flatten().collect();
-            files = vec![csv_path.display().to_string()];
-            files.extend(draw(&verified)?);
+            let partial = left > 0 || stopped();
+            // Each run keeps its index (its row in verify.csv): the same numbers on any
+            // thread count, and a partial file names which runs it holds.
+            let verified: Vec<(usize, VerifyPoint)> = slots
+                .into_iter()
+                .enumerate()
+                .filter_map(|(i, p)| p.map(|p| (i, p)))
+                .collect();
+            let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
+            if !partial {
+                // Redrawn with the runs' marks (an interrupted check keeps the plain chart:
+                // it answers Ctrl-C without drawing again).
+                files = vec![csv_path.display().to_string()];
+                files.extend(draw(&points)?);
+            }
             write_csv(
                 &verify_path,
                 &VERIFY_COLUMNS,
-                verified.iter().enumerate().map(|(k, v)| verify_row(k, v)),
+                verified.iter().map(|(k, v)| verify_row(*k, v)),
             )?;
             files.push(verify_path.display().to_string());
-            let a = agreement(&verified);
-            Some((a, verified))
+            verify_runs = Some(VerifyRuns {
+                requested: n,
+                finished: verified.len(),
+                partial,
+            });
+            Some((agreement(&points), verified))
         }
         None => None,
     };
@@ -431,10 +515,9 @@ pub fn write_map(
         Some((a, v)) => {
             let far = v
                 .iter()
-                .enumerate()
                 .filter(|(_, p)| p.agrees == Some(false) && !p.near_boundary)
                 .map(|(k, p)| FarDisagreement {
-                    run: k,
+                    run: *k,
                     kp: p.kp,
                     sensor_rate_hz: p.rate_hz,
                     spectral_radius: p.cell.spectral_radius,
@@ -458,6 +541,7 @@ pub fn write_map(
         cells_no_equilibrium: count(S::NoEquilibrium),
         cells_not_computed: count(S::NotComputed),
         verify,
+        verify_runs,
         disagreements_far: far,
     })
 }
@@ -480,26 +564,45 @@ pub fn print_report(m: &MapReport) {
         m.cells_no_equilibrium,
         m.cells_not_computed
     );
-    if let Some(a) = &m.verify {
+    if let (Some(a), Some(runs)) = (&m.verify, &m.verify_runs) {
+        let finished = if runs.partial {
+            format!(
+                "PARTIAL (interrupted): {} of {} runs finished; ",
+                runs.finished, runs.requested
+            )
+        } else {
+            String::new()
+        };
+        let runs_word = |n: usize| {
+            if n == 1 {
+                "1 run".to_string()
+            } else {
+                format!("{n} runs")
+            }
+        };
         outln!(
-            "  verify: {} compared, {} agree ({}); disagreements at spectral radius within {} of 1: {}, further: {}; left the field (not compared): {}; not compared in all: {}",
-            if a.compared == 1 { "1 run".to_string() } else { format!("{} runs", a.compared) },
+            "  verify: {finished}{} compared, {} agree{}; disagreements at spectral radius within {} of 1: {}, further: {}; not compared: {} in all ({} left the field, {} saturated the turn-rate limit, which the linear chart leaves out, {} too short to judge against the loop's time scale)",
+            runs_word(a.compared),
             a.agree,
-            a.percent.map_or_else(|| "n/a".into(), |p| format!("{p:.1} %")),
+            a.percent.map_or_else(String::new, |p| format!(" ({p:.1} %)")),
             NEAR_BOUNDARY_MARGIN,
             a.disagreements_near_boundary,
             a.disagreements_far,
+            a.not_compared,
             a.left_field,
-            a.not_compared
+            a.saturated,
+            a.undetermined
         );
         for d in &m.disagreements_far {
             outln!(
-                "    far from the boundary: run {} at kp {}, {} Hz, spectral radius {}: {}",
+                "    far from the boundary: run {} at kp {}, {} Hz, {}: {}",
                 d.run,
                 Num(d.kp),
                 Num(d.sensor_rate_hz),
-                d.spectral_radius
-                    .map_or_else(|| "n/a".into(), |r| Num(r).to_string()),
+                d.spectral_radius.map_or_else(
+                    || "no equilibrium".to_string(),
+                    |r| format!("spectral radius {}", Num(r))
+                ),
                 d.outcome
             );
         }

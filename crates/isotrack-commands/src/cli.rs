@@ -66,7 +66,8 @@ pub struct SitlArgs {
     /// The scenario.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// The link: `udpin:HOST:PORT` (listen; answer whoever writes) or `udpout:HOST:PORT`.
+    /// The link: `udpin:HOST:PORT` (listen; answer whoever writes), `udpout:HOST:PORT`,
+    /// `tcpin:HOST:PORT` (listen), `tcpout:HOST:PORT` or `serial:DEVICE:BAUD`.
     #[arg(long, value_name = "URL")]
     pub mavlink: String,
     /// Simulated seconds per wall-clock second (default 1: real time).
@@ -79,7 +80,7 @@ pub struct SitlArgs {
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
     /// `--lockstep`: end the run when nothing came from the companion (or anyone) for S
-    /// seconds of wall time.
+    /// seconds of wall time. Also: a peer of `udpin:`/`tcpin:` silent this long is dropped.
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub timeout_s: f64,
     /// Write the simulation's own `trace.csv`, `summary.json` and `scenario.toml` into DIR.
@@ -90,10 +91,12 @@ pub struct SitlArgs {
 /// The mode `isotrack fly` switches the vehicle to when a failsafe trips.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FailsafeArg {
-    /// Hold (PX4 AUTO.LOITER).
+    /// Hold (PX4 AUTO.LOITER; ArduCopter/ArduPlane LOITER, ArduRover HOLD).
     Hold,
-    /// Return home (PX4 AUTO.RTL).
+    /// Return home (PX4 AUTO.RTL; ArduPilot RTL).
     Return,
+    /// Loiter (PX4 AUTO.LOITER; ArduPilot LOITER).
+    Loiter,
 }
 
 /// `isotrack fly`.
@@ -102,7 +105,8 @@ pub struct FlyArgs {
     /// The scenario (its controller is the law flown).
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// The link to the autopilot: `udpin:HOST:PORT` or `udpout:HOST:PORT`.
+    /// The link to the autopilot: `udpin:HOST:PORT`, `udpout:HOST:PORT`, `tcpin:HOST:PORT`,
+    /// `tcpout:HOST:PORT` or `serial:DEVICE:BAUD`.
     #[arg(long, value_name = "URL")]
     pub mavlink: String,
     /// The measurement: a NAMED_VALUE_FLOAT name (`ISO_S`, or `mavlink:NAME`), or
@@ -174,6 +178,21 @@ pub struct ReportArgs {
     pub out: PathBuf,
 }
 
+/// A count written canonically: decimal digits, no sign, space or leading zero (`+5` and `05`
+/// are refused, as `--map-size` and `--shard` refuse them).
+fn canonical_count(text: &str) -> Result<usize, String> {
+    let ok = !text.is_empty()
+        && text.bytes().all(|b| b.is_ascii_digit())
+        && (text == "0" || !text.starts_with('0'));
+    if !ok {
+        return Err(
+            "expected a count in plain decimal digits (no sign, space or leading zero)".into(),
+        );
+    }
+    text.parse()
+        .map_err(|_| "expected a count that fits the machine's word".to_string())
+}
+
 /// `isotrack check`.
 #[derive(Debug, Args)]
 pub struct CheckArgs {
@@ -206,11 +225,11 @@ pub struct CheckArgs {
     pub map_size: Option<String>,
     /// Simulate N points spread over the chart, classify each run (converged, limit cycle,
     /// diverged) against the chart, write `verify.csv` and mark them on the chart (1..1000).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = canonical_count)]
     pub verify: Option<usize>,
     /// Worker threads for the chart and `--verify` (default: all cores). Results do not depend
     /// on it.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = canonical_count)]
     pub threads: Option<usize>,
     /// How the chart looks.
     #[command(flatten)]

@@ -8,7 +8,7 @@ use crate::run::Failure;
 use isotrack_runs::results::{result_cells, Column, RunRecord};
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
-use isotrack_sim::{NoTrace, RunResult, TraceRow, TraceSink};
+use isotrack_sim::{NoTrace, RunResult};
 use std::io::Write;
 use std::path::Path;
 
@@ -107,69 +107,11 @@ pub fn check_gains(gains: &[String]) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Forwards the recorded rows to `inner` and watches the true error `eps` on them: whether it
-/// ever reached the level, i.e. came within the convergence tolerance or changed sign between
-/// recorded rows (so crossed the isoline); and how far the vehicle went from its start.
-struct Reach<'a> {
-    inner: &'a mut dyn TraceSink,
-    tolerance: f64,
-    /// The sign of the first finite `eps` (`true`: above the level).
-    first_above: Option<bool>,
-    reached: bool,
-    start: Option<(f64, f64)>,
-    /// The largest distance from the start in a recorded row, m.
-    farthest_m: f64,
-}
-
-/// A law's run as the table's note needs it: `None` when no row was recorded
-/// (`output.record_rate_hz = 0`: not known); else whether `eps` never reached the level and
-/// the largest distance from the start, m.
-type Reached = Option<(bool, f64)>;
-
-impl<'a> Reach<'a> {
-    fn new(inner: &'a mut dyn TraceSink, s: &Scenario) -> Self {
-        Self {
-            inner,
-            tolerance: s.file().metrics.convergence_tolerance.unwrap_or(0.0),
-            first_above: None,
-            reached: false,
-            start: None,
-            farthest_m: 0.0,
-        }
-    }
-    fn result(&self) -> Reached {
-        self.first_above.map(|_| (!self.reached, self.farthest_m))
-    }
-}
-
-impl TraceSink for Reach<'_> {
-    fn record(&mut self, row: &TraceRow) {
-        self.inner.record(row);
-        if row.x_m.is_finite() && row.y_m.is_finite() {
-            let (x0, y0) = *self.start.get_or_insert((row.x_m, row.y_m));
-            self.farthest_m = self.farthest_m.max((row.x_m - x0).hypot(row.y_m - y0));
-        }
-        let e = row.error;
-        if !e.is_finite() {
-            return;
-        }
-        if e.abs() <= self.tolerance {
-            self.reached = true;
-        }
-        match self.first_above {
-            None => self.first_above = Some(e > 0.0),
-            Some(above) if above != (e > 0.0) => self.reached = true,
-            Some(_) => {}
-        }
-    }
-}
-
-/// Runs `s`, its trace into `sink`; the result and what [`Reach`] saw.
-fn run_watched(s: &Scenario, sink: &mut dyn TraceSink) -> (RunResult, Reached) {
-    let mut reach = Reach::new(sink, s);
-    let r = s.run(&mut reach);
-    let seen = reach.result();
-    (r, seen)
+/// Whether run `r` never reached the level (at no step within the convergence tolerance nor
+/// across the isoline: [`isotrack_sim::RunMetrics::reached_level`], every step counted, not
+/// only the recorded rows), with how far it went from its start, m.
+fn never_reached(r: &RunResult) -> Option<f64> {
+    (!r.metrics.reached_level).then_some(r.metrics.farthest_from_start_m)
 }
 
 fn md(x: Option<f64>) -> String {
@@ -230,8 +172,8 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         None => None,
     };
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
-    // The laws whose true error never reached the level (in the recorded rows), with how far
-    // each went from its start, m.
+    // The laws whose true error never reached the level (at any step, whatever the trace
+    // records), with how far each went from its start, m.
     let mut never: Vec<(ControllerKind, f64)> = Vec::new();
     for kind in kinds {
         let s = variant(&base, kind, &a.gain, &origin)?;
@@ -244,21 +186,17 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             // The directory's lock is held for all of them (above).
             let out = RunDir::open(&dir.join(kind.name()), &[], &[], None)?;
             let mut trace = out.trace(s.is_flying())?;
-            let (r, n) = run_watched(&s, trace.writer());
-            if let Some((true, far)) = n {
-                never.push((kind, far));
-            }
+            let r = s.run(trace.writer());
             let warnings = isotrack_scenario::check::warnings(&s);
             let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
             out.finish(trace, &scenario_toml(&s), &summary)?;
             r
         } else {
-            let (r, n) = run_watched(&s, &mut NoTrace);
-            if let Some((true, far)) = n {
-                never.push((kind, far));
-            }
-            r
+            s.run(&mut NoTrace)
         };
+        if let Some(far) = never_reached(&r) {
+            never.push((kind, far));
+        }
         results.push((kind, r));
     }
     outln!(
@@ -327,9 +265,9 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
 /// exactly as `pid`.
 fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> String {
     use isotrack_core::numtext::Num;
-    let tol = base.file().metrics.convergence_tolerance.unwrap_or(0.0);
+    let tol = base.spec().metrics.convergence_tolerance;
     let mut note = format!(
-        "never reached s_d: in every recorded row the true error kept its sign and stayed outside the convergence tolerance ({}), so these laws never found the isoline and their rows (effort, chattering, steady errors) measure circling or wandering, not tracking:\n",
+        "never reached s_d: at every step the true error kept its sign and stayed outside the convergence tolerance ({}), so these laws never found the isoline and their rows (effort, chattering, steady errors) measure circling or wandering, not tracking:\n",
         Num(tol)
     );
     let pid_too = never.iter().any(|(k, _)| *k == ControllerKind::Pid);
@@ -340,8 +278,7 @@ fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> Strin
         }
         note += "\n";
     }
-    let search = base.file().controller.search.unwrap_or_default();
-    note += if search == isotrack_scenario::schema::SearchKind::None {
+    note += if base.search().is_none() {
         "A law circles where it starts when its command sits at the turn-rate limit (a linear law far from the level asks for kp*|eps|) or when the field there has too little slope for it to act on (v|grad F| small next to what its gains ask; the baselines' own conditions are in docs/BASELINES.md, and broken ones are warned about above). A start nearer the isoline, or a search phase (controller.search = \"spiral\" or \"lawnmower\", flown by every law here), gives every law the same chance."
     } else {
         "Every law flew the scenario's search (controller.search) before its own law; these still never reached the isoline within the run."

@@ -73,9 +73,7 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
         return;
     }
     let written = if escape {
-        let text = args.to_string();
-        let text = isotrack_core::numtext::Escaped(&text).to_string();
-        w.write_all(clip_lines(&text, MAX_LINE_CHARS).as_bytes())
+        w.write_all(clip_lines(&args.to_string(), MAX_LINE_CHARS).as_bytes())
     } else {
         w.write_fmt(args)
     };
@@ -93,10 +91,15 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
 /// after the per-echo clip ([`isotrack_core::numtext::Clipped`]).
 pub const MAX_LINE_CHARS: usize = 1000;
 
-/// `text` with every line longer than `max` characters cut to its first `max` characters and
-/// `... (N more characters)`.
+/// `text` line by line, each line's terminal controls escaped and a line longer than `max`
+/// characters (as shown) cut there with `... (N more characters)`
+/// ([`isotrack_core::numtext::Clipped`]). The line feeds between the lines are the message's
+/// own; one inside user text was escaped where the text was put in the message.
 pub fn clip_lines(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
-    if text.split('\n').all(|l| l.len() <= max) {
+    if text
+        .split('\n')
+        .all(|l| l.len() <= max && !l.chars().any(isotrack_core::numtext::is_terminal_control))
+    {
         return std::borrow::Cow::Borrowed(text);
     }
     let mut out = String::with_capacity(text.len().min(16 * max));

@@ -89,7 +89,9 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
             o.colormap
         ))
     })?;
-    st.title = o.title.clone();
+    // Bounded and escaped as every echoed text (a hostile review: a 100 000-character title
+    // with control characters went into the figures as given).
+    st.title = o.title.as_deref().map(isotrack_scenario::load::clip);
     Ok(st)
 }
 

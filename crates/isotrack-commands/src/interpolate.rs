@@ -36,11 +36,11 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
             message: format!("--spacing-m must be a finite number > 0, got {}", Echo(sp)),
         });
     }
-    if !(a.idw_power.is_finite() && a.idw_power > 0.0) {
+    if !(a.idw_power.is_finite() && a.idw_power > 0.0 && a.idw_power.is_normal()) {
         return Err(Failure {
             code: exit::USAGE,
             message: format!(
-                "--idw-power must be a finite number > 0, got {}",
+                "--idw-power must be a finite number > 0 (not subnormal), got {}",
                 Echo(a.idw_power)
             ),
         });

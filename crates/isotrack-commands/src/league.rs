@@ -153,6 +153,19 @@ pub fn write_outputs(
             std::path::absolute(suite.scenario_path(task)).unwrap_or(suite.scenario_path(task));
         task.scenario = abs.display().to_string();
     }
+    // A built-in law run beyond the suite's own (`--controllers`) is one the suite as run
+    // scores: its gains are recorded, so it is listed (a suite refuses gains for a law it
+    // does not score).
+    let run_laws: Vec<String> = result
+        .tasks
+        .iter()
+        .flat_map(|t| t.gains.keys().cloned())
+        .collect();
+    for law in run_laws {
+        if !as_run.controllers.contains(&law) {
+            as_run.controllers.push(law);
+        }
+    }
     let header = format!(
         "The suite as run by isotrack {} ({}): the tuned gains of each task are the ones its\nscores used{}.",
         env!("CARGO_PKG_VERSION"),

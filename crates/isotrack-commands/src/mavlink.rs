@@ -3,14 +3,17 @@
 
 use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
-use crate::output::{scenario_toml, RunDir, Summary};
+use crate::output::{scenario_toml, RunDir, Summary, TraceWriter};
 use crate::run::{load, Failure};
 use isotrack_core::numtext::{Echo, Num};
-use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource};
+use isotrack_mavlink::fly::{
+    run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource,
+};
 use isotrack_mavlink::link::LinkError;
-use isotrack_mavlink::sitl::{run_sitl, Pace, SitlError, SitlOptions};
-use isotrack_runs::summary::{Ended, FlightRecord};
-use isotrack_sim::{NoTrace, TraceSink};
+use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
+use isotrack_runs::summary::Ended;
+use isotrack_sim::{NoTrace, RunMetrics, TraceRow, TraceSink};
+use serde::Serialize;
 use std::path::Path;
 
 fn usage(message: String) -> Failure {
@@ -34,14 +37,25 @@ fn link_failure(e: LinkError) -> Failure {
             code: exit::OSERR,
             message: m,
         },
+        LinkError::Device(m) => Failure {
+            code: exit::NOINPUT,
+            message: format!("--mavlink {m}"),
+        },
+        LinkError::Unavailable(m) => Failure {
+            code: exit::UNAVAILABLE,
+            message: format!("--mavlink {m}"),
+        },
     }
 }
 
+/// Checks that `v`, if given, is a finite number > 0 and not subnormal (`1e-310` s or Hz
+/// divides into infinity), echoed as written.
 fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
     match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => {
-            Err(usage(format!("{flag} must be a number > 0, got {x}")))
-        }
+        Some(x) if !(x.is_finite() && x > 0.0 && x.is_normal()) => Err(usage(format!(
+            "{flag} must be a number > 0 (not subnormal), got {}",
+            Echo(x)
+        ))),
         _ => Ok(()),
     }
 }
@@ -49,9 +63,12 @@ fn positive(flag: &str, v: Option<f64>) -> Result<(), Failure> {
 /// Checks that `v`, if given, is in `[lo, hi]` (a duration beyond `hi` overflows the clocks).
 fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     match v {
-        Some(x) if !(x.is_finite() && (lo..=hi).contains(&x)) => {
-            Err(usage(format!("{flag} must be in [{lo}, {hi}], got {x}")))
-        }
+        Some(x) if !(x.is_finite() && (lo..=hi).contains(&x)) => Err(usage(format!(
+            "{flag} must be in [{}, {}], got {}",
+            Echo(lo),
+            Echo(hi),
+            Echo(x)
+        ))),
         _ => Ok(()),
     }
 }
@@ -107,8 +124,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         Some(t) => t.writer(),
         None => &mut NoTrace,
     };
-    let report = run_sitl(&scenario, &opts, sink, &mut |a| {
-        errln!("isotrack sitl: vehicle on {a} ({})", args.mavlink);
+    let report = run_sitl_on(&scenario, &opts, sink, &mut |l| {
+        errln!(
+            "isotrack sitl: vehicle on {} ({})",
+            l.describe(),
+            args.mavlink
+        );
     })
     .map_err(|e| match e {
         SitlError::Link(l) => link_failure(l),
@@ -156,11 +177,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         out.finish(trace, &scenario_toml(&scenario), &summary)?;
     }
     outln!(
-        "outcome     {} at t = {} s ({} samples, {} setpoints refused)",
+        "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",
         cut.as_ref().map_or(report.result.outcome.as_str(), |c| c.0),
         Num(report.result.t_end_s),
         report.result.samples,
         report.setpoints_refused,
+        report.setpoints_out_of_order,
     );
     if report.interrupted {
         return Err(Failure {
@@ -175,6 +197,44 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         });
     }
     Ok(())
+}
+
+/// The content of a flight's `summary.json`.
+#[derive(Serialize)]
+struct FlySummary<'a> {
+    isotrack_version: &'static str,
+    scenario_path: Option<String>,
+    /// `completed` when the vehicle ended its run, `failsafe` otherwise.
+    outcome: &'static str,
+    outcome_detail: String,
+    end_reason: &'static str,
+    failsafe: bool,
+    failsafe_acknowledged: bool,
+    t_end_s: Option<f64>,
+    samples: u64,
+    commands: usize,
+    events: &'a [String],
+    frames_in: u64,
+    frames_out: u64,
+    junk_datagrams: u64,
+    measurements_out_of_order: u64,
+    measurements_repeated: u64,
+    /// The tracking metrics of the measured error series (`steady_state_max_abs_error`, ...),
+    /// as a simulated run's summary has them.
+    #[serde(flatten)]
+    metrics: &'a RunMetrics,
+    scenario: &'a isotrack_scenario::ScenarioFile,
+}
+
+/// `fly --out`'s trace: flushed by the flight at a bounded interval.
+struct FlyTrace(Option<TraceWriter>);
+
+impl TraceSink for FlyTrace {
+    fn record(&mut self, row: &TraceRow) {
+        if let Some(w) = self.0.as_mut() {
+            w.record(row);
+        }
+    }
 }
 
 /// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
@@ -207,9 +267,12 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     opts.failsafe = match args.failsafe {
         FailsafeArg::Hold => FailsafeAction::Hold,
         FailsafeArg::Return => FailsafeAction::Return,
+        FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
-    let out = match &args.out {
+    // Readied (and locked) by the one run-directory writer; the flight then writes its own
+    // files as it flies (scenario first, a flushed trace, the summary at the end, atomically).
+    let _out = match &args.out {
         Some(dir) => Some(prepare_out(
             dir,
             &args.scenario,
@@ -219,20 +282,28 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         )?),
         None => None,
     };
-    let mut trace = match &out {
-        Some(o) => Some(o.live_trace(false)?),
+    let mut trace = FlyTrace(match &args.out {
+        Some(dir) => {
+            // The scenario first: a flight killed mid-way leaves a directory `plot` reads.
+            let p = dir.join("scenario.toml");
+            isotrack_runs::files::write_atomic(&p, scenario_toml(&scenario).as_bytes())
+                .map_err(|e| cant(&p, e))?;
+            let p = dir.join("trace.csv");
+            Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
+        }
         None => None,
-    };
-    let sink: &mut dyn TraceSink = match trace.as_mut() {
-        Some(t) => t.writer(),
-        None => &mut NoTrace,
-    };
+    });
     let log_path = args.out.as_ref().map(|d| d.join("mavlink.tlog"));
     let mut log_error = None;
-    let report = run_fly(&scenario, &opts, sink, &mut |link| {
+    let mut flush = |t: &mut FlyTrace| {
+        if let Some(w) = t.0.as_mut() {
+            w.flush();
+        }
+    };
+    let report = run_fly_flushing(&scenario, &opts, &mut trace, &mut flush, &mut |link| {
         errln!(
             "isotrack fly: companion on {} ({})",
-            link.local_addr()?,
+            link.describe(),
             args.mavlink
         );
         if let Some(p) = &log_path {
@@ -265,39 +336,43 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     for e in &report.events {
         errln!("isotrack fly: {e}");
     }
-    if let (Some(out), Some(trace)) = (&out, trace) {
-        let summary = Summary {
-            isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+    if let (Some(dir), Some(w)) = (&args.out, trace.0) {
+        w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
+        let s = FlySummary {
+            isotrack_version: env!("CARGO_PKG_VERSION"),
             scenario_path: args
                 .scenario
                 .scenario
                 .as_ref()
                 .map(|p| p.display().to_string()),
-            ended: Ended::Flight(FlightRecord {
-                outcome: if report.end.is_failsafe() {
-                    "failsafe"
-                } else if report.end == FlyEnd::VehicleEnded {
-                    "completed"
-                } else {
-                    report.end.as_str()
-                }
-                .to_string(),
-                outcome_detail: report.events.last().cloned().unwrap_or_default(),
-                end_reason: report.end.as_str().to_string(),
-                failsafe: report.end.is_failsafe(),
-                failsafe_acknowledged: report.failsafe_acknowledged,
-                t_end_s: report.t_last_s,
-                samples: report.samples,
-                commands: report.commands.len() as u64,
-                events: report.events.clone(),
-                frames_in: report.link.frames_in,
-                frames_out: report.link.frames_out,
-                junk_datagrams: report.link.junk_datagrams,
-            }),
+            outcome: if report.end.is_failsafe() {
+                "failsafe"
+            } else if report.end == FlyEnd::VehicleEnded {
+                "completed"
+            } else {
+                report.end.as_str()
+            },
+            outcome_detail: report.events.last().cloned().unwrap_or_default(),
+            end_reason: report.end.as_str(),
+            failsafe: report.end.is_failsafe(),
+            failsafe_acknowledged: report.failsafe_acknowledged,
+            t_end_s: report.t_last_s,
+            samples: report.samples,
+            commands: report.commands.len(),
+            events: &report.events,
+            frames_in: report.link.frames_in,
+            frames_out: report.link.frames_out,
+            junk_datagrams: report.link.junk_datagrams,
+            measurements_out_of_order: report.measurements_out_of_order,
+            measurements_repeated: report.measurements_repeated,
+            metrics: &report.metrics,
             scenario: scenario.file(),
-            controller: None,
         };
-        out.finish(trace, &scenario_toml(&scenario), &summary)?;
+        // At the end, whole or not at all (atomic).
+        let p = dir.join("summary.json");
+        let text = serde_json::to_string_pretty(&s).map_err(|e| cant(&p, e.into()))?;
+        isotrack_runs::files::write_atomic(&p, (text + "\n").as_bytes())
+            .map_err(|e| cant(&p, e))?;
     }
     outln!(
         "end         {} ({} measurements, {} law commands)",

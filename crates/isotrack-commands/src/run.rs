@@ -35,7 +35,6 @@ fn fmt_opt(x: Option<f64>) -> String {
 /// A few lines a person reads after a run.
 pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
     let m = &r.metrics;
-    let f = s.file();
     let mut out = String::new();
     out += &format!("scenario    {name}\n");
     out += &format!(
@@ -51,7 +50,7 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
     );
     out += &format!(
         "steady state (last {:.0} %)  max|eps| {}  rms {}  mean {}\n",
-        100.0 * f.metrics.steady_state_fraction.unwrap_or(0.2),
+        100.0 * s.spec().metrics.steady_state_fraction,
         fmt_opt(m.steady_state_max_abs_error),
         fmt_opt(m.steady_state_rms_error),
         fmt_opt(m.steady_state_mean_error),
@@ -60,7 +59,7 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
         "convergence {} (|eps| < {})\n",
         m.convergence_time_s
             .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
-        Echo(f.metrics.convergence_tolerance.unwrap_or_default())
+        Echo(s.spec().metrics.convergence_tolerance)
     );
     // Non-finite values print as in summary.json (null there, n/a here), never as `inf`.
     let fixed = |x: f64, digits: usize| {
@@ -141,17 +140,23 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 /// `isotrack show`.
 pub fn show(args: &ScenarioArgs) -> Result<(), Failure> {
     let scenario = load(args)?;
-    out_data!("{}", scenario_toml(&scenario));
+    out_data!(
+        "{}",
+        isotrack_scenario::spec::show::with_derived(&scenario, &scenario_toml(&scenario))
+    );
     Ok(())
 }
 
 /// `isotrack check`.
 pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     if let Some(h) = args.tube_halfwidth {
-        if !(h.is_finite() && h > 0.0) {
+        if !(h.is_finite() && h > 0.0 && h.is_normal()) {
             return Err(Failure {
                 code: exit::USAGE,
-                message: format!("--tube-halfwidth must be > 0, got {}", Echo(h)),
+                message: format!(
+                    "--tube-halfwidth must be > 0 (not subnormal), got {}",
+                    Echo(h)
+                ),
             });
         }
     }
@@ -165,13 +170,26 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
     };
     if args.json {
         out_data!("{}\n", check_json(&r, map.as_ref()));
-        return Ok(());
+    } else {
+        for line in crate::check_text::render(&r) {
+            outln!("{line}");
+        }
+        if let Some(m) = &map {
+            crate::checkmap::print_report(m);
+        }
     }
-    for line in crate::check_text::render(&r) {
-        outln!("{line}");
-    }
-    if let Some(m) = &map {
-        crate::checkmap::print_report(m);
+    // Ctrl-C during --verify: the report above covers the runs that finished (marked
+    // partial); the command still says it was interrupted and exits 130.
+    if let Some(runs) = map.as_ref().and_then(|m| m.verify_runs.as_ref()) {
+        if runs.partial {
+            return Err(Failure {
+                code: crate::sweep::INTERRUPTED,
+                message: format!(
+                    "interrupted during --verify: {} of {} runs finished; the chart and verify.csv hold what was done (the report above is partial)",
+                    runs.finished, runs.requested
+                ),
+            });
+        }
     }
     Ok(())
 }

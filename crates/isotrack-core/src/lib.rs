@@ -11,6 +11,7 @@
 //! * [`vehicle`]: the vehicle trait (a turn-rate command in, a pose out).
 //! * [`theory`]: closed forms from the paper and our derivations (steady states, stability
 //!   conditions), used by checks and by tests as independent oracles.
+//! * [`spacing`]: the theory of a team's spacing loop (ring Laplacian, sampled and delayed).
 //! * [`math`]: small 2-D geometry helpers.
 //!
 //! Sign conventions, everywhere: x east, y north, heading counter-clockwise from +x, and a
@@ -25,10 +26,11 @@ mod fmath;
 pub mod lanes;
 pub mod math;
 pub mod numtext;
+pub mod spacing;
 pub mod theory;
 pub mod vehicle;
 
 pub use control::{IsolineController, Measurement};
 pub use field::{FieldDerivatives, ScalarField};
 pub use math::{Pose2, Vec2};
-pub use vehicle::Vehicle;
+pub use vehicle::{SpeedCommand, Vehicle};

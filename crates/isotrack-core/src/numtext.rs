@@ -16,10 +16,11 @@
 //!   forbidden side: [`NumUp`] for "at least" (rounded towards `+inf`, so the printed value
 //!   itself is allowed), [`NumDown`] for "at most".
 //!
-//! User text (file names, keys, values, task names) goes through [`Escaped`]: control
-//! characters that a terminal obeys (C0 but tab and newline, DEL, C1, and the Unicode bidi
-//! controls that reorder what follows) are written as escapes (`\x1b`, `\u{202e}`), so a
-//! message shows what was typed instead of acting on the terminal.
+//! User text (file names, keys, values, task names, units and names read from files) goes
+//! through [`Escaped`] (or [`Clipped`], which also bounds its length): control characters that
+//! a terminal obeys (C0 but tab, DEL, C1, and the Unicode bidi controls that reorder what
+//! follows) and line feeds are written as escapes (`\x1b`, `\x0a`, `\u{202e}`), so a message
+//! shows what was typed instead of acting on the terminal or forging a line of its own.
 
 use core::fmt;
 
@@ -80,6 +81,33 @@ impl fmt::Display for Echo {
     }
 }
 
+/// A number written into a file that is read back (a TOML value, a CSV cell): the shortest
+/// decimal that reads back to the same `f64` bit for bit, in exponent form (`{:e}`: `1e-300`,
+/// `2.5e17`) when its magnitude is outside `[1e-5, 1e16)` (the rule of the `ryu` crate and of
+/// [`Echo`]: there the exponent form is the shorter one), else positional with at least one
+/// digit after the point (`0.5`, `600.0`), so it stays a float in TOML. Rust's `{}` alone writes
+/// `1e-300` as 300 digits and `1e300` as 301. Non-finite values as Rust writes them (`NaN`,
+/// `inf`; TOML's `nan`/`inf` are the caller's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TomlFloat(pub f64);
+
+impl fmt::Display for TomlFloat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if !x.is_finite() {
+            write!(f, "{x}")
+        } else if x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
+            if x % 1.0 == 0.0 {
+                write!(f, "{x}.0")
+            } else {
+                write!(f, "{x}")
+            }
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
 /// A list of values the user wrote (`[1, 2.5]`), each as [`Echo`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EchoList<'a>(pub &'a [f64]);
@@ -108,8 +136,56 @@ pub fn is_terminal_control(c: char) -> bool {
         | '\u{2066}'..='\u{2069}')
 }
 
-/// User text for a message, with every [`is_terminal_control`] character escaped: `\x1b` for
-/// C0 and DEL, `\u{85}` / `\u{202e}` above.
+/// Whether `c` is invisible: a Unicode default-ignorable code point (the zero-width space
+/// U+200B, joiners U+200C-U+200D, marks U+200E-U+200F, the bidi controls, the word joiner and
+/// invisible operators U+2060-U+206F, the byte-order mark U+FEFF, the soft hyphen U+00AD,
+/// variation selectors, tags, Hangul fillers, ...). A name holding one looks like another
+/// name (`pi_isoline` and `pi_isoline` + U+200B print alike), so names refuse them.
+pub fn is_invisible(c: char) -> bool {
+    matches!(c,
+        '\u{ad}' | '\u{34f}' | '\u{61c}' | '\u{115f}' | '\u{1160}' | '\u{17b4}' | '\u{17b5}'
+        | '\u{180b}'..='\u{180f}' | '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}'
+        | '\u{2060}'..='\u{206f}' | '\u{3164}' | '\u{fe00}'..='\u{fe0f}' | '\u{feff}'
+        | '\u{ffa0}' | '\u{fff0}'..='\u{fff8}' | '\u{1bca0}'..='\u{1bca3}'
+        | '\u{1d173}'..='\u{1d17a}' | '\u{e0000}'..='\u{e0fff}')
+}
+
+/// Whether user text shows `c` as an escape ([`Escaped`]): a [`is_terminal_control`]
+/// character, or a line feed. A line feed in a file name, a unit or a CSV header would start a
+/// new console line that the text's author writes (`x\nerror: ...`), so inside user text it
+/// is shown as `\x0a`; the lines of a message itself are the program's.
+pub fn is_escaped(c: char) -> bool {
+    c == '\n' || is_terminal_control(c)
+}
+
+/// How `c` is shown in user text: itself, `\x1b` (C0, line feed, DEL) or `\u{202e}` (above).
+fn write_shown(f: &mut fmt::Formatter<'_>, c: char) -> fmt::Result {
+    if !is_escaped(c) {
+        use fmt::Write;
+        f.write_char(c)
+    } else if (c as u32) < 0x80 {
+        write!(f, "\\x{:02x}", c as u32)
+    } else {
+        write!(f, "\\u{{{:x}}}", c as u32)
+    }
+}
+
+/// How many characters `c` takes once shown ([`write_shown`]): 1, 4 for `\x1b`, 6 for `\u{85}`,
+/// 8 for `\u{202e}`.
+fn shown_len(c: char) -> usize {
+    if !is_escaped(c) {
+        1
+    } else if (c as u32) < 0x80 {
+        4
+    } else {
+        // `\u{` + hex digits + `}`.
+        let digits = (32 - (c as u32).leading_zeros()).div_ceil(4) as usize;
+        4 + digits
+    }
+}
+
+/// User text for a message, with every [`is_escaped`] character (terminal controls and line
+/// feeds) escaped: `\x1b` for C0, line feed and DEL, `\u{85}` / `\u{202e}` above.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Escaped<'a>(pub &'a str);
 
@@ -118,13 +194,9 @@ impl fmt::Display for Escaped<'_> {
         let s = self.0;
         let mut start = 0;
         for (i, c) in s.char_indices() {
-            if is_terminal_control(c) {
+            if is_escaped(c) {
                 f.write_str(&s[start..i])?;
-                if (c as u32) < 0x80 {
-                    write!(f, "\\x{:02x}", c as u32)?;
-                } else {
-                    write!(f, "\\u{{{:x}}}", c as u32)?;
-                }
+                write_shown(f, c)?;
                 start = i + c.len_utf8();
             }
         }
@@ -135,9 +207,14 @@ impl fmt::Display for Escaped<'_> {
 /// How many characters of one string the user wrote a message echoes ([`Clipped`]).
 pub const ECHO_CHARS: usize = 200;
 
-/// User text for a message, [`Escaped`] and cut after its first [`ECHO_CHARS`] characters
-/// (or `limit`) with `... (N more characters)`: a 900 000-character path or a 40 000-character
-/// `--set` value is echoed as its start and its length, not in full.
+/// User text for a message: [`Escaped`] first, then cut so that at most [`ECHO_CHARS`]
+/// characters (or `limit`) of the escaped text are shown, followed by `... (N more
+/// characters)`, N counted on the escaped text too. The cut falls between two characters of
+/// the text, never inside an escape (`\x1b` is shown whole or not at all), so what is shown
+/// is at most `limit` characters plus the note: a 900 000-character path, a 40 000-character
+/// `--set` value or 200 escapes (`\u{202e}`, 8 characters each) are echoed as their start and
+/// their length. The one clipping of user text in the project (the scenario's `load::clip`
+/// and the console's line bound are this).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Clipped<'a> {
     text: &'a str,
@@ -151,7 +228,7 @@ pub fn Clipped(text: &str) -> Clipped<'_> {
 }
 
 impl<'a> Clipped<'a> {
-    /// `text` cut after `limit` characters.
+    /// `text` escaped, then cut after `limit` characters of what is shown.
     pub fn with_limit(text: &'a str, limit: usize) -> Self {
         Self { text, limit }
     }
@@ -159,17 +236,20 @@ impl<'a> Clipped<'a> {
 
 impl fmt::Display for Clipped<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.text.char_indices().nth(self.limit) {
-            None => write!(f, "{}", Escaped(self.text)),
-            Some((cut, _)) => {
-                let more = self.text[cut..].chars().count();
-                write!(
-                    f,
-                    "{}... ({more} more characters)",
-                    Escaped(&self.text[..cut])
-                )
-            }
+        let total: usize = self.text.chars().map(shown_len).sum();
+        if total <= self.limit {
+            return write!(f, "{}", Escaped(self.text));
         }
+        let mut shown = 0;
+        for c in self.text.chars() {
+            let n = shown_len(c);
+            if shown + n > self.limit {
+                break;
+            }
+            write_shown(f, c)?;
+            shown += n;
+        }
+        write!(f, "... ({} more characters)", total - shown)
     }
 }
 
@@ -329,6 +409,41 @@ mod tests {
         assert_eq!(cut, "éé... (3 more characters)");
     }
 
+    /// Issue 30: the bound is on what is shown, escapes counted as they are shown and never
+    /// cut: 300 ESC characters were echoed as 200 escapes (800 characters); now at most 200
+    /// characters, whole escapes, and the rest counted as shown.
+    #[test]
+    fn clipped_escapes_first_then_cuts_on_what_is_shown() {
+        let escs = "\u{1b}".repeat(300);
+        let shown = format!("{}", Clipped(&escs));
+        assert_eq!(shown, "\\x1b".repeat(50) + "... (1000 more characters)");
+        // An escape that would cross the bound is left out whole: `ab` + `\x1b` > 5.
+        assert_eq!(
+            format!("{}", Clipped::with_limit("abc\u{1b}def", 5)),
+            "abc... (7 more characters)"
+        );
+        // `\u{202e}` is 8 characters shown; exactly at the bound it passes uncut.
+        assert_eq!(
+            format!("{}", Clipped::with_limit("\u{202e}", 8)),
+            "\\u{202e}"
+        );
+        assert_eq!(
+            format!("{}", Clipped::with_limit("\u{202e}x", 8)),
+            "\\u{202e}... (1 more characters)"
+        );
+        // Line feeds in user text are escaped, so an echo is one line.
+        assert_eq!(format!("{}", Clipped("a\nb")), "a\\x0ab");
+        for c in ['\u{1b}', '\n', '\u{85}', '\u{202e}', '\u{10ffff}', 'é', 'x'] {
+            let mut one = [0u8; 4];
+            let one = c.encode_utf8(&mut one);
+            assert_eq!(
+                format!("{}", Escaped(one)).chars().count(),
+                shown_len(c),
+                "{c:?}"
+            );
+        }
+    }
+
     /// Six significant digits, plain in [1e-6, 1e9), scientific outside, no trailing zeros;
     /// the reported `0.0024500000000000004` reads `0.00245`.
     #[test]
@@ -444,8 +559,8 @@ mod tests {
         assert_eq!(format!("{}", Num(1.0 / 1e-300)), "1e300");
     }
 
-    /// Control characters a terminal would obey are shown as escapes; other text, tabs,
-    /// newlines and non-ASCII letters pass as they are.
+    /// Control characters a terminal would obey and line feeds are shown as escapes; other
+    /// text, tabs and non-ASCII letters pass as they are.
     #[test]
     fn terminal_controls_are_escaped() {
         for (raw, shown) in [
@@ -456,12 +571,83 @@ mod tests {
             ("c1\u{9b}31m", "c1\\u{9b}31m"),
             ("evil\u{202e}txt.csv", "evil\\u{202e}txt.csv"),
             ("iso\u{2066}late", "iso\\u{2066}late"),
-            ("tab\tnew\nline é ü 中", "tab\tnew\nline é ü 中"),
+            ("tab\tand é ü 中", "tab\tand é ü 中"),
+            // Issue 30: a line feed in user text would start a console line of its own.
+            ("new\nline", "new\\x0aline"),
             ("می\u{200c}خواهم", "می\u{200c}خواهم"),
             ("rlm\u{200f}", "rlm\\u{200f}"),
             ("", ""),
         ] {
             assert_eq!(format!("{}", Escaped(raw)), shown);
+        }
+    }
+
+    /// Numbers written back into files: the exponent form outside [1e-5, 1e16) (`1e-300`, not
+    /// 300 digits), positional with a point inside; each reads back bit for bit, and is at most
+    /// 24 characters (17 significant digits, a sign, a point, `e-308`).
+    #[test]
+    fn toml_floats_are_short_and_round_trip() {
+        for (x, shown) in [
+            (1e-300, "1e-300"),
+            (-1e-300, "-1e-300"),
+            (1e300, "1e300"),
+            (5e-324, "5e-324"),
+            (f64::MAX, "1.7976931348623157e308"),
+            (0.1, "0.1"),
+            (600.0, "600.0"),
+            (0.0, "0.0"),
+            (-0.0, "-0.0"),
+            (1e-5, "0.00001"),
+            (9.99e-6, "9.99e-6"),
+            (1e16, "1e16"),
+            (9999999999999998.0, "9999999999999998.0"),
+            (1e-310, "1e-310"),
+            (1.0000001, "1.0000001"),
+        ] {
+            let t = format!("{}", TomlFloat(x));
+            assert_eq!(t, shown);
+            assert!(t.len() <= 24, "{t}");
+            let back: f64 = t.parse().unwrap();
+            assert_eq!(back.to_bits(), x.to_bits(), "{t}");
+        }
+        // Every binade, both signs: bit for bit, at most 24 characters, a point or an exponent.
+        for exponent in 0..0x7ffu64 {
+            for mantissa in [
+                0u64,
+                1,
+                0x8_0000_0000_0001,
+                0xf_ffff_ffff_ffff,
+                0x1_2345_6789_abcd,
+            ] {
+                let x = f64::from_bits((exponent << 52) | mantissa);
+                for x in [x, -x] {
+                    let t = format!("{}", TomlFloat(x));
+                    assert_eq!(t.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{t}");
+                    assert!(t.len() <= 24 && (t.contains('.') || t.contains('e')), "{t}");
+                }
+            }
+        }
+    }
+
+    /// Zero-width and other invisible characters are invisible; letters, spaces, emoji and
+    /// visible punctuation are not.
+    #[test]
+    fn invisible_characters() {
+        for c in [
+            '\u{200b}',
+            '\u{200c}',
+            '\u{200d}',
+            '\u{2060}',
+            '\u{feff}',
+            '\u{ad}',
+            '\u{202e}',
+            '\u{e0041}',
+            '\u{fe0f}',
+        ] {
+            assert!(is_invisible(c), "{c:?}");
+        }
+        for c in ['a', ' ', '_', '|', 'é', '中', '\u{1f600}', '\u{2028}'] {
+            assert!(!is_invisible(c), "{c:?}");
         }
     }
 }

@@ -46,6 +46,17 @@ pub trait Vehicle {
     }
 }
 
+/// A vehicle whose forward speed can be commanded, within an envelope: what a team's spacing
+/// law drives (docs/TEAMS.md). The command is held until the next one (zero-order hold), like
+/// the turn rate.
+pub trait SpeedCommand: Vehicle {
+    /// The speed envelope `(v_min, v_max)`, m/s, `0 < v_min <= v_max`.
+    fn speed_envelope_mps(&self) -> (f64, f64);
+    /// Holds `speed_mps`, saturated to the envelope (a NaN holds `v_min`), from the next step on;
+    /// returns the speed held.
+    fn command_speed(&self, state: &mut Self::State, speed_mps: f64) -> f64;
+}
+
 /// What a flying vehicle adds to the trace.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Telemetry {

@@ -92,7 +92,7 @@ impl Stations {
                     LoadError::new(
                         path,
                         Some(FilePosition::Line(line, Some(c + 1))),
-                        format!("`{tok}` is not a number"),
+                        format!("`{}` is not a number", isotrack_core::numtext::Clipped(tok)),
                     )
                 })
             };

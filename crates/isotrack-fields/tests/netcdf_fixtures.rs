@@ -175,3 +175,56 @@ fn coordinates_without_units_are_metres_with_a_warning() {
         );
     }
 }
+
+/// Issue 30: text attributes that are not UTF-8 (a Latin-1 `comment` and `long_name` on every
+/// variable and a Latin-1 global `history`, as older tools write them) were refused in
+/// NetCDF-4 ("could not be decoded: invalid string data") while NetCDF-3 read them with
+/// U+FFFD for the invalid bytes. Attributes isotrack does not use are read as NetCDF-3 reads
+/// them: each file loads to the grid and times of its twins.
+#[test]
+fn text_attributes_that_are_not_utf8_load_as_in_netcdf3() {
+    let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
+    for name in [
+        "latin1_netcdf4_nc4_xy_contig.nc",
+        "latin1_netcdf4_nc4_lonlat_zlib1.nc",
+        "latin1_h5netcdf_nc4_xy_chunk.nc",
+        "latin1_netcdf4_nc3_xy_unlim.nc",
+    ] {
+        let s = load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.units.as_deref(), Some("K"), "{name}");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+        assert_eq!(s.frames.len(), 3, "{name}");
+        for (got, want) in s.frames.iter().zip(&npy.frames) {
+            assert!(same(got.values(), want.values()), "{name}");
+        }
+        assert_eq!(
+            s.frame_times_s.as_deref(),
+            Some(&[0.0, 3600.0, 10800.0][..]),
+            "{name}"
+        );
+    }
+}
+
+/// Issue 30: an attribute isotrack needs (a `units`) that is not UTF-8 is refused naming the
+/// file, the variable and the attribute, in NetCDF-4 as in NetCDF-3 (where it was taken as
+/// `\u{fffd}C` for the data's units, without a word).
+#[test]
+fn a_needed_attribute_that_is_not_utf8_is_refused_naming_it() {
+    for (name, var) in [
+        ("refused_latin1_units_v.nc", "v"),
+        ("refused_latin1_units_v_nc3.nc", "v"),
+        ("refused_latin1_units_x.nc", "x"),
+        ("refused_latin1_units_time.nc", "time"),
+    ] {
+        let e = load_series(&dir().join(name), None, None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(name), "{text}");
+        assert!(
+            text.contains(&format!(
+                "variable `{var}`: its `units` attribute is not UTF-8 text"
+            )),
+            "{text}"
+        );
+        assert!(!e.unreadable, "{text}");
+    }
+}

@@ -137,7 +137,7 @@ pub enum NameError {
     #[error("controller name of {0} characters: at most {max}", max = MAX_NAME_CHARS)]
     TooLong(usize),
     /// The name holds a character that breaks a leaderboard table.
-    #[error("controller name {0:?} contains {1:?}: names are rows of Markdown and CSV tables; use no '|', line breaks or control characters")]
+    #[error("controller name {0:?} contains {1:?}: names are rows of Markdown and CSV tables; use no '|', line breaks, control or invisible (zero-width) characters")]
     BadChar(String, char),
     /// The name starts or ends with whitespace (it would pass for another name).
     #[error("controller name {0:?} starts or ends with whitespace")]
@@ -153,7 +153,15 @@ pub fn check_name(name: &str) -> Result<(), NameError> {
     if n > MAX_NAME_CHARS {
         return Err(NameError::TooLong(n));
     }
-    let breaks = |c: char| c == '|' || c.is_control() || c == '\u{2028}' || c == '\u{2029}';
+    // Invisible characters (a zero-width space, a bidi control) make a name that prints as
+    // another: `pi_isoline\u{200b}` would show as a second `pi_isoline` row.
+    let breaks = |c: char| {
+        c == '|'
+            || c.is_control()
+            || c == '\u{2028}'
+            || c == '\u{2029}'
+            || isotrack_core::numtext::is_invisible(c)
+    };
     if let Some(c) = name.chars().find(|&c| breaks(c)) {
         return Err(NameError::BadChar(name.to_string(), c));
     }

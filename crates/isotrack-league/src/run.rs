@@ -640,7 +640,7 @@ fn trajectory(
     seed: u64,
 ) -> Trajectory {
     // Record at 10 Hz, keep at most PICTURE_POINTS of the rows.
-    let duration = base.file().sim.duration_s.unwrap_or(600.0);
+    let duration = base.spec().sim.duration_s;
     let rows = (duration * 10.0).max(1.0) as u64;
     let mut sink = Thinned {
         every: rows.div_ceil(PICTURE_POINTS as u64).max(1),

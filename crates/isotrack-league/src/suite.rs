@@ -260,6 +260,17 @@ impl Suite {
         if self.tasks.is_empty() {
             return Err((vec![], "the suite has no [[task]]".into()));
         }
+        // The name heads the leaderboard and its pages: no name that prints as another.
+        let shown = |c: char| !(c.is_control() || isotrack_core::numtext::is_invisible(c));
+        if self.name.trim().is_empty() || !self.name.chars().all(shown) {
+            return Err((
+                top("name"),
+                format!(
+                    "name {:?}: give the suite a visible name, without control or invisible (zero-width) characters",
+                    clip(&self.name)
+                ),
+            ));
+        }
         if self.controllers.is_empty() {
             return Err((
                 top("controllers"),
@@ -333,7 +344,7 @@ impl Suite {
         let mut ids: BTreeMap<String, usize> = BTreeMap::new();
         for (i, t) in self.tasks.iter().enumerate() {
             let earlier = ids.get(&t.id.to_ascii_lowercase()).map(|&j| &self.tasks[j]);
-            check_task(i, t, earlier)?;
+            check_task(i, t, earlier, &self.controllers)?;
             ids.insert(t.id.to_ascii_lowercase(), i);
         }
         Ok(())
@@ -346,7 +357,7 @@ impl Suite {
 
     /// The suite as TOML (the tuned gains included), under a header comment.
     pub fn to_toml(&self, header: &str) -> String {
-        let body = toml::to_string(self).unwrap_or_default();
+        let body = isotrack_scenario::tomltext::to_toml(self).unwrap_or_default();
         let mut out = String::new();
         for line in header.lines() {
             out.push_str("# ");
@@ -370,7 +381,12 @@ fn builtin_names() -> String {
 
 /// The checks of task `i` that need no scenario; `earlier` is a task before it whose id is the
 /// same ignoring case, if any.
-fn check_task(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg>, String)> {
+fn check_task(
+    i: usize,
+    t: &Task,
+    earlier: Option<&Task>,
+    controllers: &[String],
+) -> Result<(), (Vec<Seg>, String)> {
     let ok = !t.id.is_empty()
         && t.id.len() <= 64
         && t.id
@@ -423,6 +439,42 @@ fn check_task(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg
             format!("task {}: set sim.seed has no effect: {seed_note}", t.id),
         ));
     }
+    // One value per key: a key set twice (the last would win unseen), or both set and drawn
+    // (the draw would replace the set value unseen).
+    let mut set_keys: BTreeMap<String, usize> = BTreeMap::new();
+    for (j, a) in t.set.iter().enumerate() {
+        let Some((k, _)) = a.split_once('=') else {
+            continue;
+        };
+        let k = k.trim().to_string();
+        let at = vec![
+            Seg::Key("task".into()),
+            Seg::Index(i),
+            Seg::Key("set".into()),
+            Seg::Index(j),
+        ];
+        if let Some(first) = set_keys.get(&k) {
+            return Err((
+                at,
+                format!(
+                    "task {}: set assigns {} twice (set[{first}] and set[{j}]): one value per key",
+                    t.id,
+                    clip(&k)
+                ),
+            ));
+        }
+        if t.vary.keys().any(|v| v.trim() == k) {
+            return Err((
+                at,
+                format!(
+                    "task {}: {} is both set and in vary: every run would draw it, replacing the set value",
+                    t.id,
+                    clip(&k)
+                ),
+            ));
+        }
+        set_keys.insert(k, j);
+    }
     for (k, d) in &t.vary {
         if k.trim() == "sim.seed" {
             return Err((
@@ -456,6 +508,16 @@ fn check_task(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg
                 ),
             ));
         }
+        if !controllers.contains(c) {
+            return Err((
+                task_path(i, &["tuned", c]),
+                format!(
+                    "task {}: tuned gains for {c}, which the suite does not score (controllers = [{}]): add it to controllers or remove [task.tuned.{c}]",
+                    t.id,
+                    controllers.join(", ")
+                ),
+            ));
+        }
         if let Some((k, v)) = gains.iter().find(|(_, v)| !v.is_finite()) {
             return Err((
                 task_path(i, &["tuned", c, k]),
@@ -482,11 +544,8 @@ pub fn seed_overrides(task: &Task, seed: u64) -> Vec<String> {
     o
 }
 
-/// Text clipped for messages.
+/// Text from the suite file for messages: escaped, then cut after 80 characters of what is
+/// shown ([`isotrack_core::numtext::Clipped`]; a line feed in a TOML key was printed raw).
 pub(crate) fn clip(s: &str) -> String {
-    if s.chars().count() > 80 {
-        s.chars().take(80).collect::<String>() + "..."
-    } else {
-        s.to_string()
-    }
+    isotrack_core::numtext::Clipped::with_limit(s, 80).to_string()
 }

@@ -78,6 +78,8 @@ fn metrics() -> RunMetrics {
         steady_state_rms_isoline_distance_m: Some(0.5),
         time_in_band_fraction: Some(0.8),
         track_losses: 1,
+        reached_level: true,
+        farthest_from_start_m: 10.0,
     }
 }
 
@@ -247,6 +249,17 @@ fn suite_errors_are_located_and_seeds_disjoint() {
         .unwrap_err()
         .message
         .contains("length_m"));
+}
+
+/// Issue 30: a line feed in a suite's TOML key (`vary."a\nerror: forged"`) is echoed escaped,
+/// so the message stays one line; it was printed raw, starting a line of the file's author.
+#[test]
+fn suite_keys_are_echoed_on_one_line() {
+    let dir = scenarios();
+    let text = "name = \"x\"\nversion = 1\ncontrollers = [\"pid\"]\ntuning_seeds = [1]\nscoring_seeds = [2]\n[[task]]\nid = \"a\"\ntitle = \"a\"\nscenario = \"s.toml\"\nlength_m = 1.0\nvary = { \"k\\nerror: forged\" = { uniform = [2.0, 1.0] } }\n";
+    let e = Suite::parse(text, "lf.toml", &dir).unwrap_err();
+    assert!(e.message.contains("vary k\\x0aerror: forged"), "{e}");
+    assert!(!e.to_string().contains('\n'), "{e}");
 }
 
 /// A seed's draws: the same for the same seed, within the uniform bounds, different seeds
@@ -530,7 +543,7 @@ fn registry_refuses_names_that_would_lie() {
     let mut reg = Registry::builtin();
     let names_before = reg.names().len();
     let long = "x".repeat(65);
-    let cases: [(&str, NameError); 9] = [
+    let cases: [(&str, NameError); 11] = [
         (
             "pi_isoline",
             NameError::Builtin("pi_isoline".into(), "pi_isoline"),
@@ -539,6 +552,16 @@ fn registry_refuses_names_that_would_lie() {
         ("", NameError::Empty),
         ("a|b", NameError::BadChar("a|b".into(), '|')),
         ("a\nb", NameError::BadChar("a\nb".into(), '\n')),
+        // Issue 30 (doors30a), item 7: a zero-width space or a joiner makes a name that prints
+        // as another (`pi_isoline` + U+200B looks like the built-in's row).
+        (
+            "pi_isoline\u{200b}",
+            NameError::BadChar("pi_isoline\u{200b}".into(), '\u{200b}'),
+        ),
+        (
+            "my\u{2060}law",
+            NameError::BadChar("my\u{2060}law".into(), '\u{2060}'),
+        ),
         ("a\u{7}", NameError::BadChar("a\u{7}".into(), '\u{7}')),
         (
             "a\u{2028}b",
@@ -562,4 +585,42 @@ fn registry_refuses_names_that_would_lie() {
     reg.register(&ok, make).unwrap();
     reg.register(&ok, make).unwrap();
     assert_eq!(reg.custom_names(), [ok.as_str()]);
+}
+
+/// Issue 30 (doors30a), item 7: smaller edits a suite accepted without a word are refused at
+/// their line: gains for a built-in law the suite does not score (they never ran), a key `set`
+/// twice in one task (the last silently won) or both `set` and drawn by `vary` (the draw
+/// silently won), a suite name with a zero-width space.
+#[test]
+fn silent_suite_edits_are_refused_at_their_line() {
+    let cases: [(String, usize, &str); 4] = [
+        (
+            one_task(TOP, "[task.tuned.sliding_mode]\ngamma = 0.3\n"),
+            12,
+            "tuned gains for sliding_mode, which the suite does not score (controllers = [pi_isoline, pid])",
+        ),
+        (
+            one_task(TOP, "").replace(
+                "\"sim.duration_s=20.0\"]",
+                "\"sim.duration_s=20.0\", \"sensor.rate_hz=10\", \" sim.duration_s = 30.0\"]",
+            ),
+            10,
+            "set assigns sim.duration_s twice (set[0] and set[2])",
+        ),
+        (
+            one_task(TOP, "vary = { \"sim.duration_s\" = { uniform = [10.0, 20.0] } }\n"),
+            10,
+            "sim.duration_s is both set and in vary",
+        ),
+        (
+            one_task(TOP, "").replacen("name = \"x\"", "name = \"x\u{200b}\"", 1),
+            1,
+            "visible name, without control or invisible (zero-width) characters",
+        ),
+    ];
+    for (text, line, says) in cases {
+        let e = parse_err(&text);
+        assert_eq!(e.location.map(|l| l.0), Some(line), "{e}\n{text}");
+        assert!(e.message.contains(says), "{e}");
+    }
 }

@@ -3,23 +3,30 @@
 //! the measurements it receives, and only on them (coordinate-free: positions are logged and
 //! checked against the fence, never given to the law), and sends the command as the vehicle's
 //! setpoint: a fixed wing's coordinated-turn roll `phi = -atan(omega V / g)` within the bank
-//! limit, a ground vehicle's yaw rate, both as `SET_ATTITUDE_TARGET`, stamped with the time of
-//! the measurement they answer, and repeated at a steady rate (PX4's offboard mode needs 2 Hz).
+//! limit (with the altitude hold's pitch and the airspeed hold's thrust, [`crate::setpoint`]),
+//! a ground vehicle's yaw rate, both as `SET_ATTITUDE_TARGET`, stamped with the time of the
+//! measurement they answer, and repeated at a steady rate (PX4's offboard mode needs 2 Hz).
 //!
-//! Control: with `take_control` it arms and switches to OFFBOARD (holding the measurements
-//! until it has control, so the law starts at the first one); without, it waits for the pilot
-//! to do so, answering with neutral setpoints meanwhile. Failsafes (each logged): Ctrl-C
+//! Control: with `take_control` it arms and switches to OFFBOARD (ArduPilot: GUIDED; the mode
+//! numbers are the vehicle's firmware's, [`crate::modes`]), holding the measurements until it
+//! has control, so the law starts at the first one; without, it waits for the pilot to do so,
+//! answering with neutral setpoints meanwhile. Failsafes (each logged): Ctrl-C
 //! ([`FlyOptions::stop`]), `max_duration_s` of vehicle time, no message from the vehicle or no
 //! measurement for `timeout_s` of wall time, leaving the fence: the setpoints stop and the
-//! vehicle is switched to HOLD (or RETURN).
+//! vehicle is switched to HOLD (or RETURN, LOITER). What it records: [`crate::record`].
+//!
+//! The flight is one loop ([`Flight::turn`]), each turn: the heartbeat, what the link brought
+//! ([`Flight::handle`]), the UDP sensor's lines, the fence, control, the measurements queued
+//! (answered by the law), the ends; then the way out ([`Flight::let_go`]).
 
 use crate::link::{Link, LinkError, LinkStats, Received};
 use crate::mirror::Transport;
-use crate::vehicle_state::{Mode, PX4_MAIN_AUTO, PX4_MAIN_OFFBOARD, PX4_SUB_LOITER, PX4_SUB_RTL};
+use crate::modes::{Firmware, FlyMode};
+use crate::record::Recorder;
 use crate::wire;
 use isotrack_core::{IsolineController, Measurement};
-use isotrack_scenario::Scenario;
-use isotrack_sim::{TraceRow, TraceSink};
+use isotrack_scenario::{Scenario, Tracker};
+use isotrack_sim::{RunMetrics, TraceRow, TraceSink};
 use mavlink::dialects::common::*;
 use std::collections::VecDeque;
 use std::net::UdpSocket;
@@ -116,20 +123,33 @@ impl SensorSource {
     }
 }
 
-/// The mode a failsafe switches to.
+/// The mode a failsafe switches to (each firmware's number: [`crate::modes`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FailsafeAction {
-    /// HOLD (PX4 AUTO.LOITER).
+    /// HOLD (PX4 AUTO.LOITER; ArduCopter and ArduPlane LOITER, ArduRover HOLD).
     Hold,
-    /// RETURN (PX4 AUTO.RTL).
+    /// RETURN (PX4 AUTO.RTL; ArduPilot RTL).
     Return,
+    /// LOITER (PX4 AUTO.LOITER; ArduPilot LOITER).
+    Loiter,
+}
+
+impl FailsafeAction {
+    /// The mode it commands.
+    pub fn mode(self) -> FlyMode {
+        match self {
+            FailsafeAction::Hold => FlyMode::Hold,
+            FailsafeAction::Return => FlyMode::Return,
+            FailsafeAction::Loiter => FlyMode::Loiter,
+        }
+    }
 }
 
 /// What the companion commands when it lets go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum WayOut {
     /// The failsafe mode.
-    Mode(Mode),
+    Mode(FlyMode),
     /// Disarm (a vehicle the companion armed on the ground).
     Disarm,
 }
@@ -268,6 +288,13 @@ pub struct FlyReport {
     pub way_out_commanded: bool,
     /// The link's counters.
     pub link: LinkStats,
+    /// The tracking metrics of the measured error series ([`crate::record`]).
+    pub metrics: RunMetrics,
+    /// Measurements older than one already answered: dropped, never given to the law.
+    pub measurements_out_of_order: u64,
+    /// Measurements with the time of one already answered (a repeat): answered again with the
+    /// same setpoint, never given to the law twice.
+    pub measurements_repeated: u64,
 }
 
 /// Why a flight could not start.
@@ -296,45 +323,255 @@ fn name_of(c: &[u8]) -> &[u8] {
     &c[..n]
 }
 
-struct Fly<'a> {
+/// A flight under way: the link, the vehicle as heard, the law and what is recorded.
+struct Flight<'a, S: ?Sized> {
     link: Link,
     opts: &'a FlyOptions,
     transport: Transport,
+    law: Tracker,
+    level: f64,
+    sink: &'a mut S,
+    flush: &'a mut dyn FnMut(&mut S),
+    record: Recorder,
+    events: Vec<String>,
+    t0: Instant,
+    timeout: Duration,
+    period: Duration,
+    // The vehicle as heard.
     target: Option<(u32, u8)>,
+    target_at: Option<Instant>,
+    /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
+    other_vehicle: Option<(u32, u8)>,
+    firmware: Firmware,
     armed: bool,
-    mode: Option<Mode>,
-    /// The command in force (None: neutral, before the law has control).
-    current: Option<f64>,
-    last_answer_ms: Option<u32>,
+    custom_mode: Option<u32>,
+    /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
+    run_ended: bool,
+    /// The vehicle reported `MAV_STATE_POWEROFF`.
+    vehicle_done: bool,
+    last_link: Instant,
+    mavlink1_logged: bool,
+    // Control.
     /// The vehicle refused to arm or to switch to OFFBOARD.
     refused: bool,
+    /// Armed and in OFFBOARD this turn.
+    active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
     in_control: bool,
-    /// The companion has sent an arm command.
     arm_sent: bool,
-    /// The vehicle was disarmed when first heard and armed on the companion's command: it is
-    /// still on the ground, and disarming it is the way out of a refused take-over.
+    /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
+    offboard_sent: bool,
+    was_armed: bool,
+    next_control: Instant,
+    control_tries: u32,
+    tel: Telemetry,
+    // The sensor.
+    lines: Option<UdpSocket>,
+    wanted: Vec<u8>,
+    partial: Vec<u8>,
+    skipping_line: bool,
+    /// The UDP sensor's datagram buffer (empty without one).
+    buf: Vec<u8>,
+    clock: SensorClock,
+    /// Since the vehicle's first message (the fence's wait for a position).
+    clock_start: Instant,
+    queue: VecDeque<(u32, f64)>,
+    ans: Answers,
+    next_setpoint: Instant,
+    next_heartbeat: Instant,
+}
+
+/// The vehicle's positions, altitude and airspeed as received (the fence, the trace, the fixed
+/// wing's altitude and airspeed holds; never the law).
+#[derive(Default)]
+struct Telemetry {
     /// The first `GLOBAL_POSITION_INT` fix, about which global positions are projected while
     /// no `LOCAL_POSITION_NED` has come.
     global_origin: Option<crate::geo::Home>,
     /// A finite `LOCAL_POSITION_NED` has come (positions are local from then on).
     local_seen: bool,
-    /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
-    run_ended: bool,
+    pos: Option<(f64, f64)>,
     /// When the last finite position arrived.
     position_at: Option<Instant>,
-    /// The companion has asked for OFFBOARD.
-    offboard_sent: bool,
-    /// When the vehicle was first heard.
-    target_at: Option<Instant>,
-    /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
-    other_vehicle: Option<(u32, u8)>,
-    events: Vec<String>,
-    t0: Instant,
+    /// The fence's centre.
+    home: Option<(f64, f64)>,
+    home_local: bool,
+    altitude_m: Option<f64>,
+    altitude_target_m: Option<f64>,
+    airspeed_mps: Option<f64>,
 }
 
-impl Fly<'_> {
+/// The law's answers so far.
+#[derive(Default)]
+struct Answers {
+    /// The command in force (None: neutral, before the law has control).
+    current: Option<f64>,
+    last_answer_ms: Option<u32>,
+    commands: Vec<(u32, f64)>,
+    samples: u64,
+    t_first: Option<f64>,
+    t_last: Option<f64>,
+    /// Vehicle time of the first measurement answered in control.
+    t_control: Option<f64>,
+    /// When the companion got control (its own clock).
+    first_wall: Option<Instant>,
+    out_of_order: u64,
+    repeated: u64,
+}
+
+/// Flies `scenario`'s law over `opts.url`, recording one trace row per answered measurement
+/// (the position and heading at its time, measured value as `s`, the command) into `sink`;
+/// `link_setup` is called on the link before the flight starts (the raw MAVLink log:
+/// [`Link::log_to`]).
+pub fn run_fly<S: TraceSink + ?Sized>(
+    scenario: &Scenario,
+    opts: &FlyOptions,
+    sink: &mut S,
+    link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
+) -> Result<FlyReport, FlyError> {
+    run_fly_flushing(scenario, opts, sink, &mut |_| {}, link_setup)
+}
+
+/// [`run_fly`], calling `flush` on the sink every [`crate::record::FLUSH_EVERY_ROWS`] rows and
+/// every [`crate::record::FLUSH_INTERVAL_S`] of wall time while rows come, and at the end: a
+/// companion killed mid-flight leaves the trace up to the last flush.
+pub fn run_fly_flushing<S: TraceSink + ?Sized>(
+    scenario: &Scenario,
+    opts: &FlyOptions,
+    sink: &mut S,
+    flush: &mut dyn FnMut(&mut S),
+    link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
+) -> Result<FlyReport, FlyError> {
+    let mut f = Flight::open(scenario, opts, sink, flush, link_setup)?;
+    let end = loop {
+        if let Some(end) = f.turn()? {
+            break end;
+        }
+    };
+    let (acknowledged, way_out) = f.let_go(end)?;
+    f.record.finish(f.sink, f.flush);
+    let completed = matches!(end, FlyEnd::VehicleEnded | FlyEnd::MaxDuration);
+    Ok(FlyReport {
+        end,
+        metrics: f.record.metrics(completed),
+        commands: f.ans.commands,
+        samples: f.ans.samples,
+        t_first_s: f.ans.t_first,
+        t_last_s: f.ans.t_last,
+        events: f.events,
+        failsafe_acknowledged: acknowledged,
+        way_out_commanded: way_out,
+        link: f.link.stats,
+        measurements_out_of_order: f.ans.out_of_order,
+        measurements_repeated: f.ans.repeated,
+    })
+}
+
+impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
+    /// Checks the scenario, opens the link and the sensor.
+    fn open(
+        scenario: &Scenario,
+        opts: &'a FlyOptions,
+        sink: &'a mut S,
+        flush: &'a mut dyn FnMut(&mut S),
+        link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
+    ) -> Result<Self, FlyError> {
+        if scenario.tracker().needs_ground_truth() {
+            return Err(FlyError::Scenario(
+                "controller.kind = \"gradient_reference\" needs the field's gradient at the vehicle: it cannot fly on measurements alone".into(),
+            ));
+        }
+        crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
+        let mut link = Link::open(&opts.url, opts.system_id, 191).map_err(FlyError::Link)?;
+        link_setup(&mut link).map_err(FlyError::Io)?;
+        let lines = match &opts.sensor {
+            SensorSource::UdpLines(a) => {
+                let s = UdpSocket::bind(a)
+                    .map_err(|e| FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {e}"))))?;
+                s.set_nonblocking(true).map_err(FlyError::Io)?;
+                Some(s)
+            }
+            SensorSource::Named(_) => None,
+        };
+        Ok(Self::start(scenario, opts, sink, flush, link, lines))
+    }
+
+    /// The flight's state at its start, on an open link and sensor.
+    fn start(
+        scenario: &Scenario,
+        opts: &'a FlyOptions,
+        sink: &'a mut S,
+        flush: &'a mut dyn FnMut(&mut S),
+        link: Link,
+        lines: Option<UdpSocket>,
+    ) -> Self {
+        let wanted = match &opts.sensor {
+            SensorSource::Named(n) => n.as_bytes().to_vec(),
+            SensorSource::UdpLines(_) => Vec::new(),
+        };
+        let opts_udp = lines.is_some();
+        let planned_s = opts
+            .max_duration_s
+            .unwrap_or(scenario.file().sim.duration_s.unwrap_or(600.0));
+        let now = Instant::now();
+        Self {
+            link,
+            opts,
+            transport: Transport::of(scenario),
+            law: scenario.tracker(),
+            level: scenario.level(),
+            sink,
+            flush,
+            record: Recorder::new(scenario, planned_s),
+            events: Vec::new(),
+            t0: now,
+            // Never a panic on a huge timeout (the CLI bounds it to a day).
+            timeout: Duration::try_from_secs_f64(opts.timeout_s.max(0.0))
+                .unwrap_or(Duration::from_secs(86_400)),
+            period: Duration::from_secs_f64(1.0 / opts.setpoint_rate_hz.max(2.0)),
+            target: None,
+            target_at: None,
+            other_vehicle: None,
+            firmware: Firmware::Px4,
+            armed: false,
+            custom_mode: None,
+            run_ended: false,
+            vehicle_done: false,
+            last_link: now,
+            mavlink1_logged: false,
+            refused: false,
+            active: false,
+            in_control: false,
+            arm_sent: false,
+            armed_by_us: false,
+            offboard_sent: false,
+            was_armed: false,
+            next_control: now,
+            control_tries: 0,
+            tel: Telemetry::default(),
+            lines,
+            wanted,
+            partial: Vec::new(),
+            skipping_line: false,
+            buf: if opts_udp {
+                vec![0u8; 65_536]
+            } else {
+                Vec::new()
+            },
+            clock: SensorClock {
+                newest_ms: None,
+                last: now,
+                fault: None,
+            },
+            clock_start: now,
+            queue: VecDeque::new(),
+            ans: Answers::default(),
+            next_setpoint: now,
+            next_heartbeat: now,
+        }
+    }
+
     fn event(&mut self, what: String) {
         let t = self.t0.elapsed().as_secs_f64();
         self.events.push(format!("wall {t:.3} s: {what}"));
@@ -342,6 +579,110 @@ impl Fly<'_> {
 
     fn send(&mut self, m: MavMessage) -> Result<(), FlyError> {
         self.link.send(&m).map(|_| ()).map_err(FlyError::Io)
+    }
+
+    /// One turn of the flight's loop; `Some` when the flight ends.
+    fn turn(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.opts.stop.load(Ordering::Relaxed) {
+            return Ok(Some(FlyEnd::Interrupted));
+        }
+        let now = Instant::now();
+        if now >= self.next_heartbeat {
+            self.heartbeat()?;
+            self.next_heartbeat = now + Duration::from_secs(1);
+        }
+        let had_target = self.target.is_some();
+        for r in self
+            .link
+            .poll(Duration::from_millis(10))
+            .map_err(FlyError::Io)?
+        {
+            self.handle(&r);
+        }
+        if let Some(end) = self.check_vehicles(had_target) {
+            return Ok(Some(end));
+        }
+        self.read_lines();
+        let end = match self.check_fence() {
+            Some(end) => Some(end),
+            None => match self.control()? {
+                Some(end) => Some(end),
+                None => self.answer_queue()?,
+            },
+        };
+        if end.is_some() {
+            return Ok(end);
+        }
+        let end = self.check_ends()?;
+        self.record.tick(self.sink, self.flush);
+        Ok(end)
+    }
+
+    /// The two-vehicles check, the MAVLink 1 notice, and the sensor's timer from the vehicle's
+    /// first message.
+    fn check_vehicles(&mut self, had_target: bool) -> Option<FlyEnd> {
+        if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
+            self.event(format!(
+                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
+                a.0, a.1, b.0, b.1
+            ));
+            return Some(FlyEnd::TwoVehicles);
+        }
+        if self.link.stats.mavlink1_frames > 0 && !self.mavlink1_logged {
+            self.mavlink1_logged = true;
+            self.event(
+                "MAVLink 1 frames received and ignored: this bridge speaks MAVLink 2 only (set the autopilot's link to MAVLink 2)".into(),
+            );
+        }
+        if !had_target && self.target.is_some() {
+            // The sensor's silence counts from the vehicle's first message.
+            self.clock.last = Instant::now();
+            self.clock_start = Instant::now();
+        }
+        None
+    }
+
+    /// The vehicle's end, the periodic setpoint, and the timers: link, sensor clock, the
+    /// companion's own clock for `max_duration_s`, sensor.
+    fn check_ends(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.vehicle_done && !self.run_ended {
+            self.event("the vehicle powered off without ending its run: vehicle lost".into());
+            return Ok(Some(FlyEnd::VehicleLost));
+        }
+        if self.vehicle_done {
+            self.event("the vehicle ended its run".into());
+            return Ok(Some(FlyEnd::VehicleEnded));
+        }
+        let now = Instant::now();
+        if self.target.is_some() && now >= self.next_setpoint {
+            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.next_setpoint = now + self.period;
+        }
+        if now.duration_since(self.last_link) > self.timeout {
+            self.event(format!(
+                "no message from the vehicle for {} s",
+                self.opts.timeout_s
+            ));
+            return Ok(Some(FlyEnd::LinkLost));
+        }
+        if let Some(what) = self.clock.fault.take() {
+            self.event(what);
+            return Ok(Some(FlyEnd::SensorClockJump));
+        }
+        if let (Some(max), Some(w)) = (self.opts.max_duration_s, self.ans.first_wall) {
+            // The companion's own clock too: a vehicle clock that stalls cannot stretch the run.
+            if now.duration_since(w).as_secs_f64() >= max {
+                self.event(format!(
+                    "max duration {max} s reached on the companion's clock"
+                ));
+                return Ok(Some(FlyEnd::MaxDuration));
+            }
+        }
+        if now.duration_since(self.clock.last) > self.timeout {
+            self.event(format!("no measurement for {} s", self.opts.timeout_s));
+            return Ok(Some(FlyEnd::SensorLost));
+        }
+        Ok(None)
     }
 
     fn heartbeat(&mut self) -> Result<(), FlyError> {
@@ -370,26 +711,38 @@ impl Fly<'_> {
         }))
     }
 
-    /// The setpoint of the command in force, stamped `ms`.
+    /// The setpoint of the command in force, stamped `ms`: a fixed wing's roll of the turn,
+    /// pitch of the altitude hold and thrust of the airspeed hold (body rates ignored); a ground
+    /// vehicle's yaw rate (attitude and thrust ignored).
     fn setpoint(&mut self, ms: u32) -> Result<(), FlyError> {
         let Some((sys, comp)) = self.target else {
             return Ok(());
         };
-        let w = self.current.unwrap_or(0.0);
+        let w = self.ans.current.unwrap_or(0.0);
         let ignore_rates = AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
-            | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE
-            | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE;
-        let (q, yaw_rate, mask) = match self.transport {
-            Transport::FixedWing { airspeed_mps } => (
-                wire::quaternion_of_roll(wire::roll_of_turn_rate(w, airspeed_mps)),
-                0.0,
-                ignore_rates
-                    | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE,
-            ),
+            | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE;
+        let (q, yaw_rate, thrust, mask) = match self.transport {
+            Transport::FixedWing { airspeed_mps } => {
+                let roll = wire::roll_of_turn_rate(w, airspeed_mps);
+                let pitch = crate::setpoint::pitch_of_altitude(
+                    self.tel.altitude_target_m,
+                    self.tel.altitude_m,
+                );
+                (
+                    crate::setpoint::quaternion_of_roll_pitch(roll, pitch),
+                    0.0,
+                    crate::setpoint::thrust_of_airspeed(airspeed_mps, self.tel.airspeed_mps) as f32,
+                    ignore_rates
+                        | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE,
+                )
+            }
             Transport::Ground => (
                 [1.0, 0.0, 0.0, 0.0],
                 wire::yaw_rate_of_turn_rate(w),
-                ignore_rates | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+                0.0,
+                ignore_rates
+                    | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE
+                    | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
             ),
         };
         self.send(MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
@@ -398,456 +751,524 @@ impl Fly<'_> {
             body_roll_rate: 0.0,
             body_pitch_rate: 0.0,
             body_yaw_rate: yaw_rate,
-            thrust: 0.0,
+            thrust,
             target_system: sys as u8,
             target_component: comp,
             type_mask: mask,
         }))
     }
 
-    fn set_mode_params(mode: Mode) -> [f32; 3] {
-        let (main, sub) = match mode {
-            Mode::Offboard => (PX4_MAIN_OFFBOARD, 0),
-            Mode::Return => (PX4_MAIN_AUTO, PX4_SUB_RTL),
-            _ => (PX4_MAIN_AUTO, PX4_SUB_LOITER),
+    /// Reads the UDP sensor's datagrams: at most [`crate::link::MAX_DATAGRAMS_PER_POLL`] a
+    /// turn (a flood delays, never starves, the link). A line may span datagrams: the tail
+    /// after the last newline waits for the rest (at most [`MAX_PARTIAL_LINE_BYTES`], else
+    /// dropped).
+    fn read_lines(&mut self) {
+        let Some(s) = self.lines.take() else {
+            return;
         };
-        // param1: MAV_MODE_FLAG_CUSTOM_MODE_ENABLED.
-        [1.0, main as f32, sub as f32]
-    }
-}
-
-/// Flies `scenario`'s law over `opts.url`, recording one trace row per answered measurement
-/// (received position, measured value as `s`, the command) into `sink`; `on_ready` is told the
-/// local address once the link is open. `log` receives nothing here: see [`Link::log_to`] via
-/// `link_setup`, called on the link before the flight starts (the raw MAVLink log).
-pub fn run_fly<S: TraceSink + ?Sized>(
-    scenario: &Scenario,
-    opts: &FlyOptions,
-    sink: &mut S,
-    link_setup: &mut dyn FnMut(&mut Link) -> std::io::Result<()>,
-) -> Result<FlyReport, FlyError> {
-    let mut law = scenario.tracker();
-    if law.needs_ground_truth() {
-        return Err(FlyError::Scenario(
-            "controller.kind = \"gradient_reference\" needs the field's gradient at the vehicle: it cannot fly on measurements alone".into(),
-        ));
-    }
-    crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
-    let mut link = Link::open(&opts.url, opts.system_id, 191).map_err(FlyError::Link)?;
-    link_setup(&mut link).map_err(FlyError::Io)?;
-    let lines = match &opts.sensor {
-        SensorSource::UdpLines(a) => {
-            let s = UdpSocket::bind(a)
-                .map_err(|e| FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {e}"))))?;
-            s.set_nonblocking(true).map_err(FlyError::Io)?;
-            Some(s)
-        }
-        SensorSource::Named(_) => None,
-    };
-    let wanted: Vec<u8> = match &opts.sensor {
-        SensorSource::Named(n) => n.as_bytes().to_vec(),
-        SensorSource::UdpLines(_) => Vec::new(),
-    };
-    let level = scenario.level();
-    let mut fly = Fly {
-        link,
-        opts,
-        transport: Transport::of(scenario),
-        target: None,
-        armed: false,
-        mode: None,
-        current: None,
-        last_answer_ms: None,
-        refused: false,
-        in_control: false,
-        arm_sent: false,
-        armed_by_us: false,
-        global_origin: None,
-        local_seen: false,
-        run_ended: false,
-        position_at: None,
-        offboard_sent: false,
-        target_at: None,
-        other_vehicle: None,
-        events: Vec::new(),
-        t0: Instant::now(),
-    };
-    // Never a panic on a huge timeout (the CLI bounds it to a day).
-    let timeout =
-        Duration::try_from_secs_f64(opts.timeout_s.max(0.0)).unwrap_or(Duration::from_secs(86_400));
-    let period = Duration::from_secs_f64(1.0 / opts.setpoint_rate_hz.max(2.0));
-    let mut queue: VecDeque<(u32, f64)> = VecDeque::new();
-    let mut commands = Vec::new();
-    let (mut samples, mut t_first, mut t_last) = (0u64, None::<f64>, None::<f64>);
-    let mut last_link = Instant::now();
-    let mut clock = SensorClock {
-        newest_ms: None,
-        last: Instant::now(),
-        fault: None,
-    };
-    let mut first_wall: Option<Instant> = None;
-    let mut t_control: Option<f64> = None;
-    let mut skipping_line = false;
-    let mut next_setpoint = Instant::now();
-    let mut next_heartbeat = Instant::now();
-    let mut next_control = Instant::now();
-    let mut control_tries = 0u32;
-    let mut was_armed = false;
-    let mut pos: Option<(f64, f64)> = None;
-    let mut heading = 0.0;
-    let mut home: Option<(f64, f64)> = None;
-    let mut home_local = false;
-    // Since the vehicle's first message (the fence's wait for a position).
-    let mut clock_start = Instant::now();
-    let mut vehicle_done = false;
-    let mut mavlink1_logged = false;
-    let mut partial: Vec<u8> = Vec::new();
-    let mut buf = vec![0u8; 65_536];
-    let end = 'flight: loop {
-        if opts.stop.load(Ordering::Relaxed) {
-            break 'flight FlyEnd::Interrupted;
-        }
-        let now = Instant::now();
-        if now >= next_heartbeat {
-            fly.heartbeat()?;
-            next_heartbeat = now + Duration::from_secs(1);
-        }
-        let had_target = fly.target.is_some();
-        for r in fly
-            .link
-            .poll(Duration::from_millis(10))
-            .map_err(FlyError::Io)?
-        {
-            handle(
-                &mut fly,
-                &r,
-                &wanted,
-                &mut queue,
-                &mut last_link,
-                &mut clock,
-                &mut pos,
-                &mut heading,
-                &mut vehicle_done,
-            );
-        }
-        if let (Some(a), Some(b)) = (fly.target, fly.other_vehicle) {
-            fly.event(format!(
-                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
-                a.0, a.1, b.0, b.1
-            ));
-            break 'flight FlyEnd::TwoVehicles;
-        }
-        if fly.link.stats.mavlink1_frames > 0 && !mavlink1_logged {
-            mavlink1_logged = true;
-            fly.event(
-                "MAVLink 1 frames received and ignored: this bridge speaks MAVLink 2 only (set the autopilot's link to MAVLink 2)".into(),
-            );
-        }
-        if !had_target && fly.target.is_some() {
-            // The sensor's silence counts from the vehicle's first message.
-            clock.last = Instant::now();
-            clock_start = Instant::now();
-        }
-        if let Some(s) = &lines {
-            // At most MAX_DATAGRAMS_PER_POLL datagrams a turn: a flood delays, never starves,
-            // the link. A line may span datagrams: the tail after the last newline waits for
-            // the rest (at most MAX_PARTIAL_LINE_BYTES, else dropped).
-            for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
-                let Ok((n, _)) = s.recv_from(&mut buf) else {
-                    break;
-                };
-                partial.extend_from_slice(&buf[..n]);
-                if skipping_line {
-                    // The rest of a dropped over-long line is no line.
-                    match partial.iter().position(|&b| b == b'\n') {
-                        Some(i) => {
-                            partial.drain(..=i);
-                            skipping_line = false;
-                        }
-                        None => {
-                            partial.clear();
-                            continue;
-                        }
+        let mut text = String::new();
+        for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
+            let Ok((n, _)) = s.recv_from(&mut self.buf) else {
+                break;
+            };
+            self.partial.extend_from_slice(&self.buf[..n]);
+            if self.skipping_line {
+                // The rest of a dropped over-long line is no line.
+                match self.partial.iter().position(|&b| b == b'\n') {
+                    Some(i) => {
+                        self.partial.drain(..=i);
+                        self.skipping_line = false;
                     }
-                }
-                let Some(end) = partial.iter().rposition(|&b| b == b'\n') else {
-                    if partial.len() > MAX_PARTIAL_LINE_BYTES {
-                        partial.clear();
-                        skipping_line = true;
-                    }
-                    continue;
-                };
-                let text = String::from_utf8_lossy(&partial[..end]).into_owned();
-                partial.drain(..=end);
-                if partial.len() > MAX_PARTIAL_LINE_BYTES {
-                    partial.clear();
-                    skipping_line = true;
-                }
-                for line in text.lines() {
-                    let mut it = line.split(',');
-                    let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
+                    None => {
+                        self.partial.clear();
                         continue;
-                    };
-                    if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
-                        if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
-                            clock.receive(&mut queue, ms, v);
-                        }
                     }
                 }
             }
-        }
-        // The fence, on the received position (never given to the law).
-        if let (Some(f), None, true) = (opts.fence_m, pos, fly.target.is_some()) {
-            if clock_start.elapsed() > timeout {
-                fly.event(format!(
-                    "fence: no position from the vehicle for {} s, the fence of {f} m cannot be kept",
-                    opts.timeout_s
-                ));
-                break 'flight FlyEnd::Fence;
+            let Some(end) = self.partial.iter().rposition(|&b| b == b'\n') else {
+                if self.partial.len() > MAX_PARTIAL_LINE_BYTES {
+                    self.partial.clear();
+                    self.skipping_line = true;
+                }
+                continue;
+            };
+            text.push_str(&String::from_utf8_lossy(&self.partial[..end]));
+            text.push('\n');
+            self.partial.drain(..=end);
+            if self.partial.len() > MAX_PARTIAL_LINE_BYTES {
+                self.partial.clear();
+                self.skipping_line = true;
             }
         }
-        if let (Some(f), Some(at)) = (opts.fence_m, fly.position_at) {
+        self.lines = Some(s);
+        for line in text.lines() {
+            let mut it = line.split(',');
+            let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
+                continue;
+            };
+            if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
+                if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
+                    self.clock.receive(&mut self.queue, ms, v);
+                }
+            }
+        }
+    }
+
+    /// The fence, on the received position (never given to the law): no position for
+    /// `timeout_s`, positions that stop, or farther than `fence_m` from the first one.
+    fn check_fence(&mut self) -> Option<FlyEnd> {
+        let timeout_s = self.opts.timeout_s;
+        if let (Some(f), None, true) = (self.opts.fence_m, self.tel.pos, self.target.is_some()) {
+            if self.clock_start.elapsed() > self.timeout {
+                self.event(format!(
+                    "fence: no position from the vehicle for {timeout_s} s, the fence of {f} m cannot be kept"
+                ));
+                return Some(FlyEnd::Fence);
+            }
+        }
+        if let (Some(f), Some(at)) = (self.opts.fence_m, self.tel.position_at) {
             // The fence never silently switches off: positions that stop (or turn non-finite,
             // which are dropped) end the flight.
-            if at.elapsed() > timeout {
-                fly.event(format!(
-                    "position_lost: no finite position from the vehicle for {} s, the fence of {f} m cannot be kept",
-                    opts.timeout_s
+            if at.elapsed() > self.timeout {
+                self.event(format!(
+                    "position_lost: no finite position from the vehicle for {timeout_s} s, the fence of {f} m cannot be kept"
                 ));
-                break 'flight FlyEnd::Fence;
+                return Some(FlyEnd::Fence);
             }
         }
-        if fly.local_seen && !home_local {
+        if self.tel.local_seen && !self.tel.home_local {
             // Positions were projected from GLOBAL_POSITION_INT: the fence re-anchors on the
             // first local one.
-            home_local = true;
-            home = None;
+            self.tel.home_local = true;
+            self.tel.home = None;
         }
-        if let Some(p) = pos {
-            let h = *home.get_or_insert(p);
-            if let Some(f) = opts.fence_m {
-                let d = ((p.0 - h.0).powi(2) + (p.1 - h.1).powi(2)).sqrt();
-                if d > f {
-                    fly.event(format!("fence: {d:.1} m from the start, beyond {f} m"));
-                    break 'flight FlyEnd::Fence;
-                }
-            }
+        let p = self.tel.pos?;
+        let h = *self.tel.home.get_or_insert(p);
+        let f = self.opts.fence_m?;
+        let d = ((p.0 - h.0).powi(2) + (p.1 - h.1).powi(2)).sqrt();
+        if d > f {
+            self.event(format!("fence: {d:.1} m from the start, beyond {f} m"));
+            return Some(FlyEnd::Fence);
         }
-        if fly.armed != was_armed {
+        None
+    }
+
+    /// Control: in OFFBOARD or not, a pilot's take-over, and with `take_control` the arming
+    /// and the switch to OFFBOARD (retried every 0.5 s for 10 s), once the sensor and a
+    /// position are there.
+    fn control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.armed != self.was_armed {
             // Armed: ask for OFFBOARD at once.
-            was_armed = fly.armed;
-            next_control = Instant::now();
+            self.was_armed = self.armed;
+            self.next_control = Instant::now();
         }
-        let active = fly.armed && fly.mode == Some(Mode::Offboard);
-        if active {
-            fly.in_control = true;
+        self.active = self.armed
+            && self
+                .custom_mode
+                .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.active {
+            self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
-            first_wall.get_or_insert_with(Instant::now);
-        } else if fly.in_control {
+            self.ans.first_wall.get_or_insert_with(Instant::now);
+        } else if self.in_control {
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
-            fly.event(format!(
+            let what = format!(
                 "pilot_took_over: the vehicle is {} in {}, not commanded by the companion: setpoints stopped, nothing commanded",
-                if fly.armed { "armed" } else { "disarmed" },
-                fly.mode.map_or("an unknown mode", |m| m.name())
-            ));
-            break 'flight FlyEnd::PilotTookOver;
+                if self.armed { "armed" } else { "disarmed" },
+                self.mode_name()
+            );
+            self.event(what);
+            return Ok(Some(FlyEnd::PilotTookOver));
         }
-        // Taking control: arm, then OFFBOARD, retried every 0.5 s.
-        if opts.take_control && !active && fly.refused {
-            fly.event("the vehicle refused to arm or to switch to OFFBOARD".into());
-            break 'flight FlyEnd::ControlRefused;
+        if !self.opts.take_control || self.active {
+            return Ok(None);
         }
-        // Nothing is armed before the sensor and the position are there: a take-over waits
-        // for the first measurement and the first position (each within --timeout-s, below).
-        let ready = clock.newest_ms.is_some() && pos.is_some();
-        if opts.take_control
-            && !active
-            && fly.target.is_some()
-            && !ready
-            && clock.newest_ms.is_some()
-            && clock_start.elapsed() > timeout
-        {
-            fly.event(format!(
-                "no position from the vehicle for {} s: control not taken",
-                opts.timeout_s
-            ));
-            break 'flight FlyEnd::SensorLost;
+        if self.refused {
+            let what = format!(
+                "the vehicle refused to arm or to switch to {}",
+                self.firmware.name_of(FlyMode::Offboard)
+            );
+            self.event(what);
+            return Ok(Some(FlyEnd::ControlRefused));
         }
-        if opts.take_control
-            && !active
-            && ready
-            && fly.target.is_some()
-            && Instant::now() >= next_control
-        {
-            control_tries += 1;
-            if control_tries > 20 {
-                fly.event("the vehicle did not arm or switch to OFFBOARD in 10 s".into());
-                break 'flight FlyEnd::ControlRefused;
-            }
-            if !fly.armed {
-                fly.arm_sent = true;
-                fly.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
-            } else {
-                // PX4 wants setpoints before the switch.
-                fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
-                fly.offboard_sent = true;
-                fly.command(
-                    MavCmd::MAV_CMD_DO_SET_MODE,
-                    Fly::set_mode_params(Mode::Offboard),
-                )?;
-            }
-            next_control = Instant::now() + Duration::from_millis(500);
-        }
-        let holding = opts.take_control && !active;
-        if !holding {
-            while let Some((ms, v)) = queue.pop_front() {
-                if let Some(last) = fly.last_answer_ms {
-                    if ms < last {
-                        continue;
-                    }
-                    if ms == last {
-                        // A repeat (the vehicle lost our answer?): the same answer again, within
-                        // a UDP sensor's --setpoint-rate-hz.
-                        if lines.is_none() || Instant::now() >= next_setpoint {
-                            fly.setpoint(ms)?;
-                            next_setpoint = Instant::now() + period;
-                        }
-                        continue;
-                    }
-                }
-                let m = Measurement {
-                    t_s: wire::time_s(ms),
-                    value: v,
-                };
-                t_first.get_or_insert(m.t_s);
-                // --max-duration-s counts from the first measurement the law answers in
-                // control (vehicle time).
-                let first = if active {
-                    Some(*t_control.get_or_insert(m.t_s))
-                } else {
-                    None
-                };
-                if let (Some(max), Some(first)) = (opts.max_duration_s, first) {
-                    if m.t_s - first >= max {
-                        fly.event(format!(
-                            "max duration {max} s reached at vehicle time {} s",
-                            m.t_s
-                        ));
-                        break 'flight FlyEnd::MaxDuration;
-                    }
-                }
-                samples += 1;
-                t_last = Some(m.t_s);
-                if active {
-                    let w = law.update(&m);
-                    if !w.is_finite() {
-                        fly.event(format!(
-                            "the law's command is not finite at t = {} s",
-                            m.t_s
-                        ));
-                        break 'flight FlyEnd::LawNotFinite;
-                    }
-                    commands.push((ms, w));
-                    fly.current = Some(w);
-                } else {
-                    fly.current = None;
-                }
-                fly.last_answer_ms = Some(ms);
-                // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for
-                // it); a UDP sensor's answers keep to --setpoint-rate-hz (the periodic
-                // setpoint carries the newest command): a fast sensor does not multiply the
-                // setpoints.
-                if lines.is_none() || Instant::now() >= next_setpoint {
-                    fly.setpoint(ms)?;
-                    next_setpoint = Instant::now() + period;
-                }
-                let (x, y) = pos.unwrap_or((f64::NAN, f64::NAN));
-                sink.record(&TraceRow {
-                    t_s: m.t_s,
-                    x_m: x,
-                    y_m: y,
-                    heading_rad: heading,
-                    s: v,
-                    error: v - level,
-                    omega_radps: fly.current.unwrap_or(0.0),
-                    s_measured: Some(v),
-                    telemetry: None,
-                });
-            }
-        } else if queue.len() > 100_000 {
-            queue.pop_front();
-        }
-        if vehicle_done && !fly.run_ended {
-            fly.event("the vehicle powered off without ending its run: vehicle lost".into());
-            break 'flight FlyEnd::VehicleLost;
-        }
-        if vehicle_done {
-            fly.event("the vehicle ended its run".into());
-            break 'flight FlyEnd::VehicleEnded;
-        }
-        let now = Instant::now();
-        if fly.target.is_some() && now >= next_setpoint {
-            fly.setpoint(fly.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
-            next_setpoint = now + period;
-        }
-        if now.duration_since(last_link) > timeout {
-            fly.event(format!(
-                "no message from the vehicle for {} s",
-                opts.timeout_s
-            ));
-            break 'flight FlyEnd::LinkLost;
-        }
-        if let Some(what) = clock.fault.take() {
-            fly.event(what);
-            break 'flight FlyEnd::SensorClockJump;
-        }
-        if let (Some(max), Some(w)) = (opts.max_duration_s, first_wall) {
-            // The companion's own clock too: a vehicle clock that stalls cannot stretch the run.
-            if now.duration_since(w).as_secs_f64() >= max {
-                fly.event(format!(
-                    "max duration {max} s reached on the companion's clock"
-                ));
-                break 'flight FlyEnd::MaxDuration;
-            }
-        }
-        if now.duration_since(clock.last) > timeout {
-            fly.event(format!("no measurement for {} s", opts.timeout_s));
-            break 'flight FlyEnd::SensorLost;
-        }
-    };
-    // The way out: the failsafe mode; after a refused take-over, a disarm if the companion
-    // armed the vehicle on the ground, else the failsafe mode if it is armed.
-    let mode = match opts.failsafe {
-        FailsafeAction::Hold => Mode::Hold,
-        FailsafeAction::Return => Mode::Return,
-    };
-    // Before the companion had control, a failsafe commands nothing on a vehicle it never
-    // controlled (a pilot's, or a disarmed one): only a vehicle it armed itself is disarmed, and
-    // one it asked for OFFBOARD is switched to the failsafe mode.
-    let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
-    let way_out = if end.is_failsafe() && (fly.in_control || fly.target.is_none()) {
-        Some(WayOut::Mode(mode))
-    } else if stopping && fly.armed && fly.armed_by_us {
-        Some(WayOut::Disarm)
-    } else if stopping && fly.armed && (end == FlyEnd::ControlRefused || fly.offboard_sent) {
-        Some(WayOut::Mode(mode))
-    } else {
-        None
-    };
-    if way_out.is_none() && end.is_failsafe() {
-        fly.event(format!(
-            "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",
-            end.as_str()
-        ));
+        self.take_control()
     }
-    let mut acknowledged = false;
-    if let Some(way) = way_out {
+
+    /// The vehicle's mode in logs.
+    fn mode_name(&self) -> String {
+        self.custom_mode
+            .map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
+    }
+
+    /// `take_control`'s steps: nothing is armed before the sensor and the position are there
+    /// (each within `timeout_s`); then arm, then OFFBOARD.
+    fn take_control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
+        if self.target.is_none() {
+            return Ok(None);
+        }
+        if !ready && self.clock.newest_ms.is_some() && self.clock_start.elapsed() > self.timeout {
+            self.event(format!(
+                "no position from the vehicle for {} s: control not taken",
+                self.opts.timeout_s
+            ));
+            return Ok(Some(FlyEnd::SensorLost));
+        }
+        if !ready || Instant::now() < self.next_control {
+            return Ok(None);
+        }
+        self.control_tries += 1;
+        let offboard = self.firmware.name_of(FlyMode::Offboard);
+        if self.control_tries > 20 {
+            self.event(format!(
+                "the vehicle did not arm or switch to {offboard} in 10 s"
+            ));
+            return Ok(Some(FlyEnd::ControlRefused));
+        }
+        if !self.armed {
+            self.arm_sent = true;
+            self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
+        } else {
+            let Some(p) = self.firmware.set_mode_params(FlyMode::Offboard) else {
+                let what = format!(
+                    "{}: no mode table here, control not taken",
+                    self.firmware.name()
+                );
+                self.event(what);
+                return Ok(Some(FlyEnd::ControlRefused));
+            };
+            // PX4 wants setpoints before the switch.
+            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.offboard_sent = true;
+            self.command(MavCmd::MAV_CMD_DO_SET_MODE, p)?;
+        }
+        self.next_control = Instant::now() + Duration::from_millis(500);
+        Ok(None)
+    }
+
+    /// Answers the measurements queued (held while `take_control` waits for control): a new
+    /// one by the law (in control) or a neutral setpoint, a repeat by the same setpoint again,
+    /// an older one dropped; each new one recorded.
+    fn answer_queue(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.opts.take_control && !self.active {
+            if self.queue.len() > 100_000 {
+                self.queue.pop_front();
+            }
+            return Ok(None);
+        }
+        while let Some((ms, v)) = self.queue.pop_front() {
+            match self.ans.last_answer_ms {
+                Some(last) if ms < last => self.out_of_order(ms, last),
+                Some(last) if ms == last => self.repeat(ms)?,
+                _ => {
+                    if let Some(end) = self.answer(ms, v)? {
+                        return Ok(Some(end));
+                    }
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    /// A measurement older than one answered: dropped (counted, logged once).
+    fn out_of_order(&mut self, ms: u32, last: u32) {
+        self.ans.out_of_order += 1;
+        if self.ans.out_of_order == 1 {
+            self.event(format!(
+                "a measurement stamped {} s came after one stamped {} s: out of order, dropped (never given to the law; counted in measurements_out_of_order, logged once)",
+                wire::time_s(ms),
+                wire::time_s(last)
+            ));
+        }
+    }
+
+    /// A repeat (the vehicle lost the answer?): the same answer again, within a UDP sensor's
+    /// `setpoint_rate_hz`; counted, logged once.
+    fn repeat(&mut self, ms: u32) -> Result<(), FlyError> {
+        self.ans.repeated += 1;
+        if self.ans.repeated == 1 {
+            self.event(format!(
+                "the measurement stamped {} s came again: answered again, not given to the law twice (counted in measurements_repeated, logged once)",
+                wire::time_s(ms)
+            ));
+        }
+        if self.lines.is_none() || Instant::now() >= self.next_setpoint {
+            self.setpoint(ms)?;
+            self.next_setpoint = Instant::now() + self.period;
+        }
+        Ok(())
+    }
+
+    /// A new measurement: the law's answer (in control), its setpoint and its trace row.
+    fn answer(&mut self, ms: u32, v: f64) -> Result<Option<FlyEnd>, FlyError> {
+        let m = Measurement {
+            t_s: wire::time_s(ms),
+            value: v,
+        };
+        self.ans.t_first.get_or_insert(m.t_s);
+        // --max-duration-s counts from the first measurement the law answers in control
+        // (vehicle time).
+        if self.active {
+            let first = *self.ans.t_control.get_or_insert(m.t_s);
+            if let Some(max) = self.opts.max_duration_s {
+                if m.t_s - first >= max {
+                    self.event(format!(
+                        "max duration {max} s reached at vehicle time {} s",
+                        m.t_s
+                    ));
+                    return Ok(Some(FlyEnd::MaxDuration));
+                }
+            }
+        }
+        self.ans.samples += 1;
+        self.ans.t_last = Some(m.t_s);
+        if self.active {
+            let w = self.law.update(&m);
+            if !w.is_finite() {
+                self.event(format!(
+                    "the law's command is not finite at t = {} s",
+                    m.t_s
+                ));
+                return Ok(Some(FlyEnd::LawNotFinite));
+            }
+            self.ans.commands.push((ms, w));
+            self.ans.current = Some(w);
+            self.record.observe(m.t_s, v - self.level, w);
+        } else {
+            self.ans.current = None;
+        }
+        self.ans.last_answer_ms = Some(ms);
+        // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for it); a UDP
+        // sensor's answers keep to --setpoint-rate-hz (the periodic setpoint carries the newest
+        // command): a fast sensor does not multiply the setpoints.
+        if self.lines.is_none() || Instant::now() >= self.next_setpoint {
+            self.setpoint(ms)?;
+            self.next_setpoint = Instant::now() + self.period;
+        }
+        let row = TraceRow {
+            t_s: m.t_s,
+            x_m: f64::NAN,
+            y_m: f64::NAN,
+            heading_rad: f64::NAN,
+            s: v,
+            error: v - self.level,
+            omega_radps: self.ans.current.unwrap_or(0.0),
+            s_measured: Some(v),
+            telemetry: None,
+        };
+        // A MAVLink measurement is on the vehicle's clock: paired by time; a UDP line by arrival.
+        let at = self.lines.is_none().then_some(ms);
+        self.record.row(self.sink, row, at);
+        Ok(None)
+    }
+
+    /// Handles one received message: the vehicle's heartbeat (which vehicle, its firmware,
+    /// armed, mode), the measurement, acknowledgements, positions, attitude, airspeed.
+    fn handle(&mut self, r: &Received) {
+        let from = (r.header.system_id, r.header.component_id);
+        if let MavMessage::HEARTBEAT(h) = &r.msg {
+            self.find_vehicle(from, h);
+        }
+        let Some(target) = self.target else { return };
+        // The measurement may come from another component of the vehicle's system.
+        if from.0 != target.0 {
+            return;
+        }
+        if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
+            if !self.wanted.is_empty() && name_of(&n.name[..]) == self.wanted && n.value.is_finite()
+            {
+                self.clock
+                    .receive(&mut self.queue, n.time_boot_ms, n.value as f64);
+            }
+            return;
+        }
+        if from != target {
+            return;
+        }
+        self.last_link = Instant::now();
+        match &r.msg {
+            MavMessage::HEARTBEAT(h) => self.vehicle_heartbeat(h),
+            // Acknowledgements go to every peer of the vehicle: once in control, they may
+            // answer someone else's command, and say nothing about ours.
+            MavMessage::COMMAND_ACK(a) if !self.in_control => self.acknowledged(a),
+            // A non-finite position is no position (it would switch the fence off).
+            MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
+                self.tel.local_seen = true;
+                if p.z.is_finite() {
+                    self.altitude(-p.z as f64);
+                }
+                self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
+            }
+            MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => self.global_position(g),
+            MavMessage::STATUSTEXT(t)
+                if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
+            {
+                self.run_ended = true;
+            }
+            MavMessage::ATTITUDE(a) if a.yaw.is_finite() => {
+                let heading =
+                    isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);
+                self.record.heading(a.time_boot_ms, heading);
+            }
+            MavMessage::VFR_HUD(v) if v.airspeed.is_finite() => {
+                self.tel.airspeed_mps = Some(v.airspeed as f64);
+            }
+            _ => {}
+        }
+    }
+
+    /// A heartbeat: the first autopilot heard is the vehicle (or `target_system`'s); another
+    /// within [`TWO_VEHICLES_WINDOW_S`] makes it ambiguous.
+    fn find_vehicle(&mut self, from: (u32, u8), h: &HEARTBEAT_DATA) {
+        let wanted_system = self.opts.target_system.is_none_or(|n| from.0 == n as u32);
+        if !is_autopilot(h) || from == (self.opts.system_id as u32, 191) || !wanted_system {
+            return;
+        }
+        match (self.target, self.target_at) {
+            (None, _) => {
+                self.target = Some(from);
+                self.target_at = Some(Instant::now());
+                self.firmware = Firmware::of(h.autopilot, h.mavtype);
+                let what = format!(
+                    "vehicle: system {}, component {}{}, {} modes",
+                    from.0,
+                    from.1,
+                    if self.opts.target_system.is_some() {
+                        " (--target-system)"
+                    } else {
+                        " (the first autopilot heard)"
+                    },
+                    self.firmware.name()
+                );
+                self.event(what);
+            }
+            (Some(t), Some(at))
+                if t != from
+                    && self.opts.target_system.is_none()
+                    && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
+            {
+                self.other_vehicle.get_or_insert(from);
+            }
+            _ => {}
+        }
+    }
+
+    /// The vehicle's heartbeat: armed, mode, powered off.
+    fn vehicle_heartbeat(&mut self, h: &HEARTBEAT_DATA) {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        if armed && !self.armed && self.arm_sent && !self.in_control {
+            self.armed_by_us = true;
+        }
+        let changed = armed != self.armed || Some(h.custom_mode) != self.custom_mode;
+        self.armed = armed;
+        self.custom_mode = Some(h.custom_mode);
+        if changed {
+            let what = format!(
+                "vehicle {} in {}",
+                if armed { "armed" } else { "disarmed" },
+                self.mode_name()
+            );
+            self.event(what);
+        }
+        if h.system_status == MavState::MAV_STATE_POWEROFF {
+            self.vehicle_done = true;
+        }
+    }
+
+    /// An acknowledgement before the companion has control: an accepted arming, or a refusal.
+    fn acknowledged(&mut self, a: &COMMAND_ACK_DATA) {
+        let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
+        self.event(format!("{:?}: {:?}", a.command, a.result));
+        if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && self.arm_sent {
+            if !self.armed {
+                self.armed_by_us = true;
+            }
+            self.armed = true;
+        }
+        let control = matches!(
+            a.command,
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM | MavCmd::MAV_CMD_DO_SET_MODE
+        );
+        // A refusal, not a "still working on it".
+        if control
+            && !matches!(
+                a.result,
+                MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS
+            )
+        {
+            self.refused = true;
+        }
+    }
+
+    /// A `GLOBAL_POSITION_INT` while no local position has come: projected about the first fix.
+    fn global_position(&mut self, g: &GLOBAL_POSITION_INT_DATA) {
+        let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
+        if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
+            let o = *self.tel.global_origin.get_or_insert(crate::geo::Home {
+                lat_deg: lat,
+                lon_deg: lon,
+                alt_m: 0.0,
+            });
+            self.altitude(g.relative_alt as f64 * 1e-3);
+            self.position(g.time_boot_ms, o.to_local_m(lat, lon));
+        }
+    }
+
+    /// An altitude above home, m. The first one received once the companion has control is
+    /// the altitude the fixed wing's pitch holds (not one from before: a vehicle's first
+    /// reports may not be its flight's).
+    fn altitude(&mut self, h_m: f64) {
+        self.tel.altitude_m = Some(h_m);
+        if self.in_control && self.tel.altitude_target_m.is_none() {
+            self.tel.altitude_target_m = Some(h_m);
+        }
+    }
+
+    /// A finite position (x east, y north), m, stamped `ms`.
+    fn position(&mut self, ms: u32, p: (f64, f64)) {
+        self.tel.position_at = Some(Instant::now());
+        self.tel.pos = Some(p);
+        self.record.position(ms, p, self.in_control);
+    }
+
+    /// The way out of `end`: the failsafe mode once the companion had control (or with no
+    /// vehicle heard: nothing is sent); before, after a refused take-over or a failsafe, a
+    /// disarm if the companion armed the vehicle on the ground, else the failsafe mode if it
+    /// is armed and was asked for OFFBOARD; nothing on a vehicle it never controlled.
+    fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        let mode = self.opts.failsafe.mode();
+        let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
+        if end.is_failsafe() && (self.in_control || self.target.is_none()) {
+            Some(WayOut::Mode(mode))
+        } else if stopping && self.armed && self.armed_by_us {
+            Some(WayOut::Disarm)
+        } else if stopping && self.armed && (end == FlyEnd::ControlRefused || self.offboard_sent) {
+            Some(WayOut::Mode(mode))
+        } else {
+            None
+        }
+    }
+
+    /// Lets go after `end`: commands the way out until the vehicle confirms it; returns
+    /// (confirmed, anything commanded).
+    fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
+        let Some(way) = self.way_out(end) else {
+            if end.is_failsafe() {
+                self.event(format!(
+                    "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",
+                    end.as_str()
+                ));
+            }
+            return Ok((false, false));
+        };
         let what = match way {
-            WayOut::Mode(m) => format!("{} commanded", m.name()),
+            WayOut::Mode(m) => format!("{} commanded", self.firmware.name_of(m)),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
-        fly.event(if fly.target.is_some() {
+        self.event(if self.target.is_some() {
             format!("failsafe ({}): setpoints stopped, {what}", end.as_str())
         } else {
             format!(
@@ -855,117 +1276,108 @@ pub fn run_fly<S: TraceSink + ?Sized>(
                 end.as_str()
             )
         });
-        // Every 0.3 s until the vehicle acknowledges it or reports it, or the link is lost (no
-        // message from the vehicle for --timeout-s; at least 5 tries even then: the vehicle
-        // may hear what it cannot answer).
-        let mut tries = 0u32;
-        let mut way_refused = false;
-        let mut given_up = None;
+        if self.target.is_none() {
+            self.event("no failsafe mode was sent".to_string());
+            return Ok((false, true));
+        }
+        let (confirmed, tries, why) = self.command_way_out(way)?;
+        let what = match way {
+            WayOut::Mode(m) => self.firmware.name_of(m),
+            WayOut::Disarm => "disarm",
+        };
+        self.event(match (confirmed, way) {
+            (true, WayOut::Mode(_)) => format!("the vehicle is in {what} ({tries} tries)"),
+            (true, WayOut::Disarm) => format!("the vehicle is disarmed ({tries} tries)"),
+            (false, _) => format!("the vehicle did not confirm the {what} ({tries} tries, {why})"),
+        });
+        Ok((confirmed, true))
+    }
+
+    /// Commands `way` every 0.3 s until the vehicle's heartbeat confirms it or it refuses it,
+    /// or the link is lost (no message from the vehicle for `timeout_s`; at least 5 tries even
+    /// then: the vehicle may hear what it cannot answer), a new signal arrives, or the
+    /// retries' bound passes (3 x `timeout_s` within [3, 30] s). Returns (confirmed, tries, why
+    /// not).
+    fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
+        let (cmd, params) = match way {
+            WayOut::Mode(m) => match self.firmware.set_mode_params(m) {
+                Some(p) => (MavCmd::MAV_CMD_DO_SET_MODE, p),
+                None => return Ok((false, 0, "no mode table for this vehicle here")),
+            },
+            WayOut::Disarm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 0.0, 0.0]),
+        };
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
-        // retries; so does their bound, 3 x --timeout-s within [3, 30] s.
-        opts.stop.store(false, Ordering::SeqCst);
+        // retries.
+        self.opts.stop.store(false, Ordering::SeqCst);
         let retry_end = Instant::now()
-            + Duration::from_secs_f64((3.0 * opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
-        while fly.target.is_some() {
-            let lost = Instant::now().duration_since(last_link) > timeout;
+            + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
+        let mut tries = 0u32;
+        loop {
+            let lost = Instant::now().duration_since(self.last_link) > self.timeout;
             if lost && tries >= 5 {
-                break;
+                return Ok((false, tries, "link lost"));
             }
-            if opts.stop.load(Ordering::SeqCst) {
-                given_up = Some("stopped by a signal");
-                break;
+            if self.opts.stop.load(Ordering::SeqCst) {
+                return Ok((false, tries, "stopped by a signal"));
             }
             if Instant::now() >= retry_end {
-                given_up = Some("retries' bound reached");
-                break;
+                return Ok((false, tries, "retries' bound reached"));
             }
             tries += 1;
-            match way {
-                WayOut::Mode(m) => {
-                    fly.command(MavCmd::MAV_CMD_DO_SET_MODE, Fly::set_mode_params(m))?
-                }
-                WayOut::Disarm => {
-                    fly.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 0.0, 0.0])?
-                }
+            self.command(cmd, params)?;
+            match self.await_way_out(way, cmd)? {
+                Some(true) => return Ok((true, tries, "")),
+                Some(false) => return Ok((false, tries, "refused")),
+                None => {}
             }
-            let until = Instant::now() + Duration::from_millis(300);
-            while Instant::now() < until && !acknowledged && !way_refused {
-                for r in fly
-                    .link
-                    .poll(Duration::from_millis(20))
-                    .map_err(FlyError::Io)?
-                {
-                    if Some((r.header.system_id, r.header.component_id)) != fly.target {
-                        continue;
-                    }
-                    last_link = Instant::now();
-                    if let MavMessage::COMMAND_ACK(a) = &r.msg {
-                        let ours = match way {
-                            WayOut::Mode(_) => MavCmd::MAV_CMD_DO_SET_MODE,
-                            WayOut::Disarm => MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
-                        };
-                        // A refusal (not "busy, try again"): retrying changes nothing.
-                        if a.command == ours
+        }
+    }
+
+    /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
+    /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
+    /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing).
+    fn await_way_out(&mut self, way: WayOut, cmd: MavCmd) -> Result<Option<bool>, FlyError> {
+        let until = Instant::now() + Duration::from_millis(300);
+        while Instant::now() < until {
+            for r in self
+                .link
+                .poll(Duration::from_millis(20))
+                .map_err(FlyError::Io)?
+            {
+                if Some((r.header.system_id, r.header.component_id)) != self.target {
+                    continue;
+                }
+                self.last_link = Instant::now();
+                match (&r.msg, way) {
+                    (MavMessage::COMMAND_ACK(a), _)
+                        if a.command == cmd
                             && matches!(
                                 a.result,
                                 MavResult::MAV_RESULT_DENIED
                                     | MavResult::MAV_RESULT_UNSUPPORTED
                                     | MavResult::MAV_RESULT_FAILED
-                            )
-                        {
-                            way_refused = true;
-                        }
+                            ) =>
+                    {
+                        return Ok(Some(false))
                     }
-                    // Confirmed by the vehicle's heartbeat only (an acknowledgement is a promise:
-                    // a vehicle may accept and stay in OFFBOARD).
-                    acknowledged |= match (&r.msg, way) {
-                        (MavMessage::HEARTBEAT(h), WayOut::Mode(m)) => {
-                            Mode::from_custom_mode(h.custom_mode) == Some(m)
-                        }
-                        (MavMessage::HEARTBEAT(h), WayOut::Disarm) => !h
+                    (MavMessage::HEARTBEAT(h), WayOut::Mode(m))
+                        if self.firmware.is_in(h.custom_mode, m) =>
+                    {
+                        return Ok(Some(true))
+                    }
+                    (MavMessage::HEARTBEAT(h), WayOut::Disarm)
+                        if !h
                             .base_mode
-                            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),
-                        _ => false,
-                    };
+                            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED) =>
+                    {
+                        return Ok(Some(true))
+                    }
+                    _ => {}
                 }
-            }
-            if acknowledged || way_refused {
-                break;
             }
         }
-        fly.event(if acknowledged {
-            match way {
-                WayOut::Mode(m) => format!("the vehicle is in {} ({tries} tries)", m.name()),
-                WayOut::Disarm => format!("the vehicle is disarmed ({tries} tries)"),
-            }
-        } else if fly.target.is_none() {
-            "no failsafe mode was sent".to_string()
-        } else {
-            format!(
-                "the vehicle did not confirm the {} ({tries} tries, {})",
-                match way {
-                    WayOut::Mode(m) => m.name(),
-                    WayOut::Disarm => "disarm",
-                },
-                if way_refused {
-                    "refused"
-                } else {
-                    given_up.unwrap_or("link lost")
-                }
-            )
-        });
+        Ok(None)
     }
-    Ok(FlyReport {
-        end,
-        commands,
-        samples,
-        t_first_s: t_first,
-        t_last_s: t_last,
-        events: fly.events,
-        failsafe_acknowledged: acknowledged,
-        way_out_commanded: way_out.is_some(),
-        link: fly.link.stats,
-    })
 }
 
 /// Whether a heartbeat is a vehicle's autopilot: an autopilot (not `MAV_AUTOPILOT_INVALID`)
@@ -1005,139 +1417,4 @@ pub fn is_autopilot(h: &HEARTBEAT_DATA) -> bool {
                 | MAV_TYPE_GENERIC_MULTIROTOR
                 | MAV_TYPE_GROUND_QUADRUPED
         )
-}
-
-/// Handles one received message.
-#[allow(clippy::too_many_arguments)]
-fn handle(
-    fly: &mut Fly<'_>,
-    r: &Received,
-    wanted: &[u8],
-    queue: &mut VecDeque<(u32, f64)>,
-    last_link: &mut Instant,
-    clock: &mut SensorClock,
-    pos: &mut Option<(f64, f64)>,
-    heading: &mut f64,
-    vehicle_done: &mut bool,
-) {
-    let from = (r.header.system_id, r.header.component_id);
-    if let MavMessage::HEARTBEAT(h) = &r.msg {
-        let wanted_system = fly.opts.target_system.is_none_or(|n| from.0 == n as u32);
-        if is_autopilot(h) && from != (fly.opts.system_id as u32, 191) && wanted_system {
-            match (fly.target, fly.target_at) {
-                (None, _) => {
-                    fly.target = Some(from);
-                    fly.target_at = Some(Instant::now());
-                    fly.event(format!(
-                        "vehicle: system {}, component {}{}",
-                        from.0,
-                        from.1,
-                        if fly.opts.target_system.is_some() {
-                            " (--target-system)"
-                        } else {
-                            " (the first autopilot heard)"
-                        }
-                    ));
-                }
-                (Some(t), Some(at))
-                    if t != from
-                        && fly.opts.target_system.is_none()
-                        && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
-                {
-                    fly.other_vehicle.get_or_insert(from);
-                }
-                _ => {}
-            }
-        }
-    }
-    let Some(target) = fly.target else { return };
-    // The measurement may come from another component of the vehicle's system.
-    if from.0 != target.0 {
-        return;
-    }
-    if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
-        if !wanted.is_empty() && name_of(&n.name[..]) == wanted && n.value.is_finite() {
-            clock.receive(queue, n.time_boot_ms, n.value as f64);
-        }
-        return;
-    }
-    if from != target {
-        return;
-    }
-    *last_link = Instant::now();
-    match &r.msg {
-        MavMessage::HEARTBEAT(h) => {
-            let armed = h
-                .base_mode
-                .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
-            let mode = Mode::from_custom_mode(h.custom_mode);
-            if armed && !fly.armed && fly.arm_sent && !fly.in_control {
-                fly.armed_by_us = true;
-            }
-            if armed != fly.armed || mode != fly.mode {
-                fly.event(format!(
-                    "vehicle {} in {}",
-                    if armed { "armed" } else { "disarmed" },
-                    mode.map_or("an unknown mode", |m| m.name())
-                ));
-            }
-            fly.armed = armed;
-            fly.mode = mode;
-            if h.system_status == MavState::MAV_STATE_POWEROFF {
-                *vehicle_done = true;
-            }
-        }
-        // Acknowledgements go to every peer of the vehicle: once in control, they may answer
-        // someone else's command, and say nothing about ours.
-        MavMessage::COMMAND_ACK(a) if !fly.in_control => {
-            let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
-            fly.event(format!("{:?}: {:?}", a.command, a.result));
-            if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && fly.arm_sent {
-                if !fly.armed {
-                    fly.armed_by_us = true;
-                }
-                fly.armed = true;
-            }
-            let control = matches!(
-                a.command,
-                MavCmd::MAV_CMD_COMPONENT_ARM_DISARM | MavCmd::MAV_CMD_DO_SET_MODE
-            );
-            // A refusal, not a "still working on it".
-            if control
-                && !matches!(
-                    a.result,
-                    MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS
-                )
-            {
-                fly.refused = true;
-            }
-        }
-        // A non-finite position is no position (it would switch the fence off).
-        MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
-            fly.local_seen = true;
-            fly.position_at = Some(Instant::now());
-            *pos = Some((p.y as f64, p.x as f64));
-        }
-        MavMessage::GLOBAL_POSITION_INT(g) if !fly.local_seen => {
-            let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
-            if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
-                let o = *fly.global_origin.get_or_insert(crate::geo::Home {
-                    lat_deg: lat,
-                    lon_deg: lon,
-                    alt_m: 0.0,
-                });
-                fly.position_at = Some(Instant::now());
-                *pos = Some(o.to_local_m(lat, lon));
-            }
-        }
-        MavMessage::STATUSTEXT(t)
-            if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
-        {
-            fly.run_ended = true;
-        }
-        MavMessage::ATTITUDE(a) => {
-            *heading = isotrack_core::math::wrap_angle(std::f64::consts::FRAC_PI_2 - a.yaw as f64);
-        }
-        _ => {}
-    }
 }

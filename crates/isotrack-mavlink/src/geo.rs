@@ -11,6 +11,12 @@
 //! `x` east and `y` north of home, m. Exact at home; the east-west scale is off by
 //! `cos(lat)/cos(lat_0) - 1` elsewhere (3e-5 over 5 km at 47 deg): a local flying area, not
 //! navigation across a continent.
+//!
+//! A scenario whose field is a longitude/latitude grid (NetCDF, GeoTIFF in degrees) is already
+//! on the Earth: [`Frame::of`] takes the field's own georeference
+//! ([`isotrack_scenario::field::LonLatFrame`]): home is the field's local origin and the
+//! east-west scale is the cosine of the grid's reference latitude, so that a position sent is
+//! the field file's own coordinate of that point.
 
 use isotrack_fields::georef::EARTH_RADIUS_M;
 
@@ -53,6 +59,71 @@ impl Home {
             EARTH_RADIUS_M * self.lat_deg.to_radians().cos() * dlon.to_radians(),
             EARTH_RADIUS_M * (lat_deg - self.lat_deg).to_radians(),
         )
+    }
+}
+
+/// Home and the latitude whose cosine scales east-west distances: where the simulation's local
+/// metres are on the Earth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// The local origin (and its altitude).
+    pub home: Home,
+    /// The east-west scale's latitude, deg: home's own, or a lon/lat field's reference latitude.
+    pub scale_lat_deg: f64,
+}
+
+/// How far, deg, `sitl.home_lat_deg` / `home_lon_deg` may be from a lon/lat field's own origin
+/// and still agree with it: 1e-7 deg, `GLOBAL_POSITION_INT`'s resolution (about 1 cm).
+pub const HOME_AGREEMENT_DEG: f64 = 1e-7;
+
+impl Frame {
+    /// The frame of a scenario: a lon/lat field's own georeference (home at the field's local
+    /// origin, `sitl.home_alt_m` its altitude), else `sitl.home_*` ([`Home::of`]). An error
+    /// when the scenario sets `sitl.home_lat_deg` or `home_lon_deg` to another point than a
+    /// lon/lat field's origin (the positions sent would contradict the field's coordinates).
+    pub fn of(s: &isotrack_scenario::Scenario) -> Result<Self, String> {
+        let home = Home::of(s);
+        let Some(f) = s.lonlat_frame() else {
+            return Ok(Self {
+                home,
+                scale_lat_deg: home.lat_deg,
+            });
+        };
+        let sitl = &s.file().sitl;
+        for (key, given, own) in [
+            ("sitl.home_lat_deg", sitl.home_lat_deg, f.lat0_deg),
+            ("sitl.home_lon_deg", sitl.home_lon_deg, f.lon0_deg),
+        ] {
+            if let Some(g) = given {
+                let off = wrap_lon_deg(g - own).abs();
+                if off.is_nan() || off > HOME_AGREEMENT_DEG {
+                    return Err(format!(
+                        "{key} = {}: the field is a longitude/latitude grid, whose local origin is at latitude {}, longitude {} deg; leave sitl.home_lat_deg and home_lon_deg unset (the field's own georeference is the home) or set them to that point",
+                        isotrack_core::numtext::Echo(g),
+                        isotrack_core::numtext::Echo(f.lat0_deg),
+                        isotrack_core::numtext::Echo(f.lon0_deg),
+                    ));
+                }
+            }
+        }
+        Ok(Self {
+            home: Home {
+                lat_deg: f.lat0_deg,
+                lon_deg: wrap_lon_deg(f.lon0_deg),
+                alt_m: home.alt_m,
+            },
+            scale_lat_deg: f.ref_lat_deg,
+        })
+    }
+
+    /// `(lat, lon)` in degrees of the point `x_m` east, `y_m` north of home:
+    /// `lat = lat_0 + y / R`, `lon = lon_0 + x / (R cos(scale_lat))`.
+    pub fn to_lat_lon_deg(&self, x_m: f64, y_m: f64) -> (f64, f64) {
+        let h = self.home;
+        let lat = h.lat_deg + (y_m / EARTH_RADIUS_M).to_degrees();
+        let lon = h.lon_deg
+            + (x_m / (EARTH_RADIUS_M * self.scale_lat_deg.to_radians().cos())).to_degrees();
+        (lat, wrap_lon_deg(lon))
     }
 }
 

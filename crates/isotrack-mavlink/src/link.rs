@@ -1,30 +1,66 @@
-//! A MAVLink 2 link over UDP: the `mavlink` crate frames, checks and parses every message (common
-//! dialect); this module owns the socket, so that a test can bind port 0 and learn the port, a
-//! loop can wait with a timeout, and every frame can be logged.
+//! A MAVLink 2 link over UDP, TCP or a serial port: the `mavlink` crate frames, checks and
+//! parses every message (common dialect); this module owns the socket or the device, so that a
+//! test can bind port 0 and learn the port, a loop can wait with a timeout, and every frame can
+//! be logged.
 //!
-//! Addresses (the `mavlink` crate's spelling): `udpin:HOST:PORT` listens on `HOST:PORT` and
-//! writes to every address that sent it a valid frame (up to [`MAX_PEERS`], the longest silent
-//! dropped first: a ground station and a companion at once, and a stranger's traffic does not
-//! divert the link); `udpout:HOST:PORT` writes to `HOST:PORT` from a free local port.
-//! (`udpin://` and `udpout://` are accepted too.)
+//! Addresses (the `mavlink` crate's spelling; `KIND://REST` is accepted too):
 //!
-//! Hostile traffic: a datagram is read frame by frame; bytes that are not a MAVLink 2 frame with a
-//! valid checksum are skipped (counted in [`LinkStats::junk_datagrams`] when a datagram yields
-//! nothing), message ids outside the common dialect are dropped, and one call reads at most
-//! [`MAX_DATAGRAMS_PER_POLL`] datagrams, so a flood delays a loop but never starves it.
+//! * `udpin:HOST:PORT` listens on `HOST:PORT` and writes to every address that sent it a valid
+//!   frame: a ground station and a companion at once, at most [`MAX_PEERS`];
+//! * `udpout:HOST:PORT` writes to `HOST:PORT` from a free local port;
+//! * `tcpin:HOST:PORT` listens for TCP connections and writes to every connected client, at
+//!   most [`MAX_PEERS`];
+//! * `tcpout:HOST:PORT` connects to `HOST:PORT` (refused at once if nobody listens there; a
+//!   connection that drops is tried again every second);
+//! * `serial:DEVICE:BAUD` opens a serial port (a terminal device: `/dev/ttyUSB0:57600`), raw
+//!   8N1 without flow control, at one of [`BAUD_RATES`].
+//!
+//! Peers (`udpin:`, `tcpin:`): a peer silent (no valid frame) for the peer timeout
+//! ([`Link::set_peer_timeout`], default [`DEFAULT_PEER_TIMEOUT`]) is dropped (a TCP client is
+//! disconnected); a new peer takes a free place or a silent one's, and is refused while
+//! [`MAX_PEERS`] others are alive (counted in [`LinkStats::peers_refused`]), so a flood of
+//! spoofed source addresses neither grows the set nor pushes out the peers that are talking.
+//!
+//! Hostile traffic: bytes that are not a MAVLink 2 frame with a valid checksum are skipped
+//! (counted in [`LinkStats::junk_datagrams`] when a UDP datagram yields nothing), message ids
+//! outside the common dialect are dropped, and one call reads at most
+//! [`MAX_DATAGRAMS_PER_POLL`] datagrams (at most [`MAX_FRAMES_PER_POLL`] frames of a stream),
+//! so a flood delays a loop but never starves it. A stream's outgoing bytes wait in a queue of
+//! at most [`MAX_QUEUED_BYTES`] (whole frames only: a reader that stops reading loses frames,
+//! never half of one).
 
 use mavlink::dialects::common::MavMessage;
+use mavlink::error::MessageReadError;
 use mavlink::{MAVLinkMessageRaw, MavHeader, MavlinkReader, MavlinkVersion, Message as _};
-use std::io::Write;
-use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
+use std::fs::File;
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs, UdpSocket};
+use std::os::fd::{AsRawFd, FromRawFd, RawFd};
 use std::path::Path;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-/// The most peers a `udpin:` link writes to.
+/// The most peers a `udpin:` or `tcpin:` link writes to.
 pub const MAX_PEERS: usize = 8;
 
 /// The most datagrams one [`Link::poll`] reads.
 pub const MAX_DATAGRAMS_PER_POLL: usize = 256;
+
+/// The most frames one [`Link::poll`] reads from one stream (a TCP connection, a serial port).
+pub const MAX_FRAMES_PER_POLL: usize = 1024;
+
+/// The most bytes waiting to be written to one stream; a frame that would not fit is dropped
+/// ([`LinkStats::frames_dropped`]).
+pub const MAX_QUEUED_BYTES: usize = 256 * 1024;
+
+/// How long a peer may be silent before it is dropped, unless [`Link::set_peer_timeout`] says
+/// otherwise.
+pub const DEFAULT_PEER_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The baud rates `serial:DEVICE:BAUD` accepts (the POSIX and Linux termios speeds).
+pub const BAUD_RATES: [u32; 26] = [
+    110, 150, 300, 600, 1200, 1800, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800,
+    500000, 576000, 921600, 1000000, 1152000, 1500000, 2000000, 2500000, 3000000, 3500000, 4000000,
+];
 
 /// A link that cannot be opened.
 #[derive(Debug)]
@@ -33,12 +69,20 @@ pub enum LinkError {
     Address(String),
     /// The socket cannot be had (an operating-system error).
     Io(String),
+    /// A serial device that is missing, unreadable or not a terminal device (a FIFO, a regular
+    /// file, a directory).
+    Device(String),
+    /// Nobody answers at the address (`tcpout:` to a port where nobody listens).
+    Unavailable(String),
 }
 
 impl std::fmt::Display for LinkError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            LinkError::Address(m) | LinkError::Io(m) => f.write_str(m),
+            LinkError::Address(m)
+            | LinkError::Io(m)
+            | LinkError::Device(m)
+            | LinkError::Unavailable(m) => f.write_str(m),
         }
     }
 }
@@ -55,9 +99,9 @@ pub struct Received {
 /// What the link has seen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LinkStats {
-    /// Datagrams read.
+    /// Datagrams read (UDP).
     pub datagrams: u64,
-    /// Datagrams without one valid frame of the common dialect.
+    /// Datagrams without one valid frame of the common dialect (UDP).
     pub junk_datagrams: u64,
     /// Valid frames read.
     pub frames_in: u64,
@@ -65,45 +109,418 @@ pub struct LinkStats {
     pub frames_out: u64,
     /// MAVLink 1 frames (valid checksum) received and dropped: this bridge speaks MAVLink 2.
     pub mavlink1_frames: u64,
+    /// Peers dropped after the peer timeout of silence (or a TCP connection that closed).
+    pub peers_evicted: u64,
+    /// New peers turned away because [`MAX_PEERS`] others were alive.
+    pub peers_refused: u64,
+    /// Frames not written because a stream's queue was full (a reader that stopped reading).
+    pub frames_dropped: u64,
 }
 
-/// One UDP MAVLink 2 link.
+/// The file (frames sent and received, `.tlog`) and its first error.
+#[derive(Default)]
+struct Log {
+    file: Option<std::io::BufWriter<File>>,
+    error: Option<std::io::Error>,
+}
+
+impl Log {
+    fn frame(&mut self, frame: &[u8]) {
+        if self.error.is_some() {
+            return;
+        }
+        if let Some(l) = self.file.as_mut() {
+            let us = SystemTime::now()
+                .duration_since(UNIX_EPOCH)
+                .map_or(0, |d| d.as_micros() as u64);
+            if let Err(e) = l
+                .write_all(&us.to_be_bytes())
+                .and_then(|_| l.write_all(frame))
+            {
+                self.error = Some(e);
+            }
+        }
+    }
+}
+
+/// A UDP peer and when it last sent a valid frame.
+struct UdpPeer {
+    addr: SocketAddr,
+    last: Instant,
+}
+
+/// A byte stream (a TCP connection or a serial port): its reader (the `mavlink` crate's, which
+/// keeps a frame split across reads), the bytes waiting to go out, and when it last sent a
+/// valid frame.
+struct Stream<S> {
+    reader: MavlinkReader<S>,
+    out: Vec<u8>,
+    last: Instant,
+    /// A socket (written with `MSG_NOSIGNAL`: a closed peer is an error, never a `SIGPIPE`).
+    socket: bool,
+}
+
+impl<S: Read + AsRawFd> Stream<S> {
+    fn new(source: S, socket: bool) -> Self {
+        Self {
+            reader: MavlinkReader::new(source),
+            out: Vec::new(),
+            last: Instant::now(),
+            socket,
+        }
+    }
+
+    fn fd(&self) -> RawFd {
+        self.reader.get_ref().as_raw_fd()
+    }
+
+    /// Queues `frame` whole, or drops it if the queue is full; `false` when dropped.
+    fn queue(&mut self, frame: &[u8]) -> bool {
+        if self.out.len() + frame.len() > MAX_QUEUED_BYTES {
+            return false;
+        }
+        self.out.extend_from_slice(frame);
+        true
+    }
+
+    /// Writes what the stream takes now; an error: the stream is broken.
+    fn flush(&mut self) -> std::io::Result<()> {
+        while !self.out.is_empty() {
+            let fd = self.fd();
+            let p = self.out.as_ptr() as *const libc::c_void;
+            // SAFETY: `p` points to `self.out.len()` initialised bytes; `fd` is open (owned by
+            // the reader's source).
+            let n = unsafe {
+                if self.socket {
+                    libc::send(fd, p, self.out.len(), libc::MSG_NOSIGNAL)
+                } else {
+                    libc::write(fd, p, self.out.len())
+                }
+            };
+            if n < 0 {
+                let e = std::io::Error::last_os_error();
+                match e.kind() {
+                    std::io::ErrorKind::WouldBlock => return Ok(()),
+                    std::io::ErrorKind::Interrupted => continue,
+                    _ => return Err(e),
+                }
+            }
+            self.out.drain(..n as usize);
+        }
+        Ok(())
+    }
+}
+
+/// What the link is made of.
+enum Kind {
+    Udp {
+        socket: UdpSocket,
+        /// Where to write.
+        peers: Vec<UdpPeer>,
+        /// `udpout:`: the one peer, never dropped.
+        fixed: bool,
+    },
+    TcpIn {
+        listener: TcpListener,
+        clients: Vec<Stream<TcpStream>>,
+    },
+    TcpOut {
+        addr: SocketAddr,
+        conn: Option<Stream<TcpStream>>,
+        /// When to try again after the connection dropped.
+        retry_at: Instant,
+    },
+    Serial {
+        port: Option<Stream<File>>,
+        device: String,
+    },
+}
+
+/// One MAVLink 2 link.
 pub struct Link {
-    socket: UdpSocket,
-    /// Where to write, most recently heard last.
-    peers: Vec<SocketAddr>,
-    fixed_peer: bool,
+    kind: Kind,
     system_id: u8,
     component_id: u8,
     sequence: u8,
-    log: Option<std::io::BufWriter<std::fs::File>>,
-    log_error: Option<std::io::Error>,
+    peer_timeout: Duration,
+    log: Log,
     buf: Vec<u8>,
     /// Counters.
     pub stats: LinkStats,
 }
 
 fn resolve(addr: &str) -> Result<SocketAddr, LinkError> {
+    let Some((host, port)) = addr.rsplit_once(':') else {
+        return Err(LinkError::Address(format!(
+            "`{addr}` has no port (expected HOST:PORT)"
+        )));
+    };
+    if host.is_empty() || port.is_empty() {
+        return Err(LinkError::Address(format!(
+            "`{addr}`: expected HOST:PORT, both given"
+        )));
+    }
+    if port.parse::<u16>().is_err() {
+        return Err(LinkError::Address(format!(
+            "`{addr}`: the port `{port}` is not a number in [0, 65535]"
+        )));
+    }
     addr.to_socket_addrs()
         .map_err(|e| LinkError::Address(format!("cannot resolve `{addr}`: {e}")))?
         .next()
         .ok_or_else(|| LinkError::Address(format!("`{addr}` names no address")))
 }
 
+/// The termios speed of a baud rate.
+fn speed_of(baud: u32) -> Option<libc::speed_t> {
+    Some(match baud {
+        110 => libc::B110,
+        150 => libc::B150,
+        300 => libc::B300,
+        600 => libc::B600,
+        1200 => libc::B1200,
+        1800 => libc::B1800,
+        2400 => libc::B2400,
+        4800 => libc::B4800,
+        9600 => libc::B9600,
+        19200 => libc::B19200,
+        38400 => libc::B38400,
+        57600 => libc::B57600,
+        115200 => libc::B115200,
+        230400 => libc::B230400,
+        460800 => libc::B460800,
+        500000 => libc::B500000,
+        576000 => libc::B576000,
+        921600 => libc::B921600,
+        1000000 => libc::B1000000,
+        1152000 => libc::B1152000,
+        1500000 => libc::B1500000,
+        2000000 => libc::B2000000,
+        2500000 => libc::B2500000,
+        3000000 => libc::B3000000,
+        3500000 => libc::B3500000,
+        4000000 => libc::B4000000,
+        _ => return None,
+    })
+}
+
+/// Splits `serial:DEVICE:BAUD`'s rest into the device and its termios speed.
+fn parse_serial(url: &str, rest: &str) -> Result<(String, u32), LinkError> {
+    let Some((device, baud)) = rest.rsplit_once(':') else {
+        return Err(LinkError::Address(format!(
+            "`{url}`: expected serial:DEVICE:BAUD (serial:/dev/ttyUSB0:57600)"
+        )));
+    };
+    if device.is_empty() {
+        return Err(LinkError::Address(format!(
+            "`{url}`: no device (expected serial:DEVICE:BAUD)"
+        )));
+    }
+    let list = BAUD_RATES.map(|r| r.to_string()).join(", ");
+    match baud.parse::<u32>().ok().filter(|b| speed_of(*b).is_some()) {
+        Some(b) => Ok((device.to_string(), b)),
+        None => Err(LinkError::Address(format!(
+            "`{url}`: baud rate `{baud}` is not one of {list}"
+        ))),
+    }
+}
+
+/// Opens a serial device: a terminal device (refused otherwise, before and after opening), in
+/// raw 8N1 mode at `baud`, non-blocking.
+fn open_serial(url: &str, device: &str, baud: u32) -> Result<File, LinkError> {
+    use std::os::unix::fs::FileTypeExt;
+    let not_tty = |what: &str| {
+        LinkError::Device(format!(
+            "{url}: `{device}` is {what}, not a serial port (a terminal device such as /dev/ttyUSB0)"
+        ))
+    };
+    let m = std::fs::metadata(device)
+        .map_err(|e| LinkError::Device(format!("{url}: cannot open `{device}`: {e}")))?;
+    let t = m.file_type();
+    if !t.is_char_device() {
+        return Err(not_tty(if t.is_fifo() {
+            "a FIFO"
+        } else if t.is_dir() {
+            "a directory"
+        } else if t.is_file() {
+            "a regular file"
+        } else if t.is_socket() {
+            "a socket"
+        } else {
+            "a block device"
+        }));
+    }
+    let c = std::ffi::CString::new(device)
+        .map_err(|_| LinkError::Address(format!("{url}: the device name holds a NUL byte")))?;
+    // SAFETY: `c` is a NUL-terminated path; the flags never block (O_NONBLOCK) nor make the
+    // device our controlling terminal (O_NOCTTY).
+    let fd = unsafe {
+        libc::open(
+            c.as_ptr(),
+            libc::O_RDWR | libc::O_NOCTTY | libc::O_NONBLOCK | libc::O_CLOEXEC,
+        )
+    };
+    if fd < 0 {
+        let e = std::io::Error::last_os_error();
+        return Err(LinkError::Device(format!(
+            "{url}: cannot open `{device}`: {e}"
+        )));
+    }
+    // SAFETY: `fd` was just opened and is owned by nobody else.
+    let file = unsafe { File::from_raw_fd(fd) };
+    // What was opened is what was checked (the path may have changed in between).
+    let m = file
+        .metadata()
+        .map_err(|e| LinkError::Device(format!("{url}: `{device}`: {e}")))?;
+    if !m.file_type().is_char_device() {
+        return Err(not_tty("no longer a character device"));
+    }
+    // SAFETY: `t` is a plain C struct filled by tcgetattr before use.
+    let mut t: libc::termios = unsafe { std::mem::zeroed() };
+    // SAFETY: `fd` is open; `t` is a valid termios to fill.
+    if unsafe { libc::tcgetattr(fd, &mut t) } != 0 {
+        return Err(not_tty("a character device that is not a terminal"));
+    }
+    let speed = speed_of(baud).unwrap_or(libc::B57600);
+    // SAFETY: `t` came from tcgetattr; cfmakeraw and cfset*speed only edit it.
+    let ok = unsafe {
+        libc::cfmakeraw(&mut t);
+        libc::cfsetispeed(&mut t, speed) == 0 && libc::cfsetospeed(&mut t, speed) == 0
+    };
+    t.c_cflag |= libc::CLOCAL | libc::CREAD;
+    t.c_cflag &= !(libc::CSTOPB | libc::CRTSCTS);
+    // VMIN 1: with O_NONBLOCK an empty port reads as EAGAIN (VMIN 0 would read as 0 bytes,
+    // an end of file).
+    t.c_cc[libc::VMIN] = 1;
+    t.c_cc[libc::VTIME] = 0;
+    // SAFETY: `fd` is open; `t` is a valid termios.
+    if !ok || unsafe { libc::tcsetattr(fd, libc::TCSANOW, &t) } != 0 {
+        let e = std::io::Error::last_os_error();
+        return Err(LinkError::Io(format!(
+            "{url}: cannot set `{device}` to {baud} baud: {e}"
+        )));
+    }
+    Ok(file)
+}
+
+fn connect(addr: SocketAddr, timeout: Duration) -> std::io::Result<Stream<TcpStream>> {
+    let s = TcpStream::connect_timeout(&addr, timeout)?;
+    s.set_nonblocking(true)?;
+    // Lockstep sends one small frame and waits for the answer: no Nagle delay.
+    s.set_nodelay(true)?;
+    Ok(Stream::new(s, true))
+}
+
+/// Queues `frame` on a stream (counted in `dropped` if its queue is full) and writes what it
+/// takes; `false` when the stream is broken.
+fn put<S: Read + AsRawFd>(s: &mut Stream<S>, frame: &[u8], dropped: &mut u64) -> bool {
+    if !s.queue(frame) {
+        *dropped += 1;
+    }
+    s.flush().is_ok()
+}
+
+/// Reads the frames a stream has (at most [`MAX_FRAMES_PER_POLL`]); `false` when it is closed
+/// or broken (a serial port's read of 0 bytes is no end: nothing came).
+fn drain<S: Read>(
+    s: &mut Stream<S>,
+    stats: &mut LinkStats,
+    log: &mut Log,
+    out: &mut Vec<Received>,
+) -> bool {
+    for _ in 0..MAX_FRAMES_PER_POLL {
+        match s.reader.read_any_raw_message::<MavMessage>() {
+            Ok(raw) => {
+                if accept(raw, stats, log, out) {
+                    s.last = Instant::now();
+                }
+            }
+            Err(MessageReadError::Io(e)) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                return true
+            }
+            Err(MessageReadError::Io(e))
+                if !s.socket && e.kind() == std::io::ErrorKind::UnexpectedEof =>
+            {
+                return true
+            }
+            // End of file (the peer closed) or an error: the stream is gone.
+            Err(MessageReadError::Io(_)) => return false,
+            Err(MessageReadError::Parse(_)) => {}
+        }
+    }
+    true
+}
+
+/// Takes a raw frame that passed its checksum: a MAVLink 2 message of the common dialect goes
+/// to `out` (`true`); MAVLink 1 is counted and dropped.
+fn accept(
+    raw: MAVLinkMessageRaw,
+    stats: &mut LinkStats,
+    log: &mut Log,
+    out: &mut Vec<Received>,
+) -> bool {
+    let raw = match raw {
+        MAVLinkMessageRaw::V2(raw) => raw,
+        MAVLinkMessageRaw::V1(_) => {
+            stats.mavlink1_frames += 1;
+            return false;
+        }
+    };
+    let Ok(msg) = MavMessage::parse(MavlinkVersion::V2, raw.message_id(), raw.payload()) else {
+        return false;
+    };
+    log.frame(raw.raw_bytes());
+    stats.frames_in += 1;
+    out.push(Received {
+        header: MavHeader {
+            system_id: raw.system_id(),
+            component_id: raw.component_id(),
+            sequence: raw.sequence(),
+        },
+        msg,
+    });
+    true
+}
+
+/// Waits until one of `fds` is readable or `timeout` passes (`poll(2)`).
+fn wait_readable(fds: &[RawFd], timeout: Duration) -> std::io::Result<()> {
+    let mut p: Vec<libc::pollfd> = fds
+        .iter()
+        .map(|&fd| libc::pollfd {
+            fd,
+            events: libc::POLLIN,
+            revents: 0,
+        })
+        .collect();
+    let ms = timeout.as_millis().clamp(0, i32::MAX as u128) as libc::c_int;
+    // SAFETY: `p` holds `p.len()` valid pollfd structs.
+    let r = unsafe { libc::poll(p.as_mut_ptr(), p.len() as libc::nfds_t, ms) };
+    if r < 0 {
+        let e = std::io::Error::last_os_error();
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(e);
+        }
+    }
+    Ok(())
+}
+
 impl Link {
     /// Opens `url` as system `system_id`, component `component_id`.
     pub fn open(url: &str, system_id: u8, component_id: u8) -> Result<Self, LinkError> {
-        let (mode, rest) = url.split_once(':').ok_or_else(|| {
-            LinkError::Address(format!(
-                "`{url}`: expected udpin:HOST:PORT or udpout:HOST:PORT"
-            ))
-        })?;
+        let kinds = "udpin:HOST:PORT, udpout:HOST:PORT, tcpin:HOST:PORT, tcpout:HOST:PORT or serial:DEVICE:BAUD";
+        let (mode, rest) = url
+            .split_once(':')
+            .ok_or_else(|| LinkError::Address(format!("`{url}`: expected {kinds}")))?;
         let rest = rest.strip_prefix("//").unwrap_or(rest);
         let io = |e: std::io::Error| LinkError::Io(format!("{url}: {e}"));
-        let (socket, peer, fixed_peer) = match mode {
+        let kind = match mode {
             "udpin" => {
                 let a = resolve(rest)?;
-                (UdpSocket::bind(a).map_err(io)?, None, false)
+                Kind::Udp {
+                    socket: UdpSocket::bind(a).map_err(io)?,
+                    peers: Vec::new(),
+                    fixed: false,
+                }
             }
             "udpout" => {
                 let a = resolve(rest)?;
@@ -112,82 +529,151 @@ impl Link {
                 } else {
                     "[::]:0".parse().expect("an address")
                 };
-                (UdpSocket::bind(local).map_err(io)?, Some(a), true)
+                Kind::Udp {
+                    socket: UdpSocket::bind(local).map_err(io)?,
+                    peers: vec![UdpPeer {
+                        addr: a,
+                        last: Instant::now(),
+                    }],
+                    fixed: true,
+                }
             }
-            "tcpin" | "tcpout" | "serial" => {
-                return Err(LinkError::Address(format!(
-                    "`{url}`: only UDP links (udpin:, udpout:) are supported so far"
-                )))
+            "tcpin" => {
+                let a = resolve(rest)?;
+                let listener = TcpListener::bind(a).map_err(io)?;
+                listener.set_nonblocking(true).map_err(io)?;
+                Kind::TcpIn {
+                    listener,
+                    clients: Vec::new(),
+                }
+            }
+            "tcpout" => {
+                let a = resolve(rest)?;
+                let conn = connect(a, Duration::from_secs(5)).map_err(|e| {
+                    LinkError::Unavailable(format!("{url}: cannot connect to {a}: {e}"))
+                })?;
+                Kind::TcpOut {
+                    addr: a,
+                    conn: Some(conn),
+                    retry_at: Instant::now(),
+                }
+            }
+            "serial" => {
+                let (device, baud) = parse_serial(url, rest)?;
+                let file = open_serial(url, &device, baud)?;
+                Kind::Serial {
+                    port: Some(Stream::new(file, false)),
+                    device: format!("{device} at {baud} baud"),
+                }
             }
             _ => {
                 return Err(LinkError::Address(format!(
-                    "`{url}`: unknown link kind `{mode}` (expected udpin:HOST:PORT or udpout:HOST:PORT)"
+                    "`{url}`: unknown link kind `{mode}` (expected {kinds})"
                 )))
             }
         };
         Ok(Self {
-            socket,
-            peers: peer.into_iter().collect(),
-            fixed_peer,
+            kind,
             system_id,
             component_id,
             sequence: 0,
-            log: None,
-            log_error: None,
+            peer_timeout: DEFAULT_PEER_TIMEOUT,
+            log: Log::default(),
             buf: vec![0; 65_536],
             stats: LinkStats::default(),
         })
     }
 
-    /// The local address (the port a `udpin:HOST:0` link was given).
+    /// The local address (the port a `udpin:HOST:0` or `tcpin:HOST:0` link was given); an
+    /// error for a serial link, which has none.
     pub fn local_addr(&self) -> std::io::Result<SocketAddr> {
-        self.socket.local_addr()
+        match &self.kind {
+            Kind::Udp { socket, .. } => socket.local_addr(),
+            Kind::TcpIn { listener, .. } => listener.local_addr(),
+            Kind::TcpOut { conn: Some(c), .. } => c.reader.get_ref().local_addr(),
+            Kind::TcpOut { conn: None, .. } => Err(std::io::Error::new(
+                std::io::ErrorKind::NotConnected,
+                "the TCP connection dropped",
+            )),
+            Kind::Serial { .. } => Err(std::io::Error::new(
+                std::io::ErrorKind::Unsupported,
+                "a serial link has no network address",
+            )),
+        }
     }
 
-    /// Whether the link knows where to write (a `udpin:` link once someone has written to it).
+    /// Where the link is, for messages: the local socket address, or the serial device and
+    /// its baud rate.
+    pub fn describe(&self) -> String {
+        match &self.kind {
+            Kind::Serial { device, .. } => device.clone(),
+            _ => self
+                .local_addr()
+                .map_or_else(|e| e.to_string(), |a| a.to_string()),
+        }
+    }
+
+    /// Whether the link knows where to write (a `udpin:` link once someone has written to it,
+    /// a `tcpin:` link once a client is connected).
     pub fn has_peer(&self) -> bool {
-        !self.peers.is_empty()
+        self.peer_count() > 0
+    }
+
+    /// How many peers the link writes to (at most [`MAX_PEERS`]).
+    pub fn peer_count(&self) -> usize {
+        match &self.kind {
+            Kind::Udp { peers, .. } => peers.len(),
+            Kind::TcpIn { clients, .. } => clients.len(),
+            Kind::TcpOut { conn, .. } => usize::from(conn.is_some()),
+            Kind::Serial { port, .. } => usize::from(port.is_some()),
+        }
+    }
+
+    /// Sets how long a peer of a `udpin:` or `tcpin:` link may be silent (no valid frame)
+    /// before it is dropped.
+    pub fn set_peer_timeout(&mut self, timeout: Duration) {
+        self.peer_timeout = timeout;
     }
 
     /// Logs every frame sent and received into `path` as a telemetry log (`.tlog`: each frame
     /// after its time, microseconds since the Unix epoch, big-endian `u64`), the format
     /// QGroundControl, MAVProxy and pymavlink read.
     pub fn log_to(&mut self, path: &Path) -> std::io::Result<()> {
-        self.log = Some(std::io::BufWriter::new(std::fs::File::create(path)?));
+        self.log.file = Some(std::io::BufWriter::new(File::create(path)?));
         Ok(())
     }
 
     /// Flushes the log; the first error met while writing it, if any.
     pub fn finish_log(&mut self) -> std::io::Result<()> {
-        if let Some(e) = self.log_error.take() {
+        if let Some(e) = self.log.error.take() {
             return Err(e);
         }
-        match self.log.as_mut() {
+        match self.log.file.as_mut() {
             Some(l) => l.flush(),
             None => Ok(()),
         }
     }
 
-    fn log_frame(&mut self, frame: &[u8]) {
-        if self.log_error.is_some() {
-            return;
+    /// Drops the peers silent for longer than the peer timeout (and streams that closed).
+    fn evict(&mut self) {
+        let timeout = self.peer_timeout;
+        let before = self.peer_count();
+        match &mut self.kind {
+            Kind::Udp {
+                peers,
+                fixed: false,
+                ..
+            } => peers.retain(|p| p.last.elapsed() <= timeout),
+            Kind::TcpIn { clients, .. } => clients.retain(|c| c.last.elapsed() <= timeout),
+            _ => {}
         }
-        if let Some(l) = self.log.as_mut() {
-            let us = SystemTime::now()
-                .duration_since(UNIX_EPOCH)
-                .map_or(0, |d| d.as_micros() as u64);
-            if let Err(e) = l
-                .write_all(&us.to_be_bytes())
-                .and_then(|_| l.write_all(frame))
-            {
-                self.log_error = Some(e);
-            }
-        }
+        self.stats.peers_evicted += before.saturating_sub(self.peer_count()) as u64;
     }
 
-    /// Sends `msg` (MAVLink 2) to the peer; `Ok(false)` if there is no peer yet.
+    /// Sends `msg` (MAVLink 2) to the peers; `Ok(false)` if there is no peer yet.
     pub fn send(&mut self, msg: &MavMessage) -> std::io::Result<bool> {
-        if self.peers.is_empty() {
+        self.evict();
+        if !self.has_peer() {
             return Ok(false);
         }
         let header = MavHeader {
@@ -198,36 +684,175 @@ impl Link {
         self.sequence = self.sequence.wrapping_add(1);
         let mut frame = Vec::with_capacity(300);
         mavlink::write_v2_msg(&mut frame, header, msg).map_err(std::io::Error::other)?;
-        self.log_frame(&frame);
+        self.log.frame(&frame);
         self.stats.frames_out += 1;
-        for peer in &self.peers {
-            match self.socket.send_to(&frame, peer) {
-                Ok(_) => {}
-                // Nobody listening (ICMP port unreachable comes back as this on Linux), or the
-                // socket buffer full under a flood: UDP carries on.
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::ConnectionRefused | std::io::ErrorKind::WouldBlock
-                    ) => {}
-                Err(e) => return Err(e),
+        let stats = &mut self.stats;
+        match &mut self.kind {
+            Kind::Udp { socket, peers, .. } => {
+                for peer in peers.iter() {
+                    match socket.send_to(&frame, peer.addr) {
+                        Ok(_) => {}
+                        // Nobody listening (ICMP port unreachable comes back as this on
+                        // Linux), or the socket buffer full under a flood: UDP carries on.
+                        Err(e)
+                            if matches!(
+                                e.kind(),
+                                std::io::ErrorKind::ConnectionRefused
+                                    | std::io::ErrorKind::WouldBlock
+                            ) => {}
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
+            Kind::TcpIn { clients, .. } => {
+                let before = clients.len();
+                clients.retain_mut(|c| put(c, &frame, &mut stats.frames_dropped));
+                stats.peers_evicted += (before - clients.len()) as u64;
+            }
+            Kind::TcpOut { conn, .. } => {
+                if conn
+                    .as_mut()
+                    .is_some_and(|c| !put(c, &frame, &mut stats.frames_dropped))
+                {
+                    *conn = None;
+                    stats.peers_evicted += 1;
+                }
+            }
+            Kind::Serial { port, .. } => {
+                if port
+                    .as_mut()
+                    .is_some_and(|p| !put(p, &frame, &mut stats.frames_dropped))
+                {
+                    *port = None;
+                }
             }
         }
         Ok(true)
     }
 
-    /// Reads what arrives within `timeout` (at least one datagram's worth if any comes, then
-    /// whatever else is already there, up to [`MAX_DATAGRAMS_PER_POLL`] datagrams).
+    /// Reads what arrives within `timeout` (at least one datagram's or read's worth if any
+    /// comes, then whatever else is already there, up to [`MAX_DATAGRAMS_PER_POLL`] datagrams
+    /// or [`MAX_FRAMES_PER_POLL`] frames a stream).
     pub fn poll(&mut self, timeout: Duration) -> std::io::Result<Vec<Received>> {
+        self.evict();
+        if matches!(self.kind, Kind::Udp { .. }) {
+            return self.poll_udp(timeout);
+        }
         let mut out = Vec::new();
+        self.poll_streams(&mut out)?;
+        if out.is_empty() {
+            let fds = self.fds();
+            if fds.is_empty() {
+                std::thread::sleep(timeout);
+            } else {
+                wait_readable(&fds, timeout)?;
+            }
+            self.poll_streams(&mut out)?;
+        }
+        Ok(out)
+    }
+
+    /// The descriptors a stream link waits on.
+    fn fds(&self) -> Vec<RawFd> {
+        match &self.kind {
+            Kind::Udp { socket, .. } => vec![socket.as_raw_fd()],
+            Kind::TcpIn { listener, clients } => std::iter::once(listener.as_raw_fd())
+                .chain(clients.iter().map(|c| c.fd()))
+                .collect(),
+            Kind::TcpOut { conn, .. } => conn.iter().map(|c| c.fd()).collect(),
+            Kind::Serial { port, .. } => port.iter().map(|p| p.fd()).collect(),
+        }
+    }
+
+    /// One non-blocking pass over a stream link: new connections, queued bytes, frames.
+    fn poll_streams(&mut self, out: &mut Vec<Received>) -> std::io::Result<()> {
+        let (stats, log, timeout) = (&mut self.stats, &mut self.log, self.peer_timeout);
+        match &mut self.kind {
+            Kind::Udp { .. } => {}
+            Kind::TcpIn { listener, clients } => {
+                // New clients: a free place, or a silent client's; else turned away.
+                for _ in 0..4 * MAX_PEERS {
+                    let (s, _) = match listener.accept() {
+                        Ok(x) => x,
+                        Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                        Err(e)
+                            if matches!(
+                                e.kind(),
+                                std::io::ErrorKind::Interrupted
+                                    | std::io::ErrorKind::ConnectionAborted
+                                    | std::io::ErrorKind::ConnectionReset
+                            ) =>
+                        {
+                            continue
+                        }
+                        // Out of descriptors and the like: no new client this time.
+                        Err(_) => break,
+                    };
+                    if clients.len() == MAX_PEERS {
+                        if let Some(i) = clients.iter().position(|c| c.last.elapsed() > timeout) {
+                            clients.remove(i);
+                            stats.peers_evicted += 1;
+                        }
+                    }
+                    if clients.len() == MAX_PEERS
+                        || s.set_nonblocking(true).is_err()
+                        || s.set_nodelay(true).is_err()
+                    {
+                        stats.peers_refused += 1;
+                        continue;
+                    }
+                    clients.push(Stream::new(s, true));
+                }
+                let before = clients.len();
+                clients.retain_mut(|c| c.flush().is_ok() && drain(c, stats, log, out));
+                stats.peers_evicted += (before - clients.len()) as u64;
+            }
+            Kind::TcpOut {
+                addr,
+                conn,
+                retry_at,
+            } => {
+                if conn.is_none() && Instant::now() >= *retry_at {
+                    *retry_at = Instant::now() + Duration::from_secs(1);
+                    *conn = connect(*addr, Duration::from_millis(100)).ok();
+                }
+                if let Some(c) = conn.as_mut() {
+                    if !(c.flush().is_ok() && drain(c, stats, log, out)) {
+                        *conn = None;
+                        stats.peers_evicted += 1;
+                        *retry_at = Instant::now() + Duration::from_secs(1);
+                    }
+                }
+            }
+            Kind::Serial { port, .. } => {
+                if let Some(p) = port.as_mut() {
+                    if !(p.flush().is_ok() && drain(p, stats, log, out)) {
+                        *port = None;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn poll_udp(&mut self, timeout: Duration) -> std::io::Result<Vec<Received>> {
+        let mut out = Vec::new();
+        let Kind::Udp {
+            socket,
+            peers,
+            fixed,
+        } = &mut self.kind
+        else {
+            return Ok(out);
+        };
         let timeout = timeout.max(Duration::from_micros(100));
-        self.socket.set_read_timeout(Some(timeout))?;
-        self.socket.set_nonblocking(false)?;
+        socket.set_read_timeout(Some(timeout))?;
+        socket.set_nonblocking(false)?;
         for i in 0..MAX_DATAGRAMS_PER_POLL {
             if i == 1 {
-                self.socket.set_nonblocking(true)?;
+                socket.set_nonblocking(true)?;
             }
-            let (n, from) = match self.socket.recv_from(&mut self.buf) {
+            let (n, from) = match socket.recv_from(&mut self.buf) {
                 Ok(x) => x,
                 Err(e)
                     if matches!(
@@ -244,48 +869,105 @@ impl Link {
             };
             self.stats.datagrams += 1;
             let before = out.len();
-            let datagram = self.buf[..n].to_vec();
-            self.read_frames(&datagram, &mut out);
+            let datagram = &self.buf[..n];
+            let mut reader = MavlinkReader::new(datagram);
+            // A datagram of n bytes holds at most n / 12 frames (the smallest MAVLink 2 frame).
+            for _ in 0..=n / 12 {
+                match reader.read_any_raw_message::<MavMessage>() {
+                    Ok(raw) => {
+                        accept(raw, &mut self.stats, &mut self.log, &mut out);
+                    }
+                    Err(_) => break,
+                }
+            }
             if out.len() == before {
                 self.stats.junk_datagrams += 1;
-            } else if !self.fixed_peer {
-                self.peers.retain(|p| *p != from);
-                if self.peers.len() == MAX_PEERS {
-                    self.peers.remove(0);
+                continue;
+            }
+            if *fixed {
+                continue;
+            }
+            let now = Instant::now();
+            if let Some(p) = peers.iter_mut().find(|p| p.addr == from) {
+                p.last = now;
+                continue;
+            }
+            // A new peer: a free place, or the place of one silent for the peer timeout;
+            // while MAX_PEERS others are talking, it is turned away (its frames are still
+            // read): a flood of spoofed addresses cannot push out the live peers.
+            if peers.len() == MAX_PEERS {
+                if let Some(i) = peers
+                    .iter()
+                    .position(|p| now.duration_since(p.last) > self.peer_timeout)
+                {
+                    peers.remove(i);
+                    self.stats.peers_evicted += 1;
                 }
-                self.peers.push(from);
+            }
+            if peers.len() < MAX_PEERS {
+                peers.push(UdpPeer {
+                    addr: from,
+                    last: now,
+                });
+            } else {
+                self.stats.peers_refused += 1;
             }
         }
-        self.socket.set_nonblocking(false)?;
+        socket.set_nonblocking(false)?;
         Ok(out)
     }
+}
 
-    fn read_frames(&mut self, datagram: &[u8], out: &mut Vec<Received>) {
-        let mut reader = MavlinkReader::new(datagram);
-        // A datagram of n bytes holds at most n / 12 frames (the smallest MAVLink 2 frame).
-        for _ in 0..=datagram.len() / 12 {
-            let raw = match reader.read_any_raw_message::<MavMessage>() {
-                Ok(MAVLinkMessageRaw::V2(raw)) => raw,
-                Ok(MAVLinkMessageRaw::V1(_)) => {
-                    self.stats.mavlink1_frames += 1;
-                    continue;
-                }
-                Err(_) => break,
-            };
-            let Ok(msg) = MavMessage::parse(MavlinkVersion::V2, raw.message_id(), raw.payload())
-            else {
-                continue;
-            };
-            self.log_frame(raw.raw_bytes());
-            self.stats.frames_in += 1;
-            out.push(Received {
-                header: MavHeader {
-                    system_id: raw.system_id(),
-                    component_id: raw.component_id(),
-                    sequence: raw.sequence(),
-                },
-                msg,
-            });
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn address_error(url: &str) -> String {
+        match Link::open(url, 1, 1) {
+            Err(LinkError::Address(m)) => m,
+            Err(e) => panic!("{url}: not a usage error: {e}"),
+            Ok(_) => panic!("{url}: opened"),
         }
+    }
+
+    /// Unknown kinds, missing ports and baud rates are usage errors naming what was wrong.
+    #[test]
+    fn malformed_addresses_are_usage_errors() {
+        assert!(address_error("ftp:127.0.0.1:1").contains("unknown link kind `ftp`"));
+        assert!(address_error("127.0.0.1").contains("expected udpin:"));
+        assert!(address_error("tcpin:127.0.0.1").contains("has no port"));
+        assert!(address_error("tcpout://localhost:").contains("both given"));
+        assert!(address_error("udpin:127.0.0.1:99999").contains("not a number in [0, 65535]"));
+        assert!(address_error("serial:/dev/ttyS0").contains("expected serial:DEVICE:BAUD"));
+        assert!(address_error("serial:/dev/ttyS0:56000").contains("57600"));
+        assert!(address_error("serial::57600").contains("no device"));
+    }
+
+    /// A serial device that is a regular file, a directory or missing is a device error.
+    #[test]
+    fn a_serial_device_must_be_a_terminal() {
+        let dir = std::env::temp_dir().join(format!("isotrack-serial-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("plain");
+        std::fs::write(&file, b"").unwrap();
+        let fifo = dir.join("fifo");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        for (p, what) in [
+            (file.clone(), "a regular file"),
+            (fifo.clone(), "a FIFO"),
+            (dir.clone(), "a directory"),
+            (dir.join("missing"), "No such file"),
+            (std::path::PathBuf::from("/dev/null"), "not a terminal"),
+        ] {
+            let url = format!("serial:{}:57600", p.display());
+            match Link::open(&url, 1, 1) {
+                Err(LinkError::Device(m)) => assert!(m.contains(what), "{m}"),
+                Err(e) => panic!("{url}: {e:?}"),
+                Ok(_) => panic!("{url}: opened"),
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

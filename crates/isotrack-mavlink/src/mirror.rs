@@ -6,6 +6,7 @@
 
 use crate::wire;
 use isotrack_core::IsolineController;
+use isotrack_scenario::spec::VehicleSpec;
 use isotrack_scenario::Scenario;
 use isotrack_sim::{RunResult, TraceSink};
 
@@ -34,12 +35,11 @@ pub enum Transport {
 impl Transport {
     /// The transport of a scenario's vehicle.
     pub fn of(s: &Scenario) -> Self {
-        if s.is_flying() {
-            Transport::FixedWing {
-                airspeed_mps: s.file().vehicle.airspeed_mps.unwrap_or(30.0),
-            }
-        } else {
-            Transport::Ground
+        match s.spec().vehicle {
+            VehicleSpec::FixedWing(c) => Transport::FixedWing {
+                airspeed_mps: c.airspeed_mps,
+            },
+            VehicleSpec::Dubins { .. } => Transport::Ground,
         }
     }
 

@@ -11,11 +11,26 @@
 //! Pacing: [`Pace::RealTime`] keeps simulated time at `speedup` x the wall clock, and the
 //! setpoint in force at a sample is held to the next one; the offboard failsafe switches to HOLD
 //! when no valid setpoint came for [`SitlOptions::setpoint_timeout_s`] of simulated time.
-//! [`Pace::Lockstep`] sends a sample and waits until the companion answers it (a valid
-//! `SET_ATTITUDE_TARGET` whose `time_boot_ms` is the sample's), so the flight does not depend
-//! on the machine's speed.
+//! [`Pace::Lockstep`] sends a sample and waits until it is answered, so the flight does not
+//! depend on the machine's speed. The answer is a valid setpoint (one that moves the vehicle:
+//! see [`SitlReport::setpoints_refused`]) stamped with the sample's `time_boot_ms` (`isotrack
+//! fly`'s answer), or stamped newer than every setpoint its sender sent before (a ground station
+//! or SDK that stamps setpoints with its own clock, as MAVSDK's Offboard plugin does: one sample
+//! per new setpoint). Nothing else advances the run: heartbeats, commands, requests for
+//! telemetry or parameters, refused setpoints, a setpoint repeated with the same stamp, or one
+//! stamped [`NOT_AN_ANSWER_MS`].
+//!
+//! Out-of-order setpoints: a setpoint stamped older than the last one applied from the same
+//! sender (system, component), by at most [`REORDER_WINDOW_MS`], moves nothing and is counted
+//! ([`SitlReport::setpoints_out_of_order`]): UDP may deliver late. One older by more is the
+//! sender's clock restarting (a ground station or companion restarted): it is applied, and
+//! logged.
+//!
+//! Peers: the link drops a peer silent for [`SitlOptions::companion_timeout_s`] (see
+//! [`crate::link`]); the vehicle's log keeps at most [`MAX_EVENTS`] events (then counts them),
+//! so a flood of refused commands does not grow its memory.
 
-use crate::geo::Home;
+use crate::geo::Frame;
 use crate::link::{Link, LinkError, LinkStats, Received};
 use crate::mirror::Transport;
 use crate::vehicle_state::Mode;
@@ -57,7 +72,9 @@ pub struct SitlOptions {
     /// Set from outside (Ctrl-C) to end the run where it stands.
     pub stop: Arc<AtomicBool>,
     /// Lockstep: end the run when no message came from anyone for this long, wall s (the
-    /// companion is gone: it ended or failed safe, and nobody will answer the sample).
+    /// companion is gone: it ended or failed safe, and nobody will answer the sample). Also,
+    /// in both paces, how long a peer of a `udpin:`/`tcpin:` link may be silent before the
+    /// link drops it.
     pub companion_timeout_s: f64,
 }
 
@@ -87,6 +104,9 @@ pub struct SitlReport {
     /// Setpoints that moved nothing: not finite, not for this system, not from the companion in
     /// control, or of the wrong kind.
     pub setpoints_refused: u64,
+    /// Setpoints ignored because they were stamped older than the last one applied from
+    /// their sender (by at most [`REORDER_WINDOW_MS`]).
+    pub setpoints_out_of_order: u64,
     /// The link's counters.
     pub link: LinkStats,
     /// Whether the run was stopped from outside before its end.
@@ -121,14 +141,13 @@ impl std::fmt::Display for SitlError {
 /// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
 /// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
 pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
-    let f = s.file();
-    let rate = f.sensor.rate_hz.unwrap_or(1.0 / s.dt_s());
+    let rate = s.spec().sensor.rate_hz;
     if rate > 1000.0 {
         return Err(format!(
             "sensor.rate_hz = {rate}: MAVLink stamps samples to the millisecond, so at most 1000 Hz"
         ));
     }
-    let d = f.sim.duration_s.unwrap_or(600.0);
+    let d = s.spec().sim.duration_s;
     if wire::time_ms(d).is_none() {
         return Err(format!(
             "sim.duration_s = {d}: longer than MAVLink's time_boot_ms counts ({} s)",
@@ -145,6 +164,32 @@ pub const GCS_SYSTEM_ID: u8 = 255;
 /// `param2` of `MAV_CMD_COMPONENT_ARM_DISARM` that forces it (PX4, ArduPilot): needed to disarm
 /// a flying vehicle from another system than the one in control.
 pub const FORCE_CODE: f32 = 21196.0;
+
+/// The `time_boot_ms` of a setpoint that answers no sample (`isotrack fly` sends it before its
+/// first measurement): applied, but it never answers a lockstep sample nor counts as the
+/// sender's clock.
+pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
+
+/// How far back, ms, a setpoint's stamp may be from its sender's last applied one and still
+/// count as late (out of order, ignored) rather than a restarted clock (applied).
+pub const REORDER_WINDOW_MS: u32 = 10_000;
+
+/// The most senders whose last setpoint stamp the vehicle remembers (the least recent
+/// forgotten first).
+pub const MAX_SETPOINT_SENDERS: usize = 8;
+
+/// The most events the vehicle logs; later ones are counted, and the count logged at the end.
+pub const MAX_EVENTS: usize = 1000;
+
+/// A setpoint that moved the vehicle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Applied {
+    /// Its stamp.
+    ms: u32,
+    /// Whether it is newer than every setpoint its sender sent before (or its sender's
+    /// first, or after its clock restarted).
+    newer: bool,
+}
 
 /// The autopilot's state between samples.
 struct Autopilot {
@@ -163,7 +208,13 @@ struct Autopilot {
     loiter_radps: f64,
     turn_limit_radps: f64,
     events: Vec<String>,
+    /// Events not logged (past [`MAX_EVENTS`]).
+    events_dropped: u64,
     refused: u64,
+    out_of_order: u64,
+    /// The stamp of the last setpoint applied from each sender, the most recent
+    /// [`MAX_SETPOINT_SENDERS`] senders.
+    stamps: Vec<((u32, u8), u32)>,
     /// Senders whose heartbeat says `MAV_TYPE_GCS` (MAVSDK's ground station is system 245, not
     /// 255), the most recent [`MAX_GROUND_STATIONS`].
     ground_stations: Vec<(u32, u8)>,
@@ -190,7 +241,45 @@ impl Autopilot {
     }
 
     fn event(&mut self, t_s: f64, what: String) {
+        if self.events.len() >= MAX_EVENTS {
+            self.events_dropped += 1;
+            return;
+        }
         self.events.push(format!("t = {} s: {what}", Num(t_s)));
+    }
+
+    /// Whether a setpoint of `from` stamped `ms` is applied (`Some(newer)`), or ignored as out
+    /// of order (`None`, counted). Records the stamp of an applied one.
+    fn order(&mut self, t_s: f64, from: (u32, u8), ms: u32) -> Option<bool> {
+        if ms == NOT_AN_ANSWER_MS {
+            return Some(false);
+        }
+        let i = self.stamps.iter().position(|(f, _)| *f == from);
+        let newer = match i.map(|i| self.stamps[i].1) {
+            None => true,
+            Some(last) if ms >= last => ms > last,
+            Some(last) if last - ms <= REORDER_WINDOW_MS => {
+                self.out_of_order += 1;
+                return None;
+            }
+            Some(last) => {
+                self.event(
+                    t_s,
+                    format!(
+                        "setpoint clock of system {}, component {} went back from {last} to {ms} ms: taken as restarted",
+                        from.0, from.1
+                    ),
+                );
+                true
+            }
+        };
+        if let Some(i) = i {
+            self.stamps.remove(i);
+        } else if self.stamps.len() == MAX_SETPOINT_SENDERS {
+            self.stamps.remove(0);
+        }
+        self.stamps.push((from, ms));
+        Some(newer)
     }
 
     /// The turn rate the vehicle holds from a sample at `pose`.
@@ -308,12 +397,18 @@ impl Autopilot {
         }
     }
 
-    /// Handles a setpoint; returns its time stamp if it is a valid setpoint of the companion
-    /// in control, of any companion on board (a component of the vehicle's own system: as in
-    /// PX4, setpoints are not bound to who switched the mode), or of anyone while no companion
-    /// is in control (MAVSDK as a ground station flying offboard itself included); never of
-    /// system 255, the operator's ground station.
-    fn setpoint(&mut self, t_s: f64, from: (u32, u8), s: &SET_ATTITUDE_TARGET_DATA) -> Option<u32> {
+    /// Handles a setpoint; returns its time stamp (and whether it is its sender's newest) if
+    /// it is a valid setpoint, in order, of the companion in control, of any companion on
+    /// board (a component of the vehicle's own system: as in PX4, setpoints are not bound to
+    /// who switched the mode), or of anyone while no companion is in control (MAVSDK as a
+    /// ground station flying offboard itself included); never of system 255, the operator's
+    /// ground station.
+    fn setpoint(
+        &mut self,
+        t_s: f64,
+        from: (u32, u8),
+        s: &SET_ATTITUDE_TARGET_DATA,
+    ) -> Option<Applied> {
         let on_board = from.0 == self.system_id as u32;
         if s.target_system != self.system_id
             || (self.owner.is_some_and(|o| o != from) && !on_board)
@@ -343,12 +438,16 @@ impl Autopilot {
         };
         match w {
             Some(w) if w.is_finite() => {
+                let newer = self.order(t_s, from, s.time_boot_ms)?;
                 if self.armed && self.owner.is_none() {
                     // Armed by the ground station: the first companion to fly it owns it.
                     self.owner = Some(from);
                 }
                 self.setpoint = Some((w, t_s));
-                Some(s.time_boot_ms)
+                Some(Applied {
+                    ms: s.time_boot_ms,
+                    newer,
+                })
             }
             _ => {
                 self.refused += 1;
@@ -366,7 +465,7 @@ fn sender(r: &Received) -> (u32, u8) {
 struct Sitl<'a> {
     link: Link,
     ap: Autopilot,
-    home: Home,
+    home: Frame,
     scenario: &'a Scenario,
     stop: Arc<AtomicBool>,
     /// The next whole simulated second at which the 1 Hz group goes out.
@@ -449,7 +548,7 @@ impl Sitl<'_> {
             time_unix_usec: unix_us,
             time_boot_ms: ms,
         }))?;
-        let h = self.home;
+        let h = self.home.home;
         self.send(MavMessage::HOME_POSITION(HOME_POSITION_DATA {
             latitude: (h.lat_deg * 1e7).round() as i32,
             longitude: (h.lon_deg * 1e7).round() as i32,
@@ -477,7 +576,7 @@ impl Sitl<'_> {
             time_boot_ms: ms,
             lat: (lat * 1e7).round() as i32,
             lon: (lon * 1e7).round() as i32,
-            alt: ((self.home.alt_m + alt_rel) * 1e3).round() as i32,
+            alt: ((self.home.home.alt_m + alt_rel) * 1e3).round() as i32,
             relative_alt: (alt_rel * 1e3).round() as i32,
             vx: (vn * 100.0).round().clamp(-32767.0, 32767.0) as i16,
             vy: (ve * 100.0).round().clamp(-32767.0, 32767.0) as i16,
@@ -505,7 +604,7 @@ impl Sitl<'_> {
         self.send(MavMessage::VFR_HUD(VFR_HUD_DATA {
             airspeed: airspeed as f32,
             groundspeed: self.speed_mps as f32,
-            alt: (self.home.alt_m + alt_rel) as f32,
+            alt: (self.home.home.alt_m + alt_rel) as f32,
             climb: 0.0,
             heading: hdg_deg.round() as i16 % 360,
             throttle: 50,
@@ -513,8 +612,8 @@ impl Sitl<'_> {
         Ok(())
     }
 
-    /// Handles what arrives within `timeout`; returns the time stamps of valid setpoints.
-    fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<u32>, SitlError> {
+    /// Handles what arrives within `timeout`; returns the setpoints applied.
+    fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<Applied>, SitlError> {
         let got = self.link.poll(timeout).map_err(SitlError::Io)?;
         if self.link.stats.mavlink1_frames > 0 && !self.mavlink1_logged {
             self.mavlink1_logged = true;
@@ -548,8 +647,8 @@ impl Sitl<'_> {
                     self.ap.heard_gcs(from);
                 }
                 MavMessage::SET_ATTITUDE_TARGET(s) => {
-                    if let Some(ms) = self.ap.setpoint(t_s, from, s) {
-                        answers.push(ms);
+                    if let Some(a) = self.ap.setpoint(t_s, from, s) {
+                        answers.push(a);
                     }
                 }
                 _ => {}
@@ -573,17 +672,38 @@ impl<S: TraceSink + ?Sized> TraceSink for Tee<'_, S> {
 }
 
 /// Runs `scenario` as a MAVLink vehicle on `opts.url`, recording its trace into `sink`;
-/// `on_ready` is told the local address once the link is open (the port of `udpin:HOST:0`).
-/// Waits for the first message of a peer before the run starts.
+/// `on_ready` is told the local address once the link is open (the port of `udpin:HOST:0`;
+/// never called for a serial link: see [`run_sitl_on`]). Waits for the first message of a peer
+/// before the run starts.
 pub fn run_sitl<S: TraceSink + ?Sized>(
     scenario: &Scenario,
     opts: &SitlOptions,
     sink: &mut S,
     on_ready: &mut dyn FnMut(SocketAddr),
 ) -> Result<SitlReport, SitlError> {
+    run_sitl_on(scenario, opts, sink, &mut |l| {
+        if let Ok(a) = l.local_addr() {
+            on_ready(a)
+        }
+    })
+}
+
+/// As [`run_sitl`], `on_ready` given the link itself once it is open (its address, or its
+/// serial device: [`Link::describe`]).
+pub fn run_sitl_on<S: TraceSink + ?Sized>(
+    scenario: &Scenario,
+    opts: &SitlOptions,
+    sink: &mut S,
+    on_ready: &mut dyn FnMut(&Link),
+) -> Result<SitlReport, SitlError> {
     check_wire_times(scenario).map_err(SitlError::Scenario)?;
-    let link = Link::open(&opts.url, opts.system_id, 1).map_err(SitlError::Link)?;
-    on_ready(link.local_addr().map_err(SitlError::Io)?);
+    let frame = Frame::of(scenario).map_err(SitlError::Scenario)?;
+    let mut link = Link::open(&opts.url, opts.system_id, 1).map_err(SitlError::Link)?;
+    link.set_peer_timeout(
+        Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
+            .unwrap_or(Duration::from_secs(86_400)),
+    );
+    on_ready(&link);
     let transport = Transport::of(scenario);
     let turn_limit = scenario.max_turn_rate_radps().unwrap_or(0.2);
     let start = scenario.start();
@@ -601,10 +721,13 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
             loiter_radps: 0.5 * turn_limit,
             turn_limit_radps: turn_limit,
             events: Vec::new(),
+            events_dropped: 0,
             refused: 0,
+            out_of_order: 0,
+            stamps: Vec::new(),
             ground_stations: Vec::new(),
         },
-        home: Home::of(scenario),
+        home: frame,
         scenario,
         stop: opts.stop.clone(),
         next_slow_s: 0.0,
@@ -673,7 +796,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
                     break;
                 }
                 let answers = sitl.handle_inbound(t, Duration::from_millis(50))?;
-                if answers.contains(&ms) {
+                if answers.iter().any(|a| a.ms == ms || a.newer) {
                     break;
                 }
                 if sitl.last_heard.elapsed() > companion_timeout {
@@ -757,7 +880,20 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
     } else {
         result.outcome.as_str()
     };
-    sitl.ap.event(t_end, format!("run ended ({how})"));
+    if sitl.ap.events_dropped > 0 {
+        // Past the bound: the count, and the end, are logged all the same.
+        let n = sitl.ap.events_dropped;
+        sitl.ap.events.push(format!("{n} more events not logged"));
+    }
+    if sitl.ap.out_of_order > 0 {
+        let n = sitl.ap.out_of_order;
+        sitl.ap.events.push(format!(
+            "{n} setpoints out of order ignored (stamped older than their sender's last)"
+        ));
+    }
+    sitl.ap
+        .events
+        .push(format!("t = {} s: run ended ({how})", Num(t_end)));
     let text = format!("isotrack sitl: run ended ({how})");
     sitl.statustext(MavSeverity::MAV_SEVERITY_NOTICE, &text)?;
     for _ in 0..3 {
@@ -768,6 +904,7 @@ pub fn run_sitl<S: TraceSink + ?Sized>(
         flown,
         events: sitl.ap.events,
         setpoints_refused: sitl.ap.refused,
+        setpoints_out_of_order: sitl.ap.out_of_order,
         link: sitl.link.stats,
         interrupted,
         companion_lost,

@@ -5,16 +5,15 @@
 //! confirms it. Real time is needed (a silence is a duration); nothing asserts how long
 //! anything took.
 
-use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, FlyReport};
+use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyOptions, FlyReport};
 use isotrack_mavlink::link::Link;
 use isotrack_scenario::load_scenario;
 use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
-/// PX4's custom_mode of OFFBOARD (main mode 6) and of AUTO.LOITER (main 4, sub 3).
+/// PX4's custom_mode of OFFBOARD (main mode 6).
 const OFFBOARD: u32 = 6 << 16;
-const LOITER: u32 = (4 << 16) | (3 << 24);
 
 /// How the stand-in behaves.
 #[derive(Clone)]
@@ -42,6 +41,30 @@ struct Script {
     nan_positions_from: u32,
     /// It acknowledges HOLD/RETURN but stays in its mode (a liar).
     hold_lies: bool,
+    /// Its autopilot and type (PX4 fixed wing by default; ArduPilot's mode numbers differ).
+    firmware: (MavAutopilot, MavType),
+}
+
+impl Script {
+    /// Its custom mode for `MAV_CMD_DO_SET_MODE`'s param2 and param3: PX4's `main << 16 |
+    /// sub << 24`, ArduPilot's number in param2.
+    fn custom_mode(&self, p2: f32, p3: f32) -> u32 {
+        if self.firmware.0 == MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA {
+            p2 as u32
+        } else {
+            ((p2 as u32) << 16) | ((p3 as u32) << 24)
+        }
+    }
+    /// Its mode that follows setpoints: PX4 OFFBOARD (main mode 6), ArduPilot GUIDED
+    /// (ArduCopter 4, ArduPlane and Rover 15).
+    fn guided(&self) -> u32 {
+        use MavType::*;
+        match self.firmware {
+            (MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_TYPE_QUADROTOR) => 4,
+            (MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA, _) => 15,
+            _ => OFFBOARD,
+        }
+    }
 }
 
 impl Default for Script {
@@ -58,6 +81,10 @@ impl Default for Script {
             offboard_at_beat: None,
             nan_positions_from: u32::MAX,
             hold_lies: false,
+            firmware: (
+                MavAutopilot::MAV_AUTOPILOT_PX4,
+                MavType::MAV_TYPE_FIXED_WING,
+            ),
         }
     }
 }
@@ -114,7 +141,7 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
     while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
         if script.offboard_at_beat == Some(beats) {
             armed = true;
-            mode = OFFBOARD;
+            mode = script.guided();
         }
         if script.gimbal {
             gimbal
@@ -128,8 +155,8 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
         }
         if !script.gimbal || beats > 0 {
             v.send(&heartbeat(
-                MavType::MAV_TYPE_FIXED_WING,
-                MavAutopilot::MAV_AUTOPILOT_PX4,
+                script.firmware.1,
+                script.firmware.0,
                 armed,
                 mode,
             ))
@@ -203,9 +230,11 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                     armed = false;
                     MavResult::MAV_RESULT_ACCEPTED
                 }
-                MavCmd::MAV_CMD_DO_SET_MODE if c.param2 == 6.0 => {
+                MavCmd::MAV_CMD_DO_SET_MODE
+                    if script.custom_mode(c.param2, c.param3) == script.guided() =>
+                {
                     if script.offboard == MavResult::MAV_RESULT_ACCEPTED {
-                        mode = OFFBOARD;
+                        mode = script.guided();
                     }
                     script.offboard
                 }
@@ -215,7 +244,7 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                         continue;
                     }
                     if !script.hold_lies {
-                        mode = LOITER;
+                        mode = script.custom_mode(c.param2, c.param3);
                     }
                     MavResult::MAV_RESULT_ACCEPTED
                 }
@@ -559,5 +588,126 @@ fn two_autopilots_are_refused_unless_one_is_picked() {
                 );
             }
         }
+    }
+}
+
+/// The modes a flight with `--take-control` asked for (DO_SET_MODE's param2 and param3, in
+/// order), and its report, against a stand-in of `firmware`; the flight ends at
+/// `--max-duration-s` 0.5 (a failsafe: `failsafe` commanded).
+fn modes_of(
+    firmware: (MavAutopilot, MavType),
+    failsafe: FailsafeAction,
+) -> (FlyReport, Vec<(f32, f32)>) {
+    let script = Script {
+        firmware,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.failsafe = failsafe;
+        o.max_duration_s = Some(0.5);
+    });
+    let modes = got
+        .iter()
+        .filter(|g| g.cmd == MavCmd::MAV_CMD_DO_SET_MODE)
+        .map(|g| {
+            assert_eq!(g.p[0], 1.0, "MAV_MODE_FLAG_CUSTOM_MODE_ENABLED");
+            (g.p[1], g.p[2])
+        })
+        .collect();
+    (r, modes)
+}
+
+/// ArduPilot's mode numbers by vehicle type (ArduCopter: GUIDED 4, LOITER 5, RTL 6;
+/// ArduPlane: GUIDED 15, RTL 11, LOITER 12; Rover: GUIDED 15, HOLD 4, LOITER 5, RTL 11), never
+/// PX4's (whose 4 and 6 are ArduCopter's GUIDED and RTL, ArduPlane's ACRO and FBWB); each
+/// failsafe mode confirmed by the vehicle's heartbeat.
+#[test]
+fn ardupilot_modes_by_vehicle_type() {
+    let ap = MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA;
+    for (mavtype, failsafe, guided, way_out, name) in [
+        (
+            MavType::MAV_TYPE_FIXED_WING,
+            FailsafeAction::Return,
+            15.0,
+            11.0,
+            "RTL",
+        ),
+        (
+            MavType::MAV_TYPE_FIXED_WING,
+            FailsafeAction::Hold,
+            15.0,
+            12.0,
+            "LOITER",
+        ),
+        (
+            MavType::MAV_TYPE_QUADROTOR,
+            FailsafeAction::Hold,
+            4.0,
+            5.0,
+            "LOITER",
+        ),
+        (
+            MavType::MAV_TYPE_QUADROTOR,
+            FailsafeAction::Return,
+            4.0,
+            6.0,
+            "RTL",
+        ),
+        (
+            MavType::MAV_TYPE_GROUND_ROVER,
+            FailsafeAction::Hold,
+            15.0,
+            4.0,
+            "HOLD",
+        ),
+        (
+            MavType::MAV_TYPE_GROUND_ROVER,
+            FailsafeAction::Loiter,
+            15.0,
+            5.0,
+            "LOITER",
+        ),
+        (
+            MavType::MAV_TYPE_GROUND_ROVER,
+            FailsafeAction::Return,
+            15.0,
+            11.0,
+            "RTL",
+        ),
+    ] {
+        let (r, modes) = modes_of((ap, mavtype), failsafe);
+        let case = format!("{mavtype:?} {failsafe:?}: {modes:?} {:?}", r.events);
+        assert_eq!(r.end, FlyEnd::MaxDuration, "{case}");
+        assert_eq!(modes.first(), Some(&(guided, 0.0)), "{case}");
+        assert_eq!(modes.last(), Some(&(way_out, 0.0)), "{case}");
+        assert!(r.failsafe_acknowledged, "{case}");
+        let confirmed = format!("the vehicle is in {name}");
+        assert!(r.events.iter().any(|e| e.contains(&confirmed)), "{case}");
+    }
+}
+
+/// PX4: OFFBOARD is main mode 6; RETURN is AUTO.RTL (main 4, sub 5), not a loiter; LOITER and
+/// HOLD are AUTO.LOITER (4, 3); each confirmed by the heartbeat.
+#[test]
+fn px4_return_and_loiter_modes() {
+    let px4 = (
+        MavAutopilot::MAV_AUTOPILOT_PX4,
+        MavType::MAV_TYPE_FIXED_WING,
+    );
+    for (failsafe, way_out, name) in [
+        (FailsafeAction::Return, (4.0, 5.0), "RETURN"),
+        (FailsafeAction::Loiter, (4.0, 3.0), "LOITER"),
+    ] {
+        let (r, modes) = modes_of(px4, failsafe);
+        assert_eq!(modes.first(), Some(&(6.0, 0.0)), "{modes:?}");
+        assert_eq!(modes.last(), Some(&way_out), "{modes:?}");
+        assert!(r.failsafe_acknowledged, "{:?}", r.events);
+        let confirmed = format!("the vehicle is in {name}");
+        assert!(
+            r.events.iter().any(|e| e.contains(&confirmed)),
+            "{:?}",
+            r.events
+        );
     }
 }

@@ -270,7 +270,7 @@ fn sitl_fixed_wing_yaw_rate_is_bank_limited() {
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenarios/paper-fig3-uav.toml");
     let s = load_scenario(Some(&p), &[]).unwrap();
-    let v_mps = s.file().vehicle.airspeed_mps.unwrap_or(30.0);
+    let v_mps = s.spec().vehicle.speed_mps();
     let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
     opts.pace = Pace::Lockstep;
     let stop = opts.stop.clone();

@@ -116,11 +116,14 @@ impl Raster {
             values,
         }
     }
-    /// The level-`lv` isoline of `f` sampled at the raster's cell centres.
+    /// The level-`lv` isoline of `f` sampled at the raster's cell centres, `dx` apart along x
+    /// and `dy` along y (cells need not be square: the plot area's pixels rarely divide into
+    /// square cells exactly; one step `min(dx, dy)` along both axes sampled only part of the
+    /// map, so the isoline stopped short of its far side along the axis of the larger step).
     fn isoline(&self, lv: f64, f: impl Fn(Vec2) -> Option<f64>) -> IsolineSegments {
-        IsolineSegments::from_samples(
+        IsolineSegments::from_samples_xy(
             Vec2::new(self.x0 + 0.5 * self.dx, self.y0 + 0.5 * self.dy),
-            self.dx.min(self.dy),
+            [self.dx, self.dy],
             self.nx,
             self.ny,
             lv,
@@ -1155,4 +1158,75 @@ pub fn sweep_figure(
             Ok(())
         })()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 30: on cells twice as wide as tall (dx = 2 m, dy = 1 m) the isoline of the cone
+    /// `F = |p|` at level 40 m is the whole circle of radius 40 m: every end point within the
+    /// grid's error of the radius (linear interpolation's on a 2 m edge with the field itself,
+    /// half a cell's diagonal with the raster's nearest samples) and the length that of the circle
+    /// (a polygon of 2 m chords: within 1 % of 2 pi 40 m). With one step min(dx, dy) along both
+    /// axes the lattice covered x up to 0 only: half the circle.
+    #[test]
+    fn isoline_on_non_square_cells_is_the_whole_circle() {
+        let (dx, dy, nx, ny) = (2.0, 1.0, 100, 100);
+        let (x0, y0) = (-0.5 * dx * nx as f64, -0.5 * dy * ny as f64);
+        let radius_m = 40.0;
+        let cone = |p: Vec2| Some(p.norm());
+        let values = (0..ny)
+            .flat_map(|j| {
+                (0..nx).map(move |i| {
+                    cone(Vec2::new(
+                        x0 + (i as f64 + 0.5) * dx,
+                        y0 + (j as f64 + 0.5) * dy,
+                    ))
+                })
+            })
+            .collect();
+        let raster = Raster {
+            x0,
+            y0,
+            dx,
+            dy,
+            nx,
+            ny,
+            values,
+        };
+        let half_diagonal_m = 0.5 * (dx * dx + dy * dy).sqrt();
+        // Linear interpolation along an edge of length h misses F by at most h^2 / 8 times
+        // F'' <= 1 / r (r >= R - dx near the level set), and |grad F| = 1.
+        let sag_m = dx * dx / (8.0 * (radius_m - dx));
+        for (iso, tol_m) in [
+            (raster.isoline(radius_m, cone), sag_m + 1e-9),
+            (raster.isoline(radius_m, |p| raster.at(p)), half_diagonal_m),
+        ] {
+            let segs = iso.segments();
+            assert!(!segs.is_empty());
+            let mut length_m = 0.0;
+            let (mut xmax, mut xmin, mut ymax, mut ymin) = (-1e9_f64, 1e9_f64, -1e9_f64, 1e9_f64);
+            for (a, b) in segs {
+                for p in [a, b] {
+                    assert!(
+                        (p.norm() - radius_m).abs() <= tol_m,
+                        "{p:?} at {} m",
+                        p.norm()
+                    );
+                    (xmax, xmin) = (xmax.max(p.x), xmin.min(p.x));
+                    (ymax, ymin) = (ymax.max(p.y), ymin.min(p.y));
+                }
+                length_m += (*b - *a).norm();
+            }
+            let circle_m = 2.0 * std::f64::consts::PI * radius_m;
+            assert!(
+                (length_m - circle_m).abs() < 0.01 * circle_m,
+                "{length_m} m of {circle_m} m"
+            );
+            for extreme in [xmax, -xmin, ymax, -ymin] {
+                assert!((extreme - radius_m).abs() <= tol_m + dx, "{extreme}");
+            }
+        }
+    }
 }

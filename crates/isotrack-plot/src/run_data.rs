@@ -119,32 +119,51 @@ impl RunData {
 
     /// Start of the steady-state window, s.
     pub fn steady_state_start_s(&self) -> f64 {
-        let f = self.scenario.file();
-        (1.0 - f.metrics.steady_state_fraction.unwrap_or(0.2)) * f.sim.duration_s.unwrap_or(0.0)
+        let spec = self.scenario.spec();
+        (1.0 - spec.metrics.steady_state_fraction) * spec.sim.duration_s
     }
 }
 
 /// What decides the field a run's map shows: its `[field]` section (every key, file paths
 /// absolute as written in `scenario.toml`), `controller.level` (the isoline drawn), and for a
-/// puff plume `sim.seed` (its wind's meander), each as `(key, value as JSON text)`.
+/// puff plume with a meander `sim.seed` (the meander's random modes), each as `(key, value as
+/// JSON text)`. A puff plume without meander (`field.meander_std_mps = 0`) is the same field
+/// whatever its seed and its `meander_correlation_s`: its meander's amplitude is 0, so every
+/// puff is at `source + U t` (`isotrack_fields::puff`, `displacement`), the seed and the
+/// correlation time shaping only modes that are multiplied by 0.
 fn field_identity(s: &isotrack_scenario::Scenario) -> Vec<(String, String)> {
     let f = s.file();
+    let meander = match s.field() {
+        isotrack_scenario::field::FieldModel::Puff(p) => Some(p.params().meander_std_mps != 0.0),
+        _ => None,
+    };
     let mut keys: Vec<(String, String)> = match serde_json::to_value(&f.field) {
         Ok(serde_json::Value::Object(m)) => m
             .into_iter()
+            .filter(|(k, _)| !(meander == Some(false) && k == "meander_correlation_s"))
             .map(|(k, v)| (format!("field.{k}"), v.to_string()))
             .collect(),
         other => vec![("field".into(), format!("{other:?}"))],
     };
     keys.push(("controller.level".into(), format!("{:?}", s.level())));
-    if f.field.kind == Some(isotrack_scenario::schema::FieldKind::PuffPlume) {
+    if meander == Some(true) {
         keys.push(("sim.seed".into(), f.sim.seed.unwrap_or(0).to_string()));
     }
     keys
 }
 
+/// The SHA-256 of each data file a run's field was read from, by path, as its `summary.json`
+/// records them (`data_files`; none in a run written before they were recorded).
+fn data_digests(r: &RunData) -> Vec<(String, String)> {
+    r.summary
+        .data_files()
+        .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
+        .unwrap_or_default()
+}
+
 /// Checks that every run shows the same field and isoline (see `field_identity`: the
-/// `[field]` section, the level, a puff plume's seed), since a figure or page of several runs
+/// `[field]` section, the level, a meandering puff plume's seed; and the content of its data
+/// files where both runs recorded their digests), since a figure or page of several runs
 /// draws one field under every path. Otherwise a [`PlotError::Data`] naming the first run and
 /// the first that differs from it, and the first key that differs with both values.
 pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
@@ -152,9 +171,31 @@ pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
         return Ok(());
     };
     let a = field_identity(&first.scenario);
+    let a_files = data_digests(first);
     for r in &runs[1..] {
         let b = field_identity(&r.scenario);
         if a == b {
+            // One path, other content: a data file overwritten in place between the runs
+            // (compared where both runs recorded the file's digest).
+            let b_files = data_digests(r);
+            if let Some((path, da, db)) = a_files.iter().find_map(|(p, da)| {
+                b_files
+                    .iter()
+                    .find(|(q, db)| q == p && db != da)
+                    .map(|(_, db)| (p, da, db))
+            }) {
+                let clip = isotrack_scenario::load::clip;
+                return Err(PlotError::Data(format!(
+                    "{} and {} are runs over different fields: their data file {} held other content (SHA-256 {} in {}, {} in {}: overwritten in place between the runs), so these are not drawn together; plot or report each run on its own",
+                    first.dir.display(),
+                    r.dir.display(),
+                    clip(path),
+                    clip(&da.chars().take(16).collect::<String>()),
+                    first.name,
+                    clip(&db.chars().take(16).collect::<String>()),
+                    r.name,
+                )));
+            }
             continue;
         }
         let lookup = |set: &[(String, String)], k: &str| {

@@ -232,6 +232,16 @@ fn chart<DB: DrawingBackend>(
             Key::LeftField,
             "run left the field (not compared)",
         ),
+        (
+            Behaviour::Saturated,
+            Key::LimitCycle,
+            "grey triangle: run saturated the turn-rate limit (not compared)",
+        ),
+        (
+            Behaviour::Undetermined,
+            Key::Converged,
+            "grey circle: run too short to judge (not compared)",
+        ),
     ] {
         if any(b) {
             keys.push((k, label.into()));
@@ -244,7 +254,14 @@ fn chart<DB: DrawingBackend>(
         ));
     }
     if verify.iter().any(|p| {
-        p.agrees.is_none() && !matches!(p.behaviour, Behaviour::Invalid | Behaviour::LeftField)
+        p.agrees.is_none()
+            && !matches!(
+                p.behaviour,
+                Behaviour::Invalid
+                    | Behaviour::LeftField
+                    | Behaviour::Saturated
+                    | Behaviour::Undetermined
+            )
     }) {
         keys.push((
             Key::NotCompared,
@@ -371,16 +388,21 @@ fn chart<DB: DrawingBackend>(
     };
     let shown = |b: Behaviour| verify.iter().filter(move |p| p.behaviour == b);
     let edge = st.px(1.5);
-    ch.draw_series(shown(Behaviour::Converged).flat_map(|p| {
-        [
-            Circle::new((p.kp, p.rate_hz), r, mark(p, WHITE).filled()),
-            Circle::new((p.kp, p.rate_hz), r, BLACK.stroke_width(edge)),
-        ]
-    }))
+    ch.draw_series(
+        shown(Behaviour::Converged)
+            .chain(shown(Behaviour::Undetermined))
+            .flat_map(|p| {
+                [
+                    Circle::new((p.kp, p.rate_hz), r, mark(p, WHITE).filled()),
+                    Circle::new((p.kp, p.rate_hz), r, BLACK.stroke_width(edge)),
+                ]
+            }),
+    )
     .map_err(s)?;
     ch.draw_series(
         shown(Behaviour::LimitCycle)
             .chain(shown(Behaviour::Stalled))
+            .chain(shown(Behaviour::Saturated))
             .map(|p| TriangleMarker::new((p.kp, p.rate_hz), r + 1, mark(p, BLACK).filled())),
     )
     .map_err(s)?;

@@ -1,6 +1,29 @@
-//! Which paths name one file.
+//! Which paths name one file, and what a file holds (its SHA-256).
 
 use std::path::Path;
+
+/// The SHA-256 of the file at `path`, lowercase hex, read in blocks (memory flat whatever its
+/// size; a non-regular file is refused without blocking, `isotrack_fields::io::open_regular`).
+/// The one content digest of isotrack's data files: a run records its field files' digests in
+/// `summary.json` (`data_files`), `plot`/`report` compare them (a file overwritten in place
+/// between two runs is another field), and the Python package checks a pickled scenario's
+/// files with it.
+pub fn sha256_file(path: &Path) -> std::io::Result<String> {
+    use sha2::{Digest, Sha256};
+    use std::io::Read;
+    let mut f = isotrack_fields::io::open_regular(path)?;
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        match f.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => h.update(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
 
 /// Whether two paths name the same existing file (same device and inode), not just the same
 /// string: `a/../a/x` and a hard link count.

@@ -10,6 +10,7 @@ use crate::results::RunRecord;
 use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The largest `summary.json` read, bytes (a summary is a few kB; the scenario in it is capped at
@@ -59,6 +60,11 @@ pub struct RunEnd {
     /// Warnings about the scenario (also printed on stderr): noise through a backward
     /// difference, a sampled loop that `isotrack check` finds unstable; for `sitl`, its events.
     pub warnings: Vec<String>,
+    /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
+    /// its absolute path ([`data_file_digests`]); left out when there are none. `plot` and
+    /// `report` refuse runs whose files differ (one overwritten in place between them).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub data_files: BTreeMap<String, String>,
 }
 
 /// A flight's end (`isotrack fly --out`).
@@ -124,6 +130,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
             ended: Ended::Run(RunEnd {
                 record: RunRecord::of(result),
                 warnings: warnings.to_vec(),
+                data_files: data_file_digests(scenario),
             }),
             scenario: scenario.file(),
             controller: None,
@@ -239,9 +246,35 @@ impl<S> Summary<S> {
             Ended::Flight(_) => None,
         }
     }
+
+    /// The data files' digests the run recorded (`None` for a flight).
+    pub fn data_files(&self) -> Option<&BTreeMap<String, String>> {
+        match &self.ended {
+            Ended::Run(r) => Some(&r.data_files),
+            Ended::Flight(_) => None,
+        }
+    }
 }
 
-/// The resolved scenario as TOML (reads back as the same scenario).
+/// The resolved scenario as TOML (reads back as the same scenario, bit for bit; floats in
+/// their shortest form, [`isotrack_scenario::tomltext::to_toml`]).
 pub fn scenario_toml(scenario: &Scenario) -> String {
-    toml::to_string(scenario.file()).unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+    isotrack_scenario::tomltext::to_toml(scenario.file())
+        .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}
+
+/// The SHA-256 of each data file of `scenario`'s field (`field.path`, `field.paths`, absolute
+/// in a resolved scenario), by path ([`crate::files::sha256_file`]); a file that cannot be read
+/// now (gone since the field was built) is left out.
+pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
+    let f = &scenario.file().field;
+    f.path
+        .iter()
+        .chain(f.paths.iter().flatten())
+        .filter_map(|p| {
+            crate::files::sha256_file(Path::new(p))
+                .ok()
+                .map(|d| (p.clone(), d))
+        })
+        .collect()
 }

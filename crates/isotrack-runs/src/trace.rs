@@ -51,6 +51,16 @@ impl TraceWriter {
         })
     }
 
+    /// Hands the rows written so far to the operating system (they survive the process being
+    /// killed); an error is kept, as a write error is, for [`TraceWriter::finish`].
+    pub fn flush(&mut self) {
+        if self.error.is_none() {
+            if let Err(e) = self.w.flush() {
+                self.error = Some(e);
+            }
+        }
+    }
+
     /// Flushes; the first error met while writing, if any.
     pub fn finish(mut self) -> std::io::Result<()> {
         if let Some(e) = self.error.take() {

@@ -2,17 +2,44 @@
 
 use crate::field::FieldModel;
 use crate::schema::*;
+use crate::spec::{LawSpec, VehicleSpec};
 use crate::Scenario;
 use isotrack_core::control::{
-    AntiWindup, GradientReference, GradientReferenceParams, GroundTruth, OutputStage, PiIsoline,
-    PiIsolineParams, Pid, PidCrossing, PidCrossingParams, PidParams, Search, SearchParams,
-    SearchPattern, SlidingMode, SlidingModeParams, SuboptimalSosm, SuboptimalSosmParams,
+    GradientReference, GroundTruth, PiIsoline, Pid, PidCrossing, Search, SearchParams, SlidingMode,
+    SuboptimalSosm,
 };
-use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarField};
-use isotrack_sim::{simulate, Oracles, RunResult, Sensor, SensorConfig, StepPlan, TraceSink};
-use isotrack_vehicles::{Dubins, DubinsState, FixedWing, FixedWingConfig};
+use isotrack_sim::{simulate, Oracles, RunResult, Sensor, StepPlan, TraceSink};
+use isotrack_vehicles::{Dubins, DubinsState, FixedWing};
+
+/// The steps a run of a scenario spans, from its resolved file alone (no field built): what
+/// bounds the `t_end_s`, `samples` and `convergence_time_s` a run can report (`--resume` and
+/// `merge` check stored rows against them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSpan {
+    /// Integration step `dt`, s.
+    pub dt_s: f64,
+    /// Planned steps `N = duration / dt`: a run ends at `t_end_s = k dt` with `k <= N`.
+    pub n_steps: u64,
+    /// Steps between samples `m = 1 / (rate dt)`: samples fall on steps `0, m, 2m, ...`, so a
+    /// run that sensed steps `0..=k` delivered at most `floor(k / m) + 1`.
+    pub steps_per_sample: u64,
+}
+
+/// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
+/// `resolve` refuses).
+pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
+    let sim = crate::spec::SimSpec::new(&f.sim).ok()?;
+    let rate_hz = crate::spec::sensor::sensor_config(&f.sensor).ok()?.rate_hz;
+    Some(RunSpan {
+        dt_s: sim.dt_s,
+        n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
+        steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
+            .ok()?
+            .max(1),
+    })
+}
 
 /// Every vehicle a scenario can name.
 #[derive(Clone, Debug)]
@@ -23,29 +50,31 @@ pub enum VehicleModel {
     FixedWing(Box<FixedWing>),
 }
 
+impl VehicleModel {
+    /// The turn rate the airframe can fly, rad/s: `g*tan(phi_max)/V` for the fixed wing
+    /// ([`FixedWing::airframe_turn_rate_limit_radps`]); `None` for the Dubins robot (any).
+    pub fn airframe_turn_rate_limit_radps(&self) -> Option<f64> {
+        match self {
+            VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
+            VehicleModel::Dubins(_) => None,
+        }
+    }
+}
+
 /// Builds (and for the UAV, trims) the vehicle of a resolved scenario.
 pub fn build_vehicle(f: &ScenarioFile) -> Result<VehicleModel, crate::resolve::Issue> {
-    let v = &f.vehicle;
-    Ok(match v.kind.unwrap_or(VehicleKind::Dubins) {
-        VehicleKind::Dubins => VehicleModel::Dubins(Dubins {
-            speed_mps: v.speed_mps.unwrap_or(0.5),
-        }),
-        VehicleKind::FixedWing => VehicleModel::FixedWing(Box::new(
-            FixedWing::new(FixedWingConfig {
-                airspeed_mps: v.airspeed_mps.unwrap_or(30.0),
-                altitude_m: v.altitude_m.unwrap_or(100.0),
-                wind_mps: v.wind_mps.unwrap_or([0.0, 0.0]),
-                gusts: v.gusts.unwrap_or(false),
-                seed: f.sim.seed.unwrap_or(0),
-                trim_feedforward: v.trim_feedforward.unwrap_or(true),
-                ecen674_gains: v.ecen674_gains.unwrap_or(false),
-            })
-            .map_err(|e| crate::resolve::Issue {
-                key: "vehicle.airspeed_mps".into(),
-                message: e.to_string(),
-                unreadable: false,
-            })?,
-        )),
+    let seed = crate::spec::SimSpec::new(&f.sim)?.seed;
+    Ok(match crate::spec::VehicleSpec::new(&f.vehicle, seed)? {
+        VehicleSpec::Dubins { speed_mps } => VehicleModel::Dubins(Dubins { speed_mps }),
+        VehicleSpec::FixedWing(cfg) => {
+            VehicleModel::FixedWing(Box::new(FixedWing::new(cfg).map_err(|e| {
+                crate::resolve::Issue {
+                    key: "vehicle.airspeed_mps".into(),
+                    message: e.to_string(),
+                    unreadable: false,
+                }
+            })?))
+        }
     })
 }
 
@@ -199,224 +228,79 @@ impl IsolineController for ControllerModel {
 impl Scenario {
     /// The level `s_d` the scenario tracks.
     pub fn level(&self) -> f64 {
-        self.file.controller.level.unwrap_or_default()
+        self.spec.controller.level
     }
 
     /// The turn-rate limit every controller's output stage applies, rad/s:
     /// `controller.max_turn_rate_radps` when set; otherwise, for `vehicle.kind = "fixed_wing"`,
     /// what the airframe can fly, `g*tan(phi_max)/V` (0.274 rad/s at 30 m/s and the autopilot's
     /// 40 deg bank limit), so a noisy measurement cannot command hundreds of rad/s; otherwise
-    /// none. (Not written into the resolved file: it follows the airspeed, which a sweep or
-    /// `--set` may change.)
+    /// none ([`crate::spec::TurnRateLimit`]).
     pub fn max_turn_rate_radps(&self) -> Option<f64> {
-        self.file
-            .controller
-            .max_turn_rate_radps
-            .or(match &*self.vehicle {
-                VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
-                VehicleModel::Dubins(_) => None,
-            })
+        self.spec.controller.turn_rate_limit.radps()
     }
 
-    /// The search phase before tracking (`controller.search`), with its defaults applied:
-    /// spacing the minimum turning diameter `2*v/omega_max` (`omega_max` the turn-rate limit,
-    /// 1 rad/s without one), lawnmower legs 10 spacings, hand-over at 1 % of `|level|` (0.01
-    /// for level 0). `None` without a search.
+    /// The search phase before tracking (`controller.search`), its derived geometry applied
+    /// (see [`crate::spec::ControllerSpec::search`]). `None` without a search.
     pub fn search(&self) -> Option<SearchParams> {
-        let c = &self.file.controller;
-        let v = self
-            .file
-            .vehicle
-            .speed_mps
-            .or(self.file.vehicle.airspeed_mps)
-            .unwrap_or(0.5);
-        let w_max = self.max_turn_rate_radps().unwrap_or(1.0);
-        let spacing_m = c.search_spacing_m.unwrap_or(2.0 * v / w_max);
-        let pattern = match c.search.unwrap_or_default() {
-            SearchKind::None => return None,
-            SearchKind::Spiral => SearchPattern::Spiral {
-                spacing_m,
-                speed_mps: v,
-                max_turn_rate_radps: w_max,
-            },
-            SearchKind::Lawnmower => SearchPattern::Lawnmower {
-                leg_m: c.search_leg_m.unwrap_or(10.0 * spacing_m),
-                spacing_m,
-                speed_mps: v,
-            },
-        };
-        let level = self.level();
-        let handover_delta = c.search_handover.unwrap_or(if level != 0.0 {
-            0.01 * level.abs()
-        } else {
-            0.01
-        });
-        Some(SearchParams {
-            pattern,
-            handover_delta,
-        })
+        self.spec.controller.search
     }
 
     /// The controller, at rest.
     pub fn controller(&self) -> ControllerModel {
-        let c = &self.file.controller;
-        let derivative = match c
-            .derivative
-            .unwrap_or(DerivativeKindName::BackwardDifference)
-        {
-            DerivativeKindName::BackwardDifference => DerivativeKind::BackwardDifference,
-            DerivativeKindName::FilteredDifference => DerivativeKind::FilteredDifference {
-                tau_s: c.derivative_tau_s.unwrap_or(0.1),
-            },
-            DerivativeKindName::Levant => DerivativeKind::Levant {
-                lipschitz: c.derivative_lipschitz.unwrap_or(1.0),
-            },
-        };
-        let output = OutputStage {
-            higher_side: c.higher_side.unwrap_or_default(),
-            max_turn_rate_radps: self.max_turn_rate_radps(),
-        };
-        let level = self.level();
-        let u_max = self.max_turn_rate_radps().unwrap_or(1.0);
-        let pid = PidParams {
-            level,
-            kp: c.kp.unwrap_or(3.0),
-            ki: c.ki.unwrap_or(0.2),
-            kd: c.kd.unwrap_or(10.0),
-            output,
-            derivative,
-        };
-        let sliding = |boundary_layer| SlidingModeParams {
-            level,
-            max_turn_rate_radps: u_max,
-            gamma: c.gamma.unwrap_or(0.2),
-            delta: c.delta.unwrap_or(1.0),
-            boundary_layer,
-            output,
-            derivative,
-        };
-        match c.kind.unwrap_or(ControllerKind::PiIsoline) {
-            ControllerKind::PiIsoline => {
-                let anti_windup = match c.anti_windup.unwrap_or(AntiWindupKind::None) {
-                    AntiWindupKind::None => AntiWindup::None,
-                    AntiWindupKind::Clamp => AntiWindup::Clamp {
-                        limit_radps: c.integral_limit_radps.unwrap_or(f64::INFINITY),
-                    },
-                    AntiWindupKind::Conditional => AntiWindup::Conditional {
-                        band: c.integral_band.unwrap_or(1.0),
-                    },
-                    AntiWindupKind::BackCalculation => AntiWindup::BackCalculation {
-                        tracking_time_s: c.tracking_time_s.unwrap_or(1.0),
-                    },
-                };
-                ControllerModel::PiIsoline(PiIsoline::new(PiIsolineParams {
-                    level,
-                    kp: c.kp.unwrap_or(10.0),
-                    ki: c.ki.unwrap_or(0.0),
-                    c1: c.c1.unwrap_or(0.2),
-                    c2: c.c2.unwrap_or(1.0),
-                    output,
-                    anti_windup,
-                    derivative,
-                }))
+        match &self.spec.controller.law {
+            LawSpec::PiIsoline(p) => ControllerModel::PiIsoline(PiIsoline::new(*p)),
+            LawSpec::SlidingMode(p) => ControllerModel::SlidingMode(SlidingMode::new(*p)),
+            LawSpec::SuboptimalSosm(p) => ControllerModel::SuboptimalSosm(SuboptimalSosm::new(*p)),
+            LawSpec::Pid(p) => ControllerModel::Pid(Pid::new(*p)),
+            LawSpec::PidCrossing(p) => ControllerModel::PidCrossing(PidCrossing::new(*p)),
+            LawSpec::GradientReference(p) => {
+                ControllerModel::GradientReference(GradientReference::new(*p))
             }
-            ControllerKind::SlidingMode => {
-                ControllerModel::SlidingMode(SlidingMode::new(sliding(None)))
-            }
-            ControllerKind::SlidingModeSmooth => ControllerModel::SlidingMode(SlidingMode::new(
-                sliding(Some(c.boundary_layer.unwrap_or(0.05))),
-            )),
-            ControllerKind::SuboptimalSosm => {
-                ControllerModel::SuboptimalSosm(SuboptimalSosm::new(SuboptimalSosmParams {
-                    level,
-                    max_turn_rate_radps: u_max,
-                    alpha_star: c.alpha_star.unwrap_or(0.5),
-                    output,
-                    derivative,
-                }))
-            }
-            ControllerKind::Pid => ControllerModel::Pid(Pid::new(pid)),
-            ControllerKind::PidCrossing => {
-                ControllerModel::PidCrossing(PidCrossing::new(PidCrossingParams {
-                    pid,
-                    crossing_angle_rad: c.crossing_angle_rad.unwrap_or(0.3),
-                    crossing_period_s: c.crossing_period_s.unwrap_or(20.0),
-                    turn_rate_radps: c.crossing_turn_rate_radps.unwrap_or(0.5),
-                }))
-            }
-            ControllerKind::Schedule => ControllerModel::Schedule(Schedule {
-                steps: c.course_rate_radps.clone().unwrap_or_default(),
+            LawSpec::Schedule(steps) => ControllerModel::Schedule(Schedule {
+                steps: steps.clone(),
             }),
-            ControllerKind::GradientReference => ControllerModel::GradientReference(
-                GradientReference::new(GradientReferenceParams {
-                    level,
-                    ke: c.ke.unwrap_or(0.5),
-                    k_heading: c.k_heading.unwrap_or(1.0),
-                    output,
-                }),
-            ),
         }
     }
 
     /// The sensor, seeded by `sim.seed`.
     pub fn sensor(&self) -> Sensor {
-        self.sensor_seeded(self.file.sim.seed.unwrap_or(0))
+        self.sensor_seeded(self.spec.sim.seed)
     }
 
     /// The sensor, its noise and dropouts seeded by `seed`.
     pub fn sensor_seeded(&self, seed: u64) -> Sensor {
-        let s = &self.file.sensor;
-        let dt = self.dt_s();
-        Sensor::new(
-            SensorConfig {
-                rate_hz: s.rate_hz.unwrap_or(1.0 / dt),
-                noise_std: s.noise_std.unwrap_or(0.0),
-                delay_s: s.delay_s.unwrap_or(0.0),
-                time_constant_s: s.time_constant_s.unwrap_or(0.0),
-                range: s.range,
-                resolution: s.resolution.unwrap_or(0.0),
-                dropout_probability: s.dropout_probability.unwrap_or(0.0),
-                bias_drift_per_sqrt_s: s.bias_drift_per_sqrt_s.unwrap_or(0.0),
-            },
-            dt,
-            seed,
-        )
-        // `resolve_sensor` calls this constructor with the same values (the seed aside, which
-        // cannot make it fail), and every `Scenario` comes out of `resolve`.
-        .expect("validated by resolve: Sensor::new")
+        Sensor::new(self.spec.sensor, self.dt_s(), seed)
+            // `resolve_sensor` calls this constructor with the same values (the seed aside,
+            // which cannot make it fail), and every `Scenario` comes out of `resolve`.
+            .expect("validated by resolve: Sensor::new")
     }
 
     /// Integration step, s.
     pub fn dt_s(&self) -> f64 {
-        self.file.sim.dt_s.unwrap_or(0.01)
+        self.spec.sim.dt_s
     }
 
     /// How long the error must stay within the convergence tolerance, up to the end, for a
     /// convergence time to be reported: `metrics.convergence_min_dwell_s`, default 10 % of
     /// `sim.duration_s`, s.
     pub fn convergence_min_dwell_s(&self) -> f64 {
-        let f = &self.file;
-        f.metrics
-            .convergence_min_dwell_s
-            .unwrap_or(0.1 * f.sim.duration_s.unwrap_or(600.0))
+        self.spec.metrics.convergence_min_dwell_s
     }
 
     /// The step plan (durations as step counts).
     pub fn plan(&self) -> StepPlan {
-        let f = &self.file;
+        let (sim, m) = (&self.spec.sim, &self.spec.metrics);
         StepPlan::new(
-            self.dt_s(),
-            f.sim.duration_s.unwrap_or(600.0),
-            f.output.record_rate_hz.unwrap_or(10.0),
-            f.metrics.steady_state_fraction.unwrap_or(0.2),
-            f.metrics.convergence_tolerance.unwrap_or(0.1),
-            self.convergence_min_dwell_s(),
+            sim.dt_s,
+            sim.duration_s,
+            self.spec.output.record_rate_hz,
+            m.steady_state_fraction,
+            m.convergence_tolerance,
+            m.convergence_min_dwell_s,
             self.level(),
         )
-        .map(|p| match f.metrics.track_loss_band {
-            Some(b) => p.with_track_loss_band(b),
-            None => p,
-        })
+        .map(|p| p.with_track_loss_band(m.track_loss_band))
         // `resolve_sim` and `resolve_output` apply the same `whole_steps` rule to the duration
         // and recording period, the only inputs that can make it fail.
         .expect("validated by resolve: StepPlan::new")

@@ -75,12 +75,7 @@ macro_rules! with_oracles {
 impl Scenario {
     /// The scenario's own start (`[initial]`).
     pub fn start(&self) -> Start {
-        let i = &self.file.initial;
-        Start {
-            x_m: i.x_m.unwrap_or(0.0),
-            y_m: i.y_m.unwrap_or(0.0),
-            heading_rad: i.heading_rad.unwrap_or(0.0),
-        }
+        self.spec.start
     }
 
     /// The vehicle's speed at a start (Dubins: its constant speed; fixed wing: the trimmed ground

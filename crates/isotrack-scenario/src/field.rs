@@ -15,6 +15,24 @@ use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, P
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+/// Where a longitude/latitude grid's local metres are on the Earth: the projection of
+/// [`isotrack_fields::georef`] (equirectangular, mean Earth radius `R`), with the local origin
+/// and the reference latitude of the file's grid, after `field.crop_cells` and
+/// `field.origin_m`:
+///
+/// ```text
+/// lon = lon0 + x / (R cos(ref_lat)),   lat = lat0 + y / R      (radians)
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LonLatFrame {
+    /// Longitude of the local origin `(0, 0)`, deg.
+    pub lon0_deg: f64,
+    /// Latitude of the local origin, deg.
+    pub lat0_deg: f64,
+    /// The latitude whose cosine scales east-west distances (the file's grid's middle), deg.
+    pub ref_lat_deg: f64,
+}
+
 /// Every field a scenario can name.
 #[derive(Clone, Debug)]
 pub enum FieldModel {
@@ -63,10 +81,8 @@ impl FieldDerivatives for FieldModel {
 /// field's `domain_m`. A start outside once ended the run at t = 0 with `left_field` and no
 /// hint; the issue names the extent and the keys that set it.
 pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(), Issue> {
-    let (x, y) = (
-        file.initial.x_m.unwrap_or(10.0),
-        file.initial.y_m.unwrap_or(0.0),
-    );
+    let start = crate::spec::sim::start(&file.initial)?;
+    let (x, y) = (start.x_m, start.y_m);
     let (e, set_by) = match field {
         FieldModel::Grid(g) => (
             g.grid().extent_m(),
@@ -308,6 +324,21 @@ pub fn build_field_noting(
     seed: u64,
     notes: &mut Vec<String>,
 ) -> Result<FieldModel, Issue> {
+    build_field_located(f, base_dir, seed, notes, &mut None)
+}
+
+/// As [`build_field_noting`], setting `lonlat` to where the field's local metres are on the
+/// Earth when its file is a longitude/latitude grid (NetCDF, GeoTIFF in degrees) whose
+/// spacing the scenario leaves as the file gives it (`None` otherwise: a `field.spacing_m` of
+/// its own unties the metres from the degrees).
+pub fn build_field_located(
+    f: &mut FieldSection,
+    base_dir: &Path,
+    seed: u64,
+    notes: &mut Vec<String>,
+    lonlat: &mut Option<LonLatFrame>,
+) -> Result<FieldModel, Issue> {
+    *lonlat = None;
     let analytic = |kind| {
         FieldModel::Analytic(AnalyticField {
             kind,
@@ -340,7 +371,7 @@ pub fn build_field_noting(
             offset: f.offset.unwrap_or_default(),
             gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
         })),
-        FieldKind::Grid => build_grid(f, base_dir, notes)?,
+        FieldKind::Grid => build_grid(f, base_dir, notes, lonlat)?,
         FieldKind::PuffPlume => FieldModel::Puff(Arc::new(PuffPlume::new(PuffPlumeParams {
             source_m: v2(f.source_m.unwrap_or_default()),
             release_rate_hz: f.release_rate_hz.unwrap_or(2.0),
@@ -523,6 +554,7 @@ fn build_grid(
     f: &mut FieldSection,
     base_dir: &Path,
     notes: &mut Vec<String>,
+    lonlat: &mut Option<LonLatFrame>,
 ) -> Result<FieldModel, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
@@ -538,6 +570,7 @@ fn build_grid(
     });
     // (file, its values' units) of the files that give one.
     let mut file_units: Vec<(String, String)> = Vec::new();
+    let mut georef = isotrack_fields::georef::Georeference::None;
     let (raw, file_times) = match f.paths.clone() {
         Some(list) => {
             let mut frames = Vec::with_capacity(list.len());
@@ -558,6 +591,9 @@ fn build_grid(
                 }
                 notes.extend(s.warnings);
                 file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
+                if k == 0 {
+                    georef = s.georeference;
+                }
                 frames.extend(s.frames);
                 abs.push(path.display().to_string());
             }
@@ -571,10 +607,20 @@ fn build_grid(
             f.path = Some(path.display().to_string());
             notes.extend(s.warnings);
             file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
+            georef = s.georeference;
             (s.frames, s.frame_times_s)
         }
     };
     adopt_file_units(f, &file_units, notes);
+    // The file's own position of the (cropped) south-west node, and its spacing: what
+    // field.origin_m and field.spacing_m replace.
+    let natural = raw.first().map(|g| {
+        let o = match f.crop_cells {
+            Some([c0, _, r0, _]) => g.node_m(c0, r0),
+            None => g.origin_m(),
+        };
+        (o, g.spacing_m())
+    });
     let n = raw.len();
     let mut frames = Vec::with_capacity(n);
     for (k, g) in raw.into_iter().enumerate() {
@@ -584,6 +630,27 @@ fn build_grid(
             }
             i
         })?);
+    }
+    if let (
+        isotrack_fields::georef::Georeference::LonLat {
+            lon0_deg,
+            lat0_deg,
+            ref_lat_deg,
+            ..
+        },
+        Some((o, sp)),
+    ) = (georef, natural)
+    {
+        // Local p is the file's p - origin + o; the file's local (0, 0) is (lon0, lat0).
+        if frames[0].spacing_m() == sp {
+            let k = isotrack_fields::georef::EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+            let shift = o - frames[0].origin_m();
+            *lonlat = Some(LonLatFrame {
+                lon0_deg: lon0_deg + shift.x / (k * ref_lat_deg.to_radians().cos()),
+                lat0_deg: lat0_deg + shift.y / k,
+                ref_lat_deg,
+            });
+        }
     }
     // Record what was used, so the resolved scenario reproduces the run from anywhere.
     f.spacing_m = Some(frames[0].spacing_m());

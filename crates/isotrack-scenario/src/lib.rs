@@ -21,7 +21,9 @@ pub mod field;
 pub mod load;
 pub mod resolve;
 pub mod schema;
+pub mod spec;
 pub mod sweep;
+pub mod tomltext;
 mod watch;
 
 pub use build::{ControllerModel, Tracker};
@@ -33,7 +35,7 @@ pub use load::{
 };
 pub use schema::ScenarioFile;
 
-use field::{build_field_noting, FieldModel, IsolineOracle};
+use field::{build_field_located, FieldModel, IsolineOracle, LonLatFrame};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -41,7 +43,11 @@ use std::sync::{Arc, OnceLock};
 /// times (cloning shares the field).
 #[derive(Clone, Debug)]
 pub struct Scenario {
+    /// The resolved keys: the user's, and every default resolution wrote (what `scenario.toml`
+    /// records; sweeps and `--set` apply to it).
     file: ScenarioFile,
+    /// Every setting in force, typed ([`spec`]).
+    spec: spec::ScenarioSpec,
     field: Arc<FieldModel>,
     vehicle: Arc<build::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
@@ -50,6 +56,8 @@ pub struct Scenario {
     /// The `[field]` keys its files filled in (geometry, units), not the user's: a variant
     /// that reads another file drops them, so that the new file's own are used.
     file_filled_keys: Arc<Vec<String>>,
+    /// Where a lon/lat grid's local metres are on the Earth ([`field::build_field_located`]).
+    lonlat: Option<LonLatFrame>,
 }
 
 /// The keys set in `after` but not in `before` (`path`/`paths`, made absolute, excepted).
@@ -88,21 +96,26 @@ impl Scenario {
     /// `base_dir`.
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
-        let seed = file.sim.seed.unwrap_or(0);
+        let seed = spec::SimSpec::new(&file.sim).map_err(|i| vec![i])?.seed;
         let mut notes = Vec::new();
         let given = file.field.clone();
-        let field =
-            build_field_noting(&mut file.field, base_dir, seed, &mut notes).map_err(|i| vec![i])?;
+        let mut lonlat = None;
+        let field = build_field_located(&mut file.field, base_dir, seed, &mut notes, &mut lonlat)
+            .map_err(|i| vec![i])?;
         let filled = filled_keys(&given, &file.field);
         field::check_start(&file, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
+        let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
+            .map_err(|i| vec![i])?;
         Ok(Self {
             file,
+            spec,
             field: Arc::new(field),
             vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
             field_notes: Arc::new(notes),
             file_filled_keys: Arc::new(filled),
+            lonlat,
         })
     }
 
@@ -148,6 +161,7 @@ impl Scenario {
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
+        let mut lonlat = self.lonlat;
         let (field, field_notes, file_filled_keys) = if file.field == self.file.field && !seeded {
             (
                 self.field.clone(),
@@ -155,11 +169,19 @@ impl Scenario {
                 self.file_filled_keys.clone(),
             )
         } else {
-            let seed = file.sim.seed.unwrap_or(0);
+            let seed = spec::SimSpec::new(&file.sim)
+                .map_err(|i| located(vec![i]))?
+                .seed;
             let mut notes = Vec::new();
             let given = file.field.clone();
-            let field = build_field_noting(&mut file.field, Path::new("."), seed, &mut notes)
-                .map_err(|i| located(vec![i]))?;
+            let field = build_field_located(
+                &mut file.field,
+                Path::new("."),
+                seed,
+                &mut notes,
+                &mut lonlat,
+            )
+            .map_err(|i| located(vec![i]))?;
             let mut filled = filled_keys(&given, &file.field);
             if !new_source {
                 filled.extend(self.file_filled_keys.iter().cloned());
@@ -180,13 +202,17 @@ impl Scenario {
         } else {
             Arc::new(OnceLock::new())
         };
+        let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
+            .map_err(|i| located(vec![i]))?;
         Ok(Self {
             file,
+            spec,
             field,
             vehicle,
             isoline,
             field_notes,
             file_filled_keys,
+            lonlat,
         })
     }
 
@@ -204,14 +230,24 @@ impl Scenario {
         file.controller = file.controller.switched_to(kind);
         let origin = format!("controller.kind = \"{}\"", kind.name());
         let file = resolve::resolve(file).map_err(|issues| locate_derived(issues, &origin, &[]))?;
+        let spec = spec::ScenarioSpec::new(&file, self.vehicle.airframe_turn_rate_limit_radps())
+            .map_err(|i| locate_derived(vec![i], &origin, &[]))?;
         Ok(Self {
             file,
+            spec,
             field: self.field.clone(),
             vehicle: self.vehicle.clone(),
             isoline: self.isoline.clone(),
             field_notes: self.field_notes.clone(),
             file_filled_keys: self.file_filled_keys.clone(),
+            lonlat: self.lonlat,
         })
+    }
+
+    /// Where the field's local metres are on the Earth, when its file is a longitude/latitude
+    /// grid whose spacing the scenario keeps ([`field::build_field_located`]).
+    pub fn lonlat_frame(&self) -> Option<LonLatFrame> {
+        self.lonlat
     }
 
     /// Whether the field changes with time: a grid time series, a puff plume, or an analytic
@@ -244,6 +280,12 @@ impl Scenario {
     /// scenario).
     pub fn file(&self) -> &ScenarioFile {
         &self.file
+    }
+
+    /// Every setting in force, typed, the derived ones computed (read settings here, not from
+    /// [`Scenario::file`]).
+    pub fn spec(&self) -> &spec::ScenarioSpec {
+        &self.spec
     }
 
     /// Warnings the field's files give (a grid file's `units` against `field.units`): part of

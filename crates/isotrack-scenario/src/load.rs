@@ -164,22 +164,15 @@ pub const MAX_SCENARIO_FILE_BYTES: u64 = 1 << 20;
 pub const MAX_KEY_PARTS: usize = 8;
 
 /// The most characters of user text (a key, a value, a file's line) echoed in one message: a
-/// 10 MB key once made a 20 MB error.
-pub const MAX_ECHO_CHARS: usize = 200;
+/// 10 MB key once made a 20 MB error. Counted on the text as shown, escapes included.
+pub const MAX_ECHO_CHARS: usize = isotrack_core::numtext::ECHO_CHARS;
 
-/// `text` with its terminal controls escaped ([`isotrack_core::numtext::Escaped`]: a message
-/// raised to Python or written to a file shows them as `\x1b`, as the console does), cut to
-/// [`MAX_ECHO_CHARS`] characters, with the number left out said.
+/// `text` as [`isotrack_core::numtext::Clipped`] shows it: terminal controls and line feeds
+/// escaped (a message raised to Python or written to a file shows them as `\x1b`, as the
+/// console does), then cut to [`MAX_ECHO_CHARS`] characters of what is shown, with the number
+/// left out said.
 pub fn clip(text: &str) -> String {
-    let escaped = isotrack_core::numtext::Escaped(text).to_string();
-    let text = escaped.as_str();
-    let n = text.chars().count();
-    if n <= MAX_ECHO_CHARS {
-        text.to_string()
-    } else {
-        let head: String = text.chars().take(MAX_ECHO_CHARS).collect();
-        format!("{head}... ({} more characters)", n - MAX_ECHO_CHARS)
-    }
+    isotrack_core::numtext::Clipped(text).to_string()
 }
 
 /// Loads a scenario file (or the built-in default when `path` is `None`), applies the `--set`

@@ -2,6 +2,10 @@
 //! (or every problem found, each naming its key) out.
 
 use crate::schema::*;
+use crate::spec::controller as C;
+use crate::spec::sensor as N;
+use crate::spec::sim as S;
+use crate::spec::vehicle as V;
 use isotrack_core::control::HigherSide;
 use isotrack_sim::{whole_steps, Sensor, SensorConfig, SensorError, StepPlan, StepPlanError};
 
@@ -41,11 +45,30 @@ impl Checker {
     fn positive(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x <= 0.0 {
             self.fail(key, format!("must be > 0, got {}", Echo(x)));
+        } else {
+            self.not_subnormal(key, x);
         }
     }
     fn non_negative(&mut self, key: &str, x: f64) {
         if self.finite(key, x) && x < 0.0 {
             self.fail(key, format!("must be >= 0, got {}", Echo(x)));
+        } else {
+            self.not_subnormal(key, x);
+        }
+    }
+    /// Refuses a subnormal `x` (non-zero, below `f64::MIN_POSITIVE` = 2.2e-308 in magnitude):
+    /// no gain, time or length anyone means, and a product or quotient of one underflows to 0
+    /// or overflows (`kp = 1e-310` was accepted as a law that never turns).
+    fn not_subnormal(&mut self, key: &str, x: f64) {
+        if x != 0.0 && x.is_finite() && !x.is_normal() {
+            self.fail(
+                key,
+                format!(
+                    "must not be subnormal (below {} in magnitude), got {}",
+                    Echo(f64::MIN_POSITIVE),
+                    Echo(x)
+                ),
+            );
         }
     }
     /// Rejects every present key of `section` that is not in `allowed` for the chosen
@@ -529,7 +552,7 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     let allowed = controller_allowed(kind);
     let choice = format!("controller.kind = \"{}\"", kind.name());
     c.inapplicable("controller", &choice, allowed, &controller_keys_present(ct));
-    c.field_value("controller.level", *ct.level.get_or_insert(10.0));
+    c.field_value("controller.level", *ct.level.get_or_insert(C::LEVEL));
     ct.higher_side.get_or_insert(HigherSide::Right);
     let bang_bang = matches!(
         kind,
@@ -538,7 +561,8 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
             | ControllerKind::SuboptimalSosm
     );
     if bang_bang {
-        ct.max_turn_rate_radps.get_or_insert(1.0);
+        ct.max_turn_rate_radps
+            .get_or_insert(C::BANG_BANG_U_MAX_RADPS);
     }
     if let Some(m) = ct.max_turn_rate_radps {
         c.positive("controller.max_turn_rate_radps", m);
@@ -562,21 +586,26 @@ fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKi
     };
     match kind {
         ControllerKind::PiIsoline => {
-            pos(c, "controller.kp", &mut ct.kp, 10.0);
-            nonneg(c, "controller.ki", &mut ct.ki, 1.0);
-            pos(c, "controller.c1", &mut ct.c1, 0.2);
-            pos(c, "controller.c2", &mut ct.c2, 1.0);
+            pos(c, "controller.kp", &mut ct.kp, C::PI_KP);
+            nonneg(c, "controller.ki", &mut ct.ki, C::PI_KI);
+            pos(c, "controller.c1", &mut ct.c1, C::PI_C1);
+            pos(c, "controller.c2", &mut ct.c2, C::PI_C2);
             resolve_anti_windup(c, ct);
         }
         ControllerKind::SlidingMode | ControllerKind::SlidingModeSmooth => {
-            pos(c, "controller.gamma", &mut ct.gamma, 0.2);
-            pos(c, "controller.delta", &mut ct.delta, 1.0);
+            pos(c, "controller.gamma", &mut ct.gamma, C::SM_GAMMA);
+            pos(c, "controller.delta", &mut ct.delta, C::SM_DELTA);
             if kind == ControllerKind::SlidingModeSmooth {
-                pos(c, "controller.boundary_layer", &mut ct.boundary_layer, 0.05);
+                pos(
+                    c,
+                    "controller.boundary_layer",
+                    &mut ct.boundary_layer,
+                    C::SM_BOUNDARY_LAYER,
+                );
             }
         }
         ControllerKind::SuboptimalSosm => {
-            let a = *ct.alpha_star.get_or_insert(0.5);
+            let a = *ct.alpha_star.get_or_insert(C::SOSM_ALPHA_STAR);
             if c.finite("controller.alpha_star", a) && !(a > 0.0 && a <= 1.0) {
                 c.fail(
                     "controller.alpha_star",
@@ -585,23 +614,25 @@ fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKi
             }
         }
         ControllerKind::Pid | ControllerKind::PidCrossing => {
-            nonneg(c, "controller.kp", &mut ct.kp, 3.0);
-            nonneg(c, "controller.ki", &mut ct.ki, 0.2);
-            nonneg(c, "controller.kd", &mut ct.kd, 10.0);
+            nonneg(c, "controller.kp", &mut ct.kp, C::PID_KP);
+            nonneg(c, "controller.ki", &mut ct.ki, C::PID_KI);
+            nonneg(c, "controller.kd", &mut ct.kd, C::PID_KD);
             if kind == ControllerKind::PidCrossing {
                 pos(
                     c,
                     "controller.crossing_angle_rad",
                     &mut ct.crossing_angle_rad,
-                    0.3,
+                    C::CROSSING_ANGLE_RAD,
                 );
                 pos(
                     c,
                     "controller.crossing_period_s",
                     &mut ct.crossing_period_s,
-                    20.0,
+                    C::CROSSING_PERIOD_S,
                 );
-                let d = ct.max_turn_rate_radps.unwrap_or(0.5);
+                let d = ct
+                    .max_turn_rate_radps
+                    .unwrap_or(C::CROSSING_TURN_RATE_RADPS);
                 pos(
                     c,
                     "controller.crossing_turn_rate_radps",
@@ -611,8 +642,13 @@ fn resolve_gains(c: &mut Checker, ct: &mut ControllerSection, kind: ControllerKi
             }
         }
         ControllerKind::GradientReference => {
-            pos(c, "controller.ke", &mut ct.ke, 0.5);
-            pos(c, "controller.k_heading", &mut ct.k_heading, 1.0);
+            pos(c, "controller.ke", &mut ct.ke, C::GR_KE);
+            pos(
+                c,
+                "controller.k_heading",
+                &mut ct.k_heading,
+                C::GR_K_HEADING,
+            );
         }
         ControllerKind::Schedule => resolve_schedule(c, ct),
     }
@@ -682,7 +718,7 @@ fn resolve_anti_windup(c: &mut Checker, ct: &mut ControllerSection) {
         AntiWindupKind::BackCalculation => {
             c.positive(
                 "controller.tracking_time_s",
-                *ct.tracking_time_s.get_or_insert(1.0),
+                *ct.tracking_time_s.get_or_insert(C::TRACKING_TIME_S),
             );
             if ct.max_turn_rate_radps.is_none() {
                 c.fail(
@@ -717,13 +753,14 @@ fn resolve_derivative(c: &mut Checker, ct: &mut ControllerSection) {
         DerivativeKindName::FilteredDifference => {
             c.positive(
                 "controller.derivative_tau_s",
-                *ct.derivative_tau_s.get_or_insert(0.1),
+                *ct.derivative_tau_s.get_or_insert(C::DERIVATIVE_TAU_S),
             );
         }
         DerivativeKindName::Levant => {
             c.positive(
                 "controller.derivative_lipschitz",
-                *ct.derivative_lipschitz.get_or_insert(1.0),
+                *ct.derivative_lipschitz
+                    .get_or_insert(C::DERIVATIVE_LIPSCHITZ),
             );
         }
     }
@@ -737,7 +774,7 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     resolve_field(&mut c, &mut f.field);
     resolve_vehicle(&mut c, &mut f.vehicle, dt);
     resolve_initial(&mut c, &mut f.initial);
-    let duration = f.sim.duration_s.unwrap_or(600.0);
+    let duration = f.sim.duration_s.unwrap_or(S::DURATION_S);
     resolve_sensor(&mut c, &mut f.sensor, dt, duration);
     resolve_controller(&mut c, &mut f.controller);
     resolve_metrics(&mut c, &mut f);
@@ -786,11 +823,11 @@ pub mod ranges {
 
 /// `[sim]`; returns the step (s) for the sections whose checks depend on it.
 fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
-    let dt = *sim.dt_s.get_or_insert(0.01);
+    let dt = *sim.dt_s.get_or_insert(S::DT_S);
     c.positive("sim.dt_s", dt);
-    let duration = *sim.duration_s.get_or_insert(600.0);
+    let duration = *sim.duration_s.get_or_insert(S::DURATION_S);
     c.positive("sim.duration_s", duration);
-    sim.seed.get_or_insert(0);
+    sim.seed.get_or_insert(S::SEED);
     if dt > 0.0 && duration > 0.0 && dt.is_finite() && duration.is_finite() {
         if let Err(reason) = whole_steps(duration, dt) {
             c.fail(
@@ -1017,7 +1054,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
     );
     match vk {
         VehicleKind::Dubins => {
-            let v = *vd.speed_mps.get_or_insert(0.5);
+            let v = *vd.speed_mps.get_or_insert(V::DUBINS_SPEED_MPS);
             c.positive("vehicle.speed_mps", v);
             if v > ranges::MAX_SPEED_MPS {
                 c.fail(
@@ -1027,7 +1064,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
             }
         }
         VehicleKind::FixedWing => {
-            let va = *vd.airspeed_mps.get_or_insert(30.0);
+            let va = *vd.airspeed_mps.get_or_insert(V::AIRSPEED_MPS);
             c.positive("vehicle.airspeed_mps", va);
             let (lo, hi) = ranges::AIRSPEED_RANGE_MPS;
             if va.is_finite() && !(lo..=hi).contains(&va) {
@@ -1041,7 +1078,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
                     ),
                 );
             }
-            let h = *vd.altitude_m.get_or_insert(100.0);
+            let h = *vd.altitude_m.get_or_insert(V::ALTITUDE_M);
             let (lo, hi) = ranges::ALTITUDE_RANGE_M;
             if c.finite("vehicle.altitude_m", h) && !(h > lo && h <= hi) {
                 c.fail(
@@ -1054,11 +1091,11 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
                     ),
                 );
             }
-            let w = *vd.wind_mps.get_or_insert([0.0, 0.0]);
+            let w = *vd.wind_mps.get_or_insert(V::WIND_MPS);
             c.speeds("vehicle.wind_mps", &w);
-            vd.gusts.get_or_insert(false);
-            vd.trim_feedforward.get_or_insert(true);
-            vd.ecen674_gains.get_or_insert(false);
+            vd.gusts.get_or_insert(V::GUSTS);
+            vd.trim_feedforward.get_or_insert(V::TRIM_FEEDFORWARD);
+            vd.ecen674_gains.get_or_insert(V::ECEN674_GAINS);
             if dt > 0.02 {
                 c.fail("sim.dt_s", format!("must be <= 0.02 s for vehicle.kind = \"fixed_wing\" (the autopilot runs at the step), got {}", Echo(dt)));
             }
@@ -1106,11 +1143,11 @@ fn resolve_sitl(c: &mut Checker, s: &SitlSection) {
 
 /// `[initial]`: the pose, within [`ranges::MAX_COORDINATE_M`].
 fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
-    c.coordinate("initial.x_m", *init.x_m.get_or_insert(10.0));
-    c.coordinate("initial.y_m", *init.y_m.get_or_insert(0.0));
+    c.coordinate("initial.x_m", *init.x_m.get_or_insert(S::START_X_M));
+    c.coordinate("initial.y_m", *init.y_m.get_or_insert(S::START_Y_M));
     c.finite(
         "initial.heading_rad",
-        *init.heading_rad.get_or_insert(-std::f64::consts::FRAC_PI_2),
+        *init.heading_rad.get_or_insert(S::START_HEADING_RAD),
     );
 }
 
@@ -1130,27 +1167,29 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
         );
     }
     let rate = *sn.rate_hz.get_or_insert(if dt > 0.0 && !tiny_step {
-        1.0 / dt
+        crate::spec::sensor::default_rate_hz(dt)
     } else {
         1.0
     });
     c.positive("sensor.rate_hz", rate);
-    let noise = *sn.noise_std.get_or_insert(0.0);
+    let noise = *sn.noise_std.get_or_insert(N::NOISE_STD);
     c.sensor_setting("sensor.noise_std", noise);
-    let delay = *sn.delay_s.get_or_insert(0.0);
+    let delay = *sn.delay_s.get_or_insert(N::DELAY_S);
     c.non_negative("sensor.delay_s", delay);
-    let tau = *sn.time_constant_s.get_or_insert(0.0);
+    let tau = *sn.time_constant_s.get_or_insert(N::TIME_CONSTANT_S);
     c.non_negative("sensor.time_constant_s", tau);
-    let resolution = *sn.resolution.get_or_insert(0.0);
+    let resolution = *sn.resolution.get_or_insert(N::RESOLUTION);
     c.sensor_setting("sensor.resolution", resolution);
-    let p = *sn.dropout_probability.get_or_insert(0.0);
+    let p = *sn.dropout_probability.get_or_insert(N::DROPOUT_PROBABILITY);
     if c.finite("sensor.dropout_probability", p) && !(0.0..1.0).contains(&p) {
         c.fail(
             "sensor.dropout_probability",
             format!("must be in [0, 1), got {}", Echo(p)),
         );
     }
-    let drift = *sn.bias_drift_per_sqrt_s.get_or_insert(0.0);
+    let drift = *sn
+        .bias_drift_per_sqrt_s
+        .get_or_insert(N::BIAS_DRIFT_PER_SQRT_S);
     c.sensor_setting("sensor.bias_drift_per_sqrt_s", drift);
     if let Some([lo, hi]) = sn.range {
         c.all_finite("sensor.range", &[lo, hi]);
@@ -1250,7 +1289,10 @@ pub fn nearest_valid_rates(rate_hz: f64, dt_s: f64) -> String {
 
 /// `[metrics]`.
 fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
-    let frac = *f.metrics.steady_state_fraction.get_or_insert(0.2);
+    let frac = *f
+        .metrics
+        .steady_state_fraction
+        .get_or_insert(S::STEADY_STATE_FRACTION);
     if c.finite("metrics.steady_state_fraction", frac) && !(frac > 0.0 && frac <= 1.0) {
         c.fail(
             "metrics.steady_state_fraction",
@@ -1258,11 +1300,7 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
         );
     }
     let level = f.controller.level.unwrap_or(0.0);
-    let tol_default = if level != 0.0 && level.is_finite() {
-        0.01 * level.abs()
-    } else {
-        0.01
-    };
+    let tol_default = C::one_percent_of_level(level);
     c.positive(
         "metrics.convergence_tolerance",
         *f.metrics.convergence_tolerance.get_or_insert(tol_default),
@@ -1283,7 +1321,7 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
     // The dwell's default follows the duration (10 %), which a sweep or `--set` may change
     // after this file was resolved, so it is left unset here and applied by `Scenario::plan`.
     if let Some(dwell) = f.metrics.convergence_min_dwell_s {
-        let duration = f.sim.duration_s.unwrap_or(600.0);
+        let duration = f.sim.duration_s.unwrap_or(S::DURATION_S);
         if c.finite("metrics.convergence_min_dwell_s", dwell)
             && !(dwell >= 0.0 && (!duration.is_finite() || dwell <= duration))
         {
@@ -1302,11 +1340,11 @@ fn resolve_metrics(c: &mut Checker, f: &mut ScenarioFile) {
 /// `[output]`, and the step plan: decided by [`StepPlan::new`] itself, the constructor the
 /// builder calls.
 fn resolve_output(c: &mut Checker, f: &mut ScenarioFile) {
-    let rec = *f.output.record_rate_hz.get_or_insert(10.0);
+    let rec = *f.output.record_rate_hz.get_or_insert(S::RECORD_RATE_HZ);
     c.non_negative("output.record_rate_hz", rec);
     let (dt, duration) = (
-        f.sim.dt_s.unwrap_or(0.01),
-        f.sim.duration_s.unwrap_or(600.0),
+        f.sim.dt_s.unwrap_or(S::DT_S),
+        f.sim.duration_s.unwrap_or(S::DURATION_S),
     );
     let sane = |x: f64| x.is_finite() && x > 0.0;
     if !(sane(dt) && sane(duration) && rec.is_finite() && rec >= 0.0) {

@@ -380,7 +380,7 @@ pub struct InitialSection {
     /// North position, m (default 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub y_m: Option<f64>,
-    /// Heading, rad counter-clockwise from +x (default pi/2: north).
+    /// Heading, rad counter-clockwise from +x (default -pi/2: south).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heading_rad: Option<f64>,
 }

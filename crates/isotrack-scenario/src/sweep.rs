@@ -140,7 +140,7 @@ fn array_len(list: &[toml::Value]) -> Option<usize> {
 fn cell(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => s.clone(),
-        other => other.to_string(),
+        other => crate::tomltext::value_text(other),
     }
 }
 
@@ -148,7 +148,7 @@ fn cell(v: &toml::Value) -> String {
 pub fn value_literal(v: &toml::Value) -> String {
     match v {
         toml::Value::String(s) => format!("{s:?}"),
-        other => other.to_string(),
+        other => crate::tomltext::value_text(other),
     }
 }
 

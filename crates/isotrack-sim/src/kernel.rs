@@ -7,7 +7,8 @@
 //! [`complete`](VehicleRun::complete) says so. [`Episode`](crate::Episode) drives one
 //! (`simulate`, a traced run, an agent from outside); the batched loop drives
 //! [`LANES`](crate::LANES) at once, the field and the vehicle step in SIMD lanes; a team of
-//! vehicles sharing one clock and one field would drive a slice of them the same way. So every
+//! vehicles sharing one clock and one field ([`Group`](crate::team::Group)) drives one per
+//! vehicle the same way, the spacing law answering between sense and complete. So every
 //! way to run gives each vehicle the same numbers, bit for bit, and ends it by the same rules.
 //!
 //! The controller is not in it either: between [`sense`](VehicleRun::sense) and
@@ -55,6 +56,8 @@ pub(crate) struct VehicleRun<const TRACE: bool> {
     /// The true field value there (finite).
     value: f64,
     last_valid_step: u64,
+    /// Where the vehicle started.
+    start: Vec2,
     end_pos: Vec2,
     last_row: Option<TraceRow>,
     last_recorded_step: Option<u64>,
@@ -83,6 +86,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
             pose: start,
             value: f64::NAN,
             last_valid_step: 0,
+            start: start.position,
             end_pos: start.position,
             last_row: None,
             last_recorded_step: None,
@@ -160,6 +164,8 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
         if k > 0 {
             self.metrics
                 .add_path((pose.position - self.pose.position).norm());
+            let d = pose.position - self.start;
+            self.metrics.observe_offset_sq(d.dot(d));
         }
         (self.pose, self.value) = (pose, value);
         match self.sensor.observe(t_s, value) {

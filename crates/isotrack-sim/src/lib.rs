@@ -19,7 +19,9 @@
 //! sensor, metrics, held command, sample count, end and trace of one vehicle; the vehicle's
 //! state, the clock and the field belong to its driver), whichever way a run is driven:
 //! [`Episode`] (one vehicle: [`simulate`], a traced run, an agent from outside) or
-//! [`simulate_batch`] (up to [`LANES`] vehicles, the field and step 5 in SIMD lanes).
+//! [`simulate_batch`] (up to [`LANES`] vehicles, the field and step 5 in SIMD lanes) or a
+//! [`team`] ([`Group`]: `N` vehicles on one clock, spreading out along one isoline by a spacing
+//! law from neighbour ranges; docs/TEAMS.md).
 #![deny(missing_docs)]
 
 mod batch;
@@ -28,6 +30,7 @@ mod metrics;
 mod run;
 mod sensor;
 mod simulation;
+pub mod team;
 mod trace;
 
 pub use batch::{simulate_batch, BatchRun, LANES};
@@ -40,4 +43,5 @@ pub use sensor::{
     SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
+pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult};
 pub use trace::{NoTrace, TraceRow, TraceSink};

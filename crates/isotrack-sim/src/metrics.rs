@@ -44,6 +44,12 @@ pub struct Metrics {
     /// Whether the error is tracked: within the tolerance once, and not out of the band since.
     tracking: bool,
     track_losses: u64,
+    /// Whether the error ever reached the level (see [`RunMetrics::reached_level`]).
+    reached: bool,
+    /// The sign of the first finite error (`Some(true)`: above the level).
+    first_above: Option<bool>,
+    /// The largest squared distance from the start, m^2.
+    far_sq: f64,
 }
 
 /// The metrics of a finished run. `None` (JSON `null`) where a metric is undefined: no step
@@ -83,6 +89,16 @@ pub struct RunMetrics {
     /// (`metrics.track_loss_band`, default 5 x the tolerance); re-acquired when back within
     /// the tolerance.
     pub track_losses: u64,
+    /// Whether the true error ever reached the level: came within the convergence tolerance
+    /// (`|eps| <= tol`) or changed sign (crossed the isoline) at some step of the run. Every
+    /// step counts, whatever `output.record_rate_hz` keeps in the trace (`compare` flags the
+    /// laws that never did). Not written to `summary.json`.
+    #[serde(skip)]
+    pub reached_level: bool,
+    /// The largest distance from the start position at any step of the run, m. Not written
+    /// to `summary.json`.
+    #[serde(skip)]
+    pub farthest_from_start_m: f64,
 }
 
 impl Metrics {
@@ -108,6 +124,9 @@ impl Metrics {
             ss_in_band: 0,
             tracking: false,
             track_losses: 0,
+            reached: false,
+            first_above: None,
+            far_sq: 0.0,
         }
     }
 
@@ -126,6 +145,11 @@ impl Metrics {
             self.track_losses += 1;
         } else if !self.tracking && within {
             self.tracking = true;
+        }
+        if !self.reached && eps.is_finite() {
+            let above = eps > 0.0;
+            self.reached = a <= self.cfg.convergence_tolerance
+                || *self.first_above.get_or_insert(above) != above;
         }
         if k >= self.cfg.steady_state_start_step {
             self.ss_n += 1;
@@ -179,6 +203,12 @@ impl Metrics {
         self.path_length_m += ds_m;
     }
 
+    /// Observes the squared distance of a step's position from the start, m^2.
+    #[inline]
+    pub fn observe_offset_sq(&mut self, d_sq_m2: f64) {
+        self.far_sq = self.far_sq.max(d_sq_m2);
+    }
+
     /// The metrics; `completed` says whether the run reached its planned end.
     pub fn finish(&self, completed: bool) -> RunMetrics {
         let n = self.ss_n as f64;
@@ -209,6 +239,8 @@ impl Metrics {
                 .then(|| (self.iso_sum_sq / self.iso_n as f64).sqrt()),
             time_in_band_fraction: have_ss.then(|| self.ss_in_band as f64 / n),
             track_losses: self.track_losses,
+            reached_level: self.reached,
+            farthest_from_start_m: self.far_sq.sqrt(),
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use isotrack_core::lanes;
 use isotrack_core::math::{wrap_angle, Pose2, Vec2};
-use isotrack_core::Vehicle;
+use isotrack_core::{SpeedCommand, Vehicle};
 
 /// State of a [`Dubins`] robot.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,16 +39,142 @@ impl Dubins {
         s: &mut DubinsState,
         omega_radps: f64,
         dt_s: f64,
-        (s1, c1): (f64, f64),
-        (sa, ca): (f64, f64),
+        sc1: (f64, f64),
+        sca: (f64, f64),
     ) {
-        // Rotate (c1, s1) by a, then by a again.
-        let (c2, s2) = (c1 * ca - s1 * sa, s1 * ca + c1 * sa);
-        let (c4, s4) = (c2 * ca - s2 * sa, s2 * ca + c2 * sa);
-        let k = self.speed_mps * dt_s / 6.0;
-        s.position_m.x += k * (c1 + 4.0 * c2 + c4);
-        s.position_m.y += k * (s1 + 4.0 * s2 + s4);
-        s.heading_rad += omega_radps * dt_s;
+        advance_at(self.speed_mps, s, omega_radps, dt_s, sc1, sca);
+    }
+}
+
+/// Simpson's rule over the step at speed `speed_mps` (the arithmetic of [`Dubins`], shared with
+/// [`DubinsVariableSpeed`] so that both give the same numbers at the same speed).
+#[inline(always)]
+fn advance_at(
+    speed_mps: f64,
+    s: &mut DubinsState,
+    omega_radps: f64,
+    dt_s: f64,
+    (s1, c1): (f64, f64),
+    (sa, ca): (f64, f64),
+) {
+    // Rotate (c1, s1) by a, then by a again.
+    let (c2, s2) = (c1 * ca - s1 * sa, s1 * ca + c1 * sa);
+    let (c4, s4) = (c2 * ca - s2 * sa, s2 * ca + c2 * sa);
+    let k = speed_mps * dt_s / 6.0;
+    s.position_m.x += k * (c1 + 4.0 * c2 + c4);
+    s.position_m.y += k * (s1 + 4.0 * s2 + s4);
+    s.heading_rad += omega_radps * dt_s;
+}
+
+/// State of a [`DubinsVariableSpeed`] robot: the Dubins state and the speed held.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DubinsSpeedState {
+    /// Position and heading.
+    pub dubins: DubinsState,
+    /// The speed held over the next step, m/s (inside the envelope).
+    pub speed_mps: f64,
+}
+
+/// A Dubins robot whose speed is commanded within `[min_speed_mps, max_speed_mps]` (the
+/// [`SpeedCommand`] a team's spacing law drives): `p' = v [cos(theta), sin(theta)]`,
+/// `theta' = omega`, with `v` held over each step like `omega`. The integration is [`Dubins`]'s,
+/// so at a constant speed `v` it moves as `Dubins { speed_mps: v }` does, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DubinsVariableSpeed {
+    /// Slowest speed, m/s (> 0).
+    pub min_speed_mps: f64,
+    /// Fastest speed, m/s (>= `min_speed_mps`).
+    pub max_speed_mps: f64,
+}
+
+impl DubinsVariableSpeed {
+    /// A state at `dubins` holding `speed_mps`, saturated to the envelope.
+    pub fn state(&self, dubins: DubinsState, speed_mps: f64) -> DubinsSpeedState {
+        let mut s = DubinsSpeedState {
+            dubins,
+            speed_mps: self.min_speed_mps,
+        };
+        self.command_speed(&mut s, speed_mps);
+        s
+    }
+}
+
+impl Vehicle for DubinsVariableSpeed {
+    type State = DubinsSpeedState;
+
+    #[inline]
+    fn step(&self, s: &mut DubinsSpeedState, omega_radps: f64, dt_s: f64) {
+        let (s1, c1) = lanes::sin_cos(s.dubins.heading_rad);
+        let (sa, ca) = lanes::sin_cos_small_angle(omega_radps * (0.5 * dt_s));
+        advance_at(
+            s.speed_mps,
+            &mut s.dubins,
+            omega_radps,
+            dt_s,
+            (s1, c1),
+            (sa, ca),
+        );
+    }
+
+    /// The step of `N` robots with their `sin_cos` in lanes; each state is what
+    /// [`step`](Vehicle::step) gives it, bit for bit.
+    #[inline(always)]
+    fn step_lanes<const N: usize>(
+        &self,
+        states: &mut [DubinsSpeedState; N],
+        omega_radps: &[f64; N],
+        dt_s: f64,
+    ) {
+        let mut th = [0.0; N];
+        let mut half = [0.0; N];
+        for i in 0..N {
+            th[i] = states[i].dubins.heading_rad;
+            half[i] = omega_radps[i] * (0.5 * dt_s);
+        }
+        let (s1, c1) = lanes::sin_cos_lanes(th);
+        let (sa, ca) = lanes::sin_cos_small_angle_lanes(half);
+        for i in 0..N {
+            let v = states[i].speed_mps;
+            advance_at(
+                v,
+                &mut states[i].dubins,
+                omega_radps[i],
+                dt_s,
+                (s1[i], c1[i]),
+                (sa[i], ca[i]),
+            );
+        }
+    }
+
+    #[inline]
+    fn pose(&self, s: &DubinsSpeedState) -> Pose2 {
+        Pose2 {
+            position: s.dubins.position_m,
+            heading_rad: wrap_angle(s.dubins.heading_rad),
+        }
+    }
+
+    #[inline]
+    fn position(&self, s: &DubinsSpeedState) -> Vec2 {
+        s.dubins.position_m
+    }
+
+    fn speed_mps(&self, s: &DubinsSpeedState) -> f64 {
+        s.speed_mps
+    }
+}
+
+impl SpeedCommand for DubinsVariableSpeed {
+    fn speed_envelope_mps(&self) -> (f64, f64) {
+        (self.min_speed_mps, self.max_speed_mps)
+    }
+
+    #[inline]
+    fn command_speed(&self, s: &mut DubinsSpeedState, speed_mps: f64) -> f64 {
+        // max then min: a NaN command gives v_min (f64::max ignores a NaN argument).
+        let v = self.min_speed_mps.max(speed_mps).min(self.max_speed_mps);
+        s.speed_mps = v;
+        v
     }
 }
 
@@ -198,5 +324,38 @@ mod tests {
         // 500 steps of 0.02 s at the heading's rate: the heading advanced by omega * 10 s.
         assert!((alone[1].heading_rad - (-3.0 + 1.7 + 0.3 * 10.0)).abs() < 1e-12);
         assert_eq!(d.speed_mps(&alone[0]), 0.7);
+    }
+
+    /// At a constant speed the variable-speed robot moves as the constant-speed one does, bit
+    /// for bit, alone and in lanes; commands saturate to the envelope (NaN: `v_min`).
+    #[test]
+    fn variable_speed_matches_constant_speed_and_saturates() {
+        let d = Dubins { speed_mps: 0.7 };
+        let v = DubinsVariableSpeed {
+            min_speed_mps: 0.2,
+            max_speed_mps: 1.0,
+        };
+        let start = DubinsState {
+            position_m: Vec2::new(1.0, -2.0),
+            heading_rad: 0.4,
+        };
+        let (mut a, mut b) = (start, v.state(start, 0.7));
+        let mut lanes = [v.state(start, 0.7); 3];
+        for k in 0..400 {
+            let w = 0.3 * ((k % 7) as f64 - 3.0);
+            d.step(&mut a, w, 0.01);
+            v.step(&mut b, w, 0.01);
+            v.step_lanes(&mut lanes, &[w; 3], 0.01);
+        }
+        assert_eq!(a.position_m.x.to_bits(), b.dubins.position_m.x.to_bits());
+        assert_eq!(a.position_m.y.to_bits(), b.dubins.position_m.y.to_bits());
+        assert_eq!(a.heading_rad.to_bits(), b.dubins.heading_rad.to_bits());
+        assert_eq!(lanes[2], b);
+        assert_eq!(v.command_speed(&mut b, 3.0), 1.0);
+        assert_eq!(v.command_speed(&mut b, 0.0), 0.2);
+        assert_eq!(v.command_speed(&mut b, f64::NAN), 0.2);
+        assert_eq!(v.command_speed(&mut b, 0.5), 0.5);
+        assert_eq!(v.speed_mps(&b), 0.5);
+        assert_eq!(v.speed_envelope_mps(), (0.2, 1.0));
     }
 }

@@ -11,6 +11,6 @@
 pub mod dubins;
 pub mod fixed_wing;
 
-pub use dubins::{Dubins, DubinsState};
+pub use dubins::{Dubins, DubinsSpeedState, DubinsState, DubinsVariableSpeed};
 pub use fixed_wing::{FixedWing, FixedWingConfig, FixedWingState};
-pub use isotrack_core::Vehicle;
+pub use isotrack_core::{SpeedCommand, Vehicle};

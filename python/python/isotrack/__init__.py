@@ -317,18 +317,15 @@ def _data_files(toml_text: str) -> "list[str]":
 
 
 def _sha256(path: str, cached: bool = True) -> str:
-    import hashlib
+    """The file's SHA-256 (hex), from isotrack's one content digest (the Rust function that
+    also records a run's data files in ``summary.json``)."""
     import os
 
     st = os.stat(path)
     key = (path, st.st_size, st.st_mtime_ns)
     if cached and key in _DIGESTS:
         return _DIGESTS[key]
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    _DIGESTS[key] = h.hexdigest()
+    _DIGESTS[key] = _native.file_sha256(path)
     return _DIGESTS[key]
 
 

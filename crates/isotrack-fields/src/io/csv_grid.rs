@@ -42,7 +42,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
                 LoadError::new(
                     path,
                     Some(FilePosition::Line(line, Some(c + 1))),
-                    format!("`{tok}` is not a number"),
+                    format!("`{}` is not a number", isotrack_core::numtext::Clipped(tok)),
                 )
             })?;
             values.push(v);

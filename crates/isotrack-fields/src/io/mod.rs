@@ -72,17 +72,24 @@ pub struct LoadError {
     pub unreadable: bool,
 }
 
+/// Shown on one line, whatever the file holds: the path and the message (which quotes names,
+/// units and headers read from the file, and the reader crates' errors) are [`Escaped`], so a
+/// line feed or a terminal control in them is shown as `\x0a` / `\x1b` (issue 30).
+///
+/// [`Escaped`]: isotrack_core::numtext::Escaped
 impl fmt::Display for LoadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        use isotrack_core::numtext::Escaped;
+        let (path, message) = (Escaped(&self.path), Escaped(&self.message));
         match &self.position {
             Some(FilePosition::Line(l, Some(c))) => {
-                write!(f, "{}:{l}: field {c}: {}", self.path, self.message)
+                write!(f, "{path}:{l}: field {c}: {message}")
             }
-            Some(FilePosition::Line(l, None)) => write!(f, "{}:{l}: {}", self.path, self.message),
+            Some(FilePosition::Line(l, None)) => write!(f, "{path}:{l}: {message}"),
             Some(FilePosition::Offset(o)) => {
-                write!(f, "{} (byte offset {o}): {}", self.path, self.message)
+                write!(f, "{path} (byte offset {o}): {message}")
             }
-            None => write!(f, "{}: {}", self.path, self.message),
+            None => write!(f, "{path}: {message}"),
         }
     }
 }

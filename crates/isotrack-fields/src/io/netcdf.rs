@@ -39,19 +39,31 @@ fn attr_text(v: &NcVariable, name: &str) -> Result<Option<String>, String> {
     let Some(a) = v.attribute(name) else {
         return Ok(None);
     };
-    match &a.value {
-        NcAttrValue::Chars(s) => Ok(Some(s.clone())),
-        NcAttrValue::Strings(list) if list.len() == 1 => Ok(Some(list[0].clone())),
-        NcAttrValue::Strings(list) => Err(format!(
-            "`{}` has {} values for its `{name}` attribute: need one text",
-            v.name(),
-            list.len()
-        )),
-        _ => Err(format!(
-            "`{}` has a `{name}` attribute that is not a text",
-            v.name()
-        )),
+    let text = match &a.value {
+        NcAttrValue::Chars(s) => s.clone(),
+        NcAttrValue::Strings(list) if list.len() == 1 => list[0].clone(),
+        NcAttrValue::Strings(list) => {
+            return Err(format!(
+                "`{}` has {} values for its `{name}` attribute: need one text",
+                isotrack_core::numtext::Escaped(v.name()),
+                list.len()
+            ))
+        }
+        _ => {
+            return Err(format!(
+                "`{}` has a `{name}` attribute that is not a text",
+                v.name()
+            ))
+        }
+    };
+    if text.contains(char::REPLACEMENT_CHARACTER) {
+        return Err(format!(
+            "variable `{}`: its `{name}` attribute is not UTF-8 text (`{}`, the bytes that are not UTF-8 shown as U+FFFD): isotrack reads it, so write it in UTF-8",
+            isotrack_core::numtext::Escaped(v.name()),
+            isotrack_core::numtext::Clipped(&text)
+        ));
     }
+    Ok(Some(text))
 }
 
 /// Which horizontal axis a dimension is: x (easting, longitude) or y (northing, latitude).
@@ -179,11 +191,12 @@ fn axis_kind(v: &NcVariable, warnings: &mut Vec<String>) -> Result<Axis, String>
     }
 }
 
-/// The data variable's CF `units`, trimmed (`None` when absent or empty).
-fn data_units(v: &NcVariable) -> Option<String> {
-    attr_str(v, "units")
+/// The data variable's CF `units`, trimmed (`None` when absent or empty); an error when it is
+/// not one UTF-8 text ([`attr_text`]).
+fn data_units(v: &NcVariable) -> Result<Option<String>, String> {
+    Ok(attr_text(v, "units")?
         .map(|u| u.trim().to_string())
-        .filter(|u| !u.is_empty())
+        .filter(|u| !u.is_empty()))
 }
 
 /// First value and step of a regular axis, or why not.
@@ -466,20 +479,152 @@ fn parse_bytes_with(
             format!("not a valid NetCDF file: {m}"),
         )
     })?;
-    let file = NcFile::from_bytes(bytes)
-        .map_err(|e| LoadError::new(name, None, format!("cannot read as NetCDF: {e}")))?;
-    parse_file(name, &file, variable, budget_bytes)
+    let cannot = |e: netcdf_reader::Error| {
+        LoadError::new(
+            name,
+            None,
+            format!(
+                "cannot read as NetCDF: {}",
+                isotrack_core::numtext::Clipped(&e.to_string())
+            ),
+        )
+    };
+    let file = NcFile::from_bytes(bytes).map_err(cannot)?;
+    match file.variables() {
+        Ok(vars) => parse_file(name, &file, vars, variable, budget_bytes),
+        Err(e) if is_non_utf8_text(&e) => {
+            // A text attribute that is not UTF-8 (a Latin-1 `comment` or `history` from an
+            // older tool): the strict reader refuses the whole file, where the classic reader
+            // (NetCDF-3) reads such bytes as U+FFFD. Opened again leniently, the variables'
+            // text attributes that are not UTF-8 are read here as the classic reader reads
+            // them; `attr_text` refuses one isotrack reads (`units`, `axis`, ...).
+            let lenient = NcFile::from_bytes_with_options(
+                bytes,
+                netcdf_reader::NcOpenOptions {
+                    metadata_mode: netcdf_reader::NcMetadataMode::Lossy,
+                    ..Default::default()
+                },
+            )
+            .map_err(cannot)?;
+            let mut vars = lenient.variables().map_err(cannot)?.to_vec();
+            restore_non_utf8_attributes(bytes, &mut vars);
+            parse_file(name, &lenient, &vars, variable, budget_bytes)
+        }
+        Err(e) => Err(cannot(e)),
+    }
 }
 
+/// Whether the reader refused a NetCDF-4 file for a text attribute that is not UTF-8
+/// (`attribute 'comment' could not be decoded: ... invalid string data: invalid utf-8 ...`).
+fn is_non_utf8_text(e: &netcdf_reader::Error) -> bool {
+    let m = e.to_string();
+    m.contains("could not be decoded") && m.contains("invalid string data")
+}
+
+/// `bytes` as text, those that are not UTF-8 replaced by U+FFFD as the classic NetCDF reader
+/// does, padding cut off (at the first NUL, or trailing NULs / spaces as the type pads).
+fn lossy_text(bytes: &[u8], padding: hdf5_reader::messages::datatype::StringPadding) -> String {
+    use hdf5_reader::messages::datatype::StringPadding;
+    let end = match padding {
+        StringPadding::NullTerminate => bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len()),
+        StringPadding::NullPad => bytes.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1),
+        StringPadding::SpacePad => bytes.iter().rposition(|&b| b != b' ').map_or(0, |i| i + 1),
+    };
+    String::from_utf8_lossy(&bytes[..end]).into_owned()
+}
+
+/// The text attributes of the root group's variables that the lenient reader left out because
+/// they are not UTF-8, added to `vars` with U+FFFD for the bytes that are not (one text, or
+/// one per element of an array). Nothing is added when the file cannot be walked again.
+fn restore_non_utf8_attributes(bytes: &[u8], vars: &mut [netcdf_reader::NcVariable]) {
+    use hdf5_reader::messages::datatype::{Datatype, StringSize, VarLenKind};
+    use netcdf_reader::{NcAttrValue, NcAttribute};
+    let Ok(h5) = hdf5_reader::Hdf5File::from_bytes(bytes) else {
+        return;
+    };
+    let Ok(root) = h5.root_group() else {
+        return;
+    };
+    let Ok(datasets) = root.datasets() else {
+        return;
+    };
+    let reference_bytes = 4 + usize::from(root.offset_size()) + 4;
+    for ds in datasets {
+        let leaf = ds.name().rsplit('/').next().unwrap_or_default();
+        let Some(var) = vars.iter_mut().find(|v| v.name == leaf) else {
+            continue;
+        };
+        for a in ds.attributes() {
+            if var.attribute(&a.name).is_some() {
+                continue;
+            }
+            let n = a.num_elements().unwrap_or(0) as usize;
+            let texts: Vec<String> = match &a.datatype {
+                Datatype::String {
+                    size: StringSize::Fixed(len),
+                    padding,
+                    ..
+                } if *len > 0 => a
+                    .raw_data
+                    .chunks(*len as usize)
+                    .take(n)
+                    .map(|c| lossy_text(c, *padding))
+                    .collect(),
+                Datatype::String {
+                    size: StringSize::Variable,
+                    padding,
+                    ..
+                }
+                | Datatype::VarLen {
+                    kind: VarLenKind::String,
+                    padding,
+                    ..
+                } => {
+                    if n == 1 {
+                        // One element: the reader resolved its bytes already.
+                        vec![lossy_text(&a.raw_data, *padding)]
+                    } else {
+                        a.raw_data
+                            .chunks(reference_bytes)
+                            .take(n)
+                            .map(|r| {
+                                root.resolve_vlen_reference_bytes(r, 1)
+                                    .map(|b| lossy_text(&b, *padding))
+                                    .unwrap_or_else(|_| char::REPLACEMENT_CHARACTER.into())
+                            })
+                            .collect()
+                    }
+                }
+                _ => continue,
+            };
+            let value = match (a.shape.is_empty(), texts.len()) {
+                (true, 1) => NcAttrValue::Chars(texts.into_iter().next().unwrap_or_default()),
+                _ => NcAttrValue::Strings(texts),
+            };
+            var.attributes.push(NcAttribute {
+                name: a.name.clone(),
+                value,
+            });
+        }
+    }
+}
+
+/// The grid series of `file`, whose root variables are `vars` (the reader's, or with the
+/// text attributes that are not UTF-8 restored: [`restore_non_utf8_attributes`]).
 fn parse_file(
     path: &Path,
     file: &NcFile,
+    vars: &[NcVariable],
     variable: Option<&str>,
     budget_bytes: impl FnOnce() -> Option<u64>,
 ) -> Result<LoadedSeries, LoadError> {
     let err = |m: String| LoadError::new(path, None, m);
-    let nc = |e: netcdf_reader::Error| err(format!("cannot read as NetCDF: {e}"));
-    let vars = file.variables().map_err(nc)?;
+    let nc = |e: netcdf_reader::Error| {
+        err(format!(
+            "cannot read as NetCDF: {}",
+            isotrack_core::numtext::Clipped(&e.to_string())
+        ))
+    };
     let dim_names: Vec<&str> = file
         .dimensions()
         .map_err(nc)?
@@ -577,6 +722,7 @@ fn parse_file(
             )));
         }
     }
+    let units = data_units(var).map_err(err)?;
     let data = file
         .read_variable_unpacked_masked(var.name())
         .map_err(|e| err(format!("cannot read `{}`: {e}", var.name())))?;
@@ -633,11 +779,12 @@ fn parse_file(
         Some(tdim) => match coord(&tdim.name)? {
             None => None,
             Some((t, tv)) => {
-                let units = attr_str(tv, "units").unwrap_or_default();
+                let units = attr_text(tv, "units").map_err(err)?.unwrap_or_default();
                 let unit_s = cf_time_unit_s(&units).ok_or_else(|| {
                     err(format!(
-                        "time coordinate `{}` has units `{units}`; need `<days|hours|minutes|seconds|milliseconds|microseconds> since <date>`",
-                        tdim.name
+                        "time coordinate `{}` has units `{}`; need `<days|hours|minutes|seconds|milliseconds|microseconds> since <date>`",
+                        isotrack_core::numtext::Escaped(&tdim.name),
+                        isotrack_core::numtext::Clipped(&units)
                     ))
                 })?;
                 Some(t.iter().map(|v| unit_s.to_s(v - t[0])).collect())
@@ -726,10 +873,16 @@ fn parse_file(
         frames,
         frame_times_s,
         georeference,
-        units: data_units(var),
+        units,
         warnings: warnings
             .into_iter()
-            .map(|w| format!("{}: {w}", path.display()))
+            .map(|w| {
+                format!(
+                    "{}: {}",
+                    isotrack_core::numtext::Escaped(&path.display().to_string()),
+                    isotrack_core::numtext::Escaped(&w)
+                )
+            })
             .collect(),
     })
 }
@@ -814,6 +967,35 @@ mod tests {
             assert!(e.contains(&format!("attribute `{attr}` {shown}")), "{e}");
             assert!(!e.contains("every value is NaN"), "{e}");
         }
+    }
+
+    /// Issue 30: a line feed in a unit read from the file (`units = "ft\nerror: forged"`) is
+    /// shown escaped: the error stays one line, where the line feed once reached the console.
+    #[test]
+    fn text_from_the_file_is_shown_on_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("lf.nc");
+        let mut ds = DataSet::new();
+        ds.add_fixed_dim("y", 3).unwrap();
+        ds.add_fixed_dim("x", 4).unwrap();
+        ds.add_var_f64("y", &["y"]).unwrap();
+        ds.add_var_attr_string("y", "units", "m").unwrap();
+        ds.add_var_f64("x", &["x"]).unwrap();
+        ds.add_var_attr_string("x", "units", "ft\nerror: forged")
+            .unwrap();
+        ds.add_var_f64("v", &["y", "x"]).unwrap();
+        let mut w = FileWriter::create_new(&p).unwrap();
+        w.set_def(&ds, Version::Classic, 0).unwrap();
+        w.write_var_f64("y", &[0.0, 1.0, 2.0]).unwrap();
+        w.write_var_f64("x", &[0.0, 1.0, 2.0, 3.0]).unwrap();
+        w.write_var_f64("v", &[0.0; 12]).unwrap();
+        w.close().unwrap();
+        let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
+        assert!(e.contains("units `ft\\x0aerror: forged`"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        // The path too, and any message (a reader crate's error quoting the file).
+        let e = LoadError::new(Path::new("a\nb.nc"), None, "c\rd\ne").to_string();
+        assert_eq!(e, "a\\x0ab.nc: c\\x0dd\\x0ae");
     }
 
     #[test]

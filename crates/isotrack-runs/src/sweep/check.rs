@@ -1,7 +1,9 @@
 //! The check of a stored `results.csv` row: `--resume` and `merge` trust a row only after it.
 
 use crate::sweep::rows::numeric_columns;
+use isotrack_scenario::build::{run_span, RunSpan};
 use isotrack_scenario::sweep::SweepPlan;
+use isotrack_scenario::{apply_assignments, ScenarioFile};
 
 /// The `outcome` values a row may hold.
 const OUTCOMES: [&str; 4] = ["completed", "diverged", "left_field", "invalid_scenario"];
@@ -22,7 +24,8 @@ const NON_NEGATIVE_COLUMNS: [&str; 10] = [
 ];
 
 /// What a stored row must be: the sweep's header, its run count and its plan (the varied
-/// columns of run `id` are recomputed from the plan and must match).
+/// columns of run `id` are recomputed from the plan and must match), and the spans of its runs
+/// (what bounds each run's `t_end_s`, `samples` and `convergence_time_s`).
 pub struct RowRules<'a> {
     /// The sweep's `results.csv` header.
     pub header: &'a [String],
@@ -30,6 +33,54 @@ pub struct RowRules<'a> {
     pub total: u64,
     /// The sweep's plan.
     pub plan: &'a SweepPlan,
+    /// The runs' own step counts.
+    pub spans: &'a RunSpans<'a>,
+}
+
+/// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
+/// `sim.duration_s`, `sensor.rate_hz`, or their whole tables).
+const SPAN_KEYS: [&str; 5] = [
+    "sim",
+    "sensor",
+    "sim.dt_s",
+    "sim.duration_s",
+    "sensor.rate_hz",
+];
+
+/// The [`RunSpan`] of each run of a sweep, from its resolved base scenario file: the base's
+/// own when the plan varies none of [`SPAN_KEYS`], else each run's (the base with the run's
+/// assignments, resolved: no field is built, no file read).
+pub struct RunSpans<'a> {
+    base: &'a ScenarioFile,
+    plan: &'a SweepPlan,
+    base_span: Option<RunSpan>,
+    per_run: bool,
+}
+
+impl<'a> RunSpans<'a> {
+    /// The spans of the runs of `plan` over the resolved base scenario file `base`.
+    pub fn new(plan: &'a SweepPlan, base: &'a ScenarioFile) -> Self {
+        let per_run = plan
+            .varied_keys()
+            .iter()
+            .any(|k| SPAN_KEYS.contains(&k.as_str()));
+        Self {
+            base,
+            plan,
+            base_span: run_span(base),
+            per_run,
+        }
+    }
+
+    /// The span of run `id` (`None` when its scenario is invalid: its row is checked
+    /// without one).
+    pub fn of(&self, id: u64) -> Option<RunSpan> {
+        if !self.per_run {
+            return self.base_span;
+        }
+        let file = apply_assignments(self.base, &self.plan.run_assignments(id, "")).ok()?;
+        run_span(&isotrack_scenario::resolve::resolve(file).ok()?)
+    }
 }
 
 /// Checks one stored row against the sweep: its field count, its `run_id` within the plan, the
@@ -90,7 +141,89 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         ));
     }
     check_metrics(outcome, &cell)?;
+    if outcome != "invalid_scenario" {
+        if let Some(span) = rules.spans.of(id) {
+            let column = |name: &str| {
+                let i = header.iter().position(|h| h == name).unwrap_or(0);
+                format!("column {} ({name})", i + 1)
+            };
+            check_span(&span, outcome, &cell, &column)?;
+        }
+    }
     Ok(id)
+}
+
+/// The cells a run's own step counts bound ([`RunSpan`]): `t_end_s` is `k dt` for a whole
+/// `k <= N` (the planned steps: not past the duration); `convergence_time_s` is 0 or `j dt`
+/// for a whole `1 <= j <= k` (never a fraction of a step, never below `dt`); `samples` is at
+/// most one per sample period over the steps sensed `0..=s`, `floor(s / m) + 1`, where `s = k`
+/// or, for a `diverged` run (ended by a non-finite command, sensed the step after its last
+/// valid one), `min(k + 1, N)`. Each error names its column.
+fn check_span<'c>(
+    span: &RunSpan,
+    outcome: &str,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    use isotrack_core::numtext::{Echo, Num};
+    let dt = span.dt_s;
+    // Whole steps as a run computes its times (`k as f64 * dt`): `None` for any other value.
+    let steps_of = |t: f64| -> Option<u64> {
+        let k = (t / dt).round();
+        (k >= 0.0 && k <= span.n_steps as f64 && k * dt == t).then_some(k as u64)
+    };
+    let value = |n: &str| cell(n).parse::<f64>().ok();
+    let Some(t_end) = value("t_end_s") else {
+        return Ok(());
+    };
+    let duration = span.n_steps as f64 * dt;
+    if t_end > duration {
+        return Err(format!(
+            "{}: t_end_s = {} s is past the run's duration, {} steps of {} s = {} s",
+            column("t_end_s"),
+            Echo(t_end),
+            span.n_steps,
+            Echo(dt),
+            Num(duration)
+        ));
+    }
+    let Some(k_end) = steps_of(t_end) else {
+        return Err(format!(
+            "{}: t_end_s = {} s is not a whole number of the run's steps of {} s",
+            column("t_end_s"),
+            Echo(t_end),
+            Echo(dt)
+        ));
+    };
+    if let Some(c) = value("convergence_time_s") {
+        if c != 0.0 && !steps_of(c).is_some_and(|j| (1..=k_end).contains(&j)) {
+            return Err(format!(
+                "{}: convergence_time_s = {} s is neither 0 nor a whole number of the run's steps of {} s up to t_end_s = {} s",
+                column("convergence_time_s"),
+                Echo(c),
+                Echo(dt),
+                Echo(t_end)
+            ));
+        }
+    }
+    if let Ok(samples) = cell("samples").parse::<u64>() {
+        let sensed = if outcome == "diverged" {
+            (k_end + 1).min(span.n_steps)
+        } else {
+            k_end
+        };
+        let most = sensed / span.steps_per_sample + 1;
+        if samples > most {
+            return Err(format!(
+                "{}: samples = {samples} exceeds the {most} a run can take up to t_end_s = {} s (one every {} steps of {} s)",
+                column("samples"),
+                Echo(t_end),
+                span.steps_per_sample,
+                Echo(dt)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a

@@ -2,7 +2,7 @@
 //! large the sweep), and the sorted rewrite of indexed rows.
 
 use crate::failure::{exit, fail, Failure};
-use crate::sweep::check::{check_row, RowRules};
+use crate::sweep::check::{check_row, RowRules, RunSpans};
 use crate::sweep::rows::csv_fields;
 use isotrack_scenario::sweep::SweepPlan;
 use std::io::Write;
@@ -69,7 +69,8 @@ impl Flagged {
 }
 
 /// Indexes `path` (file number `file` for [`RowRef::file`]) in one streaming pass, checking
-/// every row (field count, `run_id` below `total`, known outcome, numeric metrics). A cut-off last
+/// every row (field count, `run_id` below `total`, known outcome, numeric metrics, the bounds
+/// of the run's own step counts from `spans`). A cut-off last
 /// line (a killed sweep) is left out, and with `repair` cut from the file.
 pub fn index_results(
     path: &Path,
@@ -77,6 +78,7 @@ pub fn index_results(
     repair: bool,
     total: u64,
     plan: &SweepPlan,
+    spans: &RunSpans<'_>,
 ) -> Result<ResultsIndex, Failure> {
     use std::io::BufRead;
     let cannot = |e: std::io::Error| {
@@ -150,6 +152,7 @@ pub fn index_results(
             header: &columns,
             total,
             plan,
+            spans,
         };
         let id = check_row(&rules, &line).map_err(|why| {
             let shown: String = line.trim_end().chars().take(120).collect();

@@ -3,6 +3,7 @@
 
 use crate::failure::{exit, fail, Failure};
 use isotrack_scenario::sweep::SweepPlan;
+use isotrack_scenario::ScenarioFile;
 use std::path::Path;
 
 /// The digest that names a sweep: SHA-256 of the sweep file's bytes and of the resolved base
@@ -29,10 +30,11 @@ pub fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
 }
 
-/// The plan of shard directory `dir`, from its `sweep.toml`, after checking that its
-/// `sweep.toml` and `base_scenario.toml` are those its `sweep.json` digest names (a shard whose
-/// files were edited is refused: its rows' plan columns are checked against this plan).
-pub fn shard_plan(dir: &Path, digest: &str) -> Result<SweepPlan, Failure> {
+/// The plan of shard directory `dir`, from its `sweep.toml`, and its resolved base scenario
+/// file, from its `base_scenario.toml`, after checking that both are those its `sweep.json`
+/// digest names (a shard whose files were edited is refused: its rows' plan columns are checked
+/// against this plan, their times and sample counts against the base's step counts).
+pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile), Failure> {
     let read = |name: &str| {
         let p = dir.join(name);
         isotrack_fields::io::read_limited(&p, isotrack_scenario::MAX_SCENARIO_FILE_BYTES)
@@ -51,5 +53,16 @@ pub fn shard_plan(dir: &Path, digest: &str) -> Result<SweepPlan, Failure> {
     }
     let path = dir.join("sweep.toml");
     let text = String::from_utf8_lossy(&sweep_bytes);
-    SweepPlan::parse(&text, &path).map_err(|e| fail(exit::DATAERR, e.to_string()))
+    let plan = SweepPlan::parse(&text, &path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
+    let base: ScenarioFile = toml::from_str(&base).map_err(|e| {
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}: {}",
+                dir.join("base_scenario.toml").display(),
+                e.message().trim()
+            ),
+        )
+    })?;
+    Ok((plan, base))
 }

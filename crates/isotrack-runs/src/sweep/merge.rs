@@ -2,6 +2,7 @@
 
 use crate::failure::{exit, fail, Failure};
 use crate::files::same_file;
+use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
 use crate::sweep::manifest::{read_manifest, shard_plan};
@@ -81,7 +82,8 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         )
     })?;
-    let plan = shard_plan(d, &digest)?;
+    let (plan, base) = shard_plan(d, &digest)?;
+    let spans = RunSpans::new(&plan, &base);
     match &shards.first {
         Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
             return Err(fail(
@@ -97,7 +99,7 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
         None => shards.first = Some((t, digest, m)),
     }
     let path = d.join("results.csv");
-    let idx = index_results(&path, shards.sources.len(), false, t, &plan)?;
+    let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans)?;
     if shards.header.as_ref().is_some_and(|x| *x != idx.header) {
         return Err(fail(
             exit::DATAERR,

@@ -5,11 +5,12 @@
 
 use crate::failure::{exit, fail, Failure};
 use crate::summary::scenario_toml;
+use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::sweep::manifest::{read_manifest, sweep_digest};
 use crate::sweep::prepared::sweep_base;
-use crate::sweep::rows::{csv_line, results_header, run_rows};
+use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
 use isotrack_sim::LANES;
@@ -151,9 +152,23 @@ impl SweepJob {
         })
     }
 
-    /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest.
+    /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest, or
+    /// when an older isotrack wrote it (no `sweep.json`, or one without a digest:
+    /// [`older_format`]).
     fn check_same_sweep(&self, out: &Path) -> Result<(), Failure> {
+        if !out.join("sweep.json").exists() {
+            return Err(older_format(
+                out,
+                "it has a results.csv but no sweep.json, which every sweep writes before its first row",
+            ));
+        }
         let stored = read_manifest(out)?;
+        if stored.get("digest").is_none() {
+            return Err(older_format(
+                out,
+                "its sweep.json has no digest naming the sweep that made it",
+            ));
+        }
         if stored["digest"].as_str() != Some(self.digest.as_str()) {
             return Err(fail(
                 exit::DATAERR,
@@ -172,11 +187,30 @@ impl SweepJob {
     /// last line cut, a header-less file given the header.
     fn resumed_ids(&self, results: &Path, (k, n): (u64, u64)) -> Result<Vec<u64>, Failure> {
         let cant = cant_write(results.parent().unwrap_or(Path::new(".")));
-        let idx = index_results(results, 0, true, self.plan.total(), &self.plan)?;
+        let spans = RunSpans::new(&self.plan, self.base.file());
+        let idx = index_results(results, 0, true, self.plan.total(), &self.plan, &spans)?;
         let header_line = csv_line(&self.header);
         if idx.header.is_empty() {
             std::fs::write(results, &header_line).map_err(cant)?;
         } else if idx.header != header_line {
+            let stored = csv_fields(&idx.header).unwrap_or_default();
+            let missing: Vec<&str> = self
+                .header
+                .iter()
+                .filter(|c| !stored.contains(c))
+                .map(String::as_str)
+                .collect();
+            let dir = results.parent().unwrap_or(Path::new("."));
+            if !missing.is_empty() && stored.iter().all(|c| self.header.contains(c)) {
+                return Err(older_format(
+                    dir,
+                    &format!(
+                        "its results.csv lacks the column{} `{}` that this isotrack writes",
+                        if missing.len() == 1 { "" } else { "s" },
+                        missing.join("`, `")
+                    ),
+                ));
+            }
             return Err(fail(
                 exit::DATAERR,
                 format!(
@@ -289,7 +323,8 @@ impl SweepJob {
     /// appears twice; what it holds.
     pub fn finish(&self, out: &SweepOutput) -> Result<SweepReport, Failure> {
         let results = &out.results;
-        let idx = index_results(results, 0, false, self.plan.total(), &self.plan)?;
+        let spans = RunSpans::new(&self.plan, self.base.file());
+        let idx = index_results(results, 0, false, self.plan.total(), &self.plan, &spans)?;
         let mut rows = idx.rows;
         if let Some(d) = sort_rows(&mut rows).first() {
             return Err(fail(
@@ -309,6 +344,19 @@ impl SweepJob {
             flagged: idx.flagged,
         })
     }
+}
+
+/// The failure for `--resume` of sweep directory `out` written by an older isotrack (`why`
+/// says how that shows): its rows cannot be checked against this sweep, so they are not
+/// trusted. Exit 65, as a directory made by another sweep; what to do instead.
+fn older_format(out: &Path, why: &str) -> Failure {
+    fail(
+        exit::DATAERR,
+        format!(
+            "{}: a sweep directory written by an older isotrack ({why}): --resume cannot check its rows against this sweep, so it does not continue it. Run the sweep again into a new --out, or into this one with --force (its results.csv is replaced)",
+            out.display()
+        ),
+    )
 }
 
 /// The failure for an output in directory `out` that cannot be written.

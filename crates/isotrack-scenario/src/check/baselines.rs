@@ -11,6 +11,7 @@
 
 use super::{regions, CHECK_LATTICE};
 use crate::schema::ControllerKind;
+use crate::spec::LawSpec;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num, NumUp};
 
@@ -18,31 +19,34 @@ use isotrack_core::numtext::{Echo, Num, NumUp};
 /// for the paper's law and for laws without a stated condition, and when the bounds cannot be
 /// taken).
 pub fn baseline_warnings(s: &Scenario) -> Vec<String> {
-    let c = &s.file().controller;
-    let kind = c.kind.unwrap_or(ControllerKind::PiIsoline);
+    let c = &s.spec().controller;
+    let kind = c.kind;
     let v = super::speed_mps(s);
-    let u_bar = s.max_turn_rate_radps().unwrap_or(1.0);
-    // Which tube, and why that half-width.
-    let (tube, why) = match kind {
-        ControllerKind::SlidingMode | ControllerKind::SlidingModeSmooth => {
-            (c.delta.unwrap_or(1.0), "delta, the law's linear zone")
-        }
-        ControllerKind::SuboptimalSosm => (1.0, "1 field unit"),
+    // Which tube, and why that half-width; the law's amplitude `u_bar`.
+    let (tube, why, u_bar) = match &c.law {
+        LawSpec::SlidingMode(p) => (
+            p.delta,
+            "delta, the law's linear zone",
+            p.max_turn_rate_radps,
+        ),
+        LawSpec::SuboptimalSosm(p) => (1.0, "1 field unit", p.max_turn_rate_radps),
         _ => return vec![],
     };
     let Some(b) = regions(s, tube, CHECK_LATTICE, true).tube else {
         return vec![];
     };
-    let warnings = match kind {
-        ControllerKind::SuboptimalSosm => sosm_conditions(
-            v,
-            u_bar,
-            c.alpha_star.unwrap_or(0.5),
-            b.gamma1,
-            b.gamma2,
-            b.gamma3,
-        ),
-        _ => sliding_mode_conditions(v, u_bar, c.gamma.unwrap_or(0.2), tube, b.gamma1, b.gamma3)
+    let warnings = match &c.law {
+        LawSpec::SuboptimalSosm(p) => {
+            sosm_conditions(v, u_bar, p.alpha_star, b.gamma1, b.gamma2, b.gamma3)
+        }
+        LawSpec::SlidingMode(p) => {
+            sliding_mode_conditions(v, u_bar, p.gamma, tube, b.gamma1, b.gamma3)
+        }
+        _ => vec![],
+    };
+    let warnings: Vec<String> = match kind {
+        ControllerKind::SuboptimalSosm => warnings,
+        _ => warnings
             .into_iter()
             .map(|w| w.replacen("sliding_mode:", &format!("{}:", kind.name()), 1))
             .collect(),

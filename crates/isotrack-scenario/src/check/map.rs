@@ -119,30 +119,21 @@ impl LoopFamily {
     pub fn cell(&self, kp: f64, rate_hz: f64) -> Cell {
         let l = Law { kp, ..self.law };
         let period_s = 1.0 / rate_hz;
-        let gain = kp
-            * self.setup.base.speed_mps.max(1.0)
-            * period_s.max(1.0)
-            * self.setup.range[1].abs().max(1.0)
-            * l.c1.abs().max(1.0)
-            / l.c2.abs().min(1.0);
-        if gain.is_nan() || gain > MAX_LOOP_GAIN {
+        let (lp, slopes, orbit) = self.setup.at(&self.scenario, &l, period_s);
+        let lo = slopes.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = slopes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        // What `check` does not compute, the chart does not either (one test for both).
+        if let Some(why) = super::not_computed(&lp, orbit.as_ref()) {
             return Cell {
                 spectral_radius: None,
                 status: CellStatus::NotComputed,
-                slope_range: self.setup.range,
-                note: Some("loop gain beyond 1e100: f64 would overflow"),
+                slope_range: [lo, hi],
+                note: Some(why.short()),
             };
         }
-        let (lp, slopes, _) = self.setup.at(&self.scenario, &l, period_s);
-        let lo = slopes.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = slopes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let (spectral_radius, status, note) = match sampled::worst_radius(&lp, &slopes) {
-            None => (
-                None,
-                CellStatus::NotComputed,
-                Some("the delay spans more than 32 sensor periods"),
-            ),
-            Some(r) if r.is_finite() => (
+        let r = sampled::worst_spectral_radius(&lp, &slopes);
+        let (spectral_radius, status, note) = match r {
+            r if r.is_finite() => (
                 Some(r),
                 if r < 1.0 {
                     CellStatus::Stable
@@ -151,15 +142,10 @@ impl LoopFamily {
                 },
                 None,
             ),
-            Some(r) if r.is_nan() => (
-                None,
-                CellStatus::NotComputed,
-                Some("the eigenvalues are not finite numbers"),
-            ),
-            Some(_) if super::circular_p_law(&self.scenario, &l) => {
+            _ if super::circular_p_law(&self.scenario, &l) => {
                 (None, CellStatus::NoEquilibrium, None)
             }
-            Some(_) => (
+            _ => (
                 None,
                 CellStatus::NotComputed,
                 Some("the spectral radius is not finite"),
@@ -171,6 +157,31 @@ impl LoopFamily {
             slope_range: [lo, hi],
             note,
         }
+    }
+
+    /// The dominant mode of the loop at `(kp, rate_hz)` at the slope that decides the cell
+    /// (the largest radius): its time constant `T/|ln rho|` (decay or growth, s; infinite at
+    /// `rho = 1`) and its oscillation period `T 2 pi/|arg z|` (s; `None` for a real positive
+    /// eigenvalue). `None` when the cell is not computed or has no equilibrium.
+    pub fn dominant_mode(&self, kp: f64, rate_hz: f64) -> Option<(f64, Option<f64>)> {
+        let l = Law { kp, ..self.law };
+        let period_s = 1.0 / rate_hz;
+        let (lp, slopes, orbit) = self.setup.at(&self.scenario, &l, period_s);
+        if super::not_computed(&lp, orbit.as_ref()).is_some() {
+            return None;
+        }
+        let radius = |alpha: f64| sampled::SampledLoop { slope: alpha, ..lp }.spectral_radius();
+        let worst = slopes
+            .iter()
+            .copied()
+            .max_by(|a, b| radius(*a).total_cmp(&radius(*b)))?;
+        let rho = radius(worst);
+        if !rho.is_finite() {
+            return None;
+        }
+        let tau = period_s / rho.ln().abs();
+        let period = super::growing_mode_period_samples(&lp, worst).map(|p| p * period_s);
+        Some((tau, period))
     }
 
     /// The scenario's own `kp`.
@@ -185,7 +196,7 @@ impl LoopFamily {
 
     /// The simulation step `sim.dt_s`, s: the fastest sensor rate is `1/dt`.
     pub fn dt_s(&self) -> f64 {
-        self.scenario.file().sim.dt_s.unwrap_or(0.01)
+        self.scenario.dt_s()
     }
 
     /// The sensor delay, s.
@@ -427,6 +438,19 @@ pub enum Behaviour {
     /// chart (a loop can leave a bounded map while still converging, and an unstable one can
     /// leave it before it oscillates); counted apart ([`Agreement::left_field`]).
     LeftField,
+    /// Completed, but in the window's second half the turn-rate command sat at the turn-rate
+    /// limit for at least [`SATURATION_FRACTION`] of the samples: the limit is a saturation
+    /// the linear chart leaves out, so the run is not compared with it (an unstable loop
+    /// typically grows until it bangs between the limits; a stable one that still saturates
+    /// late is in a regime the linearisation does not describe). Counted apart
+    /// ([`Agreement::saturated`]).
+    Saturated,
+    /// Completed, but too short to judge: each half of the steady-state window must span the
+    /// time constant of the mode that decides the cell (`T/|ln rho|`: it decays or grows by a
+    /// factor e per half, distinct from a sustained oscillation), two periods of its
+    /// oscillation and [`MIN_HALF_SAMPLES`] samples ([`LoopFamily::dominant_mode`]). Not
+    /// compared; counted apart ([`Agreement::undetermined`]).
+    Undetermined,
     /// The point makes no valid scenario (the reason in `detail`).
     Invalid,
 }
@@ -440,10 +464,20 @@ impl Behaviour {
             Self::Stalled => "stalled",
             Self::Diverged => "diverged",
             Self::LeftField => "left_field",
+            Self::Saturated => "saturated",
+            Self::Undetermined => "undetermined",
             Self::Invalid => "invalid",
         }
     }
 }
+
+/// A run whose turn-rate command sits at the turn-rate limit for at least this fraction of the
+/// samples of its window's second half is [`Behaviour::Saturated`].
+pub const SATURATION_FRACTION: f64 = 0.1;
+
+/// The fewest sensor samples each half of a run's steady-state window must hold for the run to
+/// be judged ([`Behaviour::Undetermined`] otherwise).
+pub const MIN_HALF_SAMPLES: f64 = 10.0;
 
 /// A run whose error range over the second half of the steady-state window is at most this
 /// fraction of the first half's is still converging (a loop at spectral radius 0.999 at 2.7 Hz
@@ -490,6 +524,10 @@ struct Window {
     turn_sq_sum: f64,
     /// Sum of `|eps - eps_ref|` over the second half (its mean).
     abs_error_sum: f64,
+    /// The turn-rate limit in force (`None`: none).
+    limit_radps: Option<f64>,
+    /// Samples of the second half at the turn-rate limit.
+    saturated_rows: u64,
     /// The error the loop the chart checks settles at: 0 on the isoline, the P law's orbit
     /// error `eps*` on a circular field with `ki = 0`.
     error_ref: f64,
@@ -509,6 +547,12 @@ impl TraceSink for Window {
             self.turn_sum += row.omega_radps.abs();
             self.turn_sq_sum += row.omega_radps * row.omega_radps;
             self.abs_error_sum += (row.error - self.error_ref).abs();
+            if self
+                .limit_radps
+                .is_some_and(|l| row.omega_radps.abs() >= l * (1.0 - 1e-6))
+            {
+                self.saturated_rows += 1;
+            }
             self.rows += 1;
         }
     }
@@ -618,9 +662,9 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
             return p;
         }
     };
-    let file = s.file();
-    let duration = file.sim.duration_s.unwrap_or(0.0);
-    let frac = file.metrics.steady_state_fraction.unwrap_or(0.2);
+    let spec = s.spec();
+    let duration = spec.sim.duration_s;
+    let frac = spec.metrics.steady_state_fraction;
     let from_s = (1.0 - frac) * duration;
     let mut w = Window {
         from_s,
@@ -629,6 +673,8 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         turn_sum: 0.0,
         turn_sq_sum: 0.0,
         abs_error_sum: 0.0,
+        limit_radps: s.max_turn_rate_radps(),
+        saturated_rows: 0,
         error_ref: f
             .setup
             .at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz)
@@ -659,24 +705,24 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     // The floor a settled run's error range may reach: the reading error's own range (times
     // SENSOR_FLOOR_FACTOR), on a moving isoline the scenario's convergence tolerance (the
     // error tracking the motion leaves, by the scenario's own measure), and rounding.
-    let c2 = file.controller.c2.unwrap_or(1.0);
-    let level = file.controller.level.unwrap_or(0.0);
+    let c2 = f.law.c2;
+    let level = s.level();
     // The reading error's range from the sensor's own settings (not from the trace: the held
     // reading lags the true value by the motion over a period, which on an oscillating run is
     // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
     // resolution, and 4 sqrt(window) times the bias drift.
-    let sn = &file.sensor;
+    let sn = &spec.sensor;
     let window_s = duration - from_s;
-    let rr = 8.0 * sn.noise_std.unwrap_or(0.0)
-        + sn.resolution.unwrap_or(0.0)
-        + 4.0 * sn.bias_drift_per_sqrt_s.unwrap_or(0.0) * window_s.max(0.0).sqrt();
+    let rr = 8.0 * sn.noise_std
+        + sn.resolution
+        + 4.0 * sn.bias_drift_per_sqrt_s * window_s.max(0.0).sqrt();
     let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
     let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
     // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
     // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
     // scenario's own convergence tolerance (the band it counts as on the isoline).
     let motion_floor = if s.is_time_varying() || lp.curvature_per_m == 0.0 {
-        file.metrics.convergence_tolerance.unwrap_or(0.0)
+        spec.metrics.convergence_tolerance
     } else {
         0.0
     };
@@ -685,7 +731,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         .max(1e-9 * level.abs().max(c2));
     // The turn rate the reading's own error drives through the law (a noisy sensor makes a
     // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
-    let c1 = file.controller.c1.unwrap_or(0.0);
+    let c1 = f.law.c1;
     let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
     let spin = spin_turn_rate_radps(
         s.max_turn_rate_radps(),
@@ -709,7 +755,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     // circular field with ki = 0: the equilibrium the chart checks) within the scenario's
     // convergence tolerance (or the floor, when larger).
     let mean_abs_error = (w.rows > 0).then(|| w.abs_error_sum / w.rows as f64);
-    let tolerance = file.metrics.convergence_tolerance.unwrap_or(0.0).max(floor);
+    let tolerance = spec.metrics.convergence_tolerance.max(floor);
     let near = mean_abs_error.is_some_and(|e| e <= tolerance);
     p.behaviour = if !calm {
         Behaviour::LimitCycle
@@ -732,6 +778,47 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         g(rms_turn),
         g(Some(spin))
     );
+    // The turn-rate limit saturating late: outside what the linear chart describes.
+    let saturated_share = (w.rows > 0).then(|| w.saturated_rows as f64 / w.rows as f64);
+    if let (Some(share), Some(limit)) = (saturated_share, w.limit_radps) {
+        if share >= SATURATION_FRACTION {
+            p.behaviour = Behaviour::Saturated;
+            p.detail = format!(
+                "saturated: the turn-rate command sat at the limit {} rad/s in {:.0} % of the window's second half (the chart's linear loop leaves the limit out: not compared); {}",
+                Num(limit),
+                100.0 * share,
+                p.detail
+            );
+            return p;
+        }
+    }
+    // Too short to judge: each half of the window must cover the time scale of the mode that
+    // decides the cell (issue 29: a slowly decaying run was called a limit cycle, and a 2 s
+    // run "agreed" from no data).
+    let half_s = 0.5 * window_s.max(0.0);
+    let period_s = 1.0 / rate_hz;
+    let (tau, osc) = f
+        .dominant_mode(kp, rate_hz)
+        .unwrap_or((f64::INFINITY, None));
+    let need_s = tau
+        .max(2.0 * osc.unwrap_or(0.0))
+        .max(MIN_HALF_SAMPLES * period_s);
+    // A NaN need (no time scale) counts as too short: judged only when the half covers it.
+    let covered = half_s.partial_cmp(&need_s).is_some_and(|o| o.is_ge());
+    if cell.status.stable().is_some() && !covered {
+        let judged = p.behaviour.as_str();
+        p.behaviour = Behaviour::Undetermined;
+        p.detail = format!(
+            "undetermined: each half of the steady-state window is {} s, shorter than the {} s it needs (the deciding mode's time constant T/|ln rho| = {} s{}, at least {} samples); it looked {judged}: {}",
+            Num(half_s),
+            Num(need_s),
+            Num(tau),
+            osc.map_or_else(String::new, |o| format!(", twice its period {} s", Num(o))),
+            MIN_HALF_SAMPLES,
+            p.detail
+        );
+        return p;
+    }
     p.agrees = cell
         .status
         .stable()
@@ -741,8 +828,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
 
 /// The simulation steps of one run of `s` (`duration / dt`).
 pub fn steps_per_run(s: &Scenario) -> f64 {
-    let f = s.file();
-    f.sim.duration_s.unwrap_or(0.0) / f.sim.dt_s.unwrap_or(0.01)
+    s.spec().sim.duration_s / s.dt_s()
 }
 
 /// Agreement over verified points.
@@ -761,6 +847,10 @@ pub struct Agreement {
     pub disagreements_far: usize,
     /// Runs that left the field (not compared: [`Behaviour::LeftField`]).
     pub left_field: usize,
+    /// Runs that saturated the turn-rate limit late (not compared: [`Behaviour::Saturated`]).
+    pub saturated: usize,
+    /// Runs too short to judge (not compared: [`Behaviour::Undetermined`]).
+    pub undetermined: usize,
     /// Points not compared (not computed, invalid, left the field).
     pub not_compared: usize,
 }
@@ -769,6 +859,7 @@ pub struct Agreement {
 pub fn agreement(points: &[VerifyPoint]) -> Agreement {
     let compared: Vec<&VerifyPoint> = points.iter().filter(|p| p.agrees.is_some()).collect();
     let agree = compared.iter().filter(|p| p.agrees == Some(true)).count();
+    let count = |b: Behaviour| points.iter().filter(|p| p.behaviour == b).count();
     let near = compared
         .iter()
         .filter(|p| p.agrees == Some(false) && p.near_boundary)
@@ -779,10 +870,9 @@ pub fn agreement(points: &[VerifyPoint]) -> Agreement {
         percent: (!compared.is_empty()).then(|| 100.0 * agree as f64 / compared.len() as f64),
         disagreements_near_boundary: near,
         disagreements_far: compared.len() - agree - near,
-        left_field: points
-            .iter()
-            .filter(|p| p.behaviour == Behaviour::LeftField)
-            .count(),
+        left_field: count(Behaviour::LeftField),
+        saturated: count(Behaviour::Saturated),
+        undetermined: count(Behaviour::Undetermined),
         not_compared: points.len() - compared.len(),
     }
 }

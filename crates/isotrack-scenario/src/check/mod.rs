@@ -31,8 +31,10 @@ pub mod sampled;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
-use crate::schema::{ControllerKind, DerivativeKindName, FieldKind, SearchKind};
+use crate::schema::{ControllerKind, FieldKind};
+use crate::spec::LawSpec;
 use crate::Scenario;
+use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::theory::{
@@ -197,6 +199,19 @@ pub struct SampledReport {
     /// stable or not computed. A loop whose `tau` is a large part of the run's duration does not
     /// settle within the run, stable or not.
     pub slowest_time_constant_s: Option<f64>,
+    /// The time constant the run's settling follows, s: `-T/ln(rho)` of the loop at the
+    /// isoline's mean slope (the slopes of its lattice crossings from the 5th percentile up,
+    /// averaged: the vehicle passes them faster than the loop settles, so it sees their mean;
+    /// on a circular field the one exact slope, and then equal to `slowest_time_constant_s`).
+    /// The slow-mode warning is about this one. Null when the loop is not stable or not
+    /// computed.
+    pub isoline_time_constant_s: Option<f64>,
+    /// The isoline's mean slope `isoline_time_constant_s` is computed at (null with it).
+    pub isoline_mean_slope: Option<f64>,
+    /// Why the loop was not computed (null when it was): a delay past the delay-line cap, the
+    /// P law's orbit where the field is flat, or a loop gain past `f64`. `spectral_radius` and
+    /// `stable` are then null and no verdict claims stability.
+    pub not_computed: Option<String>,
     /// The law has an integral term (`ki != 0`): an unstable loop can wind the integral up into
     /// a spin rather than oscillate. Not in the JSON.
     #[serde(skip)]
@@ -306,8 +321,7 @@ pub struct CheckReport {
 /// The region over which the field is sampled: the grid, the domain, or a box round the
 /// analytic field's features and the start.
 fn region(s: &Scenario) -> [f64; 4] {
-    let f = s.file();
-    let start = Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0));
+    let start = start(s);
     let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
         r[0] = r[0].min(p.x - m);
         r[1] = r[1].max(p.x + m);
@@ -367,31 +381,29 @@ struct Law {
 /// The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed in calm
 /// air), m/s.
 fn speed_mps(s: &Scenario) -> f64 {
-    let f = s.file();
-    f.vehicle
-        .speed_mps
-        .or(f.vehicle.airspeed_mps)
-        .unwrap_or(0.0)
+    s.spec().vehicle.speed_mps()
 }
 
 /// Whether the scenario flies the paper's PI-like law (the propositions and the sampled check
 /// are about it; the baselines have their own conditions, [`baselines`]).
 fn is_pi_isoline(s: &Scenario) -> bool {
-    s.file()
-        .controller
-        .kind
-        .unwrap_or(ControllerKind::PiIsoline)
-        == ControllerKind::PiIsoline
+    s.spec().controller.kind == ControllerKind::PiIsoline
 }
 
 fn law(s: &Scenario) -> Law {
-    let f = s.file();
-    let c = &f.controller;
+    // The check models the PI-like law (`is_pi_isoline`); for another law its verdicts do not
+    // apply, and it reads the PID's own `kp`, `ki`, no `c1` and a unit `c2`.
+    let (kp, ki, c1, c2) = match &s.spec().controller.law {
+        LawSpec::PiIsoline(p) => (p.kp, p.ki, p.c1, p.c2),
+        LawSpec::Pid(p) => (p.kp, p.ki, 0.0, 1.0),
+        LawSpec::PidCrossing(p) => (p.pid.kp, p.pid.ki, 0.0, 1.0),
+        _ => (0.0, 0.0, 0.0, 1.0),
+    };
     Law {
-        kp: c.kp.unwrap_or(0.0),
-        ki: c.ki.unwrap_or(0.0),
-        c1: c.c1.unwrap_or(0.0),
-        c2: c.c2.unwrap_or(1.0),
+        kp,
+        ki,
+        c1,
+        c2,
         v: speed_mps(s),
     }
 }
@@ -528,6 +540,88 @@ fn circular_p_law(s: &Scenario, l: &Law) -> bool {
 /// `exp(-k d*)`), and a scan that went on there fragmented the stable set into rounding noise.
 const P_ORBIT_MIN_LOOP_GAIN: f64 = 1e-8;
 
+/// Why a loop is not computed: `check`, every cell of the chart and every `--verify` point go
+/// through [`not_computed`], so they agree on what is computed (issue 29: chart cells at the
+/// P law's flat orbit were coloured where `check` said "not computed").
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum NotComputed {
+    /// The loop gain `kp v T max(alpha, 1) max(c1, 1) / min(c2, 1)` is past
+    /// [`map::MAX_LOOP_GAIN`]: the sampled matrices' products leave `f64`.
+    Overflow,
+    /// The P law's orbit lies where the field is nearly flat: its loop gain `kp alpha v T` is
+    /// below [`P_ORBIT_MIN_LOOP_GAIN`].
+    FlatOrbit {
+        /// `kp alpha v T` on the orbit.
+        gain: f64,
+    },
+    /// The delay spans more than [`sampled::MAX_DELAY_STATES`] sensor periods.
+    Delay {
+        /// The delay, s.
+        delay_s: f64,
+        /// The delay in sensor periods.
+        periods: f64,
+    },
+}
+
+impl NotComputed {
+    /// The reason in a sentence (`check`'s `not_computed`, verdict and warning).
+    fn reason(self) -> String {
+        match self {
+            Self::Overflow => format!(
+                "the loop gain kp*v*T*max(alpha, 1)*max(c1, 1)/min(c2, 1) is beyond {:e}: the sampled matrices would overflow f64",
+                map::MAX_LOOP_GAIN
+            ),
+            Self::FlatOrbit { gain } => format!(
+                "the P law's orbit lies where the field is nearly flat: its loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}, so its damping (about half that per period) is within rounding of zero and the spectral radius cannot tell stable from unstable"
+            ),
+            Self::Delay { delay_s, periods } => format!(
+                "the delay of {} sensor periods ({} s) exceeds the {} periods the check models (one state each)",
+                Num(periods),
+                Echo(delay_s),
+                sampled::MAX_DELAY_STATES
+            ),
+        }
+    }
+
+    /// The reason in a few words (the chart's CSV `note`).
+    fn short(self) -> &'static str {
+        match self {
+            Self::Overflow => "loop gain beyond 1e100: f64 would overflow",
+            Self::FlatOrbit { .. } => {
+                "the P law's orbit is where the field is flat: loop gain kp*alpha*v*T below 1e-8, not decided"
+            }
+            Self::Delay { .. } => "the delay spans more than 32 sensor periods",
+        }
+    }
+}
+
+/// Whether the loop `lp` (with the P law's `orbit` when it has one) can be computed, and why
+/// not: the same test for `check`, the chart's cells and `--verify`.
+fn not_computed(lp: &SampledLoop, orbit: Option<&PLawOrbit>) -> Option<NotComputed> {
+    let gain = lp.kp
+        * lp.speed_mps.max(1.0)
+        * lp.period_s.max(1.0)
+        * lp.slope.abs().max(1.0)
+        * lp.c1.abs().max(1.0)
+        / lp.c2.abs().min(1.0);
+    if gain.is_nan() || gain > map::MAX_LOOP_GAIN {
+        return Some(NotComputed::Overflow);
+    }
+    if let Some(o) = orbit {
+        let gain = lp.kp * o.slope * lp.speed_mps * lp.period_s;
+        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
+            return Some(NotComputed::FlatOrbit { gain });
+        }
+    }
+    if lp.radius().is_none() {
+        return Some(NotComputed::Delay {
+            delay_s: lp.delay_s,
+            periods: lp.delay_s / lp.period_s,
+        });
+    }
+    None
+}
+
 /// How the loop is unstable at the isoline's own (lattice-read) slopes, each frozen.
 #[derive(Clone, Copy, Debug)]
 struct FrozenInstability {
@@ -561,11 +655,10 @@ fn growing_mode_period_samples(base: &SampledLoop, slope: f64) -> Option<f64> {
 
 /// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
 fn sensor_lag(s: &Scenario) -> Option<SensorLag> {
-    let f = s.file();
-    let tau = f.sensor.time_constant_s.unwrap_or(0.0);
+    let tau = s.spec().sensor.time_constant_s;
     (tau > 0.0).then(|| SensorLag {
         time_constant_s: tau,
-        step_s: f.sim.dt_s.unwrap_or(0.01),
+        step_s: s.dt_s(),
     })
 }
 
@@ -640,16 +733,12 @@ impl LoopSetup {
             return Err("no slope in the tube: the level is not attained in the region".into());
         };
         let mut notes = vec![];
-        let c = &f.controller;
-        let estimator = match c
-            .derivative
-            .unwrap_or(DerivativeKindName::BackwardDifference)
-        {
-            DerivativeKindName::BackwardDifference => EstimatorModel::BackwardDifference,
-            DerivativeKindName::FilteredDifference => EstimatorModel::FilteredDifference {
-                tau_s: c.derivative_tau_s.unwrap_or(0.1),
-            },
-            DerivativeKindName::Levant => {
+        let estimator = match s.spec().controller.derivative() {
+            Some(DerivativeKind::BackwardDifference) | None => EstimatorModel::BackwardDifference,
+            Some(DerivativeKind::FilteredDifference { tau_s }) => {
+                EstimatorModel::FilteredDifference { tau_s }
+            }
+            Some(DerivativeKind::Levant { .. }) => {
                 notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
                 EstimatorModel::BackwardDifference
             }
@@ -673,8 +762,8 @@ impl LoopSetup {
             ki: l.ki,
             c1: l.c1,
             c2: l.c2,
-            period_s: 1.0 / f.sensor.rate_hz.unwrap_or(100.0),
-            delay_s: f.sensor.delay_s.unwrap_or(0.0),
+            period_s: 1.0 / s.spec().sensor.rate_hz,
+            delay_s: s.spec().sensor.delay_s,
             estimator,
             heading,
             sensor_lag: sensor_lag(s),
@@ -716,9 +805,8 @@ impl LoopSetup {
 /// the same as with `full = true`.
 fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledReport {
     let slope_range = r.isoline_slope_range;
-    let f = s.file();
-    let period_s = 1.0 / f.sensor.rate_hz.unwrap_or(100.0);
-    let delay_s = f.sensor.delay_s.unwrap_or(0.0);
+    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    let delay_s = s.spec().sensor.delay_s;
     let mut rep = SampledReport {
         applicable: false,
         vehicle_model: None,
@@ -731,6 +819,9 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         spectral_radius: None,
         stable: None,
         slowest_time_constant_s: None,
+        isoline_time_constant_s: None,
+        isoline_mean_slope: None,
+        not_computed: None,
         integral: l.ki != 0.0,
         tube_spectral_radius: None,
         stable_over_tube: None,
@@ -773,31 +864,46 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
     rep.curvature_per_m = Some(base.curvature_per_m);
     rep.slope_exact = Some(exact_isoline_slope(s).is_some());
     rep.course_loop = base.course_loop_numbers();
-    // The P law's orbit far out, where the field is flat: its loop barely acts, and its
-    // stability is within rounding of neutral (P_ORBIT_MIN_LOOP_GAIN): not decided.
-    if let Some(o) = &orbit {
-        let gain = l.kp * o.slope * l.v * period_s;
-        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
-            notes.push(format!(
-                "not computed: the orbit lies where the field is nearly flat, and the loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}: its damping (about half that per period) is within rounding of zero, so the spectral radius cannot tell stable from unstable"
-            ));
-            rep.note = notes.join("; ");
-            return rep;
-        }
-    }
-    let Some(rho) = sampled::worst_radius(&base, &slopes) else {
-        notes.push(format!(
-            "not computed: the delay {} s spans {:.0} sensor periods, more than the {} delay-line states the check builds",
-            Echo(delay_s),
-            (delay_s / period_s).ceil(),
-            sampled::MAX_DELAY_STATES
-        ));
+    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
+    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
+    if let Some(why) = not_computed(&base, orbit.as_ref()) {
+        let reason = why.reason();
+        notes.push(format!("not computed: {reason}"));
+        rep.not_computed = Some(reason);
         rep.note = notes.join("; ");
         return rep;
-    };
+    }
+    let rho = sampled::worst_spectral_radius(&base, &slopes);
     rep.spectral_radius = rho.is_finite().then_some(rho);
     rep.stable = Some(rho < 1.0);
     rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
+    if rho < 1.0 {
+        // The time constant the run's settling follows: on a lattice isoline the loop at the
+        // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
+        // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
+        // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
+        // settled in 8 s).
+        let mean_slope = if orbit.is_some() || exact_isoline_slope(s).is_some() {
+            slopes.first().copied()
+        } else {
+            let along: Vec<f64> = r
+                .isoline_slopes
+                .iter()
+                .copied()
+                .filter(|&a| a >= range[0])
+                .collect();
+            (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
+        };
+        if let Some(alpha) = mean_slope {
+            let rho_mean = SampledLoop {
+                slope: alpha,
+                ..base
+            }
+            .spectral_radius();
+            rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
+            rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
+        }
+    }
     if rho >= 1.0 {
         let worst = slopes
             .iter()
@@ -943,7 +1049,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         }
         .analysis();
     }
-    if !rho.is_finite() {
+    if !rho.is_finite() && circular_p_law(s, l) {
         notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
     }
     rep.note = notes.join("; ");
@@ -952,8 +1058,8 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
 
 /// The start: position and level.
 fn start(s: &Scenario) -> Vec2 {
-    let f = s.file();
-    Vec2::new(f.initial.x_m.unwrap_or(0.0), f.initial.y_m.unwrap_or(0.0))
+    let st = s.spec().start;
+    Vec2::new(st.x_m, st.y_m)
 }
 
 /// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
@@ -1190,7 +1296,7 @@ fn prop2_initial_heading(rep: &mut Prop2Report, s: &Scenario) {
     let Some(g) = s.field().gradient(0.0, start(s)).filter(|g| g.norm() > 0.0) else {
         return;
     };
-    let h = Vec2::from_angle(f.initial.heading_rad.unwrap_or(0.0));
+    let h = Vec2::from_angle(s.spec().start.heading_rad);
     let minus_n = -g;
     // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
     // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
@@ -1418,8 +1524,8 @@ fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Ver
         return (
             Verdict::NotApplicable,
             format!(
-                "no guarantee: the sampled loop was not computed ({})",
-                sm.note
+                "no guarantee: the sampled loop was not computed: {}",
+                sm.not_computed.as_deref().unwrap_or(&sm.note)
             ),
         );
     }
@@ -1501,15 +1607,20 @@ pub const SETTLING_FRACTION: f64 = 0.2;
 /// The warning when the loop's slowest mode is too slow for the run's duration
 /// (`tau > SETTLING_FRACTION * sim.duration_s`; issue 29). `run` and `check` both give it.
 fn slow_mode_warning(s: &Scenario, sm: &SampledReport) -> Option<String> {
-    let duration = s.file().sim.duration_s.unwrap_or(0.0);
-    let tau = sm.slowest_time_constant_s?;
+    let duration = s.spec().sim.duration_s;
+    let tau = sm.isoline_time_constant_s?;
+    let alpha = sm.isoline_mean_slope?;
+    let at = if sm.slope_exact == Some(true) || sm.p_law_orbit_error.is_some() {
+        format!("at the isoline's slope {}", Num(alpha))
+    } else {
+        format!("at the isoline's mean slope {}", Num(alpha))
+    };
     (duration > 0.0 && tau > SETTLING_FRACTION * duration).then(|| {
-            format!(
-                "the sampled loop is stable but slow: its slowest mode decays with time constant -T/ln(rho) = {} s (spectral radius {}), more than a fifth of the run's duration {} s: the run may end before it settles on the isoline",
-                Num(tau),
-                sm.spectral_radius.map_or_else(|| "n/a".into(), |r| format!("{r:.6}")),
-                Echo(duration)
-            )
+        format!(
+            "the sampled loop is stable but slow: {at} its slowest mode decays with time constant -T/ln(rho) = {} s, more than a fifth of the run's duration {} s: the run may end before it settles on the isoline",
+            Num(tau),
+            Echo(duration)
+        )
     })
 }
 
@@ -1597,18 +1708,15 @@ fn sensor_not_modelled(s: &Scenario, levels: Option<[f64; 2]>) -> Vec<String> {
 /// Warnings about a scenario: noise through a raw backward difference, and a sampled loop that
 /// is unstable. `run` prints them (and writes them to summary.json); `check` reports them.
 fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
-    let f = s.file();
     let mut w = s.field_warnings().to_vec();
     // The verdict is local: first whether the run has time to settle.
     w.extend(slow_mode_warning(s, sampled));
-    let noise = f.sensor.noise_std.unwrap_or(0.0);
-    let rate = f.sensor.rate_hz.unwrap_or(100.0);
-    if noise > 0.0
-        && f.controller
-            .derivative
-            .unwrap_or(DerivativeKindName::BackwardDifference)
-            == DerivativeKindName::BackwardDifference
-    {
+    let noise = s.spec().sensor.noise_std;
+    let rate = s.spec().sensor.rate_hz;
+    // Only a law that differentiates the measurement: `gradient_reference` and `schedule` have
+    // no estimator (`None`; the old fallback `unwrap_or(BackwardDifference)` warned them too,
+    // advising a `controller.derivative` resolve refuses for them: issue 31).
+    if noise > 0.0 && s.spec().controller.derivative() == Some(DerivativeKind::BackwardDifference) {
         w.push(format!(
             "sensor noise (sensor.noise_std = {}) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
             Echo(noise),
@@ -1664,14 +1772,13 @@ impl FlatStart {
 /// (`controller.search = "none"`); `None` when the start is on the level, outside the field,
 /// or not flat.
 pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
-    let f = s.file();
-    if !is_pi_isoline(s) || f.controller.search.unwrap_or_default() != SearchKind::None {
+    if !is_pi_isoline(s) || s.search().is_some() {
         return None;
     }
     let l = law(s);
     let p0 = start(s);
     let level = s.level();
-    let duration = f.sim.duration_s.unwrap_or(0.0);
+    let duration = s.spec().sim.duration_s;
     let field = s.field();
     let mut worst: Option<FlatStart> = None;
     for k in 0..=4 {
@@ -1788,7 +1895,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
         return Some(format!(
             "the loop sampled at {} Hz was not checked: {}",
             Echo(rate),
-            sm.note
+            sm.not_computed.as_deref().unwrap_or(&sm.note)
         ));
     }
     if sm.stable != Some(false) {
@@ -1837,7 +1944,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
 /// range, and a different answer, than `check`).
 pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
-    let tube = s.file().controller.c2.unwrap_or(1.0);
+    let tube = l.c2;
     let r = regions(s, tube, CHECK_LATTICE, false);
     let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
     w.extend(baselines::baseline_warnings(s));
@@ -1853,11 +1960,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let sampled = sampled_report(s, &l, &r, true);
     let mut prop2 = prop2_report(s, &l, tube, &r);
     prop2.sensor_not_modelled = sensor_not_modelled(s, prop2.region_levels);
-    withhold_prop2_bound(
-        &mut prop2,
-        &sampled,
-        s.file().sensor.noise_std.unwrap_or(0.0),
-    );
+    withhold_prop2_bound(&mut prop2, &sampled, s.spec().sensor.noise_std);
     let (mut verdict, mut verdict_reason) = verdict(&prop1, &prop2, &sampled);
     let tight = too_tight(s, &l, &sampled);
     if let Some(reason) = &tight {
@@ -1896,10 +1999,9 @@ mod tests {
     /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points
     /// and times [`flat_start`] samples), computed without its threshold.
     fn start_ratio(s: &Scenario) -> f64 {
-        let f = s.file();
         let l = law(s);
         let p0 = start(s);
-        let duration = f.sim.duration_s.unwrap_or(0.0);
+        let duration = s.spec().sim.duration_s;
         let mut worst: f64 = 0.0;
         for k in 0..=4 {
             let t = duration * f64::from(k) / 4.0;
@@ -1968,9 +2070,7 @@ mod tests {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
             let s = crate::load_scenario(Some(&p), &[]).unwrap();
-            if !is_pi_isoline(&s)
-                || s.file().controller.search.unwrap_or_default() != SearchKind::None
-            {
+            if !is_pi_isoline(&s) || s.search().is_some() {
                 continue;
             }
             let ratio = start_ratio(&s);

@@ -176,7 +176,7 @@ pub fn moving_report(s: &Scenario, tube: f64, region: [f64; 4]) -> MovingReport 
             note: "the field does not change with time".into(),
         };
     };
-    let duration = s.file().sim.duration_s.unwrap_or(600.0);
+    let duration = s.spec().sim.duration_s;
     let level = s.level();
     let points: Vec<Vec2> = (0..SIDE * SIDE)
         .map(|n| {

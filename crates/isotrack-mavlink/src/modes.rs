@@ -1,0 +1,235 @@
+//! The flight modes `isotrack fly` commands and recognises, per autopilot: PX4 and ArduPilot
+//! number their modes differently, and ArduPilot's numbers differ between its firmwares
+//! (Copter, Plane, Rover), so the same `custom_mode` 4 is PX4's AUTO, ArduCopter's GUIDED,
+//! ArduPlane's ACRO and ArduRover's HOLD. The table is picked from the vehicle's `HEARTBEAT`
+//! (`autopilot`, then `type`), never assumed.
+//!
+//! Sources: PX4's `px4_custom_mode.h` (`custom_mode = main << 16 | sub << 24`; main 4 AUTO with
+//! sub 3 LOITER and 5 RTL, main 6 OFFBOARD), ArduPilot's `mode.h` of ArduCopter (GUIDED 4,
+//! LOITER 5, RTL 6), ArduPlane (RTL 11, LOITER 12, GUIDED 15) and Rover (HOLD 4, LOITER 5,
+//! RTL 11, GUIDED 15). `MAV_CMD_DO_SET_MODE` carries `param1 = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED`
+//! (1) and the custom mode: PX4's main and sub mode in `param2` and `param3`, ArduPilot's number
+//! in `param2`.
+
+use mavlink::dialects::common::{MavAutopilot, MavType};
+
+/// A mode the companion commands or waits for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FlyMode {
+    /// The mode that follows the companion's setpoints: PX4 OFFBOARD, ArduPilot GUIDED.
+    Offboard,
+    /// Hold where it is: PX4 AUTO.LOITER (PX4's Hold), ArduCopter LOITER, ArduPlane LOITER (a
+    /// plane cannot stop: it circles), ArduRover HOLD.
+    Hold,
+    /// Circle or hover about where it is: PX4 AUTO.LOITER, ArduCopter LOITER, ArduPlane LOITER,
+    /// ArduRover LOITER.
+    Loiter,
+    /// Return home: PX4 AUTO.RTL, ArduPilot RTL.
+    Return,
+}
+
+/// Whose mode numbers the vehicle speaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Firmware {
+    /// PX4 (and every autopilot that is not ArduPilot: isotrack's `sitl`, MAVSDK's server).
+    Px4,
+    /// ArduPilot's multirotors and helicopters (ArduCopter).
+    ArduCopter,
+    /// ArduPilot's fixed wings and VTOLs (ArduPlane, QuadPlane).
+    ArduPlane,
+    /// ArduPilot's ground vehicles and boats (Rover).
+    ArduRover,
+    /// ArduPilot on a vehicle type whose table is not known here (a submarine, a blimp, ...):
+    /// no mode is commanded.
+    ArduOther,
+}
+
+/// PX4's custom main mode AUTO.
+const PX4_AUTO: u32 = 4;
+/// PX4's custom main mode OFFBOARD.
+const PX4_OFFBOARD: u32 = 6;
+/// PX4's AUTO sub mode LOITER.
+const PX4_LOITER: u32 = 3;
+/// PX4's AUTO sub mode RTL.
+const PX4_RTL: u32 = 5;
+
+impl Firmware {
+    /// The firmware of a vehicle's heartbeat: `MAV_AUTOPILOT_ARDUPILOTMEGA` picks ArduPilot's
+    /// table by `type`; any other autopilot speaks PX4's.
+    pub fn of(autopilot: MavAutopilot, mavtype: MavType) -> Self {
+        use MavType::*;
+        if autopilot != MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA {
+            return Firmware::Px4;
+        }
+        match mavtype {
+            MAV_TYPE_QUADROTOR
+            | MAV_TYPE_COAXIAL
+            | MAV_TYPE_HELICOPTER
+            | MAV_TYPE_HEXAROTOR
+            | MAV_TYPE_OCTOROTOR
+            | MAV_TYPE_TRICOPTER
+            | MAV_TYPE_DODECAROTOR
+            | MAV_TYPE_DECAROTOR
+            | MAV_TYPE_GENERIC_MULTIROTOR => Firmware::ArduCopter,
+            MAV_TYPE_FIXED_WING
+            | MAV_TYPE_VTOL_TAILSITTER_DUOROTOR
+            | MAV_TYPE_VTOL_TAILSITTER_QUADROTOR
+            | MAV_TYPE_VTOL_TILTROTOR
+            | MAV_TYPE_VTOL_FIXEDROTOR
+            | MAV_TYPE_VTOL_TAILSITTER
+            | MAV_TYPE_VTOL_TILTWING => Firmware::ArduPlane,
+            MAV_TYPE_GROUND_ROVER | MAV_TYPE_SURFACE_BOAT => Firmware::ArduRover,
+            _ => Firmware::ArduOther,
+        }
+    }
+
+    /// Its name in logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Firmware::Px4 => "PX4",
+            Firmware::ArduCopter => "ArduCopter",
+            Firmware::ArduPlane => "ArduPlane",
+            Firmware::ArduRover => "ArduRover",
+            Firmware::ArduOther => "ArduPilot (unknown vehicle type)",
+        }
+    }
+
+    /// ArduPilot's custom mode number of `m`, if this is ArduPilot and has it.
+    fn ardupilot_number(self, m: FlyMode) -> Option<u32> {
+        use FlyMode::*;
+        match (self, m) {
+            (Firmware::ArduCopter, Offboard) => Some(4),
+            (Firmware::ArduCopter, Hold | Loiter) => Some(5),
+            (Firmware::ArduCopter, Return) => Some(6),
+            (Firmware::ArduPlane, Offboard) => Some(15),
+            (Firmware::ArduPlane, Hold | Loiter) => Some(12),
+            (Firmware::ArduPlane, Return) => Some(11),
+            (Firmware::ArduRover, Offboard) => Some(15),
+            (Firmware::ArduRover, Hold) => Some(4),
+            (Firmware::ArduRover, Loiter) => Some(5),
+            (Firmware::ArduRover, Return) => Some(11),
+            _ => None,
+        }
+    }
+
+    /// PX4's main and sub mode of `m`.
+    fn px4(m: FlyMode) -> (u32, u32) {
+        match m {
+            FlyMode::Offboard => (PX4_OFFBOARD, 0),
+            FlyMode::Hold | FlyMode::Loiter => (PX4_AUTO, PX4_LOITER),
+            FlyMode::Return => (PX4_AUTO, PX4_RTL),
+        }
+    }
+
+    /// `MAV_CMD_DO_SET_MODE`'s parameters 1 to 3 for `m`: `[1, main, sub]` (PX4) or
+    /// `[1, number, 0]` (ArduPilot); `None` where the table has no such mode.
+    pub fn set_mode_params(self, m: FlyMode) -> Option<[f32; 3]> {
+        if self == Firmware::Px4 {
+            let (main, sub) = Firmware::px4(m);
+            return Some([1.0, main as f32, sub as f32]);
+        }
+        self.ardupilot_number(m).map(|n| [1.0, n as f32, 0.0])
+    }
+
+    /// Whether a heartbeat's `custom_mode` is `m` (PX4: OFFBOARD by its main mode alone, the
+    /// AUTO modes by main and sub mode; ArduPilot: the number).
+    pub fn is_in(self, custom_mode: u32, m: FlyMode) -> bool {
+        if self == Firmware::Px4 {
+            let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
+            let (want_main, want_sub) = Firmware::px4(m);
+            return main == want_main && (m == FlyMode::Offboard || sub == want_sub);
+        }
+        self.ardupilot_number(m) == Some(custom_mode)
+    }
+
+    /// The name of a heartbeat's `custom_mode` in logs ("OFFBOARD", "GUIDED", "RTL", or the
+    /// number).
+    pub fn mode_name(self, custom_mode: u32) -> String {
+        let named = |m: FlyMode| self.is_in(custom_mode, m).then(|| self.name_of(m));
+        // Hold before Loiter: where both are one mode, its name is the hold's.
+        [
+            FlyMode::Offboard,
+            FlyMode::Hold,
+            FlyMode::Loiter,
+            FlyMode::Return,
+        ]
+        .into_iter()
+        .find_map(named)
+        .map(str::to_string)
+        .unwrap_or_else(|| match self {
+            Firmware::Px4 => format!(
+                "PX4 mode {}.{}",
+                (custom_mode >> 16) & 0xff,
+                (custom_mode >> 24) & 0xff
+            ),
+            _ => format!("{} mode {custom_mode}", self.name()),
+        })
+    }
+
+    /// The name of `m` in this firmware ("OFFBOARD" / "GUIDED", "HOLD", ...).
+    pub fn name_of(self, m: FlyMode) -> &'static str {
+        match (self, m) {
+            (Firmware::Px4, FlyMode::Offboard) => "OFFBOARD",
+            (_, FlyMode::Offboard) => "GUIDED",
+            (Firmware::Px4, FlyMode::Hold) => "HOLD",
+            (Firmware::Px4, FlyMode::Loiter) => "LOITER",
+            (Firmware::Px4, FlyMode::Return) => "RETURN",
+            (Firmware::ArduRover, FlyMode::Hold) => "HOLD",
+            (_, FlyMode::Hold | FlyMode::Loiter) => "LOITER",
+            (_, FlyMode::Return) => "RTL",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use FlyMode::*;
+
+    /// ArduPilot's tables (mode.h of ArduCopter, ArduPlane, Rover) and PX4's encoding.
+    #[test]
+    fn tables() {
+        let ap = MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA;
+        let copter = Firmware::of(ap, MavType::MAV_TYPE_QUADROTOR);
+        let plane = Firmware::of(ap, MavType::MAV_TYPE_FIXED_WING);
+        let rover = Firmware::of(ap, MavType::MAV_TYPE_GROUND_ROVER);
+        let px4 = Firmware::of(
+            MavAutopilot::MAV_AUTOPILOT_PX4,
+            MavType::MAV_TYPE_FIXED_WING,
+        );
+        assert_eq!(
+            (copter, plane, rover, px4),
+            (
+                Firmware::ArduCopter,
+                Firmware::ArduPlane,
+                Firmware::ArduRover,
+                Firmware::Px4
+            )
+        );
+        let p2 = |f: Firmware, m| f.set_mode_params(m).map(|p| p[1]);
+        assert_eq!(
+            [Offboard, Hold, Loiter, Return].map(|m| p2(copter, m)),
+            [Some(4.0), Some(5.0), Some(5.0), Some(6.0)]
+        );
+        assert_eq!(
+            [Offboard, Hold, Loiter, Return].map(|m| p2(plane, m)),
+            [Some(15.0), Some(12.0), Some(12.0), Some(11.0)]
+        );
+        assert_eq!(
+            [Offboard, Hold, Loiter, Return].map(|m| p2(rover, m)),
+            [Some(15.0), Some(4.0), Some(5.0), Some(11.0)]
+        );
+        assert_eq!(px4.set_mode_params(Return), Some([1.0, 4.0, 5.0]));
+        assert_eq!(px4.set_mode_params(Offboard), Some([1.0, 6.0, 0.0]));
+        assert!(px4.is_in((4 << 16) | (3 << 24), Hold));
+        assert!(!px4.is_in((4 << 16) | (5 << 24), Hold));
+        assert!(px4.is_in(6 << 16, Offboard));
+        // ArduCopter's 4 is GUIDED, ArduPlane's 4 ACRO: never taken for a hold or OFFBOARD.
+        assert!(copter.is_in(4, Offboard) && !plane.is_in(4, Offboard) && !plane.is_in(4, Hold));
+        assert_eq!(plane.mode_name(6), "ArduPlane mode 6");
+        assert_eq!(
+            Firmware::of(ap, MavType::MAV_TYPE_SUBMARINE).set_mode_params(Hold),
+            None
+        );
+    }
+}

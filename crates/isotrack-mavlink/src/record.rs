@@ -1,0 +1,260 @@
+//! What `isotrack fly` records of a flight: the trace rows, each paired with the vehicle's
+//! position and heading at its measurement's time, flushed at a bounded interval so that a
+//! killed companion leaves a readable trace; and the run's tracking metrics, the library's own
+//! ([`isotrack_sim::Metrics`]) on the measured error series (positions only for the path
+//! length: the law never sees them).
+//!
+//! Pairing: a MAVLink measurement stamped `t` (`time_boot_ms`) gets the latest position
+//! (`LOCAL_POSITION_NED`, else `GLOBAL_POSITION_INT`) and heading (`ATTITUDE`) stamped at or
+//! before `t`, in the vehicle's clock. A vehicle may send the position of `t` after the
+//! measurement of `t` (as `isotrack sitl` does: the pose of a step follows its sample's
+//! answer), so a row waits until a position (and, if the vehicle sends any, an attitude)
+//! stamped at or after `t` has come, for at most [`MAX_ROW_WAIT_S`] of wall time, then takes
+//! what there is (`NaN` for none). A UDP sensor's line is on the sensor's own clock: its row
+//! takes the latest position and heading received when the line arrived.
+
+use isotrack_scenario::Scenario;
+use isotrack_sim::{Metrics, MetricsConfig, RunMetrics, TraceRow, TraceSink};
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+/// The longest a trace row waits for its position, wall s.
+pub const MAX_ROW_WAIT_S: f64 = 1.0;
+/// The trace is flushed after this many rows (fewer than fill `TraceWriter`'s 8 KiB buffer,
+/// which would otherwise write a row's first part alone: a killed companion leaves whole rows)
+/// ...
+pub const FLUSH_EVERY_ROWS: u64 = 32;
+/// ... and at least this often while rows come, wall s.
+pub const FLUSH_INTERVAL_S: f64 = 1.0;
+/// The positions and attitudes kept for pairing (the newest).
+const HISTORY: usize = 4096;
+
+/// A vehicle-clock history of one telemetry value, newest last.
+#[derive(Default)]
+struct History<T: Copy> {
+    items: VecDeque<(u32, T)>,
+}
+
+impl<T: Copy> History<T> {
+    fn push(&mut self, ms: u32, v: T) {
+        // Out of order: kept in order (a late one is only ever older than what is there).
+        if self.items.back().is_some_and(|&(last, _)| ms < last) {
+            return;
+        }
+        self.items.push_back((ms, v));
+        if self.items.len() > HISTORY {
+            self.items.pop_front();
+        }
+    }
+    fn newest_ms(&self) -> Option<u32> {
+        self.items.back().map(|x| x.0)
+    }
+    fn newest(&self) -> Option<T> {
+        self.items.back().map(|x| x.1)
+    }
+    /// The latest item stamped at or before `ms`.
+    fn at(&self, ms: u32) -> Option<T> {
+        let i = self.items.partition_point(|&(t, _)| t <= ms);
+        i.checked_sub(1).map(|i| self.items[i].1)
+    }
+    /// Whether an item stamped at or after `ms` has come (or none ever will be waited for).
+    fn covers(&self, ms: u32) -> bool {
+        self.newest_ms().is_none_or(|n| n >= ms)
+    }
+}
+
+/// A row waiting for its pose.
+struct Pending {
+    row: TraceRow,
+    /// Its measurement's vehicle time (`None`: a UDP line, paired on arrival).
+    ms: Option<u32>,
+    at: Instant,
+}
+
+/// The measured error series' metrics: [`Metrics`] on the samples the law answered, sample
+/// `i` at step `round((t_i - t_0) / T)` of the scenario's sampling period `T`
+/// (`1 / sensor.rate_hz`, else `sim.dt_s`), from the first answered sample `t_0`.
+struct SeriesMetrics {
+    m: Metrics,
+    period_s: f64,
+    t0_s: Option<f64>,
+    /// The command answering the previous sample, held over one period (integrated when the
+    /// next sample comes: the last one's never is, as in a simulated run).
+    held: Option<f64>,
+    /// The last received position in control, for the path length.
+    last_pos: Option<(f64, f64)>,
+}
+
+/// The trace and the metrics of a flight.
+pub(crate) struct Recorder {
+    positions: History<(f64, f64)>,
+    headings: History<f64>,
+    pending: VecDeque<Pending>,
+    unflushed: u64,
+    last_flush: Instant,
+    metrics: SeriesMetrics,
+    max_wait: Duration,
+}
+
+impl Recorder {
+    /// For `scenario`'s metrics (its `[metrics]` keys), the steady-state window being the last
+    /// `metrics.steady_state_fraction` of `planned_s` from the first answered sample.
+    pub(crate) fn new(scenario: &Scenario, planned_s: f64) -> Self {
+        let f = scenario.file();
+        let period_s = f.sensor.rate_hz.map_or(scenario.dt_s(), |r| 1.0 / r);
+        let plan = scenario.plan();
+        let n = (planned_s / period_s).round().max(0.0);
+        let frac = f.metrics.steady_state_fraction.unwrap_or(0.2);
+        let cfg = MetricsConfig {
+            dt_s: period_s,
+            steady_state_start_step: ((1.0 - frac) * n).ceil() as u64,
+            convergence_tolerance: plan.convergence_tolerance,
+            convergence_min_dwell_steps: ((scenario.convergence_min_dwell_s() / period_s)
+                .ceil()
+                .max(0.0)
+                .min(n)) as u64,
+            track_loss_band: plan.track_loss_band,
+        };
+        Self {
+            positions: History::default(),
+            headings: History::default(),
+            pending: VecDeque::new(),
+            unflushed: 0,
+            last_flush: Instant::now(),
+            metrics: SeriesMetrics {
+                m: Metrics::new(cfg),
+                period_s,
+                t0_s: None,
+                held: None,
+                last_pos: None,
+            },
+            max_wait: Duration::from_secs_f64(MAX_ROW_WAIT_S),
+        }
+    }
+
+    /// A position received, m (x east, y north), stamped `ms`; `in_control`: it counts for the
+    /// path length.
+    pub(crate) fn position(&mut self, ms: u32, p: (f64, f64), in_control: bool) {
+        self.positions.push(ms, p);
+        let s = &mut self.metrics;
+        if in_control {
+            if let Some(q) = s.last_pos {
+                s.m.add_path(((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt());
+            }
+            s.last_pos = Some(p);
+        }
+    }
+
+    /// A heading received, rad (counter-clockwise from east), stamped `ms`.
+    pub(crate) fn heading(&mut self, ms: u32, h: f64) {
+        self.headings.push(ms, h);
+    }
+
+    /// A sample the law answered in control: measured error `eps` at `t_s`, command `omega`.
+    pub(crate) fn observe(&mut self, t_s: f64, eps: f64, omega: f64) {
+        let s = &mut self.metrics;
+        let t0 = *s.t0_s.get_or_insert(t_s);
+        let k = ((t_s - t0) / s.period_s).round().max(0.0) as u64;
+        if let Some(w) = s.held.replace(omega) {
+            s.m.integrate_command(w);
+        }
+        s.m.observe(k, eps, omega);
+    }
+
+    /// The metrics; `completed`: the flight reached its planned end.
+    pub(crate) fn metrics(&self, completed: bool) -> RunMetrics {
+        self.metrics.m.finish(completed)
+    }
+
+    /// Queues `row` for its pose (`ms`: its measurement's vehicle time; `None`: now's pose).
+    pub(crate) fn row<S: TraceSink + ?Sized>(
+        &mut self,
+        sink: &mut S,
+        row: TraceRow,
+        ms: Option<u32>,
+    ) {
+        let mut row = row;
+        if ms.is_none() {
+            (row.x_m, row.y_m) = self.positions.newest().unwrap_or((f64::NAN, f64::NAN));
+            row.heading_rad = self.headings.newest().unwrap_or(f64::NAN);
+        }
+        self.pending.push_back(Pending {
+            row,
+            ms,
+            at: Instant::now(),
+        });
+        self.write_ready(sink, false);
+    }
+
+    /// Writes the rows whose pose is known (all of them if `all`), in order.
+    fn write_ready<S: TraceSink + ?Sized>(&mut self, sink: &mut S, all: bool) {
+        while let Some(p) = self.pending.front() {
+            let ready = match p.ms {
+                None => true,
+                Some(ms) => {
+                    all || p.at.elapsed() >= self.max_wait
+                        || (self.positions.covers(ms) && self.headings.covers(ms))
+                }
+            };
+            if !ready {
+                break;
+            }
+            let Some(mut p) = self.pending.pop_front() else {
+                break;
+            };
+            if let Some(ms) = p.ms {
+                (p.row.x_m, p.row.y_m) = self.positions.at(ms).unwrap_or((f64::NAN, f64::NAN));
+                p.row.heading_rad = self.headings.at(ms).unwrap_or(f64::NAN);
+            }
+            sink.record(&p.row);
+            self.unflushed += 1;
+        }
+    }
+
+    /// Once a turn of the loop: writes the rows that are ready, and flushes (`flush`) after
+    /// [`FLUSH_EVERY_ROWS`] rows or [`FLUSH_INTERVAL_S`] with rows unflushed.
+    pub(crate) fn tick<S: TraceSink + ?Sized>(
+        &mut self,
+        sink: &mut S,
+        flush: &mut dyn FnMut(&mut S),
+    ) {
+        self.write_ready(sink, false);
+        if self.unflushed >= FLUSH_EVERY_ROWS
+            || (self.unflushed > 0 && self.last_flush.elapsed().as_secs_f64() >= FLUSH_INTERVAL_S)
+        {
+            flush(sink);
+            self.unflushed = 0;
+            self.last_flush = Instant::now();
+        }
+    }
+
+    /// At the end: every row written (with the pose there is), flushed.
+    pub(crate) fn finish<S: TraceSink + ?Sized>(
+        &mut self,
+        sink: &mut S,
+        flush: &mut dyn FnMut(&mut S),
+    ) {
+        self.write_ready(sink, true);
+        flush(sink);
+        self.unflushed = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The latest stamped at or before: 150 ms takes 100's; 200 takes 200's; 50, none.
+    #[test]
+    fn history_pairs_at_or_before() {
+        let mut h = History::default();
+        h.push(100, 1.0);
+        h.push(200, 2.0);
+        h.push(150, 9.0); // late: dropped
+        assert_eq!(h.at(150), Some(1.0));
+        assert_eq!(h.at(200), Some(2.0));
+        assert_eq!(h.at(50), None);
+        assert!(h.covers(200) && !h.covers(201));
+        assert!(History::<f64>::default().covers(5));
+    }
+}

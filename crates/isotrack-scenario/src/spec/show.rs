@@ -1,0 +1,221 @@
+//! What `isotrack show` prints: the resolved file (every key resolution wrote, as a run's
+//! `scenario.toml` records it) with every value in force that the file does not carry, each
+//! marked as derived with a TOML comment.
+//!
+//! A default that follows another key (`sensor.rate_hz = 1/sim.dt_s`, the clamp's
+//! `integral_limit_radps`, the tolerance 1 % of the level, ...) is written into the resolved
+//! file; when its value is the formula's, its line gets `# derived: FORMULA` (by value, not by
+//! who wrote it, so that showing `show`'s output gives the same text). A value resolution
+//! leaves out of the file because it must follow a key a sweep or `--set` may change (the fixed
+//! wing's turn-rate limit `g*tan(40 deg)/V`, the convergence dwell, the track-loss band, the
+//! search geometry, the `[sitl]` home) is printed as a commented-out key at the end of its
+//! section, `# KEY = VALUE  # derived: FORMULA`. Comments only: `show`'s output, run again, is
+//! the same scenario and gives the same run, byte for byte (and uncommenting a derived line pins
+//! the value it had).
+
+use super::TurnRateLimit;
+use crate::Scenario;
+use isotrack_core::control::{AntiWindup, SearchPattern};
+
+/// A TOML value of `x`, as the `toml` crate writes an `f64` (so a printed value reads back as
+/// the same number).
+fn num(x: f64) -> String {
+    toml::Value::Float(x).to_string()
+}
+
+/// `resolved_toml` (the scenario's resolved file as TOML) with the derived values marked and
+/// the values in force it does not hold added, as comments.
+pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
+    let spec = s.spec();
+    let file = s.file();
+    let ct = &file.controller;
+    // Keys on their own line: (section, key, formula) for a key the user did not give.
+    let mut inline: Vec<(&str, &str, String)> = Vec::new();
+    // Lines added at the end of a section: (section, line).
+    let mut extra: Vec<(&str, String)> = Vec::new();
+    if spec.sensor.rate_hz == super::sensor::default_rate_hz(spec.sim.dt_s) {
+        inline.push(("sensor", "rate_hz", "1/sim.dt_s (one sample a step)".into()));
+    }
+    let tol = spec.metrics.convergence_tolerance;
+    if tol == super::controller::one_percent_of_level(spec.controller.level) {
+        inline.push((
+            "metrics",
+            "convergence_tolerance",
+            "1 % of |controller.level| (0.01 for level 0)".into(),
+        ));
+    }
+    if let Some(p) = spec.controller.pi_isoline() {
+        match (p.anti_windup, ct.max_turn_rate_radps) {
+            (AntiWindup::Clamp { limit_radps }, Some(w)) if limit_radps == w => inline.push((
+                "controller",
+                "integral_limit_radps",
+                "max_turn_rate_radps".into(),
+            )),
+            (AntiWindup::Clamp { limit_radps }, None) if limit_radps == p.kp * p.c1 => {
+                inline.push((
+                    "controller",
+                    "integral_limit_radps",
+                    "kp*c1, the proportional term's reach".into(),
+                ))
+            }
+            (AntiWindup::Conditional { band }, _) if band == p.c2 => {
+                inline.push(("controller", "integral_band", "c2".into()))
+            }
+            _ => {}
+        }
+    }
+    if let super::LawSpec::PidCrossing(p) = &spec.controller.law {
+        let default = ct
+            .max_turn_rate_radps
+            .unwrap_or(super::controller::CROSSING_TURN_RATE_RADPS);
+        if p.turn_rate_radps == default {
+            inline.push((
+                "controller",
+                "crossing_turn_rate_radps",
+                "max_turn_rate_radps, or 0.5 without one".into(),
+            ));
+        }
+    }
+    if let TurnRateLimit::Airframe(w) = spec.controller.turn_rate_limit {
+        extra.push((
+            "controller",
+            format!(
+                "# max_turn_rate_radps = {}  # derived: g*tan(40 deg)/V, the airframe's turn rate at the autopilot's bank limit (follows vehicle.airspeed_mps)",
+                num(w)
+            ),
+        ));
+    }
+    if let Some(sp) = spec.controller.search {
+        let (spacing, leg) = match sp.pattern {
+            SearchPattern::Spiral { spacing_m, .. } => (spacing_m, None),
+            SearchPattern::Lawnmower {
+                spacing_m, leg_m, ..
+            } => (spacing_m, Some(leg_m)),
+        };
+        if ct.search_spacing_m.is_none() {
+            extra.push((
+                "controller",
+                format!(
+                    "# search_spacing_m = {}  # derived: 2*v/omega_max, the turning diameter (omega_max the turn-rate limit, 1 rad/s without one)",
+                    num(spacing)
+                ),
+            ));
+        }
+        if let (Some(leg), None) = (leg, ct.search_leg_m) {
+            extra.push((
+                "controller",
+                format!(
+                    "# search_leg_m = {}  # derived: 10 x search_spacing_m",
+                    num(leg)
+                ),
+            ));
+        }
+        if ct.search_handover.is_none() {
+            extra.push((
+                "controller",
+                format!(
+                    "# search_handover = {}  # derived: 1 % of |level| (0.01 for level 0)",
+                    num(sp.handover_delta)
+                ),
+            ));
+        }
+    }
+    let m = &spec.metrics;
+    if file.metrics.convergence_min_dwell_s.is_none() {
+        extra.push((
+            "metrics",
+            format!(
+                "# convergence_min_dwell_s = {}  # derived: 10 % of sim.duration_s",
+                num(m.convergence_min_dwell_s)
+            ),
+        ));
+    }
+    if file.metrics.track_loss_band.is_none() {
+        extra.push((
+            "metrics",
+            format!(
+                "# track_loss_band = {}  # derived: 5 x convergence_tolerance",
+                num(m.track_loss_band)
+            ),
+        ));
+    }
+    let mut out = annotate(resolved_toml, &inline, &extra);
+    if file.sitl.is_unset() {
+        let h = &spec.sitl;
+        out += &format!(
+            "\n# [sitl]  (isotrack sitl only; the defaults: PX4's SITL home)\n# home_lat_deg = {}\n# home_lon_deg = {}\n# home_alt_m = {}\n",
+            num(h.home_lat_deg),
+            num(h.home_lon_deg),
+            num(h.home_alt_m)
+        );
+    }
+    out
+}
+
+/// Appends `  # derived: F` to each `inline` key's line of its section, and each `extra` line
+/// after the last line of its section (a section that is missing is added at the end).
+///
+/// A line counts as a section header or a key only where the text before it is complete TOML:
+/// a `[controller]` line inside a multi-line string (a `description`) is text, not a header.
+/// Only the few candidate lines are parsed (each parse reads the text before them once).
+fn annotate(text: &str, inline: &[(&str, &str, String)], extra: &[(&str, String)]) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let complete = |i: usize| toml::from_str::<toml::Table>(&lines[..i].join("\n")).is_ok();
+    let is_header = |i: usize| lines[i].trim_start().starts_with('[') && complete(i);
+    // The line range of section `sec`'s own keys: after its header, up to the next header.
+    let range = |sec: &str| -> Option<(usize, usize)> {
+        let head = format!("[{sec}]");
+        let start = (0..lines.len()).find(|&i| lines[i].trim() == head && complete(i))?;
+        let end = (start + 1..lines.len())
+            .find(|&i| is_header(i))
+            .unwrap_or(lines.len());
+        Some((start, end))
+    };
+    let mut suffix: Vec<String> = vec![String::new(); lines.len()];
+    let mut after: Vec<Vec<String>> = vec![Vec::new(); lines.len() + 1];
+    let mut missing: Vec<String> = Vec::new();
+    for (sec, key, formula) in inline {
+        let Some((start, end)) = range(sec) else {
+            continue;
+        };
+        let is_key = |j: usize| {
+            lines[j]
+                .split_once('=')
+                .is_some_and(|(k, _)| k.trim() == *key)
+        };
+        if let Some(j) = (start + 1..end).find(|&j| is_key(j) && complete(j)) {
+            suffix[j] = format!("  # derived: {formula}");
+        }
+    }
+    for (sec, added) in extra {
+        match range(sec) {
+            Some((start, end)) => {
+                // After the section's last non-blank line.
+                let last = (start + 1..end)
+                    .rev()
+                    .find(|&j| !lines[j].trim().is_empty())
+                    .unwrap_or(start);
+                after[last + 1].push(added.clone());
+            }
+            None => {
+                missing.push(format!("\n[{sec}]"));
+                missing.push(added.clone());
+            }
+        }
+    }
+    let mut out = String::new();
+    for (i, line) in lines.iter().enumerate() {
+        for a in &after[i] {
+            out += a;
+            out.push('\n');
+        }
+        out += line;
+        out += &suffix[i];
+        out.push('\n');
+    }
+    for a in after[lines.len()].iter().chain(&missing) {
+        out += a;
+        out.push('\n');
+    }
+    out
+}

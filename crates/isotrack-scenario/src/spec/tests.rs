@@ -1,0 +1,316 @@
+//! The spec's defaults against the README's table ("Scenario files"), an independent source,
+//! and the derived values against their formulas.
+
+use super::*;
+use crate::parse_scenario;
+use crate::schema::ControllerKind;
+use isotrack_core::control::{AntiWindup, HigherSide, SearchPattern};
+use isotrack_core::estimate::DerivativeKind;
+
+fn spec_of(text: &str) -> ScenarioSpec {
+    parse_scenario(text, "<test>", &[]).unwrap().spec().clone()
+}
+
+/// An empty file: the README's defaults, every section.
+#[test]
+fn an_empty_file_has_the_readme_defaults() {
+    let s = spec_of("");
+    assert_eq!(
+        s.sim,
+        SimSpec {
+            dt_s: 0.01,
+            duration_s: 600.0,
+            seed: 0
+        }
+    );
+    assert_eq!(s.vehicle, VehicleSpec::Dubins { speed_mps: 0.5 });
+    assert_eq!(
+        (s.start.x_m, s.start.y_m, s.start.heading_rad),
+        (10.0, 0.0, -std::f64::consts::FRAC_PI_2)
+    );
+    // sensor.rate_hz = 1/sim.dt_s = 100 Hz; the rest off.
+    assert_eq!(s.sensor.rate_hz, 100.0);
+    assert_eq!(
+        [
+            s.sensor.noise_std,
+            s.sensor.delay_s,
+            s.sensor.time_constant_s,
+            s.sensor.resolution,
+            s.sensor.dropout_probability,
+            s.sensor.bias_drift_per_sqrt_s
+        ],
+        [0.0; 6]
+    );
+    assert_eq!(s.sensor.range, None);
+    let c = &s.controller;
+    assert_eq!(c.kind, ControllerKind::PiIsoline);
+    assert_eq!(c.turn_rate_limit, TurnRateLimit::None);
+    assert_eq!(c.search, None);
+    let p = c.pi_isoline().unwrap();
+    // Paper Table III: level 10, kp 10, ki 1, c1 0.2, c2 1.
+    assert_eq!(
+        (p.level, p.kp, p.ki, p.c1, p.c2),
+        (10.0, 10.0, 1.0, 0.2, 1.0)
+    );
+    assert_eq!(p.anti_windup, AntiWindup::None);
+    assert_eq!(p.derivative, DerivativeKind::BackwardDifference);
+    assert_eq!(p.output.higher_side, HigherSide::Right);
+    assert_eq!(p.output.max_turn_rate_radps, None);
+    // Tolerance 1 % of |level| = 0.1; dwell 10 % of 600 s; band 5 tolerances.
+    assert_eq!(
+        s.metrics,
+        MetricsSpec {
+            steady_state_fraction: 0.2,
+            convergence_tolerance: 0.1,
+            convergence_min_dwell_s: 60.0,
+            track_loss_band: 0.5,
+        }
+    );
+    assert_eq!(s.output.record_rate_hz, 10.0);
+    assert_eq!(
+        (s.sitl.home_lat_deg, s.sitl.home_lon_deg, s.sitl.home_alt_m),
+        (47.397742, 8.545594, 488.0)
+    );
+}
+
+/// Each law's own defaults (README, `controller.kind`; the PID's are the linearisation of the
+/// default PI-like law: `kp*c1/c2 + ki` = 3, `ki*c1/c2` = 0.2, `kd = kp` = 10).
+#[test]
+fn each_law_has_its_documented_defaults() {
+    let law = |kind: &str| spec_of(&format!("[controller]\nkind = \"{kind}\"\n")).controller;
+    match law("pid").law {
+        LawSpec::Pid(p) => assert_eq!((p.kp, p.ki, p.kd), (3.0, 0.2, 10.0)),
+        l => panic!("{l:?}"),
+    }
+    match law("pid_crossing").law {
+        LawSpec::PidCrossing(p) => {
+            assert_eq!((p.pid.kp, p.pid.ki, p.pid.kd), (3.0, 0.2, 10.0));
+            assert_eq!(
+                (p.crossing_angle_rad, p.crossing_period_s, p.turn_rate_radps),
+                (0.3, 20.0, 0.5)
+            );
+        }
+        l => panic!("{l:?}"),
+    }
+    let c = law("sliding_mode");
+    match c.law {
+        LawSpec::SlidingMode(p) => {
+            assert_eq!((p.gamma, p.delta, p.boundary_layer), (0.2, 1.0, None));
+            assert_eq!(p.max_turn_rate_radps, 1.0);
+        }
+        l => panic!("{l:?}"),
+    }
+    assert_eq!(c.turn_rate_limit, TurnRateLimit::Given(1.0));
+    match law("sliding_mode_smooth").law {
+        LawSpec::SlidingMode(p) => assert_eq!(p.boundary_layer, Some(0.05)),
+        l => panic!("{l:?}"),
+    }
+    match law("suboptimal_sosm").law {
+        LawSpec::SuboptimalSosm(p) => assert_eq!((p.alpha_star, p.max_turn_rate_radps), (0.5, 1.0)),
+        l => panic!("{l:?}"),
+    }
+    match law("gradient_reference").law {
+        LawSpec::GradientReference(p) => assert_eq!((p.ke, p.k_heading), (0.5, 1.0)),
+        l => panic!("{l:?}"),
+    }
+}
+
+/// The anti-windup schemes' defaults: the clamp at `kp*c1` (no limit given) or the turn-rate
+/// limit, the band at `c2`, the tracking time 1 s; the estimators' 0.1 s and 1.
+#[test]
+fn anti_windup_and_estimator_defaults() {
+    let pi = |text: &str| *spec_of(text).controller.pi_isoline().unwrap();
+    let p = pi("[controller]\nanti_windup = \"clamp\"\nkp = 4.0\nc1 = 0.5\n");
+    assert_eq!(p.anti_windup, AntiWindup::Clamp { limit_radps: 2.0 });
+    let p = pi("[controller]\nanti_windup = \"clamp\"\nmax_turn_rate_radps = 0.7\n");
+    assert_eq!(p.anti_windup, AntiWindup::Clamp { limit_radps: 0.7 });
+    let p = pi("[controller]\nanti_windup = \"conditional\"\nc2 = 3.0\n");
+    assert_eq!(p.anti_windup, AntiWindup::Conditional { band: 3.0 });
+    let p = pi("[controller]\nanti_windup = \"back_calculation\"\nmax_turn_rate_radps = 1.0\n");
+    assert_eq!(
+        p.anti_windup,
+        AntiWindup::BackCalculation {
+            tracking_time_s: 1.0
+        }
+    );
+    let p = pi("[controller]\nderivative = \"filtered_difference\"\n");
+    assert_eq!(
+        p.derivative,
+        DerivativeKind::FilteredDifference { tau_s: 0.1 }
+    );
+    let p = pi("[controller]\nderivative = \"levant\"\n");
+    assert_eq!(p.derivative, DerivativeKind::Levant { lipschitz: 1.0 });
+}
+
+/// The fixed wing's derived turn-rate limit is `g*tan(40 deg)/V` (Beard & McLain's g = 9.8
+/// m/s^2: 9.8*0.839100/30 = 0.274106 rad/s at the default 30 m/s; 0.205579 at 40 m/s), in
+/// every law's output stage; a given limit wins.
+#[test]
+fn the_fixed_wing_turn_rate_limit_is_derived_from_its_airspeed() {
+    for (va, want) in [(30.0, 0.274_106), (40.0, 0.205_579)] {
+        let s = spec_of(&format!(
+            "[vehicle]\nkind = \"fixed_wing\"\nairspeed_mps = {va}\n"
+        ));
+        let TurnRateLimit::Airframe(w) = s.controller.turn_rate_limit else {
+            panic!("{:?}", s.controller.turn_rate_limit)
+        };
+        assert!((w - want).abs() < 1e-6, "{w} vs {want}");
+        let p = s.controller.pi_isoline().unwrap();
+        assert_eq!(p.output.max_turn_rate_radps, Some(w));
+    }
+    let s = spec_of("[vehicle]\nkind = \"fixed_wing\"\n[controller]\nmax_turn_rate_radps = 0.1\n");
+    assert_eq!(s.controller.turn_rate_limit, TurnRateLimit::Given(0.1));
+}
+
+/// The search geometry: spacing `2*v/omega_max` (1 rad/s without a limit), legs 10 spacings,
+/// hand-over 1 % of |level|.
+#[test]
+fn search_geometry_is_derived() {
+    let s =
+        spec_of("[controller]\nsearch = \"lawnmower\"\nlevel = 4.0\n[vehicle]\nspeed_mps = 2.0\n");
+    let sp = s.controller.search.unwrap();
+    assert_eq!(sp.handover_delta, 0.04);
+    match sp.pattern {
+        SearchPattern::Lawnmower {
+            leg_m,
+            spacing_m,
+            speed_mps,
+        } => assert_eq!((leg_m, spacing_m, speed_mps), (40.0, 4.0, 2.0)),
+        p => panic!("{p:?}"),
+    }
+    let s = spec_of("[controller]\nsearch = \"spiral\"\nmax_turn_rate_radps = 0.5\n");
+    match s.controller.search.unwrap().pattern {
+        SearchPattern::Spiral {
+            spacing_m,
+            max_turn_rate_radps,
+            ..
+        } => assert_eq!((spacing_m, max_turn_rate_radps), (2.0, 0.5)),
+        p => panic!("{p:?}"),
+    }
+}
+
+/// A derived default follows a variant's own values (a swept duration, a new airspeed).
+#[test]
+fn derived_values_follow_a_variant() {
+    let s = parse_scenario("", "<test>", &[]).unwrap();
+    let v = s.derive(&["sim.duration_s=50.0".into()], "<test>").unwrap();
+    assert_eq!(v.spec().metrics.convergence_min_dwell_s, 5.0);
+    let s = parse_scenario("[vehicle]\nkind = \"fixed_wing\"\n", "<test>", &[]).unwrap();
+    let v = s
+        .derive(&["vehicle.airspeed_mps=40.0".into()], "<test>")
+        .unwrap();
+    let w = v.spec().controller.turn_rate_limit.radps().unwrap();
+    assert!((w - 0.205_579).abs() < 1e-6, "{w}");
+}
+
+/// A file resolution did not settle is an issue naming the key, not a panic.
+#[test]
+fn an_unsettled_key_is_an_issue() {
+    let e = ScenarioSpec::new(&ScenarioFile::default(), None).unwrap_err();
+    assert_eq!(e.key, "sim.dt_s");
+}
+
+/// `show`: the fixed wing's turn-rate limit, the dwell, the band and the search geometry appear
+/// as commented-out keys in their sections (numbers from the formulas: 9.8*tan(40 deg)/30,
+/// 10 % of 600 s, 5 x 0.1, 2*30/0.274106, 10 spacings, 1 % of 10), the rate and tolerance
+/// marked derived; reading it back gives the same scenario, and showing that the same text.
+#[test]
+fn show_prints_every_value_in_force_and_reads_back_the_same() {
+    let text = "[vehicle]\nkind = \"fixed_wing\"\n[controller]\nsearch = \"lawnmower\"\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let resolved = toml::to_string(s.file()).unwrap();
+    let shown = show::with_derived(&s, &resolved);
+    let section_of = |needle: &str| {
+        let i = shown
+            .find(needle)
+            .unwrap_or_else(|| panic!("{needle} in\n{shown}"));
+        shown[..i]
+            .rfind("\n[")
+            .map(|j| shown[j + 1..].lines().next().unwrap().to_string())
+    };
+    let w: f64 = 9.8 * 40f64.to_radians().tan() / 30.0;
+    let spacing = 2.0 * 30.0 / w;
+    for (line, section) in [
+        (
+            format!("# max_turn_rate_radps = {w:?}  # derived"),
+            "[controller]",
+        ),
+        (
+            format!("# search_spacing_m = {spacing:?}  # derived"),
+            "[controller]",
+        ),
+        (
+            format!("# search_leg_m = {:?}  # derived", 10.0 * spacing),
+            "[controller]",
+        ),
+        ("# search_handover = 0.1  # derived".into(), "[controller]"),
+        (
+            "# convergence_min_dwell_s = 60.0  # derived".into(),
+            "[metrics]",
+        ),
+        ("# track_loss_band = 0.5  # derived".into(), "[metrics]"),
+        ("rate_hz = 100.0  # derived: 1/sim.dt_s".into(), "[sensor]"),
+        ("convergence_tolerance = 0.1  # derived".into(), "[metrics]"),
+        ("# home_lat_deg = 47.397742".into(), "[field]"),
+    ] {
+        if section != "[field]" {
+            assert_eq!(
+                section_of(&line).as_deref(),
+                Some(section),
+                "{line}\n{shown}"
+            );
+        } else {
+            assert!(shown.contains(&line), "{line}\n{shown}");
+        }
+    }
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file());
+    assert_eq!(again.spec(), s.spec());
+    let shown_again = show::with_derived(&again, &toml::to_string(again.file()).unwrap());
+    assert_eq!(shown_again, shown);
+    // A given value that is not the formula's is not marked.
+    let s = parse_scenario("[sensor]\nrate_hz = 50.0\n", "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    assert!(shown.lines().any(|l| l == "rate_hz = 50.0"), "{shown}");
+    assert!(!shown.contains("max_turn_rate_radps"), "{shown}");
+}
+
+/// A description holding lines that look like a section and a key stays text: `show` marks only
+/// the real ones, and its output reads back as the same scenario.
+#[test]
+fn show_is_not_fooled_by_a_multi_line_string() {
+    let text = "description = \"\"\"\nfoo\n[metrics]\nrate_hz = 1\n[sensor]\nrate_hz = 2\n\"\"\"\n[controller]\nsearch = \"spiral\"\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file(), "{shown}");
+    assert_eq!(shown.matches("# derived: 1/sim.dt_s").count(), 1, "{shown}");
+    assert_eq!(
+        shown.matches("# convergence_min_dwell_s").count(),
+        1,
+        "{shown}"
+    );
+}
+
+/// The noise warning names the backward difference only for a law that has one: the old
+/// fallback `derivative.unwrap_or(BackwardDifference)` warned `gradient_reference` and
+/// `schedule` too (reachable: `compare` on gaussian-plumes-pm25, noise 0.01), advising a
+/// `controller.derivative` that resolve refuses for them.
+#[test]
+fn the_noise_warning_is_only_for_a_law_with_a_backward_difference() {
+    let noisy = "[sensor]\nnoise_std = 0.01\n[sim]\nduration_s = 1.0\n";
+    let warned = |controller: &str| {
+        let s =
+            parse_scenario(&format!("{noisy}[controller]\n{controller}"), "<test>", &[]).unwrap();
+        crate::check::warnings(&s)
+            .iter()
+            .any(|w| w.contains("through a backward difference"))
+    };
+    assert!(warned(""));
+    assert!(warned("kind = \"pid\"\n"));
+    assert!(!warned("derivative = \"levant\"\n"));
+    assert!(!warned("kind = \"gradient_reference\"\n"));
+    assert!(!warned(
+        "kind = \"schedule\"\ncourse_rate_radps = [[0.0, 0.1]]\n"
+    ));
+}

@@ -1,0 +1,523 @@
+//! Teams on the paper's circular field (`F = 20 exp(-0.1 |p|)`, the level-10 isoline a circle of
+//! radius `R = 10 ln 2` m, tracked clockwise by the Fig. 2(b) PI-like law): the spacing laws
+//! against what the geometry and the theory (`isotrack_core::spacing`) say.
+use isotrack_core::control::{PiIsoline, PiIsolineParams};
+use isotrack_core::math::Vec2;
+use isotrack_core::spacing::{max_stable_spacing_gain, ring_laplacian_eigenvalue};
+use isotrack_fields::{AnalyticField, AnalyticKind, RadialExp};
+use isotrack_sim::team::arc::CircleArc;
+use isotrack_sim::team::metrics::TeamMetricsConfig;
+use isotrack_sim::team::ranging::RangingConfig;
+use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingConfig, SpacingLaw};
+use isotrack_sim::{
+    simulate, simulate_team, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TeamConfig,
+    TeamMember, TeamResult,
+};
+use isotrack_vehicles::{Dubins, DubinsState, DubinsVariableSpeed};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+const V0: f64 = 0.5;
+const DT: f64 = 0.01;
+
+fn radius() -> f64 {
+    10.0 * std::f64::consts::LN_2
+}
+
+fn field() -> AnalyticField {
+    AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()))
+}
+
+fn arc() -> CircleArc {
+    CircleArc {
+        center_m: Vec2::new(0.0, 0.0),
+        radius_m: radius(),
+    }
+}
+
+/// On the isoline at angle `th` (rad, counter-clockwise from +x), heading clockwise along it.
+fn on_circle(th: f64) -> DubinsState {
+    let r = radius();
+    DubinsState {
+        position_m: Vec2::new(r * th.cos(), r * th.sin()),
+        heading_rad: th - FRAC_PI_2,
+    }
+}
+
+fn vehicle(v_min: f64, v_max: f64) -> DubinsVariableSpeed {
+    DubinsVariableSpeed {
+        min_speed_mps: v_min,
+        max_speed_mps: v_max,
+    }
+}
+
+fn members(
+    v: &DubinsVariableSpeed,
+    angles: &[f64],
+    rate_hz: f64,
+) -> Vec<TeamMember<isotrack_vehicles::DubinsSpeedState, PiIsoline>> {
+    angles
+        .iter()
+        .enumerate()
+        .map(|(i, &th)| TeamMember {
+            x0: v.state(on_circle(th), V0),
+            controller: PiIsoline::new(PiIsolineParams::paper_fig2b(10.0)),
+            sensor: Sensor::new(
+                SensorConfig {
+                    rate_hz,
+                    ..SensorConfig::default()
+                },
+                DT,
+                100 + i as u64,
+            )
+            .unwrap(),
+            ranging_seed: 1000 + i as u64,
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run(
+    angles: &[f64],
+    law: SpacingLaw,
+    ring: RingMode,
+    ranging: RangingConfig,
+    duration_s: f64,
+    envelope: (f64, f64),
+) -> TeamResult {
+    let v = vehicle(envelope.0, envelope.1);
+    let plan = StepPlan::new(DT, duration_s, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging,
+        spacing: SpacingConfig {
+            law,
+            nominal_speed_mps: V0,
+            ring,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let a = arc();
+    simulate_team(
+        &field(),
+        &v,
+        &plan,
+        cfg,
+        members(&v, angles, 100.0),
+        Some(&a),
+        &Oracles::default(),
+        &mut [] as &mut [NoTrace],
+    )
+    .unwrap()
+}
+
+/// The CV of the gaps of points at `angles` on a circle (independent of the sim's metric).
+fn cv_of(angles: &[f64]) -> f64 {
+    let mut a: Vec<f64> = angles.iter().map(|t| t.rem_euclid(2.0 * PI)).collect();
+    a.sort_by(f64::total_cmp);
+    let n = a.len();
+    let gaps: Vec<f64> = (0..n)
+        .map(|i| {
+            if i + 1 == n {
+                a[0] + 2.0 * PI - a[i]
+            } else {
+                a[i + 1] - a[i]
+            }
+        })
+        .collect();
+    let mean = 2.0 * PI / n as f64;
+    (gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64).sqrt() / mean
+}
+
+/// A cluster: four robots 0.3 rad (2.1 m) apart on the isoline, listed in the order of travel
+/// (clockwise: each next one ahead).
+fn cluster() -> Vec<f64> {
+    (0..4).map(|i| -0.3 * i as f64).collect()
+}
+
+fn ideal_ranging(rate_hz: f64) -> RangingConfig {
+    RangingConfig {
+        rate_hz,
+        ..RangingConfig::default()
+    }
+}
+
+/// `range_balance` from the cluster (gap CV 0.92) reaches gap_cv < 0.05 in the steady window,
+/// revisits every point within 10 % of the ideal `L/(N v0)`, keeps the order, and its speeds
+/// reach the envelope's edge without leaving it; `arc_reference` spreads the team too.
+#[test]
+fn range_balance_spreads_a_cluster() {
+    let r = run(
+        &cluster(),
+        SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+        RingMode::Listed,
+        ideal_ranging(10.0),
+        300.0,
+        (0.25, 0.75),
+    );
+    let t = r.team.unwrap();
+    let cv0 = cv_of(&cluster());
+    assert!(cv0 > 0.9, "{cv0}");
+    assert!(t.gap_cv.unwrap() < 0.05, "{t:?}");
+    assert!(t.time_to_even_s.is_some());
+    let ideal = 2.0 * PI * radius() / (4.0 * V0);
+    assert!((t.revisit_time_ideal_s - ideal).abs() < 1e-9);
+    let mx = t.revisit_time_max_s.unwrap();
+    assert!(mx < 1.1 * ideal, "{mx} vs {ideal}");
+    assert!(t.order_preserved);
+    let [lo, hi] = t.speed_range_mps.unwrap();
+    assert!(lo >= 0.25 && hi <= 0.75, "{lo} {hi}");
+    assert!(
+        hi == 0.75 || lo == 0.25,
+        "the cluster saturates a speed: {lo} {hi}"
+    );
+    for run in &r.runs {
+        assert_eq!(run.outcome, isotrack_sim::Outcome::Completed);
+    }
+    let a = run(
+        &cluster(),
+        SpacingLaw::ArcReference { gain_per_s: 0.1 },
+        RingMode::Listed,
+        ideal_ranging(10.0),
+        300.0,
+        (0.25, 0.75),
+    );
+    assert!(a.team.unwrap().gap_cv.unwrap() < 0.05);
+}
+
+/// `none`: every robot at v0; the field is symmetric under rotation about its source, so the
+/// team turns rigidly and the gap CV stays the deployment's (computed from the angles); the
+/// longest unvisited time is the largest gap over v0 (74.6 s, inside the 100 s window).
+#[test]
+fn none_keeps_the_spacing() {
+    let r = run(
+        &cluster(),
+        SpacingLaw::None,
+        RingMode::Listed,
+        ideal_ranging(10.0),
+        500.0,
+        (0.25, 0.75),
+    );
+    let t = r.team.unwrap();
+    let cv0 = cv_of(&cluster());
+    assert!(
+        (t.gap_cv_final.unwrap() - cv0).abs() < 1e-3,
+        "{t:?} vs {cv0}"
+    );
+    assert!((t.gap_cv.unwrap() - cv0).abs() < 1e-3);
+    assert_eq!(t.speed_range_mps, Some([V0, V0]));
+    let big_gap = (2.0 * PI - 0.9) * radius();
+    let mx = t.revisit_time_max_s.unwrap();
+    assert!((mx - big_gap / V0).abs() < 0.05 * big_gap / V0, "{mx}");
+}
+
+/// One robot with the `none` law moves as `simulate` moves a constant-speed Dubins robot, bit
+/// for bit (the team drives the same step kernel).
+#[test]
+fn a_team_of_one_is_simulate() {
+    let v = vehicle(0.1, 1.0);
+    let plan = StepPlan::new(DT, 60.0, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::None,
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let start = DubinsState {
+        position_m: Vec2::new(10.0, 0.0),
+        heading_rad: -FRAC_PI_2,
+    };
+    let sensor = || {
+        Sensor::new(
+            SensorConfig {
+                rate_hz: 100.0,
+                noise_std: 0.01,
+                ..SensorConfig::default()
+            },
+            DT,
+            5,
+        )
+        .unwrap()
+    };
+    let team = simulate_team(
+        &field(),
+        &v,
+        &plan,
+        cfg,
+        vec![TeamMember {
+            x0: v.state(start, V0),
+            controller: PiIsoline::new(PiIsolineParams::paper_fig2b(10.0)),
+            sensor: sensor(),
+            ranging_seed: 0,
+        }],
+        None,
+        &Oracles::default(),
+        &mut [] as &mut [NoTrace],
+    )
+    .unwrap();
+    let alone = simulate(
+        &field(),
+        &Dubins { speed_mps: V0 },
+        start,
+        &mut PiIsoline::new(PiIsolineParams::paper_fig2b(10.0)),
+        sensor(),
+        &plan,
+        &Oracles::default(),
+        &mut NoTrace,
+    );
+    assert_eq!(format!("{:?}", team.runs[0]), format!("{alone:?}"));
+}
+
+/// Listed in an order that is not the order of travel: 0, 2, 1, 3 clockwise. The ring found
+/// from ranges and range rates is the true one (0 -> 2 -> 1 -> 3 -> 0), and `range_balance` on
+/// it spreads the team without robots meeting; on the listed ring they pass through each other.
+#[test]
+fn ring_found_from_range_rates() {
+    // Vehicle i at angles[i]: clockwise order 0, 2, 1, 3.
+    let angles = [0.0, -0.6, -0.3, -0.9];
+    let discover = RingMode::Discover(DiscoveryConfig {
+        settle_s: 10.0,
+        probe_s: 4.0,
+        probe_speed_delta_mps: 0.2,
+    });
+    let ranging = RangingConfig {
+        rate_hz: 10.0,
+        noise_std_m: 0.05,
+        ..RangingConfig::default()
+    };
+    let law = SpacingLaw::RangeBalance { gain_per_s: 0.1 };
+    let r = run(&angles, law, discover, ranging, 300.0, (0.25, 0.75));
+    // [ahead, behind] of each vehicle along the clockwise travel.
+    let truth = [Some([2, 3]), Some([3, 2]), Some([1, 0]), Some([0, 1])];
+    assert_eq!(r.ring, truth);
+    let t = r.team.unwrap();
+    assert!(t.gap_cv.unwrap() < 0.05, "{t:?}");
+    assert!(t.order_preserved);
+    // The robots start 2.1 m apart and never come closer than 1 m.
+    assert!(t.min_separation_m.unwrap() > 1.0, "{t:?}");
+    // On the listed ring the team spreads too, but in the listed order: robots pass through
+    // each other to get there (a collision for real robots).
+    let listed = run(&angles, law, RingMode::Listed, ranging, 300.0, (0.25, 0.75));
+    let tl = listed.team.unwrap();
+    assert!(tl.min_separation_m.unwrap() < 0.5, "{tl:?}");
+}
+
+/// Same team, seeds, noise, losses and delay: bit-identical results, run twice and on two
+/// threads at once.
+#[test]
+fn deterministic() {
+    let ranging = RangingConfig {
+        rate_hz: 5.0,
+        noise_std_m: 0.1,
+        max_range_m: 12.0,
+        dropout_probability: 0.2,
+        delay_s: 0.3,
+    };
+    let go = move || {
+        format!(
+            "{:?}",
+            run(
+                &cluster(),
+                SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+                RingMode::Listed,
+                ranging,
+                60.0,
+                (0.25, 0.75),
+            )
+        )
+    };
+    let a = go();
+    let b = go();
+    assert_eq!(a, b);
+    let h1 = std::thread::spawn(go);
+    let h2 = std::thread::spawn(go);
+    assert_eq!(h1.join().unwrap(), a);
+    assert_eq!(h2.join().unwrap(), a);
+}
+
+/// The sampled, delayed spacing loop: theory's largest stable `k_v`
+/// (`max_stable_spacing_gain`, range slope `cos(pi/4)` for chords at even spacing) against the
+/// driver on a grid of ranging rates and delays, at 0.5, 0.8, 1.25 and 2 times that gain. The
+/// team starts evenly spread but for one robot 0.01 rad off; the simulated verdict: the steady
+/// window's mean gap CV is below half its start (decayed) or not.
+#[test]
+fn theory_verdict_matches_simulation() {
+    let n = 4;
+    let c = (PI / n as f64).cos();
+    let mut angles: Vec<f64> = (0..n).map(|i| -2.0 * PI * i as f64 / n as f64).collect();
+    angles[1] += 0.01;
+    let cv0 = cv_of(&angles);
+    let mut table = vec![];
+    let mut disagree = 0;
+    for rate_hz in [1.0, 2.0, 5.0] {
+        let t_s = 1.0 / rate_hz;
+        for delay_periods in [0.0, 0.5, 1.0, 2.0] {
+            let d = delay_periods * t_s;
+            let k_star = max_stable_spacing_gain(n, t_s, d, c).unwrap();
+            for factor in [0.5, 0.8, 1.25, 2.0] {
+                let k = factor * k_star;
+                // The slowest mode's time constant sets the duration (at least 40 of them).
+                let tau = 1.0 / (k * c * ring_laplacian_eigenvalue(n, 1));
+                let duration = (40.0 * tau + 20.0 * (t_s + d)).ceil().max(60.0);
+                let r = run(
+                    &angles,
+                    SpacingLaw::RangeBalance { gain_per_s: k },
+                    RingMode::Listed,
+                    RangingConfig {
+                        rate_hz,
+                        delay_s: d,
+                        ..RangingConfig::default()
+                    },
+                    duration,
+                    (0.05, 0.95),
+                );
+                let cv_end = r.team.unwrap().gap_cv.unwrap();
+                let sim_stable = cv_end < 0.5 * cv0;
+                let theory_stable = factor < 1.0;
+                table.push(format!(
+                    "rate {rate_hz} Hz, delay {d:.2} s, k* {k_star:.4}, k {k:.4}: cv {cv0:.5} -> {cv_end:.5}, sim {sim_stable}, theory {theory_stable}"
+                ));
+                if sim_stable != theory_stable {
+                    disagree += 1;
+                }
+            }
+        }
+    }
+    eprintln!("{}", table.join("\n"));
+    assert_eq!(disagree, 0, "{}", table.join("\n"));
+}
+
+/// The team metrics on the isoline extracted from the field sampled every 0.2 m (marching
+/// squares, stitched into a closed polyline) agree with the analytic circle's.
+#[test]
+fn polyline_isoline_gives_the_circle_metrics() {
+    use isotrack_fields::isoline::IsolineSegments;
+    use isotrack_sim::team::arc::{ArcProjection, PolylineArc};
+    let f = field();
+    let segs = IsolineSegments::from_samples(Vec2::new(-10.0, -10.0), 0.2, 101, 101, 10.0, |p| {
+        isotrack_core::ScalarField::value(&f, 0.0, p)
+    });
+    let mut loops = segs.closed_loops(1e-6);
+    assert_eq!(loops.len(), 1);
+    let poly = PolylineArc::new(loops.remove(0)).unwrap();
+    let circle = arc();
+    assert!((poly.length_m() / circle.length_m() - 1.0).abs() < 2e-3);
+    let v = vehicle(0.25, 0.75);
+    let plan = StepPlan::new(DT, 200.0, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig {
+            every_steps: 10,
+            ..TeamMetricsConfig::default()
+        },
+    };
+    let go = |a: &dyn ArcProjection| {
+        simulate_team(
+            &f,
+            &v,
+            &plan,
+            cfg,
+            members(&v, &cluster(), 100.0),
+            Some(a),
+            &Oracles::default(),
+            &mut [] as &mut [NoTrace],
+        )
+        .unwrap()
+        .team
+        .unwrap()
+    };
+    let (tp, tc) = (go(&poly), go(&circle));
+    assert!(
+        (tp.gap_cv.unwrap() - tc.gap_cv.unwrap()).abs() < 0.01,
+        "{tp:?} {tc:?}"
+    );
+    let (mp, mc) = (
+        tp.revisit_time_max_s.unwrap(),
+        tc.revisit_time_max_s.unwrap(),
+    );
+    assert!((mp - mc).abs() < 0.02 * mc, "{mp} {mc}");
+    assert_eq!(tp.order_preserved, tc.order_preserved);
+}
+
+/// The thread's CPU time (user + system), s, from `/proc/thread-self/stat` (clock ticks of
+/// 1/100 s): throughput measured on a loaded machine without counting the time other processes
+/// took (`None` off Linux).
+fn thread_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // Fields 14 and 15 of stat (utime, stime) are the 12th and 13th after the command.
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// Throughput of the 1000-robot ring (as benches/team.rs, 60 s at 100 Hz, range_balance on
+/// 10 Hz ranging, no team metrics) in vehicle-steps per second of this thread's CPU time and of
+/// wall time. Run by hand: `cargo test --release -p isotrack-sim --test team -- --ignored
+/// --nocapture throughput`.
+#[test]
+#[ignore]
+fn throughput_1000_ring() {
+    let n = 1000;
+    let r = 10.0 * 20f64.ln();
+    let v = vehicle(0.25, 0.75);
+    let members: Vec<_> = (0..n)
+        .map(|i| {
+            let th = -2.0 * PI * (i as f64 + 0.1 * (i % 3) as f64) / n as f64;
+            let x0 = DubinsState {
+                position_m: Vec2::new(r * th.cos(), r * th.sin()),
+                heading_rad: th - FRAC_PI_2,
+            };
+            TeamMember {
+                x0: v.state(x0, V0),
+                controller: PiIsoline::new(PiIsolineParams::paper_fig2b(1.0)),
+                sensor: Sensor::new(
+                    SensorConfig {
+                        rate_hz: 100.0,
+                        ..SensorConfig::default()
+                    },
+                    DT,
+                    i as u64,
+                )
+                .unwrap(),
+                ranging_seed: i as u64,
+            }
+        })
+        .collect();
+    let plan = StepPlan::new(DT, 60.0, 0.0, 0.2, 0.1, 10.0, 1.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let (c0, w0) = (thread_cpu_s(), std::time::Instant::now());
+    let res = simulate_team(
+        &field(),
+        &v,
+        &plan,
+        cfg,
+        members,
+        None,
+        &Oracles::default(),
+        &mut [] as &mut [NoTrace],
+    )
+    .unwrap();
+    let wall = w0.elapsed().as_secs_f64();
+    let steps: u64 = res.runs.iter().map(|r| r.steps).sum();
+    let cpu = c0.zip(thread_cpu_s()).map(|(a, b)| b - a);
+    eprintln!(
+        "{steps} vehicle-steps: wall {wall:.3} s ({:.2} M/s), thread CPU {cpu:?} s ({:?} M/s)",
+        steps as f64 / wall / 1e6,
+        cpu.map(|c| steps as f64 / c / 1e6)
+    );
+}
