@@ -6,7 +6,7 @@
 //! every reader (`isotrack-plot`, the HTML report) reads it through [`Summary::read`] /
 //! [`Summary::from_json`], whose errors name the file and the key.
 
-use crate::results::RunRecord;
+use crate::results::{MetricsRecord, RunRecord};
 use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
 use serde::{Deserialize, Serialize};
@@ -199,6 +199,15 @@ pub struct FlightRecord {
     pub frames_out: u64,
     /// Datagrams that were not MAVLink.
     pub junk_datagrams: u64,
+    /// Measurements stamped before one already received (dropped, never given to the law).
+    #[serde(default)]
+    pub measurements_out_of_order: u64,
+    /// Measurements repeating the last one's stamp (dropped).
+    #[serde(default)]
+    pub measurements_repeated: u64,
+    /// The tracking metrics of the measured error series, as a simulated run's record has them.
+    #[serde(flatten)]
+    pub metrics: MetricsRecord,
 }
 
 /// Why a `summary.json` cannot be read: the file and what is wrong, on one line.
