@@ -68,7 +68,7 @@ pub struct RunEnd {
     /// A team's run (`[team]`): the team metrics; left out for one vehicle. The flattened
     /// top-level record is then vehicle 0's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub team: Option<TeamJson>,
+    pub team: Option<Box<TeamJson>>,
     /// A team's run: every vehicle's outcome and metrics, in the listed order.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vehicles: Option<Vec<RunRecord>>,
@@ -263,7 +263,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
     ) -> Self {
         let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
         if let Ended::Run(r) = &mut s.ended {
-            r.team = Some(TeamJson::new(scenario, team));
+            r.team = Some(Box::new(TeamJson::new(scenario, team)));
             r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
         }
         s
@@ -382,7 +382,7 @@ impl<S> Summary<S> {
     /// A team's `team` object (`None` for one vehicle's run and for a flight).
     pub fn team(&self) -> Option<&TeamJson> {
         match &self.ended {
-            Ended::Run(r) => r.team.as_ref(),
+            Ended::Run(r) => r.team.as_deref(),
             Ended::Flight(_) => None,
         }
     }
