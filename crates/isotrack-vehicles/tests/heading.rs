@@ -62,5 +62,5 @@ fn a_huge_turn_rate_keeps_the_heading_within_pi_and_the_path_within_v_t() {
     };
     assert!(near.heading_rad < HEADING_WRAP_RAD);
     d.step(&mut near, 1.0, dt);
-    assert_eq!(near.heading_rad, 9000.0 + 1.0 * dt);
+    assert_eq!(near.heading_rad, 9000.0 + dt);
 }
