@@ -46,7 +46,9 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         .spawn()
         .unwrap();
     let t0 = Instant::now();
-    while !locked(&out) {
+    // The lock is taken before results.csv is created: wait for both, or a loaded machine sees
+    // the lock with no results.csv yet and "--force deleted nothing" means nothing.
+    while !locked(&out) || !out.join("results.csv").exists() {
         assert!(t0.elapsed() < Duration::from_secs(60), "never locked");
         assert!(first.try_wait().unwrap().is_none(), "ended before caught");
         std::thread::sleep(Duration::from_millis(5));
