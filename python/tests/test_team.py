@@ -143,8 +143,13 @@ def test_team_run_pickles_and_saves_again(tmp_path):
 
 # --- The PettingZoo environment -----------------------------------------------------------------
 
-pettingzoo = pytest.importorskip("pettingzoo")
-import isotrack.pettingzoo as ipz  # noqa: E402
+@pytest.fixture
+def ipz():
+    """isotrack.pettingzoo (skipped without pettingzoo; CI installs it)."""
+    pytest.importorskip("pettingzoo")
+    import isotrack.pettingzoo as m
+
+    return m
 
 
 def drive_builtin(env, seed=None):
@@ -156,14 +161,14 @@ def drive_builtin(env, seed=None):
     return steps
 
 
-def test_parallel_api_test_passes():
+def test_parallel_api_test_passes(ipz):
     from pettingzoo.test import parallel_api_test
 
     env = ipz.parallel_env(short_team(10.0))
     parallel_api_test(env, num_cycles=200)
 
 
-def test_the_builtin_laws_fed_back_fly_scenario_run_exactly():
+def test_the_builtin_laws_fed_back_fly_scenario_run_exactly(ipz):
     sc = short_team(20.0)
     env = ipz.parallel_env(sc)
     # sensor 10 Hz (10 steps), ranging 10 Hz (10 steps), delay 0.2 s (20 steps): gcd 10.
@@ -181,7 +186,7 @@ def test_the_builtin_laws_fed_back_fly_scenario_run_exactly():
     assert summary["team"] == run.summary["team"]
 
 
-def test_a_seed_flies_as_sim_seed_does():
+def test_a_seed_flies_as_sim_seed_does(ipz):
     sc = short_team(10.0)
     env = ipz.parallel_env(sc)
     drive_builtin(env, seed=7)
@@ -193,7 +198,7 @@ def test_a_seed_flies_as_sim_seed_does():
     assert not same(env.trace()["s_measured"], other.trace["s_measured"])
 
 
-def test_first_observation_is_the_measured_error_and_the_true_chords():
+def test_first_observation_is_the_measured_error_and_the_true_chords(ipz):
     # Ideal ranging, no sensor noise: the first ranges are the chords of the cluster on the
     # circle, 2 R sin(0.3 / 2) to each neighbour in the cluster, the end vehicles' long way round
     # 2 R sin((2 pi - 0.9) / 2) (vehicle 0's neighbour behind is 3).
@@ -214,7 +219,7 @@ def test_first_observation_is_the_measured_error_and_the_true_chords():
         assert infos[f"vehicle_{i}"]["sampled"] is True
 
 
-def test_out_of_range_neighbours_read_invalid():
+def test_out_of_range_neighbours_read_invalid(ipz):
     sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 5.0).set("team.ranging.max_range_m", 5.0)
     env = ipz.parallel_env(sc, max_turn_rate_radps=2.0)
     obs, _ = env.reset()
@@ -224,7 +229,7 @@ def test_out_of_range_neighbours_read_invalid():
     assert obs["vehicle_0"][3] == 1.0
 
 
-def test_bad_actions_raise_and_step_nothing():
+def test_bad_actions_raise_and_step_nothing(ipz):
     env = ipz.parallel_env(short_team(5.0))
     obs, infos = env.reset()
     good = {a: infos[a]["builtin_action"] for a in env.agents}
@@ -260,7 +265,7 @@ def test_bad_actions_raise_and_step_nothing():
     env.step({a: space.low.copy() for a in env.agents})
 
 
-def test_deterministic_with_seeds():
+def test_deterministic_with_seeds(ipz):
     def episode():
         env = ipz.parallel_env(short_team(5.0))
         rng = np.random.default_rng(3)
@@ -278,7 +283,7 @@ def test_deterministic_with_seeds():
     assert all(same(x, y) for x, y in zip(a, b))
 
 
-def test_speed_actions_set_the_speed():
+def test_speed_actions_set_the_speed(ipz):
     # Every robot commanded to v_max: each covers v_max * dt per step (the Dubins kinematics), so
     # over the run the path is v_max * duration for all, whatever the spacing law says.
     sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 10.0).set("controller.max_turn_rate_radps", 1.0)
@@ -293,7 +298,7 @@ def test_speed_actions_set_the_speed():
         assert abs(v["path_length_m"] / (0.75 * 10.0) - 1.0) < 1e-6
 
 
-def test_rewards_are_the_documented_sum():
+def test_rewards_are_the_documented_sum(ipz):
     # Ideal sensor on the isoline, zero turn command at the first step: the reward is the
     # spacing imbalance only, ((d_a - d_b) / (d_a + d_b))^2 times the weight, plus the tracking
     # error after one step (tiny) and no effort. Vehicle 1 is in the middle of the cluster:
@@ -309,8 +314,27 @@ def test_rewards_are_the_documented_sum():
     assert abs(rew["vehicle_0"] - expected) < 2e-3
 
 
-def test_a_scenario_without_a_team_is_refused():
+def test_a_scenario_without_a_team_is_refused(ipz):
     with pytest.raises(ValueError, match="team"):
         ipz.parallel_env(isotrack.Scenario.default())
     with pytest.raises(ValueError, match="discovered"):
         ipz.parallel_env(isotrack.Scenario.from_file(str(TEAM)).set("team.ring", "discovered").set("sim.duration_s", 400.0))
+
+
+def test_ctrl_c_stops_a_long_team_run():
+    """A SIGINT 0.3 s into a team run that takes seconds is answered within 2 s (the run
+    finishes on its own thread, its answer dropped)."""
+    import signal
+    import threading
+    import time
+
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 30000.0).set("output.record_rate_hz", 0.0)
+    t0 = time.monotonic()
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sc.run()
+    finally:
+        timer.cancel()
+    assert time.monotonic() - t0 < 2.0

@@ -153,18 +153,20 @@ fn answering_as_the_built_in_laws_is_simulate_team() {
 }
 
 /// Held speeds are flown as commanded, saturated to the envelope: the path of 30 s at a held
-/// 0.6 m/s is 18 m, and a command of 10 m/s flies v_max = 0.75 m/s (22.5 m), whatever the
-/// spacing law would command (the path sums each step's chord: shorter than the arc by a
-/// relative (omega dt)^2 / 24, under 1e-7 at these turn rates).
+/// 0.6 m/s is 18 m, and a command of 10 m/s flies v_max = 0.75 m/s (22.5 m, not 300 m),
+/// whatever the spacing law would command. The path sums each step's chord, shorter than the
+/// arc flown by a relative (omega dt)^2 / 24: within 1e-4 below `v T` for turn rates under
+/// 4.9 rad/s, never above it.
 #[test]
 fn held_speeds_fly_within_the_envelope() {
     let r = drive(30.0, |g, i| {
         g.hold_speed(i, if i == 0 { 10.0 } else { 0.6 })
     });
-    let path = |i: usize| r.runs[i].path_length_m;
-    assert!((path(0) / (0.75 * 30.0) - 1.0).abs() < 1e-6, "{}", path(0));
+    let path = |i: usize| r.runs[i].metrics.path_length_m;
+    let flew = |p: f64, v: f64| p <= v * 30.0 * (1.0 + 1e-12) && p >= v * 30.0 * (1.0 - 1e-4);
+    assert!(flew(path(0), 0.75), "{}", path(0));
     for i in 1..4 {
-        assert!((path(i) / (0.6 * 30.0) - 1.0).abs() < 1e-6, "{}", path(i));
+        assert!(flew(path(i), 0.6), "{}", path(i));
     }
 }
 
