@@ -1,7 +1,8 @@
 """A team of coordinate-free vehicles as a PettingZoo ``ParallelEnv`` (docs/TEAMS.md).
 
 >>> import isotrack, isotrack.pettingzoo
->>> env = isotrack.pettingzoo.parallel_env(isotrack.Scenario.from_file("scenarios/team-circular-4.toml"))
+>>> sc = isotrack.Scenario.from_file("scenarios/team-circular-4.toml")
+>>> env = isotrack.pettingzoo.parallel_env(sc.set("controller.max_turn_rate_radps", 1.0))
 >>> obs, infos = env.reset(seed=1)
 >>> obs, rewards, terminated, truncated, infos = env.step(
 ...     {a: infos[a]["builtin_action"] for a in env.agents})
@@ -41,6 +42,9 @@ the vehicles' move:
   the scenario's own laws command now (the tracking law's answer to the sample, its held
   command without one; the spacing law's speed, saturated to the envelope): feeding it back as
   the action flies the run ``Scenario.run()`` flies, bit for bit (python/tests/test_team.py).
+  It lies in the action space when the scenario limits the turn rate
+  (``controller.max_turn_rate_radps``); without a limit the law's answer may exceed the
+  default bound of 1 rad/s, and is then refused as an action like any other.
 
 ``env.trace()`` is the trace so far (the columns of ``Scenario.run()``'s team trace);
 ``env.summary()`` the run's ``summary.json`` content once the episode has ended.
