@@ -338,3 +338,36 @@ def test_ctrl_c_stops_a_long_team_run():
     finally:
         timer.cancel()
     assert time.monotonic() - t0 < 2.0
+
+
+def test_an_agent_that_leaves_the_field_is_terminated_and_removed(ipz):
+    # The kriged NO2 map of Fig. 2(a): a grid over x in [-24, 24] m, y in [-21, 21] m. Vehicle 0
+    # starts 1 m below its top edge heading out at v_max = 2 v0 = 1 m/s: it leaves the field
+    # after about 1 s; vehicle 1 starts at the centre heading +x and flies the 10 s out.
+    text = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    text = text.replace('path = "../data/', f'path = "{ROOT}/data/')
+    text = text.replace("duration_s = 600.0", "duration_s = 10.0")
+    text += (
+        "\n[team]\ncount = 2\nspacing = \"none\"\n"
+        "starts = [{x_m = 0.0, y_m = 20.0, heading_rad = 1.5707963267948966},"
+        " {x_m = 0.0, y_m = 0.0, heading_rad = 0.0}]\n"
+    )
+    sc = isotrack.Scenario.from_toml(text).set("controller.max_turn_rate_radps", 1.0)
+    env = ipz.parallel_env(sc)
+    obs, infos = env.reset()
+    ended = {}
+    steps = 0
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: np.array([0.0, 1.0]) for a in env.agents})
+        steps += 1
+        for a in term:
+            if term[a] or trunc[a]:
+                ended[a] = ("terminated" if term[a] else "truncated", steps)
+                assert a not in env.agents
+    assert ended["vehicle_0"][0] == "terminated"
+    assert ended["vehicle_1"] == ("truncated", steps)
+    v = env.summary()["vehicles"]
+    assert v[0]["outcome"] == "left_field" and v[1]["outcome"] == "completed"
+    assert 0.9 < v[0]["t_end_s"] < 1.1, v[0]["t_end_s"]
+    with pytest.raises(ValueError, match="no agent is live"):
+        env.step({})
