@@ -372,7 +372,7 @@ impl Scenario {
 
     /// A run's result with its end explained in the scenario's terms: past the last frame of a
     /// time series with `after_last_frame = "end"`, a `left_field` says the data ended.
-    pub(crate) fn explain_end(&self, mut r: RunResult) -> RunResult {
+    pub fn explain_end(&self, mut r: RunResult) -> RunResult {
         if let FieldModel::Series(f) = self.field() {
             let end = f.last_frame_run_time_s();
             if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
