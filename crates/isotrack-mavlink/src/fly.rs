@@ -1102,6 +1102,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 }
                 self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
             }
+            // Invalid: marked in the trace (no position), never the last one repeated.
+            MavMessage::LOCAL_POSITION_NED(p) if self.tel.local_seen => {
+                self.record.no_position(p.time_boot_ms)
+            }
             MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => self.global_position(g),
             MavMessage::STATUSTEXT(t)
                 if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
@@ -1216,6 +1220,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             });
             self.altitude(g.relative_alt as f64 * 1e-3);
             self.position(g.time_boot_ms, o.to_local_m(lat, lon));
+        } else if self.tel.global_origin.is_some() {
+            // No fix (or out of range) after positions: marked in the trace.
+            self.record.no_position(g.time_boot_ms);
         }
     }
 

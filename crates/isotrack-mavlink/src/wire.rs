@@ -28,6 +28,18 @@ pub fn time_ms(t_s: f64) -> Option<u32> {
     (ms.is_finite() && (0.0..=u32::MAX as f64).contains(&ms)).then_some(ms as u32)
 }
 
+/// The largest forward step, ms, across the wrap of `time_boot_ms` (2^32 ms, 49.7 days after
+/// boot) read as the clock wrapping rather than jumping back: 60 s, the largest step of a
+/// measurement's clock `isotrack fly` takes as no fault (`fly::MAX_MEASUREMENT_STEP_S`).
+pub const MAX_WRAP_STEP_MS: u32 = 60_000;
+
+/// Whether `to` follows `from` on `time_boot_ms`'s clock across its wrap: `to < from`, and
+/// `(to - from) mod 2^32 <= MAX_WRAP_STEP_MS` (the clock passed `u32::MAX` and went on from
+/// 0: `u32::MAX - 500` then `499` is a step of 1000 ms forward).
+pub fn wrapped_forward(from: u32, to: u32) -> bool {
+    to < from && to.wrapping_sub(from) <= MAX_WRAP_STEP_MS
+}
+
 /// Seconds of a `time_boot_ms`.
 pub fn time_s(ms: u32) -> f64 {
     ms as f64 / 1000.0
