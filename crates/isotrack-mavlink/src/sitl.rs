@@ -13,7 +13,9 @@
 //! that talks to this vehicle ([`starts_the_run`]): a `HEARTBEAT` of a ground station or a
 //! companion (`MAV_TYPE_GCS`, `MAV_TYPE_ONBOARD_CONTROLLER`), or a message addressed to this
 //! system (`target_system` = `--system-id`). A stray frame (another vehicle's heartbeat, a
-//! message for another system, a TCP connection that says nothing) starts nothing.
+//! message for another system, a TCP connection that says nothing) starts nothing. While it
+//! waits, the vehicle sends only its `HEARTBEAT`, once a wall-clock second, to the peers the
+//! link has (a ground station waits for a vehicle's heartbeat before it speaks).
 //!
 //! Pacing: [`Pace::RealTime`] keeps simulated time at `speedup` x the wall clock, and the
 //! setpoint in force at a sample is held to the next one; the offboard failsafe switches to HOLD
@@ -817,10 +819,17 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         started: false,
     };
     // The run starts when a peer talks to the vehicle (a `udpin:` link learns its peer from
-    // its first message; a stray frame starts nothing).
+    // its first message; a stray frame starts nothing). Meanwhile the vehicle beats once a
+    // wall-clock second to the peers it has (a `udpout:`/`tcpout:`/serial link's own: a
+    // ground station such as MAVSDK waits for a vehicle's heartbeat before it says anything).
+    let mut beaten = false;
     while !sitl.started {
         if sitl.stop.load(Ordering::Relaxed) {
             break;
+        }
+        if !beaten || sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
+            beaten = true;
+            sitl.heartbeat(false)?;
         }
         sitl.handle_inbound(0.0, Duration::from_millis(100))?;
     }
