@@ -110,7 +110,7 @@ impl Frame {
                 f.scale_lat_deg,
             ),
         ] {
-            if !(lat.abs() <= MAX_HOME_LAT_DEG) {
+            if lat.is_nan() || lat.abs() > MAX_HOME_LAT_DEG {
                 return Err(format!(
                     "{what} is at latitude {} deg: isotrack sitl maps local metres to latitude and longitude within {} deg of the equator (the east-west scale cos(lat) vanishes at the poles)",
                     isotrack_core::numtext::Echo(lat),

@@ -164,7 +164,7 @@ pub const MIN_TELEMETRY_RATE_HZ: f64 = 1.0;
 /// georeference) the local-to-WGS84 map holds at ([`Frame::of`]).
 pub fn check_sitl_scenario(s: &Scenario) -> Result<(), String> {
     let rate = s.spec().output.record_rate_hz;
-    if !(rate >= MIN_TELEMETRY_RATE_HZ) {
+    if rate.is_nan() || rate < MIN_TELEMETRY_RATE_HZ {
         return Err(format!(
             "output.record_rate_hz = {}: isotrack sitl sends its position telemetry once per trace row, so the rate must be at least {} Hz (0 turns the trace, and the positions, off; the default is 10)",
             Echo(rate),
