@@ -42,6 +42,14 @@ struct History<T: Copy> {
 
 impl<T: Copy> History<T> {
     fn push(&mut self, ms: u32, v: T) {
+        // The vehicle's clock wrapped (2^32 ms): the history starts again from the wrap.
+        if self
+            .items
+            .back()
+            .is_some_and(|&(last, _)| crate::wire::wrapped_forward(last, ms))
+        {
+            self.items.clear();
+        }
         // Out of order: kept in order (a late one is only ever older than what is there).
         if self.items.back().is_some_and(|&(last, _)| ms < last) {
             return;
