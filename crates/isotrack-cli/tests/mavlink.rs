@@ -124,6 +124,24 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             65,
             "sitl.home_lat_deg",
         ),
+        // At a pole the east-west scale cos(lat) vanishes: refused, both poles.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=-90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        // No trace rows, no positions: refused rather than a vehicle that never says where
+        // it is.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "output.record_rate_hz=0"],
+            65,
+            "output.record_rate_hz = 0: isotrack sitl sends its position telemetry once per trace row",
+        ),
     ] {
         let o = isotrack(&args);
         assert_fails(&o, code, &[needle]);

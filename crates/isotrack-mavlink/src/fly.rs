@@ -51,9 +51,11 @@ pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
 /// The measurements' clock as received: only a measurement newer than every one before it
 /// counts as one for the sensor-loss timer (the companion's own monotonic clock).
+/// `time_boot_ms` wraps at 2^32 ms (49.7 days after the vehicle's boot): times are unwrapped
+/// ([`wire::unwrap_ms`]), so a step across the wrap is the small step it is, not a jump.
 struct SensorClock {
-    /// The newest `time_boot_ms` received.
-    newest_ms: Option<u32>,
+    /// The newest time received, unwrapped, ms.
+    newest_ms: Option<u64>,
     /// When the newest measurement (or, before any, the vehicle's first message) arrived.
     last: Instant,
     /// A jump of the clock, to fail safe on.
@@ -62,15 +64,16 @@ struct SensorClock {
 
 impl SensorClock {
     /// Takes in a received measurement: queued unless its time jumps.
-    fn receive(&mut self, queue: &mut VecDeque<(u32, f64)>, ms: u32, v: f64) {
-        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u32;
+    fn receive(&mut self, queue: &mut VecDeque<(u64, f64)>, ms: u32, v: f64) {
+        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u64;
+        let ms = self.newest_ms.map_or(ms as u64, |n| wire::unwrap_ms(n, ms));
         match self.newest_ms {
             Some(n) if ms <= n => {
                 if n - ms > max_ms {
                     self.fault.get_or_insert(format!(
                         "the measurement's time jumped back from {} s to {} s (a rebooted or spoofed clock)",
-                        wire::time_s(n),
-                        wire::time_s(ms)
+                        wire::unwrapped_s(n),
+                        wire::unwrapped_s(ms)
                     ));
                     return;
                 }
@@ -80,8 +83,8 @@ impl SensorClock {
             Some(n) if ms - n > max_ms => {
                 self.fault.get_or_insert(format!(
                     "the measurement's time jumped ahead from {} s to {} s (a spoofed clock)",
-                    wire::time_s(n),
-                    wire::time_s(ms)
+                    wire::unwrapped_s(n),
+                    wire::unwrapped_s(ms)
                 ));
             }
             _ => {
@@ -376,7 +379,8 @@ struct Flight<'a, S: ?Sized> {
     clock: SensorClock,
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
-    queue: VecDeque<(u32, f64)>,
+    /// Measurements waiting: unwrapped time, ms ([`SensorClock`]), and value.
+    queue: VecDeque<(u64, f64)>,
     ans: Answers,
     next_setpoint: Instant,
     next_heartbeat: Instant,
@@ -407,7 +411,8 @@ struct Telemetry {
 struct Answers {
     /// The command in force (None: neutral, before the law has control).
     current: Option<f64>,
-    last_answer_ms: Option<u32>,
+    /// Unwrapped, ms.
+    last_answer_ms: Option<u64>,
     commands: Vec<(u32, f64)>,
     samples: u64,
     t_first: Option<f64>,
@@ -655,7 +660,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let now = Instant::now();
         if self.target.is_some() && now >= self.next_setpoint {
-            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(
+                self.ans
+                    .last_answer_ms
+                    .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
+            )?;
             self.next_setpoint = now + self.period;
         }
         if now.duration_since(self.last_link) > self.timeout {
@@ -941,7 +950,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
         } else {
             // PX4 wants setpoints before the switch.
-            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(
+                self.ans
+                    .last_answer_ms
+                    .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
+            )?;
             self.offboard_sent = true;
             self.command(MavCmd::MAV_CMD_DO_SET_MODE, p)?;
         }
@@ -974,38 +987,41 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// A measurement older than one answered: dropped (counted, logged once).
-    fn out_of_order(&mut self, ms: u32, last: u32) {
+    fn out_of_order(&mut self, ms: u64, last: u64) {
         self.ans.out_of_order += 1;
         if self.ans.out_of_order == 1 {
             self.event(format!(
                 "a measurement stamped {} s came after one stamped {} s: out of order, dropped (never given to the law; counted in measurements_out_of_order, logged once)",
-                wire::time_s(ms),
-                wire::time_s(last)
+                wire::unwrapped_s(ms),
+                wire::unwrapped_s(last)
             ));
         }
     }
 
     /// A repeat (the vehicle lost the answer?): the same answer again, within a UDP sensor's
     /// `setpoint_rate_hz`; counted, logged once.
-    fn repeat(&mut self, ms: u32) -> Result<(), FlyError> {
+    fn repeat(&mut self, ms: u64) -> Result<(), FlyError> {
         self.ans.repeated += 1;
         if self.ans.repeated == 1 {
             self.event(format!(
                 "the measurement stamped {} s came again: answered again, not given to the law twice (counted in measurements_repeated, logged once)",
-                wire::time_s(ms)
+                wire::unwrapped_s(ms)
             ));
         }
         if self.lines.is_none() || Instant::now() >= self.next_setpoint {
-            self.setpoint(ms)?;
+            self.setpoint(wire::wire_ms(ms))?;
             self.next_setpoint = Instant::now() + self.period;
         }
         Ok(())
     }
 
     /// A new measurement: the law's answer (in control), its setpoint and its trace row.
-    fn answer(&mut self, ms: u32, v: f64) -> Result<Option<FlyEnd>, FlyError> {
+    fn answer(&mut self, unwrapped_ms: u64, v: f64) -> Result<Option<FlyEnd>, FlyError> {
+        // The law's time is unwrapped (never going back at the wrap); the wire's stamps are
+        // `time_boot_ms`.
+        let ms = wire::wire_ms(unwrapped_ms);
         let m = Measurement {
-            t_s: wire::time_s(ms),
+            t_s: wire::unwrapped_s(unwrapped_ms),
             value: v,
         };
         self.ans.t_first.get_or_insert(m.t_s);
@@ -1040,7 +1056,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else {
             self.ans.current = None;
         }
-        self.ans.last_answer_ms = Some(ms);
+        self.ans.last_answer_ms = Some(unwrapped_ms);
         // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for it); a UDP
         // sensor's answers keep to --setpoint-rate-hz (the periodic setpoint carries the newest
         // command): a fast sensor does not multiply the setpoints.
@@ -1101,6 +1117,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     self.altitude(-p.z as f64);
                 }
                 self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
+            }
+            // Invalid: marked in the trace (no position), never the last one repeated.
+            MavMessage::LOCAL_POSITION_NED(p) if self.tel.local_seen => {
+                self.record.no_position(p.time_boot_ms)
             }
             MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => self.global_position(g),
             MavMessage::STATUSTEXT(t)
@@ -1216,6 +1236,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             });
             self.altitude(g.relative_alt as f64 * 1e-3);
             self.position(g.time_boot_ms, o.to_local_m(lat, lon));
+        } else if self.tel.global_origin.is_some() {
+            // No fix (or out of range) after positions: marked in the trace.
+            self.record.no_position(g.time_boot_ms);
         }
     }
 

@@ -12,6 +12,11 @@
 //! stamped at or after `t` has come, for at most [`MAX_ROW_WAIT_S`] of wall time, then takes
 //! what there is (`NaN` for none). A UDP sensor's line is on the sensor's own clock: its row
 //! takes the latest position and heading received when the line arrived.
+//!
+//! An invalid position (not finite, or a latitude/longitude out of range: the vehicle does not
+//! know where it is) is recorded too ([`Recorder::no_position`]): a row stamped at or after it,
+//! before the next valid one, gets `NaN` (no position), never the last valid one repeated as if
+//! it were current.
 
 use isotrack_scenario::Scenario;
 use isotrack_sim::{Metrics, MetricsConfig, RunMetrics, TraceRow, TraceSink};
@@ -37,6 +42,14 @@ struct History<T: Copy> {
 
 impl<T: Copy> History<T> {
     fn push(&mut self, ms: u32, v: T) {
+        // The vehicle's clock wrapped (2^32 ms): the history starts again from the wrap.
+        if self
+            .items
+            .back()
+            .is_some_and(|&(last, _)| crate::wire::wrapped_forward(last, ms))
+        {
+            self.items.clear();
+        }
         // Out of order: kept in order (a late one is only ever older than what is there).
         if self.items.back().is_some_and(|&(last, _)| ms < last) {
             return;
@@ -143,6 +156,12 @@ impl Recorder {
             }
             s.last_pos = Some(p);
         }
+    }
+
+    /// An invalid position received, stamped `ms`: rows from `ms` until the next valid position
+    /// get `NaN` (the path length goes on from the last valid position to the next).
+    pub(crate) fn no_position(&mut self, ms: u32) {
+        self.positions.push(ms, (f64::NAN, f64::NAN));
     }
 
     /// A heading received, rad (counter-clockwise from east), stamped `ms`.
@@ -256,5 +275,44 @@ mod tests {
         assert_eq!(h.at(50), None);
         assert!(h.covers(200) && !h.covers(201));
         assert!(History::<f64>::default().covers(5));
+    }
+
+    struct Rows(Vec<TraceRow>);
+    impl TraceSink for Rows {
+        fn record(&mut self, row: &TraceRow) {
+            self.0.push(*row);
+        }
+    }
+
+    /// After an invalid position (200 ms), rows get no position (NaN) until the next valid one
+    /// (300 ms), not the last valid one (100 ms) repeated; a row before it keeps its own.
+    #[test]
+    fn rows_after_an_invalid_position_have_none() {
+        let s = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let mut r = Recorder::new(&s, 10.0);
+        let mut sink = Rows(Vec::new());
+        r.position(100, (1.0, 2.0), true);
+        r.no_position(200);
+        r.position(300, (3.0, 4.0), true);
+        let row = TraceRow {
+            t_s: 0.0,
+            x_m: 0.0,
+            y_m: 0.0,
+            heading_rad: 0.0,
+            s: 0.0,
+            error: 0.0,
+            omega_radps: 0.0,
+            s_measured: None,
+            telemetry: None,
+        };
+        for ms in [150, 200, 250, 300] {
+            r.row(&mut sink, row, Some(ms));
+        }
+        r.finish(&mut sink, &mut |_| {});
+        let xy: Vec<(f64, f64)> = sink.0.iter().map(|r| (r.x_m, r.y_m)).collect();
+        assert_eq!(xy[0], (1.0, 2.0));
+        assert!(xy[1].0.is_nan() && xy[1].1.is_nan(), "{xy:?}");
+        assert!(xy[2].0.is_nan() && xy[2].1.is_nan(), "{xy:?}");
+        assert_eq!(xy[3], (3.0, 4.0));
     }
 }
