@@ -406,7 +406,8 @@ fn sighup_stops_fly_and_sitl_ends_without_its_companion() {
 }
 
 /// Ctrl-C (SIGINT) stops `sitl`: `interrupted` (not `completed`) on standard output and in
-/// `summary.json`, exit 130; its companion sees the run end.
+/// `summary.json`, exit 130; its companion sees the vehicle go away: a lost link (a failsafe,
+/// its HOLD unconfirmed: exit 69), never `vehicle_ended` / `completed` with exit 0.
 #[cfg(unix)]
 #[test]
 fn an_interrupted_sitl_says_interrupted() {
@@ -423,11 +424,19 @@ fn an_interrupted_sitl_says_interrupted() {
     .unwrap();
     assert_eq!(summary["outcome"], "interrupted");
     let o = fly.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        String::from_utf8_lossy(&o.stdout).contains("end         vehicle_ended"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
+        String::from_utf8_lossy(&o.stdout).contains("end         link_lost"),
+        "{err}"
     );
+    assert!(err.contains("cut short (interrupted)"), "{err}");
+    assert_eq!(o.status.code(), Some(69), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("fly/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "failsafe");
+    assert_eq!(summary["end_reason"], "link_lost");
 }
 
 /// A FIFO where `fly --out` would write its trace is refused at once (73), not opened (which
