@@ -475,6 +475,10 @@ struct Flight<'a, S: ?Sized> {
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
     queue: VecDeque<(u32, f64)>,
+    /// While `take_control` holds the measurements: how many queued ones were already
+    /// looked at for copies, and the newest time held.
+    held_scanned: usize,
+    held_newest: Option<u32>,
     ans: Answers,
     next_setpoint: Instant,
     next_heartbeat: Instant,
@@ -676,6 +680,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             },
             clock_start: now,
             queue: VecDeque::new(),
+            held_scanned: 0,
+            held_newest: None,
             ans: Answers::default(),
             next_setpoint: now,
             next_heartbeat: now,
@@ -1101,15 +1107,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if self.opts.take_control && !self.active {
             // A vehicle sends again the measurement nobody answered (sitl in lockstep, every
             // second): held copies of one time are one measurement, never a repeat to count.
-            let mut newest: Option<u32> = None;
-            self.queue.retain(|&(ms, _)| {
-                let copy = newest == Some(ms);
-                newest = Some(newest.map_or(ms, |n| n.max(ms)));
-                !copy
-            });
-            if self.queue.len() > 100_000 {
+            // Only what came since the last turn is looked at (the cost stays per message).
+            let start = self.held_scanned.min(self.queue.len());
+            let fresh: Vec<(u32, f64)> = self.queue.drain(start..).collect();
+            for (ms, v) in fresh {
+                if self.held_newest == Some(ms) {
+                    continue;
+                }
+                self.held_newest = Some(self.held_newest.map_or(ms, |n| n.max(ms)));
+                self.queue.push_back((ms, v));
+            }
+            while self.queue.len() > 100_000 {
                 self.queue.pop_front();
             }
+            self.held_scanned = self.queue.len();
             return Ok(None);
         }
         while let Some((ms, v)) = self.queue.pop_front() {
