@@ -220,6 +220,8 @@ struct FlySummary<'a> {
     junk_datagrams: u64,
     measurements_out_of_order: u64,
     measurements_repeated: u64,
+    /// What the metrics were computed over (the planned window, or what was flown).
+    metrics_over: &'a str,
     /// The tracking metrics of the measured error series (`steady_state_max_abs_error`, ...),
     /// as a simulated run's summary has them.
     #[serde(flatten)]
@@ -367,6 +369,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             junk_datagrams: report.link.junk_datagrams,
             measurements_out_of_order: report.measurements_out_of_order,
             measurements_repeated: report.measurements_repeated,
+            metrics_over: &report.metrics_over,
             metrics: &report.metrics,
             scenario: scenario.file(),
         };
@@ -386,6 +389,22 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+        });
+    }
+    if report.end == FlyEnd::VehicleMismatch {
+        return Err(Failure {
+            code: exit::DATAERR,
+            message: "the scenario's vehicle kind does not fit the vehicle's type (see above): nothing commanded".into(),
+        });
+    }
+    if report.end.is_failsafe() && !report.vehicle_heard {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): no vehicle was ever heard on {}: nothing was sent",
+                report.end.as_str(),
+                args.mavlink
+            ),
         });
     }
     if report.end == FlyEnd::PilotTookOver {

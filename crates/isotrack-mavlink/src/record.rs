@@ -33,6 +33,10 @@ pub const FLUSH_EVERY_ROWS: u64 = 32;
 pub const FLUSH_INTERVAL_S: f64 = 1.0;
 /// The positions and attitudes kept for pairing (the newest).
 const HISTORY: usize = 4096;
+/// The samples answered in control kept to compute the metrics over what was flown of a
+/// flight that ended early (24 bytes each: 24 MB; about 28 h at 10 Hz). Past it, an early
+/// end's metrics are the planned window's (the summary says so).
+pub const MAX_KEPT_SAMPLES: usize = 1_000_000;
 
 /// A vehicle-clock history of one telemetry value, newest last.
 #[derive(Default)]
@@ -96,6 +100,16 @@ struct SeriesMetrics {
     held: Option<f64>,
     /// The last received position in control, for the path length.
     last_pos: Option<(f64, f64)>,
+    /// The samples answered in control: time, s, measured error, command (at most
+    /// [`MAX_KEPT_SAMPLES`]).
+    kept: Vec<(f64, f64, f64)>,
+    /// More samples came than were kept.
+    kept_all: bool,
+    /// The metrics' configuration (the planned window).
+    cfg: MetricsConfig,
+    /// The planned duration, s, and the steady-state fraction.
+    planned_s: f64,
+    fraction: f64,
 }
 
 /// The trace and the metrics of a flight.
@@ -140,6 +154,11 @@ impl Recorder {
                 t0_s: None,
                 held: None,
                 last_pos: None,
+                kept: Vec::new(),
+                kept_all: true,
+                cfg,
+                planned_s,
+                fraction: frac,
             },
             max_wait: Duration::from_secs_f64(MAX_ROW_WAIT_S),
         }
@@ -178,11 +197,69 @@ impl Recorder {
             s.m.integrate_command(w);
         }
         s.m.observe(k, eps, omega);
+        if s.kept.len() < MAX_KEPT_SAMPLES {
+            s.kept.push((t_s, eps, omega));
+        } else {
+            s.kept_all = false;
+        }
     }
 
-    /// The metrics; `completed`: the flight reached its planned end.
-    pub(crate) fn metrics(&self, completed: bool) -> RunMetrics {
-        self.metrics.m.finish(completed)
+    /// The metrics, and what they were computed over in words; `completed`: the flight reached
+    /// its planned end.
+    ///
+    /// A completed flight's are the planned window's: steady state over the last
+    /// `metrics.steady_state_fraction` of the planned duration. A flight that ended early (a
+    /// pilot took over, a failsafe) has flown less than that window, often none of it: its
+    /// metrics are computed over what was flown instead, the steady state over the last
+    /// fraction of the steps from its first sample answered in control to its last, and the
+    /// convergence time within them (the same [`Metrics`] on the same samples, only the
+    /// window and the end moved).
+    pub(crate) fn metrics(&self, completed: bool) -> (RunMetrics, String) {
+        let s = &self.metrics;
+        let pct = format!("{}%", s.fraction * 100.0);
+        let planned = format!(
+            "the samples the law answered in control (measured error, sampling period {} s); steady state over the last {pct} of the planned {} s",
+            s.period_s, s.planned_s
+        );
+        let Some(&(t_last, _, _)) = s.kept.last() else {
+            return (
+                s.m.finish(completed),
+                "no sample answered in control: no tracking metrics".into(),
+            );
+        };
+        if completed {
+            return (s.m.finish(true), planned);
+        }
+        if !s.kept_all {
+            return (
+                s.m.finish(false),
+                format!("{planned} (the flight ended early, but was too long to keep its samples: the planned window's)"),
+            );
+        }
+        let t0 = s.kept[0].0;
+        let n = ((t_last - t0) / s.period_s).round().max(0.0);
+        let mut cfg = s.cfg;
+        cfg.steady_state_start_step = ((1.0 - s.fraction) * n).ceil() as u64;
+        cfg.convergence_min_dwell_steps = cfg.convergence_min_dwell_steps.min(n as u64);
+        let mut m = Metrics::new(cfg);
+        let mut held = None;
+        for &(t, eps, w) in &s.kept {
+            let k = ((t - t0) / s.period_s).round().max(0.0) as u64;
+            if let Some(h) = held.replace(w) {
+                m.integrate_command(h);
+            }
+            m.observe(k, eps, w);
+        }
+        m.add_path(s.m.finish(false).path_length_m);
+        (
+            m.finish(true),
+            format!(
+                "the samples the law answered in control (measured error, sampling period {} s); the flight ended early, after {} s of the planned {} s: steady state over the last {pct} of what was flown, convergence within it",
+                s.period_s,
+                t_last - t0,
+                s.planned_s
+            ),
+        )
     }
 
     /// Queues `row` for its pose (`ms`: its measurement's vehicle time; `None`: now's pose).
