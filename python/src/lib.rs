@@ -18,6 +18,7 @@ use std::sync::atomic::AtomicBool;
 mod env;
 mod guard;
 mod league;
+mod team;
 mod tools;
 
 /// The Python exception, named `isotrack.ScenarioError` in tracebacks.
@@ -686,6 +687,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     PyArray1::<f64>::zeros(m.py(), 0, false);
     m.add_class::<PyScenario>()?;
     m.add_class::<env::PyEnvBatch>()?;
+    m.add_class::<team::PyTeamEnv>()?;
+    m.add_function(wrap_pyfunction!(team::team_run, m)?)?;
+    m.add_function(wrap_pyfunction!(team::write_team_run, m)?)?;
+    m.add_function(wrap_pyfunction!(team::is_team, m)?)?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(file_sha256, m)?)?;

@@ -342,6 +342,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
                 junk_datagrams: report.link.junk_datagrams,
                 measurements_out_of_order: report.measurements_out_of_order,
                 measurements_repeated: report.measurements_repeated,
+                metrics_over: report.metrics_over.to_string(),
                 metrics: MetricsRecord::of(&report.metrics),
             }),
             scenario: scenario.file(),
@@ -361,6 +362,22 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+        });
+    }
+    if report.end == FlyEnd::VehicleMismatch {
+        return Err(Failure {
+            code: exit::DATAERR,
+            message: "the scenario's vehicle kind does not fit the vehicle's type (see above): nothing commanded".into(),
+        });
+    }
+    if report.end.is_failsafe() && !report.vehicle_heard {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): no vehicle was ever heard on {}: nothing was sent",
+                report.end.as_str(),
+                args.mavlink
+            ),
         });
     }
     if report.end == FlyEnd::PilotTookOver {

@@ -205,6 +205,9 @@ pub struct FlightRecord {
     /// Measurements repeating the last one's stamp (dropped).
     #[serde(default)]
     pub measurements_repeated: u64,
+    /// What the metrics were computed over (the planned window, or what was flown).
+    #[serde(default)]
+    pub metrics_over: String,
     /// The tracking metrics of the measured error series, as a simulated run's record has them.
     #[serde(flatten)]
     pub metrics: MetricsRecord,
