@@ -194,6 +194,39 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
             .unwrap();
     assert_eq!(summary["end_reason"], "vehicle_ended");
     assert_eq!(summary["outcome"], "completed");
+    // Written through the one summary type (a flight's record), its keys in the order the
+    // flight's summary has always had them (FLYING.md): the link's counters, then the metrics.
+    let text = std::fs::read_to_string(fly_dir.join("summary.json")).unwrap();
+    let at = |k: &str| {
+        text.find(&format!("\n  \"{k}\":"))
+            .unwrap_or_else(|| panic!("no {k}"))
+    };
+    let order = [
+        "isotrack_version",
+        "scenario_path",
+        "outcome",
+        "outcome_detail",
+        "end_reason",
+        "failsafe",
+        "failsafe_acknowledged",
+        "t_end_s",
+        "samples",
+        "commands",
+        "events",
+        "frames_in",
+        "frames_out",
+        "junk_datagrams",
+        "measurements_out_of_order",
+        "measurements_repeated",
+        "metrics_over",
+        "steady_state_max_abs_error",
+        "track_losses",
+        "scenario",
+    ];
+    for w in order.windows(2) {
+        assert!(at(w[0]) < at(w[1]), "{} before {}", w[0], w[1]);
+    }
+    assert_eq!(summary.as_object().unwrap().len(), 17 + 12 + 1);
     assert_eq!(summary["samples"], 2001);
     assert_eq!(summary["commands"], 2001);
     let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
@@ -577,4 +610,103 @@ fn a_killed_flight_leaves_a_readable_trace() {
         assert!(cells.iter().all(|c| c.parse::<f64>().is_ok()), "{r}");
     }
     assert!(out.join("scenario.toml").exists());
+}
+
+/// Takes the directory lock of `dir` as another command would.
+#[cfg(unix)]
+fn hold_lock(dir: &std::path::Path) -> std::fs::File {
+    let f = std::fs::File::create(dir.join(".isotrack.lock")).unwrap();
+    f.try_lock().unwrap();
+    f
+}
+
+/// The files of `dir`, sorted.
+fn names(dir: &std::path::Path) -> Vec<String> {
+    let mut n: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    n.sort();
+    n
+}
+
+/// Issue 31: `sitl --out` and `fly --out` handle a directory holding an earlier run as `run
+/// --out` does (the one run-directory writer): while another command holds its lock they exit 73
+/// at once and leave the earlier run as it was; otherwise the flight replaces it, and no
+/// `.isotrack.lock` is left behind.
+#[cfg(unix)]
+#[test]
+fn sitl_and_fly_out_replace_an_earlier_run_as_run_out_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sim_dir, fly_dir) = (dir.path().join("sitl"), dir.path().join("fly"));
+    for d in [&sim_dir, &fly_dir] {
+        let o = isotrack(&[
+            "run",
+            "--set",
+            "sim.duration_s=5",
+            "--quiet",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(names(d), ["scenario.toml", "summary.json", "trace.csv"]);
+    }
+    let earlier = std::fs::read(sim_dir.join("summary.json")).unwrap();
+    // Locked by another command: 73 at once, nothing touched.
+    for (cmd, d) in [("sitl", &sim_dir), ("fly", &fly_dir)] {
+        let holder = hold_lock(d);
+        let o = isotrack(&[
+            cmd,
+            "--mavlink",
+            if cmd == "sitl" {
+                "udpin:127.0.0.1:0"
+            } else {
+                "udpout:127.0.0.1:9"
+            },
+            "--timeout-s",
+            "0.3",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+        assert_fails(&o, 73, &["is writing this directory"]);
+        assert_eq!(std::fs::read(d.join("summary.json")).unwrap(), earlier);
+        drop(holder);
+        std::fs::remove_file(d.join(".isotrack.lock")).unwrap();
+    }
+    // A lockstep flight over both earlier runs.
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", "--mavlink", "udpin:127.0.0.1:0", "--lockstep"])
+        .args(["--set", "sim.duration_s=5", "--out"])
+        .arg(&sim_dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "60"])
+        .args(["--set", "sim.duration_s=5", "--mavlink"])
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .arg("--out")
+        .arg(&fly_dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(sitl.wait().unwrap().success());
+    assert_eq!(
+        names(&sim_dir),
+        ["scenario.toml", "summary.json", "trace.csv"]
+    );
+    assert_eq!(
+        names(&fly_dir),
+        ["mavlink.tlog", "scenario.toml", "summary.json", "trace.csv"]
+    );
+    let fly: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fly_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(fly["end_reason"], "vehicle_ended");
+    // 5 s at the default 100 Hz sensor: samples at 0, 0.01, ..., 5 s.
+    assert_eq!(fly["samples"], 501);
+    let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
+    assert_eq!(trace.lines().count(), 1 + 501);
 }

@@ -3,12 +3,12 @@
 use crate::cli::{FigureOptions, FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
 use crate::output::{scenario_toml, RunDir, Summary};
-use crate::run::Failure;
 use isotrack_core::numtext::Echo;
 use isotrack_plot::{
     field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, PlotError, RunData,
     Style,
 };
+use isotrack_runs::Failure;
 use isotrack_scenario::{load_scenario, Scenario};
 use std::path::{Path, PathBuf};
 
@@ -235,9 +235,9 @@ fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Fail
 }
 
 /// A bundled scenario of `--scenarios DIR`: 66 when it cannot be read (missing, a FIFO), 65
-/// when what it holds is invalid, as for every other command ([`crate::run::invalid`]).
+/// when what it holds is invalid, as for every other command ([`crate::load::invalid`]).
 fn load(path: &Path, sets: &[String]) -> Result<Scenario, Failure> {
-    load_scenario(Some(path), sets).map_err(crate::run::invalid)
+    load_scenario(Some(path), sets).map_err(crate::load::invalid)
 }
 
 /// A run behind a paper figure: a bundled scenario with `--set` overrides, its run directory

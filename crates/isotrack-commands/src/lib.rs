@@ -20,6 +20,7 @@ pub mod entry;
 pub mod figures;
 pub mod interpolate;
 pub mod league;
+pub mod load;
 pub mod mavlink;
 pub mod output;
 pub mod run;

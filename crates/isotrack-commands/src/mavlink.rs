@@ -11,9 +11,9 @@ use isotrack_mavlink::fly::{
 };
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
-use isotrack_runs::summary::Ended;
-use isotrack_sim::{NoTrace, RunMetrics, TraceRow, TraceSink};
-use serde::Serialize;
+use isotrack_runs::results::MetricsRecord;
+use isotrack_runs::summary::{Ended, FlightRecord};
+use isotrack_sim::{NoTrace, TraceRow, TraceSink};
 use std::path::Path;
 
 fn usage(message: String) -> Failure {
@@ -200,35 +200,6 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The content of a flight's `summary.json`.
-#[derive(Serialize)]
-struct FlySummary<'a> {
-    isotrack_version: &'static str,
-    scenario_path: Option<String>,
-    /// `completed` when the vehicle ended its run, `failsafe` otherwise.
-    outcome: &'static str,
-    outcome_detail: String,
-    end_reason: &'static str,
-    failsafe: bool,
-    failsafe_acknowledged: bool,
-    t_end_s: Option<f64>,
-    samples: u64,
-    commands: usize,
-    events: &'a [String],
-    frames_in: u64,
-    frames_out: u64,
-    junk_datagrams: u64,
-    measurements_out_of_order: u64,
-    measurements_repeated: u64,
-    /// What the metrics were computed over (the planned window, or what was flown).
-    metrics_over: &'a str,
-    /// The tracking metrics of the measured error series (`steady_state_max_abs_error`, ...),
-    /// as a simulated run's summary has them.
-    #[serde(flatten)]
-    metrics: &'a RunMetrics,
-    scenario: &'a isotrack_scenario::ScenarioFile,
-}
-
 /// `fly --out`'s trace: flushed by the flight at a bounded interval.
 struct FlyTrace(Option<TraceWriter>);
 
@@ -342,42 +313,44 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     }
     if let (Some(dir), Some(w)) = (&args.out, trace.0) {
         w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
-        let s = FlySummary {
-            isotrack_version: env!("CARGO_PKG_VERSION"),
+        let s = Summary {
+            isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
             scenario_path: args
                 .scenario
                 .scenario
                 .as_ref()
                 .map(|p| p.display().to_string()),
-            outcome: if report.end.is_failsafe() {
-                "failsafe"
-            } else if report.end == FlyEnd::VehicleEnded {
-                "completed"
-            } else {
-                report.end.as_str()
-            },
-            outcome_detail: report.events.last().cloned().unwrap_or_default(),
-            end_reason: report.end.as_str(),
-            failsafe: report.end.is_failsafe(),
-            failsafe_acknowledged: report.failsafe_acknowledged,
-            t_end_s: report.t_last_s,
-            samples: report.samples,
-            commands: report.commands.len(),
-            events: &report.events,
-            frames_in: report.link.frames_in,
-            frames_out: report.link.frames_out,
-            junk_datagrams: report.link.junk_datagrams,
-            measurements_out_of_order: report.measurements_out_of_order,
-            measurements_repeated: report.measurements_repeated,
-            metrics_over: &report.metrics_over,
-            metrics: &report.metrics,
+            ended: Ended::Flight(FlightRecord {
+                outcome: if report.end.is_failsafe() {
+                    "failsafe"
+                } else if report.end == FlyEnd::VehicleEnded {
+                    "completed"
+                } else {
+                    report.end.as_str()
+                }
+                .to_string(),
+                outcome_detail: report.events.last().cloned().unwrap_or_default(),
+                end_reason: report.end.as_str().to_string(),
+                failsafe: report.end.is_failsafe(),
+                failsafe_acknowledged: report.failsafe_acknowledged,
+                t_end_s: report.t_last_s,
+                samples: report.samples,
+                commands: report.commands.len() as u64,
+                events: report.events.clone(),
+                frames_in: report.link.frames_in,
+                frames_out: report.link.frames_out,
+                junk_datagrams: report.link.junk_datagrams,
+                measurements_out_of_order: report.measurements_out_of_order,
+                measurements_repeated: report.measurements_repeated,
+                metrics_over: report.metrics_over.to_string(),
+                metrics: MetricsRecord::of(&report.metrics),
+            }),
             scenario: scenario.file(),
+            controller: None,
         };
-        // At the end, whole or not at all (atomic).
+        // At the end, whole or not at all (atomic), through the one summary type.
         let p = dir.join("summary.json");
-        let text = serde_json::to_string_pretty(&s).map_err(|e| cant(&p, e.into()))?;
-        isotrack_runs::files::write_atomic(&p, (text + "\n").as_bytes())
-            .map_err(|e| cant(&p, e))?;
+        s.write(&p).map_err(|e| cant(&p, e))?;
     }
     outln!(
         "end         {} ({} measurements, {} law commands)",

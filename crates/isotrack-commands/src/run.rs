@@ -4,29 +4,13 @@ use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
 use crate::output::{scenario_toml, RunDir, Summary};
 use isotrack_core::numtext::Echo;
-use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
+use isotrack_scenario::Scenario;
 use isotrack_sim::{NoTrace, RunResult};
 
 /// A command's failure: the message and the exit code (see [`crate::exit`]).
 pub use isotrack_runs::Failure;
 
-/// A scenario error as a failure: 66 when the file, or a file it names (`field.path`), cannot
-/// be read (missing, a FIFO, a directory, a device, too big), 65 when what it holds is invalid.
-pub fn invalid(e: ScenarioError) -> Failure {
-    Failure {
-        code: if e.is_unreadable_input() {
-            exit::NOINPUT
-        } else {
-            exit::DATAERR
-        },
-        message: e.to_string(),
-    }
-}
-
-/// Loads the scenario named by the arguments.
-pub fn load(args: &ScenarioArgs) -> Result<Scenario, Failure> {
-    load_scenario(args.scenario.as_deref(), &args.set).map_err(invalid)
-}
+pub use crate::load::{invalid, load};
 
 fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4e}"))

@@ -5,7 +5,7 @@
 //! benchmark's per-task `results.csv` (`isotrack-league`) take their cells from it.
 
 use crate::trace::num;
-use isotrack_sim::RunResult;
+use isotrack_sim::{RunMetrics, RunResult};
 use serde::{Deserialize, Serialize};
 
 /// The outcome a results row records for a run whose scenario is invalid (the reason in
@@ -32,6 +32,17 @@ pub struct RunRecord {
     pub samples_dropped: u64,
     /// Last valid position `[x, y]`, m.
     pub end_position_m: [Option<f64>; 2],
+    /// The metrics ([`MetricsRecord`], flattened).
+    #[serde(flatten)]
+    pub metrics: MetricsRecord,
+}
+
+/// A run's tracking metrics as every results file records them, in `summary.json`'s order and
+/// with the names of [`isotrack_sim::RunMetrics`]; a number that is undefined or not finite is
+/// `None`. A simulated run's [`RunRecord`] and a flight's record
+/// ([`crate::summary::FlightRecord`]: the metrics of the measured error series) both hold one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MetricsRecord {
     /// `max |eps|` over the steady-state window (field units).
     pub steady_state_max_abs_error: Option<f64>,
     /// `sqrt(mean(eps^2))` over the steady-state window.
@@ -55,6 +66,7 @@ pub struct RunRecord {
     /// Share of the steady window within the tolerance, `[0, 1]`.
     pub time_in_band_fraction: Option<f64>,
     /// Times the error left the track-loss band after being tracked.
+    #[serde(default)]
     pub track_losses: u64,
 }
 
@@ -63,19 +75,11 @@ fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
-impl RunRecord {
-    /// The record of `r`.
-    pub fn of(r: &RunResult) -> Self {
-        let m = &r.metrics;
+impl MetricsRecord {
+    /// The record of metrics `m`.
+    pub fn of(m: &RunMetrics) -> Self {
         let o = |x: Option<f64>| x.and_then(finite);
-        RunRecord {
-            outcome: r.outcome.as_str().to_string(),
-            outcome_detail: r.outcome_detail.clone(),
-            t_end_s: finite(r.t_end_s),
-            steps: r.steps,
-            samples: r.samples,
-            samples_dropped: r.samples_dropped,
-            end_position_m: r.end_position_m.map(finite),
+        MetricsRecord {
             steady_state_max_abs_error: o(m.steady_state_max_abs_error),
             steady_state_rms_error: o(m.steady_state_rms_error),
             steady_state_mean_error: o(m.steady_state_mean_error),
@@ -90,26 +94,46 @@ impl RunRecord {
             track_losses: m.track_losses,
         }
     }
+}
+
+impl RunRecord {
+    /// The record of `r`.
+    pub fn of(r: &RunResult) -> Self {
+        RunRecord {
+            outcome: r.outcome.as_str().to_string(),
+            outcome_detail: r.outcome_detail.clone(),
+            t_end_s: finite(r.t_end_s),
+            steps: r.steps,
+            samples: r.samples,
+            samples_dropped: r.samples_dropped,
+            end_position_m: r.end_position_m.map(finite),
+            metrics: MetricsRecord::of(&r.metrics),
+        }
+    }
 
     /// The value of a numeric column (`None` for [`Column::Outcome`] and
     /// [`Column::OutcomeDetail`], which are text).
     pub fn value(&self, c: Column) -> Option<f64> {
         match c {
             Column::Outcome | Column::OutcomeDetail => None,
-            Column::ConvergenceTimeS => self.convergence_time_s,
-            Column::SteadyStateMaxAbsError => self.steady_state_max_abs_error,
-            Column::SteadyStateRmsError => self.steady_state_rms_error,
-            Column::SteadyStateMeanError => self.steady_state_mean_error,
-            Column::SteadyStateMaxIsolineDistanceM => self.steady_state_max_isoline_distance_m,
-            Column::SteadyStateRmsIsolineDistanceM => self.steady_state_rms_isoline_distance_m,
-            Column::PathLengthM => self.path_length_m,
-            Column::ControlEffort => self.control_effort,
-            Column::ChatteringRadps2 => self.chattering_radps2,
-            Column::SignChangesPerS => self.sign_changes_per_s,
+            Column::ConvergenceTimeS => self.metrics.convergence_time_s,
+            Column::SteadyStateMaxAbsError => self.metrics.steady_state_max_abs_error,
+            Column::SteadyStateRmsError => self.metrics.steady_state_rms_error,
+            Column::SteadyStateMeanError => self.metrics.steady_state_mean_error,
+            Column::SteadyStateMaxIsolineDistanceM => {
+                self.metrics.steady_state_max_isoline_distance_m
+            }
+            Column::SteadyStateRmsIsolineDistanceM => {
+                self.metrics.steady_state_rms_isoline_distance_m
+            }
+            Column::PathLengthM => self.metrics.path_length_m,
+            Column::ControlEffort => self.metrics.control_effort,
+            Column::ChatteringRadps2 => self.metrics.chattering_radps2,
+            Column::SignChangesPerS => self.metrics.sign_changes_per_s,
             Column::TEndS => self.t_end_s,
             Column::Samples => Some(self.samples as f64),
-            Column::TimeInBandFraction => self.time_in_band_fraction,
-            Column::TrackLosses => Some(self.track_losses as f64),
+            Column::TimeInBandFraction => self.metrics.time_in_band_fraction,
+            Column::TrackLosses => Some(self.metrics.track_losses as f64),
         }
     }
 
@@ -120,7 +144,7 @@ impl RunRecord {
             Column::Outcome => self.outcome.clone(),
             Column::OutcomeDetail => self.outcome_detail.clone().unwrap_or_default(),
             Column::Samples => self.samples.to_string(),
-            Column::TrackLosses => self.track_losses.to_string(),
+            Column::TrackLosses => self.metrics.track_losses.to_string(),
             c => real_cell(self.value(c)),
         }
     }

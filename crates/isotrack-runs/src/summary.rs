@@ -6,7 +6,7 @@
 //! every reader (`isotrack-plot`, the HTML report) reads it through [`Summary::read`] /
 //! [`Summary::from_json`], whose errors name the file and the key.
 
-use crate::results::RunRecord;
+use crate::results::{MetricsRecord, RunRecord};
 use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
 use serde::{Deserialize, Serialize};
@@ -68,7 +68,7 @@ pub struct RunEnd {
     /// A team's run (`[team]`): the team metrics; left out for one vehicle. The flattened
     /// top-level record is then vehicle 0's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub team: Option<TeamJson>,
+    pub team: Option<Box<TeamJson>>,
     /// A team's run: every vehicle's outcome and metrics, in the listed order.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vehicles: Option<Vec<RunRecord>>,
@@ -199,6 +199,18 @@ pub struct FlightRecord {
     pub frames_out: u64,
     /// Datagrams that were not MAVLink.
     pub junk_datagrams: u64,
+    /// Measurements stamped before one already received (dropped, never given to the law).
+    #[serde(default)]
+    pub measurements_out_of_order: u64,
+    /// Measurements repeating the last one's stamp (dropped).
+    #[serde(default)]
+    pub measurements_repeated: u64,
+    /// What the metrics were computed over (the planned window, or what was flown).
+    #[serde(default)]
+    pub metrics_over: String,
+    /// The tracking metrics of the measured error series, as a simulated run's record has them.
+    #[serde(flatten)]
+    pub metrics: MetricsRecord,
 }
 
 /// Why a `summary.json` cannot be read: the file and what is wrong, on one line.
@@ -254,7 +266,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
     ) -> Self {
         let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
         if let Ended::Run(r) = &mut s.ended {
-            r.team = Some(TeamJson::new(scenario, team));
+            r.team = Some(Box::new(TeamJson::new(scenario, team)));
             r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
         }
         s
@@ -373,7 +385,7 @@ impl<S> Summary<S> {
     /// A team's `team` object (`None` for one vehicle's run and for a flight).
     pub fn team(&self) -> Option<&TeamJson> {
         match &self.ended {
-            Ended::Run(r) => r.team.as_ref(),
+            Ended::Run(r) => r.team.as_deref(),
             Ended::Flight(_) => None,
         }
     }

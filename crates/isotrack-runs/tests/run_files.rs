@@ -41,8 +41,8 @@ fn non_finite_numbers_are_null_and_read_back_as_none() {
     assert!(text.ends_with("}\n"));
     let back = Summary::from_json(&text).unwrap();
     let rec = back.record().unwrap();
-    assert_eq!(rec.path_length_m, None);
-    assert_eq!(rec.control_effort, None);
+    assert_eq!(rec.metrics.path_length_m, None);
+    assert_eq!(rec.metrics.control_effort, None);
     assert_eq!(back.t_end_s(), None);
     assert_eq!(back.scenario_path, None);
     assert_eq!(back.outcome(), "completed");
@@ -285,4 +285,28 @@ fn a_team_summary_is_vehicle_0_then_team_and_vehicles() {
     let one = Summary::of_run(&s, None, &t.runs[0], &[]).to_json();
     assert!(!one.contains("\n  \"team\":") && !one.contains("\n  \"vehicles\":"));
     assert_eq!(Summary::from_json(&one).unwrap().team(), None);
+}
+
+/// Issue 31: a lock let go leaves no `.isotrack.lock`; while held, a second writer is refused
+/// (73); a file someone put at the path after the holder's is not the holder's to remove.
+#[test]
+fn a_released_lock_leaves_no_lock_file() {
+    use isotrack_runs::sweep::lock::{lock_output_dir, LOCK_FILE};
+    let d = tempfile::tempdir().unwrap();
+    let lock = lock_output_dir(d.path(), "sweep").unwrap();
+    assert!(d.path().join(LOCK_FILE).is_file());
+    let again = lock_output_dir(d.path(), "merge").unwrap_err();
+    assert_eq!(again.code, exit::CANTCREAT);
+    assert!(again.message.contains("sweep pid"), "{}", again.message);
+    drop(lock);
+    assert!(!d.path().join(LOCK_FILE).exists());
+    // Locked again after it was let go; another file put in its place stays.
+    let lock = lock_output_dir(d.path(), "sweep").unwrap();
+    std::fs::remove_file(d.path().join(LOCK_FILE)).unwrap();
+    std::fs::write(d.path().join(LOCK_FILE), "someone else's\n").unwrap();
+    drop(lock);
+    assert_eq!(
+        std::fs::read_to_string(d.path().join(LOCK_FILE)).unwrap(),
+        "someone else's\n"
+    );
 }
