@@ -156,7 +156,7 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
             "samples = `99999999999` is not a whole number",
         ),
         (
-            with(&[("steady_state_rms_error", "1e9")]),
+            with(&[("steady_state_rms_error", "1000000000.0")]),
             "steady_state_rms_error = 1000000000.0 exceeds steady_state_max_abs_error",
         ),
         (
@@ -173,13 +173,29 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
             with(&[("path_length_m", "-0.0")]),
             "path_length_m = `-0.0` is negative",
         ),
+        // (A subnormal time is no whole number of steps; a subnormal effort is a value a run
+        // with a tiny gain writes, kept since issue 30, fix30c.)
         (
             with(&[("convergence_time_s", "5e-324")]),
-            "convergence_time_s = `5e-324` is subnormal",
+            "convergence_time_s = 5e-324 s is neither 0 nor a whole number",
+        ),
+        // Issue 30 (fix30c), item 4: numbers not written as isotrack writes them (merge
+        // would copy them verbatim).
+        (
+            with(&[("t_end_s", "+2.000e0")]),
+            "t_end_s = `+2.000e0` is not how isotrack writes 2.0",
         ),
         (
-            with(&[("control_effort", "1e-320")]),
-            "control_effort = `1e-320` is subnormal",
+            with(&[("t_end_s", "2")]),
+            "t_end_s = `2` is not how isotrack writes 2.0",
+        ),
+        (
+            with(&[("samples", "+201")]),
+            "samples = `+201` is not a whole number",
+        ),
+        (
+            with(&[("samples", "0201")]),
+            "samples = `0201` is not a whole number",
         ),
         (
             with(&[("outcome", "completed"), ("outcome_detail", "made up")]),
@@ -405,9 +421,12 @@ fn resume_and_merge_refuse_impossible_rows_headers_and_shards() {
         r.join(",")
     };
     let cases: Vec<(String, &str)> = vec![
-        (with(&[("path_length_m", "1e6")]), "m/s x t_end_s"),
         (
-            with(&[("sign_changes_per_s", "1e9")]),
+            with(&[("path_length_m", "1000000.0")]),
+            "m/s x 200 steps of 0.01 s",
+        ),
+        (
+            with(&[("sign_changes_per_s", "1000000000.0")]),
             "exceeds one per step",
         ),
         (with(&[("run_id", "+2")]), "run_id `+2` is not a run number"),
@@ -573,4 +592,56 @@ fn resume_and_merge_check_samples_from_below_and_commands_against_the_limit() {
         assert_fails(&o, 65, &[&at, &column, needle]);
     }
     std::fs::write(&results, &good).unwrap();
+}
+
+/// Issue 30 (fix30c), items 2 and 3: rows real runs write are kept by `--resume` and `merge`.
+/// (a) At 30 m/s heading out of the radial field with kp = 1e307 .. 1.7e308 the first command
+/// overflows: the run ends `diverged` with t_end_s = 0 after moving one step of 0.01 s, a
+/// path of 30 m/s x 0.01 s = 0.3 m at most (not 30 m/s x 0 s). (b) kp = 1e-155 (ki = 0) turns
+/// at about kp x 0.5 x (c1 + c2 |eps'|) ~ 1e-155 rad/s: control_effort = sum omega^2 dt is
+/// of the order 1e-310 over 10 s, a subnormal the writer writes and the checker must keep.
+#[test]
+fn resume_and_merge_keep_diverged_first_steps_and_subnormal_metrics() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "sim.duration_s = 10.0\ncontroller.ki = 0.0\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    for (name, grid) in [
+        (
+            "div",
+            "[base]\ninitial.heading_rad = 0.0\nvehicle.speed_mps = 30.0\n[grid]\ncontroller.kp = [1e307, 1.7e308]\n",
+        ),
+        ("tiny", "[grid]\ncontroller.kp = [1e-155, 1e-160]\n"),
+    ] {
+        let sw = write(
+            d.path(),
+            &format!("{name}.toml"),
+            &format!("scenario = \"sc.toml\"\n{grid}"),
+        );
+        let out = p(&format!("out_{name}"));
+        let o = isotrack(&["sweep", &sw, "--out", &out]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let text = std::fs::read_to_string(d.path().join(format!("out_{name}/results.csv"))).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+        for line in text.lines().skip(1) {
+            let r: Vec<&str> = line.split(',').collect();
+            if name == "div" {
+                assert_eq!(r[col("outcome")], "diverged", "{line}");
+                assert_eq!(r[col("t_end_s")].parse::<f64>().unwrap(), 0.0, "{line}");
+                let len: f64 = r[col("path_length_m")].parse().unwrap();
+                assert!(len > 0.0 && len <= 0.3 * 1.01, "{line}");
+            } else {
+                let e: f64 = r[col("control_effort")].parse().unwrap();
+                assert!(e > 0.0 && e < f64::MIN_POSITIVE, "a subnormal effort: {line}");
+            }
+        }
+        let o = isotrack(&["sweep", &sw, "--out", &out, "--resume"]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let o = isotrack(&["merge", &out, "--out", &p(&format!("m_{name}"))]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+    }
 }

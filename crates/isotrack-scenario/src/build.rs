@@ -37,7 +37,9 @@ pub struct RunSpan {
     /// fewer than its sample steps, down to none.
     pub sensor_drops_samples: bool,
     /// The turn-rate limit every command of the run obeys, rad/s: `controller.max_turn_rate_radps`
-    /// (every law's output stage saturates at it, and so does the search phase); `None` without
+    /// (every law's output stage saturates at it; the search phase flies open loop, within it:
+    /// the spiral is capped at it and a lawnmower whose half-turns `2 v / search_spacing_m`
+    /// exceed it is refused at load); `None` without
     /// one, for a `schedule` (its turn rates are flown as written) and for the fixed wing's
     /// airframe limit (known only once the vehicle is trimmed).
     pub turn_rate_limit_radps: Option<f64>,

@@ -69,10 +69,7 @@ fn attr_text(v: &NcVariable, name: &str) -> Result<Option<String>, String> {
     // zero-width format character is no unit or name anyone writes, and would reach
     // `scenario.toml`, messages and figures.
     let text = text.trim_end_matches('\0').to_string();
-    if text
-        .chars()
-        .any(|c| c.is_control() || isotrack_core::numtext::is_invisible(c))
-    {
+    if text.chars().any(isotrack_core::numtext::is_not_plain) {
         return Err(format!(
             "variable `{}`: its `{name}` attribute holds a control or format character (`{}`): write it as plain text",
             isotrack_core::numtext::Escaped(v.name()),

@@ -156,10 +156,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     // Text cells are isotrack's own messages: never a control character (an escape sequence,
     // a line break) nor a bidirectional or zero-width format character.
     for name in ["warnings", "outcome_detail"] {
-        if cell(name)
-            .chars()
-            .any(|c| c.is_control() || isotrack_core::numtext::is_invisible(c))
-        {
+        if cell(name).chars().any(isotrack_core::numtext::is_not_plain) {
             return Err(format!(
                 "{name} holds a control or format character (`{}`)",
                 clip(cell(name))
@@ -307,14 +304,24 @@ fn check_span<'c>(
             ));
         }
     }
-    // A path no longer than the fastest speed over the run's time (+1 %).
+    // A path no longer than the fastest speed over the steps moved (+1 %): `k` steps, or for a
+    // `diverged` run (which moved the step after its last valid one before the non-finite
+    // command ended it) `min(k + 1, N)`, as for the samples.
     if let (Some(v), Some(len)) = (span.speed_max_mps, value("path_length_m")) {
-        if len > v * t_end * 1.01 + 1e-9 {
+        let moved = if outcome == "diverged" {
+            (k_end + 1).min(span.n_steps)
+        } else {
+            k_end
+        };
+        let moved_s = moved as f64 * dt;
+        if len > v * moved_s * 1.01 + 1e-9 {
             return Err(format!(
-                "{}: path_length_m = {} m exceeds {} m/s x t_end_s = {} s",
+                "{}: path_length_m = {} m exceeds {} m/s x {moved} steps of {} s = {} s (t_end_s = {} s)",
                 column("path_length_m"),
                 Echo(len),
                 Echo(v),
+                Echo(dt),
+                Num(moved_s),
                 Echo(t_end)
             ));
         }
@@ -337,7 +344,7 @@ pub fn fewest_samples(span: &RunSpan, outcome: &str, k_end: u64) -> u64 {
 
 /// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a
 /// `completed` row no `outcome_detail`; a run's row has `t_end_s` and `samples`; every number
-/// is finite (non-finite metrics are written empty) and not subnormal, the quantities that
+/// is finite (non-finite metrics are written empty; subnormals are kept), the quantities that
 /// cannot be negative are not (nor `-0.0`), an RMS is at most its
 /// maximum and `|mean|` at most the maximum (to rounding), the convergence time at most the run's
 /// end, and `samples` a whole number of at most one per step ([`isotrack_sim::MAX_STEPS`] + 1).
@@ -374,19 +381,25 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
         if v.is_sign_negative() && NON_NEGATIVE_COLUMNS.contains(&n) {
             return Err(format!("{n} = `{c}` is negative"));
         }
-        // A subnormal (below 2.2e-308, `5e-324`) is no value a run produces: times are
-        // multiples of a step far above it, and sums of squares of it vanish.
-        if v != 0.0 && !v.is_normal() {
+        // Written as isotrack writes it ([`crate::results::real_cell`], the shortest
+        // round-trip form): `+7.000e0` reads as 7 but is no cell of isotrack's, and `merge`
+        // would copy it verbatim (issue 30, fix30c).
+        let canonical = crate::results::real_cell(Some(v));
+        if c != canonical {
             return Err(format!(
-                "{n} = `{c}` is subnormal (below {:e}): not a value a run produces",
-                f64::MIN_POSITIVE
+                "{n} = `{}` is not how isotrack writes {canonical}",
+                clip(c)
             ));
         }
+        // A subnormal (below 2.2e-308) is a value a run does produce (issue 30: a gain of
+        // 1e-155 gives a control effort of 8e-311, a field of 4e-308 subnormal errors): kept,
+        // as the writer writes it. The times are bounded to whole steps by `check_span`.
         value.insert(n, v);
     }
     let samples = cell("samples");
     match samples.parse::<u64>() {
-        Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 => {}
+        // Canonical digits, as isotrack writes them (no `+70`, no `070`).
+        Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 && k.to_string() == samples => {}
         _ => {
             return Err(format!(
                 "samples = `{}` is not a whole number of samples (at most {})",

@@ -1944,7 +1944,8 @@ pub struct FlatStart {
     pub slope_term: f64,
     /// `c1 * tanh(|eps0| / c2)` where `slope_term` was largest, field units/s.
     pub level_term: f64,
-    /// The radius sampled round the start, m: two turning radii `v / omega0`.
+    /// The radius sampled round the start, m: two turning radii `v / omega0`, at most the
+    /// run's reach `v D` (speed times duration).
     pub radius_m: f64,
 }
 
@@ -1967,7 +1968,8 @@ impl FlatStart {
 /// of radius about `v/omega0` (`omega0 = kp*c1*tanh(|eps0|/c2)`, capped by the turn-rate
 /// limit) without ever heading up the gradient. This is the local form of Prop. 2's
 /// `v*gamma1 > c1`. Flat: at the start and at 16 points on the circles of one and two turning
-/// radii round it, `v*|grad F|` stays under [`FLAT_START_FRACTION`] of `c1*tanh(|eps0|/c2)`
+/// radii round it (of `R/2` and `R`, `R = min(2 v / omega0, v D)`: no farther than the run
+/// reaches), `v*|grad F|` stays under [`FLAT_START_FRACTION`] of `c1*tanh(|eps0|/c2)`
 /// at every one of the times 0, D/4, D/2, 3D/4 and D of the run's duration D (a puff plume
 /// that reaches the start later is not flat). Only for the PI-like law without a search
 /// (`controller.search = "none"`); `None` when the start is on the level, outside the field,
@@ -1990,9 +1992,12 @@ pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
         if !(level_term > 0.0 && omega0 > 0.0 && l.v > 0.0) {
             return None;
         }
-        let r = l.v / omega0;
+        // Two turning radii, but never past the run's reach `v D` (a tiny `omega0`, from a
+        // tiny gain or field, gives a radius of 1e308 m: issue 30, fix30c).
+        let reach_m = l.v * duration;
+        let r2 = (2.0 * (l.v / omega0)).min(reach_m);
         let mut g_max = field.gradient(t, p0).map_or(0.0, |g| g.norm());
-        for ring in [r, 2.0 * r] {
+        for ring in [0.5 * r2, r2] {
             for j in 0..8 {
                 let a = std::f64::consts::TAU * f64::from(j) / 8.0;
                 let p = p0 + Vec2::from_angle(a) * ring;
@@ -2014,7 +2019,7 @@ pub fn flat_start(s: &Scenario) -> Option<FlatStart> {
             worst = Some(FlatStart {
                 slope_term,
                 level_term,
-                radius_m: 2.0 * r,
+                radius_m: r2,
             });
         }
     }
@@ -2251,6 +2256,28 @@ mod tests {
             worst = worst.max(l.v * g / level_term);
         }
         worst
+    }
+
+    /// Issue 30 (fix30c): a field of 4e-308 (level 2e-308) makes `omega0 = kp c1 tanh(eps/c2)`
+    /// about 1e-308 rad/s, two turning radii 1e308 m; the warning's radius is at most the
+    /// run's reach, 0.5 m/s x 2 s = 1 m (the default robot over `sim.duration_s = 2`).
+    #[test]
+    fn a_flat_start_radius_is_at_most_the_runs_reach() {
+        let s = crate::parse_scenario(
+            "field.i0 = 4e-308\ncontroller.level = 2e-308\nsim.duration_s = 2.0\n",
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        let flat = flat_start(&s).expect("a field of 4e-308 is flat");
+        assert_eq!(flat.radius_m, 1.0, "{flat:?}");
+        assert!(
+            warnings(&s)
+                .iter()
+                .any(|w| w.contains("within 1.0 m of it") || w.contains("within 1 m of it")),
+            "{:?}",
+            warnings(&s)
+        );
     }
 
     /// Hostile review of issue 30: a start far from a Gaussian plume (the law circles for the
