@@ -341,7 +341,7 @@ fn a_moving_check_that_fails_is_in_the_verdict_and_the_warnings() {
         "{text}"
     );
     assert!(
-        line(&text, "  model ").contains("on the isoline of the field frozen at t = 0 s"),
+        line(&text, "  model ").contains(") of the field frozen at t = 0 s: spectral radius"),
         "{text}"
     );
     assert!(

@@ -256,21 +256,21 @@ fn sampled_stability_lines(sm: &SampledReport, field_moves: bool) -> Vec<String>
     };
     let mut out = vec![
         format!(
-            "  model {}, on the {}{} (slopes |grad F| {}{}): {}",
+            "  model {}, on the {} (slopes |grad F| {}{}){}: {}",
             sm.vehicle_model.unwrap_or("n/a"),
             if sm.p_law_orbit_error.is_some() {
                 "orbit"
             } else {
                 "isoline"
             },
-            if field_moves {
-                " of the field frozen at t = 0 s"
-            } else {
-                ""
-            },
             range(sm.slope_range),
             if sm.slope_exact == Some(true) {
                 ", exact"
+            } else {
+                ""
+            },
+            if field_moves {
+                " of the field frozen at t = 0 s"
             } else {
                 ""
             },
