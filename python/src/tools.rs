@@ -148,7 +148,7 @@ pub fn plot(
             size: None,
             font_size: None,
             title: None,
-            colormap: "viridis".into(),
+            colormap: None,
             dpi: 100.0,
         },
     };

@@ -258,6 +258,28 @@ fn bad_map_inputs_have_the_readmes_exit_codes() {
             "--threads is an option of --map",
         ),
         (vec!["--map"], 64, "--map needs --out"),
+        // Issue 29 (fix29c), 3: gray and copper drew byte-identical charts (the chart's own
+        // diverging palette); refused with --map, the default's name as much as any other.
+        (
+            vec!["--map", "--out", out, "--colormap", "gray"],
+            64,
+            "--colormap is not an option of check --map",
+        ),
+        (
+            vec!["--map", "--out", out, "--colormap", "copper"],
+            64,
+            "--colormap is not an option of check --map",
+        ),
+        (
+            vec!["--map", "--out", out, "--colormap", "viridis"],
+            64,
+            "--colormap is not an option of check --map",
+        ),
+        (
+            vec!["--colormap", "viridis"],
+            64,
+            "--colormap is an option of --map",
+        ),
         (
             vec!["--map", "--out", out, "--kp-range", "5:1"],
             64,
@@ -691,4 +713,16 @@ fn counts_are_canonical_ranges_normal_and_titles_bounded() {
     assert!(!svg.contains('\u{1b}'), "a raw escape character in the SVG");
     assert!(svg.contains("more characters)"), "the title is clipped");
     assert!(!svg.contains(&"x".repeat(1000)));
+}
+
+/// Issue 29 (fix29c), 3: `check --help` said `--colormap ... [default: viridis]` while the chart
+/// is drawn in its own diverging palette: the help no longer claims a default for the chart and
+/// says the chart refuses it.
+#[test]
+fn the_help_does_not_promise_a_colormap_for_the_chart() {
+    let o = isotrack(&["check", "--help"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = String::from_utf8(o.stdout).unwrap();
+    assert!(!help.contains("[default: viridis]"), "{help}");
+    assert!(help.contains("Not for `check --map`"), "{help}");
 }

@@ -310,3 +310,110 @@ fn the_rate_line_names_the_lag_that_makes_the_loop_unstable() {
     assert_eq!(json["sampled"]["stable"], Value::Bool(false), "{text}");
     assert!(!line(&text, "sensor rate:").contains("lag"), "{text}");
 }
+
+/// Issue 29 (fix29c), 1: the edge of the puff plume moves faster than the 0.5 m/s robot
+/// somewhere (the moving check's largest sampled isoline speed is above 0.5 m/s, so
+/// `trackable` is false). The verdict no longer says "nothing checked fails" beside it: it
+/// names the failed moving check, a warning says it, and the sampled radius is said to be the
+/// field's frozen at t = 0. A field that does not move gets none of it.
+#[test]
+fn a_moving_check_that_fails_is_in_the_verdict_and_the_warnings() {
+    let (text, json) = check(&[&scenario("puff-plume-edge.toml")]);
+    let max = json["moving"]["isoline_speed_max_mps"].as_f64().unwrap();
+    let v = json["moving"]["vehicle_speed_mps"].as_f64().unwrap();
+    assert!(max > v, "{text}");
+    assert_eq!(json["moving"]["trackable"], Value::Bool(false), "{text}");
+    let reason = json["verdict_reason"].as_str().unwrap();
+    assert!(!reason.contains("nothing checked fails"), "{reason}");
+    assert!(
+        reason.contains("the moving-isoline check fails"),
+        "{reason}"
+    );
+    assert_ne!(json["verdict"], "holds", "{text}");
+    let warned = json["warnings"].as_array().unwrap().iter().any(|w| {
+        w.as_str()
+            .unwrap()
+            .contains("the moving-isoline check fails")
+    });
+    assert!(warned, "{text}");
+    assert!(
+        line(&text, "verdict:").contains("the moving-isoline check fails"),
+        "{text}"
+    );
+    assert!(
+        line(&text, "  model ").contains(") of the field frozen at t = 0 s: spectral radius"),
+        "{text}"
+    );
+    assert!(
+        line(&text, "Sampled loop").contains("frozen at t = 0 s"),
+        "{text}"
+    );
+    let (text, json) = check(&[&scenario("paper-fig2b-circular.toml")]);
+    assert!(json["moving"]["trackable"].is_null(), "{text}");
+    assert!(!text.contains("frozen"), "{text}");
+    assert!(!text.contains("moving-isoline"), "{text}");
+}
+
+/// Issue 29 (fix29c), 2: with a lag of 3 s on Fig. 2(b) `check` warns that the guarantee is
+/// local and not from this start (|eps0| is over 2 c2); `run` printed nothing and ended
+/// spinning. `run` now gives the same warning, on stderr and in summary.json; without a lag
+/// it does not.
+#[test]
+fn run_warns_that_a_lagged_guarantee_is_local() {
+    let fig2b = scenario("paper-fig2b-circular.toml");
+    let (text, json) = check(&[&fig2b, "--set", "sensor.time_constant_s=3"]);
+    let local = json["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .find(|w| w.contains("the guarantee is local") && w.contains("not from this start"))
+        .unwrap_or_else(|| panic!("{text}"));
+    for (lag, expect) in [("3", true), ("0", false)] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = isotrack(&[
+            "run",
+            &fig2b,
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--set",
+            &format!("sensor.time_constant_s={lag}"),
+            "--set",
+            "sim.duration_s=2",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let summary: Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        let in_summary = summary["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str() == Some(local.as_str()));
+        let printed = stderr(&o).contains("the guarantee is local");
+        assert_eq!(in_summary, expect, "lag {lag}: {summary}");
+        assert_eq!(printed, expect, "lag {lag}: {}", stderr(&o));
+    }
+}
+
+/// Issue 29 (fix29c), 4: with a delay of 0.25 s the rate scan stops at 0.25/32 s (32
+/// delay-line states), so the rate advice for a 2 Hz sensor stops at 32/0.25 = 128 Hz, the
+/// fastest rate checked, instead of "or faster".
+#[test]
+fn rate_advice_stops_where_the_scan_stopped() {
+    let fig2b = scenario("paper-fig2b-circular.toml");
+    let (text, json) = check(&[
+        &fig2b,
+        "--set",
+        "sensor.delay_s=0.25",
+        "--set",
+        "sensor.rate_hz=2",
+    ]);
+    let from = json["sampled"]["period_scanned_from_s"].as_f64().unwrap();
+    assert!((from - 0.25 / 32.0).abs() < 1e-12, "{text}");
+    let rate = line(&text, "sensor rate:");
+    assert!(rate.contains("up to 128 Hz"), "{rate}");
+    assert!(!rate.contains("or faster"), "{rate}");
+    assert!(!text.contains("or faster is stable"), "{text}");
+}

@@ -19,7 +19,7 @@ pub fn render(r: &CheckReport) -> Vec<String> {
     out.extend(moving_lines(&r.moving));
     out.extend(prop1_lines(&r.prop1));
     out.extend(prop2_lines(&r.prop2));
-    out.extend(sampled_lines(&r.sampled));
+    out.extend(sampled_lines(&r.sampled, r.moving.time_varying));
     out
 }
 
@@ -221,14 +221,22 @@ fn prop2_conditions_line(p2: &Prop2Report) -> String {
 
 /// The sampled loop: its heading line, then (when it applies) the stability lines, the
 /// autopilot's course loop and the discrete loop's margins, then the note.
-pub fn sampled_lines(sm: &SampledReport) -> Vec<String> {
+///
+/// `field_moves`: the field changes with time, and the loop is linearised on it frozen at
+/// `t = 0` (the lattice's time; issue 29: the radius of a moving plume read as the run's).
+pub fn sampled_lines(sm: &SampledReport, field_moves: bool) -> Vec<String> {
     let mut out = vec![format!(
-        "Sampled loop (linearised at the sensor's period T = {} s, delay {} s)",
+        "Sampled loop (linearised at the sensor's period T = {} s, delay {} s{})",
         Num(sm.period_s),
-        Num(sm.delay_s)
+        Num(sm.delay_s),
+        if field_moves {
+            "; the field frozen at t = 0 s: it moves, and the radius is that frozen field's"
+        } else {
+            ""
+        }
     )];
     if sm.applicable {
-        out.extend(sampled_stability_lines(sm));
+        out.extend(sampled_stability_lines(sm, field_moves));
         out.extend(course_loop_line(sm));
         out.extend(discrete_loop_lines(sm));
     }
@@ -239,7 +247,7 @@ pub fn sampled_lines(sm: &SampledReport) -> Vec<String> {
 }
 
 /// The radius at the isoline's slopes and over the tube, the stable `kp` set, the rate.
-fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
+fn sampled_stability_lines(sm: &SampledReport, field_moves: bool) -> Vec<String> {
     let range = |r: Option<[f64; 2]>| {
         r.map_or_else(
             || "n/a".to_string(),
@@ -248,7 +256,7 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
     };
     let mut out = vec![
         format!(
-            "  model {}, on the {} (slopes |grad F| {}{}): {}",
+            "  model {}, on the {} (slopes |grad F| {}{}){}: {}",
             sm.vehicle_model.unwrap_or("n/a"),
             if sm.p_law_orbit_error.is_some() {
                 "orbit"
@@ -258,6 +266,11 @@ fn sampled_stability_lines(sm: &SampledReport) -> Vec<String> {
             range(sm.slope_range),
             if sm.slope_exact == Some(true) {
                 ", exact"
+            } else {
+                ""
+            },
+            if field_moves {
+                " of the field frozen at t = 0 s"
             } else {
                 ""
             },
@@ -313,7 +326,7 @@ fn sensor_rate_line(sm: &SampledReport) -> String {
         (_, Some(true), Some(t)) => format!(
             "sensor rate: the limit: {} Hz is too slow for these gains; {}",
             Num(rate),
-            rate_advice_text(t, sm.sim_dt_s)
+            rate_advice_text(t, sm.sim_dt_s, sm.period_scanned_from_s)
         ),
         (Some(true), _, Some(t)) => format!(
             "sensor rate: not the limit: stable at {} Hz and down to {} Hz",

@@ -106,11 +106,11 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
             (args.verify.is_some(), "--verify"),
             (args.threads.is_some(), "--threads"),
             // The chart's look (a hostile review: `check --dpi 0` exited 0, the option unused;
-            // --colormap and --dpi are caught when they differ from their defaults).
+            // --dpi is caught when it differs from its default).
             (args.look.size.is_some(), "--size"),
             (args.look.font_size.is_some(), "--font-size"),
             (args.look.title.is_some(), "--title"),
-            (args.look.colormap != "viridis", "--colormap"),
+            (args.look.colormap.is_some(), "--colormap"),
             (args.look.dpi.to_bits() != 100.0f64.to_bits(), "--dpi"),
         ] {
             if given {
@@ -123,6 +123,14 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
     }
     if args.out.is_none() {
         return Err(usage("--map needs --out DIR".into()));
+    }
+    // Issue 29: `--colormap gray` and `copper` drew byte-identical charts. The chart's palette
+    // is diverging round the boundary at radius 1 (blue stable, red unstable), which no
+    // sequential heat-map colour map shows: the option is refused, not ignored.
+    if args.look.colormap.is_some() {
+        return Err(usage(
+            "--colormap is not an option of check --map: the stability chart has its own diverging palette (blue where the spectral radius is below 1, red above, the boundary drawn at 1)".into(),
+        ));
     }
     let kp = args
         .kp_range

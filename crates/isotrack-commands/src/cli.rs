@@ -315,9 +315,11 @@ pub struct FigureOptions {
     /// The figure title, replacing the default (`--title ""` for none: a caption says it).
     #[arg(long, value_name = "TEXT")]
     pub title: Option<String>,
-    /// Heat-map colour map: viridis, gray, bone or copper.
-    #[arg(long, value_name = "NAME", default_value = "viridis")]
-    pub colormap: String,
+    /// Heat-map colour map: viridis (the default), gray, bone or copper. Not for `check --map`,
+    /// whose stability chart has its own diverging palette (blue where the spectral radius is
+    /// below 1, red above): refused there.
+    #[arg(long, value_name = "NAME")]
+    pub colormap: Option<String>,
     /// PNG resolution in dots per inch: scales every pixel dimension (300 for print).
     #[arg(long, value_name = "DPI", default_value_t = 100.0)]
     pub dpi: f64,

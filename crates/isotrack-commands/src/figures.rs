@@ -83,10 +83,11 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
             pixels
         )));
     }
-    st.colormap = Colormap::from_name(&o.colormap).ok_or_else(|| {
+    let name = o.colormap.as_deref().unwrap_or("viridis");
+    st.colormap = Colormap::from_name(name).ok_or_else(|| {
         usage(format!(
             "--colormap {}: expected viridis, gray, bone or copper",
-            o.colormap
+            isotrack_scenario::load::clip(name)
         ))
     })?;
     // Bounded and escaped as every echoed text (a hostile review: a 100 000-character title

@@ -303,26 +303,49 @@ pub struct SampledReport {
 /// a rate the simulation cannot sample at). The sensor's period is a whole number `k` of
 /// steps, so the stable rates are `1/(k dt)` with `k <= floor(max_period_s/dt)`; when that is
 /// 0 (the period needed is below one step) the advice says `sim.dt_s` must shrink too.
-pub fn rate_advice_text(max_period_s: f64, dt_s: f64) -> String {
+/// `scanned_from_s` is the shortest period the scan examined
+/// ([`SampledReport::period_scanned_from_s`]): when it is above [`FULL_PERIOD_SCAN_S`] (a
+/// delay cut the scan short) the advice stops at `1/scanned_from_s` Hz, the fastest rate
+/// checked (issue 29: "19.4773 Hz or faster" beside "periods below 7.812e-3 s were not
+/// computed").
+pub fn rate_advice_text(max_period_s: f64, dt_s: f64, scanned_from_s: Option<f64>) -> String {
     let need = 1.0 / max_period_s;
+    let cut =
+        scanned_from_s.filter(|&f| f > FULL_PERIOD_SCAN_S * (1.0 + 1e-9) && f <= max_period_s);
+    let stable = match cut {
+        Some(f) => format!(
+            "from {} Hz up to {} Hz is stable (checked; faster rates were not computed)",
+            Num(need),
+            Num(1.0 / f)
+        ),
+        None => format!("{} Hz or faster is stable", Num(need)),
+    };
     let k = (max_period_s / dt_s * (1.0 + 1e-9)).floor();
     if dt_s > 0.0 && k >= 1.0 {
+        // The fastest rate checked, in whole steps: k >= ceil(scanned_from_s / dt).
+        let k_min = cut.map_or(1.0, |f| (f / dt_s * (1.0 - 1e-9)).ceil().max(1.0));
+        let ks = if k_min > 1.0 {
+            format!("{} <= k <= {}", Num(k_min), Num(k))
+        } else {
+            format!("k <= {}", Num(k))
+        };
         format!(
-            "{} Hz or faster is stable (the period a whole number of sim.dt_s = {} s steps: sensor.rate_hz = 1/(k*sim.dt_s) with k <= {}, from {} Hz)",
-            Num(need),
+            "{stable} (the period a whole number of sim.dt_s = {} s steps: sensor.rate_hz = 1/(k*sim.dt_s) with {ks}, from {} Hz)",
             Echo(dt_s),
-            Num(k),
             Num(1.0 / (k * dt_s))
         )
     } else {
         format!(
-            "{} Hz or faster is stable, above the fastest rate 1/sim.dt_s = {} Hz the simulation samples at: sim.dt_s must shrink to {} s or less too",
-            Num(need),
+            "{stable}, above the fastest rate 1/sim.dt_s = {} Hz the simulation samples at: sim.dt_s must shrink to {} s or less too",
             Num(1.0 / dt_s),
             Num(max_period_s)
         )
     }
 }
+
+/// The shortest sensor period the rate scan examines when nothing cuts it short, s
+/// ([`SampledReport::period_scanned_from_s`]).
+pub const FULL_PERIOD_SCAN_S: f64 = 1e-4;
 
 /// The combined verdict.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -1053,7 +1076,7 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
         let limit = sampled::period_limit(&base, &slopes);
         rep.max_period_s = limit.max_period_s;
         rep.period_scanned_from_s = Some(limit.scanned_from_s);
-        if limit.scanned_from_s > 1e-4 {
+        if limit.scanned_from_s > FULL_PERIOD_SCAN_S {
             notes.push(format!(
                 "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
                 limit.scanned_from_s,
@@ -2134,7 +2157,7 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     if let (Some(true), Some(t)) = (sm.rate_is_the_limit, sm.max_period_s) {
         fixes.push(format!(
             "with a faster sensor: {}",
-            rate_advice_text(t, sm.sim_dt_s)
+            rate_advice_text(t, sm.sim_dt_s, sm.period_scanned_from_s)
         ));
     }
     if sm.lag_is_the_cause {
@@ -2169,6 +2192,19 @@ fn sampled_warning(sm: &SampledReport, rate: f64) -> Option<String> {
     ))
 }
 
+/// What the moving-isoline check found when the isoline outruns the vehicle somewhere sampled
+/// (`trackable = false`), `None` otherwise.
+fn moving_outruns(m: &moving::MovingReport) -> Option<String> {
+    (m.trackable == Some(false)).then(|| {
+        format!(
+            "the isoline moves at up to {} m/s (95th percentile {} m/s), faster than the vehicle's {} m/s somewhere sampled",
+            m.isoline_speed_max_mps.map_or_else(|| "n/a".to_string(), |x| Num(x).to_string()),
+            m.isoline_speed_p95_mps.map_or_else(|| "n/a".to_string(), |x| Num(x).to_string()),
+            Echo(m.vehicle_speed_mps)
+        )
+    })
+}
+
 /// The warnings `run` prints: the same as `check` reports, from the same lattice and the same
 /// sampled-loop computation (issue 29: a coarser lattice once gave `run` a different slope
 /// range, and a different answer, than `check`).
@@ -2177,6 +2213,9 @@ pub fn warnings(s: &Scenario) -> Vec<String> {
     let tube = l.c2;
     let r = regions(s, tube, CHECK_LATTICE, false);
     let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
+    // Issue 29: `check` warned "the guarantee is local ... not from this start" while `run`
+    // ended spinning without a word.
+    w.extend(local_only_warning(s, &l));
     w.extend(baselines::baseline_warnings(s));
     w
 }
@@ -2205,6 +2244,21 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).
     let mut warnings = settling_warnings(s, &l, &prop2);
+    if let Some(outrun) = moving_outruns(&moving) {
+        // Issue 29: "nothing checked fails" beside a moving check that failed. The sampled
+        // loop and Prop. 2 are computed on the field frozen at t = 0; an isoline that outruns
+        // the vehicle voids any guarantee from them.
+        if verdict == Verdict::Holds {
+            verdict = Verdict::NotApplicable;
+            verdict_reason =
+                format!("not guaranteed: {verdict_reason}, on the field frozen at t = 0 s");
+        }
+        verdict_reason = verdict_reason.replace("; nothing checked fails", "");
+        verdict_reason.push_str(&format!("; the moving-isoline check fails: {outrun}"));
+        warnings.push(format!(
+            "the moving-isoline check fails: {outrun}; the vehicle may lose the isoline there, and the sampled loop and Prop. 2 are computed on the field frozen at t = 0 s"
+        ));
+    }
     warnings.extend(warnings_from(s, &sampled).into_iter().map(|w| {
         // No gain helps an isoline too tight for the vehicle: no advice to change them.
         if tight.is_some() {

@@ -752,9 +752,18 @@ fn rate_advice_is_capped_at_the_simulation_step() {
     assert!(w.contains("1/sim.dt_s = 100 Hz"), "{w}");
     // Below the cap the advice is a whole number of steps: a longest stable period of 0.0349 s
     // at dt = 0.01 s is k <= 3 steps, from 1/(3*0.01) = 33.3333 Hz.
-    let t = isotrack_scenario::check::rate_advice_text(0.0349, 0.01);
+    let t = isotrack_scenario::check::rate_advice_text(0.0349, 0.01, Some(1e-4));
     assert!(t.contains("k <= 3"), "{t}");
     assert!(t.contains("33.3333 Hz"), "{t}");
+    assert!(t.contains("or faster"), "{t}");
+    // Issue 29 (fix29c), 4: a scan cut short at 0.25/32 s (a delay of 0.25 s, 32 delay-line
+    // states) stops the advice at 32/0.25 = 128 Hz, the fastest rate checked, never "or
+    // faster"; in whole steps of 0.005 s that is k >= ceil(7.8125e-3/0.005) = 2.
+    let t = isotrack_scenario::check::rate_advice_text(1.0 / 19.4773, 0.01, Some(0.25 / 32.0));
+    assert!(t.contains("up to 128 Hz"), "{t}");
+    assert!(!t.contains("or faster"), "{t}");
+    let t = isotrack_scenario::check::rate_advice_text(1.0 / 19.4773, 0.005, Some(0.25 / 32.0));
+    assert!(t.contains("2 <= k <= 10"), "{t}");
 }
 
 /// Issue 29 (fix29), 10 and 12: kp = 20, ki = 0 with a 20 s lag is unstable on the P law's
