@@ -73,9 +73,7 @@ impl<'a> TeamJson<'a> {
             coordinate_free: law.is_coordinate_free(),
             neighbours: &r.ring,
             metrics: r.team.as_ref(),
-            metrics_note: r.team.is_none().then_some(
-                "no team metrics: the isoline's arc length is known for a radial field that does not drift only, for now",
-            ),
+            metrics_note: r.team.is_none().then(|| scenario.team_metrics_note()),
         }
     }
 }
