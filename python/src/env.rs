@@ -260,6 +260,21 @@ impl PyEnvBatch {
             .slots
             .get_mut(i)
             .ok_or_else(|| PyValueError::new_err(format!("environment {i} of {n}")))?;
+        // The scenario's own ranges for `initial.*` (issue 30, fix30c: a heading of 1e300 rad
+        // was flown): finite coordinates within MAX_COORDINATE_M, a heading within
+        // MAX_ANGLE_RAD.
+        use isotrack_scenario::resolve::ranges::{MAX_ANGLE_RAD, MAX_COORDINATE_M};
+        for (name, v, most, unit) in [
+            ("x_m", x_m, MAX_COORDINATE_M, "m"),
+            ("y_m", y_m, MAX_COORDINATE_M, "m"),
+            ("heading_rad", heading_rad, MAX_ANGLE_RAD, "rad"),
+        ] {
+            if !(v.is_finite() && v.abs() <= most) {
+                return Err(PyValueError::new_err(format!(
+                    "start {name} = {v} must be a finite number within [-{most}, {most}] {unit} (as initial.{name} in a scenario)"
+                )));
+            }
+        }
         let start = Start {
             x_m,
             y_m,

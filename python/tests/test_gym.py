@@ -267,6 +267,26 @@ def test_bad_arguments_raise_clearly():
         env.reset(options={"start": "elsewhere"})
 
 
+def test_a_fixed_start_is_held_to_the_scenarios_ranges():
+    """Issue 30 (fix30c): ``initial.heading_rad`` is bounded to +-1000 rad and ``initial.x_m``,
+    ``y_m`` to +-6.4e7 m in a scenario; a Gymnasium start is held to the same (1e300 rad was
+    flown). The bounds themselves are accepted."""
+    env = IsolineEnv()
+    for bad, needle in [
+        ((8.0, 0.0, 1e300), "heading_rad"),
+        ((8.0, 0.0, -1000.5), "heading_rad"),
+        ((6.5e7, 0.0, 0.0), "x_m"),
+        ((8.0, -1e300, 0.0), "y_m"),
+    ]:
+        with pytest.raises(ValueError, match=needle):
+            env.reset(options={"start": bad})
+    obs, info = env.reset(options={"start": (8.0, 0.0, 1000.0)})
+    assert info["start"] == (8.0, 0.0, 1000.0)
+    vec = IsolineVectorEnv(num_envs=2)
+    with pytest.raises(ValueError, match="heading_rad"):
+        vec.reset(options={"start": (8.0, 0.0, 1e17)})
+
+
 def test_scenario_pickles_for_worker_processes():
     """Gymnasium copies an environment's arguments and AsyncVectorEnv pickles them: a scenario
     survives both as the same scenario (its resolved TOML, absolute file paths)."""

@@ -124,6 +124,24 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             65,
             "sitl.home_lat_deg",
         ),
+        // At a pole the east-west scale cos(lat) vanishes: refused, both poles.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=-90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        // No trace rows, no positions: refused rather than a vehicle that never says where
+        // it is.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "output.record_rate_hz=0"],
+            65,
+            "output.record_rate_hz = 0: isotrack sitl sends its position telemetry once per trace row",
+        ),
     ] {
         let o = isotrack(&args);
         assert_fails(&o, code, &[needle]);
@@ -176,6 +194,39 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
             .unwrap();
     assert_eq!(summary["end_reason"], "vehicle_ended");
     assert_eq!(summary["outcome"], "completed");
+    // Written through the one summary type (a flight's record), its keys in the order the
+    // flight's summary has always had them (FLYING.md): the link's counters, then the metrics.
+    let text = std::fs::read_to_string(fly_dir.join("summary.json")).unwrap();
+    let at = |k: &str| {
+        text.find(&format!("\n  \"{k}\":"))
+            .unwrap_or_else(|| panic!("no {k}"))
+    };
+    let order = [
+        "isotrack_version",
+        "scenario_path",
+        "outcome",
+        "outcome_detail",
+        "end_reason",
+        "failsafe",
+        "failsafe_acknowledged",
+        "t_end_s",
+        "samples",
+        "commands",
+        "events",
+        "frames_in",
+        "frames_out",
+        "junk_datagrams",
+        "measurements_out_of_order",
+        "measurements_repeated",
+        "metrics_over",
+        "steady_state_max_abs_error",
+        "track_losses",
+        "scenario",
+    ];
+    for w in order.windows(2) {
+        assert!(at(w[0]) < at(w[1]), "{} before {}", w[0], w[1]);
+    }
+    assert_eq!(summary.as_object().unwrap().len(), 17 + 12 + 1);
     assert_eq!(summary["samples"], 2001);
     assert_eq!(summary["commands"], 2001);
     let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
@@ -309,6 +360,49 @@ fn an_unconfirmed_failsafe_exits_69() {
     assert_eq!(out.status.code(), Some(69), "{err}");
     assert!(!err.contains("HOLD commanded"), "{err}");
     assert!(err.contains("link_lost"), "{err}");
+    assert!(err.contains("no vehicle was ever heard"), "{err}");
+    assert!(!err.contains("failsafe mode was sent"), "{err}");
+}
+
+/// `fly --take-control` with the default (Dubins, ground) scenario against `sitl` flying Fig.
+/// 3's fixed wing (`MAV_TYPE_FIXED_WING`): refused before any setpoint or command, naming
+/// both, exit 65; the vehicle stays disarmed (its summary's events hold no arming).
+#[cfg(unix)]
+#[test]
+fn a_scenario_of_another_kind_than_the_vehicle_exits_65() {
+    let dir = tempfile::tempdir().unwrap();
+    let fig3 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig3-uav.toml"
+    );
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", fig3, "--mavlink", "udpin:127.0.0.1:0", "--lockstep"])
+        .arg("--out")
+        .arg(dir.path().join("sitl"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(65), "{err}");
+    assert!(
+        err.contains("vehicle_mismatch")
+            && err.contains("MAV_TYPE_FIXED_WING")
+            && err.contains("dubins"),
+        "{err}"
+    );
+    signal(&sitl, "-INT");
+    let s = sitl.wait_with_output().unwrap();
+    assert_eq!(s.status.code(), Some(130));
+    let summary = std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap();
+    assert!(!summary.contains("armed by"), "{summary}");
 }
 
 /// A lockstep `sitl` (`--timeout-s` as given) and a `fly --take-control --out` flying it, on a
@@ -406,7 +500,8 @@ fn sighup_stops_fly_and_sitl_ends_without_its_companion() {
 }
 
 /// Ctrl-C (SIGINT) stops `sitl`: `interrupted` (not `completed`) on standard output and in
-/// `summary.json`, exit 130; its companion sees the run end.
+/// `summary.json`, exit 130; its companion sees the vehicle go away: a lost link (a failsafe,
+/// its HOLD unconfirmed: exit 69), never `vehicle_ended` / `completed` with exit 0.
 #[cfg(unix)]
 #[test]
 fn an_interrupted_sitl_says_interrupted() {
@@ -423,11 +518,19 @@ fn an_interrupted_sitl_says_interrupted() {
     .unwrap();
     assert_eq!(summary["outcome"], "interrupted");
     let o = fly.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        String::from_utf8_lossy(&o.stdout).contains("end         vehicle_ended"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
+        String::from_utf8_lossy(&o.stdout).contains("end         link_lost"),
+        "{err}"
     );
+    assert!(err.contains("cut short (interrupted)"), "{err}");
+    assert_eq!(o.status.code(), Some(69), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("fly/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "failsafe");
+    assert_eq!(summary["end_reason"], "link_lost");
 }
 
 /// A FIFO where `fly --out` would write its trace is refused at once (73), not opened (which
@@ -507,4 +610,103 @@ fn a_killed_flight_leaves_a_readable_trace() {
         assert!(cells.iter().all(|c| c.parse::<f64>().is_ok()), "{r}");
     }
     assert!(out.join("scenario.toml").exists());
+}
+
+/// Takes the directory lock of `dir` as another command would.
+#[cfg(unix)]
+fn hold_lock(dir: &std::path::Path) -> std::fs::File {
+    let f = std::fs::File::create(dir.join(".isotrack.lock")).unwrap();
+    f.try_lock().unwrap();
+    f
+}
+
+/// The files of `dir`, sorted.
+fn names(dir: &std::path::Path) -> Vec<String> {
+    let mut n: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    n.sort();
+    n
+}
+
+/// Issue 31: `sitl --out` and `fly --out` handle a directory holding an earlier run as `run
+/// --out` does (the one run-directory writer): while another command holds its lock they exit 73
+/// at once and leave the earlier run as it was; otherwise the flight replaces it, and no
+/// `.isotrack.lock` is left behind.
+#[cfg(unix)]
+#[test]
+fn sitl_and_fly_out_replace_an_earlier_run_as_run_out_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sim_dir, fly_dir) = (dir.path().join("sitl"), dir.path().join("fly"));
+    for d in [&sim_dir, &fly_dir] {
+        let o = isotrack(&[
+            "run",
+            "--set",
+            "sim.duration_s=5",
+            "--quiet",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(names(d), ["scenario.toml", "summary.json", "trace.csv"]);
+    }
+    let earlier = std::fs::read(sim_dir.join("summary.json")).unwrap();
+    // Locked by another command: 73 at once, nothing touched.
+    for (cmd, d) in [("sitl", &sim_dir), ("fly", &fly_dir)] {
+        let holder = hold_lock(d);
+        let o = isotrack(&[
+            cmd,
+            "--mavlink",
+            if cmd == "sitl" {
+                "udpin:127.0.0.1:0"
+            } else {
+                "udpout:127.0.0.1:9"
+            },
+            "--timeout-s",
+            "0.3",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+        assert_fails(&o, 73, &["is writing this directory"]);
+        assert_eq!(std::fs::read(d.join("summary.json")).unwrap(), earlier);
+        drop(holder);
+        std::fs::remove_file(d.join(".isotrack.lock")).unwrap();
+    }
+    // A lockstep flight over both earlier runs.
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", "--mavlink", "udpin:127.0.0.1:0", "--lockstep"])
+        .args(["--set", "sim.duration_s=5", "--out"])
+        .arg(&sim_dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "60"])
+        .args(["--set", "sim.duration_s=5", "--mavlink"])
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .arg("--out")
+        .arg(&fly_dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(sitl.wait().unwrap().success());
+    assert_eq!(
+        names(&sim_dir),
+        ["scenario.toml", "summary.json", "trace.csv"]
+    );
+    assert_eq!(
+        names(&fly_dir),
+        ["mavlink.tlog", "scenario.toml", "summary.json", "trace.csv"]
+    );
+    let fly: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fly_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(fly["end_reason"], "vehicle_ended");
+    // 5 s at the default 100 Hz sensor: samples at 0, 0.01, ..., 5 s.
+    assert_eq!(fly["samples"], 501);
+    let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
+    assert_eq!(trace.lines().count(), 1 + 501);
 }

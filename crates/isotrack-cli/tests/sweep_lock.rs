@@ -46,7 +46,9 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         .spawn()
         .unwrap();
     let t0 = Instant::now();
-    while !locked(&out) {
+    // The lock is taken before results.csv is created: wait for both, or a loaded machine sees
+    // the lock with no results.csv yet and "--force deleted nothing" means nothing.
+    while !locked(&out) || !out.join("results.csv").exists() {
         assert!(t0.elapsed() < Duration::from_secs(60), "never locked");
         assert!(first.try_wait().unwrap().is_none(), "ended before caught");
         std::thread::sleep(Duration::from_millis(5));
@@ -154,7 +156,7 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
             "samples = `99999999999` is not a whole number",
         ),
         (
-            with(&[("steady_state_rms_error", "1e9")]),
+            with(&[("steady_state_rms_error", "1000000000.0")]),
             "steady_state_rms_error = 1000000000.0 exceeds steady_state_max_abs_error",
         ),
         (
@@ -171,13 +173,29 @@ fn resume_and_merge_refuse_values_isotrack_cannot_write() {
             with(&[("path_length_m", "-0.0")]),
             "path_length_m = `-0.0` is negative",
         ),
+        // (A subnormal time is no whole number of steps; a subnormal effort is a value a run
+        // with a tiny gain writes, kept since issue 30, fix30c.)
         (
             with(&[("convergence_time_s", "5e-324")]),
-            "convergence_time_s = `5e-324` is subnormal",
+            "convergence_time_s = 5e-324 s is neither 0 nor a whole number",
+        ),
+        // Issue 30 (fix30c), item 4: numbers not written as isotrack writes them (merge
+        // would copy them verbatim).
+        (
+            with(&[("t_end_s", "+2.000e0")]),
+            "t_end_s = `+2.000e0` is not how isotrack writes 2.0",
         ),
         (
-            with(&[("control_effort", "1e-320")]),
-            "control_effort = `1e-320` is subnormal",
+            with(&[("t_end_s", "2")]),
+            "t_end_s = `2` is not how isotrack writes 2.0",
+        ),
+        (
+            with(&[("samples", "+201")]),
+            "samples = `+201` is not a whole number",
+        ),
+        (
+            with(&[("samples", "0201")]),
+            "samples = `0201` is not a whole number",
         ),
         (
             with(&[("outcome", "completed"), ("outcome_detail", "made up")]),
@@ -403,9 +421,12 @@ fn resume_and_merge_refuse_impossible_rows_headers_and_shards() {
         r.join(",")
     };
     let cases: Vec<(String, &str)> = vec![
-        (with(&[("path_length_m", "1e6")]), "m/s x t_end_s"),
         (
-            with(&[("sign_changes_per_s", "1e9")]),
+            with(&[("path_length_m", "1000000.0")]),
+            "m/s x 200 steps of 0.01 s",
+        ),
+        (
+            with(&[("sign_changes_per_s", "1000000000.0")]),
             "exceeds one per step",
         ),
         (with(&[("run_id", "+2")]), "run_id `+2` is not a run number"),
@@ -472,4 +493,155 @@ fn resume_and_merge_refuse_impossible_rows_headers_and_shards() {
     let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
     assert_fails(&o, 65, &["results.csv:4: a line longer than"]);
     std::fs::write(&results, &good).unwrap();
+}
+
+/// Issue 30 (fix30b), item 1: bounds from below and on the commands. At dt = 0.01 s over
+/// 25.37 s (N = 2537 steps, the run ending mid-period at every rate but 100 Hz) a run sensing
+/// every m = 100 / rate steps from the delay's d steps on takes exactly the sample steps j m
+/// with d <= j m <= N: floor(N / m) - ceil(d / m) + 1 (at 0.1 Hz: 3, or 2 behind a 0.35 s
+/// delay; at 100 Hz: 2538, or 2503). One fewer is refused. Under the turn-rate limit L =
+/// 0.5 rad/s, the effort sum(omega^2 dt) over N held commands is at most L^2 N dt = 6.3425
+/// rad^2/s, and the chattering (total variation over the window's duration) at most
+/// 2 L / dt = 100 rad/s^2: beyond either is refused. Each names file, line and column, on
+/// `--resume` and on `merge`.
+#[test]
+fn resume_and_merge_check_samples_from_below_and_commands_against_the_limit() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "sim.duration_s = 25.37\nsim.dt_s = 0.01\ncontroller.max_turn_rate_radps = 0.5\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsensor.rate_hz = [0.1, 1.0, 10.0, 100.0]\nsensor.delay_s = [0.0, 0.35]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("full")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = d.path().join("full/results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let rows: Vec<Vec<&str>> = good
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 8);
+    let mut line_of = std::collections::HashMap::new();
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[col("outcome")], "completed", "{r:?}");
+        assert_eq!(r[col("t_end_s")].parse::<f64>().unwrap(), 25.37);
+        let rate: f64 = r[col("sensor.rate_hz")].parse().unwrap();
+        let delay: f64 = r[col("sensor.delay_s")].parse().unwrap();
+        let m = (100.0 / rate).round() as u64;
+        let dl = (delay / 0.01).round() as u64;
+        let want = 2537 / m - dl.div_ceil(m) + 1;
+        assert_eq!(r[col("samples")], want.to_string(), "{rate} Hz, {delay} s");
+        line_of.insert((rate.to_bits(), dl), (i + 1, want));
+    }
+    assert_eq!(line_of[&(0.1f64.to_bits(), 0)].1, 3);
+    assert_eq!(line_of[&(0.1f64.to_bits(), 35)].1, 2);
+    assert_eq!(line_of[&(100.0f64.to_bits(), 0)].1, 2538);
+    assert_eq!(line_of[&(100.0f64.to_bits(), 35)].1, 2503);
+    // The untouched rows pass: a resume finds nothing to do.
+    let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let cases: Vec<((f64, u64), &str, String, String)> =
+        [(0.1, 0), (0.1, 35), (1.0, 35), (100.0, 0), (100.0, 35)]
+            .iter()
+            .map(|&(rate, dl)| {
+                let want = line_of[&(f64::to_bits(rate), dl)].1;
+                (
+                    (rate, dl),
+                    "samples",
+                    (want - 1).to_string(),
+                    format!("samples = {} is below the {want}", want - 1),
+                )
+            })
+            .chain([
+                (
+                    (10.0, 0),
+                    "control_effort",
+                    "6.35".to_string(),
+                    "control_effort = 6.35 exceeds 6.3425 rad^2/s".to_string(),
+                ),
+                (
+                    (1.0, 35),
+                    "chattering_radps2",
+                    "100.5".to_string(),
+                    "chattering_radps2 = 100.5 exceeds 100 rad/s^2".to_string(),
+                ),
+            ])
+            .collect();
+    for ((rate, dl), column, value, needle) in &cases {
+        let (line, _) = line_of[&(rate.to_bits(), *dl)];
+        let mut r = rows[line - 1].clone();
+        r[col(column)] = value;
+        let bad = r.join(",");
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[line] = &bad;
+        std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+        let at = format!("full/results.csv:{}: damaged row", line + 1);
+        let column = format!("column {} ({column})", col(column) + 1);
+        let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+        assert_fails(&o, 65, &[&at, &column, needle]);
+        let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &[&at, &column, needle]);
+    }
+    std::fs::write(&results, &good).unwrap();
+}
+
+/// Issue 30 (fix30c), items 2 and 3: rows real runs write are kept by `--resume` and `merge`.
+/// (a) At 30 m/s heading out of the radial field with kp = 1e307 .. 1.7e308 the first command
+/// overflows: the run ends `diverged` with t_end_s = 0 after moving one step of 0.01 s, a
+/// path of 30 m/s x 0.01 s = 0.3 m at most (not 30 m/s x 0 s). (b) kp = 1e-155 (ki = 0) turns
+/// at about kp x 0.5 x (c1 + c2 |eps'|) ~ 1e-155 rad/s: control_effort = sum omega^2 dt is
+/// of the order 1e-310 over 10 s, a subnormal the writer writes and the checker must keep.
+#[test]
+fn resume_and_merge_keep_diverged_first_steps_and_subnormal_metrics() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "sim.duration_s = 10.0\ncontroller.ki = 0.0\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    for (name, grid) in [
+        (
+            "div",
+            "[base]\ninitial.heading_rad = 0.0\nvehicle.speed_mps = 30.0\n[grid]\ncontroller.kp = [1e307, 1.7e308]\n",
+        ),
+        ("tiny", "[grid]\ncontroller.kp = [1e-155, 1e-160]\n"),
+    ] {
+        let sw = write(
+            d.path(),
+            &format!("{name}.toml"),
+            &format!("scenario = \"sc.toml\"\n{grid}"),
+        );
+        let out = p(&format!("out_{name}"));
+        let o = isotrack(&["sweep", &sw, "--out", &out]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let text = std::fs::read_to_string(d.path().join(format!("out_{name}/results.csv"))).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+        for line in text.lines().skip(1) {
+            let r: Vec<&str> = line.split(',').collect();
+            if name == "div" {
+                assert_eq!(r[col("outcome")], "diverged", "{line}");
+                assert_eq!(r[col("t_end_s")].parse::<f64>().unwrap(), 0.0, "{line}");
+                let len: f64 = r[col("path_length_m")].parse().unwrap();
+                assert!(len > 0.0 && len <= 0.3 * 1.01, "{line}");
+            } else {
+                let e: f64 = r[col("control_effort")].parse().unwrap();
+                assert!(e > 0.0 && e < f64::MIN_POSITIVE, "a subnormal effort: {line}");
+            }
+        }
+        let o = isotrack(&["sweep", &sw, "--out", &out, "--resume"]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let o = isotrack(&["merge", &out, "--out", &p(&format!("m_{name}"))]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+    }
 }

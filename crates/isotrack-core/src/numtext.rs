@@ -150,6 +150,15 @@ pub fn is_invisible(c: char) -> bool {
         | '\u{1d173}'..='\u{1d17a}' | '\u{e0000}'..='\u{e0fff}')
 }
 
+/// Whether `c` is no character of plain text a user names or labels something with: a
+/// control character (C0 with tab and line feed, DEL, C1), the line and paragraph separators
+/// U+2028/U+2029, or an [`is_invisible`] one (bidi controls, zero-width characters). The one
+/// rule for the strings isotrack shows from any source: a scenario's `name`, `field.units`,
+/// ..., a NetCDF attribute, a suite's name and titles, a results file's text cells.
+pub fn is_not_plain(c: char) -> bool {
+    c.is_control() || c == '\u{2028}' || c == '\u{2029}' || is_invisible(c)
+}
+
 /// Whether user text shows `c` as an escape ([`Escaped`]): a [`is_terminal_control`]
 /// character, or a line feed. A line feed in a file name, a unit or a CSV header would start a
 /// new console line that the text's author writes (`x\nerror: ...`), so inside user text it

@@ -27,7 +27,9 @@ pub fn escape(s: &str) -> String {
 }
 
 /// JSON safe inside `<script type="application/json">`: every `<`, `>` and `&` is written as
-/// `\u003c`, `\u003e`, `\u0026`, and U+2028 / U+2029 as `\u2028` / `\u2029`.
+/// `\u003c`, `\u003e`, `\u0026`, U+2028 / U+2029 as `\u2028` / `\u2029`, and the invisible
+/// characters ([`isotrack_core::numtext::is_invisible`]: bidi controls, zero-width ones) as
+/// `\uXXXX`.
 ///
 /// Escaping only `</` is not enough: `<!--` followed by `<script` puts the HTML parser in the
 /// "script data double escaped" state (WHATWG HTML, 13.2.5.20 ff.), where `</script>` no
@@ -50,6 +52,15 @@ fn escape_script_json(json: &str) -> String {
             '&' => out.push_str("\\u0026"),
             '\u{2028}' => out.push_str("\\u2028"),
             '\u{2029}' => out.push_str("\\u2029"),
+            // Bidi controls and other invisible characters (U+202E reverses what follows in
+            // a view of the page's source): as `\uXXXX` escapes, surrogate pairs above the
+            // BMP (issue 30, fix30c).
+            c if isotrack_core::numtext::is_invisible(c) => {
+                let mut units = [0u16; 2];
+                for u in c.encode_utf16(&mut units) {
+                    out.push_str(&format!("\\u{:04x}", u));
+                }
+            }
             c => out.push(c),
         }
     }
@@ -302,7 +313,7 @@ mod tests {
     use super::*;
 
     /// Hostile strings the pages must carry as data, not markup.
-    const HOSTILE: [&str; 8] = [
+    const HOSTILE: [&str; 9] = [
         "<!--<script>",
         "</script><script>alert(1)</script>",
         "<img src=x onerror=alert(1)>",
@@ -311,6 +322,7 @@ mod tests {
         "]]> <![CDATA[",
         "&amp; &lt; \\u003c \\",
         "<\\/script>",
+        "a\u{202e}b\u{200b}c\u{e0041}",
     ];
 
     /// No character that can start markup or end the element is left, and the JSON parses
@@ -320,7 +332,15 @@ mod tests {
         for s in HOSTILE {
             let v = serde_json::json!({ "name": s, "list": [s, s], s: 1.5 });
             let j = script_json(&v);
-            for bad in ['<', '>', '&', '\u{2028}', '\u{2029}'] {
+            for bad in [
+                '<',
+                '>',
+                '&',
+                '\u{2028}',
+                '\u{2029}',
+                '\u{202e}',
+                '\u{e0041}',
+            ] {
                 assert!(!j.contains(bad), "{bad:?} left in {j}");
             }
             let back: serde_json::Value = serde_json::from_str(&j).unwrap();
@@ -330,6 +350,10 @@ mod tests {
         assert_eq!(
             escape_script_json("\"<!--<a&b>\u{2028}\u{2029}\""),
             r#""\u003c!--\u003ca\u0026b\u003e\u2028\u2029""#
+        );
+        assert_eq!(
+            escape_script_json("\"\u{202e}\u{e0041}\""),
+            r#""\u202e\udb40\udc41""#
         );
         // An escaped backslash before `<` stays a backslash and a `<`.
         let j = script_json(&"\\<");

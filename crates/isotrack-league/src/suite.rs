@@ -261,7 +261,7 @@ impl Suite {
             return Err((vec![], "the suite has no [[task]]".into()));
         }
         // The name heads the leaderboard and its pages: no name that prints as another.
-        let shown = |c: char| !(c.is_control() || isotrack_core::numtext::is_invisible(c));
+        let shown = |c: char| !isotrack_core::numtext::is_not_plain(c);
         if self.name.trim().is_empty() || !self.name.chars().all(shown) {
             return Err((
                 top("name"),
@@ -416,7 +416,7 @@ fn check_task(
     }
     // The title heads the task's row of the leaderboard and its page: visible characters
     // only, at most MAX_TITLE_CHARS.
-    let shown = |c: char| !(c.is_control() || isotrack_core::numtext::is_invisible(c));
+    let shown = |c: char| !isotrack_core::numtext::is_not_plain(c);
     if t.title.chars().count() > MAX_TITLE_CHARS || !t.title.chars().all(shown) {
         return Err((
             task_path(i, &["title"]),

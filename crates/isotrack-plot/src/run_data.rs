@@ -1,6 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
+use isotrack_runs::summary::{Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
@@ -15,8 +16,8 @@ pub struct RunData {
     pub dir: PathBuf,
     /// The trace.
     pub trace: Vec<TraceRow>,
-    /// `summary.json`.
-    pub summary: serde_json::Value,
+    /// `summary.json` (read by its one reader, [`Summary::from_json`]).
+    pub summary: Summary,
     /// The resolved scenario (its field rebuilt for the map).
     pub scenario: Scenario,
 }
@@ -26,14 +27,13 @@ impl RunData {
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
-        let summary: serde_json::Value = serde_json::from_str(
-            &isotrack_fields::io::read_text_limited(&dir.join("summary.json"), 16 << 20)
-                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?,
-        )
-        .map_err(|e| err(format!("summary.json: {e}")))?;
+        let text =
+            isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
+                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
+        let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
         // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
         // would join into one path; refused until the team's figures are drawn.
-        if summary.get("team").is_some() {
+        if summary.team().is_some() {
             return Err(err(
                 "a team's run (summary.json has a `team` object): figures and reports of teams are not drawn yet (docs/TEAMS.md)".into(),
             ));
@@ -102,9 +102,11 @@ impl RunData {
             } else {
                 format!(
                     "the run ended at t = {} s: {} ({})",
-                    summary["t_end_s"],
-                    summary["outcome"].as_str().unwrap_or("?"),
-                    summary["outcome_detail"].as_str().unwrap_or("no detail")
+                    summary
+                        .t_end_s()
+                        .map_or(serde_json::Value::Null, serde_json::Value::from),
+                    summary.outcome(),
+                    summary.outcome_detail().unwrap_or("no detail")
                 )
             };
             return Err(err(format!("trace.csv has no rows: {why}")));
@@ -160,13 +162,9 @@ fn field_identity(s: &isotrack_scenario::Scenario) -> Vec<(String, String)> {
 /// The SHA-256 of each data file a run's field was read from, by path, as its `summary.json`
 /// records them (`data_files`; none in a run written before they were recorded).
 fn data_digests(r: &RunData) -> Vec<(String, String)> {
-    r.summary["data_files"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_str().unwrap_or("").to_string()))
-                .collect()
-        })
+    r.summary
+        .data_files()
+        .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
         .unwrap_or_default()
 }
 
@@ -208,7 +206,8 @@ pub fn unrecorded_data_files_note(runs: &[RunData]) -> Option<String> {
         let f = &r.scenario.file().field;
         f.path.is_some() || f.paths.as_ref().is_some_and(|p| !p.is_empty())
     };
-    let recorded = |r: &RunData| r.summary.get("data_files").is_some_and(|v| v.is_object());
+    // `data_files` is left out of a summary when empty, so recorded means non-empty.
+    let recorded = |r: &RunData| r.summary.data_files().is_some_and(|d| !d.is_empty());
     if !runs.iter().any(|r| has_files(r) && recorded(r)) {
         return None;
     }

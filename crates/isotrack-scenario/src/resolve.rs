@@ -786,10 +786,39 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     resolve_metrics(&mut c, &mut f);
     resolve_output(&mut c, &mut f);
     resolve_sitl(&mut c, &f.sitl);
+    resolve_text(&mut c, &f);
     if c.issues.is_empty() {
         Ok(f)
     } else {
         Err(c.issues)
+    }
+}
+
+/// The scenario's own strings that reach the console, `scenario.toml`, figures and pages
+/// (`name`, `description`, `field.units`, `field.value_column`, `field.variable`): plain text
+/// ([`isotrack_core::numtext::is_not_plain`], the rule for NetCDF attributes and suite names
+/// too), but a description may span lines (LF, CRLF) and hold tabs.
+fn resolve_text(c: &mut Checker, f: &ScenarioFile) {
+    use isotrack_core::numtext::{is_not_plain, Clipped};
+    for (key, text, lines) in [
+        ("name", &f.name, false),
+        ("description", &f.description, true),
+        ("field.units", &f.field.units, false),
+        ("field.value_column", &f.field.value_column, false),
+        ("field.variable", &f.field.variable, false),
+    ] {
+        let Some(text) = text else { continue };
+        let bad = |ch: char| is_not_plain(ch) && !(lines && matches!(ch, '\n' | '\r' | '\t'));
+        if let Some(ch) = text.chars().find(|&ch| bad(ch)) {
+            c.fail(
+                key,
+                format!(
+                    "holds a control or invisible character (U+{:04X}) in `{}`: write it as plain text",
+                    ch as u32,
+                    Clipped(text)
+                ),
+            );
+        }
     }
 }
 

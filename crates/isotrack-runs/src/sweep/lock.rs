@@ -8,23 +8,45 @@ use std::path::Path;
 /// written (README, "Sweeps"). The lock, not the file, is what counts: it is released when its
 /// holder exits in any way (SIGKILL and a crashed node included), so a file left behind is
 /// never a stale lock. While held, the file names its holder (`sweep pid 1234 on node7`); the
-/// holder empties it when it lets go normally.
+/// holder removes it when it lets go normally (only a killed holder leaves the file behind).
 pub const LOCK_FILE: &str = ".isotrack.lock";
 
 /// The largest holder record read back from [`LOCK_FILE`], bytes.
 const MAX_HOLDER_BYTES: u64 = 256;
 
 /// The lock of an output directory, held while this lives ([`lock_output_dir`]). Dropped, it
-/// empties the holder record (an empty [`LOCK_FILE`] is what a finished command leaves) and the
-/// operating system releases the lock with the file.
+/// removes [`LOCK_FILE`] while still holding its lock (a finished command leaves no lock file)
+/// and the operating system then releases the lock with the file. A command that opened the
+/// file before it was removed and takes its lock after finds the path gone or another file
+/// there, and opens the path again ([`lock_output_dir`]): two commands never both hold "the"
+/// lock of one directory.
 #[derive(Debug)]
 pub struct DirLock {
     file: std::fs::File,
+    path: std::path::PathBuf,
 }
 
 impl Drop for DirLock {
     fn drop(&mut self) {
-        let _ = self.file.set_len(0);
+        // Only the file this holds (a link or another file put there is not removed); when it
+        // cannot be removed (a read-only directory), its holder record is emptied as before.
+        if !(is_this_file(&self.file, &self.path) && std::fs::remove_file(&self.path).is_ok()) {
+            let _ = self.file.set_len(0);
+        }
+    }
+}
+
+/// Whether `path` (not followed if a link) is the file `file` is open on.
+fn is_this_file(file: &std::fs::File, path: &Path) -> bool {
+    match (file.metadata(), std::fs::symlink_metadata(path)) {
+        #[cfg(unix)]
+        (Ok(a), Ok(b)) => {
+            use std::os::unix::fs::MetadataExt;
+            a.dev() == b.dev() && a.ino() == b.ino()
+        }
+        #[cfg(not(unix))]
+        (Ok(_), Ok(b)) => b.is_file(),
+        _ => false,
     }
 }
 
@@ -65,10 +87,33 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
             format!("cannot lock {}: {e}", path.display()),
         )
     };
+    // A holder removes the file as it lets go (DirLock's drop): a lock taken on a file no
+    // longer at the path is no lock, so the path is opened again (a few times: each retry
+    // means another command finished meanwhile).
+    for _ in 0..16 {
+        match lock_once(dir, &path, command)? {
+            Some(lock) => return Ok(lock),
+            None => continue,
+        }
+    }
+    Err(cant(std::io::Error::other(
+        "the lock file was replaced again and again while being locked",
+    )))
+}
+
+/// One attempt of [`lock_output_dir`]: `None` when the file locked is no longer at the path.
+fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, Failure> {
+    let cant = |e: std::io::Error| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot lock {}: {e}", path.display()),
+        )
+    };
     // Never through a link nor into a FIFO: a `.isotrack.lock` that is a link to a user's file
     // would have that file emptied (the holder record replaces its content).
-    let mut f = crate::files::open_regular(&path, true, false).map_err(cant)?;
+    let mut f = crate::files::open_regular(path, true, false).map_err(cant)?;
     match f.try_lock() {
+        Ok(()) if !is_this_file(&f, path) => Ok(None),
         Ok(()) => {
             // The record is a courtesy for the message of the next one refused: failing to
             // write it does not fail the command.
@@ -76,7 +121,10 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
                 .set_len(0)
                 .and_then(|()| f.rewind())
                 .and_then(|()| f.write_all(holder_record(command).as_bytes()));
-            Ok(DirLock { file: f })
+            Ok(Some(DirLock {
+                file: f,
+                path: path.to_path_buf(),
+            }))
         }
         Err(std::fs::TryLockError::WouldBlock) => {
             let holder = read_holder(&mut f).map_or_else(

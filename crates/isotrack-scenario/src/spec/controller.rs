@@ -11,6 +11,7 @@ use isotrack_core::control::{
     PidParams, SearchParams, SearchPattern, SlidingModeParams, SuboptimalSosmParams,
 };
 use isotrack_core::estimate::DerivativeKind;
+use isotrack_core::numtext::{Echo, Num};
 
 /// Default `controller.level`, field units: the paper's Fig. 2(b) setting (Dong & You).
 pub const LEVEL: f64 = 10.0;
@@ -305,11 +306,35 @@ fn search(
             speed_mps,
             max_turn_rate_radps: w_max,
         },
-        SearchKind::Lawnmower => SearchPattern::Lawnmower {
-            leg_m: c.search_leg_m.unwrap_or(SEARCH_LEG_SPACINGS * spacing_m),
-            spacing_m,
-            speed_mps,
-        },
+        SearchKind::Lawnmower => {
+            // The half-turns fly `2 v / spacing` open loop, past the output stage: under a
+            // turn-rate limit `L` that is a turn the vehicle cannot fly (and a run whose
+            // control effort exceeds `L^2` per second), so a spacing below the turning
+            // diameter `2 v / L` is refused (the default spacing is that diameter; the
+            // tolerance covers its rounding).
+            if let Some(l) = limit.radps() {
+                let turn_radps = 2.0 * speed_mps / spacing_m;
+                if turn_radps > l * (1.0 + 1e-9) {
+                    return Err(Issue {
+                        key: "controller.search_spacing_m".to_string(),
+                        message: format!(
+                            "the lawnmower's half-turns at 2 v / search_spacing_m = 2 x {} m/s / {} m = {} rad/s exceed the turn-rate limit {} rad/s (controller.max_turn_rate_radps or the airframe's): give search_spacing_m >= 2 v / limit = {} m",
+                            Echo(speed_mps),
+                            Echo(spacing_m),
+                            Num(turn_radps),
+                            Echo(l),
+                            Num(2.0 * speed_mps / l)
+                        ),
+                        unreadable: false,
+                    });
+                }
+            }
+            SearchPattern::Lawnmower {
+                leg_m: c.search_leg_m.unwrap_or(SEARCH_LEG_SPACINGS * spacing_m),
+                spacing_m,
+                speed_mps,
+            }
+        }
     };
     Ok(Some(SearchParams {
         pattern,

@@ -189,6 +189,56 @@ fn search_geometry_is_derived() {
     }
 }
 
+/// A lawnmower flies its half-turns at `2 v / search_spacing_m` past the output stage: with
+/// v = 1 m/s (the default speed) and a limit of 0.5 rad/s the turning diameter is 2 v / L = 4 m,
+/// so 0.2 m (5 rad/s) is refused naming the key, 4 m (exactly 0.5 rad/s) and the derived
+/// default are accepted (issue 30).
+#[test]
+fn a_lawnmower_tighter_than_the_turn_rate_limit_is_refused() {
+    let base = "[vehicle]\nspeed_mps = 1.0\n[controller]\nsearch = \"lawnmower\"\nmax_turn_rate_radps = 0.5\n";
+    let e = parse_scenario(&format!("{base}search_spacing_m = 0.2\n"), "<test>", &[])
+        .err()
+        .expect("a 5 rad/s half-turn under a 0.5 rad/s limit is refused")
+        .to_string();
+    assert!(e.contains("controller.search_spacing_m"), "{e}");
+    assert!(e.contains("4 m"), "{e}");
+    let s = spec_of(&format!("{base}search_spacing_m = 4.0\n"));
+    assert!(s.controller.search.is_some());
+    let s = spec_of(base);
+    match s.controller.search.unwrap().pattern {
+        SearchPattern::Lawnmower { spacing_m, .. } => assert_eq!(spacing_m, 4.0),
+        p => panic!("{p:?}"),
+    }
+}
+
+/// Issue 30 (fix30c), item 6: the scenario's strings follow the rule of NetCDF attributes and
+/// suite names: NUL, ESC, U+202E, U+200B in `name` or `field.units` are refused naming the key;
+/// a description may span lines; plain Unicode (`µg/m³`) passes.
+#[test]
+fn scenario_strings_are_plain_text() {
+    for (set, key) in [
+        ("field.units=\"m\\u0000\\u001b[31mRED\"", "field.units"),
+        ("name=\"a\\u202eb\"", "name"),
+        ("name=\"pi\\u200b\"", "name"),
+        ("description=\"x\\u2028y\"", "description"),
+    ] {
+        let e = parse_scenario("", "<test>", &[set.to_string()])
+            .err()
+            .unwrap_or_else(|| panic!("{set} is refused"))
+            .to_string();
+        assert!(
+            e.contains(key) && e.contains("control or invisible"),
+            "{set}: {e}"
+        );
+    }
+    let s = parse_scenario(
+        "name = \"plume µ\"\ndescription = \"\"\"two\r\nlines\tand a tab\"\"\"\n[field]\nunits = \"µg/m³\"\n",
+        "<test>",
+        &[],
+    );
+    assert!(s.is_ok(), "{:?}", s.err().map(|e| e.to_string()));
+}
+
 /// A derived default follows a variant's own values (a swept duration, a new airspeed).
 #[test]
 fn derived_values_follow_a_variant() {

@@ -74,7 +74,7 @@ pub struct TeamSummary {
 
 /// How the team metrics followed an isoline that moves (`summary.json`'s
 /// `team.moving_isoline`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct MovingIsolineStats {
     /// Times the isoline was extracted (once per frame or period, not per sample).
     pub extractions: u64,

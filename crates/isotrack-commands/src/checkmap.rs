@@ -4,8 +4,8 @@
 use crate::cli::CheckArgs;
 use crate::exit;
 use crate::output::num;
-use crate::run::Failure;
 use isotrack_core::numtext::{Echo, Num};
+use isotrack_runs::Failure;
 use isotrack_scenario::check::map::{
     agreement, steps_per_run, verify_point, verify_points, Agreement, LoopFamily, MapGrid,
     StabilityMap, VerifyPoint, MAX_VERIFY_RUNS, MAX_VERIFY_STEPS, NEAR_BOUNDARY_E_FOLDS,

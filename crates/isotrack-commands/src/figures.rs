@@ -2,13 +2,13 @@
 
 use crate::cli::{FigureOptions, FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
-use crate::output::{run_to_trace, scenario_toml, write_summary};
-use crate::run::Failure;
+use crate::output::{scenario_toml, RunDir, Summary};
 use isotrack_core::numtext::Echo;
 use isotrack_plot::{
     field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, PlotError, RunData,
     Style,
 };
+use isotrack_runs::Failure;
 use isotrack_scenario::{load_scenario, Scenario};
 use std::path::{Path, PathBuf};
 
@@ -223,34 +223,21 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
 
 /// Runs `scenario` into `dir` (trace, summary, resolved scenario) and loads it back for plotting.
 fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Failure> {
-    let cant = |e: std::io::Error| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", dir.display()),
-    };
-    std::fs::create_dir_all(dir).map_err(cant)?;
-    let r = run_to_trace(scenario, &dir.join("trace.csv")).map_err(cant)?;
-    write_summary(
-        &dir.join("summary.json"),
-        scenario,
-        None,
-        &r,
-        &isotrack_scenario::check::warnings(scenario),
-    )
-    .map_err(cant)?;
-    isotrack_runs::files::write_atomic(
-        &dir.join("scenario.toml"),
-        scenario_toml(scenario).as_bytes(),
-    )
-    .map_err(cant)?;
+    let out = RunDir::open(dir, &[], &[], None)?;
+    let mut trace = out.trace(scenario.is_flying())?;
+    let r = scenario.run(trace.writer());
+    let warnings = isotrack_scenario::check::warnings(scenario);
+    let summary = Summary::of_run(scenario, None, &r, &warnings);
+    out.finish(trace, &scenario_toml(scenario), &summary)?;
     let mut d = RunData::load(dir).map_err(failure)?;
     d.name = name.to_string();
     Ok(d)
 }
 
 /// A bundled scenario of `--scenarios DIR`: 66 when it cannot be read (missing, a FIFO), 65
-/// when what it holds is invalid, as for every other command ([`crate::run::invalid`]).
+/// when what it holds is invalid, as for every other command ([`crate::load::invalid`]).
 fn load(path: &Path, sets: &[String]) -> Result<Scenario, Failure> {
-    load_scenario(Some(path), sets).map_err(crate::run::invalid)
+    load_scenario(Some(path), sets).map_err(crate::load::invalid)
 }
 
 /// A run behind a paper figure: a bundled scenario with `--set` overrides, its run directory
