@@ -198,13 +198,20 @@ impl Hashes {
     }
 }
 
-/// The bundled scenarios' file stems, sorted.
+/// Bundled scenarios left out of the manifest: too slow to run on every test (issue 32: four
+/// fixed-wing UAVs for 16 000 s on the ERA5 series, about a minute; three robots on a puff plume
+/// whose isoline of the time is extracted every second, about 10 s). Their behaviour is tested
+/// by their own tests (crates/isotrack-cli/tests/team_run.rs).
+const NOT_PINNED: [&str; 2] = ["team-era5-uav-4", "team-puff-edge-3"];
+
+/// The bundled scenarios' file stems, sorted (without [`NOT_PINNED`]).
 fn scenario_stems(repo: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(repo.join("scenarios"))
         .expect("scenarios/")
         .map(|e| e.expect("entry").path())
         .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .map(|p| p.file_stem().unwrap().to_str().unwrap().to_string())
+        .filter(|s| !NOT_PINNED.contains(&s.as_str()))
         .collect();
     v.sort();
     v

@@ -122,6 +122,9 @@ pub struct TeamRecord {
     pub order_preserved: bool,
     /// Slowest and fastest speed any vehicle held at a sample, m/s.
     pub speed_range_mps: Option<[Option<f64>; 2]>,
+    /// For an isoline that moves: how it was followed (left out otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moving_isoline: Option<isotrack_sim::team::metrics::MovingIsolineStats>,
 }
 
 /// `Some(x)` when `x` is finite (serde writes a non-finite `f64` as `null`).
@@ -145,6 +148,7 @@ impl TeamRecord {
             min_separation_m: o(m.min_separation_m),
             order_preserved: m.order_preserved,
             speed_range_mps: m.speed_range_mps.map(|r| r.map(finite)),
+            moving_isoline: m.moving_isoline.clone(),
         }
     }
 }
@@ -164,9 +168,10 @@ impl TeamJson {
             coordinate_free: law.is_coordinate_free(),
             neighbours: r.ring.clone(),
             metrics: r.team.as_ref().map(TeamRecord::of),
-            metrics_note: r.team.is_none().then(|| {
-                "no team metrics: the isoline's arc length is known for a radial field that does not drift only, for now".to_string()
-            }),
+            metrics_note: r
+                .team
+                .is_none()
+                .then(|| scenario.team_metrics_note().to_string()),
         }
     }
 }

@@ -1,24 +1,241 @@
 //! Running a scenario's `[team]` ([`crate::spec::TeamSpec`]) through
-//! [`isotrack_sim::simulate_team`]: every vehicle the scenario's field, tracking law and sensor
-//! (its own seeded streams), a Dubins robot whose speed the spacing law sets within
-//! `[team.v_min_mps, team.v_max_mps]` (docs/TEAMS.md).
+//! [`isotrack_sim::Group`]: every vehicle the scenario's field, tracking law and sensor (its
+//! own seeded streams), a Dubins robot whose speed, or a fixed-wing UAV whose airspeed command,
+//! the spacing law sets within `[team.v_min_mps, team.v_max_mps]` (docs/TEAMS.md).
 
-use crate::field::{FieldModel, IsolineOracle};
+use crate::build::VehicleModel;
+use crate::field::{FieldModel, IsolineOracle, MovingIsoline};
 use crate::spec::TeamSpec;
 use crate::Scenario;
 use isotrack_core::math::Vec2;
-use isotrack_core::{FieldDerivatives, ScalarField};
-use isotrack_sim::team::arc::{ArcProjection, CircleArc};
+use isotrack_core::{FieldDerivatives, IsolineController, ScalarField, SpeedCommand};
+use isotrack_fields::isoline::IsolineSegments;
+use isotrack_fields::puff::PuffPlume;
+use isotrack_fields::AnalyticKind;
+use isotrack_sim::team::arc::{pick_loop, CircleArc, MovingArc, PolylineArc};
 use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::SpacingConfig;
-use isotrack_sim::TraceSink;
-use isotrack_sim::{simulate_team, Oracles, TeamConfig, TeamError, TeamMember, TeamResult};
-use isotrack_vehicles::{DubinsState, DubinsVariableSpeed};
+use isotrack_sim::team::TeamIsoline;
+use isotrack_sim::{Group, Oracles, TeamConfig, TeamError, TeamMember, TeamResult, TraceSink};
+use isotrack_vehicles::{DubinsState, DubinsVariableSpeed, FixedWingVariableSpeed};
+use std::sync::Arc;
+
+/// Samples per side of the lattice an analytic field's (or a puff plume's) isoline is
+/// extracted on by marching squares for the team metrics (at most `LATTICE^2` field values per
+/// extraction).
+pub const TEAM_LATTICE: usize = 400;
+/// A puff plume's isoline of the time is extracted again every this many seconds of the run
+/// (it moves continuously; the extraction costs `PUFF_LATTICE^2` field values).
+pub const PUFF_ISOLINE_PERIOD_S: f64 = 1.0;
+/// Samples per side of the lattice a puff plume's isoline is extracted on (each value visits
+/// the live puffs near it: a coarser lattice than [`TEAM_LATTICE`] keeps the extractions, one
+/// per [`PUFF_ISOLINE_PERIOD_S`], within a few times the run's own cost).
+pub const PUFF_LATTICE: usize = 200;
+/// Team metrics along a polyline (an extracted isoline) are sampled every this many seconds
+/// (a whole number of steps, at least one): each sample projects every vehicle onto the
+/// polyline (`O(vertices)` each).
+pub const POLYLINE_METRICS_PERIOD_S: f64 = 0.1;
+
+/// The true isoline a team's metrics measure along ([`Scenario::team_isoline`]).
+pub enum TeamIsolineModel {
+    /// The circle of a radial field that does not drift (exact).
+    Circle(CircleArc),
+    /// A closed isoline of a static field, extracted once by marching squares: the loop most
+    /// of the team's starts are nearest to.
+    Polyline(PolylineArc),
+    /// An isoline that moves (a time series of frames, a puff plume): the isoline of the
+    /// time, extracted again per frame (per [`PUFF_ISOLINE_PERIOD_S`] for a puff plume).
+    Moving(Box<dyn MovingArc + Send>),
+    /// None: why.
+    None(&'static str),
+}
+
+impl TeamIsolineModel {
+    /// The engine's view of it (`None` for [`TeamIsolineModel::None`]).
+    pub fn as_team_isoline(&self) -> Option<TeamIsoline<'_>> {
+        match self {
+            TeamIsolineModel::Circle(c) => Some(TeamIsoline::Fixed(c)),
+            TeamIsolineModel::Polyline(p) => Some(TeamIsoline::Fixed(p)),
+            TeamIsolineModel::Moving(m) => Some(TeamIsoline::Moving(&**m)),
+            TeamIsolineModel::None(_) => None,
+        }
+    }
+}
+
+/// Why a scenario's team has no metrics (`summary.json`'s `team.metrics_note`).
+pub const NO_CLOSED_ISOLINE: &str = "no team metrics: the isoline at controller.level is not a closed loop (it leaves the field, or the field has no isoline there); the team metrics are measured along a closed isoline only";
+/// The note for a drifting analytic field other than a radial one.
+pub const DRIFTING_FIELD: &str =
+    "no team metrics: the isoline of a drifting analytic field is followed for a radial field only, for now";
+
+/// Marching squares stitch end points closer than this (relative to the coordinates' scale)
+/// into one vertex.
+fn loop_tolerance_m(scale_m: f64) -> f64 {
+    (1e-9 * scale_m.abs()).max(1e-6)
+}
+
+fn closed_loops(s: &IsolineSegments) -> Vec<Vec<Vec2>> {
+    let scale = s
+        .segments()
+        .iter()
+        .map(|(a, b)| a.x.abs().max(a.y.abs()).max(b.x.abs()).max(b.y.abs()))
+        .fold(0.0, f64::max);
+    s.closed_loops(loop_tolerance_m(scale))
+}
+
+/// The loop of `loops` the `starts` are on, as a polyline (oriented counter-clockwise).
+fn polyline_of(loops: Vec<Vec<Vec2>>, starts: &[Vec2]) -> TeamIsolineModel {
+    match pick_loop(&loops, starts).and_then(|j| PolylineArc::aligned(loops[j].clone(), None).ok())
+    {
+        Some(p) => TeamIsolineModel::Polyline(p),
+        None => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
+    }
+}
+
+/// Marching squares of `f` over `box_m = [x0, x1, y0, y1]` on a lattice of at most `lattice`
+/// samples per side (square cells).
+fn lattice_segments(
+    box_m: [f64; 4],
+    lattice: usize,
+    level: f64,
+    f: impl Fn(Vec2) -> Option<f64>,
+) -> Option<IsolineSegments> {
+    let [x0, x1, y0, y1] = box_m;
+    let side = (x1 - x0).max(y1 - y0);
+    if !(side > 0.0 && side.is_finite()) {
+        return None;
+    }
+    let h = side / (lattice - 1) as f64;
+    let nx = (((x1 - x0) / h).ceil() as usize + 1).clamp(2, lattice);
+    let ny = (((y1 - y0) / h).ceil() as usize + 1).clamp(2, lattice);
+    Some(IsolineSegments::from_samples(
+        Vec2::new(x0, y0),
+        h,
+        nx,
+        ny,
+        level,
+        f,
+    ))
+}
+
+/// The box an analytic field's closed isolines lie in: its domain, or (Gaussian plumes) the
+/// sources' centres widened by 8 of their largest sigma (where a plume is `exp(-32)` of its
+/// peak); `None` where unbounded (a linear ramp's isolines are straight lines).
+fn analytic_box(f: &isotrack_fields::AnalyticField) -> Option<[f64; 4]> {
+    if let Some(d) = f.domain_m {
+        return Some(d);
+    }
+    match &f.kind {
+        AnalyticKind::GaussianPlumes(g) if !g.plumes.is_empty() => {
+            let mut b = [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            for p in &g.plumes {
+                let w = 8.0 * p.sigma_m[0].max(p.sigma_m[1]);
+                b = [
+                    b[0].min(p.center_m.x - w),
+                    b[1].max(p.center_m.x + w),
+                    b[2].min(p.center_m.y - w),
+                    b[3].max(p.center_m.y + w),
+                ];
+            }
+            b.iter().all(|v| v.is_finite()).then_some(b)
+        }
+        _ => None,
+    }
+}
+
+/// A time series' isoline: the marching-squares isoline of the field of the time, one version
+/// per [`MovingIsoline::bucket_s`] (the true-isoline metric's own resolution: 1/8 of the
+/// shortest frame interval).
+struct SeriesArc(Arc<MovingIsoline>);
+
+impl MovingArc for SeriesArc {
+    fn version(&self, t_s: f64) -> Option<i64> {
+        let b = self.0.bucket_s();
+        Some(if b.is_finite() {
+            (t_s / b).floor() as i64
+        } else {
+            0
+        })
+    }
+    fn loops(&self, version: i64) -> Vec<Vec<Vec2>> {
+        let b = self.0.bucket_s();
+        let t = if b.is_finite() {
+            (version as f64 + 0.5) * b
+        } else {
+            0.0
+        };
+        match self.0.at(t).as_ref() {
+            Some(s) => closed_loops(s),
+            None => Vec::new(),
+        }
+    }
+}
+
+/// A puff plume's isoline of the time: one version per [`PUFF_ISOLINE_PERIOD_S`], extracted at
+/// the period's start, on [`PUFF_LATTICE`] samples a side, over the box the live puffs can reach: along the wind from the source
+/// to its reach `|U| max_age`, widened by four puff widths at `max_age` plus three standard
+/// deviations of the meander's displacement over `max_age`
+/// (`std(u') sqrt(2 T_c max_age)`, a correlated velocity's integral).
+struct PuffArc {
+    plume: Arc<PuffPlume>,
+    level: f64,
+    box_m: [f64; 4],
+}
+
+impl PuffArc {
+    fn new(plume: Arc<PuffPlume>, level: f64) -> Self {
+        let p = *plume.params();
+        let u = p.wind_mps;
+        let reach = u * p.max_age_s;
+        let width = 4.0 * (p.puff_sigma0_m.powi(2) + 2.0 * p.diffusivity_m2ps * p.max_age_s).sqrt();
+        let meander =
+            3.0 * p.meander_std_mps * (2.0 * p.meander_correlation_s * p.max_age_s).sqrt();
+        let m = width + meander;
+        let (a, b) = (p.source_m, p.source_m + reach);
+        let mut box_m = [
+            a.x.min(b.x) - m,
+            a.x.max(b.x) + m,
+            a.y.min(b.y) - m,
+            a.y.max(b.y) + m,
+        ];
+        if let Some(d) = p.domain_m {
+            box_m = [
+                box_m[0].max(d[0]),
+                box_m[1].min(d[1]),
+                box_m[2].max(d[2]),
+                box_m[3].min(d[3]),
+            ];
+        }
+        Self {
+            plume,
+            level,
+            box_m,
+        }
+    }
+}
+
+impl MovingArc for PuffArc {
+    fn version(&self, t_s: f64) -> Option<i64> {
+        Some((t_s / PUFF_ISOLINE_PERIOD_S).floor() as i64)
+    }
+    fn loops(&self, version: i64) -> Vec<Vec<Vec2>> {
+        let t = version as f64 * PUFF_ISOLINE_PERIOD_S;
+        lattice_segments(self.box_m, PUFF_LATTICE, self.level, |p| {
+            self.plume.value(t, p)
+        })
+        .map(|s| closed_loops(&s))
+        .unwrap_or_default()
+    }
+}
 
 impl Scenario {
-    /// The true isoline as an arc-length projection for the team metrics and the
-    /// `arc_reference` law: the circle of a radial field that does not drift (`None` otherwise:
-    /// the team metrics are then left out, and `arc_reference` is refused).
+    /// The circle of a radial field that does not drift (`None` otherwise): the exact isoline
+    /// of [`Scenario::team_isoline`] there.
     pub fn team_arc(&self) -> Option<CircleArc> {
         match self.isoline() {
             IsolineOracle::Circle {
@@ -30,6 +247,61 @@ impl Scenario {
                 radius_m: *radius_m,
             }),
             _ => None,
+        }
+    }
+
+    /// The true isoline for the team metrics and the `arc_reference` law: the circle of a
+    /// radial field that does not drift; for another static field, the closed loop (marching
+    /// squares: the grid's, or an analytic field's over its domain or its sources' reach) most
+    /// of the team's starts are nearest to; for a time series or a puff plume, the isoline of
+    /// the time ([`TeamIsolineModel::Moving`]). An open isoline (leaving the field) gives no
+    /// metrics ([`NO_CLOSED_ISOLINE`]).
+    pub fn team_isoline(&self) -> TeamIsolineModel {
+        if let Some(c) = self.team_arc() {
+            return TeamIsolineModel::Circle(c);
+        }
+        let level = self.level();
+        let starts: Vec<Vec2> = match self.spec().team.as_ref() {
+            Some(t) => t.starts.iter().map(|s| Vec2::new(s.x_m, s.y_m)).collect(),
+            None => {
+                let s = self.start();
+                vec![Vec2::new(s.x_m, s.y_m)]
+            }
+        };
+        match self.field() {
+            FieldModel::Analytic(f) => {
+                if f.drift_mps.x != 0.0 || f.drift_mps.y != 0.0 {
+                    return TeamIsolineModel::None(DRIFTING_FIELD);
+                }
+                match analytic_box(f)
+                    .and_then(|b| lattice_segments(b, TEAM_LATTICE, level, |p| f.value(0.0, p)))
+                {
+                    Some(s) => polyline_of(closed_loops(&s), &starts),
+                    None => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
+                }
+            }
+            FieldModel::Grid(_) => match self.isoline() {
+                IsolineOracle::Segments(s) => polyline_of(closed_loops(s), &starts),
+                _ => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
+            },
+            FieldModel::Series(_) => match self.isoline() {
+                IsolineOracle::Moving(m) => {
+                    TeamIsolineModel::Moving(Box::new(SeriesArc(m.clone())))
+                }
+                _ => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
+            },
+            FieldModel::Puff(p) => {
+                TeamIsolineModel::Moving(Box::new(PuffArc::new(p.clone(), level)))
+            }
+        }
+    }
+
+    /// Why a team run of this scenario has no team metrics (`summary.json`'s
+    /// `team.metrics_note`).
+    pub fn team_metrics_note(&self) -> &'static str {
+        match self.team_isoline() {
+            TeamIsolineModel::None(note) => note,
+            _ => NO_CLOSED_ISOLINE,
         }
     }
 
@@ -58,28 +330,15 @@ impl Scenario {
             isoline_distance: Some(&dist),
             gradient: Some(&grad),
         };
-        let vehicle = DubinsVariableSpeed {
-            min_speed_mps: team.v_min_mps,
-            max_speed_mps: team.v_max_mps,
-        };
         let seed = self.spec().sim.seed;
-        let members = team
-            .starts
-            .iter()
-            .enumerate()
-            .map(|(i, s)| TeamMember {
-                x0: vehicle.state(
-                    DubinsState {
-                        position_m: Vec2::new(s.x_m, s.y_m),
-                        heading_rad: s.heading_rad,
-                    },
-                    team.nominal_speed_mps,
-                ),
-                controller: self.tracker(),
-                sensor: self.sensor_seeded(TeamSpec::sensor_seed(seed, i)),
-                ranging_seed: TeamSpec::ranging_seed(seed, i),
-            })
-            .collect();
+        let model = self.team_isoline();
+        let metrics = match model {
+            TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_) => TeamMetricsConfig::default(),
+            _ => TeamMetricsConfig {
+                every_steps: ((POLYLINE_METRICS_PERIOD_S / self.dt_s()).round() as u64).max(1),
+                ..TeamMetricsConfig::default()
+            },
+        };
         let cfg = TeamConfig {
             ranging: team.ranging,
             spacing: SpacingConfig {
@@ -87,22 +346,326 @@ impl Scenario {
                 nominal_speed_mps: team.nominal_speed_mps,
                 ring: team.ring,
             },
-            metrics: TeamMetricsConfig::default(),
+            metrics,
         };
-        let arc = self.team_arc();
-        let r = simulate_team(
-            field,
-            &vehicle,
-            &self.plan(),
-            cfg,
-            members,
-            arc.as_ref().map(|a| a as &dyn ArcProjection),
-            &oracles,
-            sinks,
-        )?;
+        let isoline = model.as_team_isoline();
+        let member = |i: usize| TeamMember {
+            x0: (),
+            controller: self.tracker(),
+            sensor: self.sensor_seeded(TeamSpec::sensor_seed(seed, i)),
+            ranging_seed: TeamSpec::ranging_seed(seed, i),
+        };
+        let r = match &*self.vehicle {
+            VehicleModel::Dubins(_) => {
+                let vehicle = DubinsVariableSpeed {
+                    min_speed_mps: team.v_min_mps,
+                    max_speed_mps: team.v_max_mps,
+                };
+                let members = team
+                    .starts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let m = member(i);
+                        TeamMember {
+                            x0: vehicle.state(
+                                DubinsState {
+                                    position_m: Vec2::new(s.x_m, s.y_m),
+                                    heading_rad: s.heading_rad,
+                                },
+                                team.nominal_speed_mps,
+                            ),
+                            controller: m.controller,
+                            sensor: m.sensor,
+                            ranging_seed: m.ranging_seed,
+                        }
+                    })
+                    .collect();
+                drive(
+                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self,
+                )?
+            }
+            VehicleModel::FixedWing(w) => {
+                let vehicle =
+                    FixedWingVariableSpeed::new((**w).clone(), team.v_min_mps, team.v_max_mps)
+                        .map_err(|_| TeamError::OutOfRange {
+                            key: "v_min_mps",
+                            value: team.v_min_mps,
+                            expected: "an airspeed envelope within the Aerosonde's safe range",
+                        })?;
+                let gust_seed = w.config().seed;
+                let members = team
+                    .starts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let m = member(i);
+                        TeamMember {
+                            x0: w.initial_state_seeded(
+                                s.x_m,
+                                s.y_m,
+                                s.heading_rad,
+                                TeamSpec::gust_seed(gust_seed, i),
+                            ),
+                            controller: m.controller,
+                            sensor: m.sensor,
+                            ranging_seed: m.ranging_seed,
+                        }
+                    })
+                    .collect();
+                drive(
+                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self,
+                )?
+            }
+        };
         Ok(TeamResult {
             runs: r.runs.into_iter().map(|x| self.explain_end(x)).collect(),
             ..r
         })
+    }
+}
+
+/// [`Group::with_isoline`], driven to the end.
+#[allow(clippy::too_many_arguments)]
+fn drive<F, V, C, S>(
+    field: &F,
+    vehicle: &V,
+    cfg: TeamConfig,
+    members: Vec<TeamMember<V::State, C>>,
+    isoline: Option<TeamIsoline<'_>>,
+    oracles: &Oracles<'_>,
+    sinks: &mut [S],
+    scenario: &Scenario,
+) -> Result<TeamResult, TeamError>
+where
+    F: ScalarField,
+    V: SpeedCommand,
+    C: IsolineController,
+    S: TraceSink,
+{
+    if !sinks.is_empty() && sinks.len() != members.len() {
+        return Err(TeamError::Sinks {
+            sinks: sinks.len(),
+            vehicles: members.len(),
+        });
+    }
+    let mut g = Group::with_isoline(vehicle, &scenario.plan(), cfg, members, isoline)?;
+    g.drive(field, vehicle, oracles, sinks);
+    Ok(g.finish(sinks))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parse_scenario;
+    use isotrack_sim::team::arc::ArcProjection;
+    use isotrack_sim::TraceRow;
+
+    /// A fixed-wing UAV with gusts and a noisy sensor on the circular field (radius 600 m).
+    const UAV: &str = "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.001\n\
+        [vehicle]\nkind = \"fixed_wing\"\nairspeed_mps = 30.0\ngusts = true\n\
+        [initial]\nx_m = 600.0\ny_m = 0.0\nheading_rad = -1.5707963267948966\n\
+        [sensor]\nrate_hz = 1.0\nnoise_std = 0.01\n\
+        [controller]\nlevel = 10.976\nkp = 150.0\nki = 0.0\nc1 = 0.0005\nc2 = 0.1\n\
+        [sim]\ndt_s = 0.01\nduration_s = 60.0\nseed = 9\n";
+
+    /// A team of one fixed-wing UAV with the `none` law flies the single run, bit for bit:
+    /// the same result and the same trace (its airspeed command the configured airspeed,
+    /// its gusts and sensor seeded as the single run's).
+    #[test]
+    fn a_team_of_one_fixed_wing_is_the_single_run() {
+        let single = parse_scenario(UAV, "<test>", &[]).unwrap();
+        let mut alone: Vec<TraceRow> = Vec::new();
+        let r = single.run(&mut alone);
+        let team = parse_scenario(
+            &format!("{UAV}[team]\ncount = 1\nspacing = \"none\"\n"),
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        let t = team.spec().team.as_ref().unwrap();
+        assert_eq!((t.v_min_mps, t.v_max_mps), (20.0, 45.0));
+        let mut sinks = vec![Vec::<TraceRow>::new()];
+        let tr = team.run_team(&mut sinks).unwrap().unwrap();
+        assert_eq!(format!("{:?}", tr.runs[0]), format!("{r:?}"));
+        assert!(alone.len() > 100);
+        assert_eq!(format!("{:?}", sinks[0]), format!("{alone:?}"));
+        // range_balance with one vehicle has no neighbour: the same flight too.
+        let team = parse_scenario(
+            &format!("{UAV}[team]\ncount = 1\nspacing = \"range_balance\"\n"),
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        let tr = team
+            .run_team(&mut [] as &mut [Vec<TraceRow>])
+            .unwrap()
+            .unwrap();
+        assert_eq!(format!("{:?}", tr.runs[0]), format!("{r:?}"));
+    }
+
+    /// A fixed-wing team's envelope outside the Aerosonde's safe commanded airspeeds [20, 45] m/s
+    /// is refused by key; inside it, accepted.
+    #[test]
+    fn a_fixed_wing_envelope_is_checked() {
+        for (set, key) in [
+            ("team.v_min_mps=10.0", "team.v_min_mps"),
+            ("team.v_max_mps=50.0", "team.v_max_mps"),
+        ] {
+            let e = parse_scenario(
+                &format!("{UAV}[team]\ncount = 1\n"),
+                "<test>",
+                &[set.to_string()],
+            )
+            .unwrap_err();
+            let text = format!("{e:?}");
+            assert!(text.contains(key) && text.contains("[20, 45]"), "{text}");
+        }
+        let ok = parse_scenario(
+            &format!("{UAV}[team]\ncount = 1\nv_min_mps = 25.0\nv_max_mps = 35.0\n"),
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        let t = ok.spec().team.clone().unwrap();
+        assert_eq!((t.v_min_mps, t.v_max_mps), (25.0, 35.0));
+    }
+
+    /// Two fixed-wing UAVs a quarter of the circle apart, `arc_reference` from 25 to 35 m/s:
+    /// each UAV's airspeed stays within the envelope up to the airspeed loop's transients
+    /// (2.5 m/s), and the team's speeds (ground speeds, in still air) likewise.
+    #[test]
+    fn a_fixed_wing_team_flies_its_airspeed_commands() {
+        let s = parse_scenario(
+            &format!(
+                "{UAV}[team]\nspacing = \"arc_reference\"\nk_v = 0.05\nv_min_mps = 25.0\n\
+                 v_max_mps = 35.0\nspread = {{ along = \"arc\", radius_m = 600.0, step_rad = 0.5 }}\n\
+                 count = 2\n"
+            ),
+            "<test>",
+            &["vehicle.gusts=false".into()],
+        )
+        .unwrap();
+        let mut sinks = vec![Vec::<TraceRow>::new(), Vec::new()];
+        let r = s.run_team(&mut sinks).unwrap().unwrap();
+        let t = r.team.unwrap();
+        let [lo, hi] = t.speed_range_mps.unwrap();
+        // Ground speeds of airspeeds within the envelope, up to the airspeed loop's transient
+        // after a step of the command (a 5 m/s step undershoots by about 2 m/s).
+        assert!(lo > 22.5 && hi < 37.5, "{lo} {hi}");
+        // The gap behind vehicle 0 is the larger one at first: it slows, 1 speeds up.
+        assert!(hi > 31.0 && lo < 29.0, "{lo} {hi}");
+        for rows in &sinks {
+            for row in rows {
+                let va = row.telemetry.unwrap().airspeed_mps;
+                assert!((22.5..37.5).contains(&va), "airspeed {va}");
+            }
+        }
+    }
+
+    /// The ellipse of a single Gaussian plume, `A exp(-(u^2/sx^2 + v^2/sy^2)/2) = level`:
+    /// semi-axes `s sqrt(2 ln(A/level))`. The team's isoline (marching squares over the
+    /// sources' reach) has the ellipse's perimeter, by the integral of `|r'(t)|`
+    /// (Simpson, 20 000 intervals), to 0.1 %.
+    #[test]
+    fn a_plume_ellipse_has_its_perimeter() {
+        let s = parse_scenario(
+            "[field]\nkind = \"gaussian_plumes\"\nsources = [{ center_m = [3.0, -2.0], amplitude = 20.0, sigma_m = [12.0, 7.0], rotation_rad = 0.5 }]\n\
+             [initial]\nx_m = 17.0\ny_m = 5.0\n[controller]\nlevel = 10.0\n",
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        let k = (2.0 * 2f64.ln()).sqrt();
+        let (a, b) = (12.0 * k, 7.0 * k);
+        let n = 20_000;
+        let speed = |t: f64| (a * a * t.sin().powi(2) + b * b * t.cos().powi(2)).sqrt();
+        let h = 2.0 * std::f64::consts::PI / n as f64;
+        let per = (0..=n)
+            .map(|i| {
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * speed(i as f64 * h)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0;
+        match s.team_isoline() {
+            TeamIsolineModel::Polyline(p) => {
+                assert!(
+                    (p.length_m() / per - 1.0).abs() < 1e-3,
+                    "{} vs {per}",
+                    p.length_m()
+                );
+                assert!(p.twice_signed_area_m2() > 0.0);
+                // The ellipse's area pi a b, to the polygon's.
+                let area = 0.5 * p.twice_signed_area_m2();
+                let want = std::f64::consts::PI * a * b;
+                assert!((area / want - 1.0).abs() < 2e-3, "{area} vs {want}");
+            }
+            _ => panic!("no polyline"),
+        }
+        // A linear ramp's isoline is a straight line: no closed isoline, a note.
+        let s = parse_scenario(
+            "[field]\nkind = \"linear_ramp\"\noffset = 0.0\ngradient_per_m = [1.0, 0.0]\n",
+            "<test>",
+            &[],
+        )
+        .unwrap();
+        assert!(matches!(
+            s.team_isoline(),
+            TeamIsolineModel::None(NO_CLOSED_ISOLINE)
+        ));
+    }
+
+    /// The circle as a polyline: the paper's radial field with a domain (so the isoline is
+    /// extracted by marching squares, not known in closed form) gives the circle's team
+    /// metrics (CircleArc, exact) to the lattice's discretisation.
+    #[test]
+    fn a_polyline_circle_gives_the_circle_metrics() {
+        let base = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/team-circular-4.toml"
+        ))
+        .unwrap();
+        let circle = parse_scenario(&base, "<test>", &["sim.duration_s=200".into()]).unwrap();
+        let poly = parse_scenario(
+            &base,
+            "<test>",
+            &[
+                "sim.duration_s=200".into(),
+                "field.domain_m=[-20.0, 20.0, -20.0, 20.0]".into(),
+            ],
+        )
+        .unwrap();
+        assert!(matches!(circle.team_isoline(), TeamIsolineModel::Circle(_)));
+        let TeamIsolineModel::Polyline(p) = poly.team_isoline() else {
+            panic!("no polyline");
+        };
+        let l = 2.0 * std::f64::consts::PI * 10.0 * std::f64::consts::LN_2;
+        assert!((p.length_m() / l - 1.0).abs() < 1e-3, "{}", p.length_m());
+        let go = |s: &Scenario| {
+            s.run_team(&mut [] as &mut [Vec<TraceRow>])
+                .unwrap()
+                .unwrap()
+                .team
+                .unwrap()
+        };
+        let (tc, tp) = (go(&circle), go(&poly));
+        assert!(
+            (tc.gap_cv.unwrap() - tp.gap_cv.unwrap()).abs() < 0.005,
+            "{tc:?} {tp:?}"
+        );
+        let (mc, mp) = (
+            tc.revisit_time_max_s.unwrap(),
+            tp.revisit_time_max_s.unwrap(),
+        );
+        assert!((mc - mp).abs() < 0.02 * mc, "{mc} {mp}");
+        assert!((tc.time_to_even_s.unwrap() - tp.time_to_even_s.unwrap()).abs() < 2.0);
     }
 }

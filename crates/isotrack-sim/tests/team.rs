@@ -521,3 +521,96 @@ fn throughput_1000_ring() {
         cpu.map(|c| steps as f64 / c / 1e6)
     );
 }
+
+/// The circle of radius `R`, as a moving isoline whose every version is the inscribed
+/// `m`-gon started at a vertex that jumps with the version, clockwise on odd versions: what
+/// marching squares of a field re-extracted per frame gives (a loop started anywhere, either
+/// way round).
+struct JumpingCircle {
+    m: usize,
+}
+
+impl isotrack_sim::team::arc::MovingArc for JumpingCircle {
+    fn version(&self, t_s: f64) -> Option<i64> {
+        Some((t_s / 1.0).floor() as i64)
+    }
+    fn loops(&self, version: i64) -> Vec<Vec<Vec2>> {
+        let r = radius();
+        let shift = (version * 37).rem_euclid(self.m as i64) as usize;
+        let mut l: Vec<Vec2> = (0..self.m)
+            .map(|i| {
+                let th = 2.0 * PI * ((i + shift) % self.m) as f64 / self.m as f64;
+                Vec2::new(r * th.cos(), r * th.sin())
+            })
+            .collect();
+        if version % 2 != 0 {
+            l.reverse();
+        }
+        // A small second loop far off, which no robot is near: never picked.
+        let far = (0..8)
+            .map(|i| {
+                let th = 2.0 * PI * i as f64 / 8.0;
+                Vec2::new(100.0 + th.cos(), th.sin())
+            })
+            .collect();
+        vec![far, l]
+    }
+}
+
+/// The team metrics along a moving isoline (extracted again every second, started anywhere,
+/// either way round) equal the circle's (`CircleArc`, exact) to the polygon's discretisation:
+/// the arc coordinates are carried across extractions, not reset.
+#[test]
+fn a_moving_isoline_gives_the_circle_metrics() {
+    use isotrack_sim::team::TeamIsoline;
+    use isotrack_sim::Group;
+    let f = field();
+    let v = vehicle(0.25, 0.75);
+    let plan = StepPlan::new(DT, 200.0, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: ideal_ranging(10.0),
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig {
+            every_steps: 10,
+            ..TeamMetricsConfig::default()
+        },
+    };
+    let jumping = JumpingCircle { m: 720 };
+    let circle = arc();
+    let go = |iso: TeamIsoline<'_>| {
+        let mut g =
+            Group::with_isoline(&v, &plan, cfg, members(&v, &cluster(), 100.0), Some(iso)).unwrap();
+        g.drive(&f, &v, &Oracles::default(), &mut [] as &mut [NoTrace]);
+        g.finish(&mut [] as &mut [NoTrace]).team.unwrap()
+    };
+    let (tm, tc) = (
+        go(TeamIsoline::Moving(&jumping)),
+        go(TeamIsoline::Fixed(&circle)),
+    );
+    let per = 2.0 * 720.0 * radius() * (PI / 720.0).sin();
+    assert!((tm.isoline_length_m - per).abs() < 1e-9, "{tm:?}");
+    let stats = tm.moving_isoline.clone().unwrap();
+    // One extraction per second of the 200 s run, t = 0 and t = 200 s included.
+    assert_eq!(stats.extractions, 201);
+    assert_eq!(stats.samples_without_isoline, 0);
+    assert!(
+        (tm.gap_cv.unwrap() - tc.gap_cv.unwrap()).abs() < 0.005,
+        "{tm:?} {tc:?}"
+    );
+    let (mm, mc) = (
+        tm.revisit_time_max_s.unwrap(),
+        tc.revisit_time_max_s.unwrap(),
+    );
+    assert!((mm - mc).abs() < 0.02 * mc, "{mm} {mc}");
+    let (am, ac) = (
+        tm.revisit_time_mean_s.unwrap(),
+        tc.revisit_time_mean_s.unwrap(),
+    );
+    assert!((am - ac).abs() < 0.02 * ac, "{am} {ac}");
+    assert_eq!(tm.order_preserved, tc.order_preserved);
+    assert!(tc.moving_isoline.is_none());
+}

@@ -12,5 +12,8 @@ pub mod dubins;
 pub mod fixed_wing;
 
 pub use dubins::{Dubins, DubinsSpeedState, DubinsState, DubinsVariableSpeed};
-pub use fixed_wing::{FixedWing, FixedWingConfig, FixedWingState};
+pub use fixed_wing::{
+    AirspeedEnvelopeError, FixedWing, FixedWingConfig, FixedWingState, FixedWingVariableSpeed,
+    COMMANDED_AIRSPEED_RANGE_MPS,
+};
 pub use isotrack_core::{SpeedCommand, Vehicle};

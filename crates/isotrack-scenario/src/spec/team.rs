@@ -10,6 +10,7 @@ use crate::resolve::{Echo, Issue};
 use crate::schema::{RingName, SpacingName, SpreadAlong, TeamSection};
 use isotrack_sim::team::ranging::{Ranging, RangingConfig};
 use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
+use isotrack_vehicles::fixed_wing::COMMANDED_AIRSPEED_RANGE_MPS;
 
 /// Largest `team.count`: the issue's scale target is a ring of 1 000 robots; ten times that
 /// keeps a run's memory (per vehicle: state, sensor, ranging queue) in megabytes.
@@ -72,6 +73,16 @@ impl TeamSpec {
         }
     }
 
+    /// Vehicle `i`'s gust seed (a fixed wing with `vehicle.gusts`): `seed` (the vehicle's
+    /// configured one) for vehicle 0, as the single run; a SplitMix64 mix for the others.
+    pub fn gust_seed(seed: u64, i: usize) -> u64 {
+        if i == 0 {
+            seed
+        } else {
+            splitmix(seed ^ splitmix(!(i as u64)))
+        }
+    }
+
     /// Vehicle `i`'s ranging seed (a stream of its own, apart from every sensor's).
     pub fn ranging_seed(seed: u64, i: usize) -> u64 {
         splitmix(seed ^ splitmix(2 * i as u64 + 1))
@@ -85,14 +96,11 @@ impl TeamSpec {
         initial: Start,
     ) -> Result<Option<Self>, Issue> {
         let Some(t) = t else { return Ok(None) };
-        let v0 = match vehicle {
-            VehicleSpec::Dubins { speed_mps } => *speed_mps,
-            VehicleSpec::FixedWing(_) => {
-                return Err(issue(
-                    "team",
-                    "is for vehicle.kind = \"dubins\" only for now (the fixed wing's airspeed command is not wired yet)".into(),
-                ))
-            }
+        // The speed the spacing law commands: the Dubins robot's speed, the fixed wing's
+        // airspeed (through its autopilot's airspeed loop, within the model's safe range).
+        let (v0, airframe) = match vehicle {
+            VehicleSpec::Dubins { speed_mps } => (*speed_mps, None),
+            VehicleSpec::FixedWing(cfg) => (cfg.airspeed_mps, Some(COMMANDED_AIRSPEED_RANGE_MPS)),
         };
         let count = match (t.count, &t.starts) {
             (Some(c), _) => c,
@@ -249,14 +257,30 @@ impl TeamSpec {
             SpacingName::RangeBalance => SpacingLaw::RangeBalance { gain_per_s: k_v },
             SpacingName::ArcReference => SpacingLaw::ArcReference { gain_per_s: k_v },
         };
+        let (lo, hi) = airframe.unwrap_or((0.0, f64::INFINITY));
         let v_min = positive(
             "team.v_min_mps",
-            Some(t.v_min_mps.unwrap_or(V_MIN_FRACTION * v0)),
+            Some(t.v_min_mps.unwrap_or((V_MIN_FRACTION * v0).max(lo))),
         )?;
         let v_max = positive(
             "team.v_max_mps",
-            Some(t.v_max_mps.unwrap_or(V_MAX_FACTOR * v0)),
+            Some(t.v_max_mps.unwrap_or((V_MAX_FACTOR * v0).min(hi))),
         )?;
+        if airframe.is_some() {
+            for (key, v) in [("team.v_min_mps", v_min), ("team.v_max_mps", v_max)] {
+                if !(lo..=hi).contains(&v) {
+                    return Err(issue(
+                        key,
+                        format!(
+                            "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
+                            Echo(lo),
+                            Echo(hi),
+                            Echo(v)
+                        ),
+                    ));
+                }
+            }
+        }
         if v_min > v0 {
             return Err(issue(
                 "team.v_min_mps",

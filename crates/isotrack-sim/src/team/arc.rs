@@ -144,6 +144,129 @@ impl ArcProjection for PolylineArc {
     }
 }
 
+impl PolylineArc {
+    /// Twice the signed area enclosed (the shoelace sum `sum x_i y_{i+1} - x_{i+1} y_i`):
+    /// positive for counter-clockwise vertices.
+    pub fn twice_signed_area_m2(&self) -> f64 {
+        let v = &self.vertices;
+        let n = v.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (v[i], v[(i + 1) % n]);
+                a.x * b.y - b.x * a.y
+            })
+            .sum()
+    }
+
+    /// The closed polyline through `vertices` oriented counter-clockwise (as [`CircleArc`]'s
+    /// `s`) and, given the isoline of the last extraction `previous`, started at the vertex
+    /// nearest to `previous`'s first vertex: the arc coordinate of a point of an isoline that
+    /// moves and deforms a little between extractions then changes a little (marching squares
+    /// starts a loop anywhere). `O(vertices)`.
+    pub fn aligned(
+        mut vertices: Vec<Vec2>,
+        previous: Option<&PolylineArc>,
+    ) -> Result<Self, PolylineError> {
+        let probe = Self::new(vertices.clone())?;
+        if probe.twice_signed_area_m2() < 0.0 {
+            vertices.reverse();
+        }
+        if let Some(start) = previous.and_then(|p| p.vertices.first().copied()) {
+            let mut nearest = (0usize, f64::INFINITY);
+            for (i, v) in vertices.iter().enumerate() {
+                let d = (*v - start).dot(*v - start);
+                if d < nearest.1 {
+                    nearest = (i, d);
+                }
+            }
+            let nearest = nearest.0;
+            vertices.rotate_left(nearest);
+        }
+        Self::new(vertices)
+    }
+}
+
+/// The distance from `p` to the closed polyline `loop_m` (vertices, the last joined to the
+/// first), m.
+pub fn distance_to_loop(loop_m: &[Vec2], p: Vec2) -> f64 {
+    let n = loop_m.len();
+    let mut best = f64::INFINITY;
+    for i in 0..n {
+        let a = loop_m[i];
+        let seg = loop_m[(i + 1) % n] - a;
+        let len2 = seg.dot(seg);
+        let u = if len2 > 0.0 {
+            ((p - a).dot(seg) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let q = a + seg * u;
+        best = best.min((p - q).dot(p - q));
+    }
+    best.sqrt()
+}
+
+/// Most vehicles that vote in [`pick_loop`]: the choice costs `O(min(N, 64) x vertices)`.
+pub const MAX_LOOP_VOTERS: usize = 64;
+
+/// Which of several closed loops of an isoline the team is on: each of (at most
+/// [`MAX_LOOP_VOTERS`], evenly picked) `positions` votes for the loop nearest to it; the loop
+/// with the most votes (a tie: the longer, then the first). `None` without loops or positions.
+pub fn pick_loop(loops: &[Vec<Vec2>], positions: &[Vec2]) -> Option<usize> {
+    if loops.is_empty() {
+        return None;
+    }
+    if loops.len() == 1 {
+        return Some(0);
+    }
+    let finite: Vec<Vec2> = positions
+        .iter()
+        .copied()
+        .filter(|p| p.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return None;
+    }
+    let stride = finite.len().div_ceil(MAX_LOOP_VOTERS);
+    let mut votes = vec![0usize; loops.len()];
+    for p in finite.iter().step_by(stride) {
+        let mut best = (f64::INFINITY, 0usize);
+        for (j, l) in loops.iter().enumerate() {
+            let d = distance_to_loop(l, *p);
+            if d < best.0 {
+                best = (d, j);
+            }
+        }
+        votes[best.1] += 1;
+    }
+    let length = |l: &[Vec2]| -> f64 {
+        (0..l.len())
+            .map(|i| (l[(i + 1) % l.len()] - l[i]).norm())
+            .sum()
+    };
+    let mut pick = 0;
+    for j in 1..loops.len() {
+        let better = votes[j] > votes[pick]
+            || (votes[j] == votes[pick] && length(&loops[j]) > length(&loops[pick]));
+        if better {
+            pick = j;
+        }
+    }
+    Some(pick)
+}
+
+/// An isoline that moves (a time series of frames, a puff plume): the team metrics measure
+/// along the isoline of the time, extracted again only when [`version`](Self::version)
+/// changes (once per frame or per period, never per vehicle).
+pub trait MovingArc: Sync {
+    /// Which isoline is in force at `t_s` (the same number: the same isoline, not extracted
+    /// again); `None` where there is none (the field has ended).
+    fn version(&self, t_s: f64) -> Option<i64>;
+    /// The closed loops of the isoline of `version` (each its vertices, at least 3, the
+    /// closing one not repeated); open chains (leaving the field) are left out.
+    fn loops(&self, version: i64) -> Vec<Vec<Vec2>>;
+}
+
 /// `x mod l` in `[0, l)`.
 #[inline]
 pub(crate) fn wrap_arc(x: f64, l: f64) -> f64 {
@@ -196,5 +319,49 @@ mod tests {
         assert!(PolylineArc::new(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)]).is_err());
         assert!((wrap_arc(-1.0, 10.0) - 9.0).abs() < 1e-15);
         assert!((wrap_arc(23.0, 10.0) - 3.0).abs() < 1e-12);
+    }
+
+    /// A clockwise square is turned counter-clockwise (the shoelace area `2 a^2` positive) and
+    /// started at the vertex nearest to the last loop's start; of two loops, the one most
+    /// points are nearest to is picked (a tie: the longer).
+    #[test]
+    fn aligned_and_picked() {
+        let sq = |c: Vec2, a: f64| {
+            vec![
+                c + Vec2::new(0.0, 0.0),
+                c + Vec2::new(0.0, a),
+                c + Vec2::new(a, a),
+                c + Vec2::new(a, 0.0),
+            ]
+        };
+        let o = Vec2::new(0.0, 0.0);
+        let p = PolylineArc::aligned(sq(o, 2.0), None).unwrap();
+        assert!((p.twice_signed_area_m2() - 8.0).abs() < 1e-12);
+        assert_eq!(p.vertices()[0], Vec2::new(2.0, 0.0));
+        let prev = PolylineArc::new(vec![
+            Vec2::new(2.1, 2.1),
+            Vec2::new(0.0, 2.0),
+            Vec2::new(0.0, 0.0),
+        ])
+        .unwrap();
+        let q = PolylineArc::aligned(sq(o, 2.0), Some(&prev)).unwrap();
+        assert_eq!(q.vertices()[0], Vec2::new(2.0, 2.0));
+        assert!(q.twice_signed_area_m2() > 0.0);
+        // The point (2, 1) has s = 1 on a square started at (2, 0) going counter-clockwise.
+        assert!((p.project(Vec2::new(2.5, 1.0)).unwrap().s_m - 1.0).abs() < 1e-12);
+        let loops = vec![sq(o, 1.0), sq(Vec2::new(10.0, 0.0), 1.0)];
+        let pts = [
+            Vec2::new(10.5, 0.5),
+            Vec2::new(11.5, 0.2),
+            Vec2::new(0.5, 0.5),
+        ];
+        assert_eq!(pick_loop(&loops, &pts), Some(1));
+        let loops = vec![sq(o, 1.0), sq(Vec2::new(10.0, 0.0), 3.0)];
+        assert_eq!(
+            pick_loop(&loops, &[Vec2::new(0.5, 0.5), Vec2::new(11.0, 1.0)]),
+            Some(1)
+        );
+        assert_eq!(pick_loop(&[], &pts), None);
+        assert!((distance_to_loop(&sq(o, 1.0), Vec2::new(3.0, 0.5)) - 2.0).abs() < 1e-12);
     }
 }

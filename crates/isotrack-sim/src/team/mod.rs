@@ -28,7 +28,7 @@ use crate::kernel::{ask, Sensed, VehicleRun};
 use crate::run::{Oracles, Outcome, RunResult, StepPlan};
 use crate::sensor::Sensor;
 use crate::trace::TraceSink;
-use arc::{wrap_arc, ArcProjection};
+use arc::{pick_loop, wrap_arc, ArcProjection, MovingArc, PolylineArc};
 use isotrack_core::{IsolineController, Measurement, ScalarField, SpeedCommand, Vec2};
 use metrics::{TeamMetrics, TeamMetricsConfig, TeamSummary};
 use ranging::{RangeSample, Ranging, RangingConfig, RangingError};
@@ -107,6 +107,24 @@ pub struct TeamResult {
     pub ring: Vec<Option<[u32; 2]>>,
 }
 
+/// The true isoline a team's metrics (and the `arc_reference` law) measure along.
+#[derive(Clone, Copy)]
+pub enum TeamIsoline<'a> {
+    /// One isoline for the whole run (a circle, a polyline extracted once).
+    Fixed(&'a dyn ArcProjection),
+    /// The isoline of the time, extracted again when its version changes (checked at each
+    /// metrics sample): the loop most vehicles are nearest to ([`arc::pick_loop`]), oriented
+    /// and started as the last one ([`PolylineArc::aligned`]).
+    Moving(&'a dyn MovingArc),
+}
+
+/// The moving isoline in force.
+struct Current<'a> {
+    source: &'a dyn MovingArc,
+    version: Option<i64>,
+    arc: Option<PolylineArc>,
+}
+
 /// The probe of ring discovery in progress.
 struct Discovery {
     cfg: DiscoveryConfig,
@@ -153,6 +171,7 @@ pub struct Group<'a, X, C> {
     speed_cmd: Vec<f64>,
     discovery: Option<Discovery>,
     arc: Option<ArcRef<'a>>,
+    moving: Option<Current<'a>>,
     metrics: Option<TeamMetrics>,
     /// The latest range sample each vehicle's ranging unit delivered (for an agent outside the
     /// loop; `None` before the first).
@@ -185,7 +204,27 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
     where
         V: SpeedCommand<State = X>,
     {
-        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Lent))
+        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Lent), None)
+    }
+
+    /// [`new`](Self::new) with an isoline that may move ([`TeamIsoline::Moving`]: the
+    /// `arc_reference` law then uses the isoline of the last metrics sample).
+    pub fn with_isoline<V>(
+        vehicle: &V,
+        plan: &StepPlan,
+        cfg: TeamConfig,
+        members: Vec<TeamMember<X, C>>,
+        isoline: Option<TeamIsoline<'a>>,
+    ) -> Result<Self, TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        let (arc, moving) = match isoline {
+            Some(TeamIsoline::Fixed(a)) => (Some(ArcRef::Lent(a)), None),
+            Some(TeamIsoline::Moving(m)) => (None, Some(m)),
+            None => (None, None),
+        };
+        Self::with_arc(vehicle, plan, cfg, members, arc, moving)
     }
 
     /// [`Group::new`] with the true isoline owned by the team (for a team held across calls,
@@ -200,7 +239,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
     where
         V: SpeedCommand<State = X>,
     {
-        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Owned))
+        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Owned), None)
     }
 
     fn with_arc<V>(
@@ -209,10 +248,16 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         cfg: TeamConfig,
         members: Vec<TeamMember<X, C>>,
         arc: Option<ArcRef<'a>>,
+        moving: Option<&'a dyn MovingArc>,
     ) -> Result<Self, TeamError>
     where
         V: SpeedCommand<State = X>,
     {
+        let moving = moving.map(|m| Current {
+            source: m,
+            version: None,
+            arc: None,
+        });
         let n = members.len();
         let Some(first) = members.first() else {
             return Err(TeamError::Empty);
@@ -235,7 +280,9 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     expected: "finite and >= 0",
                 });
             }
-            SpacingLaw::ArcReference { .. } if arc.is_none() => return Err(TeamError::NoIsoline),
+            SpacingLaw::ArcReference { .. } if arc.is_none() && moving.is_none() => {
+                return Err(TeamError::NoIsoline)
+            }
             _ => {}
         }
         let discovery = match cfg.spacing.ring {
@@ -288,13 +335,15 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             ranging.push(Ranging::new(cfg.ranging, plan.dt_s, m.ranging_seed)?);
             states[i / LANES][i % LANES] = x;
         }
-        let metrics = arc_of(&arc).map(|a| {
-            let mc = TeamMetricsConfig {
-                steady_state_start_step: plan.steady_state_start_step,
-                ..cfg.metrics
-            };
-            TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0)
-        });
+        let mc = TeamMetricsConfig {
+            steady_state_start_step: plan.steady_state_start_step,
+            ..cfg.metrics
+        };
+        let metrics = match (arc_of(&arc), moving.is_some()) {
+            (Some(a), _) => Some(TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0)),
+            (None, true) => Some(TeamMetrics::new(mc, n, f64::NAN, plan.dt_s, v0).moving()),
+            (None, false) => None,
+        };
         Ok(Self {
             n,
             k: 0,
@@ -311,6 +360,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             speed_cmd,
             discovery,
             arc,
+            moving,
             metrics,
             delivered: vec![None; n],
             speed_override: None,
@@ -628,9 +678,21 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             self.omega[i] = self.runs[i].omega_radps();
             self.speeds[i] = vehicle.speed_mps(state);
         }
-        if let (Some(m), Some(a)) = (self.metrics.as_mut(), arc_of(&self.arc)) {
+        if let Some(m) = self.metrics.as_mut() {
             if m.due() {
-                m.observe(k, a, &self.positions, &self.speeds, &self.alive);
+                match (arc_of(&self.arc), self.moving.as_mut()) {
+                    (Some(a), _) => m.observe(k, a, &self.positions, &self.speeds, &self.alive),
+                    (None, Some(cur)) => {
+                        if cur.refresh(t, &self.positions, &self.alive) {
+                            m.extracted();
+                        }
+                        match &cur.arc {
+                            Some(a) => m.observe(k, a, &self.positions, &self.speeds, &self.alive),
+                            None => m.skip(k),
+                        }
+                    }
+                    (None, None) => {}
+                }
             }
         }
         // 5. Hold the speed commands and move, in lanes.
@@ -715,7 +777,12 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     if !now {
                         continue;
                     }
-                    let Some(arc) = arc_of(&self.arc) else {
+                    let moving = self
+                        .moving
+                        .as_ref()
+                        .and_then(|c| c.arc.as_ref())
+                        .map(|a| a as &dyn ArcProjection);
+                    let Some(arc) = arc_of(&self.arc).or(moving) else {
                         continue;
                     };
                     let l = arc.length_m();
@@ -827,6 +894,34 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             team: self.metrics.as_ref().map(|m| m.finish()),
             ring: self.ring,
         }
+    }
+}
+
+impl Current<'_> {
+    /// Extracts the isoline again if its version at `t_s` differs from the one in force;
+    /// returns whether it did. Without a version (the field ended) or a closed loop, no isoline.
+    fn refresh(&mut self, t_s: f64, positions: &[Vec2], alive: &[bool]) -> bool {
+        let v = self.source.version(t_s);
+        if v == self.version {
+            return false;
+        }
+        self.version = v;
+        let Some(v) = v else {
+            self.arc = None;
+            return false;
+        };
+        let loops = self.source.loops(v);
+        let live: Vec<Vec2> = positions
+            .iter()
+            .zip(alive)
+            .filter(|(_, a)| **a)
+            .map(|(p, _)| *p)
+            .collect();
+        let voters = if live.is_empty() { positions } else { &live };
+        let prev = self.arc.take();
+        self.arc = pick_loop(&loops, voters)
+            .and_then(|j| PolylineArc::aligned(loops[j].clone(), prev.as_ref()).ok());
+        true
     }
 }
 

@@ -84,6 +84,9 @@ pub struct FixedWingState {
     pub autopilot: AutopilotState,
     /// Course command, rad clockwise from north (continuous).
     pub course_cmd_rad: f64,
+    /// Airspeed command of the autopilot's airspeed loop, m/s: the configured (trim)
+    /// airspeed, unless a team's spacing law sets it ([`FixedWingVariableSpeed`]).
+    pub airspeed_cmd_mps: f64,
     /// Ground course, rad clockwise from north (continuous).
     pub course_rad: f64,
     /// The last deflections.
@@ -134,6 +137,10 @@ impl FixedWing {
     pub fn course_loop_model(&self) -> CourseLoopModel {
         course_loop_model(&self.params, &self.trim, &self.gains)
     }
+    /// The configuration it was built with.
+    pub fn config(&self) -> &FixedWingConfig {
+        &self.cfg
+    }
     /// The parameters.
     pub fn params(&self) -> &Aerosonde {
         &self.params
@@ -147,6 +154,18 @@ impl FixedWing {
     /// along `heading_rad` (counter-clockwise from east) over the ground: the airframe is
     /// crabbed into any steady wind so that its ground course is the heading given.
     pub fn initial_state(&self, x_m: f64, y_m: f64, heading_rad: f64) -> FixedWingState {
+        self.initial_state_seeded(x_m, y_m, heading_rad, self.cfg.seed)
+    }
+
+    /// [`initial_state`](Self::initial_state) with the gusts (if any) seeded by `gust_seed`
+    /// instead of the configuration's seed: each vehicle of a team its own gusts.
+    pub fn initial_state_seeded(
+        &self,
+        x_m: f64,
+        y_m: f64,
+        heading_rad: f64,
+        gust_seed: u64,
+    ) -> FixedWingState {
         let chi = FRAC_PI_2 - heading_rad;
         let [wn, we, _] = self.steady_ned();
         // Crab: air velocity Va (cos psi, sin psi) + wind must point along chi.
@@ -163,13 +182,10 @@ impl FixedWing {
         for i in 0..3 {
             x[3 + i] += r[0][i] * wned[0] + r[1][i] * wned[1] + r[2][i] * wned[2];
         }
-        let gusts = self.cfg.gusts.then(|| {
-            Dryden::new(
-                DrydenParams::default(),
-                self.cfg.airspeed_mps,
-                self.cfg.seed,
-            )
-        });
+        let gusts = self
+            .cfg
+            .gusts
+            .then(|| Dryden::new(DrydenParams::default(), self.cfg.airspeed_mps, gust_seed));
         let mut s = FixedWingState {
             x,
             autopilot: if self.cfg.trim_feedforward {
@@ -178,6 +194,7 @@ impl FixedWing {
                 AutopilotState::default()
             },
             course_cmd_rad: 0.0,
+            airspeed_cmd_mps: self.cfg.airspeed_mps,
             course_rad: 0.0,
             deltas: Deltas {
                 elevator_rad: self.trim.delta_e_rad,
@@ -296,7 +313,7 @@ impl Vehicle for FixedWing {
         let cmd = Commands {
             course_rad: s.course_cmd_rad,
             altitude_m: self.cfg.altitude_m,
-            airspeed_mps: self.cfg.airspeed_mps,
+            airspeed_mps: s.airspeed_cmd_mps,
         };
         self.step_with_commands(s, &cmd, dt_s);
     }
@@ -319,6 +336,100 @@ impl Vehicle for FixedWing {
             airspeed_mps: self.air_data(s).va_mps,
             roll_rad: s.x[6],
         })
+    }
+}
+
+/// The UAV with its airspeed commanded (a team's spacing law, docs/TEAMS.md): the command goes
+/// to the autopilot's airspeed loop (throttle, and pitch in the altitude state machine's climb
+/// and descend zones), held until the next one, saturated to `[min_airspeed_mps,
+/// max_airspeed_mps]`, which must lie within [`COMMANDED_AIRSPEED_RANGE_MPS`] (20 to 45 m/s).
+/// The gains stay those of the configured trim. At the
+/// configured airspeed it flies as [`FixedWing`] does, bit for bit (the same command).
+///
+/// The speed the [`isotrack_core::SpeedCommand`] commands is the airspeed; the speed the
+/// metrics read ([`Vehicle::speed_mps`]) is the ground speed (they differ by the wind).
+#[derive(Clone, Debug)]
+pub struct FixedWingVariableSpeed {
+    /// The UAV.
+    pub uav: FixedWing,
+    /// Slowest airspeed command, m/s.
+    pub min_airspeed_mps: f64,
+    /// Fastest airspeed command, m/s.
+    pub max_airspeed_mps: f64,
+}
+
+/// The airspeeds a commanded UAV may be sent to, m/s: the model's range
+/// [`trim::AIRSPEED_RANGE_MPS`] (15 to 45 m/s, every trim within the actuators' limits and below
+/// the stall blending, in wings-level flight) without its slow end: commanded to 15 m/s in a
+/// turn at the controller's default limit (0.274 rad/s) the UAV stalls (angle of attack 1.47
+/// rad); at 20 m/s it peaks at 0.428 rad, below alpha0 = 0.471 (test
+/// `airspeed_commands_through_the_airspeed_loop`).
+pub const COMMANDED_AIRSPEED_RANGE_MPS: (f64, f64) = (20.0, trim::AIRSPEED_RANGE_MPS.1);
+
+/// Why an airspeed envelope is refused.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "the airspeed envelope [{min}, {max}] m/s must lie within the Aerosonde's safe range \
+     for commanded airspeeds [{lo}, {hi}] m/s, with min <= max",
+    lo = COMMANDED_AIRSPEED_RANGE_MPS.0,
+    hi = COMMANDED_AIRSPEED_RANGE_MPS.1
+)]
+pub struct AirspeedEnvelopeError {
+    /// The slowest airspeed asked, m/s.
+    pub min: f64,
+    /// The fastest, m/s.
+    pub max: f64,
+}
+
+impl FixedWingVariableSpeed {
+    /// `uav` with its airspeed commanded within `[min, max]` m/s (inside
+    /// [`COMMANDED_AIRSPEED_RANGE_MPS`]).
+    pub fn new(uav: FixedWing, min: f64, max: f64) -> Result<Self, AirspeedEnvelopeError> {
+        let (lo, hi) = COMMANDED_AIRSPEED_RANGE_MPS;
+        if !(lo <= min && min <= max && max <= hi) {
+            return Err(AirspeedEnvelopeError { min, max });
+        }
+        Ok(Self {
+            uav,
+            min_airspeed_mps: min,
+            max_airspeed_mps: max,
+        })
+    }
+}
+
+impl Vehicle for FixedWingVariableSpeed {
+    type State = FixedWingState;
+
+    #[inline]
+    fn step(&self, s: &mut FixedWingState, omega_radps: f64, dt_s: f64) {
+        self.uav.step(s, omega_radps, dt_s);
+    }
+    #[inline]
+    fn pose(&self, s: &FixedWingState) -> Pose2 {
+        self.uav.pose(s)
+    }
+    #[inline]
+    fn speed_mps(&self, s: &FixedWingState) -> f64 {
+        self.uav.speed_mps(s)
+    }
+    fn telemetry(&self, s: &FixedWingState) -> Option<Telemetry> {
+        self.uav.telemetry(s)
+    }
+}
+
+impl isotrack_core::SpeedCommand for FixedWingVariableSpeed {
+    fn speed_envelope_mps(&self) -> (f64, f64) {
+        (self.min_airspeed_mps, self.max_airspeed_mps)
+    }
+
+    fn command_speed(&self, s: &mut FixedWingState, speed_mps: f64) -> f64 {
+        // max then min: a NaN command gives the slowest (f64::max ignores a NaN argument).
+        let v = self
+            .min_airspeed_mps
+            .max(speed_mps)
+            .min(self.max_airspeed_mps);
+        s.airspeed_cmd_mps = v;
+        v
     }
 }
 

@@ -432,3 +432,82 @@ fn open_loop_flight_at_trim_stays_trimmed() {
     let u = (x[3] * x[3] + x[4] * x[4] + x[5] * x[5]).sqrt();
     assert!((u - 30.0).abs() < 1e-4, "airspeed {u}");
 }
+
+/// The airspeed command of a team's spacing law goes through the autopilot's airspeed loop:
+/// from trim at 30 m/s, commands at the ends of the team's range (20 and 45 m/s) and between,
+/// flown in a steady turn at the controller's default limit (0.274 rad/s at 30 m/s), settle
+/// within 0.5 m/s of the command in 60 s, the altitude within 2 m of its command, the angle of
+/// attack below the stall blending's alpha0 = 0.47 rad throughout; in still air the ground
+/// speed of the settled straight flight is the airspeed (within 0.5 m/s). Commands outside the
+/// envelope are held at its ends (a NaN at the slowest); an envelope outside [20, 45] m/s is
+/// refused. (A 15 m/s command in that turn stalls: the angle of attack reached 1.47 rad, the
+/// airspeed ran away to 32.7 m/s; at 20 m/s its peak was 0.428 rad, below alpha0 = 0.471.)
+#[test]
+fn airspeed_commands_through_the_airspeed_loop() {
+    use isotrack_core::SpeedCommand;
+    let cfg = FixedWingConfig::default();
+    let w = FixedWingVariableSpeed::new(uav(cfg), 20.0, 45.0).unwrap();
+    for (cmd, turn) in [
+        (20.0, 0.274),
+        (40.0, 0.274),
+        (45.0, 0.274),
+        (20.0, 0.0),
+        (40.0, 0.0),
+    ] {
+        let mut s = w.uav.initial_state(0.0, 0.0, 0.0);
+        assert_eq!(w.command_speed(&mut s, cmd), cmd);
+        let mut worst_alpha: f64 = 0.0;
+        for _ in 0..6000 {
+            w.step(&mut s, turn, 0.01);
+            worst_alpha = worst_alpha.max(w.uav.air_data(&s).alpha_rad);
+        }
+        let va = w.uav.air_data(&s).va_mps;
+        assert!(
+            (va - cmd).abs() < 0.5,
+            "{cmd} m/s, turn {turn}: airspeed {va}"
+        );
+        assert!(
+            (-s.x[2] - cfg.altitude_m).abs() < 2.0,
+            "{cmd} m/s: altitude {}",
+            -s.x[2]
+        );
+        assert!(
+            worst_alpha < w.uav.params().alpha0,
+            "{cmd} m/s: alpha {worst_alpha}"
+        );
+        if turn == 0.0 {
+            let g = w.speed_mps(&s);
+            assert!((g - cmd).abs() < 0.5, "{cmd} m/s: ground speed {g}");
+        }
+    }
+    let mut s = w.uav.initial_state(0.0, 0.0, 0.0);
+    assert_eq!(w.command_speed(&mut s, 100.0), 45.0);
+    assert_eq!(w.command_speed(&mut s, f64::NAN), 20.0);
+    assert_eq!(s.airspeed_cmd_mps, 20.0);
+    assert!(FixedWingVariableSpeed::new(uav(cfg), 15.0, 40.0).is_err());
+    assert!(FixedWingVariableSpeed::new(uav(cfg), 10.0, 40.0).is_err());
+    assert!(FixedWingVariableSpeed::new(uav(cfg), 20.0, 50.0).is_err());
+    assert!(FixedWingVariableSpeed::new(uav(cfg), 40.0, 20.0).is_err());
+}
+
+/// At the configured airspeed the commanded UAV flies as the UAV does, bit for bit.
+#[test]
+fn commanded_at_trim_is_the_uav() {
+    use isotrack_core::SpeedCommand;
+    let cfg = FixedWingConfig {
+        gusts: true,
+        seed: 3,
+        ..FixedWingConfig::default()
+    };
+    let plain = uav(cfg);
+    let w = FixedWingVariableSpeed::new(uav(cfg), 20.0, 40.0).unwrap();
+    let mut a = plain.initial_state(1.0, 2.0, 0.3);
+    let mut b = w.uav.initial_state(1.0, 2.0, 0.3);
+    for k in 0..3000 {
+        w.command_speed(&mut b, 30.0);
+        let om = 0.1 * ((k / 500) % 2) as f64;
+        plain.step(&mut a, om, 0.01);
+        w.step(&mut b, om, 0.01);
+    }
+    assert_eq!(a.x, b.x);
+}
