@@ -595,7 +595,7 @@ fn resume_and_merge_check_samples_from_below_and_commands_against_the_limit() {
 }
 
 /// Issue 30 (fix30c), items 2 and 3: rows real runs write are kept by `--resume` and `merge`.
-/// (a) At 30 m/s heading out of the radial field with kp = 1e307 .. 1.7e308 the first command
+/// (a) At 30 m/s heading out of the radial field with kp = 1e308 and 1.7e308 the first command
 /// overflows: the run ends `diverged` with t_end_s = 0 after moving one step of 0.01 s, a
 /// path of 30 m/s x 0.01 s = 0.3 m at most (not 30 m/s x 0 s). (b) kp = 1e-155 (ki = 0) turns
 /// at about kp x 0.5 x (c1 + c2 |eps'|) ~ 1e-155 rad/s: control_effort = sum omega^2 dt is
@@ -612,7 +612,7 @@ fn resume_and_merge_keep_diverged_first_steps_and_subnormal_metrics() {
     for (name, grid) in [
         (
             "div",
-            "[base]\ninitial.heading_rad = 0.0\nvehicle.speed_mps = 30.0\n[grid]\ncontroller.kp = [1e307, 1.7e308]\n",
+            "[base]\ninitial.heading_rad = 0.0\nvehicle.speed_mps = 30.0\n[grid]\ncontroller.kp = [1e308, 1.7e308]\n",
         ),
         ("tiny", "[grid]\ncontroller.kp = [1e-155, 1e-160]\n"),
     ] {

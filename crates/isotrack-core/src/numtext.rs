@@ -151,12 +151,12 @@ pub fn is_invisible(c: char) -> bool {
 }
 
 /// Whether `c` is no character of plain text a user names or labels something with: a
-/// control character (C0 with tab and line feed, DEL, C1), the line and paragraph separators
-/// U+2028/U+2029, or an [`is_invisible`] one (bidi controls, zero-width characters). The one
+/// control character (C0 with tab and line feed, DEL, C1) or an [`is_invisible`] one (bidi
+/// controls, zero-width characters). The one
 /// rule for the strings isotrack shows from any source: a scenario's `name`, `field.units`,
 /// ..., a NetCDF attribute, a suite's name and titles, a results file's text cells.
 pub fn is_not_plain(c: char) -> bool {
-    c.is_control() || c == '\u{2028}' || c == '\u{2029}' || is_invisible(c)
+    c.is_control() || is_invisible(c)
 }
 
 /// Whether user text shows `c` as an escape ([`Escaped`]): a [`is_terminal_control`]
