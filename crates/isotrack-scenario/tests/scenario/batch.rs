@@ -92,12 +92,16 @@ fn default_scenario_sweep_with_mixed_outcomes() {
 
 #[test]
 fn a_diverging_run_is_masked_and_the_others_go_on() {
-    // kp = 1e308 makes the command overflow to infinity at the first sample away from the
-    // isoline: those runs end diverged at t = 0, the lanes beside them complete.
+    // kp = 1e308 with c1 = 50 makes the command overflow to infinity at the first sample
+    // away from the isoline (kp c1 tanh(eps/c2) > 1.8e308 once |tanh(eps/c2)| > 0.036): those
+    // runs end diverged at t = 0, the lanes beside them complete. (kp = 1e308 alone, with the
+    // default c1 = 0.2, gives a finite command of up to 2e307 rad/s: the robot spins, its
+    // heading wrapped past 1e7 rad, and the run completes.)
     let runs = variants(&["sim.duration_s=20"], 8, |i| {
         let mut v = start(i, 9.0);
         if i % 3 == 1 {
             v.push("controller.kp=1e308".into());
+            v.push("controller.c1=50".into());
         }
         v
     });
