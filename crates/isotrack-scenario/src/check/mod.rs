@@ -28,6 +28,7 @@ mod lattice;
 pub mod map;
 pub mod moving;
 pub mod sampled;
+pub mod team;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
@@ -355,6 +356,11 @@ pub struct CheckReport {
     pub moving: moving::MovingReport,
     /// Warnings about the scenario (the same `run` prints).
     pub warnings: Vec<String>,
+    /// A scenario with `[team]`: the spacing loop and the tracking loop over the commanded
+    /// speeds ([`team`]); absent from the JSON without `[team]`. A team verdict `fails`
+    /// makes `verdict` `fails`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub team: Option<team::TeamCheckReport>,
 }
 
 /// The region over which the field is sampled: the grid, the domain, or a box round the
@@ -2144,6 +2150,13 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         verdict = Verdict::Fails;
         verdict_reason.clone_from(reason);
     }
+    let team = team::team_report(s, &l, &r);
+    if let Some(t) = &team {
+        if t.verdict == Verdict::Fails && verdict != Verdict::Fails {
+            verdict = Verdict::Fails;
+            verdict_reason = format!("team: {}", t.verdict_reason);
+        }
+    }
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).
     let mut warnings = settling_warnings(s, &l, &prop2);
@@ -2166,6 +2179,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         prop1,
         prop2,
         sampled,
+        team,
     }
 }
 
