@@ -117,7 +117,9 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
     })?;
-    let title = if data.len() == 1 {
+    // One run directory (a team's too: its vehicles are drawn as runs) is titled by its
+    // scenario.
+    let title = if runs.len() == 1 {
         data[0]
             .scenario
             .file()

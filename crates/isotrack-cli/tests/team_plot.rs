@@ -81,4 +81,31 @@ fn team_figures_and_their_numbers() {
     let team = std::fs::read_to_string(out.join("team.svg")).unwrap();
     assert!(team.contains("gap ahead along the isoline"));
     assert!(team.contains("longest unvisited time"));
+    // Titled by the scenario, not "4 runs".
+    assert!(team.contains("team-circular-4"));
+
+    // A vehicle cell that is not one of the team's: 65 naming the row, no figure.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut lines: Vec<String> = trace.lines().map(str::to_string).collect();
+    let last = lines[3].rfind(',').unwrap();
+    lines[3] = format!("{},9", &lines[3][..last]);
+    std::fs::write(out.join("trace.csv"), lines.join("\n") + "\n").unwrap();
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("f").to_str().unwrap(),
+    ]);
+    common::assert_fails(
+        &o,
+        65,
+        &["trace.csv row 3", "not one of the team's 4 vehicles"],
+    );
+    let o = isotrack(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("r.html").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(65), "{}", common::stderr(&o));
 }
