@@ -17,6 +17,9 @@
 //! * Sampled (every scenario with the PI-like law): the loop linearised about the isoline at the
 //!   sensor's period ([`sampled`], docs/SAMPLED.md), worst over the isoline's own slopes (exact
 //!   on circular fields) and, reported separately, over the tube's.
+//! * Team (a scenario with `[team]`, [`team`]): the spacing loop sampled at the ranging rate
+//!   with its delay, and the sampled check over the speeds the spacing law may command; a team
+//!   verdict `fails` makes `verdict` `fails`.
 //! * `verdict`: `fails` when a necessary local condition fails (the sampled loop on the
 //!   isoline, or Prop. 1's exact condition), `holds` when a guarantee applies (Prop. 1 exact and
 //!   the sampled loop stable, or Prop. 2's bound) and the sensor has no effect the checks leave
