@@ -31,7 +31,9 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     renamed `b` and marked axis X), which the loader must refuse naming the coordinate; `warned_xy_no_units.nc`
     (x / y without units), read as metres with a warning; `latin1_*.nc` (text attributes in
     Latin-1, which must load) and `refused_latin1_units_*.nc` (a `units` in Latin-1, refused
-    naming the variable and the attribute): see `non_utf8`.
+    naming the variable and the attribute): see `non_utf8`; `refused_nul_*.nc` and
+    `nul_comment.nc` (a NUL inside a text attribute): see `nul_inside`; `many_attributes.nc`
+    (700 attributes of 1 kB on `v`): see `many_attributes`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -249,6 +251,51 @@ def non_utf8():
             nc["time"].setncattr("units", TIME_UNITS.encode() + b"\xa0")
 
 
+def nul_inside():
+    """A NUL inside a needed text attribute (issue 30): `refused_nul_units_x.nc` (netCDF-C:
+    x's `units` the NC_CHAR text "m\\0km"), `refused_nul_axis_y_h5py.nc` (h5py: y's `axis` a
+    fixed-length string "Y\\0X") and `refused_nul_units_time.nc` (time's units with a NUL
+    before a second date) are refused naming the variable and the attribute, where a reader
+    that cuts at the NUL would take "m", "Y" or the first date; `nul_comment.nc` (a NUL inside
+    every variable's `comment`, which isotrack does not read) loads as its twins do. Not in the
+    manifest."""
+    import h5py
+    import netCDF4
+
+    def units_x(ds):
+        ds["x"].attrs["units"] = "m\0km"
+
+    def comments(ds):
+        for name in list(ds.variables):
+            ds[name].attrs["comment"] = "before\0after"
+
+    write("netcdf4", "NETCDF4", "xy", "contig", name="refused_nul_units_x.nc", edit=units_x)
+    write("netcdf4", "NETCDF4", "xy", "zlib1", name="nul_comment.nc", edit=comments)
+    name = write("h5netcdf", "NETCDF4", "xy", "chunk", name="refused_nul_axis_y_h5py.nc")
+    if not ONLY or name in ONLY:
+        with h5py.File(os.path.join(OUT, name), "a") as f:
+            f["y"].attrs["axis"] = np.bytes_(b"Y\0X")
+    name = write("netcdf4", "NETCDF4", "xy", "zlib1", name="refused_nul_units_time.nc")
+    if not ONLY or name in ONLY:
+        with netCDF4.Dataset(os.path.join(OUT, name), "a") as nc:
+            nc["time"].setncattr("units", TIME_UNITS + "\0days since 1900-01-01")
+
+
+def many_attributes():
+    """`many_attributes.nc`: the data variable with 700 attributes of 1 000 characters, about
+    700 kB of dense attribute storage, past the 512 kB the root of its fractal heap addresses
+    directly (netCDF-C's heap: blocks of 512 B to 64 kB, 4 a row), so its last attributes sit
+    below a child indirect block, which hdf5-reader 0.12.1 read past the block's end
+    ("unexpected end of data"; fixed in vendor/hdf5-reader). Loads as its twins do; not in the
+    manifest."""
+
+    def attrs(ds):
+        for i in range(700):
+            ds["v"].attrs[f"note_{i:03d}"] = f"{i:03d} " + "x" * 996
+
+    write("netcdf4", "NETCDF4", "xy", "contig", name="many_attributes.nc", edit=attrs)
+
+
 # File names given on the command line: only those are written (all when none).
 ONLY = set(sys.argv[1:])
 
@@ -315,6 +362,8 @@ def main():
     write("netcdf4", "NETCDF4", "xyft", "contig", name="refused_xy_ft.nc")
     write("netcdf4", "NETCDF4", "lony", "contig", name="refused_lon_y.nc")
     non_utf8()
+    nul_inside()
+    many_attributes()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

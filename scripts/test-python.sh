@@ -10,7 +10,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 "$venv/bin/pip" install -q --upgrade pip
-"$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" matplotlib pymavlink "mavsdk>=4"
+"$venv/bin/pip" install -q maturin numpy pytest "gymnasium>=1.0" "pettingzoo>=1.24" matplotlib pymavlink "mavsdk>=4"
 # -v: cargo's crate-by-crate progress (a cold build takes many minutes), not a silent wait.
 echo "building the isotrack Python extension (cargo's progress follows)" >&2
 "$venv/bin/pip" install -v ./python

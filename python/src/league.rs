@@ -118,7 +118,7 @@ pub fn benchmark_json(
     // As `isotrack benchmark --out`: an existing benchmark refused unless `resume`, the
     // directory locked while this writes it.
     let _lock = out
-        .map(|d| isotrack_cli::league::open_out_dir(Path::new(d), resume))
+        .map(|d| isotrack_commands::league::open_out_dir(Path::new(d), resume))
         .transpose()
         .map_err(crate::tools::failure)?;
     let errors: FirstError = Arc::new(Mutex::new(None));
@@ -152,7 +152,7 @@ pub fn benchmark_json(
         return Err(e);
     }
     if let Some(dir) = out {
-        isotrack_cli::league::write_outputs(&suite, path, &result, Path::new(dir), tune)
+        isotrack_commands::league::write_outputs(&suite, path, &result, Path::new(dir), tune)
             .map_err(crate::tools::failure)?;
     }
     serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))

@@ -18,6 +18,7 @@ use std::sync::atomic::AtomicBool;
 mod env;
 mod guard;
 mod league;
+mod team;
 mod tools;
 
 /// The Python exception, named `isotrack.ScenarioError` in tracebacks.
@@ -436,21 +437,13 @@ fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::V
     )))
 }
 
-/// The content of `summary.json`, as the CLI writes it.
+/// The content of `summary.json`, as the CLI writes it ([`isotrack_runs::summary::Summary`],
+/// without its final newline).
 fn summary_json(s: &Scenario, origin: &str, r: &RunResult) -> PyResult<String> {
     let warnings = isotrack_scenario::check::warnings(s);
-    let summary = isotrack_runs::summary::Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION"),
-        scenario_path: (!origin.starts_with('<')).then(|| origin.to_string()),
-        result: r,
-        warnings: &warnings,
-        data_files: isotrack_runs::summary::data_file_digests(s),
-        team: None,
-        vehicles: None,
-        scenario: s.file(),
-    };
-    isotrack_runs::summary::summary_to_json(&summary)
-        .map_err(|e| PyValueError::new_err(e.to_string()))
+    let path = (!origin.starts_with('<')).then(|| std::path::Path::new(origin));
+    let text = isotrack_runs::summary::Summary::of_run(s, path, r, &warnings).to_json();
+    Ok(text.trim_end_matches('\n').to_string())
 }
 
 /// The `trace.csv` columns as numpy arrays (`s_measured` NaN where no sample was delivered).
@@ -694,6 +687,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     PyArray1::<f64>::zeros(m.py(), 0, false);
     m.add_class::<PyScenario>()?;
     m.add_class::<env::PyEnvBatch>()?;
+    m.add_class::<team::PyTeamEnv>()?;
+    m.add_function(wrap_pyfunction!(team::team_run, m)?)?;
+    m.add_function(wrap_pyfunction!(team::write_team_run, m)?)?;
+    m.add_function(wrap_pyfunction!(team::is_team, m)?)?;
     m.add("ScenarioError", m.py().get_type::<ScenarioErrorPy>())?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(file_sha256, m)?)?;

@@ -3,10 +3,11 @@
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
 use crate::{PyScenario, ScenarioErrorPy};
-use isotrack_cli::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
+use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::summary::scenario_toml;
-use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
+use isotrack_runs::rundir::RunDir;
+use isotrack_runs::trace::TELEMETRY_COLUMNS;
 use isotrack_runs::{exit, Failure};
 use isotrack_sim::{TraceRow, TraceSink};
 use numpy::PyReadonlyArray1;
@@ -33,7 +34,7 @@ pub(crate) fn failure(f: Failure) -> PyErr {
 #[pyfunction]
 pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
     let code = py.detach(|| {
-        std::panic::catch_unwind(|| isotrack_cli::entry::main_with(argv)).unwrap_or(101)
+        std::panic::catch_unwind(|| isotrack_commands::entry::main_with(argv)).unwrap_or(101)
     });
     let _ = std::io::stdout().flush();
     code
@@ -66,10 +67,6 @@ pub fn write_run(
     trace: &Bound<'_, PyDict>,
 ) -> PyResult<()> {
     let dir = Path::new(dir);
-    let io = |what: &Path, e: std::io::Error| {
-        PyOSError::new_err(format!("cannot write {}: {e}", what.display()))
-    };
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let flying = scenario.inner.is_flying();
     let t = column(trace, "t_s", None)?;
     let n = Some(t.len());
@@ -86,8 +83,10 @@ pub fn write_run(
                 .collect::<PyResult<_>>()
         })
         .transpose()?;
-    let path = dir.join("trace.csv");
-    let mut w = TraceWriter::create(&path, flying).map_err(|e| io(&path, e))?;
+    // The one run-directory writer (no lock: a saved run writes none, as before).
+    let out = RunDir::open(dir, &[], &[], None).map_err(failure)?;
+    let mut file = out.trace(flying).map_err(failure)?;
+    let w = file.writer();
     for (i, &t_s) in t.iter().enumerate() {
         let m = cols[6][i];
         w.record(&TraceRow {
@@ -107,14 +106,8 @@ pub fn write_run(
             }),
         });
     }
-    w.finish().map_err(|e| io(&path, e))?;
-    let path = dir.join("summary.json");
-    isotrack_runs::files::write_atomic(&path, format!("{summary_json}\n").as_bytes())
-        .map_err(|e| io(&path, e))?;
-    let path = dir.join("scenario.toml");
-    isotrack_runs::files::write_atomic(&path, scenario_toml(&scenario.inner).as_bytes())
-        .map_err(|e| io(&path, e))?;
-    Ok(())
+    out.finish_json(file, &scenario_toml(&scenario.inner), summary_json)
+        .map_err(failure)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
@@ -162,7 +155,7 @@ pub fn plot(
     if !args.runs.iter().all(|d| d.is_dir()) {
         // Refused at once, with the command's message (nothing is created for it).
         return crate::guard::no_panic(|| {
-            py.detach(|| isotrack_cli::console::quietly(|| isotrack_cli::figures::plot(&args)))
+            py.detach(|| isotrack_commands::console::quietly(|| isotrack_commands::figures::plot(&args)))
                 .map_err(failure)
         });
     }
@@ -170,7 +163,7 @@ pub fn plot(
     staged(py, &dir, move |staging| {
         let mut args = args;
         args.out = Some(staging.to_path_buf());
-        isotrack_cli::figures::plot(&args)
+        isotrack_commands::figures::plot(&args)
     })
 }
 
@@ -210,7 +203,7 @@ fn staged(
     let outcome = crate::guard::no_panic(|| {
         crate::guard::detached_then(
             py,
-            move || isotrack_cli::console::quietly(|| render(&theirs)),
+            move || isotrack_commands::console::quietly(|| render(&theirs)),
             move || {
                 let _ = std::fs::remove_dir_all(&gone);
             },
@@ -263,7 +256,7 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
         .unwrap_or(Path::new("."))
         .to_path_buf();
     staged(py, &dir, move |staging| {
-        isotrack_cli::league::report(&ReportArgs {
+        isotrack_commands::league::report(&ReportArgs {
             runs,
             out: staging.join(name),
         })
@@ -287,8 +280,8 @@ pub fn controller_variant(
             ControllerKind::ALL.map(|k| k.name()).join(", ")
         ))
     })?;
-    isotrack_cli::compare::check_gains(&gains).map_err(failure)?;
-    let inner = isotrack_cli::compare::variant(&scenario.inner, k, &gains, &scenario.origin)
+    isotrack_commands::compare::check_gains(&gains).map_err(failure)?;
+    let inner = isotrack_commands::compare::variant(&scenario.inner, k, &gains, &scenario.origin)
         .map_err(failure)?;
     Ok(PyScenario {
         inner,

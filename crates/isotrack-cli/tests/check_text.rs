@@ -288,3 +288,25 @@ fn every_line_of_the_bundled_checks_reads_as_a_sentence() {
         }
     }
 }
+
+/// Issue 29 (fix29b), 2: with `sensor.time_constant_s = 5` the paper's loop is unstable (the
+/// review's independent model with the lag as a state puts the limit near 3.2 s) and the same
+/// gains without the lag are stable: the "unstable at any rate" line names the lag as the
+/// advice does, and says nothing of it when there is no lag.
+#[test]
+fn the_rate_line_names_the_lag_that_makes_the_loop_unstable() {
+    let fig2b = scenario("paper-fig2b-circular.toml");
+    let (text, json) = check(&[&fig2b, "--set", "sensor.time_constant_s=5"]);
+    assert_eq!(json["sampled"]["stable"], Value::Bool(false), "{text}");
+    let rate = line(&text, "sensor rate:");
+    assert!(
+        rate.contains("with this sensor lag") && rate.contains("sensor.time_constant_s"),
+        "{rate}"
+    );
+    let (text, json) = check(&[&fig2b]);
+    assert_eq!(json["sampled"]["stable"], Value::Bool(true), "{text}");
+    // Without the lag, unstable gains (kp = 1e4 at 100 Hz) get no word about a lag.
+    let (text, json) = check(&[&fig2b, "--set", "controller.kp=10000"]);
+    assert_eq!(json["sampled"]["stable"], Value::Bool(false), "{text}");
+    assert!(!line(&text, "sensor rate:").contains("lag"), "{text}");
+}

@@ -124,6 +124,24 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             65,
             "sitl.home_lat_deg",
         ),
+        // At a pole the east-west scale cos(lat) vanishes: refused, both poles.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=-90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=90"],
+            65,
+            "sitl.home_lat_deg",
+        ),
+        // No trace rows, no positions: refused rather than a vehicle that never says where
+        // it is.
+        (
+            vec!["sitl", "--mavlink", out, "--set", "output.record_rate_hz=0"],
+            65,
+            "output.record_rate_hz = 0: isotrack sitl sends its position telemetry once per trace row",
+        ),
     ] {
         let o = isotrack(&args);
         assert_fails(&o, code, &[needle]);
@@ -309,6 +327,49 @@ fn an_unconfirmed_failsafe_exits_69() {
     assert_eq!(out.status.code(), Some(69), "{err}");
     assert!(!err.contains("HOLD commanded"), "{err}");
     assert!(err.contains("link_lost"), "{err}");
+    assert!(err.contains("no vehicle was ever heard"), "{err}");
+    assert!(!err.contains("failsafe mode was sent"), "{err}");
+}
+
+/// `fly --take-control` with the default (Dubins, ground) scenario against `sitl` flying Fig.
+/// 3's fixed wing (`MAV_TYPE_FIXED_WING`): refused before any setpoint or command, naming
+/// both, exit 65; the vehicle stays disarmed (its summary's events hold no arming).
+#[cfg(unix)]
+#[test]
+fn a_scenario_of_another_kind_than_the_vehicle_exits_65() {
+    let dir = tempfile::tempdir().unwrap();
+    let fig3 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig3-uav.toml"
+    );
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", fig3, "--mavlink", "udpin:127.0.0.1:0", "--lockstep"])
+        .arg("--out")
+        .arg(dir.path().join("sitl"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .arg("--mavlink")
+        .arg(format!("udpout:127.0.0.1:{port}"))
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(65), "{err}");
+    assert!(
+        err.contains("vehicle_mismatch")
+            && err.contains("MAV_TYPE_FIXED_WING")
+            && err.contains("dubins"),
+        "{err}"
+    );
+    signal(&sitl, "-INT");
+    let s = sitl.wait_with_output().unwrap();
+    assert_eq!(s.status.code(), Some(130));
+    let summary = std::fs::read_to_string(dir.path().join("sitl/summary.json")).unwrap();
+    assert!(!summary.contains("armed by"), "{summary}");
 }
 
 /// A lockstep `sitl` (`--timeout-s` as given) and a `fly --take-control --out` flying it, on a
@@ -406,7 +467,8 @@ fn sighup_stops_fly_and_sitl_ends_without_its_companion() {
 }
 
 /// Ctrl-C (SIGINT) stops `sitl`: `interrupted` (not `completed`) on standard output and in
-/// `summary.json`, exit 130; its companion sees the run end.
+/// `summary.json`, exit 130; its companion sees the vehicle go away: a lost link (a failsafe,
+/// its HOLD unconfirmed: exit 69), never `vehicle_ended` / `completed` with exit 0.
 #[cfg(unix)]
 #[test]
 fn an_interrupted_sitl_says_interrupted() {
@@ -423,11 +485,19 @@ fn an_interrupted_sitl_says_interrupted() {
     .unwrap();
     assert_eq!(summary["outcome"], "interrupted");
     let o = fly.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        String::from_utf8_lossy(&o.stdout).contains("end         vehicle_ended"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
+        String::from_utf8_lossy(&o.stdout).contains("end         link_lost"),
+        "{err}"
     );
+    assert!(err.contains("cut short (interrupted)"), "{err}");
+    assert_eq!(o.status.code(), Some(69), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("fly/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(summary["outcome"], "failsafe");
+    assert_eq!(summary["end_reason"], "link_lost");
 }
 
 /// A FIFO where `fly --out` would write its trace is refused at once (73), not opened (which

@@ -502,3 +502,78 @@ fn every_output_file_refuses_a_link_and_a_fifo() {
     assert_fails(&o, 73, &["sweep.json", "not a regular file"]);
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), manifest);
 }
+
+/// Issue 30 (fix30b), item 5 (item 13 of the hostile list): `plot` of a sweep directory builds
+/// its file name from column names (`sweep_{metric}_vs_{x}.svg`). A varied column and a metric
+/// whose names carry a `/`, `..`, an escape sequence and a right-to-left override (a
+/// hand-made `results.csv`) write one file inside `--out`, named with ASCII letters, digits,
+/// `_` and `-` only, and the SVG (its title and axis labels name the columns) holds no control
+/// character but the line breaks and tabs XML allows, and no bidirectional control.
+#[test]
+fn sweep_plot_file_names_and_text_are_safe_from_column_names() {
+    let d = tempfile::tempdir().unwrap();
+    let sweep = d.path().join("sw");
+    std::fs::create_dir_all(&sweep).unwrap();
+    let x = "../../x/\u{1b}[31mkey\u{202e}gnp";
+    let metric = "m/..\u{1b}]0;title\u{7}\u{202e}err";
+    std::fs::write(
+        sweep.join("results.csv"),
+        format!("run_id,\"{x}\",\"{metric}\"\n0,1.0,2.0\n1,2.0,3.0\n2,3.0,5.0\n"),
+    )
+    .unwrap();
+    let out = d.path().join("out");
+    let o = isotrack_within(
+        &[
+            "plot",
+            sweep.to_str().unwrap(),
+            "--x",
+            x,
+            "--metric",
+            metric,
+            "--format",
+            "svg",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        120,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    // Only the figure, inside --out: nothing beside the sweep or above it.
+    let written: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(written.len(), 1, "{written:?}");
+    let name = &written[0];
+    assert!(
+        name.starts_with("sweep_") && name.ends_with(".svg"),
+        "{name}"
+    );
+    let stem = name.strip_suffix(".svg").unwrap();
+    assert!(
+        stem.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+        "{name}"
+    );
+    let mut top: Vec<String> = std::fs::read_dir(d.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    top.sort();
+    assert_eq!(top, ["out", "sw"]);
+    assert!(!d.path().join("x").exists() && !sweep.join("x").exists());
+    let svg = std::fs::read_to_string(out.join(name)).unwrap();
+    let bad: Vec<char> = svg
+        .chars()
+        .filter(|&c| {
+            (c.is_control() && !matches!(c, '\n' | '\t' | '\r'))
+                || matches!(c, '\u{200b}'..='\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}' | '\u{feff}')
+        })
+        .collect();
+    assert!(bad.is_empty(), "{bad:?}");
+    // The columns are still named in the figure (their printable part).
+    assert!(
+        svg.contains("]0;title") && svg.contains("gnp"),
+        "labels kept"
+    );
+}

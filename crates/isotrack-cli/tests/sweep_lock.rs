@@ -46,7 +46,9 @@ fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock
         .spawn()
         .unwrap();
     let t0 = Instant::now();
-    while !locked(&out) {
+    // The lock is taken before results.csv is created: wait for both, or a loaded machine sees
+    // the lock with no results.csv yet and "--force deleted nothing" means nothing.
+    while !locked(&out) || !out.join("results.csv").exists() {
         assert!(t0.elapsed() < Duration::from_secs(60), "never locked");
         assert!(first.try_wait().unwrap().is_none(), "ended before caught");
         std::thread::sleep(Duration::from_millis(5));
@@ -471,5 +473,104 @@ fn resume_and_merge_refuse_impossible_rows_headers_and_shards() {
     assert_fails(&o, 65, &["results.csv:4: a line longer than"]);
     let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
     assert_fails(&o, 65, &["results.csv:4: a line longer than"]);
+    std::fs::write(&results, &good).unwrap();
+}
+
+/// Issue 30 (fix30b), item 1: bounds from below and on the commands. At dt = 0.01 s over
+/// 25.37 s (N = 2537 steps, the run ending mid-period at every rate but 100 Hz) a run sensing
+/// every m = 100 / rate steps from the delay's d steps on takes exactly the sample steps j m
+/// with d <= j m <= N: floor(N / m) - ceil(d / m) + 1 (at 0.1 Hz: 3, or 2 behind a 0.35 s
+/// delay; at 100 Hz: 2538, or 2503). One fewer is refused. Under the turn-rate limit L =
+/// 0.5 rad/s, the effort sum(omega^2 dt) over N held commands is at most L^2 N dt = 6.3425
+/// rad^2/s, and the chattering (total variation over the window's duration) at most
+/// 2 L / dt = 100 rad/s^2: beyond either is refused. Each names file, line and column, on
+/// `--resume` and on `merge`.
+#[test]
+fn resume_and_merge_check_samples_from_below_and_commands_against_the_limit() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "sim.duration_s = 25.37\nsim.dt_s = 0.01\ncontroller.max_turn_rate_radps = 0.5\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsensor.rate_hz = [0.1, 1.0, 10.0, 100.0]\nsensor.delay_s = [0.0, 0.35]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("full")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = d.path().join("full/results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let rows: Vec<Vec<&str>> = good
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 8);
+    let mut line_of = std::collections::HashMap::new();
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(r[col("outcome")], "completed", "{r:?}");
+        assert_eq!(r[col("t_end_s")].parse::<f64>().unwrap(), 25.37);
+        let rate: f64 = r[col("sensor.rate_hz")].parse().unwrap();
+        let delay: f64 = r[col("sensor.delay_s")].parse().unwrap();
+        let m = (100.0 / rate).round() as u64;
+        let dl = (delay / 0.01).round() as u64;
+        let want = 2537 / m - dl.div_ceil(m) + 1;
+        assert_eq!(r[col("samples")], want.to_string(), "{rate} Hz, {delay} s");
+        line_of.insert((rate.to_bits(), dl), (i + 1, want));
+    }
+    assert_eq!(line_of[&(0.1f64.to_bits(), 0)].1, 3);
+    assert_eq!(line_of[&(0.1f64.to_bits(), 35)].1, 2);
+    assert_eq!(line_of[&(100.0f64.to_bits(), 0)].1, 2538);
+    assert_eq!(line_of[&(100.0f64.to_bits(), 35)].1, 2503);
+    // The untouched rows pass: a resume finds nothing to do.
+    let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let cases: Vec<((f64, u64), &str, String, String)> =
+        [(0.1, 0), (0.1, 35), (1.0, 35), (100.0, 0), (100.0, 35)]
+            .iter()
+            .map(|&(rate, dl)| {
+                let want = line_of[&(f64::to_bits(rate), dl)].1;
+                (
+                    (rate, dl),
+                    "samples",
+                    (want - 1).to_string(),
+                    format!("samples = {} is below the {want}", want - 1),
+                )
+            })
+            .chain([
+                (
+                    (10.0, 0),
+                    "control_effort",
+                    "6.35".to_string(),
+                    "control_effort = 6.35 exceeds 6.3425 rad^2/s".to_string(),
+                ),
+                (
+                    (1.0, 35),
+                    "chattering_radps2",
+                    "100.5".to_string(),
+                    "chattering_radps2 = 100.5 exceeds 100 rad/s^2".to_string(),
+                ),
+            ])
+            .collect();
+    for ((rate, dl), column, value, needle) in &cases {
+        let (line, _) = line_of[&(rate.to_bits(), *dl)];
+        let mut r = rows[line - 1].clone();
+        r[col(column)] = value;
+        let bad = r.join(",");
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[line] = &bad;
+        std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+        let at = format!("full/results.csv:{}: damaged row", line + 1);
+        let column = format!("column {} ({column})", col(column) + 1);
+        let o = isotrack(&["sweep", &sw, "--out", &p("full"), "--resume"]);
+        assert_fails(&o, 65, &[&at, &column, needle]);
+        let o = isotrack(&["merge", &p("full"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &[&at, &column, needle]);
+    }
     std::fs::write(&results, &good).unwrap();
 }

@@ -84,7 +84,7 @@ fn the_lock_message_names_the_command_that_holds_it() {
         "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [4.0, 5.0]\n",
     );
     let out = d.path().join("bench");
-    let lock = isotrack_cli::league::open_out_dir(&out, false).unwrap();
+    let lock = isotrack_commands::league::open_out_dir(&out, false).unwrap();
     let holder = format!("another isotrack benchmark pid {}", std::process::id());
     let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
     assert_fails(&o, 73, &[&holder, "is writing this directory"]);

@@ -3,7 +3,7 @@
 //! own accounting) by far less. Its own test binary, so no other test shares the process.
 
 use clap::Parser;
-use isotrack_cli::cli::{Cli, Command};
+use isotrack_commands::cli::{Cli, Command};
 
 /// Peak resident set size of this process, kB (Linux `/proc/self/status`).
 fn vm_hwm_kb() -> Option<u64> {
@@ -35,7 +35,9 @@ fn a_long_trace_streams_in_constant_memory() {
     let Command::Run(args) = &cli.command else {
         unreachable!()
     };
-    isotrack_cli::run::run(args).map_err(|f| f.message).unwrap();
+    isotrack_commands::run::run(args)
+        .map_err(|f| f.message)
+        .unwrap();
     let after = vm_hwm_kb().unwrap();
     let rows = std::fs::read_to_string(out.join("trace.csv"))
         .unwrap()

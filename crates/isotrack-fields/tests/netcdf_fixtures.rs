@@ -252,3 +252,63 @@ fn a_needed_attribute_with_control_characters_is_refused_naming_it() {
         assert!(!e.unreadable, "{text}");
     }
 }
+
+/// Issue 30 (fix30b), item 2: a NUL inside a needed text attribute of a NetCDF-4 file that
+/// netCDF-C wrote (NC_CHAR, a null-terminated HDF5 string) was cut there by the reader: x's
+/// `units = "m\0km"` read as `m`, time's `units` as its first date, and the file loaded without
+/// a word. The whole attribute is read and refused naming the file, the variable and the
+/// attribute (as h5py's null-padded `axis = "Y\0X"` already was); a NUL inside a `comment`,
+/// which isotrack does not read, loads as the twins do. (Written by
+/// `scripts/make-netcdf-fixtures.py`, `nul_inside`.)
+#[test]
+fn a_nul_inside_a_needed_attribute_is_refused_not_cut() {
+    for (name, var, attr) in [
+        ("refused_nul_units_x.nc", "x", "units"),
+        ("refused_nul_units_time.nc", "time", "units"),
+        ("refused_nul_axis_y_h5py.nc", "y", "axis"),
+    ] {
+        let e = load_series(&dir().join(name), None, None).unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains(name), "{text}");
+        assert!(
+            text.contains(&format!(
+                "variable `{var}`: its `{attr}` attribute holds a control or format character"
+            )),
+            "{text}"
+        );
+        assert!(!e.unreadable, "{text}");
+    }
+    let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
+    let s =
+        load_series(&dir().join("nul_comment.nc"), None, None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.units.as_deref(), Some("K"));
+    assert_eq!(s.frames.len(), 3);
+    for (got, want) in s.frames.iter().zip(&npy.frames) {
+        assert!(same(got.values(), want.values()));
+    }
+    assert_eq!(
+        s.frame_times_s.as_deref(),
+        Some(&[0.0, 3600.0, 10800.0][..])
+    );
+}
+
+/// Issue 30 (fix30b), item 3: a data variable with 700 attributes of 1 kB (dense attribute
+/// storage whose fractal heap needs a child indirect block past its first 512 kB) was refused
+/// as "cannot read as NetCDF: HDF5 error: child 'v' ...: unexpected end of data ... (need 1030
+/// bytes, have 0)": hdf5-reader 0.12.1 located a block below a child indirect block relative
+/// to the child (patched in vendor/hdf5-reader). It loads to the grid and times of its twins.
+#[test]
+fn a_variable_with_hundreds_of_long_attributes_loads() {
+    let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
+    let s = load_series(&dir().join("many_attributes.nc"), None, None)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.units.as_deref(), Some("K"));
+    assert_eq!(s.frames.len(), 3);
+    for (got, want) in s.frames.iter().zip(&npy.frames) {
+        assert!(same(got.values(), want.values()));
+    }
+    assert_eq!(
+        s.frame_times_s.as_deref(),
+        Some(&[0.0, 3600.0, 10800.0][..])
+    );
+}

@@ -117,8 +117,9 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
             .collect();
         runs.push(RunJson {
             name: r.name.clone(),
-            outcome: r.summary["outcome"].as_str().unwrap_or("").to_string(),
-            summary: r.summary.clone(),
+            outcome: r.summary.outcome().to_string(),
+            // As a JSON value (its keys sorted), the page's data as before.
+            summary: serde_json::to_value(&r.summary).unwrap_or_default(),
             t: keep.iter().map(|k| k.t_s).collect(),
             x: keep.iter().map(|k| k.x_m).collect(),
             y: keep.iter().map(|k| k.y_m).collect(),

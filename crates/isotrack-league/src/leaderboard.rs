@@ -86,31 +86,25 @@ pub const RESULTS_COLUMNS: [&str; 15] = [
     "steady_state_rms_error",
 ];
 
-/// A task's `results.csv`: one row per scored run.
+/// A task's `results.csv`: one row per scored run, its cells as every results file writes them
+/// (`isotrack-runs`: numbers in the shortest round-trip form, empty where undefined or not
+/// finite; CSV quoting where a cell needs it).
 pub fn results_csv(runs: &[RunRow]) -> String {
-    let opt = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:?}"));
+    use isotrack_runs::results::real_cell;
     let mut s = RESULTS_COLUMNS.join(",") + "\n";
     for r in runs {
         let p = r.score.parts;
-        let _ = writeln!(
-            s,
-            "{},{},{},{:?},{:?},{:?},{:?},{:?},{:?},{},{},{},{},{:?},{}",
-            csv_cell(&r.controller),
-            r.seed,
-            r.outcome,
-            r.score.total,
-            p[0],
-            p[1],
-            p[2],
-            p[3],
-            p[4],
-            opt(r.convergence_time_s),
-            opt(r.time_in_band_fraction),
-            opt(r.steady_state_rms_isoline_distance_m),
-            r.track_losses,
-            r.control_effort,
-            opt(r.steady_state_rms_error),
-        );
+        let mut cells = vec![r.controller.clone(), r.seed.to_string(), r.outcome.clone()];
+        cells.extend([r.score.total, p[0], p[1], p[2], p[3], p[4]].map(|x| real_cell(Some(x))));
+        cells.extend([
+            real_cell(r.convergence_time_s),
+            real_cell(r.time_in_band_fraction),
+            real_cell(r.steady_state_rms_isoline_distance_m),
+            r.track_losses.to_string(),
+            real_cell(Some(r.control_effort)),
+            real_cell(r.steady_state_rms_error),
+        ]);
+        s += &isotrack_runs::sweep::rows::csv_line(&cells);
     }
     s
 }

@@ -4,6 +4,7 @@
 use crate::score::{Score, Scoring};
 use crate::suite::SuiteError;
 use isotrack_plot::FieldPicture;
+use isotrack_runs::results::{RunRecord, INVALID_SCENARIO};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -70,6 +71,41 @@ pub struct RunRow {
     pub steady_state_rms_error: Option<f64>,
     /// The score and its parts.
     pub score: Score,
+}
+
+impl RunRow {
+    /// The row of `controller`'s run on `seed`: its [`RunRecord`] (the record every results
+    /// file is built from, `isotrack-runs`), or `None` for a run whose scenario is invalid
+    /// (outcome `invalid_scenario`, no metrics, effort 0), and its score.
+    pub fn of(controller: &str, seed: u64, record: Option<&RunRecord>, score: Score) -> RunRow {
+        match record {
+            Some(r) => RunRow {
+                controller: controller.to_string(),
+                seed,
+                outcome: r.outcome.clone(),
+                convergence_time_s: r.convergence_time_s,
+                time_in_band_fraction: r.time_in_band_fraction,
+                steady_state_rms_isoline_distance_m: r.steady_state_rms_isoline_distance_m,
+                track_losses: r.track_losses,
+                // Not finite: NaN (`null` in task.json, as before; an empty cell in results.csv).
+                control_effort: r.control_effort.unwrap_or(f64::NAN),
+                steady_state_rms_error: r.steady_state_rms_error,
+                score,
+            },
+            None => RunRow {
+                controller: controller.to_string(),
+                seed,
+                outcome: INVALID_SCENARIO.into(),
+                convergence_time_s: None,
+                time_in_band_fraction: None,
+                steady_state_rms_isoline_distance_m: None,
+                track_losses: 0,
+                control_effort: 0.0,
+                steady_state_rms_error: None,
+                score,
+            },
+        }
+    }
 }
 
 /// One controller's path for a task's picture (the first scoring seed), m.

@@ -9,6 +9,7 @@ use crate::score::{score, Score, Scoring};
 use crate::suite::{task_path, Seg, Suite, SuiteError, Task};
 use crate::tune::tune;
 use isotrack_plot::FieldPicture;
+use isotrack_runs::results::RunRecord;
 use isotrack_scenario::{load_scenario, ErrorLocation, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, TraceRow, TraceSink};
 use rayon::prelude::*;
@@ -359,36 +360,21 @@ fn scored_run(
     scoring: Scoring,
 ) -> RunRow {
     match run_one(base, task, entrant, gains, seed, &mut NoTrace) {
-        Ok((s, r)) => {
-            let m = &r.metrics;
-            RunRow {
-                controller: controller.to_string(),
-                seed,
-                outcome: r.outcome.as_str().to_string(),
-                convergence_time_s: m.convergence_time_s,
-                time_in_band_fraction: m.time_in_band_fraction,
-                steady_state_rms_isoline_distance_m: m.steady_state_rms_isoline_distance_m,
-                track_losses: m.track_losses,
-                control_effort: m.control_effort,
-                steady_state_rms_error: m.steady_state_rms_error,
-                score: score(&r, &context(&s, task, scoring)),
-            }
-        }
-        Err(_) => RunRow {
-            controller: controller.to_string(),
+        Ok((s, r)) => RunRow::of(
+            controller,
             seed,
-            outcome: "invalid_scenario".into(),
-            convergence_time_s: None,
-            time_in_band_fraction: None,
-            steady_state_rms_isoline_distance_m: None,
-            track_losses: 0,
-            control_effort: 0.0,
-            steady_state_rms_error: None,
-            score: Score {
+            Some(&RunRecord::of(&r)),
+            score(&r, &context(&s, task, scoring)),
+        ),
+        Err(_) => RunRow::of(
+            controller,
+            seed,
+            None,
+            Score {
                 total: 0.0,
                 parts: [0.0; 5],
             },
-        },
+        ),
     }
 }
 

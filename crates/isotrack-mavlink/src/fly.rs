@@ -49,11 +49,75 @@ pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
+/// The most times a failsafe's way out (a mode or a disarm) is commanded, one every 0.3 s,
+/// before it is given up unconfirmed (besides the time bound of 3 x `timeout_s` within
+/// [3, 30] s).
+pub const MAX_WAY_OUT_TRIES: u32 = 20;
+
+/// How long after the companion sent an arming or a mode switch an acknowledgement of that
+/// command is taken as the answer to it, s. `COMMAND_ACK` as the `mavlink` crate decodes it
+/// here carries no target (MAVLink 2's `target_system`/`target_component` extensions are not
+/// in its common dialect's struct): an acknowledgement of a command the companion did not send,
+/// or sent longer ago, answers someone else (a ground station's arming) and is neither logged
+/// as the companion's nor taken as a refusal.
+pub const ACK_WINDOW_S: f64 = 1.0;
+
+/// The `MAV_TYPE`s a fixed-wing scenario (`vehicle.kind = "fixed_wing"`) flies: its roll
+/// setpoint is a coordinated turn's, for an aeroplane. VTOLs are refused: whether one flies
+/// as an aeroplane or hovers is not in its heartbeat.
+pub const FIXED_WING_TYPES: &[MavType] = &[MavType::MAV_TYPE_FIXED_WING];
+
+/// The `MAV_TYPE`s a ground scenario (`vehicle.kind = "dubins"`) flies: its setpoint is a yaw
+/// rate with attitude and thrust ignored, for a vehicle that keeps its own speed on the
+/// ground or water.
+pub const GROUND_TYPES: &[MavType] = &[
+    MavType::MAV_TYPE_GROUND_ROVER,
+    MavType::MAV_TYPE_SURFACE_BOAT,
+];
+
+/// Whether a vehicle's heartbeat `type` fits the scenario's vehicle kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KindMatch {
+    /// One of the kind's types ([`FIXED_WING_TYPES`], [`GROUND_TYPES`]).
+    Yes,
+    /// `MAV_TYPE_GENERIC` ("a generic micro air vehicle", what MAVSDK's autopilot server
+    /// announces): it says nothing of the airframe; flown as the scenario's kind, with a
+    /// warning logged.
+    Unknown,
+    /// Another type: refused before any setpoint or command (`vehicle_mismatch`).
+    No,
+}
+
+/// Whether a vehicle announcing `mavtype` flies a scenario whose setpoints are `transport`'s.
+pub fn vehicle_kind_match(transport: Transport, mavtype: MavType) -> KindMatch {
+    let types = match transport {
+        Transport::FixedWing { .. } => FIXED_WING_TYPES,
+        Transport::Ground => GROUND_TYPES,
+    };
+    if types.contains(&mavtype) {
+        KindMatch::Yes
+    } else if mavtype == MavType::MAV_TYPE_GENERIC {
+        KindMatch::Unknown
+    } else {
+        KindMatch::No
+    }
+}
+
+/// The scenario's vehicle kind in messages.
+fn kind_name(transport: Transport) -> &'static str {
+    match transport {
+        Transport::FixedWing { .. } => "a fixed wing (vehicle.kind = \"fixed_wing\")",
+        Transport::Ground => "a ground vehicle (vehicle.kind = \"dubins\")",
+    }
+}
+
 /// The measurements' clock as received: only a measurement newer than every one before it
 /// counts as one for the sensor-loss timer (the companion's own monotonic clock).
+/// `time_boot_ms` wraps at 2^32 ms (49.7 days after the vehicle's boot): times are unwrapped
+/// ([`wire::unwrap_ms`]), so a step across the wrap is the small step it is, not a jump.
 struct SensorClock {
-    /// The newest `time_boot_ms` received.
-    newest_ms: Option<u32>,
+    /// The newest time received, unwrapped, ms.
+    newest_ms: Option<u64>,
     /// When the newest measurement (or, before any, the vehicle's first message) arrived.
     last: Instant,
     /// A jump of the clock, to fail safe on.
@@ -62,15 +126,16 @@ struct SensorClock {
 
 impl SensorClock {
     /// Takes in a received measurement: queued unless its time jumps.
-    fn receive(&mut self, queue: &mut VecDeque<(u32, f64)>, ms: u32, v: f64) {
-        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u32;
+    fn receive(&mut self, queue: &mut VecDeque<(u64, f64)>, ms: u32, v: f64) {
+        let max_ms = (MAX_MEASUREMENT_STEP_S * 1000.0) as u64;
+        let ms = self.newest_ms.map_or(ms as u64, |n| wire::unwrap_ms(n, ms));
         match self.newest_ms {
             Some(n) if ms <= n => {
                 if n - ms > max_ms {
                     self.fault.get_or_insert(format!(
                         "the measurement's time jumped back from {} s to {} s (a rebooted or spoofed clock)",
-                        wire::time_s(n),
-                        wire::time_s(ms)
+                        wire::unwrapped_s(n),
+                        wire::unwrapped_s(ms)
                     ));
                     return;
                 }
@@ -80,8 +145,8 @@ impl SensorClock {
             Some(n) if ms - n > max_ms => {
                 self.fault.get_or_insert(format!(
                     "the measurement's time jumped ahead from {} s to {} s (a spoofed clock)",
-                    wire::time_s(n),
-                    wire::time_s(ms)
+                    wire::unwrapped_s(n),
+                    wire::unwrapped_s(ms)
                 ));
             }
             _ => {
@@ -152,6 +217,16 @@ enum WayOut {
     Mode(FlyMode),
     /// Disarm (a vehicle the companion armed on the ground).
     Disarm,
+}
+
+/// The vehicle's answer to a way out.
+enum Answer {
+    /// Its heartbeat shows what was commanded.
+    Confirmed,
+    /// Its heartbeat shows another safe mode ([`Firmware::safe_mode_name`]).
+    OtherSafeMode(&'static str),
+    /// It refused (`DENIED`, `UNSUPPORTED`, `FAILED`).
+    Refused,
 }
 
 /// Options of [`run_fly`].
@@ -233,6 +308,14 @@ pub enum FlyEnd {
     /// Two autopilots were heard within [`TWO_VEHICLES_WINDOW_S`] (without
     /// `FlyOptions::target_system`): which one to fly is ambiguous, nothing is commanded.
     TwoVehicles,
+    /// The vehicle's heartbeat `type` does not fit the scenario's vehicle kind
+    /// ([`vehicle_kind_match`]): nothing is sent but heartbeats, no setpoint, no command.
+    VehicleMismatch,
+    /// Another controller holds the vehicle: with `take_control`, the vehicle was armed and in
+    /// OFFBOARD before the companion commanded either; or setpoints for the vehicle came from
+    /// another system or component. A failsafe: before control nothing is commanded; in
+    /// control the setpoints stop and the failsafe mode is commanded.
+    AnotherController,
 }
 
 impl FlyEnd {
@@ -251,6 +334,8 @@ impl FlyEnd {
             FlyEnd::VehicleLost => "vehicle_lost",
             FlyEnd::PilotTookOver => "pilot_took_over",
             FlyEnd::TwoVehicles => "two_vehicles",
+            FlyEnd::VehicleMismatch => "vehicle_mismatch",
+            FlyEnd::AnotherController => "another_controller",
         }
     }
     /// Whether it is a failsafe (setpoints stopped, hold/return commanded).
@@ -261,6 +346,7 @@ impl FlyEnd {
                 | FlyEnd::ControlRefused
                 | FlyEnd::PilotTookOver
                 | FlyEnd::TwoVehicles
+                | FlyEnd::VehicleMismatch
         )
     }
 }
@@ -290,6 +376,11 @@ pub struct FlyReport {
     pub link: LinkStats,
     /// The tracking metrics of the measured error series ([`crate::record`]).
     pub metrics: RunMetrics,
+    /// What the metrics were computed over, in words (the planned window, or what was flown
+    /// of a flight that ended early, or why there are none).
+    pub metrics_over: String,
+    /// Whether a vehicle (an autopilot's heartbeat) was heard at all.
+    pub vehicle_heard: bool,
     /// Measurements older than one already answered: dropped, never given to the law.
     pub measurements_out_of_order: u64,
     /// Measurements with the time of one already answered (a repeat): answered again with the
@@ -342,6 +433,16 @@ struct Flight<'a, S: ?Sized> {
     target_at: Option<Instant>,
     /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
     other_vehicle: Option<(u32, u8)>,
+    /// Why the vehicle's type does not fit the scenario (refused before anything is sent).
+    mismatch: Option<String>,
+    /// Why another controller holds the vehicle (setpoints from someone else).
+    other_controller: Option<String>,
+    /// How the vehicle's run ended (`STATUSTEXT` "isotrack sitl: run ended (HOW)").
+    run_end_how: Option<String>,
+    /// The vehicle said it is going away (its run interrupted): the link is as good as lost.
+    link_gone: bool,
+    /// The control command sent last and when (its acknowledgement is the companion's).
+    awaiting: Option<(MavCmd, Instant)>,
     firmware: Firmware,
     armed: bool,
     custom_mode: Option<u32>,
@@ -376,7 +477,12 @@ struct Flight<'a, S: ?Sized> {
     clock: SensorClock,
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
-    queue: VecDeque<(u32, f64)>,
+    /// Measurements waiting: unwrapped time, ms ([`SensorClock`]), and value.
+    queue: VecDeque<(u64, f64)>,
+    /// While `take_control` holds the measurements: how many queued ones were already
+    /// looked at for copies, and the newest (unwrapped) time held.
+    held_scanned: usize,
+    held_newest: Option<u64>,
     ans: Answers,
     next_setpoint: Instant,
     next_heartbeat: Instant,
@@ -407,7 +513,8 @@ struct Telemetry {
 struct Answers {
     /// The command in force (None: neutral, before the law has control).
     current: Option<f64>,
-    last_answer_ms: Option<u32>,
+    /// Unwrapped, ms.
+    last_answer_ms: Option<u64>,
     commands: Vec<(u32, f64)>,
     samples: u64,
     t_first: Option<f64>,
@@ -418,6 +525,10 @@ struct Answers {
     first_wall: Option<Instant>,
     out_of_order: u64,
     repeated: u64,
+    /// The last answer was the law's (in control), not a neutral setpoint.
+    last_answer_in_control: bool,
+    /// The first repeat has been logged.
+    repeat_logged: bool,
 }
 
 /// Flies `scenario`'s law over `opts.url`, recording one trace row per answered measurement
@@ -452,9 +563,12 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
     let (acknowledged, way_out) = f.let_go(end)?;
     f.record.finish(f.sink, f.flush);
     let completed = matches!(end, FlyEnd::VehicleEnded | FlyEnd::MaxDuration);
+    let (metrics, metrics_over) = f.record.metrics(completed);
     Ok(FlyReport {
         end,
-        metrics: f.record.metrics(completed),
+        metrics,
+        metrics_over,
+        vehicle_heard: f.target.is_some(),
         commands: f.ans.commands,
         samples: f.ans.samples,
         t_first_s: f.ans.t_first,
@@ -533,6 +647,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             target: None,
             target_at: None,
             other_vehicle: None,
+            mismatch: None,
+            other_controller: None,
+            run_end_how: None,
+            link_gone: false,
+            awaiting: None,
             firmware: Firmware::Px4,
             armed: false,
             custom_mode: None,
@@ -566,6 +685,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             },
             clock_start: now,
             queue: VecDeque::new(),
+            held_scanned: 0,
+            held_newest: None,
             ans: Answers::default(),
             next_setpoint: now,
             next_heartbeat: now,
@@ -621,6 +742,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// The two-vehicles check, the MAVLink 1 notice, and the sensor's timer from the vehicle's
     /// first message.
     fn check_vehicles(&mut self, had_target: bool) -> Option<FlyEnd> {
+        if let Some(why) = self.mismatch.take() {
+            self.event(why);
+            return Some(FlyEnd::VehicleMismatch);
+        }
+        if let Some(why) = self.other_controller.take() {
+            self.event(why);
+            return Some(FlyEnd::AnotherController);
+        }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
             self.event(format!(
                 "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
@@ -645,6 +774,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// The vehicle's end, the periodic setpoint, and the timers: link, sensor clock, the
     /// companion's own clock for `max_duration_s`, sensor.
     fn check_ends(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.vehicle_done && self.run_ended {
+            if let Some(how) = self
+                .run_end_how
+                .clone()
+                .filter(|h| h == "interrupted" || h == "companion_lost")
+            {
+                // The vehicle went away before its run's end (Ctrl-C on `sitl`): a lost link,
+                // not a completed flight.
+                self.event(format!(
+                    "link_lost: the vehicle's run was cut short ({how}) and it powered off: the vehicle is gone"
+                ));
+                self.link_gone = true;
+                return Ok(Some(FlyEnd::LinkLost));
+            }
+        }
         if self.vehicle_done && !self.run_ended {
             self.event("the vehicle powered off without ending its run: vehicle lost".into());
             return Ok(Some(FlyEnd::VehicleLost));
@@ -655,7 +799,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let now = Instant::now();
         if self.target.is_some() && now >= self.next_setpoint {
-            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(
+                self.ans
+                    .last_answer_ms
+                    .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
+            )?;
             self.next_setpoint = now + self.period;
         }
         if now.duration_since(self.last_link) > self.timeout {
@@ -866,6 +1014,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             && self
                 .custom_mode
                 .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
+            // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
+            // companion, a ground station's offboard) holds it. --take-control never joins.
+            let offboard = self.firmware.name_of(FlyMode::Offboard);
+            self.event(format!(
+                "another_controller: the vehicle is armed and in {offboard} and the companion commanded neither: another controller holds it; nothing commanded (without --take-control, fly flies a vehicle its pilot has put in {offboard})"
+            ));
+            self.active = false;
+            return Ok(Some(FlyEnd::AnotherController));
+        }
         if self.active {
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
@@ -938,11 +1096,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         if !self.armed {
             self.arm_sent = true;
+            self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
         } else {
             // PX4 wants setpoints before the switch.
-            self.setpoint(self.ans.last_answer_ms.unwrap_or(NOT_AN_ANSWER_MS))?;
+            self.setpoint(
+                self.ans
+                    .last_answer_ms
+                    .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
+            )?;
             self.offboard_sent = true;
+            self.awaiting = Some((MavCmd::MAV_CMD_DO_SET_MODE, Instant::now()));
             self.command(MavCmd::MAV_CMD_DO_SET_MODE, p)?;
         }
         self.next_control = Instant::now() + Duration::from_millis(500);
@@ -954,9 +1118,22 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// an older one dropped; each new one recorded.
     fn answer_queue(&mut self) -> Result<Option<FlyEnd>, FlyError> {
         if self.opts.take_control && !self.active {
-            if self.queue.len() > 100_000 {
+            // A vehicle sends again the measurement nobody answered (sitl in lockstep, every
+            // second): held copies of one time are one measurement, never a repeat to count.
+            // Only what came since the last turn is looked at (the cost stays per message).
+            let start = self.held_scanned.min(self.queue.len());
+            let fresh: Vec<(u64, f64)> = self.queue.drain(start..).collect();
+            for (ms, v) in fresh {
+                if self.held_newest == Some(ms) {
+                    continue;
+                }
+                self.held_newest = Some(self.held_newest.map_or(ms, |n| n.max(ms)));
+                self.queue.push_back((ms, v));
+            }
+            while self.queue.len() > 100_000 {
                 self.queue.pop_front();
             }
+            self.held_scanned = self.queue.len();
             return Ok(None);
         }
         while let Some((ms, v)) = self.queue.pop_front() {
@@ -974,38 +1151,46 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// A measurement older than one answered: dropped (counted, logged once).
-    fn out_of_order(&mut self, ms: u32, last: u32) {
+    fn out_of_order(&mut self, ms: u64, last: u64) {
         self.ans.out_of_order += 1;
         if self.ans.out_of_order == 1 {
             self.event(format!(
                 "a measurement stamped {} s came after one stamped {} s: out of order, dropped (never given to the law; counted in measurements_out_of_order, logged once)",
-                wire::time_s(ms),
-                wire::time_s(last)
+                wire::unwrapped_s(ms),
+                wire::unwrapped_s(last)
             ));
         }
     }
 
     /// A repeat (the vehicle lost the answer?): the same answer again, within a UDP sensor's
     /// `setpoint_rate_hz`; counted, logged once.
-    fn repeat(&mut self, ms: u32) -> Result<(), FlyError> {
-        self.ans.repeated += 1;
-        if self.ans.repeated == 1 {
+    fn repeat(&mut self, ms: u64) -> Result<(), FlyError> {
+        // Before control the vehicle waits for a pilot (or for OFFBOARD) and sends its
+        // unanswered sample again: expected, not counted.
+        if self.active && self.ans.last_answer_in_control {
+            self.ans.repeated += 1;
+        }
+        if self.ans.repeated == 1 && !self.ans.repeat_logged {
+            self.ans.repeat_logged = true;
             self.event(format!(
                 "the measurement stamped {} s came again: answered again, not given to the law twice (counted in measurements_repeated, logged once)",
-                wire::time_s(ms)
+                wire::unwrapped_s(ms)
             ));
         }
         if self.lines.is_none() || Instant::now() >= self.next_setpoint {
-            self.setpoint(ms)?;
+            self.setpoint(wire::wire_ms(ms))?;
             self.next_setpoint = Instant::now() + self.period;
         }
         Ok(())
     }
 
     /// A new measurement: the law's answer (in control), its setpoint and its trace row.
-    fn answer(&mut self, ms: u32, v: f64) -> Result<Option<FlyEnd>, FlyError> {
+    fn answer(&mut self, unwrapped_ms: u64, v: f64) -> Result<Option<FlyEnd>, FlyError> {
+        // The law's time is unwrapped (never going back at the wrap); the wire's stamps are
+        // `time_boot_ms`.
+        let ms = wire::wire_ms(unwrapped_ms);
         let m = Measurement {
-            t_s: wire::time_s(ms),
+            t_s: wire::unwrapped_s(unwrapped_ms),
             value: v,
         };
         self.ans.t_first.get_or_insert(m.t_s);
@@ -1040,7 +1225,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else {
             self.ans.current = None;
         }
-        self.ans.last_answer_ms = Some(ms);
+        self.ans.last_answer_ms = Some(unwrapped_ms);
+        self.ans.last_answer_in_control = self.active;
         // A MAVLink sensor's every sample is answered (a lockstep vehicle waits for it); a UDP
         // sensor's answers keep to --setpoint-rate-hz (the periodic setpoint carries the newest
         // command): a fast sensor does not multiply the setpoints.
@@ -1073,6 +1259,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
+        self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
             return;
@@ -1102,11 +1289,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 }
                 self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
             }
+            // Invalid: marked in the trace (no position), never the last one repeated.
+            MavMessage::LOCAL_POSITION_NED(p) if self.tel.local_seen => {
+                self.record.no_position(p.time_boot_ms)
+            }
             MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => self.global_position(g),
             MavMessage::STATUSTEXT(t)
                 if name_of(&t.text[..]).starts_with(b"isotrack sitl: run ended") =>
             {
                 self.run_ended = true;
+                // "run ended (HOW)": HOW is the run's outcome, or how it was cut short.
+                let text = String::from_utf8_lossy(name_of(&t.text[..])).into_owned();
+                self.run_end_how = text
+                    .split_once('(')
+                    .and_then(|(_, rest)| rest.split_once(')'))
+                    .map(|(how, _)| how.to_string());
             }
             MavMessage::ATTITUDE(a) if a.yaw.is_finite() => {
                 let heading =
@@ -1132,6 +1329,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.target = Some(from);
                 self.target_at = Some(Instant::now());
                 self.firmware = Firmware::of(h.autopilot, h.mavtype);
+                self.check_kind(from, h.mavtype);
                 let what = format!(
                     "vehicle: system {}, component {}{}, {} modes",
                     from.0,
@@ -1154,6 +1352,60 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             _ => {}
         }
+    }
+
+    /// Whether the vehicle's `type` fits the scenario's kind: a mismatch ends the flight before
+    /// any setpoint or command; `MAV_TYPE_GENERIC` is flown with a warning.
+    fn check_kind(&mut self, from: (u32, u8), mavtype: MavType) {
+        let kind = kind_name(self.transport);
+        let types = match self.transport {
+            Transport::FixedWing { .. } => FIXED_WING_TYPES,
+            Transport::Ground => GROUND_TYPES,
+        };
+        let list = types
+            .iter()
+            .map(|t| format!("{t:?}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        match vehicle_kind_match(self.transport, mavtype) {
+            KindMatch::Yes => {}
+            KindMatch::Unknown => self.event(format!(
+                "the vehicle (system {}, component {}) announces {mavtype:?}, which says nothing of its airframe: flown as the scenario's {kind}; make sure it is one ({list})",
+                from.0, from.1
+            )),
+            KindMatch::No => {
+                self.mismatch = Some(format!(
+                    "vehicle_mismatch: the scenario's vehicle is {kind}, but the vehicle (system {}, component {}) announces {mavtype:?}: refused before any setpoint or command (the scenario's kind flies {list}, or MAV_TYPE_GENERIC)",
+                    from.0, from.1
+                ));
+            }
+        }
+    }
+
+    /// A setpoint for the vehicle's system from another sender than the companion (heard
+    /// through a router that forwards every component's traffic, or the vehicle's own link):
+    /// another controller.
+    fn foreign_setpoint(&mut self, from: (u32, u8), target: (u32, u8), msg: &MavMessage) {
+        if from == (self.opts.system_id as u32, 191) || self.other_controller.is_some() {
+            return;
+        }
+        let (what, to) = match msg {
+            MavMessage::SET_ATTITUDE_TARGET(m) => ("SET_ATTITUDE_TARGET", m.target_system),
+            MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) => {
+                ("SET_POSITION_TARGET_LOCAL_NED", m.target_system)
+            }
+            MavMessage::SET_POSITION_TARGET_GLOBAL_INT(m) => {
+                ("SET_POSITION_TARGET_GLOBAL_INT", m.target_system)
+            }
+            _ => return,
+        };
+        if to as u32 != target.0 {
+            return;
+        }
+        self.other_controller = Some(format!(
+            "another_controller: {what} for the vehicle (system {}) from system {}, component {}, not the companion: another controller is flying it; the companion's setpoints stop",
+            target.0, from.0, from.1
+        ));
     }
 
     /// The vehicle's heartbeat: armed, mode, powered off.
@@ -1182,6 +1434,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// An acknowledgement before the companion has control: an accepted arming, or a refusal.
     fn acknowledged(&mut self, a: &COMMAND_ACK_DATA) {
+        // Only the answer to the command the companion sent last, within ACK_WINDOW_S: any
+        // other acknowledgement answers someone else (a ground station arming the vehicle).
+        let ours = self.awaiting.is_some_and(|(cmd, at)| {
+            cmd == a.command && at.elapsed().as_secs_f64() <= ACK_WINDOW_S
+        });
+        if !ours {
+            return;
+        }
+        if a.result != MavResult::MAV_RESULT_IN_PROGRESS {
+            self.awaiting = None;
+        }
         let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
         self.event(format!("{:?}: {:?}", a.command, a.result));
         if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && self.arm_sent {
@@ -1216,6 +1479,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             });
             self.altitude(g.relative_alt as f64 * 1e-3);
             self.position(g.time_boot_ms, o.to_local_m(lat, lon));
+        } else if self.tel.global_origin.is_some() {
+            // No fix (or out of range) after positions: marked in the trace.
+            self.record.no_position(g.time_boot_ms);
         }
     }
 
@@ -1270,18 +1536,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             WayOut::Mode(m) => format!("{} commanded", self.firmware.name_of(m)),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
-        self.event(if self.target.is_some() {
-            format!("failsafe ({}): setpoints stopped, {what}", end.as_str())
-        } else {
-            format!(
-                "failsafe ({}): no vehicle heard, nothing to command",
-                end.as_str()
-            )
-        });
         if self.target.is_none() {
-            self.event("no failsafe mode was sent".to_string());
-            return Ok((false, true));
+            self.event(format!(
+                "failsafe ({}): no vehicle was ever heard: nothing sent, nothing to confirm",
+                end.as_str()
+            ));
+            return Ok((false, false));
         }
+        self.event(format!(
+            "failsafe ({}): setpoints stopped, {what}",
+            end.as_str()
+        ));
         let (confirmed, tries, why) = self.command_way_out(way)?;
         let what = match way {
             WayOut::Mode(m) => self.firmware.name_of(m),
@@ -1315,9 +1580,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         let mut tries = 0u32;
         loop {
-            let lost = Instant::now().duration_since(self.last_link) > self.timeout;
+            let lost =
+                self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
             if lost && tries >= 5 {
                 return Ok((false, tries, "link lost"));
+            }
+            if tries >= MAX_WAY_OUT_TRIES {
+                return Ok((false, tries, "retries' bound reached"));
             }
             if self.opts.stop.load(Ordering::SeqCst) {
                 return Ok((false, tries, "stopped by a signal"));
@@ -1328,8 +1597,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             tries += 1;
             self.command(cmd, params)?;
             match self.await_way_out(way, cmd)? {
-                Some(true) => return Ok((true, tries, "")),
-                Some(false) => return Ok((false, tries, "refused")),
+                Some(Answer::Confirmed) => return Ok((true, tries, "")),
+                Some(Answer::OtherSafeMode(name)) => {
+                    let asked = match way {
+                        WayOut::Mode(m) => self.firmware.name_of(m),
+                        WayOut::Disarm => "disarm",
+                    };
+                    self.event(format!(
+                        "the vehicle went to {name}, not the {asked} commanded: a safe mode all the same, the failsafe ends there (not insisted on)"
+                    ));
+                    return Ok((true, tries, ""));
+                }
+                Some(Answer::Refused) => return Ok((false, tries, "refused")),
                 None => {}
             }
         }
@@ -1338,7 +1617,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
     /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
     /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing).
-    fn await_way_out(&mut self, way: WayOut, cmd: MavCmd) -> Result<Option<bool>, FlyError> {
+    fn await_way_out(&mut self, way: WayOut, cmd: MavCmd) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         while Instant::now() < until {
             for r in self
@@ -1360,19 +1639,24 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                                     | MavResult::MAV_RESULT_FAILED
                             ) =>
                     {
-                        return Ok(Some(false))
+                        return Ok(Some(Answer::Refused))
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Mode(m))
                         if self.firmware.is_in(h.custom_mode, m) =>
                     {
-                        return Ok(Some(true))
+                        return Ok(Some(Answer::Confirmed))
+                    }
+                    (MavMessage::HEARTBEAT(h), WayOut::Mode(_)) => {
+                        if let Some(name) = self.firmware.safe_mode_name(h.custom_mode) {
+                            return Ok(Some(Answer::OtherSafeMode(name)));
+                        }
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Disarm)
                         if !h
                             .base_mode
                             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED) =>
                     {
-                        return Ok(Some(true))
+                        return Ok(Some(Answer::Confirmed))
                     }
                     _ => {}
                 }

@@ -12,6 +12,11 @@
 //! `cos(lat)/cos(lat_0) - 1` elsewhere (3e-5 over 5 km at 47 deg): a local flying area, not
 //! navigation across a continent.
 //!
+//! Poles: the east-west scale `cos(lat_0)` vanishes there, so a home (or a lon/lat field's
+//! reference latitude) beyond [`MAX_HOME_LAT_DEG`] is refused ([`Frame::of`]); a point north of
+//! the north pole (south of the south pole) is carried over it along its meridian
+//! (`lat = 180 - lat`, `lon = lon + 180`), so a latitude sent is always within [-90, 90].
+//!
 //! A scenario whose field is a longitude/latitude grid (NetCDF, GeoTIFF in degrees) is already
 //! on the Earth: [`Frame::of`] takes the field's own georeference
 //! ([`isotrack_scenario::field::LonLatFrame`]): home is the field's local origin and the
@@ -48,7 +53,7 @@ impl Home {
         let lat = self.lat_deg + (y_m / EARTH_RADIUS_M).to_degrees();
         let lon =
             self.lon_deg + (x_m / (EARTH_RADIUS_M * self.lat_deg.to_radians().cos())).to_degrees();
-        (lat, wrap_lon_deg(lon))
+        over_the_pole(lat, lon)
     }
 
     /// `(x east, y north)` in metres of the point at `(lat, lon)` degrees (the inverse of
@@ -76,12 +81,47 @@ pub struct Frame {
 /// and still agree with it: 1e-7 deg, `GLOBAL_POSITION_INT`'s resolution (about 1 cm).
 pub const HOME_AGREEMENT_DEG: f64 = 1e-7;
 
+/// The largest |latitude|, deg, of home or of a lon/lat field's reference latitude: the range
+/// `sitl.home_lat_deg` is checked against when the scenario loads (at 89 deg, `cos(lat_0)` is
+/// 0.017, one metre east a 1/0.017 times wider step of longitude; at 90 it is 0 and every
+/// longitude is infinite).
+pub const MAX_HOME_LAT_DEG: f64 = 89.0;
+
 impl Frame {
     /// The frame of a scenario: a lon/lat field's own georeference (home at the field's local
     /// origin, `sitl.home_alt_m` its altitude), else `sitl.home_*` ([`Home::of`]). An error
     /// when the scenario sets `sitl.home_lat_deg` or `home_lon_deg` to another point than a
     /// lon/lat field's origin (the positions sent would contradict the field's coordinates).
+    /// Also an error when home's latitude, or the field's reference latitude, is beyond
+    /// [`MAX_HOME_LAT_DEG`] (or not finite).
     pub fn of(s: &isotrack_scenario::Scenario) -> Result<Self, String> {
+        let f = Self::of_unchecked(s)?;
+        for (what, lat) in [
+            (
+                if s.lonlat_frame().is_some() {
+                    "the field's local origin (its georeference)"
+                } else {
+                    "sitl.home_lat_deg"
+                },
+                f.home.lat_deg,
+            ),
+            (
+                "the field's reference latitude (the middle of its grid)",
+                f.scale_lat_deg,
+            ),
+        ] {
+            if lat.is_nan() || lat.abs() > MAX_HOME_LAT_DEG {
+                return Err(format!(
+                    "{what} is at latitude {} deg: isotrack sitl maps local metres to latitude and longitude within {} deg of the equator (the east-west scale cos(lat) vanishes at the poles)",
+                    isotrack_core::numtext::Echo(lat),
+                    isotrack_core::numtext::Echo(MAX_HOME_LAT_DEG),
+                ));
+            }
+        }
+        Ok(f)
+    }
+
+    fn of_unchecked(s: &isotrack_scenario::Scenario) -> Result<Self, String> {
         let home = Home::of(s);
         let Some(f) = s.lonlat_frame() else {
             return Ok(Self {
@@ -123,7 +163,20 @@ impl Frame {
         let lat = h.lat_deg + (y_m / EARTH_RADIUS_M).to_degrees();
         let lon = h.lon_deg
             + (x_m / (EARTH_RADIUS_M * self.scale_lat_deg.to_radians().cos())).to_degrees();
-        (lat, wrap_lon_deg(lon))
+        over_the_pole(lat, lon)
+    }
+}
+
+/// `(lat, lon)` with a latitude past a pole carried over it along its meridian: within
+/// [-90, 90], the longitude on the other side (+180 deg) and wrapped to [-180, 180).
+fn over_the_pole(lat: f64, lon: f64) -> (f64, f64) {
+    // lat in [-90, 270) after folding whole turns; (90, 270) is over the north pole (or,
+    // past 180, over the south one too: 180 - lat < -90 cannot happen there).
+    let l = (lat + 90.0).rem_euclid(360.0) - 90.0;
+    if l > 90.0 {
+        (180.0 - l, wrap_lon_deg(lon + 180.0))
+    } else {
+        (l, wrap_lon_deg(lon))
     }
 }
 
@@ -161,5 +214,40 @@ mod tests {
         assert!((lon + 179.9999).abs() < 1e-9, "{lon}");
         let (x, _) = h.to_local_m(0.0, -179.9999);
         assert!((x - 0.0002 * m_per_deg).abs() < 1e-6, "{x}");
+    }
+
+    /// Home at 89 deg north, 10 deg east: two degrees of latitude north is one degree past
+    /// the pole, latitude 89 on the meridian 190 = -170 deg; two degrees south of home at -89
+    /// is latitude -89 on meridian -170. Every latitude sent stays within [-90, 90].
+    #[test]
+    fn a_point_past_a_pole_is_carried_over_it() {
+        let m_per_deg = 6_371_008.8 * std::f64::consts::PI / 180.0;
+        for (home_lat, dy_deg, lat_want, lon_want) in [
+            (89.0, 2.0, 89.0, -170.0),
+            (-89.0, -2.0, -89.0, -170.0),
+            (89.0, 1.0, 90.0, 10.0),
+            (89.0, -1.0, 88.0, 10.0),
+            (89.0, 361.0, 90.0, 10.0),
+        ] {
+            let h = Home {
+                lat_deg: home_lat,
+                lon_deg: 10.0,
+                alt_m: 0.0,
+            };
+            let (lat, lon) = h.to_lat_lon_deg(0.0, dy_deg * m_per_deg);
+            assert!(
+                (lat - lat_want).abs() < 1e-9,
+                "{home_lat} + {dy_deg}: {lat}"
+            );
+            assert!(
+                (lon - lon_want).abs() < 1e-9,
+                "{home_lat} + {dy_deg}: {lon}"
+            );
+            let f = Frame {
+                home: h,
+                scale_lat_deg: home_lat,
+            };
+            assert_eq!(f.to_lat_lon_deg(0.0, dy_deg * m_per_deg), (lat, lon));
+        }
     }
 }

@@ -20,6 +20,11 @@
 //! disconnected); a new peer takes a free place or a silent one's, and is refused while
 //! [`MAX_PEERS`] others are alive (counted in [`LinkStats::peers_refused`]), so a flood of
 //! spoofed source addresses neither grows the set nor pushes out the peers that are talking.
+//! A TCP client that has not yet sent a valid frame holds its place on trial: it is
+//! disconnected after [`HANDSHAKE_TIMEOUT`] (or the peer timeout, if shorter) without one, and
+//! a new client, when every place is taken, takes the place of the oldest such client; so idle
+//! connections (a port scanner, a client of another protocol, a hostile peer holding sockets
+//! open) never lock a real client out.
 //!
 //! Hostile traffic: bytes that are not a MAVLink 2 frame with a valid checksum are skipped
 //! (counted in [`LinkStats::junk_datagrams`] when a UDP datagram yields nothing), message ids
@@ -55,6 +60,10 @@ pub const MAX_QUEUED_BYTES: usize = 256 * 1024;
 /// How long a peer may be silent before it is dropped, unless [`Link::set_peer_timeout`] says
 /// otherwise.
 pub const DEFAULT_PEER_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// How long a TCP client of a `tcpin:` link may stay connected without sending a valid frame
+/// (a MAVLink client sends its first heartbeat within a second of connecting).
+pub const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// The baud rates `serial:DEVICE:BAUD` accepts (the POSIX and Linux termios speeds).
 pub const BAUD_RATES: [u32; 26] = [
@@ -155,7 +164,10 @@ struct UdpPeer {
 struct Stream<S> {
     reader: MavlinkReader<S>,
     out: Vec<u8>,
+    /// When it last sent a valid frame (or connected, before its first).
     last: Instant,
+    /// Whether it has sent a valid frame.
+    heard: bool,
     /// A socket (written with `MSG_NOSIGNAL`: a closed peer is an error, never a `SIGPIPE`).
     socket: bool,
 }
@@ -166,12 +178,24 @@ impl<S: Read + AsRawFd> Stream<S> {
             reader: MavlinkReader::new(source),
             out: Vec::new(),
             last: Instant::now(),
+            heard: false,
             socket,
         }
     }
 
     fn fd(&self) -> RawFd {
         self.reader.get_ref().as_raw_fd()
+    }
+
+    /// Whether it is still a peer: heard within `timeout`, or, never heard, connected within
+    /// [`HANDSHAKE_TIMEOUT`] (and `timeout`).
+    fn alive(&self, timeout: Duration) -> bool {
+        let limit = if self.heard {
+            timeout
+        } else {
+            timeout.min(HANDSHAKE_TIMEOUT)
+        };
+        self.last.elapsed() <= limit
     }
 
     /// Queues `frame` whole, or drops it if the queue is full; `false` when dropped.
@@ -433,6 +457,7 @@ fn drain<S: Read>(
             Ok(raw) => {
                 if accept(raw, stats, log, out) {
                     s.last = Instant::now();
+                    s.heard = true;
                 }
             }
             Err(MessageReadError::Io(e)) if e.kind() == std::io::ErrorKind::WouldBlock => {
@@ -687,7 +712,7 @@ impl Link {
                 fixed: false,
                 ..
             } => peers.retain(|p| p.last.elapsed() <= timeout),
-            Kind::TcpIn { clients, .. } => clients.retain(|c| c.last.elapsed() <= timeout),
+            Kind::TcpIn { clients, .. } => clients.retain(|c| c.alive(timeout)),
             _ => {}
         }
         self.stats.peers_evicted += before.saturating_sub(self.peer_count()) as u64;
@@ -793,7 +818,10 @@ impl Link {
         match &mut self.kind {
             Kind::Udp { .. } => {}
             Kind::TcpIn { listener, clients } => {
-                // New clients: a free place, or a silent client's; else turned away.
+                // New clients: a free place, or a silent client's, or the place of one never
+                // heard that connected before this pass (one accepted now has had no time to
+                // speak); else turned away.
+                let pass_start = Instant::now();
                 for _ in 0..4 * MAX_PEERS {
                     let (s, _) = match listener.accept() {
                         Ok(x) => x,
@@ -812,7 +840,15 @@ impl Link {
                         Err(_) => break,
                     };
                     if clients.len() == MAX_PEERS {
-                        if let Some(i) = clients.iter().position(|c| c.last.elapsed() > timeout) {
+                        // A silent client's place, else the oldest never heard (its frames
+                        // would have come by now if it spoke MAVLink).
+                        let silent = clients.iter().position(|c| !c.alive(timeout));
+                        let unheard = || {
+                            (0..clients.len())
+                                .filter(|&i| !clients[i].heard && clients[i].last < pass_start)
+                                .min_by_key(|&i| clients[i].last)
+                        };
+                        if let Some(i) = silent.or_else(unheard) {
                             clients.remove(i);
                             stats.peers_evicted += 1;
                         }

@@ -52,6 +52,10 @@ const PX4_OFFBOARD: u32 = 6;
 const PX4_LOITER: u32 = 3;
 /// PX4's AUTO sub mode RTL.
 const PX4_RTL: u32 = 5;
+/// PX4's AUTO sub mode LAND.
+const PX4_LAND: u32 = 6;
+/// ArduCopter's LAND.
+const ARDUCOPTER_LAND: u32 = 9;
 
 impl Firmware {
     /// The firmware of a vehicle's heartbeat: `MAV_AUTOPILOT_ARDUPILOTMEGA` picks ArduPilot's
@@ -140,6 +144,29 @@ impl Firmware {
             return main == want_main && (m == FlyMode::Offboard || sub == want_sub);
         }
         self.ardupilot_number(m) == Some(custom_mode)
+    }
+
+    /// The safe mode a heartbeat's `custom_mode` is, if it is one: the table's hold, loiter
+    /// and return (whichever the failsafe asked for), and the landings PX4 AUTO.LAND (main 4,
+    /// sub 6) and ArduCopter LAND (9). A failsafe that asked for one and sees the vehicle in
+    /// another (asked RTL, it loiters: its own failsafe, or a pilot's choice) is over: the
+    /// vehicle is out of the companion's setpoints and somewhere safe, and insisting would
+    /// fight it. Sources as for the table: PX4's `px4_custom_mode.h` (AUTO sub mode LAND 6),
+    /// ArduCopter's `mode.h` (LAND 9).
+    pub fn safe_mode_name(self, custom_mode: u32) -> Option<&'static str> {
+        for m in [FlyMode::Hold, FlyMode::Loiter, FlyMode::Return] {
+            if self.is_in(custom_mode, m) {
+                return Some(self.name_of(m));
+            }
+        }
+        let land = match self {
+            Firmware::Px4 => {
+                (custom_mode >> 16) & 0xff == PX4_AUTO && (custom_mode >> 24) & 0xff == PX4_LAND
+            }
+            Firmware::ArduCopter => custom_mode == ARDUCOPTER_LAND,
+            _ => false,
+        };
+        land.then_some("LAND")
     }
 
     /// The name of a heartbeat's `custom_mode` in logs ("OFFBOARD", "GUIDED", "RTL", or the
@@ -231,5 +258,29 @@ mod tests {
             Firmware::of(ap, MavType::MAV_TYPE_SUBMARINE).set_mode_params(Hold),
             None
         );
+    }
+
+    /// The safe modes that end a failsafe: PX4 AUTO.LOITER (4, 3), AUTO.RTL (4, 5), AUTO.LAND
+    /// (4, 6), never OFFBOARD (6) or MANUAL (1); ArduPlane LOITER 12, RTL 11, never its GUIDED
+    /// 15 or ACRO 4; ArduCopter LAND 9; Rover HOLD 4.
+    #[test]
+    fn safe_modes() {
+        let ap = MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA;
+        let px4 = Firmware::Px4;
+        assert_eq!(px4.safe_mode_name((4 << 16) | (3 << 24)), Some("HOLD"));
+        assert_eq!(px4.safe_mode_name((4 << 16) | (5 << 24)), Some("RETURN"));
+        assert_eq!(px4.safe_mode_name((4 << 16) | (6 << 24)), Some("LAND"));
+        assert_eq!(px4.safe_mode_name(6 << 16), None);
+        assert_eq!(px4.safe_mode_name(1 << 16), None);
+        let plane = Firmware::of(ap, MavType::MAV_TYPE_FIXED_WING);
+        assert_eq!(plane.safe_mode_name(12), Some("LOITER"));
+        assert_eq!(plane.safe_mode_name(11), Some("RTL"));
+        assert_eq!(plane.safe_mode_name(15), None);
+        assert_eq!(plane.safe_mode_name(4), None);
+        let copter = Firmware::of(ap, MavType::MAV_TYPE_QUADROTOR);
+        assert_eq!(copter.safe_mode_name(9), Some("LAND"));
+        let rover = Firmware::of(ap, MavType::MAV_TYPE_GROUND_ROVER);
+        assert_eq!(rover.safe_mode_name(4), Some("HOLD"));
+        assert_eq!(rover.safe_mode_name(15), None);
     }
 }

@@ -12,6 +12,11 @@
 //! stamped at or after `t` has come, for at most [`MAX_ROW_WAIT_S`] of wall time, then takes
 //! what there is (`NaN` for none). A UDP sensor's line is on the sensor's own clock: its row
 //! takes the latest position and heading received when the line arrived.
+//!
+//! An invalid position (not finite, or a latitude/longitude out of range: the vehicle does not
+//! know where it is) is recorded too ([`Recorder::no_position`]): a row stamped at or after it,
+//! before the next valid one, gets `NaN` (no position), never the last valid one repeated as if
+//! it were current.
 
 use isotrack_scenario::Scenario;
 use isotrack_sim::{Metrics, MetricsConfig, RunMetrics, TraceRow, TraceSink};
@@ -28,6 +33,10 @@ pub const FLUSH_EVERY_ROWS: u64 = 32;
 pub const FLUSH_INTERVAL_S: f64 = 1.0;
 /// The positions and attitudes kept for pairing (the newest).
 const HISTORY: usize = 4096;
+/// The samples answered in control kept to compute the metrics over what was flown of a
+/// flight that ended early (24 bytes each: 24 MB; about 28 h at 10 Hz). Past it, an early
+/// end's metrics are the planned window's (the summary says so).
+pub const MAX_KEPT_SAMPLES: usize = 1_000_000;
 
 /// A vehicle-clock history of one telemetry value, newest last.
 #[derive(Default)]
@@ -37,6 +46,14 @@ struct History<T: Copy> {
 
 impl<T: Copy> History<T> {
     fn push(&mut self, ms: u32, v: T) {
+        // The vehicle's clock wrapped (2^32 ms): the history starts again from the wrap.
+        if self
+            .items
+            .back()
+            .is_some_and(|&(last, _)| crate::wire::wrapped_forward(last, ms))
+        {
+            self.items.clear();
+        }
         // Out of order: kept in order (a late one is only ever older than what is there).
         if self.items.back().is_some_and(|&(last, _)| ms < last) {
             return;
@@ -83,6 +100,16 @@ struct SeriesMetrics {
     held: Option<f64>,
     /// The last received position in control, for the path length.
     last_pos: Option<(f64, f64)>,
+    /// The samples answered in control: time, s, measured error, command (at most
+    /// [`MAX_KEPT_SAMPLES`]).
+    kept: Vec<(f64, f64, f64)>,
+    /// More samples came than were kept.
+    kept_all: bool,
+    /// The metrics' configuration (the planned window).
+    cfg: MetricsConfig,
+    /// The planned duration, s, and the steady-state fraction.
+    planned_s: f64,
+    fraction: f64,
 }
 
 /// The trace and the metrics of a flight.
@@ -127,6 +154,11 @@ impl Recorder {
                 t0_s: None,
                 held: None,
                 last_pos: None,
+                kept: Vec::new(),
+                kept_all: true,
+                cfg,
+                planned_s,
+                fraction: frac,
             },
             max_wait: Duration::from_secs_f64(MAX_ROW_WAIT_S),
         }
@@ -145,6 +177,12 @@ impl Recorder {
         }
     }
 
+    /// An invalid position received, stamped `ms`: rows from `ms` until the next valid position
+    /// get `NaN` (the path length goes on from the last valid position to the next).
+    pub(crate) fn no_position(&mut self, ms: u32) {
+        self.positions.push(ms, (f64::NAN, f64::NAN));
+    }
+
     /// A heading received, rad (counter-clockwise from east), stamped `ms`.
     pub(crate) fn heading(&mut self, ms: u32, h: f64) {
         self.headings.push(ms, h);
@@ -159,11 +197,69 @@ impl Recorder {
             s.m.integrate_command(w);
         }
         s.m.observe(k, eps, omega);
+        if s.kept.len() < MAX_KEPT_SAMPLES {
+            s.kept.push((t_s, eps, omega));
+        } else {
+            s.kept_all = false;
+        }
     }
 
-    /// The metrics; `completed`: the flight reached its planned end.
-    pub(crate) fn metrics(&self, completed: bool) -> RunMetrics {
-        self.metrics.m.finish(completed)
+    /// The metrics, and what they were computed over in words; `completed`: the flight reached
+    /// its planned end.
+    ///
+    /// A completed flight's are the planned window's: steady state over the last
+    /// `metrics.steady_state_fraction` of the planned duration. A flight that ended early (a
+    /// pilot took over, a failsafe) has flown less than that window, often none of it: its
+    /// metrics are computed over what was flown instead, the steady state over the last
+    /// fraction of the steps from its first sample answered in control to its last, and the
+    /// convergence time within them (the same [`Metrics`] on the same samples, only the
+    /// window and the end moved).
+    pub(crate) fn metrics(&self, completed: bool) -> (RunMetrics, String) {
+        let s = &self.metrics;
+        let pct = format!("{}%", s.fraction * 100.0);
+        let planned = format!(
+            "the samples the law answered in control (measured error, sampling period {} s); steady state over the last {pct} of the planned {} s",
+            s.period_s, s.planned_s
+        );
+        let Some(&(t_last, _, _)) = s.kept.last() else {
+            return (
+                s.m.finish(completed),
+                "no sample answered in control: no tracking metrics".into(),
+            );
+        };
+        if completed {
+            return (s.m.finish(true), planned);
+        }
+        if !s.kept_all {
+            return (
+                s.m.finish(false),
+                format!("{planned} (the flight ended early, but was too long to keep its samples: the planned window's)"),
+            );
+        }
+        let t0 = s.kept[0].0;
+        let n = ((t_last - t0) / s.period_s).round().max(0.0);
+        let mut cfg = s.cfg;
+        cfg.steady_state_start_step = ((1.0 - s.fraction) * n).ceil() as u64;
+        cfg.convergence_min_dwell_steps = cfg.convergence_min_dwell_steps.min(n as u64);
+        let mut m = Metrics::new(cfg);
+        let mut held = None;
+        for &(t, eps, w) in &s.kept {
+            let k = ((t - t0) / s.period_s).round().max(0.0) as u64;
+            if let Some(h) = held.replace(w) {
+                m.integrate_command(h);
+            }
+            m.observe(k, eps, w);
+        }
+        m.add_path(s.m.finish(false).path_length_m);
+        (
+            m.finish(true),
+            format!(
+                "the samples the law answered in control (measured error, sampling period {} s); the flight ended early, after {} s of the planned {} s: steady state over the last {pct} of what was flown, convergence within it",
+                s.period_s,
+                t_last - t0,
+                s.planned_s
+            ),
+        )
     }
 
     /// Queues `row` for its pose (`ms`: its measurement's vehicle time; `None`: now's pose).
@@ -256,5 +352,44 @@ mod tests {
         assert_eq!(h.at(50), None);
         assert!(h.covers(200) && !h.covers(201));
         assert!(History::<f64>::default().covers(5));
+    }
+
+    struct Rows(Vec<TraceRow>);
+    impl TraceSink for Rows {
+        fn record(&mut self, row: &TraceRow) {
+            self.0.push(*row);
+        }
+    }
+
+    /// After an invalid position (200 ms), rows get no position (NaN) until the next valid one
+    /// (300 ms), not the last valid one (100 ms) repeated; a row before it keeps its own.
+    #[test]
+    fn rows_after_an_invalid_position_have_none() {
+        let s = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let mut r = Recorder::new(&s, 10.0);
+        let mut sink = Rows(Vec::new());
+        r.position(100, (1.0, 2.0), true);
+        r.no_position(200);
+        r.position(300, (3.0, 4.0), true);
+        let row = TraceRow {
+            t_s: 0.0,
+            x_m: 0.0,
+            y_m: 0.0,
+            heading_rad: 0.0,
+            s: 0.0,
+            error: 0.0,
+            omega_radps: 0.0,
+            s_measured: None,
+            telemetry: None,
+        };
+        for ms in [150, 200, 250, 300] {
+            r.row(&mut sink, row, Some(ms));
+        }
+        r.finish(&mut sink, &mut |_| {});
+        let xy: Vec<(f64, f64)> = sink.0.iter().map(|r| (r.x_m, r.y_m)).collect();
+        assert_eq!(xy[0], (1.0, 2.0));
+        assert!(xy[1].0.is_nan() && xy[1].1.is_nan(), "{xy:?}");
+        assert!(xy[2].0.is_nan() && xy[2].1.is_nan(), "{xy:?}");
+        assert_eq!(xy[3], (3.0, 4.0));
     }
 }

@@ -4,9 +4,18 @@
 //! the vehicle sends the measurement (`NAMED_VALUE_FLOAT` [`wire::MEASUREMENT_NAME`]) and holds,
 //! until the next sample, the turn rate its mode gives ([`Mode`]): in OFFBOARD (armed), the last
 //! valid setpoint of the companion that took control. Telemetry is sent at the scenario's
-//! recording rate (`output.record_rate_hz`, every sample if 0): `GLOBAL_POSITION_INT`,
-//! `LOCAL_POSITION_NED`, `ATTITUDE`, `VFR_HUD`; once per simulated second `HEARTBEAT`,
-//! `SYS_STATUS`, `SYSTEM_TIME` and `HOME_POSITION`.
+//! recording rate (`output.record_rate_hz`, at least [`MIN_TELEMETRY_RATE_HZ`]: a lower rate,
+//! or 0, which turns the trace off, is refused before the link opens, since positions would
+//! stop): `GLOBAL_POSITION_INT`, `LOCAL_POSITION_NED`, `ATTITUDE`, `VFR_HUD`; once per
+//! simulated second `HEARTBEAT`, `SYS_STATUS`, `SYSTEM_TIME` and `HOME_POSITION`.
+//!
+//! Start: the run (and its clock, real time or lockstep) starts on the first frame of a peer
+//! that talks to this vehicle ([`starts_the_run`]): a `HEARTBEAT` of a ground station or a
+//! companion (`MAV_TYPE_GCS`, `MAV_TYPE_ONBOARD_CONTROLLER`), or a message addressed to this
+//! system (`target_system` = `--system-id`). A stray frame (another vehicle's heartbeat, a
+//! message for another system, a TCP connection that says nothing) starts nothing. While it
+//! waits, the vehicle sends only its `HEARTBEAT`, once a wall-clock second, to the peers the
+//! link has (a ground station waits for a vehicle's heartbeat before it speaks).
 //!
 //! Pacing: [`Pace::RealTime`] keeps simulated time at `speedup` x the wall clock, and the
 //! setpoint in force at a sample is held to the next one; the offboard failsafe switches to HOLD
@@ -46,6 +55,7 @@ use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::Scenario;
 use isotrack_sim::{RunResult, TraceRow, TraceSink};
 use mavlink::dialects::common::*;
+use mavlink::Message as _;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -144,6 +154,38 @@ impl std::fmt::Display for SitlError {
     }
 }
 
+/// The lowest `output.record_rate_hz` `isotrack sitl` flies with, Hz: its position telemetry
+/// goes out once per trace row, and a ground station or companion expects positions at least
+/// once a second (the 1 Hz group's rate).
+pub const MIN_TELEMETRY_RATE_HZ: f64 = 1.0;
+
+/// Checks what `isotrack sitl` needs of a scenario beyond [`check_wire_times`]: telemetry at
+/// least [`MIN_TELEMETRY_RATE_HZ`] (`output.record_rate_hz`), and a home (or a lon/lat field's
+/// georeference) the local-to-WGS84 map holds at ([`Frame::of`]).
+pub fn check_sitl_scenario(s: &Scenario) -> Result<(), String> {
+    let rate = s.spec().output.record_rate_hz;
+    if rate.is_nan() || rate < MIN_TELEMETRY_RATE_HZ {
+        return Err(format!(
+            "output.record_rate_hz = {}: isotrack sitl sends its position telemetry once per trace row, so the rate must be at least {} Hz (0 turns the trace, and the positions, off; the default is 10)",
+            Echo(rate),
+            Echo(MIN_TELEMETRY_RATE_HZ)
+        ));
+    }
+    Frame::of(s).map(|_| ())
+}
+
+/// Whether a frame of another sender starts the run (see the module's "Start"): a heartbeat of
+/// a ground station or companion, or a message addressed to `system_id`.
+pub fn starts_the_run(msg: &MavMessage, system_id: u8) -> bool {
+    match msg {
+        MavMessage::HEARTBEAT(h) => matches!(
+            h.mavtype,
+            MavType::MAV_TYPE_GCS | MavType::MAV_TYPE_ONBOARD_CONTROLLER
+        ),
+        m => m.target_system_id() == Some(system_id),
+    }
+}
+
 /// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
 /// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
 pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
@@ -177,7 +219,10 @@ pub const FORCE_CODE: f32 = 21196.0;
 pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 
 /// How far back, ms, a setpoint's stamp may be from its sender's last applied one and still
-/// count as late (out of order, ignored) rather than a restarted clock (applied).
+/// count as late (out of order, ignored) rather than a restarted clock (applied). Steps are
+/// taken modulo 2^32 ms: a stamp just before the sender's `time_boot_ms` wrapped, coming after
+/// one just after, is late too; one just after, coming after one just before, is newer
+/// ([`wire::wrapped_forward`]), not a restart.
 pub const REORDER_WINDOW_MS: u32 = 10_000;
 
 /// The most senders whose last setpoint stamp the vehicle remembers (the least recent
@@ -264,13 +309,17 @@ impl Autopilot {
             return Some(false);
         }
         let i = self.stamps.iter().position(|(f, _)| *f == from);
+        // Steps modulo 2^32: the sender's clock wraps after 49.7 days (see
+        // `wire::MAX_WRAP_STEP_MS`).
         let newer = match i.map(|i| self.stamps[i].1) {
             None => true,
-            Some(last) if ms >= last => ms > last,
-            Some(last) if last - ms <= REORDER_WINDOW_MS => {
+            Some(last) if ms == last => false,
+            // Older by at most the window, across the wrap or not: late.
+            Some(last) if last.wrapping_sub(ms) <= REORDER_WINDOW_MS => {
                 self.out_of_order += 1;
                 return None;
             }
+            Some(last) if ms > last || wire::wrapped_forward(last, ms) => true,
             Some(last) => {
                 self.event(
                     t_s,
@@ -496,6 +545,8 @@ struct Sitl<'a> {
     telemetry_sent: bool,
     /// The first MAVLink 1 frame has been logged.
     mavlink1_logged: bool,
+    /// A peer has talked to the vehicle ([`starts_the_run`]).
+    started: bool,
 }
 
 impl Sitl<'_> {
@@ -590,10 +641,19 @@ impl Sitl<'_> {
         let yaw = wrap_angle(std::f64::consts::FRAC_PI_2 - r.heading_rad);
         let (vn, ve) = (self.speed_mps * yaw.cos(), self.speed_mps * yaw.sin());
         let hdg_deg = yaw.to_degrees().rem_euclid(360.0);
+        // A position that is no number (a diverged run) goes out as unknown (`INT32_MAX`,
+        // outside every latitude; `NaN` locally), never as 0 deg, 0 deg.
+        let deg_e7 = |d: f64| {
+            if d.is_finite() {
+                (d * 1e7).round() as i32
+            } else {
+                i32::MAX
+            }
+        };
         self.send(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
             time_boot_ms: ms,
-            lat: (lat * 1e7).round() as i32,
-            lon: (lon * 1e7).round() as i32,
+            lat: deg_e7(lat),
+            lon: deg_e7(lon),
             alt: ((self.home.home.alt_m + alt_rel) * 1e3).round() as i32,
             relative_alt: (alt_rel * 1e3).round() as i32,
             vx: (vn * 100.0).round().clamp(-32767.0, 32767.0) as i16,
@@ -648,6 +708,7 @@ impl Sitl<'_> {
                 continue;
             }
             self.last_heard = Instant::now();
+            self.started |= starts_the_run(&r.msg, self.ap.system_id);
             match &r.msg {
                 MavMessage::COMMAND_LONG(c) => {
                     if c.target_system != self.ap.system_id {
@@ -715,6 +776,7 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
     on_ready: &mut dyn FnMut(&Link),
 ) -> Result<SitlReport, SitlError> {
     check_wire_times(scenario).map_err(SitlError::Scenario)?;
+    check_sitl_scenario(scenario).map_err(SitlError::Scenario)?;
     let frame = Frame::of(scenario).map_err(SitlError::Scenario)?;
     let mut link = Link::open(&opts.url, opts.system_id, 1).map_err(SitlError::Link)?;
     link.set_peer_timeout(
@@ -754,11 +816,20 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         last_heard: Instant::now(),
         telemetry_sent: false,
         mavlink1_logged: false,
+        started: false,
     };
-    // A `udpin:` link learns its peer from the first message.
-    while !sitl.link.has_peer() {
+    // The run starts when a peer talks to the vehicle (a `udpin:` link learns its peer from
+    // its first message; a stray frame starts nothing). Meanwhile the vehicle beats once a
+    // wall-clock second to the peers it has (a `udpout:`/`tcpout:`/serial link's own: a
+    // ground station such as MAVSDK waits for a vehicle's heartbeat before it says anything).
+    let mut beaten = false;
+    while !sitl.started {
         if sitl.stop.load(Ordering::Relaxed) {
             break;
+        }
+        if !beaten || sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
+            beaten = true;
+            sitl.heartbeat(false)?;
         }
         sitl.handle_inbound(0.0, Duration::from_millis(100))?;
     }
@@ -940,5 +1011,90 @@ fn wait_until(sitl: &mut Sitl<'_>, t_s: f64, deadline: Instant) -> Result<(), Si
             return Ok(());
         }
         sitl.handle_inbound(t_s, (deadline - now).min(Duration::from_millis(20)))?;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn autopilot() -> Autopilot {
+        Autopilot {
+            system_id: 1,
+            armed: true,
+            mode: Mode::Offboard,
+            owner: None,
+            flying: false,
+            setpoint: None,
+            transport: Transport::Ground,
+            loiter_radps: 0.1,
+            turn_limit_radps: 0.2,
+            events: Vec::new(),
+            events_dropped: 0,
+            refused: 0,
+            out_of_order: 0,
+            stamps: Vec::new(),
+            ground_stations: Vec::new(),
+        }
+    }
+
+    /// A sender's `time_boot_ms` wraps at 2^32 ms (49.7 days): `2^32 - 500` then `499` is a
+    /// step of 1000 ms forward (newer, no restart logged), and a stamp from before the wrap
+    /// that comes late (`2^32 - 200` after `499`: 700 ms older) is out of order, not newer.
+    /// A real jump back (by more than the window, not a consistent step across the wrap) is
+    /// still a restart, logged.
+    #[test]
+    fn a_setpoint_clock_that_wraps_steps_forward() {
+        let mut ap = autopilot();
+        let gcs = (245, 190);
+        assert_eq!(ap.order(0.0, gcs, u32::MAX - 500), Some(true));
+        assert_eq!(ap.order(0.0, gcs, 499), Some(true));
+        assert!(ap.events.is_empty(), "{:?}", ap.events);
+        assert_eq!(ap.order(0.0, gcs, u32::MAX - 200), None);
+        assert_eq!(ap.out_of_order, 1);
+        assert_eq!(ap.order(0.0, gcs, 1499), Some(true));
+        assert_eq!(ap.order(0.0, gcs, 1499), Some(false));
+        // 50 000 s later, then back to 1 000 ms: a restarted clock.
+        assert_eq!(ap.order(0.0, gcs, 50_000_000), Some(true));
+        assert_eq!(ap.order(0.0, gcs, 1_000), Some(true));
+        assert_eq!(ap.events.len(), 1, "{:?}", ap.events);
+        assert!(
+            ap.events[0].contains("taken as restarted"),
+            "{:?}",
+            ap.events
+        );
+    }
+
+    /// What starts the run: a ground station's or companion's heartbeat, a message addressed to
+    /// this system; not another vehicle's heartbeat, nor a message for another system, nor a
+    /// message addressed to nobody in particular.
+    #[test]
+    fn only_a_peer_talking_to_the_vehicle_starts_the_run() {
+        let beat = |mavtype| {
+            MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                mavtype,
+                ..Default::default()
+            })
+        };
+        let command = |target_system| {
+            MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                target_system,
+                ..Default::default()
+            })
+        };
+        assert!(starts_the_run(&beat(MavType::MAV_TYPE_GCS), 1));
+        assert!(starts_the_run(
+            &beat(MavType::MAV_TYPE_ONBOARD_CONTROLLER),
+            1
+        ));
+        assert!(starts_the_run(&command(1), 1));
+        assert!(starts_the_run(&command(7), 7));
+        assert!(!starts_the_run(&beat(MavType::MAV_TYPE_QUADROTOR), 1));
+        assert!(!starts_the_run(&beat(MavType::MAV_TYPE_FIXED_WING), 1));
+        assert!(!starts_the_run(&command(2), 1));
+        assert!(!starts_the_run(
+            &MavMessage::STATUSTEXT(STATUSTEXT_DATA::default()),
+            1
+        ));
     }
 }

@@ -28,6 +28,42 @@ pub fn time_ms(t_s: f64) -> Option<u32> {
     (ms.is_finite() && (0.0..=u32::MAX as f64).contains(&ms)).then_some(ms as u32)
 }
 
+/// The largest forward step, ms, across the wrap of `time_boot_ms` (2^32 ms, 49.7 days after
+/// boot) read as the clock wrapping rather than jumping back: 60 s, the largest step of a
+/// measurement's clock `isotrack fly` takes as no fault (`fly::MAX_MEASUREMENT_STEP_S`).
+pub const MAX_WRAP_STEP_MS: u32 = 60_000;
+
+/// Whether `to` follows `from` on `time_boot_ms`'s clock across its wrap: `to < from`, and
+/// `(to - from) mod 2^32 <= MAX_WRAP_STEP_MS` (the clock passed `u32::MAX` and went on from
+/// 0: `u32::MAX - 500` then `499` is a step of 1000 ms forward).
+pub fn wrapped_forward(from: u32, to: u32) -> bool {
+    to < from && to.wrapping_sub(from) <= MAX_WRAP_STEP_MS
+}
+
+/// `ms` (a `time_boot_ms`, which wraps at 2^32 ms) unwrapped next to `near` (an unwrapped
+/// time, ms): of `ms + k 2^32`, `k >= 0`, the one nearest `near`, so that a step across a wrap
+/// is a small step (`unwrap_ms(2^32 - 500, 499) = 2^32 + 499`), and a step of less than 2^31 ms
+/// either way is the step it was.
+pub fn unwrap_ms(near: u64, ms: u32) -> u64 {
+    const TURN: u64 = 1 << 32;
+    let c = (near & !(TURN - 1)) | ms as u64;
+    [c.checked_sub(TURN), Some(c), c.checked_add(TURN)]
+        .into_iter()
+        .flatten()
+        .min_by_key(|u| u.abs_diff(near))
+        .unwrap_or(c)
+}
+
+/// The `time_boot_ms` of an unwrapped time, ms: modulo 2^32.
+pub fn wire_ms(unwrapped_ms: u64) -> u32 {
+    (unwrapped_ms & 0xFFFF_FFFF) as u32
+}
+
+/// Seconds of an unwrapped time, ms ([`unwrap_ms`]).
+pub fn unwrapped_s(ms: u64) -> f64 {
+    ms as f64 / 1000.0
+}
+
 /// Seconds of a `time_boot_ms`.
 pub fn time_s(ms: u32) -> f64 {
     ms as f64 / 1000.0
@@ -129,6 +165,22 @@ mod tests {
         assert_eq!(roll_of_quaternion([0.0; 4]), None);
         assert_eq!(roll_of_quaternion([2.0, 0.0, 0.0, 0.0]), None);
         assert_eq!(turn_rate_of_yaw_rate(f32::INFINITY), None);
+    }
+
+    /// Unwrapping: 2^32 - 500 then 499 is 1000 ms later; a late 2^32 - 200 after that is
+    /// 700 ms earlier; a step back of 50 000 s stays one; the wire value is modulo 2^32.
+    #[test]
+    fn the_clock_unwraps() {
+        let t = 1u64 << 32;
+        assert_eq!(unwrap_ms(t - 500, 499), t + 499);
+        assert_eq!(unwrap_ms(t + 499, u32::MAX - 199), t - 200);
+        assert_eq!(unwrap_ms(t + 499, 1499), t + 1499);
+        assert_eq!(unwrap_ms(50_000_000, 1000), 1000);
+        assert_eq!(unwrap_ms(0, 4_000_000_000), 4_000_000_000);
+        assert_eq!(wire_ms(t + 499), 499);
+        assert!(wrapped_forward(u32::MAX - 500, 499));
+        assert!(!wrapped_forward(499, u32::MAX - 500));
+        assert!(!wrapped_forward(u32::MAX - 500, 70_000));
     }
 
     /// Times go to the nearest millisecond; beyond u32 they are refused.

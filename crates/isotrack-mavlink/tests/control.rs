@@ -1,5 +1,6 @@
 //! Taking and letting go of control, against a scripted stand-in vehicle (system 1, component 1,
-//! PX4 modes) that records every command it receives: the companion locks onto the autopilot
+//! PX4 modes; a ground rover flying the default Dubins scenario, a fixed wing flying Fig. 3's)
+//! that records every command it receives: the companion locks onto the autopilot
 //! only, takes control only once the sensor and a position are there, and on a refused take-over
 //! or a failsafe commands its way out (disarm on the ground, else HOLD) until the vehicle
 //! confirms it. Real time is needed (a silence is a duration); nothing asserts how long
@@ -7,7 +8,7 @@
 
 use isotrack_mavlink::fly::{run_fly, FailsafeAction, FlyEnd, FlyOptions, FlyReport};
 use isotrack_mavlink::link::Link;
-use isotrack_scenario::load_scenario;
+use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
@@ -41,8 +42,21 @@ struct Script {
     nan_positions_from: u32,
     /// It acknowledges HOLD/RETURN but stays in its mode (a liar).
     hold_lies: bool,
-    /// Its autopilot and type (PX4 fixed wing by default; ArduPilot's mode numbers differ).
+    /// Its autopilot and type (PX4 ground rover by default; ArduPilot's mode numbers differ).
     firmware: (MavAutopilot, MavType),
+    /// The scenario flown: `None`, the one of the vehicle's type (Fig. 3's fixed wing for
+    /// `MAV_TYPE_FIXED_WING`, else the default Dubins robot).
+    scenario: Option<&'static str>,
+    /// Asked for a failsafe mode, it goes to this PX4 mode instead (another safe mode).
+    hold_goes_to: Option<u32>,
+    /// At this beat another companion (component 192) sends the vehicle a setpoint.
+    foreign_setpoint_at: Option<u32>,
+    /// At this beat the vehicle acknowledges an arming nobody here asked for (a ground
+    /// station's), denied.
+    stray_ack_at: Option<u32>,
+    /// Until it is in OFFBOARD it sends its first measurement again and again (as `sitl` in
+    /// lockstep does while nobody answers).
+    resend_until_offboard: bool,
 }
 
 impl Script {
@@ -83,8 +97,13 @@ impl Default for Script {
             hold_lies: false,
             firmware: (
                 MavAutopilot::MAV_AUTOPILOT_PX4,
-                MavType::MAV_TYPE_FIXED_WING,
+                MavType::MAV_TYPE_GROUND_ROVER,
             ),
+            scenario: None,
+            hold_goes_to: None,
+            foreign_setpoint_at: None,
+            stray_ack_at: None,
+            resend_until_offboard: false,
         }
     }
 }
@@ -114,10 +133,35 @@ fn heartbeat(mavtype: MavType, autopilot: MavAutopilot, armed: bool, mode: u32) 
     })
 }
 
-/// Flies the default scenario's law against the stand-in (the companion listens, `udpin:`),
-/// until the companion ends; returns its report and the commands the stand-in received.
+/// The scenario a stand-in of `script` flies: its own, else the one of the vehicle's type.
+fn scenario_of(script: &Script) -> Scenario {
+    let name = script.scenario.or_else(|| {
+        (script.firmware.1 == MavType::MAV_TYPE_FIXED_WING).then_some("paper-fig3-uav.toml")
+    });
+    match name {
+        Some(n) => {
+            let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../scenarios")
+                .join(n);
+            load_scenario(Some(&p), &[]).unwrap()
+        }
+        None => load_scenario(None, &[]).unwrap(),
+    }
+}
+
+/// Flies the scenario's law against the stand-in (the companion listens, `udpin:`), until the
+/// companion ends; returns its report and the commands the stand-in received.
 fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Vec<Got>) {
-    let s = load_scenario(None, &[]).unwrap();
+    let (r, got, _) = against_counting(script, opts);
+    (r, got)
+}
+
+/// [`against`], also counting the setpoints the stand-in received.
+fn against_counting(
+    script: Script,
+    opts: impl FnOnce(&mut FlyOptions),
+) -> (FlyReport, Vec<Got>, u32) {
+    let s = scenario_of(&script);
     let mut o = FlyOptions::new("udpin:127.0.0.1:0");
     o.timeout_s = 2.0;
     opts(&mut o);
@@ -133,6 +177,8 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
     let url = format!("udpout:{addr}");
     let mut v = Link::open(&url, 1, 1).unwrap();
     let mut gimbal = Link::open(&url, 1, 154).unwrap();
+    let mut other = Link::open(&url, 1, 192).unwrap();
+    let mut setpoints = 0u32;
     let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let (mut armed, mut mode, mut holds) = (script.armed, script.start_mode, 0u32);
     let (mut beats, mut sent) = (0u32, 0u32);
@@ -171,19 +217,36 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                     component_id: 1,
                     sequence: 0,
                 },
-                &heartbeat(
-                    MavType::MAV_TYPE_FIXED_WING,
-                    MavAutopilot::MAV_AUTOPILOT_PX4,
-                    armed,
-                    mode,
-                ),
+                &heartbeat(script.firmware.1, script.firmware.0, armed, mode),
             )
             .unwrap();
             raw.send_to(&frame, addr).unwrap();
         }
+        if script.foreign_setpoint_at == Some(beats) {
+            other
+                .send(&MavMessage::SET_ATTITUDE_TARGET(SET_ATTITUDE_TARGET_DATA {
+                    time_boot_ms: 1,
+                    q: [1.0, 0.0, 0.0, 0.0],
+                    target_system: 1,
+                    target_component: 1,
+                    type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
+                    ..Default::default()
+                }))
+                .unwrap();
+        }
+        if script.stray_ack_at == Some(beats) {
+            v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+                result: MavResult::MAV_RESULT_DENIED,
+            }))
+            .unwrap();
+        }
         if beats >= script.quiet_beats {
             let mut name = [0u8; 10];
             name[..5].copy_from_slice(b"ISO_S");
+            if script.resend_until_offboard && !(armed && mode == script.guided()) {
+                sent = 0;
+            }
             v.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
                 time_boot_ms: 1000 + 50 * sent,
                 value: 1.0,
@@ -206,6 +269,9 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
         }
         beats += 1;
         for r in v.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::SET_ATTITUDE_TARGET(_) = &r.msg {
+                setpoints += 1;
+            }
             let MavMessage::COMMAND_LONG(c) = &r.msg else {
                 continue;
             };
@@ -243,7 +309,9 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
                     if holds < script.hold_acked_at {
                         continue;
                     }
-                    if !script.hold_lies {
+                    if let Some(m) = script.hold_goes_to {
+                        mode = m;
+                    } else if !script.hold_lies {
                         mode = script.custom_mode(c.param2, c.param3);
                     }
                     MavResult::MAV_RESULT_ACCEPTED
@@ -257,7 +325,7 @@ fn against(script: Script, opts: impl FnOnce(&mut FlyOptions)) -> (FlyReport, Ve
             .unwrap();
         }
     }
-    (companion.join().unwrap(), got)
+    (companion.join().unwrap(), got, setpoints)
 }
 
 fn is_hold(g: &Got) -> bool {
@@ -558,7 +626,7 @@ fn two_autopilots_are_refused_unless_one_is_picked() {
         while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
             for l in [&mut a, &mut b] {
                 l.send(&heartbeat(
-                    MavType::MAV_TYPE_FIXED_WING,
+                    MavType::MAV_TYPE_GROUND_ROVER,
                     MavAutopilot::MAV_AUTOPILOT_PX4,
                     false,
                     0,
@@ -618,10 +686,10 @@ fn modes_of(
     (r, modes)
 }
 
-/// ArduPilot's mode numbers by vehicle type (ArduCopter: GUIDED 4, LOITER 5, RTL 6;
-/// ArduPlane: GUIDED 15, RTL 11, LOITER 12; Rover: GUIDED 15, HOLD 4, LOITER 5, RTL 11), never
-/// PX4's (whose 4 and 6 are ArduCopter's GUIDED and RTL, ArduPlane's ACRO and FBWB); each
-/// failsafe mode confirmed by the vehicle's heartbeat.
+/// ArduPilot's mode numbers by vehicle type (ArduPlane: GUIDED 15, RTL 11, LOITER 12; Rover:
+/// GUIDED 15, HOLD 4, LOITER 5, RTL 11), never PX4's (whose 4 and 6 are ArduPlane's ACRO and
+/// FBWB); each failsafe mode confirmed by the vehicle's heartbeat. (ArduCopter's table, GUIDED
+/// 4, LOITER 5, RTL 6, is the unit test's in `modes`: no scenario kind flies a multirotor.)
 #[test]
 fn ardupilot_modes_by_vehicle_type() {
     let ap = MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA;
@@ -639,20 +707,6 @@ fn ardupilot_modes_by_vehicle_type() {
             15.0,
             12.0,
             "LOITER",
-        ),
-        (
-            MavType::MAV_TYPE_QUADROTOR,
-            FailsafeAction::Hold,
-            4.0,
-            5.0,
-            "LOITER",
-        ),
-        (
-            MavType::MAV_TYPE_QUADROTOR,
-            FailsafeAction::Return,
-            4.0,
-            6.0,
-            "RTL",
         ),
         (
             MavType::MAV_TYPE_GROUND_ROVER,
@@ -712,15 +766,16 @@ fn px4_return_and_loiter_modes() {
     }
 }
 
-/// An ArduPilot vehicle of a type without a mode table here (a submarine): `--take-control`
-/// commands nothing at all, not even the arming (it used to arm, find no table, then disarm),
-/// and the take-over ends refused.
+/// An ArduPilot vehicle of a type without a mode table here (`MAV_TYPE_GENERIC`, which the
+/// kind check lets through with a warning; a submarine is refused before, as of another
+/// kind): `--take-control` commands nothing at all, not even the arming (it used to arm, find
+/// no table, then disarm), and the take-over ends refused.
 #[test]
 fn a_vehicle_without_a_mode_table_is_never_armed() {
     let script = Script {
         firmware: (
             MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
-            MavType::MAV_TYPE_SUBMARINE,
+            MavType::MAV_TYPE_GENERIC,
         ),
         ..Script::default()
     };
@@ -730,10 +785,196 @@ fn a_vehicle_without_a_mode_table_is_never_armed() {
     });
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("says nothing of its airframe")),
+        "{:?}",
+        r.events
+    );
+    assert!(
         got.iter()
             .all(|g| g.cmd != MavCmd::MAV_CMD_COMPONENT_ARM_DISARM
                 && g.cmd != MavCmd::MAV_CMD_DO_SET_MODE),
         "commanded: {:?}",
         got.iter().map(|g| g.cmd).collect::<Vec<_>>()
     );
+}
+
+/// The scenario's vehicle kind against the vehicle's type, both ways: a Dubins (ground)
+/// scenario and a fixed wing, a fixed-wing scenario and a ground rover, either and a
+/// quadrotor: refused (`vehicle_mismatch`, naming both) before any setpoint or command, even
+/// with `--take-control`.
+#[test]
+fn a_vehicle_of_another_kind_is_refused_before_anything_is_sent() {
+    let px4 = MavAutopilot::MAV_AUTOPILOT_PX4;
+    for (scenario, mavtype, kind) in [
+        (None, MavType::MAV_TYPE_FIXED_WING, "dubins"),
+        (
+            Some("paper-fig3-uav.toml"),
+            MavType::MAV_TYPE_GROUND_ROVER,
+            "fixed_wing",
+        ),
+        (None, MavType::MAV_TYPE_QUADROTOR, "dubins"),
+        (
+            Some("paper-fig3-uav.toml"),
+            MavType::MAV_TYPE_QUADROTOR,
+            "fixed_wing",
+        ),
+    ] {
+        let script = Script {
+            firmware: (px4, mavtype),
+            scenario: Some(scenario.unwrap_or("paper-fig2b-circular.toml")),
+            ..Script::default()
+        };
+        let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+        let case = format!("{kind} vs {mavtype:?}: {:?}", r.events);
+        assert_eq!(r.end, FlyEnd::VehicleMismatch, "{case}");
+        assert!(got.is_empty(), "{case}: {got:?}");
+        assert_eq!(setpoints, 0, "{case}");
+        assert!(r.commands.is_empty() && !r.way_out_commanded, "{case}");
+        let e = r.events.iter().find(|e| e.contains("vehicle_mismatch"));
+        assert!(
+            e.is_some_and(|e| e.contains(&format!("{mavtype:?}")) && e.contains(kind)),
+            "{case}"
+        );
+    }
+}
+
+/// A vehicle already armed and in OFFBOARD when a `--take-control` companion starts, which it
+/// commanded neither: another controller holds it. Refused: nothing commanded, no setpoint,
+/// nothing recorded as flown.
+#[test]
+fn take_control_does_not_join_a_vehicle_someone_else_holds() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        ..Script::default()
+    };
+    let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
+    assert!(got.is_empty(), "{got:?}");
+    assert_eq!(setpoints, 0);
+    assert!(
+        r.commands.is_empty() && !r.way_out_commanded,
+        "{:?}",
+        r.events
+    );
+}
+
+/// In control (a pilot's OFFBOARD), setpoints for the vehicle from another component (192):
+/// another controller is flying it: the setpoints stop and HOLD is commanded.
+#[test]
+fn setpoints_from_another_controller_stop_the_flight() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        foreign_setpoint_at: Some(20),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("from system 1, component 192")),
+        "{:?}",
+        r.events
+    );
+    assert!(got.iter().any(is_hold), "{got:?}");
+}
+
+/// Asked for RETURN (AUTO.RTL), the vehicle goes to AUTO.LOITER, another safe mode: the
+/// failsafe ends there, after one command, logged; not retried until the bound.
+#[test]
+fn another_safe_mode_ends_the_failsafe() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        quiet_beats: u32::MAX,
+        hold_goes_to: Some((4 << 16) | (3 << 24)),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.failsafe = FailsafeAction::Return);
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    let modes = got
+        .iter()
+        .filter(|g| g.cmd == MavCmd::MAV_CMD_DO_SET_MODE)
+        .count();
+    assert_eq!(modes, 1, "{got:?}");
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("went to HOLD, not the RETURN commanded")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// A failsafe mode the vehicle never confirms is commanded at most `MAX_WAY_OUT_TRIES` times,
+/// however long `--timeout-s` makes the time bound (10 s: 30 s, 100 tries).
+#[test]
+fn the_way_out_is_tried_a_bounded_number_of_times() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        quiet_beats: u32::MAX,
+        hold_acked_at: u32::MAX,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.timeout_s = 10.0);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    let n = got.iter().filter(|g| is_hold(g)).count() as u32;
+    let max = isotrack_mavlink::fly::MAX_WAY_OUT_TRIES;
+    assert!((max - 2..=max).contains(&n), "{n} tries: {:?}", r.events);
+}
+
+/// An acknowledgement of a command the companion did not send (a ground station's arming,
+/// denied) is neither logged as the companion's nor a refusal of its take-over: it arms once
+/// the sensor is there and flies to `--max-duration-s`.
+#[test]
+fn someone_elses_acknowledgement_is_not_the_companions() {
+    let script = Script {
+        quiet_beats: 10,
+        stray_ack_at: Some(3),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("MAV_RESULT_DENIED")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        got.iter()
+            .any(|g| g.cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && g.p[0] == 1.0),
+        "{got:?}"
+    );
+}
+
+/// A clean take-over of a vehicle that sends its first measurement again while nobody answers
+/// (as `sitl` in lockstep does): the copies held before control are one measurement, not
+/// repeats: none counted, none logged.
+#[test]
+fn a_clean_take_over_logs_no_repeat() {
+    let script = Script {
+        resend_until_offboard: true,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert_eq!(r.measurements_repeated, 0, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("came again")),
+        "{:?}",
+        r.events
+    );
+    assert!(r.commands.len() >= 5, "{:?}", r.commands);
 }

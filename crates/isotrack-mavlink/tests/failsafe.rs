@@ -10,12 +10,13 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
-/// A vehicle a pilot armed and switched to OFFBOARD (PX4 main mode 6): the companion has
-/// control from its first heartbeat, so a failsafe commands HOLD.
+/// A ground rover (the default scenario's Dubins vehicle) a pilot armed and switched to
+/// OFFBOARD (PX4 main mode 6): the companion has control from its first heartbeat, so a
+/// failsafe commands HOLD.
 fn heartbeat() -> MavMessage {
     MavMessage::HEARTBEAT(HEARTBEAT_DATA {
         custom_mode: 6 << 16,
-        mavtype: MavType::MAV_TYPE_FIXED_WING,
+        mavtype: MavType::MAV_TYPE_GROUND_ROVER,
         autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
         base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
             | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
@@ -423,6 +424,95 @@ fn a_vehicle_powering_off_is_lost() {
     let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert_eq!(vehicle.join().unwrap(), Some((4.0, 3.0)));
+}
+
+/// A vehicle that announces the end of its run (`STATUSTEXT` "isotrack sitl: run ended
+/// (HOW)", as `sitl` does) at its 3rd beat and then powers off: the flight's end, and the
+/// commands it received (DO_SET_MODE's param2 and param3).
+fn run_ended_as(how: &str) -> (isotrack_mavlink::fly::FlyReport, Option<(f32, f32)>) {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let text = format!("isotrack sitl: run ended ({how})");
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut beats = 0;
+        while t0.elapsed() < Duration::from_secs(8) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        return Some((c.param2, c.param3));
+                    }
+                }
+            }
+            if link.has_peer() && beats < 6 {
+                if beats == 3 {
+                    let mut bytes = [0u8; 50];
+                    bytes[..text.len()].copy_from_slice(text.as_bytes());
+                    link.send(&MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+                        severity: MavSeverity::MAV_SEVERITY_NOTICE,
+                        text: bytes.into(),
+                    }))
+                    .unwrap();
+                }
+                let mut h = heartbeat();
+                if let (MavMessage::HEARTBEAT(d), true) = (&mut h, beats >= 3) {
+                    d.system_status = MavState::MAV_STATE_POWEROFF;
+                }
+                link.send(&h).unwrap();
+                beats += 1;
+            }
+        }
+        None
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 1.0;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    (r, vehicle.join().unwrap())
+}
+
+/// Ctrl-C on `sitl` ("run ended (interrupted)", then powered off) is the vehicle going away,
+/// not the end of the flight: `link_lost`, a failsafe (HOLD commanded, unconfirmed), never
+/// `vehicle_ended`; a run that reached its end ("run ended (completed)") is `vehicle_ended`.
+#[test]
+fn an_interrupted_vehicle_is_a_lost_link_not_a_completed_flight() {
+    for how in ["interrupted", "companion_lost"] {
+        let (r, mode) = run_ended_as(how);
+        assert_eq!(r.end, FlyEnd::LinkLost, "{how}: {:?}", r.events);
+        assert!(r.end.is_failsafe());
+        assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+        assert_eq!(mode, Some((4.0, 3.0)), "{:?}", r.events);
+    }
+    let (r, mode) = run_ended_as("completed");
+    assert_eq!(r.end, FlyEnd::VehicleEnded, "{:?}", r.events);
+    assert_eq!(mode, None);
+}
+
+/// No vehicle ever heard (nobody at the address): the failsafe says so, and nothing is said
+/// to have been commanded ("no failsafe mode was sent" read as if one had been due).
+#[test]
+fn no_vehicle_heard_is_said_plainly() {
+    let s = load_scenario(None, &[]).unwrap();
+    let silent = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mut o = FlyOptions::new(&format!("udpout:{}", silent.local_addr().unwrap()));
+    o.timeout_s = 0.5;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert_eq!(r.end, FlyEnd::LinkLost, "{:?}", r.events);
+    assert!(!r.vehicle_heard && !r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("no vehicle was ever heard: nothing sent")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events
+            .iter()
+            .any(|e| e.contains("failsafe mode was sent")),
+        "{:?}",
+        r.events
+    );
 }
 
 /// A lockstep vehicle whose companion falls silent (it ended, or failed safe) ends its run

@@ -23,6 +23,8 @@ struct Beat {
     value: f32,
     north_m: f32,
     alt_m: f32,
+    /// From this beat on the pilot has the vehicle in MANUAL (PX4 main mode 1).
+    manual: bool,
 }
 
 /// The yaw the stand-in reports at beat `k`, rad.
@@ -42,6 +44,12 @@ fn pilots_flight(
     let addr = link.local_addr().unwrap();
     let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let finished = done.clone();
+    // The vehicle's type is the scenario's kind (a mismatch is refused).
+    let mavtype = if s.is_flying() {
+        MavType::MAV_TYPE_FIXED_WING
+    } else {
+        MavType::MAV_TYPE_GROUND_ROVER
+    };
     let vehicle = std::thread::spawn(move || {
         let (mut mode, mut k, mut got) = (6u32 << 16, 0usize, Vec::new());
         let t0 = Instant::now();
@@ -65,9 +73,12 @@ fn pilots_flight(
             if !link.has_peer() {
                 continue;
             }
+            if beats.get(k).is_some_and(|b| b.manual) {
+                mode = 1 << 16;
+            }
             link.send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
                 custom_mode: mode,
-                mavtype: MavType::MAV_TYPE_FIXED_WING,
+                mavtype,
                 autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
                 base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
                     | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
@@ -126,6 +137,7 @@ fn beats(values: &[f32], ms: impl Fn(usize) -> u32) -> Vec<Beat> {
             value,
             north_m: k as f32,
             alt_m: 100.0,
+            manual: false,
         })
         .collect()
 }
@@ -274,4 +286,43 @@ fn a_fixed_wing_setpoint_holds_altitude_and_airspeed() {
             assert_eq!(a.thrust, 0.75, "answer {k}");
         }
     }
+}
+
+/// A pilot who takes the vehicle back early (MANUAL at the 21st of 30 measurements, 0.5 s
+/// apart, `--max-duration-s` 100: the planned steady-state window, from 80 s, never flown):
+/// the metrics are computed over what was flown, not left null. The 20 answered samples span
+/// 9.5 s, 950 steps of 0.01 s; the last 20 % (from step 760, 7.6 s after the first) holds
+/// samples 16 to 19; the summary says so.
+#[test]
+fn an_early_hand_back_has_metrics_over_what_was_flown() {
+    let s = load_scenario(None, &[]).unwrap();
+    let level = s.level();
+    let eps: Vec<f64> = (0..30)
+        .map(|k| 0.3 * if k % 2 == 0 { 1.0 } else { -1.0 } / (k + 1) as f64)
+        .collect();
+    let values: Vec<f32> = eps.iter().map(|e| (level + e) as f32).collect();
+    let mut b = beats(&values, |k| 1000 + 500 * k as u32);
+    for x in &mut b[20..] {
+        x.manual = true;
+    }
+    let (r, _, _) = pilots_flight(&s, b, |o| o.max_duration_s = Some(100.0));
+    assert_eq!(
+        r.end,
+        isotrack_mavlink::fly::FlyEnd::PilotTookOver,
+        "{:?}",
+        r.events
+    );
+    assert_eq!(r.commands.len(), 20, "{:?}", r.events);
+    let e: Vec<f64> = values.iter().map(|&v| v as f64 - level).collect();
+    let window = &e[16..20];
+    let max = window.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let rms = (window.iter().map(|x| x * x).sum::<f64>() / 4.0).sqrt();
+    assert_eq!(
+        r.metrics.steady_state_max_abs_error,
+        Some(max),
+        "{}",
+        r.metrics_over
+    );
+    assert!((r.metrics.steady_state_rms_error.unwrap() - rms).abs() < 1e-15);
+    assert!(r.metrics_over.contains("ended early"), "{}", r.metrics_over);
 }

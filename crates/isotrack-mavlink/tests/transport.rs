@@ -5,7 +5,7 @@
 //! flights of `lockstep.rs` do. And the peers of a `udpin:` link: bounded, silent ones dropped.
 
 use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, FlyReport};
-use isotrack_mavlink::link::{Link, MAX_PEERS};
+use isotrack_mavlink::link::{Link, HANDSHAKE_TIMEOUT, MAX_PEERS};
 use isotrack_mavlink::mirror::{mirror, Rounding, Transport};
 use isotrack_mavlink::sitl::{run_sitl, run_sitl_on, Pace, SitlOptions, SitlReport};
 use isotrack_scenario::{load_scenario, Scenario};
@@ -331,4 +331,120 @@ fn sitl_drops_a_silent_ground_station() {
         "the companion flew on: {}",
         v.flown.len()
     );
+}
+
+/// Twelve idle TCP connections (never a frame: a port scanner, a client of another protocol,
+/// sockets held open on purpose) do not lock a MAVLink client out of a `tcpin:` link: the
+/// client that connects after them takes the place of the oldest one never heard, is heard,
+/// and hears the vehicle; and every idle connection is closed once [`HANDSHAKE_TIMEOUT`] has
+/// passed without a frame. (Before: the idle ones held all [`MAX_PEERS`] places for the peer
+/// timeout, and the client was turned away.)
+#[test]
+fn idle_tcp_connections_never_lock_a_client_out() {
+    let mut vehicle = Link::open("tcpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = vehicle.local_addr().unwrap();
+    let mut idle: Vec<std::net::TcpStream> = (0..12)
+        .map(|_| std::net::TcpStream::connect(addr).unwrap())
+        .collect();
+    for _ in 0..5 {
+        vehicle.poll(Duration::from_millis(20)).unwrap();
+    }
+    assert_eq!(vehicle.peer_count(), MAX_PEERS);
+    let mut gcs = Link::open(&format!("tcpout:{addr}"), 245, 190).unwrap();
+    gcs.send(&heartbeat()).unwrap();
+    let mut heard = 0;
+    let t0 = Instant::now();
+    while heard == 0 && t0.elapsed() < Duration::from_secs(2) {
+        heard += vehicle.poll(Duration::from_millis(20)).unwrap().len();
+    }
+    assert_eq!(heard, 1, "the client's heartbeat reached the vehicle");
+    vehicle.send(&heartbeat()).unwrap();
+    assert_eq!(frames_within(&mut gcs, Duration::from_millis(300)), 1);
+    // Past the handshake time, the idle connections are closed; the client stays.
+    let t0 = Instant::now();
+    while t0.elapsed() < HANDSHAKE_TIMEOUT + Duration::from_millis(300) {
+        gcs.send(&heartbeat()).unwrap();
+        vehicle.poll(Duration::from_millis(50)).unwrap();
+        frames_within(&mut gcs, Duration::from_millis(1));
+    }
+    assert_eq!(vehicle.peer_count(), 1);
+    for s in &mut idle {
+        s.set_read_timeout(Some(Duration::from_secs(1))).unwrap();
+        let mut b = [0u8; 4096];
+        // What the vehicle wrote before it closed it (its heartbeats), then the end: end of
+        // file or reset (never a timeout: still held open).
+        loop {
+            match s.read(&mut b) {
+                Ok(0) => break,
+                Ok(_) => continue,
+                Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => break,
+                other => panic!("an idle connection is still open: {other:?}"),
+            }
+        }
+    }
+}
+
+/// A stray frame does not start `sitl`'s clock: another vehicle's heartbeat and a command for
+/// another system, then a second of silence, and the run has not started (nothing but
+/// heartbeats reaches the stray sender, which is a peer of the `udpin:` link); a ground station's
+/// heartbeat then starts it, at 0 (its first `SYSTEM_TIME` says `time_boot_ms` < 1 s, where a
+/// clock started by the stray frame would say 10 s and more at `--speedup 10`).
+#[test]
+fn a_stray_frame_does_not_start_the_clock() {
+    let s = load_scenario(None, &["sim.duration_s=600".to_string()]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::RealTime { speedup: 10.0 };
+    let stop = opts.stop.clone();
+    let (tx, rx) = mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).expect("sitl")
+    });
+    let addr = rx.recv().unwrap();
+    let mut stray = Link::open(&format!("udpout:{addr}"), 7, 1).unwrap();
+    stray
+        .send(&MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_QUADROTOR,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+            mavlink_version: 3,
+            ..Default::default()
+        }))
+        .unwrap();
+    stray
+        .send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+            command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            param1: 1.0,
+            target_system: 9,
+            target_component: 1,
+            ..Default::default()
+        }))
+        .unwrap();
+    let mut before = Vec::new();
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(1) {
+        for r in stray.poll(Duration::from_millis(20)).unwrap() {
+            if !matches!(r.msg, MavMessage::HEARTBEAT(_)) {
+                before.push(r.msg);
+            }
+        }
+    }
+    let mut gcs = Link::open(&format!("udpout:{addr}"), 245, 190).unwrap();
+    gcs.send(&heartbeat()).unwrap();
+    let mut first_ms = None;
+    let t0 = Instant::now();
+    while first_ms.is_none() && t0.elapsed() < Duration::from_secs(5) {
+        for r in gcs.poll(Duration::from_millis(20)).unwrap() {
+            if let MavMessage::SYSTEM_TIME(t) = &r.msg {
+                first_ms.get_or_insert(t.time_boot_ms);
+            }
+        }
+    }
+    stop.store(true, Ordering::SeqCst);
+    let v = vehicle.join().unwrap();
+    assert!(
+        before.is_empty(),
+        "the stray frames started the run: {before:?}"
+    );
+    let first_ms = first_ms.expect("a SYSTEM_TIME");
+    assert!(first_ms < 1000, "the clock started early: {first_ms} ms");
+    assert!(v.interrupted);
 }

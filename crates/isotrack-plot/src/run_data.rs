@@ -1,6 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
+use isotrack_runs::summary::{Ended, Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
@@ -15,8 +16,8 @@ pub struct RunData {
     pub dir: PathBuf,
     /// The trace.
     pub trace: Vec<TraceRow>,
-    /// `summary.json`.
-    pub summary: serde_json::Value,
+    /// `summary.json` (read by its one reader, [`Summary::from_json`]).
+    pub summary: Summary,
     /// The resolved scenario (its field rebuilt for the map).
     pub scenario: Scenario,
 }
@@ -31,10 +32,7 @@ impl RunData {
     /// Whether `DIR/summary.json` is a team's run (it has a `team` object); `false` when it
     /// cannot be read (the loading then says why).
     pub fn is_team(dir: &Path) -> bool {
-        isotrack_fields::io::read_text_limited(&dir.join("summary.json"), 16 << 20)
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .is_some_and(|v| v.get("team").is_some())
+        Summary::read(&dir.join("summary.json")).is_ok_and(|s| s.team().is_some())
     }
 
     /// Loads a run directory as its vehicles: a single-vehicle run as one, a team's run (a
@@ -44,18 +42,15 @@ impl RunData {
     /// (`0..team.vehicle_count`) is a data error naming its line.
     pub fn load_team(dir: &Path) -> Result<Vec<Self>, PlotError> {
         let (all, ids) = Self::read(dir, true)?;
-        if all.summary.get("team").is_none() {
+        let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
             return Ok(vec![all]);
+        };
+        if !(1..=1_000_000).contains(&n) {
+            return Err(PlotError::Data(format!(
+                "{}: summary.json: team.vehicle_count is not a vehicle count",
+                dir.display()
+            )));
         }
-        let n = all.summary["team"]["vehicle_count"]
-            .as_u64()
-            .filter(|&n| (1..=1_000_000).contains(&n))
-            .ok_or_else(|| {
-                PlotError::Data(format!(
-                    "{}: summary.json: team.vehicle_count is not a vehicle count",
-                    dir.display()
-                ))
-            })? as usize;
         let mut traces = vec![Vec::new(); n];
         for (row, (t, id)) in all.trace.iter().zip(&ids).enumerate() {
             let Some(tr) = id.and_then(|i| traces.get_mut(i)) else {
@@ -69,16 +64,16 @@ impl RunData {
         }
         // The rows are in `traces` now: each vehicle clones the rest only, without the lists
         // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies).
-        let vehicles = all.summary["vehicles"].clone();
         let mut all = Self {
             trace: Vec::new(),
             ..all
         };
-        if let Some(top) = all.summary.as_object_mut() {
-            top.remove("vehicles");
-        }
-        if let Some(team) = all.summary["team"].as_object_mut() {
-            team.remove("neighbours");
+        let mut vehicles = Vec::new();
+        if let Ended::Run(end) = &mut all.summary.ended {
+            vehicles = end.vehicles.take().unwrap_or_default();
+            if let Some(team) = end.team.as_mut() {
+                team.neighbours = Vec::new();
+            }
         }
         Ok(traces
             .into_iter()
@@ -87,13 +82,8 @@ impl RunData {
                 // The vehicle's own outcome and metrics (`vehicles[i]`) over the team's
                 // top-level ones (vehicle 0's); the rest (`team`, `data_files`) shared.
                 let mut summary = all.summary.clone();
-                if let (Some(own), Some(top)) = (
-                    vehicles.get(i).and_then(|v| v.as_object()),
-                    summary.as_object_mut(),
-                ) {
-                    for (k, v) in own {
-                        top.insert(k.clone(), v.clone());
-                    }
+                if let (Some(own), Ended::Run(end)) = (vehicles.get(i), &mut summary.ended) {
+                    end.record = own.clone();
                 }
                 Self {
                     name: format!("vehicle {i}"),
@@ -110,14 +100,13 @@ impl RunData {
     fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>), PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
-        let summary: serde_json::Value = serde_json::from_str(
-            &isotrack_fields::io::read_text_limited(&dir.join("summary.json"), 16 << 20)
-                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?,
-        )
-        .map_err(|e| err(format!("summary.json: {e}")))?;
+        let text =
+            isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
+                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
+        let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
         // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
         // would join into one path; refused until the team's figures are drawn.
-        if !team_ok && summary.get("team").is_some() {
+        if !team_ok && summary.team().is_some() {
             return Err(err(
                 "a team's run (summary.json has a `team` object): `isotrack plot` draws teams; this command does not yet (docs/TEAMS.md)".into(),
             ));
@@ -193,9 +182,11 @@ impl RunData {
             } else {
                 format!(
                     "the run ended at t = {} s: {} ({})",
-                    summary["t_end_s"],
-                    summary["outcome"].as_str().unwrap_or("?"),
-                    summary["outcome_detail"].as_str().unwrap_or("no detail")
+                    summary
+                        .t_end_s()
+                        .map_or(serde_json::Value::Null, serde_json::Value::from),
+                    summary.outcome(),
+                    summary.outcome_detail().unwrap_or("no detail")
                 )
             };
             return Err(err(format!("trace.csv has no rows: {why}")));
@@ -254,13 +245,9 @@ fn field_identity(s: &isotrack_scenario::Scenario) -> Vec<(String, String)> {
 /// The SHA-256 of each data file a run's field was read from, by path, as its `summary.json`
 /// records them (`data_files`; none in a run written before they were recorded).
 fn data_digests(r: &RunData) -> Vec<(String, String)> {
-    r.summary["data_files"]
-        .as_object()
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_str().unwrap_or("").to_string()))
-                .collect()
-        })
+    r.summary
+        .data_files()
+        .map(|m| m.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
         .unwrap_or_default()
 }
 
@@ -302,7 +289,8 @@ pub fn unrecorded_data_files_note(runs: &[RunData]) -> Option<String> {
         let f = &r.scenario.file().field;
         f.path.is_some() || f.paths.as_ref().is_some_and(|p| !p.is_empty())
     };
-    let recorded = |r: &RunData| r.summary.get("data_files").is_some_and(|v| v.is_object());
+    // `data_files` is left out of a summary when empty, so recorded means non-empty.
+    let recorded = |r: &RunData| r.summary.data_files().is_some_and(|d| !d.is_empty());
     if !runs.iter().any(|r| has_files(r) && recorded(r)) {
         return None;
     }

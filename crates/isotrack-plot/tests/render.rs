@@ -5,37 +5,18 @@ use isotrack_plot::{
     field_map, timeseries_figure, trajectory_figure, Colormap, Format, Panels, RunData, Style,
 };
 use isotrack_scenario::parse_scenario;
-use isotrack_sim::TraceRow;
 use std::path::Path;
 
 fn make_run(dir: &Path, sets: &[&str]) -> RunData {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     let s = parse_scenario("", "<test>", &sets).unwrap();
-    let mut rows: Vec<TraceRow> = vec![];
-    s.run(&mut rows);
-    std::fs::create_dir_all(dir).unwrap();
-    // The CLI's writers live in isotrack-cli; write the same three files minimally here.
-    let mut csv = String::from("t_s,x_m,y_m,heading_rad,s,error,omega_radps,s_measured\n");
-    for r in &rows {
-        csv += &format!(
-            "{:?},{:?},{:?},{:?},{:?},{:?},{:?},{}\n",
-            r.t_s,
-            r.x_m,
-            r.y_m,
-            r.heading_rad,
-            r.s,
-            r.error,
-            r.omega_radps,
-            r.s_measured.map(|v| format!("{v:?}")).unwrap_or_default()
-        );
-    }
-    std::fs::write(dir.join("trace.csv"), csv).unwrap();
-    std::fs::write(dir.join("summary.json"), "{\"outcome\": \"completed\"}").unwrap();
-    std::fs::write(
-        dir.join("scenario.toml"),
-        toml::to_string(s.file()).unwrap(),
-    )
-    .unwrap();
+    // Written by the one run-directory writer, as `isotrack run --out` writes it.
+    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], None).unwrap();
+    let mut trace = out.trace(s.is_flying()).unwrap();
+    let r = s.run(trace.writer());
+    let summary = isotrack_runs::summary::Summary::of_run(&s, None, &r, &[]);
+    out.finish(trace, &isotrack_runs::summary::scenario_toml(&s), &summary)
+        .unwrap();
     RunData::load(dir).unwrap()
 }
 

@@ -4,10 +4,11 @@
 //! simulation crates (ARCHITECTURE.md):
 //!
 //! * the run directory format: [`trace`] (`trace.csv`, its columns defined once for the writer
-//!   and for `isotrack-plot`'s reader), [`summary`] (`summary.json`, the resolved
-//!   `scenario.toml`);
+//!   and for `isotrack-plot`'s reader), [`summary`] (`summary.json`'s one type, the resolved
+//!   `scenario.toml`), and [`rundir`], the one writer of a run directory;
 //! * the sweep engine, [`sweep`]: the results rows, plan execution, the manifest (`sweep.json`),
 //!   the resume index, merge and the output-directory lock;
+//! * [`results`]: a run's record (outcome and metrics) and the one results-row builder;
 //! * [`files`]: which paths name one file.
 //!
 //! Failures carry the process exit code the command-line tool exits with ([`exit`]).
@@ -15,6 +16,8 @@
 
 pub mod failure;
 pub mod files;
+pub mod results;
+pub mod rundir;
 pub mod summary;
 pub mod sweep;
 pub mod trace;

@@ -1,66 +1,157 @@
 //! `summary.json` and the resolved `scenario.toml` of a run directory.
+//!
+//! [`Summary`] is the one type of `summary.json`: every command that writes a run directory
+//! (`run`, `compare`, `figures`, `sitl`, `fly`, the Python package's `Run.save`) writes it
+//! through [`Summary::to_json`] ([`crate::rundir::RunDir`] writes it, atomically and last), and
+//! every reader (`isotrack-plot`, the HTML report) reads it through [`Summary::read`] /
+//! [`Summary::from_json`], whose errors name the file and the key.
 
-use isotrack_scenario::{Scenario, ScenarioFile};
+use crate::results::RunRecord;
+use isotrack_scenario::Scenario;
 use isotrack_sim::RunResult;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The content of `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct Summary<'a> {
+/// The largest `summary.json` read, bytes (a summary is a few kB; the scenario in it is capped at
+/// 1 MiB as a file).
+pub const MAX_SUMMARY_BYTES: u64 = 16 << 20;
+
+/// The content of `summary.json`: who wrote it, from which scenario file, how the run ended
+/// ([`Ended`], flattened: a simulated run's [`RunRecord`] or a flight's [`FlightRecord`]), and
+/// the resolved scenario. `S` is the scenario's type: the resolved scenario itself when written
+/// ([`Summary::of_run`]), its JSON when read back ([`Summary::read`]).
+///
+/// Non-finite or undefined numbers are `null` in the file and `None` here.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary<S = serde_json::Value> {
     /// isotrack's version.
-    pub isotrack_version: &'static str,
+    pub isotrack_version: String,
     /// The scenario file as given, or `null` for the built-in default.
     pub scenario_path: Option<String>,
-    /// The run's outcome and metrics (flattened: `outcome`, `steady_state_max_abs_error`, ...).
+    /// How the run ended, flattened into the top level (`outcome`, `t_end_s`, the metrics ...).
     #[serde(flatten)]
-    pub result: &'a RunResult,
+    pub ended: Ended,
+    /// The fully resolved scenario.
+    pub scenario: S,
+    /// The controller that flew when it is not the scenario's own law (the Python package's
+    /// `{"kind": "python", "class": ...}`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<serde_json::Value>,
+}
+
+/// How a run ended: a simulated run's record, or a flight's (`isotrack fly`: no metrics, the
+/// link's counters instead). Told apart by `end_reason`, which only a flight has.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Ended {
+    /// A flight flown by `isotrack fly`.
+    Flight(FlightRecord),
+    /// A run simulated by isotrack (also `sitl`'s, whose vehicle isotrack simulates).
+    Run(RunEnd),
+}
+
+/// A simulated run's end: its record (outcome and metrics) and the warnings about its scenario.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunEnd {
+    /// Outcome and metrics.
+    #[serde(flatten)]
+    pub record: RunRecord,
     /// Warnings about the scenario (also printed on stderr): noise through a backward
-    /// difference, a sampled loop that `isotrack check` finds unstable.
-    pub warnings: &'a [String],
+    /// difference, a sampled loop that `isotrack check` finds unstable; for `sitl`, its events.
+    pub warnings: Vec<String>,
     /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
     /// its absolute path ([`data_file_digests`]); left out when there are none. `plot` and
     /// `report` refuse runs whose files differ (one overwritten in place between them).
-    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub data_files: BTreeMap<String, String>,
     /// A team's run (`[team]`): the team metrics; left out for one vehicle. The flattened
-    /// top-level metrics are then vehicle 0's.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub team: Option<TeamJson<'a>>,
+    /// top-level record is then vehicle 0's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub team: Option<TeamJson>,
     /// A team's run: every vehicle's outcome and metrics, in the listed order.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub vehicles: Option<&'a [RunResult]>,
-    /// The fully resolved scenario.
-    pub scenario: &'a ScenarioFile,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vehicles: Option<Vec<RunRecord>>,
 }
 
 /// The `team` object of `summary.json`.
-#[derive(Debug, Serialize)]
-pub struct TeamJson<'a> {
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TeamJson {
     /// Vehicles in the team.
     pub vehicle_count: usize,
     /// `team.spacing`.
-    pub spacing: &'static str,
+    pub spacing: String,
     /// Whether the spacing law uses only ranges and neighbour identities (`arc_reference`
     /// does not: a reference).
     pub coordinate_free: bool,
     /// Each vehicle's `[ahead, behind]` neighbours at the end (`null`: none known).
-    pub neighbours: &'a [Option<[u32; 2]>],
-    /// The team metrics along the true isoline (`gap_cv`, `time_to_even_s`,
-    /// `revisit_time_max_s`, `revisit_time_mean_s`, `revisit_time_ideal_s`, `min_separation_m`,
-    /// `order_preserved`, ...); left out where the isoline has no arc-length projection
-    /// ([`TeamJson::metrics_note`] says so).
+    pub neighbours: Vec<Option<[u32; 2]>>,
+    /// The team metrics along the true isoline ([`TeamRecord`]); left out where the isoline
+    /// has no arc-length projection ([`TeamJson::metrics_note`] says so).
     #[serde(flatten)]
-    pub metrics: Option<&'a isotrack_sim::team::metrics::TeamSummary>,
+    pub metrics: Option<TeamRecord>,
     /// Why the metrics are left out.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub metrics_note: Option<&'static str>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics_note: Option<String>,
 }
 
-impl<'a> TeamJson<'a> {
-    /// The `team` object of a team run of `scenario`.
-    pub fn new(scenario: &Scenario, r: &'a isotrack_sim::TeamResult) -> Self {
+/// The team metrics of `summary.json`'s `team` object, with the names and in the order of
+/// [`isotrack_sim::team::metrics::TeamSummary`]; a number that is not finite is `None`
+/// (`null`, as serde writes a non-finite `f64`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TeamRecord {
+    /// Vehicles in the team.
+    pub count: usize,
+    /// Length of the isoline, m.
+    pub isoline_length_m: Option<f64>,
+    /// Mean over the steady window of the coefficient of variation of the arc-length gaps.
+    pub gap_cv: Option<f64>,
+    /// The gap CV at the last sample.
+    pub gap_cv_final: Option<f64>,
+    /// First sample time from which the gap CV stays at or below `even_gap_cv`, s.
+    pub time_to_even_s: Option<f64>,
+    /// Longest time a point of the isoline went without a vehicle passing, s.
+    pub revisit_time_max_s: Option<f64>,
+    /// Mean time between consecutive passes over a point of the isoline, s.
+    pub revisit_time_mean_s: Option<f64>,
+    /// The ideal revisit time of an evenly spread team, `L/(N v0)`, s.
+    pub revisit_time_ideal_s: Option<f64>,
+    /// Smallest distance between vehicles consecutive along the isoline, m.
+    pub min_separation_m: Option<f64>,
+    /// Whether the cyclic order of the vehicles held over the steady window.
+    pub order_preserved: bool,
+    /// Slowest and fastest speed any vehicle held at a sample, m/s.
+    pub speed_range_mps: Option<[Option<f64>; 2]>,
+}
+
+/// `Some(x)` when `x` is finite (serde writes a non-finite `f64` as `null`).
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+impl TeamRecord {
+    /// The record of the team metrics `m`.
+    pub fn of(m: &isotrack_sim::team::metrics::TeamSummary) -> Self {
+        let o = |x: Option<f64>| x.and_then(finite);
+        TeamRecord {
+            count: m.count,
+            isoline_length_m: finite(m.isoline_length_m),
+            gap_cv: o(m.gap_cv),
+            gap_cv_final: o(m.gap_cv_final),
+            time_to_even_s: o(m.time_to_even_s),
+            revisit_time_max_s: o(m.revisit_time_max_s),
+            revisit_time_mean_s: o(m.revisit_time_mean_s),
+            revisit_time_ideal_s: finite(m.revisit_time_ideal_s),
+            min_separation_m: o(m.min_separation_m),
+            order_preserved: m.order_preserved,
+            speed_range_mps: m.speed_range_mps.map(|r| r.map(finite)),
+        }
+    }
+}
+
+impl TeamJson {
+    /// The `team` object of a team run `r` of `scenario`.
+    pub fn new(scenario: &Scenario, r: &isotrack_sim::TeamResult) -> Self {
         let law = scenario
             .spec()
             .team
@@ -69,57 +160,231 @@ impl<'a> TeamJson<'a> {
             .unwrap_or(isotrack_sim::team::spacing::SpacingLaw::None);
         Self {
             vehicle_count: r.runs.len(),
-            spacing: law.name(),
+            spacing: law.name().to_string(),
             coordinate_free: law.is_coordinate_free(),
-            neighbours: &r.ring,
-            metrics: r.team.as_ref(),
-            metrics_note: r.team.is_none().then_some(
-                "no team metrics: the isoline's arc length is known for a radial field that does not drift only, for now",
-            ),
+            neighbours: r.ring.clone(),
+            metrics: r.team.as_ref().map(TeamRecord::of),
+            metrics_note: r.team.is_none().then(|| {
+                "no team metrics: the isoline's arc length is known for a radial field that does not drift only, for now".to_string()
+            }),
         }
     }
 }
 
-/// Writes `summary.json` (pretty-printed; non-finite or undefined metrics are `null`),
-/// atomically ([`crate::files::write_atomic`]): a reader sees no summary or a whole one.
-pub fn write_summary(
-    path: &Path,
-    scenario: &Scenario,
-    scenario_path: Option<&Path>,
-    result: &RunResult,
-    warnings: &[String],
-) -> std::io::Result<()> {
-    write_summary_team(path, scenario, scenario_path, result, warnings, None)
+/// A flight's end (`isotrack fly --out`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlightRecord {
+    /// `completed` when the vehicle ended its run, `failsafe` after a failsafe, else the end
+    /// reason.
+    pub outcome: String,
+    /// The last event.
+    pub outcome_detail: String,
+    /// Why the flight ended.
+    pub end_reason: String,
+    /// Whether a failsafe ended it.
+    pub failsafe: bool,
+    /// Whether the vehicle confirmed the failsafe mode.
+    pub failsafe_acknowledged: bool,
+    /// Time of the last measurement, s.
+    pub t_end_s: Option<f64>,
+    /// Measurements received.
+    pub samples: u64,
+    /// Law commands sent.
+    pub commands: u64,
+    /// What happened, in order.
+    pub events: Vec<String>,
+    /// MAVLink frames received.
+    pub frames_in: u64,
+    /// MAVLink frames sent.
+    pub frames_out: u64,
+    /// Datagrams that were not MAVLink.
+    pub junk_datagrams: u64,
 }
 
-/// [`write_summary`] for any run: with `team`, the top-level metrics are vehicle 0's (`result`),
-/// and the `team` object and `vehicles` array are added.
-pub fn write_summary_team(
-    path: &Path,
-    scenario: &Scenario,
-    scenario_path: Option<&Path>,
-    result: &RunResult,
-    warnings: &[String],
-    team: Option<&isotrack_sim::TeamResult>,
-) -> std::io::Result<()> {
-    let s = Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION"),
-        scenario_path: scenario_path.map(|p| p.display().to_string()),
-        result,
-        warnings,
-        data_files: data_file_digests(scenario),
-        team: team.map(|t| TeamJson::new(scenario, t)),
-        vehicles: team.map(|t| t.runs.as_slice()),
-        scenario: scenario.file(),
-    };
-    let text = summary_to_json(&s).map_err(std::io::Error::other)?;
-    crate::files::write_atomic(path, (text + "\n").as_bytes())
+/// Why a `summary.json` cannot be read: the file and what is wrong, on one line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SummaryError {
+    /// Whether the file could not be read at all (missing, not a regular file, too big), as
+    /// opposed to read and found invalid.
+    pub unreadable: bool,
+    /// The message, naming the file (and the line and column or the key where known).
+    pub message: String,
 }
 
-/// `summary.json`'s text (pretty-printed; non-finite metrics are `null`): one rendering for the
-/// file and for the Python package.
-pub fn summary_to_json(s: &Summary<'_>) -> serde_json::Result<String> {
-    serde_json::to_string_pretty(s)
+impl std::fmt::Display for SummaryError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for SummaryError {}
+
+impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
+    /// The summary of a simulated run of `scenario` (`scenario_path`: the file it was read
+    /// from, `None` for the built-in default).
+    pub fn of_run(
+        scenario: &'a Scenario,
+        scenario_path: Option<&Path>,
+        result: &RunResult,
+        warnings: &[String],
+    ) -> Self {
+        Summary {
+            isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+            scenario_path: scenario_path.map(|p| p.display().to_string()),
+            ended: Ended::Run(RunEnd {
+                record: RunRecord::of(result),
+                warnings: warnings.to_vec(),
+                data_files: data_file_digests(scenario),
+                team: None,
+                vehicles: None,
+            }),
+            scenario: scenario.file(),
+            controller: None,
+        }
+    }
+
+    /// The summary of a team's run `team` of `scenario` (`[team]`): the top-level record is
+    /// vehicle 0's, followed by the `team` object ([`TeamJson`]) and the `vehicles` array
+    /// (every vehicle's record, in the listed order).
+    pub fn of_team(
+        scenario: &'a Scenario,
+        scenario_path: Option<&Path>,
+        team: &isotrack_sim::TeamResult,
+        warnings: &[String],
+    ) -> Self {
+        let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
+        if let Ended::Run(r) = &mut s.ended {
+            r.team = Some(TeamJson::new(scenario, team));
+            r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
+        }
+        s
+    }
+}
+
+impl<S: Serialize> Summary<S> {
+    /// `summary.json`'s text: pretty-printed, non-finite numbers `null`, a final newline.
+    pub fn to_json(&self) -> String {
+        // Serialising plain data into a String cannot fail (no map with non-string keys).
+        serde_json::to_string_pretty(self).unwrap_or_else(|_| "null".into()) + "\n"
+    }
+
+    /// Writes the summary to `path` atomically ([`crate::files::write_atomic`]): a reader sees
+    /// no summary or a whole one.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        crate::files::write_atomic(path, self.to_json().as_bytes())
+    }
+}
+
+impl Summary {
+    /// Reads `path` (a regular file of at most [`MAX_SUMMARY_BYTES`]).
+    pub fn read(path: &Path) -> Result<Summary, SummaryError> {
+        let text =
+            isotrack_fields::io::read_text_limited(path, MAX_SUMMARY_BYTES).map_err(|e| {
+                SummaryError {
+                    unreadable: true,
+                    message: format!("{}: {e}", path.display()),
+                }
+            })?;
+        Summary::from_json(&text).map_err(|e| SummaryError {
+            message: format!("{}: {}", path.display(), e.message),
+            ..e
+        })
+    }
+
+    /// Parses a summary's text. A flight's summary is told by its `end_reason` key; the error
+    /// names the line and column of bad JSON, or the key missing or of the wrong type.
+    pub fn from_json(text: &str) -> Result<Summary, SummaryError> {
+        let bad = |message: String| SummaryError {
+            unreadable: false,
+            message,
+        };
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        let serde_json::Value::Object(map) = &v else {
+            return Err(bad("not a JSON object".into()));
+        };
+        let ended = if map.contains_key("end_reason") {
+            serde_json::from_value::<FlightRecord>(v.clone()).map(Ended::Flight)
+        } else {
+            serde_json::from_value::<RunEnd>(v.clone()).map(Ended::Run)
+        }
+        .map_err(|e| bad(e.to_string()))?;
+        let field = |k: &str| map.get(k).cloned().unwrap_or(serde_json::Value::Null);
+        let string = |k: &str| -> Result<Option<String>, SummaryError> {
+            match field(k) {
+                serde_json::Value::Null => Ok(None),
+                serde_json::Value::String(s) => Ok(Some(s)),
+                other => Err(bad(format!("`{k}`: expected a string, got {other}"))),
+            }
+        };
+        Ok(Summary {
+            isotrack_version: string("isotrack_version")?
+                .ok_or_else(|| bad("missing field `isotrack_version`".into()))?,
+            scenario_path: string("scenario_path")?,
+            ended,
+            scenario: match map.get("scenario") {
+                Some(s @ serde_json::Value::Object(_)) => s.clone(),
+                Some(other) => {
+                    return Err(bad(format!(
+                        "`scenario`: expected an object, got {}",
+                        isotrack_scenario::load::clip(&other.to_string())
+                    )))
+                }
+                None => return Err(bad("missing field `scenario`".into())),
+            },
+            controller: map.get("controller").cloned(),
+        })
+    }
+}
+
+impl<S> Summary<S> {
+    /// The outcome (`completed`, `left_field`, `diverged`; `interrupted` or `companion_lost`
+    /// for a cut `sitl` run; a flight's).
+    pub fn outcome(&self) -> &str {
+        match &self.ended {
+            Ended::Run(r) => &r.record.outcome,
+            Ended::Flight(f) => &f.outcome,
+        }
+    }
+
+    /// Why the run ended so, when said.
+    pub fn outcome_detail(&self) -> Option<&str> {
+        match &self.ended {
+            Ended::Run(r) => r.record.outcome_detail.as_deref(),
+            Ended::Flight(f) => Some(&f.outcome_detail),
+        }
+    }
+
+    /// The time of the last valid step (a flight's last measurement), s.
+    pub fn t_end_s(&self) -> Option<f64> {
+        match &self.ended {
+            Ended::Run(r) => r.record.t_end_s,
+            Ended::Flight(f) => f.t_end_s,
+        }
+    }
+
+    /// The simulated run's record (`None` for a flight).
+    pub fn record(&self) -> Option<&RunRecord> {
+        match &self.ended {
+            Ended::Run(r) => Some(&r.record),
+            Ended::Flight(_) => None,
+        }
+    }
+
+    /// A team's `team` object (`None` for one vehicle's run and for a flight).
+    pub fn team(&self) -> Option<&TeamJson> {
+        match &self.ended {
+            Ended::Run(r) => r.team.as_ref(),
+            Ended::Flight(_) => None,
+        }
+    }
+
+    /// The data files' digests the run recorded (`None` for a flight).
+    pub fn data_files(&self) -> Option<&BTreeMap<String, String>> {
+        match &self.ended {
+            Ended::Run(r) => Some(&r.data_files),
+            Ended::Flight(_) => None,
+        }
+    }
 }
 
 /// The resolved scenario as TOML (reads back as the same scenario, bit for bit; floats in

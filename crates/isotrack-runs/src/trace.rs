@@ -132,43 +132,39 @@ impl TraceSink for TraceWriter {
 /// One team member's sink into the team's one [`TraceWriter`] (made by
 /// [`TraceWriter::create_team`]): its rows carry its index. The team steps its vehicles in
 /// order, so the file holds, for each recorded step, vehicle 0's row, then 1's, ...
-pub struct TeamTraceSink<'a> {
-    writer: &'a std::cell::RefCell<TraceWriter>,
+pub struct TeamTraceSink<'a, 'w> {
+    writer: &'a std::cell::RefCell<&'w mut TraceWriter>,
     vehicle: usize,
 }
 
-impl<'a> TeamTraceSink<'a> {
+impl<'a, 'w> TeamTraceSink<'a, 'w> {
     /// One sink per vehicle of a team of `count`, all into `writer`.
-    pub fn for_team(writer: &'a std::cell::RefCell<TraceWriter>, count: usize) -> Vec<Self> {
+    pub fn for_team(
+        writer: &'a std::cell::RefCell<&'w mut TraceWriter>,
+        count: usize,
+    ) -> Vec<Self> {
         (0..count).map(|vehicle| Self { writer, vehicle }).collect()
     }
 }
 
-impl TraceSink for TeamTraceSink<'_> {
+impl TraceSink for TeamTraceSink<'_, '_> {
     fn record(&mut self, r: &TraceRow) {
         self.writer.borrow_mut().write_row(r, self.vehicle);
     }
 }
 
 /// Runs `scenario`'s team (its `[team]` section), streaming one trace of every vehicle into
-/// `path` (a [`VEHICLE_COLUMN`] last). `None` without a team; a team the engine refuses is an
-/// `InvalidInput` error.
-pub fn run_team_to_trace(
+/// `writer` (made by [`TraceWriter::create_team`]: a [`VEHICLE_COLUMN`] last; the caller
+/// finishes it, as [`crate::rundir::RunDir::finish`]). `None` without a team; `Some(Err)` with
+/// the engine's reason when it refuses the team.
+pub fn run_team_into(
     scenario: &Scenario,
-    path: &Path,
-) -> Option<std::io::Result<isotrack_sim::TeamResult>> {
+    writer: &mut TraceWriter,
+) -> Option<Result<isotrack_sim::TeamResult, String>> {
     let count = scenario.spec().team.as_ref()?.count();
-    Some((|| {
-        let w = std::cell::RefCell::new(TraceWriter::create_team(path, scenario.is_flying())?);
-        let mut sinks = TeamTraceSink::for_team(&w, count);
-        let r = scenario
-            .run_team(&mut sinks)
-            .expect("the scenario has a team")
-            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e.to_string()))?;
-        drop(sinks);
-        w.into_inner().finish()?;
-        Ok(r)
-    })())
+    let w = std::cell::RefCell::new(writer);
+    let mut sinks = TeamTraceSink::for_team(&w, count);
+    Some(scenario.run_team(&mut sinks)?.map_err(|e| e.to_string()))
 }
 
 /// Runs `scenario`, streaming its trace into `path`.

@@ -29,14 +29,36 @@ pub struct RunSpan {
     /// `vehicle.speed_mps` (default 0.5; its path over `t` is `v t`); `None` for the fixed
     /// wing (wind adds to its airspeed).
     pub speed_max_mps: Option<f64>,
+    /// The sensor's delay in steps `d = delay / dt`: no sample before step `d`, so a run that
+    /// sensed steps `0..=s` (`s >= d`) delivered `floor(s / m) - ceil(d / m) + 1` samples
+    /// before dropouts (the sample steps `j m` with `d <= j m <= s`).
+    pub sensor_delay_steps: u64,
+    /// Whether samples can be lost (`sensor.dropout_probability > 0`): then a run may deliver
+    /// fewer than its sample steps, down to none.
+    pub sensor_drops_samples: bool,
+    /// The turn-rate limit every command of the run obeys, rad/s: `controller.max_turn_rate_radps`
+    /// (every law's output stage saturates at it, and so does the search phase); `None` without
+    /// one, for a `schedule` (its turn rates are flown as written) and for the fixed wing's
+    /// airframe limit (known only once the vehicle is trimmed).
+    pub turn_rate_limit_radps: Option<f64>,
 }
 
 /// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
 /// `resolve` refuses).
 pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
     let sim = crate::spec::SimSpec::new(&f.sim).ok()?;
-    let rate_hz = crate::spec::sensor::sensor_config(&f.sensor).ok()?.rate_hz;
+    let sensor = crate::spec::sensor::sensor_config(&f.sensor).ok()?;
+    let rate_hz = sensor.rate_hz;
     Some(RunSpan {
+        sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
+        sensor_drops_samples: sensor.dropout_probability != 0.0,
+        turn_rate_limit_radps: match f.controller.kind {
+            Some(crate::schema::ControllerKind::Schedule) => None,
+            _ => f
+                .controller
+                .max_turn_rate_radps
+                .filter(|w| w.is_finite() && *w >= 0.0),
+        },
         dt_s: sim.dt_s,
         n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
         steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
@@ -350,7 +372,7 @@ impl Scenario {
 
     /// A run's result with its end explained in the scenario's terms: past the last frame of a
     /// time series with `after_last_frame = "end"`, a `left_field` says the data ended.
-    pub(crate) fn explain_end(&self, mut r: RunResult) -> RunResult {
+    pub fn explain_end(&self, mut r: RunResult) -> RunResult {
         if let FieldModel::Series(f) = self.field() {
             let end = f.last_frame_run_time_s();
             if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {

@@ -242,6 +242,34 @@ class Run:
         """The scenario flown (``record_rate_hz`` applied)."""
         return self._scenario
 
+    @property
+    def team(self) -> Optional[Dict[str, Any]]:
+        """A team's run: ``summary.json``'s ``team`` object (the spacing law, the neighbours,
+        the team metrics ``gap_cv``, ``revisit_time_max_s``, ...; a fresh dict at every
+        access). ``None`` for one vehicle."""
+        return self.summary.get("team")
+
+    @property
+    def vehicles(self) -> Optional[tuple]:
+        """A team's run: each vehicle's outcome and metrics, in the listed order (the keys of
+        a single run's ``summary.json`` metrics: ``outcome``, ``steady_state_max_abs_error``,
+        ...; fresh dicts). ``None`` for one vehicle."""
+        v = self.summary.get("vehicles")
+        return None if v is None else tuple(v)
+
+    def vehicle_trace(self, i: int) -> Dict[str, np.ndarray]:
+        """A team's run: vehicle ``i``'s rows of the trace (read-only arrays, without the
+        ``vehicle`` column), as a single run's ``trace``."""
+        if "vehicle" not in self._trace:
+            raise ValueError("not a team's run: its trace is run.trace")
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)):
+            raise TypeError(f"i must be a vehicle's index (an int), got {i!r:.80} ({_type_name(i)})")
+        count = len(self.summary.get("vehicles") or ())
+        if not 0 <= i < count:
+            raise IndexError(f"no vehicle {i}: the team has {count} (0 .. {count - 1})")
+        rows = self._trace["vehicle"] == i
+        return {k: _frozen(v[rows]) for k, v in self._trace.items() if k != "vehicle"}
+
     def save(self, directory) -> str:
         """Writes the run directory ``isotrack run --out DIR`` writes: ``trace.csv`` (numbers
         that read back bit for bit), ``summary.json`` and the resolved ``scenario.toml``; what
@@ -258,7 +286,10 @@ class Run:
         import os
 
         _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
-        _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
+        if "vehicle" in self._trace:
+            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace))
+        else:
+            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
         if self._python_controller is not None:
             # The [controller] table is the scenario's built-in law, which did not fly: said at
             # the top of the file, so that nobody replays it with the CLI as if it were this run.
@@ -424,6 +455,12 @@ class Scenario:
     def run(self, record_rate_hz: Optional[float] = None, controller: Any = None) -> Run:
         """Runs the scenario.
 
+        A scenario with a ``[team]`` section runs its team (docs/TEAMS.md), as ``isotrack run``
+        does: ``run.trace`` holds every vehicle's rows with a ``vehicle`` column (int64, the
+        vehicle's index; the rows of ``trace.csv``, in its order), ``run.summary`` the team's
+        ``summary.json`` (top-level metrics vehicle 0's), ``run.team`` the team metrics and
+        ``run.vehicles[i]`` vehicle ``i``'s outcome and metrics.
+
         ``controller``: any object with ``update(t_s, value) -> omega`` (rad/s, positive turns
         left) and optionally ``reset()``: it replaces the scenario's controller and sees only what
         a coordinate-free controller sees, the time and the measured value of each sample. Its
@@ -435,6 +472,14 @@ class Scenario:
         rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
         if controller is not None:
             _check_controller("controller", controller)
+        if _native.is_team(self._native):
+            if controller is not None:
+                raise ValueError(
+                    "[team]: a team flies the scenario's built-in tracking law (a Python controller "
+                    "per vehicle is not supported yet; isotrack.pettingzoo steers each vehicle from Python)"
+                )
+            summary, trace, flown = _native.team_run(self._native, rate)
+            return Run._from_native(summary, dict(trace), Scenario(flown))
         summary, trace, flown = self._native.run(rate, controller)
         if controller is None:
             return Run._from_native(summary, dict(trace), Scenario(flown))

@@ -1,7 +1,7 @@
 """Type stubs for the isotrack package."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +24,11 @@ class Run:
     def trace(self) -> Mapping[str, npt.NDArray[np.float64]]: ...
     @property
     def scenario(self) -> Optional[Scenario]: ...
+    @property
+    def team(self) -> Optional[Dict[str, Any]]: ...
+    @property
+    def vehicles(self) -> Optional[Tuple[Dict[str, Any], ...]]: ...
+    def vehicle_trace(self, i: int) -> Dict[str, npt.NDArray[np.float64]]: ...
     def __init__(
         self,
         summary: Dict[str, Any],

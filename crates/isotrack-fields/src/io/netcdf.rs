@@ -505,9 +505,23 @@ fn parse_bytes_with(
             ),
         )
     };
-    let file = NcFile::from_bytes(bytes).map_err(cannot)?;
+    if !bytes.starts_with(HDF5_SIGNATURE) {
+        // NetCDF-3 (or an HDF5 file behind a user block: its attributes are read as the
+        // reader reads them).
+        let file = NcFile::from_bytes(bytes).map_err(cannot)?;
+        let vars = file.variables().map_err(cannot)?;
+        return parse_file(name, &file, vars, variable, budget_bytes);
+    }
+    // NetCDF-4: the bytes shared by the reader and the second look at the needed text
+    // attributes ([`restore_cut_text_attributes`]), one copy as `from_bytes` makes.
+    let shared: std::sync::Arc<[u8]> = std::sync::Arc::from(bytes);
+    let file = NcFile::from_shared_bytes(shared.clone()).map_err(cannot)?;
     match file.variables() {
-        Ok(vars) => parse_file(name, &file, vars, variable, budget_bytes),
+        Ok(vars) => {
+            let mut vars = vars.to_vec();
+            restore_cut_text_attributes(&shared, &mut vars);
+            parse_file(name, &file, &vars, variable, budget_bytes)
+        }
         Err(e) if is_non_utf8_text(&e) => {
             // A text attribute that is not UTF-8 (a Latin-1 `comment` or `history` from an
             // older tool): the strict reader refuses the whole file, where the classic reader
@@ -524,9 +538,100 @@ fn parse_bytes_with(
             .map_err(cannot)?;
             let mut vars = lenient.variables().map_err(cannot)?.to_vec();
             restore_non_utf8_attributes(bytes, &mut vars);
+            restore_cut_text_attributes(&shared, &mut vars);
             parse_file(name, &lenient, &vars, variable, budget_bytes)
         }
         Err(e) => Err(cannot(e)),
+    }
+}
+
+/// The signature an HDF5 file (a NetCDF-4 file) starts with.
+const HDF5_SIGNATURE: &[u8] = b"\x89HDF\r\n\x1a\n";
+
+/// The text attributes isotrack reads from a variable ([`attr_text`]).
+const NEEDED_TEXT_ATTRIBUTES: [&str; 3] = ["units", "axis", "standard_name"];
+
+/// The needed text attributes ([`NEEDED_TEXT_ATTRIBUTES`]) of the root group's variables that
+/// hold a NUL before their end (`"m\0 junk"`), given their whole text in `vars`: the reader
+/// cuts a null-terminated HDF5 string at its first NUL (`"m"`), which would take a damaged
+/// `units` for a good one. With the whole text (trailing padding NULs removed, the NUL inside
+/// kept), [`attr_text`] refuses it as a control character, naming the variable and the
+/// attribute. Attributes without a NUL inside are left as the reader read them; nothing
+/// changes when the file cannot be walked again.
+fn restore_cut_text_attributes(bytes: &std::sync::Arc<[u8]>, vars: &mut [NcVariable]) {
+    use hdf5_reader::messages::datatype::{Datatype, StringPadding, StringSize, VarLenKind};
+    use netcdf_reader::NcAttrValue;
+    let Ok(h5) = hdf5_reader::Hdf5File::from_shared_bytes(bytes.clone()) else {
+        return;
+    };
+    let Ok(root) = h5.root_group() else {
+        return;
+    };
+    let Ok(datasets) = root.datasets() else {
+        return;
+    };
+    for ds in datasets {
+        let leaf = ds.name().rsplit('/').next().unwrap_or_default();
+        let Some(var) = vars.iter_mut().find(|v| v.name == leaf) else {
+            continue;
+        };
+        for a in ds.attributes() {
+            if !NEEDED_TEXT_ATTRIBUTES.contains(&a.name.as_str())
+                || a.num_elements().ok() != Some(1)
+            {
+                continue;
+            }
+            let (raw, padding): (&[u8], StringPadding) = match &a.datatype {
+                Datatype::String {
+                    size: StringSize::Fixed(len),
+                    padding,
+                    ..
+                } => (
+                    &a.raw_data[..(*len as usize).min(a.raw_data.len())],
+                    *padding,
+                ),
+                // One variable-length string: the reader resolved its bytes already.
+                Datatype::String {
+                    size: StringSize::Variable,
+                    padding,
+                    ..
+                }
+                | Datatype::VarLen {
+                    kind: VarLenKind::String,
+                    padding,
+                    ..
+                } => (&a.raw_data[..], *padding),
+                _ => continue,
+            };
+            // The padding the type declares at the end: NULs (or spaces) after the text.
+            let pad = if padding == StringPadding::SpacePad {
+                b' '
+            } else {
+                0
+            };
+            let end = raw.iter().rposition(|&b| b != pad).map_or(0, |i| i + 1);
+            let text = &raw[..end];
+            if !text.contains(&0) {
+                continue;
+            }
+            // Only where the reader's text is the part before the first NUL: the same
+            // attribute, cut (not bytes that are something else, such as a reference the
+            // reader could not resolve).
+            let before_nul = String::from_utf8_lossy(text.split(|&b| b == 0).next().unwrap_or(&[]));
+            let Some(at) = var.attributes.iter_mut().find(|x| x.name == a.name) else {
+                continue;
+            };
+            let cut = match &at.value {
+                NcAttrValue::Chars(t) => t.trim_end_matches('\0') == before_nul,
+                NcAttrValue::Strings(list) if list.len() == 1 => {
+                    list[0].trim_end_matches('\0') == before_nul
+                }
+                _ => false,
+            };
+            if cut {
+                at.value = NcAttrValue::Chars(String::from_utf8_lossy(text).into_owned());
+            }
+        }
     }
 }
 

@@ -38,16 +38,22 @@ pub struct RowRules<'a> {
 }
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
-/// `sim.duration_s`, `sensor.rate_hz`, the vehicle's kind and speed, or their whole tables).
-const SPAN_KEYS: [&str; 8] = [
+/// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
+/// controller's kind and turn-rate limit, or their whole tables).
+const SPAN_KEYS: [&str; 13] = [
     "sim",
     "sensor",
     "sim.dt_s",
     "sim.duration_s",
     "sensor.rate_hz",
+    "sensor.delay_s",
+    "sensor.dropout_probability",
     "vehicle",
     "vehicle.kind",
     "vehicle.speed_mps",
+    "controller",
+    "controller.kind",
+    "controller.max_turn_rate_radps",
 ];
 
 /// The [`RunSpan`] of each run of a sweep, from its resolved base scenario file: the base's
@@ -223,7 +229,13 @@ fn check_team_cells<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result
 /// for a whole `1 <= j <= k` (never a fraction of a step, never below `dt`); `samples` is at
 /// most one per sample period over the steps sensed `0..=s`, `floor(s / m) + 1`, where `s = k`
 /// or, for a `diverged` run (ended by a non-finite command, sensed the step after its last
-/// valid one), `min(k + 1, N)`. Each error names its column.
+/// valid one), `min(k + 1, N)`; and, without dropouts, at least the sample steps of the
+/// steps `0..=k` past the sensor's delay of `d` steps, `floor(k / m) - ceil(d / m) + 1`
+/// ([`fewest_samples`]). Under a turn-rate limit `L` (`|omega| <= L` for every command),
+/// `control_effort = sum omega^2 dt` over at most `min(k + 1, N)` held commands is at most
+/// `L^2 dt min(k + 1, N)`, and `chattering_radps2` (the total variation of `omega` over the
+/// window, at most `2 L` a step, over the window's duration) at most `2 L / dt`. Each error
+/// names its column.
 fn check_span<'c>(
     span: &RunSpan,
     outcome: &str,
@@ -287,6 +299,48 @@ fn check_span<'c>(
                 Echo(dt)
             ));
         }
+        let fewest = fewest_samples(span, outcome, k_end);
+        if samples < fewest {
+            return Err(format!(
+                "{}: samples = {samples} is below the {fewest} a run without dropouts takes up to t_end_s = {} s (one every {} steps of {} s from step {})",
+                column("samples"),
+                Echo(t_end),
+                span.steps_per_sample,
+                Echo(dt),
+                span.sensor_delay_steps
+            ));
+        }
+    }
+    if let Some(limit) = span.turn_rate_limit_radps {
+        // Commands held over the steps integrated: `k` for a run that completed at step `k =
+        // N`, `k + 1` for one that ended in the step after its last valid one.
+        let held = (k_end + 1).min(span.n_steps);
+        let most_effort = limit * limit * dt * held as f64;
+        if let Some(e) = value("control_effort") {
+            if e > most_effort * (1.0 + 1e-6) {
+                return Err(format!(
+                    "{}: control_effort = {} exceeds {} rad^2/s, the turn-rate limit {} rad/s held over {held} steps of {} s",
+                    column("control_effort"),
+                    Echo(e),
+                    Num(most_effort),
+                    Echo(limit),
+                    Echo(dt)
+                ));
+            }
+        }
+        if let Some(c) = value("chattering_radps2") {
+            let most = 2.0 * limit / dt;
+            if c > most * (1.0 + 1e-6) {
+                return Err(format!(
+                    "{}: chattering_radps2 = {} exceeds {} rad/s^2, a swing of twice the turn-rate limit {} rad/s every step of {} s",
+                    column("chattering_radps2"),
+                    Echo(c),
+                    Num(most),
+                    Echo(limit),
+                    Echo(dt)
+                ));
+            }
+        }
     }
     // Sign changes of a per-step quantity: at most one per step, `1 / dt` per second.
     if let Some(r) = value("sign_changes_per_s") {
@@ -312,6 +366,19 @@ fn check_span<'c>(
         }
     }
     Ok(())
+}
+
+/// The fewest samples a run of `span` that ended as `outcome` at step `k_end` delivered: none
+/// when the sensor drops samples, or when the run ended before completing its first step
+/// (`k_end = 0`, not `completed`: it sensed nothing or only its start); else the sample steps
+/// `j m` (`m` steps per sample) from the delay's `d` steps to `k_end`, every one of which
+/// the run sensed, `floor(k_end / m) - ceil(d / m) + 1` (0 when `k_end < d`).
+pub fn fewest_samples(span: &RunSpan, outcome: &str, k_end: u64) -> u64 {
+    let (m, d) = (span.steps_per_sample, span.sensor_delay_steps);
+    if span.sensor_drops_samples || (k_end == 0 && outcome != "completed") || k_end < d {
+        return 0;
+    }
+    (k_end / m + 1).saturating_sub(d.div_ceil(m))
 }
 
 /// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a

@@ -1,5 +1,6 @@
 //! The rows of `results.csv`: its columns, the row of one run, and runs run together.
 
+use crate::results::{result_cells, Column, RunRecord};
 use crate::trace::num;
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
@@ -25,6 +26,25 @@ pub const METRIC_COLUMNS: [&str; 15] = [
     "samples",
     "outcome_detail",
     "warnings",
+];
+
+/// The result columns of a sweep's row, [`METRIC_COLUMNS`] but `warnings` (built by
+/// [`result_cells`]).
+pub const SWEEP_COLUMNS: [Column; 14] = [
+    Column::Outcome,
+    Column::ConvergenceTimeS,
+    Column::SteadyStateMaxAbsError,
+    Column::SteadyStateRmsError,
+    Column::SteadyStateMeanError,
+    Column::SteadyStateMaxIsolineDistanceM,
+    Column::SteadyStateRmsIsolineDistanceM,
+    Column::PathLengthM,
+    Column::ControlEffort,
+    Column::ChatteringRadps2,
+    Column::SignChangesPerS,
+    Column::TEndS,
+    Column::Samples,
+    Column::OutcomeDetail,
 ];
 
 /// The team columns of `results.csv`, after [`METRIC_COLUMNS`], in a sweep whose base scenario
@@ -228,36 +248,13 @@ pub fn row_fields_warned(
 ) -> Vec<String> {
     // A metric that is not a finite number is written as an empty cell (as summary.json writes
     // null): a results file never holds `NaN` or `inf`, so --resume and merge can refuse them.
-    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
-    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
+    let record = result.as_ref().map(RunRecord::of);
     let mut fields = vec![id.to_string()];
     fields.extend(plan.run_cells(id));
-    match result {
-        Ok(r) => {
-            let m = &r.metrics;
-            fields.extend([
-                r.outcome.as_str().to_string(),
-                opt(m.convergence_time_s),
-                opt(m.steady_state_max_abs_error),
-                opt(m.steady_state_rms_error),
-                opt(m.steady_state_mean_error),
-                opt(m.steady_state_max_isoline_distance_m),
-                opt(m.steady_state_rms_isoline_distance_m),
-                fin(m.path_length_m),
-                fin(m.control_effort),
-                opt(m.chattering_radps2),
-                opt(m.sign_changes_per_s),
-                fin(r.t_end_s),
-                r.samples.to_string(),
-                r.outcome_detail.unwrap_or_default(),
-            ]);
-        }
-        Err(e) => {
-            fields.push("invalid_scenario".into());
-            fields.extend(std::iter::repeat_n(String::new(), numeric_columns().len()));
-            fields.push(e);
-        }
-    }
+    fields.extend(result_cells(
+        &SWEEP_COLUMNS,
+        record.as_ref().map_err(|e| e.as_str()),
+    ));
     fields.push(warnings);
     fields
 }
@@ -272,4 +269,18 @@ pub fn results_header(plan: &SweepPlan, team: bool) -> Vec<String> {
         header.extend(TEAM_COLUMNS.iter().map(|c| c.to_string()));
     }
     header
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sweep's header names are the names of the columns its rows are built from, then
+    /// `warnings`.
+    #[test]
+    fn metric_columns_are_the_sweep_columns_then_warnings() {
+        let names: Vec<&str> = SWEEP_COLUMNS.iter().map(|c| c.name()).collect();
+        assert_eq!(names[..], METRIC_COLUMNS[..14]);
+        assert_eq!(METRIC_COLUMNS[14], "warnings");
+    }
 }

@@ -402,6 +402,100 @@ impl SampledLoop {
     }
 }
 
+/// The most multiply-adds [`SampledLoop::late_response_fraction`] spends (the state's
+/// dimension squared, times the periods simulated, times its two starts): about 0.1 s. Past it the response is not computed (`None`).
+pub const MAX_RESPONSE_FLOPS: f64 = 2e8;
+
+impl SampledLoop {
+    /// How much of its transient the linear closed loop still has late in a run (issue 29: a
+    /// slow mode that the law's zero nearly cancels, as at kp = 350 on the paper's circle, has
+    /// a time constant of 350 s but almost no share in the response, which settles in about
+    /// 20 s).
+    ///
+    /// The one-period map `X_{k+1} = M X_k` ([`closed_loop_matrix`](Self::closed_loop_matrix))
+    /// is iterated from the state a run starts in, as deviations from the equilibrium: the
+    /// offset `z1 = offset_m` (`-eps0/alpha`; 1 m when that and everything below are zero),
+    /// heading along the isoline, the sensor reading, the delay line and the previous sample
+    /// all at the starting error, the filter at rest; and what the turn on a curved isoline
+    /// needs but a run starts without: the integral (it starts at 0 where the equilibrium holds
+    /// `ki sigma* = v kappa`, so `sigma = v kappa / ki` short) and for the UAV the steady bank
+    /// `b*` and the course integrator holding it (`b* / ki_chi`). Those deficits drift the
+    /// vehicle to the curve's outside; their sign relative to the offset is taken both ways
+    /// and the worse kept. With the true error `eps_k = C x_k` the result is
+    /// `max_{k0 <= k <= k_end} |eps_k| / max_{0 <= k <= k_end} |eps_k|`
+    /// (`k0 = from_s/T`, `k_end = to_s/T`, rounded down). `None` when the loop has no model
+    /// or the work passes [`MAX_RESPONSE_FLOPS`].
+    pub fn late_response_fraction(&self, from_s: f64, to_s: f64, offset_m: f64) -> Option<f64> {
+        let t = self.period_s;
+        if !(from_s >= 0.0 && to_s >= from_s && to_s.is_finite() && offset_m.is_finite()) {
+            return None;
+        }
+        let held = HeldPlant::new(self)?;
+        let np = held.a.nrows();
+        let n = held.dim();
+        let k_end = (to_s / t).floor();
+        let m = self.closed_loop_matrix()?;
+        let dim = m.nrows();
+        if (2 * dim * dim) as f64 * k_end > MAX_RESPONSE_FLOPS {
+            return None;
+        }
+        let (k_end, k0) = (k_end as usize, (from_s / t).floor() as usize);
+        // Layout as in `closed_loop_matrix`: [x, (y), w_0 .. w_m, eps_prev, (filter), (sigma)].
+        let filtered = matches!(self.estimator, EstimatorModel::FilteredDifference { .. });
+        let integral = self.ki != 0.0;
+        let i_prev = dim - 1 - usize::from(filtered) - usize::from(integral);
+        // The deficits of a run's start on a curved isoline (zero on a straight one).
+        let mut deficit = DVector::zeros(dim);
+        let turn = self.speed_mps * self.curvature_per_m;
+        if integral {
+            deficit[dim - 1] = turn / self.ki;
+        }
+        if let (HeadingDynamics::CourseLoop(c), Some(nums)) =
+            (self.heading, self.course_loop_numbers())
+        {
+            deficit[2] = nums.steady_bank_rad;
+            if c.ki_chi != 0.0 {
+                deficit[4] = nums.steady_bank_rad / c.ki_chi;
+            }
+        }
+        let offset = if offset_m == 0.0 && deficit.iter().all(|&x| x == 0.0) {
+            1.0
+        } else {
+            offset_m
+        };
+        let c = held.c.clone();
+        let eps0 = c[0] * offset;
+        let mut start = DVector::zeros(dim);
+        start[0] = offset;
+        if n > np {
+            start[np] = eps0;
+        }
+        for i in n..=i_prev {
+            start[i] = eps0;
+        }
+        let mut worst: f64 = 0.0;
+        for sign in [1.0, -1.0] {
+            let mut x = &start + &deficit * sign;
+            let (mut peak, mut late) = (eps0.abs(), if k0 == 0 { eps0.abs() } else { 0.0 });
+            for k in 1..=k_end {
+                x = &m * x;
+                let e = c.dot(&x.rows(0, np)).abs();
+                peak = peak.max(e);
+                if k >= k0 {
+                    late = late.max(e);
+                }
+            }
+            if !(peak.is_finite() && late.is_finite()) {
+                return None;
+            }
+            if peak > 0.0 {
+                worst = worst.max(late / peak);
+            }
+        }
+        Some(worst)
+    }
+}
+
 /// The worst (largest) spectral radius over the slopes `slopes`.
 pub fn worst_spectral_radius(l: &SampledLoop, slopes: &[f64]) -> f64 {
     slopes

@@ -25,13 +25,13 @@ pub mod spacing;
 
 use crate::batch::LANES;
 use crate::kernel::{ask, Sensed, VehicleRun};
-use crate::run::{Oracles, RunResult, StepPlan};
+use crate::run::{Oracles, Outcome, RunResult, StepPlan};
 use crate::sensor::Sensor;
 use crate::trace::TraceSink;
 use arc::{wrap_arc, ArcProjection};
 use isotrack_core::{IsolineController, Measurement, ScalarField, SpeedCommand, Vec2};
 use metrics::{TeamMetrics, TeamMetricsConfig, TeamSummary};
-use ranging::{Ranging, RangingConfig, RangingError};
+use ranging::{RangeSample, Ranging, RangingConfig, RangingError};
 use spacing::{
     balance_speed, pick_neighbours, DiscoveryConfig, HeldRange, RateFit, RingMode, SpacingConfig,
     SpacingLaw,
@@ -116,6 +116,23 @@ struct Discovery {
     found: Vec<Option<[u32; 2]>>,
 }
 
+/// The true isoline a team projects on: lent by the caller ([`Group::new`]) or owned by the
+/// team ([`Group::new_owning_arc`], for a team held across calls, e.g. by an environment).
+enum ArcRef<'a> {
+    Lent(&'a dyn ArcProjection),
+    Owned(Box<dyn ArcProjection + Send + 'a>),
+}
+
+/// The projection behind an [`ArcRef`].
+#[inline(always)]
+fn arc_of<'b>(a: &'b Option<ArcRef<'_>>) -> Option<&'b dyn ArcProjection> {
+    match a {
+        Some(ArcRef::Lent(a)) => Some(*a),
+        Some(ArcRef::Owned(a)) => Some(&**a),
+        None => None,
+    }
+}
+
 /// A team on one clock: the vehicles' states (in chunks of [`LANES`]), their runs in the step
 /// kernel, controllers, ranging units and spacing state. The field, the vehicle model, the
 /// oracles and the trace sinks are lent to each step, as for an [`Episode`](crate::Episode).
@@ -135,8 +152,17 @@ pub struct Group<'a, X, C> {
     held: Vec<[HeldRange; 2]>,
     speed_cmd: Vec<f64>,
     discovery: Option<Discovery>,
-    arc: Option<&'a dyn ArcProjection>,
+    arc: Option<ArcRef<'a>>,
     metrics: Option<TeamMetrics>,
+    /// The latest range sample each vehicle's ranging unit delivered (for an agent outside the
+    /// loop; `None` before the first).
+    delivered: Vec<Option<RangeSample>>,
+    /// Speeds commanded from outside the loop, held ([`Group::hold_speed`]; `None`: every
+    /// vehicle flies its spacing law's command).
+    speed_override: Option<Vec<f64>>,
+    /// The measurement each vehicle's sensor delivered at its last sample (this step's when
+    /// `command` is `Some`).
+    measured: Vec<Measurement>,
     // Per-step scratch.
     positions: Vec<Vec2>,
     values: Vec<f64>,
@@ -155,6 +181,34 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         cfg: TeamConfig,
         members: Vec<TeamMember<X, C>>,
         arc: Option<&'a dyn ArcProjection>,
+    ) -> Result<Self, TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Lent))
+    }
+
+    /// [`Group::new`] with the true isoline owned by the team (for a team held across calls,
+    /// e.g. by an environment stepped from outside).
+    pub fn new_owning_arc<V>(
+        vehicle: &V,
+        plan: &StepPlan,
+        cfg: TeamConfig,
+        members: Vec<TeamMember<X, C>>,
+        arc: Option<Box<dyn ArcProjection + Send + 'a>>,
+    ) -> Result<Self, TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        Self::with_arc(vehicle, plan, cfg, members, arc.map(ArcRef::Owned))
+    }
+
+    fn with_arc<V>(
+        vehicle: &V,
+        plan: &StepPlan,
+        cfg: TeamConfig,
+        members: Vec<TeamMember<X, C>>,
+        arc: Option<ArcRef<'a>>,
     ) -> Result<Self, TeamError>
     where
         V: SpeedCommand<State = X>,
@@ -234,7 +288,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             ranging.push(Ranging::new(cfg.ranging, plan.dt_s, m.ranging_seed)?);
             states[i / LANES][i % LANES] = x;
         }
-        let metrics = arc.map(|a| {
+        let metrics = arc_of(&arc).map(|a| {
             let mc = TeamMetricsConfig {
                 steady_state_start_step: plan.steady_state_start_step,
                 ..cfg.metrics
@@ -258,6 +312,15 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             discovery,
             arc,
             metrics,
+            delivered: vec![None; n],
+            speed_override: None,
+            measured: vec![
+                Measurement {
+                    t_s: 0.0,
+                    value: 0.0
+                };
+                n
+            ],
             positions: vec![Vec2::new(0.0, 0.0); n],
             values: vec![0.0; n],
             alive: vec![false; n],
@@ -280,6 +343,97 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
     /// Whether any vehicle's run goes on.
     pub fn is_running(&self) -> bool {
         self.running > 0
+    }
+
+    /// Number of vehicles.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether the team has no vehicle (never: [`Group::new`] refuses an empty team).
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The step the next [`advance`](Self::advance) completes (after [`sense`](Self::sense)),
+    /// or the next [`sense`](Self::sense) begins.
+    pub fn step_index(&self) -> u64 {
+        self.k
+    }
+
+    /// The plan.
+    pub fn plan(&self) -> &StepPlan {
+        &self.plan
+    }
+
+    /// Whether vehicle `i`'s run goes on.
+    pub fn is_vehicle_running(&self, i: usize) -> bool {
+        self.runs[i].is_running()
+    }
+
+    /// How vehicle `i`'s run ended, once it has.
+    pub fn outcome(&self, i: usize) -> Option<Outcome> {
+        self.runs[i].outcome()
+    }
+
+    /// Between [`sense`](Self::sense) and [`advance`](Self::advance): vehicle `i`'s sample of
+    /// this step and its tracking controller's answer, rad/s (`None`: no sample this step, its
+    /// command held).
+    pub fn sampled(&self, i: usize) -> Option<(Measurement, f64)> {
+        self.command[i].map(|w| (self.measured[i], w))
+    }
+
+    /// Between [`sense`](Self::sense) and [`advance`](Self::advance): replaces vehicle `i`'s
+    /// answer to this step's sample by `omega_radps` (an agent outside the loop steering it;
+    /// a non-finite one ends its run as `diverged`, as a controller's would). Returns whether
+    /// it had a sample (without one its command is held, and nothing is replaced).
+    pub fn replace_answer(&mut self, i: usize, omega_radps: f64) -> bool {
+        match &mut self.command[i] {
+            Some(w) => {
+                *w = omega_radps;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Vehicle `i`'s speed command from its spacing law (held since its last answer), m/s,
+    /// before the envelope's saturation.
+    pub fn law_speed_mps(&self, i: usize) -> f64 {
+        self.speed_cmd[i]
+    }
+
+    /// Commands vehicle `i`'s speed from outside the loop, m/s, held from this step on in
+    /// place of its spacing law's (saturated to the vehicle's envelope as the law's is). Once
+    /// one vehicle's speed is held, every vehicle's is (the others' at their law's command of
+    /// this moment until set).
+    pub fn hold_speed(&mut self, i: usize, speed_mps: f64) {
+        let o = self
+            .speed_override
+            .get_or_insert_with(|| self.speed_cmd.clone());
+        o[i] = speed_mps;
+    }
+
+    /// The latest range sample vehicle `i`'s ranging unit delivered (`None` before the first).
+    pub fn delivered_ranges(&self, i: usize) -> Option<RangeSample> {
+        self.delivered[i]
+    }
+
+    /// Vehicle `i`'s `[ahead, behind]` neighbours (`None` while the ring is being found).
+    pub fn neighbours(&self, i: usize) -> Option<[u32; 2]> {
+        self.ring[i]
+    }
+
+    /// Vehicle `i`'s position and the true field value there at the last step sensed
+    /// (ground truth: for rewards and logs, never an observation).
+    pub fn sensed_truth(&self, i: usize) -> (Vec2, f64) {
+        (self.positions[i], self.values[i])
+    }
+
+    /// The ranging unit's steps per sample and its delay in steps (the same for every vehicle).
+    pub fn ranging_steps(&self) -> (u64, u64) {
+        let r = &self.ranging[0];
+        (r.steps_per_sample(), r.delay_steps())
     }
 
     /// Runs every step to the end (the loop compiled for AVX-512, AVX2 and the baseline, one
@@ -306,6 +460,47 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
 
     #[inline(always)]
     fn step_inline<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sinks: &mut [S],
+    ) where
+        F: ScalarField,
+        V: SpeedCommand<State = X>,
+        S: TraceSink,
+    {
+        self.sense_inline(field, vehicle, oracles, sinks);
+        self.advance_inline(vehicle, oracles, sinks);
+    }
+
+    /// The first half of the next team step (module docs, 1-3): the positions, the samples
+    /// and the tracking controllers' answers, the ranging and the spacing law. The step then
+    /// waits for [`advance`](Self::advance); in between, an agent outside the loop may read
+    /// each vehicle's sample ([`sampled`](Self::sampled)) and replace its answer
+    /// ([`replace_answer`](Self::replace_answer)) and speed ([`hold_speed`](Self::hold_speed)).
+    /// `sense` then `advance` is [`step`](Self::step), bit for bit.
+    pub fn sense<F, V, S>(&mut self, field: &F, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
+    where
+        F: ScalarField,
+        V: SpeedCommand<State = X>,
+        S: TraceSink,
+    {
+        self.sense_inline(field, vehicle, oracles, sinks);
+    }
+
+    /// The second half of the step [`sense`](Self::sense) began (module docs, 4-5): each
+    /// vehicle's metrics and trace, the team metrics, the move.
+    pub fn advance<V, S>(&mut self, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
+    where
+        V: SpeedCommand<State = X>,
+        S: TraceSink,
+    {
+        self.advance_inline(vehicle, oracles, sinks);
+    }
+
+    #[inline(always)]
+    fn sense_inline<F, V, S>(
         &mut self,
         field: &F,
         vehicle: &V,
@@ -360,6 +555,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     Sensed::Ended => continue,
                     Sensed::Held => {}
                     Sensed::Sampled(m) if self.wants_truth[i] => {
+                        self.measured[i] = m;
                         let sample = self.runs[i].sample(m, vehicle.speed_mps(state));
                         self.command[i] = Some(ask(
                             &mut self.controllers[i],
@@ -369,6 +565,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                         ));
                     }
                     Sensed::Sampled(m) => {
+                        self.measured[i] = m;
                         ms[l] = m;
                         sampled[l] = true;
                     }
@@ -394,6 +591,19 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         }
         // 3. Ranging and the spacing law.
         self.space(k, t, vehicle);
+    }
+
+    #[inline(always)]
+    fn advance_inline<V, S>(&mut self, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
+    where
+        V: SpeedCommand<State = X>,
+        S: TraceSink,
+    {
+        let n = self.n;
+        let k = self.k;
+        let dt = self.plan.dt_s;
+        let t = k as f64 * dt;
+        let mut no_sink = crate::trace::NoTrace;
         // 4. Complete each vehicle's step; the team metrics.
         for i in 0..n {
             if !self.alive[i] {
@@ -418,7 +628,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             self.omega[i] = self.runs[i].omega_radps();
             self.speeds[i] = vehicle.speed_mps(state);
         }
-        if let (Some(m), Some(a)) = (self.metrics.as_mut(), self.arc) {
+        if let (Some(m), Some(a)) = (self.metrics.as_mut(), arc_of(&self.arc)) {
             if m.due() {
                 m.observe(k, a, &self.positions, &self.speeds, &self.alive);
             }
@@ -430,7 +640,11 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             for l in 0..LANES.min(n - c * LANES) {
                 let i = c * LANES + l;
                 if self.runs[i].is_running() {
-                    vehicle.command_speed(&mut chunk[l], self.speed_cmd[i]);
+                    let v = match &self.speed_override {
+                        None => self.speed_cmd[i],
+                        Some(o) => o[i],
+                    };
+                    vehicle.command_speed(&mut chunk[l], v);
                     running += 1;
                 }
                 w[l] = self.omega[i];
@@ -476,13 +690,16 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     // The ranging unit still runs (its streams as with any law).
                     let pa = self.alive[a].then(|| self.positions[a]);
                     let pb = self.alive[b].then(|| self.positions[b]);
-                    self.ranging[i].observe(k, t, self.positions[i], pa, pb);
+                    if let Some(r) = self.ranging[i].observe(k, t, self.positions[i], pa, pb) {
+                        self.delivered[i] = Some(r);
+                    }
                     self.speed_cmd[i] = v0;
                 }
                 SpacingLaw::RangeBalance { gain_per_s } => {
                     let pa = self.alive[a].then(|| self.positions[a]);
                     let pb = self.alive[b].then(|| self.positions[b]);
                     if let Some(r) = self.ranging[i].observe(k, t, self.positions[i], pa, pb) {
+                        self.delivered[i] = Some(r);
                         let ra = self.held[i][0].update(r.ahead, r.t_s, max_range);
                         let rb = self.held[i][1].update(r.behind, r.t_s, max_range);
                         if let (Some(ra), Some(rb)) = (ra, rb) {
@@ -498,7 +715,9 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     if !now {
                         continue;
                     }
-                    let Some(arc) = self.arc else { continue };
+                    let Some(arc) = arc_of(&self.arc) else {
+                        continue;
+                    };
                     let l = arc.length_m();
                     let me = arc.project(self.positions[i]);
                     let pa = arc.project(self.positions[a]);

@@ -175,6 +175,11 @@ impl Ranging {
         self.every
     }
 
+    /// Steps between a sample's measurement and its delivery.
+    pub fn delay_steps(&self) -> u64 {
+        self.delay_steps
+    }
+
     /// Whether step `k`'s call to [`observe`](Self::observe) measures (a countdown from step 0).
     #[inline(always)]
     pub fn measures_now(&self) -> bool {

@@ -3,7 +3,7 @@
 
 use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
-use crate::output::{scenario_toml, summary_to_json, Summary, TraceWriter};
+use crate::output::{scenario_toml, RunDir, Summary, TraceWriter};
 use crate::run::{load, Failure};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_mavlink::fly::{
@@ -11,6 +11,7 @@ use isotrack_mavlink::fly::{
 };
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
+use isotrack_runs::summary::Ended;
 use isotrack_sim::{NoTrace, RunMetrics, TraceRow, TraceSink};
 use serde::Serialize;
 use std::path::Path;
@@ -72,40 +73,18 @@ fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     }
 }
 
-/// Readies run directory `dir` for `names`: none of them one of the inputs (64), the
-/// directory created and locked as sweeps lock theirs (73 while another command writes it), and
-/// none of them an existing non-regular file (a FIFO would block the write for ever: 73).
-/// Returns the lock, held until dropped.
+/// Readies run directory `dir` ([`RunDir::open`]: nothing over an input (64), created and
+/// locked as sweeps lock theirs (73 while another command writes it), no output an existing
+/// link, FIFO or device (73)), with `extra` files besides the run's.
 fn prepare_out(
     dir: &Path,
     args: &crate::cli::ScenarioArgs,
     scenario: &isotrack_scenario::Scenario,
-    names: &[&str],
+    extra: &[&str],
     command: &str,
-) -> Result<crate::sweep::DirLock, Failure> {
+) -> Result<RunDir, Failure> {
     let inputs = crate::output::input_files(args.scenario.as_deref(), scenario);
-    for name in names {
-        if let Some(message) = crate::output::input_clash(&inputs, &dir.join(name)) {
-            return Err(usage(message));
-        }
-    }
-    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
-    let lock = crate::sweep::lock_output_dir(dir, command)?;
-    for name in names {
-        let p = dir.join(name);
-        if let Ok(m) = std::fs::metadata(&p) {
-            if !m.is_file() {
-                return Err(Failure {
-                    code: exit::CANTCREAT,
-                    message: format!(
-                        "cannot write {}: not a regular file (a FIFO, a device or a directory)",
-                        p.display()
-                    ),
-                });
-            }
-        }
-    }
-    Ok(lock)
+    RunDir::open(dir, &inputs, extra, Some(command))
 }
 
 /// The range of `--speedup`.
@@ -134,25 +113,16 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     };
     opts.companion_timeout_s = args.timeout_s;
     opts.stop = isotrack_mavlink::interrupt_flag();
-    let _lock = match &args.out {
-        Some(dir) => Some(prepare_out(
-            dir,
-            &args.scenario,
-            &scenario,
-            &["trace.csv", "summary.json", "scenario.toml"],
-            "sitl",
-        )?),
+    let out = match &args.out {
+        Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
         None => None,
     };
-    let mut writer = match &args.out {
-        Some(dir) => {
-            let p = dir.join("trace.csv");
-            Some(TraceWriter::create(&p, scenario.is_flying()).map_err(|e| cant(&p, e))?)
-        }
+    let mut trace = match &out {
+        Some(o) => Some(o.live_trace(scenario.is_flying())?),
         None => None,
     };
-    let sink: &mut dyn TraceSink = match writer.as_mut() {
-        Some(w) => w,
+    let sink: &mut dyn TraceSink = match trace.as_mut() {
+        Some(t) => t.writer(),
         None => &mut NoTrace,
     };
     let report = run_sitl_on(&scenario, &opts, sink, &mut |l| {
@@ -194,36 +164,18 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     } else {
         None
     };
-    if let (Some(dir), Some(w)) = (&args.out, writer) {
-        w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
-        let p = dir.join("summary.json");
-        let summary = Summary {
-            isotrack_version: env!("CARGO_PKG_VERSION"),
-            scenario_path: args
-                .scenario
-                .scenario
-                .as_ref()
-                .map(|p| p.display().to_string()),
-            result: &report.result,
-            warnings: &report.events,
-            data_files: isotrack_runs::summary::data_file_digests(&scenario),
-            team: None,
-            vehicles: None,
-            scenario: scenario.file(),
-        };
-        let mut text = summary_to_json(&summary).map_err(|e| cant(&p, e.into()))?;
-        if let Some((outcome, detail)) = &cut {
-            let mut v: serde_json::Value =
-                serde_json::from_str(&text).map_err(|e| cant(&p, e.into()))?;
-            v["outcome"] = (*outcome).into();
-            v["outcome_detail"] = detail.clone().into();
-            text = serde_json::to_string_pretty(&v).map_err(|e| cant(&p, e.into()))?;
+    if let (Some(out), Some(trace)) = (&out, trace) {
+        let mut summary = Summary::of_run(
+            &scenario,
+            args.scenario.scenario.as_deref(),
+            &report.result,
+            &report.events,
+        );
+        if let (Some((outcome, detail)), Ended::Run(r)) = (&cut, &mut summary.ended) {
+            r.record.outcome = (*outcome).to_string();
+            r.record.outcome_detail = Some(detail.clone());
         }
-        isotrack_runs::files::write_atomic(&p, (text + "\n").as_bytes())
-            .map_err(|e| cant(&p, e))?;
-        let p = dir.join("scenario.toml");
-        isotrack_runs::files::write_atomic(&p, scenario_toml(&scenario).as_bytes())
-            .map_err(|e| cant(&p, e))?;
+        out.finish(trace, &scenario_toml(&scenario), &summary)?;
     }
     outln!(
         "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",
@@ -268,6 +220,8 @@ struct FlySummary<'a> {
     junk_datagrams: u64,
     measurements_out_of_order: u64,
     measurements_repeated: u64,
+    /// What the metrics were computed over (the planned window, or what was flown).
+    metrics_over: &'a str,
     /// The tracking metrics of the measured error series (`steady_state_max_abs_error`, ...),
     /// as a simulated run's summary has them.
     #[serde(flatten)]
@@ -320,12 +274,14 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
-    let _lock = match &args.out {
+    // Readied (and locked) by the one run-directory writer; the flight then writes its own
+    // files as it flies (scenario first, a flushed trace, the summary at the end, atomically).
+    let _out = match &args.out {
         Some(dir) => Some(prepare_out(
             dir,
             &args.scenario,
             &scenario,
-            &["trace.csv", "summary.json", "scenario.toml", "mavlink.tlog"],
+            &["mavlink.tlog"],
             "fly",
         )?),
         None => None,
@@ -413,6 +369,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             junk_datagrams: report.link.junk_datagrams,
             measurements_out_of_order: report.measurements_out_of_order,
             measurements_repeated: report.measurements_repeated,
+            metrics_over: &report.metrics_over,
             metrics: &report.metrics,
             scenario: scenario.file(),
         };
@@ -432,6 +389,22 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+        });
+    }
+    if report.end == FlyEnd::VehicleMismatch {
+        return Err(Failure {
+            code: exit::DATAERR,
+            message: "the scenario's vehicle kind does not fit the vehicle's type (see above): nothing commanded".into(),
+        });
+    }
+    if report.end.is_failsafe() && !report.vehicle_heard {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): no vehicle was ever heard on {}: nothing was sent",
+                report.end.as_str(),
+                args.mavlink
+            ),
         });
     }
     if report.end == FlyEnd::PilotTookOver {

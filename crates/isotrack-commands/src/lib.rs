@@ -1,7 +1,10 @@
-//! # isotrack-cli
+//! # isotrack-commands
 //!
-//! The thin command-line layer: argument parsing ([`cli`]), the commands, and the run outputs
-//! ([`output`]: `trace.csv`, `summary.json`, the resolved `scenario.toml`).
+//! The isotrack commands as a library: argument parsing ([`cli`]), the commands, and the run
+//! outputs ([`output`], re-exported from `isotrack-runs`). [`entry::main_with`] is the whole
+//! command line: the `isotrack` binary (crate `isotrack-cli`, its `main` only) and the Python
+//! package's `isotrack` command both call it, so there is one implementation of the commands
+//! and the Python package builds without the binary's crate.
 #![deny(missing_docs)]
 // Every line printed goes through `console` (a closed pipe never panics): issue 30, item 13.
 #![deny(clippy::print_stdout, clippy::print_stderr)]

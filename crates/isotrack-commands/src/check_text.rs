@@ -325,6 +325,10 @@ fn sensor_rate_line(sm: &SampledReport) -> String {
             "sensor rate: not the limit: stable at {} Hz (slower rates not computed)",
             Num(rate)
         ),
+        // The lag, when it is what makes the loop unstable, is named here as in the advice
+        // (issue 29: this line said only "change the gains").
+        _ if sm.lag_is_the_cause => "sensor rate: not the limit: the loop is unstable at any rate with this sensor lag (without it the loop is stable: reduce sensor.time_constant_s, or change the gains)"
+            .to_string(),
         _ => "sensor rate: not the limit: the loop is unstable at any rate (change the gains)"
             .to_string(),
     }

@@ -2,7 +2,7 @@
 
 use crate::cli::{FigureOptions, FiguresArgs, ImageFormat, PlotArgs};
 use crate::exit;
-use crate::output::{run_to_trace, scenario_toml, write_summary};
+use crate::output::{scenario_toml, RunDir, Summary};
 use crate::run::Failure;
 use isotrack_core::numtext::Echo;
 use isotrack_plot::{
@@ -239,25 +239,12 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
 
 /// Runs `scenario` into `dir` (trace, summary, resolved scenario) and loads it back for plotting.
 fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Failure> {
-    let cant = |e: std::io::Error| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", dir.display()),
-    };
-    std::fs::create_dir_all(dir).map_err(cant)?;
-    let r = run_to_trace(scenario, &dir.join("trace.csv")).map_err(cant)?;
-    write_summary(
-        &dir.join("summary.json"),
-        scenario,
-        None,
-        &r,
-        &isotrack_scenario::check::warnings(scenario),
-    )
-    .map_err(cant)?;
-    isotrack_runs::files::write_atomic(
-        &dir.join("scenario.toml"),
-        scenario_toml(scenario).as_bytes(),
-    )
-    .map_err(cant)?;
+    let out = RunDir::open(dir, &[], &[], None)?;
+    let mut trace = out.trace(scenario.is_flying())?;
+    let r = scenario.run(trace.writer());
+    let warnings = isotrack_scenario::check::warnings(scenario);
+    let summary = Summary::of_run(scenario, None, &r, &warnings);
+    out.finish(trace, &scenario_toml(scenario), &summary)?;
     let mut d = RunData::load(dir).map_err(failure)?;
     d.name = name.to_string();
     Ok(d)

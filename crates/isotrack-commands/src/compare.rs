@@ -2,9 +2,10 @@
 
 use crate::cli::CompareArgs;
 use crate::exit;
-use crate::output::{num, scenario_toml, write_summary, TraceWriter};
+use crate::output::{scenario_toml, RunDir, Summary};
 use crate::run::invalid;
 use crate::run::Failure;
+use isotrack_runs::results::{result_cells, Column, RunRecord};
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult};
@@ -23,6 +24,19 @@ pub const COMPARISON_COLUMNS: [&str; 10] = [
     "control_effort",
     "steady_state_max_isoline_distance_m",
     "steady_state_rms_isoline_distance_m",
+];
+
+/// The result columns of `comparison.csv`, after `controller` ([`COMPARISON_COLUMNS`]).
+pub const COMPARISON_RESULT_COLUMNS: [Column; 9] = [
+    Column::Outcome,
+    Column::ConvergenceTimeS,
+    Column::SteadyStateMaxAbsError,
+    Column::SteadyStateRmsError,
+    Column::ChatteringRadps2,
+    Column::SignChangesPerS,
+    Column::ControlEffort,
+    Column::SteadyStateMaxIsolineDistanceM,
+    Column::SteadyStateRmsIsolineDistanceM,
 ];
 
 /// The scenario with `kind` as its controller: the scenario's own section when it already uses
@@ -93,28 +107,11 @@ pub fn check_gains(gains: &[String]) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Runs `s` (its trace to `trace` if given).
-fn run_traced(s: &Scenario, trace: Option<&Path>) -> std::io::Result<RunResult> {
-    match trace {
-        Some(path) => {
-            let mut w = TraceWriter::create(path, s.is_flying())?;
-            let r = s.run(&mut w);
-            w.finish()?;
-            Ok(r)
-        }
-        None => Ok(s.run(&mut NoTrace)),
-    }
-}
-
 /// Whether run `r` never reached the level (at no step within the convergence tolerance nor
 /// across the isoline: [`isotrack_sim::RunMetrics::reached_level`], every step counted, not
 /// only the recorded rows), with how far it went from its start, m.
 fn never_reached(r: &RunResult) -> Option<f64> {
     (!r.metrics.reached_level).then_some(r.metrics.farthest_from_start_m)
-}
-
-fn cell(x: Option<f64>) -> String {
-    x.map_or_else(String::new, num)
 }
 
 fn md(x: Option<f64>) -> String {
@@ -187,25 +184,16 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             errln!("warning: {w}");
         }
         let r = if let Some(dir) = &a.out {
-            let d = dir.join(kind.name());
-            std::fs::create_dir_all(&d).map_err(|e| cant(&d, e))?;
-            let r = run_traced(&s, Some(&d.join("trace.csv"))).map_err(|e| cant(&d, e))?;
-            write_summary(
-                &d.join("summary.json"),
-                &s,
-                Some(&a.scenario),
-                &r,
-                &isotrack_scenario::check::warnings(&s),
-            )
-            .map_err(|e| cant(&d, e))?;
-            isotrack_runs::files::write_atomic(
-                &d.join("scenario.toml"),
-                scenario_toml(&s).as_bytes(),
-            )
-            .map_err(|e| cant(&d, e))?;
+            // The directory's lock is held for all of them (above).
+            let out = RunDir::open(&dir.join(kind.name()), &[], &[], None)?;
+            let mut trace = out.trace(s.is_flying())?;
+            let r = s.run(trace.writer());
+            let warnings = isotrack_scenario::check::warnings(&s);
+            let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
+            out.finish(trace, &scenario_toml(&s), &summary)?;
             r
         } else {
-            run_traced(&s, None).map_err(|e| cant(Path::new("trace"), e))?
+            s.run(&mut NoTrace)
         };
         if let Some(far) = never_reached(&r) {
             never.push((kind, far));
@@ -252,20 +240,13 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         );
         let mut text = COMPARISON_COLUMNS.join(",") + "\n";
         for (k, r) in &results {
-            let m = &r.metrics;
-            text += &[
-                k.name().to_string(),
-                r.outcome.as_str().to_string(),
-                cell(m.convergence_time_s),
-                cell(m.steady_state_max_abs_error),
-                cell(m.steady_state_rms_error),
-                cell(m.chattering_radps2),
-                cell(m.sign_changes_per_s),
-                num(m.control_effort),
-                cell(m.steady_state_max_isoline_distance_m),
-                cell(m.steady_state_rms_isoline_distance_m),
-            ]
-            .join(",");
+            // The one row builder (isotrack-runs): the law's name, then its result's cells.
+            let mut row = vec![k.name().to_string()];
+            row.extend(result_cells(
+                &COMPARISON_RESULT_COLUMNS,
+                Ok(&RunRecord::of(r)),
+            ));
+            text += &row.join(",");
             text += "\n";
         }
         w.write_all(text.as_bytes())
@@ -304,4 +285,18 @@ fn never_reached_note(base: &Scenario, never: &[(ControllerKind, f64)]) -> Strin
         "Every law flew the scenario's search (controller.search) before its own law; these still never reached the isoline within the run."
     };
     note
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `comparison.csv`'s header is `controller` then the names of the columns its rows are
+    /// built from (the one row builder, isotrack-runs).
+    #[test]
+    fn the_header_names_the_built_columns() {
+        let names: Vec<&str> = COMPARISON_RESULT_COLUMNS.iter().map(|c| c.name()).collect();
+        assert_eq!(COMPARISON_COLUMNS[0], "controller");
+        assert_eq!(COMPARISON_COLUMNS[1..], names[..]);
+    }
 }

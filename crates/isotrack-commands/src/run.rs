@@ -2,7 +2,7 @@
 
 use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;
-use crate::output::{run_to_trace, scenario_toml};
+use crate::output::{scenario_toml, RunDir, Summary};
 use isotrack_core::numtext::Echo;
 use isotrack_scenario::{load_scenario, Scenario, ScenarioError};
 use isotrack_sim::{NoTrace, RunResult};
@@ -145,64 +145,41 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         |p| p.display().to_string(),
     );
     let result = if let Some(dir) = &args.out {
-        let cant = |what: &str, e: std::io::Error| Failure {
-            code: exit::CANTCREAT,
-            message: format!("cannot write {what}: {e}"),
-        };
         // An output that is one of the inputs (the scenario file, the field's data) is refused
         // before anything is written: a run directory never replaces what it was made from.
-        let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
-        for name in ["trace.csv", "summary.json", "scenario.toml"] {
-            if let Some(message) = crate::output::input_clash(&inputs, &dir.join(name)) {
-                return Err(Failure {
-                    code: exit::USAGE,
-                    message,
-                });
-            }
-        }
-        std::fs::create_dir_all(dir).map_err(|e| cant(&dir.display().to_string(), e))?;
         // One writer per run directory (as sweeps): a second `run --out D` at once exits 73.
-        let _lock = crate::sweep::lock_output_dir(dir, "run")?;
-        let trace = dir.join("trace.csv");
-        let summary = dir.join("summary.json");
-        let resolved = dir.join("scenario.toml");
-        for p in [&trace, &summary, &resolved] {
-            isotrack_runs::files::refuse_non_regular(p)
-                .map_err(|e| cant(&p.display().to_string(), e))?;
-        }
-        // The old summary goes first: a run interrupted from here on leaves a directory without
-        // a summary (which plot and report refuse), never the old summary beside a new trace.
-        match std::fs::remove_file(&summary) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(cant(&summary.display().to_string(), e))
-            }
-            _ => {}
-        }
-        // The trace streams into a temporary file renamed into place once whole; the summary,
-        // written last (atomically), marks the directory complete.
-        let trace_tmp = isotrack_runs::files::temp_beside(&trace);
+        let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
+        let out = RunDir::open(dir, &inputs, &[], Some("run"))?;
         // A team (`[team]`) writes one trace with a `vehicle` column; its summary's top-level
         // metrics are vehicle 0's, beside the `team` object and the `vehicles` array.
-        let (result, team) = match isotrack_runs::trace::run_team_to_trace(&scenario, &trace_tmp) {
-            Some(r) => r.map(|t| (t.runs[0].clone(), Some(t))),
-            None => run_to_trace(&scenario, &trace_tmp).map(|r| (r, None)),
-        }
-        .and_then(|r| std::fs::rename(&trace_tmp, &trace).map(|()| r))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&trace_tmp);
-            cant(&trace.display().to_string(), e)
-        })?;
-        isotrack_runs::files::write_atomic(&resolved, scenario_toml(&scenario).as_bytes())
-            .map_err(|e| cant(&resolved.display().to_string(), e))?;
-        isotrack_runs::summary::write_summary_team(
-            &summary,
-            &scenario,
-            args.scenario.scenario.as_deref(),
-            &result,
-            &warnings,
-            team.as_ref(),
-        )
-        .map_err(|e| cant(&summary.display().to_string(), e))?;
+        let mut trace_file = if scenario.spec().team.is_some() {
+            out.team_trace(scenario.is_flying())?
+        } else {
+            out.trace(scenario.is_flying())?
+        };
+        let team = match isotrack_runs::trace::run_team_into(&scenario, trace_file.writer()) {
+            Some(Ok(t)) => Some(t),
+            Some(Err(e)) => return Err(out.abandon(trace_file, e)),
+            None => None,
+        };
+        let (result, summary) = match &team {
+            Some(t) => (
+                t.runs[0].clone(),
+                Summary::of_team(&scenario, args.scenario.scenario.as_deref(), t, &warnings),
+            ),
+            None => {
+                let r = scenario.run(trace_file.writer());
+                let s =
+                    Summary::of_run(&scenario, args.scenario.scenario.as_deref(), &r, &warnings);
+                (r, s)
+            }
+        };
+        out.finish(trace_file, &scenario_toml(&scenario), &summary)?;
+        let (trace, summary, resolved) = (
+            out.path("trace.csv"),
+            out.path("summary.json"),
+            out.path("scenario.toml"),
+        );
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &result));
             if let Some(t) = &team {

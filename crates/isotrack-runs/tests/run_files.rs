@@ -1,0 +1,288 @@
+//! The run directory through the library: `summary.json`'s one type (written as before, read
+//! back with clear errors), the one results-row builder, and the one run-directory writer.
+
+use isotrack_runs::exit;
+use isotrack_runs::results::{result_cells, Column, RunRecord};
+use isotrack_runs::rundir::RunDir;
+use isotrack_runs::summary::{scenario_toml, Ended, Summary};
+use isotrack_scenario::parse_scenario;
+use isotrack_sim::{NoTrace, RunResult};
+
+/// A short run of the built-in default scenario.
+fn short_run() -> (isotrack_scenario::Scenario, RunResult) {
+    let s = parse_scenario("", "<test>", &["sim.duration_s=20.0".into()]).unwrap();
+    let r = s.run(&mut NoTrace);
+    (s, r)
+}
+
+/// The record serialises exactly as the run's result does (the keys and values `summary.json`
+/// has always had, in the same order), so a metric added to `RunResult` and not to the record
+/// fails here instead of silently leaving summary.json.
+#[test]
+fn the_record_is_the_result_as_summary_json_writes_it() {
+    let (_, r) = short_run();
+    assert_eq!(
+        serde_json::to_string_pretty(&RunRecord::of(&r)).unwrap(),
+        serde_json::to_string_pretty(&r).unwrap()
+    );
+}
+
+/// Non-finite numbers are `null` in the file (as serde writes a NaN `f64`) and `None` once read.
+#[test]
+fn non_finite_numbers_are_null_and_read_back_as_none() {
+    let (s, mut r) = short_run();
+    r.metrics.path_length_m = f64::NAN;
+    r.metrics.control_effort = f64::INFINITY;
+    r.t_end_s = f64::NEG_INFINITY;
+    let text = Summary::of_run(&s, None, &r, &[]).to_json();
+    assert!(text.contains("\"path_length_m\": null"), "{text}");
+    assert!(text.contains("\"control_effort\": null"), "{text}");
+    assert!(text.contains("\"t_end_s\": null"), "{text}");
+    assert!(text.ends_with("}\n"));
+    let back = Summary::from_json(&text).unwrap();
+    let rec = back.record().unwrap();
+    assert_eq!(rec.path_length_m, None);
+    assert_eq!(rec.control_effort, None);
+    assert_eq!(back.t_end_s(), None);
+    assert_eq!(back.scenario_path, None);
+    assert_eq!(back.outcome(), "completed");
+}
+
+/// What was written reads back as the same summary, and rendering it again gives the same text.
+#[test]
+fn a_summary_reads_back_as_written() {
+    let (s, r) = short_run();
+    let warnings = vec!["a warning".to_string()];
+    let written = Summary::of_run(&s, Some(std::path::Path::new("x.toml")), &r, &warnings);
+    let text = written.to_json();
+    let back = Summary::from_json(&text).unwrap();
+    assert_eq!(back.scenario_path.as_deref(), Some("x.toml"));
+    assert_eq!(back.isotrack_version, env!("CARGO_PKG_VERSION"));
+    match &back.ended {
+        Ended::Run(e) => {
+            assert_eq!(e.warnings, warnings);
+            assert_eq!(e.record.steps, r.steps);
+            assert_eq!(e.record.samples, r.samples);
+        }
+        Ended::Flight(_) => panic!("a run read as a flight"),
+    }
+    assert_eq!(back.ended, written.ended);
+    // The scenario read back as JSON (its keys sorted): the same values.
+    assert_eq!(back.scenario, serde_json::to_value(s.file()).unwrap());
+}
+
+/// A summary that is not one: the error says what is wrong (JSON position, missing key, type).
+#[test]
+fn a_bad_summary_is_a_clear_error() {
+    let e = Summary::from_json("{\"outcome\": \"completed\"}").unwrap_err();
+    assert!(!e.unreadable);
+    assert!(e.message.contains("missing field"), "{}", e.message);
+    let e = Summary::from_json("{\n  \"outcome\": ").unwrap_err();
+    assert!(e.message.contains("line 2"), "{}", e.message);
+    let e = Summary::from_json("[1, 2]").unwrap_err();
+    assert!(e.message.contains("not a JSON object"), "{}", e.message);
+    let (s, r) = short_run();
+    let good = Summary::of_run(&s, None, &r, &[]).to_json();
+    let bad = good.replacen("\"steps\": ", "\"steps\": \"many\", \"was\": ", 1);
+    let e = Summary::from_json(&bad).unwrap_err();
+    assert!(e.message.contains("invalid type"), "{}", e.message);
+    let dir = tempfile::tempdir().unwrap();
+    let e = Summary::read(&dir.path().join("summary.json")).unwrap_err();
+    assert!(
+        e.unreadable && e.message.contains("summary.json"),
+        "{}",
+        e.message
+    );
+}
+
+/// A flight's summary (`end_reason`) reads as a flight, with its counters.
+#[test]
+fn a_flight_summary_reads_as_a_flight() {
+    let text = r#"{"isotrack_version": "0", "scenario_path": null, "outcome": "failsafe",
+        "outcome_detail": "link lost", "end_reason": "link_lost", "failsafe": true,
+        "failsafe_acknowledged": false, "t_end_s": 12.5, "samples": 7, "commands": 3,
+        "events": ["link lost"], "frames_in": 10, "frames_out": 11, "junk_datagrams": 1,
+        "scenario": {}}"#;
+    let s = Summary::from_json(text).unwrap();
+    match &s.ended {
+        Ended::Flight(f) => {
+            assert_eq!(f.end_reason, "link_lost");
+            assert_eq!((f.samples, f.commands, f.frames_out), (7, 3, 11));
+        }
+        Ended::Run(_) => panic!("a flight read as a run"),
+    }
+    assert_eq!(s.outcome(), "failsafe");
+    assert_eq!(s.t_end_s(), Some(12.5));
+    assert!(s.record().is_none());
+}
+
+/// The row builder: a run's cells by name, an undefined number empty, an invalid run's row.
+#[test]
+fn the_row_builder_writes_cells_and_invalid_rows() {
+    let (_, mut r) = short_run();
+    r.metrics.convergence_time_s = None;
+    r.metrics.control_effort = 2.5;
+    r.metrics.path_length_m = f64::NAN;
+    let rec = RunRecord::of(&r);
+    let cols = [
+        Column::Outcome,
+        Column::ConvergenceTimeS,
+        Column::ControlEffort,
+        Column::PathLengthM,
+        Column::Samples,
+        Column::OutcomeDetail,
+    ];
+    assert_eq!(
+        result_cells(&cols, Ok(&rec)),
+        ["completed", "", "2.5", "", &r.samples.to_string(), ""]
+    );
+    assert_eq!(
+        result_cells(&cols, Err("bad key")),
+        ["invalid_scenario", "", "", "", "", "bad key"]
+    );
+    let names: Vec<&str> = cols.iter().map(|c| c.name()).collect();
+    assert_eq!(
+        names,
+        [
+            "outcome",
+            "convergence_time_s",
+            "control_effort",
+            "path_length_m",
+            "samples",
+            "outcome_detail"
+        ]
+    );
+}
+
+/// The one writer: the three files, the summary last and whole; the old summary gone before a
+/// new run starts; an input never written over (64); a FIFO refused at once (73).
+#[test]
+fn the_run_directory_writer() {
+    let (s, r0) = short_run();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("run");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("summary.json"), "old").unwrap();
+    let out = RunDir::open(&d, &[], &[], Some("run")).unwrap();
+    assert!(out.is_locked());
+    assert!(!d.join("summary.json").exists(), "the old summary stays");
+    // A second writer of the same directory is refused while the first holds it.
+    let second = RunDir::open(&d, &[], &[], Some("run")).unwrap_err();
+    assert_eq!(second.code, exit::CANTCREAT, "{}", second.message);
+    let mut trace = out.trace(false).unwrap();
+    let r = s.run(trace.writer());
+    assert_eq!(r, r0);
+    assert!(
+        !d.join("trace.csv").exists(),
+        "the trace appears whole, once finished"
+    );
+    out.finish(
+        trace,
+        &scenario_toml(&s),
+        &Summary::of_run(&s, None, &r, &[]),
+    )
+    .unwrap();
+    let trace = std::fs::read_to_string(d.join("trace.csv")).unwrap();
+    let mut lines = trace.lines();
+    assert_eq!(
+        lines.next(),
+        Some(isotrack_runs::trace::TRACE_COLUMNS.join(",").as_str())
+    );
+    assert!(lines.count() > 1);
+    let back = Summary::read(&d.join("summary.json")).unwrap();
+    assert_eq!(back.record().unwrap(), &RunRecord::of(&r));
+    assert_eq!(
+        std::fs::read_to_string(d.join("scenario.toml")).unwrap(),
+        scenario_toml(&s)
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    drop(out);
+
+    // An output that is an input: refused before anything is written.
+    let input = d.join("scenario.toml");
+    let e = RunDir::open(&d, std::slice::from_ref(&input), &[], None).unwrap_err();
+    assert_eq!(e.code, exit::USAGE, "{}", e.message);
+    assert!(d.join("summary.json").exists(), "nothing touched");
+
+    // A summary the one reader refuses is not written.
+    let out = RunDir::open(&d, &[], &[], None).unwrap();
+    let trace = out.trace(false).unwrap();
+    let e = out
+        .finish_json(trace, &scenario_toml(&s), "{\"outcome\": \"completed\"}")
+        .unwrap_err();
+    assert_eq!(e.code, exit::DATAERR, "{}", e.message);
+    assert!(!d.join("summary.json").exists());
+}
+
+/// A FIFO where a run file goes is refused at once (it would block the write for ever).
+#[cfg(unix)]
+#[test]
+fn a_fifo_in_the_run_directory_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("trace.csv");
+    let ok = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    if !ok {
+        return;
+    }
+    let e = RunDir::open(dir.path(), &[], &[], None).unwrap_err();
+    assert_eq!(e.code, exit::CANTCREAT);
+    assert!(e.message.contains("not a regular file"), "{}", e.message);
+}
+
+/// A team's summary (issue 32 through the one type): vehicle 0's record on top, then the
+/// `team` object and the `vehicles` array after `data_files` and before `scenario`; the team
+/// object's metrics are the engine's `TeamSummary` as serde writes it (so the bytes are those
+/// `summary.json` had before the one type), and the whole reads back as written.
+#[test]
+fn a_team_summary_is_vehicle_0_then_team_and_vehicles() {
+    let s = parse_scenario(
+        "[team]\ncount = 3\nspread = { along = \"arc\", center_m = [0.0, 0.0], radius_m = 6.931471805599453, start_rad = 0.0, step_rad = 0.5, clockwise = true }\nspacing = \"range_balance\"\n",
+        "<test>",
+        &["sim.duration_s=20.0".into()],
+    )
+    .unwrap();
+    let t = s
+        .run_team(&mut [] as &mut [NoTrace])
+        .expect("a team")
+        .unwrap();
+    assert_eq!(t.runs.len(), 3);
+    let summary = Summary::of_team(&s, None, &t, &[]);
+    let text = summary.to_json();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    // Vehicle 0's result on top, as a single run's would be.
+    assert_eq!(v["steps"], serde_json::json!(t.runs[0].steps));
+    assert_eq!(v["outcome"], serde_json::json!(t.runs[0].outcome.as_str()));
+    // Key order: ... warnings, team, vehicles, scenario.
+    let at = |k: &str| text.find(&format!("\n  \"{k}\":")).unwrap();
+    assert!(at("warnings") < at("team") && at("team") < at("vehicles"));
+    assert!(at("vehicles") < at("scenario"));
+    // `vehicles`: each run's result as the engine serialises it.
+    assert_eq!(v["vehicles"], serde_json::to_value(&t.runs).unwrap());
+    // `team`: the engine's team summary, after the count, law and ring.
+    let team = v["team"].as_object().unwrap();
+    assert_eq!(team["vehicle_count"], serde_json::json!(3));
+    assert_eq!(team["spacing"], serde_json::json!("range_balance"));
+    assert_eq!(team["coordinate_free"], serde_json::json!(true));
+    assert_eq!(team["neighbours"], serde_json::to_value(&t.ring).unwrap());
+    let metrics = serde_json::to_value(t.team.as_ref().expect("a radial field")).unwrap();
+    for (k, x) in metrics.as_object().unwrap() {
+        assert_eq!(&team[k], x, "team.{k}");
+    }
+    assert_eq!(team.len(), 4 + metrics.as_object().unwrap().len());
+    let back = Summary::from_json(&text).unwrap();
+    assert_eq!(back.team().unwrap().vehicle_count, 3);
+    assert_eq!(back.ended, summary.ended);
+    // One vehicle's summary has neither at its top level (its scenario keeps `[team]`).
+    let one = Summary::of_run(&s, None, &t.runs[0], &[]).to_json();
+    assert!(!one.contains("\n  \"team\":") && !one.contains("\n  \"vehicles\":"));
+    assert_eq!(Summary::from_json(&one).unwrap().team(), None);
+}

@@ -1,0 +1,864 @@
+//! Teams from Python (docs/TEAMS.md): a `[team]` scenario's run with every vehicle's trace in
+//! one table with a `vehicle` column and its `summary.json` (the `team` object and the
+//! `vehicles` array), as `isotrack run` writes them; the run directory written byte for byte as
+//! the CLI writes it; and the engine of the multi-agent environment (`isotrack.pettingzoo`),
+//! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
+//! between each step's samples and its move so that agents outside the loop can answer.
+
+use crate::{PyScenario, ScenarioErrorPy};
+use isotrack_core::math::Vec2;
+use isotrack_core::FieldDerivatives;
+use isotrack_scenario::field::FieldModel;
+use isotrack_scenario::spec::TeamSpec;
+use isotrack_scenario::{Scenario, Tracker};
+use isotrack_sim::team::arc::ArcProjection;
+use isotrack_sim::team::metrics::TeamMetricsConfig;
+use isotrack_sim::team::spacing::{RingMode, SpacingConfig};
+use isotrack_sim::team::Group;
+use isotrack_sim::{Oracles, TeamConfig, TeamMember, TeamResult, TraceRow, TraceSink};
+use isotrack_vehicles::{DubinsSpeedState, DubinsState, DubinsVariableSpeed};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::cell::RefCell;
+use std::path::Path;
+
+/// A team's trace rows, each with its vehicle's index, in the order the team records them.
+type Rows = Vec<(u32, TraceRow)>;
+
+/// One vehicle's trace sink into a team's shared row log.
+struct RowSink<'a> {
+    log: &'a RefCell<Rows>,
+    vehicle: u32,
+}
+
+impl TraceSink for RowSink<'_> {
+    fn record(&mut self, r: &TraceRow) {
+        self.log.borrow_mut().push((self.vehicle, *r));
+    }
+}
+
+fn sinks(log: &RefCell<Rows>, n: usize) -> Vec<RowSink<'_>> {
+    (0..n)
+        .map(|i| RowSink {
+            log,
+            vehicle: i as u32,
+        })
+        .collect()
+}
+
+/// `scenario` with `output.record_rate_hz` set to `rate` (as `Scenario.run` sets it).
+fn with_record_rate(scenario: &PyScenario, rate: Option<f64>) -> PyResult<Scenario> {
+    match rate {
+        None => Ok(scenario.inner.clone()),
+        Some(r) if !r.is_finite() => Err(ScenarioErrorPy::new_err(format!(
+            "`output.record_rate_hz`: {r:?} is not a finite number"
+        ))),
+        // `{:?}` of a finite f64 is a TOML float that reads back exactly.
+        Some(r) => scenario
+            .inner
+            .derive(&[format!("output.record_rate_hz={r:?}")], &scenario.origin)
+            .map_err(|e| ScenarioErrorPy::new_err(e.to_string())),
+    }
+}
+
+/// `summary.json`'s text for a team run, as `isotrack run` writes it: the top-level metrics
+/// vehicle 0's, the `team` object and the `vehicles` array.
+fn team_summary_json(s: &Scenario, origin: &str, r: &TeamResult) -> PyResult<String> {
+    let warnings = isotrack_scenario::check::warnings(s);
+    let summary = isotrack_runs::summary::Summary {
+        isotrack_version: env!("CARGO_PKG_VERSION"),
+        scenario_path: (!origin.starts_with('<')).then(|| origin.to_string()),
+        result: &r.runs[0],
+        warnings: &warnings,
+        data_files: isotrack_runs::summary::data_file_digests(s),
+        team: Some(isotrack_runs::summary::TeamJson::new(s, r)),
+        vehicles: Some(r.runs.as_slice()),
+        scenario: s.file(),
+    };
+    isotrack_runs::summary::summary_to_json(&summary)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The trace's columns as numpy arrays, named as `trace.csv`'s (`s_measured` NaN where no
+/// sample was delivered yet), `vehicle` an int64 column.
+fn team_columns<'py>(py: Python<'py>, rows: &Rows, flying: bool) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let col =
+        |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(|(_, r)| f(r)).collect() };
+    d.set_item("t_s", PyArray1::from_vec(py, col(&|r| r.t_s)))?;
+    d.set_item("x_m", PyArray1::from_vec(py, col(&|r| r.x_m)))?;
+    d.set_item("y_m", PyArray1::from_vec(py, col(&|r| r.y_m)))?;
+    d.set_item(
+        "heading_rad",
+        PyArray1::from_vec(py, col(&|r| r.heading_rad)),
+    )?;
+    d.set_item("s", PyArray1::from_vec(py, col(&|r| r.s)))?;
+    d.set_item("error", PyArray1::from_vec(py, col(&|r| r.error)))?;
+    d.set_item(
+        "omega_radps",
+        PyArray1::from_vec(py, col(&|r| r.omega_radps)),
+    )?;
+    d.set_item(
+        "s_measured",
+        PyArray1::from_vec(py, col(&|r| r.s_measured.unwrap_or(f64::NAN))),
+    )?;
+    if flying {
+        let t = |r: &TraceRow| r.telemetry.unwrap_or_default();
+        d.set_item(
+            "altitude_m",
+            PyArray1::from_vec(py, col(&|r| t(r).altitude_m)),
+        )?;
+        d.set_item(
+            "airspeed_mps",
+            PyArray1::from_vec(py, col(&|r| t(r).airspeed_mps)),
+        )?;
+        d.set_item("roll_rad", PyArray1::from_vec(py, col(&|r| t(r).roll_rad)))?;
+    }
+    let v: Vec<i64> = rows.iter().map(|(i, _)| i64::from(*i)).collect();
+    d.set_item(
+        isotrack_runs::trace::VEHICLE_COLUMN,
+        PyArray1::from_vec(py, v),
+    )?;
+    Ok(d)
+}
+
+/// Runs a `[team]` scenario: `(summary_json, trace_columns, scenario_flown)`, the trace with a
+/// `vehicle` column (`isotrack run`'s `trace.csv`, rows in its order), the summary with the
+/// `team` object and the `vehicles` array. `record_rate_hz` overrides
+/// `output.record_rate_hz`. Ctrl-C raises `KeyboardInterrupt` at once (the run, which cannot be
+/// cancelled, finishes on its own thread, its answer dropped).
+#[pyfunction]
+#[pyo3(signature = (scenario, record_rate_hz=None))]
+pub fn team_run<'py>(
+    py: Python<'py>,
+    scenario: &PyScenario,
+    record_rate_hz: Option<f64>,
+) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
+    crate::guard::no_panic(|| {
+        let s = with_record_rate(scenario, record_rate_hz)?;
+        let Some(count) = s.spec().team.as_ref().map(|t| t.count()) else {
+            return Err(PyValueError::new_err(
+                "not a team scenario (no [team] section): run it with Scenario.run()",
+            ));
+        };
+        let flown = s.clone();
+        let (result, rows) = crate::guard::detached(py, move || {
+            let log = RefCell::new(Rows::new());
+            let mut sinks = sinks(&log, count);
+            let r = flown.run_team(&mut sinks);
+            drop(sinks);
+            (r, log.into_inner())
+        })?;
+        let result = result
+            .expect("the scenario has a team")
+            .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))?;
+        let summary = team_summary_json(&s, &scenario.origin, &result)?;
+        let trace = team_columns(py, &rows, s.is_flying())?;
+        Ok((
+            summary,
+            trace,
+            PyScenario {
+                inner: s,
+                origin: scenario.origin.clone(),
+            },
+        ))
+    })
+}
+
+/// Whether the scenario has a `[team]` section.
+#[pyfunction]
+pub fn is_team(scenario: &PyScenario) -> bool {
+    scenario.inner.spec().team.is_some()
+}
+
+/// One float64 trace column, checked to have `n` rows.
+fn column<'py>(trace: &Bound<'py, PyDict>, name: &str, n: Option<usize>) -> PyResult<Vec<f64>> {
+    let v = trace
+        .get_item(name)?
+        .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
+    let a: PyReadonlyArray1<'py, f64> = v.extract()?;
+    let v = a.as_array().to_vec();
+    match n {
+        Some(n) if v.len() != n => Err(PyValueError::new_err(format!(
+            "the trace's column `{name}` has {} rows, `t_s` has {n}",
+            v.len()
+        ))),
+        _ => Ok(v),
+    }
+}
+
+/// Writes a team's run directory as `isotrack run --out` does: `trace.csv` with the `vehicle`
+/// column (numbers in the same shortest round-trip form), `summary.json` (its text) and the
+/// resolved `scenario.toml`.
+#[pyfunction]
+pub fn write_team_run(
+    dir: &str,
+    summary_json: &str,
+    scenario: &PyScenario,
+    trace: &Bound<'_, PyDict>,
+) -> PyResult<()> {
+    use isotrack_core::vehicle::Telemetry;
+    use isotrack_runs::trace::{TeamTraceSink, TraceWriter, TELEMETRY_COLUMNS};
+    let dir = Path::new(dir);
+    let io = |what: &Path, e: std::io::Error| {
+        PyOSError::new_err(format!("cannot write {}: {e}", what.display()))
+    };
+    let flying = scenario.inner.is_flying();
+    let t = column(trace, "t_s", None)?;
+    let n = Some(t.len());
+    let cols: Vec<Vec<f64>> = [
+        "x_m",
+        "y_m",
+        "heading_rad",
+        "s",
+        "error",
+        "omega_radps",
+        "s_measured",
+    ]
+    .iter()
+    .map(|c| column(trace, c, n))
+    .collect::<PyResult<_>>()?;
+    let telemetry: Option<Vec<Vec<f64>>> = flying
+        .then(|| {
+            TELEMETRY_COLUMNS
+                .iter()
+                .map(|c| column(trace, c, n))
+                .collect::<PyResult<_>>()
+        })
+        .transpose()?;
+    let vehicles: PyReadonlyArray1<'_, i64> = trace
+        .get_item(isotrack_runs::trace::VEHICLE_COLUMN)?
+        .ok_or_else(|| PyValueError::new_err("the trace has no column `vehicle`"))?
+        .extract()?;
+    let vehicles = vehicles.as_array().to_vec();
+    if vehicles.len() != t.len() {
+        return Err(PyValueError::new_err(format!(
+            "the trace's column `vehicle` has {} rows, `t_s` has {}",
+            vehicles.len(),
+            t.len()
+        )));
+    }
+    let count = vehicles.iter().copied().max().unwrap_or(-1) + 1;
+    if vehicles.iter().any(|&v| v < 0) || count > 1_000_000 {
+        return Err(PyValueError::new_err(
+            "the trace's column `vehicle` holds an index that is no vehicle's",
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let path = dir.join("trace.csv");
+    let w = RefCell::new(TraceWriter::create_team(&path, flying).map_err(|e| io(&path, e))?);
+    let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
+    for (i, &t_s) in t.iter().enumerate() {
+        let m = cols[6][i];
+        team_sinks[vehicles[i] as usize].record(&TraceRow {
+            t_s,
+            x_m: cols[0][i],
+            y_m: cols[1][i],
+            heading_rad: cols[2][i],
+            s: cols[3][i],
+            error: cols[4][i],
+            omega_radps: cols[5][i],
+            // NaN in the numpy column is "no sample yet", an empty cell in the file.
+            s_measured: (!m.is_nan()).then_some(m),
+            telemetry: telemetry.as_ref().map(|tm| Telemetry {
+                altitude_m: tm[0][i],
+                airspeed_mps: tm[1][i],
+                roll_rad: tm[2][i],
+            }),
+        });
+    }
+    drop(team_sinks);
+    w.into_inner().finish().map_err(|e| io(&path, e))?;
+    let path = dir.join("summary.json");
+    isotrack_runs::files::write_atomic(&path, format!("{summary_json}\n").as_bytes())
+        .map_err(|e| io(&path, e))?;
+    let path = dir.join("scenario.toml");
+    isotrack_runs::files::write_atomic(
+        &path,
+        isotrack_runs::summary::scenario_toml(&scenario.inner).as_bytes(),
+    )
+    .map_err(|e| io(&path, e))?;
+    Ok(())
+}
+
+/// Runs `$body` with `$f` bound to the scenario's field as its concrete type.
+macro_rules! with_field {
+    ($scenario:expr, $f:ident => $body:expr) => {
+        match $scenario.field() {
+            FieldModel::Analytic($f) => $body,
+            FieldModel::Grid($f) => $body,
+            FieldModel::Puff(p) => {
+                let $f = &**p;
+                $body
+            }
+            FieldModel::Series(s) => {
+                let $f = &**s;
+                $body
+            }
+        }
+    };
+}
+
+/// The turn-rate bound of the action space when the scenario has no limit, rad/s (as the
+/// single-vehicle environment's).
+const DEFAULT_MAX_TURN_RATE_RADPS: f64 = 1.0;
+
+/// Observation entries per agent: `[eps_m, deps_m, r_ahead_m, ahead_valid, r_behind_m,
+/// behind_valid]`.
+pub const OBS_LEN: usize = 6;
+
+/// Per agent, what it has been told so far.
+#[derive(Clone, Copy, Debug, Default)]
+struct Agent {
+    obs: [f64; OBS_LEN],
+    /// Time of its last sample, s (`None` before the first).
+    t_s: Option<f64>,
+    /// The built-in law's last answer (rad/s) and whether this pause has a sample.
+    builtin_omega: f64,
+    sampled: bool,
+    /// The turn rate it flies, rad/s (for the effort term).
+    omega: f64,
+    /// Whether it has been reported done.
+    done: bool,
+}
+
+/// The engine of `isotrack.pettingzoo`: a team stepped by agents outside the loop. Each env
+/// step is `period` engine steps (the greatest common divisor of the sensor period, the
+/// ranging period and the ranging delay, in steps): every sample and every range delivery
+/// falls on a pause, so an agent that answers as the built-in laws answer flies the run
+/// `Scenario.run()` flies, bit for bit.
+#[pyclass(name = "TeamEnv", module = "isotrack._native", unsendable)]
+pub struct PyTeamEnv {
+    scenario: Scenario,
+    vehicle: DubinsVariableSpeed,
+    group: Option<Group<'static, DubinsSpeedState, Tracker>>,
+    result: Option<TeamResult>,
+    log: Rows,
+    agents: Vec<Agent>,
+    period: u64,
+    level: f64,
+    max_turn_rate_radps: f64,
+    error_scale: f64,
+    spacing_weight: f64,
+    effort_weight: f64,
+    record: bool,
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+fn check_weight(name: &str, v: f64) -> PyResult<f64> {
+    if v.is_finite() && v >= 0.0 && (v == 0.0 || v.is_normal()) {
+        Ok(v)
+    } else {
+        Err(PyValueError::new_err(format!(
+            "{name} must be finite and >= 0 (0 or not subnormal), got {v:?}"
+        )))
+    }
+}
+
+#[pymethods]
+impl PyTeamEnv {
+    #[new]
+    #[pyo3(signature = (scenario, max_turn_rate_radps=None, error_scale=None, spacing_weight=1.0, effort_weight=0.01, record=true))]
+    fn new(
+        scenario: &PyScenario,
+        max_turn_rate_radps: Option<f64>,
+        error_scale: Option<f64>,
+        spacing_weight: f64,
+        effort_weight: f64,
+        record: bool,
+    ) -> PyResult<Self> {
+        let s = scenario.inner.clone();
+        let Some(team) = s.spec().team.as_ref() else {
+            return Err(PyValueError::new_err(
+                "not a team scenario (no [team] section): the single-vehicle environment is isotrack.gym",
+            ));
+        };
+        if matches!(team.ring, RingMode::Discover(_)) {
+            return Err(PyValueError::new_err(
+                "team.ring = \"discovered\": the environment's agents need a ring fixed at deployment \
+                 (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
+            ));
+        }
+        let omax = max_turn_rate_radps
+            .or(s.max_turn_rate_radps())
+            .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
+        if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
+            return Err(PyValueError::new_err(format!(
+                "max_turn_rate_radps must be finite and > 0, got {omax:?}"
+            )));
+        }
+        let scale = error_scale
+            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
+            .unwrap_or(1.0);
+        if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
+            return Err(PyValueError::new_err(format!(
+                "error_scale must be finite and > 0, got {scale:?}"
+            )));
+        }
+        let spacing_weight = check_weight("spacing_weight", spacing_weight)?;
+        let effort_weight = check_weight("effort_weight", effort_weight)?;
+        let vehicle = DubinsVariableSpeed {
+            min_speed_mps: team.v_min_mps,
+            max_speed_mps: team.v_max_mps,
+        };
+        let n = team.count();
+        let mut env = Self {
+            level: s.level(),
+            scenario: s,
+            vehicle,
+            group: None,
+            result: None,
+            log: Rows::new(),
+            agents: vec![Agent::default(); n],
+            period: 1,
+            max_turn_rate_radps: omax,
+            error_scale: scale,
+            spacing_weight,
+            effort_weight,
+            record,
+        };
+        // A first team, to check the settings and find the period.
+        let g = env.build(None)?;
+        let (r_every, r_delay) = g.ranging_steps();
+        let s_every = env.scenario.sensor().steps_per_sample();
+        env.period = gcd(gcd(s_every, r_every), r_delay).max(1);
+        Ok(env)
+    }
+
+    /// Number of agents (vehicles).
+    #[getter]
+    fn num_agents(&self) -> usize {
+        self.agents.len()
+    }
+
+    /// The turn-rate bound of the action, rad/s.
+    #[getter]
+    fn max_turn_rate_radps(&self) -> f64 {
+        self.max_turn_rate_radps
+    }
+
+    /// The speed envelope `(v_min, v_max)`, m/s.
+    #[getter]
+    fn speed_range_mps(&self) -> (f64, f64) {
+        (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps)
+    }
+
+    /// Engine steps per environment step.
+    #[getter]
+    fn period_steps(&self) -> u64 {
+        self.period
+    }
+
+    /// The engine's step, s.
+    #[getter]
+    fn dt_s(&self) -> f64 {
+        self.scenario.plan().dt_s
+    }
+
+    /// The reward's error scale (field units).
+    #[getter]
+    fn error_scale(&self) -> f64 {
+        self.error_scale
+    }
+
+    /// Starts a new episode (the sensors' and ranging units' streams seeded as `sim.seed =
+    /// seed` seeds them; the scenario's `sim.seed` if `None`) and runs to the first pause:
+    /// `(obs[n, 6], builtin[n, 2], sampled[n], t_s)`.
+    #[pyo3(signature = (seed=None))]
+    #[allow(clippy::type_complexity)]
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: Option<u64>,
+    ) -> PyResult<(
+        Bound<'py, PyAny>,
+        Bound<'py, PyAny>,
+        Bound<'py, PyArray1<bool>>,
+        f64,
+    )> {
+        crate::guard::no_panic(|| {
+            self.group = Some(self.build(seed)?);
+            self.result = None;
+            self.log.clear();
+            self.agents.iter_mut().for_each(|a| *a = Agent::default());
+            self.run_to_pause();
+            self.observe();
+            let (b, s) = self.builtin(py)?;
+            Ok((self.obs(py)?, b, s, self.t_s()))
+        })
+    }
+
+    /// Steps with every agent's `(turn rate, speed)` (`turn[n]`, rad/s, `speed[n]`, m/s;
+    /// `given[n]`: which agents act, the others' held): `(obs[n, 6], reward[n],
+    /// terminated[n], truncated[n], builtin[n, 2], sampled[n], t_s)`. A turn rate takes effect
+    /// at the agent's sample (none this step: its command is held, as a built-in law's is); a
+    /// speed from this step on.
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        turn: PyReadonlyArray1<'py, f64>,
+        speed: PyReadonlyArray1<'py, f64>,
+        given: PyReadonlyArray1<'py, bool>,
+    ) -> PyResult<(
+        Bound<'py, PyAny>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyArray1<bool>>,
+        Bound<'py, PyAny>,
+        Bound<'py, PyArray1<bool>>,
+        f64,
+    )> {
+        let (turn, speed, given) = (turn.as_slice()?, speed.as_slice()?, given.as_slice()?);
+        let n = self.agents.len();
+        if turn.len() != n || speed.len() != n || given.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "expected {n} turn rates, speeds and flags, got {}, {} and {}",
+                turn.len(),
+                speed.len(),
+                given.len()
+            )));
+        }
+        let Some(g) = self.group.as_mut() else {
+            return Err(PyValueError::new_err(
+                "the episode has ended (or was never reset): call reset()",
+            ));
+        };
+        let (omax, (vlo, vhi)) = (
+            self.max_turn_rate_radps,
+            (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps),
+        );
+        for i in 0..n {
+            if !given[i] || !g.is_vehicle_running(i) {
+                continue;
+            }
+            // The Python side has checked finiteness and the (float32) bounds; the last
+            // rounding of a float32 bound is clipped here.
+            let (w, v) = (turn[i].clamp(-omax, omax), speed[i].clamp(vlo, vhi));
+            if g.replace_answer(i, w) {
+                self.agents[i].omega = w;
+            }
+            g.hold_speed(i, v);
+        }
+        crate::guard::no_panic(|| {
+            let mut rewards = vec![0.0; n];
+            let mut terminated = vec![false; n];
+            let mut truncated = vec![false; n];
+            self.advance();
+            self.run_to_pause();
+            self.observe();
+            let running = self.group.as_ref().is_some_and(|g| g.is_running());
+            for i in 0..n {
+                if self.agents[i].done {
+                    continue;
+                }
+                rewards[i] = self.reward(i);
+                let outcome = self.outcome(i);
+                match outcome {
+                    Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
+                    Some(_) => terminated[i] = true,
+                    None if !running => truncated[i] = true,
+                    None => {}
+                }
+                self.agents[i].done = terminated[i] || truncated[i];
+            }
+            if !running {
+                self.finish();
+            }
+            let (b, s) = self.builtin(py)?;
+            Ok((
+                self.obs(py)?,
+                PyArray1::from_vec(py, rewards),
+                PyArray1::from_vec(py, terminated),
+                PyArray1::from_vec(py, truncated),
+                b,
+                s,
+                self.t_s(),
+            ))
+        })
+    }
+
+    /// Vehicle `i`'s true position `(x_m, y_m)` at the last pause (ground truth for rendering
+    /// and logs; never part of an observation).
+    fn position(&self, i: usize) -> PyResult<(f64, f64)> {
+        let g = self
+            .group
+            .as_ref()
+            .ok_or_else(|| PyValueError::new_err("no episode running"))?;
+        if i >= g.len() {
+            return Err(PyValueError::new_err(format!("no vehicle {i}")));
+        }
+        let (p, _) = g.sensed_truth(i);
+        Ok((p.x, p.y))
+    }
+
+    /// The trace recorded so far (the columns of `Scenario.run()`'s team trace; after the
+    /// episode's end its last rows too).
+    fn trace<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        team_columns(py, &self.log, self.scenario.is_flying())
+    }
+
+    /// Once the episode has ended: its `summary.json` text (as `Scenario.run()`'s; `None`
+    /// before the end).
+    fn summary_json(&self) -> PyResult<Option<String>> {
+        self.result
+            .as_ref()
+            .map(|r| team_summary_json(&self.scenario, "<env>", r))
+            .transpose()
+    }
+}
+
+impl PyTeamEnv {
+    /// A team at step 0, as `Scenario::run_team` builds it (sensor and ranging seeds from
+    /// `seed`, else `sim.seed`).
+    fn build(&self, seed: Option<u64>) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
+        let s = &self.scenario;
+        let team = s.spec().team.as_ref().expect("checked: a team scenario");
+        let seed = seed.unwrap_or(s.spec().sim.seed);
+        let vehicle = self.vehicle;
+        let members = team
+            .starts
+            .iter()
+            .enumerate()
+            .map(|(i, st)| TeamMember {
+                x0: vehicle.state(
+                    DubinsState {
+                        position_m: Vec2::new(st.x_m, st.y_m),
+                        heading_rad: st.heading_rad,
+                    },
+                    team.nominal_speed_mps,
+                ),
+                controller: s.tracker(),
+                sensor: s.sensor_seeded(TeamSpec::sensor_seed(seed, i)),
+                ranging_seed: TeamSpec::ranging_seed(seed, i),
+            })
+            .collect();
+        let cfg = TeamConfig {
+            ranging: team.ranging,
+            spacing: SpacingConfig {
+                law: team.law,
+                nominal_speed_mps: team.nominal_speed_mps,
+                ring: team.ring,
+            },
+            metrics: TeamMetricsConfig::default(),
+        };
+        let arc = s
+            .team_arc()
+            .map(|a| Box::new(a) as Box<dyn ArcProjection + Send>);
+        Group::new_owning_arc(&vehicle, &s.plan(), cfg, members, arc)
+            .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))
+    }
+
+    /// Senses steps (each completed and moved, the commands held) until one that is a pause
+    /// (a multiple of the period), which is left sensed, or until the team has stopped.
+    fn run_to_pause(&mut self) {
+        let s = self.scenario.clone();
+        let vehicle = self.vehicle;
+        let period = self.period;
+        let n = self.agents.len();
+        let log = RefCell::new(std::mem::take(&mut self.log));
+        if let Some(g) = self.group.as_mut() {
+            let mut sinks = if self.record {
+                sinks(&log, n)
+            } else {
+                Vec::new()
+            };
+            with_field!(s, field => {
+                let iso = s.isoline();
+                let dist = |t: f64, p: Vec2| iso.distance(t, p);
+                let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
+                let oracles = Oracles {
+                    isoline_distance: Some(&dist),
+                    gradient: Some(&grad),
+                };
+                while g.is_running() {
+                    g.sense(field, &vehicle, &oracles, &mut sinks);
+                    if g.step_index() % period == 0 {
+                        break;
+                    }
+                    g.advance(&vehicle, &oracles, &mut sinks);
+                }
+            });
+        }
+        self.log = log.into_inner();
+    }
+
+    /// Completes the paused step and moves.
+    fn advance(&mut self) {
+        let s = self.scenario.clone();
+        let vehicle = self.vehicle;
+        let n = self.agents.len();
+        let log = RefCell::new(std::mem::take(&mut self.log));
+        if let Some(g) = self.group.as_mut() {
+            let mut sinks = if self.record {
+                sinks(&log, n)
+            } else {
+                Vec::new()
+            };
+            with_field!(s, field => {
+                let iso = s.isoline();
+                let dist = |t: f64, p: Vec2| iso.distance(t, p);
+                let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
+                let oracles = Oracles {
+                    isoline_distance: Some(&dist),
+                    gradient: Some(&grad),
+                };
+                if g.is_running() {
+                    g.advance(&vehicle, &oracles, &mut sinks);
+                }
+            });
+        }
+        self.log = log.into_inner();
+    }
+
+    /// Ends the team run: its result, the trace's last rows.
+    fn finish(&mut self) {
+        let Some(g) = self.group.take() else { return };
+        let n = self.agents.len();
+        let log = RefCell::new(std::mem::take(&mut self.log));
+        let mut sinks = if self.record {
+            sinks(&log, n)
+        } else {
+            Vec::new()
+        };
+        let r = g.finish(&mut sinks);
+        drop(sinks);
+        self.log = log.into_inner();
+        self.result = Some(TeamResult {
+            runs: r
+                .runs
+                .into_iter()
+                .map(|x| self.scenario.explain_end(x))
+                .collect(),
+            ..r
+        });
+    }
+
+    /// Updates each agent's observation from the paused step's samples and range deliveries.
+    fn observe(&mut self) {
+        let Some(g) = self.group.as_ref().filter(|g| g.is_running()) else {
+            return;
+        };
+        let level = self.level;
+        for (i, a) in self.agents.iter_mut().enumerate() {
+            a.sampled = false;
+            if let Some((m, w)) = g.sampled(i) {
+                let eps = m.value - level;
+                let deps = match a.t_s {
+                    Some(t0) if m.t_s > t0 => (eps - a.obs[0]) / (m.t_s - t0),
+                    _ => 0.0,
+                };
+                a.obs[0] = eps;
+                a.obs[1] = deps;
+                a.t_s = Some(m.t_s);
+                a.builtin_omega = w;
+                a.sampled = true;
+            }
+            if let Some(r) = g.delivered_ranges(i) {
+                let f = |x: isotrack_sim::team::ranging::Range| {
+                    if x.valid {
+                        (x.range_m, 1.0)
+                    } else {
+                        (0.0, 0.0)
+                    }
+                };
+                (a.obs[2], a.obs[3]) = f(r.ahead);
+                (a.obs[4], a.obs[5]) = f(r.behind);
+            }
+        }
+    }
+
+    /// Agent `i`'s reward at the pause: `-|eps_i| / error_scale - spacing_weight *
+    /// ((d_ahead - d_behind) / (d_ahead + d_behind))^2 - effort_weight * (omega_i /
+    /// omega_max)^2`, with the true error and true distances to its ring neighbours.
+    fn reward(&self, i: usize) -> f64 {
+        let a = &self.agents[i];
+        let effort = self.effort_weight * (a.omega / self.max_turn_rate_radps).powi(2).min(1.0);
+        let Some(g) = self.group.as_ref() else {
+            return -effort;
+        };
+        let (p, value) = g.sensed_truth(i);
+        let tracking = if value.is_finite() {
+            (value - self.level).abs() / self.error_scale
+        } else {
+            0.0
+        };
+        let spacing = match g.neighbours(i) {
+            Some([ahead, behind]) => {
+                let da = (g.sensed_truth(ahead as usize).0 - p).norm();
+                let db = (g.sensed_truth(behind as usize).0 - p).norm();
+                let sum = da + db;
+                if sum > 0.0 && sum.is_finite() {
+                    ((da - db) / sum).powi(2)
+                } else {
+                    0.0
+                }
+            }
+            None => 0.0,
+        };
+        -tracking - self.spacing_weight * spacing - effort
+    }
+
+    fn outcome(&self, i: usize) -> Option<isotrack_sim::Outcome> {
+        match (&self.group, &self.result) {
+            (Some(g), _) => g.outcome(i),
+            (None, Some(r)) => Some(r.runs[i].outcome),
+            _ => None,
+        }
+    }
+
+    fn t_s(&self) -> f64 {
+        match &self.group {
+            Some(g) => g.step_index() as f64 * g.plan().dt_s,
+            None => self.scenario.spec().sim.duration_s,
+        }
+    }
+
+    fn obs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v: Vec<f64> = self.agents.iter().flat_map(|a| a.obs).collect();
+        Ok(PyArray1::from_vec(py, v)
+            .reshape([self.agents.len(), OBS_LEN])?
+            .into_any())
+    }
+
+    /// The built-in laws' actions at the pause, `[n, 2]` of `(turn rate, speed)` (the tracking
+    /// law's answer to the sample, or its held command without one; the spacing law's speed
+    /// saturated to the envelope), and which agents have a sample.
+    fn builtin<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyArray1<bool>>)> {
+        let (lo, hi) = (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps);
+        let mut v = Vec::with_capacity(2 * self.agents.len());
+        for (i, a) in self.agents.iter().enumerate() {
+            let speed = match &self.group {
+                Some(g) => {
+                    let s = g.law_speed_mps(i);
+                    if s.is_nan() {
+                        lo
+                    } else {
+                        s.clamp(lo, hi)
+                    }
+                }
+                None => lo,
+            };
+            v.extend([a.builtin_omega, speed]);
+        }
+        let sampled: Vec<bool> = self.agents.iter().map(|a| a.sampled).collect();
+        Ok((
+            PyArray1::from_vec(py, v)
+                .reshape([self.agents.len(), 2])?
+                .into_any(),
+            PyArray1::from_vec(py, sampled),
+        ))
+    }
+}

@@ -1,0 +1,373 @@
+"""Teams from Python (issue 32 item 7, docs/TEAMS.md): Scenario.run() of a [team] scenario (the
+trace with its `vehicle` column, run.vehicles, run.team), Run.save byte for byte as
+`isotrack run --out`, and the PettingZoo ParallelEnv (its API test, the built-in laws fed back
+reproducing Scenario.run() exactly, bad actions refused, determinism)."""
+
+import math
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import isotrack
+
+ROOT = Path(__file__).resolve().parents[2]
+TEAM = ROOT / "scenarios" / "team-circular-4.toml"
+#: The level-10 isoline of the circular field: R = ln(20/10)/0.1 (the scenario's header).
+RADIUS_M = 10.0 * math.log(2.0)
+
+
+def cli():
+    exe = os.environ.get("ISOTRACK_BIN", str(ROOT / "target" / "release" / "isotrack"))
+    if not os.path.exists(exe):
+        pytest.skip("the isotrack binary is not built (cargo build --release -p isotrack-cli)")
+    return exe
+
+
+def short_team(duration_s=20.0):
+    """The bundled four-robot team, shorter, its tracking law's turn rate limited (so that the
+    built-in answers lie inside the environment's action space), the sensor at 10 Hz and noisy,
+    the ranging noisy, lossy and late: every path of the step is used."""
+    s = isotrack.Scenario.from_file(str(TEAM))
+    for k, v in [
+        ("sim.duration_s", duration_s),
+        ("controller.max_turn_rate_radps", 1.0),
+        ("sensor.rate_hz", 10.0),
+        ("sensor.noise_std", 0.01),
+        ("team.ranging.noise_std_m", 0.05),
+        ("team.ranging.dropout_probability", 0.2),
+        ("team.ranging.delay_s", 0.2),
+    ]:
+        s = s.set(k, v)
+    return s
+
+
+def same(a, b):
+    """Equal arrays, bit for bit (NaN where the other has NaN)."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a.shape != b.shape or a.dtype != b.dtype:
+        return False
+    if a.dtype.kind == "f":
+        return bool(np.array_equal(a.view(np.uint64), b.view(np.uint64)))
+    return bool(np.array_equal(a, b))
+
+
+# --- Scenario.run() of a team -------------------------------------------------------------------
+
+
+def test_team_run_has_every_vehicle_and_the_team_metrics():
+    run = isotrack.Scenario.from_file(str(TEAM)).run()
+    tr = run.trace
+    assert tr["vehicle"].dtype == np.int64
+    assert sorted(set(tr["vehicle"].tolist())) == [0, 1, 2, 3]
+    vs = run.vehicles
+    assert len(vs) == 4
+    for v in vs:
+        assert v["outcome"] == "completed"
+    # Top-level metrics are vehicle 0's (as summary.json's).
+    assert run.summary["steady_state_max_abs_error"] == vs[0]["steady_state_max_abs_error"]
+    # The starts: the arc spread, start i at angle -0.3 i on the circle of radius R (clockwise),
+    # heading along the travel (clockwise: angle - pi/2).
+    for i in range(4):
+        t = run.vehicle_trace(i)
+        th = -0.3 * i
+        assert t["t_s"][0] == 0.0
+        assert abs(t["x_m"][0] - RADIUS_M * math.cos(th)) < 1e-12
+        assert abs(t["y_m"][0] - RADIUS_M * math.sin(th)) < 1e-12
+        assert abs(math.remainder(t["heading_rad"][0] - (th - math.pi / 2), 2 * math.pi)) < 1e-12
+        assert "vehicle" not in t
+    # Each recorded step holds vehicle 0's row, then 1's, ... (the CLI's order).
+    assert tr["vehicle"][:8].tolist() == [0, 1, 2, 3, 0, 1, 2, 3]
+    team = run.team
+    assert team["vehicle_count"] == 4
+    assert team["spacing"] == "range_balance" and team["coordinate_free"] is True
+    m = team
+    # range_balance spreads the cluster: the issue's target, and the ideal revisit time
+    # L / (N v0) = 2 pi R / (4 * 0.5).
+    assert m["gap_cv"] < 0.05
+    assert abs(m["revisit_time_ideal_s"] - 2 * math.pi * RADIUS_M / (4 * 0.5)) < 1e-9
+    # The listed ring: ahead i+1, behind i-1.
+    assert team["neighbours"] == [[(i + 1) % 4, (i + 3) % 4] for i in range(4)]
+
+
+def test_single_vehicle_runs_are_unchanged():
+    run = isotrack.Scenario.default().set("sim.duration_s", 5.0).run()
+    assert "vehicle" not in run.trace
+    assert run.team is None and run.vehicles is None
+    with pytest.raises(ValueError, match="not a team"):
+        run.vehicle_trace(0)
+
+
+def test_team_run_refuses_a_python_controller():
+    class C:
+        def update(self, t, v):
+            return 0.0
+
+    with pytest.raises(ValueError, match="team"):
+        short_team().run(controller=C())
+
+
+def test_team_run_save_is_byte_identical_to_the_cli(tmp_path):
+    exe = cli()
+    sets = ["sim.duration_s=40", "team.ranging.noise_std_m=0.05", "team.ranging.dropout_probability=0.1"]
+    cmd = [exe, "run", str(TEAM), "--quiet", "--out", str(tmp_path / "cli")]
+    for s in sets:
+        cmd += ["--set", s]
+    subprocess.run(cmd, check=True, capture_output=True)
+    sc = isotrack.Scenario.from_file(str(TEAM))
+    for s in sets:
+        k, v = s.split("=")
+        sc = sc.set(k, float(v))
+    run = sc.run()
+    run.save(tmp_path / "py")
+    for f in ("trace.csv", "summary.json", "scenario.toml"):
+        a = (tmp_path / "cli" / f).read_bytes()
+        b = (tmp_path / "py" / f).read_bytes()
+        assert a == b, f
+    header = (tmp_path / "py" / "trace.csv").read_text().splitlines()[0]
+    assert header.endswith(",vehicle")
+
+
+def test_team_run_pickles_and_saves_again(tmp_path):
+    import pickle
+
+    run = short_team(5.0).run()
+    back = pickle.loads(pickle.dumps(run))
+    assert same(back.trace["vehicle"], run.trace["vehicle"])
+    run.save(tmp_path / "a")
+    back.save(tmp_path / "b")
+    assert (tmp_path / "a" / "trace.csv").read_bytes() == (tmp_path / "b" / "trace.csv").read_bytes()
+
+
+# --- The PettingZoo environment -----------------------------------------------------------------
+
+@pytest.fixture
+def ipz():
+    """isotrack.pettingzoo (skipped without pettingzoo; CI installs it)."""
+    pytest.importorskip("pettingzoo")
+    import isotrack.pettingzoo as m
+
+    return m
+
+
+def drive_builtin(env, seed=None):
+    obs, infos = env.reset(seed=seed)
+    steps = 0
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: infos[a]["builtin_action"] for a in env.agents})
+        steps += 1
+    return steps
+
+
+def test_parallel_api_test_passes(ipz):
+    from pettingzoo.test import parallel_api_test
+
+    env = ipz.parallel_env(short_team(10.0))
+    parallel_api_test(env, num_cycles=200)
+
+
+def test_the_builtin_laws_fed_back_fly_scenario_run_exactly(ipz):
+    sc = short_team(20.0)
+    env = ipz.parallel_env(sc)
+    # sensor 10 Hz (10 steps), ranging 10 Hz (10 steps), delay 0.2 s (20 steps): gcd 10.
+    assert env.period_steps == 10
+    steps = drive_builtin(env)
+    # 20 s of 0.01 s steps, 10 a step: pauses at 0, 10, ..., 2000: 201 pauses, 201 steps.
+    assert steps == 201
+    run = sc.run()
+    got = env.trace()
+    assert list(got) == list(run.trace)
+    for k in run.trace:
+        assert same(got[k], run.trace[k]), k
+    summary = env.summary()
+    assert summary["vehicles"] == run.summary["vehicles"]
+    assert summary["team"] == run.summary["team"]
+
+
+def test_a_seed_flies_as_sim_seed_does(ipz):
+    sc = short_team(10.0)
+    env = ipz.parallel_env(sc)
+    drive_builtin(env, seed=7)
+    run = sc.set("sim.seed", 7).run()
+    other = sc.run()
+    for k in run.trace:
+        assert same(env.trace()[k], run.trace[k]), k
+    # The seed matters (noise and dropouts differ): not the scenario's own run.
+    assert not same(env.trace()["s_measured"], other.trace["s_measured"])
+
+
+def test_first_observation_is_the_measured_error_and_the_true_chords(ipz):
+    # Ideal ranging, no sensor noise: the first ranges are the chords of the cluster on the
+    # circle, 2 R sin(0.3 / 2) to each neighbour in the cluster, the end vehicles' long way round
+    # 2 R sin((2 pi - 0.9) / 2) (vehicle 0's neighbour behind is 3).
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 5.0).set("controller.max_turn_rate_radps", 1.0)
+    env = ipz.parallel_env(sc)
+    obs, infos = env.reset()
+    near = 2 * RADIUS_M * math.sin(0.15)
+    far = 2 * RADIUS_M * math.sin((2 * math.pi - 0.9) / 2)
+    for i in range(4):
+        o = obs[f"vehicle_{i}"]
+        assert o.shape == (6,) and o.dtype == np.float64
+        # On the isoline: s = 10 = s_d up to rounding; deps 0 at the first sample.
+        assert abs(o[0]) < 1e-12 and o[1] == 0.0
+        ahead = far if i == 3 else near
+        behind = far if i == 0 else near
+        assert abs(o[2] - ahead) < 1e-9 and o[3] == 1.0
+        assert abs(o[4] - behind) < 1e-9 and o[5] == 1.0
+        assert infos[f"vehicle_{i}"]["sampled"] is True
+
+
+def test_out_of_range_neighbours_read_invalid(ipz):
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 5.0).set("team.ranging.max_range_m", 5.0)
+    env = ipz.parallel_env(sc, max_turn_rate_radps=2.0)
+    obs, _ = env.reset()
+    # Vehicle 0's neighbour behind (3) is 2 R sin((2 pi - 0.9) / 2) = 6.0 m away: beyond 5 m, no
+    # answer; its neighbour ahead, 2 R sin(0.15) = 2.1 m, answers.
+    assert obs["vehicle_0"][4] == 0.0 and obs["vehicle_0"][5] == 0.0
+    assert obs["vehicle_0"][3] == 1.0
+
+
+def test_bad_actions_raise_and_step_nothing(ipz):
+    env = ipz.parallel_env(short_team(5.0))
+    obs, infos = env.reset()
+    good = {a: infos[a]["builtin_action"] for a in env.agents}
+    bad_cases = [
+        (np.zeros(3), ValueError),  # wrong shape
+        (np.zeros((2, 1)), ValueError),  # never reshaped
+        (np.array([np.nan, 0.5]), ValueError),
+        (np.array([0.0, np.inf]), ValueError),
+        (np.array([1.5, 0.5]), ValueError),  # turn beyond 1 rad/s
+        (np.array([0.0, 0.1]), ValueError),  # speed below v_min = 0.25
+        (np.array([0.0, 0.9]), ValueError),  # speed above v_max = 0.75
+        (np.array([True, False]), TypeError),
+        ("0.1", TypeError),
+        (None, TypeError),
+    ]
+    for action, err in bad_cases:
+        with pytest.raises(err):
+            env.step({**good, "vehicle_2": action})
+    with pytest.raises(KeyError):
+        env.step({a: v for a, v in good.items() if a != "vehicle_1"})
+    with pytest.raises(KeyError):
+        env.step({**good, "vehicle_9": good["vehicle_0"]})
+    # Nothing was stepped: the environment still flies the built-in run exactly.
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: infos[a]["builtin_action"] for a in env.agents})
+    run = short_team(5.0).run()
+    for k in run.trace:
+        assert same(env.trace()[k], run.trace[k]), k
+    # A float32 sample of the action space is always accepted (its rounded bounds included).
+    env.reset()
+    space = env.action_space("vehicle_0")
+    env.step({a: space.high.copy() for a in env.agents})
+    env.step({a: space.low.copy() for a in env.agents})
+
+
+def test_deterministic_with_seeds(ipz):
+    def episode():
+        env = ipz.parallel_env(short_team(5.0))
+        rng = np.random.default_rng(3)
+        obs, _ = env.reset(seed=11)
+        out = [np.stack([obs[a] for a in sorted(obs)])]
+        while env.agents:
+            acts = {a: np.array([rng.uniform(-0.3, 0.3), rng.uniform(0.3, 0.7)]) for a in env.agents}
+            obs, rew, term, trunc, _ = env.step(acts)
+            out.append(np.stack([obs[a] for a in sorted(obs)]))
+            out.append(np.array([rew[a] for a in sorted(rew)]))
+        return out
+
+    a, b = episode(), episode()
+    assert len(a) == len(b)
+    assert all(same(x, y) for x, y in zip(a, b))
+
+
+def test_speed_actions_set_the_speed(ipz):
+    # Every robot commanded to v_max: each covers v_max * dt per step (the Dubins kinematics), so
+    # over the run the path is v_max * duration for all, whatever the spacing law says.
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 10.0).set("controller.max_turn_rate_radps", 1.0)
+    env = ipz.parallel_env(sc)
+    obs, infos = env.reset()
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step(
+            {a: np.array([infos[a]["builtin_action"][0], 0.75]) for a in env.agents}
+        )
+    # (The path sums each step's chord: shorter than the arc by a relative (omega dt)^2 / 24.)
+    for v in env.summary()["vehicles"]:
+        assert abs(v["path_length_m"] / (0.75 * 10.0) - 1.0) < 1e-6
+
+
+def test_rewards_are_the_documented_sum(ipz):
+    # Ideal sensor on the isoline, zero turn command at the first step: the reward is the
+    # spacing imbalance only, ((d_a - d_b) / (d_a + d_b))^2 times the weight, plus the tracking
+    # error after one step (tiny) and no effort. Vehicle 1 is in the middle of the cluster:
+    # balanced (0); vehicle 0 has the far neighbour behind.
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 5.0).set("controller.max_turn_rate_radps", 1.0)
+    env = ipz.parallel_env(sc, spacing_weight=2.0, effort_weight=0.0)
+    obs, infos = env.reset()
+    obs, rew, *_ = env.step({a: np.array([0.0, 0.5]) for a in env.agents})
+    assert abs(rew["vehicle_1"]) < 1e-3
+    near = 2 * RADIUS_M * math.sin(0.15)
+    far = 2 * RADIUS_M * math.sin((2 * math.pi - 0.9) / 2)
+    expected = -2.0 * ((near - far) / (near + far)) ** 2
+    assert abs(rew["vehicle_0"] - expected) < 2e-3
+
+
+def test_a_scenario_without_a_team_is_refused(ipz):
+    with pytest.raises(ValueError, match="team"):
+        ipz.parallel_env(isotrack.Scenario.default())
+    with pytest.raises(ValueError, match="discovered"):
+        ipz.parallel_env(isotrack.Scenario.from_file(str(TEAM)).set("team.ring", "discovered").set("sim.duration_s", 400.0))
+
+
+def test_ctrl_c_stops_a_long_team_run():
+    """A SIGINT 0.3 s into a team run that takes seconds is answered within 2 s (the run
+    finishes on its own thread, its answer dropped)."""
+    import signal
+    import threading
+    import time
+
+    sc = isotrack.Scenario.from_file(str(TEAM)).set("sim.duration_s", 30000.0).set("output.record_rate_hz", 0.0)
+    t0 = time.monotonic()
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sc.run()
+    finally:
+        timer.cancel()
+    assert time.monotonic() - t0 < 2.0
+
+
+def test_an_agent_that_leaves_the_field_is_terminated_and_removed(ipz):
+    # The kriged NO2 map of Fig. 2(a): a grid over x in [-24, 24] m, y in [-21, 21] m. Vehicle 0
+    # starts 1 m below its top edge heading out at v_max = 2 v0 = 1 m/s: it leaves the field
+    # after about 1 s; vehicle 1 starts at the centre heading +x and flies the 10 s out.
+    text = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    text = text.replace('path = "../data/', f'path = "{ROOT}/data/')
+    text = text.replace("duration_s = 600.0", "duration_s = 10.0")
+    text += (
+        "\n[team]\ncount = 2\nspacing = \"none\"\n"
+        "starts = [{x_m = 0.0, y_m = 20.0, heading_rad = 1.5707963267948966},"
+        " {x_m = 0.0, y_m = 0.0, heading_rad = 0.0}]\n"
+    )
+    sc = isotrack.Scenario.from_toml(text).set("controller.max_turn_rate_radps", 1.0)
+    env = ipz.parallel_env(sc)
+    obs, infos = env.reset()
+    ended = {}
+    steps = 0
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: np.array([0.0, 1.0]) for a in env.agents})
+        steps += 1
+        for a in term:
+            if term[a] or trunc[a]:
+                ended[a] = ("terminated" if term[a] else "truncated", steps)
+                assert a not in env.agents
+    assert ended["vehicle_0"][0] == "terminated"
+    assert ended["vehicle_1"] == ("truncated", steps)
+    v = env.summary()["vehicles"]
+    assert v[0]["outcome"] == "left_field" and v[1]["outcome"] == "completed"
+    assert 0.9 < v[0]["t_end_s"] < 1.1, v[0]["t_end_s"]
+    with pytest.raises(ValueError, match="no agent is live"):
+        env.step({})
