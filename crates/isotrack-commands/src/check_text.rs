@@ -20,6 +20,7 @@ pub fn render(r: &CheckReport) -> Vec<String> {
     out.extend(prop1_lines(&r.prop1));
     out.extend(prop2_lines(&r.prop2));
     out.extend(sampled_lines(&r.sampled, r.moving.time_varying));
+    out.extend(r.team.iter().flat_map(|t| t.lines()));
     out
 }
 

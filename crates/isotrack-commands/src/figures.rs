@@ -99,11 +99,15 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
 /// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
 pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
     let format = st.format;
+    // A team's run is its vehicles, each drawn as a run (issue 32).
     let data: Vec<RunData> = runs
         .iter()
-        .map(|d| RunData::load(d))
-        .collect::<Result<_, _>>()
-        .map_err(failure)?;
+        .map(|d| RunData::load_team(d))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(failure)?
+        .into_iter()
+        .flatten()
+        .collect();
     // Runs over different fields, or a data file changed after a run: 65 naming it (before any
     // figure is written).
     isotrack_plot::same_field(&data).map_err(failure)?;
@@ -114,7 +118,9 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
     })?;
-    let title = if data.len() == 1 {
+    // One run directory (a team's too: its vehicles are drawn as runs) is titled by its
+    // scenario.
+    let title = if runs.len() == 1 {
         data[0]
             .scenario
             .file()
@@ -129,7 +135,17 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     let ts = out.join(format!("timeseries.{ext}"));
     trajectory_figure(&data, &traj, st, &title).map_err(failure)?;
     timeseries_figure(&data, &ts, st, &title, Panels::default()).map_err(failure)?;
-    Ok(vec![traj.display().to_string(), ts.display().to_string()])
+    let mut written = vec![traj.display().to_string(), ts.display().to_string()];
+    if runs.len() == 1 && RunData::is_team(&runs[0]) {
+        if isotrack_plot::TeamTracks::new(&data).is_some() {
+            let team = out.join(format!("team.{ext}"));
+            isotrack_plot::team_figure(&data, &team, st, &title).map_err(failure)?;
+            written.push(team.display().to_string());
+        } else {
+            errln!("note: no team figure (gaps, revisit time): the isoline's arc length is known for a radial field that does not drift only, for now");
+        }
+    }
+    Ok(written)
 }
 
 /// `isotrack plot`.
@@ -207,15 +223,15 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     }
     let mut written = plot_dirs(&a.runs, &st, &out)?;
     if a.animate {
-        let run = RunData::load(&a.runs[0]).map_err(failure)?;
+        let runs = RunData::load_team(&a.runs[0]).map_err(failure)?;
         let gif = out.join("animation.gif");
-        let title = run
+        let title = runs[0]
             .scenario
             .file()
             .name
             .clone()
-            .unwrap_or_else(|| run.name.clone());
-        isotrack_plot::animation_gif(&run, &gif, &st, &title, 48, 120).map_err(failure)?;
+            .unwrap_or_else(|| runs[0].name.clone());
+        isotrack_plot::animation_gif_team(&runs, &gif, &st, &title, 48, 120).map_err(failure)?;
         written.push(gif.display().to_string());
     }
     outln!("wrote {}", written.join(", "));

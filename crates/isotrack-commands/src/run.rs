@@ -120,12 +120,6 @@ pub fn refuse_team(scenario: &Scenario, command: &str) -> Result<(), Failure> {
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
     refuse_team_without_isoline(&scenario)?;
-    if args.plot && scenario.spec().team.is_some() {
-        return Err(Failure {
-            code: exit::USAGE,
-            message: "--plot: figures of a team ([team]) are not drawn yet (docs/TEAMS.md)".into(),
-        });
-    }
     let warnings = isotrack_scenario::check::warnings(&scenario);
     for w in &warnings {
         errln!("warning: {w}");

@@ -59,8 +59,10 @@ pub fn ring_laplacian_max_eigenvalue(n: usize) -> f64 {
     ring_laplacian_eigenvalue(n, n / 2)
 }
 
-/// The ranging delay in whole periods and the fraction of one: `d = (q + f) T`.
-fn split_delay(period_s: f64, delay_s: f64) -> Option<(usize, f64)> {
+/// The ranging delay in whole periods and the fraction of one: `d = (q + f) T`, `q` whole,
+/// `0 <= f < 1` (a delay within a part in 1e9 of a whole number of periods is that number).
+/// `None` for invalid times or a delay past [`MAX_DEGREE`] periods.
+pub fn split_delay(period_s: f64, delay_s: f64) -> Option<(usize, f64)> {
     if !(period_s > 0.0 && delay_s >= 0.0 && period_s.is_finite() && delay_s.is_finite()) {
         return None;
     }

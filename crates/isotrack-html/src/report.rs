@@ -92,11 +92,12 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
     let mut runs = vec![];
     let mut data: Vec<RunData> = vec![];
     for d in dirs {
-        let r = RunData::load(d).map_err(|e| match e {
+        // A team's run is its vehicles, each shown as a run (issue 32).
+        let r = RunData::load_team(d).map_err(|e| match e {
             PlotError::Input(m) => ReportError::Input(m),
             other => ReportError::Data(other.to_string()),
         })?;
-        data.push(r);
+        data.extend(r);
     }
     // The page draws the first run's field under every path: runs over different fields (or
     // isolines) are refused, naming both.

@@ -680,10 +680,28 @@ pub fn animation_gif(
     frames: usize,
     delay_ms: u32,
 ) -> Result<(), PlotError> {
+    animation_gif_team(std::slice::from_ref(run), path, st, title, frames, delay_ms)
+}
+
+/// [`animation_gif`] of several vehicles at once (a team's, [`RunData::load_team`]): every
+/// vehicle's path so far and position in its own colour (the trajectory figure's), on the
+/// first one's field and clock. One vehicle draws exactly [`animation_gif`]'s frames.
+pub fn animation_gif_team(
+    runs: &[RunData],
+    path: &Path,
+    st: &Style,
+    title: &str,
+    frames: usize,
+    delay_ms: u32,
+) -> Result<(), PlotError> {
     let title = st.title(title);
+    let run = runs
+        .first()
+        .ok_or_else(|| PlotError::Input("no runs to animate".into()))?;
     let tr = &run.trace;
-    let (x0, x1) = finite_bounds(tr.iter().map(|t| t.x_m));
-    let (y0, y1) = finite_bounds(tr.iter().map(|t| t.y_m));
+    let all = || runs.iter().flat_map(|r| r.trace.iter());
+    let (x0, x1) = finite_bounds(all().map(|t| t.x_m));
+    let (y0, y1) = finite_bounds(all().map(|t| t.y_m));
     let side = (x1 - x0).max(y1 - y0).max(1.0);
     let no_positions = || PlotError::Data("no trace row has a finite position".into());
     let (xa, xb) = padded_axis("x_m", x0, x1, 0.0, 0.0)?.ok_or_else(no_positions)?;
@@ -730,23 +748,26 @@ pub fn animation_gif(
                 &small,
                 &times,
             )?;
-            let upto: Vec<(f64, f64)> = tr
-                .iter()
-                .take_while(|r| r.t_s <= t)
-                .filter(|r| r.x_m.is_finite() && r.y_m.is_finite())
-                .map(|r| (r.x_m, r.y_m))
-                .collect();
-            let c = colour(0);
-            chart
-                .draw_series(LineSeries::new(
-                    upto.iter().copied(),
-                    c.stroke_width(small.px(2.0)),
-                ))
-                .map_err(s)?;
-            if let Some(&last) = upto.last() {
+            for (i, one) in runs.iter().enumerate() {
+                let upto: Vec<(f64, f64)> = one
+                    .trace
+                    .iter()
+                    .take_while(|r| r.t_s <= t)
+                    .filter(|r| r.x_m.is_finite() && r.y_m.is_finite())
+                    .map(|r| (r.x_m, r.y_m))
+                    .collect();
+                let c = colour(i);
                 chart
-                    .draw_series([Circle::new(last, small.px(5.0), c.filled())])
+                    .draw_series(LineSeries::new(
+                        upto.iter().copied(),
+                        c.stroke_width(small.px(2.0)),
+                    ))
                     .map_err(s)?;
+                if let Some(&last) = upto.last() {
+                    chart
+                        .draw_series([Circle::new(last, small.px(5.0), c.filled())])
+                        .map_err(s)?;
+                }
             }
             root.present().map_err(s)?;
         }
@@ -1179,6 +1200,154 @@ pub fn sweep_figure(
                     .draw()
                     .map_err(s)?;
             }
+            Ok(())
+        })()
+    })
+}
+
+/// A team's figure (issue 32, docs/TEAMS.md), from its trace: on top, the arc-length gap ahead
+/// of each vehicle along the true isoline over time (one colour per vehicle, as in the
+/// trajectory figure; the even gap `L/N` dashed); below, the longest time each point of the
+/// isoline went without a visit over the steady window, along the isoline (the ideal
+/// `L/(N v0)` dashed). `vehicles` as [`RunData::load_team`] gives them. A data error when the
+/// isoline's arc length is not known (a radial field that does not drift only, for now).
+pub fn team_figure(
+    vehicles: &[RunData],
+    path: &Path,
+    st: &Style,
+    title: &str,
+) -> Result<(), PlotError> {
+    let title = st.title(title);
+    let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
+        PlotError::Data(
+            "the team's figure needs the isoline's arc length: a radial field that does not drift, for now (docs/TEAMS.md)".into(),
+        )
+    })?;
+    let first = &vehicles[0];
+    let n = vehicles.len();
+    let l = tracks.length_m();
+    let stride = tracks.rows.div_ceil(2000).max(1);
+    let gaps = tracks.gaps(stride);
+    let ss = first.steady_state_start_s();
+    let revisit = tracks.revisit_max(ss);
+    let v0 = first
+        .scenario
+        .spec()
+        .team
+        .as_ref()
+        .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
+            t.nominal_speed_mps
+        });
+    let ideal = l / (n as f64 * v0);
+    let even = l / n as f64;
+    let t_end = gaps.last().map_or(1e-9, |g| g.0).max(1e-9);
+    padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
+    let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
+    let (glo, ghi) = padded_axis("gap_m", glo.min(0.0), ghi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
+    let (rlo, rhi) = finite_bounds(revisit.iter().map(|r| r.1).chain([ideal, 0.0]));
+    let (rlo, rhi) = padded_axis("revisit_s", rlo, rhi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
+    let (w, h) = st.size((1100, 760), (560, 420));
+    let f = st.base_font();
+    let (ts, ls) = (tick_step(0.0, t_end, 10), tick_step(0.0, l, 10));
+    let (gs, rs) = (tick_step(glo, ghi, 8), tick_step(rlo, rhi, 8));
+    render!(path, st.format, (w, h), |root| {
+        (|| -> DrawResult {
+            root.fill(&WHITE).map_err(s)?;
+            let body = if title.is_empty() {
+                root.clone()
+            } else {
+                root.titled(title, st.font(1.6)).map_err(s)?
+            };
+            let areas = body.split_evenly((2, 1));
+            let (w2, w3) = (st.px(2.0), st.px(3.0));
+            let dashed = |a: (f64, f64), b: (f64, f64)| {
+                DashedLineSeries::new([a, b], st.px(8.0), st.px(5.0), BLACK.stroke_width(w2))
+            };
+            let mut top = ChartBuilder::on(&areas[0])
+                .margin((0.75 * f) as u32)
+                .margin_right((2.0 * f) as u32)
+                .x_label_area_size((2.8 * f) as u32)
+                .y_label_area_size((5.6 * f) as u32)
+                .build_cartesian_2d(0.0..t_end, glo..ghi)
+                .map_err(s)?;
+            top.configure_mesh()
+                .x_desc("time (s)")
+                .y_desc("gap ahead along the isoline (m)")
+                .x_label_formatter(&|v| tick_label(*v, ts))
+                .y_label_formatter(&|v| tick_label(*v, gs))
+                .label_style(st.font(0.95))
+                .axis_desc_style(st.font(1.0))
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
+                .map_err(s)?;
+            top.draw_series(dashed((0.0, even), (t_end, even)))
+                .map_err(s)?
+                .label("even gap L/N")
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                });
+            for (i, v) in vehicles.iter().enumerate() {
+                let c = colour(i);
+                let series = top
+                    .draw_series(LineSeries::new(
+                        gaps.iter().map(|g| (g.0, g.1[i])),
+                        c.stroke_width(w2),
+                    ))
+                    .map_err(s)?;
+                if n <= RUN_COLOURS.len() {
+                    series.label(v.name.clone()).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
+                    });
+                }
+            }
+            top.configure_series_labels()
+                .label_font(st.font(0.95))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(s)?;
+            let mut bottom = ChartBuilder::on(&areas[1])
+                .margin((0.75 * f) as u32)
+                .margin_right((2.0 * f) as u32)
+                .x_label_area_size((2.8 * f) as u32)
+                .y_label_area_size((5.6 * f) as u32)
+                .build_cartesian_2d(0.0..l, rlo..rhi)
+                .map_err(s)?;
+            bottom
+                .configure_mesh()
+                .x_desc("position along the isoline, in the direction of travel (m)")
+                .y_desc("longest unvisited time (s)")
+                .x_label_formatter(&|v| tick_label(*v, ls))
+                .y_label_formatter(&|v| tick_label(*v, rs))
+                .label_style(st.font(0.95))
+                .axis_desc_style(st.font(1.0))
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
+                .map_err(s)?;
+            bottom
+                .draw_series(dashed((0.0, ideal), (l, ideal)))
+                .map_err(s)?
+                .label("ideal L/(N v0)")
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                });
+            let c = colour(1);
+            bottom
+                .draw_series(LineSeries::new(revisit.iter().copied(), c.stroke_width(w2)))
+                .map_err(s)?
+                .label("revisit time, steady window")
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
+                });
+            bottom
+                .configure_series_labels()
+                .label_font(st.font(0.95))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::LowerRight)
+                .draw()
+                .map_err(s)?;
             Ok(())
         })()
     })

@@ -9,6 +9,8 @@
 //!   end marker, equal axis scales, axes in metres, legend when several runs are overlaid);
 //! * [`timeseries_figure`]: error, measurement and turn rate against time, the steady-state
 //!   window shaded;
+//! * [`team_figure`]: a team's gaps over time and revisit time along the isoline
+//!   ([`RunData::load_team`] reads a team's run as its vehicles);
 //! * [`field_map`]: a field alone (the paper's Fig. 1(a));
 //! * [`FieldPicture`]: a field sampled on a grid round some paths, with its isoline (the data
 //!   the HTML pages draw);
@@ -24,10 +26,11 @@ mod picture;
 mod run_data;
 mod stability;
 mod style;
+mod team;
 
 pub use draw::{
-    animation_gif, field_map, sweep_figure, sweep_summary, timeseries_figure, trajectory_figure,
-    Panels, SummaryLine,
+    animation_gif, animation_gif_team, field_map, sweep_figure, sweep_summary, team_figure,
+    timeseries_figure, trajectory_figure, Panels, SummaryLine,
 };
 pub(crate) use error::open_input;
 pub use error::{PlotError, MAX_INPUT_BYTES};
@@ -36,3 +39,4 @@ pub use run_data::{data_files_unchanged, same_field, unrecorded_data_files_note,
 pub use stability::{boundary_segments, stability_map_figure};
 pub(crate) use style::fonts;
 pub use style::{tick_label, tick_step, Colormap, Format, Style, DEFAULT_FONT_FAMILY};
+pub use team::{TeamTracks, REVISIT_BINS};

@@ -1,7 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
-use isotrack_runs::summary::{Summary, MAX_SUMMARY_BYTES};
+use isotrack_runs::summary::{Ended, Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
@@ -23,8 +23,81 @@ pub struct RunData {
 }
 
 impl RunData {
-    /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml`.
+    /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml` of a single-vehicle
+    /// run (a team's run is refused: [`RunData::load_team`]).
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
+        Self::read(dir, false).map(|x| x.0)
+    }
+
+    /// Whether `DIR/summary.json` is a team's run (it has a `team` object); `false` when it
+    /// cannot be read (the loading then says why).
+    pub fn is_team(dir: &Path) -> bool {
+        Summary::read(&dir.join("summary.json")).is_ok_and(|s| s.team().is_some())
+    }
+
+    /// Loads a run directory as its vehicles: a single-vehicle run as one, a team's run (a
+    /// `team` object in `summary.json`, a `vehicle` column in `trace.csv`) as one [`RunData`]
+    /// per vehicle in the listed order, named `vehicle I`, each with its rows (the team's
+    /// `summary.json` and scenario shared). A `vehicle` cell that is not a vehicle of the team
+    /// (`0..team.vehicle_count`) is a data error naming its line.
+    pub fn load_team(dir: &Path) -> Result<Vec<Self>, PlotError> {
+        let (all, ids) = Self::read(dir, true)?;
+        let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
+            return Ok(vec![all]);
+        };
+        if !(1..=1_000_000).contains(&n) {
+            return Err(PlotError::Data(format!(
+                "{}: summary.json: team.vehicle_count is not a vehicle count",
+                dir.display()
+            )));
+        }
+        let mut traces = vec![Vec::new(); n];
+        for (row, (t, id)) in all.trace.iter().zip(&ids).enumerate() {
+            let Some(tr) = id.and_then(|i| traces.get_mut(i)) else {
+                return Err(PlotError::Data(format!(
+                    "{}: trace.csv row {}: the vehicle column is not one of the team's {n} vehicles",
+                    dir.display(),
+                    row + 1
+                )));
+            };
+            tr.push(*t);
+        }
+        // The rows are in `traces` now: each vehicle clones the rest only, without the lists
+        // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies).
+        let mut all = Self {
+            trace: Vec::new(),
+            ..all
+        };
+        let mut vehicles = Vec::new();
+        if let Ended::Run(end) = &mut all.summary.ended {
+            vehicles = end.vehicles.take().unwrap_or_default();
+            if let Some(team) = end.team.as_mut() {
+                team.neighbours = Vec::new();
+            }
+        }
+        Ok(traces
+            .into_iter()
+            .enumerate()
+            .map(|(i, trace)| {
+                // The vehicle's own outcome and metrics (`vehicles[i]`) over the team's
+                // top-level ones (vehicle 0's); the rest (`team`, `data_files`) shared.
+                let mut summary = all.summary.clone();
+                if let (Some(own), Ended::Run(end)) = (vehicles.get(i), &mut summary.ended) {
+                    end.record = own.clone();
+                }
+                Self {
+                    name: format!("vehicle {i}"),
+                    trace,
+                    summary,
+                    ..all.clone()
+                }
+            })
+            .collect())
+    }
+
+    /// The run and each row's `vehicle` cell (`None` when there is no such column or it does
+    /// not parse); a team's run is refused unless `team_ok`.
+    fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>), PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
         let text =
@@ -33,9 +106,9 @@ impl RunData {
         let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
         // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
         // would join into one path; refused until the team's figures are drawn.
-        if summary.team().is_some() {
+        if !team_ok && summary.team().is_some() {
             return Err(err(
-                "a team's run (summary.json has a `team` object): figures and reports of teams are not drawn yet (docs/TEAMS.md)".into(),
+                "a team's run (summary.json has a `team` object): `isotrack plot` draws teams; this command does not yet (docs/TEAMS.md)".into(),
             ));
         }
         let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
@@ -70,6 +143,8 @@ impl RunData {
             col(omega_radps)?,
         ];
         let meas = headers.iter().position(|h| h == s_measured);
+        let vehicle_col = headers.iter().position(|h| h == "vehicle");
+        let mut vehicles = Vec::new();
         let mut trace = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
@@ -84,6 +159,11 @@ impl RunData {
                 })?;
             }
             let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
+            vehicles.push(
+                vehicle_col
+                    .and_then(|i| rec.get(i))
+                    .and_then(|t| t.parse().ok()),
+            );
             trace.push(TraceRow {
                 t_s: v[0],
                 x_m: v[1],
@@ -115,13 +195,16 @@ impl RunData {
             || dir.display().to_string(),
             |n| n.to_string_lossy().into_owned(),
         );
-        Ok(Self {
-            name,
-            dir: dir.to_path_buf(),
-            trace,
-            summary,
-            scenario,
-        })
+        Ok((
+            Self {
+                name,
+                dir: dir.to_path_buf(),
+                trace,
+                summary,
+                scenario,
+            },
+            vehicles,
+        ))
     }
 
     /// Start of the steady-state window, s.

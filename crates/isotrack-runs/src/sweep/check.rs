@@ -153,6 +153,12 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         ));
     }
     check_metrics(outcome, &cell)?;
+    if header
+        .iter()
+        .any(|h| h == crate::sweep::rows::TEAM_COLUMNS[0])
+    {
+        check_team_cells(outcome, &cell)?;
+    }
     // Text cells are isotrack's own messages: never a control character (an escape sequence,
     // a line break) nor a bidirectional or zero-width format character.
     for name in ["warnings", "outcome_detail"] {
@@ -173,6 +179,46 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         }
     }
     Ok(id)
+}
+
+/// The team columns of a team sweep's row ([`crate::sweep::rows::TEAM_COLUMNS`]): empty in an
+/// `invalid_scenario` row; else each number empty or finite, not negative and not subnormal,
+/// and `order_preserved` `true`, `false` or empty (no team metrics).
+fn check_team_cells<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
+    let cols = crate::sweep::rows::TEAM_COLUMNS;
+    if outcome == "invalid_scenario" {
+        if let Some(n) = cols.iter().find(|n| !cell(n).is_empty()) {
+            return Err(format!("{n} holds a value in an invalid_scenario row"));
+        }
+        return Ok(());
+    }
+    for &n in cols.iter().filter(|n| **n != "order_preserved") {
+        let c = cell(n);
+        if c.is_empty() {
+            continue;
+        }
+        let ok = c.parse::<f64>().is_ok_and(|v| {
+            v.is_finite() && (v == 0.0 || v.is_normal()) && v >= 0.0 && !c.starts_with('-')
+        });
+        if !ok {
+            return Err(format!(
+                "{n} = `{}` is not a finite, non-negative number",
+                clip(c)
+            ));
+        }
+    }
+    let o = cell("order_preserved");
+    if !["", "true", "false"].contains(&o) {
+        return Err(format!(
+            "order_preserved = `{}` is not true or false",
+            clip(o)
+        ));
+    }
+    // Team metrics exist together: the ideal revisit time with any of them.
+    if o.is_empty() != cell("revisit_time_ideal_s").is_empty() {
+        return Err("order_preserved and revisit_time_ideal_s are not both given".into());
+    }
+    Ok(())
 }
 
 /// The cells a run's own step counts bound ([`RunSpan`]): `t_end_s` is `k dt` for a whole

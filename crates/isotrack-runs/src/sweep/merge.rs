@@ -89,7 +89,7 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     // file's header must be exactly them, as `sweep --resume` checks (a renamed or swapped
     // column would mislabel every value; a BOM, CRLF or control character is no header
     // isotrack writes).
-    let expected = results_header(&plan);
+    let expected = results_header(&plan, base.team.is_some());
     if m.get("columns").is_some_and(|c| *c != json!(expected)) {
         return Err(fail(
             exit::DATAERR,

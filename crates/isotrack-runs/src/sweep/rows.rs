@@ -4,7 +4,8 @@ use crate::results::{result_cells, Column, RunRecord};
 use crate::trace::num;
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
-use isotrack_sim::RunResult;
+use isotrack_sim::team::metrics::TeamSummary;
+use isotrack_sim::{NoTrace, RunResult};
 
 /// The metric columns of `results.csv`, after `run_id` and the varied keys: the outcome, the
 /// metrics, `outcome_detail`, then `warnings` (what [`run_warnings`] says about the run's
@@ -44,6 +45,21 @@ pub const SWEEP_COLUMNS: [Column; 14] = [
     Column::TEndS,
     Column::Samples,
     Column::OutcomeDetail,
+];
+
+/// The team columns of `results.csv`, after [`METRIC_COLUMNS`], in a sweep whose base scenario
+/// has `[team]` (and only there: a single-vehicle sweep's file is unchanged): the `team` object
+/// of `summary.json` (docs/TEAMS.md, "Team metrics"). Empty when the run has no team metrics (an
+/// isoline without an arc-length projection, an invalid run); `order_preserved` is `true` or
+/// `false`. The [`METRIC_COLUMNS`] of a team run are vehicle 0's, as `summary.json`'s top level.
+pub const TEAM_COLUMNS: [&str; 7] = [
+    "gap_cv",
+    "time_to_even_s",
+    "revisit_time_max_s",
+    "revisit_time_mean_s",
+    "revisit_time_ideal_s",
+    "min_separation_m",
+    "order_preserved",
 ];
 
 /// The numeric columns of [`METRIC_COLUMNS`] (all but `outcome`, `outcome_detail` and
@@ -94,6 +110,25 @@ pub fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str
         .iter()
         .map(|&id| run_scenario(plan, base, id, sweep_name))
         .collect();
+    if base.spec().team.is_some() {
+        return ids
+            .iter()
+            .zip(derived)
+            .map(|(&id, d)| {
+                let (result, team, warnings) = match d {
+                    Ok(s) => {
+                        let mut warnings = run_warnings(&s);
+                        let (result, team) = run_team_row(&s, &mut warnings);
+                        (result, team, warnings)
+                    }
+                    Err(e) => (Err(e), None, String::new()),
+                };
+                let mut fields = row_fields_warned(plan, id, result, warnings);
+                fields.extend(team_cells(team.as_ref()));
+                csv_line(&fields)
+            })
+            .collect();
+    }
     let valid: Vec<Scenario> = derived
         .iter()
         .filter_map(|d| d.as_ref().ok())
@@ -115,6 +150,60 @@ pub fn run_rows(plan: &SweepPlan, base: &Scenario, ids: &[u64], sweep_name: &str
         .collect()
 }
 
+/// A team run for a row: vehicle 0's result (as `summary.json`'s top level) and the team
+/// metrics; every other vehicle that did not complete is named in `warnings`.
+fn run_team_row(
+    s: &Scenario,
+    warnings: &mut String,
+) -> (Result<RunResult, String>, Option<TeamSummary>) {
+    match s.run_team(&mut [] as &mut [NoTrace]) {
+        None => (Err("no [team] section".into()), None),
+        Some(Err(e)) => (Err(format!("[team]: {e}")), None),
+        Some(Ok(t)) => {
+            let others: Vec<String> = t
+                .runs
+                .iter()
+                .enumerate()
+                .skip(1)
+                .filter(|(_, r)| r.outcome != isotrack_sim::Outcome::Completed)
+                .map(|(i, r)| format!("vehicle {i}: {}", r.outcome.as_str()))
+                .collect();
+            if !others.is_empty() {
+                if !warnings.is_empty() {
+                    warnings.push_str("; ");
+                }
+                warnings.push_str(&format!(
+                    "not every vehicle completed ({}); the metric columns are vehicle 0's",
+                    others.join(", ")
+                ));
+            }
+            let mut runs = t.runs.into_iter();
+            match runs.next() {
+                Some(r0) => (Ok(r0), t.team),
+                None => (Err("[team]: no vehicle".into()), None),
+            }
+        }
+    }
+}
+
+/// The [`TEAM_COLUMNS`] cells of a team run (empty cells without team metrics).
+pub fn team_cells(team: Option<&TeamSummary>) -> Vec<String> {
+    let Some(t) = team else {
+        return vec![String::new(); TEAM_COLUMNS.len()];
+    };
+    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
+    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
+    vec![
+        opt(t.gap_cv),
+        opt(t.time_to_even_s),
+        opt(t.revisit_time_max_s),
+        opt(t.revisit_time_mean_s),
+        fin(t.revisit_time_ideal_s),
+        opt(t.min_separation_m),
+        t.order_preserved.to_string(),
+    ]
+}
+
 /// The scenario of run `id` of a sweep (its base with the run's assignments), or why it is
 /// invalid, on one line.
 pub fn run_scenario(
@@ -127,10 +216,17 @@ pub fn run_scenario(
     let s = base
         .derive_with(&plan.run_assignments(id, &origin), &origin)
         .map_err(|e| e.to_string().replace('\n', " "))?;
-    if s.spec().team.is_some() {
-        return Err(format!(
-            "{origin}: [team]: a sweep runs one vehicle a run; a team is run by `isotrack run` only, for now"
-        ));
+    // The header's team columns are the base's: every run of a sweep is a team, or none is.
+    match (base.spec().team.is_some(), s.spec().team.is_some()) {
+        (false, true) => {
+            return Err(format!(
+                "{origin}: [team]: the sweep's base scenario has no [team], so its results have no team columns: give the base a [team] to sweep team keys"
+            ))
+        }
+        (true, false) => {
+            return Err(format!("{origin}: [team]: this run has no team while the base has one"))
+        }
+        _ => {}
     }
     Ok(s)
 }
@@ -163,11 +259,15 @@ pub fn row_fields_warned(
     fields
 }
 
-/// The `results.csv` header of a sweep.
-pub fn results_header(plan: &SweepPlan) -> Vec<String> {
+/// The `results.csv` header of a sweep: [`TEAM_COLUMNS`] last when its base has `[team]`
+/// (`team`).
+pub fn results_header(plan: &SweepPlan, team: bool) -> Vec<String> {
     let mut header: Vec<String> = vec!["run_id".into()];
     header.extend(plan.columns());
     header.extend(METRIC_COLUMNS.iter().map(|c| c.to_string()));
+    if team {
+        header.extend(TEAM_COLUMNS.iter().map(|c| c.to_string()));
+    }
     header
 }
 

@@ -85,7 +85,7 @@ impl SweepJob {
         let base = sweep_base(&plan, sets, &name)?;
         let base_toml = scenario_toml(&base);
         let digest = sweep_digest(&sweep_bytes, &base_toml);
-        let header = results_header(&plan);
+        let header = results_header(&plan, base.spec().team.is_some());
         Ok(Self {
             sweep_bytes,
             plan,

@@ -17,6 +17,9 @@
 //! * Sampled (every scenario with the PI-like law): the loop linearised about the isoline at the
 //!   sensor's period ([`sampled`], docs/SAMPLED.md), worst over the isoline's own slopes (exact
 //!   on circular fields) and, reported separately, over the tube's.
+//! * Team (a scenario with `[team]`, [`team`]): the spacing loop sampled at the ranging rate
+//!   with its delay, and the sampled check over the speeds the spacing law may command; a team
+//!   verdict `fails` makes `verdict` `fails`.
 //! * `verdict`: `fails` when a necessary local condition fails (the sampled loop on the
 //!   isoline, or Prop. 1's exact condition), `holds` when a guarantee applies (Prop. 1 exact and
 //!   the sampled loop stable, or Prop. 2's bound) and the sensor has no effect the checks leave
@@ -28,6 +31,7 @@ mod lattice;
 pub mod map;
 pub mod moving;
 pub mod sampled;
+pub mod team;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
@@ -388,6 +392,11 @@ pub struct CheckReport {
     pub moving: moving::MovingReport,
     /// Warnings about the scenario (the same `run` prints).
     pub warnings: Vec<String>,
+    /// A scenario with `[team]`: the spacing loop and the tracking loop over the commanded
+    /// speeds ([`team`]); absent from the JSON without `[team]`. A team verdict `fails`
+    /// makes `verdict` `fails`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub team: Option<team::TeamCheckReport>,
 }
 
 /// The region over which the field is sampled: the grid, the domain, or a box round the
@@ -2241,6 +2250,13 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         verdict = Verdict::Fails;
         verdict_reason.clone_from(reason);
     }
+    let team = team::team_report(s, &l, &r);
+    if let Some(t) = &team {
+        if t.verdict == Verdict::Fails && verdict != Verdict::Fails {
+            verdict = Verdict::Fails;
+            verdict_reason = format!("team: {}", t.verdict_reason);
+        }
+    }
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).
     let mut warnings = settling_warnings(s, &l, &prop2);
@@ -2278,6 +2294,7 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         prop1,
         prop2,
         sampled,
+        team,
     }
 }
 

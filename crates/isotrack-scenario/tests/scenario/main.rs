@@ -17,6 +17,7 @@ mod sampled;
 mod search;
 mod series;
 mod stations;
+mod team_check;
 mod theory;
 mod validation;
 mod verdict;

@@ -1,0 +1,587 @@
+//! The `team` section of `isotrack check` (docs/TEAMS.md, "Theory"): for a scenario with
+//! `[team]`,
+//!
+//! * the **spacing loop** sampled at the ranging period `T = 1/team.ranging.rate_hz` with its
+//!   delay `d = team.ranging.delay_s = (q + f) T`: every mode `m` of the ring Laplacian
+//!   (`lambda_m = 2 - 2 cos(2 pi m/N)`, Gray 2006 sec. 3.1) has the gain per period
+//!   `g_m = k_v c lambda_m T` and the characteristic polynomial
+//!   `z^{q+2} - z^{q+1} + g (1 - f) z + g f`, Schur-stable or not
+//!   ([`isotrack_core::spacing::spacing_mode_stable`]); the largest stable gain
+//!   `k_v* = g*(q, f)/(T c lambda_max)` ([`isotrack_core::spacing::max_stable_spacing_gain`]) and
+//!   the slowest mode's time constant (`-T/ln rho_1` sampled, `1/(k_v c lambda_1)` continuous).
+//!   The range slope `c = dr/dg`: `cos(pi/N)` for `range_balance` on an isoline known to be a
+//!   circle (a chord `2R sin(g/(2R))` at the even gap `2 pi R/N`), 1 for `arc_reference` (arc
+//!   gaps) and, conservatively, 1 for `range_balance` elsewhere (`|dr/dg| <= 1` on any curve,
+//!   so `k_v*` is not overstated);
+//! * the **tracking loop**'s sampled check ([`super::sampled`]) at every speed of a grid over
+//!   the range the spacing law may command, `[team.v_min_mps, team.v_max_mps]` (both ends and
+//!   `v0` included; the `none` law commands `v0` only): the paper's theory assumes a constant
+//!   speed, and the verdict holds only if the loop is stable at every speed of the range.
+
+use super::{not_computed, sampled, Law, LoopSetup, Regions, Verdict};
+use crate::spec::TeamSpec;
+use crate::Scenario;
+use isotrack_core::numtext::{Echo, Num};
+use isotrack_core::spacing::{
+    max_stable_gain_per_period, max_stable_spacing_gain, ring_laplacian_eigenvalue,
+    ring_laplacian_max_eigenvalue, slowest_mode_time_constant_s,
+    slowest_mode_time_constant_sampled_s, spacing_mode_spectral_radius, spacing_mode_stable,
+    split_delay,
+};
+use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
+use serde::Serialize;
+
+/// Speeds of the tracking check's grid over `[v_min, v_max]` (both ends included; `v0` is
+/// added when it is not on the grid).
+pub const TRACKING_SPEED_GRID: usize = 9;
+
+/// Up to this many distinct nonzero eigenvalues (`floor(N/2)`, a ring of up to 33 vehicles)
+/// the report lists every mode; beyond, the slowest (`m = 1`) and the fastest
+/// (`m = floor(N/2)`) only. Stability is decided over every mode either way.
+pub const MAX_LISTED_MODES: usize = 16;
+
+/// One mode of the ring Laplacian in the spacing loop.
+#[derive(Clone, Debug, Serialize)]
+pub struct SpacingMode {
+    /// The mode's index `m` (`1..=floor(N/2)`; `m` and `N - m` share the eigenvalue).
+    pub m: usize,
+    /// `lambda_m = 2 - 2 cos(2 pi m/N)`.
+    pub lambda: f64,
+    /// The gain per ranging period `g_m = k_v c lambda_m T`.
+    pub gain_per_period: f64,
+    /// The largest root magnitude of the mode's polynomial (< 1: the mode decays).
+    pub spectral_radius: Option<f64>,
+    /// Whether the mode is Schur-stable.
+    pub stable: bool,
+}
+
+/// The spacing loop, sampled and delayed.
+#[derive(Clone, Debug, Serialize)]
+pub struct SpacingLoopReport {
+    /// Whether there is a spacing loop to check (`range_balance` or `arc_reference` with at
+    /// least three vehicles, or two with `arc_reference`).
+    pub applicable: bool,
+    /// The scenario's `team.k_v`, 1/s (null for `none`).
+    pub k_v_per_s: Option<f64>,
+    /// The ranging period `T = 1/team.ranging.rate_hz`, s.
+    pub period_s: f64,
+    /// `team.ranging.delay_s`, s.
+    pub delay_s: f64,
+    /// The delay's whole periods `q` (`d = (q + f) T`; null when past the polynomial's degree
+    /// cap).
+    pub delay_whole_periods: Option<usize>,
+    /// The delay's fraction of a period `f`.
+    pub delay_fraction: Option<f64>,
+    /// The range slope `c = dr/dg` near even spacing.
+    pub range_slope: Option<f64>,
+    /// Where `c` comes from: `circle_chord` (`cos(pi/N)`, the isoline is a known circle),
+    /// `arc_gaps` (`arc_reference`: 1, exact) or `conservative` (1, the isoline's shape is not
+    /// known; `|dr/dg| <= 1` on any curve).
+    pub range_slope_source: Option<&'static str>,
+    /// The ring Laplacian's distinct nonzero eigenvalues with each mode's gain and stability:
+    /// every one up to [`MAX_LISTED_MODES`], else the slowest and the fastest.
+    pub modes: Vec<SpacingMode>,
+    /// Whether `modes` lists every distinct mode.
+    pub all_modes_listed: bool,
+    /// `lambda_1` (the smallest nonzero eigenvalue, the slowest mode).
+    pub lambda_min: Option<f64>,
+    /// `lambda_max` (4 for even `N`, `2 + 2 cos(pi/N)` for odd `N`).
+    pub lambda_max: Option<f64>,
+    /// The largest stable gain per period `g*(q, f)` (2 without delay; Levin & May's
+    /// `2 cos(q pi/(2q + 1))` for a whole number of periods).
+    pub max_gain_per_period: Option<f64>,
+    /// The largest stable `k_v`, 1/s: `k_v* = g*/(T c lambda_max)`.
+    pub max_stable_k_v_per_s: Option<f64>,
+    /// Whether every mode at the scenario's `k_v` is stable.
+    pub stable: Option<bool>,
+    /// The slowest mode's time constant sampled, `-T/ln(rho_1)`, s (null: it does not decay).
+    pub slowest_time_constant_s: Option<f64>,
+    /// The same in continuous time, `1/(k_v c lambda_1)`, s.
+    pub slowest_time_constant_continuous_s: Option<f64>,
+    /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
+    /// discovery phase), each with its key.
+    pub not_modelled: Vec<String>,
+    /// Remarks (why not applicable).
+    pub note: String,
+}
+
+/// The tracking loop's sampled check over the speeds the spacing law may command.
+#[derive(Clone, Debug, Serialize)]
+pub struct TeamTrackingReport {
+    /// Whether the sampled check applies (the PI-like law).
+    pub applicable: bool,
+    /// `[v_min, v_max]` the law may command (`[v0, v0]` for `none`), m/s.
+    pub speed_range_mps: [f64; 2],
+    /// The speeds checked, m/s (ascending).
+    pub speeds_mps: Vec<f64>,
+    /// The worst spectral radius over the isoline's slopes at each speed (null: not computed).
+    pub spectral_radii: Vec<Option<f64>>,
+    /// The largest of `spectral_radii`.
+    pub worst_spectral_radius: Option<f64>,
+    /// The speed where it occurs, m/s.
+    pub worst_speed_mps: Option<f64>,
+    /// Whether the loop is stable at every speed checked (null: some speed not computed).
+    pub stable_over_range: Option<bool>,
+    /// Remarks.
+    pub note: String,
+}
+
+/// The `team` section.
+#[derive(Clone, Debug, Serialize)]
+pub struct TeamCheckReport {
+    /// `team.count`.
+    pub count: usize,
+    /// `team.spacing`.
+    pub spacing_law: &'static str,
+    /// Whether the law is coordinate-free (`arc_reference` is not: a reference).
+    pub coordinate_free: bool,
+    /// `holds` (both loops stable, or the spacing loop absent and the tracking loop stable over
+    /// the range), `fails` (either unstable), `not_applicable` otherwise.
+    pub verdict: Verdict,
+    /// One sentence on why.
+    pub verdict_reason: String,
+    /// The spacing loop.
+    pub spacing: SpacingLoopReport,
+    /// The tracking loop over the commanded speeds.
+    pub tracking: TeamTrackingReport,
+}
+
+/// The range slope `c` and its source for the scenario's law.
+fn range_slope(s: &Scenario, law: &SpacingLaw, n: usize) -> (f64, &'static str) {
+    match law {
+        SpacingLaw::ArcReference { .. } => (1.0, "arc_gaps"),
+        _ if s.team_arc().is_some() => ((std::f64::consts::PI / n as f64).cos(), "circle_chord"),
+        _ => (1.0, "conservative"),
+    }
+}
+
+fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
+    let n = team.count();
+    let period_s = 1.0 / team.ranging.rate_hz;
+    let delay_s = team.ranging.delay_s;
+    let split = split_delay(period_s, delay_s);
+    let mut rep = SpacingLoopReport {
+        applicable: false,
+        k_v_per_s: None,
+        period_s,
+        delay_s,
+        delay_whole_periods: split.map(|x| x.0),
+        delay_fraction: split.map(|x| x.1),
+        range_slope: None,
+        range_slope_source: None,
+        modes: vec![],
+        all_modes_listed: false,
+        lambda_min: None,
+        lambda_max: None,
+        max_gain_per_period: None,
+        max_stable_k_v_per_s: None,
+        stable: None,
+        slowest_time_constant_s: None,
+        slowest_time_constant_continuous_s: None,
+        not_modelled: vec![],
+        note: String::new(),
+    };
+    let k_v = match team.law {
+        SpacingLaw::None => {
+            rep.note = "team.spacing = \"none\": every vehicle at v0, no spacing loop (the spacing stays as deployed)".into();
+            return rep;
+        }
+        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s } => {
+            gain_per_s
+        }
+    };
+    rep.k_v_per_s = Some(k_v);
+    if n < 2 {
+        rep.note = "a team of one: no spacing loop".into();
+        return rep;
+    }
+    if n == 2 && matches!(team.law, SpacingLaw::RangeBalance { .. }) {
+        rep.note = "with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and does nothing (use arc_reference or more vehicles)".into();
+        return rep;
+    }
+    let (c, source) = range_slope(s, &team.law, n);
+    rep.range_slope = Some(c);
+    rep.range_slope_source = Some(source);
+    rep.applicable = true;
+    let top = n / 2;
+    rep.lambda_min = Some(ring_laplacian_eigenvalue(n, 1));
+    rep.lambda_max = Some(ring_laplacian_max_eigenvalue(n));
+    let gain = |m: usize| k_v * c * ring_laplacian_eigenvalue(n, m) * period_s;
+    let Some(g_star) = max_stable_gain_per_period(period_s, delay_s) else {
+        rep.note = format!(
+            "not computed: a delay of {} periods is past the {} the check's polynomial holds",
+            Num(delay_s / period_s),
+            isotrack_core::spacing::MAX_DEGREE - 2
+        );
+        return rep;
+    };
+    rep.max_gain_per_period = Some(g_star);
+    rep.max_stable_k_v_per_s = max_stable_spacing_gain(n, period_s, delay_s, c);
+    // Every mode decides (not only the scan's g*): O(N/2) Schur tests.
+    rep.stable = Some((1..=top).all(|m| spacing_mode_stable(gain(m), period_s, delay_s)));
+    rep.all_modes_listed = top <= MAX_LISTED_MODES;
+    let listed: Vec<usize> = if rep.all_modes_listed {
+        (1..=top).collect()
+    } else {
+        vec![1, top]
+    };
+    rep.modes = listed
+        .into_iter()
+        .map(|m| SpacingMode {
+            m,
+            lambda: ring_laplacian_eigenvalue(n, m),
+            gain_per_period: gain(m),
+            spectral_radius: spacing_mode_spectral_radius(gain(m), period_s, delay_s),
+            stable: spacing_mode_stable(gain(m), period_s, delay_s),
+        })
+        .collect();
+    rep.slowest_time_constant_s =
+        slowest_mode_time_constant_sampled_s(n, k_v, c, period_s, delay_s)
+            .filter(|t| t.is_finite());
+    rep.slowest_time_constant_continuous_s =
+        Some(slowest_mode_time_constant_s(n, k_v, c)).filter(|t| t.is_finite());
+    rep.not_modelled = spacing_not_modelled(s, team, n);
+    rep
+}
+
+/// The effects the linear spacing loop leaves out, each naming its key.
+fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> {
+    let r = &team.ranging;
+    let mut out = vec![format!(
+        "speed saturation: the loop is the unsaturated law (it holds while v0 + k_v (r_ahead - r_behind) stays in [team.v_min_mps, team.v_max_mps] = [{}, {}] m/s)",
+        Echo(team.v_min_mps),
+        Echo(team.v_max_mps)
+    )];
+    if r.noise_std_m > 0.0 {
+        out.push(format!(
+            "team.ranging.noise_std_m = {} (noise moves the speeds about the loop's equilibrium; it does not change its stability)",
+            Echo(r.noise_std_m)
+        ));
+    }
+    if r.dropout_probability > 0.0 {
+        out.push(format!(
+            "team.ranging.dropout_probability = {} (a lost range is held up to 1 s: an extra, random delay)",
+            Echo(r.dropout_probability)
+        ));
+    }
+    if r.max_range_m.is_finite() {
+        let even_chord = s
+            .team_arc()
+            .map(|a| 2.0 * a.radius_m * (std::f64::consts::PI / n as f64).sin());
+        match even_chord {
+            Some(d) if d > r.max_range_m => out.push(format!(
+                "team.ranging.max_range_m = {} is shorter than the even spacing's range {} m: at even spacing the neighbours do not answer and the law sees max_range_m, not the gaps",
+                Echo(r.max_range_m),
+                Num(d)
+            )),
+            _ => out.push(format!(
+                "team.ranging.max_range_m = {} (beyond it the law sees max_range_m)",
+                Echo(r.max_range_m)
+            )),
+        }
+    }
+    if let RingMode::Discover(d) = team.ring {
+        out.push(format!(
+            "team.ring = \"discovered\": the law starts after the discovery ({} s of settling and {} probe slots of {} s)",
+            Num(d.settle_s),
+            n,
+            Num(d.probe_s)
+        ));
+    }
+    out
+}
+
+/// The speeds the tracking check covers: `v0` for `none`, else a grid over `[v_min, v_max]`
+/// with both ends and `v0`.
+fn tracking_speeds(team: &TeamSpec) -> ([f64; 2], Vec<f64>) {
+    let v0 = team.nominal_speed_mps;
+    if matches!(team.law, SpacingLaw::None) || team.count() < 2 {
+        return ([v0, v0], vec![v0]);
+    }
+    let (lo, hi) = (team.v_min_mps, team.v_max_mps);
+    let k = TRACKING_SPEED_GRID - 1;
+    let mut v: Vec<f64> = (0..=k)
+        .map(|i| {
+            if i == k {
+                hi
+            } else {
+                lo + (hi - lo) * i as f64 / k as f64
+            }
+        })
+        .collect();
+    if !v.contains(&v0) {
+        v.push(v0);
+    }
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    ([lo, hi], v)
+}
+
+fn tracking_report(s: &Scenario, l: &Law, r: &Regions, team: &TeamSpec) -> TeamTrackingReport {
+    let (range, speeds) = tracking_speeds(team);
+    let mut rep = TeamTrackingReport {
+        applicable: false,
+        speed_range_mps: range,
+        speeds_mps: speeds.clone(),
+        spectral_radii: vec![],
+        worst_spectral_radius: None,
+        worst_speed_mps: None,
+        stable_over_range: None,
+        note: String::new(),
+    };
+    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    let mut notes = vec![];
+    for &v in &speeds {
+        let lv = Law { v, ..*l };
+        let setup = match LoopSetup::new(s, &lv, r) {
+            Ok(x) => x,
+            Err(note) => {
+                rep.note = note;
+                rep.spectral_radii.clear();
+                return rep;
+            }
+        };
+        let (base, slopes, orbit) = setup.at(s, &lv, period_s);
+        if let Some(why) = not_computed(&base, orbit.as_ref()) {
+            notes.push(format!("at {} m/s not computed: {}", Num(v), why.reason()));
+            rep.spectral_radii.push(None);
+            continue;
+        }
+        let rho = sampled::worst_spectral_radius(&base, &slopes);
+        rep.spectral_radii.push(Some(rho));
+    }
+    rep.applicable = true;
+    let worst = speeds
+        .iter()
+        .zip(&rep.spectral_radii)
+        .filter_map(|(&v, r)| r.map(|r| (v, r)))
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some((v, rho)) = worst {
+        rep.worst_speed_mps = Some(v);
+        rep.worst_spectral_radius = rho.is_finite().then_some(rho);
+        let all_computed = rep.spectral_radii.iter().all(Option::is_some);
+        rep.stable_over_range = if rho >= 1.0 {
+            Some(false)
+        } else if all_computed {
+            Some(true)
+        } else {
+            None
+        };
+    }
+    if speeds.len() > 1 {
+        notes.push(format!(
+            "each speed's loop is the constant-speed linearisation (the speed changes slowly next to the tracking loop when the spacing loop is slow); the grid has {} speeds",
+            speeds.len()
+        ));
+    }
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The `team` section of a scenario with `[team]` (`None` without).
+pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamCheckReport> {
+    let team = s.spec().team.as_ref()?;
+    let spacing = spacing_report(s, team);
+    let tracking = tracking_report(s, l, r, team);
+    let (verdict, verdict_reason) = team_verdict(team, &spacing, &tracking);
+    Some(TeamCheckReport {
+        count: team.count(),
+        spacing_law: team.law.name(),
+        coordinate_free: team.law.is_coordinate_free(),
+        verdict,
+        verdict_reason,
+        spacing,
+        tracking,
+    })
+}
+
+fn team_verdict(
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+    tr: &TeamTrackingReport,
+) -> (Verdict, String) {
+    let speed_text = || match (tr.worst_speed_mps, tr.worst_spectral_radius) {
+        (Some(v), Some(r)) => format!("spectral radius {r:.6} at {} m/s", Num(v)),
+        (Some(v), None) => format!("no equilibrium at {} m/s", Num(v)),
+        _ => String::new(),
+    };
+    let range_text = format!(
+        "[{}, {}] m/s",
+        Num(tr.speed_range_mps[0]),
+        Num(tr.speed_range_mps[1])
+    );
+    if sp.stable == Some(false) {
+        return (
+            Verdict::Fails,
+            format!(
+                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay",
+                Echo(sp.k_v_per_s.unwrap_or(0.0)),
+                sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
+                Echo(team.ranging.rate_hz),
+                Echo(team.ranging.delay_s)
+            ),
+        );
+    }
+    if tr.stable_over_range == Some(false) {
+        return (
+            Verdict::Fails,
+            format!(
+                "the tracking loop is unstable at a speed the spacing law may command in {range_text} ({})",
+                speed_text()
+            ),
+        );
+    }
+    match (sp.applicable, sp.stable, tr.stable_over_range) {
+        (true, Some(true), Some(true)) => (
+            Verdict::Holds,
+            format!(
+                "the spacing loop is stable (k_v = {} < k_v* = {} 1/s) and the tracking loop is stable at every speed checked in {range_text}",
+                Echo(sp.k_v_per_s.unwrap_or(0.0)),
+                sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string())
+            ),
+        ),
+        (false, _, Some(true)) => (
+            Verdict::Holds,
+            format!(
+                "no spacing loop ({}); the tracking loop is stable at every speed checked in {range_text}",
+                sp.note
+            ),
+        ),
+        _ => (
+            Verdict::NotApplicable,
+            if tr.applicable {
+                "the loops could not all be computed (see the notes)".into()
+            } else {
+                format!("the tracking loop's sampled check does not apply: {}", tr.note)
+            },
+        ),
+    }
+}
+
+impl TeamCheckReport {
+    /// The text of `isotrack check`'s team section, line by line.
+    pub fn lines(&self) -> Vec<String> {
+        let sp = &self.spacing;
+        let tr = &self.tracking;
+        let mut out = vec![format!(
+            "Team ({} vehicles, team.spacing = {}{}; docs/TEAMS.md)",
+            self.count,
+            self.spacing_law,
+            if self.coordinate_free {
+                ""
+            } else {
+                ", a reference: not coordinate-free"
+            }
+        )];
+        out.push(format!(
+            "  team verdict: {} ({})",
+            self.verdict.as_str(),
+            self.verdict_reason
+        ));
+        if !sp.applicable {
+            out.push(format!("  spacing loop: {}", sp.note));
+        } else {
+            out.push(format!(
+                "  spacing loop sampled at the ranging period T = {} s, delay {} s = (q + f) T with q = {}, f = {}",
+                Num(sp.period_s),
+                Num(sp.delay_s),
+                sp.delay_whole_periods.map_or("n/a".into(), |q| q.to_string()),
+                sp.delay_fraction.map_or("n/a".into(), |f| Num(f).to_string())
+            ));
+            let c = sp.range_slope.unwrap_or(1.0);
+            out.push(format!(
+                "  range slope c = dr/dg = {} ({})",
+                Num(c),
+                match sp.range_slope_source {
+                    Some("circle_chord") =>
+                        "chord of the circular isoline at even spacing, cos(pi/N)",
+                    Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
+                    _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
+                }
+            ));
+            let modes: Vec<String> = sp
+                .modes
+                .iter()
+                .map(|m| {
+                    format!(
+                        "m = {}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
+                        m.m,
+                        Num(m.lambda),
+                        Num(m.gain_per_period),
+                        m.spectral_radius
+                            .map_or("n/a".into(), |r| format!("{r:.6}")),
+                        if m.stable { "stable" } else { "UNSTABLE" }
+                    )
+                })
+                .collect();
+            out.push(format!(
+                "  ring Laplacian eigenvalues ({}; m = 0, the sum of the gaps, is conserved):",
+                if sp.all_modes_listed {
+                    "every distinct one"
+                } else {
+                    "the smallest and the largest of many"
+                }
+            ));
+            out.extend(modes.into_iter().map(|m| format!("    {m}")));
+            if let (Some(g), Some(k), Some(lmax)) = (
+                sp.max_gain_per_period,
+                sp.max_stable_k_v_per_s,
+                sp.lambda_max,
+            ) {
+                out.push(format!(
+                    "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
+                    Num(g),
+                    Num(sp.period_s),
+                    Num(c),
+                    Num(lmax),
+                    Num(k),
+                    Echo(sp.k_v_per_s.unwrap_or(0.0)),
+                    match sp.stable {
+                        Some(true) => "stable",
+                        Some(false) => "UNSTABLE",
+                        None => "not computed",
+                    }
+                ));
+            }
+            if !sp.note.is_empty() {
+                out.push(format!("  note: {}", sp.note));
+            }
+            let num =
+                |x: Option<f64>| x.map_or("n/a (does not decay)".into(), |v| Num(v).to_string());
+            out.push(format!(
+                "  slowest mode (m = 1): time constant {} s sampled (-T/ln rho), {} s continuous (1/(k_v c lambda_1))",
+                num(sp.slowest_time_constant_s),
+                num(sp.slowest_time_constant_continuous_s)
+            ));
+            for w in &sp.not_modelled {
+                out.push(format!("  not modelled: {w}"));
+            }
+        }
+        if !tr.applicable {
+            out.push(format!(
+                "  tracking loop over the commanded speeds: not applicable: {}",
+                tr.note
+            ));
+            return out;
+        }
+        let state = match tr.stable_over_range {
+            Some(true) => "stable at every speed",
+            Some(false) => "UNSTABLE",
+            None => "not computed at every speed",
+        };
+        out.push(format!(
+            "  tracking loop over the commanded speeds [{}, {}] m/s ({} speeds): worst spectral radius {} at {} m/s -> {}",
+            Num(tr.speed_range_mps[0]),
+            Num(tr.speed_range_mps[1]),
+            tr.speeds_mps.len(),
+            tr.worst_spectral_radius
+                .map_or("none (no equilibrium)".into(), |r| format!("{r:.6}")),
+            tr.worst_speed_mps.map_or("n/a".into(), |v| Num(v).to_string()),
+            state
+        ));
+        if !tr.note.is_empty() {
+            out.push(format!("  note: {}", tr.note));
+        }
+        out
+    }
+}

@@ -1,0 +1,316 @@
+//! `check`'s `team` section (issue 32 item 4, docs/TEAMS.md "Theory") against numbers worked by
+//! hand, the closed forms of the delayed difference equation, the single-vehicle check at the
+//! ends of the speed range, and simulation on `scenarios/team-circular-4.toml`.
+
+use isotrack_scenario::check::{check, Verdict};
+use isotrack_scenario::{parse_scenario, Scenario};
+use isotrack_sim::NoTrace;
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::Path;
+
+fn circular_text() -> String {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/team-circular-4.toml");
+    std::fs::read_to_string(p).unwrap()
+}
+
+fn circular(sets: &[&str]) -> Scenario {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    parse_scenario(&circular_text(), "team-circular-4.toml", &sets).unwrap()
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * b.abs().max(1.0)
+}
+
+/// N = 4, T = 0.1 s, no delay: forward Euler's `g* = 2`, `lambda_max = 4`, so
+/// `k_v* = 2/(0.1 * 4 c) = 5/c`; on the circle `c = cos(pi/4)`, the distinct eigenvalues are
+/// `lambda_1 = 2 - 2 cos(pi/2) = 2` and `lambda_2 = 4`, and the slowest mode's continuous time
+/// constant `1/(k_v c lambda_1)`.
+#[test]
+fn largest_stable_gain_by_hand_for_four_at_ten_hz() {
+    let s = circular(&[]);
+    let t = check(&s, None)
+        .team
+        .expect("a team scenario has a team section");
+    let sp = &t.spacing;
+    let c = (PI / 4.0).cos();
+    assert!(sp.applicable);
+    assert_eq!(sp.range_slope_source, Some("circle_chord"));
+    assert!(close(sp.range_slope.unwrap(), c, 1e-12));
+    assert!(close(sp.max_gain_per_period.unwrap(), 2.0, 1e-9), "{sp:?}");
+    assert!(
+        close(sp.max_stable_k_v_per_s.unwrap(), 5.0 / c, 1e-9),
+        "{sp:?}"
+    );
+    let lambdas: Vec<f64> = sp.modes.iter().map(|m| m.lambda).collect();
+    assert_eq!(sp.modes.iter().map(|m| m.m).collect::<Vec<_>>(), [1, 2]);
+    assert!(close(lambdas[0], 2.0, 1e-12) && close(lambdas[1], 4.0, 1e-12));
+    // g = k_v c lambda T with k_v = 0.1, T = 0.1.
+    assert!(close(
+        sp.modes[1].gain_per_period,
+        0.1 * c * 4.0 * 0.1,
+        1e-12
+    ));
+    // No delay: the mode polynomial is z - (1 - g), its root 1 - g.
+    let g1 = 0.1 * c * 2.0 * 0.1;
+    assert!(close(sp.modes[0].spectral_radius.unwrap(), 1.0 - g1, 1e-9));
+    assert!(close(
+        sp.slowest_time_constant_continuous_s.unwrap(),
+        1.0 / (0.1 * c * 2.0),
+        1e-12
+    ));
+    // Sampled: -T/ln(1 - g1).
+    assert!(close(
+        sp.slowest_time_constant_s.unwrap(),
+        -0.1 / (1.0 - g1).ln(),
+        1e-6
+    ));
+    assert_eq!(sp.stable, Some(true));
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    // On a field whose isoline is not known to be a circle, c = 1 (conservative): k_v* = 5.
+    let plume = "[field]\nkind = \"gaussian_plumes\"\nbackground = 0.0\nsources = [{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [8.0, 8.0], rotation_rad = 0.0 }]\n[controller]\nlevel = 10.0\n[vehicle]\nkind = \"dubins\"\nspeed_mps = 0.5\n[sim]\nduration_s = 60.0\n[team]\ncount = 4\nspread = { along = \"arc\", center_m = [0.0, 0.0], radius_m = 6.66, step_rad = 0.3 }\nk_v = 0.1\nranging = { rate_hz = 10.0 }\n";
+    let p = parse_scenario(plume, "<test>", &[]).unwrap();
+    let sp = check(&p, None).team.unwrap().spacing;
+    assert_eq!(sp.range_slope_source, Some("conservative"));
+    assert!(close(sp.max_stable_k_v_per_s.unwrap(), 5.0, 1e-9), "{sp:?}");
+}
+
+/// A whole number `q` of periods of delay: `x_{j+1} - x_j + g x_{j-q} = 0` is stable iff
+/// `g < 2 cos(q pi/(2q + 1))` (Levin & May 1976): 1 for `q = 1`, `2 cos(2 pi/5) = 0.618034` for
+/// `q = 2`. An odd ring of five has `lambda_max = 2 + 2 cos(pi/5)`.
+#[test]
+fn whole_period_delays_give_levin_and_may() {
+    let c = (PI / 4.0).cos();
+    for (q, g_star) in [(1usize, 1.0), (2, 2.0 * (2.0 * PI / 5.0).cos())] {
+        let d = format!("team.ranging.delay_s={}", 0.1 * q as f64);
+        let s = circular(&[&d]);
+        let sp = check(&s, None).team.unwrap().spacing;
+        assert_eq!(sp.delay_whole_periods, Some(q));
+        assert_eq!(sp.delay_fraction, Some(0.0));
+        assert!(
+            close(sp.max_gain_per_period.unwrap(), g_star, 1e-9),
+            "{sp:?}"
+        );
+        assert!(
+            close(
+                sp.max_stable_k_v_per_s.unwrap(),
+                g_star / (0.1 * c * 4.0),
+                1e-9
+            ),
+            "q = {q}: {sp:?}"
+        );
+    }
+    // Five robots (spread 0.3 rad apart), no delay: k_v* = 2/(0.1 cos(pi/5) (2 + 2 cos(pi/5))).
+    let s = circular(&["team.count=5"]);
+    let sp = check(&s, None).team.unwrap().spacing;
+    let c5 = (PI / 5.0).cos();
+    assert!(close(sp.lambda_max.unwrap(), 2.0 + 2.0 * c5, 1e-12));
+    assert!(close(
+        sp.max_stable_k_v_per_s.unwrap(),
+        2.0 / (0.1 * c5 * (2.0 + 2.0 * c5)),
+        1e-9
+    ));
+    assert_eq!(sp.modes.len(), 2);
+}
+
+/// A gain past `k_v*` fails the team's verdict and the check's; `none` has no spacing loop and
+/// checks the tracking loop at `v0` only; two robots with `range_balance` are refused a loop.
+#[test]
+fn verdicts_follow_the_gain_and_the_law() {
+    let c = (PI / 4.0).cos();
+    let k = format!("team.k_v={}", 1.01 * 5.0 / c);
+    let r = check(&circular(&[&k]), None);
+    let t = r.team.as_ref().unwrap();
+    assert_eq!(t.spacing.stable, Some(false));
+    assert_eq!(t.verdict, Verdict::Fails);
+    assert_eq!(r.verdict, Verdict::Fails);
+    assert!(r
+        .verdict_reason
+        .starts_with("team: the spacing loop is unstable"));
+    let k = format!("team.k_v={}", 0.99 * 5.0 / c);
+    let r = check(&circular(&[&k]), None);
+    assert_eq!(r.team.as_ref().unwrap().spacing.stable, Some(true));
+    assert_eq!(r.verdict, Verdict::Holds, "{}", r.verdict_reason);
+
+    let r = check(&circular(&["team.spacing=\"none\""]), None);
+    let t = r.team.unwrap();
+    assert!(!t.spacing.applicable);
+    assert_eq!(t.tracking.speeds_mps, [0.5]);
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+
+    let t = check(&circular(&["team.count=2"]), None).team.unwrap();
+    assert!(!t.spacing.applicable);
+    assert!(
+        t.spacing.note.contains("does nothing"),
+        "{}",
+        t.spacing.note
+    );
+}
+
+/// The tracking loop over `[v_min, v_max]`: a grid with both ends (and `v0`) whose radius at
+/// each end is the single-vehicle check's at that speed; at 4 Hz sensing the loop is stable at
+/// `v0 = 0.5 m/s` but not at 1.5 m/s, so a range reaching 1.5 fails and one up to 0.75 holds.
+#[test]
+fn tracking_is_checked_over_the_commanded_speeds() {
+    let r = check(&circular(&[]), None);
+    let tr = &r.team.as_ref().unwrap().tracking;
+    assert_eq!(tr.speeds_mps.len(), 9);
+    assert_eq!(tr.speeds_mps[0], 0.25);
+    assert_eq!(tr.speeds_mps[8], 0.75);
+    assert!(tr.speeds_mps.contains(&0.5));
+    for (i, v) in [(0usize, 0.25), (8, 0.75)] {
+        let one = check(
+            &circular(&[
+                &format!("vehicle.speed_mps={v}"),
+                "team.v_min_mps=0.25",
+                "team.v_max_mps=0.75",
+            ]),
+            None,
+        );
+        let rho = one.sampled.spectral_radius.unwrap();
+        assert!(
+            close(tr.spectral_radii[i].unwrap(), rho, 1e-12),
+            "{v}: {:?} vs {rho}",
+            tr.spectral_radii[i]
+        );
+    }
+    assert_eq!(tr.stable_over_range, Some(true));
+
+    let slow = ["sensor.rate_hz=4.0", "team.v_max_mps=1.5"];
+    let at_v0 = check(&circular(&["sensor.rate_hz=4.0"]), None);
+    assert_eq!(at_v0.sampled.stable, Some(true));
+    let fast = check(
+        &circular(&[
+            "sensor.rate_hz=4.0",
+            "vehicle.speed_mps=1.5",
+            "team.v_max_mps=1.5",
+        ]),
+        None,
+    );
+    assert_eq!(
+        fast.sampled.stable,
+        Some(false),
+        "{:?}",
+        fast.sampled.spectral_radius
+    );
+    let r = check(&circular(&slow), None);
+    let t = r.team.as_ref().unwrap();
+    assert_eq!(r.sampled.stable, Some(true));
+    assert_eq!(t.tracking.stable_over_range, Some(false));
+    assert_eq!(t.tracking.worst_speed_mps, Some(1.5));
+    assert_eq!(t.verdict, Verdict::Fails);
+    assert_eq!(r.verdict, Verdict::Fails);
+    assert!(r
+        .verdict_reason
+        .contains("tracking loop is unstable at a speed"));
+    // The none law commands v0 only: the same scenario holds.
+    let mut none = slow.to_vec();
+    none.push("team.spacing=\"none\"");
+    let t = check(&circular(&none), None).team.unwrap();
+    assert_eq!(t.tracking.stable_over_range, Some(true));
+}
+
+/// The gap CV of `n` points at angles `a` on a circle (population standard deviation of the
+/// gaps over their mean).
+fn cv_of(a: &[f64]) -> f64 {
+    let mut a: Vec<f64> = a.iter().map(|t| t.rem_euclid(2.0 * PI)).collect();
+    a.sort_by(f64::total_cmp);
+    let n = a.len();
+    let gaps: Vec<f64> = (0..n)
+        .map(|i| {
+            if i + 1 == n {
+                a[0] + 2.0 * PI - a[i]
+            } else {
+                a[i + 1] - a[i]
+            }
+        })
+        .collect();
+    let mean = 2.0 * PI / n as f64;
+    (gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64).sqrt() / mean
+}
+
+/// The check's spacing verdict against simulation on team-circular-4 (as tests/sampled.rs
+/// does for one vehicle): evenly spread but robot 1 0.01 rad off, ideal ranging; a cell the
+/// check calls stable ends with the steady window's gap CV under half the start's, an unstable
+/// one above the start's.
+#[test]
+fn spacing_verdict_agrees_with_simulation() {
+    let r_m = 10.0 * std::f64::consts::LN_2;
+    let mut angles: Vec<f64> = (0..4).map(|i| -2.0 * PI * i as f64 / 4.0).collect();
+    angles[1] += 0.01;
+    let cv0 = cv_of(&angles);
+    let starts: Vec<String> = angles
+        .iter()
+        .map(|th| {
+            format!(
+                "{{x_m = {:?}, y_m = {:?}, heading_rad = {:?}}}",
+                r_m * th.cos(),
+                r_m * th.sin(),
+                th - FRAC_PI_2
+            )
+        })
+        .collect();
+    let text = circular_text()
+        .lines()
+        .filter(|l| !l.starts_with("spread ="))
+        .collect::<Vec<_>>()
+        .join("\n")
+        .replace(
+            "count = 4\n",
+            &format!("starts = [{}]\n", starts.join(", ")),
+        );
+    let c = (PI / 4.0).cos();
+    let mut table = vec![];
+    let mut disagree = 0;
+    // (ranging rate, delay in periods, k_v as a multiple of the 10 Hz no-delay k_v* = 5/c)
+    for (rate_hz, delay_periods, factor) in [
+        (2.0, 0.0, 0.5),
+        (2.0, 0.0, 2.0),
+        (2.0, 1.0, 0.4),
+        (2.0, 1.0, 1.5),
+        (5.0, 0.5, 0.5),
+        (5.0, 0.5, 1.5),
+    ] {
+        let t_s: f64 = 1.0 / rate_hz;
+        let d = delay_periods * t_s;
+        // k_v* at this rate and delay = g*/(T c 4); the factor is of it.
+        let g_star: f64 = match (delay_periods as u32, delay_periods.fract() > 0.0) {
+            (0, false) => 2.0,
+            (1, false) => 1.0,
+            // f = 1/2, q = 0: min(1/f, 2/(1 - 2f)) = 2.
+            _ => 2.0,
+        };
+        let k = factor * g_star / (t_s * c * 4.0);
+        let tau = 1.0 / (k * c * 2.0);
+        let duration = (40.0 * tau + 20.0 * (t_s + d)).ceil().max(60.0);
+        let sets: Vec<String> = vec![
+            format!("team.k_v={k}"),
+            format!("team.ranging.rate_hz={rate_hz}"),
+            format!("team.ranging.delay_s={d}"),
+            format!("sim.duration_s={duration}"),
+            "team.v_min_mps=0.05".into(),
+            "team.v_max_mps=1.5".into(),
+        ];
+        let s = parse_scenario(&text, "<grid>", &sets).unwrap();
+        let rep = check(&s, None).team.unwrap().spacing;
+        let predicted = rep.stable.unwrap();
+        let run = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+        let cv = run.team.unwrap().gap_cv.unwrap();
+        let simulated = if cv < 0.5 * cv0 {
+            Some(true)
+        } else if cv > cv0 {
+            Some(false)
+        } else {
+            None
+        };
+        table.push(format!(
+            "{rate_hz} Hz, delay {d} s, k_v {k:.4} (k_v* {:.4}): predicted {predicted}, gap CV {cv0:.5} -> {cv:.5}",
+            rep.max_stable_k_v_per_s.unwrap()
+        ));
+        if simulated != Some(predicted) {
+            disagree += 1;
+        }
+    }
+    eprintln!("{}", table.join("\n"));
+    assert_eq!(disagree, 0, "{}", table.join("\n"));
+}
