@@ -67,18 +67,10 @@ fn with_record_rate(scenario: &PyScenario, rate: Option<f64>) -> PyResult<Scenar
 /// vehicle 0's, the `team` object and the `vehicles` array.
 fn team_summary_json(s: &Scenario, origin: &str, r: &TeamResult) -> PyResult<String> {
     let warnings = isotrack_scenario::check::warnings(s);
-    let summary = isotrack_runs::summary::Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION"),
-        scenario_path: (!origin.starts_with('<')).then(|| origin.to_string()),
-        result: &r.runs[0],
-        warnings: &warnings,
-        data_files: isotrack_runs::summary::data_file_digests(s),
-        team: Some(isotrack_runs::summary::TeamJson::new(s, r)),
-        vehicles: Some(r.runs.as_slice()),
-        scenario: s.file(),
-    };
-    isotrack_runs::summary::summary_to_json(&summary)
-        .map_err(|e| PyValueError::new_err(e.to_string()))
+    let path = (!origin.starts_with('<')).then(|| std::path::Path::new(origin));
+    // Without its final newline: the writer adds it (`write_team_run`).
+    let json = isotrack_runs::summary::Summary::of_team(s, path, r, &warnings).to_json();
+    Ok(json.trim_end_matches('\n').to_string())
 }
 
 /// The trace's columns as numpy arrays, named as `trace.csv`'s (`s_measured` NaN where no
@@ -248,7 +240,8 @@ pub fn write_team_run(
     }
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let path = dir.join("trace.csv");
-    let w = RefCell::new(TraceWriter::create_team(&path, flying).map_err(|e| io(&path, e))?);
+    let mut tw = TraceWriter::create_team(&path, flying).map_err(|e| io(&path, e))?;
+    let w = RefCell::new(&mut tw);
     let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
     for (i, &t_s) in t.iter().enumerate() {
         let m = cols[6][i];
@@ -270,7 +263,7 @@ pub fn write_team_run(
         });
     }
     drop(team_sinks);
-    w.into_inner().finish().map_err(|e| io(&path, e))?;
+    tw.finish().map_err(|e| io(&path, e))?;
     let path = dir.join("summary.json");
     isotrack_runs::files::write_atomic(&path, format!("{summary_json}\n").as_bytes())
         .map_err(|e| io(&path, e))?;
