@@ -5,8 +5,8 @@
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
-use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::rundir::RunDir;
+use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::trace::TELEMETRY_COLUMNS;
 use isotrack_runs::{exit, Failure};
 use isotrack_sim::{TraceRow, TraceSink};
@@ -155,8 +155,10 @@ pub fn plot(
     if !args.runs.iter().all(|d| d.is_dir()) {
         // Refused at once, with the command's message (nothing is created for it).
         return crate::guard::no_panic(|| {
-            py.detach(|| isotrack_commands::console::quietly(|| isotrack_commands::figures::plot(&args)))
-                .map_err(failure)
+            py.detach(|| {
+                isotrack_commands::console::quietly(|| isotrack_commands::figures::plot(&args))
+            })
+            .map_err(failure)
         });
     }
     let dir = args.out.clone().unwrap_or_else(|| args.runs[0].clone());
