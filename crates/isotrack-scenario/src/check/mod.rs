@@ -2331,11 +2331,13 @@ mod tests {
 
     /// Issue 30 (fix30c): a field of 4e-308 (level 2e-308) makes `omega0 = kp c1 tanh(eps/c2)`
     /// about 1e-308 rad/s, two turning radii 1e308 m; the warning's radius is at most the
-    /// run's reach, 0.5 m/s x 2 s = 1 m (the default robot over `sim.duration_s = 2`).
+    /// run's reach, 0.5 m/s x 2 s = 1 m (the default robot over `sim.duration_s = 2`). The
+    /// convergence tolerance is set: its default follows the level down to a subnormal one,
+    /// which is refused.
     #[test]
     fn a_flat_start_radius_is_at_most_the_runs_reach() {
         let s = crate::parse_scenario(
-            "field.i0 = 4e-308\ncontroller.level = 2e-308\nsim.duration_s = 2.0\n",
+            "field.i0 = 4e-308\ncontroller.level = 2e-308\nsim.duration_s = 2.0\nmetrics.convergence_tolerance = 0.1\n",
             "<test>",
             &[],
         )

@@ -197,8 +197,7 @@ fn search_geometry_is_derived() {
 fn a_lawnmower_tighter_than_the_turn_rate_limit_is_refused() {
     let base = "[vehicle]\nspeed_mps = 1.0\n[controller]\nsearch = \"lawnmower\"\nmax_turn_rate_radps = 0.5\n";
     let e = parse_scenario(&format!("{base}search_spacing_m = 0.2\n"), "<test>", &[])
-        .err()
-        .expect("a 5 rad/s half-turn under a 0.5 rad/s limit is refused")
+        .expect_err("a 5 rad/s half-turn under a 0.5 rad/s limit is refused")
         .to_string();
     assert!(e.contains("controller.search_spacing_m"), "{e}");
     assert!(e.contains("4 m"), "{e}");
@@ -220,7 +219,7 @@ fn scenario_strings_are_plain_text() {
         ("field.units=\"m\\u0000\\u001b[31mRED\"", "field.units"),
         ("name=\"a\\u202eb\"", "name"),
         ("name=\"pi\\u200b\"", "name"),
-        ("description=\"x\\u2028y\"", "description"),
+        ("description=\"x\\u0007y\"", "description"),
     ] {
         let e = parse_scenario("", "<test>", &[set.to_string()])
             .err()
