@@ -208,6 +208,8 @@ def test_a_pymavlink_ground_station_hands_over_to_fly():
                 if q.poll() is None:
                     q.kill()
         assert fly.returncode == 75, err
+        # A planned end, not called a failsafe (issue 33).
+        assert "ended at its --max-duration-s" in err and "ended by a failsafe" not in err, err
         m = re.search(r"end         max_duration \((\d+) measurements, (\d+) law commands\)", out)
         assert m and int(m.group(2)) > 0, out + err
         p.wait(timeout=60)

@@ -116,11 +116,18 @@ pub struct FlyArgs {
     /// Arm the vehicle and switch it to OFFBOARD (else wait for the pilot to).
     #[arg(long)]
     pub take_control: bool,
+    /// With --take-control, also arm and take a vehicle announcing MAV_TYPE_GENERIC (which
+    /// says nothing of its airframe; MAVSDK's autopilot server announces it): refused
+    /// otherwise (exit 65, vehicle_mismatch).
+    #[arg(long)]
+    pub allow_generic: bool,
     /// Write `trace.csv` (received positions, measurements, commands), `summary.json`,
     /// `scenario.toml` and the raw MAVLink log `mavlink.tlog` into DIR.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Fail safe after this much vehicle time since the first measurement, s.
+    /// End the flight (commanding the --failsafe mode) after this long since the companion has
+    /// control (the first measurement it answers armed and in OFFBOARD), of vehicle time or of
+    /// its own clock, whichever comes first, s.
     #[arg(long, value_name = "S")]
     pub max_duration_s: Option<f64>,
     /// Fail safe after this long without a message from the vehicle or a measurement, s.

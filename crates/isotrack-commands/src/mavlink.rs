@@ -233,6 +233,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     let mut opts = FlyOptions::new(&args.mavlink);
     opts.sensor = sensor;
     opts.take_control = args.take_control;
+    opts.allow_generic = args.allow_generic;
     opts.max_duration_s = args.max_duration_s;
     opts.timeout_s = args.timeout_s;
     opts.fence_m = args.fence_m;
@@ -402,17 +403,26 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             ),
         });
     }
-    if commanded || report.end == FlyEnd::ControlRefused {
+    if report.end == FlyEnd::ControlRefused && !commanded {
+        // Control was not taken and no way out was sent: the vehicle's mode stands (README's
+        // exit table: 79, nothing commanded).
+        return Err(Failure {
+            code: NOTHING_COMMANDED,
+            message: "control_refused: control was not taken (see above): the companion stopped and commanded nothing (the vehicle's mode stands)".into(),
+        });
+    }
+    if commanded && report.end == FlyEnd::MaxDuration {
+        return Err(Failure {
+            code: exit::FAILSAFE,
+            message: "the flight ended at its --max-duration-s (max_duration): the way out was commanded, confirmed by the vehicle".into(),
+        });
+    }
+    if commanded {
         return Err(Failure {
             code: exit::FAILSAFE,
             message: format!(
-                "the flight was ended by a failsafe ({}){}",
+                "the flight was ended by a failsafe ({}), confirmed by the vehicle",
                 report.end.as_str(),
-                if commanded {
-                    ", confirmed by the vehicle"
-                } else {
-                    ""
-                }
             ),
         });
     }

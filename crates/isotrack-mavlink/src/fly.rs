@@ -82,7 +82,8 @@ pub enum KindMatch {
     Yes,
     /// `MAV_TYPE_GENERIC` ("a generic micro air vehicle", what MAVSDK's autopilot server
     /// announces): it says nothing of the airframe; flown as the scenario's kind, with a
-    /// warning logged.
+    /// warning logged, when the pilot hands over; with `take_control` refused unless
+    /// [`FlyOptions::allow_generic`].
     Unknown,
     /// Another type: refused before any setpoint or command (`vehicle_mismatch`).
     No,
@@ -238,7 +239,12 @@ pub struct FlyOptions {
     pub sensor: SensorSource,
     /// Arm and switch to OFFBOARD (else wait for the pilot to).
     pub take_control: bool,
-    /// End after this much vehicle time since the first measurement, s.
+    /// With `take_control`, also take a vehicle announcing `MAV_TYPE_GENERIC` (which says
+    /// nothing of its airframe); without it such a vehicle is refused (`vehicle_mismatch`)
+    /// before any setpoint or command. Without `take_control` it is flown with a warning.
+    pub allow_generic: bool,
+    /// End after this long since the companion has control (the first measurement answered
+    /// armed and in OFFBOARD), of vehicle time or of the companion's clock, whichever first, s.
     pub max_duration_s: Option<f64>,
     /// Fail safe after this long without a message from the vehicle or a measurement, wall s.
     pub timeout_s: f64,
@@ -265,6 +271,7 @@ impl FlyOptions {
             url: url.to_string(),
             sensor: SensorSource::Named(wire::MEASUREMENT_NAME.into()),
             take_control: false,
+            allow_generic: false,
             max_duration_s: None,
             timeout_s: 3.0,
             fence_m: None,
@@ -1355,7 +1362,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// Whether the vehicle's `type` fits the scenario's kind: a mismatch ends the flight before
-    /// any setpoint or command; `MAV_TYPE_GENERIC` is flown with a warning.
+    /// any setpoint or command; `MAV_TYPE_GENERIC` is flown with a warning when the pilot
+    /// hands over, and refused with `take_control` unless `allow_generic`.
     fn check_kind(&mut self, from: (u32, u8), mavtype: MavType) {
         let kind = kind_name(self.transport);
         let types = match self.transport {
@@ -1369,6 +1377,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             .join(", ");
         match vehicle_kind_match(self.transport, mavtype) {
             KindMatch::Yes => {}
+            KindMatch::Unknown if self.opts.take_control && !self.opts.allow_generic => {
+                self.mismatch = Some(format!(
+                    "vehicle_mismatch: the vehicle (system {}, component {}) announces {mavtype:?}, which says nothing of its airframe: --take-control refuses it before any setpoint or command (the scenario's vehicle is {kind}: {list}); if it is one, pass --allow-generic",
+                    from.0, from.1
+                ));
+            }
             KindMatch::Unknown => self.event(format!(
                 "the vehicle (system {}, component {}) announces {mavtype:?}, which says nothing of its airframe: flown as the scenario's {kind}; make sure it is one ({list})",
                 from.0, from.1
@@ -1553,6 +1567,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             WayOut::Disarm => "disarm",
         };
         self.event(match (confirmed, way) {
+            // `why` is the other safe mode the vehicle went to, when it did.
+            (true, WayOut::Mode(_)) if !why.is_empty() => {
+                format!("the vehicle is in {why}, not the {what} commanded ({tries} tries)")
+            }
             (true, WayOut::Mode(_)) => format!("the vehicle is in {what} ({tries} tries)"),
             (true, WayOut::Disarm) => format!("the vehicle is disarmed ({tries} tries)"),
             (false, _) => format!("the vehicle did not confirm the {what} ({tries} tries, {why})"),
@@ -1564,7 +1582,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// or the link is lost (no message from the vehicle for `timeout_s`; at least 5 tries even
     /// then: the vehicle may hear what it cannot answer), a new signal arrives, or the
     /// retries' bound passes (3 x `timeout_s` within [3, 30] s). Returns (confirmed, tries, why
-    /// not).
+    /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
         let (cmd, params) = match way {
             WayOut::Mode(m) => match self.firmware.set_mode_params(m) {
@@ -1606,7 +1624,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     self.event(format!(
                         "the vehicle went to {name}, not the {asked} commanded: a safe mode all the same, the failsafe ends there (not insisted on)"
                     ));
-                    return Ok((true, tries, ""));
+                    return Ok((true, tries, name));
                 }
                 Some(Answer::Refused) => return Ok((false, tries, "refused")),
                 None => {}

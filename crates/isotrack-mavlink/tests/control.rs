@@ -781,6 +781,7 @@ fn a_vehicle_without_a_mode_table_is_never_armed() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.allow_generic = true;
         o.max_duration_s = Some(0.5);
     });
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
@@ -835,6 +836,39 @@ fn a_vehicle_of_another_kind_is_refused_before_anything_is_sent() {
         let e = r.events.iter().find(|e| e.contains("vehicle_mismatch"));
         assert!(
             e.is_some_and(|e| e.contains(&format!("{mavtype:?}")) && e.contains(kind)),
+            "{case}"
+        );
+    }
+}
+
+/// `--take-control` and a vehicle announcing `MAV_TYPE_GENERIC` (PX4 and ArduPilot, for a
+/// fixed-wing and a ground scenario) without `--allow-generic`: refused (`vehicle_mismatch`)
+/// before any setpoint or command, as a vehicle of another kind is.
+#[test]
+fn take_control_refuses_a_generic_vehicle_unless_allowed() {
+    for (autopilot, scenario) in [
+        (MavAutopilot::MAV_AUTOPILOT_PX4, "paper-fig3-uav.toml"),
+        (MavAutopilot::MAV_AUTOPILOT_PX4, "paper-fig2b-circular.toml"),
+        (
+            MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            "paper-fig2b-circular.toml",
+        ),
+    ] {
+        let script = Script {
+            firmware: (autopilot, MavType::MAV_TYPE_GENERIC),
+            scenario: Some(scenario),
+            ..Script::default()
+        };
+        let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+        let case = format!("{autopilot:?} {scenario}: {:?}", r.events);
+        assert_eq!(r.end, FlyEnd::VehicleMismatch, "{case}");
+        assert!(got.is_empty(), "{case}: {got:?}");
+        assert_eq!(setpoints, 0, "{case}");
+        assert!(r.commands.is_empty() && !r.way_out_commanded, "{case}");
+        assert!(
+            r.events
+                .iter()
+                .any(|e| e.contains("vehicle_mismatch") && e.contains("--allow-generic")),
             "{case}"
         );
     }
@@ -906,6 +940,17 @@ fn another_safe_mode_ends_the_failsafe() {
         r.events
             .iter()
             .any(|e| e.contains("went to HOLD, not the RETURN commanded")),
+        "{:?}",
+        r.events
+    );
+    // The mode it is in is named, in the last event too (the summary's outcome_detail).
+    assert!(
+        r.events.last().is_some_and(|e| e.contains("is in HOLD")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("is in RETURN")),
         "{:?}",
         r.events
     );
