@@ -177,9 +177,11 @@ def test_sweep_missing_path_with_equals(tmp_path):
 def test_reprs():
     r = repr(isotrack.Run({}, {}, None))
     assert r.startswith("Run(")
-    sc = short().set("name", "a\nb")
-    text = repr(sc)
-    assert "\n" not in text and "a\\nb" in text
+    # A control character in a name is refused (issue 30: one plain-text rule for every string).
+    with pytest.raises(isotrack.ScenarioError, match="control or invisible"):
+        short().set("name", "a\nb")
+    text = repr(short().set("name", 'a "b" \\ c'))
+    assert "\n" not in text and text.startswith("Scenario(")
 
 
 # 15. The library does not print.

@@ -1174,7 +1174,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     fn repeat(&mut self, ms: u64) -> Result<(), FlyError> {
         // Before control the vehicle waits for a pilot (or for OFFBOARD) and sends its
         // unanswered sample again: expected, not counted.
-        if self.active && self.ans.last_answer_in_control {
+        // Nor are copies of the measurement held through a take-over that arrive after control
+        // (sent before the vehicle saw the answer; a loaded machine widens that window).
+        if self.active && self.ans.last_answer_in_control && self.held_newest != Some(ms) {
             self.ans.repeated += 1;
         }
         if self.ans.repeated == 1 && !self.ans.repeat_logged {
