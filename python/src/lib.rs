@@ -452,8 +452,20 @@ fn trace_columns<'py>(
     rows: &[TraceRow],
     flying: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    trace_columns_by(py, rows, |r| r, flying)
+}
+
+/// [`trace_columns`] of any rows holding a [`TraceRow`] (`row` reads it): the single run's
+/// and a team's (`team::team_columns`, which adds the `vehicle` column) are one code.
+pub(crate) fn trace_columns_by<'py, T>(
+    py: Python<'py>,
+    rows: &[T],
+    row: impl Fn(&T) -> &TraceRow,
+    flying: bool,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    let col = |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(f).collect() };
+    let col =
+        |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(|r| f(row(r))).collect() };
     d.set_item("t_s", PyArray1::from_vec(py, col(&|r| r.t_s)))?;
     d.set_item("x_m", PyArray1::from_vec(py, col(&|r| r.x_m)))?;
     d.set_item("y_m", PyArray1::from_vec(py, col(&|r| r.y_m)))?;

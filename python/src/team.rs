@@ -76,38 +76,7 @@ fn team_summary_json(s: &Scenario, origin: &str, r: &TeamResult) -> PyResult<Str
 /// The trace's columns as numpy arrays, named as `trace.csv`'s (`s_measured` NaN where no
 /// sample was delivered yet), `vehicle` an int64 column.
 fn team_columns<'py>(py: Python<'py>, rows: &Rows, flying: bool) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    let col =
-        |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(|(_, r)| f(r)).collect() };
-    d.set_item("t_s", PyArray1::from_vec(py, col(&|r| r.t_s)))?;
-    d.set_item("x_m", PyArray1::from_vec(py, col(&|r| r.x_m)))?;
-    d.set_item("y_m", PyArray1::from_vec(py, col(&|r| r.y_m)))?;
-    d.set_item(
-        "heading_rad",
-        PyArray1::from_vec(py, col(&|r| r.heading_rad)),
-    )?;
-    d.set_item("s", PyArray1::from_vec(py, col(&|r| r.s)))?;
-    d.set_item("error", PyArray1::from_vec(py, col(&|r| r.error)))?;
-    d.set_item(
-        "omega_radps",
-        PyArray1::from_vec(py, col(&|r| r.omega_radps)),
-    )?;
-    d.set_item(
-        "s_measured",
-        PyArray1::from_vec(py, col(&|r| r.s_measured.unwrap_or(f64::NAN))),
-    )?;
-    if flying {
-        let t = |r: &TraceRow| r.telemetry.unwrap_or_default();
-        d.set_item(
-            "altitude_m",
-            PyArray1::from_vec(py, col(&|r| t(r).altitude_m)),
-        )?;
-        d.set_item(
-            "airspeed_mps",
-            PyArray1::from_vec(py, col(&|r| t(r).airspeed_mps)),
-        )?;
-        d.set_item("roll_rad", PyArray1::from_vec(py, col(&|r| t(r).roll_rad)))?;
-    }
+    let d = crate::trace_columns_by(py, rows, |(_, r)| r, flying)?;
     let v: Vec<i64> = rows.iter().map(|(i, _)| i64::from(*i)).collect();
     d.set_item(
         isotrack_runs::trace::VEHICLE_COLUMN,
