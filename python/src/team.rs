@@ -5,6 +5,7 @@
 //! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
 //! between each step's samples and its move so that agents outside the loop can answer.
 
+use crate::tools::column;
 use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
@@ -132,22 +133,6 @@ pub fn team_run<'py>(
 #[pyfunction]
 pub fn is_team(scenario: &PyScenario) -> bool {
     scenario.inner.spec().team.is_some()
-}
-
-/// One float64 trace column, checked to have `n` rows.
-fn column<'py>(trace: &Bound<'py, PyDict>, name: &str, n: Option<usize>) -> PyResult<Vec<f64>> {
-    let v = trace
-        .get_item(name)?
-        .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
-    let a: PyReadonlyArray1<'py, f64> = v.extract()?;
-    let v = a.as_array().to_vec();
-    match n {
-        Some(n) if v.len() != n => Err(PyValueError::new_err(format!(
-            "the trace's column `{name}` has {} rows, `t_s` has {n}",
-            v.len()
-        ))),
-        _ => Ok(v),
-    }
 }
 
 /// Writes a team's run directory as `isotrack run --out` does: `trace.csv` with the `vehicle`

@@ -40,8 +40,12 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
     code
 }
 
-/// One `trace.csv` column, checked to have `n` rows.
-fn column<'py>(trace: &Bound<'py, PyDict>, name: &str, n: Option<usize>) -> PyResult<Vec<f64>> {
+/// One `trace.csv` column, checked to have `n` rows (a single run's and a team's).
+pub(crate) fn column<'py>(
+    trace: &Bound<'py, PyDict>,
+    name: &str,
+    n: Option<usize>,
+) -> PyResult<Vec<f64>> {
     let v = trace
         .get_item(name)?
         .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
