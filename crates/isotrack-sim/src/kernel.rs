@@ -238,7 +238,14 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
         }
         self.last_valid_step = k;
         self.end_pos = pose.position;
-        if self.records() {
+        if self.records() && !sink.keeps_rows() {
+            // The recording schedule as below, into a sink that keeps nothing: no row built.
+            if self.record_countdown == 0 {
+                self.last_recorded_step = Some(k);
+                self.record_countdown = self.plan.record_every;
+            }
+            self.record_countdown -= 1;
+        } else if self.records() {
             // Only a recording run keeps its rows (the last valid one goes into the trace at the
             // end): without a trace, no row is built.
             let row = TraceRow {

@@ -43,5 +43,5 @@ pub use sensor::{
     SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
-pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult};
+pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads};
 pub use trace::{NoTrace, TraceRow, TraceSink};

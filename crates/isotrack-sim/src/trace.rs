@@ -27,6 +27,13 @@ pub struct TraceRow {
 pub trait TraceSink {
     /// Records one row.
     fn record(&mut self, row: &TraceRow);
+
+    /// Whether it keeps the rows it is given (`true` but for [`NoTrace`]): a run into a sink
+    /// that keeps none builds none (the recording schedule runs on all the same).
+    #[inline(always)]
+    fn keeps_rows(&self) -> bool {
+        true
+    }
 }
 
 /// Records nothing (benchmarks, sweeps).
@@ -36,6 +43,11 @@ pub struct NoTrace;
 impl TraceSink for NoTrace {
     #[inline]
     fn record(&mut self, _row: &TraceRow) {}
+
+    #[inline(always)]
+    fn keeps_rows(&self) -> bool {
+        false
+    }
 }
 
 impl TraceSink for Vec<TraceRow> {

@@ -457,39 +457,54 @@ fn thread_cpu_s() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
+/// The process's CPU time (user + system, every thread's, those ended included), s, from
+/// `/proc/self/stat` (`None` off Linux).
+fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
 /// Throughput of the 1000-robot ring (as benches/team.rs, 60 s at 100 Hz, range_balance on
-/// 10 Hz ranging, no team metrics) in vehicle-steps per second of this thread's CPU time and of
-/// wall time. Run by hand: `cargo test --release -p isotrack-sim --test team -- --ignored
-/// --nocapture throughput`.
+/// 10 Hz ranging, no team metrics) on 1 and 2 threads (`THREADS=1,2,3` to choose), in
+/// vehicle-steps per second of wall time and of CPU time (this thread's on one thread; the
+/// process's, every thread's, on several: rayon's idle workers spin a little, which counts).
+/// Run by hand: `cargo test --workspace --release --locked --all-features --test team --
+/// --ignored --nocapture throughput`.
 #[test]
 #[ignore]
 fn throughput_1000_ring() {
+    use isotrack_sim::{Group, TeamThreads};
     let n = 1000;
     let r = 10.0 * 20f64.ln();
     let v = vehicle(0.25, 0.75);
-    let members: Vec<_> = (0..n)
-        .map(|i| {
-            let th = -2.0 * PI * (i as f64 + 0.1 * (i % 3) as f64) / n as f64;
-            let x0 = DubinsState {
-                position_m: Vec2::new(r * th.cos(), r * th.sin()),
-                heading_rad: th - FRAC_PI_2,
-            };
-            TeamMember {
-                x0: v.state(x0, V0),
-                controller: PiIsoline::new(PiIsolineParams::paper_fig2b(1.0)),
-                sensor: Sensor::new(
-                    SensorConfig {
-                        rate_hz: 100.0,
-                        ..SensorConfig::default()
-                    },
-                    DT,
-                    i as u64,
-                )
-                .unwrap(),
-                ranging_seed: i as u64,
-            }
-        })
-        .collect();
+    let members = || -> Vec<_> {
+        (0..n)
+            .map(|i| {
+                let th = -2.0 * PI * (i as f64 + 0.1 * (i % 3) as f64) / n as f64;
+                let x0 = DubinsState {
+                    position_m: Vec2::new(r * th.cos(), r * th.sin()),
+                    heading_rad: th - FRAC_PI_2,
+                };
+                TeamMember {
+                    x0: v.state(x0, V0),
+                    controller: PiIsoline::new(PiIsolineParams::paper_fig2b(1.0)),
+                    sensor: Sensor::new(
+                        SensorConfig {
+                            rate_hz: 100.0,
+                            ..SensorConfig::default()
+                        },
+                        DT,
+                        i as u64,
+                    )
+                    .unwrap(),
+                    ranging_seed: i as u64,
+                }
+            })
+            .collect()
+    };
     let plan = StepPlan::new(DT, 60.0, 0.0, 0.2, 0.1, 10.0, 1.0).unwrap();
     let cfg = TeamConfig {
         ranging: ideal_ranging(10.0),
@@ -500,26 +515,37 @@ fn throughput_1000_ring() {
         },
         metrics: TeamMetricsConfig::default(),
     };
-    let (c0, w0) = (thread_cpu_s(), std::time::Instant::now());
-    let res = simulate_team(
-        &field(),
-        &v,
-        &plan,
-        cfg,
-        members,
-        None,
-        &Oracles::default(),
-        &mut [] as &mut [NoTrace],
-    )
-    .unwrap();
-    let wall = w0.elapsed().as_secs_f64();
-    let steps: u64 = res.runs.iter().map(|r| r.steps).sum();
-    let cpu = c0.zip(thread_cpu_s()).map(|(a, b)| b - a);
-    eprintln!(
-        "{steps} vehicle-steps: wall {wall:.3} s ({:.2} M/s), thread CPU {cpu:?} s ({:?} M/s)",
-        steps as f64 / wall / 1e6,
-        cpu.map(|c| steps as f64 / c / 1e6)
-    );
+    let threads: Vec<usize> = std::env::var("THREADS")
+        .unwrap_or_else(|_| "1,2".into())
+        .split(',')
+        .map(|t| t.trim().parse().unwrap())
+        .collect();
+    let mut first: Option<String> = None;
+    for t in threads {
+        let m = members();
+        let (c0, p0, w0) = (thread_cpu_s(), process_cpu_s(), std::time::Instant::now());
+        let mut g = Group::new(&v, &plan, cfg, m, None).unwrap();
+        g.drive_threads(
+            &field(),
+            &v,
+            &Oracles::default(),
+            &mut [] as &mut [NoTrace],
+            TeamThreads::new(t),
+        );
+        let res = g.finish(&mut [] as &mut [NoTrace]);
+        let wall = w0.elapsed().as_secs_f64();
+        let steps: u64 = res.runs.iter().map(|r| r.steps).sum();
+        let cpu = c0.zip(thread_cpu_s()).map(|(a, b)| b - a);
+        let pcpu = p0.zip(process_cpu_s()).map(|(a, b)| b - a);
+        eprintln!(
+            "{t} thread(s): {steps} vehicle-steps: wall {wall:.3} s ({:.2} M/s), this thread's CPU {cpu:?} s, the process's CPU {pcpu:?} s ({:?} M/s of CPU time)",
+            steps as f64 / wall / 1e6,
+            pcpu.map(|c| steps as f64 / c / 1e6)
+        );
+        // The same run on any number of threads.
+        let text = format!("{res:?}");
+        assert_eq!(first.get_or_insert_with(|| text.clone()), &text);
+    }
 }
 
 /// The circle of radius `R`, as a moving isoline whose every version is the inscribed
@@ -613,4 +639,122 @@ fn a_moving_isoline_gives_the_circle_metrics() {
     assert!((am - ac).abs() < 0.02 * ac, "{am} {ac}");
     assert_eq!(tm.order_preserved, tc.order_preserved);
     assert!(tc.moving_isoline.is_none());
+}
+
+/// One vehicle's sink into a team's one log (a trace file's order: every row with its vehicle).
+struct LogSink<'a> {
+    log: &'a std::cell::RefCell<Vec<(usize, isotrack_sim::TraceRow)>>,
+    vehicle: usize,
+}
+
+impl isotrack_sim::TraceSink for LogSink<'_> {
+    fn record(&mut self, row: &isotrack_sim::TraceRow) {
+        self.log.borrow_mut().push((self.vehicle, *row));
+    }
+}
+
+/// A team of 60 robots (seven full chunks of eight lanes and a partial one) on the circle,
+/// every row traced (`record_rate_hz` 100) into one log, the team metrics every step: its
+/// result and log as text (`{:?}` prints each `f64` exactly, the shortest text that reads back
+/// to the same bits), driven on up to `threads` threads, each stepping at least eight
+/// vehicles (one chunk).
+fn threaded_team(law: SpacingLaw, ring: RingMode, threads: usize, duration_s: f64) -> String {
+    use isotrack_sim::{Group, TeamThreads};
+    let n = 60;
+    let angles: Vec<f64> = (0..n)
+        .map(|i| -2.0 * PI * (i as f64 + 0.3 * (i % 4) as f64) / n as f64)
+        .collect();
+    let v = vehicle(0.25, 0.75);
+    let plan = StepPlan::new(DT, duration_s, 100.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        // Noisy, lossy, delayed ranging, its range limit (0.9 m) within the spread of the
+        // gaps (0.73 m on average, 0.22 m to 0.95 m at the start).
+        ranging: RangingConfig {
+            rate_hz: 5.0,
+            noise_std_m: 0.05,
+            max_range_m: 0.9,
+            dropout_probability: 0.2,
+            delay_s: 0.3,
+        },
+        spacing: SpacingConfig {
+            law,
+            nominal_speed_mps: V0,
+            ring,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let mut members = members(&v, &angles, 100.0);
+    for (i, m) in members.iter_mut().enumerate() {
+        // Noisy sensors too.
+        m.sensor = Sensor::new(
+            SensorConfig {
+                rate_hz: 50.0,
+                noise_std: 0.01,
+                ..SensorConfig::default()
+            },
+            DT,
+            7 + i as u64,
+        )
+        .unwrap();
+    }
+    let a = arc();
+    let log = std::cell::RefCell::new(Vec::new());
+    let mut sinks: Vec<LogSink<'_>> = (0..n)
+        .map(|vehicle| LogSink { log: &log, vehicle })
+        .collect();
+    let mut g = Group::new(&v, &plan, cfg, members, Some(&a)).unwrap();
+    let split = TeamThreads {
+        threads,
+        min_vehicles_per_thread: 8,
+    };
+    assert_eq!(split.parts(n), threads);
+    g.drive_threads(&field(), &v, &Oracles::default(), &mut sinks, split);
+    let r = g.finish(&mut sinks);
+    drop(sinks);
+    let log = log.into_inner();
+    // The ring is known (found, when discovered) and every vehicle's every step is traced.
+    assert!(r.ring.iter().all(|x| x.is_some()), "{:?}", r.ring);
+    assert!(
+        log.len() > n * (duration_s / DT) as usize / 2,
+        "{}",
+        log.len()
+    );
+    format!("{r:?}\n{log:?}")
+}
+
+/// 1, 2, 3 and 7 threads give the same team run bit for bit: every result, metric and trace
+/// row, the rows in the same order; for `range_balance` on noisy, lossy, delayed ranging,
+/// `arc_reference` and `none`, and with the ring found first (discovery steps on one thread,
+/// the rest on several).
+#[test]
+fn threads_give_bit_identical_runs() {
+    let discover = RingMode::Discover(DiscoveryConfig {
+        settle_s: 1.0,
+        probe_s: 1.0,
+        probe_speed_delta_mps: 0.1,
+    });
+    let cases = [
+        (
+            SpacingLaw::RangeBalance { gain_per_s: 0.2 },
+            RingMode::Listed,
+            30.0,
+        ),
+        (
+            SpacingLaw::ArcReference { gain_per_s: 0.2 },
+            RingMode::Listed,
+            20.0,
+        ),
+        (SpacingLaw::None, RingMode::Listed, 10.0),
+        (SpacingLaw::RangeBalance { gain_per_s: 0.2 }, discover, 70.0),
+    ];
+    for (law, ring, duration_s) in cases {
+        let one = threaded_team(law, ring, 1, duration_s);
+        for threads in [2, 3, 7] {
+            let many = threaded_team(law, ring, threads, duration_s);
+            assert!(
+                one == many,
+                "{law:?} {ring:?}: {threads} threads differ from one"
+            );
+        }
+    }
 }

@@ -27,7 +27,7 @@ use crate::batch::LANES;
 use crate::kernel::{ask, Sensed, VehicleRun};
 use crate::run::{Oracles, Outcome, RunResult, StepPlan};
 use crate::sensor::Sensor;
-use crate::trace::TraceSink;
+use crate::trace::{NoTrace, TraceRow, TraceSink};
 use arc::{pick_loop, wrap_arc, ArcProjection, MovingArc, PolylineArc};
 use isotrack_core::{IsolineController, Measurement, ScalarField, SpeedCommand, Vec2};
 use metrics::{TeamMetrics, TeamMetricsConfig, TeamSummary};
@@ -36,6 +36,53 @@ use spacing::{
     balance_speed, pick_neighbours, DiscoveryConfig, HeldRange, RateFit, RingMode, SpacingConfig,
     SpacingLaw,
 };
+
+/// The [`Slab`] of a whole [`Group`] (`$g`), its trace sinks `$sinks`: each field borrowed on
+/// its own, so that the positions, the ring and the rest stay readable beside it.
+macro_rules! slab {
+    ($g:expr, $sinks:expr) => {
+        Slab {
+            base: 0,
+            n: $g.n,
+            states: &mut $g.states,
+            runs: &mut $g.runs,
+            controllers: &mut $g.controllers,
+            wants_truth: &$g.wants_truth,
+            ranging: &mut $g.ranging,
+            held: &mut $g.held,
+            speed_cmd: &mut $g.speed_cmd,
+            delivered: &mut $g.delivered,
+            measured: &mut $g.measured,
+            values: &mut $g.values,
+            speeds: &mut $g.speeds,
+            command: &mut $g.command,
+            omega: &mut $g.omega,
+            sinks: $sinks,
+        }
+    };
+}
+
+/// The [`Shared`] view of a [`Group`] (`$g`) at step `$k`, time `$t`.
+macro_rules! shared {
+    ($g:expr, $k:expr, $t:expr) => {
+        Shared {
+            k: $k,
+            t: $t,
+            dt: $g.plan.dt_s,
+            positions: &$g.positions,
+            alive: &$g.alive,
+            ring: &$g.ring,
+            spacing: $g.cfg.spacing,
+            max_range_m: $g.cfg.ranging.max_range_m,
+            arc: arc_of(&$g.arc).or($g
+                .moving
+                .as_ref()
+                .and_then(|c| c.arc.as_ref())
+                .map(|a| a as &dyn ArcProjection)),
+            speed_override: $g.speed_override.as_deref(),
+        }
+    };
+}
 
 /// One member of a team: where it starts, what steers it, what it senses, and the seed of its
 /// ranging unit.
@@ -497,6 +544,65 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         drive_lanes(self, field, vehicle, oracles, sinks);
     }
 
+    /// [`drive`](Self::drive) over the threads `threads` allows for the team's size
+    /// ([`TeamThreads::parts`]; a rayon pool of its own; one thread if none can be started). Each step, the vehicles are split into
+    /// contiguous parts, one per thread; a vehicle reads only the positions of the step
+    /// (its neighbours', for ranging) and writes only its own state, so every number, trace
+    /// row and metric is the same bit for bit on any number of threads. The trace rows are
+    /// written into `sinks` on the caller's thread, in the order one thread records them. Ring
+    /// discovery (`O(N)` per probe sample: for small teams) steps on one thread.
+    pub fn drive_threads<F, V, S>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        sinks: &mut [S],
+        threads: TeamThreads,
+    ) where
+        X: Send,
+        C: Send,
+        F: ScalarField + Sync,
+        V: SpeedCommand<State = X> + Sync,
+        S: TraceSink,
+    {
+        let parts = threads.parts(self.n);
+        let pool = if parts > 1 {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(parts)
+                .build()
+                .ok()
+        } else {
+            None
+        };
+        let Some(pool) = pool else {
+            return self.drive(field, vehicle, oracles, sinks);
+        };
+        let mut rows: Vec<Vec<TraceRow>> = vec![Vec::new(); sinks.len()];
+        let mut log: Vec<(u32, TraceRow)> = Vec::new();
+        // Without a trace the whole run is one block; with one, the rows of a block are held
+        // (at most `TRACE_BLOCK_ROWS` of them, whatever the duration) until the caller's
+        // thread writes them.
+        let block = if sinks.is_empty() {
+            u64::MAX
+        } else {
+            (TRACE_BLOCK_ROWS / self.n).max(1) as u64
+        };
+        while self.is_running() {
+            if self.discovery.is_some() {
+                self.step_inline(field, vehicle, oracles, sinks);
+                continue;
+            }
+            pool.install(|| {
+                par_block(
+                    self, field, vehicle, oracles, &mut rows, &mut log, parts, block,
+                )
+            });
+            for (v, row) in log.drain(..) {
+                sinks[v as usize].record(&row);
+            }
+        }
+    }
+
     /// One team step (module docs). `sinks` has one trace sink per vehicle (fewer: the rest
     /// record nothing).
     pub fn step<F, V, S>(&mut self, field: &F, vehicle: &V, oracles: &Oracles<'_>, sinks: &mut [S])
@@ -561,86 +667,29 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         V: SpeedCommand<State = X>,
         S: TraceSink,
     {
-        let n = self.n;
         let k = self.k;
-        let dt = self.plan.dt_s;
-        let t = k as f64 * dt;
-        // 1. Positions and the field there, in lanes.
-        for (c, chunk) in self.states.iter().enumerate() {
-            let mut px = [0.0; LANES];
-            let mut py = [0.0; LANES];
-            for (l, s) in chunk.iter().enumerate() {
-                let p = vehicle.position(s);
-                (px[l], py[l]) = (p.x, p.y);
-            }
-            let v = field.value_lanes(t, &px, &py);
-            for l in 0..LANES.min(n - c * LANES) {
-                let i = c * LANES + l;
-                self.positions[i] = Vec2::new(px[l], py[l]);
-                self.values[i] = v[l];
-            }
-        }
-        // 2. Sense; the controllers answer.
-        let mut no_sink = crate::trace::NoTrace;
-        for c in 0..self.states.len() {
-            let mut sampled = [false; LANES];
-            let mut ms = [Measurement {
-                t_s: 0.0,
-                value: 0.0,
-            }; LANES];
-            for l in 0..LANES.min(n - c * LANES) {
-                let i = c * LANES + l;
-                self.command[i] = None;
-                self.alive[i] = false;
-                if !self.runs[i].is_running() {
-                    continue;
-                }
-                let value = self.values[i];
-                let state = &self.states[c][l];
-                let sensed = match sinks.get_mut(i) {
-                    Some(s) => self.runs[i].sense(vehicle, state, k, t, |_| value, s),
-                    None => self.runs[i].sense(vehicle, state, k, t, |_| value, &mut no_sink),
-                };
-                match sensed {
-                    Sensed::Ended => continue,
-                    Sensed::Held => {}
-                    Sensed::Sampled(m) if self.wants_truth[i] => {
-                        self.measured[i] = m;
-                        let sample = self.runs[i].sample(m, vehicle.speed_mps(state));
-                        self.command[i] = Some(ask(
-                            &mut self.controllers[i],
-                            true,
-                            &sample,
-                            oracles.gradient,
-                        ));
-                    }
-                    Sensed::Sampled(m) => {
-                        self.measured[i] = m;
-                        ms[l] = m;
-                        sampled[l] = true;
-                    }
-                }
-                self.alive[i] = true;
-            }
-            if sampled.iter().any(|&s| s) {
-                let base = c * LANES;
-                let end = (base + LANES).min(n);
-                let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
-                for (l, ctrl) in self.controllers[base..end].iter_mut().enumerate() {
-                    if sampled[l] {
-                        ctrls[l] = Some(ctrl);
-                    }
-                }
-                let w = C::update_lanes(&mut ctrls, &ms);
-                for l in 0..LANES {
-                    if sampled[l] {
-                        self.command[base + l] = Some(w[l]);
-                    }
-                }
+        let t = k as f64 * self.plan.dt_s;
+        let discovering = self.discovery.is_some();
+        {
+            // 1-2. Positions, the field there and the samples, in lanes; the controllers answer.
+            let mut slab = slab!(self, sinks);
+            slab.sense(
+                field,
+                vehicle,
+                oracles,
+                k,
+                t,
+                &mut self.positions,
+                &mut self.alive,
+            );
+            // 3. Ranging and the spacing law.
+            if !discovering {
+                slab.space(&shared!(self, k, t), vehicle);
             }
         }
-        // 3. Ranging and the spacing law.
-        self.space(k, t, vehicle);
+        if discovering {
+            self.discover_step(k);
+        }
     }
 
     #[inline(always)]
@@ -649,35 +698,19 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         V: SpeedCommand<State = X>,
         S: TraceSink,
     {
-        let n = self.n;
         let k = self.k;
-        let dt = self.plan.dt_s;
-        let t = k as f64 * dt;
-        let mut no_sink = crate::trace::NoTrace;
+        let t = k as f64 * self.plan.dt_s;
         // 4. Complete each vehicle's step; the team metrics.
-        for i in 0..n {
-            if !self.alive[i] {
-                continue;
-            }
-            let state = &self.states[i / LANES][i % LANES];
-            let goes_on = match sinks.get_mut(i) {
-                Some(s) => self.runs[i].complete(self.command[i], k, t, vehicle, state, oracles, s),
-                None => self.runs[i].complete(
-                    self.command[i],
-                    k,
-                    t,
-                    vehicle,
-                    state,
-                    oracles,
-                    &mut no_sink,
-                ),
-            };
-            // A vehicle that does not go on (completed, or ended at its command) sensed this
-            // step: its position counts for the team metrics below, but it does not move.
-            let _ = goes_on;
-            self.omega[i] = self.runs[i].omega_radps();
-            self.speeds[i] = vehicle.speed_mps(state);
-        }
+        slab!(self, &mut *sinks).complete(&shared!(self, k, t), vehicle, oracles);
+        self.observe_team(k, t);
+        // 5. Hold the speed commands and move, in lanes.
+        self.running = slab!(self, sinks).advance(&shared!(self, k, t), vehicle);
+        self.k += 1;
+    }
+
+    /// The team metrics of step `k` (time `t`), when due: after every vehicle's step 4, read
+    /// from the positions, speeds and liveness of the step.
+    fn observe_team(&mut self, k: u64, t: f64) {
         if let Some(m) = self.metrics.as_mut() {
             if m.due() {
                 match (arc_of(&self.arc), self.moving.as_mut()) {
@@ -695,31 +728,10 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                 }
             }
         }
-        // 5. Hold the speed commands and move, in lanes.
-        let mut running = 0;
-        for (c, chunk) in self.states.iter_mut().enumerate() {
-            let mut w = [0.0; LANES];
-            for l in 0..LANES.min(n - c * LANES) {
-                let i = c * LANES + l;
-                if self.runs[i].is_running() {
-                    let v = match &self.speed_override {
-                        None => self.speed_cmd[i],
-                        Some(o) => o[i],
-                    };
-                    vehicle.command_speed(&mut chunk[l], v);
-                    running += 1;
-                }
-                w[l] = self.omega[i];
-            }
-            vehicle.step_lanes(chunk, &w, dt);
-        }
-        self.running = running;
-        self.k += 1;
     }
 
-    /// Step 3: the ranging units and the spacing law (or the ring discovery) set `speed_cmd`.
-    fn space<V: SpeedCommand<State = X>>(&mut self, k: u64, t: f64, vehicle: &V) {
-        let n = self.n;
+    /// Step 3 during ring discovery: the probe sets `speed_cmd`; the ring once found.
+    fn discover_step(&mut self, k: u64) {
         let v0 = self.cfg.spacing.nominal_speed_mps;
         if let Some(d) = self.discovery.as_mut() {
             let (pos, alive) = (&self.positions, &self.alive);
@@ -736,75 +748,8 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                 self.ring = core::mem::take(&mut d.found);
                 self.discovery = None;
             }
-            return;
-        }
-        let max_range = self.cfg.ranging.max_range_m;
-        for i in 0..n {
-            if !self.alive[i] {
-                continue;
-            }
-            let Some([a, b]) = self.ring[i] else {
-                continue;
-            };
-            let (a, b) = (a as usize, b as usize);
-            match self.cfg.spacing.law {
-                SpacingLaw::None => {
-                    // The ranging unit still runs (its streams as with any law).
-                    let pa = self.alive[a].then(|| self.positions[a]);
-                    let pb = self.alive[b].then(|| self.positions[b]);
-                    if let Some(r) = self.ranging[i].observe(k, t, self.positions[i], pa, pb) {
-                        self.delivered[i] = Some(r);
-                    }
-                    self.speed_cmd[i] = v0;
-                }
-                SpacingLaw::RangeBalance { gain_per_s } => {
-                    let pa = self.alive[a].then(|| self.positions[a]);
-                    let pb = self.alive[b].then(|| self.positions[b]);
-                    if let Some(r) = self.ranging[i].observe(k, t, self.positions[i], pa, pb) {
-                        self.delivered[i] = Some(r);
-                        let ra = self.held[i][0].update(r.ahead, r.t_s, max_range);
-                        let rb = self.held[i][1].update(r.behind, r.t_s, max_range);
-                        if let (Some(ra), Some(rb)) = (ra, rb) {
-                            self.speed_cmd[i] = balance_speed(v0, gain_per_s, ra, rb);
-                        }
-                    }
-                }
-                SpacingLaw::ArcReference { gain_per_s } => {
-                    // The true arc gaps on the ranging unit's schedule, without its noise,
-                    // losses or delay.
-                    let now = self.ranging[i].measures_now();
-                    self.ranging[i].observe(k, t, self.positions[i], None, None);
-                    if !now {
-                        continue;
-                    }
-                    let moving = self
-                        .moving
-                        .as_ref()
-                        .and_then(|c| c.arc.as_ref())
-                        .map(|a| a as &dyn ArcProjection);
-                    let Some(arc) = arc_of(&self.arc).or(moving) else {
-                        continue;
-                    };
-                    let l = arc.length_m();
-                    let me = arc.project(self.positions[i]);
-                    let pa = arc.project(self.positions[a]);
-                    let pb = arc.project(self.positions[b]);
-                    if let (Some(me), Some(pa), Some(pb)) = (me, pa, pb) {
-                        let heading = vehicle.pose(self.state(i)).heading_rad;
-                        let dir = if me.tangent.dot(Vec2::from_angle(heading)) >= 0.0 {
-                            1.0
-                        } else {
-                            -1.0
-                        };
-                        let ga = wrap_arc(dir * (pa.s_m - me.s_m), l);
-                        let gb = wrap_arc(dir * (me.s_m - pb.s_m), l);
-                        self.speed_cmd[i] = balance_speed(v0, gain_per_s, ga, gb);
-                    }
-                }
-            }
         }
     }
-
     /// Ring discovery at step `k`: all at `v0` until `settle_s`, then vehicle `p` probes in its
     /// slot, ranging to every vehicle that answers on its ranging steps (its own ranging unit:
     /// noise, range limit and losses; the range's time stamp is its measurement time, so the
@@ -894,6 +839,522 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             team: self.metrics.as_ref().map(|m| m.finish()),
             ring: self.ring,
         }
+    }
+}
+
+/// The fewest vehicles a thread of a team steps by default ([`TeamThreads::new`]): below
+/// twice as many a team steps on one thread, the two hand-overs of a threaded step costing
+/// more than a thread saves (measured: BENCHMARKS.md, the team rows).
+pub const MIN_VEHICLES_PER_THREAD: usize = 256;
+
+/// How a team is split over threads ([`Group::drive_threads`]); results do not depend on it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TeamThreads {
+    /// The most threads (0 and 1: one).
+    pub threads: usize,
+    /// The fewest vehicles a thread steps (rounded up to whole [`LANES`] chunks): a team of
+    /// fewer than twice as many steps on one thread.
+    pub min_vehicles_per_thread: usize,
+}
+
+impl TeamThreads {
+    /// Up to `threads` threads, each stepping at least [`MIN_VEHICLES_PER_THREAD`] vehicles.
+    pub fn new(threads: usize) -> Self {
+        Self {
+            threads,
+            min_vehicles_per_thread: MIN_VEHICLES_PER_THREAD,
+        }
+    }
+
+    /// The threads a team of `n` vehicles steps on (>= 1).
+    pub fn parts(&self, n: usize) -> usize {
+        let per = self.min_vehicles_per_thread.div_ceil(LANES).max(1);
+        self.threads.min(n.div_ceil(LANES) / per).max(1)
+    }
+}
+
+/// With traces, a threaded team returns to the caller's thread (which writes the trace rows,
+/// in the order one thread records them) after at most this many rows' worth of steps.
+const TRACE_BLOCK_ROWS: usize = 1 << 16;
+
+/// What every vehicle of a step reads in steps 3-5 (besides its own state): the positions and
+/// liveness of step `k` (its neighbours'), the ring, the settings, the true isoline in force and
+/// the held speeds. Written by no one during those steps.
+struct Shared<'s> {
+    k: u64,
+    t: f64,
+    dt: f64,
+    positions: &'s [Vec2],
+    alive: &'s [bool],
+    ring: &'s [Option<[u32; 2]>],
+    spacing: SpacingConfig,
+    max_range_m: f64,
+    arc: Option<&'s dyn ArcProjection>,
+    speed_override: Option<&'s [f64]>,
+}
+
+/// A contiguous range of a team's vehicles, whole [`LANES`] chunks (the last one may be
+/// partial), from vehicle `base`: its own part of every per-vehicle array, so that each range
+/// steps on its own thread. Indices into its arrays are local (`j`; vehicle `base + j`).
+struct Slab<'s, X, C, S> {
+    base: usize,
+    n: usize,
+    states: &'s mut [[X; LANES]],
+    runs: &'s mut [VehicleRun<true>],
+    controllers: &'s mut [C],
+    wants_truth: &'s [bool],
+    ranging: &'s mut [Ranging],
+    held: &'s mut [[HeldRange; 2]],
+    speed_cmd: &'s mut [f64],
+    delivered: &'s mut [Option<RangeSample>],
+    measured: &'s mut [Measurement],
+    values: &'s mut [f64],
+    speeds: &'s mut [f64],
+    command: &'s mut [Option<f64>],
+    omega: &'s mut [f64],
+    sinks: &'s mut [S],
+}
+
+/// Work that splits into two at a [`LANES`] chunk boundary.
+trait Split: Sized + Send {
+    /// Its chunks.
+    fn chunks(&self) -> usize;
+    /// The first `chunks` chunks and the rest.
+    fn split(self, chunks: usize) -> (Self, Self);
+}
+
+impl<X: Send, C: Send, S: Send> Split for Slab<'_, X, C, S> {
+    fn chunks(&self) -> usize {
+        self.states.len()
+    }
+
+    fn split(self, chunks: usize) -> (Self, Self) {
+        let mid = (chunks * LANES).min(self.n);
+        let (st0, st1) = self.states.split_at_mut(chunks);
+        let (ru0, ru1) = self.runs.split_at_mut(mid);
+        let (co0, co1) = self.controllers.split_at_mut(mid);
+        let (wt0, wt1) = self.wants_truth.split_at(mid);
+        let (ra0, ra1) = self.ranging.split_at_mut(mid);
+        let (he0, he1) = self.held.split_at_mut(mid);
+        let (sc0, sc1) = self.speed_cmd.split_at_mut(mid);
+        let (de0, de1) = self.delivered.split_at_mut(mid);
+        let (me0, me1) = self.measured.split_at_mut(mid);
+        let (va0, va1) = self.values.split_at_mut(mid);
+        let (sp0, sp1) = self.speeds.split_at_mut(mid);
+        let (cm0, cm1) = self.command.split_at_mut(mid);
+        let (om0, om1) = self.omega.split_at_mut(mid);
+        let sinks_mid = mid.min(self.sinks.len());
+        let (si0, si1) = self.sinks.split_at_mut(sinks_mid);
+        (
+            Slab {
+                base: self.base,
+                n: mid,
+                states: st0,
+                runs: ru0,
+                controllers: co0,
+                wants_truth: wt0,
+                ranging: ra0,
+                held: he0,
+                speed_cmd: sc0,
+                delivered: de0,
+                measured: me0,
+                values: va0,
+                speeds: sp0,
+                command: cm0,
+                omega: om0,
+                sinks: si0,
+            },
+            Slab {
+                base: self.base + mid,
+                n: self.n - mid,
+                states: st1,
+                runs: ru1,
+                controllers: co1,
+                wants_truth: wt1,
+                ranging: ra1,
+                held: he1,
+                speed_cmd: sc1,
+                delivered: de1,
+                measured: me1,
+                values: va1,
+                speeds: sp1,
+                command: cm1,
+                omega: om1,
+                sinks: si1,
+            },
+        )
+    }
+}
+
+/// A [`Slab`] with its own part of the positions and liveness, which steps 1-2 write.
+struct Front<'s, X, C, S> {
+    slab: Slab<'s, X, C, S>,
+    positions: &'s mut [Vec2],
+    alive: &'s mut [bool],
+}
+
+impl<X: Send, C: Send, S: Send> Split for Front<'_, X, C, S> {
+    fn chunks(&self) -> usize {
+        self.slab.chunks()
+    }
+
+    fn split(self, chunks: usize) -> (Self, Self) {
+        let mid = (chunks * LANES).min(self.slab.n);
+        let (s0, s1) = self.slab.split(chunks);
+        let (p0, p1) = self.positions.split_at_mut(mid);
+        let (a0, a1) = self.alive.split_at_mut(mid);
+        (
+            Front {
+                slab: s0,
+                positions: p0,
+                alive: a0,
+            },
+            Front {
+                slab: s1,
+                positions: p1,
+                alive: a1,
+            },
+        )
+    }
+}
+
+/// `f` on each of `parts` contiguous pieces of `item` (as even as whole chunks allow), in
+/// parallel on the current rayon pool; the sum of what it returns.
+fn in_parts<T: Split, P: Fn(T) -> usize + Sync>(item: T, parts: usize, f: &P) -> usize {
+    if parts <= 1 {
+        return f(item);
+    }
+    let left = parts / 2;
+    let (a, b) = {
+        let c = item.chunks() * left / parts;
+        item.split(c)
+    };
+    let (x, y) = rayon::join(|| in_parts(a, left, f), || in_parts(b, parts - left, f));
+    x + y
+}
+
+impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
+    /// Steps 1-2 for the slab's vehicles: the positions and the field there, in lanes; each
+    /// vehicle's kernel `sense`; the controllers answer the samples in lanes. `positions` and
+    /// `alive` are the slab's own (local indices).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sense<F, V>(
+        &mut self,
+        field: &F,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+        k: u64,
+        t: f64,
+        positions: &mut [Vec2],
+        alive: &mut [bool],
+    ) where
+        F: ScalarField,
+        V: SpeedCommand<State = X>,
+    {
+        let n = self.n;
+        let mut no_sink = NoTrace;
+        for (c, chunk) in self.states.iter().enumerate() {
+            let base = c * LANES;
+            let m = LANES.min(n - base);
+            let mut px = [0.0; LANES];
+            let mut py = [0.0; LANES];
+            for (l, s) in chunk.iter().enumerate() {
+                let p = vehicle.position(s);
+                (px[l], py[l]) = (p.x, p.y);
+            }
+            let v = field.value_lanes(t, &px, &py);
+            let mut sampled = [false; LANES];
+            let mut ms = [Measurement {
+                t_s: 0.0,
+                value: 0.0,
+            }; LANES];
+            for l in 0..m {
+                let i = base + l;
+                positions[i] = Vec2::new(px[l], py[l]);
+                let value = v[l];
+                self.values[i] = value;
+                self.command[i] = None;
+                alive[i] = false;
+                if !self.runs[i].is_running() {
+                    continue;
+                }
+                let state = &chunk[l];
+                let sensed = match self.sinks.get_mut(i) {
+                    Some(s) => self.runs[i].sense(vehicle, state, k, t, |_| value, s),
+                    None => self.runs[i].sense(vehicle, state, k, t, |_| value, &mut no_sink),
+                };
+                match sensed {
+                    Sensed::Ended => continue,
+                    Sensed::Held => {}
+                    Sensed::Sampled(mm) if self.wants_truth[i] => {
+                        self.measured[i] = mm;
+                        let sample = self.runs[i].sample(mm, vehicle.speed_mps(state));
+                        self.command[i] = Some(ask(
+                            &mut self.controllers[i],
+                            true,
+                            &sample,
+                            oracles.gradient,
+                        ));
+                    }
+                    Sensed::Sampled(mm) => {
+                        self.measured[i] = mm;
+                        ms[l] = mm;
+                        sampled[l] = true;
+                    }
+                }
+                alive[i] = true;
+            }
+            if sampled.iter().any(|&s| s) {
+                let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
+                for (l, ctrl) in self.controllers[base..base + m].iter_mut().enumerate() {
+                    if sampled[l] {
+                        ctrls[l] = Some(ctrl);
+                    }
+                }
+                let w = C::update_lanes(&mut ctrls, &ms);
+                for l in 0..m {
+                    if sampled[l] {
+                        self.command[base + l] = Some(w[l]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Step 3 for the slab's vehicles (not during ring discovery): each ranging unit measures
+    /// its two ring neighbours (their positions of this step, from `sh`) and delivers what
+    /// arrives now; the spacing law answers with a speed command.
+    #[inline(always)]
+    fn space<V: SpeedCommand<State = X>>(&mut self, sh: &Shared<'_>, vehicle: &V) {
+        let v0 = sh.spacing.nominal_speed_mps;
+        let (k, t) = (sh.k, sh.t);
+        for j in 0..self.n {
+            let i = self.base + j;
+            if !sh.alive[i] {
+                continue;
+            }
+            let Some([a, b]) = sh.ring[i] else {
+                continue;
+            };
+            let (a, b) = (a as usize, b as usize);
+            let me = sh.positions[i];
+            match sh.spacing.law {
+                SpacingLaw::None => {
+                    // The ranging unit still runs (its streams as with any law).
+                    let pa = sh.alive[a].then(|| sh.positions[a]);
+                    let pb = sh.alive[b].then(|| sh.positions[b]);
+                    if let Some(r) = self.ranging[j].observe(k, t, me, pa, pb) {
+                        self.delivered[j] = Some(r);
+                    }
+                    self.speed_cmd[j] = v0;
+                }
+                SpacingLaw::RangeBalance { gain_per_s } => {
+                    let pa = sh.alive[a].then(|| sh.positions[a]);
+                    let pb = sh.alive[b].then(|| sh.positions[b]);
+                    if let Some(r) = self.ranging[j].observe(k, t, me, pa, pb) {
+                        self.delivered[j] = Some(r);
+                        let [ha, hb] = &mut self.held[j];
+                        let ra = ha.update(r.ahead, r.t_s, sh.max_range_m);
+                        let rb = hb.update(r.behind, r.t_s, sh.max_range_m);
+                        if let (Some(ra), Some(rb)) = (ra, rb) {
+                            self.speed_cmd[j] = balance_speed(v0, gain_per_s, ra, rb);
+                        }
+                    }
+                }
+                SpacingLaw::ArcReference { gain_per_s } => {
+                    // The true arc gaps on the ranging unit's schedule, without its noise,
+                    // losses or delay.
+                    let now = self.ranging[j].measures_now();
+                    self.ranging[j].observe(k, t, me, None, None);
+                    if !now {
+                        continue;
+                    }
+                    let Some(arc) = sh.arc else {
+                        continue;
+                    };
+                    let l = arc.length_m();
+                    let pm = arc.project(me);
+                    let pa = arc.project(sh.positions[a]);
+                    let pb = arc.project(sh.positions[b]);
+                    if let (Some(pm), Some(pa), Some(pb)) = (pm, pa, pb) {
+                        let heading = vehicle.pose(&self.states[j / LANES][j % LANES]).heading_rad;
+                        let dir = if pm.tangent.dot(Vec2::from_angle(heading)) >= 0.0 {
+                            1.0
+                        } else {
+                            -1.0
+                        };
+                        let ga = wrap_arc(dir * (pa.s_m - pm.s_m), l);
+                        let gb = wrap_arc(dir * (pm.s_m - pb.s_m), l);
+                        self.speed_cmd[j] = balance_speed(v0, gain_per_s, ga, gb);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Step 4 for the slab's vehicles: each live one's kernel `complete` (metrics, trace, the
+    /// end); its command held and speed kept for the move and the team metrics.
+    #[inline(always)]
+    fn complete<V: SpeedCommand<State = X>>(
+        &mut self,
+        sh: &Shared<'_>,
+        vehicle: &V,
+        oracles: &Oracles<'_>,
+    ) {
+        let mut no_sink = NoTrace;
+        for j in 0..self.n {
+            if !sh.alive[self.base + j] {
+                continue;
+            }
+            let state = &self.states[j / LANES][j % LANES];
+            let command = self.command[j];
+            // A vehicle that does not go on (completed, or ended at its command) sensed this
+            // step: its position counts for the team metrics, but it does not move.
+            let _goes_on = match self.sinks.get_mut(j) {
+                Some(s) => self.runs[j].complete(command, sh.k, sh.t, vehicle, state, oracles, s),
+                None => self.runs[j].complete(
+                    command,
+                    sh.k,
+                    sh.t,
+                    vehicle,
+                    state,
+                    oracles,
+                    &mut no_sink,
+                ),
+            };
+            self.omega[j] = self.runs[j].omega_radps();
+            self.speeds[j] = vehicle.speed_mps(state);
+        }
+    }
+
+    /// Step 5 for the slab's vehicles: each that goes on holds its speed command (saturated to
+    /// the envelope) and moves, in lanes. Returns how many go on.
+    #[inline(always)]
+    fn advance<V: SpeedCommand<State = X>>(&mut self, sh: &Shared<'_>, vehicle: &V) -> usize {
+        let n = self.n;
+        let mut running = 0;
+        for (c, chunk) in self.states.iter_mut().enumerate() {
+            let mut w = [0.0; LANES];
+            for l in 0..LANES.min(n - c * LANES) {
+                let j = c * LANES + l;
+                if self.runs[j].is_running() {
+                    let v = match sh.speed_override {
+                        None => self.speed_cmd[j],
+                        Some(o) => o[self.base + j],
+                    };
+                    vehicle.command_speed(&mut chunk[l], v);
+                    running += 1;
+                }
+                w[l] = self.omega[j];
+            }
+            vehicle.step_lanes(chunk, &w, sh.dt);
+        }
+        running
+    }
+}
+
+/// Moves the rows each vehicle recorded in the last half step into `log`, in vehicle order (the
+/// order the team records them on one thread).
+fn drain_rows(rows: &mut [Vec<TraceRow>], log: &mut Vec<(u32, TraceRow)>) {
+    for (v, r) in rows.iter_mut().enumerate() {
+        log.extend(r.drain(..).map(|row| (v as u32, row)));
+    }
+}
+
+/// Steps 1-2 of one part of a threaded team step (compiled as [`drive_lanes`] is).
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "aarch64+neon"
+))]
+fn front_part<X, C, F, V>(
+    p: Front<'_, X, C, Vec<TraceRow>>,
+    field: &F,
+    vehicle: &V,
+    oracles: &Oracles<'_>,
+    k: u64,
+    t: f64,
+) where
+    X: Clone,
+    C: IsolineController,
+    F: ScalarField,
+    V: SpeedCommand<State = X>,
+{
+    let Front {
+        mut slab,
+        positions,
+        alive,
+    } = p;
+    slab.sense(field, vehicle, oracles, k, t, positions, alive);
+}
+
+/// Steps 3-5 of one part of a threaded team step; how many of its vehicles go on.
+#[multiversion::multiversion(targets(
+    "x86_64+avx512f+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "aarch64+neon"
+))]
+fn back_part<X, C, V>(
+    mut s: Slab<'_, X, C, Vec<TraceRow>>,
+    sh: &Shared<'_>,
+    vehicle: &V,
+    oracles: &Oracles<'_>,
+) -> usize
+where
+    X: Clone,
+    C: IsolineController,
+    V: SpeedCommand<State = X>,
+{
+    s.space(sh, vehicle);
+    s.complete(sh, vehicle, oracles);
+    s.advance(sh, vehicle)
+}
+
+/// Up to `steps` team steps over `parts` threads of the current rayon pool (stopping at the
+/// end, or during ring discovery, which steps on one thread). Each step: every part's steps 1-2;
+/// then every part's steps 3-5 (a vehicle reads only its own state and the positions and
+/// liveness of the step, all written before); then the team metrics. Each vehicle's numbers
+/// are those of one thread, bit for bit; the trace rows go into `log` in one thread's order.
+#[allow(clippy::too_many_arguments)]
+fn par_block<X, C, F, V>(
+    g: &mut Group<'_, X, C>,
+    field: &F,
+    vehicle: &V,
+    oracles: &Oracles<'_>,
+    rows: &mut [Vec<TraceRow>],
+    log: &mut Vec<(u32, TraceRow)>,
+    parts: usize,
+    steps: u64,
+) where
+    X: Clone + Send,
+    C: IsolineController + Send,
+    F: ScalarField + Sync,
+    V: SpeedCommand<State = X> + Sync,
+{
+    let mut left = steps;
+    while left > 0 && g.is_running() && g.discovery.is_none() {
+        left -= 1;
+        let k = g.k;
+        let t = k as f64 * g.plan.dt_s;
+        let front = Front {
+            slab: slab!(g, &mut *rows),
+            positions: &mut g.positions,
+            alive: &mut g.alive,
+        };
+        in_parts(front, parts, &|p| {
+            front_part(p, field, vehicle, oracles, k, t);
+            0
+        });
+        drain_rows(rows, log);
+        let sh = shared!(g, k, t);
+        let running = in_parts(slab!(g, &mut *rows), parts, &|s| {
+            back_part(s, &sh, vehicle, oracles)
+        });
+        g.running = running;
+        drain_rows(rows, log);
+        g.observe_team(k, t);
+        g.k += 1;
     }
 }
 
