@@ -291,3 +291,49 @@ fn the_bundled_moving_teams_run() {
     assert!(t["gap_cv"].as_f64().is_some(), "{t}");
     assert!(t["metrics_note"].is_null(), "{t}");
 }
+
+/// `run --threads N` of a team big enough to be split (800 robots around the circle: 3
+/// threads of at least 256), its ranging noisy, lossy and delayed: `trace.csv`,
+/// `summary.json` and `scenario.toml` byte-identical on 1, 2 and 3 threads (and by default).
+#[test]
+fn a_large_team_is_the_same_on_any_threads() {
+    let d = tempfile::tempdir().unwrap();
+    let mut first: Option<Vec<Vec<u8>>> = None;
+    for threads in [Some("1"), Some("2"), Some("3"), None] {
+        let out = d.path().join(format!("run-{threads:?}"));
+        let mut args = vec![
+            "run",
+            TEAM,
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "team.count=800",
+            "--set",
+            "team.spread.step_rad=0.007853981633974483",
+            "--set",
+            "team.ranging={ rate_hz = 10.0, noise_std_m = 0.05, dropout_probability = 0.2, delay_s = 0.3 }",
+            "--set",
+            "sim.duration_s=3.0",
+        ];
+        if let Some(t) = threads {
+            args.extend(["--threads", t]);
+        }
+        let o = isotrack(&args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let files: Vec<Vec<u8>> = ["trace.csv", "summary.json", "scenario.toml"]
+            .iter()
+            .map(|f| std::fs::read(out.join(f)).unwrap())
+            .collect();
+        // 800 robots' rows at each recorded step.
+        let rows = files[0].iter().filter(|&&b| b == b'\n').count() - 1;
+        assert!(rows >= 800 * 30 && rows % 800 == 0, "{rows} rows");
+        let first = first.get_or_insert_with(|| files.clone());
+        for (f, (a, b)) in ["trace.csv", "summary.json", "scenario.toml"]
+            .iter()
+            .zip(first.iter().zip(&files))
+        {
+            assert!(a == b, "{f} differs on {threads:?} threads");
+        }
+    }
+}

@@ -486,4 +486,8 @@ pub struct RunArgs {
     /// Figure options for `--plot`.
     #[command(flatten)]
     pub look: FigureOptions,
+    /// Worker threads for a team (`[team]`; default: all cores; a team of fewer than 512
+    /// vehicles steps on one). Results do not depend on it.
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
 }

@@ -124,6 +124,14 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     for w in &warnings {
         errln!("warning: {w}");
     }
+    // A team steps over `--threads` (capped as a sweep's; all cores by default).
+    let (count, note) = isotrack_runs::sweep::pool::thread_count(args.threads);
+    if let (Some(note), Some(_)) = (note, scenario.spec().team.as_ref()) {
+        errln!("{note}");
+    }
+    let threads = isotrack_sim::TeamThreads::new(
+        count.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    );
     let name = args.scenario.scenario.as_ref().map_or_else(
         || "<built-in default: paper Fig. 2(b)>".to_string(),
         |p| p.display().to_string(),
@@ -141,11 +149,12 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         } else {
             out.trace(scenario.is_flying())?
         };
-        let team = match isotrack_runs::trace::run_team_into(&scenario, trace_file.writer()) {
-            Some(Ok(t)) => Some(t),
-            Some(Err(e)) => return Err(out.abandon(trace_file, e)),
-            None => None,
-        };
+        let team =
+            match isotrack_runs::trace::run_team_into(&scenario, trace_file.writer(), threads) {
+                Some(Ok(t)) => Some(t),
+                Some(Err(e)) => return Err(out.abandon(trace_file, e)),
+                None => None,
+            };
         let (result, summary) = match &team {
             Some(t) => (
                 t.runs[0].clone(),
@@ -184,7 +193,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             }
         }
         result
-    } else if let Some(team) = scenario.run_team(&mut [] as &mut [NoTrace]) {
+    } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {
             code: exit::DATAERR,
             message: e.to_string(),

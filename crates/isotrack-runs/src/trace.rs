@@ -155,16 +155,22 @@ impl TraceSink for TeamTraceSink<'_, '_> {
 
 /// Runs `scenario`'s team (its `[team]` section), streaming one trace of every vehicle into
 /// `writer` (made by [`TraceWriter::create_team`]: a [`VEHICLE_COLUMN`] last; the caller
-/// finishes it, as [`crate::rundir::RunDir::finish`]). `None` without a team; `Some(Err)` with
+/// finishes it, as [`crate::rundir::RunDir::finish`]), over the threads `threads` allows for
+/// the team's size (the same trace on any number). `None` without a team; `Some(Err)` with
 /// the engine's reason when it refuses the team.
 pub fn run_team_into(
     scenario: &Scenario,
     writer: &mut TraceWriter,
+    threads: isotrack_sim::TeamThreads,
 ) -> Option<Result<isotrack_sim::TeamResult, String>> {
     let count = scenario.spec().team.as_ref()?.count();
     let w = std::cell::RefCell::new(writer);
     let mut sinks = TeamTraceSink::for_team(&w, count);
-    Some(scenario.run_team(&mut sinks)?.map_err(|e| e.to_string()))
+    Some(
+        scenario
+            .run_team_threads(&mut sinks, threads)?
+            .map_err(|e| e.to_string()),
+    )
 }
 
 /// Runs `scenario`, streaming its trace into `path`.

@@ -16,7 +16,9 @@ use isotrack_sim::team::arc::{pick_loop, CircleArc, MovingArc, PolylineArc};
 use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::SpacingConfig;
 use isotrack_sim::team::TeamIsoline;
-use isotrack_sim::{Group, Oracles, TeamConfig, TeamError, TeamMember, TeamResult, TraceSink};
+use isotrack_sim::{
+    Group, Oracles, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads, TraceSink,
+};
 use isotrack_vehicles::{DubinsState, DubinsVariableSpeed, FixedWingVariableSpeed};
 use std::sync::Arc;
 
@@ -308,12 +310,22 @@ impl Scenario {
     /// Runs the scenario's team (`None` without a `[team]` section), vehicle `i` recording its
     /// trace into `sinks[i]` (`sinks` empty: no trace).
     pub fn run_team<S: TraceSink>(&self, sinks: &mut [S]) -> Option<Result<TeamResult, TeamError>> {
+        self.run_team_threads(sinks, TeamThreads::new(1))
+    }
+
+    /// [`run_team`](Self::run_team) over the threads `threads` allows for the team's size
+    /// ([`Group::drive_threads`]): the same result and trace, bit for bit, on any number.
+    pub fn run_team_threads<S: TraceSink>(
+        &self,
+        sinks: &mut [S],
+        threads: TeamThreads,
+    ) -> Option<Result<TeamResult, TeamError>> {
         let team = self.spec().team.as_ref()?;
         Some(match self.field() {
-            FieldModel::Analytic(f) => self.run_team_on(f, team, sinks),
-            FieldModel::Grid(f) => self.run_team_on(f, team, sinks),
-            FieldModel::Puff(f) => self.run_team_on(&**f, team, sinks),
-            FieldModel::Series(f) => self.run_team_on(&**f, team, sinks),
+            FieldModel::Analytic(f) => self.run_team_on(f, team, sinks, threads),
+            FieldModel::Grid(f) => self.run_team_on(f, team, sinks, threads),
+            FieldModel::Puff(f) => self.run_team_on(&**f, team, sinks, threads),
+            FieldModel::Series(f) => self.run_team_on(&**f, team, sinks, threads),
         })
     }
 
@@ -322,6 +334,7 @@ impl Scenario {
         field: &F,
         team: &TeamSpec,
         sinks: &mut [S],
+        threads: TeamThreads,
     ) -> Result<TeamResult, TeamError> {
         let iso = self.isoline();
         let dist = |t: f64, p: Vec2| iso.distance(t, p);
@@ -382,7 +395,7 @@ impl Scenario {
                     })
                     .collect();
                 drive(
-                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self,
+                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self, threads,
                 )?
             }
             VehicleModel::FixedWing(w) => {
@@ -414,7 +427,7 @@ impl Scenario {
                     })
                     .collect();
                 drive(
-                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self,
+                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self, threads,
                 )?
             }
         };
@@ -436,11 +449,13 @@ fn drive<F, V, C, S>(
     oracles: &Oracles<'_>,
     sinks: &mut [S],
     scenario: &Scenario,
+    threads: TeamThreads,
 ) -> Result<TeamResult, TeamError>
 where
-    F: ScalarField,
-    V: SpeedCommand,
-    C: IsolineController,
+    F: ScalarField + Sync,
+    V: SpeedCommand + Sync,
+    V::State: Send,
+    C: IsolineController + Send,
     S: TraceSink,
 {
     if !sinks.is_empty() && sinks.len() != members.len() {
@@ -450,7 +465,7 @@ where
         });
     }
     let mut g = Group::with_isoline(vehicle, &scenario.plan(), cfg, members, isoline)?;
-    g.drive(field, vehicle, oracles, sinks);
+    g.drive_threads(field, vehicle, oracles, sinks, threads);
     Ok(g.finish(sinks))
 }
 
@@ -560,6 +575,49 @@ mod tests {
                 let va = row.telemetry.unwrap().airspeed_mps;
                 assert!((22.5..37.5).contains(&va), "airspeed {va}");
             }
+        }
+    }
+
+    /// A fixed-wing team of 60 UAVs (gusts, noisy sensors; `range_balance` on noisy, lossy,
+    /// delayed ranging) flies the same on 1, 2, 3 and 7 threads, bit for bit: every result,
+    /// team metric and trace row, the rows in the same order (one log, as the trace file).
+    #[test]
+    fn a_fixed_wing_team_is_the_same_on_any_threads() {
+        use isotrack_sim::TeamThreads;
+        use std::cell::RefCell;
+        struct Log<'a>(&'a RefCell<Vec<(usize, TraceRow)>>, usize);
+        impl TraceSink for Log<'_> {
+            fn record(&mut self, r: &TraceRow) {
+                self.0.borrow_mut().push((self.1, *r));
+            }
+        }
+        let s = parse_scenario(
+            &format!(
+                "{UAV}[team]\nspacing = \"range_balance\"\nk_v = 0.05\ncount = 60\n\
+                 spread = {{ along = \"arc\", radius_m = 600.0, step_rad = 0.104 }}\n\
+                 ranging = {{ rate_hz = 5.0, noise_std_m = 2.0, dropout_probability = 0.2, delay_s = 0.4 }}\n"
+            ),
+            "<test>",
+            &["sim.duration_s=20.0".into(), "output.record_rate_hz=100.0".into()],
+        )
+        .unwrap();
+        let go = |threads: usize| {
+            let log = RefCell::new(Vec::new());
+            let mut sinks: Vec<Log<'_>> = (0..60).map(|i| Log(&log, i)).collect();
+            let split = TeamThreads {
+                threads,
+                min_vehicles_per_thread: 8,
+            };
+            assert_eq!(split.parts(60), threads);
+            let r = s.run_team_threads(&mut sinks, split).unwrap().unwrap();
+            drop(sinks);
+            let log = log.into_inner();
+            assert!(log.len() >= 60 * 2000, "{}", log.len());
+            format!("{r:?}\n{log:?}")
+        };
+        let one = go(1);
+        for threads in [2, 3, 7] {
+            assert!(go(threads) == one, "{threads} threads differ from one");
         }
     }
 

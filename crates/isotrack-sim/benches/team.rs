@@ -13,7 +13,7 @@ use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::ranging::RangingConfig;
 use isotrack_sim::team::spacing::{RingMode, SpacingConfig, SpacingLaw};
 use isotrack_sim::{
-    simulate_team, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TeamConfig, TeamMember,
+    Group, NoTrace, Oracles, Sensor, SensorConfig, StepPlan, TeamConfig, TeamMember, TeamThreads,
 };
 use isotrack_vehicles::{DubinsState, DubinsVariableSpeed};
 use std::hint::black_box;
@@ -21,16 +21,20 @@ use std::hint::black_box;
 const N: usize = 1000;
 
 fn run(metrics_every: Option<u64>) -> u64 {
+    run_on(N, metrics_every, TeamThreads::new(1))
+}
+
+fn run_on(n: usize, metrics_every: Option<u64>, threads: TeamThreads) -> u64 {
     let field = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
     let r = 10.0 * 20f64.ln();
     let v = DubinsVariableSpeed {
         min_speed_mps: 0.25,
         max_speed_mps: 0.75,
     };
-    let members = (0..N)
+    let members = (0..n)
         .map(|i| {
             // Evenly spread but for a sawtooth of 10 % of a gap, clockwise.
-            let th = -2.0 * std::f64::consts::PI * (i as f64 + 0.1 * (i % 3) as f64) / N as f64;
+            let th = -2.0 * std::f64::consts::PI * (i as f64 + 0.1 * (i % 3) as f64) / n as f64;
             let x0 = DubinsState {
                 position_m: Vec2::new(r * th.cos(), r * th.sin()),
                 heading_rad: th - std::f64::consts::FRAC_PI_2,
@@ -72,17 +76,15 @@ fn run(metrics_every: Option<u64>) -> u64 {
         radius_m: r,
     };
     let arc_ref: Option<&dyn ArcProjection> = metrics_every.map(|_| &arc as &dyn ArcProjection);
-    let res = simulate_team(
+    let mut g = Group::new(&v, &plan, cfg, members, arc_ref).unwrap();
+    g.drive_threads(
         &field,
         &v,
-        &plan,
-        cfg,
-        members,
-        arc_ref,
         &Oracles::default(),
         &mut [] as &mut [NoTrace],
-    )
-    .unwrap();
+        threads,
+    );
+    let res = g.finish(&mut [] as &mut [NoTrace]);
     res.runs.iter().map(|r| r.steps).sum()
 }
 
@@ -92,6 +94,26 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements((N * 6000) as u64));
     g.bench_function("range_balance", |b| b.iter(|| black_box(run(None))));
     g.bench_function("team_metrics_1hz", |b| b.iter(|| black_box(run(Some(100)))));
+    for t in [1, 2] {
+        g.bench_function(format!("threads_{t}"), |b| {
+            b.iter(|| black_box(run_on(N, None, TeamThreads::new(t))))
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("team_ring_small_dubins_60s");
+    g.sample_size(10);
+    for n in [64, 128, 256, 512] {
+        g.throughput(Throughput::Elements((n * 6000) as u64));
+        for t in [1, 2] {
+            let split = TeamThreads {
+                threads: t,
+                min_vehicles_per_thread: 8,
+            };
+            g.bench_function(format!("{n}/threads_{t}"), |b| {
+                b.iter(|| black_box(run_on(n, None, split)))
+            });
+        }
+    }
     g.finish();
 }
 
