@@ -468,7 +468,8 @@ fn process_cpu_s() -> Option<f64> {
 }
 
 /// Throughput of the 1000-robot ring (as benches/team.rs, 60 s at 100 Hz, range_balance on
-/// 10 Hz ranging, no team metrics) on 1 and 2 threads (`THREADS=1,2,3` to choose), in
+/// 10 Hz ranging, no team metrics) on 1 and 2 threads (`THREADS=1,2,3` to choose; `DURATION_S`
+/// for another duration), in
 /// vehicle-steps per second of wall time and of CPU time (this thread's on one thread; the
 /// process's, every thread's, on several: rayon's idle workers spin a little, which counts).
 /// Run by hand: `cargo test --workspace --release --locked --all-features --test team --
@@ -505,7 +506,9 @@ fn throughput_1000_ring() {
             })
             .collect()
     };
-    let plan = StepPlan::new(DT, 60.0, 0.0, 0.2, 0.1, 10.0, 1.0).unwrap();
+    // `DURATION_S=600` for the 600 s (the peak memory does not grow with it).
+    let duration_s: f64 = std::env::var("DURATION_S").map_or(60.0, |d| d.parse().unwrap());
+    let plan = StepPlan::new(DT, duration_s, 0.0, 0.2, 0.1, 10.0, 1.0).unwrap();
     let cfg = TeamConfig {
         ranging: ideal_ranging(10.0),
         spacing: SpacingConfig {
