@@ -843,8 +843,10 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
 }
 
 /// The fewest vehicles a thread of a team steps by default ([`TeamThreads::new`]): below
-/// twice as many a team steps on one thread, the two hand-overs of a threaded step costing
-/// more than a thread saves (measured: BENCHMARKS.md, the team rows).
+/// twice as many a team steps on one thread. A vehicle-step costs about 60 ns on one thread
+/// and a threaded step two hand-overs (rayon joins); on the loaded machine of BENCHMARKS.md's
+/// team rows a second thread made no team of 64 to 1000 robots faster, so the bound is
+/// conservative: a thread's 256 vehicles are about 15 us of work per step.
 pub const MIN_VEHICLES_PER_THREAD: usize = 256;
 
 /// How a team is split over threads ([`Group::drive_threads`]); results do not depend on it.
