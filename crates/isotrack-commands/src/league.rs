@@ -38,9 +38,9 @@ fn default_suite() -> Result<PathBuf, Failure> {
 
 fn bench_failure(e: BenchError) -> Failure {
     match e {
-        BenchError::UnknownController(_) | BenchError::DuplicateController(_) => {
-            fail(exit::USAGE, e.to_string())
-        }
+        BenchError::UnknownController(_)
+        | BenchError::DuplicateController(_)
+        | BenchError::TeamController { .. } => fail(exit::USAGE, e.to_string()),
         BenchError::Io { .. } => fail(exit::CANTCREAT, e.to_string()),
         // A task's scenario (or a file it names) cannot be read: missing, a FIFO, a
         // directory, a device: 66, as for `sweep`'s base scenario.

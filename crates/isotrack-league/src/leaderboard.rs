@@ -90,21 +90,73 @@ pub const RESULTS_COLUMNS: [&str; 15] = [
 /// (`isotrack-runs`: numbers in the shortest round-trip form, empty where undefined or not
 /// finite; CSV quoting where a cell needs it).
 pub fn results_csv(runs: &[RunRow]) -> String {
-    use isotrack_runs::results::real_cell;
     let mut s = RESULTS_COLUMNS.join(",") + "\n";
     for r in runs {
-        let p = r.score.parts;
-        let mut cells = vec![r.controller.clone(), r.seed.to_string(), r.outcome.clone()];
-        cells.extend([r.score.total, p[0], p[1], p[2], p[3], p[4]].map(|x| real_cell(Some(x))));
-        cells.extend([
-            real_cell(r.convergence_time_s),
-            real_cell(r.time_in_band_fraction),
-            real_cell(r.steady_state_rms_isoline_distance_m),
-            r.track_losses.to_string(),
-            real_cell(Some(r.control_effort)),
-            real_cell(r.steady_state_rms_error),
-        ]);
-        s += &isotrack_runs::sweep::rows::csv_line(&cells);
+        s += &isotrack_runs::sweep::rows::csv_line(&run_cells(r));
+    }
+    s
+}
+
+/// The [`RESULTS_COLUMNS`] cells of one scored run.
+fn run_cells(r: &RunRow) -> Vec<String> {
+    use isotrack_runs::results::real_cell;
+    let p = r.score.parts;
+    let mut cells = vec![r.controller.clone(), r.seed.to_string(), r.outcome.clone()];
+    cells.extend([r.score.total, p[0], p[1], p[2], p[3], p[4]].map(|x| real_cell(Some(x))));
+    cells.extend([
+        real_cell(r.convergence_time_s),
+        real_cell(r.time_in_band_fraction),
+        real_cell(r.steady_state_rms_isoline_distance_m),
+        r.track_losses.to_string(),
+        real_cell(Some(r.control_effort)),
+        real_cell(r.steady_state_rms_error),
+    ]);
+    cells
+}
+
+/// The columns a team task's `results.csv` adds after [`RESULTS_COLUMNS`] (then
+/// `isotrack_runs::sweep::rows::TEAM_COLUMNS`, the team metrics): the team's size, how many of
+/// its vehicles completed, and the team parts of the score (docs/BENCHMARK.md, "Team score":
+/// `score = 100 * (0.50 tracking + 0.25 spacing + 0.25 revisit)`; `spacing` and `revisit` are
+/// the scaled ones, as `distance`, `losses` and `effort` are).
+pub const TEAM_SCORE_COLUMNS: [&str; 6] = [
+    "vehicles",
+    "vehicles_completed",
+    "tracking",
+    "held",
+    "spacing",
+    "revisit",
+];
+
+/// A task's `results.csv`: [`results_csv`], and for a team task the team columns
+/// ([`TEAM_SCORE_COLUMNS`], then `isotrack_runs::sweep::rows::TEAM_COLUMNS`) after each row's
+/// cells (empty for an invalid run).
+pub fn task_results_csv(t: &TaskResult) -> String {
+    if !t.team {
+        return results_csv(&t.runs);
+    }
+    use isotrack_runs::results::real_cell;
+    use isotrack_runs::sweep::rows::{csv_line, team_record_cells, TEAM_COLUMNS};
+    let mut header: Vec<String> = RESULTS_COLUMNS.iter().map(|c| c.to_string()).collect();
+    header.extend(TEAM_SCORE_COLUMNS.iter().map(|c| c.to_string()));
+    header.extend(TEAM_COLUMNS.iter().map(|c| c.to_string()));
+    let mut s = header.join(",") + "\n";
+    for r in &t.runs {
+        let mut cells = run_cells(r);
+        match &r.team {
+            Some(tm) => {
+                cells.extend([tm.vehicles.to_string(), tm.vehicles_completed.to_string()]);
+                let p = tm.parts;
+                cells
+                    .extend([p.tracking, p.held, p.spacing, p.revisit].map(|x| real_cell(Some(x))));
+                cells.extend(team_record_cells(tm.metrics.as_ref()));
+            }
+            None => cells.extend(vec![
+                String::new();
+                TEAM_SCORE_COLUMNS.len() + TEAM_COLUMNS.len()
+            ]),
+        }
+        s += &csv_line(&cells);
     }
     s
 }
@@ -152,7 +204,7 @@ pub fn write_task(t: &TaskResult, dir: &Path) -> Result<(), BenchError> {
     }
     let csv = json.with_file_name("results.csv");
     // Never through a link nor into a FIFO: `isotrack_runs::files::write_atomic`.
-    isotrack_runs::files::write_atomic(&csv, results_csv(&t.runs).as_bytes())
+    isotrack_runs::files::write_atomic(&csv, task_results_csv(t).as_bytes())
         .map_err(|e| io(&csv, e))?;
     isotrack_runs::files::write_atomic(
         &json,

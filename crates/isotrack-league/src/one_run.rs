@@ -2,10 +2,13 @@
 //! it is scored in. Shared by the scoring ([`crate::run`]) and the tuning ([`crate::tune`]).
 
 use crate::registry::{Clipped, Entrant};
-use crate::score::{ScoreContext, Scoring};
+use crate::results::TeamRow;
+use crate::score::{score, team_score, Score, ScoreContext, Scoring};
 use crate::suite::{seed_overrides, Task};
+use isotrack_runs::results::RunRecord;
+use isotrack_runs::summary::TeamRecord;
 use isotrack_scenario::{Assignment, Scenario, ScenarioError};
-use isotrack_sim::{RunResult, TraceSink};
+use isotrack_sim::{NoTrace, Outcome, RunResult, TraceSink};
 use std::collections::BTreeMap;
 
 /// The overrides of one run: the built-in law's gains, then the seed's draws (the law itself is
@@ -92,4 +95,82 @@ pub fn context(s: &Scenario, task: &Task, scoring: Scoring) -> ScoreContext {
         speed_mps: s.start_speed_mps(s.start()),
         scoring,
     }
+}
+
+/// A scored run of one (task, controller, seed).
+#[derive(Clone, Debug)]
+pub struct Scored {
+    /// `completed` when every vehicle completed; else the first vehicle's that did not
+    /// (a single run: its outcome).
+    pub outcome: String,
+    /// The run's record (a team: vehicle 0's, as `summary.json`'s top level).
+    pub record: RunRecord,
+    /// Its score.
+    pub score: Score,
+    /// A team run's team columns.
+    pub team: Option<TeamRow>,
+}
+
+/// Runs and scores one (task, controller, seed) by `scoring`: a scenario with `[team]` as a
+/// team (through [`Scenario::run_team`], the engine `isotrack run` flies it with; scored by
+/// [`team_score`]), any other as one vehicle ([`run_one`], [`score`]). `Err` with the message
+/// when the run's scenario is invalid, the team engine refuses it, or a registered controller
+/// is asked to fly a team.
+pub fn run_scored(
+    base: &Scenario,
+    task: &Task,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+    scoring: Scoring,
+) -> Result<Scored, String> {
+    if base.spec().team.is_none() {
+        let (s, r) = run_one(base, task, entrant, gains, seed, &mut NoTrace)?;
+        return Ok(Scored {
+            outcome: r.outcome.as_str().to_string(),
+            record: RunRecord::of(&r),
+            score: score(&r, &context(&s, task, scoring)),
+            team: None,
+        });
+    }
+    if let Entrant::Custom(_) = entrant {
+        return Err(format!(
+            "task {}: a team task's vehicles fly the built-in laws only",
+            task.id
+        ));
+    }
+    let s = prepare(base, task, entrant, gains, seed).map_err(|e| e.to_string())?;
+    let t = match s.run_team(&mut [] as &mut [NoTrace]) {
+        Some(Ok(t)) => t,
+        Some(Err(e)) => return Err(format!("[team]: {e}")),
+        None => {
+            return Err("[team]: this run has no team while its task's scenario has one".into())
+        }
+    };
+    let metrics = t.team.as_ref().map(TeamRecord::of);
+    let (sc, parts) = team_score(&t.runs, metrics.as_ref(), &context(&s, task, scoring));
+    let r0 = t.runs.first().ok_or("[team]: no vehicle")?;
+    let outcome = t
+        .runs
+        .iter()
+        .find(|r| r.outcome != Outcome::Completed)
+        .unwrap_or(r0)
+        .outcome
+        .as_str()
+        .to_string();
+    Ok(Scored {
+        outcome,
+        record: RunRecord::of(r0),
+        score: sc,
+        team: Some(TeamRow {
+            vehicles: t.runs.len(),
+            vehicles_completed: t
+                .runs
+                .iter()
+                .filter(|r| r.outcome == Outcome::Completed)
+                .count(),
+            parts,
+            metrics,
+        }),
+    })
 }

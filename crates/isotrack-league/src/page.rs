@@ -10,7 +10,7 @@ pub fn benchmark_page(r: &BenchResult) -> String {
     let title = format!("isotrack benchmark: {} v{}", r.suite, r.version);
     let body = format!(
         r#"<h1>{t}</h1>
-<p class="sub">{n} controllers on {m} tasks. Score per run in [0, 100] (formula {v}): {f}, 0 for a run that leaves the field or diverges; a task's score is the mean over its scoring seeds, the overall score the mean over tasks. Click a column to sort.</p>
+<p class="sub">{n} controllers on {m} tasks. Score per run in [0, 100] (formula {v}): {f}, 0 for a run that leaves the field or diverges; a task's score is the mean over its scoring seeds, the overall score the mean over tasks. Click a column to sort.</p>{team}
 <h2>Leaderboard</h2>
 <table id="leaderboard"></table>
 <div id="tasks"></div>
@@ -20,6 +20,14 @@ pub fn benchmark_page(r: &BenchResult) -> String {
         m = r.tasks.len(),
         v = i64::from(r.scoring),
         f = escape(r.scoring.formula()),
+        team = if r.tasks.iter().any(|t| t.team) {
+            format!(
+                "\n<p class=\"sub\">{}</p>",
+                escape(crate::score::TEAM_FORMULA)
+            )
+        } else {
+            String::new()
+        },
     );
     page(&title, &body, &script_json(r), BENCH_JS)
 }

@@ -1,10 +1,11 @@
 //! What a benchmark produces: its results (per task, per run) and its errors, and where a task's
 //! results are kept.
 
-use crate::score::{Score, Scoring};
+use crate::score::{Score, Scoring, TeamParts};
 use crate::suite::SuiteError;
 use isotrack_plot::FieldPicture;
 use isotrack_runs::results::{RunRecord, INVALID_SCENARIO};
+use isotrack_runs::summary::TeamRecord;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -40,6 +41,16 @@ pub enum BenchError {
         /// Why.
         message: String,
     },
+    /// A controller registered from Rust or Python on a team task: it flies one vehicle, and
+    /// a team's vehicles each run the scenario's built-in tracking law (a team of your own
+    /// controllers is not wired yet).
+    #[error("task {task}: {controller} is a registered controller, and a team task's vehicles fly the built-in laws only (a team of registered controllers is not wired yet): leave it out of this suite (--controllers)")]
+    TeamController {
+        /// The task id.
+        task: String,
+        /// The controller.
+        controller: String,
+    },
     /// `--resume` on results of another suite or controller set.
     #[error("{0}")]
     Mismatch(String),
@@ -71,6 +82,23 @@ pub struct RunRow {
     pub steady_state_rms_error: Option<f64>,
     /// The score and its parts.
     pub score: Score,
+    /// A team run's team columns (a task whose scenario has `[team]`; absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub team: Option<TeamRow>,
+}
+
+/// What a team run's row adds: how many of its vehicles completed, the team parts of its
+/// score and its team metrics (`summary.json`'s `team.metrics`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TeamRow {
+    /// Vehicles in the team.
+    pub vehicles: usize,
+    /// Vehicles whose run completed.
+    pub vehicles_completed: usize,
+    /// The team parts of the score.
+    pub parts: TeamParts,
+    /// The team metrics (`None`: none measured).
+    pub metrics: Option<TeamRecord>,
 }
 
 impl RunRow {
@@ -91,6 +119,7 @@ impl RunRow {
                 control_effort: r.metrics.control_effort.unwrap_or(f64::NAN),
                 steady_state_rms_error: r.metrics.steady_state_rms_error,
                 score,
+                team: None,
             },
             None => RunRow {
                 controller: controller.to_string(),
@@ -103,6 +132,7 @@ impl RunRow {
                 control_effort: 0.0,
                 steady_state_rms_error: None,
                 score,
+                team: None,
             },
         }
     }
@@ -139,6 +169,10 @@ pub struct TaskResult {
     /// The digest of what produced it (suite, controllers, gains, version): `--resume` reuses
     /// a task's results only when it matches.
     pub digest: String,
+    /// Whether the task's scenario has `[team]` (its runs are teams, scored by
+    /// [`crate::score::team_score`], and its `results.csv` has the team columns).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub team: bool,
 }
 
 /// A benchmark's results.

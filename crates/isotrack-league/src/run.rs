@@ -2,16 +2,15 @@
 //! the scoring seeds, and the pictures of each task.
 
 use crate::one_run::run_assignments;
-pub use crate::one_run::{context, prepare, run_one, run_overrides};
+pub use crate::one_run::{context, prepare, run_one, run_overrides, run_scored, Scored};
 use crate::registry::{Entrant, Registry};
 pub use crate::results::{task_file, BenchError, BenchResult, RunRow, TaskResult, Trajectory};
-use crate::score::{score, Score, Scoring};
+use crate::score::{Score, Scoring};
 use crate::suite::{task_path, Seg, Suite, SuiteError, Task};
 use crate::tune::tune;
 use isotrack_plot::FieldPicture;
-use isotrack_runs::results::RunRecord;
 use isotrack_scenario::{load_scenario, ErrorLocation, Scenario, ScenarioError};
-use isotrack_sim::{NoTrace, TraceRow, TraceSink};
+use isotrack_sim::{TraceRow, TraceSink};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -182,6 +181,7 @@ pub fn check_runs(
         .copied()
         .collect();
     for (ti, (task, base)) in suite.tasks.iter().zip(bases).enumerate() {
+        check_team_task(suite, ti, base, reg, controllers)?;
         for c in controllers {
             let Some(entrant) = reg.get(c) else {
                 return Err(BenchError::UnknownController(c.clone()));
@@ -195,6 +195,43 @@ pub fn check_runs(
                 }
             }
         }
+    }
+    Ok(())
+}
+
+/// A team task (its scenario has `[team]`) runs only built-in laws (a registered controller:
+/// [`BenchError::TeamController`]) and needs a closed isoline to measure its spacing and revisit
+/// times on (none, e.g. an isoline that leaves the grid: [`BenchError::Suite`] at the task's
+/// `scenario`, since the team score would be the tracking half only).
+fn check_team_task(
+    suite: &Suite,
+    ti: usize,
+    base: &Scenario,
+    reg: &Registry,
+    controllers: &[String],
+) -> Result<(), BenchError> {
+    let task = &suite.tasks[ti];
+    if base.spec().team.is_none() {
+        return Ok(());
+    }
+    if let Some(c) = controllers
+        .iter()
+        .find(|c| matches!(reg.get(c), Some(Entrant::Custom(_))))
+    {
+        return Err(BenchError::TeamController {
+            task: task.id.clone(),
+            controller: c.clone(),
+        });
+    }
+    if base.team_isoline().as_team_isoline().is_none() {
+        let why = base.team_metrics_note();
+        return Err(BenchError::Suite(suite.error_at(
+            &task_path(ti, &["scenario"]),
+            format!(
+                "task {}: a team task needs a closed isoline to measure its spacing and revisit times on, and this one has none ({why})",
+                task.id
+            ),
+        )));
     }
     Ok(())
 }
@@ -347,6 +384,7 @@ fn run_task(
         trajectories,
         picture,
         digest,
+        team: base.spec().team.is_some(),
     })
 }
 
@@ -359,13 +397,13 @@ fn scored_run(
     seed: u64,
     scoring: Scoring,
 ) -> RunRow {
-    match run_one(base, task, entrant, gains, seed, &mut NoTrace) {
-        Ok((s, r)) => RunRow::of(
-            controller,
-            seed,
-            Some(&RunRecord::of(&r)),
-            score(&r, &context(&s, task, scoring)),
-        ),
+    match run_scored(base, task, entrant, gains, seed, scoring) {
+        Ok(r) => {
+            let mut row = RunRow::of(controller, seed, Some(&r.record), r.score);
+            row.outcome = r.outcome;
+            row.team = r.team;
+            row
+        }
         Err(_) => RunRow::of(
             controller,
             seed,
@@ -415,6 +453,13 @@ fn trajectory(
     };
     let with_rate = base.derive(&["output.record_rate_hz=10.0".into()], "picture");
     let outcome = match with_rate {
+        // A team: vehicle 0's path (every vehicle records; the others' rows are dropped).
+        Ok(b) if b.spec().team.is_some() => {
+            match team_path(&b, task, entrant, gains, seed, &mut sink) {
+                Ok(o) => o,
+                Err(_) => "invalid_scenario".to_string(),
+            }
+        }
         Ok(b) => match run_one(&b, task, entrant, gains, seed, &mut sink) {
             Ok((_, r)) => r.outcome.as_str().to_string(),
             Err(_) => "invalid_scenario".to_string(),
@@ -426,6 +471,40 @@ fn trajectory(
         points: sink.points,
         outcome,
     }
+}
+
+/// Flies a team run of (task, controller, seed) with vehicle 0 recording into `sink`: the
+/// team's outcome (`completed` when every vehicle completed).
+fn team_path(
+    base: &Scenario,
+    task: &Task,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+    sink: &mut Thinned,
+) -> Result<String, String> {
+    let s = prepare(base, task, entrant, gains, seed).map_err(|e| e.to_string())?;
+    let n = s.spec().team.as_ref().map_or(0, |t| t.starts.len());
+    let mut sinks: Vec<Thinned> = (0..n)
+        .map(|_| Thinned {
+            every: sink.every,
+            k: 0,
+            points: vec![],
+        })
+        .collect();
+    let t = match s.run_team(&mut sinks) {
+        Some(Ok(t)) => t,
+        Some(Err(e)) => return Err(e.to_string()),
+        None => return Err("no team".into()),
+    };
+    if let Some(first) = sinks.into_iter().next() {
+        *sink = first;
+    }
+    Ok(t.runs
+        .iter()
+        .find(|r| r.outcome != isotrack_sim::Outcome::Completed)
+        .map_or("completed", |r| r.outcome.as_str())
+        .to_string())
 }
 
 /// Field samples per side of a picture.

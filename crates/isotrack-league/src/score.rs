@@ -150,3 +150,130 @@ pub fn score(r: &RunResult, ctx: &ScoreContext) -> Score {
     let total = 100.0 * parts.iter().zip(WEIGHTS).map(|(p, w)| p * w).sum::<f64>();
     Score { total, parts }
 }
+
+/// The team score in one line (for pages).
+pub const TEAM_FORMULA: &str = "A team task's run (its scenario has [team]) scores 100 × (0.50 tracking + held × (0.25 spacing + 0.25 revisit)): tracking the mean of its vehicles' scores by the formula above over 100, held the mean of their held, spacing 1 − gap CV/√(N−1), revisit min(r, 1/r) with r the mean revisit time over the ideal L/(N v0); spacing and revisit 0 if a vehicle did not complete. The table's parts are the vehicles' means; the team parts are in the task's results.csv. The picture shows vehicle 0's path.";
+
+/// The weights of a team run's score, in the order tracking, spacing, revisit
+/// ([`team_score`]).
+pub const TEAM_WEIGHTS: [f64; 3] = [0.50, 0.25, 0.25];
+
+/// The team parts of a team run's score (docs/BENCHMARK.md, "Team score"), each in `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TeamParts {
+    /// The mean over the vehicles of each vehicle's score (the suite's formula, 0 for a vehicle
+    /// that did not complete), over 100.
+    pub tracking: f64,
+    /// The mean over the vehicles of how much of the isoline each held: 1 for a vehicle that
+    /// converged (or, by formula 1, completed), else its share of the steady window in the band
+    /// (formula 2); 0 for a vehicle that did not complete.
+    pub held: f64,
+    /// `held * (1 - gap_cv / sqrt(N - 1))`, clamped to `[0, 1]` (1 for a team of one).
+    pub spacing: f64,
+    /// `held * min(r, 1/r)`, `r = revisit_time_mean_s / revisit_time_ideal_s`.
+    pub revisit: f64,
+}
+
+/// Scores a team run: its vehicles' `runs` (in the listed order) and its team metrics `team`
+/// (`summary.json`'s `team.metrics`; `None` when none were measured), each vehicle scored in
+/// `ctx` by [`score`].
+///
+/// ```text
+/// score    = 100 * (0.50*tracking + 0.25*spacing + 0.25*revisit)
+/// tracking = mean_i score_i / 100            score_i vehicle i's score (0 unless completed)
+/// held     = mean_i held_i                   held_i as in formula 2 (formula 1: 1), 0 unless
+///                                            vehicle i completed
+/// spacing  = held * clamp(1 - gap_cv / sqrt(N - 1), 0, 1)    (1 for N = 1)
+/// revisit  = held * min(r, 1/r),  r = revisit_time_mean_s / (L / (N v0))
+/// ```
+///
+/// `sqrt(N - 1)` is the largest gap CV of `N` gaps that sum to the isoline's length `L` (all of
+/// it in one gap: the whole team in one place), so `spacing` runs from 0 (one cluster) to 1
+/// (even gaps). The mean revisit time is off the ideal both ways: a cluster passes a point in
+/// bursts (short intervals), a team slower than `v0` or off the isoline less often, so the
+/// ratio counts either way. A team with a vehicle that did not complete gets spacing and
+/// revisit 0 (its gaps and passes are measured to a vehicle no longer tracking), as does a
+/// metric that was not measured (`None`: no closed isoline at any sample of the window). The
+/// returned [`Score::parts`] are the vehicles' mean parts (`tracking = sum(WEIGHTS * parts)`).
+pub fn team_score(
+    runs: &[RunResult],
+    team: Option<&isotrack_runs::summary::TeamRecord>,
+    ctx: &ScoreContext,
+) -> (Score, TeamParts) {
+    let n = runs.len().max(1) as f64;
+    let mut parts = [0.0; 5];
+    let mut tracking = 0.0;
+    let mut held = 0.0;
+    for r in runs {
+        let s = score(r, ctx);
+        tracking += s.total / 100.0;
+        for (p, q) in parts.iter_mut().zip(s.parts) {
+            *p += q;
+        }
+        held += vehicle_held(r, ctx.scoring);
+    }
+    let parts = parts.map(|p| p / n);
+    let tracking = tracking / n;
+    let held = held / n;
+    let all_completed = runs.iter().all(|r| r.outcome == Outcome::Completed);
+    let (spacing, revisit) = match team {
+        Some(t) if all_completed && !runs.is_empty() => (
+            spacing_part(t.count, t.gap_cv),
+            revisit_part(t.revisit_time_mean_s, t.revisit_time_ideal_s),
+        ),
+        _ => (0.0, 0.0),
+    };
+    let team = TeamParts {
+        tracking,
+        held,
+        spacing: held * spacing,
+        revisit: held * revisit,
+    };
+    let total = 100.0
+        * (TEAM_WEIGHTS[0] * team.tracking
+            + TEAM_WEIGHTS[1] * team.spacing
+            + TEAM_WEIGHTS[2] * team.revisit);
+    (Score { total, parts }, team)
+}
+
+/// How much of the isoline a vehicle held: 0 unless it completed; formula 1: 1; formula 2: 1
+/// once converged, else its share of the steady window in the band.
+fn vehicle_held(r: &RunResult, scoring: Scoring) -> f64 {
+    if r.outcome != Outcome::Completed {
+        return 0.0;
+    }
+    match scoring {
+        Scoring::V1 => 1.0,
+        Scoring::V2 if r.metrics.convergence_time_s.is_some() => 1.0,
+        Scoring::V2 => {
+            let b = r.metrics.time_in_band_fraction.unwrap_or(0.0);
+            if b.is_finite() {
+                b.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        }
+    }
+}
+
+/// `clamp(1 - gap_cv / sqrt(N - 1), 0, 1)`; 1 for a team of one; 0 when not measured.
+fn spacing_part(count: usize, gap_cv: Option<f64>) -> f64 {
+    if count <= 1 {
+        return 1.0;
+    }
+    match gap_cv {
+        Some(cv) if cv.is_finite() => (1.0 - cv / ((count - 1) as f64).sqrt()).clamp(0.0, 1.0),
+        _ => 0.0,
+    }
+}
+
+/// `min(r, 1/r)` with `r = mean / ideal`; 0 when either is not measured or not positive.
+fn revisit_part(mean_s: Option<f64>, ideal_s: Option<f64>) -> f64 {
+    match (mean_s, ideal_s) {
+        (Some(m), Some(i)) if m.is_finite() && i.is_finite() && m > 0.0 && i > 0.0 => {
+            let r = m / i;
+            r.min(1.0 / r).clamp(0.0, 1.0)
+        }
+        _ => 0.0,
+    }
+}

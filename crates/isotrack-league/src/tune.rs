@@ -7,13 +7,12 @@
 //! the keys. Starting point: the task scenario's own gains when it uses the law, else the law's
 //! defaults.
 
-use crate::one_run::{context, run_one};
+use crate::one_run::run_scored;
 use crate::registry::Entrant;
-use crate::score::{score, Scoring};
+use crate::score::Scoring;
 use crate::suite::Task;
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::Scenario;
-use isotrack_sim::NoTrace;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 
@@ -83,8 +82,8 @@ pub fn tune(
         let total: f64 = seeds
             .par_iter()
             .map(
-                |seed| match run_one(base, task, &entrant, Some(g), *seed, &mut NoTrace) {
-                    Ok((s, r)) => score(&r, &context(&s, task, scoring)).total,
+                |seed| match run_scored(base, task, &entrant, Some(g), *seed, scoring) {
+                    Ok(r) => r.score.total,
                     Err(_) => f64::NEG_INFINITY,
                 },
             )

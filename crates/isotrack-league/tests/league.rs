@@ -676,3 +676,162 @@ fn set_keys_are_compared_as_toml_reads_them_and_titles_bounded() {
         assert_eq!(e.location.map(|l| l.0), Some(line), "{e}");
     }
 }
+
+/// The team metrics `summary.json` records, for the hand-worked team scores.
+fn team_record(
+    count: usize,
+    gap_cv: Option<f64>,
+    mean_s: Option<f64>,
+) -> isotrack_runs::summary::TeamRecord {
+    isotrack_runs::summary::TeamRecord {
+        count,
+        isoline_length_m: Some(40.0),
+        gap_cv,
+        gap_cv_final: gap_cv,
+        time_to_even_s: None,
+        revisit_time_max_s: Some(30.0),
+        revisit_time_mean_s: mean_s,
+        revisit_time_ideal_s: Some(20.0),
+        min_separation_m: Some(1.0),
+        order_preserved: true,
+        speed_range_mps: None,
+        moving_isoline: None,
+    }
+}
+
+/// The team score (docs/BENCHMARK.md, "Team score") by hand: 4 vehicles, each scoring the
+/// hand-worked single run of `score_is_the_documented_formula` (formula 2, converged: the same
+/// as formula 1, s = 0.2*0.75 + 0.3*0.8 + 0.3*10/11 + 0.1*0.5 + 0.1*0.15 per unit), gap CV 0.6
+/// (spacing 1 - 0.6/sqrt(3)), mean revisit 25 s against the ideal 20 s (revisit 0.8; 16 s gives
+/// 0.8 too: the ratio counts either way). One vehicle that left the field: tracking 3/4 of it,
+/// held 3/4, spacing and revisit 0. No team metrics: the tracking half only. A team of one is
+/// evenly spread (spacing 1).
+#[test]
+fn team_score_is_the_documented_formula() {
+    use isotrack_league::score::team_score;
+    let ctx = ctx(Scoring::V2);
+    let s1 = 0.2 * 0.75 + 0.3 * 0.8 + 0.3 * 10.0 / 11.0 + 0.1 * 0.5 + 0.1 * 0.15;
+    let ok = || result(metrics(), Outcome::Completed, 300.0);
+    let runs = vec![ok(), ok(), ok(), ok()];
+    let spacing = 1.0 - 0.6 / 3f64.sqrt();
+    for mean in [25.0, 16.0] {
+        let (s, p) = team_score(&runs, Some(&team_record(4, Some(0.6), Some(mean))), &ctx);
+        let want = 100.0 * (0.5 * s1 + 0.25 * spacing + 0.25 * 0.8);
+        assert!((s.total - want).abs() < 1e-9, "{} {want}", s.total);
+        assert!((p.tracking - s1).abs() < 1e-12 && p.held == 1.0);
+        assert!((p.spacing - spacing).abs() < 1e-12 && (p.revisit - 0.8).abs() < 1e-12);
+    }
+    // One of four left the field.
+    let mut lost = runs.clone();
+    lost[2] = result(metrics(), Outcome::LeftField, 100.0);
+    let (s, p) = team_score(&lost, Some(&team_record(4, Some(0.6), Some(25.0))), &ctx);
+    assert!(
+        (s.total - 100.0 * 0.5 * 0.75 * s1).abs() < 1e-9,
+        "{}",
+        s.total
+    );
+    assert_eq!((p.held, p.spacing, p.revisit), (0.75, 0.0, 0.0));
+    // No team metrics measured.
+    let (s, _) = team_score(&runs, None, &ctx);
+    assert!((s.total - 100.0 * 0.5 * s1).abs() < 1e-9);
+    // A cluster (gap CV sqrt(N - 1)) scores no spacing; a team of one is evenly spread.
+    let (_, p) = team_score(
+        &runs,
+        Some(&team_record(4, Some(3f64.sqrt()), Some(20.0))),
+        &ctx,
+    );
+    assert_eq!((p.spacing, p.revisit), (0.0, 1.0));
+    let (_, p) = team_score(
+        &runs[..1],
+        Some(&team_record(1, Some(0.0), Some(20.0))),
+        &ctx,
+    );
+    assert_eq!(p.spacing, 1.0);
+    // Never captured (formula 2): held is the band share, and scales both team terms.
+    let mut m = metrics();
+    m.convergence_time_s = None;
+    let (_, p) = team_score(
+        &[
+            result(m.clone(), Outcome::Completed, 300.0),
+            result(m, Outcome::Completed, 300.0),
+        ],
+        Some(&team_record(2, Some(0.0), Some(20.0))),
+        &ctx,
+    );
+    assert!((p.held - 0.8).abs() < 1e-12 && (p.spacing - 0.8).abs() < 1e-12);
+}
+
+/// A registered controller flies one vehicle: on a team task it is refused before any run
+/// (never scored 0), naming the task and the controller.
+#[test]
+fn a_registered_controller_is_refused_on_a_team_task() {
+    let text = r#"
+name = "team"
+version = 1
+controllers = ["pi_isoline"]
+tuning_seeds = [11]
+scoring_seeds = [1]
+
+[[task]]
+id = "ring"
+title = "4 robots"
+scenario = "team-circular-4.toml"
+set = ["sim.duration_s=10.0"]
+length_m = 6.93
+"#;
+    let suite = Suite::parse(text, "team.toml", &scenarios()).unwrap();
+    let mut reg = Registry::builtin();
+    reg.register("my_copy", |s: &isotrack_scenario::Scenario| {
+        Box::new(s.controller()) as Box<dyn IsolineController + Send>
+    })
+    .unwrap();
+    let e = run_benchmark(&suite, &reg, &Options::default(), &|_, _, _| {}).unwrap_err();
+    assert!(
+        matches!(&e, BenchError::TeamController { task, controller } if task == "ring" && controller == "my_copy"),
+        "{e}"
+    );
+    // The built-in law alone runs the team: one row, with the team columns.
+    let opts = Options {
+        controllers: Some(vec!["pi_isoline".into()]),
+        ..Options::default()
+    };
+    let r = run_benchmark(&suite, &reg, &opts, &|_, _, _| {}).unwrap();
+    let t = &r.tasks[0];
+    assert!(t.team);
+    let row = t.runs[0].team.as_ref().expect("team columns");
+    assert_eq!((row.vehicles, row.vehicles_completed), (4, 4));
+}
+
+/// The bundled team suite loads and every run it defines is valid (each law's recorded gains,
+/// each scoring and tuning seed), every task is a team on a closed isoline (the refusals of
+/// `run_benchmark` pass), the ERA5 task's scenario reads the repository's ERA5 file, shortened
+/// to 8000 s with its 1 Hz sensor, and the volcano task flies 6 robots. Running it is the
+/// benchmark's job (a few minutes); CI checks it this far.
+#[test]
+fn the_team_suite_is_valid_as_written() {
+    let path = scenarios().join("../suites/team-v1.toml");
+    let suite = Suite::load(&path).unwrap();
+    let reg = Registry::builtin();
+    let bases: Vec<_> = suite
+        .tasks
+        .iter()
+        .map(|t| task_base(&suite, t).unwrap())
+        .collect();
+    isotrack_league::run::check_runs(&suite, &reg, &suite.controllers, &bases, true).unwrap();
+    let ids: Vec<&str> = suite.tasks.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(
+        ids,
+        ["circular-4", "volcano-6", "era5-uav-4", "puff-edge-3"]
+    );
+    let counts: Vec<usize> = bases
+        .iter()
+        .map(|b| b.spec().team.as_ref().unwrap().starts.len())
+        .collect();
+    assert_eq!(counts, [4, 6, 4, 3]);
+    for b in &bases {
+        assert!(b.team_isoline().as_team_isoline().is_some());
+    }
+    let era5 = bases[2].spec();
+    assert_eq!(era5.sim.duration_s, 8000.0);
+    assert_eq!(era5.sensor.rate_hz, 1.0);
+}

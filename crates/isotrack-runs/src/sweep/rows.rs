@@ -1,6 +1,7 @@
 //! The rows of `results.csv`: its columns, the row of one run, and runs run together.
 
-use crate::results::{result_cells, Column, RunRecord};
+use crate::results::{real_cell, result_cells, Column, RunRecord};
+use crate::summary::TeamRecord;
 use crate::trace::num;
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
@@ -188,18 +189,24 @@ fn run_team_row(
 
 /// The [`TEAM_COLUMNS`] cells of a team run (empty cells without team metrics).
 pub fn team_cells(team: Option<&TeamSummary>) -> Vec<String> {
+    team_record_cells(team.map(TeamRecord::of).as_ref())
+}
+
+/// The [`TEAM_COLUMNS`] cells of a team run's metrics as `summary.json` records them (empty
+/// cells without team metrics; a number not finite is `None` there, an empty cell here): the
+/// one builder of these cells, for a sweep's `results.csv` ([`team_cells`]) and a benchmark
+/// team task's.
+pub fn team_record_cells(team: Option<&TeamRecord>) -> Vec<String> {
     let Some(t) = team else {
         return vec![String::new(); TEAM_COLUMNS.len()];
     };
-    let fin = |x: f64| if x.is_finite() { num(x) } else { String::new() };
-    let opt = |x: Option<f64>| x.map(fin).unwrap_or_default();
     vec![
-        opt(t.gap_cv),
-        opt(t.time_to_even_s),
-        opt(t.revisit_time_max_s),
-        opt(t.revisit_time_mean_s),
-        fin(t.revisit_time_ideal_s),
-        opt(t.min_separation_m),
+        real_cell(t.gap_cv),
+        real_cell(t.time_to_even_s),
+        real_cell(t.revisit_time_max_s),
+        real_cell(t.revisit_time_mean_s),
+        real_cell(t.revisit_time_ideal_s),
+        real_cell(t.min_separation_m),
         t.order_preserved.to_string(),
     ]
 }
