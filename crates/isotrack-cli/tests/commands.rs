@@ -44,13 +44,22 @@ fn show_is_the_resolved_scenario_and_a_fixed_point() {
 }
 
 /// `show` prints every value in force (issue 31): the fixed wing's derived turn-rate limit
-/// `g*tan(40 deg)/V` = 9.8*tan(40 deg)/30 among them, and running `show`'s output gives the same
-/// run as the original, byte for byte (trace, summary, scenario.toml).
+/// `g*tan(40 deg)/V` = 9.8*tan(40 deg)/30 among them, an analytic field's drift (none: [0, 0]),
+/// a NetCDF series' frame times (ERA5's hourly frames: 0, 3600, 7200 s after the first), and
+/// running `show`'s output gives the same run as the original, byte for byte (trace, summary,
+/// scenario.toml), on a bundled scenario of every field kind: grid (one CSV frame, a NetCDF
+/// series), radial_exp, gaussian_plumes, puff_plume.
 #[test]
 fn running_shows_output_gives_the_identical_run() {
     let d = tempfile::tempdir().unwrap();
     let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
-    for name in ["paper-fig3-uav", "circular-far-start-antiwindup"] {
+    for name in [
+        "paper-fig3-uav",
+        "circular-far-start-antiwindup",
+        "gaussian-plumes-pm25",
+        "puff-plume-edge",
+        "era5-isotherm-uav",
+    ] {
         let src = scenarios.join(format!("{name}.toml"));
         let src = src.to_str().unwrap();
         let sets = ["--set", "sim.duration_s=20.0"];
@@ -60,6 +69,16 @@ fn running_shows_output_gives_the_identical_run() {
             let line = format!("# max_turn_rate_radps = {w:?}  # derived");
             assert!(shown.contains(&line), "{line} in\n{shown}");
         }
+        let drift = "# drift_mps = [0.0, 0.0]  # default";
+        let analytic = name.starts_with("circular") || name.starts_with("gaussian");
+        assert_eq!(
+            shown.contains(drift),
+            analytic,
+            "{name}: {drift} in\n{shown}"
+        );
+        let times = "# frame_times_s = [0.0, 3600.0, 7200.0, ";
+        let series = name.starts_with("era5");
+        assert_eq!(shown.contains(times), series, "{name}: {times} in\n{shown}");
         let p = write(d.path(), &format!("{name}-shown.toml"), &shown);
         let (a, b) = (
             d.path().join(format!("{name}-a")),

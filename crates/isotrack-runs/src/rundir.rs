@@ -26,12 +26,17 @@ pub const RUN_FILES: [&str; 3] = ["trace.csv", "summary.json", "scenario.toml"];
 /// field names (`field.path`, `field.paths`: absolute once the scenario is built). An output
 /// that is one of them is refused (64), never written over.
 pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<PathBuf> {
-    let field = &scenario.file().field;
     scenario_file
         .map(Path::to_path_buf)
         .into_iter()
-        .chain(field.path.iter().map(PathBuf::from))
-        .chain(field.paths.iter().flatten().map(PathBuf::from))
+        .chain(
+            scenario
+                .spec()
+                .field
+                .data_files()
+                .into_iter()
+                .map(PathBuf::from),
+        )
         .collect()
 }
 

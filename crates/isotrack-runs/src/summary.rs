@@ -415,14 +415,15 @@ pub fn scenario_toml(scenario: &Scenario) -> String {
 /// in a resolved scenario), by path ([`crate::files::sha256_file`]); a file that cannot be read
 /// now (gone since the field was built) is left out.
 pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
-    let f = &scenario.file().field;
-    f.path
-        .iter()
-        .chain(f.paths.iter().flatten())
+    scenario
+        .spec()
+        .field
+        .data_files()
+        .into_iter()
         .filter_map(|p| {
             crate::files::sha256_file(Path::new(p))
                 .ok()
-                .map(|d| (p.clone(), d))
+                .map(|d| (p.to_string(), d))
         })
         .collect()
 }

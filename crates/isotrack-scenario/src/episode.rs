@@ -12,16 +12,7 @@ use isotrack_core::{Vec2, Vehicle};
 use isotrack_sim::{Episode, NoTrace, Oracles, Outcome, RunResult, Sample, TraceSink};
 use isotrack_vehicles::{DubinsState, FixedWingState};
 
-/// Where and how a run starts: position, m, and heading, rad (counter-clockwise from +x).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Start {
-    /// Start position x, m.
-    pub x_m: f64,
-    /// Start position y, m.
-    pub y_m: f64,
-    /// Start heading, rad.
-    pub heading_rad: f64,
-}
+pub use crate::spec::sim::Start;
 
 /// The loop state for the scenario's vehicle (boxed: over a kilobyte each, the sensor's
 /// generator and the metrics' accumulators).

@@ -1,17 +1,19 @@
 //! The scenario's field: every kind behind one type, built (and for files, loaded) once.
 
-use crate::resolve::Issue;
-use crate::schema::*;
+use crate::issue::Issue;
+use crate::schema::FieldSection;
+use crate::spec::field::{
+    FieldKindSpec, FieldSpec, FrameTimes, GridFiles, GridSpec, StationsMethod, StationsSpec,
+    ValueTransform,
+};
 use isotrack_core::math::{Mat2, Vec2};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::{FieldDerivatives, ScalarField};
-use isotrack_fields::grid::{
-    AfterLastFrame, Grid2, GridField, GridSeries, Interpolation, TimeInterpolation,
-};
-use isotrack_fields::io::{load_series, GridFormat};
+use isotrack_fields::grid::{Grid2, GridField, GridSeries};
+use isotrack_fields::io::load_series;
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
-use isotrack_fields::puff::{PuffPlume, PuffPlumeParams};
-use isotrack_fields::{AnalyticField, AnalyticKind, GaussianPlumes, LinearRamp, Plume, RadialExp};
+use isotrack_fields::puff::PuffPlume;
+use isotrack_fields::{AnalyticField, AnalyticKind};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -80,9 +82,8 @@ impl FieldDerivatives for FieldModel {
 /// Checks that the start lies on the field: inside a grid's node extent or an analytic
 /// field's `domain_m`. A start outside once ended the run at t = 0 with `left_field` and no
 /// hint; the issue names the extent and the keys that set it.
-pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(), Issue> {
-    let start = crate::spec::sim::start(&file.initial)?;
-    let (x, y) = (start.x_m, start.y_m);
+pub(crate) fn check_start(start: [f64; 2], field: &FieldModel) -> Result<(), Issue> {
+    let [x, y] = start;
     let (e, set_by) = match field {
         FieldModel::Grid(g) => (
             g.grid().extent_m(),
@@ -92,7 +93,11 @@ pub(crate) fn check_start(file: &ScenarioFile, field: &FieldModel) -> Result<(),
             g.extent_m(),
             "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
         ),
-        FieldModel::Analytic(_) | FieldModel::Puff(_) => match file.field.domain_m {
+        FieldModel::Analytic(AnalyticField { domain_m, .. }) => match *domain_m {
+            Some(d) => (d, "field.domain_m"),
+            None => return Ok(()),
+        },
+        FieldModel::Puff(p) => match p.params().domain_m {
             Some(d) => (d, "field.domain_m"),
             None => return Ok(()),
         },
@@ -307,91 +312,99 @@ fn v2(a: [f64; 2]) -> Vec2 {
     Vec2::new(a[0], a[1])
 }
 
-/// Builds the field of a resolved `[field]` section; grid paths are taken relative to
-/// `base_dir` and recorded back into the section as absolute paths; `seed` (`sim.seed`) seeds
-/// a puff plume's meander.
-pub fn build_field(f: &mut FieldSection, base_dir: &Path, seed: u64) -> Result<FieldModel, Issue> {
-    build_field_noting(f, base_dir, seed, &mut Vec::new())
+/// The `[field]` keys a field's files filled in, to record into the resolved file (so that it
+/// reproduces the run from anywhere): each `Some` is written, each `None` left as it was.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FileFilled {
+    /// `field.path`, made absolute.
+    pub path: Option<String>,
+    /// `field.paths`, made absolute.
+    pub paths: Option<Vec<String>>,
+    /// `field.spacing_m`: the grid's, as used.
+    pub spacing_m: Option<[f64; 2]>,
+    /// `field.origin_m`: the grid's south-west node, as used.
+    pub origin_m: Option<[f64; 2]>,
+    /// `field.grid_spacing_m` of `stations`: the spacing they were interpolated at.
+    pub grid_spacing_m: Option<f64>,
+    /// `field.units`, from the grid files' own `units` (see [`adopt_file_units`]).
+    pub units: Option<String>,
 }
 
-/// As [`build_field`], pushing onto `notes` the warnings the files' contents give: a grid
-/// file's `units` (NetCDF's CF attribute) that differs from `field.units`, or that a value
-/// transform makes stale. A file's `units` is recorded as `field.units` when the scenario
-/// leaves it unset (and no `value_scale`, `value_offset` or `value_log10` changes the values).
-pub fn build_field_noting(
-    f: &mut FieldSection,
-    base_dir: &Path,
-    seed: u64,
-    notes: &mut Vec<String>,
-) -> Result<FieldModel, Issue> {
-    build_field_located(f, base_dir, seed, notes, &mut None)
+impl FileFilled {
+    /// Writes the filled keys into `f`.
+    pub fn record(&self, f: &mut FieldSection) {
+        if let Some(p) = &self.path {
+            f.path = Some(p.clone());
+        }
+        if let Some(p) = &self.paths {
+            f.paths = Some(p.clone());
+        }
+        if let Some(s) = self.spacing_m {
+            f.spacing_m = Some(s);
+        }
+        if let Some(o) = self.origin_m {
+            f.origin_m = Some(o);
+        }
+        if let Some(g) = self.grid_spacing_m {
+            f.grid_spacing_m = Some(g);
+        }
+        if let Some(u) = &self.units {
+            f.units = Some(u.clone());
+        }
+    }
 }
 
-/// As [`build_field_noting`], setting `lonlat` to where the field's local metres are on the
-/// Earth when its file is a longitude/latitude grid (NetCDF, GeoTIFF in degrees) whose
-/// spacing the scenario leaves as the file gives it (`None` otherwise: a `field.spacing_m` of
-/// its own unties the metres from the degrees).
-pub fn build_field_located(
-    f: &mut FieldSection,
-    base_dir: &Path,
-    seed: u64,
-    notes: &mut Vec<String>,
-    lonlat: &mut Option<LonLatFrame>,
-) -> Result<FieldModel, Issue> {
-    *lonlat = None;
-    let analytic = |kind| {
-        FieldModel::Analytic(AnalyticField {
-            kind,
-            domain_m: f.domain_m,
-            drift_mps: v2(f.drift_mps.unwrap_or_default()),
-        })
+/// A field built from its spec: the model, the keys its files filled, the warnings their
+/// contents give, and where a longitude/latitude grid is on the Earth.
+#[derive(Clone, Debug)]
+pub struct BuiltField {
+    /// The field.
+    pub model: FieldModel,
+    /// The keys its files filled ([`FileFilled::record`] them into the resolved file).
+    pub filled: FileFilled,
+    /// Warnings the files' contents give: a grid file's `units` (NetCDF's CF attribute) that
+    /// differs from `field.units`, or that a value transform makes stale.
+    pub notes: Vec<String>,
+    /// Where the field's local metres are on the Earth when its file is a longitude/latitude
+    /// grid (NetCDF, GeoTIFF in degrees) whose spacing the scenario leaves as the file gives it
+    /// (`None` otherwise: a `field.spacing_m` of its own unties the metres from the degrees).
+    pub lonlat: Option<LonLatFrame>,
+}
+
+/// Builds the field of a resolved `[field]` ([`FieldSpec`], read before its files): grid paths
+/// are taken relative to `base_dir`. A file fills the keys the spec leaves to it (its spacing
+/// and origin, its values' units when `field.units` is unset and no value transform changes the
+/// unit, the stations' grid spacing): the scenario's own values always win.
+pub fn build_field(spec: &FieldSpec, base_dir: &Path) -> Result<BuiltField, Issue> {
+    let mut filled = FileFilled::default();
+    let mut notes = Vec::new();
+    let mut lonlat = None;
+    let model = match &spec.kind {
+        FieldKindSpec::Analytic(a) => FieldModel::Analytic(a.clone()),
+        FieldKindSpec::PuffPlume(p) => FieldModel::Puff(Arc::new(PuffPlume::new(*p))),
+        FieldKindSpec::Grid(g) => {
+            let into = Filling {
+                filled: &mut filled,
+                notes: &mut notes,
+                lonlat: &mut lonlat,
+            };
+            build_grid(g, spec.units.as_deref(), base_dir, into)?
+        }
+        FieldKindSpec::Stations(s) => FieldModel::Grid(build_stations(s, base_dir, &mut filled)?),
     };
-    Ok(match f.kind.unwrap_or(FieldKind::RadialExp) {
-        FieldKind::RadialExp => analytic(AnalyticKind::RadialExp(RadialExp {
-            i0: f.i0.unwrap_or(20.0),
-            decay_per_m: f.decay_per_m.unwrap_or(0.1),
-            center_m: v2(f.center_m.unwrap_or_default()),
-        })),
-        FieldKind::GaussianPlumes => analytic(AnalyticKind::GaussianPlumes(GaussianPlumes {
-            background: f.background.unwrap_or_default(),
-            plumes: f
-                .sources
-                .clone()
-                .unwrap_or_default()
-                .into_iter()
-                .map(|s| Plume {
-                    center_m: v2(s.center_m),
-                    amplitude: s.amplitude,
-                    sigma_m: s.sigma_m,
-                    rotation_rad: s.rotation_rad,
-                })
-                .collect(),
-        })),
-        FieldKind::LinearRamp => analytic(AnalyticKind::LinearRamp(LinearRamp {
-            offset: f.offset.unwrap_or_default(),
-            gradient_per_m: v2(f.gradient_per_m.unwrap_or([0.0, 1.0])),
-        })),
-        FieldKind::Grid => build_grid(f, base_dir, notes, lonlat)?,
-        FieldKind::PuffPlume => FieldModel::Puff(Arc::new(PuffPlume::new(PuffPlumeParams {
-            source_m: v2(f.source_m.unwrap_or_default()),
-            release_rate_hz: f.release_rate_hz.unwrap_or(2.0),
-            puff_mass: f.puff_mass.unwrap_or(10.0),
-            puff_sigma0_m: f.puff_sigma0_m.unwrap_or(0.5),
-            diffusivity_m2ps: f.diffusivity_m2ps.unwrap_or(0.05),
-            wind_mps: v2(f.wind_mps.unwrap_or([0.5, 0.0])),
-            meander_std_mps: f.meander_std_mps.unwrap_or(0.1),
-            meander_correlation_s: f.meander_correlation_s.unwrap_or(20.0),
-            max_age_s: f.max_age_s.unwrap_or(120.0),
-            background: f.background.unwrap_or(0.0),
-            seed,
-            domain_m: f.domain_m,
-        }))),
-        FieldKind::Stations => FieldModel::Grid(build_stations(f, base_dir)?),
+    Ok(BuiltField {
+        model,
+        filled,
+        notes,
+        lonlat,
     })
 }
 
-fn resolve_path(f: &FieldSection, base_dir: &Path) -> PathBuf {
-    resolve_one(f.path.as_deref().unwrap_or_default(), base_dir)
+/// What building a grid fills besides the field.
+struct Filling<'a> {
+    filled: &'a mut FileFilled,
+    notes: &'a mut Vec<String>,
+    lonlat: &'a mut Option<LonLatFrame>,
 }
 
 /// A file named by the scenario, relative to its directory.
@@ -414,19 +427,18 @@ fn load_issue(key: &str, prefix: &str, e: isotrack_fields::io::LoadError) -> Iss
 }
 
 /// `field.units` from the grid files' own `units` (issue 30: a NetCDF variable in `K` or
-/// `ug m-3` was shown with no unit): taken when the scenario leaves `field.units` unset and no
-/// value transform (`value_scale`, `value_offset`, `value_log10`) changes what the unit
-/// describes; a warning (in `notes`) when `field.units` is set to another unit, when a
-/// transform leaves the unit unknown, or when the files of `field.paths` disagree.
+/// `ug m-3` was shown with no unit): taken (returned) when the scenario leaves `field.units`
+/// unset (`given`) and no value transform (`value_scale`, `value_offset`, `value_log10`)
+/// changes what the unit describes; a warning (in `notes`) when `field.units` is set to another
+/// unit, when a transform leaves the unit unknown, or when the files of `field.paths` disagree.
 fn adopt_file_units(
-    f: &mut FieldSection,
+    given: Option<&str>,
+    transform: &ValueTransform,
     file_units: &[(String, String)],
     notes: &mut Vec<String>,
-) {
-    use crate::load::clip;
-    let Some((path, units)) = file_units.first() else {
-        return;
-    };
+) -> Option<String> {
+    let clip = |t: &str| isotrack_core::numtext::Clipped(t).to_string();
+    let (path, units) = file_units.first()?;
     if let Some((other, u)) = file_units.iter().find(|(_, u)| u != units) {
         notes.push(format!(
             "the grid files give their values in different units: `{}` ({}) and `{}` ({})",
@@ -436,10 +448,8 @@ fn adopt_file_units(
             clip(other)
         ));
     }
-    let transformed = f.value_scale.is_some_and(|v| v != 1.0)
-        || f.value_offset.is_some_and(|v| v != 0.0)
-        || f.value_log10 == Some(true);
-    match &f.units {
+    let transformed = transform.changes_unit();
+    match given {
         Some(given) if given.trim() != units => notes.push(format!(
             "field.units = \"{}\" but {} gives its values in `{}` (the variable's `units` attribute){}: the figures and the report say \"{}\"",
             clip(given),
@@ -454,55 +464,56 @@ fn adopt_file_units(
             clip(path),
             clip(units)
         )),
-        None => f.units = Some(clip(units)),
+        None => return Some(clip(units)),
     }
+    None
 }
 
 /// Stations: read, interpolate onto a grid over their bounding box, then georeference
 /// overrides as for `grid`.
-fn build_stations(f: &mut FieldSection, base_dir: &Path) -> Result<GridField, Issue> {
+fn build_stations(
+    s: &StationsSpec,
+    base_dir: &Path,
+    filled: &mut FileFilled,
+) -> Result<GridField, Issue> {
     use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stations};
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
         unreadable: false,
     };
-    let path = resolve_path(f, base_dir);
-    let col = f.value_column.clone().unwrap_or_default();
-    let st = Stations::from_csv(&path, &col).map_err(|e| load_issue("field.path", "", e))?;
+    let path = resolve_one(&s.path, base_dir);
+    let st =
+        Stations::from_csv(&path, &s.value_column).map_err(|e| load_issue("field.path", "", e))?;
     let ext = st.extent_m();
-    let spacing = f.grid_spacing_m.unwrap_or(st.default_spacing_m());
-    let grid = match f.method.unwrap_or(StationMethod::Kriging) {
-        StationMethod::Idw => Idw::new(st, f.idw_power.unwrap_or(2.0)).to_grid(ext, spacing),
-        StationMethod::Kriging => OrdinaryKriging::new(st)
+    let spacing = s.grid_spacing_m.unwrap_or(st.default_spacing_m());
+    let grid = match s.method {
+        StationsMethod::Idw { power } => Idw::new(st, power).to_grid(ext, spacing),
+        StationsMethod::Kriging => OrdinaryKriging::new(st)
             .map_err(|e| issue("field.path", format!("{}: {e}", path.display())))?
             .to_grid(ext, spacing),
     }
     .map_err(|e| issue("field.grid_spacing_m", e.to_string()))?;
-    let new_spacing = f.spacing_m.unwrap_or(grid.spacing_m());
-    let origin = f.origin_m.map(v2).unwrap_or(grid.origin_m());
+    let new_spacing = s.georeference.spacing_m.unwrap_or(grid.spacing_m());
+    let origin = s.georeference.origin_m.map(v2).unwrap_or(grid.origin_m());
     let grid = grid
         .with_georeference(origin, new_spacing)
         .map_err(|e| issue("field.spacing_m", e.to_string()))?;
-    f.path = Some(path.display().to_string());
-    f.grid_spacing_m = Some(spacing);
-    f.spacing_m = Some(grid.spacing_m());
-    f.origin_m = Some([grid.origin_m().x, grid.origin_m().y]);
-    let interp = match f.interpolation.unwrap_or(InterpolationName::Bicubic) {
-        InterpolationName::Bilinear => Interpolation::Bilinear,
-        InterpolationName::Bicubic => Interpolation::Bicubic,
-    };
-    Ok(GridField::new(grid, interp))
+    filled.path = Some(path.display().to_string());
+    filled.grid_spacing_m = Some(spacing);
+    filled.spacing_m = Some(grid.spacing_m());
+    filled.origin_m = Some([grid.origin_m().x, grid.origin_m().y]);
+    Ok(GridField::new(grid, s.interpolation))
 }
 
 /// One frame as the scenario asks: cropped, re-georeferenced, values transformed.
-fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
+fn prepare_frame(g: &GridSpec, mut grid: Grid2) -> Result<Grid2, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
         unreadable: false,
     };
-    if let Some([c0, c1, r0, r1]) = f.crop_cells {
+    if let Some([c0, c1, r0, r1]) = g.crop_cells {
         if c1 >= grid.nx() || r1 >= grid.ny() {
             return Err(issue(
                 "field.crop_cells",
@@ -518,13 +529,17 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
             .crop(c0, c1, r0, r1)
             .map_err(|e| issue("field.crop_cells", e.to_string()))?;
     }
-    let spacing = f.spacing_m.unwrap_or(grid.spacing_m());
-    let origin = f.origin_m.map(v2).unwrap_or(grid.origin_m());
+    let spacing = g.georeference.spacing_m.unwrap_or(grid.spacing_m());
+    let origin = g.georeference.origin_m.map(v2).unwrap_or(grid.origin_m());
     grid = grid
         .with_georeference(origin, spacing)
         .map_err(|e| issue("field.spacing_m", e.to_string()))?;
-    let floor = f.value_floor;
-    let log = f.value_log10.unwrap_or(false);
+    let ValueTransform {
+        floor,
+        log10: log,
+        scale,
+        offset,
+    } = g.transform;
     if log && floor.is_none() && grid.value_range().0 <= 0.0 {
         return Err(issue(
             "field.value_log10",
@@ -534,8 +549,7 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
             ),
         ));
     }
-    let (scale, offset) = (f.value_scale.unwrap_or(1.0), f.value_offset.unwrap_or(0.0));
-    if floor.is_some() || log || scale != 1.0 || offset != 0.0 {
+    if g.transform.changes_values() {
         grid = grid
             .map_values(|v| {
                 let v = floor.map_or(v, |fl| v.max(fl));
@@ -551,33 +565,33 @@ fn prepare_frame(f: &FieldSection, mut grid: Grid2) -> Result<Grid2, Issue> {
 /// `field.path` (a 3-D `.npy` or a NetCDF with a time axis gives several frames) or
 /// `field.paths` (one frame per file). Paths are recorded back as absolute.
 fn build_grid(
-    f: &mut FieldSection,
+    g: &GridSpec,
+    units: Option<&str>,
     base_dir: &Path,
-    notes: &mut Vec<String>,
-    lonlat: &mut Option<LonLatFrame>,
+    into: Filling<'_>,
 ) -> Result<FieldModel, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
         unreadable: false,
     };
-    let format = f.format.map(|g| match g {
-        GridFormatName::Csv => GridFormat::Csv,
-        GridFormatName::Npy => GridFormat::Npy,
-        GridFormatName::Asc => GridFormat::Asc,
-        GridFormatName::Geotiff => GridFormat::GeoTiff,
-        GridFormatName::Netcdf => GridFormat::NetCdf,
-    });
+    let Filling {
+        filled,
+        notes,
+        lonlat,
+    } = into;
     // (file, its values' units) of the files that give one.
     let mut file_units: Vec<(String, String)> = Vec::new();
     let mut georef = isotrack_fields::georef::Georeference::None;
-    let (raw, file_times) = match f.paths.clone() {
-        Some(list) => {
+    // The one file (for messages about its time axis).
+    let mut one_file: Option<String> = None;
+    let (raw, file_times) = match &g.files {
+        GridFiles::Paths(list) => {
             let mut frames = Vec::with_capacity(list.len());
             let mut abs = Vec::with_capacity(list.len());
             for (k, p) in list.iter().enumerate() {
                 let path = resolve_one(p, base_dir);
-                let s = load_series(&path, format, f.variable.as_deref())
+                let s = load_series(&path, g.format, g.variable.as_deref())
                     .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
                 if s.frames.len() != 1 {
                     return Err(issue(
@@ -597,34 +611,35 @@ fn build_grid(
                 frames.extend(s.frames);
                 abs.push(path.display().to_string());
             }
-            f.paths = Some(abs);
+            filled.paths = Some(abs);
             (frames, None)
         }
-        None => {
-            let path = resolve_path(f, base_dir);
-            let s = load_series(&path, format, f.variable.as_deref())
+        GridFiles::Path(p) => {
+            let path = resolve_one(p, base_dir);
+            let s = load_series(&path, g.format, g.variable.as_deref())
                 .map_err(|e| load_issue("field.path", "", e))?;
-            f.path = Some(path.display().to_string());
+            filled.path = Some(path.display().to_string());
+            one_file = filled.path.clone();
             notes.extend(s.warnings);
             file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
             georef = s.georeference;
             (s.frames, s.frame_times_s)
         }
     };
-    adopt_file_units(f, &file_units, notes);
+    filled.units = adopt_file_units(units, &g.transform, &file_units, notes);
     // The file's own position of the (cropped) south-west node, and its spacing: what
     // field.origin_m and field.spacing_m replace.
-    let natural = raw.first().map(|g| {
-        let o = match f.crop_cells {
-            Some([c0, _, r0, _]) => g.node_m(c0, r0),
-            None => g.origin_m(),
+    let natural = raw.first().map(|grid| {
+        let o = match g.crop_cells {
+            Some([c0, _, r0, _]) => grid.node_m(c0, r0),
+            None => grid.origin_m(),
         };
-        (o, g.spacing_m())
+        (o, grid.spacing_m())
     });
     let n = raw.len();
     let mut frames = Vec::with_capacity(n);
-    for (k, g) in raw.into_iter().enumerate() {
-        frames.push(prepare_frame(f, g).map_err(|mut i| {
+    for (k, grid) in raw.into_iter().enumerate() {
+        frames.push(prepare_frame(g, grid).map_err(|mut i| {
             if n > 1 {
                 i.message = format!("frame {k}: {}", i.message);
             }
@@ -653,22 +668,19 @@ fn build_grid(
         }
     }
     // Record what was used, so the resolved scenario reproduces the run from anywhere.
-    f.spacing_m = Some(frames[0].spacing_m());
-    f.origin_m = Some([frames[0].origin_m().x, frames[0].origin_m().y]);
-    let interp = match f.interpolation.unwrap_or(InterpolationName::Bicubic) {
-        InterpolationName::Bilinear => Interpolation::Bilinear,
-        InterpolationName::Bicubic => Interpolation::Bicubic,
-    };
+    filled.spacing_m = Some(frames[0].spacing_m());
+    filled.origin_m = Some([frames[0].origin_m().x, frames[0].origin_m().y]);
+    let interp = g.interpolation;
     // Where the times come from, to blame the right key when they cannot make a series: a bad
     // time axis read from a file is the file's (`field.path`), not a default's.
-    let (times, times_key, from_file) = match (&f.frame_times_s, f.frame_interval_s, file_times) {
-        (Some(t), _, _) => (Some(t.clone()), "field.frame_times_s", false),
-        (None, Some(dt), _) => (
+    let (times, times_key, from_file) = match (&g.frame_times, file_times) {
+        (FrameTimes::Given(t), _) => (Some(t.clone()), "field.frame_times_s", false),
+        (FrameTimes::Interval(dt), _) => (
             Some((0..n).map(|k| k as f64 * dt).collect()),
             "field.frame_interval_s",
             false,
         ),
-        (None, None, file) => (file, "field.path", true),
+        (FrameTimes::FromFile, file) => (file, "field.path", true),
     };
     let times = match times {
         Some(t) => t,
@@ -689,32 +701,23 @@ fn build_grid(
             format!("{} frame times for {n} frames", times.len()),
         ));
     }
-    let ti = match f.time_interpolation.unwrap_or_default() {
-        TimeInterpolationName::Nearest => TimeInterpolation::Nearest,
-        TimeInterpolationName::Linear => TimeInterpolation::Linear,
-        TimeInterpolationName::Cubic => TimeInterpolation::Cubic,
-    };
-    let after = match f.after_last_frame.unwrap_or_default() {
-        AfterLastFrameName::Hold => AfterLastFrame::Hold,
-        AfterLastFrameName::End => AfterLastFrame::End,
-    };
     // Field time is measured from the first frame; the origin counts from there.
     let t0 = times[0];
     let series = GridSeries::new(
         frames,
         times.iter().map(|t| t - t0).collect(),
         interp,
-        ti,
-        f.time_origin_s.unwrap_or(0.0),
-        f.time_scale.unwrap_or(1.0),
-        after,
+        g.time_interpolation,
+        g.time_origin_s,
+        g.time_scale,
+        g.after_last_frame,
     )
     .map_err(|e| {
         let e = e.to_string();
         let e = if from_file {
             format!(
                 "the time axis read from {}: {e}",
-                f.path.as_deref().unwrap_or("the file")
+                one_file.as_deref().unwrap_or("the file")
             )
         } else {
             e

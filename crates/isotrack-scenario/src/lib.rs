@@ -18,7 +18,9 @@ pub mod build;
 pub mod check;
 pub mod episode;
 pub mod field;
+mod issue;
 pub mod load;
+pub mod ranges;
 pub mod resolve;
 pub mod schema;
 pub mod spec;
@@ -36,7 +38,7 @@ pub use load::{
 };
 pub use schema::ScenarioFile;
 
-use field::{build_field_located, FieldModel, IsolineOracle, LonLatFrame};
+use field::{build_field, FieldModel, IsolineOracle, LonLatFrame};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -52,13 +54,29 @@ pub struct Scenario {
     field: Arc<FieldModel>,
     vehicle: Arc<build::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
-    /// Warnings from the field's files ([`field::build_field_noting`]).
+    /// Warnings from the field's files ([`field::BuiltField::notes`]).
     field_notes: Arc<Vec<String>>,
     /// The `[field]` keys its files filled in (geometry, units), not the user's: a variant
     /// that reads another file drops them, so that the new file's own are used.
     file_filled_keys: Arc<Vec<String>>,
-    /// Where a lon/lat grid's local metres are on the Earth ([`field::build_field_located`]).
+    /// Where a lon/lat grid's local metres are on the Earth ([`field::BuiltField::lonlat`]).
     lonlat: Option<LonLatFrame>,
+}
+
+/// The field of a resolved file, built from its spec ([`spec::FieldSpec`], read before the
+/// files fill their keys), with `sim.seed` seeding a puff plume's meander.
+fn build_field_of(
+    file: &ScenarioFile,
+    base_dir: &Path,
+) -> Result<field::BuiltField, resolve::Issue> {
+    let seed = spec::SimSpec::new(&file.sim)?.seed;
+    build_field(&spec::FieldSpec::new(&file.field, seed)?, base_dir)
+}
+
+/// The start position `[x, y]` of a resolved file, m.
+fn start_xy(file: &ScenarioFile) -> Result<[f64; 2], resolve::Issue> {
+    let s = spec::sim::start(&file.initial)?;
+    Ok([s.x_m, s.y_m])
 }
 
 /// The keys set in `after` but not in `before` (`path`/`paths`, made absolute, excepted).
@@ -97,14 +115,12 @@ impl Scenario {
     /// `base_dir`.
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
         let mut file = resolve::resolve(file)?;
-        let seed = spec::SimSpec::new(&file.sim).map_err(|i| vec![i])?.seed;
-        let mut notes = Vec::new();
+        let built = build_field_of(&file, base_dir).map_err(|i| vec![i])?;
         let given = file.field.clone();
-        let mut lonlat = None;
-        let field = build_field_located(&mut file.field, base_dir, seed, &mut notes, &mut lonlat)
-            .map_err(|i| vec![i])?;
+        built.filled.record(&mut file.field);
         let filled = filled_keys(&given, &file.field);
-        field::check_start(&file, &field).map_err(|i| vec![i])?;
+        let (field, notes, lonlat) = (built.model, built.notes, built.lonlat);
+        field::check_start(start_xy(&file).map_err(|i| vec![i])?, &field).map_err(|i| vec![i])?;
         let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
         let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| vec![i])?;
@@ -170,26 +186,22 @@ impl Scenario {
                 self.file_filled_keys.clone(),
             )
         } else {
-            let seed = spec::SimSpec::new(&file.sim)
-                .map_err(|i| located(vec![i]))?
-                .seed;
-            let mut notes = Vec::new();
+            let built = build_field_of(&file, Path::new(".")).map_err(|i| located(vec![i]))?;
             let given = file.field.clone();
-            let field = build_field_located(
-                &mut file.field,
-                Path::new("."),
-                seed,
-                &mut notes,
-                &mut lonlat,
-            )
-            .map_err(|i| located(vec![i]))?;
+            built.filled.record(&mut file.field);
             let mut filled = filled_keys(&given, &file.field);
             if !new_source {
                 filled.extend(self.file_filled_keys.iter().cloned());
             }
-            (Arc::new(field), Arc::new(notes), Arc::new(filled))
+            lonlat = built.lonlat;
+            (
+                Arc::new(built.model),
+                Arc::new(built.notes),
+                Arc::new(filled),
+            )
         };
-        field::check_start(&file, &field).map_err(|i| located(vec![i]))?;
+        let start = start_xy(&file).map_err(|i| located(vec![i]))?;
+        field::check_start(start, &field).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
         let vehicle = if same_vehicle {
             self.vehicle.clone()
@@ -246,7 +258,7 @@ impl Scenario {
     }
 
     /// Where the field's local metres are on the Earth, when its file is a longitude/latitude
-    /// grid whose spacing the scenario keeps ([`field::build_field_located`]).
+    /// grid whose spacing the scenario keeps ([`field::BuiltField::lonlat`]).
     pub fn lonlat_frame(&self) -> Option<LonLatFrame> {
         self.lonlat
     }

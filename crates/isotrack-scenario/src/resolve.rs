@@ -3,23 +3,14 @@
 
 use crate::schema::*;
 use crate::spec::controller as C;
+use crate::spec::field as F;
 use crate::spec::sensor as N;
 use crate::spec::sim as S;
 use crate::spec::vehicle as V;
 use isotrack_core::control::HigherSide;
 use isotrack_sim::{whole_steps, Sensor, SensorConfig, SensorError, StepPlan, StepPlanError};
 
-/// A problem with one key's value.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Issue {
-    /// Dotted key, e.g. `controller.kp`.
-    pub key: String,
-    /// What is wrong.
-    pub message: String,
-    /// A file the key names could not be read at all (missing, not a regular file, beyond its
-    /// size limit): exit 66, not 65 (README, "Exit codes").
-    pub unreadable: bool,
-}
+pub use crate::issue::Issue;
 
 #[derive(Default)]
 struct Checker {
@@ -159,31 +150,6 @@ impl Checker {
     }
 }
 
-/// The default `gaussian_plumes` sources: three overlapping, rotated, anisotropic plumes whose
-/// level-10 isoline is one closed, non-convex curve about 60 m long.
-pub fn default_plumes() -> Vec<PlumeSpec> {
-    vec![
-        PlumeSpec {
-            center_m: [0.0, 0.0],
-            amplitude: 20.0,
-            sigma_m: [12.0, 7.0],
-            rotation_rad: 0.5,
-        },
-        PlumeSpec {
-            center_m: [18.0, 10.0],
-            amplitude: 12.0,
-            sigma_m: [6.0, 9.0],
-            rotation_rad: -0.3,
-        },
-        PlumeSpec {
-            center_m: [-10.0, 15.0],
-            amplitude: 8.0,
-            sigma_m: [8.0, 5.0],
-            rotation_rad: 1.0,
-        },
-    ]
-}
-
 /// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
 fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 40] {
     [
@@ -234,43 +200,45 @@ fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 40] {
 /// `puff_plume`: defaults and ranges. The puffs alive at once (`release_rate_hz * max_age_s`)
 /// are bounded, so a query stays cheap.
 fn resolve_puff(c: &mut Checker, fd: &mut FieldSection) {
-    for x in *fd.source_m.get_or_insert([0.0, 0.0]) {
+    for x in *fd.source_m.get_or_insert(F::PUFF_SOURCE_M) {
         c.coordinate("field.source_m", x);
     }
-    let rate = *fd.release_rate_hz.get_or_insert(2.0);
+    let rate = *fd.release_rate_hz.get_or_insert(F::PUFF_RELEASE_RATE_HZ);
     c.positive("field.release_rate_hz", rate);
-    let mass = *fd.puff_mass.get_or_insert(10.0);
+    let mass = *fd.puff_mass.get_or_insert(F::PUFF_MASS);
     c.positive("field.puff_mass", mass);
     c.field_value("field.puff_mass", mass);
     c.within(
         "field.puff_sigma0_m",
-        *fd.puff_sigma0_m.get_or_insert(0.5),
+        *fd.puff_sigma0_m.get_or_insert(F::PUFF_SIGMA0_M),
         ranges::MIN_LENGTH_M,
         ranges::MAX_COORDINATE_M,
         "m",
     );
     c.non_negative(
         "field.diffusivity_m2ps",
-        *fd.diffusivity_m2ps.get_or_insert(0.05),
+        *fd.diffusivity_m2ps.get_or_insert(F::PUFF_DIFFUSIVITY_M2PS),
     );
-    let w = *fd.wind_mps.get_or_insert([0.5, 0.0]);
+    let w = *fd.wind_mps.get_or_insert(F::PUFF_WIND_MPS);
     c.speeds("field.wind_mps", &w);
-    c.speeds(
-        "field.meander_std_mps",
-        &[*fd.meander_std_mps.get_or_insert(0.1)],
-    );
-    c.non_negative("field.meander_std_mps", fd.meander_std_mps.unwrap_or(0.0));
+    let meander = *fd.meander_std_mps.get_or_insert(F::PUFF_MEANDER_STD_MPS);
+    c.speeds("field.meander_std_mps", &[meander]);
+    c.non_negative("field.meander_std_mps", meander);
     // `-0.0` is calm as `0.0` is: stored as `0.0`, so two calm plumes are one field.
     if let Some(m) = fd.meander_std_mps.as_mut().filter(|m| **m == 0.0) {
         *m = 0.0;
     }
     c.positive(
         "field.meander_correlation_s",
-        *fd.meander_correlation_s.get_or_insert(20.0),
+        *fd.meander_correlation_s
+            .get_or_insert(F::PUFF_MEANDER_CORRELATION_S),
     );
-    let age = *fd.max_age_s.get_or_insert(120.0);
+    let age = *fd.max_age_s.get_or_insert(F::PUFF_MAX_AGE_S);
     c.positive("field.max_age_s", age);
-    c.field_value("field.background", *fd.background.get_or_insert(0.0));
+    c.field_value(
+        "field.background",
+        *fd.background.get_or_insert(F::BACKGROUND),
+    );
     if rate.is_finite() && age.is_finite() && rate * age > 100_000.0 {
         c.fail(
             "field.max_age_s",
@@ -321,11 +289,16 @@ fn resolve_frames(c: &mut Checker, fd: &mut FieldSection) {
     if let Some(dt) = fd.frame_interval_s {
         c.positive("field.frame_interval_s", dt);
     }
-    fd.time_interpolation
-        .get_or_insert(TimeInterpolationName::Linear);
-    c.finite("field.time_origin_s", *fd.time_origin_s.get_or_insert(0.0));
-    c.positive("field.time_scale", *fd.time_scale.get_or_insert(1.0));
-    fd.after_last_frame.get_or_insert(AfterLastFrameName::Hold);
+    fd.time_interpolation.get_or_insert(F::TIME_INTERPOLATION);
+    c.finite(
+        "field.time_origin_s",
+        *fd.time_origin_s.get_or_insert(F::TIME_ORIGIN_S),
+    );
+    c.positive(
+        "field.time_scale",
+        *fd.time_scale.get_or_insert(F::TIME_SCALE),
+    );
+    fd.after_last_frame.get_or_insert(F::AFTER_LAST_FRAME);
 }
 
 fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
@@ -359,12 +332,15 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
             );
         }
     }
-    fd.value_log10.get_or_insert(false);
-    let scale = *fd.value_scale.get_or_insert(1.0);
+    fd.value_log10.get_or_insert(F::VALUE_LOG10);
+    let scale = *fd.value_scale.get_or_insert(F::VALUE_SCALE);
     if c.finite("field.value_scale", scale) && scale == 0.0 {
         c.fail("field.value_scale", "must not be 0");
     }
-    c.finite("field.value_offset", *fd.value_offset.get_or_insert(0.0));
+    c.finite(
+        "field.value_offset",
+        *fd.value_offset.get_or_insert(F::VALUE_OFFSET),
+    );
 }
 
 /// `(key, is set)` for every kind-specific key of `[controller]`.
@@ -413,7 +389,7 @@ pub fn drop_inapplicable_keys(table: &mut toml::Table, section: &str) -> Vec<Str
     };
     let kind = sec.get("kind");
     let (allowed, shared): (&[&str], &[&str]) = match section {
-        "field" => match kind_or(kind, FieldKind::RadialExp) {
+        "field" => match kind_or(kind, F::KIND) {
             Some(k) => (field_kind_keys(k).1, &["kind", "units"]),
             None => return vec![],
         },
@@ -827,39 +803,7 @@ fn resolve_text(c: &mut Checker, f: &ScenarioFile) {
 /// computed `0.0024500000000000004` as 17).
 pub(crate) use isotrack_core::numtext::{Echo, EchoList, Num};
 
-/// The physical ranges of the keys that are not bounded by their meaning (README, "Scenario
-/// files"): wide enough for any robot or aircraft, narrow enough that positions, path lengths
-/// and step counts stay far from `f64` overflow.
-pub mod ranges {
-    /// Largest `|initial.x_m|`, `|initial.y_m|`, `|field.center_m|`, domain and source
-    /// coordinates, m (about 1.6 x the Earth's circumference).
-    pub const MAX_COORDINATE_M: f64 = 6.4e7;
-    /// Largest `|value|` of an analytic field's parameters (`i0`, `background`, `amplitude`,
-    /// `offset`, `gradient_per_m` per metre) and of `controller.level`: the grids' limit, so
-    /// values, differences and slopes stay finite (`isotrack_fields::grid::MAX_ABS_VALUE`).
-    pub const MAX_FIELD_VALUE: f64 = isotrack_fields::grid::MAX_ABS_VALUE;
-    /// Smallest plume width `sigma_m`, m: narrower plumes overflow `d^2/sigma^2`.
-    pub const MIN_LENGTH_M: f64 = 1.0e-9;
-    /// The most trace rows a run may write (`sim.duration_s * output.record_rate_hz`): about
-    /// 10 GB of CSV.
-    pub const MAX_TRACE_ROWS: u64 = 100_000_000;
-    /// Largest `vehicle.speed_mps` of the Dubins robot, m/s (well past any aircraft).
-    pub const MAX_SPEED_MPS: f64 = 1.0e3;
-    /// The Aerosonde model's airspeed range, m/s (`vehicle.airspeed_mps`, `isotrack trim`,
-    /// `isotrack replay`).
-    pub const AIRSPEED_RANGE_MPS: (f64, f64) =
-        isotrack_vehicles::fixed_wing::trim::AIRSPEED_RANGE_MPS;
-    /// The held altitudes of the fixed-wing UAV, m: above the 50 m take-off zone, at most
-    /// 20 km (the model's atmosphere is constant).
-    pub const ALTITUDE_RANGE_M: (f64, f64) = (50.0, 20_000.0);
-    /// Largest `|vehicle.wind_mps|` component and `|field.drift_mps|` component, m/s.
-    pub const MAX_WIND_MPS: f64 = 1.0e2;
-    /// Largest `|initial.heading_rad|` and `|field.sources[i].rotation_rad|`, rad (about 159
-    /// turns): an angle is meant modulo 2 pi, and past about 1e16 rad a step's turn
-    /// `omega dt` is below one ulp of the heading (the turn vanishes); at 1e3 rad the ulp is
-    /// 1.1e-13 rad.
-    pub const MAX_ANGLE_RAD: f64 = 1.0e3;
-}
+pub use crate::ranges;
 
 /// `[sim]`; returns the step (s) for the sections whose checks depend on it.
 fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
@@ -891,7 +835,7 @@ fn resolve_sim(c: &mut Checker, sim: &mut SimSection) -> f64 {
 
 /// `[field]`: the keys allowed for the chosen kind, its defaults and checks.
 fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
-    let fk = *fd.kind.get_or_insert(FieldKind::RadialExp);
+    let fk = *fd.kind.get_or_insert(F::KIND);
     let (kind_name, allowed) = field_kind_keys(fk);
     let choice = format!("field.kind = \"{kind_name}\"");
     c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
@@ -994,19 +938,25 @@ fn field_kind_keys(kind: FieldKind) -> (&'static str, &'static [&'static str]) {
 
 /// `field.kind = "radial_exp"`: `F = i0 exp(-decay |p - center|)`.
 fn resolve_radial_exp(c: &mut Checker, fd: &mut FieldSection) {
-    let i0 = *fd.i0.get_or_insert(20.0);
+    let i0 = *fd.i0.get_or_insert(F::RADIAL_I0);
     c.positive("field.i0", i0);
     c.field_value("field.i0", i0);
-    c.positive("field.decay_per_m", *fd.decay_per_m.get_or_insert(0.1));
-    for x in *fd.center_m.get_or_insert([0.0, 0.0]) {
+    c.positive(
+        "field.decay_per_m",
+        *fd.decay_per_m.get_or_insert(F::RADIAL_DECAY_PER_M),
+    );
+    for x in *fd.center_m.get_or_insert(F::RADIAL_CENTER_M) {
         c.coordinate("field.center_m", x);
     }
 }
 
 /// `field.kind = "gaussian_plumes"`: a background and at least one source.
 fn resolve_gaussian_plumes(c: &mut Checker, fd: &mut FieldSection) {
-    c.field_value("field.background", *fd.background.get_or_insert(0.0));
-    let sources = fd.sources.get_or_insert_with(default_plumes);
+    c.field_value(
+        "field.background",
+        *fd.background.get_or_insert(F::BACKGROUND),
+    );
+    let sources = fd.sources.get_or_insert_with(F::default_plumes);
     if sources.is_empty() {
         c.fail("field.sources", "must hold at least one source");
     }
@@ -1037,8 +987,8 @@ fn resolve_gaussian_plumes(c: &mut Checker, fd: &mut FieldSection) {
 
 /// `field.kind = "linear_ramp"`: `F = offset + g . p` with `g != 0`.
 fn resolve_linear_ramp(c: &mut Checker, fd: &mut FieldSection) {
-    c.field_value("field.offset", *fd.offset.get_or_insert(0.0));
-    let g = *fd.gradient_per_m.get_or_insert([0.0, 1.0]);
+    c.field_value("field.offset", *fd.offset.get_or_insert(F::RAMP_OFFSET));
+    let g = *fd.gradient_per_m.get_or_insert(F::RAMP_GRADIENT_PER_M);
     for gi in g {
         c.field_value("field.gradient_per_m", gi);
     }
@@ -1061,7 +1011,7 @@ fn resolve_grid_georeference(c: &mut Checker, fd: &mut FieldSection) {
     if let Some(o) = fd.origin_m {
         c.all_finite("field.origin_m", &o);
     }
-    fd.interpolation.get_or_insert(InterpolationName::Bicubic);
+    fd.interpolation.get_or_insert(F::INTERPOLATION);
 }
 
 /// `field.kind = "stations"`: the file and column, the method and the grid it is put on.
@@ -1075,9 +1025,9 @@ fn resolve_stations(c: &mut Checker, fd: &mut FieldSection) {
             "is required for field.kind = \"stations\"",
         );
     }
-    let m = *fd.method.get_or_insert(StationMethod::Kriging);
+    let m = *fd.method.get_or_insert(F::STATIONS_METHOD);
     if m == StationMethod::Idw {
-        c.positive("field.idw_power", *fd.idw_power.get_or_insert(2.0));
+        c.positive("field.idw_power", *fd.idw_power.get_or_insert(F::IDW_POWER));
     } else if fd.idw_power.is_some() {
         c.fail(
             "field.idw_power",

@@ -151,25 +151,25 @@ pub enum InterpolationName {
     Bicubic,
 }
 
-/// Interpolation between the frames of a time series (`field.time_interpolation`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+/// Interpolation between the frames of a time series (`field.time_interpolation`; default
+/// [`crate::spec::field::TIME_INTERPOLATION`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TimeInterpolationName {
     /// The frame nearest in time.
     Nearest,
-    /// Linear between the two frames around the time (default).
-    #[default]
+    /// Linear between the two frames around the time.
     Linear,
     /// Catmull-Rom over four frames.
     Cubic,
 }
 
-/// What a time series does past its last frame (`field.after_last_frame`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+/// What a time series does past its last frame (`field.after_last_frame`; default
+/// [`crate::spec::field::AFTER_LAST_FRAME`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AfterLastFrameName {
-    /// The last frame holds (default).
-    #[default]
+    /// The last frame holds.
     Hold,
     /// The field ends: outcome `left_field`, the detail says the data ended.
     End,

@@ -35,7 +35,8 @@ pub mod team;
 
 use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
-use crate::schema::{ControllerKind, FieldKind};
+use crate::schema::ControllerKind;
+use crate::spec::FieldKindSpec;
 use crate::spec::LawSpec;
 use crate::Scenario;
 use isotrack_core::estimate::DerivativeKind;
@@ -420,7 +421,7 @@ fn region(s: &Scenario) -> [f64; 4] {
         FieldModel::Grid(g) => g.grid().extent_m(),
         FieldModel::Series(g) => g.extent_m(),
         FieldModel::Puff(pf) => {
-            if let Some(d) = s.file().field.domain_m {
+            if let Some(d) = s.spec().field.domain_m() {
                 return d;
             }
             // The plume's reach over its puffs' lifetime downwind, and the start.
@@ -490,7 +491,6 @@ fn law(s: &Scenario) -> Law {
 }
 
 fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
-    let f = s.file();
     if !is_pi_isoline(s) {
         return Prop1Report::not_applicable(
             "Prop. 1 is for the PI-like law (controller.kind = \"pi_isoline\")".into(),
@@ -498,15 +498,14 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
     }
     let level = s.level();
     let (v, kp, ki, c1, c2) = (l.v, l.kp, l.ki, l.c1, l.c2);
-    match (f.field.kind, s.field()) {
-        (Some(FieldKind::RadialExp), FieldModel::Analytic(a)) => {
-            let AnalyticKind::RadialExp(r) = &a.kind else {
-                unreachable!("radial_exp builds RadialExp")
-            };
-            match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
-                Some(rd) => {
-                    let alpha = r.decay_per_m * level;
-                    Prop1Report {
+    match &s.spec().field.kind {
+        FieldKindSpec::Analytic(isotrack_fields::AnalyticField {
+            kind: AnalyticKind::RadialExp(r),
+            ..
+        }) => match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
+            Some(rd) => {
+                let alpha = r.decay_per_m * level;
+                Prop1Report {
                         applicable: true,
                         alpha: Some(alpha),
                         r_d_m: Some(rd),
@@ -515,13 +514,12 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
                         characteristic_polynomial: Some(prop1_characteristic_polynomial(alpha, v, rd, kp, ki, c1, c2)),
                         note: "alpha = k*s_d, the radial slope on the isoline; the paper's conditions are sufficient, the Routh-Hurwitz one is exact (locally)".into(),
                     }
-                }
-                None => Prop1Report::not_applicable(format!(
-                    "level {} is not attained by the field (0 < level < i0 is needed)",
-                    Echo(level)
-                )),
             }
-        }
+            None => Prop1Report::not_applicable(format!(
+                "level {} is not attained by the field (0 < level < i0 is needed)",
+                Echo(level)
+            )),
+        },
         _ => Prop1Report::not_applicable(
             "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
         ),
@@ -1813,18 +1811,15 @@ fn slow_mode_warning(s: &Scenario, sm: &SampledReport) -> Option<String> {
 /// reach the isoline: Prop. 2's reach condition `v*gamma1 > c1` fails between the start and
 /// the tube (it needs the region's `gamma1`, which `run`'s warnings do not compute).
 fn settling_warnings(s: &Scenario, l: &Law, p2: &Prop2Report) -> Vec<String> {
-    let f = s.file();
     let mut w = vec![];
-    let anti_windup = f
+    // The PI-like law without an anti-windup (the resolved law's, not a fallback of its own).
+    let integrates_always = s
+        .spec()
         .controller
-        .anti_windup
-        .unwrap_or(crate::schema::AntiWindupKind::None);
+        .pi_isoline()
+        .is_some_and(|p| p.anti_windup == isotrack_core::control::AntiWindup::None);
     if let Some(g1) = p2.gamma1 {
-        if is_pi_isoline(s)
-            && l.ki != 0.0
-            && anti_windup == crate::schema::AntiWindupKind::None
-            && l.v * g1 <= l.c1
-        {
+        if integrates_always && l.ki != 0.0 && l.v * g1 <= l.c1 {
             w.push(format!(
                 "between the start and the tube v*gamma1 = {} <= c1 = {}: the law may not reach the isoline from this start, and with ki = {} and no anti-windup the integral can wind up before the isoline is reached (see controller.anti_windup, e.g. \"conditional\")",
                 Num(l.v * g1),

@@ -29,9 +29,10 @@
 
 use super::speed_mps;
 use crate::field::FieldModel;
-use crate::schema::TimeInterpolationName;
+use crate::spec::FieldKindSpec;
 use crate::Scenario;
 use isotrack_core::{FieldDerivatives, ScalarField, Vec2};
+use isotrack_fields::grid::TimeInterpolation;
 use serde::Serialize;
 
 /// The moving-isoline check.
@@ -96,12 +97,16 @@ pub fn difference_rule(s: &Scenario, lattice_step_m: f64) -> Option<(Rule, Strin
                 short(dtau),
                 short(g.field_time_scale())
             );
-            match s.file().field.time_interpolation.unwrap_or_default() {
-                TimeInterpolationName::Cubic => central(
+            let cubic = matches!(
+                &s.spec().field.kind,
+                FieldKindSpec::Grid(gs) if gs.time_interpolation == TimeInterpolation::Cubic
+            );
+            match cubic {
+                true => central(
                     eighth(dt),
                     format!("an eighth of the smallest frame spacing ({frames})"),
                 ),
-                TimeInterpolationName::Linear | TimeInterpolationName::Nearest => Some((
+                false => Some((
                     Rule::Frames,
                     format!("the difference of the two frames around each time over their spacing ({frames})"),
                 )),

@@ -2,7 +2,7 @@
 //! force, given or derived) and the search flown before tracking.
 
 use super::{settled, VehicleSpec};
-use crate::resolve::Issue;
+use crate::issue::Issue;
 use crate::schema::{
     AntiWindupKind, ControllerKind, ControllerSection, DerivativeKindName, SearchKind,
 };

@@ -13,12 +13,14 @@
 //! used by `resolve` (which writes it into the resolved file, so that `scenario.toml` records
 //! it) or, for the derived ones, by the section's constructor here.
 //!
-//! One file per section: [`controller`], [`sensor`], [`vehicle`], [`sim`] (`[sim]`, `[metrics]`,
-//! `[output]`, `[initial]`, `[sitl]`). The `[field]` section is not typed yet: it is built
-//! straight from the resolved file by [`crate::field::build_field_noting`] (its files fill
-//! keys).
+//! One file per section: [`field`], [`controller`], [`sensor`], [`vehicle`], [`sim`] (`[sim]`,
+//! `[metrics]`, `[output]`, `[initial]`, `[sitl]`), [`team`]. The field is built from its spec
+//! by [`crate::field::build_field`]; a grid's or the stations' files fill the keys the scenario
+//! leaves to them (spacing, origin, units), which are recorded into the resolved file before
+//! the scenario's spec is read from it.
 
 pub mod controller;
+pub mod field;
 pub mod sensor;
 pub mod show;
 pub mod sim;
@@ -26,20 +28,24 @@ pub mod team;
 pub mod vehicle;
 
 pub use controller::{ControllerSpec, LawSpec, TurnRateLimit};
+pub use field::{FieldKindSpec, FieldSpec};
 pub use sim::{MetricsSpec, OutputSpec, SimSpec, SitlSpec};
 pub use team::TeamSpec;
 pub use vehicle::VehicleSpec;
 
-use crate::episode::Start;
-use crate::resolve::Issue;
+pub(crate) use crate::issue::settled;
+use crate::issue::Issue;
 use crate::schema::ScenarioFile;
 use isotrack_sim::SensorConfig;
+pub use sim::Start;
 
 /// A resolved scenario's settings, every one explicit (see the [module](self) docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScenarioSpec {
     /// `[sim]`.
     pub sim: SimSpec,
+    /// `[field]`, with what its files filled in.
+    pub field: FieldSpec,
     /// `[vehicle]`.
     pub vehicle: VehicleSpec,
     /// `[initial]`: the start pose.
@@ -69,6 +75,7 @@ impl ScenarioSpec {
         airframe_turn_rate_limit_radps: Option<f64>,
     ) -> Result<Self, Issue> {
         let sim = SimSpec::new(&f.sim)?;
+        let field = FieldSpec::new(&f.field, sim.seed)?;
         let vehicle = VehicleSpec::new(&f.vehicle, sim.seed)?;
         let start = sim::start(&f.initial)?;
         let sensor = sensor::sensor_config(&f.sensor)?;
@@ -80,6 +87,7 @@ impl ScenarioSpec {
         let team = TeamSpec::new(&f.team, &vehicle, &sim, start)?;
         Ok(Self {
             sim,
+            field,
             vehicle,
             start,
             sensor,
@@ -90,15 +98,6 @@ impl ScenarioSpec {
             team,
         })
     }
-}
-
-/// The value resolution settled for `key` (`section.name`): an [`Issue`] if it is unset.
-pub(crate) fn settled<T: Clone>(v: &Option<T>, key: &str) -> Result<T, Issue> {
-    v.clone().ok_or_else(|| Issue {
-        key: key.to_string(),
-        message: "was not settled by resolution (an internal error: please report it)".into(),
-        unreadable: false,
-    })
 }
 
 #[cfg(test)]

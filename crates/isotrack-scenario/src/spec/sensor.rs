@@ -2,7 +2,7 @@
 //! is a setting of its own, readings do not saturate).
 
 use super::settled;
-use crate::resolve::Issue;
+use crate::issue::Issue;
 use crate::schema::SensorSection;
 use isotrack_sim::SensorConfig;
 

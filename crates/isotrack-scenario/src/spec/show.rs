@@ -9,11 +9,15 @@
 //! leaves out of the file because it must follow a key a sweep or `--set` may change (the fixed
 //! wing's turn-rate limit `g*tan(40 deg)/V`, the convergence dwell, the track-loss band, the
 //! search geometry, the `[sitl]` home) is printed as a commented-out key at the end of its
-//! section, `# KEY = VALUE  # derived: FORMULA`. Comments only: `show`'s output, run again, is
+//! section, `# KEY = VALUE  # derived: FORMULA`. So are the field's values in force that the
+//! resolved file leaves out: an analytic field's drift (`[0.0, 0.0]` unless given), a NetCDF
+//! time series' frame times (its own time axis). Comments only: `show`'s output, run again, is
 //! the same scenario and gives the same run, byte for byte (and uncommenting a derived line pins
 //! the value it had).
 
+use super::field::{FieldKindSpec, FrameTimes};
 use super::TurnRateLimit;
+use crate::field::FieldModel;
 use crate::Scenario;
 use isotrack_core::control::{AntiWindup, SearchPattern};
 
@@ -120,6 +124,7 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
             ));
         }
     }
+    field_in_force(s, &mut extra);
     let m = &spec.metrics;
     if file.metrics.convergence_min_dwell_s.is_none() {
         extra.push((
@@ -150,6 +155,38 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
         );
     }
     out
+}
+
+/// A TOML array of `xs`, each as [`num`] writes it.
+fn nums(xs: &[f64]) -> String {
+    toml::Value::Array(xs.iter().map(|&x| toml::Value::Float(x)).collect()).to_string()
+}
+
+/// The `[field]` values in force that the resolved file does not hold (its files' own
+/// spacing, origin and units are recorded into it once the field is built): an analytic
+/// field's drift when none is given, and a time series' frame times read from its file.
+fn field_in_force(s: &Scenario, extra: &mut Vec<(&str, String)>) {
+    match &s.spec().field.kind {
+        FieldKindSpec::Analytic(a) if s.file().field.drift_mps.is_none() => extra.push((
+            "field",
+            format!(
+                "# drift_mps = {}  # default: a steady field (not written into the resolved file)",
+                nums(&[a.drift_mps.x, a.drift_mps.y])
+            ),
+        )),
+        FieldKindSpec::Grid(g) if g.frame_times == FrameTimes::FromFile => {
+            if let FieldModel::Series(series) = s.field() {
+                extra.push((
+                    "field",
+                    format!(
+                        "# frame_times_s = {}  # derived: the file's time axis, s after its first frame",
+                        nums(series.times_s())
+                    ),
+                ));
+            }
+        }
+        _ => {}
+    }
 }
 
 /// Appends `  # derived: F` to each `inline` key's line of its section, and each `extra` line

@@ -1,8 +1,7 @@
 //! `[sim]`, `[metrics]`, `[output]`, `[initial]` and `[sitl]`.
 
 use super::settled;
-use crate::episode::Start;
-use crate::resolve::Issue;
+use crate::issue::Issue;
 use crate::schema::{InitialSection, MetricsSection, OutputSection, SimSection, SitlSection};
 
 /// Default `sim.dt_s`, s.
@@ -26,6 +25,17 @@ pub const START_X_M: f64 = 10.0;
 pub const START_Y_M: f64 = 0.0;
 /// Default `initial.heading_rad`: -pi/2 (south), rad counter-clockwise from +x.
 pub const START_HEADING_RAD: f64 = -std::f64::consts::FRAC_PI_2;
+
+/// Where and how a run starts: position, m, and heading, rad (counter-clockwise from +x).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Start {
+    /// Start position x, m.
+    pub x_m: f64,
+    /// Start position y, m.
+    pub y_m: f64,
+    /// Start heading, rad.
+    pub heading_rad: f64,
+}
 
 /// `[sim]` resolved.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -3,11 +3,12 @@
 //! file keeps the user's keys as given (the defaults below apply when it is read again).
 
 use super::sim::SimSpec;
+use super::sim::Start;
 use super::vehicle::VehicleSpec;
-use crate::episode::Start;
-use crate::resolve::ranges::MAX_COORDINATE_M;
-use crate::resolve::{Echo, Issue};
+use crate::issue::Issue;
+use crate::ranges::MAX_COORDINATE_M;
 use crate::schema::{RingName, SpacingName, SpreadAlong, TeamSection};
+use isotrack_core::numtext::Echo;
 use isotrack_sim::team::ranging::{Ranging, RangingConfig};
 use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
 use isotrack_vehicles::fixed_wing::COMMANDED_AIRSPEED_RANGE_MPS;
@@ -18,6 +19,13 @@ pub const MAX_COUNT: u64 = 10_000;
 /// Largest `team.count` with `team.ring = "discovered"`: each probe fits a range rate to every
 /// other vehicle (`O(N)` per sample) and the probes take `N` slots one after another.
 pub const MAX_DISCOVERED_COUNT: u64 = 64;
+/// Default `team.spread.center_m` of an arc spread, m: the origin.
+pub const SPREAD_CENTER_M: [f64; 2] = [0.0, 0.0];
+/// Default `team.spread.start_rad` of an arc spread: the first start on +x from the centre.
+pub const SPREAD_START_RAD: f64 = 0.0;
+/// Default `team.spread.clockwise` of an arc spread (`team.spread.step_rad` defaults to
+/// `2 pi / team.count`: the starts evenly around the circle).
+pub const SPREAD_CLOCKWISE: bool = true;
 /// Default `team.spacing`: the coordinate-free law.
 pub const SPACING: SpacingName = SpacingName::RangeBalance;
 /// Default `team.k_v`, 1/s: the engine's tested gain (four robots from a cluster on the paper's
@@ -162,7 +170,7 @@ impl TeamSpec {
                             ));
                         }
                     }
-                    let c = sp.center_m.unwrap_or([0.0, 0.0]);
+                    let c = sp.center_m.unwrap_or(SPREAD_CENTER_M);
                     let cx = coordinate("team.spread.center_m", Some(c[0]))?;
                     let cy = coordinate("team.spread.center_m", Some(c[1]))?;
                     let r = positive("team.spread.radius_m", sp.radius_m)?;
@@ -176,12 +184,15 @@ impl TeamSpec {
                             ),
                         ));
                     }
-                    let th0 = finite("team.spread.start_rad", Some(sp.start_rad.unwrap_or(0.0)))?;
+                    let th0 = finite(
+                        "team.spread.start_rad",
+                        Some(sp.start_rad.unwrap_or(SPREAD_START_RAD)),
+                    )?;
                     let step = finite(
                         "team.spread.step_rad",
                         Some(sp.step_rad.unwrap_or(std::f64::consts::TAU / n as f64)),
                     )?;
-                    let cw = sp.clockwise.unwrap_or(true);
+                    let cw = sp.clockwise.unwrap_or(SPREAD_CLOCKWISE);
                     // The next start `step` further along the travel: the listed order is the
                     // order of travel (the listed ring's `ahead(i) = i + 1`).
                     let sign = if cw { -1.0 } else { 1.0 };
@@ -291,7 +302,7 @@ impl TeamSpec {
                 ),
             ));
         }
-        let max = crate::resolve::ranges::MAX_SPEED_MPS;
+        let max = crate::ranges::MAX_SPEED_MPS;
         if v_max < v0 || v_max > max {
             return Err(issue(
                 "team.v_max_mps",

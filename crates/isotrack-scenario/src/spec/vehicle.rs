@@ -1,7 +1,7 @@
 //! `[vehicle]`: the kind with its own parameters.
 
 use super::settled;
-use crate::resolve::Issue;
+use crate::issue::Issue;
 use crate::schema::{VehicleKind, VehicleSection};
 use isotrack_vehicles::FixedWingConfig;
 
