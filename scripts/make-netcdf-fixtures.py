@@ -33,7 +33,9 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     Latin-1, which must load) and `refused_latin1_units_*.nc` (a `units` in Latin-1, refused
     naming the variable and the attribute): see `non_utf8`; `refused_nul_*.nc` and
     `nul_comment.nc` (a NUL inside a text attribute): see `nul_inside`; `many_attributes.nc`
-    (700 attributes of 1 kB on `v`): see `many_attributes`.
+    (700 attributes of 1 kB on `v`): see `many_attributes`; `committed_*.nc` and
+    `refused_committed_units_x.nc` (attributes of committed HDF5 datatypes): see
+    `committed_types`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -296,6 +298,126 @@ def many_attributes():
     write("netcdf4", "NETCDF4", "xy", "contig", name="many_attributes.nc", edit=attrs)
 
 
+def committed_types():
+    """Attributes of a committed (named) HDF5 datatype, as h5py writes them with
+    `attrs.create(..., dtype=group["T"])` (and netCDF-C for user-defined types): the attribute
+    holds a reference to the type's object header instead of the type (issue 30, fix30d).
+    hdf5-reader 0.12.1 refused the whole file ("shared datatype/dataspace in attribute v2 is not
+    supported"). `committed_comment.nc`: a `comment` of a committed string type on every
+    variable, which isotrack does not read; `committed_units.nc`: `units` of a committed string
+    type on `v`, `x` and `y`. Both load as their twins do (`units` "K"). Not in the manifest:
+    `refused_committed_units_x.nc`, x's `units` reference pointing at no datatype (address 0,
+    the superblock), refused naming `x` and `units` where a reader that skips it would take x
+    without units as metres."""
+    import h5py
+
+    def add(name, attrs):
+        path = os.path.join(OUT, name)
+        with h5py.File(path, "a") as f:
+            for var, attr, text in attrs:
+                tname = f"{attr}_{var}_t"
+                f[tname] = np.dtype(f"S{len(text)}")
+                if attr in f[var].attrs:
+                    del f[var].attrs[attr]
+                f[var].attrs.create(attr, np.bytes_(text.encode()), dtype=f[tname])
+        return path
+
+    name = write("h5netcdf", "NETCDF4", "xy", "chunk", name="committed_comment.nc")
+    if not ONLY or name in ONLY:
+        add(name, [(v, "comment", "a committed type") for v in ("v", "x", "y", "time")])
+    name = write("netcdf4", "NETCDF4", "xy", "contig", name="committed_units.nc")
+    if not ONLY or name in ONLY:
+        add(name, [("v", "units", "K"), ("x", "units", "m"), ("y", "units", "m")])
+    name = write("netcdf4", "NETCDF4", "xy", "contig", name="refused_committed_units_x.nc")
+    if not ONLY or name in ONLY:
+        path = add(name, [("x", "units", "m")])
+        data = bytearray(open(path, "rb").read())
+        # The attribute message (version 2 or 3, flags 1: a shared datatype), name "units":
+        # its datatype field, a shared message (version, type 2, 8-byte address), made to
+        # point at address 0. x's attributes are in dense storage: the message is in a
+        # fractal heap direct block, whose checksum is then written again.
+        hits = []
+        at = data.find(b"units\0")
+        while at >= 0:
+            v2 = data[at - 8] == 2 and data[at - 7] == 1 and data[at - 6:at - 4] == b"\6\0"
+            v3 = data[at - 9] == 3 and data[at - 8] == 1 and data[at - 7:at - 5] == b"\6\0"
+            if v2 or v3:
+                hits.append(at + 6)
+            at = data.find(b"units\0", at + 1)
+        assert len(hits) == 1, hits
+        ref = hits[0]
+        assert data[ref + 1] == 2, data[ref:ref + 10]
+        block = data.rfind(b"FHDB", 0, ref)
+        check = direct_block_checksum(data, block)
+        data[ref + 2:ref + 10] = bytes(8)
+        check(data)
+        open(path, "wb").write(bytes(data))
+
+
+def direct_block_checksum(data, start):
+    """The fractal heap direct block at `start` (signature FHDB): its size (a power of two) and
+    where its checksum is (after the block offset, whose length the heap header sets) found by
+    the checksum that matches, and a function writing the checksum of the block in `data` there
+    (HDF5: lookup3 of the whole block, the checksum field zeroed)."""
+    for offset_bytes in range(1, 9):
+        at = start + 13 + offset_bytes
+        stored = int.from_bytes(data[at:at + 4], "little")
+        for k in range(9, 17):
+            end = start + (1 << k)
+            if end > len(data):
+                break
+            image = bytearray(data[start:end])
+            image[at - start:at - start + 4] = bytes(4)
+            if lookup3(image) == stored:
+                def write(d, at=at, end=end):
+                    image = bytearray(d[start:end])
+                    image[at - start:at - start + 4] = bytes(4)
+                    d[at:at + 4] = lookup3(image).to_bytes(4, "little")
+                return write
+    raise AssertionError(f"no direct block checksum found at {start}")
+
+
+def lookup3(data, initval=0):
+    """Bob Jenkins' lookup3 `hashlittle`, the checksum of HDF5 metadata (H5_checksum_lookup3)."""
+    m = 0xFFFFFFFF
+
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & m
+
+    def u32(b, i):
+        return int.from_bytes(b[i:i + 4], "little")
+
+    n = len(data)
+    a = b = c = (0xDEADBEEF + n + initval) & m
+    i = 0
+    while n > 12:
+        a = (a + u32(data, i)) & m
+        b = (b + u32(data, i + 4)) & m
+        c = (c + u32(data, i + 8)) & m
+        a = (a - c) & m; a ^= rot(c, 4); c = (c + b) & m
+        b = (b - a) & m; b ^= rot(a, 6); a = (a + c) & m
+        c = (c - b) & m; c ^= rot(b, 8); b = (b + a) & m
+        a = (a - c) & m; a ^= rot(c, 16); c = (c + b) & m
+        b = (b - a) & m; b ^= rot(a, 19); a = (a + c) & m
+        c = (c - b) & m; c ^= rot(b, 4); b = (b + a) & m
+        n -= 12
+        i += 12
+    if n == 0:
+        return c
+    tail = bytes(data[i:i + n]) + bytes(12 - n)
+    a = (a + u32(tail, 0)) & m
+    b = (b + u32(tail, 4)) & m
+    c = (c + u32(tail, 8)) & m
+    c ^= b; c = (c - rot(b, 14)) & m
+    a ^= c; a = (a - rot(c, 11)) & m
+    b ^= a; b = (b - rot(a, 25)) & m
+    c ^= b; c = (c - rot(b, 16)) & m
+    a ^= c; a = (a - rot(c, 4)) & m
+    b ^= a; b = (b - rot(a, 14)) & m
+    c ^= b; c = (c - rot(b, 24)) & m
+    return c
+
+
 # File names given on the command line: only those are written (all when none).
 ONLY = set(sys.argv[1:])
 
@@ -364,6 +486,7 @@ def main():
     non_utf8()
     nul_inside()
     many_attributes()
+    committed_types()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

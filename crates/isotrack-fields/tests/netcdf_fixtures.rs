@@ -312,3 +312,47 @@ fn a_variable_with_hundreds_of_long_attributes_loads() {
         Some(&[0.0, 3600.0, 10800.0][..])
     );
 }
+
+/// Issue 30 (fix30d): attributes of a committed (named) HDF5 datatype, as h5py writes them with
+/// `attrs.create(..., dtype=group["T"])` (netCDF4-python reads them), made hdf5-reader refuse
+/// the whole file: "unsupported encoding: shared datatype/dataspace in attribute v2 is not
+/// supported". The committed types are read from where they are stored (patched in
+/// vendor/hdf5-reader): a `comment` on every variable, and `units` on `v`, `x` and `y`, load to
+/// the grid and times of their twins, with the units read through the committed type. A
+/// `units` whose committed type cannot be found (x's reference made to point at address 0) is
+/// refused naming the variable and the attribute, not taken as absent (x would be metres with
+/// a warning). (Written by `scripts/make-netcdf-fixtures.py`, `committed_types`.)
+#[test]
+fn attributes_of_committed_datatypes_load_and_a_lost_one_isotrack_reads_is_refused() {
+    let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
+    for name in ["committed_comment.nc", "committed_units.nc"] {
+        let s = load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.units.as_deref(), Some("K"), "{name}");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+        assert_eq!(s.frames.len(), 3, "{name}");
+        for (got, want) in s.frames.iter().zip(&npy.frames) {
+            assert!(same(got.values(), want.values()), "{name}");
+        }
+        assert_eq!(
+            s.frame_times_s.as_deref(),
+            Some(&[0.0, 3600.0, 10800.0][..]),
+            "{name}"
+        );
+        assert_eq!(
+            s.georeference,
+            Georeference::Metres { epsg: None },
+            "{name}"
+        );
+        assert_eq!(s.frames[0].origin_m(), Vec2::new(500_000.0, 4_600_000.0));
+        assert_eq!(s.frames[0].spacing_m(), [1000.0, 2000.0], "{name}");
+    }
+    let name = "refused_committed_units_x.nc";
+    let e = load_series(&dir().join(name), None, None).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains(name), "{text}");
+    assert!(
+        text.contains("variable `x`: its `units` attribute cannot be decoded (shared datatype in the object header at 0x0: "),
+        "{text}"
+    );
+    assert!(!e.unreadable, "{text}");
+}

@@ -78,6 +78,14 @@ impl Attribute {
         }
     }
 
+    /// isotrack: why the attribute could not be decoded, when it could not (a
+    /// shared datatype or dataspace that was not found or not read): it is
+    /// then an opaque placeholder without elements, kept under its name
+    /// ([`crate::messages::attribute::UNDECODABLE_TAG`]).
+    pub fn undecodable_reason(&self) -> Option<&str> {
+        messages::attribute::undecodable_reason(&self.datatype)
+    }
+
     /// Total number of elements.
     pub fn num_elements(&self) -> Result<u64> {
         if self.shape.is_empty() {
@@ -435,18 +443,20 @@ pub(crate) fn collect_raw_attributes(
     let (header, captured) = context.parse_header_capturing(address)?;
     let mut raw = captured.attributes;
     let capture = messages::RawCapture::start();
-    let attributes = collect_attribute_messages_storage(
-        &header,
-        context.storage.as_ref(),
-        context.superblock.offset_size,
-        context.superblock.length_size,
-        Some(context.filter_registry.as_ref()),
-    )?;
+    let attributes = collect_attribute_messages_storage(&header, context)?;
     raw.extend(capture.finish().attributes);
 
     let mut used = vec![false; raw.len()];
     let mut result = Vec::with_capacity(attributes.len());
     for message in attributes {
+        if message.undecodable_reason().is_some() {
+            // isotrack: a datatype that could not be read has no bytes to give.
+            result.push(RawAttribute {
+                raw_datatype: Vec::new(),
+                message,
+            });
+            continue;
+        }
         let found = raw.iter().enumerate().position(|(i, (name, bytes))| {
             !used[i] && *name == message.name && datatype_matches(bytes, &message.datatype)
         });
@@ -467,11 +477,12 @@ pub(crate) fn collect_raw_attributes(
 
 pub(crate) fn collect_attribute_messages_storage(
     header: &ObjectHeader,
-    storage: &dyn Storage,
-    offset_size: u8,
-    length_size: u8,
-    filter_registry: Option<&FilterRegistry>,
+    context: &FileContext,
 ) -> Result<Vec<AttributeMessage>> {
+    let storage = context.storage.as_ref();
+    let offset_size = context.superblock.offset_size;
+    let length_size = context.superblock.length_size;
+    let filter_registry = Some(context.filter_registry.as_ref());
     let mut attributes = Vec::new();
     let mut attribute_info = None;
 
@@ -493,7 +504,105 @@ pub(crate) fn collect_attribute_messages_storage(
         )?);
     }
 
+    resolve_shared_attribute_parts(&mut attributes, context);
     Ok(attributes)
+}
+
+/// isotrack: the shared (committed) datatypes and shared dataspaces of
+/// `attributes` read from where they are stored: the object header at the
+/// reference's address (a committed datatype, as netCDF-C writes user-defined
+/// types and h5py `attrs.create(..., dtype=group["T"])`), or the shared message
+/// heap. An attribute whose part cannot be read stays the undecodable
+/// placeholder ([`AttributeMessage::undecodable_reason`]): the file is still
+/// read, a reader refuses the attribute if it needs it. Each referenced header
+/// is parsed once per call, within the file's header size limit, and never
+/// follows further references (no cycles).
+fn resolve_shared_attribute_parts(attributes: &mut [AttributeMessage], context: &FileContext) {
+    use crate::messages::shared::SharedMessage;
+    type Found = std::result::Result<(HdfMessage, Option<Vec<u8>>), String>;
+    let mut found: Vec<((u16, Vec<u8>), Found)> = Vec::new();
+    for attr in attributes.iter_mut().filter(|a| a.has_shared_parts()) {
+        let name = attr.name.clone();
+        attr.resolve_shared(|reference| {
+            let key = match reference {
+                SharedMessage::SharedInOhdr {
+                    message_type,
+                    address,
+                } => (*message_type, address.to_le_bytes().to_vec()),
+                SharedMessage::SharedInSohm {
+                    message_type,
+                    heap_id,
+                } => (*message_type, heap_id.clone()),
+            };
+            let result = match found.iter().find(|(k, _)| *k == key) {
+                Some((_, result)) => result.clone(),
+                None => {
+                    let result = read_shared_part(reference, context).map_err(|e| e.to_string());
+                    found.push((key, result.clone()));
+                    result
+                }
+            };
+            let (message, raw) = result.map_err(Error::InvalidData)?;
+            if let Some(raw) = raw {
+                messages::record_attribute_datatype(&name, &raw);
+            }
+            Ok(message)
+        });
+    }
+}
+
+/// The message a shared-message reference points to, with the exact bytes of
+/// a datatype message (for [`crate::RawAttribute`]).
+fn read_shared_part(
+    reference: &crate::messages::shared::SharedMessage,
+    context: &FileContext,
+) -> Result<(HdfMessage, Option<Vec<u8>>)> {
+    use crate::messages::shared::SharedMessage;
+    let capture = messages::RawCapture::start();
+    let message = match reference {
+        SharedMessage::SharedInOhdr {
+            message_type,
+            address,
+        } => {
+            let header = ObjectHeader::parse_at_storage_with_limit(
+                context.storage.as_ref(),
+                *address,
+                context.superblock.offset_size,
+                context.superblock.length_size,
+                context.max_object_header_bytes,
+            )?;
+            header
+                .messages
+                .into_iter()
+                .find(|m| match *message_type {
+                    messages::MSG_DATATYPE => matches!(m, HdfMessage::Datatype(_)),
+                    messages::MSG_DATASPACE => matches!(m, HdfMessage::Dataspace(_)),
+                    _ => false,
+                })
+                .ok_or_else(|| {
+                    Error::InvalidData(format!(
+                        "no {} message in the object header",
+                        messages::message_type_name(*message_type)
+                    ))
+                })?
+        }
+        SharedMessage::SharedInSohm {
+            message_type,
+            heap_id,
+        } => context
+            .resolve_sohm_message(heap_id, *message_type)?
+            .ok_or_else(|| {
+                Error::InvalidData(format!(
+                    "{} not found in the shared message table",
+                    messages::message_type_name(*message_type)
+                ))
+            })?,
+    };
+    let raw = match &message {
+        HdfMessage::Datatype(_) => capture.finish().datatypes.into_iter().next(),
+        _ => None,
+    };
+    Ok((message, raw))
 }
 
 fn load_dense_attribute_messages_storage(

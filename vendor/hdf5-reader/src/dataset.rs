@@ -862,13 +862,7 @@ impl Dataset {
         let mut fill_value: Option<FillValueMessage> = None;
         let mut filter_pipeline: Option<FilterPipelineMessage> = None;
         let mut external_files: Option<ExternalFilesMessage> = None;
-        let attributes = collect_attribute_messages_storage(
-            header,
-            context.context.storage.as_ref(),
-            context.context.superblock.offset_size,
-            context.context.superblock.length_size,
-            Some(context.context.filter_registry.as_ref()),
-        )?;
+        let attributes = collect_attribute_messages_storage(header, context.context.as_ref())?;
 
         for msg in &header.messages {
             match msg {
@@ -891,7 +885,9 @@ impl Dataset {
         let attr_fill_value = attributes
             .iter()
             .find(|attr| {
-                attr.name == "_FillValue" && matches!(attr.dataspace.num_elements(), Ok(1))
+                attr.name == "_FillValue"
+                    && attr.undecodable_reason().is_none()
+                    && matches!(attr.dataspace.num_elements(), Ok(1))
             })
             .map(|attr| FillValueMessage {
                 defined: !attr.raw_data.is_empty(),

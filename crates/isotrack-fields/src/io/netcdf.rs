@@ -32,11 +32,57 @@ fn attr_str(v: &NcVariable, name: &str) -> Option<String> {
     v.attribute(name)?.value.as_string()
 }
 
+/// Why the reader could not decode `v`'s attribute `name`, when it is there but could not be
+/// decoded: an HDF5 attribute whose shared (committed) datatype or shared dataspace was not
+/// found. The reader keeps such an attribute, under its name, as an opaque value without
+/// elements tagged [`hdf5_reader::messages::attribute::UNDECODABLE_TAG`] (patched in
+/// vendor/hdf5-reader), so that the file still loads when the attribute is one isotrack does
+/// not read (a `comment`), and one it reads is refused rather than taken as absent.
+fn undecodable<'a>(v: &'a NcVariable, name: &str) -> Option<&'a str> {
+    match &v.attribute(name)?.value {
+        netcdf_reader::NcAttrValue::UserDefined {
+            dtype: netcdf_reader::NcType::Opaque { tag, .. },
+            ..
+        } => tag.strip_prefix(hdf5_reader::messages::attribute::UNDECODABLE_TAG),
+        _ => None,
+    }
+}
+
+/// An error naming the variable and the first of the attributes `names` that is there but
+/// could not be decoded ([`undecodable`]); `Ok` when none is.
+fn refuse_undecodable(v: &NcVariable, names: &[&str]) -> Result<(), String> {
+    for name in names {
+        if let Some(why) = undecodable(v, name) {
+            return Err(format!(
+                "variable `{}`: its `{name}` attribute cannot be decoded ({}): isotrack reads it",
+                isotrack_core::numtext::Escaped(v.name()),
+                isotrack_core::numtext::Clipped(why)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The attributes the reader applies to a variable's values as it reads them (packing,
+/// `_Unsigned`) and, for the data variable, masks them with (fill, missing and valid values):
+/// one that could not be decoded would be taken as absent, so the values would be wrong.
+const VALUE_ATTRIBUTES: [&str; 8] = [
+    "scale_factor",
+    "add_offset",
+    "_Unsigned",
+    "_FillValue",
+    "missing_value",
+    "valid_min",
+    "valid_max",
+    "valid_range",
+];
+
 /// A coordinate's text attribute (`units`, `standard_name`, `axis`): `None` when absent, the
 /// text when it is one (a `char` array or a single NC_STRING), an error naming the variable when
 /// it is several strings (`["km", "m"]`: which one?) or numbers.
 fn attr_text(v: &NcVariable, name: &str) -> Result<Option<String>, String> {
     use netcdf_reader::NcAttrValue;
+    refuse_undecodable(v, &[name])?;
     let Some(a) = v.attribute(name) else {
         return Ok(None);
     };
@@ -804,6 +850,12 @@ fn data_variable<'a>(
         .flat_map(|v| [attr_str(v, "bounds"), attr_str(v, "climatology")])
         .flatten()
         .collect();
+    if variable.is_none() {
+        // Which variables are bounds decides which is the data variable.
+        for v in vars {
+            refuse_undecodable(v, &["bounds", "climatology"]).map_err(err)?;
+        }
+    }
     match variable {
         Some(n) => vars
             .iter()
@@ -905,8 +957,10 @@ fn frame_layout<'a>(
 }
 
 /// A packing attribute that is not finite turns every value into NaN; say so, rather than
-/// "every value is NaN / no-data".
+/// "every value is NaN / no-data". One of [`VALUE_ATTRIBUTES`] that could not be decoded is
+/// refused naming it ([`refuse_undecodable`]).
 fn check_packing(path: &Path, var: &NcVariable) -> Result<(), LoadError> {
+    refuse_undecodable(var, &VALUE_ATTRIBUTES).map_err(|m| LoadError::new(path, None, m))?;
     for a in ["scale_factor", "add_offset"] {
         if let Some(x) = var
             .attribute(a)
@@ -991,6 +1045,8 @@ fn coord_values<'a>(
     {
         None => Ok(None),
         Some(c) => {
+            refuse_undecodable(c, &VALUE_ATTRIBUTES[..3])
+                .map_err(|m| LoadError::new(path, None, m))?;
             let vals = file.read_variable_unpacked(name).map_err(|e| {
                 LoadError::new(path, None, format!("cannot read coordinate `{name}`: {e}"))
             })?;

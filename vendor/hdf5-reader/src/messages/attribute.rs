@@ -6,8 +6,10 @@
 use crate::error::{Error, Result};
 use crate::io::Cursor;
 
-use super::dataspace::{self, DataspaceMessage};
-use super::datatype::{self, Datatype};
+use super::dataspace::{self, DataspaceMessage, DataspaceType};
+use super::datatype::{self, Datatype, DatatypeMessage};
+use super::shared::{self, SharedMessage};
+use super::{HdfMessage, MSG_DATASPACE, MSG_DATATYPE};
 
 /// Parsed attribute message.
 #[derive(Debug, Clone)]
@@ -20,6 +22,163 @@ pub struct AttributeMessage {
     pub dataspace: DataspaceMessage,
     /// Raw attribute data (un-decoded bytes).
     pub raw_data: Vec<u8>,
+    /// isotrack: the parts stored elsewhere (flags bit 0: a shared (committed)
+    /// datatype, bit 1: a shared dataspace), until [`AttributeMessage::resolve_shared`]
+    /// reads them; meanwhile the message is the undecodable placeholder
+    /// ([`AttributeMessage::undecodable_reason`]). `None` when all is inline.
+    pub(crate) shared: Option<SharedParts>,
+}
+
+/// isotrack: the tag of the opaque datatype an attribute that could not be decoded
+/// carries (no elements, a null dataspace), followed by the reason. The attribute
+/// is kept under its name, so that a reader can tell "absent" from "present but
+/// not readable" (netcdf-reader passes it on as an opaque user-defined value).
+pub const UNDECODABLE_TAG: &str = "hdf5-reader: undecodable attribute: ";
+
+/// The reason an attribute of `datatype` could not be decoded, when it is the
+/// placeholder ([`UNDECODABLE_TAG`]).
+pub fn undecodable_reason(datatype: &Datatype) -> Option<&str> {
+    match datatype {
+        Datatype::Opaque { tag, .. } => tag.strip_prefix(UNDECODABLE_TAG),
+        _ => None,
+    }
+}
+
+/// An attribute's datatype or dataspace: in the message, or a reference to
+/// where it is stored (HDF5 specification, "Attribute Message", flags; "Shared
+/// Message").
+#[derive(Debug, Clone)]
+pub(crate) enum Part<T> {
+    Inline(T),
+    Shared(SharedMessage),
+}
+
+/// The parts of an attribute message with a shared datatype or dataspace.
+#[derive(Debug, Clone)]
+pub(crate) struct SharedParts {
+    datatype: Part<DatatypeMessage>,
+    dataspace: Part<DataspaceMessage>,
+    /// The rest of the message: the value, its size known once the parts are.
+    data: Vec<u8>,
+}
+
+impl AttributeMessage {
+    /// The placeholder for the attribute `name` that could not be decoded:
+    /// an opaque datatype tagged [`UNDECODABLE_TAG`] and `reason`, a null
+    /// dataspace, no data.
+    pub(crate) fn undecodable(name: String, reason: &str) -> Self {
+        AttributeMessage {
+            name,
+            datatype: Datatype::Opaque {
+                size: 1,
+                tag: format!("{UNDECODABLE_TAG}{reason}"),
+            },
+            dataspace: DataspaceMessage {
+                rank: 0,
+                dims: Vec::new(),
+                max_dims: None,
+                dataspace_type: DataspaceType::Null,
+            },
+            raw_data: Vec::new(),
+            shared: None,
+        }
+    }
+
+    /// Why the attribute could not be decoded, if it could not (a shared
+    /// datatype or dataspace that was not found or not read).
+    pub fn undecodable_reason(&self) -> Option<&str> {
+        undecodable_reason(&self.datatype)
+    }
+
+    /// Whether parts of the attribute are stored elsewhere and not read yet.
+    pub(crate) fn has_shared_parts(&self) -> bool {
+        self.shared.is_some()
+    }
+
+    /// isotrack: read the shared datatype / dataspace with `resolve` (given
+    /// the reference, it returns the referenced message), and the value's
+    /// bytes from the rest of the message. What cannot be read leaves the
+    /// attribute the undecodable placeholder, the reason in its tag.
+    pub(crate) fn resolve_shared(
+        &mut self,
+        mut resolve: impl FnMut(&SharedMessage) -> Result<HdfMessage>,
+    ) {
+        let Some(parts) = self.shared.take() else {
+            return;
+        };
+        let mut where_from = String::new();
+        let resolved = (|| -> Result<(Datatype, DataspaceMessage, Vec<u8>)> {
+            let dt = match parts.datatype {
+                Part::Inline(dt) => dt,
+                Part::Shared(reference) => {
+                    where_from = format!("shared datatype {}", describe(&reference));
+                    match resolve(&reference)? {
+                        HdfMessage::Datatype(dt) => dt,
+                        other => {
+                            return Err(Error::InvalidData(format!(
+                                "found {} instead of a datatype",
+                                message_kind(&other)
+                            )))
+                        }
+                    }
+                }
+            };
+            let ds = match parts.dataspace {
+                Part::Inline(ds) => ds,
+                Part::Shared(reference) => {
+                    where_from = format!("shared dataspace {}", describe(&reference));
+                    match resolve(&reference)? {
+                        HdfMessage::Dataspace(ds) => ds,
+                        other => {
+                            return Err(Error::InvalidData(format!(
+                                "found {} instead of a dataspace",
+                                message_kind(&other)
+                            )))
+                        }
+                    }
+                }
+            };
+            where_from = "value".to_string();
+            let size = attribute_raw_data_size(&ds, dt.size)?;
+            let data = parts.data.get(..size).ok_or_else(|| {
+                Error::InvalidData(format!(
+                    "needs {size} bytes, the message holds {}",
+                    parts.data.len()
+                ))
+            })?;
+            Ok((dt.datatype, ds, data.to_vec()))
+        })();
+        match resolved {
+            Ok((datatype, dataspace, raw_data)) => {
+                self.datatype = datatype;
+                self.dataspace = dataspace;
+                self.raw_data = raw_data;
+            }
+            Err(e) => {
+                let name = std::mem::take(&mut self.name);
+                *self = Self::undecodable(name, &format!("{where_from}: {e}"));
+            }
+        }
+    }
+}
+
+/// Where a shared message is, for messages.
+fn describe(reference: &SharedMessage) -> String {
+    match reference {
+        SharedMessage::SharedInOhdr { address, .. } => {
+            format!("in the object header at {address:#x}")
+        }
+        SharedMessage::SharedInSohm { .. } => "in the shared message heap".to_string(),
+    }
+}
+
+/// The kind of a header message, for messages.
+fn message_kind(message: &HdfMessage) -> &'static str {
+    match message {
+        HdfMessage::Datatype(_) => "a datatype",
+        HdfMessage::Dataspace(_) => "a dataspace",
+        _ => "another message",
+    }
 }
 
 /// Parse an attribute message.
@@ -90,6 +249,7 @@ fn parse_v1(cursor: &mut Cursor<'_>, offset_size: u8, length_size: u8) -> Result
         datatype: dt_msg.datatype,
         dataspace: ds_msg,
         raw_data,
+        shared: None,
     })
 }
 
@@ -102,6 +262,18 @@ fn parse_v2(cursor: &mut Cursor<'_>, offset_size: u8, length_size: u8) -> Result
 
     // Name — NOT padded in v2
     let name = cursor.read_fixed_string(name_size)?;
+
+    if flags != 0 {
+        return Ok(parse_shared_parts(
+            cursor,
+            name,
+            flags,
+            offset_size,
+            length_size,
+            datatype_size,
+            dataspace_size,
+        ));
+    }
 
     // Datatype
     let dt_start = cursor.position();
@@ -126,6 +298,7 @@ fn parse_v2(cursor: &mut Cursor<'_>, offset_size: u8, length_size: u8) -> Result
         datatype: dt_msg.datatype,
         dataspace: ds_msg,
         raw_data,
+        shared: None,
     })
 }
 
@@ -140,6 +313,18 @@ fn parse_v3(cursor: &mut Cursor<'_>, offset_size: u8, length_size: u8) -> Result
     // Name — NOT padded in v3
     let name = cursor.read_fixed_string(name_size)?;
 
+    if flags != 0 {
+        return Ok(parse_shared_parts(
+            cursor,
+            name,
+            flags,
+            offset_size,
+            length_size,
+            datatype_size,
+            dataspace_size,
+        ));
+    }
+
     // Datatype
     let dt_start = cursor.position();
     let dt_msg = datatype::parse(cursor, datatype_size)?;
@@ -163,6 +348,7 @@ fn parse_v3(cursor: &mut Cursor<'_>, offset_size: u8, length_size: u8) -> Result
         datatype: dt_msg.datatype,
         dataspace: ds_msg,
         raw_data,
+        shared: None,
     })
 }
 
@@ -174,12 +360,92 @@ fn check_flags(flags: u8, version: u8) -> Result<()> {
             "reserved flags {flags:#04x} in attribute v{version}"
         )));
     }
-    if flags != 0 {
-        return Err(Error::UnsupportedEncoding(format!(
-            "shared datatype/dataspace in attribute v{version} is not supported"
-        )));
-    }
     Ok(())
+}
+
+/// A shared message of `size` bytes, within them.
+fn parse_reference(
+    cursor: &mut Cursor<'_>,
+    message_type: u16,
+    offset_size: u8,
+    length_size: u8,
+    size: usize,
+) -> Result<SharedMessage> {
+    let mut field = Cursor::new(cursor.read_bytes(size)?);
+    shared::parse(&mut field, message_type, offset_size, length_size, size)
+}
+
+/// isotrack: the rest of a version 2 or 3 attribute message whose datatype
+/// (flags bit 0) or dataspace (bit 1) is shared: that field holds a shared
+/// message (where the datatype or dataspace is stored) instead of the
+/// datatype or dataspace itself. The attribute is the undecodable placeholder
+/// until [`AttributeMessage::resolve_shared`] reads the parts; a field that
+/// cannot be parsed leaves it the placeholder for good (the rest of the file
+/// is still read: the attribute may be one nobody needs).
+fn parse_shared_parts(
+    cursor: &mut Cursor<'_>,
+    name: String,
+    flags: u8,
+    offset_size: u8,
+    length_size: u8,
+    datatype_size: usize,
+    dataspace_size: usize,
+) -> AttributeMessage {
+    let mut where_from = "shared datatype reference";
+    let parts = (|| -> Result<SharedParts> {
+        let datatype = if flags & 0x01 != 0 {
+            Part::Shared(parse_reference(
+                cursor,
+                MSG_DATATYPE,
+                offset_size,
+                length_size,
+                datatype_size,
+            )?)
+        } else {
+            where_from = "datatype";
+            let dt_start = cursor.position();
+            let dt = datatype::parse(cursor, datatype_size)?;
+            if let Some(raw) = super::raw_bytes(cursor, dt_start, datatype_size) {
+                super::record_attribute_datatype(&name, raw);
+            }
+            Part::Inline(dt)
+        };
+        let dataspace = if flags & 0x02 != 0 {
+            where_from = "shared dataspace reference";
+            Part::Shared(parse_reference(
+                cursor,
+                MSG_DATASPACE,
+                offset_size,
+                length_size,
+                dataspace_size,
+            )?)
+        } else {
+            where_from = "dataspace";
+            Part::Inline(dataspace::parse(
+                cursor,
+                offset_size,
+                length_size,
+                dataspace_size,
+            )?)
+        };
+        let data = cursor.read_bytes(cursor.remaining() as usize)?.to_vec();
+        Ok(SharedParts {
+            datatype,
+            dataspace,
+            data,
+        })
+    })();
+    match parts {
+        Ok(parts) => {
+            let mut msg = AttributeMessage::undecodable(
+                name,
+                "shared datatype or dataspace not read (no file to read it from)",
+            );
+            msg.shared = Some(parts);
+            msg
+        }
+        Err(e) => AttributeMessage::undecodable(name, &format!("{where_from}: {e}")),
+    }
 }
 
 fn attribute_raw_data_size(ds_msg: &dataspace::DataspaceMessage, dtype_size: u32) -> Result<usize> {
@@ -251,11 +517,17 @@ mod tests {
                     "v{version}: {err}"
                 );
             }
-            // Shared datatype or dataspace: the inline fields are not there.
+            // Shared datatype or dataspace: the inline fields are not there, and
+            // these are no shared messages either (version 0x10 / 0x02 with type
+            // 0): the attribute is kept, undecodable, under its name.
             for flags in [0x01, 0x02, 0x03] {
                 let data = attr(version, flags);
-                let err = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap_err();
-                assert!(err.to_string().contains("shared"), "v{version}: {err}");
+                let msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+                assert_eq!(msg.name, "abc");
+                let reason = msg.undecodable_reason().expect("undecodable");
+                assert!(reason.contains("shared"), "v{version}: {reason}");
+                assert!(msg.raw_data.is_empty());
+                assert_eq!(msg.dataspace.num_elements().unwrap(), 0);
             }
         }
     }
@@ -350,12 +622,113 @@ mod tests {
     }
 
     #[test]
-    fn shared_v3_attribute_encodings_are_unsupported_not_corrupt() {
+    fn shared_v3_attribute_encodings_are_undecodable_not_refused() {
         for flags in [1, 2, 3] {
             let data = v3_attr(flags);
-            let err = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap_err();
-            assert!(matches!(err, Error::UnsupportedEncoding(_)), "{err}");
+            let mut msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+            assert!(msg.undecodable_reason().is_some());
+            // Nothing to resolve: the references themselves did not parse.
+            assert!(!msg.has_shared_parts());
+            msg.resolve_shared(|_| panic!("nothing to resolve"));
+            assert!(msg.undecodable_reason().is_some());
         }
+    }
+
+    /// A version 3 attribute "abc" with a committed datatype at 0x1234 (a
+    /// shared message v3, type 2, 8-byte address, as libhdf5 writes it), a
+    /// scalar dataspace and the value 99u32, `pad` bytes after it.
+    fn committed_attr(version: u8, pad: usize) -> Vec<u8> {
+        let mut reference = vec![3, 2];
+        reference.extend_from_slice(&0x1234u64.to_le_bytes());
+        let ds = scalar_dataspace();
+        let mut data = vec![version, 0x01];
+        data.extend_from_slice(&4u16.to_le_bytes());
+        data.extend_from_slice(&(reference.len() as u16).to_le_bytes());
+        data.extend_from_slice(&(ds.len() as u16).to_le_bytes());
+        if version == 3 {
+            data.push(0x00);
+        }
+        data.extend_from_slice(b"abc\0");
+        data.extend_from_slice(&reference);
+        data.extend_from_slice(&ds);
+        data.extend_from_slice(&99u32.to_le_bytes());
+        data.extend(std::iter::repeat(0xee).take(pad));
+        data
+    }
+
+    fn u32_message() -> HdfMessage {
+        let dt = u32_le_datatype();
+        HdfMessage::Datatype(datatype::parse(&mut Cursor::new(&dt), dt.len()).unwrap())
+    }
+
+    #[test]
+    fn committed_datatype_is_read_from_where_it_is_stored() {
+        for version in [2, 3] {
+            let data = committed_attr(version, 3);
+            let mut msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+            assert!(msg.has_shared_parts());
+            // Until resolved, the placeholder: never the reference's bytes as a value.
+            assert!(msg.undecodable_reason().is_some());
+            let mut asked = Vec::new();
+            msg.resolve_shared(|reference| {
+                asked.push(format!("{reference:?}"));
+                Ok(u32_message())
+            });
+            assert_eq!(asked.len(), 1);
+            assert!(asked[0].contains("address: 4660"), "{asked:?}");
+            assert_eq!(msg.name, "abc");
+            assert_eq!(msg.undecodable_reason(), None);
+            assert!(!msg.has_shared_parts());
+            assert_eq!(msg.dataspace.dataspace_type, DataspaceType::Scalar);
+            // The value's 4 bytes, not the padding after them.
+            assert_eq!(msg.raw_data, 99u32.to_le_bytes());
+        }
+    }
+
+    #[test]
+    fn committed_datatype_that_cannot_be_read_leaves_the_attribute_undecodable() {
+        let data = committed_attr(3, 0);
+        // Not found.
+        let mut msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+        msg.resolve_shared(|_| Err(Error::InvalidData("no header there".into())));
+        assert_eq!(msg.name, "abc");
+        let reason = msg.undecodable_reason().unwrap();
+        assert!(reason.contains("0x1234"), "{reason}");
+        assert!(reason.contains("no header there"), "{reason}");
+        assert!(msg.raw_data.is_empty());
+        // Something else stored there.
+        let mut msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+        msg.resolve_shared(|_| {
+            Ok(HdfMessage::Dataspace(
+                dataspace::parse(&mut Cursor::new(&scalar_dataspace()), 8, 8, 4).unwrap(),
+            ))
+        });
+        assert!(msg
+            .undecodable_reason()
+            .unwrap()
+            .contains("instead of a datatype"));
+        // A datatype larger than the value stored: 8 bytes wanted, 4 there.
+        let mut msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+        msg.resolve_shared(|_| {
+            let mut dt = u32_le_datatype();
+            dt[4..8].copy_from_slice(&8u32.to_le_bytes());
+            Ok(HdfMessage::Datatype(
+                datatype::parse(&mut Cursor::new(&dt), dt.len()).unwrap(),
+            ))
+        });
+        let reason = msg.undecodable_reason().unwrap();
+        assert!(reason.contains("needs 8 bytes"), "{reason}");
+    }
+
+    #[test]
+    fn shared_reference_longer_than_its_field_is_undecodable() {
+        // The datatype field declared 4 bytes: the 10-byte reference runs into
+        // the dataspace.
+        let mut data = committed_attr(3, 0);
+        data[4..6].copy_from_slice(&4u16.to_le_bytes());
+        let msg = parse(&mut Cursor::new(&data), 8, 8, data.len()).unwrap();
+        assert!(!msg.has_shared_parts());
+        assert!(msg.undecodable_reason().is_some());
     }
 
     #[test]
