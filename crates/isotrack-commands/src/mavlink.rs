@@ -3,7 +3,7 @@
 
 use crate::cli::{FailsafeArg, FlyArgs, SitlArgs};
 use crate::exit;
-use crate::output::{scenario_toml, RunDir, Summary, TraceWriter};
+use crate::output::{scenario_toml, RunDir, Summary};
 use crate::run::{load, Failure};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_mavlink::fly::{
@@ -12,9 +12,10 @@ use isotrack_mavlink::fly::{
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
 use isotrack_runs::results::MetricsRecord;
+use isotrack_runs::rundir::TraceFile;
 use isotrack_runs::summary::{Ended, FlightRecord};
 use isotrack_sim::{NoTrace, TraceRow, TraceSink};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 fn usage(message: String) -> Failure {
     Failure {
@@ -73,9 +74,10 @@ fn within(flag: &str, v: Option<f64>, lo: f64, hi: f64) -> Result<(), Failure> {
     }
 }
 
-/// Readies run directory `dir` ([`RunDir::open`]: nothing over an input (64), created and
-/// locked as sweeps lock theirs (73 while another command writes it), no output an existing
-/// link, FIFO or device (73)), with `extra` files besides the run's.
+/// Readies run directory `dir` ([`RunDir::open`]: nothing over an input (64), not a folder
+/// holding an input (73), created and locked as sweeps lock theirs (73 while another command
+/// writes it), no output an existing link, FIFO or device (73)), with `extra` files besides the
+/// run's. Nothing in it changes until the run has something to record ([`LiveOut`]).
 fn prepare_out(
     dir: &Path,
     args: &crate::cli::ScenarioArgs,
@@ -85,6 +87,135 @@ fn prepare_out(
 ) -> Result<RunDir, Failure> {
     let inputs = crate::output::input_files(args.scenario.as_deref(), scenario);
     RunDir::open(dir, &inputs, extra, Some(command))
+}
+
+/// A run directory written as the run goes, once it has something to record: until its first
+/// trace row (or [`LiveOut::start`] at the end, for a flight that commanded the vehicle without
+/// a row) an earlier run there stands untouched, so a start that fails (no vehicle heard, the
+/// port taken, a vehicle refused) destroys nothing. Then: the files staged beside (`fly`'s raw
+/// MAVLink log) renamed into place, `scenario.toml` written (a run killed mid-way leaves a
+/// directory `plot` reads), the old summary removed and `trace.csv` started in place
+/// ([`RunDir::live_trace`]); the summary comes last ([`RunDir::finish`]).
+struct LiveOut {
+    out: Option<RunDir>,
+    scenario_toml: String,
+    flying: bool,
+    /// Files written under a temporary name while the run has not started: (temporary, final).
+    staged: Vec<(PathBuf, PathBuf)>,
+    trace: Option<TraceFile>,
+    /// The first failure to start or write the directory (reported at the end, exit 73).
+    error: Option<Failure>,
+}
+
+impl LiveOut {
+    fn new(out: Option<RunDir>, scenario: &isotrack_scenario::Scenario, flying: bool) -> Self {
+        LiveOut {
+            out,
+            scenario_toml: scenario_toml(scenario),
+            flying,
+            staged: Vec::new(),
+            trace: None,
+            error: None,
+        }
+    }
+
+    /// Starts the directory (once; a failure is kept in `error`).
+    fn start(&mut self) {
+        let Some(out) = self.out.as_ref() else {
+            return;
+        };
+        if self.trace.is_some() || self.error.is_some() {
+            return;
+        }
+        let started = (|| {
+            for (tmp, path) in std::mem::take(&mut self.staged) {
+                std::fs::rename(&tmp, &path).map_err(|e| {
+                    let _ = std::fs::remove_file(&tmp);
+                    cant(&path, e)
+                })?;
+            }
+            let p = out.path("scenario.toml");
+            isotrack_runs::files::write_atomic(&p, self.scenario_toml.as_bytes())
+                .map_err(|e| cant(&p, e))?;
+            out.live_trace(self.flying)
+        })();
+        match started {
+            Ok(t) => self.trace = Some(t),
+            Err(e) => self.error = Some(e),
+        }
+    }
+
+    /// Flushes the trace (a flight killed mid-way leaves it up to the last flush).
+    fn flush(&mut self) {
+        if let Some(t) = self.trace.as_mut() {
+            t.writer().flush();
+        }
+    }
+
+    /// Ends the directory: the summary written (through [`RunDir::finish`]) if it was started;
+    /// else the staged files removed and the directory let go ([`RunDir::release_unused`]),
+    /// its earlier contents as they were. Returns whether anything was written.
+    fn end<S: serde::Serialize>(
+        mut self,
+        summary: impl FnOnce() -> Summary<S>,
+    ) -> Result<bool, Failure> {
+        let Some(out) = self.out.take() else {
+            return Ok(false);
+        };
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        match self.trace.take() {
+            Some(trace) => {
+                out.finish(trace, &self.scenario_toml, &summary())?;
+                Ok(true)
+            }
+            None => {
+                for (tmp, _) in std::mem::take(&mut self.staged) {
+                    let _ = std::fs::remove_file(&tmp);
+                }
+                out.release_unused();
+                Ok(false)
+            }
+        }
+    }
+}
+
+impl LiveOut {
+    /// Leaves the directory of a run that failed: a started one as it is (its trace flushed,
+    /// no summary: readers refuse it, never an old summary beside a new trace); else the staged
+    /// files removed and the directory let go, its earlier contents as they were. Returns
+    /// whether it had been started.
+    fn abandon(mut self) -> bool {
+        self.flush();
+        if self.trace.is_some() {
+            return true;
+        }
+        for (tmp, _) in std::mem::take(&mut self.staged) {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        if let Some(out) = self.out.take() {
+            out.release_unused();
+        }
+        false
+    }
+}
+
+impl TraceSink for LiveOut {
+    fn record(&mut self, row: &TraceRow) {
+        self.start();
+        if let Some(t) = self.trace.as_mut() {
+            t.writer().record(row);
+        }
+    }
+}
+
+/// The note when a run directory was left as it was (nothing to record).
+fn untouched_note(command: &str, dir: &Path) {
+    errln!(
+        "isotrack {command}: nothing written to {}: the run recorded nothing (its earlier contents, if any, stand)",
+        dir.display()
+    );
 }
 
 /// The range of `--speedup`.
@@ -117,13 +248,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
         None => None,
     };
-    let mut trace = match &out {
-        Some(o) => Some(o.live_trace(scenario.is_flying())?),
-        None => None,
-    };
-    let sink: &mut dyn TraceSink = match trace.as_mut() {
-        Some(t) => t.writer(),
-        None => &mut NoTrace,
+    // Written from the run's first row: a start that fails (the port taken) changes nothing.
+    let mut live = LiveOut::new(out, &scenario, scenario.is_flying());
+    let sink: &mut dyn TraceSink = if live.out.is_some() {
+        &mut live
+    } else {
+        &mut NoTrace
     };
     let report = run_sitl_on(&scenario, &opts, sink, &mut |l| {
         errln!(
@@ -131,18 +261,27 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             l.describe(),
             args.mavlink
         );
-    })
-    .map_err(|e| match e {
-        SitlError::Link(l) => link_failure(l),
-        SitlError::Scenario(m) => Failure {
-            code: exit::DATAERR,
-            message: m,
-        },
-        SitlError::Io(e) => Failure {
-            code: exit::OSERR,
-            message: format!("link: {e}"),
-        },
-    })?;
+    });
+    let report = match report {
+        Ok(r) => r,
+        Err(e) => {
+            let failure = match e {
+                SitlError::Link(l) => link_failure(l),
+                SitlError::Scenario(m) => Failure {
+                    code: exit::DATAERR,
+                    message: m,
+                },
+                SitlError::Io(e) => Failure {
+                    code: exit::OSERR,
+                    message: format!("link: {e}"),
+                },
+            };
+            if let (Some(dir), false) = (&args.out, live.abandon()) {
+                untouched_note("sitl", dir);
+            }
+            return Err(failure);
+        }
+    };
     for e in &report.events {
         errln!("isotrack sitl: {e}");
     }
@@ -164,7 +303,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     } else {
         None
     };
-    if let (Some(out), Some(trace)) = (&out, trace) {
+    let wrote = live.end(|| {
         let mut summary = Summary::of_run(
             &scenario,
             args.scenario.scenario.as_deref(),
@@ -175,7 +314,10 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             r.record.outcome = (*outcome).to_string();
             r.record.outcome_detail = Some(detail.clone());
         }
-        out.finish(trace, &scenario_toml(&scenario), &summary)?;
+        summary
+    })?;
+    if let (Some(dir), false) = (&args.out, wrote) {
+        untouched_note("sitl", dir);
     }
     outln!(
         "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",
@@ -198,17 +340,6 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         });
     }
     Ok(())
-}
-
-/// `fly --out`'s trace: flushed by the flight at a bounded interval.
-struct FlyTrace(Option<TraceWriter>);
-
-impl TraceSink for FlyTrace {
-    fn record(&mut self, row: &TraceRow) {
-        if let Some(w) = self.0.as_mut() {
-            w.record(row);
-        }
-    }
 }
 
 /// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
@@ -246,9 +377,9 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
     opts.stop = isotrack_mavlink::interrupt_flag();
-    // Readied (and locked) by the one run-directory writer; the flight then writes its own
-    // files as it flies (scenario first, a flushed trace, the summary at the end, atomically).
-    let _out = match &args.out {
+    // Readied (and locked) by the one run-directory writer, and written once the flight has
+    // something to record (LiveOut): a start that fails leaves an earlier flight there whole.
+    let out = match &args.out {
         Some(dir) => Some(prepare_out(
             dir,
             &args.scenario,
@@ -258,32 +389,26 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         )?),
         None => None,
     };
-    let mut trace = FlyTrace(match &args.out {
-        Some(dir) => {
-            // The scenario first: a flight killed mid-way leaves a directory `plot` reads.
-            let p = dir.join("scenario.toml");
-            isotrack_runs::files::write_atomic(&p, scenario_toml(&scenario).as_bytes())
-                .map_err(|e| cant(&p, e))?;
-            let p = dir.join("trace.csv");
-            Some(TraceWriter::create(&p, false).map_err(|e| cant(&p, e))?)
-        }
-        None => None,
+    let mut live = LiveOut::new(out, &scenario, false);
+    // The raw log goes into a temporary file beside `mavlink.tlog`, renamed into place when the
+    // flight starts its directory.
+    let log_path = args.out.as_ref().map(|d| {
+        let p = d.join("mavlink.tlog");
+        (isotrack_runs::files::temp_beside(&p), p)
     });
-    let log_path = args.out.as_ref().map(|d| d.join("mavlink.tlog"));
+    if let Some((tmp, p)) = &log_path {
+        live.staged.push((tmp.clone(), p.clone()));
+    }
     let mut log_error = None;
-    let mut flush = |t: &mut FlyTrace| {
-        if let Some(w) = t.0.as_mut() {
-            w.flush();
-        }
-    };
-    let report = run_fly_flushing(&scenario, &opts, &mut trace, &mut flush, &mut |link| {
+    let mut flush = |t: &mut LiveOut| t.flush();
+    let report = run_fly_flushing(&scenario, &opts, &mut live, &mut flush, &mut |link| {
         errln!(
             "isotrack fly: companion on {} ({})",
             link.describe(),
             args.mavlink
         );
-        if let Some(p) = &log_path {
-            if let Err(e) = link.log_to(p) {
+        if let Some((tmp, _)) = &log_path {
+            if let Err(e) = link.log_to(tmp) {
                 log_error = Some(e.to_string());
                 return Err(e);
             }
@@ -292,66 +417,75 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     });
     let report = match report {
         Ok(r) => r,
-        Err(FlyError::Io(e)) if log_error.is_some() => {
-            return Err(cant(log_path.as_deref().unwrap_or(Path::new("?")), e))
-        }
-        Err(FlyError::Link(l)) => return Err(link_failure(l)),
-        Err(FlyError::Scenario(m)) => {
-            return Err(Failure {
-                code: exit::DATAERR,
-                message: m,
-            })
-        }
-        Err(FlyError::Io(e)) => {
-            return Err(Failure {
-                code: exit::OSERR,
-                message: format!("link: {e}"),
-            })
+        Err(e) => {
+            let started = live.abandon();
+            if let (Some(dir), false) = (&args.out, started) {
+                untouched_note("fly", dir);
+            }
+            return Err(match e {
+                FlyError::Io(e) if log_error.is_some() => cant(
+                    log_path
+                        .as_ref()
+                        .map_or(Path::new("?"), |(_, p)| p.as_path()),
+                    e,
+                ),
+                FlyError::Link(l) => link_failure(l),
+                FlyError::Scenario(m) => Failure {
+                    code: exit::DATAERR,
+                    message: m,
+                },
+                FlyError::Io(e) => Failure {
+                    code: exit::OSERR,
+                    message: format!("link: {e}"),
+                },
+            });
         }
     };
     for e in &report.events {
         errln!("isotrack fly: {e}");
     }
-    if let (Some(dir), Some(w)) = (&args.out, trace.0) {
-        w.finish().map_err(|e| cant(&dir.join("trace.csv"), e))?;
-        let s = Summary {
-            isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
-            scenario_path: args
-                .scenario
-                .scenario
-                .as_ref()
-                .map(|p| p.display().to_string()),
-            ended: Ended::Flight(FlightRecord {
-                outcome: if report.end.is_failsafe() {
-                    "failsafe"
-                } else if report.end == FlyEnd::VehicleEnded {
-                    "completed"
-                } else {
-                    report.end.as_str()
-                }
-                .to_string(),
-                outcome_detail: report.events.last().cloned().unwrap_or_default(),
-                end_reason: report.end.as_str().to_string(),
-                failsafe: report.end.is_failsafe(),
-                failsafe_acknowledged: report.failsafe_acknowledged,
-                t_end_s: report.t_last_s,
-                samples: report.samples,
-                commands: report.commands.len() as u64,
-                events: report.events.clone(),
-                frames_in: report.link.frames_in,
-                frames_out: report.link.frames_out,
-                junk_datagrams: report.link.junk_datagrams,
-                measurements_out_of_order: report.measurements_out_of_order,
-                measurements_repeated: report.measurements_repeated,
-                metrics_over: report.metrics_over.to_string(),
-                metrics: MetricsRecord::of(&report.metrics),
-            }),
-            scenario: scenario.file(),
-            controller: None,
-        };
-        // At the end, whole or not at all (atomic), through the one summary type.
-        let p = dir.join("summary.json");
-        s.write(&p).map_err(|e| cant(&p, e))?;
+    // A flight that recorded no row but commanded the vehicle (a way out after a refused
+    // take-over) still writes its directory: what was commanded is on record.
+    if report.way_out_commanded {
+        live.start();
+    }
+    let wrote = live.end(|| Summary {
+        isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario_path: args
+            .scenario
+            .scenario
+            .as_ref()
+            .map(|p| p.display().to_string()),
+        ended: Ended::Flight(FlightRecord {
+            outcome: if report.end.is_failsafe() {
+                "failsafe"
+            } else if report.end == FlyEnd::VehicleEnded {
+                "completed"
+            } else {
+                report.end.as_str()
+            }
+            .to_string(),
+            outcome_detail: report.events.last().cloned().unwrap_or_default(),
+            end_reason: report.end.as_str().to_string(),
+            failsafe: report.end.is_failsafe(),
+            failsafe_acknowledged: report.failsafe_acknowledged,
+            t_end_s: report.t_last_s,
+            samples: report.samples,
+            commands: report.commands.len() as u64,
+            events: report.events.clone(),
+            frames_in: report.link.frames_in,
+            frames_out: report.link.frames_out,
+            junk_datagrams: report.link.junk_datagrams,
+            measurements_out_of_order: report.measurements_out_of_order,
+            measurements_repeated: report.measurements_repeated,
+            metrics_over: report.metrics_over.to_string(),
+            metrics: MetricsRecord::of(&report.metrics),
+        }),
+        scenario: scenario.file(),
+        controller: None,
+    })?;
+    if let (Some(dir), false) = (&args.out, wrote) {
+        untouched_note("fly", dir);
     }
     outln!(
         "end         {} ({} measurements, {} law commands)",

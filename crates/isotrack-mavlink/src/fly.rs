@@ -451,6 +451,8 @@ struct Flight<'a, S: ?Sized> {
     /// The control command sent last and when (its acknowledgement is the companion's).
     awaiting: Option<(MavCmd, Instant)>,
     firmware: Firmware,
+    /// The vehicle's heartbeat `type` (its kind, checked against the scenario's).
+    vehicle_type: MavType,
     armed: bool,
     custom_mode: Option<u32>,
     /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
@@ -660,6 +662,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             link_gone: false,
             awaiting: None,
             firmware: Firmware::Px4,
+            vehicle_type: MavType::MAV_TYPE_GENERIC,
             armed: false,
             custom_mode: None,
             run_ended: false,
@@ -873,6 +876,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let Some((sys, comp)) = self.target else {
             return Ok(());
         };
+        if !self.may_send_setpoints() {
+            return Ok(());
+        }
         let w = self.ans.current.unwrap_or(0.0);
         let ignore_rates = AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE
             | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE;
@@ -911,6 +917,33 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             target_component: comp,
             type_mask: mask,
         }))
+    }
+
+    /// Whether a setpoint may leave: never before the vehicle is accepted (its type fits the
+    /// scenario, [`vehicle_kind_match`], `MAV_TYPE_GENERIC` only as the rules say, and no other
+    /// reason to refuse it pending); with `take_control`, only for a vehicle whose modes are
+    /// known here (else control is never taken) and once it is armed (PX4 wants setpoints
+    /// before the switch to OFFBOARD; none goes to a disarmed vehicle);
+    /// without, the neutral setpoints that let the pilot hand over (PX4 refuses OFFBOARD
+    /// without a stream) go to an accepted vehicle.
+    fn may_send_setpoints(&self) -> bool {
+        if self.mismatch.is_some() || self.other_controller.is_some() || self.refused {
+            return false;
+        }
+        let kind = vehicle_kind_match(self.transport, self.vehicle_type);
+        let accepted = match kind {
+            KindMatch::Yes => true,
+            KindMatch::Unknown => !self.opts.take_control || self.opts.allow_generic,
+            KindMatch::No => false,
+        };
+        if !accepted {
+            return false;
+        }
+        if self.opts.take_control {
+            return self.in_control
+                || (self.armed && self.firmware.set_mode_params(FlyMode::Offboard).is_some());
+        }
+        true
     }
 
     /// Reads the UDP sensor's datagrams: at most [`crate::link::MAX_DATAGRAMS_PER_POLL`] a
@@ -1338,6 +1371,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.target = Some(from);
                 self.target_at = Some(Instant::now());
                 self.firmware = Firmware::of(h.autopilot, h.mavtype);
+                self.vehicle_type = h.mavtype;
                 self.check_kind(from, h.mavtype);
                 let what = format!(
                     "vehicle: system {}, component {}{}, {} modes",

@@ -538,11 +538,22 @@ impl Link {
             .ok_or_else(|| LinkError::Address(format!("`{url}`: expected {kinds}")))?;
         let rest = rest.strip_prefix("//").unwrap_or(rest);
         let io = |e: std::io::Error| LinkError::Io(format!("{url}: {e}"));
+        // A port another process listens on (a second `fly` or `sitl` on one `udpin:` port):
+        // refused, never shared (no SO_REUSEADDR/SO_REUSEPORT), and said so.
+        let bind_err = |e: std::io::Error| {
+            if e.kind() == std::io::ErrorKind::AddrInUse {
+                LinkError::Io(format!(
+                    "{url}: the port is taken: another process (a second `fly` or `sitl`?) listens on it, and a port is never shared ({e})"
+                ))
+            } else {
+                io(e)
+            }
+        };
         let kind = match mode {
             "udpin" => {
                 let a = resolve(rest)?;
                 Kind::Udp {
-                    socket: UdpSocket::bind(a).map_err(io)?,
+                    socket: UdpSocket::bind(a).map_err(bind_err)?,
                     peers: Vec::new(),
                     fixed: false,
                 }
@@ -565,7 +576,7 @@ impl Link {
             }
             "tcpin" => {
                 let a = resolve(rest)?;
-                let listener = TcpListener::bind(a).map_err(io)?;
+                let listener = TcpListener::bind(a).map_err(bind_err)?;
                 listener.set_nonblocking(true).map_err(io)?;
                 Kind::TcpIn {
                     listener,

@@ -983,6 +983,13 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
             "{n} setpoints out of order ignored (stamped older than their sender's last)"
         ));
     }
+    if sitl.link.stats.junk_datagrams > 0 {
+        // Junk (bad checksums, truncated frames, not MAVLink) moves nothing: dropped, counted.
+        let n = sitl.link.stats.junk_datagrams;
+        sitl.ap.events.push(format!(
+            "{n} datagrams without a valid MAVLink 2 frame dropped (bad checksum, truncated, not MAVLink)"
+        ));
+    }
     sitl.ap
         .events
         .push(format!("t = {} s: run ended ({how})", Num(t_end)));

@@ -2,13 +2,17 @@
 //! one way every command writes one (`run --out`, `compare --out`'s per-law directories,
 //! `figures --runs`, `sitl --out`, `fly --out`, the Python package's `Run.save`).
 //!
-//! [`RunDir::open`] readies the directory (no output over an input, created, locked when the
-//! command locks it, no output an existing link, FIFO or device, the old summary removed);
-//! [`RunDir::trace`] streams the trace into a temporary file beside `trace.csv` (or
-//! [`RunDir::live_trace`] into `trace.csv` itself, for a flight watched as it goes);
-//! [`RunDir::finish`] renames it into place, writes `scenario.toml` and then `summary.json`
-//! (atomically, last: a directory with a summary is whole). A run interrupted in between leaves
-//! a directory without a summary, which readers refuse, never an old summary beside a new trace.
+//! [`RunDir::open`] readies the directory (no output over an input, not a folder holding an
+//! input, created, locked when the command locks it, no output an existing link, FIFO or
+//! device) and changes nothing in it: an earlier run there stands until the new one has
+//! something to write. [`RunDir::trace`] streams the trace into a temporary file beside
+//! `trace.csv`; [`RunDir::finish`] removes the old summary, renames the trace into place,
+//! writes `scenario.toml` and then `summary.json` (atomically, last: a directory with a summary
+//! is whole), so a run refused or failed before its end leaves the earlier run whole. A run
+//! watched as it goes ([`RunDir::live_trace`]: `sitl`, `fly`, called once the flight has
+//! something to record) removes the old summary when it starts `trace.csv` in place; a run
+//! interrupted after that leaves a directory without a summary, which readers refuse, never an
+//! old summary beside a new trace.
 
 use crate::failure::{exit, Failure};
 use crate::files::{refuse_non_regular, same_file, temp_beside, write_atomic};
@@ -50,6 +54,73 @@ pub fn input_clash(inputs: &[PathBuf], output: &Path) -> Option<String> {
     ))
 }
 
+/// Why `dir` cannot be a run directory when something other than a directory is there (or a
+/// link to one): what it is, named. `None` for a directory, a link to one, or nothing.
+fn not_a_directory(dir: &Path) -> Option<String> {
+    let m = std::fs::symlink_metadata(dir).ok()?;
+    if m.is_dir() {
+        return None;
+    }
+    if m.file_type().is_symlink() {
+        let to = std::fs::read_link(dir)
+            .map(|t| t.display().to_string())
+            .unwrap_or_else(|_| "?".into());
+        return match std::fs::metadata(dir) {
+            Ok(t) if t.is_dir() => None,
+            Ok(t) => Some(format!(
+                "it is a symbolic link to {to}, which is {}, not a directory",
+                kind_of(&t)
+            )),
+            Err(e) => Some(format!(
+                "it is a symbolic link to {to}, which cannot be followed ({e}): a dangling link, not a directory"
+            )),
+        };
+    }
+    Some(format!("it exists and is {}, not a directory", kind_of(&m)))
+}
+
+/// What a file is, in words (`a FIFO (named pipe)`, `a regular file`, ...).
+fn kind_of(m: &std::fs::Metadata) -> &'static str {
+    let t = m.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_block_device() || t.is_char_device() {
+            return "a device";
+        }
+    }
+    if t.is_file() {
+        "a regular file"
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// When the existing directory `dir` holds one of `inputs` at any depth (it is the scenario
+/// file's folder, or a parent of it; through links): the message that refuses it. A run
+/// directory is the command's own (its files, a lock, later plots): never a folder of inputs.
+fn holds_an_input(dir: &Path, inputs: &[PathBuf]) -> Option<String> {
+    let d = std::fs::canonicalize(dir).ok()?;
+    let input = inputs
+        .iter()
+        .find(|i| std::fs::canonicalize(i).is_ok_and(|c| c.starts_with(&d)))?;
+    Some(format!(
+        "cannot write run directory {}: it holds the input {} (the scenario's folder or a parent of it): a run directory is the command's own, give --out a directory of its own",
+        dir.display(),
+        input.display()
+    ))
+}
+
 /// `cannot write PATH: WHY`, exit 73.
 fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
     Failure {
@@ -65,6 +136,9 @@ fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
 pub struct RunDir {
     dir: PathBuf,
     lock: Option<DirLock>,
+    /// Whether [`RunDir::open`] created the directory (removed again by
+    /// [`RunDir::release_unused`] when nothing was written).
+    created: bool,
 }
 
 /// `trace.csv` being streamed into a temporary file beside it ([`RunDir::trace`]).
@@ -83,10 +157,14 @@ impl TraceFile {
 
 impl RunDir {
     /// Readies run directory `dir`: none of its files ([`RUN_FILES`] and `extra`, e.g. `fly`'s
-    /// `mavlink.tlog`) one of `inputs` ([`input_files`]; exit 64), the directory created, locked
-    /// for `command` when given (exit 73 while another command writes it; `None` where the
-    /// caller holds a lock on a parent or writes no lock, as `Run.save`), none of its files an
-    /// existing link, FIFO, directory or device (exit 73), and the old `summary.json` removed.
+    /// `mavlink.tlog`) one of `inputs` ([`input_files`]; exit 64), `dir` itself a directory (or
+    /// absent, or a link to a directory; a FIFO, file, device or dangling link there is refused
+    /// naming what it is, exit 73) and not one holding an input at any depth (the scenario's
+    /// folder or a parent of it, exit 73: a run directory is the command's own), created,
+    /// locked for `command` when given (exit 73 while another command writes it; `None` where
+    /// the caller holds a lock on a parent or writes no lock, as `Run.save`), and none of its
+    /// files an existing link, FIFO, directory or device (exit 73). Nothing in it is changed
+    /// yet: an earlier run's files stand until [`RunDir::finish`] or [`RunDir::live_trace`].
     pub fn open(
         dir: &Path,
         inputs: &[PathBuf],
@@ -102,21 +180,50 @@ impl RunDir {
                 });
             }
         }
+        if let Some(why) = not_a_directory(dir) {
+            return Err(Failure {
+                code: exit::CANTCREAT,
+                message: format!("cannot write run directory {}: {why}", dir.display()),
+            });
+        }
+        if let Some(message) = holds_an_input(dir, inputs) {
+            return Err(Failure {
+                code: exit::CANTCREAT,
+                message,
+            });
+        }
+        let created = std::fs::symlink_metadata(dir).is_err();
         std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
         let lock = command.map(|c| lock_output_dir(dir, c)).transpose()?;
         for name in &names {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
         }
-        let summary = dir.join("summary.json");
-        match std::fs::remove_file(&summary) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(&summary, e)),
-            _ => {}
-        }
         Ok(RunDir {
             dir: dir.to_path_buf(),
             lock,
+            created,
         })
+    }
+
+    /// Lets go of a directory nothing was written to (a flight that never started): the lock
+    /// released, and the directory removed again if [`RunDir::open`] created it and it is
+    /// empty. An earlier run's files are left as they were.
+    pub fn release_unused(self) {
+        let RunDir { dir, lock, created } = self;
+        drop(lock);
+        if created {
+            let _ = std::fs::remove_dir(&dir);
+        }
+    }
+
+    /// Removes the old `summary.json` (the directory's earlier run is being replaced).
+    fn remove_old_summary(&self) -> Result<(), Failure> {
+        let summary = self.path("summary.json");
+        match std::fs::remove_file(&summary) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(cant(&summary, e)),
+            _ => Ok(()),
+        }
     }
 
     /// The directory.
@@ -177,16 +284,19 @@ impl RunDir {
     }
 
     /// Starts `trace.csv` written in place as the run goes, for a run watched while it flies
-    /// (`sitl`, `fly`: `tail -f DIR/trace.csv`); the summary, written last by
-    /// [`RunDir::finish`], still marks the directory whole.
+    /// (`sitl`, `fly`: `tail -f DIR/trace.csv`): the old summary is removed first (the earlier
+    /// run is replaced from here on); the summary, written last by [`RunDir::finish`], still
+    /// marks the directory whole.
     pub fn live_trace(&self, flying: bool) -> Result<TraceFile, Failure> {
+        self.remove_old_summary()?;
         let path = self.path("trace.csv");
         let writer = TraceWriter::create(&path, flying).map_err(|e| cant(&path, e))?;
         Ok(TraceFile { writer, tmp: None })
     }
 
-    /// Finishes the directory: the trace flushed and renamed into place, the resolved
-    /// `scenario.toml` written, then `summary.json`, each atomically, the summary last.
+    /// Finishes the directory: the old summary removed, the trace flushed and renamed into
+    /// place, the resolved `scenario.toml` written, then `summary.json`, each atomically, the
+    /// summary last.
     pub fn finish<S: Serialize>(
         &self,
         trace: TraceFile,
@@ -230,6 +340,12 @@ impl RunDir {
     ) -> Result<(), Failure> {
         let path = self.path("trace.csv");
         let TraceFile { writer, tmp } = trace;
+        if let Err(e) = self.remove_old_summary() {
+            if let Some(tmp) = &tmp {
+                let _ = std::fs::remove_file(tmp);
+            }
+            return Err(e);
+        }
         writer
             .finish()
             .and_then(|()| match &tmp {

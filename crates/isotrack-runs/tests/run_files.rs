@@ -154,8 +154,9 @@ fn the_row_builder_writes_cells_and_invalid_rows() {
     );
 }
 
-/// The one writer: the three files, the summary last and whole; the old summary gone before a
-/// new run starts; an input never written over (64); a FIFO refused at once (73).
+/// The one writer: the three files, the summary last and whole; the old summary standing until
+/// the new run finishes (then gone before the new trace is in place); an input never written
+/// over (64); a FIFO refused at once (73).
 #[test]
 fn the_run_directory_writer() {
     let (s, r0) = short_run();
@@ -165,7 +166,11 @@ fn the_run_directory_writer() {
     std::fs::write(d.join("summary.json"), "old").unwrap();
     let out = RunDir::open(&d, &[], &[], Some("run")).unwrap();
     assert!(out.is_locked());
-    assert!(!d.join("summary.json").exists(), "the old summary stays");
+    assert_eq!(
+        std::fs::read_to_string(d.join("summary.json")).unwrap(),
+        "old",
+        "the earlier run stands until the new one has something to write"
+    );
     // A second writer of the same directory is refused while the first holds it.
     let second = RunDir::open(&d, &[], &[], Some("run")).unwrap_err();
     assert_eq!(second.code, exit::CANTCREAT, "{}", second.message);
@@ -209,14 +214,176 @@ fn the_run_directory_writer() {
     assert_eq!(e.code, exit::USAGE, "{}", e.message);
     assert!(d.join("summary.json").exists(), "nothing touched");
 
-    // A summary the one reader refuses is not written.
+    // A summary the one reader refuses is not written: the earlier run stands whole.
+    let earlier = std::fs::read(d.join("summary.json")).unwrap();
     let out = RunDir::open(&d, &[], &[], None).unwrap();
     let trace = out.trace(false).unwrap();
     let e = out
         .finish_json(trace, &scenario_toml(&s), "{\"outcome\": \"completed\"}")
         .unwrap_err();
     assert_eq!(e.code, exit::DATAERR, "{}", e.message);
-    assert!(!d.join("summary.json").exists());
+    assert_eq!(std::fs::read(d.join("summary.json")).unwrap(), earlier);
+}
+
+/// The files of `dir` (hidden ones too) with their bytes, sorted.
+fn contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap_or_default(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// An earlier run stands whole until the new one has something to write: a run refused after
+/// the directory was readied (its trace abandoned) or one that recorded nothing (let go
+/// unused) changes nothing, and a directory `open` created for nothing is removed again; a
+/// live trace (a flight) replaces the earlier run once it starts.
+#[test]
+fn an_earlier_run_stands_until_the_new_one_writes() {
+    let (s, r) = short_run();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("run");
+    let out = RunDir::open(&d, &[], &[], Some("run")).unwrap();
+    let trace = out.trace(false).unwrap();
+    out.finish(
+        trace,
+        &scenario_toml(&s),
+        &Summary::of_run(&s, None, &r, &[]),
+    )
+    .unwrap();
+    drop(out);
+    let earlier = contents(&d);
+    assert_eq!(earlier.len(), 3, "{:?}", earlier.iter().map(|e| &e.0));
+
+    let out = RunDir::open(&d, &[], &[], Some("run")).unwrap();
+    let trace = out.trace(false).unwrap();
+    let e = out.abandon(trace, "refused");
+    assert_eq!(e.code, exit::CANTCREAT);
+    drop(out);
+    assert_eq!(
+        contents(&d),
+        earlier,
+        "an abandoned run changed the directory"
+    );
+
+    RunDir::open(&d, &[], &[], Some("fly"))
+        .unwrap()
+        .release_unused();
+    assert_eq!(contents(&d), earlier, "an unused directory changed");
+
+    let fresh = dir.path().join("fresh");
+    RunDir::open(&fresh, &[], &[], Some("fly"))
+        .unwrap()
+        .release_unused();
+    assert!(!fresh.exists(), "a directory created for nothing is left");
+
+    let out = RunDir::open(&d, &[], &[], Some("fly")).unwrap();
+    let _live = out.live_trace(false).unwrap();
+    assert!(
+        !d.join("summary.json").exists(),
+        "a live trace beside the earlier run's summary"
+    );
+}
+
+/// `DIR` that is no directory is refused (73) naming it and what it is: a FIFO, a regular
+/// file, a dangling link, a link to a FIFO; a link to a directory is followed (the run is
+/// written in the directory it points to).
+#[cfg(unix)]
+#[test]
+fn an_out_that_is_no_directory_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let fifo = p.join("fifo");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    std::fs::write(p.join("file"), "x").unwrap();
+    std::os::unix::fs::symlink(p.join("nowhere"), p.join("dangling")).unwrap();
+    std::os::unix::fs::symlink(&fifo, p.join("to-fifo")).unwrap();
+    for (name, what) in [
+        ("fifo", "a FIFO"),
+        ("file", "a regular file"),
+        ("dangling", "dangling link"),
+        ("to-fifo", "a FIFO"),
+    ] {
+        let d = p.join(name);
+        let e = RunDir::open(&d, &[], &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert!(
+            e.message.contains(&d.display().to_string())
+                && e.message.contains(what)
+                && e.message.contains("not a directory")
+                && !e.message.contains("os error 17"),
+            "{name}: {}",
+            e.message
+        );
+    }
+    let real = p.join("real");
+    std::fs::create_dir(&real).unwrap();
+    std::os::unix::fs::symlink(&real, p.join("link")).unwrap();
+    let (s, r) = short_run();
+    let out = RunDir::open(&p.join("link"), &[], &[], Some("run")).unwrap();
+    let trace = out.trace(false).unwrap();
+    out.finish(
+        trace,
+        &scenario_toml(&s),
+        &Summary::of_run(&s, None, &r, &[]),
+    )
+    .unwrap();
+    assert!(real.join("summary.json").exists());
+    assert!(std::fs::symlink_metadata(p.join("link"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+}
+
+/// A run directory that holds an input (the scenario file's folder, or a parent of it; through
+/// a link too) is refused (73) before anything is created or written in it.
+#[cfg(unix)]
+#[test]
+fn a_folder_holding_an_input_is_no_run_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("scenarios");
+    std::fs::create_dir(&folder).unwrap();
+    let input = folder.join("s.toml");
+    std::fs::write(&input, "").unwrap();
+    std::os::unix::fs::symlink(&folder, dir.path().join("link")).unwrap();
+    for d in [
+        folder.clone(),
+        dir.path().to_path_buf(),
+        dir.path().join("link"),
+    ] {
+        let e = RunDir::open(&d, std::slice::from_ref(&input), &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert!(
+            e.message.contains("holds the input") && e.message.contains("s.toml"),
+            "{}",
+            e.message
+        );
+    }
+    let mut left: Vec<_> = std::fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["s.toml"]);
+    // A sibling folder is fine.
+    RunDir::open(
+        &dir.path().join("out"),
+        std::slice::from_ref(&input),
+        &[],
+        None,
+    )
+    .unwrap();
 }
 
 /// A FIFO where a run file goes is refused at once (it would block the write for ever).

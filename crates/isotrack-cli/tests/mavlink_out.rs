@@ -1,0 +1,170 @@
+//! `fly --out`, `sitl --out` and `run --out` share one rule for an existing run directory
+//! (issue 33): it is replaced only once the new run has something to write. A flight that
+//! never starts (no vehicle heard, its port taken) leaves an earlier flight whole and creates
+//! nothing; a folder holding the scenario (or a parent of it) is refused (73), as is an `--out`
+//! that is a FIFO, a file or a dangling link, named with what it is.
+
+#![cfg(unix)]
+
+mod common;
+use common::{assert_fails, isotrack, isotrack_within, stderr};
+
+/// The files of `dir` (hidden ones too) with their bytes, sorted.
+fn contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap_or_default(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// An earlier flight's directory (a run's files and a raw log).
+fn earlier_flight(d: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=5",
+        "--quiet",
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::write(d.join("mavlink.tlog"), b"an earlier flight's log").unwrap();
+    contents(d)
+}
+
+#[test]
+fn a_flight_that_never_starts_leaves_an_earlier_flight_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("flight");
+    let earlier = earlier_flight(&d);
+    // No vehicle ever heard: exit 69, nothing sent, and nothing written.
+    let o = isotrack_within(
+        &[
+            "fly",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--timeout-s",
+            "0.3",
+            "--out",
+            d.to_str().unwrap(),
+        ],
+        60,
+    );
+    assert_fails(&o, 69, &["no vehicle was ever heard", "nothing written to"]);
+    assert_eq!(contents(&d), earlier);
+    // Nor into a directory that was not there: none is created.
+    let fresh = dir.path().join("fresh");
+    let o = isotrack_within(
+        &[
+            "fly",
+            "--mavlink",
+            "udpin:127.0.0.1:0",
+            "--timeout-s",
+            "0.3",
+            "--out",
+            fresh.to_str().unwrap(),
+        ],
+        60,
+    );
+    assert_fails(&o, 69, &["nothing written to"]);
+    assert!(!fresh.exists());
+    // A port another process holds: `fly` and `sitl` refused (71), the directory untouched.
+    let taken = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let url = format!("udpin:{}", taken.local_addr().unwrap());
+    for cmd in ["fly", "sitl"] {
+        let o = isotrack_within(&[cmd, "--mavlink", &url, "--out", d.to_str().unwrap()], 60);
+        assert_fails(&o, 71, &["the port is taken", "nothing written to"]);
+        assert_eq!(contents(&d), earlier, "{cmd}");
+    }
+}
+
+#[test]
+fn an_out_holding_the_scenario_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("scenarios");
+    std::fs::create_dir(&folder).unwrap();
+    let scenario = folder.join("s.toml");
+    std::fs::copy(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenarios/paper-fig2b-circular.toml"
+        ),
+        &scenario,
+    )
+    .unwrap();
+    let s = scenario.to_str().unwrap();
+    for out in [&folder, dir.path()] {
+        let out = out.to_str().unwrap();
+        for args in [
+            vec!["run", s, "--set", "sim.duration_s=1", "--out", out],
+            vec!["fly", s, "--mavlink", "udpout:127.0.0.1:9", "--out", out],
+            vec!["sitl", s, "--mavlink", "udpin:127.0.0.1:0", "--out", out],
+        ] {
+            let o = isotrack_within(&args, 60);
+            assert_fails(&o, 73, &["holds the input", "s.toml"]);
+        }
+    }
+    let left: Vec<String> = contents(&folder).into_iter().map(|e| e.0).collect();
+    assert_eq!(left, ["s.toml"]);
+}
+
+#[test]
+fn an_out_that_is_no_directory_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let fifo = common::fifo(p, "fifo");
+    std::fs::write(p.join("file"), "x").unwrap();
+    std::os::unix::fs::symlink(p.join("nowhere"), p.join("dangling")).unwrap();
+    std::os::unix::fs::symlink(&fifo, p.join("to-fifo")).unwrap();
+    for (name, what) in [
+        ("fifo", "a FIFO"),
+        ("file", "a regular file"),
+        ("dangling", "dangling link"),
+        ("to-fifo", "a FIFO"),
+    ] {
+        let d = p.join(name);
+        let d = d.to_str().unwrap();
+        for args in [
+            vec!["run", "--set", "sim.duration_s=1", "--out", d],
+            vec!["fly", "--mavlink", "udpout:127.0.0.1:9", "--out", d],
+        ] {
+            let o = isotrack_within(&args, 60);
+            assert_fails(&o, 73, &[d, what, "not a directory"]);
+            assert!(!stderr(&o).contains("os error 17"), "{}", stderr(&o));
+        }
+    }
+}
+
+/// `--out` through a link to a directory writes the run in the directory it points to; the
+/// link stays a link.
+#[test]
+fn out_through_a_link_to_a_directory_writes_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let real = dir.path().join("real");
+    std::fs::create_dir(&real).unwrap();
+    let link = dir.path().join("link");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=1",
+        "--quiet",
+        "--out",
+        link.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let names: Vec<String> = contents(&real).into_iter().map(|e| e.0).collect();
+    assert_eq!(names, ["scenario.toml", "summary.json", "trace.csv"]);
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+}
