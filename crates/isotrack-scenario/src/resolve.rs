@@ -64,15 +64,24 @@ impl Checker {
     }
     /// Rejects every present key of `section` that is not in `allowed` for the chosen
     /// `choice` (e.g. `field.kind = "grid"`).
+    /// Each key of `set` (the keys set in `[section]`, [`keys_set`]) that is not `allowed` for
+    /// the kind `choice` names.
     fn inapplicable(
         &mut self,
         section: &str,
         choice: &str,
         allowed: &[&str],
-        present: &[(&str, bool)],
+        set: Option<Vec<String>>,
     ) {
-        for (key, is_set) in present {
-            if *is_set && !allowed.contains(key) {
+        let Some(set) = set else {
+            self.fail(
+                &format!("{section}.kind"),
+                "cannot list the section's keys (an internal error: please report it)",
+            );
+            return;
+        };
+        for key in set {
+            if !allowed.contains(&key.as_str()) {
                 self.fail(
                     &format!("{section}.{key}"),
                     format!("does not apply to {choice}"),
@@ -150,50 +159,33 @@ impl Checker {
     }
 }
 
-/// `(key, is set)` for every kind-specific key of `[field]`, to reject keys of another kind.
-fn field_keys_present(fd: &FieldSection) -> [(&'static str, bool); 40] {
-    [
-        ("i0", fd.i0.is_some()),
-        ("decay_per_m", fd.decay_per_m.is_some()),
-        ("center_m", fd.center_m.is_some()),
-        ("background", fd.background.is_some()),
-        ("sources", fd.sources.is_some()),
-        ("offset", fd.offset.is_some()),
-        ("gradient_per_m", fd.gradient_per_m.is_some()),
-        ("domain_m", fd.domain_m.is_some()),
-        ("drift_mps", fd.drift_mps.is_some()),
-        ("path", fd.path.is_some()),
-        ("format", fd.format.is_some()),
-        ("variable", fd.variable.is_some()),
-        ("value_column", fd.value_column.is_some()),
-        ("method", fd.method.is_some()),
-        ("idw_power", fd.idw_power.is_some()),
-        ("grid_spacing_m", fd.grid_spacing_m.is_some()),
-        ("spacing_m", fd.spacing_m.is_some()),
-        ("origin_m", fd.origin_m.is_some()),
-        ("interpolation", fd.interpolation.is_some()),
-        ("crop_cells", fd.crop_cells.is_some()),
-        ("value_floor", fd.value_floor.is_some()),
-        ("value_log10", fd.value_log10.is_some()),
-        ("value_scale", fd.value_scale.is_some()),
-        ("value_offset", fd.value_offset.is_some()),
-        ("paths", fd.paths.is_some()),
-        ("frame_times_s", fd.frame_times_s.is_some()),
-        ("frame_interval_s", fd.frame_interval_s.is_some()),
-        ("time_interpolation", fd.time_interpolation.is_some()),
-        ("time_origin_s", fd.time_origin_s.is_some()),
-        ("time_scale", fd.time_scale.is_some()),
-        ("after_last_frame", fd.after_last_frame.is_some()),
-        ("source_m", fd.source_m.is_some()),
-        ("release_rate_hz", fd.release_rate_hz.is_some()),
-        ("puff_mass", fd.puff_mass.is_some()),
-        ("puff_sigma0_m", fd.puff_sigma0_m.is_some()),
-        ("diffusivity_m2ps", fd.diffusivity_m2ps.is_some()),
-        ("wind_mps", fd.wind_mps.is_some()),
-        ("meander_std_mps", fd.meander_std_mps.is_some()),
-        ("meander_correlation_s", fd.meander_correlation_s.is_some()),
-        ("max_age_s", fd.max_age_s.is_some()),
-    ]
+/// The keys of `family` (`(key, is set)`) that are set: the keys of one option of a kind (an
+/// anti-windup's, a derivative estimator's), checked against the option chosen.
+fn given(family: &[(&str, bool)]) -> Option<Vec<String>> {
+    Some(
+        family
+            .iter()
+            .filter(|(_, set)| *set)
+            .map(|(k, _)| k.to_string())
+            .collect(),
+    )
+}
+
+/// The keys set in a section, in the schema's order, less `shared` (the keys every kind
+/// takes): read from the section's own serialization (every key is an `Option` skipped when
+/// unset), so that a key added to the schema is checked against the kinds without a hand-kept
+/// list. `None` if the section cannot be serialised (it always can: it is what
+/// `scenario.toml` is written from).
+fn keys_set<T: serde::Serialize>(section: &T, shared: &[&str]) -> Option<Vec<String>> {
+    match toml::Value::try_from(section) {
+        Ok(toml::Value::Table(t)) => Some(
+            t.keys()
+                .filter(|k| !shared.contains(&k.as_str()))
+                .cloned()
+                .collect(),
+        ),
+        _ => None,
+    }
 }
 
 /// Defaults and checks of a `grid` field (the file itself is read when the scenario is built).
@@ -343,37 +335,6 @@ fn resolve_grid(c: &mut Checker, fd: &mut FieldSection) {
     );
 }
 
-/// `(key, is set)` for every kind-specific key of `[controller]`.
-fn controller_keys_present(ct: &ControllerSection) -> [(&'static str, bool); 22] {
-    [
-        ("kp", ct.kp.is_some()),
-        ("ki", ct.ki.is_some()),
-        ("c1", ct.c1.is_some()),
-        ("c2", ct.c2.is_some()),
-        ("kd", ct.kd.is_some()),
-        ("anti_windup", ct.anti_windup.is_some()),
-        ("integral_limit_radps", ct.integral_limit_radps.is_some()),
-        ("integral_band", ct.integral_band.is_some()),
-        ("tracking_time_s", ct.tracking_time_s.is_some()),
-        ("gamma", ct.gamma.is_some()),
-        ("delta", ct.delta.is_some()),
-        ("boundary_layer", ct.boundary_layer.is_some()),
-        ("alpha_star", ct.alpha_star.is_some()),
-        ("crossing_angle_rad", ct.crossing_angle_rad.is_some()),
-        ("crossing_period_s", ct.crossing_period_s.is_some()),
-        (
-            "crossing_turn_rate_radps",
-            ct.crossing_turn_rate_radps.is_some(),
-        ),
-        ("ke", ct.ke.is_some()),
-        ("k_heading", ct.k_heading.is_some()),
-        ("course_rate_radps", ct.course_rate_radps.is_some()),
-        ("derivative", ct.derivative.is_some()),
-        ("derivative_tau_s", ct.derivative_tau_s.is_some()),
-        ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
-    ]
-}
-
 /// The sections whose keys depend on their `kind`.
 pub const KINDED_SECTIONS: [&str; 3] = ["field", "vehicle", "controller"];
 
@@ -390,7 +351,7 @@ pub fn drop_inapplicable_keys(table: &mut toml::Table, section: &str) -> Vec<Str
     let kind = sec.get("kind");
     let (allowed, shared): (&[&str], &[&str]) = match section {
         "field" => match kind_or(kind, F::KIND) {
-            Some(k) => (field_kind_keys(k).1, &["kind", "units"]),
+            Some(k) => (field_kind_keys(k).1, &FIELD_SHARED_KEYS),
             None => return vec![],
         },
         "vehicle" => match kind_or(kind, VehicleKind::Dubins) {
@@ -422,6 +383,9 @@ fn kind_or<K: serde::de::DeserializeOwned>(kind: Option<&toml::Value>, default: 
         Some(k) => k.clone().try_into().ok(),
     }
 }
+
+/// The `[field]` keys every kind takes: the kind and the values' units.
+const FIELD_SHARED_KEYS: [&str; 2] = ["kind", "units"];
 
 /// The `[controller]` keys every kind takes: the kind, the level, the output stage and the
 /// search before tracking.
@@ -531,7 +495,8 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
     let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
     let allowed = controller_allowed(kind);
     let choice = format!("controller.kind = \"{}\"", kind.name());
-    c.inapplicable("controller", &choice, allowed, &controller_keys_present(ct));
+    let set = keys_set(ct, &CONTROLLER_SHARED_KEYS);
+    c.inapplicable("controller", &choice, allowed, set);
     c.field_value("controller.level", *ct.level.get_or_insert(C::LEVEL));
     ct.higher_side.get_or_insert(HigherSide::Right);
     let bang_bang = matches!(
@@ -673,11 +638,11 @@ fn resolve_anti_windup(c: &mut Checker, ct: &mut ControllerSection) {
         "controller",
         &format!("controller.anti_windup = \"{name}\""),
         own.as_slice(),
-        &[
+        given(&[
             ("integral_limit_radps", ct.integral_limit_radps.is_some()),
             ("integral_band", ct.integral_band.is_some()),
             ("tracking_time_s", ct.tracking_time_s.is_some()),
-        ],
+        ]),
     );
     match aw {
         AntiWindupKind::None => {}
@@ -725,10 +690,10 @@ fn resolve_derivative(c: &mut Checker, ct: &mut ControllerSection) {
         "controller",
         &format!("controller.derivative = \"{name}\""),
         own.as_slice(),
-        &[
+        given(&[
             ("derivative_tau_s", ct.derivative_tau_s.is_some()),
             ("derivative_lipschitz", ct.derivative_lipschitz.is_some()),
-        ],
+        ]),
     );
     match kind {
         DerivativeKindName::BackwardDifference => {}
@@ -838,7 +803,7 @@ fn resolve_field(c: &mut Checker, fd: &mut FieldSection) {
     let fk = *fd.kind.get_or_insert(F::KIND);
     let (kind_name, allowed) = field_kind_keys(fk);
     let choice = format!("field.kind = \"{kind_name}\"");
-    c.inapplicable("field", &choice, allowed, &field_keys_present(fd));
+    c.inapplicable("field", &choice, allowed, keys_set(fd, &FIELD_SHARED_KEYS));
     match fk {
         FieldKind::RadialExp => resolve_radial_exp(c, fd),
         FieldKind::GaussianPlumes => resolve_gaussian_plumes(c, fd),
@@ -1048,15 +1013,7 @@ fn resolve_vehicle(c: &mut Checker, vd: &mut VehicleSection, dt: f64) {
         "vehicle",
         &format!("vehicle.kind = \"{vname}\""),
         vallowed,
-        &[
-            ("speed_mps", vd.speed_mps.is_some()),
-            ("airspeed_mps", vd.airspeed_mps.is_some()),
-            ("altitude_m", vd.altitude_m.is_some()),
-            ("wind_mps", vd.wind_mps.is_some()),
-            ("gusts", vd.gusts.is_some()),
-            ("trim_feedforward", vd.trim_feedforward.is_some()),
-            ("ecen674_gains", vd.ecen674_gains.is_some()),
-        ],
+        keys_set(vd, &["kind"]),
     );
     match vk {
         VehicleKind::Dubins => {

@@ -981,3 +981,123 @@ fn set_values_are_one_toml_value() {
     let s = parse("vehicle.kind=dubins").unwrap();
     assert_eq!(s.file().name, None);
 }
+
+/// The keys of a section as the schema itself names them: serde's "expected one of" list for an
+/// unknown key (no hand-kept list).
+fn schema_keys<T: serde::de::DeserializeOwned + std::fmt::Debug>() -> Vec<String> {
+    let e = toml::from_str::<T>("zz_not_a_key = 1")
+        .unwrap_err()
+        .to_string();
+    let list = e.split_once(", expected ").unwrap().1;
+    list.split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// A value `key` takes in section `T` (the first of a few shapes that reads).
+fn a_value_of<T: serde::de::DeserializeOwned>(key: &str) -> String {
+    [
+        "1.0",
+        "[1.0, 2.0]",
+        "[0, 1, 0, 1]",
+        "[0.0, 1.0, 0.0, 1.0]",
+        "\"x\"",
+        "true",
+        "[\"x\"]",
+        "[1.0]",
+        "[[0.0, 0.1]]",
+        "[{ center_m = [0.0, 0.0], amplitude = 1.0, sigma_m = [1.0, 1.0] }]",
+        "\"bilinear\"",
+        "\"idw\"",
+        "\"csv\"",
+        "\"cubic\"",
+        "\"end\"",
+        "\"conditional\"",
+        "\"levant\"",
+        "\"spiral\"",
+        "\"left\"",
+        "\"fixed_wing\"",
+        "\"pid\"",
+    ]
+    .into_iter()
+    .find(|v| toml::from_str::<T>(&format!("{key} = {v}")).is_ok())
+    .unwrap_or_else(|| panic!("no test value reads as {key}"))
+    .to_string()
+}
+
+/// Every key of `[field]`, `[controller]` and `[vehicle]`, as the schema names them (a key added
+/// to the schema is in this test without editing a list), is refused under some kind ("does not
+/// apply to") and taken under another, except the kind itself and the keys every kind shares.
+#[test]
+fn every_schema_key_is_checked_against_the_kinds() {
+    let kinds = |section: &str| -> Vec<String> {
+        let e = toml::from_str::<ScenarioFile>(&format!("[{section}]\nkind = \"zz\"\n"))
+            .unwrap_err()
+            .to_string();
+        let list = e.split_once(", expected ").unwrap().1;
+        list.split('`')
+            .skip(1)
+            .step_by(2)
+            .map(str::to_string)
+            .collect()
+    };
+    let shared: &[(&str, &[&str])] = &[
+        ("field", &["kind", "units"]),
+        ("vehicle", &["kind"]),
+        (
+            "controller",
+            &[
+                "kind",
+                "level",
+                "higher_side",
+                "max_turn_rate_radps",
+                "search",
+                "search_spacing_m",
+                "search_leg_m",
+                "search_handover",
+            ],
+        ),
+    ];
+    for (section, keys, value) in [
+        (
+            "field",
+            schema_keys::<FieldSection>(),
+            a_value_of::<FieldSection> as fn(&str) -> String,
+        ),
+        (
+            "controller",
+            schema_keys::<ControllerSection>(),
+            a_value_of::<ControllerSection>,
+        ),
+        (
+            "vehicle",
+            schema_keys::<VehicleSection>(),
+            a_value_of::<VehicleSection>,
+        ),
+    ] {
+        let kinds = kinds(section);
+        assert!(kinds.len() >= 2, "{section}: {kinds:?}");
+        let shared = shared.iter().find(|(s, _)| *s == section).unwrap().1;
+        assert!(keys.len() > shared.len() + 3, "{section}: {keys:?}");
+        for key in keys.iter().filter(|k| !shared.contains(&k.as_str())) {
+            let v = value(key);
+            let refused = |kind: &str| {
+                let text = format!("[{section}]\nkind = \"{kind}\"\n{key} = {v}\n");
+                let full = format!("{section}.{key}");
+                let kind_msg = format!("does not apply to {section}.kind = ");
+                resolved(&text).err().is_some_and(|issues| {
+                    issues
+                        .iter()
+                        .any(|i| i.key == full && i.message.starts_with(&kind_msg))
+                })
+            };
+            let by_kind: Vec<bool> = kinds.iter().map(|k| refused(k)).collect();
+            assert!(
+                by_kind.iter().any(|r| *r) && by_kind.iter().any(|r| !*r),
+                "{section}.{key} = {v}: refused by kind {kinds:?}: {by_kind:?}"
+            );
+        }
+    }
+}
