@@ -158,6 +158,10 @@ fn team_score(summary: &Value, t_w: f64, v: f64, l: f64) -> [f64; 5] {
     ]
 }
 
+/// A task of the test suite: id, scenario, `set`, the gains as `--set`, the steady window's
+/// start t_w (s), the speed v0 (m/s) and `length_m`.
+type Task<'a> = (&'a str, &'a str, &'a [&'a str], [&'a str; 2], f64, f64, f64);
+
 fn close(a: f64, b: f64, what: &str) {
     assert!(
         (a - b).abs() <= 1e-9 * (1.0 + b.abs()),
@@ -172,8 +176,7 @@ fn team_suite_scores_are_the_formula_of_the_runs_summaries() {
     let out = d.path().join("out");
     let o = isotrack(&["benchmark", &suite, "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let tasks: [(&str, &str, &[&str], [&str; 2], f64, f64, f64); 2] = [
-        // id, scenario, set, gains, t_w (s), v0 (m/s), length_m
+    let tasks: [Task; 2] = [
         (
             "ring",
             "team-circular-4.toml",
