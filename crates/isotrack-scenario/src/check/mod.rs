@@ -435,10 +435,89 @@ struct FrozenInstability {
 /// (they are the advice), and the discrete loop's margins not at all; every number computed is
 /// the same as with `full = true`.
 fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledReport {
+    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    let mut rep = sampled_report_before_the_loop(s, l, r);
+    let setup = match LoopSetup::new(s, l, r) {
+        Ok(x) => x,
+        Err(note) => {
+            rep.note = note;
+            return rep;
+        }
+    };
+    let LoopSetup {
+        range,
+        model,
+        mut notes,
+        ..
+    } = setup.clone();
+    let (base, slopes, orbit) = setup.at(s, l, period_s);
+    if let Some(o) = &orbit {
+        notes.push(o.note());
+        rep.p_law_orbit_error = Some(o.orbit.error);
+        rep.slope_range = Some([o.slope, o.slope]);
+    }
+    rep.applicable = true;
+    rep.vehicle_model = Some(model);
+    rep.curvature_per_m = Some(base.curvature_per_m);
+    rep.slope_exact = Some(exact_isoline_slope(s).is_some());
+    rep.course_loop = base.course_loop_numbers();
+    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
+    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
+    if let Some(why) = not_computed(&base, orbit.as_ref()) {
+        let reason = why.reason();
+        notes.push(format!("not computed: {reason}"));
+        rep.not_computed = Some(reason);
+        rep.note = notes.join("; ");
+        return rep;
+    }
+    let rho = sampled::worst_spectral_radius(&base, &slopes);
+    rep.spectral_radius = rho.is_finite().then_some(rho);
+    rep.stable = Some(rho < 1.0);
+    rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
+    if rho < 1.0 {
+        settling_time_constants(&mut rep, s, r, &base, &slopes, orbit.is_some(), range);
+    }
+    if rho >= 1.0 {
+        unstable_mode(&mut rep, &base, &slopes);
+    }
+    if let Some(tube) = r.slope_range {
+        let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
+        rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
+        rep.stable_over_tube = Some(rho_tube < 1.0);
+    }
+    if full || rho >= 1.0 {
+        stable_kp_and_period(&mut rep, &mut notes, s, l, &base, &slopes);
+    }
+    rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
+    // Off circular fields the isoline's slope varies along it, and the loop is checked with
+    // each slope frozen: unstable at some of them is no proof of divergence (the loop passes
+    // through the steep stretch), and the verdict says what it is.
+    if orbit.is_none() && exact_isoline_slope(s).is_none() {
+        frozen_slopes(&mut rep, r, &base, &slopes, range, rho, full);
+    }
+    if full {
+        // The isoline slope with the largest radius (the only one on a circular field).
+        let worst = worst_slope(&base, &slopes).unwrap_or(range[1]);
+        rep.discrete_loop = SampledLoop {
+            slope: worst,
+            ..base
+        }
+        .analysis();
+    }
+    if !rho.is_finite() && circular_p_law(s, l) {
+        notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
+    }
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The sampled report before the loop is set up: the sensor's period and delay, the slopes the
+/// regions give, every loop number still null.
+fn sampled_report_before_the_loop(s: &Scenario, l: &Law, r: &Regions) -> SampledReport {
     let slope_range = r.isoline_slope_range;
     let period_s = 1.0 / s.spec().sensor.rate_hz;
     let delay_s = s.spec().sensor.delay_s;
-    let mut rep = SampledReport {
+    SampledReport {
         applicable: false,
         vehicle_model: None,
         period_s,
@@ -478,247 +557,212 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
                 Some(DerivativeKind::Levant { .. })
             ),
         note: String::new(),
-    };
-    let setup = match LoopSetup::new(s, l, r) {
-        Ok(x) => x,
-        Err(note) => {
-            rep.note = note;
-            return rep;
-        }
-    };
-    let LoopSetup {
-        range,
-        model,
-        mut notes,
-        ..
-    } = setup.clone();
-    let (base, slopes, orbit) = setup.at(s, l, period_s);
-    if let Some(o) = &orbit {
-        notes.push(o.note());
-        rep.p_law_orbit_error = Some(o.orbit.error);
-        rep.slope_range = Some([o.slope, o.slope]);
     }
-    rep.applicable = true;
-    rep.vehicle_model = Some(model);
-    rep.curvature_per_m = Some(base.curvature_per_m);
-    rep.slope_exact = Some(exact_isoline_slope(s).is_some());
-    rep.course_loop = base.course_loop_numbers();
-    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
-    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
-    if let Some(why) = not_computed(&base, orbit.as_ref()) {
-        let reason = why.reason();
-        notes.push(format!("not computed: {reason}"));
-        rep.not_computed = Some(reason);
-        rep.note = notes.join("; ");
-        return rep;
-    }
-    let rho = sampled::worst_spectral_radius(&base, &slopes);
-    rep.spectral_radius = rho.is_finite().then_some(rho);
-    rep.stable = Some(rho < 1.0);
-    rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
-    if rho < 1.0 {
-        // The time constant the run's settling follows: on a lattice isoline the loop at the
-        // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
-        // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
-        // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
-        // settled in 8 s).
-        let mean_slope = if orbit.is_some() || exact_isoline_slope(s).is_some() {
-            slopes.first().copied()
-        } else {
-            let along: Vec<f64> = r
-                .isoline_slopes
-                .iter()
-                .copied()
-                .filter(|&a| a >= range[0])
-                .collect();
-            (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
-        };
-        if let Some(alpha) = mean_slope {
-            let at_mean = SampledLoop {
+}
+
+/// The isoline slope among `slopes` at which the loop `base` has the largest spectral radius
+/// (the last of equals; `None` without slopes).
+fn worst_slope(base: &SampledLoop, slopes: &[f64]) -> Option<f64> {
+    slopes.iter().copied().max_by(|a, b| {
+        let at = |alpha: f64| {
+            SampledLoop {
                 slope: alpha,
-                ..base
-            };
-            let rho_mean = at_mean.spectral_radius();
-            rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
-            rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
-            // A slow mode matters only if the response from the start has a share in it
-            // (issue 29: at kp = 350 the 350 s mode is nearly cancelled by the law's zero and
-            // the run settles in about 20 s).
-            let duration = s.spec().sim.duration_s;
-            if rep
-                .isoline_time_constant_s
-                .is_some_and(|tau| duration > 0.0 && tau > SETTLING_FRACTION * duration)
-            {
-                let window = s.spec().metrics.steady_state_fraction * duration;
-                // The start's offset from the isoline, z1 = -eps0/alpha (towards lower values).
-                let offset_m = s
-                    .field()
-                    .value(0.0, start(s))
-                    .map_or(0.0, |f| -(f - s.level()) / alpha);
-                rep.late_response_fraction =
-                    at_mean.late_response_fraction(duration - window, duration, offset_m);
+                ..*base
+            }
+            .spectral_radius()
+        };
+        at(*a).total_cmp(&at(*b))
+    })
+}
+
+/// A stable loop's settling: the time constant at the isoline's mean slope and, when it is a
+/// large part of the run, the share of the transient left in the run's steady-state window.
+fn settling_time_constants(
+    rep: &mut SampledReport,
+    s: &Scenario,
+    r: &Regions,
+    base: &SampledLoop,
+    slopes: &[f64],
+    on_orbit: bool,
+    range: [f64; 2],
+) {
+    let period_s = rep.period_s;
+    // The time constant the run's settling follows: on a lattice isoline the loop at the
+    // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
+    // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
+    // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
+    // settled in 8 s).
+    let mean_slope = if on_orbit || exact_isoline_slope(s).is_some() {
+        slopes.first().copied()
+    } else {
+        let along: Vec<f64> = r
+            .isoline_slopes
+            .iter()
+            .copied()
+            .filter(|&a| a >= range[0])
+            .collect();
+        (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
+    };
+    if let Some(alpha) = mean_slope {
+        let at_mean = SampledLoop {
+            slope: alpha,
+            ..*base
+        };
+        let rho_mean = at_mean.spectral_radius();
+        rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
+        rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
+        // A slow mode matters only if the response from the start has a share in it
+        // (issue 29: at kp = 350 the 350 s mode is nearly cancelled by the law's zero and
+        // the run settles in about 20 s).
+        let duration = s.spec().sim.duration_s;
+        if rep
+            .isoline_time_constant_s
+            .is_some_and(|tau| duration > 0.0 && tau > SETTLING_FRACTION * duration)
+        {
+            let window = s.spec().metrics.steady_state_fraction * duration;
+            // The start's offset from the isoline, z1 = -eps0/alpha (towards lower values).
+            let offset_m = s
+                .field()
+                .value(0.0, start(s))
+                .map_or(0.0, |f| -(f - s.level()) / alpha);
+            rep.late_response_fraction =
+                at_mean.late_response_fraction(duration - window, duration, offset_m);
+        }
+    }
+}
+
+/// An unstable loop: its growing mode's period at the worst slope, and whether the sensor's
+/// lag is what makes it unstable.
+fn unstable_mode(rep: &mut SampledReport, base: &SampledLoop, slopes: &[f64]) {
+    let worst = worst_slope(base, slopes).unwrap_or(base.slope);
+    rep.unstable_mode_period_samples = Some(growing_mode_period_samples(base, worst));
+    // Is the sensor's lag what makes it unstable? The same loop without it (issue 29: the
+    // advice said "change ki, c1 or c2" and never named the lag).
+    if base.sensor_lag.is_some() {
+        let without = SampledLoop {
+            sensor_lag: None,
+            ..*base
+        };
+        rep.lag_is_the_cause = sampled::worst_spectral_radius(&without, slopes) < 1.0;
+    }
+}
+
+/// The stable `kp` set (with the P law's orbit recomputed at every `kp` on a circular field)
+/// and the longest stable sensor period.
+fn stable_kp_and_period(
+    rep: &mut SampledReport,
+    notes: &mut Vec<String>,
+    s: &Scenario,
+    l: &Law,
+    base: &SampledLoop,
+    slopes: &[f64],
+) {
+    let intervals = if circular_p_law(s, l) {
+        // The orbit, and with it the slope, curvature and tanh's slope, recomputed at every
+        // kp examined (issue: holding the scenario's orbit put kp = 0.05's stable set at
+        // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
+        // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
+        let at_kp = |kp: f64| {
+            p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
+                kp,
+                ..o.operating_point(*base)
+            })
+        };
+        let gain_ok = |kp: f64| {
+            at_kp(kp)
+                .is_some_and(|m| m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN)
+        };
+        // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
+        // the points examined are those from the first one that reaches the floor.
+        let from = sampled::kp_grid_from(0.0)
+            .into_iter()
+            .find(|&kp| gain_ok(kp));
+        let grid = from.map_or_else(Vec::new, sampled::kp_grid_from);
+        rep.kp_scanned_from = grid.first().copied();
+        if let Some(&first) = grid.first() {
+            if first > 1e-3 {
+                notes.push(format!(
+                    "the stable kp set is scanned from kp = {first:.4e} up, the orbit recomputed at each kp: below it the orbit lies where the field is nearly flat (loop gain kp*alpha*v*T below {P_ORBIT_MIN_LOOP_GAIN:e}) and stability is not decided"
+                ));
             }
         }
+        sampled::kp_intervals_over(&grid, |kp| {
+            at_kp(kp).is_some_and(|m| m.spectral_radius() < 1.0)
+        })
+    } else {
+        rep.kp_scanned_from = Some(1e-3);
+        sampled::kp_intervals(base, slopes).unwrap_or_default()
+    };
+    rep.max_kp = intervals.last().map(|i| i[1]);
+    rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
+    rep.kp_intervals = Some(intervals);
+    let limit = sampled::period_limit(base, slopes);
+    rep.max_period_s = limit.max_period_s;
+    rep.period_scanned_from_s = Some(limit.scanned_from_s);
+    if limit.scanned_from_s > FULL_PERIOD_SCAN_S {
+        notes.push(format!(
+            "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
+            limit.scanned_from_s,
+            sampled::MAX_DELAY_STATES
+        ));
     }
+}
+
+/// Off circular fields, the loop checked with each of the isoline's slopes frozen: how it is
+/// unstable at some of them (`rho >= 1`) and, in the full report, the fraction of the
+/// isoline's crossings at which it is stable.
+fn frozen_slopes(
+    rep: &mut SampledReport,
+    r: &Regions,
+    base: &SampledLoop,
+    slopes: &[f64],
+    range: [f64; 2],
+    rho: f64,
+    full: bool,
+) {
+    let radius_at = |alpha: f64| {
+        SampledLoop {
+            slope: alpha,
+            ..*base
+        }
+        .spectral_radius()
+    };
     if rho >= 1.0 {
         let worst = slopes
             .iter()
             .copied()
-            .max_by(|a, b| {
-                let at = |alpha: f64| {
-                    SampledLoop {
-                        slope: alpha,
-                        ..base
-                    }
-                    .spectral_radius()
-                };
-                at(*a).total_cmp(&at(*b))
-            })
-            .unwrap_or(base.slope);
-        rep.unstable_mode_period_samples = Some(growing_mode_period_samples(&base, worst));
-        // Is the sensor's lag what makes it unstable? The same loop without it (issue 29: the
-        // advice said "change ki, c1 or c2" and never named the lag).
-        if base.sensor_lag.is_some() {
-            let without = SampledLoop {
-                sensor_lag: None,
-                ..base
-            };
-            rep.lag_is_the_cause = sampled::worst_spectral_radius(&without, &slopes) < 1.0;
-        }
-    }
-    if let Some(tube) = r.slope_range {
-        let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
-        rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
-        rep.stable_over_tube = Some(rho_tube < 1.0);
-    }
-    if full || rho >= 1.0 {
-        let intervals = if circular_p_law(s, l) {
-            // The orbit, and with it the slope, curvature and tanh's slope, recomputed at every
-            // kp examined (issue: holding the scenario's orbit put kp = 0.05's stable set at
-            // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
-            // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
-            let at_kp = |kp: f64| {
-                p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
-                    kp,
-                    ..o.operating_point(base)
-                })
-            };
-            let gain_ok = |kp: f64| {
-                at_kp(kp).is_some_and(|m| {
-                    m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN
-                })
-            };
-            // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
-            // the points examined are those from the first one that reaches the floor.
-            let from = sampled::kp_grid_from(0.0)
-                .into_iter()
-                .find(|&kp| gain_ok(kp));
-            let grid = from.map_or_else(Vec::new, sampled::kp_grid_from);
-            rep.kp_scanned_from = grid.first().copied();
-            if let Some(&first) = grid.first() {
-                if first > 1e-3 {
-                    notes.push(format!(
-                        "the stable kp set is scanned from kp = {first:.4e} up, the orbit recomputed at each kp: below it the orbit lies where the field is nearly flat (loop gain kp*alpha*v*T below {P_ORBIT_MIN_LOOP_GAIN:e}) and stability is not decided"
-                    ));
-                }
-            }
-            sampled::kp_intervals_over(&grid, |kp| {
-                at_kp(kp).is_some_and(|m| m.spectral_radius() < 1.0)
-            })
-        } else {
-            rep.kp_scanned_from = Some(1e-3);
-            sampled::kp_intervals(&base, &slopes).unwrap_or_default()
-        };
-        rep.max_kp = intervals.last().map(|i| i[1]);
-        rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
-        rep.kp_intervals = Some(intervals);
-        let limit = sampled::period_limit(&base, &slopes);
-        rep.max_period_s = limit.max_period_s;
-        rep.period_scanned_from_s = Some(limit.scanned_from_s);
-        if limit.scanned_from_s > FULL_PERIOD_SCAN_S {
-            notes.push(format!(
-                "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
-                limit.scanned_from_s,
-                sampled::MAX_DELAY_STATES
-            ));
-        }
-    }
-    rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
-    // Off circular fields the isoline's slope varies along it, and the loop is checked with
-    // each slope frozen: unstable at some of them is no proof of divergence (the loop passes
-    // through the steep stretch), and the verdict says what it is.
-    if orbit.is_none() && exact_isoline_slope(s).is_none() {
-        let radius_at = |alpha: f64| {
-            SampledLoop {
-                slope: alpha,
-                ..base
-            }
-            .spectral_radius()
-        };
-        if rho >= 1.0 {
-            let worst = slopes
-                .iter()
-                .copied()
-                .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
-                .unwrap_or(range[1]);
-            let period_samples = growing_mode_period_samples(&base, worst);
-            rep.frozen = Some(FrozenInstability {
-                some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
-                steepest_unstable: radius_at(range[1]) >= 1.0,
-                period_samples,
-            });
-        }
-        if full {
-            let mut along: Vec<f64> = r
-                .isoline_slopes
-                .iter()
-                .copied()
-                .filter(|&a| a >= range[0])
-                .collect();
-            along.sort_by(f64::total_cmp);
-            if !along.is_empty() {
-                let n = along.len().min(200);
-                let picks: Vec<f64> = (0..n)
-                    .map(|i| {
-                        along[if n < 2 {
-                            0
-                        } else {
-                            i * (along.len() - 1) / (n - 1)
-                        }]
-                    })
-                    .collect();
-                let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
-                rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
-            }
-        }
+            .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
+            .unwrap_or(range[1]);
+        let period_samples = growing_mode_period_samples(base, worst);
+        rep.frozen = Some(FrozenInstability {
+            some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
+            steepest_unstable: radius_at(range[1]) >= 1.0,
+            period_samples,
+        });
     }
     if full {
-        // The isoline slope with the largest radius (the only one on a circular field).
-        let worst = slopes
+        let mut along: Vec<f64> = r
+            .isoline_slopes
             .iter()
             .copied()
-            .max_by(|a, b| {
-                let at = |alpha: f64| {
-                    SampledLoop {
-                        slope: alpha,
-                        ..base
-                    }
-                    .spectral_radius()
-                };
-                at(*a).total_cmp(&at(*b))
-            })
-            .unwrap_or(range[1]);
-        rep.discrete_loop = SampledLoop {
-            slope: worst,
-            ..base
+            .filter(|&a| a >= range[0])
+            .collect();
+        along.sort_by(f64::total_cmp);
+        if !along.is_empty() {
+            let n = along.len().min(200);
+            let picks: Vec<f64> = (0..n)
+                .map(|i| {
+                    along[if n < 2 {
+                        0
+                    } else {
+                        i * (along.len() - 1) / (n - 1)
+                    }]
+                })
+                .collect();
+            let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
+            rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
         }
-        .analysis();
     }
-    if !rho.is_finite() && circular_p_law(s, l) {
-        notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
-    }
-    rep.note = notes.join("; ");
-    rep
 }
 
 /// Prop. 2's report: the field sampled over the region and the tube, the gain conditions, the
