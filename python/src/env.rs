@@ -19,7 +19,8 @@
 //! ends the episode as truncated; the run then flies to its end with the last command held, so
 //! an episode of `D` s at `R` Hz is `floor(D * R)` steps after the reset's first sample.
 
-use crate::{PyScenario, ScenarioErrorPy};
+use crate::errors::ScenarioErrorPy;
+use crate::scenario::PyScenario;
 use isotrack_scenario::{Scenario, ScenarioEpisode, Start};
 use isotrack_sim::{Outcome, RunResult, Sample};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};

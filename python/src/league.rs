@@ -1,8 +1,9 @@
 //! `isotrack.benchmark`: a Python controller scored by the benchmark on the same tasks and seeds
 //! as the built-in laws.
 
+use crate::errors::ScenarioErrorPy;
 use crate::guard::interruptible;
-use crate::{PyScenario, ScenarioErrorPy};
+use crate::scenario::PyScenario;
 use isotrack_core::{IsolineController, Measurement};
 use isotrack_league::{run_benchmark, BenchError, ControllerFactory, Options, Registry, Suite};
 use isotrack_scenario::Scenario;
@@ -75,7 +76,7 @@ impl IsolineController for BenchController {
         Python::attach(|py| {
             match obj
                 .call_method1(py, "update", (m.t_s, m.value))
-                .and_then(|r| crate::command_value(r.bind(py)))
+                .and_then(|r| crate::controller::command_value(r.bind(py)))
             {
                 Ok(w) => {
                     self.obj = Some(obj);

@@ -5,8 +5,9 @@
 //! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
 //! between each step's samples and its move so that agents outside the loop can answer.
 
+use crate::errors::ScenarioErrorPy;
+use crate::scenario::PyScenario;
 use crate::tools::column;
-use crate::{PyScenario, ScenarioErrorPy};
 use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
 use isotrack_scenario::field::FieldModel;
@@ -77,7 +78,7 @@ fn team_summary_json(s: &Scenario, origin: &str, r: &TeamResult) -> PyResult<Str
 /// The trace's columns as numpy arrays, named as `trace.csv`'s (`s_measured` NaN where no
 /// sample was delivered yet), `vehicle` an int64 column.
 fn team_columns<'py>(py: Python<'py>, rows: &Rows, flying: bool) -> PyResult<Bound<'py, PyDict>> {
-    let d = crate::trace_columns_by(py, rows, |(_, r)| r, flying)?;
+    let d = crate::scenario::trace_columns_by(py, rows, |(_, r)| r, flying)?;
     let v: Vec<i64> = rows.iter().map(|(i, _)| i64::from(*i)).collect();
     d.set_item(
         isotrack_runs::trace::VEHICLE_COLUMN,

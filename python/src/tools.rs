@@ -2,7 +2,8 @@
 //! entry runs it in this module, so one build gives both), run directories written as
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
-use crate::{PyScenario, ScenarioErrorPy};
+use crate::errors::ScenarioErrorPy;
+use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::rundir::RunDir;
@@ -317,11 +318,11 @@ pub fn sweep_cells_with(
     name: &str,
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
-) -> PyResult<crate::SweepCells> {
+) -> PyResult<crate::sweep::SweepCells> {
     use isotrack_runs::sweep::prepared::PreparedSweep;
     use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
-    let kinds = crate::column_kinds(&sweep.plan);
+    let kinds = crate::sweep::column_kinds(&sweep.plan);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
     let total = sweep.plan.total();
@@ -347,7 +348,7 @@ pub fn sweep_cells_with(
                 if obj.bind(py).hasattr("reset")? {
                     obj.call_method0(py, "reset")?;
                 }
-                let mut c = crate::PyController {
+                let mut c = crate::controller::PyController {
                     obj,
                     error: None,
                     max_turn_rate_radps: scenario.max_turn_rate_radps(),

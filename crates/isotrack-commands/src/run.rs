@@ -152,7 +152,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         let team =
             match isotrack_runs::trace::run_team_into(&scenario, trace_file.writer(), threads) {
                 Some(Ok(t)) => Some(t),
-                Some(Err(e)) => return Err(out.abandon(trace_file, e)),
+                Some(Err(e)) => return Err(refused_team(&out, trace_file, e)),
                 None => None,
             };
         let (result, summary) = match &team {
@@ -212,6 +212,18 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     };
     let _ = result;
     Ok(())
+}
+
+/// A team the engine refuses (a `TeamError`: a setting resolution let through) with `--out`:
+/// invalid data, exit 65 with the engine's message, as without `--out` (it exited 73, "cannot
+/// write trace.csv", before: the refusal is no output's fault). The trace begun is removed, so
+/// nothing is written.
+fn refused_team(out: &RunDir, trace: isotrack_runs::rundir::TraceFile, why: String) -> Failure {
+    let _ = out.abandon(trace, &why);
+    Failure {
+        code: exit::DATAERR,
+        message: why,
+    }
 }
 
 /// `isotrack show`.
@@ -288,5 +300,36 @@ fn check_json(
             serde_json::to_string_pretty(&WithMap { report: r, map: m }).unwrap_or_default()
         }
         None => serde_json::to_string_pretty(r).unwrap_or_default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A team refused by the engine with `--out` exits 65 (invalid data, as without `--out`),
+    /// never 73 (an output that cannot be written), with the engine's message, and leaves no
+    /// `trace.csv` nor its temporary file.
+    #[test]
+    fn a_team_the_engine_refuses_is_invalid_data_with_out_too() {
+        let dir =
+            std::env::temp_dir().join(format!("isotrack-refused-team-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let out = RunDir::open(&dir, &[], &[], Some("run")).unwrap();
+        let trace = out.team_trace(false).unwrap();
+        let why = isotrack_sim::TeamError::NoIsoline.to_string();
+        let f = refused_team(&out, trace, why.clone());
+        assert_eq!(f.code, 65);
+        assert_eq!(f.code, exit::DATAERR);
+        assert_eq!(f.message, why);
+        drop(out);
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("trace"))
+            .collect();
+        assert!(left.is_empty(), "trace files left: {left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -255,11 +255,25 @@ impl Suite {
 
     /// What the file alone shows to be wrong: the message and the path of the key.
     fn check(&self) -> Result<(), (Vec<Seg>, String)> {
-        let top = |k: &str| vec![Seg::Key(k.into())];
-        let at = |k: &str, i: usize| vec![Seg::Key(k.into()), Seg::Index(i)];
         if self.tasks.is_empty() {
             return Err((vec![], "the suite has no [[task]]".into()));
         }
+        self.check_name()?;
+        self.check_controllers()?;
+        self.check_seeds()?;
+        // Task ids by their lower case, to the first task with it.
+        let mut ids: BTreeMap<String, usize> = BTreeMap::new();
+        for (i, t) in self.tasks.iter().enumerate() {
+            let earlier = ids.get(&t.id.to_ascii_lowercase()).map(|&j| &self.tasks[j]);
+            check_task(i, t, earlier, &self.controllers)?;
+            ids.insert(t.id.to_ascii_lowercase(), i);
+        }
+        Ok(())
+    }
+
+    /// The suite's name: visible, since it heads the leaderboard and its pages.
+    fn check_name(&self) -> Result<(), (Vec<Seg>, String)> {
+        let top = |k: &str| vec![Seg::Key(k.into())];
         // The name heads the leaderboard and its pages: no name that prints as another.
         let shown = |c: char| !isotrack_core::numtext::is_not_plain(c);
         if self.name.trim().is_empty() || !self.name.chars().all(shown) {
@@ -271,6 +285,13 @@ impl Suite {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// `controllers`: not empty, each a built-in law, none twice.
+    fn check_controllers(&self) -> Result<(), (Vec<Seg>, String)> {
+        let top = |k: &str| vec![Seg::Key(k.into())];
+        let at = |k: &str, i: usize| vec![Seg::Key(k.into()), Seg::Index(i)];
         if self.controllers.is_empty() {
             return Err((
                 top("controllers"),
@@ -297,6 +318,14 @@ impl Suite {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// `tuning_seeds` and `scoring_seeds`: TOML integers, none twice, the two sets disjoint,
+    /// some scoring seeds.
+    fn check_seeds(&self) -> Result<(), (Vec<Seg>, String)> {
+        let top = |k: &str| vec![Seg::Key(k.into())];
+        let at = |k: &str, i: usize| vec![Seg::Key(k.into()), Seg::Index(i)];
         if self.scoring_seeds.is_empty() {
             return Err((top("scoring_seeds"), "scoring_seeds is empty".into()));
         }
@@ -340,13 +369,6 @@ impl Suite {
                 ),
             ));
         }
-        // Task ids by their lower case, to the first task with it.
-        let mut ids: BTreeMap<String, usize> = BTreeMap::new();
-        for (i, t) in self.tasks.iter().enumerate() {
-            let earlier = ids.get(&t.id.to_ascii_lowercase()).map(|&j| &self.tasks[j]);
-            check_task(i, t, earlier, &self.controllers)?;
-            ids.insert(t.id.to_ascii_lowercase(), i);
-        }
         Ok(())
     }
 
@@ -387,6 +409,15 @@ fn check_task(
     earlier: Option<&Task>,
     controllers: &[String],
 ) -> Result<(), (Vec<Seg>, String)> {
+    check_task_id(i, t, earlier)?;
+    check_task_title_and_length(i, t)?;
+    check_task_set(i, t)?;
+    check_task_rest(i, t, controllers)
+}
+
+/// Task `i`'s id: 1-64 letters, digits, '-' or '_', and no earlier task's id ignoring case
+/// (`earlier`).
+fn check_task_id(i: usize, t: &Task, earlier: Option<&Task>) -> Result<(), (Vec<Seg>, String)> {
     let ok = !t.id.is_empty()
         && t.id.len() <= 64
         && t.id
@@ -414,6 +445,11 @@ fn check_task(
         };
         return Err((task_path(i, &["id"]), what));
     }
+    Ok(())
+}
+
+/// Task `i`'s title (visible, at most [`MAX_TITLE_CHARS`]) and `length_m` (finite, > 0).
+fn check_task_title_and_length(i: usize, t: &Task) -> Result<(), (Vec<Seg>, String)> {
     // The title heads the task's row of the leaderboard and its page: visible characters
     // only, at most MAX_TITLE_CHARS.
     let shown = |c: char| !isotrack_core::numtext::is_not_plain(c);
@@ -437,6 +473,11 @@ fn check_task(
             ),
         ));
     }
+    Ok(())
+}
+
+/// Task `i`'s `set`: no `sim.seed`, each key once, and no gain both set and tuned.
+fn check_task_set(i: usize, t: &Task) -> Result<(), (Vec<Seg>, String)> {
     let seed_note = "every run's sim.seed is its seed (tuning_seeds, scoring_seeds)";
     if let Some(j) = t
         .set
@@ -484,7 +525,7 @@ fn check_task(
             ));
         }
     }
-    check_task_rest(i, t, controllers)
+    Ok(())
 }
 
 /// The longest task title, characters.

@@ -6,6 +6,7 @@ use crate::style::Format;
 use crate::style::{tick_label, value_label, Style};
 use crate::{fonts, PlotError};
 use isotrack_scenario::check::map::{Behaviour, CellStatus, StabilityMap, VerifyPoint};
+use plotters::coord::combinators::WithKeyPoints;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -189,6 +190,18 @@ enum Key {
     Scenario,
 }
 
+/// The chart's marker colours: a run the chart disagrees with, a run not compared, and the
+/// scenario's own point.
+const RED: RGBColor = RGBColor(214, 39, 40);
+const GREY: RGBColor = RGBColor(150, 150, 150);
+const ORANGE: RGBColor = RGBColor(255, 127, 14);
+
+/// The plot's coordinates: log `kp` by log sensor rate, each with its chosen ticks.
+type MapChart<'a, DB> =
+    ChartContext<'a, DB, Cartesian2d<WithKeyPoints<LogCoord<f64>>, WithKeyPoints<LogCoord<f64>>>>;
+
+/// The whole chart: the plot (cells, boundary, `--verify` runs, the scenario's point) with its
+/// colour bar on the right, the legend and the caption below, each drawn by one function.
 fn chart<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
     map: &StabilityMap,
@@ -198,19 +211,47 @@ fn chart<DB: DrawingBackend>(
     root.fill(&WHITE).map_err(s)?;
     let f = st.base_font();
     let (w, h) = root.dim_in_pixel();
-    let [ki, c1, c2] = map.other_gains;
     let default_title = "Sampled-loop stability: spectral radius over kp and sensor rate";
     let title = st.title(default_title);
     let chars = title.chars().count() as f64;
     let title_rel = (1.4 * (w as f64 / (0.62 * f)) / chars.max(1.0)).clamp(0.7, 1.4);
+    let outside = outside_the_chart(map);
+    let keys = legend_keys(map, verify, outside);
+    let caption = caption_lines(map, outside);
+    let line_h = 1.25 * 0.85 * f;
+    let per_row = 3usize;
+    let key_rows = keys.len().div_ceil(per_row);
+    let foot = ((caption.len() + key_rows) as f64 * line_h + 1.2 * f) as u32;
+    let (body, footer) = root.split_vertically(h - foot);
+    let bar_w = (9.5 * f) as u32;
+    let (left, right) = body.split_horizontally(w.saturating_sub(bar_w));
+    let mut ch = axes(&left, map, &title, title_rel, st)?;
+    draw_cells(&mut ch, map)?;
+    let bold = st.px(3.0);
+    ch.draw_series(
+        boundary_segments(map)
+            .into_iter()
+            .map(|[a, b]| PathElement::new(vec![a, b], BLACK.stroke_width(bold))),
+    )
+    .map_err(s)?;
+    draw_verify_runs(&mut ch, verify, st)?;
+    draw_scenario_point(&mut ch, map, outside, st)?;
+    colour_bar(&right, title_rel, st)?;
+    legend_and_caption(&footer, &keys, &caption, st)
+}
+
+/// Whether the scenario's own point lies outside the chart's ranges (it is then an arrow at the
+/// edge).
+fn outside_the_chart(map: &StabilityMap) -> bool {
     let [k0, k1] = map.grid.kp_range;
     let [r0, r1] = map.grid.rate_range_hz;
     let (kp, rate) = map.scenario_point;
-    let outside = !(k0..=k1).contains(&kp) || !(r0..=r1).contains(&rate);
-    // The legend's entries (only those on the chart), drawn in rows below the plot.
-    let red = RGBColor(214, 39, 40);
-    let grey = RGBColor(150, 150, 150);
-    let orange = RGBColor(255, 127, 14);
+    !(k0..=k1).contains(&kp) || !(r0..=r1).contains(&rate)
+}
+
+/// The legend's entries (only those on the chart), drawn in rows below the plot.
+fn legend_keys(map: &StabilityMap, verify: &[VerifyPoint], outside: bool) -> Vec<(Key, String)> {
+    let (kp, rate) = map.scenario_point;
     let any = |b: Behaviour| verify.iter().any(|p| p.behaviour == b);
     let mut keys: Vec<(Key, String)> = vec![(Key::Line, "spectral radius 1 (the boundary)".into())];
     for (b, k, label) in [
@@ -280,7 +321,13 @@ fn chart<DB: DrawingBackend>(
             }
         ),
     ));
-    // The caption below the plot: what the chart shows (which slopes) and the fixed gains.
+    keys
+}
+
+/// The caption below the plot: what the chart shows (which slopes) and the fixed gains.
+fn caption_lines(map: &StabilityMap, outside: bool) -> Vec<String> {
+    let [ki, c1, c2] = map.other_gains;
+    let (kp, rate) = map.scenario_point;
     let mut caption = vec![
         format!("radius on {}", map.slope_basis),
         format!(
@@ -298,13 +345,21 @@ fn chart<DB: DrawingBackend>(
             value_label(rate)
         ));
     }
-    let line_h = 1.25 * 0.85 * f;
-    let per_row = 3usize;
-    let key_rows = keys.len().div_ceil(per_row);
-    let foot = ((caption.len() + key_rows) as f64 * line_h + 1.2 * f) as u32;
-    let (body, footer) = root.split_vertically(h - foot);
-    let bar_w = (9.5 * f) as u32;
-    let (left, right) = body.split_horizontally(w.saturating_sub(bar_w));
+    caption
+}
+
+/// The plot's axes (log `kp` by log rate, a little wider than the grid) with their ticks and
+/// titles.
+fn axes<'a, DB: DrawingBackend>(
+    left: &'a DrawingArea<DB, plotters::coord::Shift>,
+    map: &StabilityMap,
+    title: &str,
+    title_rel: f64,
+    st: &Style,
+) -> Result<MapChart<'a, DB>, String> {
+    let f = st.base_font();
+    let [k0, k1] = map.grid.kp_range;
+    let [r0, r1] = map.grid.rate_range_hz;
     // Axes a little wider than the grid (3 % of each log span a side): markers at the grid's
     // edge are drawn whole.
     let pad = |lo: f64, hi: f64| {
@@ -339,6 +394,17 @@ fn chart<DB: DrawingBackend>(
         .axis_desc_style(st.font(1.0))
         .draw()
         .map_err(s)?;
+    Ok(ch)
+}
+
+/// The cells as one image over the grid's extent: each pixel takes the nearest grid point in
+/// `(ln kp, ln rate)`; cells not computed hatched grey.
+fn draw_cells<DB: DrawingBackend>(
+    ch: &mut MapChart<'_, DB>,
+    map: &StabilityMap,
+) -> Result<(), String> {
+    let [k0, k1] = map.grid.kp_range;
+    let [r0, r1] = map.grid.rate_range_hz;
     // The cells as one image over the grid's extent: each pixel takes the nearest grid point
     // in (ln kp, ln rate).
     let (px0, py0) = ch.backend_coord(&(k0, r1));
@@ -371,14 +437,17 @@ fn chart<DB: DrawingBackend>(
     if let Some(img) = BitMapElement::with_owned_buffer((k0, r1), (pw, ph), buf) {
         ch.draw_series(std::iter::once(img)).map_err(s)?;
     }
-    let bold = st.px(3.0);
-    ch.draw_series(
-        boundary_segments(map)
-            .into_iter()
-            .map(|[a, b]| PathElement::new(vec![a, b], BLACK.stroke_width(bold))),
-    )
-    .map_err(s)?;
-    // The verification runs: shape by behaviour, white where the chart agrees, red where not.
+    Ok(())
+}
+
+/// The `--verify` runs: shape by behaviour, white where the chart agrees, red where not, grey
+/// where not compared.
+fn draw_verify_runs<DB: DrawingBackend>(
+    ch: &mut MapChart<'_, DB>,
+    verify: &[VerifyPoint],
+    st: &Style,
+) -> Result<(), String> {
+    let (red, grey) = (RED, GREY);
     let r = st.px(5.0);
     let mark = |p: &VerifyPoint, agree: RGBColor| match p.agrees {
         Some(false) => red,
@@ -419,6 +488,20 @@ fn chart<DB: DrawingBackend>(
         EmptyElement::at((x, y)) + Rectangle::new([(-q, -q), (q, q)], grey.stroke_width(edge))
     }))
     .map_err(s)?;
+    Ok(())
+}
+
+/// The scenario's own point; outside the chart, an arrow at the edge pointing to it.
+fn draw_scenario_point<DB: DrawingBackend>(
+    ch: &mut MapChart<'_, DB>,
+    map: &StabilityMap,
+    outside: bool,
+    st: &Style,
+) -> Result<(), String> {
+    let [k0, k1] = map.grid.kp_range;
+    let [r0, r1] = map.grid.rate_range_hz;
+    let (kp, rate) = map.scenario_point;
+    let orange = ORANGE;
     // The scenario's own point; outside the chart, an arrow at the edge pointing to it.
     let star = st.px(9.0);
     if outside {
@@ -461,6 +544,17 @@ fn chart<DB: DrawingBackend>(
         ])
         .map_err(s)?;
     }
+    Ok(())
+}
+
+/// The colour bar on the right: radius 0 .. 2, the boundary at 1.
+fn colour_bar<DB: DrawingBackend>(
+    right: &DrawingArea<DB, plotters::coord::Shift>,
+    title_rel: f64,
+    st: &Style,
+) -> Result<(), String> {
+    let f = st.base_font();
+    let bold = st.px(3.0);
     // Colour bar: radius 0 .. 2, the boundary at 1.
     let mut bar = ChartBuilder::on(&right)
         .margin_top((f + 2.4 * f * title_rel) as u32)
@@ -492,6 +586,23 @@ fn chart<DB: DrawingBackend>(
         BLACK.stroke_width(bold),
     )))
     .map_err(s)?;
+    Ok(())
+}
+
+/// The legend (`keys`, three to a row), then the caption, below the plot.
+fn legend_and_caption<DB: DrawingBackend>(
+    footer: &DrawingArea<DB, plotters::coord::Shift>,
+    keys: &[(Key, String)],
+    caption: &[String],
+    st: &Style,
+) -> Result<(), String> {
+    let f = st.base_font();
+    let w = footer.dim_in_pixel().0;
+    let line_h = 1.25 * 0.85 * f;
+    let per_row = 3usize;
+    let key_rows = keys.len().div_ceil(per_row);
+    let (bold, edge) = (st.px(3.0), st.px(1.5));
+    let (red, grey, orange) = (RED, GREY, ORANGE);
     // The legend, then the caption, below the plot.
     let style = TextStyle::from(st.font(0.85)).color(&BLACK);
     let col_w = (w as f64 - 2.0 * f) / per_row as f64;

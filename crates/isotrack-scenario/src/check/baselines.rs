@@ -9,7 +9,8 @@
 //! line, `start to tube`, bounds a larger region, from the start's level to the tube, and is
 //! not what these conditions use.) Each warning names its tube and gives its `gamma`s.
 
-use super::{regions, CHECK_LATTICE};
+use super::regions::{regions, CHECK_LATTICE};
+use super::setup::speed_mps;
 use crate::schema::ControllerKind;
 use crate::spec::LawSpec;
 use crate::Scenario;
@@ -21,7 +22,7 @@ use isotrack_core::numtext::{Echo, Num, NumUp};
 pub fn baseline_warnings(s: &Scenario) -> Vec<String> {
     let c = &s.spec().controller;
     let kind = c.kind;
-    let v = super::speed_mps(s);
+    let v = speed_mps(s);
     // Which tube, and why that half-width; the law's amplitude `u_bar`.
     let (tube, why, u_bar) = match &c.law {
         LawSpec::SlidingMode(p) => (

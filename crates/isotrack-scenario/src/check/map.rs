@@ -13,7 +13,11 @@
 //! * Bounded: at most [`MAX_AXIS_POINTS`] points an axis and [`MAX_CELLS`] cells; at most
 //!   [`MAX_VERIFY_RUNS`] verification runs and [`MAX_VERIFY_STEPS`] simulation steps in all.
 
-use super::{law, regions, sampled, Law, LoopSetup, CHECK_LATTICE};
+use super::regions::{regions, CHECK_LATTICE};
+use super::sampled;
+use super::setup::{
+    circular_p_law, growing_mode_period_samples, law, not_computed, p_law_orbit, Law, LoopSetup,
+};
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_sim::{Outcome, TraceRow, TraceSink};
@@ -80,11 +84,7 @@ pub struct Cell {
     pub note: Option<&'static str>,
 }
 
-/// The largest loop gain `kp v T max(alpha, 1) max(c1, 1) / min(c2, 1)` a cell is computed at:
-/// beyond it the sampled matrices' products leave `f64` (`kp = 1e308` overflowed to an
-/// infinite radius, labelled "no equilibrium" by mistake), and the cell is
-/// [`CellStatus::NotComputed`] with a note, never guessed.
-pub const MAX_LOOP_GAIN: f64 = 1e100;
+pub use super::setup::MAX_LOOP_GAIN;
 
 /// The scenario's sampled loop with `kp` and the sensor rate free: what `check` computes, for
 /// any `(kp, rate)`.
@@ -104,7 +104,7 @@ impl LoopFamily {
         let tube = tube_halfwidth.unwrap_or(l.c2);
         let r = regions(s, tube, CHECK_LATTICE, false);
         let setup = LoopSetup::new(s, &l, &r)?;
-        let on_orbit = super::p_law_orbit(s, &l).is_some();
+        let on_orbit = p_law_orbit(s, &l).is_some();
         Ok(Self {
             scenario: s.clone(),
             law: l,
@@ -123,7 +123,7 @@ impl LoopFamily {
         let lo = slopes.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = slopes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         // What `check` does not compute, the chart does not either (one test for both).
-        if let Some(why) = super::not_computed(&lp, orbit.as_ref()) {
+        if let Some(why) = not_computed(&lp, orbit.as_ref()) {
             return Cell {
                 spectral_radius: None,
                 status: CellStatus::NotComputed,
@@ -142,9 +142,7 @@ impl LoopFamily {
                 },
                 None,
             ),
-            _ if super::circular_p_law(&self.scenario, &l) => {
-                (None, CellStatus::NoEquilibrium, None)
-            }
+            _ if circular_p_law(&self.scenario, &l) => (None, CellStatus::NoEquilibrium, None),
             _ => (
                 None,
                 CellStatus::NotComputed,
@@ -167,7 +165,7 @@ impl LoopFamily {
         let l = Law { kp, ..self.law };
         let period_s = 1.0 / rate_hz;
         let (lp, slopes, orbit) = self.setup.at(&self.scenario, &l, period_s);
-        if super::not_computed(&lp, orbit.as_ref()).is_some() {
+        if not_computed(&lp, orbit.as_ref()).is_some() {
             return None;
         }
         let radius = |alpha: f64| sampled::SampledLoop { slope: alpha, ..lp }.spectral_radius();
@@ -180,7 +178,7 @@ impl LoopFamily {
             return None;
         }
         let tau = period_s / rho.ln().abs();
-        let period = super::growing_mode_period_samples(&lp, worst).map(|p| p * period_s);
+        let period = growing_mode_period_samples(&lp, worst).map(|p| p * period_s);
         Some((tau, period))
     }
 

@@ -30,32 +30,31 @@ pub mod baselines;
 mod lattice;
 pub mod map;
 pub mod moving;
+mod regions;
 pub mod sampled;
+mod setup;
 pub mod team;
+mod verdict;
 
-use crate::build::{build_vehicle, VehicleModel};
-use crate::field::FieldModel;
-use crate::schema::ControllerKind;
 use crate::spec::FieldKindSpec;
-use crate::spec::LawSpec;
 use crate::Scenario;
 use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::math::Vec2;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::theory::{
     prop1_characteristic_polynomial, prop1_exact_local_condition, prop1_paper_conditions,
-    prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m,
-    radial_exp_p_orbit, CircularOrbit, FieldBounds,
+    prop2_error_bound, prop2_min_kp, prop2_paper_min_kp, radial_exp_isoline_radius_m, FieldBounds,
 };
 use isotrack_core::{FieldDerivatives, ScalarField};
-use isotrack_fields::grid::Interpolation;
 use isotrack_fields::AnalyticKind;
-use lattice::Lattice;
-use sampled::{EstimatorModel, HeadingDynamics, SampledLoop, SensorLag};
+use regions::{exact_isoline_slope, region, regions, start, Regions, CHECK_LATTICE};
+use sampled::SampledLoop;
 use serde::Serialize;
-
-/// Lattice points per side for `isotrack check`.
-const CHECK_LATTICE: usize = 601;
+use setup::{
+    circular_p_law, curvature, growing_mode_period_samples, is_pi_isoline, law, not_computed,
+    p_law_orbit_at, spread, Law, LoopSetup, P_ORBIT_MIN_LOOP_GAIN,
+};
+pub use verdict::Verdict;
 
 /// Prop. 1 report. All `None` when the field is not circular.
 #[derive(Clone, Debug, Serialize)]
@@ -352,30 +351,6 @@ pub fn rate_advice_text(max_period_s: f64, dt_s: f64, scanned_from_s: Option<f64
 /// ([`SampledReport::period_scanned_from_s`]).
 pub const FULL_PERIOD_SCAN_S: f64 = 1e-4;
 
-/// The combined verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Verdict {
-    /// A guarantee applies (Prop. 1 exact condition with a stable sampled loop, or Prop. 2's
-    /// bound).
-    Holds,
-    /// A necessary local condition fails.
-    Fails,
-    /// Nothing fails, but no proposition gives a guarantee here.
-    NotApplicable,
-}
-
-impl Verdict {
-    /// The snake_case name.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Verdict::Holds => "holds",
-            Verdict::Fails => "fails",
-            Verdict::NotApplicable => "not_applicable",
-        }
-    }
-}
-
 /// The full report.
 #[derive(Clone, Debug, Serialize)]
 pub struct CheckReport {
@@ -400,96 +375,6 @@ pub struct CheckReport {
     pub team: Option<team::TeamCheckReport>,
 }
 
-/// The region over which the field is sampled: the grid, the domain, or a box round the
-/// analytic field's features and the start.
-fn region(s: &Scenario) -> [f64; 4] {
-    let start = start(s);
-    let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
-        r[0] = r[0].min(p.x - m);
-        r[1] = r[1].max(p.x + m);
-        r[2] = r[2].min(p.y - m);
-        r[3] = r[3].max(p.y + m);
-        r
-    };
-    let empty = [
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    match s.field() {
-        FieldModel::Grid(g) => g.grid().extent_m(),
-        FieldModel::Series(g) => g.extent_m(),
-        FieldModel::Puff(pf) => {
-            if let Some(d) = s.spec().field.domain_m() {
-                return d;
-            }
-            // The plume's reach over its puffs' lifetime downwind, and the start.
-            let pp = pf.params();
-            let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
-            grow(grow(empty, pp.source_m, reach), start, 10.0)
-        }
-        FieldModel::Analytic(a) => {
-            if let Some(d) = a.domain_m {
-                return d;
-            }
-            match &a.kind {
-                AnalyticKind::RadialExp(r) => {
-                    let rd =
-                        radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level()).unwrap_or(10.0);
-                    grow(grow(empty, r.center_m, 3.0 * rd), start, 1.0)
-                }
-                AnalyticKind::GaussianPlumes(p) => {
-                    p.plumes.iter().fold(grow(empty, start, 1.0), |r, pl| {
-                        grow(r, pl.center_m, 4.0 * pl.sigma_m[0].max(pl.sigma_m[1]))
-                    })
-                }
-                AnalyticKind::LinearRamp(_) => grow(empty, start, 100.0),
-            }
-        }
-    }
-}
-
-/// The gains and speed the theory needs.
-#[derive(Clone, Copy)]
-struct Law {
-    kp: f64,
-    ki: f64,
-    c1: f64,
-    c2: f64,
-    v: f64,
-}
-
-/// The speed the law sees: the Dubins robot's, or the UAV's airspeed (its ground speed in calm
-/// air), m/s.
-fn speed_mps(s: &Scenario) -> f64 {
-    s.spec().vehicle.speed_mps()
-}
-
-/// Whether the scenario flies the paper's PI-like law (the propositions and the sampled check
-/// are about it; the baselines have their own conditions, [`baselines`]).
-fn is_pi_isoline(s: &Scenario) -> bool {
-    s.spec().controller.kind == ControllerKind::PiIsoline
-}
-
-fn law(s: &Scenario) -> Law {
-    // The check models the PI-like law (`is_pi_isoline`); for another law its verdicts do not
-    // apply, and it reads the PID's own `kp`, `ki`, no `c1` and a unit `c2`.
-    let (kp, ki, c1, c2) = match &s.spec().controller.law {
-        LawSpec::PiIsoline(p) => (p.kp, p.ki, p.c1, p.c2),
-        LawSpec::Pid(p) => (p.kp, p.ki, 0.0, 1.0),
-        LawSpec::PidCrossing(p) => (p.pid.kp, p.pid.ki, 0.0, 1.0),
-        _ => (0.0, 0.0, 0.0, 1.0),
-    };
-    Law {
-        kp,
-        ki,
-        c1,
-        c2,
-        v: speed_mps(s),
-    }
-}
-
 fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
     if !is_pi_isoline(s) {
         return Prop1Report::not_applicable(
@@ -502,10 +387,11 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
         FieldKindSpec::Analytic(isotrack_fields::AnalyticField {
             kind: AnalyticKind::RadialExp(r),
             ..
-        }) => match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
-            Some(rd) => {
-                let alpha = r.decay_per_m * level;
-                Prop1Report {
+        }) => {
+            match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
+                Some(rd) => {
+                    let alpha = r.decay_per_m * level;
+                    Prop1Report {
                         applicable: true,
                         alpha: Some(alpha),
                         r_d_m: Some(rd),
@@ -514,191 +400,17 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
                         characteristic_polynomial: Some(prop1_characteristic_polynomial(alpha, v, rd, kp, ki, c1, c2)),
                         note: "alpha = k*s_d, the radial slope on the isoline; the paper's conditions are sufficient, the Routh-Hurwitz one is exact (locally)".into(),
                     }
+                }
+                None => Prop1Report::not_applicable(format!(
+                    "level {} is not attained by the field (0 < level < i0 is needed)",
+                    Echo(level)
+                )),
             }
-            None => Prop1Report::not_applicable(format!(
-                "level {} is not attained by the field (0 < level < i0 is needed)",
-                Echo(level)
-            )),
-        },
+        }
         _ => Prop1Report::not_applicable(
             "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
         ),
     }
-}
-
-/// The isoline's curvature the sampled check uses: `1/r_d` on a circular field, else 0.
-fn curvature(s: &Scenario) -> f64 {
-    match s.field() {
-        FieldModel::Analytic(a) => match &a.kind {
-            AnalyticKind::RadialExp(r) => {
-                radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())
-                    .map_or(0.0, |rd| 1.0 / rd)
-            }
-            _ => 0.0,
-        },
-        FieldModel::Grid(_) | FieldModel::Series(_) | FieldModel::Puff(_) => 0.0,
-    }
-}
-
-/// The orbit the P law (`ki = 0`) settles on in a circular field and the field's own level set
-/// through it.
-struct PLawOrbit {
-    /// The orbit: radius `d*` and steady error `eps*`.
-    orbit: CircularOrbit,
-    /// The field's slope there, `|dF/dd| = k F(d*)`.
-    slope: f64,
-}
-
-impl PLawOrbit {
-    /// The loop linearised on the orbit: the slope and the curvature `1/d*` of the level set
-    /// through it (the tanh's slope there follows from the curvature,
-    /// [`SampledLoop::tanh_slope`]).
-    fn operating_point(&self, l: SampledLoop) -> SampledLoop {
-        SampledLoop {
-            slope: self.slope,
-            curvature_per_m: 1.0 / self.orbit.radius_m,
-            ..l
-        }
-    }
-
-    fn note(&self) -> String {
-        format!(
-            "with ki = 0 the P law settles on the orbit of radius {:.4} m where eps = {:.4} (kp*c1*tanh(eps/c2) balances the orbit's turn v/d); the loop is checked there, at the field's slope {} and curvature {:.6} 1/m",
-            self.orbit.radius_m,
-            self.orbit.error,
-            if self.slope >= 1e-3 {
-                format!("{:.6}", self.slope)
-            } else {
-                format!("{:.4e}", self.slope)
-            },
-            1.0 / self.orbit.radius_m
-        )
-    }
-}
-
-/// The P law's orbit on a circular field ([`radial_exp_p_orbit`]): `None` with an integral
-/// term, on other fields, or when no orbit exists.
-fn p_law_orbit(s: &Scenario, l: &Law) -> Option<PLawOrbit> {
-    p_law_orbit_at(s, l, l.kp)
-}
-
-/// [`p_law_orbit`] with the proportional gain `kp` in place of the scenario's: the orbit moves
-/// with `kp` (further out, where the field is flatter, as `kp` falls), so a `kp` scan
-/// recomputes it at every `kp` it examines.
-fn p_law_orbit_at(s: &Scenario, l: &Law, kp: f64) -> Option<PLawOrbit> {
-    if !circular_p_law(s, l) {
-        return None;
-    }
-    let FieldModel::Analytic(a) = s.field() else {
-        return None;
-    };
-    let AnalyticKind::RadialExp(r) = &a.kind else {
-        return None;
-    };
-    let orbit = radial_exp_p_orbit(r.i0, r.decay_per_m, s.level(), l.v, kp, l.c1, l.c2)?;
-    // k F(d*) from F itself, not from eps* + s_d: far out, eps* ~ -s_d and the sum cancels
-    // to nothing (kp = 0.001 on the paper's field: F = 5e-108, the sum 0).
-    Some(PLawOrbit {
-        orbit,
-        slope: r.decay_per_m * r.i0 * (-r.decay_per_m * orbit.radius_m).exp(),
-    })
-}
-
-/// Whether the loop is the P law (`ki = 0`) on a circular field, where it settles on an orbit
-/// off the isoline rather than on it.
-fn circular_p_law(s: &Scenario, l: &Law) -> bool {
-    l.ki == 0.0
-        && matches!(s.field(), FieldModel::Analytic(a) if matches!(a.kind, AnalyticKind::RadialExp(_)))
-}
-
-/// The P law's orbit is examined only where its loop gain `kp*alpha*v*T` (`alpha` the field's
-/// slope on the orbit) reaches this: the loop's damping per period is about half the gain
-/// (`1 - rho = kp alpha v T / 2` for small gains, the continuous loop's `kp alpha v / 2` times
-/// `T`), and below about `1e-8` it is within a few orders of the eigenvalues' rounding
-/// (`~1e-15`): at small `kp` the orbit lies far out where the field is flat (`alpha` falls as
-/// `exp(-k d*)`), and a scan that went on there fragmented the stable set into rounding noise.
-const P_ORBIT_MIN_LOOP_GAIN: f64 = 1e-8;
-
-/// Why a loop is not computed: `check`, every cell of the chart and every `--verify` point go
-/// through [`not_computed`], so they agree on what is computed (issue 29: chart cells at the
-/// P law's flat orbit were coloured where `check` said "not computed").
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum NotComputed {
-    /// The loop gain `kp v T max(alpha, 1) max(c1, 1) / min(c2, 1)` is past
-    /// [`map::MAX_LOOP_GAIN`]: the sampled matrices' products leave `f64`.
-    Overflow,
-    /// The P law's orbit lies where the field is nearly flat: its loop gain `kp alpha v T` is
-    /// below [`P_ORBIT_MIN_LOOP_GAIN`].
-    FlatOrbit {
-        /// `kp alpha v T` on the orbit.
-        gain: f64,
-    },
-    /// The delay spans more than [`sampled::MAX_DELAY_STATES`] sensor periods.
-    Delay {
-        /// The delay, s.
-        delay_s: f64,
-        /// The delay in sensor periods.
-        periods: f64,
-    },
-}
-
-impl NotComputed {
-    /// The reason in a sentence (`check`'s `not_computed`, verdict and warning).
-    fn reason(self) -> String {
-        match self {
-            Self::Overflow => format!(
-                "the loop gain kp*v*T*max(alpha, 1)*max(c1, 1)/min(c2, 1) is beyond {:e}: the sampled matrices would overflow f64",
-                map::MAX_LOOP_GAIN
-            ),
-            Self::FlatOrbit { gain } => format!(
-                "the P law's orbit lies where the field is nearly flat: its loop gain kp*alpha*v*T = {gain:.3e} is below {P_ORBIT_MIN_LOOP_GAIN:e}, so its damping (about half that per period) is within rounding of zero and the spectral radius cannot tell stable from unstable"
-            ),
-            Self::Delay { delay_s, periods } => format!(
-                "the delay of {} sensor periods ({} s) exceeds the {} periods the check models (one state each)",
-                Num(periods),
-                Echo(delay_s),
-                sampled::MAX_DELAY_STATES
-            ),
-        }
-    }
-
-    /// The reason in a few words (the chart's CSV `note`).
-    fn short(self) -> &'static str {
-        match self {
-            Self::Overflow => "loop gain beyond 1e100: f64 would overflow",
-            Self::FlatOrbit { .. } => {
-                "the P law's orbit is where the field is flat: loop gain kp*alpha*v*T below 1e-8, not decided"
-            }
-            Self::Delay { .. } => "the delay spans more than 32 sensor periods",
-        }
-    }
-}
-
-/// Whether the loop `lp` (with the P law's `orbit` when it has one) can be computed, and why
-/// not: the same test for `check`, the chart's cells and `--verify`.
-fn not_computed(lp: &SampledLoop, orbit: Option<&PLawOrbit>) -> Option<NotComputed> {
-    let gain = lp.kp
-        * lp.speed_mps.max(1.0)
-        * lp.period_s.max(1.0)
-        * lp.slope.abs().max(1.0)
-        * lp.c1.abs().max(1.0)
-        / lp.c2.abs().min(1.0);
-    if gain.is_nan() || gain > map::MAX_LOOP_GAIN {
-        return Some(NotComputed::Overflow);
-    }
-    if let Some(o) = orbit {
-        let gain = lp.kp * o.slope * lp.speed_mps * lp.period_s;
-        if gain.is_nan() || gain < P_ORBIT_MIN_LOOP_GAIN {
-            return Some(NotComputed::FlatOrbit { gain });
-        }
-    }
-    if lp.radius().is_none() {
-        return Some(NotComputed::Delay {
-            delay_s: lp.delay_s,
-            periods: lp.delay_s / lp.period_s,
-        });
-    }
-    None
 }
 
 /// How the loop is unstable at the isoline's own (lattice-read) slopes, each frozen.
@@ -715,178 +427,95 @@ struct FrozenInstability {
     period_samples: Option<f64>,
 }
 
-/// The period, in samples, of the loop's dominant mode at `slope`: `2 pi / |arg z|` of the
-/// eigenvalue `z` of largest modulus (2: the command alternates every sample; `None` for a
-/// real positive `z`, a drift, or no matrix).
-fn growing_mode_period_samples(base: &SampledLoop, slope: f64) -> Option<f64> {
-    SampledLoop { slope, ..*base }
-        .closed_loop_matrix()
-        .and_then(|m| {
-            m.complex_eigenvalues()
-                .iter()
-                .copied()
-                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-        })
-        .map(|z| z.im.atan2(z.re).abs())
-        .filter(|&arg| arg > 1e-9)
-        .map(|arg| 2.0 * std::f64::consts::PI / arg)
-}
-
-/// The sensor's first-order lag as the simulator steps it (at `sim.dt_s`), if it has one.
-fn sensor_lag(s: &Scenario) -> Option<SensorLag> {
-    let tau = s.spec().sensor.time_constant_s;
-    (tau > 0.0).then(|| SensorLag {
-        time_constant_s: tau,
-        step_s: s.dt_s(),
-    })
-}
-
-/// The slope range the sampled check covers: the 5th percentile .. maximum of `slopes` (the
-/// lowest slopes sit at saddles, where the isoline branches and no linearisation holds; a loop
-/// with a tiny slope is slow, not unstable).
-fn slope_range(mut slopes: Vec<f64>) -> Option<[f64; 2]> {
-    slopes.retain(|g| g.is_finite() && *g > 0.0);
-    if slopes.is_empty() {
-        return None;
-    }
-    slopes.sort_by(f64::total_cmp);
-    let lo = slopes[(slopes.len() - 1) * 5 / 100];
-    let hi = *slopes.last()?;
-    Some([lo, hi])
-}
-
-/// `count` slopes spread geometrically over `range`.
-fn spread(range: [f64; 2], count: usize) -> Vec<f64> {
-    let [lo, hi] = range;
-    if hi <= lo || count < 2 {
-        return vec![hi];
-    }
-    (0..count)
-        .map(|k| lo * (hi / lo).powf(k as f64 / (count - 1) as f64))
-        .collect()
-}
-
-/// The isoline's own slopes where the field gives them exactly: `k*s_d` on a circular field
-/// (`F = i0 exp(-k d)`, so `|dF/dd| = k F`); `None` elsewhere (read off the lattice).
-fn exact_isoline_slope(s: &Scenario) -> Option<f64> {
-    match s.field() {
-        FieldModel::Analytic(a) => match &a.kind {
-            AnalyticKind::RadialExp(r) => {
-                radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())
-                    .map(|_| r.decay_per_m * s.level())
-            }
-            _ => None,
-        },
-        _ => None,
-    }
-}
-
-/// The sampled loop a scenario's law is checked with, before its gain and sensor period are
-/// applied: the vehicle's heading dynamics, the estimator, the lag, the isoline's slopes and
-/// curvature. [`sampled_report`] and the stability map ([`map`]) both go through
-/// [`LoopSetup::at`]: one computation for the verdict and for every cell of the chart.
-#[derive(Clone)]
-struct LoopSetup {
-    /// The loop at the scenario's own gains and period, on the isoline.
-    base: SampledLoop,
-    /// The isoline's slopes `[min, max]` (before the P law's orbit).
-    range: [f64; 2],
-    /// The linear vehicle model's name.
-    model: &'static str,
-    /// Remarks on what is modelled.
-    notes: Vec<String>,
-}
-
-impl LoopSetup {
-    /// `Err(note)` when the sampled check does not apply (another law, no slope in the tube, a
-    /// vehicle that cannot be built).
-    fn new(s: &Scenario, l: &Law, r: &Regions) -> Result<Self, String> {
-        let f = s.file();
-        if !is_pi_isoline(s) {
-            return Err(
-                "the sampled-data check models the PI-like law (controller.kind = \"pi_isoline\")"
-                    .into(),
-            );
-        }
-        let Some(range) = r.isoline_slope_range else {
-            return Err("no slope in the tube: the level is not attained in the region".into());
-        };
-        let mut notes = vec![];
-        let estimator = match s.spec().controller.derivative() {
-            Some(DerivativeKind::BackwardDifference) | None => EstimatorModel::BackwardDifference,
-            Some(DerivativeKind::FilteredDifference { tau_s }) => {
-                EstimatorModel::FilteredDifference { tau_s }
-            }
-            Some(DerivativeKind::Levant { .. }) => {
-                notes.push("Levant's differentiator is nonlinear; the check models it as the backward difference it converges to".to_string());
-                EstimatorModel::BackwardDifference
-            }
-        };
-        let (heading, model) = match build_vehicle(f) {
-            Ok(VehicleModel::Dubins(_)) => (HeadingDynamics::Dubins, "dubins"),
-            Ok(VehicleModel::FixedWing(w)) => (
-                HeadingDynamics::CourseLoop(w.course_loop_model()),
-                "fixed_wing_course_loop",
-            ),
-            Err(e) => return Err(format!("the vehicle cannot be built: {}", e.message)),
-        };
-        if s.max_turn_rate_radps().is_some() {
-            notes.push("the turn-rate limit is a saturation the linear model leaves out (it holds while the limit is not reached)".into());
-        }
-        let base = SampledLoop {
-            speed_mps: l.v,
-            slope: range[1],
-            curvature_per_m: curvature(s),
-            kp: l.kp,
-            ki: l.ki,
-            c1: l.c1,
-            c2: l.c2,
-            period_s: 1.0 / s.spec().sensor.rate_hz,
-            delay_s: s.spec().sensor.delay_s,
-            estimator,
-            heading,
-            sensor_lag: sensor_lag(s),
-        };
-        Ok(Self {
-            base,
-            range,
-            model,
-            notes,
-        })
-    }
-
-    /// The loop at gain `l.kp` (the rest of `l` as the scenario's) and sensor period
-    /// `period_s`, with the slopes it is checked at: the isoline's own (4 spread over `range`),
-    /// or with `ki = 0` on a circular field the slope and curvature of the orbit the P law
-    /// settles on *at this `kp`* (returned too).
-    fn at(
-        &self,
-        s: &Scenario,
-        l: &Law,
-        period_s: f64,
-    ) -> (SampledLoop, Vec<f64>, Option<PLawOrbit>) {
-        let base = SampledLoop {
-            kp: l.kp,
-            period_s,
-            ..self.base
-        };
-        match p_law_orbit(s, l) {
-            Some(o) => (o.operating_point(base), vec![o.slope], Some(o)),
-            None => (base, spread(self.range, 4), None),
-        }
-    }
-}
-
 /// The sampled-data report: stability at the isoline's own slopes (`r.isoline_slope_range`)
 /// and, separately, over the tube's (`r.slope_range`). With `full = false` (the warnings of
 /// `run`) the stable `kp` set and the period limit are computed only when the loop is unstable
 /// (they are the advice), and the discrete loop's margins not at all; every number computed is
 /// the same as with `full = true`.
 fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledReport {
+    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    let mut rep = sampled_report_before_the_loop(s, l, r);
+    let setup = match LoopSetup::new(s, l, r) {
+        Ok(x) => x,
+        Err(note) => {
+            rep.note = note;
+            return rep;
+        }
+    };
+    let LoopSetup {
+        range,
+        model,
+        mut notes,
+        ..
+    } = setup.clone();
+    let (base, slopes, orbit) = setup.at(s, l, period_s);
+    if let Some(o) = &orbit {
+        notes.push(o.note());
+        rep.p_law_orbit_error = Some(o.orbit.error);
+        rep.slope_range = Some([o.slope, o.slope]);
+    }
+    rep.applicable = true;
+    rep.vehicle_model = Some(model);
+    rep.curvature_per_m = Some(base.curvature_per_m);
+    rep.slope_exact = Some(exact_isoline_slope(s).is_some());
+    rep.course_loop = base.course_loop_numbers();
+    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
+    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
+    if let Some(why) = not_computed(&base, orbit.as_ref()) {
+        let reason = why.reason();
+        notes.push(format!("not computed: {reason}"));
+        rep.not_computed = Some(reason);
+        rep.note = notes.join("; ");
+        return rep;
+    }
+    let rho = sampled::worst_spectral_radius(&base, &slopes);
+    rep.spectral_radius = rho.is_finite().then_some(rho);
+    rep.stable = Some(rho < 1.0);
+    rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
+    if rho < 1.0 {
+        settling_time_constants(&mut rep, s, r, &base, &slopes, orbit.is_some(), range);
+    }
+    if rho >= 1.0 {
+        unstable_mode(&mut rep, &base, &slopes);
+    }
+    if let Some(tube) = r.slope_range {
+        let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
+        rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
+        rep.stable_over_tube = Some(rho_tube < 1.0);
+    }
+    if full || rho >= 1.0 {
+        stable_kp_and_period(&mut rep, &mut notes, s, l, &base, &slopes);
+    }
+    rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
+    // Off circular fields the isoline's slope varies along it, and the loop is checked with
+    // each slope frozen: unstable at some of them is no proof of divergence (the loop passes
+    // through the steep stretch), and the verdict says what it is.
+    if orbit.is_none() && exact_isoline_slope(s).is_none() {
+        frozen_slopes(&mut rep, r, &base, &slopes, range, rho, full);
+    }
+    if full {
+        // The isoline slope with the largest radius (the only one on a circular field).
+        let worst = worst_slope(&base, &slopes).unwrap_or(range[1]);
+        rep.discrete_loop = SampledLoop {
+            slope: worst,
+            ..base
+        }
+        .analysis();
+    }
+    if !rho.is_finite() && circular_p_law(s, l) {
+        notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
+    }
+    rep.note = notes.join("; ");
+    rep
+}
+
+/// The sampled report before the loop is set up: the sensor's period and delay, the slopes the
+/// regions give, every loop number still null.
+fn sampled_report_before_the_loop(s: &Scenario, l: &Law, r: &Regions) -> SampledReport {
     let slope_range = r.isoline_slope_range;
     let period_s = 1.0 / s.spec().sensor.rate_hz;
     let delay_s = s.spec().sensor.delay_s;
-    let mut rep = SampledReport {
+    SampledReport {
         applicable: false,
         vehicle_model: None,
         period_s,
@@ -926,333 +555,211 @@ fn sampled_report(s: &Scenario, l: &Law, r: &Regions, full: bool) -> SampledRepo
                 Some(DerivativeKind::Levant { .. })
             ),
         note: String::new(),
-    };
-    let setup = match LoopSetup::new(s, l, r) {
-        Ok(x) => x,
-        Err(note) => {
-            rep.note = note;
-            return rep;
-        }
-    };
-    let LoopSetup {
-        range,
-        model,
-        mut notes,
-        ..
-    } = setup.clone();
-    let (base, slopes, orbit) = setup.at(s, l, period_s);
-    if let Some(o) = &orbit {
-        notes.push(o.note());
-        rep.p_law_orbit_error = Some(o.orbit.error);
-        rep.slope_range = Some([o.slope, o.slope]);
     }
-    rep.applicable = true;
-    rep.vehicle_model = Some(model);
-    rep.curvature_per_m = Some(base.curvature_per_m);
-    rep.slope_exact = Some(exact_isoline_slope(s).is_some());
-    rep.course_loop = base.course_loop_numbers();
-    // Not computed (the P law's orbit where the field is flat, a delay past the delay line's
-    // cap, a gain past f64): the same test as the chart's cells ([`not_computed`]).
-    if let Some(why) = not_computed(&base, orbit.as_ref()) {
-        let reason = why.reason();
-        notes.push(format!("not computed: {reason}"));
-        rep.not_computed = Some(reason);
-        rep.note = notes.join("; ");
-        return rep;
-    }
-    let rho = sampled::worst_spectral_radius(&base, &slopes);
-    rep.spectral_radius = rho.is_finite().then_some(rho);
-    rep.stable = Some(rho < 1.0);
-    rep.slowest_time_constant_s = slowest_time_constant_s(rho, period_s);
-    if rho < 1.0 {
-        // The time constant the run's settling follows: on a lattice isoline the loop at the
-        // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
-        // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
-        // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
-        // settled in 8 s).
-        let mean_slope = if orbit.is_some() || exact_isoline_slope(s).is_some() {
-            slopes.first().copied()
-        } else {
-            let along: Vec<f64> = r
-                .isoline_slopes
-                .iter()
-                .copied()
-                .filter(|&a| a >= range[0])
-                .collect();
-            (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
-        };
-        if let Some(alpha) = mean_slope {
-            let at_mean = SampledLoop {
+}
+
+/// The isoline slope among `slopes` at which the loop `base` has the largest spectral radius
+/// (the last of equals; `None` without slopes).
+fn worst_slope(base: &SampledLoop, slopes: &[f64]) -> Option<f64> {
+    slopes.iter().copied().max_by(|a, b| {
+        let at = |alpha: f64| {
+            SampledLoop {
                 slope: alpha,
-                ..base
-            };
-            let rho_mean = at_mean.spectral_radius();
-            rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
-            rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
-            // A slow mode matters only if the response from the start has a share in it
-            // (issue 29: at kp = 350 the 350 s mode is nearly cancelled by the law's zero and
-            // the run settles in about 20 s).
-            let duration = s.spec().sim.duration_s;
-            if rep
-                .isoline_time_constant_s
-                .is_some_and(|tau| duration > 0.0 && tau > SETTLING_FRACTION * duration)
-            {
-                let window = s.spec().metrics.steady_state_fraction * duration;
-                // The start's offset from the isoline, z1 = -eps0/alpha (towards lower values).
-                let offset_m = s
-                    .field()
-                    .value(0.0, start(s))
-                    .map_or(0.0, |f| -(f - s.level()) / alpha);
-                rep.late_response_fraction =
-                    at_mean.late_response_fraction(duration - window, duration, offset_m);
+                ..*base
+            }
+            .spectral_radius()
+        };
+        at(*a).total_cmp(&at(*b))
+    })
+}
+
+/// A stable loop's settling: the time constant at the isoline's mean slope and, when it is a
+/// large part of the run, the share of the transient left in the run's steady-state window.
+fn settling_time_constants(
+    rep: &mut SampledReport,
+    s: &Scenario,
+    r: &Regions,
+    base: &SampledLoop,
+    slopes: &[f64],
+    on_orbit: bool,
+    range: [f64; 2],
+) {
+    let period_s = rep.period_s;
+    // The time constant the run's settling follows: on a lattice isoline the loop at the
+    // isoline's mean slope (the vehicle passes the crossings' slopes faster than it
+    // settles, and sees their mean), not at the worst frozen slope (issue 29: the NAME
+    // ash plume's steepest slope gave 180.7 s, a "slow mode" warning, while the run
+    // settled in 8 s).
+    let mean_slope = if on_orbit || exact_isoline_slope(s).is_some() {
+        slopes.first().copied()
+    } else {
+        let along: Vec<f64> = r
+            .isoline_slopes
+            .iter()
+            .copied()
+            .filter(|&a| a >= range[0])
+            .collect();
+        (!along.is_empty()).then(|| along.iter().sum::<f64>() / along.len() as f64)
+    };
+    if let Some(alpha) = mean_slope {
+        let at_mean = SampledLoop {
+            slope: alpha,
+            ..*base
+        };
+        let rho_mean = at_mean.spectral_radius();
+        rep.isoline_time_constant_s = slowest_time_constant_s(rho_mean, period_s);
+        rep.isoline_mean_slope = rep.isoline_time_constant_s.map(|_| alpha);
+        // A slow mode matters only if the response from the start has a share in it
+        // (issue 29: at kp = 350 the 350 s mode is nearly cancelled by the law's zero and
+        // the run settles in about 20 s).
+        let duration = s.spec().sim.duration_s;
+        if rep
+            .isoline_time_constant_s
+            .is_some_and(|tau| duration > 0.0 && tau > SETTLING_FRACTION * duration)
+        {
+            let window = s.spec().metrics.steady_state_fraction * duration;
+            // The start's offset from the isoline, z1 = -eps0/alpha (towards lower values).
+            let offset_m = s
+                .field()
+                .value(0.0, start(s))
+                .map_or(0.0, |f| -(f - s.level()) / alpha);
+            rep.late_response_fraction =
+                at_mean.late_response_fraction(duration - window, duration, offset_m);
+        }
+    }
+}
+
+/// An unstable loop: its growing mode's period at the worst slope, and whether the sensor's
+/// lag is what makes it unstable.
+fn unstable_mode(rep: &mut SampledReport, base: &SampledLoop, slopes: &[f64]) {
+    let worst = worst_slope(base, slopes).unwrap_or(base.slope);
+    rep.unstable_mode_period_samples = Some(growing_mode_period_samples(base, worst));
+    // Is the sensor's lag what makes it unstable? The same loop without it (issue 29: the
+    // advice said "change ki, c1 or c2" and never named the lag).
+    if base.sensor_lag.is_some() {
+        let without = SampledLoop {
+            sensor_lag: None,
+            ..*base
+        };
+        rep.lag_is_the_cause = sampled::worst_spectral_radius(&without, slopes) < 1.0;
+    }
+}
+
+/// The stable `kp` set (with the P law's orbit recomputed at every `kp` on a circular field)
+/// and the longest stable sensor period.
+fn stable_kp_and_period(
+    rep: &mut SampledReport,
+    notes: &mut Vec<String>,
+    s: &Scenario,
+    l: &Law,
+    base: &SampledLoop,
+    slopes: &[f64],
+) {
+    let intervals = if circular_p_law(s, l) {
+        // The orbit, and with it the slope, curvature and tanh's slope, recomputed at every
+        // kp examined (issue: holding the scenario's orbit put kp = 0.05's stable set at
+        // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
+        // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
+        let at_kp = |kp: f64| {
+            p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
+                kp,
+                ..o.operating_point(*base)
+            })
+        };
+        let gain_ok = |kp: f64| {
+            at_kp(kp)
+                .is_some_and(|m| m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN)
+        };
+        // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
+        // the points examined are those from the first one that reaches the floor.
+        let from = sampled::kp_grid_from(0.0)
+            .into_iter()
+            .find(|&kp| gain_ok(kp));
+        let grid = from.map_or_else(Vec::new, sampled::kp_grid_from);
+        rep.kp_scanned_from = grid.first().copied();
+        if let Some(&first) = grid.first() {
+            if first > 1e-3 {
+                notes.push(format!(
+                    "the stable kp set is scanned from kp = {first:.4e} up, the orbit recomputed at each kp: below it the orbit lies where the field is nearly flat (loop gain kp*alpha*v*T below {P_ORBIT_MIN_LOOP_GAIN:e}) and stability is not decided"
+                ));
             }
         }
+        sampled::kp_intervals_over(&grid, |kp| {
+            at_kp(kp).is_some_and(|m| m.spectral_radius() < 1.0)
+        })
+    } else {
+        rep.kp_scanned_from = Some(1e-3);
+        sampled::kp_intervals(base, slopes).unwrap_or_default()
+    };
+    rep.max_kp = intervals.last().map(|i| i[1]);
+    rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
+    rep.kp_intervals = Some(intervals);
+    let limit = sampled::period_limit(base, slopes);
+    rep.max_period_s = limit.max_period_s;
+    rep.period_scanned_from_s = Some(limit.scanned_from_s);
+    if limit.scanned_from_s > FULL_PERIOD_SCAN_S {
+        notes.push(format!(
+            "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
+            limit.scanned_from_s,
+            sampled::MAX_DELAY_STATES
+        ));
     }
+}
+
+/// Off circular fields, the loop checked with each of the isoline's slopes frozen: how it is
+/// unstable at some of them (`rho >= 1`) and, in the full report, the fraction of the
+/// isoline's crossings at which it is stable.
+fn frozen_slopes(
+    rep: &mut SampledReport,
+    r: &Regions,
+    base: &SampledLoop,
+    slopes: &[f64],
+    range: [f64; 2],
+    rho: f64,
+    full: bool,
+) {
+    let radius_at = |alpha: f64| {
+        SampledLoop {
+            slope: alpha,
+            ..*base
+        }
+        .spectral_radius()
+    };
     if rho >= 1.0 {
         let worst = slopes
             .iter()
             .copied()
-            .max_by(|a, b| {
-                let at = |alpha: f64| {
-                    SampledLoop {
-                        slope: alpha,
-                        ..base
-                    }
-                    .spectral_radius()
-                };
-                at(*a).total_cmp(&at(*b))
-            })
-            .unwrap_or(base.slope);
-        rep.unstable_mode_period_samples = Some(growing_mode_period_samples(&base, worst));
-        // Is the sensor's lag what makes it unstable? The same loop without it (issue 29: the
-        // advice said "change ki, c1 or c2" and never named the lag).
-        if base.sensor_lag.is_some() {
-            let without = SampledLoop {
-                sensor_lag: None,
-                ..base
-            };
-            rep.lag_is_the_cause = sampled::worst_spectral_radius(&without, &slopes) < 1.0;
-        }
-    }
-    if let Some(tube) = r.slope_range {
-        let rho_tube = sampled::worst_spectral_radius(&base, &spread(tube, 12)).max(rho);
-        rep.tube_spectral_radius = rho_tube.is_finite().then_some(rho_tube);
-        rep.stable_over_tube = Some(rho_tube < 1.0);
-    }
-    if full || rho >= 1.0 {
-        let intervals = if circular_p_law(s, l) {
-            // The orbit, and with it the slope, curvature and tanh's slope, recomputed at every
-            // kp examined (issue: holding the scenario's orbit put kp = 0.05's stable set at
-            // [0.05, 242.8] at 1 Hz, where the orbit recomputed per kp gives 3.308, and an end
-            // at v*kappa*/c1, where the held orbit's g reached 0). No orbit: not stable.
-            let at_kp = |kp: f64| {
-                p_law_orbit_at(s, l, kp).map(|o| SampledLoop {
-                    kp,
-                    ..o.operating_point(base)
-                })
-            };
-            let gain_ok = |kp: f64| {
-                at_kp(kp).is_some_and(|m| {
-                    m.kp * m.slope * m.speed_mps * m.period_s >= P_ORBIT_MIN_LOOP_GAIN
-                })
-            };
-            // The loop gain grows with kp (the orbit moves in, where the field is steeper), so
-            // the points examined are those from the first one that reaches the floor.
-            let from = sampled::kp_grid_from(0.0)
-                .into_iter()
-                .find(|&kp| gain_ok(kp));
-            let grid = from.map_or_else(Vec::new, sampled::kp_grid_from);
-            rep.kp_scanned_from = grid.first().copied();
-            if let Some(&first) = grid.first() {
-                if first > 1e-3 {
-                    notes.push(format!(
-                        "the stable kp set is scanned from kp = {first:.4e} up, the orbit recomputed at each kp: below it the orbit lies where the field is nearly flat (loop gain kp*alpha*v*T below {P_ORBIT_MIN_LOOP_GAIN:e}) and stability is not decided"
-                    ));
-                }
-            }
-            sampled::kp_intervals_over(&grid, |kp| {
-                at_kp(kp).is_some_and(|m| m.spectral_radius() < 1.0)
-            })
-        } else {
-            rep.kp_scanned_from = Some(1e-3);
-            sampled::kp_intervals(&base, &slopes).unwrap_or_default()
-        };
-        rep.max_kp = intervals.last().map(|i| i[1]);
-        rep.nearest_stable_kp = sampled::nearest_stable_kp(l.kp, &intervals);
-        rep.kp_intervals = Some(intervals);
-        let limit = sampled::period_limit(&base, &slopes);
-        rep.max_period_s = limit.max_period_s;
-        rep.period_scanned_from_s = Some(limit.scanned_from_s);
-        if limit.scanned_from_s > FULL_PERIOD_SCAN_S {
-            notes.push(format!(
-                "sensor periods below {:.3e} s were not computed (the delay would need more than {} delay-line states)",
-                limit.scanned_from_s,
-                sampled::MAX_DELAY_STATES
-            ));
-        }
-    }
-    rep.rate_is_the_limit = Some(rho >= 1.0 && rep.max_period_s.is_some_and(|t| t < period_s));
-    // Off circular fields the isoline's slope varies along it, and the loop is checked with
-    // each slope frozen: unstable at some of them is no proof of divergence (the loop passes
-    // through the steep stretch), and the verdict says what it is.
-    if orbit.is_none() && exact_isoline_slope(s).is_none() {
-        let radius_at = |alpha: f64| {
-            SampledLoop {
-                slope: alpha,
-                ..base
-            }
-            .spectral_radius()
-        };
-        if rho >= 1.0 {
-            let worst = slopes
-                .iter()
-                .copied()
-                .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
-                .unwrap_or(range[1]);
-            let period_samples = growing_mode_period_samples(&base, worst);
-            rep.frozen = Some(FrozenInstability {
-                some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
-                steepest_unstable: radius_at(range[1]) >= 1.0,
-                period_samples,
-            });
-        }
-        if full {
-            let mut along: Vec<f64> = r
-                .isoline_slopes
-                .iter()
-                .copied()
-                .filter(|&a| a >= range[0])
-                .collect();
-            along.sort_by(f64::total_cmp);
-            if !along.is_empty() {
-                let n = along.len().min(200);
-                let picks: Vec<f64> = (0..n)
-                    .map(|i| {
-                        along[if n < 2 {
-                            0
-                        } else {
-                            i * (along.len() - 1) / (n - 1)
-                        }]
-                    })
-                    .collect();
-                let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
-                rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
-            }
-        }
+            .max_by(|a, b| radius_at(*a).total_cmp(&radius_at(*b)))
+            .unwrap_or(range[1]);
+        let period_samples = growing_mode_period_samples(base, worst);
+        rep.frozen = Some(FrozenInstability {
+            some_stable: slopes.iter().any(|&a| radius_at(a) < 1.0),
+            steepest_unstable: radius_at(range[1]) >= 1.0,
+            period_samples,
+        });
     }
     if full {
-        // The isoline slope with the largest radius (the only one on a circular field).
-        let worst = slopes
+        let mut along: Vec<f64> = r
+            .isoline_slopes
             .iter()
             .copied()
-            .max_by(|a, b| {
-                let at = |alpha: f64| {
-                    SampledLoop {
-                        slope: alpha,
-                        ..base
-                    }
-                    .spectral_radius()
-                };
-                at(*a).total_cmp(&at(*b))
-            })
-            .unwrap_or(range[1]);
-        rep.discrete_loop = SampledLoop {
-            slope: worst,
-            ..base
+            .filter(|&a| a >= range[0])
+            .collect();
+        along.sort_by(f64::total_cmp);
+        if !along.is_empty() {
+            let n = along.len().min(200);
+            let picks: Vec<f64> = (0..n)
+                .map(|i| {
+                    along[if n < 2 {
+                        0
+                    } else {
+                        i * (along.len() - 1) / (n - 1)
+                    }]
+                })
+                .collect();
+            let stable_count = picks.iter().filter(|&&a| radius_at(a) < 1.0).count();
+            rep.isoline_stable_fraction = Some(stable_count as f64 / n as f64);
         }
-        .analysis();
-    }
-    if !rho.is_finite() && circular_p_law(s, l) {
-        notes.push("with ki = 0 the P law cannot hold the isoline's turn (v*kappa >= kp*c1): no equilibrium".into());
-    }
-    rep.note = notes.join("; ");
-    rep
-}
-
-/// The start: position and level.
-fn start(s: &Scenario) -> Vec2 {
-    let st = s.spec().start;
-    Vec2::new(st.x_m, st.y_m)
-}
-
-/// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
-/// tube's slopes and the isoline's own.
-struct Regions {
-    /// The isoline's slopes at its lattice crossings in the tube (empty where the slope is
-    /// exact).
-    isoline_slopes: Vec<f64>,
-    levels: Option<[f64; 2]>,
-    region: Option<lattice::Bounds>,
-    tube: Option<lattice::Bounds>,
-    slope_range: Option<[f64; 2]>,
-    isoline_slope_range: Option<[f64; 2]>,
-    /// The field has no value at the start.
-    start_without_data: bool,
-}
-
-fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
-    let field = s.field();
-    let level = s.level();
-    let p0 = start(s);
-    let lat = Lattice::new(field, region(s), n);
-    let has_hessian = !matches!(field, FieldModel::Grid(g) if g.interpolation() == Interpolation::Bilinear)
-        && !matches!(field, FieldModel::Series(g) if g.interpolation() == Interpolation::Bilinear);
-    let (lo, hi) = (level - tube, level + tube);
-    let tube_cells = lat
-        .nearest_band_cell(p0, lo, hi)
-        .map(|seed| lat.component(seed, lo, hi));
-    let slope_range = tube_cells.as_ref().and_then(|c| slope_range(lat.slopes(c)));
-    let isoline_slopes: Vec<f64> = match exact_isoline_slope(s) {
-        Some(_) => vec![],
-        None => tube_cells
-            .as_ref()
-            .map(|c| lat.isoline_slopes(c, level))
-            .unwrap_or_default()
-            .into_iter()
-            .filter(|g| g.is_finite() && *g > 0.0)
-            .collect(),
-    };
-    let isoline_slope_range = match exact_isoline_slope(s) {
-        Some(alpha) => Some([alpha, alpha]),
-        None => self::slope_range(isoline_slopes.clone()),
-    };
-    if !with_bounds {
-        return Regions {
-            isoline_slopes,
-            levels: None,
-            region: None,
-            tube: None,
-            slope_range,
-            isoline_slope_range,
-            start_without_data: false,
-        };
-    }
-    let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
-    let (levels, region_bounds) = match (field.value(0.0, p0), lat.cell_of(p0)) {
-        (Some(s0), Some(cell)) => {
-            // The levels from the start's, widened by the tube's half-width H on its far side,
-            // to the tube's far edge: [min(s0, s_d) - H, max(s0, s_d) + H]. Prop. 2 (Dong & You)
-            // assumes its bounds over the whole plane, and its proof uses them wherever the robot
-            // goes. From the sector `phi(t0) in [-pi + phi, -phi]` the robot can first move away
-            // from the isoline (`s' = -v |grad F| cos phi` takes either sign there) before it
-            // turns in, so the band stops not at the start's level but H beyond it; past the
-            // isoline, `|e|` is non-increasing outside `rho` and the error stays within the
-            // bound, which the note compares with the tube. A margin, not a proof: the levels
-            // the transient reaches are not bounded by the check.
-            let levels = [(s0 - tube).min(lo), (s0 + tube).max(hi)];
-            let cells = lat.component(cell, levels[0], levels[1]);
-            (Some(levels), lat.bounds(&cells, has_hessian))
-        }
-        _ => (None, None),
-    };
-    Regions {
-        isoline_slopes,
-        levels,
-        region: region_bounds,
-        tube: tube_bounds,
-        slope_range,
-        isoline_slope_range,
-        start_without_data: !field.value(0.0, p0).is_some_and(f64::is_finite),
     }
 }
 
@@ -2295,6 +1802,8 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
 
 #[cfg(test)]
 mod tests {
+    use super::regions::slope_range;
+    use super::setup::speed_mps;
     use super::*;
 
     /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points

@@ -27,7 +27,7 @@
 //! `check --set sim.duration_s=4e6` once took minutes; `isotrack_fields::puff` now shares the
 //! live puffs' displacements across a lattice at one time).
 
-use super::speed_mps;
+use super::setup::speed_mps;
 use crate::field::FieldModel;
 use crate::spec::FieldKindSpec;
 use crate::Scenario;

@@ -18,7 +18,10 @@
 //!   `v0` included; the `none` law commands `v0` only): the paper's theory assumes a constant
 //!   speed, and the verdict holds only if the loop is stable at every speed of the range.
 
-use super::{not_computed, sampled, Law, LoopSetup, Regions, Verdict};
+use super::regions::Regions;
+use super::sampled;
+use super::setup::{not_computed, Law, LoopSetup};
+use super::verdict::Verdict;
 use crate::spec::TeamSpec;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};

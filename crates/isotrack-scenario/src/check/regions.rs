@@ -1,0 +1,183 @@
+//! What the check's lattice gives it over a scenario's field: the region sampled ([`region`]),
+//! the start-to-tube region's and the tube's bounds and the isoline's slopes ([`regions`]).
+//! Shared by `check`, the stability chart ([`super::map`]), the baselines' check
+//! ([`super::baselines`]) and the team check; a leaf of `check` (it uses only
+//! [`super::lattice`]).
+
+use super::lattice::{self, Lattice};
+use crate::field::FieldModel;
+use crate::Scenario;
+use isotrack_core::math::Vec2;
+use isotrack_core::theory::radial_exp_isoline_radius_m;
+use isotrack_core::ScalarField;
+use isotrack_fields::grid::Interpolation;
+use isotrack_fields::AnalyticKind;
+
+/// Lattice points per side for `isotrack check`.
+pub(super) const CHECK_LATTICE: usize = 601;
+
+/// The region over which the field is sampled: the grid, the domain, or a box round the
+/// analytic field's features and the start.
+pub(super) fn region(s: &Scenario) -> [f64; 4] {
+    let start = start(s);
+    let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
+        r[0] = r[0].min(p.x - m);
+        r[1] = r[1].max(p.x + m);
+        r[2] = r[2].min(p.y - m);
+        r[3] = r[3].max(p.y + m);
+        r
+    };
+    let empty = [
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    match s.field() {
+        FieldModel::Grid(g) => g.grid().extent_m(),
+        FieldModel::Series(g) => g.extent_m(),
+        FieldModel::Puff(pf) => {
+            if let Some(d) = s.spec().field.domain_m() {
+                return d;
+            }
+            // The plume's reach over its puffs' lifetime downwind, and the start.
+            let pp = pf.params();
+            let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
+            grow(grow(empty, pp.source_m, reach), start, 10.0)
+        }
+        FieldModel::Analytic(a) => {
+            if let Some(d) = a.domain_m {
+                return d;
+            }
+            match &a.kind {
+                AnalyticKind::RadialExp(r) => {
+                    let rd =
+                        radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level()).unwrap_or(10.0);
+                    grow(grow(empty, r.center_m, 3.0 * rd), start, 1.0)
+                }
+                AnalyticKind::GaussianPlumes(p) => {
+                    p.plumes.iter().fold(grow(empty, start, 1.0), |r, pl| {
+                        grow(r, pl.center_m, 4.0 * pl.sigma_m[0].max(pl.sigma_m[1]))
+                    })
+                }
+                AnalyticKind::LinearRamp(_) => grow(empty, start, 100.0),
+            }
+        }
+    }
+}
+
+/// The slope range the sampled check covers: the 5th percentile .. maximum of `slopes` (the
+/// lowest slopes sit at saddles, where the isoline branches and no linearisation holds; a loop
+/// with a tiny slope is slow, not unstable).
+pub(super) fn slope_range(mut slopes: Vec<f64>) -> Option<[f64; 2]> {
+    slopes.retain(|g| g.is_finite() && *g > 0.0);
+    if slopes.is_empty() {
+        return None;
+    }
+    slopes.sort_by(f64::total_cmp);
+    let lo = slopes[(slopes.len() - 1) * 5 / 100];
+    let hi = *slopes.last()?;
+    Some([lo, hi])
+}
+
+/// The isoline's own slopes where the field gives them exactly: `k*s_d` on a circular field
+/// (`F = i0 exp(-k d)`, so `|dF/dd| = k F`); `None` elsewhere (read off the lattice).
+pub(super) fn exact_isoline_slope(s: &Scenario) -> Option<f64> {
+    match s.field() {
+        FieldModel::Analytic(a) => match &a.kind {
+            AnalyticKind::RadialExp(r) => {
+                radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())
+                    .map(|_| r.decay_per_m * s.level())
+            }
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The start: position and level.
+pub(super) fn start(s: &Scenario) -> Vec2 {
+    let st = s.spec().start;
+    Vec2::new(st.x_m, st.y_m)
+}
+
+/// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
+/// tube's slopes and the isoline's own.
+pub(super) struct Regions {
+    /// The isoline's slopes at its lattice crossings in the tube (empty where the slope is
+    /// exact).
+    pub(super) isoline_slopes: Vec<f64>,
+    pub(super) levels: Option<[f64; 2]>,
+    pub(super) region: Option<lattice::Bounds>,
+    pub(super) tube: Option<lattice::Bounds>,
+    pub(super) slope_range: Option<[f64; 2]>,
+    pub(super) isoline_slope_range: Option<[f64; 2]>,
+    /// The field has no value at the start.
+    pub(super) start_without_data: bool,
+}
+
+pub(super) fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
+    let field = s.field();
+    let level = s.level();
+    let p0 = start(s);
+    let lat = Lattice::new(field, region(s), n);
+    let has_hessian = !matches!(field, FieldModel::Grid(g) if g.interpolation() == Interpolation::Bilinear)
+        && !matches!(field, FieldModel::Series(g) if g.interpolation() == Interpolation::Bilinear);
+    let (lo, hi) = (level - tube, level + tube);
+    let tube_cells = lat
+        .nearest_band_cell(p0, lo, hi)
+        .map(|seed| lat.component(seed, lo, hi));
+    let slope_range = tube_cells.as_ref().and_then(|c| slope_range(lat.slopes(c)));
+    let isoline_slopes: Vec<f64> = match exact_isoline_slope(s) {
+        Some(_) => vec![],
+        None => tube_cells
+            .as_ref()
+            .map(|c| lat.isoline_slopes(c, level))
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|g| g.is_finite() && *g > 0.0)
+            .collect(),
+    };
+    let isoline_slope_range = match exact_isoline_slope(s) {
+        Some(alpha) => Some([alpha, alpha]),
+        None => self::slope_range(isoline_slopes.clone()),
+    };
+    if !with_bounds {
+        return Regions {
+            isoline_slopes,
+            levels: None,
+            region: None,
+            tube: None,
+            slope_range,
+            isoline_slope_range,
+            start_without_data: false,
+        };
+    }
+    let tube_bounds = tube_cells.as_ref().and_then(|c| lat.bounds(c, has_hessian));
+    let (levels, region_bounds) = match (field.value(0.0, p0), lat.cell_of(p0)) {
+        (Some(s0), Some(cell)) => {
+            // The levels from the start's, widened by the tube's half-width H on its far side,
+            // to the tube's far edge: [min(s0, s_d) - H, max(s0, s_d) + H]. Prop. 2 (Dong & You)
+            // assumes its bounds over the whole plane, and its proof uses them wherever the robot
+            // goes. From the sector `phi(t0) in [-pi + phi, -phi]` the robot can first move away
+            // from the isoline (`s' = -v |grad F| cos phi` takes either sign there) before it
+            // turns in, so the band stops not at the start's level but H beyond it; past the
+            // isoline, `|e|` is non-increasing outside `rho` and the error stays within the
+            // bound, which the note compares with the tube. A margin, not a proof: the levels
+            // the transient reaches are not bounded by the check.
+            let levels = [(s0 - tube).min(lo), (s0 + tube).max(hi)];
+            let cells = lat.component(cell, levels[0], levels[1]);
+            (Some(levels), lat.bounds(&cells, has_hessian))
+        }
+        _ => (None, None),
+    };
+    Regions {
+        isoline_slopes,
+        levels,
+        region: region_bounds,
+        tube: tube_bounds,
+        slope_range,
+        isoline_slope_range,
+        start_without_data: !field.value(0.0, p0).is_some_and(f64::is_finite),
+    }
+}

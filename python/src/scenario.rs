@@ -1,0 +1,315 @@
+//! The `Scenario` class: a resolved scenario, its overrides, its runs, its field's values and
+//! its check.
+
+use crate::controller::PyController;
+use crate::errors::{scenario_err, ScenarioErrorPy};
+use crate::guard::{self, no_panic, SignalWatch};
+use crate::values::{as_written, check_key, toml_literal, toml_value};
+use isotrack_core::{ScalarField, Vec2};
+use isotrack_scenario::{load_scenario, parse_scenario, Scenario};
+use isotrack_sim::{RunResult, TraceRow};
+use numpy::{PyArray1, PyReadonlyArray1};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::Path;
+
+/// A resolved scenario (every default filled in). Immutable: `set` returns a new one.
+#[pyclass(name = "Scenario", module = "isotrack._native", frozen)]
+pub(crate) struct PyScenario {
+    pub(crate) inner: Scenario,
+    pub(crate) origin: String,
+}
+
+#[pymethods]
+impl PyScenario {
+    /// The built-in default: the paper's Fig. 2(b) setting.
+    #[staticmethod]
+    fn default() -> PyResult<Self> {
+        let inner = no_panic(|| load_scenario(None, &[]).map_err(scenario_err))?;
+        Ok(Self {
+            inner,
+            origin: "<built-in default>".into(),
+        })
+    }
+
+    /// A scenario file (TOML); files it names are relative to it.
+    #[staticmethod]
+    fn from_file(path: &str) -> PyResult<Self> {
+        let inner = no_panic(|| load_scenario(Some(Path::new(path)), &[]).map_err(scenario_err))?;
+        Ok(Self {
+            inner,
+            origin: path.to_string(),
+        })
+    }
+
+    /// Scenario text (TOML); files it names are relative to the current directory.
+    #[staticmethod]
+    fn from_toml(text: &str) -> PyResult<Self> {
+        let inner = no_panic(|| parse_scenario(text, "<toml>", &[]).map_err(scenario_err))?;
+        Ok(Self {
+            inner,
+            origin: "<toml>".into(),
+        })
+    }
+
+    /// A new scenario with the dotted `key` set to `value` (the rules of `--set`; errors are
+    /// raised as `isotrack.ScenarioError` with the CLI's message). The key is checked to be a
+    /// dotted key and the value converted to TOML here: neither is ever read as TOML text.
+    fn set(&self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
+        no_panic(|| {
+            check_key(key)?;
+            let literal = toml_literal(&toml_value(key, value, 0)?);
+            let inner = self
+                .inner
+                .derive(&[format!("{key}={literal}")], &self.origin)
+                .map_err(|e| ScenarioErrorPy::new_err(as_written(&e.to_string(), value)))?;
+            Ok(Self {
+                inner,
+                origin: self.origin.clone(),
+            })
+        })
+    }
+
+    /// The level `s_d` the scenario tracks (field units).
+    #[getter]
+    fn level(&self) -> f64 {
+        self.inner.level()
+    }
+
+    /// The turn-rate limit applied to every controller's command, rad/s (`None`: no limit).
+    #[getter]
+    fn max_turn_rate_radps(&self) -> Option<f64> {
+        self.inner.max_turn_rate_radps()
+    }
+
+    /// The resolved scenario as TOML (what `isotrack show` prints).
+    fn to_toml(&self) -> String {
+        isotrack_runs::summary::scenario_toml(&self.inner)
+    }
+
+    /// Runs the scenario: `(summary_json, trace_columns, scenario_flown)`. `record_rate_hz` overrides
+    /// `output.record_rate_hz`; `controller` (an object with `update(t_s, value) -> omega` and
+    /// an optional `reset()`) replaces the scenario's controller.
+    #[pyo3(signature = (record_rate_hz=None, controller=None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        record_rate_hz: Option<f64>,
+        controller: Option<Py<PyAny>>,
+    ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
+        if self.inner.spec().team.is_some() {
+            return Err(PyValueError::new_err(
+                "[team]: Scenario.run() runs one vehicle; a team is run by `isotrack run` only, for now (docs/TEAMS.md)",
+            ));
+        }
+        no_panic(|| self.run_inner(py, record_rate_hz, controller))
+    }
+
+    /// The field's values at `(x, y)` (numpy arrays of one shape, m) at time `t` (s, within the
+    /// run: `0 <= t <= sim.duration_s`); NaN where the field has no value.
+    #[pyo3(signature = (x, y, t=0.0))]
+    fn field_values<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray1<'py, f64>,
+        y: PyReadonlyArray1<'py, f64>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        no_panic(|| self.field_values_inner(py, x, y, t))
+    }
+
+    /// `isotrack check --json` for this scenario; `tube_halfwidth` (field units) > 0.
+    #[pyo3(signature = (tube_halfwidth=None))]
+    fn check_json(&self, py: Python<'_>, tube_halfwidth: Option<f64>) -> PyResult<String> {
+        if let Some(h) = tube_halfwidth {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(PyValueError::new_err(format!(
+                    "tube_halfwidth must be a finite number > 0 (field units), got {h:?}"
+                )));
+            }
+        }
+        // Ctrl-C answered at once (a puff plume's check over a long run takes minutes); the
+        // check itself cannot be cancelled and finishes on its own thread, its answer dropped.
+        let scenario = self.inner.clone();
+        guard::detached(py, move || {
+            serde_json::to_string(&isotrack_scenario::check::check(&scenario, tube_halfwidth))
+        })?
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+}
+
+impl PyScenario {
+    fn run_inner<'py>(
+        &self,
+        py: Python<'py>,
+        record_rate_hz: Option<f64>,
+        controller: Option<Py<PyAny>>,
+    ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
+        let scenario = match record_rate_hz {
+            Some(r) if !r.is_finite() => {
+                return Err(ScenarioErrorPy::new_err(format!(
+                    "`output.record_rate_hz`: {r:?} is not a finite number"
+                )))
+            }
+            Some(r) => self
+                .inner
+                .derive(
+                    &[format!(
+                        "output.record_rate_hz={}",
+                        toml_literal(&toml::Value::Float(r))
+                    )],
+                    &self.origin,
+                )
+                .map_err(scenario_err)?,
+            None => self.inner.clone(),
+        };
+        let mut rows: Vec<TraceRow> = Vec::new();
+        let mut watch = SignalWatch::new();
+        let (result, failure) = match controller {
+            None => (
+                py.detach(|| scenario.run_watched(&mut rows, &mut || watch.keep_going())),
+                None,
+            ),
+            Some(obj) => {
+                if obj.bind(py).hasattr("reset")? {
+                    obj.call_method0(py, "reset")?;
+                }
+                let mut c = PyController {
+                    obj,
+                    error: None,
+                    max_turn_rate_radps: scenario.max_turn_rate_radps(),
+                };
+                let r = py.detach(|| {
+                    scenario.run_with_watched(&mut c, &mut rows, &mut || watch.keep_going())
+                });
+                (r, c.error)
+            }
+        };
+        // The controller's own exception (a KeyboardInterrupt inside it, too) first, then one
+        // that stopped the run, then any signal that came at its very end.
+        if let Some(e) = failure.or(watch.error) {
+            return Err(e);
+        }
+        py.check_signals()?;
+        let Some(result) = result else {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                "the run was stopped",
+            ));
+        };
+        let summary = summary_json(&scenario, &self.origin, &result)?;
+        let trace = trace_columns(py, &rows, scenario.is_flying())?;
+        let flown = PyScenario {
+            inner: scenario,
+            origin: self.origin.clone(),
+        };
+        Ok((summary, trace, flown))
+    }
+
+    fn field_values_inner<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray1<'py, f64>,
+        y: PyReadonlyArray1<'py, f64>,
+        t: f64,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let duration = self.inner.spec().sim.duration_s;
+        if !(0.0..=duration).contains(&t) {
+            return Err(PyValueError::new_err(format!(
+                "t = {t:?} s is outside the run: 0 <= t <= sim.duration_s = {duration:?} s"
+            )));
+        }
+        let (x, y) = (x.as_slice()?, y.as_slice()?);
+        if x.len() != y.len() {
+            return Err(PyValueError::new_err(format!(
+                "x and y differ in length ({} and {})",
+                x.len(),
+                y.len()
+            )));
+        }
+        let field = self.inner.field();
+        // In blocks of a millisecond or so, so that Ctrl-C is answered between them (a puff
+        // plume's value sums hundreds of puffs: a million points take seconds).
+        let mut watch = SignalWatch::reading_the_clock_every(1);
+        let v: Option<Vec<f64>> = py.detach(|| {
+            let mut v = Vec::with_capacity(x.len());
+            for (xs, ys) in x.chunks(256).zip(y.chunks(256)) {
+                if !watch.keep_going() {
+                    return None;
+                }
+                v.extend(
+                    xs.iter()
+                        .zip(ys)
+                        .map(|(&a, &b)| field.value(t, Vec2::new(a, b)).unwrap_or(f64::NAN)),
+                );
+            }
+            Some(v)
+        });
+        if let Some(e) = watch.error {
+            return Err(e);
+        }
+        let v = v.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))?;
+        Ok(PyArray1::from_vec(py, v))
+    }
+}
+
+/// The content of `summary.json`, as the CLI writes it ([`isotrack_runs::summary::Summary`],
+/// without its final newline).
+fn summary_json(s: &Scenario, origin: &str, r: &RunResult) -> PyResult<String> {
+    let warnings = isotrack_scenario::check::warnings(s);
+    let path = (!origin.starts_with('<')).then(|| std::path::Path::new(origin));
+    let text = isotrack_runs::summary::Summary::of_run(s, path, r, &warnings).to_json();
+    Ok(text.trim_end_matches('\n').to_string())
+}
+
+/// The `trace.csv` columns as numpy arrays (`s_measured` NaN where no sample was delivered).
+fn trace_columns<'py>(
+    py: Python<'py>,
+    rows: &[TraceRow],
+    flying: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    trace_columns_by(py, rows, |r| r, flying)
+}
+
+/// [`trace_columns`] of any rows holding a [`TraceRow`] (`row` reads it): the single run's
+/// and a team's (`team::team_columns`, which adds the `vehicle` column) are one code.
+pub(crate) fn trace_columns_by<'py, T>(
+    py: Python<'py>,
+    rows: &[T],
+    row: impl Fn(&T) -> &TraceRow,
+    flying: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let col =
+        |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(|r| f(row(r))).collect() };
+    d.set_item("t_s", PyArray1::from_vec(py, col(&|r| r.t_s)))?;
+    d.set_item("x_m", PyArray1::from_vec(py, col(&|r| r.x_m)))?;
+    d.set_item("y_m", PyArray1::from_vec(py, col(&|r| r.y_m)))?;
+    d.set_item(
+        "heading_rad",
+        PyArray1::from_vec(py, col(&|r| r.heading_rad)),
+    )?;
+    d.set_item("s", PyArray1::from_vec(py, col(&|r| r.s)))?;
+    d.set_item("error", PyArray1::from_vec(py, col(&|r| r.error)))?;
+    d.set_item(
+        "omega_radps",
+        PyArray1::from_vec(py, col(&|r| r.omega_radps)),
+    )?;
+    d.set_item(
+        "s_measured",
+        PyArray1::from_vec(py, col(&|r| r.s_measured.unwrap_or(f64::NAN))),
+    )?;
+    if flying {
+        let t = |r: &TraceRow| r.telemetry.unwrap_or_default();
+        d.set_item(
+            "altitude_m",
+            PyArray1::from_vec(py, col(&|r| t(r).altitude_m)),
+        )?;
+        d.set_item(
+            "airspeed_mps",
+            PyArray1::from_vec(py, col(&|r| t(r).airspeed_mps)),
+        )?;
+        d.set_item("roll_rad", PyArray1::from_vec(py, col(&|r| t(r).roll_rad)))?;
+    }
+    Ok(d)
+}

@@ -1,0 +1,134 @@
+//! A sweep run for Python: `results.csv`'s header, each column's kind and its cells.
+
+use crate::errors::ScenarioErrorPy;
+use crate::guard;
+use pyo3::prelude::*;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+/// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
+pub(crate) type SweepCells = (Vec<String>, Vec<&'static str>, Vec<Vec<String>>);
+
+/// A sweep from its file's text: `(header, kinds, rows)`: `results.csv`'s header, each
+/// column's kind ([`column_kinds`]) and its cells in `run_id` order; `name` names the sweep in
+/// messages and anchors its relative `scenario` path. `progress(done, total)`, a Python
+/// callable, is called on this thread about every 20 ms while the runs go and once at the end.
+/// Ctrl-C stops it between batches of runs.
+#[pyfunction]
+#[pyo3(signature = (text, name, threads=None, progress=None))]
+pub(crate) fn sweep_cells(
+    py: Python<'_>,
+    text: &str,
+    name: &str,
+    threads: Option<usize>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<SweepCells> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let prepared = isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name))
+        .map_err(sweep_failure)?;
+    let kinds = column_kinds(&prepared.plan);
+    let cancel = AtomicBool::new(false);
+    let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));
+    let report = |d: u64, t: u64| {
+        done.fetch_max(d, Ordering::Relaxed);
+        total.store(t, Ordering::Relaxed);
+    };
+    let mut shown = None;
+    let mut tick = |py: Python<'_>| -> PyResult<()> {
+        let now = (done.load(Ordering::Relaxed), total.load(Ordering::Relaxed));
+        match &progress {
+            Some(cb) if shown != Some(now) => {
+                shown = Some(now);
+                cb.call1(py, now).map(drop)
+            }
+            _ => Ok(()),
+        }
+    };
+    let (header, rows) = guard::interruptible_ticking(
+        py,
+        &cancel,
+        || {
+            // Nothing printed (the threads cap's note is Python's warning, see `sweep`).
+            isotrack_runs::sweep::prepared::sweep_in_memory(
+                text,
+                Path::new(name),
+                threads,
+                progress
+                    .is_some()
+                    .then_some(&report as &(dyn Fn(u64, u64) + Sync)),
+                &cancel,
+            )
+        },
+        &mut tick,
+    )?
+    .map_err(sweep_failure)?;
+    Ok((header, kinds, rows))
+}
+
+/// A sweep's failure as the Python exception of its kind.
+fn sweep_failure(f: isotrack_runs::Failure) -> PyErr {
+    match f.code {
+        66 => pyo3::exceptions::PyFileNotFoundError::new_err(f.message),
+        isotrack_runs::sweep::prepared::INTERRUPTED => {
+            pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message)
+        }
+        _ => ScenarioErrorPy::new_err(f.message),
+    }
+}
+
+/// The kind of each `results.csv` column of a sweep, from the plan (never from the cells, so
+/// that a column's kind does not depend on which runs it holds): `"int"` for `run_id`,
+/// `samples`, a derived `sim.seed` and a swept key whose values are all integers; `"float"` for
+/// the metrics, `[random]` keys and swept keys of numbers; `"bool"` for swept booleans; `"str"`
+/// for `outcome`, `outcome_detail`, `warnings` and any other swept key.
+pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'static str> {
+    let kind = |values: &mut dyn Iterator<Item = Option<&toml::Value>>| {
+        let (mut ints, mut floats, mut bools, mut n) = (0, 0, 0, 0);
+        for v in values {
+            n += 1;
+            match v {
+                Some(toml::Value::Integer(_)) => ints += 1,
+                Some(toml::Value::Float(_)) => floats += 1,
+                Some(toml::Value::Boolean(_)) => bools += 1,
+                _ => {}
+            }
+        }
+        if n > 0 && ints == n {
+            "int"
+        } else if n > 0 && ints + floats == n {
+            "float"
+        } else if n > 0 && bools == n {
+            "bool"
+        } else {
+            "str"
+        }
+    };
+    let mut kinds = vec!["int"];
+    for (_, list) in &plan.grid {
+        let width = list.first().and_then(|v| v.as_array()).map(|a| a.len());
+        let split = width.is_some_and(|w| {
+            list.iter()
+                .all(|v| v.as_array().is_some_and(|a| a.len() == w))
+        });
+        match width {
+            Some(w) if split => kinds.extend(
+                (0..w).map(|i| kind(&mut list.iter().map(|v| v.as_array().and_then(|a| a.get(i))))),
+            ),
+            _ => kinds.push(kind(&mut list.iter().map(Some))),
+        }
+    }
+    kinds.extend(plan.random.iter().map(|_| "float"));
+    if plan.derives_seed {
+        kinds.push("int");
+    }
+    kinds.extend(
+        isotrack_runs::sweep::rows::METRIC_COLUMNS
+            .iter()
+            .map(|c| match *c {
+                "outcome" | "outcome_detail" | "warnings" => "str",
+                "samples" => "int",
+                _ => "float",
+            }),
+    );
+    kinds
+}

@@ -1,0 +1,166 @@
+//! Python values as `Scenario.set`'s dotted keys and TOML values: checked and converted here,
+//! never read as TOML text.
+
+use crate::errors::ScenarioErrorPy;
+use pyo3::prelude::*;
+use pyo3::types::{PyList, PyTuple};
+
+/// The most dotted parts of a key (`isotrack_scenario`'s limit for `--set`) and the deepest
+/// nesting of lists in a value (a scenario's deepest value is a list of pairs).
+const MAX_KEY_PARTS: usize = isotrack_scenario::load::MAX_KEY_PARTS;
+const MAX_VALUE_DEPTH: usize = 8;
+
+/// A `Scenario.set` key: dotted parts of letters, digits, `_` and `-` (TOML's bare keys), at
+/// most [`MAX_KEY_PARTS`] of them. Anything else is refused here, so that no key is ever read
+/// as TOML (`"sim.duration_s = 7 #"` once set the duration to 7).
+pub(crate) fn check_key(key: &str) -> PyResult<()> {
+    let shown = isotrack_scenario::load::clip(key);
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.len() > MAX_KEY_PARTS {
+        return Err(ScenarioErrorPy::new_err(format!(
+            "`{shown}`: a key has at most {MAX_KEY_PARTS} dotted parts, this one has {}",
+            parts.len()
+        )));
+    }
+    let bare = |p: &str| {
+        !p.is_empty()
+            && p.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    };
+    if !parts.iter().all(|p| bare(p)) {
+        return Err(ScenarioErrorPy::new_err(format!(
+            "`{shown}`: not a dotted key such as controller.kp (letters, digits, `_` and `-` \
+             between the dots)"
+        )));
+    }
+    Ok(())
+}
+
+/// A value as a TOML literal for `--set`, its floats in the shortest form that reads back
+/// exactly (`1e300`, not the 301 digits the `toml` crate writes, which every error message
+/// would echo): Rust's `{:?}` of a finite `f64`, which TOML reads (`1e300`, `0.1`, `10.0`).
+pub(crate) fn toml_literal(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) if f.is_finite() => format!("{f:?}"),
+        toml::Value::Array(items) => {
+            let parts: Vec<String> = items.iter().map(toml_literal).collect();
+            format!("[{}]", parts.join(", "))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// A scenario error about a float given for an integer key, as the user wrote it: serde
+/// echoes the float through its own formatting (`2.0**64` as `floating point
+/// `18446744073709552000.0``, digits the user never wrote), and does not say which integers
+/// the key takes. The float is echoed as Python's `repr` and the range named (TOML's integers
+/// are 64-bit signed, so an unsigned key takes 0 ..= 2**63-1).
+pub(crate) fn as_written(message: &str, value: &Bound<'_, PyAny>) -> String {
+    const FLOAT: &str = "invalid type: floating point `";
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        return message.to_string();
+    }
+    let Some(start) = message.find(FLOAT) else {
+        return message.to_string();
+    };
+    let rest = &message[start + FLOAT.len()..];
+    let Some(close) = rest.find('`') else {
+        return message.to_string();
+    };
+    let after = &rest[close + 1..];
+    let (expected, tail) = match after.strip_prefix(", expected ") {
+        Some(e) => {
+            let end = e
+                .find(|c: char| !c.is_ascii_alphanumeric())
+                .unwrap_or(e.len());
+            (&e[..end], &e[end..])
+        }
+        None => ("", after),
+    };
+    let range = match expected {
+        "u8" => "an integer in 0 ..= 255",
+        "u16" => "an integer in 0 ..= 65535",
+        "u32" => "an integer in 0 ..= 4294967295 (2**32-1)",
+        "u64" | "usize" => "an integer in 0 ..= 9223372036854775807 (2**63-1, TOML's largest)",
+        "i32" => "an integer in -2147483648 ..= 2147483647",
+        "i64" | "isize" => "an integer in -2**63 ..= 2**63-1",
+        _ => return message.to_string(),
+    };
+    format!(
+        "{}{} is a float; this key takes {range}, written without a decimal point{tail}",
+        &message[..start],
+        shown(value)
+    )
+}
+
+/// A value's `repr` for a message, clipped (a million-element list once made a megabyte error),
+/// or its type when it has no `repr` (an int past Python's digit limit).
+pub(crate) fn shown(v: &Bound<'_, PyAny>) -> String {
+    let text = v
+        .repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| format!("a {}", v.get_type()));
+    isotrack_scenario::load::clip(&text)
+}
+
+/// A Python value as a TOML value for `--set`: booleans, integers (64-bit), finite floats,
+/// strings, and lists or tuples of them nested at most [`MAX_VALUE_DEPTH`] deep (a list that
+/// holds itself is refused, not followed).
+pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
+    let bad = |what: String| ScenarioErrorPy::new_err(format!("`{key}`: {what}"));
+    if depth > MAX_VALUE_DEPTH {
+        return Err(bad(format!(
+            "lists nested more than {MAX_VALUE_DEPTH} deep (or a list that holds itself)"
+        )));
+    }
+    if let Ok(b) = v.extract::<bool>() {
+        return Ok(toml::Value::Boolean(b));
+    }
+    if v.is_instance_of::<pyo3::types::PyInt>() {
+        return match v.extract::<i64>() {
+            Ok(i) => Ok(toml::Value::Integer(i)),
+            Err(_) => Err(bad(format!(
+                "{} does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)",
+                shown(v)
+            ))),
+        };
+    }
+    if let Ok(s) = v.extract::<String>() {
+        return Ok(toml::Value::String(s));
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let items: PyResult<Vec<toml::Value>> = v
+            .try_iter()?
+            .map(|item| toml_value(key, &item?, depth + 1))
+            .collect();
+        return Ok(toml::Value::Array(items?));
+    }
+    // A numpy integer (`np.int64`, `np.uint64`, ...) is not a Python int: taken exactly through
+    // `operator.index`, never through a float (which rounds past 2**53).
+    // A numpy array has `__index__` but refuses it unless it is a 0-d integer array: then it is
+    // no integer, and is read as a float below (or refused, naming the key).
+    let exact = if !v.is_instance_of::<pyo3::types::PyFloat>() && v.hasattr("__index__")? {
+        v.py().import("operator")?.call_method1("index", (v,)).ok()
+    } else {
+        None
+    };
+    if let Some(exact) = exact {
+        return match exact.extract::<i64>() {
+            Ok(i) => Ok(toml::Value::Integer(i)),
+            Err(_) => Err(bad(format!(
+                "{} does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)",
+                shown(v)
+            ))),
+        };
+    }
+    if let Ok(f) = v.extract::<f64>() {
+        if !f.is_finite() {
+            return Err(bad(format!("{f} is not a finite number")));
+        }
+        return Ok(toml::Value::Float(f));
+    }
+    Err(bad(format!(
+        "cannot use {} as a scenario value (numbers, booleans, strings or lists of them)",
+        shown(v)
+    )))
+}
