@@ -1,6 +1,7 @@
 """MAVSDK (version 4, the native binding from PyPI; an implementation nobody here wrote) as a
 ground station against `isotrack sitl` (issue 33): it discovers the vehicle, its telemetry
-matches isotrack's own trace of the same run, its Action plugin arms it, and its Offboard
+matches isotrack's own trace of the same run, its health says ready to arm and its landed
+state on the ground, then in the air once its Action plugin arms it, and its Offboard
 plugin's attitude setpoint turns it as commanded. Real time at 5x: the waits are generous and
 nothing asserts how long anything took."""
 

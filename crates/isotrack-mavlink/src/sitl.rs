@@ -601,8 +601,8 @@ impl Autopilot {
                         self.event(
                             t_s,
                             format!(
-                                "yaw rate {} rad/s from system {}, component {} clamped to the turn-rate limit {} rad/s (logged once)",
-                                Echo(s.body_yaw_rate as f64),
+                                "yaw rate {:?} rad/s from system {}, component {} clamped to the turn-rate limit {} rad/s (logged once)",
+                                s.body_yaw_rate,
                                 from.0,
                                 from.1,
                                 Echo(max)
