@@ -13,6 +13,7 @@ import re
 import socket
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -53,15 +54,20 @@ def companion(port):
 
 def take_control(c, seen):
     """Arm and OFFBOARD (PX4 custom main mode 6); returns the ACK results. Every message
-    received meanwhile goes into `seen`, and an ISO_S is answered as `drive` does."""
+    received meanwhile goes into `seen`, and an ISO_S is answered as `drive` does. As PX4
+    wants, a setpoint (stamped 2^32 - 1: it answers no sample) streams before the switch;
+    each COMMAND_ACK is addressed to the companion (MAVLink 2's target extension fields)."""
     acks = []
     for cmd, p in [(400, [1, 0, 0]), (176, [1, 6, 0])]:
+        if cmd == 176:
+            yaw_rate_setpoint(c, 2**32 - 1, 0.0)
         c.mav.command_long_send(1, 1, cmd, 0, *p, 0, 0, 0, 0)
         while True:
             m = c.recv_match(blocking=True, timeout=30)
             assert m is not None, "no COMMAND_ACK"
             seen.append(m)
             if m.get_type() == "COMMAND_ACK" and m.command == cmd:
+                assert (m.target_system, m.target_component) == COMPANION, m
                 acks.append(m.result)
                 break
     return acks
@@ -105,7 +111,7 @@ def test_pymavlink_decodes_every_message_sitl_sends():
     assert all(m.get_srcSystem() == 1 and m.get_srcComponent() == 1 for m in got)
     want = {"HEARTBEAT": 0, "SYS_STATUS": 1, "GLOBAL_POSITION_INT": 33, "LOCAL_POSITION_NED": 32,
             "ATTITUDE": 30, "VFR_HUD": 74, "HOME_POSITION": 242, "SYSTEM_TIME": 2,
-            "NAMED_VALUE_FLOAT": 251, "COMMAND_ACK": 77}
+            "NAMED_VALUE_FLOAT": 251, "COMMAND_ACK": 77, "EXTENDED_SYS_STATE": 245}
     for name, msg_id in want.items():
         ms = [m for m in got if m.get_type() == name]
         assert ms, f"no {name}"
@@ -118,6 +124,10 @@ def test_pymavlink_decodes_every_message_sitl_sends():
         assert count[t] == 201, (t, count[t])
     for t in ("SYS_STATUS", "SYSTEM_TIME", "HOME_POSITION"):
         assert count[t] == 21, (t, count[t])
+    # EXTENDED_SYS_STATE with the group and after each ACK; a ground vehicle on the ground.
+    assert count["EXTENDED_SYS_STATE"] >= 21 + 2
+    assert all(m.landed_state == mavutil.mavlink.MAV_LANDED_STATE_ON_GROUND
+               for m in got if m.get_type() == "EXTENDED_SYS_STATE")
     # Heartbeats: the 21 of the group, one after each ACK, the first of the three at the end
     # (and one a wall-clock second while the vehicle waits, if it ever waits that long).
     assert count["HEARTBEAT"] >= 21 + 2 + 1
@@ -194,13 +204,19 @@ def test_a_pymavlink_ground_station_hands_over_to_fly():
             assert g.recv_match(type="HEARTBEAT", blocking=True, timeout=30) is not None
             acks = []
             for cmd, prm in [(400, [1, 0, 0]), (176, [1, 6, 0])]:
-                g.mav.command_long_send(1, 1, cmd, 0, *prm, 0, 0, 0, 0)
-                while True:
-                    m = g.recv_match(type="COMMAND_ACK", blocking=True, timeout=30)
-                    assert m is not None, "no COMMAND_ACK"
-                    if m.command == cmd:
-                        acks.append(m.result)
+                # OFFBOARD is refused (1, TEMPORARILY_REJECTED, as PX4) until fly's setpoints
+                # stream: the pilot tries again.
+                for _ in range(50):
+                    g.mav.command_long_send(1, 1, cmd, 0, *prm, 0, 0, 0, 0)
+                    while True:
+                        m = g.recv_match(type="COMMAND_ACK", blocking=True, timeout=30)
+                        assert m is not None, "no COMMAND_ACK"
+                        if m.command == cmd:
+                            break
+                    if m.result != 1:
                         break
+                    time.sleep(0.2)
+                acks.append(m.result)
             assert acks == [0, 0]
             out, err = fly.communicate(timeout=120)
         finally:

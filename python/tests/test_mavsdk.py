@@ -1,6 +1,7 @@
 """MAVSDK (version 4, the native binding from PyPI; an implementation nobody here wrote) as a
 ground station against `isotrack sitl` (issue 33): it discovers the vehicle, its telemetry
-matches isotrack's own trace of the same run, its Action plugin arms it, and its Offboard
+matches isotrack's own trace of the same run, its health says ready to arm and its landed
+state on the ground, then in the air once its Action plugin arms it, and its Offboard
 plugin's attitude setpoint turns it as commanded. Real time at 5x: the waits are generous and
 nothing asserts how long anything took."""
 
@@ -20,7 +21,7 @@ mavsdk = pytest.importorskip("mavsdk")
 from mavsdk import Configuration, ComponentType, Mavsdk  # noqa: E402
 from mavsdk.plugins import offboard  # noqa: E402
 from mavsdk.plugins.action import Action  # noqa: E402
-from mavsdk.plugins.telemetry import FlightMode, Telemetry  # noqa: E402
+from mavsdk.plugins.telemetry import FlightMode, LandedState, Telemetry  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 R = 6_371_008.8  # mean Earth radius, m (docs/FLYING.md)
@@ -70,8 +71,13 @@ def test_mavsdk_ground_station_watches_arms_and_turns_the_vehicle():
             pos = until(lambda: (lambda q: q if math.isfinite(q.latitude_deg) and q.latitude_deg != 0 else None)(tel.position()))
             assert pos is not None
             assert tel.armed() is False
+            # SYS_STATUS's pre-arm check and sensors: ready to arm; EXTENDED_SYS_STATE: a
+            # disarmed fixed wing on the ground, then in the air once armed.
+            assert until(lambda: tel.health().is_armable and tel.health().is_global_position_ok)
+            assert until(lambda: tel.landed_state() == LandedState.ON_GROUND)
             act.arm()
             assert until(tel.armed)
+            assert until(lambda: tel.landed_state() == LandedState.IN_AIR and tel.in_air())
             # Roll -20 deg (left wing down): a coordinated left turn at
             # g tan(20 deg) / 30 m/s = 0.11902 rad/s through the autopilot's course loop.
             off.set_attitude(offboard.Attitude(-20.0, 0.0, 0.0, 0.5))

@@ -46,6 +46,11 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             "--speedup must be in [0.001, 1000]",
         ),
         (
+            vec!["sitl", "--mavlink", out, "--system-id", "0"],
+            64,
+            "--system-id 0 is MAVLink's broadcast address",
+        ),
+        (
             vec!["fly", "--mavlink", out, "--timeout-s", "1e20"],
             64,
             "--timeout-s must be in [0, 86400]",

@@ -231,6 +231,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
     positive("--timeout-s", Some(args.timeout_s))?;
     within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
+    if args.system_id == 0 {
+        // Messages addressed to system 0 are for everyone: a vehicle cannot be it.
+        return Err(usage(
+            "--system-id 0 is MAVLink's broadcast address, not a vehicle's: give 1 to 255".into(),
+        ));
+    }
     let scenario = load(&args.scenario)?;
     crate::run::refuse_team(&scenario, "sitl")?;
     let mut opts = SitlOptions::new(&args.mavlink);

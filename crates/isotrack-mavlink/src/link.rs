@@ -731,6 +731,28 @@ impl Link {
 
     /// Sends `msg` (MAVLink 2) to the peers; `Ok(false)` if there is no peer yet.
     pub fn send(&mut self, msg: &MavMessage) -> std::io::Result<bool> {
+        self.send_with(msg, None)
+    }
+
+    /// As [`Link::send`], with the bytes of the message's MAVLink 2 extension fields, which the
+    /// `mavlink` crate's common dialect (built without its `mav2-message-extensions` feature)
+    /// leaves out: `extensions` after the `base_len` bytes of its own fields, the checksum
+    /// seeded with `extra_crc` ([`crate::wire::extend_v2_frame`]).
+    pub fn send_extended(
+        &mut self,
+        msg: &MavMessage,
+        extra_crc: u8,
+        base_len: usize,
+        extensions: &[u8],
+    ) -> std::io::Result<bool> {
+        self.send_with(msg, Some((extra_crc, base_len, extensions)))
+    }
+
+    fn send_with(
+        &mut self,
+        msg: &MavMessage,
+        extensions: Option<(u8, usize, &[u8])>,
+    ) -> std::io::Result<bool> {
         self.evict();
         if !self.has_peer() {
             return Ok(false);
@@ -743,6 +765,9 @@ impl Link {
         self.sequence = self.sequence.wrapping_add(1);
         let mut frame = Vec::with_capacity(300);
         mavlink::write_v2_msg(&mut frame, header, msg).map_err(std::io::Error::other)?;
+        if let Some((extra_crc, base_len, ext)) = extensions {
+            frame = crate::wire::extend_v2_frame(&frame, extra_crc, base_len, ext);
+        }
         self.log.frame(&frame);
         self.stats.frames_out += 1;
         let stats = &mut self.stats;

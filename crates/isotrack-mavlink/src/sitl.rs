@@ -7,7 +7,8 @@
 //! recording rate (`output.record_rate_hz`, at least [`MIN_TELEMETRY_RATE_HZ`]: a lower rate,
 //! or 0, which turns the trace off, is refused before the link opens, since positions would
 //! stop): `GLOBAL_POSITION_INT`, `LOCAL_POSITION_NED`, `ATTITUDE`, `VFR_HUD`; once per
-//! simulated second `HEARTBEAT`, `SYS_STATUS`, `SYSTEM_TIME` and `HOME_POSITION`.
+//! simulated second `HEARTBEAT`, `SYS_STATUS`, `EXTENDED_SYS_STATE`, `SYSTEM_TIME` and
+//! `HOME_POSITION`.
 //!
 //! Start: the run (and its clock, real time or lockstep) starts on the first frame of a peer
 //! that talks to this vehicle ([`starts_the_run`]): a `HEARTBEAT` of a ground station or a
@@ -258,9 +259,22 @@ struct Autopilot {
     flying: bool,
     /// The last valid setpoint of the owner: turn rate, rad/s, and the simulated time it came.
     setpoint: Option<(f64, f64)>,
+    /// The wall-clock instant of the last valid setpoint (the stream a lockstep vehicle,
+    /// whose simulated time stands still while nobody flies it, checks before OFFBOARD).
+    setpoint_wall: Option<Instant>,
+    /// When setpoints count as streaming ([`Autopilot::streaming`]).
+    stream: Stream,
+    /// The simulated time of the last switch to OFFBOARD: the offboard failsafe's clock runs
+    /// from it or from the last valid setpoint, whichever is later.
+    offboard_since_s: f64,
     transport: Transport,
     loiter_radps: f64,
     turn_limit_radps: f64,
+    /// The largest turn rate a ground vehicle's yaw-rate setpoint gives, rad/s: the scenario's
+    /// turn-rate limit, else [`MAX_GROUND_TURN_RATE_RADPS`].
+    ground_max_radps: f64,
+    /// A yaw rate beyond `ground_max_radps` has been clamped and logged.
+    clamp_logged: bool,
     events: Vec<String>,
     /// Events not logged (past [`MAX_EVENTS`]).
     events_dropped: u64,
@@ -276,6 +290,24 @@ struct Autopilot {
 
 /// The most ground stations (by heartbeat) the vehicle remembers.
 pub const MAX_GROUND_STATIONS: usize = 8;
+
+/// The largest turn rate a ground vehicle flies from a yaw-rate setpoint when its scenario has
+/// no turn-rate limit (`controller.max_turn_rate_radps` unset on the Dubins robot), rad/s:
+/// a bound on what a setpoint may ask (a yaw rate of 1e30 rad/s would otherwise be flown),
+/// five times the largest command of the default scenario's law (1.98 rad/s).
+pub const MAX_GROUND_TURN_RATE_RADPS: f64 = 10.0;
+
+/// When a vehicle counts its setpoints as streaming, as PX4 requires before it switches to
+/// OFFBOARD (its offboard signal not lost): a valid setpoint within `within_s` of simulated
+/// time (real time), or, in lockstep (where simulated time stands still while nobody flies
+/// the vehicle), within `within_wall` of wall time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Stream {
+    /// Within this many simulated seconds ([`SitlOptions::setpoint_timeout_s`]).
+    Simulated { within_s: f64 },
+    /// Within this wall time ([`SitlOptions::companion_timeout_s`]).
+    Wall { within: Duration },
+}
 
 impl Autopilot {
     /// Whether `from` is a ground station: system [`GCS_SYSTEM_ID`], or a sender whose
@@ -348,6 +380,27 @@ impl Autopilot {
         self.armed && self.mode == Mode::Offboard
     }
 
+    /// Whether setpoints are streaming at simulated time `t_s` ([`Stream`]): PX4 refuses
+    /// OFFBOARD without them.
+    fn streaming(&self, t_s: f64) -> bool {
+        match self.stream {
+            Stream::Simulated { within_s } => {
+                self.setpoint.is_some_and(|(_, at)| t_s - at <= within_s)
+            }
+            Stream::Wall { within } => self.setpoint_wall.is_some_and(|w| w.elapsed() <= within),
+        }
+    }
+
+    /// Whether the offboard failsafe trips at simulated time `t_s`: armed in OFFBOARD with no
+    /// valid setpoint for more than `timeout_s`, counted from the later of the last valid
+    /// setpoint and the switch to OFFBOARD.
+    fn offboard_lost(&self, t_s: f64, timeout_s: f64) -> bool {
+        self.follows_setpoints()
+            && self
+                .setpoint
+                .is_none_or(|(_, at)| t_s - at.max(self.offboard_since_s) > timeout_s)
+    }
+
     /// The turn rate the vehicle holds from a sample at `pose`.
     fn turn_rate(&self, pose: Option<Pose2>) -> f64 {
         if !self.armed {
@@ -416,11 +469,13 @@ impl Autopilot {
                     MavResult::MAV_RESULT_ACCEPTED
                 } else if c.param1 == 0.0 {
                     let owner = self.owner == Some(from);
-                    if self.armed && self.flying && !owner && !forced {
+                    // As PX4 ("Disarming denied: not landed"): an unforced disarm in the air
+                    // is refused whoever sends it, the owner too.
+                    if self.armed && self.flying && !forced {
                         return self.deny(
                             t_s,
                             from,
-                            "disarm in flight (not the owner: needs force code 21196)",
+                            "disarm in flight (not landed: needs force code 21196)",
                         );
                     }
                     if self.armed && !owner && !gcs && !forced {
@@ -438,9 +493,23 @@ impl Autopilot {
                 self.deny(t_s, from, "mode change (another system has control)")
             }
             MavCmd::MAV_CMD_DO_SET_MODE => match Mode::from_px4(c.param2, c.param3) {
+                Some(Mode::Offboard) if c.param1 as u32 & 1 == 1 && !self.streaming(t_s) => {
+                    // As PX4: no OFFBOARD before setpoints stream (its offboard signal lost).
+                    self.event(
+                        t_s,
+                        format!(
+                            "refused OFFBOARD from system {}, component {}: no setpoint streaming (a valid one must come first)",
+                            from.0, from.1
+                        ),
+                    );
+                    MavResult::MAV_RESULT_TEMPORARILY_REJECTED
+                }
                 Some(m) if c.param1 as u32 & 1 == 1 => {
                     if m != self.mode {
                         self.event(t_s, format!("mode {} by system {}", m.name(), from.0));
+                        if m == Mode::Offboard {
+                            self.offboard_since_s = t_s;
+                        }
                     }
                     self.mode = m;
                     if m == Mode::Offboard && !gcs && self.owner.is_none() {
@@ -488,6 +557,29 @@ impl Autopilot {
             !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE);
         let yaw_rate =
             !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE);
+        // A field the mask does not ignore must be a number: the vehicle flies at the
+        // scenario's speed and ignores the thrust and the roll and pitch rates' values, but a
+        // setpoint carrying an infinite thrust is no valid setpoint.
+        let used_finite = [
+            (
+                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE,
+                s.body_roll_rate,
+            ),
+            (
+                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE,
+                s.body_pitch_rate,
+            ),
+            (
+                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
+                s.thrust,
+            ),
+        ]
+        .iter()
+        .all(|(bit, v)| m.contains(*bit) || v.is_finite());
+        if !used_finite {
+            self.refused += 1;
+            return None;
+        }
         let w = match self.transport {
             Transport::FixedWing { airspeed_mps } if attitude => {
                 wire::roll_of_quaternion(s.q).map(|r| wire::turn_rate_of_roll(r, airspeed_mps))
@@ -499,7 +591,27 @@ impl Autopilot {
                     wire::turn_rate_of_roll(wire::roll_of_turn_rate(w, airspeed_mps), airspeed_mps)
                 })
             }
-            Transport::Ground if yaw_rate => wire::turn_rate_of_yaw_rate(s.body_yaw_rate),
+            // Within the scenario's turn-rate limit (else MAX_GROUND_TURN_RATE_RADPS), as the
+            // single run's output stage bounds the law.
+            Transport::Ground if yaw_rate => {
+                wire::turn_rate_of_yaw_rate(s.body_yaw_rate).map(|w| {
+                    let max = self.ground_max_radps;
+                    if w.abs() > max && !self.clamp_logged {
+                        self.clamp_logged = true;
+                        self.event(
+                            t_s,
+                            format!(
+                                "yaw rate {:?} rad/s from system {}, component {} clamped to the turn-rate limit {} rad/s (logged once)",
+                                s.body_yaw_rate,
+                                from.0,
+                                from.1,
+                                Echo(max)
+                            ),
+                        );
+                    }
+                    w.clamp(-max, max)
+                })
+            }
             _ => None,
         };
         match w {
@@ -510,6 +622,7 @@ impl Autopilot {
                     self.owner = Some(from);
                 }
                 self.setpoint = Some((w, t_s));
+                self.setpoint_wall = Some(Instant::now());
                 Some(Applied {
                     ms: s.time_boot_ms,
                     newer,
@@ -579,6 +692,48 @@ impl Sitl<'_> {
         }))
     }
 
+    /// A `COMMAND_ACK` addressed, as PX4 addresses it, to the command's sender: its
+    /// `target_system` and `target_component` extension fields (MAVLink 2), so that a ground
+    /// station and a companion on one link each tell their own acknowledgements from the
+    /// other's.
+    fn command_ack(
+        &mut self,
+        command: MavCmd,
+        result: MavResult,
+        to: (u32, u8),
+    ) -> Result<(), SitlError> {
+        let ack = MavMessage::COMMAND_ACK(COMMAND_ACK_DATA { command, result });
+        // The extensions after `command` (2 bytes) and `result` (1): `progress` (u8, 0),
+        // `result_param2` (i32, 0), `target_system`, `target_component`.
+        let to_system = u8::try_from(to.0).unwrap_or(0);
+        let extensions = [0, 0, 0, 0, 0, to_system, to.1];
+        self.link
+            .send_extended(
+                &ack,
+                <COMMAND_ACK_DATA as mavlink::MessageData>::EXTRA_CRC,
+                3,
+                &extensions,
+            )
+            .map(|_| ())
+            .map_err(SitlError::Io)
+    }
+
+    /// `EXTENDED_SYS_STATE`: the landed state, as PX4's land detectors report it here: a
+    /// fixed wing armed is in the air (the scenario flies it from its start; disarmed, it is
+    /// on the ground); a ground vehicle is always on the ground. A ground station (MAVSDK's
+    /// `in_air`, `landed_state`) reads it.
+    fn extended_sys_state(&mut self) -> Result<(), SitlError> {
+        let landed_state = if self.ap.flying && self.ap.armed {
+            MavLandedState::MAV_LANDED_STATE_IN_AIR
+        } else {
+            MavLandedState::MAV_LANDED_STATE_ON_GROUND
+        };
+        self.send(MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+            vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+            landed_state,
+        }))
+    }
+
     fn statustext(&mut self, severity: MavSeverity, text: &str) -> Result<(), SitlError> {
         let mut bytes = [0u8; 50];
         for (b, c) in bytes.iter_mut().zip(text.bytes()) {
@@ -598,8 +753,14 @@ impl Sitl<'_> {
         self.next_slow_s = t_s.floor() + 1.0;
         let ms = wire::time_ms(t_s).unwrap_or(u32::MAX);
         self.heartbeat(false)?;
+        // Present, enabled and healthy: what a ground station's health reads (MAVSDK: the gyro,
+        // accelerometer and magnetometer calibrations, GPS for the global and local position,
+        // the pre-arm check for `is_armable`; home comes with `HOME_POSITION`).
         let sensors = MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_GPS
-            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO;
+            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_GYRO
+            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_ACCEL
+            | MavSysStatusSensor::MAV_SYS_STATUS_SENSOR_3D_MAG
+            | MavSysStatusSensor::MAV_SYS_STATUS_PREARM_CHECK;
         self.send(MavMessage::SYS_STATUS(SYS_STATUS_DATA {
             onboard_control_sensors_present: sensors,
             onboard_control_sensors_enabled: sensors,
@@ -610,6 +771,7 @@ impl Sitl<'_> {
             battery_remaining: -1,
             ..Default::default()
         }))?;
+        self.extended_sys_state()?;
         let unix_us = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_micros() as u64);
@@ -715,12 +877,10 @@ impl Sitl<'_> {
                         continue;
                     }
                     let result = self.ap.command(t_s, from, c);
-                    self.send(MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
-                        command: c.command,
-                        result,
-                    }))?;
+                    self.command_ack(c.command, result, from)?;
                     // The new state at once (PX4 also reports it in the next heartbeat).
                     self.heartbeat(false)?;
+                    self.extended_sys_state()?;
                 }
                 MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
                     self.ap.heard_gcs(from);
@@ -786,6 +946,8 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
     on_ready(&link);
     let transport = Transport::of(scenario);
     let turn_limit = scenario.max_turn_rate_radps().unwrap_or(0.2);
+    let companion_timeout = Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
+        .unwrap_or(Duration::from_secs(86_400));
     let start = scenario.start();
     let speed = scenario.start_speed_mps(start);
     let mut sitl = Sitl {
@@ -797,9 +959,23 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
             owner: None,
             flying: scenario.is_flying(),
             setpoint: None,
+            setpoint_wall: None,
+            stream: match opts.pace {
+                Pace::RealTime { .. } => Stream::Simulated {
+                    within_s: opts.setpoint_timeout_s,
+                },
+                Pace::Lockstep => Stream::Wall {
+                    within: companion_timeout,
+                },
+            },
+            offboard_since_s: 0.0,
             transport,
             loiter_radps: 0.5 * turn_limit,
             turn_limit_radps: turn_limit,
+            ground_max_radps: scenario
+                .max_turn_rate_radps()
+                .unwrap_or(MAX_GROUND_TURN_RATE_RADPS),
+            clamp_logged: false,
             events: Vec::new(),
             events_dropped: 0,
             refused: 0,
@@ -838,8 +1014,6 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
     let wall0 = Instant::now();
     let mut interrupted = false;
     let mut companion_lost = false;
-    let companion_timeout = Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
-        .unwrap_or(Duration::from_secs(86_400));
     loop {
         if sitl.stop.load(Ordering::Relaxed) {
             interrupted = true;
@@ -926,13 +1100,7 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
             },
             Pace::RealTime { .. } => {
                 sitl.handle_inbound(t, Duration::ZERO)?;
-                if sitl.ap.mode == Mode::Offboard
-                    && sitl.ap.armed
-                    && sitl
-                        .ap
-                        .setpoint
-                        .is_none_or(|(_, at)| t - at > opts.setpoint_timeout_s)
-                {
+                if sitl.ap.offboard_lost(t, opts.setpoint_timeout_s) {
                     sitl.ap.mode = Mode::Hold;
                     let what = format!(
                         "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
@@ -1033,9 +1201,14 @@ mod tests {
             owner: None,
             flying: false,
             setpoint: None,
+            setpoint_wall: None,
+            stream: Stream::Simulated { within_s: 1.0 },
+            offboard_since_s: 0.0,
             transport: Transport::Ground,
             loiter_radps: 0.1,
             turn_limit_radps: 0.2,
+            ground_max_radps: 0.2,
+            clamp_logged: false,
             events: Vec::new(),
             events_dropped: 0,
             refused: 0,
@@ -1103,5 +1276,139 @@ mod tests {
             &MavMessage::STATUSTEXT(STATUSTEXT_DATA::default()),
             1
         ));
+    }
+
+    fn command_long(command: MavCmd, p1: f32, p2: f32, p3: f32) -> COMMAND_LONG_DATA {
+        COMMAND_LONG_DATA {
+            param1: p1,
+            param2: p2,
+            param3: p3,
+            command,
+            target_system: 1,
+            target_component: 1,
+            ..Default::default()
+        }
+    }
+
+    /// A yaw-rate setpoint (attitude ignored) answering no sample, with `thrust` and the
+    /// extra `ignore` bits.
+    fn yaw_rate(r: f32, thrust: f32, ignore: AttitudeTargetTypemask) -> SET_ATTITUDE_TARGET_DATA {
+        SET_ATTITUDE_TARGET_DATA {
+            time_boot_ms: NOT_AN_ANSWER_MS,
+            q: [1.0, 0.0, 0.0, 0.0],
+            body_yaw_rate: r,
+            thrust,
+            target_system: 1,
+            target_component: 1,
+            type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE | ignore,
+            ..Default::default()
+        }
+    }
+
+    const ACCEPTED: MavResult = MavResult::MAV_RESULT_ACCEPTED;
+    const DENIED: MavResult = MavResult::MAV_RESULT_DENIED;
+
+    /// The ground-station rule of docs/FLYING.md: a ground station (MAVSDK's system 245 by
+    /// its `MAV_TYPE_GCS` heartbeat) arms the vehicle without owning it; system 255's
+    /// setpoints are refused, a 245's fly it (MAVSDK flying Offboard itself) and make it the
+    /// owner. Then, the vehicle a fixed wing in the air: the owner's own unforced disarm (param2
+    /// NaN, as MAVSDK sends it) is refused, as PX4 refuses one not landed; forced, accepted.
+    #[test]
+    fn a_ground_station_flies_by_setpoints_but_never_disarms_in_the_air_unforced() {
+        let mut ap = autopilot();
+        ap.armed = false;
+        ap.mode = Mode::Manual;
+        ap.flying = true;
+        let (mavsdk, qgc) = ((245, 190), (255, 190));
+        ap.heard_gcs(mavsdk);
+        let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+        assert_eq!(
+            ap.command(0.0, mavsdk, &command_long(arm, 1.0, f32::NAN, 0.0)),
+            ACCEPTED
+        );
+        assert_eq!(ap.owner, None, "arming as a pilot takes no control");
+        let none = AttitudeTargetTypemask::empty();
+        assert!(ap.setpoint(0.0, qgc, &yaw_rate(0.1, 0.5, none)).is_none());
+        assert_eq!(ap.refused, 1);
+        assert!(ap
+            .setpoint(0.0, mavsdk, &yaw_rate(0.1, 0.5, none))
+            .is_some());
+        assert_eq!(ap.owner, Some(mavsdk));
+        let unforced = command_long(arm, 0.0, f32::NAN, 0.0);
+        assert_eq!(ap.command(1.0, mavsdk, &unforced), DENIED);
+        assert_eq!(ap.command(1.0, qgc, &unforced), DENIED);
+        assert!(ap.armed);
+        let forced = command_long(arm, 0.0, FORCE_CODE, 0.0);
+        assert_eq!(ap.command(2.0, qgc, &forced), ACCEPTED);
+        assert!(!ap.armed);
+        // A ground vehicle is on the ground: its owner disarms it unforced.
+        let mut rover = autopilot();
+        rover.owner = Some((1, 191));
+        assert_eq!(rover.command(0.0, (1, 191), &unforced), ACCEPTED);
+    }
+
+    /// As PX4: OFFBOARD is refused (temporarily) until setpoints stream, a valid one within
+    /// the setpoint timeout (1 s here); the offboard failsafe's 1 s then runs from the switch
+    /// when the last setpoint came before it: a setpoint at 2.0 s, the switch at 2.5 s, no
+    /// failsafe at 3.4 s (0.9 s after the switch), one at 3.6 s.
+    #[test]
+    fn offboard_needs_setpoints_streaming_and_its_failsafe_counts_from_the_switch() {
+        let mut ap = autopilot();
+        ap.armed = false;
+        ap.mode = Mode::Manual;
+        let c = (1, 191);
+        let offboard = command_long(MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0, 0.0);
+        let arm = command_long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0, 0.0);
+        assert_eq!(ap.command(0.0, c, &arm), ACCEPTED);
+        let rejected = MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+        assert_eq!(ap.command(0.0, c, &offboard), rejected);
+        assert_eq!(ap.mode, Mode::Manual);
+        let none = AttitudeTargetTypemask::empty();
+        assert!(ap.setpoint(0.5, c, &yaw_rate(0.0, 0.0, none)).is_some());
+        // 1.5 s later the stream is gone.
+        assert_eq!(ap.command(2.0, c, &offboard), rejected);
+        assert!(ap.setpoint(2.0, c, &yaw_rate(0.0, 0.0, none)).is_some());
+        assert_eq!(ap.command(2.5, c, &offboard), ACCEPTED);
+        assert_eq!(ap.mode, Mode::Offboard);
+        assert!(!ap.offboard_lost(3.4, 1.0));
+        assert!(ap.offboard_lost(3.6, 1.0));
+    }
+
+    /// A setpoint whose thrust is used (not masked) must be a number: +inf refused; the same
+    /// with the thrust ignored moves the vehicle.
+    #[test]
+    fn an_infinite_thrust_is_no_valid_setpoint() {
+        let mut ap = autopilot();
+        let c = (1, 191);
+        let none = AttitudeTargetTypemask::empty();
+        assert!(ap
+            .setpoint(0.0, c, &yaw_rate(0.1, f32::INFINITY, none))
+            .is_none());
+        assert!(ap
+            .setpoint(0.0, c, &yaw_rate(0.1, f32::NAN, none))
+            .is_none());
+        assert_eq!((ap.refused, ap.setpoint), (2, None));
+        let ignored = AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE;
+        assert!(ap
+            .setpoint(0.0, c, &yaw_rate(0.1, f32::INFINITY, ignored))
+            .is_some());
+        assert_eq!(ap.setpoint.map(|(w, _)| w), Some(-(0.1f32 as f64)));
+    }
+
+    /// A ground vehicle's yaw rate beyond its turn-rate limit (0.2 rad/s here) flies at the
+    /// limit, in its direction (a yaw rate of 1e30 clockwise: -0.2), logged once.
+    #[test]
+    fn a_ground_yaw_rate_is_clamped_to_the_turn_rate_limit() {
+        let mut ap = autopilot();
+        let c = (1, 191);
+        let none = AttitudeTargetTypemask::empty();
+        assert!(ap.setpoint(0.0, c, &yaw_rate(1e30, 0.0, none)).is_some());
+        assert_eq!(ap.setpoint.map(|(w, _)| w), Some(-0.2));
+        assert!(ap.setpoint(0.1, c, &yaw_rate(-5.0, 0.0, none)).is_some());
+        assert_eq!(ap.setpoint.map(|(w, _)| w), Some(0.2));
+        assert_eq!(ap.events.len(), 1, "{:?}", ap.events);
+        assert!(ap.events[0].contains("clamped"), "{:?}", ap.events);
+        assert!(ap.setpoint(0.2, c, &yaw_rate(0.05, 0.0, none)).is_some());
+        assert_eq!(ap.setpoint.map(|(w, _)| w), Some(-(0.05f32 as f64)));
     }
 }

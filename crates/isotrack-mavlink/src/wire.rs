@@ -135,6 +135,36 @@ pub fn ground_round_trip(omega_radps: f64) -> f64 {
     turn_rate_of_yaw_rate(yaw_rate_of_turn_rate(omega_radps)).unwrap_or(0.0)
 }
 
+/// The length of a MAVLink 2 frame's start byte and header (unsigned, 8-bit system ids), bytes.
+const V2_HEADER_LEN: usize = 10;
+
+/// A MAVLink 2 `frame` (as `mavlink::write_v2_msg` writes it: unsigned, trailing zeros of its
+/// payload truncated) with the bytes of the message's extension fields appended: the payload
+/// padded with zeros to its `base_len` bytes, then `extensions`, its trailing zeros truncated
+/// again (at least one byte kept), the length byte set and the checksum (CRC-16/MCRF4XX of the
+/// header after the start byte and the payload, then `extra_crc`, the message's CRC_EXTRA)
+/// computed again (<https://mavlink.io/en/guide/serialization.html>). A frame that is not
+/// such a MAVLink 2 frame comes back unchanged.
+pub fn extend_v2_frame(frame: &[u8], extra_crc: u8, base_len: usize, extensions: &[u8]) -> Vec<u8> {
+    let unsigned_v2 = frame.len() >= V2_HEADER_LEN + 2 && frame[0] == 0xFD && frame[2] == 0;
+    let len = frame.get(1).map_or(0, |l| *l as usize);
+    if !unsigned_v2 || frame.len() != V2_HEADER_LEN + len + 2 || base_len + extensions.len() > 255 {
+        return frame.to_vec();
+    }
+    let mut payload = frame[V2_HEADER_LEN..V2_HEADER_LEN + len].to_vec();
+    payload.resize(base_len.max(len), 0);
+    payload.extend_from_slice(extensions);
+    while payload.len() > 1 && payload.last() == Some(&0) {
+        payload.pop();
+    }
+    let mut out = frame[..V2_HEADER_LEN].to_vec();
+    out[1] = payload.len() as u8;
+    out.extend_from_slice(&payload);
+    let crc = mavlink::calculate_crc(&out[1..], extra_crc);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,5 +226,57 @@ mod tests {
         });
         assert_eq!(m.t_s, 0.3);
         assert_eq!(m.value, 0.1f32 as f64);
+    }
+
+    /// A `COMMAND_ACK` (command 400, result ACCEPTED = 0: the crate truncates the result
+    /// byte) extended with its target (system 245, component 190): the payload is the
+    /// little-endian command, the result, `progress` and `result_param2` zero, then the
+    /// target, 10 bytes; the frame passes the `mavlink` crate's own checksum check on reading,
+    /// and reads back as the same acknowledgement.
+    #[test]
+    fn an_extended_frame_carries_its_extensions_and_a_valid_checksum() {
+        use mavlink::dialects::common::*;
+        use mavlink::MessageData;
+        let ack = MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+            command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            result: MavResult::MAV_RESULT_ACCEPTED,
+        });
+        let header = mavlink::MavHeader {
+            system_id: 1,
+            component_id: 1,
+            sequence: 7,
+        };
+        let mut frame = Vec::new();
+        mavlink::write_v2_msg(&mut frame, header, &ack).unwrap();
+        assert_eq!(frame[1], 2, "the crate truncates the zero result");
+        let out = extend_v2_frame(
+            &frame,
+            COMMAND_ACK_DATA::EXTRA_CRC,
+            3,
+            &[0, 0, 0, 0, 0, 245, 190],
+        );
+        assert_eq!(out[1], 10);
+        assert_eq!(&out[10..20], &[0x90, 0x01, 0, 0, 0, 0, 0, 0, 245, 190]);
+        assert_eq!(&out[..10], {
+            let mut h = frame[..10].to_vec();
+            h[1] = 10;
+            h
+        });
+        let read = |bytes: &[u8]| {
+            mavlink::MavlinkReader::new(bytes)
+                .read_any_message::<MavMessage>()
+                .ok()
+        };
+        let (h, back) = read(&out).expect("a valid frame");
+        assert_eq!((h.system_id, h.component_id, h.sequence), (1, 1, 7));
+        assert_eq!(back, ack);
+        // The reader checks the checksum: the same bytes with the old one do not read.
+        let mut stale = out.clone();
+        let n = stale.len();
+        stale[n - 2..].copy_from_slice(&frame[frame.len() - 2..]);
+        assert!(read(&stale).is_none());
+        // A zero target truncates back to the crate's own frame.
+        let plain = extend_v2_frame(&frame, COMMAND_ACK_DATA::EXTRA_CRC, 3, &[0; 7]);
+        assert_eq!(plain, frame);
     }
 }

@@ -543,6 +543,12 @@ fn a_lockstep_vehicle_ends_when_the_companion_is_gone() {
         ack_of(&mut c, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0),
         ok
     );
+    // Setpoints first (answering no sample), as PX4 needs them before OFFBOARD.
+    let mut first = yaw_rate_setpoint(0.0);
+    if let MavMessage::SET_ATTITUDE_TARGET(d) = &mut first {
+        d.time_boot_ms = u32::MAX;
+    }
+    c.send(&first).unwrap();
     assert_eq!(ack_of(&mut c, MavCmd::MAV_CMD_DO_SET_MODE, 1.0, 6.0), ok);
     // The first sample (t = 0) came while the commands were acknowledged: answered now,
     // within the 0.5 s the vehicle waits for a message.

@@ -94,12 +94,17 @@ fn listen(g: &mut Link, wall: Duration, newest: &mut Option<u32>, acks: &mut Vec
     }
 }
 
-/// Arms the vehicle and switches it to OFFBOARD as a ground station; both accepted.
+/// Arms the vehicle and switches it to OFFBOARD as a ground station; both accepted. A setpoint
+/// that answers no sample (stamped `u32::MAX`) goes first: as PX4, the vehicle refuses
+/// OFFBOARD before setpoints stream.
 fn arm_offboard(g: &mut Link, newest: &mut Option<u32>) {
     for (cmd, p) in [
         (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, f32::NAN, 0.0]),
         (MavCmd::MAV_CMD_DO_SET_MODE, [1.0, 6.0, 0.0]),
     ] {
+        if cmd == MavCmd::MAV_CMD_DO_SET_MODE {
+            g.send(&setpoint(u32::MAX, 0.0)).unwrap();
+        }
         g.send(&command(cmd, p)).unwrap();
         let mut acks = Vec::new();
         let t0 = Instant::now();

@@ -294,6 +294,10 @@ fn sitl_drops_a_silent_ground_station() {
         (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0),
         (MavCmd::MAV_CMD_DO_SET_MODE, 6.0),
     ] {
+        if cmd == MavCmd::MAV_CMD_DO_SET_MODE {
+            // Setpoints before OFFBOARD, as PX4 needs them (this one answers no sample).
+            c.send(&neutral_setpoint(u32::MAX)).unwrap();
+        }
         c.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
             param1: 1.0,
             param2: p2,
