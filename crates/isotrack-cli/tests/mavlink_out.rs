@@ -168,3 +168,33 @@ fn out_through_a_link_to_a_directory_writes_there() {
         .file_type()
         .is_symlink());
 }
+
+/// `sitl --out` interrupted before any peer talked to it (its run never started) leaves an
+/// earlier run in `DIR` whole (it replaced it with a header-only trace before).
+#[test]
+fn a_sitl_interrupted_before_its_run_starts_leaves_an_earlier_run_whole() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("vehicle");
+    let earlier = earlier_flight(&d);
+    let mut sitl = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", "--mavlink", "udpin:127.0.0.1:0", "--out"])
+        .arg(&d)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufReader::new(sitl.stderr.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert!(line.contains("vehicle on"), "{line}");
+    let ok = std::process::Command::new("kill")
+        .args(["-INT", &sitl.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = sitl.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130));
+    assert_eq!(contents(&d), earlier);
+}

@@ -309,6 +309,11 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     } else {
         None
     };
+    // A run that started (a peer talked to the vehicle) writes its directory even without a
+    // trace row (a lockstep run nobody flew); one that never started leaves DIR as it was.
+    if report.started {
+        live.start();
+    }
     let wrote = live.end(|| {
         let mut summary = Summary::of_run(
             &scenario,
@@ -530,6 +535,15 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             code: NOTHING_COMMANDED,
             message: format!(
                 "failsafe ({}) before the companion had control of the vehicle: it stopped and commanded nothing (the vehicle's mode stands)",
+                report.end.as_str()
+            ),
+        });
+    }
+    if commanded && report.way_out_overridden {
+        return Err(Failure {
+            code: exit::UNAVAILABLE,
+            message: format!(
+                "failsafe ({}): a pilot took over during the retries (see above): they stopped unconfirmed, the pilot's mode stands",
                 report.end.as_str()
             ),
         });

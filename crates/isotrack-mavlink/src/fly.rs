@@ -46,6 +46,10 @@ pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 /// the vehicle ambiguous (`two_vehicles`), s.
 pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
 
+/// The shortest silence of the vehicle's heartbeats that ends a flight (`link_lost`) even
+/// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
+pub const MIN_HEARTBEAT_TIMEOUT_S: f64 = 3.0;
+
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
@@ -228,6 +232,9 @@ enum Answer {
     OtherSafeMode(&'static str),
     /// It refused (`DENIED`, `UNSUPPORTED`, `FAILED`).
     Refused,
+    /// Its heartbeat shows a mode (or a disarm) the companion did not command and that is
+    /// not a safe one: a pilot took over during the retries (its word is final).
+    PilotTookOver(String),
 }
 
 /// Options of [`run_fly`].
@@ -393,6 +400,9 @@ pub struct FlyReport {
     /// Measurements with the time of one already answered (a repeat): answered again with the
     /// same setpoint, never given to the law twice.
     pub measurements_repeated: u64,
+    /// A pilot took over during the failsafe's retries (a mode or disarm the companion did not
+    /// command): the retries stopped unconfirmed, the pilot's mode stands.
+    pub way_out_overridden: bool,
 }
 
 /// Why a flight could not start.
@@ -448,6 +458,8 @@ struct Flight<'a, S: ?Sized> {
     run_end_how: Option<String>,
     /// The vehicle said it is going away (its run interrupted): the link is as good as lost.
     link_gone: bool,
+    /// A pilot took over during the failsafe's retries (they stopped).
+    way_out_overridden: bool,
     /// The control command sent last and when (its acknowledgement is the companion's).
     awaiting: Option<(MavCmd, Instant)>,
     firmware: Firmware,
@@ -460,6 +472,8 @@ struct Flight<'a, S: ?Sized> {
     /// The vehicle reported `MAV_STATE_POWEROFF`.
     vehicle_done: bool,
     last_link: Instant,
+    /// When the vehicle's last heartbeat came (its mode and arming as known).
+    last_heartbeat: Instant,
     mavlink1_logged: bool,
     // Control.
     /// The vehicle refused to arm or to switch to OFFBOARD.
@@ -483,6 +497,10 @@ struct Flight<'a, S: ?Sized> {
     skipping_line: bool,
     /// The UDP sensor's datagram buffer (empty without one).
     buf: Vec<u8>,
+    /// The UDP sensor's address: the first sender's.
+    sensor_from: Option<std::net::SocketAddr>,
+    /// Datagrams from other senders, dropped.
+    sensor_others: u64,
     clock: SensorClock,
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
@@ -513,8 +531,14 @@ struct Telemetry {
     home: Option<(f64, f64)>,
     home_local: bool,
     altitude_m: Option<f64>,
+    /// When the altitude arrived (older than `timeout_s`: unknown, the pitch hold's 0).
+    altitude_at: Option<Instant>,
     altitude_target_m: Option<f64>,
     airspeed_mps: Option<f64>,
+    /// When the airspeed arrived (older than `timeout_s`: unknown, the trim thrust).
+    airspeed_at: Option<Instant>,
+    /// A stale altitude or airspeed has been logged (once each).
+    stale_logged: (bool, bool),
 }
 
 /// The law's answers so far.
@@ -588,6 +612,7 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
         link: f.link.stats,
         measurements_out_of_order: f.ans.out_of_order,
         measurements_repeated: f.ans.repeated,
+        way_out_overridden: f.way_out_overridden,
     })
 }
 
@@ -660,6 +685,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             other_controller: None,
             run_end_how: None,
             link_gone: false,
+            way_out_overridden: false,
             awaiting: None,
             firmware: Firmware::Px4,
             vehicle_type: MavType::MAV_TYPE_GENERIC,
@@ -668,6 +694,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             run_ended: false,
             vehicle_done: false,
             last_link: now,
+            last_heartbeat: now,
             mavlink1_logged: false,
             refused: false,
             active: false,
@@ -688,6 +715,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             } else {
                 Vec::new()
             },
+            sensor_from: None,
+            sensor_others: 0,
             clock: SensorClock {
                 newest_ms: None,
                 last: now,
@@ -777,6 +806,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // The sensor's silence counts from the vehicle's first message.
             self.clock.last = Instant::now();
             self.clock_start = Instant::now();
+            self.last_heartbeat = Instant::now();
         }
         None
     }
@@ -809,17 +839,35 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let now = Instant::now();
         if self.target.is_some() && now >= self.next_setpoint {
-            self.setpoint(
-                self.ans
-                    .last_answer_ms
-                    .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
-            )?;
+            if self.may_send_setpoints() {
+                self.setpoint(
+                    self.ans
+                        .last_answer_ms
+                        .map_or(NOT_AN_ANSWER_MS, wire::wire_ms),
+                )?;
+            } else {
+                // No setpoint may leave yet: a heartbeat at the setpoints' rate instead keeps
+                // the companion heard (a lockstep vehicle counts its silence).
+                self.heartbeat()?;
+            }
             self.next_setpoint = now + self.period;
         }
         if now.duration_since(self.last_link) > self.timeout {
             self.event(format!(
                 "no message from the vehicle for {} s",
                 self.opts.timeout_s
+            ));
+            return Ok(Some(FlyEnd::LinkLost));
+        }
+        let heartbeat_timeout = self
+            .timeout
+            .max(Duration::from_secs_f64(MIN_HEARTBEAT_TIMEOUT_S));
+        if self.target.is_some() && now.duration_since(self.last_heartbeat) > heartbeat_timeout {
+            // Other messages may still come: without heartbeats the vehicle's mode and arming
+            // (a pilot's take-over, a disarm, the autopilot's own failsafe) are unknown.
+            self.event(format!(
+                "no heartbeat from the vehicle for {} s (other messages may still come): its mode and arming are unknown",
+                heartbeat_timeout.as_secs_f64()
             ));
             return Ok(Some(FlyEnd::LinkLost));
         }
@@ -884,6 +932,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             | AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE;
         let (q, yaw_rate, thrust, mask) = match self.transport {
             Transport::FixedWing { airspeed_mps } => {
+                self.forget_stale_telemetry();
                 let roll = wire::roll_of_turn_rate(w, airspeed_mps);
                 let pitch = crate::setpoint::pitch_of_altitude(
                     self.tel.altitude_target_m,
@@ -917,6 +966,34 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             target_component: comp,
             type_mask: mask,
         }))
+    }
+
+    /// An altitude or airspeed older than `timeout_s` is unknown (the pitch hold's 0, the trim
+    /// thrust), never flown on as if fresh: positions that stop would otherwise hold a frozen
+    /// altitude error's pitch for ever. Logged once each.
+    fn forget_stale_telemetry(&mut self) {
+        let timeout = self.timeout;
+        let stale = |at: Option<Instant>| at.is_some_and(|a| a.elapsed() > timeout);
+        if self.tel.altitude_m.is_some() && stale(self.tel.altitude_at) {
+            self.tel.altitude_m = None;
+            if !self.tel.stale_logged.0 {
+                self.tel.stale_logged.0 = true;
+                self.event(format!(
+                    "no altitude from the vehicle for {} s: the altitude hold's pitch is 0 until one comes",
+                    self.opts.timeout_s
+                ));
+            }
+        }
+        if self.tel.airspeed_mps.is_some() && stale(self.tel.airspeed_at) {
+            self.tel.airspeed_mps = None;
+            if !self.tel.stale_logged.1 {
+                self.tel.stale_logged.1 = true;
+                self.event(format!(
+                    "no airspeed from the vehicle for {} s: the thrust is the trim's until one comes",
+                    self.opts.timeout_s
+                ));
+            }
+        }
     }
 
     /// Whether a setpoint may leave: never before the vehicle is accepted (its type fits the
@@ -956,9 +1033,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let mut text = String::new();
         for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
-            let Ok((n, _)) = s.recv_from(&mut self.buf) else {
+            let Ok((n, from)) = s.recv_from(&mut self.buf) else {
                 break;
             };
+            // The first sender is the sensor: lines from any other address (a second sender
+            // interleaving its own values) are dropped, counted and logged once.
+            if *self.sensor_from.get_or_insert(from) != from {
+                self.sensor_others += 1;
+                if self.sensor_others == 1 {
+                    let first = self.sensor_from.map(|a| a.to_string()).unwrap_or_default();
+                    self.event(format!(
+                        "--sensor: a datagram from {from}, not the sensor ({first}, the first sender): dropped, as every other sender's (logged once)"
+                    ));
+                }
+                continue;
+            }
             self.partial.extend_from_slice(&self.buf[..n]);
             if self.skipping_line {
                 // The rest of a dropped over-long line is no line.
@@ -1319,7 +1408,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         self.last_link = Instant::now();
         match &r.msg {
-            MavMessage::HEARTBEAT(h) => self.vehicle_heartbeat(h),
+            MavMessage::HEARTBEAT(h) => {
+                self.last_heartbeat = Instant::now();
+                self.vehicle_heartbeat(h)
+            }
             // Acknowledgements go to every peer of the vehicle: once in control, they may
             // answer someone else's command, and say nothing about ours.
             MavMessage::COMMAND_ACK(a) if !self.in_control => self.acknowledged(a),
@@ -1354,6 +1446,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             MavMessage::VFR_HUD(v) if v.airspeed.is_finite() => {
                 self.tel.airspeed_mps = Some(v.airspeed as f64);
+                self.tel.airspeed_at = Some(Instant::now());
             }
             _ => {}
         }
@@ -1420,7 +1513,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 ));
             }
             KindMatch::Unknown => self.event(format!(
-                "the vehicle (system {}, component {}) announces {mavtype:?}, which says nothing of its airframe: flown as the scenario's {kind}; make sure it is one ({list})",
+                "the vehicle (system {}, component {}) announces {mavtype:?}, which says nothing of its airframe: flown as the scenario's vehicle, {kind}; make sure it is one ({list})",
                 from.0, from.1
             )),
             KindMatch::No => {
@@ -1436,9 +1529,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// through a router that forwards every component's traffic, or the vehicle's own link):
     /// another controller.
     fn foreign_setpoint(&mut self, from: (u32, u8), target: (u32, u8), msg: &MavMessage) {
-        if from == (self.opts.system_id as u32, 191) || self.other_controller.is_some() {
+        if self.other_controller.is_some() {
             return;
         }
+        // The link never hands the companion its own frames back: a setpoint with its own
+        // system and component id comes from a twin (a second companion with the same ids).
+        let twin = from == (self.opts.system_id as u32, 191);
         let (what, to) = match msg {
             MavMessage::SET_ATTITUDE_TARGET(m) => ("SET_ATTITUDE_TARGET", m.target_system),
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(m) => {
@@ -1453,8 +1549,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return;
         }
         self.other_controller = Some(format!(
-            "another_controller: {what} for the vehicle (system {}) from system {}, component {}, not the companion: another controller is flying it; the companion's setpoints stop",
-            target.0, from.0, from.1
+            "another_controller: {what} for the vehicle (system {}) from system {}, component {}, not the companion{}: another controller is flying it; the companion's setpoints stop",
+            target.0,
+            from.0,
+            from.1,
+            if twin {
+                " (its own ids: a second companion with the same --system-id)"
+            } else {
+                ""
+            }
         ));
     }
 
@@ -1540,6 +1643,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// reports may not be its flight's).
     fn altitude(&mut self, h_m: f64) {
         self.tel.altitude_m = Some(h_m);
+        self.tel.altitude_at = Some(Instant::now());
         if self.in_control && self.tel.altitude_target_m.is_none() {
             self.tel.altitude_target_m = Some(h_m);
         }
@@ -1554,8 +1658,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// The way out of `end`: the failsafe mode once the companion had control (or with no
     /// vehicle heard: nothing is sent); before, after a refused take-over or a failsafe, a
-    /// disarm if the companion armed the vehicle on the ground, else the failsafe mode if it
-    /// is armed and was asked for OFFBOARD; nothing on a vehicle it never controlled.
+    /// disarm if the companion armed the vehicle on the ground; nothing on a vehicle it never
+    /// controlled nor armed (a pilot's, armed in MANUAL: its mode stands).
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
         let mode = self.opts.failsafe.mode();
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
@@ -1563,9 +1667,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             Some(WayOut::Mode(mode))
         } else if stopping && self.armed && self.armed_by_us {
             Some(WayOut::Disarm)
-        } else if stopping && self.armed && (end == FlyEnd::ControlRefused || self.offboard_sent) {
-            Some(WayOut::Mode(mode))
         } else {
+            // A vehicle the companion never controlled nor armed (a pilot's, armed in MANUAL,
+            // whose OFFBOARD switch was refused or never answered): its mode stands.
             None
         }
     }
@@ -1630,6 +1734,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
         // retries.
         self.opts.stop.store(false, Ordering::SeqCst);
+        // The vehicle's mode and arming as the failsafe began: a change to anything else than
+        // what is commanded (or another safe mode) is a pilot's.
+        let before = (self.custom_mode, self.armed);
         let retry_end = Instant::now()
             + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         let mut tries = 0u32;
@@ -1650,7 +1757,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             tries += 1;
             self.command(cmd, params)?;
-            match self.await_way_out(way, cmd)? {
+            match self.await_way_out(way, cmd, before)? {
                 Some(Answer::Confirmed) => return Ok((true, tries, "")),
                 Some(Answer::OtherSafeMode(name)) => {
                     let asked = match way {
@@ -1663,6 +1770,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     return Ok((true, tries, name));
                 }
                 Some(Answer::Refused) => return Ok((false, tries, "refused")),
+                Some(Answer::PilotTookOver(what)) => {
+                    self.event(format!(
+                        "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
+                    ));
+                    self.way_out_overridden = true;
+                    return Ok((false, tries, "a pilot took over"));
+                }
                 None => {}
             }
         }
@@ -1671,7 +1785,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
     /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
     /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing).
-    fn await_way_out(&mut self, way: WayOut, cmd: MavCmd) -> Result<Option<Answer>, FlyError> {
+    fn await_way_out(
+        &mut self,
+        way: WayOut,
+        cmd: MavCmd,
+        before: (Option<u32>, bool),
+    ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         while Instant::now() < until {
             for r in self
@@ -1704,6 +1823,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                         if let Some(name) = self.firmware.safe_mode_name(h.custom_mode) {
                             return Ok(Some(Answer::OtherSafeMode(name)));
                         }
+                        if let Some(what) = self.pilots_change(h, before) {
+                            return Ok(Some(Answer::PilotTookOver(what)));
+                        }
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Disarm)
                         if !h
@@ -1712,11 +1834,34 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     {
                         return Ok(Some(Answer::Confirmed))
                     }
+                    (MavMessage::HEARTBEAT(h), WayOut::Disarm) => {
+                        if let Some(what) = self.pilots_change(h, before) {
+                            return Ok(Some(Answer::PilotTookOver(what)));
+                        }
+                    }
                     _ => {}
                 }
             }
         }
         Ok(None)
+    }
+}
+
+impl<S: TraceSink + ?Sized> Flight<'_, S> {
+    /// A heartbeat during the failsafe's retries that shows what a pilot did: a mode other
+    /// than the one the vehicle was in as the failsafe began (and not a safe one, checked
+    /// before), or a disarm the companion did not command; in words (`in MANUAL`, `disarmed`).
+    fn pilots_change(&self, h: &HEARTBEAT_DATA, before: (Option<u32>, bool)) -> Option<String> {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        if before.1 && !armed {
+            return Some("disarmed".into());
+        }
+        if before.0.is_some_and(|m| m != h.custom_mode) {
+            return Some(format!("in {}", self.firmware.mode_name(h.custom_mode)));
+        }
+        None
     }
 }
 

@@ -131,6 +131,9 @@ pub struct SitlReport {
     /// Whether a lockstep run ended because nobody answered for
     /// [`SitlOptions::companion_timeout_s`].
     pub companion_lost: bool,
+    /// Whether the run started (a peer talked to the vehicle): a run that never did recorded
+    /// nothing (`sitl --out` leaves an earlier run in its directory as it was).
+    pub started: bool,
 }
 
 /// Why a simulated flight could not start.
@@ -1175,6 +1178,7 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         link: sitl.link.stats,
         interrupted,
         companion_lost,
+        started: sitl.started,
     })
 }
 

@@ -51,12 +51,18 @@ struct Script {
     hold_goes_to: Option<u32>,
     /// At this beat another companion (component 192) sends the vehicle a setpoint.
     foreign_setpoint_at: Option<u32>,
+    /// That companion's component (192; 191: a twin with the companion's own ids).
+    foreign_component: u8,
     /// At this beat the vehicle acknowledges an arming nobody here asked for (a ground
     /// station's), denied.
     stray_ack_at: Option<u32>,
     /// Until it is in OFFBOARD it sends its first measurement again and again (as `sitl` in
     /// lockstep does while nobody answers).
     resend_until_offboard: bool,
+    /// After this many failsafe mode commands a pilot switches it to MANUAL (PX4 main mode 1).
+    pilot_manual_after_holds: Option<u32>,
+    /// From this beat on it sends no heartbeat (its measurements and positions go on).
+    heartbeats_stop_at: Option<u32>,
 }
 
 impl Script {
@@ -102,8 +108,11 @@ impl Default for Script {
             scenario: None,
             hold_goes_to: None,
             foreign_setpoint_at: None,
+            foreign_component: 192,
             stray_ack_at: None,
             resend_until_offboard: false,
+            pilot_manual_after_holds: None,
+            heartbeats_stop_at: None,
         }
     }
 }
@@ -177,7 +186,7 @@ fn against_counting(
     let url = format!("udpout:{addr}");
     let mut v = Link::open(&url, 1, 1).unwrap();
     let mut gimbal = Link::open(&url, 1, 154).unwrap();
-    let mut other = Link::open(&url, 1, 192).unwrap();
+    let mut other = Link::open(&url, 1, script.foreign_component).unwrap();
     let mut setpoints = 0u32;
     let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let (mut armed, mut mode, mut holds) = (script.armed, script.start_mode, 0u32);
@@ -199,7 +208,7 @@ fn against_counting(
                 ))
                 .unwrap();
         }
-        if !script.gimbal || beats > 0 {
+        if (!script.gimbal || beats > 0) && script.heartbeats_stop_at.is_none_or(|b| beats < b) {
             v.send(&heartbeat(
                 script.firmware.1,
                 script.firmware.0,
@@ -306,6 +315,10 @@ fn against_counting(
                 }
                 MavCmd::MAV_CMD_DO_SET_MODE => {
                     holds += 1;
+                    if script.pilot_manual_after_holds.is_some_and(|n| holds >= n) {
+                        mode = 1 << 16;
+                        continue;
+                    }
                     if holds < script.hold_acked_at {
                         continue;
                     }
@@ -356,10 +369,11 @@ fn a_refused_offboard_disarms_what_the_companion_armed() {
     assert!(r.commands.is_empty());
 }
 
-/// A vehicle a pilot armed (in flight) refuses OFFBOARD: the companion commands HOLD, never a
-/// disarm.
+/// A vehicle a pilot armed (in MANUAL, in flight) refuses OFFBOARD: the companion never
+/// controlled it nor armed it, so it commands nothing (no HOLD yanking the pilot out of MANUAL,
+/// no disarm): the pilot's mode stands.
 #[test]
-fn a_refused_offboard_of_an_armed_vehicle_commands_hold() {
+fn a_refused_offboard_of_a_pilots_vehicle_commands_nothing() {
     let script = Script {
         armed: true,
         offboard: MavResult::MAV_RESULT_DENIED,
@@ -367,9 +381,57 @@ fn a_refused_offboard_of_an_armed_vehicle_commands_hold() {
     };
     let (r, got) = against(script, |o| o.take_control = true);
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
-    assert!(got.iter().any(is_hold), "{got:?}");
+    assert!(!got.iter().any(is_hold), "{got:?}");
     assert!(!got.iter().any(is_disarm), "{got:?}");
-    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+}
+
+/// A failsafe in control whose HOLD the vehicle acknowledges but does not take (still in
+/// OFFBOARD), then a pilot switches it to MANUAL: the retries stop at once (the pilot's word
+/// is final in the failsafe too), logged, no more HOLD after the pilot's MANUAL.
+#[test]
+fn a_pilot_taking_over_during_the_failsafe_stops_the_retries() {
+    let script = Script {
+        hold_lies: true,
+        pilot_manual_after_holds: Some(2),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("pilot_took_over during the failsafe") && e.contains("MANUAL")),
+        "{:?}",
+        r.events
+    );
+    // The second HOLD met the pilot's MANUAL; at most one more was on its way.
+    let holds = got.iter().filter(|g| is_hold(g)).count();
+    assert!((2..=3).contains(&holds), "{holds} HOLDs: {got:?}");
+}
+
+/// Heartbeats that stop while measurements and positions still come: the vehicle's mode and
+/// arming are unknown, the flight ends `link_lost` (after the heartbeat timeout, at least 3 s).
+#[test]
+fn a_vehicle_whose_heartbeats_stop_is_lost() {
+    let script = Script {
+        heartbeats_stop_at: Some(20),
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::LinkLost, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("no heartbeat from the vehicle")),
+        "{:?}",
+        r.events
+    );
 }
 
 /// A vehicle that refuses to arm stays disarmed: nothing more to command, the flight ends
@@ -915,6 +977,26 @@ fn setpoints_from_another_controller_stop_the_flight() {
         r.events
     );
     assert!(got.iter().any(is_hold), "{got:?}");
+}
+
+/// A setpoint with the companion's own system and component id (1, 191) is a twin's (the
+/// link never hands the companion its own frames back): another controller, said so.
+#[test]
+fn a_twin_companions_setpoint_is_another_controller() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        foreign_setpoint_at: Some(20),
+        foreign_component: 191,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |_| {});
+    assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("its own ids")),
+        "{:?}",
+        r.events
+    );
 }
 
 /// Asked for RETURN (AUTO.RTL), the vehicle goes to AUTO.LOITER, another safe mode: the

@@ -208,3 +208,31 @@ fn the_tail_of_an_over_long_line_is_dropped() {
     });
     assert_eq!(r.commands, vec![(8000, w)], "{:?}", r.events);
 }
+
+/// Lines from a second sender (another address) are not the sensor's: dropped and logged
+/// once; the law runs on the first sender's lines only.
+#[test]
+fn a_second_sender_is_not_the_sensor() {
+    let (r, _) = udp_flight(|s, a| {
+        let intruder = UdpSocket::bind("127.0.0.1:0").unwrap();
+        s.send_to(b"7.0,3\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        intruder.send_to(b"7.5,50\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"8.0,2\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let expected: Vec<(u32, f64)> = [(7.0, 3.0), (8.0, 2.0)]
+        .iter()
+        .map(|&(t, v)| {
+            let w = law.update(&Measurement { t_s: t, value: v });
+            ((t * 1000.0) as u32, w)
+        })
+        .collect();
+    assert_eq!(r.commands, expected, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("not the sensor")),
+        "{:?}",
+        r.events
+    );
+}
