@@ -645,3 +645,113 @@ fn resume_and_merge_keep_diverged_first_steps_and_subnormal_metrics() {
         assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
     }
 }
+
+/// Issue 30 (att30b via fix30d), item 1: `samples` was bounded above by one per sample period
+/// over the steps sensed, `floor(k / m) + 1`, whatever the sensor's delay, so a row claiming
+/// the samples a delayed sensor never delivered was kept by `--resume` and `merge`. At dt =
+/// 0.01 s over 20 s (k = 2000 steps), one sample every 2 s (m = 200 steps) and delays of 0,
+/// 1 s and 20 s (d = 0, 100, 2000 steps), a run without dropouts delivers exactly
+/// `floor(k / m) - ceil(d / m) + 1` = 11, 10 and 1 samples; one more is refused naming the
+/// row and the column, on `--resume` and on `merge`.
+#[test]
+fn samples_a_delayed_sensor_never_delivered_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "[sim]\nduration_s = 20.0\ndt_s = 0.01\n[sensor]\nrate_hz = 0.5\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsensor.delay_s = [0.0, 1.0, 20.0]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("o")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = d.path().join("o").join("results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let rows: Vec<Vec<&str>> = good
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    for (row, want) in rows.iter().zip(["11", "10", "1"]) {
+        assert_eq!(row[col("outcome")], "completed", "{row:?}");
+        assert_eq!(
+            row[col("t_end_s")].parse::<f64>().ok(),
+            Some(20.0),
+            "{row:?}"
+        );
+        assert_eq!(row[col("samples")], want, "{row:?}");
+    }
+    for (i, claimed, most) in [(1usize, "11", "10"), (2, "2", "1")] {
+        let mut r = rows[i].clone();
+        r[col("samples")] = claimed;
+        let bad = r.join(",");
+        let mut lines: Vec<&str> = good.lines().collect();
+        lines[i + 1] = &bad;
+        std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+        let at = format!("o/results.csv:{}: damaged row", i + 2);
+        let column = format!("column {} (samples)", col("samples") + 1);
+        let needle = format!("samples = {claimed} exceeds the {most} a run can take");
+        let o = isotrack(&["sweep", &sw, "--out", &p("o"), "--resume"]);
+        assert_fails(&o, 65, &[&at, &column, &needle]);
+        let o = isotrack(&["merge", &p("o"), "--out", &p("m"), "--force"]);
+        assert_fails(&o, 65, &[&at, &column, &needle]);
+    }
+}
+
+/// Issue 30 (att30b via fix30d), item 6: a row of a run whose scenario the plan makes invalid
+/// (dt = 0.03 s is no whole number of the 100 Hz sensor's periods) relabelled `completed` with
+/// another run's metrics was kept by `--resume` and `merge`: every check of a run's own steps
+/// was skipped when its scenario did not resolve. Refused naming the row and the outcome
+/// column, on `--resume` and on `merge`.
+#[test]
+fn a_run_the_plan_makes_invalid_cannot_claim_to_have_run() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "sc.toml",
+        "[sim]\nduration_s = 2.0\n[sensor]\nrate_hz = 100.0\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\nsim.dt_s = [0.01, 0.03]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("o")]);
+    // One run is invalid: the sweep says so (its own exit code), and records it.
+    assert_ne!(o.status.code(), Some(101), "{}", stderr(&o));
+    let results = d.path().join("o").join("results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let rows: Vec<Vec<&str>> = good
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows[0][col("outcome")], "completed", "{good}");
+    assert_eq!(rows[1][col("outcome")], "invalid_scenario", "{good}");
+    // Run 1 claims run 0's outcome and metrics.
+    let mut r = rows[1][..col("outcome")].to_vec();
+    r.extend(&rows[0][col("outcome")..]);
+    let bad = r.join(",");
+    let lines = [
+        good.lines().next().unwrap(),
+        good.lines().nth(1).unwrap(),
+        &bad,
+    ];
+    std::fs::write(&results, lines.join("\n") + "\n").unwrap();
+    let at = "o/results.csv:3: damaged row";
+    let column = format!("column {} (outcome)", col("outcome") + 1);
+    let needle = "outcome = completed for run 1, whose scenario is invalid under the sweep's plan";
+    let o = isotrack(&["sweep", &sw, "--out", &p("o"), "--resume"]);
+    assert_fails(&o, 65, &[at, &column, needle]);
+    let o = isotrack(&["merge", &p("o"), "--out", &p("m"), "--force"]);
+    assert_fails(&o, 65, &[at, &column, needle]);
+}

@@ -508,6 +508,10 @@ pub(crate) fn collect_attribute_messages_storage(
     Ok(attributes)
 }
 
+/// isotrack: the most different shared datatypes and dataspaces read for the
+/// attributes of one object ([`resolve_shared_attribute_parts`]).
+pub const MAX_SHARED_PARTS_PER_OBJECT: usize = 64;
+
 /// isotrack: the shared (committed) datatypes and shared dataspaces of
 /// `attributes` read from where they are stored: the object header at the
 /// reference's address (a committed datatype, as netCDF-C writes user-defined
@@ -516,7 +520,11 @@ pub(crate) fn collect_attribute_messages_storage(
 /// placeholder ([`AttributeMessage::undecodable_reason`]): the file is still
 /// read, a reader refuses the attribute if it needs it. Each referenced header
 /// is parsed once per call, within the file's header size limit, and never
-/// follows further references (no cycles).
+/// follows further references (no cycles); at most
+/// [`MAX_SHARED_PARTS_PER_OBJECT`] different references are read for one
+/// object (a hostile file's thousands of attributes, each pointing at another
+/// large "header", would each cost a read of it): the attributes past them stay
+/// undecodable.
 fn resolve_shared_attribute_parts(attributes: &mut [AttributeMessage], context: &FileContext) {
     use crate::messages::shared::SharedMessage;
     type Found = std::result::Result<(HdfMessage, Option<Vec<u8>>), String>;
@@ -536,6 +544,9 @@ fn resolve_shared_attribute_parts(attributes: &mut [AttributeMessage], context: 
             };
             let result = match found.iter().find(|(k, _)| *k == key) {
                 Some((_, result)) => result.clone(),
+                None if found.len() >= MAX_SHARED_PARTS_PER_OBJECT => Err(format!(
+                    "not read: the object's attributes refer to more than {MAX_SHARED_PARTS_PER_OBJECT} shared datatypes or dataspaces"
+                )),
                 None => {
                     let result = read_shared_part(reference, context).map_err(|e| e.to_string());
                     found.push((key, result.clone()));

@@ -81,14 +81,24 @@ impl<'a> RunSpans<'a> {
         }
     }
 
-    /// The span of run `id` (`None` when its scenario is invalid: its row is checked
-    /// without one).
-    pub fn of(&self, id: u64) -> Option<RunSpan> {
+    /// The span of run `id` (`Ok(None)` when it has none: its row is checked without one), or
+    /// why its scenario is invalid when the plan varies a key of its span ([`SPAN_KEYS`]) and
+    /// the run's values do not apply or resolve: such a run is never run, its row is
+    /// `invalid_scenario` (a sweep records the same error for it).
+    pub fn of(&self, id: u64) -> Result<Option<RunSpan>, String> {
         if !self.per_run {
-            return self.base_span;
+            return Ok(self.base_span);
         }
-        let file = apply_assignments(self.base, &self.plan.run_assignments(id, "")).ok()?;
-        run_span(&isotrack_scenario::resolve::resolve(file).ok()?)
+        let file = apply_assignments(self.base, &self.plan.run_assignments(id, ""))
+            .map_err(|e| e.to_string())?;
+        let resolved = isotrack_scenario::resolve::resolve(file).map_err(|issues| {
+            issues
+                .iter()
+                .map(|i| format!("`{}`: {}", i.key, i.message))
+                .collect::<Vec<_>>()
+                .join("; ")
+        })?;
+        Ok(run_span(&resolved))
     }
 }
 
@@ -170,12 +180,22 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         }
     }
     if outcome != "invalid_scenario" {
-        if let Some(span) = rules.spans.of(id) {
-            let column = |name: &str| {
-                let i = header.iter().position(|h| h == name).unwrap_or(0);
-                format!("column {} ({name})", i + 1)
-            };
-            check_span(&span, outcome, &cell, &column)?;
+        let column = |name: &str| {
+            let i = header.iter().position(|h| h == name).unwrap_or(0);
+            format!("column {} ({name})", i + 1)
+        };
+        // A run whose scenario the plan makes invalid was never run: a row claiming it ran
+        // (another run's metrics under its id) would enter every statistic.
+        match rules.spans.of(id) {
+            Err(why) => {
+                return Err(format!(
+                    "{}: outcome = {outcome} for run {id}, whose scenario is invalid under the sweep's plan ({}): it was never run, its row is invalid_scenario",
+                    column("outcome"),
+                    clip(&why.replace('\n', " "))
+                ))
+            }
+            Ok(Some(span)) => check_span(&span, outcome, &cell, &column)?,
+            Ok(None) => {}
         }
     }
     Ok(id)
@@ -224,13 +244,13 @@ fn check_team_cells<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result
 /// The cells a run's own step counts bound ([`RunSpan`]): `t_end_s` is `k dt` for a whole
 /// `k <= N` (the planned steps: not past the duration); `convergence_time_s` is 0 or `j dt`
 /// for a whole `1 <= j <= k` (never a fraction of a step, never below `dt`); `samples` is at
-/// most one per sample period over the steps sensed `0..=s`, `floor(s / m) + 1`, where `s = k`
-/// or, for a `diverged` run (ended by a non-finite command, sensed the step after its last
-/// valid one), `min(k + 1, N)`; and, without dropouts, at least the sample steps of the
-/// steps `0..=k` past the sensor's delay of `d` steps, `floor(k / m) - ceil(d / m) + 1`
-/// ([`fewest_samples`]). Under a turn-rate limit `L` (`|omega| <= L` for every command),
-/// `control_effort = sum omega^2 dt` over at most `min(k + 1, N)` held commands is at most
-/// `L^2 dt min(k + 1, N)`, and `chattering_radps2` (the total variation of `omega` over the
+/// most the sample steps of the steps sensed `0..=s` past the sensor's delay of `d` steps,
+/// `floor(s / m) - ceil(d / m) + 1` (0 when `s < d`), where `s = k` or, for a `diverged` run
+/// (ended by a non-finite command, sensed the step after its last valid one), `min(k + 1, N)`;
+/// and, without dropouts, at least those of the steps `0..=k`, `floor(k / m) - ceil(d / m) + 1`
+/// ([`fewest_samples`]): without dropouts a completed run's count is exactly that. Under a
+/// turn-rate limit `L` (`|omega| <= L` for every command), `control_effort = sum omega^2 dt`
+/// over at most `min(k + 1, N)` held commands is at most `L^2 dt min(k + 1, N)`, and `chattering_radps2` (the total variation of `omega` over the
 /// window, at most `2 L` a step, over the window's duration) at most `2 L / dt`. Each error
 /// names its column.
 fn check_span<'c>(
@@ -286,14 +306,15 @@ fn check_span<'c>(
         } else {
             k_end
         };
-        let most = sensed / span.steps_per_sample + 1;
+        let most = delivered_samples(span, sensed);
         if samples > most {
             return Err(format!(
-                "{}: samples = {samples} exceeds the {most} a run can take up to t_end_s = {} s (one every {} steps of {} s)",
+                "{}: samples = {samples} exceeds the {most} a run can take up to t_end_s = {} s (one every {} steps of {} s from step {})",
                 column("samples"),
                 Echo(t_end),
                 span.steps_per_sample,
-                Echo(dt)
+                Echo(dt),
+                span.sensor_delay_steps
             ));
         }
         let fewest = fewest_samples(span, outcome, k_end);
@@ -381,11 +402,22 @@ fn check_span<'c>(
 /// `j m` (`m` steps per sample) from the delay's `d` steps to `k_end`, every one of which
 /// the run sensed, `floor(k_end / m) - ceil(d / m) + 1` (0 when `k_end < d`).
 pub fn fewest_samples(span: &RunSpan, outcome: &str, k_end: u64) -> u64 {
-    let (m, d) = (span.steps_per_sample, span.sensor_delay_steps);
-    if span.sensor_drops_samples || (k_end == 0 && outcome != "completed") || k_end < d {
+    if span.sensor_drops_samples || (k_end == 0 && outcome != "completed") {
         return 0;
     }
-    (k_end / m + 1).saturating_sub(d.div_ceil(m))
+    delivered_samples(span, k_end)
+}
+
+/// The samples a run of `span` delivers over the steps `0..=s` without dropouts: the sample
+/// steps `j m` (`m` steps per sample) from the sensor's delay of `d` steps to `s`,
+/// `floor(s / m) - ceil(d / m) + 1`, 0 when `s < d` (a delayed sensor delivers nothing
+/// before its delay). The most any run delivers (dropouts only remove samples).
+fn delivered_samples(span: &RunSpan, s: u64) -> u64 {
+    let (m, d) = (span.steps_per_sample, span.sensor_delay_steps);
+    if s < d {
+        return 0;
+    }
+    (s / m + 1).saturating_sub(d.div_ceil(m))
 }
 
 /// The metric cells of one row are what isotrack writes: an `invalid_scenario` row has none; a
