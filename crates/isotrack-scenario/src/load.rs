@@ -267,8 +267,12 @@ pub fn parse_scenario_in(
         return Err(located(e.span(), key, message));
     }
     // 3. Overrides, one at a time so that an error names its argument.
-    let mut table: toml::Table =
-        toml::from_str(text).map_err(|e| located(e.span(), None, e.message().to_string()))?;
+    // (An integer the schema reads as u64 but a TOML table cannot hold, `seed =
+    // 9223372036854775808`, fails here: its message says it is out of range, at its key.)
+    let mut table: toml::Table = toml::from_str(text).map_err(|e| {
+        let key = e.span().and_then(|s| key_at(doc.get_ref(), &s, ""));
+        located(e.span(), key, out_of_range_words(e.message().trim()))
+    })?;
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {
         let at = ErrorLocation::Override { arg: arg.clone() };
@@ -565,6 +569,12 @@ fn kinds_of(table: &toml::Table) -> [Option<String>; KINDED_SECTIONS.len()] {
 fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
     match raw.parse::<toml::Value>() {
         Ok(v) => Ok(v),
+        // A number TOML cannot hold is out of range, not a string (issue 30, att30b item 5:
+        // `9223372036854775808` was taken as the string "9223372036854775808", then refused as
+        // "invalid type: string").
+        Err(_) if out_of_range_number(raw).is_some() => {
+            Err(out_of_range_number(raw).unwrap_or_default())
+        }
         Err(_) if is_bare_word(raw) => Ok(toml::Value::String(raw.to_string())),
         Err(e) => Err(format!(
             "`{}` is not one TOML value ({}); quote a string, e.g. \"text\"",
@@ -572,6 +582,42 @@ fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
             e.message().trim()
         )),
     }
+}
+
+/// When `raw` is written as a number (TOML's integer or float syntax: a sign, digits, `_`, one
+/// `.`, an exponent) that TOML cannot hold, the message that says so: an integer beyond
+/// TOML's 64-bit signed integers, or a float whose magnitude overflows `f64` (`1e400`).
+fn out_of_range_number(raw: &str) -> Option<String> {
+    let body = raw.strip_prefix(['+', '-']).unwrap_or(raw);
+    let digits = body.replace('_', "");
+    let starts_with_digit = digits.bytes().next().is_some_and(|b| b.is_ascii_digit());
+    let numeric = digits
+        .bytes()
+        .all(|b| b.is_ascii_digit() || matches!(b, b'.' | b'e' | b'E' | b'+' | b'-'));
+    if !(starts_with_digit && numeric) {
+        return None;
+    }
+    let shown = clip(&raw.escape_debug().to_string());
+    if digits.bytes().all(|b| b.is_ascii_digit()) {
+        return Some(format!(
+            "`{shown}` is out of range: it does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)"
+        ));
+    }
+    match digits.parse::<f64>() {
+        Ok(x) if x.is_infinite() => Some(format!(
+            "`{shown}` is out of range: a 64-bit float holds magnitudes up to about 1.8e308"
+        )),
+        _ => None,
+    }
+}
+
+/// `message` from the `toml` crate with its "u64 value was too large" (an integer above
+/// 2**63-1, which fits a u64 but not TOML's integers) said as out of range, with the range.
+pub(crate) fn out_of_range_words(message: &str) -> String {
+    message.replace(
+        "u64 value was too large",
+        "out of range: the number does not fit in a 64-bit integer (-2**63 ..= 2**63-1, TOML's integers)",
+    )
 }
 
 /// Text taken as a string when it is not a TOML value (a kind, a path, a name, with spaces;
@@ -822,6 +868,39 @@ mod tests {
             );
             assert_eq!(e[0].key, None, "{arg}");
         }
+    }
+
+    /// Issue 30 (att30b item 5): a number TOML cannot hold is out of range, in the words the
+    /// Python package uses: `--set sim.seed=9223372036854775808` (2**63) and
+    /// `controller.kp=1e400` were "invalid type: string", `seed = 9223372036854775808` in a
+    /// file the bare "u64 value was too large". 2**63-1 and 1e300 are kept.
+    #[test]
+    fn numbers_toml_cannot_hold_are_out_of_range() {
+        for arg in [
+            "sim.seed=9223372036854775808",
+            "controller.kp=1e400",
+            "controller.kp=-99999999999999999999999",
+        ] {
+            let e = err("", &[arg]);
+            assert!(e[0].message.contains("is out of range"), "{arg}: {}", e[0]);
+            assert!(!e[0].message.contains("invalid type"), "{arg}: {}", e[0]);
+        }
+        let e = err("", &["sim.seed=9223372036854775808"]);
+        assert!(e[0].message.contains("-2**63 ..= 2**63-1"), "{}", e[0]);
+        let e = err("[sim]\nseed = 9223372036854775808\n", &[]);
+        assert!(
+            e[0].message.contains("out of range") && e[0].message.contains("2**63-1"),
+            "{}",
+            e[0]
+        );
+        assert_eq!(e[0].key.as_deref(), Some("sim.seed"));
+        assert_eq!(file_line(&e[0]), Some(2));
+        parse_scenario("", "s.toml", &["sim.seed=9223372036854775807".into()]).unwrap();
+        assert_eq!(out_of_range_number("1e300"), None);
+        assert_eq!(out_of_range_number("-1.5e-400"), None);
+        // Words and paths are still strings.
+        assert_eq!(out_of_range_number("1st"), None);
+        assert_eq!(out_of_range_number("12.5.x"), None);
     }
 
     #[test]

@@ -187,7 +187,8 @@ impl SweepPlan {
             path: path.display().to_string(),
             message: m,
         };
-        let doc: toml::Table = toml::from_str(text).map_err(|e| err(e.to_string()))?;
+        let doc: toml::Table = toml::from_str(text)
+            .map_err(|e| err(crate::load::out_of_range_words(&e.to_string())))?;
         for k in doc.keys() {
             if !["scenario", "base", "grid", "random"].contains(&k.as_str()) {
                 return Err(err(format!(
