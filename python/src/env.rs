@@ -32,6 +32,10 @@ use pyo3::prelude::*;
 /// effort.
 const MAX_SCALED_ERROR: f64 = 10.0;
 
+/// The largest |reward| an episode sums to: `error_scale`, `effort_weight` and
+/// `termination_penalty` are bounded so that every reward and their sum stay below it (finite).
+const MAX_EPISODE_REWARD: f64 = 1e300;
+
 /// The turn-rate bound of the action space when the scenario has no limit, rad/s (the same
 /// default the search phase uses).
 const DEFAULT_MAX_TURN_RATE_RADPS: f64 = 1.0;
@@ -138,6 +142,18 @@ impl PyEnvBatch {
         if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
             return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
         }
+        // The action space is float32 (Gymnasium's Box): a bound it cannot hold (1e300, or
+        // 1e-300 which rounds to 0) is refused here, in isotrack's words (issue 30, att30b
+        // item 7).
+        let (f32_max, f32_min) = (f64::from(f32::MAX), f64::from(f32::MIN_POSITIVE));
+        if !(f32_min..=f32_max).contains(&omax) {
+            return Err(PyValueError::new_err(format!(
+                "max_turn_rate_radps must be within [{}, {}] rad/s (the action space is float32), got {}",
+                isotrack_core::numtext::Num(f32_min),
+                isotrack_core::numtext::Num(f32_max),
+                isotrack_core::numtext::Echo(omax)
+            )));
+        }
         let scale = error_scale
             .or(s.spec().controller.pi_isoline().map(|p| p.c2))
             .unwrap_or(1.0);
@@ -154,6 +170,35 @@ impl PyEnvBatch {
         }
         let duration = s.spec().sim.duration_s;
         let rate = s.spec().sensor.rate_hz;
+        // An episode's rewards stay finite (issue 30, att30b item 7: error_scale = 2.3e-308
+        // gave -inf): |eps| <= 2 x the fields' value bound, so each term of an episode of N
+        // samples stays below MAX_EPISODE_REWARD / N, and so does their sum.
+        let samples = ((duration * rate).floor() + 1.0).max(1.0);
+        let min_scale = 2.0 * isotrack_scenario::resolve::ranges::MAX_FIELD_VALUE * samples / MAX_EPISODE_REWARD;
+        if scale < min_scale {
+            return Err(PyValueError::new_err(format!(
+                "error_scale must be at least {} field units (|eps| / error_scale over the {} samples of an episode stays below {}), got {}",
+                isotrack_core::numtext::Num(min_scale),
+                isotrack_core::numtext::Num(samples),
+                isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
+                isotrack_core::numtext::Echo(scale)
+            )));
+        }
+        let max_weight = MAX_EPISODE_REWARD / samples;
+        for (name, w) in [
+            ("effort_weight", effort_weight),
+            ("termination_penalty", termination_penalty.unwrap_or(0.0)),
+        ] {
+            if w > max_weight {
+                return Err(PyValueError::new_err(format!(
+                    "{name} must be at most {} (over the {} samples of an episode the reward stays below {}), got {}",
+                    isotrack_core::numtext::Num(max_weight),
+                    isotrack_core::numtext::Num(samples),
+                    isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
+                    isotrack_core::numtext::Echo(w)
+                )));
+            }
+        }
         let plan = s.plan();
         // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
         // values): the last sample step is the last multiple of `every` within the run.
@@ -193,6 +238,13 @@ impl PyEnvBatch {
     #[getter]
     fn max_turn_rate_radps(&self) -> f64 {
         self.max_turn_rate_radps
+    }
+
+    /// The largest start radius, m: the scenario's coordinate range
+    /// (`isotrack_scenario::resolve::ranges::MAX_COORDINATE_M`).
+    #[getter]
+    fn max_start_radius_m(&self) -> f64 {
+        isotrack_scenario::resolve::ranges::MAX_COORDINATE_M
     }
 
     /// The reward's error scale (field units).
@@ -272,7 +324,10 @@ impl PyEnvBatch {
         ] {
             if !(v.is_finite() && v.abs() <= most) {
                 return Err(PyValueError::new_err(format!(
-                    "start {name} = {v} must be a finite number within [-{most}, {most}] {unit} (as initial.{name} in a scenario)"
+                    "start {name} = {} must be a finite number within [-{}, {}] {unit} (as initial.{name} in a scenario)",
+                    isotrack_core::numtext::Echo(v),
+                    isotrack_core::numtext::Echo(most),
+                    isotrack_core::numtext::Echo(most)
                 )));
             }
         }
@@ -285,7 +340,9 @@ impl PyEnvBatch {
         let Some(sample) = e.run_to_sample() else {
             let r = e.result();
             return Err(PyValueError::new_err(format!(
-                "the run from ({x_m}, {y_m}) m ended before its first sample: {} ({})",
+                "the run from ({}, {}) m ended before its first sample: {} ({})",
+                isotrack_core::numtext::Echo(x_m),
+                isotrack_core::numtext::Echo(y_m),
                 r.outcome.as_str(),
                 r.outcome_detail.unwrap_or_default()
             )));

@@ -141,6 +141,7 @@ pub fn is_team(scenario: &PyScenario) -> bool {
 /// resolved `scenario.toml`.
 #[pyfunction]
 pub fn write_team_run(
+    py: Python<'_>,
     dir: &str,
     summary_json: &str,
     scenario: &PyScenario,
@@ -193,12 +194,29 @@ pub fn write_team_run(
             "the trace's column `vehicle` holds an index that is no vehicle's",
         ));
     }
+    let new_dir = !dir.exists();
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let path = dir.join("trace.csv");
     let mut tw = TraceWriter::create_team(&path, flying).map_err(|e| io(&path, e))?;
     let w = RefCell::new(&mut tw);
     let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
     for (i, &t_s) in t.iter().enumerate() {
+        // Ctrl-C is answered while the trace is written: the partial trace is removed, and
+        // the directory if this call made it (issue 30, att30b item 4).
+        if i % crate::tools::SIGNAL_ROWS == 0 {
+            if let Err(e) = py.check_signals() {
+                drop(team_sinks);
+                drop(w);
+                drop(tw);
+                let _ = std::fs::remove_file(&path);
+                // An old summary beside no trace is refused by every reader.
+                let _ = std::fs::remove_file(dir.join("summary.json"));
+                if new_dir {
+                    let _ = std::fs::remove_dir(dir);
+                }
+                return Err(e);
+            }
+        }
         let m = cols[6][i];
         team_sinks[vehicles[i] as usize].record(&TraceRow {
             t_s,

@@ -61,11 +61,16 @@ pub(crate) fn column<'py>(
     }
 }
 
+/// How many trace rows a save writes between two checks for Ctrl-C (`Python::check_signals`):
+/// a few milliseconds of writing.
+pub(crate) const SIGNAL_ROWS: usize = 1 << 14;
+
 /// Writes a run directory as `isotrack run --out` does: `trace.csv` from the run's columns
 /// (numbers in the same shortest round-trip form, so they read back bit for bit),
 /// `summary.json` (its text) and the resolved `scenario.toml`.
 #[pyfunction]
 pub fn write_run(
+    py: Python<'_>,
     dir: &str,
     summary_json: &str,
     scenario: &PyScenario,
@@ -89,10 +94,24 @@ pub fn write_run(
         })
         .transpose()?;
     // The one run-directory writer (no lock: a saved run writes none, as before).
+    let new_dir = !dir.exists();
     let out = RunDir::open(dir, &[], &[], None).map_err(failure)?;
     let mut file = out.trace(flying).map_err(failure)?;
-    let w = file.writer();
     for (i, &t_s) in t.iter().enumerate() {
+        // Ctrl-C is answered while the trace is written (2 M rows take seconds): the
+        // temporary trace is removed, and the directory if this call made it (issue 30,
+        // att30b item 4).
+        if i % SIGNAL_ROWS == 0 {
+            if let Err(e) = py.check_signals() {
+                drop(out.abandon(file, "interrupted"));
+                drop(out);
+                if new_dir {
+                    let _ = std::fs::remove_dir(dir);
+                }
+                return Err(e);
+            }
+        }
+        let w = file.writer();
         let m = cols[6][i];
         w.record(&TraceRow {
             t_s,

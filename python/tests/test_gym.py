@@ -287,6 +287,32 @@ def test_a_fixed_start_is_held_to_the_scenarios_ranges():
         vec.reset(options={"start": (8.0, 0.0, 1e17)})
 
 
+def test_settings_that_break_an_episode_are_refused_at_construction():
+    """Issue 30 (att30b item 7): ``error_scale = 2.3e-308`` (normal, > 0) gave a reward of
+    -inf; ``start_radius_m = 1e300`` was accepted and failed only at reset; a start of 1e300
+    was echoed with 301 digits; ``max_turn_rate_radps = 1e300`` failed in Gymnasium's Box.
+    Each is refused at construction in isotrack's words, numbers short. The bounds: |eps| is
+    at most 2e100 (the fields' value bound), so with N samples an episode needs error_scale >=
+    2e100 N / 1e300; the action space is float32 (3.4e38); starts within 6.4e7 m."""
+    with pytest.raises(ValueError, match=r"error_scale must be at least .*got 2\.3e-308$"):
+        IsolineEnv(error_scale=2.3e-308)
+    with pytest.raises(ValueError, match=r"error_scale must be at least"):
+        IsolineVectorEnv(num_envs=2, error_scale=2.3e-308)
+    with pytest.raises(ValueError, match=r"effort_weight must be at most .*got 1e\+?300$"):
+        IsolineEnv(effort_weight=1e300)
+    with pytest.raises(ValueError, match=r"start_radius_m must be .*6\.4e\+07 m.*got 1e\+300$"):
+        IsolineEnv(start_radius_m=1e300)
+    with pytest.raises(ValueError, match=r"max_turn_rate_radps must be within .*float32.*got 1e\+?300$"):
+        IsolineEnv(max_turn_rate_radps=1e300)
+    with pytest.raises(ValueError) as e:
+        IsolineEnv().reset(options={"start": (1e300, 0.0, 0.0)})
+    assert "1e300" in str(e.value) and len(str(e.value)) < 200, str(e.value)
+    # A scale a reward can use, with its reward finite.
+    env = IsolineEnv(error_scale=1e-150)
+    env.reset(seed=0, options={"start": (100.0, 0.0, 0.0)})
+    assert math.isfinite(env.step(np.array([0.5], dtype=np.float32))[1])
+
+
 def test_scenario_pickles_for_worker_processes():
     """Gymnasium copies an environment's arguments and AsyncVectorEnv pickles them: a scenario
     survives both as the same scenario (its resolved TOML, absolute file paths)."""

@@ -174,8 +174,80 @@ fn a_failed_or_interrupted_command_leaves_no_lock() {
     let status = first.wait().unwrap();
     assert!(!status.success());
     assert!(!locked(&dir2), "Ctrl-C left the lock held");
+    // Issue 30 (att30b item 10): nor the lock file (README: "the holder removes the file when
+    // done (an error and Ctrl-C included)"); the exit code is 130, 128 + SIGINT.
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    assert!(
+        !dir2.join(".isotrack.lock").exists(),
+        "Ctrl-C left the lock file"
+    );
     let o = isotrack(&["sweep", &small, "--out", &dir2_s, "--force"]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Issue 30 (att30b item 10): `run --out` stopped by Ctrl-C (SIGINT) or SIGTERM while it
+/// streams the trace leaves neither `.isotrack.lock` nor its `.trace.csv.PID.tmp`, and exits
+/// 130 / 143 (128 + the signal); a temporary file a killed run left (its PID gone) is removed
+/// by the next `run --out` into the directory.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_out_leaves_no_lock_file_nor_temporary_trace() {
+    let d = tempfile::tempdir().unwrap();
+    let temporaries = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .map(|it| {
+                it.flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.ends_with(".tmp") || n == ".isotrack.lock")
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    for (signal, code) in [("-INT", 130), ("-TERM", 143)] {
+        let out = d.path().join(format!("r{code}"));
+        let out_s = out.display().to_string();
+        // 1e6 s at 100 Hz recorded: minutes of trace.
+        let mut run = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args(["run", "--set", "sim.duration_s=1e6", "--out", &out_s])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = Instant::now();
+        while !temporaries(&out)
+            .iter()
+            .any(|n| n.starts_with(".trace.csv."))
+        {
+            assert!(t0.elapsed() < Duration::from_secs(60), "no temporary trace");
+            assert!(run.try_wait().unwrap().is_none(), "ended before caught");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let ok = Command::new("kill")
+            .args([signal, &run.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let status = run.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "{signal}: {status:?}");
+        assert_eq!(temporaries(&out), Vec::<String>::new(), "{signal}");
+    }
+    // A temporary trace of a process that is gone (killed with SIGKILL, which nothing can
+    // answer) is removed by the next run into the directory; another name is kept.
+    let out = d.path().join("r130");
+    let mut gone = Command::new("true").spawn().unwrap();
+    let pid = gone.id();
+    gone.wait().unwrap();
+    std::fs::write(out.join(format!(".trace.csv.{pid}.tmp")), "t_s\n").unwrap();
+    std::fs::write(out.join("notes.tmp"), "mine").unwrap();
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=1",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(temporaries(&out), vec!["notes.tmp".to_string()]);
 }
 
 /// Item 5: a FIFO, a directory or a device named inside a file (a scenario's `field.path` or
@@ -702,4 +774,54 @@ fn map_range_is_echoed_as_written() {
     assert!(matches!(o.status.code(), Some(64 | 65)), "{e}");
     assert!(e.contains("1e-320"), "{e}");
     assert!(!e.contains("9.99989e-321"), "{e}");
+}
+
+/// Issue 30 (att30b items 3 and 13): the one plain-text rule covers every format character
+/// and the line and paragraph separators, and what it refuses is never shown raw. A scenario
+/// `name` with U+2028 or U+FFF9 (an invisible interlinear annotation mark) is refused naming
+/// the key, the character shown as `\u{fff9}`; a run directory named with U+2028, ESC or
+/// U+202E is echoed escaped on the console and in `report.html`'s `<title>` and `<h1>`.
+#[test]
+fn invisible_and_separator_characters_are_refused_and_never_shown_raw() {
+    let d = tempfile::tempdir().unwrap();
+    for (cp, ch) in [
+        ("2028", '\u{2028}'),
+        ("FFF9", '\u{fff9}'),
+        ("13430", '\u{13430}'),
+    ] {
+        let path = write(
+            d.path(),
+            &format!("s{cp}.toml"),
+            &format!("name = \"a{ch}b\"\n[sim]\nduration_s = 1.0\n"),
+        );
+        let o = isotrack(&["run", &path]);
+        assert_fails(&o, 65, &["name", "control or invisible"]);
+        let e = stderr(&o);
+        assert!(!e.contains(ch), "U+{cp} shown raw: {e}");
+        assert!(
+            e.contains(&format!("a\\u{{{}}}b", cp.to_lowercase())),
+            "U+{cp}: {e}"
+        );
+    }
+    for name in ["r\u{2028}x", "d\u{1b}[31mred", "d\u{202e}evil"] {
+        let dir = d.path().join(name);
+        let dir_s = dir.display().to_string();
+        let o = isotrack(&["run", "--set", "sim.duration_s=1", "--out", &dir_s]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout).into_owned() + &stderr(&o);
+        for c in ['\u{2028}', '\u{1b}', '\u{202e}'] {
+            assert!(!out.contains(c), "{name:?}: {out:?}");
+        }
+        let page = d.path().join("r.html");
+        let o = isotrack(&["report", &dir_s, "--out", &page.display().to_string()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let html = std::fs::read_to_string(&page).unwrap();
+        for c in ['\u{2028}', '\u{1b}', '\u{202e}'] {
+            assert!(
+                !html.contains(c),
+                "{name:?}: raw U+{:04X} in report.html",
+                c as u32
+            );
+        }
+    }
 }

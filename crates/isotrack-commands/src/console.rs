@@ -91,14 +91,15 @@ fn write_to(state: &Mutex<StreamState>, w: &mut dyn Write, args: fmt::Arguments<
 /// after the per-echo clip ([`isotrack_core::numtext::Clipped`]).
 pub const MAX_LINE_CHARS: usize = 1000;
 
-/// `text` line by line, each line's terminal controls escaped and a line longer than `max`
+/// `text` line by line, each line's terminal controls and other non-plain characters (U+2028,
+/// U+200B: [`isotrack_core::numtext::is_escaped`]) escaped and a line longer than `max`
 /// characters (as shown) cut there with `... (N more characters)`
 /// ([`isotrack_core::numtext::Clipped`]). The line feeds between the lines are the message's
 /// own; one inside user text was escaped where the text was put in the message.
 pub fn clip_lines(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
     if text
         .split('\n')
-        .all(|l| l.len() <= max && !l.chars().any(isotrack_core::numtext::is_terminal_control))
+        .all(|l| l.len() <= max && !l.chars().any(isotrack_core::numtext::is_escaped))
     {
         return std::borrow::Cow::Borrowed(text);
     }

@@ -151,20 +151,34 @@ pub fn is_invisible(c: char) -> bool {
 }
 
 /// Whether `c` is no character of plain text a user names or labels something with: a
-/// control character (C0 with tab and line feed, DEL, C1) or an [`is_invisible`] one (bidi
-/// controls, zero-width characters). The one
-/// rule for the strings isotrack shows from any source: a scenario's `name`, `field.units`,
-/// ..., a NetCDF attribute, a suite's name and titles, a results file's text cells.
+/// character of the Unicode general categories Cc (controls: C0 with tab and line feed, DEL,
+/// C1), Cf (format characters: the bidi controls, zero-width characters, the soft hyphen, the
+/// byte-order mark, the interlinear annotation marks U+FFF9-U+FFFB, the Egyptian hieroglyph
+/// format controls U+13430-..., the Arabic number signs U+0600-U+0605, ...), Zl (U+2028) or Zp
+/// (U+2029), or an [`is_invisible`] one (default-ignorable code points of other categories:
+/// variation selectors, Hangul fillers, unassigned ones). Categories from the Unicode
+/// Character Database (UAX #44, `UnicodeData.txt`) through the `unicode-general-category`
+/// crate's tables. The one rule for the strings isotrack shows from any source: a scenario's
+/// `name`, `field.units`, ..., a NetCDF attribute, a suite's name and titles, a results file's
+/// text cells, a registered controller's name, a run directory's name in a page.
 pub fn is_not_plain(c: char) -> bool {
-    c.is_control() || is_invisible(c)
+    use unicode_general_category::{get_general_category, GeneralCategory as G};
+    c.is_control()
+        || is_invisible(c)
+        || matches!(
+            get_general_category(c),
+            G::Control | G::Format | G::LineSeparator | G::ParagraphSeparator
+        )
 }
 
 /// Whether user text shows `c` as an escape ([`Escaped`]): a [`is_terminal_control`]
-/// character, or a line feed. A line feed in a file name, a unit or a CSV header would start a
-/// new console line that the text's author writes (`x\nerror: ...`), so inside user text it
-/// is shown as `\x0a`; the lines of a message itself are the program's.
+/// character, a line feed, or any other [`is_not_plain`] character but the tab. A line feed
+/// (or U+2028) in a file name, a unit or a CSV header would start a new console line that the
+/// text's author writes (`x\nerror: ...`), so inside user text it is shown as `\x0a`; the
+/// lines of a message itself are the program's. An invisible character is shown as
+/// `\u{200b}` so that a message refusing it shows where it is.
 pub fn is_escaped(c: char) -> bool {
-    c == '\n' || is_terminal_control(c)
+    c == '\n' || is_terminal_control(c) || (c != '\t' && is_not_plain(c))
 }
 
 /// How `c` is shown in user text: itself, `\x1b` (C0, line feed, DEL) or `\u{202e}` (above).
@@ -658,5 +672,68 @@ mod tests {
         for c in ['a', ' ', '_', '|', 'é', '中', '\u{1f600}', '\u{2028}'] {
             assert!(!is_invisible(c), "{c:?}");
         }
+    }
+
+    /// Issue 30 (att30b item 3): the line and paragraph separators (Zl, Zp) and every format
+    /// character (Cf) are not plain text, the ones that are not default-ignorable included:
+    /// the interlinear annotation marks U+FFF9-U+FFFB, the Egyptian hieroglyph format controls
+    /// U+13430-U+13438, the Arabic number signs U+0600-U+0605, U+06DD, U+070F, U+0890-U+0891,
+    /// U+08E2, U+110BD, U+110CD (the code points Python's `unicodedata.category` gives as Cf,
+    /// Zl, Zp that the old rule passed). Letters, spaces, marks and emoji are plain.
+    #[test]
+    fn every_format_and_separator_character_is_not_plain() {
+        let refused = [
+            '\u{2028}',
+            '\u{2029}',
+            '\u{fff9}',
+            '\u{fffa}',
+            '\u{fffb}',
+            '\u{13430}',
+            '\u{13438}',
+            '\u{600}',
+            '\u{605}',
+            '\u{6dd}',
+            '\u{70f}',
+            '\u{890}',
+            '\u{891}',
+            '\u{8e2}',
+            '\u{110bd}',
+            '\u{110cd}',
+            '\u{200b}',
+            '\u{feff}',
+            '\u{ad}',
+            '\u{202e}',
+            '\u{85}',
+            '\u{1b}',
+            '\u{e0001}',
+        ];
+        for c in refused {
+            assert!(is_not_plain(c), "U+{:04X}", c as u32);
+            // Shown escaped in a message, so a refusal shows where it is.
+            let shown = format!("{}", Escaped(&format!("a{c}b")));
+            assert!(
+                shown.starts_with("a\\") && shown.ends_with('b'),
+                "{shown:?}"
+            );
+            assert!(!shown.contains(c), "{shown:?}");
+        }
+        assert_eq!(format!("{}", Escaped("a\u{200b}b")), "a\\u{200b}b");
+        assert_eq!(format!("{}", Escaped("a\u{2028}b")), "a\\u{2028}b");
+        for c in [
+            'a',
+            ' ',
+            '\u{a0}',
+            '_',
+            'é',
+            '中',
+            '\u{301}',
+            '\u{1f600}',
+            '\u{3000}',
+        ] {
+            assert!(!is_not_plain(c), "U+{:04X}", c as u32);
+        }
+        // A tab is a control character, but shown as itself (descriptions hold tabs).
+        assert!(is_not_plain('\t'));
+        assert_eq!(format!("{}", Escaped("a\tb")), "a\tb");
     }
 }

@@ -17,9 +17,15 @@ mod report;
 
 pub use report::{report_page, report_page_with_notes, ReportError};
 
-/// Text escaped for HTML element content and quoted attribute values (`&`, `<`, `>`, `"`, `'`).
+/// Text escaped for HTML element content and quoted attribute values (`&`, `<`, `>`, `"`, `'`),
+/// after every character that is not plain text (the one rule,
+/// [`isotrack_core::numtext::is_escaped`]: ESC, U+202E, U+2028, U+200B, ...) is shown as its
+/// escape (`\x1b`, `\u{202e}`) as the console shows it: a run directory named
+/// `d` + U+202E + `evil` would otherwise render reversed in the page's title and heading.
 pub fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
+    isotrack_core::numtext::Escaped(s)
+        .to_string()
+        .replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
@@ -55,7 +61,8 @@ fn escape_script_json(json: &str) -> String {
             // Bidi controls and other invisible characters (U+202E reverses what follows in
             // a view of the page's source): as `\uXXXX` escapes, surrogate pairs above the
             // BMP (issue 30, fix30c).
-            c if isotrack_core::numtext::is_invisible(c) => {
+            // Every character the one plain-text rule refuses (issue 30, att30b item 3).
+            c if isotrack_core::numtext::is_not_plain(c) => {
                 let mut units = [0u16; 2];
                 for u in c.encode_utf16(&mut units) {
                     out.push_str(&format!("\\u{:04x}", u));
@@ -367,5 +374,16 @@ mod tests {
             escape("<a href='x' title=\"y\">&</a>"),
             "&lt;a href=&#39;x&#39; title=&quot;y&quot;&gt;&amp;&lt;/a&gt;"
         );
+    }
+
+    /// Issue 30 (att30b item 13): a run directory's name with ESC or U+202E reached the
+    /// report's `<title>` and `<h1>` raw (the U+202E reversing the heading); every character
+    /// the one plain-text rule refuses is shown as its escape, as on the console.
+    #[test]
+    fn escape_shows_controls_and_invisibles_as_escapes() {
+        assert_eq!(escape("d\u{202e}<x>"), "d\\u{202e}&lt;x&gt;");
+        assert_eq!(escape("d\u{1b}[31m"), "d\\x1b[31m");
+        assert_eq!(escape("a\u{2028}b\u{200b}"), "a\\u{2028}b\\u{200b}");
+        assert_eq!(escape("plain é 中"), "plain é 中");
     }
 }

@@ -117,7 +117,7 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
             .collect();
         runs.push(RunJson {
             name: r.name.clone(),
-            outcome: r.summary.outcome().to_string(),
+            outcome: shown_outcome(r.summary.outcome()).to_string(),
             // As a JSON value (its keys sorted), the page's data as before.
             summary: serde_json::to_value(&r.summary).unwrap_or_default(),
             t: keep.iter().map(|k| k.t_s).collect(),
@@ -444,10 +444,48 @@ const REPORT_JS: &str = r##"
 })();
 "##;
 
+/// A summary's `outcome` as the page shows it: an outcome isotrack writes is a short snake_case
+/// word (`completed`, `left_field`, `interrupted`, a flight's `link_lost`, ...); anything else
+/// (a doctored `summary.json`'s `<!--<script>` + U+202E) is shown as `unknown`.
+fn shown_outcome(outcome: &str) -> &str {
+    let word = !outcome.is_empty()
+        && outcome.len() <= 32
+        && outcome.bytes().all(|b| b.is_ascii_lowercase() || b == b'_');
+    if word {
+        outcome
+    } else {
+        "unknown"
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use base64::Engine;
+
+    /// Issue 30 (att30b item 13): a doctored `summary.json`'s `outcome` (markup and a U+202E)
+    /// is shown as `unknown`; the outcomes isotrack writes are shown as they are.
+    #[test]
+    fn an_unknown_outcome_is_shown_as_unknown() {
+        for o in [
+            "completed",
+            "left_field",
+            "diverged",
+            "interrupted",
+            "link_lost",
+        ] {
+            assert_eq!(shown_outcome(o), o);
+        }
+        for o in [
+            "<!--<script>\u{202e}",
+            "",
+            "Completed",
+            "a b",
+            &"x".repeat(33),
+        ] {
+            assert_eq!(shown_outcome(o), "unknown", "{o:?}");
+        }
+    }
 
     fn words(b64: &str) -> Vec<u16> {
         base64::engine::general_purpose::STANDARD

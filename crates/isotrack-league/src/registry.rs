@@ -155,13 +155,9 @@ pub fn check_name(name: &str) -> Result<(), NameError> {
     }
     // Invisible characters (a zero-width space, a bidi control) make a name that prints as
     // another: `pi_isoline\u{200b}` would show as a second `pi_isoline` row.
-    let breaks = |c: char| {
-        c == '|'
-            || c.is_control()
-            || c == '\u{2028}'
-            || c == '\u{2029}'
-            || isotrack_core::numtext::is_invisible(c)
-    };
+    // The one plain-text rule (numtext::is_not_plain: controls, format characters, line and
+    // paragraph separators, invisibles), and `|`, a Markdown table's cell separator.
+    let breaks = |c: char| c == '|' || isotrack_core::numtext::is_not_plain(c);
     if let Some(c) = name.chars().find(|&c| breaks(c)) {
         return Err(NameError::BadChar(name.to_string(), c));
     }

@@ -543,7 +543,7 @@ fn registry_refuses_names_that_would_lie() {
     let mut reg = Registry::builtin();
     let names_before = reg.names().len();
     let long = "x".repeat(65);
-    let cases: [(&str, NameError); 11] = [
+    let cases: [(&str, NameError); 13] = [
         (
             "pi_isoline",
             NameError::Builtin("pi_isoline".into(), "pi_isoline"),
@@ -566,6 +566,16 @@ fn registry_refuses_names_that_would_lie() {
         (
             "a\u{2028}b",
             NameError::BadChar("a\u{2028}b".into(), '\u{2028}'),
+        ),
+        // Issue 30 (att30b item 3): the one plain-text rule, format characters included (an
+        // interlinear annotation mark, an Egyptian hieroglyph format control).
+        (
+            "a\u{fff9}b",
+            NameError::BadChar("a\u{fff9}b".into(), '\u{fff9}'),
+        ),
+        (
+            "a\u{13430}",
+            NameError::BadChar("a\u{13430}".into(), '\u{13430}'),
         ),
         (" mine", NameError::Whitespace(" mine".into())),
         (&long, NameError::TooLong(65)),

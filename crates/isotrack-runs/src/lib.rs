@@ -14,6 +14,7 @@
 //! Failures carry the process exit code the command-line tool exits with ([`exit`]).
 #![deny(missing_docs)]
 
+pub mod cleanup;
 pub mod failure;
 pub mod files;
 pub mod results;

@@ -146,6 +146,8 @@ pub struct TraceFile {
     writer: TraceWriter,
     /// The temporary file renamed into place when finished (`None`: written in place).
     tmp: Option<PathBuf>,
+    /// The temporary file removed if the process is interrupted ([`crate::cleanup`]).
+    _pending: Option<crate::cleanup::Pending>,
 }
 
 impl TraceFile {
@@ -195,6 +197,11 @@ impl RunDir {
         let created = std::fs::symlink_metadata(dir).is_err();
         std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
         let lock = command.map(|c| lock_output_dir(dir, c)).transpose()?;
+        // Holding the lock, no other command writes here: temporaries a killed process left
+        // (`.trace.csv.PID.tmp`, its PID gone) are removed.
+        if lock.is_some() {
+            crate::cleanup::remove_stale_temporaries(dir, &names);
+        }
         for name in &names {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
@@ -268,6 +275,7 @@ impl RunDir {
         })?;
         Ok(TraceFile {
             writer,
+            _pending: Some(crate::cleanup::register(&tmp)),
             tmp: Some(tmp),
         })
     }
@@ -275,7 +283,7 @@ impl RunDir {
     /// Abandons a trace that will not be finished (the run was refused): its temporary file
     /// is removed, and `why` returned as the failure to write `trace.csv` (exit 73).
     pub fn abandon(&self, trace: TraceFile, why: impl std::fmt::Display) -> Failure {
-        let TraceFile { writer, tmp } = trace;
+        let TraceFile { writer, tmp, .. } = trace;
         drop(writer);
         if let Some(tmp) = &tmp {
             let _ = std::fs::remove_file(tmp);
@@ -291,7 +299,11 @@ impl RunDir {
         self.remove_old_summary()?;
         let path = self.path("trace.csv");
         let writer = TraceWriter::create(&path, flying).map_err(|e| cant(&path, e))?;
-        Ok(TraceFile { writer, tmp: None })
+        Ok(TraceFile {
+            writer,
+            tmp: None,
+            _pending: None,
+        })
     }
 
     /// Finishes the directory: the old summary removed, the trace flushed and renamed into
@@ -339,7 +351,7 @@ impl RunDir {
         summary: &str,
     ) -> Result<(), Failure> {
         let path = self.path("trace.csv");
-        let TraceFile { writer, tmp } = trace;
+        let TraceFile { writer, tmp, .. } = trace;
         if let Err(e) = self.remove_old_summary() {
             if let Some(tmp) = &tmp {
                 let _ = std::fs::remove_file(tmp);

@@ -54,13 +54,11 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
     Some(RunSpan {
         sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
         sensor_drops_samples: sensor.dropout_probability != 0.0,
-        turn_rate_limit_radps: match f.controller.kind {
-            Some(crate::schema::ControllerKind::Schedule) => None,
-            _ => f
-                .controller
-                .max_turn_rate_radps
-                .filter(|w| w.is_finite() && *w >= 0.0),
-        },
+        // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).
+        turn_rate_limit_radps: f
+            .controller
+            .max_turn_rate_radps
+            .filter(|w| w.is_finite() && *w >= 0.0),
         dt_s: sim.dt_s,
         n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
         steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
@@ -379,7 +377,8 @@ impl Scenario {
             let end = f.last_frame_run_time_s();
             if r.outcome == isotrack_sim::Outcome::LeftField && r.t_end_s + self.dt_s() > end {
                 r.outcome_detail = Some(format!(
-                    "the field's data ended: its last frame is at t = {end} s of the run (field.after_last_frame = \"end\")"
+                    "the field's data ended: its last frame is at t = {} s of the run (field.after_last_frame = \"end\")",
+                    isotrack_core::numtext::Num(end)
                 ));
             }
         }

@@ -271,10 +271,12 @@ pub fn parse_scenario_in(
     }
     // 3. Overrides, one at a time so that an error names its argument.
     let mut table: toml::Table = toml::from_str(text).map_err(|e| {
-        // A u64 key (`sim.seed`) takes 2^63 in the schema, a TOML table does not.
+        // A u64 key (`sim.seed`) takes 2^63 in the schema, a TOML table does not: said as out
+        // of range, at its key.
+        let key = e.span().and_then(|s| key_at(doc.get_ref(), &s, ""));
         let message = e.message().trim();
         let message = number_out_of_range(message).unwrap_or_else(|| message.to_string());
-        located(e.span(), None, message)
+        located(e.span(), key, message)
     })?;
     let mut set_keys: Vec<(String, String)> = Vec::new();
     for arg in overrides {

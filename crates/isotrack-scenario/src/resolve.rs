@@ -490,7 +490,11 @@ fn resolve_search(c: &mut Checker, ct: &mut ControllerSection) {
 
 /// `[controller]`: the keys allowed for the chosen law, the shared output stage, the law's gains
 /// and the derivative estimator.
-fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
+///
+/// `fixed_wing`: the vehicle is the UAV, whose airframe sets the turn-rate limit when
+/// `max_turn_rate_radps` is not given (for every law, the bang-bang laws' amplitude included:
+/// [`crate::spec::ControllerSpec::new`]).
+fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection, fixed_wing: bool) {
     resolve_search(c, ct);
     let kind = *ct.kind.get_or_insert(ControllerKind::PiIsoline);
     let allowed = controller_allowed(kind);
@@ -505,7 +509,10 @@ fn resolve_controller(c: &mut Checker, ct: &mut ControllerSection) {
             | ControllerKind::SlidingModeSmooth
             | ControllerKind::SuboptimalSosm
     );
-    if bang_bang {
+    // On the fixed wing an unset limit is the airframe's (g tan(40 deg) / V, known once the
+    // vehicle is trimmed), the bang-bang amplitude included: 1 rad/s there was 3.6 x what the
+    // airframe flies at 30 m/s (issue 30, att30b item 14).
+    if bang_bang && !fixed_wing {
         ct.max_turn_rate_radps
             .get_or_insert(C::BANG_BANG_U_MAX_RADPS);
     }
@@ -623,6 +630,21 @@ fn resolve_schedule(c: &mut Checker, ct: &mut ControllerSection) {
                 "times must increase",
             );
         }
+        // The limit is every controller's (README): a schedule beyond it would fly a turn
+        // rate the scenario says the vehicle cannot (issue 30, att30b item 12).
+        if let Some(l) = ct.max_turn_rate_radps {
+            if w.abs() > l {
+                c.fail(
+                    &format!("controller.course_rate_radps[{i}]"),
+                    &format!(
+                        "turn rate {} rad/s exceeds controller.max_turn_rate_radps = {} rad/s, the limit every controller keeps: give |omega| <= {} or raise the limit",
+                        Echo(*w),
+                        Echo(l),
+                        Echo(l)
+                    ),
+                );
+            }
+        }
     }
 }
 
@@ -723,7 +745,8 @@ pub fn resolve(mut f: ScenarioFile) -> Result<ScenarioFile, Vec<Issue>> {
     resolve_initial(&mut c, &mut f.initial);
     let duration = f.sim.duration_s.unwrap_or(S::DURATION_S);
     resolve_sensor(&mut c, &mut f.sensor, dt, duration);
-    resolve_controller(&mut c, &mut f.controller);
+    let fixed_wing = f.vehicle.kind == Some(VehicleKind::FixedWing);
+    resolve_controller(&mut c, &mut f.controller, fixed_wing);
     resolve_metrics(&mut c, &mut f);
     resolve_output(&mut c, &mut f);
     resolve_sitl(&mut c, &f.sitl);

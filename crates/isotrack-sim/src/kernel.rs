@@ -21,6 +21,7 @@ use crate::sensor::Sensor;
 use crate::trace::{TraceRow, TraceSink};
 use isotrack_core::control::GroundTruth;
 use isotrack_core::math::Pose2;
+use isotrack_core::numtext::Num;
 use isotrack_core::{IsolineController, Measurement, Vec2, Vehicle};
 
 /// What [`VehicleRun::sense`] found: the run ended, or it goes on, the command held or to be
@@ -130,7 +131,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
         if !pose.is_finite() {
             self.end(
                 Outcome::Diverged,
-                format!("non-finite vehicle state at t = {t_s} s"),
+                format!("non-finite vehicle state at t = {} s", Num(t_s)),
             );
             return Sensed::Ended;
         }
@@ -139,8 +140,10 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
             self.end(
                 Outcome::LeftField,
                 format!(
-                    "the field has no value at ({:.6}, {:.6}) m, t = {t_s} s",
-                    pose.position.x, pose.position.y
+                    "the field has no value at ({:.6}, {:.6}) m, t = {} s",
+                    pose.position.x,
+                    pose.position.y,
+                    Num(t_s)
                 ),
             );
             if k == 0 && self.records() {
@@ -220,7 +223,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
             if !w.is_finite() {
                 self.end(
                     Outcome::Diverged,
-                    format!("non-finite turn-rate command at t = {t_s} s"),
+                    format!("non-finite turn-rate command at t = {} s", Num(t_s)),
                 );
                 self.record_start(k, t_s, vehicle, state, sink);
                 return false;

@@ -35,6 +35,11 @@ The environment's definition (the same for both):
   (the paper's error scale; 1 if unset) unless given, ``effort_weight`` 0.01 unless given.
   A terminating step also pays ``termination_penalty`` (default: ``(10 + effort_weight)`` times
   the samples left in the run, so that leaving the field never scores better than staying).
+  The settings are checked at construction so that an episode of ``N`` samples sums to less
+  than 1e300 in magnitude: ``error_scale >= 2e100 * N / 1e300`` (|eps| is at most 2e100, the
+  fields' value bound), ``effort_weight`` and ``termination_penalty`` at most ``1e300 / N``;
+  ``max_turn_rate_radps`` within float32's range (the action space), ``start_radius_m`` at most
+  6.4e7 m (the scenario's coordinate range).
 * **terminated**: the run ended as ``left_field`` (the vehicle reached a point where the field has
   no value) or ``diverged``; **truncated**: it reached the scenario's ``sim.duration_s``.
 * **reset(seed=..., options=...)**: reproducible from ``seed``. The start is drawn uniformly in
@@ -212,8 +217,11 @@ class _Starts:
 
     def __init__(self, batch: "_native.EnvBatch", start_radius_m: Optional[float], random_heading: bool):
         r = batch.default_start_radius_m if start_radius_m is None else _check_number("start_radius_m", start_radius_m)
-        if not (np.isfinite(r) and r >= 0.0):
-            raise ValueError(f"start_radius_m must be finite and >= 0, got {start_radius_m}")
+        most = batch.max_start_radius_m
+        if not (np.isfinite(r) and 0.0 <= r <= most):
+            # The scenario's coordinate range (issue 30, att30b item 7: 1e300 was accepted and
+            # failed only at reset, echoed with 300 digits).
+            raise ValueError(f"start_radius_m must be finite, >= 0 and at most {most:g} m (the scenario's coordinate range), got {r:.6g}")
         self.radius_m = r
         self.random_heading = _check_flag("random_heading", random_heading)
         self.batch = batch

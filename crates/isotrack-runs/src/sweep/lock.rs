@@ -24,6 +24,8 @@ const MAX_HOLDER_BYTES: u64 = 256;
 pub struct DirLock {
     file: std::fs::File,
     path: std::path::PathBuf,
+    /// The file removed if the process is interrupted ([`crate::cleanup`]).
+    _pending: crate::cleanup::Pending,
 }
 
 impl Drop for DirLock {
@@ -124,6 +126,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
             Ok(Some(DirLock {
                 file: f,
                 path: path.to_path_buf(),
+                _pending: crate::cleanup::register(path),
             }))
         }
         Err(std::fs::TryLockError::WouldBlock) => {

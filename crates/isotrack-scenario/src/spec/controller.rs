@@ -231,10 +231,16 @@ fn law(
             derivative: derivative(c)?,
         })
     };
+    // The bang-bang laws' amplitude: the limit in force (given, or the fixed wing's airframe
+    // limit; resolution sets 1 rad/s for the Dubins robot without one).
+    let amplitude = || match output.max_turn_rate_radps {
+        Some(w) => Ok(w),
+        None => settled(&c.max_turn_rate_radps, &key("max_turn_rate_radps")),
+    };
     let sliding = |boundary_layer| -> Result<SlidingModeParams, Issue> {
         Ok(SlidingModeParams {
             level,
-            max_turn_rate_radps: settled(&c.max_turn_rate_radps, &key("max_turn_rate_radps"))?,
+            max_turn_rate_radps: amplitude()?,
             gamma: settled(&c.gamma, &key("gamma"))?,
             delta: settled(&c.delta, &key("delta"))?,
             boundary_layer,
@@ -260,7 +266,7 @@ fn law(
         )?))?),
         ControllerKind::SuboptimalSosm => LawSpec::SuboptimalSosm(SuboptimalSosmParams {
             level,
-            max_turn_rate_radps: settled(&c.max_turn_rate_radps, &key("max_turn_rate_radps"))?,
+            max_turn_rate_radps: amplitude()?,
             alpha_star: settled(&c.alpha_star, &key("alpha_star"))?,
             output,
             derivative: derivative(c)?,

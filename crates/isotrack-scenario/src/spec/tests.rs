@@ -162,6 +162,57 @@ fn the_fixed_wing_turn_rate_limit_is_derived_from_its_airspeed() {
     assert_eq!(s.controller.turn_rate_limit, TurnRateLimit::Given(0.1));
 }
 
+/// Issue 30 (att30b item 14): on the fixed wing the bang-bang laws (`sliding_mode`,
+/// `sliding_mode_smooth`, `suboptimal_sosm`) take the airframe's limit as their amplitude and
+/// output stage, as the PI law does (`g*tan(40 deg)/V` = 0.274106 rad/s at 30 m/s); they
+/// resolved 1 rad/s, 3.6 times what the airframe flies. A given limit still wins, and the
+/// Dubins robot keeps its 1 rad/s default.
+#[test]
+fn the_fixed_wing_bang_bang_laws_take_the_airframe_limit() {
+    let want = 0.274_106;
+    for kind in ["sliding_mode", "sliding_mode_smooth", "suboptimal_sosm"] {
+        let s = spec_of(&format!(
+            "[vehicle]\nkind = \"fixed_wing\"\n[controller]\nkind = \"{kind}\"\n"
+        ));
+        let TurnRateLimit::Airframe(w) = s.controller.turn_rate_limit else {
+            panic!("{kind}: {:?}", s.controller.turn_rate_limit)
+        };
+        assert!((w - want).abs() < 1e-6, "{kind}: {w}");
+        let (amplitude, output) = match s.controller.law {
+            LawSpec::SlidingMode(p) => (p.max_turn_rate_radps, p.output.max_turn_rate_radps),
+            LawSpec::SuboptimalSosm(p) => (p.max_turn_rate_radps, p.output.max_turn_rate_radps),
+            l => panic!("{l:?}"),
+        };
+        assert!((amplitude - want).abs() < 1e-6, "{kind}: {amplitude}");
+        assert_eq!(output, Some(amplitude), "{kind}");
+        let s = spec_of(&format!(
+            "[vehicle]\nkind = \"fixed_wing\"\n[controller]\nkind = \"{kind}\"\nmax_turn_rate_radps = 0.2\n"
+        ));
+        assert_eq!(s.controller.turn_rate_limit, TurnRateLimit::Given(0.2));
+        let s = spec_of(&format!("[controller]\nkind = \"{kind}\"\n"));
+        assert_eq!(s.controller.turn_rate_limit, TurnRateLimit::Given(1.0));
+    }
+}
+
+/// Issue 30 (att30b item 12): `schedule` flew 1 rad/s under `max_turn_rate_radps = 0.1`
+/// (the limit README says every controller keeps): a schedule entry beyond the limit is
+/// refused, naming the entry; one within it (or without a limit) is kept.
+#[test]
+fn a_schedule_beyond_the_turn_rate_limit_is_refused() {
+    let base =
+        "[controller]\nkind = \"schedule\"\ncourse_rate_radps = [[0.0, 0.05], [1.0, -1.0]]\n";
+    let e = parse_scenario(&format!("{base}max_turn_rate_radps = 0.1\n"), "<test>", &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("controller.course_rate_radps[1]") && e.contains("exceeds") && e.contains("0.1"),
+        "{e}"
+    );
+    assert!(!e.contains("course_rate_radps[0]"), "{e}");
+    parse_scenario(&format!("{base}max_turn_rate_radps = 1.0\n"), "<test>", &[]).unwrap();
+    parse_scenario(base, "<test>", &[]).unwrap();
+}
+
 /// The search geometry: spacing `2*v/omega_max` (1 rad/s without a limit), legs 10 spacings,
 /// hand-over 1 % of |level|.
 #[test]

@@ -133,3 +133,21 @@ fn non_finite_command_diverges() {
     assert_eq!(r.steps, 99);
     assert!(r.outcome_detail.unwrap().contains("t = 1 s"));
 }
+
+/// Issue 30 (att30b item 15): the time in `outcome_detail` is a computed number and is shown
+/// as numtext shows computed numbers (six significant digits): a robot driving straight east
+/// at 2 m/s from x = -0.695 m leaves the field's domain (x <= 12 m) at the step of
+/// t = 635 x 0.01 s, which as an `f64` prints as 6.3500000000000005; the detail says 6.35.
+#[test]
+fn the_detail_shows_computed_times_short() {
+    let s = parse_scenario(
+        "[sim]\nduration_s = 20.0\ndt_s = 0.01\n[field]\ndomain_m = [-12.0, 12.0, -12.0, 12.0]\n[vehicle]\nspeed_mps = 2.0\n[initial]\nx_m = -0.695\ny_m = 0.0\nheading_rad = 0.0\n[controller]\nkind = \"schedule\"\ncourse_rate_radps = [[0.0, 0.0]]\n",
+        "s.toml",
+        &[],
+    )
+    .unwrap();
+    let r = s.run(&mut NoTrace);
+    assert_eq!(r.outcome, Outcome::LeftField);
+    let detail = r.outcome_detail.unwrap();
+    assert!(detail.ends_with("t = 6.35 s"), "{detail}");
+}

@@ -1,0 +1,213 @@
+//! Files a command removes when it is interrupted (Ctrl-C, SIGTERM): an output directory's
+//! lock file ([`crate::sweep::lock::LOCK_FILE`]) and a trace being streamed into its
+//! temporary file (`.trace.csv.PID.tmp`). Each is registered while it exists ([`register`]);
+//! the command-line program calls [`remove_on_interrupt`] once, after which SIGINT and SIGTERM
+//! remove every registered file and end the process with 130 (128 + SIGINT) or 143 (128 +
+//! SIGTERM), as the default action would, but without the litter (README: "the holder removes
+//! the file when done (an error and Ctrl-C included)"). A library user (the Python package)
+//! keeps its own signal handling: nothing is installed unless asked.
+//!
+//! The signal handler only writes the signal's number into a pipe (`write` is
+//! async-signal-safe, POSIX.1-2017 2.4.3); a thread blocked on the pipe's other end does the
+//! removing and the exit.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+/// The registered files, each with its registration's number.
+static PENDING: Mutex<Vec<(u64, PathBuf)>> = Mutex::new(Vec::new());
+/// The next registration's number.
+static NEXT: AtomicU64 = AtomicU64::new(0);
+
+/// A file removed if the process is interrupted while this lives ([`register`]); dropped, the
+/// file is no longer the interruption's to remove (it was renamed into place or removed).
+#[derive(Debug)]
+pub struct Pending {
+    id: u64,
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        let mut list = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+        list.retain(|(id, _)| *id != self.id);
+    }
+}
+
+/// Registers `path` to be removed if the process is interrupted before the returned
+/// [`Pending`] is dropped.
+pub fn register(path: &Path) -> Pending {
+    let id = NEXT.fetch_add(1, Ordering::Relaxed);
+    PENDING
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push((id, path.to_path_buf()));
+    Pending { id }
+}
+
+/// Removes every registered file (best effort: a file already gone is no error).
+pub fn remove_pending() {
+    let list = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+    for (_, p) in list.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+#[cfg(unix)]
+mod signals {
+    use std::sync::atomic::{AtomicI32, Ordering};
+
+    /// The pipe's write end, -1 before [`super::remove_on_interrupt`].
+    static PIPE_WRITE: AtomicI32 = AtomicI32::new(-1);
+
+    extern "C" fn on_signal(sig: libc::c_int) {
+        let byte = sig as u8;
+        let fd = PIPE_WRITE.load(Ordering::SeqCst);
+        // SAFETY: write(2) on a valid descriptor and a one-byte buffer on the stack; it is
+        // async-signal-safe. A failed write (a full pipe after many signals) is ignored.
+        unsafe {
+            libc::write(fd, (&byte as *const u8).cast(), 1);
+        }
+    }
+
+    pub(super) fn install() {
+        if PIPE_WRITE.load(Ordering::SeqCst) >= 0 {
+            return;
+        }
+        let mut fds: [libc::c_int; 2] = [0; 2];
+        // SAFETY: pipe(2) fills the two descriptors of a valid array.
+        if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
+            return;
+        }
+        let read = fds[0];
+        let spawned = std::thread::Builder::new()
+            .name("isotrack-interrupt".into())
+            .spawn(move || loop {
+                let mut byte = 0u8;
+                // SAFETY: read(2) into a one-byte buffer on the stack.
+                let n = unsafe { libc::read(read, (&mut byte as *mut u8).cast(), 1) };
+                if n == 1 {
+                    super::remove_pending();
+                    std::process::exit(128 + i32::from(byte));
+                }
+                if n == 0 {
+                    return;
+                }
+            });
+        if spawned.is_err() {
+            return;
+        }
+        PIPE_WRITE.store(fds[1], Ordering::SeqCst);
+        // SAFETY: the handler only writes to a pipe (async-signal-safe).
+        unsafe {
+            libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+            libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
+        }
+    }
+}
+
+/// Makes SIGINT and SIGTERM remove every [`register`]ed file and exit 130 or 143 (for the
+/// command-line program; once per process). Commands that stop cleanly on a signal (`fly`,
+/// `sitl`, `check --map --verify`) install their own handler over this one.
+pub fn remove_on_interrupt() {
+    #[cfg(unix)]
+    signals::install();
+}
+
+/// Whether a process with id `pid` exists (`kill(pid, 0)` does not fail with ESRCH); `true`
+/// where that cannot be told.
+#[cfg(unix)]
+fn process_exists(pid: u32) -> bool {
+    let Ok(p) = libc::pid_t::try_from(pid) else {
+        return true;
+    };
+    // SAFETY: signal 0 sends nothing; it only checks the process.
+    let r = unsafe { libc::kill(p, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
+#[cfg(not(unix))]
+fn process_exists(_pid: u32) -> bool {
+    true
+}
+
+/// Removes the temporary files (`.NAME.PID.tmp`, [`crate::files::temp_beside`]) of `names` in
+/// `dir` that a process no longer running left (killed with SIGKILL, or before this cleanup
+/// existed): for a command holding `dir`'s lock, so no other command writes there. Files of
+/// this process or of a running one are kept.
+pub fn remove_stale_temporaries(dir: &Path, names: &[&str]) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file_name = e.file_name();
+        let Some(n) = file_name.to_str() else {
+            continue;
+        };
+        let stale = names.iter().any(|name| {
+            n.strip_prefix('.')
+                .and_then(|r| r.strip_prefix(name))
+                .and_then(|r| r.strip_prefix('.'))
+                .and_then(|r| r.strip_suffix(".tmp"))
+                .filter(|pid| !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()))
+                .and_then(|pid| pid.parse::<u32>().ok())
+                .is_some_and(|pid| pid != std::process::id() && !process_exists(pid))
+        });
+        if stale && e.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file is listed for removal while its [`Pending`] lives, and no longer once dropped
+    /// (the removal itself, which touches every registered file of the process, is tested
+    /// through the binary: `tests/review.rs`).
+    #[test]
+    fn files_are_listed_while_registered() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        let listed = |p: &Path| {
+            PENDING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .iter()
+                .any(|(_, q)| q == p)
+        };
+        let pa = register(&a);
+        drop(register(&b));
+        assert!(listed(&a));
+        assert!(!listed(&b));
+        drop(pa);
+        assert!(!listed(&a));
+    }
+
+    /// A `.trace.csv.PID.tmp` of a process that no longer exists is removed; this process's,
+    /// another name's and a non-number's are kept.
+    #[cfg(unix)]
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        // A child that has exited and been waited for: its pid names no process (until the
+        // system reuses it, which does not happen within this test on any usual pid range).
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let me = std::process::id();
+        let names = [
+            format!(".trace.csv.{dead}.tmp"),
+            format!(".trace.csv.{me}.tmp"),
+            format!(".notes.txt.{dead}.tmp"),
+            ".trace.csv.x1.tmp".to_string(),
+        ];
+        for n in &names {
+            std::fs::write(dir.path().join(n), "x").unwrap();
+        }
+        remove_stale_temporaries(dir.path(), &["trace.csv", "summary.json"]);
+        let left: Vec<bool> = names.iter().map(|n| dir.path().join(n).exists()).collect();
+        assert_eq!(left, [false, true, true, true]);
+    }
+}
