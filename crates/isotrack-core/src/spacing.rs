@@ -244,10 +244,38 @@ pub fn slowest_mode_time_constant_s(n: usize, k_v: f64, range_slope: f64) -> f64
     1.0 / (k_v * range_slope * ring_laplacian_eigenvalue(n, 1))
 }
 
+/// The slowest sampled spacing mode: the `m` in `1..=floor(N/2)` (the distinct nonzero
+/// eigenvalues, `lambda_m = lambda_{N-m}`) whose polynomial has the largest spectral radius
+/// ([`spacing_mode_spectral_radius`]), with that radius. Without delay and at a small gain this is
+/// `m = 1`, as in continuous time; with a delay the modes of large `lambda_m` sit near the
+/// stability edge and can decay far more slowly (N = 4, `T` = 1 s, `d` = 2 s, `k_v` = 0.2 1/s,
+/// chords `c = cos(pi/4)`: `m = 2`, radius 0.9747, against 0.90 for `m = 1`). `None` for
+/// `n < 2` or invalid times; ties keep the smaller `m`.
+pub fn slowest_sampled_mode(
+    n: usize,
+    k_v: f64,
+    range_slope: f64,
+    period_s: f64,
+    delay_s: f64,
+) -> Option<(usize, f64)> {
+    if n < 2 {
+        return None;
+    }
+    let mut slowest: Option<(usize, f64)> = None;
+    for m in 1..=n / 2 {
+        let g = k_v * range_slope * ring_laplacian_eigenvalue(n, m) * period_s;
+        let rho = spacing_mode_spectral_radius(g, period_s, delay_s)?;
+        if slowest.is_none_or(|(_, r)| rho > r) {
+            slowest = Some((m, rho));
+        }
+    }
+    slowest
+}
+
 /// The slowest spacing mode's time constant, s, sampled at period `T` with delay `d`:
-/// `-T / ln(rho)`, `rho` the spectral radius of mode `m = 1`
-/// ([`spacing_mode_spectral_radius`]); infinite for a mode that does not decay. Tends to
-/// [`slowest_mode_time_constant_s`] as `T, d -> 0`.
+/// `-T / ln(rho)`, `rho` the largest spectral radius over the modes ([`slowest_sampled_mode`]);
+/// infinite for a mode that does not decay. Tends to [`slowest_mode_time_constant_s`] (mode
+/// `m = 1`) as `T, d -> 0`.
 pub fn slowest_mode_time_constant_sampled_s(
     n: usize,
     k_v: f64,
@@ -258,8 +286,7 @@ pub fn slowest_mode_time_constant_sampled_s(
     if n < 2 {
         return Some(f64::INFINITY);
     }
-    let g = k_v * range_slope * ring_laplacian_eigenvalue(n, 1) * period_s;
-    let rho = spacing_mode_spectral_radius(g, period_s, delay_s)?;
+    let (_, rho) = slowest_sampled_mode(n, k_v, range_slope, period_s, delay_s)?;
     if rho >= 1.0 {
         return Some(f64::INFINITY);
     }
@@ -281,6 +308,47 @@ mod tests {
         assert!((ring_laplacian_max_eigenvalue(4) - 4.0).abs() < 1e-14);
         let odd = 2.0 + 2.0 * (PI / 5.0).cos();
         assert!((ring_laplacian_max_eigenvalue(5) - odd).abs() < 1e-14);
+    }
+
+    /// With a ranging delay the slowest sampled mode is not `m = 1` (att32's case A: N = 4, 1 Hz
+    /// ranging, 2 s delay, `k_v` = 0.2 1/s, chords `c = cos(pi/4)`). Checked against the decay of
+    /// the mode's own difference equation `x_{j+1} = x_j - g x_{j-2}` stepped 4000 periods from a
+    /// unit impulse (an independent computation: the envelope's log ratio over 1000 periods).
+    #[test]
+    fn the_slowest_sampled_mode_is_the_largest_radius() {
+        let c = (PI / 4.0).cos();
+        let (m, rho) = slowest_sampled_mode(4, 0.2, c, 1.0, 2.0).unwrap();
+        assert_eq!(m, 2);
+        let decay = |g: f64| {
+            let mut x = [0.0f64; 4003];
+            x[2] = 1.0;
+            for j in 2..4002 {
+                x[j + 1] = x[j] - g * x[j - 2];
+            }
+            let env = |a: usize| x[a..a + 50].iter().fold(0.0f64, |e, v| e.max(v.abs()));
+            fmath::ln(env(3900) / env(2900)) / 1000.0
+        };
+        let g2 = 0.2 * c * ring_laplacian_eigenvalue(4, 2);
+        let g1 = 0.2 * c * ring_laplacian_eigenvalue(4, 1);
+        // Decay per period as ln(rho): mode 2's is its radius's, mode 1's is faster.
+        let ln_rho = fmath::ln(rho);
+        assert!(
+            (decay(g2) - ln_rho).abs() < 2e-4,
+            "{} vs {ln_rho}",
+            decay(g2)
+        );
+        assert!(
+            decay(g1) < ln_rho - 0.03,
+            "mode 1 decays faster: {}",
+            decay(g1)
+        );
+        let tau = slowest_mode_time_constant_sampled_s(4, 0.2, c, 1.0, 2.0).unwrap();
+        assert!(
+            (tau + 1.0 / fmath::ln(rho)).abs() < 1e-9 && tau > 35.0,
+            "{tau}"
+        );
+        // No delay, small gain: m = 1, as in continuous time.
+        assert_eq!(slowest_sampled_mode(6, 0.05, 1.0, 0.01, 0.0).unwrap().0, 1);
     }
 
     /// Schur-Cohn against polynomials with known roots.

@@ -387,11 +387,10 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
         FieldKindSpec::Analytic(isotrack_fields::AnalyticField {
             kind: AnalyticKind::RadialExp(r),
             ..
-        }) => {
-            match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
-                Some(rd) => {
-                    let alpha = r.decay_per_m * level;
-                    Prop1Report {
+        }) => match radial_exp_isoline_radius_m(r.i0, r.decay_per_m, level) {
+            Some(rd) => {
+                let alpha = r.decay_per_m * level;
+                Prop1Report {
                         applicable: true,
                         alpha: Some(alpha),
                         r_d_m: Some(rd),
@@ -400,13 +399,12 @@ fn prop1_report(s: &Scenario, l: &Law) -> Prop1Report {
                         characteristic_polynomial: Some(prop1_characteristic_polynomial(alpha, v, rd, kp, ki, c1, c2)),
                         note: "alpha = k*s_d, the radial slope on the isoline; the paper's conditions are sufficient, the Routh-Hurwitz one is exact (locally)".into(),
                     }
-                }
-                None => Prop1Report::not_applicable(format!(
-                    "level {} is not attained by the field (0 < level < i0 is needed)",
-                    Echo(level)
-                )),
             }
-        }
+            None => Prop1Report::not_applicable(format!(
+                "level {} is not attained by the field (0 < level < i0 is needed)",
+                Echo(level)
+            )),
+        },
         _ => Prop1Report::not_applicable(
             "Prop. 1 is for circular fields (field.kind = \"radial_exp\")".into(),
         ),

@@ -8,7 +8,8 @@
 //!   `z^{q+2} - z^{q+1} + g (1 - f) z + g f`, Schur-stable or not
 //!   ([`isotrack_core::spacing::spacing_mode_stable`]); the largest stable gain
 //!   `k_v* = g*(q, f)/(T c lambda_max)` ([`isotrack_core::spacing::max_stable_spacing_gain`]) and
-//!   the slowest mode's time constant (`-T/ln rho_1` sampled, `1/(k_v c lambda_1)` continuous).
+//!   the slowest mode's time constant (sampled: `-T/ln rho` of the mode with the largest radius,
+//!   with a delay not always `m = 1`; continuous: `1/(k_v c lambda_1)`).
 //!   The range slope `c = dr/dg`: `cos(pi/N)` for `range_balance` on an isoline known to be a
 //!   circle (a chord `2R sin(g/(2R))` at the even gap `2 pi R/N`), 1 for `arc_reference` (arc
 //!   gaps) and, conservatively, 1 for `range_balance` elsewhere (`|dr/dg| <= 1` on any curve,
@@ -28,8 +29,8 @@ use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::spacing::{
     max_stable_gain_per_period, max_stable_spacing_gain, ring_laplacian_eigenvalue,
     ring_laplacian_max_eigenvalue, slowest_mode_time_constant_s,
-    slowest_mode_time_constant_sampled_s, spacing_mode_spectral_radius, spacing_mode_stable,
-    split_delay,
+    slowest_mode_time_constant_sampled_s, slowest_sampled_mode, spacing_mode_spectral_radius,
+    spacing_mode_stable, split_delay,
 };
 use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
@@ -97,7 +98,11 @@ pub struct SpacingLoopReport {
     pub max_stable_k_v_per_s: Option<f64>,
     /// Whether every mode at the scenario's `k_v` is stable.
     pub stable: Option<bool>,
-    /// The slowest mode's time constant sampled, `-T/ln(rho_1)`, s (null: it does not decay).
+    /// The slowest sampled mode: the `m` with the largest spectral radius (with a ranging delay
+    /// not always `m = 1`: `isotrack_core::spacing::slowest_sampled_mode`).
+    pub slowest_mode_m: Option<usize>,
+    /// The slowest mode's time constant sampled, `-T/ln(rho)` with that mode's radius, s (null:
+    /// it does not decay).
     pub slowest_time_constant_s: Option<f64>,
     /// The same in continuous time, `1/(k_v c lambda_1)`, s.
     pub slowest_time_constant_continuous_s: Option<f64>,
@@ -179,6 +184,7 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         max_gain_per_period: None,
         max_stable_k_v_per_s: None,
         stable: None,
+        slowest_mode_m: None,
         slowest_time_constant_s: None,
         slowest_time_constant_continuous_s: None,
         not_modelled: vec![],
@@ -238,6 +244,7 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
             stable: spacing_mode_stable(gain(m), period_s, delay_s),
         })
         .collect();
+    rep.slowest_mode_m = slowest_sampled_mode(n, k_v, c, period_s, delay_s).map(|(m, _)| m);
     rep.slowest_time_constant_s =
         slowest_mode_time_constant_sampled_s(n, k_v, c, period_s, delay_s)
             .filter(|t| t.is_finite());
@@ -552,7 +559,8 @@ impl TeamCheckReport {
             let num =
                 |x: Option<f64>| x.map_or("n/a (does not decay)".into(), |v| Num(v).to_string());
             out.push(format!(
-                "  slowest mode (m = 1): time constant {} s sampled (-T/ln rho), {} s continuous (1/(k_v c lambda_1))",
+                "  slowest mode (m = {}): time constant {} s sampled (-T/ln rho), {} s continuous (m = 1: 1/(k_v c lambda_1))",
+                sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
                 num(sp.slowest_time_constant_s),
                 num(sp.slowest_time_constant_continuous_s)
             ));
