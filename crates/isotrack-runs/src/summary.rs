@@ -427,3 +427,31 @@ pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    /// Numbers read back from the run files' JSON (`summary.json`, a benchmark's `task.json` that
+    /// `--resume` reads) are the numbers written: serde_json parses floats correctly rounded only
+    /// with its `float_roundtrip` feature (without it `0.9065168750000001`, a score a benchmark
+    /// wrote, read back one unit in the last place off as `0.906516875`, and `--resume` rewrote
+    /// results.csv with it). Checked against the standard library's correctly rounded parser.
+    #[test]
+    fn json_floats_read_back_exactly() {
+        for text in [
+            "0.9065168750000001",
+            "0.1",
+            "2.2250738585072014e-308",
+            "5e-324",
+            "1.7976931348623157e308",
+            "0.30000000000000004",
+            "6.3500000000000005",
+            "2571.4285714285716",
+        ] {
+            let json: f64 = serde_json::from_str(text).unwrap();
+            let exact: f64 = text.parse().unwrap();
+            assert_eq!(json.to_bits(), exact.to_bits(), "{text}");
+            let again: f64 = serde_json::from_str(&serde_json::to_string(&json).unwrap()).unwrap();
+            assert_eq!(again.to_bits(), exact.to_bits(), "{text} round trip");
+        }
+    }
+}
