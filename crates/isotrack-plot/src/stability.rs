@@ -225,7 +225,7 @@ fn chart<DB: DrawingBackend>(
     let (body, footer) = root.split_vertically(h - foot);
     let bar_w = (9.5 * f) as u32;
     let (left, right) = body.split_horizontally(w.saturating_sub(bar_w));
-    let mut ch = axes(&left, map, &title, title_rel, st)?;
+    let mut ch = axes(&left, map, title, title_rel, st)?;
     draw_cells(&mut ch, map)?;
     let bold = st.px(3.0);
     ch.draw_series(
@@ -373,7 +373,7 @@ fn axes<'a, DB: DrawingBackend>(
     let yroom = 9;
     let xt = log_ticks(k0, k1, xroom);
     let yt = log_ticks(r0, r1, yroom);
-    let mut ch = ChartBuilder::on(&left)
+    let mut ch = ChartBuilder::on(left)
         .margin(f as u32)
         .margin_right((1.5 * f) as u32)
         .caption(title, st.font(title_rel))
@@ -556,7 +556,7 @@ fn colour_bar<DB: DrawingBackend>(
     let f = st.base_font();
     let bold = st.px(3.0);
     // Colour bar: radius 0 .. 2, the boundary at 1.
-    let mut bar = ChartBuilder::on(&right)
+    let mut bar = ChartBuilder::on(right)
         .margin_top((f + 2.4 * f * title_rel) as u32)
         .margin_bottom((f + 3.2 * f) as u32)
         .margin_left((0.5 * f) as u32)
