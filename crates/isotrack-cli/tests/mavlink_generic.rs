@@ -99,7 +99,6 @@ fn fly_against(vehicle: Vehicle, extra: &[&str]) -> (std::process::Output, Vec<S
                         v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
                             command: c.command,
                             result: MavResult::MAV_RESULT_DENIED,
-                            ..Default::default()
                         }))
                         .unwrap();
                     }

@@ -85,7 +85,6 @@ fn vehicle(port: u16, confirm_way_out: bool, seen: Arc<Mutex<Seen>>, stop: Arc<A
                     let _ = v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
                         command: c.command,
                         result: MavResult::MAV_RESULT_ACCEPTED,
-                        ..Default::default()
                     }));
                 }
                 MavMessage::SET_ATTITUDE_TARGET(_) => {

@@ -1729,7 +1729,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 Some(p) => (MavCmd::MAV_CMD_DO_SET_MODE, p),
                 None => return Ok((false, 0, "no mode table for this vehicle here")),
             },
-            WayOut::Disarm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 0.0, 0.0]),
+            // Forced (param2 21196, MAVLink's magic number): only a vehicle the companion armed
+            // itself on the ground and never had in OFFBOARD is disarmed, and an autopilot that
+            // counts a fixed wing as flying (isotrack sitl) refuses an unforced disarm.
+            WayOut::Disarm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 21196.0, 0.0]),
         };
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
         // retries.

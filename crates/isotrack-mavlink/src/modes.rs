@@ -204,6 +204,35 @@ impl Firmware {
     }
 }
 
+/// A PX4 `custom_mode`'s name (main mode in bits 16..24, AUTO's sub mode in bits 24..32; PX4's
+/// `px4_custom_mode.h`): `MANUAL`, `POSCTL`, `AUTO.MISSION`, ...; an unknown one by its
+/// numbers (`PX4 mode 9.0`).
+pub fn px4_mode_name(custom_mode: u32) -> String {
+    let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
+    let name = match main {
+        1 => Some("MANUAL"),
+        2 => Some("ALTCTL"),
+        3 => Some("POSCTL"),
+        4 => match sub {
+            1 => Some("AUTO.READY"),
+            2 => Some("AUTO.TAKEOFF"),
+            3 => Some("AUTO.LOITER"),
+            4 => Some("AUTO.MISSION"),
+            5 => Some("AUTO.RTL"),
+            6 => Some("AUTO.LAND"),
+            8 => Some("AUTO.FOLLOW_TARGET"),
+            9 => Some("AUTO.PRECLAND"),
+            _ => None,
+        },
+        5 => Some("ACRO"),
+        6 => Some("OFFBOARD"),
+        7 => Some("STABILIZED"),
+        8 => Some("RATTITUDE"),
+        _ => None,
+    };
+    name.map_or_else(|| format!("PX4 mode {main}.{sub}"), str::to_string)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,33 +308,4 @@ mod tests {
         assert_eq!(rover.safe_mode_name(4), Some("HOLD"));
         assert_eq!(rover.safe_mode_name(15), None);
     }
-}
-
-/// A PX4 `custom_mode`'s name (main mode in bits 16..24, AUTO's sub mode in bits 24..32; PX4's
-/// `px4_custom_mode.h`): `MANUAL`, `POSCTL`, `AUTO.MISSION`, ...; an unknown one by its
-/// numbers (`PX4 mode 9.0`).
-pub fn px4_mode_name(custom_mode: u32) -> String {
-    let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
-    let name = match main {
-        1 => Some("MANUAL"),
-        2 => Some("ALTCTL"),
-        3 => Some("POSCTL"),
-        4 => match sub {
-            1 => Some("AUTO.READY"),
-            2 => Some("AUTO.TAKEOFF"),
-            3 => Some("AUTO.LOITER"),
-            4 => Some("AUTO.MISSION"),
-            5 => Some("AUTO.RTL"),
-            6 => Some("AUTO.LAND"),
-            8 => Some("AUTO.FOLLOW_TARGET"),
-            9 => Some("AUTO.PRECLAND"),
-            _ => None,
-        },
-        5 => Some("ACRO"),
-        6 => Some("OFFBOARD"),
-        7 => Some("STABILIZED"),
-        8 => Some("RATTITUDE"),
-        _ => None,
-    };
-    name.map_or_else(|| format!("PX4 mode {main}.{sub}"), str::to_string)
 }
