@@ -176,9 +176,13 @@ pub fn is_not_plain(c: char) -> bool {
 /// (or U+2028) in a file name, a unit or a CSV header would start a new console line that the
 /// text's author writes (`x\nerror: ...`), so inside user text it is shown as `\x0a`; the
 /// lines of a message itself are the program's. An invisible character is shown as
-/// `\u{200b}` so that a message refusing it shows where it is.
+/// `\u{200b}` so that a message refusing it shows where it is; the joiners U+200C and U+200D
+/// (needed by some scripts and emoji, and reordering nothing) are shown as they are.
 pub fn is_escaped(c: char) -> bool {
-    c == '\n' || is_terminal_control(c) || (c != '\t' && is_not_plain(c))
+    // The joiners (U+200C, U+200D), which some scripts and emoji need, are shown as they are.
+    c == '\n'
+        || is_terminal_control(c)
+        || (!matches!(c, '\t' | '\u{200c}' | '\u{200d}') && is_not_plain(c))
 }
 
 /// How `c` is shown in user text: itself, `\x1b` (C0, line feed, DEL) or `\u{202e}` (above).
