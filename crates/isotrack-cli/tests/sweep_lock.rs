@@ -755,3 +755,55 @@ fn a_run_the_plan_makes_invalid_cannot_claim_to_have_run() {
     let o = isotrack(&["merge", &p("o"), "--out", &p("m"), "--force"]);
     assert_fails(&o, 65, &[at, &column, needle]);
 }
+
+/// Issue 30 (att30b via fix30d), item 8: a team sweep refused its own rows. The path bound used
+/// `vehicle.speed_mps` (0.5 m/s) while the team's spacing law flies a robot at up to
+/// `team.v_max_mps` (0.75 m/s in the bundled `team-circular-4.toml`): with the robots started
+/// close together (`step_rad = 0.05`, anticlockwise), vehicle 0 covers more than 0.5 m/s x 30 s
+/// = 15 m, and the sweep's own row was refused at its end, on `--resume` and on `merge`. The
+/// bound is the run's top speed: each passes; a path beyond 0.75 m/s x 30 s is still refused.
+#[test]
+fn a_team_sweeps_own_rows_are_within_the_teams_top_speed() {
+    let d = tempfile::tempdir().unwrap();
+    let bundled = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/team-circular-4.toml"
+    ))
+    .unwrap();
+    let team = bundled.replace(
+        "step_rad = 0.3, clockwise = true",
+        "step_rad = 0.05, clockwise = false",
+    );
+    assert_ne!(team, bundled);
+    write(d.path(), "team.toml", &team);
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"team.toml\"\n[base]\nsim.duration_s = 30.0\n[grid]\nsensor.noise_std = [0.0]\n",
+    );
+    let p = |n: &str| d.path().join(n).display().to_string();
+    let o = isotrack(&["sweep", &sw, "--out", &p("o")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = d.path().join("o").join("results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let row: Vec<&str> = good.lines().nth(1).unwrap().split(',').collect();
+    let len: f64 = row[col("path_length_m")].parse().unwrap();
+    // Faster than the nominal speed allows, within the team's top speed.
+    assert!(len > 0.5 * 30.0 && len <= 0.75 * 30.0, "{len}");
+    let o = isotrack(&["sweep", &sw, "--out", &p("o"), "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = isotrack(&["merge", &p("o"), "--out", &p("m")]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut r = row.clone();
+    r[col("path_length_m")] = "23.0";
+    let bad = r.join(",");
+    std::fs::write(&results, format!("{}\n{bad}\n", header.join(","))).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", &p("o"), "--resume"]);
+    assert_fails(
+        &o,
+        65,
+        &["damaged row", "path_length_m = 23 m exceeds 0.75 m/s"],
+    );
+}

@@ -26,7 +26,8 @@ pub struct RunSpan {
     /// run that sensed steps `0..=k` delivered at most `floor(k / m) + 1`.
     pub steps_per_sample: u64,
     /// The fastest the vehicle moves over ground, m/s, where known: the Dubins robot's constant
-    /// `vehicle.speed_mps` (default 0.5; its path over `t` is `v t`); `None` for the fixed
+    /// `vehicle.speed_mps` (default 0.5; its path over `t` is `v t`), in a team the most its
+    /// spacing law sets, `team.v_max_mps` (default twice the speed); `None` for the fixed
     /// wing (wind adds to its airspeed).
     pub speed_max_mps: Option<f64>,
     /// The sensor's delay in steps `d = delay / dt`: no sample before step `d`, so a run that
@@ -66,7 +67,17 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             .max(1),
         speed_max_mps: match f.vehicle.kind {
             None | Some(crate::schema::VehicleKind::Dubins) => {
-                Some(f.vehicle.speed_mps.unwrap_or(0.5)).filter(|v| v.is_finite() && *v >= 0.0)
+                let v0 = f.vehicle.speed_mps.unwrap_or(0.5);
+                // A team's spacing law flies each robot at up to `team.v_max_mps` (default
+                // `V_MAX_FACTOR v0`): the bound is the run's top speed, not the nominal one.
+                let top = match &f.team {
+                    Some(t) => t
+                        .v_max_mps
+                        .unwrap_or(crate::spec::team::V_MAX_FACTOR * v0)
+                        .max(v0),
+                    None => v0,
+                };
+                Some(top).filter(|v| v.is_finite() && *v >= 0.0)
             }
             Some(crate::schema::VehicleKind::FixedWing) => None,
         },

@@ -39,8 +39,8 @@ pub struct RowRules<'a> {
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
 /// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
-/// controller's kind and turn-rate limit, or their whole tables).
-const SPAN_KEYS: [&str; 13] = [
+/// controller's kind and turn-rate limit, a team's top speed, or their whole tables).
+const SPAN_KEYS: [&str; 15] = [
     "sim",
     "sensor",
     "sim.dt_s",
@@ -54,6 +54,8 @@ const SPAN_KEYS: [&str; 13] = [
     "controller",
     "controller.kind",
     "controller.max_turn_rate_radps",
+    "team",
+    "team.v_max_mps",
 ];
 
 /// The [`RunSpan`] of each run of a sweep, from its resolved base scenario file: the base's
