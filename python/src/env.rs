@@ -174,7 +174,8 @@ impl PyEnvBatch {
         // gave -inf): |eps| <= 2 x the fields' value bound, so each term of an episode of N
         // samples stays below MAX_EPISODE_REWARD / N, and so does their sum.
         let samples = ((duration * rate).floor() + 1.0).max(1.0);
-        let min_scale = 2.0 * isotrack_scenario::resolve::ranges::MAX_FIELD_VALUE * samples / MAX_EPISODE_REWARD;
+        let min_scale = 2.0 * isotrack_scenario::resolve::ranges::MAX_FIELD_VALUE * samples
+            / MAX_EPISODE_REWARD;
         if scale < min_scale {
             return Err(PyValueError::new_err(format!(
                 "error_scale must be at least {} field units (|eps| / error_scale over the {} samples of an episode stays below {}), got {}",
