@@ -636,7 +636,7 @@ fn resolve_schedule(c: &mut Checker, ct: &mut ControllerSection) {
             if w.abs() > l {
                 c.fail(
                     &format!("controller.course_rate_radps[{i}]"),
-                    &format!(
+                    format!(
                         "turn rate {} rad/s exceeds controller.max_turn_rate_radps = {} rad/s, the limit every controller keeps: give |omega| <= {} or raise the limit",
                         Echo(*w),
                         Echo(l),
