@@ -206,7 +206,6 @@ pub fn write_team_run(
         if i % crate::tools::SIGNAL_ROWS == 0 {
             if let Err(e) = py.check_signals() {
                 drop(team_sinks);
-                drop(w);
                 drop(tw);
                 let _ = std::fs::remove_file(&path);
                 // An old summary beside no trace is refused by every reader.
