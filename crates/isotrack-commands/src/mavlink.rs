@@ -249,7 +249,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         }
     };
     opts.companion_timeout_s = args.timeout_s;
-    opts.stop = isotrack_mavlink::interrupt_flag();
+    opts.stop = isotrack_runs::signals::interrupt_flag();
     let out = match &args.out {
         Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
         None => None,
@@ -387,7 +387,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Return => FailsafeAction::Return,
         FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
-    opts.stop = isotrack_mavlink::interrupt_flag();
+    opts.stop = isotrack_runs::signals::interrupt_flag();
     // Readied (and locked) by the one run-directory writer, and written once the flight has
     // something to record (LiveOut): a start that fails leaves an earlier flight there whole.
     let out = match &args.out {

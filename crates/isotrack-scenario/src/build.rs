@@ -1,8 +1,10 @@
-//! From a resolved [`Scenario`] to runnable parts, and running them.
+//! From a resolved [`Scenario`] to runnable parts (controllers, the run's span), and running
+//! them. The vehicle is [`crate::vehicle`]'s.
 
 use crate::field::FieldModel;
 use crate::schema::*;
-use crate::spec::{LawSpec, VehicleSpec};
+use crate::spec::LawSpec;
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::control::{
     GradientReference, GroundTruth, PiIsoline, Pid, PidCrossing, Search, SearchParams, SlidingMode,
@@ -11,7 +13,7 @@ use isotrack_core::control::{
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarField};
 use isotrack_sim::{simulate, Oracles, RunResult, Sensor, StepPlan, TraceSink};
-use isotrack_vehicles::{Dubins, DubinsState, FixedWing};
+use isotrack_vehicles::DubinsState;
 
 /// The steps a run of a scenario spans, from its resolved file alone (no field built): what
 /// bounds the `t_end_s`, `samples` and `convergence_time_s` a run can report (`--resume` and
@@ -93,43 +95,6 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             }
             Some(crate::schema::VehicleKind::FixedWing) => None,
         },
-    })
-}
-
-/// Every vehicle a scenario can name.
-#[derive(Clone, Debug)]
-pub enum VehicleModel {
-    /// `dubins`.
-    Dubins(Dubins),
-    /// `fixed_wing` (trimmed, gains computed).
-    FixedWing(Box<FixedWing>),
-}
-
-impl VehicleModel {
-    /// The turn rate the airframe can fly, rad/s: `g*tan(phi_max)/V` for the fixed wing
-    /// ([`FixedWing::airframe_turn_rate_limit_radps`]); `None` for the Dubins robot (any).
-    pub fn airframe_turn_rate_limit_radps(&self) -> Option<f64> {
-        match self {
-            VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
-            VehicleModel::Dubins(_) => None,
-        }
-    }
-}
-
-/// Builds (and for the UAV, trims) the vehicle of a resolved scenario.
-pub fn build_vehicle(f: &ScenarioFile) -> Result<VehicleModel, crate::resolve::Issue> {
-    let seed = crate::spec::SimSpec::new(&f.sim)?.seed;
-    Ok(match crate::spec::VehicleSpec::new(&f.vehicle, seed)? {
-        VehicleSpec::Dubins { speed_mps } => VehicleModel::Dubins(Dubins { speed_mps }),
-        VehicleSpec::FixedWing(cfg) => {
-            VehicleModel::FixedWing(Box::new(FixedWing::new(cfg).map_err(|e| {
-                crate::resolve::Issue {
-                    key: "vehicle.airspeed_mps".into(),
-                    message: e.to_string(),
-                    unreadable: false,
-                }
-            })?))
-        }
     })
 }
 
