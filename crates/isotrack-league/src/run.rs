@@ -348,7 +348,21 @@ fn run_task(
     if let Some(dir) = &o.resume_from {
         if let Some(prev) = read_task(dir, &task.id) {
             if prev.digest == digest {
-                return Ok(prev);
+                // Reused only once checked: its runs are the suite's and possible, its scores
+                // and picture recomputed (`resume`).
+                let expected = crate::resume::Expected {
+                    task,
+                    base: &base,
+                    reg,
+                    controllers,
+                    seeds: &suite.scoring_seeds,
+                    gains: &gains,
+                    scoring: suite.scoring,
+                    max_points: picture_points(&base),
+                };
+                return crate::resume::reuse(prev, &task_file(dir, &task.id), &expected, |t| {
+                    field_picture(&base, t)
+                });
             }
         }
     }
@@ -525,6 +539,15 @@ impl TraceSink for Thinned {
         }
         self.k += 1;
     }
+}
+
+/// The most points [`trajectory`] keeps of a run of `base`: every `ceil(rows / PICTURE_POINTS)`-th
+/// of its `rows` 10 Hz rows (the rows `0, e, 2e, ...` below `rows + 1`).
+fn picture_points(base: &Scenario) -> usize {
+    let rows = (base.spec().sim.duration_s * 10.0).max(1.0) as u64;
+    let every = rows.div_ceil(PICTURE_POINTS as u64).max(1);
+    // A run records at most `rows + 1` rows (its start and each step's), one kept every `every`.
+    ((rows + 1) / every + 1) as usize
 }
 
 fn trajectory(

@@ -42,9 +42,9 @@ pub struct RunSpan {
     /// The turn-rate limit every command of the run obeys, rad/s: `controller.max_turn_rate_radps`
     /// (every law's output stage saturates at it; the search phase flies open loop, within it:
     /// the spiral is capped at it and a lawnmower whose half-turns `2 v / search_spacing_m`
-    /// exceed it is refused at load); `None` without
-    /// one, for a `schedule` (its turn rates are flown as written) and for the fixed wing's
-    /// airframe limit (known only once the vehicle is trimmed).
+    /// exceed it is refused at load); unset on a fixed wing, the airframe's limit
+    /// `g tan(phi_max) / V` of the trimmed vehicle, which every law but a `schedule` (its
+    /// turn rates flown as written) flies then; `None` without one.
     pub turn_rate_limit_radps: Option<f64>,
 }
 
@@ -58,10 +58,22 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
         sensor_drops_samples: sensor.dropout_probability != 0.0,
         // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).
-        turn_rate_limit_radps: f
-            .controller
-            .max_turn_rate_radps
-            .filter(|w| w.is_finite() && *w >= 0.0),
+        // Unset on a fixed wing, the limit every law flies is the airframe's, `g tan(phi_max)
+        // / V` of the trimmed vehicle ([`VehicleModel::airframe_turn_rate_limit_radps`], what
+        // `crate::spec::ControllerSpec` resolves): the same resolved limit the run flies.
+        turn_rate_limit_radps: match f.controller.max_turn_rate_radps {
+            Some(w) => Some(w),
+            // A `schedule` flies its turn rates as written (no output stage): no bound then.
+            None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
+                && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
+            {
+                build_vehicle(f)
+                    .ok()
+                    .and_then(|v| v.airframe_turn_rate_limit_radps())
+            }
+            None => None,
+        }
+        .filter(|w| w.is_finite() && *w >= 0.0),
         dt_s: sim.dt_s,
         n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
         steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
