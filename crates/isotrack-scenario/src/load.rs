@@ -585,6 +585,13 @@ fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
             format!("`{}` {INTEGER_RANGE}", clip(raw))
         }),
         Err(_) if is_bare_word(raw) => Ok(toml::Value::String(raw.to_string())),
+        // A number TOML cannot hold inside a list or table (`[1e400]`): the number's bound,
+        // not advice to quote a string (att30c-16).
+        Err(e) if number_out_of_range(e.message()).is_some() => Err(format!(
+            "`{}`: {}",
+            clip(&raw.escape_debug().to_string()),
+            number_out_of_range(e.message()).unwrap_or_default()
+        )),
         Err(e) => Err(format!(
             "`{}` is not one TOML value ({}); quote a string, e.g. \"text\"",
             clip(&raw.escape_debug().to_string()),
@@ -640,6 +647,25 @@ pub(crate) fn number_out_of_range(message: &str) -> Option<String> {
     if m == "floating-point number overflowed" {
         return Some(format!("the number {FLOAT_RANGE}"));
     }
+    // A negative number for an unsigned key (`sim.seed = -1`): serde's "invalid value:
+    // integer `-1`, expected u64" said in the same words as the other bounds (att30c-16).
+    if let Some(rest) = m.strip_prefix("invalid value: integer `") {
+        if let Some((n, tail)) = rest.split_once('`') {
+            let max = match tail.trim() {
+                ", expected u64" | ", expected usize" => Some(i64::MAX as u64),
+                ", expected u32" => Some(u64::from(u32::MAX)),
+                ", expected u16" => Some(u64::from(u16::MAX)),
+                ", expected u8" => Some(u64::from(u8::MAX)),
+                _ => None,
+            };
+            if let Some(max) = max {
+                return Some(format!(
+                    "`{}` is out of range: this key takes an integer 0 ..= {max}",
+                    clip(n)
+                ));
+            }
+        }
+    }
     None
 }
 
@@ -669,8 +695,33 @@ fn insert_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Resu
             .as_table_mut()
             .ok_or_else(|| format!("`{walked}` is not a table"))?;
     }
-    t.insert(last.to_string(), value);
+    match t.get_mut(*last) {
+        Some(old) => merge_value(old, value),
+        None => {
+            t.insert(last.to_string(), value);
+        }
+    }
     Ok(())
+}
+
+/// Sets `old` to `new`, a table key by key: `controller = { kp = 2.0 }` over a `[controller]`
+/// holding `ki` and `c1` sets `kp` and keeps them (issue 30, att30c-14: it once replaced the
+/// section, so the file's keys fell back to their defaults without a word). Anything else
+/// (a number, a list, a table over a non-table) replaces.
+fn merge_value(old: &mut toml::Value, new: toml::Value) {
+    match (old, new) {
+        (toml::Value::Table(o), toml::Value::Table(n)) => {
+            for (k, v) in n {
+                match o.get_mut(&k) {
+                    Some(slot) => merge_value(slot, v),
+                    None => {
+                        o.insert(k, v);
+                    }
+                }
+            }
+        }
+        (old, new) => *old = new,
+    }
 }
 
 fn locate_issue(
@@ -852,6 +903,75 @@ mod tests {
         ] {
             assert!(!looks_like_a_number(word), "{word}");
         }
+    }
+
+    /// Issue 30 (att30c-14): `--set 'controller={kp=2.0}'` replaced the whole section, so the
+    /// file's `ki = 0.0` and `c1 = 0.5` fell back to their defaults (1.0 and 0.2) without a word.
+    /// A table value merges key by key, as the dotted key does; a kind switched by a table still
+    /// drops the old kind's keys.
+    #[test]
+    fn a_table_value_merges_key_by_key() {
+        let text = "[controller]\nki = 0.0\nc1 = 0.5\n[vehicle]\nspeed_mps = 0.8\n";
+        let set = |arg: &str| {
+            parse_scenario(text, "s.toml", &[arg.to_string()])
+                .unwrap()
+                .file()
+                .clone()
+        };
+        let table = set("controller={kp=2.0}");
+        assert_eq!(table.controller.kp, Some(2.0));
+        assert_eq!(table.controller.ki, Some(0.0));
+        assert_eq!(table.controller.c1, Some(0.5));
+        assert_eq!(table, set("controller.kp=2.0"));
+        // Nested: a table holding a table merges at every level.
+        assert_eq!(set("vehicle={}").vehicle.speed_mps, Some(0.8));
+        // Through `apply_assignments` too (a sweep's `[grid] controller = [{kp = 2.0}]`).
+        let base = parse_scenario(text, "s.toml", &[]).unwrap();
+        let applied = apply_assignments(
+            base.file(),
+            &[Assignment::new("controller={ kp = 2.0 }", "[grid]")],
+        )
+        .unwrap();
+        assert_eq!(applied.controller.kp, Some(2.0));
+        assert_eq!(applied.controller.c1, Some(0.5));
+        assert_eq!(applied.controller.ki, Some(0.0));
+        // A kind switched inside a table: the PI-like law's keys go, as with controller.kind.
+        let pid = set("controller={kind=\"pid\", kp=3.0}");
+        assert_eq!(pid.controller.kp, Some(3.0));
+        assert_eq!(pid.controller.c1, None);
+    }
+
+    /// Issue 30 (att30c-16): one wording for a number out of range, at key and column, in a
+    /// list as alone, and for a negative seed (serde's "expected u64" once).
+    #[test]
+    fn numbers_out_of_range_have_one_wording() {
+        for arg in ["initial.x_m=[1e400]", "field.center_m=[0.0, 1e400]"] {
+            let e = err("", &[arg]);
+            assert!(
+                e[0].message
+                    .contains("the number is beyond the largest 64-bit float")
+                    && !e[0].message.contains("quote a string"),
+                "{arg}: {}",
+                e[0]
+            );
+        }
+        let e = err("", &["sim.seed=-1"]);
+        assert!(
+            e[0].message.contains(
+                "`-1` is out of range: this key takes an integer 0 ..= 9223372036854775807"
+            ),
+            "{}",
+            e[0]
+        );
+        let e = err("[sim]\nseed = -1\n", &[]);
+        assert_eq!(file_line(&e[0]), Some(2));
+        assert_eq!(e[0].key.as_deref(), Some("sim.seed"));
+        assert!(
+            e[0].message.contains("0 ..= 9223372036854775807"),
+            "{}",
+            e[0]
+        );
+        assert!(!e[0].message.contains("expected u64"), "{}", e[0]);
     }
 
     #[test]
