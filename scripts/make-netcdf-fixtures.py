@@ -422,6 +422,30 @@ def lookup3(data, initval=0):
 ONLY = set(sys.argv[1:])
 
 
+def foreign_objects():
+    """Objects an HDF5 tool adds beside the netCDF variables, which isotrack never reads (issue
+    30, att30c-8): `extra_dataset.nc`, a dataset `extra` written by h5py without dimension
+    scales (no DIMENSION_LIST: netCDF-C reads it with phony dimensions, xarray opens the file);
+    `deep_committed_type.nc`, a committed datatype nested 50 levels (past hdf5-reader's 32)
+    linked in the root group. Both load as their twin `netcdf4_nc4_xy_contig.nc`; `extra` asked
+    for by name is refused. Not in the manifest."""
+    import h5py
+
+    name = write("netcdf4", "NETCDF4", "xy", "contig", name="extra_dataset.nc")
+    if not ONLY or name in ONLY:
+        with h5py.File(os.path.join(OUT, name), "a") as f:
+            f.create_dataset("extra", data=np.array([1, 2, 3], dtype="i4"))
+    name = write("netcdf4", "NETCDF4", "xy", "contig", name="deep_committed_type.nc")
+    if not ONLY or name in ONLY:
+        t = h5py.h5t.NATIVE_INT8.copy()
+        for _ in range(50):
+            c = h5py.h5t.create(h5py.h5t.COMPOUND, t.get_size())
+            c.insert(b"m", 0, t)
+            t = c
+        with h5py.File(os.path.join(OUT, name), "a") as f:
+            t.commit(f.id, b"T_deep")
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     for f in os.listdir(OUT):
@@ -487,6 +511,7 @@ def main():
     nul_inside()
     many_attributes()
     committed_types()
+    foreign_objects()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

@@ -156,7 +156,7 @@ fn benchmark_exit_codes() {
     assert_fails(
         &isotrack(&["benchmark", &suite, "--out", out, "--controllers", "nope"]),
         64,
-        &["unknown controller \"nope\""],
+        &["unknown controller `nope`"],
     );
     let missing_scenario = write(
         d.path(),
@@ -199,10 +199,10 @@ fn benchmark_refuses_invalid_suites_at_their_line() {
     let cases: [(&str, String, &str, &str); 8] = [
         ("kp", TOP.into(), "[task.tuned.pi_isoline]\nkp = -5.0\n", "kp.toml:13:1: task a, tuned pi_isoline.kp = -5.0: `controller.kp`: must be > 0"),
         ("misspelt", TOP.into(), "[task.tuned.pid]\nkpp = 2.0\n", "misspelt.toml:13:1: task a, tuned pid.kpp = 2.0: `controller.kpp`: unknown field `kpp`"),
-        ("unknown_law", TOP.into(), "[task.tuned.my_law]\nkp = 2.0\n", "unknown_law.toml:12:13: task a: tuned gains for \"my_law\", which is not a built-in law"),
+        ("unknown_law", TOP.into(), "[task.tuned.my_law]\nkp = 2.0\n", "unknown_law.toml:12:13: task a: tuned gains for `my_law`, which is not a built-in law"),
         ("vary_seed", TOP.into(), "vary = { \"sim.seed\" = { uniform = [0.0, 9.0] } }\n", "vary_seed.toml:12:10: task a: vary sim.seed"),
         ("no_controllers", TOP.replace("[\"pi_isoline\", \"pid\"]", "[]"), "", "no_controllers.toml:3:1: controllers is empty"),
-        ("twice", TOP.replace("\"pid\"]", "\"pi_isoline\"]"), "", "twice.toml:3:30: controllers: \"pi_isoline\" appears twice"),
+        ("twice", TOP.replace("\"pid\"]", "\"pi_isoline\"]"), "", "twice.toml:3:30: controllers: `pi_isoline` appears twice"),
         ("seeds", TOP.replace("[1, 2]", "[1, 2, 2]"), "", "seeds.toml:5:24: scoring_seeds: seed 2 appears twice"),
         ("ids", TOP.into(), second, "ids.toml:13:1: task id \"A\" differs from task id \"a\" only in case"),
     ];
@@ -229,7 +229,7 @@ fn benchmark_refuses_a_controller_named_twice() {
         "--controllers",
         "pid,pid",
     ]);
-    assert_fails(&o, 64, &["controller \"pid\" is named twice"]);
+    assert_fails(&o, 64, &["controller `pid` is named twice"]);
 }
 
 #[test]

@@ -205,6 +205,51 @@ fn report_page_survives_hostile_strings() {
     );
 }
 
+/// Issue 30 (att30c-2): a run directory's name with a bidi override (U+202E), a line
+/// separator and an escape was escaped in the `<title>`/`<h1>` but shown raw in the lines the
+/// script builds (the run's summary under the title, the legend, `data-run`): the override
+/// displayed "completed, steady max |eps| = 1.907" reversed. Every place shows the title's
+/// escape, and no raw control reaches the page.
+#[test]
+fn report_body_shows_a_run_name_as_its_title_does() {
+    let Some(browser) = chromium() else { return };
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("r\u{202e}evil\u{2028}x\u{1b}[31m");
+    let o = isotrack(&[
+        "run",
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        "sim.duration_s=5",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let page = d.path().join("report.html");
+    let o = isotrack(&[
+        "report",
+        dir.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let shown = "r\\u{202e}evil\\u{2028}x\\x1b[31m".to_string();
+    let dom = check_page(
+        &browser,
+        &page,
+        &d.path().join("p"),
+        "ready: 1 run(s)",
+        &[shown.clone()],
+    );
+    for raw in ['\u{202e}', '\u{2028}', '\u{1b}'] {
+        assert!(!dom.contains(raw), "{raw:?} raw in the page");
+    }
+    // The summary line under the title, built by the script, starts with the escaped name.
+    assert!(
+        dom.contains(&format!("id=\"summary\">{shown}: completed")),
+        "the summary line does not show the escaped name"
+    );
+}
+
 /// Issue 30 item 12: the report of a field that moves (the puff plume, empty at t = 0) shows
 /// the frame nearest the slider: 62 s in 32 frames is one every 2 s, so the slider at 0.4 of
 /// the run (24.8 s) shows the frame of 24 s (frame 12 of 0..31), and at 0 the frame of 0 s.

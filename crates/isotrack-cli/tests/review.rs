@@ -878,3 +878,73 @@ fn invisible_and_separator_characters_are_refused_and_never_shown_raw() {
         }
     }
 }
+
+/// Issue 30 (att30c-18): one trace check shared by `plot` and `report`. `report` drew a map
+/// 1e300 m wide where `plot` refused, and both took a time going back, a last row at 1e9 s in
+/// a 5 s run and a NaN position: each is refused by both (65), naming the row.
+#[test]
+fn plot_and_report_refuse_the_same_doctored_traces_naming_the_row() {
+    let d = tempfile::tempdir().unwrap();
+    let base = d.path().join("base");
+    let o = isotrack(&[
+        "run",
+        "--out",
+        base.to_str().unwrap(),
+        "--set",
+        "sim.duration_s=5",
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let trace = std::fs::read_to_string(base.join("trace.csv")).unwrap();
+    let lines: Vec<&str> = trace.lines().collect();
+    let last = lines.len() - 1;
+    for (tag, row, col, value, said) in [
+        ("huge_x", 10, 1, "1e300", "is not a position within"),
+        ("nan_x", 10, 1, "NaN", "is not a position within"),
+        ("back", 10, 0, "0.05", "goes back in time"),
+        (
+            "past_end",
+            last,
+            0,
+            "1e9",
+            "past the run's end (summary.json: t_end_s",
+        ),
+    ] {
+        let dir = d.path().join(tag);
+        std::fs::create_dir(&dir).unwrap();
+        for f in ["summary.json", "scenario.toml"] {
+            std::fs::copy(base.join(f), dir.join(f)).unwrap();
+        }
+        let mut doctored: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        let mut cells: Vec<&str> = lines[row].split(',').collect();
+        cells[col] = value;
+        doctored[row] = cells.join(",");
+        std::fs::write(dir.join("trace.csv"), doctored.join("\n") + "\n").unwrap();
+        let at = format!("trace.csv:{}: ", row + 1);
+        let report = d.path().join(format!("{tag}.html"));
+        let o = isotrack(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+        ]);
+        assert_fails(&o, 65, &[&at, said]);
+        assert!(!report.exists(), "{tag}: a page was written");
+        let figs = d.path().join(format!("{tag}-plot"));
+        let o = isotrack(&[
+            "plot",
+            dir.to_str().unwrap(),
+            "--out",
+            figs.to_str().unwrap(),
+        ]);
+        assert_fails(&o, 65, &[&at, said]);
+    }
+    // The run as written passes both.
+    let o = isotrack(&[
+        "report",
+        base.to_str().unwrap(),
+        "--out",
+        d.path().join("ok.html").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}

@@ -356,3 +356,38 @@ fn attributes_of_committed_datatypes_load_and_a_lost_one_isotrack_reads_is_refus
     );
     assert!(!e.unreadable, "{text}");
 }
+
+/// Issue 30 (att30c-8): a dataset written by h5py beside the netCDF variables, without
+/// dimension scales (netCDF-C reads it with phony dimensions, xarray opens the file), made
+/// the whole file unreadable ("dataset 'extra' is missing required DIMENSION_LIST metadata").
+/// The file loads as its twin; `extra` itself, asked for, is refused with that reason.
+/// (Written by `scripts/make-netcdf-fixtures.py`, `foreign_objects`.)
+#[test]
+fn a_dataset_without_dimension_scales_beside_the_variable_is_skipped() {
+    let twin = load_series(&dir().join("netcdf4_nc4_xy_contig.nc"), None, None).unwrap();
+    let s = load_series(&dir().join("extra_dataset.nc"), None, Some("v"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.frames.len(), twin.frames.len());
+    for (got, want) in s.frames.iter().zip(&twin.frames) {
+        assert!(same(got.values(), want.values()));
+        assert_eq!(got.origin_m(), want.origin_m());
+        assert_eq!(got.spacing_m(), want.spacing_m());
+    }
+    assert_eq!(s.frame_times_s, twin.frame_times_s);
+    assert_eq!(s.units, twin.units);
+    // Without a variable named, the one data variable is still found.
+    load_series(&dir().join("extra_dataset.nc"), None, None).unwrap_or_else(|e| panic!("{e}"));
+    let e = load_series(&dir().join("extra_dataset.nc"), None, Some("extra"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("'extra'") && e.contains("DIMENSION_LIST"), "{e}");
+    // A committed datatype nested 50 levels (past the reader's 32) linked in the root group
+    // refused the file ("child 'T_deep' ...: datatype nesting exceeds 32 levels"): nothing
+    // reads it, so the file loads as its twin (vendor/hdf5-reader/PATCHED.md).
+    let s = load_series(&dir().join("deep_committed_type.nc"), None, None)
+        .unwrap_or_else(|e| panic!("{e}"));
+    for (got, want) in s.frames.iter().zip(&twin.frames) {
+        assert!(same(got.values(), want.values()));
+    }
+    assert_eq!(s.frame_times_s, twin.frame_times_s);
+}

@@ -116,7 +116,10 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
             .map(|(_, row)| row)
             .collect();
         runs.push(RunJson {
-            name: r.name.clone(),
+            // The name as the title shows it (every character the plain-text rule refuses as
+            // its escape, `\u{202e}`): the script builds the summary line, the legend and
+            // `data-run` from it, where a raw U+202E reversed the run's numbers (att30c-2).
+            name: isotrack_core::numtext::Escaped(&r.name).to_string(),
             outcome: shown_outcome(r.summary.outcome()).to_string(),
             // As a JSON value (its keys sorted), the page's data as before.
             summary: serde_json::to_value(&r.summary).unwrap_or_default(),

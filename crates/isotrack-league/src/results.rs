@@ -28,10 +28,10 @@ pub enum BenchError {
     #[error("{0}")]
     Suite(SuiteError),
     /// A controller name that is not registered.
-    #[error("unknown controller {0:?} (built in: pi_isoline, sliding_mode, sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference)")]
+    #[error("unknown controller `{}` (built in: pi_isoline, sliding_mode, sliding_mode_smooth, suboptimal_sosm, pid, pid_crossing, gradient_reference)", isotrack_core::numtext::Clipped(.0))]
     UnknownController(String),
     /// A controller named twice in [`Options::controllers`](crate::run::Options::controllers).
-    #[error("controller {0:?} is named twice")]
+    #[error("controller `{}` is named twice", isotrack_core::numtext::Clipped(.0))]
     DuplicateController(String),
     /// Reading or writing results.
     #[error("{path}: {message}")]

@@ -280,7 +280,7 @@ impl Suite {
             return Err((
                 top("name"),
                 format!(
-                    "name {:?}: give the suite a visible name, without control or invisible (zero-width) characters",
+                    "name `{}`: give the suite a visible name, without control or invisible (zero-width) characters",
                     clip(&self.name)
                 ),
             ));
@@ -305,7 +305,7 @@ impl Suite {
                 return Err((
                     at("controllers", i),
                     format!(
-                        "controllers: {:?} is not a built-in law ({})",
+                        "controllers: `{}` is not a built-in law ({})",
                         clip(c),
                         builtin_names()
                     ),
@@ -314,7 +314,7 @@ impl Suite {
             if !seen.insert(c.as_str()) {
                 return Err((
                     at("controllers", i),
-                    format!("controllers: {c:?} appears twice"),
+                    format!("controllers: `{}` appears twice", clip(c)),
                 ));
             }
         }
@@ -457,7 +457,7 @@ fn check_task_title_and_length(i: usize, t: &Task) -> Result<(), (Vec<Seg>, Stri
         return Err((
             task_path(i, &["title"]),
             format!(
-                "task {}: title {:?}: give at most {MAX_TITLE_CHARS} visible characters, without control or invisible (bidi, zero-width) characters",
+                "task {}: title `{}`: give at most {MAX_TITLE_CHARS} visible characters, without control or invisible (bidi, zero-width) characters",
                 t.id,
                 clip(&t.title)
             ),
@@ -621,7 +621,7 @@ fn check_task_rest(i: usize, t: &Task, controllers: &[String]) -> Result<(), (Ve
             return Err((
                 task_path(i, &["tuned", c]),
                 format!(
-                    "task {}: tuned gains for {:?}, which is not a built-in law ({}): only the built-in laws run with recorded gains",
+                    "task {}: tuned gains for `{}`, which is not a built-in law ({}): only the built-in laws run with recorded gains",
                     t.id,
                     clip(c),
                     builtin_names()

@@ -417,12 +417,12 @@ fn suite_checks_name_the_line() {
         (
             one_task(&TOP.replace("\"pid\"]", "\"pi_isoline\"]"), ""),
             3,
-            "\"pi_isoline\" appears twice",
+            "`pi_isoline` appears twice",
         ),
         (
             one_task(&TOP.replace("\"pid\"]", "\"my_law\"]"), ""),
             3,
-            "\"my_law\" is not a built-in law",
+            "`my_law` is not a built-in law",
         ),
         (
             one_task(&TOP.replace("[1, 2]", "[1, 2, 1]"), ""),
@@ -447,7 +447,7 @@ fn suite_checks_name_the_line() {
         (
             one_task(TOP, "[task.tuned.my_law]\nkp = 1.0\n"),
             12,
-            "tuned gains for \"my_law\", which is not a built-in law",
+            "tuned gains for `my_law`, which is not a built-in law",
         ),
         (
             one_task(TOP, "")
@@ -667,7 +667,8 @@ fn set_keys_are_compared_as_toml_reads_them_and_titles_bounded() {
         (
             one_task(TOP, "").replacen("title = \"a\"", "title = \"a\u{202e}b\"", 1),
             8,
-            "without control or invisible",
+            // One escape form, as every message (att30c-10): not Debug-quoted, `\\` doubled.
+            "title `a\\u{202e}b`: give at most 200 visible characters, without control or invisible",
         ),
         (
             one_task(TOP, "").replacen("title = \"a\"", "title = \"a\u{200b}\"", 1),

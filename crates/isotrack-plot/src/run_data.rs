@@ -158,6 +158,12 @@ impl RunData {
                     ))
                 })?;
             }
+            check_row(
+                &v,
+                trace.last().map(|r: &TraceRow| r.t_s),
+                summary.t_end_s(),
+            )
+            .map_err(|m| err(format!("trace.csv:{line}: {m}")))?;
             let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
             vehicles.push(
                 vehicle_col
@@ -193,9 +199,12 @@ impl RunData {
             };
             return Err(err(format!("trace.csv has no rows: {why}")));
         }
+        // The name as every figure, page and message shows it: each character the plain-text
+        // rule refuses as its escape (`\u{202e}`, `\x1b`), as `--title` is drawn; a legend
+        // once drew U+202E and ESC as U+FFFD and kept U+2028 raw (att30c-10).
         let name = dir.file_name().map_or_else(
             || dir.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
+            |n| isotrack_core::numtext::Escaped(&n.to_string_lossy()).to_string(),
         );
         Ok((
             Self {
@@ -214,6 +223,51 @@ impl RunData {
         let spec = self.scenario.spec();
         (1.0 - spec.metrics.steady_state_fraction) * spec.sim.duration_s
     }
+}
+
+/// The one check of a trace row shared by `plot` and `report` (and the Python package's, which
+/// read runs here), issue 30 (att30c-18): its time `v[0]` finite, not before the row before
+/// (`before`, a team's rows share a time) and not past the run's end (`t_end_s` of
+/// `summary.json`, to a rounding of 1e-9 of it); its position `v[1]`, `v[2]` finite and within
+/// the +-[`MAX_AXIS_ABS`](crate::draw::MAX_AXIS_ABS) m a figure can show, or both NaN (no
+/// position: `fly`'s rows while the vehicle reports none). A doctored row (a
+/// time going back, a last row at 1e9 s in a 5 s run, `x_m = 1e300` or NaN) once gave a page
+/// whose map spanned 1e300 m or whose time series were squashed to the left edge.
+fn check_row(v: &[f64; 7], before: Option<f64>, t_end_s: Option<f64>) -> Result<(), String> {
+    use isotrack_core::numtext::Num;
+    let t = v[0];
+    if !(t.is_finite() && t >= 0.0) {
+        return Err(format!("t_s = {} is not a time >= 0", Num(t)));
+    }
+    if let Some(b) = before.filter(|b| t < *b) {
+        return Err(format!(
+            "t_s = {} goes back in time (the row before is at {} s)",
+            Num(t),
+            Num(b)
+        ));
+    }
+    if let Some(end) = t_end_s.filter(|e| e.is_finite() && t > e + 1e-9 * e.abs().max(1.0)) {
+        return Err(format!(
+            "t_s = {} is past the run's end (summary.json: t_end_s = {} s)",
+            Num(t),
+            Num(end)
+        ));
+    }
+    // `fly` writes a row whose position the vehicle did not report valid as NaN, NaN
+    // (unknown, not drawn); one coordinate NaN alone is no position isotrack writes.
+    if v[1].is_nan() && v[2].is_nan() {
+        return Ok(());
+    }
+    for (name, x) in [("x_m", v[1]), ("y_m", v[2])] {
+        if !(x.is_finite() && x.abs() <= crate::draw::MAX_AXIS_ABS) {
+            return Err(format!(
+                "{name} = {} is not a position within +-{:e} m (what a figure can show)",
+                Num(x),
+                crate::draw::MAX_AXIS_ABS
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What decides the field a run's map shows: its `[field]` section (every key, file paths

@@ -276,6 +276,13 @@ fn parse_override_value(raw: &str) -> Result<toml::Value, String> {
             format!("`{}` {INTEGER_RANGE}", clip(raw))
         }),
         Err(_) if is_bare_word(raw) => Ok(toml::Value::String(raw.to_string())),
+        // A number TOML cannot hold inside a list or table (`[1e400]`): the number's bound,
+        // not advice to quote a string (att30c-16).
+        Err(e) if number_out_of_range(e.message()).is_some() => Err(format!(
+            "`{}`: {}",
+            clip(&raw.escape_debug().to_string()),
+            number_out_of_range(e.message()).unwrap_or_default()
+        )),
         Err(e) => Err(format!(
             "`{}` is not one TOML value ({}); quote a string, e.g. \"text\"",
             clip(&raw.escape_debug().to_string()),
@@ -331,6 +338,25 @@ pub(crate) fn number_out_of_range(message: &str) -> Option<String> {
     if m == "floating-point number overflowed" {
         return Some(format!("the number {FLOAT_RANGE}"));
     }
+    // A negative number for an unsigned key (`sim.seed = -1`): serde's "invalid value:
+    // integer `-1`, expected u64" said in the same words as the other bounds (att30c-16).
+    if let Some(rest) = m.strip_prefix("invalid value: integer `") {
+        if let Some((n, tail)) = rest.split_once('`') {
+            let max = match tail.trim() {
+                ", expected u64" | ", expected usize" => Some(i64::MAX as u64),
+                ", expected u32" => Some(u64::from(u32::MAX)),
+                ", expected u16" => Some(u64::from(u16::MAX)),
+                ", expected u8" => Some(u64::from(u8::MAX)),
+                _ => None,
+            };
+            if let Some(max) = max {
+                return Some(format!(
+                    "`{}` is out of range: this key takes an integer 0 ..= {max}",
+                    clip(n)
+                ));
+            }
+        }
+    }
     None
 }
 
@@ -360,6 +386,31 @@ fn insert_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Resu
             .as_table_mut()
             .ok_or_else(|| format!("`{walked}` is not a table"))?;
     }
-    t.insert(last.to_string(), value);
+    match t.get_mut(*last) {
+        Some(old) => merge_value(old, value),
+        None => {
+            t.insert(last.to_string(), value);
+        }
+    }
     Ok(())
+}
+
+/// Sets `old` to `new`, a table key by key: `controller = { kp = 2.0 }` over a `[controller]`
+/// holding `ki` and `c1` sets `kp` and keeps them (issue 30, att30c-14: it once replaced the
+/// section, so the file's keys fell back to their defaults without a word). Anything else
+/// (a number, a list, a table over a non-table) replaces.
+fn merge_value(old: &mut toml::Value, new: toml::Value) {
+    match (old, new) {
+        (toml::Value::Table(o), toml::Value::Table(n)) => {
+            for (k, v) in n {
+                match o.get_mut(&k) {
+                    Some(slot) => merge_value(slot, v),
+                    None => {
+                        o.insert(k, v);
+                    }
+                }
+            }
+        }
+        (old, new) => *old = new,
+    }
 }

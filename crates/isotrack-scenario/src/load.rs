@@ -272,7 +272,7 @@ fn key_at(table: &DeTable<'_>, span: &Range<usize>, prefix: &str) -> Option<Stri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::assign::looks_like_a_number;
+    use crate::assign::{apply_assignments, looks_like_a_number};
     use crate::error::clip_quoted;
 
     fn err(text: &str, sets: &[&str]) -> Vec<LocatedIssue> {
@@ -349,6 +349,75 @@ mod tests {
         ] {
             assert!(!looks_like_a_number(word), "{word}");
         }
+    }
+
+    /// Issue 30 (att30c-14): `--set 'controller={kp=2.0}'` replaced the whole section, so the
+    /// file's `ki = 0.0` and `c1 = 0.5` fell back to their defaults (1.0 and 0.2) without a word.
+    /// A table value merges key by key, as the dotted key does; a kind switched by a table still
+    /// drops the old kind's keys.
+    #[test]
+    fn a_table_value_merges_key_by_key() {
+        let text = "[controller]\nki = 0.0\nc1 = 0.5\n[vehicle]\nspeed_mps = 0.8\n";
+        let set = |arg: &str| {
+            parse_scenario(text, "s.toml", &[arg.to_string()])
+                .unwrap()
+                .file()
+                .clone()
+        };
+        let table = set("controller={kp=2.0}");
+        assert_eq!(table.controller.kp, Some(2.0));
+        assert_eq!(table.controller.ki, Some(0.0));
+        assert_eq!(table.controller.c1, Some(0.5));
+        assert_eq!(table, set("controller.kp=2.0"));
+        // Nested: a table holding a table merges at every level.
+        assert_eq!(set("vehicle={}").vehicle.speed_mps, Some(0.8));
+        // Through `apply_assignments` too (a sweep's `[grid] controller = [{kp = 2.0}]`).
+        let base = parse_scenario(text, "s.toml", &[]).unwrap();
+        let applied = apply_assignments(
+            base.file(),
+            &[Assignment::new("controller={ kp = 2.0 }", "[grid]")],
+        )
+        .unwrap();
+        assert_eq!(applied.controller.kp, Some(2.0));
+        assert_eq!(applied.controller.c1, Some(0.5));
+        assert_eq!(applied.controller.ki, Some(0.0));
+        // A kind switched inside a table: the PI-like law's keys go, as with controller.kind.
+        let pid = set("controller={kind=\"pid\", kp=3.0}");
+        assert_eq!(pid.controller.kp, Some(3.0));
+        assert_eq!(pid.controller.c1, None);
+    }
+
+    /// Issue 30 (att30c-16): one wording for a number out of range, at key and column, in a
+    /// list as alone, and for a negative seed (serde's "expected u64" once).
+    #[test]
+    fn numbers_out_of_range_have_one_wording() {
+        for arg in ["initial.x_m=[1e400]", "field.center_m=[0.0, 1e400]"] {
+            let e = err("", &[arg]);
+            assert!(
+                e[0].message
+                    .contains("the number is beyond the largest 64-bit float")
+                    && !e[0].message.contains("quote a string"),
+                "{arg}: {}",
+                e[0]
+            );
+        }
+        let e = err("", &["sim.seed=-1"]);
+        assert!(
+            e[0].message.contains(
+                "`-1` is out of range: this key takes an integer 0 ..= 9223372036854775807"
+            ),
+            "{}",
+            e[0]
+        );
+        let e = err("[sim]\nseed = -1\n", &[]);
+        assert_eq!(file_line(&e[0]), Some(2));
+        assert_eq!(e[0].key.as_deref(), Some("sim.seed"));
+        assert!(
+            e[0].message.contains("0 ..= 9223372036854775807"),
+            "{}",
+            e[0]
+        );
+        assert!(!e[0].message.contains("expected u64"), "{}", e[0]);
     }
 
     #[test]

@@ -773,7 +773,16 @@ fn resolve_text(c: &mut Checker, f: &ScenarioFile) {
     ] {
         let Some(text) = text else { continue };
         let bad = |ch: char| is_not_plain(ch) && !(lines && matches!(ch, '\n' | '\r' | '\t'));
-        if let Some(ch) = text.chars().find(|&ch| bad(ch)) {
+        // The scenario's `name` and `description` are text to read, never compared as an
+        // identifier: a joiner there is kept where a script or an emoji needs it (att30c-9).
+        let prose = matches!(key, "name" | "description");
+        let chars: Vec<char> = text.chars().collect();
+        let found = chars
+            .iter()
+            .enumerate()
+            .find(|&(i, &ch)| bad(ch) && !(prose && joins_a_script(&chars, i)))
+            .map(|(_, &ch)| ch);
+        if let Some(ch) = found {
             c.fail(
                 key,
                 format!(
@@ -784,6 +793,23 @@ fn resolve_text(c: &mut Checker, f: &ScenarioFile) {
             );
         }
     }
+}
+
+/// Whether `chars[i]` is a joiner (ZWNJ U+200C, ZWJ U+200D) between two visible characters
+/// outside ASCII: Persian's `می‌خواهم` (a ZWNJ), a Devanagari half-form (a ZWJ after the
+/// virama), an emoji family (ZWJs between the emoji). There it reorders nothing and hides
+/// nothing: it shapes the letters on either side, which are shown. Between ASCII letters
+/// (`pi_iso` ZWJ `line`), at an end, or beside a space or another invisible character it shows
+/// nothing at all, so it stays refused there (issue 30, att30c-9; README "Scenario files").
+fn joins_a_script(chars: &[char], i: usize) -> bool {
+    use isotrack_core::numtext::is_not_plain;
+    let visible = |c: Option<&char>| {
+        c.is_some_and(|&c| !c.is_ascii() && !c.is_whitespace() && !is_not_plain(c))
+    };
+    matches!(chars[i], '\u{200c}' | '\u{200d}')
+        && i > 0
+        && visible(chars.get(i - 1))
+        && visible(chars.get(i + 1))
 }
 
 /// A number in messages: the one formatting of every message (six significant digits, plain

@@ -23,10 +23,12 @@
 //! index, whatever the thread count or shard.
 
 use crate::{Assignment, ScenarioError};
+use isotrack_core::numtext::{is_not_plain, Escaped, Num};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
 
 /// A distribution for a `[random]` key.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +54,37 @@ impl Dist {
                 let n: f64 = StandardNormal.sample(rng);
                 m + s * n
             }
+        }
+    }
+}
+
+impl Dist {
+    /// Whether every draw is a finite number: a uniform's `a`, `b` and width `b - a` finite
+    /// with `a < b` (`[-1e308, 1e308]` has a width of `inf`, so `a + (b - a) u` is `inf` for
+    /// every draw), a normal's mean and std finite with std >= 0 and `mean +- 40 std` finite
+    /// (the ziggurat's draws stay far inside 40 standard deviations: P(|n| > 40) < 1e-348).
+    /// `Err` says what is wrong, in words.
+    pub fn check(self) -> Result<(), String> {
+        match self {
+            Dist::Uniform(a, b) if !(a.is_finite() && b.is_finite() && a < b) => {
+                Err("expected { uniform = [a, b] } with finite a < b".into())
+            }
+            Dist::Uniform(a, b) if !(b - a).is_finite() => Err(format!(
+                "{{ uniform = [{}, {}] }} is wider than the largest 64-bit float (about 1.8e308): every draw would be inf",
+                Num(a),
+                Num(b)
+            )),
+            Dist::Normal(m, s) if !(m.is_finite() && s.is_finite() && s >= 0.0) => {
+                Err("expected { normal = [mean, std] } with finite mean and std >= 0".into())
+            }
+            Dist::Normal(m, s) if !((m + 40.0 * s).is_finite() && (m - 40.0 * s).is_finite()) => {
+                Err(format!(
+                    "{{ normal = [{}, {}] }} reaches beyond the largest 64-bit float (about 1.8e308) within 40 std: some draws would be inf",
+                    Num(m),
+                    Num(s)
+                ))
+            }
+            _ => Ok(()),
         }
     }
 }
@@ -169,6 +202,181 @@ fn line_of(text: &str, key: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
+/// One key a sweep file sets: its section, its parts as written (a quoted part may hold a
+/// dot or a space), and the 1-based line of its last part.
+struct SetKey {
+    section: &'static str,
+    parts: Vec<String>,
+    line: usize,
+}
+
+impl SetKey {
+    /// The key as a scenario reads it: every part split at its dots and trimmed (what
+    /// `--set` does with `controller. kp`).
+    fn path(&self) -> Vec<&str> {
+        self.parts
+            .iter()
+            .flat_map(|p| p.split('.'))
+            .map(str::trim)
+            .collect()
+    }
+
+    /// The key as written, quoted parts in quotes, each character a terminal would act on
+    /// escaped: `"controller.kp\x0a"`.
+    fn written(&self) -> String {
+        let bare = |p: &str| {
+            !p.is_empty()
+                && p.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        };
+        let parts: Vec<String> = self
+            .parts
+            .iter()
+            .map(|p| {
+                if bare(p) {
+                    p.clone()
+                } else {
+                    format!("\"{}\"", Escaped(p))
+                }
+            })
+            .collect();
+        format!("[{}] {}", self.section, parts.join("."))
+    }
+}
+
+/// Every key sweep text sets in `[base]`, `[grid]` and `[random]` (a distribution table is
+/// one key; `random.runs` and `random.seed` are not keys of the scenario), from the TOML
+/// reader's spans. Empty when the text does not parse (the caller reports that).
+fn set_keys(text: &str) -> Vec<SetKey> {
+    fn walk(
+        text: &str,
+        section: &'static str,
+        table: &DeTable<'_>,
+        parts: &mut Vec<String>,
+        out: &mut Vec<SetKey>,
+    ) {
+        for (k, v) in table.iter() {
+            let name = k.get_ref().to_string();
+            if section == "random" && parts.is_empty() && (name == "runs" || name == "seed") {
+                continue;
+            }
+            parts.push(name);
+            match v.get_ref() {
+                DeValue::Table(t)
+                    if !(section == "random"
+                        && t.iter().any(|(n, _)| {
+                            n.get_ref().as_ref() == "uniform" || n.get_ref().as_ref() == "normal"
+                        })) =>
+                {
+                    walk(text, section, t, parts, out)
+                }
+                _ => out.push(SetKey {
+                    section,
+                    parts: parts.clone(),
+                    line: text[..k.span().start.min(text.len())].matches('\n').count() + 1,
+                }),
+            }
+            parts.pop();
+        }
+    }
+    let Ok(doc) = DeTable::parse(text) else {
+        return vec![];
+    };
+    let mut out = vec![];
+    for section in ["base", "grid", "random"] {
+        let found = doc
+            .get_ref()
+            .iter()
+            .find(|(k, _)| k.get_ref().as_ref() == section);
+        if let Some((_, v)) = found {
+            if let DeValue::Table(t) = v.get_ref() {
+                walk(text, section, t, &mut vec![], &mut out);
+            }
+        }
+    }
+    out
+}
+
+/// Issue 30 (att30c-13): a key set twice in two spellings (`controller.kp` and
+/// `"controller.kp"`, or `"controller. kp"`, are distinct TOML keys but one scenario key, and
+/// the last one written ran while `results.csv` had a column for each), or in two sections
+/// (`[base]` and `[grid]`), or a key and a table holding it; and a key part TOML quotes that a
+/// scenario key never holds: a dot, a space, a control or invisible character (a line feed
+/// in a key once made the sweep refuse its own `results.csv` after every run), or nothing.
+/// Refused naming the lines, before any run.
+fn check_set_keys(text: &str) -> Result<(), String> {
+    let keys = set_keys(text);
+    // Sorted by path, a key and any key it is a prefix of are neighbours (every path between
+    // them starts with it too): n log n, not a comparison of every pair.
+    let mut sorted: Vec<(Vec<&str>, usize)> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (k.path(), i))
+        .collect();
+    sorted.sort();
+    for w in sorted.windows(2) {
+        let ((pa, ia), (pb, ib)) = (&w[0], &w[1]);
+        if pb.starts_with(pa) {
+            let (a, b) = (&keys[*ia.min(ib)], &keys[*ia.max(ib)]);
+            let how = if pa.len() == pb.len() {
+                "set the same key"
+            } else {
+                "set one key twice (one is a table holding the other)"
+            };
+            return Err(format!(
+                "line {}: {} and line {}: {} {how}: keep one",
+                a.line,
+                a.written(),
+                b.line,
+                b.written()
+            ));
+        }
+    }
+    for k in &keys {
+        for p in &k.parts {
+            let problem = if p.trim().is_empty() {
+                "an empty part".to_string()
+            } else if let Some(c) = p.chars().find(|&c| is_not_plain(c)) {
+                format!("a control or invisible character (U+{:04X})", c as u32)
+            } else if p.contains('.') {
+                "a dot inside quotes".to_string()
+            } else if p.chars().any(char::is_whitespace) {
+                "a space".to_string()
+            } else {
+                continue;
+            };
+            return Err(format!(
+                "line {}: {}: the key holds {problem}: write a scenario key plainly, as dotted parts (controller.kp)",
+                k.line,
+                k.written()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The dotted key set on the line of sweep text starting at byte `start`, under its last
+/// `[section]` header (`grid.controller.kp`), for a message about a value TOML cannot read
+/// (the text does not parse, so no reader's spans are at hand). `None` for a line without
+/// `KEY =`.
+fn key_on_line(text: &str, start: usize) -> Option<String> {
+    let line = text[start..].lines().next()?;
+    let key = line.split_once('=')?.0.trim();
+    if key.is_empty() || key.starts_with('[') {
+        return None;
+    }
+    let section = text[..start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('[') && !l.starts_with("[["))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_string());
+    Some(match section {
+        Some(s) => format!("{s}.{key}"),
+        None => key.to_string(),
+    })
+}
+
 impl SweepPlan {
     /// Reads and checks a sweep file.
     pub fn load(path: &Path) -> Result<Self, SweepError> {
@@ -192,9 +400,16 @@ impl SweepPlan {
             // with no place) is said plainly, where it is.
             match crate::assign::number_out_of_range(e.message()) {
                 Some(plain) => {
+                    // At line, column and key, as a scenario file's message (att30c-16).
                     let at = e.span().map(|s| {
-                        let line = text[..s.start.min(text.len())].matches('\n').count() + 1;
-                        format!("line {line}: ")
+                        let before = &text[..s.start.min(text.len())];
+                        let line = before.matches('\n').count() + 1;
+                        let start = before.rfind('\n').map_or(0, |i| i + 1);
+                        let column = before[start..].chars().count() + 1;
+                        let key = key_on_line(text, start)
+                            .map(|k| format!("`{}`: ", Escaped(&k)))
+                            .unwrap_or_default();
+                        format!("line {line}, column {column}: {key}")
                     });
                     err(format!("{}{plain}", at.unwrap_or_default()))
                 }
@@ -208,6 +423,7 @@ impl SweepPlan {
                 )));
             }
         }
+        check_set_keys(text).map_err(err)?;
         let scenario = doc
             .get("scenario")
             .and_then(|v| v.as_str())
@@ -297,15 +513,19 @@ impl SweepPlan {
                         .then(|| Some((num(&a[0])?, num(&a[1])?)))
                         .flatten()
                 };
+                let at = line_of(text, &k)
+                    .map(|l| format!("line {l}: "))
+                    .unwrap_or_default();
                 let d = match (pair("uniform"), pair("normal")) {
-                    (Some((a, b)), None) if a.is_finite() && b.is_finite() && a < b => Dist::Uniform(a, b),
-                    (None, Some((m, s))) if m.is_finite() && s.is_finite() && s >= 0.0 => Dist::Normal(m, s),
+                    (Some((a, b)), None) => Dist::Uniform(a, b),
+                    (None, Some((m, s))) => Dist::Normal(m, s),
                     _ => {
                         return Err(err(format!(
-                            "random.{k}: expected {{ uniform = [a, b] }} with a < b or {{ normal = [mean, std] }} with std >= 0"
+                            "{at}random.{k}: expected {{ uniform = [a, b] }} with a < b or {{ normal = [mean, std] }} with std >= 0"
                         )))
                     }
                 };
+                d.check().map_err(|m| err(format!("{at}random.{k}: {m}")))?;
                 random.push((k, d));
             }
             random.sort_by(|a, b| a.0.cmp(&b.0));
@@ -848,6 +1068,115 @@ mod tests {
             p.duplicate_notes()
         );
         assert!(notes.iter().any(|n| n.contains("identical")), "{notes:?}");
+    }
+
+    /// Issue 30 (att30c-13): one scenario key set twice in two spellings (a dotted and a
+    /// quoted key, a quoted key with a space, two sections, a table and a key inside it) ran
+    /// with the last and labelled rows with both; a key with a line feed ran every run, then
+    /// the sweep refused its own `results.csv`. Refused before any run, naming both lines.
+    #[test]
+    fn a_key_set_twice_in_any_spelling_is_refused_naming_both_lines() {
+        for (body, lines) in [
+            (
+                "[grid]\ncontroller.kp = [1.0, 2.0]\n\"controller.kp\" = [3.0, 4.0]\n",
+                (3, 4),
+            ),
+            (
+                "[grid]\n\"controller. kp\" = [1.0, 2.0]\n\"controller.kp\" = [3.0, 4.0]\n",
+                (3, 4),
+            ),
+            (
+                "[base]\ncontroller.kp = 9.0\n\"controller.kp\" = 8.0\n",
+                (3, 4),
+            ),
+            (
+                "[base]\ncontroller.kp = 9.0\n[grid]\ncontroller.kp = [1.0, 2.0]\n",
+                (3, 5),
+            ),
+            (
+                "[grid]\ncontroller = [{kp = 1.0}]\n[random]\nruns = 2\ncontroller.kp = { uniform = [1.0, 2.0] }\n",
+                (3, 6),
+            ),
+        ] {
+            let e = plan(&format!("scenario = \"x\"\n{body}")).unwrap_err().message;
+            let (a, b) = lines;
+            assert!(
+                e.contains(&format!("line {a}:")) && e.contains(&format!("line {b}:")),
+                "{body}: {e}"
+            );
+            assert!(e.contains("keep one"), "{e}");
+        }
+        for (key, what) in [
+            (
+                "\"controller.kp\\n\"",
+                "control or invisible character (U+000A)",
+            ),
+            (
+                "\"controller\".\"kp\\u202e\"",
+                "control or invisible character (U+202E)",
+            ),
+            ("controller.\" kp\"", "a space"),
+            ("\"controller.kp\"", "a dot inside quotes"),
+            ("controller.\"\"", "an empty part"),
+        ] {
+            let e = plan(&format!("scenario = \"x\"\n[grid]\n{key} = [1.0]\n"))
+                .unwrap_err()
+                .message;
+            assert!(e.contains("line 3:") && e.contains(what), "{key}: {e}");
+            assert!(!e.contains('\n') && !e.contains('\u{202e}'), "{e}");
+        }
+        // One key per spelling that means one thing is fine, as are siblings.
+        let p = plan("scenario = \"x\"\n[base]\ncontroller.ki = 0.0\n[grid.controller]\nkp = [1.0]\n[random]\nruns = 2\ncontroller.c1 = { uniform = [0.1, 0.2] }\n").unwrap();
+        assert_eq!(p.varied_keys()[..2], ["controller.kp", "controller.c1"]);
+    }
+
+    /// Issue 30 (att30c-16): a number TOML cannot hold in a sweep file is said at line,
+    /// column and key, as in a scenario file.
+    #[test]
+    fn a_number_beyond_range_is_said_at_line_column_and_key() {
+        let e = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [1.0, 1e400]\n")
+            .unwrap_err()
+            .message;
+        assert!(
+            e.contains("line 3, column ")
+                && e.contains(
+                    "`grid.controller.kp`: the number is beyond the largest 64-bit float"
+                ),
+            "{e}"
+        );
+    }
+
+    /// Issue 30 (att30c-17): a uniform whose width `b - a` overflows drew `inf` for every run;
+    /// a normal reaching past the largest float within 40 std sometimes. Refused at the line.
+    #[test]
+    fn distributions_whose_draws_overflow_are_refused_at_their_line() {
+        for dist in [
+            "uniform = [-1e308, 1e308]",
+            "uniform = [-1.7976931348623157e308, 1.0e300]",
+            "normal = [0.0, 1.7e308]",
+            "normal = [1.7e308, 1e307]",
+        ] {
+            let e = plan(&format!(
+                "scenario = \"x\"\n[random]\nruns = 2\nk = {{ {dist} }}\n"
+            ))
+            .unwrap_err()
+            .message;
+            assert!(
+                e.contains("line 4:") && e.contains("random.k") && e.contains("64-bit float"),
+                "{dist}: {e}"
+            );
+        }
+        // Wide but finite: every draw finite (the largest width is below 1.8e308).
+        for dist in ["uniform = [-8e307, 8e307]", "normal = [0.0, 4e306]"] {
+            let p = plan(&format!(
+                "scenario = \"x\"\n[random]\nruns = 200\nk = {{ {dist} }}\n"
+            ))
+            .unwrap();
+            for id in 0..p.total() {
+                let v: f64 = p.run_values(id)[0].parse().unwrap();
+                assert!(v.is_finite(), "{dist}: run {id}: {v}");
+            }
+        }
     }
 
     /// Item 5: 5000 identical grid values give one note, not 4999; 3 named values at most plus

@@ -878,7 +878,14 @@ impl Dataset {
 
         let dataspace =
             dataspace.ok_or_else(|| Error::InvalidData("dataset missing dataspace".into()))?;
-        let dt = datatype.ok_or_else(|| Error::InvalidData("dataset missing datatype".into()))?;
+        let dt = match datatype {
+            Some(dt) => dt,
+            // isotrack: a datatype kept undecoded: its own parse error.
+            None => {
+                return Err(crate::messages::datatype_parse_error(&header.messages)
+                    .unwrap_or_else(|| Error::InvalidData("dataset missing datatype".into())))
+            }
+        };
         let layout =
             layout.ok_or_else(|| Error::InvalidData("dataset missing data layout".into()))?;
         let layout = normalize_layout(layout, &dataspace);

@@ -565,7 +565,7 @@ fn parse_bytes_with(
             restore_cut_text_attributes(&shared, &mut vars);
             parse_file(name, &file, &vars, variable, budget_bytes)
         }
-        Err(e) if is_non_utf8_text(&e) => {
+        Err(e) if is_non_utf8_text(&e) || is_missing_dimension_list(&e) => {
             // A text attribute that is not UTF-8 (a Latin-1 `comment` or `history` from an
             // older tool): the strict reader refuses the whole file, where the classic reader
             // (NetCDF-3) reads such bytes as U+FFFD. Opened again leniently, the variables'
@@ -579,7 +579,17 @@ fn parse_bytes_with(
                 },
             )
             .map_err(cannot)?;
+            // Datasets without dimension scales (an HDF5 tool's dataset beside the netCDF
+            // variables: netCDF-C gives them phony dimensions, xarray opens the file) are left
+            // out: isotrack never reads them, and the lenient reader would give them
+            // dimensions guessed by size. The variable asked for is refused for it, with the
+            // strict reader's error (issue 30, att30c-8).
+            let unscaled = datasets_without_dimension_scales(bytes);
+            if variable.is_some_and(|v| unscaled.iter().any(|u| u == v)) {
+                return Err(cannot(e));
+            }
             let mut vars = lenient.variables().map_err(cannot)?.to_vec();
+            vars.retain(|v| !unscaled.contains(&v.name));
             restore_non_utf8_attributes(bytes, &mut vars);
             restore_cut_text_attributes(&shared, &mut vars);
             parse_file(name, &lenient, &vars, variable, budget_bytes)
@@ -676,6 +686,35 @@ fn restore_cut_text_attributes(bytes: &std::sync::Arc<[u8]>, vars: &mut [NcVaria
             }
         }
     }
+}
+
+/// Whether the reader refused a NetCDF-4 file for a dataset with no dimension scales
+/// (`dataset 'extra' is missing required DIMENSION_LIST metadata`).
+fn is_missing_dimension_list(e: &netcdf_reader::Error) -> bool {
+    e.to_string().contains("is missing required DIMENSION_LIST")
+}
+
+/// The root group's datasets with dimensions but no `DIMENSION_LIST` that are not dimension
+/// scales themselves: what netCDF-C reads with phony dimensions. Empty when the file cannot be
+/// walked.
+fn datasets_without_dimension_scales(bytes: &[u8]) -> Vec<String> {
+    let Ok(h5) = hdf5_reader::Hdf5File::from_bytes(bytes) else {
+        return vec![];
+    };
+    let Ok(datasets) = h5.root_group().and_then(|r| r.datasets()) else {
+        return vec![];
+    };
+    datasets
+        .iter()
+        .filter(|ds| {
+            let scale = ds
+                .attribute("CLASS")
+                .and_then(|a| a.read_string())
+                .is_ok_and(|c| c == "DIMENSION_SCALE");
+            ds.ndim() > 0 && !scale && ds.attribute("DIMENSION_LIST").is_err()
+        })
+        .map(|ds| ds.name().rsplit('/').next().unwrap_or_default().to_string())
+        .collect()
 }
 
 /// Whether the reader refused a NetCDF-4 file for a text attribute that is not UTF-8
@@ -956,11 +995,63 @@ fn frame_layout<'a>(
     })
 }
 
+/// Issue 30 (att30c-1): the reader takes the first number of a value attribute and ignores
+/// one that is no number, so `scale_factor = "2"` (a text), `[2.0, 3.0]` (which one?), `[]`,
+/// `0` or `5e-324` (every value 0 or a subnormal) and `_FillValue = "20"` were read as if
+/// absent or half-read, with values silently wrong. Each of `names` present on `var` (but
+/// `_Unsigned`, a text by convention) must be numbers, as many as netCDF-C takes (one;
+/// `missing_value` one or more; `valid_range` two), and a `scale_factor` must be a normal
+/// (not zero, not subnormal) number. `Err` names the variable and the attribute.
+fn check_value_attributes(var: &NcVariable, names: &[&str]) -> Result<(), String> {
+    use isotrack_core::numtext::{Clipped, Echo, Escaped};
+    use netcdf_reader::NcAttrValue;
+    for &name in names.iter().filter(|n| **n != "_Unsigned") {
+        let Some(a) = var.attribute(name) else {
+            continue;
+        };
+        let at = format!("variable `{}`: attribute `{name}`", Escaped(var.name()));
+        let Some(values) = a.value.as_f64_vec() else {
+            return Err(match &a.value {
+                NcAttrValue::Chars(t) => format!(
+                    "{at} is a text (`{}`), not a number: write it as a number of the variable's type",
+                    Clipped(t)
+                ),
+                NcAttrValue::Strings(_) => format!("{at} holds strings, not a number"),
+                _ => format!("{at} is of a user-defined type, not a number"),
+            });
+        };
+        let need = match name {
+            "missing_value" => (1, usize::MAX, "one or more"),
+            "valid_range" => (2, 2, "two (min, max)"),
+            _ => (1, 1, "one"),
+        };
+        if values.len() < need.0 || values.len() > need.1 {
+            return Err(format!("{at} has {} values: need {}", values.len(), need.2));
+        }
+        if name == "scale_factor" {
+            let x = values[0];
+            if x == 0.0 {
+                return Err(format!(
+                    "{at} is 0: a scale of 0 packs nothing (every value would be 0)"
+                ));
+            }
+            if x.is_finite() && !x.is_normal() {
+                return Err(format!(
+                    "{at} is {}, a subnormal number: no packing uses a scale that small",
+                    Echo(x)
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A packing attribute that is not finite turns every value into NaN; say so, rather than
 /// "every value is NaN / no-data". One of [`VALUE_ATTRIBUTES`] that could not be decoded is
 /// refused naming it ([`refuse_undecodable`]).
 fn check_packing(path: &Path, var: &NcVariable) -> Result<(), LoadError> {
     refuse_undecodable(var, &VALUE_ATTRIBUTES).map_err(|m| LoadError::new(path, None, m))?;
+    check_value_attributes(var, &VALUE_ATTRIBUTES).map_err(|m| LoadError::new(path, None, m))?;
     for a in ["scale_factor", "add_offset"] {
         if let Some(x) = var
             .attribute(a)
@@ -1046,6 +1137,7 @@ fn coord_values<'a>(
         None => Ok(None),
         Some(c) => {
             refuse_undecodable(c, &VALUE_ATTRIBUTES[..3])
+                .and_then(|()| check_value_attributes(c, &VALUE_ATTRIBUTES[..2]))
                 .map_err(|m| LoadError::new(path, None, m))?;
             let vals = file.read_variable_unpacked(name).map_err(|e| {
                 LoadError::new(path, None, format!("cannot read coordinate `{name}`: {e}"))
@@ -1278,6 +1370,95 @@ mod tests {
             let e = crate::io::load_grid(&p, None).unwrap_err().to_string();
             assert!(e.contains(&format!("attribute `{attr}` {shown}")), "{e}");
             assert!(!e.contains("every value is NaN"), "{e}");
+        }
+    }
+
+    /// Issue 30 (att30c-1): a packing or no-data attribute that is a text, holds the wrong
+    /// number of values, or a `scale_factor` of 0 or a subnormal was ignored or half-read
+    /// (values unscaled, no-data kept as data, every value 0): refused naming the variable and
+    /// the attribute. One number each (and `missing_value` as a list, `valid_range` as a pair)
+    /// still load.
+    #[test]
+    fn value_attributes_of_the_wrong_type_or_count_are_refused() {
+        enum A {
+            Text(&'static str),
+            F64(Vec<f64>),
+        }
+        let cases: Vec<(&str, A, Option<&str>)> = vec![
+            (
+                "scale_factor",
+                A::Text("2"),
+                Some("is a text (`2`), not a number"),
+            ),
+            ("add_offset", A::Text("5"), Some("is a text")),
+            ("missing_value", A::Text("0"), Some("is a text")),
+            ("valid_max", A::Text("1"), Some("is a text")),
+            ("_FillValue", A::Text("20"), Some("is a text")),
+            (
+                "scale_factor",
+                A::F64(vec![2.0, 3.0]),
+                Some("has 2 values: need one"),
+            ),
+            (
+                "scale_factor",
+                A::F64(vec![]),
+                Some("has 0 values: need one"),
+            ),
+            (
+                "_FillValue",
+                A::F64(vec![20.0, 0.0]),
+                Some("has 2 values: need one"),
+            ),
+            (
+                "valid_range",
+                A::F64(vec![0.0]),
+                Some("has 1 values: need two"),
+            ),
+            (
+                "scale_factor",
+                A::F64(vec![0.0]),
+                Some("a scale of 0 packs nothing"),
+            ),
+            ("scale_factor", A::F64(vec![5e-324]), Some("subnormal")),
+            ("missing_value", A::F64(vec![-1.0, -2.0]), None),
+            ("valid_range", A::F64(vec![-10.0, 10.0]), None),
+            ("scale_factor", A::F64(vec![2.0]), None),
+        ];
+        for (attr, value, want) in cases {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("a.nc");
+            let mut ds = DataSet::new();
+            ds.add_fixed_dim("lat", 4).unwrap();
+            ds.add_fixed_dim("lon", 3).unwrap();
+            ds.add_var_f64("lat", &["lat"]).unwrap();
+            ds.add_var_f64("lon", &["lon"]).unwrap();
+            ds.add_var_f64("conc", &["lat", "lon"]).unwrap();
+            match &value {
+                A::Text(t) => ds.add_var_attr_string("conc", attr, *t).unwrap(),
+                A::F64(v) => ds.add_var_attr_f64("conc", attr, v.clone()).unwrap(),
+            }
+            let mut w = FileWriter::create_new(&p).unwrap();
+            w.set_def(&ds, Version::Classic, 0).unwrap();
+            w.write_var_f64("lat", &[51.0, 50.5, 50.0, 49.5]).unwrap();
+            w.write_var_f64("lon", &[10.0, 10.5, 11.0]).unwrap();
+            w.write_var_f64("conc", &[1.0; 12]).unwrap();
+            w.close().unwrap();
+            let got = crate::io::load_grid(&p, None);
+            match want {
+                Some(w) => {
+                    let e = got.unwrap_err().to_string();
+                    assert!(
+                        e.contains(&format!("variable `conc`: attribute `{attr}`"))
+                            && e.contains(w),
+                        "{attr}: {e}"
+                    );
+                }
+                None => {
+                    let g = got.unwrap_or_else(|e| panic!("{attr}: {e}"));
+                    let want = if attr == "scale_factor" { 2.0 } else { 1.0 };
+                    assert_eq!(g.grid.at(0, 0), want, "{attr}");
+                }
+            }
         }
     }
 

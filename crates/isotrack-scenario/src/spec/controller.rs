@@ -11,7 +11,7 @@ use isotrack_core::control::{
     PidParams, SearchParams, SearchPattern, SlidingModeParams, SuboptimalSosmParams,
 };
 use isotrack_core::estimate::DerivativeKind;
-use isotrack_core::numtext::{Echo, Num};
+use isotrack_core::numtext::{Echo, Num, NumDown};
 
 /// Default `controller.level`, field units: the paper's Fig. 2(b) setting (Dong & You).
 pub const LEVEL: f64 = 10.0;
@@ -149,6 +149,25 @@ impl ControllerSpec {
             (None, Some(w)) => TurnRateLimit::Airframe(w),
             (None, None) => TurnRateLimit::None,
         };
+        // A schedule is flown open loop: on the fixed wing an entry beyond the airframe's
+        // own limit would fly a turn the airframe cannot (5 rad/s against 0.274 rad/s at
+        // 30 m/s), as a given limit is refused at resolution (issue 30, att30c-5).
+        if let (ControllerKind::Schedule, TurnRateLimit::Airframe(l)) = (kind, turn_rate_limit) {
+            let entries = c.course_rate_radps.as_deref().unwrap_or_default();
+            if let Some((i, [_, w])) = entries.iter().enumerate().find(|(_, e)| e[1].abs() > l) {
+                return Err(Issue {
+                    key: format!("controller.course_rate_radps[{i}]"),
+                    message: format!(
+                        "turn rate {} rad/s exceeds the fixed wing's own limit g*tan(40 deg)/V = {} rad/s at vehicle.airspeed_mps = {} m/s, the limit every controller keeps: give |omega| <= {} or fly faster",
+                        Echo(*w),
+                        Num(l),
+                        Echo(vehicle.speed_mps()),
+                        NumDown(l)
+                    ),
+                    unreadable: false,
+                });
+            }
+        }
         let output = OutputStage {
             higher_side: settled(&c.higher_side, "controller.higher_side")?,
             max_turn_rate_radps: turn_rate_limit.radps(),

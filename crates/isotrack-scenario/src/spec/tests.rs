@@ -213,6 +213,83 @@ fn a_schedule_beyond_the_turn_rate_limit_is_refused() {
     parse_scenario(base, "<test>", &[]).unwrap();
 }
 
+/// Issue 30 (att30c-5): on the fixed wing without a given limit, a schedule entry of 5 rad/s
+/// flew past the airframe's own `g*tan(40 deg)/V` (0.274106 rad/s at 30 m/s): refused naming
+/// the entry and the derived limit, as a given limit is; entries within it fly.
+#[test]
+fn a_fixed_wing_schedule_beyond_the_airframe_limit_is_refused() {
+    let fw = "[vehicle]\nkind = \"fixed_wing\"\n[controller]\nkind = \"schedule\"\n";
+    let e = parse_scenario(
+        &format!("{fw}course_rate_radps = [[0.0, 0.2], [1.0, 5.0]]\n"),
+        "<test>",
+        &[],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("controller.course_rate_radps[1]") && e.contains("0.274106"),
+        "{e}"
+    );
+    // Just inside the limit (0.274106 rounded down) flies; just above it does not.
+    parse_scenario(
+        &format!("{fw}course_rate_radps = [[0.0, -0.2741]]\n"),
+        "<test>",
+        &[],
+    )
+    .unwrap();
+    assert!(parse_scenario(
+        &format!("{fw}course_rate_radps = [[0.0, -0.27411]]\n"),
+        "<test>",
+        &[]
+    )
+    .is_err());
+}
+
+/// Issue 30 (att30c-9): a joiner (ZWNJ U+200C, ZWJ U+200D) in a scenario's `name` or
+/// `description` between two visible characters outside ASCII (Persian, a Devanagari
+/// half-form, an emoji family) is kept; between ASCII letters, at an end, beside a space, or in
+/// an identifying string (`field.units`) it is refused, as every other invisible character.
+#[test]
+fn joiners_are_kept_where_a_script_needs_them() {
+    for (key, value) in [
+        (
+            "name",
+            "\u{645}\u{6cc}\u{200c}\u{62e}\u{648}\u{627}\u{647}\u{645}",
+        ),
+        ("description", "\u{915}\u{94d}\u{200d}\u{937} half-form"),
+        ("name", "family \u{1f468}\u{200d}\u{1f469}\u{200d}\u{1f467}"),
+    ] {
+        let text = format!("{key} = {}\n", toml::Value::String(value.into()));
+        let s = parse_scenario(&text, "<test>", &[]).unwrap_or_else(|e| panic!("{key}: {e}"));
+        let got = if key == "name" {
+            s.file().name.clone()
+        } else {
+            s.file().description.clone()
+        };
+        assert_eq!(got.as_deref(), Some(value));
+    }
+    for (key, value) in [
+        ("name", "pi_iso\u{200d}line"),
+        ("name", "\u{645}\u{6cc}\u{200c}"),
+        ("name", "\u{200d}\u{1f468}"),
+        ("description", "\u{645} \u{200c}\u{62e}"),
+        ("field.units", "\u{645}\u{200c}\u{62e}"),
+    ] {
+        let text = if key == "field.units" {
+            format!("[field]\nunits = {}\n", toml::Value::String(value.into()))
+        } else {
+            format!("{key} = {}\n", toml::Value::String(value.into()))
+        };
+        let e = parse_scenario(&text, "<test>", &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("control or invisible character (U+200"),
+            "{key} {value:?}: {e}"
+        );
+    }
+}
+
 /// The search geometry: spacing `2*v/omega_max` (1 rad/s without a limit), legs 10 spacings,
 /// hand-over 1 % of |level|.
 #[test]

@@ -205,6 +205,17 @@ pub(crate) fn raw_bytes<'a>(cursor: &Cursor<'a>, start: u64, len: usize) -> Opti
     cursor.data().get(start..start.checked_add(len)?)
 }
 
+/// isotrack: the error of a datatype message kept undecoded by [`parse_message`] (an
+/// `Unknown` message of type [`MSG_DATATYPE`]), parsed again, among `messages`.
+pub(crate) fn datatype_parse_error(messages: &[HdfMessage]) -> Option<crate::error::Error> {
+    messages.iter().find_map(|m| match m {
+        HdfMessage::Unknown { type_id, data } if *type_id == MSG_DATATYPE => {
+            datatype::parse(&mut Cursor::new(data), data.len()).err()
+        }
+        _ => None,
+    })
+}
+
 /// Parse a single header message given its type ID, size, and a cursor
 /// positioned at the start of the message payload.
 ///
@@ -231,7 +242,23 @@ pub fn parse_message(
         }
         MSG_DATATYPE => {
             let start = cursor.position();
-            let msg = datatype::parse(cursor, msg_size)?;
+            let msg = match datatype::parse(cursor, msg_size) {
+                Ok(msg) => msg,
+                // isotrack: a datatype this reader cannot decode (nested past
+                // MAX_DATATYPE_NESTING_DEPTH, an unsupported class) is kept as raw bytes, so
+                // the object header still parses: a committed datatype linked in a group,
+                // which a listing of datasets skips, no longer makes the whole file
+                // unreadable. A dataset of that type is refused as it is opened, with this
+                // parse error ([`datatype_parse_error`]).
+                Err(_) => {
+                    return Ok(HdfMessage::Unknown {
+                        type_id: MSG_DATATYPE,
+                        data: raw_bytes(cursor, start, msg_size)
+                            .map(<[u8]>::to_vec)
+                            .unwrap_or_default(),
+                    })
+                }
+            };
             if let Some(raw) = raw_bytes(cursor, start, msg_size) {
                 record_datatype(raw);
             }
