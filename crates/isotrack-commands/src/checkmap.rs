@@ -342,7 +342,105 @@ pub fn write_map(
         code: exit::DATAERR,
         message: format!("no stability chart: {note}"),
     })?;
-    let mut grid = MapGrid::default_for(&family);
+    let grid = map_grid(args, scenario, &family, parsed)?;
+    let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+    let st_svg = crate::figures::style(&args.look, isotrack_plot::Format::Svg)?;
+    let cant = |what: &Path, e: String| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", what.display()),
+    };
+    // Held to the end.
+    let (_lock, [csv_path, png_path, svg_path, verify_path]) = open_map_dir(args, scenario, dir)?;
+    let pool = crate::sweep::worker_pool(args.threads)?;
+    // Each cell is a pure function of its point: the same bits on any thread count.
+    let points = StabilityMap::points(&grid);
+    let cells = pool.install(|| {
+        points
+            .par_iter()
+            .map(|&(k, r)| family.cell(k, r))
+            .collect::<Vec<_>>()
+    });
+    let map = StabilityMap::from_cells(&family, grid, cells);
+    // The chart is written before any verification run starts: an interrupted --verify keeps
+    // it (the figure without the runs' marks).
+    let draw = |verified: &[VerifyPoint]| -> Result<Vec<String>, Failure> {
+        let mut files = vec![];
+        for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
+            draw_atomic(path, |tmp| {
+                isotrack_plot::stability_map_figure(&map, verified, tmp, style)
+            })
+            .map_err(|e| cant(path, e))?;
+            files.push(path.display().to_string());
+        }
+        Ok(files)
+    };
+    write_csv(
+        &csv_path,
+        &MAP_COLUMNS,
+        (0..map.cells.len()).map(|i| cell_row(&map, i)),
+    )?;
+    let mut files = vec![csv_path.display().to_string()];
+    files.extend(draw(&[])?);
+    let mut verify_runs = None;
+    let verify = match args.verify {
+        Some(n) => {
+            let seed = scenario.spec().sim.seed;
+            let at = verify_points(&grid, family.dt_s(), n, seed);
+            let (verified, partial) = verify_runs_of(family, pool, at, n);
+            let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
+            if !partial {
+                // Redrawn with the runs' marks (an interrupted check keeps the plain chart:
+                // it answers Ctrl-C without drawing again).
+                files = vec![csv_path.display().to_string()];
+                files.extend(draw(&points)?);
+            }
+            write_csv(
+                &verify_path,
+                &VERIFY_COLUMNS,
+                verified.iter().map(|(k, v)| verify_row(*k, v)),
+            )?;
+            files.push(verify_path.display().to_string());
+            verify_runs = Some(VerifyRuns {
+                requested: n,
+                finished: verified.len(),
+                partial,
+            });
+            Some((agreement(&points), verified))
+        }
+        None => None,
+    };
+    let (verify, far) = match verify {
+        Some((a, v)) => (Some(a), far_disagreements(&v)),
+        None => (None, vec![]),
+    };
+    let count = |st: isotrack_scenario::check::map::CellStatus| {
+        map.cells.iter().filter(|c| c.status == st).count()
+    };
+    use isotrack_scenario::check::map::CellStatus as S;
+    Ok(MapReport {
+        files,
+        grid,
+        slope_basis: map.slope_basis,
+        cells_stable: count(S::Stable),
+        cells_unstable: count(S::Unstable),
+        cells_no_equilibrium: count(S::NoEquilibrium),
+        cells_not_computed: count(S::NotComputed),
+        verify,
+        verify_runs,
+        disagreements_far: far,
+    })
+}
+
+/// The chart's grid: the scenario's default ranges, replaced by `--kp-range`, `--rate-range`
+/// and `--map-size`, checked (and with `--verify`, checked to hold a whole-step rate and a
+/// bounded number of steps).
+fn map_grid(
+    args: &CheckArgs,
+    scenario: &Scenario,
+    family: &LoopFamily,
+    parsed: MapOptions,
+) -> Result<MapGrid, Failure> {
+    let mut grid = MapGrid::default_for(family);
     let MapOptions {
         kp_range: kp,
         rate_range_hz: rate,
@@ -391,16 +489,24 @@ pub fn write_map(
             )));
         }
     }
-    let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
-    let st_svg = crate::figures::style(&args.look, isotrack_plot::Format::Svg)?;
+    Ok(grid)
+}
+
+/// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
+/// `verify.csv`), none of them an input; an earlier `verify.csv` removed.
+fn open_map_dir(
+    args: &CheckArgs,
+    scenario: &Scenario,
+    dir: &Path,
+) -> Result<(crate::sweep::DirLock, [PathBuf; 4]), Failure> {
     let cant = |what: &Path, e: String| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", what.display()),
     };
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
     // One writer per directory, as `sweep`, `merge` and `benchmark`: a second `check --map`
-    // on DIR exits 73 instead of interleaving its files with this one's. Held to the end.
-    let _lock = crate::sweep::lock_output_dir(dir, "check --map")?;
+    // on DIR exits 73 instead of interleaving its files with this one's.
+    let lock = crate::sweep::lock_output_dir(dir, "check --map")?;
     let input = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
     let csv_path = output_path(dir, "stability_map.csv", &input)?;
     let png_path = output_path(dir, "stability_map.png", &input)?;
@@ -416,143 +522,80 @@ pub fn write_map(
             verify_path.display()
         );
     }
-    let pool = crate::sweep::worker_pool(args.threads)?;
-    // Each cell is a pure function of its point: the same bits on any thread count.
-    let points = StabilityMap::points(&grid);
-    let cells = pool.install(|| {
-        points
-            .par_iter()
-            .map(|&(k, r)| family.cell(k, r))
-            .collect::<Vec<_>>()
-    });
-    let map = StabilityMap::from_cells(&family, grid, cells);
-    // The chart is written before any verification run starts: an interrupted --verify keeps
-    // it (the figure without the runs' marks).
-    let draw = |verified: &[VerifyPoint]| -> Result<Vec<String>, Failure> {
-        let mut files = vec![];
-        for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
-            draw_atomic(path, |tmp| {
-                isotrack_plot::stability_map_figure(&map, verified, tmp, style)
-            })
-            .map_err(|e| cant(path, e))?;
-            files.push(path.display().to_string());
-        }
-        Ok(files)
-    };
-    write_csv(
-        &csv_path,
-        &MAP_COLUMNS,
-        (0..map.cells.len()).map(|i| cell_row(&map, i)),
-    )?;
-    let mut files = vec![csv_path.display().to_string()];
-    files.extend(draw(&[])?);
-    let mut verify_runs = None;
-    let verify = match args.verify {
-        Some(n) => {
-            let seed = scenario.spec().sim.seed;
-            let at = verify_points(&grid, family.dt_s(), n, seed);
-            // Ctrl-C (or SIGTERM, SIGHUP) from here on stops the runs not yet started; the runs
-            // that finished are reported (marked partial) and written, and the command exits
-            // 128 + the signal.
-            let stop = isotrack_runs::signals::interrupt_flag();
+    Ok((lock, [csv_path, png_path, svg_path, verify_path]))
+}
+
+/// The `n` `--verify` runs at `at`, on `pool`, in a thread of their own (each sent back as it
+/// finishes): each with its index (its row in `verify.csv`), and whether Ctrl-C (or SIGTERM,
+/// SIGHUP) stopped them before all finished.
+fn verify_runs_of(
+    family: LoopFamily,
+    pool: rayon::ThreadPool,
+    at: Vec<(f64, f64)>,
+    n: usize,
+) -> (Vec<(usize, VerifyPoint)>, bool) {
+    // Ctrl-C (or SIGTERM, SIGHUP) from here on stops the runs not yet started; the runs
+    // that finished are reported (marked partial) and written, and the command exits
+    // 128 + the signal.
+    let stop = isotrack_runs::signals::interrupt_flag();
+    let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
+    // The runs go on a thread of their own, each sent back as it finishes, and this
+    // one answers Ctrl-C at once: a run in progress (it may take minutes) is abandoned,
+    // never awaited (a hostile review: 18 s to answer, a second Ctrl-C ignored);
+    // returning ends the process.
+    let family = std::sync::Arc::new(family);
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, VerifyPoint)>();
+    {
+        let (family, stop) = (family.clone(), stop.clone());
+        std::thread::spawn(move || {
             let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
-            // The runs go on a thread of their own, each sent back as it finishes, and this
-            // one answers Ctrl-C at once: a run in progress (it may take minutes) is abandoned,
-            // never awaited (a hostile review: 18 s to answer, a second Ctrl-C ignored);
-            // returning ends the process.
-            let family = std::sync::Arc::new(family);
-            let (tx, rx) = std::sync::mpsc::channel::<(usize, VerifyPoint)>();
-            {
-                let (family, stop) = (family.clone(), stop.clone());
-                std::thread::spawn(move || {
-                    let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
-                    pool.install(|| {
-                        at.par_iter()
-                            .enumerate()
-                            .for_each_with(tx, |tx, (i, &(k, r))| {
-                                if !stopped() {
-                                    let _ = tx.send((i, verify_point(&family, k, r)));
-                                }
-                            });
-                    });
-                });
-            }
-            let mut slots: Vec<Option<VerifyPoint>> = vec![None; n];
-            let mut left = n;
-            while left > 0 {
-                match rx.recv_timeout(std::time::Duration::from_millis(50)) {
-                    Ok((i, p)) => {
-                        if slots[i].replace(p).is_none() {
-                            left -= 1;
+            pool.install(|| {
+                at.par_iter()
+                    .enumerate()
+                    .for_each_with(tx, |tx, (i, &(k, r))| {
+                        if !stopped() {
+                            let _ = tx.send((i, verify_point(&family, k, r)));
                         }
-                    }
-                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) if !stopped() => {}
-                    Err(_) => break,
+                    });
+            });
+        });
+    }
+    let mut slots: Vec<Option<VerifyPoint>> = vec![None; n];
+    let mut left = n;
+    while left > 0 {
+        match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+            Ok((i, p)) => {
+                if slots[i].replace(p).is_none() {
+                    left -= 1;
                 }
             }
-            let partial = left > 0 || stopped();
-            // Each run keeps its index (its row in verify.csv): the same numbers on any
-            // thread count, and a partial file names which runs it holds.
-            let verified: Vec<(usize, VerifyPoint)> = slots
-                .into_iter()
-                .enumerate()
-                .filter_map(|(i, p)| p.map(|p| (i, p)))
-                .collect();
-            let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
-            if !partial {
-                // Redrawn with the runs' marks (an interrupted check keeps the plain chart:
-                // it answers Ctrl-C without drawing again).
-                files = vec![csv_path.display().to_string()];
-                files.extend(draw(&points)?);
-            }
-            write_csv(
-                &verify_path,
-                &VERIFY_COLUMNS,
-                verified.iter().map(|(k, v)| verify_row(*k, v)),
-            )?;
-            files.push(verify_path.display().to_string());
-            verify_runs = Some(VerifyRuns {
-                requested: n,
-                finished: verified.len(),
-                partial,
-            });
-            Some((agreement(&points), verified))
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) if !stopped() => {}
+            Err(_) => break,
         }
-        None => None,
-    };
-    let (verify, far) = match verify {
-        Some((a, v)) => {
-            let far = v
-                .iter()
-                .filter(|(_, p)| p.agrees == Some(false) && !p.near_boundary)
-                .map(|(k, p)| FarDisagreement {
-                    run: *k,
-                    kp: p.kp,
-                    sensor_rate_hz: p.rate_hz,
-                    spectral_radius: p.cell.spectral_radius,
-                    outcome: p.behaviour.as_str(),
-                })
-                .collect();
-            (Some(a), far)
-        }
-        None => (None, vec![]),
-    };
-    let count = |st: isotrack_scenario::check::map::CellStatus| {
-        map.cells.iter().filter(|c| c.status == st).count()
-    };
-    use isotrack_scenario::check::map::CellStatus as S;
-    Ok(MapReport {
-        files,
-        grid,
-        slope_basis: map.slope_basis,
-        cells_stable: count(S::Stable),
-        cells_unstable: count(S::Unstable),
-        cells_no_equilibrium: count(S::NoEquilibrium),
-        cells_not_computed: count(S::NotComputed),
-        verify,
-        verify_runs,
-        disagreements_far: far,
-    })
+    }
+    let partial = left > 0 || stopped();
+    // Each run keeps its index (its row in verify.csv): the same numbers on any
+    // thread count, and a partial file names which runs it holds.
+    let verified: Vec<(usize, VerifyPoint)> = slots
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.map(|p| (i, p)))
+        .collect();
+    (verified, partial)
+}
+
+/// The runs that disagree with the chart away from its stability boundary.
+fn far_disagreements(v: &[(usize, VerifyPoint)]) -> Vec<FarDisagreement> {
+    v.iter()
+        .filter(|(_, p)| p.agrees == Some(false) && !p.near_boundary)
+        .map(|(k, p)| FarDisagreement {
+            run: *k,
+            kp: p.kp,
+            sensor_rate_hz: p.rate_hz,
+            spectral_radius: p.cell.spectral_radius,
+            outcome: p.behaviour.as_str(),
+        })
+        .collect()
 }
 
 /// The lines `check --map` prints after the report (the user's numbers echoed as written:

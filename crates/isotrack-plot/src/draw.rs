@@ -483,6 +483,21 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     if let Some(img) = BitMapElement::with_owned_buffer((range[0], range[3]), (pw, ph), buf) {
         chart.draw_series(std::iter::once(img)).map_err(s)?;
     }
+    draw_isolines(&mut chart, sc, &raster, (vmin, vmax), st, times)?;
+    draw_colour_bar(&right, sc, lay, st, (vmin, vmax))?;
+    Ok(chart)
+}
+
+/// The map's isolines over its raster: a few thin ones, the target bold, and for a field that
+/// moves the target at earlier times, light (early) to dark.
+fn draw_isolines<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    sc: &Scenario,
+    raster: &Raster,
+    (vmin, vmax): (f64, f64),
+    st: &Style,
+    times: &MapTimes,
+) -> DrawResult {
     // Isolines: a few thin ones, the target bold.
     let level = sc.level();
     let iso_at = |lv: f64, t: f64| raster.isoline(lv, |p| sc.field().value(t, p));
@@ -538,6 +553,17 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         .legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(bold))
         });
+    Ok(())
+}
+
+/// The map's colour bar on `right`, over `[vmin, vmax]`.
+fn draw_colour_bar<DB: DrawingBackend>(
+    right: &DrawingArea<DB, Shift>,
+    sc: &Scenario,
+    lay: &MapLayout,
+    st: &Style,
+    (vmin, vmax): (f64, f64),
+) -> DrawResult {
     // Colour bar, its ticks as fine as the field's span needs (a nearly flat field still gets
     // distinct labels).
     let units = bar_units(sc);
@@ -546,7 +572,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     let f = st.base_font();
     let bar_label = lay.bar_label.max(bar_label_width(st, &units, vmin, vmax));
     let bar_right = lay.bar_right(f, bar_label);
-    let mut bar = ChartBuilder::on(&right)
+    let mut bar = ChartBuilder::on(right)
         .margin_top(lay.margin + lay.caption)
         .margin_bottom(lay.margin + lay.x_label)
         .margin_left((0.5 * f) as u32)
@@ -575,7 +601,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         )
     }))
     .map_err(s)?;
-    Ok(chart)
+    Ok(())
 }
 
 /// Trajectories of one or more runs over their field (one field: runs over different fields,
@@ -823,18 +849,9 @@ fn measured_differs(r: &RunData) -> bool {
     })
 }
 
-/// Time series of one or more runs: the chosen panels, steady-state window shaded.
-pub fn timeseries_figure(
-    runs: &[RunData],
-    path: &Path,
-    st: &Style,
-    title: &str,
-    panels: Panels,
-) -> Result<(), PlotError> {
-    let title = st.title(title);
-    let first = runs
-        .first()
-        .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
+/// The panels of [`timeseries_figure`] `panels` selects, in their order (the measurement's
+/// says whether any run's measured values differ from the true ones).
+fn selected_panels(runs: &[RunData], panels: Panels) -> Vec<Panel> {
     let mut list: Vec<Panel> = Vec::new();
     if panels.error {
         list.push(Panel {
@@ -889,6 +906,22 @@ pub fn timeseries_figure(
             },
         });
     }
+    list
+}
+
+/// Time series of one or more runs: the chosen panels, steady-state window shaded.
+pub fn timeseries_figure(
+    runs: &[RunData],
+    path: &Path,
+    st: &Style,
+    title: &str,
+    panels: Panels,
+) -> Result<(), PlotError> {
+    let title = st.title(title);
+    let first = runs
+        .first()
+        .ok_or_else(|| PlotError::Input("no runs to plot".into()))?;
+    let list = selected_panels(runs, panels);
     if list.is_empty() {
         return Err(PlotError::Input("no panels selected".into()));
     }
@@ -914,7 +947,6 @@ pub fn timeseries_figure(
         Some(_) => st.size((1100, 980), (560, 520)),
         None => st.size((1100, 80 + 300 * n), (560, 40 + 160 * n)),
     };
-    let f = st.base_font();
     let ts = tick_step(0.0, t_end, 10);
     render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
@@ -929,80 +961,75 @@ pub fn timeseries_figure(
                 list.iter().zip(&data).zip(areas.iter()).enumerate()
             {
                 let (lo, hi) = (*lo, *hi);
-                let mut chart = ChartBuilder::on(area)
-                    .margin((0.75 * f) as u32)
-                    .margin_right((2.0 * f) as u32)
-                    .x_label_area_size((2.8 * f) as u32)
-                    .y_label_area_size((5.6 * f) as u32)
-                    .build_cartesian_2d(0.0..t_end, lo..hi)
-                    .map_err(s)?;
                 let ys = tick_step(lo, hi, 8);
-                chart
-                    .configure_mesh()
-                    .x_desc("time (s)")
-                    .y_desc(p.label)
-                    .x_label_formatter(&|v| tick_label(*v, ts))
-                    .y_label_formatter(&|v| tick_label(*v, ys))
-                    .label_style(st.font(0.95))
-                    .axis_desc_style(st.font(1.0))
-                    .light_line_style(WHITE.mix(0.0))
-                    .draw()
-                    .map_err(s)?;
-                if ss > 0.0 && ss < t_end {
-                    chart
-                        .draw_series([Rectangle::new(
-                            [(ss, lo), (t_end, hi)],
-                            RGBColor(230, 230, 230).filled(),
-                        )])
-                        .map_err(s)?
-                        .label("steady-state window")
-                        .legend(|(x, y)| {
-                            Rectangle::new(
-                                [(x, y - 6), (x + 20, y + 6)],
-                                RGBColor(220, 220, 220).filled(),
-                            )
-                        });
-                }
-                let (w1, w2, w3) = (st.px(1.0), st.px(2.0), st.px(3.0));
-                // Values outside the panel (a non-finite row) are left out, never drawn over
-                // the neighbouring panel.
-                let inside = move |q: &&(f64, f64)| q.1.is_finite() && q.1 >= lo && q.1 <= hi;
-                for (i, (run, [main, extra])) in runs.iter().zip(series).enumerate() {
-                    let c = colour(i);
-                    if !extra.is_empty() {
-                        chart
-                            .draw_series(LineSeries::new(
-                                extra.iter().filter(inside).copied(),
-                                c.mix(0.4).stroke_width(w1),
-                            ))
-                            .map_err(s)?;
-                    }
-                    chart
-                        .draw_series(LineSeries::new(
-                            main.iter().filter(inside).copied(),
-                            c.stroke_width(w2),
-                        ))
-                        .map_err(s)?
-                        .label(run.name.clone())
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
-                        });
-                }
+                let mut chart = panel_axes(
+                    area,
+                    st,
+                    ((0.0, t_end), (lo, hi)),
+                    ("time (s)", p.label),
+                    (ts, ys),
+                )?;
+                draw_time_series(&mut chart, st, runs, series, (lo, hi), (ss, t_end))?;
                 if k == 0 {
                     let pts = series.iter().flat_map(|sr| sr[0].iter().copied());
-                    chart
-                        .configure_series_labels()
-                        .label_font(st.font(0.95))
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK)
-                        .position(emptiest_corner(pts, [0.0, t_end, lo, hi]))
-                        .draw()
-                        .map_err(s)?;
+                    panel_legend(&mut chart, st, emptiest_corner(pts, [0.0, t_end, lo, hi]))?;
                 }
             }
             Ok(())
         })()
     })
+}
+
+/// One panel of [`timeseries_figure`] drawn: the steady-state window `[ss, t_end]` shaded,
+/// then each run's series (its light second one, if any, under its main one), the values
+/// outside `[lo, hi]` left out.
+fn draw_time_series<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    st: &Style,
+    runs: &[RunData],
+    series: &[[Series; 2]],
+    (lo, hi): (f64, f64),
+    (ss, t_end): (f64, f64),
+) -> DrawResult {
+    if ss > 0.0 && ss < t_end {
+        chart
+            .draw_series([Rectangle::new(
+                [(ss, lo), (t_end, hi)],
+                RGBColor(230, 230, 230).filled(),
+            )])
+            .map_err(s)?
+            .label("steady-state window")
+            .legend(|(x, y)| {
+                Rectangle::new(
+                    [(x, y - 6), (x + 20, y + 6)],
+                    RGBColor(220, 220, 220).filled(),
+                )
+            });
+    }
+    let (w1, w2, w3) = (st.px(1.0), st.px(2.0), st.px(3.0));
+    // Values outside the panel (a non-finite row) are left out, never drawn over the
+    // neighbouring panel.
+    let inside = move |q: &&(f64, f64)| q.1.is_finite() && q.1 >= lo && q.1 <= hi;
+    for (i, (run, [main, extra])) in runs.iter().zip(series).enumerate() {
+        let c = colour(i);
+        if !extra.is_empty() {
+            chart
+                .draw_series(LineSeries::new(
+                    extra.iter().filter(inside).copied(),
+                    c.mix(0.4).stroke_width(w1),
+                ))
+                .map_err(s)?;
+        }
+        chart
+            .draw_series(LineSeries::new(
+                main.iter().filter(inside).copied(),
+                c.stroke_width(w2),
+            ))
+            .map_err(s)?
+            .label(run.name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+    }
+    Ok(())
 }
 
 /// One group of a sweep summary: `(x, mean, std, n)` per distinct x, sorted by x.
@@ -1205,6 +1232,70 @@ pub fn sweep_figure(
     })
 }
 
+/// What [`team_figure`] draws: the gaps ahead along the isoline over time, the longest
+/// unvisited time along it, their ideal values and the panels' (checked) ranges.
+struct TeamFigureData {
+    /// The vehicles.
+    n: usize,
+    /// The isoline's length, m.
+    l: f64,
+    /// `(t, gap ahead of each vehicle)`.
+    gaps: Vec<(f64, Vec<f64>)>,
+    /// `(position along the isoline, longest unvisited time)` over the steady window.
+    revisit: Vec<(f64, f64)>,
+    /// `L/(N v0)`, s.
+    ideal: f64,
+    /// `L/N`, m.
+    even: f64,
+    t_end: f64,
+    gap_range: (f64, f64),
+    revisit_range: (f64, f64),
+}
+
+impl TeamFigureData {
+    fn of(vehicles: &[RunData]) -> Result<Self, PlotError> {
+        let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
+            PlotError::Data(
+                "the team's figure needs the isoline's arc length: a radial field that does not drift, for now (docs/TEAMS.md)".into(),
+            )
+        })?;
+        let first = &vehicles[0];
+        let n = vehicles.len();
+        let l = tracks.length_m();
+        let stride = tracks.rows.div_ceil(2000).max(1);
+        let gaps = tracks.gaps(stride);
+        let ss = first.steady_state_start_s();
+        let revisit = tracks.revisit_max(ss);
+        let v0 = first
+            .scenario
+            .spec()
+            .team
+            .as_ref()
+            .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
+                t.nominal_speed_mps
+            });
+        let ideal = l / (n as f64 * v0);
+        let even = l / n as f64;
+        let t_end = gaps.last().map_or(1e-9, |g| g.0).max(1e-9);
+        padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
+        let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
+        let (glo, ghi) = padded_axis("gap_m", glo.min(0.0), ghi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
+        let (rlo, rhi) = finite_bounds(revisit.iter().map(|r| r.1).chain([ideal, 0.0]));
+        let (rlo, rhi) = padded_axis("revisit_s", rlo, rhi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
+        Ok(Self {
+            n,
+            l,
+            gaps,
+            revisit,
+            ideal,
+            even,
+            t_end,
+            gap_range: (glo, ghi),
+            revisit_range: (rlo, rhi),
+        })
+    }
+}
+
 /// A team's figure (issue 32, docs/TEAMS.md), from its trace: on top, the arc-length gap ahead
 /// of each vehicle along the true isoline over time (one colour per vehicle, as in the
 /// trajectory figure; the even gap `L/N` dashed); below, the longest time each point of the
@@ -1218,36 +1309,18 @@ pub fn team_figure(
     title: &str,
 ) -> Result<(), PlotError> {
     let title = st.title(title);
-    let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
-        PlotError::Data(
-            "the team's figure needs the isoline's arc length: a radial field that does not drift, for now (docs/TEAMS.md)".into(),
-        )
-    })?;
-    let first = &vehicles[0];
-    let n = vehicles.len();
-    let l = tracks.length_m();
-    let stride = tracks.rows.div_ceil(2000).max(1);
-    let gaps = tracks.gaps(stride);
-    let ss = first.steady_state_start_s();
-    let revisit = tracks.revisit_max(ss);
-    let v0 = first
-        .scenario
-        .spec()
-        .team
-        .as_ref()
-        .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
-            t.nominal_speed_mps
-        });
-    let ideal = l / (n as f64 * v0);
-    let even = l / n as f64;
-    let t_end = gaps.last().map_or(1e-9, |g| g.0).max(1e-9);
-    padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
-    let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
-    let (glo, ghi) = padded_axis("gap_m", glo.min(0.0), ghi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
-    let (rlo, rhi) = finite_bounds(revisit.iter().map(|r| r.1).chain([ideal, 0.0]));
-    let (rlo, rhi) = padded_axis("revisit_s", rlo, rhi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
+    let TeamFigureData {
+        n,
+        l,
+        gaps,
+        revisit,
+        ideal,
+        even,
+        t_end,
+        gap_range: (glo, ghi),
+        revisit_range: (rlo, rhi),
+    } = TeamFigureData::of(vehicles)?;
     let (w, h) = st.size((1100, 760), (560, 420));
-    let f = st.base_font();
     let (ts, ls) = (tick_step(0.0, t_end, 10), tick_step(0.0, l, 10));
     let (gs, rs) = (tick_step(glo, ghi, 8), tick_step(rlo, rhi, 8));
     render!(path, st.format, (w, h), |root| {
@@ -1263,23 +1336,13 @@ pub fn team_figure(
             let dashed = |a: (f64, f64), b: (f64, f64)| {
                 DashedLineSeries::new([a, b], st.px(8.0), st.px(5.0), BLACK.stroke_width(w2))
             };
-            let mut top = ChartBuilder::on(&areas[0])
-                .margin((0.75 * f) as u32)
-                .margin_right((2.0 * f) as u32)
-                .x_label_area_size((2.8 * f) as u32)
-                .y_label_area_size((5.6 * f) as u32)
-                .build_cartesian_2d(0.0..t_end, glo..ghi)
-                .map_err(s)?;
-            top.configure_mesh()
-                .x_desc("time (s)")
-                .y_desc("gap ahead along the isoline (m)")
-                .x_label_formatter(&|v| tick_label(*v, ts))
-                .y_label_formatter(&|v| tick_label(*v, gs))
-                .label_style(st.font(0.95))
-                .axis_desc_style(st.font(1.0))
-                .light_line_style(WHITE.mix(0.0))
-                .draw()
-                .map_err(s)?;
+            let mut top = panel_axes(
+                &areas[0],
+                st,
+                ((0.0, t_end), (glo, ghi)),
+                ("time (s)", "gap ahead along the isoline (m)"),
+                (ts, gs),
+            )?;
             top.draw_series(dashed((0.0, even), (t_end, even)))
                 .map_err(s)?
                 .label("even gap L/N")
@@ -1300,31 +1363,17 @@ pub fn team_figure(
                     });
                 }
             }
-            top.configure_series_labels()
-                .label_font(st.font(0.95))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(s)?;
-            let mut bottom = ChartBuilder::on(&areas[1])
-                .margin((0.75 * f) as u32)
-                .margin_right((2.0 * f) as u32)
-                .x_label_area_size((2.8 * f) as u32)
-                .y_label_area_size((5.6 * f) as u32)
-                .build_cartesian_2d(0.0..l, rlo..rhi)
-                .map_err(s)?;
-            bottom
-                .configure_mesh()
-                .x_desc("position along the isoline, in the direction of travel (m)")
-                .y_desc("longest unvisited time (s)")
-                .x_label_formatter(&|v| tick_label(*v, ls))
-                .y_label_formatter(&|v| tick_label(*v, rs))
-                .label_style(st.font(0.95))
-                .axis_desc_style(st.font(1.0))
-                .light_line_style(WHITE.mix(0.0))
-                .draw()
-                .map_err(s)?;
+            panel_legend(&mut top, st, SeriesLabelPosition::UpperRight)?;
+            let mut bottom = panel_axes(
+                &areas[1],
+                st,
+                ((0.0, l), (rlo, rhi)),
+                (
+                    "position along the isoline, in the direction of travel (m)",
+                    "longest unvisited time (s)",
+                ),
+                (ls, rs),
+            )?;
             bottom
                 .draw_series(dashed((0.0, ideal), (l, ideal)))
                 .map_err(s)?
@@ -1340,17 +1389,56 @@ pub fn team_figure(
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                 });
-            bottom
-                .configure_series_labels()
-                .label_font(st.font(0.95))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::LowerRight)
-                .draw()
-                .map_err(s)?;
-            Ok(())
+            panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)
         })()
     })
+}
+
+/// One panel's axes, as [`timeseries_figure`]'s and [`team_figure`]'s panels share them: over
+/// `x` and `y`, with their descriptions and tick labels (at the steps given), no grid lines.
+fn panel_axes<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, Shift>,
+    st: &Style,
+    (x, y): ((f64, f64), (f64, f64)),
+    (x_desc, y_desc): (&str, &str),
+    (x_tick, y_tick): (f64, f64),
+) -> Result<MapChart<'a, DB>, String> {
+    let f = st.base_font();
+    let mut chart = ChartBuilder::on(area)
+        .margin((0.75 * f) as u32)
+        .margin_right((2.0 * f) as u32)
+        .x_label_area_size((2.8 * f) as u32)
+        .y_label_area_size((5.6 * f) as u32)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(s)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_label_formatter(&|v| tick_label(*v, x_tick))
+        .y_label_formatter(&|v| tick_label(*v, y_tick))
+        .label_style(st.font(0.95))
+        .axis_desc_style(st.font(1.0))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(s)?;
+    Ok(chart)
+}
+
+/// A panel's legend ([`panel_axes`]), at `at`.
+fn panel_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut MapChart<'a, DB>,
+    st: &Style,
+    at: SeriesLabelPosition,
+) -> DrawResult {
+    chart
+        .configure_series_labels()
+        .label_font(st.font(0.95))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(at)
+        .draw()
+        .map_err(s)
 }
 
 #[cfg(test)]

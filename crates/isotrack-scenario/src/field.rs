@@ -561,25 +561,30 @@ fn prepare_frame(g: &GridSpec, mut grid: Grid2) -> Result<Grid2, Issue> {
     Ok(grid)
 }
 
-/// A `grid` field: one frame (a [`GridField`]) or a time series (a [`GridSeries`]) from
-/// `field.path` (a 3-D `.npy` or a NetCDF with a time axis gives several frames) or
-/// `field.paths` (one frame per file). Paths are recorded back as absolute.
-fn build_grid(
+/// What a grid field's files gave: their frames, the one file's frame times (its own time
+/// axis), the units each file states, the first file's georeference, and the one file (for
+/// messages about its time axis).
+struct GridFilesRead {
+    raw: Vec<Grid2>,
+    file_times: Option<Vec<f64>>,
+    file_units: Vec<(String, String)>,
+    georef: isotrack_fields::georef::Georeference,
+    one_file: Option<String>,
+}
+
+/// Reads `field.path` (one file, any number of frames) or `field.paths` (one frame per file),
+/// recording the paths as absolute into `filled` and the files' warnings into `notes`.
+fn read_grid_files(
     g: &GridSpec,
-    units: Option<&str>,
     base_dir: &Path,
-    into: Filling<'_>,
-) -> Result<FieldModel, Issue> {
+    filled: &mut FileFilled,
+    notes: &mut Vec<String>,
+) -> Result<GridFilesRead, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
         message,
         unreadable: false,
     };
-    let Filling {
-        filled,
-        notes,
-        lonlat,
-    } = into;
     // (file, its values' units) of the files that give one.
     let mut file_units: Vec<(String, String)> = Vec::new();
     let mut georef = isotrack_fields::georef::Georeference::None;
@@ -626,6 +631,36 @@ fn build_grid(
             (s.frames, s.frame_times_s)
         }
     };
+    Ok(GridFilesRead {
+        raw,
+        file_times,
+        file_units,
+        georef,
+        one_file,
+    })
+}
+
+/// A `grid` field: one frame (a [`GridField`]) or a time series (a [`GridSeries`]) from
+/// `field.path` (a 3-D `.npy` or a NetCDF with a time axis gives several frames) or
+/// `field.paths` (one frame per file). Paths are recorded back as absolute.
+fn build_grid(
+    g: &GridSpec,
+    units: Option<&str>,
+    base_dir: &Path,
+    into: Filling<'_>,
+) -> Result<FieldModel, Issue> {
+    let Filling {
+        filled,
+        notes,
+        lonlat,
+    } = into;
+    let GridFilesRead {
+        raw,
+        file_times,
+        file_units,
+        georef,
+        one_file,
+    } = read_grid_files(g, base_dir, filled, notes)?;
     filled.units = adopt_file_units(units, &g.transform, &file_units, notes);
     // The file's own position of the (cropped) south-west node, and its spacing: what
     // field.origin_m and field.spacing_m replace.
@@ -646,30 +681,29 @@ fn build_grid(
             i
         })?);
     }
-    if let (
-        isotrack_fields::georef::Georeference::LonLat {
-            lon0_deg,
-            lat0_deg,
-            ref_lat_deg,
-            ..
-        },
-        Some((o, sp)),
-    ) = (georef, natural)
-    {
-        // Local p is the file's p - origin + o; the file's local (0, 0) is (lon0, lat0).
-        if frames[0].spacing_m() == sp {
-            let k = isotrack_fields::georef::EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
-            let shift = o - frames[0].origin_m();
-            *lonlat = Some(LonLatFrame {
-                lon0_deg: lon0_deg + shift.x / (k * ref_lat_deg.to_radians().cos()),
-                lat0_deg: lat0_deg + shift.y / k,
-                ref_lat_deg,
-            });
-        }
+    if let Some(frame) = lonlat_frame(georef, natural, frames.first()) {
+        *lonlat = Some(frame);
     }
     // Record what was used, so the resolved scenario reproduces the run from anywhere.
     filled.spacing_m = Some(frames[0].spacing_m());
     filled.origin_m = Some([frames[0].origin_m().x, frames[0].origin_m().y]);
+    grid_in_time(g, frames, file_times, one_file.as_deref())
+}
+
+/// The prepared `frames` as one [`GridField`] (one frame, no times) or a [`GridSeries`] at the
+/// scenario's frame times or the file's own (`file_times`, of `one_file`).
+fn grid_in_time(
+    g: &GridSpec,
+    frames: Vec<Grid2>,
+    file_times: Option<Vec<f64>>,
+    one_file: Option<&str>,
+) -> Result<FieldModel, Issue> {
+    let issue = |key: &str, message: String| Issue {
+        key: key.to_string(),
+        message,
+        unreadable: false,
+    };
+    let n = frames.len();
     let interp = g.interpolation;
     // Where the times come from, to blame the right key when they cannot make a series: a bad
     // time axis read from a file is the file's (`field.path`), not a default's.
@@ -717,7 +751,7 @@ fn build_grid(
         let e = if from_file {
             format!(
                 "the time axis read from {}: {e}",
-                one_file.as_deref().unwrap_or("the file")
+                one_file.unwrap_or("the file")
             )
         } else {
             e
@@ -725,4 +759,39 @@ fn build_grid(
         issue(times_key, e)
     })?;
     Ok(FieldModel::Series(Arc::new(series)))
+}
+
+/// Where a lon/lat grid's local metres are on the Earth: the file's local (0, 0) is
+/// `(lon0, lat0)`, and local `p` is the file's `p - origin + o` (`natural`: the file's own
+/// position `o` of the cropped south-west node, and its spacing). `None` for another
+/// georeference, or when the scenario changes the spacing (`first`: the first frame as used).
+fn lonlat_frame(
+    georef: isotrack_fields::georef::Georeference,
+    natural: Option<(Vec2, [f64; 2])>,
+    first: Option<&Grid2>,
+) -> Option<LonLatFrame> {
+    let (
+        isotrack_fields::georef::Georeference::LonLat {
+            lon0_deg,
+            lat0_deg,
+            ref_lat_deg,
+            ..
+        },
+        Some((o, sp)),
+        Some(first),
+    ) = (georef, natural, first)
+    else {
+        return None;
+    };
+    // Local p is the file's p - origin + o; the file's local (0, 0) is (lon0, lat0).
+    if first.spacing_m() != sp {
+        return None;
+    }
+    let k = isotrack_fields::georef::EARTH_RADIUS_M * std::f64::consts::PI / 180.0;
+    let shift = o - first.origin_m();
+    Some(LonLatFrame {
+        lon0_deg: lon0_deg + shift.x / (k * ref_lat_deg.to_radians().cos()),
+        lat0_deg: lat0_deg + shift.y / k,
+        ref_lat_deg,
+    })
 }

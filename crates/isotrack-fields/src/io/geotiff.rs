@@ -44,44 +44,7 @@ fn decoder_limits(file_len: u64) -> Limits {
 
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
     let len = bytes.len() as u64;
-    let tiff_err = |e: tiff::TiffError| {
-        let truncated = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
-        if let tiff::TiffError::UnsupportedError(
-            tiff::TiffUnsupportedError::UnsupportedCompressionMethod(method),
-        ) = &e
-        {
-            let name = match method {
-                tiff::tags::CompressionMethod::ModernJPEG | tiff::tags::CompressionMethod::JPEG => {
-                    "JPEG".to_string()
-                }
-                other => format!("{other:?}"),
-            };
-            return LoadError::new(
-                path,
-                None,
-                format!(
-                    "unsupported TIFF compression {name}: isotrack reads uncompressed, PackBits, \
-                     Deflate, LZW and ZSTD GeoTIFFs (convert with \
-                     `gdal_translate -co COMPRESS=DEFLATE in.tif out.tif`)"
-                ),
-            );
-        }
-        if let tiff::TiffError::UnsupportedError(
-            tiff::TiffUnsupportedError::UnknownCompressionMethod,
-        ) = &e
-        {
-            return LoadError::new(path, None, format!("unknown TIFF compression method ({e})"));
-        }
-        if truncated {
-            LoadError::new(
-                path,
-                Some(FilePosition::Offset(len)),
-                format!("truncated TIFF: the file ends at byte {len} before its data does ({e})"),
-            )
-        } else {
-            LoadError::new(path, None, format!("invalid TIFF: {e}"))
-        }
-    };
+    let tiff_err = |e: tiff::TiffError| tiff_error(path, len, e);
     let mut dec = Decoder::new(Cursor::new(bytes))
         .map_err(tiff_err)?
         .with_limits(decoder_limits(len));
@@ -107,30 +70,12 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             ))
         }
     }
-    let nodata: Option<f64> = dec
-        .find_tag(Tag::GdalNodata)
-        .map_err(tiff_err)?
-        .and_then(|v| v.into_string().ok())
-        .and_then(|s| s.trim_matches(char::from(0)).trim().parse().ok());
-    let scale = dec
-        .find_tag(Tag::ModelPixelScaleTag)
-        .map_err(tiff_err)?
-        .map(|v| v.into_f64_vec())
-        .transpose()
-        .map_err(tiff_err)?;
-    let tie = dec
-        .find_tag(Tag::ModelTiepointTag)
-        .map_err(tiff_err)?
-        .map(|v| v.into_f64_vec())
-        .transpose()
-        .map_err(tiff_err)?;
-    let keys = dec
-        .find_tag(Tag::GeoKeyDirectoryTag)
-        .map_err(tiff_err)?
-        .map(|v| v.into_u16_vec())
-        .transpose()
-        .map_err(tiff_err)?
-        .unwrap_or_default();
+    let GeoTags {
+        nodata,
+        scale,
+        tie,
+        keys,
+    } = geo_tags(&mut dec).map_err(tiff_err)?;
     let geokey = |id: u16| -> Option<u16> {
         // Header of 4 shorts, then entries (KeyID, TIFFTagLocation, Count, Value); only keys
         // stored inline (location 0) matter here.
@@ -147,19 +92,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
         ),
         Err(e) => return Err(tiff_err(e)),
     };
-    let mut values: Vec<f64> = match img {
-        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::U64(v) => v.into_iter().map(|x| x as f64).collect(),
-        DecodingResult::I8(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I16(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::I64(v) => v.into_iter().map(|x| x as f64).collect(),
-        DecodingResult::F32(v) => v.into_iter().map(f64::from).collect(),
-        DecodingResult::F64(v) => v,
-        DecodingResult::F16(v) => v.into_iter().map(f64::from).collect(),
-    };
+    let mut values = samples(img);
     if values.len() != nx * ny {
         return Err(LoadError::new(
             path,
@@ -178,7 +111,113 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
         }
     }
     flip_rows(&mut values, nx, ny);
-    let (origin, spacing, georeference) = match (scale, tie) {
+    let (origin, spacing, georeference) = placement(scale, tie, geokey, ny);
+    let grid = Grid2::new(nx, ny, origin, spacing, values).map_err(|e| LoadError::grid(path, e))?;
+    Ok(LoadedGrid { grid, georeference })
+}
+
+/// The tags that place a GeoTIFF's grid: GDAL's no-data value, the model pixel scale and tie
+/// point, and the GeoKey directory (empty when absent).
+struct GeoTags {
+    nodata: Option<f64>,
+    scale: Option<Vec<f64>>,
+    tie: Option<Vec<f64>>,
+    keys: Vec<u16>,
+}
+
+fn geo_tags(dec: &mut Decoder<Cursor<&[u8]>>) -> Result<GeoTags, tiff::TiffError> {
+    let nodata: Option<f64> = dec
+        .find_tag(Tag::GdalNodata)?
+        .and_then(|v| v.into_string().ok())
+        .and_then(|s| s.trim_matches(char::from(0)).trim().parse().ok());
+    let scale = dec
+        .find_tag(Tag::ModelPixelScaleTag)?
+        .map(|v| v.into_f64_vec())
+        .transpose()?;
+    let tie = dec
+        .find_tag(Tag::ModelTiepointTag)?
+        .map(|v| v.into_f64_vec())
+        .transpose()?;
+    let keys = dec
+        .find_tag(Tag::GeoKeyDirectoryTag)?
+        .map(|v| v.into_u16_vec())
+        .transpose()?
+        .unwrap_or_default();
+    Ok(GeoTags {
+        nodata,
+        scale,
+        tie,
+        keys,
+    })
+}
+
+/// A TIFF reader's error as a [`LoadError`] of `path` (`len` bytes): an unsupported or
+/// unknown compression named with what is read, a truncated file at its end.
+fn tiff_error(path: &Path, len: u64, e: tiff::TiffError) -> LoadError {
+    let truncated = matches!(&e, tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof);
+    if let tiff::TiffError::UnsupportedError(
+        tiff::TiffUnsupportedError::UnsupportedCompressionMethod(method),
+    ) = &e
+    {
+        let name = match method {
+            tiff::tags::CompressionMethod::ModernJPEG | tiff::tags::CompressionMethod::JPEG => {
+                "JPEG".to_string()
+            }
+            other => format!("{other:?}"),
+        };
+        return LoadError::new(
+            path,
+            None,
+            format!(
+                "unsupported TIFF compression {name}: isotrack reads uncompressed, PackBits, \
+                 Deflate, LZW and ZSTD GeoTIFFs (convert with \
+                 `gdal_translate -co COMPRESS=DEFLATE in.tif out.tif`)"
+            ),
+        );
+    }
+    if let tiff::TiffError::UnsupportedError(tiff::TiffUnsupportedError::UnknownCompressionMethod) =
+        &e
+    {
+        return LoadError::new(path, None, format!("unknown TIFF compression method ({e})"));
+    }
+    if truncated {
+        LoadError::new(
+            path,
+            Some(FilePosition::Offset(len)),
+            format!("truncated TIFF: the file ends at byte {len} before its data does ({e})"),
+        )
+    } else {
+        LoadError::new(path, None, format!("invalid TIFF: {e}"))
+    }
+}
+
+/// The samples of an image, as `f64`.
+fn samples(img: DecodingResult) -> Vec<f64> {
+    match img {
+        DecodingResult::U8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::U64(v) => v.into_iter().map(|x| x as f64).collect(),
+        DecodingResult::I8(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I16(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::I64(v) => v.into_iter().map(|x| x as f64).collect(),
+        DecodingResult::F32(v) => v.into_iter().map(f64::from).collect(),
+        DecodingResult::F64(v) => v,
+        DecodingResult::F16(v) => v.into_iter().map(f64::from).collect(),
+    }
+}
+
+/// Where the grid is: the origin (its south-west node after the flip), the spacing and the
+/// georeference, from the model pixel scale and tie point (`geokey`: the file's inline
+/// GeoKeys); metres from (0, 0) with spacing 1 when the file has neither.
+fn placement(
+    scale: Option<Vec<f64>>,
+    tie: Option<Vec<f64>>,
+    geokey: impl Fn(u16) -> Option<u16>,
+    ny: usize,
+) -> (Vec2, [f64; 2], Georeference) {
+    match (scale, tie) {
         (Some(s), Some(t)) if s.len() >= 2 && t.len() >= 6 => {
             let (sx, sy) = (s[0], s[1]);
             let (ti, tj, tx, ty) = (t[0], t[1], t[3], t[4]);
@@ -216,9 +255,7 @@ pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> 
             }
         }
         _ => (Vec2::default(), [1.0, 1.0], Georeference::None),
-    };
-    let grid = Grid2::new(nx, ny, origin, spacing, values).map_err(|e| LoadError::grid(path, e))?;
-    Ok(LoadedGrid { grid, georeference })
+    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use super::loaded::{LoadedGrid, LoadedSeries};
 use crate::georef::Georeference;
 use crate::grid::Grid2;
 use isotrack_core::Vec2;
-use npyz::{DType, NpyFile, Order, TypeChar};
+use npyz::{DType, NpyFile, Order, TypeChar, TypeStr};
 use std::path::Path;
 
 /// The longest `.npy` header accepted, bytes (a real one is under 200).
@@ -186,6 +186,19 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             ),
         ));
     }
+    let values = read_values(path, npy, ts)?;
+    let frames = into_frames(path, values, (nt, ny, nx), order, &shape)?;
+    Ok(LoadedSeries {
+        frames,
+        frame_times_s: None,
+        georeference: Georeference::None,
+        units: None,
+        warnings: Vec::new(),
+    })
+}
+
+/// The array's values as `f64`, from any of the numeric dtypes [`parse_series`] takes.
+fn read_values(path: &Path, npy: NpyFile<&[u8]>, ts: &TypeStr) -> Result<Vec<f64>, LoadError> {
     let bad = |e: std::io::Error| {
         LoadError::new(
             path,
@@ -193,7 +206,7 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             format!("cannot read the data ({ts}): {e} (truncated file?)"),
         )
     };
-    let mut values: Vec<f64> = match (ts.type_char(), ts.size_field()) {
+    let values: Vec<f64> = match (ts.type_char(), ts.size_field()) {
         (TypeChar::Float, 8) => npy.into_vec::<f64>().map_err(bad)?,
         (TypeChar::Float, 4) => npy
             .into_vec::<f32>()
@@ -257,6 +270,17 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
             ))
         }
     };
+    Ok(values)
+}
+
+/// `values` (`nt` frames of `ny` rows of `nx`, in the file's `order`) as `nt` grids.
+fn into_frames(
+    path: &Path,
+    mut values: Vec<f64>,
+    (nt, ny, nx): (usize, usize, usize),
+    order: Order,
+    shape: &[u64],
+) -> Result<Vec<Grid2>, LoadError> {
     let n = nx * ny;
     if values.len() != n * nt {
         return Err(LoadError::new(
@@ -294,11 +318,5 @@ pub(super) fn parse_series(path: &Path, bytes: &[u8]) -> Result<LoadedSeries, Lo
         frames.push(g);
     }
     frames.reverse();
-    Ok(LoadedSeries {
-        frames,
-        frame_times_s: None,
-        georeference: Georeference::None,
-        units: None,
-        warnings: Vec::new(),
-    })
+    Ok(frames)
 }

@@ -639,7 +639,9 @@ pub fn verify_points(grid: &MapGrid, dt_s: f64, count: usize, seed: u64) -> Vec<
 }
 
 /// Runs the scenario at `(kp, rate_hz)` (recording at the sensor's rate) and classifies it
-/// ([`Behaviour`]).
+/// ([`Behaviour`]): the run (`verify_run`), the floors a settled run is held to
+/// (`SettleFloors`), its behaviour in the window (`classify_run`), then the runs the chart is
+/// not compared with (saturated, too short to judge).
 pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
     let cell = f.cell(kp, rate_hz);
     let mut p = VerifyPoint {
@@ -653,6 +655,36 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         agrees: None,
         near_boundary: near_boundary(&cell, 1.0 / rate_hz, f.scenario.spec().sim.duration_s),
     };
+    let Some((s, w)) = verify_run(f, &mut p, kp, rate_hz) else {
+        return p;
+    };
+    let range = |[lo, hi]: [f64; 2]| (hi >= lo).then_some(hi - lo);
+    let (first, second) = (range(w.halves[0]), range(w.halves[1]));
+    p.error_range = second;
+    if w.rows > 0 {
+        p.mean_abs_turn_radps = Some(w.turn_sum / w.rows as f64);
+    }
+    let floors = SettleFloors::of(f, &s, kp, rate_hz, w.from_s);
+    classify_run(&mut p, &w, (first, second), &floors, &s);
+    if saturated(&mut p, &w) || too_short_to_judge(&mut p, f, kp, rate_hz, floors.window_s) {
+        return p;
+    }
+    p.agrees = p
+        .cell
+        .status
+        .stable()
+        .map(|st| st == (p.behaviour == Behaviour::Converged));
+    p
+}
+
+/// The run at `(kp, rate_hz)` with its steady-state window recorded: `None` (and `p` final)
+/// when the scenario cannot be derived, the run left the field or diverged.
+fn verify_run(
+    f: &LoopFamily,
+    p: &mut VerifyPoint,
+    kp: f64,
+    rate_hz: f64,
+) -> Option<(Scenario, Window)> {
     let sets = [
         format!("controller.kp={kp:?}"),
         format!("sensor.rate_hz={rate_hz:?}"),
@@ -662,7 +694,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         Ok(s) => s,
         Err(e) => {
             p.detail = e.to_string();
-            return p;
+            return None;
         }
     };
     let spec = s.spec();
@@ -691,57 +723,89 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         Outcome::Completed => {}
         Outcome::LeftField => {
             p.behaviour = Behaviour::LeftField;
-            return p;
+            return None;
         }
         _ => {
             p.behaviour = Behaviour::Diverged;
-            p.agrees = cell.status.stable().map(|st| !st);
-            return p;
+            p.agrees = p.cell.status.stable().map(|st| !st);
+            return None;
         }
     }
-    let range = |[lo, hi]: [f64; 2]| (hi >= lo).then_some(hi - lo);
-    let (first, second) = (range(w.halves[0]), range(w.halves[1]));
-    p.error_range = second;
-    if w.rows > 0 {
-        p.mean_abs_turn_radps = Some(w.turn_sum / w.rows as f64);
+    Some((s, w))
+}
+
+/// What a settled run is held to: the floor its error range may reach, the turn rate a calm
+/// one stays below, and the steady-state window's length.
+#[derive(Clone, Copy)]
+struct SettleFloors {
+    /// The floor, field units.
+    floor: f64,
+    /// The spin turn rate (or the reading error's own, when larger), rad/s.
+    spin: f64,
+    /// The steady-state window, s.
+    window_s: f64,
+}
+
+impl SettleFloors {
+    fn of(f: &LoopFamily, s: &Scenario, kp: f64, rate_hz: f64, from_s: f64) -> Self {
+        let spec = s.spec();
+        let duration = spec.sim.duration_s;
+        // The floor a settled run's error range may reach: the reading error's own range (times
+        // SENSOR_FLOOR_FACTOR), on a moving isoline the scenario's convergence tolerance (the
+        // error tracking the motion leaves, by the scenario's own measure), and rounding.
+        let c2 = f.law.c2;
+        let level = s.level();
+        // The reading error's range from the sensor's own settings (not from the trace: the held
+        // reading lags the true value by the motion over a period, which on an oscillating run is
+        // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
+        // resolution, and 4 sqrt(window) times the bias drift.
+        let sn = &spec.sensor;
+        let window_s = duration - from_s;
+        let rr = 8.0 * sn.noise_std
+            + sn.resolution
+            + 4.0 * sn.bias_drift_per_sqrt_s * window_s.max(0.0).sqrt();
+        let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
+        let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
+        // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
+        // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
+        // scenario's own convergence tolerance (the band it counts as on the isoline).
+        let motion_floor = if s.is_time_varying() || lp.curvature_per_m == 0.0 {
+            spec.metrics.convergence_tolerance
+        } else {
+            0.0
+        };
+        let floor = sensor_floor
+            .max(motion_floor)
+            .max(1e-9 * level.abs().max(c2));
+        // The turn rate the reading's own error drives through the law (a noisy sensor makes a
+        // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
+        let c1 = f.law.c1;
+        let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
+        let spin = spin_turn_rate_radps(
+            s.max_turn_rate_radps(),
+            1.0 / rate_hz,
+            lp.speed_mps * lp.curvature_per_m.abs(),
+        )
+        .max(noise_turn);
+        Self {
+            floor,
+            spin,
+            window_s,
+        }
     }
-    // The floor a settled run's error range may reach: the reading error's own range (times
-    // SENSOR_FLOOR_FACTOR), on a moving isoline the scenario's convergence tolerance (the
-    // error tracking the motion leaves, by the scenario's own measure), and rounding.
-    let c2 = f.law.c2;
-    let level = s.level();
-    // The reading error's range from the sensor's own settings (not from the trace: the held
-    // reading lags the true value by the motion over a period, which on an oscillating run is
-    // the oscillation itself): about 8 std of Gaussian noise over the window's samples, the
-    // resolution, and 4 sqrt(window) times the bias drift.
-    let sn = &spec.sensor;
-    let window_s = duration - from_s;
-    let rr = 8.0 * sn.noise_std
-        + sn.resolution
-        + 4.0 * sn.bias_drift_per_sqrt_s * window_s.max(0.0).sqrt();
-    let sensor_floor = SENSOR_FLOOR_FACTOR * rr;
-    let (lp, _, _) = f.setup.at(&f.scenario, &Law { kp, ..f.law }, 1.0 / rate_hz);
-    // A moving isoline, or one whose bends the loop model leaves out (taken as straight:
-    // curvature 0 on a grid), keeps forcing the error of a settled run: there the floor is the
-    // scenario's own convergence tolerance (the band it counts as on the isoline).
-    let motion_floor = if s.is_time_varying() || lp.curvature_per_m == 0.0 {
-        spec.metrics.convergence_tolerance
-    } else {
-        0.0
-    };
-    let floor = sensor_floor
-        .max(motion_floor)
-        .max(1e-9 * level.abs().max(c2));
-    // The turn rate the reading's own error drives through the law (a noisy sensor makes a
-    // settled vehicle jitter): `kp (c1 R/T + R/c2)`, `R` the reading error's range.
-    let c1 = f.law.c1;
-    let noise_turn = kp * (c1.abs() * rr * rate_hz + rr / c2.abs());
-    let spin = spin_turn_rate_radps(
-        s.max_turn_rate_radps(),
-        1.0 / rate_hz,
-        lp.speed_mps * lp.curvature_per_m.abs(),
-    )
-    .max(noise_turn);
+}
+
+/// A completed run's behaviour in the window (converged, limit cycle, stalled) and the
+/// numbers it was judged by, in `p.detail`.
+fn classify_run(
+    p: &mut VerifyPoint,
+    w: &Window,
+    (first, second): (Option<f64>, Option<f64>),
+    floors: &SettleFloors,
+    s: &Scenario,
+) {
+    let spec = s.spec();
+    let SettleFloors { floor, spin, .. } = *floors;
     let settled = match (first, second) {
         (_, Some(b)) if b <= floor => true,
         (Some(a), Some(b)) => b <= DECAY_RATIO * a,
@@ -781,6 +845,11 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         g(rms_turn),
         g(Some(spin))
     );
+}
+
+/// The turn-rate limit saturating late: outside what the linear chart describes (`true`: `p`
+/// is final, not compared).
+fn saturated(p: &mut VerifyPoint, w: &Window) -> bool {
     // The turn-rate limit saturating late: outside what the linear chart describes.
     let saturated_share = (w.rows > 0).then(|| w.saturated_rows as f64 / w.rows as f64);
     if let (Some(share), Some(limit)) = (saturated_share, w.limit_radps) {
@@ -792,9 +861,20 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
                 100.0 * share,
                 p.detail
             );
-            return p;
+            return true;
         }
     }
+    false
+}
+
+/// Too short to judge (`true`: `p` is final, undetermined).
+fn too_short_to_judge(
+    p: &mut VerifyPoint,
+    f: &LoopFamily,
+    kp: f64,
+    rate_hz: f64,
+    window_s: f64,
+) -> bool {
     // Too short to judge: each half of the window must cover the time scale of the mode that
     // decides the cell (issue 29: a slowly decaying run was called a limit cycle, and a 2 s
     // run "agreed" from no data).
@@ -808,7 +888,7 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
         .max(MIN_HALF_SAMPLES * period_s);
     // A NaN need (no time scale) counts as too short: judged only when the half covers it.
     let covered = half_s.partial_cmp(&need_s).is_some_and(|o| o.is_ge());
-    if cell.status.stable().is_some() && !covered {
+    if p.cell.status.stable().is_some() && !covered {
         let judged = p.behaviour.as_str();
         p.behaviour = Behaviour::Undetermined;
         p.detail = format!(
@@ -820,13 +900,9 @@ pub fn verify_point(f: &LoopFamily, kp: f64, rate_hz: f64) -> VerifyPoint {
             MIN_HALF_SAMPLES,
             p.detail
         );
-        return p;
+        return true;
     }
-    p.agrees = cell
-        .status
-        .stable()
-        .map(|st| st == (p.behaviour == Behaviour::Converged));
-    p
+    false
 }
 
 /// The simulation steps of one run of `s` (`duration / dt`).
