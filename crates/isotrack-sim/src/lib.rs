@@ -39,7 +39,7 @@ pub use run::{
     GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample, StepPlan, StepPlanError,
 };
 pub use sensor::{
-    whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
+    nearest_valid_rates, whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
     SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
