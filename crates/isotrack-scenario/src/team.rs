@@ -736,15 +736,12 @@ mod tests {
     /// (134.45/134.55, 134.95/135.05, 135.45/135.55 m), whose extraction has no tie.
     #[test]
     fn volcano_contours_at_lattice_levels_close() {
-        let base = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenarios/volcano.toml"
-        ))
-        .unwrap();
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/volcano.toml");
+        let base = std::fs::read_to_string(path).unwrap();
         let length = |level: f64| {
             let s = parse_scenario(
                 &base,
-                "volcano.toml",
+                path,
                 &[
                     format!("controller.level={level:?}"),
                     "team.count=6".into(),
