@@ -80,7 +80,10 @@ impl PyScenario {
             let mut sets = Vec::with_capacity(pairs.len());
             for (key, value) in &pairs {
                 check_key(key)?;
-                sets.push(format!("{key}={}", toml_literal(&toml_value(key, value, 0)?)));
+                sets.push(format!(
+                    "{key}={}",
+                    toml_literal(&toml_value(key, value, 0)?)
+                ));
             }
             let inner = self.inner.derive(&sets, &self.origin).map_err(|e| {
                 let m = e.to_string();

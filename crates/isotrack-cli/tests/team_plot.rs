@@ -111,14 +111,28 @@ fn team_figures_and_their_numbers() {
     let mut cut: Vec<&str> = original.clone();
     cut.remove(7);
     std::fs::write(out.join("trace.csv"), cut.join("\n") + "\n").unwrap();
-    let o = isotrack(&["plot", out.to_str().unwrap(), "--out", d.path().join("f").to_str().unwrap()]);
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("f").to_str().unwrap(),
+    ]);
     common::assert_fails(&o, 65, &["trace.csv:11:", "vehicle 2's row 2", "missing"]);
     let mut cut: Vec<&str> = original.clone();
     let last = cut.pop().unwrap();
     assert!(last.ends_with(",3"));
     std::fs::write(out.join("trace.csv"), cut.join("\n") + "\n").unwrap();
-    let o = isotrack(&["plot", out.to_str().unwrap(), "--out", d.path().join("f").to_str().unwrap()]);
-    common::assert_fails(&o, 65, &["vehicle 3's rows end", "completed the run", "missing"]);
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("f").to_str().unwrap(),
+    ]);
+    common::assert_fails(
+        &o,
+        65,
+        &["vehicle 3's rows end", "completed the run", "missing"],
+    );
     // Back to the trace with the vehicle cell of another team.
     std::fs::write(out.join("trace.csv"), lines.join("\n") + "\n").unwrap();
     let o = isotrack(&[

@@ -644,13 +644,13 @@ mod tests {
             per += (b - a).norm();
             area2 += a.x * b.y - b.x * a.y;
         }
-        assert!((per - 12.0 * std::f64::consts::SQRT_2).abs() < 1e-9, "{per}");
+        assert!(
+            (per - 12.0 * std::f64::consts::SQRT_2).abs() < 1e-9,
+            "{per}"
+        );
         assert!((area2.abs() - 36.0).abs() < 1e-9, "{area2}");
         let by_distance = IsolineSegments::new(iso.segments().to_vec()).closed_loops(1e-9);
-        assert!(
-            by_distance.iter().all(|l| l.len() < 12),
-            "{by_distance:?}"
-        );
+        assert!(by_distance.iter().all(|l| l.len() < 12), "{by_distance:?}");
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! Reading a run directory.
 
 use crate::PlotError;
-use isotrack_runs::summary::{Ended, Summary, MAX_SUMMARY_BYTES};
 use isotrack_core::numtext::Echo;
+use isotrack_runs::summary::{Ended, Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
 use isotrack_sim::TraceRow;
@@ -136,10 +136,7 @@ impl RunData {
     /// not parse); a team's run is refused unless `team_ok`.
     /// Each row's line in trace.csv comes third.
     #[allow(clippy::type_complexity)]
-    fn read(
-        dir: &Path,
-        team_ok: bool,
-    ) -> Result<(Self, Vec<Option<usize>>, Vec<u64>), PlotError> {
+    fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>, Vec<u64>), PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
         let text =

@@ -758,7 +758,10 @@ mod tests {
             let l = length(tied);
             for near in [tied - 0.05, tied + 0.05] {
                 let m = length(near);
-                assert!((l / m - 1.0).abs() < 0.01, "{tied} m: {l} m vs {near} m: {m} m");
+                assert!(
+                    (l / m - 1.0).abs() < 0.01,
+                    "{tied} m: {l} m vs {near} m: {m} m"
+                );
             }
         }
     }

@@ -382,7 +382,8 @@ fn past_the_largest_stable_gain_saturation_bounds_the_gaps() {
             "{case}"
         );
         assert!(
-            rep.verdict_reason.contains("the speed saturation bounds them")
+            rep.verdict_reason
+                .contains("the speed saturation bounds them")
                 && rep.verdict_reason.contains("[0.25, 0.75] m/s"),
             "{case}: {}",
             rep.verdict_reason
@@ -403,7 +404,10 @@ fn past_the_largest_stable_gain_saturation_bounds_the_gaps() {
 /// vehicle at `v0` = 0.5 m/s. Just under 1, or with the `none` law, no warning.
 #[test]
 fn every_range_dropped_is_warned() {
-    let sets = ["team.ranging.dropout_probability=1.0", "sim.duration_s=20.0"];
+    let sets = [
+        "team.ranging.dropout_probability=1.0",
+        "sim.duration_s=20.0",
+    ];
     let s = circular(&sets);
     let w = isotrack_scenario::check::warnings(&s);
     assert!(
@@ -418,7 +422,10 @@ fn every_range_dropped_is_warned() {
     let run = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
     assert_eq!(run.team.unwrap().speed_range_mps, Some([0.5, 0.5]));
     for quiet in [
-        &["team.ranging.dropout_probability=0.99", "sim.duration_s=20.0"],
+        &[
+            "team.ranging.dropout_probability=0.99",
+            "sim.duration_s=20.0",
+        ],
         &[
             "team.ranging.dropout_probability=1.0",
             "team.spacing=\"none\"",

@@ -598,8 +598,13 @@ mod tests {
         let tol = l / (720.0 * v) + 2.0 * dt + 1e-9;
         let mx = s.revisit_time_max_s.unwrap();
         assert!((mx - ideal).abs() <= tol, "max {mx} vs L/(N v) = {ideal}");
-        let mean = s.revisit_time_mean_s.expect("passes in the window measured back");
-        assert!((mean - ideal).abs() <= tol, "mean {mean} vs L/(N v) = {ideal}");
+        let mean = s
+            .revisit_time_mean_s
+            .expect("passes in the window measured back");
+        assert!(
+            (mean - ideal).abs() <= tol,
+            "mean {mean} vs L/(N v) = {ideal}"
+        );
         assert!((s.revisit_time_ideal_s - ideal).abs() < 1e-12);
     }
 

@@ -282,16 +282,7 @@ mod tests {
     /// 1/0.33 s, each accepted as written. Above `1/dt` (500 Hz) only `1/dt` itself.
     #[test]
     fn a_rate_off_the_steps_says_so_in_hz() {
-        let at = |rate_hz| {
-            Ranging::new(
-                RangingConfig {
-                    rate_hz,
-                    ..cfg()
-                },
-                0.01,
-                0,
-            )
-        };
+        let at = |rate_hz| Ranging::new(RangingConfig { rate_hz, ..cfg() }, 0.01, 0);
         let e = at(3.0).unwrap_err().to_string();
         assert!(
             e.starts_with("team.ranging.rate_hz = 3 Hz: its period 0.333333 s is not a whole number of steps of 0.01 s"),
@@ -311,7 +302,10 @@ mod tests {
             assert!(at(*got).is_ok(), "{got}");
         }
         let e = at(500.0).unwrap_err().to_string();
-        assert!(e.contains("rate_hz = 500 Hz") && e.contains("nearest valid rate is 100 Hz"), "{e}");
+        assert!(
+            e.contains("rate_hz = 500 Hz") && e.contains("nearest valid rate is 100 Hz"),
+            "{e}"
+        );
     }
 
     /// Ideal ranging at 10 Hz with dt = 0.01 s: a sample every 10 steps, the true distances.
