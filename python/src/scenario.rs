@@ -71,6 +71,34 @@ impl PyScenario {
         })
     }
 
+    /// A new scenario with every `(key, value)` of `pairs` set at once (the rules of several
+    /// `--set` in one command line): keys that bound each other (`team.v_min_mps` and
+    /// `vehicle.speed_mps`, say) are checked together, in whatever order they are given, where
+    /// [`set`](Self::set) one at a time checks each against the others' current values.
+    fn set_many(&self, py: Python<'_>, pairs: Vec<(String, Py<PyAny>)>) -> PyResult<Self> {
+        no_panic(|| {
+            let mut sets = Vec::with_capacity(pairs.len());
+            for (key, value) in &pairs {
+                check_key(key)?;
+                sets.push(format!(
+                    "{key}={}",
+                    toml_literal(&toml_value(key, value.bind(py), 0)?)
+                ));
+            }
+            let inner = self.inner.derive(&sets, &self.origin).map_err(|e| {
+                let m = e.to_string();
+                ScenarioErrorPy::new_err(match pairs.as_slice() {
+                    [(_, value)] => as_written(&m, value.bind(py)),
+                    _ => m,
+                })
+            })?;
+            Ok(Self {
+                inner,
+                origin: self.origin.clone(),
+            })
+        })
+    }
+
     /// The level `s_d` the scenario tracks (field units).
     #[getter]
     fn level(&self) -> f64 {

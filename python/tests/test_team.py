@@ -57,6 +57,32 @@ def same(a, b):
 # --- Scenario.run() of a team -------------------------------------------------------------------
 
 
+def test_set_with_a_dict_checks_bounding_keys_together():
+    """att32: one set at a time checks each key against the scenario as it stands, so raising
+    v_min above the current v0 = 0.5 m/s first is refused; a dict sets both at once (the CLI's
+    several --set), in either order, as the command line does."""
+    s = isotrack.Scenario.from_file(str(TEAM))
+    with pytest.raises(isotrack.ScenarioError, match="team.v_min_mps"):
+        s.set("team.v_min_mps", 0.6)
+    for pairs in (
+        {"team.v_min_mps": 0.6, "vehicle.speed_mps": 0.7},
+        {"vehicle.speed_mps": 0.7, "team.v_min_mps": 0.6},
+    ):
+        t = s.set(pairs)
+        assert "v_min_mps = 0.6" in t.to_toml() and "speed_mps = 0.7" in t.to_toml()
+        assert t.to_toml() == s.set("vehicle.speed_mps", 0.7).set("team.v_min_mps", 0.6).to_toml()
+    # Still refused together when the pair itself is wrong, naming the key.
+    with pytest.raises(isotrack.ScenarioError, match="team.v_min_mps"):
+        s.set({"team.v_min_mps": 0.8, "vehicle.speed_mps": 0.7})
+    with pytest.raises(TypeError):
+        s.set({"team.v_min_mps": 0.6}, 0.7)
+    with pytest.raises(TypeError):
+        s.set({1: 0.6})
+    with pytest.raises(TypeError):
+        s.set("team.v_min_mps")
+    assert s.set({}).to_toml() == s.to_toml()
+
+
 def test_team_run_has_every_vehicle_and_the_team_metrics():
     run = isotrack.Scenario.from_file(str(TEAM)).run()
     tr = run.trace
@@ -248,6 +274,12 @@ def test_bad_actions_raise_and_step_nothing(ipz):
     for action, err in bad_cases:
         with pytest.raises(err):
             env.step({**good, "vehicle_2": action})
+    # The bounds are plain numbers (att32: not numpy reprs such as np.float64(-1.0)).
+    with pytest.raises(ValueError) as e:
+        env.step({**good, "vehicle_2": np.array([1.5, 0.5])})
+    assert str(e.value) == (
+        "vehicle_2: the action [1.5, 0.5] is outside the action space [-1.0, 1.0] rad/s x [0.25, 0.75] m/s"
+    ), str(e.value)
     with pytest.raises(KeyError):
         env.step({a: v for a, v in good.items() if a != "vehicle_1"})
     with pytest.raises(KeyError):

@@ -101,6 +101,40 @@ fn team_figures_and_their_numbers() {
         65,
         &["trace.csv row 3", "not one of the team's 4 vehicles"],
     );
+    // att32: a row missing (vehicle 2's at the second recorded time, file line 8: header, four
+    // rows at t = 0, then vehicles 0 and 1) pairs vehicle 2's positions with the others' at
+    // another time: 65 naming the line where its rows go wrong (line 11 then, vehicle 2's next
+    // row, its second row but at the third time); the last row of a vehicle that completed
+    // (vehicle 3's, the file's last line) likewise.
+    let original: Vec<&str> = trace.lines().collect();
+    assert!(original[7].ends_with(",2") && original[11].ends_with(",2"));
+    let mut cut: Vec<&str> = original.clone();
+    cut.remove(7);
+    std::fs::write(out.join("trace.csv"), cut.join("\n") + "\n").unwrap();
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("f").to_str().unwrap(),
+    ]);
+    common::assert_fails(&o, 65, &["trace.csv:11:", "vehicle 2's row 2", "missing"]);
+    let mut cut: Vec<&str> = original.clone();
+    let last = cut.pop().unwrap();
+    assert!(last.ends_with(",3"));
+    std::fs::write(out.join("trace.csv"), cut.join("\n") + "\n").unwrap();
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("f").to_str().unwrap(),
+    ]);
+    common::assert_fails(
+        &o,
+        65,
+        &["vehicle 3's rows end", "completed the run", "missing"],
+    );
+    // Back to the trace with the vehicle cell of another team.
+    std::fs::write(out.join("trace.csv"), lines.join("\n") + "\n").unwrap();
     let o = isotrack(&[
         "report",
         out.to_str().unwrap(),

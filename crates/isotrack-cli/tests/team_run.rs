@@ -99,6 +99,19 @@ fn team_run_without_out_prints_the_team() {
     assert!(o.status.success(), "{}", common::stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("team        4 vehicles"), "{text}");
+    // att32: a team of one has no separation; no unit after `n/a`.
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--set",
+        "sim.duration_s=10",
+        "--set",
+        "team.count=1",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("min separation n/a\n"), "{text}");
+    assert!(!text.contains("n/a m") && !text.contains("n/a s"), "{text}");
 }
 
 /// The `[team]` keys refused with their names (exit 65), never a panic.

@@ -16,6 +16,11 @@ fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4e}"))
 }
 
+/// [`fmt_opt`] with its unit after a number (`n/a` alone, never `n/a m`).
+fn fmt_opt_unit(x: Option<f64>, unit: &str) -> String {
+    x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4e} {unit}"))
+}
+
 /// A few lines a person reads after a run.
 pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
     let m = &r.metrics;
@@ -68,13 +73,13 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
     match &t.team {
         Some(m) => {
             out += &format!(
-                "  gap_cv {}  time_to_even {}  revisit max {} s (ideal {:.2} s)  min separation {} m\n",
+                "  gap_cv {}  time_to_even {}  revisit max {} (ideal {:.2} s)  min separation {}\n",
                 fmt_opt(m.gap_cv),
                 m.time_to_even_s
                     .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
-                fmt_opt(m.revisit_time_max_s),
+                fmt_opt_unit(m.revisit_time_max_s, "s"),
                 m.revisit_time_ideal_s,
-                fmt_opt(m.min_separation_m),
+                fmt_opt_unit(m.min_separation_m, "m"),
             );
         }
         None => {

@@ -21,6 +21,10 @@ use std::sync::OnceLock;
 #[derive(Clone, Debug)]
 pub struct IsolineSegments {
     segments: Vec<(Vec2, Vec2)>,
+    /// For segments from marching squares: the lattice edges each end lies on (an edge's
+    /// index, [`lattice_edge`]), so that [`closed_loops`](Self::closed_loops) joins ends by
+    /// the edge they share, not by distance. Empty for segments given as they are.
+    edges: Vec<(u64, u64)>,
     /// The tree and the largest coordinate magnitude of the end points (m), built on first use.
     tree: OnceLock<(RTree<Indexed>, f64)>,
 }
@@ -61,7 +65,22 @@ impl PointDistance for Indexed {
     }
 }
 
+/// The index of a lattice edge of an `nx`-wide lattice: the edge from sample `(i, j)` to
+/// `(i + 1, j)` (`vertical` false) or to `(i, j + 1)` (true). Two cells sharing an edge name it
+/// alike.
+fn lattice_edge(i: usize, j: usize, nx: usize, vertical: bool) -> u64 {
+    2 * (j as u64 * nx as u64 + i as u64) + u64::from(vertical)
+}
+
 /// Crossing of `level` on the edge from `(pa, va)` to `(pb, vb)`, if the edge straddles it.
+///
+/// The tie rule: a sample equal to the level counts as above it (`v >= level`, as if it
+/// were `level + 0`: a symbolic perturbation), so every edge is straddled or not, alike from
+/// both cells that share it, and a level equal to samples (a DEM's integer elevations, their
+/// interpolated quarter steps) gives the isoline of the level raised by an infinitesimal: its
+/// crossings at such a sample are the sample itself (`t = 0`), and segments of zero length
+/// join the crossings on either side of it. [`IsolineSegments::closed_loops`] joins them by
+/// their lattice edges, so those loops close.
 fn crossing(pa: Vec2, va: f64, pb: Vec2, vb: f64, level: f64) -> Option<Vec2> {
     let (a, b) = (va - level, vb - level);
     if (a < 0.0) == (b < 0.0) {
@@ -102,6 +121,7 @@ impl IsolineSegments {
         let row =
             |j: usize| -> Vec<f64> { (0..nx).map(|i| f(p(i, j)).unwrap_or(f64::NAN)).collect() };
         let mut segments = Vec::new();
+        let mut edges = Vec::new();
         let mut below = if ny > 0 { row(0) } else { Vec::new() };
         for j in 0..ny.saturating_sub(1) {
             let above = row(j + 1);
@@ -116,16 +136,28 @@ impl IsolineSegments {
                     continue;
                 }
                 let mut pts = [Vec2::default(); 4];
+                let mut ids = [0u64; 4];
+                // The cell's edges 0..4: bottom, right, top, left.
+                let cell_edges = [
+                    lattice_edge(i, j, nx, false),
+                    lattice_edge(i + 1, j, nx, true),
+                    lattice_edge(i, j + 1, nx, false),
+                    lattice_edge(i, j, nx, true),
+                ];
                 let mut n = 0;
                 for e in 0..4 {
                     let (a, b) = (c[e], c[(e + 1) % 4]);
                     if let Some(q) = crossing(a.0, a.1, b.0, b.1, level) {
                         pts[n] = q;
+                        ids[n] = cell_edges[e];
                         n += 1;
                     }
                 }
                 match n {
-                    2 => segments.push((pts[0], pts[1])),
+                    2 => {
+                        segments.push((pts[0], pts[1]));
+                        edges.push((ids[0], ids[1]));
+                    }
                     4 => {
                         // Saddle (c0, c2 on one side, c1, c3 on the other): the cell-centre
                         // value decides which diagonal is connected. Centre on c0's side: c0 and
@@ -137,9 +169,11 @@ impl IsolineSegments {
                         if (centre >= level) == first_above {
                             segments.push((pts[0], pts[1]));
                             segments.push((pts[2], pts[3]));
+                            edges.extend([(ids[0], ids[1]), (ids[2], ids[3])]);
                         } else {
                             segments.push((pts[0], pts[3]));
                             segments.push((pts[1], pts[2]));
+                            edges.extend([(ids[0], ids[3]), (ids[1], ids[2])]);
                         }
                     }
                     _ => {}
@@ -147,13 +181,18 @@ impl IsolineSegments {
             }
             below = above;
         }
-        Self::new(segments)
+        Self {
+            segments,
+            edges,
+            tree: OnceLock::new(),
+        }
     }
 
     /// Segments as given (`(start, end)` pairs), indexed for [`Self::distance`].
     pub fn new(segments: Vec<(Vec2, Vec2)>) -> Self {
         Self {
             segments,
+            edges: Vec::new(),
             tree: OnceLock::new(),
         }
     }
@@ -182,17 +221,23 @@ impl IsolineSegments {
     }
 
     /// The segments stitched into closed loops (each a list of vertices, the closing one not
-    /// repeated, at least 3): end points closer than `tolerance_m` are joined (marching squares
-    /// computes a point on an edge shared by two cells from either side, equal to rounding).
-    /// Chains that do not close (the isoline leaves the sampled domain or a no-data region) are
-    /// left out. Each end point is matched through a hash of the `tolerance_m` lattice cell and
-    /// its 8 neighbours: `O(n)` for `n` segments. For the arc coordinate of a team's metrics
+    /// repeated, consecutive equal vertices merged, at least 3). Segments from marching
+    /// squares are joined by the lattice edge their ends lie on (each crossed edge inside the
+    /// lattice is an end of exactly two segments, one per cell, under [`crossing`]'s tie rule),
+    /// so a loop closes even where the level equals samples and several ends meet at one
+    /// point. Segments given as they are ([`new`](Self::new)): end points closer than
+    /// `tolerance_m` are joined (marching squares computes a point on an edge shared by two
+    /// cells from either side, equal to rounding), each matched through a hash of the
+    /// `tolerance_m` lattice cell and its 8 neighbours. Chains that do not close (the isoline
+    /// leaves the sampled domain or a no-data region) are left out. `O(n)` (`O(n log n)` by
+    /// edges) for `n` segments. For the arc coordinate of a team's metrics
     /// (`isotrack_sim::team::arc::PolylineArc`).
     pub fn closed_loops(&self, tolerance_m: f64) -> Vec<Vec<Vec2>> {
         use std::collections::HashMap;
         let segs = &self.segments;
         let n = segs.len();
-        if n == 0 || !(tolerance_m > 0.0 && tolerance_m.is_finite()) {
+        let by_edge = self.edges.len() == n;
+        if n == 0 || !(by_edge || (tolerance_m > 0.0 && tolerance_m.is_finite())) {
             return Vec::new();
         }
         let end = |e: usize| {
@@ -202,6 +247,26 @@ impl IsolineSegments {
                 segs[e / 2].1
             }
         };
+        if by_edge {
+            // End `e` lies on edge `edge_of(e)`; the two ends on an edge are partners.
+            let edge_of = |e: usize| {
+                if e.is_multiple_of(2) {
+                    self.edges[e / 2].0
+                } else {
+                    self.edges[e / 2].1
+                }
+            };
+            let mut order: Vec<(u64, usize)> = (0..2 * n).map(|e| (edge_of(e), e)).collect();
+            order.sort_unstable();
+            let mut partners: Vec<Option<usize>> = vec![None; 2 * n];
+            for run in order.chunk_by(|a, b| a.0 == b.0) {
+                if let [(_, a), (_, b)] = run {
+                    partners[*a] = Some(*b);
+                    partners[*b] = Some(*a);
+                }
+            }
+            return walk_loops(n, &end, |e| partners[e]);
+        }
         let cell = |p: Vec2| {
             (
                 (p.x / tolerance_m).floor() as i64,
@@ -239,39 +304,7 @@ impl IsolineSegments {
             }
             best.map(|(_, o)| o)
         };
-        let mut used = vec![false; n];
-        let mut loops = Vec::new();
-        for start in 0..n {
-            if used[start] {
-                continue;
-            }
-            used[start] = true;
-            let mut pts = vec![segs[start].0];
-            // Walk from the start segment's second end until back at its first.
-            let mut e = 2 * start + 1;
-            let closed = loop {
-                pts.push(end(e));
-                let Some(o) = partner(e) else {
-                    break false;
-                };
-                if o / 2 == start {
-                    break o == 2 * start;
-                }
-                if used[o / 2] {
-                    break false;
-                }
-                used[o / 2] = true;
-                e = o ^ 1;
-            };
-            if closed {
-                // The last point is the start's (joined): not repeated.
-                pts.pop();
-                if pts.len() >= 3 {
-                    loops.push(pts);
-                }
-            }
-        }
-        loops
+        walk_loops(n, &end, partner)
     }
 
     /// Distance from `p` to the nearest segment, `None` if there are none (or `p` is not
@@ -315,6 +348,55 @@ impl IsolineSegments {
         let d = to_segment(best.a, best.b, p).norm();
         d.is_finite().then_some(d)
     }
+}
+
+/// The closed loops of `n` segments whose end `e` (`2k`: segment `k`'s first, `2k + 1`: its
+/// second) is at `end(e)` and is joined to end `partner(e)`: each walk starts at the lowest
+/// segment not yet used and goes from its second end until back at its first; a chain that
+/// breaks is left out. Consecutive equal vertices (a segment of zero length, at a sample equal
+/// to the level) are merged.
+fn walk_loops(
+    n: usize,
+    end: &dyn Fn(usize) -> Vec2,
+    partner: impl Fn(usize) -> Option<usize>,
+) -> Vec<Vec<Vec2>> {
+    let mut used = vec![false; n];
+    let mut loops = Vec::new();
+    for start in 0..n {
+        if used[start] {
+            continue;
+        }
+        used[start] = true;
+        let mut pts = vec![end(2 * start)];
+        // Walk from the start segment's second end until back at its first.
+        let mut e = 2 * start + 1;
+        let closed = loop {
+            let p = end(e);
+            if pts.last() != Some(&p) {
+                pts.push(p);
+            }
+            let Some(o) = partner(e) else {
+                break false;
+            };
+            if o / 2 == start {
+                break o == 2 * start;
+            }
+            if used[o / 2] {
+                break false;
+            }
+            used[o / 2] = true;
+            e = o ^ 1;
+        };
+        if closed {
+            // The last point is the start's (joined, equal or within the tolerance; merged
+            // already if equal to the one before): not repeated.
+            pts.pop();
+            if pts.len() >= 3 {
+                loops.push(pts);
+            }
+        }
+    }
+    loops
 }
 
 /// The most samples [`IsolineSegments::for_grid`] takes of a grid: 2^22 (about 4.2 million
@@ -536,6 +618,39 @@ mod tests {
             cut_corners(saddle_cell([1.0, -2.0, 1.0, -2.0], 0.0)),
             vec![(0.0, 0.0), (1.0, 1.0)]
         );
+    }
+
+    /// A level equal to samples: `|x| + |y|` on the integer lattice at level 3. The tie rule
+    /// (a sample at the level counts as above) makes the isoline the diamond `|x| + |y| = 3`
+    /// through the 12 lattice points on it, some crossings at a tied sample of zero length
+    /// (at (1, 2) four segment ends meet: two edges, each crossed at the sample). Joined by
+    /// lattice edges the loop closes: 12 vertices, each on the diamond, perimeter `4 * 3
+    /// sqrt(2)`, area `2 * 3^2`. Stitched by distance (the segments as given, no edges) the
+    /// ends at such a point are paired ambiguously and the loop is lost.
+    #[test]
+    fn a_level_equal_to_samples_closes_its_loop() {
+        let iso = IsolineSegments::from_samples(Vec2::new(-5.0, -5.0), 1.0, 11, 11, 3.0, |p| {
+            Some(p.x.abs() + p.y.abs())
+        });
+        let loops = iso.closed_loops(1e-9);
+        assert_eq!(loops.len(), 1, "{loops:?}");
+        let l = &loops[0];
+        assert_eq!(l.len(), 12, "{l:?}");
+        let n = l.len();
+        let (mut per, mut area2) = (0.0, 0.0);
+        for k in 0..n {
+            let (a, b) = (l[k], l[(k + 1) % n]);
+            assert!((a.x.abs() + a.y.abs() - 3.0).abs() < 1e-12, "{a:?}");
+            per += (b - a).norm();
+            area2 += a.x * b.y - b.x * a.y;
+        }
+        assert!(
+            (per - 12.0 * std::f64::consts::SQRT_2).abs() < 1e-9,
+            "{per}"
+        );
+        assert!((area2.abs() - 36.0).abs() < 1e-9, "{area2}");
+        let by_distance = IsolineSegments::new(iso.segments().to_vec()).closed_loops(1e-9);
+        assert!(by_distance.iter().all(|l| l.len() < 12), "{by_distance:?}");
     }
 
     #[test]

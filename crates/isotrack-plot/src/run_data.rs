@@ -1,6 +1,7 @@
 //! Reading a run directory.
 
 use crate::PlotError;
+use isotrack_core::numtext::Echo;
 use isotrack_runs::summary::{Ended, Summary, MAX_SUMMARY_BYTES};
 use isotrack_runs::trace::TRACE_COLUMNS;
 use isotrack_scenario::{load_scenario, Scenario};
@@ -41,7 +42,7 @@ impl RunData {
     /// `summary.json` and scenario shared). A `vehicle` cell that is not a vehicle of the team
     /// (`0..team.vehicle_count`) is a data error naming its line.
     pub fn load_team(dir: &Path) -> Result<Vec<Self>, PlotError> {
-        let (all, ids) = Self::read(dir, true)?;
+        let (all, ids, lines) = Self::read(dir, true)?;
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
             return Ok(vec![all]);
         };
@@ -51,16 +52,52 @@ impl RunData {
                 dir.display()
             )));
         }
-        let mut traces = vec![Vec::new(); n];
-        for (row, (t, id)) in all.trace.iter().zip(&ids).enumerate() {
-            let Some(tr) = id.and_then(|i| traces.get_mut(i)) else {
+        let mut traces: Vec<Vec<TraceRow>> = vec![Vec::new(); n];
+        // The rows come a recorded time at a time, every running vehicle's row at each: a
+        // vehicle's k-th row is at the k-th time (a vehicle that ends leaves for good). A row
+        // missing (or one too many) would pair one vehicle's positions with the others' at
+        // another time in every figure: refused, naming the line.
+        let mut times: Vec<f64> = Vec::new();
+        let mut last_line = vec![0u64; n];
+        for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
+            let Some(i) = id.filter(|&i| i < n) else {
                 return Err(PlotError::Data(format!(
                     "{}: trace.csv row {}: the vehicle column is not one of the team's {n} vehicles",
                     dir.display(),
                     row + 1
                 )));
             };
-            tr.push(*t);
+            if times.last() != Some(&t.t_s) {
+                times.push(t.t_s);
+            }
+            let k = traces[i].len();
+            if times.get(k) != Some(&t.t_s) {
+                return Err(PlotError::Data(format!(
+                    "{}: trace.csv:{line}: vehicle {i}'s row {} is at t = {} s, but recorded time {} is {}: a row of the team's trace is missing or out of order (each vehicle has a row at every recorded time until it ends)",
+                    dir.display(),
+                    k + 1,
+                    Echo(t.t_s),
+                    k + 1,
+                    times.get(k).map_or("not there".to_string(), |x| format!("t = {} s", Echo(*x)))
+                )));
+            }
+            traces[i].push(*t);
+            last_line[i] = *line;
+        }
+        // A vehicle that completed the run has a row at the last recorded time.
+        if let Ended::Run(end) = &all.summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                let rows = traces[i].len();
+                if v.outcome == "completed" && rows < times.len() {
+                    return Err(PlotError::Data(format!(
+                        "{}: trace.csv:{}: vehicle {i}'s rows end at t = {} s, but it completed the run (summary.json) and the trace goes on to t = {} s: a row of the team's trace is missing",
+                        dir.display(),
+                        last_line[i],
+                        traces[i].last().map_or("?".to_string(), |r| Echo(r.t_s).to_string()),
+                        Echo(times[times.len() - 1])
+                    )));
+                }
+            }
         }
         // The rows are in `traces` now: each vehicle clones the rest only, without the lists
         // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies).
@@ -97,7 +134,9 @@ impl RunData {
 
     /// The run and each row's `vehicle` cell (`None` when there is no such column or it does
     /// not parse); a team's run is refused unless `team_ok`.
-    fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>), PlotError> {
+    /// Each row's line in trace.csv comes third.
+    #[allow(clippy::type_complexity)]
+    fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>, Vec<u64>), PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
         let text =
@@ -145,10 +184,12 @@ impl RunData {
         let meas = headers.iter().position(|h| h == s_measured);
         let vehicle_col = headers.iter().position(|h| h == "vehicle");
         let mut vehicles = Vec::new();
+        let mut lines = Vec::new();
         let mut trace = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
             let line = rec.position().map_or(0, |p| p.line());
+            lines.push(line);
             let mut v = [0.0; 7];
             for (k, &i) in idx.iter().enumerate() {
                 v[k] = rec.get(i).and_then(|t| t.parse().ok()).ok_or_else(|| {
@@ -215,6 +256,7 @@ impl RunData {
                 scenario,
             },
             vehicles,
+            lines,
         ))
     }
 

@@ -84,9 +84,12 @@ impl<'a> TeamTracks<'a> {
     }
 
     /// The revisit time along the isoline over the steady window (from `t0_s`): for each of
-    /// [`REVISIT_BINS`] equal arcs (centres in `[0, L)`, along the travel), the longest time it
-    /// went without a vehicle entering it, the window's open ends included (every bin crossed
-    /// between two rows counts as visited at the later row), s.
+    /// [`REVISIT_BINS`] equal arcs (centres in `[0, L)`, along the travel), its longest age over
+    /// the window, the age being the time since a vehicle last entered it, that visit counted
+    /// wherever it was (before the window too; a bin not entered yet counts from the first
+    /// row), the open interval at the last row included (every bin crossed between two rows
+    /// counts as visited at the later row), s: `summary.json`'s `revisit_time_max_s` is the
+    /// largest of them (docs/TEAMS.md).
     pub fn revisit_max(&self, t0_s: f64) -> Vec<(f64, f64)> {
         let l = self.length_m();
         let bins = REVISIT_BINS;
@@ -98,13 +101,12 @@ impl<'a> TeamTracks<'a> {
         else {
             return vec![];
         };
-        let mut last = vec![t0_s; bins];
+        let t_start = self.vehicles[0].trace[0].t_s;
+        let mut last = vec![t_start; bins];
         let mut worst = vec![0.0f64; bins];
         for k in 1..self.rows {
             let t = self.vehicles[0].trace[k].t_s;
-            if t < t0_s {
-                continue;
-            }
+            let in_window = t >= t0_s;
             for i in 0..self.vehicles.len() {
                 let (Some(a), Some(b)) = (self.along(i, k - 1), self.along(i, k)) else {
                     continue;
@@ -118,7 +120,9 @@ impl<'a> TeamTracks<'a> {
                 let lastb = ((a + d) / width).floor() as i64;
                 for j in first..=lastb.min(first + bins as i64 - 1) {
                     let j = j.rem_euclid(bins as i64) as usize;
-                    worst[j] = worst[j].max(t - last[j]);
+                    if in_window {
+                        worst[j] = worst[j].max(t - last[j]);
+                    }
                     last[j] = t;
                 }
             }

@@ -726,4 +726,43 @@ mod tests {
         assert!((mc - mp).abs() < 0.02 * mc, "{mc} {mp}");
         assert!((tc.time_to_even_s.unwrap() - tp.time_to_even_s.unwrap()).abs() < 2.0);
     }
+
+    /// att32 and the volcano task's 135.1 m: the DEM's integer elevations (and their
+    /// interpolated quarter steps) put the levels 134.5, 135 and 135.5 m exactly on samples of
+    /// the refined lattice, where the ends of marching squares' segments meet several at one
+    /// point and a stitch by distance lost the loop. Joined by their lattice edges (the tie
+    /// rule of `isotrack_fields::isoline`), each closes; the isoline's length is continuous in
+    /// the level, so each is within 1 % of the loops at the untied levels either side
+    /// (134.45/134.55, 134.95/135.05, 135.45/135.55 m), whose extraction has no tie.
+    #[test]
+    fn volcano_contours_at_lattice_levels_close() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/volcano.toml");
+        let base = std::fs::read_to_string(path).unwrap();
+        let length = |level: f64| {
+            let s = parse_scenario(
+                &base,
+                path,
+                &[
+                    format!("controller.level={level:?}"),
+                    "team.count=6".into(),
+                    "team.spread={ along = \"line\", step_m = 10.0 }".into(),
+                ],
+            )
+            .unwrap();
+            match s.team_isoline() {
+                TeamIsolineModel::Polyline(p) => p.length_m(),
+                _ => panic!("no closed loop at {level} m"),
+            }
+        };
+        for tied in [134.5, 135.0, 135.5] {
+            let l = length(tied);
+            for near in [tied - 0.05, tied + 0.05] {
+                let m = length(near);
+                assert!(
+                    (l / m - 1.0).abs() < 0.01,
+                    "{tied} m: {l} m vs {near} m: {m} m"
+                );
+            }
+        }
+    }
 }

@@ -39,8 +39,8 @@ pub use run::{
     GradientFn, IsolineDistanceFn, Oracles, Outcome, RunResult, Sample, StepPlan, StepPlanError,
 };
 pub use sensor::{
-    whole_steps, Sensor, SensorConfig, SensorError, StepsError, MAX_SAMPLES_IN_FLIGHT, MAX_STEPS,
-    SENSOR_VALUE_RANGE,
+    nearest_valid_rates, whole_steps, Sensor, SensorConfig, SensorError, StepsError,
+    MAX_SAMPLES_IN_FLIGHT, MAX_STEPS, SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
 pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads};

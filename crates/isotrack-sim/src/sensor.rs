@@ -13,7 +13,7 @@
 //! `e` needs `e = (1 - a)(r dt + e)`, `a = 1 - exp(-dt/tau)`; tested). With `dt << tau` the
 //! difference, `r dt / 2`, is small: 0.005 r at the default `dt = 0.01 s`.
 
-use isotrack_core::numtext::{Echo, NumDown};
+use isotrack_core::numtext::{Echo, Num, NumDown};
 use isotrack_core::Measurement;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -387,6 +387,53 @@ impl Sensor {
             }
         }
         Some(Measurement { t_s, value })
+    }
+}
+
+/// The valid sampling rates nearest `rate_hz` at step `dt_s`, as a sentence: `1/(k dt)` for the
+/// whole step counts `k = floor(n)` (the next rate above) and `k = ceil(n)` (the next below)
+/// round the period's `n = 1/(rate_hz dt_s)` steps, kept in `1..=MAX_STEPS` (a rate above
+/// `1/dt` has only the one below: one step per period). Each rate is written as the shortest
+/// decimal that is itself valid (a rate rounded to six digits, `3.0303` for `1/0.33 s`, would be
+/// refused again: the period must be whole to 1e-9 relative, [`whole_steps`]).
+pub fn nearest_valid_rates(rate_hz: f64, dt_s: f64) -> String {
+    let n = 1.0 / (rate_hz * dt_s);
+    let max = MAX_STEPS as f64;
+    let mut ks: Vec<f64> = [n.floor(), n.ceil()]
+        .into_iter()
+        .map(|k| {
+            if k.is_finite() {
+                k.clamp(1.0, max)
+            } else {
+                max
+            }
+        })
+        .collect();
+    ks.dedup();
+    // The lower rate (more steps) first.
+    ks.sort_by(|a, b| b.total_cmp(a));
+    ks.dedup();
+    let text: Vec<String> = ks
+        .iter()
+        .map(|&k| {
+            let exact = 1.0 / (k * dt_s);
+            let valid = (0..17)
+                .filter_map(|d| format!("{exact:.d$e}").parse::<f64>().ok())
+                .find(|&v| whole_steps(1.0 / v, dt_s) == Ok(k as u64))
+                .unwrap_or(exact);
+            format!(
+                "{} Hz ({} step{} of {} s, a period of {} s)",
+                Echo(valid),
+                Num(k),
+                if k == 1.0 { "" } else { "s" },
+                Echo(dt_s),
+                Num(k * dt_s)
+            )
+        })
+        .collect();
+    match text.as_slice() {
+        [one] => format!("the nearest valid rate is {one}"),
+        _ => format!("the nearest valid rates are {}", text.join(" and ")),
     }
 }
 

@@ -129,6 +129,8 @@ def _refuse_non_regular(paths: "list[str]") -> None:
 
 #: The largest scenario or sweep text read, bytes (the CLI's limit for scenario and sweep files).
 _MAX_TEXT_BYTES = 1 << 20
+# `Scenario.set`'s missing value (None is not a value a key takes, but a sentinel says so plainly).
+_UNSET = object()
 
 
 def _check_text_size(name: str, text: str) -> None:
@@ -417,18 +419,39 @@ class Scenario:
         _check_text_size("text", text)
         return Scenario(_native.Scenario.from_toml(text))
 
-    def set(self, key: str, value: Any) -> "Scenario":
-        """A new scenario with the dotted ``key`` set to ``value`` (the rules of ``--set``).
+    def set(self, key: Any, value: Any = _UNSET) -> "Scenario":
+        """A new scenario with the dotted ``key`` set to ``value`` (the rules of ``--set``), or
+        with every ``key: value`` of a dict set at once (``set({"team.v_min_mps": 0.6,
+        "vehicle.speed_mps": 0.7})``, the rules of several ``--set`` in one command: keys that
+        bound each other are checked together, in any order; one ``set`` at a time checks each
+        against the scenario as it stands).
 
         ``key``: dotted parts of letters, digits, ``_`` and ``-`` (at most 8), never read as
         TOML text. ``value``: a bool, a 64-bit integer (numpy's too), a finite float, a str, or
         a list or tuple of them nested at most 8 deep. Anything else raises
         :class:`ScenarioError` (a ``ValueError``) saying what was wrong."""
-        if not isinstance(key, str):
-            raise TypeError(f"key must be a dotted key (a str), got {key!r:.80} ({_type_name(key)})")
-        if isinstance(value, np.ndarray) and value.ndim == 0:
-            value = value[()]  # a 0-d array is its scalar (np.array(3.0) as 3.0, np.array(5) as 5)
-        new = Scenario(self._native.set(key, value))
+        if isinstance(key, dict):
+            if value is not _UNSET:
+                raise TypeError("set(dict) takes no value: the dict holds them")
+            pairs = []
+            for k, v in key.items():
+                if not isinstance(k, str):
+                    raise TypeError(f"key must be a dotted key (a str), got {k!r:.80} ({_type_name(k)})")
+                if isinstance(v, np.ndarray) and v.ndim == 0:
+                    v = v[()]
+                pairs.append((k, v))
+            if not pairs:
+                return self
+            new = Scenario(self._native.set_many(pairs))
+            key = ", ".join(k for k, _ in pairs)
+        else:
+            if not isinstance(key, str):
+                raise TypeError(f"key must be a dotted key (a str), got {key!r:.80} ({_type_name(key)})")
+            if value is _UNSET:
+                raise TypeError(f"set({key!r:.80}) needs a value")
+            if isinstance(value, np.ndarray) and value.ndim == 0:
+                value = value[()]  # a 0-d array is its scalar (np.array(3.0) as 3.0, np.array(5) as 5)
+            new = Scenario(self._native.set(key, value))
         # Held to the CLI's limit for scenario text, so that what is set also pickles (a pickled
         # scenario is its TOML) and saves as a scenario file the CLI reads.
         if len(new.to_toml().encode("utf-8")) > _MAX_TEXT_BYTES:

@@ -1,7 +1,7 @@
 """Type stubs for the isotrack package."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -48,7 +48,10 @@ class Scenario:
     def from_file(path: str) -> Scenario: ...
     @staticmethod
     def from_toml(text: str) -> Scenario: ...
+    @overload
     def set(self, key: str, value: Any) -> Scenario: ...
+    @overload
+    def set(self, key: Dict[str, Any]) -> Scenario: ...
     def to_toml(self) -> str: ...
     @property
     def level(self) -> float: ...

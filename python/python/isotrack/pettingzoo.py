@@ -162,7 +162,7 @@ class TeamParallelEnv(ParallelEnv):
         if not (np.all(x >= self._low) and np.all(x <= self._high)):
             raise ValueError(
                 f"{agent}: the action {x.tolist()} is outside the action space "
-                f"[{self._low[0]!r}, {self._high[0]!r}] rad/s x [{self._low[1]!r}, {self._high[1]!r}] m/s"
+                f"[{float(self._low[0])!r}, {float(self._high[0])!r}] rad/s x [{float(self._low[1])!r}, {float(self._high[1])!r}] m/s"
             )
         return x
 

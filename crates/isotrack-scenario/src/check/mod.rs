@@ -1462,6 +1462,7 @@ fn warnings_from(s: &Scenario, sampled: &SampledReport) -> Vec<String> {
     if let Some(flat) = flat_start(s) {
         w.push(flat.warning());
     }
+    w.extend(team::ranging_warning(s));
     w
 }
 

@@ -106,6 +106,22 @@ pub struct SpacingLoopReport {
     pub slowest_time_constant_s: Option<f64>,
     /// The same in continuous time, `1/(k_v c lambda_1)`, s.
     pub slowest_time_constant_continuous_s: Option<f64>,
+    /// Past `k_v*` (the linear loop unstable; null otherwise): how far the speed saturation lets
+    /// a gap swing about the even spacing, m. The unstable mode grows until the commanded
+    /// speeds saturate; then each vehicle runs at `team.v_min_mps` or `team.v_max_mps`, so a
+    /// gap (`g_i' = v_{i+1} - v_i`) moves at most `(v_max - v_min) T` per ranging period, and
+    /// the fastest mode (`m = floor(N/2)`, neighbours at opposite speeds, the first to go
+    /// unstable) reverses `q + 1` periods after a gap crosses the even spacing (the range it
+    /// acts on is `d = (q + f) T` old): a bounded oscillation of amplitude up to
+    /// `(v_max - v_min)(T + d)` (for `d = 0`, the relay map `a' = a - (v_max - v_min) T sgn a`
+    /// flips every period within `(v_max - v_min) T` of even). The team stays spread, the
+    /// speeds switch between the bounds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub saturated_gap_amplitude_m: Option<f64>,
+    /// The same as a gap CV bound, `saturated_gap_amplitude_m N/L`, when the isoline's length
+    /// `L` is known (a circle; null otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub saturated_gap_cv_max: Option<f64>,
     /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
     /// discovery phase), each with its key.
     pub not_modelled: Vec<String>,
@@ -187,6 +203,8 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         slowest_mode_m: None,
         slowest_time_constant_s: None,
         slowest_time_constant_continuous_s: None,
+        saturated_gap_amplitude_m: None,
+        saturated_gap_cv_max: None,
         not_modelled: vec![],
         note: String::new(),
     };
@@ -250,6 +268,14 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
             .filter(|t| t.is_finite());
     rep.slowest_time_constant_continuous_s =
         Some(slowest_mode_time_constant_s(n, k_v, c)).filter(|t| t.is_finite());
+    if rep.stable == Some(false) {
+        let amplitude = (team.v_max_mps - team.v_min_mps) * (period_s + delay_s);
+        rep.saturated_gap_amplitude_m = Some(amplitude);
+        rep.saturated_gap_cv_max = s
+            .team_arc()
+            .map(|a| amplitude * n as f64 / (std::f64::consts::TAU * a.radius_m))
+            .filter(|x| x.is_finite());
+    }
     rep.not_modelled = spacing_not_modelled(s, team, n);
     rep
 }
@@ -299,6 +325,33 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
         ));
     }
     out
+}
+
+/// A team whose every range is dropped (`team.ranging.dropout_probability = 1`): no vehicle
+/// ever ranges a neighbour, so a law that needs ranges does nothing. Warned, not refused: the
+/// run is well defined (`range_balance` holds every vehicle at `v0`, the `none` law, since a
+/// neighbour that never answers counts as at the range limit on both sides, or as no range at
+/// all; a discovered ring finds no neighbour), and a sweep of the dropout up to 1 keeps its
+/// last cell as that control. `None` when some range gets through or no law uses them.
+pub fn ranging_warning(s: &Scenario) -> Option<String> {
+    let team = s.spec().team.as_ref()?;
+    let ranges = matches!(team.law, SpacingLaw::RangeBalance { .. });
+    let discovered = matches!(team.ring, RingMode::Discover(_));
+    if team.ranging.dropout_probability < 1.0 || team.count() < 2 || !(ranges || discovered) {
+        return None;
+    }
+    let mut what = vec![];
+    if ranges {
+        what.push("range_balance holds every vehicle at v0 (as team.spacing = \"none\": the spacing stays as deployed)");
+    }
+    if discovered {
+        what.push("team.ring = \"discovered\" finds no neighbour");
+    }
+    Some(format!(
+        "team.ranging.dropout_probability = {}: every range is dropped, so no vehicle ever ranges a neighbour: {}",
+        Echo(team.ranging.dropout_probability),
+        what.join("; ")
+    ))
 }
 
 /// The speeds the tracking check covers: `v0` for `none`, else a grid over `[v_min, v_max]`
@@ -424,11 +477,16 @@ fn team_verdict(
         return (
             Verdict::Fails,
             format!(
-                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay",
+                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay, so the gaps do not converge; the speed saturation bounds them: the speeds switch between team.v_min_mps and team.v_max_mps = [{}, {}] m/s and the gaps oscillate about the even spacing by up to (v_max - v_min)(T + d) = {} m{}",
                 Echo(sp.k_v_per_s.unwrap_or(0.0)),
                 sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
                 Echo(team.ranging.rate_hz),
-                Echo(team.ranging.delay_s)
+                Echo(team.ranging.delay_s),
+                Echo(team.v_min_mps),
+                Echo(team.v_max_mps),
+                Num(sp.saturated_gap_amplitude_m.unwrap_or(f64::NAN)),
+                sp.saturated_gap_cv_max
+                    .map_or(String::new(), |c| format!(" (a gap CV up to {})", Num(c)))
             ),
         );
     }
@@ -556,10 +614,11 @@ impl TeamCheckReport {
             if !sp.note.is_empty() {
                 out.push(format!("  note: {}", sp.note));
             }
-            let num =
-                |x: Option<f64>| x.map_or("n/a (does not decay)".into(), |v| Num(v).to_string());
+            let num = |x: Option<f64>| {
+                x.map_or("none (does not decay)".into(), |v| format!("{} s", Num(v)))
+            };
             out.push(format!(
-                "  slowest mode (m = {}): time constant {} s sampled (-T/ln rho), {} s continuous (m = 1: 1/(k_v c lambda_1))",
+                "  slowest mode (m = {}): time constant {} sampled (-T/ln rho), {} continuous (m = 1: 1/(k_v c lambda_1))",
                 sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
                 num(sp.slowest_time_constant_s),
                 num(sp.slowest_time_constant_continuous_s)

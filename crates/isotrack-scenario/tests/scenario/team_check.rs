@@ -314,3 +314,125 @@ fn spacing_verdict_agrees_with_simulation() {
     eprintln!("{}", table.join("\n"));
     assert_eq!(disagree, 0, "{}", table.join("\n"));
 }
+
+/// att32: past `k_v*` the check says what simulation shows: the linear loop is unstable, so
+/// the gaps do not converge (a stable gain's steady gap CV is far smaller), but the speed
+/// saturation bounds them: the speeds reach both `team.v_min_mps` and `team.v_max_mps` and the
+/// steady window's gap CV stays under the report's bound `(v_max - v_min)(T + d) N/L` (the
+/// relay map `a' = a - (v_max - v_min) T sgn a` of the fastest mode, `q + 1` periods per
+/// reversal with a delay of `q` periods). Cases without delay (3 and 14 times k_v* at 10 Hz,
+/// 3 times at 2 Hz) and with one and three periods of delay, from an even start on the circle
+/// of team-circular-4 (L = 2 pi 10 ln 2).
+#[test]
+fn past_the_largest_stable_gain_saturation_bounds_the_gaps() {
+    let l = 2.0 * PI * 10.0 * std::f64::consts::LN_2;
+    let scenario = |sets: &[String]| {
+        let mut sets = sets.to_vec();
+        sets.extend([
+            "sim.duration_s=150.0".to_string(),
+            "controller.max_turn_rate_radps=1.0".into(),
+            "team.spread.step_rad=1.5707963267948966".into(),
+        ]);
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        circular(&sets)
+    };
+    let gap_cv = |s: &Scenario| {
+        let run = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+        let team = run.team.unwrap();
+        (team.gap_cv.unwrap(), team.speed_range_mps)
+    };
+    // The stable loop's reference: k_v*/1.5 at 10 Hz, no delay (k_v* = 5/cos(pi/4)).
+    let s = scenario(&[format!("team.k_v={}", 5.0 / (PI / 4.0).cos() / 1.5)]);
+    let rep = check(&s, None).team.unwrap();
+    assert_eq!(rep.spacing.stable, Some(true));
+    assert_eq!(rep.spacing.saturated_gap_amplitude_m, None);
+    let (stable_cv, _) = gap_cv(&s);
+    for (rate_hz, delay_periods, factor) in [
+        (10.0, 0.0, 3.0),
+        (10.0, 0.0, 14.0),
+        (2.0, 0.0, 3.0),
+        (10.0, 1.0, 1.5),
+        (10.0, 3.0, 2.0),
+    ] {
+        let t_s: f64 = 1.0 / rate_hz;
+        let d = delay_periods * t_s;
+        let ranging = [
+            format!("team.ranging.rate_hz={rate_hz}"),
+            format!("team.ranging.delay_s={d}"),
+        ];
+        let k_star = check(&scenario(&ranging), None)
+            .team
+            .unwrap()
+            .spacing
+            .max_stable_k_v_per_s
+            .unwrap();
+        let mut sets = ranging.to_vec();
+        sets.push(format!("team.k_v={}", factor * k_star));
+        let s = scenario(&sets);
+        let rep = check(&s, None).team.unwrap();
+        let case = format!("{rate_hz} Hz, delay {d} s, k_v = {factor} k_v*");
+        assert_eq!(rep.verdict, Verdict::Fails, "{case}");
+        // v_max - v_min = 0.75 - 0.25.
+        let amplitude = 0.5 * (t_s + d);
+        let got = rep.spacing.saturated_gap_amplitude_m.unwrap();
+        assert!(close(got, amplitude, 1e-12), "{case}: {got} vs {amplitude}");
+        let cv_max = amplitude * 4.0 / l;
+        assert!(
+            close(rep.spacing.saturated_gap_cv_max.unwrap(), cv_max, 1e-9),
+            "{case}"
+        );
+        assert!(
+            rep.verdict_reason
+                .contains("the speed saturation bounds them")
+                && rep.verdict_reason.contains("[0.25, 0.75] m/s"),
+            "{case}: {}",
+            rep.verdict_reason
+        );
+        let (cv, speeds) = gap_cv(&s);
+        assert!(cv <= cv_max, "{case}: gap CV {cv} past the bound {cv_max}");
+        // Not converging: far above the stable gain's, and a good share of the bound.
+        assert!(
+            cv > 10.0 * stable_cv && cv > 0.1 * cv_max,
+            "{case}: gap CV {cv} (stable {stable_cv}, bound {cv_max})"
+        );
+        assert_eq!(speeds, Some([0.25, 0.75]), "{case}");
+    }
+}
+
+/// att32: `team.ranging.dropout_probability = 1` drops every range: warned (by `run` and
+/// `check`, the one list), and the run shows what the warning says: range_balance holds every
+/// vehicle at `v0` = 0.5 m/s. Just under 1, or with the `none` law, no warning.
+#[test]
+fn every_range_dropped_is_warned() {
+    let sets = [
+        "team.ranging.dropout_probability=1.0",
+        "sim.duration_s=20.0",
+    ];
+    let s = circular(&sets);
+    let w = isotrack_scenario::check::warnings(&s);
+    assert!(
+        w.iter().any(|w| w.contains("every range is dropped")
+            && w.contains("range_balance holds every vehicle at v0")),
+        "{w:?}"
+    );
+    assert!(check(&s, None)
+        .warnings
+        .iter()
+        .any(|c| c.contains("every range is dropped")));
+    let run = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    assert_eq!(run.team.unwrap().speed_range_mps, Some([0.5, 0.5]));
+    for quiet in [
+        &[
+            "team.ranging.dropout_probability=0.99",
+            "sim.duration_s=20.0",
+        ],
+        &[
+            "team.ranging.dropout_probability=1.0",
+            "team.spacing=\"none\"",
+        ],
+    ] as [&[&str]; 2]
+    {
+        let w = isotrack_scenario::check::warnings(&circular(quiet));
+        assert!(!w.iter().any(|w| w.contains("dropped")), "{quiet:?}: {w:?}");
+    }
+}

@@ -50,10 +50,15 @@ pub struct TeamSummary {
     /// First sample time from which the gap CV stays at or below `even_gap_cv` to the end
     /// (`None`: not evenly spread at the end).
     pub time_to_even_s: Option<f64>,
-    /// Longest time a point of the isoline went without a vehicle passing, in the steady window
-    /// (the open intervals at the window's ends included), s.
+    /// Longest age of a point of the isoline over the steady window, s: the age is the time
+    /// since a vehicle last passed the point, that pass counted wherever it was (before the
+    /// window too), and a point not passed yet counts from the run's start. So an interval
+    /// between passes that ends in the window counts whole, as does the open one at the run's
+    /// end; a window shorter than the interval between passes does not censor it.
     pub revisit_time_max_s: Option<f64>,
-    /// Mean time between consecutive passes over a point of the isoline, in the steady window, s.
+    /// Mean time between consecutive passes over a point of the isoline, over the passes in the
+    /// steady window, each measured back to the pass before it wherever that was (before the
+    /// window too), s. `None` when no pass in the window had one before it.
     pub revisit_time_mean_s: Option<f64>,
     /// The ideal revisit time of an evenly spread team at the nominal speed, `L/(N v0)`, s.
     pub revisit_time_ideal_s: f64,
@@ -102,7 +107,7 @@ pub struct TeamMetrics {
     /// Time of the first sample of the current run of samples at or below `even_gap_cv`.
     even_since: Option<f64>,
     last_s: Vec<f64>,
-    /// Per bin: time of the last pass (NaN: none in the window).
+    /// Per bin: time of the last pass, over the whole run (NaN: none yet).
     bin_last: Vec<f64>,
     revisit_max: f64,
     revisit_sum: f64,
@@ -280,7 +285,7 @@ impl TeamMetrics {
             if self.moving {
                 self.last_p[i] = positions[i];
             }
-            if !in_window || prev.is_nan() {
+            if prev.is_nan() {
                 continue;
             }
             // The bins entered between the last sample and this one (the shorter way round).
@@ -291,21 +296,25 @@ impl TeamMetrics {
             }
             let forward = d > 0.0;
             let mut b = b0;
-            let t_w = self.t_window.unwrap_or(t);
             loop {
                 b = if forward {
                     (b + 1) % m
                 } else {
                     (b + m - 1) % m
                 };
+                // Before the window a pass only dates the bin's last visit; in it, the
+                // interval it ends counts whole (its start may be before the window), and a
+                // bin not passed before counts from the run's start (t = 0).
                 let last = self.bin_last[b];
-                if last.is_nan() {
-                    self.revisit_max = self.revisit_max.max(t - t_w);
-                } else {
-                    let gap = t - last;
-                    self.revisit_max = self.revisit_max.max(gap);
-                    self.revisit_sum += gap;
-                    self.revisit_count += 1;
+                if in_window {
+                    if last.is_nan() {
+                        self.revisit_max = self.revisit_max.max(t);
+                    } else {
+                        let gap = t - last;
+                        self.revisit_max = self.revisit_max.max(gap);
+                        self.revisit_sum += gap;
+                        self.revisit_count += 1;
+                    }
                 }
                 self.bin_last[b] = t;
                 if b == b1 {
@@ -382,11 +391,13 @@ impl TeamMetrics {
             self.length_m
         };
         let (revisit_max, revisit_mean) = match self.t_window {
-            Some(t_w) => {
+            Some(_) => {
+                // The open interval at the run's end: the age of each bin then (from the run's
+                // start for a bin never passed).
                 let mut mx = self.revisit_max;
                 for &last in &self.bin_last {
                     let open = if last.is_nan() {
-                        self.t_last - t_w
+                        self.t_last
                     } else {
                         self.t_last - last
                     };
@@ -546,6 +557,55 @@ mod tests {
         let last = 2.0 * PI * radius((steps - 1) as f64 * dt);
         assert!((lo - 20.0 * PI).abs() < 1e-9 && (hi - last).abs() < 1e-9);
         assert!((s.revisit_time_ideal_s - mean_l / 4.0).abs() < 1e-9);
+    }
+
+    /// Issue 32, att32 F2: a perfectly even team of `N` at `v` on a circle of length `L`, its
+    /// steady window (10 s) far shorter than the interval between passes `L/(N v)` (31.4 s):
+    /// every point's age since its last pass (that pass before the window or in it) peaks at
+    /// `L/(N v)` just before the next, so the longest revisit time is `L/(N v)` and every pass
+    /// in the window ends an interval of `L/(N v)` (the mean), to a bin's crossing time `L/(M v)`
+    /// plus a sample. A window measuring only passes inside it saw no point passed twice.
+    #[test]
+    fn a_window_shorter_than_the_revisit_interval_is_not_censored() {
+        let r = 20.0;
+        let arc = CircleArc {
+            center_m: Vec2::new(0.0, 0.0),
+            radius_m: r,
+        };
+        let (n, v, dt) = (4usize, 1.0, 0.05);
+        let l = 2.0 * PI * r;
+        let ideal = l / (n as f64 * v);
+        let cfg = TeamMetricsConfig {
+            every_steps: 2,
+            steady_state_start_step: 1800, // 90 s into a 100 s run
+            even_gap_cv: 0.05,
+            revisit_bins: 720,
+        };
+        let mut m = TeamMetrics::new(cfg, n, l, dt, v);
+        for k in 0..=2000u64 {
+            let t = k as f64 * dt;
+            let pos: Vec<Vec2> = (0..n)
+                .map(|i| {
+                    let th = v * t / r + 2.0 * PI * i as f64 / n as f64;
+                    Vec2::new(r * th.cos(), r * th.sin())
+                })
+                .collect();
+            if m.due() {
+                m.observe(k, &arc, &pos, &[v; 4], &[true; 4]);
+            }
+        }
+        let s = m.finish();
+        let tol = l / (720.0 * v) + 2.0 * dt + 1e-9;
+        let mx = s.revisit_time_max_s.unwrap();
+        assert!((mx - ideal).abs() <= tol, "max {mx} vs L/(N v) = {ideal}");
+        let mean = s
+            .revisit_time_mean_s
+            .expect("passes in the window measured back");
+        assert!(
+            (mean - ideal).abs() <= tol,
+            "mean {mean} vs L/(N v) = {ideal}"
+        );
+        assert!((s.revisit_time_ideal_s - ideal).abs() < 1e-12);
     }
 
     /// Two points swapping order mid-window: not preserved; evenly spread from t = 0: 0.

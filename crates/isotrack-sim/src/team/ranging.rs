@@ -3,8 +3,8 @@
 //! a maximum range, dropouts and a delivery delay, from its own seeded streams. `O(1)` per vehicle
 //! per sample (two ranges), memory bounded by the delay (the samples in flight).
 
-use crate::sensor::{whole_steps, StepsError};
-use isotrack_core::numtext::Echo;
+use crate::sensor::{nearest_valid_rates, whole_steps, StepsError};
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::Vec2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -53,6 +53,23 @@ pub enum RangingError {
         value: f64,
         /// What it must be.
         expected: &'static str,
+    },
+    /// A rate whose period is not a whole number (>= 1) of steps: the rate as given, its
+    /// period rounded, and the nearest valid rates ([`nearest_valid_rates`], the sensor's rule).
+    #[error(
+        "team.ranging.rate_hz = {} Hz: its period {} s {reason} of {} s (at least one); {}",
+        Echo(*.rate_hz),
+        Num(1.0 / *.rate_hz),
+        Echo(*.dt_s),
+        nearest_valid_rates(*.rate_hz, *.dt_s)
+    )]
+    RateNotWholeSteps {
+        /// The rate, Hz.
+        rate_hz: f64,
+        /// The step, s.
+        dt_s: f64,
+        /// What is wrong.
+        reason: StepsError,
     },
     /// A time not a whole number of steps.
     #[error("team.ranging.{key} = {} s {reason} of {} s", Echo(*.value), Echo(*.dt_s))]
@@ -142,14 +159,14 @@ impl Ranging {
                 reason,
             })
         };
-        let every = steps("rate_hz", 1.0 / cfg.rate_hz)?;
+        let rate_error = |reason| RangingError::RateNotWholeSteps {
+            rate_hz: cfg.rate_hz,
+            dt_s,
+            reason,
+        };
+        let every = whole_steps(1.0 / cfg.rate_hz, dt_s).map_err(rate_error)?;
         if every == 0 {
-            return Err(RangingError::NotWholeSteps {
-                key: "rate_hz",
-                value: cfg.rate_hz,
-                dt_s,
-                reason: StepsError::NotWhole,
-            });
+            return Err(rate_error(StepsError::NotWhole));
         }
         let delay_steps = steps("delay_s", cfg.delay_s)?;
         let mut dropout = ChaCha8Rng::seed_from_u64(seed);
@@ -257,6 +274,38 @@ mod tests {
             rate_hz: 10.0,
             ..RangingConfig::default()
         }
+    }
+
+    /// att32: a rate whose period is no whole number of steps is named by its key with its
+    /// value in Hz (not its period under the rate's key, in 16 digits), the period rounded, and
+    /// the nearest valid rates `1/(k dt)`: 3 Hz at 0.01 s is 33.3 steps, so 1/0.34 s and
+    /// 1/0.33 s, each accepted as written. Above `1/dt` (500 Hz) only `1/dt` itself.
+    #[test]
+    fn a_rate_off_the_steps_says_so_in_hz() {
+        let at = |rate_hz| Ranging::new(RangingConfig { rate_hz, ..cfg() }, 0.01, 0);
+        let e = at(3.0).unwrap_err().to_string();
+        assert!(
+            e.starts_with("team.ranging.rate_hz = 3 Hz: its period 0.333333 s is not a whole number of steps of 0.01 s"),
+            "{e}"
+        );
+        assert!(!e.contains("0.3333333"), "{e}");
+        let rates: Vec<f64> = e
+            .split_once("nearest valid rates are ")
+            .unwrap()
+            .1
+            .split(" and ")
+            .map(|p| p.split(' ').next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(rates.len(), 2, "{e}");
+        for (got, want) in rates.iter().zip([1.0 / 0.34, 1.0 / 0.33]) {
+            assert!((got / want - 1.0).abs() < 1e-8, "{got} vs {want}");
+            assert!(at(*got).is_ok(), "{got}");
+        }
+        let e = at(500.0).unwrap_err().to_string();
+        assert!(
+            e.contains("rate_hz = 500 Hz") && e.contains("nearest valid rate is 100 Hz"),
+            "{e}"
+        );
     }
 
     /// Ideal ranging at 10 Hz with dt = 0.01 s: a sample every 10 steps, the true distances.
