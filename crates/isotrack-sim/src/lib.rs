@@ -43,5 +43,7 @@ pub use sensor::{
     SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
-pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads};
+pub use team::{
+    simulate_team, Group, MemberSpeeds, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads,
+};
 pub use trace::{NoTrace, TraceRow, TraceSink};
