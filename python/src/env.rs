@@ -145,7 +145,8 @@ pub(crate) fn check_reward_bounds(
 }
 
 /// Each a finite number > 0, not subnormal (the reward's `error_scale`, a turn-rate bound).
-pub(crate) const POSITIVE: &str = "finite and > 0, not subnormal (at least 2.2250738585072014e-308)";
+pub(crate) const POSITIVE: &str =
+    "finite and > 0, not subnormal (at least 2.2250738585072014e-308)";
 /// Each a finite number >= 0, 0 or not subnormal (a reward's weight).
 pub(crate) const NON_NEGATIVE: &str =
     "finite and >= 0, 0 or not subnormal (at least 2.2250738585072014e-308)";

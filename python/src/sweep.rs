@@ -135,11 +135,13 @@ pub(crate) fn column_kinds(
             }),
     );
     if team {
-        kinds.extend(
-            isotrack_runs::sweep::rows::TEAM_COLUMNS
-                .iter()
-                .map(|c| if *c == "order_preserved" { "bool" } else { "float" }),
-        );
+        kinds.extend(isotrack_runs::sweep::rows::TEAM_COLUMNS.iter().map(|c| {
+            if *c == "order_preserved" {
+                "bool"
+            } else {
+                "float"
+            }
+        }));
     }
     kinds
 }

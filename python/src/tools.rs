@@ -357,7 +357,12 @@ pub fn sweep_cells_with(
         if team {
             // Each vehicle flies its own controller: the factory is called once per vehicle.
             let fields = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
-                Err(e) => isotrack_runs::sweep::rows::team_row_fields(&sweep.plan, id, Err(e), String::new()),
+                Err(e) => isotrack_runs::sweep::rows::team_row_fields(
+                    &sweep.plan,
+                    id,
+                    Err(e),
+                    String::new(),
+                ),
                 Ok(scenario) => {
                     let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
                     let mut objs = Vec::with_capacity(n);
