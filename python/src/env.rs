@@ -98,16 +98,62 @@ pub struct PyEnvBatch {
     last_sample_t_s: f64,
 }
 
-fn invalid(name: &str, v: f64, why: &str) -> PyErr {
+pub(crate) fn invalid(name: &str, v: f64, why: &str) -> PyErr {
     PyValueError::new_err(format!(
         "{name} must be {why}, got {}",
         isotrack_core::numtext::Echo(v)
     ))
 }
 
+/// The reward settings' bounds, one rule for the Gymnasium environments and the PettingZoo
+/// team environment: an episode's rewards stay finite (issue 30, att30b item 7: error_scale =
+/// 2.3e-308 gave -inf; att30c-15 for the team). `|eps|` is at most twice the fields' value bound
+/// and every weighted term of a reward at most its weight, so with `terms` rewards summed (an
+/// episode's samples, times the agents for a team) each term's sum stays below
+/// [`MAX_EPISODE_REWARD`]: `error_scale >= 2 MAX_FIELD_VALUE terms / MAX_EPISODE_REWARD`, each
+/// weight at most `MAX_EPISODE_REWARD / terms`. `what` names the terms in the message.
+pub(crate) fn check_reward_bounds(
+    scale: f64,
+    weights: &[(&str, f64)],
+    terms: f64,
+    what: &str,
+) -> PyResult<()> {
+    let min_scale =
+        2.0 * isotrack_scenario::resolve::ranges::MAX_FIELD_VALUE * terms / MAX_EPISODE_REWARD;
+    if scale < min_scale {
+        return Err(PyValueError::new_err(format!(
+            "error_scale must be at least {} field units (|eps| / error_scale over the {} {what} stays below {}), got {}",
+            isotrack_core::numtext::Num(min_scale),
+            isotrack_core::numtext::Num(terms),
+            isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
+            isotrack_core::numtext::Echo(scale)
+        )));
+    }
+    let max_weight = MAX_EPISODE_REWARD / terms;
+    for (name, w) in weights {
+        if *w > max_weight {
+            return Err(PyValueError::new_err(format!(
+                "{name} must be at most {} (over the {} {what} the reward stays below {}), got {}",
+                isotrack_core::numtext::Num(max_weight),
+                isotrack_core::numtext::Num(terms),
+                isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
+                isotrack_core::numtext::Echo(*w)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Each a finite number > 0, not subnormal (the reward's `error_scale`, a turn-rate bound).
+pub(crate) const POSITIVE: &str =
+    "finite and > 0, not subnormal (at least 2.2250738585072014e-308)";
+/// Each a finite number >= 0, 0 or not subnormal (a reward's weight).
+pub(crate) const NON_NEGATIVE: &str =
+    "finite and >= 0, 0 or not subnormal (at least 2.2250738585072014e-308)";
+
 /// Whether `x` is 0 or a normal number: a subnormal (below 2.2e-308, `1e-310`) is no setting
 /// anyone means, and dividing by one overflows (a reward of `-inf` from `error_scale = 1e-310`).
-fn zero_or_normal(x: f64) -> bool {
+pub(crate) fn zero_or_normal(x: f64) -> bool {
     x == 0.0 || x.is_normal()
 }
 
@@ -136,9 +182,6 @@ impl PyEnvBatch {
             .or(s.max_turn_rate_radps())
             .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
         // Each a finite number, and not subnormal (a step of 1e-310 divides into infinity).
-        const POSITIVE: &str = "finite and > 0, not subnormal (at least 2.2250738585072014e-308)";
-        const NON_NEGATIVE: &str =
-            "finite and >= 0, 0 or not subnormal (at least 2.2250738585072014e-308)";
         if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
             return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
         }
@@ -170,36 +213,16 @@ impl PyEnvBatch {
         }
         let duration = s.spec().sim.duration_s;
         let rate = s.spec().sensor.rate_hz;
-        // An episode's rewards stay finite (issue 30, att30b item 7: error_scale = 2.3e-308
-        // gave -inf): |eps| <= 2 x the fields' value bound, so each term of an episode of N
-        // samples stays below MAX_EPISODE_REWARD / N, and so does their sum.
         let samples = ((duration * rate).floor() + 1.0).max(1.0);
-        let min_scale = 2.0 * isotrack_scenario::resolve::ranges::MAX_FIELD_VALUE * samples
-            / MAX_EPISODE_REWARD;
-        if scale < min_scale {
-            return Err(PyValueError::new_err(format!(
-                "error_scale must be at least {} field units (|eps| / error_scale over the {} samples of an episode stays below {}), got {}",
-                isotrack_core::numtext::Num(min_scale),
-                isotrack_core::numtext::Num(samples),
-                isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
-                isotrack_core::numtext::Echo(scale)
-            )));
-        }
-        let max_weight = MAX_EPISODE_REWARD / samples;
-        for (name, w) in [
-            ("effort_weight", effort_weight),
-            ("termination_penalty", termination_penalty.unwrap_or(0.0)),
-        ] {
-            if w > max_weight {
-                return Err(PyValueError::new_err(format!(
-                    "{name} must be at most {} (over the {} samples of an episode the reward stays below {}), got {}",
-                    isotrack_core::numtext::Num(max_weight),
-                    isotrack_core::numtext::Num(samples),
-                    isotrack_core::numtext::Num(MAX_EPISODE_REWARD),
-                    isotrack_core::numtext::Echo(w)
-                )));
-            }
-        }
+        check_reward_bounds(
+            scale,
+            &[
+                ("effort_weight", effort_weight),
+                ("termination_penalty", termination_penalty.unwrap_or(0.0)),
+            ],
+            samples,
+            "samples of an episode",
+        )?;
         let plan = s.plan();
         // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
         // values): the last sample step is the last multiple of `every` within the run.

@@ -26,7 +26,7 @@ pub(crate) fn sweep_cells(
     use std::sync::atomic::{AtomicU64, Ordering};
     let prepared = isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name))
         .map_err(sweep_failure)?;
-    let kinds = column_kinds(&prepared.plan);
+    let kinds = column_kinds(&prepared.plan, prepared.base.spec().team.is_some());
     let cancel = AtomicBool::new(false);
     let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));
     let report = |d: u64, t: u64| {
@@ -80,8 +80,12 @@ fn sweep_failure(f: isotrack_runs::Failure) -> PyErr {
 /// that a column's kind does not depend on which runs it holds): `"int"` for `run_id`,
 /// `samples`, a derived `sim.seed` and a swept key whose values are all integers; `"float"` for
 /// the metrics, `[random]` keys and swept keys of numbers; `"bool"` for swept booleans; `"str"`
-/// for `outcome`, `outcome_detail`, `warnings` and any other swept key.
-pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'static str> {
+/// for `outcome`, `outcome_detail`, `warnings` and any other swept key. A team's sweep (`team`)
+/// ends with the team columns: `"float"`, `order_preserved` `"bool"`.
+pub(crate) fn column_kinds(
+    plan: &isotrack_scenario::sweep::SweepPlan,
+    team: bool,
+) -> Vec<&'static str> {
     let kind = |values: &mut dyn Iterator<Item = Option<&toml::Value>>| {
         let (mut ints, mut floats, mut bools, mut n) = (0, 0, 0, 0);
         for v in values {
@@ -130,5 +134,14 @@ pub(crate) fn column_kinds(plan: &isotrack_scenario::sweep::SweepPlan) -> Vec<&'
                 _ => "float",
             }),
     );
+    if team {
+        kinds.extend(isotrack_runs::sweep::rows::TEAM_COLUMNS.iter().map(|c| {
+            if *c == "order_preserved" {
+                "bool"
+            } else {
+                "float"
+            }
+        }));
+    }
     kinds
 }

@@ -92,12 +92,19 @@ fn team_columns<'py>(py: Python<'py>, rows: &Rows, flying: bool) -> PyResult<Bou
 /// `team` object and the `vehicles` array. `record_rate_hz` overrides
 /// `output.record_rate_hz`. Ctrl-C raises `KeyboardInterrupt` at once (the run, which cannot be
 /// cancelled, finishes on its own thread, its answer dropped).
+///
+/// `controllers`: one Python controller per vehicle (`update(t_s, value) -> omega`, the listed
+/// order), each steering its vehicle in place of the scenario's tracking law and seeing only
+/// its own vehicle's samples; each is `reset()` first if it has the method. The run then goes
+/// on this thread (the controllers call into Python); the first exception of any of them stops
+/// every vehicle (their commands NaN: `diverged`) and is raised, as is Ctrl-C.
 #[pyfunction]
-#[pyo3(signature = (scenario, record_rate_hz=None))]
+#[pyo3(signature = (scenario, record_rate_hz=None, controllers=None))]
 pub fn team_run<'py>(
     py: Python<'py>,
     scenario: &PyScenario,
     record_rate_hz: Option<f64>,
+    controllers: Option<Vec<Py<PyAny>>>,
 ) -> PyResult<(String, Bound<'py, PyDict>, PyScenario)> {
     crate::guard::no_panic(|| {
         let s = with_record_rate(scenario, record_rate_hz)?;
@@ -107,13 +114,19 @@ pub fn team_run<'py>(
             ));
         };
         let flown = s.clone();
-        let (result, rows) = crate::guard::detached(py, move || {
-            let log = RefCell::new(Rows::new());
-            let mut sinks = sinks(&log, count);
-            let r = flown.run_team(&mut sinks);
-            drop(sinks);
-            (r, log.into_inner())
-        })?;
+        let (result, rows) = match controllers {
+            None => crate::guard::detached(py, move || {
+                let log = RefCell::new(Rows::new());
+                let mut sinks = sinks(&log, count);
+                let r = flown.run_team(&mut sinks);
+                drop(sinks);
+                (r, log.into_inner())
+            })?,
+            Some(objs) => {
+                let (r, rows) = run_team_python(py, &flown, objs, true)?;
+                (Some(r), rows)
+            }
+        };
         let result = result
             .expect("the scenario has a team")
             .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))?;
@@ -130,10 +143,102 @@ pub fn team_run<'py>(
     })
 }
 
+/// What the Python controllers of a team share while it runs: the watch for Ctrl-C and the
+/// first exception any of them raised (after which every one answers NaN).
+struct TeamStop {
+    watch: crate::guard::SignalWatch,
+    error: Option<PyErr>,
+}
+
+/// One vehicle's Python controller in a team ([`run_team_python`]).
+struct TeamPyController<'a> {
+    inner: crate::controller::PyController,
+    stop: &'a std::sync::Mutex<TeamStop>,
+}
+
+impl isotrack_core::IsolineController for TeamPyController<'_> {
+    fn update(&mut self, m: &isotrack_core::Measurement) -> f64 {
+        {
+            let mut st = self.stop.lock().unwrap_or_else(|e| e.into_inner());
+            if st.error.is_some() || !st.watch.keep_going() {
+                return f64::NAN;
+            }
+        }
+        let w = self.inner.update(m);
+        if let Some(e) = self.inner.error.take() {
+            let mut st = self.stop.lock().unwrap_or_else(|e| e.into_inner());
+            st.error.get_or_insert(e);
+            return f64::NAN;
+        }
+        w
+    }
+    fn reset(&mut self) {}
+}
+
+/// A team flown by Python controllers, one per vehicle (`objs`, each `reset()` first when it
+/// has the method), on this thread with the GIL released between their calls, its trace
+/// recorded when `record`. The first exception (a controller's, or Ctrl-C's
+/// `KeyboardInterrupt`) is raised after the run.
+pub(crate) fn run_team_python(
+    py: Python<'_>,
+    s: &Scenario,
+    objs: Vec<Py<PyAny>>,
+    record: bool,
+) -> PyResult<(Result<TeamResult, isotrack_sim::TeamError>, Rows)> {
+    let count = s.spec().team.as_ref().map_or(0, |t| t.count());
+    if objs.len() != count {
+        return Err(PyValueError::new_err(format!(
+            "{} controllers for a team of {count}: give one per vehicle",
+            objs.len()
+        )));
+    }
+    for o in &objs {
+        if o.bind(py).hasattr("reset")? {
+            o.call_method0(py, "reset")?;
+        }
+    }
+    let stop = std::sync::Mutex::new(TeamStop {
+        watch: crate::guard::SignalWatch::new(),
+        error: None,
+    });
+    let limit = s.max_turn_rate_radps();
+    let ctrls: Vec<TeamPyController<'_>> = objs
+        .into_iter()
+        .map(|obj| TeamPyController {
+            inner: crate::controller::PyController {
+                obj,
+                error: None,
+                max_turn_rate_radps: limit,
+            },
+            stop: &stop,
+        })
+        .collect();
+    let (r, rows) = py.detach(|| {
+        let log = RefCell::new(Rows::new());
+        let mut sinks = sinks(&log, if record { count } else { 0 });
+        let r = s.run_team_with(ctrls, &mut sinks);
+        drop(sinks);
+        (r, log.into_inner())
+    });
+    let st = stop.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(e) = st.error.or(st.watch.error) {
+        return Err(e);
+    }
+    py.check_signals()?;
+    let r = r.ok_or_else(|| PyValueError::new_err("not a team scenario"))?;
+    Ok((r, rows))
+}
+
 /// Whether the scenario has a `[team]` section.
 #[pyfunction]
 pub fn is_team(scenario: &PyScenario) -> bool {
     scenario.inner.spec().team.is_some()
+}
+
+/// The team's size (`None` without `[team]`).
+#[pyfunction]
+pub fn team_count(scenario: &PyScenario) -> Option<usize> {
+    scenario.inner.spec().team.as_ref().map(|t| t.count())
 }
 
 /// Writes a team's run directory as `isotrack run --out` does: `trace.csv` with the `vehicle`
@@ -320,12 +425,11 @@ fn gcd(a: u64, b: u64) -> u64 {
 }
 
 fn check_weight(name: &str, v: f64) -> PyResult<f64> {
-    if v.is_finite() && v >= 0.0 && (v == 0.0 || v.is_normal()) {
+    use crate::env::{invalid, zero_or_normal, NON_NEGATIVE};
+    if v.is_finite() && v >= 0.0 && zero_or_normal(v) {
         Ok(v)
     } else {
-        Err(PyValueError::new_err(format!(
-            "{name} must be finite and >= 0 (0 or not subnormal), got {v:?}"
-        )))
+        Err(invalid(name, v, NON_NEGATIVE))
     }
 }
 
@@ -353,6 +457,12 @@ impl PyTeamEnv {
                  (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
             ));
         }
+        if !team.vehicles.is_empty() {
+            return Err(PyValueError::new_err(
+                "[[team.vehicles]]: per-vehicle overrides are flown by Scenario.run() and `isotrack run`; \
+                 the environment's agents share one speed envelope and sensor for now (docs/TEAMS.md)",
+            ));
+        }
         let omax = max_turn_rate_radps
             .or(s.max_turn_rate_radps())
             .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
@@ -365,12 +475,26 @@ impl PyTeamEnv {
             .or(s.spec().controller.pi_isoline().map(|p| p.c2))
             .unwrap_or(1.0);
         if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
-            return Err(PyValueError::new_err(format!(
-                "error_scale must be finite and > 0, got {scale:?}"
-            )));
+            return Err(crate::env::invalid(
+                "error_scale",
+                scale,
+                crate::env::POSITIVE,
+            ));
         }
         let spacing_weight = check_weight("spacing_weight", spacing_weight)?;
         let effort_weight = check_weight("effort_weight", effort_weight)?;
+        // The Gymnasium environments' rule (one function): every agent's reward of every step
+        // of the episode, at most one step per engine step, summed, stays finite.
+        let steps = s.plan().n_steps as f64 + 1.0;
+        crate::env::check_reward_bounds(
+            scale,
+            &[
+                ("spacing_weight", spacing_weight),
+                ("effort_weight", effort_weight),
+            ],
+            steps * team.count() as f64,
+            "steps x agents of an episode",
+        )?;
         let vehicle = DubinsVariableSpeed {
             min_speed_mps: team.v_min_mps,
             max_speed_mps: team.v_max_mps,

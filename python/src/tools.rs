@@ -341,7 +341,8 @@ pub fn sweep_cells_with(
     use isotrack_runs::sweep::prepared::PreparedSweep;
     use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
-    let kinds = crate::sweep::column_kinds(&sweep.plan);
+    let team = sweep.base.spec().team.is_some();
+    let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
     let total = sweep.plan.total();
@@ -353,6 +354,41 @@ pub fn sweep_cells_with(
     };
     report(0)?;
     for id in 0..total {
+        if team {
+            // Each vehicle flies its own controller: the factory is called once per vehicle.
+            let fields = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
+                Err(e) => isotrack_runs::sweep::rows::team_row_fields(
+                    &sweep.plan,
+                    id,
+                    Err(e),
+                    String::new(),
+                ),
+                Ok(scenario) => {
+                    let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
+                    let mut objs = Vec::with_capacity(n);
+                    for _ in 0..n {
+                        let native = Py::new(
+                            py,
+                            PyScenario {
+                                inner: scenario.clone(),
+                                origin: format!("sweep {} run {id}", sweep.label),
+                            },
+                        )?;
+                        objs.push(factory.call1(py, (native,))?);
+                    }
+                    let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
+                    isotrack_runs::sweep::rows::team_row_fields(
+                        &sweep.plan,
+                        id,
+                        Ok(Some(r)),
+                        String::new(),
+                    )
+                }
+            };
+            rows.push(fields);
+            report(id + 1)?;
+            continue;
+        }
         let result = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
             Err(e) => Err(e),
             Ok(scenario) => {

@@ -1,6 +1,7 @@
 """Teams from Python (issue 32 item 7, docs/TEAMS.md): Scenario.run() of a [team] scenario (the
-trace with its `vehicle` column, run.vehicles, run.team), Run.save byte for byte as
-`isotrack run --out`, and the PettingZoo ParallelEnv (its API test, the built-in laws fed back
+trace with its `vehicle` column, run.vehicles, run.team), a Python law flying every vehicle (bit
+for bit the built-in law it reproduces), sweeps of a team with the team columns (the CLI's cells),
+Run.save byte for byte as `isotrack run --out`, and the PettingZoo ParallelEnv (its API test, the built-in laws fed back
 reproducing Scenario.run() exactly, bad actions refused, determinism)."""
 
 import math
@@ -126,13 +127,196 @@ def test_single_vehicle_runs_are_unchanged():
         run.vehicle_trace(0)
 
 
-def test_team_run_refuses_a_python_controller():
-    class C:
+class PidLaw:
+    """The built-in `pid` law in Python, operation for operation (backward difference,
+    rectangle-rule integral, `kd eps' + kp eps + ki integral`): floats are IEEE doubles, so it
+    answers what the built-in answers, bit for bit."""
+
+    def __init__(self, level, kp, ki, kd):
+        self.level, self.kp, self.ki, self.kd = level, kp, ki, kd
+        self.calls = 0
+        self.reset()
+
+    def reset(self):
+        self.last = None  # (t, eps) of the derivative estimator
+        self.eps_dot = 0.0
+        self.last_t = None
+        self.integral = 0.0
+
+    def update(self, t_s, value):
+        self.calls += 1
+        eps = value - self.level
+        if self.last is None:
+            self.last = (t_s, eps)
+            self.eps_dot = 0.0
+        else:
+            dt = t_s - self.last[0]
+            if not (math.isnan(dt) or dt <= 0.0 or not math.isfinite(eps)):
+                self.eps_dot = (eps - self.last[1]) / dt
+                self.last = (t_s, eps)
+        dt = 0.0 if self.last_t is None else max(t_s - self.last_t, 0.0)
+        self.last_t = t_s
+        if math.isfinite(eps):
+            self.integral += dt * eps
+        return self.kd * self.eps_dot + self.kp * eps + self.ki * self.integral
+
+
+PID_GAINS = {"kp": 3.0, "ki": 0.2, "kd": 10.0}
+
+
+def pid_team(duration_s=20.0):
+    """short_team() flown by the built-in `pid` law (the PI-like law's linearisation: kd = kp_DY,
+    kp = kp_DY c1/c2 + ki_DY, ki = ki_DY c1/c2)."""
+    text = TEAM.read_text()
+    head, rest = text.split("[controller]", 1)
+    rest = rest[rest.index("[sim]"):]
+    law = "[controller]\nkind = \"pid\"\nlevel = 10.0\n" + "".join(f"{k} = {v}\n" for k, v in PID_GAINS.items())
+    s = isotrack.Scenario.from_toml(head + law + "\n" + rest)
+    for k, v in [
+        ("sim.duration_s", duration_s),
+        ("controller.max_turn_rate_radps", 1.0),
+        ("sensor.rate_hz", 10.0),
+        ("sensor.noise_std", 0.01),
+        ("team.ranging.noise_std_m", 0.05),
+        ("team.ranging.dropout_probability", 0.2),
+        ("team.ranging.delay_s", 0.2),
+    ]:
+        s = s.set(k, v)
+    return s
+
+
+def test_a_python_law_flies_the_team_as_the_builtin_law_bit_for_bit():
+    sc = pid_team()
+    builtin = sc.run()
+    # One object: every vehicle flies its own deep copy (the object itself is not flown).
+    one = PidLaw(sc.level, **PID_GAINS)
+    by_copy = sc.run(controller=one)
+    assert one.calls == 0
+    # A list: one per vehicle, as given.
+    laws = [PidLaw(sc.level, **PID_GAINS) for _ in range(4)]
+    by_list = sc.run(controller=laws)
+    # 10 Hz for 20 s: each vehicle's law answered its own 201 samples.
+    assert [c.calls for c in laws] == [201] * 4
+    for run in (by_copy, by_list):
+        assert set(run.trace) == set(builtin.trace)
+        for k in builtin.trace:
+            assert same(run.trace[k], builtin.trace[k]), k
+        assert run.team == builtin.team
+        assert run.vehicles == builtin.vehicles
+        assert run.summary["controller"]["kind"] == "python"
+        assert run.summary["controller"]["class"].endswith("PidLaw")
+    # The noisy sensors make it a real test: the vehicles' measurements differ from the truth.
+    tr = builtin.trace
+    assert np.nanmax(np.abs(tr["s_measured"] - tr["s"])) > 0.005
+
+
+def test_a_team_controller_is_checked_and_its_error_raised():
+    sc = short_team(duration_s=5.0)
+
+    class Zero:
         def update(self, t, v):
             return 0.0
 
-    with pytest.raises(ValueError, match="team"):
-        short_team().run(controller=C())
+    with pytest.raises(ValueError, match="3 controllers for a team of 4"):
+        sc.run(controller=[Zero(), Zero(), Zero()])
+    with pytest.raises(TypeError, match=r"controller\[1\]"):
+        sc.run(controller=[Zero(), object(), Zero(), Zero()])
+
+    class Boom:
+        def __init__(self):
+            self.n = 0
+
+        def update(self, t, v):
+            if t >= 1.0:
+                raise RuntimeError("boom at one second")
+            return 0.0
+
+    with pytest.raises(RuntimeError, match="boom at one second"):
+        sc.run(controller=Boom())
+
+
+def team_sweep_text(extra=""):
+    return (
+        f"scenario = {str(TEAM)!r}\n[base]\nsim.duration_s = 60.0\n{extra}"
+        "[grid]\nteam.spacing = [\"none\", \"range_balance\"]\nteam.count = [3, 4]\n"
+    )
+
+
+def test_a_team_sweep_has_the_team_columns_as_the_cli_writes_them(tmp_path):
+    res = isotrack.sweep(team_sweep_text(), threads=2)
+    cols = list(res)
+    assert cols[-7:] == [
+        "gap_cv", "time_to_even_s", "revisit_time_max_s", "revisit_time_mean_s",
+        "revisit_time_ideal_s", "min_separation_m", "order_preserved",
+    ]
+    assert res["gap_cv"].dtype == np.float64
+    assert isinstance(res["order_preserved"], np.ma.MaskedArray)
+    # The ideal revisit time L / (N v0) for N = 3, 4 (from the geometry, not the engine).
+    l = 2 * math.pi * RADIUS_M
+    for n, ideal in zip(res["team.count"], res["revisit_time_ideal_s"]):
+        assert abs(ideal - l / (n * 0.5)) < 1e-9 * ideal
+    # `none` keeps the deployed cluster (0.3 rad apart): its gap CV, exactly as geometry says.
+    for law, n, cv in zip(res["team.spacing"], res["team.count"], res["gap_cv"]):
+        if law == "none":
+            gaps = [0.3] * (n - 1) + [2 * math.pi - 0.3 * (n - 1)]
+            mean = 2 * math.pi / n
+            want = math.sqrt(sum((g - mean) ** 2 for g in gaps) / n) / mean
+            assert abs(cv - want) < 1e-3 * want, (n, cv, want)
+    # The CLI's results.csv, cell for cell.
+    exe = cli()
+    sw = tmp_path / "team.toml"
+    sw.write_text(team_sweep_text())
+    out = tmp_path / "out"
+    subprocess.run([exe, "sweep", str(sw), "--out", str(out)], check=True, capture_output=True)
+    import csv
+
+    with open(out / "results.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == cols
+    for i, row in enumerate(rows[1:]):
+        for k, cell in zip(cols, row):
+            v = res[k][i]
+            if k == "order_preserved":
+                assert str(bool(v)).lower() == cell
+            elif res[k].dtype.kind == "f":
+                assert (cell == "" and np.isnan(v)) or float(cell) == v, (k, cell, v)
+            else:
+                assert str(v) == cell, (k, cell, v)
+
+
+def test_a_team_sweep_with_a_python_law_is_the_builtin_sweep():
+    text = TEAM.read_text()
+    head, rest = text.split("[controller]", 1)
+    rest = rest[rest.index("[sim]"):]
+    law = "[controller]\nkind = \"pid\"\nlevel = 10.0\n" + "".join(f"{k} = {v}\n" for k, v in PID_GAINS.items())
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        p = Path(d) / "pid-team.toml"
+        p.write_text(head + law + "\n" + rest)
+        sweep = (
+            f"scenario = {str(p)!r}\n[base]\nsim.duration_s = 30.0\nsensor.rate_hz = 10.0\n"
+            "[grid]\nteam.spacing = [\"none\", \"range_balance\"]\n"
+        )
+        built = isotrack.sweep(sweep, threads=1)
+        made = []
+
+        def factory(sc):
+            made.append(sc.level)
+            return PidLaw(sc.level, **PID_GAINS)
+
+        mine = isotrack.sweep(sweep, controller_factory=factory)
+    # One controller per vehicle of each run.
+    assert len(made) == 2 * 4
+    assert list(mine) == list(built)
+    for k in built:
+        if k == "warnings":
+            continue
+        a, b = built[k], mine[k]
+        if a.dtype.kind == "f":
+            assert same(a, b), k
+        else:
+            assert list(a) == list(b), k
 
 
 def test_team_run_save_is_byte_identical_to_the_cli(tmp_path):
@@ -403,3 +587,32 @@ def test_an_agent_that_leaves_the_field_is_terminated_and_removed(ipz):
     assert 0.9 < v[0]["t_end_s"] < 1.1, v[0]["t_end_s"]
     with pytest.raises(ValueError, match="no agent is live"):
         env.step({})
+
+
+def test_reward_settings_keep_an_episode_finite(ipz):
+    """att30c-15: the team environment bounds its reward settings by the Gymnasium envs' one
+    rule (every agent's reward over every step of the episode stays below 1e300): the settings
+    that summed to -inf or -1e302 are refused by name, a subnormal scale says so; at the bound
+    an episode's rewards are finite."""
+    sc = short_team(duration_s=5.0)
+    for kw, match in [
+        ({"error_scale": 2.3e-308}, "error_scale must be at least"),
+        ({"error_scale": 1e-300}, "error_scale must be at least"),
+        ({"spacing_weight": 1.7e308}, "spacing_weight must be at most"),
+        ({"spacing_weight": 1e300}, "spacing_weight must be at most"),
+        ({"effort_weight": 1e300}, "effort_weight must be at most"),
+        ({"error_scale": 5e-324}, "not subnormal"),
+        ({"spacing_weight": 5e-324}, "not subnormal"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            ipz.parallel_env(sc, **kw)
+    # 5 s at 0.01 s: 501 steps x 4 agents; the largest weight allowed is 1e300 / 2004.
+    w = 1e300 / (501 * 4)
+    env = ipz.parallel_env(sc, spacing_weight=w * 0.999, effort_weight=w * 0.999)
+    obs, infos = env.reset(seed=1)
+    total = 0.0
+    while env.agents:
+        actions = {a: infos[a]["builtin_action"] for a in env.agents}
+        obs, rewards, term, trunc, infos = env.step(actions)
+        total += sum(rewards.values())
+    assert math.isfinite(total)

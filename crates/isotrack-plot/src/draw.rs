@@ -1272,7 +1272,7 @@ impl TeamFigureData {
             .team
             .as_ref()
             .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
-                t.nominal_speed_mps
+                t.ideal_speed_mps()
             });
         let ideal = l / (n as f64 * v0);
         let even = l / n as f64;

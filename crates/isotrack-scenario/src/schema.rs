@@ -773,6 +773,43 @@ pub struct TeamSection {
     /// Neighbour ranging.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ranging: Option<TeamRangingSection>,
+    /// Per-vehicle overrides (`[[team.vehicles]]`, each naming its vehicle by `index`): a
+    /// vehicle's own nominal speed, envelope and sensor noise and rate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vehicles: Option<Vec<TeamVehicleSection>>,
+}
+
+/// `[[team.vehicles]]`: one vehicle's own settings, where they make sense for one member of a
+/// team sharing one vehicle model, tracking law, field and ranging (docs/TEAMS.md, "Per-vehicle
+/// overrides"). Any other key is refused by name.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TeamVehicleSection {
+    /// The vehicle, `0..team.count` in the listed order (required; each at most once).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub index: Option<u64>,
+    /// A Dubins robot's nominal speed `v0_i`, m/s (default `vehicle.speed_mps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_mps: Option<f64>,
+    /// A fixed-wing UAV's nominal airspeed command `v0_i`, m/s, within the Aerosonde's safe
+    /// commanded range (default `vehicle.airspeed_mps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub airspeed_mps: Option<f64>,
+    /// Its slowest command, m/s (default `team.v_min_mps` if given, else the team's default
+    /// rule at `v0_i`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_min_mps: Option<f64>,
+    /// Its fastest command, m/s (default `team.v_max_mps` if given, else the team's default
+    /// rule at `v0_i`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v_max_mps: Option<f64>,
+    /// Its sensor's noise standard deviation, field units (default `sensor.noise_std`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor_noise_std: Option<f64>,
+    /// Its sensor's sampling rate, Hz, a whole number of steps per sample (default
+    /// `sensor.rate_hz`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensor_rate_hz: Option<f64>,
 }
 
 /// `team.spread`: `count` starts along an arc (`center_m`, `radius_m`, the first at

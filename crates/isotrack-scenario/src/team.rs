@@ -17,7 +17,8 @@ use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::SpacingConfig;
 use isotrack_sim::team::TeamIsoline;
 use isotrack_sim::{
-    Group, Oracles, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads, TraceSink,
+    Group, MemberSpeeds, Oracles, Sensor, TeamConfig, TeamError, TeamMember, TeamResult,
+    TeamThreads, TraceSink,
 };
 use isotrack_vehicles::{DubinsState, DubinsVariableSpeed, FixedWingVariableSpeed};
 use std::sync::Arc;
@@ -320,22 +321,58 @@ impl Scenario {
         sinks: &mut [S],
         threads: TeamThreads,
     ) -> Option<Result<TeamResult, TeamError>> {
+        let n = self.spec().team.as_ref()?.count();
+        let controllers = (0..n).map(|_| self.tracker()).collect();
+        self.run_team_with_threads(controllers, sinks, threads)
+    }
+
+    /// [`run_team`](Self::run_team) with other controllers in the loop, `controllers[i]`
+    /// steering vehicle `i` in place of the scenario's tracking law (a user's own law, from
+    /// Python say): the same field, vehicles, sensors, ranging, spacing law and metrics; each
+    /// controller sees only its own vehicle's measurements. One controller per vehicle.
+    pub fn run_team_with<C: IsolineController + Send, S: TraceSink>(
+        &self,
+        controllers: Vec<C>,
+        sinks: &mut [S],
+    ) -> Option<Result<TeamResult, TeamError>> {
+        self.run_team_with_threads(controllers, sinks, TeamThreads::new(1))
+    }
+
+    fn run_team_with_threads<C: IsolineController + Send, S: TraceSink>(
+        &self,
+        controllers: Vec<C>,
+        sinks: &mut [S],
+        threads: TeamThreads,
+    ) -> Option<Result<TeamResult, TeamError>> {
         let team = self.spec().team.as_ref()?;
+        if controllers.len() != team.count() {
+            return Some(Err(TeamError::OutOfRange {
+                key: "count",
+                value: controllers.len() as f64,
+                expected: "one controller per vehicle",
+            }));
+        }
         Some(match self.field() {
-            FieldModel::Analytic(f) => self.run_team_on(f, team, sinks, threads),
-            FieldModel::Grid(f) => self.run_team_on(f, team, sinks, threads),
-            FieldModel::Puff(f) => self.run_team_on(&**f, team, sinks, threads),
-            FieldModel::Series(f) => self.run_team_on(&**f, team, sinks, threads),
+            FieldModel::Analytic(f) => self.run_team_on(f, team, controllers, sinks, threads),
+            FieldModel::Grid(f) => self.run_team_on(f, team, controllers, sinks, threads),
+            FieldModel::Puff(f) => self.run_team_on(&**f, team, controllers, sinks, threads),
+            FieldModel::Series(f) => self.run_team_on(&**f, team, controllers, sinks, threads),
         })
     }
 
-    fn run_team_on<F: ScalarField + FieldDerivatives + Sync, S: TraceSink>(
+    fn run_team_on<F, C, S>(
         &self,
         field: &F,
         team: &TeamSpec,
+        controllers: Vec<C>,
         sinks: &mut [S],
         threads: TeamThreads,
-    ) -> Result<TeamResult, TeamError> {
+    ) -> Result<TeamResult, TeamError>
+    where
+        F: ScalarField + FieldDerivatives + Sync,
+        C: IsolineController + Send,
+        S: TraceSink,
+    {
         let iso = self.isoline();
         let dist = |t: f64, p: Vec2| iso.distance(t, p);
         let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
@@ -362,25 +399,44 @@ impl Scenario {
             metrics,
         };
         let isoline = model.as_team_isoline();
-        let member = |i: usize| TeamMember {
-            x0: (),
-            controller: self.tracker(),
-            sensor: self.sensor_seeded(TeamSpec::sensor_seed(seed, i)),
-            ranging_seed: TeamSpec::ranging_seed(seed, i),
+        // Vehicle `i`'s sensor: the scenario's with its override's noise and rate (the same
+        // sensor as `sensor_seeded` without one); its own seeded streams.
+        let base = self.spec().sensor;
+        let mut controllers = controllers.into_iter();
+        let mut member = |i: usize| -> Result<TeamMember<(), C>, TeamError> {
+            Ok(TeamMember {
+                x0: (),
+                controller: controllers.next().ok_or(TeamError::Empty)?,
+                sensor: Sensor::new(
+                    team.sensor(i, base),
+                    self.dt_s(),
+                    TeamSpec::sensor_seed(seed, i),
+                )
+                .map_err(|_| TeamError::OutOfRange {
+                    key: "vehicles",
+                    value: team.sensor(i, base).rate_hz,
+                    expected: "a sensor rate of a whole number of steps per sample",
+                })?,
+                ranging_seed: TeamSpec::ranging_seed(seed, i),
+            })
         };
+        // The vehicle model's envelope holds every vehicle's own (the team's without
+        // per-vehicle overrides); each vehicle's speeds are set on the group.
+        let (lo, hi) = team.speed_envelope_mps();
+        let speeds = team.member_speeds();
         let r = match &*self.vehicle {
             VehicleModel::Dubins(_) => {
                 let vehicle = DubinsVariableSpeed {
-                    min_speed_mps: team.v_min_mps,
-                    max_speed_mps: team.v_max_mps,
+                    min_speed_mps: lo,
+                    max_speed_mps: hi,
                 };
                 let members = team
                     .starts
                     .iter()
                     .enumerate()
                     .map(|(i, s)| {
-                        let m = member(i);
-                        TeamMember {
+                        let m = member(i)?;
+                        Ok(TeamMember {
                             x0: vehicle.state(
                                 DubinsState {
                                     position_m: Vec2::new(s.x_m, s.y_m),
@@ -391,29 +447,29 @@ impl Scenario {
                             controller: m.controller,
                             sensor: m.sensor,
                             ranging_seed: m.ranging_seed,
-                        }
+                        })
                     })
-                    .collect();
+                    .collect::<Result<_, TeamError>>()?;
                 drive(
-                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self, threads,
+                    field, &vehicle, cfg, members, speeds, isoline, &oracles, sinks, self, threads,
                 )?
             }
             VehicleModel::FixedWing(w) => {
-                let vehicle =
-                    FixedWingVariableSpeed::new((**w).clone(), team.v_min_mps, team.v_max_mps)
-                        .map_err(|_| TeamError::OutOfRange {
-                            key: "v_min_mps",
-                            value: team.v_min_mps,
-                            expected: "an airspeed envelope within the Aerosonde's safe range",
-                        })?;
+                let vehicle = FixedWingVariableSpeed::new((**w).clone(), lo, hi).map_err(|_| {
+                    TeamError::OutOfRange {
+                        key: "v_min_mps",
+                        value: lo,
+                        expected: "an airspeed envelope within the Aerosonde's safe range",
+                    }
+                })?;
                 let gust_seed = w.config().seed;
                 let members = team
                     .starts
                     .iter()
                     .enumerate()
                     .map(|(i, s)| {
-                        let m = member(i);
-                        TeamMember {
+                        let m = member(i)?;
+                        Ok(TeamMember {
                             x0: w.initial_state_seeded(
                                 s.x_m,
                                 s.y_m,
@@ -423,11 +479,11 @@ impl Scenario {
                             controller: m.controller,
                             sensor: m.sensor,
                             ranging_seed: m.ranging_seed,
-                        }
+                        })
                     })
-                    .collect();
+                    .collect::<Result<_, TeamError>>()?;
                 drive(
-                    field, &vehicle, cfg, members, isoline, &oracles, sinks, self, threads,
+                    field, &vehicle, cfg, members, speeds, isoline, &oracles, sinks, self, threads,
                 )?
             }
         };
@@ -445,6 +501,7 @@ fn drive<F, V, C, S>(
     vehicle: &V,
     cfg: TeamConfig,
     members: Vec<TeamMember<V::State, C>>,
+    speeds: Option<Vec<MemberSpeeds>>,
     isoline: Option<TeamIsoline<'_>>,
     oracles: &Oracles<'_>,
     sinks: &mut [S],
@@ -465,6 +522,9 @@ where
         });
     }
     let mut g = Group::with_isoline(vehicle, &scenario.plan(), cfg, members, isoline)?;
+    if let Some(speeds) = speeds {
+        g.set_member_speeds(vehicle, speeds)?;
+    }
     g.drive_threads(field, vehicle, oracles, sinks, threads);
     Ok(g.finish(sinks))
 }

@@ -43,5 +43,7 @@ pub use sensor::{
     MAX_SAMPLES_IN_FLIGHT, MAX_STEPS, SENSOR_VALUE_RANGE,
 };
 pub use simulation::{simulate, Episode};
-pub use team::{simulate_team, Group, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads};
+pub use team::{
+    simulate_team, Group, MemberSpeeds, TeamConfig, TeamError, TeamMember, TeamResult, TeamThreads,
+};
 pub use trace::{NoTrace, TraceRow, TraceSink};

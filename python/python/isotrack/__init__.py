@@ -101,6 +101,25 @@ def _check_controller(name: str, v: Any) -> Any:
     return v
 
 
+def _team_controllers(controller: Any, count: int) -> list:
+    """A team's controllers, one per vehicle: a list or tuple of ``count`` objects as given, or
+    ``count`` deep copies of one object (each vehicle its own instance)."""
+    if isinstance(controller, (list, tuple)):
+        if len(controller) != count:
+            raise ValueError(f"controller: {len(controller)} controllers for a team of {count}: give one per vehicle")
+        return [_check_controller(f"controller[{i}]", c) for i, c in enumerate(controller)]
+    _check_controller("controller", controller)
+    import copy
+
+    try:
+        return [copy.deepcopy(controller) for _ in range(count)]
+    except Exception as e:
+        raise TypeError(
+            f"controller: a team's vehicles each fly their own copy, but {_type_name(controller)} "
+            f"cannot be deep-copied ({e!r:.120}); pass a list of {count} controllers instead"
+        ) from e
+
+
 def _coordinates(name: str, v: Any) -> np.ndarray:
     """Coordinates as a float64 array: real numbers only (a ``TypeError`` naming ``name`` for
     strings, objects, booleans, complex numbers)."""
@@ -491,18 +510,24 @@ class Scenario:
         (``controller.max_turn_rate_radps``, or the airframe's for the fixed-wing UAV), as the
         built-in laws' are. An exception inside it ends the run and is raised here with its
         traceback.
+
+        For a team, each vehicle flies its own controller instance (the spacing law still sets
+        the speeds): ``controller`` is either a list (or tuple) of ``team.count`` objects, one
+        per vehicle in the listed order, or one object, of which every vehicle flies its own
+        ``copy.deepcopy`` (made before the run; the object passed is not flown). Each sees only
+        its own vehicle's samples; the first exception in any of them stops the run.
         """
         rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
+        if _native.is_team(self._native):
+            if controller is None:
+                summary, trace, flown = _native.team_run(self._native, rate)
+                return Run._from_native(summary, dict(trace), Scenario(flown))
+            controllers = _team_controllers(controller, _native.team_count(self._native))
+            summary, trace, flown = _native.team_run(self._native, rate, controllers)
+            name = ", ".join(dict.fromkeys(_controller_class(c) for c in controllers))
+            return Run._from_native(_python_summary(summary, name), dict(trace), Scenario(flown), name)
         if controller is not None:
             _check_controller("controller", controller)
-        if _native.is_team(self._native):
-            if controller is not None:
-                raise ValueError(
-                    "[team]: a team flies the scenario's built-in tracking law (a Python controller "
-                    "per vehicle is not supported yet; isotrack.pettingzoo steers each vehicle from Python)"
-                )
-            summary, trace, flown = _native.team_run(self._native, rate)
-            return Run._from_native(summary, dict(trace), Scenario(flown))
         summary, trace, flown = self._native.run(rate, controller)
         if controller is None:
             return Run._from_native(summary, dict(trace), Scenario(flown))
@@ -574,7 +599,10 @@ def _sweep_column(kind: str, cells: list, masked: bool = False) -> np.ndarray:
     if kind == "float":
         return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
     if kind == "bool":
-        return np.array([c == "true" for c in cells], dtype=np.bool_)
+        values = np.array([c == "true" for c in cells], dtype=np.bool_)
+        if masked:
+            return np.ma.masked_array(values, mask=np.array([c == "" for c in cells], dtype=bool))
+        return values
     return np.array(cells, dtype=np.str_) if cells else np.array([], dtype="<U1")
 
 
@@ -688,9 +716,16 @@ def sweep(
     ``sys.stderr``: one line redrawn in place on a terminal, else (Jupyter, a log file) a line
     at most every 5 s, and the first and last.
 
+    A sweep of a team scenario (``[team]``) has the team columns after the metric columns, as
+    ``isotrack sweep`` writes them (the metric columns vehicle 0's): ``gap_cv``,
+    ``time_to_even_s``, ``revisit_time_max_s``, ``revisit_time_mean_s``,
+    ``revisit_time_ideal_s``, ``min_separation_m`` (float64, NaN where a run has no team
+    metrics) and ``order_preserved`` (a masked bool array, masked where empty).
+
     ``controller_factory(scenario)``: fly every run with your own controller instead of the
-    scenario's: it is called once per run with that run's :class:`Scenario` and returns an
-    object with ``update(t_s, value) -> omega`` (and optionally ``reset()``), as
+    scenario's: it is called once per run with that run's :class:`Scenario` (for a team, once
+    per vehicle of each run: each vehicle its own instance) and returns an object with
+    ``update(t_s, value) -> omega`` (and optionally ``reset()``), as
     ``Scenario.run(controller=...)`` takes; the runs then go one after another (``threads``
     does not apply) and an exception inside it is raised here.
 
@@ -725,7 +760,8 @@ def sweep(
         header, kinds, rows = _native.sweep_cells(text, name, threads, show)
     if len(kinds) != len(header):  # pragma: no cover - the engine's invariant
         raise RuntimeError(f"internal error in isotrack: {len(header)} columns but {len(kinds)} kinds")
-    return {col: _sweep_column(kinds[k], [r[k] for r in rows], masked=col == "samples") for k, col in enumerate(header)}
+    masked = ("samples", "order_preserved")
+    return {col: _sweep_column(kinds[k], [r[k] for r in rows], masked=col in masked) for k, col in enumerate(header)}
 
 
 def benchmark(

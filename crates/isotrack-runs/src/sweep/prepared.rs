@@ -109,15 +109,8 @@ impl PreparedSweep {
         let plan = SweepPlan::parse(text, name).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
         let label = name.display().to_string();
         let base = sweep_base(&plan, &[], &label)?;
-        // The Python package's sweeps (built-in or Python controllers) read the columns of a
-        // single-vehicle sweep: a team's is `isotrack sweep`'s only, for now.
-        if base.spec().team.is_some() {
-            return Err(fail(
-                exit::DATAERR,
-                format!("{label}: [team]: a sweep of a team is run by `isotrack sweep` only, for now (docs/TEAMS.md)"),
-            ));
-        }
-        let header = results_header(&plan, false);
+        // A team's sweep has the team columns, as `isotrack sweep` writes them.
+        let header = results_header(&plan, base.spec().team.is_some());
         Ok(Self {
             plan,
             base,

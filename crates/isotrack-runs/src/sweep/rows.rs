@@ -6,7 +6,7 @@ use isotrack_core::numtext::Num;
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
 use isotrack_sim::team::metrics::TeamSummary;
-use isotrack_sim::{NoTrace, RunResult};
+use isotrack_sim::{NoTrace, RunResult, TeamError, TeamResult};
 
 /// The metric columns of `results.csv`, after `run_id` and the varied keys: the outcome, the
 /// metrics, `outcome_detail`, then `warnings` (what [`run_warnings`] says about the run's
@@ -157,7 +157,34 @@ fn run_team_row(
     s: &Scenario,
     warnings: &mut String,
 ) -> (Result<RunResult, String>, Option<TeamSummary>) {
-    match s.run_team(&mut [] as &mut [NoTrace]) {
+    team_row_parts(s.run_team(&mut [] as &mut [NoTrace]), warnings)
+}
+
+/// The `results.csv` fields of run `id` of a team sweep from its team run `team` (run by the
+/// caller: with Python controllers, say; `Err` an invalid scenario's reason): the row
+/// [`run_rows`] writes for it, [`METRIC_COLUMNS`] vehicle 0's then [`TEAM_COLUMNS`].
+pub fn team_row_fields(
+    plan: &SweepPlan,
+    id: u64,
+    team: Result<Option<Result<TeamResult, TeamError>>, String>,
+    mut warnings: String,
+) -> Vec<String> {
+    let (result, summary) = match team {
+        Ok(t) => team_row_parts(t, &mut warnings),
+        Err(e) => (Err(e), None),
+    };
+    let mut fields = row_fields_warned(plan, id, result, warnings);
+    fields.extend(team_cells(summary.as_ref()));
+    fields
+}
+
+/// Vehicle 0's result and the team metrics of a team run; every other vehicle that did not
+/// complete is named in `warnings`.
+fn team_row_parts(
+    team: Option<Result<TeamResult, TeamError>>,
+    warnings: &mut String,
+) -> (Result<RunResult, String>, Option<TeamSummary>) {
+    match team {
         None => (Err("no [team] section".into()), None),
         Some(Err(e)) => (Err(format!("[team]: {e}")), None),
         Some(Ok(t)) => {

@@ -146,6 +146,10 @@ pub struct TeamTrackingReport {
     pub worst_speed_mps: Option<f64>,
     /// Whether the loop is stable at every speed checked (null: some speed not computed).
     pub stable_over_range: Option<bool>,
+    /// The vehicles' distinct sensor rates, Hz, when they differ (`team.vehicles`): each
+    /// speed's radius is then the worst over them (absent with one rate).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sensor_rates_hz: Vec<f64>,
     /// Remarks.
     pub note: String,
 }
@@ -288,6 +292,15 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
         Echo(team.v_min_mps),
         Echo(team.v_max_mps)
     )];
+    if team.has_speed_overrides() {
+        let nominal = team.nominal_speeds_mps();
+        out.push(format!(
+            "team.vehicles: unequal nominal speeds ({} to {} m/s) leave the loop's modes as they are (each v0_i is a constant input) but move its equilibrium: the team moves at the mean v0 = {} m/s and vehicle i's gap ahead exceeds its gap behind by (mean v0 - v0_i)/(k_v c), while every command stays within the vehicle's own envelope",
+            Echo(nominal[0]),
+            Echo(nominal[nominal.len() - 1]),
+            Num(team.ideal_speed_mps())
+        ));
+    }
     if r.noise_std_m > 0.0 {
         out.push(format!(
             "team.ranging.noise_std_m = {} (noise moves the speeds about the loop's equilibrium; it does not change its stability)",
@@ -356,12 +369,16 @@ pub fn ranging_warning(s: &Scenario) -> Option<String> {
 
 /// The speeds the tracking check covers: `v0` for `none`, else a grid over `[v_min, v_max]`
 /// with both ends and `v0`.
+///
+/// With per-vehicle speeds (`team.vehicles`) the grid spans the union of the vehicles' envelopes
+/// and holds every vehicle's `v0_i` (`none`: the `v0_i` only), conservative for each vehicle.
 fn tracking_speeds(team: &TeamSpec) -> ([f64; 2], Vec<f64>) {
-    let v0 = team.nominal_speed_mps;
+    let nominal = team.nominal_speeds_mps();
     if matches!(team.law, SpacingLaw::None) || team.count() < 2 {
-        return ([v0, v0], vec![v0]);
+        let (lo, hi) = (nominal[0], nominal[nominal.len() - 1]);
+        return ([lo, hi], nominal);
     }
-    let (lo, hi) = (team.v_min_mps, team.v_max_mps);
+    let (lo, hi) = team.speed_envelope_mps();
     let k = TRACKING_SPEED_GRID - 1;
     let mut v: Vec<f64> = (0..=k)
         .map(|i| {
@@ -372,8 +389,10 @@ fn tracking_speeds(team: &TeamSpec) -> ([f64; 2], Vec<f64>) {
             }
         })
         .collect();
-    if !v.contains(&v0) {
-        v.push(v0);
+    for v0 in nominal {
+        if !v.contains(&v0) {
+            v.push(v0);
+        }
     }
     v.sort_by(f64::total_cmp);
     v.dedup();
@@ -390,9 +409,15 @@ fn tracking_report(s: &Scenario, l: &Law, r: &Regions, team: &TeamSpec) -> TeamT
         worst_spectral_radius: None,
         worst_speed_mps: None,
         stable_over_range: None,
+        sensor_rates_hz: vec![],
         note: String::new(),
     };
-    let period_s = 1.0 / s.spec().sensor.rate_hz;
+    // Every vehicle's sensor period (per-vehicle rates, `team.vehicles`): each speed's
+    // radius is the worst over them.
+    let rates = team.sensor_rates_hz(s.spec().sensor.rate_hz);
+    if rates.len() > 1 {
+        rep.sensor_rates_hz = rates.clone();
+    }
     let mut notes = vec![];
     for &v in &speeds {
         let lv = Law { v, ..*l };
@@ -404,14 +429,18 @@ fn tracking_report(s: &Scenario, l: &Law, r: &Regions, team: &TeamSpec) -> TeamT
                 return rep;
             }
         };
-        let (base, slopes, orbit) = setup.at(s, &lv, period_s);
-        if let Some(why) = not_computed(&base, orbit.as_ref()) {
-            notes.push(format!("at {} m/s not computed: {}", Num(v), why.reason()));
-            rep.spectral_radii.push(None);
-            continue;
+        let mut worst: Option<f64> = Some(f64::NEG_INFINITY);
+        for &rate in &rates {
+            let (base, slopes, orbit) = setup.at(s, &lv, 1.0 / rate);
+            if let Some(why) = not_computed(&base, orbit.as_ref()) {
+                notes.push(format!("at {} m/s not computed: {}", Num(v), why.reason()));
+                worst = None;
+                break;
+            }
+            let rho = sampled::worst_spectral_radius(&base, &slopes);
+            worst = worst.map(|w| if rho.total_cmp(&w).is_gt() { rho } else { w });
         }
-        let rho = sampled::worst_spectral_radius(&base, &slopes);
-        rep.spectral_radii.push(Some(rho));
+        rep.spectral_radii.push(worst);
     }
     rep.applicable = true;
     let worst = speeds

@@ -84,7 +84,7 @@ impl ScenarioSpec {
         let metrics = MetricsSpec::new(&f.metrics, &sim)?;
         let output = OutputSpec::new(&f.output)?;
         let sitl = SitlSpec::new(&f.sitl);
-        let team = TeamSpec::new(&f.team, &vehicle, &sim, start)?;
+        let team = TeamSpec::new(&f.team, &vehicle, &sim, start, &sensor)?;
         Ok(Self {
             sim,
             field,

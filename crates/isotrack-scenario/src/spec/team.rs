@@ -11,6 +11,7 @@ use crate::schema::{InitialSection, RingName, SpacingName, SpreadAlong, TeamSect
 use isotrack_core::numtext::Echo;
 use isotrack_sim::team::ranging::{Ranging, RangingConfig};
 use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
+use isotrack_sim::{MemberSpeeds, Sensor, SensorConfig};
 use isotrack_vehicles::fixed_wing::COMMANDED_AIRSPEED_RANGE_MPS;
 
 /// Largest `team.count`: the issue's scale target is a ring of 1 000 robots; ten times that
@@ -63,12 +64,134 @@ pub struct TeamSpec {
     pub ring: RingMode,
     /// Neighbour ranging.
     pub ranging: RangingConfig,
+    /// Per-vehicle overrides (`[[team.vehicles]]`), by ascending index, every value resolved
+    /// (empty: every vehicle has the team's settings).
+    pub vehicles: Vec<TeamVehicleSpec>,
+}
+
+/// One vehicle's own settings (`[[team.vehicles]]`), resolved: its nominal speed and envelope
+/// (the team's where not given) and its sensor's noise and rate (the scenario's where `None`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TeamVehicleSpec {
+    /// The vehicle, in the listed order.
+    pub index: usize,
+    /// Its nominal speed (airspeed command for a fixed wing) `v0_i`, m/s.
+    pub nominal_speed_mps: f64,
+    /// Its slowest command, m/s.
+    pub v_min_mps: f64,
+    /// Its fastest command, m/s.
+    pub v_max_mps: f64,
+    /// Its sensor's noise standard deviation, field units (`None`: `sensor.noise_std`).
+    pub sensor_noise_std: Option<f64>,
+    /// Its sensor's rate, Hz (`None`: `sensor.rate_hz`).
+    pub sensor_rate_hz: Option<f64>,
 }
 
 impl TeamSpec {
     /// Number of vehicles.
     pub fn count(&self) -> usize {
         self.starts.len()
+    }
+
+    /// Vehicle `i`'s nominal speed and envelope (its override, else the team's).
+    pub fn speeds(&self, i: usize) -> MemberSpeeds {
+        match self.vehicle(i) {
+            Some(v) => MemberSpeeds {
+                nominal_mps: v.nominal_speed_mps,
+                min_mps: v.v_min_mps,
+                max_mps: v.v_max_mps,
+            },
+            None => MemberSpeeds {
+                nominal_mps: self.nominal_speed_mps,
+                min_mps: self.v_min_mps,
+                max_mps: self.v_max_mps,
+            },
+        }
+    }
+
+    /// Vehicle `i`'s override, if it has one.
+    pub fn vehicle(&self, i: usize) -> Option<&TeamVehicleSpec> {
+        self.vehicles
+            .binary_search_by_key(&i, |v| v.index)
+            .ok()
+            .map(|k| &self.vehicles[k])
+    }
+
+    /// Whether some vehicle's speeds differ from the team's.
+    pub fn has_speed_overrides(&self) -> bool {
+        self.vehicles.iter().any(|v| {
+            (v.nominal_speed_mps, v.v_min_mps, v.v_max_mps)
+                != (self.nominal_speed_mps, self.v_min_mps, self.v_max_mps)
+        })
+    }
+
+    /// Every vehicle's speeds for the engine (`isotrack_sim::Group::set_member_speeds`), or
+    /// `None` when every vehicle has the team's (the run is then the one without overrides).
+    pub fn member_speeds(&self) -> Option<Vec<MemberSpeeds>> {
+        self.has_speed_overrides()
+            .then(|| (0..self.count()).map(|i| self.speeds(i)).collect())
+    }
+
+    /// The union of the vehicles' envelopes `[min v_min_i, max v_max_i]`, m/s: what the
+    /// spacing law may command in the team (the vehicle model's envelope).
+    pub fn speed_envelope_mps(&self) -> (f64, f64) {
+        let mut lo_hi = if self.vehicles.len() < self.count() {
+            (self.v_min_mps, self.v_max_mps)
+        } else {
+            (f64::INFINITY, f64::NEG_INFINITY)
+        };
+        for v in &self.vehicles {
+            lo_hi = (lo_hi.0.min(v.v_min_mps), lo_hi.1.max(v.v_max_mps));
+        }
+        lo_hi
+    }
+
+    /// The distinct nominal speeds `v0_i`, ascending.
+    pub fn nominal_speeds_mps(&self) -> Vec<f64> {
+        let mut v: Vec<f64> = self.vehicles.iter().map(|v| v.nominal_speed_mps).collect();
+        if self.vehicles.len() < self.count() {
+            v.push(self.nominal_speed_mps);
+        }
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    }
+
+    /// The speed of the ideal revisit time `L/(N v)`: `v0`, or with per-vehicle speeds their
+    /// mean `sum v0_i / N` (a team at its own speeds passes a point `sum v0_i / L` times a
+    /// second on average, as an even team at the mean speed does).
+    pub fn ideal_speed_mps(&self) -> f64 {
+        match self.member_speeds() {
+            None => self.nominal_speed_mps,
+            Some(m) => m.iter().map(|s| s.nominal_mps).sum::<f64>() / m.len() as f64,
+        }
+    }
+
+    /// Vehicle `i`'s sensor: `base` (the scenario's) with its override's noise and rate.
+    pub fn sensor(&self, i: usize, base: SensorConfig) -> SensorConfig {
+        match self.vehicle(i) {
+            None => base,
+            Some(v) => SensorConfig {
+                noise_std: v.sensor_noise_std.unwrap_or(base.noise_std),
+                rate_hz: v.sensor_rate_hz.unwrap_or(base.rate_hz),
+                ..base
+            },
+        }
+    }
+
+    /// The distinct sensor rates of the team's vehicles, Hz, ascending (`base` the scenario's).
+    pub fn sensor_rates_hz(&self, base: f64) -> Vec<f64> {
+        let mut r: Vec<f64> = self
+            .vehicles
+            .iter()
+            .map(|v| v.sensor_rate_hz.unwrap_or(base))
+            .collect();
+        if self.vehicles.len() < self.count() {
+            r.push(base);
+        }
+        r.sort_by(f64::total_cmp);
+        r.dedup();
+        r
     }
 
     /// Vehicle `i`'s sensor seed: `sim.seed` for vehicle 0 (a team of one senses as the single
@@ -104,6 +227,7 @@ impl TeamSpec {
         vehicle: &VehicleSpec,
         sim: &SimSpec,
         initial: Start,
+        sensor: &SensorConfig,
     ) -> Result<Option<Self>, Issue> {
         let Some(t) = t else { return Ok(None) };
         let (v0, airframe) = nominal_speed(vehicle);
@@ -114,6 +238,13 @@ impl TeamSpec {
         let (v_min, v_max) = envelope_of(t, v0, airframe)?;
         let ring = ring_of(t, count, v0, sim)?;
         let ranging = ranging_of(t, sim)?;
+        let team = Envelope {
+            v0,
+            v_min,
+            v_max,
+            airframe,
+        };
+        let vehicles = vehicles_of(t, n, vehicle, &team, &ring, sensor, sim)?;
         Ok(Some(Self {
             starts,
             law,
@@ -122,6 +253,7 @@ impl TeamSpec {
             v_max_mps: v_max,
             ring,
             ranging,
+            vehicles,
         }))
     }
 }
@@ -455,6 +587,192 @@ fn ranging_of(t: &TeamSection, sim: &SimSpec) -> Result<RangingConfig, Issue> {
         }
     })?;
     Ok(ranging)
+}
+
+/// The team's resolved speeds, the defaults of its vehicles' overrides.
+struct Envelope {
+    v0: f64,
+    v_min: f64,
+    v_max: f64,
+    airframe: Option<(f64, f64)>,
+}
+
+/// `[[team.vehicles]]`: each entry's vehicle (`index`, once each), its nominal speed (the
+/// vehicle kind's key: `speed_mps` for a Dubins robot, `airspeed_mps` for a fixed wing), its
+/// envelope around it (default: `team.v_min_mps` / `team.v_max_mps` when given, else the team's
+/// default rule at its own speed) and its sensor's noise and rate, checked as the team's and
+/// the sensor's are. Unequal speeds with a discovered ring are refused (its probes assume one).
+fn vehicles_of(
+    t: &TeamSection,
+    n: usize,
+    vehicle: &VehicleSpec,
+    team: &Envelope,
+    ring: &RingMode,
+    sensor: &SensorConfig,
+    sim: &SimSpec,
+) -> Result<Vec<TeamVehicleSpec>, Issue> {
+    let Some(list) = &t.vehicles else {
+        return Ok(Vec::new());
+    };
+    let fixed_wing = matches!(vehicle, VehicleSpec::FixedWing(_));
+    let mut out: Vec<TeamVehicleSpec> = Vec::with_capacity(list.len());
+    // The entry naming each vehicle so far: a duplicate is found in O(1), the list in O(n).
+    let mut seen: Vec<Option<usize>> = vec![None; n];
+    for (k, e) in list.iter().enumerate() {
+        let key = |name: &str| format!("team.vehicles[{k}].{name}");
+        let index = match e.index {
+            None => {
+                return Err(issue(
+                    &key("index"),
+                    "is required (the vehicle, 0 .. team.count - 1 in the listed order)".into(),
+                ))
+            }
+            Some(i) if i >= n as u64 => {
+                return Err(issue(
+                    &key("index"),
+                    format!("must be in [0, {}] (team.count = {n}), got {i}", n - 1),
+                ))
+            }
+            Some(i) => i as usize,
+        };
+        if let Some(j) = seen[index] {
+            return Err(issue(
+                &key("index"),
+                format!(
+                    "= {index} is given twice (also team.vehicles[{j}]): one entry per vehicle"
+                ),
+            ));
+        }
+        seen[index] = Some(k);
+        let (speed_key, given, wrong) = if fixed_wing {
+            (
+                "airspeed_mps",
+                e.airspeed_mps,
+                e.speed_mps.map(|_| {
+                    (
+                        "speed_mps",
+                        "a Dubins robot's speed; a fixed wing's is airspeed_mps",
+                    )
+                }),
+            )
+        } else {
+            (
+                "speed_mps",
+                e.speed_mps,
+                e.airspeed_mps.map(|_| {
+                    (
+                        "airspeed_mps",
+                        "a fixed wing's airspeed command; a Dubins robot's is speed_mps",
+                    )
+                }),
+            )
+        };
+        if let Some((name, why)) = wrong {
+            return Err(issue(&key(name), format!("is {why}")));
+        }
+        let v0 = positive(&key(speed_key), Some(given.unwrap_or(team.v0)))?;
+        let (lo, hi) = team.airframe.unwrap_or((0.0, f64::INFINITY));
+        let v_min = positive(
+            &key("v_min_mps"),
+            Some(e.v_min_mps.unwrap_or(match t.v_min_mps {
+                Some(_) => team.v_min,
+                None => (V_MIN_FRACTION * v0).max(lo),
+            })),
+        )?;
+        let v_max = positive(
+            &key("v_max_mps"),
+            Some(e.v_max_mps.unwrap_or(match t.v_max_mps {
+                Some(_) => team.v_max,
+                None => (V_MAX_FACTOR * v0).min(hi),
+            })),
+        )?;
+        if team.airframe.is_some() {
+            for (name, v) in [(speed_key, v0), ("v_min_mps", v_min), ("v_max_mps", v_max)] {
+                if !(lo..=hi).contains(&v) {
+                    return Err(issue(
+                        &key(name),
+                        format!(
+                            "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
+                            Echo(lo),
+                            Echo(hi),
+                            Echo(v)
+                        ),
+                    ));
+                }
+            }
+        }
+        let max = crate::ranges::MAX_SPEED_MPS;
+        if v0 > max {
+            return Err(issue(
+                &key(speed_key),
+                format!("must be at most {}, got {}", Echo(max), Echo(v0)),
+            ));
+        }
+        if v_min > v0 {
+            return Err(issue(
+                &key("v_min_mps"),
+                format!(
+                    "must be at most the vehicle's nominal speed {} m/s, got {}",
+                    Echo(v0),
+                    Echo(v_min)
+                ),
+            ));
+        }
+        if v_max < v0 || v_max > max {
+            return Err(issue(
+                &key("v_max_mps"),
+                format!(
+                    "must be in [the vehicle's nominal speed {}, {}], got {}",
+                    Echo(v0),
+                    Echo(max),
+                    Echo(v_max)
+                ),
+            ));
+        }
+        if matches!(ring, RingMode::Discover(_)) && v0 != team.v0 {
+            return Err(issue(
+                &key(speed_key),
+                format!(
+                    "= {} differs from the team's {} m/s, but team.ring = \"discovered\" probes with every other vehicle at one nominal speed: give the vehicles one speed or use team.ring = \"listed\"",
+                    Echo(v0),
+                    Echo(team.v0)
+                ),
+            ));
+        }
+        let noise = match e.sensor_noise_std {
+            None => None,
+            v => Some(non_negative(&key("sensor_noise_std"), v)?),
+        };
+        let rate = match e.sensor_rate_hz {
+            None => None,
+            v => Some(positive(&key("sensor_rate_hz"), v)?),
+        };
+        let cfg = SensorConfig {
+            noise_std: noise.unwrap_or(sensor.noise_std),
+            rate_hz: rate.unwrap_or(sensor.rate_hz),
+            ..*sensor
+        };
+        // As the run builds each vehicle's sensor: a rate whose period is not a whole number
+        // of steps is refused here, by key.
+        if let Err(err) = Sensor::new(cfg, sim.dt_s, 0) {
+            let name = if rate.is_some() {
+                "sensor_rate_hz"
+            } else {
+                "sensor_noise_std"
+            };
+            return Err(issue(&key(name), err.to_string()));
+        }
+        out.push(TeamVehicleSpec {
+            index,
+            nominal_speed_mps: v0,
+            v_min_mps: v_min,
+            v_max_mps: v_max,
+            sensor_noise_std: noise,
+            sensor_rate_hz: rate,
+        });
+    }
+    out.sort_by_key(|v| v.index);
+    Ok(out)
 }
 
 /// SplitMix64's finaliser (Steele, Lea & Flood, "Fast splittable pseudorandom number

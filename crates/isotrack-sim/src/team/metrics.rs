@@ -136,6 +136,14 @@ pub struct TeamMetrics {
 }
 
 impl TeamMetrics {
+    /// The speed of the ideal revisit time `L/(N v)`: for vehicles of unequal nominal speeds
+    /// `v0_i`, their mean (an evenly spread team at the common speed `mean v0_i` passes a point
+    /// every `L/sum v0_i`; so does, on average, a team at its own speeds, each vehicle passing
+    /// a point every `L/v0_i`).
+    pub fn set_nominal_speed(&mut self, speed_mps: f64) {
+        self.nominal_speed_mps = speed_mps;
+    }
+
     /// Metrics for `n` vehicles on an isoline of `length_m`, steps of `dt_s`, nominal speed
     /// `nominal_speed_mps` (for the ideal revisit time).
     pub fn new(

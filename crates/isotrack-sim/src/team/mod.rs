@@ -80,6 +80,7 @@ macro_rules! shared {
                 .and_then(|c| c.arc.as_ref())
                 .map(|a| a as &dyn ArcProjection)),
             speed_override: $g.speed_override.as_deref(),
+            member_speeds: $g.member_speeds.as_deref(),
         }
     };
 }
@@ -95,6 +96,28 @@ pub struct TeamMember<X, C> {
     pub sensor: Sensor,
     /// Seed of its ranging unit's streams.
     pub ranging_seed: u64,
+}
+
+/// One vehicle's own speeds (`team.vehicles` overrides, docs/TEAMS.md "Per-vehicle
+/// overrides"): its nominal speed `v0_i`, which the spacing law commands about
+/// (`v0_i + k_v (r_ahead - r_behind)`; the `none` law holds it), and its envelope
+/// `[min, max]`, every command saturated to it (inside the vehicle model's own envelope).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MemberSpeeds {
+    /// Nominal speed `v0_i`, m/s.
+    pub nominal_mps: f64,
+    /// Slowest command, m/s.
+    pub min_mps: f64,
+    /// Fastest command, m/s.
+    pub max_mps: f64,
+}
+
+impl MemberSpeeds {
+    /// `speed_mps` saturated to the envelope (a NaN gives `min`, as the vehicle models do).
+    #[inline(always)]
+    pub fn saturate(&self, speed_mps: f64) -> f64 {
+        self.min_mps.max(speed_mps).min(self.max_mps)
+    }
 }
 
 /// A team's settings.
@@ -226,6 +249,9 @@ pub struct Group<'a, X, C> {
     /// Speeds commanded from outside the loop, held ([`Group::hold_speed`]; `None`: every
     /// vehicle flies its spacing law's command).
     speed_override: Option<Vec<f64>>,
+    /// Each vehicle's own nominal speed and envelope ([`Group::set_member_speeds`]; `None`:
+    /// every vehicle at `cfg.spacing.nominal_speed_mps` within the vehicle model's envelope).
+    member_speeds: Option<Vec<MemberSpeeds>>,
     /// The measurement each vehicle's sensor delivered at its last sample (this step's when
     /// `command` is `Some`).
     measured: Vec<Measurement>,
@@ -411,6 +437,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             metrics,
             delivered: vec![None; n],
             speed_override: None,
+            member_speeds: None,
             measured: vec![
                 Measurement {
                     t_s: 0.0,
@@ -425,6 +452,70 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             command: vec![None; n],
             omega: vec![0.0; n],
         })
+    }
+
+    /// Gives each vehicle its own nominal speed and envelope (per-vehicle overrides), before
+    /// the first step: vehicle `i` then starts at `speeds[i].nominal_mps`, its spacing law
+    /// commands about it, and every command (the law's, a held one) is saturated to its own
+    /// `[min_mps, max_mps]`, which must lie inside the vehicle model's envelope. The ideal
+    /// revisit time uses the mean nominal speed ([`TeamMetrics::set_nominal_speed`]). Refused
+    /// after the first step, for a length other than the team's, an envelope that does not
+    /// hold its nominal speed, and with ring discovery (its probes assume one nominal speed).
+    pub fn set_member_speeds<V>(
+        &mut self,
+        vehicle: &V,
+        speeds: Vec<MemberSpeeds>,
+    ) -> Result<(), TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        let bad = |key: &'static str, value: f64, expected: &'static str| {
+            Err(TeamError::OutOfRange {
+                key,
+                value,
+                expected,
+            })
+        };
+        if self.k != 0 || speeds.len() != self.n {
+            return bad(
+                "vehicles",
+                speeds.len() as f64,
+                "one entry per vehicle, set before the first step",
+            );
+        }
+        if self.discovery.is_some() {
+            return bad(
+                "vehicles",
+                self.n as f64,
+                "one nominal speed for every vehicle with ring discovery (its probes assume it)",
+            );
+        }
+        let (lo, hi) = vehicle.speed_envelope_mps();
+        for m in &speeds {
+            let ok = m.min_mps.is_finite()
+                && m.max_mps.is_finite()
+                && lo <= m.min_mps
+                && m.min_mps <= m.nominal_mps
+                && m.nominal_mps <= m.max_mps
+                && m.max_mps <= hi;
+            if !ok {
+                return bad(
+                    "vehicles",
+                    m.nominal_mps,
+                    "min <= nominal <= max, inside the vehicle model's envelope",
+                );
+            }
+        }
+        for (i, m) in speeds.iter().enumerate() {
+            let x = &mut self.states[i / LANES][i % LANES];
+            self.speed_cmd[i] = vehicle.command_speed(x, m.nominal_mps);
+        }
+        if let Some(metrics) = self.metrics.as_mut() {
+            let sum: f64 = speeds.iter().map(|m| m.nominal_mps).sum();
+            metrics.set_nominal_speed(sum / self.n as f64);
+        }
+        self.member_speeds = Some(speeds);
+        Ok(())
     }
 
     /// Vehicle `i`'s state.
@@ -893,6 +984,7 @@ struct Shared<'s> {
     max_range_m: f64,
     arc: Option<&'s dyn ArcProjection>,
     speed_override: Option<&'s [f64]>,
+    member_speeds: Option<&'s [MemberSpeeds]>,
 }
 
 /// A contiguous range of a team's vehicles, whole [`LANES`] chunks (the last one may be
@@ -1129,13 +1221,15 @@ impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
     /// arrives now; the spacing law answers with a speed command.
     #[inline(always)]
     fn space<V: SpeedCommand<State = X>>(&mut self, sh: &Shared<'_>, vehicle: &V) {
-        let v0 = sh.spacing.nominal_speed_mps;
         let (k, t) = (sh.k, sh.t);
         for j in 0..self.n {
             let i = self.base + j;
             if !sh.alive[i] {
                 continue;
             }
+            let v0 = sh
+                .member_speeds
+                .map_or(sh.spacing.nominal_speed_mps, |m| m[i].nominal_mps);
             let Some([a, b]) = sh.ring[i] else {
                 continue;
             };
@@ -1244,6 +1338,10 @@ impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
                     let v = match sh.speed_override {
                         None => self.speed_cmd[j],
                         Some(o) => o[self.base + j],
+                    };
+                    let v = match sh.member_speeds {
+                        None => v,
+                        Some(m) => m[self.base + j].saturate(v),
                     };
                     vehicle.command_speed(&mut chunk[l], v);
                     running += 1;

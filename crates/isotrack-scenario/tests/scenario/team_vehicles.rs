@@ -1,0 +1,403 @@
+//! Per-vehicle overrides (`[[team.vehicles]]`, issue 32 item 1, docs/TEAMS.md "Per-vehicle
+//! overrides") against theory: a slower vehicle under `none` is lapped at the speed difference;
+//! under `range_balance` the team settles at the mean nominal speed (or the slow vehicle's top
+//! speed when the mean is past it) with the gap offsets the ring's steady state predicts; the
+//! refusals name their keys; the check covers every vehicle's speed and sensor rate.
+
+use isotrack_scenario::check::check;
+use isotrack_scenario::{parse_scenario, Scenario};
+use isotrack_sim::{TraceRow, TraceSink};
+use std::f64::consts::TAU;
+use std::path::Path;
+
+/// The isoline of team-circular-4: a circle of radius `10 ln 2` m about the origin.
+const R: f64 = 10.0 * std::f64::consts::LN_2;
+
+fn circular_text() -> String {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/team-circular-4.toml");
+    std::fs::read_to_string(p).unwrap()
+}
+
+/// team-circular-4 with `extra` appended to its `[team]` (the file's last section).
+fn circular_with(extra: &str, sets: &[&str]) -> Result<Scenario, String> {
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    parse_scenario(
+        &format!("{}\n{extra}\n", circular_text()),
+        "team-circular-4.toml",
+        &sets,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// Each vehicle's rows.
+fn run_rows(s: &Scenario) -> (isotrack_sim::TeamResult, Vec<Vec<TraceRow>>) {
+    let n = s.spec().team.as_ref().unwrap().count();
+    let mut sinks: Vec<Vec<TraceRow>> = vec![Vec::new(); n];
+    let r = s.run_team(&mut sinks).unwrap().unwrap();
+    (r, sinks)
+}
+
+/// The unwrapped clockwise arc travelled from the first row, m, at each row.
+fn arc_travel(rows: &[TraceRow]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(rows.len());
+    let mut prev = rows[0].y_m.atan2(rows[0].x_m);
+    let mut acc = 0.0;
+    for r in rows {
+        let a = r.y_m.atan2(r.x_m);
+        let mut d = prev - a; // clockwise positive
+        d -= TAU * (d / TAU).round();
+        acc += d;
+        prev = a;
+        out.push(acc * R);
+    }
+    out
+}
+
+/// Least-squares slope of `y` over `t`.
+fn slope(t: &[f64], y: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let num: f64 = t.iter().zip(y).map(|(a, b)| (a - mt) * (b - my)).sum();
+    let den: f64 = t.iter().map(|a| (a - mt) * (a - mt)).sum();
+    num / den
+}
+
+/// A slower vehicle under `none` (vehicle 3 at 0.3 m/s, the others at 0.5 m/s): each vehicle
+/// holds its own speed, so the fast ones gain `0.2 m/s` on it and lap it every
+/// `L/0.2 = 217.8 s`. Over the second half of 300 s the arc vehicle 0 gains on vehicle 3 grows
+/// at 0.2 m/s (within 0.5 %); vehicle 0 passes it twice (0.9 R = 6.24 m behind at the start,
+/// it catches up at `6.24/0.2 = 31 s` and again at `(6.24 + L)/0.2 = 249 s`), so the order is
+/// not preserved; the ideal revisit time is `L/sum v0_i = L/1.8`.
+#[test]
+fn a_slower_vehicle_under_none_is_lapped_at_the_speed_difference() {
+    let s = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3 }]",
+        &["team.spacing=\"none\"", "output.record_rate_hz=10.0"],
+    )
+    .unwrap();
+    let t = s.spec().team.as_ref().unwrap();
+    let m3 = t.speeds(3);
+    // The team's explicit envelope is the default of the vehicle's.
+    assert_eq!((m3.nominal_mps, m3.min_mps, m3.max_mps), (0.3, 0.25, 0.75));
+    assert_eq!(t.speeds(0).nominal_mps, 0.5);
+    let (r, rows) = run_rows(&s);
+    let a0 = arc_travel(&rows[0]);
+    let a3 = arc_travel(&rows[3]);
+    let times: Vec<f64> = rows[0].iter().map(|r| r.t_s).collect();
+    let half = times.len() / 2;
+    let rel: Vec<f64> = a0.iter().zip(&a3).map(|(x, y)| x - y).collect();
+    let v_rel = slope(&times[half..], &rel[half..]);
+    assert!((v_rel - 0.2).abs() < 0.001, "relative speed {v_rel}");
+    // Each vehicle at its own speed (the robot flies its command exactly).
+    assert!((slope(&times[half..], &a3[half..]) - 0.3).abs() < 0.002);
+    assert!((slope(&times[half..], &a0[half..]) - 0.5).abs() < 0.002);
+    // Passes: the arc gained crosses 0.9 R and 0.9 R + L, not 0.9 R + 2 L.
+    let gain_end = rel[rel.len() - 1];
+    let first = 0.9 * R;
+    let l = TAU * R;
+    assert!(
+        gain_end > first + l && gain_end < first + 2.0 * l,
+        "{gain_end}"
+    );
+    let team = r.team.unwrap();
+    assert!(!team.order_preserved);
+    let ideal = team.revisit_time_ideal_s;
+    assert!(
+        (ideal - l / 1.8).abs() < 1e-9 * ideal,
+        "{ideal} vs {}",
+        l / 1.8
+    );
+}
+
+/// The ring's steady state with unequal nominal speeds `v0_i`: every vehicle at the common
+/// speed `V` (the gaps stand still), so vehicle `i`'s law gives
+/// `r_i - r_{i-1} = (V - v0_i)/k_v` for its range ahead `r_i` and behind `r_{i-1}` (chords);
+/// summed around the ring the left side vanishes, so `V = mean v0_i` when no command saturates.
+/// A vehicle saturated at its top speed `V = v_max_s` takes up the rest,
+/// `r_s - r_{s-1} = -sum_{i != s} (V - v0_i)/k_v`. The chords `r_i` then follow from one unknown,
+/// fixed by the arc gaps `2 R asin(r_i/(2R))` summing to `L = 2 pi R` (bisection).
+fn steady_gaps(v0: &[f64], v: f64, k_v: f64, saturated: Option<usize>) -> Vec<f64> {
+    let n = v0.len();
+    let mut d: Vec<f64> = v0.iter().map(|u| (v - u) / k_v).collect();
+    if let Some(s) = saturated {
+        d[s] = 0.0;
+        d[s] = -d.iter().sum::<f64>();
+    }
+    // r_i = x + sum_{j=1..=i} d_j (r_0 = x).
+    let offsets: Vec<f64> = (0..n).map(|i| d[1..=i].iter().sum()).collect();
+    let arcs = |x: f64| -> Vec<f64> {
+        offsets
+            .iter()
+            .map(|o| 2.0 * R * ((x + o) / (2.0 * R)).clamp(-1.0, 1.0).asin())
+            .collect()
+    };
+    let (mut lo, mut hi) = (
+        -offsets.iter().cloned().fold(f64::INFINITY, f64::min),
+        2.0 * R - offsets.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+    );
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if arcs(mid).iter().sum::<f64>() < TAU * R {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    arcs(0.5 * (lo + hi))
+}
+
+/// The arc gap ahead of each vehicle (to the next in the listed order, clockwise) at row `k`.
+fn gaps_at(rows: &[Vec<TraceRow>], k: usize) -> Vec<f64> {
+    let n = rows.len();
+    (0..n)
+        .map(|i| {
+            let a = rows[i][k].y_m.atan2(rows[i][k].x_m);
+            let b = rows[(i + 1) % n][k].y_m.atan2(rows[(i + 1) % n][k].x_m);
+            let mut g = a - b;
+            g -= TAU * (g / TAU).floor();
+            g * R
+        })
+        .collect()
+}
+
+/// `range_balance` with vehicle 3 at 0.3 m/s and the others at 0.5 m/s (k_v = 0.1, ideal
+/// ranging): within the slow vehicle's envelope (top 0.75 m/s) the team settles at the mean
+/// `V = 0.45 m/s`, each vehicle moving at it, with the slow one's gap ahead 1.5 m (chord)
+/// longer than its gap behind and every other's 0.5 m shorter ([`steady_gaps`]: within 3 cm);
+/// with the slow vehicle's top speed at 0.35 m/s, under the mean, the team settles at 0.35 m/s
+/// instead, the others' chord offsets -1.5 m and the slow one's +4.5 m.
+#[test]
+fn range_balance_settles_within_the_slow_vehicle_envelope() {
+    let v0 = [0.5, 0.5, 0.5, 0.3];
+    for (extra, v, saturated) in [
+        ("vehicles = [{ index = 3, speed_mps = 0.3 }]", 0.45, None),
+        (
+            "vehicles = [{ index = 3, speed_mps = 0.3, v_max_mps = 0.35 }]",
+            0.35,
+            Some(3),
+        ),
+    ] {
+        let s = circular_with(
+            extra,
+            &["sim.duration_s=600.0", "output.record_rate_hz=10.0"],
+        )
+        .unwrap();
+        let (r, rows) = run_rows(&s);
+        let want = steady_gaps(&v0, v, 0.1, saturated);
+        let last = rows[0].len() - 1;
+        let got = gaps_at(&rows, last);
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 0.03, "{extra}: gaps {got:?} vs {want:?}");
+        }
+        // Not the even spacing: the offsets are far beyond the tolerance.
+        assert!(want.iter().any(|w| (w - TAU * R / 4.0).abs() > 0.4));
+        // Every vehicle at the common speed over the last 60 s.
+        let times: Vec<f64> = rows[0].iter().map(|r| r.t_s).collect();
+        let from = times.len() - 600;
+        for (i, rs) in rows.iter().enumerate() {
+            let a = arc_travel(rs);
+            let u = slope(&times[from..], &a[from..]);
+            assert!(
+                (u - v).abs() < 0.002,
+                "{extra}: vehicle {i} at {u} m/s, want {v}"
+            );
+        }
+        let team = r.team.unwrap();
+        assert!(team.order_preserved);
+        let l = TAU * R;
+        assert!((team.revisit_time_ideal_s - l / 1.8).abs() < 1e-9 * l);
+    }
+}
+
+/// The refusals name their key: an entry without `index`, an index past the team, one given
+/// twice, the other vehicle kind's speed key, a key that makes no sense per vehicle, an
+/// envelope that does not hold the speed, a sensor rate that is no whole number of steps, and
+/// unequal speeds with a discovered ring.
+#[test]
+fn bad_overrides_are_refused_by_key() {
+    for (extra, sets, key) in [
+        (
+            "vehicles = [{ speed_mps = 0.3 }]",
+            vec![],
+            "team.vehicles[0].index",
+        ),
+        (
+            "vehicles = [{ index = 4 }]",
+            vec![],
+            "team.vehicles[0].index",
+        ),
+        (
+            "vehicles = [{ index = 1 }, { index = 1, speed_mps = 0.4 }]",
+            vec![],
+            "team.vehicles[1].index",
+        ),
+        (
+            "vehicles = [{ index = 1, airspeed_mps = 0.4 }]",
+            vec![],
+            "team.vehicles[0].airspeed_mps",
+        ),
+        (
+            "vehicles = [{ index = 1, kind = \"dubins\" }]",
+            vec![],
+            "kind",
+        ),
+        ("vehicles = [{ index = 1, level = 3.0 }]", vec![], "level"),
+        (
+            "vehicles = [{ index = 1, speed_mps = 0.2 }]",
+            vec![],
+            "team.vehicles[0].v_min_mps",
+        ),
+        (
+            "vehicles = [{ index = 1, speed_mps = 0.8 }]",
+            vec![],
+            "team.vehicles[0].v_max_mps",
+        ),
+        (
+            "vehicles = [{ index = 2, sensor_rate_hz = 30.0 }]",
+            vec![],
+            "team.vehicles[0].sensor_rate_hz",
+        ),
+        (
+            "vehicles = [{ index = 2, sensor_noise_std = -1.0 }]",
+            vec![],
+            "team.vehicles[0].sensor_noise_std",
+        ),
+        (
+            "vehicles = [{ index = 2, speed_mps = 0.4 }]",
+            vec!["team.ring=\"discovered\"", "sim.duration_s=200.0"],
+            "team.vehicles[0].speed_mps",
+        ),
+    ] {
+        let e = circular_with(extra, &sets).unwrap_err();
+        assert!(e.contains(key), "{extra}: {e}");
+    }
+    // The defaults: without team.v_min_mps / v_max_mps the vehicle's envelope is the team's
+    // rule at its own speed (v0/2, 2 v0).
+    let text = circular_text()
+        .replace("v_min_mps = 0.25\n", "")
+        .replace("v_max_mps = 0.75\n", "");
+    let s = parse_scenario(
+        &format!("{text}\nvehicles = [{{ index = 2, speed_mps = 0.4, sensor_rate_hz = 20.0 }}]\n"),
+        "<test>",
+        &[],
+    )
+    .unwrap();
+    let t = s.spec().team.as_ref().unwrap();
+    let m = t.speeds(2);
+    assert_eq!((m.nominal_mps, m.min_mps, m.max_mps), (0.4, 0.2, 0.8));
+    assert_eq!((t.v_min_mps, t.v_max_mps), (0.25, 1.0));
+    assert_eq!(t.speed_envelope_mps(), (0.2, 1.0));
+    assert_eq!(t.sensor(2, s.spec().sensor).rate_hz, 20.0);
+    assert_eq!(t.sensor(1, s.spec().sensor).rate_hz, 100.0);
+}
+
+/// Overrides that restate the team's settings change nothing: the run is the one without
+/// them, bit for bit (the engine then gets no per-vehicle speeds and the same sensors).
+#[test]
+fn overrides_equal_to_the_team_change_nothing() {
+    let plain = circular_with("", &["sim.duration_s=30.0"]).unwrap();
+    let same = circular_with(
+        "vehicles = [{ index = 1, speed_mps = 0.5, v_min_mps = 0.25, v_max_mps = 0.75, sensor_noise_std = 0.0, sensor_rate_hz = 100.0 }]",
+        &["sim.duration_s=30.0"],
+    )
+    .unwrap();
+    assert!(same.spec().team.as_ref().unwrap().member_speeds().is_none());
+    let (a, ra) = run_rows(&plain);
+    let (b, rb) = run_rows(&same);
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    assert_eq!(format!("{ra:?}"), format!("{rb:?}"));
+}
+
+/// A vehicle's own sensor: its noise makes its measurements differ from its truth while the
+/// others' (noiseless) equal theirs; its rate spaces its samples.
+#[test]
+fn a_vehicle_has_its_own_sensor() {
+    struct Samples(Vec<(f64, f64, Option<f64>)>);
+    impl TraceSink for Samples {
+        fn record(&mut self, r: &TraceRow) {
+            self.0.push((r.t_s, r.s, r.s_measured));
+        }
+    }
+    let s = circular_with(
+        "vehicles = [{ index = 1, sensor_noise_std = 0.05 }, { index = 2, sensor_rate_hz = 4.0 }]",
+        &["sim.duration_s=10.0", "output.record_rate_hz=100.0"],
+    )
+    .unwrap();
+    let mut sinks: Vec<Samples> = (0..4).map(|_| Samples(Vec::new())).collect();
+    s.run_team(&mut sinks).unwrap().unwrap();
+    let noisy = |k: usize| {
+        sinks[k]
+            .0
+            .iter()
+            .filter(|(_, s, m)| m.is_some_and(|m| m != *s))
+            .count()
+    };
+    assert!(noisy(1) > 900, "{}", noisy(1));
+    assert_eq!(noisy(0), 0);
+    assert_eq!(noisy(3), 0);
+    // Vehicle 2 samples every 0.25 s: its measurement changes at most 4 times a second.
+    let changes = sinks[2].0.windows(2).filter(|w| w[0].2 != w[1].2).count();
+    assert!((38..=41).contains(&changes), "{changes}");
+}
+
+/// `check`'s team section with a slow vehicle and a slower sensor: the tracking grid spans the
+/// union of the envelopes and holds each `v0_i`; at each speed the radius is the worst over the
+/// vehicles' sensor rates, each the single-vehicle check's at that rate and speed; the spacing
+/// loop's modes are those without overrides (the `v0_i` are constant inputs), and the shifted
+/// equilibrium is listed as not modelled.
+#[test]
+fn the_check_covers_every_vehicle() {
+    let s = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3, v_min_mps = 0.2, sensor_rate_hz = 4.0 }]",
+        &[],
+    )
+    .unwrap();
+    let t = check(&s, None).team.unwrap();
+    let tr = &t.tracking;
+    assert_eq!(tr.speed_range_mps, [0.2, 0.75]);
+    assert_eq!(tr.speeds_mps[0], 0.2);
+    assert!(tr.speeds_mps.contains(&0.3) && tr.speeds_mps.contains(&0.5));
+    assert_eq!(tr.sensor_rates_hz, [4.0, 100.0]);
+    let k = tr.speeds_mps.len() - 1;
+    for (i, v) in [(0usize, 0.2), (k, 0.75)] {
+        let worst = [4.0, 100.0]
+            .iter()
+            .map(|rate| {
+                let one = circular_with(
+                    "",
+                    &[
+                        &format!("vehicle.speed_mps={v}"),
+                        &format!("sensor.rate_hz={rate}"),
+                        "team.v_min_mps=0.2",
+                        "team.v_max_mps=0.75",
+                    ],
+                )
+                .unwrap();
+                check(&one, None).sampled.spectral_radius.unwrap()
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        let got = tr.spectral_radii[i].unwrap();
+        assert!(
+            (got - worst).abs() <= 1e-12 * worst,
+            "{v}: {got} vs {worst}"
+        );
+    }
+    let plain = check(&circular_with("", &[]).unwrap(), None).team.unwrap();
+    assert_eq!(
+        format!("{:?}", t.spacing.modes),
+        format!("{:?}", plain.spacing.modes)
+    );
+    assert!(t
+        .spacing
+        .not_modelled
+        .iter()
+        .any(|m| m.starts_with("team.vehicles: unequal nominal speeds")));
+    // `none` checks the nominal speeds only.
+    let none = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3 }]",
+        &["team.spacing=\"none\""],
+    )
+    .unwrap();
+    let tr = check(&none, None).team.unwrap().tracking;
+    assert_eq!(tr.speeds_mps, [0.3, 0.5]);
+}
