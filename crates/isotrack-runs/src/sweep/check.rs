@@ -706,7 +706,7 @@ impl TeamBounds {
         let n = team.starts.len() as f64;
         let ideal_s = match s.team_isoline().as_team_isoline() {
             Some(isotrack_sim::team::TeamIsoline::Fixed(a)) => {
-                Some(a.length_m() / (n * team.nominal_speed_mps))
+                Some(a.length_m() / (n * team.ideal_speed_mps()))
             }
             _ => None,
         };
