@@ -239,7 +239,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
 /// resolving tells: nothing to refuse (a scenario can resolve and still fail to build).
 /// A team run whose scenario is valid can still be refused by the team engine (`[team]: ...`,
 /// found only by running it): such a row is kept as it is.
-fn check_invalid<'c>(
+fn check_invalid(
     rules: &RowRules<'_>,
     id: u64,
     detail: &str,
