@@ -440,7 +440,8 @@ vary = {{ "initial.x_m" = {{ uniform = [8.0, 14.0] }} }}
     assert_eq!(read(&out.join("leaderboard.csv")), board);
     // Impossible values and runs the suite does not define: refused (65), naming the file and
     // the field. The limit 1 rad/s held over 60 s bounds the effort by 1^2 x 60 = 60 rad^2/s.
-    let cases: [(&str, &dyn Fn(&mut serde_json::Value), &str); 7] = [
+    type Edit<'a> = (&'a str, &'a dyn Fn(&mut serde_json::Value), &'a str);
+    let cases: [Edit; 7] = [
         (
             "neg",
             &|t| t["runs"][0]["control_effort"] = serde_json::json!(-1.0),

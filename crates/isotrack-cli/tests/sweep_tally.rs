@@ -271,3 +271,47 @@ fn fixed_wing_rows_are_bounded_by_the_airframes_turn_limit() {
         &["results.csv:2", "control_effort", "turn-rate limit"],
     );
 }
+
+/// att30c-3 (a, b): a row is kept only as isotrack writes it, byte for byte (a quoted
+/// `"completed"` reads as `completed` but would be copied verbatim), and a row that did not
+/// complete says why (an empty `outcome_detail` in a `diverged` row is refused).
+#[test]
+fn rows_are_kept_only_as_isotrack_writes_them() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "plume.toml", PLUME);
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [5.0, 6.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    assert!(row.contains(",completed,"), "{row}");
+    for (name, edited, needle) in [
+        (
+            "quoted",
+            row.replacen(",completed,", ",\"completed\",", 1),
+            "as isotrack writes",
+        ),
+        (
+            "nodetail",
+            row.replacen(",completed,", ",diverged,", 1),
+            "outcome_detail is empty",
+        ),
+    ] {
+        let o_dir = d.path().join(name);
+        copy_with(&out, &o_dir, &text.replacen(row, &edited, 1));
+        let o = isotrack(&["sweep", &sw, "--out", o_dir.to_str().unwrap(), "--resume"]);
+        assert_fails(&o, 65, &["results.csv:2", needle]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{name}")).to_str().unwrap(),
+        ]);
+        assert_fails(&m, 65, &["results.csv:2", needle]);
+    }
+}

@@ -59,7 +59,7 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         sensor_drops_samples: sensor.dropout_probability != 0.0,
         // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).
         // Unset on a fixed wing, the limit every law flies is the airframe's, `g tan(phi_max)
-        // / V` of the trimmed vehicle ([`VehicleModel::airframe_turn_rate_limit_radps`], what
+        // / V` of the trimmed vehicle ([`crate::vehicle::VehicleModel::airframe_turn_rate_limit_radps`], what
         // `crate::spec::ControllerSpec` resolves): the same resolved limit the run flies.
         turn_rate_limit_radps: match f.controller.max_turn_rate_radps {
             Some(w) => Some(w),
@@ -67,7 +67,7 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
                 && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
             {
-                build_vehicle(f)
+                crate::vehicle::build_vehicle(f)
                     .ok()
                     .and_then(|v| v.airframe_turn_rate_limit_radps())
             }

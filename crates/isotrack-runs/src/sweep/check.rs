@@ -168,6 +168,16 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
             ));
         }
     }
+    // The line as isotrack writes it: its cells written again (quoted only where they must
+    // be) give the line back byte for byte; a quoted `"completed"` reads as `completed` but is
+    // no line of isotrack's, and resume/merge copy lines verbatim (att30c-3 a).
+    let fields: Vec<String> = rec.iter().map(str::to_string).collect();
+    let rewritten = crate::sweep::rows::csv_line(&fields);
+    if rewritten.trim_end_matches('\n') != line.trim_end_matches('\n') {
+        return Err(
+            "the line is not written as isotrack writes its cells (a cell quoted that needs no quotes, or another form)".to_string(),
+        );
+    }
     let cell = |name: &str| {
         header
             .iter()
@@ -229,7 +239,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
 /// resolving tells: nothing to refuse (a scenario can resolve and still fail to build).
 /// A team run whose scenario is valid can still be refused by the team engine (`[team]: ...`,
 /// found only by running it): such a row is kept as it is.
-fn check_invalid<'c>(
+fn check_invalid(
     rules: &RowRules<'_>,
     id: u64,
     detail: &str,
@@ -583,9 +593,15 @@ pub fn check_metrics<'c>(
         }
         return Ok(());
     }
-    // The detail says why a run did not complete: a completed row has none.
+    // The detail says why a run did not complete: a completed row has none, a row that did
+    // not complete always one (the run ends with its reason; att30c-3 b).
     if outcome == "completed" && !cell("outcome_detail").is_empty() {
         return Err("outcome_detail holds text in a `completed` row".to_string());
+    }
+    if whole_row && outcome != "completed" && cell("outcome_detail").is_empty() {
+        return Err(format!(
+            "outcome_detail is empty in a `{outcome}` row: a run that did not complete says why"
+        ));
     }
     for n in ["t_end_s", "samples"].into_iter().filter(|_| whole_row) {
         if cell(n).is_empty() {
