@@ -10,6 +10,10 @@ item), and prints the strongly connected components of more than one file. Test 
 
     scripts/file-cycles.py            # prints cycles; exit 1 if any
     scripts/file-cycles.py --dot      # the whole graph as Graphviz dot on stdout
+    scripts/file-cycles.py --root DIR # another tree laid out as this one (the test's fixtures)
+
+The test `crates/isotrack-cli/tests/structure.rs` runs it on the workspace (no cycle) and on a
+small tree with one (found, exit 1).
 
 Written by hand (a small Python script, no dependency) because the Rust tools that draw module
 graphs (cargo-modules) need a compiler toolchain build of their own and report modules, not files,
@@ -242,11 +246,22 @@ def crates():
         src = os.path.join(ROOT, "crates", name, "src")
         if os.path.isdir(src):
             yield name, src
-    yield "python", os.path.join(ROOT, "python", "src")
+    src = os.path.join(ROOT, "python", "src")
+    if os.path.isdir(src):
+        yield "python", src
 
 
 def main():
-    dot = "--dot" in sys.argv[1:]
+    global ROOT
+    args = sys.argv[1:]
+    if "--root" in args:
+        i = args.index("--root")
+        if i + 1 >= len(args):
+            print("error: --root takes a directory", file=sys.stderr)
+            return 2
+        ROOT = os.path.abspath(args[i + 1])
+        del args[i:i + 2]
+    dot = "--dot" in args
     found = 0
     if dot:
         print("digraph files {\n  rankdir=LR;")

@@ -4,8 +4,8 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    // Ctrl-C and SIGTERM remove the lock and temporary files a command holds, then exit
-    // 130 / 143 (issue 30, att30b item 10).
+    // Ctrl-C, SIGTERM and SIGHUP remove the lock and temporary files a command holds, then
+    // exit 130 / 143 / 129 (issue 30, att30b item 10; att30c-7).
     isotrack_commands::entry::remove_on_interrupt();
     ExitCode::from(isotrack_commands::entry::main_with(std::env::args_os()))
 }

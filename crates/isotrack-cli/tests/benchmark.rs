@@ -348,3 +348,139 @@ fn html_pages_in_a_real_browser() {
     );
     assert_not_blank(&shot);
 }
+
+/// `benchmark --resume` reuses a task's `task.json` only once checked (att30b item 11): its
+/// runs are exactly the suite's controllers x seeds, each value one a run can have (as a
+/// sweep's stored rows), and its scores, title and picture are recomputed, never read.
+#[test]
+fn resume_checks_task_json() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = repo().join("scenarios");
+    let suite = write(
+        d.path(),
+        "one.toml",
+        &format!(
+            r#"name = "one"
+version = 1
+controllers = ["pi_isoline", "sliding_mode"]
+tuning_seeds = [9001]
+scoring_seeds = [1, 2]
+
+[[task]]
+id = "c"
+title = "circular"
+scenario = "{s}/paper-fig2b-circular.toml"
+length_m = 6.93
+set = ["sim.duration_s=60.0", "controller.max_turn_rate_radps=1.0"]
+vary = {{ "initial.x_m" = {{ uniform = [8.0, 14.0] }} }}
+"#,
+            s = scen.display()
+        ),
+    );
+    let first = d.path().join("first");
+    let o = isotrack(&["benchmark", &suite, "--out", first.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let board = read(&first.join("leaderboard.csv"));
+    let results = read(&first.join("tasks/c/results.csv"));
+    let stored: serde_json::Value =
+        serde_json::from_str(&read(&first.join("tasks/c/task.json"))).unwrap();
+    // Resume after `edit`: its exit code, stderr and the out dir.
+    let resume = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let out = d.path().join(name);
+        std::fs::create_dir_all(out.join("tasks/c")).unwrap();
+        for f in [
+            "leaderboard.csv",
+            "leaderboard.md",
+            "index.html",
+            "suite.toml",
+        ] {
+            std::fs::copy(first.join(f), out.join(f)).unwrap();
+        }
+        std::fs::copy(
+            first.join("tasks/c/results.csv"),
+            out.join("tasks/c/results.csv"),
+        )
+        .unwrap();
+        let mut t = stored.clone();
+        edit(&mut t);
+        std::fs::write(out.join("tasks/c/task.json"), t.to_string()).unwrap();
+        let o = isotrack(&[
+            "benchmark",
+            &suite,
+            "--out",
+            out.to_str().unwrap(),
+            "--resume",
+        ]);
+        (o, out)
+    };
+    // Untouched: reused as is.
+    let (o, out) = resume("same", &|_| {});
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(read(&out.join("leaderboard.csv")), board);
+    assert_eq!(read(&out.join("tasks/c/results.csv")), results);
+    // Edited scores, title and picture: recomputed from the runs and the suite, so the
+    // leaderboard is the first run's.
+    let (o, out) = resume("scores", &|t| {
+        t["scores"] = serde_json::json!([["sliding_mode", 99.0], ["pi_isoline", 1.0]]);
+        t["title"] = serde_json::json!("c\u{202e}<script>");
+        t["picture"]["n"] = serde_json::json!(100_000_000u64);
+    });
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(read(&out.join("leaderboard.csv")), board);
+    let again: serde_json::Value =
+        serde_json::from_str(&read(&out.join("tasks/c/task.json"))).unwrap();
+    assert_eq!(again["title"], "circular");
+    assert_eq!(again["picture"]["n"], 64);
+    assert_eq!(again["scores"], stored["scores"]);
+    // Edited run scores: recomputed too.
+    let (o, out) = resume("run-score", &|t| {
+        t["runs"][0]["score"]["total"] = serde_json::json!(100.0);
+    });
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(read(&out.join("leaderboard.csv")), board);
+    // Impossible values and runs the suite does not define: refused (65), naming the file and
+    // the field. The limit 1 rad/s held over 60 s bounds the effort by 1^2 x 60 = 60 rad^2/s.
+    let cases: [(&str, &dyn Fn(&mut serde_json::Value), &str); 7] = [
+        (
+            "neg",
+            &|t| t["runs"][0]["control_effort"] = serde_json::json!(-1.0),
+            "runs[0].control_effort",
+        ),
+        (
+            "big",
+            &|t| t["runs"][2]["control_effort"] = serde_json::json!(1e9),
+            "runs[2].control_effort",
+        ),
+        (
+            "seed",
+            &|t| t["runs"][2]["seed"] = serde_json::json!(77),
+            "runs[2].seed",
+        ),
+        (
+            "ctl",
+            &|t| t["runs"][3]["controller"] = serde_json::json!("pid"),
+            "runs[3].controller",
+        ),
+        (
+            "band",
+            &|t| t["runs"][1]["time_in_band_fraction"] = serde_json::json!(1.5),
+            "runs[1].time_in_band_fraction",
+        ),
+        (
+            "conv",
+            &|t| t["runs"][1]["convergence_time_s"] = serde_json::json!(61.0),
+            "runs[1].convergence_time_s",
+        ),
+        (
+            "fewer",
+            &|t| {
+                t["runs"].as_array_mut().unwrap().pop();
+            },
+            "runs: 3 runs where the suite scores 4",
+        ),
+    ];
+    for (name, edit, needle) in cases {
+        let (o, _) = resume(name, edit);
+        assert_fails(&o, 65, &["task.json", needle]);
+    }
+}

@@ -726,3 +726,55 @@ fn the_help_does_not_promise_a_colormap_for_the_chart() {
     assert!(!help.contains("[default: viridis]"), "{help}");
     assert!(help.contains("Not for `check --map`"), "{help}");
 }
+
+/// att30c-7 (c): SIGTERM (a scheduler's) and SIGHUP (the terminal closed) during `--verify`
+/// stop it as Ctrl-C does (the runs that finished reported, marked partial), and the command
+/// exits 128 + the signal, 143 and 129, not Ctrl-C's 130.
+#[cfg(unix)]
+#[test]
+fn sigterm_and_sighup_during_verify_exit_128_plus_the_signal() {
+    for (signal, code) in [("-TERM", 143), ("-HUP", 129)] {
+        let d = tempfile::tempdir().unwrap();
+        let out = d.path().join("o");
+        let sc = scenario();
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args([
+                "check",
+                sc.as_str(),
+                "--set",
+                "sim.duration_s=20000",
+                "--map",
+                "--out",
+                out.to_str().unwrap(),
+                "--map-size",
+                "5x3",
+                "--verify",
+                "60",
+                "--threads",
+                "1",
+            ])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let svg = out.join("stability_map.svg");
+        for _ in 0..1200 {
+            if svg.exists() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        assert!(svg.exists(), "the chart is written before the runs");
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let kill = std::process::Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(code), "{signal}: {}", stderr(&o));
+        assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(text.contains("verify: PARTIAL (interrupted)"), "{text}");
+    }
+}

@@ -95,6 +95,27 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             64,
             "1 to 10",
         ),
+        // att33b item 13: a malformed sensor address is a usage error, as --mavlink's.
+        (
+            vec!["fly", "--mavlink", out, "--sensor", "udp:127.0.0.1:99999"],
+            64,
+            "--sensor udp:127.0.0.1:99999",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--system-id", "0"],
+            64,
+            "--system-id 0 is MAVLink's broadcast address",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--target-system", "0"],
+            64,
+            "--target-system 0 is MAVLink's broadcast address",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--allow-generic"],
+            64,
+            "--allow-generic goes with --take-control",
+        ),
         (
             vec!["sitl", "--mavlink", out, "--speedup", "2", "--lockstep"],
             64,
@@ -181,6 +202,7 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
         .args([
             "fly",
             "--take-control",
+            "--arm",
             "--timeout-s",
             "60",
             "--set",
@@ -223,6 +245,7 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
         "junk_datagrams",
         "measurements_out_of_order",
         "measurements_repeated",
+        "measurements_invalid",
         "metrics_over",
         "steady_state_max_abs_error",
         "track_losses",
@@ -231,7 +254,8 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
     for w in order.windows(2) {
         assert!(at(w[0]) < at(w[1]), "{} before {}", w[0], w[1]);
     }
-    assert_eq!(summary.as_object().unwrap().len(), 17 + 12 + 1);
+    assert_eq!(summary.as_object().unwrap().len(), 18 + 12 + 1);
+    assert_eq!(summary["measurements_invalid"], 0);
     assert_eq!(summary["samples"], 2001);
     assert_eq!(summary["commands"], 2001);
     let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
@@ -303,6 +327,25 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
         page.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // A flight that answered no measurement (att33b item 18): no rows, no end time (null in
+    // the summary); `plot` says so in words, never "t = null s".
+    let header = trace.lines().next().unwrap().to_string();
+    std::fs::write(fly_dir.join("trace.csv"), header + "\n").unwrap();
+    let mut empty = summary.clone();
+    empty["t_end_s"] = serde_json::Value::Null;
+    std::fs::write(
+        fly_dir.join("summary.json"),
+        serde_json::to_string_pretty(&empty).unwrap(),
+    )
+    .unwrap();
+    let o = isotrack(&["plot", fly_dir.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success()
+            && err.contains("before its first measurement")
+            && !err.contains("null"),
+        "{err}"
+    );
 }
 
 /// Real time (20x): the vehicle does not wait for the companion, which answers every sample all
@@ -329,7 +372,7 @@ fn a_real_time_flight_completes() {
         .unwrap();
     let port = sitl_port(&mut sitl);
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "30"])
         .arg("--mavlink")
         .arg(format!("udpout:127.0.0.1:{port}"))
         .output()
@@ -390,7 +433,7 @@ fn a_scenario_of_another_kind_than_the_vehicle_exits_65() {
         .unwrap();
     let port = sitl_port(&mut sitl);
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "30"])
         .arg("--mavlink")
         .arg(format!("udpout:127.0.0.1:{port}"))
         .output()
@@ -437,7 +480,7 @@ fn a_flight_under_way(
         .unwrap();
     let port = sitl_port(&mut sitl);
     let fly = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "30"])
         .arg("--mavlink")
         .arg(format!("udpout:127.0.0.1:{port}"))
         .arg("--out")
@@ -581,7 +624,7 @@ fn a_killed_flight_leaves_a_readable_trace() {
     let port = sitl_port(&mut sitl);
     let out = dir.path().join("fly");
     let mut fly = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "30"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "30"])
         .args(["--set", "sensor.rate_hz=1"])
         .arg("--mavlink")
         .arg(format!("udpout:127.0.0.1:{port}"))
@@ -689,7 +732,7 @@ fn sitl_and_fly_out_replace_an_earlier_run_as_run_out_does() {
         .unwrap();
     let port = sitl_port(&mut sitl);
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "60"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "60"])
         .args(["--set", "sim.duration_s=5", "--mavlink"])
         .arg(format!("udpout:127.0.0.1:{port}"))
         .arg("--out")

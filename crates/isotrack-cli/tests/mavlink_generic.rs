@@ -49,7 +49,7 @@ fn fly_against_generic(extra: &[&str]) -> (std::process::Output, Vec<String>, u3
 fn fly_against(vehicle: Vehicle, extra: &[&str]) -> (std::process::Output, Vec<String>, u32) {
     let port = free_udp_port();
     let child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "5"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "5"])
         .args(extra)
         .arg("--mavlink")
         .arg(format!("udpin:127.0.0.1:{port}"))

@@ -127,7 +127,7 @@ fn a_lockstep_flight_over_tcp() {
     assert!(line.contains("(tcpin:127.0.0.1:0)"), "{line}");
     let fly_dir = dir.path().join("fly");
     let o = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(["fly", "--take-control", "--timeout-s", "60"])
+        .args(["fly", "--take-control", "--arm", "--timeout-s", "60"])
         .args(["--set", "sim.duration_s=20", "--mavlink"])
         .arg(format!("tcpout:127.0.0.1:{port}"))
         .arg("--out")

@@ -183,7 +183,7 @@ fn way_outs(s: &Seen) -> usize {
 #[test]
 fn ctrl_c_while_waiting_for_a_heartbeat_sends_nothing_and_exits_69() {
     let port = free_udp_port();
-    let mut child = fly(port, &["--take-control"]);
+    let mut child = fly(port, &["--take-control", "--arm"]);
     let mut line = String::new();
     BufReader::new(child.stderr.take().unwrap())
         .read_line(&mut line)
@@ -211,7 +211,7 @@ fn ctrl_c_while_waiting_for_the_pilot_commands_nothing_and_exits_79() {
 #[test]
 fn ctrl_c_in_control_commands_hold_and_exits_75_once_confirmed() {
     let (o, seen) = interrupted_flight(
-        &["--take-control"],
+        &["--take-control", "--arm"],
         true,
         |s| s.setpoints_in_control >= 5,
         None,
@@ -228,7 +228,7 @@ fn ctrl_c_in_control_commands_hold_and_exits_75_once_confirmed() {
 #[test]
 fn a_second_ctrl_c_in_the_failsafe_ends_the_retries_unconfirmed_exit_69() {
     let (o, seen) = interrupted_flight(
-        &["--take-control"],
+        &["--take-control", "--arm"],
         false,
         |s| s.setpoints_in_control >= 5,
         Some(|s| way_outs(s) >= 1),

@@ -185,9 +185,9 @@ fn a_failed_or_interrupted_command_leaves_no_lock() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
-/// Issue 30 (att30b item 10): `run --out` stopped by Ctrl-C (SIGINT) or SIGTERM while it
-/// streams the trace leaves neither `.isotrack.lock` nor its `.trace.csv.PID.tmp`, and exits
-/// 130 / 143 (128 + the signal); a temporary file a killed run left (its PID gone) is removed
+/// Issue 30 (att30b item 10): `run --out` stopped by Ctrl-C (SIGINT), SIGTERM or SIGHUP while
+/// it streams the trace leaves neither `.isotrack.lock` nor its `.trace.csv.PID.tmp`, and exits
+/// 130 / 143 / 129 (128 + the signal); a temporary file a killed run left (its PID gone) is removed
 /// by the next `run --out` into the directory.
 #[cfg(unix)]
 #[test]
@@ -203,7 +203,8 @@ fn an_interrupted_run_out_leaves_no_lock_file_nor_temporary_trace() {
             })
             .unwrap_or_default()
     };
-    for (signal, code) in [("-INT", 130), ("-TERM", 143)] {
+    // SIGHUP (a closed terminal or ssh session) as SIGTERM: 129 (att30c-7).
+    for (signal, code) in [("-INT", 130), ("-TERM", 143), ("-HUP", 129)] {
         let out = d.path().join(format!("r{code}"));
         let out_s = out.display().to_string();
         // 1e6 s at 100 Hz recorded: minutes of trace.
@@ -248,6 +249,58 @@ fn an_interrupted_run_out_leaves_no_lock_file_nor_temporary_trace() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(temporaries(&out), vec!["notes.tmp".to_string()]);
+}
+
+/// att30c-7 (a): a SIGINT the command was started with ignored (`trap '' INT`, a script's
+/// `cmd &`) stays ignored, as shells expect: Ctrl-C does not stop `run --out`; SIGTERM still
+/// does, removing its temporary trace and lock file (143).
+#[cfg(unix)]
+#[test]
+fn an_inherited_ignored_sigint_stays_ignored() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("r");
+    let litter = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .map(|it| {
+                it.flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.ends_with(".tmp") || n == ".isotrack.lock")
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let mut run = Command::new("sh")
+        .args([
+            "-c",
+            "trap '' INT; exec \"$0\" run --set sim.duration_s=1e6 --out \"$1\"",
+            env!("CARGO_BIN_EXE_isotrack"),
+            &out.display().to_string(),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !litter(&out).iter().any(|n| n.starts_with(".trace.csv.")) {
+        assert!(t0.elapsed() < Duration::from_secs(60), "no temporary trace");
+        assert!(run.try_wait().unwrap().is_none(), "ended before caught");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let pid = run.id().to_string();
+    let kill = |signal: &str| {
+        let ok = Command::new("kill").args([signal, &pid]).status().unwrap();
+        assert!(ok.success());
+    };
+    kill("-INT");
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(
+        run.try_wait().unwrap().is_none(),
+        "an ignored SIGINT stopped the run"
+    );
+    kill("-TERM");
+    let status = run.wait().unwrap();
+    assert_eq!(status.code(), Some(143), "{status:?}");
+    assert_eq!(litter(&out), Vec::<String>::new());
 }
 
 /// Item 5: a FIFO, a directory or a device named inside a file (a scenario's `field.path` or

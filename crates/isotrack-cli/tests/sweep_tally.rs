@@ -111,3 +111,163 @@ fn the_lock_message_names_the_command_that_holds_it() {
     let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Copies sweep output `from` to `to` with `results.csv` replaced by `text`.
+fn copy_with(from: &std::path::Path, to: &std::path::Path, text: &str) {
+    std::fs::create_dir_all(to).unwrap();
+    for f in ["sweep.json", "sweep.toml", "base_scenario.toml"] {
+        std::fs::copy(from.join(f), to.join(f)).unwrap();
+    }
+    std::fs::write(to.join("results.csv"), text).unwrap();
+}
+
+/// `row` (1-based line) of `text` with its last cell (`warnings`) set to `w`.
+fn with_warnings(text: &str, line: usize, w: &str) -> String {
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let l = &lines[line - 1];
+    // The warnings cell is the last: quoted when it holds a comma.
+    let cut = if l.ends_with('"') {
+        l[..l.len() - 1].rfind(",\"").unwrap()
+    } else {
+        l.rfind(',').unwrap()
+    };
+    lines[line - 1] = format!("{},{w}", &l[..cut]);
+    lines.join("\n") + "\n"
+}
+
+/// att30b item 16: the `warnings` cell is recomputed from the run's scenario on `--resume`
+/// and `merge` (a blanked warning, or text on a run without one, is a damaged row), and its
+/// numbers are the console's rounding (6 significant digits), never 17.
+#[test]
+fn the_warnings_cell_is_recomputed_and_rounded() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "plume.toml", PLUME);
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [5.0, 60.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let far = text.lines().nth(2).unwrap();
+    assert!(far.contains("flat start"), "{far}");
+    // No number of more than 6 significant digits in the warning.
+    let w = &far[far.find("flat start").unwrap()..];
+    let longest = w
+        .split(|c: char| !c.is_ascii_digit())
+        .map(str::len)
+        .max()
+        .unwrap();
+    assert!(longest <= 6, "{w}");
+    for (name, line, value) in [("blank", 3, ""), ("made-up", 2, "x")] {
+        let o_dir = d.path().join(name);
+        copy_with(&out, &o_dir, &with_warnings(&text, line, value));
+        let o = isotrack(&["sweep", &sw, "--out", o_dir.to_str().unwrap(), "--resume"]);
+        assert_fails(&o, 65, &[&format!("results.csv:{line}"), "warnings"]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{name}")).to_str().unwrap(),
+        ]);
+        assert_fails(&m, 65, &[&format!("results.csv:{line}"), "warnings"]);
+    }
+}
+
+/// att30b item 6 (its reverse half): a valid run's row relabelled `invalid_scenario` (dropped
+/// from every statistic) is refused on `--resume` and `merge`, and an invalid run's row must
+/// give the reason the plan gives it. Run 1 (dt 0.03 s against a 100 Hz sensor) is invalid.
+#[test]
+fn invalid_scenario_rows_are_recomputed() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/paper-fig2b-circular.toml"
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!(
+            "scenario = {scen:?}\n[base]\nsim.duration_s = 20.0\n[grid]\nsim.dt_s = [0.01, 0.03]\n"
+        ),
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(65), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[2].contains(",invalid_scenario,"), "{}", lines[2]);
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let at = header.iter().position(|h| *h == "outcome").unwrap();
+    // Run 0 relabelled: its plan columns, outcome invalid_scenario, every metric empty, a
+    // made-up reason, no warnings.
+    let mut cells: Vec<String> = lines[1].split(',').take(at).map(str::to_string).collect();
+    cells.push("invalid_scenario".into());
+    cells.extend(std::iter::repeat_n(String::new(), header.len() - at - 3));
+    cells.push("made up".into());
+    cells.push(String::new());
+    let relabelled = cells.join(",");
+    // Run 1's reason changed.
+    let reason = lines[2].replacen("sim.dt_s", "sim.dt_x", 1);
+    assert_ne!(reason, lines[2]);
+    for (name, line, row, needle) in [
+        ("valid", 2, relabelled.as_str(), "outcome"),
+        ("reason", 3, reason.as_str(), "outcome_detail"),
+    ] {
+        let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        l[line - 1] = row.to_string();
+        let o_dir = d.path().join(name);
+        copy_with(&out, &o_dir, &(l.join("\n") + "\n"));
+        let o = isotrack(&["sweep", &sw, "--out", o_dir.to_str().unwrap(), "--resume"]);
+        assert_fails(&o, 65, &[&format!("results.csv:{line}"), needle]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{name}")).to_str().unwrap(),
+        ]);
+        assert_fails(&m, 65, &[&format!("results.csv:{line}"), needle]);
+    }
+}
+
+/// Brief fix30f item F: a fixed wing without `controller.max_turn_rate_radps` flies the
+/// airframe's limit `g tan(40 deg) / V` (0.274 rad/s at 30 m/s) under every law but a
+/// schedule; a sliding-mode row's `control_effort` is bounded by it over the run, `0.274^2 x 20
+/// s = 1.5 rad^2/s`: 10 (within `1^2 x 20`, the Dubins sliding mode's default) is refused.
+#[test]
+fn fixed_wing_rows_are_bounded_by_the_airframes_turn_limit() {
+    let d = tempfile::tempdir().unwrap();
+    write(
+        d.path(),
+        "fw.toml",
+        "[field]\nkind = \"radial_exp\"\ndecay_per_m = 0.001\n[vehicle]\nkind = \"fixed_wing\"\n[initial]\nx_m = 700.0\n[sim]\nduration_s = 20.0\n[sensor]\nrate_hz = 1.0\n[controller]\nkind = \"sliding_mode\"\n",
+    );
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"fw.toml\"\n[grid]\nsensor.noise_std = [0.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let at = header.iter().position(|h| *h == "control_effort").unwrap();
+    let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    let limit = 9.80665 * 40f64.to_radians().tan() / 30.0;
+    let effort: f64 = row[at].parse().unwrap();
+    assert!(effort <= limit * limit * 20.0 * (1.0 + 1e-9), "{effort}");
+    let mut bad: Vec<String> = row.iter().map(|s| s.to_string()).collect();
+    bad[at] = "10.0".into();
+    let doctored = format!("{}\n{}\n", text.lines().next().unwrap(), bad.join(","));
+    let o_dir = d.path().join("bad");
+    copy_with(&out, &o_dir, &doctored);
+    let o = isotrack(&["sweep", &sw, "--out", o_dir.to_str().unwrap(), "--resume"]);
+    assert_fails(
+        &o,
+        65,
+        &["results.csv:2", "control_effort", "turn-rate limit"],
+    );
+}

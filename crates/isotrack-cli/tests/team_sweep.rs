@@ -128,3 +128,89 @@ fn team_keys_on_a_single_vehicle_base_are_invalid_runs() {
     let detail = &rows[0][header.iter().position(|h| h == "outcome_detail").unwrap()];
     assert!(detail.contains("team"), "{detail}");
 }
+
+/// Replaces cell `col` of data row `row` (0-based) of CSV `text` with `value`.
+fn with_cell(text: &str, row: usize, col: &str, value: &str) -> String {
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let header: Vec<String> = lines[0].split(',').map(str::to_string).collect();
+    let i = header.iter().position(|h| h == col).unwrap();
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(lines[row + 1].as_bytes());
+    let mut cells: Vec<String> = r
+        .records()
+        .next()
+        .unwrap()
+        .unwrap()
+        .iter()
+        .map(str::to_string)
+        .collect();
+    cells[i] = value.to_string();
+    let mut w = csv::WriterBuilder::new().from_writer(vec![]);
+    w.write_record(&cells).unwrap();
+    lines[row + 1] = String::from_utf8(w.into_inner().unwrap())
+        .unwrap()
+        .trim_end()
+        .to_string();
+    lines.join("\n") + "\n"
+}
+
+/// att30b item 9: a team row's cells bounded by its run (a 30 s run of robots 0.5 m/s, at most
+/// 1 m/s under range_balance, that start on a circle of radius 10 ln 2 m): times within 30 s,
+/// the separation within the starts' spread plus twice the top speed over the run, and the ideal
+/// revisit time exactly `L/(N v0)`. Refused by `--resume` and by `merge`, naming the column.
+#[test]
+fn team_cells_are_bounded_by_their_run() {
+    let d = tempfile::tempdir().unwrap();
+    let sweep = write(
+        d.path(),
+        "team.toml",
+        &format!("scenario = {TEAM:?}\n[base]\nsim.duration_s = 30.0\n[grid]\nsensor.noise_std = [0.0]\n"),
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    // 2 pi 10 ln 2 / (4 x 0.5): the ideal as written, and one ulp off it.
+    let ideal = 2.0 * PI * 10.0 * LN_2 / (4.0 * 0.5);
+    let (header, rows) = read_csv(&out.join("results.csv"));
+    let written: f64 = rows[0][header
+        .iter()
+        .position(|h| h == "revisit_time_ideal_s")
+        .unwrap()]
+    .parse()
+    .unwrap();
+    assert!((written - ideal).abs() < 1e-12 * ideal);
+    let ulp_off = f64::from_bits(written.to_bits() + 1).to_string();
+    for (col, value) in [
+        ("time_to_even_s", "31.0"),
+        ("revisit_time_max_s", "1e300"),
+        ("revisit_time_mean_s", "30.5"),
+        ("min_separation_m", "1e300"),
+        ("revisit_time_ideal_s", "5.0"),
+        ("revisit_time_ideal_s", ulp_off.as_str()),
+    ] {
+        let bad = with_cell(&text, 0, col, value);
+        let o_dir = d.path().join(format!("o-{col}-{value}"));
+        std::fs::create_dir_all(&o_dir).unwrap();
+        for f in ["sweep.json", "sweep.toml", "base_scenario.toml"] {
+            std::fs::copy(out.join(f), o_dir.join(f)).unwrap();
+        }
+        std::fs::write(o_dir.join("results.csv"), &bad).unwrap();
+        let o = isotrack(&[
+            "sweep",
+            &sweep,
+            "--out",
+            o_dir.to_str().unwrap(),
+            "--resume",
+        ]);
+        assert_fails(&o, 65, &["results.csv:2", col]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{col}-{value}")).to_str().unwrap(),
+        ]);
+        assert_fails(&m, 65, &["results.csv:2", col]);
+    }
+}

@@ -451,9 +451,10 @@ pub fn write_map(
         Some(n) => {
             let seed = scenario.spec().sim.seed;
             let at = verify_points(&grid, family.dt_s(), n, seed);
-            // Ctrl-C (or SIGTERM) from here on stops the runs not yet started; the runs that
-            // finished are reported (marked partial) and written, and the command exits 130.
-            let stop = isotrack_mavlink::interrupt_flag();
+            // Ctrl-C (or SIGTERM, SIGHUP) from here on stops the runs not yet started; the runs
+            // that finished are reported (marked partial) and written, and the command exits
+            // 128 + the signal.
+            let stop = isotrack_runs::signals::interrupt_flag();
             let stopped = || stop.load(std::sync::atomic::Ordering::SeqCst);
             // The runs go on a thread of their own, each sent back as it finishes, and this
             // one answers Ctrl-C at once: a run in progress (it may take minutes) is abandoned,

@@ -113,9 +113,14 @@ pub struct FlyArgs {
     /// `udp:HOST:PORT` for text lines `t_s,value` from a sensor not wired to the autopilot.
     #[arg(long, value_name = "SOURCE", default_value = "ISO_S")]
     pub sensor: String,
-    /// Arm the vehicle and switch it to OFFBOARD (else wait for the pilot to).
+    /// Switch the vehicle to OFFBOARD (else wait for the pilot to); a disarmed one only with
+    /// --arm.
     #[arg(long)]
     pub take_control: bool,
+    /// With --take-control, also arm a disarmed vehicle (for simulators such as `isotrack
+    /// sitl`); without it a disarmed vehicle is refused (exit 79, nothing commanded).
+    #[arg(long)]
+    pub arm: bool,
     /// With --take-control, also arm and take a vehicle announcing MAV_TYPE_GENERIC (which
     /// says nothing of its airframe; MAVSDK's autopilot server announces it): refused
     /// otherwise (exit 65, vehicle_mismatch).
@@ -133,7 +138,8 @@ pub struct FlyArgs {
     /// Fail safe after this long without a message from the vehicle or a measurement, s.
     #[arg(long, value_name = "S", default_value_t = 3.0)]
     pub timeout_s: f64,
-    /// Fail safe farther than this from the first received position, m.
+    /// Fail safe farther than this from the position where fly got control (armed and in
+    /// OFFBOARD), m; not enforced before.
     #[arg(long, value_name = "M")]
     pub fence_m: Option<f64>,
     /// The mode a failsafe switches to.

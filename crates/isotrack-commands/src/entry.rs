@@ -6,10 +6,11 @@ use crate::cli::{Cli, Command};
 use clap::Parser;
 use std::ffi::OsString;
 
-/// Makes Ctrl-C and SIGTERM remove the lock and temporary files the command holds and exit
-/// 130 / 143 ([`isotrack_runs::cleanup::remove_on_interrupt`]); the binary calls it first.
+/// Makes Ctrl-C, SIGTERM and SIGHUP remove the lock and temporary files the command holds and
+/// exit 130 / 143 / 129 ([`isotrack_runs::signals::remove_on_interrupt`]); the binary calls it
+/// first.
 pub fn remove_on_interrupt() {
-    isotrack_runs::cleanup::remove_on_interrupt();
+    isotrack_runs::signals::remove_on_interrupt();
 }
 
 /// Runs the command line `args` (the program name first) and returns its exit code (README,

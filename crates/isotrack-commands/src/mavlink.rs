@@ -249,7 +249,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         }
     };
     opts.companion_timeout_s = args.timeout_s;
-    opts.stop = isotrack_mavlink::interrupt_flag();
+    opts.stop = isotrack_runs::signals::interrupt_flag();
     let out = match &args.out {
         Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
         None => None,
@@ -369,12 +369,34 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             args.setpoint_rate_hz
         )));
     }
+    if args.system_id == 0 || args.target_system == Some(0) {
+        // Messages from or to system 0 are broadcasts: no companion or vehicle is it.
+        return Err(usage(format!(
+            "{} 0 is MAVLink's broadcast address, not a system's: give 1 to 255",
+            if args.system_id == 0 {
+                "--system-id"
+            } else {
+                "--target-system"
+            }
+        )));
+    }
+    if args.arm && !args.take_control {
+        return Err(usage(
+            "--arm goes with --take-control (without it, fly waits for the pilot to arm and hand over)".into(),
+        ));
+    }
+    if args.allow_generic && !args.take_control {
+        return Err(usage(
+            "--allow-generic goes with --take-control (without it, a MAV_TYPE_GENERIC vehicle is flown when its pilot hands over, with a warning)".into(),
+        ));
+    }
     let sensor = SensorSource::parse(&args.sensor).map_err(usage)?;
     let scenario = load(&args.scenario)?;
     crate::run::refuse_team(&scenario, "fly")?;
     let mut opts = FlyOptions::new(&args.mavlink);
     opts.sensor = sensor;
     opts.take_control = args.take_control;
+    opts.arm = args.arm;
     opts.allow_generic = args.allow_generic;
     opts.max_duration_s = args.max_duration_s;
     opts.timeout_s = args.timeout_s;
@@ -387,7 +409,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Return => FailsafeAction::Return,
         FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
-    opts.stop = isotrack_mavlink::interrupt_flag();
+    opts.stop = isotrack_runs::signals::interrupt_flag();
     // Readied (and locked) by the one run-directory writer, and written once the flight has
     // something to record (LiveOut): a start that fails leaves an earlier flight there whole.
     let out = match &args.out {
@@ -489,6 +511,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             junk_datagrams: report.link.junk_datagrams,
             measurements_out_of_order: report.measurements_out_of_order,
             measurements_repeated: report.measurements_repeated,
+            measurements_invalid: report.measurements_invalid,
             metrics_over: report.metrics_over.to_string(),
             metrics: MetricsRecord::of(&report.metrics),
         }),

@@ -268,11 +268,12 @@ pub fn check(args: &CheckArgs) -> Result<(), Failure> {
         }
     }
     // Ctrl-C during --verify: the report above covers the runs that finished (marked
-    // partial); the command still says it was interrupted and exits 130.
+    // partial); the command still says it was interrupted and exits 128 + the signal (130
+    // for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP).
     if let Some(runs) = map.as_ref().and_then(|m| m.verify_runs.as_ref()) {
         if runs.partial {
             return Err(Failure {
-                code: crate::sweep::INTERRUPTED,
+                code: isotrack_runs::signals::interrupted_exit_code(),
                 message: format!(
                     "interrupted during --verify: {} of {} runs finished; the chart and verify.csv hold what was done (the report above is partial)",
                     runs.finished, runs.requested

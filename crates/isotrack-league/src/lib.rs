@@ -20,6 +20,7 @@ mod one_run;
 pub mod page;
 pub mod registry;
 mod results;
+mod resume;
 pub mod run;
 pub mod score;
 pub mod suite;

@@ -124,8 +124,22 @@ pub fn run_scored(
     seed: u64,
     scoring: Scoring,
 ) -> Result<Scored, String> {
+    run_scored_into(base, task, entrant, gains, seed, scoring, &mut NoTrace)
+}
+
+/// As [`run_scored`], a single vehicle's trace rows going into `sink` as well (at `base`'s
+/// `output.record_rate_hz`; the trace does not change the run). A team records none.
+pub fn run_scored_into<S: TraceSink + ?Sized>(
+    base: &Scenario,
+    task: &Task,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+    scoring: Scoring,
+    sink: &mut S,
+) -> Result<Scored, String> {
     if base.spec().team.is_none() {
-        let (s, r) = run_one(base, task, entrant, gains, seed, &mut NoTrace)?;
+        let (s, r) = run_one(base, task, entrant, gains, seed, sink)?;
         return Ok(Scored {
             outcome: r.outcome.as_str().to_string(),
             record: RunRecord::of(&r),

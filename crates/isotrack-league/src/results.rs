@@ -51,6 +51,16 @@ pub enum BenchError {
         /// The controller.
         controller: String,
     },
+    /// `--resume` found a task's stored results (`tasks/ID/task.json`, its digest matching)
+    /// that the suite contradicts: runs other than the suite's seeds x controllers, a value no
+    /// run can have. Edited or damaged: never reused, never silently rerun (exit 65).
+    #[error("{path}: {message}")]
+    Damaged {
+        /// The file.
+        path: String,
+        /// The field and why.
+        message: String,
+    },
     /// `--resume` on results of another suite or controller set.
     #[error("{0}")]
     Mismatch(String),

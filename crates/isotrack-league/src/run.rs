@@ -2,7 +2,9 @@
 //! the scoring seeds, and the pictures of each task.
 
 use crate::one_run::run_assignments;
-pub use crate::one_run::{context, prepare, run_one, run_overrides, run_scored, Scored};
+pub use crate::one_run::{
+    context, prepare, run_one, run_overrides, run_scored, run_scored_into, Scored,
+};
 use crate::registry::{Entrant, Registry};
 pub use crate::results::{task_file, BenchError, BenchResult, RunRow, TaskResult, Trajectory};
 use crate::score::{Score, Scoring};
@@ -68,9 +70,10 @@ pub fn controllers_of(
 }
 
 /// Runs a suite: every task, each controller on each scoring seed (tuned first if `o.tune`).
-/// `progress(task_index, task_count, task_id)` is called as each task starts. Results do not
-/// depend on the thread count: every run is a pure function of its task, controller, gains and
-/// seed, and every mean is taken in a fixed order.
+/// `progress(task_index, task_count, task_id)` is called as each task starts (tasks run in
+/// parallel, so not necessarily in the suite's order). Results do not depend on the thread
+/// count: every run is a pure function of its task, controller, gains and seed, and every mean
+/// is taken in a fixed order.
 ///
 /// Before any run starts, every task's scenario is loaded and every run it defines is built
 /// ([`check_runs`]): a suite with an invalid run fails as a whole with
@@ -88,18 +91,29 @@ pub fn run_benchmark(
         .map(|t| task_base(suite, t))
         .collect::<Result<Vec<_>, _>>()?;
     check_runs(suite, reg, &controllers, &bases, o.tune)?;
-    let mut tasks = Vec::with_capacity(suite.tasks.len());
-    for (i, (task, base)) in suite.tasks.iter().zip(bases).enumerate() {
-        if o.cancelled() {
-            return Err(BenchError::Interrupted);
-        }
-        progress(i, suite.tasks.len(), &task.id);
-        let t = run_task(suite, task, base, reg, &controllers, o)?;
-        if let Some(dir) = &o.save_to {
-            crate::leaderboard::write_task(&t, dir)?;
-        }
-        tasks.push(t);
-    }
+    // The tasks run at once (and each task's runs): a task's result is a pure function of the
+    // task, so the results are taken in the suite's order, and of several errors the first in
+    // that order is returned.
+    let n = suite.tasks.len();
+    let tasks = suite
+        .tasks
+        .par_iter()
+        .zip(bases.into_par_iter())
+        .enumerate()
+        .map(|(i, (task, base))| {
+            if o.cancelled() {
+                return Err(BenchError::Interrupted);
+            }
+            progress(i, n, &task.id);
+            let t = run_task(suite, task, base, reg, &controllers, o)?;
+            if let Some(dir) = &o.save_to {
+                crate::leaderboard::write_task(&t, dir)?;
+            }
+            Ok(t)
+        })
+        .collect::<Vec<Result<TaskResult, BenchError>>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
     let mut overall: Vec<(String, f64)> = controllers
         .iter()
         .map(|c| {
@@ -334,23 +348,68 @@ fn run_task(
     if let Some(dir) = &o.resume_from {
         if let Some(prev) = read_task(dir, &task.id) {
             if prev.digest == digest {
-                return Ok(prev);
+                // Reused only once checked: its runs are the suite's and possible, its scores
+                // and picture recomputed (`resume`).
+                let expected = crate::resume::Expected {
+                    task,
+                    base: &base,
+                    reg,
+                    controllers,
+                    seeds: &suite.scoring_seeds,
+                    gains: &gains,
+                    scoring: suite.scoring,
+                    max_points: picture_points(&base),
+                };
+                return crate::resume::reuse(prev, &task_file(dir, &task.id), &expected, |t| {
+                    field_picture(&base, t)
+                });
             }
         }
     }
-    let jobs: Vec<(&String, u64)> = controllers
+    // (controller, seed, whether this run also draws the controller's path in the picture:
+    // the first scoring seed's).
+    let jobs: Vec<(&String, u64, bool)> = controllers
         .iter()
-        .flat_map(|c| suite.scoring_seeds.iter().map(move |s| (c, *s)))
+        .flat_map(|c| {
+            suite
+                .scoring_seeds
+                .iter()
+                .enumerate()
+                .map(move |(k, s)| (c, *s, k == 0))
+        })
         .collect();
-    let runs: Vec<RunRow> = jobs
+    // The scenario with each seed's `sim.seed`, shared by the controllers' runs of that seed: a
+    // field that follows the seed (a puff plume's meander) and its true isoline are then built
+    // once per seed, not once per run.
+    let seeded: BTreeMap<u64, Scenario> = suite
+        .scoring_seeds
+        .iter()
+        .filter_map(|&seed| {
+            let b = base.derive(&[format!("sim.seed={seed}")], "seed").ok()?;
+            Some((seed, b))
+        })
+        .collect();
+    let done: Vec<(RunRow, Option<Trajectory>)> = jobs
         .par_iter()
-        .map(|(c, seed)| {
+        .map(|(c, seed, picture)| {
             let entrant = reg.get(c).expect("checked by controllers_of");
-            (!o.cancelled())
-                .then(|| scored_run(&base, task, c, entrant, gains.get(*c), *seed, suite.scoring))
+            let b = seeded.get(seed).unwrap_or(&base);
+            (!o.cancelled()).then(|| {
+                scored_job(
+                    b,
+                    task,
+                    c,
+                    entrant,
+                    gains.get(*c),
+                    *seed,
+                    suite.scoring,
+                    *picture,
+                )
+            })
         })
         .collect::<Option<_>>()
         .ok_or(BenchError::Interrupted)?;
+    let (runs, paths): (Vec<RunRow>, Vec<Option<Trajectory>>) = done.into_iter().unzip();
     let scores = controllers
         .iter()
         .map(|c| {
@@ -365,15 +424,8 @@ fn run_task(
             )
         })
         .collect();
-    let seed0 = suite.scoring_seeds[0];
-    let trajectories: Vec<Trajectory> = controllers
-        .par_iter()
-        .map(|c| {
-            let entrant = reg.get(c).expect("checked by controllers_of");
-            (!o.cancelled()).then(|| trajectory(&base, task, c, entrant, gains.get(c), seed0))
-        })
-        .collect::<Option<_>>()
-        .ok_or(BenchError::Interrupted)?;
+    // Each controller's path: drawn by its run of the first scoring seed, in controller order.
+    let trajectories: Vec<Trajectory> = paths.into_iter().flatten().collect();
     let picture = field_picture(&base, &trajectories);
     Ok(TaskResult {
         id: task.id.clone(),
@@ -388,6 +440,38 @@ fn run_task(
     })
 }
 
+/// The scored run of (controller, seed) and, with `picture`, the controller's path for the
+/// task's picture ([`trajectory`]): one vehicle's path recorded by the scored run itself (the
+/// trace does not change the run), a team's flown again with vehicle 0 recording.
+#[allow(clippy::too_many_arguments)]
+fn scored_job(
+    base: &Scenario,
+    task: &Task,
+    controller: &str,
+    entrant: &Entrant,
+    gains: Option<&BTreeMap<String, f64>>,
+    seed: u64,
+    scoring: Scoring,
+    picture: bool,
+) -> (RunRow, Option<Trajectory>) {
+    if picture && base.spec().team.is_none() {
+        if let Ok(b) = base.derive(&["output.record_rate_hz=10.0".into()], "picture") {
+            let mut sink = Thinned::of(&b);
+            if let Ok(r) = run_scored_into(&b, task, entrant, gains, seed, scoring, &mut sink) {
+                let path = Trajectory {
+                    controller: controller.to_string(),
+                    points: sink.points,
+                    outcome: r.outcome.clone(),
+                };
+                return (scored_row(controller, seed, Ok(r)), Some(path));
+            }
+        }
+    }
+    let row = scored_run(base, task, controller, entrant, gains, seed, scoring);
+    let path = picture.then(|| trajectory(base, task, controller, entrant, gains, seed));
+    (row, path)
+}
+
 fn scored_run(
     base: &Scenario,
     task: &Task,
@@ -397,7 +481,16 @@ fn scored_run(
     seed: u64,
     scoring: Scoring,
 ) -> RunRow {
-    match run_scored(base, task, entrant, gains, seed, scoring) {
+    scored_row(
+        controller,
+        seed,
+        run_scored(base, task, entrant, gains, seed, scoring),
+    )
+}
+
+/// The results row of a scored run (scored 0 when its scenario was invalid or refused).
+fn scored_row(controller: &str, seed: u64, run: Result<Scored, String>) -> RunRow {
+    match run {
         Ok(r) => {
             let mut row = RunRow::of(controller, seed, Some(&r.record), r.score);
             row.outcome = r.outcome;
@@ -426,6 +519,19 @@ struct Thinned {
     points: Vec<[f64; 2]>,
 }
 
+impl Thinned {
+    /// For a run of `base` recorded at 10 Hz: keeps at most [`PICTURE_POINTS`] of the rows.
+    fn of(base: &Scenario) -> Self {
+        let duration = base.spec().sim.duration_s;
+        let rows = (duration * 10.0).max(1.0) as u64;
+        Self {
+            every: rows.div_ceil(PICTURE_POINTS as u64).max(1),
+            k: 0,
+            points: vec![],
+        }
+    }
+}
+
 impl TraceSink for Thinned {
     fn record(&mut self, row: &TraceRow) {
         if self.k.is_multiple_of(self.every) && row.x_m.is_finite() && row.y_m.is_finite() {
@@ -433,6 +539,15 @@ impl TraceSink for Thinned {
         }
         self.k += 1;
     }
+}
+
+/// The most points [`trajectory`] keeps of a run of `base`: every `ceil(rows / PICTURE_POINTS)`-th
+/// of its `rows` 10 Hz rows (the rows `0, e, 2e, ...` below `rows + 1`).
+fn picture_points(base: &Scenario) -> usize {
+    let rows = (base.spec().sim.duration_s * 10.0).max(1.0) as u64;
+    let every = rows.div_ceil(PICTURE_POINTS as u64).max(1);
+    // A run records at most `rows + 1` rows (its start and each step's), one kept every `every`.
+    ((rows + 1) / every + 1) as usize
 }
 
 fn trajectory(
@@ -443,14 +558,7 @@ fn trajectory(
     gains: Option<&BTreeMap<String, f64>>,
     seed: u64,
 ) -> Trajectory {
-    // Record at 10 Hz, keep at most PICTURE_POINTS of the rows.
-    let duration = base.spec().sim.duration_s;
-    let rows = (duration * 10.0).max(1.0) as u64;
-    let mut sink = Thinned {
-        every: rows.div_ceil(PICTURE_POINTS as u64).max(1),
-        k: 0,
-        points: vec![],
-    };
+    let mut sink = Thinned::of(base);
     let with_rate = base.derive(&["output.record_rate_hz=10.0".into()], "picture");
     let outcome = match with_rate {
         // A team: vehicle 0's path (every vehicle records; the others' rows are dropped).

@@ -213,11 +213,23 @@ pub fn team_score(
         held += vehicle_held(r, ctx.scoring);
     }
     let parts = parts.map(|p| p / n);
-    let tracking = tracking / n;
-    let held = held / n;
-    let all_completed = runs.iter().all(|r| r.outcome == Outcome::Completed);
+    let all_completed = !runs.is_empty() && runs.iter().all(|r| r.outcome == Outcome::Completed);
+    let (total, team) = team_total(tracking / n, held / n, all_completed, team);
+    (Score { total, parts }, team)
+}
+
+/// A team run's score from its vehicles' `tracking` and `held` means ([`team_score`]), whether
+/// every vehicle completed, and its team metrics: `(score, parts)`, the spacing and revisit
+/// parts computed from `team` as [`team_score`] does. The one rule for a team run's score, also
+/// what `benchmark --resume` recomputes a stored team run's score with.
+pub fn team_total(
+    tracking: f64,
+    held: f64,
+    all_completed: bool,
+    team: Option<&isotrack_runs::summary::TeamRecord>,
+) -> (f64, TeamParts) {
     let (spacing, revisit) = match team {
-        Some(t) if all_completed && !runs.is_empty() => (
+        Some(t) if all_completed => (
             spacing_part(t.count, t.gap_cv),
             revisit_part(t.revisit_time_mean_s, t.revisit_time_ideal_s),
         ),
@@ -233,7 +245,7 @@ pub fn team_score(
         * (TEAM_WEIGHTS[0] * team.tracking
             + TEAM_WEIGHTS[1] * team.spacing
             + TEAM_WEIGHTS[2] * team.revisit);
-    (Score { total, parts }, team)
+    (total, team)
 }
 
 /// How much of the isoline a vehicle held: 0 unless it completed; formula 1: 1; formula 2: 1

@@ -78,15 +78,23 @@ pub fn tune(
     if seeds.is_empty() {
         return gains;
     }
+    // Each seed's scenario (its `sim.seed`), shared by every candidate's run of that seed: a
+    // field that follows the seed and its isoline are built once per seed.
+    let seeded: Vec<Option<Scenario>> = seeds
+        .iter()
+        .map(|seed| base.derive(&[format!("sim.seed={seed}")], "seed").ok())
+        .collect();
     let mean_score = |g: &BTreeMap<String, f64>| -> f64 {
         let total: f64 = seeds
             .par_iter()
-            .map(
-                |seed| match run_scored(base, task, &entrant, Some(g), *seed, scoring) {
+            .zip(&seeded)
+            .map(|(seed, b)| {
+                let b = b.as_ref().unwrap_or(base);
+                match run_scored(b, task, &entrant, Some(g), *seed, scoring) {
                     Ok(r) => r.score.total,
                     Err(_) => f64::NEG_INFINITY,
-                },
-            )
+                }
+            })
             .collect::<Vec<f64>>()
             .iter()
             .sum();

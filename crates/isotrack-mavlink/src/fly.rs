@@ -34,6 +34,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+/// The companion's MAVLink component id: `MAV_COMP_ID_ONBOARD_COMPUTER`.
+pub const COMPANION_COMPONENT: u8 = 191;
+
 /// The `time_boot_ms` of a setpoint that answers no measurement (sent before the first one).
 pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 
@@ -49,6 +52,17 @@ pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
 /// The shortest silence of the vehicle's heartbeats that ends a flight (`link_lost`) even
 /// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
 pub const MIN_HEARTBEAT_TIMEOUT_S: f64 = 3.0;
+
+/// The largest step back of the vehicle's own clock (`time_boot_ms` of its `ATTITUDE`,
+/// positions, `SYSTEM_TIME`) that is not a reboot, s: a larger one means its
+/// autopilot restarted (its clock begins again at 0), and the flight ends `vehicle_lost`.
+pub const REBOOT_STEP_S: f64 = 1.0;
+
+/// How long a vehicle in control that disarmed without the companion asking is watched for
+/// a reboot (its clock going back, [`REBOOT_STEP_S`]) before the disarm is taken as a
+/// pilot's (`pilot_took_over`), s; it ends at the vehicle's first time-stamped message. No
+/// setpoint leaves meanwhile.
+pub const REBOOT_WATCH_S: f64 = 1.0;
 
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
@@ -173,10 +187,15 @@ pub enum SensorSource {
 }
 
 impl SensorSource {
-    /// Parses `--sensor`: `NAME`, `mavlink:NAME` or `udp:HOST:PORT`.
+    /// Parses `--sensor`: `NAME`, `mavlink:NAME` or `udp:HOST:PORT` (its address checked as
+    /// [`crate::link::resolve`] does).
     pub fn parse(s: &str) -> Result<Self, String> {
         if let Some(a) = s.strip_prefix("udp:") {
-            return Ok(SensorSource::UdpLines(a.to_string()));
+            // A malformed address is a usage error, as --mavlink's.
+            return match crate::link::resolve(a) {
+                Err(LinkError::Address(m)) => Err(format!("--sensor udp:{a}: {m}")),
+                _ => Ok(SensorSource::UdpLines(a.to_string())),
+            };
         }
         if s.starts_with("serial:") {
             return Err(format!(
@@ -244,8 +263,13 @@ pub struct FlyOptions {
     pub url: String,
     /// Where the measurements come from.
     pub sensor: SensorSource,
-    /// Arm and switch to OFFBOARD (else wait for the pilot to).
+    /// Switch to OFFBOARD (else wait for the pilot to); a disarmed vehicle only with `arm`.
     pub take_control: bool,
+    /// With `take_control`, also arm a disarmed vehicle (a simulator's, such as `isotrack
+    /// sitl`, which flies from its start); without it a disarmed vehicle is refused
+    /// (`control_refused`, nothing commanded): a real aircraft is armed and flown to the area
+    /// by its pilot.
+    pub arm: bool,
     /// With `take_control`, also take a vehicle announcing `MAV_TYPE_GENERIC` (which says
     /// nothing of its airframe); without it such a vehicle is refused (`vehicle_mismatch`)
     /// before any setpoint or command. Without `take_control` it is flown with a warning.
@@ -255,7 +279,8 @@ pub struct FlyOptions {
     pub max_duration_s: Option<f64>,
     /// Fail safe after this long without a message from the vehicle or a measurement, wall s.
     pub timeout_s: f64,
-    /// Fail safe when farther than this from the first received position, m.
+    /// Fail safe when farther than this from the position where the companion got control
+    /// (armed and in OFFBOARD), m; not enforced before.
     pub fence_m: Option<f64>,
     /// The mode a failsafe switches to.
     pub failsafe: FailsafeAction,
@@ -278,6 +303,7 @@ impl FlyOptions {
             url: url.to_string(),
             sensor: SensorSource::Named(wire::MEASUREMENT_NAME.into()),
             take_control: false,
+            arm: false,
             allow_generic: false,
             max_duration_s: None,
             timeout_s: 3.0,
@@ -311,7 +337,8 @@ pub enum FlyEnd {
     /// The vehicle refused to arm or to switch to OFFBOARD.
     ControlRefused,
     /// The vehicle reported `MAV_STATE_POWEROFF` without announcing the end of its run
-    /// (`STATUSTEXT` "isotrack sitl: run ended"): failsafe.
+    /// (`STATUSTEXT` "isotrack sitl: run ended"), or its autopilot rebooted (its clock went
+    /// back by more than [`REBOOT_STEP_S`]): failsafe.
     VehicleLost,
     /// The measurements' clock jumped by more than [`MAX_MEASUREMENT_STEP_S`]: failsafe.
     SensorClockJump,
@@ -403,6 +430,11 @@ pub struct FlyReport {
     /// A pilot took over during the failsafe's retries (a mode or disarm the companion did not
     /// command): the retries stopped unconfirmed, the pilot's mode stands.
     pub way_out_overridden: bool,
+    /// Measurements that were no measurement: a `NAMED_VALUE_FLOAT` of the sensor's name whose
+    /// value is not finite, a UDP sensor line that is not `t_s,value` with both numbers, a time
+    /// in [0, 4294967.295] s and a finite value, or longer than [`MAX_PARTIAL_LINE_BYTES`]:
+    /// dropped, never given to the law; the first logged.
+    pub measurements_invalid: u64,
 }
 
 /// Why a flight could not start.
@@ -474,6 +506,13 @@ struct Flight<'a, S: ?Sized> {
     last_link: Instant,
     /// When the vehicle's last heartbeat came (its mode and arming as known).
     last_heartbeat: Instant,
+    /// The newest time of the vehicle's own clock heard (unwrapped, ms) and when it came.
+    vehicle_ms: Option<(u64, Instant)>,
+    /// The vehicle's clock went back ([`REBOOT_STEP_S`]): its autopilot rebooted.
+    reboot: Option<String>,
+    /// In control, the vehicle disarmed without the companion asking: since when (watched for
+    /// a reboot for [`REBOOT_WATCH_S`]).
+    disarm_seen: Option<Instant>,
     mavlink1_logged: bool,
     // Control.
     /// The vehicle refused to arm or to switch to OFFBOARD.
@@ -486,6 +525,12 @@ struct Flight<'a, S: ?Sized> {
     /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
     offboard_sent: bool,
+    /// With `take_control`: the vehicle's mode when the companion sent its first control
+    /// command (a change to anything but OFFBOARD before control is a pilot's).
+    mode_at_first_command: Option<Option<u32>>,
+    /// With `take_control`: the vehicle has been armed since the companion's first control
+    /// command (a disarm after it is a pilot's).
+    armed_since_command: bool,
     was_armed: bool,
     next_control: Instant,
     control_tries: u32,
@@ -501,6 +546,10 @@ struct Flight<'a, S: ?Sized> {
     sensor_from: Option<std::net::SocketAddr>,
     /// Datagrams from other senders, dropped.
     sensor_others: u64,
+    /// Measurements that were none (non-finite, malformed lines), dropped.
+    invalid: u64,
+    /// Held measurements dropped for a newer one while control was being taken.
+    held_dropped: u64,
     clock: SensorClock,
     /// Since the vehicle's first message (the fence's wait for a position).
     clock_start: Instant,
@@ -613,6 +662,7 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
         measurements_out_of_order: f.ans.out_of_order,
         measurements_repeated: f.ans.repeated,
         way_out_overridden: f.way_out_overridden,
+        measurements_invalid: f.invalid,
     })
 }
 
@@ -631,7 +681,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             ));
         }
         crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
-        let mut link = Link::open(&opts.url, opts.system_id, 191).map_err(FlyError::Link)?;
+        let mut link =
+            Link::open(&opts.url, opts.system_id, COMPANION_COMPONENT).map_err(FlyError::Link)?;
         link_setup(&mut link).map_err(FlyError::Io)?;
         let lines = match &opts.sensor {
             SensorSource::UdpLines(a) => {
@@ -695,6 +746,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             vehicle_done: false,
             last_link: now,
             last_heartbeat: now,
+            vehicle_ms: None,
+            reboot: None,
+            disarm_seen: None,
             mavlink1_logged: false,
             refused: false,
             active: false,
@@ -702,6 +756,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             arm_sent: false,
             armed_by_us: false,
             offboard_sent: false,
+            mode_at_first_command: None,
+            armed_since_command: false,
             was_armed: false,
             next_control: now,
             control_tries: 0,
@@ -717,6 +773,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             },
             sensor_from: None,
             sensor_others: 0,
+            invalid: 0,
+            held_dropped: 0,
             clock: SensorClock {
                 newest_ms: None,
                 last: now,
@@ -788,6 +846,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if let Some(why) = self.other_controller.take() {
             self.event(why);
             return Some(FlyEnd::AnotherController);
+        }
+        if let Some(why) = self.reboot.take() {
+            self.event(why);
+            return Some(FlyEnd::VehicleLost);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
             self.event(format!(
@@ -1004,7 +1066,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// without, the neutral setpoints that let the pilot hand over (PX4 refuses OFFBOARD
     /// without a stream) go to an accepted vehicle.
     fn may_send_setpoints(&self) -> bool {
-        if self.mismatch.is_some() || self.other_controller.is_some() || self.refused {
+        if self.mismatch.is_some()
+            || self.other_controller.is_some()
+            || self.refused
+            || self.disarm_seen.is_some()
+        {
             return false;
         }
         let kind = vehicle_kind_match(self.transport, self.vehicle_type);
@@ -1032,6 +1098,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return;
         };
         let mut text = String::new();
+        let mut overlong = 0u64;
         for _ in 0..crate::link::MAX_DATAGRAMS_PER_POLL {
             let Ok((n, from)) = s.recv_from(&mut self.buf) else {
                 break;
@@ -1066,6 +1133,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if self.partial.len() > MAX_PARTIAL_LINE_BYTES {
                     self.partial.clear();
                     self.skipping_line = true;
+                    overlong += 1;
                 }
                 continue;
             };
@@ -1075,35 +1143,67 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if self.partial.len() > MAX_PARTIAL_LINE_BYTES {
                 self.partial.clear();
                 self.skipping_line = true;
+                overlong += 1;
             }
         }
         self.lines = Some(s);
+        for _ in 0..overlong {
+            self.invalid_measurement(format!(
+                "a --sensor line longer than {MAX_PARTIAL_LINE_BYTES} bytes"
+            ));
+        }
         for line in text.lines() {
-            let mut it = line.split(',');
-            let (Some(t), Some(v), None) = (it.next(), it.next(), it.next()) else {
+            if line.trim().is_empty() {
                 continue;
+            }
+            let mut it = line.split(',');
+            let parsed = match (it.next(), it.next(), it.next()) {
+                (Some(t), Some(v), None) => t
+                    .trim()
+                    .parse::<f64>()
+                    .ok()
+                    .zip(v.trim().parse::<f64>().ok()),
+                _ => None,
             };
-            if let (Ok(t), Ok(v)) = (t.trim().parse::<f64>(), v.trim().parse::<f64>()) {
-                if let (Some(ms), true) = (wire::time_ms(t), v.is_finite()) {
-                    self.clock.receive(&mut self.queue, ms, v);
+            match parsed.map(|(t, v)| (wire::time_ms(t), v)) {
+                Some((Some(ms), v)) if v.is_finite() => self.clock.receive(&mut self.queue, ms, v),
+                _ => {
+                    let shown: String = line.chars().take(80).collect();
+                    self.invalid_measurement(format!(
+                        "the --sensor line {shown:?} is not `t_s,value` (two numbers, t_s in [0, 4294967.295] s, value finite)"
+                    ));
                 }
             }
         }
     }
 
-    /// The fence, on the received position (never given to the law): no position for
-    /// `timeout_s`, positions that stop, or farther than `fence_m` from the first one.
+    /// A measurement that is none: dropped (never given to the law), counted, the first one
+    /// logged.
+    fn invalid_measurement(&mut self, what: String) {
+        self.invalid += 1;
+        if self.invalid == 1 {
+            self.event(format!(
+                "{what}: dropped, no measurement (counted in measurements_invalid, logged once)"
+            ));
+        }
+    }
+
+    /// The fence, on the received position (never given to the law), once the companion has
+    /// control: centred on the position where control began (a pilot may fly the vehicle to
+    /// the area first, FLYING.md's recipe), never enforced before (a failsafe before control
+    /// commands nothing anyway); no position for `timeout_s` since control began, positions
+    /// that stop, or farther than `fence_m` from that centre.
     fn check_fence(&mut self) -> Option<FlyEnd> {
         let timeout_s = self.opts.timeout_s;
-        if let (Some(f), None, true) = (self.opts.fence_m, self.tel.pos, self.target.is_some()) {
-            if self.clock_start.elapsed() > self.timeout {
-                self.event(format!(
-                    "fence: no position from the vehicle for {timeout_s} s, the fence of {f} m cannot be kept"
-                ));
-                return Some(FlyEnd::Fence);
-            }
+        let f = self.opts.fence_m?;
+        let control_at = self.ans.first_wall.filter(|_| self.in_control)?;
+        if self.tel.pos.is_none() && control_at.elapsed() > self.timeout {
+            self.event(format!(
+                "fence: no position from the vehicle for {timeout_s} s since the companion has control, the fence of {f} m cannot be kept"
+            ));
+            return Some(FlyEnd::Fence);
         }
-        if let (Some(f), Some(at)) = (self.opts.fence_m, self.tel.position_at) {
+        if let Some(at) = self.tel.position_at {
             // The fence never silently switches off: positions that stop (or turn non-finite,
             // which are dropped) end the flight.
             if at.elapsed() > self.timeout {
@@ -1121,10 +1221,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let p = self.tel.pos?;
         let h = *self.tel.home.get_or_insert(p);
-        let f = self.opts.fence_m?;
         let d = ((p.0 - h.0).powi(2) + (p.1 - h.1).powi(2)).sqrt();
         if d > f {
-            self.event(format!("fence: {d:.1} m from the start, beyond {f} m"));
+            self.event(format!(
+                "fence: {d:.1} m from where the companion got control, beyond {f} m"
+            ));
             return Some(FlyEnd::Fence);
         }
         None
@@ -1154,10 +1255,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(Some(FlyEnd::AnotherController));
         }
         if self.active {
+            if !self.in_control && self.held_dropped > 0 {
+                self.event(format!(
+                    "control taken: the law starts from the newest measurement held meanwhile ({} older ones dropped, never answered)",
+                    self.held_dropped
+                ));
+            }
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
             self.ans.first_wall.get_or_insert_with(Instant::now);
         } else if self.in_control {
+            if !self.armed {
+                // A disarm nobody here commanded: a pilot's, or an autopilot that rebooted (its
+                // heartbeat may come before its clock says so). No setpoint leaves while the
+                // vehicle's next time-stamped message is awaited (REBOOT_WATCH_S at most).
+                let since = *self.disarm_seen.get_or_insert_with(Instant::now);
+                let clock_since = self.vehicle_ms.is_some_and(|(_, at)| at > since);
+                if !clock_since && since.elapsed().as_secs_f64() < REBOOT_WATCH_S {
+                    return Ok(None);
+                }
+            }
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
             let what = format!(
@@ -1179,7 +1296,37 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.event(what);
             return Ok(Some(FlyEnd::ControlRefused));
         }
+        if let Some(end) = self.pilot_during_take_over() {
+            return Ok(Some(end));
+        }
         self.take_control()
+    }
+
+    /// The pilot's word is final during a take-over too: once the companion has sent its first
+    /// control command (an arming or the switch to OFFBOARD), a disarm after the vehicle was
+    /// armed, or a change of mode to anything but OFFBOARD, that the companion did not command
+    /// ends the take-over at once: never re-armed, nothing more commanded (`pilot_took_over`).
+    fn pilot_during_take_over(&mut self) -> Option<FlyEnd> {
+        let before = self.mode_at_first_command?;
+        if self.armed {
+            self.armed_since_command = true;
+        }
+        let offboard = self
+            .custom_mode
+            .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        let what = if self.armed_since_command && !self.armed {
+            "disarmed"
+        } else if before.is_some() && self.custom_mode != before && !offboard {
+            "switched"
+        } else {
+            return None;
+        };
+        let mode = self.mode_name();
+        self.event(format!(
+            "pilot_took_over during the take-over: the vehicle was {what} (now {} in {mode}) before the companion had control, not by its command: nothing more commanded, the pilot's word stands",
+            if self.armed { "armed" } else { "disarmed" }
+        ));
+        Some(FlyEnd::PilotTookOver)
     }
 
     /// The vehicle's mode in logs.
@@ -1223,6 +1370,28 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.event(what);
             return Ok(Some(FlyEnd::ControlRefused));
         };
+        if self.mode_at_first_command.is_none() {
+            // A vehicle on its way home or down (its autopilot's failsafe, or its pilot's
+            // choice) is never pulled out of it.
+            if let Some(name) = self
+                .custom_mode
+                .and_then(|c| self.firmware.returning_or_landing(c))
+            {
+                self.event(format!(
+                    "the vehicle is {} in {name} (returning or landing: its autopilot's failsafe or its pilot's choice): --take-control never pulls it out, nothing commanded",
+                    if self.armed { "armed" } else { "disarmed" }
+                ));
+                return Ok(Some(FlyEnd::ControlRefused));
+            }
+            if !self.armed && !self.opts.arm {
+                self.event(
+                    "the vehicle is disarmed: --take-control arms it only with --arm (for simulators: a real aircraft is armed and flown to the area by its pilot, then taken over), nothing commanded".into(),
+                );
+                return Ok(Some(FlyEnd::ControlRefused));
+            }
+            self.mode_at_first_command = Some(self.custom_mode);
+            self.armed_since_command = self.armed;
+        }
         if !self.armed {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
@@ -1250,17 +1419,22 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // A vehicle sends again the measurement nobody answered (sitl in lockstep, every
             // second): held copies of one time are one measurement, never a repeat to count.
             // Only what came since the last turn is looked at (the cost stays per message).
+            // Only the newest one is kept: once in control, the law starts from the freshest
+            // sample, never a burst of stale ones (a slow take-over of a fast sensor).
             let start = self.held_scanned.min(self.queue.len());
             let fresh: Vec<(u64, f64)> = self.queue.drain(start..).collect();
             for (ms, v) in fresh {
                 if self.held_newest == Some(ms) {
                     continue;
                 }
-                self.held_newest = Some(self.held_newest.map_or(ms, |n| n.max(ms)));
+                if self.held_newest.is_some_and(|n| ms < n) {
+                    self.held_dropped += 1;
+                    continue;
+                }
+                self.held_newest = Some(ms);
+                self.held_dropped += self.queue.len() as u64;
+                self.queue.clear();
                 self.queue.push_back((ms, v));
-            }
-            while self.queue.len() > 100_000 {
-                self.queue.pop_front();
             }
             self.held_scanned = self.queue.len();
             return Ok(None);
@@ -1395,11 +1569,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if from.0 != target.0 {
             return;
         }
+        if from == target {
+            if let Some(ms) = vehicle_time_ms(&r.msg) {
+                self.vehicle_time(ms);
+            }
+        }
         if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
-            if !self.wanted.is_empty() && name_of(&n.name[..]) == self.wanted && n.value.is_finite()
-            {
-                self.clock
-                    .receive(&mut self.queue, n.time_boot_ms, n.value as f64);
+            if !self.wanted.is_empty() && name_of(&n.name[..]) == self.wanted {
+                if n.value.is_finite() {
+                    self.clock
+                        .receive(&mut self.queue, n.time_boot_ms, n.value as f64);
+                } else {
+                    self.invalid_measurement(format!(
+                        "NAMED_VALUE_FLOAT {} stamped {} s from system {}, component {} is {}",
+                        String::from_utf8_lossy(&self.wanted),
+                        wire::time_s(n.time_boot_ms),
+                        from.0,
+                        from.1,
+                        n.value
+                    ));
+                }
             }
             return;
         }
@@ -1414,7 +1603,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             // Acknowledgements go to every peer of the vehicle: once in control, they may
             // answer someone else's command, and say nothing about ours.
-            MavMessage::COMMAND_ACK(a) if !self.in_control => self.acknowledged(a),
+            MavMessage::COMMAND_ACK(a) if !self.in_control && !self.ack_for_another(r) => {
+                self.acknowledged(a)
+            }
             // A non-finite position is no position (it would switch the fence off).
             MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
                 self.tel.local_seen = true;
@@ -1450,6 +1641,25 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             _ => {}
         }
+    }
+
+    /// A time of the vehicle's own clock: one more than [`REBOOT_STEP_S`] behind the newest is
+    /// a reboot (its autopilot's clock begins again at 0).
+    fn vehicle_time(&mut self, ms: u32) {
+        let now = Instant::now();
+        let Some((newest, _)) = self.vehicle_ms else {
+            self.vehicle_ms = Some((ms as u64, now));
+            return;
+        };
+        let t = wire::unwrap_ms(newest, ms);
+        if t + ((REBOOT_STEP_S * 1000.0) as u64) < newest {
+            self.reboot.get_or_insert(format!(
+                "vehicle_lost: the vehicle's clock (time_boot_ms) went back from {} s to {} s: its autopilot rebooted (not a pilot's take-over)",
+                wire::unwrapped_s(newest),
+                wire::unwrapped_s(t)
+            ));
+        }
+        self.vehicle_ms = Some((newest.max(t), now));
     }
 
     /// A heartbeat: the first autopilot heard is the vehicle (or `target_system`'s); another
@@ -1583,6 +1793,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if h.system_status == MavState::MAV_STATE_POWEROFF {
             self.vehicle_done = true;
         }
+    }
+
+    /// Whether `r` is an acknowledgement addressed to someone else than the companion (its
+    /// `target_system` another system, or its `target_component` another component; 0 is
+    /// unaddressed, anyone's): a ground station's answer, never the companion's.
+    fn ack_for_another(&self, r: &Received) -> bool {
+        r.ack_target.is_some_and(|(sys, comp)| {
+            sys != 0 && (sys != self.opts.system_id || (comp != 0 && comp != COMPANION_COMPONENT))
+        })
     }
 
     /// An acknowledgement before the companion has control: an accepted arming, or a refusal.
@@ -1805,6 +2024,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     continue;
                 }
                 self.last_link = Instant::now();
+                if self.ack_for_another(&r) {
+                    continue;
+                }
                 match (&r.msg, way) {
                     (MavMessage::COMMAND_ACK(a), _)
                         if a.command == cmd
@@ -1861,10 +2083,26 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         if before.1 && !armed {
             return Some("disarmed".into());
         }
-        if before.0.is_some_and(|m| m != h.custom_mode) {
+        // OFFBOARD, which the companion itself asked for (a switch answered late), is no
+        // pilot's.
+        let own = self.offboard_sent && self.firmware.is_in(h.custom_mode, FlyMode::Offboard);
+        if before.0.is_some_and(|m| m != h.custom_mode) && !own {
             return Some(format!("in {}", self.firmware.mode_name(h.custom_mode)));
         }
         None
+    }
+}
+
+/// The `time_boot_ms` of a message stamped with the sender's clock since its boot (the ones
+/// an autopilot sends here), if it is one. Not the measurement's: its clock may be a sensor's
+/// own, and its jumps are [`MAX_MEASUREMENT_STEP_S`]'s.
+fn vehicle_time_ms(msg: &MavMessage) -> Option<u32> {
+    match msg {
+        MavMessage::ATTITUDE(m) => Some(m.time_boot_ms),
+        MavMessage::LOCAL_POSITION_NED(m) => Some(m.time_boot_ms),
+        MavMessage::GLOBAL_POSITION_INT(m) => Some(m.time_boot_ms),
+        MavMessage::SYSTEM_TIME(m) => Some(m.time_boot_ms),
+        _ => None,
     }
 }
 

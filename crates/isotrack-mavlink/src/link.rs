@@ -103,6 +103,13 @@ pub struct Received {
     pub header: MavHeader,
     /// The message.
     pub msg: MavMessage,
+    /// The datagram's source address (UDP; `None` on a stream): two senders with the same
+    /// system and component id are told apart by it.
+    pub from: Option<SocketAddr>,
+    /// A `COMMAND_ACK`'s MAVLink 2 extension fields `target_system` and `target_component`
+    /// (payload bytes 8 and 9; 0 where the frame leaves them out, unaddressed), which the
+    /// `mavlink` crate's common dialect does not decode: whom the acknowledgement answers.
+    pub ack_target: Option<(u8, u8)>,
 }
 
 /// What the link has seen.
@@ -273,7 +280,9 @@ pub struct Link {
     pub stats: LinkStats,
 }
 
-fn resolve(addr: &str) -> Result<SocketAddr, LinkError> {
+/// Resolves `HOST:PORT`: no port, an empty host or port, a port outside [0, 65535] or a
+/// host that names no address is a [`LinkError::Address`] (a usage error).
+pub fn resolve(addr: &str) -> Result<SocketAddr, LinkError> {
     let Some((host, port)) = addr.rsplit_once(':') else {
         return Err(LinkError::Address(format!(
             "`{addr}` has no port (expected HOST:PORT)"
@@ -494,6 +503,13 @@ fn accept(
     let Ok(msg) = MavMessage::parse(MavlinkVersion::V2, raw.message_id(), raw.payload()) else {
         return false;
     };
+    let ack_target = matches!(msg, MavMessage::COMMAND_ACK(_)).then(|| {
+        let p = raw.payload();
+        (
+            p.get(8).copied().unwrap_or(0),
+            p.get(9).copied().unwrap_or(0),
+        )
+    });
     log.frame(raw.raw_bytes());
     stats.frames_in += 1;
     out.push(Received {
@@ -503,6 +519,8 @@ fn accept(
             sequence: raw.sequence(),
         },
         msg,
+        from: None,
+        ack_target,
     });
     true
 }
@@ -978,6 +996,9 @@ impl Link {
             if out.len() == before {
                 self.stats.junk_datagrams += 1;
                 continue;
+            }
+            for r in &mut out[before..] {
+                r.from = Some(from);
             }
             if *fixed {
                 continue;

@@ -169,6 +169,43 @@ impl Firmware {
         land.then_some("LAND")
     }
 
+    /// The return or landing a heartbeat's `custom_mode` is, if it is one (the autopilot's own
+    /// failsafe, or its pilot's choice, bringing the vehicle home or down): PX4 AUTO.RTL,
+    /// AUTO.LAND and AUTO.PRECLAND (main 4, sub 5, 6, 9); ArduCopter RTL 6, LAND 9,
+    /// SMART_RTL 21; ArduPlane RTL 11, QLAND 20, QRTL 21; Rover RTL 11, SMART_RTL 12. Sources
+    /// as for the table (PX4's `px4_custom_mode.h`, ArduPilot's `mode.h` of each firmware).
+    pub fn returning_or_landing(self, custom_mode: u32) -> Option<&'static str> {
+        match self {
+            Firmware::Px4 => {
+                let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
+                match (main, sub) {
+                    (PX4_AUTO, PX4_RTL) => Some("AUTO.RTL"),
+                    (PX4_AUTO, PX4_LAND) => Some("AUTO.LAND"),
+                    (PX4_AUTO, 9) => Some("AUTO.PRECLAND"),
+                    _ => None,
+                }
+            }
+            Firmware::ArduCopter => match custom_mode {
+                6 => Some("RTL"),
+                ARDUCOPTER_LAND => Some("LAND"),
+                21 => Some("SMART_RTL"),
+                _ => None,
+            },
+            Firmware::ArduPlane => match custom_mode {
+                11 => Some("RTL"),
+                20 => Some("QLAND"),
+                21 => Some("QRTL"),
+                _ => None,
+            },
+            Firmware::ArduRover => match custom_mode {
+                11 => Some("RTL"),
+                12 => Some("SMART_RTL"),
+                _ => None,
+            },
+            Firmware::ArduOther => None,
+        }
+    }
+
     /// The name of a heartbeat's `custom_mode` in logs ("OFFBOARD", "GUIDED", "RTL", or the
     /// number).
     pub fn mode_name(self, custom_mode: u32) -> String {

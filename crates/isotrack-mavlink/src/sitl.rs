@@ -257,6 +257,12 @@ struct Autopilot {
     /// The companion in control (the one that armed it or switched it to OFFBOARD, or, armed by
     /// the ground station, the first to send a valid setpoint): `(system, component)`.
     owner: Option<(u32, u8)>,
+    /// The source address the owner took control from (UDP): setpoints with the owner's ids
+    /// from another address are a second companion with the same ids ([`Autopilot::twin`]).
+    owner_addr: Option<std::net::SocketAddr>,
+    /// Addresses that sent setpoints with the owner's ids, logged (the most recent
+    /// [`MAX_SETPOINT_SENDERS`]).
+    twins_logged: Vec<std::net::SocketAddr>,
     /// A fixed wing (in flight whenever armed): a disarm from another system than the owner
     /// needs PX4's force code.
     flying: bool,
@@ -431,6 +437,45 @@ impl Autopilot {
         match self.transport {
             Transport::FixedWing { airspeed_mps } => airspeed_mps / self.loiter_radps,
             Transport::Ground => 1.0,
+        }
+    }
+
+    /// Whether a setpoint from `from` at source address `addr` comes with the owner's system
+    /// and component id but from another address than the one that took control: a second
+    /// companion with the same ids (two `fly` with the default ids). Refused (counted), each
+    /// address logged once. Not for a ground station's ids (`MAV_TYPE_GCS` heartbeat).
+    fn twin(&mut self, t_s: f64, from: (u32, u8), addr: Option<std::net::SocketAddr>) -> bool {
+        let (Some(a), Some(o)) = (addr, self.owner_addr) else {
+            return false;
+        };
+        // A ground station (by its heartbeat) is one operator whatever socket it speaks from.
+        if self.owner != Some(from) || a == o || self.is_gcs(from) {
+            return false;
+        }
+        self.refused += 1;
+        if !self.twins_logged.contains(&a) {
+            if self.twins_logged.len() == MAX_SETPOINT_SENDERS {
+                self.twins_logged.remove(0);
+            }
+            self.twins_logged.push(a);
+            self.event(
+                t_s,
+                format!(
+                    "refused setpoints from {a} with the ids of the companion in control (system {}, component {}), which took control from {o}: a second companion with the same ids (give each its own --system-id); logged once per address",
+                    from.0, from.1
+                ),
+            );
+        }
+        true
+    }
+
+    /// After a command or setpoint from source address `addr`: a new owner took control from
+    /// it; no owner, no address.
+    fn owner_seen(&mut self, had_owner: bool, addr: Option<std::net::SocketAddr>) {
+        if self.owner.is_none() {
+            self.owner_addr = None;
+        } else if !had_owner {
+            self.owner_addr = addr;
         }
     }
 
@@ -879,7 +924,9 @@ impl Sitl<'_> {
                     if c.target_system != self.ap.system_id {
                         continue;
                     }
+                    let had_owner = self.ap.owner.is_some();
                     let result = self.ap.command(t_s, from, c);
+                    self.ap.owner_seen(had_owner, r.from);
                     self.command_ack(c.command, result, from)?;
                     // The new state at once (PX4 also reports it in the next heartbeat).
                     self.heartbeat(false)?;
@@ -889,9 +936,14 @@ impl Sitl<'_> {
                     self.ap.heard_gcs(from);
                 }
                 MavMessage::SET_ATTITUDE_TARGET(s) => {
+                    if s.target_system == self.ap.system_id && self.ap.twin(t_s, from, r.from) {
+                        continue;
+                    }
+                    let had_owner = self.ap.owner.is_some();
                     if let Some(a) = self.ap.setpoint(t_s, from, s) {
                         answers.push(a);
                     }
+                    self.ap.owner_seen(had_owner, r.from);
                 }
                 _ => {}
             }
@@ -960,6 +1012,8 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
             armed: false,
             mode: Mode::Manual,
             owner: None,
+            owner_addr: None,
+            twins_logged: Vec::new(),
             flying: scenario.is_flying(),
             setpoint: None,
             setpoint_wall: None,
@@ -1203,6 +1257,8 @@ mod tests {
             armed: true,
             mode: Mode::Offboard,
             owner: None,
+            owner_addr: None,
+            twins_logged: Vec::new(),
             flying: false,
             setpoint: None,
             setpoint_wall: None,

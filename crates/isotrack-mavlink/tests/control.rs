@@ -63,6 +63,22 @@ struct Script {
     pilot_manual_after_holds: Option<u32>,
     /// From this beat on it sends no heartbeat (its measurements and positions go on).
     heartbeats_stop_at: Option<u32>,
+    /// At this beat it disarms (in MANUAL), nobody having commanded it.
+    disarm_at_beat: Option<u32>,
+    /// With `disarm_at_beat`: its clock begins again at 0 there (the autopilot rebooted).
+    clock_restarts: bool,
+    /// Until it is in OFFBOARD it moves this far north each beat (a pilot flying it to the
+    /// area), m; then it stays.
+    pilot_flies_m_per_beat: f32,
+    /// Switches to OFFBOARD go unanswered before this beat (a slow take-over).
+    offboard_from_beat: u32,
+    /// At this beat it also sends a measurement whose value is NaN.
+    nan_measurement_at: Option<u32>,
+    /// At this beat (a pilot) it switches to this PX4 mode.
+    mode_at_beat: Option<(u32, u32)>,
+    /// Each command is first answered DENIED addressed to a ground station (system 255,
+    /// component 190: its own request's answer), then answered to the companion.
+    gcs_denial_first: bool,
 }
 
 impl Script {
@@ -113,6 +129,13 @@ impl Default for Script {
             resend_until_offboard: false,
             pilot_manual_after_holds: None,
             heartbeats_stop_at: None,
+            disarm_at_beat: None,
+            clock_restarts: false,
+            pilot_flies_m_per_beat: 0.0,
+            offboard_from_beat: 0,
+            nan_measurement_at: None,
+            mode_at_beat: None,
+            gcs_denial_first: false,
         }
     }
 }
@@ -191,12 +214,27 @@ fn against_counting(
     let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let (mut armed, mut mode, mut holds) = (script.armed, script.start_mode, 0u32);
     let (mut beats, mut sent) = (0u32, 0u32);
+    // The vehicle's clock at `sent` 0, ms.
+    let mut clock0 = 1000u32;
+    let mut north_m = 0.0f32;
     let mut got = Vec::new();
     let t0 = Instant::now();
     while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
         if script.offboard_at_beat == Some(beats) {
             armed = true;
             mode = script.guided();
+        }
+        if let Some((b, m)) = script.mode_at_beat {
+            if b == beats {
+                mode = m;
+            }
+        }
+        if script.disarm_at_beat == Some(beats) {
+            armed = false;
+            mode = 1 << 16;
+            if script.clock_restarts {
+                (clock0, sent) = (0, 0);
+            }
         }
         if script.gimbal {
             gimbal
@@ -257,19 +295,30 @@ fn against_counting(
                 sent = 0;
             }
             v.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
-                time_boot_ms: 1000 + 50 * sent,
+                time_boot_ms: clock0 + 50 * sent,
                 value: 1.0,
                 name: name.into(),
             }))
             .unwrap();
+            if !(armed && mode == script.guided()) {
+                north_m += script.pilot_flies_m_per_beat;
+            }
+            if script.nan_measurement_at == Some(beats) {
+                v.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                    time_boot_ms: clock0 + 50 * sent + 1,
+                    value: f32::NAN,
+                    name: name.into(),
+                }))
+                .unwrap();
+            }
             let p = if beats >= script.nan_positions_from {
                 f32::NAN
             } else {
                 0.0
             };
             v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
-                time_boot_ms: 1000 + 50 * sent,
-                x: p,
+                time_boot_ms: clock0 + 50 * sent,
+                x: p + north_m,
                 y: p,
                 ..Default::default()
             }))
@@ -294,6 +343,20 @@ fn against_counting(
             if c.target_system != 1 || !matches!(c.target_component, 0 | 1) {
                 continue;
             }
+            if script.gcs_denial_first {
+                // The extensions after command and result: progress, result_param2 (4 bytes),
+                // target_system, target_component.
+                v.send_extended(
+                    &MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                        command: c.command,
+                        result: MavResult::MAV_RESULT_DENIED,
+                    }),
+                    <COMMAND_ACK_DATA as mavlink::MessageData>::EXTRA_CRC,
+                    3,
+                    &[0, 0, 0, 0, 0, 255, 190],
+                )
+                .unwrap();
+            }
             let result = match c.command {
                 MavCmd::MAV_CMD_COMPONENT_ARM_DISARM if c.param1 == 1.0 => {
                     if script.arm == MavResult::MAV_RESULT_ACCEPTED {
@@ -304,6 +367,12 @@ fn against_counting(
                 MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
                     armed = false;
                     MavResult::MAV_RESULT_ACCEPTED
+                }
+                MavCmd::MAV_CMD_DO_SET_MODE
+                    if script.custom_mode(c.param2, c.param3) == script.guided()
+                        && beats < script.offboard_from_beat =>
+                {
+                    continue;
                 }
                 MavCmd::MAV_CMD_DO_SET_MODE
                     if script.custom_mode(c.param2, c.param3) == script.guided() =>
@@ -357,7 +426,11 @@ fn a_refused_offboard_disarms_what_the_companion_armed() {
         offboard: MavResult::MAV_RESULT_DENIED,
         ..Script::default()
     };
-    let (r, got) = against(script, |o| o.take_control = true);
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(got.iter().any(is_disarm), "{got:?}");
     assert!(!got.iter().any(is_hold), "{got:?}");
@@ -379,7 +452,11 @@ fn a_refused_offboard_of_a_pilots_vehicle_commands_nothing() {
         offboard: MavResult::MAV_RESULT_DENIED,
         ..Script::default()
     };
-    let (r, got) = against(script, |o| o.take_control = true);
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(!got.iter().any(is_hold), "{got:?}");
     assert!(!got.iter().any(is_disarm), "{got:?}");
@@ -398,6 +475,7 @@ fn a_pilot_taking_over_during_the_failsafe_stops_the_retries() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.max_duration_s = Some(0.5);
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
@@ -423,7 +501,11 @@ fn a_vehicle_whose_heartbeats_stop_is_lost() {
         heartbeats_stop_at: Some(20),
         ..Script::default()
     };
-    let (r, _) = against(script, |o| o.take_control = true);
+    let (r, _) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::LinkLost, "{:?}", r.events);
     assert!(
         r.events
@@ -442,7 +524,11 @@ fn a_refused_arming_commands_nothing_more() {
         arm: MavResult::MAV_RESULT_DENIED,
         ..Script::default()
     };
-    let (r, got) = against(script, |o| o.take_control = true);
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
     assert!(!r.way_out_commanded);
     assert!(!got.iter().any(|g| is_hold(g) || is_disarm(g)), "{got:?}");
@@ -480,6 +566,7 @@ fn take_control_waits_for_the_sensor() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.max_duration_s = Some(0.5);
     });
     let arm = got
@@ -496,7 +583,11 @@ fn take_control_without_a_sensor_never_arms() {
         quiet_beats: u32::MAX,
         ..Script::default()
     };
-    let (r, got) = against(script, |o| o.take_control = true);
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
     assert!(
         !got.iter()
@@ -555,6 +646,7 @@ fn an_interrupt_before_offboard_disarms_what_the_companion_armed() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         stop_after(o, 2.0);
     });
     assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
@@ -734,6 +826,7 @@ fn modes_of(
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.failsafe = failsafe;
         o.max_duration_s = Some(0.5);
     });
@@ -843,6 +936,7 @@ fn a_vehicle_without_a_mode_table_is_never_armed() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.allow_generic = true;
         o.max_duration_s = Some(0.5);
     });
@@ -889,7 +983,11 @@ fn a_vehicle_of_another_kind_is_refused_before_anything_is_sent() {
             scenario: Some(scenario.unwrap_or("paper-fig2b-circular.toml")),
             ..Script::default()
         };
-        let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+        let (r, got, setpoints) = against_counting(script, |o| {
+            o.take_control = true;
+            o.arm = true;
+            o.arm = true;
+        });
         let case = format!("{kind} vs {mavtype:?}: {:?}", r.events);
         assert_eq!(r.end, FlyEnd::VehicleMismatch, "{case}");
         assert!(got.is_empty(), "{case}: {got:?}");
@@ -921,7 +1019,11 @@ fn take_control_refuses_a_generic_vehicle_unless_allowed() {
             scenario: Some(scenario),
             ..Script::default()
         };
-        let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+        let (r, got, setpoints) = against_counting(script, |o| {
+            o.take_control = true;
+            o.arm = true;
+            o.arm = true;
+        });
         let case = format!("{autopilot:?} {scenario}: {:?}", r.events);
         assert_eq!(r.end, FlyEnd::VehicleMismatch, "{case}");
         assert!(got.is_empty(), "{case}: {got:?}");
@@ -946,7 +1048,11 @@ fn take_control_does_not_join_a_vehicle_someone_else_holds() {
         start_mode: OFFBOARD,
         ..Script::default()
     };
-    let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+    let (r, got, setpoints) = against_counting(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
     assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
     assert!(got.is_empty(), "{got:?}");
     assert_eq!(setpoints, 0);
@@ -1068,6 +1174,7 @@ fn someone_elses_acknowledgement_is_not_the_companions() {
     };
     let (r, got) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.max_duration_s = Some(0.5);
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
@@ -1094,6 +1201,7 @@ fn a_clean_take_over_logs_no_repeat() {
     };
     let (r, _) = against(script, |o| {
         o.take_control = true;
+        o.arm = true;
         o.max_duration_s = Some(0.5);
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
@@ -1104,4 +1212,232 @@ fn a_clean_take_over_logs_no_repeat() {
         r.events
     );
     assert!(r.commands.len() >= 5, "{:?}", r.commands);
+}
+
+/// In control, the autopilot reboots (att33b item 2: `sitl` killed and restarted): its
+/// heartbeat says disarmed in MANUAL, nobody having commanded it, and its clock begins again
+/// at 0 (4 s back). Not a pilot's take-over: `vehicle_lost`, a failsafe (HOLD commanded).
+#[test]
+fn an_autopilot_that_reboots_in_flight_is_lost_not_taken_over() {
+    let script = Script {
+        disarm_at_beat: Some(60),
+        clock_restarts: true,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("rebooted")),
+        "{:?}",
+        r.events
+    );
+    assert!(got.iter().any(is_hold), "{got:?}");
+    assert!(r.way_out_commanded);
+}
+
+/// The same disarm with the vehicle's clock going on (a pilot's kill switch): the pilot's word
+/// is final, `pilot_took_over`, nothing commanded.
+#[test]
+fn a_disarm_in_flight_without_a_reboot_is_the_pilots() {
+    let script = Script {
+        disarm_at_beat: Some(60),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.arm = true;
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!got.iter().any(is_hold), "{got:?}");
+    assert!(!r.way_out_commanded);
+}
+
+/// FLYING.md's recipe (att33b item 19): the pilot flies the vehicle (armed, MANUAL) 400 m to
+/// the area, then hands over (OFFBOARD). The 100 m fence is centred where the companion got
+/// control and not enforced before: the flight is flown to its --max-duration-s, not ended by
+/// the fence on the way.
+#[test]
+fn the_fence_is_centred_where_control_begins() {
+    let script = Script {
+        armed: true,
+        start_mode: 1 << 16,
+        offboard_at_beat: Some(40),
+        pilot_flies_m_per_beat: 10.0,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.fence_m = Some(100.0);
+        o.max_duration_s = Some(1.0);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(!r.commands.is_empty(), "{:?}", r.events);
+    assert!(got.iter().any(is_hold), "{got:?}");
+}
+
+/// A slow take-over (att33b item 15): OFFBOARD is answered only from beat 40 (2 s of 50 ms
+/// measurements held meanwhile). Once in control the law starts from the newest one held, not
+/// from a burst of stale ones: its first command answers a measurement of beat 30 or later
+/// (stamped 1000 + 50 k ms), and the older ones dropped are logged.
+#[test]
+fn a_slow_take_over_starts_from_the_newest_measurement() {
+    let script = Script {
+        offboard_from_beat: 40,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    let first_ms = r.commands.first().expect("a command").0;
+    assert!(first_ms >= 1000 + 50 * 30, "{first_ms} {:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("older ones dropped")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// A measurement whose value is NaN (att33b item 3) is no measurement: dropped, counted in
+/// measurements_invalid, logged once; the flight goes on.
+#[test]
+fn a_non_finite_measurement_is_counted_and_logged() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        nan_measurement_at: Some(5),
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| o.max_duration_s = Some(1.0));
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 1, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("NaN") && e.contains("measurements_invalid")),
+        "{:?}",
+        r.events
+    );
+}
+
+fn is_arm(g: &Got) -> bool {
+    g.cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && g.p[0] == 1.0
+}
+
+/// att33c item 5: during a take-over (the vehicle armed by the companion, its OFFBOARD switch
+/// unanswered), the pilot disarms it: the take-over ends at once, `pilot_took_over`; it is
+/// never armed again, nothing more is commanded (no disarm, no HOLD).
+#[test]
+fn a_pilots_disarm_during_the_take_over_is_final() {
+    let script = Script {
+        offboard_from_beat: u32::MAX,
+        disarm_at_beat: Some(20),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert_eq!(got.iter().filter(|g| is_arm(g)).count(), 1, "{got:?}");
+    assert!(
+        !got.iter().any(is_hold) && !got.iter().any(is_disarm),
+        "{got:?}"
+    );
+    assert!(!r.way_out_commanded && r.commands.is_empty());
+}
+
+/// att33c item 5: a pilot's vehicle (armed in POSCTL) whose OFFBOARD switch goes unanswered;
+/// the pilot switches to STABILIZED: the take-over ends at once, no more OFFBOARD requests
+/// after the pilot's switch is heard, nothing commanded on the way out.
+#[test]
+fn a_pilots_mode_change_during_the_take_over_is_final() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        offboard_from_beat: u32::MAX,
+        mode_at_beat: Some((30, 7 << 16)),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("STABILIZED")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !got.iter().any(is_hold) && !got.iter().any(is_disarm),
+        "{got:?}"
+    );
+    // OFFBOARD is asked every 0.5 s (10 beats): at most one more after beat 30's switch.
+    let late = got
+        .iter()
+        .filter(|g| g.cmd == MavCmd::MAV_CMD_DO_SET_MODE && g.measurements_before > 31)
+        .count();
+    assert!(late <= 1, "{got:?}");
+}
+
+/// att33c item 14: a vehicle armed in PX4 AUTO.RTL (its own failsafe bringing it home) is never
+/// pulled out of it: nothing commanded, `control_refused`.
+#[test]
+fn take_control_never_pulls_a_vehicle_out_of_its_return() {
+    let script = Script {
+        armed: true,
+        start_mode: (4 << 16) | (5 << 24),
+        ..Script::default()
+    };
+    let (r, got, setpoints) = against_counting(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(got.is_empty(), "{got:?}");
+    assert_eq!(setpoints, 0);
+    assert!(
+        r.events.iter().any(|e| e.contains("AUTO.RTL")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33c item 4: an acknowledgement addressed to a ground station (system 255, component 190),
+/// DENIED, before the vehicle's answer to the companion: not the companion's; the take-over
+/// goes on and the flight is flown.
+#[test]
+fn an_acknowledgement_addressed_to_another_system_is_not_ours() {
+    let script = Script {
+        gcs_denial_first: true,
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(!r.commands.is_empty());
+    assert!(
+        !r.events.iter().any(|e| e.contains("DENIED")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33c item 15: without `arm`, `--take-control` does not arm a disarmed vehicle (a real
+/// aircraft is armed and flown to the area by its pilot): refused, nothing commanded.
+#[test]
+fn take_control_arms_only_when_asked() {
+    let (r, got, setpoints) = against_counting(Script::default(), |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(got.is_empty(), "{got:?}");
+    assert_eq!(setpoints, 0);
+    assert!(
+        r.events.iter().any(|e| e.contains("--arm")),
+        "{:?}",
+        r.events
+    );
 }

@@ -209,6 +209,50 @@ fn sitl_refuses_a_stranger_once_armed() {
     assert!(owner_kept, "{:?}", report.events);
 }
 
+/// Two companions with the same ids (system 1, component 191: two `fly` with the defaults) on
+/// one vehicle, from two source addresses (att33b item 9): once A has armed it, B's setpoints
+/// are a twin's, refused and logged (naming both addresses); A's are flown.
+#[test]
+fn sitl_refuses_a_twin_companions_setpoints() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let s = load_scenario(None, &[]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&s, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let addr = rx.recv().unwrap();
+    let url = format!("udpout:{addr}");
+    let mut a = Link::open(&url, 1, 191).unwrap();
+    let mut b = Link::open(&url, 1, 191).unwrap();
+    let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+    let accepted = Some(MavResult::MAV_RESULT_ACCEPTED);
+    assert_eq!(ack_of(&mut a, arm, 1.0, 0.0), accepted);
+    for _ in 0..3 {
+        b.send(&yaw_rate_setpoint(-0.1)).unwrap();
+    }
+    a.send(&yaw_rate_setpoint(0.1)).unwrap();
+    // A round trip: what B and A sent before has been handled.
+    assert_eq!(ack_of(&mut a, arm, 1.0, 0.0), accepted);
+    stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    assert_eq!(report.setpoints_refused, 3, "{:?}", report.events);
+    let (a_addr, b_addr) = (a.local_addr().unwrap(), b.local_addr().unwrap());
+    let logged: Vec<_> = report
+        .events
+        .iter()
+        .filter(|e| e.contains("same ids"))
+        .collect();
+    assert_eq!(logged.len(), 1, "{:?}", report.events);
+    assert!(
+        logged[0].contains(&b_addr.port().to_string())
+            && logged[0].contains(&a_addr.port().to_string()),
+        "{logged:?}"
+    );
+}
+
 /// A vehicle that beats every 50 ms and sends `ISO_S` with the given `time_boot_ms`, one per
 /// beat, the last one again and again; stops after 10 s (or once told the companion ended).
 fn clocked_vehicle(times: Vec<u32>) -> FlyEnd {
@@ -581,4 +625,94 @@ fn a_lockstep_vehicle_ends_when_the_companion_is_gone() {
     assert!(report.companion_lost, "{:?}", report.events);
     assert!(!report.interrupted);
     assert_eq!(report.flown.len(), 3, "{:?}", report.events);
+}
+
+/// Whether a datagram is one MAVLink 2 `COMMAND_LONG` (message 76) carrying
+/// `MAV_CMD_DO_SET_MODE` (176): its command is the payload's bytes 28 and 29.
+fn is_set_mode(d: &[u8]) -> bool {
+    d.len() >= 10 + 30
+        && d[0] == 0xFD
+        && u32::from_le_bytes([d[7], d[8], d[9], 0]) == 76
+        && u16::from_le_bytes([d[10 + 28], d[10 + 29]]) == 176
+}
+
+/// The forced disarm against `isotrack sitl` itself (not a stand-in): `fly --take-control`
+/// arms sitl's fixed wing (counted as flying once armed, so an unforced disarm is refused),
+/// its switches to OFFBOARD are lost on the way (a relay drops them), and it is interrupted
+/// before it ever had control: it disarms the vehicle it armed, forced (param2 21196), and
+/// sitl accepts and confirms it.
+#[test]
+fn an_interrupt_before_offboard_disarms_sitls_fixed_wing_by_force() {
+    use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/paper-fig3-uav.toml");
+    let s = load_scenario(Some(&p), &[]).unwrap();
+    let mut opts = SitlOptions::new("udpin:127.0.0.1:0");
+    opts.pace = Pace::Lockstep;
+    let sitl_stop = opts.stop.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let sc = s.clone();
+    let vehicle = std::thread::spawn(move || {
+        run_sitl(&sc, &opts, &mut NoTrace, &mut |a| tx.send(a).unwrap()).unwrap()
+    });
+    let sitl_addr = rx.recv().unwrap();
+    // The relay between fly and sitl: everything passes but the switches to OFFBOARD; at the
+    // second one dropped (fly armed and retrying), fly is interrupted.
+    let relay = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    relay
+        .set_read_timeout(Some(Duration::from_millis(50)))
+        .unwrap();
+    let relay_addr = relay.local_addr().unwrap();
+    let mut o = FlyOptions::new(&format!("udpout:{relay_addr}"));
+    o.take_control = true;
+    o.arm = true;
+    o.timeout_s = 2.0;
+    let fly_stop = o.stop.clone();
+    let companion =
+        std::thread::spawn(move || run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap());
+    let (mut fly_addr, mut dropped) = (None, 0);
+    let mut buf = [0u8; 65_536];
+    let t0 = Instant::now();
+    while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
+        let Ok((n, from)) = relay.recv_from(&mut buf) else {
+            continue;
+        };
+        if from == sitl_addr {
+            if let Some(f) = fly_addr {
+                relay.send_to(&buf[..n], f).unwrap();
+            }
+            continue;
+        }
+        fly_addr = Some(from);
+        if is_set_mode(&buf[..n]) {
+            dropped += 1;
+            if dropped == 2 {
+                fly_stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            }
+            continue;
+        }
+        relay.send_to(&buf[..n], sitl_addr).unwrap();
+    }
+    let r = companion.join().unwrap();
+    sitl_stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    let report = vehicle.join().unwrap();
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(
+        r.way_out_commanded && r.failsafe_acknowledged,
+        "{:?}",
+        r.events
+    );
+    assert!(
+        report
+            .events
+            .iter()
+            .any(|e| e.contains("disarmed by system 1")),
+        "{:?}",
+        report.events
+    );
+    assert!(
+        !report.events.iter().any(|e| e.contains("refused disarm")),
+        "{:?}",
+        report.events
+    );
 }

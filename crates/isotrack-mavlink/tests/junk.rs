@@ -104,6 +104,7 @@ fn a_flood_of_junk_neither_stalls_nor_moves_the_vehicle() {
     };
     let mut c = FlyOptions::new(&format!("udpout:{addr}"));
     c.take_control = true;
+    c.arm = true;
     c.timeout_s = 30.0;
     let f = run_fly(&s, &c, &mut NoTrace, &mut |_| Ok(())).expect("fly");
     done.store(true, Ordering::SeqCst);

@@ -49,6 +49,7 @@ fn flight(
     let addr = addr_rx.recv().unwrap();
     let mut fo = FlyOptions::new(&format!("udpout:{addr}"));
     fo.take_control = true;
+    fo.arm = true;
     fo.timeout_s = 30.0;
     fly_opts(&mut fo);
     let (first_tx, first_rx) = mpsc::channel();

@@ -236,3 +236,31 @@ fn a_second_sender_is_not_the_sensor() {
         r.events
     );
 }
+
+/// Lines that are no measurement (att33b item 3): not two comma-separated numbers, a time
+/// out of [0, 4294967.295] s, a value not finite. Dropped, never given to the law, counted
+/// (measurements_invalid: 7) and the first logged; the law runs on the one good line.
+#[test]
+fn malformed_and_non_finite_lines_are_counted_and_logged() {
+    let (r, _) = udp_flight(|s, a| {
+        s.send_to(
+            b"abc,def\n2;9.2\n2,9.2,7\n2,nan\nnan,9\n-1,9\n1e300,9\n\n3.0,1\n",
+            a,
+        )
+        .unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let w = law.update(&Measurement {
+        t_s: 3.0,
+        value: 1.0,
+    });
+    assert_eq!(r.commands, vec![(3000, w)], "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 7, "{:?}", r.events);
+    let logged: Vec<_> = r
+        .events
+        .iter()
+        .filter(|e| e.contains("measurements_invalid"))
+        .collect();
+    assert_eq!(logged.len(), 1, "{:?}", r.events);
+    assert!(logged[0].contains("abc,def"), "{logged:?}");
+}

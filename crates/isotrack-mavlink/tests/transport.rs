@@ -47,6 +47,7 @@ fn lockstep(url: &str) -> SitlOptions {
 fn companion(url: &str) -> FlyOptions {
     let mut o = FlyOptions::new(url);
     o.take_control = true;
+    o.arm = true;
     o.timeout_s = 30.0;
     o
 }

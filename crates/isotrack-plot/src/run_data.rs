@@ -186,11 +186,13 @@ impl RunData {
             let why = if scenario.file().output.record_rate_hz == Some(0.0) {
                 "the trace was turned off (output.record_rate_hz = 0)".to_string()
             } else {
+                // A flight that answered no measurement has no end time (`t_end_s` null).
+                let when = match summary.t_end_s() {
+                    Some(t) => format!("the run ended at t = {} s", serde_json::Value::from(t)),
+                    None => "the run ended before its first measurement (no end time)".to_string(),
+                };
                 format!(
-                    "the run ended at t = {} s: {} ({})",
-                    summary
-                        .t_end_s()
-                        .map_or(serde_json::Value::Null, serde_json::Value::from),
+                    "{when}: {} ({})",
                     summary.outcome(),
                     summary.outcome_detail().unwrap_or("no detail")
                 )

@@ -1,15 +1,9 @@
 //! Files a command removes when it is interrupted (Ctrl-C, SIGTERM): an output directory's
 //! lock file ([`crate::sweep::lock::LOCK_FILE`]) and a trace being streamed into its
 //! temporary file (`.trace.csv.PID.tmp`). Each is registered while it exists ([`register`]);
-//! the command-line program calls [`remove_on_interrupt`] once, after which SIGINT and SIGTERM
-//! remove every registered file and end the process with 130 (128 + SIGINT) or 143 (128 +
-//! SIGTERM), as the default action would, but without the litter (README: "the holder removes
-//! the file when done (an error and Ctrl-C included)"). A library user (the Python package)
-//! keeps its own signal handling: nothing is installed unless asked.
-//!
-//! The signal handler only writes the signal's number into a pipe (`write` is
-//! async-signal-safe, POSIX.1-2017 2.4.3); a thread blocked on the pipe's other end does the
-//! removing and the exit.
+//! the signals are [`crate::signals`]': once the command-line program has called
+//! [`crate::signals::remove_on_interrupt`], SIGINT, SIGTERM and SIGHUP remove every registered
+//! file ([`remove_pending`]) and end the process with 128 + the signal.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -51,67 +45,6 @@ pub fn remove_pending() {
     for (_, p) in list.iter() {
         let _ = std::fs::remove_file(p);
     }
-}
-
-#[cfg(unix)]
-mod signals {
-    use std::sync::atomic::{AtomicI32, Ordering};
-
-    /// The pipe's write end, -1 before [`super::remove_on_interrupt`].
-    static PIPE_WRITE: AtomicI32 = AtomicI32::new(-1);
-
-    extern "C" fn on_signal(sig: libc::c_int) {
-        let byte = sig as u8;
-        let fd = PIPE_WRITE.load(Ordering::SeqCst);
-        // SAFETY: write(2) on a valid descriptor and a one-byte buffer on the stack; it is
-        // async-signal-safe. A failed write (a full pipe after many signals) is ignored.
-        unsafe {
-            libc::write(fd, (&byte as *const u8).cast(), 1);
-        }
-    }
-
-    pub(super) fn install() {
-        if PIPE_WRITE.load(Ordering::SeqCst) >= 0 {
-            return;
-        }
-        let mut fds: [libc::c_int; 2] = [0; 2];
-        // SAFETY: pipe(2) fills the two descriptors of a valid array.
-        if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
-            return;
-        }
-        let read = fds[0];
-        let spawned = std::thread::Builder::new()
-            .name("isotrack-interrupt".into())
-            .spawn(move || loop {
-                let mut byte = 0u8;
-                // SAFETY: read(2) into a one-byte buffer on the stack.
-                let n = unsafe { libc::read(read, (&mut byte as *mut u8).cast(), 1) };
-                if n == 1 {
-                    super::remove_pending();
-                    std::process::exit(128 + i32::from(byte));
-                }
-                if n == 0 {
-                    return;
-                }
-            });
-        if spawned.is_err() {
-            return;
-        }
-        PIPE_WRITE.store(fds[1], Ordering::SeqCst);
-        // SAFETY: the handler only writes to a pipe (async-signal-safe).
-        unsafe {
-            libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
-            libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
-        }
-    }
-}
-
-/// Makes SIGINT and SIGTERM remove every [`register`]ed file and exit 130 or 143 (for the
-/// command-line program; once per process). Commands that stop cleanly on a signal (`fly`,
-/// `sitl`, `check --map --verify`) install their own handler over this one.
-pub fn remove_on_interrupt() {
-    #[cfg(unix)]
-    signals::install();
 }
 
 /// Whether a process with id `pid` exists (`kill(pid, 0)` does not fail with ESRCH); `true`

@@ -9,7 +9,9 @@
 //! * the sweep engine, [`sweep`]: the results rows, plan execution, the manifest (`sweep.json`),
 //!   the resume index, merge and the output-directory lock;
 //! * [`results`]: a run's record (outcome and metrics) and the one results-row builder;
-//! * [`files`]: which paths name one file.
+//! * [`files`]: which paths name one file;
+//! * [`signals`]: the process's answer to Ctrl-C, SIGTERM and SIGHUP (files [`cleanup`] removed,
+//!   or a flag for the commands that stop cleanly).
 //!
 //! Failures carry the process exit code the command-line tool exits with ([`exit`]).
 #![deny(missing_docs)]
@@ -19,6 +21,7 @@ pub mod failure;
 pub mod files;
 pub mod results;
 pub mod rundir;
+pub mod signals;
 pub mod summary;
 pub mod sweep;
 pub mod trace;

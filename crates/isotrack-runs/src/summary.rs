@@ -210,6 +210,9 @@ pub struct FlightRecord {
     /// Measurements repeating the last one's stamp (dropped).
     #[serde(default)]
     pub measurements_repeated: u64,
+    /// Measurements that were none (a non-finite value, a malformed UDP sensor line): dropped.
+    #[serde(default)]
+    pub measurements_invalid: u64,
     /// What the metrics were computed over (the planned window, or what was flown).
     #[serde(default)]
     pub metrics_over: String,

@@ -2,8 +2,8 @@
 //! of a sweep that vary starts, seeds, gains or sensors) are stepped together in SIMD lanes
 //! ([`isotrack_sim::simulate_batch`]); each result is the one [`Scenario::run`] gives.
 
-use crate::build::VehicleModel;
 use crate::field::FieldModel;
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, ScalarField};

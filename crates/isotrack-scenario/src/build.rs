@@ -1,8 +1,10 @@
-//! From a resolved [`Scenario`] to runnable parts, and running them.
+//! From a resolved [`Scenario`] to runnable parts (controllers, the run's span), and running
+//! them. The vehicle is [`crate::vehicle`]'s.
 
 use crate::field::FieldModel;
 use crate::schema::*;
-use crate::spec::{LawSpec, VehicleSpec};
+use crate::spec::LawSpec;
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::control::{
     GradientReference, GroundTruth, PiIsoline, Pid, PidCrossing, Search, SearchParams, SlidingMode,
@@ -11,7 +13,7 @@ use isotrack_core::control::{
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, IsolineController, Measurement, ScalarField};
 use isotrack_sim::{simulate, Oracles, RunResult, Sensor, StepPlan, TraceSink};
-use isotrack_vehicles::{Dubins, DubinsState, FixedWing};
+use isotrack_vehicles::DubinsState;
 
 /// The steps a run of a scenario spans, from its resolved file alone (no field built): what
 /// bounds the `t_end_s`, `samples` and `convergence_time_s` a run can report (`--resume` and
@@ -40,9 +42,9 @@ pub struct RunSpan {
     /// The turn-rate limit every command of the run obeys, rad/s: `controller.max_turn_rate_radps`
     /// (every law's output stage saturates at it; the search phase flies open loop, within it:
     /// the spiral is capped at it and a lawnmower whose half-turns `2 v / search_spacing_m`
-    /// exceed it is refused at load); `None` without
-    /// one, for a `schedule` (its turn rates are flown as written) and for the fixed wing's
-    /// airframe limit (known only once the vehicle is trimmed).
+    /// exceed it is refused at load); unset on a fixed wing, the airframe's limit
+    /// `g tan(phi_max) / V` of the trimmed vehicle, which every law but a `schedule` (its
+    /// turn rates flown as written) flies then; `None` without one.
     pub turn_rate_limit_radps: Option<f64>,
 }
 
@@ -56,10 +58,22 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
         sensor_drops_samples: sensor.dropout_probability != 0.0,
         // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).
-        turn_rate_limit_radps: f
-            .controller
-            .max_turn_rate_radps
-            .filter(|w| w.is_finite() && *w >= 0.0),
+        // Unset on a fixed wing, the limit every law flies is the airframe's, `g tan(phi_max)
+        // / V` of the trimmed vehicle ([`VehicleModel::airframe_turn_rate_limit_radps`], what
+        // `crate::spec::ControllerSpec` resolves): the same resolved limit the run flies.
+        turn_rate_limit_radps: match f.controller.max_turn_rate_radps {
+            Some(w) => Some(w),
+            // A `schedule` flies its turn rates as written (no output stage): no bound then.
+            None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
+                && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
+            {
+                build_vehicle(f)
+                    .ok()
+                    .and_then(|v| v.airframe_turn_rate_limit_radps())
+            }
+            None => None,
+        }
+        .filter(|w| w.is_finite() && *w >= 0.0),
         dt_s: sim.dt_s,
         n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
         steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
@@ -81,43 +95,6 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             }
             Some(crate::schema::VehicleKind::FixedWing) => None,
         },
-    })
-}
-
-/// Every vehicle a scenario can name.
-#[derive(Clone, Debug)]
-pub enum VehicleModel {
-    /// `dubins`.
-    Dubins(Dubins),
-    /// `fixed_wing` (trimmed, gains computed).
-    FixedWing(Box<FixedWing>),
-}
-
-impl VehicleModel {
-    /// The turn rate the airframe can fly, rad/s: `g*tan(phi_max)/V` for the fixed wing
-    /// ([`FixedWing::airframe_turn_rate_limit_radps`]); `None` for the Dubins robot (any).
-    pub fn airframe_turn_rate_limit_radps(&self) -> Option<f64> {
-        match self {
-            VehicleModel::FixedWing(w) => Some(w.airframe_turn_rate_limit_radps()),
-            VehicleModel::Dubins(_) => None,
-        }
-    }
-}
-
-/// Builds (and for the UAV, trims) the vehicle of a resolved scenario.
-pub fn build_vehicle(f: &ScenarioFile) -> Result<VehicleModel, crate::resolve::Issue> {
-    let seed = crate::spec::SimSpec::new(&f.sim)?.seed;
-    Ok(match crate::spec::VehicleSpec::new(&f.vehicle, seed)? {
-        VehicleSpec::Dubins { speed_mps } => VehicleModel::Dubins(Dubins { speed_mps }),
-        VehicleSpec::FixedWing(cfg) => {
-            VehicleModel::FixedWing(Box::new(FixedWing::new(cfg).map_err(|e| {
-                crate::resolve::Issue {
-                    key: "vehicle.airspeed_mps".into(),
-                    message: e.to_string(),
-                    unreadable: false,
-                }
-            })?))
-        }
     })
 }
 

@@ -5,8 +5,8 @@
 //! [`isotrack_sim::Episode`], the one [`Scenario::run`] drives with its controller, so an agent
 //! that answers every sample as a controller would gives the same run, bit for bit.
 
-use crate::build::VehicleModel;
 use crate::field::FieldModel;
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::{Vec2, Vehicle};
 use isotrack_sim::{Episode, NoTrace, Oracles, Outcome, RunResult, Sample, TraceSink};

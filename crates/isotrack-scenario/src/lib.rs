@@ -13,10 +13,12 @@
 //!   running it ([`Scenario::run`]).
 #![deny(missing_docs)]
 
+pub mod assign;
 mod batch;
 pub mod build;
 pub mod check;
 pub mod episode;
+pub mod error;
 pub mod field;
 mod issue;
 pub mod load;
@@ -27,14 +29,16 @@ pub mod spec;
 pub mod sweep;
 mod team;
 pub mod tomltext;
+pub mod vehicle;
 mod watch;
 
+use assign::locate_derived;
+pub use assign::{apply_assignments, Assignment};
 pub use build::{ControllerModel, Tracker};
 pub use episode::{ScenarioEpisode, Start};
-use load::locate_derived;
+pub use error::{ErrorLocation, LocatedIssue, ScenarioError};
 pub use load::{
-    apply_assignments, build_derived, load_scenario, parse_scenario, parse_scenario_in, Assignment,
-    ErrorLocation, LocatedIssue, ScenarioError, MAX_SCENARIO_FILE_BYTES,
+    build_derived, load_scenario, parse_scenario, parse_scenario_in, MAX_SCENARIO_FILE_BYTES,
 };
 pub use schema::ScenarioFile;
 
@@ -52,7 +56,7 @@ pub struct Scenario {
     /// Every setting in force, typed ([`spec`]).
     spec: spec::ScenarioSpec,
     field: Arc<FieldModel>,
-    vehicle: Arc<build::VehicleModel>,
+    vehicle: Arc<vehicle::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
     /// Warnings from the field's files ([`field::BuiltField::notes`]).
     field_notes: Arc<Vec<String>>,
@@ -121,7 +125,7 @@ impl Scenario {
         let filled = filled_keys(&given, &file.field);
         let (field, notes, lonlat) = (built.model, built.notes, built.lonlat);
         field::check_start(start_xy(&file).map_err(|i| vec![i])?, &field).map_err(|i| vec![i])?;
-        let vehicle = build::build_vehicle(&file).map_err(|i| vec![i])?;
+        let vehicle = vehicle::build_vehicle(&file).map_err(|i| vec![i])?;
         let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| vec![i])?;
         Ok(Self {
@@ -206,7 +210,7 @@ impl Scenario {
         let vehicle = if same_vehicle {
             self.vehicle.clone()
         } else {
-            Arc::new(build::build_vehicle(&file).map_err(|i| located(vec![i]))?)
+            Arc::new(vehicle::build_vehicle(&file).map_err(|i| located(vec![i]))?)
         };
         let isoline = if Arc::ptr_eq(&field, &self.field)
             && file.controller.level == self.file.controller.level
@@ -275,7 +279,7 @@ impl Scenario {
 
     /// Whether the vehicle flies (its trace has altitude, airspeed and roll).
     pub fn is_flying(&self) -> bool {
-        matches!(*self.vehicle, build::VehicleModel::FixedWing(_))
+        matches!(*self.vehicle, vehicle::VehicleModel::FixedWing(_))
     }
 
     /// The field.

@@ -398,7 +398,7 @@ impl SweepPlan {
         let doc: toml::Table = toml::from_str(text).map_err(|e| {
             // A number out of range in the TOML reader's words (`u64 value was too large`,
             // with no place) is said plainly, where it is.
-            match crate::load::number_out_of_range(e.message()) {
+            match crate::assign::number_out_of_range(e.message()) {
                 Some(plain) => {
                     // At line, column and key, as a scenario file's message (att30c-16).
                     let at = e.span().map(|s| {

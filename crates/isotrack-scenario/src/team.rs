@@ -3,9 +3,9 @@
 //! own seeded streams), a Dubins robot whose speed, or a fixed-wing UAV whose airspeed command,
 //! the spacing law sets within `[team.v_min_mps, team.v_max_mps]` (docs/TEAMS.md).
 
-use crate::build::VehicleModel;
 use crate::field::{FieldModel, IsolineOracle, MovingIsoline};
 use crate::spec::TeamSpec;
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, IsolineController, ScalarField, SpeedCommand};

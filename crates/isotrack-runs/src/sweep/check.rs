@@ -66,6 +66,7 @@ pub struct RunSpans<'a> {
     plan: &'a SweepPlan,
     base_span: Option<RunSpan>,
     per_run: bool,
+    built: Option<(&'a isotrack_scenario::Scenario, &'a str)>,
 }
 
 impl<'a> RunSpans<'a> {
@@ -80,7 +81,24 @@ impl<'a> RunSpans<'a> {
             plan,
             base_span: run_span(base),
             per_run,
+            built: None,
         }
+    }
+
+    /// With the sweep's built base scenario and its name in messages: each row is then also
+    /// checked against its run's own scenario ([`crate::sweep::rows::run_scenario`], as the
+    /// sweep derives it): a valid run's `warnings` cell against the warnings recomputed
+    /// ([`crate::sweep::rows::run_warnings`]), its team cells against its [`TeamBounds`], and an
+    /// `invalid_scenario` row against the run's validity and reason.
+    pub fn with_scenario(mut self, base: &'a isotrack_scenario::Scenario, name: &'a str) -> Self {
+        self.built = Some((base, name));
+        self
+    }
+
+    /// Run `id`'s scenario as the sweep derives it (`None` without a built base).
+    fn scenario(&self, id: u64) -> Option<Result<isotrack_scenario::Scenario, String>> {
+        let (base, name) = self.built?;
+        Some(crate::sweep::rows::run_scenario(self.plan, base, id, name))
     }
 
     /// The span of run `id` (`Ok(None)` when it has none: its row is checked without one), or
@@ -164,7 +182,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
             clip(outcome)
         ));
     }
-    check_metrics(outcome, &cell)?;
+    check_metrics(outcome, &cell, true)?;
     if header
         .iter()
         .any(|h| h == crate::sweep::rows::TEAM_COLUMNS[0])
@@ -181,11 +199,13 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
             ));
         }
     }
-    if outcome != "invalid_scenario" {
-        let column = |name: &str| {
-            let i = header.iter().position(|h| h == name).unwrap_or(0);
-            format!("column {} ({name})", i + 1)
-        };
+    let column = |name: &str| {
+        let i = header.iter().position(|h| h == name).unwrap_or(0);
+        format!("column {} ({name})", i + 1)
+    };
+    if outcome == "invalid_scenario" {
+        check_invalid(rules, id, cell("outcome_detail"), &column)?;
+    } else {
         // A run whose scenario the plan makes invalid was never run: a row claiming it ran
         // (another run's metrics under its id) would enter every statistic.
         match rules.spans.of(id) {
@@ -199,8 +219,100 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
             Ok(Some(span)) => check_span(&span, outcome, &cell, &column)?,
             Ok(None) => {}
         }
+        check_against_scenario(rules, id, &cell, &column)?;
     }
     Ok(id)
+}
+
+/// An `invalid_scenario` row: the run's scenario must be invalid under the plan, for the
+/// reason the sweep records (`outcome_detail`, recomputed). Without a built base, only what
+/// resolving tells: nothing to refuse (a scenario can resolve and still fail to build).
+/// A team run whose scenario is valid can still be refused by the team engine (`[team]: ...`,
+/// found only by running it): such a row is kept as it is.
+fn check_invalid<'c>(
+    rules: &RowRules<'_>,
+    id: u64,
+    detail: &str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    match rules.spans.scenario(id) {
+        None => Ok(()),
+        Some(Ok(_)) if detail.starts_with("[team]: ") => Ok(()),
+        Some(Ok(_)) => Err(format!(
+            "{}: outcome = invalid_scenario for run {id}, whose scenario is valid under the sweep's plan: it is run, its row holds its results",
+            column("outcome")
+        )),
+        Some(Err(why)) if why != detail => Err(format!(
+            "{}: outcome_detail = `{}` is not the reason the sweep's plan gives run {id}: `{}`",
+            column("outcome_detail"),
+            clip(detail),
+            clip(&why)
+        )),
+        Some(Err(_)) => Ok(()),
+    }
+}
+
+/// A run's row against its own scenario ([`RunSpans::with_scenario`]; nothing without one):
+/// the scenario valid, the `warnings` cell the warnings recomputed from it (a team run's may add
+/// the vehicles that did not complete, found by running it), its team cells within its
+/// [`TeamBounds`].
+fn check_against_scenario<'c>(
+    rules: &RowRules<'_>,
+    id: u64,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    let s = match rules.spans.scenario(id) {
+        None => return Ok(()),
+        Some(Ok(s)) => s,
+        Some(Err(why)) => {
+            return Err(format!(
+                "{}: outcome = {} for run {id}, whose scenario is invalid under the sweep's plan ({}): it was never run, its row is invalid_scenario",
+                column("outcome"),
+                clip(cell("outcome")),
+                clip(&why)
+            ))
+        }
+    };
+    let want = crate::sweep::rows::run_warnings(&s);
+    let got = cell("warnings");
+    let team = s.spec().team.is_some();
+    // A team run's own addition: `not every vehicle completed (vehicle I: OUTCOME, ...); the
+    // metric columns are vehicle 0's`, after the scenario's warnings and `; `.
+    let team_tail = |rest: &str| {
+        rest.strip_prefix("not every vehicle completed (vehicle ")
+            .is_some_and(|r| r.ends_with("); the metric columns are vehicle 0's"))
+    };
+    let ok = got == want
+        || (team
+            && if want.is_empty() {
+                team_tail(got)
+            } else {
+                got.strip_prefix(&format!("{want}; "))
+                    .is_some_and(team_tail)
+            });
+    if !ok {
+        return Err(format!(
+            "{}: warnings = `{}` is not what run {id}'s scenario gives: `{}`",
+            column("warnings"),
+            clip(got),
+            clip(&want)
+        ));
+    }
+    if let Some(b) = TeamBounds::of(&s) {
+        if header_has_team(rules) {
+            check_team_bounds(cell, &b, column)?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether the sweep's rows have the team columns.
+fn header_has_team(rules: &RowRules<'_>) -> bool {
+    rules
+        .header
+        .iter()
+        .any(|h| h == crate::sweep::rows::TEAM_COLUMNS[0])
 }
 
 /// The team columns of a team sweep's row ([`crate::sweep::rows::TEAM_COLUMNS`]): empty in an
@@ -255,7 +367,7 @@ fn check_team_cells<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result
 /// over at most `min(k + 1, N)` held commands is at most `L^2 dt min(k + 1, N)`, and `chattering_radps2` (the total variation of `omega` over the
 /// window, at most `2 L` a step, over the window's duration) at most `2 L / dt`. Each error
 /// names its column.
-fn check_span<'c>(
+pub fn check_span<'c>(
     span: &RunSpan,
     outcome: &str,
     cell: &dyn Fn(&str) -> &'c str,
@@ -269,10 +381,14 @@ fn check_span<'c>(
         (k >= 0.0 && k <= span.n_steps as f64 && k * dt == t).then_some(k as u64)
     };
     let value = |n: &str| cell(n).parse::<f64>().ok();
-    let Some(t_end) = value("t_end_s") else {
-        return Ok(());
-    };
     let duration = span.n_steps as f64 * dt;
+    // A record without `t_end_s` (a benchmark task's run, of a run that did not complete) is
+    // bounded by the whole run: `k <= N`. A sweep row always has one ([`check_metrics`]).
+    let t_end = match value("t_end_s") {
+        Some(t) => t,
+        None if cell("t_end_s").is_empty() => duration,
+        None => return Ok(()),
+    };
     if t_end > duration {
         return Err(format!(
             "{}: t_end_s = {} s is past the run's duration, {} steps of {} s = {} s",
@@ -428,8 +544,39 @@ fn delivered_samples(span: &RunSpan, s: u64) -> u64 {
 /// cannot be negative are not (nor `-0.0`), an RMS is at most its
 /// maximum and `|mean|` at most the maximum (to rounding), the convergence time at most the run's
 /// end, and `samples` a whole number of at most one per step ([`isotrack_sim::MAX_STEPS`] + 1).
-fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
+///
+/// `whole_row`: the record is a whole `results.csv` row (a sweep's), so `t_end_s` and `samples`
+/// must be there; a benchmark task's run (`task.json`) records neither, and its
+/// `time_in_band_fraction` (a share, in `[0, 1]`) and `track_losses` (a whole number) besides.
+pub fn check_metrics<'c>(
+    outcome: &str,
+    cell: &dyn Fn(&str) -> &'c str,
+    whole_row: bool,
+) -> Result<(), String> {
     let numeric = numeric_columns();
+    if !OUTCOMES.contains(&outcome) {
+        return Err(format!(
+            "outcome `{}` is not one of {OUTCOMES:?}",
+            clip(outcome)
+        ));
+    }
+    let share = cell("time_in_band_fraction");
+    if !share.is_empty() {
+        if outcome == "invalid_scenario" {
+            return Err("time_in_band_fraction holds a value in an invalid_scenario row".into());
+        }
+        let ok = share.parse::<f64>().is_ok_and(|v| {
+            (0.0..=1.0).contains(&v)
+                && !v.is_sign_negative()
+                && crate::results::real_cell(Some(v)) == share
+        });
+        if !ok {
+            return Err(format!(
+                "time_in_band_fraction = `{}` is not a share in [0, 1]",
+                clip(share)
+            ));
+        }
+    }
     if outcome == "invalid_scenario" {
         if let Some(n) = numeric.iter().find(|n| !cell(n).is_empty()) {
             return Err(format!("{n} holds a value in an invalid_scenario row"));
@@ -440,7 +587,7 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
     if outcome == "completed" && !cell("outcome_detail").is_empty() {
         return Err("outcome_detail holds text in a `completed` row".to_string());
     }
-    for n in ["t_end_s", "samples"] {
+    for n in ["t_end_s", "samples"].into_iter().filter(|_| whole_row) {
         if cell(n).is_empty() {
             return Err(format!("{n} is empty in a `{outcome}` row"));
         }
@@ -478,6 +625,7 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
     }
     let samples = cell("samples");
     match samples.parse::<u64>() {
+        _ if samples.is_empty() && !whole_row => {}
         // Canonical digits, as isotrack writes them (no `+70`, no `070`).
         Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 && k.to_string() == samples => {}
         _ => {
@@ -522,4 +670,134 @@ fn check_metrics<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<()
 /// User text from a damaged file, clipped for a message.
 pub fn clip(text: &str) -> String {
     isotrack_scenario::load::clip(text)
+}
+
+/// What bounds a team run's team metrics, from its scenario ([`TeamBounds::of`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TeamBounds {
+    /// The run's planned duration `N dt`, s: every time the metrics measure (a sample time, an
+    /// interval between passes, an open interval to the end) lies within it.
+    pub duration_s: f64,
+    /// The farthest two vehicles can be apart at any time of the run, m: the largest distance
+    /// between two starts plus twice the top speed over the duration (+1 %); `None` where the
+    /// top ground speed is not known (a fixed wing: wind adds to its airspeed).
+    pub reach_m: Option<f64>,
+    /// The ideal revisit time `L / (N v0)`, s, of a run along a fixed isoline (its length `L`
+    /// as the run measures it); `None` for an isoline that moves (its `L` is the mean of the
+    /// lengths the run saw) or none.
+    pub ideal_s: Option<f64>,
+}
+
+impl TeamBounds {
+    /// The bounds of a run of team scenario `s` (`None` without `[team]`).
+    pub fn of(s: &isotrack_scenario::Scenario) -> Option<TeamBounds> {
+        let team = s.spec().team.as_ref()?;
+        let span = run_span(s.file())?;
+        let duration_s = span.n_steps as f64 * span.dt_s;
+        let mut spread = 0.0f64;
+        for a in &team.starts {
+            for b in &team.starts {
+                spread = spread.max((a.x_m - b.x_m).hypot(a.y_m - b.y_m));
+            }
+        }
+        let reach_m = span
+            .speed_max_mps
+            .map(|v| (spread + 2.0 * v * duration_s) * 1.01 + 1e-9);
+        let n = team.starts.len() as f64;
+        let ideal_s = match s.team_isoline().as_team_isoline() {
+            Some(isotrack_sim::team::TeamIsoline::Fixed(a)) => {
+                Some(a.length_m() / (n * team.nominal_speed_mps))
+            }
+            _ => None,
+        };
+        Some(TeamBounds {
+            duration_s,
+            reach_m,
+            ideal_s,
+        })
+    }
+}
+
+/// The team cells of a team run's row bounded by its scenario ([`TeamBounds`]): the times
+/// (`time_to_even_s`, `revisit_time_max_s`, `revisit_time_mean_s`) within the run's duration and
+/// the mean revisit at most the longest (to rounding); `min_separation_m` within the vehicles'
+/// reach; `revisit_time_ideal_s` exactly the recomputed `L / (N v0)` (bit for bit: the run
+/// computes it the same way), where the isoline is fixed. Each error names its column.
+pub fn check_team_bounds<'c>(
+    cell: &dyn Fn(&str) -> &'c str,
+    b: &TeamBounds,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    use isotrack_core::numtext::{Echo, Num};
+    let value = |n: &str| cell(n).parse::<f64>().ok();
+    for n in [
+        "time_to_even_s",
+        "revisit_time_max_s",
+        "revisit_time_mean_s",
+    ] {
+        if let Some(t) = value(n) {
+            if t > b.duration_s * (1.0 + 1e-12) {
+                return Err(format!(
+                    "{}: {n} = {} s is past the run's duration, {} s",
+                    column(n),
+                    Echo(t),
+                    Num(b.duration_s)
+                ));
+            }
+        }
+    }
+    if let (Some(mean), Some(max)) = (value("revisit_time_mean_s"), value("revisit_time_max_s")) {
+        if mean > max * (1.0 + 1e-12) {
+            return Err(format!(
+                "{}: revisit_time_mean_s = {} s exceeds revisit_time_max_s = {} s (a mean interval is at most the longest)",
+                column("revisit_time_mean_s"),
+                Echo(mean),
+                Echo(max)
+            ));
+        }
+    }
+    if let (Some(sep), Some(reach)) = (value("min_separation_m"), b.reach_m) {
+        if sep > reach {
+            return Err(format!(
+                "{}: min_separation_m = {} m exceeds {} m, the farthest two vehicles can be apart (their starts' spread plus twice the top speed over the run)",
+                column("min_separation_m"),
+                Echo(sep),
+                Num(reach)
+            ));
+        }
+    }
+    if let (Some(got), Some(want)) = (value("revisit_time_ideal_s"), b.ideal_s) {
+        if got != want {
+            return Err(format!(
+                "{}: revisit_time_ideal_s = {} s is not the run's L/(N v0) = {} s",
+                column("revisit_time_ideal_s"),
+                Echo(got),
+                Echo(want)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A team run's metrics as `summary.json` and a benchmark's `task.json` record them, checked
+/// as a sweep row's team cells are (the same cells, [`crate::sweep::rows::team_record_cells`]:
+/// their form, then [`check_team_bounds`]).
+pub fn check_team_record(
+    m: &crate::summary::TeamRecord,
+    b: Option<&TeamBounds>,
+) -> Result<(), String> {
+    let cells = crate::sweep::rows::team_record_cells(Some(m));
+    let names = crate::sweep::rows::TEAM_COLUMNS;
+    let cell = |n: &str| {
+        names
+            .iter()
+            .position(|c| *c == n)
+            .and_then(|i| cells.get(i))
+            .map_or("", |c| c.as_str())
+    };
+    check_team_cells("completed", &cell)?;
+    match b {
+        Some(b) => check_team_bounds(&cell, b, &|n| n.to_string()),
+        None => Ok(()),
+    }
 }

@@ -84,7 +84,15 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
         )
     })?;
     let (plan, base) = shard_plan(d, &digest)?;
+    // The rows are also checked against each run's own scenario (its warnings, team bounds,
+    // validity and reason) when the shard's base builds here (its field's files readable).
+    let built = isotrack_scenario::Scenario::from_file(base.clone(), d).ok();
+    let name = m["sweep"].as_str().unwrap_or_default().to_string();
     let spans = RunSpans::new(&plan, &base);
+    let spans = match &built {
+        Some(b) => spans.with_scenario(b, &name),
+        None => spans,
+    };
     // The columns this sweep writes: the manifest's (`columns`, where recorded) and the
     // file's header must be exactly them, as `sweep --resume` checks (a renamed or swapped
     // column would mislabel every value; a BOM, CRLF or control character is no header

@@ -2,7 +2,7 @@
 
 use crate::results::{real_cell, result_cells, Column, RunRecord};
 use crate::summary::TeamRecord;
-use crate::trace::num;
+use isotrack_core::numtext::Num;
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::Scenario;
 use isotrack_sim::team::metrics::TeamSummary;
@@ -72,16 +72,16 @@ pub fn numeric_columns() -> &'static [&'static str] {
 /// The warnings a sweep records for a run's scenario (its `warnings` cell; empty when none):
 /// the checks cheap enough to make for every run, today a start on a flat background where the
 /// PI-like law circles for the whole run ([`isotrack_scenario::check::flat_start`], the warning
-/// `isotrack run` prints). `isotrack check`'s sampled-loop warning needs a lattice scan of the
+/// `isotrack run` prints, its numbers rounded as the console's: [`Num`], 6 significant digits). `isotrack check`'s sampled-loop warning needs a lattice scan of the
 /// field per run and is left to `isotrack run`/`check` on the run's scenario.
 pub fn run_warnings(scenario: &Scenario) -> String {
     isotrack_scenario::check::flat_start(scenario).map_or_else(String::new, |f| {
         format!(
             "flat start: within {} m of it v*|grad F| is at most {} field units/s (under {} % of c1*tanh(|eps|/c2) = {}) so the vehicle circles where it starts; set controller.search",
-            num(f.radius_m),
-            num(f.slope_term),
+            Num(f.radius_m),
+            Num(f.slope_term),
             isotrack_scenario::check::FLAT_START_FRACTION * 100.0,
-            num(f.level_term)
+            Num(f.level_term)
         )
     })
 }

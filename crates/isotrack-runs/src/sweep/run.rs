@@ -188,7 +188,8 @@ impl SweepJob {
     /// last line cut, a header-less file given the header.
     fn resumed_ids(&self, results: &Path, (k, n): (u64, u64)) -> Result<Vec<u64>, Failure> {
         let cant = cant_write(results.parent().unwrap_or(Path::new(".")));
-        let spans = RunSpans::new(&self.plan, self.base.file());
+        let spans =
+            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, true, self.plan.total(), &self.plan, &spans)?;
         let header_line = csv_line(&self.header);
         if idx.header.is_empty() {
@@ -330,7 +331,8 @@ impl SweepJob {
     /// appears twice; what it holds.
     pub fn finish(&self, out: &SweepOutput) -> Result<SweepReport, Failure> {
         let results = &out.results;
-        let spans = RunSpans::new(&self.plan, self.base.file());
+        let spans =
+            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, false, self.plan.total(), &self.plan, &spans)?;
         let mut rows = idx.rows;
         if let Some(d) = sort_rows(&mut rows).first() {

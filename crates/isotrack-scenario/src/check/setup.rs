@@ -7,10 +7,10 @@
 
 use super::regions::Regions;
 use super::sampled::{self, EstimatorModel, HeadingDynamics, SampledLoop, SensorLag};
-use crate::build::{build_vehicle, VehicleModel};
 use crate::field::FieldModel;
 use crate::schema::ControllerKind;
 use crate::spec::LawSpec;
+use crate::vehicle::{build_vehicle, VehicleModel};
 use crate::Scenario;
 use isotrack_core::estimate::DerivativeKind;
 use isotrack_core::numtext::{Echo, Num};

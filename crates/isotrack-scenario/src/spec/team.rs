@@ -7,7 +7,7 @@ use super::sim::Start;
 use super::vehicle::VehicleSpec;
 use crate::issue::Issue;
 use crate::ranges::MAX_COORDINATE_M;
-use crate::schema::{RingName, SpacingName, SpreadAlong, TeamSection};
+use crate::schema::{InitialSection, RingName, SpacingName, SpreadAlong, TeamSection, TeamSpread};
 use isotrack_core::numtext::Echo;
 use isotrack_sim::team::ranging::{Ranging, RangingConfig};
 use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
@@ -96,7 +96,9 @@ impl TeamSpec {
         splitmix(seed ^ splitmix(2 * i as u64 + 1))
     }
 
-    /// From `[team]` (absent: `None`), the resolved vehicle, sim and `[initial]` start.
+    /// From `[team]` (absent: `None`), the resolved vehicle, sim and `[initial]` start. Each
+    /// concept is resolved by its own function, in this order (the first refusal is reported):
+    /// the count, the starts, the law, the speed envelope, the ring, the ranging.
     pub fn new(
         t: &Option<TeamSection>,
         vehicle: &VehicleSpec,
@@ -104,295 +106,14 @@ impl TeamSpec {
         initial: Start,
     ) -> Result<Option<Self>, Issue> {
         let Some(t) = t else { return Ok(None) };
-        // The speed the spacing law commands: the Dubins robot's speed, the fixed wing's
-        // airspeed (through its autopilot's airspeed loop, within the model's safe range).
-        let (v0, airframe) = match vehicle {
-            VehicleSpec::Dubins { speed_mps } => (*speed_mps, None),
-            VehicleSpec::FixedWing(cfg) => (cfg.airspeed_mps, Some(COMMANDED_AIRSPEED_RANGE_MPS)),
-        };
-        let count = match (t.count, &t.starts) {
-            (Some(c), _) => c,
-            (None, Some(s)) => s.len() as u64,
-            (None, None) => return Err(issue("team.count", "is required".into())),
-        };
-        if !(1..=MAX_COUNT).contains(&count) {
-            return Err(issue(
-                "team.count",
-                format!("must be in [1, {MAX_COUNT}], got {count}"),
-            ));
-        }
+        let (v0, airframe) = nominal_speed(vehicle);
+        let count = count_of(t)?;
         let n = count as usize;
-        let starts = match (&t.starts, &t.spread) {
-            (Some(_), Some(_)) => {
-                return Err(issue(
-                    "team.starts",
-                    "and team.spread are both given: give one".into(),
-                ))
-            }
-            (Some(list), None) => {
-                if list.len() != n {
-                    return Err(issue(
-                        "team.starts",
-                        format!("has {} poses for team.count = {count}", list.len()),
-                    ));
-                }
-                list.iter()
-                    .enumerate()
-                    .map(|(i, p)| {
-                        let key = |k: &str| format!("team.starts[{i}].{k}");
-                        Ok(Start {
-                            x_m: coordinate(&key("x_m"), p.x_m)?,
-                            y_m: coordinate(&key("y_m"), p.y_m)?,
-                            heading_rad: finite(&key("heading_rad"), p.heading_rad)?,
-                        })
-                    })
-                    .collect::<Result<Vec<_>, Issue>>()?
-            }
-            (None, Some(sp)) => match sp.along {
-                None => {
-                    return Err(issue(
-                        "team.spread.along",
-                        "is required (\"arc\" or \"line\")".into(),
-                    ))
-                }
-                Some(SpreadAlong::Arc) => {
-                    for (k, set) in [
-                        ("x_m", sp.x_m.is_some()),
-                        ("y_m", sp.y_m.is_some()),
-                        ("heading_rad", sp.heading_rad.is_some()),
-                        ("step_m", sp.step_m.is_some()),
-                        ("direction_rad", sp.direction_rad.is_some()),
-                    ] {
-                        if set {
-                            return Err(issue(
-                                &format!("team.spread.{k}"),
-                                "applies to along = \"line\" only".into(),
-                            ));
-                        }
-                    }
-                    let c = sp.center_m.unwrap_or(SPREAD_CENTER_M);
-                    let cx = coordinate("team.spread.center_m", Some(c[0]))?;
-                    let cy = coordinate("team.spread.center_m", Some(c[1]))?;
-                    let r = positive("team.spread.radius_m", sp.radius_m)?;
-                    if r > MAX_COORDINATE_M {
-                        return Err(issue(
-                            "team.spread.radius_m",
-                            format!(
-                                "must be at most {}, got {}",
-                                Echo(MAX_COORDINATE_M),
-                                Echo(r)
-                            ),
-                        ));
-                    }
-                    let th0 = finite(
-                        "team.spread.start_rad",
-                        Some(sp.start_rad.unwrap_or(SPREAD_START_RAD)),
-                    )?;
-                    let step = finite(
-                        "team.spread.step_rad",
-                        Some(sp.step_rad.unwrap_or(std::f64::consts::TAU / n as f64)),
-                    )?;
-                    let cw = sp.clockwise.unwrap_or(SPREAD_CLOCKWISE);
-                    // The next start `step` further along the travel: the listed order is the
-                    // order of travel (the listed ring's `ahead(i) = i + 1`).
-                    let sign = if cw { -1.0 } else { 1.0 };
-                    (0..n)
-                        .map(|i| {
-                            let th = th0 + sign * step * i as f64;
-                            Start {
-                                x_m: cx + r * th.cos(),
-                                y_m: cy + r * th.sin(),
-                                heading_rad: th + sign * std::f64::consts::FRAC_PI_2,
-                            }
-                        })
-                        .collect()
-                }
-                Some(SpreadAlong::Line) => {
-                    for (k, set) in [
-                        ("center_m", sp.center_m.is_some()),
-                        ("radius_m", sp.radius_m.is_some()),
-                        ("start_rad", sp.start_rad.is_some()),
-                        ("step_rad", sp.step_rad.is_some()),
-                        ("clockwise", sp.clockwise.is_some()),
-                    ] {
-                        if set {
-                            return Err(issue(
-                                &format!("team.spread.{k}"),
-                                "applies to along = \"arc\" only".into(),
-                            ));
-                        }
-                    }
-                    let x = coordinate("team.spread.x_m", Some(sp.x_m.unwrap_or(initial.x_m)))?;
-                    let y = coordinate("team.spread.y_m", Some(sp.y_m.unwrap_or(initial.y_m)))?;
-                    let h = finite(
-                        "team.spread.heading_rad",
-                        Some(sp.heading_rad.unwrap_or(initial.heading_rad)),
-                    )?;
-                    let step = positive("team.spread.step_m", sp.step_m)?;
-                    let dir = finite(
-                        "team.spread.direction_rad",
-                        Some(sp.direction_rad.unwrap_or(h)),
-                    )?;
-                    let far = step * (n - 1) as f64;
-                    if !(x.abs() + far <= MAX_COORDINATE_M && y.abs() + far <= MAX_COORDINATE_M) {
-                        return Err(issue(
-                            "team.spread.step_m",
-                            format!(
-                                "puts the last start beyond {} m (step {} m x {} vehicles)",
-                                Echo(MAX_COORDINATE_M),
-                                Echo(step),
-                                n - 1
-                            ),
-                        ));
-                    }
-                    (0..n)
-                        .map(|i| Start {
-                            x_m: x + step * i as f64 * dir.cos(),
-                            y_m: y + step * i as f64 * dir.sin(),
-                            heading_rad: h,
-                        })
-                        .collect()
-                }
-            },
-            (None, None) if n == 1 => vec![initial],
-            (None, None) => {
-                return Err(issue(
-                    "team.starts",
-                    "or team.spread is required for more than one vehicle".into(),
-                ))
-            }
-        };
-        let k_v = non_negative("team.k_v", Some(t.k_v.unwrap_or(K_V_PER_S)))?;
-        let law = match t.spacing.unwrap_or(SPACING) {
-            SpacingName::None => SpacingLaw::None,
-            SpacingName::RangeBalance => SpacingLaw::RangeBalance { gain_per_s: k_v },
-            SpacingName::ArcReference => SpacingLaw::ArcReference { gain_per_s: k_v },
-        };
-        let (lo, hi) = airframe.unwrap_or((0.0, f64::INFINITY));
-        let v_min = positive(
-            "team.v_min_mps",
-            Some(t.v_min_mps.unwrap_or((V_MIN_FRACTION * v0).max(lo))),
-        )?;
-        let v_max = positive(
-            "team.v_max_mps",
-            Some(t.v_max_mps.unwrap_or((V_MAX_FACTOR * v0).min(hi))),
-        )?;
-        if airframe.is_some() {
-            for (key, v) in [("team.v_min_mps", v_min), ("team.v_max_mps", v_max)] {
-                if !(lo..=hi).contains(&v) {
-                    return Err(issue(
-                        key,
-                        format!(
-                            "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
-                            Echo(lo),
-                            Echo(hi),
-                            Echo(v)
-                        ),
-                    ));
-                }
-            }
-        }
-        if v_min > v0 {
-            return Err(issue(
-                "team.v_min_mps",
-                format!(
-                    "must be at most vehicle.speed_mps = {}, got {}",
-                    Echo(v0),
-                    Echo(v_min)
-                ),
-            ));
-        }
-        let max = crate::ranges::MAX_SPEED_MPS;
-        if v_max < v0 || v_max > max {
-            return Err(issue(
-                "team.v_max_mps",
-                format!(
-                    "must be in [vehicle.speed_mps = {}, {}], got {}",
-                    Echo(v0),
-                    Echo(max),
-                    Echo(v_max)
-                ),
-            ));
-        }
-        let ring = match t.ring.unwrap_or(RING) {
-            RingName::Listed => RingMode::Listed,
-            RingName::Discovered => {
-                if count > MAX_DISCOVERED_COUNT {
-                    return Err(issue(
-                        "team.ring",
-                        format!("= \"discovered\" is for at most {MAX_DISCOVERED_COUNT} vehicles (O(N) per probe sample), got team.count = {count}"),
-                    ));
-                }
-                let d = DiscoveryConfig {
-                    settle_s: DISCOVERY_SETTLE_S,
-                    probe_s: DISCOVERY_PROBE_S,
-                    probe_speed_delta_mps: DISCOVERY_PROBE_FRACTION * v0,
-                };
-                let end = d.settle_s + d.probe_s * n as f64;
-                if end >= sim.duration_s {
-                    return Err(issue(
-                        "team.ring",
-                        format!(
-                            "= \"discovered\" needs {} s ({} s settling + {} s per vehicle) before the ring is known, but sim.duration_s = {}",
-                            Echo(end),
-                            Echo(d.settle_s),
-                            Echo(d.probe_s),
-                            Echo(sim.duration_s)
-                        ),
-                    ));
-                }
-                RingMode::Discover(d)
-            }
-        };
-        let r = t.ranging.clone().unwrap_or_default();
-        let dflt = RangingConfig::default();
-        let ranging = RangingConfig {
-            rate_hz: finite(
-                "team.ranging.rate_hz",
-                Some(r.rate_hz.unwrap_or(dflt.rate_hz)),
-            )?,
-            noise_std_m: non_negative(
-                "team.ranging.noise_std_m",
-                Some(r.noise_std_m.unwrap_or(dflt.noise_std_m)),
-            )?,
-            max_range_m: match r.max_range_m {
-                None => dflt.max_range_m,
-                v => positive("team.ranging.max_range_m", v)?,
-            },
-            dropout_probability: non_negative(
-                "team.ranging.dropout_probability",
-                Some(r.dropout_probability.unwrap_or(dflt.dropout_probability)),
-            )?,
-            delay_s: non_negative(
-                "team.ranging.delay_s",
-                Some(r.delay_s.unwrap_or(dflt.delay_s)),
-            )?,
-        };
-        // A delay past the run's end is no delay anyone means, and it would hold every range
-        // measured in the run in flight.
-        if ranging.delay_s > sim.duration_s {
-            return Err(issue(
-                "team.ranging.delay_s",
-                format!(
-                    "must be at most sim.duration_s = {}, got {}",
-                    Echo(sim.duration_s),
-                    Echo(ranging.delay_s)
-                ),
-            ));
-        }
-        // The rest (rate and delay whole numbers of steps, the probability in [0, 1]) as the
-        // ranging unit the run builds decides it, so a value that passes here cannot fail there.
-        Ranging::new(ranging, sim.dt_s, 0).map_err(|e| {
-            let msg = e.to_string();
-            let key = msg.split(' ').next().unwrap_or("team.ranging").to_string();
-            Issue {
-                message: msg
-                    .strip_prefix(&key)
-                    .map_or(msg.clone(), |m| m.trim_start().to_string()),
-                key,
-                unreadable: false,
-            }
-        })?;
+        let starts = starts_of(t, n, count, initial)?;
+        let law = law_of(t)?;
+        let (v_min, v_max) = envelope_of(t, v0, airframe)?;
+        let ring = ring_of(t, count, v0, sim)?;
+        let ranging = ranging_of(t, sim)?;
         Ok(Some(Self {
             starts,
             law,
@@ -403,6 +124,337 @@ impl TeamSpec {
             ranging,
         }))
     }
+}
+
+/// The speed the spacing law commands: the Dubins robot's speed, the fixed wing's airspeed
+/// (through its autopilot's airspeed loop, within the model's safe range, the second value).
+fn nominal_speed(vehicle: &VehicleSpec) -> (f64, Option<(f64, f64)>) {
+    match vehicle {
+        VehicleSpec::Dubins { speed_mps } => (*speed_mps, None),
+        VehicleSpec::FixedWing(cfg) => (cfg.airspeed_mps, Some(COMMANDED_AIRSPEED_RANGE_MPS)),
+    }
+}
+
+/// `team.count`, or the length of `team.starts`, in `[1, MAX_COUNT]`.
+fn count_of(t: &TeamSection) -> Result<u64, Issue> {
+    let count = match (t.count, &t.starts) {
+        (Some(c), _) => c,
+        (None, Some(s)) => s.len() as u64,
+        (None, None) => return Err(issue("team.count", "is required".into())),
+    };
+    if !(1..=MAX_COUNT).contains(&count) {
+        return Err(issue(
+            "team.count",
+            format!("must be in [1, {MAX_COUNT}], got {count}"),
+        ));
+    }
+    Ok(count)
+}
+
+/// The `n` starts: `team.starts` (one per vehicle), `team.spread` (an arc or a line), or, for a
+/// team of one without either, `[initial]`.
+fn starts_of(t: &TeamSection, n: usize, count: u64, initial: Start) -> Result<Vec<Start>, Issue> {
+    match (&t.starts, &t.spread) {
+        (Some(_), Some(_)) => Err(issue(
+            "team.starts",
+            "and team.spread are both given: give one".into(),
+        )),
+        (Some(list), None) => listed_starts(list, n, count),
+        (None, Some(sp)) => match sp.along {
+            None => Err(issue(
+                "team.spread.along",
+                "is required (\"arc\" or \"line\")".into(),
+            )),
+            Some(SpreadAlong::Arc) => arc_starts(sp, n),
+            Some(SpreadAlong::Line) => line_starts(sp, n, initial),
+        },
+        (None, None) if n == 1 => Ok(vec![initial]),
+        (None, None) => Err(issue(
+            "team.starts",
+            "or team.spread is required for more than one vehicle".into(),
+        )),
+    }
+}
+
+/// `team.starts`: `count` poses, every key required.
+fn listed_starts(list: &[InitialSection], n: usize, count: u64) -> Result<Vec<Start>, Issue> {
+    if list.len() != n {
+        return Err(issue(
+            "team.starts",
+            format!("has {} poses for team.count = {count}", list.len()),
+        ));
+    }
+    list.iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let key = |k: &str| format!("team.starts[{i}].{k}");
+            Ok(Start {
+                x_m: coordinate(&key("x_m"), p.x_m)?,
+                y_m: coordinate(&key("y_m"), p.y_m)?,
+                heading_rad: finite(&key("heading_rad"), p.heading_rad)?,
+            })
+        })
+        .collect()
+}
+
+/// `team.spread` along an arc: start `i` at angle `start_rad -+ i step_rad` (minus when
+/// clockwise) on the circle, heading along the travel; the line's keys refused.
+fn arc_starts(sp: &TeamSpread, n: usize) -> Result<Vec<Start>, Issue> {
+    for (k, set) in [
+        ("x_m", sp.x_m.is_some()),
+        ("y_m", sp.y_m.is_some()),
+        ("heading_rad", sp.heading_rad.is_some()),
+        ("step_m", sp.step_m.is_some()),
+        ("direction_rad", sp.direction_rad.is_some()),
+    ] {
+        if set {
+            return Err(issue(
+                &format!("team.spread.{k}"),
+                "applies to along = \"line\" only".into(),
+            ));
+        }
+    }
+    let c = sp.center_m.unwrap_or(SPREAD_CENTER_M);
+    let cx = coordinate("team.spread.center_m", Some(c[0]))?;
+    let cy = coordinate("team.spread.center_m", Some(c[1]))?;
+    let r = positive("team.spread.radius_m", sp.radius_m)?;
+    if r > MAX_COORDINATE_M {
+        return Err(issue(
+            "team.spread.radius_m",
+            format!(
+                "must be at most {}, got {}",
+                Echo(MAX_COORDINATE_M),
+                Echo(r)
+            ),
+        ));
+    }
+    let th0 = finite(
+        "team.spread.start_rad",
+        Some(sp.start_rad.unwrap_or(SPREAD_START_RAD)),
+    )?;
+    let step = finite(
+        "team.spread.step_rad",
+        Some(sp.step_rad.unwrap_or(std::f64::consts::TAU / n as f64)),
+    )?;
+    let cw = sp.clockwise.unwrap_or(SPREAD_CLOCKWISE);
+    // The next start `step` further along the travel: the listed order is the
+    // order of travel (the listed ring's `ahead(i) = i + 1`).
+    let sign = if cw { -1.0 } else { 1.0 };
+    Ok((0..n)
+        .map(|i| {
+            let th = th0 + sign * step * i as f64;
+            Start {
+                x_m: cx + r * th.cos(),
+                y_m: cy + r * th.sin(),
+                heading_rad: th + sign * std::f64::consts::FRAC_PI_2,
+            }
+        })
+        .collect())
+}
+
+/// `team.spread` along a line: start `i` at `(x_m, y_m) + i step_m (cos, sin)(direction_rad)`,
+/// all heading `heading_rad`; the arc's keys refused.
+fn line_starts(sp: &TeamSpread, n: usize, initial: Start) -> Result<Vec<Start>, Issue> {
+    for (k, set) in [
+        ("center_m", sp.center_m.is_some()),
+        ("radius_m", sp.radius_m.is_some()),
+        ("start_rad", sp.start_rad.is_some()),
+        ("step_rad", sp.step_rad.is_some()),
+        ("clockwise", sp.clockwise.is_some()),
+    ] {
+        if set {
+            return Err(issue(
+                &format!("team.spread.{k}"),
+                "applies to along = \"arc\" only".into(),
+            ));
+        }
+    }
+    let x = coordinate("team.spread.x_m", Some(sp.x_m.unwrap_or(initial.x_m)))?;
+    let y = coordinate("team.spread.y_m", Some(sp.y_m.unwrap_or(initial.y_m)))?;
+    let h = finite(
+        "team.spread.heading_rad",
+        Some(sp.heading_rad.unwrap_or(initial.heading_rad)),
+    )?;
+    let step = positive("team.spread.step_m", sp.step_m)?;
+    let dir = finite(
+        "team.spread.direction_rad",
+        Some(sp.direction_rad.unwrap_or(h)),
+    )?;
+    let far = step * (n - 1) as f64;
+    if !(x.abs() + far <= MAX_COORDINATE_M && y.abs() + far <= MAX_COORDINATE_M) {
+        return Err(issue(
+            "team.spread.step_m",
+            format!(
+                "puts the last start beyond {} m (step {} m x {} vehicles)",
+                Echo(MAX_COORDINATE_M),
+                Echo(step),
+                n - 1
+            ),
+        ));
+    }
+    Ok((0..n)
+        .map(|i| Start {
+            x_m: x + step * i as f64 * dir.cos(),
+            y_m: y + step * i as f64 * dir.sin(),
+            heading_rad: h,
+        })
+        .collect())
+}
+
+/// `team.spacing` with its gain `team.k_v` (>= 0).
+fn law_of(t: &TeamSection) -> Result<SpacingLaw, Issue> {
+    let k_v = non_negative("team.k_v", Some(t.k_v.unwrap_or(K_V_PER_S)))?;
+    Ok(match t.spacing.unwrap_or(SPACING) {
+        SpacingName::None => SpacingLaw::None,
+        SpacingName::RangeBalance => SpacingLaw::RangeBalance { gain_per_s: k_v },
+        SpacingName::ArcReference => SpacingLaw::ArcReference { gain_per_s: k_v },
+    })
+}
+
+/// `[team.v_min_mps, team.v_max_mps]` around `v0` (defaults `v0/2` and `2 v0`, within the
+/// airframe's safe commanded airspeeds `airframe` for a fixed wing).
+fn envelope_of(
+    t: &TeamSection,
+    v0: f64,
+    airframe: Option<(f64, f64)>,
+) -> Result<(f64, f64), Issue> {
+    let (lo, hi) = airframe.unwrap_or((0.0, f64::INFINITY));
+    let v_min = positive(
+        "team.v_min_mps",
+        Some(t.v_min_mps.unwrap_or((V_MIN_FRACTION * v0).max(lo))),
+    )?;
+    let v_max = positive(
+        "team.v_max_mps",
+        Some(t.v_max_mps.unwrap_or((V_MAX_FACTOR * v0).min(hi))),
+    )?;
+    if airframe.is_some() {
+        for (key, v) in [("team.v_min_mps", v_min), ("team.v_max_mps", v_max)] {
+            if !(lo..=hi).contains(&v) {
+                return Err(issue(
+                    key,
+                    format!(
+                        "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
+                        Echo(lo),
+                        Echo(hi),
+                        Echo(v)
+                    ),
+                ));
+            }
+        }
+    }
+    if v_min > v0 {
+        return Err(issue(
+            "team.v_min_mps",
+            format!(
+                "must be at most vehicle.speed_mps = {}, got {}",
+                Echo(v0),
+                Echo(v_min)
+            ),
+        ));
+    }
+    let max = crate::ranges::MAX_SPEED_MPS;
+    if v_max < v0 || v_max > max {
+        return Err(issue(
+            "team.v_max_mps",
+            format!(
+                "must be in [vehicle.speed_mps = {}, {}], got {}",
+                Echo(v0),
+                Echo(max),
+                Echo(v_max)
+            ),
+        ));
+    }
+    Ok((v_min, v_max))
+}
+
+/// `team.ring`: listed, or discovered (at most [`MAX_DISCOVERED_COUNT`] vehicles, the probes
+/// ending before the run does).
+fn ring_of(t: &TeamSection, count: u64, v0: f64, sim: &SimSpec) -> Result<RingMode, Issue> {
+    Ok(match t.ring.unwrap_or(RING) {
+        RingName::Listed => RingMode::Listed,
+        RingName::Discovered => {
+            if count > MAX_DISCOVERED_COUNT {
+                return Err(issue(
+                    "team.ring",
+                    format!("= \"discovered\" is for at most {MAX_DISCOVERED_COUNT} vehicles (O(N) per probe sample), got team.count = {count}"),
+                ));
+            }
+            let d = DiscoveryConfig {
+                settle_s: DISCOVERY_SETTLE_S,
+                probe_s: DISCOVERY_PROBE_S,
+                probe_speed_delta_mps: DISCOVERY_PROBE_FRACTION * v0,
+            };
+            let end = d.settle_s + d.probe_s * count as f64;
+            if end >= sim.duration_s {
+                return Err(issue(
+                    "team.ring",
+                    format!(
+                        "= \"discovered\" needs {} s ({} s settling + {} s per vehicle) before the ring is known, but sim.duration_s = {}",
+                        Echo(end),
+                        Echo(d.settle_s),
+                        Echo(d.probe_s),
+                        Echo(sim.duration_s)
+                    ),
+                ));
+            }
+            RingMode::Discover(d)
+        }
+    })
+}
+
+/// `team.ranging` with its defaults ([`RangingConfig::default`]), checked as the ranging unit
+/// the run builds checks it.
+fn ranging_of(t: &TeamSection, sim: &SimSpec) -> Result<RangingConfig, Issue> {
+    let r = t.ranging.clone().unwrap_or_default();
+    let dflt = RangingConfig::default();
+    let ranging = RangingConfig {
+        rate_hz: finite(
+            "team.ranging.rate_hz",
+            Some(r.rate_hz.unwrap_or(dflt.rate_hz)),
+        )?,
+        noise_std_m: non_negative(
+            "team.ranging.noise_std_m",
+            Some(r.noise_std_m.unwrap_or(dflt.noise_std_m)),
+        )?,
+        max_range_m: match r.max_range_m {
+            None => dflt.max_range_m,
+            v => positive("team.ranging.max_range_m", v)?,
+        },
+        dropout_probability: non_negative(
+            "team.ranging.dropout_probability",
+            Some(r.dropout_probability.unwrap_or(dflt.dropout_probability)),
+        )?,
+        delay_s: non_negative(
+            "team.ranging.delay_s",
+            Some(r.delay_s.unwrap_or(dflt.delay_s)),
+        )?,
+    };
+    // A delay past the run's end is no delay anyone means, and it would hold every range
+    // measured in the run in flight.
+    if ranging.delay_s > sim.duration_s {
+        return Err(issue(
+            "team.ranging.delay_s",
+            format!(
+                "must be at most sim.duration_s = {}, got {}",
+                Echo(sim.duration_s),
+                Echo(ranging.delay_s)
+            ),
+        ));
+    }
+    // The rest (rate and delay whole numbers of steps, the probability in [0, 1]) as the
+    // ranging unit the run builds decides it, so a value that passes here cannot fail there.
+    Ranging::new(ranging, sim.dt_s, 0).map_err(|e| {
+        let msg = e.to_string();
+        let key = msg.split(' ').next().unwrap_or("team.ranging").to_string();
+        Issue {
+            message: msg
+                .strip_prefix(&key)
+                .map_or(msg.clone(), |m| m.trim_start().to_string()),
+            key,
+            unreadable: false,
+        }
+    })?;
+    Ok(ranging)
 }
 
 /// SplitMix64's finaliser (Steele, Lea & Flood, "Fast splittable pseudorandom number
