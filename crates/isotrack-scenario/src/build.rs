@@ -67,7 +67,7 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
                 && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
             {
-                build_vehicle(f)
+                crate::vehicle::build_vehicle(f)
                     .ok()
                     .and_then(|v| v.airframe_turn_rate_limit_radps())
             }
