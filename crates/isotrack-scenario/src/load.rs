@@ -373,7 +373,7 @@ mod tests {
         assert_eq!(set("vehicle={}").vehicle.speed_mps, Some(0.8));
         // Through `apply_assignments` too (a sweep's `[grid] controller = [{kp = 2.0}]`).
         let base = parse_scenario(text, "s.toml", &[]).unwrap();
-        let applied = apply_assignments(
+        let applied = crate::apply_assignments(
             base.file(),
             &[Assignment::new("controller={ kp = 2.0 }", "[grid]")],
         )

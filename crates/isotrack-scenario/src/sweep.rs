@@ -370,7 +370,7 @@ fn key_on_line(text: &str, start: usize) -> Option<String> {
         .rev()
         .map(str::trim)
         .find(|l| l.starts_with('[') && !l.starts_with("[["))
-        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim().to_string());
+        .map(|l| l.trim_matches(['[', ']']).trim().to_string());
     Some(match section {
         Some(s) => format!("{s}.{key}"),
         None => key.to_string(),
