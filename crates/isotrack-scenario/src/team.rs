@@ -797,11 +797,9 @@ mod tests {
     #[test]
     fn volcano_contours_at_lattice_levels_close() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/volcano.toml");
-        let base = std::fs::read_to_string(path).unwrap();
         let length = |level: f64| {
-            let s = parse_scenario(
-                &base,
-                path,
+            let s = crate::load_scenario(
+                Some(std::path::Path::new(path)),
                 &[
                     format!("controller.level={level:?}"),
                     "team.count=6".into(),
