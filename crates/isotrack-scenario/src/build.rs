@@ -4,7 +4,7 @@
 use crate::field::FieldModel;
 use crate::schema::*;
 use crate::spec::LawSpec;
-use crate::vehicle::{build_vehicle, VehicleModel};
+use crate::vehicle::VehicleModel;
 use crate::Scenario;
 use isotrack_core::control::{
     GradientReference, GroundTruth, PiIsoline, Pid, PidCrossing, Search, SearchParams, SlidingMode,

@@ -272,7 +272,7 @@ fn key_at(table: &DeTable<'_>, span: &Range<usize>, prefix: &str) -> Option<Stri
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::assign::{apply_assignments, looks_like_a_number};
+    use crate::assign::looks_like_a_number;
     use crate::error::clip_quoted;
 
     fn err(text: &str, sets: &[&str]) -> Vec<LocatedIssue> {
