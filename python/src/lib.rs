@@ -7,6 +7,7 @@
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
+mod columns;
 mod controller;
 mod env;
 mod errors;

@@ -5,9 +5,9 @@
 //! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
 //! between each step's samples and its move so that agents outside the loop can answer.
 
+use crate::columns::column;
 use crate::errors::ScenarioErrorPy;
 use crate::scenario::PyScenario;
-use crate::tools::column;
 use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
 use isotrack_scenario::field::FieldModel;
@@ -308,7 +308,7 @@ pub fn write_team_run(
     for (i, &t_s) in t.iter().enumerate() {
         // Ctrl-C is answered while the trace is written: the partial trace is removed, and
         // the directory if this call made it (issue 30, att30b item 4).
-        if i % crate::tools::SIGNAL_ROWS == 0 {
+        if i % crate::columns::SIGNAL_ROWS == 0 {
             if let Err(e) = py.check_signals() {
                 drop(team_sinks);
                 drop(tw);

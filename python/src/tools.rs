@@ -2,6 +2,7 @@
 //! entry runs it in this module, so one build gives both), run directories written as
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
+use crate::columns::{column, SIGNAL_ROWS};
 use crate::errors::ScenarioErrorPy;
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
@@ -11,7 +12,6 @@ use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::trace::TELEMETRY_COLUMNS;
 use isotrack_runs::{exit, Failure};
 use isotrack_sim::{TraceRow, TraceSink};
-use numpy::PyReadonlyArray1;
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -40,30 +40,6 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
     let _ = std::io::stdout().flush();
     code
 }
-
-/// One `trace.csv` column, checked to have `n` rows (a single run's and a team's).
-pub(crate) fn column<'py>(
-    trace: &Bound<'py, PyDict>,
-    name: &str,
-    n: Option<usize>,
-) -> PyResult<Vec<f64>> {
-    let v = trace
-        .get_item(name)?
-        .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
-    let a: PyReadonlyArray1<'py, f64> = v.extract()?;
-    let v = a.as_array().to_vec();
-    match n {
-        Some(n) if v.len() != n => Err(PyValueError::new_err(format!(
-            "the trace's column `{name}` has {} rows, `t_s` has {n}",
-            v.len()
-        ))),
-        _ => Ok(v),
-    }
-}
-
-/// How many trace rows a save writes between two checks for Ctrl-C (`Python::check_signals`):
-/// a few milliseconds of writing.
-pub(crate) const SIGNAL_ROWS: usize = 1 << 14;
 
 /// Writes a run directory as `isotrack run --out` does: `trace.csv` from the run's columns
 /// (numbers in the same shortest round-trip form, so they read back bit for bit),

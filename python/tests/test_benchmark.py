@@ -1,6 +1,7 @@
 """isotrack.benchmark: a Python controller on the benchmark's tasks and seeds, beside the
 built-in laws."""
 
+import json
 import math
 from pathlib import Path
 
@@ -71,8 +72,11 @@ def test_a_python_law_is_scored_beside_the_builtin_laws(tmp_path):
     assert abs(scores["mine"] - scores["pi_isoline"]) < 1.0, scores
     assert scores["mine"] > 60.0
     assert len([run for run in task["runs"] if run["controller"] == "mine"]) == 2
-    # One factory call per scored run and per picture, each seeing the task's level and limit.
-    assert len(seen) == 3 and all(s == (10.0, 1.0) for s in seen)
+    # One factory call per scored run (the picture's path is the first seed's scored run, not
+    # a run of its own), each seeing the task's level and limit.
+    assert len(seen) == 2 and all(s == (10.0, 1.0) for s in seen)
+    trajectories = json.loads((out / "tasks" / "circular" / "task.json").read_text())["trajectories"]
+    assert [t["controller"] for t in trajectories] == ["pi_isoline", "sliding_mode", "mine"]
     assert (out / "leaderboard.csv").read_text().splitlines()[0] == "rank,controller,overall,circular"
     assert "mine" in (out / "index.html").read_text()
 

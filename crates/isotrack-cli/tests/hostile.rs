@@ -129,8 +129,8 @@ fn interpolation_grids_are_capped() {
     );
 }
 
-/// Item 3: `plot` on a trace at +-1e308 hung, on `inf` it panicked in plotters: a clear error, or
-/// the non-finite rows left out.
+/// Item 3: `plot` on a trace at +-1e308 hung, on `inf` it panicked in plotters: a clear error
+/// (a position), or the non-finite values left out (a drawn series).
 #[test]
 fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
     let d = tempfile::tempdir().unwrap();
@@ -160,7 +160,7 @@ fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
         "--out",
         d.path().join("p").to_str().unwrap(),
     ]);
-    assert_fails(&o, 65, &["x_m reaches 1e308"]);
+    assert_fails(&o, 65, &["x_m = 1e308 is not a position within +-1e100 m"]);
     std::fs::write(&trace, edit(4, "-1e308")).unwrap();
     let o = isotrack(&[
         "plot",
@@ -169,7 +169,17 @@ fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
         d.path().join("p").to_str().unwrap(),
     ]);
     assert_fails(&o, 65, &["reaches -1e308"]);
+    // An infinite position is refused naming the row (the trace check `plot` and `report`
+    // share, issue 30 att30c-18); a non-finite value in a drawn series is left out.
     std::fs::write(&trace, edit(1, "inf")).unwrap();
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--out",
+        d.path().join("p").to_str().unwrap(),
+    ]);
+    assert_fails(&o, 65, &["trace.csv:6: x_m = inf is not a position"]);
+    std::fs::write(&trace, edit(4, "inf")).unwrap();
     let o = isotrack(&[
         "plot",
         run.to_str().unwrap(),

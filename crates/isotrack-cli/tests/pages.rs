@@ -238,7 +238,7 @@ fn report_body_shows_a_run_name_as_its_title_does() {
         &page,
         &d.path().join("p"),
         "ready: 1 run(s)",
-        &[shown.clone()],
+        std::slice::from_ref(&shown),
     );
     for raw in ['\u{202e}', '\u{2028}', '\u{1b}'] {
         assert!(!dom.contains(raw), "{raw:?} raw in the page");

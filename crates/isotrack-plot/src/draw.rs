@@ -181,10 +181,7 @@ impl Raster {
     }
 }
 
-/// The largest `|value|` an axis may reach. Beyond it widths and pads overflow to infinity and
-/// plotters' tick search never ends (a trace at 1e308 once hung `isotrack plot`); the error
-/// names the quantity instead.
-pub const MAX_AXIS_ABS: f64 = 1.0e100;
+pub use crate::limits::MAX_AXIS_ABS;
 
 /// An axis range for data spanning `[lo, hi]` (finite values only; `None` when there are
 /// none): at least `min_width` wide (and 1e-9 of its magnitude, so the ticks stay distinct in

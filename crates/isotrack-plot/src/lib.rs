@@ -22,6 +22,7 @@
 
 mod draw;
 mod error;
+mod limits;
 mod picture;
 mod run_data;
 mod stability;

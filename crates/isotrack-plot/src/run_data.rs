@@ -271,7 +271,7 @@ impl RunData {
 /// read runs here), issue 30 (att30c-18): its time `v[0]` finite, not before the row before
 /// (`before`, a team's rows share a time) and not past the run's end (`t_end_s` of
 /// `summary.json`, to a rounding of 1e-9 of it); its position `v[1]`, `v[2]` finite and within
-/// the +-[`MAX_AXIS_ABS`](crate::draw::MAX_AXIS_ABS) m a figure can show, or both NaN (no
+/// the +-[`MAX_AXIS_ABS`](crate::limits::MAX_AXIS_ABS) m a figure can show, or both NaN (no
 /// position: `fly`'s rows while the vehicle reports none). A doctored row (a
 /// time going back, a last row at 1e9 s in a 5 s run, `x_m = 1e300` or NaN) once gave a page
 /// whose map spanned 1e300 m or whose time series were squashed to the left edge.
@@ -301,11 +301,11 @@ fn check_row(v: &[f64; 7], before: Option<f64>, t_end_s: Option<f64>) -> Result<
         return Ok(());
     }
     for (name, x) in [("x_m", v[1]), ("y_m", v[2])] {
-        if !(x.is_finite() && x.abs() <= crate::draw::MAX_AXIS_ABS) {
+        if !(x.is_finite() && x.abs() <= crate::limits::MAX_AXIS_ABS) {
             return Err(format!(
                 "{name} = {} is not a position within +-{:e} m (what a figure can show)",
                 Num(x),
-                crate::draw::MAX_AXIS_ABS
+                crate::limits::MAX_AXIS_ABS
             ));
         }
     }
