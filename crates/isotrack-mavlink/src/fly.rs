@@ -1083,8 +1083,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return false;
         }
         if self.opts.take_control {
+            // Before control, only once `take_control` has decided to take this vehicle (its
+            // first command sent): a vehicle armed in RETURN or LAND is never sent a setpoint
+            // while fly waits for the sensor and the position (a loaded machine widened that
+            // window: take_control_never_pulls_a_vehicle_out_of_its_return).
             return self.in_control
-                || (self.armed && self.firmware.set_mode_params(FlyMode::Offboard).is_some());
+                || (self.armed
+                    && self.mode_at_first_command.is_some()
+                    && self.firmware.set_mode_params(FlyMode::Offboard).is_some());
         }
         true
     }
