@@ -315,3 +315,67 @@ fn rows_are_kept_only_as_isotrack_writes_them() {
         assert_fails(&m, 65, &["results.csv:2", needle]);
     }
 }
+
+/// att30c-3 (c, d): the bounds the run's metric windows set, from what
+/// `isotrack_sim::Metrics::finish` computes. The plume runs 20 s in steps of 0.01 s (N = 2000):
+/// the convergence dwell is 10 % of the run, 200 steps, so a convergence time is at most
+/// (2000 - 200) x 0.01 s = 18 s (`t_end_s` itself, 20.0, is refused; 18.0 kept); the
+/// steady-state window is the last 20 %, steps 1600 to 2000, 4 s, so `sign_changes_per_s` is a
+/// count over 4 s: 66.123456 (264.49 changes) is refused, 66.25 (265) kept. Each refusal
+/// names file, line and column, on `--resume` and `merge` alike.
+#[test]
+fn convergence_and_sign_change_cells_are_bounded_by_the_metric_windows() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "plume.toml", PLUME);
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [5.0, 6.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let row = text.lines().nth(1).unwrap();
+    assert!(row.contains(",completed,") && !row.contains('"'), "{row}");
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let with = |name: &str, v: &str| {
+        let mut cells: Vec<&str> = row.split(',').collect();
+        cells[col(name)] = v;
+        text.replacen(row, &cells.join(","), 1)
+    };
+    let latest = format!("{:?}", 1800.0 * 0.01);
+    assert_eq!(latest, "18.0");
+    for (name, key, v, kept) in [
+        ("conv_end", "convergence_time_s", "20.0", false),
+        ("conv_late", "convergence_time_s", "18.01", false),
+        ("conv_latest", "convergence_time_s", latest.as_str(), true),
+        ("signs_frac", "sign_changes_per_s", "66.123456", false),
+        ("signs_whole", "sign_changes_per_s", "66.25", true),
+    ] {
+        let o_dir = d.path().join(name);
+        copy_with(&out, &o_dir, &with(key, v));
+        let o = isotrack(&["sweep", &sw, "--out", o_dir.to_str().unwrap(), "--resume"]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{name}")).to_str().unwrap(),
+        ]);
+        if kept {
+            assert!(o.status.success(), "{name}: {}", stderr(&o));
+            assert!(m.status.success(), "{name}: {}", stderr(&m));
+            continue;
+        }
+        let column = format!("column {} ({key})", col(key) + 1);
+        let says = match name {
+            "conv_end" => "convergence_time_s = 20 s is later than t_end_s - metrics.convergence_min_dwell_s = 18 s",
+            "signs_frac" => "sign_changes_per_s = 66.123456 is not a whole number of sign changes",
+            _ => key,
+        };
+        for o in [&o, &m] {
+            assert_fails(o, 65, &["results.csv:2", &column, says]);
+        }
+    }
+}

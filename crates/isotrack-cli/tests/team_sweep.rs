@@ -214,3 +214,104 @@ fn team_cells_are_bounded_by_their_run() {
         assert_fails(&m, 65, &["results.csv:2", col]);
     }
 }
+
+/// Issue 30: a team sweep's `invalid_scenario` row whose reason starts `[team]:` (the team
+/// engine's refusal, found by flying it) is checked on `--resume` and `merge` as any other
+/// invalid row: the reason recomputed from the row's scenario and compared. Here the field
+/// drifts, so it has no fixed circle, and `arc_reference` (which needs the true isoline) is
+/// refused by the engine: that row is kept as the sweep wrote it; the same row with another
+/// `[team]:` reason, or run 0's (`range_balance`, which flies) relabelled with it, is refused
+/// naming file, line and column (both were kept before).
+#[test]
+fn team_engine_refusals_are_recomputed_on_resume_and_merge() {
+    let d = tempfile::tempdir().unwrap();
+    let sweep = write(
+        d.path(),
+        "team.toml",
+        &format!(
+            "scenario = {TEAM:?}\n[base]\nsim.duration_s = 5.0\nfield.drift_mps = [0.001, 0.0]\n[grid]\nteam.spacing = [\"range_balance\", \"arc_reference\"]\n"
+        ),
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap()]);
+    assert_fails(&o, 65, &["invalid"]);
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let (header, rows) = read_csv(&out.join("results.csv"));
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    assert_eq!(rows[0][col("outcome")], "completed", "{text}");
+    assert_eq!(rows[1][col("outcome")], "invalid_scenario", "{text}");
+    let reason = &rows[1][col("outcome_detail")];
+    assert!(
+        reason.starts_with("[team]: ") && reason.contains("arc_reference"),
+        "{reason}"
+    );
+    let resume = |name: &str, results: &str| {
+        let o_dir = d.path().join(name);
+        std::fs::create_dir_all(&o_dir).unwrap();
+        for f in ["sweep.json", "sweep.toml", "base_scenario.toml"] {
+            std::fs::copy(out.join(f), o_dir.join(f)).unwrap();
+        }
+        std::fs::write(o_dir.join("results.csv"), results).unwrap();
+        let o = isotrack(&[
+            "sweep",
+            &sweep,
+            "--out",
+            o_dir.to_str().unwrap(),
+            "--resume",
+        ]);
+        let m = isotrack(&[
+            "merge",
+            o_dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("m-{name}")).to_str().unwrap(),
+        ]);
+        (o, m)
+    };
+    // As written: kept (the reason recomputed is the same); the resume reruns nothing and
+    // still reports the invalid run.
+    let (o, m) = resume("clean", &text);
+    for o in [&o, &m] {
+        let e = common::stderr(o);
+        assert!(matches!(o.status.code(), Some(0 | 65)), "{e}");
+        assert!(
+            !e.contains("results.csv:") && !e.contains("panicked"),
+            "{e}"
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(d.path().join("clean/results.csv")).unwrap(),
+        text
+    );
+    // Another engine reason for run 1.
+    let other = "[team]: a team needs at least one vehicle";
+    let (o, m) = resume("reason", &with_cell(&text, 1, "outcome_detail", other));
+    let column = format!("column {} (outcome_detail)", col("outcome_detail") + 1);
+    for o in [&o, &m] {
+        assert_fails(
+            o,
+            65,
+            &[
+                "results.csv:3",
+                &column,
+                "not the reason the team engine gives run 1",
+            ],
+        );
+    }
+    // Run 0, which flies, relabelled with run 1's refusal (run 1's line under run 0's id and
+    // values, run 0's own line removed).
+    let mut relabelled = with_cell(&text, 1, "run_id", "0");
+    for c in ["team.spacing", "sim.seed"] {
+        relabelled = with_cell(&relabelled, 1, c, &rows[0][col(c)]);
+    }
+    let lines: Vec<&str> = relabelled.lines().collect();
+    let only = format!("{}\n{}\n", lines[0], lines[2]);
+    let (o, m) = resume("relabelled", &only);
+    let column = format!("column {} (outcome)", col("outcome") + 1);
+    for o in [&o, &m] {
+        assert_fails(
+            o,
+            65,
+            &["results.csv:2", &column, "whose team the engine flies"],
+        );
+    }
+}

@@ -46,6 +46,23 @@ pub struct RunSpan {
     /// `g tan(phi_max) / V` of the trimmed vehicle, which every law but a `schedule` (its
     /// turn rates flown as written) flies then; `None` without one.
     pub turn_rate_limit_radps: Option<f64>,
+    /// The step plan's metric windows ([`StepPlan::new`], what the run's metrics use): the
+    /// steady-state window's first step `ss` (the last `metrics.steady_state_fraction` of the
+    /// `N` steps) and the convergence dwell `w` in steps (`metrics.convergence_min_dwell_s`,
+    /// rounded up, at most `N`). A run that ended at step `k` reports a convergence time only
+    /// after staying within the tolerance for more than `w` steps up to `k`, so at most
+    /// `(k - w) dt`; its per-second rates over the window divide by `(k - ss) dt`. `None` where
+    /// `[metrics]` does not resolve.
+    pub metric_steps: Option<MetricSteps>,
+}
+
+/// A run's metric windows in steps ([`RunSpan::metric_steps`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetricSteps {
+    /// The steady-state window's first step (`StepPlan::steady_state_start_step`).
+    pub steady_state_start_step: u64,
+    /// The convergence dwell, steps (`StepPlan::convergence_min_dwell_steps`).
+    pub convergence_min_dwell_steps: u64,
 }
 
 /// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
@@ -54,7 +71,28 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
     let sim = crate::spec::SimSpec::new(&f.sim).ok()?;
     let sensor = crate::spec::sensor::sensor_config(&f.sensor).ok()?;
     let rate_hz = sensor.rate_hz;
+    // The windows as the run's own step plan computes them (the record rate and level play no
+    // part in them).
+    let metric_steps = crate::spec::MetricsSpec::new(&f.metrics, &sim)
+        .ok()
+        .and_then(|m| {
+            StepPlan::new(
+                sim.dt_s,
+                sim.duration_s,
+                0.0,
+                m.steady_state_fraction,
+                m.convergence_tolerance,
+                m.convergence_min_dwell_s,
+                0.0,
+            )
+            .ok()
+        })
+        .map(|p| MetricSteps {
+            steady_state_start_step: p.steady_state_start_step,
+            convergence_min_dwell_steps: p.convergence_min_dwell_steps,
+        });
     Some(RunSpan {
+        metric_steps,
         sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
         sensor_drops_samples: sensor.dropout_probability != 0.0,
         // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).

@@ -39,8 +39,12 @@ pub struct RowRules<'a> {
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
 /// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
-/// controller's kind and turn-rate limit, a team's top speed, or their whole tables).
-const SPAN_KEYS: [&str; 15] = [
+/// controller's kind and turn-rate limit, a team's top speed, the metrics' steady-state
+/// fraction and convergence dwell, or their whole tables).
+const SPAN_KEYS: [&str; 18] = [
+    "metrics",
+    "metrics.steady_state_fraction",
+    "metrics.convergence_min_dwell_s",
     "sim",
     "sensor",
     "sim.dt_s",
@@ -237,8 +241,9 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
 /// An `invalid_scenario` row: the run's scenario must be invalid under the plan, for the
 /// reason the sweep records (`outcome_detail`, recomputed). Without a built base, only what
 /// resolving tells: nothing to refuse (a scenario can resolve and still fail to build).
-/// A team run whose scenario is valid can still be refused by the team engine (`[team]: ...`,
-/// found only by running it): such a row is kept as it is.
+/// A team run whose scenario is valid can still be refused by the team engine (`[team]: ...`):
+/// such a row's reason is recomputed as the sweep finds it ([`crate::sweep::rows::team_refusal`])
+/// and compared, as any other invalid row's.
 fn check_invalid(
     rules: &RowRules<'_>,
     id: u64,
@@ -247,7 +252,22 @@ fn check_invalid(
 ) -> Result<(), String> {
     match rules.spans.scenario(id) {
         None => Ok(()),
-        Some(Ok(_)) if detail.starts_with("[team]: ") => Ok(()),
+        Some(Ok(s)) if detail.starts_with("[team]: ") => {
+            match crate::sweep::rows::team_refusal(&s) {
+                Some(why) if why == detail => Ok(()),
+                Some(why) => Err(format!(
+                    "{}: outcome_detail = `{}` is not the reason the team engine gives run {id}: `{}`",
+                    column("outcome_detail"),
+                    clip(detail),
+                    clip(&why)
+                )),
+                None => Err(format!(
+                    "{}: outcome = invalid_scenario (`{}`) for run {id}, whose team the engine flies: it is run, its row holds its results",
+                    column("outcome"),
+                    clip(detail)
+                )),
+            }
+        }
         Some(Ok(_)) => Err(format!(
             "{}: outcome = invalid_scenario for run {id}, whose scenario is valid under the sweep's plan: it is run, its row holds its results",
             column("outcome")
@@ -517,6 +537,83 @@ pub fn check_span<'c>(
                 Echo(v),
                 Echo(dt),
                 Num(moved_s),
+                Echo(t_end)
+            ));
+        }
+    }
+    // Last: the bounds above name the more basic fault of a row first.
+    if let Some(ms) = span.metric_steps {
+        check_metric_windows(&ms, dt, outcome, k_end, t_end, cell, column)?;
+    }
+    Ok(())
+}
+
+/// The cells the run's metric windows bound ([`isotrack_scenario::build::MetricSteps`], from
+/// the run's step plan), as `isotrack_sim::Metrics::finish` computes them over the steps
+/// `0..=k` observed by a run that ended at step `k` (`t_end_s = k dt`):
+///
+/// * `convergence_time_s` is reported by a `completed` run only, and only after the error
+///   stayed within the tolerance for more than the dwell's `w` steps up to `k`: `0` needs
+///   `k >= w`, `j dt` needs `j <= k - w`, so it is at most `(k - w) dt` (att30c-3 c: `t_end_s`
+///   itself is no convergence time).
+/// * `sign_changes_per_s` is a whole count `n` of sign changes over the steady-state window
+///   from step `ss` to `k`, divided by its duration `(k - ss) dt` (`n <= k - ss`, one per
+///   step at most): the cell must be `n / ((k - ss) dt)` for a whole `n`, bit for bit as the
+///   division gives it (the cell is checked to be the shortest round-trip form of its value
+///   before); no window (`k <= ss`), no rate (att30c-3 d).
+fn check_metric_windows<'c>(
+    ms: &isotrack_scenario::build::MetricSteps,
+    dt: f64,
+    outcome: &str,
+    k_end: u64,
+    t_end: f64,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    use isotrack_core::numtext::{Echo, Num};
+    let value = |n: &str| cell(n).parse::<f64>().ok();
+    let w = ms.convergence_min_dwell_steps;
+    if let Some(c) = value("convergence_time_s") {
+        if outcome != "completed" {
+            return Err(format!(
+                "{}: convergence_time_s = {} s in a `{outcome}` row: only a run that completed reports a convergence time",
+                column("convergence_time_s"),
+                Echo(c)
+            ));
+        }
+        // In whole steps (check_span has checked `c = j dt` for a whole `j`, or 0).
+        let j = (c / dt).round();
+        if k_end < w || j > (k_end - w) as f64 {
+            let latest = k_end.saturating_sub(w) as f64 * dt;
+            return Err(format!(
+                "{}: convergence_time_s = {} s is later than t_end_s - metrics.convergence_min_dwell_s = {} s ({k_end} - {w} steps of {} s): a convergence time needs the error within the tolerance for more than the dwell's {w} steps up to the end",
+                column("convergence_time_s"),
+                Echo(c),
+                Num(latest),
+                Echo(dt)
+            ));
+        }
+    }
+    // A benchmark task's record has no `t_end_s`: its end step is known only for a run that
+    // completed (`k = N`).
+    let end_known = !cell("t_end_s").is_empty() || outcome == "completed";
+    if let Some(r) = value("sign_changes_per_s").filter(|_| end_known) {
+        let ss = ms.steady_state_start_step;
+        let steps = k_end.saturating_sub(ss);
+        let window_s = steps as f64 * dt;
+        // The count `n` whose `n / window` the metrics wrote: the two whole numbers nearest
+        // `r window` (the product rounds), each within one per step.
+        let whole = steps > 0
+            && [(r * window_s).floor(), (r * window_s).ceil()]
+                .iter()
+                .any(|&n| n >= 0.0 && n <= steps as f64 && n / window_s == r);
+        if !whole {
+            return Err(format!(
+                "{}: sign_changes_per_s = {} is not a whole number of sign changes (at most one per step) over the steady-state window of {steps} steps of {} s = {} s (steps {ss} to {k_end}, t_end_s = {} s)",
+                column("sign_changes_per_s"),
+                Echo(r),
+                Echo(dt),
+                Num(window_s),
                 Echo(t_end)
             ));
         }

@@ -160,6 +160,16 @@ fn run_team_row(
     team_row_parts(s.run_team(&mut [] as &mut [NoTrace]), warnings)
 }
 
+/// Why the team engine refuses team scenario `s`, as a team sweep records it in
+/// `outcome_detail` (`[team]: ...`), or `None` when it flies the team (or `s` has none): found
+/// as the sweep finds it, by running the team ([`run_team_row`]; the engine's refusals come
+/// before its first step, so only a team it flies costs a run). `--resume` and `merge` check a
+/// kept `[team]:` row with it.
+pub fn team_refusal(s: &Scenario) -> Option<String> {
+    s.spec().team.as_ref()?;
+    run_team_row(s, &mut String::new()).0.err()
+}
+
 /// The `results.csv` fields of run `id` of a team sweep from its team run `team` (run by the
 /// caller: with Python controllers, say; `Err` an invalid scenario's reason): the row
 /// [`run_rows`] writes for it, [`METRIC_COLUMNS`] vehicle 0's then [`TEAM_COLUMNS`].
