@@ -295,7 +295,15 @@ class Run:
         """Writes the run directory ``isotrack run --out DIR`` writes: ``trace.csv`` (numbers
         that read back bit for bit), ``summary.json`` and the resolved ``scenario.toml``; what
         :func:`plot`, :func:`report` and the ``isotrack`` command take. Creates the directory;
-        returns its path."""
+        returns its path.
+
+        Holds the directory's lock (``.isotrack.lock``) as ``isotrack run --out`` does while it
+        writes: another writer there (a ``run --out``, another save) makes it raise an
+        ``OSError`` naming the holder (``run pid 1234 on node7``), and a ``run --out`` there
+        while this saves exits 73. Ctrl-C raises ``KeyboardInterrupt`` within a few thousand
+        rows, the trace being copied or written: what is left is what was there before (the
+        trace is written into a temporary file beside ``trace.csv``, removed then, and a
+        directory this call created is removed), no temporary file and no lock file."""
         path = _check_path("directory", directory)
         if path == "":
             raise ValueError("directory is empty: name the run directory to write (as `isotrack run --out DIR`)")
@@ -307,18 +315,14 @@ class Run:
         import os
 
         _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
+        # The [controller] table is the scenario's built-in law, which did not fly a Python
+        # controller's run: said at the top of scenario.toml (written under the directory's
+        # lock with the rest), so that nobody replays it with the CLI as if it were this run.
+        note = "" if self._python_controller is None else _python_controller_note(self._python_controller)
         if "vehicle" in self._trace:
-            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace))
+            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
         else:
-            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
-        if self._python_controller is not None:
-            # The [controller] table is the scenario's built-in law, which did not fly: said at
-            # the top of the file, so that nobody replays it with the CLI as if it were this run.
-            toml_path = os.path.join(path, "scenario.toml")
-            with open(toml_path, encoding="utf-8") as f:
-                body = f.read()
-            with open(toml_path, "w", encoding="utf-8") as f:
-                f.write(_python_controller_note(self._python_controller) + body)
+            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
         return path
 
     def __reduce__(self):
