@@ -154,7 +154,7 @@ pub struct FlyArgs {
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
     /// The vehicle's MAVLink system id (default: the first autopilot heard; a second one
-    /// heard within 1 s of it ends the flight, exit 69).
+    /// heard before control, or within 2 s of it, ends the flight, exit 69).
     #[arg(long, value_name = "ID")]
     pub target_system: Option<u8>,
 }

@@ -45,9 +45,12 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
-/// How long after the first autopilot heard a second one (another system or component) makes
-/// the vehicle ambiguous (`two_vehicles`), s.
-pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
+/// How long after the first autopilot is heard `take_control` sends it nothing but heartbeats
+/// (no setpoint, no command), s: two of an autopilot's 1 Hz heartbeats, so that a second vehicle
+/// on the link (another system or component) is heard first. A second one heard at any time
+/// before the companion has control makes the vehicle ambiguous (`two_vehicles`); in control,
+/// it is logged once.
+pub const TWO_VEHICLES_WINDOW_S: f64 = 2.0;
 
 /// The shortest silence of the vehicle's heartbeats that ends a flight (`link_lost`) even
 /// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
@@ -301,6 +304,9 @@ enum WayOut {
     Mode(FlyMode),
     /// Disarm (a vehicle the companion armed on the ground).
     Disarm,
+    /// The failsafe mode, for a vehicle that accepted the switch to OFFBOARD before the
+    /// companion saw it in control: confirmed by a heartbeat in any mode but OFFBOARD.
+    LeaveOffboard(FlyMode),
 }
 
 /// The vehicle's answer to a way out.
@@ -577,6 +583,8 @@ struct Flight<'a, S: ?Sized> {
     firmware: Firmware,
     /// The vehicle's heartbeat `type` (its kind, checked against the scenario's).
     vehicle_type: MavType,
+    /// The vehicle's heartbeat `autopilot`.
+    autopilot: MavAutopilot,
     armed: bool,
     custom_mode: Option<u32>,
     /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
@@ -590,6 +598,9 @@ struct Flight<'a, S: ?Sized> {
     vehicle_ms: Option<(u64, Instant)>,
     /// The vehicle's clock went back ([`REBOOT_STEP_S`]): its autopilot rebooted.
     reboot: Option<String>,
+    /// Time-stamped frames in a row more than [`REBOOT_STEP_S`] behind the newest (one is a
+    /// late frame; two, a reboot).
+    clock_behind: u32,
     /// In control, the vehicle disarmed without the companion asking: since when (watched for
     /// a reboot for [`REBOOT_WATCH_S`]).
     disarm_seen: Option<Instant>,
@@ -598,6 +609,11 @@ struct Flight<'a, S: ?Sized> {
     twin_logged: bool,
     /// A peripheral's GENERIC heartbeat beside the autopilot has been logged.
     peripheral_logged: bool,
+    /// A second autopilot heard in control has been logged.
+    late_vehicle_logged: bool,
+    /// With `take_control`, [`TWO_VEHICLES_WINDOW_S`] has passed (the sensor's timer was
+    /// restarted then).
+    window_passed: bool,
     // Control.
     /// The vehicle refused to arm or to switch to OFFBOARD.
     refused: bool,
@@ -611,6 +627,10 @@ struct Flight<'a, S: ?Sized> {
     /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
     offboard_sent: bool,
+    /// When the vehicle last acknowledged the companion's switch to OFFBOARD as `ACCEPTED`
+    /// before control: the switch is not sent again until a heartbeat newer than it shows
+    /// what the vehicle did (a third mode is a pilot's; the old one, a switch not made).
+    offboard_accepted_at: Option<Instant>,
     /// With `take_control`: the vehicle's mode when the companion sent its first control
     /// command (a change to anything but OFFBOARD before control is a pilot's).
     mode_at_first_command: Option<Option<u32>>,
@@ -843,6 +863,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             awaiting: None,
             firmware: Firmware::Px4,
             vehicle_type: MavType::MAV_TYPE_GENERIC,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
             armed: false,
             custom_mode: None,
             run_ended: false,
@@ -851,10 +872,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             last_heartbeat: now,
             vehicle_ms: None,
             reboot: None,
+            clock_behind: 0,
             disarm_seen: None,
             mavlink1_logged: false,
             twin_logged: false,
             peripheral_logged: false,
+            late_vehicle_logged: false,
+            window_passed: false,
             refused: false,
             refusal: None,
             active: false,
@@ -862,6 +886,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             arm_sent: false,
             armed_by_us: false,
             offboard_sent: false,
+            offboard_accepted_at: None,
             mode_at_first_command: None,
             armed_since_command: false,
             was_armed: false,
@@ -1084,7 +1109,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 return Ok(Some(FlyEnd::MaxDuration));
             }
         }
-        if now.duration_since(self.clock.last) > self.timeout {
+        let waiting = self.opts.take_control && !self.window_passed;
+        if !waiting && now.duration_since(self.clock.last) > self.timeout {
             self.event(match self.clock.not_newer {
                 0 => format!("no measurement for {} s", self.opts.timeout_s),
                 n => format!(
@@ -1211,6 +1237,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// without, the neutral setpoints that let the pilot hand over (PX4 refuses OFFBOARD
     /// without a stream) go to an accepted vehicle.
     fn may_send_setpoints(&self) -> bool {
+        if self.opts.take_control && !self.window_closed() {
+            return false;
+        }
         if self.mismatch.is_some()
             || self.other_controller.is_some()
             || self.refused
@@ -1419,6 +1448,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.active = false;
             return Ok(Some(FlyEnd::AnotherController));
         }
+        if self.active && self.in_control && self.disarm_seen.is_some() {
+            // Disarmed and armed again while the disarm was watched for a reboot: the disarm
+            // was nobody's here, so a pilot's (att33d-3): never flown on, no setpoint.
+            self.event(format!(
+                "pilot_took_over: the vehicle was disarmed, not by the companion, and is armed again in {}: setpoints stopped, nothing commanded",
+                self.mode_name()
+            ));
+            self.active = false;
+            return Ok(Some(FlyEnd::PilotTookOver));
+        }
         if self.active {
             if !self.in_control && self.held_dropped > 0 {
                 self.event(format!(
@@ -1497,19 +1536,71 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         Some(FlyEnd::PilotTookOver)
     }
 
+    /// Why `take_control` does not take the vehicle as it is, if it does not: a return or a
+    /// landing; armed, a mode not on [`Firmware::takeover_allowed`]'s list, or an unknown one
+    /// (no custom mode in its heartbeat), or PX4's numbers read from an autopilot that is not
+    /// PX4 (`MAV_AUTOPILOT_GENERIC` and others: their modes are not known here). A disarmed
+    /// vehicle (armed only with `arm`, a simulator's) is taken from any mode but a return or a
+    /// landing.
+    fn not_takeable(&self) -> Option<String> {
+        if let Some(name) = self
+            .custom_mode
+            .and_then(|c| self.firmware.returning_or_landing(c))
+        {
+            return Some(format!(
+                "{name} (returning or landing: its autopilot's failsafe or its pilot's choice)"
+            ));
+        }
+        if !self.armed {
+            return None;
+        }
+        if self.firmware == Firmware::Px4 && self.autopilot != MavAutopilot::MAV_AUTOPILOT_PX4 {
+            return Some(format!(
+                "{} (its autopilot is {:?}, whose mode numbers are not known here: only MAV_AUTOPILOT_PX4's and ArduPilot's are)",
+                self.mode_name(),
+                self.autopilot
+            ));
+        }
+        match self.custom_mode {
+            None => Some("an unknown mode (its heartbeat carries no custom mode)".into()),
+            Some(c) if !self.firmware.takeover_allowed(c) => Some(format!(
+                "{} (not a mode a pilot flies or holds in: taking off, landing, avoiding, on a mission or unknown here; see docs/FLYING.md for the modes taken)",
+                self.mode_name()
+            )),
+            Some(_) => None,
+        }
+    }
+
     /// The vehicle's mode in logs.
     fn mode_name(&self) -> String {
         self.custom_mode
             .map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
     }
 
+    /// Whether [`TWO_VEHICLES_WINDOW_S`] has passed since the vehicle was first heard (always,
+    /// with `target_system`): before, nothing but heartbeats is sent.
+    fn window_closed(&self) -> bool {
+        self.opts.target_system.is_some()
+            || self
+                .target_at
+                .is_some_and(|at| at.elapsed().as_secs_f64() >= TWO_VEHICLES_WINDOW_S)
+    }
+
     /// `take_control`'s steps: nothing is armed before the sensor and the position are there
-    /// (each within `timeout_s`); then arm, then OFFBOARD.
+    /// (each within `timeout_s`) and [`TWO_VEHICLES_WINDOW_S`] has passed; then arm, then
+    /// OFFBOARD.
     fn take_control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
-        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
-        if self.target.is_none() {
+        if self.target.is_none() || !self.window_closed() {
             return Ok(None);
         }
+        if !self.window_passed {
+            // The sensor's and the position's silence count from here: the window was the
+            // companion's own wait (a lockstep vehicle resends its unanswered sample meanwhile).
+            self.window_passed = true;
+            self.clock.last = Instant::now();
+            self.clock_start = Instant::now();
+        }
+        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
         if !ready && self.clock.newest_ms.is_some() && self.clock_start.elapsed() > self.timeout {
             self.event(format!(
                 "no position from the vehicle for {} s: control not taken",
@@ -1540,13 +1631,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         if self.mode_at_first_command.is_none() {
             // A vehicle on its way home or down (its autopilot's failsafe, or its pilot's
-            // choice) is never pulled out of it.
-            if let Some(name) = self
-                .custom_mode
-                .and_then(|c| self.firmware.returning_or_landing(c))
-            {
+            // choice), taking off, avoiding traffic, or in a mode not known here is never
+            // pulled out of it: an armed vehicle is taken only from a mode its pilot flies or
+            // holds in ([`Firmware::takeover_allowed`]).
+            if let Some(why) = self.not_takeable() {
                 self.event(format!(
-                    "the vehicle is {} in {name} (returning or landing: its autopilot's failsafe or its pilot's choice): --take-control never pulls it out, nothing commanded",
+                    "the vehicle is {} in {why}: --take-control never pulls it out, nothing commanded",
                     if self.armed { "armed" } else { "disarmed" }
                 ));
                 return Ok(Some(FlyEnd::ControlRefused));
@@ -1564,6 +1654,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
+        } else if self
+            .offboard_accepted_at
+            .is_some_and(|at| self.last_heartbeat <= at)
+        {
+            // Accepted: never sent again before a heartbeat newer than the acknowledgement
+            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
+            // who switched meanwhile). The try is not counted.
+            self.control_tries -= 1;
+            self.next_control = Instant::now() + Duration::from_millis(100);
+            return Ok(None);
         } else {
             // PX4 wants setpoints before the switch.
             self.setpoint(
@@ -1867,11 +1967,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let t = wire::unwrap_ms(newest, ms);
         if t + ((REBOOT_STEP_S * 1000.0) as u64) < newest {
+            // One frame that far back is a late one (a link that reorders or delays), dropped;
+            // two in a row are the clock begun again: a reboot (att33d-4).
+            self.clock_behind += 1;
+            if self.clock_behind < 2 {
+                return;
+            }
             self.reboot.get_or_insert(format!(
                 "vehicle_lost: the vehicle's clock (time_boot_ms) went back from {} s to {} s: its autopilot rebooted (not a pilot's take-over)",
                 wire::unwrapped_s(newest),
                 wire::unwrapped_s(t)
             ));
+        } else {
+            self.clock_behind = 0;
         }
         self.vehicle_ms = Some((newest.max(t), now));
     }
@@ -1901,6 +2009,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.target_at = Some(Instant::now());
                 self.firmware = Firmware::of(h.autopilot, h.mavtype);
                 self.vehicle_type = h.mavtype;
+                self.autopilot = h.autopilot;
                 self.check_kind(from, h.mavtype);
                 let what = format!(
                     "vehicle: system {}, component {}{}, {} modes",
@@ -1916,12 +2025,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.event(what);
             }
             (Some(t), _) if t != from && t.0 == from.0 && self.peripheral(t, from, h) => {}
-            (Some(t), Some(at))
-                if t != from
-                    && self.opts.target_system.is_none()
-                    && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
-            {
-                self.other_vehicle.get_or_insert(from);
+            (Some(t), Some(at)) if t != from && self.opts.target_system.is_none() => {
+                if !self.in_control || at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S {
+                    self.other_vehicle.get_or_insert(from);
+                } else if !self.late_vehicle_logged {
+                    self.late_vehicle_logged = true;
+                    self.event(format!(
+                        "another autopilot (system {}, component {}) heard in flight: not flown, the companion flies system {}, component {}",
+                        from.0, from.1, t.0, t.1
+                    ));
+                }
             }
             _ => {}
         }
@@ -1945,6 +2058,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.target = Some(from);
             self.firmware = Firmware::of(h.autopilot, h.mavtype);
             self.vehicle_type = h.mavtype;
+            self.autopilot = h.autopilot;
             self.mismatch = None;
             self.check_kind(from, h.mavtype);
             format!(
@@ -2129,6 +2243,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
         self.event(format!("{:?}: {:?}", a.command, a.result));
+        if ok && a.command == MavCmd::MAV_CMD_DO_SET_MODE && self.offboard_sent {
+            self.offboard_accepted_at = Some(Instant::now());
+        }
         if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && self.arm_sent {
             if !self.armed {
                 self.armed_by_us = true;
@@ -2230,6 +2347,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
             Some(WayOut::Mode(mode))
+        } else if end.is_failsafe() && self.offboard_accepted_at.is_some() {
+            // The vehicle accepted the switch to OFFBOARD and no heartbeat has shown it yet:
+            // it may be in OFFBOARD with nobody sending setpoints. The way out is commanded
+            // until a heartbeat shows it out of OFFBOARD (any mode: the pilot's stands).
+            Some(WayOut::LeaveOffboard(mode))
         } else if stopping && self.armed && self.armed_by_us {
             Some(WayOut::Disarm)
         } else {
@@ -2253,6 +2375,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let what = match way {
             WayOut::Mode(m) => format!("{} commanded", self.firmware.name_of(m)),
+            WayOut::LeaveOffboard(m) => format!(
+                "{} commanded (the vehicle accepted the switch to {} before control: it is commanded out of it until a heartbeat shows another mode)",
+                self.firmware.name_of(m),
+                self.firmware.name_of(FlyMode::Offboard)
+            ),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
         if self.target.is_none() {
@@ -2268,15 +2395,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         ));
         let (confirmed, tries, why) = self.command_way_out(way)?;
         let what = match way {
-            WayOut::Mode(m) => self.firmware.name_of(m),
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
             WayOut::Disarm => "disarm",
         };
         self.event(match (confirmed, way) {
             // `why` is the other safe mode the vehicle went to, when it did.
-            (true, WayOut::Mode(_)) if !why.is_empty() => {
+            (true, WayOut::Mode(_) | WayOut::LeaveOffboard(_)) if !why.is_empty() => {
                 format!("the vehicle is in {why}, not the {what} commanded ({tries} tries)")
             }
-            (true, WayOut::Mode(_)) => format!("the vehicle is in {what} ({tries} tries)"),
+            (true, WayOut::Mode(_) | WayOut::LeaveOffboard(_)) => {
+                format!("the vehicle is in {what} ({tries} tries)")
+            }
             (true, WayOut::Disarm) => format!("the vehicle is disarmed ({tries} tries)"),
             (false, _) => format!("the vehicle did not confirm the {what} ({tries} tries, {why})"),
         });
@@ -2290,7 +2419,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
         let (cmd, params) = match way {
-            WayOut::Mode(m) => match self.firmware.set_mode_params(m) {
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => match self.firmware.set_mode_params(m) {
                 Some(p) => (MavCmd::MAV_CMD_DO_SET_MODE, p),
                 None => return Ok((false, 0, "no mode table for this vehicle here")),
             },
@@ -2308,6 +2437,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let retry_end = Instant::now()
             + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         let mut tries = 0u32;
+        // When the vehicle last acknowledged the command as ACCEPTED: it is not sent again
+        // before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
+        // retry would yank back a pilot who took over meanwhile).
+        let mut accepted: Option<Instant> = None;
         loop {
             let lost =
                 self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
@@ -2323,13 +2456,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, "retries' bound reached"));
             }
-            tries += 1;
-            self.command(cmd, params)?;
-            match self.await_way_out(way, cmd, before)? {
+            if !accepted.is_some_and(|at| self.last_heartbeat <= at) {
+                tries += 1;
+                self.command(cmd, params)?;
+            }
+            match self.await_way_out(way, cmd, before, &mut accepted)? {
                 Some(Answer::Confirmed) => return Ok((true, tries, "")),
                 Some(Answer::OtherSafeMode(name)) => {
                     let asked = match way {
-                        WayOut::Mode(m) => self.firmware.name_of(m),
+                        WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
                         WayOut::Disarm => "disarm",
                     };
                     self.event(format!(
@@ -2358,6 +2493,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         way: WayOut,
         cmd: MavCmd,
         before: (Option<u32>, bool),
+        accepted: &mut Option<Instant>,
     ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         while Instant::now() < until {
@@ -2373,7 +2509,36 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if self.ack_for_another(&r) {
                     continue;
                 }
+                match &r.msg {
+                    MavMessage::HEARTBEAT(_) => self.last_heartbeat = Instant::now(),
+                    MavMessage::COMMAND_ACK(a)
+                        if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
+                    {
+                        *accepted = Some(Instant::now())
+                    }
+                    _ => {}
+                }
+                let offboard = |h: &HEARTBEAT_DATA| {
+                    mode_of(h).map(|c| self.firmware.is_in(c, FlyMode::Offboard))
+                };
                 match (&r.msg, way) {
+                    (MavMessage::HEARTBEAT(h), WayOut::LeaveOffboard(m)) => {
+                        let Some(c) = mode_of(h) else { continue };
+                        if self.firmware.is_in(c, m) {
+                            return Ok(Some(Answer::Confirmed));
+                        }
+                        if let Some(name) = self.firmware.safe_mode_name(c) {
+                            return Ok(Some(Answer::OtherSafeMode(name)));
+                        }
+                        if offboard(h) == Some(false) {
+                            // Out of OFFBOARD in another mode (the pilot's, or the one it never
+                            // left): the pilot's mode stands.
+                            return Ok(Some(Answer::PilotTookOver(format!(
+                                "in {}",
+                                self.firmware.mode_name(c)
+                            ))));
+                        }
+                    }
                     (MavMessage::COMMAND_ACK(a), _)
                         if a.command == cmd
                             && matches!(

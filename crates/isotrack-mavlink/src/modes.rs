@@ -206,6 +206,26 @@ impl Firmware {
         }
     }
 
+    /// Whether `--take-control` takes an armed vehicle from `custom_mode`: only a mode its pilot
+    /// flies or holds in, never a take-off, a landing or return, traffic avoidance, a mission or
+    /// a mode not known here (an allow-list, att33d-1). PX4 (`px4_custom_mode.h`): MANUAL,
+    /// ALTCTL, POSCTL, ACRO, STABILIZED, RATTITUDE, AUTO.LOITER. ArduPlane (`mode.h`): MANUAL,
+    /// CIRCLE, STABILIZE, TRAINING, ACRO, FLY_BY_WIRE_A, FLY_BY_WIRE_B, CRUISE, LOITER.
+    /// Rover: MANUAL, ACRO, STEERING, HOLD, LOITER. ArduCopter: STABILIZE, ACRO, ALT_HOLD,
+    /// LOITER, POSHOLD.
+    pub fn takeover_allowed(self, custom_mode: u32) -> bool {
+        match self {
+            Firmware::Px4 => {
+                let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
+                matches!(main, 1 | 2 | 3 | 5 | 7 | 8) || (main == PX4_AUTO && sub == PX4_LOITER)
+            }
+            Firmware::ArduPlane => matches!(custom_mode, 0..=7 | 12),
+            Firmware::ArduRover => matches!(custom_mode, 0 | 1 | 3 | 4 | 5),
+            Firmware::ArduCopter => matches!(custom_mode, 0 | 1 | 2 | 5 | 16),
+            Firmware::ArduOther => false,
+        }
+    }
+
     /// The name of a heartbeat's `custom_mode` in logs ("OFFBOARD", "GUIDED", "RTL", or the
     /// number).
     pub fn mode_name(self, custom_mode: u32) -> String {
@@ -420,6 +440,28 @@ mod tests {
             Firmware::of(ap, MavType::MAV_TYPE_SUBMARINE).set_mode_params(Hold),
             None
         );
+    }
+
+    /// att33d-1: an armed vehicle is taken over only from a pilot's mode: PX4 POSCTL and
+    /// AUTO.LOITER yes, AUTO.TAKEOFF (4, 2), (4, 7), AUTO.FOLLOW_TARGET (4, 8), AUTO.VTOL_TAKEOFF
+    /// (4, 10), AUTO.MISSION and no mode (0) no; ArduPlane FLY_BY_WIRE_A yes, TAKEOFF 13,
+    /// AVOID_ADSB 14, INITIALISING 16, LOITER_ALT_QLAND 25, AUTOLAND 26 no.
+    #[test]
+    fn take_over_only_from_a_pilots_mode() {
+        let px4 = Firmware::Px4;
+        assert!(px4.takeover_allowed(3 << 16) && px4.takeover_allowed((4 << 16) | (3 << 24)));
+        for sub in [2u32, 4, 7, 8, 10] {
+            assert!(!px4.takeover_allowed((4 << 16) | (sub << 24)), "4.{sub}");
+        }
+        assert!(!px4.takeover_allowed(0) && !px4.takeover_allowed(6 << 16));
+        let plane = Firmware::of(
+            MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            MavType::MAV_TYPE_FIXED_WING,
+        );
+        assert!(plane.takeover_allowed(5) && plane.takeover_allowed(12));
+        for m in [13u32, 14, 16, 25, 26, 10, 11, 15] {
+            assert!(!plane.takeover_allowed(m), "{m}");
+        }
     }
 
     /// The safe modes that end a failsafe: PX4 AUTO.LOITER (4, 3), AUTO.RTL (4, 5), AUTO.LAND
