@@ -73,10 +73,13 @@ pub struct RunSpans<'a> {
 impl<'a> RunSpans<'a> {
     /// The spans of the runs of `plan` over the base scenario's own keys `base`.
     pub fn new(plan: &'a SweepPlan, base: &'a ScenarioFile) -> Self {
+        // Every vehicle key too: the fixed wing's turn-rate limit g tan(phi_max) / V follows
+        // its airspeed (att30d-5: a sweep over vehicle.airspeed_mps refused its own rows
+        // against the base's 30 m/s limit).
         let per_run = plan
             .varied_keys()
             .iter()
-            .any(|k| SPAN_KEYS.contains(&k.as_str()));
+            .any(|k| SPAN_KEYS.contains(&k.as_str()) || k.starts_with("vehicle."));
         Self {
             base,
             plan,

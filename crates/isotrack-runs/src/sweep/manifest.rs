@@ -4,6 +4,7 @@
 use crate::failure::{exit, fail, Failure};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::ScenarioFile;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// The digest that names a sweep: SHA-256 of the sweep file's bytes, of its base scenario's own
@@ -32,6 +33,55 @@ pub fn sweep_digest(sweep_file: &[u8], base_toml: &str) -> String {
 pub fn given_toml(given: &ScenarioFile) -> String {
     isotrack_scenario::tomltext::to_toml(given)
         .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}
+
+/// The data files a sweep's `sweep.json` records (`data_files`: the SHA-256 of each file its
+/// base scenario's field reads, by absolute path; absent without files).
+pub fn recorded_files(manifest: &serde_json::Value) -> BTreeMap<String, String> {
+    manifest
+        .get("data_files")
+        .and_then(|d| d.as_object())
+        .map(|o| {
+            o.iter()
+                .map(|(k, v)| (k.clone(), v.as_str().unwrap_or_default().to_string()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Refuses (65, naming the file) a data file whose SHA-256 in `manifest` (of the directory
+/// `dir`) is not `now`'s, the files' digests against which its rows are to be kept: the rows
+/// were computed on another version of the field (att30d-10: shards and resumed runs over a
+/// rewritten grid file were merged into one results.csv). `against` says what `now` is.
+pub fn check_data_files(
+    dir: &Path,
+    manifest: &serde_json::Value,
+    now: &BTreeMap<String, String>,
+    against: &str,
+) -> Result<(), Failure> {
+    let then = recorded_files(manifest);
+    let shown = |d: Option<&String>| d.map_or("none".to_string(), |d| d.clone());
+    for path in then.keys().chain(now.keys()) {
+        let (a, b) = (then.get(path), now.get(path));
+        if a != b {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: the field's data file {path} is not the one its rows were computed on (SHA-256 {} in its sweep.json, {} {against}): start a new --out, or restore the file",
+                    dir.display(),
+                    shown(a),
+                    shown(b)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The `data_files` entry of `sweep.json`: each data file's SHA-256 by path (`None` without
+/// files: the manifest of a sweep over an analytic field is unchanged).
+pub fn data_files_entry(files: &BTreeMap<String, String>) -> Option<serde_json::Value> {
+    (!files.is_empty()).then(|| serde_json::json!(files))
 }
 
 /// Reads `DIR/sweep.json`.

@@ -7,7 +7,9 @@ use crate::failure::{exit, fail, Failure};
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
-use crate::sweep::manifest::{given_toml, read_manifest, sweep_digest};
+use crate::sweep::manifest::{
+    check_data_files, data_files_entry, given_toml, read_manifest, sweep_digest,
+};
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
 use isotrack_scenario::sweep::SweepPlan;
@@ -181,7 +183,8 @@ impl SweepJob {
                 ),
             ));
         }
-        Ok(())
+        let now = crate::summary::data_file_digests(&self.base);
+        check_data_files(out, &stored, &now, "now")
     }
 
     /// The runs already in `results` (their ids only, sorted), each row checked, a cut-off
@@ -260,7 +263,7 @@ impl SweepJob {
         crate::files::write_atomic(&out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
         crate::files::write_atomic(&out.join("base_scenario.toml"), self.base_toml.as_bytes())
             .map_err(cant)?;
-        let manifest = json!({
+        let mut manifest = json!({
             "sweep": self.name,
             "scenario": self.plan.scenario.display().to_string(),
             "digest": self.digest,
@@ -269,6 +272,11 @@ impl SweepJob {
             "shard_runs": shard_runs,
             "columns": self.header,
         });
+        // The field's data files by content: --resume and merge refuse rows over another
+        // version of them.
+        if let Some(files) = data_files_entry(&crate::summary::data_file_digests(&self.base)) {
+            manifest["data_files"] = files;
+        }
         crate::files::write_atomic(
             &out.join("sweep.json"),
             (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
