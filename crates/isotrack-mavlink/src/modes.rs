@@ -222,8 +222,96 @@ impl Firmware {
         .map(str::to_string)
         .unwrap_or_else(|| match self {
             Firmware::Px4 => px4_mode_name(custom_mode),
-            _ => format!("{} mode {custom_mode}", self.name()),
+            _ => self.ardupilot_mode_name(custom_mode).map_or_else(
+                || format!("{} mode {custom_mode}", self.name()),
+                str::to_string,
+            ),
         })
+    }
+
+    /// An ArduPilot mode's name, as the `Mode::Number` enum of its firmware's `mode.h` names it
+    /// (ArduCopter, ArduPlane, Rover); `None` for a number not there (or PX4, or ArduPilot on
+    /// another vehicle type).
+    pub fn ardupilot_mode_name(self, custom_mode: u32) -> Option<&'static str> {
+        let table: &[(u32, &str)] = match self {
+            Firmware::ArduCopter => &[
+                (0, "STABILIZE"),
+                (1, "ACRO"),
+                (2, "ALT_HOLD"),
+                (3, "AUTO"),
+                (4, "GUIDED"),
+                (5, "LOITER"),
+                (6, "RTL"),
+                (7, "CIRCLE"),
+                (9, "LAND"),
+                (11, "DRIFT"),
+                (13, "SPORT"),
+                (14, "FLIP"),
+                (15, "AUTOTUNE"),
+                (16, "POSHOLD"),
+                (17, "BRAKE"),
+                (18, "THROW"),
+                (19, "AVOID_ADSB"),
+                (20, "GUIDED_NOGPS"),
+                (21, "SMART_RTL"),
+                (22, "FLOWHOLD"),
+                (23, "FOLLOW"),
+                (24, "ZIGZAG"),
+                (25, "SYSTEMID"),
+                (26, "AUTOROTATE"),
+                (27, "AUTO_RTL"),
+                (28, "TURTLE"),
+            ],
+            Firmware::ArduPlane => &[
+                (0, "MANUAL"),
+                (1, "CIRCLE"),
+                (2, "STABILIZE"),
+                (3, "TRAINING"),
+                (4, "ACRO"),
+                (5, "FLY_BY_WIRE_A"),
+                (6, "FLY_BY_WIRE_B"),
+                (7, "CRUISE"),
+                (8, "AUTOTUNE"),
+                (10, "AUTO"),
+                (11, "RTL"),
+                (12, "LOITER"),
+                (13, "TAKEOFF"),
+                (14, "AVOID_ADSB"),
+                (15, "GUIDED"),
+                (16, "INITIALISING"),
+                (17, "QSTABILIZE"),
+                (18, "QHOVER"),
+                (19, "QLOITER"),
+                (20, "QLAND"),
+                (21, "QRTL"),
+                (22, "QAUTOTUNE"),
+                (23, "QACRO"),
+                (24, "THERMAL"),
+                (25, "LOITER_ALT_QLAND"),
+                (26, "AUTOLAND"),
+            ],
+            Firmware::ArduRover => &[
+                (0, "MANUAL"),
+                (1, "ACRO"),
+                (3, "STEERING"),
+                (4, "HOLD"),
+                (5, "LOITER"),
+                (6, "FOLLOW"),
+                (7, "SIMPLE"),
+                (8, "DOCK"),
+                (9, "CIRCLE"),
+                (10, "AUTO"),
+                (11, "RTL"),
+                (12, "SMART_RTL"),
+                (15, "GUIDED"),
+                (16, "INITIALISING"),
+            ],
+            Firmware::Px4 | Firmware::ArduOther => &[],
+        };
+        table
+            .iter()
+            .find(|(n, _)| *n == custom_mode)
+            .map(|(_, name)| *name)
     }
 
     /// The name of `m` in this firmware ("OFFBOARD" / "GUIDED", "HOLD", ...).
@@ -267,7 +355,12 @@ pub fn px4_mode_name(custom_mode: u32) -> String {
         8 => Some("RATTITUDE"),
         _ => None,
     };
-    name.map_or_else(|| format!("PX4 mode {main}.{sub}"), str::to_string)
+    match (name, custom_mode) {
+        (Some(n), _) => n.to_string(),
+        // 0 is no mode (MAVSDK's autopilot server before a mode is set).
+        (None, 0) => "custom mode 0 (none)".into(),
+        (None, _) => format!("PX4 mode {main}.{sub}"),
+    }
 }
 
 #[cfg(test)]
@@ -315,7 +408,14 @@ mod tests {
         assert!(px4.is_in(6 << 16, Offboard));
         // ArduCopter's 4 is GUIDED, ArduPlane's 4 ACRO: never taken for a hold or OFFBOARD.
         assert!(copter.is_in(4, Offboard) && !plane.is_in(4, Offboard) && !plane.is_in(4, Hold));
-        assert_eq!(plane.mode_name(6), "ArduPlane mode 6");
+        // att33c item 7: every mode of mode.h by its name, an unknown number as a number.
+        assert_eq!(plane.mode_name(6), "FLY_BY_WIRE_B");
+        assert_eq!(plane.mode_name(0), "MANUAL");
+        assert_eq!(plane.mode_name(99), "ArduPlane mode 99");
+        assert_eq!(rover.mode_name(0), "MANUAL");
+        assert_eq!(copter.mode_name(16), "POSHOLD");
+        assert_eq!(px4.mode_name(0), "custom mode 0 (none)");
+        assert_eq!(px4.mode_name(9 << 16), "PX4 mode 9.0");
         assert_eq!(
             Firmware::of(ap, MavType::MAV_TYPE_SUBMARINE).set_mode_params(Hold),
             None

@@ -13,6 +13,9 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::stop_after;
+
 /// PX4's custom_mode of OFFBOARD (main mode 6).
 const OFFBOARD: u32 = 6 << 16;
 
@@ -151,18 +154,7 @@ struct Got {
 }
 
 fn heartbeat(mavtype: MavType, autopilot: MavAutopilot, armed: bool, mode: u32) -> MavMessage {
-    let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
-    if armed {
-        base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
-    }
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: mode,
-        mavtype,
-        autopilot,
-        base_mode: base,
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    })
+    support::heartbeat(mavtype, autopilot, support::custom_mode_flags(armed), mode)
 }
 
 /// The scenario a stand-in of `script` flies: its own, else the one of the vehicle's type.
@@ -625,15 +617,6 @@ fn mavlink1_is_logged_once() {
     let n = r.events.iter().filter(|e| e.contains("MAVLink 1")).count();
     assert_eq!(n, 1, "{:?}", r.events);
     assert!(r.link.mavlink1_frames > 1);
-}
-
-/// Sets `stop` (Ctrl-C) after `s` seconds.
-fn stop_after(o: &FlyOptions, s: f64) {
-    let stop = o.stop.clone();
-    std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_secs_f64(s));
-        stop.store(true, std::sync::atomic::Ordering::SeqCst);
-    });
 }
 
 /// Ctrl-C after the companion armed the vehicle on the ground but before OFFBOARD (the

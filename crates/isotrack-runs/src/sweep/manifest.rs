@@ -6,16 +6,32 @@ use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::ScenarioFile;
 use std::path::Path;
 
-/// The digest that names a sweep: SHA-256 of the sweep file's bytes and of the resolved base
-/// scenario (every default filled in, so a changed default or scenario file changes it too).
+/// The digest that names a sweep: SHA-256 of the sweep file's bytes, of its base scenario's own
+/// keys as `base_scenario.toml` holds them ([`given_toml`]), and of those keys resolved (every
+/// default filled in, no file read: so a changed default or scenario file changes it too).
 /// Stored in `sweep.json`; `--resume` and `merge` refuse rows made under another digest.
 pub fn sweep_digest(sweep_file: &[u8], base_toml: &str) -> String {
     use sha2::{Digest, Sha256};
+    let resolved = toml::from_str::<ScenarioFile>(base_toml)
+        .ok()
+        .and_then(|f| isotrack_scenario::resolve::resolve(f).ok())
+        .and_then(|f| isotrack_scenario::tomltext::to_toml(&f).ok())
+        .unwrap_or_default();
     let mut h = Sha256::new();
     h.update((sweep_file.len() as u64).to_le_bytes());
     h.update(sweep_file);
+    h.update((base_toml.len() as u64).to_le_bytes());
     h.update(base_toml.as_bytes());
+    h.update(resolved.as_bytes());
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A sweep's base scenario's own keys ([`isotrack_scenario::Scenario::given`]) as TOML: what
+/// `base_scenario.toml` holds, so that `isotrack run base_scenario.toml --set KEY=VALUE ...`
+/// resolves a run's keys once, as the sweep does.
+pub fn given_toml(given: &ScenarioFile) -> String {
+    isotrack_scenario::tomltext::to_toml(given)
+        .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
 }
 
 /// Reads `DIR/sweep.json`.
@@ -30,8 +46,8 @@ pub fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
 }
 
-/// The plan of shard directory `dir`, from its `sweep.toml`, and its resolved base scenario
-/// file, from its `base_scenario.toml`, after checking that both are those its `sweep.json`
+/// The plan of shard directory `dir`, from its `sweep.toml`, and its base scenario's own keys,
+/// from its `base_scenario.toml`, after checking that both are those its `sweep.json`
 /// digest names (a shard whose files were edited is refused: its rows' plan columns are checked
 /// against this plan, their times and sample counts against the base's step counts).
 pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile), Failure> {
@@ -46,7 +62,7 @@ pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile),
         return Err(fail(
             exit::DATAERR,
             format!(
-                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited; run it again",
+                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited, or an older isotrack wrote it; run it again",
                 dir.display()
             ),
         ));

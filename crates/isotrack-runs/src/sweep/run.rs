@@ -4,11 +4,10 @@
 //! then `results.csv` rewritten sorted ([`SweepJob::finish`]).
 
 use crate::failure::{exit, fail, Failure};
-use crate::summary::scenario_toml;
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
-use crate::sweep::manifest::{read_manifest, sweep_digest};
+use crate::sweep::manifest::{given_toml, read_manifest, sweep_digest};
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
 use isotrack_scenario::sweep::SweepPlan;
@@ -32,7 +31,8 @@ pub struct SweepJob {
     pub name: String,
     /// The base scenario (its file with the `--set` overrides, then `[base]`).
     pub base: Scenario,
-    /// The resolved base scenario as TOML (kept as `base_scenario.toml`).
+    /// The base scenario's own keys as TOML ([`Scenario::given`], kept as
+    /// `base_scenario.toml`): each run is these keys with its assignments, resolved once.
     pub base_toml: String,
     /// The sweep's digest ([`sweep_digest`]).
     pub digest: String,
@@ -83,7 +83,7 @@ impl SweepJob {
         let plan = SweepPlan::parse(&text, path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
         let name = path.display().to_string();
         let base = sweep_base(&plan, sets, &name)?;
-        let base_toml = scenario_toml(&base);
+        let base_toml = given_toml(base.given());
         let digest = sweep_digest(&sweep_bytes, &base_toml);
         let header = results_header(&plan, base.spec().team.is_some());
         Ok(Self {
@@ -189,7 +189,7 @@ impl SweepJob {
     fn resumed_ids(&self, results: &Path, (k, n): (u64, u64)) -> Result<Vec<u64>, Failure> {
         let cant = cant_write(results.parent().unwrap_or(Path::new(".")));
         let spans =
-            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
+            RunSpans::new(&self.plan, self.base.given()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, true, self.plan.total(), &self.plan, &spans)?;
         let header_line = csv_line(&self.header);
         if idx.header.is_empty() {
@@ -332,7 +332,7 @@ impl SweepJob {
     pub fn finish(&self, out: &SweepOutput) -> Result<SweepReport, Failure> {
         let results = &out.results;
         let spans =
-            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
+            RunSpans::new(&self.plan, self.base.given()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, false, self.plan.total(), &self.plan, &spans)?;
         let mut rows = idx.rows;
         if let Some(d) = sort_rows(&mut rows).first() {
