@@ -403,6 +403,10 @@ struct Agent {
 /// `Scenario.run()` flies, bit for bit.
 #[pyclass(name = "TeamEnv", module = "isotrack._native", unsendable)]
 pub struct PyTeamEnv {
+    /// The scenario as given: its `sim.seed` is the first unseeded episode's.
+    base: Scenario,
+    /// The current episode's scenario: `base` with `sim.seed` the episode's seed (what its
+    /// `summary.json` records, and what `Scenario.run()` and `isotrack run` replay).
     scenario: Scenario,
     vehicle: DubinsVariableSpeed,
     group: Option<Group<'static, DubinsSpeedState, Tracker>>,
@@ -504,6 +508,7 @@ impl PyTeamEnv {
         let n = team.count();
         let mut env = Self {
             level: s.level(),
+            base: s.clone(),
             scenario: s,
             vehicle,
             group: None,
@@ -518,7 +523,7 @@ impl PyTeamEnv {
             record,
         };
         // A first team, to check the settings and find the period.
-        let g = env.build(None)?;
+        let g = env.build()?;
         let (r_every, r_delay) = g.ranging_steps();
         let s_every = env.scenario.sensor().steps_per_sample();
         env.period = gcd(gcd(s_every, r_every), r_delay).max(1);
@@ -561,9 +566,21 @@ impl PyTeamEnv {
         self.error_scale
     }
 
-    /// Starts a new episode (the sensors' and ranging units' streams seeded as `sim.seed =
-    /// seed` seeds them; the scenario's `sim.seed` if `None`) and runs to the first pause:
-    /// `(obs[n, 6], builtin[n, 2], sampled[n], t_s)`.
+    /// The scenario's own `sim.seed` (the first unseeded episode's).
+    #[getter]
+    fn base_seed(&self) -> u64 {
+        self.base.spec().sim.seed
+    }
+
+    /// The current (or last) episode's `sim.seed`.
+    #[getter]
+    fn episode_seed(&self) -> u64 {
+        self.scenario.spec().sim.seed
+    }
+
+    /// Starts a new episode, the scenario with `sim.seed = seed` (`None`: the scenario's own
+    /// `sim.seed`; a seed is in `0 ..= 2**63-1`, `sim.seed`'s range, else `ValueError`), and
+    /// runs to the first pause: `(obs[n, 6], builtin[n, 2], sampled[n], t_s)`.
     #[pyo3(signature = (seed=None))]
     #[allow(clippy::type_complexity)]
     fn reset<'py>(
@@ -577,7 +594,24 @@ impl PyTeamEnv {
         f64,
     )> {
         crate::guard::no_panic(|| {
-            self.group = Some(self.build(seed)?);
+            let base_seed = self.base.spec().sim.seed;
+            let seed = seed.unwrap_or(base_seed);
+            if i64::try_from(seed).is_err() {
+                return Err(PyValueError::new_err(format!(
+                    "seed must be in 0 ..= 2**63-1 (9223372036854775807, sim.seed's range), got {seed}"
+                )));
+            }
+            // The episode is the scenario with this `sim.seed`, as `Scenario.set("sim.seed", S)`
+            // makes it (a puff plume's meander follows the seed too), so that its summary
+            // records the seed it flew and `Scenario.run()` replays it.
+            self.scenario = if seed == base_seed {
+                self.base.clone()
+            } else {
+                self.base
+                    .derive(&[format!("sim.seed={seed}")], "reset(seed)")
+                    .map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?
+            };
+            self.group = Some(self.build()?);
             self.result = None;
             self.log.clear();
             self.agents.iter_mut().for_each(|a| *a = Agent::default());
@@ -710,11 +744,11 @@ impl PyTeamEnv {
 
 impl PyTeamEnv {
     /// A team at step 0, as `Scenario::run_team` builds it (sensor and ranging seeds from
-    /// `seed`, else `sim.seed`).
-    fn build(&self, seed: Option<u64>) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
+    /// the episode's `sim.seed`).
+    fn build(&self) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
         let s = &self.scenario;
         let team = s.spec().team.as_ref().expect("checked: a team scenario");
-        let seed = seed.unwrap_or(s.spec().sim.seed);
+        let seed = s.spec().sim.seed;
         let vehicle = self.vehicle;
         let members = team
             .starts

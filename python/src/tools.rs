@@ -364,7 +364,18 @@ pub fn sweep_cells_with(
                                 origin: format!("sweep {} run {id}", sweep.label),
                             },
                         )?;
-                        objs.push(factory.call1(py, (native,))?);
+                        let obj = factory.call1(py, (native,))?;
+                        // One object for two vehicles would interleave their samples through one
+                        // state (an integral, a last time): refused, never flown shared.
+                        if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
+                            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                                "controller_factory returned the same object for vehicles {j} and {} \
+                                 of run {id}: each vehicle flies its own instance (its state is its \
+                                 own, never shared); return a new controller at every call",
+                                objs.len()
+                            )));
+                        }
+                        objs.push(obj);
                     }
                     let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
                     isotrack_runs::sweep::rows::team_row_fields(
@@ -413,5 +424,6 @@ pub fn sweep_cells_with(
         rows.push(row_fields(&sweep.plan, id, result));
         report(id + 1)?;
     }
+    crate::sweep::literal_cells(&sweep.plan, &kinds, &mut rows);
     Ok((sweep.header, kinds, rows))
 }
