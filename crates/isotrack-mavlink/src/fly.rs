@@ -611,6 +611,9 @@ struct Flight<'a, S: ?Sized> {
     peripheral_logged: bool,
     /// A second autopilot heard in control has been logged.
     late_vehicle_logged: bool,
+    /// The source address of the vehicle's frames (UDP), and why a second one makes it two.
+    vehicle_addr: Option<std::net::SocketAddr>,
+    same_ids: Option<String>,
     /// With `take_control`, [`TWO_VEHICLES_WINDOW_S`] has passed (the sensor's timer was
     /// restarted then).
     window_passed: bool,
@@ -878,6 +881,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             twin_logged: false,
             peripheral_logged: false,
             late_vehicle_logged: false,
+            vehicle_addr: None,
+            same_ids: None,
             window_passed: false,
             refused: false,
             refusal: None,
@@ -1008,6 +1013,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if let Some(why) = self.reboot.take() {
             self.event(why);
             return Some(FlyEnd::VehicleLost);
+        }
+        if let Some(why) = self.same_ids.take() {
+            if self.in_control {
+                self.event(format!("vehicle_lost: {why}"));
+                return Some(FlyEnd::VehicleLost);
+            }
+            self.event(format!("two_vehicles: {why}: nothing commanded"));
+            return Some(FlyEnd::TwoVehicles);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
             let advice = if a.0 == b.0 {
@@ -1835,6 +1848,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
+        if from == target {
+            self.vehicle_address(r.from);
+        }
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
@@ -1957,6 +1973,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// The source address of a frame with the vehicle's ids (UDP): the first one is the
+    /// vehicle's; a second address sending with the same ids is a second vehicle left at the
+    /// same system id (two PX4s at the default 1 on one radio), whose measurements and
+    /// positions would mix with the first's (att33d-10): the flight ends, `two_vehicles`
+    /// before control, `vehicle_lost` (the way out commanded) in control.
+    fn vehicle_address(&mut self, addr: Option<std::net::SocketAddr>) {
+        let Some(a) = addr else { return };
+        match self.vehicle_addr {
+            None => self.vehicle_addr = Some(a),
+            Some(first) if first != a && self.same_ids.is_none() => {
+                let t = self.target.unwrap_or_default();
+                self.same_ids = Some(format!(
+                    "two vehicles with the ids (system {}, component {}): frames from {first} and from {a} (two autopilots left at one system id on one link, or one vehicle over two paths): their measurements and positions would mix, which to fly is ambiguous",
+                    t.0, t.1
+                ));
+            }
+            _ => {}
+        }
+    }
+
     /// A time of the vehicle's own clock: one more than [`REBOOT_STEP_S`] behind the newest is
     /// a reboot (its autopilot's clock begins again at 0).
     fn vehicle_time(&mut self, ms: u32) {
@@ -2056,6 +2092,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             // Component 1 is the vehicle: taken instead, as if heard first.
             self.target = Some(from);
+            self.vehicle_addr = None;
             self.firmware = Firmware::of(h.autopilot, h.mavtype);
             self.vehicle_type = h.mavtype;
             self.autopilot = h.autopilot;

@@ -695,3 +695,32 @@ fn a_generic_peripheral_beside_the_autopilot_is_no_second_vehicle() {
         assert_eq!(logged.count(), 1, "{:?}", r.events);
     }
 }
+
+/// att33d-10: two vehicles left at the same ids (1, 1) on one link, from two addresses: their
+/// measurements would mix in the law. In control (the pilot's OFFBOARD), the flight ends
+/// `vehicle_lost` and commands the way out; the second's values are never flown.
+#[test]
+fn two_vehicles_with_the_same_ids_are_not_flown_as_one() {
+    let (r, _) = pilots_vehicle_in(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        Some(6 << 16),
+        1,
+        |o| o.max_duration_s = Some(3.0),
+        |k, v, twin| {
+            v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+            if k == 10 {
+                twin.send(&iso_s(1025 + 50 * k, 50.0)).unwrap();
+            }
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("two vehicles with the ids")),
+        "{:?}",
+        r.events
+    );
+    assert!(r.commands.iter().all(|c| c.0 % 50 == 0), "{:?}", r.commands);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+}

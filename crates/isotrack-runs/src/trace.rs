@@ -80,6 +80,12 @@ impl TraceWriter {
         }
     }
 
+    /// Marks the writer failed with `e` (as a write that met it), for tests of what follows.
+    #[cfg(test)]
+    pub(crate) fn fail_with(&mut self, e: std::io::Error) {
+        self.error.get_or_insert(e);
+    }
+
     /// The first error met while writing or flushing, if any (rows after it are not written).
     pub fn error(&self) -> Option<&std::io::Error> {
         self.error.as_ref()
