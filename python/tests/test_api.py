@@ -335,6 +335,10 @@ def test_unusable_values_are_named_briefly():
     with pytest.raises(isotrack.ScenarioError, match="cannot use None as a scenario value") as e:
         sc.set("sim.seed", None)
     with pytest.raises(isotrack.ScenarioError, match="cannot use") as e:
+        sc.set("field", {str(i) for i in range(100_000)})
+    assert len(str(e.value)) < 1000
+    # A dict is a table (att30d-6): a huge one is named briefly too, with what is wrong in it.
+    with pytest.raises(isotrack.ScenarioError, match="unknown field") as e:
         sc.set("field", {str(i): i for i in range(100_000)})
     assert len(str(e.value)) < 1000
     with pytest.raises(isotrack.ScenarioError, match="does not fit in a 64-bit integer") as e:
