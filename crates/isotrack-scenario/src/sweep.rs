@@ -445,7 +445,7 @@ fn grid_lists(g: &toml::Value) -> Result<Vec<(String, Vec<toml::Value>)>, String
 
 /// The `[random]` table (of sweep text `text`, for line numbers): its `runs` (required, >= 1),
 /// its `seed` (default 0) and its distributions, keys sorted.
-fn random_section(r: &toml::Value, text: &str) -> Result<(u64, u64, Vec<(String, Dist)>), String> {
+fn random_section(r: &toml::Value, text: &str) -> Result<RandomSection, String> {
     let t = r
         .as_table()
         .ok_or_else(|| "`random` must be a table".to_string())?;
@@ -465,7 +465,18 @@ fn random_section(r: &toml::Value, text: &str) -> Result<(u64, u64, Vec<(String,
         random.push((k, d));
     }
     random.sort_by(|a, b| a.0.cmp(&b.0));
-    Ok((draws, seed, random))
+    Ok(RandomSection {
+        draws,
+        seed,
+        random,
+    })
+}
+
+/// The `[random]` table read: the draws per grid point, the seed and the distributions.
+struct RandomSection {
+    draws: u64,
+    seed: u64,
+    random: Vec<(String, Dist)>,
 }
 
 /// `random.NAME` of table `t` as an integer `>= min` (`None` when absent).
@@ -576,9 +587,17 @@ impl SweepPlan {
             Some(g) => grid_lists(g).map_err(err)?,
             None => vec![],
         };
-        let (draws, seed, random) = match doc.get("random") {
+        let RandomSection {
+            draws,
+            seed,
+            random,
+        } = match doc.get("random") {
             Some(r) => random_section(r, text).map_err(err)?,
-            None => (1, 0, vec![]),
+            None => RandomSection {
+                draws: 1,
+                seed: 0,
+                random: vec![],
+            },
         };
         for (k, _) in &grid {
             if random.iter().any(|(r, _)| r == k) {
