@@ -11,8 +11,10 @@ blocks, files declared as `#[cfg(test)] mod name;`, and functions marked `#[test
     scripts/long-functions.py           # functions over 80 lines
     scripts/long-functions.py 60        # over another limit
 
-Prints `lines  file:line  name`; exit 0 always (a list to read, not a gate: a parser may keep its
-straight line).
+Prints `lines  file:line  name`, what is left to split; then, apart, the functions kept long
+with a reason: those with a comment `// Long by choice: WHY` on a line of their doc comment or
+attributes just above `fn`, or on the first line of their body. Exit 0 always (a list to read,
+not a gate: a parser may keep its straight line).
 """
 
 import os
@@ -138,7 +140,42 @@ def functions(path, text):
         end = matching_brace(clean, j)
         first = clean.count("\n", 0, m.start()) + 1
         last = clean.count("\n", 0, end) + 1
-        yield last - first + 1, first, m.group(1)
+        yield last - first + 1, first, m.group(1), kept_reason(text, first)
+
+
+KEPT = re.compile(r"//\s*Long by choice:\s*(.*)")
+
+
+def kept_reason(text, first):
+    """The reason of a `// Long by choice: WHY` comment on the comment and attribute lines just
+    above line `first` (1-based, the `fn` line) or on the first line of its body after the
+    signature (`None` without one)."""
+    lines = text.split("\n")
+
+    def reason(i):
+        """The reason starting on line `i`, with the `//` lines that continue it."""
+        m = KEPT.search(lines[i])
+        if not m:
+            return None
+        words = [m.group(1).strip()]
+        for line in lines[i + 1:]:
+            t = line.strip()
+            if not t.startswith("//") or t.startswith("///"):
+                break
+            words.append(t[2:].strip())
+        return " ".join(words)
+
+    i = first - 2
+    while i >= 0 and lines[i].strip().startswith(("//", "#[")):
+        if KEPT.search(lines[i]):
+            return reason(i)
+        i -= 1
+    j = first - 1
+    while j < len(lines) and not lines[j].rstrip().endswith("{"):
+        j += 1
+    if j + 1 < len(lines) and KEPT.search(lines[j + 1]):
+        return reason(j + 1)
+    return None
 
 
 def sources():
@@ -160,17 +197,26 @@ def main():
         with open(p, encoding="utf-8") as f:
             texts[p] = f.read()
         tests |= test_files(p, blank_out(texts[p]))
-    rows = []
+    rows, kept = [], []
     for p in paths:
         if os.path.normpath(p) in tests:
             continue
-        for n, line, name in functions(p, texts[p]):
+        for n, line, name, why in functions(p, texts[p]):
             if n > limit:
-                rows.append((n, os.path.relpath(p, ROOT), line, name))
-    rows.sort(key=lambda r: (-r[0], r[1], r[2]))
-    for n, p, line, name in rows:
+                (rows if why is None else kept).append((n, os.path.relpath(p, ROOT), line, name, why))
+    for r in (rows, kept):
+        r.sort(key=lambda r: (-r[0], r[1], r[2]))
+    for n, p, line, name, _ in rows:
         print(f"{n:5}  {p}:{line}  {name}")
-    print(f"{len(rows)} production function(s) over {limit} lines", file=sys.stderr)
+    if kept:
+        print("kept, with a reason:")
+        for n, p, line, name, why in kept:
+            print(f"{n:5}  {p}:{line}  {name}  ({why})")
+    print(
+        f"{len(rows)} production function(s) over {limit} lines left to split"
+        f" ({len(kept)} more kept, with a reason)",
+        file=sys.stderr,
+    )
     return 0
 
 

@@ -35,7 +35,8 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     `nul_comment.nc` (a NUL inside a text attribute): see `nul_inside`; `many_attributes.nc`
     (700 attributes of 1 kB on `v`): see `many_attributes`; `committed_*.nc` and
     `refused_committed_units_x.nc` (attributes of committed HDF5 datatypes): see
-    `committed_types`.
+    `committed_types`; `sohm_*.nc` (messages shared through the SOHM table): see
+    `shared_messages`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -446,6 +447,42 @@ def foreign_objects():
             t.commit(f.id, b"T_deep")
 
 
+def shared_messages():
+    """Files whose object header messages are shared through HDF5's shared object header
+    message (SOHM) table (issue 30, att30c-11): `sohm_datatypes.nc` shares datatypes (index
+    flags 0x02), `sohm_all.nc` every kind (0x1f: dataspaces, datatypes, fill values, filter
+    pipelines, attributes). The data is `netcdf4_nc4_xy_contig.nc`'s, written through
+    h5netcdf into a file created with a file-creation property list holding one SOHM index
+    (`H5Pset_shared_mesg_nindexes`, `H5Pset_shared_mesg_index`, called through ctypes on the
+    libhdf5 h5py bundles: h5py has no binding for them) and the latest file format. netCDF-C
+    reads both; hdf5-reader 0.12.1 refused them ("failed to load SOHM table: unexpected end of
+    data"). Not in the manifest: `sohm_fixtures_load_as_their_twin` loads each."""
+    import ctypes
+    import glob
+
+    import h5netcdf
+    import h5py
+
+    libs = glob.glob(os.path.join(os.path.dirname(h5py.__file__), "..", "h5py.libs", "libhdf5-*.so*"))
+    lib = ctypes.CDLL(libs[0]) if libs else ctypes.CDLL("libhdf5.so")
+    for name, flags in (("sohm_datatypes.nc", 0x02), ("sohm_all.nc", 0x1F)):
+        if ONLY and name not in ONLY:
+            continue
+        path = os.path.join(OUT, name)
+        if os.path.exists(path):
+            os.remove(path)
+        fcpl = h5py.h5p.create(h5py.h5p.FILE_CREATE)
+        assert lib.H5Pset_shared_mesg_nindexes(ctypes.c_int64(fcpl.id), 1) >= 0
+        assert lib.H5Pset_shared_mesg_index(ctypes.c_int64(fcpl.id), 0, ctypes.c_uint(flags), 0) >= 0
+        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+        fapl.set_libver_bounds(h5py.h5f.LIBVER_LATEST, h5py.h5f.LIBVER_LATEST)
+        fid = h5py.h5f.create(path.encode(), h5py.h5f.ACC_TRUNC, fcpl=fcpl, fapl=fapl)
+        ds = dataset("xy", True)
+        with h5netcdf.File(h5py.File(fid), "a") as f:
+            ds.dump_to_store(xr.backends.H5NetCDFStore(f),
+                             encoding=encoding(ds, "contig", True, "NETCDF4"))
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     for f in os.listdir(OUT):
@@ -512,6 +549,7 @@ def main():
     many_attributes()
     committed_types()
     foreign_objects()
+    shared_messages()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

@@ -1,7 +1,7 @@
 //! Trace columns as the run writers read them from Python (a leaf: the single run's writer
 //! in tools.rs and the team's in team.rs both use it).
 
-use numpy::PyReadonlyArray1;
+use numpy::{Element, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -16,7 +16,7 @@ pub(crate) fn column<'py>(
         .get_item(name)?
         .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
     let a: PyReadonlyArray1<'py, f64> = v.extract()?;
-    let v = a.as_array().to_vec();
+    let v = copy_interruptible(trace.py(), &a)?;
     match n {
         Some(n) if v.len() != n => Err(PyValueError::new_err(format!(
             "the trace's column `{name}` has {} rows, `t_s` has {n}",
@@ -29,3 +29,22 @@ pub(crate) fn column<'py>(
 /// How many trace rows a save writes between two checks for Ctrl-C (`Python::check_signals`):
 /// a few milliseconds of writing.
 pub(crate) const SIGNAL_ROWS: usize = 1 << 14;
+
+/// A copy of column `a`, answering Ctrl-C (`Python::check_signals`) every [`SIGNAL_ROWS`]
+/// values: the columns of a multi-million-row run are copied before a save writes its first
+/// row (seven `to_vec` copies of 6e6 rows held a `KeyboardInterrupt` for 2.1 s on a loaded
+/// machine, growing with the trace), so the copy answers as the writing does.
+pub(crate) fn copy_interruptible<T: Element + Copy>(
+    py: Python<'_>,
+    a: &PyReadonlyArray1<'_, T>,
+) -> PyResult<Vec<T>> {
+    let view = a.as_array();
+    let mut v = Vec::with_capacity(view.len());
+    for (i, &x) in view.iter().enumerate() {
+        if i % SIGNAL_ROWS == 0 {
+            py.check_signals()?;
+        }
+        v.push(x);
+    }
+    Ok(v)
+}

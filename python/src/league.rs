@@ -119,9 +119,21 @@ pub fn benchmark_json(
     // As `isotrack benchmark --out`: an existing benchmark refused unless `resume`, the
     // directory locked while this writes it.
     let _lock = out
-        .map(|d| isotrack_commands::league::open_out_dir(Path::new(d), resume))
-        .transpose()
-        .map_err(crate::tools::failure)?;
+        .map(|d| {
+            isotrack_commands::league::open_out_dir(Path::new(d), resume).map_err(|f| {
+                // The command's refusal names its flags (`--resume`, `--out`): said here in
+                // this function's arguments.
+                if !resume && f.message.contains("already holds a benchmark") {
+                    pyo3::exceptions::PyOSError::new_err(format!(
+                        "{d} already holds a benchmark: pass resume=True to reuse its task \
+                         results, or choose another out="
+                    ))
+                } else {
+                    crate::tools::failure(f)
+                }
+            })
+        })
+        .transpose()?;
     let errors: FirstError = Arc::new(Mutex::new(None));
     let cancel = Arc::new(AtomicBool::new(false));
     let mut registry = Registry::builtin();

@@ -62,6 +62,8 @@ pub(crate) fn sweep_cells(
         &mut tick,
     )?
     .map_err(sweep_failure)?;
+    let mut rows = rows;
+    literal_cells(&prepared.plan, &kinds, &mut rows);
     Ok((header, kinds, rows))
 }
 
@@ -80,24 +82,29 @@ fn sweep_failure(f: isotrack_runs::Failure) -> PyErr {
 /// that a column's kind does not depend on which runs it holds): `"int"` for `run_id`,
 /// `samples`, a derived `sim.seed` and a swept key whose values are all integers; `"float"` for
 /// the metrics, `[random]` keys and swept keys of numbers; `"bool"` for swept booleans; `"str"`
-/// for `outcome`, `outcome_detail`, `warnings` and any other swept key. A team's sweep (`team`)
-/// ends with the team columns: `"float"`, `order_preserved` `"bool"`.
+/// for `outcome`, `outcome_detail`, `warnings` and any other swept key; `"table"` for a swept
+/// key (or an element of a split one) with a table among its values, whose cells
+/// [`literal_cells`] rewrites as TOML literals. A team's sweep (`team`) ends with the team
+/// columns: `"float"`, `order_preserved` `"bool"`.
 pub(crate) fn column_kinds(
     plan: &isotrack_scenario::sweep::SweepPlan,
     team: bool,
 ) -> Vec<&'static str> {
     let kind = |values: &mut dyn Iterator<Item = Option<&toml::Value>>| {
-        let (mut ints, mut floats, mut bools, mut n) = (0, 0, 0, 0);
+        let (mut ints, mut floats, mut bools, mut tables, mut n) = (0, 0, 0, 0, 0);
         for v in values {
             n += 1;
             match v {
                 Some(toml::Value::Integer(_)) => ints += 1,
                 Some(toml::Value::Float(_)) => floats += 1,
                 Some(toml::Value::Boolean(_)) => bools += 1,
+                Some(toml::Value::Table(_)) => tables += 1,
                 _ => {}
             }
         }
-        if n > 0 && ints == n {
+        if tables > 0 {
+            "table"
+        } else if n > 0 && ints == n {
             "int"
         } else if n > 0 && ints + floats == n {
             "float"
@@ -144,4 +151,62 @@ pub(crate) fn column_kinds(
         }));
     }
     kinds
+}
+
+/// Rewrites the cells of the `"table"` columns ([`column_kinds`]) as the TOML literals of the
+/// values the runs set (strings quoted, as `--set` reads them), so that Python reads each cell
+/// back as the value itself: a table (`{ ki = 1.0, kp = 2.0 }`) as a dict, a string as a str,
+/// never one mistaken for the other (`results.csv` writes a string unquoted). A row's run is
+/// its `run_id` (its first cell); the values are picked as [`SweepPlan::run_cells`] picks them.
+///
+/// [`SweepPlan::run_cells`]: isotrack_scenario::sweep::SweepPlan::run_cells
+pub(crate) fn literal_cells(
+    plan: &isotrack_scenario::sweep::SweepPlan,
+    kinds: &[&str],
+    rows: &mut [Vec<String>],
+) {
+    use isotrack_scenario::sweep::value_literal;
+    // Each grid key's first column and, for a key whose values are arrays of one length
+    // (split into `KEY[i]` columns), that length.
+    let mut spans = Vec::with_capacity(plan.grid.len());
+    let mut col = 1;
+    for (_, list) in &plan.grid {
+        let width = list.first().and_then(|v| v.as_array()).map(|a| a.len());
+        let split = width.filter(|&w| {
+            list.iter()
+                .all(|v| v.as_array().is_some_and(|a| a.len() == w))
+        });
+        spans.push((col, split));
+        col += split.unwrap_or(1);
+    }
+    if !(1..col).any(|c| kinds.get(c) == Some(&"table")) {
+        return;
+    }
+    for row in rows.iter_mut() {
+        let Some(id) = row.first().and_then(|c| c.parse::<u64>().ok()) else {
+            continue;
+        };
+        let mut g = id / plan.draws.max(1);
+        let mut picked = vec![0; plan.grid.len()];
+        for (i, (_, list)) in plan.grid.iter().enumerate().rev() {
+            let n = list.len().max(1) as u64;
+            picked[i] = (g % n) as usize;
+            g /= n;
+        }
+        for ((first, split), ((_, list), &p)) in spans.iter().zip(plan.grid.iter().zip(&picked)) {
+            let Some(v) = list.get(p) else { continue };
+            let values: Vec<&toml::Value> = match (split, v.as_array()) {
+                (Some(_), Some(a)) => a.iter().collect(),
+                _ => vec![v],
+            };
+            for (k, x) in values.into_iter().enumerate() {
+                let c = first + k;
+                if kinds.get(c) == Some(&"table") {
+                    if let Some(cell) = row.get_mut(c) {
+                        *cell = value_literal(x);
+                    }
+                }
+            }
+        }
+    }
 }

@@ -20,7 +20,7 @@ use isotrack_sim::team::Group;
 use isotrack_sim::{Oracles, TeamConfig, TeamMember, TeamResult, TraceRow, TraceSink};
 use isotrack_vehicles::{DubinsSpeedState, DubinsState, DubinsVariableSpeed};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::cell::RefCell;
@@ -243,21 +243,21 @@ pub fn team_count(scenario: &PyScenario) -> Option<usize> {
 
 /// Writes a team's run directory as `isotrack run --out` does: `trace.csv` with the `vehicle`
 /// column (numbers in the same shortest round-trip form), `summary.json` (its text) and the
-/// resolved `scenario.toml`.
+/// resolved `scenario.toml` (after `note`, comment lines, when given), holding the directory's
+/// lock as a single run's save does (`crate::tools::write_run`).
 #[pyfunction]
+#[pyo3(signature = (dir, summary_json, scenario, trace, note=""))]
 pub fn write_team_run(
     py: Python<'_>,
     dir: &str,
     summary_json: &str,
     scenario: &PyScenario,
     trace: &Bound<'_, PyDict>,
+    note: &str,
 ) -> PyResult<()> {
     use isotrack_core::vehicle::Telemetry;
-    use isotrack_runs::trace::{TeamTraceSink, TraceWriter, TELEMETRY_COLUMNS};
+    use isotrack_runs::trace::{TeamTraceSink, TELEMETRY_COLUMNS};
     let dir = Path::new(dir);
-    let io = |what: &Path, e: std::io::Error| {
-        PyOSError::new_err(format!("cannot write {}: {e}", what.display()))
-    };
     let flying = scenario.inner.is_flying();
     let t = column(trace, "t_s", None)?;
     let n = Some(t.len());
@@ -285,7 +285,7 @@ pub fn write_team_run(
         .get_item(isotrack_runs::trace::VEHICLE_COLUMN)?
         .ok_or_else(|| PyValueError::new_err("the trace has no column `vehicle`"))?
         .extract()?;
-    let vehicles = vehicles.as_array().to_vec();
+    let vehicles = crate::columns::copy_interruptible(py, &vehicles)?;
     if vehicles.len() != t.len() {
         return Err(PyValueError::new_err(format!(
             "the trace's column `vehicle` has {} rows, `t_s` has {}",
@@ -299,22 +299,25 @@ pub fn write_team_run(
             "the trace's column `vehicle` holds an index that is no vehicle's",
         ));
     }
-    let new_dir = !dir.exists();
-    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
-    let path = dir.join("trace.csv");
-    let mut tw = TraceWriter::create_team(&path, flying).map_err(|e| io(&path, e))?;
-    let w = RefCell::new(&mut tw);
+    let new_dir = std::fs::symlink_metadata(dir).is_err();
+    // The one run-directory writer, created and locked as `run --out` does (att30c-6; the lock
+    // held until this returns): the trace streamed into a temporary file beside `trace.csv`,
+    // renamed into place with the summary written last, so an interrupted save leaves an
+    // earlier run's files as they were.
+    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::tools::SAVE_LOCK))
+        .map_err(crate::tools::failure)?;
+    let mut file = out.team_trace(flying).map_err(crate::tools::failure)?;
+    let w = RefCell::new(file.writer());
     let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
     for (i, &t_s) in t.iter().enumerate() {
-        // Ctrl-C is answered while the trace is written: the partial trace is removed, and
+        // Ctrl-C is answered while the trace is written: the temporary trace is removed, and
         // the directory if this call made it (issue 30, att30b item 4).
         if i % crate::columns::SIGNAL_ROWS == 0 {
             if let Err(e) = py.check_signals() {
                 drop(team_sinks);
-                drop(tw);
-                let _ = std::fs::remove_file(&path);
-                // An old summary beside no trace is refused by every reader.
-                let _ = std::fs::remove_file(dir.join("summary.json"));
+                drop(w);
+                drop(out.abandon(file, "interrupted"));
+                drop(out);
                 if new_dir {
                     let _ = std::fs::remove_dir(dir);
                 }
@@ -340,17 +343,16 @@ pub fn write_team_run(
         });
     }
     drop(team_sinks);
-    tw.finish().map_err(|e| io(&path, e))?;
-    let path = dir.join("summary.json");
-    isotrack_runs::files::write_atomic(&path, format!("{summary_json}\n").as_bytes())
-        .map_err(|e| io(&path, e))?;
-    let path = dir.join("scenario.toml");
-    isotrack_runs::files::write_atomic(
-        &path,
-        isotrack_runs::summary::scenario_toml(&scenario.inner).as_bytes(),
+    drop(w);
+    out.finish_json(
+        file,
+        &format!(
+            "{note}{}",
+            isotrack_runs::summary::scenario_toml(&scenario.inner)
+        ),
+        summary_json,
     )
-    .map_err(|e| io(&path, e))?;
-    Ok(())
+    .map_err(crate::tools::failure)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.
@@ -401,6 +403,10 @@ struct Agent {
 /// `Scenario.run()` flies, bit for bit.
 #[pyclass(name = "TeamEnv", module = "isotrack._native", unsendable)]
 pub struct PyTeamEnv {
+    /// The scenario as given: its `sim.seed` is the first unseeded episode's.
+    base: Scenario,
+    /// The current episode's scenario: `base` with `sim.seed` the episode's seed (what its
+    /// `summary.json` records, and what `Scenario.run()` and `isotrack run` replay).
     scenario: Scenario,
     vehicle: DubinsVariableSpeed,
     group: Option<Group<'static, DubinsSpeedState, Tracker>>,
@@ -502,6 +508,7 @@ impl PyTeamEnv {
         let n = team.count();
         let mut env = Self {
             level: s.level(),
+            base: s.clone(),
             scenario: s,
             vehicle,
             group: None,
@@ -516,7 +523,7 @@ impl PyTeamEnv {
             record,
         };
         // A first team, to check the settings and find the period.
-        let g = env.build(None)?;
+        let g = env.build()?;
         let (r_every, r_delay) = g.ranging_steps();
         let s_every = env.scenario.sensor().steps_per_sample();
         env.period = gcd(gcd(s_every, r_every), r_delay).max(1);
@@ -559,9 +566,21 @@ impl PyTeamEnv {
         self.error_scale
     }
 
-    /// Starts a new episode (the sensors' and ranging units' streams seeded as `sim.seed =
-    /// seed` seeds them; the scenario's `sim.seed` if `None`) and runs to the first pause:
-    /// `(obs[n, 6], builtin[n, 2], sampled[n], t_s)`.
+    /// The scenario's own `sim.seed` (the first unseeded episode's).
+    #[getter]
+    fn base_seed(&self) -> u64 {
+        self.base.spec().sim.seed
+    }
+
+    /// The current (or last) episode's `sim.seed`.
+    #[getter]
+    fn episode_seed(&self) -> u64 {
+        self.scenario.spec().sim.seed
+    }
+
+    /// Starts a new episode, the scenario with `sim.seed = seed` (`None`: the scenario's own
+    /// `sim.seed`; a seed is in `0 ..= 2**63-1`, `sim.seed`'s range, else `ValueError`), and
+    /// runs to the first pause: `(obs[n, 6], builtin[n, 2], sampled[n], t_s)`.
     #[pyo3(signature = (seed=None))]
     #[allow(clippy::type_complexity)]
     fn reset<'py>(
@@ -575,7 +594,24 @@ impl PyTeamEnv {
         f64,
     )> {
         crate::guard::no_panic(|| {
-            self.group = Some(self.build(seed)?);
+            let base_seed = self.base.spec().sim.seed;
+            let seed = seed.unwrap_or(base_seed);
+            if i64::try_from(seed).is_err() {
+                return Err(PyValueError::new_err(format!(
+                    "seed must be in 0 ..= 2**63-1 (9223372036854775807, sim.seed's range), got {seed}"
+                )));
+            }
+            // The episode is the scenario with this `sim.seed`, as `Scenario.set("sim.seed", S)`
+            // makes it (a puff plume's meander follows the seed too), so that its summary
+            // records the seed it flew and `Scenario.run()` replays it.
+            self.scenario = if seed == base_seed {
+                self.base.clone()
+            } else {
+                self.base
+                    .derive(&[format!("sim.seed={seed}")], "reset(seed)")
+                    .map_err(|e| ScenarioErrorPy::new_err(e.to_string()))?
+            };
+            self.group = Some(self.build()?);
             self.result = None;
             self.log.clear();
             self.agents.iter_mut().for_each(|a| *a = Agent::default());
@@ -708,11 +744,11 @@ impl PyTeamEnv {
 
 impl PyTeamEnv {
     /// A team at step 0, as `Scenario::run_team` builds it (sensor and ranging seeds from
-    /// `seed`, else `sim.seed`).
-    fn build(&self, seed: Option<u64>) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
+    /// the episode's `sim.seed`).
+    fn build(&self) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
         let s = &self.scenario;
         let team = s.spec().team.as_ref().expect("checked: a team scenario");
-        let seed = seed.unwrap_or(s.spec().sim.seed);
+        let seed = s.spec().sim.seed;
         let vehicle = self.vehicle;
         let members = team
             .starts

@@ -43,14 +43,19 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
 
 /// Writes a run directory as `isotrack run --out` does: `trace.csv` from the run's columns
 /// (numbers in the same shortest round-trip form, so they read back bit for bit),
-/// `summary.json` (its text) and the resolved `scenario.toml`.
+/// `summary.json` (its text) and the resolved `scenario.toml` (after `note`, comment lines,
+/// when given). Holding the directory's lock as `run --out` does ([`SAVE_LOCK`]): another
+/// writer there is refused with an `OSError` naming it, and a `run --out` while this writes
+/// exits 73.
 #[pyfunction]
+#[pyo3(signature = (dir, summary_json, scenario, trace, note=""))]
 pub fn write_run(
     py: Python<'_>,
     dir: &str,
     summary_json: &str,
     scenario: &PyScenario,
     trace: &Bound<'_, PyDict>,
+    note: &str,
 ) -> PyResult<()> {
     let dir = Path::new(dir);
     let flying = scenario.inner.is_flying();
@@ -69,9 +74,9 @@ pub fn write_run(
                 .collect::<PyResult<_>>()
         })
         .transpose()?;
-    // The one run-directory writer (no lock: a saved run writes none, as before).
-    let new_dir = !dir.exists();
-    let out = RunDir::open(dir, &[], &[], None).map_err(failure)?;
+    // The one run-directory writer, locked as `run --out` locks it (att30c-6).
+    let new_dir = std::fs::symlink_metadata(dir).is_err();
+    let out = RunDir::open(dir, &[], &[], Some(SAVE_LOCK)).map_err(failure)?;
     let mut file = out.trace(flying).map_err(failure)?;
     for (i, &t_s) in t.iter().enumerate() {
         // Ctrl-C is answered while the trace is written (2 M rows take seconds): the
@@ -106,9 +111,18 @@ pub fn write_run(
             }),
         });
     }
-    out.finish_json(file, &scenario_toml(&scenario.inner), summary_json)
-        .map_err(failure)
+    out.finish_json(
+        file,
+        &format!("{note}{}", scenario_toml(&scenario.inner)),
+        summary_json,
+    )
+    .map_err(failure)
 }
+
+/// The holder `Run.save` records in a run directory's lock file (`.isotrack.lock`, the lock of
+/// `isotrack run --out`, [`isotrack_runs::sweep::lock::lock_output_dir`]): a command refused
+/// there names it (`another isotrack Run.save pid 1234 on node7 is writing this directory`).
+pub(crate) const SAVE_LOCK: &str = "Run.save";
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
 /// a sweep directory takes `x`, `group` and `metric`. Ctrl-C raises `KeyboardInterrupt` at
@@ -350,7 +364,18 @@ pub fn sweep_cells_with(
                                 origin: format!("sweep {} run {id}", sweep.label),
                             },
                         )?;
-                        objs.push(factory.call1(py, (native,))?);
+                        let obj = factory.call1(py, (native,))?;
+                        // One object for two vehicles would interleave their samples through one
+                        // state (an integral, a last time): refused, never flown shared.
+                        if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
+                            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                                "controller_factory returned the same object for vehicles {j} and {} \
+                                 of run {id}: each vehicle flies its own instance (its state is its \
+                                 own, never shared); return a new controller at every call",
+                                objs.len()
+                            )));
+                        }
+                        objs.push(obj);
                     }
                     let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
                     isotrack_runs::sweep::rows::team_row_fields(
@@ -399,5 +424,6 @@ pub fn sweep_cells_with(
         rows.push(row_fields(&sweep.plan, id, result));
         report(id + 1)?;
     }
+    crate::sweep::literal_cells(&sweep.plan, &kinds, &mut rows);
     Ok((sweep.header, kinds, rows))
 }

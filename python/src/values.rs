@@ -3,7 +3,7 @@
 
 use crate::errors::ScenarioErrorPy;
 use pyo3::prelude::*;
-use pyo3::types::{PyList, PyTuple};
+use pyo3::types::{PyDict, PyList, PyTuple};
 
 /// The most dotted parts of a key (`isotrack_scenario`'s limit for `--set`) and the deepest
 /// nesting of lists in a value (a scenario's deepest value is a list of pairs).
@@ -39,12 +39,22 @@ pub(crate) fn check_key(key: &str) -> PyResult<()> {
 /// A value as a TOML literal for `--set`, its floats in the shortest form that reads back
 /// exactly (`1e300`, not the 301 digits the `toml` crate writes, which every error message
 /// would echo): Rust's `{:?}` of a finite `f64`, which TOML reads (`1e300`, `0.1`, `10.0`).
+/// A table is an inline table (`{ kp = 2.0, ki = 1.0 }`) whose keys [`toml_value`] has checked
+/// to be dotted bare keys, written as they are (a dotted key nests, as in `--set`'s TOML).
 pub(crate) fn toml_literal(v: &toml::Value) -> String {
     match v {
         toml::Value::Float(f) if f.is_finite() => format!("{f:?}"),
         toml::Value::Array(items) => {
             let parts: Vec<String> = items.iter().map(toml_literal).collect();
             format!("[{}]", parts.join(", "))
+        }
+        toml::Value::Table(t) if t.is_empty() => "{}".to_string(),
+        toml::Value::Table(t) => {
+            let parts: Vec<String> = t
+                .iter()
+                .map(|(k, x)| format!("{k} = {}", toml_literal(x)))
+                .collect();
+            format!("{{ {} }}", parts.join(", "))
         }
         other => other.to_string(),
     }
@@ -57,7 +67,10 @@ pub(crate) fn toml_literal(v: &toml::Value) -> String {
 /// are 64-bit signed, so an unsigned key takes 0 ..= 2**63-1).
 pub(crate) fn as_written(message: &str, value: &Bound<'_, PyAny>) -> String {
     const FLOAT: &str = "invalid type: floating point `";
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+    if value.is_instance_of::<PyList>()
+        || value.is_instance_of::<PyTuple>()
+        || value.is_instance_of::<PyDict>()
+    {
         return message.to_string();
     }
     let Some(start) = message.find(FLOAT) else {
@@ -104,13 +117,14 @@ pub(crate) fn shown(v: &Bound<'_, PyAny>) -> String {
 }
 
 /// A Python value as a TOML value for `--set`: booleans, integers (64-bit), finite floats,
-/// strings, and lists or tuples of them nested at most [`MAX_VALUE_DEPTH`] deep (a list that
-/// holds itself is refused, not followed).
+/// strings, lists or tuples of them, and dicts of them (a TOML table, merged key by key into
+/// the scenario's as `--set KEY={ ... }` is; its keys dotted keys as [`check_key`] takes), nested
+/// at most [`MAX_VALUE_DEPTH`] deep (a list or dict that holds itself is refused, not followed).
 pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
     let bad = |what: String| ScenarioErrorPy::new_err(format!("`{key}`: {what}"));
     if depth > MAX_VALUE_DEPTH {
         return Err(bad(format!(
-            "lists nested more than {MAX_VALUE_DEPTH} deep (or a list that holds itself)"
+            "lists or dicts nested more than {MAX_VALUE_DEPTH} deep (or one that holds itself)"
         )));
     }
     if let Ok(b) = v.extract::<bool>() {
@@ -134,6 +148,21 @@ pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyRes
             .map(|item| toml_value(key, &item?, depth + 1))
             .collect();
         return Ok(toml::Value::Array(items?));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut t = toml::Table::new();
+        for (k, x) in d.iter() {
+            let Ok(name) = k.extract::<String>() else {
+                return Err(bad(format!(
+                    "a dict's keys are the table's keys (str, such as \"kp\"), got {}",
+                    shown(&k)
+                )));
+            };
+            check_key(&name)
+                .map_err(|e| ScenarioErrorPy::new_err(format!("`{key}`: {}", e.value(v.py()))))?;
+            t.insert(name, toml_value(key, &x, depth + 1)?);
+        }
+        return Ok(toml::Value::Table(t));
     }
     // A numpy integer (`np.int64`, `np.uint64`, ...) is not a Python int: taken exactly through
     // `operator.index`, never through a float (which rounds past 2**53).
@@ -160,7 +189,45 @@ pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyRes
         return Ok(toml::Value::Float(f));
     }
     Err(bad(format!(
-        "cannot use {} as a scenario value (numbers, booleans, strings or lists of them)",
+        "cannot use {} as a scenario value (numbers, booleans, strings, or lists or dicts of them)",
         shown(v)
     )))
+}
+
+/// A TOML value's literal (a sweep's `"table"` cell, [`crate::sweep::literal_cells`]) as the
+/// Python value `Scenario.set` takes back: a table a dict (its keys in TOML's order), an array a
+/// list, a string a str, integers int, floats float, booleans bool (a date-time its TOML text).
+#[pyfunction]
+pub(crate) fn toml_cell(py: Python<'_>, text: &str) -> PyResult<Py<PyAny>> {
+    let mut t: toml::Table = toml::from_str(&format!("v = {text}")).map_err(|e| {
+        ScenarioErrorPy::new_err(format!(
+            "internal error in isotrack: a sweep cell that is not a TOML value ({}): {}",
+            isotrack_scenario::load::clip(text),
+            e.message()
+        ))
+    })?;
+    let v = t.remove("v").unwrap_or(toml::Value::Boolean(false));
+    to_python(py, &v)
+}
+
+fn to_python(py: Python<'_>, v: &toml::Value) -> PyResult<Py<PyAny>> {
+    use pyo3::IntoPyObjectExt;
+    Ok(match v {
+        toml::Value::String(s) => s.into_py_any(py)?,
+        toml::Value::Integer(i) => i.into_py_any(py)?,
+        toml::Value::Float(f) => f.into_py_any(py)?,
+        toml::Value::Boolean(b) => b.into_py_any(py)?,
+        toml::Value::Datetime(d) => d.to_string().into_py_any(py)?,
+        toml::Value::Array(a) => {
+            let items: PyResult<Vec<Py<PyAny>>> = a.iter().map(|x| to_python(py, x)).collect();
+            PyList::new(py, items?)?.into_any().unbind()
+        }
+        toml::Value::Table(t) => {
+            let d = PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, to_python(py, x)?)?;
+            }
+            d.into_any().unbind()
+        }
+    })
 }

@@ -312,8 +312,11 @@ def test_benchmark_out_like_the_cli(tmp_path):
     assert (out / "suite.toml").is_file()
     assert "tuned" in (out / "suite.toml").read_text()
     before = (out / "leaderboard.csv").read_text()
-    with pytest.raises(OSError, match="already holds a benchmark"):
+    with pytest.raises(OSError, match="already holds a benchmark") as e:
         isotrack.benchmark(lambda s: Const(-0.5), suite=suite, out=str(out))
+    # att30d-15: in this function's words, not the command's flags.
+    assert "resume=True" in str(e.value) and "out=" in str(e.value), str(e.value)
+    assert "--resume" not in str(e.value) and "--out" not in str(e.value), str(e.value)
     assert (out / "leaderboard.csv").read_text() == before
     isotrack.benchmark(lambda s: Const(0.5), suite=suite, out=str(out), resume=True)
     # Locked while another writer holds it.

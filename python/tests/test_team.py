@@ -235,6 +235,60 @@ def test_a_team_controller_is_checked_and_its_error_raised():
         sc.run(controller=Boom())
 
 
+class Integrating:
+    """A stateful law (an integral and the last sample's time): shared by two vehicles, their
+    samples would interleave through one state."""
+
+    def __init__(self):
+        self.integral, self.last, self.calls = 0.0, None, 0
+
+    def update(self, t, v):
+        self.calls += 1
+        dt = 0.0 if self.last is None else t - self.last
+        self.last = t
+        self.integral += (v - 10.0) * dt
+        return 0.1 * self.integral
+
+
+def test_one_controller_listed_for_two_vehicles_is_refused():
+    """att32d-4: `[obj] * 4` made four vehicles share one stateful controller (their samples
+    interleaved through its integral): refused, naming the first two indices of that object,
+    before anything is flown; distinct objects (and one object, deep-copied) still fly."""
+    sc = short_team(duration_s=2.0)
+    one = Integrating()
+    with pytest.raises(ValueError, match=r"controller\[0\] and controller\[1\] are the same object"):
+        sc.run(controller=[one] * 4)
+    a, b, c = Integrating(), Integrating(), Integrating()
+    with pytest.raises(ValueError, match=r"controller\[0\] and controller\[2\] are the same object"):
+        sc.run(controller=(a, b, a, c))
+    assert one.calls == a.calls == b.calls == c.calls == 0
+    laws = [Integrating() for _ in range(4)]
+    sc.run(controller=laws)
+    # 10 Hz for 2 s: each its own 21 samples.
+    assert [x.calls for x in laws] == [21] * 4
+
+
+def test_a_factory_returning_one_object_for_two_vehicles_is_refused():
+    """att32d-4: a controller_factory that returns one object for every vehicle of a team run
+    is refused, naming the vehicles and the run; nothing of the sweep is returned."""
+    one = Integrating()
+    sweep = (
+        f"scenario = {str(TEAM)!r}\n[base]\nsim.duration_s = 2.0\n"
+        "[grid]\nteam.k_v = [0.1]\n"
+    )
+    with pytest.raises(ValueError, match="same object for vehicles 0 and 1 of run 0"):
+        isotrack.sweep(sweep, controller_factory=lambda sc: one)
+    assert one.calls == 0
+    made = []
+
+    def factory(sc):
+        made.append(Integrating())
+        return made[-1]
+
+    isotrack.sweep(sweep, controller_factory=factory)
+    assert len(made) == 4 and all(x.calls > 0 for x in made)
+
+
 def team_sweep_text(extra=""):
     return (
         f"scenario = {str(TEAM)!r}\n[base]\nsim.duration_s = 60.0\n{extra}"
@@ -406,6 +460,75 @@ def test_a_seed_flies_as_sim_seed_does(ipz):
         assert same(env.trace()[k], run.trace[k]), k
     # The seed matters (noise and dropouts differ): not the scenario's own run.
     assert not same(env.trace()["s_measured"], other.trace["s_measured"])
+
+
+def test_unseeded_resets_draw_new_episodes_from_the_seeded_generator(ipz):
+    """att32d-8: after reset(seed=7) each plain reset() replayed the scenario's sim.seed episode.
+    Now, as Gymnasium's environments: a seeded reset seeds a generator, each unseeded reset flies
+    the episode of the next seed it draws (episode_seed, which sim.seed replays), and the first
+    reset of all without a seed is the scenario's own run, its generator seeded with sim.seed."""
+    from gymnasium.utils import seeding
+
+    sc = short_team(3.0)
+    env = ipz.parallel_env(sc)
+    drive_builtin(env)
+    assert env.episode_seed == 0
+    first = env.trace()
+    own = sc.run()
+    for k in own.trace:
+        assert same(first[k], own.trace[k]), k
+    # The generator seeded with sim.seed = 0: the next unseeded reset draws its first number.
+    drive_builtin(env)
+    rng = seeding.np_random(0)[0]
+    assert env.episode_seed == int(rng.integers(0, 2**63 - 1, endpoint=True))
+    drive_builtin(env, seed=7)
+    assert env.episode_seed == 7
+    rng = seeding.np_random(7)[0]
+    seeds = []
+    traces = []
+    for _ in range(2):
+        drive_builtin(env)
+        seeds.append(env.episode_seed)
+        traces.append(env.trace())
+    assert seeds == [int(rng.integers(0, 2**63 - 1, endpoint=True)) for _ in range(2)]
+    assert len({7, *seeds}) == 3
+    # Each a new episode (the noisy sensors differ), and exactly sim.seed's run.
+    assert not same(traces[0]["s_measured"], traces[1]["s_measured"])
+    assert not same(traces[0]["s_measured"], first["s_measured"])
+    for seed, tr in zip(seeds, traces):
+        run = sc.set("sim.seed", seed).run()
+        for k in run.trace:
+            assert same(tr[k], run.trace[k]), (seed, k)
+    # The same seeded sequence of resets, the same episodes (another environment).
+    other = ipz.parallel_env(sc)
+    drive_builtin(other, seed=7)
+    drive_builtin(other)
+    assert other.episode_seed == seeds[0]
+
+
+def test_the_summary_records_the_episode_seed_and_seeds_stop_at_sim_seeds_range(ipz):
+    """att32d-12: the episode's summary.json recorded the base scenario's sim.seed (0) after
+    reset(seed=5), and seeds up to 2**64-1 were taken that no sim.seed can replay. The summary
+    now records the seed flown (its scenario the one Scenario.run() replays), and a seed past
+    2**63-1 (TOML's largest integer) is a ValueError saying the range."""
+    sc = short_team(3.0)
+    env = ipz.parallel_env(sc)
+    drive_builtin(env, seed=5)
+    summary = env.summary()
+    run = sc.set("sim.seed", 5).run()
+    assert summary["scenario"]["sim"]["seed"] == 5
+    assert summary["scenario"] == run.summary["scenario"]
+    assert summary["team"] == run.summary["team"]
+    for bad in (2**63, 2**64 - 1, np.uint64(2**63 + 5)):
+        with pytest.raises(ValueError, match=r"0 \.\.= 2\*\*63-1"):
+            env.reset(seed=bad)
+    with pytest.raises(ValueError, match=r">= 0|0 \.\.="):
+        env.reset(seed=-1)
+    top = 2**63 - 1
+    drive_builtin(env, seed=top)
+    assert env.episode_seed == top
+    assert env.summary()["scenario"]["sim"]["seed"] == top
+    assert env.summary()["team"] == sc.set("sim.seed", top).run().summary["team"]
 
 
 def test_first_observation_is_the_measured_error_and_the_true_chords(ipz):

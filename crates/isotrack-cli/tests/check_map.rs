@@ -578,14 +578,11 @@ fn huge_ranges_are_echoed_as_written_and_not_called_no_equilibrium() {
     }
 }
 
-/// Ctrl-C during `--verify` keeps the chart, written before the runs start, prints the report
-/// of the runs that finished, marked partial, writes them to `verify.csv` (as many rows as the
-/// report says finished) and exits 130 (128 + SIGINT) saying so (issue 29: no report at all).
+/// Runs `check --map --verify 60` on one thread over 20000 s runs into `out`, sends `signal`
+/// (`-INT`, `-TERM`, `-HUP`) once the chart is written and the runs have started, and returns
+/// the command's output.
 #[cfg(unix)]
-#[test]
-fn ctrl_c_during_verify_keeps_the_chart() {
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("o");
+fn verify_stopped_by(signal: &str, out: &Path) -> std::process::Output {
     let sc = scenario();
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
         .args([
@@ -607,7 +604,6 @@ fn ctrl_c_during_verify_keeps_the_chart() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let png = out.join("stability_map.png");
     let svg = out.join("stability_map.svg");
     for _ in 0..1200 {
         if svg.exists() {
@@ -618,14 +614,25 @@ fn ctrl_c_during_verify_keeps_the_chart() {
     assert!(svg.exists(), "the chart is written before the runs");
     std::thread::sleep(std::time::Duration::from_millis(300));
     let kill = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status()
         .unwrap();
     assert!(kill.success());
-    let o = child.wait_with_output().unwrap();
+    child.wait_with_output().unwrap()
+}
+
+/// Ctrl-C during `--verify` keeps the chart, written before the runs start, prints the report
+/// of the runs that finished, marked partial, writes them to `verify.csv` (as many rows as the
+/// report says finished) and exits 130 (128 + SIGINT) saying so (issue 29: no report at all).
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_verify_keeps_the_chart() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("o");
+    let o = verify_stopped_by("-INT", &out);
     assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
     assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
-    assert!(png.exists() && out.join("stability_map.csv").exists());
+    assert!(out.join("stability_map.png").exists() && out.join("stability_map.csv").exists());
     let text = String::from_utf8_lossy(&o.stdout).to_string();
     let line = text
         .lines()
@@ -735,43 +742,7 @@ fn the_help_does_not_promise_a_colormap_for_the_chart() {
 fn sigterm_and_sighup_during_verify_exit_128_plus_the_signal() {
     for (signal, code) in [("-TERM", 143), ("-HUP", 129)] {
         let d = tempfile::tempdir().unwrap();
-        let out = d.path().join("o");
-        let sc = scenario();
-        let child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
-            .args([
-                "check",
-                sc.as_str(),
-                "--set",
-                "sim.duration_s=20000",
-                "--map",
-                "--out",
-                out.to_str().unwrap(),
-                "--map-size",
-                "5x3",
-                "--verify",
-                "60",
-                "--threads",
-                "1",
-            ])
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        let svg = out.join("stability_map.svg");
-        for _ in 0..1200 {
-            if svg.exists() {
-                break;
-            }
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-        assert!(svg.exists(), "the chart is written before the runs");
-        std::thread::sleep(std::time::Duration::from_millis(300));
-        let kill = std::process::Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(kill.success());
-        let o = child.wait_with_output().unwrap();
+        let o = verify_stopped_by(signal, &d.path().join("o"));
         assert_eq!(o.status.code(), Some(code), "{signal}: {}", stderr(&o));
         assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
         let text = String::from_utf8_lossy(&o.stdout).to_string();

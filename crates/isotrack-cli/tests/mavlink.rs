@@ -53,7 +53,29 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
         (
             vec!["fly", "--mavlink", out, "--timeout-s", "1e20"],
             64,
-            "--timeout-s must be in [0, 86400]",
+            "--timeout-s must be in [0.1, 86400]",
+        ),
+        // att33c item 3: below 0.1 s a flight ends at its first quiet moment; the rate
+        // echoed as written, not as 300 digits; 255 is the ground stations' id (3b).
+        (
+            vec!["fly", "--mavlink", out, "--timeout-s", "1e-5"],
+            64,
+            "--timeout-s must be in [0.1, 86400], got 0.00001",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--setpoint-rate-hz", "1e-300"],
+            64,
+            "got 1e-300",
+        ),
+        (
+            vec!["fly", "--mavlink", out, "--system-id", "255"],
+            64,
+            "--system-id 255 is the ground stations'",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--system-id", "255"],
+            64,
+            "--system-id 255 is the ground stations'",
         ),
         (
             vec!["fly", "--mavlink", out, "--max-duration-s", "1e300"],
@@ -246,6 +268,7 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
         "measurements_out_of_order",
         "measurements_repeated",
         "measurements_invalid",
+        "measurements_other_sources",
         "metrics_over",
         "steady_state_max_abs_error",
         "track_losses",
@@ -254,7 +277,7 @@ fn a_lockstep_flight_writes_a_run_directory_plot_and_report_read() {
     for w in order.windows(2) {
         assert!(at(w[0]) < at(w[1]), "{} before {}", w[0], w[1]);
     }
-    assert_eq!(summary.as_object().unwrap().len(), 18 + 12 + 1);
+    assert_eq!(summary.as_object().unwrap().len(), 19 + 12 + 1);
     assert_eq!(summary["measurements_invalid"], 0);
     assert_eq!(summary["samples"], 2001);
     assert_eq!(summary["commands"], 2001);

@@ -3,7 +3,7 @@
 //! `merge` refuse rows whose values isotrack cannot have written, and recompute the plan's
 //! columns from the run id.
 mod common;
-use common::{assert_fails, isotrack, stderr, write};
+use common::{assert_fails, bundled, isotrack, stderr, sweep_file, write, Cells};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -26,16 +26,11 @@ fn locked(dir: &Path) -> bool {
 #[test]
 fn a_second_sweep_on_a_locked_directory_exits_73_and_a_killed_one_leaves_no_lock() {
     let d = tempfile::tempdir().unwrap();
-    let scen = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenarios/paper-fig2b-circular.toml"
-    );
-    let sw = write(
+    let sw = sweep_file(
         d.path(),
         "s.toml",
-        &format!(
-            "scenario = {scen:?}\n[random]\nruns = 4000\nseed = 5\ninitial.x_m = {{ uniform = [-12.0, 12.0] }}\n"
-        ),
+        &bundled("paper-fig2b-circular"),
+        "[random]\nruns = 4000\nseed = 5\ninitial.x_m = { uniform = [-12.0, 12.0] }\n",
     );
     let out = d.path().join("out");
     let out_s = out.display().to_string();
@@ -522,13 +517,8 @@ fn resume_and_merge_check_samples_from_below_and_commands_against_the_limit() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let results = d.path().join("full/results.csv");
     let good = std::fs::read_to_string(&results).unwrap();
-    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let rows: Vec<Vec<&str>> = good
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let cells = Cells::of(&good);
+    let (col, rows) = (|n: &str| cells.col(n), &cells.rows);
     assert_eq!(rows.len(), 8);
     let mut line_of = std::collections::HashMap::new();
     for (i, r) in rows.iter().enumerate() {
@@ -671,13 +661,8 @@ fn samples_a_delayed_sensor_never_delivered_are_refused() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let results = d.path().join("o").join("results.csv");
     let good = std::fs::read_to_string(&results).unwrap();
-    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let rows: Vec<Vec<&str>> = good
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let cells = Cells::of(&good);
+    let (col, rows) = (|n: &str| cells.col(n), &cells.rows);
     for (row, want) in rows.iter().zip(["11", "10", "1"]) {
         assert_eq!(row[col("outcome")], "completed", "{row:?}");
         assert_eq!(
@@ -728,13 +713,8 @@ fn a_run_the_plan_makes_invalid_cannot_claim_to_have_run() {
     assert_ne!(o.status.code(), Some(101), "{}", stderr(&o));
     let results = d.path().join("o").join("results.csv");
     let good = std::fs::read_to_string(&results).unwrap();
-    let header: Vec<&str> = good.lines().next().unwrap().split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let rows: Vec<Vec<&str>> = good
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let cells = Cells::of(&good);
+    let (col, rows) = (|n: &str| cells.col(n), &cells.rows);
     assert_eq!(rows[0][col("outcome")], "completed", "{good}");
     assert_eq!(rows[1][col("outcome")], "invalid_scenario", "{good}");
     // Run 1 claims run 0's outcome and metrics.

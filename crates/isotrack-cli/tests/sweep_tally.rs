@@ -1,7 +1,7 @@
 //! Issue 30 (items a and b of the run-files work): a sweep is not silent about runs that did
 //! not complete or ended with a warning, and the output-directory lock names its holder.
 mod common;
-use common::{assert_fails, isotrack, stderr, write};
+use common::{assert_fails, bundled, isotrack, stderr, sweep_file, swept, write};
 
 /// A 5 m Gaussian plume (peak 10, level 5): started 5 m from its centre the PI-like law tracks
 /// it; started 60 m away the field's slope there is exp(-60^2/50) = 5e-32 of the peak, nothing
@@ -148,9 +148,7 @@ fn the_warnings_cell_is_recomputed_and_rounded() {
         "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [5.0, 60.0]\n",
     );
     let out = d.path().join("out");
-    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let text = swept(&sw, &out, &[]);
     let far = text.lines().nth(2).unwrap();
     assert!(far.contains("flat start"), "{far}");
     // No number of more than 6 significant digits in the warning.
@@ -182,16 +180,11 @@ fn the_warnings_cell_is_recomputed_and_rounded() {
 #[test]
 fn invalid_scenario_rows_are_recomputed() {
     let d = tempfile::tempdir().unwrap();
-    let scen = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenarios/paper-fig2b-circular.toml"
-    );
-    let sw = write(
+    let sw = sweep_file(
         d.path(),
         "s.toml",
-        &format!(
-            "scenario = {scen:?}\n[base]\nsim.duration_s = 20.0\n[grid]\nsim.dt_s = [0.01, 0.03]\n"
-        ),
+        &bundled("paper-fig2b-circular"),
+        "[base]\nsim.duration_s = 20.0\n[grid]\nsim.dt_s = [0.01, 0.03]\n",
     );
     let out = d.path().join("out");
     let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
@@ -250,9 +243,7 @@ fn fixed_wing_rows_are_bounded_by_the_airframes_turn_limit() {
         "scenario = \"fw.toml\"\n[grid]\nsensor.noise_std = [0.0]\n",
     );
     let out = d.path().join("out");
-    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let text = swept(&sw, &out, &[]);
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let at = header.iter().position(|h| *h == "control_effort").unwrap();
     let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
@@ -285,9 +276,7 @@ fn rows_are_kept_only_as_isotrack_writes_them() {
         "scenario = \"plume.toml\"\n[grid]\ninitial.x_m = [5.0, 6.0]\n",
     );
     let out = d.path().join("out");
-    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let text = swept(&sw, &out, &[]);
     let row = text.lines().nth(1).unwrap();
     assert!(row.contains(",completed,"), "{row}");
     for (name, edited, needle) in [

@@ -14,6 +14,7 @@ use isotrack_vehicles::fixed_wing::trim::{trim as solve_trim, trim_state};
 use isotrack_vehicles::{FixedWing, FixedWingConfig};
 use serde_json::json;
 use std::io::Write;
+use std::path::Path;
 
 /// `isotrack trim`.
 pub fn trim(a: &TrimArgs) -> Result<(), Failure> {
@@ -88,13 +89,9 @@ const MAX_REPLAY_INPUT_BYTES: u64 = 256 << 20;
 /// The initial altitudes `replay` accepts, m.
 pub const REPLAY_ALTITUDE_RANGE_M: (f64, f64) = (0.0, 20_000.0);
 
-/// `isotrack replay`.
-pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
-    let shown = a.inputs.display().to_string();
-    let data = |m: String| Failure {
-        code: exit::DATAERR,
-        message: format!("{shown}: {m}"),
-    };
+/// Refuses `--altitude-m` outside [`REPLAY_ALTITUDE_RANGE_M`] and an `--out` that is the
+/// input file.
+fn check_replay_args(a: &ReplayArgs) -> Result<(), Failure> {
     let (lo, hi) = REPLAY_ALTITUDE_RANGE_M;
     if !(a.altitude_m.is_finite() && (lo..=hi).contains(&a.altitude_m)) {
         return Err(Failure {
@@ -109,17 +106,30 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: exit::USAGE,
             message: format!(
-                "--out {} is the input file {shown}: it would be overwritten",
-                a.out.display()
+                "--out {} is the input file {}: it would be overwritten",
+                a.out.display(),
+                a.inputs.display()
             ),
         });
     }
+    Ok(())
+}
+
+/// The control inputs of `--inputs` file `path`: `(t_s, deltas)` rows with increasing times,
+/// each surface within its limits ([`replay::check_deltas`]), the whole checked by
+/// [`replay::validate`]; a problem names the file and line.
+// Long by choice: a CSV parser, read in the order of the file (the header's columns, then each
+// row's cells checked where they are read, then the rows as a whole).
+fn read_replay_inputs(path: &Path) -> Result<Vec<(f64, Deltas)>, Failure> {
+    let shown = path.display().to_string();
+    let data = |m: String| Failure {
+        code: exit::DATAERR,
+        message: format!("{shown}: {m}"),
+    };
     let bytes =
-        isotrack_fields::io::read_limited(&a.inputs, MAX_REPLAY_INPUT_BYTES).map_err(|e| {
-            Failure {
-                code: exit::NOINPUT,
-                message: format!("cannot read {shown}: {e}"),
-            }
+        isotrack_fields::io::read_limited(path, MAX_REPLAY_INPUT_BYTES).map_err(|e| Failure {
+            code: exit::NOINPUT,
+            message: format!("cannot read {shown}: {e}"),
         })?;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -190,6 +200,18 @@ pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
         rows.push((v[0], d));
     }
     replay::validate(&rows).map_err(|e| data(e.to_string()))?;
+    Ok(rows)
+}
+
+/// `isotrack replay`.
+pub fn replay(a: &ReplayArgs) -> Result<(), Failure> {
+    let shown = a.inputs.display().to_string();
+    let data = |m: String| Failure {
+        code: exit::DATAERR,
+        message: format!("{shown}: {m}"),
+    };
+    check_replay_args(a)?;
+    let rows = read_replay_inputs(&a.inputs)?;
     let uav = FixedWing::new(FixedWingConfig {
         airspeed_mps: a.airspeed_mps,
         altitude_m: a.altitude_m,

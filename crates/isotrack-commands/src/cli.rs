@@ -76,7 +76,7 @@ pub struct SitlArgs {
     /// Advance one sensor period only when the companion has answered the last sample (tests).
     #[arg(long)]
     pub lockstep: bool,
-    /// The vehicle's MAVLink system id.
+    /// The vehicle's MAVLink system id (1 to 254; 255 is the ground stations').
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
     /// `--lockstep`: end the run when nothing came from the companion (or anyone) for S
@@ -131,11 +131,13 @@ pub struct FlyArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// End the flight (commanding the --failsafe mode) after this long since the companion has
-    /// control (the first measurement it answers armed and in OFFBOARD), of vehicle time or of
-    /// its own clock, whichever comes first, s.
+    /// control, s: on the vehicle's clock from the first measurement answered in control, on
+    /// its own clock from when the vehicle was first heard armed and in OFFBOARD, whichever
+    /// ends first.
     #[arg(long, value_name = "S")]
     pub max_duration_s: Option<f64>,
-    /// Fail safe after this long without a message from the vehicle or a measurement, s.
+    /// Fail safe after this long without a message from the vehicle or a measurement, s (0.1
+    /// to 86400).
     #[arg(long, value_name = "S", default_value_t = 3.0)]
     pub timeout_s: f64,
     /// Fail safe farther than this from the position where fly got control (armed and in
@@ -148,11 +150,11 @@ pub struct FlyArgs {
     /// Setpoints per second between answers (PX4's offboard mode needs >= 2).
     #[arg(long, value_name = "HZ", default_value_t = 10.0)]
     pub setpoint_rate_hz: f64,
-    /// This companion's MAVLink system id (component 191, an onboard computer).
+    /// This companion's MAVLink system id (component 191, an onboard computer; 1 to 254).
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,
     /// The vehicle's MAVLink system id (default: the first autopilot heard; a second one
-    /// heard within 1 s of it ends the flight, exit 69).
+    /// heard before control, or within 2 s of it, ends the flight, exit 69).
     #[arg(long, value_name = "ID")]
     pub target_system: Option<u8>,
 }

@@ -122,54 +122,12 @@ fn md(x: Option<f64>) -> String {
 pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     let base = load_scenario(Some(&a.scenario), &a.set).map_err(invalid)?;
     crate::run::refuse_team(&base, "compare")?;
-    let kinds: Vec<ControllerKind> = if a.controllers.is_empty() {
-        ControllerKind::ALL.to_vec()
-    } else {
-        a.controllers
-            .iter()
-            .map(|n| {
-                ControllerKind::from_name(n.trim()).ok_or_else(|| Failure {
-                    code: exit::USAGE,
-                    message: format!(
-                        "unknown controller `{n}`; known: {}",
-                        ControllerKind::ALL.map(|k| k.name()).join(", ")
-                    ),
-                })
-            })
-            .collect::<Result<_, _>>()?
-    };
+    let kinds = chosen_kinds(&a.controllers)?;
     check_gains(&a.gain)?;
     let origin = a.scenario.display().to_string();
-    let cant = |what: &Path, e: std::io::Error| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", what.display()),
-    };
-    // `--out D`: nothing written over an input (the scenario file, its field's data: exit 64),
-    // and one writer per directory (the lock, as sweeps: a second at once exits 73).
+    // Held while the runs write into `--out` (released when dropped).
     let _lock = match &a.out {
-        Some(dir) => {
-            let inputs = crate::output::input_files(Some(&a.scenario), &base);
-            let mut outputs = vec![dir.join("comparison.csv")];
-            for kind in &kinds {
-                for f in ["trace.csv", "summary.json", "scenario.toml"] {
-                    outputs.push(dir.join(kind.name()).join(f));
-                }
-            }
-            for o in &outputs {
-                if let Some(message) = crate::output::input_clash(&inputs, o) {
-                    return Err(Failure {
-                        code: exit::USAGE,
-                        message,
-                    });
-                }
-            }
-            std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
-            let lock = crate::sweep::lock_output_dir(dir, "compare")?;
-            for o in &outputs {
-                isotrack_runs::files::refuse_non_regular(o).map_err(|e| cant(o, e))?;
-            }
-            Some(lock)
-        }
+        Some(dir) => Some(open_out(a, dir, &base, &kinds)?),
         None => None,
     };
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
@@ -200,11 +158,89 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         }
         results.push((kind, r));
     }
+    print_table(&results, &never);
+    if !never.is_empty() {
+        outln!("\n{}", never_reached_note(&base, &never));
+    }
+    if let Some(dir) = &a.out {
+        let p = dir.join("comparison.csv");
+        write_comparison(&p, &results)?;
+        outln!(
+            "\nwrote {} and one run directory per controller",
+            p.display()
+        );
+    }
+    Ok(())
+}
+
+/// The laws `--controller` names (every built-in law when none is named); an unknown name is a
+/// usage error listing the known ones.
+fn chosen_kinds(names: &[String]) -> Result<Vec<ControllerKind>, Failure> {
+    if names.is_empty() {
+        return Ok(ControllerKind::ALL.to_vec());
+    }
+    names
+        .iter()
+        .map(|n| {
+            ControllerKind::from_name(n.trim()).ok_or_else(|| Failure {
+                code: exit::USAGE,
+                message: format!(
+                    "unknown controller `{n}`; known: {}",
+                    ControllerKind::ALL.map(|k| k.name()).join(", ")
+                ),
+            })
+        })
+        .collect()
+}
+
+/// The failure for output `what` that cannot be written.
+fn cant(what: &Path, e: std::io::Error) -> Failure {
+    Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", what.display()),
+    }
+}
+
+/// `--out DIR` opened for the runs of `kinds`: nothing written over an input (the scenario
+/// file, its field's data: exit 64), and one writer per directory (the lock, as sweeps: a
+/// second at once exits 73); every output that exists must be a regular file.
+fn open_out(
+    a: &CompareArgs,
+    dir: &Path,
+    base: &Scenario,
+    kinds: &[ControllerKind],
+) -> Result<crate::sweep::DirLock, Failure> {
+    let inputs = crate::output::input_files(Some(&a.scenario), base);
+    let mut outputs = vec![dir.join("comparison.csv")];
+    for kind in kinds {
+        for f in ["trace.csv", "summary.json", "scenario.toml"] {
+            outputs.push(dir.join(kind.name()).join(f));
+        }
+    }
+    for o in &outputs {
+        if let Some(message) = crate::output::input_clash(&inputs, o) {
+            return Err(Failure {
+                code: exit::USAGE,
+                message,
+            });
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+    let lock = crate::sweep::lock_output_dir(dir, "compare")?;
+    for o in &outputs {
+        isotrack_runs::files::refuse_non_regular(o).map_err(|e| cant(o, e))?;
+    }
+    Ok(lock)
+}
+
+/// The comparison table on stdout (Markdown): one row per law, a law in `never` marked as
+/// never having reached the level.
+fn print_table(results: &[(ControllerKind, RunResult)], never: &[(ControllerKind, f64)]) {
     outln!(
         "| controller | outcome | convergence (s) | steady max\\|eps\\| | steady rms | chattering (rad/s^2) | sign changes/s | effort (rad^2/s) | max isoline dist (m) |"
     );
     outln!("|---|---|---|---|---|---|---|---|---|");
-    for (k, r) in &results {
+    for (k, r) in results {
         let m = &r.metrics;
         outln!(
             "| {}{} | {} | {} | {} | {} | {} | {} | {:.3} | {} |",
@@ -230,34 +266,26 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             md(m.steady_state_max_isoline_distance_m),
         );
     }
-    if !never.is_empty() {
-        outln!("\n{}", never_reached_note(&base, &never));
+}
+
+/// `comparison.csv` at `p`: [`COMPARISON_COLUMNS`], one row per law.
+fn write_comparison(p: &Path, results: &[(ControllerKind, RunResult)]) -> Result<(), Failure> {
+    let mut w =
+        std::io::BufWriter::new(isotrack_runs::files::create_output(p).map_err(|e| cant(p, e))?);
+    let mut text = COMPARISON_COLUMNS.join(",") + "\n";
+    for (k, r) in results {
+        // The one row builder (isotrack-runs): the law's name, then its result's cells.
+        let mut row = vec![k.name().to_string()];
+        row.extend(result_cells(
+            &COMPARISON_RESULT_COLUMNS,
+            Ok(&RunRecord::of(r)),
+        ));
+        text += &row.join(",");
+        text += "\n";
     }
-    if let Some(dir) = &a.out {
-        let p = dir.join("comparison.csv");
-        let mut w = std::io::BufWriter::new(
-            isotrack_runs::files::create_output(&p).map_err(|e| cant(&p, e))?,
-        );
-        let mut text = COMPARISON_COLUMNS.join(",") + "\n";
-        for (k, r) in &results {
-            // The one row builder (isotrack-runs): the law's name, then its result's cells.
-            let mut row = vec![k.name().to_string()];
-            row.extend(result_cells(
-                &COMPARISON_RESULT_COLUMNS,
-                Ok(&RunRecord::of(r)),
-            ));
-            text += &row.join(",");
-            text += "\n";
-        }
-        w.write_all(text.as_bytes())
-            .and_then(|_| w.flush())
-            .map_err(|e| cant(&p, e))?;
-        outln!(
-            "\nwrote {} and one run directory per controller",
-            p.display()
-        );
-    }
-    Ok(())
+    w.write_all(text.as_bytes())
+        .and_then(|_| w.flush())
+        .map_err(|e| cant(p, e))
 }
 
 /// The note under the table for the laws that never reached the isoline: what their rows

@@ -105,10 +105,22 @@ struct LiveOut {
     trace: Option<TraceFile>,
     /// The first failure to start or write the directory (reported at the end, exit 73).
     error: Option<Failure>,
+    /// The trace's first write error, as logged when it came, and the time of the last row
+    /// handed to the trace then (the recording stopped there; the flight went on).
+    trace_failed: Option<String>,
+    /// The time of the last row recorded, s.
+    last_row_t_s: Option<f64>,
+    /// The command writing (`fly`, `sitl`), for its log line.
+    command: &'static str,
 }
 
 impl LiveOut {
-    fn new(out: Option<RunDir>, scenario: &isotrack_scenario::Scenario, flying: bool) -> Self {
+    fn new(
+        out: Option<RunDir>,
+        scenario: &isotrack_scenario::Scenario,
+        flying: bool,
+        command: &'static str,
+    ) -> Self {
         LiveOut {
             out,
             scenario_toml: scenario_toml(scenario),
@@ -116,7 +128,41 @@ impl LiveOut {
             staged: Vec::new(),
             trace: None,
             error: None,
+            trace_failed: None,
+            last_row_t_s: None,
+            command,
         }
+    }
+
+    /// Logs the trace's first write error at once (a disk that filled mid-flight): the run goes
+    /// on, its recording stopped; the summary, written at the end, says so.
+    fn check_trace(&mut self) {
+        if self.trace_failed.is_some() {
+            return;
+        }
+        let Some(e) = self
+            .trace
+            .as_mut()
+            .and_then(|t| t.writer().error().map(|e| e.to_string()))
+        else {
+            return;
+        };
+        let path = self
+            .out
+            .as_ref()
+            .map_or(PathBuf::from("trace.csv"), |o| o.path("trace.csv"));
+        let at = self
+            .last_row_t_s
+            .map_or("its start".to_string(), |t| format!("t = {} s", Num(t)));
+        let note = format!(
+            "cannot write {}: {e}: recording stopped near {at} (the rows after it are missing)",
+            path.display()
+        );
+        errln!(
+            "isotrack {}: {note}; the flight goes on, summary.json will say so",
+            self.command
+        );
+        self.trace_failed = Some(note);
     }
 
     /// Starts the directory (once; a failure is kept in `error`).
@@ -150,15 +196,23 @@ impl LiveOut {
         if let Some(t) = self.trace.as_mut() {
             t.writer().flush();
         }
+        self.check_trace();
     }
 
     /// Ends the directory: the summary written (through [`RunDir::finish`]) if it was started;
     /// else the staged files removed and the directory let go ([`RunDir::release_unused`]),
     /// its earlier contents as they were. Returns whether anything was written.
+    /// A trace that could not be written to its end (logged when it happened,
+    /// [`LiveOut::check_trace`]) still gets its summary, given the note (`summary`'s argument;
+    /// `None` for a whole trace), and the end is the failure to write it (exit 73).
     fn end<S: serde::Serialize>(
         mut self,
-        summary: impl FnOnce() -> Summary<S>,
+        summary: impl FnOnce(Option<&str>) -> Summary<S>,
     ) -> Result<bool, Failure> {
+        if let Some(t) = self.trace.as_mut() {
+            t.writer().flush();
+        }
+        self.check_trace();
         let Some(out) = self.out.take() else {
             return Ok(false);
         };
@@ -166,10 +220,21 @@ impl LiveOut {
             return Err(e);
         }
         match self.trace.take() {
-            Some(trace) => {
-                out.finish(trace, &self.scenario_toml, &summary())?;
-                Ok(true)
-            }
+            Some(trace) => match self.trace_failed.take() {
+                Some(note) => {
+                    out.finish_incomplete(trace, &self.scenario_toml, &summary(Some(&note)))?;
+                    Err(Failure {
+                        code: exit::CANTCREAT,
+                        message: format!(
+                            "{note}; summary.json written with recording_incomplete (the flight itself ended as it says)"
+                        ),
+                    })
+                }
+                None => {
+                    out.finish(trace, &self.scenario_toml, &summary(None))?;
+                    Ok(true)
+                }
+            },
             None => {
                 for (tmp, _) in std::mem::take(&mut self.staged) {
                     let _ = std::fs::remove_file(&tmp);
@@ -206,7 +271,9 @@ impl TraceSink for LiveOut {
         self.start();
         if let Some(t) = self.trace.as_mut() {
             t.writer().record(row);
+            self.last_row_t_s = Some(row.t_s);
         }
+        self.check_trace();
     }
 }
 
@@ -222,6 +289,24 @@ fn untouched_note(command: &str, dir: &Path) {
 pub const SPEEDUP_RANGE: (f64, f64) = (1e-3, 1e3);
 /// The largest `--timeout-s`, s (a day).
 pub const MAX_TIMEOUT_S: f64 = 86_400.0;
+/// The smallest `--timeout-s`, s: the loops poll every 10 to 50 ms, and a vehicle beats at
+/// 1 Hz; below this a flight or a lockstep run would end at its first quiet moment.
+pub const MIN_TIMEOUT_S: f64 = 0.1;
+
+/// Refuses `--system-id 255`, the ground stations' id (QGroundControl's, MAVProxy's): `sitl`
+/// refuses every setpoint from system 255, and a vehicle or companion with it would be taken
+/// for the operator's ground station.
+fn not_a_ground_stations_id(flag: &str, id: u8) -> Result<(), Failure> {
+    if id == GCS_SYSTEM_ID {
+        return Err(usage(format!(
+            "{flag} 255 is the ground stations' system id (QGroundControl's, MAVProxy's): give 1 to 254"
+        )));
+    }
+    Ok(())
+}
+
+/// The ground stations' system id.
+const GCS_SYSTEM_ID: u8 = 255;
 /// The largest `--max-duration-s`, s: MAVLink's `time_boot_ms` span.
 pub const MAX_DURATION_S: f64 = u32::MAX as f64 / 1000.0;
 
@@ -230,7 +315,13 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     positive("--speedup", args.speedup)?;
     within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
     positive("--timeout-s", Some(args.timeout_s))?;
-    within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
+    within(
+        "--timeout-s",
+        Some(args.timeout_s),
+        MIN_TIMEOUT_S,
+        MAX_TIMEOUT_S,
+    )?;
+    not_a_ground_stations_id("--system-id", args.system_id)?;
     if args.system_id == 0 {
         // Messages addressed to system 0 are for everyone: a vehicle cannot be it.
         return Err(usage(
@@ -255,7 +346,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         None => None,
     };
     // Written from the run's first row: a start that fails (the port taken) changes nothing.
-    let mut live = LiveOut::new(out, &scenario, scenario.is_flying());
+    let mut live = LiveOut::new(out, &scenario, scenario.is_flying(), "sitl");
     let sink: &mut dyn TraceSink = if live.out.is_some() {
         &mut live
     } else {
@@ -314,12 +405,14 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     if report.started {
         live.start();
     }
-    let wrote = live.end(|| {
+    let wrote = live.end(|incomplete| {
+        let mut warnings = report.events.clone();
+        warnings.extend(incomplete.map(|n| format!("recording_incomplete: {n}")));
         let mut summary = Summary::of_run(
             &scenario,
             args.scenario.scenario.as_deref(),
             &report.result,
-            &report.events,
+            &warnings,
         );
         if let (Some((outcome, detail)), Ended::Run(r)) = (&cut, &mut summary.ended) {
             r.record.outcome = (*outcome).to_string();
@@ -360,13 +453,19 @@ pub const NOTHING_COMMANDED: u8 = exit::NOTHING_COMMANDED;
 pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     positive("--max-duration-s", args.max_duration_s)?;
     positive("--timeout-s", Some(args.timeout_s))?;
-    within("--timeout-s", Some(args.timeout_s), 0.0, MAX_TIMEOUT_S)?;
+    within(
+        "--timeout-s",
+        Some(args.timeout_s),
+        MIN_TIMEOUT_S,
+        MAX_TIMEOUT_S,
+    )?;
+    not_a_ground_stations_id("--system-id", args.system_id)?;
     within("--max-duration-s", args.max_duration_s, 0.0, MAX_DURATION_S)?;
     positive("--fence-m", args.fence_m)?;
     if !(args.setpoint_rate_hz.is_finite() && (2.0..=1000.0).contains(&args.setpoint_rate_hz)) {
         return Err(usage(format!(
             "--setpoint-rate-hz must be in [2, 1000] (PX4's offboard mode needs 2 Hz), got {}",
-            args.setpoint_rate_hz
+            Echo(args.setpoint_rate_hz)
         )));
     }
     if args.system_id == 0 || args.target_system == Some(0) {
@@ -422,7 +521,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         )?),
         None => None,
     };
-    let mut live = LiveOut::new(out, &scenario, false);
+    let mut live = LiveOut::new(out, &scenario, false, "fly");
     // The raw log goes into a temporary file beside `mavlink.tlog`, renamed into place when the
     // flight starts its directory.
     let log_path = args.out.as_ref().map(|d| {
@@ -482,7 +581,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     if report.way_out_commanded {
         live.start();
     }
-    let wrote = live.end(|| Summary {
+    let wrote = live.end(|incomplete| Summary {
         isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
         scenario_path: args
             .scenario
@@ -512,6 +611,9 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             measurements_out_of_order: report.measurements_out_of_order,
             measurements_repeated: report.measurements_repeated,
             measurements_invalid: report.measurements_invalid,
+            measurements_other_sources: report.measurements_other_sources,
+            recording_incomplete: incomplete.map(String::from),
+            data_files: isotrack_runs::summary::data_file_digests(&scenario),
             metrics_over: report.metrics_over.to_string(),
             metrics: MetricsRecord::of(&report.metrics),
         }),
@@ -530,7 +632,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     if report.end == FlyEnd::TwoVehicles {
         return Err(Failure {
             code: exit::UNAVAILABLE,
-            message: "two autopilots heard: which to fly is ambiguous, nothing commanded (pick one with --target-system)".into(),
+            message: "two autopilots heard: which to fly is ambiguous, nothing commanded (see above: on two systems, pick one with --target-system)".into(),
         });
     }
     if report.end == FlyEnd::VehicleMismatch {
@@ -540,12 +642,18 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         });
     }
     if report.end.is_failsafe() && !report.vehicle_heard {
+        let heard = match (report.other_system_heard, args.target_system) {
+            (Some((sys, comp)), Some(want)) => format!(
+                "the vehicle of --target-system {want} was never heard on {}, only system {sys}'s autopilot (component {comp}): a mistyped id?",
+                args.mavlink
+            ),
+            _ => format!("no vehicle was ever heard on {}", args.mavlink),
+        };
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: format!(
-                "failsafe ({}): no vehicle was ever heard on {}: nothing was sent",
-                report.end.as_str(),
-                args.mavlink
+                "failsafe ({}): {heard}: nothing was sent",
+                report.end.as_str()
             ),
         });
     }

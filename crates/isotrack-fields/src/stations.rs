@@ -35,6 +35,8 @@ impl Stations {
     }
 
     /// As [`from_csv`](Self::from_csv) on the file's bytes (`path` names it in errors).
+    // Long by choice: a CSV parser, read in the order of the file (the header's columns, then
+    // each row's cells checked where they are read, then the set of stations as a whole).
     pub fn from_csv_bytes(
         path: &Path,
         bytes: &[u8],

@@ -615,6 +615,14 @@ fn check_task_rest(i: usize, t: &Task, controllers: &[String]) -> Result<(), (Ve
                 format!("task {}: vary {}: bad distribution {d:?}", t.id, clip(k)),
             ));
         }
+        // The sweep's `[random]` rule: no draw overflows to `inf` (a uniform's width `b - a`, a
+        // normal's `mean +- 40 std`), the one check of both (`Dist::check_draws_finite`).
+        if let Err(why) = d.dist().check_draws_finite() {
+            return Err((
+                task_path(i, &["vary", k]),
+                format!("task {}: vary {}: {why}", t.id, clip(k)),
+            ));
+        }
     }
     for (c, gains) in &t.tuned {
         if ControllerKind::from_name(c).is_none() {

@@ -408,7 +408,7 @@ fn parse_err(text: &str) -> isotrack_league::SuiteError {
 /// that is not built in.
 #[test]
 fn suite_checks_name_the_line() {
-    let cases: [(String, usize, &str); 9] = [
+    let cases: [(String, usize, &str); 11] = [
         (
             one_task(&TOP.replace("[\"pi_isoline\", \"pid\"]", "[]"), ""),
             3,
@@ -454,6 +454,24 @@ fn suite_checks_name_the_line() {
                 + "[[task]]\nid = \"A\"\ntitle = \"b\"\nscenario = \"paper-fig2b-circular.toml\"\nlength_m = 1.0\n",
             13,
             "task id \"A\" differs from task id \"a\" only in case",
+        ),
+        // Issue 30 (att30c-17 for suites): draws that overflow to `inf`, refused by the
+        // sweep's own check (`Dist::check_draws_finite`) at the `vary` key's line.
+        (
+            one_task(
+                TOP,
+                "[task.vary.\"initial.x_m\"]\nuniform = [-1e308, 1e308]\n",
+            ),
+            12,
+            "is wider than the largest 64-bit float (about 1.8e308): every draw would be inf",
+        ),
+        (
+            one_task(
+                TOP,
+                "[task.vary.\"initial.x_m\"]\nnormal = [0.0, 1e307]\n",
+            ),
+            12,
+            "within 40 std: some draws would be inf",
         ),
     ];
     for (text, line, says) in cases {

@@ -45,9 +45,12 @@ pub const NOT_AN_ANSWER_MS: u32 = u32::MAX;
 /// fault, and fails safe (`sensor_clock_jump`).
 pub const MAX_MEASUREMENT_STEP_S: f64 = 60.0;
 
-/// How long after the first autopilot heard a second one (another system or component) makes
-/// the vehicle ambiguous (`two_vehicles`), s.
-pub const TWO_VEHICLES_WINDOW_S: f64 = 1.0;
+/// How long after the first autopilot is heard `take_control` sends it nothing but heartbeats
+/// (no setpoint, no command), s: two of an autopilot's 1 Hz heartbeats, so that a second vehicle
+/// on the link (another system or component) is heard first. A second one heard at any time
+/// before the companion has control makes the vehicle ambiguous (`two_vehicles`); in control,
+/// it is logged once.
+pub const TWO_VEHICLES_WINDOW_S: f64 = 2.0;
 
 /// The shortest silence of the vehicle's heartbeats that ends a flight (`link_lost`) even
 /// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
@@ -64,8 +67,54 @@ pub const REBOOT_STEP_S: f64 = 1.0;
 /// setpoint leaves meanwhile.
 pub const REBOOT_WATCH_S: f64 = 1.0;
 
+/// The most events a flight keeps (as `sitl` keeps at most 1000): the first
+/// `MAX_EVENTS - EVENTS_KEPT_LAST` and the last [`EVENTS_KEPT_LAST`] (the end and the way out),
+/// the ones between counted in one event in their place.
+pub const MAX_EVENTS: usize = 1000;
+
+/// Of [`MAX_EVENTS`], how many of the last events are kept.
+pub const EVENTS_KEPT_LAST: usize = 100;
+
+/// The shortest wall time between two logged changes of the vehicle's mode or arming, s: the
+/// changes between (a heartbeat flapping between two modes) are counted in the next one logged.
+pub const MODE_EVENT_INTERVAL_S: f64 = 1.0;
+
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
+
+/// The largest magnitude of a measurement's value, in the field's units: a value beyond it
+/// (as a non-finite one) is no measurement, dropped and counted (`measurements_invalid`).
+/// No sensor reads 10^12 of its unit (ppm, Pa, K, mg/m^3); within it, the error's squares
+/// summed over any flight stay far from f64's overflow (the metrics), the trace stays within
+/// the +-10^100 `isotrack plot` shows, and one rule holds for both paths (MAVLink's f32
+/// carries up to 3.4e38, a UDP line any f64).
+pub const MAX_MEASUREMENT_ABS: f64 = 1e12;
+
+/// Whether `v` is a measurement's value: finite and within [`MAX_MEASUREMENT_ABS`].
+pub fn plausible_value(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_MEASUREMENT_ABS
+}
+
+/// Parses a UDP sensor line `t_s,value`: its time on the wire (ms, [`wire::time_ms`]) and
+/// value, or `None` when it is no measurement (not two numbers, a time out of range, a value
+/// not [`plausible_value`]).
+pub fn parse_sensor_line(line: &str) -> Option<(u32, f64)> {
+    let mut it = line.split(',');
+    let (t, v) = match (it.next(), it.next(), it.next()) {
+        (Some(t), Some(v), None) => (t.trim().parse::<f64>().ok()?, v.trim().parse::<f64>().ok()?),
+        _ => return None,
+    };
+    let ms = wire::time_ms(t)?;
+    plausible_value(v).then_some((ms, v))
+}
+
+/// Whether a datagram holds a valid sensor line ([`parse_sensor_line`]; its last piece may
+/// lack the newline).
+fn holds_a_valid_line(data: &[u8]) -> bool {
+    String::from_utf8_lossy(data)
+        .split('\n')
+        .any(|l| parse_sensor_line(l).is_some())
+}
 
 /// The most times a failsafe's way out (a mode or a disarm) is commanded, one every 0.3 s,
 /// before it is given up unconfirmed (besides the time bound of 3 x `timeout_s` within
@@ -79,6 +128,15 @@ pub const MAX_WAY_OUT_TRIES: u32 = 20;
 /// or sent longer ago, answers someone else (a ground station's arming) and is neither logged
 /// as the companion's nor taken as a refusal.
 pub const ACK_WINDOW_S: f64 = 1.0;
+
+/// The altitude change a fixed wing's altitude hold takes as flown beyond its airframe's
+/// reach, m: between two altitudes `dt` apart (the vehicle's clock), a change larger than
+/// `V dt` (`vehicle.airspeed_mps`: no aeroplane climbs or sinks faster than it flies) plus this
+/// margin (baro noise, a gust, `f32` rounding) is a step of the altitude's reference (an EKF
+/// height reset, a baro glitch, a switch of the height source), not a climb: the hold's
+/// target is moved by the same step (its pitch stays what it was: trim when on target),
+/// logged ("altitude step of X m ignored").
+pub const ALTITUDE_STEP_MARGIN_M: f64 = 10.0;
 
 /// The `MAV_TYPE`s a fixed-wing scenario (`vehicle.kind = "fixed_wing"`) flies: its roll
 /// setpoint is a coordinated turn's, for an aeroplane. VTOLs are refused: whether one flies
@@ -141,6 +199,9 @@ struct SensorClock {
     last: Instant,
     /// A jump of the clock, to fail safe on.
     fault: Option<String>,
+    /// Measurements received since the newest one that were not newer (a frozen sensor
+    /// resending its last time), for the sensor-loss message.
+    not_newer: u64,
 }
 
 impl SensorClock {
@@ -159,6 +220,7 @@ impl SensorClock {
                     return;
                 }
                 // A repeat (answered again) or a late one (dropped): no news of the sensor.
+                self.not_newer += 1;
                 queue.push_back((ms, v));
             }
             Some(n) if ms - n > max_ms => {
@@ -171,6 +233,7 @@ impl SensorClock {
             _ => {
                 self.newest_ms = Some(ms);
                 self.last = Instant::now();
+                self.not_newer = 0;
                 queue.push_back((ms, v));
             }
         }
@@ -241,6 +304,9 @@ enum WayOut {
     Mode(FlyMode),
     /// Disarm (a vehicle the companion armed on the ground).
     Disarm,
+    /// The failsafe mode, for a vehicle that accepted the switch to OFFBOARD before the
+    /// companion saw it in control: confirmed by a heartbeat in any mode but OFFBOARD.
+    LeaveOffboard(FlyMode),
 }
 
 /// The vehicle's answer to a way out.
@@ -274,8 +340,9 @@ pub struct FlyOptions {
     /// nothing of its airframe); without it such a vehicle is refused (`vehicle_mismatch`)
     /// before any setpoint or command. Without `take_control` it is flown with a warning.
     pub allow_generic: bool,
-    /// End after this long since the companion has control (the first measurement answered
-    /// armed and in OFFBOARD), of vehicle time or of the companion's clock, whichever first, s.
+    /// End after this long since the companion has control, s: on the vehicle's clock from
+    /// the first measurement answered in control, on the companion's own clock from when the
+    /// vehicle was first heard armed and in OFFBOARD, whichever ends first.
     pub max_duration_s: Option<f64>,
     /// Fail safe after this long without a message from the vehicle or a measurement, wall s.
     pub timeout_s: f64,
@@ -431,10 +498,18 @@ pub struct FlyReport {
     /// command): the retries stopped unconfirmed, the pilot's mode stands.
     pub way_out_overridden: bool,
     /// Measurements that were no measurement: a `NAMED_VALUE_FLOAT` of the sensor's name whose
-    /// value is not finite, a UDP sensor line that is not `t_s,value` with both numbers, a time
-    /// in [0, 4294967.295] s and a finite value, or longer than [`MAX_PARTIAL_LINE_BYTES`]:
+    /// value is not [`plausible_value`], a UDP sensor line that is not `t_s,value` with both
+    /// numbers, a time in [0, 4294967.295] s and a plausible value, or longer than
+    /// [`MAX_PARTIAL_LINE_BYTES`], a UDP datagram without a valid line before the sensor's first:
     /// dropped, never given to the law; the first logged.
     pub measurements_invalid: u64,
+    /// Measurements from another sender than the sensor's (the first sender of a valid one):
+    /// a `NAMED_VALUE_FLOAT` of its name from another (system, component), a UDP sensor's
+    /// datagram from another address; dropped, never given to the law; the first logged.
+    pub measurements_other_sources: u64,
+    /// With `target_system`, the first autopilot heard of another system (system, component):
+    /// a vehicle was there, not the one asked for (a mistyped id?).
+    pub other_system_heard: Option<(u32, u8)>,
 }
 
 /// Why a flight could not start.
@@ -474,6 +549,15 @@ struct Flight<'a, S: ?Sized> {
     flush: &'a mut dyn FnMut(&mut S),
     record: Recorder,
     events: Vec<String>,
+    /// The last events once [`MAX_EVENTS`] `- EVENTS_KEPT_LAST` are kept, at most
+    /// [`EVENTS_KEPT_LAST`].
+    events_last: VecDeque<String>,
+    /// Events dropped between the first and the last kept.
+    events_dropped: u64,
+    /// When a change of the vehicle's mode or arming was last logged, and how many came since
+    /// without being logged ([`MODE_EVENT_INTERVAL_S`]).
+    mode_logged_at: Option<Instant>,
+    modes_unlogged: u64,
     t0: Instant,
     timeout: Duration,
     period: Duration,
@@ -482,6 +566,8 @@ struct Flight<'a, S: ?Sized> {
     target_at: Option<Instant>,
     /// Another autopilot heard within [`TWO_VEHICLES_WINDOW_S`] of the vehicle.
     other_vehicle: Option<(u32, u8)>,
+    /// With `target_system`, the first autopilot heard of another system.
+    other_system: Option<(u32, u8)>,
     /// Why the vehicle's type does not fit the scenario (refused before anything is sent).
     mismatch: Option<String>,
     /// Why another controller holds the vehicle (setpoints from someone else).
@@ -497,6 +583,8 @@ struct Flight<'a, S: ?Sized> {
     firmware: Firmware,
     /// The vehicle's heartbeat `type` (its kind, checked against the scenario's).
     vehicle_type: MavType,
+    /// The vehicle's heartbeat `autopilot`.
+    autopilot: MavAutopilot,
     armed: bool,
     custom_mode: Option<u32>,
     /// The vehicle announced the end of its run (`STATUSTEXT` "isotrack sitl: run ended").
@@ -510,13 +598,27 @@ struct Flight<'a, S: ?Sized> {
     vehicle_ms: Option<(u64, Instant)>,
     /// The vehicle's clock went back ([`REBOOT_STEP_S`]): its autopilot rebooted.
     reboot: Option<String>,
+    /// Time-stamped frames in a row more than [`REBOOT_STEP_S`] behind the newest (one is a
+    /// late frame; two, a reboot).
+    clock_behind: u32,
     /// In control, the vehicle disarmed without the companion asking: since when (watched for
     /// a reboot for [`REBOOT_WATCH_S`]).
     disarm_seen: Option<Instant>,
     mavlink1_logged: bool,
+    /// A second companion with the same ids has been heard (logged once).
+    twin_logged: bool,
+    /// A peripheral's GENERIC heartbeat beside the autopilot has been logged.
+    peripheral_logged: bool,
+    /// A second autopilot heard in control has been logged.
+    late_vehicle_logged: bool,
+    /// With `take_control`, [`TWO_VEHICLES_WINDOW_S`] has passed (the sensor's timer was
+    /// restarted then).
+    window_passed: bool,
     // Control.
     /// The vehicle refused to arm or to switch to OFFBOARD.
     refused: bool,
+    /// What it refused and how (`OFFBOARD: MAV_RESULT_TEMPORARILY_REJECTED`).
+    refusal: Option<String>,
     /// Armed and in OFFBOARD this turn.
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
@@ -525,6 +627,10 @@ struct Flight<'a, S: ?Sized> {
     /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
     offboard_sent: bool,
+    /// When the vehicle last acknowledged the companion's switch to OFFBOARD as `ACCEPTED`
+    /// before control: the switch is not sent again until a heartbeat newer than it shows
+    /// what the vehicle did (a third mode is a pilot's; the old one, a switch not made).
+    offboard_accepted_at: Option<Instant>,
     /// With `take_control`: the vehicle's mode when the companion sent its first control
     /// command (a change to anything but OFFBOARD before control is a pilot's).
     mode_at_first_command: Option<Option<u32>>,
@@ -542,10 +648,16 @@ struct Flight<'a, S: ?Sized> {
     skipping_line: bool,
     /// The UDP sensor's datagram buffer (empty without one).
     buf: Vec<u8>,
-    /// The UDP sensor's address: the first sender's.
+    /// The UDP sensor's address: the first sender of a valid line's.
     sensor_from: Option<std::net::SocketAddr>,
-    /// Datagrams from other senders, dropped.
-    sensor_others: u64,
+    /// The `NAMED_VALUE_FLOAT` sensor's (system, component): the first sender of a valid
+    /// measurement of its name.
+    meas_from: Option<(u32, u8)>,
+    /// Measurements (or UDP datagrams) from other senders than the sensor's, dropped.
+    other_sources: u64,
+    /// Before the UDP sensor is known: the sender of the last datagram dropped (no valid
+    /// line) that ended inside a line.
+    junk_tail_from: Option<std::net::SocketAddr>,
     /// Measurements that were none (non-finite, malformed lines), dropped.
     invalid: u64,
     /// Held measurements dropped for a newer one while control was being taken.
@@ -583,6 +695,9 @@ struct Telemetry {
     /// When the altitude arrived (older than `timeout_s`: unknown, the pitch hold's 0).
     altitude_at: Option<Instant>,
     altitude_target_m: Option<f64>,
+    /// The last altitude received (stale or not) and its time on the vehicle's clock
+    /// (unwrapped, ms): a step beyond [`ALTITUDE_STEP_MARGIN_M`] is a reset.
+    last_altitude: Option<(f64, u64)>,
     airspeed_mps: Option<f64>,
     /// When the airspeed arrived (older than `timeout_s`: unknown, the trim thrust).
     airspeed_at: Option<Instant>,
@@ -646,6 +761,7 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
     f.record.finish(f.sink, f.flush);
     let completed = matches!(end, FlyEnd::VehicleEnded | FlyEnd::MaxDuration);
     let (metrics, metrics_over) = f.record.metrics(completed);
+    let events = f.take_events();
     Ok(FlyReport {
         end,
         metrics,
@@ -655,7 +771,7 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
         samples: f.ans.samples,
         t_first_s: f.ans.t_first,
         t_last_s: f.ans.t_last,
-        events: f.events,
+        events,
         failsafe_acknowledged: acknowledged,
         way_out_commanded: way_out,
         link: f.link.stats,
@@ -663,6 +779,8 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
         measurements_repeated: f.ans.repeated,
         way_out_overridden: f.way_out_overridden,
         measurements_invalid: f.invalid,
+        measurements_other_sources: f.other_sources,
+        other_system_heard: f.other_system,
     })
 }
 
@@ -724,6 +842,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             flush,
             record: Recorder::new(scenario, planned_s),
             events: Vec::new(),
+            events_last: VecDeque::new(),
+            events_dropped: 0,
+            mode_logged_at: None,
+            modes_unlogged: 0,
             t0: now,
             // Never a panic on a huge timeout (the CLI bounds it to a day).
             timeout: Duration::try_from_secs_f64(opts.timeout_s.max(0.0))
@@ -732,6 +854,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             target: None,
             target_at: None,
             other_vehicle: None,
+            other_system: None,
             mismatch: None,
             other_controller: None,
             run_end_how: None,
@@ -740,6 +863,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             awaiting: None,
             firmware: Firmware::Px4,
             vehicle_type: MavType::MAV_TYPE_GENERIC,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
             armed: false,
             custom_mode: None,
             run_ended: false,
@@ -748,14 +872,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             last_heartbeat: now,
             vehicle_ms: None,
             reboot: None,
+            clock_behind: 0,
             disarm_seen: None,
             mavlink1_logged: false,
+            twin_logged: false,
+            peripheral_logged: false,
+            late_vehicle_logged: false,
+            window_passed: false,
             refused: false,
+            refusal: None,
             active: false,
             in_control: false,
             arm_sent: false,
             armed_by_us: false,
             offboard_sent: false,
+            offboard_accepted_at: None,
             mode_at_first_command: None,
             armed_since_command: false,
             was_armed: false,
@@ -772,13 +903,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 Vec::new()
             },
             sensor_from: None,
-            sensor_others: 0,
+            meas_from: None,
+            other_sources: 0,
+            junk_tail_from: None,
             invalid: 0,
             held_dropped: 0,
             clock: SensorClock {
                 newest_ms: None,
                 last: now,
                 fault: None,
+                not_newer: 0,
             },
             clock_start: now,
             queue: VecDeque::new(),
@@ -792,7 +926,31 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     fn event(&mut self, what: String) {
         let t = self.t0.elapsed().as_secs_f64();
-        self.events.push(format!("wall {t:.3} s: {what}"));
+        let line = format!("wall {t:.3} s: {what}");
+        if self.events.len() < MAX_EVENTS - EVENTS_KEPT_LAST {
+            self.events.push(line);
+            return;
+        }
+        self.events_last.push_back(line);
+        if self.events_last.len() > EVENTS_KEPT_LAST - 1 {
+            self.events_last.pop_front();
+            self.events_dropped += 1;
+        }
+    }
+
+    /// The events kept: the first ones, a count of those dropped between (if any), the last.
+    fn take_events(&mut self) -> Vec<String> {
+        let mut all = std::mem::take(&mut self.events);
+        if self.events_dropped > 0 {
+            all.push(format!(
+                "{} events not kept (a flight keeps its first {} and its last {})",
+                self.events_dropped,
+                MAX_EVENTS - EVENTS_KEPT_LAST,
+                EVENTS_KEPT_LAST - 1
+            ));
+        }
+        all.extend(self.events_last.drain(..));
+        all
     }
 
     fn send(&mut self, m: MavMessage) -> Result<(), FlyError> {
@@ -852,8 +1010,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Some(FlyEnd::VehicleLost);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
+            let advice = if a.0 == b.0 {
+                "both on one system, which --target-system cannot tell apart: have one of the two stop announcing itself as a vehicle's autopilot"
+            } else {
+                "pick one with --target-system"
+            };
             self.event(format!(
-                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded (pick one with --target-system)",
+                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded ({advice})",
                 a.0, a.1, b.0, b.1
             ));
             return Some(FlyEnd::TwoVehicles);
@@ -946,8 +1109,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 return Ok(Some(FlyEnd::MaxDuration));
             }
         }
-        if now.duration_since(self.clock.last) > self.timeout {
-            self.event(format!("no measurement for {} s", self.opts.timeout_s));
+        let waiting = self.opts.take_control && !self.window_passed;
+        if !waiting && now.duration_since(self.clock.last) > self.timeout {
+            self.event(match self.clock.not_newer {
+                0 => format!("no measurement for {} s", self.opts.timeout_s),
+                n => format!(
+                    "no new measurement for {} s (the sensor's time not advancing: {n} measurements at or before its last time {} s)",
+                    self.opts.timeout_s,
+                    self.clock.newest_ms.map_or(0.0, wire::unwrapped_s)
+                ),
+            });
             return Ok(Some(FlyEnd::SensorLost));
         }
         Ok(None)
@@ -1066,6 +1237,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// without, the neutral setpoints that let the pilot hand over (PX4 refuses OFFBOARD
     /// without a stream) go to an accepted vehicle.
     fn may_send_setpoints(&self) -> bool {
+        if self.opts.take_control && !self.window_closed() {
+            return false;
+        }
         if self.mismatch.is_some()
             || self.other_controller.is_some()
             || self.refused
@@ -1109,16 +1283,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             let Ok((n, from)) = s.recv_from(&mut self.buf) else {
                 break;
             };
-            // The first sender is the sensor: lines from any other address (a second sender
-            // interleaving its own values) are dropped, counted and logged once.
-            if *self.sensor_from.get_or_insert(from) != from {
-                self.sensor_others += 1;
-                if self.sensor_others == 1 {
-                    let first = self.sensor_from.map(|a| a.to_string()).unwrap_or_default();
-                    self.event(format!(
-                        "--sensor: a datagram from {from}, not the sensor ({first}, the first sender): dropped, as every other sender's (logged once)"
-                    ));
-                }
+            if !self.sensor_datagram_taken(from, n) {
                 continue;
             }
             self.partial.extend_from_slice(&self.buf[..n]);
@@ -1162,23 +1327,46 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if line.trim().is_empty() {
                 continue;
             }
-            let mut it = line.split(',');
-            let parsed = match (it.next(), it.next(), it.next()) {
-                (Some(t), Some(v), None) => t
-                    .trim()
-                    .parse::<f64>()
-                    .ok()
-                    .zip(v.trim().parse::<f64>().ok()),
-                _ => None,
-            };
-            match parsed.map(|(t, v)| (wire::time_ms(t), v)) {
-                Some((Some(ms), v)) if v.is_finite() => self.clock.receive(&mut self.queue, ms, v),
-                _ => {
+            match parse_sensor_line(line) {
+                Some((ms, v)) => self.clock.receive(&mut self.queue, ms, v),
+                None => {
                     let shown: String = line.chars().take(80).collect();
                     self.invalid_measurement(format!(
-                        "the --sensor line {shown:?} is not `t_s,value` (two numbers, t_s in [0, 4294967.295] s, value finite)"
+                        "the --sensor line {shown:?} is not `t_s,value` (two numbers, t_s in [0, 4294967.295] s, value finite within +-{MAX_MEASUREMENT_ABS:e})"
                     ));
                 }
+            }
+        }
+    }
+
+    /// Whether the UDP sensor's datagram of `n` bytes (in `buf`) from `from` is the sensor's.
+    /// The sensor is the first sender of a datagram holding a valid line: before it, a
+    /// datagram without one (a port scanner's, a broadcast) is no measurement (counted in
+    /// `measurements_invalid`) and locks nothing. Another sender's datagrams are dropped
+    /// (counted in `measurements_other_sources`, logged once).
+    fn sensor_datagram_taken(&mut self, from: std::net::SocketAddr, n: usize) -> bool {
+        match self.sensor_from {
+            Some(a) if a == from => true,
+            None if holds_a_valid_line(&self.buf[..n]) => {
+                // This sender's previous datagram, dropped, ended inside a line: the rest of
+                // that line, up to the first newline here, is no line either.
+                self.skipping_line = self.junk_tail_from == Some(from);
+                self.sensor_from = Some(from);
+                self.event(format!(
+                    "sensor: --sensor lines from {from} (the first sender of a valid line; any other sender's are dropped)"
+                ));
+                true
+            }
+            None => {
+                self.junk_tail_from = (!self.buf[..n].ends_with(b"\n")).then_some(from);
+                self.invalid_measurement(format!(
+                    "a --sensor datagram from {from} holding no `t_s,value` line, before the sensor's first valid one"
+                ));
+                false
+            }
+            Some(_) => {
+                self.other_source(format!("--sensor: a datagram from {from}"));
+                false
             }
         }
     }
@@ -1260,6 +1448,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.active = false;
             return Ok(Some(FlyEnd::AnotherController));
         }
+        if self.active && self.in_control && self.disarm_seen.is_some() {
+            // Disarmed and armed again while the disarm was watched for a reboot: the disarm
+            // was nobody's here, so a pilot's (att33d-3): never flown on, no setpoint.
+            self.event(format!(
+                "pilot_took_over: the vehicle was disarmed, not by the companion, and is armed again in {}: setpoints stopped, nothing commanded",
+                self.mode_name()
+            ));
+            self.active = false;
+            return Ok(Some(FlyEnd::PilotTookOver));
+        }
         if self.active {
             if !self.in_control && self.held_dropped > 0 {
                 self.event(format!(
@@ -1295,10 +1493,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(None);
         }
         if self.refused {
-            let what = format!(
-                "the vehicle refused to arm or to switch to {}",
-                self.firmware.name_of(FlyMode::Offboard)
-            );
+            let what = match self.refusal.take() {
+                Some(r) => format!("the vehicle refused {r}"),
+                None => format!(
+                    "the vehicle refused to arm or to switch to {}",
+                    self.firmware.name_of(FlyMode::Offboard)
+                ),
+            };
             self.event(what);
             return Ok(Some(FlyEnd::ControlRefused));
         }
@@ -1335,19 +1536,71 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         Some(FlyEnd::PilotTookOver)
     }
 
+    /// Why `take_control` does not take the vehicle as it is, if it does not: a return or a
+    /// landing; armed, a mode not on [`Firmware::takeover_allowed`]'s list, or an unknown one
+    /// (no custom mode in its heartbeat), or PX4's numbers read from an autopilot that is not
+    /// PX4 (`MAV_AUTOPILOT_GENERIC` and others: their modes are not known here). A disarmed
+    /// vehicle (armed only with `arm`, a simulator's) is taken from any mode but a return or a
+    /// landing.
+    fn not_takeable(&self) -> Option<String> {
+        if let Some(name) = self
+            .custom_mode
+            .and_then(|c| self.firmware.returning_or_landing(c))
+        {
+            return Some(format!(
+                "{name} (returning or landing: its autopilot's failsafe or its pilot's choice)"
+            ));
+        }
+        if !self.armed {
+            return None;
+        }
+        if self.firmware == Firmware::Px4 && self.autopilot != MavAutopilot::MAV_AUTOPILOT_PX4 {
+            return Some(format!(
+                "{} (its autopilot is {:?}, whose mode numbers are not known here: only MAV_AUTOPILOT_PX4's and ArduPilot's are)",
+                self.mode_name(),
+                self.autopilot
+            ));
+        }
+        match self.custom_mode {
+            None => Some("an unknown mode (its heartbeat carries no custom mode)".into()),
+            Some(c) if !self.firmware.takeover_allowed(c) => Some(format!(
+                "{} (not a mode a pilot flies or holds in: taking off, landing, avoiding, on a mission or unknown here; see docs/FLYING.md for the modes taken)",
+                self.mode_name()
+            )),
+            Some(_) => None,
+        }
+    }
+
     /// The vehicle's mode in logs.
     fn mode_name(&self) -> String {
         self.custom_mode
             .map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
     }
 
+    /// Whether [`TWO_VEHICLES_WINDOW_S`] has passed since the vehicle was first heard (always,
+    /// with `target_system`): before, nothing but heartbeats is sent.
+    fn window_closed(&self) -> bool {
+        self.opts.target_system.is_some()
+            || self
+                .target_at
+                .is_some_and(|at| at.elapsed().as_secs_f64() >= TWO_VEHICLES_WINDOW_S)
+    }
+
     /// `take_control`'s steps: nothing is armed before the sensor and the position are there
-    /// (each within `timeout_s`); then arm, then OFFBOARD.
+    /// (each within `timeout_s`) and [`TWO_VEHICLES_WINDOW_S`] has passed; then arm, then
+    /// OFFBOARD.
     fn take_control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
-        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
-        if self.target.is_none() {
+        if self.target.is_none() || !self.window_closed() {
             return Ok(None);
         }
+        if !self.window_passed {
+            // The sensor's and the position's silence count from here: the window was the
+            // companion's own wait (a lockstep vehicle resends its unanswered sample meanwhile).
+            self.window_passed = true;
+            self.clock.last = Instant::now();
+            self.clock_start = Instant::now();
+        }
+        let ready = self.clock.newest_ms.is_some() && self.tel.pos.is_some();
         if !ready && self.clock.newest_ms.is_some() && self.clock_start.elapsed() > self.timeout {
             self.event(format!(
                 "no position from the vehicle for {} s: control not taken",
@@ -1378,13 +1631,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         if self.mode_at_first_command.is_none() {
             // A vehicle on its way home or down (its autopilot's failsafe, or its pilot's
-            // choice) is never pulled out of it.
-            if let Some(name) = self
-                .custom_mode
-                .and_then(|c| self.firmware.returning_or_landing(c))
-            {
+            // choice), taking off, avoiding traffic, or in a mode not known here is never
+            // pulled out of it: an armed vehicle is taken only from a mode its pilot flies or
+            // holds in ([`Firmware::takeover_allowed`]).
+            if let Some(why) = self.not_takeable() {
                 self.event(format!(
-                    "the vehicle is {} in {name} (returning or landing: its autopilot's failsafe or its pilot's choice): --take-control never pulls it out, nothing commanded",
+                    "the vehicle is {} in {why}: --take-control never pulls it out, nothing commanded",
                     if self.armed { "armed" } else { "disarmed" }
                 ));
                 return Ok(Some(FlyEnd::ControlRefused));
@@ -1402,6 +1654,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
+        } else if self
+            .offboard_accepted_at
+            .is_some_and(|at| self.last_heartbeat <= at)
+        {
+            // Accepted: never sent again before a heartbeat newer than the acknowledgement
+            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
+            // who switched meanwhile). The try is not counted.
+            self.control_tries -= 1;
+            self.next_control = Instant::now() + Duration::from_millis(100);
+            return Ok(None);
         } else {
             // PX4 wants setpoints before the switch.
             self.setpoint(
@@ -1567,6 +1829,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     fn handle(&mut self, r: &Received) {
         let from = (r.header.system_id, r.header.component_id);
         if let MavMessage::HEARTBEAT(h) = &r.msg {
+            if from == (self.opts.system_id as u32, COMPANION_COMPONENT) {
+                self.twin_heard(r.from);
+            }
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
@@ -1582,19 +1847,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
             if !self.wanted.is_empty() && name_of(&n.name[..]) == self.wanted {
-                if n.value.is_finite() {
-                    self.clock
-                        .receive(&mut self.queue, n.time_boot_ms, n.value as f64);
-                } else {
-                    self.invalid_measurement(format!(
-                        "NAMED_VALUE_FLOAT {} stamped {} s from system {}, component {} is {}",
-                        String::from_utf8_lossy(&self.wanted),
-                        wire::time_s(n.time_boot_ms),
-                        from.0,
-                        from.1,
-                        n.value
-                    ));
-                }
+                self.named_measurement(from, n);
             }
             return;
         }
@@ -1616,7 +1869,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
                 self.tel.local_seen = true;
                 if p.z.is_finite() {
-                    self.altitude(-p.z as f64);
+                    self.altitude(-p.z as f64, p.time_boot_ms);
                 }
                 self.position(p.time_boot_ms, (p.y as f64, p.x as f64));
             }
@@ -1649,6 +1902,61 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// A `NAMED_VALUE_FLOAT` of the sensor's name from the vehicle's system: the first sender
+    /// (system, component) of a valid one is the sensor, as a UDP sensor's first sender is;
+    /// another component's are dropped (counted in `measurements_other_sources`, logged once),
+    /// never flown (two senders interleaving would flip the law's error). A value not
+    /// [`plausible_value`] is no measurement.
+    fn named_measurement(&mut self, from: (u32, u8), n: &NAMED_VALUE_FLOAT_DATA) {
+        let v = n.value as f64;
+        if self.meas_from.is_some_and(|m| m != from) {
+            self.other_source(format!(
+                "NAMED_VALUE_FLOAT {} from system {}, component {}",
+                String::from_utf8_lossy(&self.wanted),
+                from.0,
+                from.1
+            ));
+            return;
+        }
+        if !plausible_value(v) {
+            self.invalid_measurement(format!(
+                "NAMED_VALUE_FLOAT {} stamped {} s from system {}, component {} is {} (a value is finite, within +-{MAX_MEASUREMENT_ABS:e})",
+                String::from_utf8_lossy(&self.wanted),
+                wire::time_s(n.time_boot_ms),
+                from.0,
+                from.1,
+                isotrack_core::numtext::Echo(v)
+            ));
+            return;
+        }
+        if self.meas_from.is_none() {
+            self.meas_from = Some(from);
+            self.event(format!(
+                "sensor: NAMED_VALUE_FLOAT {} from system {}, component {} (the first sender of a valid one; any other sender's are dropped)",
+                String::from_utf8_lossy(&self.wanted),
+                from.0,
+                from.1
+            ));
+        }
+        self.clock.receive(&mut self.queue, n.time_boot_ms, v);
+    }
+
+    /// A measurement (or a UDP sensor's datagram) from another sender than the sensor's:
+    /// dropped, counted, the first logged.
+    fn other_source(&mut self, what: String) {
+        self.other_sources += 1;
+        if self.other_sources == 1 {
+            let sensor = match (self.meas_from, self.sensor_from) {
+                (Some(m), _) => format!("system {}, component {}", m.0, m.1),
+                (None, Some(a)) => a.to_string(),
+                (None, None) => "none yet".into(),
+            };
+            self.event(format!(
+                "{what}: not the sensor ({sensor}, the first sender of a valid measurement): dropped, as every other sender's (counted in measurements_other_sources, logged once)"
+            ));
+        }
+    }
+
     /// A time of the vehicle's own clock: one more than [`REBOOT_STEP_S`] behind the newest is
     /// a reboot (its autopilot's clock begins again at 0).
     fn vehicle_time(&mut self, ms: u32) {
@@ -1659,11 +1967,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let t = wire::unwrap_ms(newest, ms);
         if t + ((REBOOT_STEP_S * 1000.0) as u64) < newest {
+            // One frame that far back is a late one (a link that reorders or delays), dropped;
+            // two in a row are the clock begun again: a reboot (att33d-4).
+            self.clock_behind += 1;
+            if self.clock_behind < 2 {
+                return;
+            }
             self.reboot.get_or_insert(format!(
                 "vehicle_lost: the vehicle's clock (time_boot_ms) went back from {} s to {} s: its autopilot rebooted (not a pilot's take-over)",
                 wire::unwrapped_s(newest),
                 wire::unwrapped_s(t)
             ));
+        } else {
+            self.clock_behind = 0;
         }
         self.vehicle_ms = Some((newest.max(t), now));
     }
@@ -1672,7 +1988,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// within [`TWO_VEHICLES_WINDOW_S`] makes it ambiguous.
     fn find_vehicle(&mut self, from: (u32, u8), h: &HEARTBEAT_DATA) {
         let wanted_system = self.opts.target_system.is_none_or(|n| from.0 == n as u32);
-        if !is_autopilot(h) || from == (self.opts.system_id as u32, 191) || !wanted_system {
+        if !is_autopilot(h) || from == (self.opts.system_id as u32, 191) {
+            return;
+        }
+        if !wanted_system {
+            if self.other_system.is_none() {
+                self.other_system = Some(from);
+                self.event(format!(
+                    "an autopilot of system {} (component {}) beats, not --target-system {}: not flown (a mistyped id?)",
+                    from.0,
+                    from.1,
+                    self.opts.target_system.unwrap_or(0)
+                ));
+            }
             return;
         }
         match (self.target, self.target_at) {
@@ -1681,6 +2009,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.target_at = Some(Instant::now());
                 self.firmware = Firmware::of(h.autopilot, h.mavtype);
                 self.vehicle_type = h.mavtype;
+                self.autopilot = h.autopilot;
                 self.check_kind(from, h.mavtype);
                 let what = format!(
                     "vehicle: system {}, component {}{}, {} modes",
@@ -1695,15 +2024,62 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 );
                 self.event(what);
             }
-            (Some(t), Some(at))
-                if t != from
-                    && self.opts.target_system.is_none()
-                    && at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S =>
-            {
-                self.other_vehicle.get_or_insert(from);
+            (Some(t), _) if t != from && t.0 == from.0 && self.peripheral(t, from, h) => {}
+            (Some(t), Some(at)) if t != from && self.opts.target_system.is_none() => {
+                if !self.in_control || at.elapsed().as_secs_f64() < TWO_VEHICLES_WINDOW_S {
+                    self.other_vehicle.get_or_insert(from);
+                } else if !self.late_vehicle_logged {
+                    self.late_vehicle_logged = true;
+                    self.event(format!(
+                        "another autopilot (system {}, component {}) heard in flight: not flown, the companion flies system {}, component {}",
+                        from.0, from.1, t.0, t.1
+                    ));
+                }
             }
             _ => {}
         }
+    }
+
+    /// Two autopilot heartbeats on one system, the vehicle's `t` and `from`'s `h`: a
+    /// `MAV_TYPE_GENERIC` one on another component than `MAV_COMP_ID_AUTOPILOT1` (1) beside
+    /// component 1's is a peripheral (a MAVSDK-based payload announces GENERIC), not a second
+    /// vehicle: ignored (logged once). Heard first, it gives way to component 1 while nothing
+    /// has been commanded. Whether that was the case.
+    fn peripheral(&mut self, t: (u32, u8), from: (u32, u8), h: &HEARTBEAT_DATA) -> bool {
+        let generic = |c: u8, ty: MavType| c != 1 && ty == MavType::MAV_TYPE_GENERIC;
+        let what = if from.1 == 1
+            && generic(t.1, self.vehicle_type)
+            && h.mavtype != MavType::MAV_TYPE_GENERIC
+        {
+            if self.mode_at_first_command.is_some() || self.in_control || self.arm_sent {
+                return false;
+            }
+            // Component 1 is the vehicle: taken instead, as if heard first.
+            self.target = Some(from);
+            self.firmware = Firmware::of(h.autopilot, h.mavtype);
+            self.vehicle_type = h.mavtype;
+            self.autopilot = h.autopilot;
+            self.mismatch = None;
+            self.check_kind(from, h.mavtype);
+            format!(
+                "vehicle: system {}, component 1 (its autopilot), {} modes, not component {} (MAV_TYPE_GENERIC: a peripheral, ignored)",
+                from.0,
+                self.firmware.name(),
+                t.1
+            )
+        } else if t.1 == 1 && generic(from.1, h.mavtype) {
+            format!(
+                "a MAV_TYPE_GENERIC heartbeat from system {}, component {}: a peripheral beside the vehicle's autopilot (component 1), ignored",
+                from.0, from.1
+            )
+        } else {
+            return false;
+        };
+        if !self.peripheral_logged {
+            self.peripheral_logged = true;
+            self.event(what);
+        }
+        true
     }
 
     /// Whether the vehicle's `type` fits the scenario's kind: a mismatch ends the flight before
@@ -1777,6 +2153,31 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         ));
     }
 
+    /// A heartbeat with the companion's own ids (the link never hands it its own frames): a
+    /// second companion with the same `--system-id`. Logged once; with `take_control` the
+    /// companion goes no further (`another_controller`: before control nothing is commanded,
+    /// in control the failsafe's way out), as two companions would fly one vehicle.
+    fn twin_heard(&mut self, addr: Option<std::net::SocketAddr>) {
+        if self.twin_logged {
+            return;
+        }
+        self.twin_logged = true;
+        let what = format!(
+            "a second companion with this one's ids (system {}, component {COMPANION_COMPONENT}) beats{}",
+            self.opts.system_id,
+            addr.map_or(String::new(), |a| format!(" from {a}"))
+        );
+        if self.opts.take_control {
+            self.other_controller.get_or_insert(format!(
+                "another_controller: {what}: two companions would fly one vehicle, --take-control goes no further (give each companion its own --system-id)"
+            ));
+        } else {
+            self.event(format!(
+                "{what}: two companions would fly one vehicle (give each its own --system-id); its setpoints, if any come, end this flight (another_controller)"
+            ));
+        }
+    }
+
     /// The vehicle's heartbeat: armed, mode, powered off.
     fn vehicle_heartbeat(&mut self, h: &HEARTBEAT_DATA) {
         let armed = h
@@ -1785,16 +2186,33 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if armed && !self.armed && self.arm_sent && !self.in_control {
             self.armed_by_us = true;
         }
-        let changed = armed != self.armed || Some(h.custom_mode) != self.custom_mode;
+        let mode = mode_of(h);
+        let changed = armed != self.armed || mode != self.custom_mode;
         self.armed = armed;
-        self.custom_mode = Some(h.custom_mode);
+        self.custom_mode = mode;
         if changed {
-            let what = format!(
-                "vehicle {} in {}",
-                if armed { "armed" } else { "disarmed" },
-                self.mode_name()
-            );
-            self.event(what);
+            // A heartbeat flapping between two modes logs at most one change a second, the
+            // ones between counted in it.
+            let due = self
+                .mode_logged_at
+                .is_none_or(|at| at.elapsed().as_secs_f64() >= MODE_EVENT_INTERVAL_S);
+            if due {
+                let between = match std::mem::take(&mut self.modes_unlogged) {
+                    0 => String::new(),
+                    n => format!(
+                        " ({n} changes of mode or arming since the last logged, not logged)"
+                    ),
+                };
+                let what = format!(
+                    "vehicle {} in {}{between}",
+                    if armed { "armed" } else { "disarmed" },
+                    self.mode_name()
+                );
+                self.event(what);
+                self.mode_logged_at = Some(Instant::now());
+            } else {
+                self.modes_unlogged += 1;
+            }
         }
         if h.system_status == MavState::MAV_STATE_POWEROFF {
             self.vehicle_done = true;
@@ -1825,6 +2243,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
         self.event(format!("{:?}: {:?}", a.command, a.result));
+        if ok && a.command == MavCmd::MAV_CMD_DO_SET_MODE && self.offboard_sent {
+            self.offboard_accepted_at = Some(Instant::now());
+        }
         if ok && a.command == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && self.arm_sent {
             if !self.armed {
                 self.armed_by_us = true;
@@ -1843,6 +2264,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             )
         {
             self.refused = true;
+            let what = if a.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                format!("the switch to {}", self.firmware.name_of(FlyMode::Offboard))
+            } else {
+                "to arm".to_string()
+            };
+            self.refusal = Some(format!("{what}: {:?}", a.result));
         }
     }
 
@@ -1855,7 +2282,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 lon_deg: lon,
                 alt_m: 0.0,
             });
-            self.altitude(g.relative_alt as f64 * 1e-3);
+            self.altitude(g.relative_alt as f64 * 1e-3, g.time_boot_ms);
             self.position(g.time_boot_ms, o.to_local_m(lat, lon));
         } else if self.tel.global_origin.is_some() {
             // No fix (or out of range) after positions: marked in the trace.
@@ -1863,10 +2290,40 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
-    /// An altitude above home, m. The first one received once the companion has control is
-    /// the altitude the fixed wing's pitch holds (not one from before: a vehicle's first
-    /// reports may not be its flight's).
-    fn altitude(&mut self, h_m: f64) {
+    /// An altitude above home, m, stamped `ms` (the vehicle's clock). The first one received
+    /// once the companion has control is the altitude the fixed wing's pitch holds (not one
+    /// from before: a vehicle's first reports may not be its flight's). A fixed wing's step
+    /// beyond its airframe's reach ([`ALTITUDE_STEP_MARGIN_M`]) moves that target by the step.
+    fn altitude(&mut self, h_m: f64, ms: u32) {
+        let t = match self.tel.last_altitude {
+            Some((_, prev)) => wire::unwrap_ms(prev, ms),
+            None => ms as u64,
+        };
+        if let (Transport::FixedWing { airspeed_mps }, Some((prev_h, prev_t))) =
+            (self.transport, self.tel.last_altitude)
+        {
+            let dt_s = t.saturating_sub(prev_t) as f64 / 1000.0;
+            let step = h_m - prev_h;
+            if step.abs() > airspeed_mps * dt_s + ALTITUDE_STEP_MARGIN_M {
+                let shifted = self.tel.altitude_target_m.map(|c| c + step);
+                self.tel.altitude_target_m = shifted;
+                self.event(format!(
+                    "altitude step of {} m ignored (from {} m to {} m in {} s: beyond the {} m/s a fixed wing at {} m/s airspeed climbs or sinks): a reset of the altitude's reference, {}",
+                    isotrack_core::numtext::Num(step),
+                    isotrack_core::numtext::Num(prev_h),
+                    isotrack_core::numtext::Num(h_m),
+                    isotrack_core::numtext::Num(dt_s),
+                    isotrack_core::numtext::Num(airspeed_mps),
+                    isotrack_core::numtext::Num(airspeed_mps),
+                    if shifted.is_some() {
+                        "the altitude hold's target moved with it (its pitch stays)"
+                    } else {
+                        "no altitude held yet"
+                    }
+                ));
+            }
+        }
+        self.tel.last_altitude = Some((h_m, t.max(self.tel.last_altitude.map_or(0, |l| l.1))));
         self.tel.altitude_m = Some(h_m);
         self.tel.altitude_at = Some(Instant::now());
         if self.in_control && self.tel.altitude_target_m.is_none() {
@@ -1890,6 +2347,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
             Some(WayOut::Mode(mode))
+        } else if end.is_failsafe() && self.offboard_accepted_at.is_some() {
+            // The vehicle accepted the switch to OFFBOARD and no heartbeat has shown it yet:
+            // it may be in OFFBOARD with nobody sending setpoints. The way out is commanded
+            // until a heartbeat shows it out of OFFBOARD (any mode: the pilot's stands).
+            Some(WayOut::LeaveOffboard(mode))
         } else if stopping && self.armed && self.armed_by_us {
             Some(WayOut::Disarm)
         } else {
@@ -1913,6 +2375,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let what = match way {
             WayOut::Mode(m) => format!("{} commanded", self.firmware.name_of(m)),
+            WayOut::LeaveOffboard(m) => format!(
+                "{} commanded (the vehicle accepted the switch to {} before control: it is commanded out of it until a heartbeat shows another mode)",
+                self.firmware.name_of(m),
+                self.firmware.name_of(FlyMode::Offboard)
+            ),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
         if self.target.is_none() {
@@ -1928,15 +2395,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         ));
         let (confirmed, tries, why) = self.command_way_out(way)?;
         let what = match way {
-            WayOut::Mode(m) => self.firmware.name_of(m),
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
             WayOut::Disarm => "disarm",
         };
         self.event(match (confirmed, way) {
             // `why` is the other safe mode the vehicle went to, when it did.
-            (true, WayOut::Mode(_)) if !why.is_empty() => {
+            (true, WayOut::Mode(_) | WayOut::LeaveOffboard(_)) if !why.is_empty() => {
                 format!("the vehicle is in {why}, not the {what} commanded ({tries} tries)")
             }
-            (true, WayOut::Mode(_)) => format!("the vehicle is in {what} ({tries} tries)"),
+            (true, WayOut::Mode(_) | WayOut::LeaveOffboard(_)) => {
+                format!("the vehicle is in {what} ({tries} tries)")
+            }
             (true, WayOut::Disarm) => format!("the vehicle is disarmed ({tries} tries)"),
             (false, _) => format!("the vehicle did not confirm the {what} ({tries} tries, {why})"),
         });
@@ -1950,7 +2419,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
         let (cmd, params) = match way {
-            WayOut::Mode(m) => match self.firmware.set_mode_params(m) {
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => match self.firmware.set_mode_params(m) {
                 Some(p) => (MavCmd::MAV_CMD_DO_SET_MODE, p),
                 None => return Ok((false, 0, "no mode table for this vehicle here")),
             },
@@ -1968,6 +2437,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let retry_end = Instant::now()
             + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         let mut tries = 0u32;
+        // When the vehicle last acknowledged the command as ACCEPTED: it is not sent again
+        // before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
+        // retry would yank back a pilot who took over meanwhile).
+        let mut accepted: Option<Instant> = None;
         loop {
             let lost =
                 self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
@@ -1983,13 +2456,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, "retries' bound reached"));
             }
-            tries += 1;
-            self.command(cmd, params)?;
-            match self.await_way_out(way, cmd, before)? {
+            if !accepted.is_some_and(|at| self.last_heartbeat <= at) {
+                tries += 1;
+                self.command(cmd, params)?;
+            }
+            match self.await_way_out(way, cmd, before, &mut accepted)? {
                 Some(Answer::Confirmed) => return Ok((true, tries, "")),
                 Some(Answer::OtherSafeMode(name)) => {
                     let asked = match way {
-                        WayOut::Mode(m) => self.firmware.name_of(m),
+                        WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
                         WayOut::Disarm => "disarm",
                     };
                     self.event(format!(
@@ -2018,6 +2493,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         way: WayOut,
         cmd: MavCmd,
         before: (Option<u32>, bool),
+        accepted: &mut Option<Instant>,
     ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         while Instant::now() < until {
@@ -2033,7 +2509,36 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if self.ack_for_another(&r) {
                     continue;
                 }
+                match &r.msg {
+                    MavMessage::HEARTBEAT(_) => self.last_heartbeat = Instant::now(),
+                    MavMessage::COMMAND_ACK(a)
+                        if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
+                    {
+                        *accepted = Some(Instant::now())
+                    }
+                    _ => {}
+                }
+                let offboard = |h: &HEARTBEAT_DATA| {
+                    mode_of(h).map(|c| self.firmware.is_in(c, FlyMode::Offboard))
+                };
                 match (&r.msg, way) {
+                    (MavMessage::HEARTBEAT(h), WayOut::LeaveOffboard(m)) => {
+                        let Some(c) = mode_of(h) else { continue };
+                        if self.firmware.is_in(c, m) {
+                            return Ok(Some(Answer::Confirmed));
+                        }
+                        if let Some(name) = self.firmware.safe_mode_name(c) {
+                            return Ok(Some(Answer::OtherSafeMode(name)));
+                        }
+                        if offboard(h) == Some(false) {
+                            // Out of OFFBOARD in another mode (the pilot's, or the one it never
+                            // left): the pilot's mode stands.
+                            return Ok(Some(Answer::PilotTookOver(format!(
+                                "in {}",
+                                self.firmware.mode_name(c)
+                            ))));
+                        }
+                    }
                     (MavMessage::COMMAND_ACK(a), _)
                         if a.command == cmd
                             && matches!(
@@ -2046,12 +2551,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                         return Ok(Some(Answer::Refused))
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Mode(m))
-                        if self.firmware.is_in(h.custom_mode, m) =>
+                        if mode_of(h).is_some_and(|c| self.firmware.is_in(c, m)) =>
                     {
                         return Ok(Some(Answer::Confirmed))
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Mode(_)) => {
-                        if let Some(name) = self.firmware.safe_mode_name(h.custom_mode) {
+                        if let Some(name) = mode_of(h).and_then(|c| self.firmware.safe_mode_name(c))
+                        {
                             return Ok(Some(Answer::OtherSafeMode(name)));
                         }
                         if let Some(what) = self.pilots_change(h, before) {
@@ -2091,12 +2597,24 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         }
         // OFFBOARD, which the companion itself asked for (a switch answered late), is no
         // pilot's.
-        let own = self.offboard_sent && self.firmware.is_in(h.custom_mode, FlyMode::Offboard);
-        if before.0.is_some_and(|m| m != h.custom_mode) && !own {
-            return Some(format!("in {}", self.firmware.mode_name(h.custom_mode)));
+        // A heartbeat without a custom mode (MAV_MODE_FLAG_CUSTOM_MODE_ENABLED clear) says
+        // nothing of the mode: neither a confirmation nor a pilot's.
+        let now = mode_of(h)?;
+        let own = self.offboard_sent && self.firmware.is_in(now, FlyMode::Offboard);
+        if before.0.is_some_and(|m| m != now) && !own {
+            return Some(format!("in {}", self.firmware.mode_name(now)));
         }
         None
     }
+}
+
+/// A heartbeat's custom mode: `custom_mode` only with `MAV_MODE_FLAG_CUSTOM_MODE_ENABLED` in its
+/// `base_mode` (MAVLink: without the flag `custom_mode` means nothing), else unknown (`None`):
+/// such a heartbeat neither hands over (OFFBOARD unknown) nor confirms a failsafe's mode.
+pub fn mode_of(h: &HEARTBEAT_DATA) -> Option<u32> {
+    h.base_mode
+        .contains(MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
+        .then_some(h.custom_mode)
 }
 
 /// The `time_boot_ms` of a message stamped with the sender's clock since its boot (the ones

@@ -117,8 +117,14 @@ pub struct Received {
 pub struct LinkStats {
     /// Datagrams read (UDP).
     pub datagrams: u64,
-    /// Datagrams without one valid frame of the common dialect (UDP).
+    /// Datagrams without one valid frame of the common dialect (UDP), and not
+    /// [`LinkStats::other_dialect_datagrams`]: damaged or foreign bytes.
     pub junk_datagrams: u64,
+    /// Datagrams holding only well-formed MAVLink 2 frames of messages outside the common
+    /// dialect (ArduPilot's `MEMINFO`, `AHRS2`, `HWSTATUS`: a large share of an ArduPilot link),
+    /// skipped as a stream's are, not counted as junk (UDP; their checksums cannot be checked
+    /// without their dialect).
+    pub other_dialect_datagrams: u64,
     /// Valid frames read.
     pub frames_in: u64,
     /// Frames sent.
@@ -523,6 +529,30 @@ fn accept(
         ack_target,
     });
     true
+}
+
+/// Whether `datagram` is one or more whole MAVLink 2 frames, back to back, each of a message
+/// outside the common dialect: a start byte 0xFD, a header of 10 bytes, the payload its length
+/// byte says, a 2-byte checksum and, when its incompatibility flags say signed, a 13-byte
+/// signature; nothing before, between or after. Such frames are another dialect's (valid, for
+/// all that can be checked here), not junk.
+fn only_other_dialect_frames(datagram: &[u8]) -> bool {
+    let mut at = 0;
+    while at < datagram.len() {
+        let Some(h) = datagram.get(at..at + 10) else {
+            return false;
+        };
+        if h[0] != 0xFD {
+            return false;
+        }
+        let id = u32::from_le_bytes([h[7], h[8], h[9], 0]);
+        if <MavMessage as mavlink::Message>::default_message_from_id(id).is_some() {
+            return false;
+        }
+        let signed = h[2] & 0x01 != 0;
+        at += 12 + h[1] as usize + if signed { 13 } else { 0 };
+    }
+    at == datagram.len() && !datagram.is_empty()
 }
 
 /// Waits until one of `fds` is readable or `timeout` passes (`poll(2)`).
@@ -994,7 +1024,11 @@ impl Link {
                 }
             }
             if out.len() == before {
-                self.stats.junk_datagrams += 1;
+                if only_other_dialect_frames(datagram) {
+                    self.stats.other_dialect_datagrams += 1;
+                } else {
+                    self.stats.junk_datagrams += 1;
+                }
                 continue;
             }
             for r in &mut out[before..] {
@@ -1057,6 +1091,33 @@ mod tests {
         assert!(address_error("serial:/dev/ttyS0").contains("expected serial:DEVICE:BAUD"));
         assert!(address_error("serial:/dev/ttyS0:56000").contains("57600"));
         assert!(address_error("serial::57600").contains("no device"));
+    }
+
+    /// att33c item 22: a datagram holding only well-formed frames of another dialect
+    /// (ArduPilot's MEMINFO, id 152) is no junk: counted apart; one of damaged bytes or a frame
+    /// of the common dialect with a broken checksum is junk.
+    #[test]
+    fn another_dialects_frames_are_not_junk() {
+        let mut link = Link::open("udpin:127.0.0.1:0", 1, 191).unwrap();
+        let to = link.local_addr().unwrap();
+        let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+        // MEMINFO (152): 4-byte payload, any checksum (its CRC extra is not known here).
+        let meminfo = [0xFD, 4, 0, 0, 7, 1, 1, 152, 0, 0, 1, 2, 3, 4, 0xAB, 0xCD];
+        let two: Vec<u8> = meminfo.iter().chain(meminfo.iter()).copied().collect();
+        // A heartbeat (id 0, common) with a broken checksum: junk.
+        let heartbeat = [
+            0xFD, 9, 0, 0, 7, 1, 1, 0, 0, 0, 0, 0, 0, 0, 1, 8, 0, 0, 3, 0, 0,
+        ];
+        for d in [&meminfo[..], &two, b"hello\n", &meminfo[..15], &heartbeat] {
+            s.send_to(d, to).unwrap();
+        }
+        let t0 = Instant::now();
+        while link.stats.datagrams < 5 && t0.elapsed() < Duration::from_secs(10) {
+            link.poll(Duration::from_millis(50)).unwrap();
+        }
+        assert_eq!(link.stats.other_dialect_datagrams, 2, "{:?}", link.stats);
+        assert_eq!(link.stats.junk_datagrams, 3, "{:?}", link.stats);
+        assert!(!only_other_dialect_frames(&[]));
     }
 
     /// A serial device that is a regular file, a directory or missing is a device error.

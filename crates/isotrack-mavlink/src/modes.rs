@@ -206,6 +206,26 @@ impl Firmware {
         }
     }
 
+    /// Whether `--take-control` takes an armed vehicle from `custom_mode`: only a mode its pilot
+    /// flies or holds in, never a take-off, a landing or return, traffic avoidance, a mission or
+    /// a mode not known here (an allow-list, att33d-1). PX4 (`px4_custom_mode.h`): MANUAL,
+    /// ALTCTL, POSCTL, ACRO, STABILIZED, RATTITUDE, AUTO.LOITER. ArduPlane (`mode.h`): MANUAL,
+    /// CIRCLE, STABILIZE, TRAINING, ACRO, FLY_BY_WIRE_A, FLY_BY_WIRE_B, CRUISE, LOITER.
+    /// Rover: MANUAL, ACRO, STEERING, HOLD, LOITER. ArduCopter: STABILIZE, ACRO, ALT_HOLD,
+    /// LOITER, POSHOLD.
+    pub fn takeover_allowed(self, custom_mode: u32) -> bool {
+        match self {
+            Firmware::Px4 => {
+                let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
+                matches!(main, 1 | 2 | 3 | 5 | 7 | 8) || (main == PX4_AUTO && sub == PX4_LOITER)
+            }
+            Firmware::ArduPlane => matches!(custom_mode, 0..=7 | 12),
+            Firmware::ArduRover => matches!(custom_mode, 0 | 1 | 3 | 4 | 5),
+            Firmware::ArduCopter => matches!(custom_mode, 0 | 1 | 2 | 5 | 16),
+            Firmware::ArduOther => false,
+        }
+    }
+
     /// The name of a heartbeat's `custom_mode` in logs ("OFFBOARD", "GUIDED", "RTL", or the
     /// number).
     pub fn mode_name(self, custom_mode: u32) -> String {
@@ -222,8 +242,96 @@ impl Firmware {
         .map(str::to_string)
         .unwrap_or_else(|| match self {
             Firmware::Px4 => px4_mode_name(custom_mode),
-            _ => format!("{} mode {custom_mode}", self.name()),
+            _ => self.ardupilot_mode_name(custom_mode).map_or_else(
+                || format!("{} mode {custom_mode}", self.name()),
+                str::to_string,
+            ),
         })
+    }
+
+    /// An ArduPilot mode's name, as the `Mode::Number` enum of its firmware's `mode.h` names it
+    /// (ArduCopter, ArduPlane, Rover); `None` for a number not there (or PX4, or ArduPilot on
+    /// another vehicle type).
+    pub fn ardupilot_mode_name(self, custom_mode: u32) -> Option<&'static str> {
+        let table: &[(u32, &str)] = match self {
+            Firmware::ArduCopter => &[
+                (0, "STABILIZE"),
+                (1, "ACRO"),
+                (2, "ALT_HOLD"),
+                (3, "AUTO"),
+                (4, "GUIDED"),
+                (5, "LOITER"),
+                (6, "RTL"),
+                (7, "CIRCLE"),
+                (9, "LAND"),
+                (11, "DRIFT"),
+                (13, "SPORT"),
+                (14, "FLIP"),
+                (15, "AUTOTUNE"),
+                (16, "POSHOLD"),
+                (17, "BRAKE"),
+                (18, "THROW"),
+                (19, "AVOID_ADSB"),
+                (20, "GUIDED_NOGPS"),
+                (21, "SMART_RTL"),
+                (22, "FLOWHOLD"),
+                (23, "FOLLOW"),
+                (24, "ZIGZAG"),
+                (25, "SYSTEMID"),
+                (26, "AUTOROTATE"),
+                (27, "AUTO_RTL"),
+                (28, "TURTLE"),
+            ],
+            Firmware::ArduPlane => &[
+                (0, "MANUAL"),
+                (1, "CIRCLE"),
+                (2, "STABILIZE"),
+                (3, "TRAINING"),
+                (4, "ACRO"),
+                (5, "FLY_BY_WIRE_A"),
+                (6, "FLY_BY_WIRE_B"),
+                (7, "CRUISE"),
+                (8, "AUTOTUNE"),
+                (10, "AUTO"),
+                (11, "RTL"),
+                (12, "LOITER"),
+                (13, "TAKEOFF"),
+                (14, "AVOID_ADSB"),
+                (15, "GUIDED"),
+                (16, "INITIALISING"),
+                (17, "QSTABILIZE"),
+                (18, "QHOVER"),
+                (19, "QLOITER"),
+                (20, "QLAND"),
+                (21, "QRTL"),
+                (22, "QAUTOTUNE"),
+                (23, "QACRO"),
+                (24, "THERMAL"),
+                (25, "LOITER_ALT_QLAND"),
+                (26, "AUTOLAND"),
+            ],
+            Firmware::ArduRover => &[
+                (0, "MANUAL"),
+                (1, "ACRO"),
+                (3, "STEERING"),
+                (4, "HOLD"),
+                (5, "LOITER"),
+                (6, "FOLLOW"),
+                (7, "SIMPLE"),
+                (8, "DOCK"),
+                (9, "CIRCLE"),
+                (10, "AUTO"),
+                (11, "RTL"),
+                (12, "SMART_RTL"),
+                (15, "GUIDED"),
+                (16, "INITIALISING"),
+            ],
+            Firmware::Px4 | Firmware::ArduOther => &[],
+        };
+        table
+            .iter()
+            .find(|(n, _)| *n == custom_mode)
+            .map(|(_, name)| *name)
     }
 
     /// The name of `m` in this firmware ("OFFBOARD" / "GUIDED", "HOLD", ...).
@@ -267,7 +375,12 @@ pub fn px4_mode_name(custom_mode: u32) -> String {
         8 => Some("RATTITUDE"),
         _ => None,
     };
-    name.map_or_else(|| format!("PX4 mode {main}.{sub}"), str::to_string)
+    match (name, custom_mode) {
+        (Some(n), _) => n.to_string(),
+        // 0 is no mode (MAVSDK's autopilot server before a mode is set).
+        (None, 0) => "custom mode 0 (none)".into(),
+        (None, _) => format!("PX4 mode {main}.{sub}"),
+    }
 }
 
 #[cfg(test)]
@@ -315,11 +428,40 @@ mod tests {
         assert!(px4.is_in(6 << 16, Offboard));
         // ArduCopter's 4 is GUIDED, ArduPlane's 4 ACRO: never taken for a hold or OFFBOARD.
         assert!(copter.is_in(4, Offboard) && !plane.is_in(4, Offboard) && !plane.is_in(4, Hold));
-        assert_eq!(plane.mode_name(6), "ArduPlane mode 6");
+        // att33c item 7: every mode of mode.h by its name, an unknown number as a number.
+        assert_eq!(plane.mode_name(6), "FLY_BY_WIRE_B");
+        assert_eq!(plane.mode_name(0), "MANUAL");
+        assert_eq!(plane.mode_name(99), "ArduPlane mode 99");
+        assert_eq!(rover.mode_name(0), "MANUAL");
+        assert_eq!(copter.mode_name(16), "POSHOLD");
+        assert_eq!(px4.mode_name(0), "custom mode 0 (none)");
+        assert_eq!(px4.mode_name(9 << 16), "PX4 mode 9.0");
         assert_eq!(
             Firmware::of(ap, MavType::MAV_TYPE_SUBMARINE).set_mode_params(Hold),
             None
         );
+    }
+
+    /// att33d-1: an armed vehicle is taken over only from a pilot's mode: PX4 POSCTL and
+    /// AUTO.LOITER yes, AUTO.TAKEOFF (4, 2), (4, 7), AUTO.FOLLOW_TARGET (4, 8), AUTO.VTOL_TAKEOFF
+    /// (4, 10), AUTO.MISSION and no mode (0) no; ArduPlane FLY_BY_WIRE_A yes, TAKEOFF 13,
+    /// AVOID_ADSB 14, INITIALISING 16, LOITER_ALT_QLAND 25, AUTOLAND 26 no.
+    #[test]
+    fn take_over_only_from_a_pilots_mode() {
+        let px4 = Firmware::Px4;
+        assert!(px4.takeover_allowed(3 << 16) && px4.takeover_allowed((4 << 16) | (3 << 24)));
+        for sub in [2u32, 4, 7, 8, 10] {
+            assert!(!px4.takeover_allowed((4 << 16) | (sub << 24)), "4.{sub}");
+        }
+        assert!(!px4.takeover_allowed(0) && !px4.takeover_allowed(6 << 16));
+        let plane = Firmware::of(
+            MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            MavType::MAV_TYPE_FIXED_WING,
+        );
+        assert!(plane.takeover_allowed(5) && plane.takeover_allowed(12));
+        for m in [13u32, 14, 16, 25, 26, 10, 11, 15] {
+            assert!(!plane.takeover_allowed(m), "{m}");
+        }
     }
 
     /// The safe modes that end a failsafe: PX4 AUTO.LOITER (4, 3), AUTO.RTL (4, 5), AUTO.LAND

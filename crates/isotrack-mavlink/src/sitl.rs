@@ -190,6 +190,33 @@ pub fn starts_the_run(msg: &MavMessage, system_id: u8) -> bool {
     }
 }
 
+/// Whether a command or setpoint addressed to (`target_system`, `target_component`) is this
+/// vehicle's (`system_id`, component 1, `MAV_COMP_ID_AUTOPILOT1`): its system and its component
+/// or 0 (every component), as PX4 takes them; a command for another component of its system
+/// (a camera's, a gimbal's) is that component's to answer.
+pub fn for_this_vehicle(target_system: u8, target_component: u8, system_id: u8) -> bool {
+    target_system == system_id && matches!(target_component, 0 | 1)
+}
+
+/// A `COMMAND_INT` as the `COMMAND_LONG` it stands for (PX4 takes both for one command):
+/// `param1` to `param4` as they are, `x`, `y` (scaled integers) and `z` as `param5` to
+/// `param7`.
+pub fn command_of_int(c: &COMMAND_INT_DATA) -> COMMAND_LONG_DATA {
+    COMMAND_LONG_DATA {
+        param1: c.param1,
+        param2: c.param2,
+        param3: c.param3,
+        param4: c.param4,
+        param5: c.x as f32,
+        param6: c.y as f32,
+        param7: c.z,
+        command: c.command,
+        target_system: c.target_system,
+        target_component: c.target_component,
+        confirmation: 0,
+    }
+}
+
 /// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
 /// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
 pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
@@ -593,7 +620,7 @@ impl Autopilot {
         s: &SET_ATTITUDE_TARGET_DATA,
     ) -> Option<Applied> {
         let on_board = from.0 == self.system_id as u32;
-        if s.target_system != self.system_id
+        if !for_this_vehicle(s.target_system, s.target_component, self.system_id)
             || (self.owner.is_some_and(|o| o != from) && !on_board)
             || from.0 == GCS_SYSTEM_ID as u32
         {
@@ -920,12 +947,17 @@ impl Sitl<'_> {
             self.last_heard = Instant::now();
             self.started |= starts_the_run(&r.msg, self.ap.system_id);
             match &r.msg {
-                MavMessage::COMMAND_LONG(c) => {
-                    if c.target_system != self.ap.system_id {
+                MavMessage::COMMAND_LONG(_) | MavMessage::COMMAND_INT(_) => {
+                    let c = match &r.msg {
+                        MavMessage::COMMAND_INT(c) => command_of_int(c),
+                        MavMessage::COMMAND_LONG(c) => c.clone(),
+                        _ => continue,
+                    };
+                    if !for_this_vehicle(c.target_system, c.target_component, self.ap.system_id) {
                         continue;
                     }
                     let had_owner = self.ap.owner.is_some();
-                    let result = self.ap.command(t_s, from, c);
+                    let result = self.ap.command(t_s, from, &c);
                     self.ap.owner_seen(had_owner, r.from);
                     self.command_ack(c.command, result, from)?;
                     // The new state at once (PX4 also reports it in the next heartbeat).
@@ -1367,6 +1399,37 @@ mod tests {
 
     const ACCEPTED: MavResult = MavResult::MAV_RESULT_ACCEPTED;
     const DENIED: MavResult = MavResult::MAV_RESULT_DENIED;
+
+    /// att33c items 11 and 11b: commands and setpoints for another component of the vehicle's
+    /// system (a camera's 99) are not the autopilot's: never executed nor answered; its own
+    /// component (1) and every component (0) are. A COMMAND_INT is the COMMAND_LONG it
+    /// stands for: the arming it carries arms the vehicle.
+    #[test]
+    fn only_the_autopilots_component_is_commanded() {
+        assert!(for_this_vehicle(1, 1, 1) && for_this_vehicle(1, 0, 1));
+        assert!(!for_this_vehicle(1, 99, 1) && !for_this_vehicle(2, 1, 1));
+        let mut ap = autopilot();
+        let mut s = yaw_rate(0.1, 0.0, AttitudeTargetTypemask::empty());
+        s.target_component = 99;
+        assert!(ap.setpoint(0.0, (1, 191), &s).is_none());
+        assert_eq!(ap.refused, 1);
+        s.target_component = 0;
+        assert!(ap.setpoint(0.0, (1, 191), &s).is_some());
+        ap.armed = false;
+        ap.mode = Mode::Manual;
+        let arm = command_of_int(&COMMAND_INT_DATA {
+            param1: 1.0,
+            command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            target_system: 1,
+            target_component: 1,
+            x: 7,
+            z: 2.5,
+            ..Default::default()
+        });
+        assert_eq!((arm.param1, arm.param5, arm.param7), (1.0, 7.0, 2.5));
+        assert_eq!(ap.command(0.0, (245, 190), &arm), ACCEPTED);
+        assert!(ap.armed);
+    }
 
     /// The ground-station rule of docs/FLYING.md: a ground station (MAVSDK's system 245 by
     /// its `MAV_TYPE_GCS` heartbeat) arms the vehicle without owning it; system 255's

@@ -13,6 +13,9 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::stop_after;
+
 /// PX4's custom_mode of OFFBOARD (main mode 6).
 const OFFBOARD: u32 = 6 << 16;
 
@@ -79,6 +82,16 @@ struct Script {
     /// Each command is first answered DENIED addressed to a ground station (system 255,
     /// component 190: its own request's answer), then answered to the companion.
     gcs_denial_first: bool,
+    /// After it accepts a mode switch, no heartbeat for this many beats (PX4's 1 Hz heartbeat:
+    /// the switch shows only at the next one).
+    quiet_after_ack_beats: u32,
+    /// Right after it accepts the first mode switch, a pilot switches to this PX4 mode.
+    pilot_after_ack: Option<u32>,
+    /// With `disarm_at_beat`: this many beats later it is armed again in OFFBOARD, and it
+    /// sends no position meanwhile (no time-stamped message).
+    rearm_after: Option<u32>,
+    /// At this beat it also sends one position stamped 2 s back (a late frame).
+    late_frame_at: Option<u32>,
 }
 
 impl Script {
@@ -136,6 +149,10 @@ impl Default for Script {
             nan_measurement_at: None,
             mode_at_beat: None,
             gcs_denial_first: false,
+            quiet_after_ack_beats: 0,
+            pilot_after_ack: None,
+            rearm_after: None,
+            late_frame_at: None,
         }
     }
 }
@@ -151,18 +168,7 @@ struct Got {
 }
 
 fn heartbeat(mavtype: MavType, autopilot: MavAutopilot, armed: bool, mode: u32) -> MavMessage {
-    let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
-    if armed {
-        base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
-    }
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: mode,
-        mavtype,
-        autopilot,
-        base_mode: base,
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    })
+    support::heartbeat(mavtype, autopilot, support::custom_mode_flags(armed), mode)
 }
 
 /// The scenario a stand-in of `script` flies: its own, else the one of the vehicle's type.
@@ -217,6 +223,7 @@ fn against_counting(
     // The vehicle's clock at `sent` 0, ms.
     let mut clock0 = 1000u32;
     let mut north_m = 0.0f32;
+    let (mut quiet_until, mut pilot_after_ack) = (0u32, script.pilot_after_ack);
     let mut got = Vec::new();
     let t0 = Instant::now();
     while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
@@ -227,6 +234,12 @@ fn against_counting(
         if let Some((b, m)) = script.mode_at_beat {
             if b == beats {
                 mode = m;
+            }
+        }
+        if let (Some(d), Some(n)) = (script.disarm_at_beat, script.rearm_after) {
+            if beats == d + n {
+                armed = true;
+                mode = script.guided();
             }
         }
         if script.disarm_at_beat == Some(beats) {
@@ -246,7 +259,10 @@ fn against_counting(
                 ))
                 .unwrap();
         }
-        if (!script.gimbal || beats > 0) && script.heartbeats_stop_at.is_none_or(|b| beats < b) {
+        if (!script.gimbal || beats > 0)
+            && script.heartbeats_stop_at.is_none_or(|b| beats < b)
+            && beats >= quiet_until
+        {
             v.send(&heartbeat(
                 script.firmware.1,
                 script.firmware.0,
@@ -316,13 +332,27 @@ fn against_counting(
             } else {
                 0.0
             };
-            v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
-                time_boot_ms: clock0 + 50 * sent,
-                x: p + north_m,
-                y: p,
-                ..Default::default()
-            }))
-            .unwrap();
+            let paused = match (script.disarm_at_beat, script.rearm_after) {
+                (Some(d), Some(n)) => (d..d + n).contains(&beats),
+                _ => false,
+            };
+            if !paused {
+                v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: clock0 + 50 * sent,
+                    x: p + north_m,
+                    y: p,
+                    ..Default::default()
+                }))
+                .unwrap();
+            }
+            if script.late_frame_at == Some(beats) {
+                v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: (clock0 + 50 * sent).saturating_sub(2000),
+                    x: north_m,
+                    ..Default::default()
+                }))
+                .unwrap();
+            }
             sent += 1;
         }
         beats += 1;
@@ -405,6 +435,13 @@ fn against_counting(
                 result,
             }))
             .unwrap();
+            if c.command == MavCmd::MAV_CMD_DO_SET_MODE && result == MavResult::MAV_RESULT_ACCEPTED
+            {
+                quiet_until = beats + script.quiet_after_ack_beats;
+                if let Some(m) = pilot_after_ack.take() {
+                    mode = m;
+                }
+            }
         }
     }
     (companion.join().unwrap(), got, setpoints)
@@ -449,6 +486,7 @@ fn a_refused_offboard_disarms_what_the_companion_armed() {
 fn a_refused_offboard_of_a_pilots_vehicle_commands_nothing() {
     let script = Script {
         armed: true,
+        start_mode: 1 << 16,
         offboard: MavResult::MAV_RESULT_DENIED,
         ..Script::default()
     };
@@ -627,15 +665,6 @@ fn mavlink1_is_logged_once() {
     assert!(r.link.mavlink1_frames > 1);
 }
 
-/// Sets `stop` (Ctrl-C) after `s` seconds.
-fn stop_after(o: &FlyOptions, s: f64) {
-    let stop = o.stop.clone();
-    std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_secs_f64(s));
-        stop.store(true, std::sync::atomic::Ordering::SeqCst);
-    });
-}
-
 /// Ctrl-C after the companion armed the vehicle on the ground but before OFFBOARD (the
 /// vehicle keeps answering "in progress"): it disarms it, never a HOLD.
 #[test]
@@ -647,7 +676,8 @@ fn an_interrupt_before_offboard_disarms_what_the_companion_armed() {
     let (r, got) = against(script, |o| {
         o.take_control = true;
         o.arm = true;
-        stop_after(o, 2.0);
+        // After the arming (sent once TWO_VEHICLES_WINDOW_S, 2 s, has passed).
+        stop_after(o, 3.0);
     });
     assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
     assert!(got.iter().any(is_disarm), "{got:?}");
@@ -1337,7 +1367,7 @@ fn is_arm(g: &Got) -> bool {
 fn a_pilots_disarm_during_the_take_over_is_final() {
     let script = Script {
         offboard_from_beat: u32::MAX,
-        disarm_at_beat: Some(20),
+        disarm_at_beat: Some(60),
         ..Script::default()
     };
     let (r, got) = against(script, |o| {
@@ -1362,7 +1392,7 @@ fn a_pilots_mode_change_during_the_take_over_is_final() {
         armed: true,
         start_mode: 3 << 16,
         offboard_from_beat: u32::MAX,
-        mode_at_beat: Some((30, 7 << 16)),
+        mode_at_beat: Some((60, 7 << 16)),
         ..Script::default()
     };
     let (r, got) = against(script, |o| o.take_control = true);
@@ -1376,10 +1406,11 @@ fn a_pilots_mode_change_during_the_take_over_is_final() {
         !got.iter().any(is_hold) && !got.iter().any(is_disarm),
         "{got:?}"
     );
-    // OFFBOARD is asked every 0.5 s (10 beats): at most one more after beat 30's switch.
+    // OFFBOARD is asked every 0.5 s (10 beats), from 2 s (TWO_VEHICLES_WINDOW_S): at most one
+    // more after beat 60's switch.
     let late = got
         .iter()
-        .filter(|g| g.cmd == MavCmd::MAV_CMD_DO_SET_MODE && g.measurements_before > 31)
+        .filter(|g| g.cmd == MavCmd::MAV_CMD_DO_SET_MODE && g.measurements_before > 61)
         .count();
     assert!(late <= 1, "{got:?}");
 }
@@ -1437,6 +1468,118 @@ fn take_control_arms_only_when_asked() {
     assert_eq!(setpoints, 0);
     assert!(
         r.events.iter().any(|e| e.contains("--arm")),
+        "{:?}",
+        r.events
+    );
+}
+
+fn is_offboard_switch(g: &Got) -> bool {
+    g.cmd == MavCmd::MAV_CMD_DO_SET_MODE && g.p[1] == 6.0
+}
+
+/// att33d-7: a pilot's vehicle (armed in POSCTL) with a PX4-like heartbeat (none for 1 s after
+/// an acknowledgement) accepts fly's OFFBOARD, and its pilot switches to STABILIZED at once:
+/// the accepted switch is never sent again (a retry would take the vehicle back from the
+/// pilot); the next heartbeat shows STABILIZED, the pilot's word: `pilot_took_over`.
+#[test]
+fn an_accepted_offboard_switch_is_never_sent_again() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        quiet_after_ack_beats: 20,
+        pilot_after_ack: Some(7 << 16),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(1.0);
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert_eq!(
+        got.iter().filter(|g| is_offboard_switch(g)).count(),
+        1,
+        "{got:?}"
+    );
+    assert!(r.commands.is_empty() && !r.way_out_commanded);
+}
+
+/// att33d-6: in control, a failsafe's HOLD is accepted, then the pilot switches to POSCTL
+/// before the next (1 Hz) heartbeat: HOLD is not sent again (it would yank the vehicle back);
+/// the heartbeat shows POSCTL, a pilot's take-over during the failsafe.
+#[test]
+fn an_accepted_hold_is_not_sent_again_over_the_pilot() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        quiet_after_ack_beats: 20,
+        pilot_after_ack: Some(3 << 16),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| stop_after(o, 0.5));
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert_eq!(got.iter().filter(|g| is_hold(g)).count(), 1, "{got:?}");
+    assert!(r.way_out_overridden, "{:?}", r.events);
+}
+
+/// att33d-5: Ctrl-C after the vehicle accepted fly's OFFBOARD but before its next (1 Hz)
+/// heartbeat shows it: the vehicle may be in OFFBOARD with nobody sending setpoints, so the
+/// way out is commanded (HOLD) and confirmed, not "nothing commanded".
+#[test]
+fn a_failsafe_after_an_accepted_offboard_commands_the_way_out() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        quiet_after_ack_beats: 40,
+        ..Script::default()
+    };
+    // OFFBOARD goes out at 2 s (TWO_VEHICLES_WINDOW_S); Ctrl-C 0.6 s after, in the quiet.
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        stop_after(o, 2.6);
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(got.iter().any(is_hold), "{got:?}");
+    assert!(
+        r.way_out_commanded && r.failsafe_acknowledged,
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33d-3: in control the vehicle is disarmed (nobody here commanded it; no time-stamped
+/// message while the disarm is watched for a reboot) and armed again in OFFBOARD 0.4 s later:
+/// the disarm was a pilot's, `pilot_took_over`, never flown on (no setpoint left unsent while
+/// the law runs).
+#[test]
+fn a_disarm_and_rearm_in_the_reboot_watch_is_the_pilots() {
+    let script = Script {
+        disarm_at_beat: Some(60),
+        rearm_after: Some(8),
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.arm = true;
+        o.max_duration_s = Some(6.0);
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!got.iter().any(is_hold) && !r.way_out_commanded, "{got:?}");
+}
+
+/// att33d-4: one position frame stamped 2 s before the newest (a late frame on a link that
+/// reorders) is no reboot: dropped, the flight goes on to --max-duration-s.
+#[test]
+fn one_late_frame_is_not_a_reboot() {
+    let script = Script {
+        armed: true,
+        start_mode: OFFBOARD,
+        late_frame_at: Some(40),
+        ..Script::default()
+    };
+    let (r, _) = against(script, |o| o.max_duration_s = Some(3.0));
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("rebooted")),
         "{:?}",
         r.events
     );

@@ -10,19 +10,19 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::ack_of;
+
 /// A ground rover (the default scenario's Dubins vehicle) a pilot armed and switched to
 /// OFFBOARD (PX4 main mode 6): the companion has control from its first heartbeat, so a
 /// failsafe commands HOLD.
 fn heartbeat() -> MavMessage {
-    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: 6 << 16,
-        mavtype: MavType::MAV_TYPE_GROUND_ROVER,
-        autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
-        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
-            | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    })
+    support::heartbeat(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        MavAutopilot::MAV_AUTOPILOT_PX4,
+        support::custom_mode_flags(true),
+        6 << 16,
+    )
 }
 
 /// A vehicle that answers the companion's first message with a heartbeat, then sends
@@ -132,30 +132,6 @@ fn yaw_rate_setpoint(body_yaw_rate: f32) -> MavMessage {
         type_mask: AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE,
         ..Default::default()
     })
-}
-
-/// Sends `cmd` from `link` to the vehicle and returns the result of its acknowledgement.
-fn ack_of(link: &mut Link, cmd: MavCmd, p1: f32, p2: f32) -> Option<MavResult> {
-    link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-        param1: p1,
-        param2: p2,
-        command: cmd,
-        target_system: 1,
-        target_component: 1,
-        ..Default::default()
-    }))
-    .unwrap();
-    let t0 = Instant::now();
-    while t0.elapsed() < Duration::from_secs(10) {
-        for r in link.poll(Duration::from_millis(50)).unwrap() {
-            if let MavMessage::COMMAND_ACK(a) = &r.msg {
-                if a.command == cmd {
-                    return Some(a.result);
-                }
-            }
-        }
-    }
-    None
 }
 
 /// Once companion A (system 1, component 191) has armed the flying vehicle, a stranger B

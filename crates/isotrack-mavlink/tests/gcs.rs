@@ -12,28 +12,8 @@ use isotrack_sim::NoTrace;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
 
-fn ack_of(link: &mut Link, cmd: MavCmd, p1: f32, p2: f32) -> Option<MavResult> {
-    link.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-        param1: p1,
-        param2: p2,
-        command: cmd,
-        target_system: 1,
-        target_component: 1,
-        ..Default::default()
-    }))
-    .unwrap();
-    let t0 = Instant::now();
-    while t0.elapsed() < Duration::from_secs(10) {
-        for r in link.poll(Duration::from_millis(50)).unwrap() {
-            if let MavMessage::COMMAND_ACK(a) = &r.msg {
-                if a.command == cmd {
-                    return Some(a.result);
-                }
-            }
-        }
-    }
-    None
-}
+mod support;
+use support::ack_of;
 
 fn gcs_workflow(gcs_system: u8) {
     let s = load_scenario(None, &["sim.duration_s=30".to_string()]).unwrap();

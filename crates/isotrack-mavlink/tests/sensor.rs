@@ -15,6 +15,9 @@ use std::net::UdpSocket;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::stop_after;
+
 #[test]
 fn udp_lines_are_answered_with_the_laws_roll() {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper-fig3-uav.toml");
@@ -263,4 +266,432 @@ fn malformed_and_non_finite_lines_are_counted_and_logged() {
         .collect();
     assert_eq!(logged.len(), 1, "{:?}", r.events);
     assert!(logged[0].contains("abc,def"), "{logged:?}");
+}
+
+/// A pilot's PX4 vehicle of type `mavtype` (system 1, component 1; armed, in OFFBOARD) that
+/// `fly` (listening, `udpin:`, with `opts`) flies: every 50 ms beat it sends its heartbeat,
+/// then `beat(k, vehicle, other)` sends what the test wants (`other`: component 100 of the
+/// vehicle's system, a peripheral). Returns the report and the setpoints received.
+fn pilots_vehicle(
+    mavtype: MavType,
+    opts: impl FnOnce(&mut FlyOptions),
+    beat: impl FnMut(u32, &mut Link, &mut Link),
+) -> (
+    isotrack_mavlink::fly::FlyReport,
+    Vec<SET_ATTITUDE_TARGET_DATA>,
+) {
+    pilots_vehicle_in(mavtype, Some(6 << 16), 100, opts, beat)
+}
+
+/// [`pilots_vehicle`] armed in PX4 mode `mode` (`None`: `beat` sends the heartbeats), its
+/// `other` component `other_component`.
+fn pilots_vehicle_in(
+    mavtype: MavType,
+    mode: Option<u32>,
+    other_component: u8,
+    opts: impl FnOnce(&mut FlyOptions),
+    mut beat: impl FnMut(u32, &mut Link, &mut Link),
+) -> (
+    isotrack_mavlink::fly::FlyReport,
+    Vec<SET_ATTITUDE_TARGET_DATA>,
+) {
+    let s = if mavtype == MavType::MAV_TYPE_FIXED_WING {
+        let p =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/paper-fig3-uav.toml");
+        load_scenario(Some(&p), &[]).unwrap()
+    } else {
+        load_scenario(None, &[]).unwrap()
+    };
+    let mut o = FlyOptions::new("udpin:127.0.0.1:0");
+    o.timeout_s = 2.0;
+    opts(&mut o);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let companion = std::thread::spawn(move || {
+        run_fly(&s, &o, &mut NoTrace, &mut |l| {
+            tx.send(l.local_addr()?).unwrap();
+            Ok(())
+        })
+        .unwrap()
+    });
+    let url = format!("udpout:{}", rx.recv().unwrap());
+    let mut vehicle = Link::open(&url, 1, 1).unwrap();
+    let mut other = Link::open(&url, 1, other_component).unwrap();
+    let mut setpoints = Vec::new();
+    let t0 = Instant::now();
+    let mut k = 0;
+    while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
+        if let Some(mode) = mode {
+            vehicle
+                .send(&px4_heartbeat(
+                    mavtype,
+                    MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                        | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                    mode,
+                ))
+                .unwrap();
+        }
+        beat(k, &mut vehicle, &mut other);
+        k += 1;
+        for r in vehicle.poll(Duration::from_millis(50)).unwrap() {
+            if let MavMessage::SET_ATTITUDE_TARGET(a) = r.msg {
+                setpoints.push(a);
+            }
+        }
+        let _ = other.poll(Duration::ZERO);
+    }
+    (companion.join().unwrap(), setpoints)
+}
+
+/// A PX4 autopilot's heartbeat.
+fn px4_heartbeat(mavtype: MavType, base_mode: MavModeFlag, custom_mode: u32) -> MavMessage {
+    support::heartbeat(
+        mavtype,
+        MavAutopilot::MAV_AUTOPILOT_PX4,
+        base_mode,
+        custom_mode,
+    )
+}
+
+/// `NAMED_VALUE_FLOAT` `ISO_S` stamped `ms` with `value`.
+fn iso_s(ms: u32, value: f32) -> MavMessage {
+    let mut name = [0u8; 10];
+    name[..5].copy_from_slice(b"ISO_S");
+    MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+        time_boot_ms: ms,
+        value,
+        name: name.into(),
+    })
+}
+
+/// The law's commands for `values` at `times_ms`, as `fly` reports them.
+fn law_commands(times_ms: &[u32], value: impl Fn(u32) -> f64) -> Vec<(u32, f64)> {
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    times_ms
+        .iter()
+        .map(|&ms| {
+            let w = law.update(&Measurement {
+                t_s: ms as f64 / 1000.0,
+                value: value(ms),
+            });
+            (ms, w)
+        })
+        .collect()
+}
+
+/// att33c item 1: `ISO_S` from a second component of the vehicle's system (1, 100), interleaved
+/// with the autopilot's: the sensor is the first sender of a valid one (the autopilot here);
+/// the other's values are never flown (the law runs on the autopilot's only), they are
+/// counted in measurements_other_sources and logged once.
+#[test]
+fn a_second_components_measurements_are_not_flown() {
+    let (r, _) = pilots_vehicle(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        |o| o.max_duration_s = Some(1.0),
+        |k, v, other| {
+            v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+            if k > 2 {
+                other.send(&iso_s(1025 + 50 * k, 50.0)).unwrap();
+            }
+        },
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    let times: Vec<u32> = r.commands.iter().map(|c| c.0).collect();
+    assert!(times.len() > 5, "{:?}", r.events);
+    assert!(times.iter().all(|t| t % 50 == 0), "{times:?}");
+    assert_eq!(r.commands, law_commands(&times, |_| 9.5));
+    assert!(r.measurements_other_sources > 0, "{:?}", r.events);
+    let logged: Vec<_> = r
+        .events
+        .iter()
+        .filter(|e| e.contains("measurements_other_sources"))
+        .collect();
+    assert_eq!(logged.len(), 1, "{:?}", r.events);
+    assert!(logged[0].contains("component 100"), "{logged:?}");
+}
+
+/// att33c items 2 and 2b: a value beyond +-1e12 (MAX_MEASUREMENT_ABS) is no measurement, on
+/// either path: never given to the law (whose integral one such sample would wind for the
+/// rest of the flight), counted in measurements_invalid; the law runs on the plausible ones.
+#[test]
+fn an_implausible_value_is_no_measurement() {
+    assert!(isotrack_mavlink::fly::plausible_value(1e12));
+    assert!(!isotrack_mavlink::fly::plausible_value(-1.0000001e12));
+    let (r, _) = udp_flight(|s, a| {
+        s.send_to(b"1.0,1e300\n2.0,-2e12\n3.0,4e-320\n4.0,1\n", a)
+            .unwrap();
+    });
+    assert_eq!(
+        r.commands,
+        law_commands(&[3000, 4000], |ms| if ms == 3000 { 4e-320 } else { 1.0 }),
+        "{:?}",
+        r.events
+    );
+    assert_eq!(r.measurements_invalid, 2, "{:?}", r.events);
+    // MAVLink's f32 path: 3e38 is finite, and still no measurement.
+    let (r, _) = pilots_vehicle(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        |o| o.max_duration_s = Some(0.5),
+        |k, v, _| {
+            let value = if k == 3 || k == 4 { 3e38 } else { 9.5 };
+            v.send(&iso_s(1000 + 50 * k, value)).unwrap();
+        },
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 2, "{:?}", r.events);
+    let times: Vec<u32> = r.commands.iter().map(|c| c.0).collect();
+    assert!(
+        !times.contains(&1150) && !times.contains(&1200),
+        "{times:?}"
+    );
+    assert_eq!(r.commands, law_commands(&times, |_| 9.5));
+}
+
+/// att33c item 6: a junk datagram (a port scanner's "hello") arriving first does not lock the
+/// UDP sensor: the sensor is the first sender of a valid line; the junk is counted in
+/// measurements_invalid and the real sensor's lines are flown.
+#[test]
+fn a_junk_datagram_does_not_lock_the_sensor() {
+    let (r, _) = udp_flight(|s, a| {
+        let stray = UdpSocket::bind("127.0.0.1:0").unwrap();
+        stray.send_to(b"hello\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"7.0,3\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"8.0,2\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        stray.send_to(b"9.0,50\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let expected: Vec<(u32, f64)> = [(7.0, 3.0), (8.0, 2.0)]
+        .iter()
+        .map(|&(t, v)| {
+            (
+                (t * 1000.0) as u32,
+                law.update(&Measurement { t_s: t, value: v }),
+            )
+        })
+        .collect();
+    assert_eq!(r.commands, expected, "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 1, "{:?}", r.events);
+    assert_eq!(r.measurements_other_sources, 1, "{:?}", r.events);
+}
+
+/// The pitch of a setpoint's attitude quaternion `[w, x, y, z]` (ZYX Euler angles), rad.
+fn pitch_of(q: [f32; 4]) -> f64 {
+    let [w, x, y, z] = q.map(f64::from);
+    (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin()
+}
+
+/// att33c item 19: the fixed wing's altitude (LOCAL_POSITION_NED z) steps by 90 m between two
+/// samples 50 ms apart (an EKF height reset): 1800 m/s, beyond the 30 m/s the Fig. 3 UAV
+/// flies. Not a climb to answer with the full 15 deg of pitch: the hold's target moves with
+/// the step, the pitch stays 0 (on target before, on target after), logged once.
+#[test]
+fn an_altitude_step_is_a_reset_not_a_climb() {
+    for step_m in [90.0f32, -90.0] {
+        let (r, setpoints) = pilots_vehicle(
+            MavType::MAV_TYPE_FIXED_WING,
+            |o| o.max_duration_s = Some(1.5),
+            |k, v, _| {
+                let z = if k < 10 { -100.0 } else { -100.0 - step_m };
+                v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+                v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: 1000 + 50 * k,
+                    z,
+                    ..Default::default()
+                }))
+                .unwrap();
+            },
+        );
+        assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+        assert!(setpoints.len() > 20, "{}", setpoints.len());
+        for a in &setpoints {
+            assert!(
+                pitch_of(a.q).abs() < 1e-6,
+                "{step_m}: pitch {}",
+                pitch_of(a.q)
+            );
+        }
+        let logged: Vec<_> = r
+            .events
+            .iter()
+            .filter(|e| e.contains("altitude step of"))
+            .collect();
+        assert_eq!(logged.len(), 1, "{:?}", r.events);
+        assert!(
+            logged[0].contains(&format!("altitude step of {step_m} m ignored")),
+            "{logged:?}"
+        );
+    }
+}
+
+/// A second companion with this one's ids (system 1, component 191) beats on the link: with
+/// --take-control, fly goes no further (another_controller, nothing commanded: exit 79);
+/// without, it is logged once and the flight goes on.
+#[test]
+fn a_twin_companions_heartbeat_is_noticed() {
+    // The twin beats before the sensor and the position are there: --take-control has
+    // commanded nothing yet (nor sent a setpoint, which goes with its first command).
+    let twin_beats = |k: u32, v: &mut Link, twin: &mut Link| {
+        twin.send(&support::heartbeat(
+            MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+            MavAutopilot::MAV_AUTOPILOT_INVALID,
+            MavModeFlag::empty(),
+            0,
+        ))
+        .unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+        v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+        v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+            time_boot_ms: 1000 + 50 * k,
+            ..Default::default()
+        }))
+        .unwrap();
+    };
+    let (r, setpoints) = pilots_vehicle_in(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        Some(3 << 16),
+        191,
+        |o| o.take_control = true,
+        twin_beats,
+    );
+    assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
+    assert!(
+        !r.way_out_commanded && setpoints.is_empty(),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        r.events.iter().any(|e| e.contains("second companion")),
+        "{:?}",
+        r.events
+    );
+    let (r, _) = pilots_vehicle_in(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        Some(6 << 16),
+        191,
+        |o| o.max_duration_s = Some(0.5),
+        twin_beats,
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    let logged = r.events.iter().filter(|e| e.contains("second companion"));
+    assert_eq!(logged.count(), 1, "{:?}", r.events);
+}
+
+/// att33c item 17: a heartbeat armed with `custom_mode` OFFBOARD but without
+/// MAV_MODE_FLAG_CUSTOM_MODE_ENABLED says nothing of its mode (MAVLink): no hand-over, the
+/// law never runs; the flight waits for the pilot until stopped.
+#[test]
+fn a_custom_mode_without_its_flag_is_no_mode() {
+    let (r, _) = pilots_vehicle_in(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        None,
+        100,
+        |o| stop_after(o, 1.5),
+        |k, v, _| {
+            v.send(&px4_heartbeat(
+                MavType::MAV_TYPE_GROUND_ROVER,
+                MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                6 << 16,
+            ))
+            .unwrap();
+            v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+        },
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.commands.is_empty(), "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("armed in an unknown mode")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33c item 9: a heartbeat flapping between POSCTL and STABILIZED (20 a beat, 400 a second)
+/// while fly waits for the pilot: at most one change of mode logged a second, the ones
+/// between counted in it; the events stay few, not one per heartbeat.
+#[test]
+fn a_flapping_mode_is_logged_at_most_once_a_second() {
+    let (r, _) = pilots_vehicle_in(
+        MavType::MAV_TYPE_GROUND_ROVER,
+        None,
+        100,
+        |o| stop_after(o, 2.5),
+        |k, v, _| {
+            for i in 0..20 {
+                let mode = if i % 2 == 0 { 3 << 16 } else { 7 << 16 };
+                v.send(&px4_heartbeat(
+                    MavType::MAV_TYPE_GROUND_ROVER,
+                    MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                        | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                    mode,
+                ))
+                .unwrap();
+            }
+            v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+        },
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    let modes: Vec<_> = r
+        .events
+        .iter()
+        .filter(|e| e.contains("vehicle armed in"))
+        .collect();
+    // 2.5 s: the first change and at most one a second after it.
+    assert!((1..=4).contains(&modes.len()), "{:?}", r.events);
+    assert!(
+        modes.iter().any(|e| e.contains("not logged")),
+        "{:?}",
+        r.events
+    );
+    assert!(r.events.len() < 20, "{:?}", r.events);
+}
+
+/// att33c item 8: a MAV_TYPE_GENERIC autopilot heartbeat from another component of the
+/// vehicle's system (1, 100: a MAVSDK-based peripheral) beside the autopilot (1, 1) is no
+/// second vehicle (`two_vehicles`, which --target-system cannot resolve): ignored, logged once,
+/// whichever beats first; the autopilot is flown.
+#[test]
+fn a_generic_peripheral_beside_the_autopilot_is_no_second_vehicle() {
+    for peripheral_first in [false, true] {
+        let (r, _) = pilots_vehicle_in(
+            MavType::MAV_TYPE_GROUND_ROVER,
+            None,
+            100,
+            |o| o.max_duration_s = Some(0.5),
+            |k, v, other| {
+                let generic = px4_heartbeat(
+                    MavType::MAV_TYPE_GENERIC,
+                    MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                    0,
+                );
+                let autopilot = px4_heartbeat(
+                    MavType::MAV_TYPE_GROUND_ROVER,
+                    MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+                        | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+                    6 << 16,
+                );
+                if peripheral_first {
+                    other.send(&generic).unwrap();
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                v.send(&autopilot).unwrap();
+                if !peripheral_first {
+                    other.send(&generic).unwrap();
+                }
+                v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+            },
+        );
+        assert_eq!(
+            r.end,
+            FlyEnd::MaxDuration,
+            "{peripheral_first}: {:?}",
+            r.events
+        );
+        assert!(!r.commands.is_empty(), "{:?}", r.events);
+        let logged = r.events.iter().filter(|e| e.contains("peripheral"));
+        assert_eq!(logged.count(), 1, "{:?}", r.events);
+    }
 }

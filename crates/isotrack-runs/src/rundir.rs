@@ -291,6 +291,29 @@ impl RunDir {
         cant(&self.path("trace.csv"), why)
     }
 
+    /// Finishes a directory whose live trace ([`RunDir::live_trace`]) could not be written to
+    /// its end (a disk that filled mid-flight): the trace is left as far as it was written,
+    /// `scenario.toml` and then `summary.json` (which says so, `summary`'s to say) written
+    /// atomically as [`RunDir::finish`] writes them, so what a flight did (its end, its events)
+    /// is kept. A summary that cannot be written either is the failure (exit 73).
+    pub fn finish_incomplete<S: Serialize>(
+        &self,
+        trace: TraceFile,
+        scenario_toml: &str,
+        summary: &Summary<S>,
+    ) -> Result<(), Failure> {
+        let TraceFile { writer, tmp, .. } = trace;
+        let _ = writer.finish();
+        if let Some(tmp) = &tmp {
+            let _ = std::fs::rename(tmp, self.path("trace.csv"));
+        }
+        self.remove_old_summary()?;
+        let resolved = self.path("scenario.toml");
+        write_atomic(&resolved, scenario_toml.as_bytes()).map_err(|e| cant(&resolved, e))?;
+        let p = self.path("summary.json");
+        write_atomic(&p, summary.to_json().as_bytes()).map_err(|e| cant(&p, e))
+    }
+
     /// Starts `trace.csv` written in place as the run goes, for a run watched while it flies
     /// (`sitl`, `fly`: `tail -f DIR/trace.csv`): the old summary is removed first (the earlier
     /// run is replaced from here on); the summary, written last by [`RunDir::finish`], still
@@ -374,5 +397,66 @@ impl RunDir {
         write_atomic(&resolved, scenario_toml.as_bytes()).map_err(|e| cant(&resolved, e))?;
         let p = self.path("summary.json");
         write_atomic(&p, summary.as_bytes()).map_err(|e| cant(&p, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isotrack_sim::{TraceRow, TraceSink};
+
+    /// att33c item 10: a live trace on a full disk (`/dev/full`: every write ENOSPC) keeps its
+    /// first error; `finish` fails with it, `finish_incomplete` still writes `scenario.toml`
+    /// and `summary.json`.
+    #[test]
+    fn a_trace_on_a_full_disk_still_gets_its_summary() {
+        let full = Path::new("/dev/full");
+        if !full.exists() {
+            return;
+        }
+        let d = tempfile::tempdir().unwrap();
+        let out = RunDir::open(d.path(), &[], &[], None).unwrap();
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let trace = || {
+            let mut writer = TraceWriter::create(full, false).unwrap();
+            for k in 0..10_000 {
+                writer.record(&TraceRow {
+                    t_s: k as f64,
+                    x_m: 0.0,
+                    y_m: 0.0,
+                    heading_rad: 0.0,
+                    s: 1.0,
+                    error: 0.0,
+                    omega_radps: 0.0,
+                    s_measured: None,
+                    telemetry: None,
+                });
+            }
+            writer.flush();
+            assert_eq!(
+                writer.error().map(|e| e.raw_os_error()),
+                Some(Some(28)),
+                "ENOSPC"
+            );
+            TraceFile {
+                writer,
+                tmp: None,
+                _pending: None,
+            }
+        };
+        let summary = Summary::of_run(
+            &scenario,
+            None,
+            &scenario.run(&mut isotrack_sim::NoTrace),
+            &[],
+        );
+        assert!(out.finish(trace(), "x = 1\n", &summary).is_err());
+        assert!(!d.path().join("summary.json").exists());
+        out.finish_incomplete(trace(), "x = 1\n", &summary).unwrap();
+        assert!(d.path().join("summary.json").exists());
+        assert_eq!(
+            std::fs::read_to_string(d.path().join("scenario.toml")).unwrap(),
+            "x = 1\n"
+        );
     }
 }

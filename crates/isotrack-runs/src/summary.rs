@@ -218,6 +218,19 @@ pub struct FlightRecord {
     /// Measurements that were none (a non-finite value, a malformed UDP sensor line): dropped.
     #[serde(default)]
     pub measurements_invalid: u64,
+    /// Measurements from another sender than the sensor's (another component's
+    /// `NAMED_VALUE_FLOAT`, another address's UDP datagram): dropped.
+    #[serde(default)]
+    pub measurements_other_sources: u64,
+    /// Why the flight's trace is incomplete (its recording stopped: a disk that filled
+    /// mid-flight), absent when it is whole.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recording_incomplete: Option<String>,
+    /// The SHA-256 of each data file of the scenario flown, by path, as a run records them
+    /// ([`data_file_digests`]; left out when there are none): `plot` compares a flight with the
+    /// runs it is drawn with.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub data_files: BTreeMap<String, String>,
     /// What the metrics were computed over (the planned window, or what was flown).
     #[serde(default)]
     pub metrics_over: String,
@@ -403,11 +416,11 @@ impl<S> Summary<S> {
         }
     }
 
-    /// The data files' digests the run recorded (`None` for a flight).
+    /// The data files' digests the run or flight recorded.
     pub fn data_files(&self) -> Option<&BTreeMap<String, String>> {
         match &self.ended {
             Ended::Run(r) => Some(&r.data_files),
-            Ended::Flight(_) => None,
+            Ended::Flight(f) => Some(&f.data_files),
         }
     }
 }

@@ -80,6 +80,11 @@ impl TraceWriter {
         }
     }
 
+    /// The first error met while writing or flushing, if any (rows after it are not written).
+    pub fn error(&self) -> Option<&std::io::Error> {
+        self.error.as_ref()
+    }
+
     /// Flushes; the first error met while writing, if any.
     pub fn finish(mut self) -> std::io::Result<()> {
         if let Some(e) = self.error.take() {

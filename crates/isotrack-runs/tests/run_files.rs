@@ -116,6 +116,38 @@ fn a_flight_summary_reads_as_a_flight() {
     assert!(s.record().is_none());
 }
 
+/// att33c items 10 and 13: a flight records its data files' digests as a run does (so `plot`
+/// compares them, never calling a fresh flight "an older run"), and a flight whose recording
+/// stopped says why (`recording_incomplete`); both absent when empty, and read back.
+#[test]
+fn a_flight_summary_keeps_its_data_files_and_an_incomplete_recording() {
+    let text = r#"{"isotrack_version": "0", "scenario_path": null, "outcome": "completed",
+        "outcome_detail": "ended", "end_reason": "vehicle_ended", "failsafe": false,
+        "failsafe_acknowledged": false, "t_end_s": 12.5, "samples": 7, "commands": 3,
+        "events": [], "frames_in": 10, "frames_out": 11, "junk_datagrams": 1,
+        "recording_incomplete": "cannot write trace.csv: No space left on device",
+        "data_files": {"/d/no2.csv": "ab12"}, "scenario": {}}"#;
+    let s = Summary::from_json(text).unwrap();
+    let digests = s.data_files().unwrap();
+    assert_eq!(digests.get("/d/no2.csv").map(String::as_str), Some("ab12"));
+    let Ended::Flight(f) = &s.ended else {
+        panic!("a flight read as a run")
+    };
+    assert!(f
+        .recording_incomplete
+        .as_deref()
+        .unwrap()
+        .contains("No space"));
+    let mut whole = f.clone();
+    whole.recording_incomplete = None;
+    whole.data_files.clear();
+    let json = serde_json::to_string(&whole).unwrap();
+    assert!(
+        !json.contains("recording_incomplete") && !json.contains("data_files"),
+        "{json}"
+    );
+}
+
 /// The row builder: a run's cells by name, an undefined number empty, an invalid run's row.
 #[test]
 fn the_row_builder_writes_cells_and_invalid_rows() {

@@ -8,7 +8,7 @@ use crate::Scenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_sim::{simulate_batch, BatchRun, Oracles, RunResult, LANES};
-use isotrack_vehicles::DubinsState;
+use isotrack_vehicles::{DubinsState, FixedWingConfig};
 use std::sync::Arc;
 
 impl Scenario {
@@ -38,6 +38,13 @@ impl Scenario {
             // A Dubins robot is its speed (derive rebuilds it when sim.seed changes, which only
             // a UAV's gusts depend on).
             (VehicleModel::Dubins(a), VehicleModel::Dubins(b)) => a == b,
+            // A UAV is its configuration (trim and gains follow from it); derive rebuilds it
+            // when sim.seed changes, which only its gusts' seed depends on, and each lane
+            // starts with its own scenario's gust seed (`run_on`).
+            (VehicleModel::FixedWing(a), VehicleModel::FixedWing(b)) => {
+                let unseeded = |c: &FixedWingConfig| FixedWingConfig { seed: 0, ..*c };
+                unseeded(a.config()) == unseeded(b.config())
+            }
             _ => Arc::ptr_eq(&self.vehicle, &other.vehicle),
         };
         Arc::ptr_eq(&self.field, &other.field) && same_vehicle && self.plan() == other.plan()
@@ -91,9 +98,14 @@ fn run_on<F: ScalarField + FieldDerivatives + Sync>(
             simulate_batch(field, vehicle, &plan, batch_runs(group, oracles, x0))
         }
         VehicleModel::FixedWing(vehicle) => {
+            // Each run's own gust seed (the airframes of a group differ in nothing else).
             let x0 = |s: &Scenario| {
                 let st = s.start();
-                vehicle.initial_state(st.x_m, st.y_m, st.heading_rad)
+                let seed = match &*s.vehicle {
+                    VehicleModel::FixedWing(own) => own.config().seed,
+                    VehicleModel::Dubins(_) => vehicle.config().seed,
+                };
+                vehicle.initial_state_seeded(st.x_m, st.y_m, st.heading_rad, seed)
             };
             simulate_batch(field, &**vehicle, &plan, batch_runs(group, oracles, x0))
         }
@@ -134,6 +146,29 @@ mod tests {
             assert!(d(set).batches_with(&base), "{set}");
         }
         for set in ["vehicle.speed_mps=1", "field.i0=30", "sim.duration_s=6"] {
+            assert!(!d(set).batches_with(&base), "{set}");
+        }
+    }
+
+    /// UAV runs that differ in seed (and so in gust seed), start or gains share their lanes;
+    /// a new airspeed, wind or gust switch does not.
+    #[test]
+    fn uav_runs_batch_across_seeds() {
+        let base = parse_scenario(
+            "[vehicle]\nkind = \"fixed_wing\"\ngusts = true\n",
+            "<test>",
+            &["sim.duration_s=5".into()],
+        )
+        .unwrap();
+        let d = |set: &str| base.derive(&[set.to_string()], "<test>").unwrap();
+        for set in ["sim.seed=4", "initial.x_m=9", "controller.kp=3"] {
+            assert!(d(set).batches_with(&base), "{set}");
+        }
+        for set in [
+            "vehicle.airspeed_mps=25",
+            "vehicle.wind_mps=[1.0, 0.0]",
+            "vehicle.gusts=false",
+        ] {
             assert!(!d(set).batches_with(&base), "{set}");
         }
     }

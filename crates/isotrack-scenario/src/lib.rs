@@ -52,8 +52,11 @@ use std::sync::{Arc, OnceLock};
 #[derive(Clone, Debug)]
 pub struct Scenario {
     /// The resolved keys: the user's, and every default resolution wrote (what `scenario.toml`
-    /// records; sweeps and `--set` apply to it).
+    /// records).
     file: ScenarioFile,
+    /// The user's own keys ([`Scenario::given`]): what [`Scenario::derive`] and sweeps apply
+    /// their assignments to before resolving once.
+    given: Arc<ScenarioFile>,
     /// Every setting in force, typed ([`spec`]).
     spec: spec::ScenarioSpec,
     field: Arc<FieldModel>,
@@ -61,9 +64,9 @@ pub struct Scenario {
     isoline: Arc<OnceLock<IsolineOracle>>,
     /// Warnings from the field's files ([`field::BuiltField::notes`]).
     field_notes: Arc<Vec<String>>,
-    /// The `[field]` keys its files filled in (geometry, units), not the user's: a variant
-    /// that reads another file drops them, so that the new file's own are used.
-    file_filled_keys: Arc<Vec<String>>,
+    /// The `[field]` section as resolution left it, before its files filled keys in (paths
+    /// absolute): a variant whose resolved `[field]` is this one shares the field.
+    resolved_field: Arc<schema::FieldSection>,
     /// Where a lon/lat grid's local metres are on the Earth ([`field::BuiltField::lonlat`]).
     lonlat: Option<LonLatFrame>,
 }
@@ -84,29 +87,49 @@ fn start_xy(file: &ScenarioFile) -> Result<[f64; 2], resolve::Issue> {
     Ok([s.x_m, s.y_m])
 }
 
-/// The keys set in `after` but not in `before` (`path`/`paths`, made absolute, excepted).
-fn filled_keys(before: &schema::FieldSection, after: &schema::FieldSection) -> Vec<String> {
-    let (b, a) = (field_table(before), field_table(after));
-    a.keys()
-        .filter(|k| !b.contains_key(*k) && *k != "path" && *k != "paths")
-        .cloned()
-        .collect()
-}
-
-fn field_table(f: &schema::FieldSection) -> toml::Table {
-    match toml::Value::try_from(f) {
-        Ok(toml::Value::Table(t)) => t,
-        _ => toml::Table::new(),
+/// `[field]` with the data files named as the built field read them (`field.path`,
+/// `field.paths` made absolute, [`field::FileFilled`]), its other keys as they are: the user's
+/// keys then name the same files from any directory.
+fn with_absolute_paths(
+    section: &schema::FieldSection,
+    filled: &field::FileFilled,
+) -> schema::FieldSection {
+    let mut s = section.clone();
+    if filled.path.is_some() {
+        s.path.clone_from(&filled.path);
     }
+    if filled.paths.is_some() {
+        s.paths.clone_from(&filled.paths);
+    }
+    s
 }
 
-/// Whether assignment `arg` (`KEY=VALUE`) names another source for the field's data.
-fn names_another_field_source(arg: &str) -> bool {
-    let key = arg.split_once('=').map_or("", |(k, _)| k.trim());
-    matches!(
-        key,
-        "field" | "field.kind" | "field.path" | "field.paths" | "field.variable" | "field.format"
-    )
+/// A field built for a resolved file: the model and its notes, the resolved `[field]` before
+/// the files filled keys in (paths absolute), and where a lon/lat grid is.
+struct FieldParts {
+    model: Arc<FieldModel>,
+    notes: Arc<Vec<String>>,
+    resolved_field: Arc<schema::FieldSection>,
+    lonlat: Option<LonLatFrame>,
+}
+
+/// Builds the field of resolved `file` (files relative to `base_dir`), records the keys its
+/// files filled into `file` and names the files by absolute path in `given` (the user's keys).
+fn build_recorded(
+    file: &mut ScenarioFile,
+    given: &mut ScenarioFile,
+    base_dir: &Path,
+) -> Result<FieldParts, resolve::Issue> {
+    let built = build_field_of(file, base_dir)?;
+    given.field = with_absolute_paths(&given.field, &built.filled);
+    let resolved_field = with_absolute_paths(&file.field, &built.filled);
+    built.filled.record(&mut file.field);
+    Ok(FieldParts {
+        model: Arc::new(built.model),
+        notes: Arc::new(built.notes),
+        resolved_field: Arc::new(resolved_field),
+        lonlat: built.lonlat,
+    })
 }
 
 impl PartialEq for Scenario {
@@ -117,34 +140,35 @@ impl PartialEq for Scenario {
 
 impl Scenario {
     /// Resolves `file` (defaults, checks) and builds its field, reading files relative to
-    /// `base_dir`.
+    /// `base_dir`. `file` is the user's keys ([`Scenario::given`]).
     pub fn from_file(file: ScenarioFile, base_dir: &Path) -> Result<Self, Vec<resolve::Issue>> {
+        let mut given = file.clone();
         let mut file = resolve::resolve(file)?;
-        let built = build_field_of(&file, base_dir).map_err(|i| vec![i])?;
-        let given = file.field.clone();
-        built.filled.record(&mut file.field);
-        let filled = filled_keys(&given, &file.field);
-        let (field, notes, lonlat) = (built.model, built.notes, built.lonlat);
-        field::check_start(start_xy(&file).map_err(|i| vec![i])?, &field).map_err(|i| vec![i])?;
+        let parts = build_recorded(&mut file, &mut given, base_dir).map_err(|i| vec![i])?;
+        field::check_start(start_xy(&file).map_err(|i| vec![i])?, &parts.model)
+            .map_err(|i| vec![i])?;
         let vehicle = vehicle::build_vehicle(&file).map_err(|i| vec![i])?;
         let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| vec![i])?;
         Ok(Self {
             file,
+            given: Arc::new(given),
             spec,
-            field: Arc::new(field),
+            field: parts.model,
             vehicle: Arc::new(vehicle),
             isoline: Arc::new(OnceLock::new()),
-            field_notes: Arc::new(notes),
-            file_filled_keys: Arc::new(filled),
-            lonlat,
+            field_notes: parts.notes,
+            resolved_field: parts.resolved_field,
+            lonlat: parts.lonlat,
         })
     }
 
-    /// A variant of this scenario with `KEY=VALUE` overrides applied to its resolved keys. The
-    /// field, vehicle and true isoline are shared with `self` (not rebuilt, files not re-read)
-    /// when the variant leaves their sections and the level unchanged: sweeps stay cheap and
-    /// their memory flat.
+    /// A variant of this scenario: its own keys ([`Scenario::given`]) with the `KEY=VALUE`
+    /// overrides applied, resolved once, exactly as `isotrack run FILE --set ...` (a default
+    /// that follows another key follows the override: `sim.dt_s = 0.02` samples at 50 Hz
+    /// where `sensor.rate_hz` is unset). The field, vehicle and true isoline are shared with
+    /// `self` (not rebuilt, files not re-read) when the variant leaves their sections and the
+    /// level unchanged: sweeps stay cheap and their memory flat.
     ///
     /// Problems are located at the override (`{origin}: KEY=VALUE`) or as inherited from `self`.
     pub fn derive(&self, overrides: &[String], origin: &str) -> Result<Self, ScenarioError> {
@@ -161,59 +185,37 @@ impl Scenario {
         assignments: &[Assignment],
         origin: &str,
     ) -> Result<Self, ScenarioError> {
-        // Another file: the keys the old file filled in (its geometry, its units) are not the
-        // user's and must not override the new file's own (a hostile review: a sweep over
-        // `field.path` ran every file on the first one's grid).
-        let new_source = assignments
-            .iter()
-            .any(|a| names_another_field_source(&a.arg));
-        let file = if new_source && !self.file_filled_keys.is_empty() {
-            let mut base = self.file.clone();
-            let mut t = field_table(&base.field);
-            for k in self.file_filled_keys.iter() {
-                t.remove(k);
-            }
-            base.field = toml::Value::Table(t).try_into().unwrap_or(base.field);
-            apply_assignments(&base, assignments)?
-        } else {
-            apply_assignments(&self.file, assignments)?
-        };
+        let mut given = apply_assignments(&self.given, assignments)?;
         let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
-        let mut file = resolve::resolve(file).map_err(located)?;
+        let mut file = resolve::resolve(given.clone()).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
-        let mut lonlat = self.lonlat;
-        let (field, field_notes, file_filled_keys) = if file.field == self.file.field && !seeded {
-            (
-                self.field.clone(),
-                self.field_notes.clone(),
-                self.file_filled_keys.clone(),
-            )
-        } else {
-            let built = build_field_of(&file, Path::new(".")).map_err(|i| located(vec![i]))?;
-            let given = file.field.clone();
-            built.filled.record(&mut file.field);
-            let mut filled = filled_keys(&given, &file.field);
-            if !new_source {
-                filled.extend(self.file_filled_keys.iter().cloned());
+        let parts = if file.field == *self.resolved_field && !seeded {
+            // The same resolved section reads the same files: the keys they filled are this
+            // scenario's.
+            file.field = self.file.field.clone();
+            FieldParts {
+                model: self.field.clone(),
+                notes: self.field_notes.clone(),
+                resolved_field: self.resolved_field.clone(),
+                lonlat: self.lonlat,
             }
-            lonlat = built.lonlat;
-            (
-                Arc::new(built.model),
-                Arc::new(built.notes),
-                Arc::new(filled),
-            )
+        } else {
+            // Another source or other keys: its files are read again and fill their own keys
+            // (a hostile review: a sweep over `field.path` once ran every file on the first
+            // one's grid).
+            build_recorded(&mut file, &mut given, Path::new(".")).map_err(|i| located(vec![i]))?
         };
         let start = start_xy(&file).map_err(|i| located(vec![i]))?;
-        field::check_start(start, &field).map_err(|i| located(vec![i]))?;
+        field::check_start(start, &parts.model).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
         let vehicle = if same_vehicle {
             self.vehicle.clone()
         } else {
             Arc::new(vehicle::build_vehicle(&file).map_err(|i| located(vec![i]))?)
         };
-        let isoline = if Arc::ptr_eq(&field, &self.field)
+        let isoline = if Arc::ptr_eq(&parts.model, &self.field)
             && file.controller.level == self.file.controller.level
         {
             self.isoline.clone()
@@ -224,13 +226,14 @@ impl Scenario {
             .map_err(|i| located(vec![i]))?;
         Ok(Self {
             file,
+            given: Arc::new(given),
             spec,
-            field,
+            field: parts.model,
             vehicle,
             isoline,
-            field_notes,
-            file_filled_keys,
-            lonlat,
+            field_notes: parts.notes,
+            resolved_field: parts.resolved_field,
+            lonlat: parts.lonlat,
         })
     }
 
@@ -246,18 +249,21 @@ impl Scenario {
         }
         let mut file = self.file.clone();
         file.controller = file.controller.switched_to(kind);
+        let mut given = (*self.given).clone();
+        given.controller = given.controller.switched_to(kind);
         let origin = format!("controller.kind = \"{}\"", kind.name());
         let file = resolve::resolve(file).map_err(|issues| locate_derived(issues, &origin, &[]))?;
         let spec = spec::ScenarioSpec::new(&file, self.vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| locate_derived(vec![i], &origin, &[]))?;
         Ok(Self {
             file,
+            given: Arc::new(given),
             spec,
             field: self.field.clone(),
             vehicle: self.vehicle.clone(),
             isoline: self.isoline.clone(),
             field_notes: self.field_notes.clone(),
-            file_filled_keys: self.file_filled_keys.clone(),
+            resolved_field: self.resolved_field.clone(),
             lonlat: self.lonlat,
         })
     }
@@ -298,6 +304,15 @@ impl Scenario {
     /// scenario).
     pub fn file(&self) -> &ScenarioFile {
         &self.file
+    }
+
+    /// The user's own keys: the scenario file with its `--set` overrides (and a sweep's
+    /// `[base]` and run assignments), every default left unset, the field's data files named
+    /// by absolute path. Resolving it gives [`Scenario::file`]; a sweep keeps it as
+    /// `base_scenario.toml`, so that `isotrack run base_scenario.toml --set ...` resolves a
+    /// run's keys once, as the sweep does.
+    pub fn given(&self) -> &ScenarioFile {
+        &self.given
     }
 
     /// Every setting in force, typed, the derived ones computed (read settings here, not from

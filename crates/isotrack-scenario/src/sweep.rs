@@ -69,14 +69,24 @@ impl Dist {
             Dist::Uniform(a, b) if !(a.is_finite() && b.is_finite() && a < b) => {
                 Err("expected { uniform = [a, b] } with finite a < b".into())
             }
+            Dist::Normal(m, s) if !(m.is_finite() && s.is_finite() && s >= 0.0) => {
+                Err("expected { normal = [mean, std] } with finite mean and std >= 0".into())
+            }
+            _ => self.check_draws_finite(),
+        }
+    }
+
+    /// The part of [`Dist::check`] that keeps every draw finite, for parameters already known
+    /// finite (a benchmark suite's `vary`, whose own rule allows a uniform with `a = b`): a
+    /// uniform's width `b - a` finite, a normal's `mean +- 40 std` finite. `Err` says which
+    /// bound overflows, in words.
+    pub fn check_draws_finite(self) -> Result<(), String> {
+        match self {
             Dist::Uniform(a, b) if !(b - a).is_finite() => Err(format!(
                 "{{ uniform = [{}, {}] }} is wider than the largest 64-bit float (about 1.8e308): every draw would be inf",
                 Num(a),
                 Num(b)
             )),
-            Dist::Normal(m, s) if !(m.is_finite() && s.is_finite() && s >= 0.0) => {
-                Err("expected { normal = [mean, std] } with finite mean and std >= 0".into())
-            }
             Dist::Normal(m, s) if !((m + 40.0 * s).is_finite() && (m - 40.0 * s).is_finite()) => {
                 Err(format!(
                     "{{ normal = [{}, {}] }} reaches beyond the largest 64-bit float (about 1.8e308) within 40 std: some draws would be inf",
@@ -377,6 +387,153 @@ fn key_on_line(text: &str, start: usize) -> Option<String> {
     })
 }
 
+/// Sweep-file text as a TOML table; a number out of range in the TOML reader's words (`u64
+/// value was too large`, with no place) is said plainly, where it is.
+fn sweep_table(text: &str) -> Result<toml::Table, String> {
+    toml::from_str(text).map_err(|e: toml::de::Error| {
+        match crate::assign::number_out_of_range(e.message()) {
+            Some(plain) => {
+                // At line, column and key, as a scenario file's message (att30c-16).
+                let at = e.span().map(|s| {
+                    let before = &text[..s.start.min(text.len())];
+                    let line = before.matches('\n').count() + 1;
+                    let start = before.rfind('\n').map_or(0, |i| i + 1);
+                    let column = before[start..].chars().count() + 1;
+                    let key = key_on_line(text, start)
+                        .map(|k| format!("`{}`: ", Escaped(&k)))
+                        .unwrap_or_default();
+                    format!("line {line}, column {column}: {key}")
+                });
+                format!("{}{plain}", at.unwrap_or_default())
+            }
+            None => e.to_string(),
+        }
+    })
+}
+
+/// The `[base]` table as `KEY=VALUE` overrides, in the table's order.
+fn base_overrides(b: &toml::Value) -> Vec<String> {
+    let mut flat = vec![];
+    flatten("", b, &|_| false, &mut flat);
+    flat.into_iter()
+        .map(|(k, v)| format!("{k}={}", value_literal(&v)))
+        .collect()
+}
+
+/// The `[grid]` table's keys and their lists, keys sorted: each a non-empty list, of arrays
+/// only if of arrays of one length.
+fn grid_lists(g: &toml::Value) -> Result<Vec<(String, Vec<toml::Value>)>, String> {
+    let mut flat = vec![];
+    flatten("", g, &|_| false, &mut flat);
+    let mut grid = vec![];
+    for (k, v) in flat {
+        let list = v
+            .as_array()
+            .filter(|a| !a.is_empty())
+            .ok_or_else(|| format!("grid.{k}: must be a non-empty list of values"))?;
+        let arrays = list.iter().filter(|v| v.is_array()).count();
+        if arrays > 0 && array_len(list).is_none() {
+            return Err(format!(
+                "grid.{k}: a list of arrays needs arrays of one length, and nothing else"
+            ));
+        }
+        grid.push((k, list.clone()));
+    }
+    grid.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(grid)
+}
+
+/// The `[random]` table (of sweep text `text`, for line numbers): its `runs` (required, >= 1),
+/// its `seed` (default 0) and its distributions, keys sorted.
+fn random_section(r: &toml::Value, text: &str) -> Result<(u64, u64, Vec<(String, Dist)>), String> {
+    let t = r
+        .as_table()
+        .ok_or_else(|| "`random` must be a table".to_string())?;
+    let draws = random_integer(t, "runs", 1)?.ok_or("random.runs is required")?;
+    let seed = random_integer(t, "seed", 0)?.unwrap_or(0);
+    let is_dist = |v: &toml::Value| {
+        v.as_table()
+            .is_some_and(|t| t.contains_key("uniform") || t.contains_key("normal"))
+    };
+    let mut flat = vec![];
+    for (k, v) in t.iter().filter(|(k, _)| *k != "runs" && *k != "seed") {
+        flatten(k, v, &is_dist, &mut flat);
+    }
+    let mut random = vec![];
+    for (k, v) in flat {
+        let d = distribution(&k, &v, text)?;
+        random.push((k, d));
+    }
+    random.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok((draws, seed, random))
+}
+
+/// `random.NAME` of table `t` as an integer `>= min` (`None` when absent).
+fn random_integer(t: &toml::Table, name: &str, min: i64) -> Result<Option<u64>, String> {
+    t.get(name)
+        .map(|v| {
+            v.as_integer()
+                .filter(|n| *n >= min)
+                .map(|n| n as u64)
+                .ok_or_else(|| format!("random.{name} must be an integer >= {min}"))
+        })
+        .transpose()
+}
+
+/// The distribution of `[random]` key `k` (value `v`, in sweep text `text`), checked
+/// ([`Dist::check`]).
+fn distribution(k: &str, v: &toml::Value, text: &str) -> Result<Dist, String> {
+    // One distribution per key, and nothing beside it: `{ uniform = [1, 2], log = true }` once
+    // ran a plain uniform, silently.
+    let names: Vec<&str> = v
+        .as_table()
+        .map(|t| t.keys().map(String::as_str).collect())
+        .unwrap_or_default();
+    if names.len() > 1 || names.iter().any(|n| *n != "uniform" && *n != "normal") {
+        return Err(format!(
+            "{}random.{k}: unknown or extra keys ({}) in a distribution: expected {{ uniform = [a, b] }} or {{ normal = [mean, std] }} alone",
+            line_of(text, k).map(|l| format!("line {l}: ")).unwrap_or_default(),
+            names.join(", ")
+        ));
+    }
+    let pair = |name: &str| -> Option<(f64, f64)> {
+        let a = v.as_table()?.get(name)?.as_array()?;
+        let num = |x: &toml::Value| x.as_float().or(x.as_integer().map(|i| i as f64));
+        (a.len() == 2)
+            .then(|| Some((num(&a[0])?, num(&a[1])?)))
+            .flatten()
+    };
+    let at = line_of(text, k)
+        .map(|l| format!("line {l}: "))
+        .unwrap_or_default();
+    let d = match (pair("uniform"), pair("normal")) {
+        (Some((a, b)), None) => Dist::Uniform(a, b),
+        (None, Some((m, s))) => Dist::Normal(m, s),
+        _ => {
+            return Err(format!(
+                "{at}random.{k}: expected {{ uniform = [a, b] }} with a < b or {{ normal = [mean, std] }} with std >= 0"
+            ))
+        }
+    };
+    d.check().map_err(|m| format!("{at}random.{k}: {m}"))?;
+    Ok(d)
+}
+
+/// The sweep's run count: the grid product times `draws`, at most [`MAX_RUNS`] (checked: an
+/// overflowing product once wrapped to a small count and skipped runs).
+fn total_runs(grid: &[(String, Vec<toml::Value>)], draws: u64) -> Result<u64, String> {
+    grid.iter()
+        .try_fold(draws, |acc, (_, v)| acc.checked_mul(v.len() as u64))
+        .filter(|&t| t <= MAX_RUNS)
+        .ok_or_else(|| {
+            let sizes: Vec<String> = grid.iter().map(|(_, v)| v.len().to_string()).collect();
+            format!(
+                "the sweep has more than {MAX_RUNS} runs (grid lists of {} values x {draws} random runs); split it",
+                if sizes.is_empty() { "no".to_string() } else { sizes.join(" x ") }
+            )
+        })
+}
+
 impl SweepPlan {
     /// Reads and checks a sweep file.
     pub fn load(path: &Path) -> Result<Self, SweepError> {
@@ -395,27 +552,7 @@ impl SweepPlan {
             path: path.display().to_string(),
             message: m,
         };
-        let doc: toml::Table = toml::from_str(text).map_err(|e| {
-            // A number out of range in the TOML reader's words (`u64 value was too large`,
-            // with no place) is said plainly, where it is.
-            match crate::assign::number_out_of_range(e.message()) {
-                Some(plain) => {
-                    // At line, column and key, as a scenario file's message (att30c-16).
-                    let at = e.span().map(|s| {
-                        let before = &text[..s.start.min(text.len())];
-                        let line = before.matches('\n').count() + 1;
-                        let start = before.rfind('\n').map_or(0, |i| i + 1);
-                        let column = before[start..].chars().count() + 1;
-                        let key = key_on_line(text, start)
-                            .map(|k| format!("`{}`: ", Escaped(&k)))
-                            .unwrap_or_default();
-                        format!("line {line}, column {column}: {key}")
-                    });
-                    err(format!("{}{plain}", at.unwrap_or_default()))
-                }
-                None => err(e.to_string()),
-            }
-        })?;
+        let doc = sweep_table(text).map_err(err)?;
         for k in doc.keys() {
             if !["scenario", "base", "grid", "random"].contains(&k.as_str()) {
                 return Err(err(format!(
@@ -434,119 +571,21 @@ impl SweepPlan {
         } else {
             dir.join(scenario)
         };
-        let never = |_: &toml::Value| false;
-        let mut base = vec![];
-        if let Some(b) = doc.get("base") {
-            let mut flat = vec![];
-            flatten("", b, &never, &mut flat);
-            base = flat
-                .into_iter()
-                .map(|(k, v)| format!("{k}={}", value_literal(&v)))
-                .collect();
-        }
-        let mut grid = vec![];
-        if let Some(g) = doc.get("grid") {
-            let mut flat = vec![];
-            flatten("", g, &never, &mut flat);
-            for (k, v) in flat {
-                let list = v
-                    .as_array()
-                    .filter(|a| !a.is_empty())
-                    .ok_or_else(|| err(format!("grid.{k}: must be a non-empty list of values")))?;
-                let arrays = list.iter().filter(|v| v.is_array()).count();
-                if arrays > 0 && array_len(list).is_none() {
-                    return Err(err(format!(
-                        "grid.{k}: a list of arrays needs arrays of one length, and nothing else"
-                    )));
-                }
-                grid.push((k, list.clone()));
-            }
-        }
-        grid.sort_by(|a, b| a.0.cmp(&b.0));
-        let (mut draws, mut seed, mut random) = (1, 0, vec![]);
-        if let Some(r) = doc.get("random") {
-            let t = r
-                .as_table()
-                .ok_or_else(|| err("`random` must be a table".into()))?;
-            draws = match t.get("runs") {
-                Some(v) => v
-                    .as_integer()
-                    .filter(|n| *n >= 1)
-                    .ok_or_else(|| err("random.runs must be an integer >= 1".into()))?
-                    as u64,
-                None => return Err(err("random.runs is required".into())),
-            };
-            seed = match t.get("seed") {
-                Some(v) => v
-                    .as_integer()
-                    .filter(|n| *n >= 0)
-                    .ok_or_else(|| err("random.seed must be an integer >= 0".into()))?
-                    as u64,
-                None => 0,
-            };
-            let is_dist = |v: &toml::Value| {
-                v.as_table()
-                    .is_some_and(|t| t.contains_key("uniform") || t.contains_key("normal"))
-            };
-            let mut flat = vec![];
-            for (k, v) in t.iter().filter(|(k, _)| *k != "runs" && *k != "seed") {
-                flatten(k, v, &is_dist, &mut flat);
-            }
-            for (k, v) in flat {
-                // One distribution per key, and nothing beside it: `{ uniform = [1, 2], log =
-                // true }` once ran a plain uniform, silently.
-                let names: Vec<&str> = v
-                    .as_table()
-                    .map(|t| t.keys().map(String::as_str).collect())
-                    .unwrap_or_default();
-                if names.len() > 1 || names.iter().any(|n| *n != "uniform" && *n != "normal") {
-                    return Err(err(format!(
-                        "{}random.{k}: unknown or extra keys ({}) in a distribution: expected {{ uniform = [a, b] }} or {{ normal = [mean, std] }} alone",
-                        line_of(text, &k).map(|l| format!("line {l}: ")).unwrap_or_default(),
-                        names.join(", ")
-                    )));
-                }
-                let pair = |name: &str| -> Option<(f64, f64)> {
-                    let a = v.as_table()?.get(name)?.as_array()?;
-                    let num = |x: &toml::Value| x.as_float().or(x.as_integer().map(|i| i as f64));
-                    (a.len() == 2)
-                        .then(|| Some((num(&a[0])?, num(&a[1])?)))
-                        .flatten()
-                };
-                let at = line_of(text, &k)
-                    .map(|l| format!("line {l}: "))
-                    .unwrap_or_default();
-                let d = match (pair("uniform"), pair("normal")) {
-                    (Some((a, b)), None) => Dist::Uniform(a, b),
-                    (None, Some((m, s))) => Dist::Normal(m, s),
-                    _ => {
-                        return Err(err(format!(
-                            "{at}random.{k}: expected {{ uniform = [a, b] }} with a < b or {{ normal = [mean, std] }} with std >= 0"
-                        )))
-                    }
-                };
-                d.check().map_err(|m| err(format!("{at}random.{k}: {m}")))?;
-                random.push((k, d));
-            }
-            random.sort_by(|a, b| a.0.cmp(&b.0));
-        }
+        let base = doc.get("base").map(base_overrides).unwrap_or_default();
+        let grid = match doc.get("grid") {
+            Some(g) => grid_lists(g).map_err(err)?,
+            None => vec![],
+        };
+        let (draws, seed, random) = match doc.get("random") {
+            Some(r) => random_section(r, text).map_err(err)?,
+            None => (1, 0, vec![]),
+        };
         for (k, _) in &grid {
             if random.iter().any(|(r, _)| r == k) {
                 return Err(err(format!("`{k}` is both in [grid] and [random]")));
             }
         }
-        // Checked: an overflowing product once wrapped to a small count and skipped runs.
-        let total = grid
-            .iter()
-            .try_fold(draws, |acc, (_, v)| acc.checked_mul(v.len() as u64))
-            .filter(|&t| t <= MAX_RUNS)
-            .ok_or_else(|| {
-                let sizes: Vec<String> = grid.iter().map(|(_, v)| v.len().to_string()).collect();
-                err(format!(
-                    "the sweep has more than {MAX_RUNS} runs (grid lists of {} values x {draws} random runs); split it",
-                    if sizes.is_empty() { "no".to_string() } else { sizes.join(" x ") }
-                ))
-            })?;
+        let total = total_runs(&grid, draws).map_err(err)?;
         let sets_seed = |k: &str| k == "sim.seed" || k == "sim";
         let derives_seed = !(base
             .iter()

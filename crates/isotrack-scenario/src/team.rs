@@ -441,46 +441,9 @@ impl Scenario {
             isoline_distance: Some(&dist),
             gradient: Some(&grad),
         };
-        let seed = self.spec().sim.seed;
         let model = self.team_isoline();
-        let metrics = match model {
-            TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_) => TeamMetricsConfig::default(),
-            _ => TeamMetricsConfig {
-                every_steps: ((POLYLINE_METRICS_PERIOD_S / self.dt_s()).round() as u64).max(1),
-                ..TeamMetricsConfig::default()
-            },
-        };
-        let cfg = TeamConfig {
-            ranging: team.ranging,
-            spacing: SpacingConfig {
-                law: team.law,
-                nominal_speed_mps: team.nominal_speed_mps,
-                ring: team.ring,
-            },
-            metrics,
-        };
+        let cfg = self.team_config(team, &model);
         let isoline = model.as_team_isoline();
-        // Vehicle `i`'s sensor: the scenario's with its override's noise and rate (the same
-        // sensor as `sensor_seeded` without one); its own seeded streams.
-        let base = self.spec().sensor;
-        let mut controllers = controllers.into_iter();
-        let mut member = |i: usize| -> Result<TeamMember<(), C>, TeamError> {
-            Ok(TeamMember {
-                x0: (),
-                controller: controllers.next().ok_or(TeamError::Empty)?,
-                sensor: Sensor::new(
-                    team.sensor(i, base),
-                    self.dt_s(),
-                    TeamSpec::sensor_seed(seed, i),
-                )
-                .map_err(|_| TeamError::OutOfRange {
-                    key: "vehicles",
-                    value: team.sensor(i, base).rate_hz,
-                    expected: "a sensor rate of a whole number of steps per sample",
-                })?,
-                ranging_seed: TeamSpec::ranging_seed(seed, i),
-            })
-        };
         // The vehicle model's envelope holds every vehicle's own (the team's without
         // per-vehicle overrides); each vehicle's speeds are set on the group.
         let (lo, hi) = team.speed_envelope_mps();
@@ -491,26 +454,15 @@ impl Scenario {
                     min_speed_mps: lo,
                     max_speed_mps: hi,
                 };
-                let members = team
-                    .starts
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| {
-                        let m = member(i)?;
-                        Ok(TeamMember {
-                            x0: vehicle.state(
-                                DubinsState {
-                                    position_m: Vec2::new(s.x_m, s.y_m),
-                                    heading_rad: s.heading_rad,
-                                },
-                                team.nominal_speed_mps,
-                            ),
-                            controller: m.controller,
-                            sensor: m.sensor,
-                            ranging_seed: m.ranging_seed,
-                        })
-                    })
-                    .collect::<Result<_, TeamError>>()?;
+                let members = self.team_members(team, controllers, |_, s| {
+                    vehicle.state(
+                        DubinsState {
+                            position_m: Vec2::new(s.x_m, s.y_m),
+                            heading_rad: s.heading_rad,
+                        },
+                        team.nominal_speed_mps,
+                    )
+                })?;
                 drive(
                     field, &vehicle, cfg, members, speeds, isoline, &oracles, sinks, self, threads,
                 )?
@@ -524,25 +476,14 @@ impl Scenario {
                     }
                 })?;
                 let gust_seed = w.config().seed;
-                let members = team
-                    .starts
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| {
-                        let m = member(i)?;
-                        Ok(TeamMember {
-                            x0: w.initial_state_seeded(
-                                s.x_m,
-                                s.y_m,
-                                s.heading_rad,
-                                TeamSpec::gust_seed(gust_seed, i),
-                            ),
-                            controller: m.controller,
-                            sensor: m.sensor,
-                            ranging_seed: m.ranging_seed,
-                        })
-                    })
-                    .collect::<Result<_, TeamError>>()?;
+                let members = self.team_members(team, controllers, |i, s| {
+                    w.initial_state_seeded(
+                        s.x_m,
+                        s.y_m,
+                        s.heading_rad,
+                        TeamSpec::gust_seed(gust_seed, i),
+                    )
+                })?;
                 drive(
                     field, &vehicle, cfg, members, speeds, isoline, &oracles, sinks, self, threads,
                 )?
@@ -552,6 +493,64 @@ impl Scenario {
             runs: r.runs.into_iter().map(|x| self.explain_end(x)).collect(),
             ..r
         })
+    }
+
+    /// The team's configuration: its ranging and spacing law, and its metrics sampled every
+    /// step on a circle (exact) or without an isoline, every [`POLYLINE_METRICS_PERIOD_S`] on
+    /// an extracted one.
+    fn team_config(&self, team: &TeamSpec, model: &TeamIsolineModel) -> TeamConfig {
+        let metrics = match model {
+            TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_) => TeamMetricsConfig::default(),
+            _ => TeamMetricsConfig {
+                every_steps: ((POLYLINE_METRICS_PERIOD_S / self.dt_s()).round() as u64).max(1),
+                ..TeamMetricsConfig::default()
+            },
+        };
+        TeamConfig {
+            ranging: team.ranging,
+            spacing: SpacingConfig {
+                law: team.law,
+                nominal_speed_mps: team.nominal_speed_mps,
+                ring: team.ring,
+            },
+            metrics,
+        }
+    }
+
+    /// The team's members in start order: vehicle `i` starts at `x0(i, start)`, flown by the
+    /// `i`-th of `controllers`, with the scenario's sensor with its override's noise and rate
+    /// (the same sensor as `sensor_seeded` without one) and its own seeded streams.
+    fn team_members<X, C>(
+        &self,
+        team: &TeamSpec,
+        controllers: Vec<C>,
+        x0: impl Fn(usize, &crate::spec::sim::Start) -> X,
+    ) -> Result<Vec<TeamMember<X, C>>, TeamError> {
+        let (seed, base) = (self.spec().sim.seed, self.spec().sensor);
+        let mut controllers = controllers.into_iter();
+        team.starts
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let controller = controllers.next().ok_or(TeamError::Empty)?;
+                let sensor = Sensor::new(
+                    team.sensor(i, base),
+                    self.dt_s(),
+                    TeamSpec::sensor_seed(seed, i),
+                )
+                .map_err(|_| TeamError::OutOfRange {
+                    key: "vehicles",
+                    value: team.sensor(i, base).rate_hz,
+                    expected: "a sensor rate of a whole number of steps per sample",
+                })?;
+                Ok(TeamMember {
+                    x0: x0(i, s),
+                    controller,
+                    sensor,
+                    ranging_seed: TeamSpec::ranging_seed(seed, i),
+                })
+            })
+            .collect()
     }
 }
 

@@ -102,11 +102,21 @@ def _check_controller(name: str, v: Any) -> Any:
 
 
 def _team_controllers(controller: Any, count: int) -> list:
-    """A team's controllers, one per vehicle: a list or tuple of ``count`` objects as given, or
-    ``count`` deep copies of one object (each vehicle its own instance)."""
+    """A team's controllers, one per vehicle: a list or tuple of ``count`` distinct objects as
+    given (one object listed twice is a ``ValueError`` naming both indices: the vehicles would
+    share its state), or ``count`` deep copies of one object (each vehicle its own instance)."""
     if isinstance(controller, (list, tuple)):
         if len(controller) != count:
             raise ValueError(f"controller: {len(controller)} controllers for a team of {count}: give one per vehicle")
+        first: Dict[int, int] = {}
+        for i, c in enumerate(controller):
+            j = first.setdefault(id(c), i)
+            if j != i:
+                raise ValueError(
+                    f"controller[{j}] and controller[{i}] are the same object: each vehicle flies its own "
+                    "instance (its state is its own, never shared); give one object per vehicle, or pass "
+                    "one controller alone (each vehicle then flies its own copy.deepcopy of it)"
+                )
         return [_check_controller(f"controller[{i}]", c) for i, c in enumerate(controller)]
     _check_controller("controller", controller)
     import copy
@@ -144,6 +154,24 @@ def _refuse_non_regular(paths: "list[str]") -> None:
         if not stat.S_ISREG(mode):
             kind = "a directory" if stat.S_ISDIR(mode) else "a FIFO, a device or a socket"
             raise OSError(f"{p}: not a regular file ({kind}): not written")
+
+
+def _input_file(path: str, what: str) -> None:
+    """An input file (a scenario, sweep or suite file) as every function takes it, before it is
+    opened: ``FileNotFoundError`` ("no such WHAT") when it does not exist, ``IsADirectoryError``
+    for a directory, ``OSError`` for a FIFO, a device or a socket (never opened: a FIFO would
+    block until someone writes to it); all three are ``OSError``s with one message per case."""
+    import os
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        raise FileNotFoundError(f"{path}: no such {what}") from None
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{path}: not a regular file (a directory)")
+    if not stat.S_ISREG(mode):
+        raise OSError(f"{path}: not a regular file (a FIFO, a device or a socket)")
 
 
 #: The largest scenario or sweep text read, bytes (the CLI's limit for scenario and sweep files).
@@ -295,7 +323,15 @@ class Run:
         """Writes the run directory ``isotrack run --out DIR`` writes: ``trace.csv`` (numbers
         that read back bit for bit), ``summary.json`` and the resolved ``scenario.toml``; what
         :func:`plot`, :func:`report` and the ``isotrack`` command take. Creates the directory;
-        returns its path."""
+        returns its path.
+
+        Holds the directory's lock (``.isotrack.lock``) as ``isotrack run --out`` does while it
+        writes: another writer there (a ``run --out``, another save) makes it raise an
+        ``OSError`` naming the holder (``run pid 1234 on node7``), and a ``run --out`` there
+        while this saves exits 73. Ctrl-C raises ``KeyboardInterrupt`` within a few thousand
+        rows, the trace being copied or written: what is left is what was there before (the
+        trace is written into a temporary file beside ``trace.csv``, removed then, and a
+        directory this call created is removed), no temporary file and no lock file."""
         path = _check_path("directory", directory)
         if path == "":
             raise ValueError("directory is empty: name the run directory to write (as `isotrack run --out DIR`)")
@@ -307,18 +343,14 @@ class Run:
         import os
 
         _refuse_non_regular([os.path.join(path, f) for f in ("trace.csv", "summary.json", "scenario.toml")])
+        # The [controller] table is the scenario's built-in law, which did not fly a Python
+        # controller's run: said at the top of scenario.toml (written under the directory's
+        # lock with the rest), so that nobody replays it with the CLI as if it were this run.
+        note = "" if self._python_controller is None else _python_controller_note(self._python_controller)
         if "vehicle" in self._trace:
-            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace))
+            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
         else:
-            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace))
-        if self._python_controller is not None:
-            # The [controller] table is the scenario's built-in law, which did not fly: said at
-            # the top of the file, so that nobody replays it with the CLI as if it were this run.
-            toml_path = os.path.join(path, "scenario.toml")
-            with open(toml_path, encoding="utf-8") as f:
-                body = f.read()
-            with open(toml_path, "w", encoding="utf-8") as f:
-                f.write(_python_controller_note(self._python_controller) + body)
+            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
         return path
 
     def __reduce__(self):
@@ -422,12 +454,11 @@ class Scenario:
     @staticmethod
     def from_file(path: str) -> "Scenario":
         """A scenario file (TOML); the files it names are relative to it. A path that does not
-        exist is a ``FileNotFoundError``; one that is not a path a ``TypeError``."""
-        import os
-
+        exist is a ``FileNotFoundError``, a directory an ``IsADirectoryError``, a FIFO, device
+        or socket an ``OSError`` (not opened), as for :func:`sweep` and :func:`benchmark`; one
+        that is not a path a ``TypeError``."""
         p = _check_path("path", path)
-        if not os.path.lexists(p):
-            raise FileNotFoundError(f"{p}: no such scenario file")
+        _input_file(p, "scenario file")
         return Scenario(_native.Scenario.from_file(p))
 
     @staticmethod
@@ -446,8 +477,10 @@ class Scenario:
         against the scenario as it stands).
 
         ``key``: dotted parts of letters, digits, ``_`` and ``-`` (at most 8), never read as
-        TOML text. ``value``: a bool, a 64-bit integer (numpy's too), a finite float, a str, or
-        a list or tuple of them nested at most 8 deep. Anything else raises
+        TOML text. ``value``: a bool, a 64-bit integer (numpy's too), a finite float, a str, a
+        list or tuple of them, or a dict of them (a TOML table, its keys dotted keys: merged
+        key by key into the scenario's table, as ``--set 'controller={kp = 2.0}'`` is; a
+        list of dicts for ``team.vehicles``), nested at most 8 deep. Anything else raises
         :class:`ScenarioError` (a ``ValueError``) saying what was wrong."""
         if isinstance(key, dict):
             if value is not _UNSET:
@@ -513,7 +546,8 @@ class Scenario:
 
         For a team, each vehicle flies its own controller instance (the spacing law still sets
         the speeds): ``controller`` is either a list (or tuple) of ``team.count`` objects, one
-        per vehicle in the listed order, or one object, of which every vehicle flies its own
+        per vehicle in the listed order (each a distinct object: one listed twice is a
+        ``ValueError`` naming both indices), or one object, of which every vehicle flies its own
         ``copy.deepcopy`` (made before the run; the object passed is not flown). Each sees only
         its own vehicle's samples; the first exception in any of them stops the run.
         """
@@ -587,7 +621,9 @@ def _sweep_column(kind: str, cells: list, masked: bool = False) -> np.ndarray:
     """One ``results.csv`` column as numpy, by the column's kind (from the sweep's plan, never
     guessed from the cells): ``"int"`` int64 (with ``masked``, always a masked array, masked
     where a cell is empty: the ``samples`` of an invalid scenario), ``"float"`` float64 (NaN
-    for an empty cell), ``"bool"`` bool, ``"str"`` str (``""`` for an empty cell)."""
+    for an empty cell), ``"bool"`` bool, ``"str"`` str (``""`` for an empty cell), ``"table"``
+    (a swept key with tables among its values) an object array of the values themselves, each
+    cell a TOML literal read back (a table a dict, a string a str)."""
     if kind == "int":
         values = np.array([int(c) if c != "" else 0 for c in cells], dtype=np.int64)
         empty = np.array([c == "" for c in cells], dtype=bool)
@@ -598,6 +634,12 @@ def _sweep_column(kind: str, cells: list, masked: bool = False) -> np.ndarray:
         return values
     if kind == "float":
         return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
+    if kind == "table":
+        # An object array, filled item by item (np.array would make a list cell a new axis).
+        values = np.empty(len(cells), dtype=object)
+        for i, c in enumerate(cells):
+            values[i] = _native.toml_cell(c)
+        return values
     if kind == "bool":
         values = np.array([c == "true" for c in cells], dtype=np.bool_)
         if masked:
@@ -661,7 +703,6 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
     name's directory). A path (a ``PathLike``, or one line without ``=``, which no sweep text
     is) must name a readable regular file: a mistyped path is an error, not TOML text."""
     import os
-    import stat
 
     if not isinstance(path_or_toml_text, (str, os.PathLike)):
         raise TypeError(
@@ -680,15 +721,7 @@ def _sweep_text(path_or_toml_text) -> "tuple[str, str]":
         )
     ) or os.path.lexists(path_or_toml_text):
         path = os.fspath(path_or_toml_text)
-        try:
-            mode = os.stat(path).st_mode
-        except FileNotFoundError:
-            raise FileNotFoundError(f"{path}: no such sweep file") from None
-        if not stat.S_ISREG(mode):
-            # Not opened: a FIFO would block until someone writes to it.
-            raise IsADirectoryError(f"{path}: not a regular file") if stat.S_ISDIR(mode) else OSError(
-                f"{path}: not a regular file (a FIFO, a device or a socket)"
-            )
+        _input_file(path, "sweep file")
         if os.stat(path).st_size > _MAX_SWEEP_FILE_BYTES:
             raise ValueError(f"{path}: larger than {_MAX_SWEEP_FILE_BYTES} bytes, not a sweep file")
         with open(path, encoding="utf-8") as f:
@@ -708,9 +741,13 @@ def sweep(
     ``run_id`` order: int64 for integer columns (``run_id``, ``sim.seed``, ``samples``, and any
     swept key whose values are integers; ``samples`` is always a masked array, masked where a
     run was an invalid scenario), float64 for the other numeric columns (NaN for an empty cell), str
-    otherwise. The same cells as ``isotrack sweep`` writes, exactly: setting a row's swept keys
-    (``sim.seed`` included) on the sweep's scenario and running it gives the row's metrics
-    again. Every column's dtype follows from the sweep file alone, whatever its runs give:
+    otherwise; a swept key with tables among its values (``controller = [{kp = 2.0}, {ki =
+    3.0}]``, ``team.vehicles = [[{index = 1, speed_mps = 0.4}], ...]``) an object array of the
+    values (a table a dict, which :meth:`Scenario.set` takes back and merges key by key, as
+    ``--set`` does). The same cells as ``isotrack sweep`` writes, exactly: setting a row's swept
+    keys (``sim.seed`` included; a key whose values are arrays comes back split into ``KEY[0]``,
+    ``KEY[1]``, ... columns: set ``KEY`` to the list of them) on the sweep's scenario and
+    running it gives the row's metrics again. Every column's dtype follows from the sweep file alone, whatever its runs give:
     ``outcome`` and ``outcome_detail`` are str (``""`` where a run has no detail), a swept key
     of booleans is bool, of other text str. ``progress=True`` shows the progress on
     ``sys.stderr``: one line redrawn in place on a terminal, else (Jupyter, a log file) a line
@@ -724,7 +761,8 @@ def sweep(
 
     ``controller_factory(scenario)``: fly every run with your own controller instead of the
     scenario's: it is called once per run with that run's :class:`Scenario` (for a team, once
-    per vehicle of each run: each vehicle its own instance) and returns an object with
+    per vehicle of each run: each vehicle its own instance, so that one object returned for
+    two vehicles of a run is a ``ValueError`` naming them) and returns an object with
     ``update(t_s, value) -> omega`` (and optionally ``reset()``), as
     ``Scenario.run(controller=...)`` takes; the runs then go one after another (``threads``
     does not apply) and an exception inside it is raised here.
@@ -783,7 +821,9 @@ def benchmark(
     with the suite's tuned gains, or retuned with ``tune=True``).
 
     ``suite``: a suite file (default ``suites/standard-v2.toml`` under the current directory: run
-    from the isotrack repository, or pass the path). ``controllers``: which to score (default:
+    from the isotrack repository's root, or pass the path; the package ships no suite, whose
+    tasks' scenarios and data files are the repository's). A missing suite file is a
+    ``FileNotFoundError``, a directory an ``IsADirectoryError``, a FIFO an ``OSError``. ``controllers``: which to score (default:
     the suite's built-in laws and yours). ``out``: a directory to write ``leaderboard.csv``,
     ``leaderboard.md``, ``index.html``, ``suite.toml`` (the suite as run, with the gains
     its scores used) and per-task results into, as ``isotrack benchmark --out``: a directory
@@ -811,13 +851,17 @@ def benchmark(
     resume = _check_flag("resume", resume)
     out = None if out is None else _check_path("out", out)
     if suite is not None:
-        suite = _check_path("suite", suite)  # a missing file: FileNotFoundError (after the name)
+        suite = _check_path("suite", suite)
+        if os.path.lexists(suite):  # a missing one: FileNotFoundError, after the name's check
+            _input_file(suite, "suite file")
     if suite is None:
         suite = os.path.join("suites", "standard-v2.toml")
         if not os.path.isfile(suite):
             raise FileNotFoundError(
                 "no suite given and suites/standard-v2.toml is not under the current directory: "
-                "run from the isotrack repository or pass suite=PATH"
+                "run from the isotrack repository's root or pass suite= a checkout's "
+                "suites/standard-v2.toml (the package ships no suite: its tasks' scenarios and "
+                "data files are the repository's)"
             )
     if out is not None:
         if out == "":
@@ -882,7 +926,8 @@ def plot(
     SVG; ``animate=True`` adds ``animation.gif``) of one or more runs, overlaid, into ``out``
     (default: the first run directory). ``runs``: run directories (``Run.save``, ``isotrack run
     --out``), :class:`Run` objects (saved under ``out/runs``), or one sweep directory (with
-    ``x``, ``group``, ``metric`` as the command's options). Returns the output directory."""
+    ``x``, ``group``, ``metric`` as the command's options). Returns the output directory (the
+    figures are the files named above in it), not a list of files."""
     import os
 
     if format not in ("png", "svg"):

@@ -47,9 +47,17 @@ the vehicles' move:
   default bound of 1 rad/s, and is then refused as an action like any other.
 
 ``env.trace()`` is the trace so far (the columns of ``Scenario.run()``'s team trace);
-``env.summary()`` the run's ``summary.json`` content once the episode has ended.
-``reset(seed=S)`` seeds the sensors and ranging units as ``sim.seed = S`` does (``None``: the
-scenario's ``sim.seed``): the same seed and actions give the same episode.
+``env.summary()`` the run's ``summary.json`` content once the episode has ended (its
+``scenario.sim.seed`` the episode's seed).
+
+``reset(seed=S)`` (``0 <= S <= 2**63-1``, ``sim.seed``'s range) flies the episode of the scenario
+with ``sim.seed = S`` (its sensors' and ranging units' noise and dropouts) and seeds a generator,
+as Gymnasium's environments do; each later ``reset()`` without a seed flies a new episode, its
+seed drawn from that generator. The first reset of all without a seed flies the scenario's own
+``sim.seed`` (``Scenario.run()``'s run) and seeds the generator with it. ``env.episode_seed`` is
+the seed flown: ``scenario.set("sim.seed", env.episode_seed).run()`` replays the episode the
+built-in actions fly. The same seed and actions give the same episode, and the same seeded
+sequence of resets the same episodes.
 """
 
 from __future__ import annotations
@@ -63,11 +71,15 @@ from . import Scenario, _check_flag, _check_number, _check_scenario, _native, _t
 
 try:
     from gymnasium import spaces
+    from gymnasium.utils import seeding
     from pettingzoo import ParallelEnv
 except ImportError as e:  # pragma: no cover - depends on the environment
     raise ImportError("isotrack.pettingzoo needs pettingzoo: pip install pettingzoo") from e
 
 __all__ = ["TeamParallelEnv", "parallel_env"]
+
+#: The largest seed (``sim.seed``'s: TOML's integers are 64-bit signed).
+_MAX_SEED = 2**63 - 1
 
 
 class TeamParallelEnv(ParallelEnv):
@@ -111,6 +123,11 @@ class TeamParallelEnv(ParallelEnv):
         self.period_steps: int = self._native.period_steps
         self.dt_s: float = self._native.dt_s
         self.error_scale: float = self._native.error_scale
+        #: The generator unseeded resets draw their episodes' seeds from (seeded by a seeded
+        #: reset; by the first reset of all, with the scenario's ``sim.seed``).
+        self._np_random: Optional[np.random.Generator] = None
+        #: The current (or last) episode's ``sim.seed``; ``None`` before the first reset.
+        self.episode_seed: Optional[int] = None
 
     def observation_space(self, agent):
         """The agent's observation space (the same object at every call)."""
@@ -135,13 +152,28 @@ class TeamParallelEnv(ParallelEnv):
         }
 
     def reset(self, seed: Optional[int] = None, options: Optional[dict] = None):
+        """Starts an episode (module docs): ``seed=S`` flies it as ``sim.seed = S`` and seeds
+        the generator later unseeded resets draw their episodes' seeds from; ``None``: the
+        generator's next seed (the first reset of all, the scenario's own ``sim.seed``).
+        ``episode_seed`` is the seed flown (``sc.set("sim.seed", env.episode_seed).run()``
+        replays the episode the built-in actions fly)."""
         if seed is not None:
             if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
                 raise TypeError(f"seed must be an int >= 0 or None, got {seed!r:.80} ({_type_name(seed)})")
-            if not 0 <= int(seed) < 2**64:
-                raise ValueError(f"seed must be in 0 ..= 2**64-1, got {seed}")
+            if not 0 <= int(seed) <= _MAX_SEED:
+                raise ValueError(
+                    f"seed must be in 0 ..= 2**63-1 ({_MAX_SEED}, the range of sim.seed, which replays "
+                    f"the episode), got {int(seed)}"
+                )
             seed = int(seed)
+        if seed is None and self._np_random is None:
+            seed = int(self._native.base_seed)
+        if seed is None:
+            seed = int(self._np_random.integers(0, _MAX_SEED, endpoint=True))
+        else:
+            self._np_random, _ = seeding.np_random(seed)
         obs, builtin, sampled, t_s = self._native.reset(seed)
+        self.episode_seed = int(self._native.episode_seed)
         self.agents = list(self.possible_agents)
         return {a: obs[self._index[a]] for a in self.agents}, self._infos(builtin, sampled, t_s)
 

@@ -65,7 +65,10 @@ impl SharedMessageTable {
         num_indices: u8,
         offset_size: u8,
     ) -> Result<Self> {
-        let entry_len = 1 + 1 + 2 + 4 + 2 + 2 + 2 + 2 + usize::from(offset_size) * 2;
+        // isotrack: an index header is version, type, message type flags, minimum size, list
+        // and B-tree cutoffs, message count, then the two addresses, packed (libhdf5's
+        // `H5SM__cache_table_deserialize`); 0.12.1 read 2 reserved bytes after the count.
+        let entry_len = 1 + 1 + 2 + 4 + 2 + 2 + 2 + usize::from(offset_size) * 2;
         let table_len = 4 + usize::from(num_indices) * entry_len + 4;
         let bytes = storage.read_range(address, table_len)?;
         let mut cursor = Cursor::new(bytes.as_ref());
@@ -98,7 +101,6 @@ impl SharedMessageTable {
             let list_cutoff = cursor.read_u16_le()?;
             let btree_cutoff = cursor.read_u16_le()?;
             let num_messages = cursor.read_u16_le()?;
-            cursor.skip(2)?;
             let index_address = cursor.read_offset(offset_size)?;
             let fractal_heap_address = cursor.read_offset(offset_size)?;
             indexes.push(SharedMessageIndex {
@@ -262,8 +264,9 @@ fn parse_record_list(
     if num_records == 0 {
         return Ok(Vec::new());
     }
-    let max_record_len = 20usize;
-    let max_len = 4 + usize::from(num_records) * max_record_len + 4;
+    // isotrack: each entry takes the record's size, `record_len` (libhdf5's
+    // `H5SM_SOHM_ENTRY_SIZE`), whichever its location; 0.12.1 read 20 bytes per record.
+    let max_len = 4 + usize::from(num_records) * record_len(offset_size) + 4;
     let bytes = storage.read_range(address, max_len)?;
     let mut cursor = Cursor::new(bytes.as_ref());
     let sig = cursor.read_bytes(4)?;
@@ -275,7 +278,10 @@ fn parse_record_list(
 
     let mut records = Vec::with_capacity(usize::from(num_records));
     for _ in 0..num_records {
+        let start = cursor.position() as usize;
         records.push(parse_record(&mut cursor, offset_size)?);
+        let end = start + record_len(offset_size);
+        cursor.skip(end - cursor.position() as usize)?;
     }
 
     let checksum_pos = cursor.position() as usize;
@@ -291,9 +297,18 @@ fn parse_record_list(
     Ok(records)
 }
 
+/// The size of one shared-message record in a list or B-tree index, bytes: location (1),
+/// hash (4), then the larger of a heap record (reference count 4, heap ID 8) and an
+/// object-header record (reserved 1, message type 1, index 2, address): libhdf5's
+/// `H5SM_SOHM_ENTRY_SIZE` (17 with 8-byte offsets).
+pub(crate) fn record_len(offset_size: u8) -> usize {
+    1 + 4 + 12usize.max(4 + usize::from(offset_size))
+}
+
 fn parse_record(cursor: &mut Cursor<'_>, offset_size: u8) -> Result<SharedMessageRecord> {
+    // isotrack: location then hash, packed (libhdf5's `H5SM__message_decode`; the
+    // specification's table shows padding that is not in the file): 0.12.1 skipped 3 bytes.
     let location = cursor.read_u8()?;
-    cursor.skip(3)?;
     let hash = cursor.read_u32_le()?;
     match location {
         0 => {
@@ -378,7 +393,6 @@ mod tests {
         table.extend_from_slice(&8u16.to_le_bytes());
         table.extend_from_slice(&6u16.to_le_bytes());
         table.extend_from_slice(&1u16.to_le_bytes());
-        table.extend_from_slice(&[0, 0]);
         table.extend_from_slice(&64u64.to_le_bytes());
         table.extend_from_slice(&128u64.to_le_bytes());
         let checksum = jenkins_lookup3(&table);
@@ -399,7 +413,6 @@ mod tests {
         let mut list = Vec::new();
         list.extend_from_slice(b"SMLI");
         list.push(0);
-        list.extend_from_slice(&[0, 0, 0]);
         list.extend_from_slice(&0x1122_3344u32.to_le_bytes());
         list.extend_from_slice(&2u32.to_le_bytes());
         list.extend_from_slice(&[8, 7, 6, 5, 4, 3, 2, 1]);

@@ -120,3 +120,66 @@ pub fn fifo(dir: &Path, name: &str) -> String {
     assert!(ok.success(), "mkfifo {}", p.display());
     p.display().to_string()
 }
+
+/// The path of the bundled scenario `scenarios/NAME.toml`.
+pub fn bundled(name: &str) -> String {
+    format!("{}/../../scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Writes the sweep file `dir/name` over scenario file `scenario` (written as a TOML string)
+/// with the sections `body`; returns its path.
+pub fn sweep_file(dir: &Path, name: &str, scenario: &str, body: &str) -> String {
+    write(dir, name, &format!("scenario = {scenario:?}\n{body}"))
+}
+
+/// Runs `isotrack sweep SW --out OUT` with `extra` arguments, which must succeed; returns the
+/// `results.csv` it leaves.
+pub fn swept(sw: &str, out: &Path, extra: &[&str]) -> String {
+    let mut args = vec!["sweep", sw, "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = isotrack(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::read_to_string(out.join("results.csv")).unwrap()
+}
+
+/// The rows of CSV file `path` (a header line, then rows), each as column -> cell.
+pub fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut r = csv::Reader::from_path(path).unwrap();
+    let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            header
+                .iter()
+                .cloned()
+                .zip(rec.iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// A `results.csv` text cut at its commas (rows whose cells hold none), to edit a row cell by
+/// cell: its header and its rows.
+pub struct Cells<'a> {
+    /// The column names.
+    pub header: Vec<&'a str>,
+    /// The rows, each its cells.
+    pub rows: Vec<Vec<&'a str>>,
+}
+
+impl<'a> Cells<'a> {
+    /// `text` cut into lines and cells.
+    pub fn of(text: &'a str) -> Self {
+        let mut lines = text.lines().map(|l| l.split(',').collect::<Vec<&str>>());
+        let header = lines.next().unwrap_or_default();
+        Self {
+            header,
+            rows: lines.collect(),
+        }
+    }
+
+    /// The index of column `name`.
+    pub fn col(&self, name: &str) -> usize {
+        self.header.iter().position(|h| *h == name).unwrap()
+    }
+}

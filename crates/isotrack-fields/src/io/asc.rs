@@ -13,6 +13,9 @@ use crate::grid::Grid2;
 use isotrack_core::Vec2;
 use std::path::Path;
 
+/// Parses an ESRI ASCII grid's bytes (`path` names it in errors): the header, then the rows.
+// Long by choice: a header parser, read top to bottom in the order of the file (the header keys,
+// their checks, then the rows); split, each piece would need the half-filled header passed along.
 pub(super) fn parse(path: &Path, bytes: &[u8]) -> Result<LoadedGrid, LoadError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         LoadError::new(

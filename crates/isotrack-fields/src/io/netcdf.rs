@@ -378,6 +378,9 @@ pub(super) fn parse(path: &Path, variable: Option<&str>) -> Result<LoadedSeries,
 /// Checks a classic (CDF-1, -2, -5) header's counts and sizes against the bytes that hold it,
 /// before `netcdf-reader` allocates what they declare: a fuzzed header declaring 2^31 attribute
 /// values made it abort (out of memory). NetCDF-4 (HDF5) files are passed through.
+// Long by choice: a walk through the classic header in the order of its bytes (dimensions,
+// global attributes, variables, each with its counts and sizes checked where they are read); the
+// cursor and the offsets it checks run through the whole walk.
 fn check_classic_header(bytes: &[u8]) -> Result<(), String> {
     if bytes.len() < 4 || &bytes[..3] != b"CDF" {
         return Ok(()); // HDF5 or not NetCDF: the reader says which

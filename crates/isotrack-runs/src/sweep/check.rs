@@ -58,9 +58,10 @@ const SPAN_KEYS: [&str; 15] = [
     "team.v_max_mps",
 ];
 
-/// The [`RunSpan`] of each run of a sweep, from its resolved base scenario file: the base's
-/// own when the plan varies none of [`SPAN_KEYS`], else each run's (the base with the run's
-/// assignments, resolved: no field is built, no file read).
+/// The [`RunSpan`] of each run of a sweep, from its base scenario's own keys
+/// ([`isotrack_scenario::Scenario::given`], `base_scenario.toml`): the base's own when the plan
+/// varies none of [`SPAN_KEYS`], else each run's (the base's keys with the run's assignments,
+/// resolved once, as the sweep runs it: no field is built, no file read).
 pub struct RunSpans<'a> {
     base: &'a ScenarioFile,
     plan: &'a SweepPlan,
@@ -70,16 +71,22 @@ pub struct RunSpans<'a> {
 }
 
 impl<'a> RunSpans<'a> {
-    /// The spans of the runs of `plan` over the resolved base scenario file `base`.
+    /// The spans of the runs of `plan` over the base scenario's own keys `base`.
     pub fn new(plan: &'a SweepPlan, base: &'a ScenarioFile) -> Self {
+        // Every vehicle key too: the fixed wing's turn-rate limit g tan(phi_max) / V follows
+        // its airspeed (att30d-5: a sweep over vehicle.airspeed_mps refused its own rows
+        // against the base's 30 m/s limit).
         let per_run = plan
             .varied_keys()
             .iter()
-            .any(|k| SPAN_KEYS.contains(&k.as_str()));
+            .any(|k| SPAN_KEYS.contains(&k.as_str()) || k.starts_with("vehicle."));
         Self {
             base,
             plan,
-            base_span: run_span(base),
+            base_span: isotrack_scenario::resolve::resolve(base.clone())
+                .ok()
+                .as_ref()
+                .and_then(run_span),
             per_run,
             built: None,
         }

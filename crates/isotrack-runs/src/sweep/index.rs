@@ -146,33 +146,15 @@ pub fn index_results(
         isotrack_fields::io::open_limited(path, MAX_RESULTS_FILE_BYTES).map_err(cannot)?,
     );
     let mut line = String::new();
-    let too_long = |number: u64| {
-        fail(
-            exit::DATAERR,
-            format!(
-                "{}:{number}: a line longer than {} bytes, longer than any row isotrack writes: a damaged file; remove the line (or the file)",
-                path.display(),
-                MAX_RESULTS_LINE_BYTES
-            ),
-        )
-    };
     let mut offset = read_line_bounded(&mut rdr, &mut line)
         .map_err(cannot)?
-        .ok_or_else(|| too_long(1))? as u64;
-    let cut_at = |at: u64| -> Result<(), Failure> {
-        if !repair {
-            return Ok(());
+        .ok_or_else(|| line_too_long(path, 1))? as u64;
+    let cut_at = |at: u64| {
+        if repair {
+            cut_results(path, at)
+        } else {
+            Ok(())
         }
-        let repair_fail = |e: std::io::Error| {
-            fail(
-                exit::CANTCREAT,
-                format!("cannot repair {}: {e}", path.display()),
-            )
-        };
-        crate::files::open_regular(path, false, false)
-            .map_err(repair_fail)?
-            .set_len(at)
-            .map_err(repair_fail)
     };
     if !line.ends_with('\n') {
         // No complete header: an empty file, or one cut before its first newline.
@@ -184,8 +166,13 @@ pub fn index_results(
             flagged: Flagged::default(),
         });
     }
-    let header = std::mem::take(&mut line);
-    let columns: Vec<String> = csv_fields(&header).ok_or_else(|| {
+    let mut index = ResultsIndex {
+        header: std::mem::take(&mut line),
+        rows: vec![],
+        invalid: 0,
+        flagged: Flagged::default(),
+    };
+    let columns: Vec<String> = csv_fields(&index.header).ok_or_else(|| {
         fail(
             exit::DATAERR,
             format!("{}:1: the header is not a CSV line", path.display()),
@@ -193,19 +180,8 @@ pub fn index_results(
     })?;
     let outcome_col = columns.iter().position(|c| c == "outcome");
     let warnings_col = columns.iter().position(|c| c == "warnings");
-    let mut rows = vec![];
-    let mut invalid = 0;
-    let mut flagged = Flagged::default();
     for number in 2u64.. {
-        line.clear();
-        let n = read_line_bounded(&mut rdr, &mut line)
-            .map_err(|e| {
-                fail(
-                    exit::DATAERR,
-                    format!("{}:{number}: damaged row ({e})", path.display()),
-                )
-            })?
-            .ok_or_else(|| too_long(number))?;
+        let n = read_row_line(&mut rdr, &mut line, path, number)?;
         if n == 0 {
             break;
         }
@@ -213,36 +189,15 @@ pub fn index_results(
             cut_at(offset)?;
             break;
         }
-        // Rows are written whole; a line that does not check is a damaged file, not ours to
-        // guess at.
         let rules = RowRules {
             header: &columns,
             total,
             plan,
             spans,
         };
-        let id = check_row(&rules, &line).map_err(|why| {
-            let shown: String = line.trim_end().chars().take(120).collect();
-            fail(
-                exit::DATAERR,
-                format!(
-                    "{}:{number}: damaged row ({why}): `{shown}`; remove the line (or the file) and --resume",
-                    path.display()
-                ),
-            )
-        })?;
-        let fields = csv_fields(&line).unwrap_or_default();
-        let cell = |c: Option<usize>| c.and_then(|c| fields.get(c)).map(String::as_str);
-        let outcome = cell(outcome_col);
-        if outcome == Some("invalid_scenario") {
-            invalid += 1;
-        }
-        if outcome.is_some_and(|o| o != "completed")
-            || cell(warnings_col).is_some_and(|w| !w.is_empty())
-        {
-            flagged.add(id);
-        }
-        rows.push(RowRef {
+        let id = checked_row(&rules, path, number, &line)?;
+        index.count(id, &line, outcome_col, warnings_col);
+        index.rows.push(RowRef {
             id,
             file,
             offset,
@@ -251,11 +206,93 @@ pub fn index_results(
         });
         offset += n as u64;
     }
-    Ok(ResultsIndex {
-        header,
-        rows,
-        invalid,
-        flagged,
+    Ok(index)
+}
+
+impl ResultsIndex {
+    /// Counts checked row `line` of run `id`: an `invalid_scenario` one (its `outcome` in
+    /// column `outcome_col`), and one that did not complete or has a warning (its `warnings`
+    /// in column `warnings_col`) flagged.
+    fn count(
+        &mut self,
+        id: u64,
+        line: &str,
+        outcome_col: Option<usize>,
+        warnings_col: Option<usize>,
+    ) {
+        let fields = csv_fields(line).unwrap_or_default();
+        let cell = |c: Option<usize>| c.and_then(|c| fields.get(c)).map(String::as_str);
+        let outcome = cell(outcome_col);
+        if outcome == Some("invalid_scenario") {
+            self.invalid += 1;
+        }
+        if outcome.is_some_and(|o| o != "completed")
+            || cell(warnings_col).is_some_and(|w| !w.is_empty())
+        {
+            self.flagged.add(id);
+        }
+    }
+}
+
+/// Reads row line `number` of results file `path` into `line` (cleared first); its length in
+/// bytes, 0 at the end of the file.
+fn read_row_line(
+    rdr: &mut impl std::io::BufRead,
+    line: &mut String,
+    path: &Path,
+    number: u64,
+) -> Result<usize, Failure> {
+    line.clear();
+    read_line_bounded(rdr, line)
+        .map_err(|e| {
+            fail(
+                exit::DATAERR,
+                format!("{}:{number}: damaged row ({e})", path.display()),
+            )
+        })?
+        .ok_or_else(|| line_too_long(path, number))
+}
+
+/// The failure for line `number` of results file `path` longer than any row isotrack writes.
+fn line_too_long(path: &Path, number: u64) -> Failure {
+    fail(
+        exit::DATAERR,
+        format!(
+            "{}:{number}: a line longer than {} bytes, longer than any row isotrack writes: a damaged file; remove the line (or the file)",
+            path.display(),
+            MAX_RESULTS_LINE_BYTES
+        ),
+    )
+}
+
+/// Cuts results file `path` to its first `at` bytes (a cut-off last line dropped on
+/// `--resume`).
+fn cut_results(path: &Path, at: u64) -> Result<(), Failure> {
+    let repair_fail = |e: std::io::Error| {
+        fail(
+            exit::CANTCREAT,
+            format!("cannot repair {}: {e}", path.display()),
+        )
+    };
+    crate::files::open_regular(path, false, false)
+        .map_err(repair_fail)?
+        .set_len(at)
+        .map_err(repair_fail)
+}
+
+/// The run id of row `line` (line `number` of `path`) once it checks against `rules`
+/// ([`check_row`]): rows are written whole, so a line that does not check is a damaged file,
+/// not ours to guess at.
+fn checked_row(rules: &RowRules<'_>, path: &Path, number: u64, line: &str) -> Result<u64, Failure> {
+    check_row(rules, line).map_err(|why| {
+        let shown: String = line.trim_end().chars().take(120).collect();
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}:{number}: damaged row ({why}): `{shown}`; remove the line (or the file) and --resume",
+                path.display()
+            ),
+        )
     })
 }
 

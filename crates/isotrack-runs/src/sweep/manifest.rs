@@ -4,18 +4,84 @@
 use crate::failure::{exit, fail, Failure};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::ScenarioFile;
+use std::collections::BTreeMap;
 use std::path::Path;
 
-/// The digest that names a sweep: SHA-256 of the sweep file's bytes and of the resolved base
-/// scenario (every default filled in, so a changed default or scenario file changes it too).
+/// The digest that names a sweep: SHA-256 of the sweep file's bytes, of its base scenario's own
+/// keys as `base_scenario.toml` holds them ([`given_toml`]), and of those keys resolved (every
+/// default filled in, no file read: so a changed default or scenario file changes it too).
 /// Stored in `sweep.json`; `--resume` and `merge` refuse rows made under another digest.
 pub fn sweep_digest(sweep_file: &[u8], base_toml: &str) -> String {
     use sha2::{Digest, Sha256};
+    let resolved = toml::from_str::<ScenarioFile>(base_toml)
+        .ok()
+        .and_then(|f| isotrack_scenario::resolve::resolve(f).ok())
+        .and_then(|f| isotrack_scenario::tomltext::to_toml(&f).ok())
+        .unwrap_or_default();
     let mut h = Sha256::new();
     h.update((sweep_file.len() as u64).to_le_bytes());
     h.update(sweep_file);
+    h.update((base_toml.len() as u64).to_le_bytes());
     h.update(base_toml.as_bytes());
+    h.update(resolved.as_bytes());
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// A sweep's base scenario's own keys ([`isotrack_scenario::Scenario::given`]) as TOML: what
+/// `base_scenario.toml` holds, so that `isotrack run base_scenario.toml --set KEY=VALUE ...`
+/// resolves a run's keys once, as the sweep does.
+pub fn given_toml(given: &ScenarioFile) -> String {
+    isotrack_scenario::tomltext::to_toml(given)
+        .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
+}
+
+/// The data files a sweep's `sweep.json` records (`data_files`: the SHA-256 of each file its
+/// base scenario's field reads, by absolute path; absent without files).
+pub fn recorded_files(manifest: &serde_json::Value) -> BTreeMap<String, String> {
+    manifest
+        .get("data_files")
+        .and_then(|d| d.as_object())
+        .map(|o| {
+            o.iter()
+                .map(|(k, v)| (k.clone(), v.as_str().unwrap_or_default().to_string()))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Refuses (65, naming the file) a data file whose SHA-256 in `manifest` (of the directory
+/// `dir`) is not `now`'s, the files' digests against which its rows are to be kept: the rows
+/// were computed on another version of the field (att30d-10: shards and resumed runs over a
+/// rewritten grid file were merged into one results.csv). `against` says what `now` is.
+pub fn check_data_files(
+    dir: &Path,
+    manifest: &serde_json::Value,
+    now: &BTreeMap<String, String>,
+    against: &str,
+) -> Result<(), Failure> {
+    let then = recorded_files(manifest);
+    let shown = |d: Option<&String>| d.map_or("none".to_string(), |d| d.clone());
+    for path in then.keys().chain(now.keys()) {
+        let (a, b) = (then.get(path), now.get(path));
+        if a != b {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: the field's data file {path} is not the one its rows were computed on (SHA-256 {} in its sweep.json, {} {against}): start a new --out, or restore the file",
+                    dir.display(),
+                    shown(a),
+                    shown(b)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The `data_files` entry of `sweep.json`: each data file's SHA-256 by path (`None` without
+/// files: the manifest of a sweep over an analytic field is unchanged).
+pub fn data_files_entry(files: &BTreeMap<String, String>) -> Option<serde_json::Value> {
+    (!files.is_empty()).then(|| serde_json::json!(files))
 }
 
 /// Reads `DIR/sweep.json`.
@@ -30,8 +96,8 @@ pub fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     serde_json::from_str(&text).map_err(|e| fail(exit::DATAERR, format!("{}: {e}", path.display())))
 }
 
-/// The plan of shard directory `dir`, from its `sweep.toml`, and its resolved base scenario
-/// file, from its `base_scenario.toml`, after checking that both are those its `sweep.json`
+/// The plan of shard directory `dir`, from its `sweep.toml`, and its base scenario's own keys,
+/// from its `base_scenario.toml`, after checking that both are those its `sweep.json`
 /// digest names (a shard whose files were edited is refused: its rows' plan columns are checked
 /// against this plan, their times and sample counts against the base's step counts).
 pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile), Failure> {
@@ -46,7 +112,7 @@ pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile),
         return Err(fail(
             exit::DATAERR,
             format!(
-                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited; run it again",
+                "{}: sweep.toml or base_scenario.toml is not the sweep its sweep.json names (digest {digest}): the shard was edited, or an older isotrack wrote it; run it again",
                 dir.display()
             ),
         ));

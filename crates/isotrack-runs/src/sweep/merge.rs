@@ -5,7 +5,7 @@ use crate::files::same_file;
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
-use crate::sweep::manifest::{read_manifest, shard_plan};
+use crate::sweep::manifest::{check_data_files, read_manifest, recorded_files, shard_plan};
 use crate::sweep::rows::{csv_line, results_header};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -136,7 +136,11 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
                 ),
             ));
         }
-        Some(_) => {}
+        Some((_, _, m0)) => {
+            let first = recorded_files(m0);
+            let against = format!("in {}'s", dirs[0].display());
+            check_data_files(d, &m, &first, &against)?;
+        }
         None => shards.first = Some((t, digest, m)),
     }
     let path = d.join("results.csv");

@@ -239,17 +239,19 @@ pub fn team_record_cells(team: Option<&TeamRecord>) -> Vec<String> {
 }
 
 /// The scenario of run `id` of a sweep (its base with the run's assignments), or why it is
-/// invalid, on one line.
+/// invalid, on one line (its lines joined by one space). The reason names the run, not the
+/// sweep file (`_sweep_name`): a row is the same however the sweep file was named (`s.toml`,
+/// `./s.toml`, an absolute path), so `--resume` and `merge` recompute it from any directory.
 pub fn run_scenario(
     plan: &SweepPlan,
     base: &Scenario,
     id: u64,
-    sweep_name: &str,
+    _sweep_name: &str,
 ) -> Result<Scenario, String> {
-    let origin = format!("sweep {sweep_name} run {id}");
+    let origin = format!("sweep run {id}");
     let s = base
         .derive_with(&plan.run_assignments(id, &origin), &origin)
-        .map_err(|e| e.to_string().replace('\n', " "))?;
+        .map_err(|e| one_line(&e.to_string()))?;
     // The header's team columns are the base's: every run of a sweep is a team, or none is.
     match (base.spec().team.is_some(), s.spec().team.is_some()) {
         (false, true) => {
@@ -263,6 +265,16 @@ pub fn run_scenario(
         _ => {}
     }
     Ok(s)
+}
+
+/// `text` on one line: its lines trimmed and joined by one space (a message's indented second
+/// line reads `invalid scenario: sweep run 1 ...`, not with the indent's spaces).
+fn one_line(text: &str) -> String {
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// The `results.csv` fields of run `id` without warnings (a run with a controller of the

@@ -4,11 +4,12 @@
 //! then `results.csv` rewritten sorted ([`SweepJob::finish`]).
 
 use crate::failure::{exit, fail, Failure};
-use crate::summary::scenario_toml;
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
-use crate::sweep::manifest::{read_manifest, sweep_digest};
+use crate::sweep::manifest::{
+    check_data_files, data_files_entry, given_toml, read_manifest, sweep_digest,
+};
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
 use isotrack_scenario::sweep::SweepPlan;
@@ -32,7 +33,8 @@ pub struct SweepJob {
     pub name: String,
     /// The base scenario (its file with the `--set` overrides, then `[base]`).
     pub base: Scenario,
-    /// The resolved base scenario as TOML (kept as `base_scenario.toml`).
+    /// The base scenario's own keys as TOML ([`Scenario::given`], kept as
+    /// `base_scenario.toml`): each run is these keys with its assignments, resolved once.
     pub base_toml: String,
     /// The sweep's digest ([`sweep_digest`]).
     pub digest: String,
@@ -83,7 +85,7 @@ impl SweepJob {
         let plan = SweepPlan::parse(&text, path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
         let name = path.display().to_string();
         let base = sweep_base(&plan, sets, &name)?;
-        let base_toml = scenario_toml(&base);
+        let base_toml = given_toml(base.given());
         let digest = sweep_digest(&sweep_bytes, &base_toml);
         let header = results_header(&plan, base.spec().team.is_some());
         Ok(Self {
@@ -181,7 +183,8 @@ impl SweepJob {
                 ),
             ));
         }
-        Ok(())
+        let now = crate::summary::data_file_digests(&self.base);
+        check_data_files(out, &stored, &now, "now")
     }
 
     /// The runs already in `results` (their ids only, sorted), each row checked, a cut-off
@@ -189,7 +192,7 @@ impl SweepJob {
     fn resumed_ids(&self, results: &Path, (k, n): (u64, u64)) -> Result<Vec<u64>, Failure> {
         let cant = cant_write(results.parent().unwrap_or(Path::new(".")));
         let spans =
-            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
+            RunSpans::new(&self.plan, self.base.given()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, true, self.plan.total(), &self.plan, &spans)?;
         let header_line = csv_line(&self.header);
         if idx.header.is_empty() {
@@ -260,7 +263,7 @@ impl SweepJob {
         crate::files::write_atomic(&out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
         crate::files::write_atomic(&out.join("base_scenario.toml"), self.base_toml.as_bytes())
             .map_err(cant)?;
-        let manifest = json!({
+        let mut manifest = json!({
             "sweep": self.name,
             "scenario": self.plan.scenario.display().to_string(),
             "digest": self.digest,
@@ -269,6 +272,11 @@ impl SweepJob {
             "shard_runs": shard_runs,
             "columns": self.header,
         });
+        // The field's data files by content: --resume and merge refuse rows over another
+        // version of them.
+        if let Some(files) = data_files_entry(&crate::summary::data_file_digests(&self.base)) {
+            manifest["data_files"] = files;
+        }
         crate::files::write_atomic(
             &out.join("sweep.json"),
             (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
@@ -332,7 +340,7 @@ impl SweepJob {
     pub fn finish(&self, out: &SweepOutput) -> Result<SweepReport, Failure> {
         let results = &out.results;
         let spans =
-            RunSpans::new(&self.plan, self.base.file()).with_scenario(&self.base, &self.name);
+            RunSpans::new(&self.plan, self.base.given()).with_scenario(&self.base, &self.name);
         let idx = index_results(results, 0, false, self.plan.total(), &self.plan, &spans)?;
         let mut rows = idx.rows;
         if let Some(d) = sort_rows(&mut rows).first() {

@@ -578,83 +578,7 @@ impl TeamCheckReport {
         if !sp.applicable {
             out.push(format!("  spacing loop: {}", sp.note));
         } else {
-            out.push(format!(
-                "  spacing loop sampled at the ranging period T = {} s, delay {} s = (q + f) T with q = {}, f = {}",
-                Num(sp.period_s),
-                Num(sp.delay_s),
-                sp.delay_whole_periods.map_or("n/a".into(), |q| q.to_string()),
-                sp.delay_fraction.map_or("n/a".into(), |f| Num(f).to_string())
-            ));
-            let c = sp.range_slope.unwrap_or(1.0);
-            out.push(format!(
-                "  range slope c = dr/dg = {} ({})",
-                Num(c),
-                match sp.range_slope_source {
-                    Some("circle_chord") =>
-                        "chord of the circular isoline at even spacing, cos(pi/N)",
-                    Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
-                    _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
-                }
-            ));
-            let modes: Vec<String> = sp
-                .modes
-                .iter()
-                .map(|m| {
-                    format!(
-                        "m = {}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
-                        m.m,
-                        Num(m.lambda),
-                        Num(m.gain_per_period),
-                        m.spectral_radius
-                            .map_or("n/a".into(), |r| format!("{r:.6}")),
-                        if m.stable { "stable" } else { "UNSTABLE" }
-                    )
-                })
-                .collect();
-            out.push(format!(
-                "  ring Laplacian eigenvalues ({}; m = 0, the sum of the gaps, is conserved):",
-                if sp.all_modes_listed {
-                    "every distinct one"
-                } else {
-                    "the smallest and the largest of many"
-                }
-            ));
-            out.extend(modes.into_iter().map(|m| format!("    {m}")));
-            if let (Some(g), Some(k), Some(lmax)) = (
-                sp.max_gain_per_period,
-                sp.max_stable_k_v_per_s,
-                sp.lambda_max,
-            ) {
-                out.push(format!(
-                    "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
-                    Num(g),
-                    Num(sp.period_s),
-                    Num(c),
-                    Num(lmax),
-                    Num(k),
-                    Echo(sp.k_v_per_s.unwrap_or(0.0)),
-                    match sp.stable {
-                        Some(true) => "stable",
-                        Some(false) => "UNSTABLE",
-                        None => "not computed",
-                    }
-                ));
-            }
-            if !sp.note.is_empty() {
-                out.push(format!("  note: {}", sp.note));
-            }
-            let num = |x: Option<f64>| {
-                x.map_or("none (does not decay)".into(), |v| format!("{} s", Num(v)))
-            };
-            out.push(format!(
-                "  slowest mode (m = {}): time constant {} sampled (-T/ln rho), {} continuous (m = 1: 1/(k_v c lambda_1))",
-                sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
-                num(sp.slowest_time_constant_s),
-                num(sp.slowest_time_constant_continuous_s)
-            ));
-            for w in &sp.not_modelled {
-                out.push(format!("  not modelled: {w}"));
-            }
+            spacing_lines(sp, &mut out);
         }
         if !tr.applicable {
             out.push(format!(
@@ -682,5 +606,85 @@ impl TeamCheckReport {
             out.push(format!("  note: {}", tr.note));
         }
         out
+    }
+}
+
+/// The lines of `isotrack check`'s team section on an applicable spacing loop: its sampling,
+/// range slope, ring modes, largest stable gain, slowest mode and what it leaves out.
+fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
+    out.push(format!(
+            "  spacing loop sampled at the ranging period T = {} s, delay {} s = (q + f) T with q = {}, f = {}",
+            Num(sp.period_s),
+            Num(sp.delay_s),
+            sp.delay_whole_periods.map_or("n/a".into(), |q| q.to_string()),
+            sp.delay_fraction.map_or("n/a".into(), |f| Num(f).to_string())
+        ));
+    let c = sp.range_slope.unwrap_or(1.0);
+    out.push(format!(
+        "  range slope c = dr/dg = {} ({})",
+        Num(c),
+        match sp.range_slope_source {
+            Some("circle_chord") => "chord of the circular isoline at even spacing, cos(pi/N)",
+            Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
+            _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
+        }
+    ));
+    let modes: Vec<String> = sp
+        .modes
+        .iter()
+        .map(|m| {
+            format!(
+                "m = {}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
+                m.m,
+                Num(m.lambda),
+                Num(m.gain_per_period),
+                m.spectral_radius
+                    .map_or("n/a".into(), |r| format!("{r:.6}")),
+                if m.stable { "stable" } else { "UNSTABLE" }
+            )
+        })
+        .collect();
+    out.push(format!(
+        "  ring Laplacian eigenvalues ({}; m = 0, the sum of the gaps, is conserved):",
+        if sp.all_modes_listed {
+            "every distinct one"
+        } else {
+            "the smallest and the largest of many"
+        }
+    ));
+    out.extend(modes.into_iter().map(|m| format!("    {m}")));
+    if let (Some(g), Some(k), Some(lmax)) = (
+        sp.max_gain_per_period,
+        sp.max_stable_k_v_per_s,
+        sp.lambda_max,
+    ) {
+        out.push(format!(
+                "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
+                Num(g),
+                Num(sp.period_s),
+                Num(c),
+                Num(lmax),
+                Num(k),
+                Echo(sp.k_v_per_s.unwrap_or(0.0)),
+                match sp.stable {
+                    Some(true) => "stable",
+                    Some(false) => "UNSTABLE",
+                    None => "not computed",
+                }
+            ));
+    }
+    if !sp.note.is_empty() {
+        out.push(format!("  note: {}", sp.note));
+    }
+    let num =
+        |x: Option<f64>| x.map_or("none (does not decay)".into(), |v| format!("{} s", Num(v)));
+    out.push(format!(
+            "  slowest mode (m = {}): time constant {} sampled (-T/ln rho), {} continuous (m = 1: 1/(k_v c lambda_1))",
+            sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
+            num(sp.slowest_time_constant_s),
+            num(sp.slowest_time_constant_continuous_s)
+        ));
+    for w in &sp.not_modelled {
+        out.push(format!("  not modelled: {w}"));
     }
 }

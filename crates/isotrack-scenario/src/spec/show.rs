@@ -32,7 +32,6 @@ fn num(x: f64) -> String {
 pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
     let spec = s.spec();
     let file = s.file();
-    let ct = &file.controller;
     // Keys on their own line: (section, key, formula) for a key the user did not give.
     let mut inline: Vec<(&str, &str, String)> = Vec::new();
     // Lines added at the end of a section: (section, line).
@@ -48,6 +47,29 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
             "1 % of |controller.level| (0.01 for level 0)".into(),
         ));
     }
+    controller_inline(s, &mut inline);
+    controller_in_force(s, &mut extra);
+    field_in_force(s, &mut extra);
+    metrics_in_force(s, &mut extra);
+    let mut out = annotate(resolved_toml, &inline, &extra);
+    if file.sitl.is_unset() {
+        let h = &spec.sitl;
+        out += &format!(
+            "\n# [sitl]  (isotrack sitl only; the defaults: PX4's SITL home)\n# home_lat_deg = {}\n# home_lon_deg = {}\n# home_alt_m = {}\n",
+            num(h.home_lat_deg),
+            num(h.home_lon_deg),
+            num(h.home_alt_m)
+        );
+    }
+    out
+}
+
+/// The `[controller]` keys resolution wrote by a formula, marked inline when their value is
+/// the formula's: the PI-like law's clamp (`max_turn_rate_radps`, else `kp*c1`) or band (`c2`),
+/// `pid_crossing`'s turn rate.
+fn controller_inline(s: &Scenario, inline: &mut Vec<(&str, &str, String)>) {
+    let spec = s.spec();
+    let ct = &s.file().controller;
     if let Some(p) = spec.controller.pi_isoline() {
         match (p.anti_windup, ct.max_turn_rate_radps) {
             (AntiWindup::Clamp { limit_radps }, Some(w)) if limit_radps == w => inline.push((
@@ -80,6 +102,13 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
             ));
         }
     }
+}
+
+/// The `[controller]` values in force the resolved file leaves out: the fixed wing's turn-rate
+/// limit and the search geometry (spacing, leg, handover) where not given.
+fn controller_in_force(s: &Scenario, extra: &mut Vec<(&str, String)>) {
+    let spec = s.spec();
+    let ct = &s.file().controller;
     if let TurnRateLimit::Airframe(w) = spec.controller.turn_rate_limit {
         extra.push((
             "controller",
@@ -124,7 +153,12 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
             ));
         }
     }
-    field_in_force(s, &mut extra);
+}
+
+/// The `[metrics]` values in force the resolved file leaves out: the convergence dwell and the
+/// track-loss band where not given.
+fn metrics_in_force(s: &Scenario, extra: &mut Vec<(&str, String)>) {
+    let (spec, file) = (s.spec(), s.file());
     let m = &spec.metrics;
     if file.metrics.convergence_min_dwell_s.is_none() {
         extra.push((
@@ -144,17 +178,6 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
             ),
         ));
     }
-    let mut out = annotate(resolved_toml, &inline, &extra);
-    if file.sitl.is_unset() {
-        let h = &spec.sitl;
-        out += &format!(
-            "\n# [sitl]  (isotrack sitl only; the defaults: PX4's SITL home)\n# home_lat_deg = {}\n# home_lon_deg = {}\n# home_alt_m = {}\n",
-            num(h.home_lat_deg),
-            num(h.home_lon_deg),
-            num(h.home_alt_m)
-        );
-    }
-    out
 }
 
 /// A TOML array of `xs`, each as [`num`] writes it.

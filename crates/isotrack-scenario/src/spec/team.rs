@@ -7,7 +7,9 @@ use super::sim::Start;
 use super::vehicle::VehicleSpec;
 use crate::issue::Issue;
 use crate::ranges::MAX_COORDINATE_M;
-use crate::schema::{InitialSection, RingName, SpacingName, SpreadAlong, TeamSection, TeamSpread};
+use crate::schema::{
+    InitialSection, RingName, SpacingName, SpreadAlong, TeamSection, TeamSpread, TeamVehicleSection,
+};
 use isotrack_core::numtext::Echo;
 use isotrack_sim::team::ranging::{Ranging, RangingConfig};
 use isotrack_sim::team::spacing::{DiscoveryConfig, RingMode, SpacingLaw};
@@ -619,160 +621,227 @@ fn vehicles_of(
     // The entry naming each vehicle so far: a duplicate is found in O(1), the list in O(n).
     let mut seen: Vec<Option<usize>> = vec![None; n];
     for (k, e) in list.iter().enumerate() {
-        let key = |name: &str| format!("team.vehicles[{k}].{name}");
-        let index = match e.index {
-            None => {
-                return Err(issue(
-                    &key("index"),
-                    "is required (the vehicle, 0 .. team.count - 1 in the listed order)".into(),
-                ))
-            }
-            Some(i) if i >= n as u64 => {
-                return Err(issue(
-                    &key("index"),
-                    format!("must be in [0, {}] (team.count = {n}), got {i}", n - 1),
-                ))
-            }
-            Some(i) => i as usize,
-        };
-        if let Some(j) = seen[index] {
+        let index = entry_index(e, k, n, &mut seen)?;
+        let speeds = entry_speeds(t, e, k, fixed_wing, team)?;
+        if matches!(ring, RingMode::Discover(_)) && speeds.v0 != team.v0 {
             return Err(issue(
-                &key("index"),
-                format!(
-                    "= {index} is given twice (also team.vehicles[{j}]): one entry per vehicle"
-                ),
-            ));
-        }
-        seen[index] = Some(k);
-        let (speed_key, given, wrong) = if fixed_wing {
-            (
-                "airspeed_mps",
-                e.airspeed_mps,
-                e.speed_mps.map(|_| {
-                    (
-                        "speed_mps",
-                        "a Dubins robot's speed; a fixed wing's is airspeed_mps",
-                    )
-                }),
-            )
-        } else {
-            (
-                "speed_mps",
-                e.speed_mps,
-                e.airspeed_mps.map(|_| {
-                    (
-                        "airspeed_mps",
-                        "a fixed wing's airspeed command; a Dubins robot's is speed_mps",
-                    )
-                }),
-            )
-        };
-        if let Some((name, why)) = wrong {
-            return Err(issue(&key(name), format!("is {why}")));
-        }
-        let v0 = positive(&key(speed_key), Some(given.unwrap_or(team.v0)))?;
-        let (lo, hi) = team.airframe.unwrap_or((0.0, f64::INFINITY));
-        let v_min = positive(
-            &key("v_min_mps"),
-            Some(e.v_min_mps.unwrap_or(match t.v_min_mps {
-                Some(_) => team.v_min,
-                None => (V_MIN_FRACTION * v0).max(lo),
-            })),
-        )?;
-        let v_max = positive(
-            &key("v_max_mps"),
-            Some(e.v_max_mps.unwrap_or(match t.v_max_mps {
-                Some(_) => team.v_max,
-                None => (V_MAX_FACTOR * v0).min(hi),
-            })),
-        )?;
-        if team.airframe.is_some() {
-            for (name, v) in [(speed_key, v0), ("v_min_mps", v_min), ("v_max_mps", v_max)] {
-                if !(lo..=hi).contains(&v) {
-                    return Err(issue(
-                        &key(name),
-                        format!(
-                            "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
-                            Echo(lo),
-                            Echo(hi),
-                            Echo(v)
-                        ),
-                    ));
-                }
-            }
-        }
-        let max = crate::ranges::MAX_SPEED_MPS;
-        if v0 > max {
-            return Err(issue(
-                &key(speed_key),
-                format!("must be at most {}, got {}", Echo(max), Echo(v0)),
-            ));
-        }
-        if v_min > v0 {
-            return Err(issue(
-                &key("v_min_mps"),
-                format!(
-                    "must be at most the vehicle's nominal speed {} m/s, got {}",
-                    Echo(v0),
-                    Echo(v_min)
-                ),
-            ));
-        }
-        if v_max < v0 || v_max > max {
-            return Err(issue(
-                &key("v_max_mps"),
-                format!(
-                    "must be in [the vehicle's nominal speed {}, {}], got {}",
-                    Echo(v0),
-                    Echo(max),
-                    Echo(v_max)
-                ),
-            ));
-        }
-        if matches!(ring, RingMode::Discover(_)) && v0 != team.v0 {
-            return Err(issue(
-                &key(speed_key),
+                &entry_key(k, speeds.key),
                 format!(
                     "= {} differs from the team's {} m/s, but team.ring = \"discovered\" probes with every other vehicle at one nominal speed: give the vehicles one speed or use team.ring = \"listed\"",
-                    Echo(v0),
+                    Echo(speeds.v0),
                     Echo(team.v0)
                 ),
             ));
         }
-        let noise = match e.sensor_noise_std {
-            None => None,
-            v => Some(non_negative(&key("sensor_noise_std"), v)?),
-        };
-        let rate = match e.sensor_rate_hz {
-            None => None,
-            v => Some(positive(&key("sensor_rate_hz"), v)?),
-        };
-        let cfg = SensorConfig {
-            noise_std: noise.unwrap_or(sensor.noise_std),
-            rate_hz: rate.unwrap_or(sensor.rate_hz),
-            ..*sensor
-        };
-        // As the run builds each vehicle's sensor: a rate whose period is not a whole number
-        // of steps is refused here, by key.
-        if let Err(err) = Sensor::new(cfg, sim.dt_s, 0) {
-            let name = if rate.is_some() {
-                "sensor_rate_hz"
-            } else {
-                "sensor_noise_std"
-            };
-            return Err(issue(&key(name), err.to_string()));
-        }
+        let (noise, rate) = entry_sensor(e, k, sensor, sim)?;
         out.push(TeamVehicleSpec {
             index,
-            nominal_speed_mps: v0,
-            v_min_mps: v_min,
-            v_max_mps: v_max,
+            nominal_speed_mps: speeds.v0,
+            v_min_mps: speeds.v_min,
+            v_max_mps: speeds.v_max,
             sensor_noise_std: noise,
             sensor_rate_hz: rate,
         });
     }
     out.sort_by_key(|v| v.index);
     Ok(out)
+}
+
+/// The key `team.vehicles[k].name`.
+fn entry_key(k: usize, name: &str) -> String {
+    format!("team.vehicles[{k}].{name}")
+}
+
+/// The vehicle entry `k` names: its `index`, required, in `0 .. n`, and named by no earlier
+/// entry (`seen[i]`: the entry naming vehicle `i` so far).
+fn entry_index(
+    e: &TeamVehicleSection,
+    k: usize,
+    n: usize,
+    seen: &mut [Option<usize>],
+) -> Result<usize, Issue> {
+    let index = match e.index {
+        None => {
+            return Err(issue(
+                &entry_key(k, "index"),
+                "is required (the vehicle, 0 .. team.count - 1 in the listed order)".into(),
+            ))
+        }
+        Some(i) if i >= n as u64 => {
+            return Err(issue(
+                &entry_key(k, "index"),
+                format!("must be in [0, {}] (team.count = {n}), got {i}", n - 1),
+            ))
+        }
+        Some(i) => i as usize,
+    };
+    if let Some(j) = seen[index] {
+        return Err(issue(
+            &entry_key(k, "index"),
+            format!("= {index} is given twice (also team.vehicles[{j}]): one entry per vehicle"),
+        ));
+    }
+    seen[index] = Some(k);
+    Ok(index)
+}
+
+/// One vehicle entry's nominal speed (under `key`, the vehicle kind's speed key) and envelope.
+#[derive(Clone, Copy)]
+struct EntrySpeeds {
+    key: &'static str,
+    v0: f64,
+    v_min: f64,
+    v_max: f64,
+}
+
+/// Entry `k`'s nominal speed (the vehicle kind's key: `speed_mps` for a Dubins robot,
+/// `airspeed_mps` for a fixed wing; the other kind's key refused) and its envelope around it
+/// (default: `team.v_min_mps` / `team.v_max_mps` when given, else the team's default rule at
+/// its own speed), within a fixed wing's safe airspeeds and [`crate::ranges::MAX_SPEED_MPS`].
+fn entry_speeds(
+    t: &TeamSection,
+    e: &TeamVehicleSection,
+    k: usize,
+    fixed_wing: bool,
+    team: &Envelope,
+) -> Result<EntrySpeeds, Issue> {
+    let key = |name: &str| entry_key(k, name);
+    let (speed_key, given, wrong) = if fixed_wing {
+        (
+            "airspeed_mps",
+            e.airspeed_mps,
+            e.speed_mps.map(|_| {
+                (
+                    "speed_mps",
+                    "a Dubins robot's speed; a fixed wing's is airspeed_mps",
+                )
+            }),
+        )
+    } else {
+        (
+            "speed_mps",
+            e.speed_mps,
+            e.airspeed_mps.map(|_| {
+                (
+                    "airspeed_mps",
+                    "a fixed wing's airspeed command; a Dubins robot's is speed_mps",
+                )
+            }),
+        )
+    };
+    if let Some((name, why)) = wrong {
+        return Err(issue(&key(name), format!("is {why}")));
+    }
+    let v0 = positive(&key(speed_key), Some(given.unwrap_or(team.v0)))?;
+    let (lo, hi) = team.airframe.unwrap_or((0.0, f64::INFINITY));
+    // An envelope bound: the entry's own, else the team's when given, else the rule at v0.
+    let bound = |name: &str, own: Option<f64>, of_team: Option<f64>, team_value: f64, rule: f64| {
+        positive(
+            &key(name),
+            Some(own.unwrap_or(of_team.map_or(rule, |_| team_value))),
+        )
+    };
+    let (min_rule, max_rule) = ((V_MIN_FRACTION * v0).max(lo), (V_MAX_FACTOR * v0).min(hi));
+    let v_min = bound("v_min_mps", e.v_min_mps, t.v_min_mps, team.v_min, min_rule)?;
+    let v_max = bound("v_max_mps", e.v_max_mps, t.v_max_mps, team.v_max, max_rule)?;
+    let speeds = EntrySpeeds {
+        key: speed_key,
+        v0,
+        v_min,
+        v_max,
+    };
+    check_entry_speeds(&speeds, k, team)?;
+    Ok(speeds)
+}
+
+/// Checks entry `k`'s speeds: within a fixed wing's safe airspeeds (`team.airframe`), the
+/// nominal speed at most [`crate::ranges::MAX_SPEED_MPS`], the envelope around it.
+fn check_entry_speeds(speeds: &EntrySpeeds, k: usize, team: &Envelope) -> Result<(), Issue> {
+    let key = |name: &str| entry_key(k, name);
+    let EntrySpeeds {
+        key: speed_key,
+        v0,
+        v_min,
+        v_max,
+    } = *speeds;
+    let (lo, hi) = team.airframe.unwrap_or((0.0, f64::INFINITY));
+    if team.airframe.is_some() {
+        for (name, v) in [(speed_key, v0), ("v_min_mps", v_min), ("v_max_mps", v_max)] {
+            if !(lo..=hi).contains(&v) {
+                return Err(issue(
+                    &key(name),
+                    format!(
+                        "is an airspeed command for vehicle.kind = \"fixed_wing\" and must lie within the Aerosonde's safe airspeed range [{}, {}] m/s, got {}",
+                        Echo(lo),
+                        Echo(hi),
+                        Echo(v)
+                    ),
+                ));
+            }
+        }
+    }
+    let max = crate::ranges::MAX_SPEED_MPS;
+    if v0 > max {
+        return Err(issue(
+            &key(speed_key),
+            format!("must be at most {}, got {}", Echo(max), Echo(v0)),
+        ));
+    }
+    if v_min > v0 {
+        return Err(issue(
+            &key("v_min_mps"),
+            format!(
+                "must be at most the vehicle's nominal speed {} m/s, got {}",
+                Echo(v0),
+                Echo(v_min)
+            ),
+        ));
+    }
+    if v_max < v0 || v_max > max {
+        return Err(issue(
+            &key("v_max_mps"),
+            format!(
+                "must be in [the vehicle's nominal speed {}, {}], got {}",
+                Echo(v0),
+                Echo(max),
+                Echo(v_max)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Entry `k`'s own sensor noise and rate (`None` where it keeps the team's `sensor`), checked
+/// as the run builds its sensor: a rate whose period is not a whole number of steps is refused
+/// here, by key.
+fn entry_sensor(
+    e: &TeamVehicleSection,
+    k: usize,
+    sensor: &SensorConfig,
+    sim: &SimSpec,
+) -> Result<(Option<f64>, Option<f64>), Issue> {
+    let noise = match e.sensor_noise_std {
+        None => None,
+        v => Some(non_negative(&entry_key(k, "sensor_noise_std"), v)?),
+    };
+    let rate = match e.sensor_rate_hz {
+        None => None,
+        v => Some(positive(&entry_key(k, "sensor_rate_hz"), v)?),
+    };
+    let cfg = SensorConfig {
+        noise_std: noise.unwrap_or(sensor.noise_std),
+        rate_hz: rate.unwrap_or(sensor.rate_hz),
+        ..*sensor
+    };
+    if let Err(err) = Sensor::new(cfg, sim.dt_s, 0) {
+        let name = if rate.is_some() {
+            "sensor_rate_hz"
+        } else {
+            "sensor_noise_std"
+        };
+        return Err(issue(&entry_key(k, name), err.to_string()));
+    }
+    Ok((noise, rate))
 }
 
 /// SplitMix64's finaliser (Steele, Lea & Flood, "Fast splittable pseudorandom number

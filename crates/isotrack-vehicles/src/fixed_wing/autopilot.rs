@@ -34,6 +34,7 @@ pub struct PiState {
 impl PiState {
     /// `u = sat(kp e + ki I + extra)` with the trapezoid integral and anti-windup.
     #[allow(clippy::too_many_arguments)] // the loop's own gains and limits, spelled out
+    #[inline(always)] // compiled with the (multiversioned) step that calls it
     pub fn update(
         &mut self,
         e: f64,

@@ -72,6 +72,24 @@ impl EulerSinCos {
         }
     }
 
+    /// `(sin, cos)` of angle `k` (0 phi, 1 theta, 2 psi).
+    #[inline(always)]
+    pub fn sin_cos(&self, k: usize) -> (f64, f64) {
+        (self.sin[k], self.cos[k])
+    }
+
+    /// Lane `i` of `e`, the sines and cosines of the angles `x[6..9]` of state `x`: what
+    /// [`of`](Self::of) gives for `x` (the fourth lane, unused, that of angle 0).
+    #[inline(always)]
+    pub fn from_lane<const N: usize>(e: &EulerLanes<N>, x: &State12, i: usize) -> Self {
+        let (s0, c0) = isotrack_core::lanes::sin_cos(0.0);
+        Self {
+            angles: [x[6], x[7], x[8]],
+            sin: [e.sin[0][i], e.sin[1][i], e.sin[2][i], s0],
+            cos: [e.cos[0][i], e.cos[1][i], e.cos[2][i], c0],
+        }
+    }
+
     /// Rotation body -> NED ([`r_body_to_ned`]).
     #[inline(always)]
     pub fn rotation(&self) -> [[f64; 3]; 3] {
@@ -158,21 +176,59 @@ fn lift_coefficient_sc(p: &Aerosonde, k: f64, alpha: f64, sa: f64, ca: f64) -> f
 /// without the angles (the autopilot needs only the airspeed).
 #[inline(always)]
 pub fn airspeed_mps(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> f64 {
-    let (ur, vr, wr) = air_relative_body(x, wind, r);
-    (ur * ur + vr * vr + wr * wr).sqrt()
+    let [va] = airspeed_lanes(
+        &x.map(|v| [v]),
+        &WindLanes::of(wind),
+        &r.map(|row| row.map(|v| [v])),
+    );
+    va
+}
+
+/// [`airspeed_mps`] of `N` states in lanes (`x[k][i]`: component `k` of state `i`), the one
+/// body of both.
+#[inline(always)]
+pub(crate) fn airspeed_lanes<const N: usize>(
+    x: &[[f64; N]; 12],
+    wind: &WindLanes<N>,
+    r: &[[[f64; N]; 3]; 3],
+) -> [f64; N] {
+    let [ur, vr, wr] = air_relative_lanes(&[x[3], x[4], x[5]], wind, r);
+    let mut va = [0.0; N];
+    for i in 0..N {
+        va[i] = (ur[i] * ur[i] + vr[i] * vr[i] + wr[i] * wr[i]).sqrt();
+    }
+    va
 }
 
 /// The air-relative velocity in body axes `(u_r, v_r, w_r)`: the body velocity less the wind
 /// (steady wind rotated by `R_ned->body = R^T`, plus the body-axis gusts), m/s.
 #[inline(always)]
 fn air_relative_body(x: &State12, wind: &WindSample, r: &[[f64; 3]; 3]) -> (f64, f64, f64) {
-    let [wn, we, wd] = wind.steady_ned_mps;
-    let wb = [
-        r[0][0] * wn + r[1][0] * we + r[2][0] * wd + wind.gust_body_mps[0],
-        r[0][1] * wn + r[1][1] * we + r[2][1] * wd + wind.gust_body_mps[1],
-        r[0][2] * wn + r[1][2] * we + r[2][2] * wd + wind.gust_body_mps[2],
-    ];
-    (x[3] - wb[0], x[4] - wb[1], x[5] - wb[2])
+    let [[ur], [vr], [wr]] = air_relative_lanes(
+        &[[x[3]], [x[4]], [x[5]]],
+        &WindLanes::of(wind),
+        &r.map(|row| row.map(|v| [v])),
+    );
+    (ur, vr, wr)
+}
+
+/// [`air_relative_body`] of `N` states in lanes: the one body of both.
+#[inline(always)]
+fn air_relative_lanes<const N: usize>(
+    uvw: &[[f64; N]; 3],
+    wind: &WindLanes<N>,
+    r: &[[[f64; N]; 3]; 3],
+) -> [[f64; N]; 3] {
+    let [wn, we, wd] = &wind.steady_ned_mps;
+    let g = &wind.gust_body_mps;
+    let mut out = [[0.0; N]; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        for i in 0..N {
+            let wb = r[0][k][i] * wn[i] + r[1][k][i] * we[i] + r[2][k][i] * wd[i] + g[k][i];
+            o[i] = uvw[k][i] - wb;
+        }
+    }
+    out
 }
 
 /// Air data of state `x` in `wind`.
@@ -238,7 +294,9 @@ fn derivatives_inline(
     derivatives_with(p, dv, x, d, wind, &EulerSinCos::of(x))
 }
 
-/// [`derivatives`] with the sines and cosines of `x`'s Euler angles already known.
+/// [`derivatives`] with the sines and cosines of `x`'s Euler angles already known: the lane
+/// body ([`derivatives_lanes`]) with one lane, so a state stepped alone and the same state
+/// stepped in lanes get the same numbers by construction.
 #[inline(always)]
 fn derivatives_with(
     p: &Aerosonde,
@@ -248,24 +306,211 @@ fn derivatives_with(
     wind: &WindSample,
     euler: &EulerSinCos,
 ) -> State12 {
+    let e = EulerLanes {
+        sin: [[euler.sin[0]], [euler.sin[1]], [euler.sin[2]]],
+        cos: [[euler.cos[0]], [euler.cos[1]], [euler.cos[2]]],
+    };
+    derivatives_lanes(
+        p,
+        dv,
+        &x.map(|v| [v]),
+        &DeltasLanes::of(d),
+        &WindLanes::of(wind),
+        &e,
+    )
+    .map(|[v]| v)
+}
+
+/// The deflections of `N` aircraft, one lane each.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct DeltasLanes<const N: usize> {
+    /// Elevator, rad.
+    pub elevator_rad: [f64; N],
+    /// Aileron, rad.
+    pub aileron_rad: [f64; N],
+    /// Rudder, rad.
+    pub rudder_rad: [f64; N],
+    /// Throttle, 0..1.
+    pub throttle: [f64; N],
+}
+
+impl DeltasLanes<1> {
+    /// One aircraft's deflections as one lane.
+    #[inline(always)]
+    pub fn of(d: &Deltas) -> Self {
+        Self {
+            elevator_rad: [d.elevator_rad],
+            aileron_rad: [d.aileron_rad],
+            rudder_rad: [d.rudder_rad],
+            throttle: [d.throttle],
+        }
+    }
+}
+
+/// The wind of `N` aircraft, one lane each (see [`WindSample`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct WindLanes<const N: usize> {
+    /// Steady wind `[w_n, w_e, w_d]`, m/s.
+    pub steady_ned_mps: [[f64; N]; 3],
+    /// Gusts `[u_wg, v_wg, w_wg]` in body axes, m/s.
+    pub gust_body_mps: [[f64; N]; 3],
+}
+
+impl WindLanes<1> {
+    /// One aircraft's wind as one lane.
+    #[inline(always)]
+    pub fn of(w: &WindSample) -> Self {
+        Self {
+            steady_ned_mps: w.steady_ned_mps.map(|v| [v]),
+            gust_body_mps: w.gust_body_mps.map(|v| [v]),
+        }
+    }
+}
+
+/// The sines and cosines of `N` states' Euler angles `(phi, theta, psi)`, one lane each.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EulerLanes<const N: usize> {
+    /// `sin` of phi, theta, psi.
+    pub sin: [[f64; N]; 3],
+    /// `cos` of phi, theta, psi.
+    pub cos: [[f64; N]; 3],
+}
+
+impl<const N: usize> EulerLanes<N> {
+    /// Of the angles `x[6..9]` of the states `x` (three `sin_cos` in lanes: each lane the
+    /// value [`EulerSinCos::of`] gives, the functions being lane-wise).
+    #[inline(always)]
+    pub fn of(x: &[[f64; N]; 12]) -> Self {
+        let (s0, c0) = isotrack_core::lanes::sin_cos_lanes(x[6]);
+        let (s1, c1) = isotrack_core::lanes::sin_cos_lanes(x[7]);
+        let (s2, c2) = isotrack_core::lanes::sin_cos_lanes(x[8]);
+        Self {
+            sin: [s0, s1, s2],
+            cos: [c0, c1, c2],
+        }
+    }
+
+    /// Rotation body -> NED of each lane ([`r_body_to_ned`]'s formula).
+    #[inline(always)]
+    pub fn rotation(&self) -> [[[f64; N]; 3]; 3] {
+        let [sf, st, sp] = &self.sin;
+        let [cf, ct, cp] = &self.cos;
+        // `r_from_sincos`'s entries, each one lane-wise loop.
+        [
+            [
+                lanewise(|i| ct[i] * cp[i]),
+                lanewise(|i| sf[i] * st[i] * cp[i] - cf[i] * sp[i]),
+                lanewise(|i| cf[i] * st[i] * cp[i] + sf[i] * sp[i]),
+            ],
+            [
+                lanewise(|i| ct[i] * sp[i]),
+                lanewise(|i| sf[i] * st[i] * sp[i] + cf[i] * cp[i]),
+                lanewise(|i| cf[i] * st[i] * sp[i] - sf[i] * cp[i]),
+            ],
+            [
+                lanewise(|i| -st[i]),
+                lanewise(|i| sf[i] * ct[i]),
+                lanewise(|i| cf[i] * ct[i]),
+            ],
+        ]
+    }
+}
+
+/// `[f64; N]` of `f(i)` for each lane `i`.
+#[inline(always)]
+fn lanewise<const N: usize>(f: impl Fn(usize) -> f64) -> [f64; N] {
+    let mut o = [0.0; N];
+    for (i, o) in o.iter_mut().enumerate() {
+        *o = f(i);
+    }
+    o
+}
+
+/// `[f64; N]` from a lane-wise expression in lane index `$i`.
+macro_rules! lanes {
+    ($n:expr, $i:ident => $e:expr) => {{
+        let mut o = [0.0f64; $n];
+        for $i in 0..$n {
+            o[$i] = $e;
+        }
+        o
+    }};
+}
+
+/// The state derivative of `N` states in lanes (structure of arrays: `x[k][i]` is component `k`
+/// of state `i`): the one body of the scalar [`derivatives`] (with one lane) and of the lane
+/// step. Written branch-free (both sides computed, the answer selected per lane) so that its
+/// arithmetic vectorises; the transcendentals without a lane form (`asin` of the sideslip,
+/// `atan` of the angle of attack, the stall blend's `exp`) are the platform's, lane by lane.
+/// Each lane's numbers are those of the same operations on that lane alone.
+#[inline(always)]
+pub(crate) fn derivatives_lanes<const N: usize>(
+    p: &Aerosonde,
+    dv: &Derived,
+    x: &[[f64; N]; 12],
+    d: &DeltasLanes<N>,
+    wind: &WindLanes<N>,
+    euler: &EulerLanes<N>,
+) -> [[f64; N]; 12] {
     let gm = &dv.gammas;
-    let (u, v, w) = (x[3], x[4], x[5]);
-    let (pr, qr, rr) = (x[9], x[10], x[11]);
-    let (s3, c3) = (euler.sin, euler.cos);
-    let (sf, cf) = (s3[0], c3[0]);
-    let (st, ct) = (s3[1], c3[1]);
+    let [u, v, w] = [&x[3], &x[4], &x[5]];
+    let [pr, qr, rr] = [&x[9], &x[10], &x[11]];
+    let [sf, st, _] = &euler.sin;
+    let [cf, ct, _] = &euler.cos;
     let r = euler.rotation();
-    let (air, sa, ca) = air_data_sc(x, wind, &r);
-    let (va, alpha, beta) = (air.va_mps, air.alpha_rad, air.beta_rad);
+    // Air data (`air_data_sc`'s formulas).
+    let [ur, vr, wr] = air_relative_lanes(&[*u, *v, *w], wind, &r);
+    let va = lanes!(N, i => (ur[i] * ur[i] + vr[i] * vr[i] + wr[i] * wr[i]).sqrt());
+    let ratio = lanes!(N, i => (vr[i] / va[i]).clamp(-1.0, 1.0));
+    let ca0 = lanes!(N, i => ur[i].abs() / (ur[i] * ur[i] + wr[i] * wr[i]).sqrt());
+    let tan_a = lanes!(N, i => wr[i] / ur[i]);
+    let mut beta = [0.0; N];
+    let mut alpha = [0.0; N];
+    let mut sa = [0.0; N];
+    let mut ca = [0.0; N];
+    let mut e = [0.0; N];
+    for i in 0..N {
+        beta[i] = if va[i] > 0.0 { ratio[i].asin() } else { 0.0 };
+        (alpha[i], sa[i], ca[i]) = if ur[i] != 0.0 {
+            (tan_a[i].atan(), tan_a[i] * ca0[i], ca0[i])
+        } else {
+            let a = wr[i].atan2(ur[i]);
+            let (s, c) = a.sin_cos();
+            (a, s, c)
+        };
+        e[i] = (p.stall_m * alpha[i]).exp();
+    }
     let m = p.mass_kg;
-    // Gravity.
-    let mut fx = -m * p.g * st;
-    let mut fy = m * p.g * ct * sf;
-    let mut fz = m * p.g * ct * cf;
-    let (mut ell, mut mm, mut nn) = (0.0, 0.0, 0.0);
-    if va > 0.0 {
+    let k = dv.stall_k;
+    let mut out = [[0.0; N]; 12];
+    for i in 0..N {
+        let (u, v, w) = (u[i], v[i], w[i]);
+        let (pr, qr, rr) = (pr[i], qr[i], rr[i]);
+        let (sf, cf, st, ct) = (sf[i], cf[i], st[i], ct[i]);
+        let (va, alpha, beta, sa, ca) = (va[i], alpha[i], beta[i], sa[i], ca[i]);
+        let (de, da, dr, dt) = (
+            d.elevator_rad[i],
+            d.aileron_rad[i],
+            d.rudder_rad[i],
+            d.throttle[i],
+        );
+        // Gravity.
+        let mut fx = -m * p.g * st;
+        let mut fy = m * p.g * ct * sf;
+        let mut fz = m * p.g * ct * cf;
+        // Aerodynamics (with air motion only: at Va = 0 its terms are not finite and left out).
         let qbar = 0.5 * p.rho * va * va;
-        let cl = lift_coefficient_sc(p, dv.stall_k, alpha, sa, ca);
+        // The stall blend and lift coefficient (`stall_blend_k`, `lift_coefficient_sc`).
+        let (a, b) = (k / e[i], k * e[i]);
+        let s = (1.0 + a + b) / ((1.0 + a) * (1.0 + b));
+        let sign = if alpha > 0.0 {
+            1.0
+        } else if alpha < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        let cl = (1.0 - s) * (p.c_l0 + p.c_l_alpha * alpha) + s * 2.0 * sign * sa * sa * ca;
         let lin = p.c_l0 + p.c_l_alpha * alpha;
         let cd = p.c_d_p + lin * lin / dv.pi_e_ar;
         let cx = -cd * ca + cl * sa;
@@ -277,59 +522,105 @@ fn derivatives_with(
         let cq = p.c * qr / (2.0 * va);
         let bp = p.b * pr / (2.0 * va);
         let br = p.b * rr / (2.0 * va);
-        fx += qbar * p.s * (cx + cxq * cq + cxde * d.elevator_rad);
-        fy += qbar
-            * p.s
-            * (p.c_y0
-                + p.c_y_beta * beta
-                + p.c_y_p * bp
-                + p.c_y_r * br
-                + p.c_y_da * d.aileron_rad
-                + p.c_y_dr * d.rudder_rad);
-        fz += qbar * p.s * (cz + czq * cq + czde * d.elevator_rad);
-        ell = qbar
+        let afx = fx + qbar * p.s * (cx + cxq * cq + cxde * de);
+        let afy = fy
+            + qbar
+                * p.s
+                * (p.c_y0
+                    + p.c_y_beta * beta
+                    + p.c_y_p * bp
+                    + p.c_y_r * br
+                    + p.c_y_da * da
+                    + p.c_y_dr * dr);
+        let afz = fz + qbar * p.s * (cz + czq * cq + czde * de);
+        let aell = qbar
             * p.s
             * p.b
             * (p.c_ell0
                 + p.c_ell_beta * beta
                 + p.c_ell_p * bp
                 + p.c_ell_r * br
-                + p.c_ell_da * d.aileron_rad
-                + p.c_ell_dr * d.rudder_rad);
-        mm = qbar
-            * p.s
-            * p.c
-            * (p.c_m0 + p.c_m_alpha * alpha + p.c_m_q * cq + p.c_m_de * d.elevator_rad);
-        nn = qbar
+                + p.c_ell_da * da
+                + p.c_ell_dr * dr);
+        let amm = qbar * p.s * p.c * (p.c_m0 + p.c_m_alpha * alpha + p.c_m_q * cq + p.c_m_de * de);
+        let ann = qbar
             * p.s
             * p.b
             * (p.c_n0
                 + p.c_n_beta * beta
                 + p.c_n_p * bp
                 + p.c_n_r * br
-                + p.c_n_da * d.aileron_rad
-                + p.c_n_dr * d.rudder_rad);
+                + p.c_n_da * da
+                + p.c_n_dr * dr);
+        let moving = va > 0.0;
+        let pick = |a: f64, b: f64| if moving { a } else { b };
+        fx = pick(afx, fx);
+        fy = pick(afy, fy);
+        fz = pick(afz, fz);
+        let mut ell = pick(aell, 0.0);
+        let mm = pick(amm, 0.0);
+        let nn = pick(ann, 0.0);
+        // Propulsion (2012 model).
+        let km = p.k_motor * dt;
+        fx += 0.5 * p.rho * p.s_prop * p.c_prop * (km * km - va * va);
+        let ko = p.k_omega * dt;
+        ell -= p.k_tp * ko * ko;
+        let tt = st / ct;
+        let f = [
+            r[0][0][i] * u + r[0][1][i] * v + r[0][2][i] * w,
+            r[1][0][i] * u + r[1][1][i] * v + r[1][2][i] * w,
+            r[2][0][i] * u + r[2][1][i] * v + r[2][2][i] * w,
+            rr * v - qr * w + fx / m,
+            pr * w - rr * u + fy / m,
+            qr * u - pr * v + fz / m,
+            pr + qr * sf * tt + rr * cf * tt,
+            qr * cf - rr * sf,
+            (qr * sf + rr * cf) / ct,
+            gm[1] * pr * qr - gm[2] * qr * rr + gm[3] * ell + gm[4] * nn,
+            gm[5] * pr * rr - gm[6] * (pr * pr - rr * rr) + mm / p.jy,
+            gm[7] * pr * qr - gm[1] * qr * rr + gm[4] * ell + gm[8] * nn,
+        ];
+        for (o, fk) in out.iter_mut().zip(f) {
+            o[i] = fk;
+        }
     }
-    // Propulsion (2012 model).
-    let km = p.k_motor * d.throttle;
-    fx += 0.5 * p.rho * p.s_prop * p.c_prop * (km * km - va * va);
-    let ko = p.k_omega * d.throttle;
-    ell -= p.k_tp * ko * ko;
-    let tt = st / ct;
-    [
-        r[0][0] * u + r[0][1] * v + r[0][2] * w,
-        r[1][0] * u + r[1][1] * v + r[1][2] * w,
-        r[2][0] * u + r[2][1] * v + r[2][2] * w,
-        rr * v - qr * w + fx / m,
-        pr * w - rr * u + fy / m,
-        qr * u - pr * v + fz / m,
-        pr + qr * sf * tt + rr * cf * tt,
-        qr * cf - rr * sf,
-        (qr * sf + rr * cf) / ct,
-        gm[1] * pr * qr - gm[2] * qr * rr + gm[3] * ell + gm[4] * nn,
-        gm[5] * pr * rr - gm[6] * (pr * pr - rr * rr) + mm / p.jy,
-        gm[7] * pr * qr - gm[1] * qr * rr + gm[4] * ell + gm[8] * nn,
-    ]
+    out
+}
+
+/// One RK4 step of `N` states in lanes ([`rk4_step_inline`]'s formulas), deflections and wind
+/// held per lane, `euler` of `x`.
+#[inline(always)]
+pub(crate) fn rk4_lanes<const N: usize>(
+    p: &Aerosonde,
+    gm: &Derived,
+    x: &mut [[f64; N]; 12],
+    d: &DeltasLanes<N>,
+    wind: &WindLanes<N>,
+    dt_s: f64,
+    euler: &EulerLanes<N>,
+) {
+    // Element-wise over the 12 N numbers as one flat run (which vectorises plainly).
+    let add = |a: &[[f64; N]; 12], k: &[[f64; N]; 12], h: f64| {
+        let mut o = *a;
+        for (o, k) in o.as_flattened_mut().iter_mut().zip(k.as_flattened()) {
+            *o += h * k;
+        }
+        o
+    };
+    let stage = |x: &[[f64; N]; 12]| derivatives_lanes(p, gm, x, d, wind, &EulerLanes::of(x));
+    let k1 = derivatives_lanes(p, gm, x, d, wind, euler);
+    let k2 = stage(&add(x, &k1, 0.5 * dt_s));
+    let k3 = stage(&add(x, &k2, 0.5 * dt_s));
+    let k4 = stage(&add(x, &k3, dt_s));
+    let k = k1
+        .as_flattened()
+        .iter()
+        .zip(k2.as_flattened())
+        .zip(k3.as_flattened())
+        .zip(k4.as_flattened());
+    for (x, (((k1, k2), k3), k4)) in x.as_flattened_mut().iter_mut().zip(k) {
+        *x += dt_s / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
 }
 
 /// One classical RK4 step of `dt_s` with inputs and wind held, forces re-evaluated at every

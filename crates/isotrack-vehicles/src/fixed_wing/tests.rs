@@ -511,3 +511,89 @@ fn commanded_at_trim_is_the_uav() {
     }
     assert_eq!(a.x, b.x);
 }
+
+/// `N` aircraft stepped together (`step_lanes`: the airframe in SIMD lanes) against each
+/// stepped alone (`step`), state for state and bit for bit after every step of a long closed-loop
+/// flight: each lane with its own start, gust seed, airspeed command and turn-rate command
+/// sequence; one lane starts motionless in the air (airspeed exactly 0: the branch-free body's
+/// other side) and one diverges (a non-finite state) beside the others.
+fn lanes_equal_one_at_a_time<const N: usize>(v: &FixedWing, seconds: f64) {
+    let dt = 0.01;
+    let mut lanes: [FixedWingState; N] = core::array::from_fn(|i| {
+        let mut s = v.initial_state_seeded(
+            100.0 * i as f64,
+            -50.0 * i as f64,
+            0.7 * i as f64 - 2.0,
+            1000 + i as u64,
+        );
+        s.airspeed_cmd_mps = 26.0 + i as f64;
+        s
+    });
+    // Lane 1 at rest relative to the air, level and heading north: body velocity = wind.
+    let wned = v.steady_ned();
+    lanes[1].x[3..9].copy_from_slice(&[wned[0], wned[1], wned[2], 0.0, 0.0, 0.0]);
+    lanes[1].x[9..12].copy_from_slice(&[0.0; 3]);
+    // Lane N - 1 diverges: a non-finite roll rate.
+    lanes[N - 1].x[9] = f64::NAN;
+    let mut alone = lanes.clone();
+    let n = (seconds / dt).round() as usize;
+    let bits = |s: &FixedWingState| {
+        let mut b: Vec<u64> = s.x.iter().map(|v| v.to_bits()).collect();
+        b.extend([s.course_rad, s.course_cmd_rad].map(f64::to_bits));
+        b.extend(s.wind.gust_body_mps.map(f64::to_bits));
+        (b, format!("{s:?}"))
+    };
+    let mut airspeed_zero_met = false;
+    for k in 0..n {
+        let omega: [f64; N] =
+            core::array::from_fn(|i| 0.2 * ((k as f64) * 0.003 * (i + 1) as f64).sin());
+        if k == 0 {
+            airspeed_zero_met = v.air_data(&lanes[1]).va_mps == 0.0;
+        }
+        v.step_lanes(&mut lanes, &omega, dt);
+        for (s, &w) in alone.iter_mut().zip(&omega) {
+            v.step(s, w, dt);
+        }
+        for i in 0..N {
+            assert_eq!(
+                bits(&lanes[i]),
+                bits(&alone[i]),
+                "N = {N}, lane {i}, step {k}"
+            );
+        }
+    }
+    assert!(airspeed_zero_met, "lane 1 did not start at airspeed 0");
+    // The lanes flew different, finite flights; the diverged one stayed apart.
+    assert!(lanes[0].x.iter().all(|v| v.is_finite()));
+    assert!(lanes[N - 1].x.iter().any(|v| v.is_nan()));
+    assert_ne!(lanes[0].x[0].to_bits(), lanes[2].x[0].to_bits());
+}
+
+#[test]
+fn lanes_of_4_and_8_equal_one_at_a_time_in_calm_air_and_in_gusts() {
+    let calm = uav(FixedWingConfig {
+        wind_mps: [3.0, -2.0],
+        ..FixedWingConfig::default()
+    });
+    let gusty = uav(FixedWingConfig {
+        wind_mps: [-4.0, 1.5],
+        gusts: true,
+        ..FixedWingConfig::default()
+    });
+    for v in [&calm, &gusty] {
+        lanes_equal_one_at_a_time::<4>(v, 120.0);
+        lanes_equal_one_at_a_time::<8>(v, 120.0);
+    }
+    // The commanded-airspeed UAV steps its lanes as the UAV does.
+    let commanded = FixedWingVariableSpeed::new(gusty.clone(), 20.0, 40.0).unwrap();
+    let mut a = [
+        gusty.initial_state(0.0, 0.0, 1.0),
+        gusty.initial_state(0.0, 0.0, -1.0),
+    ];
+    let mut b = a.clone();
+    for _ in 0..500 {
+        commanded.step_lanes(&mut a, &[0.1, -0.05], 0.01);
+        gusty.step_lanes(&mut b, &[0.1, -0.05], 0.01);
+    }
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+}

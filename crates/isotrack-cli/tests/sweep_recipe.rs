@@ -1,0 +1,309 @@
+//! Issue 31, "Sweeps keep the user's own keys apart from the materialised defaults": a sweep's
+//! run is exactly `isotrack run` of the user's scenario + `[base]` + the row's assignments,
+//! resolved once, so a default that follows another key follows the row. README's re-run recipe
+//! (`isotrack run DIR/base_scenario.toml --set KEY=VALUE ...`) gives each row, every metric, and
+//! `--resume` and `merge` keep such rows.
+mod common;
+use common::{bundled, csv_rows, isotrack, stderr, sweep_file, swept, write};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// 20 s of the built-in default with `sensor.rate_hz` unset: its default is one sample a step,
+/// `1/sim.dt_s`.
+const SCENARIO: &str = "[sim]\nduration_s = 20.0\n";
+
+/// The step swept over 0.01 and 0.02 s, a `[base]` key besides.
+const SWEEP: &str =
+    "scenario = \"s.toml\"\n[base]\ncontroller.kp = 8.0\n[grid]\nsim.dt_s = [0.01, 0.02]\n";
+
+/// The numeric result columns a row shares with `summary.json`.
+const METRICS: [&str; 12] = [
+    "convergence_time_s",
+    "steady_state_max_abs_error",
+    "steady_state_rms_error",
+    "steady_state_mean_error",
+    "steady_state_max_isoline_distance_m",
+    "steady_state_rms_isoline_distance_m",
+    "path_length_m",
+    "control_effort",
+    "chattering_radps2",
+    "sign_changes_per_s",
+    "t_end_s",
+    "samples",
+];
+
+/// The rows of `DIR/results.csv`, each as column -> cell.
+fn rows(dir: &Path) -> Vec<HashMap<String, String>> {
+    csv_rows(&dir.join("results.csv"))
+}
+
+/// Runs the sweep into `out` with `extra` arguments; panics on failure.
+fn sweep(sw: &str, out: &Path, extra: &[&str]) {
+    swept(sw, out, extra);
+}
+
+/// `isotrack merge DIRS --out OUT`, which must succeed; the merged `results.csv`'s bytes.
+fn merged(dirs: &[&Path], out: &Path) -> Vec<u8> {
+    let mut args = vec!["merge"];
+    args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+    args.extend(["--out", out.to_str().unwrap()]);
+    let o = isotrack(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::read(out.join("results.csv")).unwrap()
+}
+
+#[test]
+fn a_swept_step_is_followed_by_the_sensor_rate_as_run_follows_it() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "s.toml", SCENARIO);
+    let sw = write(d.path(), "sweep.toml", SWEEP);
+    let whole = d.path().join("whole");
+    sweep(&sw, &whole, &[]);
+
+    // base_scenario.toml holds the user's keys: the file's and [base]'s, no materialised
+    // sensor rate.
+    let base: toml::Table =
+        toml::from_str(&std::fs::read_to_string(whole.join("base_scenario.toml")).unwrap())
+            .unwrap();
+    assert_eq!(base["controller"]["kp"].as_float(), Some(8.0));
+    assert_eq!(base["sim"]["duration_s"].as_float(), Some(20.0));
+    assert!(
+        base.get("sensor").and_then(|s| s.get("rate_hz")).is_none(),
+        "{base:?}"
+    );
+
+    let got = rows(&whole);
+    assert_eq!(got.len(), 2);
+    for (row, (dt, rate_hz)) in got.iter().zip([("0.01", 100.0), ("0.02", 50.0)]) {
+        assert_eq!(row["sim.dt_s"], dt, "{row:?}");
+        assert_eq!(row["outcome"], "completed", "{row:?}");
+        // Samples at t = 0, 1/rate, ..., 20 s: 20 * rate + 1.
+        assert_eq!(
+            row["samples"],
+            format!("{}", 20.0 * rate_hz + 1.0),
+            "{row:?}"
+        );
+
+        // README's recipe, run apart: the same run, every metric bit for bit.
+        let r = d.path().join(format!("rerun-{dt}"));
+        let base_path = whole.join("base_scenario.toml");
+        let dt_set = format!("sim.dt_s={}", row["sim.dt_s"]);
+        let seed_set = format!("sim.seed={}", row["sim.seed"]);
+        let o = isotrack(&[
+            "run",
+            base_path.to_str().unwrap(),
+            "--set",
+            &dt_set,
+            "--set",
+            &seed_set,
+            "--out",
+            r.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(r.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            summary["scenario"]["sensor"]["rate_hz"].as_f64(),
+            Some(rate_hz)
+        );
+        assert_eq!(summary["outcome"].as_str(), Some(row["outcome"].as_str()));
+        for m in METRICS {
+            let cell = &row[m];
+            match summary[m].as_f64() {
+                None => assert!(cell.is_empty(), "{m}: {cell} vs {}", summary[m]),
+                Some(v) => assert_eq!(
+                    cell.parse::<f64>().unwrap().to_bits(),
+                    v.to_bits(),
+                    "{m}: row {cell}, run {v}"
+                ),
+            }
+        }
+    }
+
+    // --resume keeps both rows (each checked against its own run's 100 or 50 Hz): a directory
+    // cut to the second row alone gets the first again, byte for byte.
+    let bytes = std::fs::read(whole.join("results.csv")).unwrap();
+    let text = String::from_utf8(bytes.clone()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let cut = d.path().join("cut");
+    std::fs::create_dir(&cut).unwrap();
+    for f in ["sweep.json", "sweep.toml", "base_scenario.toml"] {
+        std::fs::copy(whole.join(f), cut.join(f)).unwrap();
+    }
+    std::fs::write(
+        cut.join("results.csv"),
+        format!("{}\n{}\n", lines[0], lines[2]),
+    )
+    .unwrap();
+    sweep(&sw, &cut, &["--resume"]);
+    assert_eq!(std::fs::read(cut.join("results.csv")).unwrap(), bytes);
+
+    // Two shards merged: the same rows.
+    let (s1, s2, merged_dir) = (
+        d.path().join("s1"),
+        d.path().join("s2"),
+        d.path().join("merged"),
+    );
+    sweep(&sw, &s1, &["--shard", "1/2"]);
+    sweep(&sw, &s2, &["--shard", "2/2"]);
+    assert_eq!(merged(&[&s1, &s2], &merged_dir), bytes);
+}
+
+/// Paper Fig. 3's UAV swept over its airspeed, 20 s runs.
+const AIRSPEED: &str =
+    "[base]\nsim.duration_s = 20.0\n[grid]\nvehicle.airspeed_mps = [20.0, 40.0]\ncontroller.kp = [50.0]\n";
+
+/// att30d-5: a fixed-wing sweep over `vehicle.airspeed_mps` exited 65 on its own first row:
+/// the row check bounded `control_effort` by the turn-rate limit `g tan(40 deg) / V` of the
+/// base's 30 m/s (0.274 rad/s, 1.50 rad^2/s over 20 s), not of the run's own 20 m/s (0.411
+/// rad/s, 3.38 rad^2/s). Each row is checked against its own run: the sweep completes, resumes
+/// (nothing to do, the same bytes) and merges.
+#[test]
+fn a_sweep_over_the_airspeed_checks_each_row_against_its_own_turn_limit() {
+    let d = tempfile::tempdir().unwrap();
+    let sw = sweep_file(d.path(), "f.toml", &bundled("paper-fig3-uav"), AIRSPEED);
+    let out = d.path().join("out");
+    sweep(&sw, &out, &[]);
+    let got = rows(&out);
+    for (row, v) in got.iter().zip([20.0f64, 40.0]) {
+        let limit = 9.80665 * 40f64.to_radians().tan() / v;
+        let effort: f64 = row["control_effort"].parse().unwrap();
+        assert!(effort <= limit * limit * 20.0 * (1.0 + 1e-9), "{row:?}");
+    }
+    let bytes = std::fs::read(out.join("results.csv")).unwrap();
+    sweep(&sw, &out, &["--resume"]);
+    assert_eq!(std::fs::read(out.join("results.csv")).unwrap(), bytes);
+    assert_eq!(merged(&[&out], &d.path().join("merged")), bytes);
+}
+
+/// Runs `isotrack` with `args` in directory `dir`.
+fn isotrack_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// A sweep of [`SCENARIO`] whose run 1 is invalid (`controller.kp = -1`).
+const ONE_INVALID: &str = "scenario = \"s.toml\"\n[grid]\ncontroller.kp = [10.0, -1.0]\n";
+
+/// att30d-3: an `invalid_scenario` row's reason held the sweep file's path as typed, so a
+/// `--resume` naming it another way (`./s.toml`, an absolute path from another directory: a
+/// requeued job) refused the sweep's own rows, and shards started with two spellings merged
+/// into mixed reasons. The reason names the run only, on one line with single spaces: resumed
+/// from another directory by an absolute path the sweep keeps its rows (exit 65 for the one
+/// invalid run, as the first time), and shards named two ways merge to the same bytes.
+#[test]
+fn an_invalid_rows_reason_does_not_depend_on_how_the_sweep_is_named() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "s.toml", SCENARIO);
+    let sw = write(d.path(), "sweep.toml", ONE_INVALID);
+    let o = isotrack_in(d.path(), &["sweep", "sweep.toml", "--out", "whole"]);
+    assert_eq!(o.status.code(), Some(65), "{}", stderr(&o));
+    let whole = d.path().join("whole");
+    let got = rows(&whole);
+    assert_eq!(got[1]["outcome"], "invalid_scenario");
+    let detail = &got[1]["outcome_detail"];
+    assert!(
+        detail.starts_with("invalid scenario: sweep run 1, [grid] controller.kp=-1.0: "),
+        "{detail}"
+    );
+    assert!(
+        !detail.contains("  ") && !detail.contains("sweep.toml"),
+        "{detail}"
+    );
+    let bytes = std::fs::read(whole.join("results.csv")).unwrap();
+    // Resumed from another directory, the sweep named by its absolute path.
+    let elsewhere = d.path().join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    let whole_s = whole.display().to_string();
+    let o = isotrack_in(&elsewhere, &["sweep", &sw, "--out", &whole_s, "--resume"]);
+    assert_eq!(o.status.code(), Some(65), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("damaged row"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(whole.join("results.csv")).unwrap(), bytes);
+    // Two shards, the sweep named two ways, merged: the same rows.
+    let o = isotrack_in(
+        d.path(),
+        &["sweep", "./sweep.toml", "--out", "s1", "--shard", "1/2"],
+    );
+    assert_ne!(o.status.code(), Some(101), "{}", stderr(&o));
+    let s2 = d.path().join("s2").display().to_string();
+    let o = isotrack_in(&elsewhere, &["sweep", &sw, "--out", &s2, "--shard", "2/2"]);
+    assert_eq!(o.status.code(), Some(65), "{}", stderr(&o));
+    let o = isotrack_in(d.path(), &["merge", "s1", "s2", "--out", "m"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(d.path().join("m/results.csv")).unwrap(),
+        bytes
+    );
+}
+
+/// An ESRI ASCII grid of `20 scale exp(-0.1 r)` around the origin, 81 x 81 nodes 0.5 m apart.
+fn radial_asc(scale: f64) -> String {
+    let n = 81;
+    let mut t = format!("ncols {n}\nnrows {n}\nxllcorner -20.25\nyllcorner -20.25\ncellsize 0.5\n");
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = (0.5 * (i as f64 - 40.0), 0.5 * (j as f64 - 40.0));
+                format!("{}", 20.0 * scale * (-0.1 * (x * x + y * y).sqrt()).exp())
+            })
+            .collect();
+        t.push_str(&row.join(" "));
+        t.push('\n');
+    }
+    t
+}
+
+/// att30d-10: the sweep's digest covers its data file's path, not its content, so a grid file
+/// rewritten between two shards (or before a `--resume`) was never noticed: one results.csv
+/// over two fields. sweep.json records each data file's SHA-256; a changed file is refused
+/// (65, naming the file) by `--resume` and by `merge`.
+#[test]
+fn a_data_file_changed_between_parts_of_a_sweep_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let asc = write(d.path(), "f.asc", &radial_asc(1.0));
+    write(
+        d.path(),
+        "s.toml",
+        "[field]\nkind = \"grid\"\npath = \"f.asc\"\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 20.0\n",
+    );
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        "scenario = \"s.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let (s1, s2) = (d.path().join("s1"), d.path().join("s2"));
+    sweep(&sw, &s1, &["--shard", "1/2"]);
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(s1.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(manifest["data_files"].as_object().map(|o| o.len()), Some(1));
+    std::fs::write(&asc, radial_asc(1.05)).unwrap();
+    sweep(&sw, &s2, &["--shard", "2/2"]);
+    let name = std::fs::canonicalize(&asc).unwrap().display().to_string();
+    let m = d.path().join("m").display().to_string();
+    let o = isotrack(&[
+        "merge",
+        s1.to_str().unwrap(),
+        s2.to_str().unwrap(),
+        "--out",
+        &m,
+    ]);
+    common::assert_fails(&o, 65, &[&name, "data file"]);
+    let o = isotrack(&[
+        "sweep",
+        &sw,
+        "--out",
+        s1.to_str().unwrap(),
+        "--shard",
+        "1/2",
+        "--resume",
+    ]);
+    common::assert_fails(&o, 65, &[&name, "data file"]);
+    // The file as it was: both go through.
+    std::fs::write(&asc, radial_asc(1.0)).unwrap();
+    sweep(&sw, &s1, &["--shard", "1/2", "--resume"]);
+}

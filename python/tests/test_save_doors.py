@@ -1,0 +1,166 @@
+"""Issue 30: `Run.save`, the Python door of `isotrack run --out`: it answers Ctrl-C while it
+copies and writes a multi-million-row trace (leaving no half-written run directory), and it
+takes the directory's lock `run --out` takes (att30c-6), in both directions."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+import isotrack
+
+ROOT = Path(__file__).resolve().parents[2]
+RUN_FILES = ["scenario.toml", "summary.json", "trace.csv"]
+
+
+def cli() -> str:
+    """The isotrack binary: $ISOTRACK_BIN, or the workspace's release build."""
+    exe = os.environ.get("ISOTRACK_BIN", str(ROOT / "target" / "release" / "isotrack"))
+    if not Path(exe).exists():
+        pytest.skip(f"no isotrack binary at {exe} (build with cargo build --release)")
+    return exe
+
+
+# The child saves a run of ROWS trace rows into DIR. First it times the save of a run of
+# 16 384 rows, the rows `write_run` writes between two checks for Ctrl-C (one check
+# interval, on this machine under its present load); then it says `ready INTERVAL` and saves
+# the big run, which takes hundreds of intervals.
+SAVER = textwrap.dedent(
+    """
+    import os, signal, sys, time
+    import isotrack
+    rows, d, calib = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+    sc = isotrack.Scenario.default().set("output.record_rate_hz", 100.0)
+    small = sc.set("sim.duration_s", 163.84).run()
+    t = time.monotonic()
+    small.save(calib)
+    interval = time.monotonic() - t
+    big = sc.set("sim.duration_s", rows / 100.0).run()
+    assert len(big.trace["t_s"]) == rows + 1
+    # Where the save was when Ctrl-C was answered: whether its temporary trace
+    # (`.trace.csv.PID.tmp`, made once the columns are copied) existed yet.
+    begun = []
+    def on_int(sig, frame):
+        begun.append(os.path.isdir(d) and any(n.startswith(".trace.csv.") for n in os.listdir(d)))
+        raise KeyboardInterrupt
+    signal.signal(signal.SIGINT, on_int)
+    print("ready", interval, os.getpid(), flush=True)
+    t0 = time.monotonic()
+    try:
+        big.save(d)
+        print("finished", time.monotonic() - t0, flush=True)
+    except KeyboardInterrupt:
+        print("interrupted", time.monotonic() - t0, "writing" if begun[0] else "copying", flush=True)
+    """
+)
+
+
+def saver(tmp_path, rows, d):
+    p = subprocess.Popen(
+        [sys.executable, "-c", SAVER, str(rows), str(d), str(tmp_path / "calib")],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    word, interval, pid = p.stdout.readline().split()
+    assert word == "ready"
+    return p, float(interval)
+
+
+@pytest.mark.parametrize("existing", [False, True])
+def test_ctrl_c_during_a_large_save_raises_at_once_and_leaves_no_half_written_run(tmp_path, existing):
+    """A SIGINT sent as a 6e6-row save starts raises KeyboardInterrupt while the save still
+    copies the run's columns (a few hundred milliseconds of copying before the first row is
+    written: the copy once held the signal until it was done, answered only as the first row
+    was written) and within 40 check intervals (the save itself takes about 370). No
+    half-written run is left: a new directory is removed, an existing run directory keeps its
+    earlier run byte for byte (the trace is written into a temporary file beside it), and
+    neither a temporary file nor the lock file stays."""
+    d = tmp_path / "run"
+    before = {}
+    if existing:
+        isotrack.Scenario.default().set("sim.duration_s", 5.0).run().save(str(d))
+        before = {f: (d / f).read_bytes() for f in RUN_FILES}
+    p, interval = saver(tmp_path, 6_000_000, d)
+    try:
+        t_sig = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        line = p.stdout.readline().split()
+        answered = time.monotonic() - t_sig
+        assert p.wait(timeout=300) == 0
+    finally:
+        p.kill()
+    assert line and line[0] == "interrupted", line
+    assert line[2] == "copying", line
+    assert answered < 40 * interval + 0.05, (answered, interval)
+    if existing:
+        assert sorted(os.listdir(d)) == RUN_FILES
+        assert {f: (d / f).read_bytes() for f in RUN_FILES} == before
+    else:
+        assert not d.exists(), os.listdir(d)
+
+
+def wait_for_lock(d, holder, timeout=120.0):
+    """The holder record in `d/.isotrack.lock` once it names `holder` (`run pid N`)."""
+    lock = Path(d) / ".isotrack.lock"
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        try:
+            text = lock.read_text()
+        except OSError:
+            text = ""
+        if text.startswith(holder):
+            return text
+        time.sleep(0.01)
+    raise AssertionError(f"no {holder} lock in {d}")
+
+
+def test_save_refuses_a_directory_the_cli_is_writing(tmp_path):
+    """att30c-6: while `isotrack run --out D` holds D's lock, `Run.save(D)` raises an OSError
+    naming the holder (the CLI's 73) and writes nothing there; once the CLI is done, the save
+    goes through."""
+    d = tmp_path / "D"
+    run = isotrack.Scenario.default().set("sim.duration_s", 5.0).run()
+    p = subprocess.Popen(
+        [cli(), "run", "--out", str(d), "--quiet", "--set", "sim.duration_s=600000.0", "--set", "output.record_rate_hz=0.0"],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        holder = wait_for_lock(d, "run pid")
+        assert f"run pid {p.pid}" in holder, holder
+        with pytest.raises(OSError) as e:
+            run.save(str(d))
+        assert f"run pid {p.pid}" in str(e.value), str(e.value)
+        assert ".isotrack.lock" in str(e.value), str(e.value)
+        assert not (d / "summary.json").exists()
+    finally:
+        p.send_signal(signal.SIGTERM)
+        p.wait(timeout=120)
+    run.save(str(d))
+    assert sorted(os.listdir(d)) == RUN_FILES
+
+
+def test_the_cli_refuses_a_directory_a_save_is_writing(tmp_path):
+    """att30c-6, the other way: while `Run.save(F)` of a 4e6-row run writes F (holding its
+    lock), `isotrack run --out F` exits 73 naming `Run.save` and its pid, and F keeps nothing of
+    the CLI's run (its summary would have replaced the saved run's without a word)."""
+    f = tmp_path / "F"
+    p, _ = saver(tmp_path, 4_000_000, f)
+    try:
+        holder = wait_for_lock(f, "Run.save pid")
+        o = subprocess.run([cli(), "run", "--out", str(f), "--quiet", "--set", "sim.duration_s=1.0"], capture_output=True, text=True)
+        assert o.returncode == 73, o.stderr
+        assert f"Run.save pid {p.pid}" in o.stderr, o.stderr
+        assert holder.split(" on ")[0] == f"Run.save pid {p.pid}", holder
+        assert not (f / "summary.json").exists()
+        p.send_signal(signal.SIGINT)
+        assert p.stdout.readline().split()[0] == "interrupted"
+        assert p.wait(timeout=300) == 0
+    finally:
+        p.kill()
+    assert not f.exists(), os.listdir(f)
