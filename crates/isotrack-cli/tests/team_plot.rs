@@ -143,3 +143,154 @@ fn team_figures_and_their_numbers() {
     ]);
     assert_eq!(o.status.code(), Some(65), "{}", common::stderr(&o));
 }
+
+/// Runs scenario `text` as a team into `dir/run` and draws it (`plot --format svg`); returns
+/// the run directory.
+fn run_and_plot(dir: &std::path::Path, text: &str) -> std::path::PathBuf {
+    let scenario = dir.join("team.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let out = dir.join("run");
+    let o = isotrack(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    out
+}
+
+/// Off a radial field: one isotropic Gaussian plume `F = 20 exp(-|p|^2/(2 * 5^2))`, whose
+/// level-10 isoline is the circle of radius `r = 5 sqrt(2 ln 2)` (5.887 m). `team.svg` is drawn
+/// along the polyline the metrics use (marching squares on 400 samples a side over the
+/// plume's centre +- 8 sigma, `h = 80/399` m), labelled a closed isoline: every vertex lies on
+/// the circle within linear interpolation's error along a lattice edge,
+/// `h^2 max|F''|/(8 |F'|)` (`|F'| = 10 r/25`, `|F''| <= |F'|/r` there), doubled; its length
+/// is the circle's within 0.1 %; the gaps read off the trace are the deployment's
+/// (`none`: the field is symmetric under rotation), 0.5 r apart, and `L - r` ahead of the last.
+#[test]
+fn team_figure_off_a_radial_field_draws_the_metrics_polyline() {
+    let d = tempfile::tempdir().unwrap();
+    let sigma: f64 = 5.0;
+    let r = sigma * (2.0 * LN_2).sqrt();
+    let text = format!(
+        "name = \"plume-team\"\n[field]\nkind = \"gaussian_plumes\"\nbackground = 0.0\n\
+         sources = [{{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [5.0, 5.0], rotation_rad = 0.0 }}]\n\
+         [vehicle]\nkind = \"dubins\"\nspeed_mps = 0.5\n\
+         [controller]\nkind = \"pi_isoline\"\nlevel = 10.0\nkp = 10.0\nki = 1.0\nc1 = 0.2\nc2 = 1.0\n\
+         [sensor]\nnoise_std = 0.0\n\
+         [sim]\ndt_s = 0.01\nduration_s = 40.0\nseed = 0\n\
+         [team]\nspacing = \"none\"\ncount = 3\n\
+         spread = {{ along = \"arc\", center_m = [0.0, 0.0], radius_m = {r}, start_rad = 0.0, step_rad = 0.5, clockwise = true }}\n"
+    );
+    let out = run_and_plot(d.path(), &text);
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert!(tracks.is_closed());
+    assert!(
+        tracks.isoline_label.contains("closed"),
+        "{}",
+        tracks.isoline_label
+    );
+    let pts = tracks.arc.points();
+    assert!(pts.len() > 100);
+    assert_eq!(pts.first(), pts.last());
+    let h = 80.0 / 399.0;
+    let slope = 10.0 * r / (sigma * sigma);
+    let tol = 2.0 * h * h * (slope / r) / (8.0 * slope);
+    for p in &pts {
+        assert!(
+            (p.norm() - r).abs() <= tol,
+            "{p:?}: {} vs {r} (tol {tol})",
+            p.norm()
+        );
+    }
+    let l = 2.0 * PI * r;
+    assert!(
+        (tracks.length_m() / l - 1.0).abs() < 1e-3,
+        "{}",
+        tracks.length_m()
+    );
+    for (t, g) in tracks.gaps(50) {
+        for (i, want) in [0.5 * r, 0.5 * r, l - r].iter().enumerate() {
+            assert!(
+                (g[i] - want).abs() < 0.02 * want,
+                "t {t}: gap {i} {} vs {want}",
+                g[i]
+            );
+        }
+    }
+    let team = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(team.contains("true isoline s_d = 10 (closed)"));
+    assert!(team.contains("gap ahead along the isoline"));
+}
+
+/// An open isoline: the line `y = 5` m of the plane `F = 0.1 y` (crossing the box the team can
+/// reach), four robots heading west at `x = 12, 6, 3, 0` m under `none`: the gap ahead of the
+/// first three is 6, 3, 3 m at every row, the one in front has none (NaN); the revisit time
+/// read off the trace is at most the longest gap over `v0`, 12 s, to a bin's crossing (314/360
+/// m at 0.5 m/s) and a trace row, and a point the team never covered has none; `team.svg` is
+/// labelled an open isoline, with the mean gap's dashed lines from `summary.json`.
+#[test]
+fn team_figure_along_an_open_isoline() {
+    let d = tempfile::tempdir().unwrap();
+    let heading = PI;
+    let text = format!(
+        "name = \"plane-team\"\n[field]\nkind = \"linear_ramp\"\noffset = 0.0\ngradient_per_m = [0.0, 0.1]\n\
+         [vehicle]\nkind = \"dubins\"\nspeed_mps = 0.5\n\
+         [controller]\nkind = \"pi_isoline\"\nlevel = 0.5\nkp = 10.0\nki = 1.0\nc1 = 0.2\nc2 = 1.0\n\
+         [sensor]\nnoise_std = 0.0\n\
+         [sim]\ndt_s = 0.01\nduration_s = 120.0\nseed = 0\n\
+         [team]\nspacing = \"none\"\n\
+         starts = [{{x_m = 12.0, y_m = 5.0, heading_rad = {heading}}}, {{x_m = 6.0, y_m = 5.0, heading_rad = {heading}}}, \
+         {{x_m = 3.0, y_m = 5.0, heading_rad = {heading}}}, {{x_m = 0.0, y_m = 5.0, heading_rad = {heading}}}]\n"
+    );
+    let out = run_and_plot(d.path(), &text);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let t = &summary["team"];
+    assert!(t["metrics_note"].is_null(), "{t}");
+    let stretch = t["open_isoline"]["stretch_length_m"].as_f64().unwrap();
+    assert!((stretch - 12.0).abs() < 1e-6, "{t}");
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert!(!tracks.is_closed());
+    assert!(
+        tracks.isoline_label.contains("open"),
+        "{}",
+        tracks.isoline_label
+    );
+    assert!(tracks.arc.points().iter().all(|p| (p.y - 5.0).abs() < 1e-9));
+    let gaps = tracks.gaps(2);
+    assert!(gaps.len() > 100, "{}", gaps.len());
+    for (t, g) in &gaps {
+        for (i, want) in [6.0, 3.0, 3.0].iter().enumerate() {
+            assert!(
+                (g[i] - want).abs() < 1e-6,
+                "t {t}: gap {i} {} vs {want}",
+                g[i]
+            );
+        }
+        assert!(
+            g[3].is_nan(),
+            "t {t}: the vehicle in front has no gap ahead: {}",
+            g[3]
+        );
+    }
+    let revisit = tracks.revisit_max(60.0);
+    let tol = 314.0 / 360.0 / 0.5 + 0.1;
+    let finite: Vec<f64> = revisit
+        .iter()
+        .map(|r| r.1)
+        .filter(|w| w.is_finite())
+        .collect();
+    assert!(!finite.is_empty() && finite.len() < revisit.len());
+    let worst = finite.iter().copied().fold(0.0, f64::max);
+    assert!((worst - 12.0).abs() <= tol, "{worst}");
+    let team = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(team.contains("open: it leaves the field"));
+    assert!(team.contains("mean gap S/(N-1)"));
+}

@@ -307,6 +307,110 @@ impl IsolineSegments {
         walk_loops(n, &end, partner)
     }
 
+    /// The segments stitched into open chains: the isoline's pieces that leave the sampled
+    /// domain (or a no-data region) at both ends, each a list of vertices from one free end
+    /// (an end point joined to no other) to the other, consecutive equal vertices merged, at
+    /// least 2. Ends are joined as by [`closed_loops`](Self::closed_loops) (by lattice edge for
+    /// marching squares, else within `tolerance_m`); segments of closed loops are left out.
+    /// Chains are listed in the order of their lowest free end. `O(n)` (`O(n log n)` by edges).
+    /// For the arc coordinate along an open isoline (`isotrack_sim::team::arc::PolylineArc::open`).
+    pub fn open_chains(&self, tolerance_m: f64) -> Vec<Vec<Vec2>> {
+        use std::collections::HashMap;
+        let segs = &self.segments;
+        let n = segs.len();
+        let by_edge = self.edges.len() == n;
+        if n == 0 || !(by_edge || (tolerance_m > 0.0 && tolerance_m.is_finite())) {
+            return Vec::new();
+        }
+        let end = |e: usize| {
+            if e.is_multiple_of(2) {
+                segs[e / 2].0
+            } else {
+                segs[e / 2].1
+            }
+        };
+        let mut partners: Vec<Option<usize>> = vec![None; 2 * n];
+        if by_edge {
+            let edge_of = |e: usize| {
+                if e.is_multiple_of(2) {
+                    self.edges[e / 2].0
+                } else {
+                    self.edges[e / 2].1
+                }
+            };
+            let mut order: Vec<(u64, usize)> = (0..2 * n).map(|e| (edge_of(e), e)).collect();
+            order.sort_unstable();
+            for run in order.chunk_by(|a, b| a.0 == b.0) {
+                if let [(_, a), (_, b)] = run {
+                    partners[*a] = Some(*b);
+                    partners[*b] = Some(*a);
+                }
+            }
+        } else {
+            let cell = |p: Vec2| {
+                (
+                    (p.x / tolerance_m).floor() as i64,
+                    (p.y / tolerance_m).floor() as i64,
+                )
+            };
+            let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::with_capacity(2 * n);
+            for e in 0..2 * n {
+                let p = end(e);
+                if p.x.is_finite() && p.y.is_finite() {
+                    buckets.entry(cell(p)).or_default().push(e);
+                }
+            }
+            for (e, slot) in partners.iter_mut().enumerate() {
+                let p = end(e);
+                if !(p.x.is_finite() && p.y.is_finite()) {
+                    continue;
+                }
+                let (cx, cy) = cell(p);
+                let mut best: Option<(f64, usize)> = None;
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for &o in buckets.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+                            if o / 2 == e / 2 {
+                                continue;
+                            }
+                            let d = (end(o) - p).norm();
+                            if d <= tolerance_m && best.is_none_or(|(bd, bo)| (d, o) < (bd, bo)) {
+                                best = Some((d, o));
+                            }
+                        }
+                    }
+                }
+                *slot = best.map(|(_, o)| o);
+            }
+        }
+        let mut used = vec![false; n];
+        let mut chains = Vec::new();
+        for free in 0..2 * n {
+            if used[free / 2] || partners[free].is_some() {
+                continue;
+            }
+            // Walk from the free end through its segment and on until an end joined to none
+            // (or, where ends pair unevenly, a segment already used).
+            let mut pts = vec![end(free)];
+            let mut e = free;
+            loop {
+                used[e / 2] = true;
+                let p = end(e ^ 1);
+                if pts.last() != Some(&p) {
+                    pts.push(p);
+                }
+                match partners[e ^ 1] {
+                    Some(o) if !used[o / 2] => e = o,
+                    _ => break,
+                }
+            }
+            if pts.len() >= 2 {
+                chains.push(pts);
+            }
+        }
+        chains
+    }
+
     /// Distance from `p` to the nearest segment, `None` if there are none (or `p` is not
     /// finite): `min_k |to_segment(a_k, b_k, p)|`, found in `O(log n)` through the tree.
     ///
@@ -536,7 +640,43 @@ mod tests {
         assert!(l.iter().all(|p| (p.norm() - r).abs() < 0.02));
         let mut cut = segs.segments().to_vec();
         cut.remove(3);
-        assert!(IsolineSegments::new(cut).closed_loops(1e-6).is_empty());
+        assert!(IsolineSegments::new(cut.clone())
+            .closed_loops(1e-6)
+            .is_empty());
+        // The loop cut open is one open chain of every other segment, from one side of the cut
+        // to the other; the whole loop has none.
+        assert!(segs.open_chains(1e-6).is_empty());
+        let chains = IsolineSegments::new(cut.clone()).open_chains(1e-6);
+        assert_eq!(chains.len(), 1);
+        let c = &chains[0];
+        let open_len: f64 = c.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        let removed = (segs.segments()[3].1 - segs.segments()[3].0).norm();
+        assert!((open_len - (len - removed)).abs() < 1e-9, "{open_len}");
+    }
+
+    /// The level-1.1 isoline of the plane `F = x + y` over `[0, 4]^2` is the line
+    /// `x + y = 1.1` from `(1.1, 0)` to `(0, 1.1)`: one open chain between those two boundary
+    /// points, of length `1.1 sqrt 2` (marching squares interpolates a plane exactly), and no
+    /// closed loop.
+    #[test]
+    fn open_chain_of_a_plane() {
+        let segs = IsolineSegments::from_samples(Vec2::new(0.0, 0.0), 0.25, 17, 17, 1.1, |p| {
+            Some(p.x + p.y)
+        });
+        assert!(segs.closed_loops(1e-9).is_empty());
+        let chains = segs.open_chains(1e-9);
+        assert_eq!(chains.len(), 1);
+        let c = &chains[0];
+        let ends = [c[0], c[c.len() - 1]];
+        let want = [Vec2::new(1.1, 0.0), Vec2::new(0.0, 1.1)];
+        assert!(
+            want.iter()
+                .all(|w| ends.iter().any(|e| (*e - *w).norm() < 1e-12)),
+            "{ends:?}"
+        );
+        let len: f64 = c.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+        assert!((len - 1.1 * 2f64.sqrt()).abs() < 1e-12, "{len}");
+        assert!(c.iter().all(|p| (p.x + p.y - 1.1).abs() < 1e-12));
     }
 
     #[test]

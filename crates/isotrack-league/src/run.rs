@@ -237,8 +237,13 @@ fn check_team_task(
             controller: c.clone(),
         });
     }
-    if base.team_isoline().as_team_isoline().is_none() {
-        let why = base.team_metrics_note();
+    let model = base.team_isoline();
+    if model.as_team_isoline().is_none() || model.is_open() {
+        let why = if model.is_open() {
+            "the isoline leaves the field: an open isoline's team metrics measure the stretch the team covers, not a loop's"
+        } else {
+            base.team_metrics_note()
+        };
         return Err(BenchError::Suite(suite.error_at(
             &task_path(ti, &["scenario"]),
             format!(

@@ -725,6 +725,7 @@ fn team_record(
         order_preserved: true,
         speed_range_mps: None,
         moving_isoline: None,
+        open_isoline: None,
     }
 }
 

@@ -1240,20 +1240,48 @@ struct TeamFigureData {
     gaps: Vec<(f64, Vec<f64>)>,
     /// `(position along the isoline, longest unvisited time)` over the steady window.
     revisit: Vec<(f64, f64)>,
-    /// `L/(N v0)`, s.
+    /// `L/(N v0)`, s (an open isoline: the mean gap over `v0`, `summary.json`'s).
     ideal: f64,
-    /// `L/N`, m.
+    /// `L/N`, m (an open isoline: the mean gap over the steady window, `summary.json`'s).
     even: f64,
+    /// Whether the isoline is closed (else open: no gap ahead of the vehicle in front).
+    closed: bool,
     t_end: f64,
     gap_range: (f64, f64),
     revisit_range: (f64, f64),
+    /// The isoline the gaps and revisit times are measured along, as drawn (x, y), m.
+    isoline: Vec<(f64, f64)>,
+    /// Its legend label.
+    isoline_label: String,
+    /// Each vehicle's position at the last row (x, y), m.
+    ends: Vec<(f64, f64)>,
+    /// The isoline panel's range `[x0, x1, y0, y1]`, m.
+    map_range: [f64; 4],
+}
+
+/// The runs of consecutive finite points of `points` (a NaN or infinite coordinate breaks the
+/// line: an open isoline's vehicle in front has no gap ahead, a bin the team never covered no
+/// revisit time).
+fn finite_runs(points: impl Iterator<Item = (f64, f64)>) -> Vec<Vec<(f64, f64)>> {
+    let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+    for p in points {
+        if p.0.is_finite() && p.1.is_finite() {
+            if let Some(r) = runs.last_mut() {
+                r.push(p);
+            }
+        } else if runs.last().is_some_and(|r| !r.is_empty()) {
+            runs.push(Vec::new());
+        }
+    }
+    runs.retain(|r| !r.is_empty());
+    runs
 }
 
 impl TeamFigureData {
     fn of(vehicles: &[RunData]) -> Result<Self, PlotError> {
         let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
             PlotError::Data(
-                "the team's figure needs the isoline's arc length: a radial field that does not drift, for now (docs/TEAMS.md)".into(),
+                "the team's figure needs an isoline at controller.level to measure along, and the field has none there (docs/TEAMS.md)".into(),
             )
         })?;
         let first = &vehicles[0];
@@ -1271,8 +1299,35 @@ impl TeamFigureData {
             .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
                 t.ideal_speed_mps()
             });
-        let ideal = l / (n as f64 * v0);
-        let even = l / n as f64;
+        let closed = tracks.is_closed();
+        let (ideal, even) = if closed {
+            (l / (n as f64 * v0), l / n as f64)
+        } else {
+            // The metrics' own numbers for the stretch the team covered (NaN: none).
+            let team = first.summary.team().and_then(|t| t.metrics.as_ref());
+            (
+                team.and_then(|m| m.revisit_time_ideal_s)
+                    .unwrap_or(f64::NAN),
+                team.and_then(|m| m.open_isoline.as_ref())
+                    .and_then(|o| o.mean_gap_m)
+                    .unwrap_or(f64::NAN),
+            )
+        };
+        let isoline: Vec<(f64, f64)> = tracks.arc.points().iter().map(|p| (p.x, p.y)).collect();
+        let last = tracks.rows - 1;
+        let ends: Vec<(f64, f64)> = vehicles
+            .iter()
+            .map(|v| (v.trace[last].x_m, v.trace[last].y_m))
+            .collect();
+        let (x0, x1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.0));
+        let (y0, y1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.1));
+        let side = (x1 - x0).max(y1 - y0).max(1e-6);
+        let pad = 0.06 * side;
+        let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let half = 0.5 * side + pad;
+        let map_range = [cx - half, cx + half, cy - half, cy + half];
+        padded_axis("x_m", map_range[0], map_range[1], 0.0, 0.0)?;
+        padded_axis("y_m", map_range[2], map_range[3], 0.0, 0.0)?;
         let t_end = gaps.last().map_or(1e-9, |g| g.0).max(1e-9);
         padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
         let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
@@ -1286,9 +1341,14 @@ impl TeamFigureData {
             revisit,
             ideal,
             even,
+            closed,
             t_end,
             gap_range: (glo, ghi),
             revisit_range: (rlo, rhi),
+            isoline,
+            isoline_label: tracks.isoline_label.clone(),
+            ends,
+            map_range,
         })
     }
 }
@@ -1297,8 +1357,14 @@ impl TeamFigureData {
 /// of each vehicle along the true isoline over time (one colour per vehicle, as in the
 /// trajectory figure; the even gap `L/N` dashed); below, the longest time each point of the
 /// isoline went without a visit over the steady window, along the isoline (the ideal
-/// `L/(N v0)` dashed). `vehicles` as [`RunData::load_team`] gives them. A data error when the
-/// isoline's arc length is not known (a radial field that does not drift only, for now).
+/// `L/(N v0)` dashed) and, beside it, the isoline they are measured along as drawn (the
+/// metrics' own: a radial field's circle, a static field's marching-squares polyline, closed or
+/// open, or for a field that moves the isoline at the last row, labelled so;
+/// [`crate::team::figure_isoline`]) with each vehicle's last position. On an open isoline the
+/// gaps are between consecutive vehicles only (the one in front has none), the revisit times
+/// over the stretch the team covered, and the dashed lines the mean gap and its revisit time
+/// from `summary.json`. `vehicles` as [`RunData::load_team`] gives them. A data error when the
+/// field has no isoline at the level.
 pub fn team_figure(
     vehicles: &[RunData],
     path: &Path,
@@ -1313,9 +1379,14 @@ pub fn team_figure(
         revisit,
         ideal,
         even,
+        closed,
         t_end,
         gap_range: (glo, ghi),
         revisit_range: (rlo, rhi),
+        isoline,
+        isoline_label,
+        ends,
+        map_range,
     } = TeamFigureData::of(vehicles)?;
     let (w, h) = st.size((1100, 760), (560, 420));
     let (ts, ls) = (tick_step(0.0, t_end, 10), tick_step(0.0, l, 10));
@@ -1329,6 +1400,8 @@ pub fn team_figure(
                 root.titled(title, st.font(1.6)).map_err(s)?
             };
             let areas = body.split_evenly((2, 1));
+            let (bw, _) = areas[1].dim_in_pixel();
+            let (revisit_area, map_area) = areas[1].split_horizontally((bw as f64 * 0.62) as u32);
             let (w2, w3) = (st.px(2.0), st.px(3.0));
             let dashed = |a: (f64, f64), b: (f64, f64)| {
                 DashedLineSeries::new([a, b], st.px(8.0), st.px(5.0), BLACK.stroke_width(w2))
@@ -1340,19 +1413,26 @@ pub fn team_figure(
                 ("time (s)", "gap ahead along the isoline (m)"),
                 (ts, gs),
             )?;
-            top.draw_series(dashed((0.0, even), (t_end, even)))
-                .map_err(s)?
-                .label("even gap L/N")
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
-                });
+            if even.is_finite() {
+                top.draw_series(dashed((0.0, even), (t_end, even)))
+                    .map_err(s)?
+                    .label(if closed {
+                        "even gap L/N"
+                    } else {
+                        "mean gap S/(N-1)"
+                    })
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                    });
+            }
             for (i, v) in vehicles.iter().enumerate() {
                 let c = colour(i);
                 let series = top
-                    .draw_series(LineSeries::new(
-                        gaps.iter().map(|g| (g.0, g.1[i])),
-                        c.stroke_width(w2),
-                    ))
+                    .draw_series(
+                        finite_runs(gaps.iter().map(|g| (g.0, g.1[i])))
+                            .into_iter()
+                            .map(|r| PathElement::new(r, c.stroke_width(w2))),
+                    )
                     .map_err(s)?;
                 if n <= RUN_COLOURS.len() {
                     series.label(v.name.clone()).legend(move |(x, y)| {
@@ -1362,7 +1442,7 @@ pub fn team_figure(
             }
             panel_legend(&mut top, st, SeriesLabelPosition::UpperRight)?;
             let mut bottom = panel_axes(
-                &areas[1],
+                &revisit_area,
                 st,
                 ((0.0, l), (rlo, rhi)),
                 (
@@ -1371,22 +1451,59 @@ pub fn team_figure(
                 ),
                 (ls, rs),
             )?;
-            bottom
-                .draw_series(dashed((0.0, ideal), (l, ideal)))
-                .map_err(s)?
-                .label("ideal L/(N v0)")
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
-                });
+            if ideal.is_finite() {
+                bottom
+                    .draw_series(dashed((0.0, ideal), (l, ideal)))
+                    .map_err(s)?
+                    .label(if closed {
+                        "ideal L/(N v0)"
+                    } else {
+                        "ideal S/((N-1) v0)"
+                    })
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                    });
+            }
             let c = colour(1);
             bottom
-                .draw_series(LineSeries::new(revisit.iter().copied(), c.stroke_width(w2)))
+                .draw_series(
+                    finite_runs(revisit.iter().copied())
+                        .into_iter()
+                        .map(|r| PathElement::new(r, c.stroke_width(w2))),
+                )
                 .map_err(s)?
                 .label("revisit time, steady window")
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                 });
-            panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)
+            panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)?;
+            // The isoline the panels measure along, and where each vehicle ended.
+            let [mx0, mx1, my0, my1] = map_range;
+            let ms = tick_step(mx0, mx1, 5);
+            let mut map = panel_axes(
+                &map_area,
+                st,
+                ((mx0, mx1), (my0, my1)),
+                ("x (m)", "y (m)"),
+                (ms, ms),
+            )?;
+            map.draw_series(
+                finite_runs(isoline.iter().copied())
+                    .into_iter()
+                    .map(|r| PathElement::new(r, BLACK.stroke_width(w2))),
+            )
+            .map_err(s)?
+            .label(isoline_label.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w3))
+            });
+            for (i, e) in ends.iter().enumerate() {
+                if e.0.is_finite() && e.1.is_finite() {
+                    map.draw_series([Circle::new(*e, st.px(6.0), colour(i).filled())])
+                        .map_err(s)?;
+                }
+            }
+            panel_legend(&mut map, st, SeriesLabelPosition::UpperLeft)
         })()
     })
 }

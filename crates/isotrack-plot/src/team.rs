@@ -1,10 +1,112 @@
 //! A team's run read back for its figures (issue 32, docs/TEAMS.md): the vehicles' arc
 //! coordinates along the true isoline from the trace (never by re-simulating), the gap ahead of
-//! each vehicle over time and the revisit time along the isoline.
+//! each vehicle over time and the revisit time along the isoline. The isoline is the one the
+//! team metrics measure along (`Scenario::team_isoline`): a radial field's circle, a static
+//! field's marching-squares polyline (closed, or open where it leaves the field), or for a
+//! field that moves the isoline at the last row's time (the last frame), labelled so.
 
 use crate::run_data::RunData;
 use isotrack_core::Vec2;
-use isotrack_sim::team::arc::{ArcProjection, CircleArc};
+use isotrack_scenario::{Scenario, TeamIsolineModel};
+use isotrack_sim::team::arc::{pick_loop, ArcProjection, CircleArc, PolylineArc};
+
+/// The isoline a team's figure measures along ([`TeamTracks::arc`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum FigureArc {
+    /// A radial field's circle (exact).
+    Circle(CircleArc),
+    /// A polyline from marching squares (closed or open).
+    Polyline(PolylineArc),
+}
+
+impl ArcProjection for FigureArc {
+    fn length_m(&self) -> f64 {
+        match self {
+            FigureArc::Circle(c) => c.length_m(),
+            FigureArc::Polyline(p) => p.length_m(),
+        }
+    }
+    fn project(&self, p: Vec2) -> Option<isotrack_sim::team::arc::ArcPoint> {
+        match self {
+            FigureArc::Circle(c) => c.project(p),
+            FigureArc::Polyline(l) => l.project(p),
+        }
+    }
+    fn is_closed(&self) -> bool {
+        match self {
+            FigureArc::Circle(_) => true,
+            FigureArc::Polyline(p) => p.is_closed(),
+        }
+    }
+}
+
+/// Points of a circle drawn as a polyline.
+const CIRCLE_POINTS: usize = 360;
+
+impl FigureArc {
+    /// The isoline as the polyline drawn: a circle's [`CIRCLE_POINTS`] points, a polyline's
+    /// vertices; a closed one ends with its first point again.
+    pub fn points(&self) -> Vec<Vec2> {
+        match self {
+            FigureArc::Circle(c) => (0..=CIRCLE_POINTS)
+                .map(|i| {
+                    let th = std::f64::consts::TAU * i as f64 / CIRCLE_POINTS as f64;
+                    c.center_m + Vec2::new(th.cos(), th.sin()) * c.radius_m
+                })
+                .collect(),
+            FigureArc::Polyline(p) => {
+                let mut v = p.vertices().to_vec();
+                if p.is_closed() {
+                    v.extend(p.vertices().first().copied());
+                }
+                v
+            }
+        }
+    }
+}
+
+/// The isoline a team figure of `scenario` measures along and its legend label: as
+/// `Scenario::team_isoline` (the metrics' own), and for a field that moves its isoline at
+/// `t_last_s` (the loop most of `last_positions` are nearest to), labelled with that time.
+/// `None` where there is none.
+pub fn figure_isoline(
+    scenario: &Scenario,
+    t_last_s: f64,
+    last_positions: &[Vec2],
+) -> Option<(FigureArc, String)> {
+    let level = crate::style::value_label(scenario.level());
+    match scenario.team_isoline() {
+        TeamIsolineModel::Circle(c) => Some((
+            FigureArc::Circle(c),
+            format!("true isoline s_d = {level} (circle)"),
+        )),
+        TeamIsolineModel::Polyline(p) => {
+            let kind = if p.is_closed() {
+                "closed"
+            } else {
+                "open: it leaves the field"
+            };
+            Some((
+                FigureArc::Polyline(p),
+                format!("true isoline s_d = {level} ({kind})"),
+            ))
+        }
+        TeamIsolineModel::Moving(m) => {
+            let v = m.version(t_last_s)?;
+            let loops = m.loops(v);
+            let j = pick_loop(&loops, last_positions)?;
+            let p = PolylineArc::aligned(loops[j].clone(), None).ok()?;
+            Some((
+                FigureArc::Polyline(p),
+                format!(
+                    "isoline s_d = {level} at t = {} s (the last frame)",
+                    crate::style::tick_label(t_last_s, 1.0)
+                ),
+            ))
+        }
+        TeamIsolineModel::None(_) => None,
+    }
+}
 
 /// Bins the isoline is cut into for the revisit-time figure.
 pub const REVISIT_BINS: usize = 360;
@@ -14,8 +116,10 @@ pub const REVISIT_BINS: usize = 360;
 pub struct TeamTracks<'a> {
     /// The vehicles.
     pub vehicles: &'a [RunData],
-    /// The isoline: a circle (`Scenario::team_arc`).
-    pub arc: CircleArc,
+    /// The isoline ([`figure_isoline`]).
+    pub arc: FigureArc,
+    /// Its legend label (which isoline: for a field that moves, the last frame's).
+    pub isoline_label: String,
     /// `+1` when the team travels towards increasing arc coordinate, `-1` otherwise (the sign
     /// of the summed arc motion).
     pub direction: f64,
@@ -24,26 +128,41 @@ pub struct TeamTracks<'a> {
 }
 
 impl<'a> TeamTracks<'a> {
-    /// `None` when the isoline is not a known circle or there is no vehicle.
+    /// `None` when the scenario has no isoline to measure along ([`figure_isoline`]) or
+    /// there is no vehicle or row.
     pub fn new(vehicles: &'a [RunData]) -> Option<Self> {
         let first = vehicles.first()?;
-        let arc = first.scenario.team_arc()?;
         let rows = vehicles.iter().map(|v| v.trace.len()).min()?;
+        let last = rows.checked_sub(1)?;
+        let t_last = first.trace[last].t_s;
+        let ends: Vec<Vec2> = vehicles
+            .iter()
+            .map(|v| Vec2::new(v.trace[last].x_m, v.trace[last].y_m))
+            .collect();
+        let (arc, isoline_label) = figure_isoline(&first.scenario, t_last, &ends)?;
         let l = arc.length_m();
+        let closed = arc.is_closed();
         let mut sum = 0.0;
         for v in vehicles {
             for w in v.trace[..rows].windows(2) {
                 if let (Some(a), Some(b)) = (s_of(&arc, &w[0]), s_of(&arc, &w[1])) {
-                    sum += wrap_half(b - a, l);
+                    sum += if closed { wrap_half(b - a, l) } else { b - a };
                 }
             }
         }
         Some(Self {
             vehicles,
             arc,
+            isoline_label,
             direction: if sum < 0.0 { -1.0 } else { 1.0 },
             rows,
         })
+    }
+
+    /// Whether the isoline is closed (else open: gaps and revisit times over the stretch the
+    /// team covers, as `summary.json`'s `team.open_isoline`).
+    pub fn is_closed(&self) -> bool {
+        self.arc.is_closed()
     }
 
     /// The isoline's length `L`, m.
@@ -51,15 +170,23 @@ impl<'a> TeamTracks<'a> {
         self.arc.length_m()
     }
 
-    /// The arc coordinate of vehicle `i` at row `k`, measured along the travel, in `[0, L)`.
+    /// The arc coordinate of vehicle `i` at row `k`, measured along the travel, in `[0, L)`
+    /// (on an open isoline in `[0, L]`, from the end the team travels away from).
     fn along(&self, i: usize, k: usize) -> Option<f64> {
         let s = s_of(&self.arc, &self.vehicles[i].trace[k])?;
-        Some((self.direction * s).rem_euclid(self.length_m()))
+        Some(if self.is_closed() {
+            (self.direction * s).rem_euclid(self.length_m())
+        } else if self.direction < 0.0 {
+            self.length_m() - s
+        } else {
+            s
+        })
     }
 
     /// The gap ahead of each vehicle along the travel at every `stride`-th row, m:
     /// `(t, [gap of vehicle 0, 1, ...])` (the next vehicle ahead in the order along the
-    /// isoline at that time; `O(N log N)` per row).
+    /// isoline at that time; `O(N log N)` per row). On an open isoline the vehicle in front
+    /// has none (NaN): no gap wraps around.
     pub fn gaps(&self, stride: usize) -> Vec<(f64, Vec<f64>)> {
         let n = self.vehicles.len();
         let l = self.length_m();
@@ -76,7 +203,13 @@ impl<'a> TeamTracks<'a> {
             for p in 0..n {
                 let (s, i) = order[p];
                 let next = order[(p + 1) % n].0;
-                g[i] = if p + 1 == n { next + l - s } else { next - s };
+                g[i] = if p + 1 < n {
+                    next - s
+                } else if self.is_closed() {
+                    next + l - s
+                } else {
+                    f64::NAN
+                };
             }
             out.push((self.vehicles[0].trace[k].t_s, g));
         }
@@ -89,7 +222,11 @@ impl<'a> TeamTracks<'a> {
     /// wherever it was (before the window too; a bin not entered yet counts from the first
     /// row), the open interval at the last row included (every bin crossed between two rows
     /// counts as visited at the later row), s: `summary.json`'s `revisit_time_max_s` is the
-    /// largest of them (docs/TEAMS.md).
+    /// largest of them (docs/TEAMS.md). On an open isoline, as its metrics: a bin counts while
+    /// in the team's stretch (from the vehicle at the back to the one in front), so a bin's
+    /// first visit ends an interval only if the first row's stretch held it, and the open
+    /// interval at the last row counts for the last row's stretch; a bin the team never covered
+    /// is NaN.
     pub fn revisit_max(&self, t0_s: f64) -> Vec<(f64, f64)> {
         let l = self.length_m();
         let bins = REVISIT_BINS;
@@ -102,8 +239,24 @@ impl<'a> TeamTracks<'a> {
             return vec![];
         };
         let t_start = self.vehicles[0].trace[0].t_s;
-        let mut last = vec![t_start; bins];
-        let mut worst = vec![0.0f64; bins];
+        let closed = self.is_closed();
+        let bin_of = |s: f64| ((s / width).floor().max(0.0) as usize).min(bins - 1);
+        // The bins between the vehicles at the back and in front at row `k` (open isoline).
+        let stretch = |k: usize| -> Option<(usize, usize)> {
+            let s: Vec<f64> = (0..self.vehicles.len())
+                .filter_map(|i| self.along(i, k))
+                .collect();
+            let lo = s.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = s.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (lo <= hi).then(|| (bin_of(lo), bin_of(hi)))
+        };
+        let mut last = vec![if closed { t_start } else { f64::NAN }; bins];
+        let mut worst = vec![if closed { 0.0f64 } else { f64::NAN }; bins];
+        if !closed {
+            if let Some((lo, hi)) = stretch(0) {
+                last[lo..=hi].fill(t_start);
+            }
+        }
         for k in 1..self.rows {
             let t = self.vehicles[0].trace[k].t_s;
             let in_window = t >= t0_s;
@@ -111,30 +264,49 @@ impl<'a> TeamTracks<'a> {
                 let (Some(a), Some(b)) = (self.along(i, k - 1), self.along(i, k)) else {
                     continue;
                 };
-                let d = wrap_half(b - a, l);
+                let d = if closed { wrap_half(b - a, l) } else { b - a };
                 // Bins entered moving forward from a to a + d (a backward step enters none).
                 if d <= 0.0 {
                     continue;
                 }
                 let first = (a / width).floor() as i64 + 1;
                 let lastb = ((a + d) / width).floor() as i64;
+                let lastb = if closed {
+                    lastb
+                } else {
+                    lastb.min(bins as i64 - 1)
+                };
                 for j in first..=lastb.min(first + bins as i64 - 1) {
                     let j = j.rem_euclid(bins as i64) as usize;
-                    if in_window {
+                    // (`f64::max` keeps the number over a NaN: a bin's first interval.)
+                    if in_window && !last[j].is_nan() {
                         worst[j] = worst[j].max(t - last[j]);
                     }
                     last[j] = t;
                 }
             }
         }
+        let open_end = if closed {
+            Some((0, bins - 1))
+        } else {
+            stretch(self.rows - 1)
+        };
         (0..bins)
-            .map(|j| ((j as f64 + 0.5) * width, worst[j].max(t_end - last[j])))
+            .map(|j| {
+                let w = match open_end {
+                    Some((lo, hi)) if (lo..=hi).contains(&j) && !last[j].is_nan() => {
+                        worst[j].max(t_end - last[j])
+                    }
+                    _ => worst[j],
+                };
+                ((j as f64 + 0.5) * width, w)
+            })
             .collect()
     }
 }
 
 /// The arc coordinate of a trace row (`None`: no finite position, or the circle's centre).
-fn s_of(arc: &CircleArc, t: &isotrack_sim::TraceRow) -> Option<f64> {
+fn s_of(arc: &dyn ArcProjection, t: &isotrack_sim::TraceRow) -> Option<f64> {
     if !(t.x_m.is_finite() && t.y_m.is_finite()) {
         return None;
     }

@@ -125,6 +125,10 @@ pub struct TeamRecord {
     /// For an isoline that moves: how it was followed (left out otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub moving_isoline: Option<isotrack_sim::team::metrics::MovingIsolineStats>,
+    /// For an open isoline (one that leaves the field): the stretch the team covers (left out
+    /// for a closed one; docs/TEAMS.md "Open isolines").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_isoline: Option<isotrack_sim::team::metrics::OpenIsolineStats>,
 }
 
 /// `Some(x)` when `x` is finite (serde writes a non-finite `f64` as `null`).
@@ -149,6 +153,7 @@ impl TeamRecord {
             order_preserved: m.order_preserved,
             speed_range_mps: m.speed_range_mps.map(|r| r.map(finite)),
             moving_isoline: m.moving_isoline.clone(),
+            open_isoline: m.open_isoline.clone(),
         }
     }
 }

@@ -12,7 +12,7 @@ use isotrack_core::{FieldDerivatives, IsolineController, ScalarField, SpeedComma
 use isotrack_fields::isoline::IsolineSegments;
 use isotrack_fields::puff::PuffPlume;
 use isotrack_fields::AnalyticKind;
-use isotrack_sim::team::arc::{pick_loop, CircleArc, MovingArc, PolylineArc};
+use isotrack_sim::team::arc::{pick_piece, ArcProjection, CircleArc, MovingArc, PolylineArc};
 use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::SpacingConfig;
 use isotrack_sim::team::TeamIsoline;
@@ -43,8 +43,9 @@ pub const POLYLINE_METRICS_PERIOD_S: f64 = 0.1;
 pub enum TeamIsolineModel {
     /// The circle of a radial field that does not drift (exact).
     Circle(CircleArc),
-    /// A closed isoline of a static field, extracted once by marching squares: the loop most
-    /// of the team's starts are nearest to.
+    /// An isoline of a static field, extracted once by marching squares: the piece (a closed
+    /// loop, or an open chain that leaves the field: [`PolylineArc::open`]) most of the
+    /// team's starts are nearest to.
     Polyline(PolylineArc),
     /// An isoline that moves (a time series of frames, a puff plume): the isoline of the
     /// time, extracted again per frame (per [`PUFF_ISOLINE_PERIOD_S`] for a puff plume).
@@ -63,10 +64,16 @@ impl TeamIsolineModel {
             TeamIsolineModel::None(_) => None,
         }
     }
+
+    /// Whether it is an open isoline (one that leaves the field: the team metrics of
+    /// [`isotrack_sim::team::metrics::OpenIsolineStats`]).
+    pub fn is_open(&self) -> bool {
+        matches!(self, TeamIsolineModel::Polyline(p) if !p.is_closed())
+    }
 }
 
 /// Why a scenario's team has no metrics (`summary.json`'s `team.metrics_note`).
-pub const NO_CLOSED_ISOLINE: &str = "no team metrics: the isoline at controller.level is not a closed loop (it leaves the field, or the field has no isoline there); the team metrics are measured along a closed isoline only";
+pub const NO_CLOSED_ISOLINE: &str = "no team metrics: the field has no isoline at controller.level to measure along (no closed loop and no open piece leaving the field)";
 /// The note for a drifting analytic field other than a radial one.
 pub const DRIFTING_FIELD: &str =
     "no team metrics: the isoline of a drifting analytic field is followed for a radial field only, for now";
@@ -86,13 +93,30 @@ fn closed_loops(s: &IsolineSegments) -> Vec<Vec<Vec2>> {
     s.closed_loops(loop_tolerance_m(scale))
 }
 
-/// The loop of `loops` the `starts` are on, as a polyline (oriented counter-clockwise).
-fn polyline_of(loops: Vec<Vec<Vec2>>, starts: &[Vec2]) -> TeamIsolineModel {
-    match pick_loop(&loops, starts).and_then(|j| PolylineArc::aligned(loops[j].clone(), None).ok())
-    {
+/// The piece of the isoline `s` the `starts` are on ([`pick_piece`]), as a polyline: a closed
+/// loop (oriented counter-clockwise) or an open chain (from the free end marching squares
+/// lists first).
+fn polyline_of(s: &IsolineSegments, starts: &[Vec2]) -> TeamIsolineModel {
+    let loops = closed_loops(s);
+    let chains = open_chains(s);
+    let picked = match pick_piece(&loops, &chains, starts) {
+        Some(Ok(j)) => PolylineArc::aligned(loops[j].clone(), None).ok(),
+        Some(Err(j)) => PolylineArc::open(chains[j].clone()).ok(),
+        None => None,
+    };
+    match picked {
         Some(p) => TeamIsolineModel::Polyline(p),
         None => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
     }
+}
+
+fn open_chains(s: &IsolineSegments) -> Vec<Vec<Vec2>> {
+    let scale = s
+        .segments()
+        .iter()
+        .map(|(a, b)| a.x.abs().max(a.y.abs()).max(b.x.abs()).max(b.y.abs()))
+        .fold(0.0, f64::max);
+    s.open_chains(loop_tolerance_m(scale))
 }
 
 /// Marching squares of `f` over `box_m = [x0, x1, y0, y1]` on a lattice of at most `lattice`
@@ -254,11 +278,13 @@ impl Scenario {
     }
 
     /// The true isoline for the team metrics and the `arc_reference` law: the circle of a
-    /// radial field that does not drift; for another static field, the closed loop (marching
-    /// squares: the grid's, or an analytic field's over its domain or its sources' reach) most
-    /// of the team's starts are nearest to; for a time series or a puff plume, the isoline of
-    /// the time ([`TeamIsolineModel::Moving`]). An open isoline (leaving the field) gives no
-    /// metrics ([`NO_CLOSED_ISOLINE`]).
+    /// radial field that does not drift; for another static field, the piece of its isoline
+    /// (marching squares: the grid's, or an analytic field's over its domain, its sources'
+    /// reach or, for a linear ramp without a domain, the box the team can reach in the run)
+    /// most of the team's starts are nearest to: a closed loop, or an open chain that leaves
+    /// the field (docs/TEAMS.md "Open isolines"); for a time series or a puff plume, the
+    /// isoline of the time ([`TeamIsolineModel::Moving`], closed loops only). No isoline there
+    /// gives no metrics ([`NO_CLOSED_ISOLINE`]).
     pub fn team_isoline(&self) -> TeamIsolineModel {
         if let Some(c) = self.team_arc() {
             return TeamIsolineModel::Circle(c);
@@ -277,14 +303,15 @@ impl Scenario {
                     return TeamIsolineModel::None(DRIFTING_FIELD);
                 }
                 match analytic_box(f)
+                    .or_else(|| self.team_reach_box(f, &starts))
                     .and_then(|b| lattice_segments(b, TEAM_LATTICE, level, |p| f.value(0.0, p)))
                 {
-                    Some(s) => polyline_of(closed_loops(&s), &starts),
+                    Some(s) => polyline_of(&s, &starts),
                     None => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
                 }
             }
             FieldModel::Grid(_) => match self.isoline() {
-                IsolineOracle::Segments(s) => polyline_of(closed_loops(s), &starts),
+                IsolineOracle::Segments(s) => polyline_of(s, &starts),
                 _ => TeamIsolineModel::None(NO_CLOSED_ISOLINE),
             },
             FieldModel::Series(_) => match self.isoline() {
@@ -297,6 +324,40 @@ impl Scenario {
                 TeamIsolineModel::Moving(Box::new(PuffArc::new(p.clone(), level)))
             }
         }
+    }
+
+    /// A linear ramp without a domain (its isoline a straight line without end): the box the
+    /// team can reach in the run, the starts' box widened on every side by 1.25 times the
+    /// fastest speed times the duration, plus 1 m (a margin for wind), where its isoline is
+    /// an open chain.
+    fn team_reach_box(
+        &self,
+        f: &isotrack_fields::AnalyticField,
+        starts: &[Vec2],
+    ) -> Option<[f64; 4]> {
+        if !matches!(f.kind, AnalyticKind::LinearRamp(_)) || starts.is_empty() {
+            return None;
+        }
+        let v = match self.spec().team.as_ref() {
+            Some(t) => t.speed_envelope_mps().1,
+            None => self.spec().vehicle.speed_mps(),
+        };
+        let reach = 1.25 * v * self.spec().sim.duration_s + 1.0;
+        let mut b = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in starts {
+            b = [
+                b[0].min(p.x - reach),
+                b[1].max(p.x + reach),
+                b[2].min(p.y - reach),
+                b[3].max(p.y + reach),
+            ];
+        }
+        b.iter().all(|x| x.is_finite()).then_some(b)
     }
 
     /// Why a team run of this scenario has no team metrics (`summary.json`'s
@@ -727,17 +788,15 @@ mod tests {
             }
             _ => panic!("no polyline"),
         }
-        // A linear ramp's isoline is a straight line: no closed isoline, a note.
+        // A linear ramp's isoline is a straight line: no closed isoline, an open one (cut by
+        // the box the vehicle can reach).
         let s = parse_scenario(
             "[field]\nkind = \"linear_ramp\"\noffset = 0.0\ngradient_per_m = [1.0, 0.0]\n",
             "<test>",
             &[],
         )
         .unwrap();
-        assert!(matches!(
-            s.team_isoline(),
-            TeamIsolineModel::None(NO_CLOSED_ISOLINE)
-        ));
+        assert!(s.team_isoline().is_open());
     }
 
     /// The circle as a polyline: the paper's radial field with a domain (so the isoline is

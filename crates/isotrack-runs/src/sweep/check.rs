@@ -802,9 +802,10 @@ pub struct TeamBounds {
     /// between two starts plus twice the top speed over the duration (+1 %); `None` where the
     /// top ground speed is not known (a fixed wing: wind adds to its airspeed).
     pub reach_m: Option<f64>,
-    /// The ideal revisit time `L / (N v0)`, s, of a run along a fixed isoline (its length `L`
-    /// as the run measures it); `None` for an isoline that moves (its `L` is the mean of the
-    /// lengths the run saw) or none.
+    /// The ideal revisit time `L / (N v0)`, s, of a run along a fixed closed isoline (its
+    /// length `L` as the run measures it); `None` for an isoline that moves (its `L` is the
+    /// mean of the lengths the run saw), an open one (its ideal is the stretch the team
+    /// covered) or none.
     pub ideal_s: Option<f64>,
 }
 
@@ -825,7 +826,7 @@ impl TeamBounds {
             .map(|v| (spread + 2.0 * v * duration_s) * 1.01 + 1e-9);
         let n = team.starts.len() as f64;
         let ideal_s = match s.team_isoline().as_team_isoline() {
-            Some(isotrack_sim::team::TeamIsoline::Fixed(a)) => {
+            Some(isotrack_sim::team::TeamIsoline::Fixed(a)) if a.is_closed() => {
                 Some(a.length_m() / (n * team.ideal_speed_mps()))
             }
             _ => None,

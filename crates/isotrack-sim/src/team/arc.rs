@@ -1,30 +1,37 @@
-//! Projection of a position onto a closed isoline: its arc coordinate, for the team metrics
+//! Projection of a position onto an isoline: its arc coordinate, for the team metrics
 //! (gaps, revisit times) and the `arc_reference` spacing law. Ground truth: never for a
 //! coordinate-free law.
 //!
 //! Two implementations: [`CircleArc`] (analytic, the circular field's isolines) and
 //! [`PolylineArc`] (a closed polyline, e.g. an isoline extracted from a sampled field by
 //! marching squares and stitched into closed loops:
-//! `isotrack_fields::isoline::IsolineSegments::closed_loops`).
+//! `isotrack_fields::isoline::IsolineSegments::closed_loops`; or an open one,
+//! [`PolylineArc::open`], an isoline that leaves the field: `open_chains`).
 
 use isotrack_core::Vec2;
 
-/// A point's place on a closed isoline.
+/// A point's place on an isoline.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ArcPoint {
-    /// Arc coordinate of the nearest isoline point, m, in `[0, length)`, increasing
-    /// counter-clockwise for a circle (along the polyline's vertex order for a polyline).
+    /// Arc coordinate of the nearest isoline point, m, in `[0, length)` (`[0, length]` on an
+    /// open isoline), increasing counter-clockwise for a circle (along the polyline's vertex
+    /// order for a polyline).
     pub s_m: f64,
     /// Unit tangent there, in the direction `s` increases.
     pub tangent: Vec2,
 }
 
-/// A closed isoline onto which positions are projected.
+/// An isoline onto which positions are projected: closed (a loop, arc coordinates modulo its
+/// length) or open (a curve with two ends, arc coordinates from its first end, no wrap-around).
 pub trait ArcProjection: Sync {
     /// The isoline's length `L`, m (> 0).
     fn length_m(&self) -> f64;
     /// The place of the isoline point nearest to `p` (`None` where undefined: a circle's centre).
     fn project(&self, p: Vec2) -> Option<ArcPoint>;
+    /// Whether the isoline is a closed loop (the default) or an open curve.
+    fn is_closed(&self) -> bool {
+        true
+    }
 }
 
 /// A circle of radius `radius_m` about `center_m`: `s = R * atan2(y - y0, x - x0)` wrapped to
@@ -61,13 +68,17 @@ impl ArcProjection for CircleArc {
     }
 }
 
-/// A closed polyline `v_0, v_1, ..., v_{n-1}, v_0`: the nearest point over all segments (a
+/// A closed polyline `v_0, v_1, ..., v_{n-1}, v_0` ([`PolylineArc::new`]) or an open one
+/// `v_0, ..., v_{n-1}` ([`PolylineArc::open`]): the nearest point over all segments (a
 /// linear scan, `O(n)` per query), its arc coordinate the length along the polyline from `v_0`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PolylineArc {
     vertices: Vec<Vec2>,
-    /// `cum[i]`: arc length from `v_0` to `v_i`; `cum[n]` the total.
+    /// `cum[i]`: arc length from `v_0` to `v_i`; the last entry the total (`cum[n]` closed,
+    /// `cum[n - 1]` open).
     cum: Vec<f64>,
+    /// Whether the last vertex joins back to the first.
+    closed: bool,
 }
 
 /// Why points do not make a [`PolylineArc`].
@@ -79,6 +90,12 @@ pub enum PolylineError {
          (got {0} vertices)"
     )]
     Degenerate(usize),
+    /// An open polyline of fewer than 2 vertices, a non-finite one, or zero length.
+    #[error(
+        "an open isoline needs at least 2 finite vertices and a positive length \
+         (got {0} vertices)"
+    )]
+    DegenerateOpen(usize),
 }
 
 impl PolylineArc {
@@ -102,7 +119,36 @@ impl PolylineArc {
         if !(acc > 0.0 && acc.is_finite()) {
             return Err(PolylineError::Degenerate(n));
         }
-        Ok(Self { vertices, cum })
+        Ok(Self {
+            vertices,
+            cum,
+            closed: true,
+        })
+    }
+
+    /// The open polyline through `vertices` (`v_0` to `v_{n-1}`, not joined back): an isoline
+    /// that leaves the field. Arc coordinates run from `0` at `v_0` to the length at `v_{n-1}`;
+    /// a point beyond an end projects onto that end.
+    pub fn open(vertices: Vec<Vec2>) -> Result<Self, PolylineError> {
+        let n = vertices.len();
+        if n < 2 || vertices.iter().any(|v| !v.is_finite()) {
+            return Err(PolylineError::DegenerateOpen(n));
+        }
+        let mut cum = Vec::with_capacity(n);
+        let mut acc = 0.0;
+        cum.push(0.0);
+        for i in 0..n - 1 {
+            acc += (vertices[i + 1] - vertices[i]).norm();
+            cum.push(acc);
+        }
+        if !(acc > 0.0 && acc.is_finite()) {
+            return Err(PolylineError::DegenerateOpen(n));
+        }
+        Ok(Self {
+            vertices,
+            cum,
+            closed: false,
+        })
     }
 
     /// The vertices (without the closing repeat).
@@ -113,7 +159,11 @@ impl PolylineArc {
 
 impl ArcProjection for PolylineArc {
     fn length_m(&self) -> f64 {
-        self.cum[self.vertices.len()]
+        self.cum[self.cum.len() - 1]
+    }
+
+    fn is_closed(&self) -> bool {
+        self.closed
     }
 
     fn project(&self, p: Vec2) -> Option<ArcPoint> {
@@ -122,7 +172,8 @@ impl ArcProjection for PolylineArc {
         }
         let n = self.vertices.len();
         let mut best: Option<(f64, f64, Vec2)> = None;
-        for i in 0..n {
+        let segments = if self.closed { n } else { n - 1 };
+        for i in 0..segments {
             let a = self.vertices[i];
             let seg = self.vertices[(i + 1) % n] - a;
             let len2 = seg.dot(seg);
@@ -139,7 +190,7 @@ impl ArcProjection for PolylineArc {
         }
         let (_, s, tangent) = best?;
         let l = self.length_m();
-        let s = if s >= l { s - l } else { s };
+        let s = if self.closed && s >= l { s - l } else { s };
         Some(ArcPoint { s_m: s, tangent })
     }
 }
@@ -204,6 +255,90 @@ pub fn distance_to_loop(loop_m: &[Vec2], p: Vec2) -> f64 {
         best = best.min((p - q).dot(p - q));
     }
     best.sqrt()
+}
+
+/// The distance from `p` to the open polyline `chain_m` (vertices, not joined back), m.
+pub fn distance_to_chain(chain_m: &[Vec2], p: Vec2) -> f64 {
+    let mut best = f64::INFINITY;
+    for w in chain_m.windows(2) {
+        let (a, seg) = (w[0], w[1] - w[0]);
+        let len2 = seg.dot(seg);
+        let u = if len2 > 0.0 {
+            ((p - a).dot(seg) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let q = a + seg * u;
+        best = best.min((p - q).dot(p - q));
+    }
+    best.sqrt()
+}
+
+/// Which piece of an isoline the team is on, of its closed `loops` and its open `chains`
+/// (pieces that leave the field): each of (at most [`MAX_LOOP_VOTERS`], evenly picked)
+/// `positions` votes for the piece nearest to it; the piece with the most votes (a tie: the
+/// longer, then a loop before a chain, then the first). `Ok(i)`: loop `i`; `Err(j)`: chain
+/// `j`. `None` without pieces or positions. With no chains it is [`pick_loop`].
+pub fn pick_piece(
+    loops: &[Vec<Vec2>],
+    chains: &[Vec<Vec2>],
+    positions: &[Vec2],
+) -> Option<Result<usize, usize>> {
+    if chains.is_empty() {
+        return pick_loop(loops, positions).map(Ok);
+    }
+    let finite: Vec<Vec2> = positions
+        .iter()
+        .copied()
+        .filter(|p| p.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return None;
+    }
+    let pieces = loops.len() + chains.len();
+    let distance = |j: usize, p: Vec2| {
+        if j < loops.len() {
+            distance_to_loop(&loops[j], p)
+        } else {
+            distance_to_chain(&chains[j - loops.len()], p)
+        }
+    };
+    let length = |j: usize| -> f64 {
+        if j < loops.len() {
+            let l = &loops[j];
+            (0..l.len())
+                .map(|i| (l[(i + 1) % l.len()] - l[i]).norm())
+                .sum()
+        } else {
+            chains[j - loops.len()]
+                .windows(2)
+                .map(|w| (w[1] - w[0]).norm())
+                .sum()
+        }
+    };
+    let stride = finite.len().div_ceil(MAX_LOOP_VOTERS);
+    let mut votes = vec![0usize; pieces];
+    for p in finite.iter().step_by(stride) {
+        let mut best = (f64::INFINITY, 0usize);
+        for j in 0..pieces {
+            let d = distance(j, *p);
+            if d < best.0 {
+                best = (d, j);
+            }
+        }
+        votes[best.1] += 1;
+    }
+    let mut pick = 0;
+    for j in 1..pieces {
+        if votes[j] > votes[pick] || (votes[j] == votes[pick] && length(j) > length(pick)) {
+            pick = j;
+        }
+    }
+    Some(if pick < loops.len() {
+        Ok(pick)
+    } else {
+        Err(pick - loops.len())
+    })
 }
 
 /// Most vehicles that vote in [`pick_loop`]: the choice costs `O(min(N, 64) x vertices)`.

@@ -34,6 +34,25 @@ impl Default for TeamMetricsConfig {
     }
 }
 
+/// Most revisit bins along an open isoline ([`open_revisit_bins`]): 2^20 (16 MiB of bin
+/// state), whatever the isoline's length.
+pub const MAX_OPEN_REVISIT_BINS: usize = 1 << 20;
+
+/// The revisit bins along an open isoline of `length_m`: each at most `step_m` long (what a
+/// vehicle at its nominal speed moves in one metrics sample, so a bin's crossing time is at
+/// most a sample), at least `min_bins`, at most [`MAX_OPEN_REVISIT_BINS`]. An open isoline
+/// runs to the field's edge (or the box the team can reach), mostly ground the team never
+/// covers, so a fixed count of bins over its length would blur the revisit times of the
+/// stretch it does cover as the field (or the run) grows. `min_bins` for a step that is not
+/// positive and finite.
+pub fn open_revisit_bins(length_m: f64, step_m: f64, min_bins: usize) -> usize {
+    let want = length_m / step_m;
+    if !(want.is_finite() && want > 0.0) {
+        return min_bins.max(1);
+    }
+    (want.ceil() as usize).clamp(min_bins.max(1), MAX_OPEN_REVISIT_BINS.max(min_bins))
+}
+
 /// The team's summary (the `team` object of `summary.json`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TeamSummary {
@@ -75,6 +94,38 @@ pub struct TeamSummary {
     /// is then the mean of its length over the samples, and `revisit_time_ideal_s` uses it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moving_isoline: Option<MovingIsolineStats>,
+    /// For an open isoline (one that leaves the field; left out for a closed one): the stretch
+    /// the team covers. The gaps are then those between consecutive vehicles along the curve
+    /// only (no wrap-around gap), the revisit times are over the points inside the stretch,
+    /// and `revisit_time_ideal_s` is the stretch's ([`OpenIsolineStats`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub open_isoline: Option<OpenIsolineStats>,
+}
+
+/// How the team metrics measured along an open isoline (`summary.json`'s
+/// `team.open_isoline`): one that leaves the field (a front or a plume edge crossing a grid,
+/// a planar field's line), with two ends and no wrap-around.
+///
+/// Definitions (docs/TEAMS.md "Open isolines"): at a sample the live vehicles' arc
+/// coordinates sorted along the curve, `s_(1) <= ... <= s_(n)`; the team's **stretch** is
+/// `[s_(1), s_(n)]`, of length `S = s_(n) - s_(1)`; the **gaps** are
+/// `g_j = s_(j+1) - s_(j)`, `j = 1..n-1` (no gap from the last vehicle back to the first);
+/// `gap_cv` is their population standard deviation over their mean `S/(n-1)` (at least two
+/// gaps: three vehicles). A point of the curve counts for the revisit times while it lies in
+/// the stretch: an interval between two passes over it counts whole, as on a closed isoline;
+/// the first pass over a point the team has not covered yet (the vehicle in front entering new
+/// ground) ends no interval; a point inside the first sample's stretch not passed yet counts
+/// from the run's start; at the run's end the points in the final stretch count their age.
+/// The ideal revisit time is the mean gap over the steady window's samples over the nominal
+/// speed, `mean_k(S_k/(n_k - 1))/v0`: the interval between passes of the same stretch covered
+/// evenly.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct OpenIsolineStats {
+    /// Mean over the steady window's samples of the stretch's length `S`, m (`null`: no
+    /// sample with two vehicles on the curve).
+    pub stretch_length_m: Option<f64>,
+    /// Mean over the steady window's samples of the mean gap `S/(n - 1)`, m.
+    pub mean_gap_m: Option<f64>,
 }
 
 /// How the team metrics followed an isoline that moves (`summary.json`'s
@@ -133,6 +184,20 @@ pub struct TeamMetrics {
     /// projected onto the new one (a new loop's arc coordinates differ by more than a rescale).
     reproject: bool,
     last_p: Vec<Vec2>,
+    /// The isoline is open ([`OpenIsolineStats`]).
+    open: bool,
+    /// Open isoline: per bin, whether it lay in the team's stretch at the first sample (its
+    /// first pass then ends an interval from the run's start, as every bin's on a loop).
+    from_start: Vec<bool>,
+    /// Open isoline: whether the first sample with a vehicle on the curve was taken.
+    started: bool,
+    /// Open isoline: the bins of the stretch at the last sample.
+    stretch_bins: Option<(usize, usize)>,
+    /// Open isoline: sums over the steady window's samples of `S` and `S/(n - 1)`, and their
+    /// count.
+    stretch_sum: f64,
+    mean_gap_sum: f64,
+    stretch_count: u64,
 }
 
 impl TeamMetrics {
@@ -191,8 +256,24 @@ impl TeamMetrics {
             skipped: 0,
             reproject: false,
             last_p: vec![Vec2::new(f64::NAN, f64::NAN); n],
+            open: false,
+            from_start: Vec::new(),
+            started: false,
+            stretch_bins: None,
+            stretch_sum: 0.0,
+            mean_gap_sum: 0.0,
+            stretch_count: 0,
             cfg,
         }
+    }
+
+    /// Metrics along an open isoline (its arc coordinates in `[0, length_m]` from one end,
+    /// no wrap-around): the gaps between consecutive vehicles along it only, the revisit times
+    /// over the stretch the team covers ([`OpenIsolineStats`]). Not for a moving isoline.
+    pub fn open(mut self) -> Self {
+        self.open = true;
+        self.from_start = vec![false; self.cfg.revisit_bins];
+        self
     }
 
     /// Metrics along an isoline that moves: the isoline passed to each
@@ -290,14 +371,19 @@ impl TeamMetrics {
                 }
             };
             self.last_s[i] = s;
-            if self.moving {
+            if self.moving || self.open {
                 self.last_p[i] = positions[i];
             }
             if prev.is_nan() {
                 continue;
             }
-            // The bins entered between the last sample and this one (the shorter way round).
-            let d = wrap_arc(s - prev + 0.5 * l, l) - 0.5 * l;
+            // The bins entered between the last sample and this one (the shorter way round; on
+            // an open isoline, the only way).
+            let d = if self.open {
+                s - prev
+            } else {
+                wrap_arc(s - prev + 0.5 * l, l) - 0.5 * l
+            };
             let (b0, b1) = (bin(prev), bin(s));
             if b0 == b1 {
                 continue;
@@ -316,7 +402,11 @@ impl TeamMetrics {
                 let last = self.bin_last[b];
                 if in_window {
                     if last.is_nan() {
-                        self.revisit_max = self.revisit_max.max(t);
+                        // On an open isoline only a point the team covered from the start
+                        // (the first pass over new ground ends no interval).
+                        if !self.open || self.from_start[b] {
+                            self.revisit_max = self.revisit_max.max(t);
+                        }
                     } else {
                         let gap = t - last;
                         self.revisit_max = self.revisit_max.max(gap);
@@ -331,6 +421,10 @@ impl TeamMetrics {
             }
         }
         let count = self.scratch.len();
+        if self.open {
+            self.observe_open(t, in_window, l);
+            return;
+        }
         if count < 2 {
             return;
         }
@@ -360,7 +454,73 @@ impl TeamMetrics {
         }
     }
 
-    /// Compares the cyclic order of the vehicles along the isoline with the window's first.
+    /// The rest of a sample at time `t` on an open isoline of length `l`, the vehicles' arc
+    /// coordinates in `scratch`: the stretch, the gaps between consecutive vehicles (no
+    /// wrap-around), the closest consecutive pair, the order ([`OpenIsolineStats`]).
+    fn observe_open(&mut self, t: f64, in_window: bool, l: f64) {
+        let count = self.scratch.len();
+        if count == 0 {
+            self.stretch_bins = None;
+            return;
+        }
+        self.scratch
+            .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let m = self.cfg.revisit_bins;
+        let bin = |s: f64| ((s / l * m as f64) as usize).min(m - 1);
+        let (lo, hi) = (self.scratch[0].0, self.scratch[count - 1].0);
+        let (b_lo, b_hi) = (bin(lo), bin(hi));
+        self.stretch_bins = Some((b_lo, b_hi));
+        if !self.started {
+            // The points the team covers at its first sample: unvisited since the start.
+            self.started = true;
+            for b in b_lo..=b_hi {
+                self.from_start[b] = self.bin_last[b].is_nan();
+            }
+        }
+        if count < 2 {
+            return;
+        }
+        let stretch = hi - lo;
+        let mean = stretch / (count - 1) as f64;
+        let mut var = 0.0;
+        for j in 0..count - 1 {
+            let (s0, i0) = self.scratch[j];
+            let (s1, i1) = self.scratch[j + 1];
+            let g = s1 - s0;
+            var += (g - mean) * (g - mean);
+            let sep = (self.last_p_or(i1) - self.last_p_or(i0)).norm();
+            self.min_sep = self.min_sep.min(sep);
+        }
+        if in_window {
+            self.stretch_sum += stretch;
+            self.mean_gap_sum += mean;
+            self.stretch_count += 1;
+            self.check_order();
+        }
+        // A gap CV needs two gaps (one has no spread) and a stretch of positive length.
+        if count < 3 || !(mean > 0.0) {
+            return;
+        }
+        let cv = (var / (count - 1) as f64).sqrt() / mean;
+        self.cv_last = Some(cv);
+        if cv <= self.cfg.even_gap_cv {
+            self.even_since.get_or_insert(t);
+        } else {
+            self.even_since = None;
+        }
+        if in_window {
+            self.cv_sum += cv;
+            self.cv_count += 1;
+        }
+    }
+
+    /// Vehicle `i`'s position at the current sample (kept in `last_p` for an open isoline).
+    fn last_p_or(&self, i: u32) -> Vec2 {
+        self.last_p[i as usize]
+    }
+
+    /// Compares the cyclic order of the vehicles along the isoline with the window's first
+    /// (on an open isoline, the order from one end to the other).
     fn check_order(&mut self) {
         let now: Vec<u32> = self.scratch.iter().map(|&(_, i)| i).collect();
         let Some(reference) = &self.order_ref else {
@@ -382,6 +542,10 @@ impl TeamMetrics {
             return;
         };
         let n = now.len();
+        if self.open && shift != 0 {
+            self.order_ok = false;
+            return;
+        }
         if (0..n).any(|j| now[(shift + j) % n] != present[j]) {
             self.order_ok = false;
         }
@@ -403,13 +567,28 @@ impl TeamMetrics {
                 // The open interval at the run's end: the age of each bin then (from the run's
                 // start for a bin never passed).
                 let mut mx = self.revisit_max;
-                for &last in &self.bin_last {
-                    let open = if last.is_nan() {
-                        self.t_last
-                    } else {
-                        self.t_last - last
-                    };
-                    mx = mx.max(open);
+                if self.open {
+                    // The points of the final stretch only (the ground behind the team is
+                    // left, the ground ahead not covered yet).
+                    if let Some((b_lo, b_hi)) = self.stretch_bins {
+                        for b in b_lo..=b_hi {
+                            let last = self.bin_last[b];
+                            if !last.is_nan() {
+                                mx = mx.max(self.t_last - last);
+                            } else if self.from_start[b] {
+                                mx = mx.max(self.t_last);
+                            }
+                        }
+                    }
+                } else {
+                    for &last in &self.bin_last {
+                        let open = if last.is_nan() {
+                            self.t_last
+                        } else {
+                            self.t_last - last
+                        };
+                        mx = mx.max(open);
+                    }
                 }
                 let mean =
                     (self.revisit_count > 0).then(|| self.revisit_sum / self.revisit_count as f64);
@@ -425,7 +604,14 @@ impl TeamMetrics {
             time_to_even_s: self.even_since,
             revisit_time_max_s: revisit_max,
             revisit_time_mean_s: revisit_mean,
-            revisit_time_ideal_s: l / (self.n as f64 * self.nominal_speed_mps),
+            revisit_time_ideal_s: if self.open {
+                match self.stretch_count {
+                    0 => f64::NAN,
+                    c => self.mean_gap_sum / c as f64 / self.nominal_speed_mps,
+                }
+            } else {
+                l / (self.n as f64 * self.nominal_speed_mps)
+            },
             min_separation_m: self.min_sep.is_finite().then_some(self.min_sep),
             order_preserved: self.order_ok,
             speed_range_mps: (self.speed_min <= self.speed_max)
@@ -436,6 +622,13 @@ impl TeamMetrics {
                     .then_some([self.len_min, self.len_max]),
                 samples_without_isoline: self.skipped,
             }),
+            open_isoline: self.open.then(|| {
+                let c = self.stretch_count;
+                OpenIsolineStats {
+                    stretch_length_m: (c > 0).then(|| self.stretch_sum / c as f64),
+                    mean_gap_m: (c > 0).then(|| self.mean_gap_sum / c as f64),
+                }
+            }),
         }
     }
 }
@@ -443,7 +636,7 @@ impl TeamMetrics {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::team::arc::CircleArc;
+    use crate::team::arc::{CircleArc, PolylineArc};
     use std::f64::consts::PI;
 
     /// Four points moving rigidly round a circle of radius 10 at 1 m/s, at arc positions 0, 10,
@@ -614,6 +807,183 @@ mod tests {
             "mean {mean} vs L/(N v) = {ideal}"
         );
         assert!((s.revisit_time_ideal_s - ideal).abs() < 1e-12);
+    }
+
+    /// Four points at arc offsets `offs` behind one another along `arc` (an open isoline),
+    /// moving rigidly at `v` from `s0` for `steps` steps of `dt`, the window from `window`.
+    fn rigid_open(
+        arc: &dyn ArcProjection,
+        at: &dyn Fn(f64) -> Vec2,
+        offs: &[f64],
+        v: f64,
+        dt: f64,
+        steps: u64,
+        window: u64,
+        bins: usize,
+    ) -> TeamSummary {
+        let n = offs.len();
+        let cfg = TeamMetricsConfig {
+            every_steps: 1,
+            steady_state_start_step: window,
+            even_gap_cv: 0.05,
+            revisit_bins: bins,
+        };
+        let mut m = TeamMetrics::new(cfg, n, arc.length_m(), dt, v).open();
+        for k in 0..=steps {
+            let t = k as f64 * dt;
+            let pos: Vec<Vec2> = offs.iter().map(|o| at(o + v * t)).collect();
+            if m.due() {
+                m.observe(k, arc, &pos, &vec![v; n], &vec![true; n]);
+            }
+        }
+        m.finish()
+    }
+
+    /// The population CV of `gaps`.
+    fn cv_of(gaps: &[f64]) -> f64 {
+        let k = gaps.len() as f64;
+        let mean = gaps.iter().sum::<f64>() / k;
+        (gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / k).sqrt() / mean
+    }
+
+    /// An open isoline: the straight line `y = 5` from `x = -100` to `x = 400` (the isoline
+    /// of the planar field `F = y` at level 5, cut by a domain), arc coordinate `x + 100`.
+    /// Four points at `x = 0, 10, 20, 40` moving rigidly along it at 2 m/s: the gaps are
+    /// 10, 10, 20 (no wrap-around gap of `L - 40 = 460`), so the gap CV is theirs by hand; a
+    /// point inside the stretch waits a gap over `v` between passes: at most 20/2 = 10 s, on
+    /// average (each point sees the three gaps once) 40/3/2 s, which is also the ideal
+    /// (the mean gap `S/(N - 1)` over `v`); the stretch is 40 m; the closest pair 10 m apart.
+    /// Measured as a closed isoline instead, the wrap-around gap gives a CV of 1.4 and a
+    /// longest revisit time of the run.
+    #[test]
+    fn open_straight_line_by_hand() {
+        let arc = PolylineArc::open(vec![Vec2::new(-100.0, 5.0), Vec2::new(400.0, 5.0)]).unwrap();
+        assert!(!arc.is_closed());
+        assert_eq!(arc.length_m(), 500.0);
+        let p = arc.project(Vec2::new(37.5, 9.0)).unwrap();
+        assert_eq!(p.s_m, 137.5);
+        assert_eq!(arc.project(Vec2::new(-300.0, 5.0)).unwrap().s_m, 0.0);
+        assert_eq!(arc.project(Vec2::new(900.0, 0.0)).unwrap().s_m, 500.0);
+        let (v, dt) = (2.0, 0.05);
+        let at = |x: f64| Vec2::new(x, 5.0);
+        // 100 s: the lead from x = 40 to 240; the window from 30 s.
+        let s = rigid_open(&arc, &at, &[0.0, 10.0, 20.0, 40.0], v, dt, 2000, 600, 500);
+        let cv = cv_of(&[10.0, 10.0, 20.0]);
+        assert!(
+            (s.gap_cv.unwrap() - cv).abs() < 1e-9,
+            "{:?} vs {cv}",
+            s.gap_cv
+        );
+        assert!((s.gap_cv_final.unwrap() - cv).abs() < 1e-9);
+        // A bin is 1 m, crossed in 0.5 s; a sample 0.05 s.
+        let tol = 1.0 / v + dt + 1e-9;
+        let mx = s.revisit_time_max_s.unwrap();
+        assert!((mx - 20.0 / v).abs() <= tol, "max {mx}");
+        let mean = s.revisit_time_mean_s.unwrap();
+        assert!((mean - 40.0 / 3.0 / v).abs() <= tol, "mean {mean}");
+        assert!((s.revisit_time_ideal_s - 40.0 / 3.0 / v).abs() < 1e-9);
+        let o = s.open_isoline.clone().unwrap();
+        assert!((o.stretch_length_m.unwrap() - 40.0).abs() < 1e-9);
+        assert!((o.mean_gap_m.unwrap() - 40.0 / 3.0).abs() < 1e-9);
+        assert!((s.min_separation_m.unwrap() - 10.0).abs() < 1e-9);
+        assert!(s.order_preserved);
+        assert_eq!(s.isoline_length_m, 500.0);
+        assert_eq!(s.time_to_even_s, None);
+        assert!(s.moving_isoline.is_none());
+        // The same team measured as on a loop of the same length (wrapping): the gap
+        // `L - 40` counts, and the ground behind the team ages to the run's end.
+        let mut closed = TeamMetrics::new(
+            TeamMetricsConfig {
+                steady_state_start_step: 600,
+                revisit_bins: 500,
+                ..TeamMetricsConfig::default()
+            },
+            4,
+            500.0,
+            dt,
+            v,
+        );
+        for k in 0..=2000u64 {
+            let t = k as f64 * dt;
+            let pos: Vec<Vec2> = [0.0, 10.0, 20.0, 40.0]
+                .iter()
+                .map(|o| at(o + v * t))
+                .collect();
+            closed.observe(k, &arc, &pos, &[v; 4], &[true; 4]);
+        }
+        let c = closed.finish();
+        assert!(c.gap_cv.unwrap() > 1.0 && c.revisit_time_max_s.unwrap() > 90.0);
+    }
+
+    /// An open isoline that curves: three quarters of a circle of radius 20 m (a polyline of
+    /// 2700 chords from angle 0 to `3 pi/2`, the circle cut open), four points at arc offsets
+    /// 0, 8, 16, 30 going round at 1 m/s for 40 s (the lead ends at 70 m of the 94.2 m): the
+    /// gaps along the curve are 8, 8, 14 (to the chords' sagitta), the closest pair the chord
+    /// of an 8 m arc, `2 R sin(8/(2 R))`, the longest revisit 14 s, the ideal `(30/3)/1` s.
+    #[test]
+    fn open_circle_cut_by_hand() {
+        let r = 20.0;
+        let m = 2700;
+        let pts: Vec<Vec2> = (0..=m)
+            .map(|i| {
+                let th = 1.5 * PI * i as f64 / m as f64;
+                Vec2::new(r * th.cos(), r * th.sin())
+            })
+            .collect();
+        let arc = PolylineArc::open(pts).unwrap();
+        let per = 2.0 * m as f64 * r * (0.75 * PI / m as f64).sin();
+        assert!((arc.length_m() - per).abs() < 1e-9);
+        let at = |s: f64| Vec2::new(r * (s / r).cos(), r * (s / r).sin());
+        // The window from 15 s: every pass in it ends an interval whose start the window's
+        // passes share (the lead passed s = 30 m at 0 s).
+        let s = rigid_open(&arc, &at, &[0.0, 8.0, 16.0, 30.0], 1.0, 0.05, 800, 300, 360);
+        let cv = cv_of(&[8.0, 8.0, 14.0]);
+        assert!(
+            (s.gap_cv.unwrap() - cv).abs() < 1e-4,
+            "{:?} vs {cv}",
+            s.gap_cv
+        );
+        let chord = 2.0 * r * (8.0 / (2.0 * r)).sin();
+        assert!((s.min_separation_m.unwrap() - chord).abs() < 1e-9);
+        let tol = per / 360.0 + 0.05 + 1e-9;
+        let mx = s.revisit_time_max_s.unwrap();
+        assert!((mx - 14.0).abs() <= tol, "max {mx}");
+        let mean = s.revisit_time_mean_s.unwrap();
+        assert!((mean - 10.0).abs() <= tol, "mean {mean}");
+        assert!((s.revisit_time_ideal_s - 10.0).abs() < 1e-4);
+        assert!(s.order_preserved);
+    }
+
+    /// An open isoline's revisit bins: a sample's travel each (314 m at 0.05 m per sample:
+    /// 6280), never fewer than the loop's count nor more than the cap.
+    #[test]
+    fn open_bins_follow_the_travel_per_sample() {
+        assert_eq!(open_revisit_bins(314.0, 0.05, 720), 6280);
+        assert_eq!(open_revisit_bins(10.0, 1.0, 720), 720);
+        assert_eq!(open_revisit_bins(1e12, 1.0, 720), MAX_OPEN_REVISIT_BINS);
+        assert_eq!(open_revisit_bins(100.0, 0.0, 720), 720);
+        assert_eq!(open_revisit_bins(100.0, f64::NAN, 720), 720);
+    }
+
+    /// On an open isoline two points swapping places break the order (a linear order: a
+    /// rotation of it, which a loop allows, is a change too); two vehicles give no gap CV.
+    #[test]
+    fn open_order_and_two_vehicles() {
+        let arc = PolylineArc::open(vec![Vec2::new(0.0, 0.0), Vec2::new(100.0, 0.0)]).unwrap();
+        let mut m = TeamMetrics::new(TeamMetricsConfig::default(), 3, 100.0, 1.0, 1.0).open();
+        let x = |a: f64| Vec2::new(a, 0.0);
+        m.observe(0, &arc, &[x(10.0), x(20.0), x(30.0)], &[1.0; 3], &[true; 3]);
+        m.observe(1, &arc, &[x(11.0), x(21.0), x(31.0)], &[1.0; 3], &[true; 3]);
+        assert!(m.finish().order_preserved);
+        // (1, 2, 0): a cyclic rotation of (0, 1, 2), fine on a loop, not on an open curve.
+        m.observe(2, &arc, &[x(40.0), x(22.0), x(32.0)], &[1.0; 3], &[true; 3]);
+        assert!(!m.finish().order_preserved);
+        let mut two = TeamMetrics::new(TeamMetricsConfig::default(), 2, 100.0, 1.0, 1.0).open();
+        two.observe(0, &arc, &[x(10.0), x(30.0)], &[1.0; 2], &[true; 2]);
+        let s = two.finish();
+        assert_eq!(s.gap_cv, None);
+        assert!((s.min_separation_m.unwrap() - 20.0).abs() < 1e-12);
+        assert!((s.revisit_time_ideal_s - 20.0).abs() < 1e-12);
     }
 
     /// Two points swapping order mid-window: not preserved; evenly spread from t = 0: 0.

@@ -148,7 +148,7 @@ pub enum TeamError {
     /// The ranging settings.
     #[error(transparent)]
     Ranging(#[from] RangingError),
-    /// `arc_reference` needs the true isoline.
+    /// `arc_reference` needs the true isoline, closed (its ring of arc gaps wraps around).
     #[error(
         "team.spacing = \"arc_reference\" needs the true isoline (a closed isoline to project on)"
     )]
@@ -353,7 +353,10 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                     expected: "finite and >= 0",
                 });
             }
-            SpacingLaw::ArcReference { .. } if arc.is_none() && moving.is_none() => {
+            SpacingLaw::ArcReference { .. }
+                if (arc.is_none() && moving.is_none())
+                    || arc_of(&arc).is_some_and(|a| !a.is_closed()) =>
+            {
                 return Err(TeamError::NoIsoline)
             }
             _ => {}
@@ -413,6 +416,16 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             ..cfg.metrics
         };
         let metrics = match (arc_of(&arc), moving.is_some()) {
+            (Some(a), _) if !a.is_closed() => {
+                // Bins as long as a vehicle at `v0` moves in a metrics sample: an open
+                // isoline's length is mostly ground the team never covers.
+                let step_m = v0 * mc.every_steps.max(1) as f64 * plan.dt_s;
+                let mc = TeamMetricsConfig {
+                    revisit_bins: metrics::open_revisit_bins(a.length_m(), step_m, mc.revisit_bins),
+                    ..mc
+                };
+                Some(TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0).open())
+            }
             (Some(a), _) => Some(TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0)),
             (None, true) => Some(TeamMetrics::new(mc, n, f64::NAN, plan.dt_s, v0).moving()),
             (None, false) => None,
