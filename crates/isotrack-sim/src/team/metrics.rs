@@ -498,7 +498,7 @@ impl TeamMetrics {
             self.check_order();
         }
         // A gap CV needs two gaps (one has no spread) and a stretch of positive length.
-        if count < 3 || !(mean > 0.0) {
+        if count < 3 || mean.is_nan() || mean <= 0.0 {
             return;
         }
         let cv = (var / (count - 1) as f64).sqrt() / mean;
@@ -811,6 +811,7 @@ mod tests {
 
     /// Four points at arc offsets `offs` behind one another along `arc` (an open isoline),
     /// moving rigidly at `v` from `s0` for `steps` steps of `dt`, the window from `window`.
+    #[allow(clippy::too_many_arguments)]
     fn rigid_open(
         arc: &dyn ArcProjection,
         at: &dyn Fn(f64) -> Vec2,
