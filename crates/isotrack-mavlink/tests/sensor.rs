@@ -476,6 +476,37 @@ fn a_junk_datagram_does_not_lock_the_sensor() {
     assert_eq!(r.measurements_other_sources, 1, "{:?}", r.events);
 }
 
+/// ver33-7: a stray datagram whose tail only looks like a line (`0,9` without its newline)
+/// locks nothing: no line was parsed from it (its tail waits for a newline that never comes).
+/// The real sensor, sending next, is the sensor and is flown; the stray's datagram is counted
+/// invalid, and the stray's later line is another source's.
+#[test]
+fn an_unterminated_tail_does_not_lock_the_sensor() {
+    let (r, _) = udp_flight(|s, a| {
+        let stray = UdpSocket::bind("127.0.0.1:0").unwrap();
+        stray.send_to(b"0,9", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"7.0,3\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"8.0,2\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        stray.send_to(b"\n9.0,50\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let expected: Vec<(u32, f64)> = [(7.0, 3.0), (8.0, 2.0)]
+        .iter()
+        .map(|&(t, v)| {
+            (
+                (t * 1000.0) as u32,
+                law.update(&Measurement { t_s: t, value: v }),
+            )
+        })
+        .collect();
+    assert_eq!(r.commands, expected, "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 1, "{:?}", r.events);
+    assert_eq!(r.measurements_other_sources, 1, "{:?}", r.events);
+}
+
 /// The pitch of a setpoint's attitude quaternion `[w, x, y, z]` (ZYX Euler angles), rad.
 fn pitch_of(q: [f32; 4]) -> f64 {
     let [w, x, y, z] = q.map(f64::from);
