@@ -710,6 +710,8 @@ struct Telemetry {
     airspeed_at: Option<Instant>,
     /// A stale altitude or airspeed has been logged (once each).
     stale_logged: (bool, bool),
+    /// The hold's target re-referenced after an altitude outage has been logged (once).
+    rereferenced_logged: bool,
 }
 
 /// The law's answers so far.
@@ -2365,8 +2367,34 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             Some((_, prev)) => wire::unwrap_ms(prev, ms),
             None => ms as u64,
         };
-        if let (Transport::FixedWing { airspeed_mps }, Some((prev_h, prev_t))) =
-            (self.transport, self.tel.last_altitude)
+        // After an outage (no altitude for `timeout_s`: the hold was already at pitch 0, the
+        // aircraft not held meanwhile) the gap would stretch the bound `V dt + 10 m` without
+        // limit, so that a reset then is flown as a climb (ver33-1): the first new altitude
+        // is compared with nothing, the hold's target becomes it (logged once).
+        let was_unknown = self.tel.altitude_m.is_none()
+            || self
+                .tel
+                .altitude_at
+                .is_some_and(|a| a.elapsed() > self.timeout);
+        if let (Transport::FixedWing { .. }, true, Some((prev_h, _)), Some(c)) = (
+            self.transport,
+            was_unknown,
+            self.tel.last_altitude,
+            self.tel.altitude_target_m,
+        ) {
+            self.tel.altitude_target_m = Some(h_m);
+            if !self.tel.rereferenced_logged {
+                self.tel.rereferenced_logged = true;
+                self.event(format!(
+                    "altitude back after none for {} s (from {} m to {} m): not compared with the old one, the altitude hold's target re-referenced from {} m to it (logged once)",
+                    self.opts.timeout_s,
+                    isotrack_core::numtext::Num(prev_h),
+                    isotrack_core::numtext::Num(h_m),
+                    isotrack_core::numtext::Num(c),
+                ));
+            }
+        } else if let (Transport::FixedWing { airspeed_mps }, false, Some((prev_h, prev_t))) =
+            (self.transport, was_unknown, self.tel.last_altitude)
         {
             let dt_s = t.saturating_sub(prev_t) as f64 / 1000.0;
             let step = h_m - prev_h;

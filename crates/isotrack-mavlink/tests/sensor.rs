@@ -556,6 +556,62 @@ fn an_altitude_step_is_a_reset_not_a_climb() {
     }
 }
 
+/// ver33-1: the fixed wing's altitude (100 m for 1 s) stops for 2 s, longer than --timeout-s (1 s: the hold's
+/// pitch is 0 meanwhile), and comes back 200 m higher (an EKF height reset after the outage)
+/// with the vehicle's clock 10 s on (its stamps follow the wall clock, plus 10 s from then):
+/// the bound `V dt + 10 m` on that 12 s gap is 370 m, so compared, the step was flown as a
+/// climb with the full -15 deg. The first altitude after the outage re-references the hold's
+/// target instead: the pitch stays 0 (on target before, unknown during, on target after),
+/// logged.
+#[test]
+fn an_altitude_after_an_outage_re_references_the_hold() {
+    let t0 = Instant::now();
+    let mut gap: Option<Instant> = None;
+    let (r, setpoints) = pilots_vehicle(
+        MavType::MAV_TYPE_FIXED_WING,
+        |o| {
+            o.timeout_s = 1.0;
+            o.max_duration_s = Some(16.0);
+        },
+        move |_, v, _| {
+            let back = gap.is_some_and(|g| g.elapsed() > Duration::from_secs(2));
+            let ms = 1000 + t0.elapsed().as_millis() as u32 + if back { 10_000 } else { 0 };
+            v.send(&iso_s(ms, 9.5)).unwrap();
+            let z = if t0.elapsed() < Duration::from_secs(1) {
+                -100.0
+            } else if back {
+                -300.0
+            } else {
+                gap.get_or_insert_with(Instant::now);
+                return;
+            };
+            v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                time_boot_ms: ms,
+                z,
+                ..Default::default()
+            }))
+            .unwrap();
+        },
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(setpoints.len() > 20, "{}", setpoints.len());
+    for a in &setpoints {
+        assert!(pitch_of(a.q).abs() < 1e-6, "pitch {}", pitch_of(a.q));
+    }
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("re-referenced from 100 m to it")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("altitude step of")),
+        "{:?}",
+        r.events
+    );
+}
+
 /// A second companion with this one's ids (system 1, component 191) beats on the link: with
 /// --take-control, fly goes no further (another_controller, nothing commanded: exit 79);
 /// without, it is logged once and the flight goes on.
