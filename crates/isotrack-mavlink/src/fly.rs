@@ -108,11 +108,14 @@ pub fn parse_sensor_line(line: &str) -> Option<(u32, f64)> {
     plausible_value(v).then_some((ms, v))
 }
 
-/// Whether a datagram holds a valid sensor line ([`parse_sensor_line`]; its last piece may
-/// lack the newline).
+/// Whether data holds a complete valid sensor line ([`parse_sensor_line`]): one ended by a
+/// newline. A tail without its newline is no line yet (it may never end: a stray "0,9" must
+/// not lock the sensor, ver33-7).
 fn holds_a_valid_line(data: &[u8]) -> bool {
-    String::from_utf8_lossy(data)
-        .split('\n')
+    let text = String::from_utf8_lossy(data);
+    let complete = text.matches('\n').count();
+    text.split('\n')
+        .take(complete)
         .any(|l| parse_sensor_line(l).is_some())
 }
 
@@ -658,9 +661,10 @@ struct Flight<'a, S: ?Sized> {
     meas_from: Option<(u32, u8)>,
     /// Measurements (or UDP datagrams) from other senders than the sensor's, dropped.
     other_sources: u64,
-    /// Before the UDP sensor is known: the sender of the last datagram dropped (no valid
-    /// line) that ended inside a line.
-    junk_tail_from: Option<std::net::SocketAddr>,
+    /// Before the UDP sensor is known: the sender of the last datagram dropped (no complete
+    /// valid line) and its unterminated tail, which that sender's next datagram may end (`[0]`:
+    /// a tail that is no line, over-long).
+    pre_lock_tail: Option<(std::net::SocketAddr, Vec<u8>)>,
     /// Measurements that were none (non-finite, malformed lines), dropped.
     invalid: u64,
     /// Held measurements dropped for a newer one while control was being taken.
@@ -706,6 +710,8 @@ struct Telemetry {
     airspeed_at: Option<Instant>,
     /// A stale altitude or airspeed has been logged (once each).
     stale_logged: (bool, bool),
+    /// The hold's target re-referenced after an altitude outage has been logged (once).
+    rereferenced_logged: bool,
 }
 
 /// The law's answers so far.
@@ -910,7 +916,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             sensor_from: None,
             meas_from: None,
             other_sources: 0,
-            junk_tail_from: None,
+            pre_lock_tail: None,
             invalid: 0,
             held_dropped: 0,
             clock: SensorClock {
@@ -1353,25 +1359,50 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// Whether the UDP sensor's datagram of `n` bytes (in `buf`) from `from` is the sensor's.
-    /// The sensor is the first sender of a datagram holding a valid line: before it, a
+    /// The sensor is the first sender of a datagram holding a complete valid line (ended by
+    /// its newline; an unterminated tail locks nothing): before it, a
     /// datagram without one (a port scanner's, a broadcast) is no measurement (counted in
     /// `measurements_invalid`) and locks nothing. Another sender's datagrams are dropped
     /// (counted in `measurements_other_sources`, logged once).
     fn sensor_datagram_taken(&mut self, from: std::net::SocketAddr, n: usize) -> bool {
         match self.sensor_from {
             Some(a) if a == from => true,
-            None if holds_a_valid_line(&self.buf[..n]) => {
-                // This sender's previous datagram, dropped, ended inside a line: the rest of
-                // that line, up to the first newline here, is no line either.
-                self.skipping_line = self.junk_tail_from == Some(from);
-                self.sensor_from = Some(from);
-                self.event(format!(
-                    "sensor: --sensor lines from {from} (the first sender of a valid line; any other sender's are dropped)"
-                ));
-                true
-            }
             None => {
-                self.junk_tail_from = (!self.buf[..n].ends_with(b"\n")).then_some(from);
+                // This sender's unterminated tail before, dropped, waits for its end here (a
+                // line may span datagrams); a NUL marks one that is no line (over-long).
+                let mut joined = match self.pre_lock_tail.take() {
+                    Some((a, t)) if a == from => t,
+                    _ => Vec::new(),
+                };
+                let tail_len = joined.len();
+                joined.extend_from_slice(&self.buf[..n]);
+                if holds_a_valid_line(&joined) {
+                    if joined[..tail_len] == [0] {
+                        // The rest of a dropped over-long line is no line either.
+                        self.skipping_line = true;
+                    } else {
+                        self.partial = joined[..tail_len].to_vec();
+                    }
+                    self.sensor_from = Some(from);
+                    self.event(format!(
+                        "sensor: --sensor lines from {from} (the first sender of a valid line; any other sender's are dropped)"
+                    ));
+                    return true;
+                }
+                let start = joined
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |i| i + 1);
+                let tail = &joined[start..];
+                self.pre_lock_tail = Some((
+                    from,
+                    if tail.len() > MAX_PARTIAL_LINE_BYTES || (start == 0 && tail.starts_with(&[0]))
+                    {
+                        vec![0]
+                    } else {
+                        tail.to_vec()
+                    },
+                ));
                 self.invalid_measurement(format!(
                     "a --sensor datagram from {from} holding no `t_s,value` line, before the sensor's first valid one"
                 ));
@@ -2336,8 +2367,34 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             Some((_, prev)) => wire::unwrap_ms(prev, ms),
             None => ms as u64,
         };
-        if let (Transport::FixedWing { airspeed_mps }, Some((prev_h, prev_t))) =
-            (self.transport, self.tel.last_altitude)
+        // After an outage (no altitude for `timeout_s`: the hold was already at pitch 0, the
+        // aircraft not held meanwhile) the gap would stretch the bound `V dt + 10 m` without
+        // limit, so that a reset then is flown as a climb (ver33-1): the first new altitude
+        // is compared with nothing, the hold's target becomes it (logged once).
+        let was_unknown = self.tel.altitude_m.is_none()
+            || self
+                .tel
+                .altitude_at
+                .is_some_and(|a| a.elapsed() > self.timeout);
+        if let (Transport::FixedWing { .. }, true, Some((prev_h, _)), Some(c)) = (
+            self.transport,
+            was_unknown,
+            self.tel.last_altitude,
+            self.tel.altitude_target_m,
+        ) {
+            self.tel.altitude_target_m = Some(h_m);
+            if !self.tel.rereferenced_logged {
+                self.tel.rereferenced_logged = true;
+                self.event(format!(
+                    "altitude back after none for {} s (from {} m to {} m): not compared with the old one, the altitude hold's target re-referenced from {} m to it (logged once)",
+                    self.opts.timeout_s,
+                    isotrack_core::numtext::Num(prev_h),
+                    isotrack_core::numtext::Num(h_m),
+                    isotrack_core::numtext::Num(c),
+                ));
+            }
+        } else if let (Transport::FixedWing { airspeed_mps }, false, Some((prev_h, prev_t))) =
+            (self.transport, was_unknown, self.tel.last_altitude)
         {
             let dt_s = t.saturating_sub(prev_t) as f64 / 1000.0;
             let step = h_m - prev_h;

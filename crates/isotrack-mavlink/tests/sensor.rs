@@ -476,6 +476,37 @@ fn a_junk_datagram_does_not_lock_the_sensor() {
     assert_eq!(r.measurements_other_sources, 1, "{:?}", r.events);
 }
 
+/// ver33-7: a stray datagram whose tail only looks like a line (`0,9` without its newline)
+/// locks nothing: no line was parsed from it (its tail waits for a newline that never comes).
+/// The real sensor, sending next, is the sensor and is flown; the stray's datagram is counted
+/// invalid, and the stray's later line is another source's.
+#[test]
+fn an_unterminated_tail_does_not_lock_the_sensor() {
+    let (r, _) = udp_flight(|s, a| {
+        let stray = UdpSocket::bind("127.0.0.1:0").unwrap();
+        stray.send_to(b"0,9", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"7.0,3\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        s.send_to(b"8.0,2\n", a).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+        stray.send_to(b"\n9.0,50\n", a).unwrap();
+    });
+    let mut law = load_scenario(None, &[]).unwrap().tracker();
+    let expected: Vec<(u32, f64)> = [(7.0, 3.0), (8.0, 2.0)]
+        .iter()
+        .map(|&(t, v)| {
+            (
+                (t * 1000.0) as u32,
+                law.update(&Measurement { t_s: t, value: v }),
+            )
+        })
+        .collect();
+    assert_eq!(r.commands, expected, "{:?}", r.events);
+    assert_eq!(r.measurements_invalid, 1, "{:?}", r.events);
+    assert_eq!(r.measurements_other_sources, 1, "{:?}", r.events);
+}
+
 /// The pitch of a setpoint's attitude quaternion `[w, x, y, z]` (ZYX Euler angles), rad.
 fn pitch_of(q: [f32; 4]) -> f64 {
     let [w, x, y, z] = q.map(f64::from);
@@ -523,6 +554,62 @@ fn an_altitude_step_is_a_reset_not_a_climb() {
             "{logged:?}"
         );
     }
+}
+
+/// ver33-1: the fixed wing's altitude (100 m for 1 s) stops for 2 s, longer than --timeout-s (1 s: the hold's
+/// pitch is 0 meanwhile), and comes back 200 m higher (an EKF height reset after the outage)
+/// with the vehicle's clock 10 s on (its stamps follow the wall clock, plus 10 s from then):
+/// the bound `V dt + 10 m` on that 12 s gap is 370 m, so compared, the step was flown as a
+/// climb with the full -15 deg. The first altitude after the outage re-references the hold's
+/// target instead: the pitch stays 0 (on target before, unknown during, on target after),
+/// logged.
+#[test]
+fn an_altitude_after_an_outage_re_references_the_hold() {
+    let t0 = Instant::now();
+    let mut gap: Option<Instant> = None;
+    let (r, setpoints) = pilots_vehicle(
+        MavType::MAV_TYPE_FIXED_WING,
+        |o| {
+            o.timeout_s = 1.0;
+            o.max_duration_s = Some(16.0);
+        },
+        move |_, v, _| {
+            let back = gap.is_some_and(|g| g.elapsed() > Duration::from_secs(2));
+            let ms = 1000 + t0.elapsed().as_millis() as u32 + if back { 10_000 } else { 0 };
+            v.send(&iso_s(ms, 9.5)).unwrap();
+            let z = if t0.elapsed() < Duration::from_secs(1) {
+                -100.0
+            } else if back {
+                -300.0
+            } else {
+                gap.get_or_insert_with(Instant::now);
+                return;
+            };
+            v.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                time_boot_ms: ms,
+                z,
+                ..Default::default()
+            }))
+            .unwrap();
+        },
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(setpoints.len() > 20, "{}", setpoints.len());
+    for a in &setpoints {
+        assert!(pitch_of(a.q).abs() < 1e-6, "pitch {}", pitch_of(a.q));
+    }
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("re-referenced from 100 m to it")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("altitude step of")),
+        "{:?}",
+        r.events
+    );
 }
 
 /// A second companion with this one's ids (system 1, component 191) beats on the link: with
