@@ -48,3 +48,8 @@ pub(crate) fn copy_interruptible<T: Element + Copy>(
     }
     Ok(v)
 }
+
+/// The holder `Run.save` records in a run directory's lock file (`.isotrack.lock`, the lock of
+/// `isotrack run --out`, [`isotrack_runs::sweep::lock::lock_output_dir`]): a command refused
+/// there names it (`another isotrack Run.save pid 1234 on node7 is writing this directory`).
+pub(crate) const SAVE_LOCK: &str = "Run.save";

@@ -129,7 +129,7 @@ pub fn benchmark_json(
                          results, or choose another out="
                     ))
                 } else {
-                    crate::tools::failure(f)
+                    crate::errors::failure(f)
                 }
             })
         })
@@ -166,7 +166,7 @@ pub fn benchmark_json(
     }
     if let Some(dir) = out {
         isotrack_commands::league::write_outputs(&suite, path, &result, Path::new(dir), tune)
-            .map_err(crate::tools::failure)?;
+            .map_err(crate::errors::failure)?;
     }
     serde_json::to_string(&result).map_err(|e| ScenarioErrorPy::new_err(e.to_string()))
 }

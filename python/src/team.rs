@@ -304,9 +304,9 @@ pub fn write_team_run(
     // held until this returns): the trace streamed into a temporary file beside `trace.csv`,
     // renamed into place with the summary written last, so an interrupted save leaves an
     // earlier run's files as they were.
-    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::tools::SAVE_LOCK))
-        .map_err(crate::tools::failure)?;
-    let mut file = out.team_trace(flying).map_err(crate::tools::failure)?;
+    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::columns::SAVE_LOCK))
+        .map_err(crate::errors::failure)?;
+    let mut file = out.team_trace(flying).map_err(crate::errors::failure)?;
     let w = RefCell::new(file.writer());
     let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
     for (i, &t_s) in t.iter().enumerate() {
@@ -352,7 +352,7 @@ pub fn write_team_run(
         ),
         summary_json,
     )
-    .map_err(crate::tools::failure)
+    .map_err(crate::errors::failure)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.

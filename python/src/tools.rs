@@ -2,32 +2,21 @@
 //! entry runs it in this module, so one build gives both), run directories written as
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
-use crate::columns::{column, SIGNAL_ROWS};
-use crate::errors::ScenarioErrorPy;
+use crate::columns::{column, SAVE_LOCK, SIGNAL_ROWS};
+use crate::errors::{failure, ScenarioErrorPy};
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::rundir::RunDir;
 use isotrack_runs::summary::scenario_toml;
 use isotrack_runs::trace::TELEMETRY_COLUMNS;
-use isotrack_runs::{exit, Failure};
+use isotrack_runs::Failure;
 use isotrack_sim::{TraceRow, TraceSink};
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-/// A command-line failure as the Python exception of its exit code (README, "Exit codes").
-pub(crate) fn failure(f: Failure) -> PyErr {
-    match f.code {
-        exit::USAGE => PyValueError::new_err(f.message),
-        exit::DATAERR => ScenarioErrorPy::new_err(f.message),
-        exit::NOINPUT => PyFileNotFoundError::new_err(f.message),
-        exit::CANTCREAT | exit::OSERR => PyOSError::new_err(f.message),
-        _ => PyRuntimeError::new_err(f.message),
-    }
-}
 
 /// The `isotrack` command line: `argv` with the program name first; returns the exit code.
 /// Output goes to the process's stdout and stderr, as the binary's does; a panic (its message
@@ -118,11 +107,6 @@ pub fn write_run(
     )
     .map_err(failure)
 }
-
-/// The holder `Run.save` records in a run directory's lock file (`.isotrack.lock`, the lock of
-/// `isotrack run --out`, [`isotrack_runs::sweep::lock::lock_output_dir`]): a command refused
-/// there names it (`another isotrack Run.save pid 1234 on node7 is writing this directory`).
-pub(crate) const SAVE_LOCK: &str = "Run.save";
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
 /// a sweep directory takes `x`, `group` and `metric`. Ctrl-C raises `KeyboardInterrupt` at
