@@ -2550,7 +2550,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, "retries' bound reached"));
             }
-            if !accepted.is_some_and(|at| self.last_heartbeat <= at) {
+            if accepted.is_none_or(|at| self.last_heartbeat > at) {
                 tries += 1;
                 self.command(cmd, params)?;
             }
