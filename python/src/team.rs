@@ -315,7 +315,6 @@ pub fn write_team_run(
         if i % crate::columns::SIGNAL_ROWS == 0 {
             if let Err(e) = py.check_signals() {
                 drop(team_sinks);
-                drop(w);
                 drop(out.abandon(file, "interrupted"));
                 drop(out);
                 if new_dir {
@@ -343,7 +342,6 @@ pub fn write_team_run(
         });
     }
     drop(team_sinks);
-    drop(w);
     out.finish_json(
         file,
         &format!(

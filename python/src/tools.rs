@@ -3,7 +3,7 @@
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
 use crate::columns::{column, SAVE_LOCK, SIGNAL_ROWS};
-use crate::errors::{failure, ScenarioErrorPy};
+use crate::errors::failure;
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
 use isotrack_core::vehicle::Telemetry;
