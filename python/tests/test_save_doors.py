@@ -49,9 +49,11 @@ SAVER = textwrap.dedent(
         begun.append(os.path.isdir(d) and any(n.startswith(".trace.csv.") for n in os.listdir(d)))
         raise KeyboardInterrupt
     signal.signal(signal.SIGINT, on_int)
-    print("ready", interval, os.getpid(), flush=True)
+    # "ready" is printed inside the try, so a signal that arrives before the save has begun
+    # is still answered by the except below (the parent sends it as soon as it reads "ready").
     t0 = time.monotonic()
     try:
+        print("ready", interval, os.getpid(), flush=True)
         big.save(d)
         print("finished", time.monotonic() - t0, flush=True)
     except KeyboardInterrupt:
