@@ -243,16 +243,11 @@ pub fn distance_to_loop(loop_m: &[Vec2], p: Vec2) -> f64 {
     let n = loop_m.len();
     let mut best = f64::INFINITY;
     for i in 0..n {
-        let a = loop_m[i];
-        let seg = loop_m[(i + 1) % n] - a;
-        let len2 = seg.dot(seg);
-        let u = if len2 > 0.0 {
-            ((p - a).dot(seg) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let q = a + seg * u;
-        best = best.min((p - q).dot(p - q));
+        best = best.min(squared_distance_to_segment(
+            loop_m[i],
+            loop_m[(i + 1) % n],
+            p,
+        ));
     }
     best.sqrt()
 }
@@ -261,17 +256,23 @@ pub fn distance_to_loop(loop_m: &[Vec2], p: Vec2) -> f64 {
 pub fn distance_to_chain(chain_m: &[Vec2], p: Vec2) -> f64 {
     let mut best = f64::INFINITY;
     for w in chain_m.windows(2) {
-        let (a, seg) = (w[0], w[1] - w[0]);
-        let len2 = seg.dot(seg);
-        let u = if len2 > 0.0 {
-            ((p - a).dot(seg) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let q = a + seg * u;
-        best = best.min((p - q).dot(p - q));
+        best = best.min(squared_distance_to_segment(w[0], w[1], p));
     }
     best.sqrt()
+}
+
+/// The squared distance from `p` to the segment from `a` to `b`, m^2: to the point
+/// `a + u (b - a)` with `u` the projection clamped to [0, 1] (`u = 0` for a zero-length segment).
+fn squared_distance_to_segment(a: Vec2, b: Vec2, p: Vec2) -> f64 {
+    let seg = b - a;
+    let len2 = seg.dot(seg);
+    let u = if len2 > 0.0 {
+        ((p - a).dot(seg) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = a + seg * u;
+    (p - q).dot(p - q)
 }
 
 /// Which piece of an isoline the team is on, of its closed `loops` and its open `chains`
