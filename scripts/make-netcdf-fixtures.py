@@ -36,7 +36,8 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     (700 attributes of 1 kB on `v`): see `many_attributes`; `committed_*.nc` and
     `refused_committed_units_x.nc` (attributes of committed HDF5 datatypes): see
     `committed_types`; `sohm_*.nc` (messages shared through the SOHM table): see
-    `shared_messages`.
+    `shared_messages`; `refused_group_*.nc` (groups that do not form a tree): see
+    `group_links`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -447,6 +448,40 @@ def foreign_objects():
             t.commit(f.id, b"T_deep")
 
 
+def group_links():
+    """Groups that do not form a tree, which the loader must refuse naming the link (issue 30,
+    att30d-7: netcdf-reader built the group tree recursively without a visited set, so a
+    cycle overflowed the stack): `refused_group_loop.nc` (a group `g` holding a hard link
+    `loop` to itself, h5py `g["loop"] = g`), `refused_group_up.nc` (`g/up` a link to the root),
+    `refused_group_twice.nc` (`a/s` and `b/s` the same group: no cycle) and
+    `refused_group_deep.nc` (3000 nested groups `g/g/...`, past the 64 levels read). Each is
+    the twin `netcdf4_nc4_xy_contig.nc` plus those groups. Not in the manifest."""
+    import h5py
+
+    def loop(f):
+        g = f.create_group("g")
+        g["loop"] = g
+
+    def up(f):
+        f.create_group("g")["up"] = f["/"]
+
+    def twice(f):
+        s = f.create_group("a").create_group("s")
+        f.create_group("b")["s"] = s
+
+    def deep(f):
+        g = f
+        for _ in range(3000):
+            g = g.create_group("g")
+
+    for suffix, edit in (("loop", loop), ("up", up), ("twice", twice), ("deep", deep)):
+        name = write("netcdf4", "NETCDF4", "xy", "contig", name=f"refused_group_{suffix}.nc")
+        if not ONLY or name in ONLY:
+            # The newest format: 3000 groups in compact link storage, ~0.4 MB.
+            with h5py.File(os.path.join(OUT, name), "a", libver="latest") as f:
+                edit(f)
+
+
 def shared_messages():
     """Files whose object header messages are shared through HDF5's shared object header
     message (SOHM) table (issue 30, att30c-11): `sohm_datatypes.nc` shares datatypes (index
@@ -550,6 +585,7 @@ def main():
     committed_types()
     foreign_objects()
     shared_messages()
+    group_links()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load
