@@ -6,8 +6,6 @@
 
 use std::sync::Arc;
 
-#[cfg(test)]
-use crate::btree_v2::{self, BTreeV2Record};
 use crate::checksum::jenkins_lookup3;
 use crate::error::{Error, Result};
 use crate::filters::FilterRegistry;
@@ -27,8 +25,9 @@ pub(crate) struct SharedMessageTable {
 }
 
 // isotrack: reading a shared message needs only the index's flags and heap
-// address; its records (list or v2 B-tree) are parsed by the unit tests.
-#[cfg_attr(not(test), allow(dead_code))]
+// address (the rest is kept as the table holds it); list records are parsed
+// by the unit tests only.
+#[allow(dead_code)]
 #[derive(Debug, Clone)]
 struct SharedMessageIndex {
     index_type: SharedMessageIndexType,
@@ -48,6 +47,7 @@ enum SharedMessageIndexType {
 }
 
 #[cfg(test)]
+#[allow(dead_code)]
 #[derive(Debug, Clone)]
 enum SharedMessageRecord {
     Heap {
@@ -196,42 +196,6 @@ impl SharedMessageIndex {
         };
         (self.message_type_flags & flag) != 0
     }
-
-    #[cfg(test)]
-    fn records(
-        &self,
-        storage: &dyn Storage,
-        offset_size: u8,
-        length_size: u8,
-    ) -> Result<Vec<SharedMessageRecord>> {
-        let _ = (self.min_message_size, self.list_cutoff, self.btree_cutoff);
-        match self.index_type {
-            SharedMessageIndexType::List => {
-                parse_record_list(storage, self.index_address, self.num_messages, offset_size)
-            }
-            SharedMessageIndexType::BTree => {
-                let header = btree_v2::BTreeV2Header::parse_at_storage(
-                    storage,
-                    self.index_address,
-                    offset_size,
-                    length_size,
-                )?;
-                let records = btree_v2::collect_btree_v2_records_storage(
-                    storage,
-                    &header,
-                    offset_size,
-                    length_size,
-                    None,
-                    &[],
-                    None,
-                )?;
-                records
-                    .into_iter()
-                    .filter_map(record_from_btree)
-                    .collect::<Result<Vec<_>>>()
-            }
-        }
-    }
 }
 
 #[cfg(test)]
@@ -317,33 +281,6 @@ fn parse_record(cursor: &mut Cursor<'_>, offset_size: u8) -> Result<SharedMessag
         other => Err(Error::InvalidData(format!(
             "unknown SOHM record location: {other}"
         ))),
-    }
-}
-
-#[cfg(test)]
-fn record_from_btree(record: BTreeV2Record) -> Option<Result<SharedMessageRecord>> {
-    match record {
-        BTreeV2Record::SharedMessageHeap {
-            hash,
-            reference_count,
-            heap_id,
-        } => Some(Ok(SharedMessageRecord::Heap {
-            hash,
-            reference_count,
-            heap_id,
-        })),
-        BTreeV2Record::SharedMessageObjectHeader {
-            hash,
-            message_type,
-            object_header_index,
-            object_header_address,
-        } => Some(Ok(SharedMessageRecord::ObjectHeader {
-            hash,
-            message_type,
-            object_header_index,
-            object_header_address,
-        })),
-        _ => None,
     }
 }
 

@@ -192,3 +192,16 @@ fn each_kind_alone_and_in_separate_indexes_reads_back() {
             .filter(|(n, _)| !shares_attributes(n)),
     );
 }
+
+/// ver30b-8: attributes shared, alone, with every kind in one index and in five indexes: `v`
+/// has 9 or 21 (dense storage: the name B-tree's records hold shared-message heap IDs, and
+/// the object has no heap of its own: "undefined address"), `crs` and `time_bnds` a few
+/// (compact).
+#[test]
+fn shared_attributes_read_back() {
+    check_all(
+        sohm_files()
+            .into_iter()
+            .filter(|(n, _)| shares_attributes(n)),
+    );
+}
