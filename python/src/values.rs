@@ -244,6 +244,36 @@ fn to_python(py: Python<'_>, v: &toml::Value) -> PyResult<Py<PyAny>> {
     })
 }
 
+/// The dotted keys a `(key, value)` sets with their values ([`keys_set`]'s, each with its value).
+pub(crate) fn leaves<'a>(key: &str, v: &'a toml::Value, out: &mut Vec<(String, &'a toml::Value)>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                leaves(&format!("{key}.{k}"), x, out);
+            }
+        }
+        _ => out.push((key.to_string(), v)),
+    }
+}
+
+/// A message without the Rust type names serde writes (`expected struct ControllerSection`,
+/// for a value where a table goes, ver30b-10): said as `expected a table of keys`.
+pub(crate) fn no_type_names(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(at) = rest.find("expected struct ") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + "expected struct ".len()..];
+        let end = after
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+            .unwrap_or(after.len());
+        out.push_str("expected a table of keys");
+        rest = &after[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// The dotted keys a `(key, value)` sets: `key` itself, or for a table each of its values'
 /// keys under it (a table is merged key by key, so it sets only the keys it holds; a list,
 /// `team.vehicles = [{...}]` included, is one value).

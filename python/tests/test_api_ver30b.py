@@ -254,3 +254,22 @@ def test_a_huge_key_is_refused_before_it_is_parsed(where):
             sc.set({"controller." + big: 1.0, "sim.seed": 1})
         else:
             sc.set("controller", {big: 1.0})
+
+
+def test_an_error_inside_a_table_value_names_the_key_inside_it():
+    """ver30b-10 (Python's set): a wrong value inside a table is said of its dotted key, as the
+    dotted set says it, not of the table; a value where a table goes names no Rust type."""
+    sc = isotrack.Scenario.from_file(str(ROOT / "scenarios" / "team-circular-4.toml"))
+    with pytest.raises(isotrack.ScenarioError) as dotted:
+        sc.set("controller.kp", True)
+    with pytest.raises(isotrack.ScenarioError) as table:
+        sc.set("controller", {"kp": True})
+    assert "`controller.kp`" in str(dotted.value), str(dotted.value)
+    assert str(table.value) == str(dotted.value)
+    with pytest.raises(isotrack.ScenarioError) as e:
+        sc.set("team", {"ranging": {"a": 1}})
+    assert "team.ranging" in str(e.value), str(e.value)
+    with pytest.raises(isotrack.ScenarioError) as e:
+        sc.set("controller", "x")
+    assert "struct" not in str(e.value) and "Section" not in str(e.value), str(e.value)
+    assert "expected a table of keys" in str(e.value), str(e.value)
