@@ -93,7 +93,7 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
     let mut data: Vec<RunData> = vec![];
     for d in dirs {
         // A team's run is its vehicles, each shown as a run (issue 32).
-        let r = RunData::load_team(d).map_err(|e| match e {
+        let r = RunData::load_team_named(d, dirs.len() > 1).map_err(|e| match e {
             PlotError::Input(m) => ReportError::Input(m),
             other => ReportError::Data(other.to_string()),
         })?;

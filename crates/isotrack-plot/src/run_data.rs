@@ -42,6 +42,13 @@ impl RunData {
     /// `summary.json` and scenario shared). A `vehicle` cell that is not a vehicle of the team
     /// (`0..team.vehicle_count`) is a data error naming its line.
     pub fn load_team(dir: &Path) -> Result<Vec<Self>, PlotError> {
+        Self::load_team_named(dir, false)
+    }
+
+    /// [`load_team`](Self::load_team), a team's vehicles named `DIR vehicle I` when
+    /// `with_run` (several runs drawn together: their vehicles, and the messages that compare
+    /// them, tell the runs apart; issue 32, att32d-7), else `vehicle I`.
+    pub fn load_team_named(dir: &Path, with_run: bool) -> Result<Vec<Self>, PlotError> {
         let (all, ids, lines) = Self::read(dir, true)?;
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
             return Ok(vec![all]);
@@ -123,7 +130,11 @@ impl RunData {
                     end.record = own.clone();
                 }
                 Self {
-                    name: format!("vehicle {i}"),
+                    name: if with_run {
+                        format!("{} vehicle {i}", all.name)
+                    } else {
+                        format!("vehicle {i}")
+                    },
                     trace,
                     summary,
                     ..all.clone()

@@ -436,3 +436,57 @@ fn every_range_dropped_is_warned() {
         assert!(!w.iter().any(|w| w.contains("dropped")), "{quiet:?}: {w:?}");
     }
 }
+
+/// Issue 32 (brief item 5): `check`'s team section on a fixed-wing team against simulation at
+/// one grid point each side of the bound. Two Aerosonde UAVs at 30 m/s under `none` (the
+/// tracking grid is `v0` only) on a radial field's circle of radius 600 m, sampled at 1 Hz: the
+/// largest stable `kp` of the single-vehicle check at that speed (the course and roll loops'
+/// model) sets `kp = kp*/2` and `2 kp*`; the team's tracking check calls the first stable and
+/// the second unstable, and the team's simulation agrees: at `kp*/2` both UAVs settle (steady
+/// `max|eps|` within `2 c2`, no chattering), at `2 kp*` neither does. The airframe's turn-rate
+/// limit is lifted (the linear model leaves saturation out), as in
+/// `sampled.rs` `predicts_the_fixed_wing_uav_at_one_hertz`.
+#[test]
+fn a_fixed_wing_team_check_agrees_with_simulation() {
+    let text = "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.001\n\
+        [vehicle]\nkind = \"fixed_wing\"\nairspeed_mps = 30.0\n\
+        [initial]\nx_m = 600.0\ny_m = 0.0\nheading_rad = -1.5707963267948966\n\
+        [sensor]\nrate_hz = 1.0\n\
+        [controller]\nlevel = 10.976\nkp = 150.0\nki = 0.0\nc1 = 0.0005\nc2 = 0.1\n\
+        max_turn_rate_radps = 100.0\n\
+        [sim]\ndt_s = 0.01\nduration_s = 300.0\nseed = 9\n";
+    let at = |kp: f64, team: bool| {
+        let t = if team {
+            "[team]\nspacing = \"none\"\ncount = 2\n\
+             spread = { along = \"arc\", radius_m = 600.0, step_rad = 1.0, clockwise = true }\n"
+        } else {
+            ""
+        };
+        parse_scenario(
+            &format!("{text}{t}"),
+            "<test>",
+            &[format!("controller.kp={kp}")],
+        )
+        .unwrap()
+    };
+    let kp_max = check(&at(150.0, false), None).sampled.max_kp.unwrap();
+    let settles = |s: &Scenario| {
+        let r = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+        r.runs.iter().all(|v| {
+            v.outcome == isotrack_sim::Outcome::Completed
+                && v.metrics
+                    .steady_state_max_abs_error
+                    .is_some_and(|e| e <= 0.2)
+                && v.metrics.chattering_radps2.is_some_and(|c| c < 1.0)
+        })
+    };
+    let low = at(0.5 * kp_max, true);
+    let tr = check(&low, None).team.unwrap().tracking;
+    assert_eq!(tr.speeds_mps, [30.0]);
+    assert_eq!(tr.stable_over_range, Some(true), "kp {}", 0.5 * kp_max);
+    assert!(settles(&low), "kp {} does not settle", 0.5 * kp_max);
+    let high = at(2.0 * kp_max, true);
+    let tr = check(&high, None).team.unwrap().tracking;
+    assert_eq!(tr.stable_over_range, Some(false), "kp {}", 2.0 * kp_max);
+    assert!(!settles(&high), "kp {} settles", 2.0 * kp_max);
+}
