@@ -78,13 +78,17 @@ impl PyScenario {
     fn set_many(&self, py: Python<'_>, pairs: Vec<(String, Py<PyAny>)>) -> PyResult<Self> {
         no_panic(|| {
             let mut sets = Vec::with_capacity(pairs.len());
+            let mut keys = Vec::with_capacity(pairs.len());
             for (key, value) in &pairs {
                 check_key(key)?;
-                sets.push(format!(
-                    "{key}={}",
-                    toml_literal(&toml_value(key, value.bind(py), 0)?)
-                ));
+                let v = toml_value(key, value.bind(py), 0)?;
+                let mut set = Vec::new();
+                crate::values::keys_set(key, &v, &mut set);
+                keys.push(set);
+                sets.push(format!("{key}={}", toml_literal(&v)));
             }
+            let names: Vec<&str> = pairs.iter().map(|(k, _)| k.as_str()).collect();
+            crate::values::check_once(&names, &keys)?;
             let inner = self.inner.derive(&sets, &self.origin).map_err(|e| {
                 let m = e.to_string();
                 ScenarioErrorPy::new_err(match pairs.as_slice() {

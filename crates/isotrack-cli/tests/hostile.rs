@@ -687,3 +687,31 @@ fn a_fifo_is_refused_by_every_input_path_without_waiting() {
         &not_regular,
     );
 }
+
+/// Regression (issue 30, att30d-7): a NetCDF-4 grid whose group holds a hard link to itself or
+/// to the root (13 KB of legal HDF5) aborted `run` with a stack overflow (exit 134). Refused
+/// with 65 naming `field.path`, the file and the link; 3000 nested groups likewise.
+#[test]
+fn a_netcdf_group_cycle_is_refused_not_a_stack_overflow() {
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../isotrack-fields/tests/fixtures/netcdf");
+    let d = tempfile::tempdir().unwrap();
+    for (file, want) in [
+        ("refused_group_loop.nc", "/g/loop -> /g"),
+        ("refused_group_up.nc", "/g/up -> /"),
+        ("refused_group_deep.nc", "group nesting exceeds 64 levels"),
+    ] {
+        let nc = fixtures.join(file);
+        let sc = write(
+            d.path(),
+            "sc.toml",
+            &format!(
+                "[field]\nkind = \"grid\"\npath = {:?}\nvariable = \"v\"\n",
+                nc.to_str().unwrap()
+            ),
+        );
+        let o = isotrack(&["run", &sc]);
+        assert_fails(&o, 65, &["field.path", file, want]);
+        assert!(!stderr(&o).contains("overflow"), "{}", stderr(&o));
+    }
+}

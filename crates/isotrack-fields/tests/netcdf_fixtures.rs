@@ -420,3 +420,45 @@ fn sohm_fixtures_load_as_their_twin() {
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
     }
 }
+
+/// Issue 30 (att30d-7): a NetCDF-4 file whose groups do not form a tree
+/// (scripts/make-netcdf-fixtures.py, `group_links`; each the twin `netcdf4_nc4_xy_contig.nc`
+/// plus groups) overflowed the stack in netcdf-reader's recursive group walk (the process
+/// aborted; Python died of SIGSEGV): a group `g` holding a hard link to itself or to the root.
+/// Each is refused naming the link; a group linked at two places (no cycle, but the reader
+/// would read it once per path, twice per level when shared at every level) and 3000 nested
+/// groups (past the 64 levels read) likewise.
+#[test]
+fn groups_that_are_not_a_tree_are_refused_naming_the_link() {
+    for (file, want) in [
+        (
+            "refused_group_loop.nc",
+            "a group cycle; NetCDF groups form a tree): /g/loop -> /g",
+        ),
+        (
+            "refused_group_up.nc",
+            "a group cycle; NetCDF groups form a tree): /g/up -> /",
+        ),
+        (
+            "refused_group_twice.nc",
+            "a group is linked twice (NetCDF groups form a tree): /a/s and /b/s",
+        ),
+        (
+            "refused_group_deep.nc",
+            "group nesting exceeds 64 levels at /g/g/g/",
+        ),
+    ] {
+        let path = dir().join(file);
+        let e = load_series(&path, None, None).unwrap_err().to_string();
+        assert!(e.contains(file) && e.contains(want), "{file}: {e}");
+        // The variable asked for by name reads the group tree too.
+        let e = load_series(&path, None, Some("v")).unwrap_err().to_string();
+        assert!(e.contains(want), "{file}: {e}");
+    }
+    // The deep chain is named to its 65th level, the first past the limit.
+    let e = load_series(&dir().join("refused_group_deep.nc"), None, None)
+        .unwrap_err()
+        .to_string();
+    let at = &e[e.find("levels at ").unwrap() + "levels at ".len()..];
+    assert_eq!(at.trim_end().matches("/g").count(), 65, "{e}");
+}

@@ -1126,55 +1126,90 @@ fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
     None
 }
 
+/// The verdict from the three checks alone, the first that applies in this order: what
+/// overrides a guarantee ([`overriding_verdict`]), what guarantees ([`holding_verdict`]), else
+/// why there is no guarantee ([`no_guarantee_verdict`]).
 fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
     let at = format!("T = {} s", Num(sm.period_s));
+    overriding_verdict(p1, p2, sm, &at)
+        .or_else(|| holding_verdict(p1, p2, sm, &at))
+        .unwrap_or_else(|| no_guarantee_verdict(p2, sm, &at))
+}
+
+/// What decides before any guarantee is looked at: a nonlinear estimator (the linear model
+/// does not carry over), an unstable sampled loop, Prop. 1's exact condition failing, or a
+/// sensor feature the check does not model. `None` when none of them applies.
+fn overriding_verdict(
+    p1: &Prop1Report,
+    p2: &Prop2Report,
+    sm: &SampledReport,
+    at: &str,
+) -> Option<(Verdict, String)> {
     if sm.nonlinear_estimator {
         // Levant's differentiator is nonlinear: neither "stable" nor "unstable" of the linear
         // model carries over to the run.
-        return (
+        return Some((
             Verdict::NotApplicable,
             format!(
                 "not guaranteed: {LEVANT_REASON}; the linear model with a backward difference gives {}",
                 radius_text(sm.spectral_radius)
             ),
-        );
+        ));
     }
-    if let Some(v) = unstable_verdict(sm, &at) {
-        return v;
+    if let Some(v) = unstable_verdict(sm, at) {
+        return Some(v);
     }
     if p1.exact_local_condition_holds == Some(false) {
-        return (
+        return Some((
             Verdict::Fails,
             "Prop. 1's exact local condition fails: the tracking orbit is unstable".into(),
-        );
+        ));
     }
     if !p2.sensor_not_modelled.is_empty() {
-        return (
+        return Some((
             Verdict::NotApplicable,
             format!(
                 "no guarantee: the check models an ideal sensor, and {}; nothing checked fails",
                 p2.sensor_not_modelled.join("; ")
             ),
-        );
+        ));
     }
+    None
+}
+
+/// The guarantees: Prop. 1's exact condition with the sampled loop stable on the isoline, or
+/// Prop. 2's bound. `None` when neither holds.
+fn holding_verdict(
+    p1: &Prop1Report,
+    p2: &Prop2Report,
+    sm: &SampledReport,
+    at: &str,
+) -> Option<(Verdict, String)> {
     if p1.exact_local_condition_holds == Some(true)
         && sm.stable == Some(true)
         && sm.p_law_orbit_error.is_none()
     {
-        return (
+        return Some((
             Verdict::Holds,
             format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable at the isoline's slope k*s_d: locally exponentially stable"),
-        );
+        ));
     }
     if p2.bound_applies {
-        return (
+        return Some((
             Verdict::Holds,
             format!(
                 "Prop. 2's bound applies: limsup|eps| <= {:.6}",
                 p2.error_bound.unwrap_or(f64::NAN)
             ),
-        );
+        ));
     }
+    None
+}
+
+/// Why there is no guarantee (nothing checked fails): the P law's offset orbit, a sampled
+/// loop not computed, a loop stable on the isoline but not over the tube, else the first
+/// reason the propositions do not apply.
+fn no_guarantee_verdict(p2: &Prop2Report, sm: &SampledReport, at: &str) -> (Verdict, String) {
     if let (Some(e), Some(true)) = (sm.p_law_orbit_error, sm.stable) {
         return (
             Verdict::NotApplicable,
