@@ -102,7 +102,7 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     // A team's run is its vehicles, each drawn as a run (issue 32).
     let data: Vec<RunData> = runs
         .iter()
-        .map(|d| RunData::load_team(d))
+        .map(|d| RunData::load_team_named(d, runs.len() > 1))
         .collect::<Result<Vec<_>, _>>()
         .map_err(failure)?
         .into_iter()

@@ -131,7 +131,8 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
 fn load_runs(dirs: &[&Path]) -> Result<Vec<RunData>, ReportError> {
     let mut data: Vec<RunData> = vec![];
     for d in dirs {
-        let r = RunData::load_team(d).map_err(|e| match e {
+        // A team's run is its vehicles, named `DIR vehicle I` among several runs (att32d-7).
+        let r = RunData::load_team_named(d, dirs.len() > 1).map_err(|e| match e {
             PlotError::Input(m) => ReportError::Input(m),
             other => ReportError::Data(other.to_string()),
         })?;

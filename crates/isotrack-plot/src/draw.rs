@@ -1293,12 +1293,15 @@ struct TeamFigureData {
     gaps: Vec<(f64, Vec<f64>)>,
     /// `(position along the isoline, longest unvisited time)` over the steady window.
     revisit: Vec<(f64, f64)>,
-    /// `L/(N v0)`, s (an open isoline: the mean gap over `v0`, `summary.json`'s).
+    /// `L/(N v0)` (`L/sum v0_i` with per-vehicle speeds), s (an open isoline: the mean gap
+    /// over `v0`, `summary.json`'s).
     ideal: f64,
     /// `L/N`, m (an open isoline: the mean gap over the steady window, `summary.json`'s).
     even: f64,
     /// Whether the isoline is closed (else open: no gap ahead of the vehicle in front).
     closed: bool,
+    /// Whether the vehicles have their own nominal speeds (the ideal is then `L/sum v0_i`).
+    per_vehicle_speeds: bool,
     t_end: f64,
     gap_range: (f64, f64),
     revisit_range: (f64, f64),
@@ -1353,6 +1356,12 @@ impl TeamFigureData {
                 t.ideal_speed_mps()
             });
         let closed = tracks.is_closed();
+        let per_vehicle_speeds = first
+            .scenario
+            .spec()
+            .team
+            .as_ref()
+            .is_some_and(|t| t.member_speeds().is_some());
         let (ideal, even) = if closed {
             (l / (n as f64 * v0), l / n as f64)
         } else {
@@ -1395,6 +1404,7 @@ impl TeamFigureData {
             ideal,
             even,
             closed,
+            per_vehicle_speeds,
             t_end,
             gap_range: (glo, ghi),
             revisit_range: (rlo, rhi),
@@ -1433,6 +1443,7 @@ pub fn team_figure(
         ideal,
         even,
         closed,
+        per_vehicle_speeds,
         t_end,
         gap_range: (glo, ghi),
         revisit_range: (rlo, rhi),
@@ -1505,16 +1516,24 @@ pub fn team_figure(
                 (ls, rs),
             )?;
             if ideal.is_finite() {
+                // Dashed in the legend as on the panel (att32d-16: drawn solid there), and
+                // with per-vehicle speeds its own formula, `L/sum v0_i`.
+                let (dash, gap) = (st.px(6.0), st.px(3.0));
                 bottom
                     .draw_series(dashed((0.0, ideal), (l, ideal)))
                     .map_err(s)?
-                    .label(if closed {
-                        "ideal L/(N v0)"
-                    } else {
-                        "ideal S/((N-1) v0)"
+                    .label(match (closed, per_vehicle_speeds) {
+                        (true, false) => "ideal L/(N v0)",
+                        (true, true) => "ideal L/sum v0_i",
+                        (false, _) => "ideal S/((N-1) v0)",
                     })
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                        plotters::element::DashedPathElement::new(
+                            vec![(x, y), (x + 20, y)],
+                            dash,
+                            gap,
+                            BLACK.stroke_width(w2),
+                        )
                     });
             }
             let c = colour(1);

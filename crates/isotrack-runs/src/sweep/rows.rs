@@ -73,8 +73,20 @@ pub fn numeric_columns() -> &'static [&'static str] {
 /// the checks cheap enough to make for every run, today a start on a flat background where the
 /// PI-like law circles for the whole run ([`isotrack_scenario::check::flat_start`], the warning
 /// `isotrack run` prints, its numbers rounded as the console's: [`Num`], 6 significant digits). `isotrack check`'s sampled-loop warning needs a lattice scan of the
-/// field per run and is left to `isotrack run`/`check` on the run's scenario.
+/// field per run and is left to `isotrack run`/`check` on the run's scenario. A team's row
+/// (whose run costs far more than the scan) adds `check`'s team failure
+/// ([`isotrack_scenario::check::team_warning`], as `isotrack run` warns it; att32d-6).
 pub fn run_warnings(scenario: &Scenario) -> String {
+    let flat = flat_start_warning(scenario);
+    match isotrack_scenario::check::team_warning(scenario) {
+        None => flat,
+        Some(t) if flat.is_empty() => t,
+        Some(t) => format!("{flat}; {t}"),
+    }
+}
+
+/// The flat-start warning of [`run_warnings`] (empty when none).
+fn flat_start_warning(scenario: &Scenario) -> String {
     isotrack_scenario::check::flat_start(scenario).map_or_else(String::new, |f| {
         format!(
             "flat start: within {} m of it v*|grad F| is at most {} field units/s (under {} % of c1*tanh(|eps|/c2) = {}) so the vehicle circles where it starts; set controller.search",

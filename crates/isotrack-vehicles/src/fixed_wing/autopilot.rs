@@ -89,6 +89,30 @@ impl AutopilotState {
         }
         s
     }
+
+    /// A bumpless start in level flight trimmed at `flown` (another airspeed than the trim
+    /// `ff` whose throttle and elevator the autopilot feeds forward, with gains `g`), in
+    /// altitude hold: at the start the throttle loop gives `ff.delta_t + ki_v I_v =
+    /// flown.delta_t` (its error zero), so `I_v = (flown.delta_t - ff.delta_t)/ki_v`; the
+    /// elevator `kp_theta (theta_c - theta) + ff.delta_e = flown.delta_e` at `theta =
+    /// flown.alpha` (level flight), so the altitude loop's pitch command is `theta_c =
+    /// flown.alpha + (flown.delta_e - ff.delta_e)/kp_theta = ki_h I_h`. With `flown = ff` it
+    /// is [`from_trim`](Self::from_trim)'s (the same numbers).
+    pub fn from_trim_at(flown: &Trim, ff: &Trim, g: &Gains) -> Self {
+        let mut s = Self::default();
+        let theta_c = if g.kp_theta != 0.0 {
+            flown.alpha_rad + (flown.delta_e_rad - ff.delta_e_rad) / g.kp_theta
+        } else {
+            flown.alpha_rad
+        };
+        if g.ki_h != 0.0 {
+            s.altitude.integral = theta_c / g.ki_h;
+        }
+        if g.ki_v != 0.0 {
+            s.airspeed_throttle.integral = (flown.delta_t - ff.delta_t) / g.ki_v;
+        }
+        s
+    }
 }
 
 /// Commands to the autopilot.
