@@ -63,6 +63,9 @@ pub struct MetricSteps {
     pub steady_state_start_step: u64,
     /// The convergence dwell, steps (`StepPlan::convergence_min_dwell_steps`).
     pub convergence_min_dwell_steps: u64,
+    /// The convergence tolerance on `|eps|`, field units (`metrics.convergence_tolerance`):
+    /// the bound of the in-band share and of a convergence.
+    pub convergence_tolerance: f64,
 }
 
 /// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
@@ -98,6 +101,7 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         .map(|p| MetricSteps {
             steady_state_start_step: p.steady_state_start_step,
             convergence_min_dwell_steps: p.convergence_min_dwell_steps,
+            convergence_tolerance: p.convergence_tolerance,
         });
     Some(RunSpan {
         metric_steps,

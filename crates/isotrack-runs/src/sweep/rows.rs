@@ -272,7 +272,7 @@ pub fn run_scenario(
 ) -> Result<Scenario, String> {
     let origin = format!("sweep run {id}");
     let s = base
-        .derive_with(&plan.run_assignments(id, &origin), &origin)
+        .derive_with_in(&plan.run_assignments(id, &origin), &origin, &plan.dir)
         .map_err(|e| one_line(&e.to_string()))?;
     // The header's team columns are the base's: every run of a sweep is a team, or none is.
     match (base.spec().team.is_some(), s.spec().team.is_some()) {
