@@ -141,14 +141,7 @@ impl<'a> RunSpans<'a> {
 /// this.
 pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     let header = rules.header;
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(line.as_bytes());
-    let rec = r
-        .records()
-        .next()
-        .and_then(Result::ok)
-        .ok_or("not a CSV row")?;
+    let rec = crate::sweep::rows::csv_record(line).ok_or("not a CSV row")?;
     if rec.len() != header.len() {
         return Err(format!(
             "{} fields where the header has {}",

@@ -1753,10 +1753,19 @@ fn moving_outruns(m: &moving::MovingReport) -> Option<String> {
 /// The warnings `run` prints: the same as `check` reports, from the same lattice and the same
 /// sampled-loop computation (issue 29: a coarser lattice once gave `run` a different slope
 /// range, and a different answer, than `check`).
+///
+/// Where the isoline's slope is exact (circular fields, [`exact_isoline_slope`]) no lattice is
+/// sampled ([`Regions::of_exact_slope`]): the warnings read the sampled loop at the isoline's
+/// slopes only, and the lattice would give them nothing else (the tube's slope range feeds
+/// `check`'s verdict and report, not a warning). On the default scenario the lattice was a
+/// seventh of a 600 k-step run's instructions (BENCHMARKS.md, issue 34).
 pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
     let tube = l.c2;
-    let r = regions(s, tube, CHECK_LATTICE, false);
+    let r = match exact_isoline_slope(s) {
+        Some(alpha) => Regions::of_exact_slope(alpha),
+        None => regions(s, tube, CHECK_LATTICE, false),
+    };
     let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
     // Issue 29: `check` warned "the guarantee is local ... not from this start" while `run`
     // ended spinning without a word.
@@ -1904,6 +1913,67 @@ mod tests {
     use super::regions::slope_range;
     use super::setup::speed_mps;
     use super::*;
+
+    /// The warnings of `run` with the lattice sampled whatever the field, as `warnings` gave
+    /// them before issue 34 (the reference for
+    /// `circular_fields_warn_the_same_without_the_lattice`).
+    fn warnings_on_the_lattice(s: &Scenario) -> Vec<String> {
+        let l = law(s);
+        let r = regions(s, l.c2, CHECK_LATTICE, false);
+        let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
+        w.extend(local_only_warning(s, &l));
+        w.extend(baselines::baseline_warnings(s));
+        w
+    }
+
+    /// Issue 34: on a circular field `run`'s warnings skip the 601 x 601 lattice (the
+    /// isoline's slope is exact there); every warning is the one the lattice gives, over
+    /// scenarios that raise each kind the sampled loop has: slow, unstable (gain and rate),
+    /// lag and delay, noise, the P law's orbit, a flat start, a sliding-mode baseline; the
+    /// lattice is what it was (the tube's slope range is a real range, not the isoline's one
+    /// slope).
+    #[test]
+    fn circular_fields_warn_the_same_without_the_lattice() {
+        let cases: [&[&str]; 12] = [
+            &[],
+            &["sim.duration_s=1.0"],
+            &["sensor.rate_hz=2.0"],
+            &["controller.kp=2000.0"],
+            &["sim.duration_s=1.0", "sensor.delay_s=0.05"],
+            &["sim.duration_s=1.0", "sensor.time_constant_s=0.2"],
+            &["sensor.noise_std=0.01"],
+            &["controller.ki=0.0"],
+            &["controller.ki=0.0", "controller.kp=2000.0"],
+            &["initial.x_m=300.0"],
+            &["controller.kind=\"sliding_mode\""],
+            &["sensor.rate_hz=2.0", "sensor.delay_s=0.3"],
+        ];
+        let mut seen = std::collections::BTreeSet::new();
+        for set in cases {
+            let set: Vec<String> = set.iter().map(|a| (*a).to_string()).collect();
+            let s = crate::parse_scenario("", "<test>", &set).unwrap();
+            assert!(exact_isoline_slope(&s).is_some(), "{set:?}");
+            let fast = warnings(&s);
+            assert_eq!(fast, warnings_on_the_lattice(&s), "{set:?}");
+            for w in &fast {
+                seen.insert(w.split(':').next().unwrap_or_default().to_string());
+            }
+            let l = law(&s);
+            let tube = regions(&s, l.c2, CHECK_LATTICE, false).slope_range.unwrap();
+            assert!(tube[0] < tube[1], "{set:?}: {tube:?}");
+        }
+        for kind in [
+            "the sampled loop is stable but slow",
+            "the loop sampled at 2 Hz is unstable (spectral radius 1.2053)",
+            "the loop sampled at 100 Hz is unstable (spectral radius 2.2383)",
+            "with sensor.delay_s = 0.05 the guarantee is local",
+            "with sensor.time_constant_s = 0.2 the guarantee is local",
+            "sensor noise (sensor.noise_std = 0.01) reaches the law through a backward difference",
+            "flat background at the start",
+        ] {
+            assert!(seen.contains(kind), "{kind} not among {seen:?}");
+        }
+    }
 
     /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points
     /// and times [`flat_start`] samples), computed without its threshold.
