@@ -53,3 +53,37 @@ pub(crate) fn copy_interruptible<T: Element + Copy>(
 /// `isotrack run --out`, [`isotrack_runs::sweep::lock::lock_output_dir`]): a command refused
 /// there names it (`another isotrack Run.save pid 1234 on node7 is writing this directory`).
 pub(crate) const SAVE_LOCK: &str = "Run.save";
+
+/// The check for Ctrl-C right after a save's commit (ver30b-9): the signal handler runs here
+/// rather than after the call returns, so that a `KeyboardInterrupt` that came during the final
+/// writes (the summary, the scenario, their fsyncs and renames: past the last check before the
+/// commit, after which the earlier run is replaced) says that the save completed and `dir`
+/// holds the new run, whole. Another exception of a handler is raised as it is.
+pub(crate) fn interrupt_after_save(py: Python<'_>, dir: &std::path::Path) -> PyResult<()> {
+    use pyo3::exceptions::PyKeyboardInterrupt;
+    match py.check_signals() {
+        Ok(()) => Ok(()),
+        Err(e) if e.is_instance_of::<PyKeyboardInterrupt>(py) => {
+            let said = PyKeyboardInterrupt::new_err(format!(
+                "interrupted after the save completed: {} holds the new run, whole (the \
+                 interrupt came during the final writes, after the earlier run was replaced)",
+                dir.display()
+            ));
+            said.set_cause(py, Some(e));
+            Err(said)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// A run directory's refusal to `Run.save` in Python's words: the command line's "use another
+/// --out" (a flag the caller has not got) said as "save into another directory".
+pub(crate) fn save_failure(f: isotrack_runs::Failure) -> PyErr {
+    crate::errors::failure(isotrack_runs::Failure {
+        message: f
+            .message
+            .replace("or use another --out", "or save into another directory")
+            .replace("give --out a directory", "save into a directory"),
+        ..f
+    })
+}

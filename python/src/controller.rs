@@ -55,3 +55,57 @@ pub(crate) fn command_value(r: &Bound<'_, PyAny>) -> PyResult<f64> {
     }
     r.extract::<f64>()
 }
+
+/// The objects a `controller_factory` has returned so far in one sweep or benchmark, each with
+/// the run (and vehicle) it flies: an object returned again for another run would carry its
+/// state (an integral, a last time) from run to run, so that a row depends on the runs before
+/// it and cannot be run again alone. Held by weak reference where the object allows one (a dead
+/// object cannot come back, and its address may then be reused), else by strong reference (so
+/// that its address is not reused while the sweep runs).
+#[derive(Default)]
+pub(crate) struct Returned {
+    seen: std::collections::HashMap<usize, (Py<PyAny>, bool, String)>,
+}
+
+impl Returned {
+    /// Records `obj` as flying `label`; `Some(earlier label)` when the factory already returned
+    /// this very object (still alive) for `earlier`.
+    pub(crate) fn check(
+        &mut self,
+        py: Python<'_>,
+        obj: &Py<PyAny>,
+        label: String,
+    ) -> PyResult<Option<String>> {
+        use pyo3::types::{PyWeakrefMethods, PyWeakrefReference};
+        let key = obj.as_ptr() as usize;
+        if let Some((held, weak, earlier)) = self.seen.get(&key) {
+            let alive = if *weak {
+                held.bind(py)
+                    .cast::<PyWeakrefReference>()
+                    .ok()
+                    .and_then(|w| w.upgrade())
+                    .is_some_and(|o| o.is(obj.bind(py)))
+            } else {
+                held.is(obj)
+            };
+            if alive {
+                return Ok(Some(earlier.clone()));
+            }
+        }
+        let held = match PyWeakrefReference::new(obj.bind(py)) {
+            Ok(w) => (w.into_any().unbind(), true),
+            Err(_) => (obj.clone_ref(py), false),
+        };
+        self.seen.insert(key, (held.0, held.1, label));
+        Ok(None)
+    }
+}
+
+/// The refusal of one object returned for two runs (`earlier` and `now` name them).
+pub(crate) fn shared_across_runs(earlier: &str, now: &str) -> PyErr {
+    pyo3::exceptions::PyValueError::new_err(format!(
+        "controller_factory returned the same object for {now} as for {earlier}: its state \
+         (an integral, a last time) would carry from run to run, so that a result depends on \
+         the runs before it and cannot be run again alone; return a new controller at every call"
+    ))
+}

@@ -27,6 +27,9 @@ struct PyFactory {
     factory: Py<PyAny>,
     errors: FirstError,
     cancel: Arc<AtomicBool>,
+    /// Every object the factory returned, with the call (and the run's seed) it answered: one
+    /// object returned twice would carry its state from run to run (refused).
+    returned: Mutex<(crate::controller::Returned, u64)>,
 }
 
 impl ControllerFactory for PyFactory {
@@ -39,7 +42,17 @@ impl ControllerFactory for PyFactory {
                     origin: "<benchmark>".into(),
                 },
             )?;
-            self.factory.call1(py, (native,))
+            let obj = self.factory.call1(py, (native,))?;
+            let mut returned = self
+                .returned
+                .lock()
+                .map_err(|_| PyValueError::new_err("controller_factory: a run panicked"))?;
+            returned.1 += 1;
+            let now = format!("run {} (seed {})", returned.1, scenario.spec().sim.seed);
+            match returned.0.check(py, &obj, now.clone())? {
+                Some(earlier) => Err(crate::controller::shared_across_runs(&earlier, &now)),
+                None => Ok(obj),
+            }
         });
         let obj = match obj {
             Ok(o) => Some(o),
@@ -144,6 +157,7 @@ pub fn benchmark_json(
                 factory,
                 errors: errors.clone(),
                 cancel: cancel.clone(),
+                returned: Mutex::default(),
             },
         )
         .map_err(|e| PyValueError::new_err(e.to_string()))?;

@@ -59,11 +59,20 @@ impl PyScenario {
     fn set(&self, key: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
         no_panic(|| {
             check_key(key)?;
-            let literal = toml_literal(&toml_value(key, value, 0)?);
+            let v = toml_value(key, value, 0)?;
+            let literal = toml_literal(&v);
             let inner = self
                 .inner
                 .derive(&[format!("{key}={literal}")], &self.origin)
-                .map_err(|e| ScenarioErrorPy::new_err(as_written(&e.to_string(), value)))?;
+                .map_err(|e| {
+                    // A table's error is said of the key inside it that is wrong, as `--set
+                    // controller.kp=true` says it (ver30b-10): each of its keys set alone,
+                    // the first refused named.
+                    let m = self
+                        .inner_error(key, &v)
+                        .unwrap_or_else(|| as_written(&e.to_string(), value));
+                    ScenarioErrorPy::new_err(crate::values::no_type_names(&m))
+                })?;
             Ok(Self {
                 inner,
                 origin: self.origin.clone(),
@@ -78,19 +87,23 @@ impl PyScenario {
     fn set_many(&self, py: Python<'_>, pairs: Vec<(String, Py<PyAny>)>) -> PyResult<Self> {
         no_panic(|| {
             let mut sets = Vec::with_capacity(pairs.len());
+            let mut keys = Vec::with_capacity(pairs.len());
             for (key, value) in &pairs {
                 check_key(key)?;
-                sets.push(format!(
-                    "{key}={}",
-                    toml_literal(&toml_value(key, value.bind(py), 0)?)
-                ));
+                let v = toml_value(key, value.bind(py), 0)?;
+                let mut set = Vec::new();
+                crate::values::keys_set(key, &v, &mut set);
+                keys.push(set);
+                sets.push(format!("{key}={}", toml_literal(&v)));
             }
+            let names: Vec<&str> = pairs.iter().map(|(k, _)| k.as_str()).collect();
+            crate::values::check_once(&names, &keys)?;
             let inner = self.inner.derive(&sets, &self.origin).map_err(|e| {
                 let m = e.to_string();
-                ScenarioErrorPy::new_err(match pairs.as_slice() {
+                ScenarioErrorPy::new_err(crate::values::no_type_names(&match pairs.as_slice() {
                     [(_, value)] => as_written(&m, value.bind(py)),
                     _ => m,
-                })
+                }))
             })?;
             Ok(Self {
                 inner,
@@ -168,6 +181,22 @@ impl PyScenario {
 }
 
 impl PyScenario {
+    /// The error of the first key inside the table `v` (set at `key`) that is refused when set
+    /// alone as a dotted key; `None` when `v` is no table or each of its keys is taken alone.
+    fn inner_error(&self, key: &str, v: &toml::Value) -> Option<String> {
+        if !matches!(v, toml::Value::Table(_)) {
+            return None;
+        }
+        let mut leaves = Vec::new();
+        crate::values::leaves(key, v, &mut leaves);
+        leaves.into_iter().find_map(|(k, x)| {
+            self.inner
+                .derive(&[format!("{k}={}", toml_literal(x))], &self.origin)
+                .err()
+                .map(|e| e.to_string())
+        })
+    }
+
     fn run_inner<'py>(
         &self,
         py: Python<'py>,

@@ -24,8 +24,7 @@ pub(crate) fn sweep_cells(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<SweepCells> {
     use std::sync::atomic::{AtomicU64, Ordering};
-    let prepared = isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name))
-        .map_err(sweep_failure)?;
+    let prepared = prepare(text, name)?;
     let kinds = column_kinds(&prepared.plan, prepared.base.spec().team.is_some());
     let cancel = AtomicBool::new(false);
     let (done, total) = (AtomicU64::new(0), AtomicU64::new(prepared.plan.total()));
@@ -65,6 +64,27 @@ pub(crate) fn sweep_cells(
     let mut rows = rows;
     literal_cells(&prepared.plan, &kinds, &mut rows);
     Ok((header, kinds, rows))
+}
+
+/// A sweep prepared from its file's text (`name` names it and anchors its `scenario` path).
+/// A `scenario` that cannot be read gets the class the same file gets as a top-level argument
+/// (ver30b-12): `IsADirectoryError` for a directory, `OSError` for a FIFO, a device or a
+/// socket (never opened), `FileNotFoundError` when it is missing.
+pub(crate) fn prepare(
+    text: &str,
+    name: &str,
+) -> PyResult<isotrack_runs::sweep::prepared::PreparedSweep> {
+    isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name)).map_err(|f| {
+        if f.code != isotrack_runs::exit::NOINPUT {
+            return sweep_failure(f);
+        }
+        let plan = isotrack_scenario::sweep::SweepPlan::parse(text, Path::new(name));
+        match plan.ok().map(|p| std::fs::metadata(&p.scenario)) {
+            Some(Ok(m)) if m.is_dir() => pyo3::exceptions::PyIsADirectoryError::new_err(f.message),
+            Some(Ok(m)) if !m.is_file() => pyo3::exceptions::PyOSError::new_err(f.message),
+            _ => sweep_failure(f),
+        }
+    })
 }
 
 /// A sweep's failure as the Python exception of its kind.

@@ -305,14 +305,15 @@ pub fn write_team_run(
     // renamed into place with the summary written last, so an interrupted save leaves an
     // earlier run's files as they were.
     let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::columns::SAVE_LOCK))
-        .map_err(crate::errors::failure)?;
+        .map_err(crate::columns::save_failure)?;
     let mut file = out.team_trace(flying).map_err(crate::errors::failure)?;
     let w = RefCell::new(file.writer());
     let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
-    for (i, &t_s) in t.iter().enumerate() {
+    for i in 0..=t.len() {
         // Ctrl-C is answered while the trace is written: the temporary trace is removed, and
-        // the directory if this call made it (issue 30, att30b item 4).
-        if i % crate::columns::SIGNAL_ROWS == 0 {
+        // the directory if this call made it (issue 30, att30b item 4); checked once more after
+        // the last row, just before the commit (ver30b-9).
+        if i % crate::columns::SIGNAL_ROWS == 0 || i == t.len() {
             if let Err(e) = py.check_signals() {
                 drop(team_sinks);
                 drop(out.abandon(file, "interrupted"));
@@ -323,6 +324,7 @@ pub fn write_team_run(
                 return Err(e);
             }
         }
+        let Some(&t_s) = t.get(i) else { break };
         let m = cols[6][i];
         team_sinks[vehicles[i] as usize].record(&TraceRow {
             t_s,
@@ -350,7 +352,8 @@ pub fn write_team_run(
         ),
         summary_json,
     )
-    .map_err(crate::errors::failure)
+    .map_err(crate::errors::failure)?;
+    crate::columns::interrupt_after_save(py, dir)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.

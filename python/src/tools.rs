@@ -65,13 +65,14 @@ pub fn write_run(
         .transpose()?;
     // The one run-directory writer, locked as `run --out` locks it (att30c-6).
     let new_dir = std::fs::symlink_metadata(dir).is_err();
-    let out = RunDir::open(dir, &[], &[], Some(SAVE_LOCK)).map_err(failure)?;
+    let out = RunDir::open(dir, &[], &[], Some(SAVE_LOCK)).map_err(crate::columns::save_failure)?;
     let mut file = out.trace(flying).map_err(failure)?;
-    for (i, &t_s) in t.iter().enumerate() {
+    for i in 0..=t.len() {
         // Ctrl-C is answered while the trace is written (2 M rows take seconds): the
         // temporary trace is removed, and the directory if this call made it (issue 30,
-        // att30b item 4).
-        if i % SIGNAL_ROWS == 0 {
+        // att30b item 4); checked once more after the last row, just before the commit
+        // (ver30b-9), so that an interrupt before it always leaves the earlier run.
+        if i % SIGNAL_ROWS == 0 || i == t.len() {
             if let Err(e) = py.check_signals() {
                 drop(out.abandon(file, "interrupted"));
                 drop(out);
@@ -81,6 +82,7 @@ pub fn write_run(
                 return Err(e);
             }
         }
+        let Some(&t_s) = t.get(i) else { break };
         let w = file.writer();
         let m = cols[6][i];
         w.record(&TraceRow {
@@ -105,7 +107,8 @@ pub fn write_run(
         &format!("{note}{}", scenario_toml(&scenario.inner)),
         summary_json,
     )
-    .map_err(failure)
+    .map_err(failure)?;
+    crate::columns::interrupt_after_save(py, dir)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
@@ -198,14 +201,30 @@ fn staged(
     dir: &Path,
     render: impl FnOnce(&Path) -> Result<(), Failure> + Send + 'static,
 ) -> PyResult<()> {
-    let staging = staging_dir(dir)?;
-    let (theirs, gone) = (staging.clone(), staging.clone());
+    // The directories this call creates (`dir` and any missing parent, deepest first): removed
+    // again, when empty, unless the figures were moved into them, so that Ctrl-C or a failure
+    // leaves nothing behind, an empty output directory included, as the command does.
+    let made: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|p| !p.as_os_str().is_empty() && std::fs::symlink_metadata(p).is_err())
+        .map(Path::to_path_buf)
+        .collect();
+    let unmake = |made: &[PathBuf]| {
+        for d in made {
+            let _ = std::fs::remove_dir(d);
+        }
+    };
+    let staging = staging_dir(dir).inspect_err(|_| unmake(&made))?;
+    let (theirs, gone, made_too) = (staging.clone(), staging.clone(), made.clone());
     let outcome = crate::guard::no_panic(|| {
         crate::guard::detached_then(
             py,
             move || isotrack_commands::console::quietly(|| render(&theirs)),
             move || {
                 let _ = std::fs::remove_dir_all(&gone);
+                // An abandoned render ends later: the directories this call made go then too
+                // (empty only: another writer's files are never touched).
+                unmake(&made_too);
             },
         )
     });
@@ -220,10 +239,14 @@ fn staged(
         })),
         Err(e) => {
             let _ = std::fs::remove_dir_all(&staging);
+            unmake(&made);
             return Err(e);
         }
     };
     let _ = std::fs::remove_dir_all(&staging);
+    if moved.is_err() {
+        unmake(&made);
+    }
     moved
 }
 
@@ -312,13 +335,13 @@ pub fn sweep_cells_with(
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<crate::sweep::SweepCells> {
-    use isotrack_runs::sweep::prepared::PreparedSweep;
     use isotrack_runs::sweep::rows::{row_fields, run_scenario};
-    let sweep = PreparedSweep::new(text, Path::new(name)).map_err(failure)?;
+    let sweep = crate::sweep::prepare(text, name)?;
     let team = sweep.base.spec().team.is_some();
     let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
+    let mut returned = crate::controller::Returned::default();
     let total = sweep.plan.total();
     let report = |done: u64| -> PyResult<()> {
         match &progress {
@@ -359,6 +382,10 @@ pub fn sweep_cells_with(
                                 objs.len()
                             )));
                         }
+                        let now = format!("vehicle {} of run {id}", objs.len());
+                        if let Some(earlier) = returned.check(py, &obj, now.clone())? {
+                            return Err(crate::controller::shared_across_runs(&earlier, &now));
+                        }
                         objs.push(obj);
                     }
                     let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
@@ -385,6 +412,10 @@ pub fn sweep_cells_with(
                     },
                 )?;
                 let obj = factory.call1(py, (native,))?;
+                let now = format!("run {id}");
+                if let Some(earlier) = returned.check(py, &obj, now.clone())? {
+                    return Err(crate::controller::shared_across_runs(&earlier, &now));
+                }
                 if obj.bind(py).hasattr("reset")? {
                     obj.call_method0(py, "reset")?;
                 }

@@ -9,11 +9,23 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 /// nesting of lists in a value (a scenario's deepest value is a list of pairs).
 const MAX_KEY_PARTS: usize = isotrack_scenario::load::MAX_KEY_PARTS;
 const MAX_VALUE_DEPTH: usize = 8;
+/// The longest key taken, bytes (the longest dotted scenario key is about 40).
+const MAX_KEY_BYTES: usize = 256;
 
 /// A `Scenario.set` key: dotted parts of letters, digits, `_` and `-` (TOML's bare keys), at
 /// most [`MAX_KEY_PARTS`] of them. Anything else is refused here, so that no key is ever read
 /// as TOML (`"sim.duration_s = 7 #"` once set the duration to 7).
 pub(crate) fn check_key(key: &str) -> PyResult<()> {
+    // No scenario key is longer than a few dozen characters: a longer one is refused before
+    // it is split, matched or compared for "did you mean" (a 10 MB key inside a dict once
+    // took 33 s to refuse, ver30b-13).
+    if key.len() > MAX_KEY_BYTES {
+        return Err(ScenarioErrorPy::new_err(format!(
+            "`{}`: a key of {} bytes (no scenario key is longer than {MAX_KEY_BYTES})",
+            isotrack_scenario::load::clip(key),
+            key.len()
+        )));
+    }
     let shown = isotrack_scenario::load::clip(key);
     let parts: Vec<&str> = key.split('.').collect();
     if parts.len() > MAX_KEY_PARTS {
@@ -230,4 +242,83 @@ fn to_python(py: Python<'_>, v: &toml::Value) -> PyResult<Py<PyAny>> {
             d.into_any().unbind()
         }
     })
+}
+
+/// The dotted keys a `(key, value)` sets with their values ([`keys_set`]'s, each with its value).
+pub(crate) fn leaves<'a>(key: &str, v: &'a toml::Value, out: &mut Vec<(String, &'a toml::Value)>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                leaves(&format!("{key}.{k}"), x, out);
+            }
+        }
+        _ => out.push((key.to_string(), v)),
+    }
+}
+
+/// A message without the Rust type names serde writes (`expected struct ControllerSection`,
+/// for a value where a table goes, ver30b-10): said as `expected a table of keys`.
+pub(crate) fn no_type_names(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(at) = rest.find("expected struct ") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + "expected struct ".len()..];
+        let end = after
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+            .unwrap_or(after.len());
+        out.push_str("expected a table of keys");
+        rest = &after[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The dotted keys a `(key, value)` sets: `key` itself, or for a table each of its values'
+/// keys under it (a table is merged key by key, so it sets only the keys it holds; a list,
+/// `team.vehicles = [{...}]` included, is one value).
+pub(crate) fn keys_set(key: &str, v: &toml::Value, out: &mut Vec<String>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                keys_set(&format!("{key}.{k}"), x, out);
+            }
+        }
+        _ => out.push(key.to_string()),
+    }
+}
+
+/// Refuses two `(key, value)` pairs of one `set` call that set one key (ver30b-13): the same
+/// dotted key, or a key and a key under it (`{"sim": {"seed": 1}, "sim.seed": 2}`, which
+/// would otherwise take whichever came last), as a sweep refuses `[base]` and `[grid]`
+/// setting one key twice. `keys[i]` are the keys pair `names[i]` sets ([`keys_set`]).
+pub(crate) fn check_once(names: &[&str], keys: &[Vec<String>]) -> PyResult<()> {
+    let mut by_key: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for (i, ks) in keys.iter().enumerate() {
+        for k in ks {
+            by_key.entry(k.as_str()).or_insert(i);
+        }
+    }
+    for (i, ks) in keys.iter().enumerate() {
+        for k in ks {
+            // The key itself and every key above it (`sim` above `sim.seed`).
+            let above = k.match_indices('.').map(|(at, _)| &k[..at]);
+            for prefix in std::iter::once(k.as_str()).chain(above) {
+                match by_key.get(prefix) {
+                    Some(&j) if j != i => {
+                        let (a, b) = if j < i { (j, i) } else { (i, j) };
+                        return Err(ScenarioErrorPy::new_err(format!(
+                            "`{}` and `{}` set one key twice in one set() call (`{prefix}`; \
+                             a table holding a key and the key itself, or two spellings of \
+                             it): keep one",
+                            isotrack_scenario::load::clip(names[a]),
+                            isotrack_scenario::load::clip(names[b])
+                        )));
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(())
 }

@@ -139,6 +139,8 @@ def test_save_refuses_a_directory_the_cli_is_writing(tmp_path):
             run.save(str(d))
         assert f"run pid {p.pid}" in str(e.value), str(e.value)
         assert ".isotrack.lock" in str(e.value), str(e.value)
+        # In Python's words, not the command line's (`--out`): ver30b's brief item 3.
+        assert "--out" not in str(e.value) and "save into another directory" in str(e.value), str(e.value)
         assert not (d / "summary.json").exists()
     finally:
         p.send_signal(signal.SIGTERM)

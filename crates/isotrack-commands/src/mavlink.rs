@@ -557,7 +557,7 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
-    if report.end == FlyEnd::TwoVehicles {
+    if report.end == FlyEnd::TwoVehicles && !report.way_out_commanded {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: "two autopilots heard: which to fly is ambiguous, nothing commanded (see above: on two systems, pick one with --target-system)".into(),

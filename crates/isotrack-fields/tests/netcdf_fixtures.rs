@@ -392,19 +392,44 @@ fn a_dataset_without_dimension_scales_beside_the_variable_is_skipped() {
     assert_eq!(s.frame_times_s, twin.frame_times_s);
 }
 
-/// Issue 30 (att30c-11): messages shared through HDF5's shared object header message (SOHM)
-/// table (scripts/make-netcdf-fixtures.py, `shared_messages`: datatypes only, flags 0x02, and
-/// every kind, 0x1f) refused the whole file ("failed to load SOHM table: unexpected end of
-/// data"): hdf5-reader 0.12.1 read the table's pointer message, index headers and records
-/// with padding that is not in the file (vendor/hdf5-reader/PATCHED.md). Each loads to the
-/// data the script wrote: frame 0 is `frame0.csv`, every frame `series.npy`'s, with the
-/// times, units and grid of its twin `netcdf4_nc4_xy_contig.nc`.
+/// Issue 30 (att30c-11, ver30b-1, ver30b-8): messages shared through HDF5's shared object
+/// header message (SOHM) table (scripts/make-netcdf-fixtures.py, `shared_messages`: each kind
+/// libhdf5 shares, dataspaces, datatypes, fill values, filter pipelines and attributes, alone
+/// in one index, all in one index, in separate indexes, each in list and in B-tree form, and
+/// a variable with 9 or 21 shared attributes in dense storage) refused the whole file:
+/// hdf5-reader 0.12.1 read the table's pointer message, index headers and records with
+/// padding that is not in the file ("failed to load SOHM table: unexpected end of data"),
+/// tested an index's message-type flags with the wrong bits (separate indexes: "unsupported
+/// dataspace version 17") and read shared dense attributes from the object's own heap
+/// ("undefined address") (vendor/hdf5-reader/PATCHED.md). Each loads to the data the script
+/// wrote: frame 0 is `frame0.csv`, every frame `series.npy`'s, with the times, units and grid
+/// of its twin `netcdf4_nc4_xy_contig.nc`.
 #[test]
 fn sohm_fixtures_load_as_their_twin() {
     let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
     let csv = load_grid(&dir().join("frame0.csv"), None).unwrap();
     let twin = load_series(&dir().join("netcdf4_nc4_xy_contig.nc"), None, None).unwrap();
-    for name in ["sohm_datatypes.nc", "sohm_all.nc"] {
+    let mut names = Vec::new();
+    for form in ["", "_btree"] {
+        for kind in [
+            "dataspaces",
+            "datatypes",
+            "fill",
+            "pline",
+            "attrs",
+            "all",
+            "separate",
+            "dataspaces_datatypes",
+            "datatypes_dataspaces",
+            "attrs_dense",
+            "all_dense",
+            "separate_dense",
+        ] {
+            names.push(format!("sohm_{kind}{form}.nc"));
+        }
+    }
+    assert_eq!(names.len(), 24);
+    for name in &names {
         let s =
             load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(s.frames.len(), 3, "{name}");

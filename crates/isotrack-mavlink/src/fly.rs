@@ -654,6 +654,8 @@ struct Flight<'a, S: ?Sized> {
     twin_logged: bool,
     /// The companion's own frames have come back (logged once).
     echo_logged: bool,
+    /// In control, since when the vehicle's heartbeat has shown no known mode (armed).
+    unknown_mode_since: Option<Instant>,
     /// The last disarm came after a silence of the vehicle's of more than [`REBOOT_STEP_S`].
     disarm_after_silence: bool,
     /// A peripheral's GENERIC heartbeat beside the autopilot has been logged.
@@ -960,6 +962,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             mavlink1_logged: false,
             twin_logged: false,
             echo_logged: false,
+            unknown_mode_since: None,
             disarm_after_silence: false,
             peripheral_logged: false,
             late_vehicle_logged: false,
@@ -1125,9 +1128,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             } else {
                 "pick one with --target-system"
             };
+            let lag_s = self.target_at.map_or(0.0, |t| t.elapsed().as_secs_f64());
+            let when = if self.in_control {
+                format!("{lag_s:.1} s after the first, in control")
+            } else {
+                format!("{lag_s:.1} s after the first, before control")
+            };
+            // Something commanded already (control, an accepted OFFBOARD, an arming): the way
+            // out of it goes to the vehicle flown (ver33b-1); else nothing is.
+            let commanded = self.two_vehicles_way_out().is_some();
             self.event(format!(
-                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded ({advice})",
-                a.0, a.1, b.0, b.1
+                "two autopilots heard: system {}, component {} and system {}, component {} ({when}): which to fly is ambiguous, {} ({advice})",
+                a.0,
+                a.1,
+                b.0,
+                b.1,
+                if commanded {
+                    "the way out is commanded to the first"
+                } else {
+                    "nothing commanded"
+                }
             ));
             return Some(FlyEnd::TwoVehicles);
         }
@@ -1590,6 +1610,23 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             && self
                 .custom_mode
                 .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.in_control && self.armed && self.custom_mode.is_none() {
+            // In control, a heartbeat armed in an unknown mode (no custom-mode flag: a relay
+            // rewriting base_mode, a glitch) is no pilot's word (ver33b-10): the companion
+            // carries on as in control, logged once; no known mode for `timeout_s` is a lost
+            // link (the way out commanded: OFFBOARD may still hold).
+            let since = *self.unknown_mode_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > self.timeout {
+                self.event(format!(
+                    "no known mode from the vehicle for {} s (armed, its heartbeat without a custom mode): its mode is unknown, the link as good as lost",
+                    self.opts.timeout_s
+                ));
+                return Ok(Some(FlyEnd::LinkLost));
+            }
+            self.active = true;
+        } else {
+            self.unknown_mode_since = None;
+        }
         if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
             // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
             // companion, a ground station's offboard) holds it. --take-control never joins.
@@ -2631,7 +2668,42 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// vehicle heard: nothing is sent); before, after a refused take-over or a failsafe, a
     /// disarm if the companion armed the vehicle on the ground; nothing on a vehicle it never
     /// controlled nor armed (a pilot's, armed in MANUAL: its mode stands).
+    /// Whether failsafe `end` came while a disarm nobody here commanded was watched for a
+    /// reboot (in control), and is not the reboot itself (`vehicle_lost`).
+    fn pilots_disarm_watched(&self, end: FlyEnd) -> bool {
+        end.is_failsafe()
+            && end != FlyEnd::VehicleLost
+            && self.in_control
+            && !self.armed
+            && self.disarm_seen.is_some()
+    }
+
+    /// The way out after `two_vehicles`, if the companion commanded anything before it
+    /// (ver33b-1): the failsafe mode in control, out of an accepted OFFBOARD, or the disarm of
+    /// a vehicle it armed; `None` when nothing was commanded.
+    fn two_vehicles_way_out(&self) -> Option<WayOut> {
+        let mode = self.opts.failsafe.mode();
+        if self.in_control {
+            Some(WayOut::Mode(mode))
+        } else if self.offboard_accepted_at.is_some() {
+            Some(WayOut::LeaveOffboard(mode))
+        } else if self.armed && self.armed_by_us {
+            Some(WayOut::Disarm)
+        } else {
+            None
+        }
+    }
+
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        if end == FlyEnd::TwoVehicles {
+            return self.two_vehicles_way_out();
+        }
+        if self.pilots_disarm_watched(end) {
+            // A failsafe while a disarm nobody here commanded is watched for a reboot: the
+            // disarm is the pilot's, whose mode stands (ver33b-5); a reboot established
+            // (`vehicle_lost`) is not.
+            return None;
+        }
         let mode = self.opts.failsafe.mode();
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
@@ -2654,6 +2726,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// (confirmed, anything commanded).
     fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
         let Some(way) = self.way_out(end) else {
+            if self.pilots_disarm_watched(end) {
+                self.event(format!(
+                    "failsafe ({}): the vehicle had just been disarmed, not by the companion (a pilot's disarm, watched for a reboot): nothing commanded, the pilot's mode stands",
+                    end.as_str()
+                ));
+                return Ok((false, false));
+            }
             if end.is_failsafe() {
                 self.event(format!(
                     "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",

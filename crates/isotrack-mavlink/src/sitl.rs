@@ -837,7 +837,6 @@ impl Sitl<'_> {
     /// A `STATUSTEXT` of `text`, at most [`STATUSTEXT_CHARS`] bytes (a longer one is cut:
     /// keep them short).
     fn statustext(&mut self, severity: MavSeverity, text: &str) -> Result<(), SitlError> {
-        debug_assert!(text.len() <= STATUSTEXT_CHARS, "{text}");
         let mut bytes = [0u8; 50];
         for (b, c) in bytes.iter_mut().zip(text.bytes()) {
             *b = c;

@@ -74,14 +74,14 @@ impl Sender {
 /// Runs `fly` (the default scenario's rover, `udpin`, timeout 2 s, `max_duration_s`) against
 /// frames from ONE socket: `turn(k)` gives the datagrams of turn `k` (every 50 ms).
 fn fly_against(max_duration_s: f64, turn: impl FnMut(u32) -> Vec<Vec<u8>>) -> FlyReport {
-    fly_against_with(max_duration_s, false, false, turn)
+    fly_against_with(max_duration_s, |_| {}, false, turn)
 }
 
-/// [`fly_against`], with `--take-control` or not, the socket sending every datagram of fly's
+/// [`fly_against`], its options tweaked (`--take-control`, a Ctrl-C), the socket sending every datagram of fly's
 /// back to it (`echo`: a loop in the link) or not.
 fn fly_against_with(
     max_duration_s: f64,
-    take_control: bool,
+    tweak: impl FnOnce(&mut FlyOptions),
     echo: bool,
     mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
 ) -> FlyReport {
@@ -89,7 +89,7 @@ fn fly_against_with(
     let mut o = FlyOptions::new("udpin:127.0.0.1:0");
     o.timeout_s = 2.0;
     o.max_duration_s = Some(max_duration_s);
-    o.take_control = take_control;
+    tweak(&mut o);
     let (tx, rx) = std::sync::mpsc::channel();
     let companion = std::thread::spawn(move || {
         run_fly(&s, &o, &mut NoTrace, &mut |l| {
@@ -304,15 +304,20 @@ fn a_twin_heard_before_the_vehicle_ends_as_another_controller() {
         seq: 0,
         ids: (1, 191),
     };
-    let r = fly_against_with(6.0, true, false, move |_| {
-        let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-            mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
-            autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
-            mavlink_version: 3,
-            ..Default::default()
-        });
-        twin.frames(&[beat]).into_iter().map(|f| f.1).collect()
-    });
+    let r = fly_against_with(
+        6.0,
+        |o| o.take_control = true,
+        false,
+        move |_| {
+            let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+                autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+                mavlink_version: 3,
+                ..Default::default()
+            });
+            twin.frames(&[beat]).into_iter().map(|f| f.1).collect()
+        },
+    );
     assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
     assert!(!r.vehicle_heard && !r.way_out_commanded, "{:?}", r.events);
     assert!(
@@ -333,13 +338,18 @@ fn a_link_echoing_fly_s_own_frames_is_no_twin() {
         seq: 0,
         ids: (1, 1),
     };
-    let r = fly_against_with(2.0, false, true, move |k| {
-        let ms = 1000 + 50 * k;
-        a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
-    });
+    let r = fly_against_with(
+        2.0,
+        |_| {},
+        true,
+        move |k| {
+            let ms = 1000 + 50 * k;
+            a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+                .into_iter()
+                .map(|f| f.1)
+                .collect()
+        },
+    );
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
     assert!(!r.commands.is_empty(), "{:?}", r.events);
     let echoes = r
@@ -384,4 +394,112 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
         "{:?}",
         r.events
     );
+}
+
+/// ver33b-1: a second autopilot (system 4) heard 0.5 s after the vehicle, once the companion has
+/// control (the pilot's OFFBOARD): `two_vehicles`, and the way out (HOLD) is commanded to the
+/// vehicle flown, not "nothing commanded" with the vehicle left in OFFBOARD.
+#[test]
+fn a_second_autopilot_in_control_gets_the_way_out() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut b = Sender {
+        seq: 0,
+        ids: (4, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out: Vec<Vec<u8>> = a
+            .frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect();
+        if k >= 10 {
+            out.extend(b.frames(&[heartbeat(2)]).into_iter().map(|f| f.1));
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("in control): which to fly is ambiguous, the way out is commanded")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33b-5: in control, the pilot disarms (the heartbeat disarmed, time-stamped frames pause)
+/// and Ctrl-C comes 0.3 s later, inside the reboot watch: the disarm is the pilot's, nothing is
+/// commanded (no HOLD on the pilot's disarmed vehicle).
+#[test]
+fn a_failsafe_in_the_reboot_watch_commands_nothing() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    // The pilot's disarm at 1.0 s of this clock, the Ctrl-C at 1.3 s: inside the 1 s watch.
+    let t0 = Instant::now();
+    let r = fly_against_with(
+        20.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(1300));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        false,
+        move |k| {
+            let ms = 1000 + 50 * k;
+            if t0.elapsed() < Duration::from_millis(1000) {
+                return a
+                    .frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+                    .into_iter()
+                    .map(|f| f.1)
+                    .collect();
+            }
+            let mut hb = heartbeat(6);
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+            }
+            a.frames(&[hb]).into_iter().map(|f| f.1).collect()
+        },
+    );
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("a pilot's disarm, watched for a reboot")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33b-10: in control, heartbeats that drop the custom-mode flag for 0.5 s (a relay
+/// rewriting `base_mode`; the mode unknown, still armed) are no pilot's word: the flight goes
+/// on to its `max_duration_s`, not `pilot_took_over` with the vehicle left in OFFBOARD.
+#[test]
+fn an_unknown_mode_in_control_is_no_pilots_word() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(2.5, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut hb = heartbeat(6);
+        if (15..25).contains(&k) {
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.base_mode = MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+            }
+        }
+        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect()
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
 }

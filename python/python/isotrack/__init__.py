@@ -328,10 +328,21 @@ class Run:
         Holds the directory's lock (``.isotrack.lock``) as ``isotrack run --out`` does while it
         writes: another writer there (a ``run --out``, another save) makes it raise an
         ``OSError`` naming the holder (``run pid 1234 on node7``), and a ``run --out`` there
-        while this saves exits 73. Ctrl-C raises ``KeyboardInterrupt`` within a few thousand
-        rows, the trace being copied or written: what is left is what was there before (the
-        trace is written into a temporary file beside ``trace.csv``, removed then, and a
-        directory this call created is removed), no temporary file and no lock file."""
+        while this saves exits 73.
+
+        Ctrl-C raises ``KeyboardInterrupt`` within a few thousand rows, the trace being copied
+        or written, under one rule: either what is left is what was there before (the trace
+        is written into a temporary file beside ``trace.csv``, removed then, and a directory
+        this call created is removed; no temporary file and no lock file), or the save
+        completed: an interrupt that comes during the final writes (after the last row, once
+        the earlier run is being replaced) is held until they end and then raised as a
+        ``KeyboardInterrupt`` saying "interrupted after the save completed: DIR holds the new
+        run". SIGTERM (what Slurm sends at a time limit) is not caught by Python: the process
+        ends at once, leaving the earlier run's files (or, during the final writes, the new
+        trace without its ``summary.json``: no run that :func:`plot` or :func:`report` takes),
+        a ``.trace.csv.PID.tmp`` that the next save or ``isotrack run --out`` there removes,
+        and no lock held (the OS lock ends with the process); ``signal.signal(signal.SIGTERM,
+        signal.default_int_handler)`` makes SIGTERM end a save as Ctrl-C does."""
         path = _check_path("directory", directory)
         if path == "":
             raise ValueError("directory is empty: name the run directory to write (as `isotrack run --out DIR`)")
@@ -481,7 +492,11 @@ class Scenario:
         list or tuple of them, or a dict of them (a TOML table, its keys dotted keys: merged
         key by key into the scenario's table, as ``--set 'controller={kp = 2.0}'`` is; a
         list of dicts for ``team.vehicles``), nested at most 8 deep. Anything else raises
-        :class:`ScenarioError` (a ``ValueError``) saying what was wrong."""
+        :class:`ScenarioError` (a ``ValueError``) saying what was wrong. A key longer than
+        256 bytes is refused before it is read (no scenario key is half as long). One dict
+        that sets one key twice (``{"sim": {"seed": 1}, "sim.seed": 2}``: a table holding a
+        key and the key itself) is a :class:`ScenarioError` naming both (a table and a key it
+        does not hold merge); separate ``set`` calls take the last, as separate ``--set`` do."""
         if isinstance(key, dict):
             if value is not _UNSET:
                 raise TypeError("set(dict) takes no value: the dict holds them")
@@ -765,7 +780,15 @@ def sweep(
     two vehicles of a run is a ``ValueError`` naming them) and returns an object with
     ``update(t_s, value) -> omega`` (and optionally ``reset()``), as
     ``Scenario.run(controller=...)`` takes; the runs then go one after another (``threads``
-    does not apply) and an exception inside it is raised here.
+    does not apply) and an exception inside it is raised here. Every run flies a new object:
+    one the factory already returned for an earlier run is a ``ValueError`` naming both runs
+    (its state would carry from run to run, so that a row would depend on the rows before it
+    and could not be run again alone); it is refused, never copied. The objects returned are
+    held (by weak reference where they allow one) until the sweep returns.
+
+    A sweep file's ``scenario =`` that is missing is a ``FileNotFoundError``, a directory an
+    ``IsADirectoryError``, a FIFO, a device or a socket an ``OSError`` (never opened), as the
+    same path gets as this function's own argument.
 
     ``threads``: an int >= 1 (default: all cores; capped at 8 per core). Arguments of the wrong
     type are a ``TypeError`` naming the argument."""
@@ -816,7 +839,9 @@ def benchmark(
 
     ``controller_factory(scenario)`` is called once per run with that run's :class:`Scenario`
     (read ``scenario.level``, ``scenario.max_turn_rate_radps``; never the vehicle's position) and
-    returns an object with ``update(t_s, value) -> omega``. Its commands are clipped to the
+    returns an object with ``update(t_s, value) -> omega``: a new one at every call (an object
+    it already returned for another run is a ``ValueError`` naming both runs, nothing written:
+    its state would carry from one seed's run to the next and into the scores). Its commands are clipped to the
     task's turn-rate limit. It is scored with the gains it sets itself (the built-in laws run
     with the suite's tuned gains, or retuned with ``tune=True``).
 

@@ -39,9 +39,10 @@ pub struct RowRules<'a> {
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
 /// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
-/// controller's kind and turn-rate limit, a team's top speed, the metrics' steady-state
-/// fraction and convergence dwell, or their whole tables).
-const SPAN_KEYS: [&str; 18] = [
+/// controller's kind and turn-rate limit, a team's top speed and per-vehicle overrides (vehicle
+/// 0's own sensor rate and speeds), the metrics' steady-state fraction and convergence dwell,
+/// or their whole tables).
+const SPAN_KEYS: [&str; 19] = [
     "metrics",
     "metrics.steady_state_fraction",
     "metrics.convergence_min_dwell_s",
@@ -60,6 +61,7 @@ const SPAN_KEYS: [&str; 18] = [
     "controller.max_turn_rate_radps",
     "team",
     "team.v_max_mps",
+    "team.vehicles",
 ];
 
 /// The [`RunSpan`] of each run of a sweep, from its base scenario's own keys
@@ -139,14 +141,7 @@ impl<'a> RunSpans<'a> {
 /// this.
 pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     let header = rules.header;
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(line.as_bytes());
-    let rec = r
-        .records()
-        .next()
-        .and_then(Result::ok)
-        .ok_or("not a CSV row")?;
+    let rec = crate::sweep::rows::csv_record(line).ok_or("not a CSV row")?;
     if rec.len() != header.len() {
         return Err(format!(
             "{} fields where the header has {}",
