@@ -40,11 +40,13 @@ pub struct RowRules<'a> {
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
 /// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
 /// controller's kind and turn-rate limit, a team's top speed and per-vehicle overrides (vehicle
-/// 0's own sensor rate and speeds), the metrics' steady-state fraction and convergence dwell,
-/// or their whole tables).
-const SPAN_KEYS: [&str; 19] = [
+/// 0's own sensor rate and speeds), the metrics' steady-state fraction, convergence dwell and
+/// convergence tolerance (att30d-13's bounds; by default 1 % of `controller.level`), or their
+/// whole tables).
+const SPAN_KEYS: [&str; 21] = [
     "metrics",
     "metrics.steady_state_fraction",
+    "metrics.convergence_tolerance",
     "metrics.convergence_min_dwell_s",
     "sim",
     "sensor",
@@ -59,6 +61,7 @@ const SPAN_KEYS: [&str; 19] = [
     "controller",
     "controller.kind",
     "controller.max_turn_rate_radps",
+    "controller.level",
     "team",
     "team.v_max_mps",
     "team.vehicles",
