@@ -78,7 +78,8 @@ pub struct SitlArgs {
     pub lockstep: bool,
     /// Send HEARTBEAT only at this fixed rate of the wall clock, Hz, as PX4 does (1): a mode
     /// or arming change shows only in the next beat, never at once (default: once a simulated
-    /// second and after every change). Real time only.
+    /// second and after every change). On the wall clock, also with --speedup; not with
+    /// --lockstep.
     #[arg(long, value_name = "HZ", conflicts_with = "lockstep")]
     pub heartbeat_hz: Option<f64>,
     /// The vehicle's MAVLink system id (1 to 254; 255 is the ground stations').

@@ -583,6 +583,10 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
                 "the vehicle of --target-system {want} was never heard on {}, only system {sys}'s autopilot (component {comp}): a mistyped id?",
                 args.mavlink
             ),
+            _ if report.link.frames_in > 0 => format!(
+                "no vehicle was ever heard on {}: {} frames came, but no autopilot's HEARTBEAT (one beating slower than --timeout-s, or no autopilot among the senders)",
+                args.mavlink, report.link.frames_in
+            ),
             _ => format!("no vehicle was ever heard on {}", args.mavlink),
         };
         return Err(Failure {

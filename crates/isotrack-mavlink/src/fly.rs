@@ -2685,10 +2685,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mode = self.opts.failsafe.mode();
         if self.in_control {
             Some(WayOut::Mode(mode))
+        } else if self.armed && self.armed_by_us {
+            // Armed by the companion on the ground and never flown: disarmed, whatever mode
+            // it was switched to (ver33c-6).
+            Some(WayOut::Disarm)
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
-        } else if self.armed && self.armed_by_us {
-            Some(WayOut::Disarm)
         } else {
             None
         }
@@ -2708,13 +2710,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
             Some(WayOut::Mode(mode))
+        } else if stopping && self.armed && self.armed_by_us {
+            // Armed by the companion on the ground and never flown: disarmed (forced), even
+            // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6).
+            Some(WayOut::Disarm)
         } else if end.is_failsafe() && self.offboard_accepted_at.is_some() {
             // The vehicle accepted the switch to OFFBOARD and no heartbeat has shown it yet:
             // it may be in OFFBOARD with nobody sending setpoints. The way out is commanded
             // until a heartbeat shows it out of OFFBOARD (any mode: the pilot's stands).
             Some(WayOut::LeaveOffboard(mode))
-        } else if stopping && self.armed && self.armed_by_us {
-            Some(WayOut::Disarm)
         } else {
             // A vehicle the companion never controlled nor armed (a pilot's, armed in MANUAL,
             // whose OFFBOARD switch was refused or never answered): its mode stands.

@@ -42,14 +42,22 @@ pub const POSITION_JUMP_MARGIN_M: f64 = 20.0;
 /// Positions over which jumps are counted.
 pub const POSITION_WINDOW: u64 = 64;
 
-/// Jumps within [`POSITION_WINDOW`] positions that make two vehicles (one or two are resets).
-pub const POSITION_JUMPS_LIMIT: usize = 3;
+/// Jumps within [`POSITION_WINDOW`] positions that make two vehicles: a reset is one, a
+/// one-frame glitch two (out and back), two glitches four (ver33c-2); two vehicles
+/// interleaved jump at every switch.
+pub const POSITION_JUMPS_LIMIT: usize = 5;
 
 /// The sequence numbers of the frames of one (system, component), watched for a second sender.
 #[derive(Default)]
 pub struct SequenceWatch {
     /// The newest frame's sequence number and message.
     last: Option<(u8, MavMessage)>,
+    /// Per sequence number, the message of the last frame that carried it: a frame behind the
+    /// newest identical to it is a copy the link delivered again (a duplicate), not a second
+    /// sender's (ver33c-5).
+    by_number: Vec<Option<MavMessage>>,
+    /// Duplicates (a frame identical to the last one with its number), not counted.
+    pub duplicates: u64,
     window: Window,
     /// Out-of-sequence frames in all.
     pub out_of_sequence: u64,
@@ -59,16 +67,26 @@ impl SequenceWatch {
     /// A frame numbered `seq` carrying `msg`: whether the window now holds
     /// [`OUT_OF_SEQUENCE_LIMIT`] out-of-sequence frames (two senders).
     pub fn frame(&mut self, seq: u8, msg: &MavMessage) -> bool {
+        if self.by_number.is_empty() {
+            self.by_number = vec![None; 256];
+        }
+        let copy = self.by_number[seq as usize].as_ref() == Some(msg);
         let behind = match &self.last {
             None => false,
-            Some((last, m)) => match seq.wrapping_sub(*last) {
-                // The same number: a duplicate if the same frame, else another sender's.
-                0 => m != msg,
+            Some((last, _)) => match seq.wrapping_sub(*last) {
+                // The same number, or a number behind: a duplicate if the same frame as the
+                // last with that number, else another sender's (or a late frame).
+                _ if copy => {
+                    self.duplicates += 1;
+                    return false;
+                }
+                0 => true,
                 // Forward: the next frame, or some lost between.
                 1..=128 => false,
                 _ => true,
             },
         };
+        self.by_number[seq as usize] = Some(msg.clone());
         self.last = Some((seq, msg.clone()));
         if behind {
             self.out_of_sequence += 1;
@@ -229,6 +247,19 @@ mod tests {
                 );
             }
         }
+        // ver33c-5: a fifth of the frames delivered again, identical, up to 6 frames late (a
+        // mesh radio): duplicates, no second sender.
+        let mut r = Lcg(11);
+        let mut late: Vec<(u8, u32)> = Vec::new();
+        for k in 0..5000u32 {
+            late.push((k as u8, k));
+            if r.next() < 0.2 {
+                let back = (r.next() * 7.0) as u32;
+                let j = k.saturating_sub(back);
+                late.push((j as u8, j));
+            }
+        }
+        assert_eq!(first_alarm(&late), None);
         // Every frame doubled (a link that duplicates): the same content, no second sender.
         let doubled: Vec<(u8, u32)> = (0..3000u32)
             .flat_map(|k| [(k as u8, k), (k as u8, k)])
@@ -276,16 +307,17 @@ mod tests {
         }
     }
 
-    /// A vehicle at 30 m/s reporting at 10 Hz with 10 m of noise, one reset of 500 m, a burst
-    /// of positions arriving at once after a 3 s outage: no two vehicles. Two vehicles 300 m
-    /// apart interleaved: two, at the third switch.
+    /// A vehicle at 30 m/s reporting at 10 Hz with 10 m of noise, one reset of 500 m, two
+    /// one-frame glitches of 500 m 2 s apart, a burst of positions arriving at once after a 3 s
+    /// outage: no two vehicles. Two vehicles 300 m apart interleaved: two, at the fifth switch.
     #[test]
     fn position_jumps() {
         let mut r = Lcg(3);
         let mut w = PositionWatch::default();
         for k in 0..2000u32 {
             let reset = if k > 700 { 500.0 } else { 0.0 };
-            let x = 3.0 * k as f64 + reset + 10.0 * (r.next() - 0.5);
+            let glitch = if k == 300 || k == 320 { 500.0 } else { 0.0 };
+            let x = 3.0 * k as f64 + reset + glitch + 10.0 * (r.next() - 0.5);
             // Positions 1000..1030 queued through an outage, delivered within a millisecond.
             let wall = if (1000..1030).contains(&k) {
                 100.0
@@ -295,13 +327,20 @@ mod tests {
             assert!(!w.position((x, 0.0), 100 * k, wall), "{k}");
         }
         let mut w = PositionWatch::default();
-        let alarms: Vec<bool> = (0..6u32)
+        let alarms: Vec<bool> = (0..8u32)
             .map(|k| {
-                let p = if k % 2 == 0 { (0.0, 0.0) } else { (300.0, 0.0) };
+                let p = if k.is_multiple_of(2) {
+                    (0.0, 0.0)
+                } else {
+                    (300.0, 0.0)
+                };
                 w.position(p, 1000 + 50 * k, 0.05 * k as f64)
             })
             .collect();
-        assert_eq!(alarms, [false, false, false, true, true, true]);
+        assert_eq!(
+            alarms,
+            [false, false, false, false, false, true, true, true]
+        );
         assert_eq!(w.last_jump.map(|j| j.0), Some(300.0));
     }
 }

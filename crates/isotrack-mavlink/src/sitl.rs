@@ -95,8 +95,9 @@ pub struct SitlOptions {
     pub companion_timeout_s: f64,
     /// `HEARTBEAT` at this fixed rate of the wall clock only, Hz, as PX4 beats (1 Hz): never
     /// after a command's acknowledgement or a mode change, so that a companion learns of a
-    /// switch only from the next beat (up to a period later). `None` (the default): once a
-    /// simulated second and after every change (at once). Real time only.
+    /// switch only from the next beat (up to a period later); the first beat as soon as a peer
+    /// is there. On the wall clock, also with a speed-up. `None` (the default): once a
+    /// simulated second and after every change (at once). Not in lockstep.
     pub heartbeat_hz: Option<f64>,
 }
 
@@ -1143,6 +1144,11 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
             sitl.heartbeat(false)?;
         }
         sitl.handle_inbound(0.0, Duration::from_millis(100))?;
+    }
+    if sitl.started && sitl.heartbeat_period.is_some() {
+        // A peer is there now (a `udpin:` link's first beats had nowhere to go): beat at once,
+        // as PX4 beats from its boot, then every period (ver33c-3).
+        sitl.heartbeat(false)?;
     }
     let mut ep = scenario.episode(None, None);
     let mut flown = Vec::new();

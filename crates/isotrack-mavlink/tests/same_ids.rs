@@ -211,7 +211,7 @@ fn one_sender_over_a_lossy_reordering_link_is_flown() {
         let mut out = Vec::new();
         for (_, f) in a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.05 * k as f32)]) {
             n += 1;
-            if n % 3 == 0 {
+            if n.is_multiple_of(3) {
                 continue;
             }
             if n % 100 == 1 {
