@@ -451,16 +451,15 @@ struct Jobs<'a> {
     scoring: Scoring,
 }
 
+/// A scored run's row, and its path when it draws one.
+type Done = (RunRow, Option<Trajectory>);
+
 /// The rows (and the paths) of `j`'s runs, in their order. With `lanes` (issue 34), the runs
 /// that draw no path, of one vehicle, by a built-in law, are stepped [`isotrack_sim::LANES`]
 /// at a time in SIMD lanes ([`crate::one_run::run_scored_lanes`]; the runs of a seed
 /// together, since a field that follows the seed differs between seeds), every other run
 /// alone ([`scored_job`]); each row is the same either way, on any thread count.
-fn run_jobs(
-    j: &Jobs<'_>,
-    o: &Options,
-    lanes: bool,
-) -> Result<Vec<(RunRow, Option<Trajectory>)>, BenchError> {
+fn run_jobs(j: &Jobs<'_>, o: &Options, lanes: bool) -> Result<Vec<Done>, BenchError> {
     let laned = |&(c, _, picture): &(&String, u64, bool)| {
         lanes
             && !picture
@@ -482,7 +481,7 @@ fn run_jobs(
         .collect();
     let base_of = |seed: u64| j.seeded.get(&seed).unwrap_or(j.base);
     let entrant_of = |c: &str| j.reg.get(c).expect("checked by controllers_of");
-    let done: Vec<Vec<(usize, (RunRow, Option<Trajectory>))>> = units
+    let done: Vec<Vec<(usize, Done)>> = units
         .par_iter()
         .map(|(in_lanes, unit)| {
             if o.cancelled() {
@@ -533,7 +532,7 @@ fn run_jobs(
         })
         .collect::<Option<_>>()
         .ok_or(BenchError::Interrupted)?;
-    let mut done: Vec<(usize, (RunRow, Option<Trajectory>))> = done.into_iter().flatten().collect();
+    let mut done: Vec<(usize, Done)> = done.into_iter().flatten().collect();
     done.sort_by_key(|(i, _)| *i);
     Ok(done.into_iter().map(|(_, d)| d).collect())
 }
