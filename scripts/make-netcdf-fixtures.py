@@ -36,7 +36,8 @@ The matrix (one file each, `<engine>_<format>_<coords>_<layout>.nc`):
     (700 attributes of 1 kB on `v`): see `many_attributes`; `committed_*.nc` and
     `refused_committed_units_x.nc` (attributes of committed HDF5 datatypes): see
     `committed_types`; `sohm_*.nc` (messages shared through the SOHM table): see
-    `shared_messages`.
+    `shared_messages`; `refused_group_*.nc` (groups that do not form a tree): see
+    `group_links`.
 
 Run with file names as arguments to (re)write only those (the others are left as they are):
 
@@ -447,16 +448,91 @@ def foreign_objects():
             t.commit(f.id, b"T_deep")
 
 
+def group_links():
+    """Groups that do not form a tree, which the loader must refuse naming the link (issue 30,
+    att30d-7: netcdf-reader built the group tree recursively without a visited set, so a
+    cycle overflowed the stack): `refused_group_loop.nc` (a group `g` holding a hard link
+    `loop` to itself, h5py `g["loop"] = g`), `refused_group_up.nc` (`g/up` a link to the root),
+    `refused_group_twice.nc` (`a/s` and `b/s` the same group: no cycle) and
+    `refused_group_deep.nc` (3000 nested groups `g/g/...`, past the 64 levels read). Each is
+    the twin `netcdf4_nc4_xy_contig.nc` plus those groups. Not in the manifest."""
+    import h5py
+
+    def loop(f):
+        g = f.create_group("g")
+        g["loop"] = g
+
+    def up(f):
+        f.create_group("g")["up"] = f["/"]
+
+    def twice(f):
+        s = f.create_group("a").create_group("s")
+        f.create_group("b")["s"] = s
+
+    def deep(f):
+        g = f
+        for _ in range(3000):
+            g = g.create_group("g")
+
+    for suffix, edit in (("loop", loop), ("up", up), ("twice", twice), ("deep", deep)):
+        name = write("netcdf4", "NETCDF4", "xy", "contig", name=f"refused_group_{suffix}.nc")
+        if not ONLY or name in ONLY:
+            # The newest format: 3000 groups in compact link storage, ~0.4 MB.
+            with h5py.File(os.path.join(OUT, name), "a", libver="latest") as f:
+                edit(f)
+
+
+# libhdf5's shared-message index flags (H5Opublic.h, `H5O_SHMESG_*_FLAG`): 1 << the message
+# type ID of the HDF5 file format specification, "Shared Object Header Message Table" (dataspace
+# 0x0001 -> bit 1, datatype 0x0003 -> bit 3, fill value 0x0005 -> bit 5, filter pipeline 0x000B ->
+# bit 11, attribute 0x000C -> bit 12).
+SOHM_DATASPACES, SOHM_DATATYPES, SOHM_FILL, SOHM_PLINE, SOHM_ATTRS = 0x2, 0x8, 0x20, 0x800, 0x1000
+SOHM_ALL = 0x182A
+SOHM_KINDS = (("dataspaces", SOHM_DATASPACES), ("datatypes", SOHM_DATATYPES), ("fill", SOHM_FILL),
+              ("pline", SOHM_PLINE), ("attrs", SOHM_ATTRS))
+
+
+def sohm_files():
+    """{file name: (index flags, one per index; B-tree form; extra attributes on `v`)} of
+    `shared_messages`."""
+    files = {}
+    for form in ("", "_btree"):
+        for kind, flags in SOHM_KINDS:
+            files[f"sohm_{kind}{form}.nc"] = ([flags], bool(form), 0)
+        files[f"sohm_all{form}.nc"] = ([SOHM_ALL], bool(form), 0)
+        files[f"sohm_separate{form}.nc"] = ([f for _, f in SOHM_KINDS], bool(form), 0)
+        # Two indexes, in both orders (ver30b-1: a datatype was looked up in the dataspace index).
+        files[f"sohm_dataspaces_datatypes{form}.nc"] = ([SOHM_DATASPACES, SOHM_DATATYPES], bool(form), 0)
+        files[f"sohm_datatypes_dataspaces{form}.nc"] = ([SOHM_DATATYPES, SOHM_DATASPACES], bool(form), 0)
+        # 12 more attributes on `v` (21 in all; dense storage, as the 9 above: a fractal heap
+        # and a v2 B-tree of names, each record naming a shared attribute's ID in the
+        # shared-message heap).
+        files[f"sohm_attrs_dense{form}.nc"] = ([SOHM_ATTRS], bool(form), 12)
+        files[f"sohm_all_dense{form}.nc"] = ([SOHM_ALL], bool(form), 12)
+        files[f"sohm_separate_dense{form}.nc"] = ([f for _, f in SOHM_KINDS], bool(form), 12)
+    return files
+
+
 def shared_messages():
     """Files whose object header messages are shared through HDF5's shared object header
-    message (SOHM) table (issue 30, att30c-11): `sohm_datatypes.nc` shares datatypes (index
-    flags 0x02), `sohm_all.nc` every kind (0x1f: dataspaces, datatypes, fill values, filter
-    pipelines, attributes). The data is `netcdf4_nc4_xy_contig.nc`'s, written through
-    h5netcdf into a file created with a file-creation property list holding one SOHM index
+    message (SOHM) table (issue 30: att30c-11, ver30b-1, ver30b-8), `sohm_files()`: each kind
+    libhdf5 can share (dataspaces, datatypes, fill values, filter pipelines, attributes) alone
+    in one index (`sohm_<kind>.nc`), all in one index (`sohm_all.nc`, flags 0x182a), each in
+    its own index (`sohm_separate.nc`, five indexes) and dataspaces and datatypes in two
+    (`sohm_dataspaces_datatypes.nc`, `sohm_datatypes_dataspaces.nc`), each in list form and
+    in B-tree form (`H5Pset_shared_mesg_phase_change`: a list of up to 200 messages, or
+    `*_btree.nc`, a v2 B-tree from the first message). `v` has 9 attributes (xarray's 5,
+    `_FillValue` and netCDF's 3), so libhdf5 keeps them in dense storage (more than 8), 21
+    in `*_dense*.nc`; `crs` and `time_bnds` have few (compact storage). The data is
+    `netcdf4_nc4_xy_zlib1.nc`'s (chunked and deflated, so that there is a filter pipeline to share), written through
+    h5netcdf into a file created with a file-creation property list holding the SOHM indexes
     (`H5Pset_shared_mesg_nindexes`, `H5Pset_shared_mesg_index`, called through ctypes on the
-    libhdf5 h5py bundles: h5py has no binding for them) and the latest file format. netCDF-C
-    reads both; hdf5-reader 0.12.1 refused them ("failed to load SOHM table: unexpected end of
-    data"). Not in the manifest: `sohm_fixtures_load_as_their_twin` loads each."""
+    libhdf5 h5py bundles: h5py has no binding for them; the flags are libhdf5's, 1 << message
+    type ID) and the latest file format. netCDF-C reads each; hdf5-reader 0.12.1 refused them
+    ("failed to load SOHM table: unexpected end of data"), and after that fix, separate indexes
+    ("unsupported dataspace version 17") and shared dense attributes ("undefined address").
+    Not in the manifest: `sohm_fixtures_load_as_their_twin` loads each, and
+    vendor/hdf5-reader/tests/sohm.rs reads each with hdf5-reader."""
     import ctypes
     import glob
 
@@ -465,22 +541,33 @@ def shared_messages():
 
     libs = glob.glob(os.path.join(os.path.dirname(h5py.__file__), "..", "h5py.libs", "libhdf5-*.so*"))
     lib = ctypes.CDLL(libs[0]) if libs else ctypes.CDLL("libhdf5.so")
-    for name, flags in (("sohm_datatypes.nc", 0x02), ("sohm_all.nc", 0x1F)):
+    for name, (indexes, btree, extra) in sohm_files().items():
         if ONLY and name not in ONLY:
             continue
         path = os.path.join(OUT, name)
         if os.path.exists(path):
             os.remove(path)
         fcpl = h5py.h5p.create(h5py.h5p.FILE_CREATE)
-        assert lib.H5Pset_shared_mesg_nindexes(ctypes.c_int64(fcpl.id), 1) >= 0
-        assert lib.H5Pset_shared_mesg_index(ctypes.c_int64(fcpl.id), 0, ctypes.c_uint(flags), 0) >= 0
+        plist = ctypes.c_int64(fcpl.id)
+        assert lib.H5Pset_shared_mesg_nindexes(plist, ctypes.c_uint(len(indexes))) >= 0
+        for i, flags in enumerate(indexes):
+            assert lib.H5Pset_shared_mesg_index(plist, ctypes.c_uint(i), ctypes.c_uint(flags),
+                                                ctypes.c_uint(0)) >= 0
+        # An index is a list up to `max_list` messages (libhdf5's default 50: the attribute
+        # indexes here hold 62 to 99) and a v2 B-tree past it: 200 keeps each a list, 0 makes
+        # each a B-tree from its first message.
+        max_list, min_btree = (0, 0) if btree else (200, 200)
+        assert lib.H5Pset_shared_mesg_phase_change(plist, ctypes.c_uint(max_list),
+                                                   ctypes.c_uint(min_btree)) >= 0
         fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
         fapl.set_libver_bounds(h5py.h5f.LIBVER_LATEST, h5py.h5f.LIBVER_LATEST)
         fid = h5py.h5f.create(path.encode(), h5py.h5f.ACC_TRUNC, fcpl=fcpl, fapl=fapl)
         ds = dataset("xy", True)
+        for i in range(extra):
+            ds["v"].attrs[f"note_{i:02d}"] = f"note {i}: " + "abc" * (i + 1)
         with h5netcdf.File(h5py.File(fid), "a") as f:
             ds.dump_to_store(xr.backends.H5NetCDFStore(f),
-                             encoding=encoding(ds, "contig", True, "NETCDF4"))
+                             encoding=encoding(ds, "zlib1", True, "NETCDF4"))
 
 
 def main():
@@ -550,6 +637,7 @@ def main():
     committed_types()
     foreign_objects()
     shared_messages()
+    group_links()
     for frames in (1, 4, 5):
         if not ONLY or f"unwritten_{frames}x16000x16000.nc" in ONLY:
             unwritten(frames)  # not in the manifest: they must not load

@@ -362,3 +362,26 @@ def test_set_arrays_inside_lists_name_the_key():
         short().set("controller.kp", np.array([3.0, 4.0]))
     with pytest.raises(isotrack.ScenarioError, match="sim.seed"):
         short().set("sim.seed", [np.array([1, 2])])
+
+
+@pytest.mark.parametrize("name,link", [("loop", "/g/loop -> /g"), ("up", "/g/up -> /")])
+def test_netcdf_group_cycle_is_a_scenario_error_not_a_crash(tmp_path, name, link):
+    # Issue 30, att30d-7: a NetCDF-4 grid whose group holds a hard link to itself or to the
+    # root overflowed the stack in the reader and killed the interpreter (SIGSEGV). Run in a
+    # child so that a regression fails here instead of killing pytest.
+    nc = ROOT / "crates/isotrack-fields/tests/fixtures/netcdf" / f"refused_group_{name}.nc"
+    sc = tmp_path / "sc.toml"
+    sc.write_text(f'[field]\nkind = "grid"\npath = "{nc}"\nvariable = "v"\n')
+    code = (
+        "import sys, isotrack\n"
+        "try:\n"
+        "    isotrack.Scenario.from_file(sys.argv[1])\n"
+        "except isotrack.ScenarioError as e:\n"
+        "    print(e)\n"
+        "else:\n"
+        "    raise SystemExit('loaded')\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code, str(sc)], capture_output=True, text=True)
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert "field.path" in r.stdout and f"refused_group_{name}.nc" in r.stdout, r.stdout
+    assert link in r.stdout, r.stdout

@@ -484,4 +484,30 @@ vary = {{ "initial.x_m" = {{ uniform = [8.0, 14.0] }} }}
         let (o, _) = resume(name, edit);
         assert_fails(&o, 65, &["task.json", needle]);
     }
+    // Issue 30, att30d-13: metrics that contradict each other under the tolerance (0.1 in the
+    // scenario): every run rewritten as converged at 0 and always in the band, although some
+    // run's steady-state RMS error is past 0.1 (it cannot be: converged at t = 0 means
+    // |eps| < 0.1 at every step; in the band at every step of the window means <= 0.1).
+    let over = stored["runs"].as_array().unwrap().iter().any(|r| {
+        r["steady_state_rms_error"]
+            .as_f64()
+            .is_some_and(|e| e > 0.1)
+    });
+    assert!(over, "a run past the tolerance: {stored}");
+    let (o, _) = resume("contradicts", &|t| {
+        for r in t["runs"].as_array_mut().unwrap() {
+            r["time_in_band_fraction"] = serde_json::json!(1.0);
+            r["convergence_time_s"] = serde_json::json!(0.0);
+            r["track_losses"] = serde_json::json!(0);
+        }
+    });
+    assert_fails(
+        &o,
+        65,
+        &[
+            "task.json",
+            "contradicts it",
+            "metrics.convergence_tolerance = 0.1",
+        ],
+    );
 }

@@ -687,3 +687,188 @@ fn a_fifo_is_refused_by_every_input_path_without_waiting() {
         &not_regular,
     );
 }
+
+/// Regression (issue 30, att30d-7): a NetCDF-4 grid whose group holds a hard link to itself or
+/// to the root (13 KB of legal HDF5) aborted `run` with a stack overflow (exit 134). Refused
+/// with 65 naming `field.path`, the file and the link; 3000 nested groups likewise.
+#[test]
+fn a_netcdf_group_cycle_is_refused_not_a_stack_overflow() {
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../isotrack-fields/tests/fixtures/netcdf");
+    let d = tempfile::tempdir().unwrap();
+    for (file, want) in [
+        ("refused_group_loop.nc", "/g/loop -> /g"),
+        ("refused_group_up.nc", "/g/up -> /"),
+        ("refused_group_deep.nc", "group nesting exceeds 64 levels"),
+    ] {
+        let nc = fixtures.join(file);
+        let sc = write(
+            d.path(),
+            "sc.toml",
+            &format!(
+                "[field]\nkind = \"grid\"\npath = {:?}\nvariable = \"v\"\n",
+                nc.to_str().unwrap()
+            ),
+        );
+        let o = isotrack(&["run", &sc]);
+        assert_fails(&o, 65, &["field.path", file, want]);
+        assert!(!stderr(&o).contains("overflow"), "{}", stderr(&o));
+    }
+}
+
+/// Regression (issue 30, ver30-1): a relative `field.path` in a sweep's `[base]` or `[grid]`
+/// was resolved against the working directory, not the sweep file's directory (as the sweep's
+/// `scenario` is): the sweep worked only when started from that directory, and `--resume` from
+/// another one (a requeued Slurm task) exited 65. Started from elsewhere (the test's working
+/// directory is the crate's, which holds no `b.csv`), the paths are the sweep file's, recorded
+/// by absolute path, and a `--resume` from a third directory keeps every row.
+#[test]
+fn sweep_file_paths_are_relative_to_the_sweep_file() {
+    let d = tempfile::tempdir().unwrap();
+    let (scen, sub) = (d.path().join("scen"), d.path().join("sub"));
+    std::fs::create_dir_all(&scen).unwrap();
+    std::fs::create_dir_all(&sub).unwrap();
+    // A 21 x 21 ramp v = x (1 m spacing); the base file and the sweep's differ by a constant.
+    let ramp = |offset: f64| {
+        (0..21)
+            .map(|_| {
+                (0..21)
+                    .map(|i| format!("{}", offset + f64::from(i)))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n"
+    };
+    write(&scen, "a.csv", &ramp(0.0));
+    write(&sub, "b.csv", &ramp(1.0));
+    write(&sub, "c.csv", &ramp(2.0));
+    write(
+        &scen,
+        "sc.toml",
+        "[field]\nkind = \"grid\"\npath = \"a.csv\"\n[initial]\nx_m = 10.0\ny_m = 10.0\n\
+         [controller]\nlevel = 12.0\n[sim]\nduration_s = 1.0\n",
+    );
+    for (name, sweep, file) in [
+        (
+            "base.toml",
+            "scenario = \"../scen/sc.toml\"\n[base]\nfield.path = \"b.csv\"\n\
+             [grid]\ncontroller.kp = [5.0, 10.0]\n",
+            "b.csv",
+        ),
+        (
+            "grid.toml",
+            "scenario = \"../scen/sc.toml\"\n[grid]\nfield.path = [\"b.csv\", \"c.csv\"]\n",
+            "a.csv",
+        ),
+    ] {
+        let s = write(&sub, name, sweep);
+        let out = d.path().join(format!("o-{name}"));
+        let o = isotrack(&["sweep", &s, "--out", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        let base = std::fs::read_to_string(out.join("base_scenario.toml")).unwrap();
+        let dir = if file == "a.csv" { &scen } else { &sub };
+        let want = dir.canonicalize().unwrap().join(file);
+        assert!(base.contains(want.to_str().unwrap()), "{name}: {base}");
+        let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 3, "{csv}");
+        assert!(!csv.contains("invalid_scenario"), "{name}: {csv}");
+        // A resume from another directory (given the sweep by a path relative to it), its
+        // last row removed.
+        let kept: String = csv.lines().take(2).map(|l| format!("{l}\n")).collect();
+        std::fs::write(out.join("results.csv"), kept).unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .current_dir(d.path())
+            .args([
+                "sweep",
+                &format!("sub/{name}"),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .arg("--resume")
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr(&o));
+        assert_eq!(
+            std::fs::read_to_string(out.join("results.csv")).unwrap(),
+            csv
+        );
+    }
+}
+
+/// Regression (issue 30, att30d-13 a): a row converged at t = 0 (|eps| below the tolerance at
+/// every step from the start) beside a steady-state maximum error far past the tolerance was
+/// kept by `--resume`. The scenario's tolerance (1 % of its level) is below 1; the row's
+/// maximum is above 1.
+#[test]
+fn resume_refuses_a_convergence_the_window_contradicts() {
+    let d = tempfile::tempdir().unwrap();
+    let scen = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/gaussian-plumes-pm25.toml");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        &format!(
+            "scenario = {:?}\n[base]\nsim.duration_s = 30.0\ncontroller.max_turn_rate_radps = 100.0\n[grid]\ncontroller.kp = [10.0, 20.0]\n",
+            scen.to_str().unwrap()
+        ),
+    );
+    let out = d.path().join("d");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let results = out.join("results.csv");
+    let good = std::fs::read_to_string(&results).unwrap();
+    let lines: Vec<&str> = good.lines().collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut row: Vec<&str> = lines[1].split(',').collect();
+    let max: f64 = row[col("steady_state_max_abs_error")].parse().unwrap();
+    assert!(
+        row[col("convergence_time_s")].is_empty() && max > 1.0,
+        "{}",
+        lines[1]
+    );
+    row[col("convergence_time_s")] = "0.0";
+    std::fs::write(&results, format!("{}\n{}\n", lines[0], row.join(","))).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+    assert_fails(
+        &o,
+        65,
+        &[
+            "steady_state_max_abs_error",
+            "contradicts it",
+            "is at or before the steady-state window's start",
+        ],
+    );
+    // Issue 30, att30d-1: cells a completed run always writes, emptied (the row otherwise
+    // intact): its path length, its control effort (finite under the turn-rate limit of
+    // 100 rad/s in [base], which no command of this run reaches), its window's RMS error
+    // beside the maximum.
+    for (name, needle) in [
+        (
+            "path_length_m",
+            "path_length_m is empty in a `completed` row",
+        ),
+        (
+            "control_effort",
+            "control_effort is empty in a `completed` row",
+        ),
+        (
+            "steady_state_rms_error",
+            "steady_state_rms_error is empty beside steady_state_max_abs_error",
+        ),
+    ] {
+        let mut row: Vec<&str> = lines[1].split(',').collect();
+        assert_eq!(row[col("outcome")], "completed", "{}", lines[1]);
+        assert!(!row[col(name)].is_empty(), "{}", lines[1]);
+        row[col(name)] = "";
+        std::fs::write(&results, format!("{}\n{}\n", lines[0], row.join(","))).unwrap();
+        let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+        assert_fails(&o, 65, &[needle]);
+    }
+    // The row as written resumes.
+    std::fs::write(&results, format!("{}\n{}\n", lines[0], lines[1])).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}

@@ -50,6 +50,22 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             64,
             "--system-id 0 is MAVLink's broadcast address",
         ),
+        // fix33h: sitl's PX4-like fixed heartbeat rate, bounded; real time only.
+        (
+            vec!["sitl", "--mavlink", out, "--heartbeat-hz", "0"],
+            64,
+            "--heartbeat-hz must be a number > 0",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--heartbeat-hz", "100"],
+            64,
+            "--heartbeat-hz must be in [0.2, 50], got 100",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--heartbeat-hz", "1", "--lockstep"],
+            64,
+            "--heartbeat-hz",
+        ),
         (
             vec!["fly", "--mavlink", out, "--timeout-s", "1e20"],
             64,
@@ -123,6 +139,12 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             64,
             "--sensor udp:127.0.0.1:99999",
         ),
+        // att33d-9c: port 0 would be one nobody could send to.
+        (
+            vec!["fly", "--mavlink", out, "--sensor", "udp:127.0.0.1:0"],
+            64,
+            "--sensor udp:127.0.0.1:0: port 0",
+        ),
         (
             vec!["fly", "--mavlink", out, "--system-id", "0"],
             64,
@@ -182,6 +204,17 @@ fn bad_options_are_usage_errors_and_unflyable_scenarios_data_errors() {
             vec!["sitl", "--mavlink", out, "--set", "sitl.home_lat_deg=90"],
             65,
             "sitl.home_lat_deg",
+        ),
+        // ver33-5: a level beyond the +-1e12 a measurement may be: refused at start by both.
+        (
+            vec!["fly", "--mavlink", out, "--set", "controller.level=5e12"],
+            65,
+            "controller.level = ",
+        ),
+        (
+            vec!["sitl", "--mavlink", out, "--set", "controller.level=-5e12"],
+            65,
+            "beyond the +-1e12 a measurement may be",
         ),
         // No trace rows, no positions: refused rather than a vehicle that never says where
         // it is.
@@ -780,4 +813,112 @@ fn sitl_and_fly_out_replace_an_earlier_run_as_run_out_does() {
     assert_eq!(fly["samples"], 501);
     let trace = std::fs::read_to_string(fly_dir.join("trace.csv")).unwrap();
     assert_eq!(trace.lines().count(), 1 + 501);
+}
+
+/// ver33-2: `fly`'s events reach standard error as they happen, not when the flight ends: the
+/// vehicle it took ("vehicle: system 1, component 1 ...") is read from its standard error
+/// while it still waits for the pilot's hand-over (it would wait for ever: the test interrupts
+/// it only once the line came, or after 60 s without it).
+#[test]
+fn fly_writes_its_events_as_they_happen() {
+    let mut sitl = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["sitl", "--mavlink", "udpin:127.0.0.1:0", "--set"])
+        .arg("sim.duration_s=600")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let port = sitl_port(&mut sitl);
+    let mut fly = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "fly",
+            "--mavlink",
+            &format!("udpout:127.0.0.1:{port}"),
+            "--timeout-s",
+            "60",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = fly.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        for line in BufReader::new(err).lines() {
+            let Ok(line) = line else { break };
+            let _ = tx.send(line);
+        }
+    });
+    let mut seen_live = false;
+    let t0 = std::time::Instant::now();
+    while t0.elapsed() < std::time::Duration::from_secs(60) {
+        match rx.recv_timeout(std::time::Duration::from_millis(200)) {
+            Ok(line) if line.contains("vehicle: system 1, component 1") => {
+                seen_live = true;
+                break;
+            }
+            _ => {}
+        }
+    }
+    // SIGINT: fly's Ctrl-C (before control: nothing commanded, exit 79).
+    let _ = Command::new("kill")
+        .args(["-INT", &fly.id().to_string()])
+        .status();
+    let status = fly.wait().unwrap();
+    reader.join().unwrap();
+    let _ = sitl.kill();
+    let _ = sitl.wait();
+    assert!(
+        seen_live,
+        "the vehicle's line came only after the interrupt"
+    );
+    assert_eq!(status.code(), Some(79));
+}
+
+/// ver33-4 (a): `fly --take-control` hearing a twin companion's heartbeat (its own ids, system
+/// 1, component 191) before any vehicle exits 79 (another controller: nothing commanded), as
+/// FLYING.md says, not 69 "no vehicle was ever heard".
+#[test]
+fn a_twin_before_the_vehicle_exits_79() {
+    let mut fly = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "fly",
+            "--mavlink",
+            "udpin:127.0.0.1:17531",
+            "--take-control",
+            "--timeout-s",
+            "5",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let beat = mavlink::dialects::common::MavMessage::HEARTBEAT(
+        mavlink::dialects::common::HEARTBEAT_DATA {
+            mavtype: mavlink::dialects::common::MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+            autopilot: mavlink::dialects::common::MavAutopilot::MAV_AUTOPILOT_INVALID,
+            mavlink_version: 3,
+            ..Default::default()
+        },
+    );
+    let t0 = std::time::Instant::now();
+    let mut seq = 0u8;
+    while fly.try_wait().unwrap().is_none() && t0.elapsed() < std::time::Duration::from_secs(30) {
+        let mut f = Vec::new();
+        let header = mavlink::MavHeader {
+            system_id: 1,
+            component_id: 191,
+            sequence: seq,
+        };
+        mavlink::write_v2_msg(&mut f, header, &beat).unwrap();
+        seq = seq.wrapping_add(1);
+        let _ = sock.send_to(&f, "127.0.0.1:17531");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let _ = fly.kill();
+    let o = fly.wait_with_output().unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(79), "{e}");
+    assert!(e.contains("a second companion with this one's ids"), "{e}");
 }

@@ -294,3 +294,178 @@ fn team_figure_along_an_open_isoline() {
     assert!(team.contains("open: it leaves the field"));
     assert!(team.contains("mean gap S/(N-1)"));
 }
+
+/// att32d-14: a vehicle that leaves the field early. The field is a grid pyramid on
+/// `[0, 40]^2` m (`F = -10 + min(x, y, 40 - x, 40 - y)`, 1 m lattice); vehicle 3 starts at
+/// (38, 20) m heading east (+x) at 3 m/s with `v_max_mps = 3` and a turn limit of 0.2 rad/s,
+/// so it crosses the grid's edge `x = 40` m, 2 m away, no sooner than 2/3 s; the other three
+/// stay inside. Its last row once went into `trace.csv` after every row at 60 s, so the run's
+/// own `plot`/`report` refused it (65, "goes back in time"), and the run said `completed` with
+/// `warnings: []`. Now the rows are in time order (checked here row by row, independently of
+/// the reader), vehicle 3's last row is at its `t_end_s`, `plot` and `report` draw the run,
+/// and stderr and `summary.json`'s `warnings` name vehicle 3, its outcome and its time.
+#[test]
+fn a_vehicle_that_leaves_the_field_early_is_plotted_and_named() {
+    let d = tempfile::tempdir().unwrap();
+    let grid: String = (0..41)
+        .map(|i: i32| {
+            (0..41)
+                .map(|j: i32| format!("{:.1}", -10 + i.min(j).min(40 - i).min(40 - j)))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    let grid_path = common::write(d.path(), "pyr.csv", &grid);
+    let scenario = common::write(
+        d.path(),
+        "left.toml",
+        &format!(
+            r#"name = "team-left"
+[field]
+kind = "grid"
+path = "{grid_path}"
+spacing_m = [1.0, 1.0]
+origin_m = [0.0, 0.0]
+interpolation = "bilinear"
+[vehicle]
+kind = "dubins"
+speed_mps = 0.5
+[controller]
+kind = "pi_isoline"
+level = 5.0
+kp = 2.0
+ki = 0.0
+c1 = 0.2
+c2 = 1.0
+max_turn_rate_radps = 0.2
+[sensor]
+rate_hz = 100.0
+[sim]
+dt_s = 0.01
+duration_s = 60.0
+[team]
+count = 4
+starts = [{{x_m=25.0,y_m=20.0,heading_rad=1.5707963}},{{x_m=25.0,y_m=22.0,heading_rad=1.5707963}},{{x_m=25.0,y_m=24.0,heading_rad=1.5707963}},{{x_m=38.0,y_m=20.0,heading_rad=0.0}}]
+spacing = "range_balance"
+k_v = 0.1
+vehicles = [{{index = 3, speed_mps = 3.0, v_max_mps = 3.0}}]
+"#
+        ),
+    );
+    let out = d.path().join("run");
+    let o = isotrack(&["run", &scenario, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let err = common::stderr(&o);
+    assert!(
+        err.contains(
+            "warning: 1 of 4 vehicles did not complete the run (vehicle 3: left_field at t = "
+        ),
+        "{err}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["outcome"], "completed");
+    let v3 = &summary["vehicles"][3];
+    assert_eq!(v3["outcome"], "left_field");
+    let t_end = v3["t_end_s"].as_f64().unwrap();
+    assert!((2.0 / 3.0 - 0.01..10.0).contains(&t_end), "t_end {t_end}");
+    let warnings = summary["warnings"].as_array().unwrap();
+    assert!(
+        warnings.iter().any(|w| w
+            .as_str()
+            .unwrap()
+            .contains("vehicle 3: left_field at t = ")),
+        "{warnings:?}"
+    );
+    // Every row at or after the one before; vehicle 3's rows end at its t_end_s.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut before = f64::NEG_INFINITY;
+    let mut last3 = f64::NAN;
+    for (n, line) in trace.lines().enumerate().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let t: f64 = cells[0].parse().unwrap();
+        assert!(t >= before, "trace.csv:{}: t_s = {t} after {before}", n + 1);
+        before = t;
+        if *cells.last().unwrap() == "3" {
+            last3 = t;
+        }
+    }
+    assert!((last3 - t_end).abs() < 1e-9, "{last3} vs {t_end}");
+    assert_eq!(before, 60.0);
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("r.html").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}
+
+/// att32d-7: several team runs drawn together name each vehicle by its run (`DIR vehicle I`):
+/// the legend tells two runs of the same field apart, and two runs over different fields are
+/// refused naming both directories (the message read "in vehicle 0, unset in vehicle 0").
+/// One run alone keeps `vehicle I`.
+#[test]
+fn several_team_runs_name_their_vehicles_by_run() {
+    let d = tempfile::tempdir().unwrap();
+    let run = |name: &str, sets: &[&str]| {
+        let out = d.path().join(name);
+        let mut args = vec!["run", TEAM, "--out", out.to_str().unwrap(), "--quiet"];
+        for s in sets {
+            args.extend(["--set", s]);
+        }
+        let o = isotrack(&args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        out
+    };
+    let a = run("ra", &["sim.duration_s=5.0"]);
+    let b = run("rb", &["sim.duration_s=5.0", "team.spacing=\"none\""]);
+    let c = run("rc", &["sim.duration_s=5.0", "field.i0=30.0"]);
+    let figs = d.path().join("figs");
+    let o = isotrack(&[
+        "plot",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--out",
+        figs.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let svg = std::fs::read_to_string(figs.join("trajectory.svg")).unwrap();
+    for i in 0..4 {
+        for r in ["ra", "rb"] {
+            assert!(svg.contains(&format!("{r} vehicle {i}")), "{r} vehicle {i}");
+        }
+    }
+    let o = isotrack(&[
+        "report",
+        a.to_str().unwrap(),
+        c.to_str().unwrap(),
+        "--out",
+        d.path().join("r.html").to_str().unwrap(),
+    ]);
+    common::assert_fails(&o, 65, &["ra vehicle 0", "rc vehicle 0"]);
+    let o = isotrack(&["plot", a.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let svg = std::fs::read_to_string(a.join("trajectory.svg")).unwrap();
+    assert!(svg.contains("vehicle 0") && !svg.contains("ra vehicle 0"));
+    // att32d-16: with per-vehicle speeds the ideal is L/sum v0_i, and team.svg's legend says
+    // so (it read "ideal L/(N v0)").
+    let team = std::fs::read_to_string(a.join("team.svg")).unwrap();
+    assert!(team.contains("ideal L/(N v0)"));
+    let e = run(
+        "re",
+        &[
+            "sim.duration_s=5.0",
+            "team.vehicles=[{index=3, speed_mps=0.3}]",
+        ],
+    );
+    let o = isotrack(&["plot", e.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let team = std::fs::read_to_string(e.join("team.svg")).unwrap();
+    assert!(team.contains("ideal L/sum v0_i") && !team.contains("ideal L/(N v0)"));
+}

@@ -315,3 +315,91 @@ fn team_engine_refusals_are_recomputed_on_resume_and_merge() {
         );
     }
 }
+
+/// att32d-3 and -5: a team row is vehicle 0's, so its bounds (`samples`, `path_length_m`)
+/// come from vehicle 0's own resolved settings, its `team.vehicles` override included. Under
+/// `none` on the circular field every robot flies its `v0_i` for the whole run, so vehicle
+/// 0's row has `rate * T + 1` samples (one at every multiple of `1 / rate` in `[0, T]`) and a
+/// path of `v0_0 T`; with 10 Hz against the scenario's 100 Hz and 0.8 m/s past the team's
+/// top speed `team.v_max_mps = 0.75` the sweep once refused its own rows (65, "samples = 101
+/// is below the 1001 ...", "path_length_m ... exceeds 0.75 m/s ..."), and `--resume` too. The override in the base (a plan that varies another key) and varied by the
+/// grid itself (`team.vehicles`), each finished and then resumed.
+#[test]
+fn vehicle_0_overrides_bound_its_own_rows() {
+    let d = tempfile::tempdir().unwrap();
+    let t = 10.0;
+    for (name, base, grid, want) in [
+        (
+            "base",
+            "team.vehicles = [{index=0, sensor_rate_hz=10.0, speed_mps=0.8, v_max_mps=0.9}]\nteam.v_max_mps = 0.75\n",
+            "team.k_v = [0.1, 0.2]\n",
+            [(10.0, 0.8), (10.0, 0.8)],
+        ),
+        (
+            "grid",
+            "team.v_max_mps = 0.75\n",
+            "team.vehicles = [[{index=0, sensor_rate_hz=10.0, speed_mps=0.8, v_max_mps=0.9}], [{index=0, sensor_rate_hz=20.0, speed_mps=0.7, v_max_mps=0.9}]]\n",
+            [(10.0, 0.8), (20.0, 0.7)],
+        ),
+    ] {
+        let sweep = write(
+            d.path(),
+            &format!("{name}.toml"),
+            &format!(
+                "scenario = {TEAM:?}\n[base]\nsim.duration_s = {t:?}\nteam.spacing = \"none\"\n{base}[grid]\n{grid}"
+            ),
+        );
+        let out = d.path().join(name);
+        let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{name}: {}", common::stderr(&o));
+        let (header, rows) = read_csv(&out.join("results.csv"));
+        let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+        assert_eq!(rows.len(), 2);
+        for (r, (rate, v0)) in rows.iter().zip(want) {
+            assert_eq!(r[col("outcome")], "completed", "{r:?}");
+            let samples: f64 = r[col("samples")].parse().unwrap();
+            assert_eq!(samples, rate * t + 1.0, "{name}: {r:?}");
+            let path: f64 = r[col("path_length_m")].parse().unwrap();
+            // Each step's chord of a turn at rate w falls short of `v dt` by `(w dt)^2/24`
+            // of it (about 3e-8 at the circle's `w = v/R`): within 1e-5.
+            assert!(
+                (path - v0 * t).abs() < 1e-5 * v0 * t,
+                "{name}: {path} vs {}",
+                v0 * t
+            );
+        }
+        let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap(), "--resume"]);
+        assert!(o.status.success(), "{name} --resume: {}", common::stderr(&o));
+    }
+}
+
+/// att32d-6: a team row's `warnings` cell carries `check`'s team failure, as `isotrack run`
+/// warns it. Four robots ranging at 10 Hz without delay on the circle: the spacing loop is
+/// stable up to `k_v* = 2/(0.1 cos(pi/4) 4) = 7.07 1/s`, so the row at `k_v = 10` warns and
+/// the row at `k_v = 0.1` does not; `--resume` recomputes and accepts both cells.
+#[test]
+fn a_team_row_warns_when_the_team_check_fails() {
+    let d = tempfile::tempdir().unwrap();
+    let sweep = write(
+        d.path(),
+        "kv.toml",
+        &format!(
+            "scenario = {TEAM:?}\n[base]\nsim.duration_s = 10.0\n[grid]\nteam.k_v = [0.1, 10.0]\n"
+        ),
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let (header, rows) = read_csv(&out.join("results.csv"));
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    assert_eq!(rows[0][col("warnings")], "", "{:?}", rows[0]);
+    assert!(
+        rows[1][col("warnings")].starts_with(
+            "the team check fails: the spacing loop is unstable: team.k_v = 10 is past"
+        ),
+        "{:?}",
+        rows[1]
+    );
+    let o = isotrack(&["sweep", &sweep, "--out", out.to_str().unwrap(), "--resume"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+}

@@ -98,27 +98,7 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
         ));
     }
     if !args.map {
-        for (given, flag) in [
-            (args.out.is_some(), "--out"),
-            (args.kp_range.is_some(), "--kp-range"),
-            (args.rate_range.is_some(), "--rate-range"),
-            (args.map_size.is_some(), "--map-size"),
-            (args.verify.is_some(), "--verify"),
-            (args.threads.is_some(), "--threads"),
-            // The chart's look (a hostile review: `check --dpi 0` exited 0, the option unused;
-            // --dpi is caught when it differs from its default).
-            (args.look.size.is_some(), "--size"),
-            (args.look.font_size.is_some(), "--font-size"),
-            (args.look.title.is_some(), "--title"),
-            (args.look.colormap.is_some(), "--colormap"),
-            (args.look.dpi.to_bits() != 100.0f64.to_bits(), "--dpi"),
-        ] {
-            if given {
-                return Err(usage(format!(
-                    "{flag} is an option of --map (check --map --out DIR)"
-                )));
-            }
-        }
+        refuse_map_options(args)?;
         return Ok(MapOptions::default());
     }
     if args.out.is_none() {
@@ -142,32 +122,7 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
         .as_deref()
         .map(|t| parse_range("--rate-range", t))
         .transpose()?;
-    let size = match args.map_size.as_deref() {
-        None => None,
-        Some(t) => {
-            let bad = || {
-                usage(format!(
-                    "--map-size {}: expected NxM (points along kp x along the rate), e.g. 61x41",
-                    clip(t)
-                ))
-            };
-            // Exactly NxM: decimal digits, a lower-case `x`, decimal digits (no sign, space or
-            // `X`: a hostile review's `3X4` and `+3x4` were accepted silently).
-            let (a, b) = t.split_once('x').ok_or_else(bad)?;
-            // No leading zero either (`04x3`), as `--shard` and the counts elsewhere.
-            let digits = |x: &str| {
-                !x.is_empty()
-                    && x.bytes().all(|c| c.is_ascii_digit())
-                    && (x == "0" || !x.starts_with('0'))
-            };
-            if !(digits(a) && digits(b)) {
-                return Err(bad());
-            }
-            let n: usize = a.parse().map_err(|_| bad())?;
-            let m: usize = b.parse().map_err(|_| bad())?;
-            Some((n, m))
-        }
-    };
+    let size = args.map_size.as_deref().map(parse_map_size).transpose()?;
     if let Some(n) = args.verify {
         if !(1..=MAX_VERIFY_RUNS).contains(&n) {
             return Err(usage(format!("--verify {n}: 1 to {MAX_VERIFY_RUNS} runs")));
@@ -178,6 +133,55 @@ pub fn precheck(args: &CheckArgs) -> Result<MapOptions, Failure> {
         rate_range_hz: rate,
         size,
     })
+}
+
+/// Without `--map`: every option of the chart refused, naming it.
+fn refuse_map_options(args: &CheckArgs) -> Result<(), Failure> {
+    for (given, flag) in [
+        (args.out.is_some(), "--out"),
+        (args.kp_range.is_some(), "--kp-range"),
+        (args.rate_range.is_some(), "--rate-range"),
+        (args.map_size.is_some(), "--map-size"),
+        (args.verify.is_some(), "--verify"),
+        (args.threads.is_some(), "--threads"),
+        // The chart's look (a hostile review: `check --dpi 0` exited 0, the option unused;
+        // --dpi is caught when it differs from its default).
+        (args.look.size.is_some(), "--size"),
+        (args.look.font_size.is_some(), "--font-size"),
+        (args.look.title.is_some(), "--title"),
+        (args.look.colormap.is_some(), "--colormap"),
+        (args.look.dpi.to_bits() != 100.0f64.to_bits(), "--dpi"),
+    ] {
+        if given {
+            return Err(usage(format!(
+                "{flag} is an option of --map (check --map --out DIR)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// `--map-size NxM`: points along kp x along the rate.
+fn parse_map_size(t: &str) -> Result<(usize, usize), Failure> {
+    let bad = || {
+        usage(format!(
+            "--map-size {}: expected NxM (points along kp x along the rate), e.g. 61x41",
+            clip(t)
+        ))
+    };
+    // Exactly NxM: decimal digits, a lower-case `x`, decimal digits (no sign, space or
+    // `X`: a hostile review's `3X4` and `+3x4` were accepted silently).
+    let (a, b) = t.split_once('x').ok_or_else(bad)?;
+    // No leading zero either (`04x3`), as `--shard` and the counts elsewhere.
+    let digits = |x: &str| {
+        !x.is_empty() && x.bytes().all(|c| c.is_ascii_digit()) && (x == "0" || !x.starts_with('0'))
+    };
+    if !(digits(a) && digits(b)) {
+        return Err(bad());
+    }
+    let n: usize = a.parse().map_err(|_| bad())?;
+    let m: usize = b.parse().map_err(|_| bad())?;
+    Ok((n, m))
 }
 
 /// What `check --map` wrote (named in `check --json`'s `map`).
@@ -343,14 +347,18 @@ pub fn write_map(
         message: format!("no stability chart: {note}"),
     })?;
     let grid = map_grid(args, scenario, &family, parsed)?;
-    let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
-    let st_svg = crate::figures::style(&args.look, isotrack_plot::Format::Svg)?;
-    let cant = |what: &Path, e: String| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", what.display()),
-    };
+    let png_style = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+    let svg_style = crate::figures::style(&args.look, isotrack_plot::Format::Svg)?;
     // Held to the end.
-    let (_lock, [csv_path, png_path, svg_path, verify_path]) = open_map_dir(args, scenario, dir)?;
+    let (_lock, [csv, png, svg, verify_csv]) = open_map_dir(args, scenario, dir)?;
+    let out = ChartFiles {
+        csv,
+        png,
+        svg,
+        verify_csv,
+        png_style,
+        svg_style,
+    };
     let pool = crate::sweep::worker_pool(args.threads)?;
     // Each cell is a pure function of its point: the same bits on any thread count.
     let points = StabilityMap::points(&grid);
@@ -363,55 +371,21 @@ pub fn write_map(
     let map = StabilityMap::from_cells(&family, grid, cells);
     // The chart is written before any verification run starts: an interrupted --verify keeps
     // it (the figure without the runs' marks).
-    let draw = |verified: &[VerifyPoint]| -> Result<Vec<String>, Failure> {
-        let mut files = vec![];
-        for (path, style) in [(&png_path, &st), (&svg_path, &st_svg)] {
-            draw_atomic(path, |tmp| {
-                isotrack_plot::stability_map_figure(&map, verified, tmp, style)
-            })
-            .map_err(|e| cant(path, e))?;
-            files.push(path.display().to_string());
-        }
-        Ok(files)
-    };
     write_csv(
-        &csv_path,
+        &out.csv,
         &MAP_COLUMNS,
         (0..map.cells.len()).map(|i| cell_row(&map, i)),
     )?;
-    let mut files = vec![csv_path.display().to_string()];
-    files.extend(draw(&[])?);
-    let mut verify_runs = None;
-    let verify = match args.verify {
+    let mut files = vec![out.csv.display().to_string()];
+    files.extend(out.draw(&map, &[])?);
+    let (verify, verify_runs, far) = match args.verify {
         Some(n) => {
-            let seed = scenario.spec().sim.seed;
-            let at = verify_points(&grid, family.dt_s(), n, seed);
-            let (verified, partial) = verify_runs_of(family, pool, at, n);
-            let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
-            if !partial {
-                // Redrawn with the runs' marks (an interrupted check keeps the plain chart:
-                // it answers Ctrl-C without drawing again).
-                files = vec![csv_path.display().to_string()];
-                files.extend(draw(&points)?);
-            }
-            write_csv(
-                &verify_path,
-                &VERIFY_COLUMNS,
-                verified.iter().map(|(k, v)| verify_row(*k, v)),
-            )?;
-            files.push(verify_path.display().to_string());
-            verify_runs = Some(VerifyRuns {
-                requested: n,
-                finished: verified.len(),
-                partial,
-            });
-            Some((agreement(&points), verified))
+            let (agreement, runs, far) =
+                verify_chart(n, scenario, &grid, family, pool, &map, &out)?;
+            files.push(out.verify_csv.display().to_string());
+            (Some(agreement), Some(runs), far)
         }
-        None => None,
-    };
-    let (verify, far) = match verify {
-        Some((a, v)) => (Some(a), far_disagreements(&v)),
-        None => (None, vec![]),
+        None => (None, None, vec![]),
     };
     let count = |st: isotrack_scenario::check::map::CellStatus| {
         map.cells.iter().filter(|c| c.status == st).count()
@@ -429,6 +403,74 @@ pub fn write_map(
         verify_runs,
         disagreements_far: far,
     })
+}
+
+/// The chart's files (as [`open_map_dir`] named them) and the styles of its figures.
+struct ChartFiles {
+    /// `stability_map.csv`.
+    csv: PathBuf,
+    /// `stability_map.png`.
+    png: PathBuf,
+    /// `stability_map.svg`.
+    svg: PathBuf,
+    /// `verify.csv`.
+    verify_csv: PathBuf,
+    /// The PNG's style.
+    png_style: isotrack_plot::Style,
+    /// The SVG's style.
+    svg_style: isotrack_plot::Style,
+}
+
+impl ChartFiles {
+    /// Draws the chart with the `verified` runs' marks as PNG and SVG, each replacing its file
+    /// atomically; returns their paths.
+    fn draw(&self, map: &StabilityMap, verified: &[VerifyPoint]) -> Result<Vec<String>, Failure> {
+        let mut files = vec![];
+        for (path, style) in [(&self.png, &self.png_style), (&self.svg, &self.svg_style)] {
+            draw_atomic(path, |tmp| {
+                isotrack_plot::stability_map_figure(map, verified, tmp, style)
+            })
+            .map_err(|e| Failure {
+                code: exit::CANTCREAT,
+                message: format!("cannot write {}: {e}", path.display()),
+            })?;
+            files.push(path.display().to_string());
+        }
+        Ok(files)
+    }
+}
+
+/// `--verify n`: the runs at points of the chart, `verify.csv` written, and the chart redrawn
+/// (the same files) with their marks when all finished (an interrupted check keeps the plain
+/// chart: it answers Ctrl-C without drawing again). Returns the agreement over the runs
+/// that finished, how many did, and those that disagree away from the boundary.
+fn verify_chart(
+    n: usize,
+    scenario: &Scenario,
+    grid: &MapGrid,
+    family: LoopFamily,
+    pool: rayon::ThreadPool,
+    map: &StabilityMap,
+    out: &ChartFiles,
+) -> Result<(Agreement, VerifyRuns, Vec<FarDisagreement>), Failure> {
+    let seed = scenario.spec().sim.seed;
+    let at = verify_points(grid, family.dt_s(), n, seed);
+    let (verified, partial) = verify_runs_of(family, pool, at, n);
+    let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
+    if !partial {
+        out.draw(map, &points)?;
+    }
+    write_csv(
+        &out.verify_csv,
+        &VERIFY_COLUMNS,
+        verified.iter().map(|(k, v)| verify_row(*k, v)),
+    )?;
+    let runs = VerifyRuns {
+        requested: n,
+        finished: verified.len(),
+        partial,
+    };
+    Ok((agreement(&points), runs, far_disagreements(&verified)))
 }
 
 /// The chart's grid: the scenario's default ranges, replaced by `--kp-range`, `--rate-range`

@@ -76,6 +76,11 @@ pub struct SitlArgs {
     /// Advance one sensor period only when the companion has answered the last sample (tests).
     #[arg(long)]
     pub lockstep: bool,
+    /// Send HEARTBEAT only at this fixed rate of the wall clock, Hz, as PX4 does (1): a mode
+    /// or arming change shows only in the next beat, never at once (default: once a simulated
+    /// second and after every change). Real time only.
+    #[arg(long, value_name = "HZ", conflicts_with = "lockstep")]
+    pub heartbeat_hz: Option<f64>,
     /// The vehicle's MAVLink system id (1 to 254; 255 is the ground stations').
     #[arg(long, value_name = "ID", default_value_t = 1)]
     pub system_id: u8,

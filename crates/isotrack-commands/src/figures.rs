@@ -102,7 +102,7 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     // A team's run is its vehicles, each drawn as a run (issue 32).
     let data: Vec<RunData> = runs
         .iter()
-        .map(|d| RunData::load_team(d))
+        .map(|d| RunData::load_team_named(d, runs.len() > 1))
         .collect::<Result<Vec<_>, _>>()
         .map_err(failure)?
         .into_iter()
@@ -158,68 +158,10 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     let out = a.out.clone().unwrap_or_else(|| a.runs[0].clone());
     let results = a.runs[0].join("results.csv");
     for d in &a.runs {
-        let is_run = d.join("summary.json").is_file();
-        let is_sweep = d.join("results.csv").is_file();
-        if !is_run && !is_sweep {
-            return Err(Failure {
-                code: exit::NOINPUT,
-                message: format!(
-                    "{} is neither a run directory (summary.json, trace.csv, scenario.toml, from `isotrack run --out`) nor a sweep directory (results.csv, from `isotrack sweep --out`)",
-                    d.display()
-                ),
-            });
-        }
+        refuse_neither_run_nor_sweep(d)?;
     }
     if a.runs.len() == 1 && results.exists() {
-        // A sweep: a metric against a swept parameter.
-        let x = match &a.x {
-            Some(x) => x.clone(),
-            None => {
-                let f = isotrack_fields::io::open_limited(&results, isotrack_plot::MAX_INPUT_BYTES)
-                    .map_err(|e| Failure {
-                        code: exit::NOINPUT,
-                        message: format!("{}: {e}", results.display()),
-                    })?;
-                let mut r = csv::Reader::from_reader(f);
-                r.headers()
-                    .ok()
-                    .and_then(|h| h.get(1).map(str::to_string))
-                    .unwrap_or_default()
-            }
-        };
-        std::fs::create_dir_all(&out).map_err(|e| Failure {
-            code: exit::CANTCREAT,
-            message: format!("cannot create {}: {e}", out.display()),
-        })?;
-        // A file name from column names: ASCII letters, digits, `_` and `-` only (`.`, `[`,
-        // `]`, a `/`, an escape character or a bidi control each become `_`), at most 100
-        // characters of each.
-        let safe = |k: &str| -> String {
-            k.chars()
-                .take(100)
-                .map(|c| {
-                    if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
-                        c
-                    } else {
-                        '_'
-                    }
-                })
-                .collect()
-        };
-        let file = out.join(format!(
-            "sweep_{}_vs_{}{}.{}",
-            safe(&a.metric),
-            safe(&x),
-            a.group
-                .as_deref()
-                .map(|g| format!("_by_{}", safe(g)))
-                .unwrap_or_default(),
-            format.extension()
-        ));
-        isotrack_plot::sweep_figure(&results, &x, &a.metric, a.group.as_deref(), &file, &st)
-            .map_err(failure)?;
-        outln!("wrote {}", file.display());
-        return Ok(());
+        return plot_sweep(a, &results, &out, &st);
     }
     let mut written = plot_dirs(&a.runs, &st, &out)?;
     if a.animate {
@@ -235,6 +177,77 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         written.push(gif.display().to_string());
     }
     outln!("wrote {}", written.join(", "));
+    Ok(())
+}
+
+/// A directory given to `isotrack plot` that is neither a run directory nor a sweep directory:
+/// 66 naming what each holds.
+fn refuse_neither_run_nor_sweep(d: &Path) -> Result<(), Failure> {
+    let is_run = d.join("summary.json").is_file();
+    let is_sweep = d.join("results.csv").is_file();
+    if !is_run && !is_sweep {
+        return Err(Failure {
+            code: exit::NOINPUT,
+            message: format!(
+                "{} is neither a run directory (summary.json, trace.csv, scenario.toml, from `isotrack run --out`) nor a sweep directory (results.csv, from `isotrack sweep --out`)",
+                d.display()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// `isotrack plot` of a sweep directory: `--metric` against `--x` (by default the first
+/// parameter column of `results`), one line per `--group` value, into
+/// `sweep_METRIC_vs_X[_by_GROUP].EXT` in `out`.
+fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<(), Failure> {
+    let x = match &a.x {
+        Some(x) => x.clone(),
+        None => {
+            let f = isotrack_fields::io::open_limited(results, isotrack_plot::MAX_INPUT_BYTES)
+                .map_err(|e| Failure {
+                    code: exit::NOINPUT,
+                    message: format!("{}: {e}", results.display()),
+                })?;
+            let mut r = csv::Reader::from_reader(f);
+            r.headers()
+                .ok()
+                .and_then(|h| h.get(1).map(str::to_string))
+                .unwrap_or_default()
+        }
+    };
+    std::fs::create_dir_all(out).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot create {}: {e}", out.display()),
+    })?;
+    // A file name from column names: ASCII letters, digits, `_` and `-` only (`.`, `[`,
+    // `]`, a `/`, an escape character or a bidi control each become `_`), at most 100
+    // characters of each.
+    let safe = |k: &str| -> String {
+        k.chars()
+            .take(100)
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    };
+    let file = out.join(format!(
+        "sweep_{}_vs_{}{}.{}",
+        safe(&a.metric),
+        safe(&x),
+        a.group
+            .as_deref()
+            .map(|g| format!("_by_{}", safe(g)))
+            .unwrap_or_default(),
+        st.format.extension()
+    ));
+    isotrack_plot::sweep_figure(results, &x, &a.metric, a.group.as_deref(), &file, st)
+        .map_err(failure)?;
+    outln!("wrote {}", file.display());
     Ok(())
 }
 

@@ -26,10 +26,48 @@ pub fn write_grid_csv(path: &std::path::Path, g: &Grid2) -> std::io::Result<()> 
 
 /// Runs the command.
 pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
-    let data = |m: String| Failure {
-        code: exit::DATAERR,
-        message: m,
+    check_options(a)?;
+    let stations = Stations::from_csv(&a.stations, &a.value_column).map_err(|e| Failure {
+        code: if e.unreadable {
+            exit::NOINPUT
+        } else {
+            exit::DATAERR
+        },
+        message: e.to_string(),
+    })?;
+    let spacing_m = a.spacing_m.unwrap_or(stations.default_spacing_m());
+    let n = stations.values.len();
+    let projection = stations.projection;
+    let (grid, method) = station_grid(a, stations, spacing_m)?;
+    let cant = |e: std::io::Error| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot write {}: {e}", a.out.display()),
     };
+    let side = a.out.with_extension("json");
+    prepare_outputs(a, &side)?;
+    write_grid_csv(&a.out, &grid).map_err(cant)?;
+    let (lo, hi) = grid.value_range();
+    let sidecar = sidecar_json(a, &grid, n, projection, method);
+    isotrack_runs::files::write_atomic(
+        &side,
+        (serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n").as_bytes(),
+    )
+    .map_err(cant)?;
+    outln!(
+        "wrote {} ({} x {} nodes, {} m spacing, values {} .. {}) and {}",
+        a.out.display(),
+        grid.nx(),
+        grid.ny(),
+        Num(spacing_m),
+        Num(lo),
+        Num(hi),
+        side.display()
+    );
+    Ok(())
+}
+
+/// `--spacing-m` and `--idw-power`, each a finite number > 0 (the power not subnormal).
+fn check_options(a: &InterpolateArgs) -> Result<(), Failure> {
     if let Some(sp) = a.spacing_m.filter(|s| !(s.is_finite() && *s > 0.0)) {
         return Err(Failure {
             code: exit::USAGE,
@@ -45,18 +83,22 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
             ),
         });
     }
-    let stations = Stations::from_csv(&a.stations, &a.value_column).map_err(|e| Failure {
-        code: if e.unreadable {
-            exit::NOINPUT
-        } else {
-            exit::DATAERR
-        },
-        message: e.to_string(),
-    })?;
+    Ok(())
+}
+
+/// The stations interpolated by `--method` onto a grid over their extent, `spacing_m` apart,
+/// and the method as the sidecar records it (the kriging's fitted variogram with it). A grid
+/// too fine is a usage error (`--spacing-m`), a kriging that cannot be fitted a data error.
+fn station_grid(
+    a: &InterpolateArgs,
+    stations: Stations,
+    spacing_m: f64,
+) -> Result<(Grid2, serde_json::Value), Failure> {
+    let data = |m: String| Failure {
+        code: exit::DATAERR,
+        message: m,
+    };
     let extent = stations.extent_m();
-    let spacing_m = a.spacing_m.unwrap_or(stations.default_spacing_m());
-    let n = stations.values.len();
-    let projection = stations.projection;
     let (grid, method) = match a.method {
         Method::Idw => {
             let idw = Idw::new(stations, a.idw_power);
@@ -84,13 +126,19 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         },
         StationGridError::Grid(_) => data(e.to_string()),
     })?;
+    Ok((grid, method))
+}
+
+/// The outputs (`--out` and its `.json` sidecar `side`) checked before either is written:
+/// neither is the stations file, the directory exists, neither is a link or other non-regular
+/// file.
+fn prepare_outputs(a: &InterpolateArgs, side: &std::path::Path) -> Result<(), Failure> {
     let cant = |e: std::io::Error| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
     };
-    let side = a.out.with_extension("json");
     // Neither output replaces the stations file it is made from (64).
-    for o in [&a.out, &side] {
+    for o in [a.out.as_path(), side] {
         if let Some(message) = crate::output::input_clash(std::slice::from_ref(&a.stations), o) {
             return Err(Failure {
                 code: exit::USAGE,
@@ -101,12 +149,23 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(cant)?;
     }
-    for o in [&a.out, &side] {
+    for o in [a.out.as_path(), side] {
         isotrack_runs::files::refuse_non_regular(o).map_err(cant)?;
     }
-    write_grid_csv(&a.out, &grid).map_err(cant)?;
+    Ok(())
+}
+
+/// The grid's sidecar: what it was derived from, its layout, shape, spacing, origin and
+/// projection (for lon/lat stations), the interpolation `method` and the values' range.
+fn sidecar_json(
+    a: &InterpolateArgs,
+    grid: &Grid2,
+    n: usize,
+    projection: Option<(f64, f64, f64)>,
+    method: serde_json::Value,
+) -> serde_json::Value {
     let (lo, hi) = grid.value_range();
-    let sidecar = json!({
+    json!({
         "derived": format!("interpolated by isotrack {} from {} ({} stations, column `{}`); a derived product, not measured data",
             env!("CARGO_PKG_VERSION"), a.stations.display(), n, a.value_column),
         "layout": "row-major values[iy][ix]; row 0 = southernmost row, column 0 = westernmost column; CSV without header",
@@ -119,21 +178,5 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         "interpolation": method,
         "value_min": lo,
         "value_max": hi,
-    });
-    isotrack_runs::files::write_atomic(
-        &side,
-        (serde_json::to_string_pretty(&sidecar).unwrap_or_default() + "\n").as_bytes(),
-    )
-    .map_err(cant)?;
-    outln!(
-        "wrote {} ({} x {} nodes, {} m spacing, values {} .. {}) and {}",
-        a.out.display(),
-        grid.nx(),
-        grid.ny(),
-        Num(spacing_m),
-        Num(lo),
-        Num(hi),
-        side.display()
-    );
-    Ok(())
+    })
 }

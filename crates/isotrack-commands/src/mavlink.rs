@@ -7,7 +7,7 @@ use crate::output::{scenario_toml, RunDir, Summary};
 use crate::run::{load, Failure};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_mavlink::fly::{
-    run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, SensorSource,
+    run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, FlyReport, SensorSource,
 };
 use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
@@ -110,6 +110,9 @@ struct LiveOut {
     trace_failed: Option<String>,
     /// The time of the last row recorded, s.
     last_row_t_s: Option<f64>,
+    /// Another file of the run that could not be written to its end (`fly`'s
+    /// `mavlink.tlog`), as logged when it happened: in `recording_incomplete` too (ver33-6).
+    other_failed: Option<String>,
     /// The command writing (`fly`, `sitl`), for its log line.
     command: &'static str,
 }
@@ -130,6 +133,7 @@ impl LiveOut {
             error: None,
             trace_failed: None,
             last_row_t_s: None,
+            other_failed: None,
             command,
         }
     }
@@ -219,8 +223,12 @@ impl LiveOut {
         if let Some(e) = self.error.take() {
             return Err(e);
         }
+        let failed = match (self.trace_failed.take(), self.other_failed.take()) {
+            (Some(a), Some(b)) => Some(format!("{a}; {b}")),
+            (a, b) => a.or(b),
+        };
         match self.trace.take() {
-            Some(trace) => match self.trace_failed.take() {
+            Some(trace) => match failed {
                 Some(note) => {
                     out.finish_incomplete(trace, &self.scenario_toml, &summary(Some(&note)))?;
                     Err(Failure {
@@ -287,6 +295,9 @@ fn untouched_note(command: &str, dir: &Path) {
 
 /// The range of `--speedup`.
 pub const SPEEDUP_RANGE: (f64, f64) = (1e-3, 1e3);
+/// The range of `sitl --heartbeat-hz`, Hz: MAVLink's heartbeat is 1 Hz, at least 0.2 Hz (a
+/// companion's link timeout is a few seconds), at most 50 Hz.
+pub const HEARTBEAT_HZ_RANGE: (f64, f64) = (0.2, 50.0);
 /// The largest `--timeout-s`, s (a day).
 pub const MAX_TIMEOUT_S: f64 = 86_400.0;
 /// The smallest `--timeout-s`, s: the loops poll every 10 to 50 ms, and a vehicle beats at
@@ -310,8 +321,8 @@ const GCS_SYSTEM_ID: u8 = 255;
 /// The largest `--max-duration-s`, s: MAVLink's `time_boot_ms` span.
 pub const MAX_DURATION_S: f64 = u32::MAX as f64 / 1000.0;
 
-/// `isotrack sitl`.
-pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
+/// `sitl`'s options checked before anything is loaded or opened: the usage errors (64).
+fn check_sitl_args(args: &SitlArgs) -> Result<(), Failure> {
     positive("--speedup", args.speedup)?;
     within("--speedup", args.speedup, SPEEDUP_RANGE.0, SPEEDUP_RANGE.1)?;
     positive("--timeout-s", Some(args.timeout_s))?;
@@ -321,6 +332,13 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         MIN_TIMEOUT_S,
         MAX_TIMEOUT_S,
     )?;
+    positive("--heartbeat-hz", args.heartbeat_hz)?;
+    within(
+        "--heartbeat-hz",
+        args.heartbeat_hz,
+        HEARTBEAT_HZ_RANGE.0,
+        HEARTBEAT_HZ_RANGE.1,
+    )?;
     not_a_ground_stations_id("--system-id", args.system_id)?;
     if args.system_id == 0 {
         // Messages addressed to system 0 are for everyone: a vehicle cannot be it.
@@ -328,6 +346,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             "--system-id 0 is MAVLink's broadcast address, not a vehicle's: give 1 to 255".into(),
         ));
     }
+    Ok(())
+}
+
+/// `isotrack sitl`.
+pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
+    check_sitl_args(args)?;
     let scenario = load(&args.scenario)?;
     crate::run::refuse_team(&scenario, "sitl")?;
     let mut opts = SitlOptions::new(&args.mavlink);
@@ -340,6 +364,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         }
     };
     opts.companion_timeout_s = args.timeout_s;
+    opts.heartbeat_hz = args.heartbeat_hz;
     opts.stop = isotrack_runs::signals::interrupt_flag();
     let out = match &args.out {
         Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
@@ -449,8 +474,8 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
 /// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
 pub const NOTHING_COMMANDED: u8 = exit::NOTHING_COMMANDED;
 
-/// `isotrack fly`.
-pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
+/// `fly`'s options checked before anything is loaded or opened: the usage errors (64).
+fn check_fly_args(args: &FlyArgs) -> Result<(), Failure> {
     positive("--max-duration-s", args.max_duration_s)?;
     positive("--timeout-s", Some(args.timeout_s))?;
     within(
@@ -489,9 +514,12 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             "--allow-generic goes with --take-control (without it, a MAV_TYPE_GENERIC vehicle is flown when its pilot hands over, with a warning)".into(),
         ));
     }
-    let sensor = SensorSource::parse(&args.sensor).map_err(usage)?;
-    let scenario = load(&args.scenario)?;
-    crate::run::refuse_team(&scenario, "fly")?;
+    Ok(())
+}
+
+/// The bridge's options of `fly`'s arguments, its sensor parsed, Ctrl-C wired, events written
+/// live.
+fn fly_options(args: &FlyArgs, sensor: SensorSource) -> FlyOptions {
     let mut opts = FlyOptions::new(&args.mavlink);
     opts.sensor = sensor;
     opts.take_control = args.take_control;
@@ -509,127 +537,27 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         FailsafeArg::Loiter => FailsafeAction::Loiter,
     };
     opts.stop = isotrack_runs::signals::interrupt_flag();
-    // Readied (and locked) by the one run-directory writer, and written once the flight has
-    // something to record (LiveOut): a start that fails leaves an earlier flight there whole.
-    let out = match &args.out {
-        Some(dir) => Some(prepare_out(
-            dir,
-            &args.scenario,
-            &scenario,
-            &["mavlink.tlog"],
-            "fly",
-        )?),
-        None => None,
-    };
-    let mut live = LiveOut::new(out, &scenario, false, "fly");
-    // The raw log goes into a temporary file beside `mavlink.tlog`, renamed into place when the
-    // flight starts its directory.
-    let log_path = args.out.as_ref().map(|d| {
-        let p = d.join("mavlink.tlog");
-        (isotrack_runs::files::temp_beside(&p), p)
-    });
-    if let Some((tmp, p)) = &log_path {
-        live.staged.push((tmp.clone(), p.clone()));
-    }
-    let mut log_error = None;
-    let mut flush = |t: &mut LiveOut| t.flush();
-    let report = run_fly_flushing(&scenario, &opts, &mut live, &mut flush, &mut |link| {
-        errln!(
-            "isotrack fly: companion on {} ({})",
-            link.describe(),
-            args.mavlink
-        );
-        if let Some((tmp, _)) = &log_path {
-            if let Err(e) = link.log_to(tmp) {
-                log_error = Some(e.to_string());
-                return Err(e);
-            }
-        }
-        Ok(())
-    });
-    let report = match report {
-        Ok(r) => r,
-        Err(e) => {
-            let started = live.abandon();
-            if let (Some(dir), false) = (&args.out, started) {
-                untouched_note("fly", dir);
-            }
-            return Err(match e {
-                FlyError::Io(e) if log_error.is_some() => cant(
-                    log_path
-                        .as_ref()
-                        .map_or(Path::new("?"), |(_, p)| p.as_path()),
-                    e,
-                ),
-                FlyError::Link(l) => link_failure(l),
-                FlyError::Scenario(m) => Failure {
-                    code: exit::DATAERR,
-                    message: m,
-                },
-                FlyError::Io(e) => Failure {
-                    code: exit::OSERR,
-                    message: format!("link: {e}"),
-                },
-            });
-        }
-    };
-    for e in &report.events {
-        errln!("isotrack fly: {e}");
-    }
-    // A flight that recorded no row but commanded the vehicle (a way out after a refused
-    // take-over) still writes its directory: what was commanded is on record.
-    if report.way_out_commanded {
-        live.start();
-    }
-    let wrote = live.end(|incomplete| Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
-        scenario_path: args
-            .scenario
-            .scenario
-            .as_ref()
-            .map(|p| p.display().to_string()),
-        ended: Ended::Flight(FlightRecord {
-            outcome: if report.end.is_failsafe() {
-                "failsafe"
-            } else if report.end == FlyEnd::VehicleEnded {
-                "completed"
-            } else {
-                report.end.as_str()
-            }
-            .to_string(),
-            outcome_detail: report.events.last().cloned().unwrap_or_default(),
-            end_reason: report.end.as_str().to_string(),
-            failsafe: report.end.is_failsafe(),
-            failsafe_acknowledged: report.failsafe_acknowledged,
-            t_end_s: report.t_last_s,
-            samples: report.samples,
-            commands: report.commands.len() as u64,
-            events: report.events.clone(),
-            frames_in: report.link.frames_in,
-            frames_out: report.link.frames_out,
-            junk_datagrams: report.link.junk_datagrams,
-            measurements_out_of_order: report.measurements_out_of_order,
-            measurements_repeated: report.measurements_repeated,
-            measurements_invalid: report.measurements_invalid,
-            measurements_other_sources: report.measurements_other_sources,
-            recording_incomplete: incomplete.map(String::from),
-            data_files: isotrack_runs::summary::data_file_digests(&scenario),
-            metrics_over: report.metrics_over.to_string(),
-            metrics: MetricsRecord::of(&report.metrics),
-        }),
-        scenario: scenario.file(),
-        controller: None,
-    })?;
-    if let (Some(dir), false) = (&args.out, wrote) {
-        untouched_note("fly", dir);
-    }
+    // Each event on standard error as it happens (unbuffered: a line at a time), not when the
+    // flight ends (ver33-2): the operator watching the companion's terminal sees a rejected
+    // sensor, a pilot's take-over or a failsafe at once.
+    opts.live_events = Some(isotrack_mavlink::fly::LiveEvents(std::sync::Arc::new(
+        |e| {
+            errln!("isotrack fly: {e}");
+        },
+    )));
+    opts
+}
+
+/// The end line on stdout and the exit of a flight that ran (README's exit table): 69, 65, 79,
+/// 75 as it ended and what was commanded.
+fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
     outln!(
         "end         {} ({} measurements, {} law commands)",
         report.end.as_str(),
         report.samples,
         report.commands.len()
     );
-    if report.end == FlyEnd::TwoVehicles {
+    if report.end == FlyEnd::TwoVehicles && !report.way_out_commanded {
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: "two autopilots heard: which to fly is ambiguous, nothing commanded (see above: on two systems, pick one with --target-system)".into(),
@@ -639,6 +567,14 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: exit::DATAERR,
             message: "the scenario's vehicle kind does not fit the vehicle's type (see above): nothing commanded".into(),
+        });
+    }
+    if report.end == FlyEnd::AnotherController && !report.way_out_commanded {
+        // A twin companion heard before any vehicle (ver33-4) or another controller before
+        // control: the companion went no further.
+        return Err(Failure {
+            code: NOTHING_COMMANDED,
+            message: "another_controller: another controller or a second companion with this one's ids (see above): the companion went no further and commanded nothing (the vehicle's mode stands)".into(),
         });
     }
     if report.end.is_failsafe() && !report.vehicle_heard {
@@ -712,4 +648,131 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
         });
     }
     Ok(())
+}
+
+/// `isotrack fly`.
+pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
+    check_fly_args(args)?;
+    let sensor = SensorSource::parse(&args.sensor).map_err(usage)?;
+    let scenario = load(&args.scenario)?;
+    crate::run::refuse_team(&scenario, "fly")?;
+    let opts = fly_options(args, sensor);
+    // Readied (and locked) by the one run-directory writer, and written once the flight has
+    // something to record (LiveOut): a start that fails leaves an earlier flight there whole.
+    let out = match &args.out {
+        Some(dir) => Some(prepare_out(
+            dir,
+            &args.scenario,
+            &scenario,
+            &["mavlink.tlog"],
+            "fly",
+        )?),
+        None => None,
+    };
+    let mut live = LiveOut::new(out, &scenario, false, "fly");
+    // The raw log goes into a temporary file beside `mavlink.tlog`, renamed into place when the
+    // flight starts its directory.
+    let log_path = args.out.as_ref().map(|d| {
+        let p = d.join("mavlink.tlog");
+        (isotrack_runs::files::temp_beside(&p), p)
+    });
+    if let Some((tmp, p)) = &log_path {
+        live.staged.push((tmp.clone(), p.clone()));
+    }
+    let mut log_error = None;
+    let mut flush = |t: &mut LiveOut| t.flush();
+    let report = run_fly_flushing(&scenario, &opts, &mut live, &mut flush, &mut |link| {
+        errln!(
+            "isotrack fly: companion on {} ({})",
+            link.describe(),
+            args.mavlink
+        );
+        if let Some((tmp, _)) = &log_path {
+            if let Err(e) = link.log_to(tmp) {
+                log_error = Some(e.to_string());
+                return Err(e);
+            }
+        }
+        Ok(())
+    });
+    let report = match report {
+        Ok(r) => r,
+        Err(e) => {
+            let started = live.abandon();
+            if let (Some(dir), false) = (&args.out, started) {
+                untouched_note("fly", dir);
+            }
+            return Err(match e {
+                FlyError::Io(e) if log_error.is_some() => cant(
+                    log_path
+                        .as_ref()
+                        .map_or(Path::new("?"), |(_, p)| p.as_path()),
+                    e,
+                ),
+                FlyError::Link(l) => link_failure(l),
+                FlyError::Scenario(m) => Failure {
+                    code: exit::DATAERR,
+                    message: m,
+                },
+                FlyError::Io(e) => Failure {
+                    code: exit::OSERR,
+                    message: format!("link: {e}"),
+                },
+            });
+        }
+    };
+    for e in report.events.iter().skip(report.events_live) {
+        errln!("isotrack fly: {e}");
+    }
+    if let (Some(note), Some((_, p))) = (&report.log_incomplete, &log_path) {
+        live.other_failed = Some(format!("{}: {note}", p.display()));
+    }
+    // A flight that recorded no row but commanded the vehicle (a way out after a refused
+    // take-over) still writes its directory: what was commanded is on record.
+    if report.way_out_commanded {
+        live.start();
+    }
+    let wrote = live.end(|incomplete| Summary {
+        isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario_path: args
+            .scenario
+            .scenario
+            .as_ref()
+            .map(|p| p.display().to_string()),
+        ended: Ended::Flight(FlightRecord {
+            outcome: if report.end.is_failsafe() {
+                "failsafe"
+            } else if report.end == FlyEnd::VehicleEnded {
+                "completed"
+            } else {
+                report.end.as_str()
+            }
+            .to_string(),
+            outcome_detail: report.events.last().cloned().unwrap_or_default(),
+            end_reason: report.end.as_str().to_string(),
+            failsafe: report.end.is_failsafe(),
+            failsafe_acknowledged: report.failsafe_acknowledged,
+            t_end_s: report.t_last_s,
+            samples: report.samples,
+            commands: report.commands.len() as u64,
+            events: report.events.clone(),
+            frames_in: report.link.frames_in,
+            frames_out: report.link.frames_out,
+            junk_datagrams: report.link.junk_datagrams,
+            measurements_out_of_order: report.measurements_out_of_order,
+            measurements_repeated: report.measurements_repeated,
+            measurements_invalid: report.measurements_invalid,
+            measurements_other_sources: report.measurements_other_sources,
+            recording_incomplete: incomplete.map(String::from),
+            data_files: isotrack_runs::summary::data_file_digests(&scenario),
+            metrics_over: report.metrics_over.to_string(),
+            metrics: MetricsRecord::of(&report.metrics),
+        }),
+        scenario: scenario.file(),
+        controller: None,
+    })?;
+    if let (Some(dir), false) = (&args.out, wrote) {
+        untouched_note("fly", dir);
+    }
+    fly_exit(&report, args)
 }

@@ -160,6 +160,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 Some(Err(e)) => return Err(refused_team(&out, trace_file, e)),
                 None => None,
             };
+        warn_unfinished(team.as_ref());
         let (result, summary) = match &team {
             Some(t) => (
                 t.runs[0].clone(),
@@ -203,6 +204,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             code: exit::DATAERR,
             message: e.to_string(),
         })?;
+        warn_unfinished(Some(&team));
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &team.runs[0]));
             out!("{}", team_summary(&team));
@@ -217,6 +219,14 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     };
     let _ = result;
     Ok(())
+}
+
+/// A team run's vehicles that did not complete (other than vehicle 0, whose outcome the
+/// summary prints), as a `warning:` line on stderr (`summary.json` lists it in `warnings`).
+fn warn_unfinished(team: Option<&isotrack_sim::TeamResult>) {
+    if let Some(w) = team.and_then(isotrack_runs::summary::unfinished_vehicles) {
+        errln!("warning: {w}");
+    }
 }
 
 /// A team the engine refuses (a `TeamError`: a setting resolution let through) with `--out`:

@@ -341,12 +341,27 @@ fn write_number(f: &mut fmt::Formatter<'_>, x: f64, rounding: Rounding) -> fmt::
         return write!(f, "{x}");
     }
     let neg = x < 0.0;
-    let a = x.abs();
-    let Some((mut m, mut e)) = decompose(a) else {
+    let Some((m, e)) = decompose(x.abs()) else {
         return write!(f, "{x}");
     };
-    // Away from the forbidden side: for "at least" the printed value must not be below x, for
-    // "at most" not above: one step of the last digit towards the side where the bound holds.
+    let (m, e) = towards_bound(m, e, x, rounding);
+    if neg {
+        f.write_str("-")?;
+    }
+    let (digits, len) = significant_digits(m);
+    let ds = core::str::from_utf8(&digits[..len]).unwrap_or("0");
+    if (-6..9).contains(&e) {
+        write_positional(f, ds, e)
+    } else {
+        write_scientific(f, ds, e)
+    }
+}
+
+/// The decimal `(m, e)` of `|x|` (see [`decompose`]) moved one step of its last digit away from
+/// the forbidden side: for "at least" the printed value must not be below `x`, for "at most" not
+/// above; unchanged when the nearest already keeps the bound (or for [`Rounding::Nearest`]).
+fn towards_bound(mut m: u64, mut e: i32, x: f64, rounding: Rounding) -> (u64, i32) {
+    let neg = x < 0.0;
     let r = decimal_value(m, e);
     let printed = if neg { -r } else { r };
     let smallest = 10u64.pow(SIGNIFICANT_DIGITS - 1);
@@ -372,10 +387,12 @@ fn write_number(f: &mut fmt::Formatter<'_>, x: f64, rounding: Rounding) -> fmt::
         }
         None => {}
     }
-    if neg {
-        f.write_str("-")?;
-    }
-    // The significant digits without trailing zeros.
+    (m, e)
+}
+
+/// The [`SIGNIFICANT_DIGITS`] ASCII digits of `m` and how many of them are kept once trailing
+/// zeros are dropped (at least one).
+fn significant_digits(m: u64) -> ([u8; SIGNIFICANT_DIGITS as usize], usize) {
     let mut digits = [0u8; SIGNIFICANT_DIGITS as usize];
     let mut rest = m;
     for d in digits.iter_mut().rev() {
@@ -386,36 +403,42 @@ fn write_number(f: &mut fmt::Formatter<'_>, x: f64, rounding: Rounding) -> fmt::
     while len > 1 && digits[len - 1] == b'0' {
         len -= 1;
     }
-    let ds = core::str::from_utf8(&digits[..len]).unwrap_or("0");
-    if (-6..9).contains(&e) {
-        if e < 0 {
-            f.write_str("0.")?;
-            for _ in 0..(-e - 1) {
-                f.write_str("0")?;
-            }
-            f.write_str(ds)
-        } else {
-            let int_len = e as usize + 1;
-            if len <= int_len {
-                f.write_str(ds)?;
-                for _ in len..int_len {
-                    f.write_str("0")?;
-                }
-                Ok(())
-            } else {
-                f.write_str(&ds[..int_len])?;
-                f.write_str(".")?;
-                f.write_str(&ds[int_len..])
-            }
+    (digits, len)
+}
+
+/// The digits `ds` (first digit of decimal exponent `e`, `-6 <= e < 9`) as a plain decimal:
+/// `0.000ds`, `ds000` or `d.ddd`.
+fn write_positional(f: &mut fmt::Formatter<'_>, ds: &str, e: i32) -> fmt::Result {
+    if e < 0 {
+        f.write_str("0.")?;
+        for _ in 0..(-e - 1) {
+            f.write_str("0")?;
         }
-    } else {
-        f.write_str(&ds[..1])?;
-        if len > 1 {
-            f.write_str(".")?;
-            f.write_str(&ds[1..])?;
-        }
-        write!(f, "e{e}")
+        return f.write_str(ds);
     }
+    let int_len = e as usize + 1;
+    let len = ds.len();
+    if len <= int_len {
+        f.write_str(ds)?;
+        for _ in len..int_len {
+            f.write_str("0")?;
+        }
+        Ok(())
+    } else {
+        f.write_str(&ds[..int_len])?;
+        f.write_str(".")?;
+        f.write_str(&ds[int_len..])
+    }
+}
+
+/// The digits `ds` with decimal exponent `e` as `d.ddde<e>` (`de<e>` for a single digit).
+fn write_scientific(f: &mut fmt::Formatter<'_>, ds: &str, e: i32) -> fmt::Result {
+    f.write_str(&ds[..1])?;
+    if ds.len() > 1 {
+        f.write_str(".")?;
+        f.write_str(&ds[1..])?;
+    }
+    write!(f, "e{e}")
 }
 
 #[cfg(test)]

@@ -233,40 +233,83 @@ impl IsolineSegments {
     /// edges) for `n` segments. For the arc coordinate of a team's metrics
     /// (`isotrack_sim::team::arc::PolylineArc`).
     pub fn closed_loops(&self, tolerance_m: f64) -> Vec<Vec<Vec2>> {
-        use std::collections::HashMap;
-        let segs = &self.segments;
-        let n = segs.len();
+        let Some(partners) = self.end_partners(tolerance_m) else {
+            return Vec::new();
+        };
+        walk_loops(self.segments.len(), &|e| self.end(e), |e| partners[e])
+    }
+
+    /// The segments stitched into open chains: the isoline's pieces that leave the sampled
+    /// domain (or a no-data region) at both ends, each a list of vertices from one free end
+    /// (an end point joined to no other) to the other, consecutive equal vertices merged, at
+    /// least 2. Ends are joined as by [`closed_loops`](Self::closed_loops) (by lattice edge for
+    /// marching squares, else within `tolerance_m`); segments of closed loops are left out.
+    /// Chains are listed in the order of their lowest free end. `O(n)` (`O(n log n)` by edges).
+    /// For the arc coordinate along an open isoline (`isotrack_sim::team::arc::PolylineArc::open`).
+    pub fn open_chains(&self, tolerance_m: f64) -> Vec<Vec<Vec2>> {
+        let Some(partners) = self.end_partners(tolerance_m) else {
+            return Vec::new();
+        };
+        walk_chains(self.segments.len(), &|e| self.end(e), &partners)
+    }
+
+    /// End point `e` of the segments: `2k` is segment `k`'s first, `2k + 1` its second.
+    fn end(&self, e: usize) -> Vec2 {
+        let (a, b) = self.segments[e / 2];
+        if e.is_multiple_of(2) {
+            a
+        } else {
+            b
+        }
+    }
+
+    /// For each end point `e` (numbered as by [`end`](Self::end)), the end it is joined to, as
+    /// [`closed_loops`](Self::closed_loops) and [`open_chains`](Self::open_chains) join them:
+    /// by the lattice edge both lie on for marching squares, else the nearest other segment's
+    /// end within `tolerance_m`. `None` when there is nothing to join: no segments, or segments
+    /// given as they are with a tolerance not positive and finite.
+    fn end_partners(&self, tolerance_m: f64) -> Option<Vec<Option<usize>>> {
+        let n = self.segments.len();
         let by_edge = self.edges.len() == n;
         if n == 0 || !(by_edge || (tolerance_m > 0.0 && tolerance_m.is_finite())) {
-            return Vec::new();
+            return None;
         }
-        let end = |e: usize| {
+        Some(if by_edge {
+            self.partners_by_edge()
+        } else {
+            self.partners_within(tolerance_m)
+        })
+    }
+
+    /// Partners by lattice edge: end `e` lies on edge `edges[e / 2]` (first or second), and the
+    /// two ends on an edge are partners (an edge with one end, or more than two, joins none).
+    fn partners_by_edge(&self) -> Vec<Option<usize>> {
+        let n = self.segments.len();
+        let edge_of = |e: usize| {
             if e.is_multiple_of(2) {
-                segs[e / 2].0
+                self.edges[e / 2].0
             } else {
-                segs[e / 2].1
+                self.edges[e / 2].1
             }
         };
-        if by_edge {
-            // End `e` lies on edge `edge_of(e)`; the two ends on an edge are partners.
-            let edge_of = |e: usize| {
-                if e.is_multiple_of(2) {
-                    self.edges[e / 2].0
-                } else {
-                    self.edges[e / 2].1
-                }
-            };
-            let mut order: Vec<(u64, usize)> = (0..2 * n).map(|e| (edge_of(e), e)).collect();
-            order.sort_unstable();
-            let mut partners: Vec<Option<usize>> = vec![None; 2 * n];
-            for run in order.chunk_by(|a, b| a.0 == b.0) {
-                if let [(_, a), (_, b)] = run {
-                    partners[*a] = Some(*b);
-                    partners[*b] = Some(*a);
-                }
+        let mut order: Vec<(u64, usize)> = (0..2 * n).map(|e| (edge_of(e), e)).collect();
+        order.sort_unstable();
+        let mut partners: Vec<Option<usize>> = vec![None; 2 * n];
+        for run in order.chunk_by(|a, b| a.0 == b.0) {
+            if let [(_, a), (_, b)] = run {
+                partners[*a] = Some(*b);
+                partners[*b] = Some(*a);
             }
-            return walk_loops(n, &end, |e| partners[e]);
         }
+        partners
+    }
+
+    /// Partners by distance: the end joined to end `e` is the nearest end of another segment
+    /// within `tolerance_m` (ties to the lower end number), found through a hash of the
+    /// `tolerance_m` lattice cell and its 8 neighbours; ends that are not finite join none.
+    fn partners_within(&self, tolerance_m: f64) -> Vec<Option<usize>> {
+        use std::collections::HashMap;
+        let n = self.segments.len();
         let cell = |p: Vec2| {
             (
                 (p.x / tolerance_m).floor() as i64,
@@ -275,15 +318,13 @@ impl IsolineSegments {
         };
         let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::with_capacity(2 * n);
         for e in 0..2 * n {
-            let p = end(e);
+            let p = self.end(e);
             if p.x.is_finite() && p.y.is_finite() {
                 buckets.entry(cell(p)).or_default().push(e);
             }
         }
-        // The end point joined to end point `e`: the nearest other segment's end within the
-        // tolerance.
         let partner = |e: usize| -> Option<usize> {
-            let p = end(e);
+            let p = self.end(e);
             if !(p.x.is_finite() && p.y.is_finite()) {
                 return None;
             }
@@ -295,7 +336,7 @@ impl IsolineSegments {
                         if o / 2 == e / 2 {
                             continue;
                         }
-                        let d = (end(o) - p).norm();
+                        let d = (self.end(o) - p).norm();
                         if d <= tolerance_m && best.is_none_or(|(bd, bo)| (d, o) < (bd, bo)) {
                             best = Some((d, o));
                         }
@@ -304,111 +345,7 @@ impl IsolineSegments {
             }
             best.map(|(_, o)| o)
         };
-        walk_loops(n, &end, partner)
-    }
-
-    /// The segments stitched into open chains: the isoline's pieces that leave the sampled
-    /// domain (or a no-data region) at both ends, each a list of vertices from one free end
-    /// (an end point joined to no other) to the other, consecutive equal vertices merged, at
-    /// least 2. Ends are joined as by [`closed_loops`](Self::closed_loops) (by lattice edge for
-    /// marching squares, else within `tolerance_m`); segments of closed loops are left out.
-    /// Chains are listed in the order of their lowest free end. `O(n)` (`O(n log n)` by edges).
-    /// For the arc coordinate along an open isoline (`isotrack_sim::team::arc::PolylineArc::open`).
-    pub fn open_chains(&self, tolerance_m: f64) -> Vec<Vec<Vec2>> {
-        use std::collections::HashMap;
-        let segs = &self.segments;
-        let n = segs.len();
-        let by_edge = self.edges.len() == n;
-        if n == 0 || !(by_edge || (tolerance_m > 0.0 && tolerance_m.is_finite())) {
-            return Vec::new();
-        }
-        let end = |e: usize| {
-            if e.is_multiple_of(2) {
-                segs[e / 2].0
-            } else {
-                segs[e / 2].1
-            }
-        };
-        let mut partners: Vec<Option<usize>> = vec![None; 2 * n];
-        if by_edge {
-            let edge_of = |e: usize| {
-                if e.is_multiple_of(2) {
-                    self.edges[e / 2].0
-                } else {
-                    self.edges[e / 2].1
-                }
-            };
-            let mut order: Vec<(u64, usize)> = (0..2 * n).map(|e| (edge_of(e), e)).collect();
-            order.sort_unstable();
-            for run in order.chunk_by(|a, b| a.0 == b.0) {
-                if let [(_, a), (_, b)] = run {
-                    partners[*a] = Some(*b);
-                    partners[*b] = Some(*a);
-                }
-            }
-        } else {
-            let cell = |p: Vec2| {
-                (
-                    (p.x / tolerance_m).floor() as i64,
-                    (p.y / tolerance_m).floor() as i64,
-                )
-            };
-            let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::with_capacity(2 * n);
-            for e in 0..2 * n {
-                let p = end(e);
-                if p.x.is_finite() && p.y.is_finite() {
-                    buckets.entry(cell(p)).or_default().push(e);
-                }
-            }
-            for (e, slot) in partners.iter_mut().enumerate() {
-                let p = end(e);
-                if !(p.x.is_finite() && p.y.is_finite()) {
-                    continue;
-                }
-                let (cx, cy) = cell(p);
-                let mut best: Option<(f64, usize)> = None;
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for &o in buckets.get(&(cx + dx, cy + dy)).into_iter().flatten() {
-                            if o / 2 == e / 2 {
-                                continue;
-                            }
-                            let d = (end(o) - p).norm();
-                            if d <= tolerance_m && best.is_none_or(|(bd, bo)| (d, o) < (bd, bo)) {
-                                best = Some((d, o));
-                            }
-                        }
-                    }
-                }
-                *slot = best.map(|(_, o)| o);
-            }
-        }
-        let mut used = vec![false; n];
-        let mut chains = Vec::new();
-        for free in 0..2 * n {
-            if used[free / 2] || partners[free].is_some() {
-                continue;
-            }
-            // Walk from the free end through its segment and on until an end joined to none
-            // (or, where ends pair unevenly, a segment already used).
-            let mut pts = vec![end(free)];
-            let mut e = free;
-            loop {
-                used[e / 2] = true;
-                let p = end(e ^ 1);
-                if pts.last() != Some(&p) {
-                    pts.push(p);
-                }
-                match partners[e ^ 1] {
-                    Some(o) if !used[o / 2] => e = o,
-                    _ => break,
-                }
-            }
-            if pts.len() >= 2 {
-                chains.push(pts);
-            }
-        }
-        chains
+        (0..2 * n).map(partner).collect()
     }
 
     /// Distance from `p` to the nearest segment, `None` if there are none (or `p` is not
@@ -501,6 +438,42 @@ fn walk_loops(
         }
     }
     loops
+}
+
+/// The open chains of `n` segments whose end `e` is at `end(e)` and joined to `partners[e]`
+/// (numbered as for [`walk_loops`]): each walk starts at a free end (joined to none) of a
+/// segment not yet used, lowest first, and goes through its segment and on until an end joined
+/// to none (or, where ends pair unevenly, a segment already used). Consecutive equal vertices
+/// are merged; chains of fewer than 2 vertices are left out.
+fn walk_chains(
+    n: usize,
+    end: &dyn Fn(usize) -> Vec2,
+    partners: &[Option<usize>],
+) -> Vec<Vec<Vec2>> {
+    let mut used = vec![false; n];
+    let mut chains = Vec::new();
+    for free in 0..2 * n {
+        if used[free / 2] || partners[free].is_some() {
+            continue;
+        }
+        let mut pts = vec![end(free)];
+        let mut e = free;
+        loop {
+            used[e / 2] = true;
+            let p = end(e ^ 1);
+            if pts.last() != Some(&p) {
+                pts.push(p);
+            }
+            match partners[e ^ 1] {
+                Some(o) if !used[o / 2] => e = o,
+                _ => break,
+            }
+        }
+        if pts.len() >= 2 {
+            chains.push(pts);
+        }
+    }
+    chains
 }
 
 /// The most samples [`IsolineSegments::for_grid`] takes of a grid: 2^22 (about 4.2 million

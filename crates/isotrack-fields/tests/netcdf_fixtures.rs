@@ -392,19 +392,44 @@ fn a_dataset_without_dimension_scales_beside_the_variable_is_skipped() {
     assert_eq!(s.frame_times_s, twin.frame_times_s);
 }
 
-/// Issue 30 (att30c-11): messages shared through HDF5's shared object header message (SOHM)
-/// table (scripts/make-netcdf-fixtures.py, `shared_messages`: datatypes only, flags 0x02, and
-/// every kind, 0x1f) refused the whole file ("failed to load SOHM table: unexpected end of
-/// data"): hdf5-reader 0.12.1 read the table's pointer message, index headers and records
-/// with padding that is not in the file (vendor/hdf5-reader/PATCHED.md). Each loads to the
-/// data the script wrote: frame 0 is `frame0.csv`, every frame `series.npy`'s, with the
-/// times, units and grid of its twin `netcdf4_nc4_xy_contig.nc`.
+/// Issue 30 (att30c-11, ver30b-1, ver30b-8): messages shared through HDF5's shared object
+/// header message (SOHM) table (scripts/make-netcdf-fixtures.py, `shared_messages`: each kind
+/// libhdf5 shares, dataspaces, datatypes, fill values, filter pipelines and attributes, alone
+/// in one index, all in one index, in separate indexes, each in list and in B-tree form, and
+/// a variable with 9 or 21 shared attributes in dense storage) refused the whole file:
+/// hdf5-reader 0.12.1 read the table's pointer message, index headers and records with
+/// padding that is not in the file ("failed to load SOHM table: unexpected end of data"),
+/// tested an index's message-type flags with the wrong bits (separate indexes: "unsupported
+/// dataspace version 17") and read shared dense attributes from the object's own heap
+/// ("undefined address") (vendor/hdf5-reader/PATCHED.md). Each loads to the data the script
+/// wrote: frame 0 is `frame0.csv`, every frame `series.npy`'s, with the times, units and grid
+/// of its twin `netcdf4_nc4_xy_contig.nc`.
 #[test]
 fn sohm_fixtures_load_as_their_twin() {
     let npy = load_series(&dir().join("series.npy"), None, None).unwrap();
     let csv = load_grid(&dir().join("frame0.csv"), None).unwrap();
     let twin = load_series(&dir().join("netcdf4_nc4_xy_contig.nc"), None, None).unwrap();
-    for name in ["sohm_datatypes.nc", "sohm_all.nc"] {
+    let mut names = Vec::new();
+    for form in ["", "_btree"] {
+        for kind in [
+            "dataspaces",
+            "datatypes",
+            "fill",
+            "pline",
+            "attrs",
+            "all",
+            "separate",
+            "dataspaces_datatypes",
+            "datatypes_dataspaces",
+            "attrs_dense",
+            "all_dense",
+            "separate_dense",
+        ] {
+            names.push(format!("sohm_{kind}{form}.nc"));
+        }
+    }
+    assert_eq!(names.len(), 24);
+    for name in &names {
         let s =
             load_series(&dir().join(name), None, None).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(s.frames.len(), 3, "{name}");
@@ -419,4 +444,46 @@ fn sohm_fixtures_load_as_their_twin() {
         assert_eq!(s.georeference, twin.georeference, "{name}");
         assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
     }
+}
+
+/// Issue 30 (att30d-7): a NetCDF-4 file whose groups do not form a tree
+/// (scripts/make-netcdf-fixtures.py, `group_links`; each the twin `netcdf4_nc4_xy_contig.nc`
+/// plus groups) overflowed the stack in netcdf-reader's recursive group walk (the process
+/// aborted; Python died of SIGSEGV): a group `g` holding a hard link to itself or to the root.
+/// Each is refused naming the link; a group linked at two places (no cycle, but the reader
+/// would read it once per path, twice per level when shared at every level) and 3000 nested
+/// groups (past the 64 levels read) likewise.
+#[test]
+fn groups_that_are_not_a_tree_are_refused_naming_the_link() {
+    for (file, want) in [
+        (
+            "refused_group_loop.nc",
+            "a group cycle; NetCDF groups form a tree): /g/loop -> /g",
+        ),
+        (
+            "refused_group_up.nc",
+            "a group cycle; NetCDF groups form a tree): /g/up -> /",
+        ),
+        (
+            "refused_group_twice.nc",
+            "a group is linked twice (NetCDF groups form a tree): /a/s and /b/s",
+        ),
+        (
+            "refused_group_deep.nc",
+            "group nesting exceeds 64 levels at /g/g/g/",
+        ),
+    ] {
+        let path = dir().join(file);
+        let e = load_series(&path, None, None).unwrap_err().to_string();
+        assert!(e.contains(file) && e.contains(want), "{file}: {e}");
+        // The variable asked for by name reads the group tree too.
+        let e = load_series(&path, None, Some("v")).unwrap_err().to_string();
+        assert!(e.contains(want), "{file}: {e}");
+    }
+    // The deep chain is named to its 65th level, the first past the limit.
+    let e = load_series(&dir().join("refused_group_deep.nc"), None, None)
+        .unwrap_err()
+        .to_string();
+    let at = &e[e.find("levels at ").unwrap() + "levels at ".len()..];
+    assert_eq!(at.trim_end().matches("/g").count(), 65, "{e}");
 }

@@ -89,68 +89,19 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
 /// [`report_page`] and the notes a command shows beside it (runs without recorded data-file
 /// digests beside runs with them: `isotrack_plot::unrecorded_data_files_note`).
 pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), ReportError> {
-    let mut runs = vec![];
-    let mut data: Vec<RunData> = vec![];
-    for d in dirs {
-        // A team's run is its vehicles, each shown as a run (issue 32).
-        let r = RunData::load_team(d).map_err(|e| match e {
-            PlotError::Input(m) => ReportError::Input(m),
-            other => ReportError::Data(other.to_string()),
-        })?;
-        data.extend(r);
-    }
+    let data = load_runs(dirs)?;
     // The page draws the first run's field under every path: runs over different fields (or
     // isolines) are refused, naming both.
     isotrack_plot::same_field(&data).map_err(|e| ReportError::Data(e.to_string()))?;
     let notes: Vec<String> = isotrack_plot::unrecorded_data_files_note(&data)
         .into_iter()
         .collect();
-    for r in &data {
-        let n = r.trace.len();
-        let every = n.div_ceil(MAX_POINTS).max(1);
-        let keep: Vec<&isotrack_sim::TraceRow> = r
-            .trace
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i.is_multiple_of(every) || *i + 1 == n)
-            .map(|(_, row)| row)
-            .collect();
-        runs.push(RunJson {
-            // The name as the title shows it (every character the plain-text rule refuses as
-            // its escape, `\u{202e}`): the script builds the summary line, the legend and
-            // `data-run` from it, where a raw U+202E reversed the run's numbers (att30c-2).
-            name: isotrack_core::numtext::Escaped(&r.name).to_string(),
-            outcome: shown_outcome(r.summary.outcome()).to_string(),
-            // As a JSON value (its keys sorted), the page's data as before.
-            summary: serde_json::to_value(&r.summary).unwrap_or_default(),
-            t: keep.iter().map(|k| k.t_s).collect(),
-            x: keep.iter().map(|k| k.x_m).collect(),
-            y: keep.iter().map(|k| k.y_m).collect(),
-            s: keep.iter().map(|k| finite(k.s)).collect(),
-            s_measured: keep.iter().map(|k| k.s_measured.and_then(finite)).collect(),
-            error: keep.iter().map(|k| finite(k.error)).collect(),
-            omega: keep.iter().map(|k| k.omega_radps).collect(),
-        });
-    }
+    let runs: Vec<RunJson> = data.iter().map(run_json).collect();
     let first = data
         .first()
         .ok_or_else(|| ReportError::Input("no run directory given".into()))?;
     let scenario = &first.scenario;
-    let t_end = runs
-        .iter()
-        .filter_map(|r| r.t.last().copied())
-        .fold(0.0, f64::max);
-    let moving = scenario.is_time_varying();
-    let mut picture = picture(scenario, &runs, if moving { FRAME_GRID } else { GRID });
-    let frames = match &mut picture {
-        Some(pic) if moving => {
-            let f = frames(scenario, pic, t_end);
-            pic.values.clear();
-            pic.isoline.clear();
-            Some(f)
-        }
-        _ => None,
-    };
+    let (picture, frames) = field_json(scenario, &runs);
     let units = scenario
         .file()
         .field
@@ -164,7 +115,89 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let body = format!(
+    let body = page_body(&title);
+    let json = ReportJson {
+        level: scenario.level(),
+        runs,
+        picture,
+        frames,
+        units,
+    };
+    Ok((page(&title, &body, &script_json(&json), REPORT_JS), notes))
+}
+
+/// The runs of the run directories `dirs`, in order: a team's run is its vehicles, each shown
+/// as a run (issue 32).
+fn load_runs(dirs: &[&Path]) -> Result<Vec<RunData>, ReportError> {
+    let mut data: Vec<RunData> = vec![];
+    for d in dirs {
+        // A team's run is its vehicles, named `DIR vehicle I` among several runs (att32d-7).
+        let r = RunData::load_team_named(d, dirs.len() > 1).map_err(|e| match e {
+            PlotError::Input(m) => ReportError::Input(m),
+            other => ReportError::Data(other.to_string()),
+        })?;
+        data.extend(r);
+    }
+    Ok(data)
+}
+
+/// One run as the page's script reads it: its name and outcome as shown, its summary, and its
+/// trace thinned evenly to at most [`MAX_POINTS`] rows (the last row kept), values that are not
+/// finite as `null`.
+fn run_json(r: &RunData) -> RunJson {
+    let n = r.trace.len();
+    let every = n.div_ceil(MAX_POINTS).max(1);
+    let keep: Vec<&isotrack_sim::TraceRow> = r
+        .trace
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i.is_multiple_of(every) || *i + 1 == n)
+        .map(|(_, row)| row)
+        .collect();
+    RunJson {
+        // The name as the title shows it (every character the plain-text rule refuses as
+        // its escape, `\u{202e}`): the script builds the summary line, the legend and
+        // `data-run` from it, where a raw U+202E reversed the run's numbers (att30c-2).
+        name: isotrack_core::numtext::Escaped(&r.name).to_string(),
+        outcome: shown_outcome(r.summary.outcome()).to_string(),
+        // As a JSON value (its keys sorted), the page's data as before.
+        summary: serde_json::to_value(&r.summary).unwrap_or_default(),
+        t: keep.iter().map(|k| k.t_s).collect(),
+        x: keep.iter().map(|k| k.x_m).collect(),
+        y: keep.iter().map(|k| k.y_m).collect(),
+        s: keep.iter().map(|k| finite(k.s)).collect(),
+        s_measured: keep.iter().map(|k| k.s_measured.and_then(finite)).collect(),
+        error: keep.iter().map(|k| finite(k.error)).collect(),
+        omega: keep.iter().map(|k| k.omega_radps).collect(),
+    }
+}
+
+/// The field under the paths: a field that does not move as one picture on [`GRID`]² samples;
+/// one that moves as its square and lattice (on [`FRAME_GRID`]² samples) with the values and
+/// isolines in [`FRAMES`] frames over the longest run.
+fn field_json(scenario: &Scenario, runs: &[RunJson]) -> (Option<FieldPicture>, Option<FramesJson>) {
+    let t_end = runs
+        .iter()
+        .filter_map(|r| r.t.last().copied())
+        .fold(0.0, f64::max);
+    let moving = scenario.is_time_varying();
+    let mut picture = picture(scenario, runs, if moving { FRAME_GRID } else { GRID });
+    let frames = match &mut picture {
+        Some(pic) if moving => {
+            let f = frames(scenario, pic, t_end);
+            pic.values.clear();
+            pic.isoline.clear();
+            Some(f)
+        }
+        _ => None,
+    };
+    (picture, frames)
+}
+
+/// The page's body: the title, the time controls, the map with its legend, the charts and the
+/// tooltip (the script fills them).
+fn page_body(title: &str) -> String {
+    format!(
         r#"<h1>{t}</h1>
 <p class="sub" id="summary"></p>
 <div class="controls"><button id="play" type="button">Play</button> <input id="time" type="range" min="0" max="1000" value="0" step="1" aria-label="time"> <span id="clock">t = 0 s</span></div>
@@ -174,16 +207,8 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
 </div>
 <div id="tooltip"></div>
 <p class="note" id="status">loading</p>"#,
-        t = escape(&title)
-    );
-    let json = ReportJson {
-        level: scenario.level(),
-        runs,
-        picture,
-        frames,
-        units,
-    };
-    Ok((page(&title, &body, &script_json(&json), REPORT_JS), notes))
+        t = escape(title)
+    )
 }
 
 fn picture(scenario: &Scenario, runs: &[RunJson], n: usize) -> Option<FieldPicture> {

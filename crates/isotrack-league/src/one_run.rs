@@ -111,6 +111,56 @@ pub struct Scored {
     pub team: Option<TeamRow>,
 }
 
+/// The scored single-vehicle run `r` of scenario `s`.
+fn scored_single(s: &Scenario, r: &RunResult, task: &Task, scoring: Scoring) -> Scored {
+    Scored {
+        outcome: r.outcome.as_str().to_string(),
+        record: RunRecord::of(r),
+        score: score(r, &context(s, task, scoring)),
+        team: None,
+    }
+}
+
+/// One run of [`run_scored_lanes`]: its task's base scenario (of its seed), the built-in law
+/// that flies it with its gains, and its seed.
+pub(crate) struct LaneJob<'a> {
+    /// The base scenario (one vehicle).
+    pub base: &'a Scenario,
+    /// The built-in law's entrant ([`Entrant::Builtin`]).
+    pub entrant: &'a Entrant,
+    /// Its gains.
+    pub gains: Option<&'a BTreeMap<String, f64>>,
+    /// The scoring seed.
+    pub seed: u64,
+}
+
+/// [`run_scored`] of each of `jobs` (single-vehicle runs of built-in laws), the runs stepped
+/// together ([`Scenario::run_batch`]: those that share their field, vehicle and step plan,
+/// [`isotrack_sim::LANES`] at a time in SIMD lanes, whatever their law, gains or seed), each
+/// result the one `run_scored` gives (`run_batch`'s results are `run(&mut NoTrace)`'s bit for
+/// bit; test `run::tests::lanes_score_as_runs_one_at_a_time`).
+pub(crate) fn run_scored_lanes(
+    jobs: &[LaneJob<'_>],
+    task: &Task,
+    scoring: Scoring,
+) -> Vec<Result<Scored, String>> {
+    // Each job's place among the scenarios flown, or why its scenario is invalid.
+    let mut flown = Vec::with_capacity(jobs.len());
+    let slots: Vec<Result<usize, String>> = jobs
+        .iter()
+        .map(|j| {
+            let s = prepare(j.base, task, j.entrant, j.gains, j.seed).map_err(|e| e.to_string())?;
+            flown.push(s);
+            Ok(flown.len() - 1)
+        })
+        .collect();
+    let results = Scenario::run_batch(&flown);
+    slots
+        .into_iter()
+        .map(|slot| slot.map(|i| scored_single(&flown[i], &results[i], task, scoring)))
+        .collect()
+}
+
 /// Runs and scores one (task, controller, seed) by `scoring`: a scenario with `[team]` as a
 /// team (through [`Scenario::run_team`], the engine `isotrack run` flies it with; scored by
 /// [`team_score`]), any other as one vehicle ([`run_one`], [`score`]). `Err` with the message
@@ -140,12 +190,7 @@ pub fn run_scored_into<S: TraceSink + ?Sized>(
 ) -> Result<Scored, String> {
     if base.spec().team.is_none() {
         let (s, r) = run_one(base, task, entrant, gains, seed, sink)?;
-        return Ok(Scored {
-            outcome: r.outcome.as_str().to_string(),
-            record: RunRecord::of(&r),
-            score: score(&r, &context(&s, task, scoring)),
-            team: None,
-        });
+        return Ok(scored_single(&s, &r, task, scoring));
     }
     if let Entrant::Custom(_) = entrant {
         return Err(format!(

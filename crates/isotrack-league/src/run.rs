@@ -394,26 +394,19 @@ fn run_task(
             Some((seed, b))
         })
         .collect();
-    let done: Vec<(RunRow, Option<Trajectory>)> = jobs
-        .par_iter()
-        .map(|(c, seed, picture)| {
-            let entrant = reg.get(c).expect("checked by controllers_of");
-            let b = seeded.get(seed).unwrap_or(&base);
-            (!o.cancelled()).then(|| {
-                scored_job(
-                    b,
-                    task,
-                    c,
-                    entrant,
-                    gains.get(*c),
-                    *seed,
-                    suite.scoring,
-                    *picture,
-                )
-            })
-        })
-        .collect::<Option<_>>()
-        .ok_or(BenchError::Interrupted)?;
+    let done = run_jobs(
+        &Jobs {
+            jobs: &jobs,
+            seeded: &seeded,
+            base: &base,
+            task,
+            reg,
+            gains: &gains,
+            scoring: suite.scoring,
+        },
+        o,
+        true,
+    )?;
     let (runs, paths): (Vec<RunRow>, Vec<Option<Trajectory>>) = done.into_iter().unzip();
     let scores = controllers
         .iter()
@@ -443,6 +436,106 @@ fn run_task(
         digest,
         team: base.spec().team.is_some(),
     })
+}
+
+/// A task's scored runs: (controller, seed, whether the run draws the controller's path),
+/// with what they are run from.
+struct Jobs<'a> {
+    jobs: &'a [(&'a String, u64, bool)],
+    /// The task's base scenario with each seed's `sim.seed`.
+    seeded: &'a BTreeMap<u64, Scenario>,
+    base: &'a Scenario,
+    task: &'a Task,
+    reg: &'a Registry,
+    gains: &'a BTreeMap<String, BTreeMap<String, f64>>,
+    scoring: Scoring,
+}
+
+/// The rows (and the paths) of `j`'s runs, in their order. With `lanes` (issue 34), the runs
+/// that draw no path, of one vehicle, by a built-in law, are stepped [`isotrack_sim::LANES`]
+/// at a time in SIMD lanes ([`crate::one_run::run_scored_lanes`]; the runs of a seed
+/// together, since a field that follows the seed differs between seeds), every other run
+/// alone ([`scored_job`]); each row is the same either way, on any thread count.
+fn run_jobs(
+    j: &Jobs<'_>,
+    o: &Options,
+    lanes: bool,
+) -> Result<Vec<(RunRow, Option<Trajectory>)>, BenchError> {
+    let laned = |&(c, _, picture): &(&String, u64, bool)| {
+        lanes
+            && !picture
+            && j.base.spec().team.is_none()
+            && matches!(j.reg.get(c), Some(Entrant::Builtin(_)))
+    };
+    // The units of work: up to LANES laned runs (seed by seed, the runs' order within a
+    // seed), then each other run alone.
+    let mut together: Vec<usize> = (0..j.jobs.len()).filter(|&i| laned(&j.jobs[i])).collect();
+    together.sort_by_key(|&i| j.jobs[i].1);
+    let units: Vec<(bool, Vec<usize>)> = together
+        .chunks(isotrack_sim::LANES)
+        .map(|c| (true, c.to_vec()))
+        .chain(
+            (0..j.jobs.len())
+                .filter(|&i| !laned(&j.jobs[i]))
+                .map(|i| (false, vec![i])),
+        )
+        .collect();
+    let base_of = |seed: u64| j.seeded.get(&seed).unwrap_or(j.base);
+    let entrant_of = |c: &str| j.reg.get(c).expect("checked by controllers_of");
+    let done: Vec<Vec<(usize, (RunRow, Option<Trajectory>))>> = units
+        .par_iter()
+        .map(|(in_lanes, unit)| {
+            if o.cancelled() {
+                return None;
+            }
+            if *in_lanes {
+                let runs: Vec<crate::one_run::LaneJob<'_>> = unit
+                    .iter()
+                    .map(|&i| {
+                        let (c, seed, _) = j.jobs[i];
+                        crate::one_run::LaneJob {
+                            base: base_of(seed),
+                            entrant: entrant_of(c),
+                            gains: j.gains.get(c),
+                            seed,
+                        }
+                    })
+                    .collect();
+                let scored = crate::one_run::run_scored_lanes(&runs, j.task, j.scoring);
+                return Some(
+                    unit.iter()
+                        .zip(scored)
+                        .map(|(&i, r)| {
+                            let (c, seed, _) = j.jobs[i];
+                            (i, (scored_row(c, seed, r), None))
+                        })
+                        .collect(),
+                );
+            }
+            Some(
+                unit.iter()
+                    .map(|&i| {
+                        let (c, seed, picture) = j.jobs[i];
+                        let job = scored_job(
+                            base_of(seed),
+                            j.task,
+                            c,
+                            entrant_of(c),
+                            j.gains.get(c),
+                            seed,
+                            j.scoring,
+                            picture,
+                        );
+                        (i, job)
+                    })
+                    .collect(),
+            )
+        })
+        .collect::<Option<_>>()
+        .ok_or(BenchError::Interrupted)?;
+    let mut done: Vec<(usize, (RunRow, Option<Trajectory>))> = done.into_iter().flatten().collect();
+    done.sort_by_key(|(i, _)| *i);
+    Ok(done.into_iter().map(|(_, d)| d).collect())
 }
 
 /// The scored run of (controller, seed) and, with `picture`, the controller's path for the
@@ -662,4 +755,111 @@ fn read_task(dir: &Path, id: &str) -> Option<TaskResult> {
     // A task file is a few KB; anything that is not a regular file is not one of ours.
     let text = isotrack_fields::io::read_text_limited(&task_file(dir, id), 64 << 20).ok()?;
     serde_json::from_str(&text).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 34: a task's runs stepped in lanes ([`run_jobs`] with `lanes`) give every row and
+    /// path that each run flown alone gives, on 1 and 2 threads: the 6-DOF UAV in gusts (each
+    /// lane its own gust seed and heading), the Dubins robot on the circular field, and a puff
+    /// plume (a field per seed), each flown by three laws on four seeds.
+    #[test]
+    fn lanes_score_as_runs_one_at_a_time() {
+        let text = r#"
+name = "lanes"
+version = 1
+controllers = ["pi_isoline", "pid", "sliding_mode"]
+tuning_seeds = [11]
+scoring_seeds = [1, 2, 3, 4]
+
+[[task]]
+id = "uav"
+title = "UAV in gusts"
+scenario = "paper-fig3-uav.toml"
+set = ["sim.duration_s=40.0", "vehicle.wind_mps=[6.0, 2.0]", "vehicle.gusts=true"]
+length_m = 2131.0
+vary = { "initial.heading_rad" = { uniform = [-3.0, 3.0] } }
+
+[task.tuned.pi_isoline]
+ki = 0.2
+kp = 8.0
+
+[[task]]
+id = "circular"
+title = "circular field"
+scenario = "paper-fig2b-circular.toml"
+set = ["sim.duration_s=30.0"]
+length_m = 6.93
+vary = { "initial.x_m" = { uniform = [8.0, 12.0] }, "initial.heading_rad" = { uniform = [-3.0, 3.0] } }
+
+[[task]]
+id = "puff"
+title = "puff plume"
+scenario = "puff-plume-edge.toml"
+set = ["sim.duration_s=20.0"]
+length_m = 50.0
+"#;
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+        let suite = Suite::parse(text, "lanes.toml", &dir).unwrap();
+        let reg = Registry::builtin();
+        let o = Options::default();
+        for task in &suite.tasks {
+            let base = task_base(&suite, task).unwrap();
+            let controllers = suite.controllers.clone();
+            let jobs: Vec<(&String, u64, bool)> = controllers
+                .iter()
+                .flat_map(|c| {
+                    suite
+                        .scoring_seeds
+                        .iter()
+                        .enumerate()
+                        .map(move |(k, s)| (c, *s, k == 0))
+                })
+                .collect();
+            let seeded: BTreeMap<u64, Scenario> = suite
+                .scoring_seeds
+                .iter()
+                .map(|&seed| {
+                    (
+                        seed,
+                        base.derive(&[format!("sim.seed={seed}")], "seed").unwrap(),
+                    )
+                })
+                .collect();
+            let gains: BTreeMap<String, BTreeMap<String, f64>> = controllers
+                .iter()
+                .map(|c| (c.clone(), task.tuned.get(c).cloned().unwrap_or_default()))
+                .collect();
+            let j = Jobs {
+                jobs: &jobs,
+                seeded: &seeded,
+                base: &base,
+                task,
+                reg: &reg,
+                gains: &gains,
+                scoring: suite.scoring,
+            };
+            let on = |threads: usize, lanes: bool| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let done = pool.install(|| run_jobs(&j, &o, lanes)).unwrap();
+                // `{:?}` writes each number's shortest round trip: equal text, equal bits.
+                format!("{done:?}")
+            };
+            let alone = on(1, false);
+            assert_eq!(on(1, true), alone, "task {}", task.id);
+            assert_eq!(on(2, true), alone, "task {}", task.id);
+            // Each row where its run is, and a path for each law's first seed.
+            let rows = run_jobs(&j, &o, true).unwrap();
+            assert_eq!(rows.len(), 12);
+            for (k, (row, path)) in rows.iter().enumerate() {
+                assert_eq!((&row.controller, row.seed), (jobs[k].0, jobs[k].1));
+                assert_eq!(path.is_some(), jobs[k].2, "task {} run {k}", task.id);
+            }
+        }
+    }
 }

@@ -260,6 +260,11 @@ impl SensorSource {
             // A malformed address is a usage error, as --mavlink's.
             return match crate::link::resolve(a) {
                 Err(LinkError::Address(m)) => Err(format!("--sensor udp:{a}: {m}")),
+                // Port 0 binds a port the system picks, which no sensor could be told
+                // (att33d-9c).
+                Ok(addr) if addr.port() == 0 => Err(format!(
+                    "--sensor udp:{a}: port 0 would be a port the system picks, which no sensor could know: give the port the sensor sends to"
+                )),
                 _ => Ok(SensorSource::UdpLines(a.to_string())),
             };
         }
@@ -363,6 +368,21 @@ pub struct FlyOptions {
     pub target_system: Option<u8>,
     /// Set from outside (Ctrl-C) to stop.
     pub stop: Arc<AtomicBool>,
+    /// Called with each event as it happens (the operator's terminal: `fly` writes them to
+    /// standard error at once, not when the flight ends): the first
+    /// [`MAX_EVENTS`] `- EVENTS_KEPT_LAST`, then one line saying the rest are printed at the
+    /// end ([`FlyReport::events_live`] says how many of the report's went out so).
+    pub live_events: Option<LiveEvents>,
+}
+
+/// A writer of events as they happen ([`FlyOptions::live_events`]).
+#[derive(Clone)]
+pub struct LiveEvents(pub Arc<dyn Fn(&str) + Send + Sync>);
+
+impl std::fmt::Debug for LiveEvents {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("LiveEvents")
+    }
 }
 
 impl FlyOptions {
@@ -383,6 +403,7 @@ impl FlyOptions {
             system_id: 1,
             target_system: None,
             stop: Arc::new(AtomicBool::new(false)),
+            live_events: None,
         }
     }
 }
@@ -408,7 +429,8 @@ pub enum FlyEnd {
     ControlRefused,
     /// The vehicle reported `MAV_STATE_POWEROFF` without announcing the end of its run
     /// (`STATUSTEXT` "isotrack sitl: run ended"), or its autopilot rebooted (its clock went
-    /// back by more than [`REBOOT_STEP_S`]): failsafe.
+    /// back by more than [`REBOOT_STEP_S`]), or a second vehicle with its ids was heard
+    /// ([`crate::same_ids`]; before control nothing is commanded): failsafe.
     VehicleLost,
     /// The measurements' clock jumped by more than [`MAX_MEASUREMENT_STEP_S`]: failsafe.
     SensorClockJump,
@@ -477,6 +499,9 @@ pub struct FlyReport {
     pub t_last_s: Option<f64>,
     /// Events (control, failsafes), in order.
     pub events: Vec<String>,
+    /// How many of the first `events` went to [`FlyOptions::live_events`] as they happened
+    /// (the rest, from the count of those not kept on, were not).
+    pub events_live: usize,
     /// Whether the vehicle acknowledged the failsafe mode (or, after a refused take-over, the
     /// mode or the disarm commanded).
     pub failsafe_acknowledged: bool,
@@ -513,6 +538,9 @@ pub struct FlyReport {
     /// With `target_system`, the first autopilot heard of another system (system, component):
     /// a vehicle was there, not the one asked for (a mistyped id?).
     pub other_system_heard: Option<(u32, u8)>,
+    /// Why the raw MAVLink log ([`Link::log_to`]) stopped short, and when (a full disk): its
+    /// frames after that are missing (logged when it happened).
+    pub log_incomplete: Option<String>,
 }
 
 /// Why a flight could not start.
@@ -539,6 +567,20 @@ impl std::fmt::Display for FlyError {
 fn name_of(c: &[u8]) -> &[u8] {
     let n = c.iter().position(|&b| b == 0).unwrap_or(c.len());
     &c[..n]
+}
+
+/// Refuses a scenario whose `controller.level` is beyond [`MAX_MEASUREMENT_ABS`]: every
+/// measurement at the level would be dropped as implausible, and the flight could only end
+/// `sensor_lost` (ver33-5). `fly` and `sitl` refuse it before anything is opened.
+pub fn check_level(scenario: &Scenario) -> Result<(), String> {
+    let level = scenario.level();
+    if plausible_value(level) {
+        return Ok(());
+    }
+    Err(format!(
+        "controller.level = {}: beyond the +-{MAX_MEASUREMENT_ABS:e} a measurement may be over MAVLink or --sensor lines (fly drops every measurement beyond it as implausible, so no measurement at the level could be flown): scale the field and the level down",
+        isotrack_core::numtext::Echo(level)
+    ))
 }
 
 /// A flight under way: the link, the vehicle as heard, the law and what is recorded.
@@ -610,6 +652,12 @@ struct Flight<'a, S: ?Sized> {
     mavlink1_logged: bool,
     /// A second companion with the same ids has been heard (logged once).
     twin_logged: bool,
+    /// The companion's own frames have come back (logged once).
+    echo_logged: bool,
+    /// In control, since when the vehicle's heartbeat has shown no known mode (armed).
+    unknown_mode_since: Option<Instant>,
+    /// The last disarm came after a silence of the vehicle's of more than [`REBOOT_STEP_S`].
+    disarm_after_silence: bool,
     /// A peripheral's GENERIC heartbeat beside the autopilot has been logged.
     peripheral_logged: bool,
     /// A second autopilot heard in control has been logged.
@@ -617,6 +665,12 @@ struct Flight<'a, S: ?Sized> {
     /// The source address of the vehicle's frames (UDP), and why a second one makes it two.
     vehicle_addr: Option<std::net::SocketAddr>,
     same_ids: Option<String>,
+    /// Why the raw MAVLink log stopped short (logged once, when it happened).
+    log_incomplete: Option<String>,
+    /// The sequence numbers of the vehicle's frames, watched for a second sender with its ids.
+    seq_watch: crate::same_ids::SequenceWatch,
+    /// The vehicle's positions, watched for jumps no airframe makes.
+    pos_watch: crate::same_ids::PositionWatch,
     /// With `take_control`, [`TWO_VEHICLES_WINDOW_S`] has passed (the sensor's timer was
     /// restarted then).
     window_passed: bool,
@@ -766,13 +820,27 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
             break end;
         }
     };
+    // A change of mode or arming still pending is the vehicle's last known state.
+    f.flush_mode_log(true);
     let (acknowledged, way_out) = f.let_go(end)?;
+    f.check_log();
+    if let (Err(e), None) = (f.link.finish_log(), &f.log_incomplete) {
+        let note = format!("cannot write the MAVLink log: {e}: its last frames are missing");
+        f.event(note.clone());
+        f.log_incomplete = Some(note);
+    }
     f.record.finish(f.sink, f.flush);
     let completed = matches!(end, FlyEnd::VehicleEnded | FlyEnd::MaxDuration);
     let (metrics, metrics_over) = f.record.metrics(completed);
     let events = f.take_events();
+    let events_live = if opts.live_events.is_some() {
+        events.len().min(MAX_EVENTS - EVENTS_KEPT_LAST)
+    } else {
+        0
+    };
     Ok(FlyReport {
         end,
+        events_live,
         metrics,
         metrics_over,
         vehicle_heard: f.target.is_some(),
@@ -790,6 +858,7 @@ pub fn run_fly_flushing<S: TraceSink + ?Sized>(
         measurements_invalid: f.invalid,
         measurements_other_sources: f.other_sources,
         other_system_heard: f.other_system,
+        log_incomplete: f.log_incomplete,
     })
 }
 
@@ -808,13 +877,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             ));
         }
         crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
+        check_level(scenario).map_err(FlyError::Scenario)?;
         let mut link =
             Link::open(&opts.url, opts.system_id, COMPANION_COMPONENT).map_err(FlyError::Link)?;
         link_setup(&mut link).map_err(FlyError::Io)?;
         let lines = match &opts.sensor {
             SensorSource::UdpLines(a) => {
-                let s = UdpSocket::bind(a)
-                    .map_err(|e| FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {e}"))))?;
+                let s = UdpSocket::bind(a).map_err(|e| {
+                    let taken = if e.kind() == std::io::ErrorKind::AddrInUse {
+                        "the port is taken (by --mavlink's own udpin: port, or another process), and a port is never shared: "
+                    } else {
+                        ""
+                    };
+                    FlyError::Link(LinkError::Io(format!("--sensor udp:{a}: {taken}{e}")))
+                })?;
                 s.set_nonblocking(true).map_err(FlyError::Io)?;
                 Some(s)
             }
@@ -885,10 +961,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             disarm_seen: None,
             mavlink1_logged: false,
             twin_logged: false,
+            echo_logged: false,
+            unknown_mode_since: None,
+            disarm_after_silence: false,
             peripheral_logged: false,
             late_vehicle_logged: false,
             vehicle_addr: None,
             same_ids: None,
+            log_incomplete: None,
+            seq_watch: Default::default(),
+            pos_watch: Default::default(),
             window_passed: false,
             refused: false,
             refusal: None,
@@ -939,8 +1021,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let t = self.t0.elapsed().as_secs_f64();
         let line = format!("wall {t:.3} s: {what}");
         if self.events.len() < MAX_EVENTS - EVENTS_KEPT_LAST {
+            if let Some(live) = &self.opts.live_events {
+                (live.0)(&line);
+            }
             self.events.push(line);
             return;
+        }
+        if self.events_last.is_empty() && self.events_dropped == 0 {
+            if let Some(live) = &self.opts.live_events {
+                (live.0)(&format!(
+                    "wall {t:.3} s: {} events so far: the next are no longer printed as they happen (the last {} are printed at the end, the ones between counted)",
+                    MAX_EVENTS - EVENTS_KEPT_LAST,
+                    EVENTS_KEPT_LAST - 1
+                ));
+            }
         }
         self.events_last.push_back(line);
         if self.events_last.len() > EVENTS_KEPT_LAST - 1 {
@@ -986,6 +1080,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         {
             self.handle(&r);
         }
+        self.flush_mode_log(false);
         if let Some(end) = self.check_vehicles(had_target) {
             return Ok(Some(end));
         }
@@ -1002,6 +1097,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let end = self.check_ends()?;
         self.record.tick(self.sink, self.flush);
+        self.check_log();
         Ok(end)
     }
 
@@ -1021,12 +1117,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Some(FlyEnd::VehicleLost);
         }
         if let Some(why) = self.same_ids.take() {
-            if self.in_control {
-                self.event(format!("vehicle_lost: {why}"));
-                return Some(FlyEnd::VehicleLost);
-            }
-            self.event(format!("two_vehicles: {why}: nothing commanded"));
-            return Some(FlyEnd::TwoVehicles);
+            // Before control the companion goes no further (nothing commanded, exit 79, unless
+            // a command already went out: the way out of it); in control, the way out.
+            self.event(format!("vehicle_lost: {why}"));
+            return Some(FlyEnd::VehicleLost);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
             let advice = if a.0 == b.0 {
@@ -1034,9 +1128,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             } else {
                 "pick one with --target-system"
             };
+            let lag_s = self.target_at.map_or(0.0, |t| t.elapsed().as_secs_f64());
+            let when = if self.in_control {
+                format!("{lag_s:.1} s after the first, in control")
+            } else {
+                format!("{lag_s:.1} s after the first, before control")
+            };
+            // Something commanded already (control, an accepted OFFBOARD, an arming): the way
+            // out of it goes to the vehicle flown (ver33b-1); else nothing is.
+            let commanded = self.two_vehicles_way_out().is_some();
             self.event(format!(
-                "two autopilots heard within {TWO_VEHICLES_WINDOW_S} s: system {}, component {} and system {}, component {}: which to fly is ambiguous, nothing commanded ({advice})",
-                a.0, a.1, b.0, b.1
+                "two autopilots heard: system {}, component {} and system {}, component {} ({when}): which to fly is ambiguous, {} ({advice})",
+                a.0,
+                a.1,
+                b.0,
+                b.1,
+                if commanded {
+                    "the way out is commanded to the first"
+                } else {
+                    "nothing commanded"
+                }
             ));
             return Some(FlyEnd::TwoVehicles);
         }
@@ -1141,6 +1252,23 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(Some(FlyEnd::SensorLost));
         }
         Ok(None)
+    }
+
+    /// Logs the raw MAVLink log's first write error at once (a disk that filled mid-flight):
+    /// the flight goes on, the log's frames after it are missing (ver33-6).
+    fn check_log(&mut self) {
+        if self.log_incomplete.is_some() {
+            return;
+        }
+        let Some(e) = self.link.log_error().map(|e| e.to_string()) else {
+            return;
+        };
+        let t = self.t0.elapsed().as_secs_f64();
+        let note = format!(
+            "cannot write the MAVLink log: {e}: it stopped near wall {t:.3} s (the frames after it are missing)"
+        );
+        self.event(format!("{note}; the flight goes on"));
+        self.log_incomplete = Some(note);
     }
 
     fn heartbeat(&mut self) -> Result<(), FlyError> {
@@ -1482,6 +1610,23 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             && self
                 .custom_mode
                 .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.in_control && self.armed && self.custom_mode.is_none() {
+            // In control, a heartbeat armed in an unknown mode (no custom-mode flag: a relay
+            // rewriting base_mode, a glitch) is no pilot's word (ver33b-10): the companion
+            // carries on as in control, logged once; no known mode for `timeout_s` is a lost
+            // link (the way out commanded: OFFBOARD may still hold).
+            let since = *self.unknown_mode_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > self.timeout {
+                self.event(format!(
+                    "no known mode from the vehicle for {} s (armed, its heartbeat without a custom mode): its mode is unknown, the link as good as lost",
+                    self.opts.timeout_s
+                ));
+                return Ok(Some(FlyEnd::LinkLost));
+            }
+            self.active = true;
+        } else {
+            self.unknown_mode_since = None;
+        }
         if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
             // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
             // companion, a ground station's offboard) holds it. --take-control never joins.
@@ -1509,6 +1654,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     self.held_dropped
                 ));
             }
+            if !self.in_control {
+                // The change that gave the companion control is logged at once (ver33-3).
+                self.flush_mode_log(true);
+            }
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
             self.ans.first_wall.get_or_insert_with(Instant::now);
@@ -1525,10 +1674,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
             // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
+            self.flush_mode_log(true);
             let what = format!(
-                "pilot_took_over: the vehicle is {} in {}, not commanded by the companion: setpoints stopped, nothing commanded",
+                "pilot_took_over: the vehicle is {} in {}, not commanded by the companion{}: setpoints stopped, nothing commanded",
                 if self.armed { "armed" } else { "disarmed" },
-                self.mode_name()
+                self.mode_name(),
+                if !self.armed && self.disarm_after_silence {
+                    format!(
+                        " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
+                    )
+                } else {
+                    String::new()
+                }
             );
             self.event(what);
             return Ok(Some(FlyEnd::PilotTookOver));
@@ -1872,6 +2029,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// armed, mode), the measurement, acknowledgements, positions, attitude, airspeed.
     fn handle(&mut self, r: &Received) {
         let from = (r.header.system_id, r.header.component_id);
+        if self.link.is_own_echo(r) {
+            // The companion's own frame come back (a loop in the link): no twin's (ver33-4).
+            if !self.echo_logged {
+                self.echo_logged = true;
+                self.event(
+                    "the companion's own frames came back (the same ids, numbers and contents it sent: a loop in the link?): ignored, not a second companion".into(),
+                );
+            }
+            return;
+        }
         if let MavMessage::HEARTBEAT(h) = &r.msg {
             if from == (self.opts.system_id as u32, COMPANION_COMPONENT) {
                 self.twin_heard(r.from);
@@ -1881,6 +2048,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let Some(target) = self.target else { return };
         if from == target {
             self.vehicle_address(r.from);
+            self.vehicle_sender(r);
         }
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
@@ -1901,11 +2069,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if from != target {
             return;
         }
+        let silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         match &r.msg {
             MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
-                self.vehicle_heartbeat(h)
+                let was_armed = self.armed;
+                self.vehicle_heartbeat(h);
+                if was_armed && !self.armed {
+                    // A disarm after a silence: a reboot (whose clock need not go back far
+                    // enough to say so) looks the same as a pilot's disarm (att33d-9a).
+                    self.disarm_after_silence = silent_s > REBOOT_STEP_S;
+                }
             }
             // Acknowledgements go to every peer of the vehicle: once in control, they may
             // answer someone else's command, and say nothing about ours.
@@ -1967,7 +2142,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         if !plausible_value(v) {
             self.invalid_measurement(format!(
-                "NAMED_VALUE_FLOAT {} stamped {} s from system {}, component {} is {} (a value is finite, within +-{MAX_MEASUREMENT_ABS:e})",
+                "NAMED_VALUE_FLOAT {} stamped {} s from system {}, component {} is {} (a plausible value is finite and within +-{MAX_MEASUREMENT_ABS:e})",
                 String::from_utf8_lossy(&self.wanted),
                 wire::time_s(n.time_boot_ms),
                 from.0,
@@ -2007,8 +2182,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// The source address of a frame with the vehicle's ids (UDP): the first one is the
     /// vehicle's; a second address sending with the same ids is a second vehicle left at the
     /// same system id (two PX4s at the default 1 on one radio), whose measurements and
-    /// positions would mix with the first's (att33d-10): the flight ends, `two_vehicles`
-    /// before control, `vehicle_lost` (the way out commanded) in control.
+    /// positions would mix with the first's (att33d-10): the flight ends `vehicle_lost`, before
+    /// control with nothing commanded, in control with the way out commanded.
     fn vehicle_address(&mut self, addr: Option<std::net::SocketAddr>) {
         let Some(a) = addr else { return };
         match self.vehicle_addr {
@@ -2021,6 +2196,36 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 ));
             }
             _ => {}
+        }
+    }
+
+    /// A frame with the vehicle's ids, checked for a second sender with them on one address
+    /// ([`crate::same_ids`]): its sequence numbers interleaving with the vehicle's, a heartbeat
+    /// of another type or autopilot than the vehicle's first.
+    fn vehicle_sender(&mut self, r: &Received) {
+        if self.same_ids.is_some() {
+            return;
+        }
+        let t = self.target.unwrap_or_default();
+        let ids = format!(
+            "two vehicles with the ids (system {}, component {})",
+            t.0, t.1
+        );
+        if self.seq_watch.frame(r.header.sequence, &r.msg) {
+            self.same_ids = Some(format!(
+                "{ids}: {} of their last {} frames out of sequence (MAVLink's frame numbers of two senders interleaving; a link that reorders that many is not flown either): their measurements and positions would mix, which to fly is ambiguous",
+                crate::same_ids::OUT_OF_SEQUENCE_LIMIT,
+                crate::same_ids::SEQUENCE_WINDOW_FRAMES
+            ));
+            return;
+        }
+        if let MavMessage::HEARTBEAT(h) = &r.msg {
+            if h.mavtype != self.vehicle_type || h.autopilot != self.autopilot {
+                self.same_ids = Some(format!(
+                    "{ids}: a heartbeat of {:?} ({:?}) after the vehicle's {:?} ({:?}) (a second vehicle with its ids, or its autopilot changed): which to fly is ambiguous",
+                    h.mavtype, h.autopilot, self.vehicle_type, self.autopilot
+                ));
+            }
         }
     }
 
@@ -2124,6 +2329,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // Component 1 is the vehicle: taken instead, as if heard first.
             self.target = Some(from);
             self.vehicle_addr = None;
+            self.seq_watch = Default::default();
+            self.pos_watch = Default::default();
             self.firmware = Firmware::of(h.autopilot, h.mavtype);
             self.vehicle_type = h.mavtype;
             self.autopilot = h.autopilot;
@@ -2260,31 +2467,41 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.custom_mode = mode;
         if changed {
             // A heartbeat flapping between two modes logs at most one change a second, the
-            // ones between counted in it.
-            let due = self
-                .mode_logged_at
-                .is_none_or(|at| at.elapsed().as_secs_f64() >= MODE_EVENT_INTERVAL_S);
-            if due {
-                let between = match std::mem::take(&mut self.modes_unlogged) {
-                    0 => String::new(),
-                    n => format!(
-                        " ({n} changes of mode or arming since the last logged, not logged)"
-                    ),
-                };
-                let what = format!(
-                    "vehicle {} in {}{between}",
-                    if armed { "armed" } else { "disarmed" },
-                    self.mode_name()
-                );
-                self.event(what);
-                self.mode_logged_at = Some(Instant::now());
-            } else {
-                self.modes_unlogged += 1;
-            }
+            // ones between counted in it; the last one pending is logged when the second has
+            // passed (`flush_mode_log`), never lost (ver33-3).
+            self.modes_unlogged += 1;
+            self.flush_mode_log(false);
         }
         if h.system_status == MavState::MAV_STATE_POWEROFF {
             self.vehicle_done = true;
         }
+    }
+
+    /// Logs the vehicle's arming and mode as they are, if a change of them is pending and
+    /// [`MODE_EVENT_INTERVAL_S`] has passed since the last logged (or `now`: control taken,
+    /// the flight's end), the changes not logged between counted in it.
+    fn flush_mode_log(&mut self, now: bool) {
+        if self.modes_unlogged == 0 {
+            return;
+        }
+        let due = now
+            || self
+                .mode_logged_at
+                .is_none_or(|at| at.elapsed().as_secs_f64() >= MODE_EVENT_INTERVAL_S);
+        if !due {
+            return;
+        }
+        let between = match std::mem::take(&mut self.modes_unlogged) - 1 {
+            0 => String::new(),
+            n => format!(" ({n} changes of mode or arming since the last logged, not logged)"),
+        };
+        let what = format!(
+            "vehicle {} in {}{between}",
+            if self.armed { "armed" } else { "disarmed" },
+            self.mode_name()
+        );
+        self.event(what);
+        self.mode_logged_at = Some(Instant::now());
     }
 
     /// Whether `r` is an acknowledgement addressed to someone else than the companion (its
@@ -2427,6 +2644,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// A finite position (x east, y north), m, stamped `ms`.
     fn position(&mut self, ms: u32, p: (f64, f64)) {
+        let wall_s = self.t0.elapsed().as_secs_f64();
+        if self.pos_watch.position(p, ms, wall_s) && self.same_ids.is_none() {
+            let t = self.target.unwrap_or_default();
+            let (d, dt) = self.pos_watch.last_jump.unwrap_or_default();
+            self.same_ids = Some(format!(
+                "two vehicles with the ids (system {}, component {}): {} of their last {} positions jumped farther than {} m/s covers (the last {} m in {} s): two vehicles' positions interleaving, which to fly is ambiguous",
+                t.0,
+                t.1,
+                crate::same_ids::POSITION_JUMPS_LIMIT,
+                crate::same_ids::POSITION_WINDOW,
+                crate::same_ids::MAX_GROUND_SPEED_MPS,
+                isotrack_core::numtext::Num(d),
+                isotrack_core::numtext::Num(dt),
+            ));
+        }
         self.tel.position_at = Some(Instant::now());
         self.tel.pos = Some(p);
         self.record.position(ms, p, self.in_control);
@@ -2436,7 +2668,42 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// vehicle heard: nothing is sent); before, after a refused take-over or a failsafe, a
     /// disarm if the companion armed the vehicle on the ground; nothing on a vehicle it never
     /// controlled nor armed (a pilot's, armed in MANUAL: its mode stands).
+    /// Whether failsafe `end` came while a disarm nobody here commanded was watched for a
+    /// reboot (in control), and is not the reboot itself (`vehicle_lost`).
+    fn pilots_disarm_watched(&self, end: FlyEnd) -> bool {
+        end.is_failsafe()
+            && end != FlyEnd::VehicleLost
+            && self.in_control
+            && !self.armed
+            && self.disarm_seen.is_some()
+    }
+
+    /// The way out after `two_vehicles`, if the companion commanded anything before it
+    /// (ver33b-1): the failsafe mode in control, out of an accepted OFFBOARD, or the disarm of
+    /// a vehicle it armed; `None` when nothing was commanded.
+    fn two_vehicles_way_out(&self) -> Option<WayOut> {
+        let mode = self.opts.failsafe.mode();
+        if self.in_control {
+            Some(WayOut::Mode(mode))
+        } else if self.offboard_accepted_at.is_some() {
+            Some(WayOut::LeaveOffboard(mode))
+        } else if self.armed && self.armed_by_us {
+            Some(WayOut::Disarm)
+        } else {
+            None
+        }
+    }
+
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        if end == FlyEnd::TwoVehicles {
+            return self.two_vehicles_way_out();
+        }
+        if self.pilots_disarm_watched(end) {
+            // A failsafe while a disarm nobody here commanded is watched for a reboot: the
+            // disarm is the pilot's, whose mode stands (ver33b-5); a reboot established
+            // (`vehicle_lost`) is not.
+            return None;
+        }
         let mode = self.opts.failsafe.mode();
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
@@ -2459,6 +2726,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// (confirmed, anything commanded).
     fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
         let Some(way) = self.way_out(end) else {
+            if self.pilots_disarm_watched(end) {
+                self.event(format!(
+                    "failsafe ({}): the vehicle had just been disarmed, not by the companion (a pilot's disarm, watched for a reboot): nothing commanded, the pilot's mode stands",
+                    end.as_str()
+                ));
+                return Ok((false, false));
+            }
             if end.is_failsafe() {
                 self.event(format!(
                     "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",

@@ -15,6 +15,7 @@ pub mod link;
 pub mod mirror;
 pub mod modes;
 pub mod record;
+pub mod same_ids;
 pub mod setpoint;
 pub mod sitl;
 pub mod vehicle_state;

@@ -282,9 +282,15 @@ pub struct Link {
     peer_timeout: Duration,
     log: Log,
     buf: Vec<u8>,
+    /// The last [`RECENT_SENT`] frames sent: sequence number and message (an echo of them is
+    /// this link's own frames coming back, not a twin's).
+    recent_sent: std::collections::VecDeque<(u8, MavMessage)>,
     /// Counters.
     pub stats: LinkStats,
 }
+
+/// The frames sent that [`Link::is_own_echo`] recognises.
+pub const RECENT_SENT: usize = 256;
 
 /// Resolves `HOST:PORT`: no port, an empty host or port, a port outside [0, 65535] or a
 /// host that names no address is a [`LinkError::Address`] (a usage error).
@@ -664,6 +670,7 @@ impl Link {
             peer_timeout: DEFAULT_PEER_TIMEOUT,
             log: Log::default(),
             buf: vec![0; 65_536],
+            recent_sent: std::collections::VecDeque::new(),
             stats: LinkStats::default(),
         })
     }
@@ -750,6 +757,24 @@ impl Link {
         Ok(())
     }
 
+    /// Whether `r` is one of this link's own last [`RECENT_SENT`] frames come back (a routing
+    /// loop, a broadcast set-up that hands the sender its own datagrams): its ids, sequence
+    /// number and message those of a frame it sent.
+    pub fn is_own_echo(&self, r: &Received) -> bool {
+        r.header.system_id == self.system_id.into()
+            && r.header.component_id == self.component_id
+            && self
+                .recent_sent
+                .iter()
+                .any(|(seq, m)| *seq == r.header.sequence && *m == r.msg)
+    }
+
+    /// The first error met while writing the log (a full disk), if any: from then on no frame
+    /// is written to it (ver33-6).
+    pub fn log_error(&self) -> Option<&std::io::Error> {
+        self.log.error.as_ref()
+    }
+
     /// Flushes the log; the first error met while writing it, if any.
     pub fn finish_log(&mut self) -> std::io::Result<()> {
         if let Some(e) = self.log.error.take() {
@@ -811,6 +836,10 @@ impl Link {
             sequence: self.sequence,
         };
         self.sequence = self.sequence.wrapping_add(1);
+        if self.recent_sent.len() == RECENT_SENT {
+            self.recent_sent.pop_front();
+        }
+        self.recent_sent.push_back((header.sequence, msg.clone()));
         let mut frame = Vec::with_capacity(300);
         mavlink::write_v2_msg(&mut frame, header, msg).map_err(std::io::Error::other)?;
         if let Some((extra_crc, base_len, ext)) = extensions {
@@ -1070,6 +1099,27 @@ impl Link {
 
 #[cfg(test)]
 mod tests {
+    /// ver33-6: a log whose disk is full (`/dev/full`: every write ENOSPC) keeps its first
+    /// error, which `log_error` reports and `finish_log` returns, and writes nothing more.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_full_disk_stops_the_log_and_says_so() {
+        let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        link.log.file = Some(std::io::BufWriter::new(f));
+        assert!(link.log_error().is_none());
+        // More than the writer's 8 KiB buffer: the write reaches the device.
+        for _ in 0..200 {
+            link.log.frame(&[0u8; 100]);
+        }
+        let e = link.log_error().expect("the full disk's error");
+        assert_eq!(e.raw_os_error(), Some(libc::ENOSPC));
+        assert!(link.finish_log().is_err());
+    }
+
     use super::*;
 
     fn address_error(url: &str) -> String {

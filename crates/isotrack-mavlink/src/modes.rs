@@ -209,7 +209,8 @@ impl Firmware {
     /// Whether `--take-control` takes an armed vehicle from `custom_mode`: only a mode its pilot
     /// flies or holds in, never a take-off, a landing or return, traffic avoidance, a mission or
     /// a mode not known here (an allow-list, att33d-1). PX4 (`px4_custom_mode.h`): MANUAL,
-    /// ALTCTL, POSCTL, ACRO, STABILIZED, RATTITUDE, AUTO.LOITER. ArduPlane (`mode.h`): MANUAL,
+    /// ALTCTL, POSCTL, ACRO, STABILIZED, RATTITUDE (each with sub-mode 0 only: not POSCTL.ORBIT
+    /// (3, 1) nor POSCTL.SLOW (3, 2)), AUTO.LOITER. ArduPlane (`mode.h`): MANUAL,
     /// CIRCLE, STABILIZE, TRAINING, ACRO, FLY_BY_WIRE_A, FLY_BY_WIRE_B, CRUISE, LOITER.
     /// Rover: MANUAL, ACRO, STEERING, HOLD, LOITER. ArduCopter: STABILIZE, ACRO, ALT_HOLD,
     /// LOITER, POSHOLD.
@@ -217,7 +218,10 @@ impl Firmware {
         match self {
             Firmware::Px4 => {
                 let (main, sub) = ((custom_mode >> 16) & 0xff, (custom_mode >> 24) & 0xff);
-                matches!(main, 1 | 2 | 3 | 5 | 7 | 8) || (main == PX4_AUTO && sub == PX4_LOITER)
+                // (main, sub) exactly: a sub-mode outside AUTO is not the pilot's (POSCTL.ORBIT,
+                // 3.1, a ground station's automatic circle) or unknown here (ver33b-2).
+                (matches!(main, 1 | 2 | 3 | 5 | 7 | 8) && sub == 0)
+                    || (main == PX4_AUTO && sub == PX4_LOITER)
             }
             Firmware::ArduPlane => matches!(custom_mode, 0..=7 | 12),
             Firmware::ArduRover => matches!(custom_mode, 0 | 1 | 3 | 4 | 5),
@@ -454,6 +458,14 @@ mod tests {
             assert!(!px4.takeover_allowed((4 << 16) | (sub << 24)), "4.{sub}");
         }
         assert!(!px4.takeover_allowed(0) && !px4.takeover_allowed(6 << 16));
+        // ver33b-2: outside AUTO the sub-mode must be 0: POSCTL.ORBIT (3, 1), POSCTL.SLOW (3, 2)
+        // and a MANUAL with a sub-mode PX4 never sends (1, 5) are refused.
+        for (main, sub) in [(3u32, 1u32), (3, 2), (1, 5)] {
+            assert!(
+                !px4.takeover_allowed((main << 16) | (sub << 24)),
+                "{main}.{sub}"
+            );
+        }
         let plane = Firmware::of(
             MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
             MavType::MAV_TYPE_FIXED_WING,

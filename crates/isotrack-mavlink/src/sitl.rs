@@ -93,6 +93,11 @@ pub struct SitlOptions {
     /// in both paces, how long a peer of a `udpin:`/`tcpin:` link may be silent before the
     /// link drops it.
     pub companion_timeout_s: f64,
+    /// `HEARTBEAT` at this fixed rate of the wall clock only, Hz, as PX4 beats (1 Hz): never
+    /// after a command's acknowledgement or a mode change, so that a companion learns of a
+    /// switch only from the next beat (up to a period later). `None` (the default): once a
+    /// simulated second and after every change (at once). Real time only.
+    pub heartbeat_hz: Option<f64>,
 }
 
 impl SitlOptions {
@@ -105,6 +110,7 @@ impl SitlOptions {
             setpoint_timeout_s: 1.0,
             stop: Arc::new(AtomicBool::new(false)),
             companion_timeout_s: 10.0,
+            heartbeat_hz: None,
         }
     }
 }
@@ -158,6 +164,13 @@ impl std::fmt::Display for SitlError {
     }
 }
 
+/// The characters of one `STATUSTEXT` (MAVLink's `text[50]`).
+pub const STATUSTEXT_CHARS: usize = 50;
+
+/// The `STATUSTEXT` of sitl's own offboard failsafe (att33d-9d: its event, "failsafe: no valid
+/// setpoint for 1 s in OFFBOARD: HOLD", is longer than one `STATUSTEXT` holds).
+pub const OFFBOARD_LOST_STATUSTEXT: &str = "failsafe: offboard setpoints lost: HOLD";
+
 /// The lowest `output.record_rate_hz` `isotrack sitl` flies with, Hz: its position telemetry
 /// goes out once per trace row, and a ground station or companion expects positions at least
 /// once a second (the 1 Hz group's rate).
@@ -175,6 +188,7 @@ pub fn check_sitl_scenario(s: &Scenario) -> Result<(), String> {
             Echo(MIN_TELEMETRY_RATE_HZ)
         ));
     }
+    crate::fly::check_level(s)?;
     Frame::of(s).map(|_| ())
 }
 
@@ -726,6 +740,8 @@ struct Sitl<'a> {
     /// The next whole simulated second at which the 1 Hz group goes out.
     next_slow_s: f64,
     last_heartbeat_wall: Instant,
+    /// [`SitlOptions::heartbeat_hz`]'s period: heartbeats on it only.
+    heartbeat_period: Option<Duration>,
     speed_mps: f64,
     /// When the last valid frame of another sender came.
     last_heard: Instant,
@@ -740,6 +756,15 @@ struct Sitl<'a> {
 impl Sitl<'_> {
     fn send(&mut self, m: MavMessage) -> Result<(), SitlError> {
         self.link.send(&m).map(|_| ()).map_err(SitlError::Io)
+    }
+
+    /// A heartbeat after a change of mode or arming: at once, unless it beats at a fixed rate
+    /// only ([`SitlOptions::heartbeat_hz`]).
+    fn changed_heartbeat(&mut self) -> Result<(), SitlError> {
+        if self.heartbeat_period.is_none() {
+            self.heartbeat(false)?;
+        }
+        Ok(())
     }
 
     fn heartbeat(&mut self, ended: bool) -> Result<(), SitlError> {
@@ -809,6 +834,8 @@ impl Sitl<'_> {
         }))
     }
 
+    /// A `STATUSTEXT` of `text`, at most [`STATUSTEXT_CHARS`] bytes (a longer one is cut:
+    /// keep them short).
     fn statustext(&mut self, severity: MavSeverity, text: &str) -> Result<(), SitlError> {
         let mut bytes = [0u8; 50];
         for (b, c) in bytes.iter_mut().zip(text.bytes()) {
@@ -827,7 +854,9 @@ impl Sitl<'_> {
         }
         self.next_slow_s = t_s.floor() + 1.0;
         let ms = wire::time_ms(t_s).unwrap_or(u32::MAX);
-        self.heartbeat(false)?;
+        if self.heartbeat_period.is_none() {
+            self.heartbeat(false)?;
+        }
         // Present, enabled and healthy: what a ground station's health reads (MAVSDK: the gyro,
         // accelerometer and magnetometer calibrations, GPS for the global and local position,
         // the pre-arm check for `is_armable`; home comes with `HOME_POSITION`).
@@ -929,6 +958,12 @@ impl Sitl<'_> {
 
     /// Handles what arrives within `timeout`; returns the setpoints applied.
     fn handle_inbound(&mut self, t_s: f64, timeout: Duration) -> Result<Vec<Applied>, SitlError> {
+        if self
+            .heartbeat_period
+            .is_some_and(|p| self.last_heartbeat_wall.elapsed() >= p)
+        {
+            self.heartbeat(false)?;
+        }
         let got = self.link.poll(timeout).map_err(SitlError::Io)?;
         if self.link.stats.mavlink1_frames > 0 && !self.mavlink1_logged {
             self.mavlink1_logged = true;
@@ -960,8 +995,9 @@ impl Sitl<'_> {
                     let result = self.ap.command(t_s, from, &c);
                     self.ap.owner_seen(had_owner, r.from);
                     self.command_ack(c.command, result, from)?;
-                    // The new state at once (PX4 also reports it in the next heartbeat).
-                    self.heartbeat(false)?;
+                    // The new state at once (PX4 reports it only in the next heartbeat:
+                    // `heartbeat_hz`).
+                    self.changed_heartbeat()?;
                     self.extended_sys_state()?;
                 }
                 MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
@@ -1077,6 +1113,13 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         stop: opts.stop.clone(),
         next_slow_s: 0.0,
         last_heartbeat_wall: Instant::now(),
+        heartbeat_period: match opts.pace {
+            Pace::RealTime { .. } => opts
+                .heartbeat_hz
+                .filter(|hz| hz.is_finite() && *hz > 0.0)
+                .and_then(|hz| Duration::try_from_secs_f64(1.0 / hz).ok()),
+            Pace::Lockstep => None,
+        },
         speed_mps: speed,
         last_heard: Instant::now(),
         telemetry_sent: false,
@@ -1092,7 +1135,10 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         if sitl.stop.load(Ordering::Relaxed) {
             break;
         }
-        if !beaten || sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
+        if !beaten
+            || sitl.last_heartbeat_wall.elapsed()
+                >= sitl.heartbeat_period.unwrap_or(Duration::from_secs(1))
+        {
             beaten = true;
             sitl.heartbeat(false)?;
         }
@@ -1196,8 +1242,10 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
                         Echo(opts.setpoint_timeout_s)
                     );
                     sitl.ap.event(t, what.clone());
-                    sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, &what)?;
-                    sitl.heartbeat(false)?;
+                    // STATUSTEXT holds 50 characters (MAVLink 2 chunks them beyond, which
+                    // not every reader joins): the short form, the event says it all.
+                    sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, OFFBOARD_LOST_STATUSTEXT)?;
+                    sitl.changed_heartbeat()?;
                 }
             }
         }
@@ -1282,6 +1330,15 @@ fn wait_until(sitl: &mut Sitl<'_>, t_s: f64, deadline: Instant) -> Result<(), Si
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// att33d-9d: the STATUSTEXTs sitl sends fit one `STATUSTEXT`'s 50 characters, whole: the
+    /// offboard failsafe's and the end of a run's longest ("companion_lost").
+    #[test]
+    fn statustexts_fit_one_frame() {
+        assert!(OFFBOARD_LOST_STATUSTEXT.len() <= STATUSTEXT_CHARS);
+        assert!("isotrack sitl: run ended (companion_lost)".len() <= STATUSTEXT_CHARS);
+        assert!("isotrack sitl: run ended (interrupted)".len() <= STATUSTEXT_CHARS);
+    }
 
     fn autopilot() -> Autopilot {
         Autopilot {

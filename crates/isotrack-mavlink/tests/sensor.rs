@@ -811,3 +811,46 @@ fn two_vehicles_with_the_same_ids_are_not_flown_as_one() {
     assert!(r.commands.iter().all(|c| c.0 % 50 == 0), "{:?}", r.commands);
     assert!(r.way_out_commanded, "{:?}", r.events);
 }
+
+/// ver33-3: the once-a-second limit of the mode log never loses the last change when none
+/// follows it: the pilot arming in OFFBOARD 0.5 s after the vehicle was heard disarmed in
+/// MANUAL (the hand-over: logged at once, it gave the companion control), or switching from
+/// POSCTL to STABILIZED 0.5 s after it was heard (logged when its second has passed).
+#[test]
+fn the_last_change_of_mode_is_logged_when_none_follows() {
+    for (first, then, want) in [
+        (
+            (false, 1u32 << 16),
+            (true, 6u32 << 16),
+            "vehicle armed in OFFBOARD",
+        ),
+        (
+            (true, 3 << 16),
+            (true, 7 << 16),
+            "vehicle armed in STABILIZED",
+        ),
+    ] {
+        let (r, _) = pilots_vehicle_in(
+            MavType::MAV_TYPE_GROUND_ROVER,
+            None,
+            100,
+            |o| stop_after(o, 2.0),
+            |k, v, _| {
+                let (armed, mode) = if k < 10 { first } else { then };
+                v.send(&px4_heartbeat(
+                    MavType::MAV_TYPE_GROUND_ROVER,
+                    support::custom_mode_flags(armed),
+                    mode,
+                ))
+                .unwrap();
+                v.send(&iso_s(1000 + 50 * k, 9.5)).unwrap();
+            },
+        );
+        assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+        assert!(
+            r.events.iter().any(|e| e.contains(want)),
+            "{want}: {:?}",
+            r.events
+        );
+    }
+}

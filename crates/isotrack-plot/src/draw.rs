@@ -616,68 +616,17 @@ pub fn trajectory_figure(
     // One field is drawn under every path: runs over different fields are refused.
     crate::same_field(runs)?;
     let points = || runs.iter().flat_map(|r| r.trace.iter());
-    let (x0, x1) = finite_bounds(points().map(|t| t.x_m));
-    let (y0, y1) = finite_bounds(points().map(|t| t.y_m));
-    // Both axes padded by the same 12 % of the larger extent (at least 1 m).
-    let side = (x1 - x0).max(y1 - y0).max(1.0);
-    let axis = |what: &str, lo: f64, hi: f64| {
-        padded_axis(what, lo, hi, 0.0, 0.0).map(|r| {
-            r.map(|(a, b)| {
-                let pad = 0.12 * side;
-                (a - pad, b + pad)
-            })
-        })
-    };
-    let no_positions = || PlotError::Data("no trace row has a finite position".into());
-    let (xa, xb) = axis("x_m", x0, x1)?.ok_or_else(no_positions)?;
-    let (ya, yb) = axis("y_m", y0, y1)?.ok_or_else(no_positions)?;
+    let extent = paths_extent(runs)?;
     let t_end = first.trace.last().map_or(0.0, |t| t.t_s);
     let times = MapTimes::for_run(&first.scenario, t_end);
-    let (lay, range) = map_layout(st, title, &first.scenario, [xa, xb, ya, yb], &[times.at_s]);
+    let (lay, range) = map_layout(st, title, &first.scenario, extent, &[times.at_s]);
     let arrow = 0.06 * (range[1] - range[0]);
     let legend_at = emptiest_corner(points().map(|t| (t.x_m, t.y_m)), range);
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
             let mut chart = draw_map(&root, &first.scenario, range, (title, &lay), st, &times)?;
-            let (w2, w3) = (st.px(2.0), st.px(3.0));
             for (i, run) in runs.iter().enumerate() {
-                let c = colour(i);
-                chart
-                    .draw_series(LineSeries::new(
-                        run.trace
-                            .iter()
-                            .filter(|t| t.x_m.is_finite() && t.y_m.is_finite())
-                            .map(|t| (t.x_m, t.y_m)),
-                        c.stroke_width(w2),
-                    ))
-                    .map_err(s)?
-                    .label(run.name.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
-                    });
-                let (a, b) = (run.trace[0], run.trace[run.trace.len() - 1]);
-                let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
-                let tip = (a.x_m + arrow * hx, a.y_m + arrow * hy);
-                let back = |ang: f64| {
-                    let (sx, sy) = ((a.heading_rad + ang).cos(), (a.heading_rad + ang).sin());
-                    (tip.0 - 0.3 * arrow * sx, tip.1 - 0.3 * arrow * sy)
-                };
-                chart
-                    .draw_series([
-                        PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(w3)),
-                        PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(w3)),
-                    ])
-                    .map_err(s)?;
-                let r = st.px(7.0);
-                chart
-                    .draw_series([Circle::new((a.x_m, a.y_m), r, c.filled())])
-                    .map_err(s)?;
-                chart
-                    .draw_series([Circle::new((a.x_m, a.y_m), r, WHITE.stroke_width(w2))])
-                    .map_err(s)?;
-                chart
-                    .draw_series([TriangleMarker::new((b.x_m, b.y_m), st.px(9.0), c.filled())])
-                    .map_err(s)?;
+                draw_path(&mut chart, run, colour(i), arrow, st)?;
             }
             chart
                 .configure_series_labels()
@@ -690,6 +639,67 @@ pub fn trajectory_figure(
             Ok(())
         })()
     })
+}
+
+/// The map's extent `[x0, x1, y0, y1]` (m) around the finite positions of `runs`' traces:
+/// both axes padded by the same 12 % of the larger extent (at least 1 m).
+fn paths_extent(runs: &[RunData]) -> Result<[f64; 4], PlotError> {
+    let points = || runs.iter().flat_map(|r| r.trace.iter());
+    let (x0, x1) = finite_bounds(points().map(|t| t.x_m));
+    let (y0, y1) = finite_bounds(points().map(|t| t.y_m));
+    let pad = 0.12 * (x1 - x0).max(y1 - y0).max(1.0);
+    let no_positions = || PlotError::Data("no trace row has a finite position".into());
+    let (xa, xb) = padded_axis("x_m", x0, x1, 0.0, 0.0)?.ok_or_else(no_positions)?;
+    let (ya, yb) = padded_axis("y_m", y0, y1, 0.0, 0.0)?.ok_or_else(no_positions)?;
+    Ok([xa - pad, xb + pad, ya - pad, yb + pad])
+}
+
+/// One run's path on the trajectory figure in colour `c`, labelled with its name for the
+/// legend: the line through its finite positions, an arrow `arrow` (m) long along its first
+/// heading, a ring at its start and a triangle at its end.
+fn draw_path<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    run: &RunData,
+    c: RGBColor,
+    arrow: f64,
+    st: &Style,
+) -> DrawResult {
+    let (w2, w3) = (st.px(2.0), st.px(3.0));
+    chart
+        .draw_series(LineSeries::new(
+            run.trace
+                .iter()
+                .filter(|t| t.x_m.is_finite() && t.y_m.is_finite())
+                .map(|t| (t.x_m, t.y_m)),
+            c.stroke_width(w2),
+        ))
+        .map_err(s)?
+        .label(run.name.clone())
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+    let (a, b) = (run.trace[0], run.trace[run.trace.len() - 1]);
+    let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
+    let tip = (a.x_m + arrow * hx, a.y_m + arrow * hy);
+    let back = |ang: f64| {
+        let (sx, sy) = ((a.heading_rad + ang).cos(), (a.heading_rad + ang).sin());
+        (tip.0 - 0.3 * arrow * sx, tip.1 - 0.3 * arrow * sy)
+    };
+    chart
+        .draw_series([
+            PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(w3)),
+            PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(w3)),
+        ])
+        .map_err(s)?;
+    let r = st.px(7.0);
+    chart
+        .draw_series([Circle::new((a.x_m, a.y_m), r, c.filled())])
+        .map_err(s)?;
+    chart
+        .draw_series([Circle::new((a.x_m, a.y_m), r, WHITE.stroke_width(w2))])
+        .map_err(s)?;
+    chart
+        .draw_series([TriangleMarker::new((b.x_m, b.y_m), st.px(9.0), c.filled())])
+        .map_err(s)?;
+    Ok(())
 }
 
 /// An animated GIF of one run over time: at each of `frames` times through the run, the field
@@ -722,20 +732,8 @@ pub fn animation_gif_team(
         .first()
         .ok_or_else(|| PlotError::Input("no runs to animate".into()))?;
     let tr = &run.trace;
-    let all = || runs.iter().flat_map(|r| r.trace.iter());
-    let (x0, x1) = finite_bounds(all().map(|t| t.x_m));
-    let (y0, y1) = finite_bounds(all().map(|t| t.y_m));
-    let side = (x1 - x0).max(y1 - y0).max(1.0);
-    let no_positions = || PlotError::Data("no trace row has a finite position".into());
-    let (xa, xb) = padded_axis("x_m", x0, x1, 0.0, 0.0)?.ok_or_else(no_positions)?;
-    let (ya, yb) = padded_axis("y_m", y0, y1, 0.0, 0.0)?.ok_or_else(no_positions)?;
-    let pad = 0.12 * side;
-    // GIF frames are small: a third of the map's default pixels unless --size says otherwise.
-    let mut small = st.clone();
-    if small.size_px.is_none() {
-        small.size_px = Some((660, 540));
-        small.font_px = Some(small.font_px.unwrap_or(11.0));
-    }
+    let extent = paths_extent(runs)?;
+    let small = gif_style(st);
     let t_end = tr.last().map_or(0.0, |t| t.t_s);
     let frames = frames.clamp(1, 1000);
     // One layout for every frame: its colour bar sized for the field at the start, the middle
@@ -744,7 +742,7 @@ pub fn animation_gif_team(
         &small,
         title,
         &run.scenario,
-        [xa - pad, xb + pad, ya - pad, yb + pad],
+        extent,
         &[0.0, 0.5 * t_end, t_end],
     );
     let res: DrawResult = draw_atomic(path, |path| {
@@ -772,25 +770,7 @@ pub fn animation_gif_team(
                 &times,
             )?;
             for (i, one) in runs.iter().enumerate() {
-                let upto: Vec<(f64, f64)> = one
-                    .trace
-                    .iter()
-                    .take_while(|r| r.t_s <= t)
-                    .filter(|r| r.x_m.is_finite() && r.y_m.is_finite())
-                    .map(|r| (r.x_m, r.y_m))
-                    .collect();
-                let c = colour(i);
-                chart
-                    .draw_series(LineSeries::new(
-                        upto.iter().copied(),
-                        c.stroke_width(small.px(2.0)),
-                    ))
-                    .map_err(s)?;
-                if let Some(&last) = upto.last() {
-                    chart
-                        .draw_series([Circle::new(last, small.px(5.0), c.filled())])
-                        .map_err(s)?;
-                }
+                draw_path_until(&mut chart, one, t, colour(i), &small)?;
             }
             root.present().map_err(s)?;
         }
@@ -800,6 +780,47 @@ pub fn animation_gif_team(
         path: path.display().to_string(),
         message,
     })
+}
+
+/// The style of a GIF frame: small, a third of the map's default pixels (and an 11 px font)
+/// unless `--size` says otherwise.
+fn gif_style(st: &Style) -> Style {
+    let mut small = st.clone();
+    if small.size_px.is_none() {
+        small.size_px = Some((660, 540));
+        small.font_px = Some(small.font_px.unwrap_or(11.0));
+    }
+    small
+}
+
+/// One vehicle on an animation frame at time `t` (s), in colour `c`: its path so far (the
+/// finite positions up to `t`) and a dot where it is.
+fn draw_path_until<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    run: &RunData,
+    t: f64,
+    c: RGBColor,
+    st: &Style,
+) -> DrawResult {
+    let upto: Vec<(f64, f64)> = run
+        .trace
+        .iter()
+        .take_while(|r| r.t_s <= t)
+        .filter(|r| r.x_m.is_finite() && r.y_m.is_finite())
+        .map(|r| (r.x_m, r.y_m))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(
+            upto.iter().copied(),
+            c.stroke_width(st.px(2.0)),
+        ))
+        .map_err(s)?;
+    if let Some(&last) = upto.last() {
+        chart
+            .draw_series([Circle::new(last, st.px(5.0), c.filled())])
+            .map_err(s)?;
+    }
+    Ok(())
 }
 
 /// A field alone over `range` (`[x0, x1, y0, y1]`, m), with its isolines.
@@ -1053,22 +1074,12 @@ pub fn sweep_summary(
             .position(|h| h == n)
             .ok_or_else(|| err(format!("no column `{n}`; columns: {}", names())))
     };
-    // x: a column, or the components of a vector key (its norm).
-    let x_cols: Vec<usize> = match headers.iter().position(|h| h == x_key) {
-        Some(i) => vec![i],
-        None => {
-            let comps: Vec<usize> = (0..)
-                .map_while(|k| headers.iter().position(|h| h == format!("{x_key}[{k}]")))
-                .collect();
-            if comps.is_empty() {
-                return Err(err(format!(
-                    "no column `{x_key}` (nor `{x_key}[0]`, ...); columns: {}",
-                    names()
-                )));
-            }
-            comps
-        }
-    };
+    let x_cols = x_columns(&headers, x_key).ok_or_else(|| {
+        err(format!(
+            "no column `{x_key}` (nor `{x_key}[0]`, ...); columns: {}",
+            names()
+        ))
+    })?;
     let yi = col(metric)?;
     let gi = group.map(col).transpose()?;
     let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<u64, Vec<f64>>> =
@@ -1113,14 +1124,8 @@ pub fn sweep_summary(
             let mut pts: Vec<(f64, f64, f64, usize)> = xs
                 .into_iter()
                 .map(|(k, ys)| {
-                    let n = ys.len();
-                    let mean = ys.iter().sum::<f64>() / n as f64;
-                    let var = if n > 1 {
-                        ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1) as f64
-                    } else {
-                        0.0
-                    };
-                    (f64::from_bits(k), mean, var.sqrt(), n)
+                    let (mean, std) = mean_and_std(&ys);
+                    (f64::from_bits(k), mean, std, ys.len())
                 })
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -1128,6 +1133,31 @@ pub fn sweep_summary(
         })
         .collect();
     Ok((lines, skipped))
+}
+
+/// The columns of the sweep summary's x: the column `x_key`, else the components `x_key[0]`,
+/// `x_key[1]`, ... of a vector key (its norm is plotted); `None` when there are neither.
+fn x_columns(headers: &csv::StringRecord, x_key: &str) -> Option<Vec<usize>> {
+    if let Some(i) = headers.iter().position(|h| h == x_key) {
+        return Some(vec![i]);
+    }
+    let comps: Vec<usize> = (0..)
+        .map_while(|k| headers.iter().position(|h| h == format!("{x_key}[{k}]")))
+        .collect();
+    (!comps.is_empty()).then_some(comps)
+}
+
+/// The mean of `ys` (not empty) and their sample standard deviation (`n - 1` in the
+/// denominator; 0 for one value).
+fn mean_and_std(ys: &[f64]) -> (f64, f64) {
+    let n = ys.len();
+    let mean = ys.iter().sum::<f64>() / n as f64;
+    let var = if n > 1 {
+        ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1) as f64
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
 }
 
 /// A sweep summary figure: the metric's mean against `x_key` with an error bar of one sample
@@ -1150,20 +1180,11 @@ pub fn sweep_figure(
     let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, 1e-9)?.ok_or_else(bad)?;
     let (ya, yb) = padded_axis(metric, y0, y1, 0.08, 1e-12)?.ok_or_else(bad)?;
     let runs: usize = all().map(|p| p.3).sum();
-    let default_title = format!(
-        "{metric} against {x_key}: mean \u{b1} 1 std over {runs} runs{}",
-        if skipped > 0 {
-            format!(" ({skipped} without a value)")
-        } else {
-            String::new()
-        }
-    );
+    let default_title = sweep_title(x_key, metric, runs, skipped);
     let title = st.title(&default_title);
     let (w, h) = st.size((1000, 700), (560, 400));
     let f = st.base_font();
-    // A long title gets a smaller font rather than running off the image.
-    let chars = title.chars().count() as f64;
-    let title_rel = (1.4 * (w as f64 / (0.62 * f)) / chars.max(1.0)).clamp(0.75, 1.4);
+    let title_rel = title_font_rel(title, w, f);
     let (xs, ys) = (tick_step(xa, xb, 10), tick_step(ya, yb, 8));
     let points = lines.iter().flat_map(|l| l.1.iter().map(|p| (p.0, p.1)));
     let legend_at = emptiest_corner(points, [xa, xb, ya, yb]);
@@ -1189,30 +1210,11 @@ pub fn sweep_figure(
                 .draw()
                 .map_err(s)?;
             for (i, (g, pts)) in lines.iter().enumerate() {
-                let c = colour(i + 1);
-                let (w2, r4, bar) = (st.px(2.0), st.px(4.0), st.px(8.0));
                 let label = match group {
                     Some(k) => format!("{k} = {g}"),
                     None => metric.to_string(),
                 };
-                chart
-                    .draw_series(LineSeries::new(
-                        pts.iter().map(|p| (p.0, p.1)),
-                        c.stroke_width(w2),
-                    ))
-                    .map_err(s)?
-                    .label(label)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w2))
-                    });
-                chart
-                    .draw_series(pts.iter().map(|p| {
-                        ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), bar)
-                    }))
-                    .map_err(s)?;
-                chart
-                    .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), r4, c.filled())))
-                    .map_err(s)?;
+                draw_summary_line(&mut chart, pts, label, colour(i + 1), st)?;
             }
             if group.is_some() {
                 chart
@@ -1229,6 +1231,57 @@ pub fn sweep_figure(
     })
 }
 
+/// The sweep figure's default title: the metric against `x_key`, the runs drawn and those
+/// without a value.
+fn sweep_title(x_key: &str, metric: &str, runs: usize, skipped: usize) -> String {
+    format!(
+        "{metric} against {x_key}: mean \u{b1} 1 std over {runs} runs{}",
+        if skipped > 0 {
+            format!(" ({skipped} without a value)")
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// The font size, relative to the base font `f` (px), of a `title` on a figure `w` px wide: a
+/// long title gets a smaller font (down to 0.75) rather than running off the image, a short
+/// one at most 1.4.
+fn title_font_rel(title: &str, w: u32, f: f64) -> f64 {
+    let chars = title.chars().count() as f64;
+    (1.4 * (w as f64 / (0.62 * f)) / chars.max(1.0)).clamp(0.75, 1.4)
+}
+
+/// One group's line of the sweep figure in colour `c`, labelled `label` for the legend: the
+/// means joined, an error bar of one standard deviation and a dot at each x.
+fn draw_summary_line<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    pts: &[(f64, f64, f64, usize)],
+    label: String,
+    c: RGBColor,
+    st: &Style,
+) -> DrawResult {
+    let (w2, r4, bar) = (st.px(2.0), st.px(4.0), st.px(8.0));
+    chart
+        .draw_series(LineSeries::new(
+            pts.iter().map(|p| (p.0, p.1)),
+            c.stroke_width(w2),
+        ))
+        .map_err(s)?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w2)));
+    chart
+        .draw_series(
+            pts.iter()
+                .map(|p| ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), bar)),
+        )
+        .map_err(s)?;
+    chart
+        .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), r4, c.filled())))
+        .map_err(s)?;
+    Ok(())
+}
+
 /// What [`team_figure`] draws: the gaps ahead along the isoline over time, the longest
 /// unvisited time along it, their ideal values and the panels' (checked) ranges.
 struct TeamFigureData {
@@ -1240,12 +1293,15 @@ struct TeamFigureData {
     gaps: Vec<(f64, Vec<f64>)>,
     /// `(position along the isoline, longest unvisited time)` over the steady window.
     revisit: Vec<(f64, f64)>,
-    /// `L/(N v0)`, s (an open isoline: the mean gap over `v0`, `summary.json`'s).
+    /// `L/(N v0)` (`L/sum v0_i` with per-vehicle speeds), s (an open isoline: the mean gap
+    /// over `v0`, `summary.json`'s).
     ideal: f64,
     /// `L/N`, m (an open isoline: the mean gap over the steady window, `summary.json`'s).
     even: f64,
     /// Whether the isoline is closed (else open: no gap ahead of the vehicle in front).
     closed: bool,
+    /// Whether the vehicles have their own nominal speeds (the ideal is then `L/sum v0_i`).
+    per_vehicle_speeds: bool,
     t_end: f64,
     gap_range: (f64, f64),
     revisit_range: (f64, f64),
@@ -1300,6 +1356,12 @@ impl TeamFigureData {
                 t.ideal_speed_mps()
             });
         let closed = tracks.is_closed();
+        let per_vehicle_speeds = first
+            .scenario
+            .spec()
+            .team
+            .as_ref()
+            .is_some_and(|t| t.member_speeds().is_some());
         let (ideal, even) = if closed {
             (l / (n as f64 * v0), l / n as f64)
         } else {
@@ -1342,6 +1404,7 @@ impl TeamFigureData {
             ideal,
             even,
             closed,
+            per_vehicle_speeds,
             t_end,
             gap_range: (glo, ghi),
             revisit_range: (rlo, rhi),
@@ -1380,6 +1443,7 @@ pub fn team_figure(
         ideal,
         even,
         closed,
+        per_vehicle_speeds,
         t_end,
         gap_range: (glo, ghi),
         revisit_range: (rlo, rhi),
@@ -1452,16 +1516,24 @@ pub fn team_figure(
                 (ls, rs),
             )?;
             if ideal.is_finite() {
+                // Dashed in the legend as on the panel (att32d-16: drawn solid there), and
+                // with per-vehicle speeds its own formula, `L/sum v0_i`.
+                let (dash, gap) = (st.px(6.0), st.px(3.0));
                 bottom
                     .draw_series(dashed((0.0, ideal), (l, ideal)))
                     .map_err(s)?
-                    .label(if closed {
-                        "ideal L/(N v0)"
-                    } else {
-                        "ideal S/((N-1) v0)"
+                    .label(match (closed, per_vehicle_speeds) {
+                        (true, false) => "ideal L/(N v0)",
+                        (true, true) => "ideal L/sum v0_i",
+                        (false, _) => "ideal S/((N-1) v0)",
                     })
                     .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+                        plotters::element::DashedPathElement::new(
+                            vec![(x, y), (x + 20, y)],
+                            dash,
+                            gap,
+                            BLACK.stroke_width(w2),
+                        )
                     });
             }
             let c = colour(1);

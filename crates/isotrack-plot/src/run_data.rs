@@ -42,6 +42,13 @@ impl RunData {
     /// `summary.json` and scenario shared). A `vehicle` cell that is not a vehicle of the team
     /// (`0..team.vehicle_count`) is a data error naming its line.
     pub fn load_team(dir: &Path) -> Result<Vec<Self>, PlotError> {
+        Self::load_team_named(dir, false)
+    }
+
+    /// [`load_team`](Self::load_team), a team's vehicles named `DIR vehicle I` when
+    /// `with_run` (several runs drawn together: their vehicles, and the messages that compare
+    /// them, tell the runs apart; issue 32, att32d-7), else `vehicle I`.
+    pub fn load_team_named(dir: &Path, with_run: bool) -> Result<Vec<Self>, PlotError> {
         let (all, ids, lines) = Self::read(dir, true)?;
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
             return Ok(vec![all]);
@@ -59,6 +66,18 @@ impl RunData {
         // another time in every figure: refused, naming the line.
         let mut times: Vec<f64> = Vec::new();
         let mut last_line = vec![0u64; n];
+        // A vehicle that ended early (`left_field`, `diverged`: summary.json) writes its last
+        // valid state at the step it ended, which may fall between two recorded times: that
+        // one row, at its `t_end_s`, is its last, off the schedule (att32d-14).
+        let mut ended_at: Vec<Option<f64>> = vec![None; n];
+        if let Ended::Run(end) = &all.summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                if v.outcome != "completed" {
+                    ended_at[i] = v.t_end_s;
+                }
+            }
+        }
+        let mut done = vec![false; n];
         for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
             let Some(i) = id.filter(|&i| i < n) else {
                 return Err(PlotError::Data(format!(
@@ -67,10 +86,26 @@ impl RunData {
                     row + 1
                 )));
             };
+            if done[i] {
+                return Err(PlotError::Data(format!(
+                    "{}: trace.csv:{line}: vehicle {i} has a row after its last (at its end, t_end_s = {} s in summary.json)",
+                    dir.display(),
+                    ended_at[i].map_or("?".to_string(), |e| Echo(e).to_string())
+                )));
+            }
+            let k = traces[i].len();
+            if ended_at[i] == Some(t.t_s)
+                && times.get(k) != Some(&t.t_s)
+                && times.last().is_none_or(|l| *l < t.t_s)
+            {
+                traces[i].push(*t);
+                last_line[i] = *line;
+                done[i] = true;
+                continue;
+            }
             if times.last() != Some(&t.t_s) {
                 times.push(t.t_s);
             }
-            let k = traces[i].len();
             if times.get(k) != Some(&t.t_s) {
                 return Err(PlotError::Data(format!(
                     "{}: trace.csv:{line}: vehicle {i}'s row {} is at t = {} s, but recorded time {} is {}: a row of the team's trace is missing or out of order (each vehicle has a row at every recorded time until it ends)",
@@ -123,7 +158,11 @@ impl RunData {
                     end.record = own.clone();
                 }
                 Self {
-                    name: format!("vehicle {i}"),
+                    name: if with_run {
+                        format!("{} vehicle {i}", all.name)
+                    } else {
+                        format!("vehicle {i}")
+                    },
                     trace,
                     summary,
                     ..all.clone()

@@ -132,7 +132,23 @@ impl<'a> TeamTracks<'a> {
     /// there is no vehicle or row.
     pub fn new(vehicles: &'a [RunData]) -> Option<Self> {
         let first = vehicles.first()?;
-        let rows = vehicles.iter().map(|v| v.trace.len()).min()?;
+        // A vehicle that ended early may end on a row off the recorded times (its last valid
+        // state, at the step it ended: att32d-14); the rows paired across vehicles are those
+        // at the recorded times, the longest trace's.
+        let longest = vehicles.iter().max_by_key(|v| v.trace.len())?;
+        let rows = vehicles
+            .iter()
+            .map(|v| {
+                let c = v.trace.len();
+                let on_schedule =
+                    c == 0 || longest.trace.get(c - 1).map(|r| r.t_s) == Some(v.trace[c - 1].t_s);
+                if on_schedule {
+                    c
+                } else {
+                    c - 1
+                }
+            })
+            .min()?;
         let last = rows.checked_sub(1)?;
         let t_last = first.trace[last].t_s;
         let ends: Vec<Vec2> = vehicles

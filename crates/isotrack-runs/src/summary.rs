@@ -292,6 +292,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
     ) -> Self {
         let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
         if let Ended::Run(r) = &mut s.ended {
+            r.warnings.extend(unfinished_vehicles(team));
             r.team = Some(Box::new(TeamJson::new(scenario, team)));
             r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
         }
@@ -447,6 +448,54 @@ pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
                 .map(|d| (p.to_string(), d))
         })
         .collect()
+}
+
+/// The most vehicles [`unfinished_vehicles`] names one by one (a team of 10 000 whose every
+/// vehicle left the field gives one line, not 10 000).
+const UNFINISHED_NAMED: usize = 5;
+
+/// The warning of a team run `team` in which vehicles other than vehicle 0 (whose outcome is
+/// the top level's) did not complete: each named with its outcome, the time it ended and why
+/// (`vehicle 3: left_field at t = 0.68 s (the field has no value at ...)`), the first
+/// [`UNFINISHED_NAMED`] of them; `None` when they all completed. `isotrack run` prints it and
+/// `summary.json` lists it in `warnings` (issue 32, att32d-14: a run whose vehicle 3 left the
+/// field at 0.68 s said `completed`, `warnings: []`).
+pub fn unfinished_vehicles(team: &isotrack_sim::TeamResult) -> Option<String> {
+    use isotrack_core::numtext::Num;
+    let ended: Vec<(usize, &RunResult)> = team
+        .runs
+        .iter()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, r)| r.outcome != isotrack_sim::Outcome::Completed)
+        .collect();
+    if ended.is_empty() {
+        return None;
+    }
+    let mut named: Vec<String> = ended
+        .iter()
+        .take(UNFINISHED_NAMED)
+        .map(|(i, r)| {
+            let why = r
+                .outcome_detail
+                .as_deref()
+                .map_or_else(String::new, |d| format!(" ({d})"));
+            format!(
+                "vehicle {i}: {} at t = {} s{why}",
+                r.outcome.as_str(),
+                Num(r.t_end_s)
+            )
+        })
+        .collect();
+    if ended.len() > UNFINISHED_NAMED {
+        named.push(format!("and {} more", ended.len() - UNFINISHED_NAMED));
+    }
+    Some(format!(
+        "{} of {} vehicles did not complete the run ({}); the top-level metrics are vehicle 0's, each vehicle's outcome is in `vehicles`",
+        ended.len(),
+        team.runs.len(),
+        named.join("; ")
+    ))
 }
 
 #[cfg(test)]

@@ -63,6 +63,9 @@ pub struct MetricSteps {
     pub steady_state_start_step: u64,
     /// The convergence dwell, steps (`StepPlan::convergence_min_dwell_steps`).
     pub convergence_min_dwell_steps: u64,
+    /// The convergence tolerance on `|eps|`, field units (`metrics.convergence_tolerance`):
+    /// the bound of the in-band share and of a convergence.
+    pub convergence_tolerance: f64,
 }
 
 /// The [`RunSpan`] of resolved scenario file `f` (`None` if its step counts are invalid, which
@@ -70,7 +73,15 @@ pub struct MetricSteps {
 pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
     let sim = crate::spec::SimSpec::new(&f.sim).ok()?;
     let sensor = crate::spec::sensor::sensor_config(&f.sensor).ok()?;
-    let rate_hz = sensor.rate_hz;
+    // A team's row is vehicle 0's: its own override (`team.vehicles`, `index = 0`) sets its
+    // sensor's rate and its speeds (issue 32, att32d-3 and -5: a sweep whose vehicle 0 had
+    // its own `sensor_rate_hz` or `v_max_mps` refused its own rows, bounded by the team's).
+    let own = f
+        .team
+        .as_ref()
+        .and_then(|t| t.vehicles.as_ref())
+        .and_then(|v| v.iter().find(|e| e.index == Some(0)));
+    let rate_hz = own.and_then(|e| e.sensor_rate_hz).unwrap_or(sensor.rate_hz);
     // The windows as the run's own step plan computes them (the record rate and level play no
     // part in them).
     let metric_steps = crate::spec::MetricsSpec::new(&f.metrics, &sim)
@@ -90,6 +101,7 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         .map(|p| MetricSteps {
             steady_state_start_step: p.steady_state_start_step,
             convergence_min_dwell_steps: p.convergence_min_dwell_steps,
+            convergence_tolerance: p.convergence_tolerance,
         });
     Some(RunSpan {
         metric_steps,
@@ -121,10 +133,15 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             None | Some(crate::schema::VehicleKind::Dubins) => {
                 let v0 = f.vehicle.speed_mps.unwrap_or(0.5);
                 // A team's spacing law flies each robot at up to `team.v_max_mps` (default
-                // `V_MAX_FACTOR v0`): the bound is the run's top speed, not the nominal one.
+                // `V_MAX_FACTOR v0`): the bound is the run's top speed, not the nominal one;
+                // vehicle 0's own `speed_mps` and `v_max_mps` where it has them (its envelope
+                // as `spec::team` resolves it: its own bound, else the team's, else the rule
+                // at its own speed).
+                let v0 = own.and_then(|e| e.speed_mps).unwrap_or(v0);
                 let top = match &f.team {
-                    Some(t) => t
-                        .v_max_mps
+                    Some(t) => own
+                        .and_then(|e| e.v_max_mps)
+                        .or(t.v_max_mps)
                         .unwrap_or(crate::spec::team::V_MAX_FACTOR * v0)
                         .max(v0),
                     None => v0,

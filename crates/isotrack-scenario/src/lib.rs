@@ -179,11 +179,26 @@ impl Scenario {
         self.derive_with(&assignments, origin)
     }
 
-    /// As [`Scenario::derive`], each assignment carrying its own label for messages.
+    /// As [`Scenario::derive`], each assignment carrying its own label for messages; a
+    /// relative file path an assignment gives (`field.path`, `field.paths`) is relative to the
+    /// working directory, as a Python `Scenario.set` is.
     pub fn derive_with(
         &self,
         assignments: &[Assignment],
         origin: &str,
+    ) -> Result<Self, ScenarioError> {
+        self.derive_with_in(assignments, origin, Path::new("."))
+    }
+
+    /// As [`Scenario::derive_with`], a relative file path an assignment gives relative to
+    /// `base_dir`: a sweep's `[base]`, `[grid]` and `[random]` paths are relative to the sweep
+    /// file, as its `scenario` is (issue 30, ver30-1: they were relative to the working
+    /// directory, so `--resume` from another directory could not read them).
+    pub fn derive_with_in(
+        &self,
+        assignments: &[Assignment],
+        origin: &str,
+        base_dir: &Path,
     ) -> Result<Self, ScenarioError> {
         let mut given = apply_assignments(&self.given, assignments)?;
         let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
@@ -205,7 +220,7 @@ impl Scenario {
             // Another source or other keys: its files are read again and fill their own keys
             // (a hostile review: a sweep over `field.path` once ran every file on the first
             // one's grid).
-            build_recorded(&mut file, &mut given, Path::new(".")).map_err(|i| located(vec![i]))?
+            build_recorded(&mut file, &mut given, base_dir).map_err(|i| located(vec![i]))?
         };
         let start = start_xy(&file).map_err(|i| located(vec![i]))?;
         field::check_start(start, &parts.model).map_err(|i| located(vec![i]))?;

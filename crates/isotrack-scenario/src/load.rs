@@ -80,23 +80,7 @@ pub fn parse_scenario_in(
     base_dir: &Path,
 ) -> Result<Scenario, ScenarioError> {
     let located = |span: Option<Range<usize>>, key: Option<String>, message: String| {
-        let (line, column) = match &span {
-            Some(s) => {
-                let (l, c) = line_col(text, s.start);
-                (Some(l), Some(c))
-            }
-            None => (None, None),
-        };
-        ScenarioError::Invalid(vec![LocatedIssue {
-            location: ErrorLocation::File {
-                path: origin.to_string(),
-                line,
-                column,
-            },
-            key,
-            message,
-            unreadable: false,
-        }])
+        located_in(text, origin, span, key, message)
     };
 
     // 1. Syntax, with spans kept for locating keys later.
@@ -123,25 +107,7 @@ pub fn parse_scenario_in(
         let message = number_out_of_range(message).unwrap_or_else(|| message.to_string());
         located(e.span(), key, message)
     })?;
-    let mut set_keys: Vec<(String, String)> = Vec::new();
-    for arg in overrides {
-        let at = ErrorLocation::Override { arg: arg.clone() };
-        let before = kinds_of(&table);
-        let key = apply_one(&mut table, arg, at)?;
-        let after = kinds_of(&table);
-        for (section, _) in KINDED_SECTIONS
-            .iter()
-            .zip(before.iter().zip(&after))
-            .filter(|(_, (b, a))| b != a)
-        {
-            // `--set controller.kind=...` switches controllers (and so for fields and
-            // vehicles): the file's keys for the old kind go; later overrides are checked
-            // against the new kind.
-            drop_inapplicable_keys(&mut table, section);
-            set_keys.retain(|(k, _)| !k.starts_with(&format!("{section}.")));
-        }
-        set_keys.push((key, arg.clone()));
-    }
+    let set_keys = apply_overrides(&mut table, overrides)?;
     let file: ScenarioFile = toml::Value::Table(table)
         .try_into()
         .map_err(|e: toml::de::Error| located(None, None, e.message().to_string()))?;
@@ -154,6 +120,64 @@ pub fn parse_scenario_in(
                 .collect(),
         )
     })
+}
+
+/// An error in `text` (read from `origin`) at the byte `span` (its line and column; none without
+/// a span), on `key` if known.
+fn located_in(
+    text: &str,
+    origin: &str,
+    span: Option<Range<usize>>,
+    key: Option<String>,
+    message: String,
+) -> ScenarioError {
+    let (line, column) = match &span {
+        Some(s) => {
+            let (l, c) = line_col(text, s.start);
+            (Some(l), Some(c))
+        }
+        None => (None, None),
+    };
+    ScenarioError::Invalid(vec![LocatedIssue {
+        location: ErrorLocation::File {
+            path: origin.to_string(),
+            line,
+            column,
+        },
+        key,
+        message,
+        unreadable: false,
+    }])
+}
+
+/// Applies the `--set` overrides to `table` one at a time, so that an error names its argument.
+/// Returns the keys set with the argument that set each (for locating later problems); a
+/// `--set` that switches a section's kind drops the file's keys for the old kind, and the
+/// earlier overrides into that section with them.
+fn apply_overrides(
+    table: &mut toml::Table,
+    overrides: &[String],
+) -> Result<Vec<(String, String)>, ScenarioError> {
+    let mut set_keys: Vec<(String, String)> = Vec::new();
+    for arg in overrides {
+        let at = ErrorLocation::Override { arg: arg.clone() };
+        let before = kinds_of(table);
+        let key = apply_one(table, arg, at)?;
+        let after = kinds_of(table);
+        for (section, _) in KINDED_SECTIONS
+            .iter()
+            .zip(before.iter().zip(&after))
+            .filter(|(_, (b, a))| b != a)
+        {
+            // `--set controller.kind=...` switches controllers (and so for fields and
+            // vehicles): the file's keys for the old kind go; later overrides are checked
+            // against the new kind.
+            drop_inapplicable_keys(table, section);
+            set_keys.retain(|(k, _)| !k.starts_with(&format!("{section}.")));
+        }
+        set_keys.push((key, arg.clone()));
+    }
+    Ok(set_keys)
 }
 
 /// Resolves and builds a derived scenario file (files relative to `base_dir`); problems are

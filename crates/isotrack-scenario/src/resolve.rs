@@ -1170,6 +1170,19 @@ fn resolve_initial(c: &mut Checker, init: &mut InitialSection) {
 /// `[sensor]`: decided by [`Sensor::new`] itself, the constructor the builder calls, so a value
 /// that passes here cannot fail there.
 fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: f64) {
+    let (rate, tiny_step) = resolve_sensor_rate(c, sn, dt);
+    c.positive("sensor.rate_hz", rate);
+    let (noise, delay) = resolve_sensor_settings(c, sn);
+    if tiny_step {
+        return; // already reported
+    }
+    check_sensor_timing(c, dt, duration_s, rate, noise, delay);
+}
+
+/// `sensor.rate_hz`, one sample a step (`1/sim.dt_s`) by default, and whether the step is so
+/// small that this default is not finite (reported on `sim.dt_s`; the rate is then 1 Hz, so
+/// that nothing else is reported about it).
+fn resolve_sensor_rate(c: &mut Checker, sn: &mut SensorSection, dt: f64) -> (f64, bool) {
     // The default rate is one sample a step: a step so small that `1/dt` is infinite
     // (`sim.dt_s = 1e-320`) is the step's fault, not the (unwritten) rate's.
     let tiny_step = sn.rate_hz.is_none() && dt > 0.0 && !(1.0 / dt).is_finite();
@@ -1187,7 +1200,13 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
     } else {
         1.0
     });
-    c.positive("sensor.rate_hz", rate);
+    (rate, tiny_step)
+}
+
+/// The sensor's other settings with their defaults and ranges: noise, delay, time constant,
+/// resolution, dropout probability in `[0, 1)`, bias drift and the range `[min, max]`.
+/// Returns the noise and the delay, which the timing check needs.
+fn resolve_sensor_settings(c: &mut Checker, sn: &mut SensorSection) -> (f64, f64) {
     let noise = *sn.noise_std.get_or_insert(N::NOISE_STD);
     c.sensor_setting("sensor.noise_std", noise);
     let delay = *sn.delay_s.get_or_insert(N::DELAY_S);
@@ -1222,8 +1241,21 @@ fn resolve_sensor(c: &mut Checker, sn: &mut SensorSection, dt: f64, duration_s: 
             );
         }
     }
+    (noise, delay)
+}
+
+/// The sensor's timing as [`Sensor::new`] decides it (the rate a whole number of steps, the
+/// delay within the run), once `dt`, the rate and the delay are each valid on their own.
+fn check_sensor_timing(
+    c: &mut Checker,
+    dt: f64,
+    duration_s: f64,
+    rate: f64,
+    noise: f64,
+    delay: f64,
+) {
     let all_finite = [dt, rate, delay].iter().all(|x| x.is_finite());
-    if tiny_step || !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
+    if !(all_finite && dt > 0.0 && rate > 0.0 && delay >= 0.0) {
         return; // already reported
     }
     if delay > duration_s {

@@ -104,6 +104,9 @@ impl Dist {
 pub struct SweepPlan {
     /// The base scenario file (absolute or relative to the working directory).
     pub scenario: PathBuf,
+    /// The sweep file's directory: a relative file path in `[base]`, `[grid]` or `[random]`
+    /// (`field.path`, `field.paths`) is relative to it, as `scenario` is.
+    pub dir: PathBuf,
     /// Fixed overrides, `KEY=VALUE`.
     pub base: Vec<String>,
     /// Grid keys and their values (TOML literals), keys sorted.
@@ -613,6 +616,7 @@ impl SweepPlan {
             || random.iter().any(|(k, _)| sets_seed(k)));
         Ok(Self {
             scenario,
+            dir: dir.to_path_buf(),
             base,
             grid,
             draws,

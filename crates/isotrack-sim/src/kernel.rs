@@ -133,6 +133,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
                 Outcome::Diverged,
                 format!("non-finite vehicle state at t = {} s", Num(t_s)),
             );
+            self.record_last(sink);
             return Sensed::Ended;
         }
         let value = value_at(pose.position);
@@ -162,6 +163,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
                 });
                 self.last_recorded_step = Some(0);
             }
+            self.record_last(sink);
             return Sensed::Ended;
         }
         if k > 0 {
@@ -226,6 +228,7 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
                     format!("non-finite turn-rate command at t = {} s", Num(t_s)),
                 );
                 self.record_start(k, t_s, vehicle, state, sink);
+                self.record_last(sink);
                 return false;
             }
             self.omega = w;
@@ -304,6 +307,19 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
         self.last_recorded_step = Some(0);
     }
 
+    /// The last valid state into the trace, if the recording schedule left it out: at the
+    /// step a run ends early (`left_field`, `diverged`), so that a team's trace, whose vehicles
+    /// share one file, stays in time order (issue 32, att32d-14: the row once went in at the
+    /// team's end, after every later row), and at [`finish`](Self::finish).
+    fn record_last<S: TraceSink + ?Sized>(&mut self, sink: &mut S) {
+        if self.records() && self.last_recorded_step != Some(self.last_valid_step) {
+            if let Some(row) = &self.last_row {
+                sink.record(row);
+                self.last_recorded_step = Some(self.last_valid_step);
+            }
+        }
+    }
+
     fn end(&mut self, outcome: Outcome, detail: String) {
         self.ended = Some((outcome, Some(detail)));
     }
@@ -333,12 +349,8 @@ impl<const TRACE: bool> VehicleRun<TRACE> {
 
     /// Ends the run (a run still going ends as it stands, as `completed` would at its end) and
     /// returns its result; the last valid state is always in the trace.
-    pub(crate) fn finish<S: TraceSink + ?Sized>(self, sink: &mut S) -> RunResult {
-        if self.records() && self.last_recorded_step != Some(self.last_valid_step) {
-            if let Some(row) = &self.last_row {
-                sink.record(row);
-            }
-        }
+    pub(crate) fn finish<S: TraceSink + ?Sized>(mut self, sink: &mut S) -> RunResult {
+        self.record_last(sink);
         let (outcome, detail) = self.ended.unwrap_or((Outcome::Completed, None));
         RunResult {
             outcome,

@@ -1,5 +1,4 @@
 use crate::error::{Error, Result};
-use crate::filters::FilterRegistry;
 use crate::fractal_heap::FractalHeap;
 use crate::global_heap::{GlobalHeapCollection, GlobalHeapObject};
 use crate::io::Cursor;
@@ -479,10 +478,6 @@ pub(crate) fn collect_attribute_messages_storage(
     header: &ObjectHeader,
     context: &FileContext,
 ) -> Result<Vec<AttributeMessage>> {
-    let storage = context.storage.as_ref();
-    let offset_size = context.superblock.offset_size;
-    let length_size = context.superblock.length_size;
-    let filter_registry = Some(context.filter_registry.as_ref());
     let mut attributes = Vec::new();
     let mut attribute_info = None;
 
@@ -495,13 +490,7 @@ pub(crate) fn collect_attribute_messages_storage(
     }
 
     if let Some(info) = attribute_info {
-        attributes.extend(load_dense_attribute_messages_storage(
-            &info,
-            storage,
-            offset_size,
-            length_size,
-            filter_registry,
-        )?);
+        attributes.extend(load_dense_attribute_messages_storage(&info, context)?);
     }
 
     resolve_shared_attribute_parts(&mut attributes, context);
@@ -616,32 +605,73 @@ fn read_shared_part(
     Ok((message, raw))
 }
 
+/// Object header message flag: the message is shared (HDF5 file format
+/// specification, "Version 2 Object Header", header message flags bit 1).
+const MESSAGE_FLAG_SHARED: u8 = 0x02;
+
+/// The attributes of an object in dense storage: the records of its name (or
+/// creation-order) v2 B-tree, each the ID of an attribute message in the
+/// object's fractal heap.
+///
+/// isotrack: a record whose message flags hold "shared" (bit 1) names the
+/// attribute's ID in the shared-message (SOHM) heap instead (libhdf5's
+/// `H5A__dense_build_table_cb` / `H5SM_reconstitute`): read from there. 0.12.1
+/// read every ID from the object's own heap, refusing the file ("undefined
+/// address", or a wrong message) when libhdf5 shares attributes and an object
+/// has more than 8 (ver30b-8). The object's heap is opened only for an
+/// attribute stored in it.
 fn load_dense_attribute_messages_storage(
     info: &AttributeInfoMessage,
-    storage: &dyn Storage,
-    offset_size: u8,
-    length_size: u8,
-    filter_registry: Option<&FilterRegistry>,
+    context: &FileContext,
 ) -> Result<Vec<AttributeMessage>> {
-    if Cursor::is_undefined_offset(info.fractal_heap_address, offset_size) {
-        return Ok(Vec::new());
-    }
-
-    let heap = FractalHeap::parse_at_storage(
-        storage,
-        info.fractal_heap_address,
-        offset_size,
-        length_size,
-    )?;
+    let storage = context.storage.as_ref();
+    let offset_size = context.superblock.offset_size;
+    let length_size = context.superblock.length_size;
+    let filter_registry = Some(context.filter_registry.as_ref());
 
     let records = load_dense_attribute_records_storage(info, storage, offset_size, length_size)?;
 
+    let mut heap = None;
     let mut attributes = Vec::new();
     for record in records {
-        let heap_id = match record {
-            btree_v2::BTreeV2Record::AttributeNameHash { heap_id, .. }
-            | btree_v2::BTreeV2Record::AttributeCreationOrder { heap_id, .. } => heap_id,
+        let (flags, heap_id) = match record {
+            btree_v2::BTreeV2Record::AttributeNameHash { flags, heap_id, .. }
+            | btree_v2::BTreeV2Record::AttributeCreationOrder { flags, heap_id, .. } => {
+                (flags, heap_id)
+            }
             _ => continue,
+        };
+
+        if flags & MESSAGE_FLAG_SHARED != 0 {
+            match context.resolve_sohm_message(&heap_id, messages::MSG_ATTRIBUTE)? {
+                Some(HdfMessage::Attribute(attr)) => attributes.push(attr),
+                Some(_) => {
+                    return Err(Error::InvalidData(
+                        "shared dense attribute: the shared message is not an attribute".into(),
+                    ))
+                }
+                None => {
+                    return Err(Error::InvalidData(
+                        "shared dense attribute: no shared message index holds attributes".into(),
+                    ))
+                }
+            }
+            continue;
+        }
+
+        let heap = match &mut heap {
+            Some(heap) => heap,
+            None => {
+                if Cursor::is_undefined_offset(info.fractal_heap_address, offset_size) {
+                    return Err(Error::UndefinedAddress);
+                }
+                heap.insert(FractalHeap::parse_at_storage(
+                    storage,
+                    info.fractal_heap_address,
+                    offset_size,
+                    length_size,
+                )?)
+            }
         };
 
         let managed_bytes = heap.get_object_storage_with_registry(

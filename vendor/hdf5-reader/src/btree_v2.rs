@@ -185,7 +185,13 @@ pub enum BTreeV2Record {
         heap_id: Vec<u8>,
     },
     /// Type 9: Attribute creation order.
-    AttributeCreationOrder { order: u32, heap_id: Vec<u8> },
+    AttributeCreationOrder {
+        order: u32,
+        /// isotrack: the attribute message's object header message flags (bit
+        /// 1: shared, `heap_id` then an ID in the shared-message heap).
+        flags: u8,
+        heap_id: Vec<u8>,
+    },
     /// Type 10: Non-filtered chunked dataset record (v2 chunk index).
     ChunkedNonFiltered { address: u64, offsets: Vec<u64> },
     /// Type 11: Filtered chunked dataset record (v2 chunk index).
@@ -328,9 +334,13 @@ fn parse_record(
         // Type 9: attribute creation order
         9 => {
             let heap_id = cursor.read_bytes(heap_id_len)?.to_vec();
-            let _flags = cursor.read_u8()?;
+            let flags = cursor.read_u8()?;
             let order = cursor.read_u32_le()?;
-            BTreeV2Record::AttributeCreationOrder { order, heap_id }
+            BTreeV2Record::AttributeCreationOrder {
+                order,
+                flags,
+                heap_id,
+            }
         }
 
         // Type 10: non-filtered chunk
@@ -1616,6 +1626,7 @@ mod tests {
             BTreeV2Record::AttributeCreationOrder {
                 order,
                 heap_id: parsed_heap_id,
+                ..
             } => {
                 assert_eq!(parsed_heap_id, heap_id);
                 assert_eq!(order, 7);

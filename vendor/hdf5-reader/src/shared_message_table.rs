@@ -6,7 +6,6 @@
 
 use std::sync::Arc;
 
-use crate::btree_v2::{self, BTreeV2Record};
 use crate::checksum::jenkins_lookup3;
 use crate::error::{Error, Result};
 use crate::filters::FilterRegistry;
@@ -16,6 +15,7 @@ use crate::messages::{parse_message, HdfMessage};
 use crate::storage::Storage;
 
 const SMTB_SIGNATURE: [u8; 4] = *b"SMTB";
+#[cfg(test)]
 const SMLI_SIGNATURE: [u8; 4] = *b"SMLI";
 
 /// File-level SOHM master table.
@@ -24,6 +24,10 @@ pub(crate) struct SharedMessageTable {
     indexes: Vec<SharedMessageIndex>,
 }
 
+// isotrack: reading a shared message needs only the index's flags and heap
+// address (the rest is kept as the table holds it); list records are parsed
+// by the unit tests only.
+#[allow(dead_code)]
 #[derive(Debug, Clone)]
 struct SharedMessageIndex {
     index_type: SharedMessageIndexType,
@@ -42,6 +46,8 @@ enum SharedMessageIndexType {
     BTree,
 }
 
+#[cfg(test)]
+#[allow(dead_code)]
 #[derive(Debug, Clone)]
 enum SharedMessageRecord {
     Heap {
@@ -129,6 +135,16 @@ impl SharedMessageTable {
     }
 
     /// Resolve a SOHM heap ID into the concrete object-header message.
+    ///
+    /// isotrack: the heap ID is an object ID in the fractal heap of the one
+    /// index whose message-type flags hold `message_type` (libhdf5's
+    /// `H5SM_get_fheap_addr`, then `H5HF_op`; the index's records are not
+    /// needed to read it). 0.12.1 tested the flags with the wrong bits (see
+    /// [`shared_message_type_flag`]), fell back to every index when none
+    /// matched and took the first record with an equal heap ID: heap IDs are
+    /// unique only within one heap, so with datatypes and dataspaces in
+    /// separate indexes a datatype was read from the dataspace heap ("unsupported
+    /// dataspace version 17"). `None` when no index tracks the type.
     pub(crate) fn resolve_heap_message(
         &self,
         heap_id: &[u8],
@@ -138,123 +154,51 @@ impl SharedMessageTable {
         length_size: u8,
         filter_registry: Option<&FilterRegistry>,
     ) -> Result<Option<HdfMessage>> {
-        let preferred_indexes: Vec<&SharedMessageIndex> = self
+        let Some(index) = self
             .indexes
             .iter()
-            .filter(|index| index.tracks_message_type(message_type))
-            .collect();
-
-        let indexes: Vec<&SharedMessageIndex> = if preferred_indexes.is_empty() {
-            self.indexes.iter().collect()
-        } else {
-            preferred_indexes
+            .find(|index| index.tracks_message_type(message_type))
+        else {
+            return Ok(None);
         };
-
-        for index in indexes {
-            for record in index.records(storage, offset_size, length_size)? {
-                match record {
-                    SharedMessageRecord::Heap {
-                        hash,
-                        reference_count,
-                        heap_id: record_heap_id,
-                    } => {
-                        let _ = (hash, reference_count);
-                        if record_heap_id != heap_id {
-                            continue;
-                        }
-                    }
-                    SharedMessageRecord::ObjectHeader {
-                        hash,
-                        message_type,
-                        object_header_index,
-                        object_header_address,
-                    } => {
-                        let _ = (
-                            hash,
-                            message_type,
-                            object_header_index,
-                            object_header_address,
-                        );
-                        continue;
-                    }
-                }
-
-                if Cursor::is_undefined_offset(index.fractal_heap_address, offset_size) {
-                    return Err(Error::UndefinedAddress);
-                }
-                let heap = FractalHeap::parse_at_storage(
-                    storage,
-                    index.fractal_heap_address,
-                    offset_size,
-                    length_size,
-                )?;
-                let payload = heap.get_object_storage_with_registry(
-                    heap_id,
-                    storage,
-                    offset_size,
-                    length_size,
-                    filter_registry,
-                )?;
-                let mut cursor = Cursor::new(&payload);
-                let message = parse_message(
-                    message_type,
-                    payload.len(),
-                    &mut cursor,
-                    offset_size,
-                    length_size,
-                )?;
-                return Ok(Some(message));
-            }
+        if Cursor::is_undefined_offset(index.fractal_heap_address, offset_size) {
+            return Err(Error::UndefinedAddress);
         }
-
-        Ok(None)
+        let heap = FractalHeap::parse_at_storage(
+            storage,
+            index.fractal_heap_address,
+            offset_size,
+            length_size,
+        )?;
+        let payload = heap.get_object_storage_with_registry(
+            heap_id,
+            storage,
+            offset_size,
+            length_size,
+            filter_registry,
+        )?;
+        let mut cursor = Cursor::new(&payload);
+        let message = parse_message(
+            message_type,
+            payload.len(),
+            &mut cursor,
+            offset_size,
+            length_size,
+        )?;
+        Ok(Some(message))
     }
 }
 
 impl SharedMessageIndex {
     fn tracks_message_type(&self, message_type: u16) -> bool {
-        let Some(bit) = shared_message_type_bit(message_type) else {
+        let Some(flag) = shared_message_type_flag(message_type) else {
             return false;
         };
-        (self.message_type_flags & (1u16 << bit)) != 0
-    }
-
-    fn records(
-        &self,
-        storage: &dyn Storage,
-        offset_size: u8,
-        length_size: u8,
-    ) -> Result<Vec<SharedMessageRecord>> {
-        let _ = (self.min_message_size, self.list_cutoff, self.btree_cutoff);
-        match self.index_type {
-            SharedMessageIndexType::List => {
-                parse_record_list(storage, self.index_address, self.num_messages, offset_size)
-            }
-            SharedMessageIndexType::BTree => {
-                let header = btree_v2::BTreeV2Header::parse_at_storage(
-                    storage,
-                    self.index_address,
-                    offset_size,
-                    length_size,
-                )?;
-                let records = btree_v2::collect_btree_v2_records_storage(
-                    storage,
-                    &header,
-                    offset_size,
-                    length_size,
-                    None,
-                    &[],
-                    None,
-                )?;
-                records
-                    .into_iter()
-                    .filter_map(record_from_btree)
-                    .collect::<Result<Vec<_>>>()
-            }
-        }
+        (self.message_type_flags & flag) != 0
     }
 }
 
+#[cfg(test)]
 fn parse_record_list(
     storage: &dyn Storage,
     address: u64,
@@ -297,6 +241,7 @@ fn parse_record_list(
     Ok(records)
 }
 
+#[cfg(test)]
 /// The size of one shared-message record in a list or B-tree index, bytes: location (1),
 /// hash (4), then the larger of a heap record (reference count 4, heap ID 8) and an
 /// object-header record (reserved 1, message type 1, index 2, address): libhdf5's
@@ -305,6 +250,7 @@ pub(crate) fn record_len(offset_size: u8) -> usize {
     1 + 4 + 12usize.max(4 + usize::from(offset_size))
 }
 
+#[cfg(test)]
 fn parse_record(cursor: &mut Cursor<'_>, offset_size: u8) -> Result<SharedMessageRecord> {
     // isotrack: location then hash, packed (libhdf5's `H5SM__message_decode`; the
     // specification's table shows padding that is not in the file): 0.12.1 skipped 3 bytes.
@@ -338,39 +284,23 @@ fn parse_record(cursor: &mut Cursor<'_>, offset_size: u8) -> Result<SharedMessag
     }
 }
 
-fn record_from_btree(record: BTreeV2Record) -> Option<Result<SharedMessageRecord>> {
-    match record {
-        BTreeV2Record::SharedMessageHeap {
-            hash,
-            reference_count,
-            heap_id,
-        } => Some(Ok(SharedMessageRecord::Heap {
-            hash,
-            reference_count,
-            heap_id,
-        })),
-        BTreeV2Record::SharedMessageObjectHeader {
-            hash,
-            message_type,
-            object_header_index,
-            object_header_address,
-        } => Some(Ok(SharedMessageRecord::ObjectHeader {
-            hash,
-            message_type,
-            object_header_index,
-            object_header_address,
-        })),
-        _ => None,
-    }
-}
-
-fn shared_message_type_bit(message_type: u16) -> Option<u8> {
+/// isotrack: the flag of `message_type` in an index's message-type flags:
+/// `1 << message type ID` (HDF5 file format specification, "Shared Object
+/// Header Message Table", the index's "Message Type Flags": bit 1 dataspace
+/// 0x0001, bit 3 datatype 0x0003, bit 5 fill value 0x0005, bit 11 filter
+/// pipeline 0x000B, bit 12 attribute 0x000C; libhdf5's `H5O_SHMESG_*_FLAG`,
+/// every kind 0x182A). 0.12.1 used bits 0 to 4. The old fill value message
+/// (0x0004) is looked up in the fill value index.
+fn shared_message_type_flag(message_type: u16) -> Option<u16> {
+    use crate::messages::{
+        MSG_ATTRIBUTE, MSG_DATASPACE, MSG_DATATYPE, MSG_FILL_VALUE, MSG_FILL_VALUE_OLD,
+        MSG_FILTER_PIPELINE,
+    };
     match message_type {
-        crate::messages::MSG_DATASPACE => Some(0),
-        crate::messages::MSG_DATATYPE => Some(1),
-        crate::messages::MSG_FILL_VALUE | crate::messages::MSG_FILL_VALUE_OLD => Some(2),
-        crate::messages::MSG_FILTER_PIPELINE => Some(3),
-        crate::messages::MSG_ATTRIBUTE => Some(4),
+        MSG_DATASPACE | MSG_DATATYPE | MSG_FILL_VALUE | MSG_FILTER_PIPELINE | MSG_ATTRIBUTE => {
+            Some(1u16 << message_type)
+        }
+        MSG_FILL_VALUE_OLD => Some(1u16 << MSG_FILL_VALUE),
         _ => None,
     }
 }
@@ -388,7 +318,7 @@ mod tests {
         table.extend_from_slice(b"SMTB");
         table.push(0);
         table.push(0);
-        table.extend_from_slice(&0x0002u16.to_le_bytes());
+        table.extend_from_slice(&0x0008u16.to_le_bytes());
         table.extend_from_slice(&16u32.to_le_bytes());
         table.extend_from_slice(&8u16.to_le_bytes());
         table.extend_from_slice(&6u16.to_le_bytes());
@@ -402,9 +332,47 @@ mod tests {
         let parsed = SharedMessageTable::parse_at_storage(&storage, 0, 1, 8).unwrap();
         assert_eq!(parsed.indexes.len(), 1);
         assert!(parsed.indexes[0].tracks_message_type(crate::messages::MSG_DATATYPE));
+        assert!(!parsed.indexes[0].tracks_message_type(crate::messages::MSG_DATASPACE));
         assert_eq!(parsed.indexes[0].num_messages, 1);
         assert_eq!(parsed.indexes[0].index_address, 64);
         assert_eq!(parsed.indexes[0].fractal_heap_address, 128);
+    }
+
+    /// isotrack: libhdf5's `H5O_SHMESG_*_FLAG` values (H5Opublic.h), 1 << message type ID.
+    #[test]
+    fn index_flags_are_one_shifted_by_the_message_type() {
+        use crate::messages::*;
+        let index = |flags| SharedMessageIndex {
+            index_type: SharedMessageIndexType::List,
+            message_type_flags: flags,
+            min_message_size: 0,
+            list_cutoff: 50,
+            btree_cutoff: 40,
+            num_messages: 0,
+            index_address: 0,
+            fractal_heap_address: 0,
+        };
+        let kinds = [
+            (MSG_DATASPACE, 0x0002),
+            (MSG_DATATYPE, 0x0008),
+            (MSG_FILL_VALUE, 0x0020),
+            (MSG_FILTER_PIPELINE, 0x0800),
+            (MSG_ATTRIBUTE, 0x1000),
+        ];
+        for (kind, flags) in kinds {
+            for (other, _) in kinds {
+                assert_eq!(index(flags).tracks_message_type(other), other == kind);
+            }
+            assert!(index(0x182A).tracks_message_type(kind));
+        }
+        assert!(index(0x0020).tracks_message_type(MSG_FILL_VALUE_OLD));
+        // 0x1F, every kind in the bits 0.12.1 used (0 to 4), holds dataspaces (bit 1) and
+        // datatypes (bit 3) only.
+        assert!(index(0x001F).tracks_message_type(MSG_DATASPACE));
+        assert!(index(0x001F).tracks_message_type(MSG_DATATYPE));
+        for kind in [MSG_FILL_VALUE, MSG_FILTER_PIPELINE, MSG_ATTRIBUTE] {
+            assert!(!index(0x001F).tracks_message_type(kind));
+        }
     }
 
     #[test]

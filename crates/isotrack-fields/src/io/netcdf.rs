@@ -551,16 +551,37 @@ fn parse_bytes_with(
             ),
         )
     };
+    let tangled = |m: String| {
+        LoadError::new(
+            name,
+            None,
+            format!(
+                "cannot read as NetCDF: {}",
+                isotrack_core::numtext::Clipped(&m)
+            ),
+        )
+    };
     if !bytes.starts_with(HDF5_SIGNATURE) {
         // NetCDF-3 (or an HDF5 file behind a user block: its attributes are read as the
         // reader reads them).
         let file = NcFile::from_bytes(bytes).map_err(cannot)?;
+        if matches!(
+            file.format(),
+            netcdf_reader::NcFormat::Nc4 | netcdf_reader::NcFormat::Nc4Classic
+        ) {
+            if let Ok(h5) = hdf5_reader::Hdf5File::from_bytes(bytes) {
+                check_group_tree(&h5).map_err(tangled)?;
+            }
+        }
         let vars = file.variables().map_err(cannot)?;
         return parse_file(name, &file, vars, variable, budget_bytes);
     }
     // NetCDF-4: the bytes shared by the reader and the second look at the needed text
     // attributes ([`restore_cut_text_attributes`]), one copy as `from_bytes` makes.
     let shared: std::sync::Arc<[u8]> = std::sync::Arc::from(bytes);
+    if let Ok(h5) = hdf5_reader::Hdf5File::from_shared_bytes(shared.clone()) {
+        check_group_tree(&h5).map_err(tangled)?;
+    }
     let file = NcFile::from_shared_bytes(shared.clone()).map_err(cannot)?;
     match file.variables() {
         Ok(vars) => {
@@ -599,6 +620,63 @@ fn parse_bytes_with(
         }
         Err(e) => Err(cannot(e)),
     }
+}
+
+/// The deepest nesting of groups below the root read, as netcdf-reader's own limit ("NetCDF
+/// group nesting exceeds 64").
+const MAX_GROUP_DEPTH: usize = 64;
+
+/// Refuses a NetCDF-4 file whose groups do not form a tree of at most [`MAX_GROUP_DEPTH`]
+/// levels, before the reader builds its group tree: a group holding a hard link to itself or
+/// to an ancestor (legal HDF5: h5py `g["loop"] = g`, `g["up"] = f["/"]`) made netcdf-reader
+/// 0.12.1 (`build_group_recursive`, which keeps no visited set) recurse until the stack
+/// overflowed, aborting the process (issue 30, att30d-7). The graph is walked here without
+/// recursion, each group known by its object header address: a group met a second time is
+/// refused, as a cycle when it is an ancestor of the link (`/g/loop` back to `/g`), as a group
+/// linked twice otherwise (the NetCDF data model's groups form a tree, and a group shared by
+/// two links at every level doubles the reader's work per level). A group whose members
+/// cannot be listed is left for the reader, which refuses it with its own error.
+fn check_group_tree(h5: &hdf5_reader::Hdf5File) -> Result<(), String> {
+    let Ok(root) = h5.root_group() else {
+        return Ok(());
+    };
+    let mut seen: std::collections::HashMap<u64, String> =
+        std::collections::HashMap::from([(root.address(), "/".to_string())]);
+    let mut stack = vec![(root, String::new(), 0_usize)];
+    while let Some((group, path, depth)) = stack.pop() {
+        let Ok(children) = group.groups() else {
+            continue;
+        };
+        // Walked in listing order (the stack pops the first child first).
+        let mut found = Vec::with_capacity(children.len());
+        for child in children {
+            let leaf = child.name().rsplit('/').next().unwrap_or_default();
+            let child_path = format!("{path}/{leaf}");
+            if let Some(first) = seen.get(&child.address()) {
+                let ancestor = first == "/" || child_path.starts_with(&format!("{first}/"));
+                return Err(if ancestor {
+                    format!(
+                        "a group links back to an ancestor (a group cycle; NetCDF groups form \
+                         a tree): {child_path} -> {first}"
+                    )
+                } else {
+                    format!(
+                        "a group is linked twice (NetCDF groups form a tree): {first} and \
+                         {child_path}"
+                    )
+                });
+            }
+            if depth + 1 > MAX_GROUP_DEPTH {
+                return Err(format!(
+                    "group nesting exceeds {MAX_GROUP_DEPTH} levels at {child_path}"
+                ));
+            }
+            seen.insert(child.address(), child_path.clone());
+            found.push((child, child_path, depth + 1));
+        }
+        stack.extend(found.into_iter().rev());
+    }
+    Ok(())
 }
 
 /// The signature an HDF5 file (a NetCDF-4 file) starts with.

@@ -39,9 +39,10 @@ pub struct RowRules<'a> {
 
 /// The keys of a run's scenario that its [`RunSpan`] depends on (`sim.dt_s`,
 /// `sim.duration_s`, the sensor's rate, delay and dropouts, the vehicle's kind and speed, the
-/// controller's kind and turn-rate limit, a team's top speed, the metrics' steady-state
-/// fraction and convergence dwell, or their whole tables).
-const SPAN_KEYS: [&str; 18] = [
+/// controller's kind and turn-rate limit, a team's top speed and per-vehicle overrides (vehicle
+/// 0's own sensor rate and speeds), the metrics' steady-state fraction and convergence dwell,
+/// or their whole tables).
+const SPAN_KEYS: [&str; 19] = [
     "metrics",
     "metrics.steady_state_fraction",
     "metrics.convergence_min_dwell_s",
@@ -60,6 +61,7 @@ const SPAN_KEYS: [&str; 18] = [
     "controller.max_turn_rate_radps",
     "team",
     "team.v_max_mps",
+    "team.vehicles",
 ];
 
 /// The [`RunSpan`] of each run of a sweep, from its base scenario's own keys
@@ -139,14 +141,7 @@ impl<'a> RunSpans<'a> {
 /// this.
 pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     let header = rules.header;
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(line.as_bytes());
-    let rec = r
-        .records()
-        .next()
-        .and_then(Result::ok)
-        .ok_or("not a CSV row")?;
+    let rec = crate::sweep::rows::csv_record(line).ok_or("not a CSV row")?;
     if rec.len() != header.len() {
         return Err(format!(
             "{} fields where the header has {}",
@@ -489,6 +484,16 @@ pub fn check_span<'c>(
         // N`, `k + 1` for one that ended in the step after its last valid one.
         let held = (k_end + 1).min(span.n_steps);
         let most_effort = limit * limit * dt * held as f64;
+        // Under the limit the effort is finite (at most `most_effort`): only a diverged run's
+        // is written empty (att30d-1).
+        if outcome != "diverged" && most_effort.is_finite() && cell("control_effort").is_empty() {
+            return Err(format!(
+                "{}: control_effort is empty in a `{outcome}` row: under the turn-rate limit {} rad/s it is at most {} rad^2/s",
+                column("control_effort"),
+                Echo(limit),
+                Num(most_effort)
+            ));
+        }
         if let Some(e) = value("control_effort") {
             if e > most_effort * (1.0 + 1e-6) {
                 return Err(format!(
@@ -601,6 +606,21 @@ fn check_metric_windows<'c>(
             ));
         }
     }
+    check_tolerance_implications(ms, dt, cell, column)?;
+    // A completed run observed every step of its window (`k_end = N`, the window from step
+    // `ss`): its sign-change rate (a count over the window's duration, always finite) is there
+    // once the window spans a step (att30d-1). A task's run records no rates (no `samples`).
+    let ss = ms.steady_state_start_step;
+    if outcome == "completed"
+        && k_end > ss + 2
+        && !cell("samples").is_empty()
+        && cell("sign_changes_per_s").is_empty()
+    {
+        return Err(format!(
+            "{}: sign_changes_per_s is empty in a `completed` row whose steady-state window spans steps {ss} to {k_end}",
+            column("sign_changes_per_s")
+        ));
+    }
     // A benchmark task's record has no `t_end_s`: its end step is known only for a run that
     // completed (`k = N`).
     let end_known = !cell("t_end_s").is_empty() || outcome == "completed";
@@ -622,6 +642,99 @@ fn check_metric_windows<'c>(
                 Echo(dt),
                 Num(window_s),
                 Echo(t_end)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The metrics that the convergence tolerance `tol` ties together, as
+/// `isotrack_sim::Metrics` computes them (issue 30, att30d-13: a row or task with a
+/// convergence time of 0 beside a steady-state error far past the tolerance, or an in-band
+/// share of 1 beside an RMS error past it, was kept, and raised a task's score):
+/// * a convergence time `c = j dt` at or before the steady-state window's first step `s`
+///   (`j <= s`) means `|eps_k| < tol` at every step from `j` to the end, so over the window the
+///   maximum `|eps|` is below `tol`, the RMS at most it (to rounding) and every step in the
+///   band (`time_in_band_fraction = 1`);
+/// * `time_in_band_fraction = 1` (every window step with `|eps| <= tol`: `n / n`, exact) means
+///   a maximum and an RMS of at most `tol`;
+/// * a maximum of at most `tol` means every window step in the band: a share of 1.
+///
+/// Each error names its column and the tolerance.
+fn check_tolerance_implications<'c>(
+    ms: &isotrack_scenario::build::MetricSteps,
+    dt: f64,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    use isotrack_core::numtext::{Echo, Num};
+    let value = |n: &str| cell(n).parse::<f64>().ok();
+    let tol = ms.convergence_tolerance;
+    let ss = ms.steady_state_start_step;
+    let (max, rms, share) = (
+        value("steady_state_max_abs_error"),
+        value("steady_state_rms_error"),
+        value("time_in_band_fraction"),
+    );
+    // An RMS of values all within the tolerance may exceed it by rounding only.
+    let rms_over = |r: f64| r > tol * (1.0 + 1e-12);
+    if let Some(c) = value("convergence_time_s").filter(|c| (c / dt).round() <= ss as f64) {
+        let why = format!(
+            "convergence_time_s = {} s is at or before the steady-state window's start ({} s): |error| stays below metrics.convergence_tolerance = {} from then to the end",
+            Echo(c),
+            Num(ss as f64 * dt),
+            Echo(tol)
+        );
+        if let Some(m) = max.filter(|&m| m >= tol) {
+            return Err(format!(
+                "{}: steady_state_max_abs_error = {} contradicts it ({why})",
+                column("steady_state_max_abs_error"),
+                Echo(m)
+            ));
+        }
+        if let Some(r) = rms.filter(|&r| rms_over(r)) {
+            return Err(format!(
+                "{}: steady_state_rms_error = {} contradicts it ({why})",
+                column("steady_state_rms_error"),
+                Echo(r)
+            ));
+        }
+        if let Some(f) = share.filter(|&f| f != 1.0) {
+            return Err(format!(
+                "{}: time_in_band_fraction = {} contradicts it ({why}, so every step of the window is in the band)",
+                column("time_in_band_fraction"),
+                Echo(f)
+            ));
+        }
+    }
+    if share == Some(1.0) {
+        let why = format!(
+            "time_in_band_fraction = 1 puts every step of the steady-state window within metrics.convergence_tolerance = {}",
+            Echo(tol)
+        );
+        if let Some(m) = max.filter(|&m| m > tol) {
+            return Err(format!(
+                "{}: steady_state_max_abs_error = {} contradicts it ({why})",
+                column("steady_state_max_abs_error"),
+                Echo(m)
+            ));
+        }
+        if let Some(r) = rms.filter(|&r| rms_over(r)) {
+            return Err(format!(
+                "{}: steady_state_rms_error = {} contradicts it ({why})",
+                column("steady_state_rms_error"),
+                Echo(r)
+            ));
+        }
+    }
+    if let (Some(m), Some(f)) = (max, share) {
+        if m <= tol && f != 1.0 {
+            return Err(format!(
+                "{}: time_in_band_fraction = {} where steady_state_max_abs_error = {} is within metrics.convergence_tolerance = {}: every step of the window is in the band (a share of 1)",
+                column("time_in_band_fraction"),
+                Echo(f),
+                Echo(m),
+                Echo(tol)
             ));
         }
     }
@@ -756,6 +869,7 @@ pub fn check_metrics<'c>(
             ))
         }
     }
+    check_emptied_cells(outcome, cell, whole_row)?;
     // Rounding: an RMS of equal values may exceed their maximum by an ulp or so.
     let at_most = |a: &str, b: &str, what: &str| -> Result<(), String> {
         match (value.get(a), value.get(b)) {
@@ -785,6 +899,64 @@ pub fn check_metrics<'c>(
         "t_end_s",
         "convergence happens within the run",
     )
+}
+
+/// The metric cells a run always has, or has together, as `isotrack_sim::Metrics::finish`
+/// writes them (issue 30, att30d-1: a `completed` row with `path_length_m` emptied, or
+/// `steady_state_rms_error` alone emptied beside its window's maximum, was kept). A run that
+/// completed or left the field has a finite path length (a bounded speed over finitely many
+/// steps; only a diverged run's can be non-finite, written empty; the control effort is
+/// bounded only under a turn-rate limit: [`check_span`]). A completed run's error is finite at
+/// every step, so the steady-state window's maximum, RMS and mean are all there or all missing
+/// (no window), the two isoline distances likewise, unless the maximum is so large that the
+/// sum of squares overflows (at or past 1e100 here, far below any overflow with at most 2^53
+/// steps: an RMS of a field in the 1e200s is written empty). In a whole row only (a
+/// benchmark task's run records fewer metrics).
+fn check_emptied_cells<'c>(
+    outcome: &str,
+    cell: &dyn Fn(&str) -> &'c str,
+    whole_row: bool,
+) -> Result<(), String> {
+    if !whole_row {
+        return Ok(());
+    }
+    if (outcome == "completed" || outcome == "left_field") && cell("path_length_m").is_empty() {
+        return Err(format!(
+            "path_length_m is empty in a `{outcome}` row: a run that did not diverge has a finite path length"
+        ));
+    }
+    if outcome != "completed" {
+        return Ok(());
+    }
+    let groups: [(&str, &[&str]); 2] = [
+        (
+            "steady_state_max_abs_error",
+            &["steady_state_rms_error", "steady_state_mean_error"],
+        ),
+        (
+            "steady_state_max_isoline_distance_m",
+            &["steady_state_rms_isoline_distance_m"],
+        ),
+    ];
+    for (max, others) in groups {
+        let m = cell(max);
+        let small = m.parse::<f64>().is_ok_and(|v| v < 1e100);
+        for n in others {
+            if small && cell(n).is_empty() {
+                return Err(format!(
+                    "{n} is empty beside {max} = {} in a `completed` row: the metrics of one window are written together",
+                    clip(m)
+                ));
+            }
+            if m.is_empty() && !cell(n).is_empty() {
+                return Err(format!(
+                    "{max} is empty beside {n} = {} in a `completed` row: the metrics of one window are written together",
+                    clip(cell(n))
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// User text from a damaged file, clipped for a message.

@@ -23,7 +23,7 @@ pub fn sweep_base(plan: &SweepPlan, sets: &[String], label: &str) -> Result<Scen
     let base = load_scenario(Some(&plan.scenario), sets).map_err(scenario_failure)?;
     let base_assign = plan.run_assignments(0, label);
     let base = base
-        .derive_with(&base_assign[..plan.base.len()], label)
+        .derive_with_in(&base_assign[..plan.base.len()], label, &plan.dir)
         .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
     plan.check_keys(&base, label)
         .map_err(|e| fail(exit::DATAERR, e.to_string()))?;

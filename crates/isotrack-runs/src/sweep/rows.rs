@@ -73,8 +73,20 @@ pub fn numeric_columns() -> &'static [&'static str] {
 /// the checks cheap enough to make for every run, today a start on a flat background where the
 /// PI-like law circles for the whole run ([`isotrack_scenario::check::flat_start`], the warning
 /// `isotrack run` prints, its numbers rounded as the console's: [`Num`], 6 significant digits). `isotrack check`'s sampled-loop warning needs a lattice scan of the
-/// field per run and is left to `isotrack run`/`check` on the run's scenario.
+/// field per run and is left to `isotrack run`/`check` on the run's scenario. A team's row
+/// (whose run costs far more than the scan) adds `check`'s team failure
+/// ([`isotrack_scenario::check::team_warning`], as `isotrack run` warns it; att32d-6).
 pub fn run_warnings(scenario: &Scenario) -> String {
+    let flat = flat_start_warning(scenario);
+    match isotrack_scenario::check::team_warning(scenario) {
+        None => flat,
+        Some(t) if flat.is_empty() => t,
+        Some(t) => format!("{flat}; {t}"),
+    }
+}
+
+/// The flat-start warning of [`run_warnings`] (empty when none).
+fn flat_start_warning(scenario: &Scenario) -> String {
     isotrack_scenario::check::flat_start(scenario).map_or_else(String::new, |f| {
         format!(
             "flat start: within {} m of it v*|grad F| is at most {} field units/s (under {} % of c1*tanh(|eps|/c2) = {}) so the vehicle circles where it starts; set controller.search",
@@ -95,11 +107,77 @@ pub fn csv_line(fields: &[String]) -> String {
 
 /// Fields of one CSV line (`None` if it does not parse).
 pub fn csv_fields(line: &str) -> Option<Vec<String>> {
-    let mut r = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(line.as_bytes());
-    let rec = r.records().next()?.ok()?;
+    let rec = csv_record(line)?;
     Some(rec.iter().map(str::to_string).collect())
+}
+
+/// The first record of `line` as a fresh `csv` reader (default settings, no header row)
+/// reads it; `None` if it does not parse.
+///
+/// Building a reader builds its parser's automaton, about 270 k instructions, twice as many as
+/// a sweep's row takes to check (issue 34: every row of a sweep is read twice when it ends).
+/// So each thread keeps one reader over a line it swaps, and starts it afresh for each line
+/// with `seek_raw` to the start: the parser reset, its line count 1, the end of input
+/// forgotten, and no header handling (a seeked reader has done with its header: this one
+/// read an empty one when it was made). It is flexible: a fresh reader compares no first
+/// record's field count with anything, and neither may this one, which has read other lines
+/// before. Test: `csv_record_reads_as_a_fresh_reader`.
+pub(crate) fn csv_record(line: &str) -> Option<csv::StringRecord> {
+    thread_local! {
+        static READER: std::cell::RefCell<csv::Reader<OneLine>> = std::cell::RefCell::new({
+            let mut r = csv::ReaderBuilder::new()
+                .has_headers(false)
+                .flexible(true)
+                .from_reader(OneLine::default());
+            // The header read now, from nothing, so that no later seek reads one.
+            let _ = r.byte_headers();
+            r
+        });
+    }
+    READER.with_borrow_mut(|r| {
+        let source = r.get_mut();
+        source.bytes.clear();
+        source.bytes.extend_from_slice(line.as_bytes());
+        r.seek_raw(std::io::SeekFrom::Start(0), csv::Position::new())
+            .ok()?;
+        let rec = r.records().next()?.ok();
+        // Not kept: a long line's bytes are not held past the call.
+        r.get_mut().bytes = Vec::new();
+        rec
+    })
+}
+
+/// The line [`csv_record`]'s reader reads: its bytes, and where the reader is in them.
+#[derive(Default)]
+struct OneLine {
+    bytes: Vec<u8>,
+    at: usize,
+}
+
+impl std::io::Read for OneLine {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let rest = self.bytes.get(self.at..).unwrap_or_default();
+        let n = rest.len().min(buf.len());
+        buf[..n].copy_from_slice(&rest[..n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+impl std::io::Seek for OneLine {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        // Only the start is ever asked for (`csv::Position::new()`).
+        self.at = match to {
+            std::io::SeekFrom::Start(n) => usize::try_from(n).unwrap_or(usize::MAX),
+            _ => {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::Unsupported,
+                    "a line is read from its start",
+                ))
+            }
+        };
+        Ok(self.at as u64)
+    }
 }
 
 /// The rows of runs `ids` (CSV lines with their newlines, in `ids` order). A run whose values
@@ -260,7 +338,7 @@ pub fn run_scenario(
 ) -> Result<Scenario, String> {
     let origin = format!("sweep run {id}");
     let s = base
-        .derive_with(&plan.run_assignments(id, &origin), &origin)
+        .derive_with_in(&plan.run_assignments(id, &origin), &origin, &plan.dir)
         .map_err(|e| one_line(&e.to_string()))?;
     // The header's team columns are the base's: every run of a sweep is a team, or none is.
     match (base.spec().team.is_some(), s.spec().team.is_some()) {
@@ -338,5 +416,58 @@ mod tests {
         let names: Vec<&str> = SWEEP_COLUMNS.iter().map(|c| c.name()).collect();
         assert_eq!(names[..], METRIC_COLUMNS[..14]);
         assert_eq!(METRIC_COLUMNS[14], "warnings");
+    }
+
+    /// The first record of `line` as a reader made for it alone reads it (what `csv_fields`
+    /// did before issue 34).
+    fn fresh(line: &str) -> Option<Vec<String>> {
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(line.as_bytes());
+        let rec = r.records().next()?.ok()?;
+        Some(rec.iter().map(str::to_string).collect())
+    }
+
+    /// Issue 34: the one reader a thread reuses reads every line as a reader made for it
+    /// would, whatever came before: after an empty line (no byte read: a plain `seek` to the
+    /// start would be skipped and the reader stay at its end), after a line of more or fewer
+    /// fields (a reader that is not flexible refuses a second record of another length), after
+    /// an unterminated quote, a line longer than the reader's 8 KiB buffer, lines of several
+    /// records, blank lines, CR LF, quotes doubled and quoted line breaks.
+    #[test]
+    fn csv_record_reads_as_a_fresh_reader() {
+        let long = format!("1,\"{}\",3\n", "x,".repeat(10_000));
+        let lines = [
+            "a,b,c\n",
+            "",
+            "1,2,3\n",
+            "\n",
+            "x\n",
+            "1,2\n",
+            "\"unterminated,4\n",
+            "p,q,r,s,t\n",
+            "\r\n",
+            "\n\nafter,blank\n",
+            "two,records\nsecond,one,here\n",
+            "crlf,line\r\n",
+            "\"quo\"\"ted\",\"line\nbreak\",\n",
+            long.as_str(),
+            "no newline at the end",
+            ",,\n",
+            "\u{feff}bom,1\n",
+            "",
+            "last,1,2,3\n",
+        ];
+        for _ in 0..2 {
+            for line in lines {
+                assert_eq!(csv_fields(line), fresh(line), "{line:?}");
+            }
+        }
+        assert_eq!(
+            csv_fields("a,\"b,c\",d\n"),
+            Some(vec!["a".to_string(), "b,c".to_string(), "d".to_string()])
+        );
+        assert_eq!(csv_fields(""), None);
+        assert_eq!(csv_fields("1,2\n").map(|f| f.len()), Some(2));
     }
 }

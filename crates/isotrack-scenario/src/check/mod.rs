@@ -1126,55 +1126,90 @@ fn unstable_verdict(sm: &SampledReport, at: &str) -> Option<(Verdict, String)> {
     None
 }
 
+/// The verdict from the three checks alone, the first that applies in this order: what
+/// overrides a guarantee ([`overriding_verdict`]), what guarantees ([`holding_verdict`]), else
+/// why there is no guarantee ([`no_guarantee_verdict`]).
 fn verdict_alone(p1: &Prop1Report, p2: &Prop2Report, sm: &SampledReport) -> (Verdict, String) {
     let at = format!("T = {} s", Num(sm.period_s));
+    overriding_verdict(p1, p2, sm, &at)
+        .or_else(|| holding_verdict(p1, p2, sm, &at))
+        .unwrap_or_else(|| no_guarantee_verdict(p2, sm, &at))
+}
+
+/// What decides before any guarantee is looked at: a nonlinear estimator (the linear model
+/// does not carry over), an unstable sampled loop, Prop. 1's exact condition failing, or a
+/// sensor feature the check does not model. `None` when none of them applies.
+fn overriding_verdict(
+    p1: &Prop1Report,
+    p2: &Prop2Report,
+    sm: &SampledReport,
+    at: &str,
+) -> Option<(Verdict, String)> {
     if sm.nonlinear_estimator {
         // Levant's differentiator is nonlinear: neither "stable" nor "unstable" of the linear
         // model carries over to the run.
-        return (
+        return Some((
             Verdict::NotApplicable,
             format!(
                 "not guaranteed: {LEVANT_REASON}; the linear model with a backward difference gives {}",
                 radius_text(sm.spectral_radius)
             ),
-        );
+        ));
     }
-    if let Some(v) = unstable_verdict(sm, &at) {
-        return v;
+    if let Some(v) = unstable_verdict(sm, at) {
+        return Some(v);
     }
     if p1.exact_local_condition_holds == Some(false) {
-        return (
+        return Some((
             Verdict::Fails,
             "Prop. 1's exact local condition fails: the tracking orbit is unstable".into(),
-        );
+        ));
     }
     if !p2.sensor_not_modelled.is_empty() {
-        return (
+        return Some((
             Verdict::NotApplicable,
             format!(
                 "no guarantee: the check models an ideal sensor, and {}; nothing checked fails",
                 p2.sensor_not_modelled.join("; ")
             ),
-        );
+        ));
     }
+    None
+}
+
+/// The guarantees: Prop. 1's exact condition with the sampled loop stable on the isoline, or
+/// Prop. 2's bound. `None` when neither holds.
+fn holding_verdict(
+    p1: &Prop1Report,
+    p2: &Prop2Report,
+    sm: &SampledReport,
+    at: &str,
+) -> Option<(Verdict, String)> {
     if p1.exact_local_condition_holds == Some(true)
         && sm.stable == Some(true)
         && sm.p_law_orbit_error.is_none()
     {
-        return (
+        return Some((
             Verdict::Holds,
             format!("Prop. 1's exact condition holds and the loop sampled at {at} is stable at the isoline's slope k*s_d: locally exponentially stable"),
-        );
+        ));
     }
     if p2.bound_applies {
-        return (
+        return Some((
             Verdict::Holds,
             format!(
                 "Prop. 2's bound applies: limsup|eps| <= {:.6}",
                 p2.error_bound.unwrap_or(f64::NAN)
             ),
-        );
+        ));
     }
+    None
+}
+
+/// Why there is no guarantee (nothing checked fails): the P law's offset orbit, a sampled
+/// loop not computed, a loop stable on the isoline but not over the tube, else the first
+/// reason the propositions do not apply.
+fn no_guarantee_verdict(p2: &Prop2Report, sm: &SampledReport, at: &str) -> (Verdict, String) {
     if let (Some(e), Some(true)) = (sm.p_law_orbit_error, sm.stable) {
         return (
             Verdict::NotApplicable,
@@ -1718,16 +1753,90 @@ fn moving_outruns(m: &moving::MovingReport) -> Option<String> {
 /// The warnings `run` prints: the same as `check` reports, from the same lattice and the same
 /// sampled-loop computation (issue 29: a coarser lattice once gave `run` a different slope
 /// range, and a different answer, than `check`).
+///
+/// Where the isoline's slope is exact (circular fields, [`exact_isoline_slope`]) no lattice is
+/// sampled ([`Regions::of_exact_slope`]): the warnings read the sampled loop at the isoline's
+/// slopes only, and the lattice would give them nothing else (the tube's slope range feeds
+/// `check`'s verdict and report, not a warning). On the default scenario the lattice was a
+/// seventh of a 600 k-step run's instructions (BENCHMARKS.md, issue 34).
 pub fn warnings(s: &Scenario) -> Vec<String> {
     let l = law(s);
     let tube = l.c2;
-    let r = regions(s, tube, CHECK_LATTICE, false);
+    let r = match exact_isoline_slope(s) {
+        Some(alpha) => Regions::of_exact_slope(alpha),
+        None => regions(s, tube, CHECK_LATTICE, false),
+    };
     let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
     // Issue 29: `check` warned "the guarantee is local ... not from this start" while `run`
     // ended spinning without a word.
     w.extend(local_only_warning(s, &l));
     w.extend(baselines::baseline_warnings(s));
+    w.extend(team_warning_with(s, &l, &r));
+    w.extend(vehicle_noise_warnings(s));
     w
+}
+
+/// The backward-difference noise warning of [`warnings_from`] for the team's vehicles whose
+/// own sensor (`team.vehicles`: `sensor_noise_std`, `sensor_rate_hz`) differs from
+/// `[sensor]`, one line per distinct sensor naming its vehicles (issue 32, att32d-10: the
+/// noise given to one vehicle warned nowhere, the same on `[sensor]` did).
+fn vehicle_noise_warnings(s: &Scenario) -> Vec<String> {
+    let Some(team) = s.spec().team.as_ref() else {
+        return vec![];
+    };
+    if s.spec().controller.derivative() != Some(DerivativeKind::BackwardDifference) {
+        return vec![];
+    }
+    let base = &s.spec().sensor;
+    // (noise, rate) -> the vehicles with it, in the listed order.
+    let mut groups: Vec<((f64, f64), Vec<usize>)> = vec![];
+    for v in &team.vehicles {
+        let own = (
+            v.sensor_noise_std.unwrap_or(base.noise_std),
+            v.sensor_rate_hz.unwrap_or(base.rate_hz),
+        );
+        if own == (base.noise_std, base.rate_hz) || own.0 <= 0.0 {
+            continue;
+        }
+        match groups.iter_mut().find(|(k, _)| *k == own) {
+            Some((_, list)) => list.push(v.index),
+            None => groups.push((own, vec![v.index])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|((noise, rate), list)| {
+            let named: Vec<String> = list.iter().take(5).map(|i| i.to_string()).collect();
+            let more = list.len().saturating_sub(5);
+            format!(
+                "vehicle{} {}{}: its sensor noise ({} field units at {} Hz, team.vehicles) reaches the law through a backward difference: eps' carries noise of std {:.3e} (sqrt(2)*noise_std*rate); use controller.derivative = \"filtered_difference\" or \"levant\"",
+                if list.len() > 1 { "s" } else { "" },
+                named.join(", "),
+                if more > 0 { format!(" and {more} more") } else { String::new() },
+                Echo(noise),
+                Echo(rate),
+                std::f64::consts::SQRT_2 * noise * rate
+            )
+        })
+        .collect()
+}
+
+/// A team scenario whose `check` team section fails, as a warning for `isotrack run`
+/// ([`warnings`]) and a sweep's `warnings` cell: `the team check fails: REASON` with the
+/// team verdict's reason (issue 32, att32d-6: a run whose team check failed, the tracking loop
+/// unstable at a speed the spacing law commands or `team.k_v` past `k_v*`, warned nothing,
+/// as a single run with an unstable sampled loop does). `None` without `[team]` or when it
+/// does not fail.
+pub fn team_warning(s: &Scenario) -> Option<String> {
+    s.spec().team.as_ref()?;
+    let l = law(s);
+    let r = regions(s, l.c2, CHECK_LATTICE, false);
+    team_warning_with(s, &l, &r)
+}
+
+fn team_warning_with(s: &Scenario, l: &Law, r: &Regions) -> Option<String> {
+    let t = team::team_report(s, l, r)?;
+    (t.verdict == Verdict::Fails).then(|| format!("the team check fails: {}", t.verdict_reason))
 }
 
 /// Runs the checks; `tube_halfwidth` defaults to `c2`.
@@ -1804,6 +1913,67 @@ mod tests {
     use super::regions::slope_range;
     use super::setup::speed_mps;
     use super::*;
+
+    /// The warnings of `run` with the lattice sampled whatever the field, as `warnings` gave
+    /// them before issue 34 (the reference for
+    /// `circular_fields_warn_the_same_without_the_lattice`).
+    fn warnings_on_the_lattice(s: &Scenario) -> Vec<String> {
+        let l = law(s);
+        let r = regions(s, l.c2, CHECK_LATTICE, false);
+        let mut w = warnings_from(s, &sampled_report(s, &l, &r, false));
+        w.extend(local_only_warning(s, &l));
+        w.extend(baselines::baseline_warnings(s));
+        w
+    }
+
+    /// Issue 34: on a circular field `run`'s warnings skip the 601 x 601 lattice (the
+    /// isoline's slope is exact there); every warning is the one the lattice gives, over
+    /// scenarios that raise each kind the sampled loop has: slow, unstable (gain and rate),
+    /// lag and delay, noise, the P law's orbit, a flat start, a sliding-mode baseline; the
+    /// lattice is what it was (the tube's slope range is a real range, not the isoline's one
+    /// slope).
+    #[test]
+    fn circular_fields_warn_the_same_without_the_lattice() {
+        let cases: [&[&str]; 12] = [
+            &[],
+            &["sim.duration_s=1.0"],
+            &["sensor.rate_hz=2.0"],
+            &["controller.kp=2000.0"],
+            &["sim.duration_s=1.0", "sensor.delay_s=0.05"],
+            &["sim.duration_s=1.0", "sensor.time_constant_s=0.2"],
+            &["sensor.noise_std=0.01"],
+            &["controller.ki=0.0"],
+            &["controller.ki=0.0", "controller.kp=2000.0"],
+            &["initial.x_m=300.0"],
+            &["controller.kind=\"sliding_mode\""],
+            &["sensor.rate_hz=2.0", "sensor.delay_s=0.3"],
+        ];
+        let mut seen = std::collections::BTreeSet::new();
+        for set in cases {
+            let set: Vec<String> = set.iter().map(|a| (*a).to_string()).collect();
+            let s = crate::parse_scenario("", "<test>", &set).unwrap();
+            assert!(exact_isoline_slope(&s).is_some(), "{set:?}");
+            let fast = warnings(&s);
+            assert_eq!(fast, warnings_on_the_lattice(&s), "{set:?}");
+            for w in &fast {
+                seen.insert(w.split(':').next().unwrap_or_default().to_string());
+            }
+            let l = law(&s);
+            let tube = regions(&s, l.c2, CHECK_LATTICE, false).slope_range.unwrap();
+            assert!(tube[0] < tube[1], "{set:?}: {tube:?}");
+        }
+        for kind in [
+            "the sampled loop is stable but slow",
+            "the loop sampled at 2 Hz is unstable (spectral radius 1.2053)",
+            "the loop sampled at 100 Hz is unstable (spectral radius 2.2383)",
+            "with sensor.delay_s = 0.05 the guarantee is local",
+            "with sensor.time_constant_s = 0.2 the guarantee is local",
+            "sensor noise (sensor.noise_std = 0.01) reaches the law through a backward difference",
+            "flat background at the start",
+        ] {
+            assert!(seen.contains(kind), "{kind} not among {seen:?}");
+        }
+    }
 
     /// The ratio `v*|grad F| / (c1*tanh(|eps0|/c2))` near the start (largest over the points
     /// and times [`flat_start`] samples), computed without its threshold.

@@ -118,6 +118,24 @@ pub(super) struct Regions {
     pub(super) start_without_data: bool,
 }
 
+impl Regions {
+    /// The regions of a field whose isoline slope `alpha` is exact ([`exact_isoline_slope`]),
+    /// without a lattice: the isoline's slope range `[alpha, alpha]` (as [`regions`] gives it
+    /// there) and nothing read off a lattice (no tube slopes, no bounds). Enough for the
+    /// warnings of `run`, which read only the isoline's slopes ([`super::warnings`]).
+    pub(super) fn of_exact_slope(alpha: f64) -> Self {
+        Self {
+            isoline_slopes: vec![],
+            levels: None,
+            region: None,
+            tube: None,
+            slope_range: None,
+            isoline_slope_range: Some([alpha, alpha]),
+            start_without_data: false,
+        }
+    }
+}
+
 pub(super) fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> Regions {
     let field = s.field();
     let level = s.level();

@@ -789,6 +789,82 @@ fn crossings(ws: &[f64], f: impl Fn(f64) -> f64) -> Vec<f64> {
     out
 }
 
+/// The margins read off a sampled loop gain.
+struct Margins {
+    /// The gain margin nearest 1 in ratio (`1/|L|` at a phase crossover) and its frequency,
+    /// rad/s.
+    gain: Option<(f64, f64)>,
+    /// The nearest factor below 1 at which a stable loop turns unstable.
+    lower: Option<f64>,
+    /// The nearest factor above 1 at which a stable loop turns unstable.
+    upper: Option<f64>,
+    /// The phase margin nearest 0 (deg) and its gain crossover, rad/s.
+    phase: Option<(f64, f64)>,
+}
+
+/// The margins of the loop gain `L = N/D` (coefficients `n`, `d`) sampled at period `t` (s),
+/// read off `L(exp(j w T))` on 4000 logarithmically spaced frequencies in `[1e-5, 1] pi/T`,
+/// each crossing refined by bisection; crossings where `|L|` is unbounded (the open loop's
+/// poles on the unit circle) are left out. `stable_now`: the closed loop is stable as it is
+/// (the lower and upper factors are `None` otherwise).
+fn margins(n: &[f64], d: &[f64], t: f64, stable_now: bool) -> Margins {
+    let nyquist = std::f64::consts::PI / t;
+    let ws: Vec<f64> = (0..4000)
+        .map(|k| nyquist * 10f64.powf(-5.0 + 5.0 * k as f64 / 3999.0))
+        .collect();
+    let l = |w: f64| loop_gain_at(n, d, w, t);
+    let bounded = |w: f64| l(w).norm() < 1e8;
+    // Phase crossovers: L real and negative. At pi/T, L is real (z = -1).
+    // A crossover where |L| is rounding noise (below 1e-8, a "gain margin" above 1e8, e.g.
+    // at pi/T on a lagged loop) is no margin: left out (the review saw 2e14 reported).
+    let significant = |w: f64| bounded(w) && l(w).norm() > 1e-8;
+    let mut phase_x: Vec<f64> = crossings(&ws, |w| l(w).im)
+        .into_iter()
+        .filter(|&w| l(w).re < 0.0 && significant(w))
+        .collect();
+    if l(nyquist).re < 0.0 && significant(nyquist) {
+        phase_x.push(nyquist);
+    }
+    let gm = phase_x
+        .iter()
+        .map(|&w| (1.0 / l(w).norm(), w))
+        .min_by(|a, b| a.0.ln().abs().total_cmp(&b.0.ln().abs()));
+    // A pole crosses the unit circle exactly where `1 + lambda L(exp(j w T)) = 0`, i.e. at
+    // a phase crossover with `lambda = 1/|L|`; so a stable loop stays stable for the
+    // factors between the nearest such `lambda` below 1 and the nearest above.
+    let factors: Vec<f64> = phase_x.iter().map(|&w| 1.0 / l(w).norm()).collect();
+    let gm_lower = factors
+        .iter()
+        .copied()
+        .filter(|&g| g < 1.0)
+        .max_by(f64::total_cmp)
+        .filter(|_| stable_now);
+    let gm_upper = factors
+        .iter()
+        .copied()
+        .filter(|&g| g > 1.0)
+        .min_by(f64::total_cmp)
+        .filter(|_| stable_now);
+    let pm = crossings(&ws, |w| l(w).norm().ln())
+        .into_iter()
+        .filter(|&w| bounded(w))
+        .map(|w| {
+            let z = l(w);
+            let mut pm = 180.0 + z.im.atan2(z.re).to_degrees();
+            if pm > 180.0 {
+                pm -= 360.0;
+            }
+            (pm, w)
+        })
+        .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+    Margins {
+        gain: gm,
+        lower: gm_lower,
+        upper: gm_upper,
+        phase: pm,
+    }
+}
+
 impl SampledLoop {
     /// The discrete loop and its margins; `None` without a model.
     ///
@@ -812,56 +888,13 @@ impl SampledLoop {
         let n: Vec<f64> = p2.iter().zip(&p1).map(|(b, a)| b - a).collect();
         let d: Vec<f64> = p2.iter().zip(&p1).map(|(b, a)| 2.0 * a - b).collect();
         let t = self.period_s;
-        let nyquist = std::f64::consts::PI / t;
-        let ws: Vec<f64> = (0..4000)
-            .map(|k| nyquist * 10f64.powf(-5.0 + 5.0 * k as f64 / 3999.0))
-            .collect();
-        let l = |w: f64| loop_gain_at(&n, &d, w, t);
-        let bounded = |w: f64| l(w).norm() < 1e8;
-        // Phase crossovers: L real and negative. At pi/T, L is real (z = -1).
-        // A crossover where |L| is rounding noise (below 1e-8, a "gain margin" above 1e8, e.g.
-        // at pi/T on a lagged loop) is no margin: left out (the review saw 2e14 reported).
-        let significant = |w: f64| bounded(w) && l(w).norm() > 1e-8;
-        let mut phase_x: Vec<f64> = crossings(&ws, |w| l(w).im)
-            .into_iter()
-            .filter(|&w| l(w).re < 0.0 && significant(w))
-            .collect();
-        if l(nyquist).re < 0.0 && significant(nyquist) {
-            phase_x.push(nyquist);
-        }
-        let gm = phase_x
-            .iter()
-            .map(|&w| (1.0 / l(w).norm(), w))
-            .min_by(|a, b| a.0.ln().abs().total_cmp(&b.0.ln().abs()));
-        // A pole crosses the unit circle exactly where `1 + lambda L(exp(j w T)) = 0`, i.e. at
-        // a phase crossover with `lambda = 1/|L|`; so a stable loop stays stable for the
-        // factors between the nearest such `lambda` below 1 and the nearest above.
         let stable_now = m.complex_eigenvalues().iter().all(|z| z.norm() < 1.0);
-        let factors: Vec<f64> = phase_x.iter().map(|&w| 1.0 / l(w).norm()).collect();
-        let gm_lower = factors
-            .iter()
-            .copied()
-            .filter(|&g| g < 1.0)
-            .max_by(f64::total_cmp)
-            .filter(|_| stable_now);
-        let gm_upper = factors
-            .iter()
-            .copied()
-            .filter(|&g| g > 1.0)
-            .min_by(f64::total_cmp)
-            .filter(|_| stable_now);
-        let pm = crossings(&ws, |w| l(w).norm().ln())
-            .into_iter()
-            .filter(|&w| bounded(w))
-            .map(|w| {
-                let z = l(w);
-                let mut pm = 180.0 + z.im.atan2(z.re).to_degrees();
-                if pm > 180.0 {
-                    pm -= 360.0;
-                }
-                (pm, w)
-            })
-            .min_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
+        let Margins {
+            gain: gm,
+            lower: gm_lower,
+            upper: gm_upper,
+            phase: pm,
+        } = margins(&n, &d, t, stable_now);
         // With a sensor lag the plant held over a period carries the lagged reading `y` as its
         // last state, and `c` reads it (issue 29: `phi` was the 2 x 2 vehicle alone while
         // `closed_loop` had the lag).

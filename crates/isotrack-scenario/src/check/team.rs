@@ -222,6 +222,15 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         }
     };
     rep.k_v_per_s = Some(k_v);
+    if k_v == 0.0 {
+        // att32d-9: at g = 0 every mode's roots sit at z = 1 (marginal): the law commands v0
+        // whatever the ranges, as `none` does; no loop to be past k_v*, no saturation.
+        rep.note = format!(
+            "team.k_v = 0: {} commands v0 whatever the gaps, as team.spacing = \"none\": no spacing loop, the gaps stay as deployed and do not converge",
+            team.law.name()
+        );
+        return rep;
+    }
     if n < 2 {
         rep.note = "a team of one: no spacing loop".into();
         return rep;
@@ -273,10 +282,16 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
     rep.slowest_time_constant_continuous_s =
         Some(slowest_mode_time_constant_s(n, k_v, c)).filter(|t| t.is_finite());
     if rep.stable == Some(false) {
-        let amplitude = (team.v_max_mps - team.v_min_mps) * (period_s + delay_s);
+        // The widest swing of any vehicle's speed: the union of the envelopes (att32d-15:
+        // the team's [v_min, v_max] alone understated it with per-vehicle envelopes).
+        let (lo, hi) = team.speed_envelope_mps();
+        let amplitude = (hi - lo) * (period_s + delay_s);
         rep.saturated_gap_amplitude_m = Some(amplitude);
+        // About L/N only when every vehicle has one nominal speed (else the oscillation is
+        // about the shifted equilibrium of the not-modelled note: no CV bound).
         rep.saturated_gap_cv_max = s
             .team_arc()
+            .filter(|_| team.nominal_speeds_mps().len() == 1)
             .map(|a| amplitude * n as f64 / (std::f64::consts::TAU * a.radius_m))
             .filter(|x| x.is_finite());
     }
@@ -294,11 +309,19 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
     )];
     if team.has_speed_overrides() {
         let nominal = team.nominal_speeds_mps();
+        let mean = team.ideal_speed_mps();
+        let speed = match common_speed(team, mean) {
+            Some((v, i, bound)) => format!(
+                "the team moves at V = clamp(mean v0 = {}, max v_min_i, min v_max_i) = {} m/s, vehicle {i}'s {bound} (saturated there; the reachable ideal revisit time is L/(N V), not L/sum v0_i)",
+                Num(mean),
+                Num(v)
+            ),
+            None => format!("the team moves at the mean v0 = {} m/s", Num(mean)),
+        };
         out.push(format!(
-            "team.vehicles: unequal nominal speeds ({} to {} m/s) leave the loop's modes as they are (each v0_i is a constant input) but move its equilibrium: the team moves at the mean v0 = {} m/s and vehicle i's gap ahead exceeds its gap behind by (mean v0 - v0_i)/(k_v c), while every command stays within the vehicle's own envelope",
+            "team.vehicles: unequal nominal speeds ({} to {} m/s) leave the loop's modes as they are (each v0_i is a constant input) but move its equilibrium: {speed} and vehicle i's gap ahead exceeds its gap behind by (V - v0_i)/(k_v c), while every command stays within the vehicle's own envelope",
             Echo(nominal[0]),
-            Echo(nominal[nominal.len() - 1]),
-            Num(team.ideal_speed_mps())
+            Echo(nominal[nominal.len() - 1])
         ));
     }
     if r.noise_std_m > 0.0 {
@@ -340,6 +363,33 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
     out
 }
 
+/// Where the clamp of att32d-2 is active: the team's common steady speed
+/// `V = clamp(mean, max_i v_min_i, min_i v_max_i)` when it differs from `mean` (the mean
+/// nominal speed, where the unsaturated loop settles: the gaps' sum is conserved, so the
+/// speeds' mean offset is zero), with the vehicle whose bound sets it and which bound; `None`
+/// when the mean lies in every envelope (or none is common: [`disjoint_envelopes`]).
+fn common_speed(team: &TeamSpec, mean: f64) -> Option<(f64, usize, &'static str)> {
+    let (mut lo, mut hi) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
+    for i in 0..team.count() {
+        let v = team.speeds(i);
+        if v.min_mps > lo.1 {
+            lo = (i, v.min_mps);
+        }
+        if v.max_mps < hi.1 {
+            hi = (i, v.max_mps);
+        }
+    }
+    if lo.1 > hi.1 {
+        None
+    } else if mean > hi.1 {
+        Some((hi.1, hi.0, "top speed v_max"))
+    } else if mean < lo.1 {
+        Some((lo.1, lo.0, "slowest speed v_min"))
+    } else {
+        None
+    }
+}
+
 /// A team whose every range is dropped (`team.ranging.dropout_probability = 1`): no vehicle
 /// ever ranges a neighbour, so a law that needs ranges does nothing. Warned, not refused: the
 /// run is well defined (`range_balance` holds every vehicle at `v0`, the `none` law, since a
@@ -374,7 +424,13 @@ pub fn ranging_warning(s: &Scenario) -> Option<String> {
 /// and holds every vehicle's `v0_i` (`none`: the `v0_i` only), conservative for each vehicle.
 fn tracking_speeds(team: &TeamSpec) -> ([f64; 2], Vec<f64>) {
     let nominal = team.nominal_speeds_mps();
-    if matches!(team.law, SpacingLaw::None) || team.count() < 2 {
+    let no_loop = match team.law {
+        SpacingLaw::None => true,
+        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s } => {
+            gain_per_s == 0.0
+        }
+    };
+    if no_loop || team.count() < 2 {
         let (lo, hi) = (nominal[0], nominal[nominal.len() - 1]);
         return ([lo, hi], nominal);
     }
@@ -389,9 +445,13 @@ fn tracking_speeds(team: &TeamSpec) -> ([f64; 2], Vec<f64>) {
             }
         })
         .collect();
+    // A nominal speed replaces a grid point within rounding of it (att32d-16: `0.3` and the
+    // grid's `0.1 + 0.8 * 2/8 = 0.30000000000000004` were both listed).
+    let near = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
     for v0 in nominal {
-        if !v.contains(&v0) {
-            v.push(v0);
+        match v.iter_mut().find(|g| near(**g, v0)) {
+            Some(g) => *g = v0,
+            None => v.push(v0),
         }
     }
     v.sort_by(f64::total_cmp);
@@ -502,17 +562,25 @@ fn team_verdict(
         Num(tr.speed_range_mps[0]),
         Num(tr.speed_range_mps[1])
     );
+    if let Some(d) = disjoint_envelopes(team) {
+        return (Verdict::Fails, d.reason());
+    }
     if sp.stable == Some(false) {
         return (
             Verdict::Fails,
             format!(
-                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay, so the gaps do not converge; the speed saturation bounds them: the speeds switch between team.v_min_mps and team.v_max_mps = [{}, {}] m/s and the gaps oscillate about the even spacing by up to (v_max - v_min)(T + d) = {} m{}",
+                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay, so the gaps do not converge; the speed saturation bounds them: the speeds switch between the vehicles' envelopes [min v_min_i, max v_max_i] = [{}, {}] m/s and the gaps oscillate about {} by up to (v_max - v_min)(T + d) = {} m{}",
                 Echo(sp.k_v_per_s.unwrap_or(0.0)),
                 sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
                 Echo(team.ranging.rate_hz),
                 Echo(team.ranging.delay_s),
-                Echo(team.v_min_mps),
-                Echo(team.v_max_mps),
+                Echo(team.speed_envelope_mps().0),
+                Echo(team.speed_envelope_mps().1),
+                if team.nominal_speeds_mps().len() == 1 {
+                    "the even spacing"
+                } else {
+                    "the equilibrium of the unequal nominal speeds"
+                },
                 Num(sp.saturated_gap_amplitude_m.unwrap_or(f64::NAN)),
                 sp.saturated_gap_cv_max
                     .map_or(String::new(), |c| format!(" (a gap CV up to {})", Num(c)))
@@ -553,6 +621,66 @@ fn team_verdict(
             },
         ),
     }
+}
+
+/// Two vehicles whose speed envelopes share no speed ([`disjoint_envelopes`]): vehicle
+/// `fast`'s slowest command is above vehicle `slow`'s fastest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DisjointEnvelopes {
+    /// The vehicle with the largest `v_min_i` (the first in the listed order).
+    pub fast: usize,
+    /// Its `v_min_i`, m/s.
+    pub fast_v_min_mps: f64,
+    /// The vehicle with the smallest `v_max_i` (the first in the listed order).
+    pub slow: usize,
+    /// Its `v_max_i`, m/s.
+    pub slow_v_max_mps: f64,
+}
+
+impl DisjointEnvelopes {
+    /// Why the team fails, naming both vehicles and the keys.
+    pub fn reason(&self) -> String {
+        format!(
+            "no speed is common to every vehicle's envelope: vehicle {}'s slowest command (v_min = {} m/s) is above vehicle {}'s fastest (v_max = {} m/s; team.vehicles, team.v_min_mps, team.v_max_mps), so the gaps cannot settle whatever the law: vehicle {} gains at least {} m/s on vehicle {} and laps it (robots pass through each other)",
+            self.fast,
+            Echo(self.fast_v_min_mps),
+            self.slow,
+            Echo(self.slow_v_max_mps),
+            self.fast,
+            Num(self.fast_v_min_mps - self.slow_v_max_mps),
+            self.slow
+        )
+    }
+}
+
+/// Two vehicles of `team` with no common speed, or `None` (issue 32, att32d-1). A spread team
+/// on a closed isoline keeps its gaps only if every vehicle moves at one common speed `V` in
+/// steady state (each gap's rate is `v_{i+1} - v_i`, and the gaps sum to the isoline's
+/// length): so `V` must lie in every envelope, `max_i v_min_i <= V <= min_i v_max_i`. When
+/// `max_i v_min_i > min_i v_max_i` no such `V` exists: the vehicle with the largest `v_min`
+/// gains at least the difference on the one with the smallest `v_max`, whatever the spacing
+/// law commands, and laps it. `check` said `holds` and the robots passed through each other
+/// (closest approach 1.3e-4 m).
+pub fn disjoint_envelopes(team: &TeamSpec) -> Option<DisjointEnvelopes> {
+    if team.count() < 2 || team.vehicles.is_empty() {
+        return None;
+    }
+    let (mut fast, mut slow) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
+    for i in 0..team.count() {
+        let v = team.speeds(i);
+        if v.min_mps > fast.1 {
+            fast = (i, v.min_mps);
+        }
+        if v.max_mps < slow.1 {
+            slow = (i, v.max_mps);
+        }
+    }
+    (fast.1 > slow.1).then_some(DisjointEnvelopes {
+        fast: fast.0,
+        fast_v_min_mps: fast.1,
+        slow: slow.0,
+        slow_v_max_mps: slow.1,
+    })
 }
 
 impl TeamCheckReport {

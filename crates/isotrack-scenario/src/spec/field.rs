@@ -254,6 +254,94 @@ fn interpolation(f: &FieldSection) -> Result<Interpolation, Issue> {
     })
 }
 
+/// `field.spacing_m` and `field.origin_m`.
+fn georeference(f: &FieldSection) -> GridGeoreference {
+    GridGeoreference {
+        spacing_m: f.spacing_m,
+        origin_m: f.origin_m,
+    }
+}
+
+/// A resolved `[field]` of kind `grid`: its files, format, georeference, value transform and
+/// frames in time.
+fn grid_spec(f: &FieldSection) -> Result<GridSpec, Issue> {
+    Ok(GridSpec {
+        files: match &f.paths {
+            Some(p) => GridFiles::Paths(p.clone()),
+            None => GridFiles::Path(settled(&f.path, "field.path")?),
+        },
+        format: f.format.map(|g| match g {
+            GridFormatName::Csv => GridFormat::Csv,
+            GridFormatName::Npy => GridFormat::Npy,
+            GridFormatName::Asc => GridFormat::Asc,
+            GridFormatName::Geotiff => GridFormat::GeoTiff,
+            GridFormatName::Netcdf => GridFormat::NetCdf,
+        }),
+        variable: f.variable.clone(),
+        georeference: georeference(f),
+        interpolation: interpolation(f)?,
+        crop_cells: f.crop_cells,
+        transform: ValueTransform {
+            floor: f.value_floor,
+            log10: settled(&f.value_log10, "field.value_log10")?,
+            scale: settled(&f.value_scale, "field.value_scale")?,
+            offset: settled(&f.value_offset, "field.value_offset")?,
+        },
+        frame_times: match (&f.frame_times_s, f.frame_interval_s) {
+            (Some(t), _) => FrameTimes::Given(t.clone()),
+            (None, Some(dt)) => FrameTimes::Interval(dt),
+            (None, None) => FrameTimes::FromFile,
+        },
+        time_interpolation: match settled(&f.time_interpolation, "field.time_interpolation")? {
+            TimeInterpolationName::Nearest => TimeInterpolation::Nearest,
+            TimeInterpolationName::Linear => TimeInterpolation::Linear,
+            TimeInterpolationName::Cubic => TimeInterpolation::Cubic,
+        },
+        time_origin_s: settled(&f.time_origin_s, "field.time_origin_s")?,
+        time_scale: settled(&f.time_scale, "field.time_scale")?,
+        after_last_frame: match settled(&f.after_last_frame, "field.after_last_frame")? {
+            AfterLastFrameName::Hold => AfterLastFrame::Hold,
+            AfterLastFrameName::End => AfterLastFrame::End,
+        },
+    })
+}
+
+/// A resolved `[field]` of kind `stations`: the CSV, its value column and the interpolation
+/// method onto the grid.
+fn stations_spec(f: &FieldSection) -> Result<StationsSpec, Issue> {
+    Ok(StationsSpec {
+        path: settled(&f.path, "field.path")?,
+        value_column: settled(&f.value_column, "field.value_column")?,
+        method: match settled(&f.method, "field.method")? {
+            StationMethod::Kriging => StationsMethod::Kriging,
+            StationMethod::Idw => StationsMethod::Idw {
+                power: settled(&f.idw_power, "field.idw_power")?,
+            },
+        },
+        grid_spacing_m: f.grid_spacing_m,
+        georeference: georeference(f),
+        interpolation: interpolation(f)?,
+    })
+}
+
+/// A resolved `[field]` of kind `puff_plume`; `seed` (`sim.seed`) seeds its meander.
+fn puff_plume_params(f: &FieldSection, seed: u64) -> Result<PuffPlumeParams, Issue> {
+    Ok(PuffPlumeParams {
+        source_m: v2(settled(&f.source_m, "field.source_m")?),
+        release_rate_hz: settled(&f.release_rate_hz, "field.release_rate_hz")?,
+        puff_mass: settled(&f.puff_mass, "field.puff_mass")?,
+        puff_sigma0_m: settled(&f.puff_sigma0_m, "field.puff_sigma0_m")?,
+        diffusivity_m2ps: settled(&f.diffusivity_m2ps, "field.diffusivity_m2ps")?,
+        wind_mps: v2(settled(&f.wind_mps, "field.wind_mps")?),
+        meander_std_mps: settled(&f.meander_std_mps, "field.meander_std_mps")?,
+        meander_correlation_s: settled(&f.meander_correlation_s, "field.meander_correlation_s")?,
+        max_age_s: settled(&f.max_age_s, "field.max_age_s")?,
+        background: settled(&f.background, "field.background")?,
+        seed,
+        domain_m: f.domain_m,
+    })
+}
+
 impl FieldSpec {
     /// From a resolved `[field]`; `seed` (`sim.seed`) seeds a puff plume's meander.
     pub fn new(f: &FieldSection, seed: u64) -> Result<Self, Issue> {
@@ -263,10 +351,6 @@ impl FieldSpec {
                 domain_m: f.domain_m,
                 drift_mps: v2(f.drift_mps.unwrap_or(DRIFT_MPS)),
             })
-        };
-        let georeference = GridGeoreference {
-            spacing_m: f.spacing_m,
-            origin_m: f.origin_m,
         };
         let kind = match settled(&f.kind, "field.kind")? {
             FieldKind::RadialExp => analytic(AnalyticKind::RadialExp(RadialExp {
@@ -290,78 +374,9 @@ impl FieldSpec {
                 offset: settled(&f.offset, "field.offset")?,
                 gradient_per_m: v2(settled(&f.gradient_per_m, "field.gradient_per_m")?),
             })),
-            FieldKind::Grid => FieldKindSpec::Grid(GridSpec {
-                files: match &f.paths {
-                    Some(p) => GridFiles::Paths(p.clone()),
-                    None => GridFiles::Path(settled(&f.path, "field.path")?),
-                },
-                format: f.format.map(|g| match g {
-                    GridFormatName::Csv => GridFormat::Csv,
-                    GridFormatName::Npy => GridFormat::Npy,
-                    GridFormatName::Asc => GridFormat::Asc,
-                    GridFormatName::Geotiff => GridFormat::GeoTiff,
-                    GridFormatName::Netcdf => GridFormat::NetCdf,
-                }),
-                variable: f.variable.clone(),
-                georeference,
-                interpolation: interpolation(f)?,
-                crop_cells: f.crop_cells,
-                transform: ValueTransform {
-                    floor: f.value_floor,
-                    log10: settled(&f.value_log10, "field.value_log10")?,
-                    scale: settled(&f.value_scale, "field.value_scale")?,
-                    offset: settled(&f.value_offset, "field.value_offset")?,
-                },
-                frame_times: match (&f.frame_times_s, f.frame_interval_s) {
-                    (Some(t), _) => FrameTimes::Given(t.clone()),
-                    (None, Some(dt)) => FrameTimes::Interval(dt),
-                    (None, None) => FrameTimes::FromFile,
-                },
-                time_interpolation: match settled(
-                    &f.time_interpolation,
-                    "field.time_interpolation",
-                )? {
-                    TimeInterpolationName::Nearest => TimeInterpolation::Nearest,
-                    TimeInterpolationName::Linear => TimeInterpolation::Linear,
-                    TimeInterpolationName::Cubic => TimeInterpolation::Cubic,
-                },
-                time_origin_s: settled(&f.time_origin_s, "field.time_origin_s")?,
-                time_scale: settled(&f.time_scale, "field.time_scale")?,
-                after_last_frame: match settled(&f.after_last_frame, "field.after_last_frame")? {
-                    AfterLastFrameName::Hold => AfterLastFrame::Hold,
-                    AfterLastFrameName::End => AfterLastFrame::End,
-                },
-            }),
-            FieldKind::Stations => FieldKindSpec::Stations(StationsSpec {
-                path: settled(&f.path, "field.path")?,
-                value_column: settled(&f.value_column, "field.value_column")?,
-                method: match settled(&f.method, "field.method")? {
-                    StationMethod::Kriging => StationsMethod::Kriging,
-                    StationMethod::Idw => StationsMethod::Idw {
-                        power: settled(&f.idw_power, "field.idw_power")?,
-                    },
-                },
-                grid_spacing_m: f.grid_spacing_m,
-                georeference,
-                interpolation: interpolation(f)?,
-            }),
-            FieldKind::PuffPlume => FieldKindSpec::PuffPlume(PuffPlumeParams {
-                source_m: v2(settled(&f.source_m, "field.source_m")?),
-                release_rate_hz: settled(&f.release_rate_hz, "field.release_rate_hz")?,
-                puff_mass: settled(&f.puff_mass, "field.puff_mass")?,
-                puff_sigma0_m: settled(&f.puff_sigma0_m, "field.puff_sigma0_m")?,
-                diffusivity_m2ps: settled(&f.diffusivity_m2ps, "field.diffusivity_m2ps")?,
-                wind_mps: v2(settled(&f.wind_mps, "field.wind_mps")?),
-                meander_std_mps: settled(&f.meander_std_mps, "field.meander_std_mps")?,
-                meander_correlation_s: settled(
-                    &f.meander_correlation_s,
-                    "field.meander_correlation_s",
-                )?,
-                max_age_s: settled(&f.max_age_s, "field.max_age_s")?,
-                background: settled(&f.background, "field.background")?,
-                seed,
-                domain_m: f.domain_m,
-            }),
+            FieldKind::Grid => FieldKindSpec::Grid(grid_spec(f)?),
+            FieldKind::Stations => FieldKindSpec::Stations(stations_spec(f)?),
+            FieldKind::PuffPlume => FieldKindSpec::PuffPlume(puff_plume_params(f, seed)?),
         };
         Ok(Self {
             units: f.units.clone(),

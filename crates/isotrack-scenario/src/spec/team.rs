@@ -510,7 +510,7 @@ fn ring_of(t: &TeamSection, count: u64, v0: f64, sim: &SimSpec) -> Result<RingMo
             if count > MAX_DISCOVERED_COUNT {
                 return Err(issue(
                     "team.ring",
-                    format!("= \"discovered\" is for at most {MAX_DISCOVERED_COUNT} vehicles (O(N) per probe sample), got team.count = {count}"),
+                    format!("\"discovered\" is for at most {MAX_DISCOVERED_COUNT} vehicles (O(N) per probe sample), got team.count = {count}"),
                 ));
             }
             let d = DiscoveryConfig {
@@ -523,7 +523,7 @@ fn ring_of(t: &TeamSection, count: u64, v0: f64, sim: &SimSpec) -> Result<RingMo
                 return Err(issue(
                     "team.ring",
                     format!(
-                        "= \"discovered\" needs {} s ({} s settling + {} s per vehicle) before the ring is known, but sim.duration_s = {}",
+                        "\"discovered\" needs a run longer than {} s ({} s settling + {} s per vehicle: the probes must end before the run does), but sim.duration_s = {}",
                         Echo(end),
                         Echo(d.settle_s),
                         Echo(d.probe_s),
@@ -623,15 +623,27 @@ fn vehicles_of(
     for (k, e) in list.iter().enumerate() {
         let index = entry_index(e, k, n, &mut seen)?;
         let speeds = entry_speeds(t, e, k, fixed_wing, team)?;
-        if matches!(ring, RingMode::Discover(_)) && speeds.v0 != team.v0 {
-            return Err(issue(
-                &entry_key(k, speeds.key),
-                format!(
-                    "= {} differs from the team's {} m/s, but team.ring = \"discovered\" probes with every other vehicle at one nominal speed: give the vehicles one speed or use team.ring = \"listed\"",
-                    Echo(speeds.v0),
-                    Echo(team.v0)
-                ),
-            ));
+        if matches!(ring, RingMode::Discover(_)) {
+            // The engine runs a discovered ring with the team's speeds only (its probes step
+            // one vehicle while the others fly v0 in the team's envelope): an envelope of its
+            // own is refused here, at its key, as a speed is (att32d-11: `check` said holds,
+            // then the engine refused without a key).
+            for (name, own, of_team) in [
+                (speeds.key, speeds.v0, team.v0),
+                ("v_min_mps", speeds.v_min, team.v_min),
+                ("v_max_mps", speeds.v_max, team.v_max),
+            ] {
+                if own != of_team {
+                    return Err(issue(
+                        &entry_key(k, name),
+                        format!(
+                            "= {} differs from the team's {} m/s, but team.ring = \"discovered\" probes with every other vehicle at the team's nominal speed and envelope: give the vehicles the team's speeds or use team.ring = \"listed\"",
+                            Echo(own),
+                            Echo(of_team)
+                        ),
+                    ));
+                }
+            }
         }
         let (noise, rate) = entry_sensor(e, k, sensor, sim)?;
         out.push(TeamVehicleSpec {
@@ -692,6 +704,20 @@ struct EntrySpeeds {
     v0: f64,
     v_min: f64,
     v_max: f64,
+    /// Where `v_min` and `v_max` come from when the entry does not give them (for messages:
+    /// att32d-16, a refusal named `team.vehicles[0].v_max_mps`, which the user never set).
+    v_min_from: &'static str,
+    v_max_from: &'static str,
+}
+
+/// Where an envelope bound the entry does not give comes from: "" (its own), the team's key,
+/// or the team's rule at the entry's speed.
+fn bound_source(own: Option<f64>, of_team: Option<f64>, team_key: &'static str) -> &'static str {
+    match (own, of_team) {
+        (Some(_), _) => "",
+        (None, Some(_)) => team_key,
+        (None, None) => "the team's default rule at the vehicle's speed",
+    }
 }
 
 /// Entry `k`'s nominal speed (the vehicle kind's key: `speed_mps` for a Dubins robot,
@@ -749,6 +775,8 @@ fn entry_speeds(
         v0,
         v_min,
         v_max,
+        v_min_from: bound_source(e.v_min_mps, t.v_min_mps, "team.v_min_mps"),
+        v_max_from: bound_source(e.v_max_mps, t.v_max_mps, "team.v_max_mps"),
     };
     check_entry_speeds(&speeds, k, team)?;
     Ok(speeds)
@@ -763,7 +791,17 @@ fn check_entry_speeds(speeds: &EntrySpeeds, k: usize, team: &Envelope) -> Result
         v0,
         v_min,
         v_max,
+        v_min_from,
+        v_max_from,
     } = *speeds;
+    // ", inherited from team.v_max_mps" where the entry does not give the bound.
+    let from = |src: &str| {
+        if src.is_empty() {
+            String::new()
+        } else {
+            format!(" (not given here: from {src})")
+        }
+    };
     let (lo, hi) = team.airframe.unwrap_or((0.0, f64::INFINITY));
     if team.airframe.is_some() {
         for (name, v) in [(speed_key, v0), ("v_min_mps", v_min), ("v_max_mps", v_max)] {
@@ -791,20 +829,24 @@ fn check_entry_speeds(speeds: &EntrySpeeds, k: usize, team: &Envelope) -> Result
         return Err(issue(
             &key("v_min_mps"),
             format!(
-                "must be at most the vehicle's nominal speed {} m/s, got {}",
+                "must be at most the vehicle's nominal speed {} m/s, got {}{}",
                 Echo(v0),
-                Echo(v_min)
+                Echo(v_min),
+                from(v_min_from)
             ),
         ));
     }
-    if v_max < v0 || v_max > max {
+    // The top a vehicle can have: a fixed wing's safe airspeed, else the scenario bound.
+    let top = max.min(hi);
+    if v_max < v0 || v_max > top {
         return Err(issue(
             &key("v_max_mps"),
             format!(
-                "must be in [the vehicle's nominal speed {}, {}], got {}",
+                "must be in [the vehicle's nominal speed {}, {}], got {}{}",
                 Echo(v0),
-                Echo(max),
-                Echo(v_max)
+                Echo(top),
+                Echo(v_max),
+                from(v_max_from)
             ),
         ));
     }

@@ -267,6 +267,18 @@ fn bad_overrides_are_refused_by_key() {
             vec!["team.ring=\"discovered\"", "sim.duration_s=200.0"],
             "team.vehicles[0].speed_mps",
         ),
+        // att32d-11: an envelope of its own under discovery, refused at its key (the engine
+        // refused it after `check` said holds, with "team.vehicles = 4 is out of range").
+        (
+            "vehicles = [{ index = 2, v_max_mps = 0.55 }]",
+            vec!["team.ring=\"discovered\"", "sim.duration_s=200.0"],
+            "team.vehicles[0].v_max_mps",
+        ),
+        (
+            "vehicles = [{ index = 1, sensor_rate_hz = 50.0 }, { index = 2, v_min_mps = 0.3 }]",
+            vec!["team.ring=\"discovered\"", "sim.duration_s=200.0"],
+            "team.vehicles[1].v_min_mps",
+        ),
     ] {
         let e = circular_with(extra, &sets).unwrap_err();
         assert!(e.contains(key), "{extra}: {e}");
@@ -400,4 +412,313 @@ fn the_check_covers_every_vehicle() {
     .unwrap();
     let tr = check(&none, None).team.unwrap().tracking;
     assert_eq!(tr.speeds_mps, [0.3, 0.5]);
+}
+
+/// att32d-1: envelopes with no common speed. Vehicle 1 never commands less than 0.5 m/s,
+/// vehicle 3 never more than 0.35 m/s: a spread team keeps its gaps only at one common speed
+/// in every envelope (each gap's rate is `v_{i+1} - v_i`), and none exists, so vehicle 1
+/// gains at least 0.15 m/s on vehicle 3 whatever `range_balance` commands. `check` fails
+/// naming both (it said `holds`), `run`'s warnings say so; the run shows the lapping: vehicle
+/// 1's arc travelled exceeds vehicle 3's by at least `0.15 t`.
+#[test]
+fn disjoint_envelopes_fail_the_check_and_warn() {
+    let s = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3, v_max_mps = 0.35 }, { index = 1, speed_mps = 0.6, v_min_mps = 0.5 }]",
+        &["sim.duration_s=60.0"],
+    )
+    .unwrap();
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict.as_str(), "fails", "{}", t.verdict_reason);
+    for needle in [
+        "vehicle 1's slowest command (v_min = 0.5",
+        "vehicle 3's fastest (v_max = 0.35",
+    ] {
+        assert!(t.verdict_reason.contains(needle), "{}", t.verdict_reason);
+    }
+    let w = isotrack_scenario::check::warnings(&s);
+    assert!(
+        w.iter()
+            .any(|w| w.starts_with("the team check fails: no speed is common")),
+        "{w:?}"
+    );
+    let (_, rows) = run_rows(&s);
+    let (a1, a3) = (arc_travel(&rows[1]), arc_travel(&rows[3]));
+    let k = rows[1].len() - 1;
+    let t_end = rows[1][k].t_s;
+    assert!(
+        a1[k] - a3[k] >= 0.15 * t_end * 0.99,
+        "{} vs {}",
+        a1[k] - a3[k],
+        0.15 * t_end
+    );
+    // Envelopes that share a speed (0.35 m/s here): no such failure, no warning.
+    let ok = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3, v_max_mps = 0.35 }, { index = 1, speed_mps = 0.6, v_min_mps = 0.35 }]",
+        &[],
+    )
+    .unwrap();
+    assert!(
+        isotrack_scenario::check::team::disjoint_envelopes(ok.spec().team.as_ref().unwrap())
+            .is_none()
+    );
+    assert!(!isotrack_scenario::check::warnings(&ok)
+        .iter()
+        .any(|w| w.contains("no speed is common")));
+}
+
+/// att32d-6: `run`'s warnings (and so `summary.json`'s) carry `check`'s team failure, as they
+/// carry a single run's unstable sampled loop. The spacing loop of 4 robots on the circle with
+/// ranging at 10 Hz and no delay is stable up to `k_v* = 2/(T cos(pi/4) lambda_max)` with
+/// `lambda_max = 4`, `2/(0.1 * 0.7071 * 4) = 7.07 1/s` (Gray 2006, the ring's Laplacian):
+/// `k_v = 10` warns, `k_v = 5` does not. A vehicle's own sensor rate of 4 Hz with `kp = 50` makes
+/// the tracking loop unstable at its speeds (att32d-10): the team check fails and warns too.
+#[test]
+fn a_failing_team_check_is_a_run_warning() {
+    let k_v_star = 2.0 / (0.1 * (std::f64::consts::PI / 4.0).cos() * 4.0);
+    assert!(5.0 < k_v_star && k_v_star < 10.0);
+    let team_warning = |sets: &[&str], extra: &str| {
+        let s = circular_with(extra, sets).unwrap();
+        isotrack_scenario::check::warnings(&s)
+            .into_iter()
+            .find(|w| w.starts_with("the team check fails"))
+    };
+    let w = team_warning(&["team.k_v=10.0"], "").expect("k_v = 10 warns");
+    assert!(
+        w.contains("team.k_v = 10 is past the largest stable k_v*"),
+        "{w}"
+    );
+    assert_eq!(team_warning(&["team.k_v=5.0"], ""), None);
+    let w = team_warning(
+        &["controller.kp=50.0"],
+        "vehicles = [{ index = 2, sensor_rate_hz = 4.0 }]",
+    )
+    .expect("a 4 Hz vehicle warns");
+    assert!(w.contains("tracking loop is unstable"), "{w}");
+    assert_eq!(team_warning(&["controller.kp=50.0"], ""), None);
+}
+
+/// att32d-10: the backward difference's noise warning for a vehicle's own sensor noise, with
+/// its own number `sqrt(2) noise rate` (0.05 at 100 Hz: 7.071e0), naming the vehicle; none
+/// for the others, none without noise.
+#[test]
+fn a_vehicle_noise_override_warns_naming_the_vehicle() {
+    let s = circular_with("vehicles = [{ index = 2, sensor_noise_std = 0.05 }]", &[]).unwrap();
+    let w = isotrack_scenario::check::warnings(&s);
+    let noise: Vec<&String> = w
+        .iter()
+        .filter(|w| w.contains("backward difference"))
+        .collect();
+    assert_eq!(noise.len(), 1, "{w:?}");
+    let want = format!("{:.3e}", std::f64::consts::SQRT_2 * 0.05 * 100.0);
+    assert!(noise[0].starts_with("vehicle 2: its sensor noise (0.05 field units at 100 Hz"));
+    assert!(noise[0].contains(&want), "{} vs {want}", noise[0]);
+    let plain = circular_with("", &[]).unwrap();
+    assert!(!isotrack_scenario::check::warnings(&plain)
+        .iter()
+        .any(|w| w.contains("backward difference")));
+}
+
+/// att32d-2: vehicle 3 at 0.3 m/s with top speed 0.35 m/s, the others at 0.5 m/s: the mean
+/// nominal speed 0.45 m/s is past vehicle 3's top, so the team settles at
+/// `V = clamp(0.45, max v_min_i, min v_max_i) = 0.35 m/s` (the simulation's, checked in
+/// `range_balance_settles_within_the_slow_vehicle_envelope`): the check's note says so and
+/// names vehicle 3 (it said "the team moves at the mean v0 = 0.45 m/s"); within the envelope
+/// (top 0.75 m/s) it still says the mean.
+#[test]
+fn the_equilibrium_note_clamps_to_the_envelopes() {
+    let note = |extra: &str| {
+        let s = circular_with(extra, &[]).unwrap();
+        check(&s, None)
+            .team
+            .unwrap()
+            .spacing
+            .not_modelled
+            .into_iter()
+            .find(|m| m.starts_with("team.vehicles: unequal nominal speeds"))
+            .unwrap()
+    };
+    let v = 0.45_f64.clamp(0.25, 0.35);
+    let n = note("vehicles = [{ index = 3, speed_mps = 0.3, v_max_mps = 0.35 }]");
+    assert!(
+        n.contains(&format!(
+            "min v_max_i) = {v} m/s, vehicle 3's top speed v_max"
+        )),
+        "{n}"
+    );
+    assert!(n.contains("L/(N V)"), "{n}");
+    let n = note("vehicles = [{ index = 3, speed_mps = 0.3 }]");
+    assert!(
+        n.contains("the team moves at the mean v0 = 0.45 m/s"),
+        "{n}"
+    );
+}
+
+/// att32d-9: `team.k_v = 0` under `range_balance` commands `v0` whatever the ranges: no
+/// spacing loop (every mode's roots at `z = 1`, marginal), so `check` neither calls 0 "past
+/// k_v*" nor gives a saturation bound, and checks the tracking loop at `v0` only, as for
+/// `none`; the run is the `none` run (the same team metrics, bit for bit).
+#[test]
+fn k_v_zero_is_no_spacing_loop() {
+    let zero = circular_with("", &["team.k_v=0.0", "sim.duration_s=20.0"]).unwrap();
+    let t = check(&zero, None).team.unwrap();
+    assert_ne!(t.verdict.as_str(), "fails", "{}", t.verdict_reason);
+    assert!(!t.spacing.applicable);
+    assert!(
+        t.spacing
+            .note
+            .starts_with("team.k_v = 0: range_balance commands v0"),
+        "{}",
+        t.spacing.note
+    );
+    assert_eq!(t.spacing.saturated_gap_amplitude_m, None);
+    assert_eq!(t.spacing.saturated_gap_cv_max, None);
+    assert_eq!(t.tracking.speeds_mps, [0.5]);
+    let none = circular_with("", &["team.spacing=\"none\"", "sim.duration_s=20.0"]).unwrap();
+    let a = zero
+        .run_team(&mut [] as &mut [isotrack_sim::NoTrace])
+        .unwrap()
+        .unwrap();
+    let b = none
+        .run_team(&mut [] as &mut [isotrack_sim::NoTrace])
+        .unwrap()
+        .unwrap();
+    assert_eq!(format!("{:?}", a.team), format!("{:?}", b.team));
+}
+
+/// att32d-15: past `k_v*` the saturated gaps swing by up to the widest speed difference any
+/// vehicle can command times `T + d`: with vehicle 1's top at 0.95 m/s and vehicle 2's bottom
+/// at 0.05 m/s, `(0.95 - 0.05) 0.1 = 0.09 m` (the team's [0.25, 0.75] gave 0.05 m, which the
+/// simulation exceeds: 0.084 m), and the CV bound `0.09 N/L`. The simulation's last 20 % of
+/// 400 s stays within it.
+#[test]
+fn the_saturation_bound_uses_every_envelope() {
+    let s = circular_with(
+        "vehicles = [{ index = 1, v_max_mps = 0.95 }, { index = 2, v_min_mps = 0.05 }]",
+        &[
+            "team.k_v=20.0",
+            "sim.duration_s=400.0",
+            "output.record_rate_hz=10.0",
+        ],
+    )
+    .unwrap();
+    let sp = check(&s, None).team.unwrap().spacing;
+    let amp = (0.95 - 0.05) * 0.1;
+    let got = sp.saturated_gap_amplitude_m.unwrap();
+    assert!((got - amp).abs() < 1e-12, "{got} vs {amp}");
+    let cv = sp.saturated_gap_cv_max.unwrap();
+    assert!((cv - amp * 4.0 / (TAU * R)).abs() < 1e-12, "{cv}");
+    let (_, rows) = run_rows(&s);
+    let even = TAU * R / 4.0;
+    let from = rows[0].len() * 4 / 5;
+    let mut worst: f64 = 0.0;
+    for k in from..rows[0].len() {
+        for g in gaps_at(&rows, k) {
+            worst = worst.max((g - even).abs());
+        }
+    }
+    assert!(
+        worst > 0.05,
+        "the team's own envelope would bound it: {worst}"
+    );
+    assert!(worst <= amp, "{worst} vs {amp}");
+}
+
+/// att32d-13: a fixed wing with its own nominal airspeed starts trimmed at it, not at the
+/// scenario's `vehicle.airspeed_mps` (30 m/s): its first trace row reads its own `v0_i`
+/// (20 and 44 m/s here), and under `none` (the command `v0_i` throughout) its airspeed stays
+/// within 1.5 m/s of it for the whole run (it began 10 m/s off and, from 30 m/s, dipped to
+/// 17.6 m/s). The vehicle without an override flies as in the team without overrides, bit for
+/// bit. Three UAVs on the circle of radius 600 m of a radial field, no gusts.
+#[test]
+fn a_fixed_wing_member_starts_at_its_own_airspeed() {
+    let uav = "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.001\n\
+        [vehicle]\nkind = \"fixed_wing\"\nairspeed_mps = 30.0\n\
+        [sensor]\nrate_hz = 1.0\n\
+        [controller]\nlevel = 10.976\nkp = 150.0\nki = 0.0\nc1 = 0.0005\nc2 = 0.1\n\
+        [sim]\ndt_s = 0.01\nduration_s = 60.0\nseed = 9\n\
+        [team]\nspacing = \"none\"\nspread = { along = \"arc\", radius_m = 600.0, step_rad = 0.5 }\ncount = 3\n";
+    let overrides =
+        "vehicles = [{ index = 1, airspeed_mps = 20.0 }, { index = 2, airspeed_mps = 44.0 }]\n";
+    let rows = |text: &str| {
+        let s = parse_scenario(text, "<test>", &[]).unwrap();
+        let mut sinks = vec![Vec::<TraceRow>::new(), Vec::new(), Vec::new()];
+        s.run_team(&mut sinks).unwrap().unwrap();
+        sinks
+    };
+    let sinks = rows(&format!("{uav}{overrides}"));
+    for (i, v0) in [(0, 30.0), (1, 20.0), (2, 44.0)] {
+        let first = sinks[i][0].telemetry.unwrap().airspeed_mps;
+        assert!((first - v0).abs() < 1e-9, "vehicle {i}: starts at {first}");
+        for row in &sinks[i] {
+            let va = row.telemetry.unwrap().airspeed_mps;
+            assert!(
+                (va - v0).abs() < 1.5,
+                "vehicle {i} at t = {}: {va}",
+                row.t_s
+            );
+        }
+    }
+    let plain = rows(uav);
+    assert_eq!(format!("{:?}", sinks[0]), format!("{:?}", plain[0]));
+}
+
+/// att32d-16: an envelope bound the entry does not give, refused at the entry's key, says where
+/// it comes from, and a fixed wing's top is its safe airspeed (45 m/s), not the scenario bound
+/// (the message read "must be in [the vehicle's nominal speed 45, 1000], got 40").
+#[test]
+fn an_inherited_bound_is_named_in_the_refusal() {
+    let uav = "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.001\n\
+        [vehicle]\nkind = \"fixed_wing\"\nairspeed_mps = 30.0\n\
+        [controller]\nlevel = 10.976\nkp = 150.0\nki = 0.0\nc1 = 0.0005\nc2 = 0.1\n\
+        [team]\nspacing = \"none\"\ncount = 2\nv_max_mps = 40.0\n\
+        spread = { along = \"arc\", radius_m = 600.0, step_rad = 0.5 }\n\
+        vehicles = [{ index = 0, airspeed_mps = 45.0 }]\n";
+    let e = parse_scenario(uav, "<test>", &[]).unwrap_err().to_string();
+    for needle in [
+        "team.vehicles[0].v_max_mps",
+        "[the vehicle's nominal speed 45, 45], got 40 (not given here: from team.v_max_mps)",
+    ] {
+        assert!(e.contains(needle), "{e}");
+    }
+}
+
+/// att32d-16: the tracking grid over `[0.1, 0.9]` m/s has `0.1 + 0.8 * 2/8`, which rounds to
+/// 0.30000000000000004; vehicle 3's nominal 0.3 m/s takes its place rather than being listed
+/// beside it: nine speeds, 0.3 once.
+#[test]
+fn the_tracking_grid_lists_a_nominal_speed_once() {
+    let s = circular_with(
+        "vehicles = [{ index = 3, speed_mps = 0.3, v_min_mps = 0.1, v_max_mps = 0.9 }]",
+        &[],
+    )
+    .unwrap();
+    let tr = check(&s, None).team.unwrap().tracking;
+    assert_eq!(tr.speed_range_mps, [0.1, 0.9]);
+    assert!(0.1 + 0.8 * 2.0 / 8.0 != 0.3);
+    assert_eq!(
+        tr.speeds_mps
+            .iter()
+            .filter(|v| (**v - 0.3).abs() < 1e-6)
+            .count(),
+        1,
+        "{:?}",
+        tr.speeds_mps
+    );
+    assert!(tr.speeds_mps.contains(&0.3) && tr.speeds_mps.contains(&0.5));
+    // The grid's nine points, 0.5 (the others' speed) among them.
+    assert_eq!(tr.speeds_mps.len(), 9, "{:?}", tr.speeds_mps);
+}
+
+/// ver30b-6: a discovered ring of four needs a run longer than 60 + 4 * 10 = 100 s (the probes
+/// must end before the run does): 100 s is refused with a message that says "longer than"
+/// (it said "needs 100 s ... but sim.duration_s = 100"), without the stray "= ", and 100.01 s
+/// is accepted.
+#[test]
+fn a_discovered_ring_needs_a_run_longer_than_its_probes() {
+    let e = circular_with("", &["team.ring=\"discovered\"", "sim.duration_s=100.0"]).unwrap_err();
+    assert!(
+        e.contains("`team.ring`: \"discovered\" needs a run longer than 100 s (60 s settling + 10 s per vehicle"),
+        "{e}"
+    );
+    assert!(circular_with("", &["team.ring=\"discovered\"", "sim.duration_s=100.01"]).is_ok());
 }

@@ -153,6 +153,10 @@ pub enum TeamError {
         "team.spacing = \"arc_reference\" needs the true isoline (a closed isoline to project on)"
     )]
     NoIsoline,
+    /// Per-vehicle speeds or envelopes with ring discovery: its probes step one vehicle's
+    /// speed while every other flies the team's nominal speed within the team's envelope.
+    #[error("team.vehicles: per-vehicle speeds or envelopes with team.ring = \"discovered\": its probes assume every vehicle at the team's nominal speed and envelope (give the vehicles the team's speeds or use team.ring = \"listed\")")]
+    SpeedsWithDiscovery,
     /// A setting out of range.
     #[error("team.{key} = {value} is out of range: {expected}")]
     OutOfRange {
@@ -497,11 +501,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             );
         }
         if self.discovery.is_some() {
-            return bad(
-                "vehicles",
-                self.n as f64,
-                "one nominal speed for every vehicle with ring discovery (its probes assume it)",
-            );
+            return Err(TeamError::SpeedsWithDiscovery);
         }
         let (lo, hi) = vehicle.speed_envelope_mps();
         for m in &speeds {

@@ -89,6 +89,30 @@ impl AutopilotState {
         }
         s
     }
+
+    /// A bumpless start in level flight trimmed at `flown` (another airspeed than the trim
+    /// `ff` whose throttle and elevator the autopilot feeds forward, with gains `g`), in
+    /// altitude hold: at the start the throttle loop gives `ff.delta_t + ki_v I_v =
+    /// flown.delta_t` (its error zero), so `I_v = (flown.delta_t - ff.delta_t)/ki_v`; the
+    /// elevator `kp_theta (theta_c - theta) + ff.delta_e = flown.delta_e` at `theta =
+    /// flown.alpha` (level flight), so the altitude loop's pitch command is `theta_c =
+    /// flown.alpha + (flown.delta_e - ff.delta_e)/kp_theta = ki_h I_h`. With `flown = ff` it
+    /// is [`from_trim`](Self::from_trim)'s (the same numbers).
+    pub fn from_trim_at(flown: &Trim, ff: &Trim, g: &Gains) -> Self {
+        let mut s = Self::default();
+        let theta_c = if g.kp_theta != 0.0 {
+            flown.alpha_rad + (flown.delta_e_rad - ff.delta_e_rad) / g.kp_theta
+        } else {
+            flown.alpha_rad
+        };
+        if g.ki_h != 0.0 {
+            s.altitude.integral = theta_c / g.ki_h;
+        }
+        if g.ki_v != 0.0 {
+            s.airspeed_throttle.integral = (flown.delta_t - ff.delta_t) / g.ki_v;
+        }
+        s
+    }
 }
 
 /// Commands to the autopilot.
@@ -147,8 +171,41 @@ pub fn autopilot(
     let (phi, theta) = (x[6], x[7]);
     let (p, q) = (x[9], x[10]);
     let h = -x[2];
-    // Lateral: course from roll, roll from aileron.
-    let e_chi = wrap_angle(cmd.course_rad - course_rad);
+    let da = lateral(st, cfg, g, phi, p, course_rad, cmd.course_rad, ts);
+    let zone = Zone::of(h, cmd.altitude_m);
+    st.enter(zone);
+    let (dt, theta_c) = longitudinal(st, cfg, g, trim, zone, h, va_mps, cmd, ts);
+    let ff_e = if cfg.trim_feedforward {
+        trim.delta_e_rad
+    } else {
+        0.0
+    };
+    let de = (g.kp_theta * (theta_c - theta) - g.kd_theta * q + ff_e)
+        .clamp(-cfg.surface_max_rad, cfg.surface_max_rad);
+    Deltas {
+        elevator_rad: de,
+        aileron_rad: da,
+        rudder_rad: 0.0,
+        throttle: dt.clamp(0.0, 1.0),
+    }
+}
+
+/// The lateral loops: the course error (wrapped to `(-pi, pi]`) gives the roll command
+/// (limited to the bank limit), the roll error with the `-kd_phi p` damping the aileron
+/// (limited to the surface limit), rad.
+#[allow(clippy::too_many_arguments)] // the loop's own inputs, spelled out
+#[inline(always)]
+fn lateral(
+    st: &mut AutopilotState,
+    cfg: &AutopilotConfig,
+    g: &Gains,
+    phi: f64,
+    p: f64,
+    course_rad: f64,
+    course_cmd_rad: f64,
+    ts: f64,
+) -> f64 {
+    let e_chi = wrap_angle(course_cmd_rad - course_rad);
     let phi_c = st.course.update(
         e_chi,
         g.kp_chi,
@@ -158,7 +215,7 @@ pub fn autopilot(
         cfg.roll_max_rad,
         ts,
     );
-    let da = st.roll.update(
+    st.roll.update(
         phi_c - phi,
         g.kp_phi,
         g.ki_phi,
@@ -166,30 +223,62 @@ pub fn autopilot(
         -cfg.surface_max_rad,
         cfg.surface_max_rad,
         ts,
-    );
-    // Longitudinal state machine.
-    let zone = if h <= 50.0 {
-        Zone::TakeOff
-    } else if h <= cmd.altitude_m - 10.0 {
-        Zone::Climb
-    } else if h >= cmd.altitude_m + 10.0 {
-        Zone::Descend
-    } else {
-        Zone::Hold
-    };
-    if st.zone.is_some_and(|z| z != zone) {
-        st.altitude = PiState::default();
-        st.airspeed_throttle = PiState::default();
-        st.airspeed_pitch = PiState::default();
+    )
+}
+
+impl Zone {
+    /// The altitude state machine's zone at altitude `h` (m) for the commanded `altitude_m`.
+    #[inline(always)]
+    fn of(h: f64, altitude_m: f64) -> Self {
+        if h <= 50.0 {
+            Zone::TakeOff
+        } else if h <= altitude_m - 10.0 {
+            Zone::Climb
+        } else if h >= altitude_m + 10.0 {
+            Zone::Descend
+        } else {
+            Zone::Hold
+        }
     }
-    st.zone = Some(zone);
-    let (ff_t, ff_e) = if cfg.trim_feedforward {
-        (trim.delta_t, trim.delta_e_rad)
+}
+
+impl AutopilotState {
+    /// Enter `zone`: the longitudinal integrators reset when the zone changes.
+    #[inline(always)]
+    fn enter(&mut self, zone: Zone) {
+        if self.zone.is_some_and(|z| z != zone) {
+            self.altitude = PiState::default();
+            self.airspeed_throttle = PiState::default();
+            self.airspeed_pitch = PiState::default();
+        }
+        self.zone = Some(zone);
+    }
+}
+
+/// The longitudinal loops of `zone`: the throttle and the pitch command (rad). Take-off: half
+/// throttle, pitch `theta_max`; climb (half throttle) and descend (none): pitch from the
+/// airspeed error; hold: throttle from the airspeed error (plus the trim throttle with
+/// feed-forward), pitch from the altitude error.
+#[allow(clippy::too_many_arguments)] // the loops' own inputs, spelled out
+#[inline(always)]
+fn longitudinal(
+    st: &mut AutopilotState,
+    cfg: &AutopilotConfig,
+    g: &Gains,
+    trim: &Trim,
+    zone: Zone,
+    h: f64,
+    va_mps: f64,
+    cmd: &Commands,
+    ts: f64,
+) -> (f64, f64) {
+    let ff_t = if cfg.trim_feedforward {
+        trim.delta_t
     } else {
-        (0.0, 0.0)
+        0.0
     };
     let e_va = cmd.airspeed_mps - va_mps;
-    let (dt, theta_c) = match zone {
+    match zone {
         Zone::TakeOff => (0.5, cfg.theta_max_rad),
         Zone::Climb | Zone::Descend => {
             let th = st.airspeed_pitch.update(
@@ -218,14 +307,6 @@ pub fn autopilot(
             );
             (dt, th)
         }
-    };
-    let de = (g.kp_theta * (theta_c - theta) - g.kd_theta * q + ff_e)
-        .clamp(-cfg.surface_max_rad, cfg.surface_max_rad);
-    Deltas {
-        elevator_rad: de,
-        aileron_rad: da,
-        rudder_rad: 0.0,
-        throttle: dt.clamp(0.0, 1.0),
     }
 }
 

@@ -166,14 +166,52 @@ impl FixedWing {
         heading_rad: f64,
         gust_seed: u64,
     ) -> FixedWingState {
+        self.start_at(None, x_m, y_m, heading_rad, gust_seed)
+    }
+
+    /// [`initial_state_seeded`](Self::initial_state_seeded) trimmed at another airspeed
+    /// `airspeed_mps` (a team member's own nominal airspeed, its airspeed command from the
+    /// start) instead of the configured one: the airframe in level flight at that trim, the
+    /// autopilot's integrators set for a bumpless start there
+    /// ([`AutopilotState::from_trim_at`], the gains and feed-forward staying the configured
+    /// trim's, as every step uses them), the gusts at that airspeed. At the configured airspeed
+    /// it is [`initial_state_seeded`](Self::initial_state_seeded), bit for bit. Issue 32,
+    /// att32d-13: a member with `airspeed_mps = 20` started at the scenario's 30 m/s and dipped
+    /// to 17.6 m/s on the way down.
+    pub fn initial_state_at_airspeed(
+        &self,
+        x_m: f64,
+        y_m: f64,
+        heading_rad: f64,
+        gust_seed: u64,
+        airspeed_mps: f64,
+    ) -> Result<FixedWingState, TrimError> {
+        if airspeed_mps == self.cfg.airspeed_mps {
+            return Ok(self.initial_state_seeded(x_m, y_m, heading_rad, gust_seed));
+        }
+        let flown = trim(&self.params, airspeed_mps)?;
+        Ok(self.start_at(Some(&flown), x_m, y_m, heading_rad, gust_seed))
+    }
+
+    /// The start trimmed at `other` (`None`: the configured trim).
+    fn start_at(
+        &self,
+        other: Option<&Trim>,
+        x_m: f64,
+        y_m: f64,
+        heading_rad: f64,
+        gust_seed: u64,
+    ) -> FixedWingState {
+        let flown = other.unwrap_or(&self.trim);
+        let airspeed_mps = flown.airspeed_mps;
         let chi = FRAC_PI_2 - heading_rad;
         let [wn, we, _] = self.steady_ned();
         // Crab: air velocity Va (cos psi, sin psi) + wind must point along chi.
         let (sc, cc) = isotrack_core::lanes::sin_cos(chi);
         let cross = -wn * sc + we * cc;
-        let crab = (-(cross / self.cfg.airspeed_mps)).clamp(-1.0, 1.0).asin();
+        let crab = (-(cross / airspeed_mps)).clamp(-1.0, 1.0).asin();
         let psi = chi + crab;
-        let mut x = trim_state(&self.trim, self.cfg.altitude_m, psi);
+        let mut x = trim_state(flown, self.cfg.altitude_m, psi);
         x[0] = y_m;
         x[1] = x_m;
         // Ground velocity in body axes = air velocity + wind in body axes.
@@ -185,20 +223,20 @@ impl FixedWing {
         let gusts = self
             .cfg
             .gusts
-            .then(|| Dryden::new(DrydenParams::default(), self.cfg.airspeed_mps, gust_seed));
+            .then(|| Dryden::new(DrydenParams::default(), airspeed_mps, gust_seed));
         let mut s = FixedWingState {
             x,
-            autopilot: if self.cfg.trim_feedforward {
-                AutopilotState::from_trim(&self.trim, &self.gains)
-            } else {
-                AutopilotState::default()
+            autopilot: match (self.cfg.trim_feedforward, other) {
+                (false, _) => AutopilotState::default(),
+                (true, None) => AutopilotState::from_trim(&self.trim, &self.gains),
+                (true, Some(t)) => AutopilotState::from_trim_at(t, &self.trim, &self.gains),
             },
             course_cmd_rad: 0.0,
-            airspeed_cmd_mps: self.cfg.airspeed_mps,
+            airspeed_cmd_mps: airspeed_mps,
             course_rad: 0.0,
             deltas: Deltas {
-                elevator_rad: self.trim.delta_e_rad,
-                throttle: self.trim.delta_t,
+                elevator_rad: flown.delta_e_rad,
+                throttle: flown.delta_t,
                 ..Deltas::default()
             },
             wind: WindSample {

@@ -1,0 +1,505 @@
+//! att33d-10: two vehicles with the SAME ids (system 1, component 1: two PX4s left at the
+//! default `MAV_SYS_ID`) reaching `fly` from ONE address (a router), each with its own MAVLink
+//! frame counter, are never flown as one: their interleaved sequence numbers end the flight
+//! (`vehicle_lost`: before control nothing commanded, in control the way out). One vehicle over a
+//! link that loses and reorders frames is flown as ever.
+
+use isotrack_mavlink::fly::{run_fly, FlyEnd, FlyOptions, FlyReport};
+use isotrack_scenario::load_scenario;
+use isotrack_sim::NoTrace;
+use mavlink::dialects::common::*;
+use mavlink::MavHeader;
+use std::net::{SocketAddr, UdpSocket};
+use std::time::{Duration, Instant};
+
+/// A PX4 ground rover's heartbeat, armed, in PX4 main mode `main` (6: OFFBOARD, 2: POSCTL).
+fn heartbeat(main: u32) -> MavMessage {
+    MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: main << 16,
+        mavtype: MavType::MAV_TYPE_GROUND_ROVER,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            | MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    })
+}
+
+/// `NAMED_VALUE_FLOAT` `ISO_S` stamped `ms` with `value`.
+fn iso_s(ms: u32, value: f32) -> MavMessage {
+    let mut name = [0u8; 10];
+    name[..5].copy_from_slice(b"ISO_S");
+    MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+        time_boot_ms: ms,
+        value,
+        name: name.into(),
+    })
+}
+
+/// A position `x` m north, stamped `ms`.
+fn position(ms: u32, x: f32) -> MavMessage {
+    MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+        time_boot_ms: ms,
+        x,
+        ..Default::default()
+    })
+}
+
+/// One sender with ids (1, 1) (or `ids`) on a raw socket: its own frame counter.
+struct Sender {
+    seq: u8,
+    ids: (u8, u8),
+}
+
+impl Sender {
+    /// The frames of `msgs`, numbered on from this sender's counter.
+    fn frames(&mut self, msgs: &[MavMessage]) -> Vec<(u8, Vec<u8>)> {
+        msgs.iter()
+            .map(|m| {
+                let mut f = Vec::new();
+                let header = MavHeader {
+                    system_id: self.ids.0.into(),
+                    component_id: self.ids.1,
+                    sequence: self.seq,
+                };
+                mavlink::write_v2_msg(&mut f, header, m).unwrap();
+                let s = self.seq;
+                self.seq = self.seq.wrapping_add(1);
+                (s, f)
+            })
+            .collect()
+    }
+}
+
+/// Runs `fly` (the default scenario's rover, `udpin`, timeout 2 s, `max_duration_s`) against
+/// frames from ONE socket: `turn(k)` gives the datagrams of turn `k` (every 50 ms).
+fn fly_against(max_duration_s: f64, turn: impl FnMut(u32) -> Vec<Vec<u8>>) -> FlyReport {
+    fly_against_with(max_duration_s, |_| {}, false, turn)
+}
+
+/// [`fly_against`], its options tweaked (`--take-control`, a Ctrl-C), the socket sending every datagram of fly's
+/// back to it (`echo`: a loop in the link) or not.
+fn fly_against_with(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    echo: bool,
+    mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
+) -> FlyReport {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut o = FlyOptions::new("udpin:127.0.0.1:0");
+    o.timeout_s = 2.0;
+    o.max_duration_s = Some(max_duration_s);
+    tweak(&mut o);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let companion = std::thread::spawn(move || {
+        run_fly(&s, &o, &mut NoTrace, &mut |l| {
+            tx.send(l.local_addr()?).unwrap();
+            Ok(())
+        })
+        .unwrap()
+    });
+    let fly: SocketAddr = rx.recv().unwrap();
+    let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+    sock.set_read_timeout(Some(Duration::from_millis(50)))
+        .unwrap();
+    let mut buf = [0u8; 2048];
+    let t0 = Instant::now();
+    let mut k = 0;
+    while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
+        for d in turn(k) {
+            sock.send_to(&d, fly).unwrap();
+        }
+        k += 1;
+        // Whatever fly sends (setpoints, commands) is read and left (no acknowledgement), or
+        // sent back to it.
+        while let Ok((n, _)) = sock.recv_from(&mut buf) {
+            if echo {
+                sock.send_to(&buf[..n], fly).unwrap();
+            }
+            sock.set_read_timeout(Some(Duration::from_millis(1)))
+                .unwrap();
+        }
+        sock.set_read_timeout(Some(Duration::from_millis(50)))
+            .unwrap();
+    }
+    companion.join().unwrap()
+}
+
+/// Vehicle A (armed, in PX4 mode `main`) alone for 20 turns (1 s), then vehicle B with the same
+/// ids through the same socket, its counter 100 ahead, 2 m from A (no jump in the positions:
+/// only the frame numbers tell the two apart), its measurement 50 where A's is 9.5.
+fn two_senders(main: u32) -> FlyReport {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut b = Sender {
+        seq: 100,
+        ids: (1, 1),
+    };
+    fly_against(6.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let x = 0.05 * k as f32;
+        let mut out: Vec<Vec<u8>> = a
+            .frames(&[heartbeat(main), iso_s(ms, 9.5), position(ms, x)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect();
+        if k >= 20 {
+            out.extend(
+                b.frames(&[
+                    heartbeat(main),
+                    iso_s(ms + 20, 50.0),
+                    position(ms + 20, x + 2.0),
+                ])
+                .into_iter()
+                .map(|f| f.1),
+            );
+        }
+        out
+    })
+}
+
+/// In control (the pilot's OFFBOARD): the flight ends `vehicle_lost`, naming the ids and the
+/// frame numbers, and the way out is commanded.
+#[test]
+fn two_senders_with_the_same_ids_on_one_address_end_the_flight_in_control() {
+    let r = two_senders(6);
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "two vehicles with the ids (system 1, component 1): 12 of their last 512 frames out of sequence"
+        )),
+        "{:?}",
+        r.events
+    );
+    assert!(r.way_out_commanded, "{:?}", r.events);
+}
+
+/// Before control (the pilot's POSCTL: no hand-over yet): the flight ends `vehicle_lost` with
+/// nothing commanded (the CLI's exit 79), no law command.
+#[test]
+fn two_senders_with_the_same_ids_before_control_command_nothing() {
+    let r = two_senders(2);
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("out of sequence")),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(r.commands.is_empty(), "{:?}", r.commands);
+}
+
+/// One vehicle over a link that loses every third frame, loses 150 in a row once (a fade: its
+/// counter seems to step back), and swaps two neighbours every 100 frames: flown to its
+/// `max_duration_s`, never taken for two.
+#[test]
+fn one_sender_over_a_lossy_reordering_link_is_flown() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut n = 0u32;
+    let mut held: Option<Vec<u8>> = None;
+    let r = fly_against(3.0, move |k| {
+        let ms = 1000 + 50 * k;
+        if k == 30 {
+            // 150 frames lost (a fade).
+            a.seq = a.seq.wrapping_add(150);
+        }
+        let mut out = Vec::new();
+        for (_, f) in a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.05 * k as f32)]) {
+            n += 1;
+            if n % 3 == 0 {
+                continue;
+            }
+            if n % 100 == 1 {
+                held = Some(f);
+                continue;
+            }
+            out.push(f);
+            if let Some(h) = held.take() {
+                out.push(h);
+            }
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(!r.commands.is_empty(), "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("two vehicles")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// Two vehicles with the same ids far apart (300 m) and their counters in step (two PX4s booted
+/// together): their positions jump farther than any airframe moves, which ends the flight.
+#[test]
+fn two_vehicles_far_apart_with_the_same_ids_jump() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(6.0, move |k| {
+        let ms = 1000 + 50 * k;
+        // One counter for both (the numbers alone cannot tell them apart), the positions
+        // alternate between the two vehicles from turn 20.
+        let x = if k >= 20 && k % 2 == 1 { 300.0 } else { 0.0 };
+        a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, x)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect()
+    });
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("positions jumped farther than 100 m/s covers (the last 300 m")),
+        "{:?}",
+        r.events
+    );
+    assert!(r.way_out_commanded, "{:?}", r.events);
+}
+
+/// A heartbeat of another type with the vehicle's ids (a rover's ids beating as a quadrotor:
+/// a second vehicle left at them, or its autopilot changed) ends the flight.
+#[test]
+fn a_heartbeat_of_another_type_with_the_vehicles_ids_ends_the_flight() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(6.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut hb = heartbeat(6);
+        if k == 20 {
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.mavtype = MavType::MAV_TYPE_QUADROTOR;
+            }
+        }
+        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect()
+    });
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "a heartbeat of MAV_TYPE_QUADROTOR (MAV_AUTOPILOT_PX4) after the vehicle's MAV_TYPE_GROUND_ROVER"
+        )),
+        "{:?}",
+        r.events
+    );
+    assert!(r.way_out_commanded, "{:?}", r.events);
+}
+
+/// ver33-4 (a): a twin companion's heartbeat (this one's ids, 1, 191) heard before any
+/// vehicle, with `--take-control`: `another_controller`, nothing sent or commanded (the CLI's
+/// exit 79, not "no vehicle was ever heard").
+#[test]
+fn a_twin_heard_before_the_vehicle_ends_as_another_controller() {
+    let mut twin = Sender {
+        seq: 0,
+        ids: (1, 191),
+    };
+    let r = fly_against_with(
+        6.0,
+        |o| o.take_control = true,
+        false,
+        move |_| {
+            let beat = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                mavtype: MavType::MAV_TYPE_ONBOARD_CONTROLLER,
+                autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+                mavlink_version: 3,
+                ..Default::default()
+            });
+            twin.frames(&[beat]).into_iter().map(|f| f.1).collect()
+        },
+    );
+    assert_eq!(r.end, FlyEnd::AnotherController, "{:?}", r.events);
+    assert!(!r.vehicle_heard && !r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("a second companion with this one's ids")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33-4 (b): a link that hands fly its own frames back (a routing loop): its own heartbeats
+/// and setpoints are recognised (the ids, numbers and contents it sent) and ignored, logged
+/// once; the pilot's vehicle is flown to its `max_duration_s`, not ended as a twin's.
+#[test]
+fn a_link_echoing_fly_s_own_frames_is_no_twin() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against_with(
+        2.0,
+        |_| {},
+        true,
+        move |k| {
+            let ms = 1000 + 50 * k;
+            a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+                .into_iter()
+                .map(|f| f.1)
+                .collect()
+        },
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(!r.commands.is_empty(), "{:?}", r.events);
+    let echoes = r
+        .events
+        .iter()
+        .filter(|e| e.contains("own frames came back"))
+        .count();
+    assert_eq!(echoes, 1, "{:?}", r.events);
+}
+
+/// att33d-9a: in control, the vehicle falls silent for 1.5 s and comes back disarmed in MANUAL,
+/// its clock not gone back (a reboot that does not look like one, or a pilot's disarm): it
+/// ends `pilot_took_over`, nothing commanded, and the log says it may be a reboot.
+#[test]
+fn a_disarm_after_a_silence_may_be_a_reboot() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        if (20..50).contains(&k) {
+            return Vec::new();
+        }
+        let mut hb = heartbeat(if k < 20 { 6 } else { 1 });
+        if k >= 50 {
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+            }
+        }
+        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect()
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("or its autopilot rebooted")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33b-1: a second autopilot (system 4) heard 0.5 s after the vehicle, once the companion has
+/// control (the pilot's OFFBOARD): `two_vehicles`, and the way out (HOLD) is commanded to the
+/// vehicle flown, not "nothing commanded" with the vehicle left in OFFBOARD.
+#[test]
+fn a_second_autopilot_in_control_gets_the_way_out() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut b = Sender {
+        seq: 0,
+        ids: (4, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out: Vec<Vec<u8>> = a
+            .frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect();
+        if k >= 10 {
+            out.extend(b.frames(&[heartbeat(2)]).into_iter().map(|f| f.1));
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::TwoVehicles, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("in control): which to fly is ambiguous, the way out is commanded")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33b-5: in control, the pilot disarms (the heartbeat disarmed, time-stamped frames pause)
+/// and Ctrl-C comes 0.3 s later, inside the reboot watch: the disarm is the pilot's, nothing is
+/// commanded (no HOLD on the pilot's disarmed vehicle).
+#[test]
+fn a_failsafe_in_the_reboot_watch_commands_nothing() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    // The pilot's disarm at 1.0 s of this clock, the Ctrl-C at 1.3 s: inside the 1 s watch.
+    let t0 = Instant::now();
+    let r = fly_against_with(
+        20.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(1300));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        false,
+        move |k| {
+            let ms = 1000 + 50 * k;
+            if t0.elapsed() < Duration::from_millis(1000) {
+                return a
+                    .frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
+                    .into_iter()
+                    .map(|f| f.1)
+                    .collect();
+            }
+            let mut hb = heartbeat(6);
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+            }
+            a.frames(&[hb]).into_iter().map(|f| f.1).collect()
+        },
+    );
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("a pilot's disarm, watched for a reboot")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// ver33b-10: in control, heartbeats that drop the custom-mode flag for 0.5 s (a relay
+/// rewriting `base_mode`; the mode unknown, still armed) are no pilot's word: the flight goes
+/// on to its `max_duration_s`, not `pilot_took_over` with the vehicle left in OFFBOARD.
+#[test]
+fn an_unknown_mode_in_control_is_no_pilots_word() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(2.5, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut hb = heartbeat(6);
+        if (15..25).contains(&k) {
+            if let MavMessage::HEARTBEAT(h) = &mut hb {
+                h.base_mode = MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
+            }
+        }
+        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
+            .into_iter()
+            .map(|f| f.1)
+            .collect()
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+}
