@@ -82,18 +82,7 @@ pub const MODE_EVENT_INTERVAL_S: f64 = 1.0;
 /// The longest unterminated line kept from a UDP sensor's datagrams, bytes.
 pub const MAX_PARTIAL_LINE_BYTES: usize = 1024;
 
-/// The largest magnitude of a measurement's value, in the field's units: a value beyond it
-/// (as a non-finite one) is no measurement, dropped and counted (`measurements_invalid`).
-/// No sensor reads 10^12 of its unit (ppm, Pa, K, mg/m^3); within it, the error's squares
-/// summed over any flight stay far from f64's overflow (the metrics), the trace stays within
-/// the +-10^100 `isotrack plot` shows, and one rule holds for both paths (MAVLink's f32
-/// carries up to 3.4e38, a UDP line any f64).
-pub const MAX_MEASUREMENT_ABS: f64 = 1e12;
-
-/// Whether `v` is a measurement's value: finite and within [`MAX_MEASUREMENT_ABS`].
-pub fn plausible_value(v: f64) -> bool {
-    v.is_finite() && v.abs() <= MAX_MEASUREMENT_ABS
-}
+pub use crate::wire::{check_level, plausible_value, MAX_MEASUREMENT_ABS};
 
 /// Parses a UDP sensor line `t_s,value`: its time on the wire (ms, [`wire::time_ms`]) and
 /// value, or `None` when it is no measurement (not two numbers, a time out of range, a value
@@ -569,20 +558,6 @@ fn name_of(c: &[u8]) -> &[u8] {
     &c[..n]
 }
 
-/// Refuses a scenario whose `controller.level` is beyond [`MAX_MEASUREMENT_ABS`]: every
-/// measurement at the level would be dropped as implausible, and the flight could only end
-/// `sensor_lost` (ver33-5). `fly` and `sitl` refuse it before anything is opened.
-pub fn check_level(scenario: &Scenario) -> Result<(), String> {
-    let level = scenario.level();
-    if plausible_value(level) {
-        return Ok(());
-    }
-    Err(format!(
-        "controller.level = {}: beyond the +-{MAX_MEASUREMENT_ABS:e} a measurement may be over MAVLink or --sensor lines (fly drops every measurement beyond it as implausible, so no measurement at the level could be flown): scale the field and the level down",
-        isotrack_core::numtext::Echo(level)
-    ))
-}
-
 /// A flight under way: the link, the vehicle as heard, the law and what is recorded.
 struct Flight<'a, S: ?Sized> {
     link: Link,
@@ -876,7 +851,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 "controller.kind = \"gradient_reference\" needs the field's gradient at the vehicle: it cannot fly on measurements alone".into(),
             ));
         }
-        crate::sitl::check_wire_times(scenario).map_err(FlyError::Scenario)?;
+        crate::wire::check_wire_times(scenario).map_err(FlyError::Scenario)?;
         check_level(scenario).map_err(FlyError::Scenario)?;
         let mut link =
             Link::open(&opts.url, opts.system_id, COMPANION_COMPONENT).map_err(FlyError::Link)?;

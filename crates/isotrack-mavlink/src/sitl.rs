@@ -62,6 +62,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+pub use crate::wire::check_wire_times;
+
 /// How simulated time goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Pace {
@@ -189,7 +191,7 @@ pub fn check_sitl_scenario(s: &Scenario) -> Result<(), String> {
             Echo(MIN_TELEMETRY_RATE_HZ)
         ));
     }
-    crate::fly::check_level(s)?;
+    crate::wire::check_level(s)?;
     Frame::of(s).map(|_| ())
 }
 
@@ -230,25 +232,6 @@ pub fn command_of_int(c: &COMMAND_INT_DATA) -> COMMAND_LONG_DATA {
         target_component: c.target_component,
         confirmation: 0,
     }
-}
-
-/// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
-/// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
-pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
-    let rate = s.spec().sensor.rate_hz;
-    if rate > 1000.0 {
-        return Err(format!(
-            "sensor.rate_hz = {rate}: MAVLink stamps samples to the millisecond, so at most 1000 Hz"
-        ));
-    }
-    let d = s.spec().sim.duration_s;
-    if wire::time_ms(d).is_none() {
-        return Err(format!(
-            "sim.duration_s = {d}: longer than MAVLink's time_boot_ms counts ({} s)",
-            u32::MAX as f64 / 1000.0
-        ));
-    }
-    Ok(())
 }
 
 /// The ground station's system id (QGroundControl's and MAVProxy's default): it may arm,

@@ -9,6 +9,7 @@
 //! negative roll (left wing down) and a negative body yaw rate.
 
 use isotrack_core::Measurement;
+use isotrack_scenario::Scenario;
 
 /// Gravity in the coordinated-turn relation, m/s^2: 9.8, the `g` of the simulated Aerosonde (Beard & McLain 2012), so that the relation is the airframe's own.
 pub const G_MPS2: f64 = 9.8;
@@ -163,6 +164,52 @@ pub fn extend_v2_frame(frame: &[u8], extra_crc: u8, base_len: usize, extensions:
     let crc = mavlink::calculate_crc(&out[1..], extra_crc);
     out.extend_from_slice(&crc.to_le_bytes());
     out
+}
+
+/// The largest magnitude of a measurement's value, in the field's units: a value beyond it
+/// (as a non-finite one) is no measurement, dropped and counted (`measurements_invalid`).
+/// No sensor reads 10^12 of its unit (ppm, Pa, K, mg/m^3); within it, the error's squares
+/// summed over any flight stay far from f64's overflow (the metrics), the trace stays within
+/// the +-10^100 `isotrack plot` shows, and one rule holds for both paths (MAVLink's f32
+/// carries up to 3.4e38, a UDP line any f64).
+pub const MAX_MEASUREMENT_ABS: f64 = 1e12;
+
+/// Whether `v` is a measurement's value: finite and within [`MAX_MEASUREMENT_ABS`].
+pub fn plausible_value(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_MEASUREMENT_ABS
+}
+
+/// Refuses a scenario whose `controller.level` is beyond [`MAX_MEASUREMENT_ABS`]: every
+/// measurement at the level would be dropped as implausible, and the flight could only end
+/// `sensor_lost` (ver33-5). `fly` and `sitl` refuse it before anything is opened.
+pub fn check_level(scenario: &Scenario) -> Result<(), String> {
+    let level = scenario.level();
+    if plausible_value(level) {
+        return Ok(());
+    }
+    Err(format!(
+        "controller.level = {}: beyond the +-{MAX_MEASUREMENT_ABS:e} a measurement may be over MAVLink or --sensor lines (fly drops every measurement beyond it as implausible, so no measurement at the level could be flown): scale the field and the level down",
+        isotrack_core::numtext::Echo(level)
+    ))
+}
+
+/// Checks that a scenario's times fit MAVLink's millisecond clock: sensor samples at least 1 ms
+/// apart (else two samples share a `time_boot_ms`) and a run shorter than `u32::MAX` ms.
+pub fn check_wire_times(s: &Scenario) -> Result<(), String> {
+    let rate = s.spec().sensor.rate_hz;
+    if rate > 1000.0 {
+        return Err(format!(
+            "sensor.rate_hz = {rate}: MAVLink stamps samples to the millisecond, so at most 1000 Hz"
+        ));
+    }
+    let d = s.spec().sim.duration_s;
+    if time_ms(d).is_none() {
+        return Err(format!(
+            "sim.duration_s = {d}: longer than MAVLink's time_boot_ms counts ({} s)",
+            u32::MAX as f64 / 1000.0
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

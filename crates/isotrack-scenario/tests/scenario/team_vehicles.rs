@@ -694,7 +694,7 @@ fn the_tracking_grid_lists_a_nominal_speed_once() {
     .unwrap();
     let tr = check(&s, None).team.unwrap().tracking;
     assert_eq!(tr.speed_range_mps, [0.1, 0.9]);
-    assert!(0.1 + 0.8 * 2.0 / 8.0 != 0.3);
+    assert_ne!(0.1 + 0.8 * 2.0 / 8.0, 0.3);
     assert_eq!(
         tr.speeds_mps
             .iter()
