@@ -609,10 +609,20 @@ impl SweepPlan {
         }
         let total = total_runs(&grid, draws).map_err(err)?;
         let sets_seed = |k: &str| k == "sim.seed" || k == "sim";
+        // A `[grid] sim = [{...}, ...]` list of tables sets the seed only if one of its
+        // tables holds `seed`: the tables merge key by key, as the dotted `sim.KEY` lists do,
+        // so a table of other `sim` keys leaves each run its own derived seed (ver30b-7).
+        let grid_sets_seed = |(k, values): &(String, Vec<toml::Value>)| {
+            k == "sim.seed"
+                || (k == "sim"
+                    && values
+                        .iter()
+                        .any(|v| v.as_table().is_none_or(|t| t.contains_key("seed"))))
+        };
         let derives_seed = !(base
             .iter()
             .any(|b| sets_seed(b.split_once('=').map_or("", |(k, _)| k.trim())))
-            || grid.iter().any(|(k, _)| sets_seed(k))
+            || grid.iter().any(grid_sets_seed)
             || random.iter().any(|(k, _)| sets_seed(k)));
         Ok(Self {
             scenario,
@@ -917,6 +927,32 @@ mod tests {
         let p = plan("scenario = \"x\"\n[grid]\ncontroller.kp = [1.0, 2.0, 1.0]\n").unwrap();
         assert!(p.derives_seed);
         assert!(p.duplicate_notes()[0].contains("1.0 more than once"));
+    }
+
+    /// ver30b-7: a `[grid] sim` list of tables without `seed` is the dotted `sim.KEY` list
+    /// written another way: each run keeps its own derived seed (README, "One seed per run"),
+    /// the same seed run by run as the dotted spelling gives; a table that holds `seed` sets it.
+    #[test]
+    fn a_grid_sim_table_without_seed_keeps_the_derived_seeds() {
+        let table = plan(
+            "scenario = \"x\"\n[grid]\nsim = [{ duration_s = 20.0 }, { duration_s = 21.0 }]\n",
+        )
+        .unwrap();
+        let dotted = plan("scenario = \"x\"\n[grid]\nsim.duration_s = [20.0, 21.0]\n").unwrap();
+        assert!(table.derives_seed && dotted.derives_seed);
+        assert_eq!(table.columns().last().map(String::as_str), Some("sim.seed"));
+        for id in 0..2 {
+            assert_eq!(table.run_values(id).last(), dotted.run_values(id).last());
+            assert_eq!(
+                table.run_values(id).last().unwrap(),
+                &derived_seed(0, id).to_string()
+            );
+        }
+        let seeded = plan(
+            "scenario = \"x\"\n[grid]\nsim = [{ duration_s = 20.0 }, { duration_s = 21.0, seed = 4 }]\n",
+        )
+        .unwrap();
+        assert!(!seeded.derives_seed);
     }
 
     #[test]
