@@ -359,7 +359,7 @@ vehicles = [{{index = 3, speed_mps = 3.0, v_max_mps = 3.0}}]
     let err = common::stderr(&o);
     assert!(
         err.contains(
-            "warning: 1 of 4 vehicles did not complete the run (vehicle 3: left_field at t = "
+            "warning: 1 of the 3 vehicles besides vehicle 0 did not complete the run (vehicle 3: left_field at t = "
         ),
         "{err}"
     );

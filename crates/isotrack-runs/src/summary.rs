@@ -491,9 +491,9 @@ pub fn unfinished_vehicles(team: &isotrack_sim::TeamResult) -> Option<String> {
         named.push(format!("and {} more", ended.len() - UNFINISHED_NAMED));
     }
     Some(format!(
-        "{} of {} vehicles did not complete the run ({}); the top-level metrics are vehicle 0's, each vehicle's outcome is in `vehicles`",
+        "{} of the {} vehicles besides vehicle 0 did not complete the run ({}); the top-level outcome and metrics are vehicle 0's, each vehicle's outcome is in `vehicles`",
         ended.len(),
-        team.runs.len(),
+        team.runs.len() - 1,
         named.join("; ")
     ))
 }
