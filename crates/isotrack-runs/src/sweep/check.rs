@@ -681,6 +681,13 @@ fn check_tolerance_implications<'c>(
     );
     // An RMS of values all within the tolerance may exceed it by rounding only.
     let rms_over = |r: f64| r > tol * (1.0 + 1e-12);
+    let contradicts = |name: &str, v: f64, why: &str| {
+        Err(format!(
+            "{}: {name} = {} contradicts it ({why})",
+            column(name),
+            Echo(v)
+        ))
+    };
     if let Some(c) = value("convergence_time_s").filter(|c| (c / dt).round() <= ss as f64) {
         let why = format!(
             "convergence_time_s = {} s is at or before the steady-state window's start ({} s): |error| stays below metrics.convergence_tolerance = {} from then to the end",
@@ -689,25 +696,17 @@ fn check_tolerance_implications<'c>(
             Echo(tol)
         );
         if let Some(m) = max.filter(|&m| m >= tol) {
-            return Err(format!(
-                "{}: steady_state_max_abs_error = {} contradicts it ({why})",
-                column("steady_state_max_abs_error"),
-                Echo(m)
-            ));
+            return contradicts("steady_state_max_abs_error", m, &why);
         }
         if let Some(r) = rms.filter(|&r| rms_over(r)) {
-            return Err(format!(
-                "{}: steady_state_rms_error = {} contradicts it ({why})",
-                column("steady_state_rms_error"),
-                Echo(r)
-            ));
+            return contradicts("steady_state_rms_error", r, &why);
         }
         if let Some(f) = share.filter(|&f| f != 1.0) {
-            return Err(format!(
-                "{}: time_in_band_fraction = {} contradicts it ({why}, so every step of the window is in the band)",
-                column("time_in_band_fraction"),
-                Echo(f)
-            ));
+            return contradicts(
+                "time_in_band_fraction",
+                f,
+                &format!("{why}, so every step of the window is in the band"),
+            );
         }
     }
     if share == Some(1.0) {
@@ -716,18 +715,10 @@ fn check_tolerance_implications<'c>(
             Echo(tol)
         );
         if let Some(m) = max.filter(|&m| m > tol) {
-            return Err(format!(
-                "{}: steady_state_max_abs_error = {} contradicts it ({why})",
-                column("steady_state_max_abs_error"),
-                Echo(m)
-            ));
+            return contradicts("steady_state_max_abs_error", m, &why);
         }
         if let Some(r) = rms.filter(|&r| rms_over(r)) {
-            return Err(format!(
-                "{}: steady_state_rms_error = {} contradicts it ({why})",
-                column("steady_state_rms_error"),
-                Echo(r)
-            ));
+            return contradicts("steady_state_rms_error", r, &why);
         }
     }
     if let (Some(m), Some(f)) = (max, share) {
