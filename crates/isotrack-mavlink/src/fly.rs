@@ -654,6 +654,16 @@ struct Flight<'a, S: ?Sized> {
     refused: bool,
     /// What it refused and how (`OFFBOARD: MAV_RESULT_TEMPORARILY_REJECTED`).
     refusal: Option<String>,
+    /// A refusal heard, not yet the vehicle's last word (ver33b-11): the command refused and
+    /// when. An acknowledgement carries no sender's request (an unaddressed `DENIED` may answer
+    /// a ground station's same command): the take-over ends only once a heartbeat newer than
+    /// the refusal (and than any acceptance after it) shows the command not carried out.
+    refusal_pending: Option<(MavCmd, Instant)>,
+    /// A heartbeat of the vehicle's ids showed a pilot's word ([`Flight::shows_pilots_word`]):
+    /// the pilot's once confirmed ([`LeaveSeen`], ver33c-1).
+    leave_seen: Option<LeaveSeen>,
+    /// Heartbeats of the vehicle's ids handled.
+    heartbeats: u64,
     /// Armed and in OFFBOARD this turn.
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
@@ -741,6 +751,35 @@ struct Telemetry {
     stale_logged: (bool, bool),
     /// The hold's target re-referenced after an altitude outage has been logged (once).
     rereferenced_logged: bool,
+}
+
+/// In control, a heartbeat of the vehicle's ids that showed it out of OFFBOARD or disarmed; during
+/// a take-over, one that showed a pilot's change ([`Flight::shows_pilots_word`]) (ver33c-1). A
+/// second vehicle left at the same ids behind one router (its own frame counter)
+/// beats too, and its first heartbeat looks exactly like a pilot's switch: taken at its word,
+/// the companion would stop and command nothing, and the vehicle flown would be left in
+/// OFFBOARD without setpoints. So the change is the pilot's word only once confirmed: the
+/// vehicle's next heartbeat shows it too, and no frame of its ids came out of sequence since
+/// the one that showed it ([`crate::same_ids`]: two senders' counters interleaving step back at
+/// least once a switch between them). Until then the last setpoint is repeated (an autopilot
+/// out of OFFBOARD or GUIDED ignores offboard setpoints, so a pilot loses nothing), no
+/// measurement is answered, and during a take-over nothing more is commanded: however it turns
+/// out, the flight ends; a heartbeat that no longer shows it, with frames out of sequence
+/// since, is a second vehicle's (`vehicle_lost`: the way out of what the companion commanded),
+/// one without is one sender's change and back (the pilot's word, as ever).
+#[derive(Clone, Debug)]
+struct LeaveSeen {
+    /// [`Flight::heartbeats`] at the heartbeat that showed it (or at the last one after frames
+    /// out of sequence: confirmation counts again from there).
+    beat: u64,
+    /// The vehicle's frames out of sequence before that heartbeat.
+    out_of_sequence: u64,
+    /// What it showed, in words (`disarmed in MANUAL`).
+    what: String,
+    /// Confirmed: the pilot's word.
+    confirmed: bool,
+    /// Confirmed by a heartbeat that no longer shows it (one sender's change and back).
+    back: bool,
 }
 
 /// The law's answers so far.
@@ -949,6 +988,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             window_passed: false,
             refused: false,
             refusal: None,
+            refusal_pending: None,
+            leave_seen: None,
+            heartbeats: 0,
             active: false,
             in_control: false,
             arm_sent: false,
@@ -1602,6 +1644,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else {
             self.unknown_mode_since = None;
         }
+        if let Some(end) = self.unconfirmed_leave() {
+            return Ok(Some(end));
+        }
         if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
             // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
             // companion, a ground station's offboard) holds it. --take-control never joins.
@@ -1632,6 +1677,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if !self.in_control {
                 // The change that gave the companion control is logged at once (ver33-3).
                 self.flush_mode_log(true);
+                if self.refusal_pending.take().is_some() {
+                    let refusal = self.refusal.take().unwrap_or_default();
+                    self.event(format!(
+                        "the refusal heard ({refusal}) was not the vehicle's last word: its heartbeat shows it armed in {} (the refusal answered someone else's command)",
+                        self.mode_name()
+                    ));
+                }
             }
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
@@ -1668,6 +1720,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if !self.opts.take_control || self.active {
             return Ok(None);
         }
+        if self.refusal_still_pending() {
+            return Ok(None);
+        }
         if self.refused {
             let what = match self.refusal.take() {
                 Some(r) => format!("the vehicle refused {r}"),
@@ -1682,13 +1737,74 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if let Some(end) = self.pilot_during_take_over() {
             return Ok(Some(end));
         }
+        if self.leave_seen.as_ref().is_some_and(|l| !l.confirmed) {
+            // A pilot's word awaiting confirmation: nothing more commanded meanwhile.
+            return Ok(None);
+        }
         self.take_control()
+    }
+
+    /// A refusal heard ([`Flight::refusal_pending`], ver33b-11) is the vehicle's last word once
+    /// a heartbeat newer than it, and than any acceptance of the switch after it, shows the
+    /// command not carried out, or `timeout_s` passes without one (`refused`). A command
+    /// carried out all the same (armed; armed in OFFBOARD is control taken, in `control`)
+    /// answered someone else's: the take-over goes on. Nothing is commanded while it is
+    /// pending; whether it is.
+    fn refusal_still_pending(&mut self) -> bool {
+        let Some((cmd, at)) = self.refusal_pending else {
+            return false;
+        };
+        let newest = match self.offboard_accepted_at {
+            Some(a) if cmd == MavCmd::MAV_CMD_DO_SET_MODE && a > at => a,
+            _ => at,
+        };
+        let heard = self.last_heartbeat > newest;
+        if !heard && newest.elapsed() < self.timeout {
+            return true;
+        }
+        self.refusal_pending = None;
+        if heard && cmd == MavCmd::MAV_CMD_COMPONENT_ARM_DISARM && self.armed {
+            let refusal = self.refusal.take().unwrap_or_default();
+            self.event(format!(
+                "the refusal heard ({refusal}) was not the vehicle's last word: its heartbeat shows it armed since (the refusal answered someone else's command): the take-over goes on"
+            ));
+            return false;
+        }
+        self.refused = true;
+        false
+    }
+
+    /// In control, a change out of OFFBOARD or a disarm not yet confirmed ([`LeaveSeen`],
+    /// ver33c-1) is flown on (`active`); one confirmed by a heartbeat back in OFFBOARD (one
+    /// sender's change and back) is the pilot's word: `pilot_took_over`, nothing commanded.
+    fn unconfirmed_leave(&mut self) -> Option<FlyEnd> {
+        let l = self.leave_seen.as_ref()?;
+        if !l.confirmed {
+            if self.in_control {
+                self.active = true;
+            }
+            return None;
+        }
+        if !l.back {
+            return None;
+        }
+        let what = l.what.clone();
+        self.flush_mode_log(true);
+        self.event(format!(
+            "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion (its heartbeats in sequence: one sender's){}: setpoints stopped, nothing commanded",
+            if self.armed { "armed" } else { "disarmed" },
+            self.mode_name(),
+            if self.in_control { "" } else { ", during the take-over" }
+        ));
+        self.active = false;
+        Some(FlyEnd::PilotTookOver)
     }
 
     /// The pilot's word is final during a take-over too: once the companion has sent its first
     /// control command (an arming or the switch to OFFBOARD), a disarm after the vehicle was
     /// armed, or a change of mode to anything but OFFBOARD, that the companion did not command
-    /// ends the take-over at once: never re-armed, nothing more commanded (`pilot_took_over`).
+    /// ends the take-over once the next heartbeat confirms it ([`LeaveSeen`]): never re-armed,
+    /// nothing more commanded (`pilot_took_over`).
     fn pilot_during_take_over(&mut self) -> Option<FlyEnd> {
         let before = self.mode_at_first_command?;
         if self.armed {
@@ -1704,6 +1820,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else {
             return None;
         };
+        if self.leave_seen.as_ref().is_none_or(|l| !l.confirmed) {
+            // Not yet confirmed by the next heartbeat ([`LeaveSeen`], ver33c-1).
+            return None;
+        }
         let mode = self.mode_name();
         self.event(format!(
             "pilot_took_over during the take-over: the vehicle was {what} (now {} in {mode}) before the companion had control, not by its command: nothing more commanded, the pilot's word stands",
@@ -1859,6 +1979,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// one by the law (in control) or a neutral setpoint, a repeat by the same setpoint again,
     /// an older one dropped; each new one recorded.
     fn answer_queue(&mut self) -> Result<Option<FlyEnd>, FlyError> {
+        if self.leave_seen.as_ref().is_some_and(|l| !l.confirmed) {
+            // A pilot's word awaiting confirmation ends the flight however it turns out
+            // ([`LeaveSeen`]): no measurement is answered meanwhile (the vehicle may be the
+            // pilot's already); the last setpoint is repeated (`check_ends`).
+            return Ok(None);
+        }
         if self.opts.take_control && !self.active {
             // A vehicle sends again the measurement nobody answered (sitl in lockstep, every
             // second): held copies of one time are one measurement, never a repeat to count.
@@ -2021,6 +2147,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
+        // The vehicle's frames out of sequence before this one (a pilot's word, ver33c-1).
+        let out_of_sequence_before = self.seq_watch.out_of_sequence;
         if from == target {
             self.vehicle_address(r.from);
             self.vehicle_sender(r);
@@ -2051,6 +2179,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.last_heartbeat = Instant::now();
                 let was_armed = self.armed;
                 self.vehicle_heartbeat(h);
+                self.watch_leave(out_of_sequence_before);
                 if was_armed && !self.armed {
                     // A disarm after a silence: a reboot (whose clock need not go back far
                     // enough to say so) looks the same as a pilot's disarm (att33d-9a).
@@ -2452,6 +2581,79 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// Whether the vehicle's arming and mode, as its heartbeats show them, are a pilot's word
+    /// the companion did not command: in control, out of OFFBOARD or disarmed (armed in an
+    /// unknown mode is not, ver33b-10); during a take-over (once a control command went out), a
+    /// disarm after it was armed, or another mode than before that command and not OFFBOARD.
+    fn shows_pilots_word(&self) -> bool {
+        let offboard = self
+            .custom_mode
+            .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.in_control {
+            return !(self.armed && (self.custom_mode.is_none() || offboard));
+        }
+        let Some(before) = self.mode_at_first_command else {
+            return false;
+        };
+        (self.armed_since_command && !self.armed)
+            || (before.is_some() && self.custom_mode != before && !offboard)
+    }
+
+    /// The vehicle's heartbeat just handled: in control or during a take-over, a pilot's word
+    /// ([`Flight::shows_pilots_word`]) is watched until confirmed ([`LeaveSeen`]);
+    /// `out_of_sequence_before` counts the vehicle's frames out of sequence before this
+    /// heartbeat's.
+    fn watch_leave(&mut self, out_of_sequence_before: u64) {
+        self.heartbeats += 1;
+        if self.mode_at_first_command.is_some() && self.armed {
+            self.armed_since_command = true;
+        }
+        let shows_control = !self.shows_pilots_word();
+        let now = self.seq_watch.out_of_sequence;
+        let beat = self.heartbeats;
+        let state = format!(
+            "{} in {}",
+            if self.armed { "armed" } else { "disarmed" },
+            self.mode_name()
+        );
+        let t = self.target.unwrap_or_default();
+        match (&mut self.leave_seen, shows_control) {
+            (None, true) => {}
+            (None, false) => {
+                self.leave_seen = Some(LeaveSeen {
+                    beat,
+                    out_of_sequence: out_of_sequence_before,
+                    what: state,
+                    confirmed: false,
+                    back: false,
+                })
+            }
+            (Some(l), false) if !l.confirmed => {
+                if now > l.out_of_sequence {
+                    // Frames out of sequence since: not yet one sender's word; counted again.
+                    (l.beat, l.out_of_sequence) = (beat, now);
+                } else if beat > l.beat {
+                    l.confirmed = true;
+                }
+            }
+            (Some(l), true) if !l.confirmed => {
+                if now > l.out_of_sequence {
+                    let what = format!(
+                        "two vehicles with the ids (system {}, component {}): a heartbeat {}, then one {state}, and {} of their frames out of sequence between (a second vehicle's frame counter): which to fly is ambiguous, not a pilot's word",
+                        t.0,
+                        t.1,
+                        l.what,
+                        now - l.out_of_sequence
+                    );
+                    self.same_ids.get_or_insert(what);
+                } else {
+                    (l.confirmed, l.back) = (true, true);
+                }
+            }
+            _ => {}
+        }
+    }
+
     /// Logs the vehicle's arming and mode as they are, if a change of them is pending and
     /// [`MODE_EVENT_INTERVAL_S`] has passed since the last logged (or `now`: control taken,
     /// the flight's end), the changes not logged between counted in it.
@@ -2498,10 +2700,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if !ours {
             return;
         }
-        if a.result != MavResult::MAV_RESULT_IN_PROGRESS {
+        let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
+        if ok {
+            // A refusal leaves the command awaited: an unaddressed refusal may answer another's
+            // same command, the vehicle's acceptance of ours may follow (ver33b-11).
             self.awaiting = None;
         }
-        let ok = a.result == MavResult::MAV_RESULT_ACCEPTED;
         self.event(format!("{:?}: {:?}", a.command, a.result));
         if ok && a.command == MavCmd::MAV_CMD_DO_SET_MODE && self.offboard_sent {
             self.offboard_accepted_at = Some(Instant::now());
@@ -2523,7 +2727,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 MavResult::MAV_RESULT_ACCEPTED | MavResult::MAV_RESULT_IN_PROGRESS
             )
         {
-            self.refused = true;
+            self.refusal_pending = Some((a.command, Instant::now()));
             let what = if a.command == MavCmd::MAV_CMD_DO_SET_MODE {
                 format!("the switch to {}", self.firmware.name_of(FlyMode::Offboard))
             } else {
@@ -2689,6 +2893,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
             // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6).
             Some(WayOut::Disarm)
+        } else if end == FlyEnd::ControlRefused
+            && self
+                .offboard_accepted_at
+                .is_some_and(|at| self.last_heartbeat <= at)
+        {
+            // A refused take-over after the vehicle accepted the switch to OFFBOARD, no
+            // heartbeat since saying what it did (ver33b-11): it may be in OFFBOARD with nobody
+            // sending setpoints: commanded out of it.
+            Some(WayOut::LeaveOffboard(mode))
         } else if end.is_failsafe() && self.offboard_accepted_at.is_some() {
             // The vehicle accepted the switch to OFFBOARD and no heartbeat has shown it yet:
             // it may be in OFFBOARD with nobody sending setpoints. The way out is commanded
@@ -2834,7 +3047,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
     /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
-    /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing).
+    /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing),
+    /// unless an acceptance followed the refusal within the listen (ver33b-11).
     fn await_way_out(
         &mut self,
         way: WayOut,
@@ -2843,6 +3057,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         accepted: &mut Option<Instant>,
     ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
+        // A refusal heard and no acceptance after it: an unaddressed refusal may answer
+        // someone else's same command, the vehicle's acceptance of this one may follow
+        // (ver33b-11): a refusal is the answer only if none came by the end of the listen.
+        let mut refused = false;
         while Instant::now() < until {
             for r in self
                 .link
@@ -2861,7 +3079,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     MavMessage::COMMAND_ACK(a)
                         if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
                     {
-                        *accepted = Some(Instant::now())
+                        *accepted = Some(Instant::now());
+                        refused = false;
                     }
                     _ => {}
                 }
@@ -2895,7 +3114,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                                     | MavResult::MAV_RESULT_FAILED
                             ) =>
                     {
-                        return Ok(Some(Answer::Refused))
+                        refused = true
                     }
                     (MavMessage::HEARTBEAT(h), WayOut::Mode(m))
                         if mode_of(h).is_some_and(|c| self.firmware.is_in(c, m)) =>
@@ -2927,7 +3146,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 }
             }
         }
-        Ok(None)
+        Ok(refused.then_some(Answer::Refused))
     }
 }
 

@@ -82,6 +82,9 @@ struct Script {
     /// Each command is first answered DENIED addressed to a ground station (system 255,
     /// component 190: its own request's answer), then answered to the companion.
     gcs_denial_first: bool,
+    /// Each command is first answered DENIED unaddressed (no target: as an autopilot answers
+    /// any sender's same command, a ground station's), then answered as the script says.
+    unaddressed_denial_first: bool,
     /// After it accepts a mode switch, no heartbeat for this many beats (PX4's 1 Hz heartbeat:
     /// the switch shows only at the next one).
     quiet_after_ack_beats: u32,
@@ -149,6 +152,7 @@ impl Default for Script {
             nan_measurement_at: None,
             mode_at_beat: None,
             gcs_denial_first: false,
+            unaddressed_denial_first: false,
             quiet_after_ack_beats: 0,
             pilot_after_ack: None,
             rearm_after: None,
@@ -385,6 +389,13 @@ fn against_counting(
                     3,
                     &[0, 0, 0, 0, 0, 255, 190],
                 )
+                .unwrap();
+            }
+            if script.unaddressed_denial_first {
+                v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                    command: c.command,
+                    result: MavResult::MAV_RESULT_DENIED,
+                }))
                 .unwrap();
             }
             let result = match c.command {
@@ -1456,6 +1467,67 @@ fn an_acknowledgement_addressed_to_another_system_is_not_ours() {
         "{:?}",
         r.events
     );
+}
+
+/// ver33b-11: every command is first answered DENIED unaddressed (an autopilot's answer to a
+/// ground station's same command), then ACCEPTED; the switch to OFFBOARD shows only at the
+/// heartbeat 0.5 s later (PX4's slow heartbeat). The refusal is not the vehicle's last word:
+/// the companion waits for the heartbeat, takes control and flies (before: `control_refused`
+/// at once, nothing commanded, the vehicle left in OFFBOARD with nobody sending setpoints), and
+/// its way out at the end is confirmed. Both a pilot's vehicle (armed in POSCTL) and one the
+/// companion arms.
+#[test]
+fn an_unaddressed_refusal_before_the_acceptance_is_not_the_last_word() {
+    for armed in [true, false] {
+        let script = Script {
+            armed,
+            start_mode: 3 << 16,
+            unaddressed_denial_first: true,
+            quiet_after_ack_beats: 10,
+            ..Script::default()
+        };
+        let (r, got) = against(script, |o| {
+            o.take_control = true;
+            o.arm = true;
+            o.max_duration_s = Some(1.0);
+        });
+        assert_eq!(r.end, FlyEnd::MaxDuration, "armed {armed}: {:?}", r.events);
+        assert!(!r.commands.is_empty(), "{:?}", r.events);
+        assert!(
+            r.events
+                .iter()
+                .any(|e| e.contains("not the vehicle's last word")),
+            "{:?}",
+            r.events
+        );
+        assert!(got.iter().any(is_hold), "{got:?}");
+        assert!(
+            r.way_out_commanded && r.failsafe_acknowledged,
+            "{:?}",
+            r.events
+        );
+    }
+}
+
+/// ver33b-11: the vehicle refuses OFFBOARD for real (DENIED, and its next heartbeat still shows
+/// POSCTL): the take-over ends `control_refused` at that heartbeat, nothing commanded (the
+/// pilot's mode stands), however long the heartbeat takes.
+#[test]
+fn a_refusal_the_next_heartbeat_confirms_ends_the_take_over() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        offboard: MavResult::MAV_RESULT_DENIED,
+        unaddressed_denial_first: true,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(5.0);
+    });
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    assert!(!got.iter().any(is_hold), "{got:?}");
+    assert!(!r.way_out_commanded, "{:?}", r.events);
 }
 
 /// att33c item 15: without `arm`, `--take-control` does not arm a disarmed vehicle (a real

@@ -503,3 +503,116 @@ fn an_unknown_mode_in_control_is_no_pilots_word() {
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
 }
+
+/// A PX4 ground rover's heartbeat in PX4 main mode `main` (1: MANUAL, 3: POSCTL, 6:
+/// OFFBOARD), disarmed.
+fn heartbeat_disarmed(main: u32) -> MavMessage {
+    let mut hb = heartbeat(main);
+    if let MavMessage::HEARTBEAT(h) = &mut hb {
+        h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+    }
+    hb
+}
+
+/// The datagrams of `frames`.
+fn datagrams(frames: Vec<(u8, Vec<u8>)>) -> Vec<Vec<u8>> {
+    frames.into_iter().map(|f| f.1).collect()
+}
+
+/// ver33c-1: in control (the pilot's OFFBOARD), a second vehicle with the same ids behind the
+/// same address (its own frame counter, behind or ahead of the vehicle's) beats once a second,
+/// in POSCTL or disarmed in MANUAL, and sends nothing else. Its first heartbeat is no pilot's
+/// word: the vehicle's next heartbeat (armed in OFFBOARD) contradicts it with a frame out of
+/// sequence between, so the flight ends `vehicle_lost` with the way out commanded (before:
+/// `pilot_took_over` at the twin's first heartbeat, nothing commanded, the vehicle left in
+/// OFFBOARD with nobody sending setpoints).
+#[test]
+fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
+    for (twin_seq, twin) in [
+        (0u8, heartbeat(3)),
+        (100, heartbeat(3)),
+        (0, heartbeat_disarmed(1)),
+        (100, heartbeat_disarmed(1)),
+    ] {
+        let mut a = Sender {
+            seq: 0,
+            ids: (1, 1),
+        };
+        let mut b = Sender {
+            seq: twin_seq,
+            ids: (1, 1),
+        };
+        let twin_hb = twin.clone();
+        let r = fly_against(20.0, move |k| {
+            let ms = 1000 + 50 * k;
+            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            if k >= 20 && k % 20 == 0 {
+                out.extend(datagrams(b.frames(std::slice::from_ref(&twin_hb))));
+            }
+            out
+        });
+        assert_eq!(r.end, FlyEnd::VehicleLost, "{twin:?} {:?}", r.events);
+        assert!(r.way_out_commanded, "{:?}", r.events);
+        assert!(
+            r.events.iter().any(
+                |e| e.contains("not a pilot's word") && e.contains("two vehicles with the ids")
+            ),
+            "{:?}",
+            r.events
+        );
+    }
+}
+
+/// ver33c-1's other side: one vehicle whose pilot switches to POSCTL in flight over a link
+/// that delivers that heartbeat late (after the measurement sent after it: a frame out of
+/// sequence) is not taken for two: the next heartbeats, in sequence, confirm the pilot's word:
+/// `pilot_took_over`, nothing commanded.
+#[test]
+fn a_pilots_switch_on_a_reordering_link_stands() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out = datagrams(a.frames(&[
+            heartbeat(if k < 20 { 6 } else { 3 }),
+            iso_s(ms, 9.5),
+            position(ms, 0.0),
+        ]));
+        if k == 20 {
+            out.swap(0, 1);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+}
+
+/// One sender's change and back within a heartbeat (POSCTL, then OFFBOARD again at the next
+/// one, frames in sequence): the pilot's word, as before ver33c-1: `pilot_took_over`, nothing
+/// commanded.
+#[test]
+fn one_senders_switch_and_back_is_the_pilots_word() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        datagrams(a.frames(&[
+            heartbeat(if k == 20 { 3 } else { 6 }),
+            iso_s(ms, 9.5),
+            position(ms, 0.0),
+        ]))
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains(", then armed in OFFBOARD")),
+        "{:?}",
+        r.events
+    );
+}
