@@ -876,6 +876,17 @@ fn the_listed_ring_closes_around_a_vehicle_that_ends_early() {
             even > end_s && even < end_s + 10.0 * tau,
             "gone {gone}: {t:?}"
         );
+        // Item 2: the ideal revisit time of the three live vehicles over the window (240 s
+        // to the end), `L/(3 v0)`; the measured mean revisit time is that of three evenly
+        // spread robots (within 1 %), while the team's `L/(4 v0)` stays reported beside it.
+        let l = 2.0 * PI * radius();
+        let active = t
+            .revisit_time_ideal_active_s
+            .expect("a vehicle gone in the window");
+        assert!((active - l / (3.0 * V0)).abs() < 1e-9, "{active}");
+        assert!((t.revisit_time_ideal_s - l / (4.0 * V0)).abs() < 1e-9);
+        let mean = t.revisit_time_mean_s.unwrap();
+        assert!((mean / active - 1.0).abs() < 0.01, "{mean} vs {active}");
         let chord = 2.0 * radius() * (PI / 4.0).sin();
         let sep = t.min_separation_m.unwrap();
         assert!(

@@ -534,6 +534,8 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         if let Some(metrics) = self.metrics.as_mut() {
             let sum: f64 = speeds.iter().map(|m| m.nominal_mps).sum();
             metrics.set_nominal_speed(sum / self.n as f64);
+            let own: Vec<f64> = speeds.iter().map(|m| m.nominal_mps).collect();
+            metrics.set_member_speeds(&own);
         }
         self.member_speeds = Some(speeds);
         Ok(())
