@@ -469,3 +469,154 @@ fn several_team_runs_name_their_vehicles_by_run() {
     let team = std::fs::read_to_string(e.join("team.svg")).unwrap();
     assert!(team.contains("ideal L/sum v0_i") && !team.contains("ideal L/(N v0)"));
 }
+
+/// A team on a pyramid grid (level 5: a square loop) whose vehicle 0 leaves the field early:
+/// it starts at (38, 20) m heading +x at 3 m/s, 2 m from the grid's edge; the other three
+/// start on the loop's side x = 25 m and complete the 60 s run. Returns the run directory.
+fn vehicle_0_leaves(d: &std::path::Path) -> std::path::PathBuf {
+    let grid: String = (0..41)
+        .map(|i: i32| {
+            (0..41)
+                .map(|j: i32| format!("{:.1}", -10 + i.min(j).min(40 - i).min(40 - j)))
+                .collect::<Vec<_>>()
+                .join(",")
+                + "\n"
+        })
+        .collect();
+    let grid_path = common::write(d, "pyr.csv", &grid);
+    let scenario = common::write(
+        d,
+        "left0.toml",
+        &format!(
+            r#"name = "team-left-0"
+[field]
+kind = "grid"
+path = "{grid_path}"
+spacing_m = [1.0, 1.0]
+origin_m = [0.0, 0.0]
+interpolation = "bilinear"
+[vehicle]
+kind = "dubins"
+speed_mps = 0.5
+[controller]
+kind = "pi_isoline"
+level = 5.0
+kp = 2.0
+ki = 0.0
+c1 = 0.2
+c2 = 1.0
+max_turn_rate_radps = 0.2
+[sensor]
+rate_hz = 100.0
+[sim]
+dt_s = 0.01
+duration_s = 60.0
+[team]
+count = 4
+starts = [{{x_m=38.0,y_m=20.0,heading_rad=0.0}},{{x_m=25.0,y_m=20.0,heading_rad=1.5707963}},{{x_m=25.0,y_m=22.0,heading_rad=1.5707963}},{{x_m=25.0,y_m=24.0,heading_rad=1.5707963}}]
+spacing = "range_balance"
+k_v = 0.1
+vehicles = [{{index = 0, speed_mps = 3.0, v_max_mps = 3.0}}]
+"#
+        ),
+    );
+    let out = d.join("run");
+    let o = isotrack(&["run", &scenario, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    out
+}
+
+/// att32e-2/-6: vehicle 0 ends first (left_field near 0.67 s). `plot` draws every vehicle to
+/// its own end: the team figure's rows (read from `TeamTracks`, the numbers drawn) are every
+/// recorded time of the vehicles that completed, counted here from trace.csv's text, and its
+/// gaps go on to the run's 60 s; each vehicle's timeseries is its own rows. Before the fix the
+/// reader bounded every row by the top-level (vehicle 0's) end time, refusing the others'
+/// later rows, and the team figure stopped at the first vehicle's end.
+#[test]
+fn every_vehicle_is_drawn_to_its_own_end() {
+    let d = tempfile::tempdir().unwrap();
+    let out = vehicle_0_leaves(d.path());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["vehicles"][0]["outcome"], "left_field");
+    let t0 = summary["vehicles"][0]["t_end_s"].as_f64().unwrap();
+    assert!(t0 < 5.0, "{t0}");
+    // Rows per vehicle and the last time, from the text.
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let mut rows = [0usize; 4];
+    let mut last_t = [f64::NAN; 4];
+    for line in trace.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let v: usize = cells.last().unwrap().parse().unwrap();
+        rows[v] += 1;
+        last_t[v] = cells[0].parse().unwrap();
+    }
+    assert_eq!(last_t[1..], [60.0; 3]);
+    assert!(
+        rows[0] < rows[1] && rows[1] == rows[2] && rows[2] == rows[3],
+        "{rows:?}"
+    );
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("r.html").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let vehicles = RunData::load_team(&out).unwrap();
+    for (i, v) in vehicles.iter().enumerate() {
+        assert_eq!(v.trace.len(), rows[i], "vehicle {i}");
+        assert_eq!(v.trace.last().unwrap().t_s, last_t[i], "vehicle {i}");
+    }
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert_eq!(tracks.rows, rows[1]);
+    assert_eq!(tracks.vehicle_rows[1..], rows[1..]);
+    assert!(tracks.vehicle_rows[0] <= rows[0]);
+    let gaps = tracks.gaps(1);
+    assert_eq!(gaps.last().unwrap().0, 60.0);
+    // After vehicle 0's end it has no gap; the three others' gaps close the loop.
+    let (_, g) = gaps.last().unwrap();
+    assert!(g[0].is_nan());
+    let l = tracks.length_m();
+    let sum: f64 = g[1..].iter().sum();
+    assert!((sum - l).abs() < 1e-9 * l, "{sum} vs {l}");
+}
+
+/// att32e-4: a trace row of a vehicle after its own end (summary.json's `vehicles[i].t_end_s`)
+/// is refused by `plot` and `report` (65), naming trace.csv's line and the vehicle. Here
+/// vehicle 1's end is set to 30 s in the summary while its rows go on to 60 s: the first of
+/// its rows past 30 s (its line found here in the text) is named. Before the fix a vehicle's
+/// rows were bounded only by the run's end, and the run loaded.
+#[test]
+fn a_row_after_its_vehicles_end_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let out = vehicle_0_leaves(d.path());
+    let path = out.join("summary.json");
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    summary["vehicles"][1]["t_end_s"] = serde_json::json!(30.0);
+    std::fs::write(&path, serde_json::to_string_pretty(&summary).unwrap()).unwrap();
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let line = trace
+        .lines()
+        .enumerate()
+        .skip(1)
+        .find(|(_, l)| {
+            let c: Vec<&str> = l.split(',').collect();
+            *c.last().unwrap() == "1" && c[0].parse::<f64>().unwrap() > 30.0
+        })
+        .map(|(n, _)| n + 1)
+        .unwrap();
+    let want = format!("trace.csv:{line}: vehicle 1 has a row at t = ");
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    common::assert_fails(&o, 65, &[&want, "after its end"]);
+    let o = isotrack(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        d.path().join("r.html").to_str().unwrap(),
+    ]);
+    common::assert_fails(&o, 65, &[&want, "after its end"]);
+}

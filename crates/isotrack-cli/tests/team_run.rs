@@ -350,3 +350,71 @@ fn a_large_team_is_the_same_on_any_threads() {
         }
     }
 }
+
+/// att32e-5: a team start outside a gridded field is refused (65) naming the key and the
+/// vehicle, as a single vehicle's start outside the grid is (`initial.x_m`). The volcano DEM
+/// (61 x 87 nodes, 10 m apart from the origin) spans x in [0, 600] m and y in [0, 860] m; from
+/// `[initial]` (300, 700) m a line of three robots 200 m apart along +x puts vehicle 2 at
+/// x = 700 m, and a listed pose at y = 900 m puts vehicle 1 above the grid; an arc of radius
+/// 400 m about (300, 400) m starting at angle 0 puts vehicle 0 at x = 700 m. Starts on the grid
+/// run.
+#[test]
+fn a_team_start_outside_the_grid_is_refused() {
+    let volcano = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios/volcano.toml");
+    let short = ["--set", "sim.duration_s=0.1"];
+    let line = [
+        "--set",
+        "team.count=3",
+        "--set",
+        "team.spread.along=\"line\"",
+        "--set",
+        "team.spread.direction_rad=0.0",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", volcano];
+        args.extend_from_slice(&short);
+        args.extend_from_slice(extra);
+        isotrack(&args)
+    };
+    let mut args = line.to_vec();
+    args.extend_from_slice(&["--set", "team.spread.step_m=200.0"]);
+    assert_fails(
+        &run(&args),
+        65,
+        &[
+            "team.spread",
+            "vehicle 2",
+            "(700, 700) m",
+            "x in [0, 600] m",
+        ],
+    );
+    let mut args = line.to_vec();
+    args.extend_from_slice(&["--set", "team.spread.step_m=100.0"]);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let poses = "team.starts=[{x_m = 300.0, y_m = 700.0, heading_rad = 0.0}, {x_m = 300.0, y_m = 900.0, heading_rad = 0.0}]";
+    assert_fails(
+        &run(&["--set", poses]),
+        65,
+        &["team.starts[1].y_m", "vehicle 1", "y in [0, 860] m"],
+    );
+    let arc = [
+        "--set",
+        "team.count=2",
+        "--set",
+        "team.spread.along=\"arc\"",
+        "--set",
+        "team.spread.center_m=[300.0, 400.0]",
+        "--set",
+        "team.spread.radius_m=400.0",
+        "--set",
+        "team.spread.start_rad=0.0",
+        "--set",
+        "team.spread.step_rad=0.1",
+    ];
+    assert_fails(
+        &run(&arc),
+        65,
+        &["team.spread", "vehicle 0", "(700, 400) m"],
+    );
+}

@@ -721,6 +721,7 @@ fn team_record(
         revisit_time_max_s: Some(30.0),
         revisit_time_mean_s: mean_s,
         revisit_time_ideal_s: Some(20.0),
+        revisit_time_ideal_active_s: None,
         min_separation_m: Some(1.0),
         order_preserved: true,
         speed_range_mps: None,

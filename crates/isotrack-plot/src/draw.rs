@@ -1376,10 +1376,14 @@ impl TeamFigureData {
             )
         };
         let isoline: Vec<(f64, f64)> = tracks.arc.points().iter().map(|p| (p.x, p.y)).collect();
-        let last = tracks.rows - 1;
+        // Each vehicle's last position, at its own end.
         let ends: Vec<(f64, f64)> = vehicles
             .iter()
-            .map(|v| (v.trace[last].x_m, v.trace[last].y_m))
+            .map(|v| {
+                v.trace
+                    .last()
+                    .map_or((f64::NAN, f64::NAN), |r| (r.x_m, r.y_m))
+            })
             .collect();
         let (x0, x1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.0));
         let (y0, y1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.1));

@@ -77,6 +77,13 @@ impl RunData {
                 }
             }
         }
+        // Every vehicle's own end (`vehicles[i].t_end_s`): a row after it is refused (att32e-4).
+        let mut end_of: Vec<Option<f64>> = vec![None; n];
+        if let Ended::Run(end) = &all.summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                end_of[i] = v.t_end_s;
+            }
+        }
         let mut done = vec![false; n];
         for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
             let Some(i) = id.filter(|&i| i < n) else {
@@ -86,6 +93,14 @@ impl RunData {
                     row + 1
                 )));
             };
+            if let Some(e) = end_of[i].filter(|e| t.t_s > e + 1e-9 * e.abs().max(1.0)) {
+                return Err(PlotError::Data(format!(
+                    "{}: trace.csv:{line}: vehicle {i} has a row at t = {} s, after its end (t_end_s = {} s in summary.json's vehicles[{i}])",
+                    dir.display(),
+                    Echo(t.t_s),
+                    Echo(e)
+                )));
+            }
             if done[i] {
                 return Err(PlotError::Data(format!(
                     "{}: trace.csv:{line}: vehicle {i} has a row after its last (at its end, t_end_s = {} s in summary.json)",
@@ -225,6 +240,20 @@ impl RunData {
         let mut vehicles = Vec::new();
         let mut lines = Vec::new();
         let mut trace = Vec::new();
+        // The run's end: a team's is its last vehicle's (the top-level `t_end_s` is vehicle
+        // 0's, which may end first: its end once refused the others' later rows, att32e-2);
+        // each vehicle's own end bounds its own rows ([`RunData::load_team`]).
+        let run_end_s = match (&summary.ended, team_ok && summary.team().is_some()) {
+            (Ended::Run(end), true) => end
+                .vehicles
+                .iter()
+                .flatten()
+                .map(|v| v.t_end_s)
+                .try_fold(f64::NEG_INFINITY, |m, t| t.map(|t| m.max(t)))
+                .filter(|m| m.is_finite())
+                .or(summary.t_end_s()),
+            _ => summary.t_end_s(),
+        };
         for rec in rdr.records() {
             let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
             let line = rec.position().map_or(0, |p| p.line());
@@ -238,12 +267,8 @@ impl RunData {
                     ))
                 })?;
             }
-            check_row(
-                &v,
-                trace.last().map(|r: &TraceRow| r.t_s),
-                summary.t_end_s(),
-            )
-            .map_err(|m| err(format!("trace.csv:{line}: {m}")))?;
+            check_row(&v, trace.last().map(|r: &TraceRow| r.t_s), run_end_s)
+                .map_err(|m| err(format!("trace.csv:{line}: {m}")))?;
             let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
             vehicles.push(
                 vehicle_col

@@ -123,8 +123,15 @@ pub struct TeamTracks<'a> {
     /// `+1` when the team travels towards increasing arc coordinate, `-1` otherwise (the sign
     /// of the summed arc motion).
     pub direction: f64,
-    /// The common number of rows.
+    /// The recorded times: the rows of the vehicle with the most rows at the recorded times
+    /// (every vehicle that completed the run has them all).
     pub rows: usize,
+    /// Each vehicle's rows at the recorded times (`rows` for a vehicle that completed; fewer
+    /// for one that ended early, whose rows stop at its own end: att32e-2/-6, the figure once
+    /// stopped at the first vehicle's end).
+    pub vehicle_rows: Vec<usize>,
+    /// The vehicle whose rows give the recorded times.
+    clock: usize,
 }
 
 impl<'a> TeamTracks<'a> {
@@ -134,9 +141,11 @@ impl<'a> TeamTracks<'a> {
         let first = vehicles.first()?;
         // A vehicle that ended early may end on a row off the recorded times (its last valid
         // state, at the step it ended: att32d-14); the rows paired across vehicles are those
-        // at the recorded times, the longest trace's.
-        let longest = vehicles.iter().max_by_key(|v| v.trace.len())?;
-        let rows = vehicles
+        // at the recorded times, the longest trace's. Each vehicle counts to its own end.
+        let clock =
+            (0..vehicles.len()).max_by_key(|&i| (vehicles[i].trace.len(), usize::MAX - i))?;
+        let longest = &vehicles[clock];
+        let vehicle_rows: Vec<usize> = vehicles
             .iter()
             .map(|v| {
                 let c = v.trace.len();
@@ -148,19 +157,21 @@ impl<'a> TeamTracks<'a> {
                     c - 1
                 }
             })
-            .min()?;
+            .collect();
+        let rows = vehicle_rows.iter().copied().max()?;
         let last = rows.checked_sub(1)?;
-        let t_last = first.trace[last].t_s;
+        let t_last = longest.trace[last].t_s;
+        // Each vehicle's last position (its own end).
         let ends: Vec<Vec2> = vehicles
             .iter()
-            .map(|v| Vec2::new(v.trace[last].x_m, v.trace[last].y_m))
+            .filter_map(|v| v.trace.last().map(|r| Vec2::new(r.x_m, r.y_m)))
             .collect();
         let (arc, isoline_label) = figure_isoline(&first.scenario, t_last, &ends)?;
         let l = arc.length_m();
         let closed = arc.is_closed();
         let mut sum = 0.0;
-        for v in vehicles {
-            for w in v.trace[..rows].windows(2) {
+        for (v, &own) in vehicles.iter().zip(&vehicle_rows) {
+            for w in v.trace[..own].windows(2) {
                 if let (Some(a), Some(b)) = (s_of(&arc, &w[0]), s_of(&arc, &w[1])) {
                     sum += if closed { wrap_half(b - a, l) } else { b - a };
                 }
@@ -172,7 +183,14 @@ impl<'a> TeamTracks<'a> {
             isoline_label,
             direction: if sum < 0.0 { -1.0 } else { 1.0 },
             rows,
+            vehicle_rows,
+            clock,
         })
+    }
+
+    /// The recorded time of row `k`, s.
+    pub fn time_s(&self, k: usize) -> f64 {
+        self.vehicles[self.clock].trace[k].t_s
     }
 
     /// Whether the isoline is closed (else open: gaps and revisit times over the stretch the
@@ -188,7 +206,11 @@ impl<'a> TeamTracks<'a> {
 
     /// The arc coordinate of vehicle `i` at row `k`, measured along the travel, in `[0, L)`
     /// (on an open isoline in `[0, L]`, from the end the team travels away from).
+    /// `None` also past the vehicle's own end.
     fn along(&self, i: usize, k: usize) -> Option<f64> {
+        if k >= self.vehicle_rows[i] {
+            return None;
+        }
         let s = s_of(&self.arc, &self.vehicles[i].trace[k])?;
         Some(if self.is_closed() {
             (self.direction * s).rem_euclid(self.length_m())
@@ -202,7 +224,8 @@ impl<'a> TeamTracks<'a> {
     /// The gap ahead of each vehicle along the travel at every `stride`-th row, m:
     /// `(t, [gap of vehicle 0, 1, ...])` (the next vehicle ahead in the order along the
     /// isoline at that time; `O(N log N)` per row). On an open isoline the vehicle in front
-    /// has none (NaN): no gap wraps around.
+    /// has none (NaN): no gap wraps around. A vehicle past its own end has none (NaN), and the
+    /// others' gaps close around it, as the team's ring does.
     pub fn gaps(&self, stride: usize) -> Vec<(f64, Vec<f64>)> {
         let n = self.vehicles.len();
         let l = self.length_m();
@@ -211,11 +234,13 @@ impl<'a> TeamTracks<'a> {
         for k in (0..self.rows).step_by(stride.max(1)) {
             order.clear();
             order.extend((0..n).filter_map(|i| self.along(i, k).map(|s| (s, i))));
-            if order.len() != n || n < 2 {
+            let live = self.vehicle_rows.iter().filter(|&&r| k < r).count();
+            if order.len() != live || live < 2 {
                 continue;
             }
             order.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let mut g = vec![0.0; n];
+            let mut g = vec![f64::NAN; n];
+            let n = live;
             for p in 0..n {
                 let (s, i) = order[p];
                 let next = order[(p + 1) % n].0;
@@ -227,7 +252,7 @@ impl<'a> TeamTracks<'a> {
                     f64::NAN
                 };
             }
-            out.push((self.vehicles[0].trace[k].t_s, g));
+            out.push((self.time_s(k), g));
         }
         out
     }
@@ -247,14 +272,11 @@ impl<'a> TeamTracks<'a> {
         let l = self.length_m();
         let bins = REVISIT_BINS;
         let width = l / bins as f64;
-        let Some(t_end) = self.vehicles[0]
-            .trace
-            .get(self.rows.wrapping_sub(1))
-            .map(|t| t.t_s)
-        else {
+        let Some(last_row) = self.rows.checked_sub(1) else {
             return vec![];
         };
-        let t_start = self.vehicles[0].trace[0].t_s;
+        let t_end = self.time_s(last_row);
+        let t_start = self.time_s(0);
         let closed = self.is_closed();
         let bin_of = |s: f64| ((s / width).floor().max(0.0) as usize).min(bins - 1);
         // The bins between the vehicles at the back and in front at row `k` (open isoline).
@@ -274,7 +296,7 @@ impl<'a> TeamTracks<'a> {
             }
         }
         for k in 1..self.rows {
-            let t = self.vehicles[0].trace[k].t_s;
+            let t = self.time_s(k);
             let in_window = t >= t0_s;
             for i in 0..self.vehicles.len() {
                 let (Some(a), Some(b)) = (self.along(i, k - 1), self.along(i, k)) else {

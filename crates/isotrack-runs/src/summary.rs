@@ -116,6 +116,11 @@ pub struct TeamRecord {
     pub revisit_time_mean_s: Option<f64>,
     /// The ideal revisit time of an evenly spread team, `L/(N v0)`, s.
     pub revisit_time_ideal_s: Option<f64>,
+    /// The ideal revisit time of the vehicles whose runs went on, over the steady window,
+    /// `L / mean_k(sum of the live vehicles' v0_i)`, s: present only when a vehicle had gone
+    /// at a steady-window sample (docs/TEAMS.md "Vehicles that end early").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub revisit_time_ideal_active_s: Option<f64>,
     /// Smallest distance between vehicles consecutive along the isoline, m.
     pub min_separation_m: Option<f64>,
     /// Whether the cyclic order of the vehicles held over the steady window.
@@ -149,6 +154,7 @@ impl TeamRecord {
             revisit_time_max_s: o(m.revisit_time_max_s),
             revisit_time_mean_s: o(m.revisit_time_mean_s),
             revisit_time_ideal_s: finite(m.revisit_time_ideal_s),
+            revisit_time_ideal_active_s: o(m.revisit_time_ideal_active_s),
             min_separation_m: o(m.min_separation_m),
             order_preserved: m.order_preserved,
             speed_range_mps: m.speed_range_mps.map(|r| r.map(finite)),

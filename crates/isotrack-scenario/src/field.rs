@@ -79,45 +79,97 @@ impl FieldDerivatives for FieldModel {
     }
 }
 
+/// The extent a start must lie in (`[x0, x1, y0, y1]`, m) and the keys that set it: a grid's
+/// node extent, an analytic field's or a puff plume's `domain_m` (`None`: no bound).
+fn start_extent(field: &FieldModel) -> Option<([f64; 4], &'static str)> {
+    const GRID_KEYS: &str = "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)";
+    match field {
+        FieldModel::Grid(g) => Some((g.grid().extent_m(), GRID_KEYS)),
+        FieldModel::Series(g) => Some((g.extent_m(), GRID_KEYS)),
+        FieldModel::Analytic(AnalyticField { domain_m, .. }) => {
+            domain_m.map(|d| (d, "field.domain_m"))
+        }
+        FieldModel::Puff(p) => p.params().domain_m.map(|d| (d, "field.domain_m")),
+    }
+}
+
+/// Whether `[x, y]` lies outside `field`'s start extent: `Some((extent, keys, x inside))`.
+fn outside(start: [f64; 2], field: &FieldModel) -> Option<([f64; 4], &'static str, bool)> {
+    let [x, y] = start;
+    let (e, set_by) = start_extent(field)?;
+    let x_in = (e[0]..=e[1]).contains(&x);
+    (!(x_in && (e[2]..=e[3]).contains(&y))).then_some((e, set_by, x_in))
+}
+
+/// "spans x in [..] m and y in [..] m, set by ..." of an extent.
+fn spans(e: [f64; 4], set_by: &str) -> String {
+    format!(
+        "which spans x in [{}, {}] m and y in [{}, {}] m, set by {set_by}",
+        Num(e[0]),
+        Num(e[1]),
+        Num(e[2]),
+        Num(e[3])
+    )
+}
+
 /// Checks that the start lies on the field: inside a grid's node extent or an analytic
 /// field's `domain_m`. A start outside once ended the run at t = 0 with `left_field` and no
 /// hint; the issue names the extent and the keys that set it.
 pub(crate) fn check_start(start: [f64; 2], field: &FieldModel) -> Result<(), Issue> {
-    let [x, y] = start;
-    let (e, set_by) = match field {
-        FieldModel::Grid(g) => (
-            g.grid().extent_m(),
-            "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
-        ),
-        FieldModel::Series(g) => (
-            g.extent_m(),
-            "field.origin_m and field.spacing_m (by default the file's georeference; a CSV or .npy grid has none: origin [0, 0], spacing 1 m)",
-        ),
-        FieldModel::Analytic(AnalyticField { domain_m, .. }) => match *domain_m {
-            Some(d) => (d, "field.domain_m"),
-            None => return Ok(()),
-        },
-        FieldModel::Puff(p) => match p.params().domain_m {
-            Some(d) => (d, "field.domain_m"),
-            None => return Ok(()),
-        },
-    };
-    if (e[0]..=e[1]).contains(&x) && (e[2]..=e[3]).contains(&y) {
+    let Some((e, set_by, x_in)) = outside(start, field) else {
         return Ok(());
-    }
-    let key = if (e[0]..=e[1]).contains(&x) {
-        "initial.y_m"
-    } else {
-        "initial.x_m"
     };
+    let [x, y] = start;
+    let key = if x_in { "initial.y_m" } else { "initial.x_m" };
     Err(Issue {
         key: key.into(),
         unreadable: false,
         message: format!(
-            "the start ({}, {}) m is outside the field, which spans x in [{}, {}] m and y in [{}, {}] m, set by {set_by}",
-            Echo(x), Echo(y), Num(e[0]), Num(e[1]), Num(e[2]), Num(e[3])
+            "the start ({}, {}) m is outside the field, {}",
+            Echo(x),
+            Echo(y),
+            spans(e, set_by)
         ),
     })
+}
+
+/// Checks that every team vehicle's start lies on the field, as [`check_start`] checks a
+/// single vehicle's (att32e-5: a team start outside a grid was accepted, and the vehicle
+/// ended at t = 0 with `left_field`). The issue names the vehicle and the key that placed it:
+/// `team.starts[I].x_m` (or `.y_m`) for a listed pose, `team.spread` for a spread along a line
+/// or an arc (a team of one without either starts at `[initial]`, checked by
+/// [`check_start`]).
+pub(crate) fn check_team_starts(
+    team: Option<&crate::schema::TeamSection>,
+    starts: &[crate::spec::sim::Start],
+    field: &FieldModel,
+) -> Result<(), Issue> {
+    let Some(team) = team else {
+        return Ok(());
+    };
+    for (i, s) in starts.iter().enumerate() {
+        let Some((e, set_by, x_in)) = outside([s.x_m, s.y_m], field) else {
+            continue;
+        };
+        let key = if team.starts.is_some() {
+            format!("team.starts[{i}].{}", if x_in { "y_m" } else { "x_m" })
+        } else if team.spread.is_some() {
+            "team.spread".to_string()
+        } else {
+            continue;
+        };
+        return Err(Issue {
+            key,
+            unreadable: false,
+            message: format!(
+                "puts vehicle {i}'s start at ({}, {}) m, outside the field, {}",
+                Echo(s.x_m),
+                Echo(s.y_m),
+                spans(e, set_by)
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// The true isoline of a field, for the distance metric.

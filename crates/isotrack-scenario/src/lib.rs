@@ -150,6 +150,10 @@ impl Scenario {
         let vehicle = vehicle::build_vehicle(&file).map_err(|i| vec![i])?;
         let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| vec![i])?;
+        if let Some(t) = &spec.team {
+            field::check_team_starts(file.team.as_ref(), &t.starts, &parts.model)
+                .map_err(|i| vec![i])?;
+        }
         Ok(Self {
             file,
             given: Arc::new(given),
@@ -239,6 +243,10 @@ impl Scenario {
         };
         let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| located(vec![i]))?;
+        if let Some(t) = &spec.team {
+            field::check_team_starts(file.team.as_ref(), &t.starts, &parts.model)
+                .map_err(|i| located(vec![i]))?;
+        }
         Ok(Self {
             file,
             given: Arc::new(given),

@@ -763,3 +763,141 @@ fn threads_give_bit_identical_runs() {
         }
     }
 }
+
+/// The PI-like law, answering NaN from `end_s` on: its vehicle's run ends there (`diverged`),
+/// as a vehicle's run ends early for any reason (completed, its command, the field, a
+/// non-finite measurement).
+struct EndsAt {
+    inner: PiIsoline,
+    end_s: f64,
+}
+
+impl isotrack_core::IsolineController for EndsAt {
+    fn update(&mut self, m: &isotrack_core::Measurement) -> f64 {
+        if m.t_s >= self.end_s {
+            f64::NAN
+        } else {
+            self.inner.update(m)
+        }
+    }
+
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+}
+
+/// Four robots evenly spread (`L/4` apart) under `range_balance` on the listed ring, ideal
+/// ranging at 10 Hz up to `max_range_m`, `k_v = 0.1` 1/s; vehicle `gone` ends at `end_s`.
+fn one_ends_early(gone: usize, end_s: f64, duration_s: f64, max_range_m: f64) -> TeamResult {
+    let v = vehicle(0.25, 0.75);
+    let plan = StepPlan::new(DT, duration_s, 0.0, 0.2, 0.1, 10.0, 10.0).unwrap();
+    let cfg = TeamConfig {
+        ranging: RangingConfig {
+            max_range_m,
+            ..ideal_ranging(10.0)
+        },
+        spacing: SpacingConfig {
+            law: SpacingLaw::RangeBalance { gain_per_s: 0.1 },
+            nominal_speed_mps: V0,
+            ring: RingMode::Listed,
+        },
+        metrics: TeamMetricsConfig::default(),
+    };
+    let angles: Vec<f64> = (0..4).map(|i| -FRAC_PI_2 * i as f64).collect();
+    let members = members(&v, &angles, 100.0)
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| TeamMember {
+            x0: m.x0,
+            controller: EndsAt {
+                inner: m.controller,
+                end_s: if i == gone { end_s } else { f64::INFINITY },
+            },
+            sensor: m.sensor,
+            ranging_seed: m.ranging_seed,
+        })
+        .collect();
+    let a = arc();
+    simulate_team(
+        &field(),
+        &v,
+        &plan,
+        cfg,
+        members,
+        Some(&a),
+        &Oracles::default(),
+        &mut [] as &mut [NoTrace],
+    )
+    .unwrap()
+}
+
+/// att32e-3: one of four robots ends at 30 s. The listed ring closes around it (its
+/// behind-neighbour's "ahead" becomes its "ahead", and the mirror), and the three others
+/// re-space to `L/3` on the ring Laplacian of three: `lambda_1 = 3`, chords at `L/3` with slope
+/// `c = cos(pi/3)`, so the slowest mode's time constant is `1/(k_v c lambda_1) = 6.67 s`.
+/// From the gaps `L/2, L/4, L/4` (CV 0.354) the linear loop reaches CV 0.05 in
+/// `tau ln(0.354/0.05) = 13 s`; the test allows ten time constants (the chord's slope at the
+/// `L/2` gap is near 0 and the speeds saturate at first). At the end the gap CV of the three
+/// (computed here from their end positions) is below 0.005, and no two come closer than the
+/// chord of `L/4` less a tenth of the radius; the same with a range limit of 20 m (the
+/// isoline's diameter is 13.9 m). Before the fix the gone vehicle stayed in its neighbours'
+/// ring: without a range limit they held its last range for ever, and the three kept the
+/// gaps `L/2, L/4, L/4` (end gap CV 0.353); with the limit its range read 20 m after a second,
+/// so the vehicle behind it flew its top speed and the one ahead of it its slowest, and they
+/// met.
+#[test]
+fn the_listed_ring_closes_around_a_vehicle_that_ends_early() {
+    let (end_s, duration_s) = (30.0, 300.0);
+    for (gone, max_range_m) in [(2usize, 20.0), (1, f64::INFINITY), (0, f64::INFINITY)] {
+        let r = one_ends_early(gone, end_s, duration_s, max_range_m);
+        for (i, run) in r.runs.iter().enumerate() {
+            if i == gone {
+                assert_eq!(run.outcome, isotrack_sim::Outcome::Diverged);
+                assert!((run.t_end_s - end_s).abs() < 0.011, "{}", run.t_end_s);
+            } else {
+                assert_eq!(run.outcome, isotrack_sim::Outcome::Completed, "{i}");
+            }
+        }
+        let live: Vec<u32> = (0..4u32).filter(|&i| i as usize != gone).collect();
+        let angles: Vec<f64> = live
+            .iter()
+            .map(|&i| {
+                let p = r.runs[i as usize].end_position_m;
+                p[1].atan2(p[0])
+            })
+            .collect();
+        let cv_end = cv_of(&angles);
+        assert!(cv_end < 0.005, "gone {gone}: end gap CV {cv_end}");
+        let t = r.team.unwrap();
+        let tau = 1.0 / (0.1 * (PI / 3.0).cos() * ring_laplacian_eigenvalue(3, 1));
+        assert!((tau - 20.0 / 3.0).abs() < 1e-9);
+        let even = t.time_to_even_s.expect("evenly spread at the end");
+        assert!(
+            even > end_s && even < end_s + 10.0 * tau,
+            "gone {gone}: {t:?}"
+        );
+        // Item 2: the ideal revisit time of the three live vehicles over the window (240 s
+        // to the end), `L/(3 v0)`; the measured mean revisit time is that of three evenly
+        // spread robots (within 1 %), while the team's `L/(4 v0)` stays reported beside it.
+        let l = 2.0 * PI * radius();
+        let active = t
+            .revisit_time_ideal_active_s
+            .expect("a vehicle gone in the window");
+        assert!((active - l / (3.0 * V0)).abs() < 1e-9, "{active}");
+        assert!((t.revisit_time_ideal_s - l / (4.0 * V0)).abs() < 1e-9);
+        let mean = t.revisit_time_mean_s.unwrap();
+        assert!((mean / active - 1.0).abs() < 0.01, "{mean} vs {active}");
+        let chord = 2.0 * radius() * (PI / 4.0).sin();
+        let sep = t.min_separation_m.unwrap();
+        assert!(
+            sep > chord - 0.1 * radius(),
+            "gone {gone}: {sep} vs {chord}"
+        );
+        // The ring of the three: `ahead(i) = i + 1` skipping the gone vehicle.
+        for (k, &i) in live.iter().enumerate() {
+            let want = [live[(k + 1) % 3], live[(k + 2) % 3]];
+            assert_eq!(r.ring[i as usize], Some(want), "gone {gone}");
+        }
+        assert_eq!(r.ring[gone], None);
+    }
+}

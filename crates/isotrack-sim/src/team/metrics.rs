@@ -79,8 +79,16 @@ pub struct TeamSummary {
     /// steady window, each measured back to the pass before it wherever that was (before the
     /// window too), s. `None` when no pass in the window had one before it.
     pub revisit_time_mean_s: Option<f64>,
-    /// The ideal revisit time of an evenly spread team at the nominal speed, `L/(N v0)`, s.
+    /// The ideal revisit time of an evenly spread team at the nominal speed, `L/(N v0)`, s
+    /// (every vehicle of the team, gone or not: the team as deployed).
     pub revisit_time_ideal_s: f64,
+    /// The ideal revisit time of the vehicles whose runs went on, over the steady window:
+    /// `L / mean_k(sum of v0_i over the vehicles live at sample k)`, s (`L/(N_active v0)` with
+    /// one nominal speed and the same vehicles live throughout the window). Present only when a
+    /// vehicle's run had ended at a steady-window sample (a closed isoline); then
+    /// `revisit_time_mean_s` is to be compared with it, not with `revisit_time_ideal_s`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub revisit_time_ideal_active_s: Option<f64>,
     /// Smallest distance between vehicles consecutive along the isoline over the samples, m
     /// (consecutive pairs only: `O(N)` per sample; on a simple isoline the closest pair is
     /// consecutive unless vehicles are far off it).
@@ -198,6 +206,13 @@ pub struct TeamMetrics {
     stretch_sum: f64,
     mean_gap_sum: f64,
     stretch_count: u64,
+    /// Each vehicle's nominal speed `v0_i` (for the live vehicles' ideal revisit time).
+    member_speeds_mps: Vec<f64>,
+    /// Over the steady window's samples: the sum of the live vehicles' nominal speeds, the
+    /// samples, and whether a vehicle's run had ended at one of them.
+    active_speed_sum: f64,
+    active_samples: u64,
+    lost_in_window: bool,
 }
 
 impl TeamMetrics {
@@ -207,6 +222,15 @@ impl TeamMetrics {
     /// a point every `L/v0_i`).
     pub fn set_nominal_speed(&mut self, speed_mps: f64) {
         self.nominal_speed_mps = speed_mps;
+    }
+
+    /// Each vehicle's own nominal speed `v0_i` (one per vehicle; ignored otherwise), for
+    /// `revisit_time_ideal_active_s` (by default every vehicle's is the nominal speed given to
+    /// [`new`](Self::new)).
+    pub fn set_member_speeds(&mut self, speeds_mps: &[f64]) {
+        if speeds_mps.len() == self.n {
+            self.member_speeds_mps = speeds_mps.to_vec();
+        }
     }
 
     /// Metrics for `n` vehicles on an isoline of `length_m`, steps of `dt_s`, nominal speed
@@ -263,6 +287,10 @@ impl TeamMetrics {
             stretch_sum: 0.0,
             mean_gap_sum: 0.0,
             stretch_count: 0,
+            member_speeds_mps: vec![nominal_speed_mps; n],
+            active_speed_sum: 0.0,
+            active_samples: 0,
+            lost_in_window: false,
             cfg,
         }
     }
@@ -348,6 +376,20 @@ impl TeamMetrics {
         let reproject = core::mem::take(&mut self.reproject);
         let m = self.cfg.revisit_bins;
         let bin = |s: f64| ((s / l * m as f64) as usize).min(m - 1);
+        if in_window {
+            let mut sum = 0.0;
+            for (v, _) in self
+                .member_speeds_mps
+                .iter()
+                .zip(alive)
+                .filter(|(_, a)| **a)
+            {
+                sum += v;
+            }
+            self.active_speed_sum += sum;
+            self.active_samples += 1;
+            self.lost_in_window |= alive.iter().take(self.n).any(|a| !a);
+        }
         self.scratch.clear();
         for i in 0..self.n {
             if !alive[i] {
@@ -612,6 +654,8 @@ impl TeamMetrics {
             } else {
                 l / (self.n as f64 * self.nominal_speed_mps)
             },
+            revisit_time_ideal_active_s: (self.lost_in_window && !self.open)
+                .then(|| l / (self.active_speed_sum / self.active_samples as f64)),
             min_separation_m: self.min_sep.is_finite().then_some(self.min_sep),
             order_preserved: self.order_ok,
             speed_range_mps: (self.speed_min <= self.speed_max)
@@ -807,6 +851,53 @@ mod tests {
             "mean {mean} vs L/(N v) = {ideal}"
         );
         assert!((s.revisit_time_ideal_s - ideal).abs() < 1e-12);
+    }
+
+    /// att32e (item 2): the live vehicles' ideal revisit time. Four points on a circle of
+    /// radius 10, nominal speeds 1, 2, 1, 1 m/s; the window is the last 10 of 20 samples.
+    /// Vehicle 3 is gone from the window's sixth sample on: the live speeds sum to 5 m/s at 5
+    /// samples and 4 m/s at 5, so the ideal is `L/4.5` by hand; `revisit_time_ideal_s` stays
+    /// the team's `L/(4 x 1.25)`. With every vehicle live in the window it is absent.
+    #[test]
+    fn the_ideal_of_the_live_vehicles() {
+        let r = 10.0;
+        let arc = CircleArc {
+            center_m: Vec2::new(0.0, 0.0),
+            radius_m: r,
+        };
+        let l = 2.0 * PI * r;
+        let cfg = TeamMetricsConfig {
+            every_steps: 1,
+            steady_state_start_step: 10,
+            even_gap_cv: 0.05,
+            revisit_bins: 36,
+        };
+        let run = |gone_from: u64| {
+            let mut m = TeamMetrics::new(cfg, 4, l, 0.1, 1.25);
+            m.set_member_speeds(&[1.0, 2.0, 1.0, 1.0]);
+            for k in 0..20u64 {
+                let pos: Vec<Vec2> = (0..4)
+                    .map(|i| {
+                        let th = 0.01 * k as f64 + PI / 2.0 * i as f64;
+                        Vec2::new(r * th.cos(), r * th.sin())
+                    })
+                    .collect();
+                let alive = [true, true, true, k < gone_from];
+                if m.due() {
+                    m.observe(k, &arc, &pos, &[1.0; 4], &alive);
+                }
+            }
+            m.finish()
+        };
+        let s = run(15);
+        let want = l / 4.5;
+        let got = s.revisit_time_ideal_active_s.unwrap();
+        assert!((got - want).abs() < 1e-12 * want, "{got} vs {want}");
+        assert!((s.revisit_time_ideal_s - l / 5.0).abs() < 1e-12 * l);
+        // Gone before the window: L/4 throughout.
+        let got = run(3).revisit_time_ideal_active_s.unwrap();
+        assert!((got - l / 4.0).abs() < 1e-12 * l, "{got}");
+        assert_eq!(run(20).revisit_time_ideal_active_s, None);
     }
 
     /// Four points at arc offsets `offs` behind one another along `arc` (an open isoline),

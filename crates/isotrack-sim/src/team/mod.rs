@@ -33,8 +33,8 @@ use isotrack_core::{IsolineController, Measurement, ScalarField, SpeedCommand, V
 use metrics::{TeamMetrics, TeamMetricsConfig, TeamSummary};
 use ranging::{RangeSample, Ranging, RangingConfig, RangingError};
 use spacing::{
-    balance_speed, pick_neighbours, DiscoveryConfig, HeldRange, RateFit, RingMode, SpacingConfig,
-    SpacingLaw,
+    balance_speed, leave_ring, pick_neighbours, DiscoveryConfig, HeldRange, RateFit, RingMode,
+    SpacingConfig, SpacingLaw,
 };
 
 /// The [`Slab`] of a whole [`Group`] (`$g`), its trace sinks `$sinks`: each field borrowed on
@@ -177,7 +177,8 @@ pub struct TeamResult {
     /// The team metrics (with an isoline to project on).
     pub team: Option<TeamSummary>,
     /// Each vehicle's `[ahead, behind]` neighbours as used at the end (`None` before a ring was
-    /// found).
+    /// found, and for a vehicle whose run ended before the others': it left the ring, which
+    /// closed around it).
     pub ring: Vec<Option<[u32; 2]>>,
 }
 
@@ -233,6 +234,11 @@ pub struct Group<'a, X, C> {
     k: u64,
     /// Vehicles whose run goes on.
     running: usize,
+    /// Vehicles whose run went on when the ring was last closed around the ended ones
+    /// ([`Group::close_ring`]).
+    ring_running: usize,
+    /// Whether each vehicle has left the ring (its run ended).
+    left_ring: Vec<bool>,
     plan: StepPlan,
     cfg: TeamConfig,
     states: Vec<[X; LANES]>,
@@ -438,6 +444,8 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             n,
             k: 0,
             running: n,
+            ring_running: n,
+            left_ring: vec![false; n],
             plan: *plan,
             cfg,
             states,
@@ -526,6 +534,8 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         if let Some(metrics) = self.metrics.as_mut() {
             let sum: f64 = speeds.iter().map(|m| m.nominal_mps).sum();
             metrics.set_nominal_speed(sum / self.n as f64);
+            let own: Vec<f64> = speeds.iter().map(|m| m.nominal_mps).collect();
+            metrics.set_member_speeds(&own);
         }
         self.member_speeds = Some(speeds);
         Ok(())
@@ -809,7 +819,44 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         self.observe_team(k, t);
         // 5. Hold the speed commands and move, in lanes.
         self.running = slab!(self, sinks).advance(&shared!(self, k, t), vehicle);
+        self.close_ring();
         self.k += 1;
+    }
+
+    /// After a step's move: the ring closes around every vehicle whose run ended at this step
+    /// (docs/TEAMS.md "Vehicles that end early"; [`leave_ring`]): its end is announced to its
+    /// two neighbours, who range their new neighbours from the next step on. A neighbour whose
+    /// neighbour changed forgets the range it held ([`HeldRange`]); one left alone flies its
+    /// nominal speed. `O(1)` unless a run ended (then `O(N)` per ended vehicle); nothing once
+    /// every run has ended. During ring discovery no ring exists yet: the vehicles that ended
+    /// leave the found ring when it is complete ([`Group::discover_step`]).
+    fn close_ring(&mut self) {
+        if self.running >= self.ring_running {
+            return;
+        }
+        self.ring_running = self.running;
+        if self.running == 0 || self.discovery.is_some() {
+            return;
+        }
+        for i in 0..self.n {
+            if self.left_ring[i] || self.runs[i].is_running() {
+                continue;
+            }
+            self.left_ring[i] = true;
+            for (j, sides) in leave_ring(&mut self.ring, i) {
+                for (side, changed) in sides.into_iter().enumerate() {
+                    if changed {
+                        self.held[j][side] = HeldRange::default();
+                    }
+                }
+                if self.ring[j].is_none() {
+                    self.speed_cmd[j] = self
+                        .member_speeds
+                        .as_ref()
+                        .map_or(self.cfg.spacing.nominal_speed_mps, |m| m[j].nominal_mps);
+                }
+            }
+        }
     }
 
     /// The team metrics of step `k` (time `t`), when due: after every vehicle's step 4, read
@@ -851,6 +898,9 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             ) {
                 self.ring = core::mem::take(&mut d.found);
                 self.discovery = None;
+                // The vehicles whose runs ended during the discovery leave the found ring.
+                self.ring_running = self.n;
+                self.close_ring();
             }
         }
     }
@@ -1465,6 +1515,7 @@ fn par_block<X, C, F, V>(
             back_part(s, &sh, vehicle, oracles)
         });
         g.running = running;
+        g.close_ring();
         drain_rows(rows, log);
         g.observe_team(k, t);
         g.k += 1;

@@ -130,6 +130,45 @@ impl HeldRange {
     }
 }
 
+/// Closes the ring around vehicle `i`, whose run has ended (docs/TEAMS.md "Vehicles that end
+/// early"): every vehicle whose neighbour ahead was `i` takes `i`'s neighbour ahead, every one
+/// whose neighbour behind was `i` takes `i`'s neighbour behind, and `i` leaves the ring
+/// (`ring[i] = None`). A vehicle left with no neighbour but itself has none (`None`); one left
+/// with itself on one side only takes its other neighbour on both. The one place a ring (listed
+/// or discovered) drops a vehicle. Returns the vehicles whose neighbours changed, with a flag
+/// per side (`[ahead, behind]`), in index order. `O(N)`.
+pub fn leave_ring(ring: &mut [Option<[u32; 2]>], i: usize) -> Vec<(usize, [bool; 2])> {
+    let mut changed = Vec::new();
+    let Some([a, b]) = ring.get_mut(i).and_then(Option::take) else {
+        return changed;
+    };
+    let me = i as u32;
+    for (j, r) in ring.iter_mut().enumerate() {
+        let Some([ja, jb]) = r.as_mut() else {
+            continue;
+        };
+        let flags = [*ja == me, *jb == me];
+        if !(flags[0] || flags[1]) {
+            continue;
+        }
+        if flags[0] {
+            *ja = a;
+        }
+        if flags[1] {
+            *jb = b;
+        }
+        let own = j as u32;
+        *r = match (*ja == own, *jb == own) {
+            (true, true) => None,
+            (true, false) => Some([*jb, *jb]),
+            (false, true) => Some([*ja, *ja]),
+            (false, false) => Some([*ja, *jb]),
+        };
+        changed.push((j, flags));
+    }
+    changed
+}
+
 /// A least-squares line through `(t, r)` samples: the range rate and mean range to one vehicle
 /// during a probe.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -220,6 +259,25 @@ mod tests {
             HeldRange::default().update(Range::INVALID, 0.0, f64::INFINITY),
             None
         );
+    }
+
+    /// A ring 0 -> 1 -> 2 -> 3 -> 0 ([ahead, behind]): vehicle 1 leaves, so 0's ahead is 2 and
+    /// 2's behind is 0; then 3 leaves (0 and 2 each other's both neighbours); then 2 (0 alone).
+    #[test]
+    fn leaving_closes_the_ring() {
+        let mut ring: Vec<Option<[u32; 2]>> = (0..4u32)
+            .map(|i| Some([(i + 1) % 4, (i + 3) % 4]))
+            .collect();
+        let changed = leave_ring(&mut ring, 1);
+        assert_eq!(changed, vec![(0, [true, false]), (2, [false, true])]);
+        assert_eq!(ring, vec![Some([2, 3]), None, Some([3, 0]), Some([0, 2])]);
+        leave_ring(&mut ring, 3);
+        assert_eq!(ring, vec![Some([2, 2]), None, Some([0, 0]), None]);
+        leave_ring(&mut ring, 2);
+        assert_eq!(ring, vec![None; 4]);
+        // Leaving twice, or with no ring yet, changes nothing.
+        assert!(leave_ring(&mut ring, 2).is_empty());
+        assert!(leave_ring(&mut ring, 9).is_empty());
     }
 
     /// A line r = 3 - 0.5 t: slope and mean by hand; picking neighbours: nearest ahead and
