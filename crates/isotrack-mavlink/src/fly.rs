@@ -664,6 +664,10 @@ struct Flight<'a, S: ?Sized> {
     leave_seen: Option<LeaveSeen>,
     /// Heartbeats of the vehicle's ids handled.
     heartbeats: u64,
+    /// When the vehicle's last heartbeat (in sequence) came, and the gaps between its last
+    /// few, s: how long a pilot's word waits for confirmation ([`Flight::confirm_span`]).
+    beat_at: Option<Instant>,
+    beat_gaps_s: [f64; 4],
     /// Armed and in OFFBOARD this turn.
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
@@ -759,19 +763,21 @@ struct Telemetry {
 /// beats too, and its first heartbeat looks exactly like a pilot's switch: taken at its word,
 /// the companion would stop and command nothing, and the vehicle flown would be left in
 /// OFFBOARD without setpoints. So the change is the pilot's word only once confirmed: the
-/// vehicle's next heartbeat shows it too, and no frame of its ids came out of sequence since
-/// the one that showed it ([`crate::same_ids`]: two senders' counters interleaving step back at
-/// least once a switch between them). Until then the last setpoint is repeated (an autopilot
+/// heartbeats of its ids (in sequence: a late one is older news, never applied) show it, none
+/// contradicting, for longer than the vehicle's heartbeat period ([`Flight::confirm_span`]),
+/// within which the vehicle flown, if it is another, beats too. Until then the last setpoint is repeated (an autopilot
 /// out of OFFBOARD or GUIDED ignores offboard setpoints, so a pilot loses nothing), no
 /// measurement is answered, and during a take-over nothing more is commanded: however it turns
 /// out, the flight ends; a heartbeat that no longer shows it, with frames out of sequence
-/// since, is a second vehicle's (`vehicle_lost`: the way out of what the companion commanded),
+/// since ([`crate::same_ids`]: two senders' counters interleaving step back at least once a
+/// switch between them), is a second vehicle's (`vehicle_lost`: the way out of what the companion commanded),
 /// one without is one sender's change and back (the pilot's word, as ever).
 #[derive(Clone, Debug)]
 struct LeaveSeen {
-    /// [`Flight::heartbeats`] at the heartbeat that showed it (or at the last one after frames
-    /// out of sequence: confirmation counts again from there).
-    beat: u64,
+    /// When the heartbeat that showed it came, and how long it must stand uncontradicted
+    /// ([`Flight::confirm_span`]).
+    at: Instant,
+    span: Duration,
     /// The vehicle's frames out of sequence before that heartbeat.
     out_of_sequence: u64,
     /// What it showed, in words (`disarmed in MANUAL`).
@@ -991,6 +997,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             refusal_pending: None,
             leave_seen: None,
             heartbeats: 0,
+            beat_at: None,
+            beat_gaps_s: [0.0; 4],
             active: false,
             in_control: false,
             arm_sent: false,
@@ -2153,6 +2161,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.vehicle_address(r.from);
             self.vehicle_sender(r);
         }
+        // A frame of the vehicle's ids behind the newest: a late one or another sender's.
+        let late = self.seq_watch.out_of_sequence > out_of_sequence_before;
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
@@ -2175,11 +2185,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         match &r.msg {
+            // Older news than the heartbeat before it, or a second sender's (att33e-2): its
+            // arming and mode are not the vehicle's now, never applied (a late OFFBOARD one after
+            // a pilot's MANUAL would read as a twin's contradiction).
+            MavMessage::HEARTBEAT(_) if late => {}
             MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
                 let was_armed = self.armed;
                 self.vehicle_heartbeat(h);
                 self.watch_leave(out_of_sequence_before);
+                self.note_beat();
                 if was_armed && !self.armed {
                     // A disarm after a silence: a reboot (whose clock need not go back far
                     // enough to say so) looks the same as a pilot's disarm (att33d-9a).
@@ -2581,6 +2596,29 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted.
+    fn note_beat(&mut self) {
+        let now = Instant::now();
+        if let Some(at) = self.beat_at {
+            self.beat_gaps_s[(self.heartbeats % 4) as usize] = now.duration_since(at).as_secs_f64();
+        }
+        self.beat_at = Some(now);
+    }
+
+    /// How long a pilot's word shown by the vehicle's heartbeats must stand, none contradicting,
+    /// before it is taken ([`LeaveSeen`]): 1.1 x the longest of the gaps between its last four
+    /// heartbeats (1 s, PX4's period, before four were heard), within [0.05, 5] s: long enough
+    /// that the vehicle flown, if the heartbeats were another's, has beaten meanwhile.
+    fn confirm_span(&self) -> Duration {
+        let longest = self.beat_gaps_s.iter().fold(0.0f64, |m, &g| m.max(g));
+        let gap_s = if self.heartbeats > 4 {
+            longest
+        } else {
+            1.0f64.max(longest)
+        };
+        Duration::from_secs_f64((1.1 * gap_s).clamp(0.05, 5.0))
+    }
+
     /// Whether the vehicle's arming and mode, as its heartbeats show them, are a pilot's word
     /// the companion did not command: in control, out of OFFBOARD or disarmed (armed in an
     /// unknown mode is not, ver33b-10); during a take-over (once a control command went out), a
@@ -2610,7 +2648,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let shows_control = !self.shows_pilots_word();
         let now = self.seq_watch.out_of_sequence;
-        let beat = self.heartbeats;
+        let span = self.confirm_span();
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
@@ -2621,21 +2659,16 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             (None, true) => {}
             (None, false) => {
                 self.leave_seen = Some(LeaveSeen {
-                    beat,
+                    at: Instant::now(),
+                    span,
                     out_of_sequence: out_of_sequence_before,
                     what: state,
                     confirmed: false,
                     back: false,
                 })
             }
-            (Some(l), false) if !l.confirmed => {
-                if now > l.out_of_sequence {
-                    // Frames out of sequence since: not yet one sender's word; counted again.
-                    (l.beat, l.out_of_sequence) = (beat, now);
-                } else if beat > l.beat {
-                    l.confirmed = true;
-                }
-            }
+            // A late frame now and then (a link that reorders) changes nothing (att33e-6).
+            (Some(l), false) if !l.confirmed && l.at.elapsed() >= l.span => l.confirmed = true,
             (Some(l), true) if !l.confirmed => {
                 if now > l.out_of_sequence {
                     let what = format!(
@@ -3001,26 +3034,38 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
         // retry would yank back a pilot who took over meanwhile).
         let mut accepted: Option<Instant> = None;
+        // A heartbeat showed a pilot's change, when (att33e-1: taken once it has stood, none
+        // contradicting, for `confirm_span`; no retry meanwhile).
+        let mut pilot_seen: Option<Instant> = None;
+        let span = self.confirm_span();
+        // The vehicle refused the way out: an unaddressed refusal may answer someone else's
+        // same command (att33e-5), so the retries go on to their bound, which then says so.
+        let mut refused = false;
         loop {
             let lost =
                 self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
             if lost && tries >= 5 {
                 return Ok((false, tries, "link lost"));
             }
+            let bound = if refused {
+                "refused"
+            } else {
+                "retries' bound reached"
+            };
             if tries >= MAX_WAY_OUT_TRIES {
-                return Ok((false, tries, "retries' bound reached"));
+                return Ok((false, tries, bound));
             }
             if self.opts.stop.load(Ordering::SeqCst) {
                 return Ok((false, tries, "stopped by a signal"));
             }
             if Instant::now() >= retry_end {
-                return Ok((false, tries, "retries' bound reached"));
+                return Ok((false, tries, bound));
             }
-            if accepted.is_none_or(|at| self.last_heartbeat > at) {
+            if accepted.is_none_or(|at| self.last_heartbeat > at) && pilot_seen.is_none() {
                 tries += 1;
                 self.command(cmd, params)?;
             }
-            match self.await_way_out(way, cmd, before, &mut accepted)? {
+            match self.await_way_out(way, cmd, before, &mut accepted, (&mut pilot_seen, span))? {
                 Some(Answer::Confirmed) => return Ok((true, tries, "")),
                 Some(Answer::OtherSafeMode(name)) => {
                     let asked = match way {
@@ -3032,7 +3077,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     ));
                     return Ok((true, tries, name));
                 }
-                Some(Answer::Refused) => return Ok((false, tries, "refused")),
+                Some(Answer::Refused) => refused = true,
                 Some(Answer::PilotTookOver(what)) => {
                     self.event(format!(
                         "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
@@ -3055,6 +3100,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         cmd: MavCmd,
         before: (Option<u32>, bool),
         accepted: &mut Option<Instant>,
+        (pilot_seen, span): (&mut Option<Instant>, Duration),
     ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         // A refusal heard and no acceptance after it: an unaddressed refusal may answer
@@ -3074,7 +3120,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if self.ack_for_another(&r) {
                     continue;
                 }
+                let before_frame = self.seq_watch.out_of_sequence;
+                self.seq_watch.frame(r.header.sequence, &r.msg);
+                let late = self.seq_watch.out_of_sequence > before_frame;
                 match &r.msg {
+                    // A late heartbeat or a second sender's: not the vehicle's now (att33e-2).
+                    MavMessage::HEARTBEAT(_) if late => continue,
                     MavMessage::HEARTBEAT(_) => self.last_heartbeat = Instant::now(),
                     MavMessage::COMMAND_ACK(a)
                         if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
@@ -3084,28 +3135,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     }
                     _ => {}
                 }
-                let offboard = |h: &HEARTBEAT_DATA| {
-                    mode_of(h).map(|c| self.firmware.is_in(c, FlyMode::Offboard))
-                };
-                match (&r.msg, way) {
-                    (MavMessage::HEARTBEAT(h), WayOut::LeaveOffboard(m)) => {
-                        let Some(c) = mode_of(h) else { continue };
-                        if self.firmware.is_in(c, m) {
-                            return Ok(Some(Answer::Confirmed));
-                        }
-                        if let Some(name) = self.firmware.safe_mode_name(c) {
-                            return Ok(Some(Answer::OtherSafeMode(name)));
-                        }
-                        if offboard(h) == Some(false) {
-                            // Out of OFFBOARD in another mode (the pilot's, or the one it never
-                            // left): the pilot's mode stands.
-                            return Ok(Some(Answer::PilotTookOver(format!(
-                                "in {}",
-                                self.firmware.mode_name(c)
-                            ))));
-                        }
-                    }
-                    (MavMessage::COMMAND_ACK(a), _)
+                match &r.msg {
+                    MavMessage::COMMAND_ACK(a)
                         if a.command == cmd
                             && matches!(
                                 a.result,
@@ -3116,32 +3147,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     {
                         refused = true
                     }
-                    (MavMessage::HEARTBEAT(h), WayOut::Mode(m))
-                        if mode_of(h).is_some_and(|c| self.firmware.is_in(c, m)) =>
-                    {
-                        return Ok(Some(Answer::Confirmed))
-                    }
-                    (MavMessage::HEARTBEAT(h), WayOut::Mode(_)) => {
-                        if let Some(name) = mode_of(h).and_then(|c| self.firmware.safe_mode_name(c))
-                        {
-                            return Ok(Some(Answer::OtherSafeMode(name)));
+                    MavMessage::HEARTBEAT(h) => match self.heartbeat_answer(h, way, before) {
+                        Some(Answer::PilotTookOver(what)) => {
+                            // A second vehicle with the ids may beat too (att33e-1): the
+                            // pilot's word once it has stood, none contradicting, for `span`.
+                            let since = *pilot_seen.get_or_insert_with(Instant::now);
+                            if since.elapsed() >= span {
+                                return Ok(Some(Answer::PilotTookOver(what)));
+                            }
                         }
-                        if let Some(what) = self.pilots_change(h, before) {
-                            return Ok(Some(Answer::PilotTookOver(what)));
-                        }
-                    }
-                    (MavMessage::HEARTBEAT(h), WayOut::Disarm)
-                        if !h
-                            .base_mode
-                            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED) =>
-                    {
-                        return Ok(Some(Answer::Confirmed))
-                    }
-                    (MavMessage::HEARTBEAT(h), WayOut::Disarm) => {
-                        if let Some(what) = self.pilots_change(h, before) {
-                            return Ok(Some(Answer::PilotTookOver(what)));
-                        }
-                    }
+                        Some(answer) => return Ok(Some(answer)),
+                        None => *pilot_seen = None,
+                    },
                     _ => {}
                 }
             }
@@ -3151,6 +3168,48 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 }
 
 impl<S: TraceSink + ?Sized> Flight<'_, S> {
+    /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:
+    /// the mode commanded (or, for a disarm, disarmed), another safe mode, a pilot's change
+    /// ([`Flight::pilots_change`]; out of OFFBOARD in any other mode for `LeaveOffboard`), or
+    /// nothing yet.
+    fn heartbeat_answer(
+        &self,
+        h: &HEARTBEAT_DATA,
+        way: WayOut,
+        before: (Option<u32>, bool),
+    ) -> Option<Answer> {
+        let safe = |c: u32| self.firmware.safe_mode_name(c).map(Answer::OtherSafeMode);
+        match way {
+            WayOut::LeaveOffboard(m) => {
+                let c = mode_of(h)?;
+                if self.firmware.is_in(c, m) {
+                    return Some(Answer::Confirmed);
+                }
+                // Out of OFFBOARD in another mode (the pilot's, or the one it never left): the
+                // pilot's mode stands.
+                safe(c).or_else(|| {
+                    (!self.firmware.is_in(c, FlyMode::Offboard)).then(|| {
+                        Answer::PilotTookOver(format!("in {}", self.firmware.mode_name(c)))
+                    })
+                })
+            }
+            WayOut::Mode(m) => match mode_of(h) {
+                Some(c) if self.firmware.is_in(c, m) => Some(Answer::Confirmed),
+                c => c
+                    .and_then(safe)
+                    .or_else(|| self.pilots_change(h, before).map(Answer::PilotTookOver)),
+            },
+            WayOut::Disarm
+                if !h
+                    .base_mode
+                    .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED) =>
+            {
+                Some(Answer::Confirmed)
+            }
+            WayOut::Disarm => self.pilots_change(h, before).map(Answer::PilotTookOver),
+        }
+    }
+
     /// A heartbeat during the failsafe's retries that shows what a pilot did: a mode other
     /// than the one the vehicle was in as the failsafe began (and not a safe one, checked
     /// before), or a disarm the companion did not command; in words (`in MANUAL`, `disarmed`).

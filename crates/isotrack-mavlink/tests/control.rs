@@ -82,6 +82,9 @@ struct Script {
     /// Each command is first answered DENIED addressed to a ground station (system 255,
     /// component 190: its own request's answer), then answered to the companion.
     gcs_denial_first: bool,
+    /// The failsafe mode commands before this one (1: the first) are answered DENIED
+    /// unaddressed and not carried out (a ground station's same command answered, say).
+    hold_denied_before: u32,
     /// Each command is first answered DENIED unaddressed (no target: as an autopilot answers
     /// any sender's same command, a ground station's), then answered as the script says.
     unaddressed_denial_first: bool,
@@ -153,6 +156,7 @@ impl Default for Script {
             mode_at_beat: None,
             gcs_denial_first: false,
             unaddressed_denial_first: false,
+            hold_denied_before: 1,
             quiet_after_ack_beats: 0,
             pilot_after_ack: None,
             rearm_after: None,
@@ -430,6 +434,14 @@ fn against_counting(
                         continue;
                     }
                     if holds < script.hold_acked_at {
+                        continue;
+                    }
+                    if holds < script.hold_denied_before {
+                        v.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                            command: c.command,
+                            result: MavResult::MAV_RESULT_DENIED,
+                        }))
+                        .unwrap();
                         continue;
                     }
                     if let Some(m) = script.hold_goes_to {
@@ -1507,6 +1519,31 @@ fn an_unaddressed_refusal_before_the_acceptance_is_not_the_last_word() {
             r.events
         );
     }
+}
+
+/// att33e-5: the first failsafe HOLD is answered only by an unaddressed DENIED (not carried
+/// out), the second ACCEPTED: the refusal does not end the retries (an unaddressed refusal may
+/// answer someone else's same command), and the vehicle is confirmed in HOLD (before: "refused"
+/// after one try, the vehicle left in OFFBOARD with nobody sending setpoints).
+#[test]
+fn a_refused_failsafe_mode_is_retried() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        hold_denied_before: 2,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| {
+        o.take_control = true;
+        o.max_duration_s = Some(0.5);
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(got.iter().filter(|g| is_hold(g)).count() >= 2, "{got:?}");
+    assert!(
+        r.way_out_commanded && r.failsafe_acknowledged,
+        "{:?}",
+        r.events
+    );
 }
 
 /// ver33b-11: the vehicle refuses OFFBOARD for real (DENIED, and its next heartbeat still shows

@@ -554,13 +554,49 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
         assert_eq!(r.end, FlyEnd::VehicleLost, "{twin:?} {:?}", r.events);
         assert!(r.way_out_commanded, "{:?}", r.events);
         assert!(
-            r.events.iter().any(
-                |e| e.contains("not a pilot's word") && e.contains("two vehicles with the ids")
-            ),
+            r.events
+                .iter()
+                .any(|e| e.contains("vehicle_lost: two vehicles with the ids")),
+            "{:?}",
+            r.events
+        );
+        assert!(
+            !r.events.iter().any(|e| e.contains("pilot_took_over")),
             "{:?}",
             r.events
         );
     }
+}
+
+/// att33e-2: one vehicle whose pilot switches to POSCTL, the last OFFBOARD heartbeat before the
+/// switch delivered late (after the first POSCTL one: its frame number behind): older news, not
+/// a second vehicle's contradiction: `pilot_took_over`, nothing commanded (before: `vehicle_lost`
+/// with HOLD commanded against the pilot).
+#[test]
+fn a_late_heartbeat_after_a_pilots_switch_is_older_news() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut held: Vec<Vec<u8>> = Vec::new();
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out = datagrams(a.frames(&[
+            heartbeat(if k < 20 { 6 } else { 3 }),
+            iso_s(ms, 9.5),
+            position(ms, 0.0),
+        ]));
+        if k == 19 {
+            // Turn 19's OFFBOARD heartbeat is held back and delivered after turn 20's POSCTL one.
+            held.push(out.remove(0));
+        }
+        if k == 20 {
+            out.insert(1, held.remove(0));
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
 }
 
 /// ver33c-1's other side: one vehicle whose pilot switches to POSCTL in flight over a link
@@ -615,4 +651,74 @@ fn one_senders_switch_and_back_is_the_pilots_word() {
         "{:?}",
         r.events
     );
+}
+
+/// att33e-1: in control, Ctrl-C starts the failsafe (HOLD, never acknowledged here); from then
+/// on a second vehicle with the same ids behind the same address beats disarmed in MANUAL at
+/// 5 Hz. Its heartbeats are no pilot's word during the retries either: they never end them
+/// "pilot_took_over during the failsafe" (before: at the twin's first heartbeat, the vehicle
+/// flown left in OFFBOARD with no setpoints); the HOLD goes on being commanded.
+#[test]
+fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut b = Sender {
+        seq: 100,
+        ids: (1, 1),
+    };
+    let t0 = Instant::now();
+    let r = fly_against_with(
+        20.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(1500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        false,
+        move |k| {
+            let ms = 1000 + 50 * k;
+            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            if t0.elapsed() > Duration::from_millis(1600) && k % 4 == 0 {
+                out.extend(datagrams(b.frames(&[heartbeat_disarmed(1)])));
+            }
+            out
+        },
+    );
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33e-6: one vehicle over a link that delivers a frame late at every turn (its measurement
+/// and position swapped) from its pilot's switch to POSCTL on: the late frames are no second
+/// sender's, the pilot's word stands once the heartbeats have shown it for longer than their
+/// period: `pilot_took_over`, nothing commanded (before: never confirmed, the flight flown on
+/// to its end and HOLD commanded against the pilot).
+#[test]
+fn a_pilots_switch_over_a_link_that_reorders_every_turn_stands() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out = datagrams(a.frames(&[
+            heartbeat(if k < 20 { 6 } else { 3 }),
+            iso_s(ms, 9.5),
+            position(ms, 0.0),
+        ]));
+        if k >= 20 {
+            out.swap(1, 2);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
 }
