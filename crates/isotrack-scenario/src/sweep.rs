@@ -1436,11 +1436,15 @@ mod tests {
             p.data_files(&analytic),
             ["/abs/c.csv".to_string(), at("a.csv")]
         );
-        // A list of field tables, one of them analytic, and a `[base]` that names a file.
+        // A list of field tables over a base that names a file: one table's own file, an
+        // analytic one (none), one that keeps the base's.
         let p = parse(
-            "scenario = \"x.toml\"\n[base]\nfield.kind = \"grid\"\nfield.path = \"d.csv\"\n[grid]\nfield = [{ kind = \"grid\", path = \"e.csv\" }, { kind = \"radial_exp\" }, { spacing_m = [2.0, 2.0] }]\n",
+            "scenario = \"x.toml\"\n[grid]\nfield = [{ kind = \"grid\", path = \"e.csv\" }, { kind = \"radial_exp\" }, { spacing_m = [2.0, 2.0] }]\n",
         );
-        assert_eq!(p.data_files(&analytic), [at("d.csv"), at("e.csv")]);
+        assert_eq!(
+            p.data_files(&base_grid),
+            ["/data/base.csv".to_string(), at("e.csv")]
+        );
         // Past MAX_FILE_COMBINATIONS (2 kinds x 2049 paths): every path named, unresolved.
         let many: Vec<String> = (0..2049).map(|i| format!("\"f{i}.csv\"")).collect();
         let p = parse(&format!(
