@@ -501,3 +501,76 @@ vary = {{ "initial.x_m" = {{ uniform = [8.0, 14.0] }} }}
         ],
     );
 }
+
+/// `20 scale exp(-0.1 r)` around the origin as a CSV grid (no header, row 0 south), 81 x 81
+/// nodes, 0.5 m apart from (-20, -20) m with the scenario's `spacing_m` and `origin_m`.
+fn radial_csv(scale: f64) -> String {
+    let n = 81;
+    let mut t = String::new();
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = (0.5 * (i as f64 - 40.0), 0.5 * (j as f64 - 40.0));
+                format!("{}", 20.0 * scale * (-0.1 * (x * x + y * y).sqrt()).exp())
+            })
+            .collect();
+        t.push_str(&row.join(","));
+        t.push('\n');
+    }
+    t
+}
+
+/// ver30b-3 / att30d-10, the benchmark's half: a task's `task.json` digest covered its
+/// scenario file's bytes but not the grid file the scenario names, so `benchmark --resume`
+/// after the grid file was rewritten reused the scores computed on the old field without a
+/// word. The digest covers each data file's SHA-256: the task is run again, and its results
+/// are a fresh benchmark's on the new file; with the file unchanged it is reused.
+#[test]
+fn resume_runs_a_task_again_when_its_data_file_changed() {
+    let d = tempfile::tempdir().unwrap();
+    let grid = write(d.path(), "f.csv", &radial_csv(1.0));
+    write(
+        d.path(),
+        "s.toml",
+        "[field]\nkind = \"grid\"\npath = \"f.csv\"\nspacing_m = [0.5, 0.5]\norigin_m = [-20.0, -20.0]\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 20.0\n",
+    );
+    let suite = write(
+        d.path(),
+        "grid.toml",
+        r#"name = "grid"
+version = 1
+controllers = ["pi_isoline", "sliding_mode"]
+tuning_seeds = [9001]
+scoring_seeds = [1, 2]
+
+[[task]]
+id = "g"
+title = "CSV grid"
+scenario = "s.toml"
+length_m = 63.0
+vary = { "initial.heading_rad" = { uniform = [-3.0, 3.0] } }
+"#,
+    );
+    let bench = |out: &Path, resume: bool| {
+        let mut args = vec!["benchmark", &suite, "--out", out.to_str().unwrap()];
+        if resume {
+            args.push("--resume");
+        }
+        let o = isotrack(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        read(&out.join("tasks/g/results.csv"))
+    };
+    let (first, fresh) = (d.path().join("first"), d.path().join("fresh"));
+    let old = bench(&first, false);
+    // Unchanged: reused (the same bytes).
+    assert_eq!(bench(&first, true), old);
+    std::fs::write(&grid, radial_csv(1.1)).unwrap();
+    let new = bench(&fresh, false);
+    assert_ne!(new, old, "the two fields must score differently");
+    // Rewritten: run again, as a fresh benchmark on the new file.
+    assert_eq!(bench(&first, true), new);
+    assert_eq!(
+        read(&first.join("leaderboard.csv")),
+        read(&fresh.join("leaderboard.csv"))
+    );
+}

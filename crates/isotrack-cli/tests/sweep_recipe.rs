@@ -307,3 +307,113 @@ fn a_data_file_changed_between_parts_of_a_sweep_is_refused() {
     std::fs::write(&asc, radial_asc(1.0)).unwrap();
     sweep(&sw, &s1, &["--shard", "1/2", "--resume"]);
 }
+
+/// `20 scale exp(-0.1 r)` around the origin as a CSV grid (no header, row 0 south), 81 x 81
+/// nodes: with `field.spacing_m = [0.5, 0.5]` and `field.origin_m = [-20, -20]` the grid of
+/// [`radial_asc`].
+fn radial_csv(scale: f64) -> String {
+    let n = 81;
+    let mut t = String::new();
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = (0.5 * (i as f64 - 40.0), 0.5 * (j as f64 - 40.0));
+                format!("{}", 20.0 * scale * (-0.1 * (x * x + y * y).sqrt()).exp())
+            })
+            .collect();
+        t.push_str(&row.join(","));
+        t.push('\n');
+    }
+    t
+}
+
+/// The SHA-256 of `bytes` in hex, computed here (sha2), not by isotrack.
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// ver30b-3: a sweep whose `[grid]` varies `field.path` over two CSV files recorded in
+/// sweep.json only the base scenario's file, so a rewritten second file was never noticed:
+/// `--resume` and `merge` kept rows computed on the old file without a word. sweep.json
+/// records every file a run reads; `--resume` and `merge` (of shards run before the edit, or
+/// on both sides of it) refuse the edited one (65, naming it); the files as they were go
+/// through.
+#[test]
+fn every_field_file_a_grid_of_runs_reads_is_checked() {
+    let d = tempfile::tempdir().unwrap();
+    let a = write(d.path(), "a.csv", &radial_csv(1.0));
+    let b = write(d.path(), "b.csv", &radial_csv(1.05));
+    write(
+        d.path(),
+        "s.toml",
+        "[field]\nkind = \"grid\"\npath = \"a.csv\"\nspacing_m = [0.5, 0.5]\norigin_m = [-20.0, -20.0]\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 20.0\n",
+    );
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"a.csv\", \"b.csv\"]\n",
+    );
+    let (whole, s1, s2) = (
+        d.path().join("whole"),
+        d.path().join("s1"),
+        d.path().join("s2"),
+    );
+    sweep(&sw, &whole, &[]);
+    sweep(&sw, &s1, &["--shard", "1/2"]);
+    sweep(&sw, &s2, &["--shard", "2/2"]);
+    let name = |p: &str| std::fs::canonicalize(p).unwrap().display().to_string();
+    let (a_name, b_name) = (name(&a), name(&b));
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(whole.join("sweep.json")).unwrap()).unwrap();
+    let expected = serde_json::json!({
+        a_name.clone(): sha256_hex(radial_csv(1.0).as_bytes()),
+        b_name.clone(): sha256_hex(radial_csv(1.05).as_bytes()),
+    });
+    assert_eq!(manifest["data_files"], expected, "{manifest}");
+    // The two runs read different files: their rows differ.
+    let got = rows(&whole);
+    assert_eq!(got.len(), 2);
+    assert!(METRICS.iter().any(|c| got[0][*c] != got[1][*c]), "{got:?}");
+
+    // b.csv rewritten: every way of keeping the old rows is refused, naming it.
+    std::fs::write(&b, radial_csv(1.1)).unwrap();
+    let resume = |dir: &Path, shard: Option<&str>| {
+        let mut args = vec!["sweep", &sw, "--out", dir.to_str().unwrap(), "--resume"];
+        if let Some(s) = shard {
+            args.extend(["--shard", s]);
+        }
+        isotrack(&args)
+    };
+    common::assert_fails(&resume(&whole, None), 65, &[&b_name, "data file"]);
+    common::assert_fails(&resume(&s1, Some("1/2")), 65, &[&b_name, "data file"]);
+    let m = d.path().join("m");
+    let merge = |dirs: &[&Path]| {
+        let mut args = vec!["merge"];
+        args.extend(dirs.iter().map(|d| d.to_str().unwrap()));
+        args.extend(["--out", m.to_str().unwrap(), "--force"]);
+        isotrack(&args)
+    };
+    common::assert_fails(&merge(&[&s1, &s2]), 65, &[&b_name, "data file"]);
+    // A shard run after the edit beside one run before it.
+    let s2_new = d.path().join("s2_new");
+    sweep(&sw, &s2_new, &["--shard", "2/2"]);
+    common::assert_fails(&merge(&[&s1, &s2_new]), 65, &[&b_name, "data file"]);
+    assert!(!m.join("results.csv").exists());
+
+    // The files as they were: resume and merge go through.
+    std::fs::write(&b, radial_csv(1.05)).unwrap();
+    let o = resume(&whole, None);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = resume(&s1, Some("1/2"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = merge(&[&s1, &s2]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(m.join("results.csv")).unwrap(),
+        std::fs::read(whole.join("results.csv")).unwrap()
+    );
+}

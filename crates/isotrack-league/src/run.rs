@@ -349,7 +349,7 @@ fn run_task(
             gains.insert(c.clone(), g);
         }
     }
-    let digest = task_digest(suite, task, controllers, &gains);
+    let digest = task_digest(suite, task, controllers, &gains, &base);
     if let Some(dir) = &o.resume_from {
         if let Some(prev) = read_task(dir, &task.id) {
             if prev.digest == digest {
@@ -723,11 +723,19 @@ fn field_picture(base: &Scenario, trajectories: &[Trajectory]) -> FieldPicture {
     FieldPicture::around(base, points, PICTURE_GRID).expect("a finite start point")
 }
 
+/// The digest of what produces a task's results (`task.json`'s `digest`; `--resume` reuses
+/// the stored task only when it is this one): the version, the task's keys, the suite's seeds,
+/// controllers and scoring, the gains, the scenario file's bytes, and the SHA-256 of each
+/// data file its field reads (`field.path`, `field.paths` of `base`, the task's scenario with
+/// its `set`): a grid file rewritten since was otherwise reused as scored on the old one
+/// (ver30b-3, att30d-10's benchmark half). A task without data files has the digest it had
+/// before they were counted.
 fn task_digest(
     suite: &Suite,
     task: &Task,
     controllers: &[String],
     gains: &BTreeMap<String, BTreeMap<String, f64>>,
+    base: &Scenario,
 ) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
@@ -743,6 +751,14 @@ fn task_digest(
         isotrack_scenario::MAX_SCENARIO_FILE_BYTES,
     ) {
         h.update(t);
+    }
+    // Each data file by path and content (a file that cannot be read now is left out, as in
+    // summary.json; the task then fails to build anyway).
+    for (path, sha) in isotrack_runs::summary::data_file_digests(base) {
+        h.update(b"data_file\0");
+        h.update(path.as_bytes());
+        h.update(b"\0");
+        h.update(sha.as_bytes());
     }
     h.finalize()
         .iter()

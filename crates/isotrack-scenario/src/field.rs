@@ -460,7 +460,7 @@ struct Filling<'a> {
 }
 
 /// A file named by the scenario, relative to its directory.
-fn resolve_one(p: &str, base_dir: &Path) -> PathBuf {
+pub(crate) fn resolve_one(p: &str, base_dir: &Path) -> PathBuf {
     let mut path = PathBuf::from(p);
     if path.is_relative() {
         path = base_dir.join(path);

@@ -846,7 +846,116 @@ impl SweepPlan {
         }
         Ok(())
     }
+
+    /// The data files the runs of this sweep read (`field.path`, `field.paths`; absolute, as
+    /// a built field names them), distinct and sorted, for a base scenario whose own keys are
+    /// `given` ([`crate::Scenario::given`], paths absolute): the base's files when no `[grid]`
+    /// key chooses the field's files, else those of every combination of the values of the
+    /// `[grid]` keys that do (`field`, `field.kind`, `field.path`, `field.paths`; `[random]`
+    /// draws numbers only), each applied after `[base]` as a run applies it, resolved
+    /// without reading a file. A combination a run cannot make (an `invalid_scenario` run)
+    /// reads nothing. Beyond [`MAX_FILE_COMBINATIONS`] combinations, the base's files and
+    /// every path any of those values names (a superset of the files the runs read). A sweep's `sweep.json` records their
+    /// SHA-256 (ver30b-3: a sweep over two grid files recorded only the base's, so `--resume`
+    /// and `merge` kept rows computed on an edited one without a word).
+    pub fn data_files(&self, given: &crate::ScenarioFile) -> Vec<String> {
+        let chooses_files =
+            |k: &str| matches!(k, "field" | "field.kind" | "field.path" | "field.paths");
+        // Each such key's distinct values, as assignments.
+        let lists: Vec<Vec<String>> = self
+            .grid
+            .iter()
+            .filter(|(k, _)| chooses_files(k))
+            .map(|(k, list)| {
+                let mut args: Vec<String> = list
+                    .iter()
+                    .map(|v| format!("{k}={}", value_literal(v)))
+                    .collect();
+                args.sort();
+                args.dedup();
+                args
+            })
+            .collect();
+        let base: Vec<Assignment> = self
+            .base
+            .iter()
+            .map(|arg| Assignment {
+                label: format!("[base] {arg}"),
+                arg: arg.clone(),
+            })
+            .collect();
+        let mut files = std::collections::BTreeSet::new();
+        let mut read = |args: &[&String]| {
+            let mut each = base.clone();
+            each.extend(args.iter().map(|arg| Assignment {
+                label: format!("[grid] {arg}"),
+                arg: (*arg).clone(),
+            }));
+            let Ok(file) = crate::apply_assignments(given, &each) else {
+                return;
+            };
+            let Ok(file) = crate::resolve::resolve(file) else {
+                return;
+            };
+            // The seed moves a puff plume's meander only, never its files.
+            if let Ok(field) = crate::spec::FieldSpec::new(&file.field, 0) {
+                for p in field.data_files() {
+                    let path = crate::field::resolve_one(p, &self.dir);
+                    files.insert(path.display().to_string());
+                }
+            }
+        };
+        let combinations = lists
+            .iter()
+            .try_fold(1u64, |acc, l| acc.checked_mul(l.len() as u64))
+            .filter(|&n| n <= MAX_FILE_COMBINATIONS);
+        match combinations {
+            Some(n) => {
+                // Mixed radix over the lists, the last varying fastest.
+                for mut c in 0..n {
+                    let mut args = Vec::with_capacity(lists.len());
+                    for l in lists.iter().rev() {
+                        let len = l.len() as u64;
+                        args.push(&l[(c % len) as usize]);
+                        c /= len;
+                    }
+                    args.reverse();
+                    read(&args);
+                }
+            }
+            None => {
+                // Too many to resolve: the base's files and every path any value names,
+                // whatever kind the run ends up with (a superset).
+                read(&[]);
+                for (k, list) in self.grid.iter().filter(|(k, _)| chooses_files(k)) {
+                    for v in list {
+                        let named = match (k.as_str(), v) {
+                            ("field.path" | "field.paths", v) => vec![v],
+                            ("field", toml::Value::Table(t)) => {
+                                ["path", "paths"].iter().filter_map(|p| t.get(*p)).collect()
+                            }
+                            _ => vec![],
+                        };
+                        let strings = named.into_iter().flat_map(|v| match v {
+                            toml::Value::String(p) => vec![p.as_str()],
+                            toml::Value::Array(a) => a.iter().filter_map(|x| x.as_str()).collect(),
+                            _ => vec![],
+                        });
+                        for p in strings {
+                            let path = crate::field::resolve_one(p, &self.dir);
+                            files.insert(path.display().to_string());
+                        }
+                    }
+                }
+            }
+        }
+        files.into_iter().collect()
+    }
 }
+
+/// The most combinations of the `[grid]` values that choose a field's files that
+/// [`SweepPlan::data_files`] resolves one by one (each a few microseconds, no file read).
+pub const MAX_FILE_COMBINATIONS: u64 = 4096;
 
 #[cfg(test)]
 mod tests {
@@ -1295,5 +1404,55 @@ mod tests {
         let notes = p.duplicate_notes();
         assert_eq!(notes.len(), 4, "{notes:?}");
         assert!(notes[3].contains("7 more values"), "{notes:?}");
+    }
+
+    /// ver30b-3: the data files a sweep's runs read are every file its `[grid]` chooses
+    /// (each combination of `field`, `field.kind`, `field.path`, `field.paths`, applied after
+    /// `[base]`, a relative path under the sweep file's directory), not only the base's; a
+    /// combination that reads no file (an analytic kind) adds none, and a sweep whose grid
+    /// chooses no file reads the base's.
+    #[test]
+    fn data_files_are_every_file_the_grid_chooses() {
+        let dir = Path::new("/nonexistent-isotrack-sweep");
+        let given = |text: &str| toml::from_str::<crate::ScenarioFile>(text).unwrap();
+        let parse = |text: &str| SweepPlan::parse(text, &dir.join("sweep.toml")).unwrap();
+        let base_grid = given("[field]\nkind = \"grid\"\npath = \"/data/base.csv\"\n");
+        let analytic = given("[field]\nkind = \"radial_exp\"\n");
+        let at = |n: &str| dir.join(n).display().to_string();
+        // No file key in the grid: the base's file.
+        let p = parse("scenario = \"x.toml\"\n[grid]\ncontroller.kp = [1.0, 2.0]\n");
+        assert_eq!(p.data_files(&base_grid), ["/data/base.csv"]);
+        assert!(p.data_files(&analytic).is_empty());
+        // Two paths over the base's: those two, not the base's.
+        let p = parse(
+            "scenario = \"x.toml\"\n[grid]\nfield.path = [\"b.csv\", \"a.csv\", \"b.csv\"]\n",
+        );
+        assert_eq!(p.data_files(&base_grid), [at("a.csv"), at("b.csv")]);
+        // Kinds x paths from an analytic base: the grid runs' files only.
+        let p = parse(
+            "scenario = \"x.toml\"\n[grid]\nfield.kind = [\"radial_exp\", \"grid\"]\nfield.path = [\"a.csv\", \"/abs/c.csv\"]\n",
+        );
+        assert_eq!(
+            p.data_files(&analytic),
+            ["/abs/c.csv".to_string(), at("a.csv")]
+        );
+        // A list of field tables over a base that names a file: one table's own file, an
+        // analytic one (none), one that keeps the base's.
+        let p = parse(
+            "scenario = \"x.toml\"\n[grid]\nfield = [{ kind = \"grid\", path = \"e.csv\" }, { kind = \"radial_exp\" }, { spacing_m = [2.0, 2.0] }]\n",
+        );
+        assert_eq!(
+            p.data_files(&base_grid),
+            ["/data/base.csv".to_string(), at("e.csv")]
+        );
+        // Past MAX_FILE_COMBINATIONS (2 kinds x 2049 paths): every path named, unresolved.
+        let many: Vec<String> = (0..2049).map(|i| format!("\"f{i}.csv\"")).collect();
+        let p = parse(&format!(
+            "scenario = \"x.toml\"\n[grid]\nfield.kind = [\"radial_exp\", \"grid\"]\nfield.path = [{}]\n",
+            many.join(", ")
+        ));
+        let files = p.data_files(&analytic);
+        assert_eq!(files.len(), 2049);
+        assert!(files.contains(&at("f0.csv")) && files.contains(&at("f2048.csv")));
     }
 }

@@ -854,6 +854,9 @@ def benchmark(
     its scores used) and per-task results into, as ``isotrack benchmark --out``: a directory
     that already holds a benchmark is refused (``OSError``) unless ``resume=True`` (its task
     results reused), and one that another benchmark or sweep is writing (its lock held) too.
+    A task is reused only when its suite entry, scenario file and data files are unchanged, but
+    your controller's code is not part of that check: after changing the controller, pass
+    another ``name`` or ``out`` (a reused task keeps the old controller's scores).
 
     Returns a dict: ``overall`` (``[name, score]`` pairs, best first), ``tasks`` (per task:
     ``scores``, ``runs`` with every scored run, ``gains``, ...), ``controllers``, ``suite``,

@@ -35,8 +35,8 @@ pub fn given_toml(given: &ScenarioFile) -> String {
         .unwrap_or_else(|e| format!("# cannot render: {e}\n"))
 }
 
-/// The data files a sweep's `sweep.json` records (`data_files`: the SHA-256 of each file its
-/// base scenario's field reads, by absolute path; absent without files).
+/// The data files a sweep's `sweep.json` records (`data_files`: the SHA-256 of each file a run
+/// of the sweep reads, [`plan_data_file_digests`], by absolute path; absent without files).
 pub fn recorded_files(manifest: &serde_json::Value) -> BTreeMap<String, String> {
     manifest
         .get("data_files")
@@ -76,6 +76,45 @@ pub fn check_data_files(
         }
     }
     Ok(())
+}
+
+/// Refuses (65, naming the file) shard directory `dir` when a data file its `manifest`
+/// records (`data_files`) holds other bytes now than its rows were computed on: `merge` of
+/// shards all run before a grid file was rewritten would otherwise write their rows as this
+/// sweep's over the new file. A recorded file that cannot be read here (shards merged on
+/// another machine) is not checked; the shards are still checked against each other
+/// ([`check_data_files`]).
+pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Result<(), Failure> {
+    for (path, then) in recorded_files(manifest) {
+        let Ok(now) = crate::files::sha256_file(Path::new(&path)) else {
+            continue;
+        };
+        if now != then {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: the field's data file {path} is not the one its rows were computed on (SHA-256 {then} in its sweep.json, {now} now): run the sweep again, or restore the file",
+                    dir.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The SHA-256 of every data file a run of `plan` reads ([`SweepPlan::data_files`], for a
+/// base whose own keys are `given`), by absolute path ([`crate::files::sha256_file`]); a file
+/// that cannot be read now is left out. For a sweep whose `[grid]` chooses no files, the
+/// base's files: [`crate::summary::data_file_digests`] of the base.
+pub fn plan_data_file_digests(plan: &SweepPlan, given: &ScenarioFile) -> BTreeMap<String, String> {
+    plan.data_files(given)
+        .into_iter()
+        .filter_map(|p| {
+            crate::files::sha256_file(Path::new(&p))
+                .ok()
+                .map(|d| (p, d))
+        })
+        .collect()
 }
 
 /// The `data_files` entry of `sweep.json`: each data file's SHA-256 by path (`None` without

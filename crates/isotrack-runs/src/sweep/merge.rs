@@ -5,7 +5,9 @@ use crate::files::same_file;
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
-use crate::sweep::manifest::{check_data_files, read_manifest, recorded_files, shard_plan};
+use crate::sweep::manifest::{
+    check_data_files, check_recorded_files_now, read_manifest, recorded_files, shard_plan,
+};
 use crate::sweep::rows::{csv_line, results_header};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -83,7 +85,15 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         )
     })?;
-    let (plan, base) = shard_plan(d, &digest)?;
+    let (mut plan, base) = shard_plan(d, &digest)?;
+    // A relative file path in the sweep's `[grid]` or `[base]` names a file beside the sweep
+    // file, not beside the shard's copy of it: the runs are resolved from the sweep file's
+    // directory while that file is still there (fix30k: a sweep over `field.path = ["a.csv",
+    // ...]` refused its own shards' rows, every run "invalid" for want of `SHARD/a.csv`).
+    if let Some(sweep) = m["sweep"].as_str().map(Path::new).filter(|p| p.is_file()) {
+        plan.dir = sweep.parent().unwrap_or(Path::new(".")).to_path_buf();
+    }
+    check_recorded_files_now(d, &m)?;
     // The rows are also checked against each run's own scenario (its warnings, team bounds,
     // validity and reason) when the shard's base builds here (its field's files readable).
     let built = isotrack_scenario::Scenario::from_file(base.clone(), d).ok();

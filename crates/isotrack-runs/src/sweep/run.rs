@@ -8,7 +8,8 @@ use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::sweep::manifest::{
-    check_data_files, data_files_entry, given_toml, read_manifest, sweep_digest,
+    check_data_files, data_files_entry, given_toml, plan_data_file_digests, read_manifest,
+    sweep_digest,
 };
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
@@ -40,6 +41,9 @@ pub struct SweepJob {
     pub digest: String,
     /// The `results.csv` header.
     pub header: Vec<String>,
+    /// The SHA-256 of every data file a run reads, by path ([`plan_data_file_digests`]),
+    /// taken once as the sweep starts: what `sweep.json` records and `--resume` checks.
+    pub data_files: std::collections::BTreeMap<String, String>,
 }
 
 /// An output directory opened for a sweep: locked, its `results.csv` holding at least the
@@ -88,6 +92,7 @@ impl SweepJob {
         let base_toml = given_toml(base.given());
         let digest = sweep_digest(&sweep_bytes, &base_toml);
         let header = results_header(&plan, base.spec().team.is_some());
+        let data_files = plan_data_file_digests(&plan, base.given());
         Ok(Self {
             sweep_bytes,
             plan,
@@ -96,6 +101,7 @@ impl SweepJob {
             base_toml,
             digest,
             header,
+            data_files,
         })
     }
 
@@ -183,8 +189,7 @@ impl SweepJob {
                 ),
             ));
         }
-        let now = crate::summary::data_file_digests(&self.base);
-        check_data_files(out, &stored, &now, "now")
+        check_data_files(out, &stored, &self.data_files, "now")
     }
 
     /// The runs already in `results` (their ids only, sorted), each row checked, a cut-off
@@ -272,9 +277,9 @@ impl SweepJob {
             "shard_runs": shard_runs,
             "columns": self.header,
         });
-        // The field's data files by content: --resume and merge refuse rows over another
+        // The data files of every run by content: --resume and merge refuse rows over another
         // version of them.
-        if let Some(files) = data_files_entry(&crate::summary::data_file_digests(&self.base)) {
+        if let Some(files) = data_files_entry(&self.data_files) {
             manifest["data_files"] = files;
         }
         crate::files::write_atomic(
