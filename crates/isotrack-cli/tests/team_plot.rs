@@ -620,3 +620,114 @@ fn a_row_after_its_vehicles_end_is_refused() {
     ]);
     common::assert_fails(&o, 65, &[&want, "after its end"]);
 }
+
+/// att32f-1 and -2: a team's `summary.json` that does not match its trace is refused (65, the
+/// file and the key named) by `plot` and `report`, not drawn: `vehicles` one short (vehicle 3
+/// then had no end known, its rows cut at 1 s drawn as its end) or one long (a vehicle 4 with
+/// no rows), `team.count` differing from `team.vehicle_count`, and `team` set to null beside
+/// the trace's `vehicle` column (drawn as one vehicle jumping between the team's positions).
+/// Before the fix every one of these exited 0 (the attacker's edits of a 3 s run of four).
+#[test]
+fn a_summary_that_does_not_match_its_team_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "sim.duration_s=3.0",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let short_trace: String = trace
+        .lines()
+        .enumerate()
+        .filter(|(n, l)| {
+            let c: Vec<&str> = l.split(',').collect();
+            *n == 0 || !(*c.last().unwrap() == "3" && c[0].parse::<f64>().unwrap() > 1.0)
+        })
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, bool, &[&str]); 5] = [
+        (
+            "vehicles-3",
+            |s| {
+                s["vehicles"].as_array_mut().unwrap().pop();
+            },
+            false,
+            &[
+                "summary.json's `vehicles` lists 3 vehicles",
+                "team.vehicle_count = 4",
+            ],
+        ),
+        (
+            "vehicles-3-trunc",
+            |s| {
+                s["vehicles"].as_array_mut().unwrap().pop();
+            },
+            true,
+            &[
+                "summary.json's `vehicles` lists 3 vehicles",
+                "team.vehicle_count = 4",
+            ],
+        ),
+        (
+            "vehicles-5",
+            |s| {
+                let v0 = s["vehicles"][0].clone();
+                s["vehicles"].as_array_mut().unwrap().push(v0);
+            },
+            false,
+            &[
+                "summary.json's `vehicles` lists 5 vehicles",
+                "team.vehicle_count = 4",
+            ],
+        ),
+        (
+            "count-3",
+            |s| s["team"]["count"] = serde_json::json!(3),
+            false,
+            &["summary.json: team.count = 3", "team.vehicle_count = 4"],
+        ),
+        (
+            "team-null",
+            |s| s["team"] = serde_json::Value::Null,
+            false,
+            &[
+                "trace.csv has a `vehicle` column",
+                "summary.json's `team` is null",
+            ],
+        ),
+    ];
+    for (name, edit, cut, needles) in cases {
+        let dir = d.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::copy(out.join("scenario.toml"), dir.join("scenario.toml")).unwrap();
+        let t = if cut { &short_trace } else { &trace };
+        std::fs::write(dir.join("trace.csv"), t).unwrap();
+        let mut s = summary.clone();
+        edit(&mut s);
+        std::fs::write(
+            dir.join("summary.json"),
+            serde_json::to_string_pretty(&s).unwrap(),
+        )
+        .unwrap();
+        let o = isotrack(&["plot", dir.to_str().unwrap(), "--format", "svg"]);
+        common::assert_fails(&o, 65, needles);
+        let o = isotrack(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("{name}.html")).to_str().unwrap(),
+        ]);
+        common::assert_fails(&o, 65, needles);
+    }
+}

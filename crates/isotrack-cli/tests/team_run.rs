@@ -418,3 +418,79 @@ fn a_team_start_outside_the_grid_is_refused() {
         &["team.spread", "vehicle 0", "(700, 400) m"],
     );
 }
+
+/// att32f-5's reproducer (repro/dr-b-base.toml): team-circular-4 with `ring = "discovered"` on
+/// lossy, slow ranging (1 Hz, 70 % dropout, 2 s delay), `domain_m` [-20, 20]^2. The probes
+/// found `[[1,3],[3,3],[3,1],[2,1]]` (vehicle 3 the ahead of two, vehicle 0 of none), flown
+/// without a word: `min_separation_m` 0.0005, `order_preserved` false. Now the table is checked
+/// (one ring through the vehicles flying) and, not being one, the spacing law is turned off with
+/// a warning: every vehicle flies `v0` after the probes, so the gaps stay as the probes left
+/// them: deployed `0.3 R` = 2.08 m of arc, each probe (`v0/4` for 10 s) closing one gap by at
+/// most 1.25 m and the next reopening it, the closest approach a chord of at least 0.8 m of arc
+/// (less the tracking error). The same team on good ranging (10 Hz, 50 %, 0.5 s, repro/dr-a)
+/// finds the travel order 0 -> 1 -> 2 -> 3 (listed clockwise, ahead `i + 1`) with no warning.
+#[test]
+fn a_discovered_table_that_is_not_a_ring_is_refused_with_a_warning() {
+    let d = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(TEAM).unwrap();
+    let ranging =
+        "ranging = { rate_hz = 10.0, noise_std_m = 0.0, dropout_probability = 0.0, delay_s = 0.0 }";
+    assert!(base.contains(ranging) && base.contains("ring = \"listed\""));
+    let with = |r: &str| {
+        base.replace("ring = \"listed\"", "ring = \"discovered\"")
+            .replace(ranging, &format!("ranging = {r}"))
+            .replace(
+                "center_m = [0.0, 0.0]\n",
+                "center_m = [0.0, 0.0]\ndomain_m = [-20.0, 20.0, -20.0, 20.0]\n",
+            )
+    };
+    let lossy =
+        with("{ rate_hz = 1.0, noise_std_m = 0.5, dropout_probability = 0.7, delay_s = 2.0 }");
+    assert!(lossy.contains("domain_m"));
+    let path = write(d.path(), "dr-b-base.toml", &lossy);
+    let out = d.path().join("b");
+    let o = isotrack(&["run", &path, "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let err = common::stderr(&o);
+    assert!(err.contains("are not one ring"), "{err}");
+    let s = json(&out.join("summary.json"));
+    let warned: Vec<&str> = s["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("team.ring = \"discovered\""))
+        .collect();
+    assert_eq!(warned.len(), 1, "{s}");
+    assert!(
+        warned[0].contains("[[1,3],[3,3],[3,1],[2,1]]"),
+        "{}",
+        warned[0]
+    );
+    assert!(warned[0].contains("spacing law is off"), "{}", warned[0]);
+    let t = &s["team"];
+    assert_eq!(
+        t["neighbours"],
+        serde_json::json!([null, null, null, null]),
+        "{t}"
+    );
+    let sep = t["min_separation_m"].as_f64().unwrap();
+    assert!(sep > 0.5, "min_separation_m {sep}");
+
+    let good =
+        with("{ rate_hz = 10.0, noise_std_m = 0.5, dropout_probability = 0.5, delay_s = 0.5 }");
+    let path = write(d.path(), "dr-a-base.toml", &good);
+    let out = d.path().join("a");
+    let o = isotrack(&["run", &path, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let s = json(&out.join("summary.json"));
+    assert!(
+        !s["warnings"].to_string().contains("not one ring"),
+        "{}",
+        s["warnings"]
+    );
+    assert_eq!(
+        s["team"]["neighbours"],
+        serde_json::json!([[1, 3], [2, 0], [3, 1], [0, 2]])
+    );
+}

@@ -221,10 +221,15 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// A team run's vehicles that did not complete (other than vehicle 0, whose outcome the
-/// summary prints), as a `warning:` line on stderr (`summary.json` lists it in `warnings`).
+/// A team run's warnings ([`isotrack_runs::summary::team_warnings`]: a discovered ring that
+/// was not one ring; the vehicles that did not complete, other than vehicle 0, whose outcome
+/// the summary prints), each a `warning:` line on stderr (`summary.json` lists them in
+/// `warnings`).
 fn warn_unfinished(team: Option<&isotrack_sim::TeamResult>) {
-    if let Some(w) = team.and_then(isotrack_runs::summary::unfinished_vehicles) {
+    for w in team
+        .map(isotrack_runs::summary::team_warnings)
+        .unwrap_or_default()
+    {
         errln!("warning: {w}");
     }
 }

@@ -23,6 +23,78 @@ pub struct RunData {
     pub scenario: Scenario,
 }
 
+/// A team's `summary.json` against itself and its scenario (att32f-1): `team.count` (the
+/// metrics') and the scenario's `[team]` count are `team.vehicle_count` (`n`), and `vehicles`
+/// lists `n` vehicles. A list one short or one long drew a vehicle with no end known (or one
+/// with no rows), and `count` differing passed unread; each refused naming the key.
+fn check_team_lists(run: &RunData, n: usize) -> Result<(), String> {
+    let Ended::Run(end) = &run.summary.ended else {
+        return Ok(());
+    };
+    if let Some(c) = end
+        .team
+        .as_ref()
+        .and_then(|t| t.metrics.as_ref())
+        .map(|m| m.count)
+    {
+        if c != n {
+            return Err(format!(
+                "summary.json: team.count = {c}, but team.vehicle_count = {n}: not one team"
+            ));
+        }
+    }
+    if let Some(t) = run.scenario.spec().team.as_ref() {
+        if t.count() != n {
+            return Err(format!(
+                "scenario.toml's team has {} vehicles, but summary.json's team.vehicle_count = {n}",
+                t.count()
+            ));
+        }
+    }
+    match &end.vehicles {
+        None => Err(format!(
+            "summary.json has no `vehicles` list (each vehicle's outcome and end), but its team has {n} vehicles"
+        )),
+        Some(v) if v.len() != n => Err(format!(
+            "summary.json's `vehicles` lists {} vehicles, but team.vehicle_count = {n}",
+            v.len()
+        )),
+        Some(_) => Ok(()),
+    }
+}
+
+/// A run whose `summary.json` has no `team` object (att32f-2): its trace must not be a team's (a
+/// `vehicle` column: the single-run figures would join every vehicle's rows into one path), nor
+/// its summary have a `vehicles` list, nor its scenario a `[team]` (a run of it has a `team`).
+fn check_not_a_team(
+    summary: &Summary,
+    scenario: &Scenario,
+    vehicle_col: bool,
+) -> Result<(), String> {
+    let Ended::Run(end) = &summary.ended else {
+        return if vehicle_col {
+            Err("trace.csv has a `vehicle` column (a team's trace), but summary.json is a flight's, with no `team`".into())
+        } else {
+            Ok(())
+        };
+    };
+    let why = if vehicle_col {
+        Some("trace.csv has a `vehicle` column (a team's trace)")
+    } else if end.vehicles.is_some() {
+        Some("summary.json has a `vehicles` list (a team's run)")
+    } else if scenario.spec().team.is_some() {
+        Some("scenario.toml has a `[team]` (a run of it is a team's)")
+    } else {
+        None
+    };
+    match why {
+        Some(w) => Err(format!(
+            "{w}, but summary.json's `team` is null or missing: the team's run cannot be read as one vehicle's"
+        )),
+        None => Ok(()),
+    }
+}
+
 impl RunData {
     /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml` of a single-vehicle
     /// run (a team's run is refused: [`RunData::load_team`]).
@@ -59,6 +131,8 @@ impl RunData {
                 dir.display()
             )));
         }
+        check_team_lists(&all, n)
+            .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
         let mut traces: Vec<Vec<TraceRow>> = vec![Vec::new(); n];
         // The rows come a recorded time at a time, every running vehicle's row at each: a
         // vehicle's k-th row is at the k-th time (a vehicle that ends leaves for good). A row
@@ -133,6 +207,13 @@ impl RunData {
             }
             traces[i].push(*t);
             last_line[i] = *line;
+        }
+        // Every vehicle of the team has rows (att32f-1: one without any was drawn nowhere).
+        if let Some(i) = traces.iter().position(Vec::is_empty) {
+            return Err(PlotError::Data(format!(
+                "{}: trace.csv has no row of vehicle {i}, one of the team's {n} (summary.json's team.vehicle_count)",
+                dir.display()
+            )));
         }
         // A vehicle that completed the run has a row at the last recorded time.
         if let Ended::Run(end) = &all.summary.ended {
@@ -237,6 +318,9 @@ impl RunData {
         ];
         let meas = headers.iter().position(|h| h == s_measured);
         let vehicle_col = headers.iter().position(|h| h == "vehicle");
+        if summary.team().is_none() {
+            check_not_a_team(&summary, &scenario, vehicle_col.is_some()).map_err(err)?;
+        }
         let mut vehicles = Vec::new();
         let mut lines = Vec::new();
         let mut trace = Vec::new();

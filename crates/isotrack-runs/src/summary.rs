@@ -298,7 +298,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
     ) -> Self {
         let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
         if let Ended::Run(r) = &mut s.ended {
-            r.warnings.extend(unfinished_vehicles(team));
+            r.warnings.extend(team_warnings(team));
             r.team = Some(Box::new(TeamJson::new(scenario, team)));
             r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
         }
@@ -459,6 +459,15 @@ pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
 /// The most vehicles [`unfinished_vehicles`] names one by one (a team of 10 000 whose every
 /// vehicle left the field gives one line, not 10 000).
 const UNFINISHED_NAMED: usize = 5;
+
+/// The warnings of a team run `team`: the engine's ([`isotrack_sim::TeamResult::warnings`]: a
+/// discovered ring that was not one ring) then [`unfinished_vehicles`]'. `isotrack run` prints
+/// them and `summary.json` lists them in `warnings`.
+pub fn team_warnings(team: &isotrack_sim::TeamResult) -> Vec<String> {
+    let mut w = team.warnings.clone();
+    w.extend(unfinished_vehicles(team));
+    w
+}
 
 /// The warning of a team run `team` in which vehicles other than vehicle 0 (whose outcome is
 /// the top level's) did not complete: each named with its outcome, the time it ended and why

@@ -33,8 +33,8 @@ use isotrack_core::{IsolineController, Measurement, ScalarField, SpeedCommand, V
 use metrics::{TeamMetrics, TeamMetricsConfig, TeamSummary};
 use ranging::{RangeSample, Ranging, RangingConfig, RangingError};
 use spacing::{
-    balance_speed, leave_ring, pick_neighbours, DiscoveryConfig, HeldRange, RateFit, RingMode,
-    SpacingConfig, SpacingLaw,
+    balance_speed, leave_ring, pick_neighbours, ring_fault, DiscoveryConfig, HeldRange, RateFit,
+    RingMode, SpacingConfig, SpacingLaw,
 };
 
 /// The [`Slab`] of a whole [`Group`] (`$g`), its trace sinks `$sinks`: each field borrowed on
@@ -180,6 +180,9 @@ pub struct TeamResult {
     /// found, and for a vehicle whose run ended before the others': it left the ring, which
     /// closed around it).
     pub ring: Vec<Option<[u32; 2]>>,
+    /// The engine's warnings about the run (a discovered ring that was not one ring: the
+    /// spacing law turned off), for the run's `warnings`.
+    pub warnings: Vec<String>,
 }
 
 /// The true isoline a team's metrics (and the `arc_reference` law) measure along.
@@ -272,6 +275,8 @@ pub struct Group<'a, X, C> {
     speeds: Vec<f64>,
     command: Vec<Option<f64>>,
     omega: Vec<f64>,
+    /// The engine's warnings ([`TeamResult::warnings`]).
+    warnings: Vec<String>,
 }
 
 impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
@@ -476,6 +481,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             speeds: vec![0.0; n],
             command: vec![None; n],
             omega: vec![0.0; n],
+            warnings: Vec::new(),
         })
     }
 
@@ -896,14 +902,46 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
                 &mut self.ranging,
                 &mut self.speed_cmd,
             ) {
-                self.ring = core::mem::take(&mut d.found);
+                let found = core::mem::take(&mut d.found);
+                self.ring = found.clone();
                 self.discovery = None;
                 // The vehicles whose runs ended during the discovery leave the found ring.
                 self.ring_running = self.n;
                 self.close_ring();
+                self.check_found_ring(k, &found);
             }
         }
     }
+    /// The ring just found at step `k` (`found`: the table the probes picked, before closing
+    /// around the vehicles that ended during the discovery), checked: one ring through the
+    /// vehicles still flying ([`ring_fault`]). A table that is not (lossy or slow ranging:
+    /// att32f-5, `[[1,3],[3,3],[3,1],[2,1]]`) would pull vehicles toward each other and orphan
+    /// a live one when the ring closes: the spacing law is turned off instead (no vehicle has
+    /// neighbours; each flies its nominal speed for the rest of the run), with a warning.
+    fn check_found_ring(&mut self, k: u64, found: &[Option<[u32; 2]>]) {
+        let live: Vec<bool> = self.left_ring.iter().map(|l| !l).collect();
+        let Some(fault) = ring_fault(&self.ring, &live) else {
+            return;
+        };
+        let table: Vec<String> = found
+            .iter()
+            .map(|r| r.map_or_else(|| "null".to_string(), |[a, b]| format!("[{a},{b}]")))
+            .collect();
+        self.warnings.push(format!(
+            "team.ring = \"discovered\": the neighbours found by the probes (ending at t = {} s) are not one ring through the vehicles flying ({fault}; [ahead, behind] by vehicle: [{}]); the spacing law is off: every vehicle flies its nominal speed for the rest of the run, unspaced (team.neighbours all null). The ranging is too lossy or slow for the probes (more rate_hz, less dropout_probability or delay_s), or list the ring (team.ring = \"listed\")",
+            isotrack_core::numtext::Num(k as f64 * self.plan.dt_s),
+            table.join(",")
+        ));
+        for (i, r) in self.ring.iter_mut().enumerate() {
+            *r = None;
+            self.held[i] = [HeldRange::default(); 2];
+            self.speed_cmd[i] = self
+                .member_speeds
+                .as_ref()
+                .map_or(self.cfg.spacing.nominal_speed_mps, |m| m[i].nominal_mps);
+        }
+    }
+
     /// Ring discovery at step `k`: all at `v0` until `settle_s`, then vehicle `p` probes in its
     /// slot, ranging to every vehicle that answers on its ranging steps (its own ranging unit:
     /// noise, range limit and losses; the range's time stamp is its measurement time, so the
@@ -992,6 +1030,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             runs,
             team: self.metrics.as_ref().map(|m| m.finish()),
             ring: self.ring,
+            warnings: self.warnings,
         }
     }
 }

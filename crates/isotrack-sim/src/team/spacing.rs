@@ -169,6 +169,66 @@ pub fn leave_ring(ring: &mut [Option<[u32; 2]>], i: usize) -> Vec<(usize, [bool;
     changed
 }
 
+/// Why `ring` is not one ring through the vehicles `live` marks, in words (`None`: it is).
+/// One ring: every live vehicle has neighbours `[ahead, behind]`, both live and not itself;
+/// `behind(ahead(i)) = i` and `ahead(behind(i)) = i` (each vehicle the ahead of exactly one and
+/// the behind of exactly one); following "ahead" from any live vehicle visits every live one
+/// before it returns (one cycle, not several). With two live vehicles each is the other's
+/// ahead and behind; a lone live vehicle has none (`None`). Vehicles not live are not looked
+/// at. `O(N)`.
+pub fn ring_fault(ring: &[Option<[u32; 2]>], live: &[bool]) -> Option<String> {
+    let is_live = |j: u32| live.get(j as usize).copied().unwrap_or(false);
+    let members: Vec<usize> = (0..ring.len().min(live.len()))
+        .filter(|&i| live[i])
+        .collect();
+    if members.len() == 1 {
+        let i = members[0];
+        return ring[i].map(|_| format!("vehicle {i}, the only one flying, has neighbours"));
+    }
+    for &i in &members {
+        let Some([a, b]) = ring[i] else {
+            return Some(format!("vehicle {i} has no neighbours"));
+        };
+        for (side, j) in [("ahead", a), ("behind", b)] {
+            if j as usize == i {
+                return Some(format!("vehicle {i} is its own neighbour {side}"));
+            }
+            if !is_live(j) {
+                return Some(format!(
+                    "vehicle {i}'s neighbour {side} is vehicle {j}, which is not flying"
+                ));
+            }
+        }
+        if ring[a as usize].map(|r| r[1]) != Some(i as u32) {
+            return Some(format!(
+                "vehicle {i}'s neighbour ahead is vehicle {a}, whose neighbour behind is not vehicle {i}"
+            ));
+        }
+        if ring[b as usize].map(|r| r[0]) != Some(i as u32) {
+            return Some(format!(
+                "vehicle {i}'s neighbour behind is vehicle {b}, whose neighbour ahead is not vehicle {i}"
+            ));
+        }
+    }
+    if let Some(&start) = members.first() {
+        let (mut at, mut steps) = (start, 0usize);
+        loop {
+            at = ring[at].map_or(start, |r| r[0] as usize);
+            steps += 1;
+            if at == start || steps > members.len() {
+                break;
+            }
+        }
+        if steps != members.len() {
+            return Some(format!(
+                "following the neighbours ahead from vehicle {start} returns after {steps} of the {} vehicles flying: more than one ring",
+                members.len()
+            ));
+        }
+    }
+    None
+}
+
 /// A least-squares line through `(t, r)` samples: the range rate and mean range to one vehicle
 /// during a probe.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -232,6 +292,37 @@ pub(crate) fn pick_neighbours(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// att32f-5's tables: the one the lossy ranging found (vehicle 3 the ahead of two, vehicle
+    /// 0 of none) and what closing it around vehicle 2 left (vehicle 0 orphaned) are not rings;
+    /// a ring, the two-vehicle ring, a lone vehicle and two rings of two are told apart.
+    #[test]
+    fn ring_faults() {
+        let all = [true; 4];
+        let bad = [Some([1, 3]), Some([3, 3]), Some([3, 1]), Some([2, 1])];
+        assert!(ring_fault(&bad, &all).is_some());
+        let orphaned = [Some([1, 3]), Some([3, 3]), None, Some([1, 1])];
+        assert!(ring_fault(&orphaned, &[true, true, false, true]).is_some());
+        let ring = [Some([1, 3]), Some([2, 0]), Some([3, 1]), Some([0, 2])];
+        assert_eq!(ring_fault(&ring, &all), None);
+        // Not in the listed order: 0 -> 2 -> 1 -> 3 -> 0.
+        let found = [Some([2, 3]), Some([3, 2]), Some([1, 0]), Some([0, 1])];
+        assert_eq!(ring_fault(&found, &all), None);
+        let mut closed = ring;
+        leave_ring(&mut closed, 2);
+        assert_eq!(ring_fault(&closed, &[true, true, false, true]), None);
+        let two = [Some([1, 1]), None, Some([0, 0]), None];
+        assert!(ring_fault(&two, &all).is_some());
+        assert!(ring_fault(&two, &[true, false, false, false]).is_some());
+        let pair = [Some([2, 2]), None, Some([0, 0]), None];
+        assert_eq!(ring_fault(&pair, &[true, false, true, false]), None);
+        let lone = [None, None, None, None];
+        assert_eq!(ring_fault(&lone, &[false, true, false, false]), None);
+        let two_rings = [Some([1, 1]), Some([0, 0]), Some([3, 3]), Some([2, 2])];
+        let why = ring_fault(&two_rings, &all).unwrap();
+        assert!(why.contains("more than one ring"), "{why}");
+        assert!(ring_fault(&lone, &all).is_some());
+    }
 
     #[test]
     fn law_names_and_labels() {
