@@ -1745,7 +1745,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if let Some(end) = self.pilot_during_take_over() {
             return Ok(Some(end));
         }
-        if self.leave_seen.as_ref().is_some_and(|l| !l.confirmed) {
+        if self.pilots_word_pending() {
             // A pilot's word awaiting confirmation: nothing more commanded meanwhile.
             return Ok(None);
         }
@@ -1987,7 +1987,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// one by the law (in control) or a neutral setpoint, a repeat by the same setpoint again,
     /// an older one dropped; each new one recorded.
     fn answer_queue(&mut self) -> Result<Option<FlyEnd>, FlyError> {
-        if self.leave_seen.as_ref().is_some_and(|l| !l.confirmed) {
+        if self.pilots_word_pending() {
             // A pilot's word awaiting confirmation ends the flight however it turns out
             // ([`LeaveSeen`]): no measurement is answered meanwhile (the vehicle may be the
             // pilot's already); the last setpoint is repeated (`check_ends`).
@@ -2155,14 +2155,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
-        // The vehicle's frames out of sequence before this one (a pilot's word, ver33c-1).
+        // The vehicle's frames out of sequence (and duplicates) before this one (a pilot's
+        // word, ver33c-1).
         let out_of_sequence_before = self.seq_watch.out_of_sequence;
+        let duplicates_before = self.seq_watch.duplicates;
         if from == target {
             self.vehicle_address(r.from);
             self.vehicle_sender(r);
         }
-        // A frame of the vehicle's ids behind the newest: a late one or another sender's.
-        let late = self.seq_watch.out_of_sequence > out_of_sequence_before;
+        // A frame of the vehicle's ids behind the newest (a late one or another sender's), or a
+        // copy of one already handled (delivered again, maybe late: att33f-2).
+        let late = self.seq_watch.out_of_sequence > out_of_sequence_before
+            || self.seq_watch.duplicates > duplicates_before;
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
@@ -2596,6 +2600,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// Whether a pilot's word shown by the heartbeats awaits confirmation ([`LeaveSeen`]).
+    fn pilots_word_pending(&self) -> bool {
+        self.leave_seen.as_ref().is_some_and(|l| !l.confirmed)
+    }
+
     /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted.
     fn note_beat(&mut self) {
         let now = Instant::now();
@@ -2912,6 +2921,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if end == FlyEnd::TwoVehicles {
             return self.two_vehicles_way_out();
         }
+        if end.is_failsafe() && end != FlyEnd::VehicleLost && self.pilots_word_pending() {
+            // A failsafe (a link lost, Ctrl-C, ...) while a pilot's word awaits confirmation
+            // (att33f-7): the pilot's mode stands, nothing is commanded against it (a second
+            // vehicle's word, not yet told apart, leaves the vehicle flown to its own
+            // offboard-loss failsafe).
+            return None;
+        }
         if self.pilots_disarm_watched(end) {
             // A failsafe while a disarm nobody here commanded is watched for a reboot: the
             // disarm is the pilot's, whose mode stands (ver33b-5); a reboot established
@@ -2958,7 +2974,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 ));
                 return Ok((false, false));
             }
-            if end.is_failsafe() {
+            if end.is_failsafe() && self.pilots_word_pending() && end != FlyEnd::VehicleLost {
+                self.event(format!(
+                    "failsafe ({}) while the vehicle's heartbeats showed it {}, not yet confirmed as its pilot's: nothing commanded against it, the pilot's mode stands",
+                    end.as_str(),
+                    self.leave_seen.as_ref().map_or(String::new(), |l| l.what.clone())
+                ));
+            } else if end.is_failsafe() {
                 self.event(format!(
                     "failsafe ({}) before the companion had control: nothing commanded, the vehicle's mode stands",
                     end.as_str()
@@ -3120,9 +3142,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if self.ack_for_another(&r) {
                     continue;
                 }
-                let before_frame = self.seq_watch.out_of_sequence;
+                let before_frame = (self.seq_watch.out_of_sequence, self.seq_watch.duplicates);
                 self.seq_watch.frame(r.header.sequence, &r.msg);
-                let late = self.seq_watch.out_of_sequence > before_frame;
+                let late =
+                    (self.seq_watch.out_of_sequence, self.seq_watch.duplicates) != before_frame;
                 match &r.msg {
                     // A late heartbeat or a second sender's: not the vehicle's now (att33e-2).
                     MavMessage::HEARTBEAT(_) if late => continue,

@@ -722,3 +722,65 @@ fn a_pilots_switch_over_a_link_that_reorders_every_turn_stands() {
     assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
 }
+
+/// att33f-2: after the pilot's switch to POSCTL (and one pair of frames swapped: a frame out of
+/// sequence), a byte-identical copy of the last OFFBOARD heartbeat is delivered again: a copy of
+/// a frame already handled is no news, never applied: `pilot_took_over`, nothing commanded
+/// (before: read as a second vehicle's contradiction, `vehicle_lost`, HOLD against the pilot).
+#[test]
+fn a_late_copy_of_a_heartbeat_is_no_news() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut kept: Option<Vec<u8>> = None;
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let mut out = datagrams(a.frames(&[
+            heartbeat(if k < 20 { 6 } else { 3 }),
+            iso_s(ms, 9.5),
+            position(ms, 0.0),
+        ]));
+        if k == 19 {
+            kept = Some(out[0].clone());
+        }
+        if k == 20 {
+            out.swap(1, 2);
+        }
+        if k == 21 {
+            out.insert(1, kept.take().unwrap());
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+}
+
+/// att33f-7: the pilot's switch to POSCTL shown by a heartbeat, then no heartbeat any more
+/// (its positions and measurements go on): the link is lost before the span confirms the
+/// pilot's word, and nothing is commanded against it (before: HOLD commanded at link_lost).
+#[test]
+fn a_failsafe_while_a_pilots_word_awaits_confirmation_commands_nothing() {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        let msgs = match k {
+            0..=19 => vec![heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)],
+            20 => vec![heartbeat(3), iso_s(ms, 9.5), position(ms, 0.0)],
+            _ => vec![iso_s(ms, 9.5), position(ms, 0.0)],
+        };
+        datagrams(a.frames(&msgs))
+    });
+    assert_eq!(r.end, FlyEnd::LinkLost, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("not yet confirmed as its pilot's")),
+        "{:?}",
+        r.events
+    );
+}
