@@ -5,6 +5,7 @@ use crate::style::{tick_label, tick_step, value_label, Format, Style};
 use crate::{fonts, PlotError};
 use isotrack_core::{ScalarField, Vec2};
 use isotrack_fields::isoline::IsolineSegments;
+use isotrack_runs::summary::Ended;
 use isotrack_scenario::Scenario;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -879,8 +880,18 @@ fn selected_panels(runs: &[RunData], panels: Panels) -> Vec<Panel> {
     }
     if panels.measurement {
         let noisy = runs.iter().any(measured_differs);
+        // A flight's `s` is what its sensor measured: no true value is known in flight
+        // (docs/FLYING.md), nu-13.
+        let flights = runs
+            .iter()
+            .filter(|r| matches!(r.summary.ended, Ended::Flight(_)))
+            .count();
         list.push(Panel {
-            label: if noisy {
+            label: if flights == runs.len() {
+                "measured field value s (flight)"
+            } else if flights > 0 {
+                "s: true (simulated runs), measured (flights)"
+            } else if noisy {
                 "s: true (bold), measured (light)"
             } else {
                 "true field value s"
@@ -1185,9 +1196,21 @@ pub fn sweep_figure(
     let (w, h) = st.size((1000, 700), (560, 400));
     let f = st.base_font();
     let title_rel = title_font_rel(title, w, f);
+    let label_of = |g: &str| match group {
+        Some(k) => format!("{k} = {g}"),
+        None => metric.to_string(),
+    };
+    let (yb, legend_at) = match group {
+        Some(_) => {
+            let chars = lines.iter().map(|l| label_of(&l.0).chars().count());
+            let legend = legend_box_px(chars.max().unwrap_or(0), lines.len(), f);
+            sweep_legend_place(&lines, [xa, xb, ya, yb], sweep_plot_px((w, h), f), legend)
+        }
+        None => (yb, SeriesLabelPosition::UpperRight),
+    };
     let (xs, ys) = (tick_step(xa, xb, 10), tick_step(ya, yb, 8));
-    let points = lines.iter().flat_map(|l| l.1.iter().map(|p| (p.0, p.1)));
-    let legend_at = emptiest_corner(points, [xa, xb, ya, yb]);
+    let whole_x = whole_number_labels(all().map(|p| p.0), xa, xb);
+    let xs = if whole_x.is_some() { 1.0 } else { xs };
     render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
@@ -1203,6 +1226,8 @@ pub fn sweep_figure(
                 .configure_mesh()
                 .x_desc(x_key)
                 .y_desc(metric)
+                // plotters' own default is 11 labels at most.
+                .x_labels(whole_x.unwrap_or(11))
                 .x_label_formatter(&|v| tick_label(*v, xs))
                 .y_label_formatter(&|v| tick_label(*v, ys))
                 .label_style(st.font(0.95))
@@ -1210,11 +1235,7 @@ pub fn sweep_figure(
                 .draw()
                 .map_err(s)?;
             for (i, (g, pts)) in lines.iter().enumerate() {
-                let label = match group {
-                    Some(k) => format!("{k} = {g}"),
-                    None => metric.to_string(),
-                };
-                draw_summary_line(&mut chart, pts, label, colour(i + 1), st)?;
+                draw_summary_line(&mut chart, pts, label_of(g), colour(i + 1), st)?;
             }
             if group.is_some() {
                 chart
@@ -1229,6 +1250,101 @@ pub fn sweep_figure(
             Ok(())
         })()
     })
+}
+
+/// The x labels of a sweep figure whose x values are all whole numbers (`team.count`, a
+/// seed, a sample count), spanning at most 12: one at each whole number of `[xa, xb]`, so the
+/// axis reads 3 and 4, not 3.0 to 3.9 without the 4 (plotters' own choice of at most 10
+/// labels); `None` otherwise (the usual ticks).
+fn whole_number_labels(xs: impl Iterator<Item = f64>, xa: f64, xb: f64) -> Option<usize> {
+    let mut any = false;
+    for x in xs.filter(|x| x.is_finite()) {
+        if x.fract() != 0.0 {
+            return None;
+        }
+        any = true;
+    }
+    let n = xb.floor() - xa.ceil() + 1.0;
+    (any && (2.0..=12.0).contains(&n)).then_some(n as usize)
+}
+
+/// The sweep figure's plot area in pixels `(width, height)` on a `size` image with base font
+/// `f` px: the image less the y labels' 5.6 f and the right margin's 2 f and 1 f, less the
+/// title (about 2 f), the x labels' 3.2 f and the margins' 2 f (the layout of
+/// [`sweep_figure`], to within a few pixels: enough to place its legend).
+fn sweep_plot_px(size: (u32, u32), f: f64) -> (f64, f64) {
+    let (w, h) = (f64::from(size.0), f64::from(size.1));
+    ((w - 8.6 * f).max(1.0), (h - 7.2 * f).max(1.0))
+}
+
+/// A legend's box in pixels `(width, height)` for `rows` labels of at most `chars` characters
+/// in plotters' series-label area at 0.95 f: a 20 px sample line and padding beside the
+/// text (about 0.6 of the font size a character), a row a line of 1.25 x the font.
+fn legend_box_px(chars: usize, rows: usize, f: f64) -> (f64, f64) {
+    let font = 0.95 * f;
+    (
+        0.6 * font * chars as f64 + 20.0 + 2.0 * f,
+        1.25 * font * rows as f64 + f,
+    )
+}
+
+/// Where the sweep figure's legend goes and the top of its y axis: the first corner (upper
+/// right, upper left, lower right, lower left) whose legend box covers none of the lines, their
+/// dots and error bars, the axis unchanged; when every corner covers some, the upper right over
+/// headroom added above the data (the y axis raised so the highest bar ends below the box).
+fn sweep_legend_place(
+    lines: &[SummaryLine],
+    range: [f64; 4],
+    plot_px: (f64, f64),
+    legend_px: (f64, f64),
+) -> (f64, SeriesLabelPosition) {
+    let [xa, xb, ya, yb] = range;
+    let fw = (legend_px.0 / plot_px.0).min(0.9);
+    let fh = (legend_px.1 / plot_px.1).min(0.9);
+    let (bw, bh) = (fw * (xb - xa), fh * (yb - ya));
+    // [x0, x1, y0, y1] of the box in each corner, in the order tried.
+    let corners = [
+        (SeriesLabelPosition::UpperRight, [xb - bw, xb, yb - bh, yb]),
+        (SeriesLabelPosition::UpperLeft, [xa, xa + bw, yb - bh, yb]),
+        (SeriesLabelPosition::LowerRight, [xb - bw, xb, ya, ya + bh]),
+        (SeriesLabelPosition::LowerLeft, [xa, xa + bw, ya, ya + bh]),
+    ];
+    for (at, b) in corners {
+        if !lines.iter().any(|l| line_meets_box(&l.1, b)) {
+            return (yb, at);
+        }
+    }
+    let top = finite_bounds(lines.iter().flat_map(|l| l.1.iter().map(|p| p.1 + p.2))).1;
+    // The top `fh` of the axis (and a 3 % gap) above `top`: top <= yb' - (fh + 0.03)(yb' - ya).
+    let k = (fh + 0.03).min(0.9);
+    let raised = (top - k * ya) / (1.0 - k);
+    (
+        if raised.is_finite() {
+            raised.max(yb)
+        } else {
+            yb
+        },
+        SeriesLabelPosition::UpperRight,
+    )
+}
+
+/// Whether one sweep line (its means joined, each with a bar of +-1 std) meets the box
+/// `[x0, x1, y0, y1]`: a dot or bar inside it, or a point of a segment (16 along each).
+fn line_meets_box(pts: &[(f64, f64, f64, usize)], b: [f64; 4]) -> bool {
+    let inside = |x: f64, y: f64| x >= b[0] && x <= b[1] && y >= b[2] && y <= b[3];
+    let bar = |p: &(f64, f64, f64, usize)| {
+        p.0 >= b[0] && p.0 <= b[1] && p.1 + p.2 >= b[2] && p.1 - p.2 <= b[3]
+    };
+    pts.iter().any(bar)
+        || pts.windows(2).any(|w| {
+            (0..=16).any(|i| {
+                let u = f64::from(i) / 16.0;
+                inside(
+                    w[0].0 + u * (w[1].0 - w[0].0),
+                    w[0].1 + u * (w[1].1 - w[0].1),
+                )
+            })
+        })
 }
 
 /// The sweep figure's default title: the metric against `x_key`, the runs drawn and those
@@ -1634,6 +1750,57 @@ fn panel_legend<'a, DB: DrawingBackend + 'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// nu-7: a sweep over `team.count = [3, 4]` is labelled at 3 and 4 (the axis padded by 5 %
+    /// each side, 2.95 to 4.05, holds the two whole numbers); half values, or whole numbers
+    /// spanning more than 12, keep the usual ticks.
+    #[test]
+    fn whole_number_x_values_get_a_label_at_each() {
+        assert_eq!(
+            whole_number_labels([3.0, 4.0, 3.0].into_iter(), 2.95, 4.05),
+            Some(2)
+        );
+        assert_eq!(
+            whole_number_labels([1.0, 8.0].into_iter(), 0.65, 8.35),
+            Some(8)
+        );
+        assert_eq!(whole_number_labels([3.0, 3.5].into_iter(), 2.9, 3.6), None);
+        assert_eq!(
+            whole_number_labels([0.0, 20.0].into_iter(), -1.0, 21.0),
+            None
+        );
+        assert_eq!(whole_number_labels(std::iter::empty(), 0.0, 4.0), None);
+    }
+
+    /// nu-7: a flat line at 1.40 along the top of the axis and one at 0 along its bottom
+    /// leave no corner free for a legend 30 % wide and 12 % tall: the axis is raised until
+    /// the highest point (1.40) lies below the box in the upper right, by the box's own rule.
+    /// Lines in the lower half only leave the upper right free, the axis unchanged; the sweep
+    /// of `team.spacing` over `team.count` (none: 1.21 at 3, 1.40 at 4, under the box in the
+    /// upper right only) the upper left.
+    #[test]
+    fn the_sweep_legend_covers_no_data() {
+        let line = |name: &str, y3: f64, y4: f64| -> SummaryLine {
+            (name.into(), vec![(3.0, y3, 0.0, 1), (4.0, y4, 0.0, 1)])
+        };
+        let (ya, yb) = (-0.112, 1.512);
+        let plot = (1000.0, 500.0);
+        let legend = (300.0, 60.0);
+        let both = [line("top", 1.40, 1.40), line("rb", 0.0, 0.0)];
+        let (top, at) = sweep_legend_place(&both, [2.95, 4.05, ya, yb], plot, legend);
+        assert_eq!(at, SeriesLabelPosition::UpperRight);
+        let box_bottom = top - 60.0 / 500.0 * (top - ya);
+        assert!(
+            top > yb && 1.40 < box_bottom,
+            "top {top}, box from {box_bottom}"
+        );
+        let low: SummaryLine = ("low".into(), vec![(3.0, 0.1, 0.05, 1), (4.0, 0.3, 0.05, 1)]);
+        let (top, at) = sweep_legend_place(&[low], [2.95, 4.05, 0.0, 1.0], plot, legend);
+        assert_eq!((top, at), (1.0, SeriesLabelPosition::UpperRight));
+        let sweep = [line("none", 1.21, 1.40), line("rb", 0.0, 0.0)];
+        let (top, at) = sweep_legend_place(&sweep, [2.95, 4.05, ya, yb], plot, legend);
+        assert_eq!((top, at), (yb, SeriesLabelPosition::UpperLeft));
+    }
 
     /// Issue 30: on cells twice as wide as tall (dx = 2 m, dy = 1 m) the isoline of the cone
     /// `F = |p|` at level 40 m is the whole circle of radius 40 m: every end point within the
