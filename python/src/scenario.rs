@@ -61,18 +61,15 @@ impl PyScenario {
             check_key(key)?;
             let v = toml_value(key, value, 0)?;
             let literal = toml_literal(&v);
-            let inner = self
-                .inner
-                .derive(&[format!("{key}={literal}")], &self.origin)
-                .map_err(|e| {
-                    // A table's error is said of the key inside it that is wrong, as `--set
-                    // controller.kp=true` says it (ver30b-10): each of its keys set alone,
-                    // the first refused named.
-                    let m = self
-                        .inner_error(key, &v)
-                        .unwrap_or_else(|| as_written(&e.to_string(), value));
-                    ScenarioErrorPy::new_err(crate::values::no_type_names(&m))
-                })?;
+            let inner = self.derive(&[format!("{key}={literal}")]).map_err(|e| {
+                // A table's error is said of the key inside it that is wrong, as `--set
+                // controller.kp=true` says it (ver30b-10): each of its keys set alone,
+                // the first refused named.
+                let m = self
+                    .inner_error(key, &v)
+                    .unwrap_or_else(|| as_written(&e.to_string(), value));
+                ScenarioErrorPy::new_err(crate::values::no_type_names(&m))
+            })?;
             Ok(Self {
                 inner,
                 origin: self.origin.clone(),
@@ -98,7 +95,7 @@ impl PyScenario {
             }
             let names: Vec<&str> = pairs.iter().map(|(k, _)| k.as_str()).collect();
             crate::values::check_once(&names, &keys)?;
-            let inner = self.inner.derive(&sets, &self.origin).map_err(|e| {
+            let inner = self.derive(&sets).map_err(|e| {
                 let m = e.to_string();
                 ScenarioErrorPy::new_err(crate::values::no_type_names(&match pairs.as_slice() {
                     [(_, value)] => as_written(&m, value.bind(py)),
@@ -181,6 +178,27 @@ impl PyScenario {
 }
 
 impl PyScenario {
+    /// This scenario with `KEY=VALUE` overrides applied, as `isotrack run FILE --set ...`: a
+    /// relative file path an override gives (`field.path`, `field.paths`) is relative to the
+    /// scenario file's folder for a scenario read from a file (the CLI's rule, nu-12: the same
+    /// `set` once named another file from Python), to the working directory otherwise
+    /// (`default()`, `from_toml`, as their own paths are).
+    fn derive(&self, overrides: &[String]) -> Result<Scenario, isotrack_scenario::ScenarioError> {
+        let assignments: Vec<isotrack_scenario::Assignment> = overrides
+            .iter()
+            .map(|o| isotrack_scenario::Assignment::new(o.clone(), &self.origin))
+            .collect();
+        // `origin` is a path only for a scenario read from a file (else `<toml>`, `sweep ...
+        // run N`, ...): a regular file there.
+        let file = Path::new(&self.origin);
+        let folder = match file.parent() {
+            Some(p) if file.is_file() && !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        self.inner
+            .derive_with_in(&assignments, &self.origin, folder)
+    }
+
     /// The error of the first key inside the table `v` (set at `key`) that is refused when set
     /// alone as a dotted key; `None` when `v` is no table or each of its keys is taken alone.
     fn inner_error(&self, key: &str, v: &toml::Value) -> Option<String> {
@@ -190,8 +208,7 @@ impl PyScenario {
         let mut leaves = Vec::new();
         crate::values::leaves(key, v, &mut leaves);
         leaves.into_iter().find_map(|(k, x)| {
-            self.inner
-                .derive(&[format!("{k}={}", toml_literal(x))], &self.origin)
+            self.derive(&[format!("{k}={}", toml_literal(x))])
                 .err()
                 .map(|e| e.to_string())
         })

@@ -682,6 +682,19 @@ impl PyTeamEnv {
             self.advance();
             self.run_to_pause();
             self.observe();
+            // The run's last step reached and sensed (t = sim.duration_s): no later action
+            // would move a vehicle, so the episode ends here, as `IsolineEnv` ends at the last
+            // sample (nu-17: one more step repeated the last observation), the last step
+            // completed with the laws' answers there (the trace's last row, as
+            // `Scenario.run()` writes it).
+            let last = self.scenario.plan().n_steps;
+            if self
+                .group
+                .as_ref()
+                .is_some_and(|g| g.is_running() && g.step_index() >= last)
+            {
+                self.advance();
+            }
             let running = self.group.as_ref().is_some_and(|g| g.is_running());
             for i in 0..n {
                 if self.agents[i].done {

@@ -90,6 +90,57 @@ def test_every_row_of_a_random_sweep_reruns_exactly(tmp_path):
     assert len(seen_seeds) == len(cols["run_id"])
 
 
+def test_set_reads_a_relative_data_path_against_the_scenario_file_as_the_cli_does(tmp_path, monkeypatch):
+    """nu-12: `Scenario.from_file(F).set("field.path", P)` with a relative P reads the file
+    relative to F's folder, as `isotrack run F --set field.path=P` does (it read P against the
+    working directory: another file, or none). Three computations agree: the set from
+    another directory, a scenario file naming P itself, and the CLI's --set; the other data
+    file gives another run (the path is what decides)."""
+    src = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    data = (ROOT / "data" / "no2_germany_kriged" / "no2_germany_kriged.csv").read_text()
+    (tmp_path / "sc").mkdir()
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "a.csv").write_text(data)
+    # b: the same map, every value 1.5 higher: the level-10 isoline moves.
+    rows = [",".join(repr(float(v) + 1.5) for v in line.split(",")) for line in data.splitlines()]
+    (tmp_path / "data" / "b.csv").write_text("\n".join(rows) + "\n")
+    old_path = '"../data/no2_germany_kriged/no2_germany_kriged.csv"'
+    assert old_path in src
+    (tmp_path / "sc" / "x.toml").write_text(src.replace(old_path, '"../data/a.csv"'))
+    (tmp_path / "sc" / "y.toml").write_text(src.replace(old_path, '"../data/b.csv"'))
+    # A decoy: from the working directory elsewhere/cwd, ../data/b.csv is a copy of a.csv.
+    (tmp_path / "elsewhere" / "data").mkdir(parents=True)
+    (tmp_path / "elsewhere" / "data" / "b.csv").write_text(data)
+    (tmp_path / "elsewhere" / "cwd").mkdir()
+    monkeypatch.chdir(tmp_path / "elsewhere" / "cwd")
+    x = isotrack.Scenario.from_file(str(tmp_path / "sc" / "x.toml")).set("sim.duration_s", 20.0)
+    by_set = x.set("field.path", "../data/b.csv").run(record_rate_hz=0.0).summary
+    direct = (
+        isotrack.Scenario.from_file(str(tmp_path / "sc" / "y.toml"))
+        .set("sim.duration_s", 20.0)
+        .run(record_rate_hz=0.0)
+        .summary
+    )
+    on_a = x.run(record_rate_hz=0.0).summary
+    for m in METRICS:
+        assert by_set[m] == direct[m], (m, by_set[m], direct[m])
+    assert any(on_a[m] != direct[m] for m in METRICS)
+    exe = os.environ.get("ISOTRACK_BIN", str(ROOT / "target" / "release" / "isotrack"))
+    if not Path(exe).exists():
+        pytest.skip(f"no isotrack binary at {exe}")
+    out = tmp_path / "cli"
+    r = subprocess.run(
+        [exe, "run", str(tmp_path / "sc" / "x.toml"), "--set", "sim.duration_s=20.0"]
+        + ["--set", "field.path=../data/b.csv", "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 0, r.stderr
+    s = json.loads((out / "summary.json").read_text())
+    for m in METRICS:
+        assert s[m] == direct[m], (m, s[m], direct[m])
+
+
 def test_a_swept_step_is_followed_by_the_sensor_rate_as_run_follows_it(tmp_path):
     """Issue 31: a sweep's run is `isotrack run` of the scenario + `[base]` + the row's keys,
     resolved once. With `sensor.rate_hz` unset (one sample a step, `1/sim.dt_s`), `[grid]

@@ -438,8 +438,10 @@ def test_the_builtin_laws_fed_back_fly_scenario_run_exactly(ipz):
     # sensor 10 Hz (10 steps), ranging 10 Hz (10 steps), delay 0.2 s (20 steps): gcd 10.
     assert env.period_steps == 10
     steps = drive_builtin(env)
-    # 20 s of 0.01 s steps, 10 a step: pauses at 0, 10, ..., 2000: 201 pauses, 201 steps.
-    assert steps == 201
+    # 20 s of 0.01 s steps, 10 a step: pauses at 0 (the reset's), 10, ..., 2000: 200 steps,
+    # the last reaching the run's end (t = 20 s) and truncating there, as IsolineEnv's
+    # floor(D*R) (nu-17: a 201st step repeated the last observation).
+    assert steps == 200
     run = sc.run()
     got = env.trace()
     assert list(got) == list(run.trace)
