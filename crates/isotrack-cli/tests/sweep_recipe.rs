@@ -417,3 +417,41 @@ fn every_field_file_a_grid_of_runs_reads_is_checked() {
         std::fs::read(whole.join("results.csv")).unwrap()
     );
 }
+
+/// nu-15: a data file a sweep's runs read that does not exist is a missing input, refused
+/// before any run with the README table's 66 naming it: in `[grid] field.path` (each of its
+/// runs was `invalid_scenario` after every other run had run, exit 65) and in `[base]` (65).
+#[test]
+fn a_missing_data_file_of_a_sweep_is_refused_before_any_run() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "f.asc", &radial_asc(1.0));
+    write(
+        d.path(),
+        "s.toml",
+        "[field]\nkind = \"grid\"\npath = \"f.asc\"\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 20.0\n",
+    );
+    let grid = write(
+        d.path(),
+        "grid.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"f.asc\", \"nowhere.asc\"]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let out = d.path().join("g");
+    let o = isotrack(&["sweep", &grid, "--out", out.to_str().unwrap()]);
+    common::assert_fails(&o, 66, &["nowhere.asc", "cannot read"]);
+    assert!(
+        !out.join("results.csv").exists()
+            || std::fs::read_to_string(out.join("results.csv"))
+                .unwrap()
+                .lines()
+                .count()
+                <= 1,
+        "no run ran"
+    );
+    let base = write(
+        d.path(),
+        "base.toml",
+        "scenario = \"s.toml\"\n[base]\nfield.path = \"nowhere.asc\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let o = isotrack(&["sweep", &base, "--out", d.path().join("b").to_str().unwrap()]);
+    common::assert_fails(&o, 66, &["nowhere.asc", "[base]"]);
+}

@@ -103,16 +103,27 @@ pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Res
 }
 
 /// The SHA-256 of every data file a run of `plan` reads ([`SweepPlan::data_files`], for a
-/// base whose own keys are `given`), by absolute path ([`crate::files::sha256_file`]); a file
-/// that cannot be read now is left out. For a sweep whose `[grid]` chooses no files, the
-/// base's files: [`crate::summary::data_file_digests`] of the base.
-pub fn plan_data_file_digests(plan: &SweepPlan, given: &ScenarioFile) -> BTreeMap<String, String> {
+/// base whose own keys are `given`), by absolute path ([`crate::files::sha256_file`]); for a
+/// sweep whose `[grid]` chooses no files, the base's. Taken as a sweep starts: a data file a
+/// run would read that cannot be read now (missing, not a regular file, unreadable) is
+/// refused before any run, [`exit::NOINPUT`] naming it (nu-15: a `[grid] field.path` value naming no
+/// file was found only after every other run had run, each of its runs `invalid_scenario`,
+/// exit 65).
+pub fn plan_data_file_digests_all(
+    plan: &SweepPlan,
+    given: &ScenarioFile,
+    label: &str,
+) -> Result<BTreeMap<String, String>, Failure> {
     plan.data_files(given)
         .into_iter()
-        .filter_map(|p| {
-            crate::files::sha256_file(Path::new(&p))
-                .ok()
-                .map(|d| (p, d))
+        .map(|p| match crate::files::sha256_file(Path::new(&p)) {
+            Ok(d) => Ok((p, d)),
+            Err(e) => Err(fail(
+                exit::NOINPUT,
+                format!(
+                    "{label}: the data file {p}, which runs of the sweep read (`field.path` or `field.paths` of its scenario, [base] or [grid]), cannot be read: {e}"
+                ),
+            )),
         })
         .collect()
 }

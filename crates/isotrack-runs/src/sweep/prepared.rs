@@ -24,7 +24,16 @@ pub fn sweep_base(plan: &SweepPlan, sets: &[String], label: &str) -> Result<Scen
     let base_assign = plan.run_assignments(0, label);
     let base = base
         .derive_with_in(&base_assign[..plan.base.len()], label, &plan.dir)
-        .map_err(|e| fail(exit::DATAERR, format!("{label}: [base]: {e}")))?;
+        .map_err(|e| {
+            // A data file `[base]` names that cannot be read is a missing input (66, the
+            // README's table), as for `isotrack run` (nu-15: it was 65).
+            let code = if e.is_unreadable_input() {
+                exit::NOINPUT
+            } else {
+                exit::DATAERR
+            };
+            fail(code, format!("{label}: [base]: {e}"))
+        })?;
     plan.check_keys(&base, label)
         .map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     Ok(base)

@@ -8,7 +8,7 @@ use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::sweep::manifest::{
-    check_data_files, data_files_entry, given_toml, plan_data_file_digests, read_manifest,
+    check_data_files, data_files_entry, given_toml, plan_data_file_digests_all, read_manifest,
     sweep_digest,
 };
 use crate::sweep::prepared::sweep_base;
@@ -41,7 +41,7 @@ pub struct SweepJob {
     pub digest: String,
     /// The `results.csv` header.
     pub header: Vec<String>,
-    /// The SHA-256 of every data file a run reads, by path ([`plan_data_file_digests`]),
+    /// The SHA-256 of every data file a run reads, by path ([`plan_data_file_digests_all`]),
     /// taken once as the sweep starts: what `sweep.json` records and `--resume` checks.
     pub data_files: std::collections::BTreeMap<String, String>,
 }
@@ -92,7 +92,7 @@ impl SweepJob {
         let base_toml = given_toml(base.given());
         let digest = sweep_digest(&sweep_bytes, &base_toml);
         let header = results_header(&plan, base.spec().team.is_some());
-        let data_files = plan_data_file_digests(&plan, base.given());
+        let data_files = plan_data_file_digests_all(&plan, base.given(), &name)?;
         Ok(Self {
             sweep_bytes,
             plan,
