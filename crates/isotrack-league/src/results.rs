@@ -185,6 +185,25 @@ pub struct TaskResult {
     pub team: bool,
 }
 
+/// A task's mean score per controller ([`TaskResult::scores`]), in `controllers`' order: the
+/// mean of the totals of its `runs` (0 for a controller without a run).
+pub(crate) fn controller_means(controllers: &[String], runs: &[RunRow]) -> Vec<(String, f64)> {
+    controllers
+        .iter()
+        .map(|c| {
+            let mine: Vec<f64> = runs
+                .iter()
+                .filter(|r| &r.controller == c)
+                .map(|r| r.score.total)
+                .collect();
+            (
+                c.clone(),
+                mine.iter().sum::<f64>() / mine.len().max(1) as f64,
+            )
+        })
+        .collect()
+}
+
 /// A benchmark's results.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BenchResult {

@@ -10,7 +10,7 @@
 
 use crate::one_run::{context, prepare};
 use crate::registry::Registry;
-use crate::results::{BenchError, RunRow, TaskResult, TeamRow, Trajectory};
+use crate::results::{controller_means, BenchError, RunRow, TaskResult, TeamRow, Trajectory};
 use crate::score::{score, team_total, Score, Scoring, WEIGHTS};
 use crate::suite::Task;
 use isotrack_runs::results::{real_cell, INVALID_SCENARIO};
@@ -56,17 +56,41 @@ pub(crate) fn reuse(
         path: file.display().to_string(),
         message: format!("{field}: {why} (remove the file to rerun the task)"),
     };
+    let runs = check_runs(prev.runs, e, &damaged)?;
+    let scores = controller_means(e.controllers, &runs);
+    check_paths(&prev.trajectories, e, &damaged)?;
+    let picture = picture(&prev.trajectories);
+    Ok(TaskResult {
+        id: e.task.id.clone(),
+        title: e.task.title.clone(),
+        scores,
+        gains: e.gains.clone(),
+        runs,
+        trajectories: prev.trajectories,
+        picture,
+        digest: prev.digest,
+        team: e.base.spec().team.is_some(),
+    })
+}
+
+/// The stored runs are the suite's, in its order (each controller's runs over the scoring
+/// seeds), and each possible ([`check_run`]): the runs with their scores recomputed.
+fn check_runs(
+    stored: Vec<RunRow>,
+    e: &Expected<'_>,
+    damaged: &dyn Fn(String, String) -> BenchError,
+) -> Result<Vec<RunRow>, BenchError> {
     let jobs: Vec<(&String, u64)> = e
         .controllers
         .iter()
         .flat_map(|c| e.seeds.iter().map(move |s| (c, *s)))
         .collect();
-    if prev.runs.len() != jobs.len() {
+    if stored.len() != jobs.len() {
         return Err(damaged(
             "runs".into(),
             format!(
                 "{} runs where the suite scores {} ({} controllers x {} seeds)",
-                prev.runs.len(),
+                stored.len(),
                 jobs.len(),
                 e.controllers.len(),
                 e.seeds.len()
@@ -74,7 +98,7 @@ pub(crate) fn reuse(
         ));
     }
     let mut runs = Vec::with_capacity(jobs.len());
-    for (i, (row, (c, seed))) in prev.runs.into_iter().zip(&jobs).enumerate() {
+    for (i, (row, (c, seed))) in stored.into_iter().zip(&jobs).enumerate() {
         let at = |f: &str| format!("runs[{i}].{f}");
         if &row.controller != *c {
             return Err(damaged(
@@ -94,32 +118,28 @@ pub(crate) fn reuse(
         let checked = check_run(row, e, c, *seed).map_err(|(f, why)| damaged(at(&f), why))?;
         runs.push(checked);
     }
-    let scores = e
-        .controllers
-        .iter()
-        .map(|c| {
-            let mine: Vec<f64> = runs
-                .iter()
-                .filter(|r| &r.controller == c)
-                .map(|r| r.score.total)
-                .collect();
-            (
-                c.clone(),
-                mine.iter().sum::<f64>() / mine.len().max(1) as f64,
-            )
-        })
-        .collect();
-    if prev.trajectories.len() != e.controllers.len() {
+    Ok(runs)
+}
+
+/// The stored picture paths: one per controller, in the suite's order, each with an outcome a
+/// path may have ([`PATH_OUTCOMES`]), at most `max_points` points, every one finite and within
+/// [`isotrack_scenario::ranges::MAX_COORDINATE_M`] of the origin.
+fn check_paths(
+    paths: &[Trajectory],
+    e: &Expected<'_>,
+    damaged: &dyn Fn(String, String) -> BenchError,
+) -> Result<(), BenchError> {
+    if paths.len() != e.controllers.len() {
         return Err(damaged(
             "trajectories".into(),
             format!(
                 "{} paths where the suite has {} controllers",
-                prev.trajectories.len(),
+                paths.len(),
                 e.controllers.len()
             ),
         ));
     }
-    for (i, (t, c)) in prev.trajectories.iter().zip(e.controllers).enumerate() {
+    for (i, (t, c)) in paths.iter().zip(e.controllers).enumerate() {
         let at = |f: &str| format!("trajectories[{i}].{f}");
         if &t.controller != c {
             return Err(damaged(
@@ -161,18 +181,7 @@ pub(crate) fn reuse(
             ));
         }
     }
-    let picture = picture(&prev.trajectories);
-    Ok(TaskResult {
-        id: e.task.id.clone(),
-        title: e.task.title.clone(),
-        scores,
-        gains: e.gains.clone(),
-        runs,
-        trajectories: prev.trajectories,
-        picture,
-        digest: prev.digest,
-        team: e.base.spec().team.is_some(),
-    })
+    Ok(())
 }
 
 /// One stored run checked against its scenario, with its score recomputed; `Err((field, why))`.
@@ -182,10 +191,6 @@ fn check_run(
     controller: &str,
     seed: u64,
 ) -> Result<RunRow, (String, String)> {
-    let zero = Score {
-        total: 0.0,
-        parts: [0.0; 5],
-    };
     let entrant = e
         .reg
         .get(controller)
@@ -195,22 +200,7 @@ fn check_run(
     // `invalid_scenario` only when a team's engine refused it: never in a single-vehicle task.
     let s = prepare(e.base, e.task, entrant, e.gains.get(controller), seed).ok();
     if row.outcome == INVALID_SCENARIO {
-        let want = RunRow::of(controller, seed, None, zero);
-        if s.is_some() && !is_team {
-            return Err((
-                "outcome".into(),
-                "invalid_scenario for a run whose scenario is valid: it was run".into(),
-            ));
-        }
-        let mut r = row;
-        r.score = zero;
-        if r != want {
-            return Err((
-                "outcome".into(),
-                "an invalid_scenario run holds measurements".into(),
-            ));
-        }
-        return Ok(r);
+        return check_invalid_run(row, s.is_some() && !is_team, controller, seed);
     }
     let Some(s) = s else {
         return Err((
@@ -221,71 +211,8 @@ fn check_run(
             ),
         ));
     };
-    let Some(mut span) = isotrack_scenario::build::run_span(s.file()) else {
-        return Err(("outcome".into(), "the run's steps cannot be counted".into()));
-    };
-    // The limit the run flew (a fixed wing's airframe limit included).
-    span.turn_rate_limit_radps = s.max_turn_rate_radps();
-    let duration = span.n_steps as f64 * span.dt_s;
+    let duration = check_measurements(&row, &s)?;
     let completed = row.outcome == "completed";
-    let mut cells: BTreeMap<&str, String> = BTreeMap::new();
-    cells.insert("outcome", row.outcome.clone());
-    cells.insert("convergence_time_s", real_cell(row.convergence_time_s));
-    cells.insert(
-        "time_in_band_fraction",
-        real_cell(row.time_in_band_fraction),
-    );
-    cells.insert(
-        "steady_state_rms_isoline_distance_m",
-        real_cell(row.steady_state_rms_isoline_distance_m),
-    );
-    cells.insert(
-        "steady_state_rms_error",
-        real_cell(row.steady_state_rms_error),
-    );
-    cells.insert("control_effort", real_cell(Some(row.control_effort)));
-    // A completed run ended at its last planned step (`t_end_s = N dt`, as the run computes
-    // it); any other within the run.
-    if completed {
-        cells.insert("t_end_s", real_cell(Some(duration)));
-    }
-    let cell = |n: &str| cells.get(n).map_or("", |c| c.as_str());
-    let field_of = |m: &str| {
-        [
-            "outcome",
-            "control_effort",
-            "convergence_time_s",
-            "time_in_band_fraction",
-        ]
-        .into_iter()
-        .chain([
-            "steady_state_rms_isoline_distance_m",
-            "steady_state_rms_error",
-            "samples",
-        ])
-        .find(|n| m.starts_with(n) || m.contains(&format!(" ({n})")))
-        .unwrap_or("outcome")
-        .to_string()
-    };
-    // The field, and the message without it when it leads.
-    let located = |m: String| {
-        let f = field_of(&m);
-        let m = m
-            .strip_prefix(&format!("{f}: "))
-            .map_or(m.clone(), str::to_string);
-        (f, m)
-    };
-    check_metrics(&row.outcome, &cell, false).map_err(located)?;
-    check_span(&span, &row.outcome, &cell, &|n| n.to_string()).map_err(located)?;
-    if row.track_losses > span.n_steps {
-        return Err((
-            "track_losses".into(),
-            format!(
-                "{} track losses in a run of {} steps",
-                row.track_losses, span.n_steps
-            ),
-        ));
-    }
     let t_end_s = if completed { duration } else { 0.0 };
     let ctx = context(&s, e.task, e.scoring);
     let mut r = row;
@@ -314,6 +241,114 @@ fn check_run(
     r.score = Score { total, parts };
     r.team = Some(team);
     Ok(r)
+}
+
+/// A stored `invalid_scenario` run: refused when its scenario is valid and would have been run
+/// (`ran`: a single-vehicle task whose run prepares), or when it holds any measurement (it is
+/// then [`RunRow::of`] with no result and a zero score).
+fn check_invalid_run(
+    row: RunRow,
+    ran: bool,
+    controller: &str,
+    seed: u64,
+) -> Result<RunRow, (String, String)> {
+    let zero = Score {
+        total: 0.0,
+        parts: [0.0; 5],
+    };
+    let want = RunRow::of(controller, seed, None, zero);
+    if ran {
+        return Err((
+            "outcome".into(),
+            "invalid_scenario for a run whose scenario is valid: it was run".into(),
+        ));
+    }
+    let mut r = row;
+    r.score = zero;
+    if r != want {
+        return Err((
+            "outcome".into(),
+            "an invalid_scenario run holds measurements".into(),
+        ));
+    }
+    Ok(r)
+}
+
+/// A stored run's measurements checked as a sweep's row is ([`check_metrics`] of a task's
+/// record, [`check_span`] against the steps of its scenario `s` under the limit it flew) and its
+/// track losses at most one per step: the run's planned duration `N dt`, in s.
+fn check_measurements(row: &RunRow, s: &Scenario) -> Result<f64, (String, String)> {
+    let Some(mut span) = isotrack_scenario::build::run_span(s.file()) else {
+        return Err(("outcome".into(), "the run's steps cannot be counted".into()));
+    };
+    // The limit the run flew (a fixed wing's airframe limit included).
+    span.turn_rate_limit_radps = s.max_turn_rate_radps();
+    let duration = span.n_steps as f64 * span.dt_s;
+    let cells = record_cells(row, duration);
+    let cell = |n: &str| cells.get(n).map_or("", |c| c.as_str());
+    check_metrics(&row.outcome, &cell, false).map_err(located)?;
+    check_span(&span, &row.outcome, &cell, &|n| n.to_string()).map_err(located)?;
+    if row.track_losses > span.n_steps {
+        return Err((
+            "track_losses".into(),
+            format!(
+                "{} track losses in a run of {} steps",
+                row.track_losses, span.n_steps
+            ),
+        ));
+    }
+    Ok(duration)
+}
+
+/// A stored run's measurements as the cells of a sweep's row, written as a sweep writes them
+/// ([`real_cell`]). A completed run ended at its last planned step (`t_end_s = N dt`, with
+/// `duration` as the run computes it); any other within the run, its `t_end_s` not recorded.
+fn record_cells(row: &RunRow, duration: f64) -> BTreeMap<&'static str, String> {
+    let mut cells: BTreeMap<&str, String> = BTreeMap::new();
+    cells.insert("outcome", row.outcome.clone());
+    cells.insert("convergence_time_s", real_cell(row.convergence_time_s));
+    cells.insert(
+        "time_in_band_fraction",
+        real_cell(row.time_in_band_fraction),
+    );
+    cells.insert(
+        "steady_state_rms_isoline_distance_m",
+        real_cell(row.steady_state_rms_isoline_distance_m),
+    );
+    cells.insert(
+        "steady_state_rms_error",
+        real_cell(row.steady_state_rms_error),
+    );
+    cells.insert("control_effort", real_cell(Some(row.control_effort)));
+    if row.outcome == "completed" {
+        cells.insert("t_end_s", real_cell(Some(duration)));
+    }
+    cells
+}
+
+/// A row check's message located in a task's record: the field it names (the first of the
+/// record's fields it starts with or names in parentheses, else `outcome`) and the message
+/// without it when it leads.
+fn located(m: String) -> (String, String) {
+    let f = [
+        "outcome",
+        "control_effort",
+        "convergence_time_s",
+        "time_in_band_fraction",
+    ]
+    .into_iter()
+    .chain([
+        "steady_state_rms_isoline_distance_m",
+        "steady_state_rms_error",
+        "samples",
+    ])
+    .find(|n| m.starts_with(n) || m.contains(&format!(" ({n})")))
+    .unwrap_or("outcome")
+    .to_string();
+    let m = m
+        .strip_prefix(&format!("{f}: "))
+        .map_or(m.clone(), str::to_string);
+    (f, m)
 }
 
 /// A team run's team row checked (its counts, its parts in `[0, 1]`, its metrics as a sweep's

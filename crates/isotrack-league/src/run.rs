@@ -327,6 +327,9 @@ fn locate_run_error(
     suite.error_at(&path, format!("task {}, {what}: {why}", task.id))
 }
 
+/// Task `task` of `suite` on `base` for `controllers`: the built-in laws' gains, then either
+/// the stored results reused (`--resume`, digest matching) or every scoring run, with each
+/// controller's mean score and the picture.
 fn run_task(
     suite: &Suite,
     task: &Task,
@@ -335,20 +338,7 @@ fn run_task(
     controllers: &[String],
     o: &Options,
 ) -> Result<TaskResult, BenchError> {
-    let mut gains: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
-    for c in controllers {
-        if let Some(Entrant::Builtin(kind)) = reg.get(c) {
-            if o.cancelled() {
-                return Err(BenchError::Interrupted);
-            }
-            let g = if o.tune {
-                tune(&base, task, *kind, &suite.tuning_seeds, suite.scoring)
-            } else {
-                task.tuned.get(c).cloned().unwrap_or_default()
-            };
-            gains.insert(c.clone(), g);
-        }
-    }
+    let gains = task_gains(suite, task, &base, reg, controllers, o)?;
     let digest = task_digest(suite, task, controllers, &gains, &base);
     if let Some(dir) = &o.resume_from {
         if let Some(prev) = read_task(dir, &task.id) {
@@ -371,29 +361,8 @@ fn run_task(
             }
         }
     }
-    // (controller, seed, whether this run also draws the controller's path in the picture:
-    // the first scoring seed's).
-    let jobs: Vec<(&String, u64, bool)> = controllers
-        .iter()
-        .flat_map(|c| {
-            suite
-                .scoring_seeds
-                .iter()
-                .enumerate()
-                .map(move |(k, s)| (c, *s, k == 0))
-        })
-        .collect();
-    // The scenario with each seed's `sim.seed`, shared by the controllers' runs of that seed: a
-    // field that follows the seed (a puff plume's meander) and its true isoline are then built
-    // once per seed, not once per run.
-    let seeded: BTreeMap<u64, Scenario> = suite
-        .scoring_seeds
-        .iter()
-        .filter_map(|&seed| {
-            let b = base.derive(&[format!("sim.seed={seed}")], "seed").ok()?;
-            Some((seed, b))
-        })
-        .collect();
+    let jobs = scoring_jobs(controllers, &suite.scoring_seeds);
+    let seeded = seeded_scenarios(&base, &suite.scoring_seeds);
     let done = run_jobs(
         &Jobs {
             jobs: &jobs,
@@ -408,20 +377,7 @@ fn run_task(
         true,
     )?;
     let (runs, paths): (Vec<RunRow>, Vec<Option<Trajectory>>) = done.into_iter().unzip();
-    let scores = controllers
-        .iter()
-        .map(|c| {
-            let mine: Vec<f64> = runs
-                .iter()
-                .filter(|r| &r.controller == c)
-                .map(|r| r.score.total)
-                .collect();
-            (
-                c.clone(),
-                mine.iter().sum::<f64>() / mine.len().max(1) as f64,
-            )
-        })
-        .collect();
+    let scores = crate::results::controller_means(controllers, &runs);
     // Each controller's path: drawn by its run of the first scoring seed, in controller order.
     let trajectories: Vec<Trajectory> = paths.into_iter().flatten().collect();
     let picture = field_picture(&base, &trajectories);
@@ -436,6 +392,56 @@ fn run_task(
         digest,
         team: base.spec().team.is_some(),
     })
+}
+
+/// The gains each built-in law among `controllers` runs task `task` with: tuned on the suite's
+/// tuning seeds under `--tune` ([`tune`]), else the suite's recorded ones (none recorded: the
+/// law's resolved defaults). Stops at a cancel between laws.
+fn task_gains(
+    suite: &Suite,
+    task: &Task,
+    base: &Scenario,
+    reg: &Registry,
+    controllers: &[String],
+    o: &Options,
+) -> Result<BTreeMap<String, BTreeMap<String, f64>>, BenchError> {
+    let mut gains: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    for c in controllers {
+        if let Some(Entrant::Builtin(kind)) = reg.get(c) {
+            if o.cancelled() {
+                return Err(BenchError::Interrupted);
+            }
+            let g = if o.tune {
+                tune(base, task, *kind, &suite.tuning_seeds, suite.scoring)
+            } else {
+                task.tuned.get(c).cloned().unwrap_or_default()
+            };
+            gains.insert(c.clone(), g);
+        }
+    }
+    Ok(gains)
+}
+
+/// A task's scoring runs, controller by controller, seed by seed: (controller, seed, whether
+/// this run also draws the controller's path in the picture: the first scoring seed's).
+fn scoring_jobs<'c>(controllers: &'c [String], seeds: &[u64]) -> Vec<(&'c String, u64, bool)> {
+    controllers
+        .iter()
+        .flat_map(|c| seeds.iter().enumerate().map(move |(k, s)| (c, *s, k == 0)))
+        .collect()
+}
+
+/// The scenario with each seed's `sim.seed`, shared by the controllers' runs of that seed: a
+/// field that follows the seed (a puff plume's meander) and its true isoline are then built
+/// once per seed, not once per run. A seed whose scenario does not derive is left out.
+fn seeded_scenarios(base: &Scenario, seeds: &[u64]) -> BTreeMap<u64, Scenario> {
+    seeds
+        .iter()
+        .filter_map(|&seed| {
+            let b = base.derive(&[format!("sim.seed={seed}")], "seed").ok()?;
+            Some((seed, b))
+        })
+        .collect()
 }
 
 /// A task's scored runs: (controller, seed, whether the run draws the controller's path),

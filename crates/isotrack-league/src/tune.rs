@@ -65,17 +65,8 @@ pub fn tune(
     scoring: Scoring,
 ) -> BTreeMap<String, f64> {
     let entrant = Entrant::Builtin(kind);
-    let mut gains: BTreeMap<String, f64> = BTreeMap::new();
-    // The starting point: the resolved gains of the law on this task.
-    let Ok(start) = base.with_controller_kind(kind) else {
-        return gains;
-    };
-    for key in tuned_keys(kind) {
-        if let Some(v) = resolved(&start, key) {
-            gains.insert(key.to_string(), v);
-        }
-    }
-    if seeds.is_empty() {
+    let mut gains = starting_gains(base, kind);
+    if gains.is_empty() || seeds.is_empty() {
         return gains;
     }
     // Each seed's scenario (its `sim.seed`), shared by every candidate's run of that seed: a
@@ -128,16 +119,36 @@ pub fn tune(
                 })
                 .collect()
         };
-        // The first candidate is the current value: it wins ties.
-        let mut best = tried[0];
-        for &(v, s) in &tried[1..] {
-            if s > best.1 {
-                best = (v, s);
-            }
-        }
-        gains.insert(key.to_string(), best.0);
+        gains.insert(key.to_string(), best_candidate(&tried));
     }
     gains
+}
+
+/// The starting point of a tuning: the resolved gains of law `kind` on the task's scenario
+/// `base` (its tuned keys, [`tuned_keys`]); none when the law does not apply to it.
+fn starting_gains(base: &Scenario, kind: ControllerKind) -> BTreeMap<String, f64> {
+    let mut gains: BTreeMap<String, f64> = BTreeMap::new();
+    let Ok(start) = base.with_controller_kind(kind) else {
+        return gains;
+    };
+    for key in tuned_keys(kind) {
+        if let Some(v) = resolved(&start, key) {
+            gains.insert(key.to_string(), v);
+        }
+    }
+    gains
+}
+
+/// The value of the best-scoring `(value, mean score)` trial; the first candidate is the
+/// current value, and it wins ties.
+fn best_candidate(tried: &[(f64, f64)]) -> f64 {
+    let mut best = tried[0];
+    for &(v, s) in &tried[1..] {
+        if s > best.1 {
+            best = (v, s);
+        }
+    }
+    best.0
 }
 
 /// What a law's trial runs share: the task's base scenario and its seeds' scenarios.

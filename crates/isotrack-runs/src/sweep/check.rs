@@ -1,6 +1,7 @@
 //! The check of a stored `results.csv` row: `--resume` and `merge` trust a row only after it.
 
 use crate::sweep::rows::numeric_columns;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_scenario::build::{run_span, RunSpan};
 use isotrack_scenario::sweep::SweepPlan;
 use isotrack_scenario::{apply_assignments, ScenarioFile};
@@ -145,48 +146,9 @@ impl<'a> RunSpans<'a> {
 pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     let header = rules.header;
     let rec = crate::sweep::rows::csv_record(line).ok_or("not a CSV row")?;
-    if rec.len() != header.len() {
-        return Err(format!(
-            "{} fields where the header has {}",
-            rec.len(),
-            header.len()
-        ));
-    }
-    let id: u64 = rec[0]
-        .parse()
-        .ok()
-        // Canonical digits, as isotrack writes them (no `+0`, no `00`).
-        .filter(|id: &u64| id.to_string() == rec[0])
-        .ok_or_else(|| format!("run_id `{}` is not a run number", clip(&rec[0])))?;
-    if id >= rules.total {
-        return Err(format!(
-            "run_id {id} is beyond this sweep's {} runs",
-            rules.total
-        ));
-    }
-    for ((name, cell), want) in header[1..]
-        .iter()
-        .zip(rec.iter().skip(1))
-        .zip(rules.plan.run_cells(id))
-    {
-        if cell != want {
-            return Err(format!(
-                "{name} = `{}` where the sweep's plan gives run {id} `{}`",
-                clip(cell),
-                clip(&want)
-            ));
-        }
-    }
-    // The line as isotrack writes it: its cells written again (quoted only where they must
-    // be) give the line back byte for byte; a quoted `"completed"` reads as `completed` but is
-    // no line of isotrack's, and resume/merge copy lines verbatim (att30c-3 a).
-    let fields: Vec<String> = rec.iter().map(str::to_string).collect();
-    let rewritten = crate::sweep::rows::csv_line(&fields);
-    if rewritten.trim_end_matches('\n') != line.trim_end_matches('\n') {
-        return Err(
-            "the line is not written as isotrack writes its cells (a cell quoted that needs no quotes, or another form)".to_string(),
-        );
-    }
+    let id = row_run_id(rules, &rec)?;
+    check_plan_cells(rules, &rec, id)?;
+    check_written_form(&rec, line)?;
     let cell = |name: &str| {
         header
             .iter()
@@ -208,16 +170,7 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
     {
         check_team_cells(outcome, &cell)?;
     }
-    // Text cells are isotrack's own messages: never a control character (an escape sequence,
-    // a line break) nor a bidirectional or zero-width format character.
-    for name in ["warnings", "outcome_detail"] {
-        if cell(name).chars().any(isotrack_core::numtext::is_not_plain) {
-            return Err(format!(
-                "{name} holds a control or format character (`{}`)",
-                clip(cell(name))
-            ));
-        }
-    }
+    check_text_cells(&cell)?;
     let column = |name: &str| {
         let i = header.iter().position(|h| h == name).unwrap_or(0);
         format!("column {} ({name})", i + 1)
@@ -241,6 +194,80 @@ pub fn check_row(rules: &RowRules<'_>, line: &str) -> Result<u64, String> {
         check_against_scenario(rules, id, &cell, &column)?;
     }
     Ok(id)
+}
+
+/// The run a row is of: the row has the header's field count, and its first cell is a run
+/// number written as isotrack writes it (canonical digits) within the sweep's `total` runs.
+fn row_run_id(rules: &RowRules<'_>, rec: &csv::StringRecord) -> Result<u64, String> {
+    if rec.len() != rules.header.len() {
+        return Err(format!(
+            "{} fields where the header has {}",
+            rec.len(),
+            rules.header.len()
+        ));
+    }
+    let id: u64 = rec[0]
+        .parse()
+        .ok()
+        // Canonical digits, as isotrack writes them (no `+0`, no `00`).
+        .filter(|id: &u64| id.to_string() == rec[0])
+        .ok_or_else(|| format!("run_id `{}` is not a run number", clip(&rec[0])))?;
+    if id >= rules.total {
+        return Err(format!(
+            "run_id {id} is beyond this sweep's {} runs",
+            rules.total
+        ));
+    }
+    Ok(id)
+}
+
+/// The plan's columns of run `id` ([`SweepPlan::run_cells`], recomputed from the run id) are
+/// the row's cells after its `run_id`, in the header's order.
+fn check_plan_cells(rules: &RowRules<'_>, rec: &csv::StringRecord, id: u64) -> Result<(), String> {
+    for ((name, cell), want) in rules.header[1..]
+        .iter()
+        .zip(rec.iter().skip(1))
+        .zip(rules.plan.run_cells(id))
+    {
+        if cell != want {
+            return Err(format!(
+                "{name} = `{}` where the sweep's plan gives run {id} `{}`",
+                clip(cell),
+                clip(&want)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The line as isotrack writes it: its cells written again (quoted only where they must be,
+/// [`crate::sweep::rows::csv_line`]) give the line back byte for byte; a quoted `"completed"`
+/// reads as `completed` but is no line of isotrack's, and resume/merge copy lines verbatim
+/// (att30c-3 a).
+fn check_written_form(rec: &csv::StringRecord, line: &str) -> Result<(), String> {
+    let fields: Vec<String> = rec.iter().map(str::to_string).collect();
+    let rewritten = crate::sweep::rows::csv_line(&fields);
+    if rewritten.trim_end_matches('\n') != line.trim_end_matches('\n') {
+        return Err(
+            "the line is not written as isotrack writes its cells (a cell quoted that needs no quotes, or another form)".to_string(),
+        );
+    }
+    Ok(())
+}
+
+/// Text cells are isotrack's own messages: never a control character (an escape sequence, a
+/// line break) nor a bidirectional or zero-width format character
+/// ([`isotrack_core::numtext::is_not_plain`]).
+fn check_text_cells<'c>(cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
+    for name in ["warnings", "outcome_detail"] {
+        if cell(name).chars().any(isotrack_core::numtext::is_not_plain) {
+            return Err(format!(
+                "{name} holds a control or format character (`{}`)",
+                clip(cell(name))
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// An `invalid_scenario` row: the run's scenario must be invalid under the plan, for the
@@ -408,21 +435,93 @@ pub fn check_span<'c>(
     cell: &dyn Fn(&str) -> &'c str,
     column: &dyn Fn(&str) -> String,
 ) -> Result<(), String> {
-    use isotrack_core::numtext::{Echo, Num};
-    let dt = span.dt_s;
-    // Whole steps as a run computes its times (`k as f64 * dt`): `None` for any other value.
-    let steps_of = |t: f64| -> Option<u64> {
-        let k = (t / dt).round();
-        (k >= 0.0 && k <= span.n_steps as f64 && k * dt == t).then_some(k as u64)
+    let Some((t_end, k_end)) = span_end(span, cell, column)? else {
+        return Ok(());
     };
-    let value = |n: &str| cell(n).parse::<f64>().ok();
+    let end = SpanEnd {
+        span,
+        outcome,
+        t_end,
+        k_end,
+    };
+    if let Some(c) = cell_value(cell, "convergence_time_s") {
+        if c != 0.0 && !steps_of(span, c).is_some_and(|j| (1..=k_end).contains(&j)) {
+            return Err(format!(
+                "{}: convergence_time_s = {} s is neither 0 nor a whole number of the run's steps of {} s up to t_end_s = {} s",
+                column("convergence_time_s"),
+                Echo(c),
+                Echo(span.dt_s),
+                Echo(t_end)
+            ));
+        }
+    }
+    if let Ok(samples) = cell("samples").parse::<u64>() {
+        check_span_samples(&end, samples, column)?;
+    }
+    if let Some(limit) = span.turn_rate_limit_radps {
+        check_span_turn_rate(&end, limit, cell, column)?;
+    }
+    check_span_motion(&end, cell, column)?;
+    // Last: the bounds above name the more basic fault of a row first.
+    if let Some(ms) = span.metric_steps {
+        check_metric_windows(&ms, span.dt_s, outcome, k_end, t_end, cell, column)?;
+    }
+    Ok(())
+}
+
+/// Where a row's run ended, as [`check_span`] reads it.
+struct SpanEnd<'s> {
+    /// The run's span.
+    span: &'s RunSpan,
+    /// The row's `outcome`.
+    outcome: &'s str,
+    /// The row's `t_end_s`, in s.
+    t_end: f64,
+    /// The steps `k` with `t_end_s = k dt`.
+    k_end: u64,
+}
+
+impl SpanEnd<'_> {
+    /// The steps a row's run sensed and moved: `k`, or for a `diverged` run (ended by a
+    /// non-finite command, sensed and moved the step after its last valid one) `min(k + 1, N)`.
+    fn steps_taken(&self) -> u64 {
+        if self.outcome == "diverged" {
+            (self.k_end + 1).min(self.span.n_steps)
+        } else {
+            self.k_end
+        }
+    }
+}
+
+/// Whole steps as a run computes its times (`k as f64 * dt`, `k <= N`): `None` for any other
+/// value.
+fn steps_of(span: &RunSpan, t: f64) -> Option<u64> {
+    let dt = span.dt_s;
+    let k = (t / dt).round();
+    (k >= 0.0 && k <= span.n_steps as f64 && k * dt == t).then_some(k as u64)
+}
+
+/// The number in cell `n` (`None` when it is empty or no number).
+fn cell_value<'c>(cell: &dyn Fn(&str) -> &'c str, n: &str) -> Option<f64> {
+    cell(n).parse::<f64>().ok()
+}
+
+/// A row's end, `t_end_s = k dt` and `k`: not past the run's duration `N dt`, a whole number
+/// of steps. A record without `t_end_s` (a benchmark task's run, of a run that did not
+/// complete) is bounded by the whole run: `k <= N`; a sweep row always has one
+/// ([`check_metrics`]). `Ok(None)`: a `t_end_s` that is no number, refused by
+/// [`check_metrics`], bounds nothing here.
+fn span_end<'c>(
+    span: &RunSpan,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<Option<(f64, u64)>, String> {
+    let dt = span.dt_s;
     let duration = span.n_steps as f64 * dt;
-    // A record without `t_end_s` (a benchmark task's run, of a run that did not complete) is
-    // bounded by the whole run: `k <= N`. A sweep row always has one ([`check_metrics`]).
-    let t_end = match value("t_end_s") {
+    let t_end = match cell_value(cell, "t_end_s") {
         Some(t) => t,
         None if cell("t_end_s").is_empty() => duration,
-        None => return Ok(()),
+        None => return Ok(None),
     };
     if t_end > duration {
         return Err(format!(
@@ -434,7 +533,7 @@ pub fn check_span<'c>(
             Num(duration)
         ));
     }
-    let Some(k_end) = steps_of(t_end) else {
+    let Some(k_end) = steps_of(span, t_end) else {
         return Err(format!(
             "{}: t_end_s = {} s is not a whole number of the run's steps of {} s",
             column("t_end_s"),
@@ -442,89 +541,105 @@ pub fn check_span<'c>(
             Echo(dt)
         ));
     };
-    if let Some(c) = value("convergence_time_s") {
-        if c != 0.0 && !steps_of(c).is_some_and(|j| (1..=k_end).contains(&j)) {
-            return Err(format!(
-                "{}: convergence_time_s = {} s is neither 0 nor a whole number of the run's steps of {} s up to t_end_s = {} s",
-                column("convergence_time_s"),
-                Echo(c),
-                Echo(dt),
-                Echo(t_end)
-            ));
-        }
+    Ok(Some((t_end, k_end)))
+}
+
+/// The `samples` cell between the fewest a run without dropouts takes up to its end
+/// ([`fewest_samples`]) and the most any run can take over the steps it sensed
+/// ([`SpanEnd::steps_taken`], [`delivered_samples`]).
+fn check_span_samples(
+    end: &SpanEnd<'_>,
+    samples: u64,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    let span = end.span;
+    let most = delivered_samples(span, end.steps_taken());
+    if samples > most {
+        return Err(format!(
+            "{}: samples = {samples} exceeds the {most} a run can take up to t_end_s = {} s (one every {} steps of {} s from step {})",
+            column("samples"),
+            Echo(end.t_end),
+            span.steps_per_sample,
+            Echo(span.dt_s),
+            span.sensor_delay_steps
+        ));
     }
-    if let Ok(samples) = cell("samples").parse::<u64>() {
-        let sensed = if outcome == "diverged" {
-            (k_end + 1).min(span.n_steps)
-        } else {
-            k_end
-        };
-        let most = delivered_samples(span, sensed);
-        if samples > most {
-            return Err(format!(
-                "{}: samples = {samples} exceeds the {most} a run can take up to t_end_s = {} s (one every {} steps of {} s from step {})",
-                column("samples"),
-                Echo(t_end),
-                span.steps_per_sample,
-                Echo(dt),
-                span.sensor_delay_steps
-            ));
-        }
-        let fewest = fewest_samples(span, outcome, k_end);
-        if samples < fewest {
-            return Err(format!(
-                "{}: samples = {samples} is below the {fewest} a run without dropouts takes up to t_end_s = {} s (one every {} steps of {} s from step {})",
-                column("samples"),
-                Echo(t_end),
-                span.steps_per_sample,
-                Echo(dt),
-                span.sensor_delay_steps
-            ));
-        }
+    let fewest = fewest_samples(span, end.outcome, end.k_end);
+    if samples < fewest {
+        return Err(format!(
+            "{}: samples = {samples} is below the {fewest} a run without dropouts takes up to t_end_s = {} s (one every {} steps of {} s from step {})",
+            column("samples"),
+            Echo(end.t_end),
+            span.steps_per_sample,
+            Echo(span.dt_s),
+            span.sensor_delay_steps
+        ));
     }
-    if let Some(limit) = span.turn_rate_limit_radps {
-        // Commands held over the steps integrated: `k` for a run that completed at step `k =
-        // N`, `k + 1` for one that ended in the step after its last valid one.
-        let held = (k_end + 1).min(span.n_steps);
-        let most_effort = limit * limit * dt * held as f64;
-        // Under the limit the effort is finite (at most `most_effort`): only a diverged run's
-        // is written empty (att30d-1).
-        if outcome != "diverged" && most_effort.is_finite() && cell("control_effort").is_empty() {
+    Ok(())
+}
+
+/// The cells a turn-rate limit `L` bounds: `control_effort = sum omega^2 dt` over the
+/// `min(k + 1, N)` commands held is at most `L^2 dt min(k + 1, N)` (and so present unless the
+/// run diverged), `chattering_radps2` at most `2 L / dt` (a swing of `2 L` every step).
+fn check_span_turn_rate<'c>(
+    end: &SpanEnd<'_>,
+    limit: f64,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    let (dt, outcome) = (end.span.dt_s, end.outcome);
+    // Commands held over the steps integrated: `k` for a run that completed at step `k =
+    // N`, `k + 1` for one that ended in the step after its last valid one.
+    let held = (end.k_end + 1).min(end.span.n_steps);
+    let most_effort = limit * limit * dt * held as f64;
+    // Under the limit the effort is finite (at most `most_effort`): only a diverged run's
+    // is written empty (att30d-1).
+    if outcome != "diverged" && most_effort.is_finite() && cell("control_effort").is_empty() {
+        return Err(format!(
+            "{}: control_effort is empty in a `{outcome}` row: under the turn-rate limit {} rad/s it is at most {} rad^2/s",
+            column("control_effort"),
+            Echo(limit),
+            Num(most_effort)
+        ));
+    }
+    if let Some(e) = cell_value(cell, "control_effort") {
+        if e > most_effort * (1.0 + 1e-6) {
             return Err(format!(
-                "{}: control_effort is empty in a `{outcome}` row: under the turn-rate limit {} rad/s it is at most {} rad^2/s",
+                "{}: control_effort = {} exceeds {} rad^2/s, the turn-rate limit {} rad/s held over {held} steps of {} s",
                 column("control_effort"),
+                Echo(e),
+                Num(most_effort),
                 Echo(limit),
-                Num(most_effort)
+                Echo(dt)
             ));
         }
-        if let Some(e) = value("control_effort") {
-            if e > most_effort * (1.0 + 1e-6) {
-                return Err(format!(
-                    "{}: control_effort = {} exceeds {} rad^2/s, the turn-rate limit {} rad/s held over {held} steps of {} s",
-                    column("control_effort"),
-                    Echo(e),
-                    Num(most_effort),
-                    Echo(limit),
-                    Echo(dt)
-                ));
-            }
-        }
-        if let Some(c) = value("chattering_radps2") {
-            let most = 2.0 * limit / dt;
-            if c > most * (1.0 + 1e-6) {
-                return Err(format!(
-                    "{}: chattering_radps2 = {} exceeds {} rad/s^2, a swing of twice the turn-rate limit {} rad/s every step of {} s",
-                    column("chattering_radps2"),
-                    Echo(c),
-                    Num(most),
-                    Echo(limit),
-                    Echo(dt)
-                ));
-            }
+    }
+    if let Some(c) = cell_value(cell, "chattering_radps2") {
+        let most = 2.0 * limit / dt;
+        if c > most * (1.0 + 1e-6) {
+            return Err(format!(
+                "{}: chattering_radps2 = {} exceeds {} rad/s^2, a swing of twice the turn-rate limit {} rad/s every step of {} s",
+                column("chattering_radps2"),
+                Echo(c),
+                Num(most),
+                Echo(limit),
+                Echo(dt)
+            ));
         }
     }
-    // Sign changes of a per-step quantity: at most one per step, `1 / dt` per second.
-    if let Some(r) = value("sign_changes_per_s") {
+    Ok(())
+}
+
+/// The cells the steps themselves bound: `sign_changes_per_s` at most one per step (`1 / dt`
+/// per second); `path_length_m` no longer than the fastest speed over the steps moved
+/// ([`SpanEnd::steps_taken`]), +1 %.
+fn check_span_motion<'c>(
+    end: &SpanEnd<'_>,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    let dt = end.span.dt_s;
+    if let Some(r) = cell_value(cell, "sign_changes_per_s") {
         if r > (1.0 / dt) * (1.0 + 1e-9) {
             return Err(format!(
                 "{}: sign_changes_per_s = {} exceeds one per step of {} s",
@@ -534,15 +649,8 @@ pub fn check_span<'c>(
             ));
         }
     }
-    // A path no longer than the fastest speed over the steps moved (+1 %): `k` steps, or for a
-    // `diverged` run (which moved the step after its last valid one before the non-finite
-    // command ended it) `min(k + 1, N)`, as for the samples.
-    if let (Some(v), Some(len)) = (span.speed_max_mps, value("path_length_m")) {
-        let moved = if outcome == "diverged" {
-            (k_end + 1).min(span.n_steps)
-        } else {
-            k_end
-        };
+    if let (Some(v), Some(len)) = (end.span.speed_max_mps, cell_value(cell, "path_length_m")) {
+        let moved = end.steps_taken();
         let moved_s = moved as f64 * dt;
         if len > v * moved_s * 1.01 + 1e-9 {
             return Err(format!(
@@ -552,13 +660,9 @@ pub fn check_span<'c>(
                 Echo(v),
                 Echo(dt),
                 Num(moved_s),
-                Echo(t_end)
+                Echo(end.t_end)
             ));
         }
-    }
-    // Last: the bounds above name the more basic fault of a row first.
-    if let Some(ms) = span.metric_steps {
-        check_metric_windows(&ms, dt, outcome, k_end, t_end, cell, column)?;
     }
     Ok(())
 }
@@ -585,7 +689,6 @@ fn check_metric_windows<'c>(
     cell: &dyn Fn(&str) -> &'c str,
     column: &dyn Fn(&str) -> String,
 ) -> Result<(), String> {
-    use isotrack_core::numtext::{Echo, Num};
     let value = |n: &str| cell(n).parse::<f64>().ok();
     let w = ms.convergence_min_dwell_steps;
     if let Some(c) = value("convergence_time_s") {
@@ -670,7 +773,6 @@ fn check_tolerance_implications<'c>(
     cell: &dyn Fn(&str) -> &'c str,
     column: &dyn Fn(&str) -> String,
 ) -> Result<(), String> {
-    use isotrack_core::numtext::{Echo, Num};
     let value = |n: &str| cell(n).parse::<f64>().ok();
     let tol = ms.convergence_tolerance;
     let ss = ms.steady_state_start_step;
@@ -781,6 +883,24 @@ pub fn check_metrics<'c>(
             clip(outcome)
         ));
     }
+    check_share_cell(outcome, cell)?;
+    if outcome == "invalid_scenario" {
+        if let Some(n) = numeric.iter().find(|n| !cell(n).is_empty()) {
+            return Err(format!("{n} holds a value in an invalid_scenario row"));
+        }
+        return Ok(());
+    }
+    check_run_end_cells(outcome, cell, whole_row)?;
+    let value = numeric_values(numeric, cell)?;
+    check_samples_cell(cell, whole_row)?;
+    check_emptied_cells(outcome, cell, whole_row)?;
+    check_metric_orderings(&value)
+}
+
+/// `time_in_band_fraction`, when given (a benchmark task's run records it): not in an
+/// `invalid_scenario` row, a share in `[0, 1]` written as isotrack writes it
+/// ([`crate::results::real_cell`]).
+fn check_share_cell<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result<(), String> {
     let share = cell("time_in_band_fraction");
     if !share.is_empty() {
         if outcome == "invalid_scenario" {
@@ -798,14 +918,17 @@ pub fn check_metrics<'c>(
             ));
         }
     }
-    if outcome == "invalid_scenario" {
-        if let Some(n) = numeric.iter().find(|n| !cell(n).is_empty()) {
-            return Err(format!("{n} holds a value in an invalid_scenario row"));
-        }
-        return Ok(());
-    }
-    // The detail says why a run did not complete: a completed row has none, a row that did
-    // not complete always one (the run ends with its reason; att30c-3 b).
+    Ok(())
+}
+
+/// The cells that say how a run ended: the detail says why a run did not complete, so a
+/// completed row has none and (in a whole row) a row that did not complete always one (the run
+/// ends with its reason; att30c-3 b); a whole row has `t_end_s` and `samples`.
+fn check_run_end_cells<'c>(
+    outcome: &str,
+    cell: &dyn Fn(&str) -> &'c str,
+    whole_row: bool,
+) -> Result<(), String> {
     if outcome == "completed" && !cell("outcome_detail").is_empty() {
         return Err("outcome_detail holds text in a `completed` row".to_string());
     }
@@ -819,6 +942,15 @@ pub fn check_metrics<'c>(
             return Err(format!("{n} is empty in a `{outcome}` row"));
         }
     }
+    Ok(())
+}
+
+/// The values of the non-empty numeric cells but `samples`, each a finite number, not negative
+/// (nor `-0.0`) in [`NON_NEGATIVE_COLUMNS`], written in isotrack's own form.
+fn numeric_values<'c>(
+    numeric: &'static [&'static str],
+    cell: &dyn Fn(&str) -> &'c str,
+) -> Result<std::collections::HashMap<&'static str, f64>, String> {
     let mut value = std::collections::HashMap::new();
     for &n in numeric.iter().filter(|n| **n != "samples") {
         let c = cell(n);
@@ -850,21 +982,29 @@ pub fn check_metrics<'c>(
         // as the writer writes it. The times are bounded to whole steps by `check_span`.
         value.insert(n, v);
     }
+    Ok(value)
+}
+
+/// `samples`: a whole number in canonical digits of at most one per step
+/// ([`isotrack_sim::MAX_STEPS`] + 1); empty only outside a whole row.
+fn check_samples_cell<'c>(cell: &dyn Fn(&str) -> &'c str, whole_row: bool) -> Result<(), String> {
     let samples = cell("samples");
     match samples.parse::<u64>() {
-        _ if samples.is_empty() && !whole_row => {}
+        _ if samples.is_empty() && !whole_row => Ok(()),
         // Canonical digits, as isotrack writes them (no `+70`, no `070`).
-        Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 && k.to_string() == samples => {}
-        _ => {
-            return Err(format!(
-                "samples = `{}` is not a whole number of samples (at most {})",
-                clip(samples),
-                isotrack_sim::MAX_STEPS + 1
-            ))
-        }
+        Ok(k) if k <= isotrack_sim::MAX_STEPS + 1 && k.to_string() == samples => Ok(()),
+        _ => Err(format!(
+            "samples = `{}` is not a whole number of samples (at most {})",
+            clip(samples),
+            isotrack_sim::MAX_STEPS + 1
+        )),
     }
-    check_emptied_cells(outcome, cell, whole_row)?;
-    // Rounding: an RMS of equal values may exceed their maximum by an ulp or so.
+}
+
+/// The orderings between metrics that hold by their definitions: an RMS and a `|mean|` at most
+/// their window's maximum, the convergence time at most the run's end (to rounding: an RMS of
+/// equal values may exceed their maximum by an ulp or so).
+fn check_metric_orderings(value: &std::collections::HashMap<&str, f64>) -> Result<(), String> {
     let at_most = |a: &str, b: &str, what: &str| -> Result<(), String> {
         match (value.get(a), value.get(b)) {
             (Some(x), Some(y)) if x.abs() > y * (1.0 + 1e-12) => {
@@ -1015,7 +1155,6 @@ pub fn check_team_bounds<'c>(
     b: &TeamBounds,
     column: &dyn Fn(&str) -> String,
 ) -> Result<(), String> {
-    use isotrack_core::numtext::{Echo, Num};
     let value = |n: &str| cell(n).parse::<f64>().ok();
     for n in [
         "time_to_even_s",

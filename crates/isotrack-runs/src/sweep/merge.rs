@@ -70,21 +70,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
 fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Failure> {
     check_not_being_written(d)?;
     let m = read_manifest(d)?;
-    let t = m["total_runs"].as_u64().ok_or_else(|| {
-        fail(
-            exit::DATAERR,
-            format!("{}/sweep.json: no total_runs", d.display()),
-        )
-    })?;
-    let digest = m["digest"].as_str().map(str::to_string).ok_or_else(|| {
-        fail(
-            exit::DATAERR,
-            format!(
-                "{}/sweep.json: no digest (made by an older isotrack): run that shard again",
-                d.display()
-            ),
-        )
-    })?;
+    let (t, digest) = manifest_identity(d, &m)?;
     let (mut plan, base) = shard_plan(d, &digest)?;
     // A relative file path in the sweep's `[grid]` or `[base]` names a file beside the sweep
     // file, not beside the shard's copy of it: the runs are resolved from the sweep file's
@@ -117,42 +103,8 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
-    // The manifest's shard `[k, n]` (1 <= k <= n, as `--shard` takes) and every row of the
-    // shard in it (`id % n == k - 1`): a shard holding another's rows is damaged.
-    let shard = m
-        .get("shard")
-        .and_then(|s| s.as_array())
-        .and_then(|a| match a.as_slice() {
-            [k, n] => Some((k.as_u64()?, n.as_u64()?)),
-            _ => None,
-        });
-    let Some((k, n)) = shard.filter(|&(k, n)| (1..=n).contains(&k)) else {
-        return Err(fail(
-            exit::DATAERR,
-            format!(
-                "{}/sweep.json: shard must be [k, n] with 1 <= k <= n",
-                d.display()
-            ),
-        ));
-    };
-    match &shards.first {
-        Some((t0, d0, _)) if *t0 != t || *d0 != digest => {
-            return Err(fail(
-                exit::DATAERR,
-                format!(
-                    "{}: a different sweep from {} (sweep file, base scenario or seed differ: digest {digest} vs {d0})",
-                    d.display(),
-                    dirs[0].display()
-                ),
-            ));
-        }
-        Some((_, _, m0)) => {
-            let first = recorded_files(m0);
-            let against = format!("in {}'s", dirs[0].display());
-            check_data_files(d, &m, &first, &against)?;
-        }
-        None => shards.first = Some((t, digest, m)),
-    }
+    let (k, n) = manifest_shard(d, &m)?;
+    check_same_sweep(shards, d, dirs, t, digest, m)?;
     let path = d.join("results.csv");
     let header = read_header(&path)?;
     if !header.is_empty() && header != csv_line(&expected) {
@@ -187,6 +139,80 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     shards.rows.extend(idx.rows);
     shards.sources.push(path);
     Ok(())
+}
+
+/// Which sweep shard `d`'s manifest `m` is of: its run count (`total_runs`) and its `digest`
+/// (of the sweep file, base scenario and seed; a manifest without one was made by an older
+/// isotrack and is refused).
+fn manifest_identity(d: &Path, m: &serde_json::Value) -> Result<(u64, String), Failure> {
+    let t = m["total_runs"].as_u64().ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!("{}/sweep.json: no total_runs", d.display()),
+        )
+    })?;
+    let digest = m["digest"].as_str().map(str::to_string).ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}/sweep.json: no digest (made by an older isotrack): run that shard again",
+                d.display()
+            ),
+        )
+    })?;
+    Ok((t, digest))
+}
+
+/// The manifest's shard `[k, n]` (1 <= k <= n, as `--shard` takes): every row of the shard
+/// must be in it (`id % n == k - 1`), a shard holding another's rows is damaged.
+fn manifest_shard(d: &Path, m: &serde_json::Value) -> Result<(u64, u64), Failure> {
+    let shard = m
+        .get("shard")
+        .and_then(|s| s.as_array())
+        .and_then(|a| match a.as_slice() {
+            [k, n] => Some((k.as_u64()?, n.as_u64()?)),
+            _ => None,
+        });
+    shard.filter(|&(k, n)| (1..=n).contains(&k)).ok_or_else(|| {
+        fail(
+            exit::DATAERR,
+            format!(
+                "{}/sweep.json: shard must be [k, n] with 1 <= k <= n",
+                d.display()
+            ),
+        )
+    })
+}
+
+/// Shard `d` (`t` runs, `digest`, manifest `m`) is of the same sweep as the first shard read,
+/// over the same data files; the first shard is recorded as the one the others are held to.
+fn check_same_sweep(
+    shards: &mut Shards,
+    d: &Path,
+    dirs: &[PathBuf],
+    t: u64,
+    digest: String,
+    m: serde_json::Value,
+) -> Result<(), Failure> {
+    match &shards.first {
+        Some((t0, d0, _)) if *t0 != t || *d0 != digest => Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: a different sweep from {} (sweep file, base scenario or seed differ: digest {digest} vs {d0})",
+                d.display(),
+                dirs[0].display()
+            ),
+        )),
+        Some((_, _, m0)) => {
+            let first = recorded_files(m0);
+            let against = format!("in {}'s", dirs[0].display());
+            check_data_files(d, &m, &first, &against)
+        }
+        None => {
+            shards.first = Some((t, digest, m));
+            Ok(())
+        }
+    }
 }
 
 /// Refuses runs that appear more than once (`dupes`) or are missing from the sorted `rows` of
