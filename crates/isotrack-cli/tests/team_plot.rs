@@ -84,7 +84,8 @@ fn team_figures_and_their_numbers() {
     // Titled by the scenario, not "4 runs".
     assert!(team.contains("team-circular-4"));
 
-    // A vehicle cell that is not one of the team's: 65 naming the row, no figure.
+    // A vehicle cell that is not one of the team's: 65 naming its line (file line 4, the third
+    // row: att32f-8, it was named "row 3"), no figure.
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let mut lines: Vec<String> = trace.lines().map(str::to_string).collect();
     let last = lines[3].rfind(',').unwrap();
@@ -99,7 +100,7 @@ fn team_figures_and_their_numbers() {
     common::assert_fails(
         &o,
         65,
-        &["trace.csv row 3", "not one of the team's 4 vehicles"],
+        &["trace.csv:4:", "not one of the team's 4 vehicles"],
     );
     // att32: a row missing (vehicle 2's at the second recorded time, file line 8: header, four
     // rows at t = 0, then vehicles 0 and 1) pairs vehicle 2's positions with the others' at
@@ -729,5 +730,111 @@ fn a_summary_that_does_not_match_its_team_is_refused() {
             d.path().join(format!("{name}.html")).to_str().unwrap(),
         ]);
         common::assert_fails(&o, 65, needles);
+    }
+}
+
+/// att32f-8: a vehicle whose summary ends it later than its rows is refused naming that
+/// vehicle and its line in trace.csv (the file's line, header included). Vehicle 0 leaves the
+/// field at 0.68 s, between the recorded times 0.6 and 0.7 s: its last row, alone at 0.68 s, is
+/// its end. With `vehicles[0].t_end_s` set to 30 s, or vehicle 0 `completed` at 60 s, that row
+/// is named (before the fix: "trace.csv:31: vehicle 1's row 8 is at t = 0.7000000000000001
+/// s, but recorded time 8 is t = 0.68 s", a right row blamed); with its last row cut (its rows
+/// then end at 0.6 s, on the recorded times, against its end at 0.68 s) the run was drawn; now
+/// its new last row is named.
+#[test]
+fn a_summary_end_that_is_not_the_traces_names_the_vehicle_and_its_line() {
+    let d = tempfile::tempdir().unwrap();
+    let out = vehicle_0_leaves(d.path());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["vehicles"][0]["outcome"], "left_field");
+    let t0 = summary["vehicles"][0]["t_end_s"].as_f64().unwrap();
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    // Vehicle 0's rows: (file line, time cell, time).
+    let rows0: Vec<(usize, &str, f64)> = trace
+        .lines()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, l)| l.ends_with(",0"))
+        .map(|(n, l)| {
+            let t = l.split(',').next().unwrap();
+            (n + 1, t, t.parse().unwrap())
+        })
+        .collect();
+    let (line0, cell0, last_t) = *rows0.last().unwrap();
+    assert_eq!(last_t, t0);
+    // Its end is off the recorded times: the only row at that time.
+    let at_end = trace
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').next() == Some(cell0))
+        .count();
+    assert_eq!(at_end, 1, "vehicle 0's end at {t0} s is a recorded time");
+    let (line_before, cell_before, _) = rows0[rows0.len() - 2];
+    let cut: String = trace
+        .lines()
+        .enumerate()
+        .filter(|(n, _)| n + 1 != line0)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    type Edit = fn(&mut serde_json::Value);
+    let later: Edit = |s| s["vehicles"][0]["t_end_s"] = serde_json::json!(30.0);
+    let completed: Edit = |s| {
+        s["vehicles"][0]["t_end_s"] = serde_json::json!(60.0);
+        s["vehicles"][0]["outcome"] = serde_json::json!("completed");
+    };
+    let none: Edit = |_| {};
+    let named = format!("trace.csv:{line0}: vehicle 0's last row is at t = {cell0} s");
+    let cases: [(&str, Edit, &str, Vec<String>); 3] = [
+        (
+            "later",
+            later,
+            &trace,
+            vec![
+                named.clone(),
+                "summary.json's vehicles[0] ends it at t = 30 s (left_field)".into(),
+            ],
+        ),
+        (
+            "completed",
+            completed,
+            &trace,
+            vec![
+                named,
+                "summary.json's vehicles[0] ends it at t = 60 s (completed)".into(),
+            ],
+        ),
+        (
+            "cut",
+            none,
+            &cut,
+            vec![
+                format!("trace.csv:{line_before}: vehicle 0's rows end at t = {cell_before} s"),
+                format!("summary.json's vehicles[0] ends it at t = {cell0} s (left_field)"),
+            ],
+        ),
+    ];
+    for (name, edit, t, needles) in cases {
+        let dir = d.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::copy(out.join("scenario.toml"), dir.join("scenario.toml")).unwrap();
+        std::fs::write(dir.join("trace.csv"), t).unwrap();
+        let mut s = summary.clone();
+        edit(&mut s);
+        std::fs::write(
+            dir.join("summary.json"),
+            serde_json::to_string_pretty(&s).unwrap(),
+        )
+        .unwrap();
+        let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+        let o = isotrack(&["plot", dir.to_str().unwrap(), "--format", "svg"]);
+        common::assert_fails(&o, 65, &needles);
+        let o = isotrack(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("{name}.html")).to_str().unwrap(),
+        ]);
+        common::assert_fails(&o, 65, &needles);
     }
 }
