@@ -97,7 +97,8 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
 }
 
 /// `team.spacing = "arc_reference"` needs the true isoline's arc length (a radial field that
-/// does not drift, for now): refused before anything is written (exit 65).
+/// does not drift, its circle inside its `domain_m` if it has one, for now): refused before
+/// anything is written (exit 65).
 pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
     let arc_law = scenario.spec().team.as_ref().is_some_and(|t| {
         matches!(
@@ -108,7 +109,7 @@ pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
     if arc_law && scenario.team_arc().is_none() {
         return Err(Failure {
             code: exit::DATAERR,
-            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift only, for now".into(),
+            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift (its circle inside the field's domain_m) only, for now".into(),
         });
     }
     Ok(())
