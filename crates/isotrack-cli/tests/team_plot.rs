@@ -838,3 +838,97 @@ fn a_summary_end_that_is_not_the_traces_names_the_vehicle_and_its_line() {
         common::assert_fails(&o, 65, &needles);
     }
 }
+
+/// The circular field of team-circular-4 inside `domain_m` [-20, 20]^2, a 20 s run, the
+/// `[team]` table `team` (four robots under `range_balance` unless it says otherwise).
+fn domain_team(team: &str) -> String {
+    format!(
+        r#"name = "team-domain"
+[field]
+kind = "radial_exp"
+i0 = 20.0
+decay_per_m = 0.1
+center_m = [0.0, 0.0]
+domain_m = [-20.0, 20.0, -20.0, 20.0]
+[vehicle]
+kind = "dubins"
+speed_mps = 0.5
+[controller]
+kind = "pi_isoline"
+level = 10.0
+kp = 10.0
+ki = 1.0
+c1 = 0.2
+c2 = 1.0
+[sim]
+dt_s = 0.01
+duration_s = 20.0
+[team]
+spacing = "range_balance"
+k_v = 0.1
+v_min_mps = 0.25
+v_max_mps = 0.75
+{team}
+"#
+    )
+}
+
+/// att32f-3: four robots start at x = 19.9 m heading out of the domain and all leave the field
+/// within the first second, long before the steady window (16 s to 20 s). `summary.json`'s
+/// `revisit_time_max_s` is null, and team.svg draws no revisit curve (labelled so): every bin
+/// of `TeamTracks::revisit_max` is NaN (before the fix about 0.3 s each, the open interval at
+/// the last row, as if the loop were revisited within 0.3 s). The time axis runs to the last
+/// vehicle's end, `TeamTracks::end_s`, the latest `t_end_s` in summary.json. With two robots,
+/// one on the circle through the run and one leaving at once, the gaps stop within the first
+/// second while the axis runs to the run's 20 s.
+#[test]
+fn a_team_gone_before_the_window_has_no_revisit_curve() {
+    let d = tempfile::tempdir().unwrap();
+    let out = run_and_plot(
+        d.path(),
+        &domain_team(
+            "count = 4\nstarts = [{ x_m = 19.9, y_m = 0.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 1.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 2.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 3.0, heading_rad = 0.0 }]",
+        ),
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["team"]["revisit_time_max_s"].is_null(), "{}", s["team"]);
+    let ends: Vec<f64> = (0..4)
+        .map(|i| {
+            assert_eq!(s["vehicles"][i]["outcome"], "left_field");
+            s["vehicles"][i]["t_end_s"].as_f64().unwrap()
+        })
+        .collect();
+    let last = ends.iter().copied().fold(0.0, f64::max);
+    assert!(last < 1.0, "{ends:?}");
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert_eq!(tracks.end_s(), last);
+    let ss = vehicles[0].steady_state_start_s();
+    assert_eq!(ss, 16.0, "the last 20 % of 20 s");
+    let revisit = tracks.revisit_max(ss);
+    assert!(!revisit.is_empty() && revisit.iter().all(|r| r.1.is_nan()));
+    let svg = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(svg.contains("no revisit time: no vehicle live in the steady window"));
+    assert!(!svg.contains("revisit time, steady window"));
+
+    let d2 = tempfile::tempdir().unwrap();
+    let out = run_and_plot(
+        d2.path(),
+        &domain_team(
+            "count = 2\nstarts = [{ x_m = 6.931471805599, y_m = 0.0, heading_rad = -1.570796326795 }, { x_m = 19.9, y_m = 2.0, heading_rad = 0.0 }]",
+        ),
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["vehicles"][0]["outcome"], "completed");
+    assert_eq!(s["vehicles"][1]["outcome"], "left_field");
+    assert!(s["team"]["revisit_time_max_s"].as_f64().is_some());
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert_eq!(tracks.end_s(), 20.0);
+    let gaps = tracks.gaps(1);
+    assert!(gaps.last().unwrap().0 < 1.0, "{:?}", gaps.last());
+    let svg = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(svg.contains("revisit time, steady window"));
+}
