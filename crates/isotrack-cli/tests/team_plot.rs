@@ -84,7 +84,8 @@ fn team_figures_and_their_numbers() {
     // Titled by the scenario, not "4 runs".
     assert!(team.contains("team-circular-4"));
 
-    // A vehicle cell that is not one of the team's: 65 naming the row, no figure.
+    // A vehicle cell that is not one of the team's: 65 naming its line (file line 4, the third
+    // row: att32f-8, it was named "row 3"), no figure.
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let mut lines: Vec<String> = trace.lines().map(str::to_string).collect();
     let last = lines[3].rfind(',').unwrap();
@@ -99,7 +100,7 @@ fn team_figures_and_their_numbers() {
     common::assert_fails(
         &o,
         65,
-        &["trace.csv row 3", "not one of the team's 4 vehicles"],
+        &["trace.csv:4:", "not one of the team's 4 vehicles"],
     );
     // att32: a row missing (vehicle 2's at the second recorded time, file line 8: header, four
     // rows at t = 0, then vehicles 0 and 1) pairs vehicle 2's positions with the others' at
@@ -730,4 +731,204 @@ fn a_summary_that_does_not_match_its_team_is_refused() {
         ]);
         common::assert_fails(&o, 65, needles);
     }
+}
+
+/// att32f-8: a vehicle whose summary ends it later than its rows is refused naming that
+/// vehicle and its line in trace.csv (the file's line, header included). Vehicle 0 leaves the
+/// field at 0.68 s, between the recorded times 0.6 and 0.7 s: its last row, alone at 0.68 s, is
+/// its end. With `vehicles[0].t_end_s` set to 30 s, or vehicle 0 `completed` at 60 s, that row
+/// is named (before the fix: "trace.csv:31: vehicle 1's row 8 is at t = 0.7000000000000001
+/// s, but recorded time 8 is t = 0.68 s", a right row blamed); with its last row cut (its rows
+/// then end at 0.6 s, on the recorded times, against its end at 0.68 s) the run was drawn; now
+/// its new last row is named.
+#[test]
+fn a_summary_end_that_is_not_the_traces_names_the_vehicle_and_its_line() {
+    let d = tempfile::tempdir().unwrap();
+    let out = vehicle_0_leaves(d.path());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["vehicles"][0]["outcome"], "left_field");
+    let t0 = summary["vehicles"][0]["t_end_s"].as_f64().unwrap();
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    // Vehicle 0's rows: (file line, time cell, time).
+    let rows0: Vec<(usize, &str, f64)> = trace
+        .lines()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, l)| l.ends_with(",0"))
+        .map(|(n, l)| {
+            let t = l.split(',').next().unwrap();
+            (n + 1, t, t.parse().unwrap())
+        })
+        .collect();
+    let (line0, cell0, last_t) = *rows0.last().unwrap();
+    assert_eq!(last_t, t0);
+    // Its end is off the recorded times: the only row at that time.
+    let at_end = trace
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').next() == Some(cell0))
+        .count();
+    assert_eq!(at_end, 1, "vehicle 0's end at {t0} s is a recorded time");
+    let (line_before, cell_before, _) = rows0[rows0.len() - 2];
+    let cut: String = trace
+        .lines()
+        .enumerate()
+        .filter(|(n, _)| n + 1 != line0)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    type Edit = fn(&mut serde_json::Value);
+    let later: Edit = |s| s["vehicles"][0]["t_end_s"] = serde_json::json!(30.0);
+    let completed: Edit = |s| {
+        s["vehicles"][0]["t_end_s"] = serde_json::json!(60.0);
+        s["vehicles"][0]["outcome"] = serde_json::json!("completed");
+    };
+    let none: Edit = |_| {};
+    let named = format!("trace.csv:{line0}: vehicle 0's last row is at t = {cell0} s");
+    let cases: [(&str, Edit, &str, Vec<String>); 3] = [
+        (
+            "later",
+            later,
+            &trace,
+            vec![
+                named.clone(),
+                "summary.json's vehicles[0] ends it at t = 30 s (left_field)".into(),
+            ],
+        ),
+        (
+            "completed",
+            completed,
+            &trace,
+            vec![
+                named,
+                "summary.json's vehicles[0] ends it at t = 60 s (completed)".into(),
+            ],
+        ),
+        (
+            "cut",
+            none,
+            &cut,
+            vec![
+                format!("trace.csv:{line_before}: vehicle 0's rows end at t = {cell_before} s"),
+                format!("summary.json's vehicles[0] ends it at t = {cell0} s (left_field)"),
+            ],
+        ),
+    ];
+    for (name, edit, t, needles) in cases {
+        let dir = d.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::copy(out.join("scenario.toml"), dir.join("scenario.toml")).unwrap();
+        std::fs::write(dir.join("trace.csv"), t).unwrap();
+        let mut s = summary.clone();
+        edit(&mut s);
+        std::fs::write(
+            dir.join("summary.json"),
+            serde_json::to_string_pretty(&s).unwrap(),
+        )
+        .unwrap();
+        let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+        let o = isotrack(&["plot", dir.to_str().unwrap(), "--format", "svg"]);
+        common::assert_fails(&o, 65, &needles);
+        let o = isotrack(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("{name}.html")).to_str().unwrap(),
+        ]);
+        common::assert_fails(&o, 65, &needles);
+    }
+}
+
+/// The circular field of team-circular-4 inside `domain_m` [-20, 20]^2, a 20 s run, the
+/// `[team]` table `team` (four robots under `range_balance` unless it says otherwise).
+fn domain_team(team: &str) -> String {
+    format!(
+        r#"name = "team-domain"
+[field]
+kind = "radial_exp"
+i0 = 20.0
+decay_per_m = 0.1
+center_m = [0.0, 0.0]
+domain_m = [-20.0, 20.0, -20.0, 20.0]
+[vehicle]
+kind = "dubins"
+speed_mps = 0.5
+[controller]
+kind = "pi_isoline"
+level = 10.0
+kp = 10.0
+ki = 1.0
+c1 = 0.2
+c2 = 1.0
+[sim]
+dt_s = 0.01
+duration_s = 20.0
+[team]
+spacing = "range_balance"
+k_v = 0.1
+v_min_mps = 0.25
+v_max_mps = 0.75
+{team}
+"#
+    )
+}
+
+/// att32f-3: four robots start at x = 19.9 m heading out of the domain and all leave the field
+/// within the first second, long before the steady window (16 s to 20 s). `summary.json`'s
+/// `revisit_time_max_s` is null, and team.svg draws no revisit curve (labelled so): every bin
+/// of `TeamTracks::revisit_max` is NaN (before the fix about 0.3 s each, the open interval at
+/// the last row, as if the loop were revisited within 0.3 s). The time axis runs to the last
+/// vehicle's end, `TeamTracks::end_s`, the latest `t_end_s` in summary.json. With two robots,
+/// one on the circle through the run and one leaving at once, the gaps stop within the first
+/// second while the axis runs to the run's 20 s.
+#[test]
+fn a_team_gone_before_the_window_has_no_revisit_curve() {
+    let d = tempfile::tempdir().unwrap();
+    let out = run_and_plot(
+        d.path(),
+        &domain_team(
+            "count = 4\nstarts = [{ x_m = 19.9, y_m = 0.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 1.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 2.0, heading_rad = 0.0 }, { x_m = 19.9, y_m = 3.0, heading_rad = 0.0 }]",
+        ),
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["team"]["revisit_time_max_s"].is_null(), "{}", s["team"]);
+    let ends: Vec<f64> = (0..4)
+        .map(|i| {
+            assert_eq!(s["vehicles"][i]["outcome"], "left_field");
+            s["vehicles"][i]["t_end_s"].as_f64().unwrap()
+        })
+        .collect();
+    let last = ends.iter().copied().fold(0.0, f64::max);
+    assert!(last < 1.0, "{ends:?}");
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert_eq!(tracks.end_s(), last);
+    let ss = vehicles[0].steady_state_start_s();
+    assert_eq!(ss, 16.0, "the last 20 % of 20 s");
+    let revisit = tracks.revisit_max(ss);
+    assert!(!revisit.is_empty() && revisit.iter().all(|r| r.1.is_nan()));
+    let svg = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(svg.contains("no revisit time: no vehicle live in the steady window"));
+    assert!(!svg.contains("revisit time, steady window"));
+
+    let d2 = tempfile::tempdir().unwrap();
+    let out = run_and_plot(
+        d2.path(),
+        &domain_team(
+            "count = 2\nstarts = [{ x_m = 6.931471805599, y_m = 0.0, heading_rad = -1.570796326795 }, { x_m = 19.9, y_m = 2.0, heading_rad = 0.0 }]",
+        ),
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["vehicles"][0]["outcome"], "completed");
+    assert_eq!(s["vehicles"][1]["outcome"], "left_field");
+    assert!(s["team"]["revisit_time_max_s"].as_f64().is_some());
+    let vehicles = RunData::load_team(&out).unwrap();
+    let tracks = TeamTracks::new(&vehicles).unwrap();
+    assert_eq!(tracks.end_s(), 20.0);
+    let gaps = tracks.gaps(1);
+    assert!(gaps.last().unwrap().0 < 1.0, "{:?}", gaps.last());
+    let svg = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    assert!(svg.contains("revisit time, steady window"));
 }

@@ -494,3 +494,52 @@ fn a_discovered_table_that_is_not_a_ring_is_refused_with_a_warning() {
         serde_json::json!([[1, 3], [2, 0], [3, 1], [0, 2]])
     );
 }
+
+/// att32f-7: `team.spacing = "arc_reference"` on the radial field with a `domain_m` that holds
+/// the whole circle (`[-20, 20]^2`, radius `10 ln 2 = 6.93` m) runs, along the exact circle:
+/// `isoline_length_m` is `2 pi (10 ln 2)` to 1e-9 (it was refused, 65, "known for a radial field
+/// that does not drift only"; and `range_balance` there measured along the marching-squares
+/// polygon, 43.5516 m). A domain that cuts the circle (`y <= 6` m) is still refused, naming the
+/// key, before anything is written.
+#[test]
+fn arc_reference_runs_on_a_circle_inside_the_domain() {
+    let d = tempfile::tempdir().unwrap();
+    let l = 2.0 * PI * 10.0 * LN_2;
+    for law in ["arc_reference", "range_balance"] {
+        let out = d.path().join(law);
+        let o = isotrack(&[
+            "run",
+            TEAM,
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "sim.duration_s=20.0",
+            "--set",
+            "field.domain_m=[-20.0, 20.0, -20.0, 20.0]",
+            "--set",
+            &format!("team.spacing=\"{law}\""),
+        ]);
+        assert!(o.status.success(), "{law}: {}", common::stderr(&o));
+        let t = &json(&out.join("summary.json"))["team"];
+        assert_eq!(t["spacing"], law);
+        assert_eq!(t["coordinate_free"], law == "range_balance");
+        let got = t["isoline_length_m"].as_f64().unwrap();
+        assert!((got - l).abs() < 1e-9, "{law}: {got} vs {l}");
+    }
+    let out = d.path().join("cut");
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "sim.duration_s=20.0",
+        "--set",
+        "field.domain_m=[-20.0, 20.0, -20.0, 6.0]",
+        "--set",
+        "team.spacing=\"arc_reference\"",
+    ]);
+    assert_fails(&o, 65, &["arc_reference", "needs the isoline's arc length"]);
+    assert!(!out.join("summary.json").exists());
+}

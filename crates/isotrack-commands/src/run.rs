@@ -72,13 +72,20 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
     let mut out = format!("team        {} vehicles", t.runs.len());
     match &t.team {
         Some(m) => {
+            // An open isoline's ideal is NaN without a steady-window sample of two vehicles
+            // on it (`null` in summary.json): `n/a` as its neighbours print (att32f-4).
+            let ideal = m.revisit_time_ideal_s;
+            let ideal = if ideal.is_finite() {
+                format!("{ideal:.2} s")
+            } else {
+                "n/a".to_string()
+            };
             out += &format!(
-                "  gap_cv {}  time_to_even {}  revisit max {} (ideal {:.2} s)  min separation {}\n",
+                "  gap_cv {}  time_to_even {}  revisit max {} (ideal {ideal})  min separation {}\n",
                 fmt_opt(m.gap_cv),
                 m.time_to_even_s
                     .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
                 fmt_opt_unit(m.revisit_time_max_s, "s"),
-                m.revisit_time_ideal_s,
                 fmt_opt_unit(m.min_separation_m, "m"),
             );
         }
@@ -90,7 +97,8 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
 }
 
 /// `team.spacing = "arc_reference"` needs the true isoline's arc length (a radial field that
-/// does not drift, for now): refused before anything is written (exit 65).
+/// does not drift, its circle inside its `domain_m` if it has one, for now): refused before
+/// anything is written (exit 65).
 pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
     let arc_law = scenario.spec().team.as_ref().is_some_and(|t| {
         matches!(
@@ -101,7 +109,7 @@ pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
     if arc_law && scenario.team_arc().is_none() {
         return Err(Failure {
             code: exit::DATAERR,
-            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift only, for now".into(),
+            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift (its circle inside the field's domain_m) only, for now".into(),
         });
     }
     Ok(())
@@ -352,5 +360,42 @@ mod tests {
             .collect();
         assert!(left.is_empty(), "trace files left: {left:?}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// att32f-4: an open isoline's ideal revisit time with no steady-window sample of two
+    /// vehicles is NaN (`null` in summary.json): the console prints `n/a` as for its
+    /// neighbours (it printed `ideal NaN s`); a finite one prints as before, to 0.01 s.
+    #[test]
+    fn a_team_line_prints_no_nan() {
+        let summary = |ideal: f64| isotrack_sim::team::metrics::TeamSummary {
+            count: 4,
+            isoline_length_m: 41.33,
+            gap_cv: None,
+            gap_cv_final: None,
+            time_to_even_s: None,
+            revisit_time_max_s: None,
+            revisit_time_mean_s: None,
+            revisit_time_ideal_s: ideal,
+            revisit_time_ideal_active_s: None,
+            min_separation_m: Some(9.8026),
+            order_preserved: true,
+            speed_range_mps: None,
+            moving_isoline: None,
+            open_isoline: None,
+        };
+        let line = |ideal: f64| {
+            team_summary(&isotrack_sim::TeamResult {
+                runs: Vec::new(),
+                team: Some(summary(ideal)),
+                ring: Vec::new(),
+                warnings: Vec::new(),
+            })
+        };
+        let nan = line(f64::NAN);
+        assert_eq!(
+            nan,
+            "team        0 vehicles  gap_cv n/a  time_to_even never  revisit max n/a (ideal n/a)  min separation 9.8026e0 m\n"
+        );
+        assert!(line(21.7656).contains("(ideal 21.77 s)"));
     }
 }

@@ -1462,7 +1462,13 @@ impl TeamFigureData {
         let stride = tracks.rows.div_ceil(2000).max(1);
         let gaps = tracks.gaps(stride);
         let ss = first.steady_state_start_s();
-        let revisit = tracks.revisit_max(ss);
+        let mut revisit = tracks.revisit_max(ss);
+        // The figure agrees with summary.json: no revisit time where the metrics have none
+        // (no vehicle live in the steady window; att32f-3).
+        let team = first.summary.team().and_then(|t| t.metrics.as_ref());
+        if team.is_some_and(|m| m.revisit_time_max_s.is_none()) {
+            revisit.iter_mut().for_each(|r| r.1 = f64::NAN);
+        }
         let v0 = first
             .scenario
             .spec()
@@ -1482,7 +1488,6 @@ impl TeamFigureData {
             (l / (n as f64 * v0), l / n as f64)
         } else {
             // The metrics' own numbers for the stretch the team covered (NaN: none).
-            let team = first.summary.team().and_then(|t| t.metrics.as_ref());
             (
                 team.and_then(|m| m.revisit_time_ideal_s)
                     .unwrap_or(f64::NAN),
@@ -1510,7 +1515,12 @@ impl TeamFigureData {
         let map_range = [cx - half, cx + half, cy - half, cy + half];
         padded_axis("x_m", map_range[0], map_range[1], 0.0, 0.0)?;
         padded_axis("y_m", map_range[2], map_range[3], 0.0, 0.0)?;
-        let t_end = gaps.last().map_or(1e-9, |g| g.0).max(1e-9);
+        // To the last vehicle's end (att32f-3: the gaps' last time, which stops once fewer than
+        // two vehicles are left, cut the axis short of the run).
+        let t_end = tracks
+            .end_s()
+            .max(gaps.last().map_or(0.0, |g| g.0))
+            .max(1e-9);
         padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
         let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
         let (glo, ghi) = padded_axis("gap_m", glo.min(0.0), ghi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
@@ -1657,14 +1667,20 @@ pub fn team_figure(
                     });
             }
             let c = colour(1);
+            let revisits = finite_runs(revisit.iter().copied());
+            let label = if revisits.is_empty() {
+                "no revisit time: no vehicle live in the steady window"
+            } else {
+                "revisit time, steady window"
+            };
             bottom
                 .draw_series(
-                    finite_runs(revisit.iter().copied())
+                    revisits
                         .into_iter()
                         .map(|r| PathElement::new(r, c.stroke_width(w2))),
                 )
                 .map_err(s)?
-                .label("revisit time, steady window")
+                .label(label)
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                 });

@@ -63,6 +63,23 @@ fn check_team_lists(run: &RunData, n: usize) -> Result<(), String> {
     }
 }
 
+/// How `summary.json`'s `vehicles[i]` ends vehicle `i`, for a message: "ends it at t = T s
+/// (OUTCOME)".
+fn vehicle_end(summary: &Summary, i: usize) -> String {
+    let Ended::Run(end) = &summary.ended else {
+        return "is not there".into();
+    };
+    match end.vehicles.as_ref().and_then(|v| v.get(i)) {
+        Some(v) => format!(
+            "ends it at t = {} ({})",
+            v.t_end_s
+                .map_or_else(|| "?".to_string(), |t| format!("{} s", Echo(t))),
+            v.outcome
+        ),
+        None => "is not there".into(),
+    }
+}
+
 /// A run whose `summary.json` has no `team` object (att32f-2): its trace must not be a team's (a
 /// `vehicle` column: the single-run figures would join every vehicle's rows into one path), nor
 /// its summary have a `vehicles` list, nor its scenario a `[team]` (a run of it has a `team`).
@@ -159,12 +176,22 @@ impl RunData {
             }
         }
         let mut done = vec![false; n];
+        // Each vehicle's last row (its index in the file), and for each recorded time the row
+        // that set it and how many rows are at it: a time set by a vehicle's last row alone is
+        // that vehicle's end off the recorded times (att32f-8).
+        let mut last_row = vec![usize::MAX; n];
+        for (row, id) in ids.iter().enumerate() {
+            if let Some(i) = id.filter(|&i| i < n) {
+                last_row[i] = row;
+            }
+        }
+        let mut time_set_by: Vec<(usize, usize, u64)> = Vec::new();
+        let mut rows_at: Vec<usize> = Vec::new();
         for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
             let Some(i) = id.filter(|&i| i < n) else {
                 return Err(PlotError::Data(format!(
-                    "{}: trace.csv row {}: the vehicle column is not one of the team's {n} vehicles",
+                    "{}: trace.csv:{line}: the vehicle column is not one of the team's {n} vehicles",
                     dir.display(),
-                    row + 1
                 )));
             };
             if let Some(e) = end_of[i].filter(|e| t.t_s > e + 1e-9 * e.abs().max(1.0)) {
@@ -194,8 +221,31 @@ impl RunData {
             }
             if times.last() != Some(&t.t_s) {
                 times.push(t.t_s);
+                time_set_by.push((i, row, *line));
+                rows_at.push(0);
+            }
+            if let Some(c) = rows_at.last_mut() {
+                *c += 1;
             }
             if times.get(k) != Some(&t.t_s) {
+                // The time this vehicle skipped was set by another vehicle's last row, alone
+                // at it: that vehicle's row off the recorded times, which only its end is, but
+                // its summary ends it elsewhere (a later end, or `completed`). It is named,
+                // not this vehicle (att32f-8: "vehicle 0's row 5" was blamed at a line that was
+                // right).
+                if let Some(&(j, jrow, jline)) = time_set_by.get(k) {
+                    if j != i && jrow == last_row[j] && rows_at[k] == 1 && times[k] < t.t_s {
+                        return Err(PlotError::Data(format!(
+                            "{}: trace.csv:{jline}: vehicle {j}'s last row is at t = {} s, alone between the recorded times{} and t = {} s (trace.csv:{line}), as a vehicle's row is only at its end, but summary.json's vehicles[{j}] {}: the summary is not this trace's, or a row of vehicle {j} is missing",
+                            dir.display(),
+                            Echo(times[k]),
+                            k.checked_sub(1)
+                                .map_or(String::new(), |p| format!(" t = {} s", Echo(times[p]))),
+                            Echo(t.t_s),
+                            vehicle_end(&all.summary, j),
+                        )));
+                    }
+                }
                 return Err(PlotError::Data(format!(
                     "{}: trace.csv:{line}: vehicle {i}'s row {} is at t = {} s, but recorded time {} is {}: a row of the team's trace is missing or out of order (each vehicle has a row at every recorded time until it ends)",
                     dir.display(),
@@ -226,6 +276,25 @@ impl RunData {
                         last_line[i],
                         traces[i].last().map_or("?".to_string(), |r| Echo(r.t_s).to_string()),
                         Echo(times[times.len() - 1])
+                    )));
+                }
+            }
+        }
+        // Every vehicle's rows end at its end (its last valid state is always written, at the
+        // step it ended): a vehicle whose summary ends it later than its last row (a row cut,
+        // or another run's summary) is refused naming its last row (att32f-8).
+        if let Ended::Run(end) = &all.summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                let Some((e, last)) = v.t_end_s.zip(traces[i].last()) else {
+                    continue;
+                };
+                if last.t_s < e - 1e-9 * e.abs().max(1.0) {
+                    return Err(PlotError::Data(format!(
+                        "{}: trace.csv:{}: vehicle {i}'s rows end at t = {} s, but summary.json's vehicles[{i}] {}: a row of the team's trace is missing, or the summary is not this trace's",
+                        dir.display(),
+                        last_line[i],
+                        Echo(last.t_s),
+                        vehicle_end(&all.summary, i),
                     )));
                 }
             }

@@ -193,6 +193,16 @@ impl<'a> TeamTracks<'a> {
         self.vehicles[self.clock].trace[k].t_s
     }
 
+    /// The last vehicle's end, s: the latest of the vehicles' last rows (each at its own end,
+    /// on the recorded times or off them), where the team figure's time axis ends (att32f-3:
+    /// it ended at the gaps' last time, which stops once fewer than two vehicles are left).
+    pub fn end_s(&self) -> f64 {
+        self.vehicles
+            .iter()
+            .filter_map(|v| v.trace.last().map(|r| r.t_s))
+            .fold(self.time_s(self.rows - 1), f64::max)
+    }
+
     /// Whether the isoline is closed (else open: gaps and revisit times over the stretch the
     /// team covers, as `summary.json`'s `team.open_isoline`).
     pub fn is_closed(&self) -> bool {
@@ -267,7 +277,10 @@ impl<'a> TeamTracks<'a> {
     /// in the team's stretch (from the vehicle at the back to the one in front), so a bin's
     /// first visit ends an interval only if the first row's stretch held it, and the open
     /// interval at the last row counts for the last row's stretch; a bin the team never covered
-    /// is NaN.
+    /// is NaN. Every bin is NaN when the team ended before the window (no vehicle's row in it:
+    /// `summary.json`'s `revisit_time_max_s` is then `null`; att32f-3: the open interval at the
+    /// last row was drawn as the bins' revisit time, a loop nobody flew "revisited within
+    /// 0.3 s").
     pub fn revisit_max(&self, t0_s: f64) -> Vec<(f64, f64)> {
         let l = self.length_m();
         let bins = REVISIT_BINS;
@@ -275,6 +288,11 @@ impl<'a> TeamTracks<'a> {
         let Some(last_row) = self.rows.checked_sub(1) else {
             return vec![];
         };
+        if self.end_s() < t0_s {
+            return (0..bins)
+                .map(|j| ((j as f64 + 0.5) * width, f64::NAN))
+                .collect();
+        }
         let t_end = self.time_s(last_row);
         let t_start = self.time_s(0);
         let closed = self.is_closed();

@@ -262,7 +262,11 @@ impl MovingArc for PuffArc {
 
 impl Scenario {
     /// The circle of a radial field that does not drift (`None` otherwise): the exact isoline
-    /// of [`Scenario::team_isoline`] there.
+    /// of [`Scenario::team_isoline`] there. With a `domain_m`, the circle when it lies inside
+    /// the domain (its box `center -+ R` within the domain's, touching allowed): the field is
+    /// the same along it, so it is the isoline whole (att32f-7: `arc_reference` was refused
+    /// there, and the metrics measured along its marching-squares polygon); a domain that cuts
+    /// the circle leaves open arcs, measured as an open isoline.
     pub fn team_arc(&self) -> Option<CircleArc> {
         match self.isoline() {
             IsolineOracle::Circle {
@@ -273,8 +277,37 @@ impl Scenario {
                 center_m: *center_m,
                 radius_m: *radius_m,
             }),
-            _ => None,
+            _ => self.circle_inside_domain(),
         }
+    }
+
+    /// A radial field's circle at the level when the field has a `domain_m` containing it and
+    /// does not drift.
+    fn circle_inside_domain(&self) -> Option<CircleArc> {
+        let FieldModel::Analytic(f) = self.field() else {
+            return None;
+        };
+        let (AnalyticKind::RadialExp(r), Some([x0, x1, y0, y1])) = (&f.kind, f.domain_m) else {
+            return None;
+        };
+        let level = self.level();
+        if f.drift_mps.x != 0.0
+            || f.drift_mps.y != 0.0
+            || !(r.i0 > 0.0 && level > 0.0 && level < r.i0 && r.decay_per_m > 0.0)
+        {
+            return None;
+        }
+        let radius_m = (r.i0 / level).ln() / r.decay_per_m;
+        let c = r.center_m;
+        let inside = radius_m.is_finite()
+            && x0 <= c.x - radius_m
+            && c.x + radius_m <= x1
+            && y0 <= c.y - radius_m
+            && c.y + radius_m <= y1;
+        inside.then_some(CircleArc {
+            center_m: c,
+            radius_m,
+        })
     }
 
     /// The true isoline for the team metrics and the `arc_reference` law: the circle of a

@@ -909,3 +909,40 @@ fn the_listed_ring_closes_around_a_vehicle_that_ends_early() {
         assert_eq!(r.ring[gone], None);
     }
 }
+
+/// att32f-9: a vehicle whose run ends (here `diverged`) at the run's last step leaves the ring
+/// as one ending earlier does, while the vehicles that completed keep theirs: the ring at the
+/// end (`summary.json`'s `team.neighbours`) is the listed ring `ahead(i) = i + 1` of the three
+/// others. Before the fix the ring was not closed once no run went on, and the gone vehicle
+/// stayed vehicle 1's "ahead" and vehicle 3's "behind" (`[[1,3],[2,0],[3,1],[0,2]]`).
+#[test]
+fn a_vehicle_that_ends_at_the_last_step_leaves_the_ring() {
+    let duration_s = 2.0;
+    // Its controller answers NaN at the sample at `duration_s` (the last step) only.
+    let r = one_ends_early(2, duration_s - 0.5 * DT, duration_s, f64::INFINITY);
+    for (i, run) in r.runs.iter().enumerate() {
+        let want = if i == 2 {
+            isotrack_sim::Outcome::Diverged
+        } else {
+            isotrack_sim::Outcome::Completed
+        };
+        assert_eq!(run.outcome, want, "{i}");
+    }
+    // It ended at the last step: its last valid state is the step before.
+    assert!(
+        (r.runs[2].t_end_s - (duration_s - DT)).abs() < 1e-9,
+        "{}",
+        r.runs[2].t_end_s
+    );
+    assert_eq!(
+        r.ring,
+        vec![Some([1, 3]), Some([3, 0]), None, Some([0, 1])],
+        "the ring of 0 -> 1 -> 3 -> 0"
+    );
+    // Nobody ends: the whole listed ring stays.
+    let all = one_ends_early(2, f64::INFINITY, duration_s, f64::INFINITY);
+    assert_eq!(
+        all.ring,
+        vec![Some([1, 3]), Some([2, 0]), Some([3, 1]), Some([0, 2])]
+    );
+}

@@ -64,10 +64,12 @@ pub struct TeamSummary {
     /// standard deviation over mean) of the arc-length gaps between consecutive vehicles along
     /// the isoline (0: evenly spread). `None` without a sample in the window.
     pub gap_cv: Option<f64>,
-    /// The gap CV at the last sample.
+    /// The gap CV at the last sample (`None` when that sample has none: fewer than two
+    /// vehicles live on a closed isoline, fewer than three on an open one).
     pub gap_cv_final: Option<f64>,
     /// First sample time from which the gap CV stays at or below `even_gap_cv` to the end
-    /// (`None`: not evenly spread at the end).
+    /// (`None`: not evenly spread at the end, which a sample without a gap CV is not: the
+    /// team then has no gaps to be even).
     pub time_to_even_s: Option<f64>,
     /// Longest age of a point of the isoline over the steady window, s: the age is the time
     /// since a vehicle last passed the point, that pass counted wherever it was (before the
@@ -468,6 +470,7 @@ impl TeamMetrics {
             return;
         }
         if count < 2 {
+            self.no_gap_cv();
             return;
         }
         self.scratch
@@ -503,6 +506,7 @@ impl TeamMetrics {
         let count = self.scratch.len();
         if count == 0 {
             self.stretch_bins = None;
+            self.no_gap_cv();
             return;
         }
         self.scratch
@@ -520,6 +524,7 @@ impl TeamMetrics {
             }
         }
         if count < 2 {
+            self.no_gap_cv();
             return;
         }
         let stretch = hi - lo;
@@ -541,6 +546,7 @@ impl TeamMetrics {
         }
         // A gap CV needs two gaps (one has no spread) and a stretch of positive length.
         if count < 3 || mean.is_nan() || mean <= 0.0 {
+            self.no_gap_cv();
             return;
         }
         let cv = (var / (count - 1) as f64).sqrt() / mean;
@@ -554,6 +560,17 @@ impl TeamMetrics {
             self.cv_sum += cv;
             self.cv_count += 1;
         }
+    }
+
+    /// A sample without a gap CV (too few vehicles live on the isoline: att32f-4/-6): the
+    /// final gap CV is none, and the team is not evenly spread from it on (`time_to_even_s`
+    /// restarts at the next sample that is). Before, such a sample left both as the last
+    /// sample with a CV had them: `gap_cv_final` a number (even from `t = 0`) with one or no
+    /// vehicle live at the end, and `time_to_even_s` 0 on an open isoline whose evenly
+    /// deployed team had all gone.
+    fn no_gap_cv(&mut self) {
+        self.cv_last = None;
+        self.even_since = None;
     }
 
     /// Vehicle `i`'s position at the current sample (kept in `last_p` for an open isoline).
@@ -1098,5 +1115,57 @@ mod tests {
         m.observe(3, &arc, &p, &[1.0; 3], &[true; 3]);
         assert!(!m.finish().order_preserved);
         assert!(m.finish().gap_cv.unwrap() > 0.0);
+    }
+
+    /// att32f-6/-4: `gap_cv_final` is the gap CV at the last sample and `time_to_even_s` the
+    /// start of the last run of even samples up to it; a sample without a gap CV (one vehicle
+    /// live on a loop, fewer than three on an open isoline) has neither. On the unit circle,
+    /// three points a third apart (CV 0, even from t = 0); vehicle 2 gone: the gaps of the
+    /// two left are `2 pi/3` and `4 pi/3`, mean `pi`, CV `(pi/3)/pi = 1/3` by hand; vehicle 1
+    /// gone too: no gap CV (before the fix: 1/3 and even from 0 whatever came after). On an
+    /// open line, three points 10 m apart (CV 0, even from 0), then all gone: none of either
+    /// (before: `time_to_even_s` 0, `gap_cv_final` 0, where a loop's team gone gave none).
+    #[test]
+    fn the_final_gap_cv_is_the_last_samples() {
+        let arc = CircleArc {
+            center_m: Vec2::new(0.0, 0.0),
+            radius_m: 1.0,
+        };
+        let mut m = TeamMetrics::new(TeamMetricsConfig::default(), 3, 2.0 * PI, 1.0, 1.0);
+        let at = |th: f64| Vec2::new(th.cos(), th.sin());
+        let third = 2.0 * PI / 3.0;
+        let p = [at(0.0), at(third), at(2.0 * third)];
+        m.observe(0, &arc, &p, &[1.0; 3], &[true; 3]);
+        let s = m.finish();
+        assert!(s.gap_cv_final.unwrap() < 1e-12);
+        assert_eq!(s.time_to_even_s, Some(0.0));
+        m.observe(1, &arc, &p, &[1.0; 3], &[true, true, false]);
+        let s = m.finish();
+        assert!((s.gap_cv_final.unwrap() - 1.0 / 3.0).abs() < 1e-12, "{s:?}");
+        assert_eq!(s.time_to_even_s, None);
+        m.observe(2, &arc, &p, &[1.0; 3], &[true, false, false]);
+        let s = m.finish();
+        assert_eq!(s.gap_cv_final, None, "one vehicle live: no gaps");
+        assert_eq!(s.time_to_even_s, None);
+        assert!(
+            (s.gap_cv.unwrap() - 1.0 / 6.0).abs() < 1e-12,
+            "mean of 0, 1/3"
+        );
+        m.observe(3, &arc, &p, &[1.0; 3], &[false; 3]);
+        assert_eq!(m.finish().gap_cv_final, None);
+
+        let line = PolylineArc::open(vec![Vec2::new(0.0, 0.0), Vec2::new(100.0, 0.0)]).unwrap();
+        let mut o = TeamMetrics::new(TeamMetricsConfig::default(), 3, 100.0, 1.0, 1.0).open();
+        let x = |a: f64| Vec2::new(a, 0.0);
+        let q = [x(10.0), x(20.0), x(30.0)];
+        o.observe(0, &line, &q, &[1.0; 3], &[true; 3]);
+        let s = o.finish();
+        assert_eq!((s.gap_cv_final, s.time_to_even_s), (Some(0.0), Some(0.0)));
+        o.observe(1, &line, &q, &[1.0; 3], &[true, true, false]);
+        let s = o.finish();
+        assert_eq!((s.gap_cv_final, s.time_to_even_s), (None, None), "one gap");
+        o.observe(2, &line, &q, &[1.0; 3], &[false; 3]);
+        let s = o.finish();
+        assert_eq!((s.gap_cv_final, s.time_to_even_s), (None, None), "all gone");
     }
 }

@@ -177,8 +177,8 @@ pub struct TeamResult {
     /// The team metrics (with an isoline to project on).
     pub team: Option<TeamSummary>,
     /// Each vehicle's `[ahead, behind]` neighbours as used at the end (`None` before a ring was
-    /// found, and for a vehicle whose run ended before the others': it left the ring, which
-    /// closed around it).
+    /// found, and for a vehicle whose run ended other than by completing, even at the last
+    /// step: it left the ring, which closed around it).
     pub ring: Vec<Option<[u32; 2]>>,
     /// The engine's warnings about the run (a discovered ring that was not one ring: the
     /// spacing law turned off), for the run's `warnings`.
@@ -833,19 +833,25 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
     /// (docs/TEAMS.md "Vehicles that end early"; [`leave_ring`]): its end is announced to its
     /// two neighbours, who range their new neighbours from the next step on. A neighbour whose
     /// neighbour changed forgets the range it held ([`HeldRange`]); one left alone flies its
-    /// nominal speed. `O(1)` unless a run ended (then `O(N)` per ended vehicle); nothing once
-    /// every run has ended. During ring discovery no ring exists yet: the vehicles that ended
-    /// leave the found ring when it is complete ([`Group::discover_step`]).
+    /// nominal speed. `O(1)` unless a run ended (then `O(N)` per ended vehicle). At the run's
+    /// last step the vehicles that completed stay in the ring (`summary.json`'s
+    /// `team.neighbours` is the ring at the end), but a vehicle that ended otherwise at that
+    /// same step leaves it (att32f-9: the ring was not closed once no run went on, so such a
+    /// vehicle stayed its neighbours' neighbour). During ring discovery no ring exists yet: the
+    /// vehicles that ended leave the found ring when it is complete ([`Group::discover_step`]).
     fn close_ring(&mut self) {
         if self.running >= self.ring_running {
             return;
         }
         self.ring_running = self.running;
-        if self.running == 0 || self.discovery.is_some() {
+        if self.discovery.is_some() {
             return;
         }
         for i in 0..self.n {
-            if self.left_ring[i] || self.runs[i].is_running() {
+            if self.left_ring[i]
+                || self.runs[i].is_running()
+                || self.runs[i].outcome() == Some(Outcome::Completed)
+            {
                 continue;
             }
             self.left_ring[i] = true;
