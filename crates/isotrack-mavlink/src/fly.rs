@@ -664,10 +664,11 @@ struct Flight<'a, S: ?Sized> {
     leave_seen: Option<LeaveSeen>,
     /// Heartbeats of the vehicle's ids handled.
     heartbeats: u64,
-    /// When the vehicle's last heartbeat (in sequence) came, and the gaps between its last
-    /// few, s: how long a pilot's word waits for confirmation ([`Flight::confirm_span`]).
+    /// When the vehicle's last heartbeat (in sequence) came, and the longest gap between two
+    /// in sequence over the flight, s: how long a pilot's word waits for confirmation
+    /// ([`Flight::confirm_span`]).
     beat_at: Option<Instant>,
-    beat_gaps_s: [f64; 4],
+    longest_beat_gap_s: f64,
     /// Armed and in OFFBOARD this turn.
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
@@ -998,7 +999,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             leave_seen: None,
             heartbeats: 0,
             beat_at: None,
-            beat_gaps_s: [0.0; 4],
+            longest_beat_gap_s: 0.0,
             active: false,
             in_control: false,
             arm_sent: false,
@@ -2605,27 +2606,38 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.leave_seen.as_ref().is_some_and(|l| !l.confirmed)
     }
 
-    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted.
+    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted,
+    /// the longest kept ([`Flight::confirm_span`]).
     fn note_beat(&mut self) {
         let now = Instant::now();
         if let Some(at) = self.beat_at {
-            self.beat_gaps_s[(self.heartbeats % 4) as usize] = now.duration_since(at).as_secs_f64();
+            let gap_s = now.duration_since(at).as_secs_f64();
+            self.longest_beat_gap_s = self.longest_beat_gap_s.max(gap_s);
         }
         self.beat_at = Some(now);
     }
 
     /// How long a pilot's word shown by the vehicle's heartbeats must stand, none contradicting,
-    /// before it is taken ([`LeaveSeen`]): 1.1 x the longest of the gaps between its last four
-    /// heartbeats (1 s, PX4's period, before four were heard), within [0.05, 5] s: long enough
-    /// that the vehicle flown, if the heartbeats were another's, has beaten meanwhile.
+    /// before it is taken ([`LeaveSeen`]), and a failsafe's way out shown by them before it is
+    /// confirmed: 1.1 x the vehicle's heartbeat period, within [1.1, 5] s: long enough that the
+    /// vehicle flown, if the heartbeats were another's, has beaten meanwhile (att33f-1).
+    ///
+    /// The period is the LONGEST gap between two heartbeats of the ids in sequence over the
+    /// whole flight, at least 1 s (MAVLink's nominal 1 Hz heartbeat; PX4's and ArduPilot's),
+    /// not a guess of the next gap from the last few: a second vehicle with the ids beating
+    /// faster than the vehicle flown (its beats in sequence count as the vehicle's: the two
+    /// cannot be told apart before they disagree), a heartbeat rate dropped (5 Hz to 1 Hz, a
+    /// stream-rate change) or a jitter's long gap after short ones shortened such a guess below
+    /// the vehicle's own period, and a second vehicle's word then stood before the vehicle
+    /// flown beat. A maximum only grows: nothing a second sender sends can shorten it, so it
+    /// needs no freezing on a sign of one, a pending word or a failsafe (freezing could only
+    /// keep it shorter); a long gap (a heartbeat lost) lengthens the wait for a pilot's word,
+    /// which ends the flight however it turns out and commands nothing against the pilot
+    /// meanwhile. Not covered: a vehicle whose period is longer than any gap seen so far and
+    /// than 1 s (its first long jitter gap, or a vehicle beating slower than 1 Hz).
     fn confirm_span(&self) -> Duration {
-        let longest = self.beat_gaps_s.iter().fold(0.0f64, |m, &g| m.max(g));
-        let gap_s = if self.heartbeats > 4 {
-            longest
-        } else {
-            1.0f64.max(longest)
-        };
-        Duration::from_secs_f64((1.1 * gap_s).clamp(0.05, 5.0))
+        let period_s = self.longest_beat_gap_s.max(1.0);
+        Duration::from_secs_f64((1.1 * period_s).min(5.0))
     }
 
     /// Whether the vehicle's arming and mode, as its heartbeats show them, are a pilot's word

@@ -433,7 +433,7 @@ fn a_second_autopilot_in_control_gets_the_way_out() {
 }
 
 /// ver33b-5: in control, the pilot disarms (the heartbeat disarmed, time-stamped frames pause)
-/// and Ctrl-C comes 0.3 s later, inside the reboot watch: the disarm is the pilot's, nothing is
+/// and Ctrl-C comes 0.5 s after the disarm is confirmed, inside the reboot watch: the disarm is the pilot's, nothing is
 /// commanded (no HOLD on the pilot's disarmed vehicle).
 #[test]
 fn a_failsafe_in_the_reboot_watch_commands_nothing() {
@@ -441,14 +441,16 @@ fn a_failsafe_in_the_reboot_watch_commands_nothing() {
         seq: 0,
         ids: (1, 1),
     };
-    // The pilot's disarm at 1.0 s of this clock, the Ctrl-C at 1.3 s: inside the 1 s watch.
+    // The pilot's disarm at 1.0 s of this clock, confirmed once its heartbeats have shown it
+    // for the span (1.1 x the 1 s floor of the heartbeat period: at ~2.1 s), the Ctrl-C at
+    // 2.6 s: inside the 1 s watch that follows (and before the sensor's 2 s timeout, 3.0 s).
     let t0 = Instant::now();
     let r = fly_against_with(
         20.0,
         |o| {
             let stop = o.stop.clone();
             std::thread::spawn(move || {
-                std::thread::sleep(Duration::from_millis(1300));
+                std::thread::sleep(Duration::from_millis(2600));
                 stop.store(true, std::sync::atomic::Ordering::SeqCst);
             });
         },
@@ -696,26 +698,34 @@ fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
     );
 }
 
-/// att33e-6: one vehicle over a link that delivers a frame late at every turn (its measurement
-/// and position swapped) from its pilot's switch to POSCTL on: the late frames are no second
+/// att33e-6: one vehicle (1 Hz heartbeat, measurements every 40 ms) over a link that delivers
+/// a frame late once a second (at phase 0.5 s two consecutive frames swapped: att33e's
+/// `--swap-every 1`), its pilot switching to POSCTL at 2.5 s: the late frames are no second
 /// sender's, the pilot's word stands once the heartbeats have shown it for longer than their
-/// period: `pilot_took_over`, nothing commanded (before: never confirmed, the flight flown on
-/// to its end and HOLD commanded against the pilot).
+/// period (at the 5 s heartbeat): `pilot_took_over`, nothing commanded (before att33e-6's fix:
+/// never confirmed, the flight flown on to its end and HOLD commanded against the pilot). (A
+/// swap at every 50 ms turn, as this test once sent with a 20 Hz heartbeat, is 12 late frames
+/// in 512 within 0.6 s: two senders' interleaving by the rule, before the span of a 1 s
+/// heartbeat period.)
 #[test]
-fn a_pilots_switch_over_a_link_that_reorders_every_turn_stands() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
-    let r = fly_against(20.0, move |k| {
-        let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
-        if k >= 20 {
-            out.swap(1, 2);
+fn a_pilots_switch_over_a_link_that_reorders_once_a_second_stands() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut swaps = Beats::new(0.5, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat, ms);
+        if swaps.due(t) {
+            let n = out.len();
+            out.swap(n - 2, n - 1);
         }
         out
     });
@@ -783,4 +793,196 @@ fn a_failsafe_while_a_pilots_word_awaits_confirmation_commands_nothing() {
         "{:?}",
         r.events
     );
+}
+
+/// A schedule of heartbeats on the companion's wall clock: the first at `first_s`, then one
+/// after each of `gaps_s` in turn (cycled), s.
+struct Beats {
+    next_s: f64,
+    gaps_s: Vec<f64>,
+    i: usize,
+}
+
+impl Beats {
+    fn new(first_s: f64, gaps_s: &[f64]) -> Self {
+        Self {
+            next_s: first_s,
+            gaps_s: gaps_s.to_vec(),
+            i: 0,
+        }
+    }
+
+    /// Whether a beat is due at `t_s` (then the next one is scheduled).
+    fn due(&mut self, t_s: f64) -> bool {
+        if t_s < self.next_s {
+            return false;
+        }
+        self.next_s += self.gaps_s[self.i % self.gaps_s.len()];
+        self.i += 1;
+        true
+    }
+}
+
+/// `fly` (tweaked as [`fly_against_with`]) against a vehicle (ids 1, 1) on wall time: its
+/// heartbeat whenever `vehicle(t_s)` gives one (`t_s` since the start), its measurement and
+/// position every 40 ms (stamped with the wall clock); and a second vehicle with the same ids
+/// behind the same socket beating whenever `twin(t_s)` gives a heartbeat, its frame counter
+/// 100 ahead of the vehicle's (each sender's frames in sequence: only their interleaving steps
+/// back).
+fn vehicle_and_twin(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    mut vehicle: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+    mut twin: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+) -> FlyReport {
+    let mut a = Sender {
+        seq: 0,
+        ids: (1, 1),
+    };
+    let mut b = Sender {
+        seq: 100,
+        ids: (1, 1),
+    };
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    fly_against_with(max_duration_s, tweak, false, move |_| {
+        let t_s = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t_s * 1000.0) as u32;
+        let beat = vehicle(t_s);
+        let mut msgs = Vec::new();
+        if ms >= last_ms + 40 || beat.is_some() {
+            // A heartbeat after the turn's measurement: never the vehicle's first frame after
+            // the second vehicle's (which steps back, and is dropped as late if a heartbeat).
+            last_ms = ms;
+            msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
+        }
+        msgs.extend(beat);
+        let mut out = datagrams(a.frames(&msgs));
+        if let Some(hb) = twin(t_s) {
+            // Its counter kept 100 ahead of the vehicle's (a sender of more frames): each of
+            // its frames steps forward, the vehicle's next one back (out of sequence).
+            b.seq = a.seq.wrapping_add(100);
+            out.extend(datagrams(b.frames(&[hb])));
+        }
+        out
+    })
+}
+
+/// The number of tries in the way out's last word ("... (N tries, ...)").
+fn way_out_tries(r: &FlyReport) -> Option<u32> {
+    r.events.iter().rev().find_map(|e| {
+        let (_, rest) = e.split_once(" (")?;
+        rest.split_once(" tries")?.0.parse().ok()
+    })
+}
+
+/// Asserts that a flight with a second vehicle's heartbeats ended `vehicle_lost` with HOLD
+/// commanded more than once and never unconfirmed-confirmed: no `pilot_took_over` (at the
+/// flight's end or during the failsafe's retries), the vehicle flown (which never leaves
+/// OFFBOARD here) not reported in HOLD.
+fn assert_twin_never_the_pilot(r: &FlyReport) {
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle did not confirm the HOLD")),
+        "{:?}",
+        r.events
+    );
+    assert!(way_out_tries(r).is_some_and(|n| n >= 2), "{:?}", r.events);
+}
+
+/// att33f-1 (N3): the vehicle flown (the pilot's OFFBOARD) beats at 1 Hz; from 2.05 s a second
+/// vehicle with its ids beats at 5 Hz, armed in OFFBOARD (in agreement: its beats in sequence
+/// count as the vehicle's), then from 3.1 s disarmed in MANUAL. The span is the vehicle's own
+/// period (1.1 x 1 s), not a fifth of it: the vehicle's 4.0 s heartbeat contradicts the
+/// second vehicle's word (`vehicle_lost`, HOLD commanded), and during the retries its 5 Hz
+/// beats never stand either (B1, att33f-4): the HOLD is retried, never "a pilot took over".
+/// Before: the twin's beats made the span 0.22 s: `pilot_took_over` at ~3.5 s, nothing
+/// commanded, the vehicle left armed in OFFBOARD.
+#[test]
+fn a_fast_twin_in_agreement_then_disarmed_is_no_pilots_word() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.05, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| {
+            other.due(t).then(|| {
+                if t < 3.1 {
+                    heartbeat(6)
+                } else {
+                    heartbeat_disarmed(1)
+                }
+            })
+        },
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// att33f-1 (N8): the vehicle beats at 5 Hz, then at 1 Hz from 2.6 s (a stream-rate change,
+/// at 2.45 s); from 2.65 s a second vehicle with its ids beats disarmed in MANUAL at 5 Hz. The
+/// span is at least 1.1 s (a 1 Hz heartbeat's), never the 5 Hz gaps': the vehicle's 3.6 s
+/// heartbeat contradicts (`vehicle_lost`, HOLD retried). Before: span 0.22 s,
+/// `pilot_took_over` at ~3.05 s.
+#[test]
+fn a_heartbeat_rate_drop_does_not_shorten_the_span() {
+    let mut own = Beats::new(0.0, &[0.2]);
+    let mut slow = false;
+    let mut other = Beats::new(2.65, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| {
+            if t >= 2.45 && !slow {
+                slow = true;
+                own = Beats::new(own.next_s.max(2.45), &[1.0]);
+            }
+            own.due(t).then(|| heartbeat(6))
+        },
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// att33f-1 (N1): the vehicle's heartbeat jitters, gaps of 0.5 s four times then 1.5 s (beats
+/// at 0, 0.5, 1, 1.5, 2, 3.5, ..., 5.5, 7); a second vehicle with its ids beats disarmed in
+/// MANUAL at 5 Hz from 5.55 s, the start of a 1.5 s gap after four of 0.5 s. The span is the
+/// longest gap seen (1.1 x 1.5 s), not the last four's (0.55 s): the vehicle's 7 s heartbeat
+/// contradicts (`vehicle_lost`, HOLD retried). Before: `pilot_took_over` at ~6.15 s.
+#[test]
+fn heartbeat_jitter_does_not_shorten_the_span() {
+    let mut own = Beats::new(0.0, &[0.5, 0.5, 0.5, 0.5, 1.5]);
+    let mut other = Beats::new(5.55, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// The vehicle's sender: ids (1, 1), its frame counter from 0.
+fn vehicle_sender() -> Sender {
+    Sender {
+        seq: 0,
+        ids: (1, 1),
+    }
+}
+
+/// One turn of the vehicle's frames: its heartbeat `hb` (if any), then its measurement (9.5)
+/// and position (at the origin), both stamped `ms`.
+fn turn_frames(a: &mut Sender, hb: Option<MavMessage>, ms: u32) -> Vec<Vec<u8>> {
+    let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+    msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
+    datagrams(a.frames(&msgs))
 }
