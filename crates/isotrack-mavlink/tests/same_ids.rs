@@ -986,3 +986,125 @@ fn turn_frames(a: &mut Sender, hb: Option<MavMessage>, ms: u32) -> Vec<Vec<u8>> 
     msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
     datagrams(a.frames(&msgs))
 }
+
+/// A PX4 ground rover's heartbeat, armed, in PX4 main mode `main` and sub mode `sub` (4, 3:
+/// AUTO.LOITER, the failsafe's HOLD).
+fn heartbeat_sub(main: u32, sub: u32) -> MavMessage {
+    let mut hb = heartbeat(main);
+    if let MavMessage::HEARTBEAT(h) = &mut hb {
+        h.custom_mode = (main << 16) | (sub << 24);
+    }
+    hb
+}
+
+/// att33f-3 (N10c): in control (the pilot's OFFBOARD, 1 Hz heartbeat), Ctrl-C at 2.5 s starts
+/// the failsafe: HOLD, never acknowledged nor carried out (the vehicle stays armed in OFFBOARD).
+/// From 2.65 s a second vehicle with its ids beats armed in AUTO.LOITER (the HOLD commanded) at
+/// 1 Hz. Its heartbeat confirms nothing before it has stood for the span with none
+/// contradicting, and the vehicle's OFFBOARD heartbeats contradict it every second: the HOLD
+/// is retried to the bound and reported not confirmed (exit 69). Before: "the vehicle is in
+/// HOLD (1 tries)" at the second vehicle's first heartbeat (exit 75), the vehicle flown left in
+/// OFFBOARD with nobody sending setpoints.
+#[test]
+fn a_twins_heartbeat_in_the_mode_commanded_confirms_no_failsafe() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.65, &[1.0]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(2500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| other.due(t).then(|| heartbeat_sub(4, 3)),
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("the vehicle is in")),
+        "{:?}",
+        r.events
+    );
+    assert!(way_out_tries(&r).is_some_and(|n| n >= 2), "{:?}", r.events);
+}
+
+/// The way out shown by the vehicle's own heartbeats (one sender, 1 Hz: it goes to AUTO.LOITER
+/// at 3.2 s, after Ctrl-C at 2.5 s) is confirmed once they have shown it for the span (1.1 s:
+/// at the third heartbeat in HOLD, 6 s), as before only later: exit 75, "the vehicle is in
+/// HOLD".
+#[test]
+fn the_vehicles_own_hold_is_confirmed_after_the_span() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(2500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 3.2 {
+                    heartbeat(6)
+                } else {
+                    heartbeat_sub(4, 3)
+                }
+            })
+        },
+        |_| None,
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle is in HOLD")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// A vehicle whose unchanging heartbeat (armed in OFFBOARD, 1 Hz) always falls on one frame
+/// number (7: its frames between span the other 255 numbers, 100 of them lost in a fade every
+/// second): each heartbeat is identical to the last frame with its number, but ahead of the
+/// newest, a new frame, never dropped as a copy delivered again: the flight is flown to its
+/// `max_duration_s` (found while testing att33f-1's rate drop: a heartbeat 256 frames after an
+/// identical one was dropped as a copy since 2535521, and the failsafe's retries then took a
+/// second vehicle's word for the pilot's; here, no heartbeat after the first was heard:
+/// `link_lost` at 3 s).
+#[test]
+fn a_heartbeat_on_the_number_of_the_last_one_is_no_copy() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut fades = Beats::new(0.5, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(5.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(6));
+        if beat.is_some() {
+            a.seq = 7;
+        }
+        if fades.due(t) {
+            a.seq = a.seq.wrapping_add(100);
+        }
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        turn_frames(&mut a, beat, ms)
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("two vehicles")),
+        "{:?}",
+        r.events
+    );
+}
