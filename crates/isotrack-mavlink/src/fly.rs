@@ -2950,9 +2950,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mode = self.opts.failsafe.mode();
         if self.in_control {
             Some(WayOut::Mode(mode))
-        } else if self.armed && self.armed_by_us {
+        } else if self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed, whatever mode
-            // it was switched to (ver33c-6).
+            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6).
             Some(WayOut::Disarm)
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
@@ -2982,9 +2982,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
             Some(WayOut::Mode(mode))
-        } else if stopping && self.armed && self.armed_by_us {
+        } else if stopping && self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
-            // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6).
+            // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6);
+            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing.
             Some(WayOut::Disarm)
         } else if end == FlyEnd::ControlRefused
             && self
@@ -3268,6 +3269,14 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
             Some(l) if !l.confirmed => l.before,
             _ => (self.custom_mode, self.armed),
         }
+    }
+
+    /// Whether the forced disarm is owed on the way out: the companion armed the vehicle on
+    /// the ground and never had it in control, and no confirmed heartbeat shows it disarmed
+    /// (ver33c-6; att33f-6: a second vehicle's disarmed heartbeat, unconfirmed, is no reason
+    /// to skip it).
+    fn disarm_owed(&self) -> bool {
+        self.armed_by_us && !self.in_control && (self.armed || self.confirmed_state().1)
     }
 
     /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:

@@ -733,32 +733,43 @@ fn a_pilots_switch_over_a_link_that_reorders_once_a_second_stands() {
     assert!(!r.way_out_commanded, "{:?}", r.events);
 }
 
-/// att33f-2: after the pilot's switch to POSCTL (and one pair of frames swapped: a frame out of
-/// sequence), a byte-identical copy of the last OFFBOARD heartbeat is delivered again: a copy of
-/// a frame already handled is no news, never applied: `pilot_took_over`, nothing commanded
-/// (before: read as a second vehicle's contradiction, `vehicle_lost`, HOLD against the pilot).
+/// att33f-2 (N7's order): the vehicle (the pilot's OFFBOARD, 1 Hz heartbeat) is switched to
+/// MANUAL by its pilot at 2.5 s (heartbeats in MANUAL from 3 s); at 3.05 s one pair of frames
+/// is swapped (a frame out of sequence), at 3.1 s the 2 s OFFBOARD heartbeat is delivered
+/// again, byte-identical (a retransmitting radio). A copy of a frame already handled is no
+/// news, never applied: the pilot's word stands (`pilot_took_over` at the 5 s heartbeat),
+/// nothing commanded. Before (92cda41): the copy was applied as the vehicle's state, read as a
+/// second vehicle's contradiction with the swapped frame between: `vehicle_lost`, HOLD
+/// commanded against the pilot.
 #[test]
 fn a_late_copy_of_a_heartbeat_is_no_news() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
     let mut kept: Option<Vec<u8>> = None;
-    let r = fly_against(20.0, move |k| {
-        let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
-        if k == 19 {
-            kept = Some(out[0].clone());
+    let (mut swapped, mut copied) = (false, false);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own
+            .due(t)
+            .then(|| if t < 2.5 { heartbeat(6) } else { heartbeat(1) });
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
         }
-        if k == 20 {
-            out.swap(1, 2);
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat.clone(), ms);
+        if beat.is_some() && (2.0..2.5).contains(&t) {
+            kept = out.first().cloned();
         }
-        if k == 21 {
-            out.insert(1, kept.take().unwrap());
+        if t >= 3.05 && !swapped {
+            swapped = true;
+            out.swap(0, 1);
+        }
+        if t >= 3.1 && !copied {
+            copied = true;
+            out.extend(kept.take());
         }
         out
     });
@@ -1104,6 +1115,52 @@ fn a_heartbeat_on_the_number_of_the_last_one_is_no_copy() {
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
     assert!(
         !r.events.iter().any(|e| e.contains("two vehicles")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33f-6 (C4, N9a): `--take-control --arm` of a disarmed vehicle (1 Hz heartbeat; it shows
+/// itself armed from 3 s, after the companion's arming, and never goes to OFFBOARD). From 3.5 s
+/// a second vehicle with its ids beats disarmed in MANUAL at 4 Hz; the vehicle's 4 s heartbeat
+/// contradicts it (`vehicle_lost`) and the second vehicle's comes right after. The vehicle the
+/// companion armed on the ground gets the forced disarm (the disarmed heartbeat is not
+/// confirmed: a second vehicle's), retried to the bound, never "a pilot took over". Before:
+/// the last heartbeat's disarmed state skipped the disarm: nothing commanded, the vehicle left
+/// armed on the ground.
+#[test]
+fn a_twin_during_take_control_arm_gets_the_forced_disarm() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(3.5, &[0.25]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            o.take_control = true;
+            o.arm = true;
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 2.9 {
+                    heartbeat_disarmed(1)
+                } else {
+                    heartbeat(1)
+                }
+            })
+        },
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("disarm commanded (armed by the companion, on the ground)")),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
         "{:?}",
         r.events
     );
