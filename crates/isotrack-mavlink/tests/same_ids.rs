@@ -129,10 +129,7 @@ fn fly_against_with(
 /// ids through the same socket, its counter 100 ahead, 2 m from A (no jump in the positions:
 /// only the frame numbers tell the two apart), its measurement 50 where A's is 9.5.
 fn two_senders(main: u32) -> FlyReport {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 100,
         ids: (1, 1),
@@ -196,10 +193,7 @@ fn two_senders_with_the_same_ids_before_control_command_nothing() {
 /// `max_duration_s`, never taken for two.
 #[test]
 fn one_sender_over_a_lossy_reordering_link_is_flown() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut n = 0u32;
     let mut held: Option<Vec<u8>> = None;
     let r = fly_against(3.0, move |k| {
@@ -238,10 +232,7 @@ fn one_sender_over_a_lossy_reordering_link_is_flown() {
 /// together): their positions jump farther than any airframe moves, which ends the flight.
 #[test]
 fn two_vehicles_far_apart_with_the_same_ids_jump() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(6.0, move |k| {
         let ms = 1000 + 50 * k;
         // One counter for both (the numbers alone cannot tell them apart), the positions
@@ -267,10 +258,7 @@ fn two_vehicles_far_apart_with_the_same_ids_jump() {
 /// a second vehicle left at them, or its autopilot changed) ends the flight.
 #[test]
 fn a_heartbeat_of_another_type_with_the_vehicles_ids_ends_the_flight() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(6.0, move |k| {
         let ms = 1000 + 50 * k;
         let mut hb = heartbeat(6);
@@ -279,10 +267,7 @@ fn a_heartbeat_of_another_type_with_the_vehicles_ids_ends_the_flight() {
                 h.mavtype = MavType::MAV_TYPE_QUADROTOR;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(
@@ -334,20 +319,14 @@ fn a_twin_heard_before_the_vehicle_ends_as_another_controller() {
 /// once; the pilot's vehicle is flown to its `max_duration_s`, not ended as a twin's.
 #[test]
 fn a_link_echoing_fly_s_own_frames_is_no_twin() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against_with(
         2.0,
         |_| {},
         true,
         move |k| {
             let ms = 1000 + 50 * k;
-            a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
-                .into_iter()
-                .map(|f| f.1)
-                .collect()
+            turn_frames(&mut a, Some(heartbeat(6)), ms)
         },
     );
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
@@ -365,10 +344,7 @@ fn a_link_echoing_fly_s_own_frames_is_no_twin() {
 /// ends `pilot_took_over`, nothing commanded, and the log says it may be a reboot.
 #[test]
 fn a_disarm_after_a_silence_may_be_a_reboot() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
         if (20..50).contains(&k) {
@@ -380,10 +356,7 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
                 h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
@@ -401,10 +374,7 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
 /// vehicle flown, not "nothing commanded" with the vehicle left in OFFBOARD.
 #[test]
 fn a_second_autopilot_in_control_gets_the_way_out() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 0,
         ids: (4, 1),
@@ -437,10 +407,7 @@ fn a_second_autopilot_in_control_gets_the_way_out() {
 /// commanded (no HOLD on the pilot's disarmed vehicle).
 #[test]
 fn a_failsafe_in_the_reboot_watch_commands_nothing() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     // The pilot's disarm at 1.0 s of this clock, confirmed once its heartbeats have shown it
     // for the span (1.1 x the 1 s floor of the heartbeat period: at ~2.1 s), the Ctrl-C at
     // 2.6 s: inside the 1 s watch that follows (and before the sensor's 2 s timeout, 3.0 s).
@@ -486,10 +453,7 @@ fn a_failsafe_in_the_reboot_watch_commands_nothing() {
 /// on to its `max_duration_s`, not `pilot_took_over` with the vehicle left in OFFBOARD.
 #[test]
 fn an_unknown_mode_in_control_is_no_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(2.5, move |k| {
         let ms = 1000 + 50 * k;
         let mut hb = heartbeat(6);
@@ -498,10 +462,7 @@ fn an_unknown_mode_in_control_is_no_pilots_word() {
                 h.base_mode = MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
 }
@@ -547,7 +508,7 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
         let twin_hb = twin.clone();
         let r = fly_against(20.0, move |k| {
             let ms = 1000 + 50 * k;
-            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            let mut out = turn_frames(&mut a, Some(heartbeat(6)), ms);
             if k >= 20 && k % 20 == 0 {
                 out.extend(datagrams(b.frames(std::slice::from_ref(&twin_hb))));
             }
@@ -576,18 +537,11 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
 /// with HOLD commanded against the pilot).
 #[test]
 fn a_late_heartbeat_after_a_pilots_switch_is_older_news() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut held: Vec<Vec<u8>> = Vec::new();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
+        let mut out = turn_frames(&mut a, Some(heartbeat(if k < 20 { 6 } else { 3 })), ms);
         if k == 19 {
             // Turn 19's OFFBOARD heartbeat is held back and delivered after turn 20's POSCTL one.
             held.push(out.remove(0));
@@ -607,17 +561,10 @@ fn a_late_heartbeat_after_a_pilots_switch_is_older_news() {
 /// `pilot_took_over`, nothing commanded.
 #[test]
 fn a_pilots_switch_on_a_reordering_link_stands() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
+        let mut out = turn_frames(&mut a, Some(heartbeat(if k < 20 { 6 } else { 3 })), ms);
         if k == 20 {
             out.swap(0, 1);
         }
@@ -632,17 +579,10 @@ fn a_pilots_switch_on_a_reordering_link_stands() {
 /// commanded.
 #[test]
 fn one_senders_switch_and_back_is_the_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        datagrams(a.frames(&[
-            heartbeat(if k == 20 { 3 } else { 6 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]))
+        turn_frames(&mut a, Some(heartbeat(if k == 20 { 3 } else { 6 })), ms)
     });
     assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
@@ -662,10 +602,7 @@ fn one_senders_switch_and_back_is_the_pilots_word() {
 /// flown left in OFFBOARD with no setpoints); the HOLD goes on being commanded.
 #[test]
 fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 100,
         ids: (1, 1),
@@ -683,7 +620,7 @@ fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
         false,
         move |k| {
             let ms = 1000 + 50 * k;
-            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            let mut out = turn_frames(&mut a, Some(heartbeat(6)), ms);
             if t0.elapsed() > Duration::from_millis(1600) && k % 4 == 0 {
                 out.extend(datagrams(b.frames(&[heartbeat_disarmed(1)])));
             }
@@ -782,10 +719,7 @@ fn a_late_copy_of_a_heartbeat_is_no_news() {
 /// pilot's word, and nothing is commanded against it (before: HOLD commanded at link_lost).
 #[test]
 fn a_failsafe_while_a_pilots_word_awaits_confirmation_commands_nothing() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
         let msgs = match k {
@@ -846,10 +780,7 @@ fn vehicle_and_twin(
     mut vehicle: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
     mut twin: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
 ) -> FlyReport {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 100,
         ids: (1, 1),
