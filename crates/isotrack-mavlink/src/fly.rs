@@ -319,6 +319,34 @@ enum Answer {
     PilotTookOver(String),
 }
 
+/// A heartbeat's answer during the failsafe's retries awaiting confirmation (att33e-1,
+/// att33f-3): the heartbeats of the vehicle's ids must show it for [`Flight::confirm_span`],
+/// none contradicting, before it is taken, whichever it is (the way out confirmed, another
+/// safe mode, or a pilot's change): a second vehicle with the ids beats too, and its heartbeat
+/// in the mode commanded (or disarmed, for a disarm) would end the retries while the vehicle
+/// flown, which refused them, stays in OFFBOARD.
+struct AnswerSeen {
+    /// A pilot's change ([`Answer::PilotTookOver`]) rather than the way out's (confirmed,
+    /// another safe mode): a heartbeat showing the other kind contradicts it.
+    pilots: bool,
+    /// When the first heartbeat showing it came.
+    at: Instant,
+    /// The vehicle's frames out of sequence by then.
+    out_of_sequence: u64,
+}
+
+/// What the failsafe's retries have seen of the vehicle's heartbeats so far.
+#[derive(Default)]
+struct RetryWatch {
+    /// The answer shown, awaiting confirmation: no retry is sent meanwhile (unless
+    /// `two_senders`).
+    seen: Option<AnswerSeen>,
+    /// An answer was contradicted with frames of the ids out of sequence between: two senders'
+    /// heartbeats disagree, so no answer shown holds the retries back any more (the way out
+    /// goes on being commanded to its bound unless one stands for the span).
+    two_senders: bool,
+}
+
 /// Options of [`run_fly`].
 #[derive(Clone, Debug)]
 pub struct FlyOptions {
@@ -664,10 +692,11 @@ struct Flight<'a, S: ?Sized> {
     leave_seen: Option<LeaveSeen>,
     /// Heartbeats of the vehicle's ids handled.
     heartbeats: u64,
-    /// When the vehicle's last heartbeat (in sequence) came, and the gaps between its last
-    /// few, s: how long a pilot's word waits for confirmation ([`Flight::confirm_span`]).
+    /// When the vehicle's last heartbeat (in sequence) came, and the longest gap between two
+    /// in sequence over the flight, s: how long a pilot's word waits for confirmation
+    /// ([`Flight::confirm_span`]).
     beat_at: Option<Instant>,
-    beat_gaps_s: [f64; 4],
+    longest_beat_gap_s: f64,
     /// Armed and in OFFBOARD this turn.
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
@@ -780,6 +809,8 @@ struct LeaveSeen {
     span: Duration,
     /// The vehicle's frames out of sequence before that heartbeat.
     out_of_sequence: u64,
+    /// The vehicle's mode and arming before that heartbeat (as last confirmed).
+    before: (Option<u32>, bool),
     /// What it showed, in words (`disarmed in MANUAL`).
     what: String,
     /// Confirmed: the pilot's word.
@@ -998,7 +1029,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             leave_seen: None,
             heartbeats: 0,
             beat_at: None,
-            beat_gaps_s: [0.0; 4],
+            longest_beat_gap_s: 0.0,
             active: false,
             in_control: false,
             arm_sent: false,
@@ -2196,8 +2227,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
                 let was_armed = self.armed;
+                let was = (self.custom_mode, self.armed);
                 self.vehicle_heartbeat(h);
-                self.watch_leave(out_of_sequence_before);
+                self.watch_leave(out_of_sequence_before, was);
                 self.note_beat();
                 if was_armed && !self.armed {
                     // A disarm after a silence: a reboot (whose clock need not go back far
@@ -2605,27 +2637,38 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.leave_seen.as_ref().is_some_and(|l| !l.confirmed)
     }
 
-    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted.
+    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted,
+    /// the longest kept ([`Flight::confirm_span`]).
     fn note_beat(&mut self) {
         let now = Instant::now();
         if let Some(at) = self.beat_at {
-            self.beat_gaps_s[(self.heartbeats % 4) as usize] = now.duration_since(at).as_secs_f64();
+            let gap_s = now.duration_since(at).as_secs_f64();
+            self.longest_beat_gap_s = self.longest_beat_gap_s.max(gap_s);
         }
         self.beat_at = Some(now);
     }
 
     /// How long a pilot's word shown by the vehicle's heartbeats must stand, none contradicting,
-    /// before it is taken ([`LeaveSeen`]): 1.1 x the longest of the gaps between its last four
-    /// heartbeats (1 s, PX4's period, before four were heard), within [0.05, 5] s: long enough
-    /// that the vehicle flown, if the heartbeats were another's, has beaten meanwhile.
+    /// before it is taken ([`LeaveSeen`]), and a failsafe's way out shown by them before it is
+    /// confirmed: 1.1 x the vehicle's heartbeat period, within [1.1, 5] s: long enough that the
+    /// vehicle flown, if the heartbeats were another's, has beaten meanwhile (att33f-1).
+    ///
+    /// The period is the LONGEST gap between two heartbeats of the ids in sequence over the
+    /// whole flight, at least 1 s (MAVLink's nominal 1 Hz heartbeat; PX4's and ArduPilot's),
+    /// not a guess of the next gap from the last few: a second vehicle with the ids beating
+    /// faster than the vehicle flown (its beats in sequence count as the vehicle's: the two
+    /// cannot be told apart before they disagree), a heartbeat rate dropped (5 Hz to 1 Hz, a
+    /// stream-rate change) or a jitter's long gap after short ones shortened such a guess below
+    /// the vehicle's own period, and a second vehicle's word then stood before the vehicle
+    /// flown beat. A maximum only grows: nothing a second sender sends can shorten it, so it
+    /// needs no freezing on a sign of one, a pending word or a failsafe (freezing could only
+    /// keep it shorter); a long gap (a heartbeat lost) lengthens the wait for a pilot's word,
+    /// which ends the flight however it turns out and commands nothing against the pilot
+    /// meanwhile. Not covered: a vehicle whose period is longer than any gap seen so far and
+    /// than 1 s (its first long jitter gap, or a vehicle beating slower than 1 Hz).
     fn confirm_span(&self) -> Duration {
-        let longest = self.beat_gaps_s.iter().fold(0.0f64, |m, &g| m.max(g));
-        let gap_s = if self.heartbeats > 4 {
-            longest
-        } else {
-            1.0f64.max(longest)
-        };
-        Duration::from_secs_f64((1.1 * gap_s).clamp(0.05, 5.0))
+        let period_s = self.longest_beat_gap_s.max(1.0);
+        Duration::from_secs_f64((1.1 * period_s).min(5.0))
     }
 
     /// Whether the vehicle's arming and mode, as its heartbeats show them, are a pilot's word
@@ -2649,8 +2692,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// The vehicle's heartbeat just handled: in control or during a take-over, a pilot's word
     /// ([`Flight::shows_pilots_word`]) is watched until confirmed ([`LeaveSeen`]);
     /// `out_of_sequence_before` counts the vehicle's frames out of sequence before this
-    /// heartbeat's.
-    fn watch_leave(&mut self, out_of_sequence_before: u64) {
+    /// heartbeat's, `was` is its mode and arming before it.
+    fn watch_leave(&mut self, out_of_sequence_before: u64, was: (Option<u32>, bool)) {
         self.heartbeats += 1;
         if self.mode_at_first_command.is_some() && self.armed {
             self.armed_since_command = true;
@@ -2671,6 +2714,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     at: Instant::now(),
                     span,
                     out_of_sequence: out_of_sequence_before,
+                    before: was,
                     what: state,
                     confirmed: false,
                     back: false,
@@ -2906,9 +2950,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mode = self.opts.failsafe.mode();
         if self.in_control {
             Some(WayOut::Mode(mode))
-        } else if self.armed && self.armed_by_us {
+        } else if self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed, whatever mode
-            // it was switched to (ver33c-6).
+            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6).
             Some(WayOut::Disarm)
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
@@ -2938,9 +2982,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
         if end.is_failsafe() && (self.in_control || self.target.is_none()) {
             Some(WayOut::Mode(mode))
-        } else if stopping && self.armed && self.armed_by_us {
+        } else if stopping && self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
-            // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6).
+            // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6);
+            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing.
             Some(WayOut::Disarm)
         } else if end == FlyEnd::ControlRefused
             && self
@@ -3046,9 +3091,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
         // retries.
         self.opts.stop.store(false, Ordering::SeqCst);
-        // The vehicle's mode and arming as the failsafe began: a change to anything else than
-        // what is commanded (or another safe mode) is a pilot's.
-        let before = (self.custom_mode, self.armed);
+        // The vehicle's mode and arming as the failsafe began (as last confirmed: not a pilot's
+        // word still awaiting confirmation, which may be a second vehicle's): a change to
+        // anything else than what is commanded (or another safe mode) is a pilot's.
+        let before = self.confirmed_state();
         let retry_end = Instant::now()
             + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
         let mut tries = 0u32;
@@ -3056,9 +3102,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
         // retry would yank back a pilot who took over meanwhile).
         let mut accepted: Option<Instant> = None;
-        // A heartbeat showed a pilot's change, when (att33e-1: taken once it has stood, none
-        // contradicting, for `confirm_span`; no retry meanwhile).
-        let mut pilot_seen: Option<Instant> = None;
+        // A heartbeat's answer awaiting confirmation (att33e-1, att33f-3: taken once it has
+        // stood, none contradicting, for `confirm_span`; no retry meanwhile).
+        let mut watch = RetryWatch::default();
         let span = self.confirm_span();
         // The vehicle refused the way out: an unaddressed refusal may answer someone else's
         // same command (att33e-5), so the retries go on to their bound, which then says so.
@@ -3083,11 +3129,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, bound));
             }
-            if accepted.is_none_or(|at| self.last_heartbeat > at) && pilot_seen.is_none() {
+            if accepted.is_none_or(|at| self.last_heartbeat > at)
+                && (watch.seen.is_none() || watch.two_senders)
+            {
                 tries += 1;
                 self.command(cmd, params)?;
             }
-            match self.await_way_out(way, cmd, before, &mut accepted, (&mut pilot_seen, span))? {
+            match self.await_way_out(way, cmd, before, &mut accepted, (&mut watch, span))? {
                 Some(Answer::Confirmed) => return Ok((true, tries, "")),
                 Some(Answer::OtherSafeMode(name)) => {
                     let asked = match way {
@@ -3122,7 +3170,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         cmd: MavCmd,
         before: (Option<u32>, bool),
         accepted: &mut Option<Instant>,
-        (pilot_seen, span): (&mut Option<Instant>, Duration),
+        (watch, span): (&mut RetryWatch, Duration),
     ) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         // A refusal heard and no acceptance after it: an unaddressed refusal may answer
@@ -3170,18 +3218,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     {
                         refused = true
                     }
-                    MavMessage::HEARTBEAT(h) => match self.heartbeat_answer(h, way, before) {
-                        Some(Answer::PilotTookOver(what)) => {
-                            // A second vehicle with the ids may beat too (att33e-1): the
-                            // pilot's word once it has stood, none contradicting, for `span`.
-                            let since = *pilot_seen.get_or_insert_with(Instant::now);
-                            if since.elapsed() >= span {
-                                return Ok(Some(Answer::PilotTookOver(what)));
-                            }
+                    MavMessage::HEARTBEAT(h) => {
+                        // A second vehicle with the ids may beat too (att33e-1, att33f-3):
+                        // an answer once it has stood, none contradicting, for `span`.
+                        let answer = self.heartbeat_answer(h, way, before);
+                        if let Some(answer) = self.answer_stands(answer, watch, span) {
+                            return Ok(Some(answer));
                         }
-                        Some(answer) => return Ok(Some(answer)),
-                        None => *pilot_seen = None,
-                    },
+                    }
                     _ => {}
                 }
             }
@@ -3191,6 +3235,50 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 }
 
 impl<S: TraceSink + ?Sized> Flight<'_, S> {
+    /// A heartbeat's `answer` (in sequence) during the retries, watched ([`AnswerSeen`]): the
+    /// answer once heartbeats have shown it for `span` with none contradicting (one showing
+    /// nothing yet, or the other kind of answer); a contradiction with frames of the ids out of
+    /// sequence since is two senders' (`two_senders`: the retries are no longer held back).
+    fn answer_stands(
+        &self,
+        answer: Option<Answer>,
+        watch: &mut RetryWatch,
+        span: Duration,
+    ) -> Option<Answer> {
+        let now = self.seq_watch.out_of_sequence;
+        let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
+        match (&watch.seen, answer.is_some()) {
+            (Some(seen), true) if seen.pilots == pilots => {
+                return (seen.at.elapsed() >= span).then_some(answer).flatten();
+            }
+            (Some(seen), _) if now > seen.out_of_sequence => watch.two_senders = true,
+            _ => {}
+        }
+        watch.seen = answer.is_some().then(|| AnswerSeen {
+            pilots,
+            at: Instant::now(),
+            out_of_sequence: now,
+        });
+        None
+    }
+
+    /// The vehicle's mode and arming as last confirmed: before a pilot's word still awaiting
+    /// confirmation ([`LeaveSeen`]: it may be a second vehicle's), else as its heartbeats show.
+    fn confirmed_state(&self) -> (Option<u32>, bool) {
+        match &self.leave_seen {
+            Some(l) if !l.confirmed => l.before,
+            _ => (self.custom_mode, self.armed),
+        }
+    }
+
+    /// Whether the forced disarm is owed on the way out: the companion armed the vehicle on
+    /// the ground and never had it in control, and no confirmed heartbeat shows it disarmed
+    /// (ver33c-6; att33f-6: a second vehicle's disarmed heartbeat, unconfirmed, is no reason
+    /// to skip it).
+    fn disarm_owed(&self) -> bool {
+        self.armed_by_us && !self.in_control && (self.armed || self.confirmed_state().1)
+    }
+
     /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:
     /// the mode commanded (or, for a disarm, disarmed), another safe mode, a pilot's change
     /// ([`Flight::pilots_change`]; out of OFFBOARD in any other mode for `LeaveOffboard`), or
@@ -3243,12 +3331,13 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         if before.1 && !armed {
             return Some("disarmed".into());
         }
-        // OFFBOARD, which the companion itself asked for (a switch answered late), is no
-        // pilot's.
+        // OFFBOARD, which the companion itself asked for (a switch answered late) or flew in,
+        // is no pilot's: it is what the way out takes the vehicle out of.
         // A heartbeat without a custom mode (MAV_MODE_FLAG_CUSTOM_MODE_ENABLED clear) says
         // nothing of the mode: neither a confirmation nor a pilot's.
         let now = mode_of(h)?;
-        let own = self.offboard_sent && self.firmware.is_in(now, FlyMode::Offboard);
+        let own =
+            (self.offboard_sent || self.in_control) && self.firmware.is_in(now, FlyMode::Offboard);
         if before.0.is_some_and(|m| m != now) && !own {
             return Some(format!("in {}", self.firmware.mode_name(now)));
         }

@@ -70,7 +70,15 @@ impl SequenceWatch {
         if self.by_number.is_empty() {
             self.by_number = vec![None; 256];
         }
-        let copy = self.by_number[seq as usize].as_ref() == Some(msg);
+        // A copy is a frame identical to the last one with its number and not ahead of the
+        // newest: a frame one to 128 numbers ahead is a new one even if identical to the frame
+        // 256 numbers before it (a vehicle's unchanging heartbeat that falls on the number of
+        // its last one: dropped as a copy, its heartbeats would go unheard).
+        let ahead = self
+            .last
+            .as_ref()
+            .is_some_and(|(last, _)| (1..=128).contains(&seq.wrapping_sub(*last)));
+        let copy = !ahead && self.by_number[seq as usize].as_ref() == Some(msg);
         let behind = match &self.last {
             None => false,
             Some((last, _)) => match seq.wrapping_sub(*last) {

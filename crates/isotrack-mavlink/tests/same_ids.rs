@@ -129,10 +129,7 @@ fn fly_against_with(
 /// ids through the same socket, its counter 100 ahead, 2 m from A (no jump in the positions:
 /// only the frame numbers tell the two apart), its measurement 50 where A's is 9.5.
 fn two_senders(main: u32) -> FlyReport {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 100,
         ids: (1, 1),
@@ -196,10 +193,7 @@ fn two_senders_with_the_same_ids_before_control_command_nothing() {
 /// `max_duration_s`, never taken for two.
 #[test]
 fn one_sender_over_a_lossy_reordering_link_is_flown() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut n = 0u32;
     let mut held: Option<Vec<u8>> = None;
     let r = fly_against(3.0, move |k| {
@@ -238,10 +232,7 @@ fn one_sender_over_a_lossy_reordering_link_is_flown() {
 /// together): their positions jump farther than any airframe moves, which ends the flight.
 #[test]
 fn two_vehicles_far_apart_with_the_same_ids_jump() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(6.0, move |k| {
         let ms = 1000 + 50 * k;
         // One counter for both (the numbers alone cannot tell them apart), the positions
@@ -267,10 +258,7 @@ fn two_vehicles_far_apart_with_the_same_ids_jump() {
 /// a second vehicle left at them, or its autopilot changed) ends the flight.
 #[test]
 fn a_heartbeat_of_another_type_with_the_vehicles_ids_ends_the_flight() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(6.0, move |k| {
         let ms = 1000 + 50 * k;
         let mut hb = heartbeat(6);
@@ -279,10 +267,7 @@ fn a_heartbeat_of_another_type_with_the_vehicles_ids_ends_the_flight() {
                 h.mavtype = MavType::MAV_TYPE_QUADROTOR;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(
@@ -334,20 +319,14 @@ fn a_twin_heard_before_the_vehicle_ends_as_another_controller() {
 /// once; the pilot's vehicle is flown to its `max_duration_s`, not ended as a twin's.
 #[test]
 fn a_link_echoing_fly_s_own_frames_is_no_twin() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against_with(
         2.0,
         |_| {},
         true,
         move |k| {
             let ms = 1000 + 50 * k;
-            a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)])
-                .into_iter()
-                .map(|f| f.1)
-                .collect()
+            turn_frames(&mut a, Some(heartbeat(6)), ms)
         },
     );
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
@@ -365,10 +344,7 @@ fn a_link_echoing_fly_s_own_frames_is_no_twin() {
 /// ends `pilot_took_over`, nothing commanded, and the log says it may be a reboot.
 #[test]
 fn a_disarm_after_a_silence_may_be_a_reboot() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
         if (20..50).contains(&k) {
@@ -380,10 +356,7 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
                 h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
@@ -401,10 +374,7 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
 /// vehicle flown, not "nothing commanded" with the vehicle left in OFFBOARD.
 #[test]
 fn a_second_autopilot_in_control_gets_the_way_out() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 0,
         ids: (4, 1),
@@ -433,22 +403,21 @@ fn a_second_autopilot_in_control_gets_the_way_out() {
 }
 
 /// ver33b-5: in control, the pilot disarms (the heartbeat disarmed, time-stamped frames pause)
-/// and Ctrl-C comes 0.3 s later, inside the reboot watch: the disarm is the pilot's, nothing is
+/// and Ctrl-C comes 0.5 s after the disarm is confirmed, inside the reboot watch: the disarm is the pilot's, nothing is
 /// commanded (no HOLD on the pilot's disarmed vehicle).
 #[test]
 fn a_failsafe_in_the_reboot_watch_commands_nothing() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
-    // The pilot's disarm at 1.0 s of this clock, the Ctrl-C at 1.3 s: inside the 1 s watch.
+    let mut a = vehicle_sender();
+    // The pilot's disarm at 1.0 s of this clock, confirmed once its heartbeats have shown it
+    // for the span (1.1 x the 1 s floor of the heartbeat period: at ~2.1 s), the Ctrl-C at
+    // 2.6 s: inside the 1 s watch that follows (and before the sensor's 2 s timeout, 3.0 s).
     let t0 = Instant::now();
     let r = fly_against_with(
         20.0,
         |o| {
             let stop = o.stop.clone();
             std::thread::spawn(move || {
-                std::thread::sleep(Duration::from_millis(1300));
+                std::thread::sleep(Duration::from_millis(2600));
                 stop.store(true, std::sync::atomic::Ordering::SeqCst);
             });
         },
@@ -484,10 +453,7 @@ fn a_failsafe_in_the_reboot_watch_commands_nothing() {
 /// on to its `max_duration_s`, not `pilot_took_over` with the vehicle left in OFFBOARD.
 #[test]
 fn an_unknown_mode_in_control_is_no_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(2.5, move |k| {
         let ms = 1000 + 50 * k;
         let mut hb = heartbeat(6);
@@ -496,10 +462,7 @@ fn an_unknown_mode_in_control_is_no_pilots_word() {
                 h.base_mode = MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
             }
         }
-        a.frames(&[hb, iso_s(ms, 9.5), position(ms, 0.0)])
-            .into_iter()
-            .map(|f| f.1)
-            .collect()
+        turn_frames(&mut a, Some(hb), ms)
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
 }
@@ -545,7 +508,7 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
         let twin_hb = twin.clone();
         let r = fly_against(20.0, move |k| {
             let ms = 1000 + 50 * k;
-            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            let mut out = turn_frames(&mut a, Some(heartbeat(6)), ms);
             if k >= 20 && k % 20 == 0 {
                 out.extend(datagrams(b.frames(std::slice::from_ref(&twin_hb))));
             }
@@ -574,18 +537,11 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
 /// with HOLD commanded against the pilot).
 #[test]
 fn a_late_heartbeat_after_a_pilots_switch_is_older_news() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut held: Vec<Vec<u8>> = Vec::new();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
+        let mut out = turn_frames(&mut a, Some(heartbeat(if k < 20 { 6 } else { 3 })), ms);
         if k == 19 {
             // Turn 19's OFFBOARD heartbeat is held back and delivered after turn 20's POSCTL one.
             held.push(out.remove(0));
@@ -605,17 +561,10 @@ fn a_late_heartbeat_after_a_pilots_switch_is_older_news() {
 /// `pilot_took_over`, nothing commanded.
 #[test]
 fn a_pilots_switch_on_a_reordering_link_stands() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
+        let mut out = turn_frames(&mut a, Some(heartbeat(if k < 20 { 6 } else { 3 })), ms);
         if k == 20 {
             out.swap(0, 1);
         }
@@ -630,17 +579,10 @@ fn a_pilots_switch_on_a_reordering_link_stands() {
 /// commanded.
 #[test]
 fn one_senders_switch_and_back_is_the_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
-        datagrams(a.frames(&[
-            heartbeat(if k == 20 { 3 } else { 6 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]))
+        turn_frames(&mut a, Some(heartbeat(if k == 20 { 3 } else { 6 })), ms)
     });
     assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
@@ -660,10 +602,7 @@ fn one_senders_switch_and_back_is_the_pilots_word() {
 /// flown left in OFFBOARD with no setpoints); the HOLD goes on being commanded.
 #[test]
 fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let mut b = Sender {
         seq: 100,
         ids: (1, 1),
@@ -681,7 +620,7 @@ fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
         false,
         move |k| {
             let ms = 1000 + 50 * k;
-            let mut out = datagrams(a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]));
+            let mut out = turn_frames(&mut a, Some(heartbeat(6)), ms);
             if t0.elapsed() > Duration::from_millis(1600) && k % 4 == 0 {
                 out.extend(datagrams(b.frames(&[heartbeat_disarmed(1)])));
             }
@@ -696,26 +635,34 @@ fn a_twins_heartbeat_during_the_failsafe_is_no_pilots_word() {
     );
 }
 
-/// att33e-6: one vehicle over a link that delivers a frame late at every turn (its measurement
-/// and position swapped) from its pilot's switch to POSCTL on: the late frames are no second
+/// att33e-6: one vehicle (1 Hz heartbeat, measurements every 40 ms) over a link that delivers
+/// a frame late once a second (at phase 0.5 s two consecutive frames swapped: att33e's
+/// `--swap-every 1`), its pilot switching to POSCTL at 2.5 s: the late frames are no second
 /// sender's, the pilot's word stands once the heartbeats have shown it for longer than their
-/// period: `pilot_took_over`, nothing commanded (before: never confirmed, the flight flown on
-/// to its end and HOLD commanded against the pilot).
+/// period (at the 5 s heartbeat): `pilot_took_over`, nothing commanded (before att33e-6's fix:
+/// never confirmed, the flight flown on to its end and HOLD commanded against the pilot). (A
+/// swap at every 50 ms turn, as this test once sent with a 20 Hz heartbeat, is 12 late frames
+/// in 512 within 0.6 s: two senders' interleaving by the rule, before the span of a 1 s
+/// heartbeat period.)
 #[test]
-fn a_pilots_switch_over_a_link_that_reorders_every_turn_stands() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
-    let r = fly_against(20.0, move |k| {
-        let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
-        if k >= 20 {
-            out.swap(1, 2);
+fn a_pilots_switch_over_a_link_that_reorders_once_a_second_stands() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut swaps = Beats::new(0.5, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat, ms);
+        if swaps.due(t) {
+            let n = out.len();
+            out.swap(n - 2, n - 1);
         }
         out
     });
@@ -723,32 +670,43 @@ fn a_pilots_switch_over_a_link_that_reorders_every_turn_stands() {
     assert!(!r.way_out_commanded, "{:?}", r.events);
 }
 
-/// att33f-2: after the pilot's switch to POSCTL (and one pair of frames swapped: a frame out of
-/// sequence), a byte-identical copy of the last OFFBOARD heartbeat is delivered again: a copy of
-/// a frame already handled is no news, never applied: `pilot_took_over`, nothing commanded
-/// (before: read as a second vehicle's contradiction, `vehicle_lost`, HOLD against the pilot).
+/// att33f-2 (N7's order): the vehicle (the pilot's OFFBOARD, 1 Hz heartbeat) is switched to
+/// MANUAL by its pilot at 2.5 s (heartbeats in MANUAL from 3 s); at 3.05 s one pair of frames
+/// is swapped (a frame out of sequence), at 3.1 s the 2 s OFFBOARD heartbeat is delivered
+/// again, byte-identical (a retransmitting radio). A copy of a frame already handled is no
+/// news, never applied: the pilot's word stands (`pilot_took_over` at the 5 s heartbeat),
+/// nothing commanded. Before (92cda41): the copy was applied as the vehicle's state, read as a
+/// second vehicle's contradiction with the swapped frame between: `vehicle_lost`, HOLD
+/// commanded against the pilot.
 #[test]
 fn a_late_copy_of_a_heartbeat_is_no_news() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
     let mut kept: Option<Vec<u8>> = None;
-    let r = fly_against(20.0, move |k| {
-        let ms = 1000 + 50 * k;
-        let mut out = datagrams(a.frames(&[
-            heartbeat(if k < 20 { 6 } else { 3 }),
-            iso_s(ms, 9.5),
-            position(ms, 0.0),
-        ]));
-        if k == 19 {
-            kept = Some(out[0].clone());
+    let (mut swapped, mut copied) = (false, false);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own
+            .due(t)
+            .then(|| if t < 2.5 { heartbeat(6) } else { heartbeat(1) });
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
         }
-        if k == 20 {
-            out.swap(1, 2);
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat.clone(), ms);
+        if beat.is_some() && (2.0..2.5).contains(&t) {
+            kept = out.first().cloned();
         }
-        if k == 21 {
-            out.insert(1, kept.take().unwrap());
+        if t >= 3.05 && !swapped {
+            swapped = true;
+            out.swap(0, 1);
+        }
+        if t >= 3.1 && !copied {
+            copied = true;
+            out.extend(kept.take());
         }
         out
     });
@@ -761,10 +719,7 @@ fn a_late_copy_of_a_heartbeat_is_no_news() {
 /// pilot's word, and nothing is commanded against it (before: HOLD commanded at link_lost).
 #[test]
 fn a_failsafe_while_a_pilots_word_awaits_confirmation_commands_nothing() {
-    let mut a = Sender {
-        seq: 0,
-        ids: (1, 1),
-    };
+    let mut a = vehicle_sender();
     let r = fly_against(20.0, move |k| {
         let ms = 1000 + 50 * k;
         let msgs = match k {
@@ -780,6 +735,363 @@ fn a_failsafe_while_a_pilots_word_awaits_confirmation_commands_nothing() {
         r.events
             .iter()
             .any(|e| e.contains("not yet confirmed as its pilot's")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// A schedule of heartbeats on the companion's wall clock: the first at `first_s`, then one
+/// after each of `gaps_s` in turn (cycled), s.
+struct Beats {
+    next_s: f64,
+    gaps_s: Vec<f64>,
+    i: usize,
+}
+
+impl Beats {
+    fn new(first_s: f64, gaps_s: &[f64]) -> Self {
+        Self {
+            next_s: first_s,
+            gaps_s: gaps_s.to_vec(),
+            i: 0,
+        }
+    }
+
+    /// Whether a beat is due at `t_s` (then the next one is scheduled).
+    fn due(&mut self, t_s: f64) -> bool {
+        if t_s < self.next_s {
+            return false;
+        }
+        self.next_s += self.gaps_s[self.i % self.gaps_s.len()];
+        self.i += 1;
+        true
+    }
+}
+
+/// `fly` (tweaked as [`fly_against_with`]) against a vehicle (ids 1, 1) on wall time: its
+/// heartbeat whenever `vehicle(t_s)` gives one (`t_s` since the start), its measurement and
+/// position every 40 ms (stamped with the wall clock); and a second vehicle with the same ids
+/// behind the same socket beating whenever `twin(t_s)` gives a heartbeat, its frame counter
+/// 100 ahead of the vehicle's (each sender's frames in sequence: only their interleaving steps
+/// back).
+fn vehicle_and_twin(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    mut vehicle: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+    mut twin: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+) -> FlyReport {
+    let mut a = vehicle_sender();
+    let mut b = Sender {
+        seq: 100,
+        ids: (1, 1),
+    };
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    fly_against_with(max_duration_s, tweak, false, move |_| {
+        let t_s = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t_s * 1000.0) as u32;
+        let beat = vehicle(t_s);
+        let mut msgs = Vec::new();
+        if ms >= last_ms + 40 || beat.is_some() {
+            // A heartbeat after the turn's measurement: never the vehicle's first frame after
+            // the second vehicle's (which steps back, and is dropped as late if a heartbeat).
+            last_ms = ms;
+            msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
+        }
+        msgs.extend(beat);
+        let mut out = datagrams(a.frames(&msgs));
+        if let Some(hb) = twin(t_s) {
+            // Its counter kept 100 ahead of the vehicle's (a sender of more frames): each of
+            // its frames steps forward, the vehicle's next one back (out of sequence).
+            b.seq = a.seq.wrapping_add(100);
+            out.extend(datagrams(b.frames(&[hb])));
+        }
+        out
+    })
+}
+
+/// The number of tries in the way out's last word ("... (N tries, ...)").
+fn way_out_tries(r: &FlyReport) -> Option<u32> {
+    r.events.iter().rev().find_map(|e| {
+        let (_, rest) = e.split_once(" (")?;
+        rest.split_once(" tries")?.0.parse().ok()
+    })
+}
+
+/// Asserts that a flight with a second vehicle's heartbeats ended `vehicle_lost` with HOLD
+/// commanded more than once and never unconfirmed-confirmed: no `pilot_took_over` (at the
+/// flight's end or during the failsafe's retries), the vehicle flown (which never leaves
+/// OFFBOARD here) not reported in HOLD.
+fn assert_twin_never_the_pilot(r: &FlyReport) {
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle did not confirm the HOLD")),
+        "{:?}",
+        r.events
+    );
+    assert!(way_out_tries(r).is_some_and(|n| n >= 2), "{:?}", r.events);
+}
+
+/// att33f-1 (N3): the vehicle flown (the pilot's OFFBOARD) beats at 1 Hz; from 2.05 s a second
+/// vehicle with its ids beats at 5 Hz, armed in OFFBOARD (in agreement: its beats in sequence
+/// count as the vehicle's), then from 3.1 s disarmed in MANUAL. The span is the vehicle's own
+/// period (1.1 x 1 s), not a fifth of it: the vehicle's 4.0 s heartbeat contradicts the
+/// second vehicle's word (`vehicle_lost`, HOLD commanded), and during the retries its 5 Hz
+/// beats never stand either (B1, att33f-4): the HOLD is retried, never "a pilot took over".
+/// Before: the twin's beats made the span 0.22 s: `pilot_took_over` at ~3.5 s, nothing
+/// commanded, the vehicle left armed in OFFBOARD.
+#[test]
+fn a_fast_twin_in_agreement_then_disarmed_is_no_pilots_word() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.05, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| {
+            other.due(t).then(|| {
+                if t < 3.1 {
+                    heartbeat(6)
+                } else {
+                    heartbeat_disarmed(1)
+                }
+            })
+        },
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// att33f-1 (N8): the vehicle beats at 5 Hz, then at 1 Hz from 2.6 s (a stream-rate change,
+/// at 2.45 s); from 2.65 s a second vehicle with its ids beats disarmed in MANUAL at 5 Hz. The
+/// span is at least 1.1 s (a 1 Hz heartbeat's), never the 5 Hz gaps': the vehicle's 3.6 s
+/// heartbeat contradicts (`vehicle_lost`, HOLD retried). Before: span 0.22 s,
+/// `pilot_took_over` at ~3.05 s.
+#[test]
+fn a_heartbeat_rate_drop_does_not_shorten_the_span() {
+    let mut own = Beats::new(0.0, &[0.2]);
+    let mut slow = false;
+    let mut other = Beats::new(2.65, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| {
+            if t >= 2.45 && !slow {
+                slow = true;
+                own = Beats::new(own.next_s.max(2.45), &[1.0]);
+            }
+            own.due(t).then(|| heartbeat(6))
+        },
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// att33f-1 (N1): the vehicle's heartbeat jitters, gaps of 0.5 s four times then 1.5 s (beats
+/// at 0, 0.5, 1, 1.5, 2, 3.5, ..., 5.5, 7); a second vehicle with its ids beats disarmed in
+/// MANUAL at 5 Hz from 5.55 s, the start of a 1.5 s gap after four of 0.5 s. The span is the
+/// longest gap seen (1.1 x 1.5 s), not the last four's (0.55 s): the vehicle's 7 s heartbeat
+/// contradicts (`vehicle_lost`, HOLD retried). Before: `pilot_took_over` at ~6.15 s.
+#[test]
+fn heartbeat_jitter_does_not_shorten_the_span() {
+    let mut own = Beats::new(0.0, &[0.5, 0.5, 0.5, 0.5, 1.5]);
+    let mut other = Beats::new(5.55, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |_| {},
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_twin_never_the_pilot(&r);
+}
+
+/// The vehicle's sender: ids (1, 1), its frame counter from 0.
+fn vehicle_sender() -> Sender {
+    Sender {
+        seq: 0,
+        ids: (1, 1),
+    }
+}
+
+/// One turn of the vehicle's frames: its heartbeat `hb` (if any), then its measurement (9.5)
+/// and position (at the origin), both stamped `ms`.
+fn turn_frames(a: &mut Sender, hb: Option<MavMessage>, ms: u32) -> Vec<Vec<u8>> {
+    let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+    msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
+    datagrams(a.frames(&msgs))
+}
+
+/// A PX4 ground rover's heartbeat, armed, in PX4 main mode `main` and sub mode `sub` (4, 3:
+/// AUTO.LOITER, the failsafe's HOLD).
+fn heartbeat_sub(main: u32, sub: u32) -> MavMessage {
+    let mut hb = heartbeat(main);
+    if let MavMessage::HEARTBEAT(h) = &mut hb {
+        h.custom_mode = (main << 16) | (sub << 24);
+    }
+    hb
+}
+
+/// att33f-3 (N10c): in control (the pilot's OFFBOARD, 1 Hz heartbeat), Ctrl-C at 2.5 s starts
+/// the failsafe: HOLD, never acknowledged nor carried out (the vehicle stays armed in OFFBOARD).
+/// From 2.65 s a second vehicle with its ids beats armed in AUTO.LOITER (the HOLD commanded) at
+/// 1 Hz. Its heartbeat confirms nothing before it has stood for the span with none
+/// contradicting, and the vehicle's OFFBOARD heartbeats contradict it every second: the HOLD
+/// is retried to the bound and reported not confirmed (exit 69). Before: "the vehicle is in
+/// HOLD (1 tries)" at the second vehicle's first heartbeat (exit 75), the vehicle flown left in
+/// OFFBOARD with nobody sending setpoints.
+#[test]
+fn a_twins_heartbeat_in_the_mode_commanded_confirms_no_failsafe() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.65, &[1.0]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(2500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| own.due(t).then(|| heartbeat(6)),
+        move |t| other.due(t).then(|| heartbeat_sub(4, 3)),
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("the vehicle is in")),
+        "{:?}",
+        r.events
+    );
+    assert!(way_out_tries(&r).is_some_and(|n| n >= 2), "{:?}", r.events);
+}
+
+/// The way out shown by the vehicle's own heartbeats (one sender, 1 Hz: it goes to AUTO.LOITER
+/// at 3.2 s, after Ctrl-C at 2.5 s) is confirmed once they have shown it for the span (1.1 s:
+/// at the third heartbeat in HOLD, 6 s), as before only later: exit 75, "the vehicle is in
+/// HOLD".
+#[test]
+fn the_vehicles_own_hold_is_confirmed_after_the_span() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(2500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 3.2 {
+                    heartbeat(6)
+                } else {
+                    heartbeat_sub(4, 3)
+                }
+            })
+        },
+        |_| None,
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle is in HOLD")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// A vehicle whose unchanging heartbeat (armed in OFFBOARD, 1 Hz) always falls on one frame
+/// number (7: its frames between span the other 255 numbers, 100 of them lost in a fade every
+/// second): each heartbeat is identical to the last frame with its number, but ahead of the
+/// newest, a new frame, never dropped as a copy delivered again: the flight is flown to its
+/// `max_duration_s` (found while testing att33f-1's rate drop: a heartbeat 256 frames after an
+/// identical one was dropped as a copy since 2535521, and the failsafe's retries then took a
+/// second vehicle's word for the pilot's; here, no heartbeat after the first was heard:
+/// `link_lost` at 3 s).
+#[test]
+fn a_heartbeat_on_the_number_of_the_last_one_is_no_copy() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut fades = Beats::new(0.5, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(5.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(6));
+        if beat.is_some() {
+            a.seq = 7;
+        }
+        if fades.due(t) {
+            a.seq = a.seq.wrapping_add(100);
+        }
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        turn_frames(&mut a, beat, ms)
+    });
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("two vehicles")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33f-6 (C4, N9a): `--take-control --arm` of a disarmed vehicle (1 Hz heartbeat; it shows
+/// itself armed from 3 s, after the companion's arming, and never goes to OFFBOARD). From 3.5 s
+/// a second vehicle with its ids beats disarmed in MANUAL at 4 Hz; the vehicle's 4 s heartbeat
+/// contradicts it (`vehicle_lost`) and the second vehicle's comes right after. The vehicle the
+/// companion armed on the ground gets the forced disarm (the disarmed heartbeat is not
+/// confirmed: a second vehicle's), retried to the bound, never "a pilot took over". Before:
+/// the last heartbeat's disarmed state skipped the disarm: nothing commanded, the vehicle left
+/// armed on the ground.
+#[test]
+fn a_twin_during_take_control_arm_gets_the_forced_disarm() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(3.5, &[0.25]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            o.take_control = true;
+            o.arm = true;
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 2.9 {
+                    heartbeat_disarmed(1)
+                } else {
+                    heartbeat(1)
+                }
+            })
+        },
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("disarm commanded (armed by the companion, on the ground)")),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
         "{:?}",
         r.events
     );
