@@ -452,6 +452,11 @@ fn a_missing_data_file_of_a_sweep_is_refused_before_any_run() {
         "base.toml",
         "scenario = \"s.toml\"\n[base]\nfield.path = \"nowhere.asc\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
     );
-    let o = isotrack(&["sweep", &base, "--out", d.path().join("b").to_str().unwrap()]);
+    let o = isotrack(&[
+        "sweep",
+        &base,
+        "--out",
+        d.path().join("b").to_str().unwrap(),
+    ]);
     common::assert_fails(&o, 66, &["nowhere.asc", "[base]"]);
 }
