@@ -568,12 +568,15 @@ fn signal(child: &std::process::Child, sig: &str) {
 
 /// The terminal closing (SIGHUP) stops `fly` as Ctrl-C does: HOLD commanded and confirmed,
 /// `interrupted`, exit 75 (ended by a failsafe); the lockstep `sitl`, answered no more, ends
-/// after its --timeout-s as `companion_lost`, exit 69.
+/// after its --timeout-s as `companion_lost`, exit 69. That timeout is 3 s: a HOLD stands once
+/// the heartbeats have shown it for 1.1 s (the failsafe's confirmation span, att33f-3), which
+/// the sitl's once-a-second heartbeat while it waits gives at its second beat in HOLD; with 1 s
+/// it ended before, and the HOLD, shown once, was rightly not confirmed.
 #[cfg(unix)]
 #[test]
 fn sighup_stops_fly_and_sitl_ends_without_its_companion() {
     let dir = tempfile::tempdir().unwrap();
-    let (sitl, fly) = a_flight_under_way(dir.path(), "1");
+    let (sitl, fly) = a_flight_under_way(dir.path(), "3");
     signal(&fly, "-HUP");
     let o = fly.wait_with_output().unwrap();
     let (out, err) = (

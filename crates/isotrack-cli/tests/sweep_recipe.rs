@@ -437,7 +437,7 @@ fn a_missing_data_file_of_a_sweep_is_refused_before_any_run() {
     );
     let out = d.path().join("g");
     let o = isotrack(&["sweep", &grid, "--out", out.to_str().unwrap()]);
-    common::assert_fails(&o, 66, &["nowhere.asc", "cannot read"]);
+    common::assert_fails(&o, 66, &["nowhere.asc", "cannot be read"]);
     assert!(
         !out.join("results.csv").exists()
             || std::fs::read_to_string(out.join("results.csv"))

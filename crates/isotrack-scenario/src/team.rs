@@ -839,18 +839,20 @@ mod tests {
         assert!(s.team_isoline().is_open());
     }
 
-    /// The circle as a polyline: the paper's radial field with a domain (so the isoline is
-    /// extracted by marching squares, not known in closed form) gives the circle's team
-    /// metrics (CircleArc, exact) to the lattice's discretisation.
+    /// A domain that holds the whole circle (att32f-7): the paper's radial field with
+    /// `field.domain_m` = [-20, 20]^2 around its level-10 circle (radius 10 ln 2 = 6.93 m) is
+    /// measured along the exact circle, as without a domain (it was a marching-squares polyline,
+    /// its metrics within the lattice's error of these), and the team, which never nears the
+    /// domain's edge, flies the same run: the same team metrics to the last bit.
     #[test]
-    fn a_polyline_circle_gives_the_circle_metrics() {
+    fn a_circle_inside_the_domain_gives_the_circle_metrics() {
         let base = std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../scenarios/team-circular-4.toml"
         ))
         .unwrap();
         let circle = parse_scenario(&base, "<test>", &["sim.duration_s=200".into()]).unwrap();
-        let poly = parse_scenario(
+        let inside = parse_scenario(
             &base,
             "<test>",
             &[
@@ -860,11 +862,7 @@ mod tests {
         )
         .unwrap();
         assert!(matches!(circle.team_isoline(), TeamIsolineModel::Circle(_)));
-        let TeamIsolineModel::Polyline(p) = poly.team_isoline() else {
-            panic!("no polyline");
-        };
-        let l = 2.0 * std::f64::consts::PI * 10.0 * std::f64::consts::LN_2;
-        assert!((p.length_m() / l - 1.0).abs() < 1e-3, "{}", p.length_m());
+        assert!(matches!(inside.team_isoline(), TeamIsolineModel::Circle(_)));
         let go = |s: &Scenario| {
             s.run_team(&mut [] as &mut [Vec<TraceRow>])
                 .unwrap()
@@ -872,17 +870,11 @@ mod tests {
                 .team
                 .unwrap()
         };
-        let (tc, tp) = (go(&circle), go(&poly));
-        assert!(
-            (tc.gap_cv.unwrap() - tp.gap_cv.unwrap()).abs() < 0.005,
-            "{tc:?} {tp:?}"
-        );
-        let (mc, mp) = (
-            tc.revisit_time_max_s.unwrap(),
-            tp.revisit_time_max_s.unwrap(),
-        );
-        assert!((mc - mp).abs() < 0.02 * mc, "{mc} {mp}");
-        assert!((tc.time_to_even_s.unwrap() - tp.time_to_even_s.unwrap()).abs() < 2.0);
+        let (tc, ti) = (go(&circle), go(&inside));
+        assert_eq!(tc.gap_cv, ti.gap_cv);
+        assert_eq!(tc.revisit_time_max_s, ti.revisit_time_max_s);
+        assert_eq!(tc.time_to_even_s, ti.time_to_even_s);
+        assert!(tc.gap_cv.is_some() && tc.revisit_time_max_s.is_some());
     }
 
     /// att32 and the volcano task's 135.1 m: the DEM's integer elevations (and their
