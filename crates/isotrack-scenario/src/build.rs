@@ -82,9 +82,25 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
         .and_then(|t| t.vehicles.as_ref())
         .and_then(|v| v.iter().find(|e| e.index == Some(0)));
     let rate_hz = own.and_then(|e| e.sensor_rate_hz).unwrap_or(sensor.rate_hz);
-    // The windows as the run's own step plan computes them (the record rate and level play no
-    // part in them).
-    let metric_steps = crate::spec::MetricsSpec::new(&f.metrics, &sim)
+    Some(RunSpan {
+        metric_steps: metric_steps(f, &sim),
+        sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
+        sensor_drops_samples: sensor.dropout_probability != 0.0,
+        turn_rate_limit_radps: turn_rate_limit_radps(f),
+        dt_s: sim.dt_s,
+        n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
+        steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
+            .ok()?
+            .max(1),
+        speed_max_mps: speed_max_mps(f, own),
+    })
+}
+
+/// The metric windows of `f`'s run as the run's own step plan computes them ([`StepPlan::new`]
+/// on `sim`'s step and duration and `[metrics]`; the record rate and level play no part in
+/// them): `None` where `[metrics]` does not resolve.
+fn metric_steps(f: &ScenarioFile, sim: &crate::spec::SimSpec) -> Option<MetricSteps> {
+    crate::spec::MetricsSpec::new(&f.metrics, sim)
         .ok()
         .and_then(|m| {
             StepPlan::new(
@@ -102,55 +118,58 @@ pub fn run_span(f: &ScenarioFile) -> Option<RunSpan> {
             steady_state_start_step: p.steady_state_start_step,
             convergence_min_dwell_steps: p.convergence_min_dwell_steps,
             convergence_tolerance: p.convergence_tolerance,
-        });
-    Some(RunSpan {
-        metric_steps,
-        sensor_delay_steps: isotrack_sim::whole_steps(sensor.delay_s, sim.dt_s).ok()?,
-        sensor_drops_samples: sensor.dropout_probability != 0.0,
-        // Every law keeps it, `schedule` included (resolution refuses a schedule beyond it).
-        // Unset on a fixed wing, the limit every law flies is the airframe's, `g tan(phi_max)
-        // / V` of the trimmed vehicle ([`crate::vehicle::VehicleModel::airframe_turn_rate_limit_radps`], what
-        // `crate::spec::ControllerSpec` resolves): the same resolved limit the run flies.
-        turn_rate_limit_radps: match f.controller.max_turn_rate_radps {
-            Some(w) => Some(w),
-            // A `schedule` flies its turn rates as written (no output stage): no bound then.
-            None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
-                && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
-            {
-                crate::vehicle::build_vehicle(f)
-                    .ok()
-                    .and_then(|v| v.airframe_turn_rate_limit_radps())
-            }
-            None => None,
+        })
+}
+
+/// The turn-rate limit every command of `f`'s run obeys ([`RunSpan::turn_rate_limit_radps`]):
+/// `controller.max_turn_rate_radps`, which every law keeps, `schedule` included (resolution
+/// refuses a schedule beyond it). Unset on a fixed wing, the limit every law flies is the
+/// airframe's, `g tan(phi_max) / V` of the trimmed vehicle
+/// ([`crate::vehicle::VehicleModel::airframe_turn_rate_limit_radps`], what
+/// `crate::spec::ControllerSpec` resolves): the same resolved limit the run flies. `None`
+/// without one, or when it is not a finite, non-negative rate.
+fn turn_rate_limit_radps(f: &ScenarioFile) -> Option<f64> {
+    match f.controller.max_turn_rate_radps {
+        Some(w) => Some(w),
+        // A `schedule` flies its turn rates as written (no output stage): no bound then.
+        None if f.vehicle.kind == Some(crate::schema::VehicleKind::FixedWing)
+            && f.controller.kind != Some(crate::schema::ControllerKind::Schedule) =>
+        {
+            crate::vehicle::build_vehicle(f)
+                .ok()
+                .and_then(|v| v.airframe_turn_rate_limit_radps())
         }
-        .filter(|w| w.is_finite() && *w >= 0.0),
-        dt_s: sim.dt_s,
-        n_steps: isotrack_sim::whole_steps(sim.duration_s, sim.dt_s).ok()?,
-        steps_per_sample: isotrack_sim::whole_steps(1.0 / rate_hz, sim.dt_s)
-            .ok()?
-            .max(1),
-        speed_max_mps: match f.vehicle.kind {
-            None | Some(crate::schema::VehicleKind::Dubins) => {
-                let v0 = f.vehicle.speed_mps.unwrap_or(0.5);
-                // A team's spacing law flies each robot at up to `team.v_max_mps` (default
-                // `V_MAX_FACTOR v0`): the bound is the run's top speed, not the nominal one;
-                // vehicle 0's own `speed_mps` and `v_max_mps` where it has them (its envelope
-                // as `spec::team` resolves it: its own bound, else the team's, else the rule
-                // at its own speed).
-                let v0 = own.and_then(|e| e.speed_mps).unwrap_or(v0);
-                let top = match &f.team {
-                    Some(t) => own
-                        .and_then(|e| e.v_max_mps)
-                        .or(t.v_max_mps)
-                        .unwrap_or(crate::spec::team::V_MAX_FACTOR * v0)
-                        .max(v0),
-                    None => v0,
-                };
-                Some(top).filter(|v| v.is_finite() && *v >= 0.0)
-            }
-            Some(crate::schema::VehicleKind::FixedWing) => None,
-        },
-    })
+        None => None,
+    }
+    .filter(|w| w.is_finite() && *w >= 0.0)
+}
+
+/// The fastest `f`'s vehicle (vehicle 0 in a team, with its own overrides `own`) moves over
+/// ground ([`RunSpan::speed_max_mps`]): the Dubins robot's constant `vehicle.speed_mps`
+/// (default 0.5), in a team the most its spacing law sets; `None` for the fixed wing (wind
+/// adds to its airspeed) or when it is not a finite, non-negative speed.
+fn speed_max_mps(f: &ScenarioFile, own: Option<&TeamVehicleSection>) -> Option<f64> {
+    match f.vehicle.kind {
+        None | Some(crate::schema::VehicleKind::Dubins) => {
+            let v0 = f.vehicle.speed_mps.unwrap_or(0.5);
+            // A team's spacing law flies each robot at up to `team.v_max_mps` (default
+            // `V_MAX_FACTOR v0`): the bound is the run's top speed, not the nominal one;
+            // vehicle 0's own `speed_mps` and `v_max_mps` where it has them (its envelope
+            // as `spec::team` resolves it: its own bound, else the team's, else the rule
+            // at its own speed).
+            let v0 = own.and_then(|e| e.speed_mps).unwrap_or(v0);
+            let top = match &f.team {
+                Some(t) => own
+                    .and_then(|e| e.v_max_mps)
+                    .or(t.v_max_mps)
+                    .unwrap_or(crate::spec::team::V_MAX_FACTOR * v0)
+                    .max(v0),
+                None => v0,
+            };
+            Some(top).filter(|v| v.is_finite() && *v >= 0.0)
+        }
+        Some(crate::schema::VehicleKind::FixedWing) => None,
+    }
 }
 
 /// `schedule`: a piecewise-constant turn rate `omega(t) = w_i` for `t_i <= t < t_{i+1}`

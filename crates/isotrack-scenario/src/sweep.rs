@@ -859,23 +859,7 @@ impl SweepPlan {
     /// SHA-256 (ver30b-3: a sweep over two grid files recorded only the base's, so `--resume`
     /// and `merge` kept rows computed on an edited one without a word).
     pub fn data_files(&self, given: &crate::ScenarioFile) -> Vec<String> {
-        let chooses_files =
-            |k: &str| matches!(k, "field" | "field.kind" | "field.path" | "field.paths");
-        // Each such key's distinct values, as assignments.
-        let lists: Vec<Vec<String>> = self
-            .grid
-            .iter()
-            .filter(|(k, _)| chooses_files(k))
-            .map(|(k, list)| {
-                let mut args: Vec<String> = list
-                    .iter()
-                    .map(|v| format!("{k}={}", value_literal(v)))
-                    .collect();
-                args.sort();
-                args.dedup();
-                args
-            })
-            .collect();
+        let lists = self.file_choosing_values();
         let base: Vec<Assignment> = self
             .base
             .iter()
@@ -885,26 +869,6 @@ impl SweepPlan {
             })
             .collect();
         let mut files = std::collections::BTreeSet::new();
-        let mut read = |args: &[&String]| {
-            let mut each = base.clone();
-            each.extend(args.iter().map(|arg| Assignment {
-                label: format!("[grid] {arg}"),
-                arg: (*arg).clone(),
-            }));
-            let Ok(file) = crate::apply_assignments(given, &each) else {
-                return;
-            };
-            let Ok(file) = crate::resolve::resolve(file) else {
-                return;
-            };
-            // The seed moves a puff plume's meander only, never its files.
-            if let Ok(field) = crate::spec::FieldSpec::new(&file.field, 0) {
-                for p in field.data_files() {
-                    let path = crate::field::resolve_one(p, &self.dir);
-                    files.insert(path.display().to_string());
-                }
-            }
-        };
         let combinations = lists
             .iter()
             .try_fold(1u64, |acc, l| acc.checked_mul(l.len() as u64))
@@ -920,37 +884,98 @@ impl SweepPlan {
                         c /= len;
                     }
                     args.reverse();
-                    read(&args);
+                    self.combination_files(given, &base, &args, &mut files);
                 }
             }
             None => {
                 // Too many to resolve: the base's files and every path any value names,
                 // whatever kind the run ends up with (a superset).
-                read(&[]);
-                for (k, list) in self.grid.iter().filter(|(k, _)| chooses_files(k)) {
-                    for v in list {
-                        let named = match (k.as_str(), v) {
-                            ("field.path" | "field.paths", v) => vec![v],
-                            ("field", toml::Value::Table(t)) => {
-                                ["path", "paths"].iter().filter_map(|p| t.get(*p)).collect()
-                            }
-                            _ => vec![],
-                        };
-                        let strings = named.into_iter().flat_map(|v| match v {
-                            toml::Value::String(p) => vec![p.as_str()],
-                            toml::Value::Array(a) => a.iter().filter_map(|x| x.as_str()).collect(),
-                            _ => vec![],
-                        });
-                        for p in strings {
-                            let path = crate::field::resolve_one(p, &self.dir);
-                            files.insert(path.display().to_string());
-                        }
-                    }
-                }
+                self.combination_files(given, &base, &[], &mut files);
+                self.named_files(&mut files);
             }
         }
         files.into_iter().collect()
     }
+
+    /// The distinct values (sorted, as assignments `KEY=VALUE`) of each `[grid]` key that
+    /// chooses the field's files ([`chooses_files`]), in the grid's order.
+    fn file_choosing_values(&self) -> Vec<Vec<String>> {
+        self.grid
+            .iter()
+            .filter(|(k, _)| chooses_files(k))
+            .map(|(k, list)| {
+                let mut args: Vec<String> = list
+                    .iter()
+                    .map(|v| format!("{k}={}", value_literal(v)))
+                    .collect();
+                args.sort();
+                args.dedup();
+                args
+            })
+            .collect()
+    }
+
+    /// Adds to `files` the data files (absolute, beside the sweep file) of the run made by the
+    /// `[grid]` assignments `args` applied after `[base]` (`base`) to the base's own keys
+    /// `given`, resolved without reading a file; nothing for a combination a run cannot make.
+    fn combination_files(
+        &self,
+        given: &crate::ScenarioFile,
+        base: &[Assignment],
+        args: &[&String],
+        files: &mut std::collections::BTreeSet<String>,
+    ) {
+        let mut each = base.to_vec();
+        each.extend(args.iter().map(|arg| Assignment {
+            label: format!("[grid] {arg}"),
+            arg: (*arg).clone(),
+        }));
+        let Ok(file) = crate::apply_assignments(given, &each) else {
+            return;
+        };
+        let Ok(file) = crate::resolve::resolve(file) else {
+            return;
+        };
+        // The seed moves a puff plume's meander only, never its files.
+        if let Ok(field) = crate::spec::FieldSpec::new(&file.field, 0) {
+            for p in field.data_files() {
+                let path = crate::field::resolve_one(p, &self.dir);
+                files.insert(path.display().to_string());
+            }
+        }
+    }
+
+    /// Adds to `files` every path (absolute, beside the sweep file) that any value of a
+    /// `[grid]` key choosing the field's files names (`field.path`, `field.paths`, a `field`
+    /// table's `path` or `paths`), whatever kind the run ends up with.
+    fn named_files(&self, files: &mut std::collections::BTreeSet<String>) {
+        for (k, list) in self.grid.iter().filter(|(k, _)| chooses_files(k)) {
+            for v in list {
+                let named = match (k.as_str(), v) {
+                    ("field.path" | "field.paths", v) => vec![v],
+                    ("field", toml::Value::Table(t)) => {
+                        ["path", "paths"].iter().filter_map(|p| t.get(*p)).collect()
+                    }
+                    _ => vec![],
+                };
+                let strings = named.into_iter().flat_map(|v| match v {
+                    toml::Value::String(p) => vec![p.as_str()],
+                    toml::Value::Array(a) => a.iter().filter_map(|x| x.as_str()).collect(),
+                    _ => vec![],
+                });
+                for p in strings {
+                    let path = crate::field::resolve_one(p, &self.dir);
+                    files.insert(path.display().to_string());
+                }
+            }
+        }
+    }
+}
+
+/// Whether `[grid]` key `k` chooses a field's files (`field`, `field.kind`, `field.path`,
+/// `field.paths`; `[random]` draws numbers only).
+fn chooses_files(k: &str) -> bool {
+    matches!(k, "field" | "field.kind" | "field.path" | "field.paths")
 }
 
 /// The most combinations of the `[grid]` values that choose a field's files that

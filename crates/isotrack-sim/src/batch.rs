@@ -112,54 +112,22 @@ where
         let values = field.value_lanes(t, &px, &py);
         // Steps 1-3 up to the controller, lane by lane; then every sampled law at once; then
         // the rest of step 3 and step 4, lane by lane; then step 5 for all lanes.
-        let mut going = [false; LANES];
-        let mut sampled = [false; LANES];
-        let mut command = [None; LANES];
-        let mut ms = [Measurement {
-            t_s: 0.0,
-            value: 0.0,
-        }; LANES];
-        for (i, lane) in lanes.iter_mut().enumerate() {
-            if !lane.run.is_running() {
-                continue;
-            }
-            let value_at = |_| values[i];
-            match lane
-                .run
-                .sense(vehicle, &states[i], k, t, value_at, &mut NoTrace)
-            {
-                Sensed::Ended => continue,
-                Sensed::Held => {}
-                Sensed::Sampled(m) if lane.wants_truth => {
-                    let sample = lane.run.sample(m, vehicle.speed_mps(&states[i]));
-                    let gradient = lane.oracles.gradient;
-                    command[i] = Some(ask(&mut lane.controller, true, &sample, gradient));
-                }
-                Sensed::Sampled(m) => {
-                    ms[i] = m;
-                    sampled[i] = true;
-                }
-            }
-            going[i] = true;
-        }
-        if sampled.iter().any(|&s| s) {
-            let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
-            for (i, lane) in lanes.iter_mut().enumerate() {
-                if sampled[i] {
-                    ctrls[i] = Some(&mut lane.controller);
-                }
-            }
-            let w = C::update_lanes(&mut ctrls, &ms);
-            for i in 0..LANES {
-                if sampled[i] {
-                    command[i] = Some(w[i]);
-                }
-            }
+        let mut step = sense_lanes(&mut lanes, vehicle, &states, k, t, &values);
+        if step.sampled.iter().any(|&s| s) {
+            update_sampled_lanes(&mut lanes, &mut step);
         }
         for (i, lane) in lanes.iter_mut().enumerate() {
-            if going[i] {
+            if step.going[i] {
                 let (run, oracles) = (&mut lane.run, &lane.oracles);
-                run.complete(command[i], k, t, vehicle, &states[i], oracles, &mut NoTrace);
+                run.complete(
+                    step.command[i],
+                    k,
+                    t,
+                    vehicle,
+                    &states[i],
+                    oracles,
+                    &mut NoTrace,
+                );
                 omega[i] = run.omega_radps();
             }
         }
@@ -170,4 +138,86 @@ where
         .into_iter()
         .map(|l| l.run.finish(&mut NoTrace))
         .collect()
+}
+
+/// One step of the lanes between sensing and completing it.
+struct LaneStep {
+    /// The lanes still running after sensing (the others ended or were never live).
+    going: [bool; LANES],
+    /// The lanes whose sampled law answers at once ([`IsolineController::update_lanes`]).
+    sampled: [bool; LANES],
+    /// Each going lane's command, once its law answered (`None`: held).
+    command: [Option<f64>; LANES],
+    /// The samples of the `sampled` lanes.
+    ms: [Measurement; LANES],
+}
+
+/// Steps 1-3 of step `k` (time `t`, the field's `values` at the lanes' positions) up to the
+/// controller, lane by lane ([`VehicleRun::sense`]): a law that needs ground truth is asked
+/// at once ([`ask`], with its oracles' gradient), a sample for any other law is kept for
+/// [`update_sampled_lanes`].
+#[inline(always)]
+fn sense_lanes<V, C>(
+    lanes: &mut [Lane<'_, C>],
+    vehicle: &V,
+    states: &[V::State; LANES],
+    k: u64,
+    t: f64,
+    values: &[f64; LANES],
+) -> LaneStep
+where
+    V: Vehicle,
+    C: IsolineController,
+{
+    let mut step = LaneStep {
+        going: [false; LANES],
+        sampled: [false; LANES],
+        command: [None; LANES],
+        ms: [Measurement {
+            t_s: 0.0,
+            value: 0.0,
+        }; LANES],
+    };
+    for (i, lane) in lanes.iter_mut().enumerate() {
+        if !lane.run.is_running() {
+            continue;
+        }
+        let value_at = |_| values[i];
+        match lane
+            .run
+            .sense(vehicle, &states[i], k, t, value_at, &mut NoTrace)
+        {
+            Sensed::Ended => continue,
+            Sensed::Held => {}
+            Sensed::Sampled(m) if lane.wants_truth => {
+                let sample = lane.run.sample(m, vehicle.speed_mps(&states[i]));
+                let gradient = lane.oracles.gradient;
+                step.command[i] = Some(ask(&mut lane.controller, true, &sample, gradient));
+            }
+            Sensed::Sampled(m) => {
+                step.ms[i] = m;
+                step.sampled[i] = true;
+            }
+        }
+        step.going[i] = true;
+    }
+    step
+}
+
+/// Every sampled law of the step answers at once ([`IsolineController::update_lanes`] over
+/// the `sampled` lanes' controllers and samples): their commands.
+#[inline(always)]
+fn update_sampled_lanes<C: IsolineController>(lanes: &mut [Lane<'_, C>], step: &mut LaneStep) {
+    let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
+    for (i, lane) in lanes.iter_mut().enumerate() {
+        if step.sampled[i] {
+            ctrls[i] = Some(&mut lane.controller);
+        }
+    }
+    let w = C::update_lanes(&mut ctrls, &step.ms);
+    for (i, w) in w.iter().enumerate() {
+        if step.sampled[i] {
+            step.command[i] = Some(*w);
+        }
+    }
 }

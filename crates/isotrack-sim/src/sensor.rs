@@ -305,55 +305,89 @@ impl Sensor {
     #[inline(always)]
     pub fn observe(&mut self, t_s: f64, true_value: f64) -> Option<Measurement> {
         if self.ideal {
-            let sample_now = self.countdown == 0;
-            self.countdown = if sample_now {
-                self.every - 1
-            } else {
-                self.countdown - 1
-            };
+            let sample_now = self.tick();
             return sample_now.then_some(Measurement {
                 t_s,
                 value: true_value,
             });
         }
-        // The sensing element's lag acts on the true value at every step.
-        let true_value = if self.lag_gain < 1.0 {
-            let y = self.lagged.get_or_insert(true_value);
-            *y += self.lag_gain * (true_value - *y);
-            *y
-        } else {
-            true_value
-        };
+        let true_value = self.lag(true_value);
+        let sample_now = self.tick();
+        let delayed = self.delayed(true_value, sample_now)?;
+        if !sample_now {
+            return None;
+        }
+        let value = self.corrupted(delayed);
+        if self.dropout_probability > 0.0 {
+            let u: f64 = rand::RngExt::random(&mut self.dropout_rng);
+            if u < self.dropout_probability {
+                self.dropped += 1;
+                return None;
+            }
+        }
+        Some(Measurement { t_s, value })
+    }
+
+    /// Whether this step is a sample step, the countdown to the next one advanced: samples
+    /// fall every `every` steps, from step 0.
+    #[inline(always)]
+    fn tick(&mut self) -> bool {
         let sample_now = self.countdown == 0;
         self.countdown = if sample_now {
             self.every - 1
         } else {
             self.countdown - 1
         };
-        let delayed = if self.delay_steps == 0 {
-            true_value
+        sample_now
+    }
+
+    /// The sensing element's first-order lag, acting on the true value at every step:
+    /// `y += g (x - y)` from `y = x` at the first step (the value itself without a lag,
+    /// `g = 1`).
+    #[inline(always)]
+    fn lag(&mut self, true_value: f64) -> f64 {
+        if self.lag_gain < 1.0 {
+            let y = self.lagged.get_or_insert(true_value);
+            *y += self.lag_gain * (true_value - *y);
+            *y
         } else {
-            if self.store_countdown == 0 {
-                self.history.push_back(true_value);
-                self.store_countdown = self.every - 1;
-            } else {
-                self.store_countdown -= 1;
-            }
-            if self.warmup > 0 {
-                self.warmup -= 1;
-                return None;
-            }
-            if !sample_now {
-                return None;
-            }
-            // The front is the value of step `k - delay_steps`: stored steps and sample steps
-            // are both `every` apart, and the first stored one is the first with
-            // `j + delay_steps` a multiple of `every`.
-            self.history.pop_front()?
-        };
+            true_value
+        }
+    }
+
+    /// The value the delay line gives at this step (`sample_now`: a sample step): without a
+    /// delay the value itself; else the value of step `k - delay_steps` on a sample step once
+    /// the delay has filled, `None` before or between samples. Only the steps that will be
+    /// sampled are stored, one every `every` steps.
+    #[inline(always)]
+    fn delayed(&mut self, true_value: f64, sample_now: bool) -> Option<f64> {
+        if self.delay_steps == 0 {
+            return Some(true_value);
+        }
+        if self.store_countdown == 0 {
+            self.history.push_back(true_value);
+            self.store_countdown = self.every - 1;
+        } else {
+            self.store_countdown -= 1;
+        }
+        if self.warmup > 0 {
+            self.warmup -= 1;
+            return None;
+        }
         if !sample_now {
             return None;
         }
+        // The front is the value of step `k - delay_steps`: stored steps and sample steps
+        // are both `every` apart, and the first stored one is the first with
+        // `j + delay_steps` a multiple of `every`.
+        self.history.pop_front()
+    }
+
+    /// A sample's value as the instrument reports it: plus white noise and the bias's random
+    /// walk (each stream drawn only when present), quantised to the resolution, clamped to the
+    /// range.
+    #[inline(always)]
+    fn corrupted(&mut self, delayed: f64) -> f64 {
         let noise = if self.noise_std > 0.0 {
             let n: f64 = StandardNormal.sample(&mut self.rng);
             self.noise_std * n
@@ -379,14 +413,7 @@ impl Sensor {
         if let Some([lo, hi]) = self.range {
             value = value.clamp(lo, hi);
         }
-        if self.dropout_probability > 0.0 {
-            let u: f64 = rand::RngExt::random(&mut self.dropout_rng);
-            if u < self.dropout_probability {
-                self.dropped += 1;
-                return None;
-            }
-        }
-        Some(Measurement { t_s, value })
+        value
     }
 }
 

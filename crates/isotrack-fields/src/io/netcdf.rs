@@ -541,46 +541,62 @@ fn parse_bytes_with(
             format!("not a valid NetCDF file: {m}"),
         )
     })?;
-    let cannot = |e: netcdf_reader::Error| {
-        LoadError::new(
-            name,
-            None,
-            format!(
-                "cannot read as NetCDF: {}",
-                isotrack_core::numtext::Clipped(&e.to_string())
-            ),
-        )
-    };
-    let tangled = |m: String| {
-        LoadError::new(
-            name,
-            None,
-            format!(
-                "cannot read as NetCDF: {}",
-                isotrack_core::numtext::Clipped(&m)
-            ),
-        )
-    };
     if !bytes.starts_with(HDF5_SIGNATURE) {
-        // NetCDF-3 (or an HDF5 file behind a user block: its attributes are read as the
-        // reader reads them).
-        let file = NcFile::from_bytes(bytes).map_err(cannot)?;
-        if matches!(
-            file.format(),
-            netcdf_reader::NcFormat::Nc4 | netcdf_reader::NcFormat::Nc4Classic
-        ) {
-            if let Ok(h5) = hdf5_reader::Hdf5File::from_bytes(bytes) {
-                check_group_tree(&h5).map_err(tangled)?;
-            }
-        }
-        let vars = file.variables().map_err(cannot)?;
-        return parse_file(name, &file, vars, variable, budget_bytes);
+        return parse_classic(name, bytes, variable, budget_bytes);
     }
-    // NetCDF-4: the bytes shared by the reader and the second look at the needed text
-    // attributes ([`restore_cut_text_attributes`]), one copy as `from_bytes` makes.
+    parse_netcdf4(name, bytes, variable, budget_bytes)
+}
+
+/// The reader's refusal of file `name`, `why` clipped: "cannot read as NetCDF: ...".
+fn cannot_read(name: &Path, why: &str) -> LoadError {
+    LoadError::new(
+        name,
+        None,
+        format!(
+            "cannot read as NetCDF: {}",
+            isotrack_core::numtext::Clipped(why)
+        ),
+    )
+}
+
+/// A file that does not start with the HDF5 signature: NetCDF-3 (or an HDF5 file behind a
+/// user block: its attributes are read as the reader reads them, its groups checked to form a
+/// tree first, [`check_group_tree`]).
+fn parse_classic(
+    name: &Path,
+    bytes: &[u8],
+    variable: Option<&str>,
+    budget_bytes: impl FnOnce() -> Option<u64>,
+) -> Result<LoadedSeries, LoadError> {
+    let cannot = |e: netcdf_reader::Error| cannot_read(name, &e.to_string());
+    let file = NcFile::from_bytes(bytes).map_err(cannot)?;
+    if matches!(
+        file.format(),
+        netcdf_reader::NcFormat::Nc4 | netcdf_reader::NcFormat::Nc4Classic
+    ) {
+        if let Ok(h5) = hdf5_reader::Hdf5File::from_bytes(bytes) {
+            check_group_tree(&h5).map_err(|m| cannot_read(name, &m))?;
+        }
+    }
+    let vars = file.variables().map_err(cannot)?;
+    parse_file(name, &file, vars, variable, budget_bytes)
+}
+
+/// A NetCDF-4 file: its groups checked to form a tree ([`check_group_tree`]), then read by the
+/// strict reader, or leniently ([`parse_lenient`]) where the strict reader refuses a text
+/// attribute that is not UTF-8 or a dataset without dimension scales. The bytes are shared by
+/// the reader and the second look at the needed text attributes
+/// ([`restore_cut_text_attributes`]), one copy as `from_bytes` makes.
+fn parse_netcdf4(
+    name: &Path,
+    bytes: &[u8],
+    variable: Option<&str>,
+    budget_bytes: impl FnOnce() -> Option<u64>,
+) -> Result<LoadedSeries, LoadError> {
+    let cannot = |e: netcdf_reader::Error| cannot_read(name, &e.to_string());
     let shared: std::sync::Arc<[u8]> = std::sync::Arc::from(bytes);
     if let Ok(h5) = hdf5_reader::Hdf5File::from_shared_bytes(shared.clone()) {
-        check_group_tree(&h5).map_err(tangled)?;
+        check_group_tree(&h5).map_err(|m| cannot_read(name, &m))?;
     }
     let file = NcFile::from_shared_bytes(shared.clone()).map_err(cannot)?;
     match file.variables() {
@@ -590,36 +606,48 @@ fn parse_bytes_with(
             parse_file(name, &file, &vars, variable, budget_bytes)
         }
         Err(e) if is_non_utf8_text(&e) || is_missing_dimension_list(&e) => {
-            // A text attribute that is not UTF-8 (a Latin-1 `comment` or `history` from an
-            // older tool): the strict reader refuses the whole file, where the classic reader
-            // (NetCDF-3) reads such bytes as U+FFFD. Opened again leniently, the variables'
-            // text attributes that are not UTF-8 are read here as the classic reader reads
-            // them; `attr_text` refuses one isotrack reads (`units`, `axis`, ...).
-            let lenient = NcFile::from_bytes_with_options(
-                bytes,
-                netcdf_reader::NcOpenOptions {
-                    metadata_mode: netcdf_reader::NcMetadataMode::Lossy,
-                    ..Default::default()
-                },
-            )
-            .map_err(cannot)?;
-            // Datasets without dimension scales (an HDF5 tool's dataset beside the netCDF
-            // variables: netCDF-C gives them phony dimensions, xarray opens the file) are left
-            // out: isotrack never reads them, and the lenient reader would give them
-            // dimensions guessed by size. The variable asked for is refused for it, with the
-            // strict reader's error (issue 30, att30c-8).
-            let unscaled = datasets_without_dimension_scales(bytes);
-            if variable.is_some_and(|v| unscaled.iter().any(|u| u == v)) {
-                return Err(cannot(e));
-            }
-            let mut vars = lenient.variables().map_err(cannot)?.to_vec();
-            vars.retain(|v| !unscaled.contains(&v.name));
-            restore_non_utf8_attributes(bytes, &mut vars);
-            restore_cut_text_attributes(&shared, &mut vars);
-            parse_file(name, &lenient, &vars, variable, budget_bytes)
+            parse_lenient(name, &shared, e, variable, budget_bytes)
         }
         Err(e) => Err(cannot(e)),
     }
+}
+
+/// A NetCDF-4 file the strict reader refused with `strict` for a text attribute that is not
+/// UTF-8 (a Latin-1 `comment` or `history` from an older tool) or a dataset without dimension
+/// scales, where the classic reader (NetCDF-3) reads such bytes as U+FFFD. Opened again
+/// leniently, the variables' text attributes that are not UTF-8 are read here as the classic
+/// reader reads them; `attr_text` refuses one isotrack reads (`units`, `axis`, ...).
+fn parse_lenient(
+    name: &Path,
+    shared: &std::sync::Arc<[u8]>,
+    strict: netcdf_reader::Error,
+    variable: Option<&str>,
+    budget_bytes: impl FnOnce() -> Option<u64>,
+) -> Result<LoadedSeries, LoadError> {
+    let cannot = |e: netcdf_reader::Error| cannot_read(name, &e.to_string());
+    let bytes: &[u8] = shared;
+    let lenient = NcFile::from_bytes_with_options(
+        bytes,
+        netcdf_reader::NcOpenOptions {
+            metadata_mode: netcdf_reader::NcMetadataMode::Lossy,
+            ..Default::default()
+        },
+    )
+    .map_err(cannot)?;
+    // Datasets without dimension scales (an HDF5 tool's dataset beside the netCDF variables:
+    // netCDF-C gives them phony dimensions, xarray opens the file) are left out: isotrack never
+    // reads them, and the lenient reader would give them dimensions guessed by size. The
+    // variable asked for is refused for it, with the strict reader's error (issue 30,
+    // att30c-8).
+    let unscaled = datasets_without_dimension_scales(bytes);
+    if variable.is_some_and(|v| unscaled.iter().any(|u| u == v)) {
+        return Err(cannot(strict));
+    }
+    let mut vars = lenient.variables().map_err(cannot)?.to_vec();
+    vars.retain(|v| !unscaled.contains(&v.name));
+    restore_non_utf8_attributes(bytes, &mut vars);
+    restore_cut_text_attributes(shared, &mut vars);
+    parse_file(name, &lenient, &vars, variable, budget_bytes)
 }
 
 /// The deepest nesting of groups below the root read, as netcdf-reader's own limit ("NetCDF

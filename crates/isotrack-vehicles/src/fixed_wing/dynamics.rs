@@ -458,113 +458,21 @@ pub(crate) fn derivatives_lanes<const N: usize>(
     let [sf, st, _] = &euler.sin;
     let [cf, ct, _] = &euler.cos;
     let r = euler.rotation();
-    // Air data (`air_data_sc`'s formulas).
-    let [ur, vr, wr] = air_relative_lanes(&[*u, *v, *w], wind, &r);
-    let va = lanes!(N, i => (ur[i] * ur[i] + vr[i] * vr[i] + wr[i] * wr[i]).sqrt());
-    let ratio = lanes!(N, i => (vr[i] / va[i]).clamp(-1.0, 1.0));
-    let ca0 = lanes!(N, i => ur[i].abs() / (ur[i] * ur[i] + wr[i] * wr[i]).sqrt());
-    let tan_a = lanes!(N, i => wr[i] / ur[i]);
-    let mut beta = [0.0; N];
-    let mut alpha = [0.0; N];
-    let mut sa = [0.0; N];
-    let mut ca = [0.0; N];
-    let mut e = [0.0; N];
-    for i in 0..N {
-        beta[i] = if va[i] > 0.0 { ratio[i].asin() } else { 0.0 };
-        (alpha[i], sa[i], ca[i]) = if ur[i] != 0.0 {
-            (tan_a[i].atan(), tan_a[i] * ca0[i], ca0[i])
-        } else {
-            let a = wr[i].atan2(ur[i]);
-            let (s, c) = a.sin_cos();
-            (a, s, c)
-        };
-        e[i] = (p.stall_m * alpha[i]).exp();
-    }
+    let air = AirLanes::of(p, &air_relative_lanes(&[*u, *v, *w], wind, &r));
     let m = p.mass_kg;
-    let k = dv.stall_k;
     let mut out = [[0.0; N]; 12];
     for i in 0..N {
         let (u, v, w) = (u[i], v[i], w[i]);
         let (pr, qr, rr) = (pr[i], qr[i], rr[i]);
         let (sf, cf, st, ct) = (sf[i], cf[i], st[i], ct[i]);
-        let (va, alpha, beta, sa, ca) = (va[i], alpha[i], beta[i], sa[i], ca[i]);
-        let (de, da, dr, dt) = (
+        let deltas = [
             d.elevator_rad[i],
             d.aileron_rad[i],
             d.rudder_rad[i],
             d.throttle[i],
-        );
-        // Gravity.
-        let mut fx = -m * p.g * st;
-        let mut fy = m * p.g * ct * sf;
-        let mut fz = m * p.g * ct * cf;
-        // Aerodynamics (with air motion only: at Va = 0 its terms are not finite and left out).
-        let qbar = 0.5 * p.rho * va * va;
-        // The stall blend and lift coefficient (`stall_blend_k`, `lift_coefficient_sc`).
-        let (a, b) = (k / e[i], k * e[i]);
-        let s = (1.0 + a + b) / ((1.0 + a) * (1.0 + b));
-        let sign = if alpha > 0.0 {
-            1.0
-        } else if alpha < 0.0 {
-            -1.0
-        } else {
-            0.0
-        };
-        let cl = (1.0 - s) * (p.c_l0 + p.c_l_alpha * alpha) + s * 2.0 * sign * sa * sa * ca;
-        let lin = p.c_l0 + p.c_l_alpha * alpha;
-        let cd = p.c_d_p + lin * lin / dv.pi_e_ar;
-        let cx = -cd * ca + cl * sa;
-        let cxq = -p.c_d_q * ca + p.c_l_q * sa;
-        let cxde = -p.c_d_de * ca + p.c_l_de * sa;
-        let cz = -cd * sa - cl * ca;
-        let czq = -p.c_d_q * sa - p.c_l_q * ca;
-        let czde = -p.c_d_de * sa - p.c_l_de * ca;
-        let cq = p.c * qr / (2.0 * va);
-        let bp = p.b * pr / (2.0 * va);
-        let br = p.b * rr / (2.0 * va);
-        let afx = fx + qbar * p.s * (cx + cxq * cq + cxde * de);
-        let afy = fy
-            + qbar
-                * p.s
-                * (p.c_y0
-                    + p.c_y_beta * beta
-                    + p.c_y_p * bp
-                    + p.c_y_r * br
-                    + p.c_y_da * da
-                    + p.c_y_dr * dr);
-        let afz = fz + qbar * p.s * (cz + czq * cq + czde * de);
-        let aell = qbar
-            * p.s
-            * p.b
-            * (p.c_ell0
-                + p.c_ell_beta * beta
-                + p.c_ell_p * bp
-                + p.c_ell_r * br
-                + p.c_ell_da * da
-                + p.c_ell_dr * dr);
-        let amm = qbar * p.s * p.c * (p.c_m0 + p.c_m_alpha * alpha + p.c_m_q * cq + p.c_m_de * de);
-        let ann = qbar
-            * p.s
-            * p.b
-            * (p.c_n0
-                + p.c_n_beta * beta
-                + p.c_n_p * bp
-                + p.c_n_r * br
-                + p.c_n_da * da
-                + p.c_n_dr * dr);
-        let moving = va > 0.0;
-        let pick = |a: f64, b: f64| if moving { a } else { b };
-        fx = pick(afx, fx);
-        fy = pick(afy, fy);
-        fz = pick(afz, fz);
-        let mut ell = pick(aell, 0.0);
-        let mm = pick(amm, 0.0);
-        let nn = pick(ann, 0.0);
-        // Propulsion (2012 model).
-        let km = p.k_motor * dt;
-        fx += 0.5 * p.rho * p.s_prop * p.c_prop * (km * km - va * va);
-        let ko = p.k_omega * dt;
-        ell -= p.k_tp * ko * ko;
+        ];
+        let ([fx, fy, fz], [ell, mm, nn]) =
+            forces_moments(p, dv, &air.lane(i), [sf, cf, st, ct], [pr, qr, rr], deltas);
         let tt = st / ct;
         let f = [
             r[0][0][i] * u + r[0][1][i] * v + r[0][2][i] * w,
@@ -585,6 +493,200 @@ pub(crate) fn derivatives_lanes<const N: usize>(
         }
     }
     out
+}
+
+/// The air data of `N` states in lanes (`air_data_sc`'s formulas) from their air-relative
+/// body velocities `[ur, vr, wr]`: the airspeed `Va`, the sideslip `beta = asin(vr / Va)` (0 at
+/// `Va = 0`), the angle of attack `alpha = atan(wr / ur)` with its sine and cosine (from the
+/// tangent; by `atan2` where `ur = 0`), and the stall blend's `exp(M alpha)`.
+struct AirLanes<const N: usize> {
+    /// Airspeed `Va`, m/s.
+    va: [f64; N],
+    /// Angle of attack, rad.
+    alpha: [f64; N],
+    /// Sideslip, rad.
+    beta: [f64; N],
+    /// `sin(alpha)`.
+    sa: [f64; N],
+    /// `cos(alpha)`.
+    ca: [f64; N],
+    /// `exp(M alpha)` (`M`: [`Aerosonde::stall_m`]).
+    e: [f64; N],
+}
+
+/// One lane of [`AirLanes`].
+#[derive(Clone, Copy)]
+struct AirLane {
+    va: f64,
+    alpha: f64,
+    beta: f64,
+    sa: f64,
+    ca: f64,
+    e: f64,
+}
+
+impl<const N: usize> AirLanes<N> {
+    /// Of the air-relative body velocities `[ur, vr, wr]` (the square roots and divisions in
+    /// lanes; the `asin`, `atan` and `exp`, which have no lane form, lane by lane).
+    #[inline(always)]
+    fn of(p: &Aerosonde, [ur, vr, wr]: &[[f64; N]; 3]) -> Self {
+        let va = lanes!(N, i => (ur[i] * ur[i] + vr[i] * vr[i] + wr[i] * wr[i]).sqrt());
+        let ratio = lanes!(N, i => (vr[i] / va[i]).clamp(-1.0, 1.0));
+        let ca0 = lanes!(N, i => ur[i].abs() / (ur[i] * ur[i] + wr[i] * wr[i]).sqrt());
+        let tan_a = lanes!(N, i => wr[i] / ur[i]);
+        let mut beta = [0.0; N];
+        let mut alpha = [0.0; N];
+        let mut sa = [0.0; N];
+        let mut ca = [0.0; N];
+        let mut e = [0.0; N];
+        for i in 0..N {
+            beta[i] = if va[i] > 0.0 { ratio[i].asin() } else { 0.0 };
+            (alpha[i], sa[i], ca[i]) = if ur[i] != 0.0 {
+                (tan_a[i].atan(), tan_a[i] * ca0[i], ca0[i])
+            } else {
+                let a = wr[i].atan2(ur[i]);
+                let (s, c) = a.sin_cos();
+                (a, s, c)
+            };
+            e[i] = (p.stall_m * alpha[i]).exp();
+        }
+        Self {
+            va,
+            alpha,
+            beta,
+            sa,
+            ca,
+            e,
+        }
+    }
+
+    /// Lane `i`.
+    #[inline(always)]
+    fn lane(&self, i: usize) -> AirLane {
+        AirLane {
+            va: self.va[i],
+            alpha: self.alpha[i],
+            beta: self.beta[i],
+            sa: self.sa[i],
+            ca: self.ca[i],
+            e: self.e[i],
+        }
+    }
+}
+
+/// One aircraft's body forces `[fx, fy, fz]` (N) and moments `[l, m, n]` (N m) (Beard &
+/// McLain, 2012, ch. 4): gravity, from the attitude `[sin phi, cos phi, sin theta, cos theta]`;
+/// the aerodynamics ([`aerodynamics`]), with air motion only (at `Va = 0` their terms are not
+/// finite and left out, selected branch-free); the propeller's thrust and torque from the
+/// throttle (the 2012 model). `rates`: `[p, q, r]`, rad/s; `deltas`: elevator, aileron,
+/// rudder (rad) and throttle.
+#[inline(always)]
+fn forces_moments(
+    p: &Aerosonde,
+    dv: &Derived,
+    air: &AirLane,
+    [sf, cf, st, ct]: [f64; 4],
+    rates: [f64; 3],
+    deltas: [f64; 4],
+) -> ([f64; 3], [f64; 3]) {
+    let m = p.mass_kg;
+    let va = air.va;
+    let dt = deltas[3];
+    // Gravity.
+    let gravity = [-m * p.g * st, m * p.g * ct * sf, m * p.g * ct * cf];
+    let [afx, afy, afz, aell, amm, ann] = aerodynamics(p, dv, air, gravity, rates, deltas);
+    let moving = va > 0.0;
+    let pick = |a: f64, b: f64| if moving { a } else { b };
+    let mut fx = pick(afx, gravity[0]);
+    let fy = pick(afy, gravity[1]);
+    let fz = pick(afz, gravity[2]);
+    let mut ell = pick(aell, 0.0);
+    let mm = pick(amm, 0.0);
+    let nn = pick(ann, 0.0);
+    // Propulsion (2012 model).
+    let km = p.k_motor * dt;
+    fx += 0.5 * p.rho * p.s_prop * p.c_prop * (km * km - va * va);
+    let ko = p.k_omega * dt;
+    ell -= p.k_tp * ko * ko;
+    ([fx, fy, fz], [ell, mm, nn])
+}
+
+/// The forces `gravity` plus the aerodynamic forces, and the aerodynamic moments, of one
+/// aircraft in moving air (Beard & McLain, 2012, ch. 4): the stall blend and lift coefficient
+/// (`stall_blend_k`, `lift_coefficient_sc`), the drag polar, the body-axis coefficients rotated
+/// by the angle of attack, the rate and control derivatives. Not finite at `Va = 0`.
+#[inline(always)]
+fn aerodynamics(
+    p: &Aerosonde,
+    dv: &Derived,
+    air: &AirLane,
+    [fx, fy, fz]: [f64; 3],
+    [pr, qr, rr]: [f64; 3],
+    [de, da, dr, _]: [f64; 4],
+) -> [f64; 6] {
+    let AirLane {
+        va,
+        alpha,
+        beta,
+        sa,
+        ca,
+        e,
+    } = *air;
+    let k = dv.stall_k;
+    let qbar = 0.5 * p.rho * va * va;
+    // The stall blend and lift coefficient (`stall_blend_k`, `lift_coefficient_sc`).
+    let (a, b) = (k / e, k * e);
+    let s = (1.0 + a + b) / ((1.0 + a) * (1.0 + b));
+    let sign = if alpha > 0.0 {
+        1.0
+    } else if alpha < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    let cl = (1.0 - s) * (p.c_l0 + p.c_l_alpha * alpha) + s * 2.0 * sign * sa * sa * ca;
+    let lin = p.c_l0 + p.c_l_alpha * alpha;
+    let cd = p.c_d_p + lin * lin / dv.pi_e_ar;
+    let cx = -cd * ca + cl * sa;
+    let cxq = -p.c_d_q * ca + p.c_l_q * sa;
+    let cxde = -p.c_d_de * ca + p.c_l_de * sa;
+    let cz = -cd * sa - cl * ca;
+    let czq = -p.c_d_q * sa - p.c_l_q * ca;
+    let czde = -p.c_d_de * sa - p.c_l_de * ca;
+    let cq = p.c * qr / (2.0 * va);
+    let bp = p.b * pr / (2.0 * va);
+    let br = p.b * rr / (2.0 * va);
+    let afx = fx + qbar * p.s * (cx + cxq * cq + cxde * de);
+    let afy = fy
+        + qbar
+            * p.s
+            * (p.c_y0
+                + p.c_y_beta * beta
+                + p.c_y_p * bp
+                + p.c_y_r * br
+                + p.c_y_da * da
+                + p.c_y_dr * dr);
+    let afz = fz + qbar * p.s * (cz + czq * cq + czde * de);
+    let aell = qbar
+        * p.s
+        * p.b
+        * (p.c_ell0
+            + p.c_ell_beta * beta
+            + p.c_ell_p * bp
+            + p.c_ell_r * br
+            + p.c_ell_da * da
+            + p.c_ell_dr * dr);
+    let amm = qbar * p.s * p.c * (p.c_m0 + p.c_m_alpha * alpha + p.c_m_q * cq + p.c_m_de * de);
+    let ann = qbar
+        * p.s
+        * p.b
+        * (p.c_n0
+            + p.c_n_beta * beta
+            + p.c_n_p * bp
+            + p.c_n_r * br
+            + p.c_n_da * da
+            + p.c_n_dr * dr);
+    [afx, afy, afz, aell, amm, ann]
 }
 
 /// One RK4 step of `N` states in lanes ([`rk4_step_inline`]'s formulas), deflections and wind
