@@ -53,8 +53,8 @@ use crate::vehicle_state::Mode;
 use crate::wire;
 use isotrack_core::math::{wrap_angle, Pose2};
 use isotrack_core::numtext::{Echo, Num};
-use isotrack_scenario::Scenario;
-use isotrack_sim::{RunResult, TraceRow, TraceSink};
+use isotrack_scenario::{Scenario, ScenarioEpisode};
+use isotrack_sim::{RunResult, Sample, TraceRow, TraceSink};
 use mavlink::dialects::common::*;
 use mavlink::Message as _;
 use std::net::SocketAddr;
@@ -344,6 +344,43 @@ enum Stream {
 }
 
 impl Autopilot {
+    /// A disarmed vehicle in MANUAL with no owner, nothing logged: `turn_limit_radps` is the
+    /// turn rate a fixed wing's roll setpoints are bounded by (its loiter at half of it),
+    /// `ground_max_radps` the ground vehicle's ([`MAX_GROUND_TURN_RATE_RADPS`] without a limit).
+    fn new(
+        system_id: u8,
+        flying: bool,
+        stream: Stream,
+        transport: Transport,
+        turn_limit_radps: f64,
+        ground_max_radps: f64,
+    ) -> Self {
+        Autopilot {
+            system_id,
+            armed: false,
+            mode: Mode::Manual,
+            owner: None,
+            owner_addr: None,
+            twins_logged: Vec::new(),
+            flying,
+            setpoint: None,
+            setpoint_wall: None,
+            stream,
+            offboard_since_s: 0.0,
+            transport,
+            loiter_radps: 0.5 * turn_limit_radps,
+            turn_limit_radps,
+            ground_max_radps,
+            clamp_logged: false,
+            events: Vec::new(),
+            events_dropped: 0,
+            refused: 0,
+            out_of_order: 0,
+            stamps: Vec::new(),
+            ground_stations: Vec::new(),
+        }
+    }
+
     /// Whether `from` is a ground station: system [`GCS_SYSTEM_ID`], or a sender whose
     /// heartbeat says `MAV_TYPE_GCS`.
     fn is_gcs(&self, from: (u32, u8)) -> bool {
@@ -1046,244 +1083,24 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
     check_sitl_scenario(scenario).map_err(SitlError::Scenario)?;
     let frame = Frame::of(scenario).map_err(SitlError::Scenario)?;
     let mut link = Link::open(&opts.url, opts.system_id, 1).map_err(SitlError::Link)?;
-    link.set_peer_timeout(
-        Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
-            .unwrap_or(Duration::from_secs(86_400)),
-    );
+    link.set_peer_timeout(companion_timeout(opts));
     on_ready(&link);
-    let transport = Transport::of(scenario);
-    let turn_limit = scenario.max_turn_rate_radps().unwrap_or(0.2);
-    let companion_timeout = Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
-        .unwrap_or(Duration::from_secs(86_400));
-    let start = scenario.start();
-    let speed = scenario.start_speed_mps(start);
-    let mut sitl = Sitl {
-        link,
-        ap: Autopilot {
-            system_id: opts.system_id,
-            armed: false,
-            mode: Mode::Manual,
-            owner: None,
-            owner_addr: None,
-            twins_logged: Vec::new(),
-            flying: scenario.is_flying(),
-            setpoint: None,
-            setpoint_wall: None,
-            stream: match opts.pace {
-                Pace::RealTime { .. } => Stream::Simulated {
-                    within_s: opts.setpoint_timeout_s,
-                },
-                Pace::Lockstep => Stream::Wall {
-                    within: companion_timeout,
-                },
-            },
-            offboard_since_s: 0.0,
-            transport,
-            loiter_radps: 0.5 * turn_limit,
-            turn_limit_radps: turn_limit,
-            ground_max_radps: scenario
-                .max_turn_rate_radps()
-                .unwrap_or(MAX_GROUND_TURN_RATE_RADPS),
-            clamp_logged: false,
-            events: Vec::new(),
-            events_dropped: 0,
-            refused: 0,
-            out_of_order: 0,
-            stamps: Vec::new(),
-            ground_stations: Vec::new(),
-        },
-        home: frame,
-        scenario,
-        stop: opts.stop.clone(),
-        next_slow_s: 0.0,
-        last_heartbeat_wall: Instant::now(),
-        heartbeat_period: match opts.pace {
-            Pace::RealTime { .. } => opts
-                .heartbeat_hz
-                .filter(|hz| hz.is_finite() && *hz > 0.0)
-                .and_then(|hz| Duration::try_from_secs_f64(1.0 / hz).ok()),
-            Pace::Lockstep => None,
-        },
-        speed_mps: speed,
-        last_heard: Instant::now(),
-        telemetry_sent: false,
-        mavlink1_logged: false,
-        started: false,
-    };
-    // The run starts when a peer talks to the vehicle (a `udpin:` link learns its peer from
-    // its first message; a stray frame starts nothing). Meanwhile the vehicle beats once a
-    // wall-clock second to the peers it has (a `udpout:`/`tcpout:`/serial link's own: a
-    // ground station such as MAVSDK waits for a vehicle's heartbeat before it says anything).
-    let mut beaten = false;
-    while !sitl.started {
-        if sitl.stop.load(Ordering::Relaxed) {
-            break;
-        }
-        if !beaten
-            || sitl.last_heartbeat_wall.elapsed()
-                >= sitl.heartbeat_period.unwrap_or(Duration::from_secs(1))
-        {
-            beaten = true;
-            sitl.heartbeat(false)?;
-        }
-        sitl.handle_inbound(0.0, Duration::from_millis(100))?;
-    }
-    if sitl.started && sitl.heartbeat_period.is_some() {
-        // A peer is there now (a `udpin:` link's first beats had nowhere to go): beat at once,
-        // as PX4 beats from its boot, then every period (ver33c-3).
-        sitl.heartbeat(false)?;
-    }
+    let mut sitl = Sitl::new(scenario, opts, link, frame);
+    sitl.wait_for_peer()?;
     let mut ep = scenario.episode(None, None);
     let mut flown = Vec::new();
-    let wall0 = Instant::now();
-    let mut interrupted = false;
-    let mut companion_lost = false;
-    loop {
-        if sitl.stop.load(Ordering::Relaxed) {
-            interrupted = true;
-            break;
-        }
-        let mut tee = Tee {
-            rows: Vec::new(),
-            sink: &mut *sink,
-        };
-        let sample = ep.run_to_sample_traced(&mut tee);
-        let rows = std::mem::take(&mut tee.rows);
-        for r in &rows {
-            if let Pace::RealTime { speedup } = opts.pace {
-                wait_until(
-                    &mut sitl,
-                    r.t_s,
-                    wall0 + Duration::from_secs_f64(r.t_s / speedup),
-                )?;
-            }
-            sitl.telemetry(r)?;
-        }
-        let Some(sample) = sample else { break };
-        let t = sample.measurement.t_s;
-        let ms = wire::time_ms(t).unwrap_or(u32::MAX);
-        if let Pace::RealTime { speedup } = opts.pace {
-            wait_until(&mut sitl, t, wall0 + Duration::from_secs_f64(t / speedup))?;
-        }
-        sitl.slow_group(t)?;
-        let mut name = [0u8; 10];
-        for (b, c) in name.iter_mut().zip(wire::MEASUREMENT_NAME.bytes()) {
-            *b = c;
-        }
-        let iso = MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
-            time_boot_ms: ms,
-            value: sample.measurement.value as f32,
-            name: name.into(),
-        });
-        sitl.send(iso.clone())?;
-        match opts.pace {
-            Pace::Lockstep => loop {
-                if sitl.stop.load(Ordering::Relaxed) {
-                    interrupted = true;
-                    break;
-                }
-                let answers = sitl.handle_inbound(t, Duration::from_millis(50))?;
-                if answers
-                    .iter()
-                    .any(|a| a.followed && (a.ms == ms || a.newer))
-                {
-                    break;
-                }
-                if sitl.last_heard.elapsed() > companion_timeout {
-                    let what = format!(
-                        "no message from anyone for {} s: the companion is gone, run ended",
-                        Echo(opts.companion_timeout_s)
-                    );
-                    sitl.ap.event(t, what);
-                    companion_lost = true;
-                    break;
-                }
-                if sitl.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
-                    // A lost datagram must not stall the run: the sample goes again with the
-                    // heartbeat (the companion answers a repeat with its answer again).
-                    sitl.heartbeat(false)?;
-                    if !sitl.telemetry_sent {
-                        // The first sample's position comes with its answer's step: a
-                        // companion that waits for a position before taking control gets
-                        // the sample's pose now.
-                        let p = sample.pose;
-                        sitl.telemetry(&TraceRow {
-                            t_s: t,
-                            x_m: p.position.x,
-                            y_m: p.position.y,
-                            heading_rad: p.heading_rad,
-                            s: sample.true_value,
-                            error: sample.true_value - scenario.level(),
-                            omega_radps: 0.0,
-                            s_measured: Some(sample.measurement.value),
-                            telemetry: None,
-                        })?;
-                    }
-                    sitl.send(iso.clone())?;
-                }
-            },
-            Pace::RealTime { .. } => {
-                sitl.handle_inbound(t, Duration::ZERO)?;
-                if sitl.ap.offboard_lost(t, opts.setpoint_timeout_s) {
-                    sitl.ap.mode = Mode::Hold;
-                    let what = format!(
-                        "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
-                        Echo(opts.setpoint_timeout_s)
-                    );
-                    sitl.ap.event(t, what.clone());
-                    // STATUSTEXT holds 50 characters (MAVLink 2 chunks them beyond, which
-                    // not every reader joins): the short form, the event says it all.
-                    sitl.statustext(MavSeverity::MAV_SEVERITY_WARNING, OFFBOARD_LOST_STATUSTEXT)?;
-                    sitl.changed_heartbeat()?;
-                }
-            }
-        }
-        if interrupted || companion_lost {
-            break;
-        }
-        let w = sitl.ap.turn_rate(Some(sample.pose));
-        flown.push((ms, w));
-        let mut tee = Tee {
-            rows: Vec::new(),
-            sink: &mut *sink,
-        };
-        ep.command_traced(w, &mut tee);
-        let rows = std::mem::take(&mut tee.rows);
-        for r in &rows {
-            sitl.telemetry(r)?;
-        }
-    }
+    let ended = sitl.fly(&mut ep, opts, sink, &mut flown)?;
     let t_end = ep.t_s();
-    let mut tee = Tee {
+    let result = ep.finish_traced(&mut Tee {
         rows: Vec::new(),
         sink: &mut *sink,
+    });
+    let how = match ended {
+        Ended::Interrupted => "interrupted",
+        Ended::CompanionLost => "companion_lost",
+        Ended::Run => result.outcome.as_str(),
     };
-    let result = ep.finish_traced(&mut tee);
-    let how = if interrupted {
-        "interrupted"
-    } else if companion_lost {
-        "companion_lost"
-    } else {
-        result.outcome.as_str()
-    };
-    if sitl.ap.events_dropped > 0 {
-        // Past the bound: the count, and the end, are logged all the same.
-        let n = sitl.ap.events_dropped;
-        sitl.ap.events.push(format!("{n} more events not logged"));
-    }
-    if sitl.ap.out_of_order > 0 {
-        let n = sitl.ap.out_of_order;
-        sitl.ap.events.push(format!(
-            "{n} setpoints out of order ignored (stamped older than their sender's last)"
-        ));
-    }
-    if sitl.link.stats.junk_datagrams > 0 {
-        // Junk (bad checksums, truncated frames, not MAVLink) moves nothing: dropped, counted.
-        let n = sitl.link.stats.junk_datagrams;
-        sitl.ap.events.push(format!(
-            "{n} datagrams without a valid MAVLink 2 frame dropped (bad checksum, truncated, not MAVLink)"
-        ));
-    }
+    sitl.log_counts();
     sitl.ap
         .events
         .push(format!("t = {} s: run ended ({how})", Num(t_end)));
@@ -1299,9 +1116,286 @@ pub fn run_sitl_on<S: TraceSink + ?Sized>(
         setpoints_refused: sitl.ap.refused,
         setpoints_out_of_order: sitl.ap.out_of_order,
         link: sitl.link.stats,
-        interrupted,
-        companion_lost,
+        interrupted: ended == Ended::Interrupted,
+        companion_lost: ended == Ended::CompanionLost,
         started: sitl.started,
+    })
+}
+
+/// [`SitlOptions::companion_timeout_s`] as a wall time (a day where it is too large to be one).
+fn companion_timeout(opts: &SitlOptions) -> Duration {
+    Duration::try_from_secs_f64(opts.companion_timeout_s.max(0.0))
+        .unwrap_or(Duration::from_secs(86_400))
+}
+
+/// How a sitl run's loop ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ended {
+    /// The episode ended (its outcome says how).
+    Run,
+    /// Stopped from outside ([`SitlOptions::stop`]: Ctrl-C).
+    Interrupted,
+    /// In lockstep, nobody answered for [`SitlOptions::companion_timeout_s`].
+    CompanionLost,
+}
+
+impl<'a> Sitl<'a> {
+    /// The vehicle of `scenario` on `link`, disarmed in MANUAL, before any peer has talked.
+    fn new(scenario: &'a Scenario, opts: &SitlOptions, link: Link, home: Frame) -> Self {
+        let turn_limit = scenario.max_turn_rate_radps().unwrap_or(0.2);
+        let stream = match opts.pace {
+            Pace::RealTime { .. } => Stream::Simulated {
+                within_s: opts.setpoint_timeout_s,
+            },
+            Pace::Lockstep => Stream::Wall {
+                within: companion_timeout(opts),
+            },
+        };
+        let ap = Autopilot::new(
+            opts.system_id,
+            scenario.is_flying(),
+            stream,
+            Transport::of(scenario),
+            turn_limit,
+            scenario
+                .max_turn_rate_radps()
+                .unwrap_or(MAX_GROUND_TURN_RATE_RADPS),
+        );
+        Sitl {
+            link,
+            ap,
+            home,
+            scenario,
+            stop: opts.stop.clone(),
+            next_slow_s: 0.0,
+            last_heartbeat_wall: Instant::now(),
+            heartbeat_period: match opts.pace {
+                Pace::RealTime { .. } => opts
+                    .heartbeat_hz
+                    .filter(|hz| hz.is_finite() && *hz > 0.0)
+                    .and_then(|hz| Duration::try_from_secs_f64(1.0 / hz).ok()),
+                Pace::Lockstep => None,
+            },
+            speed_mps: scenario.start_speed_mps(scenario.start()),
+            last_heard: Instant::now(),
+            telemetry_sent: false,
+            mavlink1_logged: false,
+            started: false,
+        }
+    }
+}
+
+impl Sitl<'_> {
+    /// Waits until a peer talks to the vehicle (a `udpin:` link learns its peer from its first
+    /// message; a stray frame starts nothing) or the run is stopped. Meanwhile the vehicle
+    /// beats once a wall-clock second to the peers it has (a `udpout:`/`tcpout:`/serial link's
+    /// own: a ground station such as MAVSDK waits for a vehicle's heartbeat before it says
+    /// anything).
+    fn wait_for_peer(&mut self) -> Result<(), SitlError> {
+        let mut beaten = false;
+        while !self.started {
+            if self.stop.load(Ordering::Relaxed) {
+                break;
+            }
+            if !beaten
+                || self.last_heartbeat_wall.elapsed()
+                    >= self.heartbeat_period.unwrap_or(Duration::from_secs(1))
+            {
+                beaten = true;
+                self.heartbeat(false)?;
+            }
+            self.handle_inbound(0.0, Duration::from_millis(100))?;
+        }
+        if self.started && self.heartbeat_period.is_some() {
+            // A peer is there now (a `udpin:` link's first beats had nowhere to go): beat at
+            // once, as PX4 beats from its boot, then every period (ver33c-3).
+            self.heartbeat(false)?;
+        }
+        Ok(())
+    }
+
+    /// Flies the episode sample by sample: each sample's rows go out as telemetry (in real
+    /// time: at their wall-clock instants), the measurement as `NAMED_VALUE_FLOAT`, then the
+    /// vehicle turns as its setpoints say (lockstep: once the companion has answered the
+    /// sample); the turn rate flown at each sample is pushed onto `flown`.
+    fn fly<S: TraceSink + ?Sized>(
+        &mut self,
+        ep: &mut ScenarioEpisode,
+        opts: &SitlOptions,
+        sink: &mut S,
+        flown: &mut Vec<(u32, f64)>,
+    ) -> Result<Ended, SitlError> {
+        let wall0 = Instant::now();
+        loop {
+            if self.stop.load(Ordering::Relaxed) {
+                return Ok(Ended::Interrupted);
+            }
+            let mut tee = Tee {
+                rows: Vec::new(),
+                sink: &mut *sink,
+            };
+            let sample = ep.run_to_sample_traced(&mut tee);
+            let rows = std::mem::take(&mut tee.rows);
+            for r in &rows {
+                if let Pace::RealTime { speedup } = opts.pace {
+                    wait_until(
+                        self,
+                        r.t_s,
+                        wall0 + Duration::from_secs_f64(r.t_s / speedup),
+                    )?;
+                }
+                self.telemetry(r)?;
+            }
+            let Some(sample) = sample else {
+                return Ok(Ended::Run);
+            };
+            let t = sample.measurement.t_s;
+            let ms = wire::time_ms(t).unwrap_or(u32::MAX);
+            if let Pace::RealTime { speedup } = opts.pace {
+                wait_until(self, t, wall0 + Duration::from_secs_f64(t / speedup))?;
+            }
+            self.slow_group(t)?;
+            let iso = measurement_message(ms, sample.measurement.value);
+            self.send(iso.clone())?;
+            match opts.pace {
+                Pace::Lockstep => {
+                    if let Some(ended) = self.await_answer(&sample, ms, &iso, opts)? {
+                        return Ok(ended);
+                    }
+                }
+                Pace::RealTime { .. } => {
+                    self.handle_inbound(t, Duration::ZERO)?;
+                    self.offboard_failsafe(t, opts.setpoint_timeout_s)?;
+                }
+            }
+            let w = self.ap.turn_rate(Some(sample.pose));
+            flown.push((ms, w));
+            let mut tee = Tee {
+                rows: Vec::new(),
+                sink: &mut *sink,
+            };
+            ep.command_traced(w, &mut tee);
+            for r in &std::mem::take(&mut tee.rows) {
+                self.telemetry(r)?;
+            }
+        }
+    }
+
+    /// In lockstep, waits for the companion's answer to the sample stamped `ms` (a setpoint
+    /// followed, stamped `ms` or newer): `None` once it came, else how the run ends (stopped,
+    /// or nobody heard from for [`SitlOptions::companion_timeout_s`]). Every wall-clock second
+    /// without an answer the heartbeat and the sample go again.
+    fn await_answer(
+        &mut self,
+        sample: &Sample,
+        ms: u32,
+        iso: &MavMessage,
+        opts: &SitlOptions,
+    ) -> Result<Option<Ended>, SitlError> {
+        let t = sample.measurement.t_s;
+        loop {
+            if self.stop.load(Ordering::Relaxed) {
+                return Ok(Some(Ended::Interrupted));
+            }
+            let answers = self.handle_inbound(t, Duration::from_millis(50))?;
+            if answers
+                .iter()
+                .any(|a| a.followed && (a.ms == ms || a.newer))
+            {
+                return Ok(None);
+            }
+            if self.last_heard.elapsed() > companion_timeout(opts) {
+                let what = format!(
+                    "no message from anyone for {} s: the companion is gone, run ended",
+                    Echo(opts.companion_timeout_s)
+                );
+                self.ap.event(t, what);
+                return Ok(Some(Ended::CompanionLost));
+            }
+            if self.last_heartbeat_wall.elapsed() >= Duration::from_secs(1) {
+                // A lost datagram must not stall the run: the sample goes again with the
+                // heartbeat (the companion answers a repeat with its answer again).
+                self.heartbeat(false)?;
+                if !self.telemetry_sent {
+                    // The first sample's position comes with its answer's step: a companion
+                    // that waits for a position before taking control gets the sample's pose
+                    // now.
+                    let row = self.sample_row(sample);
+                    self.telemetry(&row)?;
+                }
+                self.send(iso.clone())?;
+            }
+        }
+    }
+
+    /// The trace row of a sample's pose, before any command (turn rate 0).
+    fn sample_row(&self, sample: &Sample) -> TraceRow {
+        let p = sample.pose;
+        TraceRow {
+            t_s: sample.measurement.t_s,
+            x_m: p.position.x,
+            y_m: p.position.y,
+            heading_rad: p.heading_rad,
+            s: sample.true_value,
+            error: sample.true_value - self.scenario.level(),
+            omega_radps: 0.0,
+            s_measured: Some(sample.measurement.value),
+            telemetry: None,
+        }
+    }
+
+    /// PX4's offboard failsafe in real time: no valid setpoint for `timeout_s` in OFFBOARD
+    /// switches to HOLD, logged, told by STATUSTEXT and a heartbeat at once.
+    fn offboard_failsafe(&mut self, t_s: f64, timeout_s: f64) -> Result<(), SitlError> {
+        if !self.ap.offboard_lost(t_s, timeout_s) {
+            return Ok(());
+        }
+        self.ap.mode = Mode::Hold;
+        let what = format!(
+            "failsafe: no valid setpoint for {} s in OFFBOARD: HOLD",
+            Echo(timeout_s)
+        );
+        self.ap.event(t_s, what);
+        // STATUSTEXT holds 50 characters (MAVLink 2 chunks them beyond, which not every
+        // reader joins): the short form, the event says it all.
+        self.statustext(MavSeverity::MAV_SEVERITY_WARNING, OFFBOARD_LOST_STATUSTEXT)?;
+        self.changed_heartbeat()
+    }
+
+    /// The end's counts in the log: events past the bound, setpoints out of order, junk.
+    fn log_counts(&mut self) {
+        if self.ap.events_dropped > 0 {
+            // Past the bound: the count, and the end, are logged all the same.
+            let n = self.ap.events_dropped;
+            self.ap.events.push(format!("{n} more events not logged"));
+        }
+        if self.ap.out_of_order > 0 {
+            let n = self.ap.out_of_order;
+            self.ap.events.push(format!(
+                "{n} setpoints out of order ignored (stamped older than their sender's last)"
+            ));
+        }
+        if self.link.stats.junk_datagrams > 0 {
+            // Junk (bad checksums, truncated frames, not MAVLink) moves nothing: dropped,
+            // counted.
+            let n = self.link.stats.junk_datagrams;
+            self.ap.events.push(format!(
+                "{n} datagrams without a valid MAVLink 2 frame dropped (bad checksum, truncated, not MAVLink)"
+            ));
+        }
+    }
+}
+
+/// The measurement as MAVLink carries it: `NAMED_VALUE_FLOAT` named [`wire::MEASUREMENT_NAME`].
+fn measurement_message(ms: u32, value: f64) -> MavMessage {
+    let mut name = [0u8; 10];
+    for (b, c) in name.iter_mut().zip(wire::MEASUREMENT_NAME.bytes()) {
+        *b = c;
+    }
+    MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+        time_boot_ms: ms,
+        value: value as f32,
+        name: name.into(),
     })
 }
 
@@ -1330,30 +1424,18 @@ mod tests {
     }
 
     fn autopilot() -> Autopilot {
-        Autopilot {
-            system_id: 1,
-            armed: true,
-            mode: Mode::Offboard,
-            owner: None,
-            owner_addr: None,
-            twins_logged: Vec::new(),
-            flying: false,
-            setpoint: None,
-            setpoint_wall: None,
-            stream: Stream::Simulated { within_s: 1.0 },
-            offboard_since_s: 0.0,
-            transport: Transport::Ground,
-            loiter_radps: 0.1,
-            turn_limit_radps: 0.2,
-            ground_max_radps: 0.2,
-            clamp_logged: false,
-            events: Vec::new(),
-            events_dropped: 0,
-            refused: 0,
-            out_of_order: 0,
-            stamps: Vec::new(),
-            ground_stations: Vec::new(),
-        }
+        let mut ap = Autopilot::new(
+            1,
+            false,
+            Stream::Simulated { within_s: 1.0 },
+            Transport::Ground,
+            0.2,
+            0.2,
+        );
+        ap.armed = true;
+        ap.mode = Mode::Offboard;
+        ap.loiter_radps = 0.1;
+        ap
     }
 
     /// A sender's `time_boot_ms` wraps at 2^32 ms (49.7 days): `2^32 - 500` then `499` is a
