@@ -10,10 +10,11 @@ use isotrack_mavlink::fly::{
     run_fly_flushing, FailsafeAction, FlyEnd, FlyError, FlyOptions, FlyReport, SensorSource,
 };
 use isotrack_mavlink::link::LinkError;
-use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions};
+use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions, SitlReport};
 use isotrack_runs::results::MetricsRecord;
 use isotrack_runs::rundir::TraceFile;
 use isotrack_runs::summary::{Ended, FlightRecord};
+use isotrack_scenario::{Scenario, ScenarioFile};
 use isotrack_sim::{NoTrace, TraceRow, TraceSink};
 use std::path::{Path, PathBuf};
 
@@ -354,18 +355,7 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     check_sitl_args(args)?;
     let scenario = load(&args.scenario)?;
     crate::run::refuse_team(&scenario, "sitl")?;
-    let mut opts = SitlOptions::new(&args.mavlink);
-    opts.system_id = args.system_id;
-    opts.pace = if args.lockstep {
-        Pace::Lockstep
-    } else {
-        Pace::RealTime {
-            speedup: args.speedup.unwrap_or(1.0),
-        }
-    };
-    opts.companion_timeout_s = args.timeout_s;
-    opts.heartbeat_hz = args.heartbeat_hz;
-    opts.stop = isotrack_runs::signals::interrupt_flag();
+    let opts = sitl_options(args);
     let out = match &args.out {
         Some(dir) => Some(prepare_out(dir, &args.scenario, &scenario, &[], "sitl")?),
         None => None,
@@ -387,44 +377,16 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     let report = match report {
         Ok(r) => r,
         Err(e) => {
-            let failure = match e {
-                SitlError::Link(l) => link_failure(l),
-                SitlError::Scenario(m) => Failure {
-                    code: exit::DATAERR,
-                    message: m,
-                },
-                SitlError::Io(e) => Failure {
-                    code: exit::OSERR,
-                    message: format!("link: {e}"),
-                },
-            };
             if let (Some(dir), false) = (&args.out, live.abandon()) {
                 untouched_note("sitl", dir);
             }
-            return Err(failure);
+            return Err(sitl_failure(e));
         }
     };
     for e in &report.events {
         errln!("isotrack sitl: {e}");
     }
-    // A run cut short is no `completed` run: `interrupted` (Ctrl-C, SIGTERM, SIGHUP), as
-    // `run` says, or `companion_lost` (lockstep, nobody answered for --timeout-s).
-    let cut = if report.interrupted {
-        Some((
-            "interrupted",
-            "stopped by a signal (Ctrl-C, SIGTERM or SIGHUP)".to_string(),
-        ))
-    } else if report.companion_lost {
-        Some((
-            "companion_lost",
-            format!(
-                "lockstep: no message from the companion for {} s",
-                Echo(args.timeout_s)
-            ),
-        ))
-    } else {
-        None
-    };
+    let cut = cut_short(&report, args.timeout_s);
     // A run that started (a peer talked to the vehicle) writes its directory even without a
     // trace row (a lockstep run nobody flew); one that never started leaves DIR as it was.
     if report.started {
@@ -448,6 +410,12 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
     if let (Some(dir), false) = (&args.out, wrote) {
         untouched_note("sitl", dir);
     }
+    sitl_exit(&report, cut)
+}
+
+/// The end line on stdout and the exit of a sitl run that ran (README's exit table): 130 when
+/// interrupted, 69 when the lockstep companion was lost, else 0.
+fn sitl_exit(report: &SitlReport, cut: Option<(&str, String)>) -> Result<(), Failure> {
     outln!(
         "outcome     {} at t = {} s ({} samples, {} setpoints refused, {} setpoints out of order)",
         cut.as_ref().map_or(report.result.outcome.as_str(), |c| c.0),
@@ -469,6 +437,60 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
         });
     }
     Ok(())
+}
+
+/// The vehicle's options of `sitl`'s arguments, Ctrl-C wired.
+fn sitl_options(args: &SitlArgs) -> SitlOptions {
+    let mut opts = SitlOptions::new(&args.mavlink);
+    opts.system_id = args.system_id;
+    opts.pace = if args.lockstep {
+        Pace::Lockstep
+    } else {
+        Pace::RealTime {
+            speedup: args.speedup.unwrap_or(1.0),
+        }
+    };
+    opts.companion_timeout_s = args.timeout_s;
+    opts.heartbeat_hz = args.heartbeat_hz;
+    opts.stop = isotrack_runs::signals::interrupt_flag();
+    opts
+}
+
+/// The exit of a sitl run that could not run (README's exit table).
+fn sitl_failure(e: SitlError) -> Failure {
+    match e {
+        SitlError::Link(l) => link_failure(l),
+        SitlError::Scenario(m) => Failure {
+            code: exit::DATAERR,
+            message: m,
+        },
+        SitlError::Io(e) => Failure {
+            code: exit::OSERR,
+            message: format!("link: {e}"),
+        },
+    }
+}
+
+/// A sitl run cut short is no `completed` run: its outcome and detail, `interrupted` (Ctrl-C,
+/// SIGTERM, SIGHUP), as `run` says, or `companion_lost` (lockstep, nobody answered for
+/// `timeout_s`); `None` for a run that ended by itself.
+fn cut_short(report: &SitlReport, timeout_s: f64) -> Option<(&'static str, String)> {
+    if report.interrupted {
+        Some((
+            "interrupted",
+            "stopped by a signal (Ctrl-C, SIGTERM or SIGHUP)".to_string(),
+        ))
+    } else if report.companion_lost {
+        Some((
+            "companion_lost",
+            format!(
+                "lockstep: no message from the companion for {} s",
+                Echo(timeout_s)
+            ),
+        ))
+    } else {
+        None
+    }
 }
 
 /// `fly`'s exit code when it stopped before it had control (see [`exit::NOTHING_COMMANDED`]).
@@ -654,6 +676,71 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// The exit of a flight that could not fly (README's exit table): an I/O error writing the raw
+/// log at `log` (when that is what failed) names the log's file.
+fn fly_failure(e: FlyError, log: Option<&Path>) -> Failure {
+    match e {
+        FlyError::Io(e) if log.is_some() => cant(log.unwrap_or(Path::new("?")), e),
+        FlyError::Link(l) => link_failure(l),
+        FlyError::Scenario(m) => Failure {
+            code: exit::DATAERR,
+            message: m,
+        },
+        FlyError::Io(e) => Failure {
+            code: exit::OSERR,
+            message: format!("link: {e}"),
+        },
+    }
+}
+
+/// A flight's summary.json: its record as it ended (`incomplete`: the trace's recording note).
+fn flight_summary<'a>(
+    report: &FlyReport,
+    args: &FlyArgs,
+    scenario: &'a Scenario,
+    incomplete: Option<&str>,
+) -> Summary<&'a ScenarioFile> {
+    Summary {
+        isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario_path: args
+            .scenario
+            .scenario
+            .as_ref()
+            .map(|p| p.display().to_string()),
+        ended: Ended::Flight(FlightRecord {
+            outcome: if report.end.is_failsafe() {
+                "failsafe"
+            } else if report.end == FlyEnd::VehicleEnded {
+                "completed"
+            } else {
+                report.end.as_str()
+            }
+            .to_string(),
+            outcome_detail: report.events.last().cloned().unwrap_or_default(),
+            end_reason: report.end.as_str().to_string(),
+            failsafe: report.end.is_failsafe(),
+            failsafe_acknowledged: report.failsafe_acknowledged,
+            t_end_s: report.t_last_s,
+            samples: report.samples,
+            commands: report.commands.len() as u64,
+            events: report.events.clone(),
+            frames_in: report.link.frames_in,
+            frames_out: report.link.frames_out,
+            junk_datagrams: report.link.junk_datagrams,
+            measurements_out_of_order: report.measurements_out_of_order,
+            measurements_repeated: report.measurements_repeated,
+            measurements_invalid: report.measurements_invalid,
+            measurements_other_sources: report.measurements_other_sources,
+            recording_incomplete: incomplete.map(String::from),
+            data_files: isotrack_runs::summary::data_file_digests(scenario),
+            metrics_over: report.metrics_over.to_string(),
+            metrics: MetricsRecord::of(&report.metrics),
+        }),
+        scenario: scenario.file(),
+        controller: None,
+    }
+}
+
 /// `isotrack fly`.
 pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     check_fly_args(args)?;
@@ -706,23 +793,8 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
             if let (Some(dir), false) = (&args.out, started) {
                 untouched_note("fly", dir);
             }
-            return Err(match e {
-                FlyError::Io(e) if log_error.is_some() => cant(
-                    log_path
-                        .as_ref()
-                        .map_or(Path::new("?"), |(_, p)| p.as_path()),
-                    e,
-                ),
-                FlyError::Link(l) => link_failure(l),
-                FlyError::Scenario(m) => Failure {
-                    code: exit::DATAERR,
-                    message: m,
-                },
-                FlyError::Io(e) => Failure {
-                    code: exit::OSERR,
-                    message: format!("link: {e}"),
-                },
-            });
+            let log = log_path.as_ref().map(|(_, p)| p.as_path());
+            return Err(fly_failure(e, log.filter(|_| log_error.is_some())));
         }
     };
     for e in report.events.iter().skip(report.events_live) {
@@ -736,45 +808,7 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     if report.way_out_commanded {
         live.start();
     }
-    let wrote = live.end(|incomplete| Summary {
-        isotrack_version: env!("CARGO_PKG_VERSION").to_string(),
-        scenario_path: args
-            .scenario
-            .scenario
-            .as_ref()
-            .map(|p| p.display().to_string()),
-        ended: Ended::Flight(FlightRecord {
-            outcome: if report.end.is_failsafe() {
-                "failsafe"
-            } else if report.end == FlyEnd::VehicleEnded {
-                "completed"
-            } else {
-                report.end.as_str()
-            }
-            .to_string(),
-            outcome_detail: report.events.last().cloned().unwrap_or_default(),
-            end_reason: report.end.as_str().to_string(),
-            failsafe: report.end.is_failsafe(),
-            failsafe_acknowledged: report.failsafe_acknowledged,
-            t_end_s: report.t_last_s,
-            samples: report.samples,
-            commands: report.commands.len() as u64,
-            events: report.events.clone(),
-            frames_in: report.link.frames_in,
-            frames_out: report.link.frames_out,
-            junk_datagrams: report.link.junk_datagrams,
-            measurements_out_of_order: report.measurements_out_of_order,
-            measurements_repeated: report.measurements_repeated,
-            measurements_invalid: report.measurements_invalid,
-            measurements_other_sources: report.measurements_other_sources,
-            recording_incomplete: incomplete.map(String::from),
-            data_files: isotrack_runs::summary::data_file_digests(&scenario),
-            metrics_over: report.metrics_over.to_string(),
-            metrics: MetricsRecord::of(&report.metrics),
-        }),
-        scenario: scenario.file(),
-        controller: None,
-    })?;
+    let wrote = live.end(|incomplete| flight_summary(&report, args, &scenario, incomplete))?;
     if let (Some(dir), false) = (&args.out, wrote) {
         untouched_note("fly", dir);
     }
