@@ -583,9 +583,9 @@ fn wait_readable(fds: &[RawFd], timeout: Duration) -> std::io::Result<()> {
     Ok(())
 }
 
-impl Link {
-    /// Opens `url` as system `system_id`, component `component_id`.
-    pub fn open(url: &str, system_id: u8, component_id: u8) -> Result<Self, LinkError> {
+impl Kind {
+    /// The transport `url` names, opened (bound, listening, connected or the device opened).
+    fn open(url: &str) -> Result<Self, LinkError> {
         let kinds = "udpin:HOST:PORT, udpout:HOST:PORT, tcpin:HOST:PORT, tcpout:HOST:PORT or serial:DEVICE:BAUD";
         let (mode, rest) = url
             .split_once(':')
@@ -603,15 +603,12 @@ impl Link {
                 io(e)
             }
         };
-        let kind = match mode {
-            "udpin" => {
-                let a = resolve(rest)?;
-                Kind::Udp {
-                    socket: UdpSocket::bind(a).map_err(bind_err)?,
-                    peers: Vec::new(),
-                    fixed: false,
-                }
-            }
+        Ok(match mode {
+            "udpin" => Kind::Udp {
+                socket: UdpSocket::bind(resolve(rest)?).map_err(bind_err)?,
+                peers: Vec::new(),
+                fixed: false,
+            },
             "udpout" => {
                 let a = resolve(rest)?;
                 let local: SocketAddr = if a.is_ipv4() {
@@ -629,8 +626,7 @@ impl Link {
                 }
             }
             "tcpin" => {
-                let a = resolve(rest)?;
-                let listener = TcpListener::bind(a).map_err(bind_err)?;
+                let listener = TcpListener::bind(resolve(rest)?).map_err(bind_err)?;
                 listener.set_nonblocking(true).map_err(io)?;
                 Kind::TcpIn {
                     listener,
@@ -650,9 +646,8 @@ impl Link {
             }
             "serial" => {
                 let (device, baud) = parse_serial(url, rest)?;
-                let file = open_serial(url, &device, baud)?;
                 Kind::Serial {
-                    port: Some(Stream::new(file, false)),
+                    port: Some(Stream::new(open_serial(url, &device, baud)?, false)),
                     device: format!("{device} at {baud} baud"),
                 }
             }
@@ -661,9 +656,15 @@ impl Link {
                     "`{url}`: unknown link kind `{mode}` (expected {kinds})"
                 )))
             }
-        };
+        })
+    }
+}
+
+impl Link {
+    /// Opens `url` as system `system_id`, component `component_id`.
+    pub fn open(url: &str, system_id: u8, component_id: u8) -> Result<Self, LinkError> {
         Ok(Self {
-            kind,
+            kind: Kind::open(url)?,
             system_id,
             component_id,
             sequence: 0,
