@@ -1064,37 +1064,46 @@ impl Link {
             for r in &mut out[before..] {
                 r.from = Some(from);
             }
-            if *fixed {
-                continue;
-            }
-            let now = Instant::now();
-            if let Some(p) = peers.iter_mut().find(|p| p.addr == from) {
-                p.last = now;
-                continue;
-            }
-            // A new peer: a free place, or the place of one silent for the peer timeout;
-            // while MAX_PEERS others are talking, it is turned away (its frames are still
-            // read): a flood of spoofed addresses cannot push out the live peers.
-            if peers.len() == MAX_PEERS {
-                if let Some(i) = peers
-                    .iter()
-                    .position(|p| now.duration_since(p.last) > self.peer_timeout)
-                {
-                    peers.remove(i);
-                    self.stats.peers_evicted += 1;
-                }
-            }
-            if peers.len() < MAX_PEERS {
-                peers.push(UdpPeer {
-                    addr: from,
-                    last: now,
-                });
-            } else {
-                self.stats.peers_refused += 1;
+            if !*fixed {
+                note_peer(peers, from, self.peer_timeout, &mut self.stats);
             }
         }
         socket.set_nonblocking(false)?;
         Ok(out)
+    }
+}
+
+/// A `udpin:` link's peers after a valid frame from `from`: a known peer's time renewed; a new
+/// one takes a free place, or the place of one silent for `peer_timeout`; while [`MAX_PEERS`]
+/// others are talking, it is turned away (its frames are still read): a flood of spoofed
+/// addresses cannot push out the live peers.
+fn note_peer(
+    peers: &mut Vec<UdpPeer>,
+    from: SocketAddr,
+    peer_timeout: Duration,
+    stats: &mut LinkStats,
+) {
+    let now = Instant::now();
+    if let Some(p) = peers.iter_mut().find(|p| p.addr == from) {
+        p.last = now;
+        return;
+    }
+    if peers.len() == MAX_PEERS {
+        if let Some(i) = peers
+            .iter()
+            .position(|p| now.duration_since(p.last) > peer_timeout)
+        {
+            peers.remove(i);
+            stats.peers_evicted += 1;
+        }
+    }
+    if peers.len() < MAX_PEERS {
+        peers.push(UdpPeer {
+            addr: from,
+            last: now,
+        });
+    } else {
+        stats.peers_refused += 1;
     }
 }
 
