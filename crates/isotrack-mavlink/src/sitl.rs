@@ -662,35 +662,49 @@ impl Autopilot {
             self.refused += 1;
             return None;
         }
+        if !used_fields_finite(s) {
+            self.refused += 1;
+            return None;
+        }
+        let w = self.turn_rate_of_setpoint(t_s, from, s);
+        match w {
+            Some(w) if w.is_finite() => {
+                let newer = self.order(t_s, from, s.time_boot_ms)?;
+                if self.armed && self.owner.is_none() {
+                    // Armed by the ground station: the first companion to fly it owns it.
+                    self.owner = Some(from);
+                }
+                self.setpoint = Some((w, t_s));
+                self.setpoint_wall = Some(Instant::now());
+                Some(Applied {
+                    ms: s.time_boot_ms,
+                    newer,
+                    followed: self.follows_setpoints(),
+                })
+            }
+            _ => {
+                self.refused += 1;
+                None
+            }
+        }
+    }
+
+    /// The turn rate a setpoint asks of this vehicle, rad/s: a fixed wing's from the roll of its
+    /// attitude (or the coordinated-turn roll of its yaw rate), a ground vehicle's from its yaw
+    /// rate, clamped to the turn-rate limit (logged once); `None` where the mask leaves nothing
+    /// this vehicle flies by.
+    fn turn_rate_of_setpoint(
+        &mut self,
+        t_s: f64,
+        from: (u32, u8),
+        s: &SET_ATTITUDE_TARGET_DATA,
+    ) -> Option<f64> {
         let m = s.type_mask;
         let attitude =
             !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_ATTITUDE_IGNORE);
         let yaw_rate =
             !m.contains(AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_YAW_RATE_IGNORE);
-        // A field the mask does not ignore must be a number: the vehicle flies at the
-        // scenario's speed and ignores the thrust and the roll and pitch rates' values, but a
-        // setpoint carrying an infinite thrust is no valid setpoint.
-        let used_finite = [
-            (
-                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE,
-                s.body_roll_rate,
-            ),
-            (
-                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE,
-                s.body_pitch_rate,
-            ),
-            (
-                AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
-                s.thrust,
-            ),
-        ]
-        .iter()
-        .all(|(bit, v)| m.contains(*bit) || v.is_finite());
-        if !used_finite {
-            self.refused += 1;
-            return None;
-        }
-        let w = match self.transport {
+        match self.transport {
             Transport::FixedWing { airspeed_mps } if attitude => {
                 wire::roll_of_quaternion(s.q).map(|r| wire::turn_rate_of_roll(r, airspeed_mps))
             }
@@ -723,31 +737,34 @@ impl Autopilot {
                 })
             }
             _ => None,
-        };
-        match w {
-            Some(w) if w.is_finite() => {
-                let newer = self.order(t_s, from, s.time_boot_ms)?;
-                if self.armed && self.owner.is_none() {
-                    // Armed by the ground station: the first companion to fly it owns it.
-                    self.owner = Some(from);
-                }
-                self.setpoint = Some((w, t_s));
-                self.setpoint_wall = Some(Instant::now());
-                Some(Applied {
-                    ms: s.time_boot_ms,
-                    newer,
-                    followed: self.follows_setpoints(),
-                })
-            }
-            _ => {
-                self.refused += 1;
-                None
-            }
         }
     }
 }
 
 /// A received frame's sender.
+/// Every field a setpoint's mask does not ignore is a number: the vehicle flies at the scenario's
+/// speed and ignores the thrust and the roll and pitch rates' values, but a setpoint carrying an
+/// infinite thrust is no valid setpoint.
+fn used_fields_finite(s: &SET_ATTITUDE_TARGET_DATA) -> bool {
+    let m = s.type_mask;
+    [
+        (
+            AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE,
+            s.body_roll_rate,
+        ),
+        (
+            AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_BODY_PITCH_RATE_IGNORE,
+            s.body_pitch_rate,
+        ),
+        (
+            AttitudeTargetTypemask::ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE,
+            s.thrust,
+        ),
+    ]
+    .iter()
+    .all(|(bit, v)| m.contains(*bit) || v.is_finite())
+}
+
 fn sender(r: &Received) -> (u32, u8) {
     (r.header.system_id, r.header.component_id)
 }
