@@ -560,85 +560,94 @@ impl Autopilot {
 
     /// Handles a command; returns the acknowledgement's result.
     fn command(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
-        let gcs = self.is_gcs(from);
         match c.command {
-            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => {
-                // As PX4: forced exactly when param2 is the force code; any other value (0, or
-                // the NaN that MAVSDK puts in parameters it does not use) is an ordinary request.
-                let forced = c.param2 == FORCE_CODE;
-                if c.param1 == 1.0 {
-                    if !self.may_command(from) {
-                        return self.deny(t_s, from, "arming (another system has control)");
-                    }
-                    if !self.armed {
-                        self.armed = true;
-                        // The ground station arms as a pilot: it takes no control.
-                        self.owner = (!gcs).then_some(from);
-                        self.event(t_s, format!("armed by system {}", from.0));
-                    }
-                    MavResult::MAV_RESULT_ACCEPTED
-                } else if c.param1 == 0.0 {
-                    let owner = self.owner == Some(from);
-                    // As PX4 ("Disarming denied: not landed"): an unforced disarm in the air
-                    // is refused whoever sends it, the owner too.
-                    if self.armed && self.flying && !forced {
-                        return self.deny(
-                            t_s,
-                            from,
-                            "disarm in flight (not landed: needs force code 21196)",
-                        );
-                    }
-                    if self.armed && !owner && !gcs && !forced {
-                        return self.deny(t_s, from, "disarm (another system has control)");
-                    }
-                    self.armed = false;
-                    self.owner = None;
-                    self.event(t_s, format!("disarmed by system {}", from.0));
-                    MavResult::MAV_RESULT_ACCEPTED
-                } else {
-                    MavResult::MAV_RESULT_DENIED
-                }
-            }
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => self.arm_disarm(t_s, from, c),
             MavCmd::MAV_CMD_DO_SET_MODE if !self.may_command(from) => {
                 self.deny(t_s, from, "mode change (another system has control)")
             }
-            MavCmd::MAV_CMD_DO_SET_MODE => match Mode::from_px4(c.param2, c.param3) {
-                Some(Mode::Offboard) if c.param1 as u32 & 1 == 1 && !self.streaming(t_s) => {
-                    // As PX4: no OFFBOARD before setpoints stream (its offboard signal lost).
-                    self.event(
-                        t_s,
-                        format!(
-                            "refused OFFBOARD from system {}, component {}: no setpoint streaming (a valid one must come first)",
-                            from.0, from.1
-                        ),
-                    );
-                    MavResult::MAV_RESULT_TEMPORARILY_REJECTED
-                }
-                Some(m) if c.param1 as u32 & 1 == 1 => {
-                    if m != self.mode {
-                        self.event(t_s, format!("mode {} by system {}", m.name(), from.0));
-                        if m == Mode::Offboard {
-                            self.offboard_since_s = t_s;
-                        }
-                    }
-                    self.mode = m;
-                    if m == Mode::Offboard && !gcs && self.owner.is_none() {
-                        self.owner = Some(from);
-                    }
-                    MavResult::MAV_RESULT_ACCEPTED
-                }
-                _ => {
-                    self.event(
-                        t_s,
-                        format!(
-                            "refused mode (base {}, main {}, sub {}) from system {}",
-                            c.param1, c.param2, c.param3, from.0
-                        ),
-                    );
-                    MavResult::MAV_RESULT_DENIED
-                }
-            },
+            MavCmd::MAV_CMD_DO_SET_MODE => self.set_mode(t_s, from, c),
             _ => MavResult::MAV_RESULT_UNSUPPORTED,
+        }
+    }
+
+    /// `MAV_CMD_COMPONENT_ARM_DISARM` as PX4 answers it.
+    fn arm_disarm(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
+        let gcs = self.is_gcs(from);
+        // As PX4: forced exactly when param2 is the force code; any other value (0, or
+        // the NaN that MAVSDK puts in parameters it does not use) is an ordinary request.
+        let forced = c.param2 == FORCE_CODE;
+        if c.param1 == 1.0 {
+            if !self.may_command(from) {
+                return self.deny(t_s, from, "arming (another system has control)");
+            }
+            if !self.armed {
+                self.armed = true;
+                // The ground station arms as a pilot: it takes no control.
+                self.owner = (!gcs).then_some(from);
+                self.event(t_s, format!("armed by system {}", from.0));
+            }
+            MavResult::MAV_RESULT_ACCEPTED
+        } else if c.param1 == 0.0 {
+            let owner = self.owner == Some(from);
+            // As PX4 ("Disarming denied: not landed"): an unforced disarm in the air
+            // is refused whoever sends it, the owner too.
+            if self.armed && self.flying && !forced {
+                return self.deny(
+                    t_s,
+                    from,
+                    "disarm in flight (not landed: needs force code 21196)",
+                );
+            }
+            if self.armed && !owner && !gcs && !forced {
+                return self.deny(t_s, from, "disarm (another system has control)");
+            }
+            self.armed = false;
+            self.owner = None;
+            self.event(t_s, format!("disarmed by system {}", from.0));
+            MavResult::MAV_RESULT_ACCEPTED
+        } else {
+            MavResult::MAV_RESULT_DENIED
+        }
+    }
+
+    /// `MAV_CMD_DO_SET_MODE` (PX4's custom modes) from a system that may command.
+    fn set_mode(&mut self, t_s: f64, from: (u32, u8), c: &COMMAND_LONG_DATA) -> MavResult {
+        let gcs = self.is_gcs(from);
+        match Mode::from_px4(c.param2, c.param3) {
+            Some(Mode::Offboard) if c.param1 as u32 & 1 == 1 && !self.streaming(t_s) => {
+                // As PX4: no OFFBOARD before setpoints stream (its offboard signal lost).
+                self.event(
+                    t_s,
+                    format!(
+                        "refused OFFBOARD from system {}, component {}: no setpoint streaming (a valid one must come first)",
+                        from.0, from.1
+                    ),
+                );
+                MavResult::MAV_RESULT_TEMPORARILY_REJECTED
+            }
+            Some(m) if c.param1 as u32 & 1 == 1 => {
+                if m != self.mode {
+                    self.event(t_s, format!("mode {} by system {}", m.name(), from.0));
+                    if m == Mode::Offboard {
+                        self.offboard_since_s = t_s;
+                    }
+                }
+                self.mode = m;
+                if m == Mode::Offboard && !gcs && self.owner.is_none() {
+                    self.owner = Some(from);
+                }
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+            _ => {
+                self.event(
+                    t_s,
+                    format!(
+                        "refused mode (base {}, main {}, sub {}) from system {}",
+                        c.param1, c.param2, c.param3, from.0
+                    ),
+                );
+                MavResult::MAV_RESULT_DENIED
+            }
         }
     }
 
