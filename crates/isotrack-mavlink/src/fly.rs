@@ -701,6 +701,15 @@ struct Flight<'a, S: ?Sized> {
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
     in_control: bool,
+    /// When the companion got control (the heartbeat that showed the vehicle armed and in
+    /// OFFBOARD was handled).
+    control_at: Option<Instant>,
+    /// Control confirmed (att33g-1): a heartbeat of the ids showed the vehicle armed and in
+    /// OFFBOARD at least [`Flight::confirm_span`] after control was taken, none contradicting
+    /// (no pilot's word seen since): the heartbeat that gave control may have been a second
+    /// vehicle's with the ids, and until confirmed a vehicle the companion armed on the ground
+    /// is still owed the forced disarm ([`Flight::disarm_owed`]).
+    control_confirmed: bool,
     arm_sent: bool,
     /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
@@ -1032,6 +1041,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             longest_beat_gap_s: 0.0,
             active: false,
             in_control: false,
+            control_at: None,
+            control_confirmed: false,
             arm_sent: false,
             armed_by_us: false,
             offboard_sent: false,
@@ -1723,6 +1734,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                         self.mode_name()
                     ));
                 }
+            }
+            if !self.in_control {
+                self.control_at = Some(Instant::now());
             }
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
@@ -2701,6 +2715,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let shows_control = !self.shows_pilots_word();
         let now = self.seq_watch.out_of_sequence;
         let span = self.confirm_span();
+        let offboard = self
+            .custom_mode
+            .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.in_control
+            && !self.control_confirmed
+            && self.leave_seen.is_none()
+            && self.armed
+            && offboard
+            && self.control_at.is_some_and(|at| at.elapsed() >= span)
+        {
+            // Shown for the span, none contradicting: control confirmed (att33g-1).
+            self.control_confirmed = true;
+        }
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
@@ -2948,12 +2975,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// a vehicle it armed; `None` when nothing was commanded.
     fn two_vehicles_way_out(&self) -> Option<WayOut> {
         let mode = self.opts.failsafe.mode();
-        if self.in_control {
-            Some(WayOut::Mode(mode))
-        } else if self.disarm_owed() {
-            // Armed by the companion on the ground and never flown: disarmed, whatever mode
-            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6).
+        if self.disarm_owed() {
+            // Armed by the companion on the ground and never flown under a confirmed control
+            // (att33g-1): disarmed, whatever mode it was switched to (ver33c-6), unless
+            // confirmed disarmed (att33f-6).
             Some(WayOut::Disarm)
+        } else if self.in_control {
+            Some(WayOut::Mode(mode))
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
         } else {
@@ -2980,13 +3008,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let mode = self.opts.failsafe.mode();
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
-        if end.is_failsafe() && (self.in_control || self.target.is_none()) {
-            Some(WayOut::Mode(mode))
-        } else if stopping && self.disarm_owed() {
+        if stopping && self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
             // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6);
-            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing.
+            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing,
+            // nor does control granted on a heartbeat not confirmed (att33g-1: a second
+            // vehicle's armed-OFFBOARD one).
             Some(WayOut::Disarm)
+        } else if end.is_failsafe() && (self.in_control || self.target.is_none()) {
+            Some(WayOut::Mode(mode))
         } else if end == FlyEnd::ControlRefused
             && self
                 .offboard_accepted_at
@@ -3040,6 +3070,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.firmware.name_of(m),
                 self.firmware.name_of(FlyMode::Offboard)
             ),
+            WayOut::Disarm if self.in_control => "disarm commanded (armed by the companion, on the ground; its control not yet confirmed by the vehicle's heartbeats: the one that showed it may have been a second vehicle's)".into(),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
         if self.target.is_none() {
@@ -3272,11 +3303,12 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
     }
 
     /// Whether the forced disarm is owed on the way out: the companion armed the vehicle on
-    /// the ground and never had it in control, and no confirmed heartbeat shows it disarmed
-    /// (ver33c-6; att33f-6: a second vehicle's disarmed heartbeat, unconfirmed, is no reason
-    /// to skip it).
+    /// the ground and no confirmed heartbeat has shown it in control ([`Flight::control_confirmed`]:
+    /// att33g-1, control granted on a heartbeat that may have been a second vehicle's), and no
+    /// confirmed heartbeat shows it disarmed (ver33c-6; att33f-6: a second vehicle's disarmed
+    /// heartbeat, unconfirmed, is no reason to skip it).
     fn disarm_owed(&self) -> bool {
-        self.armed_by_us && !self.in_control && (self.armed || self.confirmed_state().1)
+        self.armed_by_us && !self.control_confirmed && (self.armed || self.confirmed_state().1)
     }
 
     /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:
