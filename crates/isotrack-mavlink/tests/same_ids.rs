@@ -1206,3 +1206,81 @@ fn confirmed_control_of_a_vehicle_the_companion_armed_gets_hold() {
         r.events
     );
 }
+
+/// att33g-2 (P5a): one vehicle (the pilot's OFFBOARD, 1 Hz heartbeat, a measurement and a
+/// position every 40 ms) whose pilot switches to POSCTL at 2.5 s, over a link that swaps the
+/// first two frames of every turn from 2.9 to 3.9 s (a burst of reordering: 12 of the last 512
+/// frames out of sequence by 3.4 s; the 3 s POSCTL heartbeat is delivered one frame late,
+/// after the measurement sent after it). The late heartbeat is still newer than the one before
+/// (applied: the pilot's word), and the frame numbers alone command nothing against a pilot's
+/// word awaiting confirmation: the heartbeats decide, `pilot_took_over` at the 5 s one,
+/// nothing commanded. Before: the POSCTL heartbeat was dropped as late and `vehicle_lost`
+/// (12 of 512) commanded HOLD against the pilot.
+#[test]
+fn a_burst_of_reordering_during_a_pilots_switch_commands_nothing_against_it() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat, ms);
+        if (2.9..3.9).contains(&t) {
+            out.swap(0, 1);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(
+            |e| e.contains("12 of their last 512 frames out of sequence")
+                && e.contains("nothing is commanded against it")
+        ),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33g's S11: one vehicle (the pilot's OFFBOARD, 1 Hz heartbeat) over a link that delivers
+/// every heartbeat one frame late (after the measurement sent after it; 1 frame in 51 out of
+/// sequence, below the two-sender threshold); its pilot switches to POSCTL at 2.5 s. A
+/// heartbeat one frame late is still the newest heartbeat: the link is not lost, and the
+/// pilot's word stands (`pilot_took_over`, nothing commanded). Before: every heartbeat after
+/// the first was dropped as older news, `link_lost` came at 3 s with one arriving every second
+/// and commanded HOLD.
+#[test]
+fn heartbeats_each_a_frame_late_keep_the_link_and_the_pilots_word() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let late = beat.is_some();
+        let mut out = turn_frames(&mut a, beat, ms);
+        if late {
+            out.swap(0, 1);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("no heartbeat")),
+        "{:?}",
+        r.events
+    );
+}
