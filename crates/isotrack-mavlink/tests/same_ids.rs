@@ -1096,3 +1096,191 @@ fn a_twin_during_take_control_arm_gets_the_forced_disarm() {
         r.events
     );
 }
+
+/// att33g-1 (N9a, C5): `--take-control --arm` of a disarmed vehicle (1 Hz heartbeat: disarmed
+/// in MANUAL, armed in MANUAL from 3 s after the companion's arming, armed in OFFBOARD from 4 s
+/// as if its switch had been carried out). A second vehicle with its ids beats at 5 Hz, armed
+/// in OFFBOARD from 3.1 s (its beat, not the vehicle's, gives the companion control), then
+/// disarmed in MANUAL from 3.5 s; the vehicle's 4 s heartbeat contradicts that
+/// (`vehicle_lost`). Control was granted 0.9 s before, on a heartbeat no later one confirmed
+/// (the span is 1.1 s): the vehicle the companion armed on the ground gets the forced disarm,
+/// not HOLD. Before: "HOLD commanded", and the vehicle was left armed in a hold on the ground.
+#[test]
+fn control_granted_on_a_twins_beat_still_owes_the_forced_disarm() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(3.1, &[0.2]);
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            o.take_control = true;
+            o.arm = true;
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 2.9 {
+                    heartbeat_disarmed(1)
+                } else if t < 3.9 {
+                    heartbeat(1)
+                } else {
+                    heartbeat(6)
+                }
+            })
+        },
+        move |t| {
+            other.due(t).then(|| {
+                if t < 3.45 {
+                    heartbeat(6)
+                } else {
+                    heartbeat_disarmed(1)
+                }
+            })
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("vehicle armed in OFFBOARD")),
+        "control was never taken: {:?}",
+        r.events
+    );
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("failsafe (vehicle_lost): setpoints stopped, disarm commanded")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("HOLD commanded")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33g-1's other side: `--take-control --arm` of a disarmed vehicle that is then in
+/// OFFBOARD at every heartbeat (1 Hz) with no second vehicle: control is confirmed at the
+/// heartbeat 1.1 s or more after it was taken, and Ctrl-C 3 s into the flight commands HOLD,
+/// not the disarm (a vehicle flown in control is never disarmed by a failsafe).
+#[test]
+fn confirmed_control_of_a_vehicle_the_companion_armed_gets_hold() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let t0 = Instant::now();
+    let r = vehicle_and_twin(
+        30.0,
+        |o| {
+            o.take_control = true;
+            o.arm = true;
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(6500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 2.9 {
+                    heartbeat_disarmed(1)
+                } else if t < 3.9 {
+                    heartbeat(1)
+                } else {
+                    heartbeat(6)
+                }
+            })
+        },
+        |_| None,
+    );
+    assert!(t0.elapsed() > Duration::from_secs(6), "{:?}", r.events);
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("failsafe (interrupted): setpoints stopped, HOLD commanded")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33g-2 (P5a): one vehicle (the pilot's OFFBOARD, 1 Hz heartbeat, a measurement and a
+/// position every 40 ms) whose pilot switches to POSCTL at 2.5 s, over a link that swaps the
+/// first two frames of every turn from 2.9 to 3.9 s (a burst of reordering: 12 of the last 512
+/// frames out of sequence by 3.4 s; the 3 s POSCTL heartbeat is delivered one frame late,
+/// after the measurement sent after it). The late heartbeat is still newer than the one before
+/// (applied: the pilot's word), and the frame numbers alone command nothing against a pilot's
+/// word awaiting confirmation: the heartbeats decide, `pilot_took_over` at the 5 s one,
+/// nothing commanded. Before: the POSCTL heartbeat was dropped as late and `vehicle_lost`
+/// (12 of 512) commanded HOLD against the pilot.
+#[test]
+fn a_burst_of_reordering_during_a_pilots_switch_commands_nothing_against_it() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let mut out = turn_frames(&mut a, beat, ms);
+        if (2.9..3.9).contains(&t) {
+            out.swap(0, 1);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(
+            |e| e.contains("12 of their last 512 frames out of sequence")
+                && e.contains("nothing is commanded against it")
+        ),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33g's S11: one vehicle (the pilot's OFFBOARD, 1 Hz heartbeat) over a link that delivers
+/// every heartbeat one frame late (after the measurement sent after it; 1 frame in 51 out of
+/// sequence, below the two-sender threshold); its pilot switches to POSCTL at 2.5 s. A
+/// heartbeat one frame late is still the newest heartbeat: the link is not lost, and the
+/// pilot's word stands (`pilot_took_over`, nothing commanded). Before: every heartbeat after
+/// the first was dropped as older news, `link_lost` came at 3 s with one arriving every second
+/// and commanded HOLD.
+#[test]
+fn heartbeats_each_a_frame_late_keep_the_link_and_the_pilots_word() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 3 }));
+        if ms < last_ms + 40 && beat.is_none() {
+            return Vec::new();
+        }
+        last_ms = ms;
+        let late = beat.is_some();
+        let mut out = turn_frames(&mut a, beat, ms);
+        if late {
+            out.swap(0, 1);
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("no heartbeat")),
+        "{:?}",
+        r.events
+    );
+}
