@@ -1409,6 +1409,8 @@ struct TeamFigureData {
     gaps: Vec<(f64, Vec<f64>)>,
     /// `(position along the isoline, longest unvisited time)` over the steady window.
     revisit: Vec<(f64, f64)>,
+    /// The revisit panel's label when it has no curve: why.
+    no_revisit: String,
     /// `L/(N v0)` (`L/sum v0_i` with per-vehicle speeds), s (an open isoline: the mean gap
     /// over `v0`, `summary.json`'s).
     ideal: f64,
@@ -1416,6 +1418,9 @@ struct TeamFigureData {
     even: f64,
     /// Whether the isoline is closed (else open: no gap ahead of the vehicle in front).
     closed: bool,
+    /// Whether the field moves its isoline (the dashed lines of its mean length, the curves
+    /// along its last frame).
+    moving: bool,
     /// Whether the vehicles have their own nominal speeds (the ideal is then `L/sum v0_i`).
     per_vehicle_speeds: bool,
     t_end: f64,
@@ -1461,14 +1466,32 @@ impl TeamFigureData {
         let l = tracks.length_m();
         let stride = tracks.rows.div_ceil(2000).max(1);
         let gaps = tracks.gaps(stride);
-        let ss = first.steady_state_start_s();
-        let mut revisit = tracks.revisit_max(ss);
+        // The window the metrics took (their first sample in it; att32g-1, -2).
+        let window = crate::team::metrics_window_start_s(&first.scenario, &tracks.arc);
+        let mut revisit = tracks.revisit_max(window.unwrap_or(f64::INFINITY));
         // The figure agrees with summary.json: no revisit time where the metrics have none
         // (no vehicle live in the steady window; att32f-3).
         let team = first.summary.team().and_then(|t| t.metrics.as_ref());
         if team.is_some_and(|m| m.revisit_time_max_s.is_none()) {
             revisit.iter_mut().for_each(|r| r.1 = f64::NAN);
         }
+        // Why a panel has no revisit curve, as the run shows it.
+        let no_revisit = match window {
+            None => format!(
+                "no revisit time: no metrics sample in the steady window (sampled every {} s)",
+                crate::style::value_label(
+                    first
+                        .scenario
+                        .team_metrics_every_steps(matches!(
+                            tracks.arc,
+                            crate::team::FigureArc::Circle(_)
+                        ))
+                        .max(1) as f64
+                        * first.scenario.dt_s()
+                )
+            ),
+            Some(_) => "no revisit time: no vehicle live in the steady window".to_string(),
+        };
         let v0 = first
             .scenario
             .spec()
@@ -1484,7 +1507,18 @@ impl TeamFigureData {
             .team
             .as_ref()
             .is_some_and(|t| t.member_speeds().is_some());
-        let (ideal, even) = if closed {
+        // A field that moves its isoline: the figure measures along the last frame's, the
+        // metrics along each sample's; the dashed lines are summary.json's, of the mean length
+        // (nu-2: the last frame's drawn disagreed with summary.json without a word).
+        let moving = team.is_some_and(|m| m.moving_isoline.is_some());
+        let (ideal, even) = if closed && moving {
+            (
+                team.and_then(|m| m.revisit_time_ideal_s)
+                    .unwrap_or(f64::NAN),
+                team.and_then(|m| m.isoline_length_m)
+                    .map_or(f64::NAN, |l| l / n as f64),
+            )
+        } else if closed {
             (l / (n as f64 * v0), l / n as f64)
         } else {
             // The metrics' own numbers for the stretch the team covered (NaN: none).
@@ -1531,9 +1565,11 @@ impl TeamFigureData {
             l,
             gaps,
             revisit,
+            no_revisit,
             ideal,
             even,
             closed,
+            moving,
             per_vehicle_speeds,
             t_end,
             gap_range: (glo, ghi),
@@ -1570,9 +1606,11 @@ pub fn team_figure(
         l,
         gaps,
         revisit,
+        no_revisit,
         ideal,
         even,
         closed,
+        moving,
         per_vehicle_speeds,
         t_end,
         gap_range: (glo, ghi),
@@ -1610,10 +1648,10 @@ pub fn team_figure(
             if even.is_finite() {
                 top.draw_series(dashed((0.0, even), (t_end, even)))
                     .map_err(s)?
-                    .label(if closed {
-                        "even gap L/N"
-                    } else {
-                        "mean gap S/(N-1)"
+                    .label(match (closed, moving) {
+                        (true, false) => "even gap L/N",
+                        (true, true) => "even gap L/N, L the mean length",
+                        (false, _) => "mean gap S/(N-1)",
                     })
                     .legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
@@ -1652,10 +1690,12 @@ pub fn team_figure(
                 bottom
                     .draw_series(dashed((0.0, ideal), (l, ideal)))
                     .map_err(s)?
-                    .label(match (closed, per_vehicle_speeds) {
-                        (true, false) => "ideal L/(N v0)",
-                        (true, true) => "ideal L/sum v0_i",
-                        (false, _) => "ideal S/((N-1) v0)",
+                    .label(match (closed, per_vehicle_speeds, moving) {
+                        (true, false, false) => "ideal L/(N v0)",
+                        (true, true, false) => "ideal L/sum v0_i",
+                        (true, false, true) => "ideal L/(N v0), L the mean length",
+                        (true, true, true) => "ideal L/sum v0_i, L the mean length",
+                        (false, _, _) => "ideal S/((N-1) v0)",
                     })
                     .legend(move |(x, y)| {
                         plotters::element::DashedPathElement::new(
@@ -1669,7 +1709,9 @@ pub fn team_figure(
             let c = colour(1);
             let revisits = finite_runs(revisit.iter().copied());
             let label = if revisits.is_empty() {
-                "no revisit time: no vehicle live in the steady window"
+                no_revisit.as_str()
+            } else if moving {
+                "revisit time, steady window, along the last frame"
             } else {
                 "revisit time, steady window"
             };
@@ -1685,35 +1727,83 @@ pub fn team_figure(
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                 });
             panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)?;
-            // The isoline the panels measure along, and where each vehicle ended.
+            // The isoline the panels measure along, and where each vehicle ended; its key above
+            // the panel, outside the axes (nu-1: the key's box was cut at the figure's edge;
+            // nu-7: it covered a vehicle's last position).
+            let f = st.base_font();
+            let (key_area, map_area) = map_area.split_vertically((2.0 * f) as u32);
+            draw_line_key(&key_area, st, &isoline_label, (5.6 + 0.75) * f, w3)?;
             let [mx0, mx1, my0, my1] = map_range;
             let ms = tick_step(mx0, mx1, 5);
-            let mut map = panel_axes(
+            let (mw, _) = map_area.dim_in_pixel();
+            let label_style = TextStyle::from(st.font(0.95));
+            let x_labels = x_labels_that_fit(st, mw, (mx0, mx1), ms, |t| {
+                map_area
+                    .estimate_text_size(t, &label_style)
+                    .map_or(0.6 * 0.95 * f * t.chars().count() as f64, |(w, _)| w as f64)
+            });
+            let mut map = panel_axes_labelled(
                 &map_area,
                 st,
                 ((mx0, mx1), (my0, my1)),
                 ("x (m)", "y (m)"),
                 (ms, ms),
+                x_labels,
             )?;
             map.draw_series(
                 finite_runs(isoline.iter().copied())
                     .into_iter()
                     .map(|r| PathElement::new(r, BLACK.stroke_width(w2))),
             )
-            .map_err(s)?
-            .label(isoline_label.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w3))
-            });
+            .map_err(s)?;
             for (i, e) in ends.iter().enumerate() {
                 if e.0.is_finite() && e.1.is_finite() {
                     map.draw_series([Circle::new(*e, st.px(6.0), colour(i).filled())])
                         .map_err(s)?;
                 }
             }
-            panel_legend(&mut map, st, SeriesLabelPosition::UpperLeft)
+            Ok(())
         })()
     })
+}
+
+/// A key of one black line labelled `label` in `area` (a strip above a panel), from `x0_px`:
+/// the text at the panel's label size, smaller where it would not fit the strip's width (down
+/// to half of it).
+fn draw_line_key<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    st: &Style,
+    label: &str,
+    x0_px: f64,
+    stroke_px: u32,
+) -> DrawResult {
+    let f = st.base_font();
+    let (w, h) = area.dim_in_pixel();
+    let y = (0.5 * h as f64) as i32;
+    let x0 = x0_px as i32;
+    let line = st.px(20.0) as i32;
+    let text_x = x0 + line + (0.5 * f) as i32;
+    let room = (w as f64 - text_x as f64 - 0.5 * f).max(1.0);
+    let mut rel = 0.95;
+    if let Ok((tw, _)) = area.estimate_text_size(label, &TextStyle::from(st.font(rel))) {
+        if tw as f64 > room {
+            rel = (rel * room / tw as f64).max(0.5 * rel);
+        }
+    }
+    area.draw(&PathElement::new(
+        vec![(x0, y), (x0 + line, y)],
+        BLACK.stroke_width(stroke_px),
+    ))
+    .map_err(s)?;
+    area.draw(&Text::new(
+        label.to_string(),
+        (text_x, y),
+        TextStyle::from(st.font(rel)).pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        )),
+    ))
+    .map_err(s)
 }
 
 /// One panel's axes, as [`timeseries_figure`]'s and [`team_figure`]'s panels share them: over
@@ -1721,9 +1811,21 @@ pub fn team_figure(
 fn panel_axes<'a, DB: DrawingBackend + 'a>(
     area: &'a DrawingArea<DB, Shift>,
     st: &Style,
+    ranges: ((f64, f64), (f64, f64)),
+    descs: (&str, &str),
+    ticks: (f64, f64),
+) -> Result<MapChart<'a, DB>, String> {
+    panel_axes_labelled(area, st, ranges, descs, ticks, None)
+}
+
+/// [`panel_axes`] with at most `x_labels` labels on the x axis (`None`: plotters' default).
+fn panel_axes_labelled<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, Shift>,
+    st: &Style,
     (x, y): ((f64, f64), (f64, f64)),
     (x_desc, y_desc): (&str, &str),
     (x_tick, y_tick): (f64, f64),
+    x_labels: Option<usize>,
 ) -> Result<MapChart<'a, DB>, String> {
     let f = st.base_font();
     let mut chart = ChartBuilder::on(area)
@@ -1733,18 +1835,58 @@ fn panel_axes<'a, DB: DrawingBackend + 'a>(
         .y_label_area_size((5.6 * f) as u32)
         .build_cartesian_2d(x.0..x.1, y.0..y.1)
         .map_err(s)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_desc)
+    let x_fmt = |v: &f64| tick_label(*v, x_tick);
+    let y_fmt = |v: &f64| tick_label(*v, y_tick);
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
         .y_desc(y_desc)
-        .x_label_formatter(&|v| tick_label(*v, x_tick))
-        .y_label_formatter(&|v| tick_label(*v, y_tick))
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
         .label_style(st.font(0.95))
         .axis_desc_style(st.font(1.0))
-        .light_line_style(WHITE.mix(0.0))
-        .draw()
-        .map_err(s)?;
+        .light_line_style(WHITE.mix(0.0));
+    if let Some(n) = x_labels {
+        mesh.x_labels(n);
+    }
+    mesh.draw().map_err(s)?;
     Ok(chart)
+}
+
+/// How many x labels fit side by side on a panel of `area_w_px` ([`panel_axes`]' margins and
+/// y label area off it) over `[x0, x1]` labelled at `step`, a label `width_px` wide (as drawn)
+/// and `0.8 em` from the next: `None` when the usual ones do, else fewer (nu-8: a
+/// kilometre-scale field ran its six-digit labels together).
+fn x_labels_that_fit(
+    st: &Style,
+    area_w_px: u32,
+    (x0, x1): (f64, f64),
+    step: f64,
+    width_px: impl Fn(&str) -> f64,
+) -> Option<usize> {
+    let f = st.base_font();
+    let plot_w = area_w_px as f64 - (0.75 + 2.0 + 5.6) * f;
+    // The labels plotters draws at its default count of 11 (its steps are 1, 2, 5 times a
+    // power of ten, as `tick_step`'s), each with a gap after it.
+    let usual = tick_step(x0, x1, 11);
+    if !(usual > 0.0 && usual.is_finite()) {
+        return None;
+    }
+    let first = (x0 / usual).ceil() as i64;
+    let last = (x1 / usual).floor() as i64;
+    let gap = 0.8 * f;
+    let (mut total, mut widest, mut count) = (0.0, 0.0f64, 0usize);
+    for k in first..=last.min(first.saturating_add(100)) {
+        let w = width_px(&tick_label(k as f64 * usual, step));
+        total += w + gap;
+        widest = widest.max(w);
+        count += 1;
+    }
+    if count == 0 || total <= plot_w {
+        None
+    } else {
+        let label_w = widest + gap;
+        Some(((plot_w / label_w).floor() as usize).max(2))
+    }
 }
 
 /// A panel's legend ([`panel_axes`]), at `at`.

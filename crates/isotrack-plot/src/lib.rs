@@ -40,4 +40,4 @@ pub use run_data::{data_files_unchanged, same_field, unrecorded_data_files_note,
 pub use stability::{boundary_segments, stability_map_figure};
 pub(crate) use style::fonts;
 pub use style::{tick_label, tick_step, Colormap, Format, Style, DEFAULT_FONT_FAMILY};
-pub use team::{figure_isoline, FigureArc, TeamTracks, REVISIT_BINS};
+pub use team::{figure_isoline, metrics_window_start_s, FigureArc, TeamTracks, REVISIT_BINS};

@@ -59,8 +59,44 @@ fn check_team_lists(run: &RunData, n: usize) -> Result<(), String> {
             "summary.json's `vehicles` lists {} vehicles, but team.vehicle_count = {n}",
             v.len()
         )),
-        Some(_) => Ok(()),
+        // A team's run writes every vehicle's end; one with none was drawn ending at its last
+        // row, a trace cut short read as its end (att32g-5).
+        Some(v) => match v.iter().position(|v| v.t_end_s.is_none()) {
+            Some(i) => Err(format!(
+                "summary.json: vehicles[{i}].t_end_s is null, but a team's run writes every vehicle's end ({} of vehicle {i}): its rows cannot be checked against it",
+                v[i].outcome
+            )),
+            None => check_duration(run, v),
+        },
     }
+}
+
+/// A team's vehicles against `scenario.toml`'s `sim.duration_s` (att32g-7): a vehicle that
+/// `completed` ends at the duration, none after it. A scenario edited after the run (another
+/// duration) was drawn, its steady window (and the revisit panel's) taken from the edited
+/// duration; refused naming the key and the first vehicle that disagrees.
+fn check_duration(
+    run: &RunData,
+    vehicles: &[isotrack_runs::results::RunRecord],
+) -> Result<(), String> {
+    let d = run.scenario.spec().sim.duration_s;
+    let tol = 1e-9 * d.abs().max(1.0);
+    for (i, v) in vehicles.iter().enumerate() {
+        let Some(t) = v.t_end_s else { continue };
+        let wrong = if v.outcome == "completed" {
+            (t - d).abs() > tol
+        } else {
+            t > d + tol
+        };
+        if wrong {
+            return Err(format!(
+                "scenario.toml: sim.duration_s = {} s, but summary.json's vehicles[{i}] {}: the scenario is not this run's",
+                Echo(d),
+                vehicle_end(&run.summary, i)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// How `summary.json`'s `vehicles[i]` ends vehicle `i`, for a message: "ends it at t = T s
@@ -186,7 +222,10 @@ impl RunData {
             }
         }
         let mut time_set_by: Vec<(usize, usize, u64)> = Vec::new();
-        let mut rows_at: Vec<usize> = Vec::new();
+        // For each recorded time, whether every row at it is its vehicle's last: a time off the
+        // schedule where one or more vehicles ended together (att32g-4: two vehicles ending at
+        // the same step blamed a right row).
+        let mut all_last: Vec<bool> = Vec::new();
         for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
             let Some(i) = id.filter(|&i| i < n) else {
                 return Err(PlotError::Data(format!(
@@ -222,21 +261,27 @@ impl RunData {
             if times.last() != Some(&t.t_s) {
                 times.push(t.t_s);
                 time_set_by.push((i, row, *line));
-                rows_at.push(0);
+                all_last.push(true);
             }
-            if let Some(c) = rows_at.last_mut() {
-                *c += 1;
+            if let Some(c) = all_last.last_mut() {
+                *c &= row == last_row[i];
             }
             if times.get(k) != Some(&t.t_s) {
-                // The time this vehicle skipped was set by another vehicle's last row, alone
-                // at it: that vehicle's row off the recorded times, which only its end is, but
-                // its summary ends it elsewhere (a later end, or `completed`). It is named,
-                // not this vehicle (att32f-8: "vehicle 0's row 5" was blamed at a line that was
-                // right).
-                if let Some(&(j, jrow, jline)) = time_set_by.get(k) {
-                    if j != i && jrow == last_row[j] && rows_at[k] == 1 && times[k] < t.t_s {
+                // The time this vehicle skipped is held by other vehicles' last rows only: a
+                // time off the recorded ones, which only a vehicle's end is, but the summary
+                // of one of them ends it elsewhere (a later end, or `completed`). That vehicle
+                // is named, not this one (att32f-8: "vehicle 0's row 5" was blamed at a line
+                // that was right; att32g-4: so it was when two vehicles ended there).
+                if let Some(&(j0, _, _)) = time_set_by.get(k) {
+                    let ends_there = |j: usize| {
+                        traces[j].last().map(|r| r.t_s) == Some(times[k])
+                            && ended_at[j] != Some(times[k])
+                    };
+                    let j = (0..n).find(|&j| j != i && ends_there(j)).unwrap_or(j0);
+                    let jline = last_line[j];
+                    if j != i && all_last[k] && times[k] < t.t_s {
                         return Err(PlotError::Data(format!(
-                            "{}: trace.csv:{jline}: vehicle {j}'s last row is at t = {} s, alone between the recorded times{} and t = {} s (trace.csv:{line}), as a vehicle's row is only at its end, but summary.json's vehicles[{j}] {}: the summary is not this trace's, or a row of vehicle {j} is missing",
+                            "{}: trace.csv:{jline}: vehicle {j}'s last row is at t = {} s, between the recorded times{} and t = {} s (trace.csv:{line}), off them, as a vehicle's row is only at its end, but summary.json's vehicles[{j}] {}: the summary is not this trace's, or a row of vehicle {j} is missing",
                             dir.display(),
                             Echo(times[k]),
                             k.checked_sub(1)
@@ -362,7 +407,11 @@ impl RunData {
                 err(m)
             }
         })?;
-        let mut rdr = csv::Reader::from_reader(crate::open_input(&dir.join("trace.csv"))?);
+        // Each `\r\n` read as `\n`: the csv reader counts a CRLF file's lines one short (its
+        // record starts before the `\n` of the line ending before it), so every trace.csv:LINE
+        // named was one too early (att32g-9).
+        let mut rdr =
+            csv::Reader::from_reader(CrlfAsLf::new(crate::open_input(&dir.join("trace.csv"))?));
         let headers = rdr
             .headers()
             .map_err(|e| err(format!("trace.csv: {e}")))?
@@ -401,8 +450,8 @@ impl RunData {
                 .vehicles
                 .iter()
                 .flatten()
-                .map(|v| v.t_end_s)
-                .try_fold(f64::NEG_INFINITY, |m, t| t.map(|t| m.max(t)))
+                .filter_map(|v| v.t_end_s)
+                .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))
                 .filter(|m| m.is_finite())
                 .or(summary.t_end_s()),
             _ => summary.t_end_s(),
@@ -481,6 +530,61 @@ impl RunData {
     pub fn steady_state_start_s(&self) -> f64 {
         let spec = self.scenario.spec();
         (1.0 - spec.metrics.steady_state_fraction) * spec.sim.duration_s
+    }
+}
+
+/// A reader that reads each `\r\n` of `R` as `\n` (a `\r` not followed by `\n` is kept), so
+/// that the csv reader's line of a record is the file's line whatever the line ending
+/// (att32g-9: with `\r\n` it was one line too early).
+struct CrlfAsLf<R> {
+    inner: R,
+    /// Bytes read from `inner`, `buf[at..]` not yet given out.
+    buf: Vec<u8>,
+    at: usize,
+    /// A `\r` ended the last chunk read: whether it is kept depends on the next byte.
+    pending_cr: bool,
+}
+
+impl<R: std::io::Read> CrlfAsLf<R> {
+    fn new(inner: R) -> Self {
+        Self {
+            inner,
+            buf: Vec::new(),
+            at: 0,
+            pending_cr: false,
+        }
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for CrlfAsLf<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        while self.at >= self.buf.len() {
+            let mut chunk = [0u8; 64 * 1024];
+            let n = self.inner.read(&mut chunk)?;
+            self.buf.clear();
+            self.at = 0;
+            if n == 0 {
+                if std::mem::take(&mut self.pending_cr) {
+                    self.buf.push(b'\r');
+                    continue;
+                }
+                return Ok(0);
+            }
+            for &b in &chunk[..n] {
+                if std::mem::take(&mut self.pending_cr) && b != b'\n' {
+                    self.buf.push(b'\r');
+                }
+                if b == b'\r' {
+                    self.pending_cr = true;
+                } else {
+                    self.buf.push(b);
+                }
+            }
+        }
+        let k = out.len().min(self.buf.len() - self.at);
+        out[..k].copy_from_slice(&self.buf[self.at..self.at + k]);
+        self.at += k;
+        Ok(k)
     }
 }
 

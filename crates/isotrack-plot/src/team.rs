@@ -108,6 +108,26 @@ pub fn figure_isoline(
     }
 }
 
+/// The steady window of a team's figure as the team metrics take it (att32g-1, -2): the time
+/// of the metrics' first sample at or after the run's steady-state start step (its step plan's,
+/// `metrics.steady_state_fraction` of `sim.duration_s`), the metrics sampling every step along
+/// a circle and every `POLYLINE_METRICS_PERIOD_S` along an extracted isoline (`arc`), from step
+/// 0. `None` when the run has no metrics sample in the window (a window shorter than the
+/// sampling period): `summary.json`'s window quantities are then `null`. The window start
+/// once was `(1 - f) T` in floating point, a hair after a vehicle's end at the metrics' first
+/// window step, and the figure and `summary.json` disagreed on whether a vehicle was live in it.
+pub fn metrics_window_start_s(scenario: &Scenario, arc: &FigureArc) -> Option<f64> {
+    let plan = scenario.plan();
+    let every = scenario
+        .team_metrics_every_steps(matches!(arc, FigureArc::Circle(_)))
+        .max(1);
+    let k = plan
+        .steady_state_start_step
+        .div_ceil(every)
+        .checked_mul(every)?;
+    (k <= plan.n_steps).then(|| k as f64 * plan.dt_s)
+}
+
 /// Bins the isoline is cut into for the revisit-time figure.
 pub const REVISIT_BINS: usize = 360;
 

@@ -535,16 +535,29 @@ impl Scenario {
         })
     }
 
+    /// How often the team metrics sample, in steps: every step along a circle (exact:
+    /// `exact_circle`), every [`POLYLINE_METRICS_PERIOD_S`] (rounded to whole steps, at least
+    /// one) along an extracted isoline. A team figure's steady window starts at the metrics'
+    /// first sample in it (att32g-1).
+    pub fn team_metrics_every_steps(&self, exact_circle: bool) -> u64 {
+        if exact_circle {
+            TeamMetricsConfig::default().every_steps
+        } else {
+            ((POLYLINE_METRICS_PERIOD_S / self.dt_s()).round() as u64).max(1)
+        }
+    }
+
     /// The team's configuration: its ranging and spacing law, and its metrics sampled every
     /// step on a circle (exact) or without an isoline, every [`POLYLINE_METRICS_PERIOD_S`] on
     /// an extracted one.
     fn team_config(&self, team: &TeamSpec, model: &TeamIsolineModel) -> TeamConfig {
-        let metrics = match model {
-            TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_) => TeamMetricsConfig::default(),
-            _ => TeamMetricsConfig {
-                every_steps: ((POLYLINE_METRICS_PERIOD_S / self.dt_s()).round() as u64).max(1),
-                ..TeamMetricsConfig::default()
-            },
+        let every_steps = self.team_metrics_every_steps(matches!(
+            model,
+            TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_)
+        ));
+        let metrics = TeamMetricsConfig {
+            every_steps,
+            ..TeamMetricsConfig::default()
         };
         TeamConfig {
             ranging: team.ranging,

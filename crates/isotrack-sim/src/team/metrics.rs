@@ -75,7 +75,8 @@ pub struct TeamSummary {
     /// since a vehicle last passed the point, that pass counted wherever it was (before the
     /// window too), and a point not passed yet counts from the run's start. So an interval
     /// between passes that ends in the window counts whole, as does the open one at the run's
-    /// end; a window shorter than the interval between passes does not censor it.
+    /// end; a window shorter than the interval between passes does not censor it. `None`
+    /// without a steady-window sample at which a vehicle was live.
     pub revisit_time_max_s: Option<f64>,
     /// Mean time between consecutive passes over a point of the isoline, over the passes in the
     /// steady window, each measured back to the pass before it wherever that was (before the
@@ -215,6 +216,9 @@ pub struct TeamMetrics {
     active_speed_sum: f64,
     active_samples: u64,
     lost_in_window: bool,
+    /// Whether a vehicle was live at a steady-window sample (without one, no revisit time:
+    /// att32g-1, a sample after every vehicle had ended gave every bin an age).
+    live_in_window: bool,
 }
 
 impl TeamMetrics {
@@ -293,6 +297,7 @@ impl TeamMetrics {
             active_speed_sum: 0.0,
             active_samples: 0,
             lost_in_window: false,
+            live_in_window: false,
             cfg,
         }
     }
@@ -391,6 +396,7 @@ impl TeamMetrics {
             self.active_speed_sum += sum;
             self.active_samples += 1;
             self.lost_in_window |= alive.iter().take(self.n).any(|a| !a);
+            self.live_in_window |= alive.iter().take(self.n).any(|a| *a);
         }
         self.scratch.clear();
         for i in 0..self.n {
@@ -622,7 +628,7 @@ impl TeamMetrics {
             self.length_m
         };
         let (revisit_max, revisit_mean) = match self.t_window {
-            Some(_) => {
+            Some(_) if self.live_in_window => {
                 // The open interval at the run's end: the age of each bin then (from the run's
                 // start for a bin never passed).
                 let mut mx = self.revisit_max;
@@ -653,7 +659,7 @@ impl TeamMetrics {
                     (self.revisit_count > 0).then(|| self.revisit_sum / self.revisit_count as f64);
                 (Some(mx), mean)
             }
-            None => (None, None),
+            _ => (None, None),
         };
         TeamSummary {
             count: self.n,
@@ -915,6 +921,50 @@ mod tests {
         let got = run(3).revisit_time_ideal_active_s.unwrap();
         assert!((got - l / 4.0).abs() < 1e-12 * l, "{got}");
         assert_eq!(run(20).revisit_time_ideal_active_s, None);
+    }
+
+    /// att32g-1: no revisit time without a vehicle live at a steady-window sample. Four points
+    /// at rest on a circle, samples at steps 0..=11 of 0.1 s, the window from step 10; every
+    /// vehicle's run ends at step `end` (live at it, as a run that ends at a step writes it).
+    /// Ending at step 9, nobody is live in the window: `None` (it was the open age at the last
+    /// sample, 1.1 s, of a loop nobody flew). Ending at step 10, the window's first sample has
+    /// them: no point is ever passed, so each one's age at the last sample is 1.1 s.
+    #[test]
+    fn no_revisit_time_without_a_live_vehicle_in_the_window() {
+        let r = 10.0;
+        let arc = CircleArc {
+            center_m: Vec2::new(0.0, 0.0),
+            radius_m: r,
+        };
+        let l = 2.0 * PI * r;
+        let cfg = TeamMetricsConfig {
+            every_steps: 1,
+            steady_state_start_step: 10,
+            even_gap_cv: 0.05,
+            revisit_bins: 36,
+        };
+        let run = |end: u64| {
+            let mut m = TeamMetrics::new(cfg, 4, l, 0.1, 1.0);
+            let pos: Vec<Vec2> = (0..4)
+                .map(|i| {
+                    let th = PI / 2.0 * i as f64;
+                    Vec2::new(r * th.cos(), r * th.sin())
+                })
+                .collect();
+            for k in 0..=11u64 {
+                let alive = [k <= end; 4];
+                if m.due() {
+                    m.observe(k, &arc, &pos, &[1.0; 4], &alive);
+                }
+            }
+            m.finish()
+        };
+        let s = run(9);
+        assert_eq!(s.revisit_time_max_s, None);
+        assert_eq!(s.revisit_time_mean_s, None);
+        let s = run(10);
+        let got = s.revisit_time_max_s.unwrap();
+        assert!((got - 1.1).abs() < 1e-12, "{got}");
     }
 
     /// Four points at arc offsets `offs` behind one another along `arc` (an open isoline),
