@@ -142,7 +142,7 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
             isotrack_plot::team_figure(&data, &team, st, &title).map_err(failure)?;
             written.push(team.display().to_string());
         } else {
-            errln!("note: no team figure (gaps, revisit time): the field has no isoline at controller.level to measure along (or a drifting analytic field that is not radial)");
+            errln!("note: no team figure (gaps, revisit time): the field has no isoline at controller.level to measure along (or an analytic field that drifts, a radial one included)");
         }
     }
     Ok(written)

@@ -104,6 +104,49 @@ pub(crate) fn locate_derived(
     )
 }
 
+/// A team key assigned onto a base scenario without `[team]` (nu-19: a sweep's `[grid]
+/// team.k_v`): the section the assignment creates has no `team.count` (nor `team.starts`), and
+/// that problem, inherited from nowhere the user wrote, is located at the first assignment of
+/// a team key, saying that the base has no `[team]` (it was "a value of the base scenario or
+/// its default" asking for `team.count`). Other problems are as located.
+pub(crate) fn blame_team_onto_no_team(
+    e: ScenarioError,
+    assignments: &[Assignment],
+) -> ScenarioError {
+    let ScenarioError::Invalid(issues) = e else {
+        return e;
+    };
+    let team_key = |a: &&Assignment| {
+        let k = a.arg.split_once('=').map_or("", |(k, _)| k.trim());
+        key_covers("team", k)
+    };
+    let Some(first) = assignments.iter().find(team_key) else {
+        return ScenarioError::Invalid(issues);
+    };
+    let key = first.arg.split_once('=').map_or("", |(k, _)| k.trim());
+    ScenarioError::Invalid(
+        issues
+            .into_iter()
+            .map(|i| {
+                if i.key.as_deref() == Some("team.count")
+                    && matches!(i.location, ErrorLocation::Inherited { .. })
+                {
+                    LocatedIssue {
+                        location: ErrorLocation::Assigned {
+                            label: first.label.clone(),
+                        },
+                        key: Some(key.to_string()),
+                        message: "the base scenario has no [team] section: a team key applies to a team; give the base a [team] (team.count, or team.starts), or assign team.count too".into(),
+                        unreadable: false,
+                    }
+                } else {
+                    i
+                }
+            })
+            .collect(),
+    )
+}
+
 /// Whether an assignment to `set` is the source of a problem with `issue_key`: the same key,
 /// a table holding it, or a key inside it.
 pub(crate) fn key_covers(set: &str, issue_key: &str) -> bool {

@@ -41,7 +41,7 @@ pub use load::{
     build_derived, load_scenario, parse_scenario, parse_scenario_in, MAX_SCENARIO_FILE_BYTES,
 };
 pub use schema::ScenarioFile;
-pub use team::TeamIsolineModel;
+pub use team::{TeamIsolineModel, ARC_REFERENCE_WITHOUT_ARC};
 
 use field::{build_field, FieldModel, IsolineOracle, LonLatFrame};
 use std::path::Path;
@@ -85,6 +85,70 @@ fn build_field_of(
 fn start_xy(file: &ScenarioFile) -> Result<[f64; 2], resolve::Issue> {
     let s = spec::sim::start(&file.initial)?;
     Ok([s.x_m, s.y_m])
+}
+
+/// Whether `[initial]`'s position places a vehicle: a single vehicle, a team of one without
+/// `team.starts` or `team.spread`, or a line spread without its own `x_m` and `y_m` (its first
+/// start defaults to `[initial]`'s). With `team.starts`, an arc spread or a line spread with its
+/// own position, `[initial]` flies nobody and is not checked against the field (nu-14: the
+/// unused default start (10, 0) m outside a `domain_m` refused a team whose starts were all
+/// inside).
+fn initial_places_a_vehicle(file: &ScenarioFile) -> bool {
+    let Some(t) = &file.team else {
+        return true;
+    };
+    match (&t.starts, &t.spread) {
+        (Some(_), _) => false,
+        (None, Some(sp)) => {
+            sp.along == Some(schema::SpreadAlong::Line) && (sp.x_m.is_none() || sp.y_m.is_none())
+        }
+        (None, None) => true,
+    }
+}
+
+/// The vehicle (`vehicle`, when the caller shares one already built) and the spec of resolved
+/// `file`, its starts checked against `field`: `[initial]`'s `start` where it places a vehicle
+/// ([`initial_places_a_vehicle`]), every team vehicle's start. Every value error found is
+/// listed (nu-14: a start outside the field hid a `team.starts`/`team.spread` conflict).
+fn checked_parts(
+    file: &ScenarioFile,
+    start: [f64; 2],
+    field: &FieldModel,
+    vehicle: Option<Arc<vehicle::VehicleModel>>,
+) -> Result<(Arc<vehicle::VehicleModel>, spec::ScenarioSpec), Vec<resolve::Issue>> {
+    let mut issues = Vec::new();
+    if initial_places_a_vehicle(file) {
+        if let Err(i) = field::check_start(start, field) {
+            issues.push(i);
+        }
+    }
+    let vehicle = match vehicle {
+        Some(v) => v,
+        None => match vehicle::build_vehicle(file) {
+            Ok(v) => Arc::new(v),
+            Err(i) => {
+                issues.push(i);
+                return Err(issues);
+            }
+        },
+    };
+    let spec = match spec::ScenarioSpec::new(file, vehicle.airframe_turn_rate_limit_radps()) {
+        Ok(s) => s,
+        Err(i) => {
+            issues.push(i);
+            return Err(issues);
+        }
+    };
+    if let Some(t) = &spec.team {
+        if let Err(i) = field::check_team_starts(file.team.as_ref(), &t.starts, field) {
+            issues.push(i);
+        }
+    }
+    if issues.is_empty() {
+        Ok((vehicle, spec))
+    } else {
+        Err(issues)
+    }
 }
 
 /// `[field]` with the data files named as the built field read them (`field.path`,
@@ -145,21 +209,14 @@ impl Scenario {
         let mut given = file.clone();
         let mut file = resolve::resolve(file)?;
         let parts = build_recorded(&mut file, &mut given, base_dir).map_err(|i| vec![i])?;
-        field::check_start(start_xy(&file).map_err(|i| vec![i])?, &parts.model)
-            .map_err(|i| vec![i])?;
-        let vehicle = vehicle::build_vehicle(&file).map_err(|i| vec![i])?;
-        let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
-            .map_err(|i| vec![i])?;
-        if let Some(t) = &spec.team {
-            field::check_team_starts(file.team.as_ref(), &t.starts, &parts.model)
-                .map_err(|i| vec![i])?;
-        }
+        let start = start_xy(&file).map_err(|i| vec![i])?;
+        let (vehicle, spec) = checked_parts(&file, start, &parts.model, None)?;
         Ok(Self {
             file,
             given: Arc::new(given),
             spec,
             field: parts.model,
-            vehicle: Arc::new(vehicle),
+            vehicle,
             isoline: Arc::new(OnceLock::new()),
             field_notes: parts.notes,
             resolved_field: parts.resolved_field,
@@ -205,7 +262,15 @@ impl Scenario {
         base_dir: &Path,
     ) -> Result<Self, ScenarioError> {
         let mut given = apply_assignments(&self.given, assignments)?;
-        let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
+        let no_team = self.given.team.is_none();
+        let located = |issues: Vec<resolve::Issue>| {
+            let e = locate_derived(issues, origin, assignments);
+            if no_team {
+                assign::blame_team_onto_no_team(e, assignments)
+            } else {
+                e
+            }
+        };
         let mut file = resolve::resolve(given.clone()).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
@@ -227,13 +292,14 @@ impl Scenario {
             build_recorded(&mut file, &mut given, base_dir).map_err(|i| located(vec![i]))?
         };
         let start = start_xy(&file).map_err(|i| located(vec![i]))?;
-        field::check_start(start, &parts.model).map_err(|i| located(vec![i]))?;
         let same_vehicle = file.vehicle == self.file.vehicle && file.sim.seed == self.file.sim.seed;
-        let vehicle = if same_vehicle {
-            self.vehicle.clone()
-        } else {
-            Arc::new(vehicle::build_vehicle(&file).map_err(|i| located(vec![i]))?)
-        };
+        let (vehicle, spec) = checked_parts(
+            &file,
+            start,
+            &parts.model,
+            same_vehicle.then(|| self.vehicle.clone()),
+        )
+        .map_err(located)?;
         let isoline = if Arc::ptr_eq(&parts.model, &self.field)
             && file.controller.level == self.file.controller.level
         {
@@ -241,12 +307,6 @@ impl Scenario {
         } else {
             Arc::new(OnceLock::new())
         };
-        let spec = spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps())
-            .map_err(|i| located(vec![i]))?;
-        if let Some(t) = &spec.team {
-            field::check_team_starts(file.team.as_ref(), &t.starts, &parts.model)
-                .map_err(|i| located(vec![i]))?;
-        }
         Ok(Self {
             file,
             given: Arc::new(given),

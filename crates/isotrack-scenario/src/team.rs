@@ -14,7 +14,7 @@ use isotrack_fields::puff::PuffPlume;
 use isotrack_fields::AnalyticKind;
 use isotrack_sim::team::arc::{pick_piece, ArcProjection, CircleArc, MovingArc, PolylineArc};
 use isotrack_sim::team::metrics::TeamMetricsConfig;
-use isotrack_sim::team::spacing::SpacingConfig;
+use isotrack_sim::team::spacing::{SpacingConfig, SpacingLaw};
 use isotrack_sim::team::TeamIsoline;
 use isotrack_sim::{
     Group, MemberSpeeds, Oracles, Sensor, TeamConfig, TeamError, TeamMember, TeamResult,
@@ -74,9 +74,16 @@ impl TeamIsolineModel {
 
 /// Why a scenario's team has no metrics (`summary.json`'s `team.metrics_note`).
 pub const NO_CLOSED_ISOLINE: &str = "no team metrics: the field has no isoline at controller.level to measure along (no closed loop and no open piece leaving the field)";
-/// The note for a drifting analytic field other than a radial one.
+/// The note for a drifting analytic field, a radial one included (att32g-6: the note said
+/// radial fields were followed; their team metrics are not wired: the arc projection is of a
+/// fixed isoline).
 pub const DRIFTING_FIELD: &str =
-    "no team metrics: the isoline of a drifting analytic field is followed for a radial field only, for now";
+    "no team metrics: the team metrics do not follow the isoline of a drifting analytic field (a radial one included), for now";
+
+/// Why `isotrack run` refuses a scenario whose law is `arc_reference` on a field without a
+/// known arc length ([`Scenario::team_refusal`]; exit 65), and why `check` says its team
+/// section does not apply (att32g-3: one text for both).
+pub const ARC_REFERENCE_WITHOUT_ARC: &str = "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift (its circle inside the field's domain_m) only, for now";
 
 /// Marching squares stitch end points closer than this (relative to the coordinates' scale)
 /// into one vertex.
@@ -391,6 +398,18 @@ impl Scenario {
             ];
         }
         b.iter().all(|x| x.is_finite()).then_some(b)
+    }
+
+    /// Why `isotrack run` refuses this scenario's team before it starts, or `None`:
+    /// `team.spacing = "arc_reference"` needs the true arc length ([`Scenario::team_arc`]:
+    /// a radial field that does not drift, its circle inside its `domain_m`).
+    pub fn team_refusal(&self) -> Option<&'static str> {
+        let arc_law = self
+            .spec()
+            .team
+            .as_ref()
+            .is_some_and(|t| matches!(t.law, SpacingLaw::ArcReference { .. }));
+        (arc_law && self.team_arc().is_none()).then_some(ARC_REFERENCE_WITHOUT_ARC)
     }
 
     /// Why a team run of this scenario has no team metrics (`summary.json`'s

@@ -1866,6 +1866,11 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
             verdict = Verdict::Fails;
             verdict_reason = format!("team: {}", t.verdict_reason);
         }
+        // att32g-3: a team `run` refuses is no `holds`.
+        if s.team_refusal().is_some() && verdict == Verdict::Holds {
+            verdict = Verdict::NotApplicable;
+            verdict_reason = format!("team: {}", t.verdict_reason);
+        }
     }
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).

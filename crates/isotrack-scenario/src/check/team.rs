@@ -222,6 +222,11 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         }
     };
     rep.k_v_per_s = Some(k_v);
+    if let Some(why) = s.team_refusal() {
+        // att32g-3: `run` refuses it (65); no loop of a run that never starts holds.
+        rep.note = format!("not applicable: `isotrack run` refuses this scenario: {why}");
+        return rep;
+    }
     if k_v == 0.0 {
         // att32d-9: at g = 0 every mode's roots sit at z = 1 (marginal): the law commands v0
         // whatever the ranges, as `none` does; no loop to be past k_v*, no saturation.
@@ -535,7 +540,13 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
     let team = s.spec().team.as_ref()?;
     let spacing = spacing_report(s, team);
     let tracking = tracking_report(s, l, r, team);
-    let (verdict, verdict_reason) = team_verdict(team, &spacing, &tracking);
+    let (verdict, verdict_reason) = match s.team_refusal() {
+        Some(why) => (
+            Verdict::NotApplicable,
+            format!("`isotrack run` refuses this scenario (exit 65): {why}"),
+        ),
+        None => team_verdict(team, &spacing, &tracking),
+    };
     Some(TeamCheckReport {
         count: team.count(),
         spacing_law: team.law.name(),

@@ -51,6 +51,7 @@ pub fn with_derived(s: &Scenario, resolved_toml: &str) -> String {
     controller_in_force(s, &mut extra);
     field_in_force(s, &mut extra);
     metrics_in_force(s, &mut extra);
+    team_in_force(s, &mut extra);
     let mut out = annotate(resolved_toml, &inline, &extra);
     if file.sitl.is_unset() {
         let h = &spec.sitl;
@@ -177,6 +178,164 @@ fn metrics_in_force(s: &Scenario, extra: &mut Vec<(&str, String)>) {
                 num(m.track_loss_band)
             ),
         ));
+    }
+}
+
+/// The `[team]` values in force the resolved file leaves out (nu-18): the law, its gain, the
+/// speed envelope and the ring where not given; a line spread's first pose (`[initial]`'s) and
+/// direction (`heading_rad`), an arc spread's centre, first angle, step and sense; the
+/// ranging's keys not given (a `[team.ranging]` the file does not have is shown as a comment,
+/// its header too, so that `show`'s output reads back as the same scenario).
+fn team_in_force(s: &Scenario, extra: &mut Vec<(&'static str, String)>) {
+    use crate::schema::{RingName, SpacingName, SpreadAlong};
+    let (Some(t), Some(spec)) = (s.file().team.as_ref(), s.spec().team.as_ref()) else {
+        return;
+    };
+    let line = |key: &str, value: String, why: &str| format!("# {key} = {value}  # {why}");
+    if t.count.is_none() {
+        extra.push((
+            "team",
+            line(
+                "count",
+                spec.count().to_string(),
+                "derived: the length of team.starts",
+            ),
+        ));
+    }
+    if t.spacing.is_none() {
+        let name = match super::team::SPACING {
+            SpacingName::None => "none",
+            SpacingName::RangeBalance => "range_balance",
+            SpacingName::ArcReference => "arc_reference",
+        };
+        extra.push(("team", line("spacing", format!("\"{name}\""), "default")));
+    }
+    if t.k_v.is_none() {
+        extra.push(("team", line("k_v", num(super::team::K_V_PER_S), "default")));
+    }
+    let airframe = "the nominal speed (vehicle.speed_mps, a fixed wing's vehicle.airspeed_mps), within a fixed wing's safe commanded airspeeds";
+    if t.v_min_mps.is_none() {
+        extra.push((
+            "team",
+            line(
+                "v_min_mps",
+                num(spec.v_min_mps),
+                &format!("derived: half {airframe}"),
+            ),
+        ));
+    }
+    if t.v_max_mps.is_none() {
+        extra.push((
+            "team",
+            line(
+                "v_max_mps",
+                num(spec.v_max_mps),
+                &format!("derived: twice {airframe}"),
+            ),
+        ));
+    }
+    if t.ring.is_none() {
+        let name = match super::team::RING {
+            RingName::Listed => "listed",
+            RingName::Discovered => "discovered",
+        };
+        extra.push((
+            "team",
+            line(
+                "ring",
+                format!("\"{name}\""),
+                "default: the listed order is the order of travel",
+            ),
+        ));
+    }
+    if let (Some(sp), None, Some(first)) = (&t.spread, &t.starts, spec.starts.first()) {
+        let mut spread = |key: &str, value: String, why: &str| {
+            extra.push(("team.spread", line(key, value, why)));
+        };
+        match sp.along {
+            Some(SpreadAlong::Line) => {
+                if sp.x_m.is_none() {
+                    spread("x_m", num(first.x_m), "derived: initial.x_m");
+                }
+                if sp.y_m.is_none() {
+                    spread("y_m", num(first.y_m), "derived: initial.y_m");
+                }
+                if sp.heading_rad.is_none() {
+                    spread(
+                        "heading_rad",
+                        num(first.heading_rad),
+                        "derived: initial.heading_rad",
+                    );
+                }
+                if sp.direction_rad.is_none() {
+                    spread(
+                        "direction_rad",
+                        num(first.heading_rad),
+                        "derived: heading_rad (the line ahead of the first start)",
+                    );
+                }
+            }
+            Some(SpreadAlong::Arc) => {
+                if sp.center_m.is_none() {
+                    spread("center_m", nums(&super::team::SPREAD_CENTER_M), "default");
+                }
+                if sp.start_rad.is_none() {
+                    spread("start_rad", num(super::team::SPREAD_START_RAD), "default");
+                }
+                if sp.step_rad.is_none() {
+                    spread(
+                        "step_rad",
+                        num(std::f64::consts::TAU / spec.count() as f64),
+                        "derived: 2 pi/count",
+                    );
+                }
+                if sp.clockwise.is_none() {
+                    spread(
+                        "clockwise",
+                        super::team::SPREAD_CLOCKWISE.to_string(),
+                        "default",
+                    );
+                }
+            }
+            None => {}
+        }
+    }
+    let r = t.ranging.clone().unwrap_or_default();
+    let g = &spec.ranging;
+    let mut ranging = Vec::new();
+    let mut key = |given: bool, k: &str, v: f64, why: &str| {
+        if !given {
+            ranging.push(line(k, num(v), why));
+        }
+    };
+    key(r.rate_hz.is_some(), "rate_hz", g.rate_hz, "default");
+    key(
+        r.noise_std_m.is_some(),
+        "noise_std_m",
+        g.noise_std_m,
+        "default",
+    );
+    key(
+        r.max_range_m.is_some(),
+        "max_range_m",
+        g.max_range_m,
+        "default: no limit",
+    );
+    key(
+        r.dropout_probability.is_some(),
+        "dropout_probability",
+        g.dropout_probability,
+        "default",
+    );
+    key(r.delay_s.is_some(), "delay_s", g.delay_s, "default");
+    if t.ranging.is_some() {
+        extra.extend(ranging.into_iter().map(|l| ("team.ranging", l)));
+    } else {
+        extra.push((
+            "team",
+            "# [team.ranging]  (not in the file: every key its default)".to_string(),
+        ));
+        extra.extend(ranging.into_iter().map(|l| ("team", l)));
     }
 }
 

@@ -452,6 +452,92 @@ fn show_prints_every_value_in_force_and_reads_back_the_same() {
     assert!(!shown.contains("max_turn_rate_radps"), "{shown}");
 }
 
+/// nu-18: `show` gives the `[team]` values in force the file leaves out, each in its section:
+/// the law (`range_balance`), `k_v` 0.1, the envelope `v0/2 = 0.25`, `2 v0 = 1.0` m/s, the ring
+/// (`listed`), a line spread's first pose from `[initial]` (3, 4) m heading 0.5 rad and its
+/// direction (= heading), the ranging's five defaults (10 Hz, no noise, no limit, no loss, no
+/// delay) under a commented `[team.ranging]`; an arc spread's centre (the origin), first angle
+/// 0, step `2 pi/3` and sense (clockwise). Comments only: the output reads back as the same
+/// scenario, and showing it again gives the same text.
+#[test]
+fn show_gives_the_team_defaults() {
+    let text = "[initial]\nx_m = 3.0\ny_m = 4.0\nheading_rad = 0.5\n[team]\ncount = 3\nspread = { along = \"line\", step_m = 1.0 }\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    let section_of = |shown: &str, needle: &str| {
+        let i = shown
+            .find(needle)
+            .unwrap_or_else(|| panic!("{needle} in\n{shown}"));
+        shown[..i]
+            .rfind("\n[")
+            .map(|j| shown[j + 1..].lines().next().unwrap().to_string())
+    };
+    for (line, section) in [
+        ("# spacing = \"range_balance\"  # default", "[team]"),
+        ("# k_v = 0.1  # default", "[team]"),
+        ("# v_min_mps = 0.25  # derived: half", "[team]"),
+        ("# v_max_mps = 1.0  # derived: twice", "[team]"),
+        ("# ring = \"listed\"  # default", "[team]"),
+        ("# [team.ranging]", "[team]"),
+        ("# rate_hz = 10.0  # default", "[team]"),
+        ("# noise_std_m = 0.0  # default", "[team]"),
+        ("# max_range_m = inf  # default: no limit", "[team]"),
+        ("# dropout_probability = 0.0  # default", "[team]"),
+        ("# delay_s = 0.0  # default", "[team]"),
+        ("# x_m = 3.0  # derived: initial.x_m", "[team.spread]"),
+        ("# y_m = 4.0  # derived: initial.y_m", "[team.spread]"),
+        (
+            "# heading_rad = 0.5  # derived: initial.heading_rad",
+            "[team.spread]",
+        ),
+        (
+            "# direction_rad = 0.5  # derived: heading_rad",
+            "[team.spread]",
+        ),
+    ] {
+        assert_eq!(
+            section_of(&shown, line).as_deref(),
+            Some(section),
+            "{line}\n{shown}"
+        );
+    }
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file());
+    assert_eq!(again.spec(), s.spec());
+    let shown_again = show::with_derived(&again, &toml::to_string(again.file()).unwrap());
+    assert_eq!(shown_again, shown);
+    // Given keys are not repeated; an arc spread's defaults; given ranging keys stand.
+    let text = "[team]\ncount = 3\nring = \"listed\"\nk_v = 0.2\nspread = { along = \"arc\", radius_m = 5.0 }\nranging = { rate_hz = 5.0 }\n";
+    let s = parse_scenario(text, "<test>", &[]).unwrap();
+    let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+    assert!(!shown.contains("# ring"), "{shown}");
+    assert!(!shown.contains("# k_v"), "{shown}");
+    assert!(!shown.contains("# rate_hz"), "{shown}");
+    assert!(!shown.contains("# [team.ranging]"), "{shown}");
+    let step = format!(
+        "# step_rad = {:?}  # derived: 2 pi/count",
+        std::f64::consts::TAU / 3.0
+    );
+    for line in [
+        "# center_m = [0.0, 0.0]  # default",
+        "# start_rad = 0.0  # default",
+        &step,
+        "# clockwise = true  # default",
+    ] {
+        assert_eq!(
+            section_of(&shown, line).as_deref(),
+            Some("[team.spread]"),
+            "{line}"
+        );
+    }
+    assert_eq!(
+        section_of(&shown, "# noise_std_m = 0.0  # default").as_deref(),
+        Some("[team.ranging]")
+    );
+    let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+    assert_eq!(again.file(), s.file());
+}
+
 /// A description holding lines that look like a section and a key stays text: `show` marks only
 /// the real ones, and its output reads back as the same scenario.
 #[test]

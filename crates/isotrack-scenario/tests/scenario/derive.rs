@@ -203,3 +203,34 @@ fn a_variant_on_another_file_takes_its_geometry() {
     let kp = base.derive(&["controller.kp=5".into()], "<test>").unwrap();
     assert_eq!(kp.file().field.spacing_m, Some([0.5, 0.5]));
 }
+
+/// nu-19: a team key assigned onto a base without `[team]` (a sweep's `[grid] team.k_v`) is
+/// located at that assignment, naming the key and saying the base has no `[team]` (it was
+/// "a value of the base scenario or its default" asking for `team.count`); with `team.count`
+/// assigned too, the variant is a team.
+#[test]
+fn a_team_key_onto_a_base_without_team_names_the_assignment() {
+    use isotrack_scenario::Assignment;
+    let base = parse_scenario("", "<test>", &[]).unwrap();
+    let a = Assignment {
+        arg: "team.k_v=0.05".into(),
+        label: "sweep s.toml run 0, [grid] team.k_v=0.05".into(),
+    };
+    let e = base
+        .derive_with(std::slice::from_ref(&a), "sweep s.toml run 0")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "sweep s.toml run 0, [grid] team.k_v=0.05: `team.k_v`: the base scenario has no [team]"
+        ),
+        "{e}"
+    );
+    assert!(!e.contains("a value of the base scenario"), "{e}");
+    let count = Assignment {
+        arg: "team.count=1".into(),
+        label: "sweep s.toml run 0, [grid] team.count=1".into(),
+    };
+    let s = base.derive_with(&[a, count], "sweep s.toml run 0").unwrap();
+    assert_eq!(s.spec().team.as_ref().map(|t| t.count()), Some(1));
+}

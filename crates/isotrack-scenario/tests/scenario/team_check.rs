@@ -436,3 +436,59 @@ fn every_range_dropped_is_warned() {
         assert!(!w.iter().any(|w| w.contains("dropped")), "{quiet:?}: {w:?}");
     }
 }
+
+/// att32g-3: `arc_reference` on the circular field with a `domain_m` cutting the circle
+/// (x from -5 m: the circle of radius 6.93 m leaves it), or on the same field drifting, is
+/// refused by `run` (no arc length); `check` no longer says its team loop `holds` with the
+/// arc gaps: the team section and the verdict are `not_applicable`, giving `run`'s reason.
+/// The same law with the whole circle inside the domain still holds.
+#[test]
+fn check_gives_runs_refusal_of_arc_reference_without_an_arc() {
+    let why = isotrack_scenario::ARC_REFERENCE_WITHOUT_ARC;
+    for sets in [
+        &[
+            "team.spacing=\"arc_reference\"",
+            "field.domain_m=[-5.0, 20.0, -20.0, 20.0]",
+        ][..],
+        &[
+            "team.spacing=\"arc_reference\"",
+            "field.drift_mps=[0.01, 0.0]",
+        ][..],
+    ] {
+        let s = circular(sets);
+        assert_eq!(s.team_refusal(), Some(why), "{sets:?}");
+        let r = check(&s, None);
+        let t = r.team.as_ref().unwrap();
+        assert_eq!(t.verdict, Verdict::NotApplicable, "{sets:?}");
+        assert!(t.verdict_reason.contains(why), "{}", t.verdict_reason);
+        assert!(!t.spacing.applicable);
+        assert_eq!(t.spacing.range_slope_source, None);
+        assert!(t.spacing.note.contains(why), "{}", t.spacing.note);
+        assert_eq!(r.verdict, Verdict::NotApplicable, "{sets:?}");
+        assert!(r.verdict_reason.contains(why), "{}", r.verdict_reason);
+    }
+    let s = circular(&[
+        "team.spacing=\"arc_reference\"",
+        "field.domain_m=[-20.0, 20.0, -20.0, 20.0]",
+    ]);
+    assert_eq!(s.team_refusal(), None);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert_eq!(t.spacing.range_slope_source, Some("arc_gaps"));
+}
+
+/// att32g-6: a drifting radial field gets no team metrics; its note says so (it said "the
+/// isoline of a drifting analytic field is followed for a radial field only", read as: radial
+/// fields are measured).
+#[test]
+fn a_drifting_radial_fields_note_says_it_has_no_team_metrics() {
+    let s = circular(&["field.drift_mps=[0.01, 0.0]", "sim.duration_s=2"]);
+    let r = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    assert!(r.team.is_none());
+    let note = s.team_metrics_note();
+    assert!(
+        note.contains("drifting analytic field (a radial one included)"),
+        "{note}"
+    );
+    assert!(!note.contains("followed for a radial field"), "{note}");
+}
