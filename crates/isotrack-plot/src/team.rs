@@ -125,7 +125,7 @@ pub fn metrics_window_start_s(scenario: &Scenario, arc: &FigureArc) -> Option<f6
         .steady_state_start_step
         .div_ceil(every)
         .checked_mul(every)?;
-    (k <= plan.n_steps).then(|| k as f64 * plan.dt_s)
+    (k <= plan.n_steps).then_some(k as f64 * plan.dt_s)
 }
 
 /// Bins the isoline is cut into for the revisit-time figure.
