@@ -138,6 +138,7 @@ pub fn team_run<'py>(
             PyScenario {
                 inner: s,
                 origin: scenario.origin.clone(),
+                folder: scenario.folder.clone(),
             },
         ))
     })
