@@ -40,6 +40,7 @@ impl ControllerFactory for PyFactory {
                 PyScenario {
                     inner: scenario.clone(),
                     origin: "<benchmark>".into(),
+                    folder: None,
                 },
             )?;
             let obj = self.factory.call1(py, (native,))?;

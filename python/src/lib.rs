@@ -53,6 +53,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(file_sha256, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep_base_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(values::toml_cell, m)?)?;
     m.add_function(wrap_pyfunction!(league::benchmark_json, m)?)?;
     m.add_function(wrap_pyfunction!(tools::cli_main, m)?)?;

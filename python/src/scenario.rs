@@ -12,13 +12,21 @@ use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A resolved scenario (every default filled in). Immutable: `set` returns a new one.
 #[pyclass(name = "Scenario", module = "isotrack._native", frozen)]
 pub(crate) struct PyScenario {
     pub(crate) inner: Scenario,
+    /// Names the scenario in messages (the path as given to `from_file`, `<toml>`, ...).
     pub(crate) origin: String,
+    /// The absolute folder a relative file path given to `set` is read against: the scenario
+    /// file's folder as it was when the file was read (`from_file`; a sweep's folder for the
+    /// scenarios of a sweep), `None` for the working directory (`default()`, `from_toml`).
+    /// Taken once, never looked up again from `origin` (att30n-4: after a `chdir` the same
+    /// `set` read another file), and kept by every scenario derived from this one and through
+    /// pickling (att30n-11).
+    pub(crate) folder: Option<PathBuf>,
 }
 
 #[pymethods]
@@ -30,6 +38,7 @@ impl PyScenario {
         Ok(Self {
             inner,
             origin: "<built-in default>".into(),
+            folder: None,
         })
     }
 
@@ -40,6 +49,7 @@ impl PyScenario {
         Ok(Self {
             inner,
             origin: path.to_string(),
+            folder: Some(absolute_folder(Path::new(path))),
         })
     }
 
@@ -50,6 +60,7 @@ impl PyScenario {
         Ok(Self {
             inner,
             origin: "<toml>".into(),
+            folder: None,
         })
     }
 
@@ -73,6 +84,7 @@ impl PyScenario {
             Ok(Self {
                 inner,
                 origin: self.origin.clone(),
+                folder: self.folder.clone(),
             })
         })
     }
@@ -105,8 +117,36 @@ impl PyScenario {
             Ok(Self {
                 inner,
                 origin: self.origin.clone(),
+                folder: self.folder.clone(),
             })
         })
+    }
+
+    /// The scenario's name in messages (the path given to `from_file`, `<toml>`, ...).
+    #[getter]
+    fn origin(&self) -> &str {
+        &self.origin
+    }
+
+    /// The folder (absolute) a relative file path given to `set` is read against, `None` for
+    /// the working directory at the time of the `set` (what pickling carries).
+    #[getter]
+    fn folder(&self) -> Option<String> {
+        self.folder
+            .as_ref()
+            .map(|f| f.to_string_lossy().into_owned())
+    }
+
+    /// This scenario named `origin` in messages, a relative file path given to `set` read
+    /// against `folder` (`None`: the working directory): an unpickled scenario takes back the
+    /// folder and name it was pickled with.
+    #[pyo3(signature = (origin, folder=None))]
+    fn relocated(&self, origin: &str, folder: Option<&str>) -> Self {
+        Self {
+            inner: self.inner.clone(),
+            origin: origin.to_string(),
+            folder: folder.map(PathBuf::from),
+        }
     }
 
     /// The level `s_d` the scenario tracks (field units).
@@ -181,20 +221,14 @@ impl PyScenario {
     /// This scenario with `KEY=VALUE` overrides applied, as `isotrack run FILE --set ...`: a
     /// relative file path an override gives (`field.path`, `field.paths`) is relative to the
     /// scenario file's folder for a scenario read from a file (the CLI's rule, nu-12: the same
-    /// `set` once named another file from Python), to the working directory otherwise
-    /// (`default()`, `from_toml`, as their own paths are).
+    /// `set` once named another file from Python), taken when the file was read (`folder`),
+    /// to the working directory otherwise (`default()`, `from_toml`, as their own paths are).
     fn derive(&self, overrides: &[String]) -> Result<Scenario, isotrack_scenario::ScenarioError> {
         let assignments: Vec<isotrack_scenario::Assignment> = overrides
             .iter()
             .map(|o| isotrack_scenario::Assignment::new(o.clone(), &self.origin))
             .collect();
-        // `origin` is a path only for a scenario read from a file (else `<toml>`, `sweep ...
-        // run N`, ...): a regular file there.
-        let file = Path::new(&self.origin);
-        let folder = match file.parent() {
-            Some(p) if file.is_file() && !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
+        let folder = self.folder.as_deref().unwrap_or(Path::new("."));
         self.inner
             .derive_with_in(&assignments, &self.origin, folder)
     }
@@ -276,6 +310,7 @@ impl PyScenario {
         let flown = PyScenario {
             inner: scenario,
             origin: self.origin.clone(),
+            folder: self.folder.clone(),
         };
         Ok((summary, trace, flown))
     }
@@ -325,6 +360,12 @@ impl PyScenario {
         let v = v.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))?;
         Ok(PyArray1::from_vec(py, v))
     }
+}
+
+/// The folder of the file at `path` as an absolute path, taken now
+/// ([`crate::sweep::absolute_dir`]: canonical when it can be).
+pub(crate) fn absolute_folder(path: &Path) -> PathBuf {
+    crate::sweep::absolute_dir(path.parent().unwrap_or(Path::new(".")))
 }
 
 /// The content of `summary.json`, as the CLI writes it ([`isotrack_runs::summary::Summary`],

@@ -2,8 +2,9 @@
 
 use crate::errors::ScenarioErrorPy;
 use crate::guard;
+use crate::scenario::PyScenario;
 use pyo3::prelude::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 /// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
@@ -70,10 +71,56 @@ pub(crate) fn sweep_cells(
 /// A `scenario` that cannot be read gets the class the same file gets as a top-level argument
 /// (ver30b-12): `IsADirectoryError` for a directory, `OSError` for a FIFO, a device or a
 /// socket (never opened), `FileNotFoundError` when it is missing.
+///
+/// Every data file a run of the sweep reads (`field.path`, `field.paths`, of its scenario,
+/// `[base]` or `[grid]`) is then checked as `isotrack sweep` checks it before any run (exit 66
+/// there): one that cannot be read is a `FileNotFoundError` with the CLI's message, before any
+/// run (att30n-10: Python ran the sweep, those runs `invalid_scenario`).
 pub(crate) fn prepare(
     text: &str,
     name: &str,
 ) -> PyResult<isotrack_runs::sweep::prepared::PreparedSweep> {
+    let prepared = prepare_base(text, name)?;
+    isotrack_runs::sweep::manifest::plan_data_file_digests_all(
+        &prepared.plan,
+        prepared.base.given(),
+        &prepared.label,
+    )
+    .map_err(sweep_failure)?;
+    Ok(prepared)
+}
+
+/// The folder `dir` (a sweep file's or a scenario file's; empty: the working directory) as an
+/// absolute path, taken now: canonical when it can be (symbolic links and `..` resolved, as the
+/// kernel reads a path through it), else the working directory joined with it.
+pub(crate) fn absolute_dir(dir: &Path) -> PathBuf {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    std::fs::canonicalize(dir)
+        .or_else(|_| std::path::absolute(dir))
+        .unwrap_or_else(|_| dir.to_path_buf())
+}
+
+/// The scenario every run of a sweep is derived from: the sweep file's `scenario` with its
+/// `[base]` keys set, a relative file path later given to its `set` read against the sweep
+/// file's folder, as the sweep reads its `[grid]` and `[base]` values (att30n-3: a row's
+/// relative `field.path` cell set on the sweep's `scenario` file was read against that file's
+/// folder: another file). Setting a row's swept keys on it and running it gives the row again.
+#[pyfunction]
+pub(crate) fn sweep_base_scenario(text: &str, name: &str) -> PyResult<PyScenario> {
+    let prepared = prepare(text, name)?;
+    Ok(PyScenario {
+        inner: prepared.base,
+        origin: format!("<sweep {}>", prepared.label),
+        folder: Some(absolute_dir(&prepared.plan.dir)),
+    })
+}
+
+/// [`prepare`] without the check of its data files.
+fn prepare_base(text: &str, name: &str) -> PyResult<isotrack_runs::sweep::prepared::PreparedSweep> {
     isotrack_runs::sweep::prepared::PreparedSweep::new(text, Path::new(name)).map_err(|f| {
         if f.code != isotrack_runs::exit::NOINPUT {
             return sweep_failure(f);

@@ -138,6 +138,7 @@ pub fn team_run<'py>(
             PyScenario {
                 inner: s,
                 origin: scenario.origin.clone(),
+                folder: scenario.folder.clone(),
             },
         ))
     })
@@ -688,19 +689,56 @@ impl PyTeamEnv {
             // completed with the laws' answers there (the trace's last row, as
             // `Scenario.run()` writes it).
             let last = self.scenario.plan().n_steps;
+            let period = self.period;
+            // The time of this pause, before the run is completed below.
+            let paused_t_s = self.t_s();
+            let mut last_pause = false;
             if self
                 .group
                 .as_ref()
                 .is_some_and(|g| g.is_running() && g.step_index() >= last)
             {
                 self.advance();
+            } else if self.group.as_ref().is_some_and(|g| {
+                g.is_running() && g.step_index() < last && g.step_index() + period > last
+            }) {
+                // The last pause of a run whose sim.duration_s is no multiple of the period:
+                // no later pause, so no later action or sample, as `IsolineEnv` ends at its
+                // last sample (att30n-6: one more step, t = sim.duration_s, repeated this
+                // observation as `sampled`). The run's last steps are flown here with the
+                // commands of this pause, held, as `Scenario.run()` holds them.
+                last_pause = true;
+                for (i, r) in rewards.iter_mut().enumerate() {
+                    if !self.agents[i].done {
+                        *r = self.reward(i);
+                    }
+                }
+                while self.group.as_ref().is_some_and(|g| g.is_running()) {
+                    self.advance();
+                    self.run_to_pause();
+                }
+            } else if self
+                .group
+                .as_ref()
+                .is_some_and(|g| g.is_running() && (0..n).all(|i| !g.is_vehicle_running(i)))
+            {
+                // Every vehicle's run has ended before sim.duration_s (each left the field,
+                // say): the step that ended the last one is completed, as the engine's loop
+                // completes it, so that the team stops and the summary comes (att30n-5: it
+                // stayed `None` although every agent was done).
+                self.advance();
             }
-            let running = self.group.as_ref().is_some_and(|g| g.is_running());
+            let running = self
+                .group
+                .as_ref()
+                .is_some_and(|g| g.is_running() && (0..n).any(|i| g.is_vehicle_running(i)));
             for i in 0..n {
                 if self.agents[i].done {
                     continue;
                 }
-                rewards[i] = self.reward(i);
+                if !last_pause {
+                    rewards[i] = self.reward(i);
+                }
                 let outcome = self.outcome(i);
                 match outcome {
                     Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
@@ -713,6 +751,9 @@ impl PyTeamEnv {
             if !running {
                 self.finish();
             }
+            // The episode's last step says the time of its last pause (its last sample, as
+            // `IsolineEnv` says), the run's end otherwise.
+            let t_s = if last_pause { paused_t_s } else { self.t_s() };
             let (b, s) = self.builtin(py)?;
             Ok((
                 self.obs(py)?,
@@ -721,7 +762,7 @@ impl PyTeamEnv {
                 PyArray1::from_vec(py, truncated),
                 b,
                 s,
-                self.t_s(),
+                t_s,
             ))
         })
     }

@@ -309,6 +309,7 @@ pub fn controller_variant(
     Ok(PyScenario {
         inner,
         origin: scenario.origin.clone(),
+        folder: scenario.folder.clone(),
     })
 }
 
@@ -337,6 +338,8 @@ pub fn sweep_cells_with(
 ) -> PyResult<crate::sweep::SweepCells> {
     use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = crate::sweep::prepare(text, name)?;
+    // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
+    let folder = crate::sweep::absolute_dir(&sweep.plan.dir);
     let team = sweep.base.spec().team.is_some();
     let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
@@ -369,6 +372,7 @@ pub fn sweep_cells_with(
                             PyScenario {
                                 inner: scenario.clone(),
                                 origin: format!("sweep {} run {id}", sweep.label),
+                                folder: Some(folder.clone()),
                             },
                         )?;
                         let obj = factory.call1(py, (native,))?;
@@ -409,6 +413,7 @@ pub fn sweep_cells_with(
                     PyScenario {
                         inner: scenario.clone(),
                         origin: format!("sweep {} run {id}", sweep.label),
+                        folder: Some(folder.clone()),
                     },
                 )?;
                 let obj = factory.call1(py, (native,))?;

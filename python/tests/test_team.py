@@ -741,3 +741,82 @@ def test_reward_settings_keep_an_episode_finite(ipz):
         obs, rewards, term, trunc, infos = env.step(actions)
         total += sum(rewards.values())
     assert math.isfinite(total)
+
+
+@pytest.mark.parametrize("count", [4, 1])
+def test_the_summary_comes_when_every_vehicle_leaves_the_field(ipz, count):
+    """att30n-5: an episode in which every vehicle leaves the field before sim.duration_s ends
+    (no agent left) but `summary()` stayed None. The domain cuts the level-10 circle at x = 6 m
+    (R = 6.93 m): every vehicle, flying the built-in laws, leaves there, the last well before
+    20 s. The summary is then `Scenario.run()`'s, every vehicle `left_field`."""
+    spread = {
+        "along": "arc",
+        "center_m": [0.0, 0.0],
+        "radius_m": RADIUS_M,
+        "start_rad": math.pi / 2,
+        "step_rad": 0.3,
+        "clockwise": True,
+    }
+    sc = (
+        isotrack.Scenario.from_file(str(TEAM))
+        .set(
+            {
+                "sim.duration_s": 20.0,
+                "field.domain_m": [-20.0, 6.0, -20.0, 20.0],
+                "initial.x_m": 0.0,
+                "controller.max_turn_rate_radps": 1.0,
+                "team.spread": spread,
+            }
+        )
+        .set("team.count", count)
+    )
+    run = sc.run()
+    assert [v["outcome"] for v in run.summary["vehicles"]] == ["left_field"] * count
+    assert run.summary["t_end_s"] < 19.0
+    env = ipz.parallel_env(sc)
+    steps = drive_builtin(env)
+    assert env.agents == []
+    summary = env.summary()
+    assert summary is not None
+    assert summary["vehicles"] == run.summary["vehicles"]
+    assert "team" in summary  # (its metrics: see the report of py30o, not compared here)
+    got = env.trace()
+    for k in run.trace:
+        assert same(got[k], run.trace[k]), k
+    # The episode ends at the last vehicle's end, within a step.
+    step_s = env.period_steps * 0.01  # sim.dt_s = 0.01 s
+    assert abs(steps * step_s - max(v["t_end_s"] for v in run.summary["vehicles"])) <= step_s + 1e-9
+
+
+@pytest.mark.parametrize("duration_s", [1.05, 1.01, 1.09, 1.0])
+@pytest.mark.parametrize("count", [1, 2])
+def test_a_duration_off_the_step_takes_isoline_envs_count(ipz, duration_s, count):
+    """att30n-6: with sim.duration_s no multiple of the environment's step (0.1 s: sensor
+    10 Hz, ranging 5 Hz), the team environment took one step more than IsolineEnv's
+    floor(D * R) = 10, the last repeating the observation at t = 1.0 s as `sampled`. Now 10
+    steps, the last at the last sample (t = 1.0 s) truncating; the run still flies to
+    sim.duration_s with the last commands held: trace and summary are `Scenario.run()`'s."""
+    sc = isotrack.Scenario.from_file(str(TEAM)).set(
+        {
+            "sim.duration_s": duration_s,
+            "sensor.rate_hz": 10.0,
+            "team.ranging": {"rate_hz": 5.0},
+            "controller.max_turn_rate_radps": 1.0,
+            "team.count": count,
+        }
+    )
+    env = ipz.parallel_env(sc)
+    obs, infos = env.reset()
+    seen = []
+    while env.agents:
+        obs, rew, term, trunc, infos = env.step({a: infos[a]["builtin_action"] for a in env.agents})
+        seen.append((infos["vehicle_0"]["t_s"], infos["vehicle_0"]["sampled"], term["vehicle_0"], trunc["vehicle_0"]))
+    assert len(seen) == math.floor(duration_s * 10.0 + 1e-9) == 10
+    t_last, sampled, term, trunc = seen[-1]
+    assert abs(t_last - 1.0) < 1e-9 and sampled and trunc and not term
+    run = sc.run()
+    got = env.trace()
+    for k in run.trace:
+        assert same(got[k], run.trace[k]), k
+    assert env.summary()["vehicles"] == run.summary["vehicles"]
+    assert env.summary()["team"] == run.summary["team"]

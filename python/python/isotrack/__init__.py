@@ -26,6 +26,7 @@ __all__ = [
     "plot",
     "report",
     "sweep",
+    "sweep_base",
     "__version__",
 ]
 
@@ -442,9 +443,12 @@ class Scenario:
         self._digests = {p: _sha256(p) for p in _data_files(native.to_toml())}
 
     @staticmethod
-    def _unpickle(text: str, digests: Dict[str, str]) -> "Scenario":
+    def _unpickle(
+        text: str, digests: Dict[str, str], origin: Optional[str] = None, folder: Optional[str] = None
+    ) -> "Scenario":
         """A pickled scenario, its data files checked against the digests taken when it was
-        made (read afresh, never from the cache)."""
+        made (read afresh, never from the cache); ``origin`` and ``folder`` (absolute: where a
+        relative path given to ``set`` is read, taken when its file was read) as it had them."""
         import os
 
         for p, want in digests.items():
@@ -455,7 +459,10 @@ class Scenario:
                     f"{p}: the scenario's data file changed since the scenario was made (SHA-256 "
                     f"{want[:16]}... then): unpickled, it would fly another field"
                 )
-        return Scenario.from_toml(text)
+        scenario = Scenario.from_toml(text)
+        if origin is None:  # pickled by an isotrack without the folder: as it was then
+            return scenario
+        return Scenario(scenario._native.relocated(origin, folder))
 
     @staticmethod
     def default() -> "Scenario":
@@ -464,7 +471,11 @@ class Scenario:
 
     @staticmethod
     def from_file(path: str) -> "Scenario":
-        """A scenario file (TOML); the files it names are relative to it. A path that does not
+        """A scenario file (TOML); the files it names are relative to it, and so is a relative
+        file path later given to :meth:`set` (``field.path``, ``field.paths``, as ``isotrack run
+        FILE --set`` reads it): the file's folder is taken as an absolute path when it is read,
+        so that a later ``os.chdir``, the file's removal, a copy or a pickle (a
+        ``multiprocessing`` worker) reads the same files. A path that does not
         exist is a ``FileNotFoundError``, a directory an ``IsADirectoryError``, a FIFO, device
         or socket an ``OSError`` (not opened), as for :func:`sweep` and :func:`benchmark`; one
         that is not a path a ``TypeError``."""
@@ -603,7 +614,10 @@ class Scenario:
         return self
 
     def __reduce__(self):
-        return (Scenario._unpickle, (self.to_toml(), dict(self._digests)))
+        # The folder travels with it (att30n-11: a spawn worker read a relative `set` path
+        # against its own working directory, another file).
+        native = self._native
+        return (Scenario._unpickle, (self.to_toml(), dict(self._digests), native.origin, native.folder))
 
     def __eq__(self, other: object) -> bool:
         return isinstance(other, Scenario) and self.to_toml() == other.to_toml()
@@ -761,8 +775,9 @@ def sweep(
     values (a table a dict, which :meth:`Scenario.set` takes back and merges key by key, as
     ``--set`` does). The same cells as ``isotrack sweep`` writes, exactly: setting a row's swept
     keys (``sim.seed`` included; a key whose values are arrays comes back split into ``KEY[0]``,
-    ``KEY[1]``, ... columns: set ``KEY`` to the list of them) on the sweep's scenario and
-    running it gives the row's metrics again. Every column's dtype follows from the sweep file alone, whatever its runs give:
+    ``KEY[1]``, ... columns: set ``KEY`` to the list of them) on :func:`sweep_base` of the same
+    sweep and running it gives the row's metrics again (a relative ``field.path`` cell is
+    relative to the sweep file's folder, as ``sweep_base`` reads it). Every column's dtype follows from the sweep file alone, whatever its runs give:
     ``outcome`` and ``outcome_detail`` are str (``""`` where a run has no detail), a swept key
     of booleans is bool, of other text str. ``progress=True`` shows the progress on
     ``sys.stderr``: one line redrawn in place on a terminal, else (Jupyter, a log file) a line
@@ -788,7 +803,10 @@ def sweep(
 
     A sweep file's ``scenario =`` that is missing is a ``FileNotFoundError``, a directory an
     ``IsADirectoryError``, a FIFO, a device or a socket an ``OSError`` (never opened), as the
-    same path gets as this function's own argument.
+    same path gets as this function's own argument. A data file a run would read
+    (``field.path`` or ``field.paths`` of the scenario, ``[base]`` or ``[grid]``) that cannot be
+    read (missing, not a regular file, unreadable) is a ``FileNotFoundError`` before any run,
+    with the message ``isotrack sweep`` exits 66 with.
 
     ``threads``: an int >= 1 (default: all cores; capped at 8 per core). Arguments of the wrong
     type are a ``TypeError`` naming the argument."""
@@ -823,6 +841,19 @@ def sweep(
         raise RuntimeError(f"internal error in isotrack: {len(header)} columns but {len(kinds)} kinds")
     masked = ("samples", "order_preserved")
     return {col: _sweep_column(kinds[k], [r[k] for r in rows], masked=col in masked) for k, col in enumerate(header)}
+
+
+def sweep_base(path_or_toml_text: str) -> Scenario:
+    """The scenario every run of a sweep is made from: the sweep file's ``scenario`` with its
+    ``[base]`` keys set (a path or TOML text, as :func:`sweep` takes). Setting a row's swept
+    keys (``sim.seed`` included) on it and running it gives the row's metrics again, bit for
+    bit, the cells as :func:`sweep` returns them: a relative file path given to its ``set``
+    (a ``[grid] field.path`` or ``field.paths`` cell) is read against the sweep file's folder
+    (absolute, taken now), as the sweep reads it, not against the ``scenario`` file's. Its
+    errors are :func:`sweep`'s (a data file a run would read that cannot be read is a
+    ``FileNotFoundError``)."""
+    text, name = _sweep_text(path_or_toml_text)
+    return Scenario(_native.sweep_base_scenario(text, name))
 
 
 def benchmark(

@@ -75,6 +75,8 @@ def sweep(
     controller_factory: Optional[Callable[[Scenario], Controller]] = ...,
 ) -> Dict[str, npt.NDArray[Any]]: ...
 
+def sweep_base(path_or_toml_text: Union[str, os.PathLike[str]]) -> Scenario: ...
+
 def plot(
     runs: RunDirs,
     out: Optional[str] = ...,
