@@ -1096,6 +1096,11 @@ pub fn sweep_summary(
     let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<u64, Vec<f64>>> =
         Default::default();
     let mut skipped = 0;
+    // Which columns hold a number in some run, and a text value of the x and the metric
+    // columns (for the message when no run has both as numbers, nu-20).
+    let mut numeric = vec![false; headers.len()];
+    let mut x_text: Option<String> = None;
+    let mut y_text: Option<String> = None;
     for rec in rdr.records() {
         let rec = rec.map_err(|e| err(e.to_string()))?;
         let num = |i: usize| {
@@ -1103,6 +1108,20 @@ pub fn sweep_summary(
                 .and_then(|v| v.parse::<f64>().ok())
                 .filter(|v| v.is_finite())
         };
+        for (i, n) in numeric.iter_mut().enumerate() {
+            *n = *n || num(i).is_some();
+        }
+        let text = |i: usize| {
+            rec.get(i)
+                .filter(|v| !v.is_empty() && v.parse::<f64>().is_err())
+                .map(str::to_string)
+        };
+        if x_text.is_none() {
+            x_text = x_cols.iter().find_map(|&i| text(i));
+        }
+        if y_text.is_none() {
+            y_text = text(yi);
+        }
         let x = if x_cols.len() == 1 {
             num(x_cols[0])
         } else {
@@ -1127,7 +1146,35 @@ pub fn sweep_summary(
         }
     }
     if by.is_empty() {
-        return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
+        let x_is_text = x_text.is_some() && !x_cols.iter().any(|&i| numeric[i]);
+        let y_is_text = y_text.is_some() && !numeric[yi];
+        if !x_is_text && !y_is_text {
+            return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
+        }
+        let mut why = Vec::new();
+        if let (true, Some(v)) = (x_is_text, &x_text) {
+            why.push(format!(
+                "`{x_key}` is text (e.g. `{}`): --x must be a numeric key (a text key such as team.spacing or controller.kind goes to --group)",
+                isotrack_scenario::load::clip(v)
+            ));
+        }
+        if let (true, Some(v)) = (y_is_text, &y_text) {
+            why.push(format!(
+                "`{metric}` is not a number (e.g. `{}`): --metric must be a numeric column",
+                isotrack_scenario::load::clip(v)
+            ));
+        }
+        let numbers: Vec<&str> = headers
+            .iter()
+            .zip(&numeric)
+            .filter(|(_, n)| **n)
+            .map(|(h, _)| h)
+            .collect();
+        return Err(err(format!(
+            "no run has a number in both `{x_key}` and `{metric}`: {}; the columns holding numbers: {}",
+            why.join("; "),
+            numbers.join(", ")
+        )));
     }
     let lines = by
         .into_iter()
@@ -2024,5 +2071,44 @@ mod tests {
                 assert!((extreme - radius_m).abs() <= tol_m + dx, "{extreme}");
             }
         }
+    }
+
+    /// nu-20: `plot SWEEP --x team.spacing` (a text key) or `--metric order_preserved` (a
+    /// boolean) over rows that all have both said "no run has both": the message says --x must
+    /// be numeric (a text key goes to --group), which value was not a number, and which columns
+    /// hold numbers. An empty column keeps the old message.
+    #[test]
+    fn a_text_key_or_a_boolean_metric_is_named_as_not_a_number() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("results.csv");
+        std::fs::write(
+            &p,
+            "run_id,team.spacing,team.k_v,gap_cv,order_preserved,empty\n0,none,0.05,0.1,true,\n1,range_balance,0.1,0.02,true,\n",
+        )
+        .unwrap();
+        let e = |x: &str, m: &str| match sweep_summary(&p, x, m, None) {
+            Err(PlotError::Data(m)) => m,
+            other => panic!("{other:?}"),
+        };
+        let m = e("team.spacing", "gap_cv");
+        assert!(m.contains("`team.spacing` is text (e.g. `none`): --x must be a numeric key (a text key such as team.spacing or controller.kind goes to --group)"), "{m}");
+        assert!(
+            m.contains("the columns holding numbers: run_id, team.k_v, gap_cv"),
+            "{m}"
+        );
+        assert!(!m.contains("gap_cv` is not"), "{m}");
+        let m = e("team.k_v", "order_preserved");
+        assert!(m.contains("`order_preserved` is not a number (e.g. `true`): --metric must be a numeric column"), "{m}");
+        assert!(
+            m.contains("the columns holding numbers: run_id, team.k_v, gap_cv"),
+            "{m}"
+        );
+        assert!(!m.contains("--x must"), "{m}");
+        let m = e("team.k_v", "empty");
+        assert!(m.ends_with("no run has both `team.k_v` and `empty`"), "{m}");
+        // Numeric x and metric: the summary as before.
+        let (lines, skipped) = sweep_summary(&p, "team.k_v", "gap_cv", None).unwrap();
+        assert_eq!(skipped, 0);
+        assert_eq!(lines[0].1.len(), 2);
     }
 }

@@ -26,6 +26,22 @@ use std::path::{Path, PathBuf};
 /// The files of a run directory.
 pub const RUN_FILES: [&str; 3] = ["trace.csv", "summary.json", "scenario.toml"];
 
+/// The other files isotrack writes into a run directory: `plot`'s (and `run --plot`'s) figures
+/// in either format, `plot --animate`'s `animation.gif` and `fly`'s `mavlink.tlog`. A new run
+/// replacing the directory removes them with the old summary (nu-21: an earlier run's figures
+/// were left beside the new trace, read as this run's); files of any other name are the user's
+/// and are never touched.
+pub const RUN_OUTPUTS: [&str; 8] = [
+    "trajectory.png",
+    "trajectory.svg",
+    "timeseries.png",
+    "timeseries.svg",
+    "team.png",
+    "team.svg",
+    "animation.gif",
+    "mavlink.tlog",
+];
+
 /// The files a command reads for `scenario`: the scenario file (if any) and the data files its
 /// field names (`field.path`, `field.paths`: absolute once the scenario is built). An output
 /// that is one of them is refused (64), never written over.
@@ -139,6 +155,9 @@ pub struct RunDir {
     /// Whether [`RunDir::open`] created the directory (removed again by
     /// [`RunDir::release_unused`] when nothing was written).
     created: bool,
+    /// The command's own files besides [`RUN_FILES`] (`fly`'s `mavlink.tlog`), never removed
+    /// as an earlier run's output.
+    extra: Vec<String>,
 }
 
 /// `trace.csv` being streamed into a temporary file beside it ([`RunDir::trace`]).
@@ -210,6 +229,7 @@ impl RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
+            extra: extra.iter().map(|e| e.to_string()).collect(),
         })
     }
 
@@ -217,20 +237,42 @@ impl RunDir {
     /// released, and the directory removed again if [`RunDir::open`] created it and it is
     /// empty. An earlier run's files are left as they were.
     pub fn release_unused(self) {
-        let RunDir { dir, lock, created } = self;
+        let RunDir {
+            dir, lock, created, ..
+        } = self;
         drop(lock);
         if created {
             let _ = std::fs::remove_dir(&dir);
         }
     }
 
-    /// Removes the old `summary.json` (the directory's earlier run is being replaced).
+    /// Removes the old `summary.json` (the directory's earlier run is being replaced), then
+    /// the earlier run's other outputs ([`RUN_OUTPUTS`] but the command's own `extra`): a
+    /// regular file or a link of that name is removed (a link itself, never what it points
+    /// to); anything else there (a directory the user made) is left.
     fn remove_old_summary(&self) -> Result<(), Failure> {
         let summary = self.path("summary.json");
         match std::fs::remove_file(&summary) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(cant(&summary, e)),
-            _ => Ok(()),
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(&summary, e)),
+            _ => {}
         }
+        for name in RUN_OUTPUTS {
+            if self.extra.iter().any(|e| e == name) {
+                continue;
+            }
+            let p = self.path(name);
+            let Ok(m) = std::fs::symlink_metadata(&p) else {
+                continue;
+            };
+            if m.is_dir() {
+                continue;
+            }
+            match std::fs::remove_file(&p) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(&p, e)),
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     /// The directory.
@@ -452,5 +494,59 @@ mod tests {
             std::fs::read_to_string(d.path().join("scenario.toml")).unwrap(),
             "x = 1\n"
         );
+    }
+
+    /// nu-21: a new run over an earlier run's directory removes that run's figures
+    /// (`trajectory`, `timeseries`, `team` in PNG and SVG, `animation.gif`) and `fly`'s
+    /// `mavlink.tlog`, keeps every file of another name, and a command's own extra file
+    /// (`fly`'s tlog) is not removed.
+    #[test]
+    fn a_new_run_removes_the_earlier_runs_figures_and_nothing_else() {
+        let d = tempfile::tempdir().unwrap();
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let summary = Summary::of_run(
+            &scenario,
+            None,
+            &scenario.run(&mut isotrack_sim::NoTrace),
+            &[],
+        );
+        let kept = ["notes.txt", "team.jpg", "my.png", "trajectory.png.bak"];
+        let old = [
+            "trajectory.png",
+            "trajectory.svg",
+            "timeseries.png",
+            "timeseries.svg",
+            "team.png",
+            "team.svg",
+            "animation.gif",
+            "mavlink.tlog",
+        ];
+        for name in kept.iter().chain(old.iter()) {
+            std::fs::write(d.path().join(name), b"old").unwrap();
+        }
+        let out = RunDir::open(d.path(), &[], &[], None).unwrap();
+        let trace = out.trace(false).unwrap();
+        out.finish(trace, "x = 1\n", &summary).unwrap();
+        for name in old {
+            assert!(!d.path().join(name).exists(), "{name} left");
+        }
+        for name in kept {
+            assert_eq!(
+                std::fs::read(d.path().join(name)).unwrap(),
+                b"old",
+                "{name}"
+            );
+        }
+        // A command's own extra file stays (fly writes its tlog before the first trace row).
+        std::fs::write(d.path().join("mavlink.tlog"), b"new").unwrap();
+        std::fs::write(d.path().join("team.png"), b"old").unwrap();
+        let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], None).unwrap();
+        let trace = out.live_trace(false).unwrap();
+        out.finish(trace, "x = 1\n", &summary).unwrap();
+        assert_eq!(
+            std::fs::read(d.path().join("mavlink.tlog")).unwrap(),
+            b"new"
+        );
+        assert!(!d.path().join("team.png").exists());
     }
 }
