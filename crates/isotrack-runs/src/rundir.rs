@@ -158,6 +158,10 @@ pub struct RunDir {
     /// The command's own files besides [`RUN_FILES`] (`fly`'s `mavlink.tlog`), never removed
     /// as an earlier run's output.
     extra: Vec<String>,
+    /// Whether the directory held an earlier run when opened (one of [`RUN_FILES`] there): only
+    /// then are [`RUN_OUTPUTS`] an earlier run's, removed when it is replaced; in a directory
+    /// that held no run, a `trajectory.png` is the user's and stays.
+    earlier_run: bool,
 }
 
 /// `trace.csv` being streamed into a temporary file beside it ([`RunDir::trace`]).
@@ -225,11 +229,15 @@ impl RunDir {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
         }
+        let earlier_run = RUN_FILES
+            .iter()
+            .any(|f| std::fs::symlink_metadata(dir.join(f)).is_ok());
         Ok(RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
             extra: extra.iter().map(|e| e.to_string()).collect(),
+            earlier_run,
         })
     }
 
@@ -246,8 +254,9 @@ impl RunDir {
         }
     }
 
-    /// Removes the old `summary.json` (the directory's earlier run is being replaced), then
-    /// the earlier run's other outputs ([`RUN_OUTPUTS`] but the command's own `extra`): a
+    /// Removes the old `summary.json` (the directory's earlier run is being replaced), then,
+    /// if the directory held an earlier run when opened, that run's other outputs
+    /// ([`RUN_OUTPUTS`] but the command's own `extra`): a
     /// regular file or a link of that name is removed (a link itself, never what it points
     /// to); anything else there (a directory the user made) is left.
     fn remove_old_summary(&self) -> Result<(), Failure> {
@@ -257,7 +266,7 @@ impl RunDir {
             _ => {}
         }
         for name in RUN_OUTPUTS {
-            if self.extra.iter().any(|e| e == name) {
+            if !self.earlier_run || self.extra.iter().any(|e| e == name) {
                 continue;
             }
             let p = self.path(name);
@@ -499,7 +508,8 @@ mod tests {
     /// nu-21: a new run over an earlier run's directory removes that run's figures
     /// (`trajectory`, `timeseries`, `team` in PNG and SVG, `animation.gif`) and `fly`'s
     /// `mavlink.tlog`, keeps every file of another name, and a command's own extra file
-    /// (`fly`'s tlog) is not removed.
+    /// (`fly`'s tlog) is not removed; in a directory that held no run, nothing but the run's
+    /// own files is touched.
     #[test]
     fn a_new_run_removes_the_earlier_runs_figures_and_nothing_else() {
         let d = tempfile::tempdir().unwrap();
@@ -521,6 +531,18 @@ mod tests {
             "animation.gif",
             "mavlink.tlog",
         ];
+        // A directory that held no run: a file named as a figure is the user's, kept.
+        let user = tempfile::tempdir().unwrap();
+        std::fs::write(user.path().join("trajectory.png"), b"mine").unwrap();
+        let out = RunDir::open(user.path(), &[], &[], None).unwrap();
+        let trace = out.trace(false).unwrap();
+        out.finish(trace, "x = 1\n", &summary).unwrap();
+        assert_eq!(
+            std::fs::read(user.path().join("trajectory.png")).unwrap(),
+            b"mine"
+        );
+        // An earlier run (its summary.json there): its figures go.
+        std::fs::write(d.path().join("summary.json"), b"{}").unwrap();
         for name in kept.iter().chain(old.iter()) {
             std::fs::write(d.path().join(name), b"old").unwrap();
         }
