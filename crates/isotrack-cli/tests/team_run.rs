@@ -543,3 +543,100 @@ fn arc_reference_runs_on_a_circle_inside_the_domain() {
     assert_fails(&o, 65, &["arc_reference", "needs the isoline's arc length"]);
     assert!(!out.join("summary.json").exists());
 }
+
+/// nu-16: a team without metrics (team-circular-4's radial field peaks at 20: no isoline at
+/// level 25) prints the reason summary.json's `team.metrics_note` gives, word for word (it
+/// printed "the isoline's arc length is not known for this field", another reason).
+#[test]
+fn the_printed_team_line_gives_the_summarys_metrics_note() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--set",
+        "controller.level=25.0",
+        "--set",
+        "sim.duration_s=30",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let note = json(&out.join("summary.json"))["team"]["metrics_note"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(note.contains("no isoline at controller.level"), "{note}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("team "))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(line.ends_with(&format!("({note})")), "{line}");
+    assert!(!stdout.contains("arc length is not known"), "{stdout}");
+}
+
+/// nu-14: with the starts given by the team (an arc spread, `team.starts`), the unused
+/// default `[initial]` pose (10, 0) m outside `field.domain_m` = [-8, 8]^2 does not refuse the
+/// run; where `[initial]` does place a vehicle (a line spread without its own position) it is
+/// still refused, and every value error is listed (the spread's missing `step_m` too).
+#[test]
+fn an_unused_initial_pose_outside_the_domain_is_not_checked() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("run");
+    let base = [
+        "run",
+        TEAM,
+        "--set",
+        "field.domain_m=[-8.0, 8.0, -8.0, 8.0]",
+        "--set",
+        "sim.duration_s=1",
+        "--quiet",
+    ];
+    // The arc spread (radius 6.93 m: every start inside the domain).
+    let mut a: Vec<&str> = base.to_vec();
+    a.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    let o = isotrack(&a);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let s = json(&out.join("summary.json"));
+    assert_eq!(s["vehicles"].as_array().unwrap().len(), 4);
+    // The spread line replaced by `with`.
+    let file = |name: &str, with: &str| {
+        let text = std::fs::read_to_string(TEAM)
+            .unwrap()
+            .lines()
+            .map(|l| if l.starts_with("spread") { with } else { l })
+            .collect::<Vec<_>>()
+            .join("\n");
+        write(d.path(), name, &text)
+    };
+    let run = |f: &str| {
+        isotrack(&[
+            "run",
+            f,
+            "--set",
+            "field.domain_m=[-8.0, 8.0, -8.0, 8.0]",
+            "--set",
+            "sim.duration_s=1",
+            "--quiet",
+        ])
+    };
+    let f = file(
+        "starts.toml",
+        "starts = [{x_m = 6.0, y_m = 0.0, heading_rad = 0.0}, {x_m = 0.0, y_m = -6.0, heading_rad = 0.0}, {x_m = -6.0, y_m = 0.0, heading_rad = 0.0}, {x_m = 0.0, y_m = 6.0, heading_rad = 0.0}]",
+    );
+    let o = run(&f);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    // A line spread with its own position inside the domain.
+    let f = file(
+        "line.toml",
+        "spread = { along = \"line\", x_m = 0.0, y_m = 0.0, step_m = 1.0 }",
+    );
+    let o = run(&f);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    // A line spread without x_m/y_m starts at [initial]: refused naming initial.x_m, and the
+    // spread's own error (no step_m) listed with it.
+    let f = file("bad.toml", "spread = { along = \"line\" }");
+    let o = run(&f);
+    assert_fails(&o, 65, &["initial.x_m", "team.spread.step_m"]);
+}

@@ -67,8 +67,9 @@ pub fn human_summary(name: &str, s: &Scenario, r: &RunResult) -> String {
     out
 }
 
-/// A team's lines after [`human_summary`] (vehicle 0's): the team metrics.
-pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
+/// A team's lines after [`human_summary`] (vehicle 0's): the team metrics, or, without them,
+/// `summary.json`'s `team.metrics_note` for `scenario` (one source for the reason, nu-16).
+pub fn team_summary(scenario: &Scenario, t: &isotrack_sim::TeamResult) -> String {
     let mut out = format!("team        {} vehicles", t.runs.len());
     match &t.team {
         Some(m) => {
@@ -89,9 +90,7 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
                 fmt_opt_unit(m.min_separation_m, "m"),
             );
         }
-        None => {
-            out += "  (no team metrics: the isoline's arc length is not known for this field)\n"
-        }
+        None => out += &format!("  ({})\n", scenario.team_metrics_note()),
     }
     out
 }
@@ -100,19 +99,13 @@ pub fn team_summary(t: &isotrack_sim::TeamResult) -> String {
 /// does not drift, its circle inside its `domain_m` if it has one, for now): refused before
 /// anything is written (exit 65).
 pub fn refuse_team_without_isoline(scenario: &Scenario) -> Result<(), Failure> {
-    let arc_law = scenario.spec().team.as_ref().is_some_and(|t| {
-        matches!(
-            t.law,
-            isotrack_sim::team::spacing::SpacingLaw::ArcReference { .. }
-        )
-    });
-    if arc_law && scenario.team_arc().is_none() {
-        return Err(Failure {
+    match scenario.team_refusal() {
+        Some(why) => Err(Failure {
             code: exit::DATAERR,
-            message: "team.spacing = \"arc_reference\" needs the isoline's arc length, known for a radial field that does not drift (its circle inside the field's domain_m) only, for now".into(),
-        });
+            message: why.into(),
+        }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Refuses a scenario with `[team]` in a command that runs one vehicle (`compare`, `sitl`,
@@ -190,7 +183,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &result));
             if let Some(t) = &team {
-                out!("{}", team_summary(t));
+                out!("{}", team_summary(&scenario, t));
             }
             outln!(
                 "wrote       {}, {}, {}",
@@ -215,7 +208,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         warn_unfinished(Some(&team));
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &team.runs[0]));
-            out!("{}", team_summary(&team));
+            out!("{}", team_summary(&scenario, &team));
         }
         team.runs[0].clone()
     } else {
@@ -383,13 +376,17 @@ mod tests {
             moving_isoline: None,
             open_isoline: None,
         };
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
         let line = |ideal: f64| {
-            team_summary(&isotrack_sim::TeamResult {
-                runs: Vec::new(),
-                team: Some(summary(ideal)),
-                ring: Vec::new(),
-                warnings: Vec::new(),
-            })
+            team_summary(
+                &scenario,
+                &isotrack_sim::TeamResult {
+                    runs: Vec::new(),
+                    team: Some(summary(ideal)),
+                    ring: Vec::new(),
+                    warnings: Vec::new(),
+                },
+            )
         };
         let nan = line(f64::NAN);
         assert_eq!(
