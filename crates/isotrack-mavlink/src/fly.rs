@@ -3372,10 +3372,10 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         if self.seq_watch.out_of_sequence == out_of_sequence {
             return false;
         }
-        // Old news unless the newest frame's number is past the last heartbeat applied.
-        self.seq_watch
+        !self
+            .seq_watch
             .last_number
-            .is_none_or(|n| self.beat_number.is_some_and(|b| n <= b))
+            .is_some_and(|n| self.beat_number.is_none_or(|b| n > b))
     }
 
     /// The vehicle's mode and arming as last confirmed: before a pilot's word still awaiting
