@@ -213,9 +213,7 @@ fn ctrl_c_in_control_commands_hold_and_exits_75_once_confirmed() {
     let (o, seen) = interrupted_flight(
         &["--take-control", "--arm"],
         true,
-        // 2 s in control (10 Hz setpoints): the control of the vehicle it armed is confirmed
-        // (att33g-1: before, a failsafe commands the forced disarm, not HOLD).
-        |s| s.setpoints_in_control >= 20,
+        |s| s.setpoints_in_control >= 5,
         None,
     );
     let err = stderr(&o);
@@ -232,7 +230,7 @@ fn a_second_ctrl_c_in_the_failsafe_ends_the_retries_unconfirmed_exit_69() {
     let (o, seen) = interrupted_flight(
         &["--take-control", "--arm"],
         false,
-        |s| s.setpoints_in_control >= 20,
+        |s| s.setpoints_in_control >= 5,
         Some(|s| way_outs(s) >= 1),
     );
     let err = stderr(&o);

@@ -668,18 +668,6 @@ struct Flight<'a, S: ?Sized> {
     /// The source address of the vehicle's frames (UDP), and why a second one makes it two.
     vehicle_addr: Option<std::net::SocketAddr>,
     same_ids: Option<String>,
-    /// Two senders with the vehicle's ids by their frame numbers alone
-    /// ([`crate::same_ids::OUT_OF_SEQUENCE_LIMIT`] out of sequence; no heartbeat contradicting,
-    /// no position jump, no second address or type: those are `same_ids`): while a pilot's word
-    /// awaits confirmation it decides (att33g-2: a burst of reordering is no reason to command
-    /// anything against it), else the flight ends `vehicle_lost` at once.
-    seq_two_senders: Option<String>,
-    /// `seq_two_senders` came while a pilot's word awaited confirmation (logged once).
-    seq_two_senders_deferred: bool,
-    /// The unwrapped frame number ([`crate::same_ids::SequenceWatch::last_number`]) of the
-    /// vehicle's last heartbeat applied: a heartbeat behind the newest frame but ahead of it is
-    /// newer news all the same (one delivered a frame late), applied (S11, att33g-2).
-    beat_number: Option<u64>,
     /// Why the raw MAVLink log stopped short (logged once, when it happened).
     log_incomplete: Option<String>,
     /// The sequence numbers of the vehicle's frames, watched for a second sender with its ids.
@@ -713,20 +701,6 @@ struct Flight<'a, S: ?Sized> {
     active: bool,
     /// The vehicle has been armed and in OFFBOARD (the companion had control).
     in_control: bool,
-    /// When the companion got control (the heartbeat that showed the vehicle armed and in
-    /// OFFBOARD was handled).
-    control_at: Option<Instant>,
-    /// Control confirmed (att33g-1): a heartbeat of the ids showed the vehicle armed and in
-    /// OFFBOARD at least [`Flight::confirm_span`] after control was taken, none contradicting
-    /// (no pilot's word seen since): the heartbeat that gave control may have been a second
-    /// vehicle's with the ids, and until confirmed a vehicle the companion armed on the ground
-    /// is still owed the forced disarm ([`Flight::disarm_owed`]).
-    control_confirmed: bool,
-    /// At control: the vehicle's newest clock time (unwrapped, ms) and its frames out of
-    /// sequence so far. Its own clock advancing by [`Flight::confirm_span`] with no frame out
-    /// of sequence since (no second sender's frames interleaving) and no pilot's word also
-    /// confirms control: a lockstep simulator's flight runs faster than the wall clock.
-    control_clock: Option<(u64, u64)>,
     arm_sent: bool,
     /// Disarmed when first heard and armed on the companion's command: still on the ground.
     armed_by_us: bool,
@@ -1045,9 +1019,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             late_vehicle_logged: false,
             vehicle_addr: None,
             same_ids: None,
-            seq_two_senders: None,
-            seq_two_senders_deferred: false,
-            beat_number: None,
             log_incomplete: None,
             seq_watch: Default::default(),
             pos_watch: Default::default(),
@@ -1061,9 +1032,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             longest_beat_gap_s: 0.0,
             active: false,
             in_control: false,
-            control_at: None,
-            control_confirmed: false,
-            control_clock: None,
             arm_sent: false,
             armed_by_us: false,
             offboard_sent: false,
@@ -1207,27 +1175,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if let Some(why) = self.same_ids.take() {
             // Before control the companion goes no further (nothing commanded, exit 79, unless
             // a command already went out: the way out of it); in control, the way out.
-            self.event(format!("vehicle_lost: {why}"));
-            return Some(FlyEnd::VehicleLost);
-        }
-        if self.seq_two_senders.is_some() && self.leave_seen.is_some() {
-            // The frame numbers alone while a pilot's word awaits confirmation (att33g-2: a
-            // burst of reordering during the pilot's switch): nothing is commanded against it
-            // meanwhile; its confirmation ends the flight as the pilot's take-over, a heartbeat
-            // contradicting it (or a position jump, a second address or type) as `vehicle_lost`
-            // with the way out, the link's loss as a failsafe commanding nothing.
-            if !self.seq_two_senders_deferred {
-                self.seq_two_senders_deferred = true;
-                let what = self
-                    .leave_seen
-                    .as_ref()
-                    .map_or(String::new(), |l| l.what.clone());
-                let why = self.seq_two_senders.clone().unwrap_or_default();
-                self.event(format!(
-                    "{why}; but the vehicle's heartbeats show it {what}, not yet confirmed as its pilot's: nothing is commanded against it, the heartbeats decide (pilot_took_over once confirmed, vehicle_lost if one contradicts it)"
-                ));
-            }
-        } else if let Some(why) = self.seq_two_senders.take() {
             self.event(format!("vehicle_lost: {why}"));
             return Some(FlyEnd::VehicleLost);
         }
@@ -1777,22 +1724,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     ));
                 }
             }
-            if !self.in_control {
-                self.control_at = Some(Instant::now());
-                self.control_clock = self
-                    .vehicle_ms
-                    .map(|(ms, _)| (ms, self.seq_watch.out_of_sequence));
-            }
-            if !self.control_confirmed && self.leave_seen.is_none() {
-                let span_ms = self.confirm_span().as_millis() as u64;
-                if let (Some((ms0, oos0)), Some((ms, _))) = (self.control_clock, self.vehicle_ms) {
-                    if self.seq_watch.out_of_sequence == oos0 && ms >= ms0 + span_ms {
-                        // The vehicle's own clock (a lockstep simulator's runs fast), one
-                        // sender's frames in sequence throughout: control confirmed (att33g-1).
-                        self.control_confirmed = true;
-                    }
-                }
-            }
             self.in_control = true;
             // --max-duration-s counts from here (the companion's clock).
             self.ans.first_wall.get_or_insert_with(Instant::now);
@@ -2263,11 +2194,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.vehicle_address(r.from);
             self.vehicle_sender(r);
         }
-        // A frame of the vehicle's ids behind the newest (a late one or another sender's) and
-        // not ahead of the last heartbeat applied, or a copy of one already handled (delivered
-        // again, maybe late: att33f-2).
-        let late =
-            from == target && self.beat_is_old_news((out_of_sequence_before, duplicates_before));
+        // A frame of the vehicle's ids behind the newest (a late one or another sender's), or a
+        // copy of one already handled (delivered again, maybe late: att33f-2).
+        let late = self.seq_watch.out_of_sequence > out_of_sequence_before
+            || self.seq_watch.duplicates > duplicates_before;
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
@@ -2296,7 +2226,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             MavMessage::HEARTBEAT(_) if late => {}
             MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
-                self.beat_number = self.seq_watch.last_number.or(self.beat_number);
                 let was_armed = self.armed;
                 let was = (self.custom_mode, self.armed);
                 self.vehicle_heartbeat(h);
@@ -2429,10 +2358,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// ([`crate::same_ids`]): its sequence numbers interleaving with the vehicle's, a heartbeat
     /// of another type or autopilot than the vehicle's first.
     fn vehicle_sender(&mut self, r: &Received) {
-        // Every frame is watched (a heartbeat behind the newest is older news, or a second
-        // sender's), also once two senders are seen by their numbers (att33g-2: a pilot's
-        // word pending decides).
-        let two = self.seq_watch.frame(r.header.sequence, &r.msg);
         if self.same_ids.is_some() {
             return;
         }
@@ -2441,8 +2366,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "two vehicles with the ids (system {}, component {})",
             t.0, t.1
         );
-        if two {
-            self.seq_two_senders.get_or_insert(format!(
+        if self.seq_watch.frame(r.header.sequence, &r.msg) {
+            self.same_ids = Some(format!(
                 "{ids}: {} of their last {} frames out of sequence (MAVLink's frame numbers of two senders interleaving; a link that reorders that many is not flown either): their measurements and positions would mix, which to fly is ambiguous",
                 crate::same_ids::OUT_OF_SEQUENCE_LIMIT,
                 crate::same_ids::SEQUENCE_WINDOW_FRAMES
@@ -2776,19 +2701,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let shows_control = !self.shows_pilots_word();
         let now = self.seq_watch.out_of_sequence;
         let span = self.confirm_span();
-        let offboard = self
-            .custom_mode
-            .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
-        if self.in_control
-            && !self.control_confirmed
-            && self.leave_seen.is_none()
-            && self.armed
-            && offboard
-            && self.control_at.is_some_and(|at| at.elapsed() >= span)
-        {
-            // Shown for the span, none contradicting: control confirmed (att33g-1).
-            self.control_confirmed = true;
-        }
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
@@ -3036,13 +2948,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// a vehicle it armed; `None` when nothing was commanded.
     fn two_vehicles_way_out(&self) -> Option<WayOut> {
         let mode = self.opts.failsafe.mode();
-        if self.disarm_owed() {
-            // Armed by the companion on the ground and never flown under a confirmed control
-            // (att33g-1): disarmed, whatever mode it was switched to (ver33c-6), unless
-            // confirmed disarmed (att33f-6).
-            Some(WayOut::Disarm)
-        } else if self.in_control {
+        if self.in_control {
             Some(WayOut::Mode(mode))
+        } else if self.disarm_owed() {
+            // Armed by the companion on the ground and never flown: disarmed, whatever mode
+            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6).
+            Some(WayOut::Disarm)
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
         } else {
@@ -3069,15 +2980,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let mode = self.opts.failsafe.mode();
         let stopping = end.is_failsafe() || end == FlyEnd::ControlRefused;
-        if stopping && self.disarm_owed() {
+        if end.is_failsafe() && (self.in_control || self.target.is_none()) {
+            Some(WayOut::Mode(mode))
+        } else if stopping && self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
             // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6);
-            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing,
-            // nor does control granted on a heartbeat not confirmed (att33g-1: a second
-            // vehicle's armed-OFFBOARD one).
+            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing.
             Some(WayOut::Disarm)
-        } else if end.is_failsafe() && (self.in_control || self.target.is_none()) {
-            Some(WayOut::Mode(mode))
         } else if end == FlyEnd::ControlRefused
             && self
                 .offboard_accepted_at
@@ -3131,7 +3040,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.firmware.name_of(m),
                 self.firmware.name_of(FlyMode::Offboard)
             ),
-            WayOut::Disarm if self.in_control => "disarm commanded (armed by the companion, on the ground; its control not yet confirmed by the vehicle's heartbeats: the one that showed it may have been a second vehicle's)".into(),
             WayOut::Disarm => "disarm commanded (armed by the companion, on the ground)".into(),
         };
         if self.target.is_none() {
@@ -3284,14 +3192,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 }
                 let before_frame = (self.seq_watch.out_of_sequence, self.seq_watch.duplicates);
                 self.seq_watch.frame(r.header.sequence, &r.msg);
-                let late = self.beat_is_old_news(before_frame);
+                let late =
+                    (self.seq_watch.out_of_sequence, self.seq_watch.duplicates) != before_frame;
                 match &r.msg {
                     // A late heartbeat or a second sender's: not the vehicle's now (att33e-2).
                     MavMessage::HEARTBEAT(_) if late => continue,
-                    MavMessage::HEARTBEAT(_) => {
-                        self.last_heartbeat = Instant::now();
-                        self.beat_number = self.seq_watch.last_number.or(self.beat_number);
-                    }
+                    MavMessage::HEARTBEAT(_) => self.last_heartbeat = Instant::now(),
                     MavMessage::COMMAND_ACK(a)
                         if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
                     {
@@ -3356,28 +3262,6 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         None
     }
 
-    /// Whether the vehicle's frame just watched ([`crate::same_ids::SequenceWatch::frame`];
-    /// `before`: its out-of-sequence and duplicate counts before it), if a heartbeat, is older
-    /// news, never applied: a copy of a frame already handled (att33f-2), or a frame behind
-    /// the newest (a late one, or a second sender's) that is not ahead of the last heartbeat
-    /// applied (att33e-2: the OFFBOARD heartbeat sent before a pilot's MANUAL one and delivered
-    /// after it). A heartbeat delivered one frame late, after a position sent after it, is
-    /// still newer than the heartbeat before it: applied (S11: a link swapping a frame every
-    /// 0.5 s made every heartbeat late, and `link_lost` came with one arriving every second).
-    fn beat_is_old_news(&self, before: (u64, u64)) -> bool {
-        let (out_of_sequence, duplicates) = before;
-        if self.seq_watch.duplicates > duplicates {
-            return true;
-        }
-        if self.seq_watch.out_of_sequence == out_of_sequence {
-            return false;
-        }
-        !self
-            .seq_watch
-            .last_number
-            .is_some_and(|n| self.beat_number.is_none_or(|b| n > b))
-    }
-
     /// The vehicle's mode and arming as last confirmed: before a pilot's word still awaiting
     /// confirmation ([`LeaveSeen`]: it may be a second vehicle's), else as its heartbeats show.
     fn confirmed_state(&self) -> (Option<u32>, bool) {
@@ -3388,12 +3272,11 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
     }
 
     /// Whether the forced disarm is owed on the way out: the companion armed the vehicle on
-    /// the ground and no confirmed heartbeat has shown it in control ([`Flight::control_confirmed`]:
-    /// att33g-1, control granted on a heartbeat that may have been a second vehicle's), and no
-    /// confirmed heartbeat shows it disarmed (ver33c-6; att33f-6: a second vehicle's disarmed
-    /// heartbeat, unconfirmed, is no reason to skip it).
+    /// the ground and never had it in control, and no confirmed heartbeat shows it disarmed
+    /// (ver33c-6; att33f-6: a second vehicle's disarmed heartbeat, unconfirmed, is no reason
+    /// to skip it).
     fn disarm_owed(&self) -> bool {
-        self.armed_by_us && !self.control_confirmed && (self.armed || self.confirmed_state().1)
+        self.armed_by_us && !self.in_control && (self.armed || self.confirmed_state().1)
     }
 
     /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:

@@ -61,17 +61,6 @@ pub struct SequenceWatch {
     window: Window,
     /// Out-of-sequence frames in all.
     pub out_of_sequence: u64,
-    /// The last frame's number unwrapped: counted on by each step forward (1 to 128), back by
-    /// each step behind (129 to 255 is 256 minus that many back), from 256 at the first frame,
-    /// so that one sender's frames keep their order past the counter's wrap however many
-    /// frames come between two of them.
-    number: u64,
-    /// The unwrapped number ([`SequenceWatch::number`]) of the frame last given to
-    /// [`SequenceWatch::frame`]; `None` for a copy, or a frame with the last one's number and
-    /// other content (their order unknown). A frame behind the newest but ahead of an earlier
-    /// one (a heartbeat delivered one frame late, after a position sent after it) is newer
-    /// than that one (att33g's S11).
-    pub last_number: Option<u64>,
 }
 
 impl SequenceWatch {
@@ -91,34 +80,18 @@ impl SequenceWatch {
             .is_some_and(|(last, _)| (1..=128).contains(&seq.wrapping_sub(*last)));
         let copy = !ahead && self.by_number[seq as usize].as_ref() == Some(msg);
         let behind = match &self.last {
-            None => {
-                self.number = 256;
-                self.last_number = Some(self.number);
-                false
-            }
+            None => false,
             Some((last, _)) => match seq.wrapping_sub(*last) {
                 // The same number, or a number behind: a duplicate if the same frame as the
                 // last with that number, else another sender's (or a late frame).
                 _ if copy => {
                     self.duplicates += 1;
-                    self.last_number = None;
                     return false;
                 }
-                0 => {
-                    self.last_number = None;
-                    true
-                }
+                0 => true,
                 // Forward: the next frame, or some lost between.
-                d @ 1..=128 => {
-                    self.number += d as u64;
-                    self.last_number = Some(self.number);
-                    false
-                }
-                d => {
-                    self.number = self.number.saturating_sub(256 - d as u64);
-                    self.last_number = Some(self.number);
-                    true
-                }
+                1..=128 => false,
+                _ => true,
             },
         };
         self.by_number[seq as usize] = Some(msg.clone());
@@ -303,35 +276,6 @@ mod tests {
         // The counter's wrap 255 -> 0 is a step forward.
         let wrap: Vec<(u8, u32)> = (250..270u32).map(|k| (k as u8, k)).collect();
         assert_eq!(first_alarm(&wrap), None);
-    }
-
-    /// The unwrapped numbers keep one sender's order past the counter's wrap, with more than
-    /// 128 frames between two (loss or not), and a frame one behind the newest is still ahead
-    /// of one sent before it (S11: a heartbeat delivered one frame late).
-    #[test]
-    fn unwrapped_numbers_keep_one_senders_order() {
-        let mut w = SequenceWatch::default();
-        // Frames 0..600 (past two wraps), every third lost: numbers step by 1 or 2.
-        let mut numbers = Vec::new();
-        for k in (0..600u32).filter(|k| k % 3 != 2) {
-            w.frame(k as u8, &msg(k));
-            numbers.push((k, w.last_number.unwrap()));
-        }
-        for pair in numbers.windows(2) {
-            let ((k0, n0), (k1, n1)) = (pair[0], pair[1]);
-            assert_eq!(n1 - n0, (k1 - k0) as u64, "{k0} -> {k1}");
-        }
-        // 600, 602, then 601 late (one behind the newest): 601 is ahead of 600.
-        w.frame(600u32 as u8, &msg(600));
-        let n600 = w.last_number.unwrap();
-        w.frame(602u32 as u8, &msg(602));
-        w.frame(601u32 as u8, &msg(601));
-        assert_eq!(w.last_number, Some(n600 + 1));
-        // A copy, and another content with the last one's number: no number.
-        w.frame(601u32 as u8, &msg(601));
-        assert_eq!(w.last_number, None);
-        w.frame(601u32 as u8, &msg(7));
-        assert_eq!(w.last_number, None);
     }
 
     /// Two senders interleaved, at their own rates and with any offset between their counters

@@ -529,11 +529,7 @@ fn a_refused_offboard_of_a_pilots_vehicle_commands_nothing() {
 /// is final in the failsafe too), logged, no more HOLD after the pilot's MANUAL.
 #[test]
 fn a_pilot_taking_over_during_the_failsafe_stops_the_retries() {
-    // A pilot's vehicle (armed in POSCTL): one the companion armed would get the forced disarm
-    // while its control is not confirmed (att33g-1).
     let script = Script {
-        armed: true,
-        start_mode: 3 << 16,
         hold_lies: true,
         pilot_manual_after_holds: Some(2),
         ..Script::default()
@@ -871,19 +867,14 @@ fn two_autopilots_are_refused_unless_one_is_picked() {
 }
 
 /// The modes a flight with `--take-control` asked for (DO_SET_MODE's param2 and param3, in
-/// order), and its report, against a stand-in of `firmware` a pilot armed (in PX4 MANUAL or
-/// ArduPilot's mode 0: a vehicle the companion arms itself is disarmed, not `failsafe`, while
-/// its control is not confirmed, att33g-1); the flight ends at `--max-duration-s` 0.5 (a
-/// failsafe: `failsafe` commanded).
+/// order), and its report, against a stand-in of `firmware`; the flight ends at
+/// `--max-duration-s` 0.5 (a failsafe: `failsafe` commanded).
 fn modes_of(
     firmware: (MavAutopilot, MavType),
     failsafe: FailsafeAction,
 ) -> (FlyReport, Vec<(f32, f32)>) {
-    let px4 = firmware.0 != MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA;
     let script = Script {
         firmware,
-        armed: true,
-        start_mode: if px4 { 1 << 16 } else { 0 },
         ..Script::default()
     };
     let (r, got) = against(script, |o| {
@@ -1278,14 +1269,10 @@ fn a_clean_take_over_logs_no_repeat() {
 
 /// In control, the autopilot reboots (att33b item 2: `sitl` killed and restarted): its
 /// heartbeat says disarmed in MANUAL, nobody having commanded it, and its clock begins again
-/// at 0 (4 s back). Not a pilot's take-over: `vehicle_lost`, a failsafe (HOLD commanded: a
-/// pilot's vehicle, armed in POSCTL; one the companion armed would get the forced disarm while
-/// its control is not confirmed, att33g-1).
+/// at 0 (4 s back). Not a pilot's take-over: `vehicle_lost`, a failsafe (HOLD commanded).
 #[test]
 fn an_autopilot_that_reboots_in_flight_is_lost_not_taken_over() {
     let script = Script {
-        armed: true,
-        start_mode: 3 << 16,
         disarm_at_beat: Some(60),
         clock_restarts: true,
         ..Script::default()
@@ -1525,12 +1512,7 @@ fn an_unaddressed_refusal_before_the_acceptance_is_not_the_last_word() {
             "{:?}",
             r.events
         );
-        // The vehicle the companion armed: the forced disarm while its control is not yet
-        // confirmed (att33g-1), HOLD once it is.
-        assert!(
-            got.iter().any(|g| is_hold(g) || (!armed && is_disarm(g))),
-            "{got:?}"
-        );
+        assert!(got.iter().any(is_hold), "{got:?}");
         assert!(
             r.way_out_commanded && r.failsafe_acknowledged,
             "{:?}",
