@@ -363,9 +363,9 @@ impl PyScenario {
 }
 
 /// The folder of the file at `path` as an absolute path, taken now
-/// ([`crate::sweep::absolute_dir`]: canonical when it can be).
+/// ([`absolute_dir`]: canonical when it can be).
 pub(crate) fn absolute_folder(path: &Path) -> PathBuf {
-    crate::sweep::absolute_dir(path.parent().unwrap_or(Path::new(".")))
+    absolute_dir(path.parent().unwrap_or(Path::new(".")))
 }
 
 /// The content of `summary.json`, as the CLI writes it ([`isotrack_runs::summary::Summary`],
@@ -427,4 +427,18 @@ pub(crate) fn trace_columns_by<'py, T>(
         d.set_item("roll_rad", PyArray1::from_vec(py, col(&|r| t(r).roll_rad)))?;
     }
     Ok(d)
+}
+
+/// The folder `dir` (a sweep file's or a scenario file's; empty: the working directory) as an
+/// absolute path, taken now: canonical when it can be (symbolic links and `..` resolved, as the
+/// kernel reads a path through it), else the working directory joined with it.
+pub(crate) fn absolute_dir(dir: &Path) -> PathBuf {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    std::fs::canonicalize(dir)
+        .or_else(|_| std::path::absolute(dir))
+        .unwrap_or_else(|_| dir.to_path_buf())
 }

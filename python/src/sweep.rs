@@ -4,7 +4,7 @@ use crate::errors::ScenarioErrorPy;
 use crate::guard;
 use crate::scenario::PyScenario;
 use pyo3::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 /// A sweep's answer to Python: `results.csv`'s header, each column's kind, and its cells.
@@ -90,20 +90,6 @@ pub(crate) fn prepare(
     Ok(prepared)
 }
 
-/// The folder `dir` (a sweep file's or a scenario file's; empty: the working directory) as an
-/// absolute path, taken now: canonical when it can be (symbolic links and `..` resolved, as the
-/// kernel reads a path through it), else the working directory joined with it.
-pub(crate) fn absolute_dir(dir: &Path) -> PathBuf {
-    let dir = if dir.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        dir
-    };
-    std::fs::canonicalize(dir)
-        .or_else(|_| std::path::absolute(dir))
-        .unwrap_or_else(|_| dir.to_path_buf())
-}
-
 /// The scenario every run of a sweep is derived from: the sweep file's `scenario` with its
 /// `[base]` keys set, a relative file path later given to its `set` read against the sweep
 /// file's folder, as the sweep reads its `[grid]` and `[base]` values (att30n-3: a row's
@@ -115,7 +101,7 @@ pub(crate) fn sweep_base_scenario(text: &str, name: &str) -> PyResult<PyScenario
     Ok(PyScenario {
         inner: prepared.base,
         origin: format!("<sweep {}>", prepared.label),
-        folder: Some(absolute_dir(&prepared.plan.dir)),
+        folder: Some(crate::scenario::absolute_dir(&prepared.plan.dir)),
     })
 }
 

@@ -339,7 +339,7 @@ pub fn sweep_cells_with(
     use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = crate::sweep::prepare(text, name)?;
     // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
-    let folder = crate::sweep::absolute_dir(&sweep.plan.dir);
+    let folder = crate::scenario::absolute_dir(&sweep.plan.dir);
     let team = sweep.base.spec().team.is_some();
     let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
