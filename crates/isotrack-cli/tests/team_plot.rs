@@ -598,6 +598,9 @@ fn a_row_after_its_vehicles_end_is_refused() {
     let mut summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     summary["vehicles"][1]["t_end_s"] = serde_json::json!(30.0);
+    // Ended there as vehicle 0 ended (not `completed` at 30 s of a 60 s run: att32g-7 refuses
+    // that first, naming scenario.toml's duration).
+    summary["vehicles"][1]["outcome"] = summary["vehicles"][0]["outcome"].clone();
     std::fs::write(&path, serde_json::to_string_pretty(&summary).unwrap()).unwrap();
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let line = trace
