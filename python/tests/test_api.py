@@ -205,7 +205,9 @@ def interrupt_in(seconds):
 
 def assert_interrupted_quickly(call):
     """`call()` raises KeyboardInterrupt well before it would have finished: a SIGINT at
-    0.3 s is answered within 2 s (the work takes far longer)."""
+    0.3 s is answered within 5 s (the work takes far longer; an unloaded 2-core machine
+    answers in well under 1 s, but with both cores busy the answer took up to 4 s: the bound
+    is a check that the interrupt is seen between steps, not a timing target)."""
     t0 = time.monotonic()
     timer = interrupt_in(0.3)
     try:
@@ -214,7 +216,7 @@ def assert_interrupted_quickly(call):
     finally:
         timer.cancel()
     elapsed = time.monotonic() - t0
-    assert elapsed < 2.0, elapsed
+    assert elapsed < 5.0, elapsed
 
 
 def test_ctrl_c_stops_a_long_run():
