@@ -787,3 +787,68 @@ fn a_team_sweeps_own_rows_are_within_the_teams_top_speed() {
         &["damaged row", "path_length_m = 23 m exceeds 0.75 m/s"],
     );
 }
+
+/// att32g-8: `sweep.json` records the engine that computed the rows (`isotrack VERSION engine
+/// N`); `--resume` and `merge` refuse a directory begun by another engine as "computed by
+/// another isotrack" (such rows were refused as "damaged"). A `sweep.json` without an engine (an
+/// older isotrack's) still resumes when its rows check, and is not claimed for this engine; a
+/// row refused there says the engine is not recorded.
+#[test]
+fn a_sweep_begun_by_another_isotrack_is_refused_as_such() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 1.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let out = d.path().join("out");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let read = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap()
+    };
+    let manifest = read();
+    let engine = manifest["engine"].as_str().unwrap().to_string();
+    assert!(
+        engine.starts_with("isotrack ") && engine.ends_with(" engine 1"),
+        "{engine}"
+    );
+    let resume = || isotrack(&["sweep", &sw, "--out", out.to_str().unwrap(), "--resume"]);
+    let merged = d.path().join("m");
+    let merge = || {
+        isotrack(&[
+            "merge",
+            out.to_str().unwrap(),
+            "--out",
+            merged.to_str().unwrap(),
+        ])
+    };
+    // Another engine.
+    let mut m = manifest.clone();
+    m["engine"] = serde_json::json!("isotrack 0.0.1 engine 0");
+    std::fs::write(out.join("sweep.json"), m.to_string()).unwrap();
+    let needles = [
+        "computed by another isotrack",
+        "isotrack 0.0.1 engine 0",
+        "new --out",
+    ];
+    assert_fails(&resume(), 65, &needles);
+    assert_fails(&merge(), 65, &needles);
+    // No engine (an older isotrack's sweep.json): whole rows resume; the manifest does not
+    // claim them.
+    let mut m = manifest.clone();
+    m.as_object_mut().unwrap().remove("engine");
+    std::fs::write(out.join("sweep.json"), m.to_string()).unwrap();
+    let o = resume();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(read().get("engine").is_none(), "{}", read());
+    // ... and a refused row there says the engine is unknown.
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let damaged = results.replacen(",5.0,", ",5.5,", 1);
+    assert_ne!(damaged, results);
+    std::fs::write(out.join("results.csv"), damaged).unwrap();
+    let needles = ["damaged row", "records no engine", "new --out"];
+    assert_fails(&resume(), 65, &needles);
+    assert_fails(&merge(), 65, &needles);
+}

@@ -7,6 +7,58 @@ use isotrack_scenario::ScenarioFile;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The revision of the engine that computes a sweep's rows, raised by hand whenever a change
+/// gives an existing run other numbers (att32f-7's circle in a domain moved the team metrics
+/// in the 6th digit): 1 is the first recorded. `sweep.json` records [`engine`]; `--resume` and
+/// `merge` refuse a directory begun by another engine (att32g-8: such rows were refused as
+/// "damaged", with advice that misdiagnosed them).
+pub const ENGINE_REVISION: u32 = 1;
+
+/// What `sweep.json`'s `engine` records: `isotrack VERSION engine REVISION`.
+pub fn engine() -> String {
+    format!(
+        "isotrack {} engine {ENGINE_REVISION}",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// Checks directory `dir`'s manifest's `engine` against this isotrack's ([`engine`]): another
+/// one is refused (65) as computed by another isotrack; returns whether one is recorded (a
+/// `sweep.json` from before the engine was recorded has none: its rows are checked as they
+/// are, and a refused row says the engine is unknown, [`unrecorded_engine_note`]).
+pub fn check_engine(dir: &Path, manifest: &serde_json::Value) -> Result<bool, Failure> {
+    match manifest.get("engine") {
+        None => Ok(false),
+        Some(e) if e.as_str() == Some(engine().as_str()) => Ok(true),
+        Some(e) => Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: computed by another isotrack ({} in its sweep.json; this is {}): its rows' numbers are that isotrack's, and a sweep's rows must all be one isotrack's; finish it with the isotrack that began it, or run it again into a new --out",
+                dir.display(),
+                isotrack_scenario::load::clip(&e.as_str().map_or_else(|| e.to_string(), str::to_string)),
+                engine()
+            ),
+        )),
+    }
+}
+
+/// A row refused in directory `dir`, whose `sweep.json` records no engine ([`check_engine`]):
+/// the refusal (65) says the row may be whole and computed by an older isotrack.
+pub fn unrecorded_engine_note(f: Failure, dir: &Path) -> Failure {
+    if f.code != exit::DATAERR || !f.message.contains("damaged row") {
+        return f;
+    }
+    Failure {
+        code: f.code,
+        message: format!(
+            "{}; note: {}/sweep.json records no engine (it was begun by an isotrack older than {}): a whole row computed by another isotrack, whose numbers differ, is refused so too; if so, run the sweep again into a new --out",
+            f.message,
+            dir.display(),
+            engine()
+        ),
+    }
+}
+
 /// The digest that names a sweep: SHA-256 of the sweep file's bytes, of its base scenario's own
 /// keys as `base_scenario.toml` holds them ([`given_toml`]), and of those keys resolved (every
 /// default filled in, no file read: so a changed default or scenario file changes it too).

@@ -6,7 +6,8 @@ use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
 use crate::sweep::manifest::{
-    check_data_files, check_recorded_files_now, read_manifest, recorded_files, shard_plan,
+    check_data_files, check_engine, check_recorded_files_now, engine, read_manifest,
+    recorded_files, shard_plan, unrecorded_engine_note,
 };
 use crate::sweep::rows::{csv_line, results_header};
 use serde_json::json;
@@ -20,6 +21,8 @@ struct Shards {
     header: Option<String>,
     rows: Vec<RowRef>,
     sources: Vec<PathBuf>,
+    /// Whether a shard's `sweep.json` records no engine ([`check_engine`]).
+    unrecorded_engine: bool,
 }
 
 /// Merges the shard directories `dirs` of one sweep (same digest) into `out`: refuses missing,
@@ -61,7 +64,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
         &shards.rows,
         &shards.sources,
     )?;
-    write_merged_manifest(dirs, out, manifest, total)?;
+    write_merged_manifest(dirs, out, manifest, total, !shards.unrecorded_engine)?;
     Ok(total)
 }
 
@@ -71,6 +74,8 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     check_not_being_written(d)?;
     let m = read_manifest(d)?;
     let (t, digest) = manifest_identity(d, &m)?;
+    let engine_known = check_engine(d, &m)?;
+    shards.unrecorded_engine |= !engine_known;
     let (mut plan, base) = shard_plan(d, &digest)?;
     // A relative file path in the sweep's `[grid]` or `[base]` names a file beside the sweep
     // file, not beside the shard's copy of it: the runs are resolved from the sweep file's
@@ -117,7 +122,13 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
-    let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans)?;
+    let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans).map_err(|e| {
+        if engine_known {
+            e
+        } else {
+            unrecorded_engine_note(e, d)
+        }
+    })?;
     if let Some(r) = idx.rows.iter().find(|r| r.id % n != k - 1) {
         return Err(fail(
             exit::DATAERR,
@@ -259,6 +270,7 @@ fn write_merged_manifest(
     out: &Path,
     mut manifest: serde_json::Value,
     total: u64,
+    record_engine: bool,
 ) -> Result<(), Failure> {
     let Some(first) = dirs.first() else {
         return Ok(());
@@ -276,6 +288,14 @@ fn write_merged_manifest(
                     )
                 })?;
             crate::files::write_atomic(&out.join(f), &bytes).map_err(cant)?;
+        }
+    }
+    // Every shard this engine's: the merged rows are too; else none is claimed.
+    if let Some(m) = manifest.as_object_mut() {
+        if record_engine {
+            m.insert("engine".into(), json!(engine()));
+        } else {
+            m.remove("engine");
         }
     }
     manifest["shard"] = json!([1, 1]);

@@ -8,8 +8,8 @@ use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::sweep::manifest::{
-    check_data_files, data_files_entry, given_toml, plan_data_file_digests_all, read_manifest,
-    sweep_digest,
+    check_data_files, check_engine, data_files_entry, engine, given_toml,
+    plan_data_file_digests_all, read_manifest, sweep_digest, unrecorded_engine_note,
 };
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
@@ -138,15 +138,24 @@ impl SweepJob {
                 ),
             ));
         }
+        // Whether the rows there are of a known engine (a new results.csv: this one's).
+        let mut engine_known = true;
         if results.exists() && resume {
-            self.check_same_sweep(out)?;
+            engine_known = self.check_same_sweep(out)?;
         }
         let done = if results.exists() {
-            self.resumed_ids(&results, shard)?
+            self.resumed_ids(&results, shard).map_err(|e| {
+                if engine_known {
+                    e
+                } else {
+                    unrecorded_engine_note(e, out)
+                }
+            })?
         } else {
             vec![]
         };
-        self.write_manifest(out, shard, shard_runs)?;
+        // Rows of an unknown engine kept: the manifest does not claim them for this one.
+        self.write_manifest(out, shard, shard_runs, engine_known || done.is_empty())?;
         if !results.exists() {
             crate::files::write_atomic(&results, csv_line(&self.header).as_bytes())
                 .map_err(cant)?;
@@ -161,10 +170,10 @@ impl SweepJob {
         })
     }
 
-    /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest, or
-    /// when an older isotrack wrote it (no `sweep.json`, or one without a digest:
-    /// [`older_format`]).
-    fn check_same_sweep(&self, out: &Path) -> Result<(), Failure> {
+    /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest or
+    /// another engine ([`check_engine`]), or when an older isotrack wrote it (no `sweep.json`,
+    /// or one without a digest: [`older_format`]). Returns whether its engine is recorded.
+    fn check_same_sweep(&self, out: &Path) -> Result<bool, Failure> {
         if !out.join("sweep.json").exists() {
             return Err(older_format(
                 out,
@@ -189,7 +198,9 @@ impl SweepJob {
                 ),
             ));
         }
-        check_data_files(out, &stored, &self.data_files, "now")
+        let known = check_engine(out, &stored)?;
+        check_data_files(out, &stored, &self.data_files, "now")?;
+        Ok(known)
     }
 
     /// The runs already in `results` (their ids only, sorted), each row checked, a cut-off
@@ -262,6 +273,7 @@ impl SweepJob {
         out: &Path,
         (k, n): (u64, u64),
         shard_runs: u64,
+        record_engine: bool,
     ) -> Result<(), Failure> {
         let cant = cant_write(out);
         // Never through a link nor into a FIFO (73 at once): `files::write_atomic`.
@@ -281,6 +293,9 @@ impl SweepJob {
         // version of them.
         if let Some(files) = data_files_entry(&self.data_files) {
             manifest["data_files"] = files;
+        }
+        if record_engine {
+            manifest["engine"] = json!(engine());
         }
         crate::files::write_atomic(
             &out.join("sweep.json"),
