@@ -460,3 +460,36 @@ fn a_missing_data_file_of_a_sweep_is_refused_before_any_run() {
     ]);
     common::assert_fails(&o, 66, &["nowhere.asc", "[base]"]);
 }
+
+/// The scenario of the data-file tests below: a grid field read from `f.asc`, 20 s.
+const GRID_SCENARIO: &str = "[field]\nkind = \"grid\"\npath = \"f.asc\"\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 20.0\n";
+
+/// Whether directory `out` holds no row of a run (no results.csv, or its header only).
+fn no_run_in(out: &Path) -> bool {
+    std::fs::read_to_string(out.join("results.csv")).map_or(true, |t| t.lines().count() <= 1)
+}
+
+/// att30n-2: a `[grid] field.path` value holding a line break (a legal file name) was written
+/// as a quoted two-line cell, then the sweep's own final pass refused its own row as damaged
+/// (exit 65 after every run) and `--resume` could never finish. It is refused before any run
+/// (65), naming the key and the value escaped.
+#[test]
+fn a_grid_value_with_a_line_break_is_refused_before_any_run() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "f.asc", &radial_asc(1.0));
+    write(d.path(), "new\nline.asc", &radial_asc(1.0));
+    write(d.path(), "s.toml", GRID_SCENARIO);
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"f.asc\", \"new\\nline.asc\"]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let out = d.path().join("o");
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    common::assert_fails(
+        &o,
+        65,
+        &["[grid] field.path value 2 \"new\\nline.asc\"", "line break"],
+    );
+    assert!(no_run_in(&out));
+}

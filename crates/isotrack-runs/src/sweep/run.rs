@@ -73,6 +73,35 @@ pub struct SweepReport {
     pub flagged: crate::sweep::index::Flagged,
 }
 
+/// Refuses (65, before any run) a `[grid]` value holding a line break (a string, or one in
+/// a list or table: `field.path = ["new\nline.csv"]`, a legal file name), naming its key and
+/// the value escaped: its `results.csv` cell would span two lines, which the sweep's own row
+/// check (`--resume`, `merge`, the final pass) reads as a damaged row (att30n-2: every run
+/// ran, then the sweep refused its own row, and `--resume` could never finish).
+fn refuse_line_breaks(plan: &SweepPlan, name: &str) -> Result<(), Failure> {
+    fn breaks(v: &toml::Value) -> bool {
+        match v {
+            toml::Value::String(s) => s.contains(['\n', '\r']),
+            toml::Value::Array(a) => a.iter().any(breaks),
+            toml::Value::Table(t) => t.iter().any(|(k, v)| k.contains(['\n', '\r']) || breaks(v)),
+            _ => false,
+        }
+    }
+    for (k, list) in &plan.grid {
+        if let Some((i, v)) = list.iter().enumerate().find(|(_, v)| breaks(v)) {
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{name}: [grid] {k} value {} {}: holds a line break, which a row of results.csv cannot hold; rename the file (or choose another value)",
+                    i + 1,
+                    isotrack_scenario::load::clip(&isotrack_scenario::sweep::value_literal(v))
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl SweepJob {
     /// Reads and checks sweep file `path`, its base scenario with `sets` applied.
     pub fn prepare(path: &Path, sets: &[String]) -> Result<Self, Failure> {
@@ -88,6 +117,7 @@ impl SweepJob {
             .map_err(|_| fail(exit::DATAERR, format!("{}: not UTF-8 text", path.display())))?;
         let plan = SweepPlan::parse(&text, path).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
         let name = path.display().to_string();
+        refuse_line_breaks(&plan, &name)?;
         let base = sweep_base(&plan, sets, &name)?;
         let base_toml = given_toml(base.given());
         let digest = sweep_digest(&sweep_bytes, &base_toml);
