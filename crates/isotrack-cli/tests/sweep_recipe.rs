@@ -493,3 +493,62 @@ fn a_grid_value_with_a_line_break_is_refused_before_any_run() {
     );
     assert!(no_run_in(&out));
 }
+
+/// att30n-9 and att30n-13: a `[grid]` data file beyond its size limit (4 GiB, a sparse file
+/// here) was hashed whole (28 s) before any run, then each of its runs was `invalid_scenario`
+/// and the sweep exited 65 after running everything; an unreadable one was refused 66 without
+/// the key or the value as written. Both are refused 66 before any run, at once (the size
+/// from the metadata), naming `[grid] field.path value 2` as the sweep file writes it.
+#[test]
+fn a_grid_data_file_beyond_its_limit_or_missing_is_refused_at_once_by_its_key() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "f.asc", &radial_asc(1.0));
+    write(d.path(), "s.toml", GRID_SCENARIO);
+    let huge = d.path().join("huge.asc");
+    std::fs::write(&huge, radial_asc(1.0)).unwrap();
+    let len = (4u64 << 30) + 1;
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&huge)
+        .unwrap()
+        .set_len(len)
+        .unwrap();
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"f.asc\", \"huge.asc\"]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let out = d.path().join("o");
+    let t0 = std::time::Instant::now();
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    let took = t0.elapsed();
+    common::assert_fails(
+        &o,
+        66,
+        &[
+            "[grid] field.path value 2 \"huge.asc\"",
+            &format!(
+                "{len} bytes is more than the {} this reader accepts",
+                4u64 << 30
+            ),
+        ],
+    );
+    assert!(no_run_in(&out));
+    // Hashing 4 GiB takes many seconds; the metadata, milliseconds (a loaded machine: 5 s).
+    assert!(took.as_secs_f64() < 5.0, "{took:?}");
+    let sw = write(
+        d.path(),
+        "sweep2.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"f.asc\", \"nowhere.asc\"]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    common::assert_fails(
+        &o,
+        66,
+        &[
+            "[grid] field.path value 2 \"nowhere.asc\"",
+            "nowhere.asc, which runs of the sweep read, cannot be read",
+        ],
+    );
+    assert!(no_run_in(&out));
+}

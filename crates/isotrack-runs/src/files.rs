@@ -9,9 +9,33 @@ use std::path::Path;
 /// between two runs is another field), and the Python package checks a pickled scenario's
 /// files with it.
 pub fn sha256_file(path: &Path) -> std::io::Result<String> {
+    sha256_of(isotrack_fields::io::open_regular(path)?)
+}
+
+/// The SHA-256 of a field's data file `path` ([`sha256_file`]), refused from its metadata,
+/// before a byte is read, when it is larger than any field's reader accepts
+/// ([`isotrack_fields::io::MAX_GRID_FILE_BYTES`]; the error `read_limited` gives): a sweep
+/// checks its data files with it before any run (att30n-9: a 4.3 GB file named in `[grid]`
+/// was hashed whole, 28 s, then each of its runs refused it).
+pub fn sha256_data_file(path: &Path) -> std::io::Result<String> {
+    let f = isotrack_fields::io::open_regular(path)?;
+    let (len, max) = (
+        f.metadata()?.len(),
+        isotrack_fields::io::MAX_GRID_FILE_BYTES,
+    );
+    if len > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("{len} bytes is more than the {max} this reader accepts"),
+        ));
+    }
+    sha256_of(f)
+}
+
+/// The SHA-256 (hex) of what file `f` holds from where it stands, read in 1 MiB blocks.
+fn sha256_of(mut f: std::fs::File) -> std::io::Result<String> {
     use sha2::{Digest, Sha256};
     use std::io::Read;
-    let mut f = isotrack_fields::io::open_regular(path)?;
     let mut h = Sha256::new();
     let mut buf = vec![0u8; 1 << 20];
     loop {

@@ -949,8 +949,21 @@ impl SweepPlan {
     /// `[grid]` key choosing the field's files names (`field.path`, `field.paths`, a `field`
     /// table's `path` or `paths`), whatever kind the run ends up with.
     fn named_files(&self, files: &mut std::collections::BTreeSet<String>) {
-        for (k, list) in self.grid.iter().filter(|(k, _)| chooses_files(k)) {
-            for v in list {
+        for (_, _, path) in self.named_values() {
+            files.insert(path);
+        }
+    }
+
+    /// Every path a value of a `[grid]` key choosing the field's files names, as
+    /// `(key index in the grid, value index in its list, absolute path beside the sweep
+    /// file)`, in the grid's order.
+    fn named_values(&self) -> Vec<(usize, usize, String)> {
+        let mut out = vec![];
+        for (ki, (k, list)) in self.grid.iter().enumerate() {
+            if !chooses_files(k) {
+                continue;
+            }
+            for (vi, v) in list.iter().enumerate() {
                 let named = match (k.as_str(), v) {
                     ("field.path" | "field.paths", v) => vec![v],
                     ("field", toml::Value::Table(t)) => {
@@ -965,10 +978,25 @@ impl SweepPlan {
                 });
                 for p in strings {
                     let path = crate::field::resolve_one(p, &self.dir);
-                    files.insert(path.display().to_string());
+                    out.push((ki, vi, path.display().to_string()));
                 }
             }
         }
+        out
+    }
+
+    /// The `[grid]` value that names data file `path` (absolute, as [`Self::data_files`]
+    /// gives it), as the sweep file writes it: `[grid] KEY value N VALUE` (N from 1, the
+    /// value a TOML literal, a line break in it escaped), for messages about that file
+    /// (att30n-13); `None` when no `[grid]` value names it (the base scenario's file).
+    pub fn file_origin(&self, path: &str) -> Option<String> {
+        let (ki, vi, _) = self.named_values().into_iter().find(|n| n.2 == path)?;
+        let (k, list) = &self.grid[ki];
+        Some(format!(
+            "[grid] {k} value {} {}",
+            vi + 1,
+            value_literal(&list[vi])
+        ))
     }
 }
 

@@ -155,29 +155,55 @@ pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Res
 }
 
 /// The SHA-256 of every data file a run of `plan` reads ([`SweepPlan::data_files`], for a
-/// base whose own keys are `given`), by absolute path ([`crate::files::sha256_file`]); for a
-/// sweep whose `[grid]` chooses no files, the base's. Taken as a sweep starts: a data file a
-/// run would read that cannot be read now (missing, not a regular file, unreadable) is
-/// refused before any run, [`exit::NOINPUT`] naming it (nu-15: a `[grid] field.path` value naming no
-/// file was found only after every other run had run, each of its runs `invalid_scenario`,
-/// exit 65).
+/// base whose own keys are `given`), by absolute path ([`crate::files::sha256_data_file`]);
+/// for a sweep whose `[grid]` chooses no files, the base's. Taken as a sweep starts: a data
+/// file a run would read that cannot be read now (missing, not a regular file, unreadable,
+/// beyond its size limit: checked before it is read) is refused before any run,
+/// [`exit::NOINPUT`] naming it and the `[grid]` value that names it as written (nu-15: a
+/// `[grid] field.path` value naming no file was found only after every other run had run,
+/// each of its runs `invalid_scenario`, exit 65; att30n-9, -13).
 pub fn plan_data_file_digests_all(
     plan: &SweepPlan,
     given: &ScenarioFile,
     label: &str,
 ) -> Result<BTreeMap<String, String>, Failure> {
-    plan.data_files(given)
-        .into_iter()
-        .map(|p| match crate::files::sha256_file(Path::new(&p)) {
-            Ok(d) => Ok((p, d)),
-            Err(e) => Err(fail(
-                exit::NOINPUT,
-                format!(
-                    "{label}: the data file {p}, which runs of the sweep read (`field.path` or `field.paths` of its scenario, [base] or [grid]), cannot be read: {e}"
-                ),
-            )),
-        })
-        .collect()
+    let mut files = BTreeMap::new();
+    for p in plan.data_files(given) {
+        match crate::files::sha256_data_file(Path::new(&p)) {
+            Ok(d) => {
+                files.insert(p, d);
+            }
+            Err(e) => return Err(unreadable_data_file(plan, label, &p, &e, Some(true))),
+        }
+    }
+    Ok(files)
+}
+
+/// The refusal (66) of data file `p` of sweep `label`'s `plan` that cannot be read (`e`),
+/// naming the `[grid]` value that names it ([`SweepPlan::file_origin`]); `reads`, whether a
+/// run reads it (`None`: past [`isotrack_scenario::sweep::MAX_FILE_COMBINATIONS`]
+/// combinations, not told).
+fn unreadable_data_file(
+    plan: &SweepPlan,
+    label: &str,
+    p: &str,
+    e: &std::io::Error,
+    reads: Option<bool>,
+) -> Failure {
+    let who = match reads {
+        None => format!(
+            "which runs of the sweep may read (its [grid] values that choose the field's files make more than {} combinations: not told apart)",
+            isotrack_scenario::sweep::MAX_FILE_COMBINATIONS
+        ),
+        Some(_) => "which runs of the sweep read".to_string(),
+    };
+    let message = match plan.file_origin(p) {
+        Some(origin) => format!("{label}: {origin}: the data file {p}, {who}, cannot be read: {e}"),
+        None => format!(
+            "{label}: the data file {p}, {who} (`field.path` or `field.paths` of its scenario, [base] or [grid]), cannot be read: {e}"
+        ),
+    };
+    fail(exit::NOINPUT, message)
 }
 
 /// The `data_files` entry of `sweep.json`: each data file's SHA-256 by path (`None` without
