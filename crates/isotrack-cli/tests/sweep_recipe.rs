@@ -552,3 +552,52 @@ fn a_grid_data_file_beyond_its_limit_or_missing_is_refused_at_once_by_its_key() 
     );
     assert!(no_run_in(&out));
 }
+
+/// att30n-14: `merge` of shards whose data file is gone called a good row "damaged" and
+/// advised deleting it ("remove the line ... and --resume"), which `--resume` then refused 66.
+/// Both say the data file cannot be read (66, naming it), never "damaged"; the file put back,
+/// the merge goes through.
+#[test]
+fn a_sweep_whose_data_file_is_gone_says_so() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "f.asc", &radial_asc(1.0));
+    let b = write(d.path(), "b.asc", &radial_asc(1.05));
+    write(d.path(), "s.toml", GRID_SCENARIO);
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        "scenario = \"s.toml\"\n[grid]\nfield.path = [\"f.asc\", \"b.asc\"]\n",
+    );
+    let (s1, s2, m) = (d.path().join("s1"), d.path().join("s2"), d.path().join("m"));
+    sweep(&sw, &s1, &["--shard", "1/2"]);
+    sweep(&sw, &s2, &["--shard", "2/2"]);
+    let name = std::fs::canonicalize(&b).unwrap().display().to_string();
+    let moved = d.path().join("b.moved");
+    std::fs::rename(&b, &moved).unwrap();
+    let merge = || {
+        isotrack(&[
+            "merge",
+            s1.to_str().unwrap(),
+            s2.to_str().unwrap(),
+            "--out",
+            m.to_str().unwrap(),
+        ])
+    };
+    let o = merge();
+    common::assert_fails(&o, 66, &[&name, "cannot be read now", "restore it"]);
+    assert!(!stderr(&o).contains("damaged"), "{}", stderr(&o));
+    let o = isotrack(&[
+        "sweep",
+        &sw,
+        "--out",
+        s2.to_str().unwrap(),
+        "--shard",
+        "2/2",
+        "--resume",
+    ]);
+    common::assert_fails(&o, 66, &["b.asc", "cannot be read"]);
+    assert!(!stderr(&o).contains("damaged"), "{}", stderr(&o));
+    std::fs::rename(&moved, &b).unwrap();
+    let o = merge();
+    assert!(o.status.success(), "{}", stderr(&o));
+}

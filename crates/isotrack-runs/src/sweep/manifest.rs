@@ -133,14 +133,20 @@ pub fn check_data_files(
 /// Refuses (65, naming the file) shard directory `dir` when a data file its `manifest`
 /// records (`data_files`) holds other bytes now than its rows were computed on: `merge` of
 /// shards all run before a grid file was rewritten would otherwise write their rows as this
-/// sweep's over the new file. A recorded file that cannot be read here (shards merged on
-/// another machine) is not checked; the shards are still checked against each other
-/// ([`check_data_files`]).
+/// sweep's over the new file. A recorded file that cannot be read now (gone, moved, not
+/// readable) is refused too (66, naming it): each row is checked against its run's scenario,
+/// which reads the file, so its good rows would be called damaged (att30n-14).
 pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Result<(), Failure> {
     for (path, then) in recorded_files(manifest) {
-        let Ok(now) = crate::files::sha256_file(Path::new(&path)) else {
-            continue;
-        };
+        let now = crate::files::sha256_file(Path::new(&path)).map_err(|e| {
+            fail(
+                exit::NOINPUT,
+                format!(
+                    "{}: the field's data file {path}, on which its rows were computed (its sweep.json's data_files), cannot be read now: {e}; restore it there (its rows are checked against it), or run the sweep again",
+                    dir.display()
+                ),
+            )
+        })?;
         if now != then {
             return Err(fail(
                 exit::DATAERR,
