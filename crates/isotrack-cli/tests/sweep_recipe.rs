@@ -601,3 +601,58 @@ fn a_sweep_whose_data_file_is_gone_says_so() {
     let o = merge();
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// att30n-1: past 4096 combinations of the `[grid]` values that choose the field's files the
+/// sweep's data files are a superset, and a file no run reads (a path beside an analytic kind)
+/// was refused 66 as one "which runs of the sweep read"; with 4096 values it ran. Whatever the
+/// count, a file no run reads is not refused, and one a run reads still is.
+#[test]
+fn a_data_file_no_run_reads_is_not_refused_whatever_the_combinations() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "f.asc", &radial_asc(1.0));
+    write(d.path(), "s.toml", GRID_SCENARIO);
+    let names: Vec<String> = (0..=4096).map(|i| format!("\"none{i}.asc\"")).collect();
+    let sweep_of = |file: &str, kind: &str| {
+        write(
+            d.path(),
+            file,
+            &format!(
+                "scenario = \"s.toml\"\n[base]\nsim.duration_s = 0.5\n[grid]\nfield.kind = [\"{kind}\"]\nfield.path = [{}]\n",
+                names.join(", ")
+            ),
+        )
+    };
+    let radial = sweep_of("radial.toml", "radial_exp");
+    let out = d.path().join("r");
+    let o = isotrack(&[
+        "sweep",
+        &radial,
+        "--out",
+        out.to_str().unwrap(),
+        "--shard",
+        "1/4097",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let got = rows(&out);
+    assert_eq!(got.len(), 1);
+    assert_eq!(got[0]["outcome"], "completed", "{got:?}");
+    let grid = sweep_of("grid.toml", "grid");
+    let out = d.path().join("g");
+    let o = isotrack(&[
+        "sweep",
+        &grid,
+        "--out",
+        out.to_str().unwrap(),
+        "--shard",
+        "1/4097",
+    ]);
+    common::assert_fails(
+        &o,
+        66,
+        &[
+            "[grid] field.path value 1 \"none0.asc\"",
+            "which runs of the sweep read,",
+        ],
+    );
+    assert!(no_run_in(&out));
+}

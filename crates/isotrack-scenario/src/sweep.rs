@@ -998,6 +998,82 @@ impl SweepPlan {
             value_literal(&list[vi])
         ))
     }
+
+    /// Whether a run of this sweep reads each data file of `paths` (absolute, among
+    /// [`Self::data_files`]) when its combinations of file-choosing `[grid]` values are too
+    /// many for [`Self::data_files`] to resolve (a superset then): every combination that
+    /// holds a value naming the file is resolved, the others cannot read it. `Some(true)` when
+    /// one reads it, `Some(false)` when none does (att30n-1: a path beside a kind that reads
+    /// no file), `None` when those combinations are themselves more than
+    /// [`MAX_FILE_COMBINATIONS`], or when no `[grid]` value names it (the base's file).
+    pub fn reads_files(&self, given: &crate::ScenarioFile, paths: &[String]) -> Vec<Option<bool>> {
+        let lists = self.file_choosing_values();
+        // The grid's file-choosing keys in order: the index of each among `lists`.
+        let file_keys: Vec<usize> = self
+            .grid
+            .iter()
+            .enumerate()
+            .filter(|(_, (k, _))| chooses_files(k))
+            .map(|(i, _)| i)
+            .collect();
+        let base: Vec<Assignment> = self
+            .base
+            .iter()
+            .map(|arg| Assignment {
+                label: format!("[base] {arg}"),
+                arg: arg.clone(),
+            })
+            .collect();
+        // Each path the values name: the values naming it (resolved once for all paths).
+        let mut naming: std::collections::HashMap<String, Vec<(usize, usize)>> =
+            std::collections::HashMap::new();
+        for (ki, vi, p) in self.named_values() {
+            naming.entry(p).or_default().push((ki, vi));
+        }
+        let reads = |path: &String| -> Option<bool> {
+            let values = naming.get(path)?;
+            for &(ki, vi) in values {
+                let li = file_keys.iter().position(|&i| i == ki)?;
+                let (k, list) = &self.grid[ki];
+                let fixed = format!("{k}={}", value_literal(&list[vi]));
+                let others = lists
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != li)
+                    .try_fold(1u64, |acc, (_, l)| acc.checked_mul(l.len() as u64))
+                    .filter(|&n| n <= MAX_FILE_COMBINATIONS)?;
+                for mut c in 0..others {
+                    let mut args: Vec<&String> = Vec::with_capacity(lists.len());
+                    for (i, l) in lists.iter().enumerate().rev() {
+                        if i == li {
+                            args.push(&fixed);
+                            continue;
+                        }
+                        let len = l.len() as u64;
+                        args.push(&l[(c % len) as usize]);
+                        c /= len;
+                    }
+                    args.reverse();
+                    let mut files = std::collections::BTreeSet::new();
+                    self.combination_files(given, &base, &args, &mut files);
+                    if files.contains(path) {
+                        return Some(true);
+                    }
+                }
+            }
+            Some(false)
+        };
+        paths.iter().map(reads).collect()
+    }
+
+    /// Whether [`Self::data_files`] gives a superset of the files the runs read (more than
+    /// [`MAX_FILE_COMBINATIONS`] combinations of file-choosing `[grid]` values).
+    pub fn data_files_are_a_superset(&self) -> bool {
+        self.file_choosing_values()
+            .iter()
+            .try_fold(1u64, |acc, l| acc.checked_mul(l.len() as u64))
+            .is_none_or(|n| n > MAX_FILE_COMBINATIONS)
+    }
 }
 
 /// Whether `[grid]` key `k` chooses a field's files (`field`, `field.kind`, `field.path`,

@@ -167,22 +167,42 @@ pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Res
 /// beyond its size limit: checked before it is read) is refused before any run,
 /// [`exit::NOINPUT`] naming it and the `[grid]` value that names it as written (nu-15: a
 /// `[grid] field.path` value naming no file was found only after every other run had run,
-/// each of its runs `invalid_scenario`, exit 65; att30n-9, -13).
+/// each of its runs `invalid_scenario`, exit 65; att30n-9, -13). Past
+/// [`isotrack_scenario::sweep::MAX_FILE_COMBINATIONS`] combinations (a superset of the
+/// files), an unreadable file is refused only when a run reads it
+/// ([`SweepPlan::reads_files`]; att30n-1), or, when that cannot be told, with a message that
+/// says so; a file no run reads is not recorded.
 pub fn plan_data_file_digests_all(
     plan: &SweepPlan,
     given: &ScenarioFile,
     label: &str,
 ) -> Result<BTreeMap<String, String>, Failure> {
+    let superset = plan.data_files_are_a_superset();
     let mut files = BTreeMap::new();
+    let mut unreadable = vec![];
     for p in plan.data_files(given) {
         match crate::files::sha256_data_file(Path::new(&p)) {
             Ok(d) => {
                 files.insert(p, d);
             }
-            Err(e) => return Err(unreadable_data_file(plan, label, &p, &e, Some(true))),
+            Err(e) => {
+                if !superset {
+                    return Err(unreadable_data_file(plan, label, &p, &e, Some(true)));
+                }
+                unreadable.push((p, e));
+            }
         }
     }
-    Ok(files)
+    let paths: Vec<String> = unreadable.iter().map(|u| u.0.clone()).collect();
+    let reads = plan.reads_files(given, &paths);
+    match unreadable
+        .iter()
+        .zip(reads)
+        .find(|(_, r)| *r != Some(false))
+    {
+        Some(((p, e), r)) => Err(unreadable_data_file(plan, label, p, e, r)),
+        None => Ok(files),
+    }
 }
 
 /// The refusal (66) of data file `p` of sweep `label`'s `plan` that cannot be read (`e`),
