@@ -1235,7 +1235,14 @@ pub fn sweep_figure(
     let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
     let (_, y1) = finite_bounds(all().map(|p| p.1 + p.2));
     let bad = || err("no finite values".into());
-    let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, 1e-9)?.ok_or_else(bad)?;
+    // One whole x value (`team.count = [5]`): an axis one unit wide round it, labelled once
+    // at the value (att30n-7: an axis 2e-7 wide was labelled 4.9999997 to 5.0000002).
+    let x_width = if x0 == x1 && x0.fract() == 0.0 {
+        1.0
+    } else {
+        1e-9
+    };
+    let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, x_width)?.ok_or_else(bad)?;
     let (ya, yb) = padded_axis(metric, y0, y1, 0.08, 1e-12)?.ok_or_else(bad)?;
     let runs: usize = all().map(|p| p.3).sum();
     let default_title = sweep_title(x_key, metric, runs, skipped);
@@ -1243,8 +1250,20 @@ pub fn sweep_figure(
     let (w, h) = st.size((1000, 700), (560, 400));
     let f = st.base_font();
     let title_rel = title_font_rel(title, w, f);
+    // Group labels as wide as the plot at most (att30n-8: two absolute paths made a legend
+    // wider than the image, clipped at both edges and over a point): values shortened.
+    let shown: std::collections::HashMap<&str, String> = match group {
+        Some(k) => {
+            let room = legend_chars_that_fit(sweep_plot_px((w, h), f).0, f);
+            let prefix = format!("{k} = ").chars().count();
+            let values: Vec<&str> = lines.iter().map(|l| l.0.as_str()).collect();
+            let short = shortened_values(&values, room.saturating_sub(prefix).max(12));
+            values.into_iter().zip(short).collect()
+        }
+        None => Default::default(),
+    };
     let label_of = |g: &str| match group {
-        Some(k) => format!("{k} = {g}"),
+        Some(k) => format!("{k} = {}", shown.get(g).map_or(g, |v| v.as_str())),
         None => metric.to_string(),
     };
     let (yb, legend_at) = match group {
@@ -1261,6 +1280,20 @@ pub fn sweep_figure(
     render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
+            // Whole-number labels as many as fit side by side (att30n-15: twelve seeds near
+            // 1e9 ran together): else fewer, plotters choosing a step of 1, 2 or 5.
+            let label_style = TextStyle::from(st.font(0.95));
+            let x_labels = whole_x.map(|n| {
+                let widest = (xa.ceil() as i64..=xb.floor() as i64)
+                    .take(13)
+                    .filter_map(|v| {
+                        root.estimate_text_size(&tick_label(v as f64, 1.0), &label_style)
+                            .ok()
+                    })
+                    .map(|(w, _)| f64::from(w))
+                    .fold(0.0, f64::max);
+                whole_labels_that_fit(n, widest, sweep_plot_px((w, h), f).0, f)
+            });
             let mut chart = ChartBuilder::on(&root)
                 .margin(f as u32)
                 .margin_right((2.0 * f) as u32)
@@ -1274,7 +1307,7 @@ pub fn sweep_figure(
                 .x_desc(x_key)
                 .y_desc(metric)
                 // plotters' own default is 11 labels at most.
-                .x_labels(whole_x.unwrap_or(11))
+                .x_labels(x_labels.unwrap_or(11))
                 .x_label_formatter(&|v| tick_label(*v, xs))
                 .y_label_formatter(&|v| tick_label(*v, ys))
                 .label_style(st.font(0.95))
@@ -1312,7 +1345,92 @@ fn whole_number_labels(xs: impl Iterator<Item = f64>, xa: f64, xb: f64) -> Optio
         any = true;
     }
     let n = xb.floor() - xa.ceil() + 1.0;
-    (any && (2.0..=12.0).contains(&n)).then_some(n as usize)
+    (any && (1.0..=12.0).contains(&n)).then_some(n as usize)
+}
+
+/// How many of `n` whole-number x labels, the widest `widest_px` wide, a plot `plot_w_px`
+/// wide (base font `f` px) shows: all of them when they fit side by side with a gap of
+/// 0.8 f after each, else as many as fit (at least 1; plotters then labels every 2nd, 5th,
+/// ... whole number, as before c47423f).
+fn whole_labels_that_fit(n: usize, widest_px: f64, plot_w_px: f64, f: f64) -> usize {
+    let each = widest_px + 0.8 * f;
+    if each.is_nan() || each <= 0.0 || n as f64 * each <= plot_w_px {
+        return n;
+    }
+    ((plot_w_px / each).floor() as usize).clamp(1, n)
+}
+
+/// The most characters a sweep legend's label may have for its box ([`legend_box_px`]) to
+/// be at most 0.9 of a plot `plot_w_px` wide (base font `f` px).
+fn legend_chars_that_fit(plot_w_px: f64, f: f64) -> usize {
+    let room = 0.9 * plot_w_px - 20.0 - 2.0 * f;
+    (room / (0.6 * 0.95 * f)).max(0.0).floor() as usize
+}
+
+/// Group values as a legend shows them, each at most `max` characters: all as they are when
+/// they fit; else a value too long as `…/` and its last path component (a file name), cut to
+/// its last characters after `…` if still too long, when that keeps the values distinct;
+/// else from where the values first differ (their common prefix left out, `…` for it, one `/`
+/// before it kept), cut with a `…` at the end if still too long.
+fn shortened_values(values: &[&str], max: usize) -> Vec<String> {
+    let len = |v: &str| v.chars().count();
+    if values.iter().all(|v| len(v) <= max) {
+        return values.iter().map(|v| v.to_string()).collect();
+    }
+    let tail = |v: &str, keep: usize| -> String {
+        let n = len(v);
+        v.chars().skip(n.saturating_sub(keep)).collect()
+    };
+    let named: Vec<String> = values
+        .iter()
+        .map(|v| {
+            if len(v) <= max {
+                return v.to_string();
+            }
+            let name = match v.rfind(['/', '\\']) {
+                Some(i) if i + 1 < v.len() => format!("\u{2026}{}", &v[i..]),
+                _ => v.to_string(),
+            };
+            if len(&name) <= max {
+                name
+            } else {
+                format!("\u{2026}{}", tail(v, max.saturating_sub(1)))
+            }
+        })
+        .collect();
+    let distinct = named.iter().collect::<std::collections::HashSet<_>>().len() == named.len();
+    if distinct {
+        return named;
+    }
+    // The characters all values share at their start (none for one value).
+    let chars: Vec<Vec<char>> = values.iter().map(|v| v.chars().collect()).collect();
+    let common = match chars.split_first() {
+        Some((first, rest)) if !rest.is_empty() => (0..first.len())
+            .take_while(|&i| rest.iter().all(|c| c.get(i) == Some(&first[i])))
+            .count(),
+        _ => 0,
+    };
+    chars
+        .iter()
+        .map(|c| {
+            if c.len() <= max {
+                return c.iter().collect();
+            }
+            let mut start = common.min(c.len().saturating_sub(1));
+            if start > 0 && matches!(c[start - 1], '/' | '\\') {
+                start -= 1;
+            }
+            let lead = if start > 0 { "\u{2026}" } else { "" };
+            let room = max.saturating_sub(lead.chars().count());
+            let shown: String = if c.len() - start <= room {
+                c[start..].iter().collect()
+            } else {
+                let cut: String = c[start..start + room.saturating_sub(1)].iter().collect();
+                format!("{cut}\u{2026}")
+            };
+            format!("{lead}{shown}")
+        })
+        .collect()
 }
 
 /// The sweep figure's plot area in pixels `(width, height)` on a `size` image with base font
@@ -1975,6 +2093,61 @@ mod tests {
             None
         );
         assert_eq!(whole_number_labels(std::iter::empty(), 0.0, 4.0), None);
+        // att30n-7: one whole value on its axis one unit wide (padded 5 %): one label.
+        assert_eq!(whole_number_labels([5.0].into_iter(), 4.45, 5.55), Some(1));
+    }
+
+    /// att30n-15: twelve labels 117 px wide with a gap of 0.8 x 16 px need 12 x 129.8 =
+    /// 1558 px: on a plot 862 px wide 6 fit (862 / 129.8 = 6.6); eight 10 px labels, 8 x
+    /// 22.8 = 182 px, all fit; one label wider than the plot is still drawn.
+    #[test]
+    fn whole_number_labels_are_as_many_as_fit() {
+        assert_eq!(whole_labels_that_fit(12, 117.0, 862.0, 16.0), 6);
+        assert_eq!(whole_labels_that_fit(8, 10.0, 862.0, 16.0), 8);
+        assert_eq!(whole_labels_that_fit(3, 2000.0, 862.0, 16.0), 1);
+    }
+
+    /// att30n-8: a legend's labels at most as wide as 0.9 of the plot: on a plot 862 px
+    /// wide at 16 px, (0.9 x 862 - 20 - 32) / (0.6 x 0.95 x 16) = 723.8 / 9.12 = 79
+    /// characters. Values too long show a path's file name after an ellipsis when that keeps
+    /// them apart, else their ends round one; short values stay as they are.
+    #[test]
+    fn long_legend_values_are_shortened_to_fit() {
+        assert_eq!(legend_chars_that_fit(862.0, 16.0), 79);
+        let dir = format!("/tmp/longdir/{}", "a".repeat(60));
+        let (a, b) = (format!("{dir}/first.csv"), format!("{dir}/second.csv"));
+        assert_eq!(
+            shortened_values(&[&a, &b], 40),
+            ["\u{2026}/first.csv", "\u{2026}/second.csv"]
+        );
+        assert_eq!(shortened_values(&["short", "also"], 40), ["short", "also"]);
+        // One file name in two folders: shown from where they differ (none in common here).
+        let (c, d) = (
+            format!("/x/{}/map.csv", "b".repeat(50)),
+            format!("/y/{}/map.csv", "b".repeat(50)),
+        );
+        let got = shortened_values(&[&c, &d], 40);
+        assert_eq!(got[0], format!("/x/{}\u{2026}", "b".repeat(36)));
+        assert_ne!(got[0], got[1]);
+        assert!(got.iter().all(|v| v.chars().count() == 40), "{got:?}");
+        // Two long file names sharing their ends, in one long folder (att30n-8's): from the
+        // folder's last `/` on, cut at the end.
+        let (f, s) = (
+            format!("{dir}/first_variant_of_the_map_with_a_long_name.csv"),
+            format!("{dir}/second_variant_of_the_map_with_a_long_name.csv"),
+        );
+        let got = shortened_values(&[&f, &s], 36);
+        assert_eq!(
+            got,
+            [
+                "\u{2026}/first_variant_of_the_map_with_a_l\u{2026}",
+                "\u{2026}/second_variant_of_the_map_with_a_\u{2026}"
+            ]
+        );
+        // A file name longer than the room: its last characters.
+        let e = format!("/d/{}.csv", "c".repeat(60));
+        let got = shortened_values(&[&e], 20);
+        assert_eq!(got, [format!("\u{2026}{}.csv", "c".repeat(15))]);
     }
 
     /// nu-7: a flat line at 1.40 along the top of the axis and one at 0 along its bottom
