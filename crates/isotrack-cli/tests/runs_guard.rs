@@ -570,3 +570,63 @@ fn sweep_plot_file_names_and_text_are_safe_from_column_names() {
         "labels kept"
     );
 }
+
+/// att36-1: `run --out A` into a user's folder that never held an isotrack run but has a
+/// `scenario.toml` of its own (not the input), a `trace.csv` or a `summary.json` of its own keys
+/// keeps the user's files named as isotrack's figures (`trajectory.png`, `team.svg`,
+/// `animation.gif`, ...): isotrack never removes a file it did not write. A real earlier run's
+/// figures (written by `run --plot`) are still removed when a new run replaces it (nu-21).
+#[test]
+fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write(d.path(), "in.toml", &std::fs::read_to_string(SCEN).unwrap());
+    let figures = [
+        "trajectory.png",
+        "team.svg",
+        "timeseries.svg",
+        "animation.gif",
+    ];
+    for (name, text) in [
+        ("scenario.toml", std::fs::read_to_string(SCEN).unwrap()),
+        ("trace.csv", "a,b\n1,2\n".to_string()),
+        ("summary.json", "{\"notes\": \"mine\"}\n".to_string()),
+    ] {
+        let a = d.path().join(format!("user-{name}"));
+        std::fs::create_dir_all(&a).unwrap();
+        write(&a, name, &text);
+        for f in figures {
+            write(&a, f, "MY PICTURE\n");
+        }
+        let o = isotrack(&[
+            "run",
+            &input,
+            "--out",
+            &a.display().to_string(),
+            "--quiet",
+            "--set",
+            SHORT,
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+        for f in figures {
+            assert_eq!(
+                std::fs::read_to_string(a.join(f)).ok().as_deref(),
+                Some("MY PICTURE\n"),
+                "{f} beside the user's {name}"
+            );
+        }
+        assert!(std::fs::read_to_string(a.join("summary.json"))
+            .unwrap()
+            .contains("\"isotrack_version\""));
+    }
+    // A real run with its figures: a new run there removes them (nu-21 holds).
+    let r = d.path().join("r").display().to_string();
+    let o = isotrack(&[
+        "run", &input, "--out", &r, "--quiet", "--plot", "--set", SHORT,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(Path::new(&r).join("trajectory.png").exists());
+    let o = isotrack(&["run", &input, "--out", &r, "--quiet", "--set", SHORT]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(!Path::new(&r).join("trajectory.png").exists());
+    assert!(!Path::new(&r).join("timeseries.png").exists());
+}

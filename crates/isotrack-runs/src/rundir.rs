@@ -137,6 +137,26 @@ fn holds_an_input(dir: &Path, inputs: &[PathBuf]) -> Option<String> {
     ))
 }
 
+/// The largest `summary.json` read to tell whether a directory holds an earlier run (a run's
+/// is a few kB; a team's, one object per vehicle, well under this).
+const SUMMARY_MAX_BYTES: u64 = 64 << 20;
+
+/// Whether `dir` holds an earlier isotrack run: its `summary.json` a regular file that reads
+/// as isotrack's own summary ([`Summary::from_json`]: its keys, `isotrack_version`, the
+/// resolved `scenario`, the outcome). A file merely named `scenario.toml`, `trace.csv` or
+/// `summary.json` (a user's project folder, att36-1) is not a run: the files there named as
+/// isotrack's figures are the user's and are never removed.
+fn holds_a_run(dir: &Path) -> bool {
+    let p = dir.join("summary.json");
+    let Ok(m) = std::fs::symlink_metadata(&p) else {
+        return false;
+    };
+    if !m.is_file() || m.len() > SUMMARY_MAX_BYTES {
+        return false;
+    }
+    std::fs::read_to_string(&p).is_ok_and(|text| Summary::from_json(&text).is_ok())
+}
+
 /// `cannot write PATH: WHY`, exit 73.
 fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
     Failure {
@@ -158,9 +178,11 @@ pub struct RunDir {
     /// The command's own files besides [`RUN_FILES`] (`fly`'s `mavlink.tlog`), never removed
     /// as an earlier run's output.
     extra: Vec<String>,
-    /// Whether the directory held an earlier run when opened (one of [`RUN_FILES`] there): only
-    /// then are [`RUN_OUTPUTS`] an earlier run's, removed when it is replaced; in a directory
-    /// that held no run, a `trajectory.png` is the user's and stays.
+    /// Whether the directory held an earlier run when opened (its `summary.json` isotrack's
+    /// own, [`holds_a_run`]): only then are [`RUN_OUTPUTS`] an earlier run's, removed when it
+    /// is replaced; in a directory that held no run (a user's folder that merely has a file
+    /// named `scenario.toml`, `trace.csv` or `summary.json`), a `trajectory.png` is the user's
+    /// and stays.
     earlier_run: bool,
 }
 
@@ -229,9 +251,7 @@ impl RunDir {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
         }
-        let earlier_run = RUN_FILES
-            .iter()
-            .any(|f| std::fs::symlink_metadata(dir.join(f)).is_ok());
+        let earlier_run = holds_a_run(dir);
         Ok(RunDir {
             dir: dir.to_path_buf(),
             lock,
@@ -541,8 +561,8 @@ mod tests {
             std::fs::read(user.path().join("trajectory.png")).unwrap(),
             b"mine"
         );
-        // An earlier run (its summary.json there): its figures go.
-        std::fs::write(d.path().join("summary.json"), b"{}").unwrap();
+        // An earlier run (its summary.json there, isotrack's own): its figures go.
+        std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
         for name in kept.iter().chain(old.iter()) {
             std::fs::write(d.path().join(name), b"old").unwrap();
         }
@@ -570,5 +590,56 @@ mod tests {
             b"new"
         );
         assert!(!d.path().join("team.png").exists());
+    }
+
+    /// att36-1: a folder that never held an isotrack run but has files named `scenario.toml`,
+    /// `trace.csv` and `summary.json` (a user's project folder, a JSON file of its own keys) is
+    /// not an earlier run: a new run writes its own three files there and removes none of the
+    /// user's files named as isotrack's figures; `summary.json` must read as isotrack's own
+    /// summary, so a bare `{}` or one missing `isotrack_version` does not make a run either.
+    #[test]
+    fn a_folder_with_files_named_as_a_runs_is_not_an_earlier_run() {
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let summary = Summary::of_run(
+            &scenario,
+            None,
+            &scenario.run(&mut isotrack_sim::NoTrace),
+            &[],
+        );
+        let mut not_isotracks = summary.to_json().replace("isotrack_version", "version");
+        assert!(Summary::from_json(&not_isotracks).is_err());
+        not_isotracks.push('\n');
+        for (present, summary_text) in [
+            (vec!["scenario.toml"], None),
+            (vec!["trace.csv"], None),
+            (vec!["scenario.toml", "trace.csv"], Some("{}")),
+            (vec![], Some("{\"notes\": \"mine\"}")),
+            (vec!["trace.csv"], Some(not_isotracks.as_str())),
+        ] {
+            let d = tempfile::tempdir().unwrap();
+            for name in &present {
+                std::fs::write(d.path().join(name), b"the user's\n").unwrap();
+            }
+            if let Some(text) = summary_text {
+                std::fs::write(d.path().join("summary.json"), text).unwrap();
+            }
+            for name in RUN_OUTPUTS {
+                std::fs::write(d.path().join(name), b"mine").unwrap();
+            }
+            let out = RunDir::open(d.path(), &[], &[], None).unwrap();
+            let trace = out.trace(false).unwrap();
+            out.finish(trace, "x = 1\n", &summary).unwrap();
+            for name in RUN_OUTPUTS {
+                assert_eq!(
+                    std::fs::read(d.path().join(name)).ok().as_deref(),
+                    Some(&b"mine"[..]),
+                    "{name} of a folder holding {present:?} and summary {summary_text:?}"
+                );
+            }
+            assert_eq!(
+                std::fs::read_to_string(d.path().join("summary.json")).unwrap(),
+                summary.to_json()
+            );
+        }
     }
 }
