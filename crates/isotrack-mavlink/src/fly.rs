@@ -23,6 +23,7 @@ use crate::link::{Link, LinkError, LinkStats, Received};
 use crate::mirror::Transport;
 use crate::modes::{Firmware, FlyMode};
 use crate::record::Recorder;
+use crate::same_ids::FrameKind;
 use crate::wire;
 use isotrack_core::{IsolineController, Measurement};
 use isotrack_scenario::{Scenario, Tracker};
@@ -329,22 +330,15 @@ struct AnswerSeen {
     /// A pilot's change ([`Answer::PilotTookOver`]) rather than the way out's (confirmed,
     /// another safe mode): a heartbeat showing the other kind contradicts it.
     pilots: bool,
-    /// When the first heartbeat showing it came.
+    /// When the first heartbeat showing it came (or the last older one contradicting it).
     at: Instant,
-    /// The vehicle's frames out of sequence by then.
-    out_of_sequence: u64,
 }
 
 /// What the failsafe's retries have seen of the vehicle's heartbeats so far.
 #[derive(Default)]
 struct RetryWatch {
-    /// The answer shown, awaiting confirmation: no retry is sent meanwhile (unless
-    /// `two_senders`).
+    /// The answer shown, awaiting confirmation: no retry is sent meanwhile.
     seen: Option<AnswerSeen>,
-    /// An answer was contradicted with frames of the ids out of sequence between: two senders'
-    /// heartbeats disagree, so no answer shown holds the retries back any more (the way out
-    /// goes on being commanded to its bound unless one stands for the span).
-    two_senders: bool,
 }
 
 /// Options of [`run_fly`].
@@ -640,8 +634,17 @@ struct Flight<'a, S: ?Sized> {
     /// The vehicle reported `MAV_STATE_POWEROFF`.
     vehicle_done: bool,
     last_link: Instant,
-    /// When the vehicle's last heartbeat came (its mode and arming as known).
+    /// When the vehicle's last heartbeat applied came (its mode and arming as known).
     last_heartbeat: Instant,
+    /// When the last heartbeat of the vehicle's ids came, applied or not (a late one older
+    /// than the last applied, or any after a second sender was seen): the link is alive.
+    beat_heard: Instant,
+    /// The unwrapped frame number of the last heartbeat applied ([`crate::same_ids`]): a
+    /// heartbeat is applied only if its number is newer (older news is never applied).
+    beat_number: Option<u64>,
+    /// A second sender with the vehicle's ids has been seen ([`Flight::second_sender_seen`]):
+    /// no heartbeat of the ids is taken as the vehicle's word any more, no disarm is sent.
+    second_sender: bool,
     /// The newest time of the vehicle's own clock heard (unwrapped, ms) and when it came.
     vehicle_ms: Option<(u64, Instant)>,
     /// The vehicle's clock went back ([`REBOOT_STEP_S`]): its autopilot rebooted.
@@ -692,8 +695,8 @@ struct Flight<'a, S: ?Sized> {
     leave_seen: Option<LeaveSeen>,
     /// Heartbeats of the vehicle's ids handled.
     heartbeats: u64,
-    /// When the vehicle's last heartbeat (in sequence) came, and the longest gap between two
-    /// in sequence over the flight, s: how long a pilot's word waits for confirmation
+    /// When the vehicle's last heartbeat (applied) came, and the longest gap between two
+    /// applied over the flight, s: how long a pilot's word waits for confirmation
     /// ([`Flight::confirm_span`]).
     beat_at: Option<Instant>,
     longest_beat_gap_s: f64,
@@ -792,23 +795,22 @@ struct Telemetry {
 /// beats too, and its first heartbeat looks exactly like a pilot's switch: taken at its word,
 /// the companion would stop and command nothing, and the vehicle flown would be left in
 /// OFFBOARD without setpoints. So the change is the pilot's word only once confirmed: the
-/// heartbeats of its ids (in sequence: a late one is older news, never applied) show it, none
+/// heartbeats of its ids applied (newer than the last applied: an older one is older news,
+/// never applied, but one contradicting the word restarts its span) show it, none
 /// contradicting, for longer than the vehicle's heartbeat period ([`Flight::confirm_span`]),
-/// within which the vehicle flown, if it is another, beats too. Until then the last setpoint is repeated (an autopilot
-/// out of OFFBOARD or GUIDED ignores offboard setpoints, so a pilot loses nothing), no
-/// measurement is answered, and during a take-over nothing more is commanded: however it turns
-/// out, the flight ends; a heartbeat that no longer shows it, with frames out of sequence
-/// since ([`crate::same_ids`]: two senders' counters interleaving step back at least once a
-/// switch between them), is a second vehicle's (`vehicle_lost`: the way out of what the companion commanded),
-/// one without is one sender's change and back (the pilot's word, as ever).
+/// within which the vehicle flown, if it is another, beats too. Until then the last setpoint
+/// is repeated (an autopilot out of OFFBOARD or GUIDED ignores offboard setpoints, so a pilot
+/// loses nothing), no measurement is answered, and during a take-over nothing more is
+/// commanded: however it turns out, the flight ends. A second sender with the ids seen
+/// ([`crate::same_ids`]: two different frames with one number) ends it `vehicle_lost`; a
+/// newer heartbeat that no longer shows the word, without one, is one sender's change and
+/// back (the pilot's word, as ever).
 #[derive(Clone, Debug)]
 struct LeaveSeen {
     /// When the heartbeat that showed it came, and how long it must stand uncontradicted
     /// ([`Flight::confirm_span`]).
     at: Instant,
     span: Duration,
-    /// The vehicle's frames out of sequence before that heartbeat.
-    out_of_sequence: u64,
     /// The vehicle's mode and arming before that heartbeat (as last confirmed).
     before: (Option<u32>, bool),
     /// What it showed, in words (`disarmed in MANUAL`).
@@ -1006,6 +1008,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             vehicle_done: false,
             last_link: now,
             last_heartbeat: now,
+            beat_heard: now,
+            beat_number: None,
+            second_sender: false,
             vehicle_ms: None,
             reboot: None,
             clock_behind: 0,
@@ -1218,6 +1223,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.clock.last = Instant::now();
             self.clock_start = Instant::now();
             self.last_heartbeat = Instant::now();
+            self.beat_heard = Instant::now();
         }
         None
     }
@@ -1273,7 +1279,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let heartbeat_timeout = self
             .timeout
             .max(Duration::from_secs_f64(MIN_HEARTBEAT_TIMEOUT_S));
-        if self.target.is_some() && now.duration_since(self.last_heartbeat) > heartbeat_timeout {
+        if self.target.is_some() && now.duration_since(self.beat_heard) > heartbeat_timeout {
             // Other messages may still come: without heartbeats the vehicle's mode and arming
             // (a pilot's take-over, a disarm, the autopilot's own failsafe) are unknown.
             self.event(format!(
@@ -1830,7 +1836,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let what = l.what.clone();
         self.flush_mode_log(true);
         self.event(format!(
-            "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion (its heartbeats in sequence: one sender's){}: setpoints stopped, nothing commanded",
+            "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion (no second sender with its ids seen: one sender's){}: setpoints stopped, nothing commanded",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name(),
             if self.in_control { "" } else { ", during the take-over" }
@@ -2186,18 +2192,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.find_vehicle(from, h);
         }
         let Some(target) = self.target else { return };
-        // The vehicle's frames out of sequence (and duplicates) before this one (a pilot's
-        // word, ver33c-1).
-        let out_of_sequence_before = self.seq_watch.out_of_sequence;
-        let duplicates_before = self.seq_watch.duplicates;
+        // The frame's unwrapped number on the vehicle's counter (its ids' frames only).
+        let mut number = None;
         if from == target {
             self.vehicle_address(r.from);
-            self.vehicle_sender(r);
+            match self.vehicle_sender(r) {
+                // A copy of a frame already handled, delivered again (maybe late: att33f-2):
+                // ignored entirely, never evidence, never applied.
+                (FrameKind::Copy, _) => return,
+                (_, n) => number = Some(n),
+            }
         }
-        // A frame of the vehicle's ids behind the newest (a late one or another sender's), or a
-        // copy of one already handled (delivered again, maybe late: att33f-2).
-        let late = self.seq_watch.out_of_sequence > out_of_sequence_before
-            || self.seq_watch.duplicates > duplicates_before;
         self.foreign_setpoint(from, target, &r.msg);
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
@@ -2220,16 +2225,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         match &r.msg {
-            // Older news than the heartbeat before it, or a second sender's (att33e-2): its
-            // arming and mode are not the vehicle's now, never applied (a late OFFBOARD one after
-            // a pilot's MANUAL would read as a twin's contradiction).
-            MavMessage::HEARTBEAT(_) if late => {}
+            // Every heartbeat of the ids keeps the link alive (S11: a link that delivers each
+            // heartbeat one frame late); after a second sender none is the vehicle's word.
+            MavMessage::HEARTBEAT(_) if self.second_sender => self.beat_heard = Instant::now(),
+            // Older than the last heartbeat applied (a late one, att33e-2): not the vehicle's
+            // state now, never applied (a late OFFBOARD one after a pilot's MANUAL would read
+            // as a change and back); one that contradicts a pilot's word pending restarts it.
+            MavMessage::HEARTBEAT(h)
+                if number.zip(self.beat_number).is_some_and(|(n, b)| n <= b) =>
+            {
+                self.beat_heard = Instant::now();
+                self.older_beat(h);
+            }
             MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
+                self.beat_heard = self.last_heartbeat;
+                self.beat_number = number.or(self.beat_number);
                 let was_armed = self.armed;
                 let was = (self.custom_mode, self.armed);
                 self.vehicle_heartbeat(h);
-                self.watch_leave(out_of_sequence_before, was);
+                self.watch_leave(was);
                 self.note_beat();
                 if was_armed && !self.armed {
                     // A disarm after a silence: a reboot (whose clock need not go back far
@@ -2345,7 +2360,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             None => self.vehicle_addr = Some(a),
             Some(first) if first != a && self.same_ids.is_none() => {
                 let t = self.target.unwrap_or_default();
-                self.same_ids = Some(format!(
+                self.second_sender_seen(format!(
                     "two vehicles with the ids (system {}, component {}): frames from {first} and from {a} (two autopilots left at one system id on one link, or one vehicle over two paths): their measurements and positions would mix, which to fly is ambiguous",
                     t.0, t.1
                 ));
@@ -2355,31 +2370,61 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// A frame with the vehicle's ids, checked for a second sender with them on one address
-    /// ([`crate::same_ids`]): its sequence numbers interleaving with the vehicle's, a heartbeat
-    /// of another type or autopilot than the vehicle's first.
-    fn vehicle_sender(&mut self, r: &Received) {
-        if self.same_ids.is_some() {
-            return;
-        }
+    /// ([`crate::same_ids`]): two different frames with one number within the window, a
+    /// heartbeat of another type or autopilot than the vehicle's first. Returns what the frame
+    /// is ([`FrameKind`]) and its unwrapped number.
+    fn vehicle_sender(&mut self, r: &Received) -> (FrameKind, u64) {
+        let wall_s = self.t0.elapsed().as_secs_f64();
+        let (kind, number) = self.seq_watch.frame(r.header.sequence, &r.msg, wall_s);
         let t = self.target.unwrap_or_default();
         let ids = format!(
             "two vehicles with the ids (system {}, component {})",
             t.0, t.1
         );
-        if self.seq_watch.frame(r.header.sequence, &r.msg) {
-            self.same_ids = Some(format!(
-                "{ids}: {} of their last {} frames out of sequence (MAVLink's frame numbers of two senders interleaving; a link that reorders that many is not flown either): their measurements and positions would mix, which to fly is ambiguous",
-                crate::same_ids::OUT_OF_SEQUENCE_LIMIT,
-                crate::same_ids::SEQUENCE_WINDOW_FRAMES
+        if kind == FrameKind::Conflict {
+            self.second_sender_seen(format!(
+                "{ids}: two different frames numbered {} within the last {} numbers of their counter (a link loses, delays or doubles one sender's frames, never numbers two different ones alike: MAVLink's frame counters of two senders): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence,
+                crate::same_ids::SEQUENCE_WINDOW
             ));
-            return;
         }
-        if let MavMessage::HEARTBEAT(h) = &r.msg {
+        if let (FrameKind::New | FrameKind::Late, MavMessage::HEARTBEAT(h)) = (kind, &r.msg) {
             if h.mavtype != self.vehicle_type || h.autopilot != self.autopilot {
-                self.same_ids = Some(format!(
+                self.second_sender_seen(format!(
                     "{ids}: a heartbeat of {:?} ({:?}) after the vehicle's {:?} ({:?}) (a second vehicle with its ids, or its autopilot changed): which to fly is ambiguous",
                     h.mavtype, h.autopilot, self.vehicle_type, self.autopilot
                 ));
+            }
+        }
+        (kind, number)
+    }
+
+    /// A second sender with the vehicle's ids, `why`: the flight ends `vehicle_lost`
+    /// ([`Flight::check_vehicles`]), and from now on no heartbeat of the ids is the vehicle's
+    /// word (neither a pilot's nor a confirmation) and no disarm is sent: either sender may
+    /// be the vehicle, maybe flying ([`Flight::way_out`]).
+    fn second_sender_seen(&mut self, why: String) {
+        if !self.second_sender {
+            self.second_sender = true;
+            self.same_ids.get_or_insert(why);
+        }
+    }
+
+    /// A heartbeat of the vehicle's ids older than the last applied one (a late one): never
+    /// applied; if it shows another arming or mode than a pilot's word still awaiting
+    /// confirmation, the word has not stood uncontradicted: its span starts again (a second
+    /// vehicle whose frame counter runs ahead of the vehicle's makes every heartbeat of the
+    /// vehicle's older than its own, att33h-2/-3; one sender's heartbeat delivered after a
+    /// newer one only delays the word).
+    fn older_beat(&mut self, h: &HEARTBEAT_DATA) {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        let shows = (mode_of(h), armed);
+        let now = (self.custom_mode, self.armed);
+        if let Some(l) = self.leave_seen.as_mut().filter(|l| !l.confirmed) {
+            if shows != now {
+                l.at = Instant::now();
             }
         }
     }
@@ -2485,6 +2530,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.target = Some(from);
             self.vehicle_addr = None;
             self.seq_watch = Default::default();
+            self.beat_number = None;
             self.pos_watch = Default::default();
             self.firmware = Firmware::of(h.autopilot, h.mavtype);
             self.vehicle_type = h.mavtype;
@@ -2637,7 +2683,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.leave_seen.as_ref().is_some_and(|l| !l.confirmed)
     }
 
-    /// A heartbeat of the vehicle's (in sequence) came now: the gap since the last one noted,
+    /// A heartbeat of the vehicle's (applied) came now: the gap since the last one noted,
     /// the longest kept ([`Flight::confirm_span`]).
     fn note_beat(&mut self) {
         let now = Instant::now();
@@ -2653,10 +2699,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// confirmed: 1.1 x the vehicle's heartbeat period, within [1.1, 5] s: long enough that the
     /// vehicle flown, if the heartbeats were another's, has beaten meanwhile (att33f-1).
     ///
-    /// The period is the LONGEST gap between two heartbeats of the ids in sequence over the
+    /// The period is the LONGEST gap between two heartbeats of the ids applied over the
     /// whole flight, at least 1 s (MAVLink's nominal 1 Hz heartbeat; PX4's and ArduPilot's),
     /// not a guess of the next gap from the last few: a second vehicle with the ids beating
-    /// faster than the vehicle flown (its beats in sequence count as the vehicle's: the two
+    /// faster than the vehicle flown (its beats applied count as the vehicle's: the two
     /// cannot be told apart before they disagree), a heartbeat rate dropped (5 Hz to 1 Hz, a
     /// stream-rate change) or a jitter's long gap after short ones shortened such a guess below
     /// the vehicle's own period, and a second vehicle's word then stood before the vehicle
@@ -2689,53 +2735,38 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             || (before.is_some() && self.custom_mode != before && !offboard)
     }
 
-    /// The vehicle's heartbeat just handled: in control or during a take-over, a pilot's word
-    /// ([`Flight::shows_pilots_word`]) is watched until confirmed ([`LeaveSeen`]);
-    /// `out_of_sequence_before` counts the vehicle's frames out of sequence before this
-    /// heartbeat's, `was` is its mode and arming before it.
-    fn watch_leave(&mut self, out_of_sequence_before: u64, was: (Option<u32>, bool)) {
+    /// The vehicle's heartbeat just handled (applied): in control or during a take-over, a
+    /// pilot's word ([`Flight::shows_pilots_word`]) is watched until confirmed
+    /// ([`LeaveSeen`]); `was` is its mode and arming before it.
+    fn watch_leave(&mut self, was: (Option<u32>, bool)) {
         self.heartbeats += 1;
         if self.mode_at_first_command.is_some() && self.armed {
             self.armed_since_command = true;
         }
         let shows_control = !self.shows_pilots_word();
-        let now = self.seq_watch.out_of_sequence;
         let span = self.confirm_span();
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name()
         );
-        let t = self.target.unwrap_or_default();
         match (&mut self.leave_seen, shows_control) {
             (None, true) => {}
             (None, false) => {
                 self.leave_seen = Some(LeaveSeen {
                     at: Instant::now(),
                     span,
-                    out_of_sequence: out_of_sequence_before,
                     before: was,
                     what: state,
                     confirmed: false,
                     back: false,
                 })
             }
-            // A late frame now and then (a link that reorders) changes nothing (att33e-6).
+            // Late frames (a link that reorders) change nothing (att33e-6, att33g-2).
             (Some(l), false) if !l.confirmed && l.at.elapsed() >= l.span => l.confirmed = true,
-            (Some(l), true) if !l.confirmed => {
-                if now > l.out_of_sequence {
-                    let what = format!(
-                        "two vehicles with the ids (system {}, component {}): a heartbeat {}, then one {state}, and {} of their frames out of sequence between (a second vehicle's frame counter): which to fly is ambiguous, not a pilot's word",
-                        t.0,
-                        t.1,
-                        l.what,
-                        now - l.out_of_sequence
-                    );
-                    self.same_ids.get_or_insert(what);
-                } else {
-                    (l.confirmed, l.back) = (true, true);
-                }
-            }
+            // A heartbeat newer than the word's that no longer shows it, and no second sender
+            // seen: one sender's change and back, the pilot's word all the same.
+            (Some(l), true) if !l.confirmed => (l.confirmed, l.back) = (true, true),
             _ => {}
         }
     }
@@ -2913,7 +2944,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if self.pos_watch.position(p, ms, wall_s) && self.same_ids.is_none() {
             let t = self.target.unwrap_or_default();
             let (d, dt) = self.pos_watch.last_jump.unwrap_or_default();
-            self.same_ids = Some(format!(
+            self.second_sender_seen(format!(
                 "two vehicles with the ids (system {}, component {}): {} of their last {} positions jumped farther than {} m/s covers (the last {} m in {} s): two vehicles' positions interleaving, which to fly is ambiguous",
                 t.0,
                 t.1,
@@ -2961,7 +2992,22 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// The way out of `end` ([`Flight::way_out_one_sender`]'s), but once a second sender with
+    /// the vehicle's ids has been seen, the `--failsafe` mode in place of any (never a disarm:
+    /// either sender may be the vehicle, and the companion cannot tell which is on the ground),
+    /// and still nothing where nothing would be commanded (the companion commanded nothing
+    /// before).
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        let way = self.way_out_one_sender(end);
+        if self.second_sender {
+            way.map(|_| WayOut::Mode(self.opts.failsafe.mode()))
+        } else {
+            way
+        }
+    }
+
+    /// The way out of `end` with one sender of the vehicle's ids.
+    fn way_out_one_sender(&self, end: FlyEnd) -> Option<WayOut> {
         if end == FlyEnd::TwoVehicles {
             return self.two_vehicles_way_out();
         }
@@ -3008,6 +3054,17 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// What the failsafe's log says once a second sender with the vehicle's ids was seen.
+    fn second_sender_note(&self) -> String {
+        let t = self.target.unwrap_or_default();
+        format!(
+            ": a second sender with the vehicle's ids (system {}, component {}) was seen, and nothing tells the two apart: no heartbeat of the ids is taken as a confirmation or a pilot's word, and no disarm is sent (either may be the vehicle, maybe flying); {} is commanded to the retries' bound. A vehicle armed on the ground must be disarmed by its operator (PX4's preflight auto-disarm may do it)",
+            t.0,
+            t.1,
+            self.firmware.name_of(self.opts.failsafe.mode())
+        )
+    }
+
     /// Lets go after `end`: commands the way out until the vehicle confirms it; returns
     /// (confirmed, anything commanded).
     fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
@@ -3050,10 +3107,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok((false, false));
         }
         self.event(format!(
-            "failsafe ({}): setpoints stopped, {what}",
-            end.as_str()
+            "failsafe ({}): setpoints stopped, {what}{}",
+            end.as_str(),
+            if self.second_sender {
+                self.second_sender_note()
+            } else {
+                String::new()
+            }
         ));
         let (confirmed, tries, why) = self.command_way_out(way)?;
+        // The way out may have turned to the failsafe mode (a second sender seen meanwhile).
+        let way = if self.second_sender {
+            WayOut::Mode(self.opts.failsafe.mode())
+        } else {
+            way
+        };
         let what = match way {
             WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
             WayOut::Disarm => "disarm",
@@ -3072,21 +3140,29 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         Ok((confirmed, true))
     }
 
+    /// The command and parameters of `way`; `None` for a mode without a table here.
+    fn way_out_command(&self, way: WayOut) -> Option<(MavCmd, [f32; 3])> {
+        match way {
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self
+                .firmware
+                .set_mode_params(m)
+                .map(|p| (MavCmd::MAV_CMD_DO_SET_MODE, p)),
+            // Forced (param2 21196, MAVLink's magic number): only a vehicle the companion armed
+            // itself on the ground and never had in OFFBOARD is disarmed, and an autopilot that
+            // counts a fixed wing as flying (isotrack sitl) refuses an unforced disarm.
+            WayOut::Disarm => Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 21196.0, 0.0])),
+        }
+    }
+
     /// Commands `way` every 0.3 s until the vehicle's heartbeat confirms it or it refuses it,
     /// or the link is lost (no message from the vehicle for `timeout_s`; at least 5 tries even
     /// then: the vehicle may hear what it cannot answer), a new signal arrives, or the
     /// retries' bound passes (3 x `timeout_s` within [3, 30] s). Returns (confirmed, tries, why
     /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
-        let (cmd, params) = match way {
-            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => match self.firmware.set_mode_params(m) {
-                Some(p) => (MavCmd::MAV_CMD_DO_SET_MODE, p),
-                None => return Ok((false, 0, "no mode table for this vehicle here")),
-            },
-            // Forced (param2 21196, MAVLink's magic number): only a vehicle the companion armed
-            // itself on the ground and never had in OFFBOARD is disarmed, and an autopilot that
-            // counts a fixed wing as flying (isotrack sitl) refuses an unforced disarm.
-            WayOut::Disarm => (MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [0.0, 21196.0, 0.0]),
+        let mut way = way;
+        let Some((mut cmd, mut params)) = self.way_out_command(way) else {
+            return Ok((false, 0, "no mode table for this vehicle here"));
         };
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
         // retries.
@@ -3109,16 +3185,40 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // The vehicle refused the way out: an unaddressed refusal may answer someone else's
         // same command (att33e-5), so the retries go on to their bound, which then says so.
         let mut refused = false;
+        // A second sender with the ids was seen before the retries began (their log said so).
+        let mut told = self.second_sender;
         loop {
+            if self.second_sender && !told {
+                // A second sender with the ids seen during the retries: no answer of the
+                // heartbeats any more, never a disarm (either may be the vehicle, maybe
+                // flying): the failsafe mode instead, to the bound.
+                told = true;
+                if !matches!(way, WayOut::Mode(_)) {
+                    way = WayOut::Mode(self.opts.failsafe.mode());
+                    let Some(c) = self.way_out_command(way) else {
+                        return Ok((false, tries, "no mode table for this vehicle here"));
+                    };
+                    (cmd, params) = c;
+                    accepted = None;
+                }
+                let note = self.second_sender_note();
+                self.event(format!("during the failsafe's retries{note}"));
+            }
+            if self.second_sender {
+                // No answer awaited holds the retries back any more.
+                watch.seen = None;
+            }
             let lost =
                 self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
             if lost && tries >= 5 {
                 return Ok((false, tries, "link lost"));
             }
-            let bound = if refused {
-                "refused"
-            } else {
-                "retries' bound reached"
+            let bound = match (refused, self.second_sender) {
+                (true, _) => "refused",
+                (false, true) => {
+                    "retries' bound reached; a second sender with the ids: no heartbeat confirms it"
+                }
+                (false, false) => "retries' bound reached",
             };
             if tries >= MAX_WAY_OUT_TRIES {
                 return Ok((false, tries, bound));
@@ -3129,9 +3229,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, bound));
             }
-            if accepted.is_none_or(|at| self.last_heartbeat > at)
-                && (watch.seen.is_none() || watch.two_senders)
-            {
+            // After a second sender no heartbeat is applied: any heard says the vehicle answered.
+            let heard = if self.second_sender {
+                self.beat_heard
+            } else {
+                self.last_heartbeat
+            };
+            if accepted.is_none_or(|at| heard > at) && watch.seen.is_none() {
                 tries += 1;
                 self.command(cmd, params)?;
             }
@@ -3186,18 +3290,39 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if Some((r.header.system_id, r.header.component_id)) != self.target {
                     continue;
                 }
+                let (kind, number) = self.vehicle_sender(&r);
+                if kind == FrameKind::Copy {
+                    // Delivered again: ignored entirely.
+                    continue;
+                }
                 self.last_link = Instant::now();
                 if self.ack_for_another(&r) {
                     continue;
                 }
-                let before_frame = (self.seq_watch.out_of_sequence, self.seq_watch.duplicates);
-                self.seq_watch.frame(r.header.sequence, &r.msg);
-                let late =
-                    (self.seq_watch.out_of_sequence, self.seq_watch.duplicates) != before_frame;
                 match &r.msg {
-                    // A late heartbeat or a second sender's: not the vehicle's now (att33e-2).
-                    MavMessage::HEARTBEAT(_) if late => continue,
-                    MavMessage::HEARTBEAT(_) => self.last_heartbeat = Instant::now(),
+                    // After a second sender: heard (the link alive), never an answer.
+                    MavMessage::HEARTBEAT(_) if self.second_sender => {
+                        self.beat_heard = Instant::now();
+                        continue;
+                    }
+                    // Older than the last applied (a late one): not the vehicle's answer now;
+                    // one showing another answer than the one awaited restarts its span.
+                    MavMessage::HEARTBEAT(h) if self.beat_number.is_some_and(|b| number <= b) => {
+                        self.beat_heard = Instant::now();
+                        let answer = self.heartbeat_answer(h, way, before);
+                        let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
+                        if let Some(seen) = watch.seen.as_mut() {
+                            if answer.is_none() || seen.pilots != pilots {
+                                seen.at = Instant::now();
+                            }
+                        }
+                        continue;
+                    }
+                    MavMessage::HEARTBEAT(_) => {
+                        self.last_heartbeat = Instant::now();
+                        self.beat_heard = self.last_heartbeat;
+                        self.beat_number = Some(number);
+                    }
                     MavMessage::COMMAND_ACK(a)
                         if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
                     {
@@ -3235,29 +3360,24 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 }
 
 impl<S: TraceSink + ?Sized> Flight<'_, S> {
-    /// A heartbeat's `answer` (in sequence) during the retries, watched ([`AnswerSeen`]): the
-    /// answer once heartbeats have shown it for `span` with none contradicting (one showing
-    /// nothing yet, or the other kind of answer); a contradiction with frames of the ids out of
-    /// sequence since is two senders' (`two_senders`: the retries are no longer held back).
+    /// A heartbeat's `answer` (applied: newer than the last) during the retries, watched
+    /// ([`AnswerSeen`]): the answer once heartbeats have shown it for `span` with none
+    /// contradicting (one showing nothing yet, or the other kind of answer, starts over).
     fn answer_stands(
         &self,
         answer: Option<Answer>,
         watch: &mut RetryWatch,
         span: Duration,
     ) -> Option<Answer> {
-        let now = self.seq_watch.out_of_sequence;
         let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
-        match (&watch.seen, answer.is_some()) {
-            (Some(seen), true) if seen.pilots == pilots => {
+        if let (Some(seen), true) = (&watch.seen, answer.is_some()) {
+            if seen.pilots == pilots {
                 return (seen.at.elapsed() >= span).then_some(answer).flatten();
             }
-            (Some(seen), _) if now > seen.out_of_sequence => watch.two_senders = true,
-            _ => {}
         }
         watch.seen = answer.is_some().then(|| AnswerSeen {
             pilots,
             at: Instant::now(),
-            out_of_sequence: now,
         });
         None
     }
@@ -3279,7 +3399,7 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         self.armed_by_us && !self.in_control && (self.armed || self.confirmed_state().1)
     }
 
-    /// What a heartbeat of the vehicle's (in sequence) during the retries of `way` answers:
+    /// What a heartbeat of the vehicle's (applied) during the retries of `way` answers:
     /// the mode commanded (or, for a disarm, disarmed), another safe mode, a pilot's change
     /// ([`Flight::pilots_change`]; out of OFFBOARD in any other mode for `LeaveOffboard`), or
     /// nothing yet.

@@ -83,8 +83,55 @@ fn fly_against_with(
     max_duration_s: f64,
     tweak: impl FnOnce(&mut FlyOptions),
     echo: bool,
-    mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
+    turn: impl FnMut(u32) -> Vec<Vec<u8>>,
 ) -> FlyReport {
+    fly_against_seen(max_duration_s, tweak, echo, turn).0
+}
+
+/// A command fly sent: `MAV_CMD` number and its first three parameters.
+type Sent = (u16, [f32; 3]);
+
+/// The `COMMAND_LONG`s (message 76) in a datagram of MAVLink 2 frames, read by hand: the
+/// payload's seven f32 parameters, then the u16 command (MAVLink 2 drops the payload's
+/// trailing zero bytes: what is missing is 0).
+fn command_longs(d: &[u8]) -> Vec<Sent> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 12 <= d.len() && d[i] == 0xFD {
+        let len = d[i + 1] as usize;
+        let signed = d[i + 2] & 1 == 1;
+        let id = u32::from_le_bytes([d[i + 7], d[i + 8], d[i + 9], 0]);
+        let end = (i + 10 + len).min(d.len());
+        if id == 76 {
+            let mut p = [0u8; 33];
+            let n = (end - i - 10).min(33);
+            p[..n].copy_from_slice(&d[i + 10..i + 10 + n]);
+            let f =
+                |k: usize| f32::from_le_bytes([p[4 * k], p[4 * k + 1], p[4 * k + 2], p[4 * k + 3]]);
+            out.push((u16::from_le_bytes([p[28], p[29]]), [f(0), f(1), f(2)]));
+        }
+        i = end + 2 + if signed { 13 } else { 0 };
+    }
+    out
+}
+
+/// `MAV_CMD_COMPONENT_ARM_DISARM`'s number.
+const ARM_DISARM: u16 = 400;
+/// `MAV_CMD_DO_SET_MODE`'s number.
+const SET_MODE: u16 = 176;
+
+/// Whether fly ever sent a disarm (`ARM_DISARM` with param1 0, forced or not).
+fn disarm_sent(c: &[Sent]) -> bool {
+    c.iter().any(|&(cmd, p)| cmd == ARM_DISARM && p[0] == 0.0)
+}
+
+/// [`fly_against_with`], also returning the commands fly sent (`COMMAND_LONG`), in order.
+fn fly_against_seen(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    echo: bool,
+    mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
+) -> (FlyReport, Vec<Sent>) {
     let s = load_scenario(None, &[]).unwrap();
     let mut o = FlyOptions::new("udpin:127.0.0.1:0");
     o.timeout_s = 2.0;
@@ -103,6 +150,7 @@ fn fly_against_with(
     sock.set_read_timeout(Some(Duration::from_millis(50)))
         .unwrap();
     let mut buf = [0u8; 2048];
+    let mut commands = Vec::new();
     let t0 = Instant::now();
     let mut k = 0;
     while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
@@ -116,13 +164,14 @@ fn fly_against_with(
             if echo {
                 sock.send_to(&buf[..n], fly).unwrap();
             }
+            commands.extend(command_longs(&buf[..n]));
             sock.set_read_timeout(Some(Duration::from_millis(1)))
                 .unwrap();
         }
         sock.set_read_timeout(Some(Duration::from_millis(50)))
             .unwrap();
     }
-    companion.join().unwrap()
+    (companion.join().unwrap(), commands)
 }
 
 /// Vehicle A (armed, in PX4 mode `main`) alone for 20 turns (1 s), then vehicle B with the same
@@ -165,7 +214,7 @@ fn two_senders_with_the_same_ids_on_one_address_end_the_flight_in_control() {
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(
         r.events.iter().any(|e| e.contains(
-            "two vehicles with the ids (system 1, component 1): 12 of their last 512 frames out of sequence"
+            "two vehicles with the ids (system 1, component 1): two different frames numbered"
         )),
         "{:?}",
         r.events
@@ -180,7 +229,9 @@ fn two_senders_with_the_same_ids_before_control_command_nothing() {
     let r = two_senders(2);
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(
-        r.events.iter().any(|e| e.contains("out of sequence")),
+        r.events
+            .iter()
+            .any(|e| e.contains("two different frames numbered")),
         "{:?}",
         r.events
     );
@@ -188,8 +239,9 @@ fn two_senders_with_the_same_ids_before_control_command_nothing() {
     assert!(r.commands.is_empty(), "{:?}", r.commands);
 }
 
-/// One vehicle over a link that loses every third frame, loses 150 in a row once (a fade: its
-/// counter seems to step back), and swaps two neighbours every 100 frames: flown to its
+/// One vehicle (six frames a turn) over a link that loses every third frame, loses the 150
+/// of 25 turns in a row once (a fade, silent for 25 turns where 64 frames take 16: its
+/// counter seems to step back 106), and swaps two neighbours every 100 frames: flown to its
 /// `max_duration_s`, never taken for two.
 #[test]
 fn one_sender_over_a_lossy_reordering_link_is_flown() {
@@ -198,12 +250,21 @@ fn one_sender_over_a_lossy_reordering_link_is_flown() {
     let mut held: Option<Vec<u8>> = None;
     let r = fly_against(3.0, move |k| {
         let ms = 1000 + 50 * k;
-        if k == 30 {
-            // 150 frames lost (a fade).
-            a.seq = a.seq.wrapping_add(150);
+        let p = position(ms, 0.05 * k as f32);
+        let frames = a.frames(&[
+            heartbeat(6),
+            iso_s(ms, 9.5),
+            p.clone(),
+            p.clone(),
+            p.clone(),
+            p,
+        ]);
+        if (30..55).contains(&k) {
+            // A fade: the turn's frames lost.
+            return Vec::new();
         }
         let mut out = Vec::new();
-        for (_, f) in a.frames(&[heartbeat(6), iso_s(ms, 9.5), position(ms, 0.05 * k as f32)]) {
+        for (_, f) in frames {
             n += 1;
             if n.is_multiple_of(3) {
                 continue;
@@ -1051,19 +1112,90 @@ fn a_heartbeat_on_the_number_of_the_last_one_is_no_copy() {
     );
 }
 
-/// att33f-6 (C4, N9a): `--take-control --arm` of a disarmed vehicle (1 Hz heartbeat; it shows
-/// itself armed from 3 s, after the companion's arming, and never goes to OFFBOARD). From 3.5 s
-/// a second vehicle with its ids beats disarmed in MANUAL at 4 Hz; the vehicle's 4 s heartbeat
-/// contradicts it (`vehicle_lost`) and the second vehicle's comes right after. The vehicle the
-/// companion armed on the ground gets the forced disarm (the disarmed heartbeat is not
-/// confirmed: a second vehicle's), retried to the bound, never "a pilot took over". Before:
-/// the last heartbeat's disarmed state skipped the disarm: nothing commanded, the vehicle left
-/// armed on the ground.
+/// `fly` (tweaked as [`fly_against_with`]) against a vehicle as [`vehicle_and_twin`]'s, and
+/// a second vehicle with its ids from `twin_from_s` on: its own frame counter, starting
+/// `ahead` numbers ahead of the vehicle's and stepping by one per frame (no reset), a
+/// position 0.5 m from the vehicle's every 40 ms and a heartbeat whenever `twin(t_s)` gives
+/// one. Returns the report and the commands fly sent.
+fn vehicle_and_twin_with_positions(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    mut vehicle: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+    twin_from_s: f64,
+    ahead: u8,
+    mut twin: impl FnMut(f64) -> Option<MavMessage> + Send + 'static,
+) -> (FlyReport, Vec<Sent>) {
+    let mut a = vehicle_sender();
+    let mut b: Option<Sender> = None;
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    fly_against_seen(max_duration_s, tweak, false, move |_| {
+        let t_s = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t_s * 1000.0) as u32;
+        let beat = vehicle(t_s);
+        let due = ms >= last_ms + 40;
+        let mut msgs = Vec::new();
+        if due || beat.is_some() {
+            last_ms = ms;
+            msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
+        }
+        msgs.extend(beat);
+        let mut out = datagrams(a.frames(&msgs));
+        if t_s >= twin_from_s {
+            let b = b.get_or_insert_with(|| Sender {
+                seq: a.seq.wrapping_add(ahead),
+                ids: (1, 1),
+            });
+            let mut m: Vec<MavMessage> = twin(t_s).into_iter().collect();
+            if due {
+                m.push(position(ms + 10, 0.5));
+            }
+            out.extend(datagrams(b.frames(&m)));
+        }
+        out
+    })
+}
+
+/// Asserts the end after a second sender was seen: `vehicle_lost`, the HOLD commanded more
+/// than once and never confirmed, no disarm ever sent, no pilot's word taken, and the log
+/// saying so.
+fn assert_hold_never_a_disarm(r: &FlyReport, c: &[Sent]) {
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(!disarm_sent(c), "{c:?} {:?}", r.events);
+    assert!(
+        c.iter().filter(|x| x.0 == SET_MODE).count() >= 2,
+        "{c:?} {:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "a second sender with the vehicle's ids (system 1, component 1) was seen, and nothing tells the two apart"
+        ) && e.contains("no disarm is sent")
+            && e.contains("must be disarmed by its operator")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att33f-6 / att33h-2 (C4, N9a): `--take-control --arm` of a disarmed vehicle (1 Hz
+/// heartbeat; it shows itself armed from 3 s, after the companion's arming, and never goes to
+/// OFFBOARD). From 3.5 s a second vehicle with its ids beats disarmed in MANUAL at 4 Hz, its
+/// counter 100 ahead. Once its frames and the vehicle's meet on one number (a conflict), the
+/// flight ends `vehicle_lost`; either may be the vehicle (the companion cannot tell which is on
+/// the ground), so no disarm is sent: HOLD, to the retries' bound, never confirmed. Before
+/// (main): the forced disarm, to whichever of the two heard it.
 #[test]
-fn a_twin_during_take_control_arm_gets_the_forced_disarm() {
+fn a_twin_during_take_control_arm_gets_hold_never_a_disarm() {
     let mut own = Beats::new(0.0, &[1.0]);
     let mut other = Beats::new(3.5, &[0.25]);
-    let r = vehicle_and_twin(
+    let (r, c) = vehicle_and_twin_with_positions(
         30.0,
         |o| {
             o.take_control = true;
@@ -1078,21 +1210,189 @@ fn a_twin_during_take_control_arm_gets_the_forced_disarm() {
                 }
             })
         },
+        3.5,
+        100,
         move |t| other.due(t).then(|| heartbeat_disarmed(1)),
     );
-    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
-    assert!(r.way_out_commanded, "{:?}", r.events);
-    assert!(
-        r.events
-            .iter()
-            .any(|e| e.contains("disarm commanded (armed by the companion, on the ground)")),
-        "{:?}",
-        r.events
+    assert_hold_never_a_disarm(&r, &c);
+}
+
+/// att33g-1 / att33h-5 (N9a, W3b): `--take-control --arm`, the vehicle armed on the
+/// companion's arming (from 2.9 s) but staying in MANUAL; a second vehicle with its ids,
+/// counter 120 ahead, beats armed in OFFBOARD at 5 Hz from 3.2 s (after the companion's switch
+/// to OFFBOARD): control is taken on its beat. The conflict of the two counters ends the flight `vehicle_lost`: HOLD to the bound,
+/// never a disarm, never "a pilot's change and back".
+#[test]
+fn a_twins_offboard_beat_during_take_control_arm_gets_hold_never_a_disarm() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(3.2, &[0.2]);
+    let (r, c) = vehicle_and_twin_with_positions(
+        30.0,
+        |o| {
+            o.take_control = true;
+            o.arm = true;
+        },
+        move |t| {
+            own.due(t).then(|| {
+                if t < 2.9 {
+                    heartbeat_disarmed(1)
+                } else {
+                    heartbeat(1)
+                }
+            })
+        },
+        3.2,
+        120,
+        move |t| other.due(t).then(|| heartbeat(6)),
     );
+    assert_hold_never_a_disarm(&r, &c);
+}
+
+/// att33h-3 (X1): in control of a vehicle its pilot armed (OFFBOARD, 1 Hz heartbeat), a
+/// second vehicle with its ids from 2.05 s: disarmed heartbeats at 5 Hz and a position every
+/// 40 ms, its counter 60 ahead (as many frames as the vehicle's: the vehicle's heartbeats are
+/// all older than its last one). Its disarm is no pilot's word: the vehicle's own heartbeats,
+/// older, keep it from standing; the two counters' conflict ends the flight `vehicle_lost`,
+/// HOLD to the bound. Before (main): the twin's word ended the retries ("pilot_took_over during
+/// the failsafe"), the vehicle left in OFFBOARD with nobody sending setpoints.
+#[test]
+fn a_twin_with_positions_ahead_in_control_is_no_pilots_word() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.05, &[0.2]);
+    let (r, c) = vehicle_and_twin_with_positions(
+        30.0,
+        |_| {},
+        move |t| own.due(t).then(|| heartbeat(6)),
+        2.05,
+        60,
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_hold_never_a_disarm(&r, &c);
+}
+
+/// att33h-8 (F1): in control, Ctrl-C at 2.5 s starts the failsafe (HOLD never acknowledged
+/// nor carried out: the vehicle stays armed in OFFBOARD); from 2.6 s a second vehicle with its
+/// ids beats disarmed at 5 Hz and sends positions every 40 ms, its counter 40 ahead. Its
+/// disarm never ends the retries as a pilot's: HOLD retried, never confirmed, never "a pilot
+/// took over". Before (main): "pilot_took_over during the failsafe" after 2 tries.
+#[test]
+fn a_twin_with_positions_during_the_failsafe_is_no_pilots_word() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.6, &[0.2]);
+    let (r, c) = vehicle_and_twin_with_positions(
+        30.0,
+        |o| {
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(2500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        move |t| own.due(t).then(|| heartbeat(6)),
+        2.6,
+        40,
+        move |t| other.due(t).then(|| heartbeat_disarmed(1)),
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(!disarm_sent(&c), "{c:?}");
     assert!(
         !r.events.iter().any(|e| e.contains("pilot_took_over")),
         "{:?}",
         r.events
     );
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("during the failsafe's retries: a second sender")),
+        "{:?}",
+        r.events
+    );
+    assert!(c.iter().filter(|x| x.0 == SET_MODE).count() >= 2, "{c:?}");
+}
+
+/// att33g-2 / att33h-1 (P5a): the pilot (the vehicle in OFFBOARD, 1 Hz heartbeat, frames
+/// every 40 ms) switches to MANUAL at 2.5 s, and from then for 1 s the link swaps the first
+/// two frames of every turn (a frame late every 50 ms, the MANUAL heartbeats among them): late
+/// frames of one sender, however many, are never a second sender: `pilot_took_over`, nothing
+/// commanded. Before (main): 12 late frames in 512 were two senders: `vehicle_lost`, HOLD
+/// commanded against the pilot.
+#[test]
+fn a_burst_of_reordering_after_a_pilots_switch_is_no_second_sender() {
+    let mut a = vehicle_sender();
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut last_ms = 0u32;
+    let t0 = Instant::now();
+    let (r, c) = fly_against_seen(
+        30.0,
+        |_| {},
+        false,
+        move |_| {
+            let t = t0.elapsed().as_secs_f64();
+            let ms = 1000 + (t * 1000.0) as u32;
+            let beat = own.due(t).then(|| heartbeat(if t < 2.5 { 6 } else { 1 }));
+            if ms < last_ms + 40 && beat.is_none() {
+                return Vec::new();
+            }
+            last_ms = ms;
+            let mut out = turn_frames(&mut a, beat, ms);
+            if (2.5..3.5).contains(&t) {
+                out.swap(0, 1);
+            }
+            out
+        },
+    );
+    assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(c.is_empty(), "{c:?}");
+    assert!(
+        !r.events.iter().any(|e| e.contains("two vehicles")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// S11: every heartbeat (1 Hz) delivered one frame late (swapped with the frame after it): a
+/// heartbeat of the ids keeps the link alive, and one newer than the last applied is applied
+/// however it came: in control the flight goes on to its `max_duration_s` (8 s); a pilot's
+/// MANUAL at 3.5 s is confirmed (`pilot_took_over`, nothing commanded). Before (main): every heartbeat
+/// after the first was dropped as late: `link_lost` 3 s on, HOLD commanded.
+#[test]
+fn heartbeats_each_one_frame_late_keep_the_link() {
+    for pilot in [false, true] {
+        let mut a = vehicle_sender();
+        let mut own = Beats::new(0.0, &[1.0]);
+        let mut last_ms = 0u32;
+        let t0 = Instant::now();
+        let (r, c) = fly_against_seen(
+            8.0,
+            |_| {},
+            false,
+            move |_| {
+                let t = t0.elapsed().as_secs_f64();
+                let ms = 1000 + (t * 1000.0) as u32;
+                let manual = pilot && t >= 3.5;
+                let beat = own.due(t).then(|| heartbeat(if manual { 1 } else { 6 }));
+                if ms < last_ms + 40 && beat.is_none() {
+                    return Vec::new();
+                }
+                last_ms = ms;
+                let late = beat.is_some();
+                let mut out = turn_frames(&mut a, beat, ms);
+                if late {
+                    out.swap(0, 1);
+                }
+                out
+            },
+        );
+        if pilot {
+            assert_eq!(r.end, FlyEnd::PilotTookOver, "{:?}", r.events);
+            assert!(!r.way_out_commanded, "{:?}", r.events);
+            assert!(c.is_empty(), "{c:?}");
+        } else {
+            // Flown to the end (the HOLD of max_duration), never link_lost.
+            assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+        }
+    }
 }
