@@ -32,6 +32,13 @@ pub trait ArcProjection: Sync {
     fn is_closed(&self) -> bool {
         true
     }
+    /// The point of the isoline at arc coordinate `s_m` (wrapped into `[0, length)` on a loop,
+    /// clamped to the ends of an open curve); `None` where the projection does not know its
+    /// points (the default) or `s_m` is not finite. The team metrics along a moving isoline
+    /// carry each revisit bin's last pass from one extraction to the next through its point.
+    fn point_at(&self, _s_m: f64) -> Option<Vec2> {
+        None
+    }
 }
 
 /// A circle of radius `radius_m` about `center_m`: `s = R * atan2(y - y0, x - x0)` wrapped to
@@ -65,6 +72,14 @@ impl ArcProjection for CircleArc {
             s_m: s,
             tangent: Vec2::new(-d.y / n, d.x / n),
         })
+    }
+
+    fn point_at(&self, s_m: f64) -> Option<Vec2> {
+        if !(s_m.is_finite() && self.radius_m > 0.0) {
+            return None;
+        }
+        let th = s_m / self.radius_m;
+        Some(self.center_m + Vec2::new(self.radius_m * th.cos(), self.radius_m * th.sin()))
     }
 }
 
@@ -192,6 +207,30 @@ impl ArcProjection for PolylineArc {
         let l = self.length_m();
         let s = if self.closed && s >= l { s - l } else { s };
         Some(ArcPoint { s_m: s, tangent })
+    }
+
+    fn point_at(&self, s_m: f64) -> Option<Vec2> {
+        if !s_m.is_finite() {
+            return None;
+        }
+        let l = self.length_m();
+        let s = if self.closed {
+            wrap_arc(s_m, l)
+        } else {
+            s_m.clamp(0.0, l)
+        };
+        let n = self.vertices.len();
+        let segments = if self.closed { n } else { n - 1 };
+        // The segment `i` with `cum[i] <= s < cum[i + 1]` (the last one at the end).
+        let i = (self.cum.partition_point(|c| *c <= s).max(1) - 1).min(segments - 1);
+        let (a, b) = (self.vertices[i], self.vertices[(i + 1) % n]);
+        let len = self.cum[i + 1] - self.cum[i];
+        let u = if len > 0.0 {
+            ((s - self.cum[i]) / len).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        Some(a + (b - a) * u)
     }
 }
 

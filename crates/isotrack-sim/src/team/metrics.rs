@@ -195,6 +195,14 @@ pub struct TeamMetrics {
     /// projected onto the new one (a new loop's arc coordinates differ by more than a rescale).
     reproject: bool,
     last_p: Vec<Vec2>,
+    /// Moving isoline: the points of the current isoline's bin boundaries (bin `b` starts at
+    /// `b L/M`), kept to carry each bin's last pass to the next extraction's isoline (empty
+    /// while the isoline gives no points: the bins are then only fractions of its length).
+    bound_p: Vec<Vec2>,
+    /// Scratch at an extraction: the old boundaries' arc coordinates on the new isoline with
+    /// their last passes, sorted; the vehicles' last positions' arc coordinates there.
+    carried: Vec<(f64, f64)>,
+    vehicles_new: Vec<f64>,
     /// The isoline is open ([`OpenIsolineStats`]).
     open: bool,
     /// Open isoline: per bin, whether it lay in the team's stretch at the first sample (its
@@ -286,6 +294,9 @@ impl TeamMetrics {
             skipped: 0,
             reproject: false,
             last_p: vec![Vec2::new(f64::NAN, f64::NAN); n],
+            bound_p: Vec::new(),
+            carried: Vec::new(),
+            vehicles_new: Vec::new(),
             open: false,
             from_start: Vec::new(),
             started: false,
@@ -314,7 +325,15 @@ impl TeamMetrics {
     /// Metrics along an isoline that moves: the isoline passed to each
     /// [`observe`](Self::observe) may differ (its length, its arc coordinates); the arc
     /// coordinates of the last sample are rescaled to the new length, the bins of the revisit
-    /// times are fractions of the length, `isoline_length_m` is the mean length.
+    /// times are `revisit_bins` equal arcs of the isoline of the time, `isoline_length_m` is the
+    /// mean length. At an extraction ([`extracted`](Self::extracted)) each bin's last pass is
+    /// carried from the old isoline to the new one by place, not by its fraction of the length
+    /// (issue 32, nu36-6): the old bins' boundaries are projected onto the new isoline, and a new
+    /// boundary takes the last pass interpolated between the two old ones about it (the time a
+    /// vehicle passed is linear in the arc between two vehicles), or, where a vehicle lies
+    /// between them, the one on its side. A new loop starts at the vertex nearest to the last
+    /// one's start, which slides along the loop as it deforms; taken by fraction, the bins slid
+    /// with it, and a bin sliding along with the vehicles went unpassed.
     pub fn moving(mut self) -> Self {
         self.moving = true;
         self
@@ -381,6 +400,9 @@ impl TeamMetrics {
         let rescale = (self.last_l != l).then(|| l / self.last_l);
         self.last_l = l;
         let reproject = core::mem::take(&mut self.reproject);
+        if self.moving {
+            self.carry_bins(arc, l, reproject, rescale.is_some());
+        }
         let m = self.cfg.revisit_bins;
         let bin = |s: f64| ((s / l * m as f64) as usize).min(m - 1);
         if in_window {
@@ -416,8 +438,11 @@ impl TeamMetrics {
                 arc.project(self.last_p[i]).map_or(f64::NAN, |a| a.s_m)
             } else {
                 match rescale {
-                    Some(r) => (self.last_s[i] * r).min(l.next_down()),
-                    None => self.last_s[i],
+                    // (A vehicle without a last arc coordinate keeps none: `NaN.min(x)` is `x`,
+                    // which had it pass from the loop's end at the first sample and after a
+                    // sample without an isoline.)
+                    Some(r) if !self.last_s[i].is_nan() => (self.last_s[i] * r).min(l.next_down()),
+                    _ => self.last_s[i],
                 }
             };
             self.last_s[i] = s;
@@ -502,6 +527,91 @@ impl TeamMetrics {
             self.cv_sum += cv;
             self.cv_count += 1;
             self.check_order();
+        }
+    }
+
+    /// Moving isoline, before a sample's passes on the isoline `arc` of length `l`: at an
+    /// extraction (`reproject`), each bin of the new isoline takes its last pass from the old
+    /// bins' boundaries projected onto it ([`moving`](Self::moving)); then, when the isoline is
+    /// new or `changed` (its length), the points of its bin boundaries for the next extraction.
+    /// `O(M x vertices)` per extraction (the projections), `O(M (log M + N))` for the rest.
+    fn carry_bins(&mut self, arc: &dyn ArcProjection, l: f64, reproject: bool, changed: bool) {
+        let m = self.cfg.revisit_bins;
+        if reproject && self.bound_p.len() == m && l > 0.0 && l.is_finite() {
+            self.carried.clear();
+            for (p, t) in self.bound_p.iter().zip(&self.bin_last) {
+                if let Some(a) = arc.project(*p) {
+                    self.carried.push((a.s_m, *t));
+                }
+            }
+            self.carried.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+            self.vehicles_new.clear();
+            for i in 0..self.n {
+                if self.last_s[i].is_nan() {
+                    continue;
+                }
+                if let Some(a) = arc.project(self.last_p[i]) {
+                    self.vehicles_new.push(a.s_m);
+                }
+            }
+            let k = self.carried.len();
+            for b in 0..m * usize::from(k > 0) {
+                let x = b as f64 * l / m as f64;
+                // The old boundaries about `x` (cyclically): `u0 <= x < u1`.
+                let hi = self.carried.partition_point(|c| c.0 <= x);
+                let (i0, i1) = if hi == 0 {
+                    (k - 1, 0)
+                } else {
+                    (hi - 1, hi % k)
+                };
+                let ((u0, t0), (u1, t1)) = (self.carried[i0], self.carried[i1]);
+                let g = wrap_arc(u1 - u0, l);
+                let at = wrap_arc(x - u0, l);
+                // The more recent pass is the side a vehicle between them came from (a pass
+                // never made is the oldest).
+                let recent0 = !t0.is_nan() && (t1.is_nan() || t0 >= t1);
+                let vehicle = self
+                    .vehicles_new
+                    .iter()
+                    .map(|q| wrap_arc(q - u0, l))
+                    .find(|e| *e < g);
+                self.bin_last[b] = match vehicle {
+                    Some(e) if recent0 => {
+                        if at <= e {
+                            t0
+                        } else {
+                            t1
+                        }
+                    }
+                    Some(e) => {
+                        if at >= e {
+                            t1
+                        } else {
+                            t0
+                        }
+                    }
+                    None if t0.is_nan() || t1.is_nan() || g <= 0.0 => {
+                        if at <= 0.5 * g {
+                            t0
+                        } else {
+                            t1
+                        }
+                    }
+                    None => t0 + (t1 - t0) * (at / g),
+                };
+            }
+        }
+        if self.bound_p.len() != m || reproject || changed {
+            self.bound_p.clear();
+            for b in 0..m {
+                match arc.point_at(b as f64 * l / m as f64) {
+                    Some(p) => self.bound_p.push(p),
+                    None => {
+                        self.bound_p.clear();
+                        return;
+                    }
+                }
+            }
         }
     }
 
@@ -825,6 +935,63 @@ mod tests {
         let last = 2.0 * PI * radius((steps - 1) as f64 * dt);
         assert!((lo - 20.0 * PI).abs() < 1e-9 && (hi - last).abs() < 1e-9);
         assert!((s.revisit_time_ideal_s - mean_l / 4.0).abs() < 1e-9);
+    }
+
+    /// Issue 32 (nu36-6): a loop re-extracted with its start vertex sliding along it. The
+    /// isoline is a circle of radius 20 m that does not move, given at every second as a
+    /// 720-gon whose first vertex is at the angle `phi(t) = c v t/R` (a moving isoline's start
+    /// slides as the loop deforms); four points evenly spread go round at `v = 1` m/s. Every
+    /// point of the circle is passed every `L/(N v) = 2 pi 20/4 = 31.42` s whatever the start,
+    /// so the longest and the mean revisit time over the window (the last 200 of 400 s) are
+    /// `L/(N v)`, to a bin's crossing `L/(M v) = 0.17` s, a sample (0.1 s) and the start's
+    /// slide in a second (`|c| v x 1 s`). Before the fix the bins were fractions of the length
+    /// from the start and slid with it: passed at the relative speed `(1 - c) v`, every
+    /// `L/(N (1 - c) v)`: 62.8 s for `c = 1/2`, 20.9 s for `c = -1/2`.
+    #[test]
+    fn a_loop_whose_start_slides_is_revisited_every_l_over_n_v() {
+        let (r, v, dt, n) = (20.0, 1.0, 0.1, 4usize);
+        let l = 2.0 * PI * r;
+        let ideal = l / (n as f64 * v);
+        let polygon = |phi: f64| {
+            PolylineArc::new(
+                (0..720)
+                    .map(|i| {
+                        let th = phi + 2.0 * PI * i as f64 / 720.0;
+                        Vec2::new(r * th.cos(), r * th.sin())
+                    })
+                    .collect(),
+            )
+            .unwrap()
+        };
+        for c in [0.5, -0.5, 0.0] {
+            let cfg = TeamMetricsConfig {
+                steady_state_start_step: 2000,
+                ..TeamMetricsConfig::default()
+            };
+            let mut m = TeamMetrics::new(cfg, n, f64::NAN, dt, v).moving();
+            let mut arc = polygon(0.0);
+            for k in 0..=4000u64 {
+                let t = k as f64 * dt;
+                if k % 10 == 0 {
+                    arc = polygon(c * v * t / r);
+                    m.extracted();
+                }
+                let pos: Vec<Vec2> = (0..n)
+                    .map(|i| {
+                        let th = v * t / r + 2.0 * PI * i as f64 / n as f64;
+                        Vec2::new(r * th.cos(), r * th.sin())
+                    })
+                    .collect();
+                m.observe(k, &arc, &pos, &[v; 4], &[true; 4]);
+            }
+            let s = m.finish();
+            let tol = l / (720.0 * v) + dt + c.abs() * v + 1e-9;
+            let mx = s.revisit_time_max_s.unwrap();
+            assert!((mx - ideal).abs() <= tol, "c {c}: max {mx} vs {ideal}");
+            let mean = s.revisit_time_mean_s.unwrap();
+            assert!((mean - ideal).abs() <= tol, "c {c}: mean {mean} vs {ideal}");
+            assert_eq!(s.moving_isoline.unwrap().extractions, 401);
+        }
     }
 
     /// Issue 32, att32 F2: a perfectly even team of `N` at `v` on a circle of length `L`, its
