@@ -30,7 +30,7 @@ use pyo3::prelude::*;
 /// The scaled error counted by the default termination penalty per step left: a run that ends
 /// early pays as if every remaining step had `|eps| = MAX_SCALED_ERROR * error_scale` at full
 /// effort.
-const MAX_SCALED_ERROR: f64 = 10.0;
+pub(crate) const MAX_SCALED_ERROR: f64 = 10.0;
 
 /// The largest |reward| an episode sums to: `error_scale`, `effort_weight` and
 /// `termination_penalty` are bounded so that every reward and their sum stay below it (finite).

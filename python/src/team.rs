@@ -12,12 +12,10 @@ use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
 use isotrack_scenario::field::FieldModel;
 use isotrack_scenario::spec::TeamSpec;
-use isotrack_scenario::{Scenario, Tracker};
-use isotrack_sim::team::arc::ArcProjection;
-use isotrack_sim::team::metrics::TeamMetricsConfig;
-use isotrack_sim::team::spacing::{RingMode, SpacingConfig};
-use isotrack_sim::team::Group;
-use isotrack_sim::{Oracles, TeamConfig, TeamMember, TeamResult, TraceRow, TraceSink};
+use isotrack_scenario::{Scenario, TeamIsolineModel, Tracker};
+use isotrack_sim::team::spacing::RingMode;
+use isotrack_sim::team::{Group, OwnedTeamIsoline};
+use isotrack_sim::{Oracles, TeamMember, TeamResult, TraceRow, TraceSink};
 use isotrack_vehicles::{DubinsSpeedState, DubinsState, DubinsVariableSpeed};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
@@ -396,6 +394,9 @@ struct Agent {
     omega: f64,
     /// Whether it has been reported done.
     done: bool,
+    /// Its tracking term `|eps| / error_scale` at the last pause with a true value (the term
+    /// of a step that ends it off the field, where the field has none: nu36-5).
+    last_tracking: f64,
 }
 
 /// The engine of `isotrack.pettingzoo`: a team stepped by agents outside the loop. Each env
@@ -421,6 +422,11 @@ pub struct PyTeamEnv {
     error_scale: f64,
     spacing_weight: f64,
     effort_weight: f64,
+    /// What an agent's early end (`left_field`, `diverged`) costs, beside its step's reward
+    /// (`None`: the default, as the single-vehicle environment's).
+    termination_penalty: Option<f64>,
+    /// The scenario's file (`summary.json`'s `scenario_path`), or `<...>` without one.
+    origin: String,
     record: bool,
 }
 
@@ -444,7 +450,7 @@ fn check_weight(name: &str, v: f64) -> PyResult<f64> {
 #[pymethods]
 impl PyTeamEnv {
     #[new]
-    #[pyo3(signature = (scenario, max_turn_rate_radps=None, error_scale=None, spacing_weight=1.0, effort_weight=0.01, record=true))]
+    #[pyo3(signature = (scenario, max_turn_rate_radps=None, error_scale=None, spacing_weight=1.0, effort_weight=0.01, record=true, termination_penalty=None))]
     fn new(
         scenario: &PyScenario,
         max_turn_rate_radps: Option<f64>,
@@ -452,6 +458,7 @@ impl PyTeamEnv {
         spacing_weight: f64,
         effort_weight: f64,
         record: bool,
+        termination_penalty: Option<f64>,
     ) -> PyResult<Self> {
         let s = scenario.inner.clone();
         let Some(team) = s.spec().team.as_ref() else {
@@ -491,6 +498,9 @@ impl PyTeamEnv {
         }
         let spacing_weight = check_weight("spacing_weight", spacing_weight)?;
         let effort_weight = check_weight("effort_weight", effort_weight)?;
+        let termination_penalty = termination_penalty
+            .map(|p| check_weight("termination_penalty", p))
+            .transpose()?;
         // The Gymnasium environments' rule (one function): every agent's reward of every step
         // of the episode, at most one step per engine step, summed, stays finite.
         let steps = s.plan().n_steps as f64 + 1.0;
@@ -499,6 +509,7 @@ impl PyTeamEnv {
             &[
                 ("spacing_weight", spacing_weight),
                 ("effort_weight", effort_weight),
+                ("termination_penalty", termination_penalty.unwrap_or(0.0)),
             ],
             steps * team.count() as f64,
             "steps x agents of an episode",
@@ -522,6 +533,8 @@ impl PyTeamEnv {
             error_scale: scale,
             spacing_weight,
             effort_weight,
+            termination_penalty,
+            origin: scenario.origin.clone(),
             record,
         };
         // A first team, to check the settings and find the period.
@@ -692,6 +705,13 @@ impl PyTeamEnv {
             let period = self.period;
             // The time of this pause, before the run is completed below.
             let paused_t_s = self.t_s();
+            // The environment steps an agent ending in this one would not fly (the default
+            // penalty's count): the episode's `floor(last / period)` less the steps taken,
+            // this one included (a team whose every vehicle has ended pauses at the step that
+            // ended the last one, within this env step: hence the rounding up).
+            let pauses_left = self.group.as_ref().map_or(0, |g| {
+                (last / period).saturating_sub(g.step_index().div_ceil(period))
+            });
             let mut last_pause = false;
             if self
                 .group
@@ -706,8 +726,14 @@ impl PyTeamEnv {
                 // no later pause, so no later action or sample, as `IsolineEnv` ends at its
                 // last sample (att30n-6: one more step, t = sim.duration_s, repeated this
                 // observation as `sampled`). The run's last steps are flown here with the
-                // commands of this pause, held, as `Scenario.run()` holds them.
+                // laws' answers to this pause, held, as `Scenario.run()` holds them.
                 last_pause = true;
+                // No action answers this pause: its speeds are the spacing laws' answers, as
+                // its turn rates are the tracking laws' (nu36-19: the agents' speeds of the
+                // pause before were held, and the tail flew another run than Scenario.run()).
+                if let Some(g) = self.group.as_mut() {
+                    g.release_speeds();
+                }
                 for (i, r) in rewards.iter_mut().enumerate() {
                     if !self.agents[i].done {
                         *r = self.reward(i);
@@ -742,7 +768,10 @@ impl PyTeamEnv {
                 let outcome = self.outcome(i);
                 match outcome {
                     Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
-                    Some(_) => terminated[i] = true,
+                    Some(_) => {
+                        terminated[i] = true;
+                        rewards[i] -= self.penalty(pauses_left);
+                    }
                     None if !running => truncated[i] = true,
                     None => {}
                 }
@@ -792,7 +821,7 @@ impl PyTeamEnv {
     fn summary_json(&self) -> PyResult<Option<String>> {
         self.result
             .as_ref()
-            .map(|r| team_summary_json(&self.scenario, "<env>", r))
+            .map(|r| team_summary_json(&self.scenario, &self.origin, r))
             .transpose()
     }
 }
@@ -822,19 +851,18 @@ impl PyTeamEnv {
                 ranging_seed: TeamSpec::ranging_seed(seed, i),
             })
             .collect();
-        let cfg = TeamConfig {
-            ranging: team.ranging,
-            spacing: SpacingConfig {
-                law: team.law,
-                nominal_speed_mps: team.nominal_speed_mps,
-                ring: team.ring,
-            },
-            metrics: TeamMetricsConfig::default(),
+        // The run's own true isoline and metrics configuration (att36-3: with the circle of a
+        // radial field only, an isoline cut by field.domain_m, a grid's or a moving one had
+        // no team metrics here, and the summary said the field had none).
+        let model = s.team_isoline();
+        let cfg = s.team_config(team, &model);
+        let isoline = match model {
+            TeamIsolineModel::Circle(c) => Some(OwnedTeamIsoline::Fixed(Box::new(c))),
+            TeamIsolineModel::Polyline(p) => Some(OwnedTeamIsoline::Fixed(Box::new(p))),
+            TeamIsolineModel::Moving(m) => Some(OwnedTeamIsoline::Moving(m)),
+            TeamIsolineModel::None(_) => None,
         };
-        let arc = s
-            .team_arc()
-            .map(|a| Box::new(a) as Box<dyn ArcProjection + Send>);
-        Group::new_owning_arc(&vehicle, &s.plan(), cfg, members, arc)
+        Group::new_owning_isoline(&vehicle, &s.plan(), cfg, members, isoline)
             .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))
     }
 
@@ -960,17 +988,24 @@ impl PyTeamEnv {
     /// Agent `i`'s reward at the pause: `-|eps_i| / error_scale - spacing_weight *
     /// ((d_ahead - d_behind) / (d_ahead + d_behind))^2 - effort_weight * (omega_i /
     /// omega_max)^2`, with the true error and true distances to its ring neighbours.
-    fn reward(&self, i: usize) -> f64 {
-        let a = &self.agents[i];
-        let effort = self.effort_weight * (a.omega / self.max_turn_rate_radps).powi(2).min(1.0);
+    fn reward(&mut self, i: usize) -> f64 {
+        let effort = self.effort_weight
+            * (self.agents[i].omega / self.max_turn_rate_radps)
+                .powi(2)
+                .min(1.0);
         let Some(g) = self.group.as_ref() else {
             return -effort;
         };
         let (p, value) = g.sensed_truth(i);
+        // Off the field (no true value) the last term stands, as the single-vehicle
+        // environment's reward keeps the last sample's error (nu36-5: it read 0, so that
+        // leaving the field paid).
         let tracking = if value.is_finite() {
-            (value - self.level).abs() / self.error_scale
+            let x = (value - self.level).abs() / self.error_scale;
+            self.agents[i].last_tracking = x;
+            x
         } else {
-            0.0
+            self.agents[i].last_tracking
         };
         let spacing = match g.neighbours(i) {
             Some([ahead, behind]) => {
@@ -986,6 +1021,18 @@ impl PyTeamEnv {
             None => 0.0,
         };
         -tracking - self.spacing_weight * spacing - effort
+    }
+
+    /// What an agent ending early with `pauses_left` pauses of the run unflown pays beside its
+    /// step's reward: `termination_penalty`, by default the worst reward a step can have
+    /// under the error cap, `MAX_SCALED_ERROR + spacing_weight + effort_weight`, times the
+    /// pauses left, so that ending early never scores better than flying the run out (the
+    /// single-vehicle environment's rule, `crate::env`).
+    fn penalty(&self, pauses_left: u64) -> f64 {
+        self.termination_penalty.unwrap_or(
+            (crate::env::MAX_SCALED_ERROR + self.spacing_weight + self.effort_weight)
+                * pauses_left as f64,
+        )
     }
 
     fn outcome(&self, i: usize) -> Option<isotrack_sim::Outcome> {

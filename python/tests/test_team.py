@@ -779,7 +779,10 @@ def test_the_summary_comes_when_every_vehicle_leaves_the_field(ipz, count):
     summary = env.summary()
     assert summary is not None
     assert summary["vehicles"] == run.summary["vehicles"]
-    assert "team" in summary  # (its metrics: see the report of py30o, not compared here)
+    # att36-3: the team metrics too (the level-10 circle cut by the domain is an open
+    # isoline: the environment said the field had none) and the scenario's file.
+    assert summary["team"] == run.summary["team"]
+    assert summary["team"].get("isoline_length_m") is not None
     got = env.trace()
     for k in run.trace:
         assert same(got[k], run.trace[k]), k
@@ -820,3 +823,122 @@ def test_a_duration_off_the_step_takes_isoline_envs_count(ipz, duration_s, count
         assert same(got[k], run.trace[k]), k
     assert env.summary()["vehicles"] == run.summary["vehicles"]
     assert env.summary()["team"] == run.summary["team"]
+
+
+@pytest.mark.parametrize("duration_s", [1.05, 3.05])
+def test_a_duration_off_the_step_flies_the_laws_tail(ipz, duration_s):
+    """nu36-19: with sim.duration_s no multiple of the environment's step (0.1 s: sensor and
+    ranging at 10 Hz) and a seeded noisy episode, the built-in actions fed back flew another
+    tail than Scenario.run() (the agents' speeds of the pause before held after the last
+    pause, where the spacing laws answer): vehicles 1 and 2 ended 0.1 mm off, gap_cv differed
+    in the 9th digit. The tail is the laws' now: the same run bit for bit."""
+    sc = isotrack.Scenario.from_file(str(TEAM)).set(
+        {"sim.duration_s": duration_s, "controller.max_turn_rate_radps": 1.0, "sensor.rate_hz": 10.0}
+    )
+    env = ipz.parallel_env(sc)
+    drive_builtin(env, seed=0)
+    run = sc.set("sim.seed", 0).run()
+    got = env.trace()
+    for k in run.trace:
+        assert same(got[k], run.trace[k]), k
+    assert env.summary()["vehicles"] == run.summary["vehicles"]
+    assert env.summary()["team"] == run.summary["team"]
+
+
+def test_the_environment_measures_along_a_grid_isoline_as_the_run_does(ipz):
+    """att36-3: the environment built its team metrics on the circle of a radial field only:
+    along a grid's isoline (the kriged NO2 map, marching squares) the summary said "the field
+    has no isoline", where Scenario.run() measures along it."""
+    text = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    text = text.replace('path = "../data/', f'path = "{ROOT}/data/')
+    text = text.replace("duration_s = 600.0", "duration_s = 8.0")
+    text += (
+        "\n[team]\nstarts = [{x_m = 0.0, y_m = 0.0, heading_rad = 0.0},"
+        " {x_m = 2.0, y_m = 1.0, heading_rad = 1.0}]\n"
+    )
+    sc = isotrack.Scenario.from_toml(text).set("controller.max_turn_rate_radps", 1.0)
+    run = sc.run()
+    assert run.summary["team"].get("gap_cv") is not None or run.summary["team"].get("isoline_length_m") is not None
+    env = ipz.parallel_env(sc)
+    drive_builtin(env)
+    assert env.summary()["team"] == run.summary["team"]
+
+
+def test_the_summary_names_the_scenario_file(ipz):
+    """att36-3 (its MINOR): the environment's summary had no scenario_path where
+    Scenario.from_file(F).run()'s names F."""
+    sc = isotrack.Scenario.from_file(str(TEAM)).set(
+        {"sim.duration_s": 1.0, "controller.max_turn_rate_radps": 1.0}
+    )
+    env = ipz.parallel_env(sc)
+    drive_builtin(env)
+    assert env.summary()["scenario_path"] == sc.run().summary["scenario_path"]
+    assert env.summary()["scenario_path"] is not None
+
+
+def test_leaving_the_field_never_pays(ipz):
+    """nu36-5: the step that ended an agent off the field read a tracking term of 0 and no
+    penalty, so an agent far from the isoline did best by leaving at once. Now the terminating
+    step keeps the agent's last tracking term and pays (10 + spacing_weight + effort_weight)
+    per environment step left (the single-vehicle environment's rule), or the penalty given."""
+    sc = isotrack.Scenario.from_file(str(TEAM)).set(
+        {
+            "sim.duration_s": 30.0,
+            "controller.max_turn_rate_radps": 1.0,
+            "sensor.rate_hz": 10.0,
+            "field.domain_m": [-10.0, 10.0, -10.0, 10.0],
+        }
+    )
+    for given in [None, 0.0, 123.0]:
+        kw = {} if given is None else {"termination_penalty": given}
+        env = ipz.parallel_env(sc, **kw)
+        obs, infos = env.reset(seed=0)
+        rewards = {a: [] for a in env.agents}
+        ended = {}
+        steps = 0
+        while env.agents:
+            # Straight out at top speed (v_max 0.75 m/s): every vehicle leaves the 20 m box.
+            obs, rew, term, trunc, infos = env.step({a: np.array([0.0, 0.75]) for a in env.agents})
+            steps += 1
+            for a, r in rew.items():
+                rewards[a].append(r)
+                if term[a]:
+                    ended[a] = steps
+        assert sorted(ended) == sorted(rewards), ended
+        period_s = env.period_steps * 0.01
+        n_pauses = round(30.0 / period_s)
+        for a, rs in rewards.items():
+            before, last = rs[-2], rs[-1]
+            # Flying out, the tracking term grows: the last step's own terms (tracking at
+            # the last true value, spacing <= 1, effort 0 for a zero turn rate) lie within
+            # one step's change of the step before's.
+            pauses_left = n_pauses - ended[a]
+            penalty = (10.0 + 1.0 + 0.01) * pauses_left if given is None else given
+            own = last + penalty
+            assert before - 1.0 - 0.5 <= own <= 0.0, (a, before, last, penalty)
+            assert own <= -1.0, (a, own)  # the tracking term is kept, not 0
+            if given is None:
+                # Never better than flying on with the worst capped step to the end.
+                assert sum(rs) <= -(10.0 + 1.0 + 0.01) * pauses_left
+
+
+def test_a_scenario_whose_data_file_changed_is_not_run(tmp_path):
+    """att36-10: Scenario.run() after the scenario's data file changed on disk flew the field
+    read when the scenario was made but named the new file's SHA-256 in summary.json: a run
+    directory whose provenance was false. It raises now, as unpickling does."""
+    data = ROOT / "data" / "no2_germany_kriged" / "no2_germany_kriged.csv"
+    (tmp_path / "field.csv").write_bytes(data.read_bytes())
+    text = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    text = text.replace('path = "../data/no2_germany_kriged/no2_germany_kriged.csv"', 'path = "field.csv"')
+    text = text.replace("duration_s = 600.0", "duration_s = 2.0")
+    (tmp_path / "s.toml").write_text(text)
+    sc = isotrack.Scenario.from_file(str(tmp_path / "s.toml"))
+    first = sc.run()
+    digest = first.summary["data_files"][str(tmp_path / "field.csv")]
+    lines = (tmp_path / "field.csv").read_text().splitlines(keepends=True)
+    (tmp_path / "field.csv").write_text("".join(lines) + "\n")
+    with pytest.raises(ValueError, match="changed since the scenario was made"):
+        sc.run()
+    # Made again, it flies the file as it is now and names that file's digest.
+    again = isotrack.Scenario.from_file(str(tmp_path / "s.toml")).run()
+    assert again.summary["data_files"][str(tmp_path / "field.csv")] != digest

@@ -392,6 +392,13 @@ impl RunDir {
     pub fn live_trace(&self, flying: bool) -> Result<TraceFile, Failure> {
         self.remove_old_summary()?;
         let path = self.path("trace.csv");
+        // A fresh file, never the earlier run's truncated in place: that file may have other
+        // hard links (a `cp -al` / `rsync --link-dest` snapshot of the earlier run), which
+        // would be rewritten with this flight's rows (att36-13). Only a regular file is
+        // removed; anything else at the name is refused by the create below as before.
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_file()) {
+            std::fs::remove_file(&path).map_err(|e| cant(&path, e))?;
+        }
         let writer = TraceWriter::create(&path, flying).map_err(|e| cant(&path, e))?;
         Ok(TraceFile {
             writer,

@@ -324,6 +324,32 @@ fn an_earlier_run_stands_until_the_new_one_writes() {
     );
 }
 
+/// att36-13: a live trace (`sitl`, `fly --out`) over an earlier run's `trace.csv` is a new
+/// file: a hard link to the earlier one (a `cp -al` snapshot) keeps the earlier rows, where
+/// truncating in place rewrote the snapshot with the new flight's.
+#[cfg(unix)]
+#[test]
+fn a_live_trace_never_writes_through_a_hard_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("run");
+    std::fs::create_dir(&d).unwrap();
+    std::fs::write(d.join("trace.csv"), b"the earlier run's rows\n").unwrap();
+    std::fs::write(d.join("summary.json"), b"{}").unwrap();
+    let snapshot = dir.path().join("snapshot-trace.csv");
+    std::fs::hard_link(d.join("trace.csv"), &snapshot).unwrap();
+    let out = RunDir::open(&d, &[], &[], Some("fly")).unwrap();
+    let mut live = out.live_trace(false).unwrap();
+    live.writer().flush();
+    drop(live);
+    assert_eq!(
+        std::fs::read(&snapshot).unwrap(),
+        b"the earlier run's rows\n",
+        "the snapshot was rewritten"
+    );
+    let now = std::fs::read_to_string(d.join("trace.csv")).unwrap();
+    assert!(now.starts_with("t_s,"), "{now}");
+}
+
 /// `DIR` that is no directory is refused (73) naming it and what it is: a FIFO, a regular
 /// file, a dangling link, a link to a FIFO; a link to a directory is followed (the run is
 /// written in the directory it points to).

@@ -569,7 +569,7 @@ impl Scenario {
     /// The team's configuration: its ranging and spacing law, and its metrics sampled every
     /// step on a circle (exact) or without an isoline, every [`POLYLINE_METRICS_PERIOD_S`] on
     /// an extracted one.
-    fn team_config(&self, team: &TeamSpec, model: &TeamIsolineModel) -> TeamConfig {
+    pub fn team_config(&self, team: &TeamSpec, model: &TeamIsolineModel) -> TeamConfig {
         let every_steps = self.team_metrics_every_steps(matches!(
             model,
             TeamIsolineModel::Circle(_) | TeamIsolineModel::None(_)

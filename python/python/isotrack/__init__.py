@@ -578,6 +578,37 @@ class Scenario:
         its own vehicle's samples; the first exception in any of them stops the run.
         """
         rate = _check_number("record_rate_hz", record_rate_hz, optional=True)
+        self._check_data_files()
+        run = self._run(rate, controller)
+        self._check_data_files(run.summary.get("data_files") or {})
+        return run
+
+    def _check_data_files(self, recorded: Optional[Dict[str, str]] = None) -> None:
+        """Raises if a data file of the scenario changed since it was made (att36-10): the
+        scenario holds the field as it was read then, so a run would fly that field while its
+        ``summary.json`` named the file as it is now (``recorded``: the digests a run's summary
+        took, checked after it; ``None``: the files now, before it)."""
+        import os
+
+        for p, want in self._digests.items():
+            if recorded is None:
+                if not os.path.isfile(p):
+                    raise FileNotFoundError(
+                        f"{p}: the scenario's data file is gone since the scenario was made: make "
+                        "the scenario again to fly the files as they are now"
+                    )
+                now = _sha256(p)
+            else:
+                now = recorded.get(p, "(not readable at the run's end)")
+            if now != want:
+                raise ValueError(
+                    f"{p}: the scenario's data file changed since the scenario was made (SHA-256 "
+                    f"{want[:16]}... then, {now[:16]}... now): the scenario holds the field as it "
+                    "was read then, so a run would not be the file's; make the scenario again "
+                    "(Scenario.from_file, or .set of the path) to fly the file as it is now"
+                )
+
+    def _run(self, rate: Optional[float], controller: Any) -> Run:
         if _native.is_team(self._native):
             if controller is None:
                 summary, trace, flown = _native.team_run(self._native, rate)

@@ -35,7 +35,12 @@ the vehicles' move:
   true (noise-free) error and the true distances to its ring neighbours (ground truth, as the
   single-vehicle reward's error): tracking, plus the imbalance of its two gaps (0 when the
   neighbours are equally far), plus effort. ``error_scale`` defaults as the single-vehicle
-  environment's (``pi_isoline``'s ``c2``, else 1).
+  environment's (``pi_isoline``'s ``c2``, else 1). On the step that ends an agent off the field
+  (where the field has no value) the tracking term is its last one. A terminating step
+  (``left_field``, ``diverged``) also pays ``termination_penalty`` (default: ``(10 +
+  spacing_weight + effort_weight)`` times the env steps left in the run, the worst a step can
+  cost under the single-vehicle environment's error cap of 10), so that leaving the field never
+  scores better than flying on, as in :mod:`isotrack.gym`.
 * **termination**: an agent whose run ends early (left the field, diverged) is terminated; at
   the run's end (``sim.duration_s``) every agent still flying is truncated.
 * **infos[agent]**: ``t_s``, ``sampled`` (this step has its sample), ``builtin_action``: what
@@ -95,6 +100,7 @@ class TeamParallelEnv(ParallelEnv):
         spacing_weight: float = 1.0,
         effort_weight: float = 0.01,
         record: bool = True,
+        termination_penalty: Optional[float] = None,
     ):
         _check_scenario("scenario", scenario)
         self.scenario = scenario
@@ -105,6 +111,7 @@ class TeamParallelEnv(ParallelEnv):
             _check_number("spacing_weight", spacing_weight),
             _check_number("effort_weight", effort_weight),
             _check_flag("record", record),
+            _check_number("termination_penalty", termination_penalty, optional=True),
         )
         n = self._native.num_agents
         self.possible_agents = [f"vehicle_{i}" for i in range(n)]
@@ -255,5 +262,5 @@ def parallel_env(scenario: Scenario, **kwargs) -> TeamParallelEnv:
     """The team of ``scenario`` (a :class:`isotrack.Scenario` with a ``[team]`` section) as a
     PettingZoo ``ParallelEnv``; ``kwargs``: ``max_turn_rate_radps``, ``error_scale``,
     ``spacing_weight`` (default 1), ``effort_weight`` (default 0.01), ``record`` (keep the
-    trace, default True). Module docs for the spaces and rewards."""
+    trace, default True), ``termination_penalty`` (default: see the module docs). Module docs for the spaces and rewards."""
     return TeamParallelEnv(scenario, **kwargs)

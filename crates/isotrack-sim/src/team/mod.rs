@@ -196,9 +196,33 @@ pub enum TeamIsoline<'a> {
     Moving(&'a dyn MovingArc),
 }
 
+/// The true isoline a team owns ([`Group::new_owning_isoline`], for a team held across calls,
+/// e.g. by an environment stepped from outside): [`TeamIsoline`] owned.
+pub enum OwnedTeamIsoline<'a> {
+    /// One isoline for the whole run.
+    Fixed(Box<dyn ArcProjection + Send + 'a>),
+    /// The isoline of the time.
+    Moving(Box<dyn MovingArc + Send + 'a>),
+}
+
+/// A moving isoline's source: lent by the caller or owned by the team.
+enum MovingRef<'a> {
+    Lent(&'a dyn MovingArc),
+    Owned(Box<dyn MovingArc + Send + 'a>),
+}
+
+impl MovingRef<'_> {
+    fn get(&self) -> &dyn MovingArc {
+        match self {
+            MovingRef::Lent(m) => *m,
+            MovingRef::Owned(m) => &**m,
+        }
+    }
+}
+
 /// The moving isoline in force.
 struct Current<'a> {
-    source: &'a dyn MovingArc,
+    source: MovingRef<'a>,
     version: Option<i64>,
     arc: Option<PolylineArc>,
 }
@@ -309,7 +333,28 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
     {
         let (arc, moving) = match isoline {
             Some(TeamIsoline::Fixed(a)) => (Some(ArcRef::Lent(a)), None),
-            Some(TeamIsoline::Moving(m)) => (None, Some(m)),
+            Some(TeamIsoline::Moving(m)) => (None, Some(MovingRef::Lent(m))),
+            None => (None, None),
+        };
+        Self::with_arc(vehicle, plan, cfg, members, arc, moving)
+    }
+
+    /// [`with_isoline`](Self::with_isoline) with the true isoline owned by the team (for a
+    /// team held across calls, e.g. by an environment stepped from outside: the same metrics
+    /// as the run's, on a closed, open or moving isoline).
+    pub fn new_owning_isoline<V>(
+        vehicle: &V,
+        plan: &StepPlan,
+        cfg: TeamConfig,
+        members: Vec<TeamMember<X, C>>,
+        isoline: Option<OwnedTeamIsoline<'a>>,
+    ) -> Result<Self, TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        let (arc, moving) = match isoline {
+            Some(OwnedTeamIsoline::Fixed(a)) => (Some(ArcRef::Owned(a)), None),
+            Some(OwnedTeamIsoline::Moving(m)) => (None, Some(MovingRef::Owned(m))),
             None => (None, None),
         };
         Self::with_arc(vehicle, plan, cfg, members, arc, moving)
@@ -336,7 +381,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
         cfg: TeamConfig,
         members: Vec<TeamMember<X, C>>,
         arc: Option<ArcRef<'a>>,
-        moving: Option<&'a dyn MovingArc>,
+        moving: Option<MovingRef<'a>>,
     ) -> Result<Self, TeamError>
     where
         V: SpeedCommand<State = X>,
@@ -629,6 +674,13 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             .speed_override
             .get_or_insert_with(|| self.speed_cmd.clone());
         o[i] = speed_mps;
+    }
+
+    /// Gives every vehicle's speed back to its spacing law from this step on (undoes
+    /// [`hold_speed`](Self::hold_speed)): a run's steps that no outside command can answer
+    /// any more are flown as the run's own loop flies them.
+    pub fn release_speeds(&mut self) {
+        self.speed_override = None;
     }
 
     /// The latest range sample vehicle `i`'s ranging unit delivered (`None` before the first).
@@ -1571,7 +1623,7 @@ impl Current<'_> {
     /// Extracts the isoline again if its version at `t_s` differs from the one in force;
     /// returns whether it did. Without a version (the field ended) or a closed loop, no isoline.
     fn refresh(&mut self, t_s: f64, positions: &[Vec2], alive: &[bool]) -> bool {
-        let v = self.source.version(t_s);
+        let v = self.source.get().version(t_s);
         if v == self.version {
             return false;
         }
@@ -1580,7 +1632,7 @@ impl Current<'_> {
             self.arc = None;
             return false;
         };
-        let loops = self.source.loops(v);
+        let loops = self.source.get().loops(v);
         let live: Vec<Vec2> = positions
             .iter()
             .zip(alive)
