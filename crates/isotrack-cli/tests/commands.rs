@@ -399,3 +399,133 @@ fn the_plotted_isoline_is_the_circle_of_the_level() {
         "the circle is drawn all the way round: {octants:?}"
     );
 }
+
+/// nu36-13: running `show`'s output of a team gives the identical run (trace, summary but its
+/// file names, scenario.toml), for every bundled team scenario and for a team given by `starts`
+/// alone (whose `show` once printed a `[team]` header per commented value: TOML refuses it,
+/// `duplicate key`, and `run` exited 65).
+#[test]
+fn running_shows_output_of_a_team_gives_the_identical_run() {
+    let d = tempfile::tempdir().unwrap();
+    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    let starts_only = write(
+        d.path(),
+        "starts-only.toml",
+        "[sim]\nduration_s = 60.0\n[team]\nstarts = [{x_m = 6.93, y_m = 0.0, heading_rad = -1.5708}, {x_m = -6.93, y_m = 0.0, heading_rad = 1.5708}]\n",
+    );
+    let mut sources: Vec<(String, String)> =
+        ["team-circular-4", "team-era5-uav-4", "team-puff-edge-3"]
+            .iter()
+            .map(|n| {
+                let p = scenarios.join(format!("{n}.toml"));
+                (n.to_string(), p.to_str().unwrap().to_string())
+            })
+            .collect();
+    sources.push(("starts-only".into(), starts_only));
+    for (name, src) in &sources {
+        let sets = ["--set", "sim.duration_s=20.0"];
+        let shown = ok(&[&["show", src.as_str()][..], &sets[..]].concat());
+        assert_eq!(
+            shown.lines().filter(|l| l.trim() == "[team]").count(),
+            1,
+            "{name}:\n{shown}"
+        );
+        let p = write(d.path(), &format!("{name}-shown.toml"), &shown);
+        let (a, b) = (
+            d.path().join(format!("{name}-a")),
+            d.path().join(format!("{name}-b")),
+        );
+        let quiet = "--quiet";
+        ok(&[
+            &["run", src.as_str()][..],
+            &sets[..],
+            &["--out", a.to_str().unwrap(), quiet],
+        ]
+        .concat());
+        ok(&["run", &p, "--out", b.to_str().unwrap(), quiet]);
+        for f in ["trace.csv", "summary.json", "scenario.toml"] {
+            let (x, y) = (
+                std::fs::read(a.join(f)).unwrap(),
+                std::fs::read(b.join(f)).unwrap(),
+            );
+            if f == "summary.json" {
+                let strip = |v: &[u8]| {
+                    let mut j: serde_json::Value = serde_json::from_slice(v).unwrap();
+                    if let Some(o) = j.as_object_mut() {
+                        o.retain(|k, _| {
+                            !k.contains("source") && !k.contains("path") && k != "name"
+                        });
+                    }
+                    j
+                };
+                assert_eq!(strip(&x), strip(&y), "{name}: {f}");
+            } else {
+                assert!(x == y, "{name}: {f} differs");
+            }
+        }
+    }
+}
+
+/// nu36-1: the trajectory figure's colour-bar tick labels are drawn right of the bar, each
+/// starting past its right edge (left-aligned), never under it: in the SVG of a default run the
+/// bar is its 100 rectangles of one `x` and `width`, and every number beside it (a text within
+/// the bar's height and not more than 100 px left of it) starts right of `x + width` (before:
+/// right-aligned to 2 px left of the bar, which the PNG drew over their last digits).
+#[test]
+fn colour_bar_labels_are_right_of_the_bar() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("run");
+    ok(&[
+        "run",
+        "--out",
+        run.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "sim.duration_s=20.0",
+    ]);
+    ok(&["plot", run.to_str().unwrap(), "--format", "svg"]);
+    let svg = std::fs::read_to_string(run.join("trajectory.svg")).unwrap();
+    let attr = |tag: &str, name: &str| -> Option<f64> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        tag[at..at + tag[at..].find('"')?].parse().ok()
+    };
+    let rects: Vec<[f64; 4]> = svg
+        .split("<rect")
+        .skip(1)
+        .filter_map(|t| {
+            Some([
+                attr(t, "x")?,
+                attr(t, "y")?,
+                attr(t, "width")?,
+                attr(t, "height")?,
+            ])
+        })
+        .collect();
+    let bar: Vec<&[f64; 4]> = rects
+        .iter()
+        .filter(|r| {
+            rects
+                .iter()
+                .filter(|q| q[0] == r[0] && q[2] == r[2])
+                .count()
+                >= 100
+        })
+        .collect();
+    assert!(bar.len() >= 100, "{} rectangles of the bar", bar.len());
+    let (x, w) = (bar[0][0], bar[0][2]);
+    let top = bar.iter().map(|r| r[1]).fold(f64::INFINITY, f64::min);
+    let bottom = bar.iter().map(|r| r[1] + r[3]).fold(0.0, f64::max);
+    let labels: Vec<(f64, f64, String, String)> = svg_texts(&svg)
+        .into_iter()
+        .filter(|t| t.3.parse::<f64>().is_ok())
+        .filter(|t| t.1 >= top - 2.0 && t.1 <= bottom + 2.0 && t.0 >= x - 100.0)
+        .collect();
+    assert!(labels.len() >= 3, "{labels:?}");
+    for l in &labels {
+        assert!(
+            l.0 >= x + w && l.2 != "end" && l.2 != "middle",
+            "label {l:?} not right of the bar [{x}, {}]",
+            x + w
+        );
+    }
+}

@@ -630,3 +630,27 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
     assert!(!Path::new(&r).join("trajectory.png").exists());
     assert!(!Path::new(&r).join("timeseries.png").exists());
 }
+
+/// att36-2: `plot DIR` of a run directory another command is writing (its lock held, as
+/// `run --out DIR` holds it while it replaces the run) is refused (73) before anything is
+/// read or drawn, so no figure lands beside another run's summary; once the lock is free the
+/// same plot draws, and leaves no lock file behind.
+#[test]
+fn plot_refuses_a_run_directory_being_written() {
+    let d = tempfile::tempdir().unwrap();
+    let r = d.path().join("r");
+    let rs = r.display().to_string();
+    let o = isotrack(&["run", SCEN, "--out", &rs, "--quiet", "--set", SHORT]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let lock = hold_lock(&r);
+    let o = isotrack_within(&["plot", &rs], 60);
+    assert_fails(&o, 73, &["is writing this directory", ".isotrack.lock"]);
+    assert!(!r.join("trajectory.png").exists());
+    assert!(!r.join("timeseries.png").exists());
+    drop(lock);
+    std::fs::remove_file(r.join(".isotrack.lock")).unwrap();
+    let o = isotrack_within(&["plot", &rs], 60);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(r.join("trajectory.png").exists());
+    assert!(!r.join(".isotrack.lock").exists());
+}

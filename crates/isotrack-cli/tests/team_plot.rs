@@ -935,3 +935,40 @@ fn a_team_gone_before_the_window_has_no_revisit_curve() {
     let svg = std::fs::read_to_string(out.join("team.svg")).unwrap();
     assert!(svg.contains("revisit time, steady window"));
 }
+
+/// nu36-2: team.svg's dashed references (the even gap `L/N` over the gaps, the ideal
+/// `L/(N v0)` over the revisit curve) are drawn again over the curves, which settle on them and
+/// hid them: each of their dashes (black, 2 px, horizontal) is in the SVG twice, the second
+/// after the curves (before the fix no dash was drawn twice).
+#[test]
+fn team_figure_draws_its_dashed_references_over_the_curves() {
+    let d = tempfile::tempdir().unwrap();
+    let scenario = common::bundled("team-circular-4");
+    let out = d.path().join("run");
+    let o = isotrack(&[
+        "run",
+        &scenario,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "sim.duration_s=120.0",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&["plot", out.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let team = std::fs::read_to_string(out.join("team.svg")).unwrap();
+    let dashes: Vec<Vec<(f64, f64)>> = common::polylines(&team, "#000000", "2")
+        .into_iter()
+        .filter(|p| p.len() == 2 && p[0].1 == p[1].1 && p[0].0 != p[1].0)
+        .collect();
+    let twice = dashes
+        .iter()
+        .filter(|p| dashes.iter().filter(|q| q == p).count() == 2)
+        .count();
+    assert!(
+        twice >= 20,
+        "{twice} of {} dashes drawn twice",
+        dashes.len()
+    );
+}

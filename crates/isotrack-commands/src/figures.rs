@@ -163,6 +163,15 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     if a.runs.len() == 1 && results.exists() {
         return plot_sweep(a, &results, &out, &st);
     }
+    // att36-2: an existing output directory (a run directory drawn into itself, by default) is
+    // locked as `run --out` locks it, before a run is read and until the figures are in place:
+    // a `run --out` replacing it meanwhile is refused (73), as is this plot while a run (or
+    // any other writer) holds it (73, naming the holder), so figures never land beside another
+    // run's summary than the one drawn.
+    let _lock = out
+        .is_dir()
+        .then(|| isotrack_runs::sweep::lock::lock_output_dir(&out, "plot"))
+        .transpose()?;
     let mut written = plot_dirs(&a.runs, &st, &out)?;
     if a.animate {
         let runs = RunData::load_team(&a.runs[0]).map_err(failure)?;

@@ -16,9 +16,16 @@ fn fmt_opt(x: Option<f64>) -> String {
     x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4e}"))
 }
 
-/// [`fmt_opt`] with its unit after a number (`n/a` alone, never `n/a m`).
+/// A team line's time or distance with its unit: to 0.01 as the line's other times and
+/// its ideal print (nu36-3: `revisit max 2.1780e1 s (ideal 21.78 s)` mixed two formats), a
+/// value below 0.01 in [`fmt_opt`]'s form so that it does not print as 0.00; `n/a` alone
+/// (never `n/a m`) when missing or not finite.
 fn fmt_opt_unit(x: Option<f64>, unit: &str) -> String {
-    x.map_or_else(|| "n/a".to_string(), |v| format!("{v:.4e} {unit}"))
+    match x {
+        Some(v) if v.is_finite() && (v == 0.0 || v.abs() >= 0.01) => format!("{v:.2} {unit}"),
+        Some(v) if v.is_finite() => format!("{v:.4e} {unit}"),
+        _ => "n/a".to_string(),
+    }
 }
 
 /// A few lines a person reads after a run.
@@ -391,8 +398,50 @@ mod tests {
         let nan = line(f64::NAN);
         assert_eq!(
             nan,
-            "team        0 vehicles  gap_cv n/a  time_to_even never  revisit max n/a (ideal n/a)  min separation 9.8026e0 m\n"
+            "team        0 vehicles  gap_cv n/a  time_to_even never  revisit max n/a (ideal n/a)  min separation 9.80 m\n"
         );
         assert!(line(21.7656).contains("(ideal 21.77 s)"));
+    }
+
+    /// nu36-3: the team line prints its times and distances in one format, to 0.01 (as
+    /// `time_to_even` and the ideal revisit time print): team-circular-4's revisit max 21.78 s
+    /// beside its ideal 21.78 s and min separation 2.0717 m as 2.07 m (they printed
+    /// `2.1780e1 s` and `2.0717e0 m`); a separation under 0.01 m keeps its digits.
+    #[test]
+    fn a_team_line_prints_one_number_format() {
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let line = |revisit: f64, separation: f64| {
+            team_summary(
+                &scenario,
+                &isotrack_sim::TeamResult {
+                    runs: Vec::new(),
+                    team: Some(isotrack_sim::team::metrics::TeamSummary {
+                        count: 4,
+                        isoline_length_m: 43.55,
+                        gap_cv: Some(2.9e-11),
+                        gap_cv_final: None,
+                        time_to_even_s: Some(55.07),
+                        revisit_time_max_s: Some(revisit),
+                        revisit_time_mean_s: None,
+                        revisit_time_ideal_s: 21.7759,
+                        revisit_time_ideal_active_s: None,
+                        min_separation_m: Some(separation),
+                        order_preserved: true,
+                        speed_range_mps: None,
+                        moving_isoline: None,
+                        open_isoline: None,
+                    }),
+                    ring: Vec::new(),
+                    warnings: Vec::new(),
+                },
+            )
+        };
+        assert_eq!(
+            line(21.78, 2.0717),
+            "team        0 vehicles  gap_cv 2.9000e-11  time_to_even 55.07 s  revisit max 21.78 s (ideal 21.78 s)  min separation 2.07 m\n"
+        );
+        assert!(line(15166.2, 29404.0)
+            .contains("revisit max 15166.20 s (ideal 21.78 s)  min separation 29404.00 m"));
+        assert!(line(21.78, 0.0012).contains("min separation 1.2000e-3 m"));
     }
 }

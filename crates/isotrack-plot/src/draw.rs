@@ -239,7 +239,7 @@ struct MapLayout {
     h: u32,
     /// The colour bar's part of the width: a half-font gap, `bar_label`, the bar, a margin.
     bar_w: u32,
-    /// The colour bar's label area (its unit and tick labels), left of the bar.
+    /// The colour bar's label area (its tick labels and unit), right of the bar.
     bar_label: u32,
     margin: u32,
     right_pad: u32,
@@ -265,7 +265,7 @@ fn bar_units(sc: &Scenario) -> String {
 }
 
 /// Width the colour bar's label area needs for values `[vmin, vmax]`, px: the unit's text
-/// height (it is drawn rotated, at the area's left edge), a gap, the widest tick label as
+/// height (it is drawn rotated, at the area's right edge), a gap, the widest tick label as
 /// measured in its font, and two of the longest tick marks (plotters leaves two tick lengths
 /// between a label and its axis); at least the default 4.6 font sizes.
 fn bar_label_width(st: &Style, units: &str, vmin: f64, vmax: f64) -> u32 {
@@ -554,7 +554,11 @@ fn draw_isolines<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The map's colour bar on `right`, over `[vmin, vmax]`.
+/// The map's colour bar on `right`, over `[vmin, vmax]`: the bar, its tick marks and tick
+/// labels to its right, each label starting two tick lengths right of the bar (left-aligned,
+/// so a label is never drawn under the bar however the PNG renderer measures its text:
+/// nu36-1, right-aligned labels left of the bar lost their last digits under it in PNG), and
+/// the unit, rotated, right of the labels.
 fn draw_colour_bar<DB: DrawingBackend>(
     right: &DrawingArea<DB, Shift>,
     sc: &Scenario,
@@ -562,11 +566,13 @@ fn draw_colour_bar<DB: DrawingBackend>(
     st: &Style,
     (vmin, vmax): (f64, f64),
 ) -> DrawResult {
+    use plotters::coord::ranged1d::Ranged;
+    use plotters::coord::types::RangedCoordf64;
     // Colour bar, its ticks as fine as the field's span needs (a nearly flat field still gets
     // distinct labels).
     let units = bar_units(sc);
-    // The bar 1.6 font sizes wide, its labels and unit to its left, as wide as the labels
-    // measure (more than the layout planned pushes the bar into its right margin).
+    // The bar 1.6 font sizes wide, its labels and unit to its right, as wide as the labels
+    // measure (more than the layout planned pushes the bar's right margin in).
     let f = st.base_font();
     let bar_label = lay.bar_label.max(bar_label_width(st, &units, vmin, vmax));
     let bar_right = lay.bar_right(f, bar_label);
@@ -575,16 +581,17 @@ fn draw_colour_bar<DB: DrawingBackend>(
         .margin_bottom(lay.margin + lay.x_label)
         .margin_left((0.5 * f) as u32)
         .margin_right(bar_right)
-        .y_label_area_size(bar_label)
+        .right_y_label_area_size(bar_label)
         .build_cartesian_2d(0.0..1.0, vmin..vmax)
         .map_err(s)?;
     let vs = tick_step(vmin, vmax, 10);
+    // The mesh draws the tick marks and the unit; the labels are drawn below, left-aligned.
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
         .y_labels(BAR_LABELS)
         .y_desc(units)
-        .y_label_formatter(&|v| tick_label(*v, vs))
+        .y_label_formatter(&|_| String::new())
         .label_style(st.font(0.9))
         .axis_desc_style(st.font(1.0))
         .draw()
@@ -599,6 +606,21 @@ fn draw_colour_bar<DB: DrawingBackend>(
         )
     }))
     .map_err(s)?;
+    let (x0, y0) = right.get_base_pixel();
+    let style = TextStyle::from(st.font(0.9)).pos(plotters::style::text_anchor::Pos::new(
+        plotters::style::text_anchor::HPos::Left,
+        plotters::style::text_anchor::VPos::Center,
+    ));
+    for v in RangedCoordf64::from(vmin..vmax).key_points(BAR_LABELS) {
+        let (x, y) = bar.backend_coord(&(1.0, v));
+        right
+            .draw_text(
+                &tick_label(v, vs),
+                &style,
+                (x - x0 + 1 + 2 * BAR_TICK_PX as i32, y - y0),
+            )
+            .map_err(s)?;
+    }
     Ok(())
 }
 
@@ -1837,6 +1859,12 @@ pub fn team_figure(
                     });
                 }
             }
+            // nu36-2: the even gap drawn again over the vehicles' gaps, which settle on it and
+            // hid it (its legend entry stays first).
+            if even.is_finite() {
+                top.draw_series(dashed((0.0, even), (t_end, even)))
+                    .map_err(s)?;
+            }
             panel_legend(&mut top, st, SeriesLabelPosition::UpperRight)?;
             let mut bottom = panel_axes(
                 &revisit_area,
@@ -1891,6 +1919,13 @@ pub fn team_figure(
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
                 });
+            // nu36-2: the ideal drawn again over the revisit curve, which lies on it for an even
+            // team and hid it (its legend entry stays first).
+            if ideal.is_finite() {
+                bottom
+                    .draw_series(dashed((0.0, ideal), (l, ideal)))
+                    .map_err(s)?;
+            }
             panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)?;
             // The isoline the panels measure along, and where each vehicle ended; its key above
             // the panel, outside the axes (nu-1: the key's box was cut at the figure's edge;

@@ -392,7 +392,10 @@ fn annotate(text: &str, inline: &[(&str, &str, String)], extra: &[(&str, String)
     };
     let mut suffix: Vec<String> = vec![String::new(); lines.len()];
     let mut after: Vec<Vec<String>> = vec![Vec::new(); lines.len() + 1];
-    let mut missing: Vec<String> = Vec::new();
+    // Sections the text does not have, in the order first named, each with its lines: one
+    // header per section (nu36-13: a `[team]` given by `starts` alone, written as
+    // `[[team.starts]]` tables only, once got a `[team]` header per line, invalid TOML).
+    let mut missing: Vec<(&str, Vec<String>)> = Vec::new();
     for (sec, key, formula) in inline {
         let Some((start, end)) = range(sec) else {
             continue;
@@ -416,10 +419,10 @@ fn annotate(text: &str, inline: &[(&str, &str, String)], extra: &[(&str, String)
                     .unwrap_or(start);
                 after[last + 1].push(added.clone());
             }
-            None => {
-                missing.push(format!("\n[{sec}]"));
-                missing.push(added.clone());
-            }
+            None => match missing.iter_mut().find(|(m, _)| m == sec) {
+                Some((_, added_lines)) => added_lines.push(added.clone()),
+                None => missing.push((sec, vec![added.clone()])),
+            },
         }
     }
     let mut out = String::new();
@@ -432,9 +435,16 @@ fn annotate(text: &str, inline: &[(&str, &str, String)], extra: &[(&str, String)
         out += &suffix[i];
         out.push('\n');
     }
-    for a in after[lines.len()].iter().chain(&missing) {
+    for a in &after[lines.len()] {
         out += a;
         out.push('\n');
+    }
+    for (sec, added_lines) in &missing {
+        out += &format!("\n[{sec}]\n");
+        for a in added_lines {
+            out += a;
+            out.push('\n');
+        }
     }
     out
 }

@@ -538,6 +538,38 @@ fn show_gives_the_team_defaults() {
     assert_eq!(again.file(), s.file());
 }
 
+/// nu36-13: a `[team]` given by `starts` alone (or `starts` and `vehicles`, arrays of tables
+/// only) is written as `[[team.starts]]` tables with no `[team]` header of its own: `show` adds
+/// the header once for all the team's commented values (it once added one per line, 12 `[team]`
+/// headers, which TOML refuses as a duplicate key), and the output reads back as the same
+/// scenario and shows again as the same text.
+#[test]
+fn show_of_a_team_given_by_starts_alone_is_valid_toml() {
+    let starts = "starts = [{x_m = 6.93, y_m = 0.0, heading_rad = -1.5708}, {x_m = -6.93, y_m = 0.0, heading_rad = 1.5708}]\n";
+    for text in [
+        format!("[team]\n{starts}"),
+        format!("[team]\n{starts}vehicles = [{{index = 1, speed_mps = 0.4}}]\n"),
+    ] {
+        let s = parse_scenario(&text, "<test>", &[]).unwrap();
+        let shown = show::with_derived(&s, &toml::to_string(s.file()).unwrap());
+        assert_eq!(
+            shown.lines().filter(|l| l.trim() == "[team]").count(),
+            1,
+            "{shown}"
+        );
+        assert!(toml::from_str::<toml::Table>(&shown).is_ok(), "{shown}");
+        assert!(
+            shown.contains("# count = 2  # derived: the length of team.starts"),
+            "{shown}"
+        );
+        let again = parse_scenario(&shown, "<shown>", &[]).unwrap();
+        assert_eq!(again.file(), s.file());
+        assert_eq!(again.spec(), s.spec());
+        let shown_again = show::with_derived(&again, &toml::to_string(again.file()).unwrap());
+        assert_eq!(shown_again, shown);
+    }
+}
+
 /// A description holding lines that look like a section and a key stays text: `show` marks only
 /// the real ones, and its output reads back as the same scenario.
 #[test]
