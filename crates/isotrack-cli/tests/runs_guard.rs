@@ -618,7 +618,26 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
             .unwrap()
             .contains("\"isotrack_version\""));
     }
-    // A real run with its figures: a new run there removes them (nu-21 holds).
+    // att38-1: a second run there (the summary now isotrack's) keeps them too.
+    let a = d.path().join("user-scenario.toml");
+    let o = isotrack(&[
+        "run",
+        &input,
+        "--out",
+        &a.display().to_string(),
+        "--quiet",
+        "--set",
+        SHORT,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    for f in figures {
+        assert_eq!(
+            std::fs::read_to_string(a.join(f)).ok().as_deref(),
+            Some("MY PICTURE\n"),
+            "{f} after a second run"
+        );
+    }
+    // nu-21: a real run's figures are kept as well, and the new run says they are not its own.
     let r = d.path().join("r").display().to_string();
     let o = isotrack(&[
         "run", &input, "--out", &r, "--quiet", "--plot", "--set", SHORT,
@@ -627,8 +646,22 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
     assert!(Path::new(&r).join("trajectory.png").exists());
     let o = isotrack(&["run", &input, "--out", &r, "--quiet", "--set", SHORT]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
-    assert!(!Path::new(&r).join("trajectory.png").exists());
-    assert!(!Path::new(&r).join("timeseries.png").exists());
+    assert!(Path::new(&r).join("trajectory.png").exists());
+    let err = common::stderr(&o);
+    assert!(
+        err.contains("also holds trajectory.png, timeseries.png from before this run"),
+        "{err}"
+    );
+    // Drawn again (run --plot), the figures are this run's: no note.
+    let o = isotrack(&[
+        "run", &input, "--out", &r, "--quiet", "--plot", "--set", SHORT,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(
+        !common::stderr(&o).contains("from before this run"),
+        "{}",
+        common::stderr(&o)
+    );
 }
 
 /// att36-2: `plot DIR` of a run directory another command is writing (its lock held, as

@@ -206,6 +206,17 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 outln!("plotted     {}", written.join(", "));
             }
         }
+        // An earlier run's figures (or the user's files of those names) are never removed:
+        // said, so that they are not read as this run's (nu-21; att38-1).
+        let before = out.outputs_from_before();
+        if !before.is_empty() {
+            errln!(
+                "note: {} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this run's",
+                dir.display(),
+                before.join(", "),
+                dir.display()
+            );
+        }
         result
     } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {

@@ -28,9 +28,10 @@ pub const RUN_FILES: [&str; 3] = ["trace.csv", "summary.json", "scenario.toml"];
 
 /// The other files isotrack writes into a run directory: `plot`'s (and `run --plot`'s) figures
 /// in either format, `plot --animate`'s `animation.gif` and `fly`'s `mavlink.tlog`. A new run
-/// replacing the directory removes them with the old summary (nu-21: an earlier run's figures
-/// were left beside the new trace, read as this run's); files of any other name are the user's
-/// and are never touched.
+/// replacing the directory never removes them (a file of one of these names may be the user's:
+/// att36-1, att38-1, where deleting them lost a user's pictures); those left from before the
+/// run are named by [`RunDir::outputs_from_before`], which `run` prints as a note (nu-21: an
+/// earlier run's figures left beside the new trace read as this run's).
 pub const RUN_OUTPUTS: [&str; 8] = [
     "trajectory.png",
     "trajectory.svg",
@@ -137,26 +138,6 @@ fn holds_an_input(dir: &Path, inputs: &[PathBuf]) -> Option<String> {
     ))
 }
 
-/// The largest `summary.json` read to tell whether a directory holds an earlier run (a run's
-/// is a few kB; a team's, one object per vehicle, well under this).
-const SUMMARY_MAX_BYTES: u64 = 64 << 20;
-
-/// Whether `dir` holds an earlier isotrack run: its `summary.json` a regular file that reads
-/// as isotrack's own summary ([`Summary::from_json`]: its keys, `isotrack_version`, the
-/// resolved `scenario`, the outcome). A file merely named `scenario.toml`, `trace.csv` or
-/// `summary.json` (a user's project folder, att36-1) is not a run: the files there named as
-/// isotrack's figures are the user's and are never removed.
-fn holds_a_run(dir: &Path) -> bool {
-    let p = dir.join("summary.json");
-    let Ok(m) = std::fs::symlink_metadata(&p) else {
-        return false;
-    };
-    if !m.is_file() || m.len() > SUMMARY_MAX_BYTES {
-        return false;
-    }
-    std::fs::read_to_string(&p).is_ok_and(|text| Summary::from_json(&text).is_ok())
-}
-
 /// `cannot write PATH: WHY`, exit 73.
 fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
     Failure {
@@ -178,12 +159,9 @@ pub struct RunDir {
     /// The command's own files besides [`RUN_FILES`] (`fly`'s `mavlink.tlog`), never removed
     /// as an earlier run's output.
     extra: Vec<String>,
-    /// Whether the directory held an earlier run when opened (its `summary.json` isotrack's
-    /// own, [`holds_a_run`]): only then are [`RUN_OUTPUTS`] an earlier run's, removed when it
-    /// is replaced; in a directory that held no run (a user's folder that merely has a file
-    /// named `scenario.toml`, `trace.csv` or `summary.json`), a `trajectory.png` is the user's
-    /// and stays.
-    earlier_run: bool,
+    /// When the directory was opened: a [`RUN_OUTPUTS`] file modified before it was not
+    /// written by this command ([`RunDir::outputs_from_before`]).
+    opened_at: std::time::SystemTime,
 }
 
 /// `trace.csv` being streamed into a temporary file beside it ([`RunDir::trace`]).
@@ -251,13 +229,13 @@ impl RunDir {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
         }
-        let earlier_run = holds_a_run(dir);
+        let opened_at = std::time::SystemTime::now();
         Ok(RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
             extra: extra.iter().map(|e| e.to_string()).collect(),
-            earlier_run,
+            opened_at,
         })
     }
 
@@ -274,34 +252,31 @@ impl RunDir {
         }
     }
 
-    /// Removes the old `summary.json` (the directory's earlier run is being replaced), then,
-    /// if the directory held an earlier run when opened, that run's other outputs
-    /// ([`RUN_OUTPUTS`] but the command's own `extra`): a
-    /// regular file or a link of that name is removed (a link itself, never what it points
-    /// to); anything else there (a directory the user made) is left.
+    /// Removes the old `summary.json` (the directory's earlier run is being replaced). Nothing
+    /// else: a figure or log of an earlier run may as well be the user's own file of that name
+    /// ([`RUN_OUTPUTS`]), and isotrack never removes a file it may not have written.
     fn remove_old_summary(&self) -> Result<(), Failure> {
         let summary = self.path("summary.json");
         match std::fs::remove_file(&summary) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(&summary, e)),
             _ => {}
         }
-        for name in RUN_OUTPUTS {
-            if !self.earlier_run || self.extra.iter().any(|e| e == name) {
-                continue;
-            }
-            let p = self.path(name);
-            let Ok(m) = std::fs::symlink_metadata(&p) else {
-                continue;
-            };
-            if m.is_dir() {
-                continue;
-            }
-            match std::fs::remove_file(&p) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(&p, e)),
-                _ => {}
-            }
-        }
         Ok(())
+    }
+
+    /// The [`RUN_OUTPUTS`] (but the command's own `extra`) in the directory that were not
+    /// written since it was opened: an earlier run's figures or logs, or the user's files of
+    /// those names, beside this run's files and not this run's (nu-21; `run` prints them as a
+    /// note, never removes them).
+    pub fn outputs_from_before(&self) -> Vec<&'static str> {
+        RUN_OUTPUTS
+            .into_iter()
+            .filter(|name| !self.extra.iter().any(|e| e == name))
+            .filter(|name| {
+                std::fs::symlink_metadata(self.path(name))
+                    .is_ok_and(|m| !m.is_dir() && m.modified().map_or(true, |t| t < self.opened_at))
+            })
+            .collect()
     }
 
     /// The directory.
@@ -532,13 +507,13 @@ mod tests {
         );
     }
 
-    /// nu-21: a new run over an earlier run's directory removes that run's figures
-    /// (`trajectory`, `timeseries`, `team` in PNG and SVG, `animation.gif`) and `fly`'s
-    /// `mavlink.tlog`, keeps every file of another name, and a command's own extra file
-    /// (`fly`'s tlog) is not removed; in a directory that held no run, nothing but the run's
-    /// own files is touched.
+    /// att38-1 (att36-1's second door): a new run over an earlier run's directory removes none
+    /// of the files named as isotrack's figures and logs (an earlier run's, or the user's:
+    /// isotrack cannot tell, and deleting lost a user's pictures on the second run into their
+    /// folder); [`RunDir::outputs_from_before`] names those there from before the run (nu-21's
+    /// note), not one written since it was opened, nor the command's own extra file.
     #[test]
-    fn a_new_run_removes_the_earlier_runs_figures_and_nothing_else() {
+    fn a_new_run_removes_no_figure_and_names_those_from_before() {
         let d = tempfile::tempdir().unwrap();
         let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
         let summary = Summary::of_run(
@@ -547,56 +522,26 @@ mod tests {
             &scenario.run(&mut isotrack_sim::NoTrace),
             &[],
         );
-        let kept = ["notes.txt", "team.jpg", "my.png", "trajectory.png.bak"];
-        let old = [
-            "trajectory.png",
-            "trajectory.svg",
-            "timeseries.png",
-            "timeseries.svg",
-            "team.png",
-            "team.svg",
-            "animation.gif",
-            "mavlink.tlog",
-        ];
-        // A directory that held no run: a file named as a figure is the user's, kept.
-        let user = tempfile::tempdir().unwrap();
-        std::fs::write(user.path().join("trajectory.png"), b"mine").unwrap();
-        let out = RunDir::open(user.path(), &[], &[], None).unwrap();
-        let trace = out.trace(false).unwrap();
-        out.finish(trace, "x = 1\n", &summary).unwrap();
-        assert_eq!(
-            std::fs::read(user.path().join("trajectory.png")).unwrap(),
-            b"mine"
-        );
-        // An earlier run (its summary.json there, isotrack's own): its figures go.
         std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
-        for name in kept.iter().chain(old.iter()) {
+        for name in ["notes.txt", "my.png"].iter().chain(RUN_OUTPUTS.iter()) {
             std::fs::write(d.path().join(name), b"old").unwrap();
         }
-        let out = RunDir::open(d.path(), &[], &[], None).unwrap();
+        // Modification times are coarse on some file systems: the run opens strictly later.
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], None).unwrap();
         let trace = out.trace(false).unwrap();
         out.finish(trace, "x = 1\n", &summary).unwrap();
-        for name in old {
-            assert!(!d.path().join(name).exists(), "{name} left");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        // A figure this command draws after the run (run --plot) is not from before.
+        std::fs::write(d.path().join("trajectory.png"), b"new").unwrap();
+        for name in ["notes.txt", "my.png"].iter().chain(RUN_OUTPUTS.iter()) {
+            assert!(d.path().join(name).exists(), "{name} removed");
         }
-        for name in kept {
-            assert_eq!(
-                std::fs::read(d.path().join(name)).unwrap(),
-                b"old",
-                "{name}"
-            );
-        }
-        // A command's own extra file stays (fly writes its tlog before the first trace row).
-        std::fs::write(d.path().join("mavlink.tlog"), b"new").unwrap();
-        std::fs::write(d.path().join("team.png"), b"old").unwrap();
-        let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], None).unwrap();
-        let trace = out.live_trace(false).unwrap();
-        out.finish(trace, "x = 1\n", &summary).unwrap();
-        assert_eq!(
-            std::fs::read(d.path().join("mavlink.tlog")).unwrap(),
-            b"new"
-        );
-        assert!(!d.path().join("team.png").exists());
+        let before: Vec<&str> = RUN_OUTPUTS
+            .into_iter()
+            .filter(|n| *n != "trajectory.png" && *n != "mavlink.tlog")
+            .collect();
+        assert_eq!(out.outputs_from_before(), before);
     }
 
     /// att36-1: a folder that never held an isotrack run but has files named `scenario.toml`,
