@@ -852,3 +852,55 @@ fn a_sweep_begun_by_another_isotrack_is_refused_as_such() {
     assert_fails(&resume(), 65, &needles);
     assert_fails(&merge(), 65, &needles);
 }
+
+/// att38-5: `merge` of a shard whose `sweep.json` records this engine with one that records none
+/// (an older isotrack's) merged the two isotracks' rows silently and dropped the stamp; it is
+/// refused (65), naming both shards, in either order.
+#[test]
+fn a_merge_of_a_stamped_and_an_unstamped_shard_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 1.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let shard = |k: &str| {
+        let out = d.path().join(format!("shard-{k}"));
+        let o = isotrack(&[
+            "sweep",
+            &sw,
+            "--out",
+            out.to_str().unwrap(),
+            "--shard",
+            &format!("{k}/2"),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        out
+    };
+    let (a, b) = (shard("1"), shard("2"));
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(b.join("sweep.json")).unwrap()).unwrap();
+    m.as_object_mut().unwrap().remove("engine");
+    std::fs::write(b.join("sweep.json"), m.to_string()).unwrap();
+    for (i, (x, y)) in [(&a, &b), (&b, &a)].into_iter().enumerate() {
+        let merged = d.path().join(format!("m{i}"));
+        let o = isotrack(&[
+            "merge",
+            x.to_str().unwrap(),
+            y.to_str().unwrap(),
+            "--out",
+            merged.to_str().unwrap(),
+        ]);
+        assert_fails(
+            &o,
+            65,
+            &[
+                "computed by another isotrack",
+                "records no engine",
+                "shard-2",
+            ],
+        );
+        assert!(!merged.join("results.csv").exists());
+    }
+}

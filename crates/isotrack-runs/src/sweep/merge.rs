@@ -23,6 +23,9 @@ struct Shards {
     sources: Vec<PathBuf>,
     /// Whether a shard's `sweep.json` records no engine ([`check_engine`]).
     unrecorded_engine: bool,
+    /// The first shard whose `sweep.json` records no engine, and the first that records this
+    /// one (att38-5: both at once are the rows of two isotracks, merged silently before).
+    engines: [Option<PathBuf>; 2],
 }
 
 /// Merges the shard directories `dirs` of one sweep (same digest) into `out`: refuses missing,
@@ -76,6 +79,19 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     let (t, digest) = manifest_identity(d, &m)?;
     let engine_known = check_engine(d, &m)?;
     shards.unrecorded_engine |= !engine_known;
+    shards.engines[usize::from(engine_known)].get_or_insert_with(|| d.to_path_buf());
+    if let [Some(old), Some(new)] = &shards.engines {
+        return Err(fail(
+            exit::DATAERR,
+            format!(
+                "{}: computed by another isotrack than {} (its sweep.json records no engine: it was begun by an isotrack older than {}, which {} records): a sweep's rows must all be one isotrack's; run that shard again with this isotrack",
+                old.display(),
+                new.display(),
+                engine(),
+                new.display()
+            ),
+        ));
+    }
     let (mut plan, base) = shard_plan(d, &digest)?;
     // A relative file path in the sweep's `[grid]` or `[base]` names a file beside the sweep
     // file, not beside the shard's copy of it: the runs are resolved from the sweep file's
