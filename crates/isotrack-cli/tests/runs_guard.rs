@@ -680,6 +680,13 @@ fn plot_refuses_a_run_directory_being_written() {
     assert_fails(&o, 73, &["is writing this directory", ".isotrack.lock"]);
     assert!(!r.join("trajectory.png").exists());
     assert!(!r.join("timeseries.png").exists());
+    // att38-2: in the window where the run has removed the old summary and not yet renamed
+    // the new one in, the directory reads as no run: still 73 naming the holder, not 66.
+    let summary = std::fs::read(r.join("summary.json")).unwrap();
+    std::fs::remove_file(r.join("summary.json")).unwrap();
+    let o = isotrack_within(&["plot", &rs], 60);
+    assert_fails(&o, 73, &["is writing this directory"]);
+    std::fs::write(r.join("summary.json"), summary).unwrap();
     drop(lock);
     std::fs::remove_file(r.join(".isotrack.lock")).unwrap();
     let o = isotrack_within(&["plot", &rs], 60);

@@ -158,7 +158,16 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     let out = a.out.clone().unwrap_or_else(|| a.runs[0].clone());
     let results = a.runs[0].join("results.csv");
     for d in &a.runs {
-        refuse_neither_run_nor_sweep(d)?;
+        if let Err(e) = refuse_neither_run_nor_sweep(d) {
+            // A run directory being replaced (`run --out` between removing the old summary
+            // and renaming the new one in) reads as neither: the holder of its lock is named
+            // (73) rather than a run directory called none (att38-2); a free lock is let go
+            // at once.
+            if d.is_dir() {
+                drop(isotrack_runs::sweep::lock::lock_output_dir(d, "plot")?);
+            }
+            return Err(e);
+        }
     }
     if a.runs.len() == 1 && results.exists() {
         return plot_sweep(a, &results, &out, &st);
