@@ -206,17 +206,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 outln!("plotted     {}", written.join(", "));
             }
         }
-        // An earlier run's figures (or the user's files of those names) are never removed:
-        // said, so that they are not read as this run's (nu-21; att38-1).
-        let before = out.outputs_from_before();
-        if !before.is_empty() {
-            errln!(
-                "note: {} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this run's",
-                dir.display(),
-                before.join(", "),
-                dir.display()
-            );
-        }
+        note_outputs_from_before(&out, dir);
         result
     } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {
@@ -238,6 +228,20 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     };
     let _ = result;
     Ok(())
+}
+
+/// An earlier run's figures (or the user's files of those names) in the run directory `dir`,
+/// never removed: said, so that they are not read as this run's (nu-21; att38-1).
+fn note_outputs_from_before(out: &RunDir, dir: &std::path::Path) {
+    let before = out.outputs_from_before();
+    if !before.is_empty() {
+        errln!(
+            "note: {} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this run's",
+            dir.display(),
+            before.join(", "),
+            dir.display()
+        );
+    }
 }
 
 /// A team run's warnings ([`isotrack_runs::summary::team_warnings`]: a discovered ring that

@@ -71,14 +71,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
     Ok(total)
 }
 
-/// Reads shard directory `d` into `shards`: refused while being written, without a manifest
-/// or digest, edited since, from another sweep than the first shard, or with other columns.
-fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Failure> {
-    check_not_being_written(d)?;
-    let m = read_manifest(d)?;
-    let (t, digest) = manifest_identity(d, &m)?;
-    let engine_known = check_engine(d, &m)?;
-    shards.unrecorded_engine |= !engine_known;
+/// Notes whether shard `d` records this engine (`engine_known`) or none; refuses (65) a merge
+/// holding both (att38-5: the rows of two isotracks were merged silently, the stamp dropped).
+fn refuse_engines_mixed(shards: &mut Shards, d: &Path, engine_known: bool) -> Result<(), Failure> {
     shards.engines[usize::from(engine_known)].get_or_insert_with(|| d.to_path_buf());
     if let [Some(old), Some(new)] = &shards.engines {
         return Err(fail(
@@ -92,6 +87,18 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
+    Ok(())
+}
+
+/// Reads shard directory `d` into `shards`: refused while being written, without a manifest
+/// or digest, edited since, from another sweep than the first shard, or with other columns.
+fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Failure> {
+    check_not_being_written(d)?;
+    let m = read_manifest(d)?;
+    let (t, digest) = manifest_identity(d, &m)?;
+    let engine_known = check_engine(d, &m)?;
+    shards.unrecorded_engine |= !engine_known;
+    refuse_engines_mixed(shards, d, engine_known)?;
     let (mut plan, base) = shard_plan(d, &digest)?;
     // A relative file path in the sweep's `[grid]` or `[base]` names a file beside the sweep
     // file, not beside the shard's copy of it: the runs are resolved from the sweep file's
