@@ -308,11 +308,12 @@ fn dejavu_number_em(s: &str) -> f64 {
         / 2048.0
 }
 
-/// Issue 30 item 12: colour-bar tick labels as wide as `-12344.9975` (a field of -12345 with a
-/// 1e-4 per metre slope) fit between the bar's unit, drawn rotated at the left of the label
-/// area, and the bar: each label's left end (its right end minus its width in the font's
-/// metrics) is right of the unit's text, its right end left of the bar, and the bar inside the
-/// image. (The old fixed 4.6-font-size area put these labels over the unit.)
+/// Issue 30 item 12, nu36-1: colour-bar tick labels as wide as `-12344.9975` (a field of
+/// -12345 with a 1e-4 per metre slope) fit between the bar and its unit, drawn rotated at the
+/// image's right edge: each label starts right of the bar and its right end (its left end plus
+/// its width in the font's metrics) is left of the unit's glyphs, the unit inside the image.
+/// (The old fixed 4.6-font-size area put these labels over the unit; nu36-1's PNGs drew the
+/// bar over labels anchored at their right end.)
 #[test]
 fn wide_colour_bar_labels_fit_between_unit_and_bar() {
     let dir = tempfile::tempdir().unwrap();
@@ -346,14 +347,22 @@ fn wide_colour_bar_labels_fit_between_unit_and_bar() {
             texts.iter().any(|t| t.4 == "isoline s_d = -12344.9995"),
             "{texts:?}"
         );
-        // Rotated, its glyphs span one font size (ascent + descent) from its anchor.
-        let unit_right = unit.0 + 1.2 * unit.1;
+        // nu36-1: the bar, then its tick labels left-aligned right of it, then the unit,
+        // rotated at the right edge. Rotated a quarter turn clockwise with its baseline moved
+        // 0.76 em off its anchor, the unit's glyphs span about one font size left of the anchor
+        // (1.2 allowed, as the ascent and descent of the face).
+        let (unit_left, unit_right) = (unit.0 - 1.2 * unit.1, unit.0);
+        assert!(
+            unit_right <= w as f64,
+            "{w}: the unit at {unit_right} beyond the image"
+        );
         let labels: Vec<_> = texts
             .iter()
-            .filter(|t| t.0 > unit.0 && t.2 == "end" && t.4.starts_with("-1234"))
+            .filter(|t| t.2 == "start" && !t.3 && t.4.starts_with("-1234"))
             .collect();
         assert!(labels.len() >= 3, "{texts:?}");
-        // The bar: the colour rectangles right of the labels.
+        let labels_left = labels.iter().map(|l| l.0).fold(f64::INFINITY, f64::min);
+        // The bar: the colour rectangles just left of the labels.
         let bar_x = svg
             .split("<rect")
             .filter_map(|r| {
@@ -365,25 +374,25 @@ fn wide_colour_bar_labels_fit_between_unit_and_bar() {
                     .next()?
                     .parse()
                     .ok()?;
-                (x > unit.0 && width < 60.0).then_some((x, x + width))
+                (x > w as f64 / 2.0 && x < labels_left && width < 60.0).then_some((x, x + width))
             })
             .fold((f64::INFINITY, 0.0f64), |(a, b), (x0, x1)| {
                 (a.min(x0), b.max(x1))
             });
-        assert!(bar_x.1 <= w as f64, "{w}: bar ends at {}", bar_x.1);
+        assert!(bar_x.0 < bar_x.1, "{w}: no bar left of the labels");
         for l in &labels {
-            let left = l.0 - dejavu_number_em(&l.4) * l.1;
+            let right = l.0 + dejavu_number_em(&l.4) * l.1;
             assert!(
-                left >= unit_right,
-                "{w}: {:?} starts at {left:.1}, the unit ends at {unit_right:.1}",
-                l.4
-            );
-            assert!(
-                l.0 <= bar_x.0,
-                "{w}: {:?} ends at {} inside the bar at {}",
+                l.0 >= bar_x.1,
+                "{w}: {:?} starts at {} inside the bar ending at {}",
                 l.4,
                 l.0,
-                bar_x.0
+                bar_x.1
+            );
+            assert!(
+                right <= unit_left,
+                "{w}: {:?} ends at {right:.1}, the unit starts at {unit_left:.1}",
+                l.4
             );
         }
     }
