@@ -60,8 +60,8 @@ fn s<E: std::fmt::Display>(e: E) -> String {
 
 /// Draws a figure into a fresh temporary file beside `path` (same extension, so the encoder
 /// picks the same format; created by `isotrack_runs::files::create_output`), then renames it
-/// over `path`. An existing `path` that is not a regular file (a symbolic link, a FIFO) is
-/// refused at once: never written through, never waited on.
+/// over `path`, marked as isotrack's (`mark`). An existing `path` that is not a regular file
+/// (a symbolic link, a FIFO) is refused at once: never written through, never waited on.
 pub(crate) fn draw_atomic(path: &Path, body: impl FnOnce(&Path) -> DrawResult) -> DrawResult {
     isotrack_runs::files::refuse_non_regular(path).map_err(s)?;
     let name = path
@@ -74,7 +74,11 @@ pub(crate) fn draw_atomic(path: &Path, body: impl FnOnce(&Path) -> DrawResult) -
         .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp{ext}", std::process::id()));
     drop(isotrack_runs::files::create_output(&tmp).map_err(s)?);
-    let res = body(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(s));
+    // Every figure carries isotrack's mark (att38-9): a later plot tells it from the user's
+    // file of that name.
+    let res = body(&tmp)
+        .and_then(|()| crate::mark::mark(&tmp))
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(s));
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -1259,13 +1263,21 @@ pub fn sweep_figure(
     let bad = || err("no finite values".into());
     // One whole x value (`team.count = [5]`): an axis one unit wide round it, labelled once
     // at the value (att30n-7: an axis 2e-7 wide was labelled 4.9999997 to 5.0000002).
+    // One value that is not whole (0.1, 5.5), or a metric the same in every run: an axis a
+    // fifth of the value wide round it (1 round 0), labelled once, at the value, by hand
+    // (att38-7: ticks 1e-9 apart ran together and past the image's edge).
+    let single_x = (x0 == x1 && x0.fract() != 0.0).then_some(x0);
+    let single_y = (y0 == y1 && y0.is_finite()).then_some(y0);
     let x_width = if x0 == x1 && x0.fract() == 0.0 {
         1.0
+    } else if let Some(v) = single_x {
+        single_value_width(v)
     } else {
         1e-9
     };
     let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, x_width)?.ok_or_else(bad)?;
-    let (ya, yb) = padded_axis(metric, y0, y1, 0.08, 1e-12)?.ok_or_else(bad)?;
+    let y_width = single_y.map_or(1e-12, single_value_width);
+    let (ya, yb) = padded_axis(metric, y0, y1, 0.08, y_width)?.ok_or_else(bad)?;
     let runs: usize = all().map(|p| p.3).sum();
     let default_title = sweep_title(x_key, metric, runs, skipped);
     let title = st.title(&default_title);
@@ -1330,12 +1342,57 @@ pub fn sweep_figure(
                 .y_desc(metric)
                 // plotters' own default is 11 labels at most.
                 .x_labels(x_labels.unwrap_or(11))
-                .x_label_formatter(&|v| tick_label(*v, xs))
-                .y_label_formatter(&|v| tick_label(*v, ys))
+                .x_label_formatter(&|v| {
+                    if single_x.is_some() {
+                        String::new()
+                    } else {
+                        tick_label(*v, xs)
+                    }
+                })
+                .y_label_formatter(&|v| {
+                    if single_y.is_some() {
+                        String::new()
+                    } else {
+                        tick_label(*v, ys)
+                    }
+                })
                 .label_style(st.font(0.95))
                 .axis_desc_style(st.font(1.0))
                 .draw()
                 .map_err(s)?;
+            // The one value's label, at the value (att38-7).
+            let one_style = TextStyle::from(st.font(0.95));
+            let tick = (0.5 * f) as i32;
+            if let Some(v) = single_x {
+                let (px, py) = chart.backend_coord(&(v, ya));
+                let text = single_value_label(v);
+                root.draw(&PathElement::new(vec![(px, py), (px, py + tick)], BLACK))
+                    .map_err(s)?;
+                root.draw_text(
+                    &text,
+                    &one_style.pos(plotters::style::text_anchor::Pos::new(
+                        plotters::style::text_anchor::HPos::Center,
+                        plotters::style::text_anchor::VPos::Top,
+                    )),
+                    (px, py + tick + (0.2 * f) as i32),
+                )
+                .map_err(s)?;
+            }
+            if let Some(v) = single_y {
+                let (px, py) = chart.backend_coord(&(xa, v));
+                let text = single_value_label(v);
+                root.draw(&PathElement::new(vec![(px - tick, py), (px, py)], BLACK))
+                    .map_err(s)?;
+                root.draw_text(
+                    &text,
+                    &one_style.pos(plotters::style::text_anchor::Pos::new(
+                        plotters::style::text_anchor::HPos::Right,
+                        plotters::style::text_anchor::VPos::Center,
+                    )),
+                    (px - tick - (0.3 * f) as i32, py),
+                )
+                .map_err(s)?;
+            }
             for (i, (g, pts)) in lines.iter().enumerate() {
                 draw_summary_line(&mut chart, pts, label_of(g), colour(i + 1), st)?;
             }
@@ -1352,6 +1409,28 @@ pub fn sweep_figure(
             Ok(())
         })()
     })
+}
+
+/// The width of a sweep axis round its one value `v` (att38-7): a fifth of `|v|`, or 1 for 0.
+fn single_value_width(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        1.0
+    } else {
+        0.2 * v.abs()
+    }
+}
+
+/// The label of a sweep axis's one value: as written in the results (the shortest decimal
+/// that reads back), never a tick rounding of it; shortened to 10 significant digits when
+/// longer (a metric's `9.999999999999998`).
+fn single_value_label(v: f64) -> String {
+    let exact = isotrack_core::numtext::Echo(v).to_string();
+    if exact.chars().filter(char::is_ascii_digit).count() <= 10 {
+        exact
+    } else {
+        let short = format!("{v:.9e}").parse::<f64>().unwrap_or(v);
+        isotrack_core::numtext::Echo(short).to_string()
+    }
 }
 
 /// The x labels of a sweep figure whose x values are all whole numbers (`team.count`, a
@@ -1603,6 +1682,10 @@ struct TeamFigureData {
     ideal: f64,
     /// `L/N`, m (an open isoline: the mean gap over the steady window, `summary.json`'s).
     even: f64,
+    /// The ideal revisit time of the vehicles still flying (`summary.json`'s
+    /// `revisit_time_ideal_active_s`) where a vehicle was lost and it differs from `ideal`
+    /// (nu36-14), else NaN.
+    ideal_active: f64,
     /// Whether the isoline is closed (else open: no gap ahead of the vehicle in front).
     closed: bool,
     /// Whether the field moves its isoline (the dashed lines of its mean length, the curves
@@ -1717,6 +1800,10 @@ impl TeamFigureData {
                     .unwrap_or(f64::NAN),
             )
         };
+        let ideal_active = team
+            .and_then(|m| m.revisit_time_ideal_active_s)
+            .filter(|a| a.is_finite() && ideal.is_finite() && *a != ideal)
+            .unwrap_or(f64::NAN);
         let isoline: Vec<(f64, f64)> = tracks.arc.points().iter().map(|p| (p.x, p.y)).collect();
         // Each vehicle's last position, at its own end.
         let ends: Vec<(f64, f64)> = vehicles
@@ -1745,7 +1832,13 @@ impl TeamFigureData {
         padded_axis("t_s", 0.0, t_end, 0.0, 0.0)?;
         let (glo, ghi) = finite_bounds(gaps.iter().flat_map(|g| g.1.iter().copied()).chain([even]));
         let (glo, ghi) = padded_axis("gap_m", glo.min(0.0), ghi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
-        let (rlo, rhi) = finite_bounds(revisit.iter().map(|r| r.1).chain([ideal, 0.0]));
+        let (rlo, rhi) =
+            finite_bounds(
+                revisit
+                    .iter()
+                    .map(|r| r.1)
+                    .chain([ideal, ideal_active, 0.0]),
+            );
         let (rlo, rhi) = padded_axis("revisit_s", rlo, rhi, 0.08, 1e-9)?.unwrap_or((0.0, 1.0));
         Ok(Self {
             n,
@@ -1755,6 +1848,7 @@ impl TeamFigureData {
             no_revisit,
             ideal,
             even,
+            ideal_active,
             closed,
             moving,
             per_vehicle_speeds,
@@ -1796,6 +1890,7 @@ pub fn team_figure(
         no_revisit,
         ideal,
         even,
+        ideal_active,
         closed,
         moving,
         per_vehicle_speeds,
@@ -1899,6 +1994,28 @@ pub fn team_figure(
                         )
                     });
             }
+            // nu36-14: a team that lost a vehicle: the ideal of those still flying too, dotted
+            // (the revisit curve settles on it, not on the deployed ideal).
+            if ideal_active.is_finite() {
+                let (dot, gap) = (st.px(2.0), st.px(4.0));
+                bottom
+                    .draw_series(std::iter::once(plotters::element::DashedPathElement::new(
+                        vec![(0.0, ideal_active), (l, ideal_active)],
+                        dot,
+                        gap,
+                        BLACK.stroke_width(w2),
+                    )))
+                    .map_err(s)?
+                    .label("ideal of the vehicles still flying")
+                    .legend(move |(x, y)| {
+                        plotters::element::DashedPathElement::new(
+                            vec![(x, y), (x + 20, y)],
+                            dot,
+                            gap,
+                            BLACK.stroke_width(w2),
+                        )
+                    });
+            }
             let c = colour(1);
             let revisits = finite_runs(revisit.iter().copied());
             let label = if revisits.is_empty() {
@@ -1926,7 +2043,20 @@ pub fn team_figure(
                     .draw_series(dashed((0.0, ideal), (l, ideal)))
                     .map_err(s)?;
             }
-            panel_legend(&mut bottom, st, SeriesLabelPosition::LowerRight)?;
+            // att36-14: the key in the corner the curve and the ideal line leave free (it sat
+            // at the lower right over a low revisit curve and hid it).
+            let mut drawn: Vec<(f64, f64)> = revisit
+                .iter()
+                .copied()
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect();
+            for level in [ideal, ideal_active] {
+                if level.is_finite() {
+                    drawn.extend((0..=64).map(|k| (l * f64::from(k) / 64.0, level)));
+                }
+            }
+            let corner = quiet_corner(&drawn, (0.0, l), (rlo, rhi));
+            panel_legend(&mut bottom, st, corner)?;
             // The isoline the panels measure along, and where each vehicle ended; its key above
             // the panel, outside the axes (nu-1: the key's box was cut at the figure's edge;
             // nu-7: it covered a vehicle's last position).
@@ -2090,6 +2220,34 @@ fn x_labels_that_fit(
 }
 
 /// A panel's legend ([`panel_axes`]), at `at`.
+/// The corner of a panel over `x` x `y` for a legend box that covers the fewest of `points`
+/// (the box taken as 55 % of the width and 30 % of the height from the corner), in the order
+/// lower right, upper right, upper left, lower left on a tie (att36-14).
+fn quiet_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let (w, h) = (x.1 - x.0, y.1 - y.0);
+    let count = |right: bool, upper: bool| {
+        points
+            .iter()
+            .filter(|p| {
+                let fx = (p.0 - x.0) / w;
+                let fy = (p.1 - y.0) / h;
+                let in_x = if right { fx >= 0.45 } else { fx <= 0.55 };
+                let in_y = if upper { fy >= 0.7 } else { fy <= 0.3 };
+                in_x && in_y
+            })
+            .count()
+    };
+    [
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ]
+    .into_iter()
+    .min_by_key(|&(_, r, u)| count(r, u))
+    .map_or(SeriesLabelPosition::LowerRight, |c| c.0)
+}
+
 fn panel_legend<'a, DB: DrawingBackend + 'a>(
     chart: &mut MapChart<'a, DB>,
     st: &Style,
@@ -2108,6 +2266,41 @@ fn panel_legend<'a, DB: DrawingBackend + 'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// att36-14: the revisit panel's key goes where neither the curve nor the ideal line is:
+    /// a low curve (ERA5 at 600 s: 300-600 s under an ideal near the top) leaves the upper
+    /// corners to the ideal and the lower ones to the curve, the key taking the one with the
+    /// fewest points; a curve on the ideal in the middle leaves the lower right free.
+    #[test]
+    fn the_revisit_key_takes_a_free_corner() {
+        let l = 580.0;
+        let curve: Vec<(f64, f64)> = (0..=100).map(|k| (l * k as f64 / 100.0, 400.0)).collect();
+        let at = |pts: &[(f64, f64)]| quiet_corner(pts, (0.0, l), (0.0, 5000.0));
+        // The curve low everywhere: an upper corner.
+        assert!(matches!(at(&curve), SeriesLabelPosition::UpperRight));
+        // The curve low on the right only, high on the left: lower left is busy, lower right
+        // too; upper right is free.
+        let mixed: Vec<(f64, f64)> = curve
+            .iter()
+            .map(|&(x, y)| (x, if x < 0.5 * l { 4500.0 } else { y }))
+            .collect();
+        assert!(matches!(at(&mixed), SeriesLabelPosition::UpperRight));
+        // In the middle: lower right, as before.
+        let mid: Vec<(f64, f64)> = curve.iter().map(|&(x, _)| (x, 2500.0)).collect();
+        assert!(matches!(at(&mid), SeriesLabelPosition::LowerRight));
+    }
+
+    /// att38-7: one sweep value's axis is a fifth of it wide round it (1 round 0) and its
+    /// label is the value as written.
+    #[test]
+    fn one_value_axes() {
+        assert!((single_value_width(5.5) - 1.1).abs() < 1e-15);
+        assert_eq!(single_value_width(0.0), 1.0);
+        assert_eq!(single_value_label(5.5), "5.5");
+        assert_eq!(single_value_label(0.1), "0.1");
+        assert_eq!(single_value_label(-1234567.5), "-1234567.5");
+        assert_eq!(single_value_label(9.999999999999998), "10");
+    }
 
     /// nu-7: a sweep over `team.count = [3, 4]` is labelled at 3 and 4 (the axis padded by 5 %
     /// each side, 2.95 to 4.05, holds the two whole numbers); half values, or whole numbers

@@ -23,6 +23,7 @@
 mod draw;
 mod error;
 mod limits;
+mod mark;
 mod picture;
 mod run_data;
 mod stability;
@@ -35,6 +36,7 @@ pub use draw::{
 };
 pub(crate) use error::open_input;
 pub use error::{PlotError, MAX_INPUT_BYTES};
+pub use mark::{is_isotrack_figure, refuse_foreign_figure};
 pub use picture::FieldPicture;
 pub use run_data::{data_files_unchanged, same_field, unrecorded_data_files_note, RunData};
 pub use stability::{boundary_segments, stability_map_figure};

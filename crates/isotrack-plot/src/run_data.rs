@@ -23,6 +23,18 @@ pub struct RunData {
     pub scenario: Scenario,
 }
 
+/// The outcomes a team's vehicle ends with (`summary.json`'s `vehicles[i].outcome`).
+const TEAM_OUTCOMES: [&str; 3] = ["completed", "left_field", "diverged"];
+
+/// The outcomes of a simulated run's `summary.json` (a cut `sitl` run's too).
+const RUN_OUTCOMES: [&str; 5] = [
+    "completed",
+    "left_field",
+    "diverged",
+    "interrupted",
+    "companion_lost",
+];
+
 /// A team's `summary.json` against itself and its scenario (att32f-1): `team.count` (the
 /// metrics') and the scenario's `[team]` count are `team.vehicle_count` (`n`), and `vehicles`
 /// lists `n` vehicles. A list one short or one long drew a vehicle with no end known (or one
@@ -49,6 +61,36 @@ fn check_team_lists(run: &RunData, n: usize) -> Result<(), String> {
                 "scenario.toml's team has {} vehicles, but summary.json's team.vehicle_count = {n}",
                 t.count()
             ));
+        }
+    }
+    // att36-15: each vehicle's outcome one a team's run writes, and the top-level record
+    // (documented to be vehicle 0's) vehicle 0's.
+    if let Some(v) = &end.vehicles {
+        if let Some((i, bad)) = v
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !TEAM_OUTCOMES.contains(&v.outcome.as_str()))
+        {
+            return Err(format!(
+                "summary.json: vehicles[{i}].outcome = \"{}\" is no outcome of a team's vehicle ({})",
+                isotrack_scenario::load::clip(&bad.outcome),
+                TEAM_OUTCOMES.join(", ")
+            ));
+        }
+        if let Some(v0) = v.first() {
+            let same_end = match (end.record.t_end_s, v0.t_end_s) {
+                (Some(a), Some(b)) => a == b,
+                (a, b) => a.is_none() && b.is_none(),
+            };
+            if end.record.outcome != v0.outcome || !same_end {
+                return Err(format!(
+                    "summary.json: the top-level outcome {} at t_end_s = {} is not vehicles[0]'s ({} at {}), whose record the top level repeats",
+                    isotrack_scenario::load::clip(&end.record.outcome),
+                    end.record.t_end_s.map_or("null".to_string(), |t| Echo(t).to_string()),
+                    isotrack_scenario::load::clip(&v0.outcome),
+                    v0.t_end_s.map_or("null".to_string(), |t| Echo(t).to_string()),
+                ));
+            }
         }
     }
     match &end.vehicles {
@@ -97,6 +139,77 @@ fn check_duration(
         }
     }
     Ok(())
+}
+
+/// `scenario.toml` against the resolved scenario `summary.json` records (att36-5): the run
+/// flew the summary's; a `scenario.toml` edited after the run (another level, field, speed,
+/// steady fraction ...) drew the run against a scenario it never flew, and an edited
+/// summary's scenario likewise. Refused naming the first key (in key order) whose values
+/// differ; a key only one of them has (a summary of an older isotrack without a newer key)
+/// is not compared.
+fn check_scenario_is_runs(run: &RunData) -> Result<(), String> {
+    let Ok(toml_json) = serde_json::to_value(run.scenario.file()) else {
+        return Ok(());
+    };
+    match first_difference(&toml_json, &run.summary.scenario, &mut Vec::new()) {
+        None => Ok(()),
+        Some((key, in_toml, in_summary)) => Err(format!(
+            "scenario.toml: {key} = {in_toml}, but summary.json's scenario (the one the run flew) has {key} = {in_summary}: the scenario is not this run's (edited after the run?); restore it or re-run it"
+        )),
+    }
+}
+
+/// The first key (dotted, `a.b[2].c`) where `a` and `b` differ, with each side's value as
+/// JSON (clipped); keys only one side has are skipped.
+fn first_difference(
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    path: &mut Vec<String>,
+) -> Option<(String, String, String)> {
+    use serde_json::Value;
+    let here = |path: &[String]| {
+        let mut k = String::new();
+        for p in path {
+            if !p.starts_with('[') && !k.is_empty() {
+                k.push('.');
+            }
+            k.push_str(p);
+        }
+        k
+    };
+    let clip = |v: &Value| isotrack_scenario::load::clip(&v.to_string());
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            for (k, va) in x {
+                let Some(vb) = y.get(k) else { continue };
+                path.push(k.clone());
+                let d = first_difference(va, vb, path);
+                path.pop();
+                if d.is_some() {
+                    return d;
+                }
+            }
+            None
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => {
+            for (i, (va, vb)) in x.iter().zip(y).enumerate() {
+                path.push(format!("[{i}]"));
+                let d = first_difference(va, vb, path);
+                path.pop();
+                if d.is_some() {
+                    return d;
+                }
+            }
+            None
+        }
+        (Value::Number(x), Value::Number(y))
+            if x.as_f64().is_some() && x.as_f64() == y.as_f64() =>
+        {
+            None
+        }
+        _ if a == b => None,
+        _ => Some((here(path), clip(a), clip(b))),
+    }
 }
 
 /// How `summary.json`'s `vehicles[i]` ends vehicle `i`, for a message: "ends it at t = T s
@@ -152,7 +265,10 @@ impl RunData {
     /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml` of a single-vehicle
     /// run (a team's run is refused: [`RunData::load_team`]).
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
-        Self::read(dir, false).map(|x| x.0)
+        let run = Self::read(dir, false)?.0;
+        check_scenario_is_runs(&run)
+            .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
+        Ok(run)
     }
 
     /// Whether `DIR/summary.json` is a team's run (it has a `team` object); `false` when it
@@ -176,6 +292,8 @@ impl RunData {
     pub fn load_team_named(dir: &Path, with_run: bool) -> Result<Vec<Self>, PlotError> {
         let (all, ids, lines) = Self::read(dir, true)?;
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
+            check_scenario_is_runs(&all)
+                .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
             return Ok(vec![all]);
         };
         if !(1..=1_000_000).contains(&n) {
@@ -185,6 +303,7 @@ impl RunData {
             )));
         }
         check_team_lists(&all, n)
+            .and_then(|()| check_scenario_is_runs(&all))
             .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
         let mut traces: Vec<Vec<TraceRow>> = vec![Vec::new(); n];
         // The rows come a recorded time at a time, every running vehicle's row at each: a
@@ -392,6 +511,17 @@ impl RunData {
             isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
                 .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
         let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
+        // att36-15: an outcome isotrack never writes ("exploded") was drawn and reported as
+        // given.
+        if let Ended::Run(end) = &summary.ended {
+            if !RUN_OUTCOMES.contains(&end.record.outcome.as_str()) {
+                return Err(err(format!(
+                    "summary.json: outcome = \"{}\" is no outcome of a run ({})",
+                    isotrack_scenario::load::clip(&end.record.outcome),
+                    RUN_OUTCOMES.join(", ")
+                )));
+            }
+        }
         // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
         // would join into one path; refused until the team's figures are drawn.
         if !team_ok && summary.team().is_some() {

@@ -65,6 +65,17 @@ impl FigureArc {
     }
 }
 
+/// A linear ramp without `field.domain_m`: a field without an edge, whose isoline the team
+/// metrics cut at the box the team can reach.
+fn ramp_without_edge(scenario: &Scenario) -> bool {
+    matches!(
+        scenario.field(),
+        isotrack_scenario::field::FieldModel::Analytic(f)
+            if f.domain_m.is_none()
+                && matches!(f.kind, isotrack_fields::AnalyticKind::LinearRamp(_))
+    )
+}
+
 /// The isoline a team figure of `scenario` measures along and its legend label: as
 /// `Scenario::team_isoline` (the metrics' own), and for a field that moves its isoline at
 /// `t_last_s` (the loop most of `last_positions` are nearest to), labelled with that time.
@@ -83,6 +94,10 @@ pub fn figure_isoline(
         TeamIsolineModel::Polyline(p) => {
             let kind = if p.is_closed() {
                 "closed"
+            } else if ramp_without_edge(scenario) {
+                // nu36-12: a linear ramp without a domain has no edge to leave: its line is
+                // cut at the box the team can reach (docs/TEAMS.md "Open isolines").
+                "open: cut at the box the team can reach"
             } else {
                 "open: it leaves the field"
             };

@@ -384,3 +384,138 @@ spacing = "none"
     );
     assert!(!fig.contains("no vehicle live"));
 }
+
+/// Sets `section.key` in `dir`'s scenario.toml to `v` (the section made when absent).
+fn set_key(dir: &Path, section: &str, key: &str, v: toml::Value) {
+    let p = dir.join("scenario.toml");
+    let mut t: toml::Table = std::fs::read_to_string(&p).unwrap().parse().unwrap();
+    t.entry(section)
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+        .as_table_mut()
+        .unwrap()
+        .insert(key.into(), v);
+    std::fs::write(&p, toml::to_string(&t).unwrap()).unwrap();
+}
+
+/// att36-5: a run directory whose scenario.toml was edited after the run (the level, the
+/// field's i0 and centre, the speed, the steady fraction, the record rate), or whose
+/// summary.json's own resolved scenario was, is refused (65) naming the key and both values,
+/// for a team's run and a single vehicle's alike; the directory as written is read. Before the
+/// fix every one of them was drawn against the edited scenario.
+#[test]
+fn a_scenario_edited_after_the_run_is_refused_naming_the_key() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("run");
+    make_team_run(&run, &scenario(two_leave(3.0), "none", 1.0));
+    assert_eq!(RunData::load_team(&run).unwrap().len(), 4);
+    let cases: [(&str, &str, toml::Value, &str); 6] = [
+        (
+            "controller",
+            "level",
+            toml::Value::Float(12.0),
+            "controller.level = 12.0",
+        ),
+        ("field", "i0", toml::Value::Float(25.0), "field.i0 = 25.0"),
+        (
+            "field",
+            "center_m",
+            toml::Value::Array(vec![toml::Value::Float(3.0), toml::Value::Float(0.0)]),
+            "field.center_m[0] = 3.0",
+        ),
+        (
+            "vehicle",
+            "speed_mps",
+            toml::Value::Float(0.7),
+            "vehicle.speed_mps = 0.7",
+        ),
+        (
+            "metrics",
+            "steady_state_fraction",
+            toml::Value::Float(0.25),
+            "metrics.steady_state_fraction = 0.25",
+        ),
+        (
+            "output",
+            "record_rate_hz",
+            toml::Value::Float(5.0),
+            "output.record_rate_hz = 5.0",
+        ),
+    ];
+    for (i, (section, key, v, named)) in cases.into_iter().enumerate() {
+        let dir = edited(&run, &d.path().join(format!("e{i}")), |_| {}, None);
+        set_key(&dir, section, key, v);
+        let m = refusal(&dir);
+        assert!(m.contains(&format!("scenario.toml: {named}")), "{m}");
+        assert!(m.contains("summary.json's scenario"), "{m}");
+    }
+    // summary.json's own scenario edited, scenario.toml as written.
+    let dir = edited(
+        &run,
+        &d.path().join("json"),
+        |s| s["scenario"]["controller"]["level"] = serde_json::json!(12.0),
+        None,
+    );
+    let m = refusal(&dir);
+    assert!(
+        m.contains("scenario.toml: controller.level = 10.0, but summary.json's scenario (the one the run flew) has controller.level = 12.0"),
+        "{m}"
+    );
+    // A single vehicle's run: the same rule.
+    let single = d.path().join("single");
+    {
+        let s =
+            isotrack_scenario::parse_scenario("[sim]\nduration_s = 2.0\n", "<test>", &[]).unwrap();
+        let out = isotrack_runs::rundir::RunDir::open(&single, &[], &[], None).unwrap();
+        let mut trace = out.trace(s.is_flying()).unwrap();
+        let r = s.run(trace.writer());
+        let summary = Summary::of_run(&s, None, &r, &[]);
+        out.finish(trace, &scenario_toml(&s), &summary).unwrap();
+    }
+    assert!(RunData::load(&single).is_ok());
+    set_key(&single, "controller", "level", toml::Value::Float(14.0));
+    match RunData::load(&single) {
+        Err(e @ isotrack_plot::PlotError::Data(_)) => {
+            assert!(
+                e.to_string()
+                    .contains("scenario.toml: controller.level = 14.0"),
+                "{e}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// att36-15: a team's summary.json whose vehicle has an outcome isotrack never writes
+/// ("exploded"), or whose top-level outcome or end (documented as vehicle 0's) is not
+/// vehicle 0's, is refused naming the key; the run as written is read. Before the fix all
+/// three were drawn and reported as given.
+#[test]
+fn a_summary_whose_outcomes_are_not_a_runs_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("run");
+    make_team_run(&run, &scenario(two_leave(3.0), "none", 1.0));
+    let dir = edited(
+        &run,
+        &d.path().join("exploded"),
+        |s| s["vehicles"][1]["outcome"] = serde_json::json!("exploded"),
+        None,
+    );
+    let m = refusal(&dir);
+    assert!(m.contains("vehicles[1].outcome = \"exploded\""), "{m}");
+    let dir = edited(
+        &run,
+        &d.path().join("top"),
+        |s| s["t_end_s"] = serde_json::json!(0.5),
+        None,
+    );
+    let m = refusal(&dir);
+    assert!(m.contains("is not vehicles[0]'s"), "{m}");
+    let dir = edited(
+        &run,
+        &d.path().join("top_outcome"),
+        |s| s["outcome"] = serde_json::json!("diverged"),
+        None,
+    );
+    let m = refusal(&dir);
+    assert!(m.contains("the top-level outcome diverged"), "{m}");
+}

@@ -41,7 +41,7 @@ pub use load::{
     build_derived, load_scenario, parse_scenario, parse_scenario_in, MAX_SCENARIO_FILE_BYTES,
 };
 pub use schema::ScenarioFile;
-pub use team::{TeamIsolineModel, ARC_REFERENCE_WITHOUT_ARC};
+pub use team::{TeamIsolineModel, ARC_REFERENCE_NO_ISOLINE, ARC_REFERENCE_WITHOUT_ARC};
 
 use field::{build_field, FieldModel, IsolineOracle, LonLatFrame};
 use std::path::Path;

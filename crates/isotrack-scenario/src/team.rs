@@ -80,6 +80,11 @@ pub const NO_CLOSED_ISOLINE: &str = "no team metrics: the field has no isoline a
 pub const DRIFTING_FIELD: &str =
     "no team metrics: the team metrics do not follow the isoline of a drifting analytic field (a radial one included), for now";
 
+/// Why `isotrack run` refuses `team.spacing = "arc_reference"` on a radial field whose values
+/// never reach `controller.level` (att36-8: it was refused with
+/// [`ARC_REFERENCE_WITHOUT_ARC`], false there: the field is a radial one that does not drift).
+pub const ARC_REFERENCE_NO_ISOLINE: &str = "team.spacing = \"arc_reference\" needs the isoline's arc length, but the field has no isoline at controller.level: a radial field i0 exp(-k r) takes values in (0, i0] only, and the level is not among them";
+
 /// Why `isotrack run` refuses a scenario whose law is `arc_reference` on a field without a
 /// known arc length ([`Scenario::team_refusal`]; exit 65), and why `check` says its team
 /// section does not apply (att32g-3: one text for both).
@@ -409,7 +414,28 @@ impl Scenario {
             .team
             .as_ref()
             .is_some_and(|t| matches!(t.law, SpacingLaw::ArcReference { .. }));
-        (arc_law && self.team_arc().is_none()).then_some(ARC_REFERENCE_WITHOUT_ARC)
+        if !arc_law || self.team_arc().is_some() {
+            return None;
+        }
+        Some(if self.radial_without_level() {
+            ARC_REFERENCE_NO_ISOLINE
+        } else {
+            ARC_REFERENCE_WITHOUT_ARC
+        })
+    }
+
+    /// A radial field (`i0 exp(-k r)`, `i0 > 0`, `k > 0`) whose values `(0, i0]` do not hold
+    /// `controller.level` (`level <= 0` or `level >= i0`: at `i0` the "isoline" is the centre
+    /// alone): no isoline at the level at all.
+    fn radial_without_level(&self) -> bool {
+        let FieldModel::Analytic(f) = self.field() else {
+            return false;
+        };
+        let AnalyticKind::RadialExp(r) = &f.kind else {
+            return false;
+        };
+        let level = self.level();
+        r.i0 > 0.0 && r.decay_per_m > 0.0 && !(level > 0.0 && level < r.i0)
     }
 
     /// Why a team run of this scenario has no team metrics (`summary.json`'s

@@ -167,6 +167,11 @@ pub struct Prop2Report {
     pub initial_heading_in_sector: Option<bool>,
     /// Remarks.
     pub note: String,
+    /// A team's start the start-dependent parts analyse (nu36-4: `[initial]` is no vehicle's
+    /// start there): `vehicle I's start (X, Y) m, heading H rad, ...`; `None` for one
+    /// vehicle (absent from the JSON then).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub analysed_start: Option<String>,
 }
 
 /// The sampled-data check (docs/SAMPLED.md).
@@ -818,7 +823,28 @@ fn prop2_region_sampling(s: &Scenario, l: &Law, tube: f64, r: &Regions) -> Prop2
         initial_phi_rad: None,
         initial_heading_in_sector: None,
         note: String::new(),
+        analysed_start: analysed_start_text(s),
     }
+}
+
+/// [`Prop2Report::analysed_start`]: which of a team's starts the start-dependent parts
+/// (the start-to-tube region, `phi(t0)`, the reach and settling warnings) are computed from.
+fn analysed_start_text(s: &Scenario) -> Option<String> {
+    let (Some(i), st) = regions::analysed_start(s) else {
+        return None;
+    };
+    let n = regions::starts(s).len();
+    Some(format!(
+        "vehicle {i}'s ({}, {}) m, heading {} rad{}; the start-to-tube band holds every start's level and phi(t0) is checked at every start ([initial] is no vehicle's start in a team)",
+        Num(st.x_m),
+        Num(st.y_m),
+        Num(st.heading_rad),
+        if n > 1 {
+            format!(", of the team's {n} starts the farthest from the level")
+        } else {
+            String::new()
+        }
+    ))
 }
 
 /// Whether Prop. 2 is stated for this law and these gains.
@@ -908,24 +934,40 @@ fn prop2_bound(rep: &mut Prop2Report, b: &FieldBounds, l: &Law) {
     }
 }
 
-/// The initial heading condition `phi(t0) in [-pi + phi, -phi]`.
+/// The initial heading condition `phi(t0) in [-pi + phi, -phi]`: at the analysed start
+/// ([`regions::analysed_start`]); for a team (nu36-4) at every vehicle's start, in the sector
+/// only if each is, `phi(t0)` the first start's outside it (the analysed one's otherwise).
 fn prop2_initial_heading(rep: &mut Prop2Report, s: &Scenario) {
     let f = s.file();
-    let Some(g) = s.field().gradient(0.0, start(s)).filter(|g| g.norm() > 0.0) else {
+    let left = f.controller.higher_side == Some(isotrack_core::control::HigherSide::Left);
+    let phi_of = |st: &crate::spec::Start| {
+        let g = s
+            .field()
+            .gradient(0.0, Vec2::new(st.x_m, st.y_m))
+            .filter(|g| g.norm() > 0.0)?;
+        let h = Vec2::from_angle(st.heading_rad);
+        let minus_n = -g;
+        // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as
+        // printed (higher values on the right) wants phi in (-pi, 0); mirror for "left".
+        let phi0 = minus_n.cross(h).atan2(minus_n.dot(h));
+        Some(if left { -phi0 } else { phi0 })
+    };
+    let (_, analysed) = regions::analysed_start(s);
+    let Some(mut phi0) = phi_of(&analysed) else {
         return;
     };
-    let h = Vec2::from_angle(s.spec().start.heading_rad);
-    let minus_n = -g;
-    // Signed angle from -grad F to h, counter-clockwise positive; the paper's law as printed
-    // (higher values on the right) wants phi in (-pi, 0); mirror for "left".
-    let mut phi0 = minus_n.cross(h).atan2(minus_n.dot(h));
-    if f.controller.higher_side == Some(isotrack_core::control::HigherSide::Left) {
-        phi0 = -phi0;
+    if let Some(m) = rep.error_bound_phi_rad {
+        let inside = |p: f64| p <= -m && p >= -std::f64::consts::PI + m;
+        let outside = regions::starts(s)
+            .iter()
+            .filter_map(phi_of)
+            .find(|p| !inside(*p));
+        if let Some(p) = outside {
+            phi0 = p;
+        }
+        rep.initial_heading_in_sector = Some(inside(phi0));
     }
     rep.initial_phi_rad = Some(phi0);
-    if let Some(m) = rep.error_bound_phi_rad {
-        rep.initial_heading_in_sector = Some(phi0 <= -m && phi0 >= -std::f64::consts::PI + m);
-    }
 }
 
 /// The remarks on the conditions, each following from the condition that failed: the reach
@@ -1773,7 +1815,64 @@ pub fn warnings(s: &Scenario) -> Vec<String> {
     w.extend(baselines::baseline_warnings(s));
     w.extend(team_warning_with(s, &l, &r));
     w.extend(vehicle_noise_warnings(s));
+    w.extend(coincident_starts(s));
     w
+}
+
+/// att36-18: a team with two vehicles starting at one pose (the same position and heading,
+/// e.g. `team.spread.step_rad = 0` or `2 pi`): the text naming the first such pair, `None`
+/// otherwise. A coordinate-free law commands them from the same measurement and the same
+/// ranges (0 to each other): they fly as one unless their sensors' noise parts them, and the
+/// spacing law can never separate them itself. `check` and `run` warn (docs/TEAMS.md).
+pub fn coincident_starts(s: &Scenario) -> Option<String> {
+    let t = s.spec().team.as_ref()?;
+    let key = |i: usize| {
+        let st = &t.starts[i];
+        let h = st.heading_rad.rem_euclid(std::f64::consts::TAU);
+        // One heading for 0 and 2 pi (rem_euclid of -0.0 or of 2 pi less an ulp).
+        let h = if (std::f64::consts::TAU - h).abs() < 1e-12 {
+            0.0
+        } else {
+            h
+        };
+        (st.x_m, st.y_m, h)
+    };
+    let mut order: Vec<usize> = (0..t.starts.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.total_cmp(&kb.0)
+            .then(ka.1.total_cmp(&kb.1))
+            .then(ka.2.total_cmp(&kb.2))
+            .then(a.cmp(&b))
+    });
+    let close = |a: (f64, f64, f64), b: (f64, f64, f64)| {
+        (a.0 - b.0).abs() <= 1e-9 * a.0.abs().max(1.0)
+            && (a.1 - b.1).abs() <= 1e-9 * a.1.abs().max(1.0)
+            && (a.2 - b.2).abs() <= 1e-9
+    };
+    let pair = order
+        .windows(2)
+        .filter(|w| close(key(w[0]), key(w[1])))
+        .map(|w| (w[0].min(w[1]), w[0].max(w[1])))
+        .min()?;
+    let st = &t.starts[pair.0];
+    let n = order
+        .iter()
+        .filter(|&&i| close(key(i), key(pair.0)))
+        .count();
+    Some(format!(
+        "team: vehicles {} and {}{} start at one pose ({}, {}) m, heading {} rad: a coordinate-free law commands them from the same measurement and a range of 0 to each other, so they fly as one unless their sensors' noise parts them; the spacing law cannot separate them (give each its own start: team.starts, or a team.spread with step_rad not a multiple of 2 pi)",
+        pair.0,
+        pair.1,
+        if n > 2 {
+            format!(" ({n} vehicles in all)")
+        } else {
+            String::new()
+        },
+        Echo(st.x_m),
+        Echo(st.y_m),
+        Echo(st.heading_rad)
+    ))
 }
 
 /// The backward-difference noise warning of [`warnings_from`] for the team's vehicles whose
@@ -1839,6 +1938,37 @@ fn team_warning_with(s: &Scenario, l: &Law, r: &Regions) -> Option<String> {
     (t.verdict == Verdict::Fails).then(|| format!("the team check fails: {}", t.verdict_reason))
 }
 
+/// A radial field that does not drift whose isoline circle at the level (radius
+/// `r_d = ln(i0/s_d)/k` round its centre) is cut by its `field.domain_m` (att36-23): the
+/// text saying so, `None` otherwise (no domain, the circle inside it, touching allowed as for
+/// the team's arc, or no circle).
+fn circle_cut_by_domain(s: &Scenario) -> Option<String> {
+    let crate::field::FieldModel::Analytic(a) = s.field() else {
+        return None;
+    };
+    let (AnalyticKind::RadialExp(r), Some(d)) = (&a.kind, a.domain_m) else {
+        return None;
+    };
+    if a.drift_mps.x != 0.0 || a.drift_mps.y != 0.0 {
+        return None;
+    }
+    let rd = radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level())?;
+    let c = r.center_m;
+    let inside = d[0] <= c.x - rd && c.x + rd <= d[1] && d[2] <= c.y - rd && c.y + rd <= d[3];
+    (!inside).then(|| {
+        format!(
+            "the isoline, the circle of radius {} m round ({}, {}) m, is cut by field.domain_m = [{}, {}, {}, {}]",
+            Num(rd),
+            Echo(c.x),
+            Echo(c.y),
+            Echo(d[0]),
+            Echo(d[1]),
+            Echo(d[2]),
+            Echo(d[3])
+        )
+    })
+}
+
 /// Runs the checks; `tube_halfwidth` defaults to `c2`.
 pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let l = law(s);
@@ -1875,6 +2005,26 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).
     let mut warnings = settling_warnings(s, &l, &prop2);
+    if let Some(one) = coincident_starts(s) {
+        if verdict == Verdict::Holds {
+            verdict = Verdict::NotApplicable;
+            verdict_reason = format!("not guaranteed: {verdict_reason}; {one}");
+        }
+        warnings.push(one);
+    }
+    if let Some(cut) = circle_cut_by_domain(s) {
+        // att36-23: "holds" (locally exponentially stable) for an orbit the domain cuts: a
+        // vehicle that tracks it reaches the domain's edge and leaves the field.
+        if verdict == Verdict::Holds {
+            verdict = Verdict::NotApplicable;
+            verdict_reason = format!(
+                "not guaranteed: {verdict_reason}, on an orbit that cannot be flown: {cut}"
+            );
+        }
+        warnings.push(format!(
+            "{cut}: a vehicle tracking it reaches the domain's edge and leaves the field (run ends left_field)"
+        ));
+    }
     if let Some(outrun) = moving_outruns(&moving) {
         // Issue 29: "nothing checked fails" beside a moving check that failed. The sampled
         // loop and Prop. 2 are computed on the field frozen at t = 0; an isoline that outruns
@@ -2592,5 +2742,156 @@ mod tests {
             p.verdict_reason
         );
         assert!(!p.prop2.ki_nonzero);
+    }
+
+    /// nu36-4: a team's check analyses the team's starts, not `[initial]`'s pose (no vehicle
+    /// flies from it). team-circular-4's robots start on the isoline (r = 10 ln 2 m, where
+    /// `F = 20 exp(-0.1 r) = 10`), heading along it: the start-to-tube band is the tube's
+    /// `[s_d - c2, s_d + c2] = [9, 11]` and `|phi(t0)| = pi/2`, whatever `[initial]` says; on
+    /// main `[initial]` at (60, 0) gave the band from `F(60) = 20 e^-6 = 0.0496` and a
+    /// reach/wind-up warning "from this start".
+    #[test]
+    fn a_team_check_analyses_the_team_starts_not_initial() {
+        for sets in [
+            &[][..],
+            &["initial.x_m=60.0", "initial.heading_rad=1.0"][..],
+        ] {
+            let r = check(&bundled("team-circular-4", sets), None);
+            let [lo, hi] = r.prop2.region_levels.unwrap();
+            assert!(
+                (lo - 9.0).abs() < 1e-9 && (hi - 11.0).abs() < 1e-9,
+                "{sets:?}: {lo} {hi}"
+            );
+            let phi0 = r.prop2.initial_phi_rad.unwrap();
+            assert!(
+                (phi0.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+                "{sets:?}: {phi0}"
+            );
+            assert!(
+                r.warnings.iter().all(|w| !w.contains("from this start")),
+                "{sets:?}: {:?}",
+                r.warnings
+            );
+            assert!(r
+                .prop2
+                .analysed_start
+                .as_deref()
+                .unwrap()
+                .starts_with("vehicle "));
+        }
+        // Its addendum: a domain leaving [initial] at (50, 0) without data withholds nothing
+        // for it (every robot starts inside the domain).
+        let r = check(
+            &bundled(
+                "team-circular-4",
+                &["field.domain_m=[-10.0,10.0,-10.0,10.0]", "initial.x_m=50.0"],
+            ),
+            None,
+        );
+        assert!(!r.prop2.start_without_data, "{}", r.prop2.note);
+        assert!(!r.prop2.note.contains("(50, 0)"), "{}", r.prop2.note);
+        assert!(r.prop2.region_levels.is_some());
+    }
+
+    /// nu36-4: starts on both sides of the isoline: the band holds every start's level,
+    /// `[F(12) - 1, F(3) + 1]` with `F(r) = 20 exp(-0.1 r)`, and the analysed start is the
+    /// one farthest from the level (`|F(3) - 10| = 4.82 > |F(12) - 10| = 3.98`: vehicle 0).
+    #[test]
+    fn a_team_band_holds_every_start_level() {
+        let text = "[field]\nkind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.1\n[vehicle]\nspeed_mps = 0.5\n[controller]\nlevel = 10.0\nkp = 10.0\nki = 1.0\nc1 = 0.2\nc2 = 1.0\n[team]\nstarts = [{x_m = 3.0, y_m = 0.0, heading_rad = 0.0}, {x_m = -12.0, y_m = 0.0, heading_rad = 0.0}]\n";
+        let s = crate::parse_scenario(text, "<test>", &[]).unwrap();
+        let r = check(&s, None);
+        let f = |r: f64| 20.0 * (-0.1 * r).exp();
+        let [lo, hi] = r.prop2.region_levels.unwrap();
+        assert!((lo - (f(12.0) - 1.0)).abs() < 1e-9, "{lo}");
+        assert!((hi - (f(3.0) + 1.0)).abs() < 1e-9, "{hi}");
+        assert!(r
+            .prop2
+            .analysed_start
+            .unwrap()
+            .starts_with("vehicle 0's (3, 0) m"));
+    }
+
+    /// att36-23: the paper's circular field with `field.domain_m` cutting its level-10
+    /// circle (radius `ln(20/10)/0.1 = 6.93 m`; x from -5 m) is not `holds`: the orbit cannot be
+    /// flown whole, and the simulated run indeed ends `left_field`. The domain holding the
+    /// circle (x from -6.95 m) still holds.
+    #[test]
+    fn a_circle_the_domain_cuts_does_not_hold() {
+        let s = bundled(
+            "paper-fig2b-circular",
+            &[
+                "field.domain_m=[-5.0,20.0,-20.0,20.0]",
+                "sim.duration_s=300.0",
+            ],
+        );
+        let r = check(&s, None);
+        assert_ne!(r.verdict, Verdict::Holds, "{}", r.verdict_reason);
+        assert!(
+            r.verdict_reason.contains("cut by field.domain_m"),
+            "{}",
+            r.verdict_reason
+        );
+        assert!(
+            r.warnings.iter().any(|w| w.contains("radius 6.93147 m")),
+            "{:?}",
+            r.warnings
+        );
+        let run = s.run(&mut isotrack_sim::NoTrace);
+        assert_eq!(run.outcome.as_str(), "left_field");
+        let whole = bundled(
+            "paper-fig2b-circular",
+            &[
+                "field.domain_m=[-6.95,20.0,-20.0,20.0]",
+                "sim.duration_s=300.0",
+            ],
+        );
+        assert_eq!(check(&whole, None).verdict, Verdict::Holds);
+    }
+
+    /// att36-18: a team whose four robots start at one pose (an arc spread with `step_rad`
+    /// 0 or `2 pi`) is not `holds` and both `check` and `run`'s warnings name it; the bundled
+    /// spread (step 0.3 rad) warns nothing of it.
+    #[test]
+    fn a_team_started_at_one_pose_warns() {
+        for step in ["0.0", "6.283185307179586"] {
+            let spread = format!("team.spread={{along=\"arc\", center_m=[0.0,0.0], radius_m=6.931471805599453, start_rad=0.0, step_rad={step}, clockwise=true}}");
+            let s = bundled("team-circular-4", &[spread.as_str()]);
+            let r = check(&s, None);
+            assert_ne!(r.verdict, Verdict::Holds, "{step}: {}", r.verdict_reason);
+            let named = "team: vehicles 0 and 1 (4 vehicles in all) start at one pose";
+            assert!(
+                r.warnings.iter().any(|w| w.starts_with(named)),
+                "{step}: {:?}",
+                r.warnings
+            );
+            assert!(warnings(&s).iter().any(|w| w.starts_with(named)), "{step}");
+        }
+        let s = bundled("team-circular-4", &[]);
+        assert_eq!(coincident_starts(&s), None);
+        assert_eq!(check(&s, None).verdict, Verdict::Holds);
+    }
+
+    /// att36-12: a puff plume's check does not depend on a domain wider than the plume's reach
+    /// (the domain says where the field is defined; the plume is the same): with
+    /// `field.domain_m` 2 km or 200 km wide the lattice still covers the plume's reach
+    /// (`|wind| max_age + 4 sigma0 + 10 m` round the source), so the verdict, the moving
+    /// check and the isoline's slopes are those without a domain. Before, the lattice spread
+    /// over the domain (333 m a step at 200 km) and the verdict went from "the moving-isoline
+    /// check fails" to "the level is not attained in the region".
+    #[test]
+    fn a_puff_check_does_not_depend_on_a_wide_domain() {
+        let base = check(&bundled("team-puff-edge-3", &["sim.duration_s=60.0"]), None);
+        for d in ["1000.0", "100000.0"] {
+            let dom = format!("field.domain_m=[-{d},{d},-{d},{d}]");
+            let r = check(
+                &bundled("team-puff-edge-3", &["sim.duration_s=60.0", dom.as_str()]),
+                None,
+            );
+            assert_eq!(r.verdict, base.verdict, "{d}: {}", r.verdict_reason);
+            assert_eq!(r.verdict_reason, base.verdict_reason, "{d}");
+            assert_eq!(r.sampled.slope_range, base.sampled.slope_range, "{d}");
+            assert!(!r.verdict_reason.contains("not attained"), "{d}");
+        }
     }
 }

@@ -6,6 +6,7 @@
 
 use super::lattice::{self, Lattice};
 use crate::field::FieldModel;
+use crate::spec::Start;
 use crate::Scenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::theory::radial_exp_isoline_radius_m;
@@ -19,13 +20,35 @@ pub(super) const CHECK_LATTICE: usize = 601;
 /// The region over which the field is sampled: the grid, the domain, or a box round the
 /// analytic field's features and the start.
 pub(super) fn region(s: &Scenario) -> [f64; 4] {
-    let start = start(s);
     let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
         r[0] = r[0].min(p.x - m);
         r[1] = r[1].max(p.x + m);
         r[2] = r[2].min(p.y - m);
         r[3] = r[3].max(p.y + m);
         r
+    };
+    // Every vehicle's start (nu36-4: a team's, not `[initial]`'s): the box round them, grown
+    // by `m` as the one start was.
+    let all = starts(s);
+    let start_box = |m: f64| {
+        all.iter().fold(
+            [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ],
+            |r, st| grow(r, Vec2::new(st.x_m, st.y_m), m),
+        )
+    };
+    let with_starts = |r: [f64; 4], m: f64| {
+        let b = start_box(m);
+        [
+            r[0].min(b[0]),
+            r[1].max(b[1]),
+            r[2].min(b[2]),
+            r[3].max(b[3]),
+        ]
     };
     let empty = [
         f64::INFINITY,
@@ -37,13 +60,30 @@ pub(super) fn region(s: &Scenario) -> [f64; 4] {
         FieldModel::Grid(g) => g.grid().extent_m(),
         FieldModel::Series(g) => g.extent_m(),
         FieldModel::Puff(pf) => {
-            if let Some(d) = s.spec().field.domain_m() {
-                return d;
-            }
-            // The plume's reach over its puffs' lifetime downwind, and the start.
+            // The plume's reach over its puffs' lifetime downwind, and the start; within the
+            // domain when there is one (att36-12: the domain alone, 2 km or 200 km wide, spread
+            // the fixed lattice over it, 333 m a step for a plume tens of metres wide, and the
+            // verdict changed with it: the domain says where the field is defined, the plume is
+            // the same).
             let pp = pf.params();
             let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
-            grow(grow(empty, pp.source_m, reach), start, 10.0)
+            let b = with_starts(grow(empty, pp.source_m, reach), 10.0);
+            match s.spec().field.domain_m() {
+                Some(d) => {
+                    let cut = [
+                        b[0].max(d[0]),
+                        b[1].min(d[1]),
+                        b[2].max(d[2]),
+                        b[3].min(d[3]),
+                    ];
+                    if cut[0] < cut[1] && cut[2] < cut[3] {
+                        cut
+                    } else {
+                        d
+                    }
+                }
+                None => b,
+            }
         }
         FieldModel::Analytic(a) => {
             if let Some(d) = a.domain_m {
@@ -53,14 +93,14 @@ pub(super) fn region(s: &Scenario) -> [f64; 4] {
                 AnalyticKind::RadialExp(r) => {
                     let rd =
                         radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level()).unwrap_or(10.0);
-                    grow(grow(empty, r.center_m, 3.0 * rd), start, 1.0)
+                    with_starts(grow(empty, r.center_m, 3.0 * rd), 1.0)
                 }
                 AnalyticKind::GaussianPlumes(p) => {
-                    p.plumes.iter().fold(grow(empty, start, 1.0), |r, pl| {
+                    p.plumes.iter().fold(with_starts(empty, 1.0), |r, pl| {
                         grow(r, pl.center_m, 4.0 * pl.sigma_m[0].max(pl.sigma_m[1]))
                     })
                 }
-                AnalyticKind::LinearRamp(_) => grow(empty, start, 100.0),
+                AnalyticKind::LinearRamp(_) => with_starts(empty, 100.0),
             }
         }
     }
@@ -97,10 +137,46 @@ pub(super) fn exact_isoline_slope(s: &Scenario) -> Option<f64> {
     }
 }
 
-/// The start: position and level.
+/// The start: position and level (the pose [`analysed_start`] gives).
 pub(super) fn start(s: &Scenario) -> Vec2 {
-    let st = s.spec().start;
+    let (_, st) = analysed_start(s);
     Vec2::new(st.x_m, st.y_m)
+}
+
+/// Every start a vehicle flies from: `[initial]` for one vehicle, the team's starts for a team
+/// (whose `[initial]` no vehicle flies from, nu36-4).
+pub(super) fn starts(s: &Scenario) -> &[Start] {
+    match s.spec().team.as_ref() {
+        Some(t) if !t.starts.is_empty() => &t.starts,
+        _ => std::slice::from_ref(&s.spec().start),
+    }
+}
+
+/// The pose the start-dependent checks analyse (the start-to-tube region, the heading sector,
+/// the reach and settling warnings), with its vehicle's index for a team: `[initial]` for one
+/// vehicle; for a team (nu36-4: `[initial]` is no vehicle's start there) the team's start
+/// farthest from the level, `|F(0, p) - s_d|` largest at `t = 0`, a start without a field
+/// value before any (the first such in the listed order on a tie): the region from it to the
+/// tube holds the levels of every start on its side of the isoline.
+pub(super) fn analysed_start(s: &Scenario) -> (Option<usize>, Start) {
+    let Some(t) = s.spec().team.as_ref().filter(|t| !t.starts.is_empty()) else {
+        return (None, s.spec().start);
+    };
+    let level = s.level();
+    let distance = |st: &Start| {
+        s.field()
+            .value(0.0, Vec2::new(st.x_m, st.y_m))
+            .filter(|f| f.is_finite())
+            .map_or(f64::INFINITY, |f| (f - level).abs())
+    };
+    let mut best = (0, distance(&t.starts[0]));
+    for (i, st) in t.starts.iter().enumerate().skip(1) {
+        let d = distance(st);
+        if d > best.1 {
+            best = (i, d);
+        }
+    }
+    (Some(best.0), t.starts[best.0])
 }
 
 /// What the lattice gives the checks: bounds over the start-to-tube region and the tube, the
@@ -185,7 +261,15 @@ pub(super) fn regions(s: &Scenario, tube: f64, n: usize, with_bounds: bool) -> R
             // isoline, `|e|` is non-increasing outside `rho` and the error stays within the
             // bound, which the note compares with the tube. A margin, not a proof: the levels
             // the transient reaches are not bounded by the check.
-            let levels = [(s0 - tube).min(lo), (s0 + tube).max(hi)];
+            //
+            // A team (nu36-4): the band holds every vehicle's start level with data (the
+            // analysed start, farthest from the level, holds those on its side).
+            let (s_lo, s_hi) = starts(s)
+                .iter()
+                .filter_map(|st| field.value(0.0, Vec2::new(st.x_m, st.y_m)))
+                .filter(|f| f.is_finite())
+                .fold((s0, s0), |(a, b), f| (a.min(f), b.max(f)));
+            let levels = [(s_lo - tube).min(lo), (s_hi + tube).max(hi)];
             let cells = lat.component(cell, levels[0], levels[1]);
             (Some(levels), lat.bounds(&cells, has_hessian))
         }

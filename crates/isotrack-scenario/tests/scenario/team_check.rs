@@ -492,3 +492,33 @@ fn a_drifting_radial_fields_note_says_it_has_no_team_metrics() {
     );
     assert!(!note.contains("followed for a radial field"), "{note}");
 }
+
+/// att36-8: `arc_reference` at a level the radial field never takes (level 25 over
+/// `i0 = 20`: `20 exp(-0.1 r) <= 20 < 25` everywhere) is refused because there is no isoline
+/// at the level, not for a field kind it "only knows for now" (the field IS a non-drifting
+/// radial field); `check`'s team section gives the same reason. At level 10 it runs.
+#[test]
+fn arc_reference_above_the_peak_says_there_is_no_isoline() {
+    let spread = "team.spread={along=\"arc\", center_m=[0.0,0.0], radius_m=6.931471805599453, start_rad=0.0, step_rad=0.3, clockwise=true}";
+    for level in ["25.0", "20.0", "-1.0"] {
+        let lv = format!("controller.level={level}");
+        let s = circular(&["team.spacing=\"arc_reference\"", &lv, spread]);
+        assert_eq!(
+            s.team_refusal(),
+            Some(isotrack_scenario::ARC_REFERENCE_NO_ISOLINE),
+            "{level}"
+        );
+        assert!(
+            isotrack_scenario::ARC_REFERENCE_NO_ISOLINE.contains("no isoline at controller.level")
+        );
+        let t = check(&s, None).team.unwrap();
+        assert!(
+            t.verdict_reason
+                .contains(isotrack_scenario::ARC_REFERENCE_NO_ISOLINE),
+            "{}",
+            t.verdict_reason
+        );
+    }
+    let s = circular(&["team.spacing=\"arc_reference\"", spread]);
+    assert_eq!(s.team_refusal(), None);
+}
