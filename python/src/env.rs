@@ -9,8 +9,8 @@
 //! - observation: `[eps_m, deps_m]`, the measured error `eps_m = s_measured - s_d` and its
 //!   sampled difference `(eps_m,k - eps_m,k-1) / (t_k - t_k-1)` (1/s; 0 at the first sample),
 //!   exactly what a coordinate-free controller can compute;
-//! - reward: `-|eps_k| / error_scale - effort_weight * (omega / omega_max)^2`, with `eps_k` the
-//!   true (noise-free) error at the new sample; on a terminating step (`left_field`,
+//! - reward: `-min(|eps_k| / error_scale, MAX_SCALED_ERROR) - effort_weight * (omega /
+//!   omega_max)^2`, with `eps_k` the true (noise-free) error at the new sample; on a terminating step (`left_field`,
 //!   `diverged`) also `-termination_penalty` (default: the worst reward a step can have under
 //!   the error cap `MAX_SCALED_ERROR`, times the steps left, so that ending a run early never
 //!   scores better than flying it out).
@@ -31,6 +31,14 @@ use pyo3::prelude::*;
 /// early pays as if every remaining step had `|eps| = MAX_SCALED_ERROR * error_scale` at full
 /// effort.
 pub(crate) const MAX_SCALED_ERROR: f64 = 10.0;
+
+/// The tracking term of a reward, `min(|eps| / error_scale, MAX_SCALED_ERROR)`: capped, so that
+/// the default termination penalty (`MAX_SCALED_ERROR` per step left) bounds what flying on could
+/// cost and leaving the field never pays (att39-10: uncapped, an agent that could not hold its
+/// error under 10 error scales scored better by leaving).
+pub(crate) fn capped_error(error: f64, error_scale: f64) -> f64 {
+    (error.abs() / error_scale).min(MAX_SCALED_ERROR)
+}
 
 /// The largest |reward| an episode sums to: `error_scale`, `effort_weight` and
 /// `termination_penalty` are bounded so that every reward and their sum stay below it (finite).
@@ -538,7 +546,7 @@ impl PyEnvBatch {
         let Some(sample) = e.run_to_sample() else {
             // Ended without a new sample: off the field, diverged, or (the sensor dropping the
             // last samples) at the end of the run.
-            let r = -slot.true_error.abs() / scale - effort;
+            let r = -capped_error(slot.true_error, scale) - effort;
             return match e.outcome() {
                 Some(Outcome::Completed) | None => (r, false, true),
                 Some(_) => (r - penalty(slot.samples), true, false),
@@ -551,7 +559,7 @@ impl PyEnvBatch {
         slot.true_error = sample.true_value - level;
         slot.samples += 1;
         slot.pose = pose_of(&sample);
-        let r = -slot.true_error.abs() / scale - effort;
+        let r = -capped_error(slot.true_error, scale) - effort;
         if sample.measurement.t_s < last_sample_t_s {
             return (r, false, false);
         }

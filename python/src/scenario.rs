@@ -122,6 +122,24 @@ impl PyScenario {
         })
     }
 
+    /// The data files the scenario's field reads (`field.path`, every `field.paths` entry),
+    /// absolute, in the scenario's order: what `summary.json`'s `data_files` records.
+    fn data_files(&self) -> Vec<String> {
+        self.inner
+            .spec()
+            .field
+            .data_files()
+            .into_iter()
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// Whether `other` flies this scenario's field as it was read (no file read again since):
+    /// a `set` of keys outside the resolved `[field]` shares it.
+    fn shares_field(&self, other: &PyScenario) -> bool {
+        self.inner.shares_field_with(&other.inner)
+    }
+
     /// The scenario's name in messages (the path given to `from_file`, `<toml>`, ...).
     #[getter]
     fn origin(&self) -> &str {

@@ -1001,7 +1001,7 @@ impl PyTeamEnv {
         // environment's reward keeps the last sample's error (nu36-5: it read 0, so that
         // leaving the field paid).
         let tracking = if value.is_finite() {
-            let x = (value - self.level).abs() / self.error_scale;
+            let x = crate::env::capped_error(value - self.level, self.error_scale);
             self.agents[i].last_tracking = x;
             x
         } else {

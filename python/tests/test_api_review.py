@@ -444,3 +444,20 @@ def test_toml_text_is_bounded_like_files():
     with pytest.raises(ValueError, match="larger than"):
         isotrack.Scenario.from_toml('name = "' + "\u00e9" * (600 << 10) + '"\n')
     assert isotrack.Scenario.from_toml('name = "' + "a" * 1000 + '"\n').to_toml()
+
+
+def test_saving_twice_keeps_the_users_figures(tmp_path):
+    """att39-6 (att38-1 through Python): the second ``Run.save(DIR)`` into a folder holding the
+    user's own trajectory.png and team.svg deleted them (the first save's summary made the
+    folder read as an earlier run, and every figure there as that run's). isotrack never
+    removes a file it may not have written: both survive any number of saves, byte for byte."""
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / "trajectory.png").write_bytes(b"MY PICTURE")
+    (d / "team.svg").write_text("<svg>mine</svg>")
+    run = short(seconds=1.0).run()
+    for _ in range(3):
+        run.save(d)
+        assert (d / "trajectory.png").read_bytes() == b"MY PICTURE"
+        assert (d / "team.svg").read_text() == "<svg>mine</svg>"
+    assert (d / "summary.json").is_file() and (d / "trace.csv").is_file()

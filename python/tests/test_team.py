@@ -5,6 +5,8 @@ Run.save byte for byte as `isotrack run --out`, and the PettingZoo ParallelEnv (
 reproducing Scenario.run() exactly, bad actions refused, determinism)."""
 
 import math
+import re
+import shutil
 import os
 import subprocess
 from pathlib import Path
@@ -942,3 +944,109 @@ def test_a_scenario_whose_data_file_changed_is_not_run(tmp_path):
     # Made again, it flies the file as it is now and names that file's digest.
     again = isotrack.Scenario.from_file(str(tmp_path / "s.toml")).run()
     assert again.summary["data_files"][str(tmp_path / "field.csv")] != digest
+
+
+def _volcano_copy(tmp_path):
+    """volcano.toml with its data file copied into tmp_path (the scenario reads the copy)."""
+    shutil.copy(ROOT / "data" / "volcano" / "volcano.csv", tmp_path / "volcano.csv")
+    text = (ROOT / "scenarios" / "volcano.toml").read_text()
+    text = re.sub(r'path = "[^"]*volcano\.csv"', 'path = "volcano.csv"', text)
+    (tmp_path / "volcano.toml").write_text(text)
+    return tmp_path / "volcano.csv"
+
+
+def _edit(path):
+    text = path.read_text()
+    path.write_text(text.replace("13", "19"))
+
+
+def test_a_scenario_set_from_one_whose_data_file_changed_is_not_run(tmp_path):
+    """att39-5: ``sc.set(KEY, V).run()`` (the README's idiom) after the data file changed flew
+    the field ``sc`` had read (the old one) and named the new file's SHA-256: ``set`` took its
+    digests from the file as it is now. A scenario set from another carries the digests of the
+    field it flies; one that reads its files again takes theirs."""
+    csv = _volcano_copy(tmp_path)
+    sc = isotrack.Scenario.from_file(str(tmp_path / "volcano.toml")).set("sim.duration_s", 5.0)
+    old = sc.run().summary["data_files"][str(csv)]
+    _edit(csv)
+    for derived in (sc.set("controller.kp", 5.0), sc.set({"sim.duration_s": 4.0}), sc.set("sim.seed", 3)):
+        with pytest.raises(ValueError, match="changed since the scenario was made"):
+            derived.run()
+    # Read again (its own file): it flies the file as it is now and names that digest.
+    fresh = isotrack.Scenario.from_file(str(tmp_path / "volcano.toml")).set("sim.duration_s", 5.0).run()
+    assert fresh.summary["data_files"][str(csv)] != old
+
+
+def test_a_time_series_whose_file_changed_is_not_run(tmp_path):
+    """att39-11: the data files of a grid time series (``field.paths``, a list) were never
+    checked: a run after one of them changed flew the old frames and named the new digest."""
+    csv = _volcano_copy(tmp_path)
+    shutil.copy(csv, tmp_path / "v2.csv")
+    text = (tmp_path / "volcano.toml").read_text()
+    text = text.replace('path = "volcano.csv"', 'paths = ["volcano.csv", "v2.csv"]\nframe_times_s = [0.0, 100.0]')
+    (tmp_path / "ts.toml").write_text(text)
+    sc = isotrack.Scenario.from_file(str(tmp_path / "ts.toml")).set("sim.duration_s", 5.0)
+    assert sorted(sc._digests) == sorted([str(csv), str(tmp_path / "v2.csv")])
+    sc.run()
+    _edit(tmp_path / "v2.csv")
+    with pytest.raises(ValueError, match="v2.csv: the scenario's data file changed"):
+        sc.run()
+
+
+def test_the_team_env_refuses_a_data_file_changed_since_the_scenario(tmp_path, ipz):
+    """att39-5: the PettingZoo team env flew the field its scenario had read and its summary
+    named the changed file's digest. reset() raises as Scenario.run() does."""
+    csv = _volcano_copy(tmp_path)
+    down = -math.pi / 2
+    sc = isotrack.Scenario.from_file(str(tmp_path / "volcano.toml")).set(
+        {
+            "sim.duration_s": 4.0,
+            "controller.max_turn_rate_radps": 1.0,
+            "team.starts": [{"x_m": 300.0, "y_m": 700.0 - 50.0 * i, "heading_rad": down} for i in range(3)],
+        }
+    )
+    env = ipz.parallel_env(sc)
+    env.reset(seed=1)
+    _edit(csv)
+    with pytest.raises(ValueError, match="changed since the scenario was made"):
+        env.reset(seed=1)
+
+
+@pytest.mark.parametrize("error_scale", [None, 0.1])
+def test_leaving_never_pays_for_an_agent_that_cannot_track(ipz, error_scale):
+    """att39-10: the tracking term was uncapped (the cap of 10 error scales was in the default
+    penalty only), so an agent that could not hold its error under 10 error scales (here: a
+    0.5-m level circle a 2.5-m turn radius cannot fly, error_scale 0.1) scored better by flying
+    straight out of the field than by flying on. With the term capped at 10 (every step's
+    reward >= -(10 + spacing_weight + effort_weight)), the penalty bounds flying on."""
+    base = isotrack.Scenario.from_file(str(TEAM)).set(
+        {
+            "controller.max_turn_rate_radps": 0.2,
+            "controller.level": 19.0,
+            "sim.duration_s": 60.0,
+            "field.domain_m": [-7.5, 7.5, -7.5, 7.5],
+        }
+    )
+
+    def episode(leave):
+        env = ipz.parallel_env(base, error_scale=error_scale)
+        obs, infos = env.reset(seed=0)
+        total, left, worst = 0.0, False, 0.0
+        while env.agents:
+            acts = {a: infos[a]["builtin_action"] for a in env.agents}
+            if leave and "vehicle_0" in acts:
+                acts["vehicle_0"] = np.array([0.0, env.action_space("vehicle_0").high[1]], np.float32)
+            obs, rw, te, tr, infos = env.step(acts)
+            if "vehicle_0" in rw:
+                total += rw["vehicle_0"]
+                if te["vehicle_0"]:
+                    left = True
+                else:
+                    worst = min(worst, rw["vehicle_0"])
+        return total, left, worst
+
+    stay, stay_left, worst = episode(False)
+    go, go_left = episode(True)[:2]
+    assert not stay_left and go_left
+    assert worst >= -(10.0 + 1.0 + 0.01) - 1e-12, worst
+    assert go < stay, (go, stay)

@@ -398,6 +398,13 @@ impl Scenario {
         &self.given
     }
 
+    /// Whether `other` flies this scenario's field itself, as read when it was made (the same
+    /// built field: a variant whose resolved `[field]` is unchanged shares it and reads no file
+    /// again, see [`Scenario::derive_with_in`]); `false` when either one read its files itself.
+    pub fn shares_field_with(&self, other: &Scenario) -> bool {
+        Arc::ptr_eq(&self.field, &other.field)
+    }
+
     /// Every setting in force, typed, the derived ones computed (read settings here, not from
     /// [`Scenario::file`]).
     pub fn spec(&self) -> &spec::ScenarioSpec {

@@ -395,23 +395,6 @@ class Run:
 _DIGESTS: Dict[tuple, str] = {}
 
 
-def _data_files(toml_text: str) -> "list[str]":
-    """The data files a resolved scenario reads: its string values that are absolute paths of
-    regular files (``to_toml`` writes them absolute)."""
-    import os
-    import re
-
-    files = []
-    for m in re.finditer(r'^[A-Za-z0-9_.-]+\s*=\s*("(?:[^"\\]|\\.)*")\s*$', toml_text, re.M):
-        try:
-            v = json.loads(m.group(1))
-        except ValueError:
-            continue
-        if isinstance(v, str) and os.path.isabs(v) and os.path.isfile(v) and v not in files:
-            files.append(v)
-    return files
-
-
 def _sha256(path: str, cached: bool = True) -> str:
     """The file's SHA-256 (hex), from isotrack's one content digest (the Rust function that
     also records a run's data files in ``summary.json``)."""
@@ -440,7 +423,17 @@ class Scenario:
                 f"Scenario.from_toml(text), not Scenario({native!r:.80})"
             )
         self._native = native
-        self._digests = {p: _sha256(p) for p in _data_files(native.to_toml())}
+        self._digests = {p: _sha256(p) for p in dict.fromkeys(native.data_files())}
+
+    def _derived(self, native: "_native.Scenario") -> "Scenario":
+        """A scenario made from this one (``set``): where it flies this one's field as read
+        (no file read again), it carries this one's digests, taken when the files were read
+        (att39-5: it took them from the files as they are now, so a changed file passed the
+        check while the old field flew); otherwise its own, from the files it just read."""
+        new = Scenario(native)
+        if self._native.shares_field(native):
+            new._digests = {p: self._digests.get(p, d) for p, d in new._digests.items()}
+        return new
 
     @staticmethod
     def _unpickle(
@@ -520,7 +513,7 @@ class Scenario:
                 pairs.append((k, v))
             if not pairs:
                 return self
-            new = Scenario(self._native.set_many(pairs))
+            new = self._derived(self._native.set_many(pairs))
             key = ", ".join(k for k, _ in pairs)
         else:
             if not isinstance(key, str):
@@ -529,7 +522,7 @@ class Scenario:
                 raise TypeError(f"set({key!r:.80}) needs a value")
             if isinstance(value, np.ndarray) and value.ndim == 0:
                 value = value[()]  # a 0-d array is its scalar (np.array(3.0) as 3.0, np.array(5) as 5)
-            new = Scenario(self._native.set(key, value))
+            new = self._derived(self._native.set(key, value))
         # Held to the CLI's limit for scenario text, so that what is set also pickles (a pickled
         # scenario is its TOML) and saves as a scenario file the CLI reads.
         if len(new.to_toml().encode("utf-8")) > _MAX_TEXT_BYTES:
@@ -605,25 +598,25 @@ class Scenario:
                     f"{p}: the scenario's data file changed since the scenario was made (SHA-256 "
                     f"{want[:16]}... then, {now[:16]}... now): the scenario holds the field as it "
                     "was read then, so a run would not be the file's; make the scenario again "
-                    "(Scenario.from_file, or .set of the path) to fly the file as it is now"
+                    "(Scenario.from_file, Scenario.from_toml) to fly the file as it is now"
                 )
 
     def _run(self, rate: Optional[float], controller: Any) -> Run:
         if _native.is_team(self._native):
             if controller is None:
                 summary, trace, flown = _native.team_run(self._native, rate)
-                return Run._from_native(summary, dict(trace), Scenario(flown))
+                return Run._from_native(summary, dict(trace), self._derived(flown))
             controllers = _team_controllers(controller, _native.team_count(self._native))
             summary, trace, flown = _native.team_run(self._native, rate, controllers)
             name = ", ".join(dict.fromkeys(_controller_class(c) for c in controllers))
-            return Run._from_native(_python_summary(summary, name), dict(trace), Scenario(flown), name)
+            return Run._from_native(_python_summary(summary, name), dict(trace), self._derived(flown), name)
         if controller is not None:
             _check_controller("controller", controller)
         summary, trace, flown = self._native.run(rate, controller)
         if controller is None:
-            return Run._from_native(summary, dict(trace), Scenario(flown))
+            return Run._from_native(summary, dict(trace), self._derived(flown))
         name = _controller_class(controller)
-        return Run._from_native(_python_summary(summary, name), dict(trace), Scenario(flown), name)
+        return Run._from_native(_python_summary(summary, name), dict(trace), self._derived(flown), name)
 
     def field_values(self, x, y, t: float = 0.0) -> np.ndarray:
         """The field at points ``(x, y)`` (m) at time ``t`` (s, within the run:

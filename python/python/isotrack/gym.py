@@ -30,8 +30,8 @@ The environment's definition (the same for both):
   no position, heading or gradient. The bounds are finite where the sensor has a ``range =
   [lo, hi]`` (``eps_m`` in ``[lo - s_d, hi - s_d]``, ``|deps_m| <= (hi - lo) * rate_hz``), else
   infinite (a field value has no bound a noisy sensor respects).
-* **reward**: ``-|eps| / error_scale - effort_weight * (omega / omega_max)**2``, with ``eps`` the
-  true (noise-free) error at the new sample, ``error_scale`` the scenario controller's ``c2``
+* **reward**: ``-min(|eps| / error_scale, 10) - effort_weight * (omega / omega_max)**2``, with
+  ``eps`` the true (noise-free) error at the new sample (the tracking term capped at 10), ``error_scale`` the scenario controller's ``c2``
   (the paper's error scale; 1 if unset) unless given, ``effort_weight`` 0.01 unless given.
   A terminating step also pays ``termination_penalty`` (default: ``(10 + effort_weight)`` times
   the samples left in the run, so that leaving the field never scores better than staying).

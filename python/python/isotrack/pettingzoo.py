@@ -30,7 +30,7 @@ the vehicles' move:
   the latest ranges its ranging unit delivered to its ring neighbours ahead and behind with a
   validity flag each (1: the neighbour answered; 0: it did not, the range reads 0; both 0
   before the first delivery). Nothing else: no position, heading or neighbour position.
-* **reward** (per agent): ``-|eps| / error_scale - spacing_weight * ((d_ahead - d_behind) /
+* **reward** (per agent): ``-min(|eps| / error_scale, 10) - spacing_weight * ((d_ahead - d_behind) /
   (d_ahead + d_behind))^2 - effort_weight * (omega / omega_max)^2`` at the new pause, with the
   true (noise-free) error and the true distances to its ring neighbours (ground truth, as the
   single-vehicle reward's error): tracking, plus the imbalance of its two gaps (0 when the
@@ -39,7 +39,7 @@ the vehicles' move:
   (where the field has no value) the tracking term is its last one. A terminating step
   (``left_field``, ``diverged``) also pays ``termination_penalty`` (default: ``(10 +
   spacing_weight + effort_weight)`` times the env steps left in the run, the worst a step can
-  cost under the single-vehicle environment's error cap of 10), so that leaving the field never
+  cost under the tracking term's cap of 10, as in the single-vehicle environment), so that leaving the field never
   scores better than flying on, as in :mod:`isotrack.gym`.
 * **termination**: an agent whose run ends early (left the field, diverged) is terminated; at
   the run's end (``sim.duration_s``) every agent still flying is truncated.
@@ -163,7 +163,9 @@ class TeamParallelEnv(ParallelEnv):
         the generator later unseeded resets draw their episodes' seeds from; ``None``: the
         generator's next seed (the first reset of all, the scenario's own ``sim.seed``).
         ``episode_seed`` is the seed flown (``sc.set("sim.seed", env.episode_seed).run()``
-        replays the episode the built-in actions fly)."""
+        replays the episode the built-in actions fly). Raises ``ValueError`` when a data file
+        of the scenario changed since the scenario was made (the env flies the field read then;
+        ``FileNotFoundError`` when one is gone), as ``Scenario.run()`` does."""
         if seed is not None:
             if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
                 raise TypeError(f"seed must be an int >= 0 or None, got {seed!r:.80} ({_type_name(seed)})")
@@ -179,6 +181,9 @@ class TeamParallelEnv(ParallelEnv):
             seed = int(self._np_random.integers(0, _MAX_SEED, endpoint=True))
         else:
             self._np_random, _ = seeding.np_random(seed)
+        # The env holds the field as the scenario read it: a data file changed since would fly
+        # the old field under the new file's digest in summary() (att39-5).
+        self.scenario._check_data_files()
         obs, builtin, sampled, t_s = self._native.reset(seed)
         self.episode_seed = int(self._native.episode_seed)
         self.agents = list(self.possible_agents)
@@ -242,9 +247,16 @@ class TeamParallelEnv(ParallelEnv):
 
     def summary(self) -> Optional[Dict[str, Any]]:
         """The episode's ``summary.json`` content (``team``, ``vehicles``) once it has ended;
-        ``None`` before."""
+        ``None`` before. ``ValueError`` when a data file changed during the episode (its
+        ``data_files`` would name a file the field flown was not read from)."""
         text = self._native.summary_json()
-        return None if text is None else json.loads(text)
+        if text is None:
+            return None
+        summary = json.loads(text)
+        # Its data_files are the files as they are now: the field flown is the one read when the
+        # scenario was made (att39-5), so a file changed since is refused, never named.
+        self.scenario._check_data_files(summary.get("data_files") or {})
+        return summary
 
     def state(self) -> np.ndarray:
         """The vehicles' true positions, ``float64[n, 2]`` of ``(x_m, y_m)`` at the last pause
