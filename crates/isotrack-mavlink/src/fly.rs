@@ -647,6 +647,9 @@ struct Flight<'a, S: ?Sized> {
     second_sender: bool,
     /// The newest time of the vehicle's own clock heard (unwrapped, ms) and when it came.
     vehicle_ms: Option<(u64, Instant)>,
+    /// The landed state of the vehicle's last `EXTENDED_SYS_STATE` (none: it sends none):
+    /// in the air, a vehicle the companion armed is never disarmed (att37-3).
+    landed: Option<MavLandedState>,
     /// The vehicle's clock went back ([`REBOOT_STEP_S`]): its autopilot rebooted.
     reboot: Option<String>,
     /// Time-stamped frames in a row more than [`REBOOT_STEP_S`] behind the newest (one is a
@@ -1013,6 +1016,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             second_sender: false,
             vehicle_ms: None,
             reboot: None,
+            landed: None,
             clock_behind: 0,
             disarm_seen: None,
             mavlink1_logged: false,
@@ -2194,13 +2198,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let Some(target) = self.target else { return };
         // The frame's unwrapped number on the vehicle's counter (its ids' frames only).
         let mut number = None;
+        let mut kind = None;
         if from == target {
             self.vehicle_address(r.from);
             match self.vehicle_sender(r) {
                 // A copy of a frame already handled, delivered again (maybe late: att33f-2):
                 // ignored entirely, never evidence, never applied.
                 (FrameKind::Copy, _) => return,
-                (_, n) => number = Some(n),
+                // In a doubt (a first conflict, att37-1): the link is alive, nothing else.
+                (FrameKind::Doubt, _) => {
+                    self.doubt_frame(&r.msg);
+                    return;
+                }
+                (k, n) => (kind, number) = (Some(k), Some(n)),
             }
         }
         self.foreign_setpoint(from, target, &r.msg);
@@ -2208,7 +2218,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if from.0 != target.0 {
             return;
         }
-        if from == target {
+        // The reboot test reads new frames only: a late one (or a copy) is one sender's
+        // reordered past, never its clock begun again (att37-2).
+        if kind == Some(FrameKind::New) {
             if let Some(ms) = vehicle_time_ms(&r.msg) {
                 self.vehicle_time(ms);
             }
@@ -2290,7 +2302,45 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.tel.airspeed_mps = Some(v.airspeed as f64);
                 self.tel.airspeed_at = Some(Instant::now());
             }
+            // Newer than the last (a late one is the vehicle's past).
+            MavMessage::EXTENDED_SYS_STATE(e) if kind == Some(FrameKind::New) => {
+                self.landed = Some(e.landed_state)
+            }
             _ => {}
+        }
+    }
+
+    /// A frame of the vehicle's ids in a doubt ([`FrameKind::Doubt`]: a first conflict of
+    /// their frame numbers, two senders not proven): the link is alive; nothing in it is the
+    /// vehicle's state, a pilot's word or a confirmation.
+    fn doubt_frame(&mut self, msg: &MavMessage) {
+        self.last_link = Instant::now();
+        if matches!(msg, MavMessage::HEARTBEAT(_)) {
+            self.beat_heard = self.last_link;
+        }
+    }
+
+    /// Whether the vehicle's last `EXTENDED_SYS_STATE` said it is in the air (taking off,
+    /// flying or landing).
+    fn reports_in_air(&self) -> bool {
+        matches!(
+            self.landed,
+            Some(
+                MavLandedState::MAV_LANDED_STATE_IN_AIR
+                    | MavLandedState::MAV_LANDED_STATE_TAKEOFF
+                    | MavLandedState::MAV_LANDED_STATE_LANDING
+            )
+        )
+    }
+
+    /// The way out owed to a vehicle the companion armed and never had in control
+    /// ([`Flight::disarm_owed`]): the disarm (forced), but the failsafe mode if the vehicle
+    /// reports itself in the air (att37-3: `isotrack sitl`'s fixed wing, armed).
+    fn owed_way_out(&self) -> WayOut {
+        if self.reports_in_air() {
+            WayOut::Mode(self.opts.failsafe.mode())
+        } else {
+            WayOut::Disarm
         }
     }
 
@@ -2381,12 +2431,32 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "two vehicles with the ids (system {}, component {})",
             t.0, t.1
         );
-        if kind == FrameKind::Conflict {
-            self.second_sender_seen(format!(
+        if let Some(jump) = self.seq_watch.take_resync() {
+            // A doubt ended with no proof: one sender whose link lost a burst. The heartbeats'
+            // "newer than the last applied" starts again here (the next one is applied), and a
+            // pilot's word awaiting confirmation stands its span again from now.
+            self.beat_number = None;
+            if let Some(l) = self.leave_seen.as_mut().filter(|l| !l.confirmed) {
+                l.at = Instant::now();
+            }
+            self.event(format!(
+                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing showed a second sender in the next {} frames: resynchronised, one sender (the frames between were not applied)",
+                jump,
+                (jump as u32 + 255) % 256,
+                crate::same_ids::DOUBT_FRAMES
+            ));
+        }
+        match (kind, self.seq_watch.resumed_from) {
+            (FrameKind::Conflict, Some(old)) => self.second_sender_seen(format!(
+                "{ids}: a frame numbered {} goes on from the counter's {old} while the frames since a conflict there are numbered behind {old} (one sender whose link lost a burst comes back behind and walks up to {old} first; two counters going on side by side are two senders'): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence
+            )),
+            (FrameKind::Conflict, None) => self.second_sender_seen(format!(
                 "{ids}: two different frames numbered {} within the last {} numbers of their counter (a link loses, delays or doubles one sender's frames, never numbers two different ones alike: MAVLink's frame counters of two senders): their measurements and positions would mix, which to fly is ambiguous",
                 r.header.sequence,
                 crate::same_ids::SEQUENCE_WINDOW
-            ));
+            )),
+            _ => {}
         }
         if let (FrameKind::New | FrameKind::Late, MavMessage::HEARTBEAT(h)) = (kind, &r.msg) {
             if h.mavtype != self.vehicle_type || h.autopilot != self.autopilot {
@@ -2983,8 +3053,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             Some(WayOut::Mode(mode))
         } else if self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed, whatever mode
-            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6).
-            Some(WayOut::Disarm)
+            // it was switched to (ver33c-6), unless confirmed disarmed (att33f-6), or in the
+            // failsafe mode if it reports itself in the air (att37-3).
+            Some(self.owed_way_out())
         } else if self.offboard_accepted_at.is_some() {
             Some(WayOut::LeaveOffboard(mode))
         } else {
@@ -3031,8 +3102,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else if stopping && self.disarm_owed() {
             // Armed by the companion on the ground and never flown: disarmed (forced), even
             // after an accepted OFFBOARD, never left armed in a hold on the ground (ver33c-6);
-            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing.
-            Some(WayOut::Disarm)
+            // a disarmed heartbeat not confirmed (a second vehicle's, att33f-6) changes nothing;
+            // the failsafe mode instead if the vehicle reports itself in the air (att37-3).
+            Some(self.owed_way_out())
         } else if end == FlyEnd::ControlRefused
             && self
                 .offboard_accepted_at
@@ -3091,6 +3163,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok((false, false));
         };
         let what = match way {
+            WayOut::Mode(m) if !self.second_sender && self.disarm_owed() => format!(
+                "{} commanded (armed by the companion, but the vehicle reports itself in the air in its EXTENDED_SYS_STATE: never disarmed)",
+                self.firmware.name_of(m)
+            ),
             WayOut::Mode(m) => format!("{} commanded", self.firmware.name_of(m)),
             WayOut::LeaveOffboard(m) => format!(
                 "{} commanded (the vehicle accepted the switch to {} before control: it is commanded out of it until a heartbeat shows another mode)",
@@ -3156,7 +3232,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// Commands `way` every 0.3 s until the vehicle's heartbeat confirms it or it refuses it,
     /// or the link is lost (no message from the vehicle for `timeout_s`; at least 5 tries even
-    /// then: the vehicle may hear what it cannot answer), a new signal arrives, or the
+    /// then, the vehicle may hear what it cannot answer, unless it acknowledged the command
+    /// as accepted), a new signal arrives, or the
     /// retries' bound passes (3 x `timeout_s` within [3, 30] s). Returns (confirmed, tries, why
     /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
@@ -3210,7 +3287,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             let lost =
                 self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
-            if lost && tries >= 5 {
+            // At least 5 tries before a lost link ends them (a vehicle may hear what it cannot
+            // answer), unless it acknowledged the command as accepted: it heard it, and it is
+            // not sent again before a heartbeat says what it did (att37-5).
+            if lost && (tries >= 5 || accepted.is_some()) {
                 return Ok((false, tries, "link lost"));
             }
             let bound = match (refused, self.second_sender) {
@@ -3293,6 +3373,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 let (kind, number) = self.vehicle_sender(&r);
                 if kind == FrameKind::Copy {
                     // Delivered again: ignored entirely.
+                    continue;
+                }
+                if kind == FrameKind::Doubt {
+                    // In a doubt: the link is alive, no answer.
+                    self.doubt_frame(&r.msg);
                     continue;
                 }
                 self.last_link = Instant::now();

@@ -14,12 +14,38 @@
 //! * else 0 to 128 behind `N`, on an unseen number: late, a reordered frame of the one sender
 //!   filling its gap (never evidence of a second sender, however many);
 //! * on a number seen with the same message: a copy the link delivered again (ignored);
-//! * on a number seen with another message: a conflict, two senders (one is proof).
+//! * on a number seen with another message: a conflict.
+//!
+//! One conflict is no proof (att37-1): one sender whose link loses a burst of 127 to 254
+//! frames sent faster than its usual rate (a parameter list, MAVLink FTP, a log: PX4 sends
+//! them at the link's full speed) comes back up to 128 numbers behind `N` with no silence
+//! between, on a number seen before the loss. So a conflict opens a DOUBT
+//! ([`FrameKind::Doubt`]): the window's newest number `N_A` is kept, a fresh window `W_B` is
+//! seeded with the conflicting frame, and every frame after it is classed in `W_B` (new, late,
+//! copy or conflict as above). Two senders are proven ([`FrameKind::Conflict`]) by
+//! * (a) a conflict in `W_B` (two different frames with one number since the first conflict:
+//!   one sender never sends that), or
+//! * (b) the old stream going on: a frame 1 to [`MAX_STEP_AHEAD`] ahead of `N_A` while `W_B`'s
+//!   newest number is still behind `N_A` and the frame is more than [`RESUME_STEP`] ahead of
+//!   it (one sender that lost a burst walks `s + 1, s + 2, ...` up to `N_A` first; a second
+//!   sender whose counter runs behind is given away by the first one's next frame; one
+//!   within [`RESUME_STEP`] behind meets the first one's numbers in `W_B` within a few frames:
+//!   (a)).
+//!
+//! After [`DOUBT_FRAMES`] frames in doubt with neither (or [`DOUBT_MIN_FRAMES`] once
+//! [`DOUBT_S`] has passed), `W_B` becomes the window: one sender, resynchronised
+//! ([`SequenceWatch::take_resync`]). Two senders whose counters are so close
+//! that neither shows within the doubt (a slow one, 1 Hz heartbeats, a few numbers behind a
+//! fast one) drift apart by the fast one's rate: their next conflict opens another doubt,
+//! which (b) ends at once. During a doubt nothing received is the vehicle's word (the
+//! companion keeps only the link alive).
 //!
 //! Not told apart: two senders whose counters run in step (their numbers never meet within
-//! the window with different frames), and a frame delivered more than 127 frames late, which
+//! the window with different frames), a frame delivered more than 127 frames late, which
 //! its number makes a new one (its sender's own frames up to that number then read as late,
-//! and its own frame with that number as a conflict).
+//! and its own frame with that number as a conflict: a doubt, resynchronised), and one sender
+//! that, in a doubt, loses more than [`RESUME_STEP`] frames in a row just as its numbers pass
+//! `N_A` (two bursts lost within [`DOUBT_FRAMES`] frames: read as two senders).
 //!
 //! Two vehicles far apart show too in their positions: a position farther from the last than
 //! [`MAX_GROUND_SPEED_MPS`] covers in the time between them, plus [`POSITION_JUMP_MARGIN_M`],
@@ -44,6 +70,28 @@ pub const MAX_GROUND_SPEED_MPS: f64 = 100.0;
 /// estimator's noise, a GPS fix's step).
 pub const POSITION_JUMP_MARGIN_M: f64 = 20.0;
 
+/// In a doubt, the largest step ahead of `W_B`'s newest number of a frame that is new by the
+/// old window's newest number `N_A` while `W_B`'s is still behind it, and is no proof of two
+/// senders: one sender that lost a burst comes back walking `s + 1, s + 2, ...` (a few frames
+/// lost on the way) up to `N_A`; the other sender of two whose counters are more than this
+/// apart sends such a frame next.
+pub const RESUME_STEP: u8 = 8;
+
+/// Frames (new or late, not copies) in a doubt with no proof of two senders, after which the
+/// doubt's window is the window: one sender resynchronised (about 1.3 s of a PX4's 50 frames
+/// a second), or after [`DOUBT_MIN_FRAMES`] once [`DOUBT_S`] has passed.
+pub const DOUBT_FRAMES: u32 = 64;
+
+/// Frames in a doubt before it may end on its time ([`DOUBT_S`]): two senders whose counters
+/// are up to [`RESUME_STEP`] apart meet in the doubt's window within 2 x (RESUME_STEP + 1)
+/// frames of both (proof (a)).
+pub const DOUBT_MIN_FRAMES: u32 = 24;
+
+/// The time after which a doubt of [`DOUBT_MIN_FRAMES`] frames or more ends resynchronised,
+/// s (the companion's clock): nothing received in a doubt is applied, so a slow link's doubt
+/// must not outlast the measurements' and heartbeats' timeouts.
+pub const DOUBT_S: f64 = 0.5;
+
 /// Positions over which jumps are counted.
 pub const POSITION_WINDOW: u64 = 64;
 
@@ -61,8 +109,27 @@ pub enum FrameKind {
     Late,
     /// Identical to the frame already seen with its number: delivered again, ignored.
     Copy,
-    /// Another frame than the one already seen with its number: two senders.
+    /// Two senders proven: another frame than the one already seen with its number, in a
+    /// doubt's window (or the old stream going on during a doubt: [`crate::same_ids`]).
     Conflict,
+    /// In a doubt: the first conflict (another frame than the one seen with its number, no
+    /// proof of two senders yet), or a frame after it (new or late in the doubt's window),
+    /// until two senders are proven or the watch resynchronises: the link is alive, nothing
+    /// in the frame is the vehicle's word.
+    Doubt,
+}
+
+/// A doubt: the first conflict seen, awaiting proof of two senders.
+struct DoubtState {
+    /// The old window's newest number (modulo 256).
+    old_newest: u8,
+    /// The step from the old newest number to the conflicting frame's, modulo 256 (a loss of
+    /// this many frames less one, or 255 + 256 k more).
+    jump: u8,
+    /// Frames since, new or late in the doubt's window.
+    frames: u32,
+    /// When it opened (the companion's clock, s).
+    since_s: f64,
 }
 
 /// The sequence numbers of the frames of one (system, component), watched for a second sender.
@@ -76,8 +143,20 @@ pub struct SequenceWatch {
     pub late: u64,
     /// Copies in all.
     pub copies: u64,
-    /// Conflicts in all.
+    /// Conflicts in all (proof of two senders).
     pub conflicts: u64,
+    /// Doubts opened in all (first conflicts).
+    pub doubts: u64,
+    /// Doubts that ended resynchronised (one sender) in all.
+    pub resyncs: u64,
+    /// The doubt under way, if any.
+    doubt: Option<DoubtState>,
+    /// The last doubt ended resynchronised, not yet taken: its jump ([`Self::take_resync`]).
+    resynced: Option<u8>,
+    /// Two senders proven: every conflict since is one more proof, no doubt.
+    proven: bool,
+    /// The proof was the old stream going on (b): the old window's newest number then.
+    pub resumed_from: Option<u8>,
     /// When the last [`RESTART_FRAMES`] + 1 frames came (the companion's clock, s; since the
     /// last restart).
     times: VecDeque<f64>,
@@ -103,6 +182,12 @@ impl Default for SequenceWatch {
             late: 0,
             copies: 0,
             conflicts: 0,
+            doubts: 0,
+            resyncs: 0,
+            doubt: None,
+            resynced: None,
+            proven: false,
+            resumed_from: None,
             times: VecDeque::new(),
             base: 0,
         }
@@ -111,15 +196,17 @@ impl Default for SequenceWatch {
 
 impl SequenceWatch {
     /// A frame numbered `seq` carrying `msg`: what it is, and its number unwrapped (on the
-    /// counter's unwrapped scale of the newest: a late frame's is below the newest's).
-    /// `wall_s` is when it came on the companion's clock (s, never going back).
+    /// counter's unwrapped scale of the newest: a late frame's is below the newest's; a
+    /// doubt's window numbers above every number before it). `wall_s` is when it came on the
+    /// companion's clock (s, never going back).
     pub fn frame(&mut self, seq: u8, msg: &MavMessage, wall_s: f64) -> (FrameKind, u64) {
         if let (Some(&first), Some(&last)) = (self.times.front(), self.times.back()) {
             let m = self.times.len();
             let took_s = (last - first) * RESTART_FRAMES as f64 / (m - 1).max(1) as f64;
             if m >= RESTART_MIN_FRAMES && wall_s - last > took_s {
-                self.base = self.newest.take().map_or(0, |n| (n / 256 + 1) * 256);
-                self.seen.iter_mut().for_each(|m| *m = None);
+                // (A doubt too ends: the next frame is taken as the first.)
+                self.doubt = None;
+                self.restart();
                 self.times.clear();
             }
         }
@@ -135,6 +222,86 @@ impl SequenceWatch {
             self.newest = Some(u);
             return (FrameKind::New, u);
         };
+        if let Some(d) = &self.doubt {
+            // (b): the old stream goes on while the doubt's window is still behind it.
+            let n_b = newest as u8;
+            let ahead_of_old = seq.wrapping_sub(d.old_newest);
+            let b_behind = d.old_newest.wrapping_sub(n_b);
+            if (1..=MAX_STEP_AHEAD).contains(&ahead_of_old)
+                && (1..=128).contains(&b_behind)
+                && seq.wrapping_sub(n_b) > RESUME_STEP
+            {
+                self.resumed_from = Some(d.old_newest);
+                return self.proof(newest + seq.wrapping_sub(n_b) as u64);
+            }
+        }
+        let (kind, u) = self.classify(newest, seq, msg);
+        match (kind, self.doubt.as_mut()) {
+            // (a): a conflict in the doubt's window (or any, once proven).
+            (FrameKind::Conflict, Some(_)) => self.proof(u),
+            (FrameKind::Conflict, None) if self.proven => self.proof(u),
+            (FrameKind::Conflict, None) => {
+                // The first conflict: a doubt, its window seeded with this frame.
+                self.doubts += 1;
+                let old = newest as u8;
+                self.doubt = Some(DoubtState {
+                    old_newest: old,
+                    jump: seq.wrapping_sub(old),
+                    frames: 0,
+                    since_s: wall_s,
+                });
+                self.restart();
+                let u = self.base + 256 + seq as u64;
+                self.seen[seq as usize] = Some(msg.clone());
+                self.newest = Some(u);
+                (FrameKind::Doubt, u)
+            }
+            (FrameKind::Copy, _) => (FrameKind::Copy, u),
+            (_, Some(d)) => {
+                d.frames += 1;
+                let timed_out = d.frames >= DOUBT_MIN_FRAMES && wall_s - d.since_s >= DOUBT_S;
+                if d.frames < DOUBT_FRAMES && !timed_out {
+                    return (FrameKind::Doubt, u);
+                }
+                // No proof: one sender, resynchronised on the doubt's window.
+                self.resynced = Some(d.jump);
+                self.resyncs += 1;
+                self.doubt = None;
+                (kind, u)
+            }
+            (_, None) => (kind, u),
+        }
+    }
+
+    /// Two senders proven by the frame numbered `u` (unwrapped): the doubt's window is the
+    /// window from now on.
+    fn proof(&mut self, u: u64) -> (FrameKind, u64) {
+        self.conflicts += 1;
+        self.proven = true;
+        self.doubt = None;
+        (FrameKind::Conflict, u)
+    }
+
+    /// Whether a doubt is under way ([`FrameKind::Doubt`]).
+    pub fn in_doubt(&self) -> bool {
+        self.doubt.is_some()
+    }
+
+    /// The last doubt ended resynchronised (one sender), once: the step from the old newest
+    /// number to the first conflicting frame's, modulo 256 (`k + 1` for a loss of `k` frames).
+    pub fn take_resync(&mut self) -> Option<u8> {
+        self.resynced.take()
+    }
+
+    /// Forgets every number seen (a restart, or a doubt's fresh window): the next frame's
+    /// unwrapped number is above every one before.
+    fn restart(&mut self) {
+        self.base = self.newest.take().map_or(0, |n| (n / 256 + 1) * 256);
+        self.seen.iter_mut().for_each(|m| *m = None);
+    }
+
+    /// A frame numbered `seq` carrying `msg` classed in the window whose newest is `newest`.
+    fn classify(&mut self, newest: u64, seq: u8, msg: &MavMessage) -> (FrameKind, u64) {
         let n = newest as u8;
         let d = seq.wrapping_sub(n);
         if (1..=MAX_STEP_AHEAD).contains(&d) {
@@ -159,10 +326,7 @@ impl SequenceWatch {
                 self.copies += 1;
                 FrameKind::Copy
             }
-            Some(_) => {
-                self.conflicts += 1;
-                FrameKind::Conflict
-            }
+            Some(_) => FrameKind::Conflict,
         };
         (kind, u)
     }
@@ -412,15 +576,26 @@ mod tests {
         assert_eq!(u[at - 1] - u[at], 128);
     }
 
-    /// CONFLICT once is two senders: a second frame with a number seen within the window and
-    /// another content, 0 (the newest's number) to 128 behind.
+    /// One conflict is a doubt, not two senders: a second frame with a number seen within the
+    /// window and another content, 0 (the newest's number) to 128 behind, opens a doubt;
+    /// the same sender going on (the next numbers) resynchronises after [`DOUBT_FRAMES`].
     #[test]
-    fn one_conflict_is_two_senders() {
+    fn one_conflict_is_a_doubt() {
         for behind in [0u32, 1, 57, 128] {
             let mut f: Vec<(u8, u32)> = (0..400u32).map(|k| (k as u8, k)).collect();
             let s = 399 - behind;
             f.push((s as u8, 1_000_000));
-            assert_eq!(first_alarm(&f), Some(400), "{behind}");
+            // Its sender goes on: s + 1, s + 2, ...
+            f.extend((1..200u32).map(|i| ((s + i) as u8, 1_000_000 + i)));
+            let k = kinds(&f);
+            assert_eq!(k[400], FrameKind::Doubt, "{behind}");
+            assert!(!k.contains(&FrameKind::Conflict), "{behind}");
+            // Doubt for the conflicting frame and the frames after it until DOUBT_S has passed
+            // (one every 20 ms: 25 frames, at least DOUBT_MIN_FRAMES), then new.
+            let doubts = k.iter().filter(|&&k| k == FrameKind::Doubt).count();
+            let after = ((DOUBT_S / 0.02).round() as u32).max(DOUBT_MIN_FRAMES) as usize;
+            assert_eq!(doubts, after, "{behind}");
+            assert_eq!(k[400 + after], FrameKind::New);
         }
         // The same content is a copy: 128 behind still, never evidence.
         let mut f: Vec<(u8, u32)> = (0..400u32).map(|k| (k as u8, k)).collect();
@@ -431,6 +606,154 @@ mod tests {
         let mut f: Vec<(u8, u32)> = (0..400u32).map(|k| (k as u8, k)).collect();
         f.push((270u32 as u8, 270));
         assert_eq!(kinds(&f)[400], FrameKind::New);
+    }
+
+    /// att37-1: one sender at 50 frames a second whose link loses a burst of `k` frames sent
+    /// in 1 ms each (a parameter list at the link's full speed: no silence), 127 <= k <= 255,
+    /// from any counter value: one sender, never a proof of two; a doubt (the next number is
+    /// 255 - k behind the newest, on a number seen) resynchronised once after DOUBT_FRAMES;
+    /// its numbers unwrapped go on up after it. The same with 10 % of the frames after the
+    /// burst lost at random, or neighbours swapped.
+    #[test]
+    fn a_burst_loss_without_silence_is_one_sender() {
+        for start in [0u32, 100, 200, 255] {
+            for k in 127..=255u32 {
+                for variant in 0..3 {
+                    let mut r = Lcg(k as u64 * 7 + start as u64);
+                    let mut w = SequenceWatch::default();
+                    let mut c = start;
+                    let mut t = 0.0;
+                    for _ in 0..300 {
+                        w.frame(c as u8, &msg(c), t);
+                        c += 1;
+                        t += 0.02;
+                    }
+                    // The burst: k frames, 1 ms each, lost.
+                    c += k;
+                    t += 0.001 * k as f64;
+                    let mut after: Vec<u32> = (c..c + 600).collect();
+                    if variant == 1 {
+                        after.retain(|&x| x == c || r.next() >= 0.1);
+                    }
+                    if variant == 2 {
+                        for i in (1..after.len() - 1).step_by(7) {
+                            after.swap(i, i + 1);
+                        }
+                    }
+                    let mut last_new = 0;
+                    for (i, &x) in after.iter().enumerate() {
+                        let (kind, u) = w.frame(x as u8, &msg(x), t + 0.02 * i as f64);
+                        assert_ne!(kind, FrameKind::Conflict, "start {start} k {k} v {variant}");
+                        if i == 0 && k < 255 {
+                            assert_eq!(kind, FrameKind::Doubt, "start {start} k {k}");
+                        }
+                        if kind == FrameKind::New {
+                            assert!(u > last_new);
+                            last_new = u;
+                        }
+                    }
+                    assert_eq!(w.resyncs, w.doubts, "start {start} k {k} v {variant}");
+                    assert!(w.doubts >= u64::from(k < 255), "start {start} k {k}");
+                    assert!(!w.in_doubt());
+                    if w.doubts == 1 {
+                        assert_eq!(w.take_resync(), Some((k + 1) as u8));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Two senders A and B with one counter offset `off` (B's counter `off` behind A's,
+    /// modulo 256: 1 to 128 behind, 129 to 255 ahead by 256 - off), A at `rate_a` frames a
+    /// second and B at `rate_b` from `b_from_s`: the index of the first proof of two senders,
+    /// and the frames of A and of B up to it.
+    fn twins(off: u32, rate_a: f64, rate_b: f64, b_from_s: f64) -> Option<(usize, u32, u32)> {
+        let mut w = SequenceWatch::default();
+        let (mut a, mut b) = (1000u32, 1000 + 256 - off);
+        let (mut ta, mut tb) = (0.0f64, b_from_s);
+        for i in 0..5000 {
+            let (s, k, t) = if ta <= tb {
+                a += 1;
+                ta += 1.0 / rate_a;
+                (a, 1_000_000 + a, ta - 1.0 / rate_a)
+            } else {
+                b += 1;
+                tb += 1.0 / rate_b;
+                (b, 2_000_000 + b, tb - 1.0 / rate_b)
+            };
+            if w.frame(s as u8, &msg(k), t).0 == FrameKind::Conflict {
+                return Some((i, a - 1000, b - (1000 + 256 - off)));
+            }
+        }
+        None
+    }
+
+    /// Twins whose counter is 1 to 255 behind (= ahead by 256 minus that) the vehicle's, all
+    /// proven (a CONFLICT), never only a doubt resynchronised:
+    /// * at one rate (50 frames a second each) within 2 x 129 + 2 frames: their numbers meet
+    ///   within the window at the latest when the offset has gone round it once (offset 128,
+    ///   the window's oldest, the slowest), and a first conflict is then proven at once, by
+    ///   the other's next frame (b) or, offset within RESUME_STEP, by their numbers meeting in
+    ///   the doubt's window (a);
+    /// * a slow twin (1 Hz heartbeats) beside a 50 frames a second vehicle, and the reverse,
+    ///   within 8 of the slow one's frames: each of its frames lands 49 numbers further round
+    ///   the fast one's counter; one within RESUME_STEP of the fast one's newest opens a doubt
+    ///   that may resynchronise, the next one (49 further) opens one that (b) ends at once.
+    #[test]
+    fn twins_behind_or_ahead_fast_or_slow_are_proven() {
+        for off in 1..=255u32 {
+            let at = twins(off, 50.0, 50.0, 0.005);
+            assert!(
+                at.is_some_and(|(i, _, _)| i <= 2 * 129 + 2),
+                "same rate, offset {off}: {at:?}"
+            );
+            let at = twins(off, 50.0, 1.0, 0.5);
+            assert!(
+                at.is_some_and(|(_, _, b)| b <= 8),
+                "50/1, offset {off}: {at:?}"
+            );
+            let at = twins(off, 1.0, 50.0, 0.5);
+            assert!(
+                at.is_some_and(|(_, a, _)| a <= 8),
+                "1/50, offset {off}: {at:?}"
+            );
+        }
+    }
+
+    /// A replay: a recording of the vehicle's own frames sent again `back` frames behind
+    /// (a second sender with the vehicle's contents and numbers 256 - back ahead) at the
+    /// vehicle's rate: proven; a copy within the window (back <= 128) is a copy, ignored.
+    #[test]
+    fn a_replay_is_proven_or_a_copy() {
+        for back in [20u32, 100, 128, 129, 150, 200, 250] {
+            let mut w = SequenceWatch::default();
+            let mut proven = None;
+            for i in 0..2000u32 {
+                if w.frame(i as u8, &msg(i), 0.02 * i as f64).0 == FrameKind::Conflict {
+                    proven = Some(i);
+                    break;
+                }
+                if i >= back {
+                    let r = i - back;
+                    let kind = w.frame(r as u8, &msg(r), 0.02 * i as f64 + 0.01).0;
+                    if kind == FrameKind::Conflict {
+                        proven = Some(i);
+                        break;
+                    }
+                    if back <= 128 {
+                        assert_eq!(kind, FrameKind::Copy, "back {back}");
+                    }
+                }
+            }
+            if back <= 128 {
+                assert_eq!(proven, None, "back {back}");
+            } else {
+                assert!(
+                    proven.is_some_and(|i| i < back + 300),
+                    "back {back}: {proven:?}"
+                );
+            }
+        }
     }
 
     /// COPY never counts: a late copy of a frame whose number was filled late is a copy too,
@@ -482,7 +805,7 @@ mod tests {
     /// A fade: 200 frames lost in a row at 50 frames a second (4 s of silence): the next
     /// number looks 56 behind, on a number seen before the fade, but the silence was longer
     /// than the last 64 frames took: the watch restarts, new. The same step with no silence
-    /// (frames at a steady rate) is a conflict.
+    /// (frames at a steady rate) is a doubt (att37-1), never a proof.
     #[test]
     fn a_fade_restarts_the_watch() {
         let mut w = SequenceWatch::default();
@@ -496,7 +819,7 @@ mod tests {
         for k in 0..300u32 {
             w.frame(k as u8, &msg(k), 0.02 * k as f64);
         }
-        assert_eq!(w.frame(500u32 as u8, &msg(500), 6.0).0, FrameKind::Conflict);
+        assert_eq!(w.frame(500u32 as u8, &msg(500), 6.0).0, FrameKind::Doubt);
     }
 
     /// Two senders interleaved, at their own rates and with any offset between their counters

@@ -80,6 +80,53 @@ fn sensor_loss_fails_safe_to_hold() {
     assert_eq!(mode, Some((4.0, 3.0)));
 }
 
+/// att37-5: in control (the pilot's OFFBOARD, a heartbeat every 50 ms, no measurement), the
+/// sensor is lost after `timeout_s` (1 s) and HOLD is commanded; the vehicle acknowledges it
+/// as ACCEPTED, then falls silent (before any heartbeat shows HOLD). The accepted command is
+/// not sent again before a heartbeat says what the vehicle did, so only 1 try goes out; the
+/// retries end once nothing has come for `timeout_s`, "link lost" (FLYING.md: "the link is
+/// lost ...; at least 5 tries even then, unless the vehicle acknowledged the command as
+/// accepted"), not at the retries' bound (3 s). Before: "(1 tries, retries' bound reached)".
+#[test]
+fn a_hold_accepted_then_silence_ends_link_lost() {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(60) {
+            for r in link.poll(Duration::from_millis(50)).unwrap() {
+                if let MavMessage::COMMAND_LONG(c) = &r.msg {
+                    if c.command == MavCmd::MAV_CMD_DO_SET_MODE {
+                        link.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                            command: c.command,
+                            result: MavResult::MAV_RESULT_ACCEPTED,
+                        }))
+                        .unwrap();
+                        return true;
+                    }
+                }
+            }
+            if link.has_peer() {
+                link.send(&heartbeat()).unwrap();
+            }
+        }
+        false
+    });
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.timeout_s = 1.0;
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert!(vehicle.join().unwrap());
+    assert_eq!(r.end, FlyEnd::SensorLost, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle did not confirm the HOLD (1 tries, link lost)")),
+        "{:?}",
+        r.events
+    );
+}
+
 /// The vehicle's own offboard failsafe: a companion that arms it, switches it to OFFBOARD, sends
 /// one setpoint and falls silent leaves it in HOLD (real time at 20x; the run is 20 simulated
 /// seconds, the timeout 1).
@@ -612,13 +659,15 @@ fn is_set_mode(d: &[u8]) -> bool {
         && u16::from_le_bytes([d[10 + 28], d[10 + 29]]) == 176
 }
 
-/// The forced disarm against `isotrack sitl` itself (not a stand-in): `fly --take-control`
-/// arms sitl's fixed wing (counted as flying once armed, so an unforced disarm is refused),
-/// its switches to OFFBOARD are lost on the way (a relay drops them), and it is interrupted
-/// before it ever had control: it disarms the vehicle it armed, forced (param2 21196), and
-/// sitl accepts and confirms it.
+/// att37-3, against `isotrack sitl` itself (not a stand-in): `fly --take-control --arm` arms
+/// sitl's fixed wing, which then reports itself in the air (`EXTENDED_SYS_STATE`
+/// `MAV_LANDED_STATE_IN_AIR`: a fixed wing armed flies), its switches to OFFBOARD are lost on
+/// the way (a relay drops the first two), and it is interrupted before it ever had control:
+/// the vehicle it armed is in the air, so it is never disarmed (forced or not): HOLD is
+/// commanded (the relay passes it) and confirmed. Before: the forced disarm (param2 21196) of
+/// a flying fixed wing, which sitl accepted.
 #[test]
-fn an_interrupt_before_offboard_disarms_sitls_fixed_wing_by_force() {
+fn an_interrupt_before_offboard_holds_sitls_fixed_wing_in_the_air() {
     use isotrack_mavlink::sitl::{run_sitl, Pace, SitlOptions};
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenarios/paper-fig3-uav.toml");
@@ -660,7 +709,7 @@ fn an_interrupt_before_offboard_disarms_sitls_fixed_wing_by_force() {
             continue;
         }
         fly_addr = Some(from);
-        if is_set_mode(&buf[..n]) {
+        if is_set_mode(&buf[..n]) && dropped < 2 {
             dropped += 1;
             if dropped == 2 {
                 fly_stop.store(true, std::sync::atomic::Ordering::SeqCst);
@@ -679,16 +728,22 @@ fn an_interrupt_before_offboard_disarms_sitls_fixed_wing_by_force() {
         r.events
     );
     assert!(
-        report
-            .events
-            .iter()
-            .any(|e| e.contains("disarmed by system 1")),
+        !report.events.iter().any(|e| e.contains("disarmed by")),
         "{:?}",
         report.events
     );
     assert!(
-        !report.events.iter().any(|e| e.contains("refused disarm")),
+        r.events.iter().any(|e| e.contains(
+            "HOLD commanded (armed by the companion, but the vehicle reports itself in the air"
+        )),
         "{:?}",
-        report.events
+        r.events
+    );
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle is in HOLD")),
+        "{:?}",
+        r.events
     );
 }
