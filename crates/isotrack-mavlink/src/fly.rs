@@ -696,6 +696,9 @@ struct Flight<'a, S: ?Sized> {
     /// A heartbeat of the vehicle's ids showed a pilot's word ([`Flight::shows_pilots_word`]):
     /// the pilot's once confirmed ([`LeaveSeen`], ver33c-1).
     leave_seen: Option<LeaveSeen>,
+    /// Doubts about the vehicle's frame counter that ended resynchronised (one sender's burst
+    /// loss, as far as fly could tell), counted for the log.
+    resyncs: u32,
     /// Heartbeats of the vehicle's ids handled.
     heartbeats: u64,
     /// When the vehicle's last heartbeat (applied) came, and the longest gap between two
@@ -1036,6 +1039,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             refusal: None,
             refusal_pending: None,
             leave_seen: None,
+            resyncs: 0,
             heartbeats: 0,
             beat_at: None,
             longest_beat_gap_s: 0.0,
@@ -1840,9 +1844,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let what = l.what.clone();
         self.flush_mode_log(true);
         self.event(format!(
-            "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion (no second sender with its ids seen: one sender's){}: setpoints stopped, nothing commanded",
+            "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion ({}){}: setpoints stopped, nothing commanded",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name(),
+            match self.resyncs {
+                0 => "no second sender with its ids seen: one sender's".to_string(),
+                n => format!("no second sender with its ids proven, though its frame counter jumped {n} time{} and was taken as one sender's", if n == 1 { "" } else { "s" }),
+            },
             if self.in_control { "" } else { ", during the take-over" }
         ));
         self.active = false;
@@ -2322,15 +2330,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// Whether the vehicle's last `EXTENDED_SYS_STATE` said it is in the air (taking off,
     /// flying or landing).
+    /// A ground scenario's vehicle (a rover, a boat) is on the ground whatever it reports
+    /// (att39f-4: PX4's rover land detector says IN_AIR whenever armed, so a rover fly armed
+    /// on the ground was left armed in HOLD instead of getting the owed disarm).
     fn reports_in_air(&self) -> bool {
-        matches!(
-            self.landed,
-            Some(
-                MavLandedState::MAV_LANDED_STATE_IN_AIR
-                    | MavLandedState::MAV_LANDED_STATE_TAKEOFF
-                    | MavLandedState::MAV_LANDED_STATE_LANDING
+        !matches!(self.transport, Transport::Ground)
+            && matches!(
+                self.landed,
+                Some(
+                    MavLandedState::MAV_LANDED_STATE_IN_AIR
+                        | MavLandedState::MAV_LANDED_STATE_TAKEOFF
+                        | MavLandedState::MAV_LANDED_STATE_LANDING
+                )
             )
-        )
     }
 
     /// The way out owed to a vehicle the companion armed and never had in control
@@ -2439,11 +2451,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if let Some(l) = self.leave_seen.as_mut().filter(|l| !l.confirmed) {
                 l.at = Instant::now();
             }
+            self.resyncs += 1;
             self.event(format!(
-                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing showed a second sender in the next {} frames: resynchronised, one sender (the frames between were not applied)",
+                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing proved a second sender while in doubt: resynchronised as one sender (the frames between were not applied; {} such jump{} since the start)",
                 jump,
                 (jump as u32 + 255) % 256,
-                crate::same_ids::DOUBT_FRAMES
+                self.resyncs,
+                if self.resyncs == 1 { "" } else { "s" }
             ));
         }
         match (kind, self.seq_watch.resumed_from) {

@@ -747,3 +747,76 @@ fn an_interrupt_before_offboard_holds_sitls_fixed_wing_in_the_air() {
         r.events
     );
 }
+
+/// att39f-4: PX4's rover land detector reports `MAV_LANDED_STATE_IN_AIR` whenever the rover is
+/// armed (RoverLandDetector: "if we are armed we are not landed"). A rover `fly --take-control
+/// --arm` armed on the ground and interrupted before it had control is owed the disarm, in
+/// the air or not by its report: a ground scenario's vehicle is on the ground. The stand-in:
+/// disarmed when first heard, armed by the companion's ARM, EXTENDED_SYS_STATE IN_AIR while
+/// armed, the switch to OFFBOARD acknowledged but never shown; the companion is interrupted at
+/// that switch. It must send the disarm, never HOLD (before: HOLD, the rover left armed).
+#[test]
+fn a_rover_reporting_in_air_when_armed_is_still_disarmed() {
+    let s = load_scenario(None, &[]).unwrap();
+    let mut link = Link::open("udpin:127.0.0.1:0", 1, 1).unwrap();
+    let addr = link.local_addr().unwrap();
+    let mut o = FlyOptions::new(&format!("udpout:{addr}"));
+    o.take_control = true;
+    o.arm = true;
+    o.timeout_s = 2.0;
+    let fly_stop = o.stop.clone();
+    let vehicle = std::thread::spawn(move || {
+        let t0 = Instant::now();
+        let mut armed = false;
+        while t0.elapsed() < Duration::from_secs(60) {
+            for r in link.poll(Duration::from_millis(20)).unwrap() {
+                let MavMessage::COMMAND_LONG(c) = &r.msg else {
+                    continue;
+                };
+                let ack = |link: &mut Link| {
+                    link.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                        command: c.command,
+                        result: MavResult::MAV_RESULT_ACCEPTED,
+                    }))
+                    .unwrap()
+                };
+                match c.command {
+                    MavCmd::MAV_CMD_COMPONENT_ARM_DISARM if c.param1 == 1.0 => {
+                        armed = true;
+                        ack(&mut link);
+                    }
+                    MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => return Some("disarm"),
+                    MavCmd::MAV_CMD_DO_SET_MODE if c.param2 == 6.0 => {
+                        ack(&mut link);
+                        fly_stop.store(true, std::sync::atomic::Ordering::SeqCst);
+                    }
+                    MavCmd::MAV_CMD_DO_SET_MODE => return Some("set mode"),
+                    _ => {}
+                }
+            }
+            if link.has_peer() {
+                // PX4 POSCTL (main mode 3) as a pilot left it, armed only by the companion.
+                link.send(&support::heartbeat(
+                    MavType::MAV_TYPE_GROUND_ROVER,
+                    MavAutopilot::MAV_AUTOPILOT_PX4,
+                    support::custom_mode_flags(armed),
+                    3 << 16,
+                ))
+                .unwrap();
+                link.send(&MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+                    vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+                    landed_state: if armed {
+                        MavLandedState::MAV_LANDED_STATE_IN_AIR
+                    } else {
+                        MavLandedState::MAV_LANDED_STATE_ON_GROUND
+                    },
+                }))
+                .unwrap();
+            }
+        }
+        None
+    });
+    let r = run_fly(&s, &o, &mut NoTrace, &mut |_| Ok(())).unwrap();
+    assert_eq!(vehicle.join().unwrap(), Some("disarm"), "{:?}", r.events);
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+}
