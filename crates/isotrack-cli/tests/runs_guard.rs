@@ -694,3 +694,264 @@ fn plot_refuses_a_run_directory_being_written() {
     assert!(r.join("trajectory.png").exists());
     assert!(!r.join(".isotrack.lock").exists());
 }
+
+/// A finished 2-run sweep (20 s runs of Fig. 2(b), `controller.kp` 5 and 10) in `dir/name`.
+fn small_sweep(dir: &Path, name: &str) -> (String, std::path::PathBuf) {
+    let sw = write(
+        dir,
+        &format!("{name}.toml"),
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 20.0\n[grid]\ncontroller.kp = [5.0, 10.0]\n"
+        ),
+    );
+    let out = dir.join(name);
+    let o = isotrack(&["sweep", &sw, "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    (sw, out)
+}
+
+/// The names in `dir` that start with `prefix`.
+fn names_starting(dir: &Path, prefix: &str) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|n| n.starts_with(prefix))
+        .collect();
+    v.sort();
+    v
+}
+
+/// att38-8: `plot SWEEP` while another command (`sweep --resume`, `sweep --force`, a merge)
+/// holds the sweep directory's lock drew the rows so far into it, exit 0. It is refused (73,
+/// naming the holder) and draws nothing, also with `--out` elsewhere; the lock free, it draws
+/// and leaves no lock file.
+#[test]
+fn plot_refuses_a_sweep_directory_being_written() {
+    let d = tempfile::tempdir().unwrap();
+    let (_, out) = small_sweep(d.path(), "sw");
+    let outs = out.display().to_string();
+    let elsewhere = d.path().join("figs");
+    let lock = hold_lock(&out);
+    let o = isotrack_within(&["plot", &outs], 60);
+    assert_fails(&o, 73, &["is writing this directory", ".isotrack.lock"]);
+    let o = isotrack_within(&["plot", &outs, "--out", elsewhere.to_str().unwrap()], 60);
+    assert_fails(&o, 73, &["is writing this directory"]);
+    assert!(names_starting(&out, "sweep_").is_empty());
+    assert!(!elsewhere.exists() || names_starting(&elsewhere, "sweep_").is_empty());
+    // `sweep --force` has replaced results.csv by its header alone: 73 too, not "no run has".
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    std::fs::write(out.join("results.csv"), results.lines().next().unwrap()).unwrap();
+    let o = isotrack_within(&["plot", &outs], 60);
+    assert_fails(&o, 73, &["is writing this directory"]);
+    std::fs::write(out.join("results.csv"), &results).unwrap();
+    drop(lock);
+    std::fs::remove_file(out.join(".isotrack.lock")).unwrap();
+    let o = isotrack_within(&["plot", &outs], 60);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert_eq!(
+        names_starting(&out, "sweep_"),
+        ["sweep_steady_state_max_abs_error_vs_controller_kp.png"]
+    );
+    assert!(!out.join(".isotrack.lock").exists());
+}
+
+/// att36-11: `sweep --force` starts over beside the earlier sweep's `plot` figures, which then
+/// read as the new results' figures. isotrack cannot tell its figure from a user's file of that
+/// name, and never removes a file it may not have written (att38-1's rule): it keeps them and
+/// says so, naming them, as `run` does of a run directory's figures.
+#[test]
+fn sweep_force_names_the_figures_from_before_and_keeps_them() {
+    let d = tempfile::tempdir().unwrap();
+    let (sw, out) = small_sweep(d.path(), "sw");
+    let outs = out.display().to_string();
+    let o = isotrack_within(&["plot", &outs], 60);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let fig = out.join("sweep_steady_state_max_abs_error_vs_controller_kp.png");
+    let bytes = std::fs::read(&fig).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", &outs, "--force"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let e = common::stderr(&o);
+    assert!(
+        e.contains("sweep_steady_state_max_abs_error_vs_controller_kp.png")
+            && e.contains("from before this sweep"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(&fig).unwrap(), bytes);
+    // A sweep into a fresh directory, or --force with no figure there, says nothing of it.
+    std::fs::remove_file(&fig).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", &outs, "--force"]);
+    assert!(!common::stderr(&o).contains("from before"));
+}
+
+/// att36-13 addendum: `sweep --resume` appended its rows to results.csv in place, so a hard
+/// link to it (a `cp -al` snapshot of the half-done sweep) grew with them. The snapshot keeps
+/// the rows it had; the resumed sweep's file holds every run.
+#[test]
+fn sweep_resume_leaves_a_hard_linked_snapshot_as_it_was() {
+    let d = tempfile::tempdir().unwrap();
+    let (sw, out) = small_sweep(d.path(), "sw");
+    let outs = out.display().to_string();
+    let results = out.join("results.csv");
+    let full = std::fs::read_to_string(&results).unwrap();
+    let cut: String = full.lines().take(2).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&results, &cut).unwrap();
+    let snap = d.path().join("snapshot.csv");
+    std::fs::hard_link(&results, &snap).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", &outs, "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert_eq!(std::fs::read_to_string(&snap).unwrap(), cut);
+    assert_eq!(std::fs::read_to_string(&results).unwrap(), full);
+}
+
+/// att38-11: `merge` hashed a recorded data file replaced by a huge one in full (5 GB: 10 s)
+/// before refusing it, where `sweep` refuses it from its size (att30n-9). A file larger than
+/// any field's reader accepts is refused from its size: 66 saying so, no SHA-256 of it.
+#[test]
+fn merge_refuses_a_data_file_grown_beyond_the_readers_limit_from_its_size() {
+    let d = tempfile::tempdir().unwrap();
+    let n = 41;
+    let mut asc = format!("ncols {n}\nnrows {n}\nxllcorner -20.5\nyllcorner -20.5\ncellsize 1.0\n");
+    for j in 0..n {
+        let row: Vec<String> = (0..n)
+            .map(|i| {
+                let (x, y) = (i as f64 - 20.0, j as f64 - 20.0);
+                format!("{}", 20.0 * (-0.1 * (x * x + y * y).sqrt()).exp())
+            })
+            .collect();
+        asc.push_str(&row.join(" "));
+        asc.push('\n');
+    }
+    let data = write(d.path(), "f.asc", &asc);
+    write(
+        d.path(),
+        "s.toml",
+        "[field]\nkind = \"grid\"\npath = \"f.asc\"\n[initial]\nx_m = 5.0\ny_m = 0.0\n[sim]\nduration_s = 5.0\n",
+    );
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        "scenario = \"s.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let shard = |k: &str| {
+        let out = d.path().join(format!("m{k}"));
+        let o = isotrack(&[
+            "sweep",
+            &sw,
+            "--out",
+            out.to_str().unwrap(),
+            "--shard",
+            &format!("{k}/2"),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+        out.display().to_string()
+    };
+    let (m1, m2) = (shard("1"), shard("2"));
+    // Sparse: no byte of it is stored, but a hash would read all of them.
+    std::fs::remove_file(&data).unwrap();
+    let f = std::fs::File::create(&data).unwrap();
+    f.set_len(isotrack_fields::io::MAX_GRID_FILE_BYTES + 1)
+        .unwrap();
+    let merged = d.path().join("mm").display().to_string();
+    let o = isotrack_within(&["merge", &m1, &m2, "--out", &merged], 120);
+    assert_fails(&o, 66, &["f.asc", "bytes is more than the"]);
+    assert!(
+        !common::stderr(&o).contains("SHA-256"),
+        "{}",
+        common::stderr(&o)
+    );
+}
+
+/// att36-9: `compare --out CMP` locked CMP only, so a `run --out CMP/pi_isoline` meanwhile
+/// (which locks CMP/pi_isoline) wrote the very directory compare was writing, both exit 0, one
+/// result gone. compare locks each law's directory while it writes it: while another command
+/// holds it, compare is refused (73, naming the holder) and writes nothing there; free, compare
+/// writes it and leaves no lock file.
+#[test]
+fn compare_locks_each_laws_directory_while_it_writes_it() {
+    let d = tempfile::tempdir().unwrap();
+    let cmp = d.path().join("cmp");
+    let law = cmp.join("pi_isoline");
+    let lock = hold_lock(&law);
+    let args = [
+        "compare",
+        SCEN,
+        "--controllers",
+        "pi_isoline",
+        "--set",
+        SHORT,
+        "--out",
+        cmp.to_str().unwrap(),
+    ];
+    let o = isotrack_within(&args, 120);
+    assert_fails(&o, 73, &["is writing this directory", "pi_isoline"]);
+    assert!(!law.join("summary.json").exists());
+    drop(lock);
+    std::fs::remove_file(law.join(".isotrack.lock")).unwrap();
+    let o = isotrack_within(&args, 120);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(law.join("summary.json").exists());
+    assert!(!law.join(".isotrack.lock").exists());
+}
+
+/// att38-10: Ctrl-C during `plot` left `.trajectory.png.PID.tmp.png` in the run directory,
+/// which no later command removed. The interrupted plot removes its temporary figure (exit
+/// 130), as `run --out` removes its temporary trace.
+#[test]
+fn ctrl_c_during_plot_leaves_no_temporary_figure() {
+    let d = tempfile::tempdir().unwrap();
+    let r = d.path().join("r");
+    let rs = r.display().to_string();
+    // 6000 s of Fig. 2(b): a trajectory long enough to catch plot drawing it.
+    let o = isotrack(&[
+        "run",
+        SCEN,
+        "--out",
+        &rs,
+        "--quiet",
+        "--set",
+        "sim.duration_s=6000",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let temporary = |r: &Path| {
+        std::fs::read_dir(r)
+            .unwrap()
+            .flatten()
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter(|n| n.contains(".tmp"))
+            .collect::<Vec<_>>()
+    };
+    let mut caught = false;
+    for _ in 0..20 {
+        let mut plot = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args(["plot", &rs])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = std::time::Instant::now();
+        while temporary(&r).is_empty() && plot.try_wait().unwrap().is_none() {
+            assert!(t0.elapsed() < std::time::Duration::from_secs(60));
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        if plot.try_wait().unwrap().is_some() {
+            continue;
+        }
+        let kill = std::process::Command::new("kill")
+            .args(["-INT", &plot.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = plot.wait().unwrap();
+        if status.code() == Some(0) {
+            // Ended before the signal came.
+            continue;
+        }
+        caught = true;
+        assert_eq!(status.code(), Some(130));
+        assert_eq!(temporary(&r), Vec::<String>::new());
+        assert!(!r.join(".isotrack.lock").exists());
+        break;
+    }
+    assert!(caught, "plot was never caught drawing");
+}

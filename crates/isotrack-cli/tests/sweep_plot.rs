@@ -196,3 +196,58 @@ fn long_group_labels_stay_inside_the_image_and_apart() {
     }
     assert_ne!(legend[0].4, legend[1].4);
 }
+
+/// att36-22: an integer x column (`sim.seed`) was grouped through `f64`, so seeds above 2^53
+/// one apart (2^53 and 2^53 + 1 are one `f64`) merged into one "mean ± std" point, and the
+/// labels ran together. Each seed is its own point (one run each, its own metric), and the x
+/// labels are the seeds exactly.
+#[test]
+fn seeds_beyond_two_to_the_53_are_distinct_points_labelled_exactly() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("seeds");
+    std::fs::create_dir_all(&dir).unwrap();
+    let seeds = [
+        "9007199254740992",
+        "9007199254740993",
+        "9007199254740994",
+        "9007199254740995",
+    ];
+    let mut csv = "run_id,sim.seed,outcome,steady_state_max_abs_error\n".to_string();
+    for (i, s) in seeds.iter().enumerate() {
+        csv.push_str(&format!("{i},{s},completed,{}\n", 2 * (i + 1)));
+    }
+    write(&dir, "results.csv", &csv);
+    let (lines, skipped) = isotrack_plot::sweep_summary(
+        &dir.join("results.csv"),
+        "sim.seed",
+        "steady_state_max_abs_error",
+        None,
+    )
+    .unwrap();
+    assert_eq!(skipped, 0);
+    let pts = &lines[0].1;
+    // One run per seed: four points, each its seed's metric, no spread.
+    let got: Vec<(f64, f64, usize)> = pts.iter().map(|p| (p.1, p.2, p.3)).collect();
+    assert_eq!(
+        got,
+        [(2.0, 0.0, 1), (4.0, 0.0, 1), (6.0, 0.0, 1), (8.0, 0.0, 1)]
+    );
+    let o = isotrack(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--x",
+        "sim.seed",
+        "--format",
+        "svg",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(dir.join("sweep_steady_state_max_abs_error_vs_sim_seed.svg"))
+        .unwrap();
+    let labels: Vec<String> = common::svg_texts(&svg).into_iter().map(|t| t.3).collect();
+    // The x labels (as many as fit side by side) are seeds, written whole.
+    let x_labels: Vec<&String> = labels.iter().filter(|l| l.starts_with("900719")).collect();
+    assert!(x_labels.len() >= 2, "{labels:?}");
+    for l in x_labels {
+        assert!(seeds.contains(&l.as_str()), "{l} is no seed: {labels:?}");
+    }
+}

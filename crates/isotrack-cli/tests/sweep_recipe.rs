@@ -656,3 +656,84 @@ fn a_data_file_no_run_reads_is_not_refused_whatever_the_combinations() {
     );
     assert!(no_run_in(&out));
 }
+
+/// att38-6: every string a TOML file can hold round-trips through `results.csv` and its resume
+/// index. File names TOML escapes (`\u0301`: a macOS NFD `café`, a zero-width space, U+2028,
+/// U+0085, a vertical tab) were written back as Rust's `\u{301}`, which no TOML reads, and the
+/// sweep was refused with a TOML error blaming the user's quoting. Each is swept (every run
+/// completed), its cell is the file's name exactly, and `--resume` keeps every row.
+#[test]
+fn grid_file_names_with_any_character_toml_holds_are_swept_and_resumed() {
+    let d = tempfile::tempdir().unwrap();
+    let names = [
+        "f.asc",
+        "cafe\u{301}.asc",
+        "z\u{200b}y.asc",
+        "x\u{2028}y.asc",
+        "x\u{85}y.asc",
+        "x\u{b}y.asc",
+        "x\ty \"q\" \\.asc",
+    ];
+    for n in names {
+        write(d.path(), n, &radial_asc(1.0));
+    }
+    write(d.path(), "s.toml", GRID_SCENARIO);
+    // As a user's TOML file holds them: escapes for what TOML cannot hold as it is.
+    let toml_list = "[\"f.asc\", \"cafe\\u0301.asc\", \"z\\u200by.asc\", \"x\\u2028y.asc\", \"x\\u0085y.asc\", \"x\\u000by.asc\", \"x\\ty \\\"q\\\" \\\\.asc\"]";
+    let sw = write(
+        d.path(),
+        "sweep.toml",
+        &format!("scenario = \"s.toml\"\n[grid]\nfield.path = {toml_list}\n"),
+    );
+    let out = d.path().join("o");
+    let outs = out.to_str().unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", outs]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let rows = csv_rows(&out.join("results.csv"));
+    assert_eq!(rows.len(), names.len());
+    for (row, name) in rows.iter().zip(names) {
+        assert_eq!(row["field.path"], name);
+        assert_eq!(row["outcome"], "completed", "{name:?}: {row:?}");
+    }
+    let before = std::fs::read(out.join("results.csv")).unwrap();
+    let o = isotrack(&["sweep", &sw, "--out", outs, "--resume"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(std::fs::read(out.join("results.csv")).unwrap(), before);
+}
+
+/// att38-6: a `[grid]` value every run refuses (a tab in `field.units` or `name`, a control
+/// character) makes its run `invalid_scenario`, the reason quoting the value; the reason's tab
+/// was written as it is, then the sweep's own final check refused its row as damaged (65
+/// "damaged row"), and every `--resume` wrote it again and refused it again. The row is kept:
+/// the value's cell holds the tab exactly, the reason shows it escaped, the sweep ends as one
+/// with an invalid run (65 saying so) and `--resume` finds every run done.
+#[test]
+fn a_run_refusing_a_grid_value_with_a_tab_is_recorded_and_resumed() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "s.toml", SCENARIO);
+    for key in ["field.units", "name"] {
+        let sw = write(
+            d.path(),
+            "sweep.toml",
+            &format!("scenario = \"s.toml\"\n[grid]\n{key} = [\"a\", \"tab\\there\"]\n"),
+        );
+        let out = d.path().join(format!("o_{key}"));
+        let outs = out.to_str().unwrap();
+        for extra in [&[][..], &["--resume"][..]] {
+            let mut args = vec!["sweep", &sw, "--out", outs];
+            args.extend(extra);
+            let o = isotrack(&args);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(65), "{key} {extra:?}: {e}");
+            assert!(!e.contains("damaged row"), "{key} {extra:?}: {e}");
+            assert!(e.contains("1 of them invalid"), "{key} {extra:?}: {e}");
+            let rows = csv_rows(&out.join("results.csv"));
+            assert_eq!(rows.len(), 2, "{key} {extra:?}");
+            assert_eq!(rows[0]["outcome"], "completed");
+            assert_eq!(rows[1][key], "tab\there");
+            assert_eq!(rows[1]["outcome"], "invalid_scenario");
+            let why = &rows[1]["outcome_detail"];
+            assert!(why.contains("tab\\x09here") && !why.contains('\t'), "{why}");
+        }
+    }
+}

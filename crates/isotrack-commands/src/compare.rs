@@ -142,8 +142,10 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             errln!("warning: {w}");
         }
         let r = if let Some(dir) = &a.out {
-            // The directory's lock is held for all of them (above).
-            let out = RunDir::open(&dir.join(kind.name()), &[], &[], None)?;
+            // The directory's lock is held for all of them (above), and each law's directory
+            // is locked too while it is written: a `run --out CMP/LAW` meanwhile never saw the
+            // parent's lock, both wrote the directory and the run's result vanished (att36-9).
+            let out = RunDir::open(&dir.join(kind.name()), &[], &[], Some("compare"))?;
             let mut trace = out.trace(s.is_flying())?;
             let r = s.run(trace.writer());
             let warnings = isotrack_scenario::check::warnings(&s);

@@ -164,12 +164,21 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
             // (73) rather than a run directory called none (att38-2); a free lock is let go
             // at once.
             if d.is_dir() {
-                drop(isotrack_runs::sweep::lock::lock_output_dir(d, "plot")?);
+                drop(lock_to_draw(d)?);
             }
             return Err(e);
         }
     }
     if a.runs.len() == 1 && results.exists() {
+        // att38-8: a sweep directory is locked as a run directory is (below), before its
+        // results are read and until the figure is in place: while `sweep --resume` or
+        // `sweep --force` (or a merge) writes it, plot is refused 73 naming the holder, not
+        // drawn from the rows so far into the directory whose results.csv then grows. An
+        // output directory of its own (`--out`) that exists is locked too.
+        let _lock = lock_to_draw(&a.runs[0])?;
+        let _out_lock = (out.is_dir() && !same_dir(&out, &a.runs[0]))
+            .then(|| lock_to_draw(&out))
+            .transpose()?;
         return plot_sweep(a, &results, &out, &st);
     }
     // att36-2: an existing output directory (a run directory drawn into itself, by default) is
@@ -177,10 +186,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     // a `run --out` replacing it meanwhile is refused (73), as is this plot while a run (or
     // any other writer) holds it (73, naming the holder), so figures never land beside another
     // run's summary than the one drawn.
-    let _lock = out
-        .is_dir()
-        .then(|| isotrack_runs::sweep::lock::lock_output_dir(&out, "plot"))
-        .transpose()?;
+    let _lock = out.is_dir().then(|| lock_to_draw(&out)).transpose()?;
     let mut written = plot_dirs(&a.runs, &st, &out)?;
     if a.animate {
         let runs = RunData::load_team(&a.runs[0]).map_err(failure)?;
@@ -196,6 +202,37 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     }
     outln!("wrote {}", written.join(", "));
     Ok(())
+}
+
+/// The lock of directory `dir` for `plot` ([`isotrack_runs::sweep::lock::lock_output_dir`]):
+/// 73 naming the holder while another command writes it. A lock file that cannot be created (a
+/// directory this user cannot write) is said as what it is for plot: no figure can be written
+/// there (att38-10: "cannot lock RO/.isotrack.lock: Permission denied" named a file the user
+/// never asked for).
+fn lock_to_draw(dir: &Path) -> Result<isotrack_runs::sweep::lock::DirLock, Failure> {
+    isotrack_runs::sweep::lock::lock_output_dir(dir, "plot").map_err(|mut f| {
+        let lock = dir.join(isotrack_runs::sweep::lock::LOCK_FILE);
+        if let Some(why) = f
+            .message
+            .strip_prefix(&format!("cannot lock {}: ", lock.display()))
+        {
+            f.message = format!(
+                "cannot write figures into {}: {why} (creating its lock file {}); give --out a directory you can write",
+                dir.display(),
+                isotrack_runs::sweep::lock::LOCK_FILE
+            );
+        }
+        f
+    })
+}
+
+/// Whether `a` and `b` name one directory (both resolved; the same path when either cannot
+/// be): a directory's lock is taken once by one command.
+fn same_dir(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
 }
 
 /// A directory given to `isotrack plot` that is neither a run directory nor a sweep directory:
@@ -271,7 +308,8 @@ fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<()
 
 /// Runs `scenario` into `dir` (trace, summary, resolved scenario) and loads it back for plotting.
 fn run_into(scenario: &Scenario, dir: &Path, name: &str) -> Result<RunData, Failure> {
-    let out = RunDir::open(dir, &[], &[], None)?;
+    // Locked while written, as `compare` locks each law's directory (att36-9).
+    let out = RunDir::open(dir, &[], &[], Some("figures"))?;
     let mut trace = out.trace(scenario.is_flying())?;
     let r = scenario.run(trace.writer());
     let warnings = isotrack_scenario::check::warnings(scenario);

@@ -80,7 +80,11 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     for note in job.plan.duplicate_notes() {
         errln!("note: {note}");
     }
+    let opened_at = std::time::SystemTime::now();
     let out = job.open_output(&a.out, (k, n), a.resume, a.force)?;
+    if a.force {
+        note_figures_from_before(&a.out, opened_at);
+    }
     let new_runs = out.shard_runs - out.done.len() as u64;
     let pb = runs_progress_bar(new_runs);
     let pool = worker_pool(a.threads)?;
@@ -114,6 +118,53 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
     }
     outln!("{summary}");
     Ok(())
+}
+
+/// The sweep figures `plot` writes (`sweep_METRIC_vs_X[_by_GROUP].png` or `.svg`) in sweep
+/// directory `dir` from before `since`, named in a note after `--force` started the sweep
+/// over: an earlier sweep's figures beside the new results.csv read as this sweep's (att36-11,
+/// nu-21's class). They are not removed: a file of such a name may be the user's, and isotrack
+/// never removes a file it may not have written (att38-1's rule; `run` says the same of a run
+/// directory's figures).
+fn note_figures_from_before(dir: &std::path::Path, since: std::time::SystemTime) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut names: Vec<String> = entries
+        .flatten()
+        .filter(|e| {
+            e.metadata()
+                .is_ok_and(|m| m.is_file() && m.modified().map_or(true, |t| t < since))
+        })
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|n| {
+            n.starts_with("sweep_")
+                && n.contains("_vs_")
+                && (n.ends_with(".png") || n.ends_with(".svg"))
+        })
+        .collect();
+    if names.is_empty() {
+        return;
+    }
+    names.sort();
+    const NAMED: usize = 5;
+    let more = names.len().saturating_sub(NAMED);
+    names.truncate(NAMED);
+    let shown: Vec<String> = names
+        .iter()
+        .map(|n| isotrack_scenario::load::clip(n))
+        .collect();
+    errln!(
+        "note: {} also holds {}{} from before this sweep, not this sweep's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this sweep's",
+        dir.display(),
+        shown.join(", "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        },
+        dir.display()
+    );
 }
 
 /// The one-line tally of the runs that did not complete or ended with a warning, on stderr

@@ -74,11 +74,15 @@ pub(crate) fn draw_atomic(path: &Path, body: impl FnOnce(&Path) -> DrawResult) -
         .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp{ext}", std::process::id()));
     drop(isotrack_runs::files::create_output(&tmp).map_err(s)?);
+    // Removed if the command is interrupted while drawing (att38-10: Ctrl-C during `plot`
+    // left `.trajectory.png.PID.tmp.png` behind); no longer once renamed into place.
+    let pending = isotrack_runs::cleanup::register(&tmp);
     // Every figure carries isotrack's mark (att38-9): a later plot tells it from the user's
     // file of that name.
     let res = body(&tmp)
         .and_then(|()| crate::mark::mark(&tmp))
         .and_then(|()| std::fs::rename(&tmp, path).map_err(s));
+    drop(pending);
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -1101,6 +1105,39 @@ pub fn sweep_summary(
     metric: &str,
     group: Option<&str>,
 ) -> Result<(Vec<SummaryLine>, usize), PlotError> {
+    let (mut lines, skipped, offset) = sweep_summary_exact(results_csv, x_key, metric, group)?;
+    if let Some(o) = offset {
+        for (_, pts) in &mut lines {
+            for p in pts.iter_mut() {
+                p.0 += o as f64;
+            }
+        }
+    }
+    Ok((lines, skipped))
+}
+
+/// An x value of a sweep summary as it is grouped: a whole number written as one (a seed, a
+/// count) exactly, any other number by its bits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum XKey {
+    Whole(i128),
+    Bits(u64),
+}
+
+/// The integers an `f64` holds exactly, `2^53` (beyond, two seeds one apart are one `f64`).
+const EXACT_F64_INTEGERS: i128 = 1 << 53;
+
+/// [`sweep_summary`] with its x values exact: an x column whose numbers are all whole numbers
+/// written as such (`sim.seed`, `team.count`) is grouped by its integers, not through `f64`
+/// (att36-22: seeds above 2^53 one apart were one x, their runs one "mean ± std" point). When
+/// one of them is beyond what an `f64` holds exactly, the points' x are relative to the
+/// smallest, returned as the offset (`Some`), so that distinct integers stay distinct points.
+fn sweep_summary_exact(
+    results_csv: &Path,
+    x_key: &str,
+    metric: &str,
+    group: Option<&str>,
+) -> Result<(Vec<SummaryLine>, usize, Option<i128>), PlotError> {
     let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
     let mut rdr = csv::Reader::from_reader(crate::open_input(results_csv)?);
     let headers = rdr.headers().map_err(|e| err(e.to_string()))?.clone();
@@ -1119,8 +1156,23 @@ pub fn sweep_summary(
     })?;
     let yi = col(metric)?;
     let gi = group.map(col).transpose()?;
-    let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<u64, Vec<f64>>> =
+    let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<XKey, Vec<f64>>> =
         Default::default();
+    // A single x column of whole numbers (each finite number of it an integer as written):
+    // read before grouping, so that the x of a run is never rounded.
+    let whole = x_cols.len() == 1 && {
+        let mut r = csv::Reader::from_reader(crate::open_input(results_csv)?);
+        let mut all_whole = true;
+        for rec in r.records() {
+            let rec = rec.map_err(|e| err(e.to_string()))?;
+            let v = rec.get(x_cols[0]).unwrap_or("");
+            if v.parse::<f64>().is_ok_and(f64::is_finite) && v.parse::<i128>().is_err() {
+                all_whole = false;
+                break;
+            }
+        }
+        all_whole
+    };
     let mut skipped = 0;
     // Which columns hold a number in some run, and a text value of the x and the metric
     // columns (for the message when no run has both as numbers, nu-20).
@@ -1160,11 +1212,12 @@ pub fn sweep_summary(
         match (x, num(yi)) {
             (Some(x), Some(y)) => {
                 let g = gi.and_then(|i| rec.get(i)).unwrap_or("").to_string();
-                // Keyed by the bits of x (+0.0 for -0.0): the same x value, one point.
-                let key = if x == 0.0 {
-                    0.0f64.to_bits()
-                } else {
-                    x.to_bits()
+                // Keyed by the integer as written, or by the bits of x (+0.0 for -0.0): the
+                // same x value, one point.
+                let key = match rec.get(x_cols[0]).map(str::parse::<i128>) {
+                    Some(Ok(v)) if whole => XKey::Whole(v),
+                    _ if x == 0.0 => XKey::Bits(0.0f64.to_bits()),
+                    _ => XKey::Bits(x.to_bits()),
                 };
                 by.entry(g).or_default().entry(key).or_default().push(y);
             }
@@ -1202,6 +1255,18 @@ pub fn sweep_summary(
             numbers.join(", ")
         )));
     }
+    let wholes = || {
+        by.values()
+            .flat_map(|xs| xs.keys())
+            .filter_map(|k| match k {
+                XKey::Whole(v) => Some(*v),
+                XKey::Bits(_) => None,
+            })
+    };
+    let offset = wholes()
+        .any(|v| v.abs() > EXACT_F64_INTEGERS)
+        .then(|| wholes().min())
+        .flatten();
     let lines = by
         .into_iter()
         .map(|(g, xs)| {
@@ -1209,14 +1274,32 @@ pub fn sweep_summary(
                 .into_iter()
                 .map(|(k, ys)| {
                     let (mean, std) = mean_and_std(&ys);
-                    (f64::from_bits(k), mean, std, ys.len())
+                    let x = match k {
+                        XKey::Whole(v) => v.saturating_sub(offset.unwrap_or(0)) as f64,
+                        XKey::Bits(b) => f64::from_bits(b),
+                    };
+                    (x, mean, std, ys.len())
                 })
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             (g, pts)
         })
         .collect();
-    Ok((lines, skipped))
+    Ok((lines, skipped, offset))
+}
+
+/// A tick label of a sweep figure's x axis whose values are relative to `offset` (the
+/// smallest of integers beyond `f64`'s exact ones, [`sweep_summary_exact`]): a whole tick as
+/// the exact integer it stands for, others as `tick_label` writes offset + tick; without an
+/// offset, [`tick_label`].
+fn x_tick_label(v: f64, step: f64, offset: Option<i128>) -> String {
+    match offset {
+        Some(o) if v.is_finite() && v.fract() == 0.0 && v.abs() < 1e38 => o
+            .checked_add(v as i128)
+            .map_or_else(|| tick_label(o as f64 + v, step), |x| x.to_string()),
+        Some(o) => tick_label(o as f64 + v, step),
+        None => tick_label(v, step),
+    }
 }
 
 /// The columns of the sweep summary's x: the column `x_key`, else the components `x_key[0]`,
@@ -1255,7 +1338,7 @@ pub fn sweep_figure(
     st: &Style,
 ) -> Result<(), PlotError> {
     let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
-    let (lines, skipped) = sweep_summary(results_csv, x_key, metric, group)?;
+    let (lines, skipped, x_offset) = sweep_summary_exact(results_csv, x_key, metric, group)?;
     let all = || lines.iter().flat_map(|l| l.1.iter());
     let (x0, x1) = finite_bounds(all().map(|p| p.0));
     let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
@@ -1321,8 +1404,11 @@ pub fn sweep_figure(
                 let widest = (xa.ceil() as i64..=xb.floor() as i64)
                     .take(13)
                     .filter_map(|v| {
-                        root.estimate_text_size(&tick_label(v as f64, 1.0), &label_style)
-                            .ok()
+                        root.estimate_text_size(
+                            &x_tick_label(v as f64, 1.0, x_offset),
+                            &label_style,
+                        )
+                        .ok()
                     })
                     .map(|(w, _)| f64::from(w))
                     .fold(0.0, f64::max);
@@ -1346,7 +1432,7 @@ pub fn sweep_figure(
                     if single_x.is_some() {
                         String::new()
                     } else {
-                        tick_label(*v, xs)
+                        x_tick_label(*v, xs, x_offset)
                     }
                 })
                 .y_label_formatter(&|v| {

@@ -130,6 +130,28 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// Gives the file at `path` a fresh inode holding the same bytes: copied to a temporary
+/// beside it ([`temp_beside`]), then renamed over it. A hard link to the old file (a `cp -al`
+/// or `rsync --link-dest` snapshot) keeps what it held; only the new file grows after this
+/// (att36-13 addendum: `sweep --resume` appended its rows to the snapshot's results.csv too).
+pub fn renew_inode(path: &Path) -> std::io::Result<()> {
+    refuse_non_regular(path)?;
+    let tmp = temp_beside(path);
+    let pending = crate::cleanup::register(&tmp);
+    let result = isotrack_fields::io::open_regular(path)
+        .and_then(|mut from| {
+            let mut to = create_output(&tmp)?;
+            std::io::copy(&mut from, &mut to)?;
+            to.sync_all()
+        })
+        .and_then(|()| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    drop(pending);
+    result
+}
+
 /// A temporary name beside `path` for an atomic write: `.NAME.PID.tmp` in the same directory.
 pub fn temp_beside(path: &Path) -> std::path::PathBuf {
     let name = path

@@ -190,12 +190,48 @@ fn cell(v: &toml::Value) -> String {
     }
 }
 
-/// A TOML value as an override `VALUE` (round-trips through `--set` parsing).
+/// A TOML value as an override `VALUE` (round-trips through `--set` parsing): a string as a
+/// TOML basic string on one line ([`basic_string`]), an array's strings too, anything else as
+/// [`crate::tomltext::value_text`] writes it.
 pub fn value_literal(v: &toml::Value) -> String {
     match v {
-        toml::Value::String(s) => format!("{s:?}"),
+        toml::Value::String(s) => basic_string(s),
+        toml::Value::Array(items) => {
+            let parts: Vec<String> = items.iter().map(value_literal).collect();
+            format!("[{}]", parts.join(", "))
+        }
         other => crate::tomltext::value_text(other),
     }
+}
+
+/// `s` as a TOML basic string on one line: `"` and `\` escaped, the controls TOML refuses
+/// in a basic string (U+0000-U+001F but the tab, and U+007F) escaped as `\b`, `\n`, `\f`,
+/// `\r` or `\uXXXX`, the tab as `\t`; every other character as it is (TOML takes any other
+/// Unicode character in a basic string). Rust's `{:?}` wrote `\u{301}` for a combining accent
+/// (a macOS NFD file name `café.csv`) and `\u{200b}`, `\u{2028}`, `\u{85}`, `\u{b}`,
+/// `\0` for others: no TOML escapes, so a sweep refused such a `[grid]` value with a TOML
+/// error about the user's quoting (att38-6).
+pub fn basic_string(s: &str) -> String {
+    use std::fmt::Write;
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\t' => out.push_str("\\t"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\u{8}' => out.push_str("\\b"),
+            '\u{c}' => out.push_str("\\f"),
+            c if c < ' ' || c == '\u{7f}' => {
+                let _ = write!(out, "\\u{:04X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
 }
 
 /// The 1-based line of sweep text `text` that sets flattened key `key` (`initial.x_m`,

@@ -285,7 +285,7 @@ fn check_invalid(
     match rules.spans.scenario(id) {
         None => Ok(()),
         Some(Ok(s)) if detail.starts_with("[team]: ") => {
-            match crate::sweep::rows::team_refusal(&s) {
+            match crate::sweep::rows::team_refusal(&s).map(|w| crate::sweep::rows::text_cell(&w)) {
                 Some(why) if why == detail => Ok(()),
                 Some(why) => Err(format!(
                     "{}: outcome_detail = `{}` is not the reason the team engine gives run {id}: `{}`",
@@ -304,7 +304,7 @@ fn check_invalid(
             "{}: outcome = invalid_scenario for run {id}, whose scenario is valid under the sweep's plan: it is run, its row holds its results",
             column("outcome")
         )),
-        Some(Err(why)) if why != detail => Err(format!(
+        Some(Err(why)) if crate::sweep::rows::text_cell(&why) != detail => Err(format!(
             "{}: outcome_detail = `{}` is not the reason the sweep's plan gives run {id}: `{}`",
             column("outcome_detail"),
             clip(detail),
@@ -336,7 +336,7 @@ fn check_against_scenario<'c>(
             ))
         }
     };
-    let want = crate::sweep::rows::run_warnings(&s);
+    let want = crate::sweep::rows::text_cell(&crate::sweep::rows::run_warnings(&s));
     let got = cell("warnings");
     let team = s.spec().team.is_some();
     // A team run's own addition: `not every vehicle completed (vehicle I: OUTCOME, ...); the

@@ -138,7 +138,7 @@ pub fn check_data_files(
 /// which reads the file, so its good rows would be called damaged (att30n-14).
 pub fn check_recorded_files_now(dir: &Path, manifest: &serde_json::Value) -> Result<(), Failure> {
     for (path, then) in recorded_files(manifest) {
-        let now = crate::files::sha256_file(Path::new(&path)).map_err(|e| {
+        let now = crate::files::sha256_data_file(Path::new(&path)).map_err(|e| {
             fail(
                 exit::NOINPUT,
                 format!(

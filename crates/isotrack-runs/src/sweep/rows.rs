@@ -385,12 +385,44 @@ pub fn row_fields_warned(
     let record = result.as_ref().map(RunRecord::of);
     let mut fields = vec![id.to_string()];
     fields.extend(plan.run_cells(id));
-    fields.extend(result_cells(
-        &SWEEP_COLUMNS,
-        record.as_ref().map_err(|e| e.as_str()),
-    ));
-    fields.push(warnings);
+    let mut cells = result_cells(&SWEEP_COLUMNS, record.as_ref().map_err(|e| e.as_str()));
+    if let Some(detail) = SWEEP_COLUMNS
+        .iter()
+        .position(|&c| c == Column::OutcomeDetail)
+        .and_then(|i| cells.get_mut(i))
+    {
+        *detail = text_cell(detail);
+    }
+    fields.extend(cells);
+    fields.push(text_cell(&warnings));
     fields
+}
+
+/// A text cell of `results.csv` (`outcome_detail`, `warnings`: isotrack's messages) as a row
+/// holds it: every character that is not plain text
+/// ([`isotrack_core::numtext::is_not_plain`]: a control, the tab included, a format or
+/// separator character) escaped as a message shows it, `\x09` below U+0080 and `\u{2028}`
+/// above. A message may quote a user's value (`invalid scenario: ... holds a control or
+/// invisible character (U+0009) in `tab<TAB>here``); written as it is, the row was refused
+/// by the sweep's own check when the sweep ended, and by every `--resume` after it, which
+/// wrote it again (att38-6). `--resume` and `merge` compare a row's cells with the messages
+/// recomputed through this too. The varied keys' cells hold the values as they are.
+pub fn text_cell(text: &str) -> String {
+    use std::fmt::Write;
+    if !text.chars().any(isotrack_core::numtext::is_not_plain) {
+        return text.to_string();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if !isotrack_core::numtext::is_not_plain(c) {
+            out.push(c);
+        } else if (c as u32) < 0x80 {
+            let _ = write!(out, "\\x{:02x}", c as u32);
+        } else {
+            let _ = write!(out, "\\u{{{:x}}}", c as u32);
+        }
+    }
+    out
 }
 
 /// The `results.csv` header of a sweep: [`TEAM_COLUMNS`] last when its base has `[team]`

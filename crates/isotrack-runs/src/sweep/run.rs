@@ -184,6 +184,11 @@ impl SweepJob {
         } else {
             vec![]
         };
+        // The rows kept are appended to in a file of their own (att36-13 addendum): a hard
+        // link to the results.csv resumed (a `cp -al` snapshot) keeps the rows it had.
+        if resume && results.exists() {
+            crate::files::renew_inode(&results).map_err(cant_write(out))?;
+        }
         // Rows of an unknown engine kept: the manifest does not claim them for this one.
         self.write_manifest(out, shard, shard_runs, engine_known || done.is_empty())?;
         if !results.exists() {
