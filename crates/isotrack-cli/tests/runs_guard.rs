@@ -955,3 +955,44 @@ fn ctrl_c_during_plot_leaves_no_temporary_figure() {
     }
     assert!(caught, "plot was never caught drawing");
 }
+
+/// att38-9: `run --out U --plot` into a folder that never held a run, holding the user's own
+/// `trajectory.png`, replaced it without a word; `plot RUN --out U` too. Both are refused (73)
+/// naming the file, before the run (no trace written) and before any figure, and the user's
+/// file is as it was; with the file moved away both draw, and a second `plot` replaces
+/// isotrack's own (marked) figures.
+#[test]
+fn plot_never_replaces_a_users_file_named_as_a_figure() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write(d.path(), "in.toml", &std::fs::read_to_string(SCEN).unwrap());
+    let u = d.path().join("U");
+    std::fs::create_dir_all(&u).unwrap();
+    write(&u, "trajectory.png", "MY PICTURE\n");
+    let us = u.display().to_string();
+    let o = isotrack(&[
+        "run", &input, "--out", &us, "--quiet", "--plot", "--set", SHORT,
+    ]);
+    assert_fails(&o, 73, &["trajectory.png is not a figure isotrack wrote"]);
+    assert!(!u.join("trace.csv").exists());
+    assert_eq!(
+        std::fs::read_to_string(u.join("trajectory.png")).unwrap(),
+        "MY PICTURE\n"
+    );
+    let r = d.path().join("r").display().to_string();
+    let o = isotrack(&["run", &input, "--out", &r, "--quiet", "--set", SHORT]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = isotrack(&["plot", &r, "--out", &us]);
+    assert_fails(&o, 73, &["trajectory.png is not a figure isotrack wrote"]);
+    assert_eq!(
+        std::fs::read_to_string(u.join("trajectory.png")).unwrap(),
+        "MY PICTURE\n"
+    );
+    assert!(!u.join("timeseries.png").exists());
+    std::fs::rename(u.join("trajectory.png"), d.path().join("mine.png")).unwrap();
+    for _ in 0..2 {
+        let o = isotrack(&["plot", &r, "--out", &us]);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    }
+    let png = std::fs::read(u.join("trajectory.png")).unwrap();
+    assert!(png.windows(17).any(|w| w == b"Software\0isotrack"));
+}

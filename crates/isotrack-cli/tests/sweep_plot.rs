@@ -96,6 +96,30 @@ fn one_whole_x_value_gets_one_label() {
     assert_eq!(ticks, ["5"], "{svg}");
 }
 
+/// att38-7: one x value that is not whole (`controller.kp = [5.5]`) was labelled
+/// 5.499999997 to 5.500000003, the last label cut at the image's edge; a metric the same in
+/// every run (`t_end_s`, 2 s) got nine y labels 1e-9 apart over the axis title. Each now has
+/// one label, the value as written, inside the image.
+#[test]
+fn one_value_that_is_not_whole_gets_one_label() {
+    let d = tempfile::tempdir().unwrap();
+    let svg = swept_svg(
+        d.path(),
+        "[base]\nsim.duration_s = 2.0\n[grid]\ncontroller.kp = [5.5]\ncontroller.ki = [0.0, 1.0]\n",
+        &["--x", "controller.kp", "--metric", "t_end_s"],
+    );
+    let ticks: Vec<String> = x_ticks(&svg).into_iter().map(|t| t.2).collect();
+    assert_eq!(ticks, ["5.5"], "{svg}");
+    let y: Vec<(f64, String)> = texts(&svg)
+        .into_iter()
+        .filter(|t| t.2 == "end" && t.4.parse::<f64>().is_ok())
+        .map(|t| (t.0, t.4))
+        .collect();
+    assert_eq!(y.len(), 1, "{y:?}");
+    assert_eq!(y[0].1, "2");
+    assert!(y[0].0 > 0.0 && y[0].0 < width(&svg), "{y:?}");
+}
+
 /// att30n-15: twelve consecutive seeds near 1e9 got a label each, 13 characters wide 37 px
 /// apart: they ran together. Neighbouring labels are now at least their half-widths apart
 /// (a DejaVu Sans digit is 0.636 em: 0.64 em a character bounds them) and at least two are

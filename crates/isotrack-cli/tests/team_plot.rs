@@ -292,8 +292,47 @@ fn team_figure_along_an_open_isoline() {
     let worst = finite.iter().copied().fold(0.0, f64::max);
     assert!((worst - 12.0).abs() <= tol, "{worst}");
     let team = std::fs::read_to_string(out.join("team.svg")).unwrap();
-    assert!(team.contains("open: it leaves the field"));
+    // nu36-12: a ramp without a domain has no edge: its line is cut at the box the team can
+    // reach (it was labelled "open: it leaves the field").
+    assert!(team.contains("open: cut at the box the team can reach"));
+    assert!(!team.contains("leaves the field"));
     assert!(team.contains("mean gap S/(N-1)"));
+    // nu36-11: the same team without a scenario `name` is titled by its run directory, as a
+    // single run is, in all three figures (each was titled "vehicle 0").
+    let unnamed = d.path().join("unnamed.toml");
+    std::fs::write(&unnamed, text.replacen("name = \"plane-team\"\n", "", 1)).unwrap();
+    let openrun = d.path().join("openrun");
+    let o = isotrack(&[
+        "run",
+        unnamed.to_str().unwrap(),
+        "--out",
+        openrun.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let o = isotrack(&["plot", openrun.to_str().unwrap(), "--format", "svg"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    for f in ["trajectory.svg", "timeseries.svg", "team.svg"] {
+        let svg = std::fs::read_to_string(openrun.join(f)).unwrap();
+        assert!(svg.contains("openrun"), "{f}: titled by its vehicle 0");
+    }
+    // nu36-16: two team runs plotted together: no team figure, and a note says why.
+    let o = isotrack(&[
+        "plot",
+        out.to_str().unwrap(),
+        openrun.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--out",
+        d.path().join("both").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(!d.path().join("both/team.svg").exists());
+    assert!(
+        common::stderr(&o).contains("note: no team figure"),
+        "{}",
+        common::stderr(&o)
+    );
 }
 
 /// att32d-14: a vehicle that leaves the field early. The field is a grid pyramid on

@@ -145,6 +145,9 @@ fn region_band(p2: &Prop2Report) -> Option<String> {
 pub fn prop2_lines(p2: &Prop2Report) -> Vec<String> {
     let mut out =
         vec!["Prop. 2 (smooth field, ki = 0: gain conditions and error bound)".to_string()];
+    if let Some(a) = &p2.analysed_start {
+        out.push(format!("  start analysed: {a}"));
+    }
     if let Some(band) = region_band(p2) {
         out.push(format!(
             "  start to tube, {band} ({} samples): gamma1 = {}  gamma2 = {}  gamma3 = {}",

@@ -96,6 +96,40 @@ pub fn style(o: &FigureOptions, format: Format) -> Result<Style, Failure> {
     Ok(st)
 }
 
+/// Refuses (73) when one of `names` in `out` is a file isotrack did not write (no isotrack
+/// mark: the user's own `trajectory.png` in a folder that never held a run, att38-9), before
+/// any figure is drawn.
+pub fn refuse_foreign_figures(out: &Path, names: &[String]) -> Result<(), Failure> {
+    for n in names {
+        isotrack_plot::refuse_foreign_figure(&out.join(n)).map_err(|message| Failure {
+            code: exit::CANTCREAT,
+            message,
+        })?;
+    }
+    Ok(())
+}
+
+/// The run figures `plot_dirs` writes in `format` for `team` (a team's run drawn alone adds
+/// `team.*`).
+pub fn run_figure_names(format: Format, team: bool) -> Vec<String> {
+    let ext = format.extension();
+    let mut names = vec![format!("trajectory.{ext}"), format!("timeseries.{ext}")];
+    if team {
+        names.push(format!("team.{ext}"));
+    }
+    names
+}
+
+/// A run directory's name as a figure's title when its scenario has no `name` (as
+/// [`RunData`] names a single run): a team's run is titled by its directory too, not by its
+/// first vehicle's label `vehicle 0` (nu36-11).
+fn dir_label(dir: &Path) -> String {
+    dir.file_name().map_or_else(
+        || dir.display().to_string(),
+        |n| isotrack_core::numtext::Escaped(&n.to_string_lossy()).to_string(),
+    )
+}
+
 /// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
 pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
     let format = st.format;
@@ -114,6 +148,10 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     if let Some(n) = isotrack_plot::unrecorded_data_files_note(&data) {
         errln!("warning: {n}");
     }
+    refuse_foreign_figures(
+        out,
+        &run_figure_names(format, runs.len() == 1 && RunData::is_team(&runs[0])),
+    )?;
     std::fs::create_dir_all(out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
@@ -126,7 +164,7 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
             .file()
             .name
             .clone()
-            .unwrap_or_else(|| data[0].name.clone())
+            .unwrap_or_else(|| dir_label(&runs[0]))
     } else {
         format!("{} runs", data.len())
     };
@@ -142,7 +180,33 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
             isotrack_plot::team_figure(&data, &team, st, &title).map_err(failure)?;
             written.push(team.display().to_string());
         } else {
-            errln!("note: no team figure (gaps, revisit time): the field has no isoline at controller.level to measure along (or an analytic field that drifts, a radial one included)");
+            // nu36-10: the run's own reason (summary.json's team.metrics_note), not an
+            // either/or whose first clause may be false.
+            let why = data[0]
+                .summary
+                .team()
+                .and_then(|t| t.metrics_note.clone())
+                .map(|n| n.trim_start_matches("no team metrics: ").to_string())
+                .unwrap_or_else(|| "the run recorded no team metrics".to_string());
+            errln!(
+                "note: no team figure (gaps, revisit time): {}",
+                isotrack_scenario::load::clip(&why)
+            );
+        }
+    } else if runs.len() > 1 {
+        // nu36-16: several run directories, a team's among them: its team figure is drawn
+        // from it alone, said rather than dropped without a word.
+        let teams: Vec<String> = runs
+            .iter()
+            .filter(|d| RunData::is_team(d))
+            .map(|d| d.display().to_string())
+            .collect();
+        if !teams.is_empty() {
+            errln!(
+                "note: no team figure (gaps, revisit time): team.{ext} is drawn for one team's run directory plotted alone (`isotrack plot {}`), not for {} directories together",
+                teams[0],
+                runs.len()
+            );
         }
     }
     Ok(written)
@@ -187,6 +251,9 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
     // any other writer) holds it (73, naming the holder), so figures never land beside another
     // run's summary than the one drawn.
     let _lock = out.is_dir().then(|| lock_to_draw(&out)).transpose()?;
+    if a.animate {
+        refuse_foreign_figures(&out, &["animation.gif".to_string()])?;
+    }
     let mut written = plot_dirs(&a.runs, &st, &out)?;
     if a.animate {
         let runs = RunData::load_team(&a.runs[0]).map_err(failure)?;
@@ -196,7 +263,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
             .file()
             .name
             .clone()
-            .unwrap_or_else(|| runs[0].name.clone());
+            .unwrap_or_else(|| dir_label(&a.runs[0]));
         isotrack_plot::animation_gif_team(&runs, &gif, &st, &title, 48, 120).map_err(failure)?;
         written.push(gif.display().to_string());
     }

@@ -23,7 +23,29 @@ fn fmt_opt(x: Option<f64>) -> String {
 fn fmt_opt_unit(x: Option<f64>, unit: &str) -> String {
     match x {
         Some(v) if v.is_finite() && (v == 0.0 || v.abs() >= 0.01) => format!("{v:.2} {unit}"),
-        Some(v) if v.is_finite() => format!("{v:.4e} {unit}"),
+        // att38-4: under 0.01 in decimals too, to three significant digits (`0.00069 m` beside
+        // `2.07 m`, not `6.9315e-4 m`), in exponent form only below 1e-9.
+        Some(v) if v.is_finite() && v.abs() >= 1e-9 => format!("{} {unit}", significant(v, 3)),
+        Some(v) if v.is_finite() => format!("{v:.2e} {unit}"),
+        _ => "n/a".to_string(),
+    }
+}
+
+/// `v` (finite, not zero) in decimals to `digits` significant digits, trailing zeros kept.
+fn significant(v: f64, digits: i32) -> String {
+    let mag = v.abs().log10().floor() as i32;
+    let decimals = (digits - 1 - mag).clamp(0, 17) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A team line's ratio (`gap_cv`): four significant digits in decimals between 1e-3 and 1e4
+/// (att38-4: `1.7321e0` printed in exponent form at any size), in exponent form outside (a
+/// converged team's `2.900e-11`); `n/a` when missing or not finite.
+fn fmt_ratio(x: Option<f64>) -> String {
+    match x {
+        Some(0.0) => "0".to_string(),
+        Some(v) if v.is_finite() && (1e-3..1e4).contains(&v.abs()) => significant(v, 4),
+        Some(v) if v.is_finite() => format!("{v:.3e}"),
         _ => "n/a".to_string(),
     }
 }
@@ -88,9 +110,16 @@ pub fn team_summary(scenario: &Scenario, t: &isotrack_sim::TeamResult) -> String
             } else {
                 "n/a".to_string()
             };
+            // nu36-14: a team that lost a vehicle has the ideal of those still flying too.
+            let ideal = match m.revisit_time_ideal_active_s {
+                Some(a) if a.is_finite() && a != m.revisit_time_ideal_s => {
+                    format!("{ideal}; {a:.2} s for the vehicles still flying")
+                }
+                _ => ideal,
+            };
             out += &format!(
                 "  gap_cv {}  time_to_even {}  revisit max {} (ideal {ideal})  min separation {}\n",
-                fmt_opt(m.gap_cv),
+                fmt_ratio(m.gap_cv),
                 m.time_to_even_s
                     .map_or_else(|| "never".to_string(), |t| format!("{t:.2} s")),
                 fmt_opt_unit(m.revisit_time_max_s, "s"),
@@ -155,6 +184,17 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
         // One writer per run directory (as sweeps): a second `run --out D` at once exits 73.
         let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
         let out = RunDir::open(dir, &inputs, &[], Some("run"))?;
+        // `--plot` into a folder holding the user's own trajectory.png (no isotrack mark) is
+        // refused before the run, not after it (att38-9).
+        if args.plot {
+            crate::figures::refuse_foreign_figures(
+                dir,
+                &crate::figures::run_figure_names(
+                    isotrack_plot::Format::Png,
+                    scenario.spec().team.is_some(),
+                ),
+            )?;
+        }
         // A team (`[team]`) writes one trace with a `vehicle` column; its summary's top-level
         // metrics are vehicle 0's, beside the `team` object and the `vehicles` array.
         let mut trace_file = if scenario.spec().team.is_some() {
@@ -453,10 +493,56 @@ mod tests {
         };
         assert_eq!(
             line(21.78, 2.0717),
-            "team        0 vehicles  gap_cv 2.9000e-11  time_to_even 55.07 s  revisit max 21.78 s (ideal 21.78 s)  min separation 2.07 m\n"
+            "team        0 vehicles  gap_cv 2.900e-11  time_to_even 55.07 s  revisit max 21.78 s (ideal 21.78 s)  min separation 2.07 m\n"
         );
         assert!(line(15166.2, 29404.0)
             .contains("revisit max 15166.20 s (ideal 21.78 s)  min separation 29404.00 m"));
-        assert!(line(21.78, 0.0012).contains("min separation 1.2000e-3 m"));
+        // att38-4: under 0.01 m in decimals (three significant digits), not `1.2000e-3 m`.
+        assert!(line(21.78, 0.0012).contains("min separation 0.00120 m"));
+        assert!(line(21.78, 6.9315e-4).contains("min separation 0.000693 m"));
+    }
+
+    /// att38-4: gap_cv in decimals to four significant digits between 1e-3 and 1e4
+    /// (`sqrt(3) = 1.7321` prints `1.732`, not `1.7321e0`; 0.183 prints `0.1830`), in exponent
+    /// form outside; nu36-14: a team that lost a vehicle names the ideal of the vehicles
+    /// still flying beside the deployed one (`L/(3 v0)` = 43.56/1.5 = 29.04 s beside
+    /// `L/(4 v0)` = 21.78 s).
+    #[test]
+    fn a_team_line_prints_gap_cv_in_decimals_and_the_live_ideal() {
+        assert_eq!(fmt_ratio(Some(3f64.sqrt())), "1.732");
+        assert_eq!(fmt_ratio(Some(0.183)), "0.1830");
+        assert_eq!(fmt_ratio(Some(2.9e-11)), "2.900e-11");
+        assert_eq!(fmt_ratio(Some(0.0)), "0");
+        assert_eq!(fmt_ratio(None), "n/a");
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let line = team_summary(
+            &scenario,
+            &isotrack_sim::TeamResult {
+                runs: Vec::new(),
+                team: Some(isotrack_sim::team::metrics::TeamSummary {
+                    count: 4,
+                    isoline_length_m: 43.55,
+                    gap_cv: Some(3f64.sqrt()),
+                    gap_cv_final: None,
+                    time_to_even_s: None,
+                    revisit_time_max_s: Some(29.04),
+                    revisit_time_mean_s: None,
+                    revisit_time_ideal_s: 21.78,
+                    revisit_time_ideal_active_s: Some(29.04),
+                    min_separation_m: Some(2.0717),
+                    order_preserved: true,
+                    speed_range_mps: None,
+                    moving_isoline: None,
+                    open_isoline: None,
+                }),
+                ring: Vec::new(),
+                warnings: Vec::new(),
+            },
+        );
+        assert!(line.contains("gap_cv 1.732  "), "{line}");
+        assert!(
+            line.contains("(ideal 21.78 s; 29.04 s for the vehicles still flying)"),
+            "{line}"
+        );
     }
 }
