@@ -594,7 +594,11 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
             std::fs::read_to_string(SCEN).unwrap(),
             "holds scenario.toml but no summary.json",
         ),
-        ("trace.csv", "a,b\n1,2\n".to_string(), "holds trace.csv but no summary.json"),
+        (
+            "trace.csv",
+            "a,b\n1,2\n".to_string(),
+            "holds trace.csv but no summary.json",
+        ),
         (
             "summary.json",
             "{\"notes\": \"mine\"}\n".to_string(),
@@ -1013,4 +1017,24 @@ fn plot_never_replaces_a_users_file_named_as_a_figure() {
     }
     let png = std::fs::read(u.join("trajectory.png")).unwrap();
     assert!(png.windows(17).any(|w| w == b"Software\0isotrack"));
+}
+
+/// att39-9: `plot DIR` of a folder that is neither a run nor a sweep created a lock file in
+/// it (to name a holder, att38-2) and, where it could not (a read-only folder), said "cannot
+/// lock" (73) instead of what the folder is. Without a writer's lock file there, plot says
+/// 66 and leaves the folder as it was.
+#[test]
+fn plot_of_a_folder_that_is_no_run_says_so_and_writes_nothing_there() {
+    let d = tempfile::tempdir().unwrap();
+    let f = d.path().join("notes");
+    std::fs::create_dir_all(&f).unwrap();
+    write(&f, "notes.txt", "mine\n");
+    let o = isotrack_within(&["plot", f.to_str().unwrap()], 60);
+    assert_fails(&o, 66, &["is neither a run directory"]);
+    let names: Vec<_> = std::fs::read_dir(&f)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("notes.txt")]);
 }

@@ -226,9 +226,15 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
             // A run directory being replaced (`run --out` between removing the old summary
             // and renaming the new one in) reads as neither: the holder of its lock is named
             // (73) rather than a run directory called none (att38-2); a free lock is let go
-            // at once.
-            if d.is_dir() {
-                drop(lock_to_draw(d)?);
+            // at once. Only where a writer's lock file is (att39-9: a folder plot only reads
+            // had a lock file created in it, and a read-only one was refused "cannot lock"
+            // instead of this 66); a failure to look at it keeps the 66.
+            if d.join(isotrack_runs::sweep::lock::LOCK_FILE).is_file() {
+                if let Err(f) = lock_to_draw(d) {
+                    if f.message.contains("is writing this directory") {
+                        return Err(f);
+                    }
+                }
             }
             return Err(e);
         }
