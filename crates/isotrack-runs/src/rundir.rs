@@ -61,38 +61,6 @@ pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<Pat
         .collect()
 }
 
-/// Why the run files already in `dir` (`names`: [`RUN_FILES`] and the command's own) are not an
-/// earlier isotrack run's, which a new run may replace (att39-1: a user's own `summary.json`,
-/// `trace.csv` or `scenario.toml` was replaced without a word): a `summary.json` that does not
-/// read as an isotrack run's summary ([`Summary::read`]), or run files with no `summary.json`
-/// beside them (an interrupted run's leave the same: the user removes them). `None` when there
-/// is none of them, or an isotrack summary.
-fn not_an_isotrack_run(dir: &Path, names: &[&str]) -> Option<String> {
-    let summary = dir.join("summary.json");
-    if std::fs::symlink_metadata(&summary).is_ok() {
-        return Summary::read(&summary).err().map(|e| {
-            format!(
-                "{} is not an isotrack run's summary ({e}): refusing to replace it or the files beside it; use another --out, or move it away",
-                summary.display()
-            )
-        });
-    }
-    let present: Vec<&str> = names
-        .iter()
-        .copied()
-        .filter(|n| std::fs::symlink_metadata(dir.join(n)).is_ok())
-        .collect();
-    (!present.is_empty()).then(|| {
-        format!(
-            "{} holds {} but no summary.json: not an isotrack run's directory (or an interrupted one's), so refusing to replace {}; use another --out, or move {} away",
-            dir.display(),
-            present.join(", "),
-            if present.len() == 1 { "it" } else { "them" },
-            if present.len() == 1 { "it" } else { "them" },
-        )
-    })
-}
-
 /// When `output` is one of `inputs` (the same file, through links): the message that refuses it.
 pub fn input_clash(inputs: &[PathBuf], output: &Path) -> Option<String> {
     let input = inputs.iter().find(|i| same_file(i, output))?;
@@ -260,12 +228,6 @@ impl RunDir {
         for name in &names {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
-        }
-        if let Some(message) = not_an_isotrack_run(dir, &names) {
-            return Err(Failure {
-                code: exit::CANTCREAT,
-                message,
-            });
         }
         let opened_at = std::time::SystemTime::now();
         Ok(RunDir {
