@@ -820,10 +820,17 @@ fn a_summary_end_that_is_not_the_traces_names_the_vehicle_and_its_line() {
         .map(|(_, l)| format!("{l}\n"))
         .collect();
     type Edit = fn(&mut serde_json::Value);
-    let later: Edit = |s| s["vehicles"][0]["t_end_s"] = serde_json::json!(30.0);
+    // The top level repeats vehicle 0's record (att36-15 refuses a summary where it does not),
+    // so each edit changes both.
+    let later: Edit = |s| {
+        s["vehicles"][0]["t_end_s"] = serde_json::json!(30.0);
+        s["t_end_s"] = serde_json::json!(30.0);
+    };
     let completed: Edit = |s| {
         s["vehicles"][0]["t_end_s"] = serde_json::json!(60.0);
         s["vehicles"][0]["outcome"] = serde_json::json!("completed");
+        s["t_end_s"] = serde_json::json!(60.0);
+        s["outcome"] = serde_json::json!("completed");
     };
     let none: Edit = |_| {};
     let named = format!("trace.csv:{line0}: vehicle 0's last row is at t = {cell0} s");

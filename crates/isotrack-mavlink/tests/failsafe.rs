@@ -803,6 +803,15 @@ fn a_rover_reporting_in_air_when_armed_is_still_disarmed() {
                     3 << 16,
                 ))
                 .unwrap();
+                // The measurement, so that the companion goes on to arm and take control.
+                let mut name = [0u8; 10];
+                name[..5].copy_from_slice(b"ISO_S");
+                link.send(&MavMessage::NAMED_VALUE_FLOAT(NAMED_VALUE_FLOAT_DATA {
+                    time_boot_ms: t0.elapsed().as_millis() as u32,
+                    value: 12.0,
+                    name: name.into(),
+                }))
+                .unwrap();
                 link.send(&MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
                     vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
                     landed_state: if armed {

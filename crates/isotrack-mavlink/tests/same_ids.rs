@@ -1405,7 +1405,7 @@ fn heartbeats_each_one_frame_late_keep_the_link() {
 fn resyncs(r: &FlyReport) -> usize {
     r.events
         .iter()
-        .filter(|e| e.contains("resynchronised, one sender"))
+        .filter(|e| e.contains("resynchronised as one sender"))
         .count()
 }
 
