@@ -812,6 +812,11 @@ fn a_rover_reporting_in_air_when_armed_is_still_disarmed() {
                     name: name.into(),
                 }))
                 .unwrap();
+                link.send(&MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: t0.elapsed().as_millis() as u32,
+                    ..Default::default()
+                }))
+                .unwrap();
                 link.send(&MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
                     vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
                     landed_state: if armed {
