@@ -163,11 +163,67 @@ pub fn plot(
         });
     }
     let dir = args.out.clone().unwrap_or_else(|| args.runs[0].clone());
-    staged(py, &dir, move |staging| {
+    // att40-27: a run or sweep directory drawn into is locked as `isotrack plot` locks it
+    // (refused while `run --out` or a sweep writes it: a writer's lock file is there), for the
+    // whole render and move; a folder that is neither gets no lock file (the command refuses
+    // it, 66, 1a9b2e4).
+    let holds_run = ["summary.json", "results.csv", isotrack_runs::sweep::lock::LOCK_FILE]
+        .iter()
+        .any(|f| dir.join(f).exists());
+    let _lock = if dir.is_dir() && holds_run {
+        Some(
+            isotrack_runs::sweep::lock::lock_output_dir(&dir, "plot")
+                .map_err(failure)?,
+        )
+    } else {
+        None
+    };
+    staged(py, &dir, Guard::Figures, move |staging| {
         let mut args = args;
         args.out = Some(staging.to_path_buf());
         isotrack_commands::figures::plot(&args)
     })
+}
+
+/// What [`staged`] checks in the destination before moving the files drawn over it.
+#[derive(Clone, Copy, PartialEq)]
+enum Guard {
+    /// Nothing (a report's page named by the caller).
+    Nothing,
+    /// The run figures `isotrack plot` refuses to replace unless isotrack wrote them
+    /// (att40-25: `trajectory.*`, `timeseries.*`, `team.*`, `animation.gif` without
+    /// isotrack's mark, or not a regular file): refused (OSError naming the file) before any is
+    /// moved. The command checks them in the directory it draws in, which for this wrapper is
+    /// the staging directory, empty.
+    Figures,
+}
+
+/// The first file of `from` whose namesake in `to` [`Guard::Figures`] refuses, with why.
+fn foreign_figure(from: &Path, to: &Path) -> PyResult<()> {
+    let io = |p: &Path, e: std::io::Error| PyOSError::new_err(format!("{}: {e}", p.display()));
+    for entry in std::fs::read_dir(from).map_err(|e| io(from, e))? {
+        let name = entry.map_err(|e| io(from, e))?.file_name();
+        let n = name.to_string_lossy();
+        let figure = ["trajectory.", "timeseries.", "team."]
+            .iter()
+            .any(|p| n.starts_with(p))
+            || n == "animation.gif";
+        if !figure {
+            continue;
+        }
+        let target = to.join(&name);
+        if let Ok(m) = std::fs::symlink_metadata(&target) {
+            if !m.is_file() {
+                return Err(PyOSError::new_err(format!(
+                    "{} is not a regular file (a link, FIFO, directory or device): isotrack never replaces it; move it away, or draw elsewhere (out=DIR)",
+                    target.display()
+                )));
+            }
+        }
+        isotrack_commands::figures::refuse_foreign_figures(to, &[n.to_string()])
+            .map_err(failure)?;
+    }
+    Ok(())
 }
 
 /// A fresh staging directory in `dir`: `.isotrack-partial-PID-N`, hidden, removed once its
@@ -199,6 +255,7 @@ fn staging_dir(dir: &Path) -> PyResult<PathBuf> {
 fn staged(
     py: Python<'_>,
     dir: &Path,
+    guard: Guard,
     render: impl FnOnce(&Path) -> Result<(), Failure> + Send + 'static,
 ) -> PyResult<()> {
     // The directories this call creates (`dir` and any missing parent, deepest first): removed
@@ -229,7 +286,10 @@ fn staged(
         )
     });
     let moved = match outcome {
-        Ok(Ok(())) => move_files(&staging, dir),
+        Ok(Ok(())) => match guard {
+            Guard::Figures => foreign_figure(&staging, dir).and_then(|()| move_files(&staging, dir)),
+            Guard::Nothing => move_files(&staging, dir),
+        },
         // Named as the caller named them, not by the staging directory.
         Ok(Err(f)) => Err(failure(Failure {
             message: f
@@ -278,7 +338,7 @@ pub fn report(py: Python<'_>, runs: Vec<PathBuf>, out: PathBuf) -> PyResult<()> 
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."))
         .to_path_buf();
-    staged(py, &dir, move |staging| {
+    staged(py, &dir, Guard::Nothing, move |staging| {
         isotrack_commands::league::report(&ReportArgs {
             runs,
             out: staging.join(name),

@@ -168,3 +168,60 @@ def test_the_cli_refuses_a_directory_a_save_is_writing(tmp_path):
     finally:
         p.kill()
     assert not f.exists(), os.listdir(f)
+
+
+def test_plot_never_replaces_a_users_own_figure(tmp_path):
+    """att40-25: `isotrack.plot` drew into a staging folder, so the command's check of the
+    figures it replaces (att38-9: only isotrack's marked figures) looked into an empty folder,
+    and the user's own trajectory.png and animation.gif were then moved over. Now refused
+    (OSError naming the file), the user's files byte for byte as they were, in a run directory
+    and in a folder given as `out`; isotrack's own figures are still redrawn."""
+    run = isotrack.Scenario.default().set("sim.duration_s", 5.0).run()
+    d = tmp_path / "run"
+    run.save(d)
+    mine = b"MY OWN PICTURE, three weeks of work"
+    (d / "trajectory.png").write_bytes(mine)
+    with pytest.raises(OSError, match="trajectory.png is not a figure isotrack wrote"):
+        isotrack.plot(str(d))
+    assert (d / "trajectory.png").read_bytes() == mine
+    assert not (d / "timeseries.png").exists()
+    assert [p.name for p in d.iterdir() if p.name.startswith(".isotrack-partial")] == []
+
+    out = tmp_path / "figs"
+    out.mkdir()
+    (out / "animation.gif").write_bytes(mine)
+    with pytest.raises(OSError, match="animation.gif is not a figure isotrack wrote"):
+        isotrack.plot(str(d), out=str(out), animate=True)
+    assert (out / "animation.gif").read_bytes() == mine
+
+    (d / "trajectory.png").unlink()
+    isotrack.plot(str(d))
+    first = (d / "trajectory.png").read_bytes()
+    assert first.startswith(b"\x89PNG")
+    isotrack.plot(str(d))
+    assert (d / "trajectory.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_plot_waits_for_a_run_writing_the_directory(tmp_path):
+    """att40-27: `isotrack.plot` into a run directory takes the lock `isotrack plot` takes, so
+    it is refused (OSError naming the holder) while `run --out` writes there."""
+    d = tmp_path / "run"
+    isotrack.Scenario.default().set("sim.duration_s", 5.0).run().save(d)
+    scenario = tmp_path / "long.toml"
+    scenario.write_text((ROOT / "scenarios" / "paper-fig2b-circular.toml").read_text())
+    p = subprocess.Popen(
+        [cli(), "run", str(scenario), "--out", str(d), "--quiet", "--set", "sim.duration_s=3000000"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.monotonic() + 30.0
+        while not (d / ".isotrack.lock").exists():
+            assert p.poll() is None, p.stderr.read()
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        with pytest.raises(OSError, match="writing this directory"):
+            isotrack.plot(str(d))
+    finally:
+        p.kill()
+        p.wait()

@@ -637,6 +637,14 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
             "{f} after a second run"
         );
     }
+    // att40-1: the note does not tell the user that `plot` redraws their own files (it
+    // refuses them, 73): it says to move them.
+    let err = common::stderr(&o);
+    assert!(
+        err.contains("not a figure isotrack wrote") && err.contains("move them away"),
+        "{err}"
+    );
+    assert!(!err.contains("redraws"), "{err}");
     // nu-21: a real run's figures are kept as well, and the new run says they are not its own.
     let r = d.path().join("r").display().to_string();
     let o = isotrack(&[
@@ -652,6 +660,12 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
         err.contains("also holds trajectory.png, timeseries.png from before this run"),
         "{err}"
     );
+    assert!(
+        err.contains("plot' redraws trajectory.png, timeseries.png")
+            || err.contains(" redraws trajectory.png, timeseries.png"),
+        "{err}"
+    );
+    assert!(!err.contains("not a figure isotrack wrote"), "{err}");
     // Drawn again (run --plot), the figures are this run's: no note.
     let o = isotrack(&[
         "run", &input, "--out", &r, "--quiet", "--plot", "--set", SHORT,
@@ -1015,4 +1029,141 @@ fn plot_of_a_folder_that_is_no_run_says_so_and_writes_nothing_there() {
         .map(|e| e.file_name())
         .collect();
     assert_eq!(names, vec![std::ffi::OsString::from("notes.txt")]);
+}
+
+/// att40-23: `plot SWEEP --out ELSEWHERE` of a sweep directory this user cannot write (a
+/// colleague's sweep, a read-only mount), no writer's lock file in it, draws into ELSEWHERE
+/// (it was refused 73, "cannot write figures into SWEEP ... give --out a directory you can
+/// write"); the sweep is left as it was, no lock file created. Drawn by the user `nobody`
+/// (setpriv) when the tests run as root, who writes everywhere; skipped where neither works.
+#[test]
+fn a_read_only_sweep_is_plotted_into_another_out() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = tempfile::tempdir().unwrap();
+    std::fs::set_permissions(d.path(), std::fs::Permissions::from_mode(0o777)).unwrap();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!("scenario = {SCEN:?}\n[base]\nsim.duration_s = 5.0\n[grid]\ncontroller.kp = [5.0, 10.0]\n"),
+    );
+    let sweep = d.path().join("swd");
+    let o = isotrack(&["sweep", &sw, "--out", sweep.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let listing = |p: &Path| {
+        let mut v: Vec<String> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing(&sweep);
+    for e in std::fs::read_dir(&sweep).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o444)).unwrap();
+    }
+    std::fs::set_permissions(&sweep, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let out = d.path().join("figs");
+    let root = std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    let o = if root {
+        match std::process::Command::new("setpriv")
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+            .arg(env!("CARGO_BIN_EXE_isotrack"))
+            .args([
+                "plot",
+                sweep.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+        {
+            Ok(o) if !common::stderr(&o).contains("setpriv:") => o,
+            _ => {
+                eprintln!("skipped: running as root without setpriv to draw as another user");
+                std::fs::set_permissions(&sweep, std::fs::Permissions::from_mode(0o755)).unwrap();
+                return;
+            }
+        }
+    } else {
+        isotrack(&[
+            "plot",
+            sweep.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    std::fs::set_permissions(&sweep, std::fs::Permissions::from_mode(0o755)).unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(
+        listing(&out)
+            .iter()
+            .any(|f| f.starts_with("sweep_") && f.ends_with(".png")),
+        "{:?}",
+        listing(&out)
+    );
+    assert_eq!(listing(&sweep), before);
+}
+
+/// nu40-4: a data file replaced while `run --out` flies: the run flew the field read before it,
+/// and summary.json's `data_files` names that file's SHA-256 (it named the new file's: the
+/// digest was taken after the run), with a warning saying the file changed. The digests are
+/// computed here by sha2 from the bytes written.
+#[test]
+fn a_data_file_replaced_during_the_run_is_named_as_read() {
+    use sha2::Digest;
+    let d = tempfile::tempdir().unwrap();
+    let data = d.path().join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let original = std::fs::read(format!("{root}/data/volcano/volcano.csv")).unwrap();
+    let csv = data.join("volcano.csv");
+    std::fs::write(&csv, &original).unwrap();
+    let scen = std::fs::read_to_string(format!("{root}/scenarios/volcano.toml"))
+        .unwrap()
+        .replace("../data/volcano/volcano.csv", "data/volcano.csv");
+    let input = write(d.path(), "volcano.toml", &scen);
+    let out = d.path().join("run");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(["run", &input, "--out", out.to_str().unwrap(), "--quiet"])
+        .args(["--set", "sim.duration_s=200000"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The live trace appears once the scenario is loaded (and its files hashed).
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_dir(&out).is_ok_and(|mut r| {
+        r.any(|e| e.is_ok_and(|e| e.file_name().to_string_lossy().starts_with(".trace.csv.")))
+    }) {
+        assert!(t0.elapsed().as_secs() < 60, "no live trace");
+        assert!(child.try_wait().unwrap().is_none(), "the run ended first");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let mut changed = String::from_utf8(original.clone()).unwrap();
+    changed.push_str("\n# edited\n");
+    std::fs::write(&csv, &changed).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let hex = |b: &[u8]| {
+        sha2::Sha256::digest(b)
+            .iter()
+            .map(|x| format!("{x:02x}"))
+            .collect::<String>()
+    };
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let files = s["data_files"].as_object().unwrap();
+    assert_eq!(files.len(), 1, "{files:?}");
+    let (_, digest) = files.iter().next().unwrap();
+    assert_eq!(digest.as_str(), Some(hex(&original).as_str()));
+    assert_ne!(hex(&original), hex(changed.as_bytes()));
+    let warned = s["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().starts_with("a data file changed"));
+    assert!(warned, "{}", s["warnings"]);
+    assert!(common::stderr(&o).contains("warning: a data file changed"));
 }

@@ -640,3 +640,70 @@ fn an_unused_initial_pose_outside_the_domain_is_not_checked() {
     let o = run(&f);
     assert_fails(&o, 65, &["initial.x_m", "team.spread.step_m"]);
 }
+
+/// nu39-3: a team whose vehicles come closer than 0.5 m warns, naming the pair, the distance
+/// and the time. The bundled circle's spread with `step_rad = 0.03` starts consecutive robots
+/// `2 r sin(0.015)` apart (r = 10 ln 2: 0.2079 m, a collision for real robots) and range_balance
+/// parts them from there, so the closest approach is the start's, at t = 0. The bundled spread
+/// (0.3 rad: 2.07 m) gives no such warning.
+#[test]
+fn vehicles_closer_than_half_a_metre_are_warned() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("close");
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "team.spread.step_rad=0.03",
+        "--set",
+        "sim.duration_s=60",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let chord = 2.0 * 10.0 * LN_2 * 0.015f64.sin();
+    let s = json(&out.join("summary.json"));
+    let min_sep = s["team"]["min_separation_m"].as_f64().unwrap();
+    assert!((min_sep - chord).abs() < 1e-6, "{min_sep} vs {chord}");
+    let warnings: Vec<String> = s["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect();
+    let w = warnings
+        .iter()
+        .find(|w| w.contains(" came within "))
+        .unwrap_or_else(|| panic!("no close-approach warning in {warnings:?}"));
+    let pair_ok = [
+        "vehicles 0 and 1 ",
+        "vehicles 1 and 2 ",
+        "vehicles 2 and 3 ",
+    ]
+    .iter()
+    .any(|p| w.starts_with(p));
+    assert!(pair_ok, "{w}");
+    let within: f64 = w
+        .split(" came within ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{w}"));
+    assert!((within - chord).abs() < 1e-5, "{w}");
+    assert!(w.contains(" at t = 0 s "), "{w}");
+    assert!(common::stderr(&o).contains(&format!("warning: {w}")));
+
+    let far = d.path().join("far");
+    let o = isotrack(&[
+        "run",
+        TEAM,
+        "--out",
+        far.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "sim.duration_s=60",
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(!common::stderr(&o).contains(" came within "));
+}

@@ -245,7 +245,7 @@ pub fn plot(a: &PlotArgs) -> Result<(), Failure> {
         // `sweep --force` (or a merge) writes it, plot is refused 73 naming the holder, not
         // drawn from the rows so far into the directory whose results.csv then grows. An
         // output directory of its own (`--out`) that exists is locked too.
-        let _lock = lock_to_draw(&a.runs[0])?;
+        let _lock = lock_sweep_to_read(&a.runs[0], &out)?;
         let _out_lock = (out.is_dir() && !same_dir(&out, &a.runs[0]))
             .then(|| lock_to_draw(&out))
             .transpose()?;
@@ -297,6 +297,30 @@ fn lock_to_draw(dir: &Path) -> Result<isotrack_runs::sweep::lock::DirLock, Failu
         }
         f
     })
+}
+
+/// The lock of sweep directory `sweep` drawn into `out` ([`lock_to_draw`]), or none when
+/// `out` is elsewhere and `sweep` is one this user cannot write (a colleague's sweep, a
+/// read-only mount) with no lock file in it: no writer holds it (a writer's lock file is there
+/// while it writes, removed as it lets go), and plot only reads it (att40-23: such a sweep was
+/// refused 73, "give --out a directory you can write", with --out given). A writer starting
+/// after this look is not seen (its owner can still write there).
+fn lock_sweep_to_read(
+    sweep: &Path,
+    out: &Path,
+) -> Result<Option<isotrack_runs::sweep::lock::DirLock>, Failure> {
+    match lock_to_draw(sweep) {
+        Ok(l) => Ok(Some(l)),
+        Err(f)
+            if !same_dir(out, sweep)
+                && std::fs::symlink_metadata(sweep.join(isotrack_runs::sweep::lock::LOCK_FILE))
+                    .is_err()
+                && f.message.starts_with("cannot write figures into ") =>
+        {
+            Ok(None)
+        }
+        Err(f) => Err(f),
+    }
 }
 
 /// Whether `a` and `b` name one directory (both resolved; the same path when either cannot

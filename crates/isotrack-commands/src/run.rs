@@ -161,6 +161,9 @@ pub fn refuse_team(scenario: &Scenario, command: &str) -> Result<(), Failure> {
 /// `isotrack run`.
 pub fn run(args: &RunArgs) -> Result<(), Failure> {
     let scenario = load(&args.scenario)?;
+    // The data files as read by the load just made (nu40-4: hashed after the run, a file
+    // replaced meanwhile was named by its new digest).
+    let read = isotrack_runs::summary::data_file_digests(&scenario);
     refuse_team_without_isoline(&scenario)?;
     let warnings = isotrack_scenario::check::warnings(&scenario);
     for w in &warnings {
@@ -209,7 +212,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 None => None,
             };
         warn_unfinished(team.as_ref());
-        let (result, summary) = match &team {
+        let (result, mut summary) = match &team {
             Some(t) => (
                 t.runs[0].clone(),
                 Summary::of_team(&scenario, args.scenario.scenario.as_deref(), t, &warnings),
@@ -221,6 +224,9 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 (r, s)
             }
         };
+        if let Some(w) = summary.data_files_as_read(read) {
+            errln!("warning: {w}");
+        }
         out.finish(trace_file, &scenario_toml(&scenario), &summary)?;
         let (trace, summary, resolved) = (
             out.path("trace.csv"),
@@ -255,7 +261,11 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 outln!("plotted     {}", written.join(", "));
             }
         }
-        note_outputs_from_before(&before, dir, team.is_some());
+        note_outputs_from_before(
+            &before,
+            dir,
+            team.as_ref().is_some_and(|t| t.team.is_some()),
+        );
         result
     } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {
@@ -281,42 +291,63 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 
 /// An earlier run's figures (or the user's files of those names) in the run directory `dir`,
 /// never removed: said, so that they are not read as this run's (nu-21; att38-1).
-fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, team: bool) {
+fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, team_figure: bool) {
     if before.is_empty() {
         return;
     }
     let q = shell_quoted(dir);
+    // att40-1: only a regular file with isotrack's mark is redrawn by `plot`; it refuses (73)
+    // anything else of a figure's name (the user's own file, an older isotrack's unmarked
+    // figure, a link or FIFO), so the advice for those is to move them.
+    let foreign = |n: &str| {
+        n != "mavlink.tlog"
+            && (std::fs::symlink_metadata(dir.join(n)).map_or(true, |m| !m.is_file())
+                || isotrack_plot::refuse_foreign_figure(&dir.join(n)).is_err())
+    };
     let has =
         |f: &dyn Fn(&str) -> bool| before.iter().copied().filter(|n| f(n)).collect::<Vec<_>>();
     let is_team = |n: &str| n.starts_with("team.");
+    // att40-2: a team figure is drawn only for a team run with team metrics.
+    let redrawn = |n: &str| !foreign(n) && n != "mavlink.tlog" && (team_figure || !is_team(n));
     let mut advice = Vec::new();
-    let png = has(&|n| n.ends_with(".png") && (team || !is_team(n)));
+    let png = has(&|n| redrawn(n) && n.ends_with(".png"));
     if !png.is_empty() {
         advice.push(format!("`isotrack plot {q}` redraws {}", png.join(", ")));
     }
-    let svg = has(&|n| n.ends_with(".svg") && (team || !is_team(n)));
+    let svg = has(&|n| redrawn(n) && n.ends_with(".svg"));
     if !svg.is_empty() {
         advice.push(format!(
-            "`isotrack plot {q} --format svg` {}",
+            "`isotrack plot {q} --format svg` redraws {}",
             svg.join(", ")
         ));
     }
-    if before.contains(&"animation.gif") {
-        advice.push(format!("`isotrack plot {q} --animate` animation.gif"));
-    }
-    let stale = has(&|n| (!team && is_team(n)) || n == "mavlink.tlog");
-    if !stale.is_empty() {
+    if has(&|n| redrawn(n) && n == "animation.gif").len() == 1 {
         advice.push(format!(
-            "{} {} no output of this run (a team's figure{}, a flight's log): move {} away",
-            stale.join(", "),
-            if stale.len() == 1 { "is" } else { "are" },
-            if team {
-                ""
-            } else {
-                ", and this run is no team"
-            },
-            if stale.len() == 1 { "it" } else { "them" }
+            "`isotrack plot {q} --animate` redraws animation.gif"
         ));
+    }
+    let them = |v: &[&str]| if v.len() == 1 { "it" } else { "them" };
+    let is_are = |v: &[&str]| if v.len() == 1 { "is" } else { "are" };
+    let mine = has(&|n| foreign(n));
+    if !mine.is_empty() {
+        advice.push(format!(
+            "{} {} not a figure isotrack wrote (your own file, an older isotrack's or not a regular file), which `plot` will not replace: move {} away",
+            mine.join(", "),
+            is_are(&mine),
+            them(&mine)
+        ));
+    }
+    let team_stale = has(&|n| !foreign(n) && !team_figure && is_team(n));
+    if !team_stale.is_empty() {
+        advice.push(format!(
+            "{} {} a team figure, and this run draws none: move {} away",
+            team_stale.join(", "),
+            is_are(&team_stale),
+            them(&team_stale)
+        ));
+    }
+    if before.contains(&"mavlink.tlog") {
+        advice.push("mavlink.tlog is a flight's log, no output of this run: move it away".into());
     }
     errln!(
         "note: {q} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): {}",
@@ -525,6 +556,7 @@ mod tests {
             revisit_time_ideal_s: ideal,
             revisit_time_ideal_active_s: None,
             min_separation_m: Some(9.8026),
+            closest_approach: None,
             order_preserved: true,
             speed_range_mps: None,
             moving_isoline: None,
@@ -573,6 +605,7 @@ mod tests {
                         revisit_time_ideal_s: 21.7759,
                         revisit_time_ideal_active_s: None,
                         min_separation_m: Some(separation),
+                        closest_approach: None,
                         order_preserved: true,
                         speed_range_mps: None,
                         moving_isoline: None,
@@ -622,6 +655,7 @@ mod tests {
                     revisit_time_ideal_s: 21.78,
                     revisit_time_ideal_active_s: Some(29.04),
                     min_separation_m: Some(2.0717),
+                    closest_approach: None,
                     order_preserved: true,
                     speed_range_mps: None,
                     moving_isoline: None,

@@ -460,6 +460,24 @@ fn a_scenario_edited_after_the_run_is_refused_naming_the_key() {
         m.contains("scenario.toml: controller.level = 10.0, but summary.json's scenario (the one the run flew) has controller.level = 12.0"),
         "{m}"
     );
+    // att40-4: a seed past 2^53 edited by one (as f64 the two were one number).
+    let dir = edited(
+        &run,
+        &d.path().join("seed"),
+        |s| s["scenario"]["sim"]["seed"] = serde_json::json!(1_152_921_504_606_846_976_u64),
+        None,
+    );
+    set_key(
+        &dir,
+        "sim",
+        "seed",
+        toml::Value::Integer(1_152_921_504_606_846_977),
+    );
+    let m = refusal(&dir);
+    assert!(
+        m.contains("scenario.toml: sim.seed = 1152921504606846977, but summary.json's scenario (the one the run flew) has sim.seed = 1152921504606846976"),
+        "{m}"
+    );
     // A single vehicle's run: the same rule.
     let single = d.path().join("single");
     {

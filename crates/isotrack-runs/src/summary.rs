@@ -382,6 +382,38 @@ impl Summary {
 }
 
 impl<S> Summary<S> {
+    /// nu40-4: names the data files as the run read them, `read` ([`data_file_digests`] taken
+    /// when the scenario was loaded, before the run), not as they are when the summary is
+    /// written: a file replaced while the run flew (on the field read before) was named by its
+    /// new SHA-256. When a file's digest now differs from `read`'s (or it is gone), returns the
+    /// warning saying so, also added to the summary's `warnings`; `None` when every file is as
+    /// read. A simulated run's summary only (a flight's has none).
+    pub fn data_files_as_read(&mut self, read: BTreeMap<String, String>) -> Option<String> {
+        let Ended::Run(r) = &mut self.ended else {
+            return None;
+        };
+        let changed: Vec<String> = read
+            .iter()
+            .filter(|(p, d)| {
+                crate::files::sha256_file(Path::new(p.as_str()))
+                    .ok()
+                    .as_ref()
+                    != Some(*d)
+            })
+            .map(|(p, d)| format!("{p} (SHA-256 {} as read)", &d[..d.len().min(16)]))
+            .collect();
+        r.data_files = read;
+        if changed.is_empty() {
+            return None;
+        }
+        let w = format!(
+            "a data file changed (or went) while the run flew: {}; the run flew the field as read before it, and data_files names that one",
+            changed.join(", ")
+        );
+        r.warnings.push(w.clone());
+        Some(w)
+    }
+
     /// The outcome (`completed`, `left_field`, `diverged`; `interrupted` or `companion_lost`
     /// for a cut `sitl` run; a flight's).
     pub fn outcome(&self) -> &str {
@@ -465,8 +497,31 @@ const UNFINISHED_NAMED: usize = 5;
 /// them and `summary.json` lists them in `warnings`.
 pub fn team_warnings(team: &isotrack_sim::TeamResult) -> Vec<String> {
     let mut w = team.warnings.clone();
+    w.extend(close_approach(team));
     w.extend(unfinished_vehicles(team));
     w
+}
+
+/// The warning of a team run whose vehicles came closer than
+/// [`CLOSE_APPROACH_M`](isotrack_sim::team::metrics::CLOSE_APPROACH_M) to each other
+/// (nu39-3: on the puff plume with a listed ring whose arrival order differed, two robots
+/// passed through each other, 0.02 m apart, with no word): which, when and how close; `None`
+/// otherwise. `order_preserved` looks at the steady window only, so a crossing before it is
+/// named here and nowhere else.
+pub fn close_approach(team: &isotrack_sim::TeamResult) -> Option<String> {
+    use isotrack_core::numtext::Num;
+    use isotrack_sim::team::metrics::CLOSE_APPROACH_M;
+    let c = team.team.as_ref()?.closest_approach?;
+    (c.distance_m < CLOSE_APPROACH_M).then(|| {
+        format!(
+            "vehicles {} and {} came within {} m of each other at t = {} s (closer than {} m: a collision for real vehicles, which the model's points pass through): the spacing law drove them together (a listed team.ring whose arrival order on the isoline differs from the listed one does: try team.ring = \"discovered\"), or they started too close",
+            c.pair[0],
+            c.pair[1],
+            Num(c.distance_m),
+            Num(c.t_s),
+            Num(CLOSE_APPROACH_M)
+        )
+    })
 }
 
 /// The warning of a team run `team` in which vehicles other than vehicle 0 (whose outcome is

@@ -339,11 +339,19 @@ fn check_against_scenario<'c>(
     let want = crate::sweep::rows::text_cell(&crate::sweep::rows::run_warnings(&s));
     let got = cell("warnings");
     let team = s.spec().team.is_some();
-    // A team run's own addition: `not every vehicle completed (vehicle I: OUTCOME, ...); the
-    // metric columns are vehicle 0's`, after the scenario's warnings and `; `.
-    let team_tail = |rest: &str| {
-        rest.strip_prefix("not every vehicle completed (vehicle ")
+    // A team run's own additions, after the scenario's warnings and `; `: its close approach
+    // (`vehicles I and J came within D m of each other at t = T s (...)...`, nu39-3) and/or
+    // `not every vehicle completed (vehicle I: OUTCOME, ...); the metric columns are vehicle
+    // 0's`, in that order (what the run gave: not recomputed here).
+    let unfinished = |r: &str| {
+        r.strip_prefix("not every vehicle completed (vehicle ")
             .is_some_and(|r| r.ends_with("); the metric columns are vehicle 0's"))
+    };
+    let approach = |r: &str| r.starts_with("vehicles ") && r.contains(" came within ");
+    let team_tail = |rest: &str| match rest.split_once("; not every vehicle completed (") {
+        _ if unfinished(rest) => true,
+        Some((a, _)) => approach(a) && unfinished(&rest[a.len() + 2..]),
+        None => approach(rest) && !rest.contains("; "),
     };
     let ok = got == want
         || (team
@@ -410,11 +418,41 @@ fn check_team_cells<'c>(outcome: &str, cell: &dyn Fn(&str) -> &'c str) -> Result
             clip(o)
         ));
     }
-    // Team metrics exist together: the ideal revisit time with any of them.
-    if o.is_empty() != cell("revisit_time_ideal_s").is_empty() {
-        return Err("order_preserved and revisit_time_ideal_s are not both given".into());
+    // Team metrics exist together: no ideal revisit time without them. With them it may be
+    // empty: an open isoline's is the mean gap over the samples with two vehicles on the curve,
+    // none when every vehicle left it first (nu40-12: the writer gave such a row, this check
+    // called it damaged, and the sweep could never finish).
+    if o.is_empty() && !cell("revisit_time_ideal_s").is_empty() {
+        return Err("revisit_time_ideal_s is given without order_preserved".into());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod team_cell_tests {
+    use super::check_team_cells;
+
+    fn cells<'a>(order: &'a str, ideal: &'a str) -> impl Fn(&str) -> &'a str {
+        move |n: &str| match n {
+            "order_preserved" => order,
+            "revisit_time_ideal_s" => ideal,
+            _ => "",
+        }
+    }
+
+    /// nu40-12: a team run on an open isoline whose vehicles all left it before two were on
+    /// the curve has team metrics (order_preserved) and no ideal revisit time: a valid row.
+    /// An ideal revisit time without any team metric is not.
+    #[test]
+    fn an_open_runs_row_without_an_ideal_revisit_time_is_valid() {
+        assert_eq!(check_team_cells("left_field", &cells("true", "")), Ok(()));
+        assert_eq!(
+            check_team_cells("completed", &cells("false", "12.5")),
+            Ok(())
+        );
+        assert_eq!(check_team_cells("completed", &cells("", "")), Ok(()));
+        assert!(check_team_cells("completed", &cells("", "12.5")).is_err());
+    }
 }
 
 /// The cells a run's own step counts bound ([`RunSpan`]): `t_end_s` is `k dt` for a whole

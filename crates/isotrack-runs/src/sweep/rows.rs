@@ -284,6 +284,12 @@ fn team_row_parts(
                 .filter(|(_, r)| r.outcome != isotrack_sim::Outcome::Completed)
                 .map(|(i, r)| format!("vehicle {i}: {}", r.outcome.as_str()))
                 .collect();
+            if let Some(c) = crate::summary::close_approach(&t) {
+                if !warnings.is_empty() {
+                    warnings.push_str("; ");
+                }
+                warnings.push_str(&c);
+            }
             if !others.is_empty() {
                 if !warnings.is_empty() {
                     warnings.push_str("; ");

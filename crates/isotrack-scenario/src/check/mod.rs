@@ -1996,8 +1996,12 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
             verdict = Verdict::Fails;
             verdict_reason = format!("team: {}", t.verdict_reason);
         }
-        // att32g-3: a team `run` refuses is no `holds`.
-        if s.team_refusal().is_some() && verdict == Verdict::Holds {
+        // att32g-3: a team `run` refuses is no `holds`; nu40-7: nor one whose loops the check
+        // could not compute (a ranging delay past the periods its polynomial holds: the
+        // overall `holds` stood for a spacing loop 7 times past its largest stable gain).
+        if (s.team_refusal().is_some() || t.verdict == Verdict::NotApplicable)
+            && verdict == Verdict::Holds
+        {
             verdict = Verdict::NotApplicable;
             verdict_reason = format!("team: {}", t.verdict_reason);
         }

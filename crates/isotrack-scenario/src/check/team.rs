@@ -342,16 +342,13 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
         ));
     }
     if r.max_range_m.is_finite() {
-        let even_chord = s
-            .team_arc()
-            .map(|a| 2.0 * a.radius_m * (std::f64::consts::PI / n as f64).sin());
-        match even_chord {
-            Some(d) if d > r.max_range_m => out.push(format!(
+        match even_chord_beyond_range(s, team) {
+            Some(d) => out.push(format!(
                 "team.ranging.max_range_m = {} is shorter than the even spacing's range {} m: at even spacing the neighbours do not answer and the law sees max_range_m, not the gaps",
                 Echo(r.max_range_m),
                 Num(d)
             )),
-            _ => out.push(format!(
+            None => out.push(format!(
                 "team.ranging.max_range_m = {} (beyond it the law sees max_range_m)",
                 Echo(r.max_range_m)
             )),
@@ -366,6 +363,22 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
         ));
     }
     out
+}
+
+/// The range between neighbours at even spacing on the team's circle, `2 r sin(pi/N)` (a chord
+/// of the circle of radius `r` through `2 pi/N`), when it is longer than
+/// `team.ranging.max_range_m`: `None` when it is not, or the isoline is not a known circle
+/// ([`Scenario::team_arc`]).
+fn even_chord_beyond_range(s: &Scenario, team: &TeamSpec) -> Option<f64> {
+    let max_range_m = team.ranging.max_range_m;
+    let n = team.count();
+    if !max_range_m.is_finite() || n < 2 {
+        return None;
+    }
+    let chord = s
+        .team_arc()
+        .map(|a| 2.0 * a.radius_m * (std::f64::consts::PI / n as f64).sin())?;
+    (chord > max_range_m).then_some(chord)
 }
 
 /// Where the clamp of att32d-2 is active: the team's common steady speed
@@ -545,7 +558,10 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
             Verdict::NotApplicable,
             format!("`isotrack run` refuses this scenario (exit 65): {why}"),
         ),
-        None => team_verdict(team, &spacing, &tracking),
+        None => match range_balance_out_of_range(s, team) {
+            Some(why) => (Verdict::Fails, why),
+            None => team_verdict(team, &spacing, &tracking),
+        },
     };
     Some(TeamCheckReport {
         count: team.count(),
@@ -556,6 +572,28 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
         spacing,
         tracking,
     })
+}
+
+/// nu39-7: `range_balance` (k_v > 0) on a circle whose even spacing's range is beyond
+/// `team.ranging.max_range_m` ([`even_chord_beyond_range`]): the text of the `fails` verdict,
+/// `None` otherwise. Past `max_range_m` the law sees `max_range_m` for every neighbour, so the
+/// range slope `c` is 0 there: even spacing is no asymptotically stable equilibrium, and the
+/// team halts wherever the ranges it can hear balance (on the circle of radius 10 m with 4
+/// vehicles and `max_range_m = 5`, three gaps of 5.1 m and one of 28.2 m, gap CV 0.92).
+fn range_balance_out_of_range(s: &Scenario, team: &TeamSpec) -> Option<String> {
+    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
+        return None;
+    };
+    if gain_per_s == 0.0 {
+        return None;
+    }
+    let chord = even_chord_beyond_range(s, team)?;
+    Some(format!(
+        "team.ranging.max_range_m = {} is shorter than the even spacing's range {} m (the chord 2 r sin(pi/N) of the team's circle): at even spacing the neighbours do not answer, the law sees max_range_m for both and commands v0, so even spacing is not where the gaps converge; the team halts wherever the ranges it hears balance (set team.ranging.max_range_m above {} m)",
+        Echo(team.ranging.max_range_m),
+        Num(chord),
+        Num(chord)
+    ))
 }
 
 fn team_verdict(

@@ -522,3 +522,76 @@ fn arc_reference_above_the_peak_says_there_is_no_isoline() {
     let s = circular(&["team.spacing=\"arc_reference\"", spread]);
     assert_eq!(s.team_refusal(), None);
 }
+
+/// nu39-7: range_balance with `team.ranging.max_range_m` shorter than the even spacing's range
+/// (4 robots on the circle of radius r = 10 ln 2: the chord `2 r sin(pi/4)` = 9.80258 m) fails:
+/// past max_range_m the law sees max_range_m for both neighbours, so even spacing is no
+/// equilibrium the gaps converge to; simulation agrees (the team halts with uneven gaps, the
+/// gap CV far above the 0.05 of an even team, never even), and `run` warns it. Above the chord
+/// the check holds and the team spreads.
+#[test]
+fn a_ranging_limit_short_of_the_even_spacing_fails() {
+    let chord = 2.0 * 10.0 * std::f64::consts::LN_2 * (PI / 4.0).sin();
+    let short = circular(&["team.ranging.max_range_m=5.0"]);
+    let t = check(&short, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains(&format!(
+            "shorter than the even spacing's range {:.5} m",
+            chord
+        )),
+        "{} (chord {chord})",
+        t.verdict_reason
+    );
+    let warned = isotrack_scenario::check::warnings(&short);
+    assert!(
+        warned
+            .iter()
+            .any(|w| w.starts_with("the team check fails: team.ranging.max_range_m = 5 ")),
+        "{warned:?}"
+    );
+    let run = short.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    let m = run.team.unwrap();
+    assert!(m.gap_cv_final.unwrap() > 0.5, "{m:?}");
+    assert_eq!(m.time_to_even_s, None, "{m:?}");
+
+    let long = circular(&[&format!("team.ranging.max_range_m={}", chord * 1.2)]);
+    let t = check(&long, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let m = long
+        .run_team(&mut [] as &mut [NoTrace])
+        .unwrap()
+        .unwrap()
+        .team
+        .unwrap();
+    assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
+}
+
+/// nu40-7: a ranging delay of 63 periods (6.3 s at 10 Hz) is past the periods the check's
+/// polynomial holds, so the spacing loop is not computed; the whole check's verdict is then no
+/// `holds` (it said `holds` for k_v = 0.5, where Levin & May's whole-period bound
+/// `g* = 2 cos(q pi/(2q + 1))` gives k_v* = g*/(T c 4) = 0.0875 1/s: unstable). At 62 periods
+/// the loop is computed and fails.
+#[test]
+fn a_spacing_loop_not_computed_is_no_holds() {
+    let c = (PI / 4.0).cos();
+    let q = 63.0;
+    let g_star = 2.0 * (q * PI / (2.0 * q + 1.0)).cos();
+    assert!(0.5 > g_star / (0.1 * c * 4.0));
+    let r = check(
+        &circular(&["team.ranging.delay_s=6.3", "team.k_v=0.5"]),
+        None,
+    );
+    assert_eq!(r.team.as_ref().unwrap().verdict, Verdict::NotApplicable);
+    assert_eq!(r.verdict, Verdict::NotApplicable, "{}", r.verdict_reason);
+    assert!(
+        r.verdict_reason.starts_with("team: "),
+        "{}",
+        r.verdict_reason
+    );
+    let r = check(
+        &circular(&["team.ranging.delay_s=6.2", "team.k_v=0.5"]),
+        None,
+    );
+    assert_eq!(r.verdict, Verdict::Fails, "{}", r.verdict_reason);
+}

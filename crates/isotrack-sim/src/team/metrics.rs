@@ -53,6 +53,23 @@ pub fn open_revisit_bins(length_m: f64, step_m: f64, min_bins: usize) -> usize {
     (want.ceil() as usize).clamp(min_bins.max(1), MAX_OPEN_REVISIT_BINS.max(min_bins))
 }
 
+/// A distance between two vehicles below which a team run warns (nu39-3): closer than this,
+/// real robots or aircraft collide (the model's vehicles are points and pass through each
+/// other), m. A team whose vehicles are larger reads `min_separation_m` against its own.
+pub const CLOSE_APPROACH_M: f64 = 0.5;
+
+/// The closest approach of two vehicles consecutive along the isoline
+/// ([`TeamSummary::min_separation_m`]): when and which.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClosestApproach {
+    /// Distance between them, m.
+    pub distance_m: f64,
+    /// Time of the sample, s.
+    pub t_s: f64,
+    /// The two vehicles' indices in the listed order, the smaller first.
+    pub pair: [u32; 2],
+}
+
 /// The team's summary (the `team` object of `summary.json`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TeamSummary {
@@ -96,6 +113,10 @@ pub struct TeamSummary {
     /// (consecutive pairs only: `O(N)` per sample; on a simple isoline the closest pair is
     /// consecutive unless vehicles are far off it).
     pub min_separation_m: Option<f64>,
+    /// Where `min_separation_m` was reached: the first sample at which it was (not in
+    /// `summary.json`: the run's warning names it, [`CLOSE_APPROACH_M`]).
+    #[serde(skip)]
+    pub closest_approach: Option<ClosestApproach>,
     /// Whether the cyclic order of the vehicles along the isoline at every steady-window sample
     /// was the order at the window's first sample (no overtaking once settled).
     pub order_preserved: bool,
@@ -175,6 +196,7 @@ pub struct TeamMetrics {
     revisit_sum: f64,
     revisit_count: u64,
     min_sep: f64,
+    closest: Option<ClosestApproach>,
     order_ref: Option<Vec<u32>>,
     order_ok: bool,
     speed_min: f64,
@@ -278,6 +300,7 @@ impl TeamMetrics {
             revisit_sum: 0.0,
             revisit_count: 0,
             min_sep: f64::INFINITY,
+            closest: None,
             order_ref: None,
             order_ok: true,
             speed_min: f64::INFINITY,
@@ -514,7 +537,7 @@ impl TeamMetrics {
             let g = if j + 1 == count { s1 + l - s0 } else { s1 - s0 };
             var += (g - mean) * (g - mean);
             let sep = (positions[i1 as usize] - positions[i0 as usize]).norm();
-            self.min_sep = self.min_sep.min(sep);
+            self.note_separation(sep, t, i0, i1);
         }
         let cv = (var / count as f64).sqrt() / mean;
         self.cv_last = Some(cv);
@@ -652,7 +675,7 @@ impl TeamMetrics {
             let g = s1 - s0;
             var += (g - mean) * (g - mean);
             let sep = (self.last_p_or(i1) - self.last_p_or(i0)).norm();
-            self.min_sep = self.min_sep.min(sep);
+            self.note_separation(sep, t, i0, i1);
         }
         if in_window {
             self.stretch_sum += stretch;
@@ -690,6 +713,19 @@ impl TeamMetrics {
     }
 
     /// Vehicle `i`'s position at the current sample (kept in `last_p` for an open isoline).
+    /// The distance `sep` between consecutive vehicles `i0` and `i1` at time `t`: the
+    /// smallest so far kept, with the first sample that reached it.
+    fn note_separation(&mut self, sep: f64, t: f64, i0: u32, i1: u32) {
+        if sep < self.min_sep {
+            self.closest = Some(ClosestApproach {
+                distance_m: sep,
+                t_s: t,
+                pair: [i0.min(i1), i0.max(i1)],
+            });
+        }
+        self.min_sep = self.min_sep.min(sep);
+    }
+
     fn last_p_or(&self, i: u32) -> Vec2 {
         self.last_p[i as usize]
     }
@@ -790,6 +826,7 @@ impl TeamMetrics {
             revisit_time_ideal_active_s: (self.lost_in_window && !self.open)
                 .then(|| l / (self.active_speed_sum / self.active_samples as f64)),
             min_separation_m: self.min_sep.is_finite().then_some(self.min_sep),
+            closest_approach: self.closest.filter(|_| self.min_sep.is_finite()),
             order_preserved: self.order_ok,
             speed_range_mps: (self.speed_min <= self.speed_max)
                 .then_some([self.speed_min, self.speed_max]),
