@@ -152,9 +152,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
             out.finish(trace, &scenario_toml(&s), &summary)?;
             // An earlier run's figures there are not this run's: said, as `run` says it.
-            if let Some(note) = out.note_outputs_from_before(&[], false) {
-                errln!("{note}");
-            }
+            crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
             r
         } else {
             s.run(&mut NoTrace)

@@ -231,9 +231,7 @@ impl LiveOut {
         // An earlier run's figures (or log, for `sitl`) there are not this run's: said once
         // the run is written, as `run` says it (nu-21, att39-1 addendum).
         let note_before = |out: &RunDir| {
-            if let Some(n) = out.note_outputs_from_before(&[], false) {
-                errln!("{n}");
-            }
+            crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false)
         };
         match self.trace.take() {
             Some(trace) => match failed {

@@ -239,25 +239,23 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 resolved.display()
             );
         }
-        // Every file named as a figure or log here when the directory was opened is from
-        // before this run, whatever its date (att39-7); --plot's own are struck off.
-        let mut drawn: Vec<String> = Vec::new();
+        // Every file named as a figure or log here now is from before this run (the run wrote
+        // none yet), whatever its date (att39-7: by modification time, one dated in the future
+        // was missed); --plot's own are struck off below.
+        let mut before = outputs_present(dir);
         if args.plot {
             let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
             let written = crate::figures::plot_dirs(std::slice::from_ref(dir), &st, dir)?;
-            drawn = written
-                .iter()
-                .filter_map(|w| std::path::Path::new(w).file_name())
-                .map(|n| n.to_string_lossy().into_owned())
-                .collect();
+            before.retain(|n| {
+                !written
+                    .iter()
+                    .any(|w| std::path::Path::new(w).file_name() == Some(std::ffi::OsStr::new(n)))
+            });
             if !args.quiet {
                 outln!("plotted     {}", written.join(", "));
             }
         }
-        let drawn: Vec<&str> = drawn.iter().map(String::as_str).collect();
-        if let Some(note) = out.note_outputs_from_before(&drawn, team.is_some()) {
-            errln!("{note}");
-        }
+        note_outputs_from_before(&before, dir, team.is_some());
         result
     } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {
@@ -279,6 +277,88 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     };
     let _ = result;
     Ok(())
+}
+
+/// An earlier run's figures (or the user's files of those names) in the run directory `dir`,
+/// never removed: said, so that they are not read as this run's (nu-21; att38-1). Also
+/// `compare`'s per-law directories and `sitl`/`fly --out` (att39-1 addendum), with the files
+/// [`isotrack_runs::rundir::RunDir::outputs_from_before`] names.
+pub(crate) fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, team: bool) {
+    if before.is_empty() {
+        return;
+    }
+    let q = shell_quoted(dir);
+    let has =
+        |f: &dyn Fn(&str) -> bool| before.iter().copied().filter(|n| f(n)).collect::<Vec<_>>();
+    let is_team = |n: &str| n.starts_with("team.");
+    let mut advice = Vec::new();
+    let png = has(&|n| n.ends_with(".png") && (team || !is_team(n)));
+    if !png.is_empty() {
+        advice.push(format!("`isotrack plot {q}` redraws {}", png.join(", ")));
+    }
+    let svg = has(&|n| n.ends_with(".svg") && (team || !is_team(n)));
+    if !svg.is_empty() {
+        advice.push(format!(
+            "`isotrack plot {q} --format svg` {}",
+            svg.join(", ")
+        ));
+    }
+    if before.contains(&"animation.gif") {
+        advice.push(format!("`isotrack plot {q} --animate` animation.gif"));
+    }
+    let stale = has(&|n| (!team && is_team(n)) || n == "mavlink.tlog");
+    if !stale.is_empty() {
+        advice.push(format!(
+            "{} {} no output of this run (a team's figure{}, a flight's log): move {} away",
+            stale.join(", "),
+            if stale.len() == 1 { "is" } else { "are" },
+            if team {
+                ""
+            } else {
+                ", and this run is no team"
+            },
+            if stale.len() == 1 { "it" } else { "them" }
+        ));
+    }
+    errln!(
+        "note: {q} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): {}",
+        before.join(", "),
+        advice.join("; ")
+    );
+}
+
+/// The files named as isotrack's figures and logs ([`isotrack_runs::rundir::RUN_OUTPUTS`])
+/// in `dir`.
+fn outputs_present(dir: &std::path::Path) -> Vec<&'static str> {
+    isotrack_runs::rundir::RUN_OUTPUTS
+        .into_iter()
+        .filter(|n| std::fs::symlink_metadata(dir.join(n)).is_ok_and(|m| !m.is_dir()))
+        .collect()
+}
+
+/// `path` as a POSIX shell word to paste (att39-7: `my run;touch PWNED` was printed bare, and a
+/// line break in it forged a line of output): as it is when every character is plain, else in
+/// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
+fn shell_quoted(path: &std::path::Path) -> String {
+    let s = path.to_string_lossy();
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        return s.into_owned();
+    }
+    if s.chars().any(char::is_control) {
+        let body: String = s
+            .chars()
+            .map(|c| match c {
+                '\\' => "\\\\".to_string(),
+                '\'' => "\\'".to_string(),
+                c if c.is_control() && (c as u32) < 0x80 => format!("\\x{:02x}", c as u32),
+                c if c.is_control() => format!("\\u{:04x}", c as u32),
+                c => c.to_string(),
+            })
+            .collect();
+        return format!("$'{body}'");
+    }
+    format!("'{}'", s.replace('\'', "'\\''"))
 }
 
 /// A team run's warnings ([`isotrack_runs::summary::team_warnings`]: a discovered ring that
@@ -387,6 +467,22 @@ fn check_json(
 #[cfg(test)]
 mod tests {
 
+    /// att39-7: the directory in the note's advice pastes into a POSIX shell as one word (bash
+    /// for a control character): plain as is, else single-quoted, a quote closed and escaped.
+    #[test]
+    fn the_notes_directory_is_one_shell_word() {
+        use std::path::Path;
+        assert_eq!(shell_quoted(Path::new("/tmp/run_1.d")), "/tmp/run_1.d");
+        assert_eq!(
+            shell_quoted(Path::new("my run;touch PWNED")),
+            "'my run;touch PWNED'"
+        );
+        assert_eq!(shell_quoted(Path::new("it's")), "'it'\\''s'");
+        assert_eq!(
+            shell_quoted(Path::new("inj\u{1b}[2J\nnote")),
+            "$'inj\\x1b[2J\\x0anote'"
+        );
+    }
     use super::*;
 
     /// A team refused by the engine with `--out` exits 65 (invalid data, as without `--out`),

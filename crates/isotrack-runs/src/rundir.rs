@@ -159,31 +159,6 @@ fn present_outputs(dir: &Path, extra: &[&str]) -> Vec<&'static str> {
         .collect()
 }
 
-/// `path` as a POSIX shell word to paste (att39-7: `my run;touch PWNED` was printed bare, and a
-/// line break in it forged a line of output): as it is when every character is plain, else in
-/// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
-pub fn shell_quoted(path: &Path) -> String {
-    let s = path.to_string_lossy();
-    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
-    if !s.is_empty() && s.chars().all(plain) {
-        return s.into_owned();
-    }
-    if s.chars().any(char::is_control) {
-        let body: String = s
-            .chars()
-            .map(|c| match c {
-                '\\' => "\\\\".to_string(),
-                '\'' => "\\'".to_string(),
-                c if c.is_control() && (c as u32) < 0x80 => format!("\\x{:02x}", c as u32),
-                c if c.is_control() => format!("\\u{:04x}", c as u32),
-                c => c.to_string(),
-            })
-            .collect();
-        return format!("$'{body}'");
-    }
-    format!("'{}'", s.replace('\'', "'\\''"))
-}
-
 /// When `output` is one of `inputs` (the same file, through links): the message that refuses it.
 pub fn input_clash(inputs: &[PathBuf], output: &Path) -> Option<String> {
     let input = inputs.iter().find(|i| same_file(i, output))?;
@@ -394,7 +369,9 @@ impl RunDir {
 
     /// The [`RUN_OUTPUTS`] (but the command's own `extra`) that were in the directory when it
     /// was opened and are there still: an earlier run's figures or logs, or the user's files
-    /// of those names, beside this run's files and not this run's (nu-21; never removed).
+    /// of those names, beside this run's files and not this run's (nu-21; never removed):
+    /// what `run`'s note names (`note_outputs_from_before` in isotrack-commands), printed by
+    /// `compare` for each law's directory and by `sitl` and `fly --out` too.
     pub fn outputs_from_before(&self) -> Vec<&'static str> {
         let now = present_outputs(&self.dir, &[]);
         self.before
@@ -402,63 +379,6 @@ impl RunDir {
             .copied()
             .filter(|n| now.contains(n))
             .collect()
-    }
-
-    /// The note every command replacing a run here prints on stderr once its run is written
-    /// (`run`, `compare`'s per-law directories, `sitl`, `fly --out`; nu-21, att38-1, att39-1
-    /// addendum): the [`RunDir::outputs_from_before`] but those the command drew again since
-    /// (`drawn`: `run --plot`'s file names), which are not this run's, each with what redraws it
-    /// (`isotrack plot DIR` the PNGs, `--format svg` the SVGs, `--animate` the animation; a
-    /// team's figure beside a run that is no team's (`team` false), or a flight's log, is no
-    /// output of this run: move it away; att39-2), `DIR` as one shell word ([`shell_quoted`],
-    /// att39-7). `None` when there is none.
-    pub fn note_outputs_from_before(&self, drawn: &[&str], team: bool) -> Option<String> {
-        let before: Vec<&str> = self
-            .outputs_from_before()
-            .into_iter()
-            .filter(|n| !drawn.contains(n))
-            .collect();
-        if before.is_empty() {
-            return None;
-        }
-        let q = shell_quoted(&self.dir);
-        let has =
-            |f: &dyn Fn(&str) -> bool| before.iter().copied().filter(|n| f(n)).collect::<Vec<_>>();
-        let is_team = |n: &str| n.starts_with("team.");
-        let mut advice = Vec::new();
-        let png = has(&|n| n.ends_with(".png") && (team || !is_team(n)));
-        if !png.is_empty() {
-            advice.push(format!("`isotrack plot {q}` redraws {}", png.join(", ")));
-        }
-        let svg = has(&|n| n.ends_with(".svg") && (team || !is_team(n)));
-        if !svg.is_empty() {
-            advice.push(format!(
-                "`isotrack plot {q} --format svg` {}",
-                svg.join(", ")
-            ));
-        }
-        if before.contains(&"animation.gif") {
-            advice.push(format!("`isotrack plot {q} --animate` animation.gif"));
-        }
-        let stale = has(&|n| (!team && is_team(n)) || n == "mavlink.tlog");
-        if !stale.is_empty() {
-            advice.push(format!(
-                "{} {} no output of this run (a team's figure{}, a flight's log): move {} away",
-                stale.join(", "),
-                if stale.len() == 1 { "is" } else { "are" },
-                if team {
-                    ""
-                } else {
-                    ", and this run is no team"
-                },
-                if stale.len() == 1 { "it" } else { "them" }
-            ));
-        }
-        Some(format!(
-            "note: {q} also holds {} from before this run, not this run's (isotrack never removes a file it may not have written): {}",
-            before.join(", "),
-            advice.join("; ")
-        ))
     }
 
     /// The directory.
@@ -640,22 +560,6 @@ mod tests {
     use super::*;
     use isotrack_sim::{TraceRow, TraceSink};
 
-    /// att39-7: the directory in the note's advice pastes into a POSIX shell as one word (bash
-    /// for a control character): plain as is, else single-quoted, a quote closed and escaped.
-    #[test]
-    fn the_notes_directory_is_one_shell_word() {
-        assert_eq!(shell_quoted(Path::new("/tmp/run_1.d")), "/tmp/run_1.d");
-        assert_eq!(
-            shell_quoted(Path::new("my run;touch PWNED")),
-            "'my run;touch PWNED'"
-        );
-        assert_eq!(shell_quoted(Path::new("it's")), "'it'\\''s'");
-        assert_eq!(
-            shell_quoted(Path::new("inj\u{1b}[2J\nnote")),
-            "$'inj\\x1b[2J\\x0anote'"
-        );
-    }
-
     /// att33c item 10: a live trace whose writes failed (a disk that filled: ENOSPC) keeps its
     /// first error; `finish` fails with it, `finish_incomplete` still writes `scenario.toml`
     /// and `summary.json`.
@@ -710,8 +614,7 @@ mod tests {
     /// isotrack cannot tell, and deleting lost a user's pictures on the second run into their
     /// folder); [`RunDir::outputs_from_before`] names those there when it was opened (nu-21's
     /// note), whatever their date (att39-7: one dated a day ahead was missed by modification
-    /// time), not one first written since, nor the command's own extra file; the note leaves
-    /// out what the command drew again.
+    /// time), not one first written since, nor the command's own extra file.
     #[test]
     fn a_new_run_removes_no_figure_and_names_those_from_before() {
         let d = tempfile::tempdir().unwrap();
@@ -755,15 +658,6 @@ mod tests {
             .filter(|n| *n != "mavlink.tlog")
             .collect();
         assert_eq!(out.outputs_from_before(), before);
-        let dir = shell_quoted(d.path());
-        assert_eq!(
-            out.note_outputs_from_before(&["trajectory.png", "timeseries.png"], false)
-                .unwrap(),
-            format!(
-                "note: {dir} also holds trajectory.svg, team.png, team.svg, animation.gif from before this run, not this run's (isotrack never removes a file it may not have written): `isotrack plot {dir} --format svg` trajectory.svg; `isotrack plot {dir} --animate` animation.gif; team.png, team.svg are no output of this run (a team's figure, and this run is no team, a flight's log): move them away"
-            )
-        );
-        assert_eq!(out.note_outputs_from_before(&before, false), None);
     }
 
     /// att36-1, att39-1: a folder that never held an isotrack run but has files named
