@@ -198,3 +198,74 @@ fn a_sitl_interrupted_before_its_run_starts_leaves_an_earlier_run_whole() {
     assert_eq!(o.status.code(), Some(130));
     assert_eq!(contents(&d), earlier);
 }
+
+/// att39-4 SAFETY: `fly --out UF` replaced a user's own `UF/mavlink.tlog` (a real flight's
+/// log, no isotrack summary beside it) without a word. It is refused (73, naming the file)
+/// before the link is opened: no frame reaches the vehicle (nothing to arm it), and every file
+/// is as it was. Likewise `sitl --out` and `fly --out` into a folder with a user's own
+/// `summary.json` (att39-1), and a `trace.csv` with no summary.
+#[test]
+fn fly_and_sitl_out_never_replace_a_users_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let vehicle = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let to_vehicle = format!("udpout:{}", vehicle.local_addr().unwrap());
+    let folders: [(&str, &str, &[u8], &str); 3] = [
+        (
+            "tlog",
+            "mavlink.tlog",
+            b"my own tlog from a real flight",
+            "no summary.json beside it",
+        ),
+        (
+            "summary",
+            "summary.json",
+            b"{\"my\": \"results\"}\n",
+            "is not an isotrack run's summary",
+        ),
+        (
+            "trace",
+            "trace.csv",
+            b"t,my,data\n",
+            "no summary.json beside it",
+        ),
+    ];
+    for (name, file, text, why) in folders {
+        let uf = dir.path().join(name);
+        std::fs::create_dir(&uf).unwrap();
+        std::fs::write(uf.join(file), text).unwrap();
+        std::fs::write(uf.join("notes.txt"), b"mine").unwrap();
+        let before = contents(&uf);
+        let named = uf.join(file).display().to_string();
+        let u = uf.to_str().unwrap();
+        let fly = [
+            "fly",
+            "--mavlink",
+            &to_vehicle,
+            "--take-control",
+            "--arm",
+            "--max-duration-s",
+            "3",
+            "--out",
+            u,
+        ];
+        let o = isotrack_within(&fly, 60);
+        assert_fails(&o, 73, &[&named, why, "use another --out"]);
+        assert!(!stderr(&o).contains("companion on"), "{}", stderr(&o));
+        assert_eq!(contents(&uf), before, "fly into {name}");
+        if file != "mavlink.tlog" {
+            let o = isotrack_within(&["sitl", "--mavlink", "udpin:127.0.0.1:0", "--out", u], 60);
+            assert_fails(&o, 73, &[&named, why, "use another --out"]);
+            assert!(!stderr(&o).contains("vehicle on"), "{}", stderr(&o));
+            assert_eq!(contents(&uf), before, "sitl into {name}");
+        }
+    }
+    // Nothing was ever sent to the vehicle.
+    vehicle
+        .set_read_timeout(Some(std::time::Duration::from_millis(500)))
+        .unwrap();
+    let mut buf = [0u8; 512];
+    assert!(
+        vehicle.recv_from(&mut buf).is_err(),
+        "a frame reached the vehicle"
+    );
+}

@@ -571,11 +571,28 @@ fn sweep_plot_file_names_and_text_are_safe_from_column_names() {
     );
 }
 
-/// att36-1: `run --out A` into a user's folder that never held an isotrack run but has a
-/// `scenario.toml` of its own (not the input), a `trace.csv` or a `summary.json` of its own keys
-/// keeps the user's files named as isotrack's figures (`trajectory.png`, `team.svg`,
-/// `animation.gif`, ...): isotrack never removes a file it did not write. A real earlier run's
-/// figures (written by `run --plot`) are still removed when a new run replaces it (nu-21).
+/// The files of `dir` (hidden ones too) with their bytes, sorted.
+fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// att36-1, att39-1: `run --out A` into a user's folder that never held an isotrack run but
+/// has a `scenario.toml` of its own (not the input), a `trace.csv` or a `summary.json` of its
+/// own keys is refused (73, naming the file) before any run: the user's files, those and the
+/// ones named as isotrack's figures (`trajectory.png`, `team.svg`, `animation.gif`, ...), are
+/// as they were (before att39-1 the three run files were replaced without a word; att36-1's
+/// test asserted that overwrite). A folder
+/// holding only files named as figures is run into, and keeps them, run after run (att38-1).
+/// A real earlier run's figures (written by `run --plot`) are kept too, with a note (nu-21).
 #[test]
 fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
     let d = tempfile::tempdir().unwrap();
@@ -586,17 +603,77 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
         "timeseries.svg",
         "animation.gif",
     ];
-    for (name, text) in [
-        ("scenario.toml", std::fs::read_to_string(SCEN).unwrap()),
-        ("trace.csv", "a,b\n1,2\n".to_string()),
-        ("summary.json", "{\"notes\": \"mine\"}\n".to_string()),
-    ] {
-        let a = d.path().join(format!("user-{name}"));
+    let scen = std::fs::read_to_string(SCEN).unwrap();
+    let mine = "{\"my\": \"results, 3 weeks of work\"}\n";
+    for (i, (files, named, why)) in [
+        (
+            vec![("scenario.toml", scen.as_str())],
+            "scenario.toml",
+            "no summary.json beside it",
+        ),
+        (
+            vec![("trace.csv", "a,b\n1,2\n")],
+            "trace.csv",
+            "no summary.json beside it",
+        ),
+        (
+            vec![("summary.json", "{\"notes\": \"mine\"}\n")],
+            "summary.json",
+            "is not an isotrack run's summary (no `isotrack_version` key)",
+        ),
+        // att39-1's folder: the user's JSON, data and notes, none of them replaced.
+        (
+            vec![
+                ("summary.json", mine),
+                ("trace.csv", "t,my,data\n"),
+                ("scenario.toml", "# my own notes\n"),
+            ],
+            "summary.json",
+            "is not an isotrack run's summary (no `isotrack_version` key)",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let a = d.path().join(format!("user-{i}"));
         std::fs::create_dir_all(&a).unwrap();
-        write(&a, name, &text);
+        for (name, text) in &files {
+            write(&a, name, text);
+        }
         for f in figures {
             write(&a, f, "MY PICTURE\n");
         }
+        let before = listing(&a);
+        let o = isotrack(&[
+            "run",
+            &input,
+            "--out",
+            &a.display().to_string(),
+            "--set",
+            SHORT,
+        ]);
+        let file = a.join(named).display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[&file, why, "refusing to replace it", "use another --out"],
+        );
+        assert!(
+            o.stdout.is_empty(),
+            "refused before the run: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        // Every file as it was (no lock file, no temporary left either).
+        assert_eq!(listing(&a), before, "{files:?}");
+    }
+    // Figures only: run into, twice (att38-1: the second run, the summary now isotrack's),
+    // the user's figures kept each time.
+    let a = d.path().join("user-figures");
+    std::fs::create_dir_all(&a).unwrap();
+    for f in figures {
+        write(&a, f, "MY PICTURE\n");
+    }
+    for _ in 0..2 {
         let o = isotrack(&[
             "run",
             &input,
@@ -611,40 +688,21 @@ fn run_out_keeps_a_users_files_named_as_figures_in_a_folder_that_held_no_run() {
             assert_eq!(
                 std::fs::read_to_string(a.join(f)).ok().as_deref(),
                 Some("MY PICTURE\n"),
-                "{f} beside the user's {name}"
+                "{f} after a run"
             );
         }
         assert!(std::fs::read_to_string(a.join("summary.json"))
             .unwrap()
             .contains("\"isotrack_version\""));
-    }
-    // att38-1: a second run there (the summary now isotrack's) keeps them too.
-    let a = d.path().join("user-scenario.toml");
-    let o = isotrack(&[
-        "run",
-        &input,
-        "--out",
-        &a.display().to_string(),
-        "--quiet",
-        "--set",
-        SHORT,
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
-    for f in figures {
-        assert_eq!(
-            std::fs::read_to_string(a.join(f)).ok().as_deref(),
-            Some("MY PICTURE\n"),
-            "{f} after a second run"
+        // att40-1: the note does not tell the user that `plot` redraws their own files (it
+        // refuses them, 73): it says to move them.
+        let err = common::stderr(&o);
+        assert!(
+            err.contains("not a figure isotrack wrote") && err.contains("move them away"),
+            "{err}"
         );
+        assert!(!err.contains("redraws"), "{err}");
     }
-    // att40-1: the note does not tell the user that `plot` redraws their own files (it
-    // refuses them, 73): it says to move them.
-    let err = common::stderr(&o);
-    assert!(
-        err.contains("not a figure isotrack wrote") && err.contains("move them away"),
-        "{err}"
-    );
-    assert!(!err.contains("redraws"), "{err}");
     // nu-21: a real run's figures are kept as well, and the new run says they are not its own.
     let r = d.path().join("r").display().to_string();
     let o = isotrack(&[
@@ -906,6 +964,85 @@ fn compare_locks_each_laws_directory_while_it_writes_it() {
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     assert!(law.join("summary.json").exists());
     assert!(!law.join(".isotrack.lock").exists());
+}
+
+/// att39-1 (addendum): `compare --out CMP` replaced a user's own `CMP/comparison.csv` and a
+/// user's `CMP/pid/summary.json` without a word. Both are refused (73, naming the file) before
+/// any law runs (no law's directory written), every file as it was; a comparison.csv and
+/// per-law runs compare wrote are replaced by the next compare as before, which names a figure
+/// left in a law's directory as not this run's (compare printed no note at all).
+#[test]
+fn compare_out_never_replaces_a_users_comparison_or_summary() {
+    let d = tempfile::tempdir().unwrap();
+    let args = |cmp: &Path| {
+        vec![
+            "compare".to_string(),
+            SCEN.to_string(),
+            "--controllers".into(),
+            "pi_isoline,pid".into(),
+            "--set".into(),
+            SHORT.into(),
+            "--out".into(),
+            cmp.display().to_string(),
+        ]
+    };
+    let run = |cmp: &Path| {
+        let a = args(cmp);
+        isotrack_within(&a.iter().map(String::as_str).collect::<Vec<_>>(), 120)
+    };
+    // The user's comparison of their own controllers.
+    let cmp = d.path().join("cmp-csv");
+    std::fs::create_dir_all(&cmp).unwrap();
+    write(
+        &cmp,
+        "comparison.csv",
+        "my comparison of my own controllers\n",
+    );
+    let before = listing(&cmp);
+    let o = run(&cmp);
+    let file = cmp.join("comparison.csv").display().to_string();
+    assert_fails(
+        &o,
+        73,
+        &[&file, "is not an isotrack comparison", "use another --out"],
+    );
+    assert_eq!(listing(&cmp), before);
+    // A law's directory holding the user's summary.json (and a figure).
+    let cmp = d.path().join("cmp-law");
+    std::fs::create_dir_all(cmp.join("pid")).unwrap();
+    write(&cmp.join("pid"), "summary.json", "{\"mine\": 1}\n");
+    write(&cmp.join("pid"), "trajectory.png", "mine\n");
+    let before = (listing(&cmp), listing(&cmp.join("pid")));
+    let o = run(&cmp);
+    let file = cmp.join("pid/summary.json").display().to_string();
+    assert_fails(
+        &o,
+        73,
+        &[
+            &file,
+            "is not an isotrack run's summary",
+            "use another --out",
+        ],
+    );
+    assert_eq!((listing(&cmp), listing(&cmp.join("pid"))), before);
+    // compare's own outputs: replaced by the next compare; a figure left in a law's directory
+    // is kept and named as not this run's, as `run` names it.
+    let cmp = d.path().join("cmp");
+    let o = run(&cmp);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert!(!common::stderr(&o).contains("from before this run"));
+    write(&cmp.join("pid"), "trajectory.png", "MY PICTURE\n");
+    let o = run(&cmp);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let note = format!(
+        "note: {} also holds trajectory.png from before this run, not this run's",
+        cmp.join("pid").display()
+    );
+    assert!(common::stderr(&o).contains(&note), "{}", common::stderr(&o));
+    assert_eq!(
+        std::fs::read_to_string(cmp.join("pid/trajectory.png")).unwrap(),
+        "MY PICTURE\n"
+    );
 }
 
 /// att38-10: Ctrl-C during `plot` left `.trajectory.png.PID.tmp.png` in the run directory,

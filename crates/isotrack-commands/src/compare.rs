@@ -151,6 +151,8 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             let warnings = isotrack_scenario::check::warnings(&s);
             let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
             out.finish(trace, &scenario_toml(&s), &summary)?;
+            // An earlier run's figures there are not this run's: said, as `run` says it.
+            crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
             r
         } else {
             s.run(&mut NoTrace)
@@ -232,7 +234,46 @@ fn open_out(
     for o in &outputs {
         isotrack_runs::files::refuse_non_regular(o).map_err(|e| cant(o, e))?;
     }
+    // Whose files are there (att39-1), before any law runs: a comparison.csv that is not
+    // isotrack's, or a law's directory holding run files that are not an earlier isotrack
+    // run's, is refused (73) naming it; the lock is removed again as it drops.
+    refuse_foreign_comparison(&dir.join("comparison.csv"))?;
+    for kind in kinds {
+        let law = dir.join(kind.name());
+        if law.is_dir() {
+            isotrack_runs::rundir::refuse_not_an_earlier_run(&law, &[])?;
+        }
+    }
     Ok(lock)
+}
+
+/// Refuses (73) an existing `comparison.csv` that an isotrack did not write: every version of
+/// `compare` wrote [`COMPARISON_COLUMNS`] as its first line (unchanged since the command came),
+/// so a file whose first line is anything else is the user's, never replaced (att39-1: it was,
+/// without a word). Only the first 4 KiB are read, never through a link nor from a FIFO
+/// (refused before this).
+fn refuse_foreign_comparison(p: &Path) -> Result<(), Failure> {
+    use std::io::Read;
+    if std::fs::symlink_metadata(p).is_err() {
+        return Ok(());
+    }
+    let mut head = Vec::new();
+    let read = isotrack_runs::files::open_read_regular(p)
+        .and_then(|f| f.take(4096).read_to_end(&mut head));
+    let header = COMPARISON_COLUMNS.join(",");
+    let first = head.split(|b| *b == b'\n').next().unwrap_or_default();
+    let why = match read {
+        Err(e) => format!("it cannot be read: {e}"),
+        Ok(_) if first == header.as_bytes() => return Ok(()),
+        Ok(_) => format!("its first line is not compare's header `{header}`"),
+    };
+    Err(Failure {
+        code: exit::CANTCREAT,
+        message: format!(
+            "{} is not an isotrack comparison ({why}): refusing to replace it; move it away or use another --out",
+            p.display()
+        ),
+    })
 }
 
 /// The comparison table on stdout (Markdown): one row per law, a law in `never` marked as

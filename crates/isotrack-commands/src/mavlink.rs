@@ -228,10 +228,16 @@ impl LiveOut {
             (Some(a), Some(b)) => Some(format!("{a}; {b}")),
             (a, b) => a.or(b),
         };
+        // An earlier run's figures (or log, for `sitl`) there are not this run's: said once
+        // the run is written, as `run` says it (nu-21, att39-1 addendum).
+        let note_before = |out: &RunDir| {
+            crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false)
+        };
         match self.trace.take() {
             Some(trace) => match failed {
                 Some(note) => {
                     out.finish_incomplete(trace, &self.scenario_toml, &summary(Some(&note)))?;
+                    note_before(&out);
                     Err(Failure {
                         code: exit::CANTCREAT,
                         message: format!(
@@ -241,6 +247,7 @@ impl LiveOut {
                 }
                 None => {
                     out.finish(trace, &self.scenario_toml, &summary(None))?;
+                    note_before(&out);
                     Ok(true)
                 }
             },

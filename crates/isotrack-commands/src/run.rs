@@ -290,8 +290,11 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
 }
 
 /// An earlier run's figures (or the user's files of those names) in the run directory `dir`,
-/// never removed: said, so that they are not read as this run's (nu-21; att38-1).
-fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, team_figure: bool) {
+/// never removed: said, so that they are not read as this run's (nu-21; att38-1). Also
+/// `compare`'s per-law directories and `sitl`/`fly --out` (att39-1 addendum), with the files
+/// [`isotrack_runs::rundir::RunDir::outputs_from_before`] names; `team_figure`: whether this
+/// run draws a team figure (a team run with team metrics).
+pub(crate) fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, team_figure: bool) {
     if before.is_empty() {
         return;
     }

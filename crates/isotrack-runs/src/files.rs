@@ -83,6 +83,24 @@ pub fn refuse_non_regular(path: &Path) -> std::io::Result<()> {
     }
 }
 
+/// Opens `path` for reading without following a link and without blocking on a FIFO
+/// (`O_NOFOLLOW | O_NONBLOCK` on Unix); anything but a regular file is an error (`it is not a
+/// regular file`), so a caller reading what is there never hangs nor reads through a link.
+pub fn open_read_regular(path: &Path) -> std::io::Result<std::fs::File> {
+    let mut o = std::fs::OpenOptions::new();
+    o.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        o.custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK);
+    }
+    let f = o.open(path)?;
+    if !f.metadata()?.is_file() {
+        return Err(std::io::Error::other("it is not a regular file"));
+    }
+    Ok(f)
+}
+
 /// Opens `path` for writing without following a link and without blocking on a FIFO
 /// (`O_NOFOLLOW | O_NONBLOCK` on Unix), creating it when absent; `truncate` empties it once it
 /// is known to be a regular file. Anything else ([`refuse_non_regular`]) is an error, so the

@@ -4,7 +4,8 @@
 //!
 //! [`RunDir::open`] readies the directory (no output over an input, not a folder holding an
 //! input, created, locked when the command locks it, no output an existing link, FIFO or
-//! device) and changes nothing in it: an earlier run there stands until the new one has
+//! device, no run file there that is not an earlier isotrack run's: [`not_an_earlier_run`])
+//! and changes nothing in it: an earlier run there stands until the new one has
 //! something to write. [`RunDir::trace`] streams the trace into a temporary file beside
 //! `trace.csv`; [`RunDir::finish`] removes the old summary, renames the trace into place,
 //! writes `scenario.toml` and then `summary.json` (atomically, last: a directory with a summary
@@ -58,6 +59,103 @@ pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<Pat
                 .into_iter()
                 .map(PathBuf::from),
         )
+        .collect()
+}
+
+/// Reads regular file `path` whole if it holds at most `max` bytes (`Ok(None)` when it holds
+/// more: never read whole), without following a link nor blocking on a FIFO
+/// ([`crate::files::open_read_regular`]).
+fn read_capped(path: &Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read;
+    let f = crate::files::open_read_regular(path)?;
+    if f.metadata()?.len() > max {
+        return Ok(None);
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= max).then_some(bytes))
+}
+
+/// `it` or `them`, `is` or `are`, for `n` files.
+fn it_them(n: usize) -> (&'static str, &'static str) {
+    if n == 1 {
+        ("it", "is")
+    } else {
+        ("them", "are")
+    }
+}
+
+/// Why the run files already in the existing directory `dir` ([`RUN_FILES`] and the command's
+/// own `extra`, e.g. `fly`'s `mavlink.tlog`) are not an earlier isotrack run's, which a new
+/// run may replace (att39-1, att39-4: a user's own `summary.json`, `trace.csv`,
+/// `scenario.toml` or `mavlink.tlog` was replaced without a word); `None` when there is none
+/// of them, or when `summary.json` is one an isotrack of any version wrote
+/// ([`crate::summary::not_isotracks`]: a JSON object with `isotrack_version`, `outcome` and
+/// `scenario`; the other files beside it are then that run's).
+///
+/// Refused: a `summary.json` that is not isotrack's (or larger than
+/// [`crate::summary::MAX_SUMMARY_BYTES`], never read whole, or unreadable), and run files with
+/// no `summary.json` beside them (the user's own; isotrack writes a run's summary last, so a
+/// run killed before its end leaves none either: its files are moved away by hand). Files
+/// named as figures ([`RUN_OUTPUTS`] but `extra`) are no run files: never replaced, a
+/// directory holding only them (or the user's other files) is run into. `summary.json` is
+/// read without following a link nor opening a FIFO ([`RunDir::open`] refuses those first).
+pub fn not_an_earlier_run(dir: &Path, extra: &[&str]) -> Option<String> {
+    let summary = dir.join("summary.json");
+    if std::fs::symlink_metadata(&summary).is_ok() {
+        let max = crate::summary::MAX_SUMMARY_BYTES;
+        let why = match read_capped(&summary, max) {
+            Ok(Some(bytes)) => match std::str::from_utf8(&bytes) {
+                Ok(text) => crate::summary::not_isotracks(text),
+                Err(_) => Some("not UTF-8 text".into()),
+            },
+            Ok(None) => Some(format!(
+                "larger than {} MiB, which no isotrack summary is",
+                max >> 20
+            )),
+            Err(e) => Some(format!("it cannot be read: {e}")),
+        }?;
+        return Some(format!(
+            "{} is not an isotrack run's summary ({why}): refusing to replace it; move it away or use another --out",
+            summary.display()
+        ));
+    }
+    let present: Vec<String> = RUN_FILES
+        .iter()
+        .chain(extra)
+        .filter(|n| **n != "summary.json")
+        .map(|n| dir.join(n))
+        .filter(|p| std::fs::symlink_metadata(p).is_ok())
+        .map(|p| p.display().to_string())
+        .collect();
+    if present.is_empty() {
+        return None;
+    }
+    let (it, is) = it_them(present.len());
+    Some(format!(
+        "{} {is} not an isotrack run's: no summary.json beside {it} (isotrack writes a run's summary.json last; a run killed before its end leaves none either): refusing to replace {it}; move {it} away or use another --out",
+        present.join(", ")
+    ))
+}
+
+/// [`not_an_earlier_run`] as the failure (exit 73), for a command that checks its run
+/// directories before it runs anything (`compare`'s per-law directories).
+pub fn refuse_not_an_earlier_run(dir: &Path, extra: &[&str]) -> Result<(), Failure> {
+    match not_an_earlier_run(dir, extra) {
+        Some(message) => Err(Failure {
+            code: exit::CANTCREAT,
+            message,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The [`RUN_OUTPUTS`] but `extra` in `dir` (anything there but a directory).
+fn present_outputs(dir: &Path, extra: &[&str]) -> Vec<&'static str> {
+    RUN_OUTPUTS
+        .into_iter()
+        .filter(|n| !extra.contains(n))
+        .filter(|n| std::fs::symlink_metadata(dir.join(n)).is_ok_and(|m| !m.is_dir()))
         .collect()
 }
 
@@ -156,12 +254,11 @@ pub struct RunDir {
     /// Whether [`RunDir::open`] created the directory (removed again by
     /// [`RunDir::release_unused`] when nothing was written).
     created: bool,
-    /// The command's own files besides [`RUN_FILES`] (`fly`'s `mavlink.tlog`), never removed
-    /// as an earlier run's output.
-    extra: Vec<String>,
-    /// When the directory was opened: a [`RUN_OUTPUTS`] file modified before it was not
-    /// written by this command ([`RunDir::outputs_from_before`]).
-    opened_at: std::time::SystemTime,
+    /// The [`RUN_OUTPUTS`] in the directory when it was opened but the command's own `extra`
+    /// files (`fly`'s `mavlink.tlog`, replaced as the earlier run's): not written by
+    /// this command ([`RunDir::outputs_from_before`]; att39-7: told by name, not by
+    /// modification time, which missed one dated in the future).
+    before: Vec<&'static str>,
 }
 
 /// `trace.csv` being streamed into a temporary file beside it ([`RunDir::trace`]).
@@ -188,8 +285,11 @@ impl RunDir {
     /// folder or a parent of it, exit 73: a run directory is the command's own), created,
     /// locked for `command` when given (exit 73 while another command writes it; `None` where
     /// the caller holds a lock on a parent or writes no lock, as `Run.save`), and none of its
-    /// files an existing link, FIFO, directory or device (exit 73). Nothing in it is changed
-    /// yet: an earlier run's files stand until [`RunDir::finish`] or [`RunDir::live_trace`].
+    /// files an existing link, FIFO, directory or device (exit 73), nor one that is not an
+    /// earlier isotrack run's ([`not_an_earlier_run`]: a user's own `summary.json`, or
+    /// `trace.csv`, `scenario.toml`, `extra` with no summary beside them; exit 73 naming it,
+    /// before the command runs anything). Nothing in it is changed yet: an earlier run's files
+    /// stand until [`RunDir::finish`] or [`RunDir::live_trace`].
     pub fn open(
         dir: &Path,
         inputs: &[PathBuf],
@@ -229,13 +329,16 @@ impl RunDir {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
         }
-        let opened_at = std::time::SystemTime::now();
+        // Only now, the lock held (no isotrack command is midway through replacing the
+        // directory) and no run file a link or FIFO: whose files are these? A user's are
+        // refused before anything runs (the lock file is removed again as the lock drops).
+        refuse_not_an_earlier_run(dir, extra)?;
+        let before = present_outputs(dir, extra);
         Ok(RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
-            extra: extra.iter().map(|e| e.to_string()).collect(),
-            opened_at,
+            before,
         })
     }
 
@@ -264,18 +367,17 @@ impl RunDir {
         Ok(())
     }
 
-    /// The [`RUN_OUTPUTS`] (but the command's own `extra`) in the directory that were not
-    /// written since it was opened: an earlier run's figures or logs, or the user's files of
-    /// those names, beside this run's files and not this run's (nu-21; `run` prints them as a
-    /// note, never removes them).
+    /// The [`RUN_OUTPUTS`] (but the command's own `extra`) that were in the directory when it
+    /// was opened and are there still: an earlier run's figures or logs, or the user's files
+    /// of those names, beside this run's files and not this run's (nu-21; never removed):
+    /// what `run`'s note names (`note_outputs_from_before` in isotrack-commands), printed by
+    /// `compare` for each law's directory and by `sitl` and `fly --out` too.
     pub fn outputs_from_before(&self) -> Vec<&'static str> {
-        RUN_OUTPUTS
-            .into_iter()
-            .filter(|name| !self.extra.iter().any(|e| e == name))
-            .filter(|name| {
-                std::fs::symlink_metadata(self.path(name))
-                    .is_ok_and(|m| !m.is_dir() && m.modified().map_or(true, |t| t < self.opened_at))
-            })
+        let now = present_outputs(&self.dir, &[]);
+        self.before
+            .iter()
+            .copied()
+            .filter(|n| now.contains(n))
             .collect()
     }
 
@@ -510,8 +612,9 @@ mod tests {
     /// att38-1 (att36-1's second door): a new run over an earlier run's directory removes none
     /// of the files named as isotrack's figures and logs (an earlier run's, or the user's:
     /// isotrack cannot tell, and deleting lost a user's pictures on the second run into their
-    /// folder); [`RunDir::outputs_from_before`] names those there from before the run (nu-21's
-    /// note), not one written since it was opened, nor the command's own extra file.
+    /// folder); [`RunDir::outputs_from_before`] names those there when it was opened (nu-21's
+    /// note), whatever their date (att39-7: one dated a day ahead was missed by modification
+    /// time), not one first written since, nor the command's own extra file.
     #[test]
     fn a_new_run_removes_no_figure_and_names_those_from_before() {
         let d = tempfile::tempdir().unwrap();
@@ -523,32 +626,46 @@ mod tests {
             &[],
         );
         std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
-        for name in ["notes.txt", "my.png"].iter().chain(RUN_OUTPUTS.iter()) {
+        let old: Vec<&str> = RUN_OUTPUTS
+            .into_iter()
+            .filter(|n| *n != "timeseries.svg")
+            .collect();
+        for name in ["notes.txt", "my.png"].iter().chain(old.iter()) {
             std::fs::write(d.path().join(name), b"old").unwrap();
         }
-        // Modification times are coarse on some file systems: the run opens strictly later.
-        std::thread::sleep(std::time::Duration::from_millis(20));
+        let ahead = std::time::SystemTime::now() + std::time::Duration::from_secs(86_400);
+        std::fs::File::options()
+            .write(true)
+            .open(d.path().join("trajectory.svg"))
+            .unwrap()
+            .set_modified(ahead)
+            .unwrap();
         let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], None).unwrap();
         let trace = out.trace(false).unwrap();
         out.finish(trace, "x = 1\n", &summary).unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(20));
-        // A figure this command draws after the run (run --plot) is not from before.
-        std::fs::write(d.path().join("trajectory.png"), b"new").unwrap();
-        for name in ["notes.txt", "my.png"].iter().chain(RUN_OUTPUTS.iter()) {
-            assert!(d.path().join(name).exists(), "{name} removed");
+        // A figure first written after the run opened is not from before.
+        std::fs::write(d.path().join("timeseries.svg"), b"new").unwrap();
+        for name in ["notes.txt", "my.png"].iter().chain(old.iter()) {
+            assert_eq!(
+                std::fs::read(d.path().join(name)).unwrap(),
+                b"old",
+                "{name}"
+            );
         }
-        let before: Vec<&str> = RUN_OUTPUTS
-            .into_iter()
-            .filter(|n| *n != "trajectory.png" && *n != "mavlink.tlog")
+        let before: Vec<&str> = old
+            .iter()
+            .copied()
+            .filter(|n| *n != "mavlink.tlog")
             .collect();
         assert_eq!(out.outputs_from_before(), before);
     }
 
-    /// att36-1: a folder that never held an isotrack run but has files named `scenario.toml`,
-    /// `trace.csv` and `summary.json` (a user's project folder, a JSON file of its own keys) is
-    /// not an earlier run: a new run writes its own three files there and removes none of the
-    /// user's files named as isotrack's figures; `summary.json` must read as isotrack's own
-    /// summary, so a bare `{}` or one missing `isotrack_version` does not make a run either.
+    /// att36-1, att39-1: a folder that never held an isotrack run but has files named
+    /// `scenario.toml`, `trace.csv` or `summary.json` (a user's project folder, a JSON file of
+    /// its own keys) is not an earlier run: the run is refused (73, naming the file) before
+    /// anything is written, and every file there is left as it was, the lock file removed
+    /// again. A `summary.json` must read as one an isotrack wrote, so a bare `{}`, one missing
+    /// `isotrack_version` or one larger than any summary (never read whole) is the user's.
     #[test]
     fn a_folder_with_files_named_as_a_runs_is_not_an_earlier_run() {
         let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
@@ -561,12 +678,45 @@ mod tests {
         let mut not_isotracks = summary.to_json().replace("isotrack_version", "version");
         assert!(Summary::from_json(&not_isotracks).is_err());
         not_isotracks.push('\n');
-        for (present, summary_text) in [
-            (vec!["scenario.toml"], None),
-            (vec!["trace.csv"], None),
-            (vec!["scenario.toml", "trace.csv"], Some("{}")),
-            (vec![], Some("{\"notes\": \"mine\"}")),
-            (vec!["trace.csv"], Some(not_isotracks.as_str())),
+        for (present, summary_text, named, why) in [
+            (
+                vec!["scenario.toml"],
+                None,
+                "scenario.toml",
+                "no summary.json beside it",
+            ),
+            (
+                vec!["trace.csv"],
+                None,
+                "trace.csv",
+                "no summary.json beside it",
+            ),
+            (
+                vec!["scenario.toml", "trace.csv"],
+                Some("{}"),
+                "summary.json",
+                "no `isotrack_version` key",
+            ),
+            (
+                vec![],
+                Some("{\"notes\": \"mine\"}"),
+                "summary.json",
+                "no `isotrack_version` key",
+            ),
+            (
+                vec!["trace.csv"],
+                Some(not_isotracks.as_str()),
+                "summary.json",
+                "no `isotrack_version` key",
+            ),
+            (
+                vec![],
+                Some("{\"isotrack_version\": 1, \"outcome\": \"x\", \"scenario\": {}}"),
+                "summary.json",
+                "its `isotrack_version` is not a string",
+            ),
+            (vec![], Some("[1, 2]"), "summary.json", "not a JSON object"),
+            (vec![], Some("my notes"), "summary.json", "not JSON"),
         ] {
             let d = tempfile::tempdir().unwrap();
             for name in &present {
@@ -578,19 +728,149 @@ mod tests {
             for name in RUN_OUTPUTS {
                 std::fs::write(d.path().join(name), b"mine").unwrap();
             }
-            let out = RunDir::open(d.path(), &[], &[], None).unwrap();
-            let trace = out.trace(false).unwrap();
-            out.finish(trace, "x = 1\n", &summary).unwrap();
-            for name in RUN_OUTPUTS {
-                assert_eq!(
-                    std::fs::read(d.path().join(name)).ok().as_deref(),
-                    Some(&b"mine"[..]),
-                    "{name} of a folder holding {present:?} and summary {summary_text:?}"
+            let before = listing(d.path());
+            let e = RunDir::open(d.path(), &[], &[], Some("run")).unwrap_err();
+            assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+            let file = d.path().join(named).display().to_string();
+            for part in [
+                file.as_str(),
+                why,
+                "refusing to replace",
+                "use another --out",
+            ] {
+                assert!(
+                    e.message.contains(part),
+                    "{present:?} {summary_text:?}: {part:?} not in {}",
+                    e.message
                 );
             }
+            assert_eq!(listing(d.path()), before, "{present:?} {summary_text:?}");
+        }
+    }
+
+    /// The files of `dir` (hidden ones too) with their bytes, sorted.
+    fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
+        let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let bytes = std::fs::read(e.path()).unwrap_or_default();
+                (e.file_name().to_string_lossy().into_owned(), bytes)
+            })
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// att39-1, att39-4: `fly`'s `mavlink.tlog` (its `extra` file) with no summary beside it is
+    /// a user's log, refused naming it; a 2 GiB `summary.json` (sparse) is refused without
+    /// being read whole; a `summary.json` that is a FIFO is refused as before, not opened.
+    #[cfg(unix)]
+    #[test]
+    fn a_users_log_a_huge_summary_and_a_fifo_are_refused() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::write(d.path().join("mavlink.tlog"), b"my own flight").unwrap();
+        // `run` and `sitl` write no mavlink.tlog: a figure-named file, kept and run into.
+        RunDir::open(d.path(), &[], &[], None).unwrap();
+        let e = RunDir::open(d.path(), &[], &["mavlink.tlog"], Some("fly")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT);
+        let tlog = d.path().join("mavlink.tlog").display().to_string();
+        assert!(
+            e.message.contains(&tlog) && e.message.contains("no summary.json beside it"),
+            "{}",
+            e.message
+        );
+        assert_eq!(
+            std::fs::read(d.path().join("mavlink.tlog")).unwrap(),
+            b"my own flight"
+        );
+
+        let d = tempfile::tempdir().unwrap();
+        let f = std::fs::File::create(d.path().join("summary.json")).unwrap();
+        f.set_len(2 << 30).unwrap();
+        drop(f);
+        let t = std::time::Instant::now();
+        let e = RunDir::open(d.path(), &[], &[], None).unwrap_err();
+        assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
+        assert!(e.message.contains("larger than 16 MiB"), "{}", e.message);
+
+        let d = tempfile::tempdir().unwrap();
+        let fifo = d.path().join("summary.json");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if made {
+            let e = RunDir::open(d.path(), &[], &[], None).unwrap_err();
+            assert!(e.message.contains("not a regular file"), "{}", e.message);
+        }
+    }
+
+    /// What counts as an earlier isotrack run (att39-1): a `summary.json` any isotrack wrote,
+    /// whatever its version's keys: the first version's (`d905a43`: no `warnings`, no
+    /// `data_files`), a flight's (`fly`: `end_reason`, no metrics), a Python controller's
+    /// (`controller`), one with keys a later isotrack adds (a team's `team`, ...); the run is
+    /// replaced, the
+    /// figures named as isotrack's kept.
+    #[test]
+    fn every_isotracks_summary_is_an_earlier_run() {
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let result = scenario.run(&mut isotrack_sim::NoTrace);
+        let summary = Summary::of_run(&scenario, None, &result, &[]);
+        // As d905a43's `write_summary` wrote it: version, path, the flattened RunResult of the
+        // time, the scenario.
+        let first = r#"{
+  "isotrack_version": "0.1.0",
+  "scenario_path": null,
+  "outcome": "completed",
+  "outcome_detail": null,
+  "t_end_s": 60.0,
+  "steps": 60000,
+  "samples": 6000,
+  "end_position_m": [1.0, 2.0],
+  "convergence_time_s": 3.5,
+  "steady_state_max_abs_error": 0.01,
+  "scenario": {"sim": {"dt_s": 0.001}}
+}
+"#;
+        let flight = r#"{"isotrack_version": "0.1.0", "scenario_path": "f.toml",
+            "outcome": "failsafe", "outcome_detail": "link lost", "end_reason": "link_lost",
+            "failsafe": true, "failsafe_acknowledged": false, "t_end_s": 12.5, "samples": 7,
+            "commands": 3, "events": ["link lost"], "frames_in": 10, "frames_out": 11,
+            "junk_datagrams": 1, "scenario": {}}"#;
+        let python = summary.to_json().replacen(
+            "\"isotrack_version\"",
+            "\"controller\": {\"kind\": \"python\", \"class\": \"Mine\"},\n  \"isotrack_version\"",
+            1,
+        );
+        let later = summary
+            .to_json()
+            .replacen("{", "{\"a_key_of_isotrack_9\": [1],", 1);
+        for (what, text) in [
+            ("the first version's", first.to_string()),
+            ("a flight's", flight.to_string()),
+            ("a Python controller's", python),
+            ("a later version's", later),
+            ("this version's", summary.to_json()),
+        ] {
+            assert_eq!(crate::summary::not_isotracks(&text), None, "{what}");
+            let d = tempfile::tempdir().unwrap();
+            std::fs::write(d.path().join("summary.json"), &text).unwrap();
+            std::fs::write(d.path().join("trace.csv"), b"t_s\n").unwrap();
+            std::fs::write(d.path().join("mavlink.tlog"), b"its log").unwrap();
+            std::fs::write(d.path().join("trajectory.png"), b"its figure").unwrap();
+            let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], Some("fly"))
+                .unwrap_or_else(|e| panic!("{what}: {}", e.message));
+            let trace = out.trace(false).unwrap();
+            out.finish(trace, "x = 1\n", &summary).unwrap();
             assert_eq!(
                 std::fs::read_to_string(d.path().join("summary.json")).unwrap(),
-                summary.to_json()
+                summary.to_json(),
+                "{what}"
+            );
+            assert_eq!(
+                std::fs::read(d.path().join("trajectory.png")).unwrap(),
+                b"its figure"
             );
         }
     }

@@ -320,6 +320,52 @@ impl<S: Serialize> Summary<S> {
     }
 }
 
+/// Why `text` is not a `summary.json` that an isotrack of any version wrote (`None` when it
+/// is one): what tells an earlier isotrack run's directory, which a new run may replace, from
+/// a folder holding a user's own `summary.json` (att39-1), which it never replaces.
+///
+/// Every summary isotrack has written, from its first version on (`run`, `sitl`, `compare`'s
+/// and `figures`' runs, a team's, `fly`'s flight, the Python package's `Run.save`), is a JSON
+/// object with `isotrack_version` (a string), `outcome` (a string) and `scenario` (the
+/// resolved scenario, an object); those three and nothing more are required. Every other key
+/// may be missing or unknown: an older isotrack's summary has no `warnings` (before the
+/// Python package), no `data_files`, no `metrics_over`, and a newer one may add keys; so this
+/// is looser than [`Summary::from_json`], which reads the present format.
+pub fn not_isotracks(text: &str) -> Option<String> {
+    let v: serde_json::Value = match serde_json::from_str(text) {
+        Ok(v) => v,
+        Err(e) => return Some(format!("not JSON: {e}")),
+    };
+    let serde_json::Value::Object(map) = &v else {
+        return Some("not a JSON object".into());
+    };
+    for (key, what, ok) in [
+        (
+            "isotrack_version",
+            "a string",
+            map.get("isotrack_version").is_some_and(|v| v.is_string()),
+        ),
+        (
+            "outcome",
+            "a string",
+            map.get("outcome").is_some_and(|v| v.is_string()),
+        ),
+        (
+            "scenario",
+            "an object",
+            map.get("scenario").is_some_and(|v| v.is_object()),
+        ),
+    ] {
+        if !ok {
+            return Some(match map.get(key) {
+                None => format!("no `{key}` key"),
+                Some(_) => format!("its `{key}` is not {what}"),
+            });
+        }
+    }
+    None
+}
+
 impl Summary {
     /// Reads `path` (a regular file of at most [`MAX_SUMMARY_BYTES`]).
     pub fn read(path: &Path) -> Result<Summary, SummaryError> {

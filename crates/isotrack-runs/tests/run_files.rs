@@ -195,12 +195,15 @@ fn the_run_directory_writer() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().join("run");
     std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("summary.json"), "old").unwrap();
+    // An earlier run's summary, as an isotrack wrote it (an ad-hoc "old" was no isotrack's
+    // summary: since att39-1 such a file is the user's, and refused).
+    let old = Summary::of_run(&s, Some(std::path::Path::new("old.toml")), &r0, &[]).to_json();
+    std::fs::write(d.join("summary.json"), &old).unwrap();
     let out = RunDir::open(&d, &[], &[], Some("run")).unwrap();
     assert!(out.is_locked());
     assert_eq!(
         std::fs::read_to_string(d.join("summary.json")).unwrap(),
-        "old",
+        old,
         "the earlier run stands until the new one has something to write"
     );
     // A second writer of the same directory is refused while the first holds it.
@@ -334,7 +337,14 @@ fn a_live_trace_never_writes_through_a_hard_link() {
     let d = dir.path().join("run");
     std::fs::create_dir(&d).unwrap();
     std::fs::write(d.join("trace.csv"), b"the earlier run's rows\n").unwrap();
-    std::fs::write(d.join("summary.json"), b"{}").unwrap();
+    // The earlier run's summary as an isotrack wrote it (a bare `{}` is no isotrack's summary:
+    // since att39-1 such a directory is the user's, and refused).
+    let (s, r) = short_run();
+    std::fs::write(
+        d.join("summary.json"),
+        Summary::of_run(&s, None, &r, &[]).to_json(),
+    )
+    .unwrap();
     let snapshot = dir.path().join("snapshot-trace.csv");
     std::fs::hard_link(d.join("trace.csv"), &snapshot).unwrap();
     let out = RunDir::open(&d, &[], &[], Some("fly")).unwrap();
