@@ -645,6 +645,9 @@ struct Flight<'a, S: ?Sized> {
     /// A second sender with the vehicle's ids has been seen ([`Flight::second_sender_seen`]):
     /// no heartbeat of the ids is taken as the vehicle's word any more, no disarm is sent.
     second_sender: bool,
+    /// The flight ended `vehicle_lost` on a second sender with the vehicle's ids (not on a
+    /// reboot): [`Flight::word_before_second_sender`].
+    lost_to_second_sender: bool,
     /// The newest time of the vehicle's own clock heard (unwrapped, ms) and when it came.
     vehicle_ms: Option<(u64, Instant)>,
     /// The landed state of the vehicle's last `EXTENDED_SYS_STATE` (none: it sends none):
@@ -1017,6 +1020,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             beat_heard: now,
             beat_number: None,
             second_sender: false,
+            lost_to_second_sender: false,
             vehicle_ms: None,
             reboot: None,
             landed: None,
@@ -1189,6 +1193,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // Before control the companion goes no further (nothing commanded, exit 79, unless
             // a command already went out: the way out of it); in control, the way out.
             self.event(format!("vehicle_lost: {why}"));
+            self.lost_to_second_sender = true;
             return Some(FlyEnd::VehicleLost);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
@@ -3083,12 +3088,32 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// and still nothing where nothing would be commanded (the companion commanded nothing
     /// before).
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        if self.word_before_second_sender(end).is_some() {
+            return None;
+        }
         let way = self.way_out_one_sender(end);
         if self.second_sender {
             way.map(|_| WayOut::Mode(self.opts.failsafe.mode()))
         } else {
             way
         }
+    }
+
+    /// What a pilot's word showed ([`LeaveSeen`], awaiting confirmation or confirmed), if the
+    /// flight ends `vehicle_lost` on a second sender with the vehicle's ids (not a reboot) after
+    /// a heartbeat applied before it showed that word (att39f-1/-2): then NOTHING is commanded.
+    /// Frame numbers are 8-bit, so one sender over a lossy link and two senders with one id
+    /// cannot be told apart in every case; the way out is chosen so that neither reading
+    /// costs the vehicle: if the word was the pilot's (one sender read as two), the pilot keeps
+    /// the vehicle (no HOLD against the pilot's MANUAL); if it was the second sender's, the
+    /// vehicle flown is still in OFFBOARD with no setpoints, and its autopilot's own
+    /// offboard-loss failsafe takes it. A heartbeat is applied only outside a doubt and before
+    /// a second sender is seen ([`crate::same_ids`]), so a word is always heard before that.
+    fn word_before_second_sender(&self, end: FlyEnd) -> Option<&str> {
+        if end != FlyEnd::VehicleLost || !self.lost_to_second_sender {
+            return None;
+        }
+        self.leave_seen.as_ref().map(|l| l.what.as_str())
     }
 
     /// The way out of `end` with one sender of the vehicle's ids.
@@ -3155,6 +3180,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// (confirmed, anything commanded).
     fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
         let Some(way) = self.way_out(end) else {
+            if let Some(word) = self.word_before_second_sender(end) {
+                self.event(format!(
+                    "failsafe (vehicle_lost) after the vehicle's heartbeats showed it {word} (a pilot's word, or the second sender's): setpoints stopped, nothing commanded, the pilot's mode stands (a vehicle still in {} falls to its own offboard-loss failsafe)",
+                    self.firmware.name_of(FlyMode::Offboard)
+                ));
+                return Ok((false, false));
+            }
             if self.pilots_disarm_watched(end) {
                 self.event(format!(
                     "failsafe ({}): the vehicle had just been disarmed, not by the companion (a pilot's disarm, watched for a reboot): nothing commanded, the pilot's mode stands",
