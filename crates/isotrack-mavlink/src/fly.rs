@@ -828,6 +828,8 @@ struct LeaveSeen {
     confirmed: bool,
     /// Confirmed by a heartbeat that no longer shows it (one sender's change and back).
     back: bool,
+    /// The frame watch's doubts opened before it ([`crate::same_ids::SequenceWatch::doubts`]).
+    doubts: u64,
 }
 
 /// The law's answers so far.
@@ -1852,9 +1854,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion ({}){}: setpoints stopped, nothing commanded",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name(),
-            match self.resyncs {
-                0 => "no second sender with its ids seen: one sender's".to_string(),
-                n => format!("no second sender with its ids proven, though its frame counter jumped {n} time{} and was taken as one sender's", if n == 1 { "" } else { "s" }),
+            match (self.seq_watch.doubts, self.resyncs) {
+                (0, _) => "no second sender with its ids seen: one sender's".to_string(),
+                (d, n) => format!(
+                    "no second sender with its ids proven, though its frame counter was in doubt {d} time{} before the word ({n} resynchronised as one sender's)",
+                    if d == 1 { "" } else { "s" }
+                ),
             },
             if self.in_control { "" } else { ", during the take-over" }
         ));
@@ -2448,7 +2453,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "two vehicles with the ids (system {}, component {})",
             t.0, t.1
         );
-        if let Some(jump) = self.seq_watch.take_resync() {
+        if let Some(rs) = self.seq_watch.take_resync() {
             // A doubt ended with no proof: one sender whose link lost a burst. The heartbeats'
             // "newer than the last applied" starts again here (the next one is applied), and a
             // pilot's word awaiting confirmation stands its span again from now.
@@ -2458,19 +2463,37 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             self.resyncs += 1;
             self.event(format!(
-                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing proved a second sender while in doubt: resynchronised as one sender (the frames between were not applied; {} such jump{} since the start)",
-                jump,
-                (jump as u32 + 255) % 256,
+                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing showed a second sender in the next {} frames ({:.2} s) of doubt: resynchronised as one sender{} (the frames of the doubt were not applied; {} such jump{} since the start; another conflict within {} s of this is taken as a second sender)",
+                rs.jump,
+                (rs.jump as u32 + 255) % 256,
+                rs.frames,
+                rs.secs,
+                if rs.on_old {
+                    ", on the counter from before the jump (the frames after it were strays)"
+                } else {
+                    ""
+                },
                 self.resyncs,
-                if self.resyncs == 1 { "" } else { "s" }
+                if self.resyncs == 1 { "" } else { "s" },
+                crate::same_ids::RESYNC_MEMORY_S
             ));
         }
-        match (kind, self.seq_watch.resumed_from) {
-            (FrameKind::Conflict, Some(old)) => self.second_sender_seen(format!(
-                "{ids}: a frame numbered {} goes on from the counter's {old} while the frames since a conflict there are numbered behind {old} (one sender whose link lost a burst comes back behind and walks up to {old} first; two counters going on side by side are two senders'): their measurements and positions would mix, which to fly is ambiguous",
-                r.header.sequence
+        match (
+            kind,
+            self.seq_watch.resumed_from,
+            self.seq_watch.after_resync_s,
+        ) {
+            (FrameKind::Conflict, Some(old), _) => self.second_sender_seen(format!(
+                "{ids}: a frame numbered {} goes on from the counter's {old}, more than {} numbers past it, with frames of the counter that came back behind {old} at a conflict there between them (one sender's own late frames go at most a few numbers past {old}; two counters going on side by side are two senders'): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence,
+                crate::same_ids::REORDER
             )),
-            (FrameKind::Conflict, None) => self.second_sender_seen(format!(
+            (FrameKind::Conflict, None, Some(after_s)) => self.second_sender_seen(format!(
+                "{ids}: a frame numbered {} conflicts with the one seen with its number {after_s:.1} s after the counter was resynchronised as one sender's (a link loses a burst of one sender's frames now and then, not twice within {} s; a second sender near the vehicle's counter conflicts at each of its frames): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence,
+                crate::same_ids::RESYNC_MEMORY_S
+            )),
+            (FrameKind::Conflict, None, None) => self.second_sender_seen(format!(
                 "{ids}: two different frames numbered {} within the last {} numbers of their counter (a link loses, delays or doubles one sender's frames, never numbers two different ones alike: MAVLink's frame counters of two senders): their measurements and positions would mix, which to fly is ambiguous",
                 r.header.sequence,
                 crate::same_ids::SEQUENCE_WINDOW
@@ -2834,11 +2857,32 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let shows_control = !self.shows_pilots_word();
         let span = self.confirm_span();
+        let doubts = self.seq_watch.doubts;
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name()
         );
+        // A heartbeat newer than the word's that no longer shows it, a doubt of the frame
+        // counter since the word (att39f-3: a second sender's heartbeat taken as the vehicle's,
+        // then the vehicle's own, a doubt between): two senders, not one sender's change and
+        // back (nothing commanded: the word was heard before,
+        // [`Flight::word_before_second_sender`]).
+        if let Some((word, n)) = self
+            .leave_seen
+            .as_ref()
+            .filter(|l| shows_control && !l.confirmed && doubts > l.doubts)
+            .map(|l| (l.what.clone(), doubts - l.doubts))
+        {
+            let t = self.target.unwrap_or_default();
+            self.second_sender_seen(format!(
+                "two vehicles with the ids (system {}, component {}): the heartbeats showed it {word}, then {state}, with {n} doubt{} of the frame counter between (a pilot's change and back comes from one counter with no doubt between; a second sender's heartbeat taken as the vehicle's, then the vehicle's own, with one): which to fly is ambiguous",
+                t.0,
+                t.1,
+                if n == 1 { "" } else { "s" }
+            ));
+            return;
+        }
         match (&mut self.leave_seen, shows_control) {
             (None, true) => {}
             (None, false) => {
@@ -2849,6 +2893,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     what: state,
                     confirmed: false,
                     back: false,
+                    doubts,
                 })
             }
             // Late frames (a link that reorders) change nothing (att33e-6, att33g-2).

@@ -1721,3 +1721,97 @@ fn a_burst_then_a_fade_after_a_pilots_manual_commands_nothing() {
     });
     assert_nothing_against_the_pilot(&r, &c);
 }
+
+/// How a slow twin numbers its frames ([`vehicle_with_a_slow_twin`]).
+#[derive(Clone, Copy, Debug)]
+enum TwinCounter {
+    /// Each frame numbered the vehicle's last number + this (a spoofer reading the link).
+    Near(i32),
+    /// Its own counter, starting this many numbers ahead of the vehicle's.
+    Free(u8),
+}
+
+/// att39f-3's stand-in: in control (the pilot's OFFBOARD; three frames a 50 ms turn, paced on
+/// the wall clock, a heartbeat every fourth turn), a second sender with the vehicle's ids
+/// beats armed in MANUAL once a second (every 20 turns) from turn 40, numbered by `counter`.
+/// The report and the commands fly sent.
+fn vehicle_with_a_slow_twin(counter: TwinCounter) -> (FlyReport, Vec<Sent>) {
+    let mut a = vehicle_sender();
+    let mut free: Option<Sender> = None;
+    let t0 = Instant::now();
+    fly_against_seen(
+        12.0,
+        |_| {},
+        false,
+        move |k| {
+            let due = Duration::from_millis(50 * k as u64);
+            if let Some(wait) = due.checked_sub(t0.elapsed()) {
+                std::thread::sleep(wait);
+            }
+            let ms = 1000 + 50 * k;
+            let msgs = if k % 4 == 0 {
+                vec![heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]
+            } else {
+                vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
+            };
+            let mut out = datagrams(a.frames(&msgs));
+            if k >= 40 && k % 20 == 0 {
+                let last = a.seq.wrapping_sub(1);
+                let b = match counter {
+                    TwinCounter::Near(off) => free.insert(Sender {
+                        seq: (last as i32 + off).rem_euclid(256) as u8,
+                        ids: (1, 1),
+                    }),
+                    TwinCounter::Free(ahead) => free.get_or_insert_with(|| Sender {
+                        seq: last.wrapping_add(ahead),
+                        ids: (1, 1),
+                    }),
+                };
+                out.extend(datagrams(b.frames(&[heartbeat(1)])));
+            }
+            out
+        },
+    )
+}
+
+/// The wall time of the first event starting `what` ("wall T s: what...").
+fn event_time_s(r: &FlyReport, what: &str) -> Option<f64> {
+    r.events.iter().find_map(|e| {
+        let (t, rest) = e.strip_prefix("wall ")?.split_once(" s: ")?;
+        rest.starts_with(what).then(|| t.parse().ok()).flatten()
+    })
+}
+
+/// att39f-3 (N22, N23, N18): a second sender beating armed in MANUAL once a second beside the
+/// vehicle's 60 frames a second, numbered 3 behind or 3 ahead of the vehicle's last number, or
+/// with its own counter 60 ahead, ends the flight `vehicle_lost` within a few seconds of its
+/// first frame (2 s in: turn 40), never `pilot_took_over` and never flown to the end. Where its
+/// MANUAL heartbeat was applied as the vehicle's before the proof, nothing is commanded
+/// (att39f-1); else the HOLD. Before (fly39): N22 never proven (a resync each second, flown to
+/// max_duration), N23 and N18 `pilot_took_over` "no second sender ... seen".
+#[test]
+fn a_slow_twin_near_the_vehicles_counter_is_proven() {
+    for counter in [
+        TwinCounter::Near(-3),
+        TwinCounter::Near(3),
+        TwinCounter::Free(60),
+    ] {
+        let (r, c) = vehicle_with_a_slow_twin(counter);
+        assert_eq!(r.end, FlyEnd::VehicleLost, "{counter:?}: {:?}", r.events);
+        assert!(
+            !r.events.iter().any(|e| e.contains("pilot_took_over")),
+            "{counter:?}: {:?}",
+            r.events
+        );
+        let at = event_time_s(&r, "vehicle_lost");
+        assert!(
+            at.is_some_and(|t| t < 7.0),
+            "{counter:?}: {at:?} {:?}",
+            r.events
+        );
+        if !r.way_out_commanded {
+            assert_word_before_the_proof_commands_nothing(&r);
+            assert!(c.is_empty(), "{counter:?}: {c:?}");
+        }
+    }
+}
