@@ -39,7 +39,10 @@
 //! After [`DOUBT_FRAMES`] frames in doubt with no proof (or [`DOUBT_MIN_FRAMES`] once
 //! [`DOUBT_S`] has passed), the stream with more new frames in it becomes the window: one sender,
 //! resynchronised ([`SequenceWatch::take_resync`]). During a doubt nothing received is the
-//! vehicle's word (the companion keeps only the link alive).
+//! vehicle's word (the companion keeps only the link alive). Resynchronised on the doubt's
+//! window, the old window's frames are kept for [`SEQUENCE_WINDOW`] numbers more: a frame
+//! identical to one of them is a copy delivered again across the doubt (a redundant path,
+//! att39f's F10), whatever its number says in the new window.
 //!
 //! Frame numbers are 8-bit, so one sender on a lossy link and two senders with one id cannot
 //! be told apart in every case; the companion's way out is chosen to be safe either way
@@ -269,6 +272,13 @@ pub struct SequenceWatch {
     proven: bool,
     /// The proof was the old stream going on (b): the old window's newest number then.
     pub resumed_from: Option<u8>,
+    /// After a doubt resynchronised on its own window: the old window's frames (per number,
+    /// modulo 256), a frame identical to one of them is a copy delivered again across the
+    /// doubt (a redundant path, att39f's F10), whatever its number is in the window; forgotten
+    /// at the next doubt or restart, or once the window's newest (unwrapped) reaches
+    /// `before_doubt_until` (129 numbers on from the resynchronisation).
+    before_doubt: Vec<Option<MavMessage>>,
+    before_doubt_until: u64,
     /// When the last [`RESTART_FRAMES`] + 1 frames came (the companion's clock, s; since the
     /// last restart).
     times: VecDeque<f64>,
@@ -303,6 +313,8 @@ impl Default for SequenceWatch {
             proven: false,
             resumed_from: None,
             times: VecDeque::new(),
+            before_doubt: Vec::new(),
+            before_doubt_until: 0,
             base: 0,
         }
     }
@@ -343,6 +355,18 @@ impl SequenceWatch {
             return self.doubt_frame(newest, seq, msg, wall_s);
         }
         let u = unwrapped(newest, seq);
+        if newest >= self.before_doubt_until {
+            self.before_doubt.clear();
+        } else if self
+            .before_doubt
+            .get(seq as usize)
+            .is_some_and(|m| m.as_ref() == Some(msg))
+        {
+            // A copy of a frame from before the last doubt, delivered again across it (by its
+            // number new, late or a conflict in the doubt's window).
+            self.copies += 1;
+            return (FrameKind::Copy, u);
+        }
         match fit(&self.seen, newest, seq, msg) {
             Fit::Copy => {
                 self.copies += 1;
@@ -363,6 +387,7 @@ impl SequenceWatch {
                 // The first conflict: a doubt, its window seeded with this frame (numbered
                 // above every number of the old window).
                 self.doubts += 1;
+                self.before_doubt.clear();
                 let old = newest as u8;
                 let mut seen_b = vec![None; 256];
                 seen_b[seq as usize] = Some(msg.clone());
@@ -403,7 +428,7 @@ impl SequenceWatch {
     /// a tie); a copy in either is a copy; a conflict in both is proof (a); the old stream's
     /// new frames gone more than [`REORDER`] past `N_A` with the doubt's between are proof
     /// (b). Else, after [`DOUBT_FRAMES`] (or [`DOUBT_MIN_FRAMES`] and [`DOUBT_S`]), the stream
-    /// of the last new frame becomes the window: resynchronised.
+    /// with more new frames in the doubt becomes the window: resynchronised.
     fn doubt_frame(
         &mut self,
         newest_a: u64,
@@ -504,7 +529,9 @@ impl SequenceWatch {
         }
         let top = (n_a.max(d.newest_b) / 256 + 1) * 256;
         let rebased = top + (newest as u8) as u64;
-        self.seen = seen;
+        let old = std::mem::replace(&mut self.seen, seen);
+        self.before_doubt = if live == Stream::B { old } else { Vec::new() };
+        self.before_doubt_until = rebased + SEQUENCE_WINDOW as u64;
         self.newest = Some(rebased);
         let u = unwrapped(rebased, seq);
         self.resynced = Some(Resync {
@@ -540,6 +567,7 @@ impl SequenceWatch {
     /// Forgets every number seen (a restart): the next frame's
     /// unwrapped number is above every one before.
     fn restart(&mut self) {
+        self.before_doubt.clear();
         self.base = self.newest.take().map_or(0, |n| (n / 256 + 1) * 256);
         self.seen.iter_mut().for_each(|m| *m = None);
     }
@@ -1008,6 +1036,30 @@ mod tests {
         for off in [60u32, 100, 127] {
             let at = twins(256 - off, 50.0, 1.0, 0.5);
             assert!(at.is_some_and(|(_, _, b)| b <= 6), "off {off}: {at:?}");
+        }
+    }
+
+    /// att39f's F10 (item 5): one sender whose every frame a redundant path delivers again 60
+    /// frames later, and whose link loses a burst of `k` frames sent at once (127 to 254):
+    /// the copies of its frames from before the burst, delivered during the doubt and after
+    /// it resynchronised, are copies, never a conflict.
+    #[test]
+    fn copies_across_a_doubt_are_copies() {
+        for k in [127u32, 150, 200, 230, 254] {
+            let orig: Vec<u32> = (0..300).chain(300 + k..300 + k + 600).collect();
+            let mut order = Vec::new();
+            let mut times = Vec::new();
+            for (i, &c) in orig.iter().enumerate() {
+                order.push(c);
+                times.push(0.02 * i as f64);
+                if i >= 60 {
+                    order.push(orig[i - 60]);
+                    times.push(0.02 * i as f64 + 0.01);
+                }
+            }
+            let (kinds, w) = feed(&order, &times);
+            assert!(!kinds.contains(&FrameKind::Conflict), "k {k}");
+            assert_eq!(w.resyncs, w.doubts, "k {k}");
         }
     }
 
