@@ -645,6 +645,9 @@ struct Flight<'a, S: ?Sized> {
     /// A second sender with the vehicle's ids has been seen ([`Flight::second_sender_seen`]):
     /// no heartbeat of the ids is taken as the vehicle's word any more, no disarm is sent.
     second_sender: bool,
+    /// The flight ended `vehicle_lost` on a second sender with the vehicle's ids (not on a
+    /// reboot): [`Flight::word_before_second_sender`].
+    lost_to_second_sender: bool,
     /// The newest time of the vehicle's own clock heard (unwrapped, ms) and when it came.
     vehicle_ms: Option<(u64, Instant)>,
     /// The landed state of the vehicle's last `EXTENDED_SYS_STATE` (none: it sends none):
@@ -825,6 +828,8 @@ struct LeaveSeen {
     confirmed: bool,
     /// Confirmed by a heartbeat that no longer shows it (one sender's change and back).
     back: bool,
+    /// The frame watch's doubts opened before it ([`crate::same_ids::SequenceWatch::doubts`]).
+    doubts: u64,
 }
 
 /// The law's answers so far.
@@ -1017,6 +1022,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             beat_heard: now,
             beat_number: None,
             second_sender: false,
+            lost_to_second_sender: false,
             vehicle_ms: None,
             reboot: None,
             landed: None,
@@ -1189,6 +1195,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // Before control the companion goes no further (nothing commanded, exit 79, unless
             // a command already went out: the way out of it); in control, the way out.
             self.event(format!("vehicle_lost: {why}"));
+            self.lost_to_second_sender = true;
             return Some(FlyEnd::VehicleLost);
         }
         if let (Some(a), Some(b)) = (self.target, self.other_vehicle) {
@@ -1847,9 +1854,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "pilot_took_over: the vehicle was {what}, then {} in {}, neither commanded by the companion ({}){}: setpoints stopped, nothing commanded",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name(),
-            match self.resyncs {
-                0 => "no second sender with its ids seen: one sender's".to_string(),
-                n => format!("no second sender with its ids proven, though its frame counter jumped {n} time{} and was taken as one sender's", if n == 1 { "" } else { "s" }),
+            match (self.seq_watch.doubts, self.resyncs) {
+                (0, _) => "no second sender with its ids seen: one sender's".to_string(),
+                (d, n) => format!(
+                    "no second sender with its ids proven, though its frame counter was in doubt {d} time{} before the word ({n} resynchronised as one sender's)",
+                    if d == 1 { "" } else { "s" }
+                ),
             },
             if self.in_control { "" } else { ", during the take-over" }
         ));
@@ -2443,7 +2453,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "two vehicles with the ids (system {}, component {})",
             t.0, t.1
         );
-        if let Some(jump) = self.seq_watch.take_resync() {
+        if let Some(rs) = self.seq_watch.take_resync() {
             // A doubt ended with no proof: one sender whose link lost a burst. The heartbeats'
             // "newer than the last applied" starts again here (the next one is applied), and a
             // pilot's word awaiting confirmation stands its span again from now.
@@ -2453,19 +2463,37 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             self.resyncs += 1;
             self.event(format!(
-                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing proved a second sender while in doubt: resynchronised as one sender (the frames between were not applied; {} such jump{} since the start)",
-                jump,
-                (jump as u32 + 255) % 256,
+                "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing showed a second sender in the next {} frames ({:.2} s) of doubt: resynchronised as one sender{} (the frames of the doubt were not applied; {} such jump{} since the start; another conflict within {} s of this is taken as a second sender)",
+                rs.jump,
+                (rs.jump as u32 + 255) % 256,
+                rs.frames,
+                rs.secs,
+                if rs.on_old {
+                    ", on the counter from before the jump (the frames after it were strays)"
+                } else {
+                    ""
+                },
                 self.resyncs,
-                if self.resyncs == 1 { "" } else { "s" }
+                if self.resyncs == 1 { "" } else { "s" },
+                crate::same_ids::RESYNC_MEMORY_S
             ));
         }
-        match (kind, self.seq_watch.resumed_from) {
-            (FrameKind::Conflict, Some(old)) => self.second_sender_seen(format!(
-                "{ids}: a frame numbered {} goes on from the counter's {old} while the frames since a conflict there are numbered behind {old} (one sender whose link lost a burst comes back behind and walks up to {old} first; two counters going on side by side are two senders'): their measurements and positions would mix, which to fly is ambiguous",
-                r.header.sequence
+        match (
+            kind,
+            self.seq_watch.resumed_from,
+            self.seq_watch.after_resync_s,
+        ) {
+            (FrameKind::Conflict, Some(old), _) => self.second_sender_seen(format!(
+                "{ids}: a frame numbered {} goes on from the counter's {old}, more than {} numbers past it, with frames of the counter that came back behind {old} at a conflict there between them (one sender's own late frames go at most a few numbers past {old}; two counters going on side by side are two senders'): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence,
+                crate::same_ids::REORDER
             )),
-            (FrameKind::Conflict, None) => self.second_sender_seen(format!(
+            (FrameKind::Conflict, None, Some(after_s)) => self.second_sender_seen(format!(
+                "{ids}: a frame numbered {} conflicts with the one seen with its number {after_s:.1} s after the counter was resynchronised as one sender's (a link loses a burst of one sender's frames now and then, not twice within {} s; a second sender near the vehicle's counter conflicts at each of its frames): their measurements and positions would mix, which to fly is ambiguous",
+                r.header.sequence,
+                crate::same_ids::RESYNC_MEMORY_S
+            )),
+            (FrameKind::Conflict, None, None) => self.second_sender_seen(format!(
                 "{ids}: two different frames numbered {} within the last {} numbers of their counter (a link loses, delays or doubles one sender's frames, never numbers two different ones alike: MAVLink's frame counters of two senders): their measurements and positions would mix, which to fly is ambiguous",
                 r.header.sequence,
                 crate::same_ids::SEQUENCE_WINDOW
@@ -2829,11 +2857,32 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let shows_control = !self.shows_pilots_word();
         let span = self.confirm_span();
+        let doubts = self.seq_watch.doubts;
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name()
         );
+        // A heartbeat newer than the word's that no longer shows it, a doubt of the frame
+        // counter since the word (att39f-3: a second sender's heartbeat taken as the vehicle's,
+        // then the vehicle's own, a doubt between): two senders, not one sender's change and
+        // back (nothing commanded: the word was heard before,
+        // [`Flight::word_before_second_sender`]).
+        if let Some((word, n)) = self
+            .leave_seen
+            .as_ref()
+            .filter(|l| shows_control && !l.confirmed && doubts > l.doubts)
+            .map(|l| (l.what.clone(), doubts - l.doubts))
+        {
+            let t = self.target.unwrap_or_default();
+            self.second_sender_seen(format!(
+                "two vehicles with the ids (system {}, component {}): the heartbeats showed it {word}, then {state}, with {n} doubt{} of the frame counter between (a pilot's change and back comes from one counter with no doubt between; a second sender's heartbeat taken as the vehicle's, then the vehicle's own, with one): which to fly is ambiguous",
+                t.0,
+                t.1,
+                if n == 1 { "" } else { "s" }
+            ));
+            return;
+        }
         match (&mut self.leave_seen, shows_control) {
             (None, true) => {}
             (None, false) => {
@@ -2844,6 +2893,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     what: state,
                     confirmed: false,
                     back: false,
+                    doubts,
                 })
             }
             // Late frames (a link that reorders) change nothing (att33e-6, att33g-2).
@@ -3083,12 +3133,32 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// and still nothing where nothing would be commanded (the companion commanded nothing
     /// before).
     fn way_out(&self, end: FlyEnd) -> Option<WayOut> {
+        if self.word_before_second_sender(end).is_some() {
+            return None;
+        }
         let way = self.way_out_one_sender(end);
         if self.second_sender {
             way.map(|_| WayOut::Mode(self.opts.failsafe.mode()))
         } else {
             way
         }
+    }
+
+    /// What a pilot's word showed ([`LeaveSeen`], awaiting confirmation or confirmed), if the
+    /// flight ends `vehicle_lost` on a second sender with the vehicle's ids (not a reboot) after
+    /// a heartbeat applied before it showed that word (att39f-1/-2): then NOTHING is commanded.
+    /// Frame numbers are 8-bit, so one sender over a lossy link and two senders with one id
+    /// cannot be told apart in every case; the way out is chosen so that neither reading
+    /// costs the vehicle: if the word was the pilot's (one sender read as two), the pilot keeps
+    /// the vehicle (no HOLD against the pilot's MANUAL); if it was the second sender's, the
+    /// vehicle flown is still in OFFBOARD with no setpoints, and its autopilot's own
+    /// offboard-loss failsafe takes it. A heartbeat is applied only outside a doubt and before
+    /// a second sender is seen ([`crate::same_ids`]), so a word is always heard before that.
+    fn word_before_second_sender(&self, end: FlyEnd) -> Option<&str> {
+        if end != FlyEnd::VehicleLost || !self.lost_to_second_sender {
+            return None;
+        }
+        self.leave_seen.as_ref().map(|l| l.what.as_str())
     }
 
     /// The way out of `end` with one sender of the vehicle's ids.
@@ -3155,6 +3225,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// (confirmed, anything commanded).
     fn let_go(&mut self, end: FlyEnd) -> Result<(bool, bool), FlyError> {
         let Some(way) = self.way_out(end) else {
+            if let Some(word) = self.word_before_second_sender(end) {
+                self.event(format!(
+                    "failsafe (vehicle_lost) after the vehicle's heartbeats showed it {word} (a pilot's word, or the second sender's): setpoints stopped, nothing commanded, the pilot's mode stands (a vehicle still in {} falls to its own offboard-loss failsafe)",
+                    self.firmware.name_of(FlyMode::Offboard)
+                ));
+                return Ok((false, false));
+            }
             if self.pilots_disarm_watched(end) {
                 self.event(format!(
                     "failsafe ({}): the vehicle had just been disarmed, not by the companion (a pilot's disarm, watched for a reboot): nothing commanded, the pilot's mode stands",

@@ -20,32 +20,41 @@
 //! frames sent faster than its usual rate (a parameter list, MAVLink FTP, a log: PX4 sends
 //! them at the link's full speed) comes back up to 128 numbers behind `N` with no silence
 //! between, on a number seen before the loss. So a conflict opens a DOUBT
-//! ([`FrameKind::Doubt`]): the window's newest number `N_A` is kept, a fresh window `W_B` is
-//! seeded with the conflicting frame, and every frame after it is classed in `W_B` (new, late,
-//! copy or conflict as above). Two senders are proven ([`FrameKind::Conflict`]) by
-//! * (a) a conflict in `W_B` (two different frames with one number since the first conflict:
-//!   one sender never sends that), or
-//! * (b) the old stream going on: a frame 1 to [`MAX_STEP_AHEAD`] ahead of `N_A` while `W_B`'s
-//!   newest number is still behind `N_A` and the frame is more than [`RESUME_STEP`] ahead of
-//!   it (one sender that lost a burst walks `s + 1, s + 2, ...` up to `N_A` first; a second
-//!   sender whose counter runs behind is given away by the first one's next frame; one
-//!   within [`RESUME_STEP`] behind meets the first one's numbers in `W_B` within a few frames:
-//!   (a)).
+//! ([`FrameKind::Doubt`]): the old window (`A`, newest `N_A`) is kept, a second window `W_B` is
+//! seeded with the conflicting frame, and every frame after it goes to the window it fits
+//! nearer (new by a smaller step, or late by fewer numbers; `W_B` on a tie; a copy in either is
+//! a copy). Two senders are proven ([`FrameKind::Conflict`]) by
+//! * (a) a frame that conflicts in both windows (two different frames with one number since
+//!   the first conflict: one sender never sends that), or
+//! * (b) the old stream going on beside the new one: new frames of `A` more than [`REORDER`]
+//!   numbers past `N_A`, then a new frame of `W_B`, then one of `A` again (both counters
+//!   alive). One sender's own frames from before the burst, delivered late across it, go at
+//!   most a few numbers past `N_A` (att39f-1); its frames after a second loss that pass `N_A`
+//!   go on alone (att39f-2: the doubt's first frames were strays);
+//! * (c) a first conflict within [`RESYNC_MEMORY_S`] of the last resynchronisation (one
+//!   sender loses such a burst now and then, not twice within seconds; a second sender that
+//!   sends a frame a second near the vehicle's counter, att39f-3, opens a doubt at each of
+//!   its frames).
 //!
-//! After [`DOUBT_FRAMES`] frames in doubt with neither (or [`DOUBT_MIN_FRAMES`] once
-//! [`DOUBT_S`] has passed), `W_B` becomes the window: one sender, resynchronised
-//! ([`SequenceWatch::take_resync`]). Two senders whose counters are so close
-//! that neither shows within the doubt (a slow one, 1 Hz heartbeats, a few numbers behind a
-//! fast one) drift apart by the fast one's rate: their next conflict opens another doubt,
-//! which (b) ends at once. During a doubt nothing received is the vehicle's word (the
-//! companion keeps only the link alive).
+//! After [`DOUBT_FRAMES`] frames in doubt with no proof (or [`DOUBT_MIN_FRAMES`] once
+//! [`DOUBT_S`] has passed), the stream with more new frames in it becomes the window: one sender,
+//! resynchronised ([`SequenceWatch::take_resync`]). During a doubt nothing received is the
+//! vehicle's word (the companion keeps only the link alive). Resynchronised on the doubt's
+//! window, the old window's frames are kept for [`SEQUENCE_WINDOW`] numbers more: a frame
+//! identical to one of them is a copy delivered again across the doubt (a redundant path,
+//! att39f's F10), whatever its number says in the new window.
 //!
-//! Not told apart: two senders whose counters run in step (their numbers never meet within
-//! the window with different frames), a frame delivered more than 127 frames late, which
-//! its number makes a new one (its sender's own frames up to that number then read as late,
-//! and its own frame with that number as a conflict: a doubt, resynchronised), and one sender
-//! that, in a doubt, loses more than [`RESUME_STEP`] frames in a row just as its numbers pass
-//! `N_A` (two bursts lost within [`DOUBT_FRAMES`] frames: read as two senders).
+//! Frame numbers are 8-bit, so one sender on a lossy link and two senders with one id cannot
+//! be told apart in every case; the companion's way out is chosen to be safe either way
+//! (`fly`: a second sender proven after a pilot's word heard commands nothing). Not told apart:
+//! two senders whose counters run in step (their numbers never meet within the window with
+//! different frames); a frame delivered more than 127 frames late, which its number makes a new
+//! one (its sender's own frames up to that number then read as late, and its own frame with
+//! that number as a conflict: a doubt, resynchronised); one sender that loses two bursts within
+//! a doubt so that a frame conflicts in both windows (a), or a second burst within
+//! [`RESYNC_MEMORY_S`] of the first (c): read as two senders; a second sender whose frames
+//! come seldom and all numbered ahead of the vehicle's newest is applied as the vehicle's until
+//! the vehicle's own frames reach its numbers (then a doubt, then (c) at its next frame).
 //!
 //! Two vehicles far apart show too in their positions: a position farther from the last than
 //! [`MAX_GROUND_SPEED_MPS`] covers in the time between them, plus [`POSITION_JUMP_MARGIN_M`],
@@ -70,27 +79,34 @@ pub const MAX_GROUND_SPEED_MPS: f64 = 100.0;
 /// estimator's noise, a GPS fix's step).
 pub const POSITION_JUMP_MARGIN_M: f64 = 20.0;
 
-/// In a doubt, the largest step ahead of `W_B`'s newest number of a frame that is new by the
-/// old window's newest number `N_A` while `W_B`'s is still behind it, and is no proof of two
-/// senders: one sender that lost a burst comes back walking `s + 1, s + 2, ...` (a few frames
-/// lost on the way) up to `N_A`; the other sender of two whose counters are more than this
-/// apart sends such a frame next.
-pub const RESUME_STEP: u8 = 8;
+/// In a doubt, how far past the old window's newest number `N_A` one sender's own frames from
+/// before the conflict may go (its last frames before a burst delivered late, reordered across
+/// it: att39f-1). The old stream going on proves two senders only once its frames have gone
+/// more than this past `N_A` AND interleave with the doubt's window's ([`crate::same_ids`], (b)).
+pub const REORDER: u8 = 16;
 
 /// Frames (new or late, not copies) in a doubt with no proof of two senders, after which the
-/// doubt's window is the window: one sender resynchronised (about 1.3 s of a PX4's 50 frames
-/// a second), or after [`DOUBT_MIN_FRAMES`] once [`DOUBT_S`] has passed.
+/// doubt's live stream is the window: one sender resynchronised (about 1.3 s of a PX4's 50
+/// frames a second), or after [`DOUBT_MIN_FRAMES`] once [`DOUBT_S`] has passed.
 pub const DOUBT_FRAMES: u32 = 64;
 
-/// Frames in a doubt before it may end on its time ([`DOUBT_S`]): two senders whose counters
-/// are up to [`RESUME_STEP`] apart meet in the doubt's window within 2 x (RESUME_STEP + 1)
-/// frames of both (proof (a)).
-pub const DOUBT_MIN_FRAMES: u32 = 24;
+/// Frames in a doubt before it may end on its time ([`DOUBT_S`]): two senders at one rate
+/// send 2 x ([`REORDER`] + 1) frames, and one more, by the time the old one has gone more
+/// than [`REORDER`] past `N_A` with the other's frames between (proof (b)); a third more for
+/// rates that differ a little (heartbeats on one side).
+pub const DOUBT_MIN_FRAMES: u32 = 3 * REORDER as u32;
 
 /// The time after which a doubt of [`DOUBT_MIN_FRAMES`] frames or more ends resynchronised,
 /// s (the companion's clock): nothing received in a doubt is applied, so a slow link's doubt
 /// must not outlast the measurements' and heartbeats' timeouts.
 pub const DOUBT_S: f64 = 0.5;
+
+/// A first conflict within this long after the last resynchronisation is proof of two senders,
+/// s (the companion's clock): one sender loses a burst of 127 to 254 frames now and then (a
+/// parameter list, a log download), not twice within seconds, while a second sender that sends
+/// a frame a second or fewer near the vehicle's counter (att39f-3) opens a doubt at each of its
+/// frames that the vehicle's own frames resynchronise.
+pub const RESYNC_MEMORY_S: f64 = 5.0;
 
 /// Positions over which jumps are counted.
 pub const POSITION_WINDOW: u64 = 64;
@@ -119,17 +135,111 @@ pub enum FrameKind {
     Doubt,
 }
 
-/// A doubt: the first conflict seen, awaiting proof of two senders.
+/// The stream of a frame in a doubt: the old window's (`A`) or the doubt's (`B`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stream {
+    A,
+    B,
+}
+
+/// How a frame fits a window (without entering it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Fit {
+    /// So many numbers ahead of the newest.
+    New(u8),
+    /// So many numbers behind the newest, on an unseen number.
+    Late(u8),
+    /// On a number seen with the same message.
+    Copy,
+    /// On a number seen with another message.
+    Conflict,
+}
+
+impl Fit {
+    /// How far from the window's newest number the frame fits: `None` if it does not.
+    fn distance(self) -> Option<u8> {
+        match self {
+            Fit::New(d) | Fit::Late(d) => Some(d),
+            Fit::Copy | Fit::Conflict => None,
+        }
+    }
+}
+
+/// How frame `seq` carrying `msg` fits the window `seen` whose newest is `newest`.
+fn fit(seen: &[Option<MavMessage>], newest: u64, seq: u8, msg: &MavMessage) -> Fit {
+    let n = newest as u8;
+    let d = seq.wrapping_sub(n);
+    if (1..=MAX_STEP_AHEAD).contains(&d) {
+        return Fit::New(d);
+    }
+    match &seen[seq as usize] {
+        None => Fit::Late(n.wrapping_sub(seq)),
+        Some(m) if m == msg => Fit::Copy,
+        Some(_) => Fit::Conflict,
+    }
+}
+
+/// Enters frame `seq` carrying `msg` (new or late) in the window `seen` whose newest is
+/// `newest`: its unwrapped number.
+fn enter(seen: &mut [Option<MavMessage>], newest: &mut u64, seq: u8, msg: &MavMessage) -> u64 {
+    let n = *newest as u8;
+    let d = seq.wrapping_sub(n);
+    seen[seq as usize] = Some(msg.clone());
+    if (1..=MAX_STEP_AHEAD).contains(&d) {
+        for k in 1..d {
+            seen[n.wrapping_add(k) as usize] = None;
+        }
+        *newest += d as u64;
+        return *newest;
+    }
+    unwrapped(*newest, seq)
+}
+
+/// The unwrapped number of a frame numbered `seq` behind (or on) the window's newest `newest`.
+fn unwrapped(newest: u64, seq: u8) -> u64 {
+    newest.saturating_sub((newest as u8).wrapping_sub(seq) as u64)
+}
+
+/// A doubt: the first conflict seen, awaiting proof of two senders. The old window (`A`, the
+/// watch's own) is kept, and the doubt's window (`B`) is seeded with the conflicting frame;
+/// each frame after it goes to the window it fits nearer.
 struct DoubtState {
-    /// The old window's newest number (modulo 256).
+    /// The old window's newest number when the doubt opened, `N_A` (modulo 256).
     old_newest: u8,
     /// The step from the old newest number to the conflicting frame's, modulo 256 (a loss of
     /// this many frames less one, or 255 + 256 k more).
     jump: u8,
-    /// Frames since, new or late in the doubt's window.
+    /// Frames since, new or late in either window.
     frames: u32,
     /// When it opened (the companion's clock, s).
     since_s: f64,
+    /// The doubt's window: per number, the message seen with it.
+    seen_b: Vec<Option<MavMessage>>,
+    /// Its newest number, unwrapped (above every number of the old window's).
+    newest_b: u64,
+    /// A new frame of the old stream has gone more than [`REORDER`] past `N_A`.
+    a_past: bool,
+    /// A new frame of the doubt's stream came after that.
+    b_since: bool,
+    /// New frames of the old stream and of the doubt's since it opened (the conflicting one
+    /// counted in the doubt's).
+    new_a: u32,
+    new_b: u32,
+}
+
+/// A doubt that ended resynchronised, with no proof of two senders ([`SequenceWatch::take_resync`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resync {
+    /// The step from the old newest number to the first conflicting frame's, modulo 256
+    /// (`k + 1` for a loss of `k` frames).
+    pub jump: u8,
+    /// The frames in the doubt after the conflicting one (new or late, not copies).
+    pub frames: u32,
+    /// How long the doubt lasted, s (the companion's clock).
+    pub secs: f64,
+    /// The stream that went on (more new frames in the doubt) was the old window's (its frames
+    /// went past `N_A`: the doubt's first frames were the strays), not the doubt's.
+    pub on_old: bool,
 }
 
 /// The sequence numbers of the frames of one (system, component), watched for a second sender.
@@ -151,12 +261,24 @@ pub struct SequenceWatch {
     pub resyncs: u64,
     /// The doubt under way, if any.
     doubt: Option<DoubtState>,
-    /// The last doubt ended resynchronised, not yet taken: its jump ([`Self::take_resync`]).
-    resynced: Option<u8>,
+    /// The last doubt ended resynchronised, not yet taken ([`Self::take_resync`]).
+    resynced: Option<Resync>,
+    /// When the last doubt ended resynchronised (the companion's clock, s).
+    last_resync_s: Option<f64>,
+    /// The proof was a first conflict [`RESYNC_MEMORY_S`] or less after the last
+    /// resynchronisation: how long after it, s.
+    pub after_resync_s: Option<f64>,
     /// Two senders proven: every conflict since is one more proof, no doubt.
     proven: bool,
     /// The proof was the old stream going on (b): the old window's newest number then.
     pub resumed_from: Option<u8>,
+    /// After a doubt resynchronised on its own window: the old window's frames (per number,
+    /// modulo 256), a frame identical to one of them is a copy delivered again across the
+    /// doubt (a redundant path, att39f's F10), whatever its number is in the window; forgotten
+    /// at the next doubt or restart, or once the window's newest (unwrapped) reaches
+    /// `before_doubt_until` (129 numbers on from the resynchronisation).
+    before_doubt: Vec<Option<MavMessage>>,
+    before_doubt_until: u64,
     /// When the last [`RESTART_FRAMES`] + 1 frames came (the companion's clock, s; since the
     /// last restart).
     times: VecDeque<f64>,
@@ -186,9 +308,13 @@ impl Default for SequenceWatch {
             resyncs: 0,
             doubt: None,
             resynced: None,
+            last_resync_s: None,
+            after_resync_s: None,
             proven: false,
             resumed_from: None,
             times: VecDeque::new(),
+            before_doubt: Vec::new(),
+            before_doubt_until: 0,
             base: 0,
         }
     }
@@ -204,8 +330,11 @@ impl SequenceWatch {
             let m = self.times.len();
             let took_s = (last - first) * RESTART_FRAMES as f64 / (m - 1).max(1) as f64;
             if m >= RESTART_MIN_FRAMES && wall_s - last > took_s {
-                // (A doubt too ends: the next frame is taken as the first.)
-                self.doubt = None;
+                // (A doubt too ends: the next frame is taken as the first, numbered above
+                // every number given before, the doubt's too.)
+                if let Some(d) = self.doubt.take() {
+                    self.newest = self.newest.map(|n| n.max(d.newest_b));
+                }
                 self.restart();
                 self.times.clear();
             }
@@ -222,55 +351,198 @@ impl SequenceWatch {
             self.newest = Some(u);
             return (FrameKind::New, u);
         };
-        if let Some(d) = &self.doubt {
-            // (b): the old stream goes on while the doubt's window is still behind it.
-            let n_b = newest as u8;
-            let ahead_of_old = seq.wrapping_sub(d.old_newest);
-            let b_behind = d.old_newest.wrapping_sub(n_b);
-            if (1..=MAX_STEP_AHEAD).contains(&ahead_of_old)
-                && (1..=128).contains(&b_behind)
-                && seq.wrapping_sub(n_b) > RESUME_STEP
-            {
-                self.resumed_from = Some(d.old_newest);
-                return self.proof(newest + seq.wrapping_sub(n_b) as u64);
-            }
+        if self.doubt.is_some() {
+            return self.doubt_frame(newest, seq, msg, wall_s);
         }
-        let (kind, u) = self.classify(newest, seq, msg);
-        match (kind, self.doubt.as_mut()) {
-            // (a): a conflict in the doubt's window (or any, once proven).
-            (FrameKind::Conflict, Some(_)) => self.proof(u),
-            (FrameKind::Conflict, None) if self.proven => self.proof(u),
-            (FrameKind::Conflict, None) => {
-                // The first conflict: a doubt, its window seeded with this frame.
+        let u = unwrapped(newest, seq);
+        if newest >= self.before_doubt_until {
+            self.before_doubt.clear();
+        } else if self
+            .before_doubt
+            .get(seq as usize)
+            .is_some_and(|m| m.as_ref() == Some(msg))
+        {
+            // A copy of a frame from before the last doubt, delivered again across it (by its
+            // number new, late or a conflict in the doubt's window).
+            self.copies += 1;
+            return (FrameKind::Copy, u);
+        }
+        match fit(&self.seen, newest, seq, msg) {
+            Fit::Copy => {
+                self.copies += 1;
+                (FrameKind::Copy, u)
+            }
+            // Once proven, every conflict is one more proof.
+            Fit::Conflict if self.proven => self.proof(u),
+            Fit::Conflict => {
+                if let Some(since_s) = self
+                    .last_resync_s
+                    .map(|t| wall_s - t)
+                    .filter(|&dt| dt <= RESYNC_MEMORY_S)
+                {
+                    // (c): a first conflict again within seconds of a resynchronisation.
+                    self.after_resync_s = Some(since_s);
+                    return self.proof(u);
+                }
+                // The first conflict: a doubt, its window seeded with this frame (numbered
+                // above every number of the old window).
                 self.doubts += 1;
+                self.before_doubt.clear();
                 let old = newest as u8;
+                let mut seen_b = vec![None; 256];
+                seen_b[seq as usize] = Some(msg.clone());
+                let newest_b = (newest / 256 + 2) * 256 + seq as u64;
                 self.doubt = Some(DoubtState {
                     old_newest: old,
                     jump: seq.wrapping_sub(old),
                     frames: 0,
                     since_s: wall_s,
+                    seen_b,
+                    newest_b,
+                    a_past: false,
+                    b_since: false,
+                    new_a: 0,
+                    new_b: 1,
                 });
-                self.restart();
-                let u = self.base + 256 + seq as u64;
-                self.seen[seq as usize] = Some(msg.clone());
-                self.newest = Some(u);
-                (FrameKind::Doubt, u)
+                (FrameKind::Doubt, newest_b)
             }
-            (FrameKind::Copy, _) => (FrameKind::Copy, u),
-            (_, Some(d)) => {
-                d.frames += 1;
-                let timed_out = d.frames >= DOUBT_MIN_FRAMES && wall_s - d.since_s >= DOUBT_S;
-                if d.frames < DOUBT_FRAMES && !timed_out {
-                    return (FrameKind::Doubt, u);
+            f => {
+                if matches!(f, Fit::Late(_)) {
+                    self.late += 1;
                 }
-                // No proof: one sender, resynchronised on the doubt's window.
-                self.resynced = Some(d.jump);
-                self.resyncs += 1;
-                self.doubt = None;
+                let mut n = newest;
+                let u = enter(&mut self.seen, &mut n, seq, msg);
+                self.newest = Some(n);
+                let kind = if matches!(f, Fit::New(_)) {
+                    FrameKind::New
+                } else {
+                    FrameKind::Late
+                };
                 (kind, u)
             }
-            (_, None) => (kind, u),
         }
+    }
+
+    /// A frame in a doubt, the old window's newest number being `newest_a`: it goes to the
+    /// window it fits nearer (new by a smaller step, or late by fewer numbers; the doubt's on
+    /// a tie); a copy in either is a copy; a conflict in both is proof (a); the old stream's
+    /// new frames gone more than [`REORDER`] past `N_A` with the doubt's between are proof
+    /// (b). Else, after [`DOUBT_FRAMES`] (or [`DOUBT_MIN_FRAMES`] and [`DOUBT_S`]), the stream
+    /// with more new frames in the doubt becomes the window: resynchronised.
+    fn doubt_frame(
+        &mut self,
+        newest_a: u64,
+        seq: u8,
+        msg: &MavMessage,
+        wall_s: f64,
+    ) -> (FrameKind, u64) {
+        let Some(mut d) = self.doubt.take() else {
+            return (FrameKind::Doubt, newest_a);
+        };
+        let fa = fit(&self.seen, newest_a, seq, msg);
+        let fb = fit(&d.seen_b, d.newest_b, seq, msg);
+        if fa == Fit::Copy || fb == Fit::Copy {
+            // Delivered again (before or since the conflict): ignored.
+            self.copies += 1;
+            let u = if fb == Fit::Copy {
+                unwrapped(d.newest_b, seq)
+            } else {
+                unwrapped(newest_a, seq)
+            };
+            self.doubt = Some(d);
+            return (FrameKind::Copy, u);
+        }
+        let stream = match (fa.distance(), fb.distance()) {
+            // (a): another frame than the one seen with its number in both windows: two
+            // different frames with one number since the first conflict.
+            (None, None) => return self.proof(unwrapped(d.newest_b, seq)),
+            (Some(_), None) => Stream::A,
+            (None, Some(_)) => Stream::B,
+            (Some(x), Some(y)) if x < y => Stream::A,
+            (Some(_), Some(_)) => Stream::B,
+        };
+        let f = if stream == Stream::A { fa } else { fb };
+        let mut n_a = newest_a;
+        let u = match stream {
+            Stream::A => enter(&mut self.seen, &mut n_a, seq, msg),
+            Stream::B => enter(&mut d.seen_b, &mut d.newest_b, seq, msg),
+        };
+        self.newest = Some(n_a);
+        if matches!(f, Fit::Late(_)) {
+            self.late += 1;
+        } else {
+            match stream {
+                Stream::A => {
+                    if d.a_past && d.b_since {
+                        // (b): the old stream goes on past N_A, the doubt's frames between:
+                        // two counters alive side by side.
+                        self.resumed_from = Some(d.old_newest);
+                        return self.proof(u);
+                    }
+                    let past = (n_a as u8).wrapping_sub(d.old_newest);
+                    if (REORDER + 1..=MAX_STEP_AHEAD).contains(&past) {
+                        d.a_past = true;
+                    }
+                }
+                Stream::B => d.b_since |= d.a_past,
+            }
+            match stream {
+                Stream::A => d.new_a += 1,
+                Stream::B => d.new_b += 1,
+            }
+        }
+        d.frames += 1;
+        let timed_out = d.frames >= DOUBT_MIN_FRAMES && wall_s - d.since_s >= DOUBT_S;
+        if d.frames < DOUBT_FRAMES && !timed_out {
+            self.doubt = Some(d);
+            return (FrameKind::Doubt, u);
+        }
+        // No proof: one sender, resynchronised on the stream that went on, the one with more
+        // new frames in the doubt: the old one if the sender's numbers passed N_A and went on
+        // alone (the doubt's first frames were strays, att39f-2), else the doubt's (which came
+        // back behind and walked up to N_A; a few of the old one's late frames beside it,
+        // att39f-1), this frame entered in it if it fits, every number above every one given
+        // so far.
+        let live = if d.new_a > d.new_b {
+            Stream::A
+        } else {
+            Stream::B
+        };
+        let (mut seen, mut newest) = match live {
+            Stream::A => (std::mem::take(&mut self.seen), n_a),
+            Stream::B => (std::mem::take(&mut d.seen_b), d.newest_b),
+        };
+        let mut kind = if matches!(f, Fit::New(_)) {
+            FrameKind::New
+        } else {
+            FrameKind::Late
+        };
+        if live != stream {
+            kind = match fit(&seen, newest, seq, msg) {
+                Fit::New(_) => FrameKind::New,
+                Fit::Late(_) => FrameKind::Late,
+                _ => kind,
+            };
+            if matches!(kind, FrameKind::New | FrameKind::Late) {
+                enter(&mut seen, &mut newest, seq, msg);
+            }
+        }
+        let top = (n_a.max(d.newest_b) / 256 + 1) * 256;
+        let rebased = top + (newest as u8) as u64;
+        let old = std::mem::replace(&mut self.seen, seen);
+        self.before_doubt = if live == Stream::B { old } else { Vec::new() };
+        self.before_doubt_until = rebased + SEQUENCE_WINDOW as u64;
+        self.newest = Some(rebased);
+        let u = unwrapped(rebased, seq);
+        self.resynced = Some(Resync {
+            jump: d.jump,
+            frames: d.frames,
+            secs: wall_s - d.since_s,
+            on_old: live == Stream::A,
+        });
+        self.resyncs += 1;
+        self.last_resync_s = Some(wall_s);
+        (kind, u)
     }
 
     /// Two senders proven by the frame numbered `u` (unwrapped): the doubt's window is the
@@ -287,48 +559,17 @@ impl SequenceWatch {
         self.doubt.is_some()
     }
 
-    /// The last doubt ended resynchronised (one sender), once: the step from the old newest
-    /// number to the first conflicting frame's, modulo 256 (`k + 1` for a loss of `k` frames).
-    pub fn take_resync(&mut self) -> Option<u8> {
+    /// The last doubt ended resynchronised (one sender), once ([`Resync`]).
+    pub fn take_resync(&mut self) -> Option<Resync> {
         self.resynced.take()
     }
 
-    /// Forgets every number seen (a restart, or a doubt's fresh window): the next frame's
+    /// Forgets every number seen (a restart): the next frame's
     /// unwrapped number is above every one before.
     fn restart(&mut self) {
+        self.before_doubt.clear();
         self.base = self.newest.take().map_or(0, |n| (n / 256 + 1) * 256);
         self.seen.iter_mut().for_each(|m| *m = None);
-    }
-
-    /// A frame numbered `seq` carrying `msg` classed in the window whose newest is `newest`.
-    fn classify(&mut self, newest: u64, seq: u8, msg: &MavMessage) -> (FrameKind, u64) {
-        let n = newest as u8;
-        let d = seq.wrapping_sub(n);
-        if (1..=MAX_STEP_AHEAD).contains(&d) {
-            for k in 1..d {
-                self.seen[n.wrapping_add(k) as usize] = None;
-            }
-            self.seen[seq as usize] = Some(msg.clone());
-            let u = newest + d as u64;
-            self.newest = Some(u);
-            return (FrameKind::New, u);
-        }
-        let behind = n.wrapping_sub(seq) as u64;
-        let u = newest.saturating_sub(behind);
-        let slot = &mut self.seen[seq as usize];
-        let kind = match slot {
-            None => {
-                *slot = Some(msg.clone());
-                self.late += 1;
-                FrameKind::Late
-            }
-            Some(m) if m == msg => {
-                self.copies += 1;
-                FrameKind::Copy
-            }
-            Some(_) => FrameKind::Conflict,
-        };
-        (kind, u)
     }
 }
 
@@ -656,10 +897,169 @@ mod tests {
                     assert!(w.doubts >= u64::from(k < 255), "start {start} k {k}");
                     assert!(!w.in_doubt());
                     if w.doubts == 1 {
-                        assert_eq!(w.take_resync(), Some((k + 1) as u8));
+                        assert_eq!(w.take_resync().map(|r| r.jump), Some((k + 1) as u8));
                     }
                 }
             }
+        }
+    }
+
+    /// Feeds one sender's frames `order` (its count: the number modulo 256, the content the
+    /// count) at `times` (s): the kinds.
+    fn feed(order: &[u32], times: &[f64]) -> (Vec<FrameKind>, SequenceWatch) {
+        let mut w = SequenceWatch::default();
+        let k = order
+            .iter()
+            .zip(times)
+            .map(|(&c, &t)| w.frame(c as u8, &msg(c), t).0)
+            .collect();
+        (k, w)
+    }
+
+    /// att39f-1 (F9, the model's swap.py): one sender at 50 frames a second whose link loses a
+    /// burst of `k` frames sent at once (127 <= k <= 254) and delivers its last `j` frames
+    /// before the burst (1 to 10) late, after the first `after` frames after it (1 to 5), in
+    /// order or newest first: one sender, never a proof of two (its own frames from before
+    /// the burst go at most `j` <= REORDER past the old newest number). Before (fly39): proven
+    /// two by (b) for every such case (a frame just above the old newest number, far ahead of
+    /// the doubt's newest).
+    #[test]
+    fn a_swap_across_a_burst_is_one_sender() {
+        for k in 127..=254u32 {
+            for j in 1..=10u32 {
+                for after in 1..=5usize {
+                    for reversed in [false, true] {
+                        let mut held: Vec<u32> = (300 - j..300).collect();
+                        if reversed {
+                            held.reverse();
+                        }
+                        let post: Vec<u32> = (300 + k..300 + k + 200).collect();
+                        let mut order: Vec<u32> = (0..300 - j).collect();
+                        order.extend(&post[..after]);
+                        order.extend(held);
+                        order.extend(&post[after..]);
+                        let times: Vec<f64> = (0..order.len()).map(|i| 0.02 * i as f64).collect();
+                        let (kinds, w) = feed(&order, &times);
+                        assert!(
+                            !kinds.contains(&FrameKind::Conflict),
+                            "k {k} j {j} after {after} reversed {reversed}"
+                        );
+                        assert_eq!(w.resyncs, w.doubts, "k {k} j {j} after {after}");
+                        assert!(!w.in_doubt());
+                    }
+                }
+            }
+        }
+    }
+
+    /// att39f-2 (F3c, the model's single.py with a fade): one sender at 50 frames a second
+    /// loses a burst of `k1` frames sent at once, `m` frames come, then `k2` frames are lost
+    /// at the usual rate (a radio fade: a silence of k2 x 20 ms), then on: one sender, never
+    /// a proof of two, whether its numbers after the fade pass the old newest number (they go
+    /// on alone: the doubt's first frames were strays) or not, or the fade is long enough to
+    /// restart the watch. Before (fly39): proven two by (b) for k1 = 200, m = 5 .. 20 and k2
+    /// from about 51 up.
+    #[test]
+    fn a_burst_then_a_fade_is_one_sender() {
+        for k1 in [127u32, 150, 200, 230, 254] {
+            for m in [1u32, 5, 10, 20] {
+                for k2 in 1..=255u32 {
+                    let mut order: Vec<u32> = (0..300).collect();
+                    let mut times: Vec<f64> = (0..300).map(|i| 0.02 * i as f64).collect();
+                    let mut t = 0.02 * 299.0;
+                    let mut c = 300 + k1;
+                    for _ in 0..m {
+                        t += 0.02;
+                        order.push(c);
+                        times.push(t);
+                        c += 1;
+                    }
+                    t += 0.02 * k2 as f64;
+                    c += k2;
+                    for _ in 0..200 {
+                        t += 0.02;
+                        order.push(c);
+                        times.push(t);
+                        c += 1;
+                    }
+                    let (kinds, w) = feed(&order, &times);
+                    assert!(
+                        !kinds.contains(&FrameKind::Conflict),
+                        "k1 {k1} m {m} k2 {k2}"
+                    );
+                    assert!(!w.in_doubt(), "k1 {k1} m {m} k2 {k2}");
+                }
+            }
+        }
+    }
+
+    /// att39f-3 (N22, N23, the model's near.py): a second sender that sends one frame every
+    /// `period` of the vehicle's (51 frames a second), numbered the vehicle's last number +
+    /// `off` (-7 to 127: it numbers from the vehicle's counter) is proven within 8 s of its
+    /// first frame: each of its frames opens a doubt that the vehicle's own frames may
+    /// resynchronise, and the next one, within RESYNC_MEMORY_S, is proof. Before (fly39):
+    /// never proven for these offsets at 1 Hz.
+    #[test]
+    fn a_slow_twin_numbering_from_the_vehicles_counter_is_proven() {
+        for period in [26u32, 51, 102] {
+            for off in (-7i32..=127).filter(|&o| o != 0) {
+                let mut w = SequenceWatch::default();
+                let mut twin_frames = 0;
+                let mut proven = false;
+                for g in 0..3000u32 {
+                    let t = g as f64 / 51.0;
+                    if w.frame(g as u8, &msg(g), t).0 == FrameKind::Conflict {
+                        proven = true;
+                        break;
+                    }
+                    if g >= 100 && g % period == 0 {
+                        twin_frames += 1;
+                        let s = (g as i32 + off).rem_euclid(256) as u8;
+                        if w.frame(s, &msg(9_000_000 + g), t).0 == FrameKind::Conflict {
+                            proven = true;
+                            break;
+                        }
+                    }
+                }
+                assert!(
+                    proven && (twin_frames * period) as f64 / 51.0 <= 8.0,
+                    "period {period} off {off}: {twin_frames}"
+                );
+            }
+        }
+    }
+
+    /// att39f-3 (N18): a free-running second sender 60 numbers ahead of the vehicle's counter
+    /// at 1 Hz beside the vehicle's 50 frames a second is proven within 6 of its frames.
+    #[test]
+    fn a_slow_free_twin_ahead_is_proven() {
+        for off in [60u32, 100, 127] {
+            let at = twins(256 - off, 50.0, 1.0, 0.5);
+            assert!(at.is_some_and(|(_, _, b)| b <= 6), "off {off}: {at:?}");
+        }
+    }
+
+    /// att39f's F10 (item 5): one sender whose every frame a redundant path delivers again 60
+    /// frames later, and whose link loses a burst of `k` frames sent at once (127 to 254):
+    /// the copies of its frames from before the burst, delivered during the doubt and after
+    /// it resynchronised, are copies, never a conflict.
+    #[test]
+    fn copies_across_a_doubt_are_copies() {
+        for k in [127u32, 150, 200, 230, 254] {
+            let orig: Vec<u32> = (0..300).chain(300 + k..300 + k + 600).collect();
+            let mut order = Vec::new();
+            let mut times = Vec::new();
+            for (i, &c) in orig.iter().enumerate() {
+                order.push(c);
+                times.push(0.02 * i as f64);
+                if i >= 60 {
+                    order.push(orig[i - 60]);
+                    times.push(0.02 * i as f64 + 0.01);
+                }
+            }
+            let (kinds, w) = feed(&order, &times);
+            assert!(!kinds.contains(&FrameKind::Conflict), "k {k}");
+            assert_eq!(w.resyncs, w.doubts, "k {k}");
         }
     }
 
@@ -690,21 +1090,20 @@ mod tests {
 
     /// Twins whose counter is 1 to 255 behind (= ahead by 256 minus that) the vehicle's, all
     /// proven (a CONFLICT), never only a doubt resynchronised:
-    /// * at one rate (50 frames a second each) within 2 x 129 + 2 frames: their numbers meet
-    ///   within the window at the latest when the offset has gone round it once (offset 128,
-    ///   the window's oldest, the slowest), and a first conflict is then proven at once, by
-    ///   the other's next frame (b) or, offset within RESUME_STEP, by their numbers meeting in
-    ///   the doubt's window (a);
+    /// * at one rate (50 frames a second each) within 2 x 129 + 2 x (REORDER + 2) frames: their
+    ///   numbers meet within the window at the latest when the offset has gone round it once
+    ///   (offset 128, the window's oldest, the slowest), and a first conflict is then proven
+    ///   once the old counter has gone more than REORDER past it with the other's frames
+    ///   between (b), or by a frame that conflicts in both windows (a);
     /// * a slow twin (1 Hz heartbeats) beside a 50 frames a second vehicle, and the reverse,
-    ///   within 8 of the slow one's frames: each of its frames lands 49 numbers further round
-    ///   the fast one's counter; one within RESUME_STEP of the fast one's newest opens a doubt
-    ///   that may resynchronise, the next one (49 further) opens one that (b) ends at once.
+    ///   within 8 of the slow one's frames: a doubt its frame opens may resynchronise, the
+    ///   next conflict, within RESYNC_MEMORY_S, is proof (c).
     #[test]
     fn twins_behind_or_ahead_fast_or_slow_are_proven() {
         for off in 1..=255u32 {
             let at = twins(off, 50.0, 50.0, 0.005);
             assert!(
-                at.is_some_and(|(i, _, _)| i <= 2 * 129 + 2),
+                at.is_some_and(|(i, _, _)| i <= 2 * 129 + 2 * (REORDER as usize + 2)),
                 "same rate, offset {off}: {at:?}"
             );
             let at = twins(off, 50.0, 1.0, 0.5);

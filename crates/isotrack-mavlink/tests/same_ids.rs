@@ -580,7 +580,11 @@ fn a_same_id_twins_heartbeat_in_control_is_no_pilots_word() {
             out
         });
         assert_eq!(r.end, FlyEnd::VehicleLost, "{twin:?} {:?}", r.events);
-        assert!(r.way_out_commanded, "{:?}", r.events);
+        // The way out, or nothing where the twin's heartbeat was applied as a word before the
+        // proof (att39f-1).
+        if !r.way_out_commanded {
+            assert_word_before_the_proof_commands_nothing(&r);
+        }
         assert!(
             r.events
                 .iter()
@@ -883,18 +887,40 @@ fn way_out_tries(r: &FlyReport) -> Option<u32> {
     })
 }
 
+/// Asserts that a flight ended `vehicle_lost` on a second sender with nothing commanded because
+/// a heartbeat applied before the proof showed a word (a pilot's, or the second sender's:
+/// att39f-1), and that the log says so.
+fn assert_word_before_the_proof_commands_nothing(r: &FlyReport) {
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "(a pilot's word, or the second sender's): setpoints stopped, nothing commanded, the pilot's mode stands"
+        )),
+        "{:?}",
+        r.events
+    );
+}
+
 /// Asserts that a flight with a second vehicle's heartbeats ended `vehicle_lost` with HOLD
 /// commanded more than once and never unconfirmed-confirmed: no `pilot_took_over` (at the
 /// flight's end or during the failsafe's retries), the vehicle flown (which never leaves
 /// OFFBOARD here) not reported in HOLD.
+///
+/// att39f-1: where a heartbeat applied before the second sender was proven showed a word (the
+/// twin's, which fly cannot tell from a pilot's), nothing is commanded instead
+/// ([`assert_word_before_the_proof_commands_nothing`]).
 fn assert_twin_never_the_pilot(r: &FlyReport) {
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
-    assert!(r.way_out_commanded, "{:?}", r.events);
     assert!(
         !r.events.iter().any(|e| e.contains("pilot_took_over")),
         "{:?}",
         r.events
     );
+    if !r.way_out_commanded {
+        assert_word_before_the_proof_commands_nothing(r);
+        return;
+    }
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
     assert!(
         r.events
@@ -1163,11 +1189,28 @@ fn vehicle_and_twin_with_positions(
 /// Asserts the end after a second sender was seen: `vehicle_lost`, the HOLD commanded more
 /// than once and never confirmed, no disarm ever sent, no pilot's word taken, and the log
 /// saying so.
+///
+/// att39f-1: where a heartbeat applied before the second sender was proven showed a word (the
+/// twin's, which fly cannot tell from a pilot's), nothing is commanded instead: no disarm, no
+/// HOLD ([`assert_word_before_the_proof_commands_nothing`]).
 fn assert_hold_never_a_disarm(r: &FlyReport, c: &[Sent]) {
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
-    assert!(r.way_out_commanded, "{:?}", r.events);
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
     assert!(!disarm_sent(c), "{c:?} {:?}", r.events);
+    if !r.way_out_commanded {
+        assert_word_before_the_proof_commands_nothing(r);
+        assert!(
+            !c.iter().any(|x| x.0 == SET_MODE && x.1[1] == 4.0),
+            "{c:?} {:?}",
+            r.events
+        );
+        assert!(
+            !r.events.iter().any(|e| e.contains("pilot_took_over")),
+            "{:?}",
+            r.events
+        );
+        return;
+    }
     assert!(
         c.iter().filter(|x| x.0 == SET_MODE).count() >= 2,
         "{c:?} {:?}",
@@ -1566,4 +1609,209 @@ fn a_reversed_burst_of_one_sender_is_no_reboot() {
         "{:?}",
         r.events
     );
+}
+
+/// One sender on a frame-level link (att39f's stand-in PX4): in control (the pilot's
+/// OFFBOARD), three frames a 50 ms turn (paced on the wall clock; a heartbeat every fourth turn, else a second
+/// position; a measurement and a position each), the pilot's MANUAL from turn 60 (heartbeats
+/// of it from then: a pilot's word awaiting confirmation). `link(k, frames)` is the link: it
+/// gets turn `k`'s frames (number, bytes) and the vehicle's sender (to step its counter: a
+/// burst of frames sent and lost) and gives the datagrams delivered. The report and every
+/// command fly sent.
+fn pilot_manual_over_a_link(
+    mut link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
+) -> (FlyReport, Vec<Sent>) {
+    let mut a = vehicle_sender();
+    let t0 = Instant::now();
+    fly_against_seen(
+        8.0,
+        |_| {},
+        false,
+        move |k| {
+            // Turns paced at 50 ms (the link's silences as long as the frames' rate says).
+            let due = Duration::from_millis(50 * k as u64);
+            if let Some(wait) = due.checked_sub(t0.elapsed()) {
+                std::thread::sleep(wait);
+            }
+            let ms = 1000 + 50 * k;
+            let main = if k < 60 { 6 } else { 1 };
+            let msgs = if k % 4 == 0 {
+                vec![heartbeat(main), iso_s(ms, 9.5), position(ms, 0.0)]
+            } else {
+                vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
+            };
+            let frames = a.frames(&msgs);
+            link(k, frames, &mut a)
+        },
+    )
+}
+
+/// Asserts that nothing was commanded against the pilot's MANUAL heard (no COMMAND_LONG at all:
+/// the pilot put the vehicle in OFFBOARD, fly commanded nothing before either): the flight ends
+/// as the pilot's (`pilot_took_over`), or `vehicle_lost` if the link still reads as two
+/// senders, then with nothing commanded and the log saying why.
+fn assert_nothing_against_the_pilot(r: &FlyReport, c: &[Sent]) {
+    assert!(c.is_empty(), "{c:?} {:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    match r.end {
+        FlyEnd::PilotTookOver => {}
+        FlyEnd::VehicleLost => assert!(
+            r.events.iter().any(|e| e.contains(
+                "showed it armed in MANUAL (a pilot's word, or the second sender's): setpoints stopped, nothing commanded, the pilot's mode stands"
+            )),
+            "{:?}",
+            r.events
+        ),
+        e => panic!("{e:?}: {:?}", r.events),
+    }
+}
+
+/// att39f-1 (F9b): one sender; the pilot's MANUAL heard (turn 60); at turn 66 the link holds
+/// the last two frames before a burst of 200 frames sent at once and lost, and delivers the
+/// first frame after the burst, then the two held ones newest first (numbers N_A + 201, N_A,
+/// N_A - 1), then on. No command may go out after the MANUAL heartbeat, whatever the verdict
+/// on the senders. Before (fly39): `vehicle_lost` "goes on from the counter's ...", HOLD
+/// commanded against the pilot (7 DO_SET_MODE).
+#[test]
+fn a_swap_across_a_burst_after_a_pilots_manual_commands_nothing() {
+    let mut held: Vec<Vec<u8>> = Vec::new();
+    let (r, c) = pilot_manual_over_a_link(move |k, frames, a| {
+        let mut out: Vec<Vec<u8>> = frames.into_iter().map(|f| f.1).collect();
+        if k == 66 {
+            held = out.split_off(1);
+            a.seq = a.seq.wrapping_add(200);
+        } else if k == 67 {
+            let rest = out.split_off(1);
+            out.extend(held.drain(..).rev());
+            out.extend(rest);
+        }
+        out
+    });
+    assert_nothing_against_the_pilot(&r, &c);
+}
+
+/// att39f-2 (F3c): one sender; the pilot's MANUAL heard (turn 60); at turn 66 a burst of 200
+/// frames sent at once is lost, six frames come, then the next 52 frames (a fade at the usual
+/// rate, shorter than the last 64 frames took: no restart of the watch) are lost, then on. No
+/// command may go out after the MANUAL heartbeat. Before (fly39): `vehicle_lost`, HOLD
+/// commanded against the pilot.
+#[test]
+fn a_burst_then_a_fade_after_a_pilots_manual_commands_nothing() {
+    let mut seen_after = 0u32;
+    let mut lose = 0u32;
+    let (r, c) = pilot_manual_over_a_link(move |k, frames, a| {
+        if k == 66 {
+            a.seq = a.seq.wrapping_add(200);
+        }
+        // (The frames of turn 66 were numbered before the burst: the burst comes after them.)
+        let mut out = Vec::new();
+        for (_, f) in frames {
+            if k > 66 && seen_after < 6 {
+                seen_after += 1;
+                if seen_after == 6 {
+                    lose = 52;
+                }
+            } else if lose > 0 {
+                lose -= 1;
+                continue;
+            }
+            out.push(f);
+        }
+        out
+    });
+    assert_nothing_against_the_pilot(&r, &c);
+}
+
+/// How a slow twin numbers its frames ([`vehicle_with_a_slow_twin`]).
+#[derive(Clone, Copy, Debug)]
+enum TwinCounter {
+    /// Each frame numbered the vehicle's last number + this (a spoofer reading the link).
+    Near(i32),
+    /// Its own counter, starting this many numbers ahead of the vehicle's.
+    Free(u8),
+}
+
+/// att39f-3's stand-in: in control (the pilot's OFFBOARD; three frames a 50 ms turn, paced on
+/// the wall clock, a heartbeat every fourth turn), a second sender with the vehicle's ids
+/// beats armed in MANUAL once a second (every 20 turns) from turn 40, numbered by `counter`.
+/// The report and the commands fly sent.
+fn vehicle_with_a_slow_twin(counter: TwinCounter) -> (FlyReport, Vec<Sent>) {
+    let mut a = vehicle_sender();
+    let mut free: Option<Sender> = None;
+    let t0 = Instant::now();
+    fly_against_seen(
+        12.0,
+        |_| {},
+        false,
+        move |k| {
+            let due = Duration::from_millis(50 * k as u64);
+            if let Some(wait) = due.checked_sub(t0.elapsed()) {
+                std::thread::sleep(wait);
+            }
+            let ms = 1000 + 50 * k;
+            let msgs = if k % 4 == 0 {
+                vec![heartbeat(6), iso_s(ms, 9.5), position(ms, 0.0)]
+            } else {
+                vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
+            };
+            let mut out = datagrams(a.frames(&msgs));
+            if k >= 40 && k % 20 == 0 {
+                let last = a.seq.wrapping_sub(1);
+                let b = match counter {
+                    TwinCounter::Near(off) => free.insert(Sender {
+                        seq: (last as i32 + off).rem_euclid(256) as u8,
+                        ids: (1, 1),
+                    }),
+                    TwinCounter::Free(ahead) => free.get_or_insert_with(|| Sender {
+                        seq: last.wrapping_add(ahead),
+                        ids: (1, 1),
+                    }),
+                };
+                out.extend(datagrams(b.frames(&[heartbeat(1)])));
+            }
+            out
+        },
+    )
+}
+
+/// The wall time of the first event starting `what` ("wall T s: what...").
+fn event_time_s(r: &FlyReport, what: &str) -> Option<f64> {
+    r.events.iter().find_map(|e| {
+        let (t, rest) = e.strip_prefix("wall ")?.split_once(" s: ")?;
+        rest.starts_with(what).then(|| t.parse().ok()).flatten()
+    })
+}
+
+/// att39f-3 (N22, N23, N18): a second sender beating armed in MANUAL once a second beside the
+/// vehicle's 60 frames a second, numbered 3 behind or 3 ahead of the vehicle's last number, or
+/// with its own counter 60 ahead, ends the flight `vehicle_lost` within a few seconds of its
+/// first frame (2 s in: turn 40), never `pilot_took_over` and never flown to the end. Where its
+/// MANUAL heartbeat was applied as the vehicle's before the proof, nothing is commanded
+/// (att39f-1); else the HOLD. Before (fly39): N22 never proven (a resync each second, flown to
+/// max_duration), N23 and N18 `pilot_took_over` "no second sender ... seen".
+#[test]
+fn a_slow_twin_near_the_vehicles_counter_is_proven() {
+    for counter in [
+        TwinCounter::Near(-3),
+        TwinCounter::Near(3),
+        TwinCounter::Free(60),
+    ] {
+        let (r, c) = vehicle_with_a_slow_twin(counter);
+        assert_eq!(r.end, FlyEnd::VehicleLost, "{counter:?}: {:?}", r.events);
+        assert!(
+            !r.events.iter().any(|e| e.contains("pilot_took_over")),
+            "{counter:?}: {:?}",
+            r.events
+        );
+        let at = event_time_s(&r, "vehicle_lost");
+        assert!(
+            at.is_some_and(|t| t < 7.0),
+            "{counter:?}: {at:?} {:?}",
+            r.events
+        );
+        if !r.way_out_commanded {
+            assert_word_before_the_proof_commands_nothing(&r);
+            assert!(c.is_empty(), "{counter:?}: {c:?}");
+        }
+    }
 }
