@@ -225,3 +225,33 @@ def test_plot_waits_for_a_run_writing_the_directory(tmp_path):
     finally:
         p.kill()
         p.wait()
+
+
+def test_save_never_replaces_a_users_summary_or_trace(tmp_path):
+    """att39-1: `Run.save(P)` into a folder holding the user's own summary.json (not an
+    isotrack run's) and trace.csv replaced both without a word. It raises an OSError naming the
+    file (the CLI's exit 73) and every file is as it was; a folder holding an earlier save is
+    replaced as before."""
+    run = isotrack.Scenario.default().set("sim.duration_s", 5.0).run()
+    cases = [
+        ({"summary.json": '{"my": "results"}\n', "trace.csv": "t,my,data\n"}, "summary.json",
+         "is not an isotrack run's summary"),
+        ({"trace.csv": "t,my,data\n"}, "trace.csv", "no summary.json beside it"),
+    ]
+    for i, (files, named, why) in enumerate(cases):
+        p = tmp_path / f"P{i}"
+        p.mkdir()
+        for name, text in files.items():
+            (p / name).write_text(text)
+        with pytest.raises(OSError) as e:
+            run.save(str(p))
+        message = str(e.value)
+        assert str(p / named) in message and why in message, message
+        assert "save into another directory" in message, message
+        assert sorted(os.listdir(p)) == sorted(files)
+        for name, text in files.items():
+            assert (p / name).read_text() == text
+    earlier = tmp_path / "earlier"
+    run.save(str(earlier))
+    run.save(str(earlier))
+    assert sorted(os.listdir(earlier)) == RUN_FILES
