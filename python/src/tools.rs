@@ -167,14 +167,13 @@ pub fn plot(
     // (refused while `run --out` or a sweep writes it: a writer's lock file is there), for the
     // whole render and move; a folder that is neither gets no lock file (the command refuses
     // it, 66, 1a9b2e4).
-    let holds_run = ["summary.json", "results.csv", isotrack_runs::sweep::lock::LOCK_FILE]
-        .iter()
-        .any(|f| dir.join(f).exists());
+    // A sweep directory is locked by the command itself (its input, att38-8): locked here too,
+    // this process would refuse itself (att41-16).
+    let lock_file = dir.join(isotrack_runs::sweep::lock::LOCK_FILE).exists();
+    let holds_run =
+        !dir.join("results.csv").exists() && (dir.join("summary.json").exists() || lock_file);
     let _lock = if dir.is_dir() && holds_run {
-        Some(
-            isotrack_runs::sweep::lock::lock_output_dir(&dir, "plot")
-                .map_err(failure)?,
-        )
+        Some(isotrack_runs::sweep::lock::lock_output_dir(&dir, "plot").map_err(failure)?)
     } else {
         None
     };
@@ -287,7 +286,9 @@ fn staged(
     });
     let moved = match outcome {
         Ok(Ok(())) => match guard {
-            Guard::Figures => foreign_figure(&staging, dir).and_then(|()| move_files(&staging, dir)),
+            Guard::Figures => {
+                foreign_figure(&staging, dir).and_then(|()| move_files(&staging, dir))
+            }
             Guard::Nothing => move_files(&staging, dir),
         },
         // Named as the caller named them, not by the staging directory.

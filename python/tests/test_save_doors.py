@@ -255,3 +255,20 @@ def test_save_never_replaces_a_users_summary_or_trace(tmp_path):
     run.save(str(earlier))
     run.save(str(earlier))
     assert sorted(os.listdir(earlier)) == RUN_FILES
+
+
+def test_plot_of_a_sweep_draws_into_the_sweep(tmp_path):
+    """att41-16: `isotrack.plot(SWEEP)` took the sweep directory's lock, then the command took
+    it again for its input and refused its own process: every sweep plot into the sweep
+    failed. It draws the sweep figure there."""
+    sw = tmp_path / "sw.toml"
+    sw.write_text(
+        f'scenario = "{ROOT / "scenarios" / "paper-fig2b-circular.toml"}"\n'
+        "[base]\nsim.duration_s = 5.0\n[grid]\ncontroller.kp = [5.0, 10.0]\n"
+    )
+    out = tmp_path / "swd"
+    subprocess.run([cli(), "sweep", str(sw), "--out", str(out)], check=True, capture_output=True)
+    isotrack.plot(str(out))
+    drawn = [p.name for p in out.iterdir() if p.name.startswith("sweep_") and p.suffix == ".png"]
+    assert drawn, sorted(p.name for p in out.iterdir())
+    assert not (out / ".isotrack.lock").exists()

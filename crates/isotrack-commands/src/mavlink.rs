@@ -634,7 +634,7 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
         return Err(Failure {
             code: NOTHING_COMMANDED,
             message: format!(
-                "failsafe ({}) before the companion had control of the vehicle: it stopped and commanded nothing (the vehicle's mode stands)",
+                "failsafe ({}): the companion stopped and commanded nothing, before it had control of the vehicle or after the vehicle's heartbeats showed a pilot's word (see above): the vehicle's mode stands",
                 report.end.as_str()
             ),
         });
