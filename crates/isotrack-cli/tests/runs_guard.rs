@@ -1186,15 +1186,8 @@ fn a_read_only_sweep_is_plotted_into_another_out() {
     let sweep = d.path().join("swd");
     let o = isotrack(&["sweep", &sw, "--out", sweep.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
-    let listing = |p: &Path| {
-        let mut v: Vec<String> = std::fs::read_dir(p)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    };
-    let before = listing(&sweep);
+    let names = |p: &Path| -> Vec<String> { listing(p).into_iter().map(|(n, _)| n).collect() };
+    let before = names(&sweep);
     for e in std::fs::read_dir(&sweep).unwrap() {
         let p = e.unwrap().path();
         std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o444)).unwrap();
@@ -1235,13 +1228,13 @@ fn a_read_only_sweep_is_plotted_into_another_out() {
     std::fs::set_permissions(&sweep, std::fs::Permissions::from_mode(0o755)).unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
     assert!(
-        listing(&out)
+        names(&out)
             .iter()
             .any(|f| f.starts_with("sweep_") && f.ends_with(".png")),
         "{:?}",
-        listing(&out)
+        names(&out)
     );
-    assert_eq!(listing(&sweep), before);
+    assert_eq!(names(&sweep), before);
 }
 
 /// nu40-4: a data file replaced while `run --out` flies: the run flew the field read before it,

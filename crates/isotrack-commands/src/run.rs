@@ -302,11 +302,17 @@ pub(crate) fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, t
     // att40-1: only a regular file with isotrack's mark is redrawn by `plot`; it refuses (73)
     // anything else of a figure's name (the user's own file, an older isotrack's unmarked
     // figure, a link or FIFO), so the advice for those is to move them.
-    let foreign = |n: &str| {
-        n != "mavlink.tlog"
-            && (std::fs::symlink_metadata(dir.join(n)).map_or(true, |m| !m.is_file())
-                || isotrack_plot::refuse_foreign_figure(&dir.join(n)).is_err())
-    };
+    // Looked at once per file (the mark test reads the file).
+    let foreign_files: Vec<&str> = before
+        .iter()
+        .copied()
+        .filter(|&n| {
+            n != "mavlink.tlog"
+                && (std::fs::symlink_metadata(dir.join(n)).map_or(true, |m| !m.is_file())
+                    || isotrack_plot::refuse_foreign_figure(&dir.join(n)).is_err())
+        })
+        .collect();
+    let foreign = |n: &str| foreign_files.contains(&n);
     let has =
         |f: &dyn Fn(&str) -> bool| before.iter().copied().filter(|n| f(n)).collect::<Vec<_>>();
     let is_team = |n: &str| n.starts_with("team.");
