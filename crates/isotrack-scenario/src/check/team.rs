@@ -24,6 +24,7 @@ use super::sampled;
 use super::setup::{not_computed, Law, LoopSetup};
 use super::verdict::Verdict;
 use crate::spec::TeamSpec;
+use crate::team::TeamIsolineModel;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::spacing::{
@@ -32,6 +33,9 @@ use isotrack_core::spacing::{
     slowest_mode_time_constant_sampled_s, slowest_sampled_mode, spacing_mode_spectral_radius,
     spacing_mode_stable, split_delay,
 };
+use isotrack_core::Vec2;
+use isotrack_sim::team::arc::{ArcProjection, PolylineArc};
+use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
 
@@ -122,6 +126,10 @@ pub struct SpacingLoopReport {
     /// `L` is known (a circle; null otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub saturated_gap_cv_max: Option<f64>,
+    /// Where the ranges fall silent (`team.ranging.max_range_m`): the halt and the largest gap
+    /// CV it can leave (absent when no halt exists or the law does not range).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range_halt: Option<RangeHaltReport>,
     /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
     /// discovery phase), each with its key.
     pub not_modelled: Vec<String>,
@@ -209,6 +217,7 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         slowest_time_constant_continuous_s: None,
         saturated_gap_amplitude_m: None,
         saturated_gap_cv_max: None,
+        range_halt: range_halt(s, team),
         not_modelled: vec![],
         note: String::new(),
     };
@@ -300,12 +309,12 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
             .map(|a| amplitude * n as f64 / (std::f64::consts::TAU * a.radius_m))
             .filter(|x| x.is_finite());
     }
-    rep.not_modelled = spacing_not_modelled(s, team, n);
+    rep.not_modelled = spacing_not_modelled(team, n, rep.range_halt.as_ref());
     rep
 }
 
 /// The effects the linear spacing loop leaves out, each naming its key.
-fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> {
+fn spacing_not_modelled(team: &TeamSpec, n: usize, halt: Option<&RangeHaltReport>) -> Vec<String> {
     let r = &team.ranging;
     let mut out = vec![format!(
         "speed saturation: the loop is the unsaturated law (it holds while v0 + k_v (r_ahead - r_behind) stays in [team.v_min_mps, team.v_max_mps] = [{}, {}] m/s)",
@@ -342,12 +351,8 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
         ));
     }
     if r.max_range_m.is_finite() {
-        match even_chord_beyond_range(s, team) {
-            Some(d) => out.push(format!(
-                "team.ranging.max_range_m = {} is shorter than the even spacing's range {} m: at even spacing the neighbours do not answer and the law sees max_range_m, not the gaps",
-                Echo(r.max_range_m),
-                Num(d)
-            )),
+        match halt {
+            Some(h) => out.push(h.text()),
             None => out.push(format!(
                 "team.ranging.max_range_m = {} (beyond it the law sees max_range_m)",
                 Echo(r.max_range_m)
@@ -365,20 +370,145 @@ fn spacing_not_modelled(s: &Scenario, team: &TeamSpec, n: usize) -> Vec<String> 
     out
 }
 
-/// The range between neighbours at even spacing on the team's circle, `2 r sin(pi/N)` (a chord
-/// of the circle of radius `r` through `2 pi/N`), when it is longer than
-/// `team.ranging.max_range_m`: `None` when it is not, or the isoline is not a known circle
-/// ([`Scenario::team_arc`]).
-fn even_chord_beyond_range(s: &Scenario, team: &TeamSpec) -> Option<f64> {
-    let max_range_m = team.ranging.max_range_m;
+/// Samples of a closed extracted isoline's arc coordinate at which [`min_silent_gap_m`] looks
+/// ahead for the first silent neighbour (each crossing then refined by bisection).
+pub const SILENT_GAP_SAMPLES: usize = 2048;
+
+/// Where `range_balance`'s ranges fall silent (nu39-7, att41-5/-6/-19): past
+/// `team.ranging.max_range_m` the law sees `max_range_m` for a neighbour, so a vehicle whose
+/// two neighbours are both out of range commands `v0`. With equal nominal speeds the team
+/// halts there: every vehicle at `v0`, the gaps frozen. Every equilibrium of the law has all
+/// its neighbours in range with equal ranges, or all out of range (one silent neighbour and one
+/// heard give unequal ranges, and the silence passes round the ring); on a circle equal ranges
+/// are equal gaps, so with even spacing out of range every equilibrium is a halt. A halt has
+/// every arc gap at least `g_min` (the shortest arc whose chord reaches `max_range_m`), and the
+/// gaps sum to the isoline's length `L`: the largest gap CV such a halt can leave (the
+/// population CV the run reports) is that of `N - 1` gaps of `g_min` and one of
+/// `g_min + slack`, `slack = L - N g_min`: `slack sqrt(N - 1)/L` (0 when even spacing is just
+/// in range, rising continuously as the range shortens).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RangeHaltReport {
+    /// `team.ranging.max_range_m`, m.
+    pub max_range_m: f64,
+    /// The isoline's length `L`, m (the circle's, or the extracted closed loop's).
+    pub isoline_length_m: f64,
+    /// `g_min`: the shortest arc between two points of the isoline whose chord reaches
+    /// `max_range_m` (`2 R asin(max_range/(2 R))` on a circle; on an extracted loop the least
+    /// over [`SILENT_GAP_SAMPLES`] starting points), m.
+    pub min_silent_gap_m: f64,
+    /// The range between neighbours at even spacing on a known circle, `2 R sin(pi/N)`, m
+    /// (absent on an extracted loop, where it varies along it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub even_range_m: Option<f64>,
+    /// The largest gap CV a halt can leave, `(L - N g_min) sqrt(N - 1)/L`.
+    pub worst_gap_cv: f64,
+    /// The gap CV at or below which a team counts as even (`time_to_even_s`'s).
+    pub even_gap_cv: f64,
+}
+
+impl RangeHaltReport {
+    /// Whether a halt can leave the team uneven (`worst_gap_cv > even_gap_cv`): the spacing
+    /// law's claim (the gaps converge to even) does not hold.
+    pub fn fails(&self) -> bool {
+        self.worst_gap_cv > self.even_gap_cv
+    }
+
+    /// What the halt is, in words (the `fails` verdict's reason and `not_modelled`'s line).
+    pub fn text(&self) -> String {
+        let even = match self.even_range_m {
+            Some(d) => format!(
+                "the even spacing's range is {} m (the chord 2 r sin(pi/N) of the team's circle)",
+                Num(d)
+            ),
+            None => "the isoline is an extracted loop".into(),
+        };
+        format!(
+            "team.ranging.max_range_m = {}: where both neighbours are beyond it range_balance sees max_range_m for both, commands v0 and the team halts; {even}, every arc gap of at least {} m is out of range, so a halt on this isoline (L = {} m) can leave a gap CV up to {} (even: {})",
+            Echo(self.max_range_m),
+            Num(self.min_silent_gap_m),
+            Num(self.isoline_length_m),
+            Num(self.worst_gap_cv),
+            Num(self.even_gap_cv)
+        )
+    }
+}
+
+/// [`RangeHaltReport`] for a scenario whose team runs `range_balance` (`k_v > 0`) with at
+/// least three vehicles at one nominal speed and a finite `max_range_m`, on a known circle or an
+/// extracted closed loop; `None` otherwise, or when no halt exists (`N g_min >= L`: at even
+/// spacing every neighbour is heard). Two vehicles have no spacing loop whatever the range
+/// (each sees its one neighbour twice, att41-19); unequal speeds do not halt (the slower are
+/// lapped: the spacing loop's `team.vehicles` note).
+pub fn range_halt(s: &Scenario, team: &TeamSpec) -> Option<RangeHaltReport> {
+    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
+        return None;
+    };
+    let r = team.ranging.max_range_m;
     let n = team.count();
-    if !max_range_m.is_finite() || n < 2 {
+    if gain_per_s == 0.0 || !r.is_finite() || n < 3 || team.nominal_speeds_mps().len() != 1 {
         return None;
     }
-    let chord = s
-        .team_arc()
-        .map(|a| 2.0 * a.radius_m * (std::f64::consts::PI / n as f64).sin())?;
-    (chord > max_range_m).then_some(chord)
+    let (length_m, g_min, even_range_m) = match s.team_isoline() {
+        TeamIsolineModel::Circle(c) => {
+            let d = 2.0 * c.radius_m;
+            if r >= d {
+                return None;
+            }
+            let even = d * (std::f64::consts::PI / n as f64).sin();
+            (c.length_m(), d * (r / d).asin(), Some(even))
+        }
+        TeamIsolineModel::Polyline(p) if p.is_closed() => {
+            let l = p.length_m();
+            (l, min_silent_gap_m(&p, r, l / n as f64)?, None)
+        }
+        _ => return None,
+    };
+    let slack = length_m - n as f64 * g_min;
+    (slack > 0.0 && length_m > 0.0).then(|| RangeHaltReport {
+        max_range_m: r,
+        isoline_length_m: length_m,
+        min_silent_gap_m: g_min,
+        even_range_m,
+        worst_gap_cv: slack * ((n - 1) as f64).sqrt() / length_m,
+        even_gap_cv: TeamMetricsConfig::default().even_gap_cv,
+    })
+}
+
+/// The shortest arc `g <= cap_m` from any of [`SILENT_GAP_SAMPLES`] points of the closed
+/// isoline `p` to the first point ahead whose chord reaches `range_m` (`cap_m` when none does
+/// within it; `None` for a degenerate loop). Written here: a scan of chords along an arc, no
+/// library's. The crossing is bracketed on the sampling grid and bisected, keeping the lower
+/// end (a shorter `g_min`: the CV bound errs high, never low).
+fn min_silent_gap_m(p: &PolylineArc, range_m: f64, cap_m: f64) -> Option<f64> {
+    let l = p.length_m();
+    let step = l / SILENT_GAP_SAMPLES as f64;
+    if !(step > 0.0 && cap_m > 0.0) {
+        return None;
+    }
+    let chord = |a: Vec2, s: f64| p.point_at(s).map_or(0.0, |b| (b - a).norm());
+    let mut best = cap_m;
+    for k in 0..SILENT_GAP_SAMPLES {
+        let s0 = k as f64 * step;
+        let a = p.point_at(s0)?;
+        let mut g = step;
+        while g < best && chord(a, s0 + g) < range_m {
+            g += step;
+        }
+        if g >= best {
+            continue;
+        }
+        let (mut lo, mut hi) = (g - step, g);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if chord(a, s0 + mid) < range_m {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        best = best.min(lo);
+    }
+    Some(best)
 }
 
 /// Where the clamp of att32d-2 is active: the team's common steady speed
@@ -558,7 +688,7 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
             Verdict::NotApplicable,
             format!("`isotrack run` refuses this scenario (exit 65): {why}"),
         ),
-        None => match range_balance_out_of_range(s, team) {
+        None => match range_balance_out_of_range(&spacing) {
             Some(why) => (Verdict::Fails, why),
             None => team_verdict(team, &spacing, &tracking),
         },
@@ -574,25 +704,17 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
     })
 }
 
-/// nu39-7: `range_balance` (k_v > 0) on a circle whose even spacing's range is beyond
-/// `team.ranging.max_range_m` ([`even_chord_beyond_range`]): the text of the `fails` verdict,
-/// `None` otherwise. Past `max_range_m` the law sees `max_range_m` for every neighbour, so the
-/// range slope `c` is 0 there: even spacing is no asymptotically stable equilibrium, and the
-/// team halts wherever the ranges it can hear balance (on the circle of radius 10 m with 4
-/// vehicles and `max_range_m = 5`, three gaps of 5.1 m and one of 28.2 m, gap CV 0.92).
-fn range_balance_out_of_range(s: &Scenario, team: &TeamSpec) -> Option<String> {
-    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
-        return None;
+/// nu39-7, att41-5: the text of the `fails` verdict when a halt out of range can leave the team
+/// uneven ([`RangeHaltReport::fails`]), `None` otherwise.
+fn range_balance_out_of_range(sp: &SpacingLoopReport) -> Option<String> {
+    let h = sp.range_halt.filter(RangeHaltReport::fails)?;
+    let advice = match h.even_range_m {
+        Some(d) => format!("set team.ranging.max_range_m above {} m", Num(d)),
+        None => "set team.ranging.max_range_m longer".into(),
     };
-    if gain_per_s == 0.0 {
-        return None;
-    }
-    let chord = even_chord_beyond_range(s, team)?;
     Some(format!(
-        "team.ranging.max_range_m = {} is shorter than the even spacing's range {} m (the chord 2 r sin(pi/N) of the team's circle): at even spacing the neighbours do not answer, the law sees max_range_m for both and commands v0, so even spacing is not where the gaps converge; the team halts wherever the ranges it hears balance (set team.ranging.max_range_m above {} m)",
-        Echo(team.ranging.max_range_m),
-        Num(chord),
-        Num(chord)
+        "{}: even spacing is not where the gaps converge ({advice})",
+        h.text()
     ))
 }
 

@@ -523,41 +523,80 @@ fn arc_reference_above_the_peak_says_there_is_no_isoline() {
     assert_eq!(s.team_refusal(), None);
 }
 
-/// nu39-7: range_balance with `team.ranging.max_range_m` shorter than the even spacing's range
-/// (4 robots on the circle of radius r = 10 ln 2: the chord `2 r sin(pi/4)` = 9.80258 m) fails:
-/// past max_range_m the law sees max_range_m for both neighbours, so even spacing is no
-/// equilibrium the gaps converge to; simulation agrees (the team halts with uneven gaps, the
-/// gap CV far above the 0.05 of an even team, never even), and `run` warns it. Above the chord
-/// the check holds and the team spreads.
+/// The largest gap CV a team of `n` can halt with on a closed isoline of length `l` when every
+/// arc gap of at least `g_min` is out of range (an independent statement of the bound: the
+/// population CV of `n - 1` gaps of `g_min` and one taking the rest), by direct computation.
+fn halt_cv(l: f64, g_min: f64, n: usize) -> f64 {
+    let mut gaps = vec![g_min; n - 1];
+    gaps.push(l - (n - 1) as f64 * g_min);
+    let mean = l / n as f64;
+    let var = gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
+    var.sqrt() / mean
+}
+
+/// nu39-7, att41-5: range_balance with `team.ranging.max_range_m` shorter than the even
+/// spacing's range (4 robots on the circle of radius r = 10 ln 2: the chord `2 r sin(pi/4)` =
+/// 9.80258 m). Past max_range_m the law sees max_range_m for both neighbours and commands v0:
+/// the team halts once every gap's chord reaches the range, i.e. every arc gap is at least
+/// `g_min = 2 r asin(max_range/(2 r))`. The worst halt leaves the CV of `halt_cv`: at 5 m
+/// (0.918) far above the 0.05 of an even team, so the check fails and `run` warns it, and the
+/// simulated team halts with a CV at most the bound (the bound is reached: 0.918); at 9.7 m
+/// (0.0226) a halt is even by the metrics' own measure, so the check holds, and the simulated
+/// team reaches even spacing with a CV within the bound. Above the chord: no halt, holds.
 #[test]
-fn a_ranging_limit_short_of_the_even_spacing_fails() {
-    let chord = 2.0 * 10.0 * std::f64::consts::LN_2 * (PI / 4.0).sin();
-    let short = circular(&["team.ranging.max_range_m=5.0"]);
-    let t = check(&short, None).team.unwrap();
-    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
-    assert!(
-        t.verdict_reason.contains(&format!(
-            "shorter than the even spacing's range {:.5} m",
-            chord
-        )),
-        "{} (chord {chord})",
-        t.verdict_reason
-    );
-    let warned = isotrack_scenario::check::warnings(&short);
-    assert!(
-        warned
-            .iter()
-            .any(|w| w.starts_with("the team check fails: team.ranging.max_range_m = 5 ")),
-        "{warned:?}"
-    );
-    let run = short.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
-    let m = run.team.unwrap();
-    assert!(m.gap_cv_final.unwrap() > 0.5, "{m:?}");
-    assert_eq!(m.time_to_even_s, None, "{m:?}");
+fn a_ranging_limit_short_of_the_even_spacing_fails_by_the_halt_it_allows() {
+    let r = 10.0 * std::f64::consts::LN_2;
+    let l = 2.0 * PI * r;
+    let chord = 2.0 * r * (PI / 4.0).sin();
+    for (range, fails) in [(5.0, true), (9.7, false)] {
+        let bound = halt_cv(l, 2.0 * r * (range / (2.0 * r)).asin(), 4);
+        let s = circular(&[&format!("team.ranging.max_range_m={range}")]);
+        let t = check(&s, None).team.unwrap();
+        let h = t.spacing.range_halt.unwrap();
+        assert!(close(h.worst_gap_cv, bound, 1e-9), "{h:?} vs {bound}");
+        assert!(close(h.even_range_m.unwrap(), chord, 1e-12), "{h:?}");
+        let warned = isotrack_scenario::check::warnings(&s);
+        let m = s
+            .run_team(&mut [] as &mut [NoTrace])
+            .unwrap()
+            .unwrap()
+            .team
+            .unwrap();
+        // The vehicles fly their tracking error off the circle (a chord between points just
+        // outside it reaches the range at a shorter arc), so the halt meets the bound to within
+        // 1e-3 of it (seen: 0.022965 against 0.022959 at 9.7 m).
+        let cv = m.gap_cv_final.unwrap();
+        assert!(cv <= bound * (1.0 + 1e-3), "range {range}: {cv} > {bound}");
+        if fails {
+            assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+            assert!(
+                t.verdict_reason.contains("max_range_m = 5:"),
+                "{}",
+                t.verdict_reason
+            );
+            assert!(
+                warned
+                    .iter()
+                    .any(|w| w.starts_with("the team check fails: team.ranging.max_range_m = 5:")),
+                "{warned:?}"
+            );
+            assert!(cv > 0.5, "{m:?}");
+            assert_eq!(m.time_to_even_s, None, "{m:?}");
+        } else {
+            assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+            assert!(
+                !warned.iter().any(|w| w.contains("max_range_m")),
+                "{warned:?}"
+            );
+            assert!(cv < 0.05, "{m:?}");
+            assert!(m.time_to_even_s.is_some(), "{m:?}");
+        }
+    }
 
     let long = circular(&[&format!("team.ranging.max_range_m={}", chord * 1.2)]);
     let t = check(&long, None).team.unwrap();
     assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert!(t.spacing.range_halt.is_none());
     let m = long
         .run_team(&mut [] as &mut [NoTrace])
         .unwrap()
@@ -565,6 +604,74 @@ fn a_ranging_limit_short_of_the_even_spacing_fails() {
         .team
         .unwrap();
     assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
+}
+
+/// att41-19: with two vehicles range_balance has no loop whatever the range (each vehicle's
+/// neighbour ahead is its neighbour behind), so a range limit changes neither the verdict nor
+/// the run.
+#[test]
+fn a_ranging_limit_does_not_touch_a_team_of_two() {
+    for sets in [
+        &["team.count=2"][..],
+        &["team.count=2", "team.ranging.max_range_m=5.0"],
+    ] {
+        let s = circular(sets);
+        let t = check(&s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Holds, "{sets:?}: {}", t.verdict_reason);
+        assert!(t.spacing.range_halt.is_none());
+        let warned = isotrack_scenario::check::warnings(&s);
+        assert!(
+            !warned.iter().any(|w| w.contains("max_range_m")),
+            "{warned:?}"
+        );
+    }
+}
+
+/// att41-6: the same halt on an isoline the check extracts (an isotropic Gaussian whose level-10
+/// isoline is the circle of radius `sigma sqrt(2 ln 2)` = 11.7741 m, as a marching-squares loop):
+/// with max_range_m = 5 against a chord of 16.65 m the team cannot spread. The bound from the
+/// circle's closed form (the loop is that circle to the lattice's accuracy) is the check's
+/// within 1 %, the check fails, and the simulated team halts uneven within the bound.
+#[test]
+fn a_ranging_limit_fails_on_an_extracted_loop_too() {
+    let text = circular_text()
+        .replace(
+            "kind = \"radial_exp\"\ni0 = 20.0\ndecay_per_m = 0.1\ncenter_m = [0.0, 0.0]\n",
+            "kind = \"gaussian_plumes\"\nbackground = 0.0\nsources = [{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [10.0, 10.0], rotation_rad = 0.0 }]\n",
+        );
+    let s = parse_scenario(
+        &text,
+        "g4.toml",
+        &[
+            "team.ranging.max_range_m=5.0".to_string(),
+            "team.spread.radius_m=11.774100225154747".to_string(),
+            "team.spread.step_rad=0.3".to_string(),
+        ],
+    );
+    let s = match s {
+        Ok(s) => s,
+        Err(e) => panic!("{e}\n{text}"),
+    };
+    let r = 10.0 * (2.0 * std::f64::consts::LN_2).sqrt();
+    let bound = halt_cv(2.0 * PI * r, 2.0 * r * (5.0 / (2.0 * r)).asin(), 4);
+    let t = check(&s, None).team.unwrap();
+    let h = t.spacing.range_halt.expect("a halt on the extracted loop");
+    assert!(h.even_range_m.is_none(), "{h:?}");
+    assert!(close(h.worst_gap_cv, bound, 1e-2), "{h:?} vs {bound}");
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let m = s
+        .run_team(&mut [] as &mut [NoTrace])
+        .unwrap()
+        .unwrap()
+        .team
+        .unwrap();
+    // The vehicles fly their tracking error off the extracted loop, so their projected gaps
+    // meet the bound to within 1e-3 of it (seen: 1.26021 against 1.26017).
+    let cv = m.gap_cv_final.unwrap();
+    assert!(
+        cv > 0.5 && cv <= h.worst_gap_cv * (1.0 + 1e-3),
+        "{cv} vs {h:?}"
+    );
 }
 
 /// nu40-7: a ranging delay of 63 periods (6.3 s at 10 Hz) is past the periods the check's
