@@ -64,7 +64,7 @@ pub const CLOSE_APPROACH_M: f64 = 0.5;
 pub struct ClosestApproach {
     /// Distance between them, m.
     pub distance_m: f64,
-    /// Time of the sample, s.
+    /// Time of the approach, s (between two samples when it was reached between them).
     pub t_s: f64,
     /// The two vehicles' indices in the listed order, the smaller first.
     pub pair: [u32; 2],
@@ -109,11 +109,12 @@ pub struct TeamSummary {
     /// `revisit_time_mean_s` is to be compared with it, not with `revisit_time_ideal_s`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub revisit_time_ideal_active_s: Option<f64>,
-    /// Smallest distance between vehicles consecutive along the isoline over the samples, m
-    /// (consecutive pairs only: `O(N)` per sample; on a simple isoline the closest pair is
-    /// consecutive unless vehicles are far off it).
+    /// Smallest distance between vehicles consecutive along the isoline, m, at the samples and
+    /// between them (each vehicle along the straight segment between its two samples: a pass
+    /// between samples counts, att41-4), consecutive pairs only: `O(N)` per sample; on a
+    /// simple isoline the closest pair is consecutive unless vehicles are far off it.
     pub min_separation_m: Option<f64>,
-    /// Where `min_separation_m` was reached: the first sample at which it was (not in
+    /// Where `min_separation_m` was reached: the first time it was (not in
     /// `summary.json`: the run's warning names it, [`CLOSE_APPROACH_M`]).
     #[serde(skip)]
     pub closest_approach: Option<ClosestApproach>,
@@ -197,6 +198,11 @@ pub struct TeamMetrics {
     revisit_count: u64,
     min_sep: f64,
     closest: Option<ClosestApproach>,
+    /// Each vehicle's position at the last sample (NaN: not live or off the isoline there) and
+    /// that sample's time: the separations between samples are taken along the straight
+    /// segments from there (att41-4).
+    sep_prev_p: Vec<Vec2>,
+    sep_prev_t: f64,
     order_ref: Option<Vec<u32>>,
     order_ok: bool,
     speed_min: f64,
@@ -301,6 +307,8 @@ impl TeamMetrics {
             revisit_count: 0,
             min_sep: f64::INFINITY,
             closest: None,
+            sep_prev_p: vec![Vec2::new(f64::NAN, f64::NAN); n],
+            sep_prev_t: f64::NAN,
             order_ref: None,
             order_ok: true,
             speed_min: f64::INFINITY,
@@ -394,6 +402,25 @@ impl TeamMetrics {
     /// One sample at step `k`: `positions[i]` and `speeds[i]` of vehicle `i`, `alive[i]` whether
     /// its run goes on.
     pub fn observe(
+        &mut self,
+        k: u64,
+        arc: &dyn ArcProjection,
+        positions: &[Vec2],
+        speeds: &[f64],
+        alive: &[bool],
+    ) {
+        self.observe_sample(k, arc, positions, speeds, alive);
+        for (i, q) in self.sep_prev_p.iter_mut().enumerate() {
+            *q = if alive[i] && !self.last_s[i].is_nan() {
+                positions[i]
+            } else {
+                Vec2::new(f64::NAN, f64::NAN)
+            };
+        }
+        self.sep_prev_t = self.t_last;
+    }
+
+    fn observe_sample(
         &mut self,
         k: u64,
         arc: &dyn ArcProjection,
@@ -536,8 +563,7 @@ impl TeamMetrics {
             let (s1, i1) = self.scratch[(j + 1) % count];
             let g = if j + 1 == count { s1 + l - s0 } else { s1 - s0 };
             var += (g - mean) * (g - mean);
-            let sep = (positions[i1 as usize] - positions[i0 as usize]).norm();
-            self.note_separation(sep, t, i0, i1);
+            self.note_separation(positions[i0 as usize], positions[i1 as usize], t, i0, i1);
         }
         let cv = (var / count as f64).sqrt() / mean;
         self.cv_last = Some(cv);
@@ -674,8 +700,7 @@ impl TeamMetrics {
             let (s1, i1) = self.scratch[j + 1];
             let g = s1 - s0;
             var += (g - mean) * (g - mean);
-            let sep = (self.last_p_or(i1) - self.last_p_or(i0)).norm();
-            self.note_separation(sep, t, i0, i1);
+            self.note_separation(self.last_p_or(i0), self.last_p_or(i1), t, i0, i1);
         }
         if in_window {
             self.stretch_sum += stretch;
@@ -713,13 +738,38 @@ impl TeamMetrics {
     }
 
     /// Vehicle `i`'s position at the current sample (kept in `last_p` for an open isoline).
-    /// The distance `sep` between consecutive vehicles `i0` and `i1` at time `t`: the
-    /// smallest so far kept, with the first sample that reached it.
-    fn note_separation(&mut self, sep: f64, t: f64, i0: u32, i1: u32) {
+    /// The closest approach of consecutive vehicles `i0` and `i1` (now at `p0`, `p1`, time `t`)
+    /// since the last sample: the smallest so far kept, with its time. Between samples each
+    /// vehicle is taken to move along the straight segment from its last sample's position
+    /// (exact for constant velocities; the relative position `d(u) = d0 + u (d1 - d0)`,
+    /// nearest the origin at `u* = -d0.(d1 - d0)/|d1 - d0|^2` clamped to `[0, 1]`): a pass
+    /// between samples (att41-4: 20 m/s apart, samples 0.1 s apart, 2 m of relative travel) is
+    /// caught, not only the samples' distances. Without a last position for either (its first
+    /// sample, or one off the isoline), the distance now.
+    fn note_separation(&mut self, p0: Vec2, p1: Vec2, t: f64, i0: u32, i1: u32) {
+        let d1 = p1 - p0;
+        let mut sep = d1.norm();
+        let mut at = t;
+        let (q0, q1) = (self.sep_prev_p[i0 as usize], self.sep_prev_p[i1 as usize]);
+        if q0.is_finite() && q1.is_finite() && self.sep_prev_t < t {
+            let d0 = q1 - q0;
+            let dd = d1 - d0;
+            let den = dd.dot(dd);
+            if den > 0.0 {
+                let u = -d0.dot(dd) / den;
+                if u > 0.0 && u < 1.0 {
+                    let between = (d0 + dd * u).norm();
+                    if between < sep {
+                        sep = between;
+                        at = self.sep_prev_t + u * (t - self.sep_prev_t);
+                    }
+                }
+            }
+        }
         if sep < self.min_sep {
             self.closest = Some(ClosestApproach {
                 distance_m: sep,
-                t_s: t,
+                t_s: at,
                 pair: [i0.min(i1), i0.max(i1)],
             });
         }
@@ -852,6 +902,46 @@ mod tests {
     use super::*;
     use crate::team::arc::{CircleArc, PolylineArc};
     use std::f64::consts::PI;
+
+    /// att41-4: two vehicles 20 m/s apart on a straight stretch (a circle of radius 10 km),
+    /// sampled every 0.1 s: vehicle 0 at 30 m/s starts 1.1 m behind vehicle 1 at 10 m/s, so it
+    /// passes through it at t = 1.1/20 = 0.055 s, between the samples at 0 (1.1 m apart) and
+    /// 0.1 s (0.9 m apart, the order swapped). The closest approach is 0 (to the circle's
+    /// sagitta over 3 m, 3^2/(8 10^4) = 1e-4 m), at 0.055 s, not the samples' 0.9 m.
+    #[test]
+    fn a_pass_between_samples_is_the_closest_approach() {
+        let r = 10_000.0;
+        let arc = CircleArc {
+            center_m: Vec2::new(0.0, -r),
+            radius_m: r,
+        };
+        let l = 2.0 * PI * r;
+        let dt = 0.01;
+        let cfg = TeamMetricsConfig {
+            every_steps: 10,
+            steady_state_start_step: 0,
+            even_gap_cv: 0.05,
+            revisit_bins: 360,
+        };
+        let mut m = TeamMetrics::new(cfg, 2, l, dt, 20.0);
+        let at = |s: f64| {
+            let th = PI / 2.0 - s / r;
+            Vec2::new(r * th.cos(), -r + r * th.sin())
+        };
+        for k in 0..=20u64 {
+            let t = k as f64 * dt;
+            let pos = [at(30.0 * t), at(1.1 + 10.0 * t)];
+            if m.due() {
+                m.observe(k, &arc, &pos, &[30.0, 10.0], &[true; 2]);
+            }
+        }
+        let s = m.finish();
+        let d = s.min_separation_m.unwrap();
+        assert!(d < 2e-4, "{d}");
+        let c = s.closest_approach.unwrap();
+        assert!((c.t_s - 0.055).abs() < 1e-6, "{c:?}");
+        assert_eq!(c.pair, [0, 1]);
+    }
 
     /// Four points moving rigidly round a circle of radius 10 at 1 m/s, at arc positions 0, 10,
     /// 20, 40 (gaps 10, 10, 20, L - 40): the CV is the gaps' by hand; the revisit time of a point
