@@ -330,6 +330,8 @@ struct AnswerSeen {
     /// A pilot's change ([`Answer::PilotTookOver`]) rather than the way out's (confirmed,
     /// another safe mode): a heartbeat showing the other kind contradicts it.
     pilots: bool,
+    /// What a pilot's change shows, in words (`in MANUAL`); empty for the way out's.
+    what: String,
     /// When the first heartbeat showing it came (or the last older one contradicting it).
     at: Instant,
 }
@@ -3357,6 +3359,24 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mut told = self.second_sender;
         loop {
             if self.second_sender && !told {
+                // A second sender with the ids seen during the retries after a heartbeat
+                // showed a pilot's word, awaiting confirmation (att41f-2): as for a word heard
+                // before the proof that ends the flight ([`Flight::word_before_second_sender`]),
+                // nothing more is commanded: the word was the pilot's (one sender read as two),
+                // whose mode stands, or the second sender's, and the vehicle flown keeps the
+                // way out already commanded or falls to its own offboard-loss failsafe.
+                if let Some(word) = watch.seen.as_ref().filter(|s| s.pilots) {
+                    let t = self.target.unwrap_or_default();
+                    self.event(format!(
+                        "during the failsafe's retries: a second sender with the vehicle's ids (system {}, component {}) was seen after the vehicle's heartbeats showed it {} (a pilot's word, or the second sender's, awaiting confirmation): the retries stop, nothing more commanded, the pilot's mode stands (a vehicle still in {} falls to its own offboard-loss failsafe)",
+                        t.0,
+                        t.1,
+                        word.what,
+                        self.firmware.name_of(FlyMode::Offboard)
+                    ));
+                    self.way_out_overridden = true;
+                    return Ok((false, tries, "a pilot's word before a second sender"));
+                }
                 // A second sender with the ids seen during the retries: no answer of the
                 // heartbeats any more, never a disarm (either may be the vehicle, maybe
                 // flying): the failsafe mode instead, to the bound.
@@ -3551,8 +3571,12 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                 return (seen.at.elapsed() >= span).then_some(answer).flatten();
             }
         }
-        watch.seen = answer.is_some().then(|| AnswerSeen {
+        watch.seen = answer.as_ref().map(|a| AnswerSeen {
             pilots,
+            what: match a {
+                Answer::PilotTookOver(w) => w.clone(),
+                _ => String::new(),
+            },
             at: Instant::now(),
         });
         None
