@@ -1904,3 +1904,44 @@ fn a_second_sender_proven_after_a_pilots_word_in_the_retries_stops_them() {
         r.events
     );
 }
+
+/// att41f-3 (E9): in control (the pilot's OFFBOARD), one sender whose link loses a burst of 200
+/// frames sent at once at turn 40 and another at turn 70, within 5 s of the first's resync: a
+/// second sender by rule (c) (one sender read as two, FLYING.md), no word heard before:
+/// `vehicle_lost`, HOLD commanded (never shown: the vehicle stays in OFFBOARD). The pilot then
+/// switches to MANUAL (turn 100): a heartbeat of the ids showing a mode the companion did not
+/// command, the pilot's or the second sender's: the retries stop, nothing more commanded.
+/// Before: HOLD retried against the pilot's MANUAL to the retries' bound (3 x --timeout-s).
+#[test]
+fn a_mode_nobody_commanded_after_a_proof_stops_the_retries() {
+    let (r, c) = manual_over_a_link(
+        100,
+        30.0,
+        |o| o.timeout_s = 3.0,
+        |k, frames, a| {
+            if k == 40 || k == 70 {
+                a.seq = a.seq.wrapping_add(200);
+            }
+            frames.into_iter().map(|f| f.1).collect()
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    let modes = mode_command_turns(&c);
+    // HOLD went out after the proof, and none once fly had the MANUAL heartbeat (turn 100; a
+    // command read at turn 101 may have left before it).
+    assert!(
+        modes.first().is_some_and(|&k| (70..100).contains(&k)),
+        "{c:?} {:?}",
+        r.events
+    );
+    assert!(modes.iter().all(|&k| k <= 101), "{c:?} {:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "a heartbeat of the ids shows in MANUAL, which the companion did not command: a pilot's or the second sender's; nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
+}
