@@ -2479,7 +2479,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 rs.frames,
                 rs.secs,
                 if rs.on_old {
-                    ", on the counter from before the jump (the frames after it were strays)"
+                    ", on the counter from before the jump (the frames after it were strays, or the sender lost 256 more than the jump)"
                 } else {
                     ""
                 },
