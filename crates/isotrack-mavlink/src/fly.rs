@@ -318,6 +318,12 @@ enum Answer {
     /// Its heartbeat shows a mode (or a disarm) the companion did not command and that is
     /// not a safe one: a pilot took over during the retries (its word is final).
     PilotTookOver(String),
+    /// Once a second sender with the vehicle's ids has been seen: a heartbeat of the ids
+    /// shows a mode (or a disarm) the companion did not command, a pilot's or the second
+    /// sender's, which nothing tells apart (att41f-3): the retries stop, nothing more is
+    /// commanded (the vehicle flown keeps the way out already commanded, or falls to its own
+    /// offboard-loss failsafe; a pilot's mode stands).
+    NotCommanded(String),
 }
 
 /// A heartbeat's answer during the failsafe's retries awaiting confirmation (att33e-1,
@@ -330,6 +336,8 @@ struct AnswerSeen {
     /// A pilot's change ([`Answer::PilotTookOver`]) rather than the way out's (confirmed,
     /// another safe mode): a heartbeat showing the other kind contradicts it.
     pilots: bool,
+    /// What a pilot's change shows, in words (`in MANUAL`); empty for the way out's.
+    what: String,
     /// When the first heartbeat showing it came (or the last older one contradicting it).
     at: Instant,
 }
@@ -339,6 +347,8 @@ struct AnswerSeen {
 struct RetryWatch {
     /// The answer shown, awaiting confirmation: no retry is sent meanwhile.
     seen: Option<AnswerSeen>,
+    /// A disarm was commanded (the way out before a second sender was seen).
+    disarm_sent: bool,
 }
 
 /// Options of [`run_fly`].
@@ -2469,7 +2479,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 rs.frames,
                 rs.secs,
                 if rs.on_old {
-                    ", on the counter from before the jump (the frames after it were strays)"
+                    ", on the counter from before the jump (the frames after it were strays, or the sender lost 256 more than the jump)"
                 } else {
                     ""
                 },
@@ -3214,7 +3224,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     fn second_sender_note(&self) -> String {
         let t = self.target.unwrap_or_default();
         format!(
-            ": a second sender with the vehicle's ids (system {}, component {}) was seen, and nothing tells the two apart: no heartbeat of the ids is taken as a confirmation or a pilot's word, and no disarm is sent (either may be the vehicle, maybe flying); {} is commanded to the retries' bound. A vehicle armed on the ground must be disarmed by its operator (PX4's preflight auto-disarm may do it)",
+            ": a second sender with the vehicle's ids (system {}, component {}) was seen, and nothing tells the two apart: no heartbeat of the ids is taken as a confirmation or a pilot's word, and no disarm is sent (either may be the vehicle, maybe flying); {} is commanded to the retries' bound, or until a heartbeat of the ids shows a mode or arming the companion did not command (a pilot's or the second sender's: then nothing more). A vehicle armed on the ground must be disarmed by its operator (PX4's preflight auto-disarm may do it)",
             t.0,
             t.1,
             self.firmware.name_of(self.opts.failsafe.mode())
@@ -3357,9 +3367,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mut told = self.second_sender;
         loop {
             if self.second_sender && !told {
+                // A second sender with the ids seen during the retries after a heartbeat
+                // showed a pilot's word, awaiting confirmation (att41f-2): as for a word heard
+                // before the proof that ends the flight ([`Flight::word_before_second_sender`]),
+                // nothing more is commanded: the word was the pilot's (one sender read as two),
+                // whose mode stands, or the second sender's, and the vehicle flown keeps the
+                // way out already commanded or falls to its own offboard-loss failsafe.
+                if let Some(word) = watch.seen.as_ref().filter(|s| s.pilots) {
+                    self.word_before_second_sender_in_retries(&word.what);
+                    return Ok((false, tries, "a pilot's word before a second sender"));
+                }
                 // A second sender with the ids seen during the retries: no answer of the
                 // heartbeats any more, never a disarm (either may be the vehicle, maybe
-                // flying): the failsafe mode instead, to the bound.
+                // flying): the failsafe mode instead, to the bound or to a heartbeat showing a
+                // mode the companion did not command ([`Answer::NotCommanded`]).
                 told = true;
                 if !matches!(way, WayOut::Mode(_)) {
                     way = WayOut::Mode(self.opts.failsafe.mode());
@@ -3408,6 +3429,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             };
             if accepted.is_none_or(|at| heard > at) && watch.seen.is_none() {
                 tries += 1;
+                watch.disarm_sent |= matches!(way, WayOut::Disarm);
                 self.command(cmd, params)?;
             }
             match self.await_way_out(way, cmd, before, &mut accepted, (&mut watch, span))? {
@@ -3423,6 +3445,22 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     return Ok((true, tries, name));
                 }
                 Some(Answer::Refused) => refused = true,
+                Some(Answer::NotCommanded(what)) => {
+                    if let Some(word) = watch.seen.as_ref().filter(|s| s.pilots && !told) {
+                        // The second sender was seen in this listen, after the word.
+                        self.word_before_second_sender_in_retries(&word.what);
+                        return Ok((false, tries, "a pilot's word before a second sender"));
+                    }
+                    let t = self.target.unwrap_or_default();
+                    self.event(format!(
+                        "during the failsafe's retries, a second sender with the vehicle's ids (system {}, component {}) seen: a heartbeat of the ids shows {what}, which the companion did not command: a pilot's or the second sender's; nothing more commanded (the pilot's mode stands; the vehicle flown keeps the {} already commanded, or falls to its own offboard-loss failsafe)",
+                        t.0,
+                        t.1,
+                        self.firmware.name_of(self.opts.failsafe.mode())
+                    ));
+                    self.way_out_overridden = true;
+                    return Ok((false, tries, "a mode the companion did not command shown"));
+                }
                 Some(Answer::PilotTookOver(what)) => {
                     self.event(format!(
                         "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
@@ -3433,6 +3471,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 None => {}
             }
         }
+    }
+
+    /// The failsafe's retries stop on a second sender with the vehicle's ids seen after a
+    /// heartbeat showed `word`, a pilot's word awaiting confirmation (att41f-2): logged, nothing
+    /// more commanded.
+    fn word_before_second_sender_in_retries(&mut self, word: &str) {
+        let t = self.target.unwrap_or_default();
+        self.event(format!(
+            "during the failsafe's retries: a second sender with the vehicle's ids (system {}, component {}) was seen after the vehicle's heartbeats showed it {word} (a pilot's word, or the second sender's, awaiting confirmation): the retries stop, nothing more commanded, the pilot's mode stands (a vehicle still in {} falls to its own offboard-loss failsafe)",
+            t.0,
+            t.1,
+            self.firmware.name_of(FlyMode::Offboard)
+        ));
+        self.way_out_overridden = true;
     }
 
     /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
@@ -3465,6 +3517,25 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 if kind == FrameKind::Copy {
                     // Delivered again: ignored entirely.
                     continue;
+                }
+                if let (true, MavMessage::HEARTBEAT(h)) = (self.second_sender, &r.msg) {
+                    // After a second sender (in a doubt of the frame counter or not): never a
+                    // confirmation, but a mode or disarm the companion did not command (a
+                    // pilot's, or the second sender's) stops the retries (att41f-3). A disarm
+                    // the companion commanded before the second sender was seen is its own.
+                    let armed = h
+                        .base_mode
+                        .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+                    let way = WayOut::Mode(self.opts.failsafe.mode());
+                    let shown = match self.heartbeat_answer(h, way, before) {
+                        Some(Answer::PilotTookOver(_)) if !armed && watch.disarm_sent => None,
+                        Some(Answer::PilotTookOver(w)) => Some(w),
+                        Some(Answer::OtherSafeMode(n)) => Some(format!("in {n}")),
+                        _ => None,
+                    };
+                    if let Some(w) = shown {
+                        return Ok(Some(Answer::NotCommanded(w)));
+                    }
                 }
                 if kind == FrameKind::Doubt {
                     // In a doubt: the link is alive, no answer.
@@ -3551,8 +3622,12 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                 return (seen.at.elapsed() >= span).then_some(answer).flatten();
             }
         }
-        watch.seen = answer.is_some().then(|| AnswerSeen {
+        watch.seen = answer.as_ref().map(|a| AnswerSeen {
             pilots,
+            what: match a {
+                Answer::PilotTookOver(w) => w.clone(),
+                _ => String::new(),
+            },
             at: Instant::now(),
         });
         None

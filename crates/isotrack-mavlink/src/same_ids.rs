@@ -30,7 +30,10 @@
 //!   numbers past `N_A`, then a new frame of `W_B`, then one of `A` again (both counters
 //!   alive). One sender's own frames from before the burst, delivered late across it, go at
 //!   most a few numbers past `N_A` (att39f-1); its frames after a second loss that pass `N_A`
-//!   go on alone (att39f-2: the doubt's first frames were strays);
+//!   go on alone (att39f-2: the doubt's first frames were strays); a frame of `W_B` that
+//!   conflicts in `A` only on `N_A` itself is not counted (att41f-5: one sender's frame
+//!   numbered `N_A` after a burst of 225 to 254 frames, delivered late, while its next frames
+//!   fitted `A` nearer and walked it past `N_A`);
 //! * (c) a first conflict within [`RESYNC_MEMORY_S`] of the last resynchronisation (one
 //!   sender loses such a burst now and then, not twice within seconds; a second sender that
 //!   sends a frame a second near the vehicle's counter, att39f-3, opens a doubt at each of
@@ -52,7 +55,9 @@
 //! one (its sender's own frames up to that number then read as late, and its own frame with
 //! that number as a conflict: a doubt, resynchronised); one sender that loses two bursts within
 //! a doubt so that a frame conflicts in both windows (a), or a second burst within
-//! [`RESYNC_MEMORY_S`] of the first (c): read as two senders; a second sender whose frames
+//! [`RESYNC_MEMORY_S`] of the first (c), or whose frame numbered `N_A` after a burst of 225 to
+//! 254 frames comes so late (about 45 frames) that the doubt has resynchronised on the old
+//! window before it (c): read as two senders; a second sender whose frames
 //! come seldom and all numbered ahead of the vehicle's newest is applied as the vehicle's until
 //! the vehicle's own frames reach its numbers (then a doubt, then (c) at its next frame).
 //!
@@ -484,7 +489,12 @@ impl SequenceWatch {
                         d.a_past = true;
                     }
                 }
-                Stream::B => d.b_since |= d.a_past,
+                // A frame of the doubt's window that conflicts in the old one only on `N_A`
+                // itself is no frame of a second counter beside the old one (att41f-5): one
+                // sender's frame numbered `N_A` after a burst of 225 to 254 frames, delivered
+                // late, while its next frames walked the old window past `N_A` (they fit it
+                // nearer, by one, with that frame missing).
+                Stream::B => d.b_since |= d.a_past && !(fa == Fit::Conflict && seq == d.old_newest),
             }
             match stream {
                 Stream::A => d.new_a += 1,
@@ -1259,6 +1269,38 @@ mod tests {
     /// A vehicle at 30 m/s reporting at 10 Hz with 10 m of noise, one reset of 500 m, two
     /// one-frame glitches of 500 m 2 s apart, a burst of positions arriving at once after a 3 s
     /// outage: no two vehicles. Two vehicles 300 m apart interleaved: two, at the fifth switch.
+    /// att41f-5 (L1, L3): ONE sender, a burst of `k` = 225 to 254 frames lost (its next number
+    /// `254 - k` behind the newest before it, `N_A`: a doubt), and the one frame after the burst
+    /// numbered `N_A` (the `255 - k`-th) delivered 17 or more places late, within the doubt.
+    /// Without it the sender's next frames fit the old window nearer and walk it past `N_A`;
+    /// the frame numbered `N_A` then conflicts in the old window only because that number was
+    /// its newest, and fits the doubt's by one: it is no frame of a second counter, never the
+    /// interleaving of proof (b). Before: (b), two senders, for every case here (the frames
+    /// after the doubt's end are a resynchronised window's: (c) for a frame that late, left as
+    /// a limit).
+    #[test]
+    fn the_newest_numbers_frame_late_after_a_burst_is_one_sender() {
+        for k in 225..=254u32 {
+            let p = 255 - k as usize;
+            for d in 17..45 - p {
+                let mut c = 0u32;
+                let mut frames: Vec<(u8, u32)> = (0..600)
+                    .map(|i| {
+                        if i == 300 {
+                            c += k;
+                        }
+                        c += 1;
+                        ((c - 1) as u8, c - 1)
+                    })
+                    .collect();
+                let late = frames.remove(300 + p);
+                assert_eq!(late.0, 299u32 as u8, "{k}");
+                frames.insert(300 + p + d, late);
+                assert_eq!(first_alarm(&frames), None, "burst {k}, late by {d}");
+            }
+        }
+    }
+
     #[test]
     fn position_jumps() {
         let mut r = Lcg(3);

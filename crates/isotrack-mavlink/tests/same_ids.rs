@@ -130,8 +130,20 @@ fn fly_against_seen(
     max_duration_s: f64,
     tweak: impl FnOnce(&mut FlyOptions),
     echo: bool,
-    mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
+    turn: impl FnMut(u32) -> Vec<Vec<u8>>,
 ) -> (FlyReport, Vec<Sent>) {
+    let (r, c) = fly_against_turns(max_duration_s, tweak, echo, turn);
+    (r, c.into_iter().map(|x| x.1).collect())
+}
+
+/// [`fly_against_seen`], each command with the turn after whose datagrams it was read (fly
+/// sent it after it had the frames of the turns before).
+fn fly_against_turns(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    echo: bool,
+    mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
+) -> (FlyReport, Vec<(u32, Sent)>) {
     let s = load_scenario(None, &[]).unwrap();
     let mut o = FlyOptions::new("udpin:127.0.0.1:0");
     o.timeout_s = 2.0;
@@ -164,7 +176,7 @@ fn fly_against_seen(
             if echo {
                 sock.send_to(&buf[..n], fly).unwrap();
             }
-            commands.extend(command_longs(&buf[..n]));
+            commands.extend(command_longs(&buf[..n]).into_iter().map(|c| (k - 1, c)));
             sock.set_read_timeout(Some(Duration::from_millis(1)))
                 .unwrap();
         }
@@ -1320,8 +1332,13 @@ fn a_twin_with_positions_ahead_in_control_is_no_pilots_word() {
 /// att33h-8 (F1): in control, Ctrl-C at 2.5 s starts the failsafe (HOLD never acknowledged
 /// nor carried out: the vehicle stays armed in OFFBOARD); from 2.6 s a second vehicle with its
 /// ids beats disarmed at 5 Hz and sends positions every 40 ms, its counter 40 ahead. Its
-/// disarm never ends the retries as a pilot's: HOLD retried, never confirmed, never "a pilot
-/// took over". Before (main): "pilot_took_over during the failsafe" after 2 tries.
+/// disarm never ends the retries as a pilot's: HOLD commanded, never confirmed, never "a pilot
+/// took over". Before (main): "pilot_took_over during the failsafe" after 2 tries. att41f-2:
+/// its disarm, heard before the second sender was proven, awaits confirmation as a pilot's
+/// word would (no retry meanwhile); the proof then stops the retries with nothing more
+/// commanded (a pilot's word, or the second sender's: the vehicle flown has the HOLD already
+/// commanded, or falls to its own offboard-loss failsafe), where before it retried the HOLD
+/// to the bound.
 #[test]
 fn a_twin_with_positions_during_the_failsafe_is_no_pilots_word() {
     let mut own = Beats::new(0.0, &[1.0]);
@@ -1356,7 +1373,14 @@ fn a_twin_with_positions_during_the_failsafe_is_no_pilots_word() {
         "{:?}",
         r.events
     );
-    assert!(c.iter().filter(|x| x.0 == SET_MODE).count() >= 2, "{c:?}");
+    assert!(c.iter().any(|x| x.0 == SET_MODE), "{c:?}");
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "showed it disarmed (a pilot's word, or the second sender's, awaiting confirmation): the retries stop, nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
 }
 
 /// att33g-2 / att33h-1 (P5a): the pilot (the vehicle in OFFBOARD, 1 Hz heartbeat, frames
@@ -1619,31 +1643,38 @@ fn a_reversed_burst_of_one_sender_is_no_reboot() {
 /// burst of frames sent and lost) and gives the datagrams delivered. The report and every
 /// command fly sent.
 fn pilot_manual_over_a_link(
-    mut link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
+    link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
 ) -> (FlyReport, Vec<Sent>) {
+    let (r, c) = manual_over_a_link(60, 8.0, |_| {}, link);
+    (r, c.into_iter().map(|x| x.1).collect())
+}
+
+/// [`pilot_manual_over_a_link`], the pilot's MANUAL from turn `manual_from`, `fly` tweaked by
+/// `tweak` with `max_duration_s`; each command with its turn ([`fly_against_turns`]).
+fn manual_over_a_link(
+    manual_from: u32,
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    mut link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
+) -> (FlyReport, Vec<(u32, Sent)>) {
     let mut a = vehicle_sender();
     let t0 = Instant::now();
-    fly_against_seen(
-        8.0,
-        |_| {},
-        false,
-        move |k| {
-            // Turns paced at 50 ms (the link's silences as long as the frames' rate says).
-            let due = Duration::from_millis(50 * k as u64);
-            if let Some(wait) = due.checked_sub(t0.elapsed()) {
-                std::thread::sleep(wait);
-            }
-            let ms = 1000 + 50 * k;
-            let main = if k < 60 { 6 } else { 1 };
-            let msgs = if k % 4 == 0 {
-                vec![heartbeat(main), iso_s(ms, 9.5), position(ms, 0.0)]
-            } else {
-                vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
-            };
-            let frames = a.frames(&msgs);
-            link(k, frames, &mut a)
-        },
-    )
+    fly_against_turns(max_duration_s, tweak, false, move |k| {
+        // Turns paced at 50 ms (the link's silences as long as the frames' rate says).
+        let due = Duration::from_millis(50 * k as u64);
+        if let Some(wait) = due.checked_sub(t0.elapsed()) {
+            std::thread::sleep(wait);
+        }
+        let ms = 1000 + 50 * k;
+        let main = if k < manual_from { 6 } else { 1 };
+        let msgs = if k % 4 == 0 {
+            vec![heartbeat(main), iso_s(ms, 9.5), position(ms, 0.0)]
+        } else {
+            vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
+        };
+        let frames = a.frames(&msgs);
+        link(k, frames, &mut a)
+    })
 }
 
 /// Asserts that nothing was commanded against the pilot's MANUAL heard (no COMMAND_LONG at all:
@@ -1814,4 +1845,103 @@ fn a_slow_twin_near_the_vehicles_counter_is_proven() {
             assert!(c.is_empty(), "{counter:?}: {c:?}");
         }
     }
+}
+
+/// The turns of the mode commands (`DO_SET_MODE`) fly sent.
+fn mode_command_turns(c: &[(u32, Sent)]) -> Vec<u32> {
+    c.iter()
+        .filter(|x| x.1 .0 == SET_MODE)
+        .map(|x| x.0)
+        .collect()
+}
+
+/// att41f-2 (Q1): in control (the pilot's OFFBOARD), Ctrl-C at 1.5 s: HOLD commanded, never
+/// shown by the vehicle (it stays in OFFBOARD), retried every 0.3 s. One sender whose link
+/// loses a burst of 200 frames sent at once at turn 50 (a doubt, resynchronised as one sender
+/// after 48 frames); the pilot switches to MANUAL at turn 80 (a word awaiting confirmation: no
+/// retry meanwhile); a second burst of 200 at turn 86, within 5 s of the resync: a second
+/// sender by rule (c). The pilot's word was heard before the proof: the retries stop with
+/// nothing more commanded, as for a word heard before a proof that ends the flight
+/// (att39f-1). Before: the retries resumed at the proof, HOLD every 0.3 s against the pilot's
+/// MANUAL to the retries' bound.
+#[test]
+fn a_second_sender_proven_after_a_pilots_word_in_the_retries_stops_them() {
+    let (r, c) = manual_over_a_link(
+        80,
+        30.0,
+        |o| {
+            o.timeout_s = 3.0;
+            let stop = o.stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(1500));
+                stop.store(true, std::sync::atomic::Ordering::SeqCst);
+            });
+        },
+        |k, frames, a| {
+            if k == 50 || k == 86 {
+                a.seq = a.seq.wrapping_add(200);
+            }
+            frames.into_iter().map(|f| f.1).collect()
+        },
+    );
+    let modes = mode_command_turns(&c);
+    // The Ctrl-C's HOLD went out, and none once fly had the MANUAL heartbeat (turn 80; a
+    // command read at turn 81 may have left before it).
+    assert!(
+        modes.first().is_some_and(|&k| k < 80),
+        "{c:?} {:?}",
+        r.events
+    );
+    assert!(modes.iter().all(|&k| k <= 81), "{c:?} {:?}", r.events);
+    assert!(!disarm_sent(&c.iter().map(|x| x.1).collect::<Vec<_>>()));
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "showed it in MANUAL (a pilot's word, or the second sender's, awaiting confirmation): the retries stop, nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att41f-3 (E9): in control (the pilot's OFFBOARD), one sender whose link loses a burst of 200
+/// frames sent at once at turn 40 and another at turn 70, within 5 s of the first's resync: a
+/// second sender by rule (c) (one sender read as two, FLYING.md), no word heard before:
+/// `vehicle_lost`, HOLD commanded (never shown: the vehicle stays in OFFBOARD). The pilot then
+/// switches to MANUAL (turn 100): a heartbeat of the ids showing a mode the companion did not
+/// command, the pilot's or the second sender's: the retries stop, nothing more commanded.
+/// Before: HOLD retried against the pilot's MANUAL to the retries' bound (3 x --timeout-s).
+#[test]
+fn a_mode_nobody_commanded_after_a_proof_stops_the_retries() {
+    let (r, c) = manual_over_a_link(
+        100,
+        30.0,
+        |o| o.timeout_s = 3.0,
+        |k, frames, a| {
+            if k == 40 || k == 70 {
+                a.seq = a.seq.wrapping_add(200);
+            }
+            frames.into_iter().map(|f| f.1).collect()
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    let modes = mode_command_turns(&c);
+    // HOLD went out after the proof, and none once fly had the MANUAL heartbeat (turn 100; a
+    // command read at turn 101 may have left before it).
+    assert!(
+        modes.first().is_some_and(|&k| (70..100).contains(&k)),
+        "{c:?} {:?}",
+        r.events
+    );
+    assert!(modes.iter().all(|&k| k <= 101), "{c:?} {:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "a heartbeat of the ids shows in MANUAL, which the companion did not command: a pilot's or the second sender's; nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
 }
