@@ -828,6 +828,52 @@ fn plot_refuses_a_sweep_directory_being_written() {
     assert!(!out.join(".isotrack.lock").exists());
 }
 
+/// att41-10 SAFETY: `plot SWEEP` (into the sweep, or `--out DIR`) replaced the user's own file
+/// named as a sweep figure (`sweep_METRIC_vs_X.png`/`.svg`, no isotrack mark) without a word,
+/// where `plot RUN` refuses one. Refused the same way (73, naming it, before anything is
+/// drawn: the folder as it was); isotrack's own earlier sweep figure (marked) is redrawn.
+/// Fails on the source before (exit 0, the user's file a PNG).
+#[test]
+fn plot_of_a_sweep_never_replaces_a_users_file_named_as_its_figure() {
+    let d = tempfile::tempdir().unwrap();
+    let (_, out) = small_sweep(d.path(), "sw");
+    let outs = out.display().to_string();
+    let po = d.path().join("po");
+    std::fs::create_dir(&po).unwrap();
+    let pos = po.display().to_string();
+    for (dir, name, args) in [
+        (
+            &out,
+            "sweep_steady_state_max_abs_error_vs_controller_kp.png",
+            vec!["plot", &outs],
+        ),
+        (
+            &po,
+            "sweep_steady_state_max_abs_error_vs_controller_kp.svg",
+            vec!["plot", &outs, "--format", "svg", "--out", &pos],
+        ),
+    ] {
+        std::fs::write(dir.join(name), b"MY OWN SWEEP PLOT").unwrap();
+        let before = listing(dir);
+        let o = isotrack_within(&args, 60);
+        let named = dir.join(name).display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[&named, "not a figure isotrack wrote", "move it away"],
+        );
+        assert!(!String::from_utf8_lossy(&o.stdout).contains("wrote"));
+        assert_eq!(listing(dir), before, "{name}");
+        std::fs::remove_file(dir.join(name)).unwrap();
+    }
+    // Its own figure, marked, is redrawn.
+    let args = ["plot", &outs, "--format", "svg", "--out", &pos];
+    for _ in 0..2 {
+        let o = isotrack_within(&args, 60);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    }
+}
+
 /// att36-11: `sweep --force` starts over beside the earlier sweep's `plot` figures, which then
 /// read as the new results' figures. isotrack cannot tell its figure from a user's file of that
 /// name, and never removes a file it may not have written (att38-1's rule): it keeps them and
