@@ -625,10 +625,6 @@ fn map_extent(s: &Scenario) -> [f64; 4] {
 /// `isotrack figures`: the paper's figures ([`PAPER_FIGURES`]) from this project's own runs;
 /// each run is made once (in the order first needed) and shared by the figures that use it.
 pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
-    std::fs::create_dir_all(&a.out).map_err(|e| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot create {}: {e}", a.out.display()),
-    })?;
     let formats: Vec<Format> = if a.svg {
         vec![Format::Png, Format::Svg]
     } else {
@@ -638,6 +634,23 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         .iter()
         .map(|&f| style(&a.look, f))
         .collect::<Result<_, _>>()?;
+    // att41-12: a file of a paper figure's name in `--out` that isotrack did not write (the
+    // user's own edited `fig2b.png`, no isotrack mark) is refused (73, naming it) before any
+    // run, as `plot` refuses a run's figure.
+    let names: Vec<String> = formats
+        .iter()
+        .flat_map(|f| {
+            PAPER_FIGURES
+                .iter()
+                .flat_map(|g| g.iter())
+                .map(move |fig| format!("{}.{}", fig.stem, f.extension()))
+        })
+        .collect();
+    refuse_foreign_figures(&a.out, &names)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot create {}: {e}", a.out.display()),
+    })?;
     let mut done = PaperRuns::default();
     let mut written = vec![];
     for group in PAPER_FIGURES {
