@@ -347,11 +347,6 @@ impl RunDir {
         let created = std::fs::symlink_metadata(dir).is_err();
         std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
         let lock = command.map(|c| lock_output_dir(dir, c)).transpose()?;
-        // Holding the lock, no other command writes here: temporaries a killed process left
-        // (`.trace.csv.PID.tmp`, its PID gone) are removed.
-        if lock.is_some() {
-            crate::cleanup::remove_stale_temporaries(dir, &names);
-        }
         for name in &names {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
@@ -360,6 +355,12 @@ impl RunDir {
         // directory) and no run file a link or FIFO: whose files are these? A user's are
         // refused before anything runs (the lock file is removed again as the lock drops).
         refuse_not_an_earlier_run(dir, extra)?;
+        // Holding the lock, no other command writes here, and the directory is an earlier
+        // run's or holds no run file: temporaries a killed process left (`.trace.csv.PID.tmp`,
+        // its PID gone) are removed. Only now: a folder refused above loses nothing (att41-13).
+        if lock.is_some() {
+            crate::cleanup::remove_stale_temporaries(dir, &names);
+        }
         let before = present_outputs(dir, extra);
         Ok(RunDir {
             dir: dir.to_path_buf(),
@@ -778,6 +779,44 @@ mod tests {
             }
             assert_eq!(listing(d.path()), before, "{present:?} {summary_text:?}");
         }
+    }
+
+    /// att41-13: a folder refused as holding the user's run files loses nothing first: a
+    /// stale-looking `.trace.csv.NNN.tmp` (NNN no live process) and a `.isotrack.lock` of the
+    /// user's (no lock record in it) are left as they were; in an earlier run's directory the
+    /// stale temporary is removed as before. Fails on the source before (both files deleted
+    /// before the refusal).
+    #[test]
+    fn a_refused_folder_loses_no_temporary_nor_lock_file() {
+        let d = tempfile::tempdir().unwrap();
+        // No process has pid 4194304 + 1 (above Linux's pid_max).
+        let tmp = ".trace.csv.4194305.tmp";
+        std::fs::write(d.path().join("trace.csv"), b"mine\n").unwrap();
+        std::fs::write(d.path().join(tmp), b"my backup\n").unwrap();
+        let before = listing(d.path());
+        let e = RunDir::open(d.path(), &[], &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert_eq!(listing(d.path()), before);
+        std::fs::write(d.path().join(".isotrack.lock"), b"my lock notes\n").unwrap();
+        let before = listing(d.path());
+        let e = RunDir::open(d.path(), &[], &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert!(e.message.contains(".isotrack.lock"), "{}", e.message);
+        assert_eq!(listing(d.path()), before);
+        // An earlier run's directory: its stale temporary goes.
+        let d = tempfile::tempdir().unwrap();
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let summary = Summary::of_run(
+            &scenario,
+            None,
+            &scenario.run(&mut isotrack_sim::NoTrace),
+            &[],
+        );
+        std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
+        std::fs::write(d.path().join(tmp), b"a killed run's\n").unwrap();
+        let out = RunDir::open(d.path(), &[], &[], Some("run")).unwrap();
+        assert!(!d.path().join(tmp).exists());
+        drop(out);
     }
 
     /// The files of `dir` (hidden ones too) with their bytes, sorted.
