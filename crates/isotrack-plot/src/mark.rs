@@ -185,7 +185,7 @@ pub fn is_isotrack_figure(path: &Path) -> bool {
 
 /// Refuses to replace `path` with a figure when a file is there that isotrack did not write
 /// (no mark: the user's own file of that name, or a figure of an isotrack older than the
-/// mark), naming it and what to do (att38-9); `Ok` when nothing is there or the file is an
+/// mark), naming it (shell-quoted, att41-2) and what to do (att38-9); `Ok` when nothing is there or the file is an
 /// isotrack figure.
 pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
     match std::fs::symlink_metadata(path) {
@@ -195,7 +195,7 @@ pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
         Ok(m) if !m.is_file() => Ok(()),
         Ok(_) => Err(format!(
             "{} is not a figure isotrack wrote (it has no isotrack mark: your own file of that name, or a figure of an older isotrack, which did not mark its figures), and isotrack never replaces a file it did not write: move it away, or draw elsewhere (--out DIR)",
-            path.display()
+            isotrack_runs::owned::shell_quoted(path)
         )),
     }
 }

@@ -51,14 +51,57 @@ pub fn refuse_foreign_csv(
         code: exit::CANTCREAT,
         message: format!(
             "{} is not {what} ({why}): refusing to replace it; move it away or use another --out",
-            path.display()
+            shell_quoted(path)
         ),
     })
+}
+
+/// `path` as a POSIX shell word to paste, as every message naming a file the user is to move
+/// or look at names it (att41-2: a refusal printed it raw, so a name with a line break forged
+/// its own `error:` line; att39-7: `my run;touch PWNED` was printed bare, and a
+/// line break in it forged a line of output): as it is when every character is plain, else in
+/// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
+pub fn shell_quoted(path: &Path) -> String {
+    let s = path.to_string_lossy();
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        return s.into_owned();
+    }
+    if s.chars().any(char::is_control) {
+        let body: String = s
+            .chars()
+            .map(|c| match c {
+                '\\' => "\\\\".to_string(),
+                '\'' => "\\'".to_string(),
+                c if c.is_control() && (c as u32) < 0x80 => format!("\\x{:02x}", c as u32),
+                c if c.is_control() => format!("\\u{:04x}", c as u32),
+                c => c.to_string(),
+            })
+            .collect();
+        return format!("$'{body}'");
+    }
+    format!("'{}'", s.replace('\'', "'\\''"))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// att39-7: the directory in the note's advice pastes into a POSIX shell as one word (bash
+    /// for a control character): plain as is, else single-quoted, a quote closed and escaped.
+    #[test]
+    fn the_notes_directory_is_one_shell_word() {
+        assert_eq!(shell_quoted(Path::new("/tmp/run_1.d")), "/tmp/run_1.d");
+        assert_eq!(
+            shell_quoted(Path::new("my run;touch PWNED")),
+            "'my run;touch PWNED'"
+        );
+        assert_eq!(shell_quoted(Path::new("it's")), "'it'\\''s'");
+        assert_eq!(
+            shell_quoted(Path::new("inj\u{1b}[2J\nnote")),
+            "$'inj\\x1b[2J\\x0anote'"
+        );
+    }
 
     /// A table is isotrack's only when its first line is a header exactly: not a prefix of
     /// one, not one with more after it on the line; a huge file is not read whole (a 4 GiB

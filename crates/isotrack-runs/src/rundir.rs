@@ -17,6 +17,7 @@
 
 use crate::failure::{exit, Failure};
 use crate::files::{refuse_non_regular, same_file, temp_beside, write_atomic};
+use crate::owned::shell_quoted;
 use crate::summary::Summary;
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::trace::TraceWriter;
@@ -110,7 +111,7 @@ pub fn not_an_earlier_run(dir: &Path, extra: &[&str]) -> Option<String> {
         let refused = |why: String| {
             Some(format!(
                 "{} is not an isotrack run's summary ({why}): refusing to replace it; move it away or use another --out",
-                summary.display()
+                shell_quoted(&summary)
             ))
         };
         let text = match read_capped(&summary, max) {
@@ -161,7 +162,7 @@ fn present_files(dir: &Path, names: &[&str]) -> Vec<String> {
         .filter(|n| **n != "summary.json")
         .map(|n| dir.join(n))
         .filter(|p| std::fs::symlink_metadata(p).is_ok())
-        .map(|p| p.display().to_string())
+        .map(|p| shell_quoted(&p))
         .collect()
 }
 
@@ -258,16 +259,16 @@ fn holds_an_input(dir: &Path, inputs: &[PathBuf]) -> Option<String> {
         .find(|i| std::fs::canonicalize(i).is_ok_and(|c| c.starts_with(&d)))?;
     Some(format!(
         "cannot write run directory {}: it holds the input {} (the scenario's folder or a parent of it): a run directory is the command's own, give --out a directory of its own",
-        dir.display(),
+        shell_quoted(dir),
         input.display()
     ))
 }
 
-/// `cannot write PATH: WHY`, exit 73.
+/// `cannot write PATH: WHY` (the path shell-quoted, att41-2), exit 73.
 fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
     Failure {
         code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", path.display()),
+        message: format!("cannot write {}: {e}", shell_quoted(path)),
     }
 }
 
@@ -335,7 +336,7 @@ impl RunDir {
         if let Some(why) = not_a_directory(dir) {
             return Err(Failure {
                 code: exit::CANTCREAT,
-                message: format!("cannot write run directory {}: {why}", dir.display()),
+                message: format!("cannot write run directory {}: {why}", shell_quoted(dir)),
             });
         }
         if let Some(message) = holds_an_input(dir, inputs) {

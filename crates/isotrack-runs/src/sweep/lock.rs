@@ -155,7 +155,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
             exit::CANTCREAT,
             format!(
                 "{} is not an isotrack lock file (it holds text that is not isotrack's holder record `COMMAND pid N on HOST`: a file of your own), and isotrack never replaces a file it did not write: move it away, or use another --out",
-                path.display()
+                crate::owned::shell_quoted(path)
             ),
         )),
         Ok(()) => {
