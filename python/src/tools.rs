@@ -189,8 +189,9 @@ pub fn plot(
 enum Guard {
     /// Nothing (a report's page named by the caller).
     Nothing,
-    /// The run figures `isotrack plot` refuses to replace unless isotrack wrote them
-    /// (att40-25: `trajectory.*`, `timeseries.*`, `team.*`, `animation.gif` without
+    /// The figures `isotrack plot` refuses to replace unless isotrack wrote them
+    /// (att40-25: `trajectory.*`, `timeseries.*`, `team.*`, `animation.gif`, att41-10: a
+    /// sweep's `sweep_*_vs_*.png`/`.svg`, without
     /// isotrack's mark, or not a regular file): refused (OSError naming the file) before any is
     /// moved. The command checks them in the directory it draws in, which for this wrapper is
     /// the staging directory, empty.
@@ -203,10 +204,12 @@ fn foreign_figure(from: &Path, to: &Path) -> PyResult<()> {
     for entry in std::fs::read_dir(from).map_err(|e| io(from, e))? {
         let name = entry.map_err(|e| io(from, e))?.file_name();
         let n = name.to_string_lossy();
+        // att41-10 (Python addendum): a sweep's figure too, `sweep_METRIC_vs_X.png`/`.svg`.
         let figure = ["trajectory.", "timeseries.", "team."]
             .iter()
             .any(|p| n.starts_with(p))
-            || n == "animation.gif";
+            || n == "animation.gif"
+            || (n.starts_with("sweep_") && (n.ends_with(".png") || n.ends_with(".svg")));
         if !figure {
             continue;
         }

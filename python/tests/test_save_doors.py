@@ -272,3 +272,31 @@ def test_plot_of_a_sweep_draws_into_the_sweep(tmp_path):
     drawn = [p.name for p in out.iterdir() if p.name.startswith("sweep_") and p.suffix == ".png"]
     assert drawn, sorted(p.name for p in out.iterdir())
     assert not (out / ".isotrack.lock").exists()
+
+
+def test_plot_of_a_sweep_never_replaces_a_users_file_named_as_its_figure(tmp_path):
+    """att41-10 (Python addendum): `isotrack.plot(SWEEP, out=...)` moved its figure over the
+    user's own file of that name (`sweep_METRIC_vs_X.png`, no isotrack mark). Refused
+    (OSError naming the file), the file byte for byte as it was, into the sweep and into
+    `out`; isotrack's own figure is still redrawn."""
+    sw = tmp_path / "sw.toml"
+    sw.write_text(
+        f'scenario = "{ROOT / "scenarios" / "paper-fig2b-circular.toml"}"\n'
+        "[base]\nsim.duration_s = 5.0\n[grid]\ncontroller.kp = [5.0, 10.0]\n"
+    )
+    swd = tmp_path / "swd"
+    subprocess.run([cli(), "sweep", str(sw), "--out", str(swd)], check=True, capture_output=True)
+    name = "sweep_steady_state_max_abs_error_vs_controller_kp.png"
+    mine = b"MY OWN SWEEP PLOT"
+    out = tmp_path / "so3"
+    out.mkdir()
+    for d, kwargs in [(swd, {}), (out, {"out": str(out)})]:
+        (d / name).write_bytes(mine)
+        with pytest.raises(OSError, match=f"{name} is not a figure isotrack wrote"):
+            isotrack.plot(str(swd), **kwargs)
+        assert (d / name).read_bytes() == mine
+        assert [p.name for p in d.iterdir() if p.name.startswith(".isotrack-partial")] == []
+        (d / name).unlink()
+    isotrack.plot(str(swd), out=str(out))
+    isotrack.plot(str(swd), out=str(out))
+    assert (out / name).read_bytes().startswith(b"\x89PNG")

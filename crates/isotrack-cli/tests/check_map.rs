@@ -521,6 +521,74 @@ fn a_stale_verify_csv_is_removed() {
     assert!(out.join("stability_map.csv").exists());
 }
 
+/// The files of `dir` (hidden ones too) with their bytes, sorted.
+fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// att41-11 SAFETY: `check --map --out DIR` deleted the user's own `verify.csv` (no --verify
+/// even asked for) and replaced their `stability_map.csv`, `.png`, `.svg`. A table whose first
+/// line is not isotrack's header for it and a figure without isotrack's mark are the user's:
+/// refused (73, naming the file) before anything is computed, every file as it was. An older
+/// isotrack's chart table (its eight columns, before `note`) is still isotrack's, replaced.
+/// Fails on the source before (exit 0, verify.csv gone, the others replaced).
+#[test]
+fn the_chart_never_replaces_nor_removes_a_users_file() {
+    let d = tempfile::tempdir().unwrap();
+    let sc = scenario();
+    for (name, text, why) in [
+        (
+            "stability_map.csv",
+            "MY DATA\n",
+            "first line is not check --map's header",
+        ),
+        (
+            "verify.csv",
+            "MY VERIFY\n",
+            "first line is not check --map --verify's header",
+        ),
+        (
+            "stability_map.png",
+            "MY PIC\n",
+            "not a figure isotrack wrote",
+        ),
+        (
+            "stability_map.svg",
+            "<svg/>\n",
+            "not a figure isotrack wrote",
+        ),
+    ] {
+        let out = d.path().join(name.replace('.', "_"));
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join(name), text).unwrap();
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        let before = listing(&out);
+        let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
+        let named = out.join(name).display().to_string();
+        assert_fails(&r, 73, &[&named, why, "move it away"]);
+        assert_eq!(listing(&out), before, "{name}");
+    }
+    let out = d.path().join("older");
+    std::fs::create_dir(&out).unwrap();
+    let older = format!(
+        "{}\n1,1,1,0.5,true,stable,1,1\n",
+        MAP_COLUMNS[..8].join(",")
+    );
+    std::fs::write(out.join("stability_map.csv"), older).unwrap();
+    let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert_eq!(read_csv(&out.join("stability_map.csv")).0, MAP_COLUMNS);
+}
+
 /// One writer per directory: while another holds `DIR/.isotrack.lock` (as `sweep` does),
 /// `check --map --out DIR` exits 73 and writes nothing.
 #[test]

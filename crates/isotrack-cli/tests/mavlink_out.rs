@@ -25,7 +25,9 @@ fn contents(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
     v
 }
 
-/// An earlier flight's directory (a run's files and a raw log).
+/// An earlier flight's directory (a run's files and a raw log), its summary a flight's: a
+/// run's with the `end_reason` key every flight's summary has (att41-1: a log beside a
+/// simulated run's summary is the user's, never replaced).
 fn earlier_flight(d: &std::path::Path) -> Vec<(String, Vec<u8>)> {
     let o = isotrack(&[
         "run",
@@ -36,6 +38,9 @@ fn earlier_flight(d: &std::path::Path) -> Vec<(String, Vec<u8>)> {
         d.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let summary = std::fs::read_to_string(d.join("summary.json")).unwrap();
+    let flight = summary.replacen('{', "{\"end_reason\": \"vehicle_ended\",", 1);
+    std::fs::write(d.join("summary.json"), flight).unwrap();
     std::fs::write(d.join("mavlink.tlog"), b"an earlier flight's log").unwrap();
     contents(d)
 }
@@ -267,5 +272,60 @@ fn fly_and_sitl_out_never_replace_a_users_files() {
     assert!(
         vehicle.recv_from(&mut buf).is_err(),
         "a frame reached the vehicle"
+    );
+}
+
+/// att41-1 SAFETY: `fly --out DIR` replaced the user's own `mavlink.tlog` (their ground
+/// station's log) kept beside a simulated run's `summary.json`: a run writes no log, so no
+/// isotrack wrote that one. Refused (73, naming it) before the link is opened: no frame reaches
+/// the vehicle, every file as it was. `run --out` into the same folder still replaces the run
+/// and keeps the log. Fails on the source before (fly flew, and its log replaced the user's).
+#[test]
+fn fly_out_never_replaces_a_log_beside_a_simulated_runs_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("simrun");
+    let u = d.to_str().unwrap();
+    let run = ["run", "--set", "sim.duration_s=5", "--quiet", "--out", u];
+    let o = isotrack(&run);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::write(d.join("mavlink.tlog"), b"MY QGC LOG").unwrap();
+    let before = contents(&d);
+    let vehicle = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let to_vehicle = format!("udpout:{}", vehicle.local_addr().unwrap());
+    let o = isotrack_within(
+        &[
+            "fly",
+            "--mavlink",
+            &to_vehicle,
+            "--take-control",
+            "--arm",
+            "--max-duration-s",
+            "3",
+            "--out",
+            u,
+        ],
+        60,
+    );
+    let tlog = d.join("mavlink.tlog").display().to_string();
+    assert_fails(
+        &o,
+        73,
+        &[&tlog, "not an isotrack flight's", "use another --out"],
+    );
+    assert!(!stderr(&o).contains("companion on"), "{}", stderr(&o));
+    assert_eq!(contents(&d), before);
+    vehicle
+        .set_read_timeout(Some(std::time::Duration::from_millis(500)))
+        .unwrap();
+    let mut buf = [0u8; 512];
+    assert!(
+        vehicle.recv_from(&mut buf).is_err(),
+        "a frame reached the vehicle"
+    );
+    let o = isotrack(&run);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(d.join("mavlink.tlog")).unwrap(),
+        b"MY QGC LOG"
     );
 }

@@ -729,6 +729,45 @@ fn figures_unreadable_scenario_is_66() {
     }
 }
 
+/// att41-12 SAFETY: `figures --out DIR` replaced the user's own `fig2b.png` (their edited
+/// version, no isotrack mark) without a word. A file of a paper figure's name that isotrack did
+/// not write is refused (73, naming it) before any run: no run directory made, every file as
+/// it was; with `--svg`, the SVGs too. Fails on the source before (exit 0, the file replaced).
+#[test]
+fn figures_never_replace_a_users_file_named_as_a_figure() {
+    let d = tempfile::tempdir().unwrap();
+    let scenarios = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    for (name, svg) in [("fig2b.png", false), ("fig3c.svg", true)] {
+        let out = d.path().join(format!("out_{svg}"));
+        let runs = d.path().join(format!("runs_{svg}"));
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join(name), b"MY FIG").unwrap();
+        let mut args = vec![
+            "figures",
+            "--scenarios",
+            scenarios.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--runs",
+            runs.to_str().unwrap(),
+        ];
+        if svg {
+            args.push("--svg");
+        }
+        let o = isotrack_within(&args, 120);
+        let named = out.join(name).display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[&named, "not a figure isotrack wrote", "move it away"],
+        );
+        assert!(!runs.exists(), "a run was made");
+        let left: Vec<_> = std::fs::read_dir(&out).unwrap().flatten().collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        assert_eq!(std::fs::read(out.join(name)).unwrap(), b"MY FIG");
+    }
+}
+
 /// Blame and wording: a step so small that the default sensor rate `1/dt` is infinite blames
 /// `sim.dt_s`, not the unwritten `sensor.rate_hz`; a suite seed beyond TOML's integers names
 /// the range and echoes the value; the PI-like law on a level the field does not attain says

@@ -828,6 +828,99 @@ fn plot_refuses_a_sweep_directory_being_written() {
     assert!(!out.join(".isotrack.lock").exists());
 }
 
+/// att41-10 SAFETY: `plot SWEEP` (into the sweep, or `--out DIR`) replaced the user's own file
+/// named as a sweep figure (`sweep_METRIC_vs_X.png`/`.svg`, no isotrack mark) without a word,
+/// where `plot RUN` refuses one. Refused the same way (73, naming it, before anything is
+/// drawn: the folder as it was); isotrack's own earlier sweep figure (marked) is redrawn.
+/// Fails on the source before (exit 0, the user's file a PNG).
+#[test]
+fn plot_of_a_sweep_never_replaces_a_users_file_named_as_its_figure() {
+    let d = tempfile::tempdir().unwrap();
+    let (_, out) = small_sweep(d.path(), "sw");
+    let outs = out.display().to_string();
+    let po = d.path().join("po");
+    std::fs::create_dir(&po).unwrap();
+    let pos = po.display().to_string();
+    for (dir, name, args) in [
+        (
+            &out,
+            "sweep_steady_state_max_abs_error_vs_controller_kp.png",
+            vec!["plot", &outs],
+        ),
+        (
+            &po,
+            "sweep_steady_state_max_abs_error_vs_controller_kp.svg",
+            vec!["plot", &outs, "--format", "svg", "--out", &pos],
+        ),
+    ] {
+        std::fs::write(dir.join(name), b"MY OWN SWEEP PLOT").unwrap();
+        let before = listing(dir);
+        let o = isotrack_within(&args, 60);
+        let named = dir.join(name).display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[&named, "not a figure isotrack wrote", "move it away"],
+        );
+        assert!(!String::from_utf8_lossy(&o.stdout).contains("wrote"));
+        assert_eq!(listing(dir), before, "{name}");
+        std::fs::remove_file(dir.join(name)).unwrap();
+    }
+    // Its own figure, marked, is redrawn.
+    let args = ["plot", &outs, "--format", "svg", "--out", &pos];
+    for _ in 0..2 {
+        let o = isotrack_within(&args, 60);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    }
+}
+
+/// att41-2: a refusal names the file as run's note does, shell-quoted: a directory whose name
+/// holds a line break and `error: ...` printed it raw, forging a second `error:` line. Now one
+/// `error:` line, the path as bash's `$'...'` to paste; a run directory's refusal and a
+/// figure's alike. Fails on the source before (two `error:` lines, the path raw).
+#[test]
+fn a_refusal_names_the_file_as_one_shell_word() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("nl\nerror: none, all fine");
+    std::fs::create_dir(&dir).unwrap();
+    std::fs::write(dir.join("trace.csv"), b"u\n").unwrap();
+    let ds = dir.to_str().unwrap();
+    let quoted = format!(
+        "$'{}/nl\\x0aerror: none, all fine/trace.csv'",
+        d.path().display()
+    );
+    let o = isotrack_within(&["run", "--set", "sim.duration_s=1", "--out", ds], 60);
+    assert_fails(&o, 73, &[&quoted, "not an isotrack run's"]);
+    let e = common::stderr(&o);
+    assert_eq!(
+        e.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{e}"
+    );
+    // A figure of the user's there: plot's refusal quotes it too.
+    std::fs::remove_file(dir.join("trace.csv")).unwrap();
+    std::fs::write(dir.join("trajectory.png"), b"MY FIGURE").unwrap();
+    let r = d.path().join("r");
+    let o = isotrack(&[
+        "run",
+        "--set",
+        "sim.duration_s=1",
+        "--quiet",
+        "--out",
+        r.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = isotrack_within(&["plot", r.to_str().unwrap(), "--out", ds], 60);
+    let quoted = quoted.replace("trace.csv", "trajectory.png");
+    assert_fails(&o, 73, &[&quoted, "not a figure isotrack wrote"]);
+    let e = common::stderr(&o);
+    assert_eq!(
+        e.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{e}"
+    );
+}
+
 /// att36-11: `sweep --force` starts over beside the earlier sweep's `plot` figures, which then
 /// read as the new results' figures. isotrack cannot tell its figure from a user's file of that
 /// name, and never removes a file it may not have written (att38-1's rule): it keeps them and

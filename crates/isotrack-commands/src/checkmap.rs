@@ -534,8 +534,30 @@ fn map_grid(
     Ok(grid)
 }
 
+/// Refuses (73) a `stability_map.csv` or a `verify.csv` that isotrack did not write
+/// ([`isotrack_runs::owned::refuse_foreign_csv`]): its first line is not the header every
+/// `check --map` wrote for it (the chart's [`MAP_COLUMNS`], or the first eight of them, as
+/// before its `note` column came; `verify.csv`'s [`VERIFY_COLUMNS`], unchanged since
+/// `--verify` came).
+fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
+    isotrack_runs::owned::refuse_foreign_csv(
+        csv,
+        &[MAP_COLUMNS.join(","), MAP_COLUMNS[..8].join(",")],
+        "an isotrack stability chart's table",
+        "check --map's",
+    )?;
+    isotrack_runs::owned::refuse_foreign_csv(
+        verify,
+        &[VERIFY_COLUMNS.join(",")],
+        "an isotrack verification table",
+        "check --map --verify's",
+    )
+}
+
 /// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
-/// `verify.csv`), none of them an input; an earlier `verify.csv` removed.
+/// `verify.csv`), none of them an input nor a file of the user's (a table or figure isotrack
+/// did not write: [`refuse_foreign_tables`], the figures' mark); an earlier `verify.csv`
+/// removed.
 fn open_map_dir(
     args: &CheckArgs,
     scenario: &Scenario,
@@ -557,6 +579,14 @@ fn open_map_dir(
     // anything is written (without --verify it would sit beside a chart it does not describe;
     // with --verify and an interruption, beside a chart it was not made for).
     let verify_path = output_path(dir, "verify.csv", &input)?;
+    // att41-11: whose files are these, before anything is computed or removed? A table whose
+    // first line is not isotrack's header for it, or a figure without isotrack's mark, is the
+    // user's: refused (73, naming it), every file as it was (the lock removed as it drops).
+    refuse_foreign_tables(&csv_path, &verify_path)?;
+    crate::figures::refuse_foreign_figures(
+        dir,
+        &["stability_map.png".into(), "stability_map.svg".into()],
+    )?;
     if verify_path.exists() {
         std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;
         errln!(

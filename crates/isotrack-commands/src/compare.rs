@@ -250,30 +250,15 @@ fn open_out(
 /// Refuses (73) an existing `comparison.csv` that an isotrack did not write: every version of
 /// `compare` wrote [`COMPARISON_COLUMNS`] as its first line (unchanged since the command came),
 /// so a file whose first line is anything else is the user's, never replaced (att39-1: it was,
-/// without a word). Only the first 4 KiB are read, never through a link nor from a FIFO
-/// (refused before this).
+/// without a word). Only the first line is read ([`isotrack_runs::owned::refuse_foreign_csv`]),
+/// never through a link nor from a FIFO (refused before this).
 fn refuse_foreign_comparison(p: &Path) -> Result<(), Failure> {
-    use std::io::Read;
-    if std::fs::symlink_metadata(p).is_err() {
-        return Ok(());
-    }
-    let mut head = Vec::new();
-    let read = isotrack_runs::files::open_read_regular(p)
-        .and_then(|f| f.take(4096).read_to_end(&mut head));
-    let header = COMPARISON_COLUMNS.join(",");
-    let first = head.split(|b| *b == b'\n').next().unwrap_or_default();
-    let why = match read {
-        Err(e) => format!("it cannot be read: {e}"),
-        Ok(_) if first == header.as_bytes() => return Ok(()),
-        Ok(_) => format!("its first line is not compare's header `{header}`"),
-    };
-    Err(Failure {
-        code: exit::CANTCREAT,
-        message: format!(
-            "{} is not an isotrack comparison ({why}): refusing to replace it; move it away or use another --out",
-            p.display()
-        ),
-    })
+    isotrack_runs::owned::refuse_foreign_csv(
+        p,
+        &[COMPARISON_COLUMNS.join(",")],
+        "an isotrack comparison",
+        "compare's",
+    )
 }
 
 /// The comparison table on stdout (Markdown): one row per law, a law in `never` marked as

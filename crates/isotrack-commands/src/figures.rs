@@ -351,7 +351,8 @@ fn refuse_neither_run_nor_sweep(d: &Path) -> Result<(), Failure> {
 
 /// `isotrack plot` of a sweep directory: `--metric` against `--x` (by default the first
 /// parameter column of `results`), one line per `--group` value, into
-/// `sweep_METRIC_vs_X[_by_GROUP].EXT` in `out`.
+/// `sweep_METRIC_vs_X[_by_GROUP].EXT` in `out`, which replaces a file of that name only if it
+/// is a figure isotrack wrote ([`refuse_foreign_figures`]).
 fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<(), Failure> {
     let x = match &a.x {
         Some(x) => x.clone(),
@@ -368,10 +369,6 @@ fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<()
                 .unwrap_or_default()
         }
     };
-    std::fs::create_dir_all(out).map_err(|e| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot create {}: {e}", out.display()),
-    })?;
     // A file name from column names: ASCII letters, digits, `_` and `-` only (`.`, `[`,
     // `]`, a `/`, an escape character or a bidi control each become `_`), at most 100
     // characters of each.
@@ -387,7 +384,7 @@ fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<()
             })
             .collect()
     };
-    let file = out.join(format!(
+    let name = format!(
         "sweep_{}_vs_{}{}.{}",
         safe(&a.metric),
         safe(&x),
@@ -396,7 +393,15 @@ fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<()
             .map(|g| format!("_by_{}", safe(g)))
             .unwrap_or_default(),
         st.format.extension()
-    ));
+    );
+    // att41-10: the user's own file of the figure's name (no isotrack mark) is refused (73)
+    // before anything is drawn, as for a run's figures.
+    refuse_foreign_figures(out, std::slice::from_ref(&name))?;
+    std::fs::create_dir_all(out).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot create {}: {e}", out.display()),
+    })?;
+    let file = out.join(name);
     isotrack_plot::sweep_figure(results, &x, &a.metric, a.group.as_deref(), &file, st)
         .map_err(failure)?;
     outln!("wrote {}", file.display());
@@ -620,10 +625,6 @@ fn map_extent(s: &Scenario) -> [f64; 4] {
 /// `isotrack figures`: the paper's figures ([`PAPER_FIGURES`]) from this project's own runs;
 /// each run is made once (in the order first needed) and shared by the figures that use it.
 pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
-    std::fs::create_dir_all(&a.out).map_err(|e| Failure {
-        code: exit::CANTCREAT,
-        message: format!("cannot create {}: {e}", a.out.display()),
-    })?;
     let formats: Vec<Format> = if a.svg {
         vec![Format::Png, Format::Svg]
     } else {
@@ -633,6 +634,23 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         .iter()
         .map(|&f| style(&a.look, f))
         .collect::<Result<_, _>>()?;
+    // att41-12: a file of a paper figure's name in `--out` that isotrack did not write (the
+    // user's own edited `fig2b.png`, no isotrack mark) is refused (73, naming it) before any
+    // run, as `plot` refuses a run's figure.
+    let names: Vec<String> = formats
+        .iter()
+        .flat_map(|f| {
+            PAPER_FIGURES
+                .iter()
+                .flat_map(|g| g.iter())
+                .map(move |fig| format!("{}.{}", fig.stem, f.extension()))
+        })
+        .collect();
+    refuse_foreign_figures(&a.out, &names)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: format!("cannot create {}: {e}", a.out.display()),
+    })?;
     let mut done = PaperRuns::default();
     let mut written = vec![];
     for group in PAPER_FIGURES {

@@ -298,7 +298,7 @@ pub(crate) fn note_outputs_from_before(before: &[&str], dir: &std::path::Path, t
     if before.is_empty() {
         return;
     }
-    let q = shell_quoted(dir);
+    let q = isotrack_runs::owned::shell_quoted(dir);
     // att40-1: only a regular file with isotrack's mark is redrawn by `plot`; it refuses (73)
     // anything else of a figure's name (the user's own file, an older isotrack's unmarked
     // figure, a link or FIFO), so the advice for those is to move them.
@@ -372,31 +372,6 @@ fn outputs_present(dir: &std::path::Path) -> Vec<&'static str> {
         .into_iter()
         .filter(|n| std::fs::symlink_metadata(dir.join(n)).is_ok_and(|m| !m.is_dir()))
         .collect()
-}
-
-/// `path` as a POSIX shell word to paste (att39-7: `my run;touch PWNED` was printed bare, and a
-/// line break in it forged a line of output): as it is when every character is plain, else in
-/// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
-fn shell_quoted(path: &std::path::Path) -> String {
-    let s = path.to_string_lossy();
-    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
-    if !s.is_empty() && s.chars().all(plain) {
-        return s.into_owned();
-    }
-    if s.chars().any(char::is_control) {
-        let body: String = s
-            .chars()
-            .map(|c| match c {
-                '\\' => "\\\\".to_string(),
-                '\'' => "\\'".to_string(),
-                c if c.is_control() && (c as u32) < 0x80 => format!("\\x{:02x}", c as u32),
-                c if c.is_control() => format!("\\u{:04x}", c as u32),
-                c => c.to_string(),
-            })
-            .collect();
-        return format!("$'{body}'");
-    }
-    format!("'{}'", s.replace('\'', "'\\''"))
 }
 
 /// A team run's warnings ([`isotrack_runs::summary::team_warnings`]: a discovered ring that
@@ -505,22 +480,6 @@ fn check_json(
 #[cfg(test)]
 mod tests {
 
-    /// att39-7: the directory in the note's advice pastes into a POSIX shell as one word (bash
-    /// for a control character): plain as is, else single-quoted, a quote closed and escaped.
-    #[test]
-    fn the_notes_directory_is_one_shell_word() {
-        use std::path::Path;
-        assert_eq!(shell_quoted(Path::new("/tmp/run_1.d")), "/tmp/run_1.d");
-        assert_eq!(
-            shell_quoted(Path::new("my run;touch PWNED")),
-            "'my run;touch PWNED'"
-        );
-        assert_eq!(shell_quoted(Path::new("it's")), "'it'\\''s'");
-        assert_eq!(
-            shell_quoted(Path::new("inj\u{1b}[2J\nnote")),
-            "$'inj\\x1b[2J\\x0anote'"
-        );
-    }
     use super::*;
 
     /// A team refused by the engine with `--out` exits 65 (invalid data, as without `--out`),

@@ -52,27 +52,56 @@ fn png_marked(bytes: &[u8]) -> Option<Vec<u8>> {
     Some(out)
 }
 
-/// Whether PNG `bytes` hold the mark's `tEXt` chunk before their image data.
-fn png_has_mark(bytes: &[u8]) -> bool {
-    if bytes.len() < 8 || &bytes[..8] != PNG_SIGNATURE {
+/// The most PNG chunks looked at for the mark: isotrack puts it right after `IHDR` (the
+/// second chunk); a few more are allowed for, never a walk through a file's every chunk.
+const PNG_CHUNKS_LOOKED_AT: usize = 16;
+
+/// Reads `buf.len()` bytes of `f` at `at`; `false` when the file holds fewer.
+fn read_at(f: &mut std::fs::File, at: u64, buf: &mut [u8]) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    f.seek(SeekFrom::Start(at)).is_ok() && f.read_exact(buf).is_ok()
+}
+
+/// Whether PNG file `f` (`len` bytes) holds the mark's `tEXt` chunk before its image data:
+/// its chunk headers are read one by one (12 bytes each, the data skipped), the first
+/// [`PNG_CHUNKS_LOOKED_AT`] at most (att41-18: the whole file was read into memory).
+fn png_has_mark(f: &mut std::fs::File, len: u64) -> bool {
+    let mut signature = [0u8; 8];
+    if !read_at(f, 0, &mut signature) || signature != PNG_SIGNATURE {
         return false;
     }
-    let mut at = 8usize;
-    while at + 8 <= bytes.len() {
-        let len = u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-        let kind = &bytes[at + 4..at + 8];
-        let Some(end) = (at + 8).checked_add(len as usize) else {
-            return false;
-        };
-        if kind == b"IDAT" || kind == b"IEND" || end > bytes.len() {
+    let mut at = 8u64;
+    for _ in 0..PNG_CHUNKS_LOOKED_AT {
+        let mut head = [0u8; 8];
+        if !read_at(f, at, &mut head) {
             return false;
         }
-        if kind == b"tEXt" && &bytes[at + 8..end] == PNG_TEXT {
-            return true;
+        let n = u64::from(u32::from_be_bytes([head[0], head[1], head[2], head[3]]));
+        let kind = &head[4..8];
+        let end = at + 8 + n;
+        if kind == b"IDAT" || kind == b"IEND" || end > len {
+            return false;
+        }
+        if kind == b"tEXt" && n == PNG_TEXT.len() as u64 {
+            let mut data = [0u8; PNG_TEXT.len()];
+            if read_at(f, at + 8, &mut data) && data == PNG_TEXT {
+                return true;
+            }
         }
         at = end + 4;
     }
     false
+}
+
+/// Whether file `f` (`len` bytes) ends with `tail` then `after` more bytes (read: those
+/// bytes only).
+fn ends_with(f: &mut std::fs::File, len: u64, tail: &[u8], after: u64) -> bool {
+    let n = tail.len() as u64 + after;
+    if len < n {
+        return false;
+    }
+    let mut buf = vec![0u8; tail.len()];
+    read_at(f, len - n, &mut buf) && buf == tail
 }
 
 /// The GIF comment extension holding the mark: introducer, label, one sub-block, terminator.
@@ -126,10 +155,16 @@ pub(crate) fn mark(path: &Path) -> Result<(), String> {
     }
 }
 
-/// Whether the file at `path` carries isotrack's mark (by its extension; an unreadable file
-/// does not).
+/// Whether the file at `path` carries isotrack's mark (by its extension; an unreadable file,
+/// a link or a FIFO does not). Reads only where the mark is (att41-18: the whole file was
+/// read, 20 GB of memory for a 20 GB file): an SVG's and a GIF's last bytes, a PNG's first
+/// chunk headers; never through a link nor from a FIFO
+/// ([`isotrack_runs::files::open_read_regular`]).
 pub fn is_isotrack_figure(path: &Path) -> bool {
-    let Ok(bytes) = std::fs::read(path) else {
+    let Ok(mut f) = isotrack_runs::files::open_read_regular(path) else {
+        return false;
+    };
+    let Ok(len) = f.metadata().map(|m| m.len()) else {
         return false;
     };
     let ext = path
@@ -137,19 +172,20 @@ pub fn is_isotrack_figure(path: &Path) -> bool {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
-        "png" => png_has_mark(&bytes),
+        "png" => png_has_mark(&mut f, len),
+        // The comment, then the trailer; a GIF longer than the comment alone.
         "gif" => {
             let c = gif_comment();
-            bytes.len() > c.len() && bytes[..bytes.len() - 1].ends_with(&c)
+            len > c.len() as u64 && ends_with(&mut f, len, &c, 1)
         }
-        "svg" => bytes.ends_with(SVG_MARK.as_bytes()),
+        "svg" => ends_with(&mut f, len, SVG_MARK.as_bytes(), 0),
         _ => false,
     }
 }
 
 /// Refuses to replace `path` with a figure when a file is there that isotrack did not write
 /// (no mark: the user's own file of that name, or a figure of an isotrack older than the
-/// mark), naming it and what to do (att38-9); `Ok` when nothing is there or the file is an
+/// mark), naming it (shell-quoted, att41-2) and what to do (att38-9); `Ok` when nothing is there or the file is an
 /// isotrack figure.
 pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
     match std::fs::symlink_metadata(path) {
@@ -159,7 +195,7 @@ pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
         Ok(m) if !m.is_file() => Ok(()),
         Ok(_) => Err(format!(
             "{} is not a figure isotrack wrote (it has no isotrack mark: your own file of that name, or a figure of an older isotrack, which did not mark its figures), and isotrack never replaces a file it did not write: move it away, or draw elsewhere (--out DIR)",
-            path.display()
+            isotrack_runs::owned::shell_quoted(path)
         )),
     }
 }
@@ -174,5 +210,57 @@ mod tests {
     fn crc_is_pngs() {
         assert_eq!(crc32(b"IEND"), 0xae42_6082);
         assert_eq!(crc32(b"123456789"), 0xcbf4_3926);
+    }
+
+    /// A PNG chunk: length, type, data, CRC over type and data.
+    fn chunk(kind: &[u8], data: &[u8]) -> Vec<u8> {
+        let mut body = kind.to_vec();
+        body.extend_from_slice(data);
+        let mut c = (data.len() as u32).to_be_bytes().to_vec();
+        c.extend_from_slice(&body);
+        c.extend_from_slice(&crc32(&body).to_be_bytes());
+        c
+    }
+
+    /// att41-18: a marked PNG, GIF and SVG are told as isotrack's, the same files unmarked
+    /// are not; a 20 GiB file of each name (sparse) is answered from a few bytes, at once
+    /// (before, it was read whole: 20 GB of memory, minutes).
+    #[test]
+    fn the_mark_is_read_where_it_is_never_the_whole_file() {
+        let d = tempfile::tempdir().unwrap();
+        let mut png = PNG_SIGNATURE.to_vec();
+        png.extend(chunk(b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 2, 0, 0, 0]));
+        png.extend(chunk(b"IDAT", b"x"));
+        png.extend(chunk(b"IEND", b""));
+        let files: [(&str, Vec<u8>); 3] = [
+            ("a.png", png),
+            ("a.gif", b"GIF89a\x01\x00\x01\x00\x00\x00\x00;".to_vec()),
+            (
+                "a.svg",
+                b"<svg xmlns=\"http://www.w3.org/2000/svg\"/>\n".to_vec(),
+            ),
+        ];
+        for (name, bytes) in &files {
+            let p = d.path().join(name);
+            std::fs::write(&p, bytes).unwrap();
+            assert!(!is_isotrack_figure(&p), "{name} unmarked");
+            mark(&p).unwrap();
+            assert!(is_isotrack_figure(&p), "{name} marked");
+            assert!(refuse_foreign_figure(&p).is_ok(), "{name}");
+            let huge = d.path().join(format!("huge_{name}"));
+            let f = std::fs::File::create(&huge).unwrap();
+            f.set_len(20 << 30).unwrap();
+            drop(f);
+            let t = std::time::Instant::now();
+            assert!(!is_isotrack_figure(&huge), "{name} huge");
+            assert!(refuse_foreign_figure(&huge).is_err(), "{name} huge");
+            assert!(t.elapsed().as_secs_f64() < 1.0, "{name}: {:?}", t.elapsed());
+        }
+        // A PNG with a huge chunk before the mark's place is not walked through either.
+        let p = d.path().join("b.png");
+        let mut png = PNG_SIGNATURE.to_vec();
+        png.extend(chunk(b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 2, 0, 0, 0]));
+        std::fs::write(&p, &png).unwrap();
+        assert!(!is_isotrack_figure(&p));
     }
 }

@@ -10,6 +10,7 @@
 //!   the resume index, merge and the output-directory lock;
 //! * [`results`]: a run's record (outcome and metrics) and the one results-row builder;
 //! * [`files`]: which paths name one file;
+//! * [`owned`]: whether a file a command would replace is isotrack's own;
 //! * [`signals`]: the process's answer to Ctrl-C, SIGTERM and SIGHUP (files [`cleanup`] removed,
 //!   or a flag for the commands that stop cleanly).
 //!
@@ -19,6 +20,7 @@
 pub mod cleanup;
 pub mod failure;
 pub mod files;
+pub mod owned;
 pub mod results;
 pub mod rundir;
 pub mod signals;

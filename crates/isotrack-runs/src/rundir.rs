@@ -17,6 +17,7 @@
 
 use crate::failure::{exit, Failure};
 use crate::files::{refuse_non_regular, same_file, temp_beside, write_atomic};
+use crate::owned::shell_quoted;
 use crate::summary::Summary;
 use crate::sweep::lock::{lock_output_dir, DirLock};
 use crate::trace::TraceWriter;
@@ -91,7 +92,10 @@ fn it_them(n: usize) -> (&'static str, &'static str) {
 /// `scenario.toml` or `mavlink.tlog` was replaced without a word); `None` when there is none
 /// of them, or when `summary.json` is one an isotrack of any version wrote
 /// ([`crate::summary::not_isotracks`]: a JSON object with `isotrack_version`, `outcome` and
-/// `scenario`; the other files beside it are then that run's).
+/// `scenario`; the other files beside it are then that run's, but `extra`: a flight's own
+/// files, `fly`'s `mavlink.tlog`, are that run's only beside a flight's summary
+/// ([`crate::summary::is_flights`]; att41-1: a run writes no log, so one beside a simulated
+/// run's summary is the user's).
 ///
 /// Refused: a `summary.json` that is not isotrack's (or larger than
 /// [`crate::summary::MAX_SUMMARY_BYTES`], never read whole, or unreadable), and run files with
@@ -104,30 +108,43 @@ pub fn not_an_earlier_run(dir: &Path, extra: &[&str]) -> Option<String> {
     let summary = dir.join("summary.json");
     if std::fs::symlink_metadata(&summary).is_ok() {
         let max = crate::summary::MAX_SUMMARY_BYTES;
-        let why = match read_capped(&summary, max) {
-            Ok(Some(bytes)) => match std::str::from_utf8(&bytes) {
-                Ok(text) => crate::summary::not_isotracks(text),
-                Err(_) => Some("not UTF-8 text".into()),
+        let refused = |why: String| {
+            Some(format!(
+                "{} is not an isotrack run's summary ({why}): refusing to replace it; move it away or use another --out",
+                shell_quoted(&summary)
+            ))
+        };
+        let text = match read_capped(&summary, max) {
+            Ok(Some(bytes)) => match String::from_utf8(bytes) {
+                Ok(text) => text,
+                Err(_) => return refused("not UTF-8 text".into()),
             },
-            Ok(None) => Some(format!(
-                "larger than {} MiB, which no isotrack summary is",
-                max >> 20
-            )),
-            Err(e) => Some(format!("it cannot be read: {e}")),
-        }?;
+            Ok(None) => {
+                return refused(format!(
+                    "larger than {} MiB, which no isotrack summary is",
+                    max >> 20
+                ))
+            }
+            Err(e) => return refused(format!("it cannot be read: {e}")),
+        };
+        if let Some(why) = crate::summary::not_isotracks(&text) {
+            return refused(why);
+        }
+        // att41-1: the `extra` files are a flight's (`fly`'s `mavlink.tlog`): that run's only
+        // beside a flight's summary. Beside a simulated run's (which writes no log) it is the
+        // user's own, as with no summary at all.
+        let theirs = present_files(dir, extra);
+        if theirs.is_empty() || crate::summary::is_flights(&text) {
+            return None;
+        }
+        let (it, is) = it_them(theirs.len());
         return Some(format!(
-            "{} is not an isotrack run's summary ({why}): refusing to replace it; move it away or use another --out",
-            summary.display()
+            "{} {is} not an isotrack flight's: the summary.json beside {it} is a simulated run's (no `end_reason` key, which every flight's summary has), and only `fly --out` writes {it}: refusing to replace {it}; move {it} away or use another --out",
+            theirs.join(", ")
         ));
     }
-    let present: Vec<String> = RUN_FILES
-        .iter()
-        .chain(extra)
-        .filter(|n| **n != "summary.json")
-        .map(|n| dir.join(n))
-        .filter(|p| std::fs::symlink_metadata(p).is_ok())
-        .map(|p| p.display().to_string())
-        .collect();
+    let run_files: Vec<&str> = RUN_FILES.iter().chain(extra).copied().collect();
+    let present = present_files(dir, &run_files);
     if present.is_empty() {
         return None;
     }
@@ -136,6 +153,17 @@ pub fn not_an_earlier_run(dir: &Path, extra: &[&str]) -> Option<String> {
         "{} {is} not an isotrack run's: no summary.json beside {it} (isotrack writes a run's summary.json last; a run killed before its end leaves none either): refusing to replace {it}; move {it} away or use another --out",
         present.join(", ")
     ))
+}
+
+/// The paths of those of `names` (but `summary.json`) that are in `dir`, for a message.
+fn present_files(dir: &Path, names: &[&str]) -> Vec<String> {
+    names
+        .iter()
+        .filter(|n| **n != "summary.json")
+        .map(|n| dir.join(n))
+        .filter(|p| std::fs::symlink_metadata(p).is_ok())
+        .map(|p| shell_quoted(&p))
+        .collect()
 }
 
 /// [`not_an_earlier_run`] as the failure (exit 73), for a command that checks its run
@@ -231,16 +259,16 @@ fn holds_an_input(dir: &Path, inputs: &[PathBuf]) -> Option<String> {
         .find(|i| std::fs::canonicalize(i).is_ok_and(|c| c.starts_with(&d)))?;
     Some(format!(
         "cannot write run directory {}: it holds the input {} (the scenario's folder or a parent of it): a run directory is the command's own, give --out a directory of its own",
-        dir.display(),
+        shell_quoted(dir),
         input.display()
     ))
 }
 
-/// `cannot write PATH: WHY`, exit 73.
+/// `cannot write PATH: WHY` (the path shell-quoted, att41-2), exit 73.
 fn cant(path: &Path, e: impl std::fmt::Display) -> Failure {
     Failure {
         code: exit::CANTCREAT,
-        message: format!("cannot write {}: {e}", path.display()),
+        message: format!("cannot write {}: {e}", shell_quoted(path)),
     }
 }
 
@@ -308,7 +336,7 @@ impl RunDir {
         if let Some(why) = not_a_directory(dir) {
             return Err(Failure {
                 code: exit::CANTCREAT,
-                message: format!("cannot write run directory {}: {why}", dir.display()),
+                message: format!("cannot write run directory {}: {why}", shell_quoted(dir)),
             });
         }
         if let Some(message) = holds_an_input(dir, inputs) {
@@ -320,11 +348,6 @@ impl RunDir {
         let created = std::fs::symlink_metadata(dir).is_err();
         std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
         let lock = command.map(|c| lock_output_dir(dir, c)).transpose()?;
-        // Holding the lock, no other command writes here: temporaries a killed process left
-        // (`.trace.csv.PID.tmp`, its PID gone) are removed.
-        if lock.is_some() {
-            crate::cleanup::remove_stale_temporaries(dir, &names);
-        }
         for name in &names {
             let p = dir.join(name);
             refuse_non_regular(&p).map_err(|e| cant(&p, e))?;
@@ -333,6 +356,12 @@ impl RunDir {
         // directory) and no run file a link or FIFO: whose files are these? A user's are
         // refused before anything runs (the lock file is removed again as the lock drops).
         refuse_not_an_earlier_run(dir, extra)?;
+        // Holding the lock, no other command writes here, and the directory is an earlier
+        // run's or holds no run file: temporaries a killed process left (`.trace.csv.PID.tmp`,
+        // its PID gone) are removed. Only now: a folder refused above loses nothing (att41-13).
+        if lock.is_some() {
+            crate::cleanup::remove_stale_temporaries(dir, &names);
+        }
         let before = present_outputs(dir, extra);
         Ok(RunDir {
             dir: dir.to_path_buf(),
@@ -625,7 +654,12 @@ mod tests {
             &scenario.run(&mut isotrack_sim::NoTrace),
             &[],
         );
-        std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
+        // A flight's directory (its summary has `end_reason`): its `mavlink.tlog` is `fly`'s
+        // own extra file (att41-1: beside a simulated run's summary it is the user's).
+        let flight = summary
+            .to_json()
+            .replacen('{', "{\"end_reason\": \"vehicle_ended\",", 1);
+        std::fs::write(d.path().join("summary.json"), flight).unwrap();
         let old: Vec<&str> = RUN_OUTPUTS
             .into_iter()
             .filter(|n| *n != "timeseries.svg")
@@ -748,6 +782,44 @@ mod tests {
         }
     }
 
+    /// att41-13: a folder refused as holding the user's run files loses nothing first: a
+    /// stale-looking `.trace.csv.NNN.tmp` (NNN no live process) and a `.isotrack.lock` of the
+    /// user's (no lock record in it) are left as they were; in an earlier run's directory the
+    /// stale temporary is removed as before. Fails on the source before (both files deleted
+    /// before the refusal).
+    #[test]
+    fn a_refused_folder_loses_no_temporary_nor_lock_file() {
+        let d = tempfile::tempdir().unwrap();
+        // No process has pid 4194304 + 1 (above Linux's pid_max).
+        let tmp = ".trace.csv.4194305.tmp";
+        std::fs::write(d.path().join("trace.csv"), b"mine\n").unwrap();
+        std::fs::write(d.path().join(tmp), b"my backup\n").unwrap();
+        let before = listing(d.path());
+        let e = RunDir::open(d.path(), &[], &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert_eq!(listing(d.path()), before);
+        std::fs::write(d.path().join(".isotrack.lock"), b"my lock notes\n").unwrap();
+        let before = listing(d.path());
+        let e = RunDir::open(d.path(), &[], &[], Some("run")).unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT, "{}", e.message);
+        assert!(e.message.contains(".isotrack.lock"), "{}", e.message);
+        assert_eq!(listing(d.path()), before);
+        // An earlier run's directory: its stale temporary goes.
+        let d = tempfile::tempdir().unwrap();
+        let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
+        let summary = Summary::of_run(
+            &scenario,
+            None,
+            &scenario.run(&mut isotrack_sim::NoTrace),
+            &[],
+        );
+        std::fs::write(d.path().join("summary.json"), summary.to_json()).unwrap();
+        std::fs::write(d.path().join(tmp), b"a killed run's\n").unwrap();
+        let out = RunDir::open(d.path(), &[], &[], Some("run")).unwrap();
+        assert!(!d.path().join(tmp).exists());
+        drop(out);
+    }
+
     /// The files of `dir` (hidden ones too) with their bytes, sorted.
     fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
         let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
@@ -810,8 +882,8 @@ mod tests {
     /// whatever its version's keys: the first version's (`d905a43`: no `warnings`, no
     /// `data_files`), a flight's (`fly`: `end_reason`, no metrics), a Python controller's
     /// (`controller`), one with keys a later isotrack adds (a team's `team`, ...); the run is
-    /// replaced, the
-    /// figures named as isotrack's kept.
+    /// replaced, the figures named as isotrack's kept. A `mavlink.tlog` is the run's (replaced
+    /// by `fly --out`) only beside a flight's summary (att41-1).
     #[test]
     fn every_isotracks_summary_is_an_earlier_run() {
         let scenario = isotrack_scenario::load_scenario(None, &[]).unwrap();
@@ -859,7 +931,22 @@ mod tests {
             std::fs::write(d.path().join("trace.csv"), b"t_s\n").unwrap();
             std::fs::write(d.path().join("mavlink.tlog"), b"its log").unwrap();
             std::fs::write(d.path().join("trajectory.png"), b"its figure").unwrap();
-            let out = RunDir::open(d.path(), &[], &["mavlink.tlog"], Some("fly"))
+            let flight = what == "a flight's";
+            if !flight {
+                // att41-1: a run writes no log; the one beside its summary is the user's, so
+                // `fly --out` is refused (73, naming it), every file as it was; `run` (no
+                // extra file) replaces the run and keeps the log.
+                let before = listing(d.path());
+                let e = RunDir::open(d.path(), &[], &["mavlink.tlog"], Some("fly")).unwrap_err();
+                assert_eq!(e.code, exit::CANTCREAT, "{what}");
+                let tlog = d.path().join("mavlink.tlog").display().to_string();
+                for part in [tlog.as_str(), "not an isotrack flight's", "no `end_reason`"] {
+                    assert!(e.message.contains(part), "{what}: {}", e.message);
+                }
+                assert_eq!(listing(d.path()), before, "{what}");
+            }
+            let extra: &[&str] = if flight { &["mavlink.tlog"] } else { &[] };
+            let out = RunDir::open(d.path(), &[], extra, Some("fly"))
                 .unwrap_or_else(|e| panic!("{what}: {}", e.message));
             let trace = out.trace(false).unwrap();
             out.finish(trace, "x = 1\n", &summary).unwrap();
@@ -872,6 +959,12 @@ mod tests {
                 std::fs::read(d.path().join("trajectory.png")).unwrap(),
                 b"its figure"
             );
+            if !flight {
+                assert_eq!(
+                    std::fs::read(d.path().join("mavlink.tlog")).unwrap(),
+                    b"its log"
+                );
+            }
         }
     }
 }

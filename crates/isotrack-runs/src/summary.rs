@@ -320,6 +320,18 @@ impl<S: Serialize> Summary<S> {
     }
 }
 
+/// Whether `text` (a summary an isotrack wrote: [`not_isotracks`] is `None`) is a flight's,
+/// `fly`'s: a JSON object with an `end_reason` string, the key every flight's summary has had
+/// since `fly` came (2219288) and no other summary has (a simulated run's, `sitl`'s, a team's,
+/// `Run.save`'s). Only beside a flight's summary is a `mavlink.tlog` that flight's log
+/// (att41-1: `fly --out` replaced a user's log sitting beside a simulated run's summary).
+pub fn is_flights(text: &str) -> bool {
+    serde_json::from_str::<serde_json::Value>(text).is_ok_and(|v| {
+        v.get("end_reason")
+            .is_some_and(serde_json::Value::is_string)
+    })
+}
+
 /// Why `text` is not a `summary.json` that an isotrack of any version wrote (`None` when it
 /// is one): what tells an earlier isotrack run's directory, which a new run may replace, from
 /// a folder holding a user's own `summary.json` (att39-1), which it never replaces.

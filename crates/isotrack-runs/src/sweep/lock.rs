@@ -75,6 +75,41 @@ fn read_holder(f: &mut std::fs::File) -> Option<String> {
     (!text.is_empty() && !text.chars().any(char::is_control)).then(|| text.to_string())
 }
 
+/// Whether locked [`LOCK_FILE`] `f` is isotrack's to reuse (att41-13): empty (the first
+/// isotrack's lock files, one a holder could not remove) or a holder record
+/// ([`holder_record`]: `COMMAND pid PID`, ` on HOST`) that a killed holder left. Anything else
+/// is a file of the user's of that name, never overwritten. Reads at most
+/// [`MAX_HOLDER_BYTES`] and one more.
+fn holds_a_record_or_nothing(f: &mut std::fs::File) -> bool {
+    let mut bytes = Vec::new();
+    if f.rewind().is_err()
+        || f.take(MAX_HOLDER_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .is_err()
+    {
+        return false;
+    }
+    if bytes.len() as u64 > MAX_HOLDER_BYTES {
+        return false;
+    }
+    let Ok(text) = std::str::from_utf8(&bytes) else {
+        return false;
+    };
+    let text = text.trim();
+    if text.is_empty() {
+        return true;
+    }
+    let Some((command, rest)) = text.split_once(" pid ") else {
+        return false;
+    };
+    let (pid, host) = rest.split_once(" on ").unwrap_or((rest, "x"));
+    !command.is_empty()
+        && !host.is_empty()
+        && !pid.is_empty()
+        && pid.bytes().all(|b| b.is_ascii_digit())
+        && !text.chars().any(char::is_control)
+}
+
 /// Takes the exclusive lock of output directory `dir` for `command` (`sweep`, `merge`,
 /// `benchmark`): an advisory `flock`-style lock on [`LOCK_FILE`], std's `File::try_lock`, held
 /// until the returned [`DirLock`] is dropped or the process ends, with the holder (command,
@@ -116,6 +151,13 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
     let mut f = crate::files::open_regular(path, true, false).map_err(cant)?;
     match f.try_lock() {
         Ok(()) if !is_this_file(&f, path) => Ok(None),
+        Ok(()) if !holds_a_record_or_nothing(&mut f) => Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} is not an isotrack lock file (it holds text that is not isotrack's holder record `COMMAND pid N on HOST`: a file of your own), and isotrack never replaces a file it did not write: move it away, or use another --out",
+                crate::owned::shell_quoted(path)
+            ),
+        )),
         Ok(()) => {
             // The record is a courtesy for the message of the next one refused: failing to
             // write it does not fail the command.
