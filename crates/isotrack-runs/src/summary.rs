@@ -518,20 +518,13 @@ pub fn scenario_toml(scenario: &Scenario) -> String {
 }
 
 /// The SHA-256 of each data file of `scenario`'s field (`field.path`, `field.paths`, absolute
-/// in a resolved scenario), by path ([`crate::files::sha256_file`]); a file that cannot be read
-/// now (gone since the field was built) is left out.
+/// in a resolved scenario), by path, of the bytes the field was parsed from
+/// ([`Scenario::data_file_digests`]: taken as the load read them). att41-22: they were taken
+/// by reading each file again after the load, so a file replaced while the scenario loaded
+/// was named by its new digest (and then agreed with itself at the end: no warning) for a
+/// field parsed from the old one.
 pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
-    scenario
-        .spec()
-        .field
-        .data_files()
-        .into_iter()
-        .filter_map(|p| {
-            crate::files::sha256_file(Path::new(p))
-                .ok()
-                .map(|d| (p.to_string(), d))
-        })
-        .collect()
+    scenario.data_file_digests().clone()
 }
 
 /// The most vehicles [`unfinished_vehicles`] names one by one (a team of 10 000 whose every

@@ -545,3 +545,48 @@ fn a_released_lock_leaves_no_lock_file() {
         "someone else's\n"
     );
 }
+
+/// att41-22: `summary.json`'s `data_files` names each data file by the SHA-256 of the bytes the
+/// field was parsed from. The grid is replaced (renamed over, as `mv` does) after the scenario
+/// loaded it: the summary still names the loaded file's digest (`sha256sum` of its text:
+/// 9bad80dc...), not the new file's (39768365...), and `data_files_as_read` warns that the file
+/// changed. Before the fix the digests were taken by reading the files again, after the load:
+/// they named the new file, for a run on the old field.
+#[test]
+fn data_files_name_the_bytes_the_field_was_parsed_from() {
+    let d = tempfile::tempdir().unwrap();
+    let grid = d.path().join("g.csv");
+    std::fs::write(&grid, "0,1,2\n10,11,12\n20,21,22\n30,31,32\n").unwrap();
+    let s = isotrack_scenario::parse_scenario_in(
+        "[field]\nkind = \"grid\"\npath = \"g.csv\"\n[initial]\nx_m = 1.0\ny_m = 1.0\n[controller]\nlevel = 15.0\n[sim]\nduration_s = 1.0\n",
+        "<test>",
+        &[],
+        d.path(),
+    );
+    let s = match s {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    let replacement = d.path().join("new.csv");
+    std::fs::write(
+        &replacement,
+        "100,101,102\n110,111,112\n120,121,122\n130,131,132\n",
+    )
+    .unwrap();
+    std::fs::rename(&replacement, &grid).unwrap();
+    let key = std::fs::canonicalize(&grid).unwrap().display().to_string();
+    let old = "9bad80dc300f30f8e4254a6025fde01952b4a378655dbd2c11405b20e70d8472";
+    let read = isotrack_runs::summary::data_file_digests(&s);
+    assert_eq!(read.get(&key).map(String::as_str), Some(old), "{read:?}");
+    let r = s.run(&mut NoTrace);
+    let mut summary = Summary::of_run(&s, None, &r, &[]);
+    assert_eq!(
+        summary
+            .data_files()
+            .and_then(|f| f.get(&key))
+            .map(String::as_str),
+        Some(old)
+    );
+    let w = summary.data_files_as_read(read).expect("a warning");
+    assert!(w.contains("(SHA-256 9bad80dc300f30f8 as read)"), "{w}");
+}

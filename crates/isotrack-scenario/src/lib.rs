@@ -44,6 +44,7 @@ pub use schema::ScenarioFile;
 pub use team::{TeamIsolineModel, ARC_REFERENCE_NO_ISOLINE, ARC_REFERENCE_WITHOUT_ARC};
 
 use field::{build_field, FieldModel, IsolineOracle, LonLatFrame};
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -69,6 +70,9 @@ pub struct Scenario {
     resolved_field: Arc<schema::FieldSection>,
     /// Where a lon/lat grid's local metres are on the Earth ([`field::BuiltField::lonlat`]).
     lonlat: Option<LonLatFrame>,
+    /// The SHA-256 of each data file the field was read from, as read
+    /// ([`field::BuiltField::digests`]).
+    digests: Arc<BTreeMap<String, String>>,
 }
 
 /// The field of a resolved file, built from its spec ([`spec::FieldSpec`], read before the
@@ -175,6 +179,7 @@ struct FieldParts {
     notes: Arc<Vec<String>>,
     resolved_field: Arc<schema::FieldSection>,
     lonlat: Option<LonLatFrame>,
+    digests: Arc<BTreeMap<String, String>>,
 }
 
 /// Builds the field of resolved `file` (files relative to `base_dir`), records the keys its
@@ -193,6 +198,7 @@ fn build_recorded(
         notes: Arc::new(built.notes),
         resolved_field: Arc::new(resolved_field),
         lonlat: built.lonlat,
+        digests: Arc::new(built.digests),
     })
 }
 
@@ -221,6 +227,7 @@ impl Scenario {
             field_notes: parts.notes,
             resolved_field: parts.resolved_field,
             lonlat: parts.lonlat,
+            digests: parts.digests,
         })
     }
 
@@ -284,6 +291,7 @@ impl Scenario {
                 notes: self.field_notes.clone(),
                 resolved_field: self.resolved_field.clone(),
                 lonlat: self.lonlat,
+                digests: self.digests.clone(),
             }
         } else {
             // Another source or other keys: its files are read again and fill their own keys
@@ -317,6 +325,7 @@ impl Scenario {
             field_notes: parts.notes,
             resolved_field: parts.resolved_field,
             lonlat: parts.lonlat,
+            digests: parts.digests,
         })
     }
 
@@ -348,6 +357,7 @@ impl Scenario {
             field_notes: self.field_notes.clone(),
             resolved_field: self.resolved_field.clone(),
             lonlat: self.lonlat,
+            digests: self.digests.clone(),
         })
     }
 
@@ -409,6 +419,15 @@ impl Scenario {
     /// [`Scenario::file`]).
     pub fn spec(&self) -> &spec::ScenarioSpec {
         &self.spec
+    }
+
+    /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
+    /// absolute path, of the bytes the field was parsed from (read once: att41-22); empty for a
+    /// field read from no file. A variant sharing this field ([`Scenario::derive`],
+    /// [`Scenario::with_controller_kind`]) shares these; one that read its files again has its
+    /// own. What `summary.json`'s `data_files` records.
+    pub fn data_file_digests(&self) -> &BTreeMap<String, String> {
+        &self.digests
     }
 
     /// Warnings the field's files give (a grid file's `units` against `field.units`): part of
