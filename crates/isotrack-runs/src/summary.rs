@@ -428,16 +428,13 @@ impl Summary {
 }
 
 impl<S> Summary<S> {
-    /// nu40-4: names the data files as the run read them, `read` ([`data_file_digests`] taken
-    /// when the scenario was loaded, before the run), not as they are when the summary is
-    /// written: a file replaced while the run flew (on the field read before) was named by its
-    /// new SHA-256. When a file's digest now differs from `read`'s (or it is gone), returns the
-    /// warning saying so, also added to the summary's `warnings`; `None` when every file is as
-    /// read. A simulated run's summary only (a flight's has none).
+    /// nu40-4: names the data files as the run read them, `read` ([`data_file_digests`] of the
+    /// scenario flown: the bytes its field was parsed from), not as they are when the summary
+    /// is written: a file replaced while the run flew (on the field read before) was named by
+    /// its new SHA-256. When a file's digest now differs from `read`'s (or it is gone), returns
+    /// the warning saying so, also added to a run's `warnings` or a flight's `events`
+    /// (att41-17: `sitl` and `fly` record theirs so too); `None` when every file is as read.
     pub fn data_files_as_read(&mut self, read: BTreeMap<String, String>) -> Option<String> {
-        let Ended::Run(r) = &mut self.ended else {
-            return None;
-        };
         let changed: Vec<String> = read
             .iter()
             .filter(|(p, d)| {
@@ -448,16 +445,23 @@ impl<S> Summary<S> {
             })
             .map(|(p, d)| format!("{p} (SHA-256 {} as read)", &d[..d.len().min(16)]))
             .collect();
-        r.data_files = read;
-        if changed.is_empty() {
-            return None;
+        let w = (!changed.is_empty()).then(|| {
+            format!(
+                "a data file changed (or went) while the run flew: {}; the run flew the field as read before it, and data_files names that one",
+                changed.join(", ")
+            )
+        });
+        match &mut self.ended {
+            Ended::Run(r) => {
+                r.data_files = read;
+                r.warnings.extend(w.clone());
+            }
+            Ended::Flight(f) => {
+                f.data_files = read;
+                f.events.extend(w.clone());
+            }
         }
-        let w = format!(
-            "a data file changed (or went) while the run flew: {}; the run flew the field as read before it, and data_files names that one",
-            changed.join(", ")
-        );
-        r.warnings.push(w.clone());
-        Some(w)
+        w
     }
 
     /// The outcome (`completed`, `left_field`, `diverged`; `interrupted` or `companion_lost`

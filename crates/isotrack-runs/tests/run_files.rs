@@ -590,3 +590,47 @@ fn data_files_name_the_bytes_the_field_was_parsed_from() {
     let w = summary.data_files_as_read(read).expect("a warning");
     assert!(w.contains("(SHA-256 9bad80dc300f30f8 as read)"), "{w}");
 }
+
+/// att41-17: a flight's summary (`sitl --out`, `fly --out`) records the data files as the field
+/// was read and, when a file changed since, says so in its `events` (a flight has no
+/// `warnings`), as a run's does in `warnings`. Here the recorded digest is not the file's (as
+/// when the file was replaced during the flight): the digest as read is kept and the warning
+/// names the file. Before the fix a flight's summary was left as it was (no warning, and the
+/// digests were the files' after the flight).
+#[test]
+fn a_flight_names_its_data_files_as_read_and_says_when_one_changed() {
+    let d = tempfile::tempdir().unwrap();
+    let grid = d.path().join("g.csv");
+    std::fs::write(&grid, "0,1,2\n10,11,12\n20,21,22\n30,31,32\n").unwrap();
+    let text = r#"{"isotrack_version": "0", "scenario_path": null, "outcome": "completed",
+        "outcome_detail": "ended", "end_reason": "vehicle_ended", "failsafe": false,
+        "failsafe_acknowledged": false, "t_end_s": 12.5, "samples": 7, "commands": 3,
+        "events": ["ended"], "frames_in": 10, "frames_out": 11, "junk_datagrams": 1,
+        "scenario": {}}"#;
+    let path = grid.display().to_string();
+    let as_read = "39768365d30bd35f3790aacbf5e60e7e1fe99fe9e5c78b92dd46e1c9f9294e2e";
+    let mut s = Summary::from_json(text).unwrap();
+    let read = std::collections::BTreeMap::from([(path.clone(), as_read.to_string())]);
+    let w = s.data_files_as_read(read).expect("a warning");
+    assert!(
+        w.contains(&format!("{path} (SHA-256 39768365d30bd35f as read)")),
+        "{w}"
+    );
+    let Ended::Flight(f) = &s.ended else {
+        panic!("a flight read as a run")
+    };
+    assert_eq!(f.data_files.get(&path).map(String::as_str), Some(as_read));
+    assert_eq!(f.events, ["ended".to_string(), w.clone()]);
+    assert_eq!(f.outcome_detail, "ended");
+    // The file as read (its SHA-256 by sha256sum: 9bad80dc...): no warning, nothing added.
+    let mut s = Summary::from_json(text).unwrap();
+    let same = "9bad80dc300f30f8e4254a6025fde01952b4a378655dbd2c11405b20e70d8472";
+    assert_eq!(
+        s.data_files_as_read(std::collections::BTreeMap::from([(path, same.to_string())])),
+        None
+    );
+    let Ended::Flight(f) = &s.ended else {
+        panic!("a flight read as a run")
+    };
+    assert_eq!(f.events, ["ended"]);
+}

@@ -268,7 +268,7 @@ impl Scenario {
         origin: &str,
         base_dir: &Path,
     ) -> Result<Self, ScenarioError> {
-        let mut given = apply_assignments(&self.given, assignments)?;
+        let given = apply_assignments(&self.given, assignments)?;
         let no_team = self.given.team.is_none();
         let located = |issues: Vec<resolve::Issue>| {
             let e = locate_derived(issues, origin, assignments);
@@ -278,11 +278,43 @@ impl Scenario {
                 e
             }
         };
+        self.derived_from(given, &located, base_dir)
+    }
+
+    /// A variant of this scenario from a whole scenario file `file` (this scenario's resolved
+    /// file with keys changed: `compare`'s law and its `--gain`s), resolved and built as
+    /// [`build_derived`] builds it (problems located at the assignment that set the key, else
+    /// against `origin`), but flying this scenario's field itself, no file read again, when
+    /// its resolved `[field]` is this one's (att41-8: `compare` read the field once per law, so
+    /// a data file replaced meanwhile gave its laws different fields). Files a changed
+    /// `[field]` names are relative to `base_dir`.
+    pub fn variant_of_file(
+        &self,
+        file: ScenarioFile,
+        origin: &str,
+        assignments: &[Assignment],
+        base_dir: &Path,
+    ) -> Result<Self, ScenarioError> {
+        let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
+        self.derived_from(file, &located, base_dir)
+    }
+
+    /// The variant whose own keys are `given`: resolved once; this scenario's field, notes,
+    /// digests, vehicle and isoline shared where its resolved sections leave them unchanged
+    /// (the `[field]` as resolution left it, or as the files filled it in), else built again
+    /// (files relative to `base_dir`).
+    fn derived_from(
+        &self,
+        mut given: ScenarioFile,
+        located: &dyn Fn(Vec<resolve::Issue>) -> ScenarioError,
+        base_dir: &Path,
+    ) -> Result<Self, ScenarioError> {
         let mut file = resolve::resolve(given.clone()).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
-        let parts = if file.field == *self.resolved_field && !seeded {
+        let same_field = file.field == *self.resolved_field || file.field == self.file.field;
+        let parts = if same_field && !seeded {
             // The same resolved section reads the same files: the keys they filled are this
             // scenario's.
             file.field = self.file.field.clone();
