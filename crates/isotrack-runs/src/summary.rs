@@ -59,6 +59,10 @@ pub struct RunEnd {
     pub record: RunRecord,
     /// Warnings about the scenario (also printed on stderr): noise through a backward
     /// difference, a sampled loop that `isotrack check` finds unstable; for `sitl`, its events.
+    /// Empty when read from an older isotrack's summary, which has none (att41-14: `plot` and
+    /// `report` refused it with serde's "missing field `warnings`", where `run --out` takes it
+    /// for an earlier isotrack run, [`not_isotracks`]).
+    #[serde(default)]
     pub warnings: Vec<String>,
     /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
     /// its absolute path ([`data_file_digests`]); left out when there are none. `plot` and
