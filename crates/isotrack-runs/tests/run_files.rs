@@ -634,3 +634,69 @@ fn a_flight_names_its_data_files_as_read_and_says_when_one_changed() {
     };
     assert_eq!(f.events, ["ended"]);
 }
+
+/// att41-3: the close-approach warning gives the reason the team's settings give. Team-circular-4
+/// with no spacing law and vehicle 3 at 0.3 m/s (the others 0.5): the others lap it, vehicles
+/// 2 and 3 meeting at about 10 s; the reason is the lapping, every `L/|v0_2 - v0_3|` with `L`
+/// the circle's length `2 pi 10 ln 2 = 43.55 m`, so 217.76 s, and it no longer blames a spacing
+/// law or advises `team.ring = "discovered"` (which refuses per-vehicle speeds). The reasons of
+/// the other teams: no law at one speed; a law on a listed ring at one speed (the advice kept);
+/// a law on a discovered ring (no advice).
+#[test]
+fn the_close_approach_reason_fits_the_team() {
+    use isotrack_runs::summary::{approach_reason, team_warnings};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/team-circular-4.toml");
+    let lap = isotrack_scenario::load_scenario(
+        Some(&path),
+        &[
+            "team.spacing=\"none\"".into(),
+            "team.vehicles=[{index = 3, speed_mps = 0.3}]".into(),
+            "sim.duration_s=20".into(),
+        ],
+    )
+    .unwrap();
+    let team = lap.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    let w = team_warnings(&lap, &team);
+    let w = w
+        .iter()
+        .find(|w| w.contains(" came within "))
+        .unwrap_or_else(|| panic!("no close approach in {w:?}"));
+    assert!(w.starts_with("vehicles 2 and 3 came within "), "{w}");
+    assert!(
+        w.contains("vehicle 2 flies at 0.5 m/s and vehicle 3 at 0.3 m/s (team.vehicles) and with no spacing law (team.spacing = \"none\") each keeps its speed: the faster laps the slower every L/|v0_2 - v0_3| = "),
+        "{w}"
+    );
+    let every: f64 = w
+        .split("v0_3| = ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{w}"));
+    let l = 2.0 * std::f64::consts::PI * 10.0 * std::f64::consts::LN_2;
+    assert!(
+        (every - l / 0.2).abs() < 1e-6 * every,
+        "{every} vs {}",
+        l / 0.2
+    );
+    assert!(!w.contains("discovered") && !w.contains("drove"), "{w}");
+    // The other teams' reasons (from the settings alone).
+    let spec_of = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        isotrack_scenario::load_scenario(Some(&path), &sets)
+            .unwrap()
+            .spec()
+            .team
+            .clone()
+            .unwrap()
+    };
+    let none = spec_of(&["team.spacing=\"none\""]);
+    assert!(approach_reason([0, 1], l, Some(&none)).starts_with("no spacing law holds them apart"));
+    let listed = spec_of(&[]);
+    assert!(approach_reason([0, 1], l, Some(&listed)).contains("try team.ring = \"discovered\""));
+    let discovered = spec_of(&["team.ring=\"discovered\""]);
+    assert_eq!(
+        approach_reason([0, 1], l, Some(&discovered)),
+        "the spacing law drove them together, or they started too close"
+    );
+}
