@@ -7,7 +7,7 @@ use crate::run::invalid;
 use crate::run::Failure;
 use isotrack_runs::results::{result_cells, Column, RunRecord};
 use isotrack_scenario::schema::ControllerKind;
-use isotrack_scenario::{apply_assignments, build_derived, load_scenario, Assignment, Scenario};
+use isotrack_scenario::{apply_assignments, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult};
 use std::io::Write;
 use std::path::Path;
@@ -41,7 +41,10 @@ pub const COMPARISON_RESULT_COLUMNS: [Column; 9] = [
 
 /// The scenario with `kind` as its controller: the scenario's own section when it already uses
 /// that kind; otherwise the kind's defaults with the shared keys (level, turning side, turn-rate
-/// limit, derivative estimator) carried over; then the `--gain` overrides for that kind.
+/// limit, derivative estimator) carried over; then the `--gain` overrides for that kind. The
+/// variant flies `base`'s field itself, as read once ([`Scenario::variant_of_file`]): every
+/// law of a comparison flies the same field (att41-8: each law read the data files again, so
+/// a file replaced during a compare gave its laws different fields).
 pub fn variant(
     base: &Scenario,
     kind: ControllerKind,
@@ -61,11 +64,11 @@ pub fn variant(
         })
         .collect();
     let file = apply_assignments(&file, &sets).map_err(invalid)?;
-    build_derived(
+    base.variant_of_file(
         file,
         &format!("{origin} [{}]", kind.name()),
-        Path::new("."),
         &sets,
+        Path::new("."),
     )
     .map_err(invalid)
 }
@@ -149,7 +152,12 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             let mut trace = out.trace(s.is_flying())?;
             let r = s.run(trace.writer());
             let warnings = isotrack_scenario::check::warnings(&s);
-            let summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
+            let mut summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
+            // Every law flew the field as read when the scenario loaded; a data file changed
+            // since is said (as `run` says it), and data_files names the one flown.
+            if let Some(w) = summary.data_files_as_read(base.data_file_digests().clone()) {
+                errln!("warning: {w}");
+            }
             out.finish(trace, &scenario_toml(&s), &summary)?;
             // An earlier run's figures there are not this run's: said, as `run` says it.
             crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
@@ -354,5 +362,34 @@ mod tests {
         let names: Vec<&str> = COMPARISON_RESULT_COLUMNS.iter().map(|c| c.name()).collect();
         assert_eq!(COMPARISON_COLUMNS[0], "controller");
         assert_eq!(COMPARISON_COLUMNS[1..], names[..]);
+    }
+
+    /// att41-8: every law of a comparison flies the base scenario's field itself, as read once
+    /// (the same built field, the same data-file digests), a law with `--gain`s too; its
+    /// controller is the law's. Before the fix each law's variant read the data files again
+    /// (`build_derived`), so a file replaced during a compare gave the laws different fields
+    /// and a law's summary the new file's digest.
+    #[test]
+    fn every_law_flies_the_field_read_once() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/volcano.toml");
+        let base = load_scenario(Some(&path), &["sim.duration_s=5".to_string()]).unwrap();
+        assert_eq!(base.data_file_digests().len(), 1);
+        let gains = ["sliding_mode.gamma=0.3".to_string()];
+        for kind in ControllerKind::ALL {
+            let v = variant(&base, kind, &gains, "volcano")
+                .unwrap_or_else(|e| panic!("{}: {}", kind.name(), e.message));
+            assert_eq!(v.file().controller.kind, Some(kind));
+            assert!(
+                base.shares_field_with(&v),
+                "{} read the field again",
+                kind.name()
+            );
+            assert_eq!(v.data_file_digests(), base.data_file_digests());
+        }
+        let smc = variant(&base, ControllerKind::SlidingMode, &gains, "volcano").unwrap();
+        assert_eq!(
+            serde_json::to_value(&smc.file().controller).unwrap()["gamma"],
+            serde_json::json!(0.3)
+        );
     }
 }

@@ -13,7 +13,7 @@ use isotrack_mavlink::link::LinkError;
 use isotrack_mavlink::sitl::{run_sitl_on, Pace, SitlError, SitlOptions, SitlReport};
 use isotrack_runs::results::MetricsRecord;
 use isotrack_runs::rundir::TraceFile;
-use isotrack_runs::summary::{Ended, FlightRecord};
+use isotrack_runs::summary::{data_file_digests, Ended, FlightRecord};
 use isotrack_scenario::{Scenario, ScenarioFile};
 use isotrack_sim::{NoTrace, TraceRow, TraceSink};
 use std::path::{Path, PathBuf};
@@ -412,6 +412,11 @@ pub fn sitl(args: &SitlArgs) -> Result<(), Failure> {
             r.record.outcome = (*outcome).to_string();
             r.record.outcome_detail = Some(detail.clone());
         }
+        // att41-17: the data files as the field was read (before the run), and a word when
+        // one changed since, as `run` records them.
+        if let Some(w) = summary.data_files_as_read(data_file_digests(&scenario)) {
+            errln!("warning: {w}");
+        }
         summary
     })?;
     if let (Some(dir), false) = (&args.out, wrote) {
@@ -739,7 +744,7 @@ fn flight_summary<'a>(
             measurements_invalid: report.measurements_invalid,
             measurements_other_sources: report.measurements_other_sources,
             recording_incomplete: incomplete.map(String::from),
-            data_files: isotrack_runs::summary::data_file_digests(scenario),
+            data_files: data_file_digests(scenario),
             metrics_over: report.metrics_over.to_string(),
             metrics: MetricsRecord::of(&report.metrics),
         }),
@@ -815,7 +820,15 @@ pub fn fly(args: &FlyArgs) -> Result<(), Failure> {
     if report.way_out_commanded {
         live.start();
     }
-    let wrote = live.end(|incomplete| flight_summary(&report, args, &scenario, incomplete))?;
+    let wrote = live.end(|incomplete| {
+        let mut summary = flight_summary(&report, args, &scenario, incomplete);
+        // att41-17: the data files as the field was read (before the flight), and a word
+        // (in `events` too) when one changed since, as `run` records them.
+        if let Some(w) = summary.data_files_as_read(data_file_digests(&scenario)) {
+            errln!("warning: {w}");
+        }
+        summary
+    })?;
     if let (Some(dir), false) = (&args.out, wrote) {
         untouched_note("fly", dir);
     }

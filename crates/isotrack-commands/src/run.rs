@@ -211,7 +211,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
                 Some(Err(e)) => return Err(refused_team(&out, trace_file, e)),
                 None => None,
             };
-        warn_unfinished(team.as_ref());
+        warn_unfinished(&scenario, team.as_ref());
         let (result, mut summary) = match &team {
             Some(t) => (
                 t.runs[0].clone(),
@@ -272,7 +272,7 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
             code: exit::DATAERR,
             message: e.to_string(),
         })?;
-        warn_unfinished(Some(&team));
+        warn_unfinished(&scenario, Some(&team));
         if !args.quiet {
             out!("{}", human_summary(&name, &scenario, &team.runs[0]));
             out!("{}", team_summary(&scenario, &team));
@@ -378,9 +378,9 @@ fn outputs_present(dir: &std::path::Path) -> Vec<&'static str> {
 /// was not one ring; the vehicles that did not complete, other than vehicle 0, whose outcome
 /// the summary prints), each a `warning:` line on stderr (`summary.json` lists them in
 /// `warnings`).
-fn warn_unfinished(team: Option<&isotrack_sim::TeamResult>) {
+fn warn_unfinished(scenario: &Scenario, team: Option<&isotrack_sim::TeamResult>) {
     for w in team
-        .map(isotrack_runs::summary::team_warnings)
+        .map(|t| isotrack_runs::summary::team_warnings(scenario, t))
         .unwrap_or_default()
     {
         errln!("warning: {w}");

@@ -34,6 +34,15 @@ impl Stations {
         Self::from_csv_bytes(path, &bytes, value_column)
     }
 
+    /// As [`from_csv`](Self::from_csv), with the SHA-256 of the very bytes parsed
+    /// ([`crate::io::sha256_hex`]: the file is read once, att41-22).
+    pub fn from_csv_hashed(path: &Path, value_column: &str) -> Result<(Self, String), LoadError> {
+        let bytes = crate::io::read_limited(path, MAX_STATION_FILE_BYTES)
+            .map_err(|e| LoadError::cannot_read(path, e))?;
+        let s = Self::from_csv_bytes(path, &bytes, value_column)?;
+        Ok((s, crate::io::sha256_hex(&bytes)))
+    }
+
     /// As [`from_csv`](Self::from_csv) on the file's bytes (`path` names it in errors).
     // Long by choice: a CSV parser, read in the order of the file (the header's columns, then
     // each row's cells checked where they are read, then the set of stations as a whole).

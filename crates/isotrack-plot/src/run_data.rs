@@ -144,18 +144,124 @@ fn check_duration(
 /// `scenario.toml` against the resolved scenario `summary.json` records (att36-5): the run
 /// flew the summary's; a `scenario.toml` edited after the run (another level, field, speed,
 /// steady fraction ...) drew the run against a scenario it never flew, and an edited
-/// summary's scenario likewise. Refused naming the first key (in key order) whose values
-/// differ; a key only one of them has (a summary of an older isotrack without a newer key)
-/// is not compared.
+/// summary's scenario likewise. Both sides are compared after resolving (att40-3): the
+/// summary's scenario is read as a scenario file and resolved as `scenario.toml` is, and every
+/// key of the two resolved forms is compared, so that a key one side has and the other leaves
+/// to its default (`field.drift_mps`, `field.domain_m`, `team.ranging.max_range_m`, which a
+/// resolved file leaves out when unset) is a difference unless both resolve to the same value
+/// (an older isotrack's summary without a newer key resolves it to its default, as
+/// `scenario.toml` does). Refused naming the first key (in key order) whose values differ. A
+/// summary's scenario that is empty or is no scenario (not one key of a run's resolved
+/// scenario) is not this run's: refused too (att40-3: `"scenario": {}` turned the check off).
 fn check_scenario_is_runs(run: &RunData) -> Result<(), String> {
-    let Ok(toml_json) = serde_json::to_value(run.scenario.file()) else {
-        return Ok(());
+    let not_runs = |why: String| {
+        format!(
+            "summary.json's scenario {why}: it is not this run's (a run records its whole resolved scenario there); re-run it"
+        )
     };
-    match first_difference(&toml_json, &run.summary.scenario, &mut Vec::new()) {
-        None => Ok(()),
-        Some((key, in_toml, in_summary)) => Err(format!(
-            "scenario.toml: {key} = {in_toml}, but summary.json's scenario (the one the run flew) has {key} = {in_summary}: the scenario is not this run's (edited after the run?); restore it or re-run it"
-        )),
+    if run
+        .summary
+        .scenario
+        .as_object()
+        .is_none_or(serde_json::Map::is_empty)
+    {
+        return Err(not_runs("is empty".into()));
+    }
+    let file: isotrack_scenario::ScenarioFile =
+        serde_json::from_value(run.summary.scenario.clone()).map_err(|e| {
+            not_runs(format!(
+                "is not a scenario ({})",
+                isotrack_scenario::load::clip(&e.to_string())
+            ))
+        })?;
+    let resolved = isotrack_scenario::resolve::resolve(file).map_err(|issues| {
+        let first = issues.first().map_or_else(String::new, |i| {
+            format!(
+                " ({}: {})",
+                i.key,
+                isotrack_scenario::load::clip(&i.message)
+            )
+        });
+        not_runs(format!("does not resolve{first}"))
+    })?;
+    let (Ok(mut in_toml), Ok(mut in_summary)) = (
+        serde_json::to_value(run.scenario.file()),
+        serde_json::to_value(&resolved),
+    ) else {
+        return Err(not_runs("cannot be compared".into()));
+    };
+    // Each key one side leaves out that resolves, set on that side, to the settings it has
+    // without it (a derived default written out, a zero drift) is the same run: set there,
+    // and the comparison goes on. Each pass settles one key, so the passes are bounded.
+    loop {
+        let Some(d) = first_difference(&in_toml, &in_summary, &mut Vec::new()) else {
+            return Ok(());
+        };
+        let side = match (&d.in_toml, &d.in_summary) {
+            (Some(v), None) => Some((&mut in_summary, v.clone())),
+            (None, Some(v)) => Some((&mut in_toml, v.clone())),
+            _ => None,
+        };
+        // A section's key only: `name` and `description` are text, not settings.
+        let settled = side.filter(|_| d.path.len() >= 2).is_some_and(|(lacking, v)| {
+            let mut set = lacking.clone();
+            set_at(&mut set, &d.path, v)
+                && matches!((settings_of(lacking), settings_of(&set)), (Some(a), Some(b)) if a == b)
+                && {
+                    *lacking = set;
+                    true
+                }
+        });
+        if !settled {
+            let shown = |v: &Option<serde_json::Value>| {
+                v.as_ref().map_or_else(
+                    || UNSET.to_string(),
+                    |v| isotrack_scenario::load::clip(&v.to_string()),
+                )
+            };
+            return Err(format!(
+                "scenario.toml: {key} = {}, but summary.json's scenario (the one the run flew) has {key} = {}: the scenario is not this run's (edited after the run?); restore it or re-run it",
+                shown(&d.in_toml),
+                shown(&d.in_summary),
+                key = d.key,
+            ));
+        }
+    }
+}
+
+/// Every setting in force ([`isotrack_scenario::spec::ScenarioSpec`], the derived ones
+/// computed) of a scenario given as the JSON of a scenario file, resolved; `None` when it is
+/// not one. No file is read: a field's files only fill keys a resolved file already holds.
+fn settings_of(json: &serde_json::Value) -> Option<isotrack_scenario::spec::ScenarioSpec> {
+    let file: isotrack_scenario::ScenarioFile = serde_json::from_value(json.clone()).ok()?;
+    let file = isotrack_scenario::resolve::resolve(file).ok()?;
+    let vehicle = isotrack_scenario::vehicle::build_vehicle(&file).ok()?;
+    isotrack_scenario::spec::ScenarioSpec::new(&file, vehicle.airframe_turn_rate_limit_radps()).ok()
+}
+
+/// Sets the key at `path` (as [`first_difference`] gives it: object keys and `[i]` indices)
+/// in `json` to `value`; `false` when the path does not lead to an object there.
+fn set_at(json: &mut serde_json::Value, path: &[String], value: serde_json::Value) -> bool {
+    let Some((last, parents)) = path.split_last() else {
+        return false;
+    };
+    let mut at = json;
+    for p in parents {
+        let next = match p.strip_prefix('[').and_then(|i| i.strip_suffix(']')) {
+            Some(i) => i.parse::<usize>().ok().and_then(|i| at.get_mut(i)),
+            None => at.get_mut(p.as_str()),
+        };
+        match next {
+            Some(n) => at = n,
+            None => return false,
+        }
+    }
+    match at.as_object_mut() {
+        Some(m) => {
+            m.insert(last.clone(), value);
+            true
+        }
+        None => false,
     }
 }
 
@@ -166,31 +272,58 @@ fn integer(n: &serde_json::Number) -> Option<i128> {
         .or_else(|| n.as_u64().map(i128::from))
 }
 
-/// The first key (dotted, `a.b[2].c`) where `a` and `b` differ, with each side's value as
-/// JSON (clipped); keys only one side has are skipped.
+/// How a key one side leaves out is shown (a resolved file leaves out a key whose default is
+/// "none": no drift, no domain, no range limit, or a derived value).
+const UNSET: &str = "(unset: the default)";
+
+/// Where two scenarios' JSON first differ ([`first_difference`]).
+struct Difference {
+    /// The key, dotted (`a.b[2].c`).
+    key: String,
+    /// The key as its parts (object keys, `[i]` indices).
+    path: Vec<String>,
+    /// `scenario.toml`'s value (`None`: it has no such key).
+    in_toml: Option<serde_json::Value>,
+    /// `summary.json`'s value (`None`: it has no such key).
+    in_summary: Option<serde_json::Value>,
+}
+
+/// The first key (in key order) where `a` (`scenario.toml`'s) and `b` (`summary.json`'s)
+/// differ; a key only one side has is a difference (att40-3: such keys were skipped, so a key
+/// added to `scenario.toml` that the resolved file leaves out was never compared).
 fn first_difference(
     a: &serde_json::Value,
     b: &serde_json::Value,
     path: &mut Vec<String>,
-) -> Option<(String, String, String)> {
+) -> Option<Difference> {
     use serde_json::Value;
-    let here = |path: &[String]| {
-        let mut k = String::new();
+    let here = |path: &[String], x: Option<&Value>, y: Option<&Value>| {
+        let mut key = String::new();
         for p in path {
-            if !p.starts_with('[') && !k.is_empty() {
-                k.push('.');
+            if !p.starts_with('[') && !key.is_empty() {
+                key.push('.');
             }
-            k.push_str(p);
+            key.push_str(p);
         }
-        k
+        Some(Difference {
+            key,
+            path: path.to_vec(),
+            in_toml: x.cloned(),
+            in_summary: y.cloned(),
+        })
     };
-    let clip = |v: &Value| isotrack_scenario::load::clip(&v.to_string());
     match (a, b) {
         (Value::Object(x), Value::Object(y)) => {
-            for (k, va) in x {
-                let Some(vb) = y.get(k) else { continue };
+            // Every key of either side, in key order.
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            for k in keys {
                 path.push(k.clone());
-                let d = first_difference(va, vb, path);
+                let d = match (x.get(k), y.get(k)) {
+                    (Some(va), Some(vb)) => first_difference(va, vb, path),
+                    (va, vb) => here(path, va, vb),
+                };
                 path.pop();
                 if d.is_some() {
                     return d;
@@ -212,7 +345,11 @@ fn first_difference(
         // Integers (a seed up to 2^64 - 1) compare exactly: as f64, 2^60 and 2^60 + 1 are one
         // number, and an edited seed passed (att40-4).
         (Value::Number(x), Value::Number(y)) if integer(x).is_some() && integer(y).is_some() => {
-            (integer(x) != integer(y)).then(|| (here(path), clip(a), clip(b)))
+            if integer(x) != integer(y) {
+                here(path, Some(a), Some(b))
+            } else {
+                None
+            }
         }
         (Value::Number(x), Value::Number(y))
             if x.as_f64().is_some() && x.as_f64() == y.as_f64() =>
@@ -220,7 +357,7 @@ fn first_difference(
             None
         }
         _ if a == b => None,
-        _ => Some((here(path), clip(a), clip(b))),
+        _ => here(path, Some(a), Some(b)),
     }
 }
 

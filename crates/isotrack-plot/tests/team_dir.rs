@@ -537,3 +537,127 @@ fn a_summary_whose_outcomes_are_not_a_runs_is_refused() {
     let m = refusal(&dir);
     assert!(m.contains("the top-level outcome diverged"), "{m}");
 }
+
+/// Runs `text` (one vehicle) into `dir` as `isotrack run --out DIR` writes it.
+fn make_single_run(dir: &Path, text: &str) {
+    let s = isotrack_scenario::parse_scenario(text, "<test>", &[]).unwrap();
+    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], None).unwrap();
+    let mut trace = out.trace(s.is_flying()).unwrap();
+    let r = s.run(trace.writer());
+    let summary = Summary::of_run(&s, None, &r, &[]);
+    out.finish(trace, &scenario_toml(&s), &summary).unwrap();
+}
+
+/// att40-3: a key added to scenario.toml that the resolved file leaves out when it is unset
+/// (an analytic field's `drift_mps` and `domain_m`, `team.ranging.max_range_m`, the derived
+/// `metrics.convergence_min_dwell_s` and `metrics.track_loss_band`) is a difference, refused
+/// (65) naming the key and both values, the summary's "(unset: the default)"; so is a summary
+/// whose scenario is `{}` (the check was off) or no scenario. A key added with the value it
+/// resolves to anyway (a zero drift; the dwell 2 s, 10 % of the 20 s run, which is what an
+/// unset dwell is derived as, docs) is the same run and read. Before the fix every edit was drawn: the
+/// keys one side had were skipped.
+#[test]
+fn a_key_the_resolved_file_leaves_out_added_is_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let single = d.path().join("single");
+    make_single_run(&single, "[sim]\nduration_s = 20.0\n");
+    assert!(RunData::load(&single).is_ok());
+    let refused = |dir: &Path| match RunData::load(dir) {
+        Err(e @ isotrack_plot::PlotError::Data(_)) => e.to_string(),
+        other => panic!("{}: {other:?}", dir.display()),
+    };
+    let two = |a: f64, b: f64| toml::Value::Array(vec![a.into(), b.into()]);
+    let cases: [(&str, &str, toml::Value, &str); 4] = [
+        (
+            "field",
+            "drift_mps",
+            two(0.5, 0.0),
+            "field.drift_mps = [0.5,0.0]",
+        ),
+        (
+            "field",
+            "domain_m",
+            toml::Value::Array(vec![2.5.into(), 10.5.into(), (-7.0).into(), 0.5.into()]),
+            "field.domain_m = [2.5,10.5,-7.0,0.5]",
+        ),
+        (
+            "metrics",
+            "convergence_min_dwell_s",
+            toml::Value::Float(3.0),
+            "metrics.convergence_min_dwell_s = 3.0",
+        ),
+        (
+            "metrics",
+            "track_loss_band",
+            toml::Value::Float(7.0),
+            "metrics.track_loss_band = 7.0",
+        ),
+    ];
+    for (i, (section, key, v, named)) in cases.into_iter().enumerate() {
+        let dir = edited(&single, &d.path().join(format!("s{i}")), |_| {}, None);
+        set_key(&dir, section, key, v);
+        let m = refused(&dir);
+        assert!(
+            m.contains(&format!(
+                "scenario.toml: {named}, but summary.json's scenario (the one the run flew) has {}.{key} = (unset: the default)",
+                section
+            )),
+            "{m}"
+        );
+    }
+    // The same keys at the values they resolve to anyway: the same run, read.
+    for (i, (section, key, v)) in [
+        ("field", "drift_mps", two(0.0, 0.0)),
+        (
+            "metrics",
+            "convergence_min_dwell_s",
+            toml::Value::Float(2.0),
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let dir = edited(&single, &d.path().join(format!("same{i}")), |_| {}, None);
+        set_key(&dir, section, key, v);
+        assert!(RunData::load(&dir).is_ok(), "{section}.{key}");
+    }
+    // summary.json's scenario `{}`, or not a scenario: not this run's.
+    for (name, scenario, needle) in [
+        (
+            "empty",
+            serde_json::json!({}),
+            "summary.json's scenario is empty",
+        ),
+        (
+            "alien",
+            serde_json::json!({"colour": "red"}),
+            "summary.json's scenario is not a scenario",
+        ),
+    ] {
+        let dir = edited(
+            &single,
+            &d.path().join(name),
+            |s| s["scenario"] = scenario,
+            None,
+        );
+        let m = refused(&dir);
+        assert!(m.contains(needle), "{m}");
+        assert!(m.contains("not this run's"), "{m}");
+    }
+    // A team's run: `team.ranging.max_range_m` added.
+    let run = d.path().join("team");
+    make_team_run(&run, &scenario(two_leave(3.0), "none", 1.0));
+    let dir = edited(&run, &d.path().join("range"), |_| {}, None);
+    let p = dir.join("scenario.toml");
+    let mut t: toml::Table = std::fs::read_to_string(&p).unwrap().parse().unwrap();
+    t["team"]["ranging"]
+        .as_table_mut()
+        .unwrap()
+        .insert("max_range_m".into(), toml::Value::Float(5.0));
+    std::fs::write(&p, toml::to_string(&t).unwrap()).unwrap();
+    let m = refusal(&dir);
+    assert!(
+        m.contains("scenario.toml: team.ranging.max_range_m = 5.0, but summary.json's scenario (the one the run flew) has team.ranging.max_range_m = (unset: the default)"),
+        "{m}"
+    );
+}

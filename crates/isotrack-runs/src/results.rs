@@ -28,7 +28,9 @@ pub struct RunRecord {
     pub steps: u64,
     /// Measurements delivered to the controller.
     pub samples: u64,
-    /// Samples lost to dropouts.
+    /// Samples lost to dropouts (0 when read from an older isotrack's summary, written before
+    /// the sensor had dropouts, att41-14).
+    #[serde(default)]
     pub samples_dropped: u64,
     /// Last valid position `[x, y]`, m.
     pub end_position_m: [Option<f64>; 2],

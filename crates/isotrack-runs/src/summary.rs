@@ -59,6 +59,10 @@ pub struct RunEnd {
     pub record: RunRecord,
     /// Warnings about the scenario (also printed on stderr): noise through a backward
     /// difference, a sampled loop that `isotrack check` finds unstable; for `sitl`, its events.
+    /// Empty when read from an older isotrack's summary, which has none (att41-14: `plot` and
+    /// `report` refused it with serde's "missing field `warnings`", where `run --out` takes it
+    /// for an earlier isotrack run, [`not_isotracks`]).
+    #[serde(default)]
     pub warnings: Vec<String>,
     /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
     /// its absolute path ([`data_file_digests`]); left out when there are none. `plot` and
@@ -298,7 +302,7 @@ impl<'a> Summary<&'a isotrack_scenario::ScenarioFile> {
     ) -> Self {
         let mut s = Summary::of_run(scenario, scenario_path, &team.runs[0], warnings);
         if let Ended::Run(r) = &mut s.ended {
-            r.warnings.extend(team_warnings(team));
+            r.warnings.extend(team_warnings(scenario, team));
             r.team = Some(Box::new(TeamJson::new(scenario, team)));
             r.vehicles = Some(team.runs.iter().map(RunRecord::of).collect());
         }
@@ -440,16 +444,13 @@ impl Summary {
 }
 
 impl<S> Summary<S> {
-    /// nu40-4: names the data files as the run read them, `read` ([`data_file_digests`] taken
-    /// when the scenario was loaded, before the run), not as they are when the summary is
-    /// written: a file replaced while the run flew (on the field read before) was named by its
-    /// new SHA-256. When a file's digest now differs from `read`'s (or it is gone), returns the
-    /// warning saying so, also added to the summary's `warnings`; `None` when every file is as
-    /// read. A simulated run's summary only (a flight's has none).
+    /// nu40-4: names the data files as the run read them, `read` ([`data_file_digests`] of the
+    /// scenario flown: the bytes its field was parsed from), not as they are when the summary
+    /// is written: a file replaced while the run flew (on the field read before) was named by
+    /// its new SHA-256. When a file's digest now differs from `read`'s (or it is gone), returns
+    /// the warning saying so, also added to a run's `warnings` or a flight's `events`
+    /// (att41-17: `sitl` and `fly` record theirs so too); `None` when every file is as read.
     pub fn data_files_as_read(&mut self, read: BTreeMap<String, String>) -> Option<String> {
-        let Ended::Run(r) = &mut self.ended else {
-            return None;
-        };
         let changed: Vec<String> = read
             .iter()
             .filter(|(p, d)| {
@@ -460,16 +461,23 @@ impl<S> Summary<S> {
             })
             .map(|(p, d)| format!("{p} (SHA-256 {} as read)", &d[..d.len().min(16)]))
             .collect();
-        r.data_files = read;
-        if changed.is_empty() {
-            return None;
+        let w = (!changed.is_empty()).then(|| {
+            format!(
+                "a data file changed (or went) while the run flew: {}; the run flew the field as read before it, and data_files names that one",
+                changed.join(", ")
+            )
+        });
+        match &mut self.ended {
+            Ended::Run(r) => {
+                r.data_files = read;
+                r.warnings.extend(w.clone());
+            }
+            Ended::Flight(f) => {
+                f.data_files = read;
+                f.events.extend(w.clone());
+            }
         }
-        let w = format!(
-            "a data file changed (or went) while the run flew: {}; the run flew the field as read before it, and data_files names that one",
-            changed.join(", ")
-        );
-        r.warnings.push(w.clone());
-        Some(w)
+        w
     }
 
     /// The outcome (`completed`, `left_field`, `diverged`; `interrupted` or `companion_lost`
@@ -530,32 +538,26 @@ pub fn scenario_toml(scenario: &Scenario) -> String {
 }
 
 /// The SHA-256 of each data file of `scenario`'s field (`field.path`, `field.paths`, absolute
-/// in a resolved scenario), by path ([`crate::files::sha256_file`]); a file that cannot be read
-/// now (gone since the field was built) is left out.
+/// in a resolved scenario), by path, of the bytes the field was parsed from
+/// ([`Scenario::data_file_digests`]: taken as the load read them). att41-22: they were taken
+/// by reading each file again after the load, so a file replaced while the scenario loaded
+/// was named by its new digest (and then agreed with itself at the end: no warning) for a
+/// field parsed from the old one.
 pub fn data_file_digests(scenario: &Scenario) -> BTreeMap<String, String> {
-    scenario
-        .spec()
-        .field
-        .data_files()
-        .into_iter()
-        .filter_map(|p| {
-            crate::files::sha256_file(Path::new(p))
-                .ok()
-                .map(|d| (p.to_string(), d))
-        })
-        .collect()
+    scenario.data_file_digests().clone()
 }
 
 /// The most vehicles [`unfinished_vehicles`] names one by one (a team of 10 000 whose every
 /// vehicle left the field gives one line, not 10 000).
 const UNFINISHED_NAMED: usize = 5;
 
-/// The warnings of a team run `team`: the engine's ([`isotrack_sim::TeamResult::warnings`]: a
-/// discovered ring that was not one ring) then [`unfinished_vehicles`]'. `isotrack run` prints
-/// them and `summary.json` lists them in `warnings`.
-pub fn team_warnings(team: &isotrack_sim::TeamResult) -> Vec<String> {
+/// The warnings of a team run `team` of `scenario`: the engine's
+/// ([`isotrack_sim::TeamResult::warnings`]: a discovered ring that was not one ring), then
+/// [`close_approach`]'s and [`unfinished_vehicles`]'. `isotrack run` prints them and
+/// `summary.json` lists them in `warnings`.
+pub fn team_warnings(scenario: &Scenario, team: &isotrack_sim::TeamResult) -> Vec<String> {
     let mut w = team.warnings.clone();
-    w.extend(close_approach(team));
+    w.extend(close_approach(team, scenario.spec().team.as_ref()));
     w.extend(unfinished_vehicles(team));
     w
 }
@@ -563,23 +565,96 @@ pub fn team_warnings(team: &isotrack_sim::TeamResult) -> Vec<String> {
 /// The warning of a team run whose vehicles came closer than
 /// [`CLOSE_APPROACH_M`](isotrack_sim::team::metrics::CLOSE_APPROACH_M) to each other
 /// (nu39-3: on the puff plume with a listed ring whose arrival order differed, two robots
-/// passed through each other, 0.02 m apart, with no word): which, when and how close; `None`
+/// passed through each other, 0.02 m apart, with no word): which, when and how close, and the
+/// reason the team's settings (`spec`, its `[team]`) give ([`approach_reason`]); `None`
 /// otherwise. `order_preserved` looks at the steady window only, so a crossing before it is
 /// named here and nowhere else.
-pub fn close_approach(team: &isotrack_sim::TeamResult) -> Option<String> {
+pub fn close_approach(
+    team: &isotrack_sim::TeamResult,
+    spec: Option<&isotrack_scenario::spec::team::TeamSpec>,
+) -> Option<String> {
     use isotrack_core::numtext::Num;
     use isotrack_sim::team::metrics::CLOSE_APPROACH_M;
-    let c = team.team.as_ref()?.closest_approach?;
+    let summary = team.team.as_ref()?;
+    let c = summary.closest_approach?;
     (c.distance_m < CLOSE_APPROACH_M).then(|| {
         format!(
-            "vehicles {} and {} came within {} m of each other at t = {} s (closer than {} m: a collision for real vehicles, which the model's points pass through): the spacing law drove them together (a listed team.ring whose arrival order on the isoline differs from the listed one does: try team.ring = \"discovered\"), or they started too close",
+            "vehicles {} and {} came within {} m of each other at t = {} s (closer than {} m: a collision for real vehicles, which the model's points pass through): {}",
             c.pair[0],
             c.pair[1],
             Num(c.distance_m),
             Num(c.t_s),
-            Num(CLOSE_APPROACH_M)
+            Num(CLOSE_APPROACH_M),
+            approach_reason(c.pair, summary.isoline_length_m, spec)
         )
     })
+}
+
+/// Why vehicles `pair` of a team (`spec`: its `[team]`; `None` when unknown) came close, as the
+/// team's settings tell it (att41-3: a team with no spacing law, lapped by a slower vehicle,
+/// was told that "the spacing law drove them together" and to try `team.ring =
+/// "discovered"`, which refuses per-vehicle speeds):
+///
+/// * their nominal speeds differ and nothing holds the faster back (`team.spacing = "none"`,
+///   or envelopes with no speed in common): the faster laps the slower every
+///   `L/|v0_i - v0_j|` (`l_m`: the isoline's length);
+/// * no spacing law (equal speeds): nothing keeps them apart;
+/// * a spacing law on a listed ring, every vehicle at one speed: the law drove them together,
+///   as a listed ring whose arrival order differs from the listed one does (try
+///   `team.ring = "discovered"`, which such a team may use), or they started too close;
+/// * any other team: the spacing law drove them together, or they started too close (per-vehicle
+///   speeds named when the pair's differ).
+pub fn approach_reason(
+    pair: [u32; 2],
+    l_m: f64,
+    spec: Option<&isotrack_scenario::spec::team::TeamSpec>,
+) -> String {
+    use isotrack_core::numtext::Num;
+    use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
+    let Some(t) = spec else {
+        return "the spacing law drove them together, a faster vehicle lapped a slower one, or they started too close".into();
+    };
+    let (i, j) = (pair[0] as usize, pair[1] as usize);
+    let (a, b) = (t.speeds(i), t.speeds(j));
+    let no_law = t.law == SpacingLaw::None;
+    let apart = a.min_mps > b.max_mps || b.min_mps > a.max_mps;
+    if a.nominal_mps != b.nominal_mps && (no_law || apart) {
+        let (fast, slow, vf, vs) = if a.nominal_mps > b.nominal_mps {
+            (i, j, a.nominal_mps, b.nominal_mps)
+        } else {
+            (j, i, b.nominal_mps, a.nominal_mps)
+        };
+        let why = if no_law {
+            "with no spacing law (team.spacing = \"none\") each keeps its speed"
+        } else {
+            "their speed envelopes have no speed in common, so the spacing law cannot hold them"
+        };
+        let every = if l_m.is_finite() && l_m > 0.0 {
+            format!(" = {} s", Num(l_m / (vf - vs)))
+        } else {
+            String::new()
+        };
+        return format!(
+            "vehicle {fast} flies at {} m/s and vehicle {slow} at {} m/s (team.vehicles) and {why}: the faster laps the slower every L/|v0_{fast} - v0_{slow}|{every} (robots pass through each other)",
+            Num(vf),
+            Num(vs)
+        );
+    }
+    if no_law {
+        return "no spacing law holds them apart (team.spacing = \"none\"): they started too close, or met on the isoline".into();
+    }
+    let one_speed = (0..t.count()).all(|k| t.speeds(k).nominal_mps == t.nominal_speed_mps);
+    if matches!(t.ring, RingMode::Listed) && one_speed {
+        return "the spacing law drove them together (a listed team.ring whose arrival order on the isoline differs from the listed one does: try team.ring = \"discovered\"), or they started too close".into();
+    }
+    if a.nominal_mps != b.nominal_mps {
+        return format!(
+            "the spacing law drove them together (vehicle {i} at {} m/s, vehicle {j} at {} m/s: team.vehicles), or they started too close",
+            Num(a.nominal_mps),
+            Num(b.nominal_mps)
+        );
+    }
+    "the spacing law drove them together, or they started too close".into()
 }
 
 /// The warning of a team run `team` in which vehicles other than vehicle 0 (whose outcome is

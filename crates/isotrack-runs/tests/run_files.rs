@@ -545,3 +545,158 @@ fn a_released_lock_leaves_no_lock_file() {
         "someone else's\n"
     );
 }
+
+/// att41-22: `summary.json`'s `data_files` names each data file by the SHA-256 of the bytes the
+/// field was parsed from. The grid is replaced (renamed over, as `mv` does) after the scenario
+/// loaded it: the summary still names the loaded file's digest (`sha256sum` of its text:
+/// 9bad80dc...), not the new file's (39768365...), and `data_files_as_read` warns that the file
+/// changed. Before the fix the digests were taken by reading the files again, after the load:
+/// they named the new file, for a run on the old field.
+#[test]
+fn data_files_name_the_bytes_the_field_was_parsed_from() {
+    let d = tempfile::tempdir().unwrap();
+    let grid = d.path().join("g.csv");
+    std::fs::write(&grid, "0,1,2\n10,11,12\n20,21,22\n30,31,32\n").unwrap();
+    let s = isotrack_scenario::parse_scenario_in(
+        "[field]\nkind = \"grid\"\npath = \"g.csv\"\n[initial]\nx_m = 1.0\ny_m = 1.0\n[controller]\nlevel = 15.0\n[sim]\nduration_s = 1.0\n",
+        "<test>",
+        &[],
+        d.path(),
+    );
+    let s = match s {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    let replacement = d.path().join("new.csv");
+    std::fs::write(
+        &replacement,
+        "100,101,102\n110,111,112\n120,121,122\n130,131,132\n",
+    )
+    .unwrap();
+    std::fs::rename(&replacement, &grid).unwrap();
+    let key = std::fs::canonicalize(&grid).unwrap().display().to_string();
+    let old = "9bad80dc300f30f8e4254a6025fde01952b4a378655dbd2c11405b20e70d8472";
+    let read = isotrack_runs::summary::data_file_digests(&s);
+    assert_eq!(read.get(&key).map(String::as_str), Some(old), "{read:?}");
+    let r = s.run(&mut NoTrace);
+    let mut summary = Summary::of_run(&s, None, &r, &[]);
+    assert_eq!(
+        summary
+            .data_files()
+            .and_then(|f| f.get(&key))
+            .map(String::as_str),
+        Some(old)
+    );
+    let w = summary.data_files_as_read(read).expect("a warning");
+    assert!(w.contains("(SHA-256 9bad80dc300f30f8 as read)"), "{w}");
+}
+
+/// att41-17: a flight's summary (`sitl --out`, `fly --out`) records the data files as the field
+/// was read and, when a file changed since, says so in its `events` (a flight has no
+/// `warnings`), as a run's does in `warnings`. Here the recorded digest is not the file's (as
+/// when the file was replaced during the flight): the digest as read is kept and the warning
+/// names the file. Before the fix a flight's summary was left as it was (no warning, and the
+/// digests were the files' after the flight).
+#[test]
+fn a_flight_names_its_data_files_as_read_and_says_when_one_changed() {
+    let d = tempfile::tempdir().unwrap();
+    let grid = d.path().join("g.csv");
+    std::fs::write(&grid, "0,1,2\n10,11,12\n20,21,22\n30,31,32\n").unwrap();
+    let text = r#"{"isotrack_version": "0", "scenario_path": null, "outcome": "completed",
+        "outcome_detail": "ended", "end_reason": "vehicle_ended", "failsafe": false,
+        "failsafe_acknowledged": false, "t_end_s": 12.5, "samples": 7, "commands": 3,
+        "events": ["ended"], "frames_in": 10, "frames_out": 11, "junk_datagrams": 1,
+        "scenario": {}}"#;
+    let path = grid.display().to_string();
+    let as_read = "39768365d30bd35f3790aacbf5e60e7e1fe99fe9e5c78b92dd46e1c9f9294e2e";
+    let mut s = Summary::from_json(text).unwrap();
+    let read = std::collections::BTreeMap::from([(path.clone(), as_read.to_string())]);
+    let w = s.data_files_as_read(read).expect("a warning");
+    assert!(
+        w.contains(&format!("{path} (SHA-256 39768365d30bd35f as read)")),
+        "{w}"
+    );
+    let Ended::Flight(f) = &s.ended else {
+        panic!("a flight read as a run")
+    };
+    assert_eq!(f.data_files.get(&path).map(String::as_str), Some(as_read));
+    assert_eq!(f.events, ["ended".to_string(), w.clone()]);
+    assert_eq!(f.outcome_detail, "ended");
+    // The file as read (its SHA-256 by sha256sum: 9bad80dc...): no warning, nothing added.
+    let mut s = Summary::from_json(text).unwrap();
+    let same = "9bad80dc300f30f8e4254a6025fde01952b4a378655dbd2c11405b20e70d8472";
+    assert_eq!(
+        s.data_files_as_read(std::collections::BTreeMap::from([(path, same.to_string())])),
+        None
+    );
+    let Ended::Flight(f) = &s.ended else {
+        panic!("a flight read as a run")
+    };
+    assert_eq!(f.events, ["ended"]);
+}
+
+/// att41-3: the close-approach warning gives the reason the team's settings give. Team-circular-4
+/// with no spacing law and vehicle 3 at 0.3 m/s (the others 0.5): the others lap it, vehicles
+/// 2 and 3 meeting at about 10 s; the reason is the lapping, every `L/|v0_2 - v0_3|` with `L`
+/// the circle's length `2 pi 10 ln 2 = 43.55 m`, so 217.76 s, and it no longer blames a spacing
+/// law or advises `team.ring = "discovered"` (which refuses per-vehicle speeds). The reasons of
+/// the other teams: no law at one speed; a law on a listed ring at one speed (the advice kept);
+/// a law on a discovered ring (no advice).
+#[test]
+fn the_close_approach_reason_fits_the_team() {
+    use isotrack_runs::summary::{approach_reason, team_warnings};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/team-circular-4.toml");
+    let lap = isotrack_scenario::load_scenario(
+        Some(&path),
+        &[
+            "team.spacing=\"none\"".into(),
+            "team.vehicles=[{index = 3, speed_mps = 0.3}]".into(),
+            "sim.duration_s=20".into(),
+        ],
+    )
+    .unwrap();
+    let team = lap.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    let w = team_warnings(&lap, &team);
+    let w = w
+        .iter()
+        .find(|w| w.contains(" came within "))
+        .unwrap_or_else(|| panic!("no close approach in {w:?}"));
+    assert!(w.starts_with("vehicles 2 and 3 came within "), "{w}");
+    assert!(
+        w.contains("vehicle 2 flies at 0.5 m/s and vehicle 3 at 0.3 m/s (team.vehicles) and with no spacing law (team.spacing = \"none\") each keeps its speed: the faster laps the slower every L/|v0_2 - v0_3| = "),
+        "{w}"
+    );
+    let every: f64 = w
+        .split("v0_3| = ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{w}"));
+    let l = 2.0 * std::f64::consts::PI * 10.0 * std::f64::consts::LN_2;
+    assert!(
+        (every - l / 0.2).abs() < 1e-6 * every,
+        "{every} vs {}",
+        l / 0.2
+    );
+    assert!(!w.contains("discovered") && !w.contains("drove"), "{w}");
+    // The other teams' reasons (from the settings alone).
+    let spec_of = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        isotrack_scenario::load_scenario(Some(&path), &sets)
+            .unwrap()
+            .spec()
+            .team
+            .clone()
+            .unwrap()
+    };
+    let none = spec_of(&["team.spacing=\"none\""]);
+    assert!(approach_reason([0, 1], l, Some(&none)).starts_with("no spacing law holds them apart"));
+    let listed = spec_of(&[]);
+    assert!(approach_reason([0, 1], l, Some(&listed)).contains("try team.ring = \"discovered\""));
+    let discovered = spec_of(&["team.ring=\"discovered\""]);
+    assert_eq!(
+        approach_reason([0, 1], l, Some(&discovered)),
+        "the spacing law drove them together, or they started too close"
+    );
+}

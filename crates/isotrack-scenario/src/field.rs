@@ -10,10 +10,11 @@ use isotrack_core::math::{Mat2, Vec2};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_fields::grid::{Grid2, GridField, GridSeries};
-use isotrack_fields::io::load_series;
+use isotrack_fields::io::load_series_hashed;
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
 use isotrack_fields::puff::PuffPlume;
 use isotrack_fields::{AnalyticField, AnalyticKind};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -421,6 +422,10 @@ pub struct BuiltField {
     /// grid (NetCDF, GeoTIFF in degrees) whose spacing the scenario leaves as the file gives it
     /// (`None` otherwise: a `field.spacing_m` of its own unties the metres from the degrees).
     pub lonlat: Option<LonLatFrame>,
+    /// The SHA-256 of each data file the field was read from, by absolute path (as
+    /// [`FileFilled`] names it), of the very bytes parsed (att41-22: hashed as read, not by
+    /// reading the file again after the load).
+    pub digests: BTreeMap<String, String>,
 }
 
 /// Builds the field of a resolved `[field]` ([`FieldSpec`], read before its files): grid paths
@@ -431,6 +436,7 @@ pub fn build_field(spec: &FieldSpec, base_dir: &Path) -> Result<BuiltField, Issu
     let mut filled = FileFilled::default();
     let mut notes = Vec::new();
     let mut lonlat = None;
+    let mut digests = BTreeMap::new();
     let model = match &spec.kind {
         FieldKindSpec::Analytic(a) => FieldModel::Analytic(a.clone()),
         FieldKindSpec::PuffPlume(p) => FieldModel::Puff(Arc::new(PuffPlume::new(*p))),
@@ -439,16 +445,20 @@ pub fn build_field(spec: &FieldSpec, base_dir: &Path) -> Result<BuiltField, Issu
                 filled: &mut filled,
                 notes: &mut notes,
                 lonlat: &mut lonlat,
+                digests: &mut digests,
             };
             build_grid(g, spec.units.as_deref(), base_dir, into)?
         }
-        FieldKindSpec::Stations(s) => FieldModel::Grid(build_stations(s, base_dir, &mut filled)?),
+        FieldKindSpec::Stations(s) => {
+            FieldModel::Grid(build_stations(s, base_dir, &mut filled, &mut digests)?)
+        }
     };
     Ok(BuiltField {
         model,
         filled,
         notes,
         lonlat,
+        digests,
     })
 }
 
@@ -457,6 +467,8 @@ struct Filling<'a> {
     filled: &'a mut FileFilled,
     notes: &'a mut Vec<String>,
     lonlat: &'a mut Option<LonLatFrame>,
+    /// Each file's SHA-256 as read ([`BuiltField::digests`]).
+    digests: &'a mut BTreeMap<String, String>,
 }
 
 /// A file named by the scenario, relative to its directory.
@@ -527,6 +539,7 @@ fn build_stations(
     s: &StationsSpec,
     base_dir: &Path,
     filled: &mut FileFilled,
+    digests: &mut BTreeMap<String, String>,
 ) -> Result<GridField, Issue> {
     use isotrack_fields::stations::{Idw, OrdinaryKriging, StationInterpolator, Stations};
     let issue = |key: &str, message: String| Issue {
@@ -535,8 +548,9 @@ fn build_stations(
         unreadable: false,
     };
     let path = resolve_one(&s.path, base_dir);
-    let st =
-        Stations::from_csv(&path, &s.value_column).map_err(|e| load_issue("field.path", "", e))?;
+    let (st, digest) = Stations::from_csv_hashed(&path, &s.value_column)
+        .map_err(|e| load_issue("field.path", "", e))?;
+    digests.insert(path.display().to_string(), digest);
     let ext = st.extent_m();
     let spacing = s.grid_spacing_m.unwrap_or(st.default_spacing_m());
     let grid = match s.method {
@@ -625,12 +639,14 @@ struct GridFilesRead {
 }
 
 /// Reads `field.path` (one file, any number of frames) or `field.paths` (one frame per file),
-/// recording the paths as absolute into `filled` and the files' warnings into `notes`.
+/// recording the paths as absolute into `filled`, the files' warnings into `notes` and the
+/// SHA-256 of each file's bytes as parsed into `digests`.
 fn read_grid_files(
     g: &GridSpec,
     base_dir: &Path,
     filled: &mut FileFilled,
     notes: &mut Vec<String>,
+    digests: &mut BTreeMap<String, String>,
 ) -> Result<GridFilesRead, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
@@ -648,8 +664,9 @@ fn read_grid_files(
             let mut abs = Vec::with_capacity(list.len());
             for (k, p) in list.iter().enumerate() {
                 let path = resolve_one(p, base_dir);
-                let s = load_series(&path, g.format, g.variable.as_deref())
+                let (s, digest) = load_series_hashed(&path, g.format, g.variable.as_deref())
                     .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
+                digests.insert(path.display().to_string(), digest);
                 if s.frames.len() != 1 {
                     return Err(issue(
                         "field.paths",
@@ -673,8 +690,9 @@ fn read_grid_files(
         }
         GridFiles::Path(p) => {
             let path = resolve_one(p, base_dir);
-            let s = load_series(&path, g.format, g.variable.as_deref())
+            let (s, digest) = load_series_hashed(&path, g.format, g.variable.as_deref())
                 .map_err(|e| load_issue("field.path", "", e))?;
+            digests.insert(path.display().to_string(), digest);
             filled.path = Some(path.display().to_string());
             one_file = filled.path.clone();
             notes.extend(s.warnings);
@@ -705,6 +723,7 @@ fn build_grid(
         filled,
         notes,
         lonlat,
+        digests,
     } = into;
     let GridFilesRead {
         raw,
@@ -712,7 +731,7 @@ fn build_grid(
         file_units,
         georef,
         one_file,
-    } = read_grid_files(g, base_dir, filled, notes)?;
+    } = read_grid_files(g, base_dir, filled, notes, digests)?;
     filled.units = adopt_file_units(units, &g.transform, &file_units, notes);
     // The file's own position of the (cropped) south-west node, and its spacing: what
     // field.origin_m and field.spacing_m replace.

@@ -44,6 +44,7 @@ pub use schema::ScenarioFile;
 pub use team::{TeamIsolineModel, ARC_REFERENCE_NO_ISOLINE, ARC_REFERENCE_WITHOUT_ARC};
 
 use field::{build_field, FieldModel, IsolineOracle, LonLatFrame};
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
@@ -69,6 +70,9 @@ pub struct Scenario {
     resolved_field: Arc<schema::FieldSection>,
     /// Where a lon/lat grid's local metres are on the Earth ([`field::BuiltField::lonlat`]).
     lonlat: Option<LonLatFrame>,
+    /// The SHA-256 of each data file the field was read from, as read
+    /// ([`field::BuiltField::digests`]).
+    digests: Arc<BTreeMap<String, String>>,
 }
 
 /// The field of a resolved file, built from its spec ([`spec::FieldSpec`], read before the
@@ -175,6 +179,7 @@ struct FieldParts {
     notes: Arc<Vec<String>>,
     resolved_field: Arc<schema::FieldSection>,
     lonlat: Option<LonLatFrame>,
+    digests: Arc<BTreeMap<String, String>>,
 }
 
 /// Builds the field of resolved `file` (files relative to `base_dir`), records the keys its
@@ -193,6 +198,7 @@ fn build_recorded(
         notes: Arc::new(built.notes),
         resolved_field: Arc::new(resolved_field),
         lonlat: built.lonlat,
+        digests: Arc::new(built.digests),
     })
 }
 
@@ -221,6 +227,7 @@ impl Scenario {
             field_notes: parts.notes,
             resolved_field: parts.resolved_field,
             lonlat: parts.lonlat,
+            digests: parts.digests,
         })
     }
 
@@ -261,7 +268,7 @@ impl Scenario {
         origin: &str,
         base_dir: &Path,
     ) -> Result<Self, ScenarioError> {
-        let mut given = apply_assignments(&self.given, assignments)?;
+        let given = apply_assignments(&self.given, assignments)?;
         let no_team = self.given.team.is_none();
         let located = |issues: Vec<resolve::Issue>| {
             let e = locate_derived(issues, origin, assignments);
@@ -271,11 +278,43 @@ impl Scenario {
                 e
             }
         };
+        self.derived_from(given, &located, base_dir)
+    }
+
+    /// A variant of this scenario from a whole scenario file `file` (this scenario's resolved
+    /// file with keys changed: `compare`'s law and its `--gain`s), resolved and built as
+    /// [`build_derived`] builds it (problems located at the assignment that set the key, else
+    /// against `origin`), but flying this scenario's field itself, no file read again, when
+    /// its resolved `[field]` is this one's (att41-8: `compare` read the field once per law, so
+    /// a data file replaced meanwhile gave its laws different fields). Files a changed
+    /// `[field]` names are relative to `base_dir`.
+    pub fn variant_of_file(
+        &self,
+        file: ScenarioFile,
+        origin: &str,
+        assignments: &[Assignment],
+        base_dir: &Path,
+    ) -> Result<Self, ScenarioError> {
+        let located = |issues: Vec<resolve::Issue>| locate_derived(issues, origin, assignments);
+        self.derived_from(file, &located, base_dir)
+    }
+
+    /// The variant whose own keys are `given`: resolved once; this scenario's field, notes,
+    /// digests, vehicle and isoline shared where its resolved sections leave them unchanged
+    /// (the `[field]` as resolution left it, or as the files filled it in), else built again
+    /// (files relative to `base_dir`).
+    fn derived_from(
+        &self,
+        mut given: ScenarioFile,
+        located: &dyn Fn(Vec<resolve::Issue>) -> ScenarioError,
+        base_dir: &Path,
+    ) -> Result<Self, ScenarioError> {
         let mut file = resolve::resolve(given.clone()).map_err(located)?;
         // A puff plume's meander follows sim.seed: a new seed is a new field.
         let seeded =
             matches!(*self.field, FieldModel::Puff(_)) && file.sim.seed != self.file.sim.seed;
-        let parts = if file.field == *self.resolved_field && !seeded {
+        let same_field = file.field == *self.resolved_field || file.field == self.file.field;
+        let parts = if same_field && !seeded {
             // The same resolved section reads the same files: the keys they filled are this
             // scenario's.
             file.field = self.file.field.clone();
@@ -284,6 +323,7 @@ impl Scenario {
                 notes: self.field_notes.clone(),
                 resolved_field: self.resolved_field.clone(),
                 lonlat: self.lonlat,
+                digests: self.digests.clone(),
             }
         } else {
             // Another source or other keys: its files are read again and fill their own keys
@@ -317,6 +357,7 @@ impl Scenario {
             field_notes: parts.notes,
             resolved_field: parts.resolved_field,
             lonlat: parts.lonlat,
+            digests: parts.digests,
         })
     }
 
@@ -348,6 +389,7 @@ impl Scenario {
             field_notes: self.field_notes.clone(),
             resolved_field: self.resolved_field.clone(),
             lonlat: self.lonlat,
+            digests: self.digests.clone(),
         })
     }
 
@@ -409,6 +451,15 @@ impl Scenario {
     /// [`Scenario::file`]).
     pub fn spec(&self) -> &spec::ScenarioSpec {
         &self.spec
+    }
+
+    /// The SHA-256 of each data file the field was read from (`field.path`, `field.paths`), by
+    /// absolute path, of the bytes the field was parsed from (read once: att41-22); empty for a
+    /// field read from no file. A variant sharing this field ([`Scenario::derive`],
+    /// [`Scenario::with_controller_kind`]) shares these; one that read its files again has its
+    /// own. What `summary.json`'s `data_files` records.
+    pub fn data_file_digests(&self) -> &BTreeMap<String, String> {
+        &self.digests
     }
 
     /// Warnings the field's files give (a grid file's `units` against `field.units`): part of

@@ -137,7 +137,17 @@ fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, Load
     open_regular(path)
         .and_then(|f| f.take(8).read_to_end(&mut head))
         .map_err(|e| LoadError::cannot_read(path, e))?;
-    let content = GridFormat::from_signature(&head);
+    format_of_head(path, format, &head)
+}
+
+/// [`format_of`] decided from `head`, the file's first (up to 8) bytes as read.
+fn format_of_head(
+    path: &Path,
+    format: Option<GridFormat>,
+    head: &[u8],
+) -> Result<GridFormat, LoadError> {
+    let head = &head[..head.len().min(8)];
+    let content = GridFormat::from_signature(head);
     match (format, content) {
         (Some(given), Some(c)) if given != c => {
             return Err(LoadError::new(
@@ -152,7 +162,7 @@ fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, Load
             ))
         }
         (_, Some(c)) => return Ok(c),
-        (Some(given), None) => return check_head(path, given, &head).map(|()| given),
+        (Some(given), None) => return check_head(path, given, head).map(|()| given),
         (None, None) => {}
     }
     let by_name = GridFormat::from_extension(path).or_else(|| {
@@ -170,7 +180,7 @@ fn format_of(path: &Path, format: Option<GridFormat>) -> Result<GridFormat, Load
                 f.name()
             ),
         )),
-        Some(f) => check_head(path, f, &head).map(|()| f),
+        Some(f) => check_head(path, f, head).map(|()| f),
         None => Err(LoadError::new(
             path,
             None,
@@ -237,6 +247,46 @@ pub fn load_series(
             })
         }
     }
+}
+
+/// The SHA-256 of `bytes`, lowercase hex: isotrack's one content digest of a data file
+/// (`isotrack_runs::files::sha256_file` gives the same of a file's bytes).
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// How a loader reads a whole file of at most the given bytes: [`read_limited`], or a stand-in
+/// (a test's, to change the file on disk once its bytes are read).
+pub type ReadWhole<'a> = &'a dyn Fn(&Path, u64) -> std::io::Result<Vec<u8>>;
+
+/// A grid file loaded as [`load_series`] loads it, with the SHA-256 ([`sha256_hex`]) of the
+/// very bytes parsed: the file is read once, into memory, hashed, then parsed from those bytes
+/// (att41-22: a digest taken by reading the file again after the load named a file replaced
+/// in between by its new content, for a field read from the old one).
+pub fn load_series_hashed(
+    path: &Path,
+    format: Option<GridFormat>,
+    variable: Option<&str>,
+) -> Result<(LoadedSeries, String), LoadError> {
+    load_series_read(path, format, variable, &read_limited)
+}
+
+/// As [`load_series_hashed`], the file's bytes read by `read` (the format decided from the
+/// first of those bytes, not from another read of the file).
+pub fn load_series_read(
+    path: &Path,
+    format: Option<GridFormat>,
+    variable: Option<&str>,
+    read: ReadWhole<'_>,
+) -> Result<(LoadedSeries, String), LoadError> {
+    let bytes = read(path, MAX_GRID_FILE_BYTES).map_err(|e| LoadError::cannot_read(path, e))?;
+    let format = format_of_head(path, format, &bytes)?;
+    let series = parse_series_bytes(path, &bytes, format, variable)?;
+    Ok((series, sha256_hex(&bytes)))
 }
 
 /// Loads a grid file; `format` is inferred from the extension when `None`.

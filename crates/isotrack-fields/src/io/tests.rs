@@ -846,3 +846,37 @@ fn address_space_limit_and_virtual_size_are_read_from_proc() {
     assert_eq!(parse_vm_size_bytes(status), Some(12345 * 1024));
     assert_eq!(parse_vm_size_bytes("Name:\tx\n"), None);
 }
+
+/// att41-22: the digest a load gives is of the bytes it parsed, not of the file as it is after
+/// the load. The read stand-in reads the file, then renames another grid over it (as an editor
+/// or `mv` replaces a file) before the loader sees the bytes: the loader parses the first grid
+/// and names its SHA-256 (`sha256sum` of the text: 9bad80dc...), not the second's (39768365...),
+/// which the file on disk now holds. Deterministic: the replacement happens inside the read.
+#[test]
+fn the_digest_is_of_the_bytes_parsed_not_the_file_after() {
+    const OLD: &str = "0,1,2\n10,11,12\n20,21,22\n30,31,32\n";
+    const NEW: &str = "100,101,102\n110,111,112\n120,121,122\n130,131,132\n";
+    const OLD_SHA256: &str = "9bad80dc300f30f8e4254a6025fde01952b4a378655dbd2c11405b20e70d8472";
+    const NEW_SHA256: &str = "39768365d30bd35f3790aacbf5e60e7e1fe99fe9e5c78b92dd46e1c9f9294e2e";
+    // FIPS 180-2's test vector: the digest function itself.
+    assert_eq!(
+        sha256_hex(b"abc"),
+        "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+    );
+    let (d, p) = tmp("g.csv", OLD.as_bytes());
+    let replacement = d.path().join("new.csv");
+    std::fs::write(&replacement, NEW).unwrap();
+    let read_then_replace = |path: &Path, max: u64| {
+        let bytes = read_limited(path, max);
+        std::fs::rename(&replacement, path).unwrap();
+        bytes
+    };
+    let (series, digest) = load_series_read(&p, None, None, &read_then_replace).unwrap();
+    assert_eq!(series.frames[0].values(), expected().as_slice());
+    assert_eq!(digest, OLD_SHA256);
+    // The file now holds the other grid (what a digest read after the load named).
+    assert_eq!(sha256_hex(&std::fs::read(&p).unwrap()), NEW_SHA256);
+    let (now, now_digest) = load_series_hashed(&p, None, None).unwrap();
+    assert_eq!(now_digest, NEW_SHA256);
+    assert_eq!(now.frames[0].values()[0], 100.0);
+}

@@ -235,7 +235,11 @@ fn run_team_row(
     s: &Scenario,
     warnings: &mut String,
 ) -> (Result<RunResult, String>, Option<TeamSummary>) {
-    team_row_parts(s.run_team(&mut [] as &mut [NoTrace]), warnings)
+    team_row_parts(
+        s.run_team(&mut [] as &mut [NoTrace]),
+        s.spec().team.as_ref(),
+        warnings,
+    )
 }
 
 /// Why the team engine refuses team scenario `s`, as a team sweep records it in
@@ -258,7 +262,7 @@ pub fn team_row_fields(
     mut warnings: String,
 ) -> Vec<String> {
     let (result, summary) = match team {
-        Ok(t) => team_row_parts(t, &mut warnings),
+        Ok(t) => team_row_parts(t, None, &mut warnings),
         Err(e) => (Err(e), None),
     };
     let mut fields = row_fields_warned(plan, id, result, warnings);
@@ -267,9 +271,11 @@ pub fn team_row_fields(
 }
 
 /// Vehicle 0's result and the team metrics of a team run; every other vehicle that did not
-/// complete is named in `warnings`.
+/// complete is named in `warnings`, as is a close approach (its reason from the team's settings
+/// `spec` when known).
 fn team_row_parts(
     team: Option<Result<TeamResult, TeamError>>,
+    spec: Option<&isotrack_scenario::spec::team::TeamSpec>,
     warnings: &mut String,
 ) -> (Result<RunResult, String>, Option<TeamSummary>) {
     match team {
@@ -284,7 +290,7 @@ fn team_row_parts(
                 .filter(|(_, r)| r.outcome != isotrack_sim::Outcome::Completed)
                 .map(|(i, r)| format!("vehicle {i}: {}", r.outcome.as_str()))
                 .collect();
-            if let Some(c) = crate::summary::close_approach(&t) {
+            if let Some(c) = crate::summary::close_approach(&t, spec) {
                 if !warnings.is_empty() {
                     warnings.push_str("; ");
                 }
