@@ -43,9 +43,9 @@ impl Stations {
         Ok((s, crate::io::sha256_hex(&bytes)))
     }
 
-    /// As [`from_csv`](Self::from_csv) on the file's bytes (`path` names it in errors).
-    // Long by choice: a CSV parser, read in the order of the file (the header's columns, then
-    // each row's cells checked where they are read, then the set of stations as a whole).
+    /// As [`from_csv`](Self::from_csv) on the file's bytes (`path` names it in errors): the
+    /// header's columns, then each row's cells checked where they are read, then the set of
+    /// stations as a whole.
     pub fn from_csv_bytes(
         path: &Path,
         bytes: &[u8],
@@ -58,31 +58,12 @@ impl Stations {
             .headers()
             .map_err(|e| LoadError::new(path, Some(FilePosition::Line(1, None)), e.to_string()))?
             .clone();
-        let col = |name: &str| headers.iter().position(|h| h == name);
-        let (xc, yc, lonlat) = match (col("x_m"), col("y_m"), col("lon_deg"), col("lat_deg")) {
-            (Some(x), Some(y), _, _) => (x, y, false),
-            (_, _, Some(x), Some(y)) => (x, y, true),
-            _ => {
-                return Err(LoadError::new(
-                    path,
-                    Some(FilePosition::Line(1, None)),
-                    format!(
-                        "need columns `x_m, y_m` or `lon_deg, lat_deg`; the header has {:?}",
-                        headers.iter().collect::<Vec<_>>()
-                    ),
-                ))
-            }
-        };
-        let vc = col(value_column).ok_or_else(|| {
-            LoadError::new(
-                path,
-                Some(FilePosition::Line(1, None)),
-                format!(
-                    "no column `{value_column}` in the header {:?}",
-                    headers.iter().collect::<Vec<_>>()
-                ),
-            )
-        })?;
+        let StationColumns {
+            x: xc,
+            y: yc,
+            value: vc,
+            lonlat,
+        } = StationColumns::of(path, &headers, value_column)?;
         let mut raw = Vec::new();
         // Rows with a value, counted beyond MAX_STATIONS (but not kept) to name the total.
         let mut count = 0usize;
@@ -115,74 +96,14 @@ impl Stations {
                 continue;
             }
             let (x, y, v) = (num(xc)?, num(yc)?, num(vc)?);
-            let at = |c: usize, m: String| {
-                LoadError::new(path, Some(FilePosition::Line(line, Some(c + 1))), m)
-            };
-            if !(x.is_finite() && y.is_finite() && v.is_finite()) {
-                return Err(LoadError::new(
-                    path,
-                    Some(FilePosition::Line(line, None)),
-                    "non-finite coordinate or value",
-                ));
-            }
-            if v.abs() > MAX_ABS_VALUE {
-                return Err(at(vc, format!("value {v:e} is beyond +-{MAX_ABS_VALUE:e} (the limit of a grid's values): rescale the column")));
-            }
-            if lonlat {
-                if !(-180.0..=360.0).contains(&x) {
-                    return Err(at(
-                        xc,
-                        format!("longitude {} deg is outside [-180, 360]", Echo(x)),
-                    ));
-                }
-                if !(-90.0..=90.0).contains(&y) {
-                    return Err(at(
-                        yc,
-                        format!("latitude {} deg is outside [-90, 90]", Echo(y)),
-                    ));
-                }
-            } else if x.abs() > MAX_COORDINATE_M || y.abs() > MAX_COORDINATE_M {
-                let c = if x.abs() > MAX_COORDINATE_M { xc } else { yc };
-                return Err(at(c, format!("coordinate beyond +-{MAX_COORDINATE_M:e} m")));
-            }
+            check_station(path, line, (xc, yc, vc, lonlat), (x, y, v))?;
             count += 1;
             if count <= MAX_STATIONS {
                 raw.push((x, y, v));
             }
         }
-        if count > MAX_STATIONS {
-            return Err(LoadError::new(
-                path,
-                None,
-                format!(
-                    "{count} stations with values: more than the {MAX_STATIONS} a station field \
-                     may have (ordinary kriging solves a dense system of stations + 1 \
-                     unknowns); thin or average the stations"
-                ),
-            ));
-        }
-        if raw.len() < 3 {
-            return Err(LoadError::new(
-                path,
-                None,
-                format!("{} stations with values; at least 3 are needed", raw.len()),
-            ));
-        }
-        let (positions_m, projection) = if lonlat {
-            unwrap_longitudes(path, &mut raw)?;
-            let lon0 = raw.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
-            let lat0 = raw.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
-            let lat1 = raw.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
-            let ref_lat = 0.5 * (lat0 + lat1);
-            (
-                raw.iter()
-                    .map(|r| lonlat_to_local_m(r.0, r.1, lon0, lat0, ref_lat))
-                    .collect(),
-                Some((lon0, lat0, ref_lat)),
-            )
-        } else {
-            (raw.iter().map(|r| Vec2::new(r.0, r.1)).collect(), None)
-        };
+        check_station_count(path, count, raw.len())?;
+        let (positions_m, projection) = project(path, &mut raw, lonlat)?;
         let stations = Self {
             positions_m,
             values: raw.iter().map(|r| r.2).collect(),
@@ -638,6 +559,142 @@ impl StationInterpolator for OrdinaryKriging {
                 .map(|(q, b)| b * self.variogram.gamma((p - *q).norm()))
                 .sum::<f64>()
     }
+}
+
+/// The columns of a station file: the coordinates `x` and `y` (`x_m, y_m`, else `lon_deg,
+/// lat_deg` when `lonlat`) and the value.
+struct StationColumns {
+    x: usize,
+    y: usize,
+    value: usize,
+    lonlat: bool,
+}
+
+impl StationColumns {
+    /// The columns of the header `headers` (line 1 of `path`), the value in `value_column`.
+    fn of(path: &Path, headers: &csv::StringRecord, value_column: &str) -> Result<Self, LoadError> {
+        let col = |name: &str| headers.iter().position(|h| h == name);
+        let (xc, yc, lonlat) = match (col("x_m"), col("y_m"), col("lon_deg"), col("lat_deg")) {
+            (Some(x), Some(y), _, _) => (x, y, false),
+            (_, _, Some(x), Some(y)) => (x, y, true),
+            _ => {
+                return Err(LoadError::new(
+                    path,
+                    Some(FilePosition::Line(1, None)),
+                    format!(
+                        "need columns `x_m, y_m` or `lon_deg, lat_deg`; the header has {:?}",
+                        headers.iter().collect::<Vec<_>>()
+                    ),
+                ))
+            }
+        };
+        let vc = col(value_column).ok_or_else(|| {
+            LoadError::new(
+                path,
+                Some(FilePosition::Line(1, None)),
+                format!(
+                    "no column `{value_column}` in the header {:?}",
+                    headers.iter().collect::<Vec<_>>()
+                ),
+            )
+        })?;
+        Ok(Self {
+            x: xc,
+            y: yc,
+            value: vc,
+            lonlat,
+        })
+    }
+}
+
+/// Checks one station read at `line` of `path` (columns `xc`, `yc`, `vc`; longitude and
+/// latitude when `lonlat`): finite, its value within a grid's values, its coordinates within
+/// their ranges.
+fn check_station(
+    path: &Path,
+    line: usize,
+    (xc, yc, vc, lonlat): (usize, usize, usize, bool),
+    (x, y, v): (f64, f64, f64),
+) -> Result<(), LoadError> {
+    let at =
+        |c: usize, m: String| LoadError::new(path, Some(FilePosition::Line(line, Some(c + 1))), m);
+    if !(x.is_finite() && y.is_finite() && v.is_finite()) {
+        return Err(LoadError::new(
+            path,
+            Some(FilePosition::Line(line, None)),
+            "non-finite coordinate or value",
+        ));
+    }
+    if v.abs() > MAX_ABS_VALUE {
+        return Err(at(vc, format!("value {v:e} is beyond +-{MAX_ABS_VALUE:e} (the limit of a grid's values): rescale the column")));
+    }
+    if lonlat {
+        if !(-180.0..=360.0).contains(&x) {
+            return Err(at(
+                xc,
+                format!("longitude {} deg is outside [-180, 360]", Echo(x)),
+            ));
+        }
+        if !(-90.0..=90.0).contains(&y) {
+            return Err(at(
+                yc,
+                format!("latitude {} deg is outside [-90, 90]", Echo(y)),
+            ));
+        }
+    } else if x.abs() > MAX_COORDINATE_M || y.abs() > MAX_COORDINATE_M {
+        let c = if x.abs() > MAX_COORDINATE_M { xc } else { yc };
+        return Err(at(c, format!("coordinate beyond +-{MAX_COORDINATE_M:e} m")));
+    }
+    Ok(())
+}
+
+/// Checks the number of stations with values in `path`: `count` at most [`MAX_STATIONS`],
+/// and at least 3 kept (`kept`).
+fn check_station_count(path: &Path, count: usize, kept: usize) -> Result<(), LoadError> {
+    if count > MAX_STATIONS {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!(
+                "{count} stations with values: more than the {MAX_STATIONS} a station field \
+                     may have (ordinary kriging solves a dense system of stations + 1 \
+                     unknowns); thin or average the stations"
+            ),
+        ));
+    }
+    if kept < 3 {
+        return Err(LoadError::new(
+            path,
+            None,
+            format!("{kept} stations with values; at least 3 are needed"),
+        ));
+    }
+    Ok(())
+}
+
+/// The stations' positions, m, and where they are longitude and latitude (`lonlat`), the
+/// projection's `(lon0, lat0, ref_lat)` (the longitudes unwrapped first).
+#[allow(clippy::type_complexity)]
+fn project(
+    path: &Path,
+    raw: &mut [(f64, f64, f64)],
+    lonlat: bool,
+) -> Result<(Vec<Vec2>, Option<(f64, f64, f64)>), LoadError> {
+    Ok(if lonlat {
+        unwrap_longitudes(path, raw)?;
+        let lon0 = raw.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        let lat0 = raw.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        let lat1 = raw.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
+        let ref_lat = 0.5 * (lat0 + lat1);
+        (
+            raw.iter()
+                .map(|r| lonlat_to_local_m(r.0, r.1, lon0, lat0, ref_lat))
+                .collect(),
+            Some((lon0, lat0, ref_lat)),
+        )
+    } else {
+        (raw.iter().map(|r| Vec2::new(r.0, r.1)).collect(), None)
+    })
 }
 
 #[cfg(test)]

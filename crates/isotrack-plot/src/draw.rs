@@ -1124,6 +1124,9 @@ enum XKey {
     Bits(u64),
 }
 
+/// The metric's values of a sweep's runs by group and x value.
+type GroupedRuns = std::collections::BTreeMap<String, std::collections::BTreeMap<XKey, Vec<f64>>>;
+
 /// The integers an `f64` holds exactly, `2^53` (beyond, two seeds one apart are one `f64`).
 const EXACT_F64_INTEGERS: i128 = 1 << 53;
 
@@ -1156,29 +1159,18 @@ fn sweep_summary_exact(
     })?;
     let yi = col(metric)?;
     let gi = group.map(col).transpose()?;
-    let mut by: std::collections::BTreeMap<String, std::collections::BTreeMap<XKey, Vec<f64>>> =
-        Default::default();
+    let mut by = GroupedRuns::default();
     // A single x column of whole numbers (each finite number of it an integer as written):
     // read before grouping, so that the x of a run is never rounded.
-    let whole = x_cols.len() == 1 && {
-        let mut r = csv::Reader::from_reader(crate::open_input(results_csv)?);
-        let mut all_whole = true;
-        for rec in r.records() {
-            let rec = rec.map_err(|e| err(e.to_string()))?;
-            let v = rec.get(x_cols[0]).unwrap_or("");
-            if v.parse::<f64>().is_ok_and(f64::is_finite) && v.parse::<i128>().is_err() {
-                all_whole = false;
-                break;
-            }
-        }
-        all_whole
-    };
+    let whole = x_cols.len() == 1 && whole_number_column(results_csv, x_cols[0])?;
     let mut skipped = 0;
     // Which columns hold a number in some run, and a text value of the x and the metric
     // columns (for the message when no run has both as numbers, nu-20).
-    let mut numeric = vec![false; headers.len()];
-    let mut x_text: Option<String> = None;
-    let mut y_text: Option<String> = None;
+    let mut seen = ColumnsSeen {
+        numeric: vec![false; headers.len()],
+        x_text: None,
+        y_text: None,
+    };
     for rec in rdr.records() {
         let rec = rec.map_err(|e| err(e.to_string()))?;
         let num = |i: usize| {
@@ -1186,20 +1178,7 @@ fn sweep_summary_exact(
                 .and_then(|v| v.parse::<f64>().ok())
                 .filter(|v| v.is_finite())
         };
-        for (i, n) in numeric.iter_mut().enumerate() {
-            *n = *n || num(i).is_some();
-        }
-        let text = |i: usize| {
-            rec.get(i)
-                .filter(|v| !v.is_empty() && v.parse::<f64>().is_err())
-                .map(str::to_string)
-        };
-        if x_text.is_none() {
-            x_text = x_cols.iter().find_map(|&i| text(i));
-        }
-        if y_text.is_none() {
-            y_text = text(yi);
-        }
+        seen.note(&rec, &x_cols, yi);
         let x = if x_cols.len() == 1 {
             num(x_cols[0])
         } else {
@@ -1225,19 +1204,74 @@ fn sweep_summary_exact(
         }
     }
     if by.is_empty() {
+        return Err(err(seen.why_no_run(
+            &headers,
+            (x_key, &x_cols),
+            (metric, yi),
+        )));
+    }
+    let (lines, offset) = summary_lines(by);
+    Ok((lines, skipped, offset))
+}
+
+/// What [`sweep_summary_exact`] saw of a sweep's columns, for its message when no run has a
+/// number in both the x and the metric columns (nu-20).
+struct ColumnsSeen {
+    /// Whether each column holds a finite number in some run.
+    numeric: Vec<bool>,
+    /// A text value of the x columns (the first seen), if any.
+    x_text: Option<String>,
+    /// A text value of the metric column (the first seen), if any.
+    y_text: Option<String>,
+}
+
+impl ColumnsSeen {
+    /// Notes the columns of one row `rec`, the x in columns `x_cols` and the metric in `yi`.
+    fn note(&mut self, rec: &csv::StringRecord, x_cols: &[usize], yi: usize) {
+        for (i, n) in self.numeric.iter_mut().enumerate() {
+            *n = *n
+                || rec
+                    .get(i)
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .filter(|v| v.is_finite())
+                    .is_some();
+        }
+        let text = |i: usize| {
+            rec.get(i)
+                .filter(|v| !v.is_empty() && v.parse::<f64>().is_err())
+                .map(str::to_string)
+        };
+        if self.x_text.is_none() {
+            self.x_text = x_cols.iter().find_map(|&i| text(i));
+        }
+        if self.y_text.is_none() {
+            self.y_text = text(yi);
+        }
+    }
+
+    /// The message when no run has both `x_key` (in columns `x_cols`) and `metric` (in
+    /// column `yi`) as numbers: which of them is text, and the columns that hold numbers.
+    fn why_no_run(
+        &self,
+        headers: &csv::StringRecord,
+        (x_key, x_cols): (&str, &[usize]),
+        (metric, yi): (&str, usize),
+    ) -> String {
+        let numeric = &self.numeric;
+        let (x_text, y_text) = (&self.x_text, &self.y_text);
         let x_is_text = x_text.is_some() && !x_cols.iter().any(|&i| numeric[i]);
         let y_is_text = y_text.is_some() && !numeric[yi];
         if !x_is_text && !y_is_text {
-            return Err(err(format!("no run has both `{x_key}` and `{metric}`")));
+            return format!("no run has both `{x_key}` and `{metric}`");
         }
         let mut why = Vec::new();
-        if let (true, Some(v)) = (x_is_text, &x_text) {
+        if let (true, Some(v)) = (x_is_text, x_text) {
             why.push(format!(
                 "`{x_key}` is text (e.g. `{}`): --x must be a numeric key (a text key such as team.spacing or controller.kind goes to --group)",
                 isotrack_scenario::load::clip(v)
             ));
         }
-        if let (true, Some(v)) = (y_is_text, &y_text) {
+        if let (true, Some(v)) = (y_is_text, y_text) {
             why.push(format!(
                 "`{metric}` is not a number (e.g. `{}`): --metric must be a numeric column",
                 isotrack_scenario::load::clip(v)
@@ -1245,16 +1279,22 @@ fn sweep_summary_exact(
         }
         let numbers: Vec<&str> = headers
             .iter()
-            .zip(&numeric)
+            .zip(numeric.iter())
             .filter(|(_, n)| **n)
             .map(|(h, _)| h)
             .collect();
-        return Err(err(format!(
+        format!(
             "no run has a number in both `{x_key}` and `{metric}`: {}; the columns holding numbers: {}",
             why.join("; "),
             numbers.join(", ")
-        )));
+        )
     }
+}
+
+/// The summary lines of the runs grouped `by` group and x: each x's mean, standard deviation
+/// and count, sorted by x; whole-number x relative to the smallest (returned) when one of them
+/// is beyond `f64`'s exact integers ([`sweep_summary_exact`]).
+fn summary_lines(by: GroupedRuns) -> (Vec<SummaryLine>, Option<i128>) {
     let wholes = || {
         by.values()
             .flat_map(|xs| xs.keys())
@@ -1285,7 +1325,22 @@ fn sweep_summary_exact(
             (g, pts)
         })
         .collect();
-    Ok((lines, skipped, offset))
+    (lines, offset)
+}
+
+/// Whether every finite number in column `x_col` of `results_csv` is an integer as written
+/// (`sim.seed`, `team.count`: [`sweep_summary_exact`] then groups by the integers).
+fn whole_number_column(results_csv: &Path, x_col: usize) -> Result<bool, PlotError> {
+    let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
+    let mut r = csv::Reader::from_reader(crate::open_input(results_csv)?);
+    for rec in r.records() {
+        let rec = rec.map_err(|e| err(e.to_string()))?;
+        let v = rec.get(x_col).unwrap_or("");
+        if v.parse::<f64>().is_ok_and(f64::is_finite) && v.parse::<i128>().is_err() {
+            return Ok(false);
+        }
+    }
+    Ok(true)
 }
 
 /// A tick label of a sweep figure's x axis whose values are relative to `offset` (the
@@ -1327,6 +1382,76 @@ fn mean_and_std(ys: &[f64]) -> (f64, f64) {
     (mean, var.sqrt())
 }
 
+/// A sweep figure's axes: `x` and `y` the ranges drawn, `single_x` / `single_y` the one value
+/// of an axis labelled by hand at the value (else `None`).
+struct SweepAxes {
+    x: (f64, f64),
+    y: (f64, f64),
+    single_x: Option<f64>,
+    single_y: Option<f64>,
+}
+
+impl SweepAxes {
+    /// The axes round the summary `lines` (each mean with its error bar); a data error on
+    /// `results_csv` when there are no finite values.
+    fn of(
+        lines: &[SummaryLine],
+        (x_key, metric): (&str, &str),
+        results_csv: &Path,
+    ) -> Result<Self, PlotError> {
+        let all = || lines.iter().flat_map(|l| l.1.iter());
+        let (x0, x1) = finite_bounds(all().map(|p| p.0));
+        let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
+        let (_, y1) = finite_bounds(all().map(|p| p.1 + p.2));
+        let bad = || PlotError::Data(format!("{}: no finite values", results_csv.display()));
+        // One whole x value (`team.count = [5]`): an axis one unit wide round it, labelled once
+        // at the value (att30n-7: an axis 2e-7 wide was labelled 4.9999997 to 5.0000002).
+        // One value that is not whole (0.1, 5.5), or a metric the same in every run: an axis a
+        // fifth of the value wide round it (1 round 0), labelled once, at the value, by hand
+        // (att38-7: ticks 1e-9 apart ran together and past the image's edge).
+        let single_x = (x0 == x1 && x0.fract() != 0.0).then_some(x0);
+        let single_y = (y0 == y1 && y0.is_finite()).then_some(y0);
+        let x_width = if x0 == x1 && x0.fract() == 0.0 {
+            1.0
+        } else if let Some(v) = single_x {
+            single_value_width(v)
+        } else {
+            1e-9
+        };
+        let x = padded_axis(x_key, x0, x1, 0.05, x_width)?.ok_or_else(bad)?;
+        let y_width = single_y.map_or(1e-12, single_value_width);
+        let y = padded_axis(metric, y0, y1, 0.08, y_width)?.ok_or_else(bad)?;
+        Ok(Self {
+            x,
+            y,
+            single_x,
+            single_y,
+        })
+    }
+}
+
+/// The legend label of each summary line: `group = value` with the values shortened so that
+/// the legend is as wide as the plot at most (att30n-8: two absolute paths made a legend wider
+/// than the image, clipped at both edges and over a point), or the metric without a group.
+fn sweep_line_labels(
+    lines: &[SummaryLine],
+    group: Option<&str>,
+    metric: &str,
+    (w, h): (u32, u32),
+    f: f64,
+) -> Vec<String> {
+    match group {
+        Some(k) => {
+            let room = legend_chars_that_fit(sweep_plot_px((w, h), f).0, f);
+            let prefix = format!("{k} = ").chars().count();
+            let values: Vec<&str> = lines.iter().map(|l| l.0.as_str()).collect();
+            let short = shortened_values(&values, room.saturating_sub(prefix).max(12));
+            short.into_iter().map(|v| format!("{k} = {v}")).collect()
+        }
+        None => lines.iter().map(|_| metric.to_string()).collect(),
+    }
+}
+
 /// A sweep summary figure: the metric's mean against `x_key` with an error bar of one sample
 /// standard deviation at each x value, one line per `group` value (README, "Sweeps").
 pub fn sweep_figure(
@@ -1337,55 +1462,20 @@ pub fn sweep_figure(
     path: &Path,
     st: &Style,
 ) -> Result<(), PlotError> {
-    let err = |m: String| PlotError::Data(format!("{}: {m}", results_csv.display()));
     let (lines, skipped, x_offset) = sweep_summary_exact(results_csv, x_key, metric, group)?;
     let all = || lines.iter().flat_map(|l| l.1.iter());
-    let (x0, x1) = finite_bounds(all().map(|p| p.0));
-    let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
-    let (_, y1) = finite_bounds(all().map(|p| p.1 + p.2));
-    let bad = || err("no finite values".into());
-    // One whole x value (`team.count = [5]`): an axis one unit wide round it, labelled once
-    // at the value (att30n-7: an axis 2e-7 wide was labelled 4.9999997 to 5.0000002).
-    // One value that is not whole (0.1, 5.5), or a metric the same in every run: an axis a
-    // fifth of the value wide round it (1 round 0), labelled once, at the value, by hand
-    // (att38-7: ticks 1e-9 apart ran together and past the image's edge).
-    let single_x = (x0 == x1 && x0.fract() != 0.0).then_some(x0);
-    let single_y = (y0 == y1 && y0.is_finite()).then_some(y0);
-    let x_width = if x0 == x1 && x0.fract() == 0.0 {
-        1.0
-    } else if let Some(v) = single_x {
-        single_value_width(v)
-    } else {
-        1e-9
-    };
-    let (xa, xb) = padded_axis(x_key, x0, x1, 0.05, x_width)?.ok_or_else(bad)?;
-    let y_width = single_y.map_or(1e-12, single_value_width);
-    let (ya, yb) = padded_axis(metric, y0, y1, 0.08, y_width)?.ok_or_else(bad)?;
+    let axes = SweepAxes::of(&lines, (x_key, metric), results_csv)?;
+    let ((xa, xb), (ya, yb)) = (axes.x, axes.y);
     let runs: usize = all().map(|p| p.3).sum();
     let default_title = sweep_title(x_key, metric, runs, skipped);
     let title = st.title(&default_title);
     let (w, h) = st.size((1000, 700), (560, 400));
     let f = st.base_font();
     let title_rel = title_font_rel(title, w, f);
-    // Group labels as wide as the plot at most (att30n-8: two absolute paths made a legend
-    // wider than the image, clipped at both edges and over a point): values shortened.
-    let shown: std::collections::HashMap<&str, String> = match group {
-        Some(k) => {
-            let room = legend_chars_that_fit(sweep_plot_px((w, h), f).0, f);
-            let prefix = format!("{k} = ").chars().count();
-            let values: Vec<&str> = lines.iter().map(|l| l.0.as_str()).collect();
-            let short = shortened_values(&values, room.saturating_sub(prefix).max(12));
-            values.into_iter().zip(short).collect()
-        }
-        None => Default::default(),
-    };
-    let label_of = |g: &str| match group {
-        Some(k) => format!("{k} = {}", shown.get(g).map_or(g, |v| v.as_str())),
-        None => metric.to_string(),
-    };
+    let labels = sweep_line_labels(&lines, group, metric, (w, h), f);
     let (yb, legend_at) = match group {
         Some(_) => {
-            let chars = lines.iter().map(|l| label_of(&l.0).chars().count());
+            let chars = labels.iter().map(|l| l.chars().count());
             let legend = legend_box_px(chars.max().unwrap_or(0), lines.len(), f);
             sweep_legend_place(&lines, [xa, xb, ya, yb], sweep_plot_px((w, h), f), legend)
         }
@@ -1397,23 +1487,8 @@ pub fn sweep_figure(
     render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
-            // Whole-number labels as many as fit side by side (att30n-15: twelve seeds near
-            // 1e9 ran together): else fewer, plotters choosing a step of 1, 2 or 5.
-            let label_style = TextStyle::from(st.font(0.95));
-            let x_labels = whole_x.map(|n| {
-                let widest = (xa.ceil() as i64..=xb.floor() as i64)
-                    .take(13)
-                    .filter_map(|v| {
-                        root.estimate_text_size(
-                            &x_tick_label(v as f64, 1.0, x_offset),
-                            &label_style,
-                        )
-                        .ok()
-                    })
-                    .map(|(w, _)| f64::from(w))
-                    .fold(0.0, f64::max);
-                whole_labels_that_fit(n, widest, sweep_plot_px((w, h), f).0, f)
-            });
+            let x_labels =
+                whole_x.map(|n| whole_x_labels_that_fit(&root, st, n, (xa, xb), x_offset, (w, h)));
             let mut chart = ChartBuilder::on(&root)
                 .margin(f as u32)
                 .margin_right((2.0 * f) as u32)
@@ -1422,65 +1497,15 @@ pub fn sweep_figure(
                 .y_label_area_size((5.6 * f) as u32)
                 .build_cartesian_2d(xa..xb, ya..yb)
                 .map_err(s)?;
-            chart
-                .configure_mesh()
-                .x_desc(x_key)
-                .y_desc(metric)
-                // plotters' own default is 11 labels at most.
-                .x_labels(x_labels.unwrap_or(11))
-                .x_label_formatter(&|v| {
-                    if single_x.is_some() {
-                        String::new()
-                    } else {
-                        x_tick_label(*v, xs, x_offset)
-                    }
-                })
-                .y_label_formatter(&|v| {
-                    if single_y.is_some() {
-                        String::new()
-                    } else {
-                        tick_label(*v, ys)
-                    }
-                })
-                .label_style(st.font(0.95))
-                .axis_desc_style(st.font(1.0))
-                .draw()
-                .map_err(s)?;
-            // The one value's label, at the value (att38-7).
-            let one_style = TextStyle::from(st.font(0.95));
-            let tick = (0.5 * f) as i32;
-            if let Some(v) = single_x {
-                let (px, py) = chart.backend_coord(&(v, ya));
-                let text = single_value_label(v);
-                root.draw(&PathElement::new(vec![(px, py), (px, py + tick)], BLACK))
-                    .map_err(s)?;
-                root.draw_text(
-                    &text,
-                    &one_style.pos(plotters::style::text_anchor::Pos::new(
-                        plotters::style::text_anchor::HPos::Center,
-                        plotters::style::text_anchor::VPos::Top,
-                    )),
-                    (px, py + tick + (0.2 * f) as i32),
-                )
-                .map_err(s)?;
-            }
-            if let Some(v) = single_y {
-                let (px, py) = chart.backend_coord(&(xa, v));
-                let text = single_value_label(v);
-                root.draw(&PathElement::new(vec![(px - tick, py), (px, py)], BLACK))
-                    .map_err(s)?;
-                root.draw_text(
-                    &text,
-                    &one_style.pos(plotters::style::text_anchor::Pos::new(
-                        plotters::style::text_anchor::HPos::Right,
-                        plotters::style::text_anchor::VPos::Center,
-                    )),
-                    (px - tick - (0.3 * f) as i32, py),
-                )
-                .map_err(s)?;
-            }
-            for (i, (g, pts)) in lines.iter().enumerate() {
-                draw_summary_line(&mut chart, pts, label_of(g), colour(i + 1), st)?;
+            let ticks = SweepTicks {
+                x_labels,
+                steps: (xs, ys),
+                x_offset,
+            };
+            draw_sweep_mesh(&mut chart, st, (x_key, metric), &axes, &ticks)?;
+            draw_single_value_labels(&root, &chart, st, &axes)?;
+            for (i, ((_, pts), label)) in lines.iter().zip(&labels).enumerate() {
+                draw_summary_line(&mut chart, pts, label.clone(), colour(i + 1), st)?;
             }
             if group.is_some() {
                 chart
@@ -1495,6 +1520,119 @@ pub fn sweep_figure(
             Ok(())
         })()
     })
+}
+
+/// How many of `n` whole-number x labels fit side by side on a sweep figure of `size` drawn
+/// on `root` (att30n-15: twelve seeds near 1e9 ran together): else fewer, plotters choosing
+/// a step of 1, 2 or 5. The widest of the first 13 labels over `[xa, xb]` is measured.
+fn whole_x_labels_that_fit<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    st: &Style,
+    n: usize,
+    (xa, xb): (f64, f64),
+    x_offset: Option<i128>,
+    size: (u32, u32),
+) -> usize {
+    let f = st.base_font();
+    let label_style = TextStyle::from(st.font(0.95));
+    let widest = (xa.ceil() as i64..=xb.floor() as i64)
+        .take(13)
+        .filter_map(|v| {
+            root.estimate_text_size(&x_tick_label(v as f64, 1.0, x_offset), &label_style)
+                .ok()
+        })
+        .map(|(w, _)| f64::from(w))
+        .fold(0.0, f64::max);
+    whole_labels_that_fit(n, widest, sweep_plot_px(size, f).0, f)
+}
+
+/// How a sweep figure's axes are labelled: at most `x_labels` x labels (`None`: plotters'
+/// default), at the tick `steps` (x, y), the x values relative to `x_offset`
+/// ([`x_tick_label`]).
+struct SweepTicks {
+    x_labels: Option<usize>,
+    steps: (f64, f64),
+    x_offset: Option<i128>,
+}
+
+/// A sweep figure's mesh: the axes' descriptions (`x_key`, `metric`) and tick labels, none
+/// on an axis of one value (labelled by [`draw_single_value_labels`]).
+fn draw_sweep_mesh<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    st: &Style,
+    (x_key, metric): (&str, &str),
+    axes: &SweepAxes,
+    ticks: &SweepTicks,
+) -> DrawResult {
+    let (xs, ys) = ticks.steps;
+    chart
+        .configure_mesh()
+        .x_desc(x_key)
+        .y_desc(metric)
+        // plotters' own default is 11 labels at most.
+        .x_labels(ticks.x_labels.unwrap_or(11))
+        .x_label_formatter(&|v| {
+            if axes.single_x.is_some() {
+                String::new()
+            } else {
+                x_tick_label(*v, xs, ticks.x_offset)
+            }
+        })
+        .y_label_formatter(&|v| {
+            if axes.single_y.is_some() {
+                String::new()
+            } else {
+                tick_label(*v, ys)
+            }
+        })
+        .label_style(st.font(0.95))
+        .axis_desc_style(st.font(1.0))
+        .draw()
+        .map_err(s)
+}
+
+/// The one value of a sweep figure's axis of one value, labelled at the value by hand with a
+/// tick (att38-7): below the x axis, left of the y axis.
+fn draw_single_value_labels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    chart: &MapChart<'_, DB>,
+    st: &Style,
+    axes: &SweepAxes,
+) -> DrawResult {
+    let f = st.base_font();
+    let one_style = TextStyle::from(st.font(0.95));
+    let tick = (0.5 * f) as i32;
+    if let Some(v) = axes.single_x {
+        let (px, py) = chart.backend_coord(&(v, axes.y.0));
+        let text = single_value_label(v);
+        root.draw(&PathElement::new(vec![(px, py), (px, py + tick)], BLACK))
+            .map_err(s)?;
+        root.draw_text(
+            &text,
+            &one_style.pos(plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Center,
+                plotters::style::text_anchor::VPos::Top,
+            )),
+            (px, py + tick + (0.2 * f) as i32),
+        )
+        .map_err(s)?;
+    }
+    if let Some(v) = axes.single_y {
+        let (px, py) = chart.backend_coord(&(axes.x.0, v));
+        let text = single_value_label(v);
+        root.draw(&PathElement::new(vec![(px - tick, py), (px, py)], BLACK))
+            .map_err(s)?;
+        root.draw_text(
+            &text,
+            &one_style.pos(plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Right,
+                plotters::style::text_anchor::VPos::Center,
+            )),
+            (px - tick - (0.3 * f) as i32, py),
+        )
+        .map_err(s)?;
+    }
+    Ok(())
 }
 
 /// The width of a sweep axis round its one value `v` (att38-7): a fifth of `|v|`, or 1 for 0.
@@ -1810,44 +1948,24 @@ fn finite_runs(points: impl Iterator<Item = (f64, f64)>) -> Vec<Vec<(f64, f64)>>
     runs
 }
 
-impl TeamFigureData {
-    fn of(vehicles: &[RunData]) -> Result<Self, PlotError> {
-        let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
-            PlotError::Data(
-                "the team's figure needs an isoline at controller.level to measure along, and the field has none there (docs/TEAMS.md)".into(),
-            )
-        })?;
-        let first = &vehicles[0];
-        let n = vehicles.len();
-        let l = tracks.length_m();
-        let stride = tracks.rows.div_ceil(2000).max(1);
-        let gaps = tracks.gaps(stride);
-        // The window the metrics took (their first sample in it; att32g-1, -2).
-        let window = crate::team::metrics_window_start_s(&first.scenario, &tracks.arc);
-        let mut revisit = tracks.revisit_max(window.unwrap_or(f64::INFINITY));
-        // The figure agrees with summary.json: no revisit time where the metrics have none
-        // (no vehicle live in the steady window; att32f-3).
-        let team = first.summary.team().and_then(|t| t.metrics.as_ref());
-        if team.is_some_and(|m| m.revisit_time_max_s.is_none()) {
-            revisit.iter_mut().for_each(|r| r.1 = f64::NAN);
-        }
-        // Why a panel has no revisit curve, as the run shows it.
-        let no_revisit = match window {
-            None => format!(
-                "no revisit time: no metrics sample in the steady window (sampled every {} s)",
-                crate::style::value_label(
-                    first
-                        .scenario
-                        .team_metrics_every_steps(matches!(
-                            tracks.arc,
-                            crate::team::FigureArc::Circle(_)
-                        ))
-                        .max(1) as f64
-                        * first.scenario.dt_s()
-                )
-            ),
-            Some(_) => "no revisit time: no vehicle live in the steady window".to_string(),
-        };
+/// The ideal levels [`team_figure`] draws dashed: the revisit time `ideal`, the gap `even`
+/// and the ideal of the vehicles still flying `ideal_active` (NaN: none).
+struct IdealLevels {
+    ideal: f64,
+    even: f64,
+    ideal_active: f64,
+}
+
+impl IdealLevels {
+    /// The levels of a team of `n` vehicles along an isoline of length `l` m, from the
+    /// scenario of the team's first vehicle and the team's metrics in `summary.json`.
+    fn of(
+        first: &RunData,
+        team: Option<&isotrack_runs::summary::TeamRecord>,
+        (closed, moving): (bool, bool),
+        l: f64,
+        n: usize,
+    ) -> Self {
         let v0 = first
             .scenario
             .spec()
@@ -1856,17 +1974,9 @@ impl TeamFigureData {
             .map_or(first.scenario.spec().vehicle.speed_mps(), |t| {
                 t.ideal_speed_mps()
             });
-        let closed = tracks.is_closed();
-        let per_vehicle_speeds = first
-            .scenario
-            .spec()
-            .team
-            .as_ref()
-            .is_some_and(|t| t.member_speeds().is_some());
         // A field that moves its isoline: the figure measures along the last frame's, the
         // metrics along each sample's; the dashed lines are summary.json's, of the mean length
         // (nu-2: the last frame's drawn disagreed with summary.json without a word).
-        let moving = team.is_some_and(|m| m.moving_isoline.is_some());
         let (ideal, even) = if closed && moving {
             (
                 team.and_then(|m| m.revisit_time_ideal_s)
@@ -1890,25 +2000,97 @@ impl TeamFigureData {
             .and_then(|m| m.revisit_time_ideal_active_s)
             .filter(|a| a.is_finite() && ideal.is_finite() && *a != ideal)
             .unwrap_or(f64::NAN);
+        Self {
+            ideal,
+            even,
+            ideal_active,
+        }
+    }
+}
+
+/// Why the revisit panel of [`team_figure`] has no curve, as the run shows it: no metrics
+/// sample in the steady window (`window` is `None`), or no vehicle live in it.
+fn no_revisit_reason(first: &RunData, arc: &crate::team::FigureArc, window: Option<f64>) -> String {
+    match window {
+        None => format!(
+            "no revisit time: no metrics sample in the steady window (sampled every {} s)",
+            crate::style::value_label(
+                first
+                    .scenario
+                    .team_metrics_every_steps(matches!(arc, crate::team::FigureArc::Circle(_)))
+                    .max(1) as f64
+                    * first.scenario.dt_s()
+            )
+        ),
+        Some(_) => "no revisit time: no vehicle live in the steady window".to_string(),
+    }
+}
+
+/// Each vehicle's last position (x, y), m, at its own end (NaN: no row).
+fn last_positions(vehicles: &[RunData]) -> Vec<(f64, f64)> {
+    vehicles
+        .iter()
+        .map(|v| {
+            v.trace
+                .last()
+                .map_or((f64::NAN, f64::NAN), |r| (r.x_m, r.y_m))
+        })
+        .collect()
+}
+
+/// The isoline panel's square range `[x0, x1, y0, y1]`, m, round the isoline and the
+/// vehicles' last positions (6 % of the side on each side); an error where it is not finite.
+fn team_map_range(isoline: &[(f64, f64)], ends: &[(f64, f64)]) -> Result<[f64; 4], PlotError> {
+    let (x0, x1) = finite_bounds(isoline.iter().chain(ends).map(|p| p.0));
+    let (y0, y1) = finite_bounds(isoline.iter().chain(ends).map(|p| p.1));
+    let side = (x1 - x0).max(y1 - y0).max(1e-6);
+    let pad = 0.06 * side;
+    let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let half = 0.5 * side + pad;
+    let map_range = [cx - half, cx + half, cy - half, cy + half];
+    padded_axis("x_m", map_range[0], map_range[1], 0.0, 0.0)?;
+    padded_axis("y_m", map_range[2], map_range[3], 0.0, 0.0)?;
+    Ok(map_range)
+}
+
+impl TeamFigureData {
+    fn of(vehicles: &[RunData]) -> Result<Self, PlotError> {
+        let tracks = crate::team::TeamTracks::new(vehicles).ok_or_else(|| {
+            PlotError::Data(
+                "the team's figure needs an isoline at controller.level to measure along, and the field has none there (docs/TEAMS.md)".into(),
+            )
+        })?;
+        let first = &vehicles[0];
+        let n = vehicles.len();
+        let l = tracks.length_m();
+        let stride = tracks.rows.div_ceil(2000).max(1);
+        let gaps = tracks.gaps(stride);
+        // The window the metrics took (their first sample in it; att32g-1, -2).
+        let window = crate::team::metrics_window_start_s(&first.scenario, &tracks.arc);
+        let mut revisit = tracks.revisit_max(window.unwrap_or(f64::INFINITY));
+        // The figure agrees with summary.json: no revisit time where the metrics have none
+        // (no vehicle live in the steady window; att32f-3).
+        let team = first.summary.team().and_then(|t| t.metrics.as_ref());
+        if team.is_some_and(|m| m.revisit_time_max_s.is_none()) {
+            revisit.iter_mut().for_each(|r| r.1 = f64::NAN);
+        }
+        let no_revisit = no_revisit_reason(first, &tracks.arc, window);
+        let closed = tracks.is_closed();
+        let per_vehicle_speeds = first
+            .scenario
+            .spec()
+            .team
+            .as_ref()
+            .is_some_and(|t| t.member_speeds().is_some());
+        let moving = team.is_some_and(|m| m.moving_isoline.is_some());
+        let IdealLevels {
+            ideal,
+            even,
+            ideal_active,
+        } = IdealLevels::of(first, team, (closed, moving), l, n);
         let isoline: Vec<(f64, f64)> = tracks.arc.points().iter().map(|p| (p.x, p.y)).collect();
-        // Each vehicle's last position, at its own end.
-        let ends: Vec<(f64, f64)> = vehicles
-            .iter()
-            .map(|v| {
-                v.trace
-                    .last()
-                    .map_or((f64::NAN, f64::NAN), |r| (r.x_m, r.y_m))
-            })
-            .collect();
-        let (x0, x1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.0));
-        let (y0, y1) = finite_bounds(isoline.iter().chain(&ends).map(|p| p.1));
-        let side = (x1 - x0).max(y1 - y0).max(1e-6);
-        let pad = 0.06 * side;
-        let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-        let half = 0.5 * side + pad;
-        let map_range = [cx - half, cx + half, cy - half, cy + half];
-        padded_axis("x_m", map_range[0], map_range[1], 0.0, 0.0)?;
-        padded_axis("y_m", map_range[2], map_range[3], 0.0, 0.0)?;
+        let ends = last_positions(vehicles);
+        let map_range = team_map_range(&isoline, &ends)?;
         // To the last vehicle's end (att32f-3: the gaps' last time, which stops once fewer than
         // two vehicles are left, cut the axis short of the run).
         let t_end = tracks
@@ -1968,29 +2150,8 @@ pub fn team_figure(
     title: &str,
 ) -> Result<(), PlotError> {
     let title = st.title(title);
-    let TeamFigureData {
-        n,
-        l,
-        gaps,
-        revisit,
-        no_revisit,
-        ideal,
-        even,
-        ideal_active,
-        closed,
-        moving,
-        per_vehicle_speeds,
-        t_end,
-        gap_range: (glo, ghi),
-        revisit_range: (rlo, rhi),
-        isoline,
-        isoline_label,
-        ends,
-        map_range,
-    } = TeamFigureData::of(vehicles)?;
+    let data = TeamFigureData::of(vehicles)?;
     let (w, h) = st.size((1100, 760), (560, 420));
-    let (ts, ls) = (tick_step(0.0, t_end, 10), tick_step(0.0, l, 10));
-    let (gs, rs) = (tick_step(glo, ghi, 8), tick_step(rlo, rhi, 8));
     render!(path, st.format, (w, h), |root| {
         (|| -> DrawResult {
             root.fill(&WHITE).map_err(s)?;
@@ -2002,185 +2163,243 @@ pub fn team_figure(
             let areas = body.split_evenly((2, 1));
             let (bw, _) = areas[1].dim_in_pixel();
             let (revisit_area, map_area) = areas[1].split_horizontally((bw as f64 * 0.62) as u32);
-            let (w2, w3) = (st.px(2.0), st.px(3.0));
-            let dashed = |a: (f64, f64), b: (f64, f64)| {
-                DashedLineSeries::new([a, b], st.px(8.0), st.px(5.0), BLACK.stroke_width(w2))
-            };
-            let mut top = panel_axes(
-                &areas[0],
-                st,
-                ((0.0, t_end), (glo, ghi)),
-                ("time (s)", "gap ahead along the isoline (m)"),
-                (ts, gs),
-            )?;
-            if even.is_finite() {
-                top.draw_series(dashed((0.0, even), (t_end, even)))
-                    .map_err(s)?
-                    .label(match (closed, moving) {
-                        (true, false) => "even gap L/N",
-                        (true, true) => "even gap L/N, L the mean length",
-                        (false, _) => "mean gap S/(N-1)",
-                    })
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
-                    });
-            }
-            for (i, v) in vehicles.iter().enumerate() {
-                let c = colour(i);
-                let series = top
-                    .draw_series(
-                        finite_runs(gaps.iter().map(|g| (g.0, g.1[i])))
-                            .into_iter()
-                            .map(|r| PathElement::new(r, c.stroke_width(w2))),
-                    )
-                    .map_err(s)?;
-                if n <= RUN_COLOURS.len() {
-                    series.label(v.name.clone()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
-                    });
-                }
-            }
-            // nu36-2: the even gap drawn again over the vehicles' gaps, which settle on it and
-            // hid it (its legend entry stays first).
-            if even.is_finite() {
-                top.draw_series(dashed((0.0, even), (t_end, even)))
-                    .map_err(s)?;
-            }
-            panel_legend(&mut top, st, SeriesLabelPosition::UpperRight)?;
-            let mut bottom = panel_axes(
-                &revisit_area,
-                st,
-                ((0.0, l), (rlo, rhi)),
-                (
-                    "position along the isoline, in the direction of travel (m)",
-                    "longest unvisited time (s)",
-                ),
-                (ls, rs),
-            )?;
-            if ideal.is_finite() {
-                // Dashed in the legend as on the panel (att32d-16: drawn solid there), and
-                // with per-vehicle speeds its own formula, `L/sum v0_i`.
-                let (dash, gap) = (st.px(6.0), st.px(3.0));
-                bottom
-                    .draw_series(dashed((0.0, ideal), (l, ideal)))
-                    .map_err(s)?
-                    .label(match (closed, per_vehicle_speeds, moving) {
-                        (true, false, false) => "ideal L/(N v0)",
-                        (true, true, false) => "ideal L/sum v0_i",
-                        (true, false, true) => "ideal L/(N v0), L the mean length",
-                        (true, true, true) => "ideal L/sum v0_i, L the mean length",
-                        (false, _, _) => "ideal S/((N-1) v0)",
-                    })
-                    .legend(move |(x, y)| {
-                        plotters::element::DashedPathElement::new(
-                            vec![(x, y), (x + 20, y)],
-                            dash,
-                            gap,
-                            BLACK.stroke_width(w2),
-                        )
-                    });
-            }
-            // nu36-14: a team that lost a vehicle: the ideal of those still flying too, dotted
-            // (the revisit curve settles on it, not on the deployed ideal).
-            if ideal_active.is_finite() {
-                let (dot, gap) = (st.px(2.0), st.px(4.0));
-                bottom
-                    .draw_series(std::iter::once(plotters::element::DashedPathElement::new(
-                        vec![(0.0, ideal_active), (l, ideal_active)],
-                        dot,
-                        gap,
-                        BLACK.stroke_width(w2),
-                    )))
-                    .map_err(s)?
-                    .label("ideal of the vehicles still flying")
-                    .legend(move |(x, y)| {
-                        plotters::element::DashedPathElement::new(
-                            vec![(x, y), (x + 20, y)],
-                            dot,
-                            gap,
-                            BLACK.stroke_width(w2),
-                        )
-                    });
-            }
-            let c = colour(1);
-            let revisits = finite_runs(revisit.iter().copied());
-            let label = if revisits.is_empty() {
-                no_revisit.as_str()
-            } else if moving {
-                "revisit time, steady window, along the last frame"
-            } else {
-                "revisit time, steady window"
-            };
-            bottom
-                .draw_series(
-                    revisits
-                        .into_iter()
-                        .map(|r| PathElement::new(r, c.stroke_width(w2))),
-                )
-                .map_err(s)?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
-                });
-            // nu36-2: the ideal drawn again over the revisit curve, which lies on it for an even
-            // team and hid it (its legend entry stays first).
-            if ideal.is_finite() {
-                bottom
-                    .draw_series(dashed((0.0, ideal), (l, ideal)))
-                    .map_err(s)?;
-            }
-            // att36-14: the key in the corner the curve and the ideal line leave free (it sat
-            // at the lower right over a low revisit curve and hid it).
-            let mut drawn: Vec<(f64, f64)> = revisit
-                .iter()
-                .copied()
-                .filter(|p| p.0.is_finite() && p.1.is_finite())
-                .collect();
-            for level in [ideal, ideal_active] {
-                if level.is_finite() {
-                    drawn.extend((0..=64).map(|k| (l * f64::from(k) / 64.0, level)));
-                }
-            }
-            let corner = quiet_corner(&drawn, (0.0, l), (rlo, rhi));
-            panel_legend(&mut bottom, st, corner)?;
-            // The isoline the panels measure along, and where each vehicle ended; its key above
-            // the panel, outside the axes (nu-1: the key's box was cut at the figure's edge;
-            // nu-7: it covered a vehicle's last position).
-            let f = st.base_font();
-            let (key_area, map_area) = map_area.split_vertically((2.0 * f) as u32);
-            draw_line_key(&key_area, st, &isoline_label, (5.6 + 0.75) * f, w3)?;
-            let [mx0, mx1, my0, my1] = map_range;
-            let ms = tick_step(mx0, mx1, 5);
-            let (mw, _) = map_area.dim_in_pixel();
-            let label_style = TextStyle::from(st.font(0.95));
-            let x_labels = x_labels_that_fit(st, mw, (mx0, mx1), ms, |t| {
-                map_area
-                    .estimate_text_size(t, &label_style)
-                    .map_or(0.6 * 0.95 * f * t.chars().count() as f64, |(w, _)| w as f64)
-            });
-            let mut map = panel_axes_labelled(
-                &map_area,
-                st,
-                ((mx0, mx1), (my0, my1)),
-                ("x (m)", "y (m)"),
-                (ms, ms),
-                x_labels,
-            )?;
-            map.draw_series(
-                finite_runs(isoline.iter().copied())
-                    .into_iter()
-                    .map(|r| PathElement::new(r, BLACK.stroke_width(w2))),
-            )
-            .map_err(s)?;
-            for (i, e) in ends.iter().enumerate() {
-                if e.0.is_finite() && e.1.is_finite() {
-                    map.draw_series([Circle::new(*e, st.px(6.0), colour(i).filled())])
-                        .map_err(s)?;
-                }
-            }
-            Ok(())
+            draw_team_gaps(&areas[0], st, &data, vehicles)?;
+            draw_team_revisit(&revisit_area, st, &data)?;
+            draw_team_isoline(&map_area, st, &data)
         })()
     })
+}
+
+/// A dashed black level line from `a` to `b`, as [`team_figure`]'s panels draw their ideal
+/// and even-gap levels.
+fn dashed_level(
+    st: &Style,
+    a: (f64, f64),
+    b: (f64, f64),
+) -> DashedLineSeries<std::array::IntoIter<(f64, f64), 2>, u32> {
+    DashedLineSeries::new(
+        [a, b],
+        st.px(8.0),
+        st.px(5.0),
+        BLACK.stroke_width(st.px(2.0)),
+    )
+}
+
+/// [`team_figure`]'s top panel: the gap ahead of each vehicle over time, the even gap dashed.
+fn draw_team_gaps<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    st: &Style,
+    d: &TeamFigureData,
+    vehicles: &[RunData],
+) -> DrawResult {
+    let (glo, ghi) = d.gap_range;
+    let (ts, gs) = (tick_step(0.0, d.t_end, 10), tick_step(glo, ghi, 8));
+    let (w2, w3) = (st.px(2.0), st.px(3.0));
+    let mut top = panel_axes(
+        area,
+        st,
+        ((0.0, d.t_end), (glo, ghi)),
+        ("time (s)", "gap ahead along the isoline (m)"),
+        (ts, gs),
+    )?;
+    if d.even.is_finite() {
+        top.draw_series(dashed_level(st, (0.0, d.even), (d.t_end, d.even)))
+            .map_err(s)?
+            .label(match (d.closed, d.moving) {
+                (true, false) => "even gap L/N",
+                (true, true) => "even gap L/N, L the mean length",
+                (false, _) => "mean gap S/(N-1)",
+            })
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(w2))
+            });
+    }
+    for (i, v) in vehicles.iter().enumerate() {
+        let c = colour(i);
+        let series = top
+            .draw_series(
+                finite_runs(d.gaps.iter().map(|g| (g.0, g.1[i])))
+                    .into_iter()
+                    .map(|r| PathElement::new(r, c.stroke_width(w2))),
+            )
+            .map_err(s)?;
+        if d.n <= RUN_COLOURS.len() {
+            series.label(v.name.clone()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
+            });
+        }
+    }
+    // nu36-2: the even gap drawn again over the vehicles' gaps, which settle on it and
+    // hid it (its legend entry stays first).
+    if d.even.is_finite() {
+        top.draw_series(dashed_level(st, (0.0, d.even), (d.t_end, d.even)))
+            .map_err(s)?;
+    }
+    panel_legend(&mut top, st, SeriesLabelPosition::UpperRight)
+}
+
+/// [`team_figure`]'s lower left panel: the longest unvisited time along the isoline, the
+/// ideal dashed (and that of the vehicles still flying dotted), the key in a free corner.
+fn draw_team_revisit<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    st: &Style,
+    d: &TeamFigureData,
+) -> DrawResult {
+    let (l, (rlo, rhi)) = (d.l, d.revisit_range);
+    let (ls, rs) = (tick_step(0.0, l, 10), tick_step(rlo, rhi, 8));
+    let (w2, w3) = (st.px(2.0), st.px(3.0));
+    let mut bottom = panel_axes(
+        area,
+        st,
+        ((0.0, l), (rlo, rhi)),
+        (
+            "position along the isoline, in the direction of travel (m)",
+            "longest unvisited time (s)",
+        ),
+        (ls, rs),
+    )?;
+    draw_ideal_lines(&mut bottom, st, d)?;
+    let c = colour(1);
+    let revisits = finite_runs(d.revisit.iter().copied());
+    let label = if revisits.is_empty() {
+        d.no_revisit.as_str()
+    } else if d.moving {
+        "revisit time, steady window, along the last frame"
+    } else {
+        "revisit time, steady window"
+    };
+    bottom
+        .draw_series(
+            revisits
+                .into_iter()
+                .map(|r| PathElement::new(r, c.stroke_width(w2))),
+        )
+        .map_err(s)?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+    // nu36-2: the ideal drawn again over the revisit curve, which lies on it for an even
+    // team and hid it (its legend entry stays first).
+    if d.ideal.is_finite() {
+        bottom
+            .draw_series(dashed_level(st, (0.0, d.ideal), (l, d.ideal)))
+            .map_err(s)?;
+    }
+    // att36-14: the key in the corner the curve and the ideal line leave free (it sat
+    // at the lower right over a low revisit curve and hid it).
+    let mut drawn: Vec<(f64, f64)> = d
+        .revisit
+        .iter()
+        .copied()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    for level in [d.ideal, d.ideal_active] {
+        if level.is_finite() {
+            drawn.extend((0..=64).map(|k| (l * f64::from(k) / 64.0, level)));
+        }
+    }
+    let corner = quiet_corner(&drawn, (0.0, l), (rlo, rhi));
+    panel_legend(&mut bottom, st, corner)
+}
+
+/// The ideal revisit time dashed across [`team_figure`]'s revisit panel, and where a vehicle
+/// was lost that of the vehicles still flying dotted, each with its legend entry.
+fn draw_ideal_lines<DB: DrawingBackend>(
+    bottom: &mut MapChart<'_, DB>,
+    st: &Style,
+    d: &TeamFigureData,
+) -> DrawResult {
+    let l = d.l;
+    let w2 = st.px(2.0);
+    if d.ideal.is_finite() {
+        // Dashed in the legend as on the panel (att32d-16: drawn solid there), and
+        // with per-vehicle speeds its own formula, `L/sum v0_i`.
+        let (dash, gap) = (st.px(6.0), st.px(3.0));
+        bottom
+            .draw_series(dashed_level(st, (0.0, d.ideal), (l, d.ideal)))
+            .map_err(s)?
+            .label(match (d.closed, d.per_vehicle_speeds, d.moving) {
+                (true, false, false) => "ideal L/(N v0)",
+                (true, true, false) => "ideal L/sum v0_i",
+                (true, false, true) => "ideal L/(N v0), L the mean length",
+                (true, true, true) => "ideal L/sum v0_i, L the mean length",
+                (false, _, _) => "ideal S/((N-1) v0)",
+            })
+            .legend(move |(x, y)| {
+                plotters::element::DashedPathElement::new(
+                    vec![(x, y), (x + 20, y)],
+                    dash,
+                    gap,
+                    BLACK.stroke_width(w2),
+                )
+            });
+    }
+    // nu36-14: a team that lost a vehicle: the ideal of those still flying too, dotted
+    // (the revisit curve settles on it, not on the deployed ideal).
+    if d.ideal_active.is_finite() {
+        let (dot, gap) = (st.px(2.0), st.px(4.0));
+        bottom
+            .draw_series(std::iter::once(plotters::element::DashedPathElement::new(
+                vec![(0.0, d.ideal_active), (l, d.ideal_active)],
+                dot,
+                gap,
+                BLACK.stroke_width(w2),
+            )))
+            .map_err(s)?
+            .label("ideal of the vehicles still flying")
+            .legend(move |(x, y)| {
+                plotters::element::DashedPathElement::new(
+                    vec![(x, y), (x + 20, y)],
+                    dot,
+                    gap,
+                    BLACK.stroke_width(w2),
+                )
+            });
+    }
+    Ok(())
+}
+
+/// [`team_figure`]'s lower right panel: the isoline the panels measure along, and where each
+/// vehicle ended; its key above the panel, outside the axes (nu-1: the key's box was cut at
+/// the figure's edge; nu-7: it covered a vehicle's last position).
+fn draw_team_isoline<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    st: &Style,
+    d: &TeamFigureData,
+) -> DrawResult {
+    let (w2, w3) = (st.px(2.0), st.px(3.0));
+    let f = st.base_font();
+    let (key_area, map_area) = area.split_vertically((2.0 * f) as u32);
+    draw_line_key(&key_area, st, &d.isoline_label, (5.6 + 0.75) * f, w3)?;
+    let [mx0, mx1, my0, my1] = d.map_range;
+    let ms = tick_step(mx0, mx1, 5);
+    let (mw, _) = map_area.dim_in_pixel();
+    let label_style = TextStyle::from(st.font(0.95));
+    let x_labels = x_labels_that_fit(st, mw, (mx0, mx1), ms, |t| {
+        map_area
+            .estimate_text_size(t, &label_style)
+            .map_or(0.6 * 0.95 * f * t.chars().count() as f64, |(w, _)| w as f64)
+    });
+    let mut map = panel_axes_labelled(
+        &map_area,
+        st,
+        ((mx0, mx1), (my0, my1)),
+        ("x (m)", "y (m)"),
+        (ms, ms),
+        x_labels,
+    )?;
+    map.draw_series(
+        finite_runs(d.isoline.iter().copied())
+            .into_iter()
+            .map(|r| PathElement::new(r, BLACK.stroke_width(w2))),
+    )
+    .map_err(s)?;
+    for (i, e) in d.ends.iter().enumerate() {
+        if e.0.is_finite() && e.1.is_finite() {
+            map.draw_series([Circle::new(*e, st.px(6.0), colour(i).filled())])
+                .map_err(s)?;
+        }
+    }
+    Ok(())
 }
 
 /// A key of one black line labelled `label` in `area` (a strip above a panel), from `x0_px`:

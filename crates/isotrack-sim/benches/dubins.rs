@@ -44,20 +44,29 @@ fn run_on<F: ScalarField, S: TraceSink>(field: &F, record_rate_hz: f64, sink: &m
 
 fn bench(c: &mut Criterion) {
     let analytic = AnalyticField::new(AnalyticKind::RadialExp(RadialExp::paper()));
+    bench_one_run(c, &analytic);
+    bench_eight_runs(c, &analytic);
+    bench_grid(c);
+}
+
+/// One run on the analytic field, without a trace and recording at 10 Hz.
+fn bench_one_run(c: &mut Criterion, analytic: &AnalyticField) {
     let mut g = c.benchmark_group("dubins_circular_600s");
     g.throughput(Throughput::Elements(60_000));
     g.bench_function("trace_off", |b| {
-        b.iter(|| black_box(run_on(&analytic, 0.0, &mut NoTrace)))
+        b.iter(|| black_box(run_on(analytic, 0.0, &mut NoTrace)))
     });
     g.bench_function("trace_10hz", |b| {
         b.iter(|| {
             let mut rows: Vec<TraceRow> = Vec::with_capacity(6002);
-            black_box(run_on(&analytic, 10.0, &mut rows))
+            black_box(run_on(analytic, 10.0, &mut rows))
         })
     });
     g.finish();
+}
 
-    // The same run, 8 of them from spread starts: stepped together in lanes, and one by one.
+/// The same run, 8 of them from spread starts: stepped together in lanes, and one by one.
+fn bench_eight_runs(c: &mut Criterion, analytic: &AnalyticField) {
     let starts: Vec<DubinsState> = (0..8)
         .map(|i| DubinsState {
             position_m: Vec2::new(10.0 - i as f64, 0.5 * i as f64),
@@ -86,7 +95,7 @@ fn bench(c: &mut Criterion) {
                     oracles: Oracles::default(),
                 })
                 .collect();
-            black_box(simulate_batch(&analytic, &vehicle, &plan, runs))
+            black_box(simulate_batch(analytic, &vehicle, &plan, runs))
         })
     });
     g.bench_function("one_by_one", |b| {
@@ -96,7 +105,7 @@ fn bench(c: &mut Criterion) {
                 .map(|&x0| {
                     let mut c = PiIsoline::new(PiIsolineParams::paper_fig2b(10.0));
                     simulate(
-                        &analytic,
+                        analytic,
                         &vehicle,
                         x0,
                         &mut c,
@@ -111,8 +120,11 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.finish();
+}
 
-    // A 0.25 m grid sampled from the circular field (161 x 161 nodes).
+/// One run on a 0.25 m grid sampled from the circular field (161 x 161 nodes), bicubic and
+/// bilinear.
+fn bench_grid(c: &mut Criterion) {
     let grid = Grid2::from_fn(161, 161, Vec2::new(-20.0, -20.0), [0.25, 0.25], |p| {
         20.0 * (-0.1 * p.norm()).exp()
     })

@@ -1969,6 +1969,73 @@ fn circle_cut_by_domain(s: &Scenario) -> Option<String> {
     })
 }
 
+/// The check's overall verdict and its reason, as the checks after the local ones qualify it.
+struct Overall {
+    verdict: Verdict,
+    reason: String,
+}
+
+impl Overall {
+    /// Folds the team check's verdict in: a team that fails fails the check; a team `run`
+    /// refuses, or whose loops the check could not compute, is no `holds`.
+    fn fold_team(&mut self, s: &Scenario, t: &team::TeamCheckReport) {
+        if t.verdict == Verdict::Fails && self.verdict != Verdict::Fails {
+            self.verdict = Verdict::Fails;
+            self.reason = format!("team: {}", t.verdict_reason);
+        }
+        // att32g-3: a team `run` refuses is no `holds`; nu40-7: nor one whose loops the check
+        // could not compute (a ranging delay past the periods its polynomial holds: the
+        // overall `holds` stood for a spacing loop 7 times past its largest stable gain).
+        if (s.team_refusal().is_some() || t.verdict == Verdict::NotApplicable)
+            && self.verdict == Verdict::Holds
+        {
+            self.verdict = Verdict::NotApplicable;
+            self.reason = format!("team: {}", t.verdict_reason);
+        }
+    }
+
+    /// Qualifies a local verdict by what voids it, each with its warning: starts that
+    /// coincide, an orbit the domain cuts, an isoline that outruns the vehicle (`moving`).
+    fn qualify(&mut self, s: &Scenario, moving: &moving::MovingReport, warnings: &mut Vec<String>) {
+        let (verdict, verdict_reason) = (&mut self.verdict, &mut self.reason);
+        if let Some(one) = coincident_starts(s) {
+            if *verdict == Verdict::Holds {
+                *verdict = Verdict::NotApplicable;
+                *verdict_reason = format!("not guaranteed: {verdict_reason}; {one}");
+            }
+            warnings.push(one);
+        }
+        if let Some(cut) = circle_cut_by_domain(s) {
+            // att36-23: "holds" (locally exponentially stable) for an orbit the domain cuts: a
+            // vehicle that tracks it reaches the domain's edge and leaves the field.
+            if *verdict == Verdict::Holds {
+                *verdict = Verdict::NotApplicable;
+                *verdict_reason = format!(
+                    "not guaranteed: {verdict_reason}, on an orbit that cannot be flown: {cut}"
+                );
+            }
+            warnings.push(format!(
+                "{cut}: a vehicle tracking it reaches the domain's edge and leaves the field (run ends left_field)"
+            ));
+        }
+        if let Some(outrun) = moving_outruns(moving) {
+            // Issue 29: "nothing checked fails" beside a moving check that failed. The sampled
+            // loop and Prop. 2 are computed on the field frozen at t = 0; an isoline that outruns
+            // the vehicle voids any guarantee from them.
+            if *verdict == Verdict::Holds {
+                *verdict = Verdict::NotApplicable;
+                *verdict_reason =
+                    format!("not guaranteed: {verdict_reason}, on the field frozen at t = 0 s");
+            }
+            *verdict_reason = verdict_reason.replace("; nothing checked fails", "");
+            verdict_reason.push_str(&format!("; the moving-isoline check fails: {outrun}"));
+            warnings.push(format!(
+                "the moving-isoline check fails: {outrun}; the vehicle may lose the isoline there, and the sampled loop and Prop. 2 are computed on the field frozen at t = 0 s"
+            ));
+        }
+    }
+}
+
 /// Runs the checks; `tube_halfwidth` defaults to `c2`.
 pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
     let l = law(s);
@@ -1991,59 +2058,21 @@ pub fn check(s: &Scenario, tube_halfwidth: Option<f64>) -> CheckReport {
         verdict_reason.clone_from(reason);
     }
     let team = team::team_report(s, &l, &r);
+    let mut overall = Overall {
+        verdict,
+        reason: verdict_reason,
+    };
     if let Some(t) = &team {
-        if t.verdict == Verdict::Fails && verdict != Verdict::Fails {
-            verdict = Verdict::Fails;
-            verdict_reason = format!("team: {}", t.verdict_reason);
-        }
-        // att32g-3: a team `run` refuses is no `holds`; nu40-7: nor one whose loops the check
-        // could not compute (a ranging delay past the periods its polynomial holds: the
-        // overall `holds` stood for a spacing loop 7 times past its largest stable gain).
-        if (s.team_refusal().is_some() || t.verdict == Verdict::NotApplicable)
-            && verdict == Verdict::Holds
-        {
-            verdict = Verdict::NotApplicable;
-            verdict_reason = format!("team: {}", t.verdict_reason);
-        }
+        overall.fold_team(s, t);
     }
     let moving = moving::moving_report(s, tube, region(s));
     // The warnings that qualify a local verdict first (they print right after it).
     let mut warnings = settling_warnings(s, &l, &prop2);
-    if let Some(one) = coincident_starts(s) {
-        if verdict == Verdict::Holds {
-            verdict = Verdict::NotApplicable;
-            verdict_reason = format!("not guaranteed: {verdict_reason}; {one}");
-        }
-        warnings.push(one);
-    }
-    if let Some(cut) = circle_cut_by_domain(s) {
-        // att36-23: "holds" (locally exponentially stable) for an orbit the domain cuts: a
-        // vehicle that tracks it reaches the domain's edge and leaves the field.
-        if verdict == Verdict::Holds {
-            verdict = Verdict::NotApplicable;
-            verdict_reason = format!(
-                "not guaranteed: {verdict_reason}, on an orbit that cannot be flown: {cut}"
-            );
-        }
-        warnings.push(format!(
-            "{cut}: a vehicle tracking it reaches the domain's edge and leaves the field (run ends left_field)"
-        ));
-    }
-    if let Some(outrun) = moving_outruns(&moving) {
-        // Issue 29: "nothing checked fails" beside a moving check that failed. The sampled
-        // loop and Prop. 2 are computed on the field frozen at t = 0; an isoline that outruns
-        // the vehicle voids any guarantee from them.
-        if verdict == Verdict::Holds {
-            verdict = Verdict::NotApplicable;
-            verdict_reason =
-                format!("not guaranteed: {verdict_reason}, on the field frozen at t = 0 s");
-        }
-        verdict_reason = verdict_reason.replace("; nothing checked fails", "");
-        verdict_reason.push_str(&format!("; the moving-isoline check fails: {outrun}"));
-        warnings.push(format!(
-            "the moving-isoline check fails: {outrun}; the vehicle may lose the isoline there, and the sampled loop and Prop. 2 are computed on the field frozen at t = 0 s"
-        ));
-    }
+    overall.qualify(s, &moving, &mut warnings);
+    let Overall {
+        verdict,
+        reason: verdict_reason,
+    } = overall;
     warnings.extend(warnings_from(s, &sampled).into_iter().map(|w| {
         // No gain helps an isoline too tight for the vehicle: no advice to change them.
         if tight.is_some() {

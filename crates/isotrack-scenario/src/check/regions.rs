@@ -17,74 +17,45 @@ use isotrack_fields::AnalyticKind;
 /// Lattice points per side for `isotrack check`.
 pub(super) const CHECK_LATTICE: usize = 601;
 
+/// An empty box `[x0, x1, y0, y1]`, m: growing it round a point gives the square round it.
+const EMPTY: [f64; 4] = [
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+];
+
+/// The box `r` grown to hold the square of half-side `m` round `p`.
+fn grow(mut r: [f64; 4], p: Vec2, m: f64) -> [f64; 4] {
+    r[0] = r[0].min(p.x - m);
+    r[1] = r[1].max(p.x + m);
+    r[2] = r[2].min(p.y - m);
+    r[3] = r[3].max(p.y + m);
+    r
+}
+
+/// The box `r` grown to hold every vehicle's start (nu36-4: a team's, not `[initial]`'s),
+/// each grown by `m` as the one start was.
+fn with_starts(r: [f64; 4], all: &[Start], m: f64) -> [f64; 4] {
+    let b = all
+        .iter()
+        .fold(EMPTY, |r, st| grow(r, Vec2::new(st.x_m, st.y_m), m));
+    [
+        r[0].min(b[0]),
+        r[1].max(b[1]),
+        r[2].min(b[2]),
+        r[3].max(b[3]),
+    ]
+}
+
 /// The region over which the field is sampled: the grid, the domain, or a box round the
 /// analytic field's features and the start.
 pub(super) fn region(s: &Scenario) -> [f64; 4] {
-    let grow = |mut r: [f64; 4], p: Vec2, m: f64| {
-        r[0] = r[0].min(p.x - m);
-        r[1] = r[1].max(p.x + m);
-        r[2] = r[2].min(p.y - m);
-        r[3] = r[3].max(p.y + m);
-        r
-    };
-    // Every vehicle's start (nu36-4: a team's, not `[initial]`'s): the box round them, grown
-    // by `m` as the one start was.
     let all = starts(s);
-    let start_box = |m: f64| {
-        all.iter().fold(
-            [
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-            ],
-            |r, st| grow(r, Vec2::new(st.x_m, st.y_m), m),
-        )
-    };
-    let with_starts = |r: [f64; 4], m: f64| {
-        let b = start_box(m);
-        [
-            r[0].min(b[0]),
-            r[1].max(b[1]),
-            r[2].min(b[2]),
-            r[3].max(b[3]),
-        ]
-    };
-    let empty = [
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
     match s.field() {
         FieldModel::Grid(g) => g.grid().extent_m(),
         FieldModel::Series(g) => g.extent_m(),
-        FieldModel::Puff(pf) => {
-            // The plume's reach over its puffs' lifetime downwind, and the start; within the
-            // domain when there is one (att36-12: the domain alone, 2 km or 200 km wide, spread
-            // the fixed lattice over it, 333 m a step for a plume tens of metres wide, and the
-            // verdict changed with it: the domain says where the field is defined, the plume is
-            // the same).
-            let pp = pf.params();
-            let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
-            let b = with_starts(grow(empty, pp.source_m, reach), 10.0);
-            match s.spec().field.domain_m() {
-                Some(d) => {
-                    let cut = [
-                        b[0].max(d[0]),
-                        b[1].min(d[1]),
-                        b[2].max(d[2]),
-                        b[3].min(d[3]),
-                    ];
-                    if cut[0] < cut[1] && cut[2] < cut[3] {
-                        cut
-                    } else {
-                        d
-                    }
-                }
-                None => b,
-            }
-        }
+        FieldModel::Puff(pf) => puff_region(pf, s.spec().field.domain_m(), all),
         FieldModel::Analytic(a) => {
             if let Some(d) = a.domain_m {
                 return d;
@@ -93,16 +64,47 @@ pub(super) fn region(s: &Scenario) -> [f64; 4] {
                 AnalyticKind::RadialExp(r) => {
                     let rd =
                         radial_exp_isoline_radius_m(r.i0, r.decay_per_m, s.level()).unwrap_or(10.0);
-                    with_starts(grow(empty, r.center_m, 3.0 * rd), 1.0)
+                    with_starts(grow(EMPTY, r.center_m, 3.0 * rd), all, 1.0)
                 }
                 AnalyticKind::GaussianPlumes(p) => {
-                    p.plumes.iter().fold(with_starts(empty, 1.0), |r, pl| {
+                    p.plumes.iter().fold(with_starts(EMPTY, all, 1.0), |r, pl| {
                         grow(r, pl.center_m, 4.0 * pl.sigma_m[0].max(pl.sigma_m[1]))
                     })
                 }
-                AnalyticKind::LinearRamp(_) => with_starts(empty, 100.0),
+                AnalyticKind::LinearRamp(_) => with_starts(EMPTY, all, 100.0),
             }
         }
+    }
+}
+
+/// A puff plume's region: the plume's reach over its puffs' lifetime downwind, and the
+/// starts; within the `domain` when there is one (att36-12: the domain alone, 2 km or 200 km
+/// wide, spread the fixed lattice over it, 333 m a step for a plume tens of metres wide, and
+/// the verdict changed with it: the domain says where the field is defined, the plume is the
+/// same).
+fn puff_region(
+    pf: &isotrack_fields::puff::PuffPlume,
+    domain: Option<[f64; 4]>,
+    all: &[Start],
+) -> [f64; 4] {
+    let pp = pf.params();
+    let reach = pp.wind_mps.norm() * pp.max_age_s + 4.0 * pp.puff_sigma0_m + 10.0;
+    let b = with_starts(grow(EMPTY, pp.source_m, reach), all, 10.0);
+    match domain {
+        Some(d) => {
+            let cut = [
+                b[0].max(d[0]),
+                b[1].min(d[1]),
+                b[2].max(d[2]),
+                b[3].min(d[3]),
+            ];
+            if cut[0] < cut[1] && cut[2] < cut[3] {
+                cut
+            } else {
+                d
+            }
+        }
+        None => b,
     }
 }
 

@@ -187,11 +187,29 @@ fn metrics_in_force(s: &Scenario, extra: &mut Vec<(&str, String)>) {
 /// ranging's keys not given (a `[team.ranging]` the file does not have is shown as a comment,
 /// its header too, so that `show`'s output reads back as the same scenario).
 fn team_in_force(s: &Scenario, extra: &mut Vec<(&'static str, String)>) {
-    use crate::schema::{RingName, SpacingName, SpreadAlong};
     let (Some(t), Some(spec)) = (s.file().team.as_ref(), s.spec().team.as_ref()) else {
         return;
     };
-    let line = |key: &str, value: String, why: &str| format!("# {key} = {value}  # {why}");
+    team_keys_in_force(t, spec, extra);
+    if let (Some(sp), None, Some(first)) = (&t.spread, &t.starts, spec.starts.first()) {
+        spread_in_force(sp, first, spec.count(), extra);
+    }
+    ranging_in_force(t, spec, extra);
+}
+
+/// A value in force the file leaves out, as `show` prints it: `# KEY = VALUE  # WHY`.
+fn line(key: &str, value: String, why: &str) -> String {
+    format!("# {key} = {value}  # {why}")
+}
+
+/// `[team]`'s own keys in force the file `t` leaves out: the count, the law, its gain, the
+/// speed envelope and the ring.
+fn team_keys_in_force(
+    t: &crate::schema::TeamSection,
+    spec: &super::team::TeamSpec,
+    extra: &mut Vec<(&'static str, String)>,
+) {
+    use crate::schema::{RingName, SpacingName};
     if t.count.is_none() {
         extra.push((
             "team",
@@ -248,58 +266,77 @@ fn team_in_force(s: &Scenario, extra: &mut Vec<(&'static str, String)>) {
             ),
         ));
     }
-    if let (Some(sp), None, Some(first)) = (&t.spread, &t.starts, spec.starts.first()) {
-        let mut spread = |key: &str, value: String, why: &str| {
-            extra.push(("team.spread", line(key, value, why)));
-        };
-        match sp.along {
-            Some(SpreadAlong::Line) => {
-                if sp.x_m.is_none() {
-                    spread("x_m", num(first.x_m), "derived: initial.x_m");
-                }
-                if sp.y_m.is_none() {
-                    spread("y_m", num(first.y_m), "derived: initial.y_m");
-                }
-                if sp.heading_rad.is_none() {
-                    spread(
-                        "heading_rad",
-                        num(first.heading_rad),
-                        "derived: initial.heading_rad",
-                    );
-                }
-                if sp.direction_rad.is_none() {
-                    spread(
-                        "direction_rad",
-                        num(first.heading_rad),
-                        "derived: heading_rad (the line ahead of the first start)",
-                    );
-                }
+}
+
+/// A spread's values in force the file's `[team.spread]` `sp` leaves out (the team's `count`
+/// starts from `first`): a line's first pose and direction, an arc's centre, first angle,
+/// step and sense.
+fn spread_in_force(
+    sp: &crate::schema::TeamSpread,
+    first: &super::sim::Start,
+    count: usize,
+    extra: &mut Vec<(&'static str, String)>,
+) {
+    use crate::schema::SpreadAlong;
+    let mut spread = |key: &str, value: String, why: &str| {
+        extra.push(("team.spread", line(key, value, why)));
+    };
+    match sp.along {
+        Some(SpreadAlong::Line) => {
+            if sp.x_m.is_none() {
+                spread("x_m", num(first.x_m), "derived: initial.x_m");
             }
-            Some(SpreadAlong::Arc) => {
-                if sp.center_m.is_none() {
-                    spread("center_m", nums(&super::team::SPREAD_CENTER_M), "default");
-                }
-                if sp.start_rad.is_none() {
-                    spread("start_rad", num(super::team::SPREAD_START_RAD), "default");
-                }
-                if sp.step_rad.is_none() {
-                    spread(
-                        "step_rad",
-                        num(std::f64::consts::TAU / spec.count() as f64),
-                        "derived: 2 pi/count",
-                    );
-                }
-                if sp.clockwise.is_none() {
-                    spread(
-                        "clockwise",
-                        super::team::SPREAD_CLOCKWISE.to_string(),
-                        "default",
-                    );
-                }
+            if sp.y_m.is_none() {
+                spread("y_m", num(first.y_m), "derived: initial.y_m");
             }
-            None => {}
+            if sp.heading_rad.is_none() {
+                spread(
+                    "heading_rad",
+                    num(first.heading_rad),
+                    "derived: initial.heading_rad",
+                );
+            }
+            if sp.direction_rad.is_none() {
+                spread(
+                    "direction_rad",
+                    num(first.heading_rad),
+                    "derived: heading_rad (the line ahead of the first start)",
+                );
+            }
         }
+        Some(SpreadAlong::Arc) => {
+            if sp.center_m.is_none() {
+                spread("center_m", nums(&super::team::SPREAD_CENTER_M), "default");
+            }
+            if sp.start_rad.is_none() {
+                spread("start_rad", num(super::team::SPREAD_START_RAD), "default");
+            }
+            if sp.step_rad.is_none() {
+                spread(
+                    "step_rad",
+                    num(std::f64::consts::TAU / count as f64),
+                    "derived: 2 pi/count",
+                );
+            }
+            if sp.clockwise.is_none() {
+                spread(
+                    "clockwise",
+                    super::team::SPREAD_CLOCKWISE.to_string(),
+                    "default",
+                );
+            }
+        }
+        None => {}
     }
+}
+/// The ranging's keys in force the file `t` leaves out (a `[team.ranging]` the file does not
+/// have is shown as a comment, its header too, so that `show`'s output reads back as the same
+/// scenario).
+fn ranging_in_force(
+    t: &crate::schema::TeamSection,
+    spec: &super::team::TeamSpec,
+    extra: &mut Vec<(&'static str, String)>,
+) {
     let r = t.ranging.clone().unwrap_or_default();
     let g = &spec.ranging;
     let mut ranging = Vec::new();

@@ -253,6 +253,164 @@ fn arc_of<'b>(a: &'b Option<ArcRef<'_>>) -> Option<&'b dyn ArcProjection> {
     }
 }
 
+/// Checks a team's spacing settings: a positive finite nominal speed, a finite gain >= 0,
+/// and for the `arc_reference` law a true isoline to refer to (a fixed closed `arc`, or a
+/// `moving` one).
+fn check_spacing(
+    spacing: &SpacingConfig,
+    arc: Option<&dyn ArcProjection>,
+    moving: bool,
+) -> Result<(), TeamError> {
+    let v0 = spacing.nominal_speed_mps;
+    if !(v0 > 0.0 && v0.is_finite()) {
+        return Err(TeamError::OutOfRange {
+            key: "nominal_speed_mps",
+            value: v0,
+            expected: "a positive finite speed",
+        });
+    }
+    match spacing.law {
+        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s }
+            if !(gain_per_s >= 0.0 && gain_per_s.is_finite()) =>
+        {
+            Err(TeamError::OutOfRange {
+                key: "spacing_gain_per_s",
+                value: gain_per_s,
+                expected: "finite and >= 0",
+            })
+        }
+        SpacingLaw::ArcReference { .. }
+            if (arc.is_none() && !moving) || arc.is_some_and(|a| !a.is_closed()) =>
+        {
+            Err(TeamError::NoIsoline)
+        }
+        _ => Ok(()),
+    }
+}
+
+impl Discovery {
+    /// The ring discovery of `ring` for `n` vehicles stepped at `plan.dt_s` (`None`: the ring
+    /// is listed); an error for a probe out of range.
+    fn of(ring: RingMode, plan: &StepPlan, n: usize) -> Result<Option<Self>, TeamError> {
+        let RingMode::Discover(d) = ring else {
+            return Ok(None);
+        };
+        let ok = |x: f64| x.is_finite() && x >= 0.0;
+        let valid = ok(d.settle_s)
+            && d.probe_s > 0.0
+            && ok(d.probe_s)
+            && d.probe_speed_delta_mps.is_finite()
+            && d.probe_speed_delta_mps != 0.0;
+        if !valid {
+            return Err(TeamError::OutOfRange {
+                key: "ring.discover",
+                value: d.probe_s,
+                expected: "settle_s >= 0, probe_s > 0, a non-zero finite probe speed",
+            });
+        }
+        Ok(Some(Self {
+            cfg: d,
+            settle_steps: (d.settle_s / plan.dt_s).round() as u64,
+            probe_steps: ((d.probe_s / plan.dt_s).round() as u64).max(1),
+            fits: vec![RateFit::default(); n],
+            found: vec![None; n],
+        }))
+    }
+}
+
+/// The ring a team of `n` starts with: each vehicle's neighbours ahead and behind in the
+/// listed order (none for one vehicle), or none yet where the ring is `discovered`.
+fn starting_ring(n: usize, discovered: bool) -> Vec<Option<[u32; 2]>> {
+    if discovered {
+        vec![None; n]
+    } else {
+        (0..n)
+            .map(|i| (n > 1).then(|| [((i + 1) % n) as u32, ((i + n - 1) % n) as u32]))
+            .collect()
+    }
+}
+
+/// Each vehicle's own parts as a team starts, in the members' order: states in chunks of
+/// [`LANES`] (the last chunk padded), runs in the step kernel, controllers (and whether each
+/// needs the ground truth), ranging units and first speed commands.
+struct Started<X, C> {
+    states: Vec<[X; LANES]>,
+    runs: Vec<VehicleRun<true>>,
+    controllers: Vec<C>,
+    wants_truth: Vec<bool>,
+    ranging: Vec<Ranging>,
+    speed_cmd: Vec<f64>,
+}
+
+impl<X: Clone, C: IsolineController> Started<X, C> {
+    /// Starts `members` on `vehicle` at `plan`, each commanded the nominal speed, the spare
+    /// lanes of the last chunk holding `pad`; an error for a ranging unit's settings.
+    fn of<V>(
+        vehicle: &V,
+        plan: &StepPlan,
+        cfg: &TeamConfig,
+        members: Vec<TeamMember<X, C>>,
+        pad: X,
+    ) -> Result<Self, TeamError>
+    where
+        V: SpeedCommand<State = X>,
+    {
+        let n = members.len();
+        let v0 = cfg.spacing.nominal_speed_mps;
+        let chunks = n.div_ceil(LANES);
+        let mut s = Self {
+            states: (0..chunks)
+                .map(|_| core::array::from_fn(|_| pad.clone()))
+                .collect(),
+            runs: Vec::with_capacity(n),
+            controllers: Vec::with_capacity(n),
+            wants_truth: Vec::with_capacity(n),
+            ranging: Vec::with_capacity(n),
+            speed_cmd: Vec::with_capacity(n),
+        };
+        for (i, m) in members.into_iter().enumerate() {
+            let mut x = m.x0;
+            s.speed_cmd.push(vehicle.command_speed(&mut x, v0));
+            s.runs
+                .push(VehicleRun::new(plan, m.sensor, vehicle.pose(&x)));
+            s.wants_truth.push(m.controller.needs_ground_truth());
+            s.controllers.push(m.controller);
+            s.ranging
+                .push(Ranging::new(cfg.ranging, plan.dt_s, m.ranging_seed)?);
+            s.states[i / LANES][i % LANES] = x;
+        }
+        Ok(s)
+    }
+}
+
+/// A team's metrics along its true isoline (`arc`, or a `moving` one): `n` vehicles at the
+/// nominal speed `v0_mps`, stepped every `dt_s`; `None` without an isoline.
+fn team_metrics(
+    mc: TeamMetricsConfig,
+    arc: Option<&dyn ArcProjection>,
+    moving: bool,
+    n: usize,
+    dt_s: f64,
+    v0_mps: f64,
+) -> Option<TeamMetrics> {
+    let v0 = v0_mps;
+    match (arc, moving) {
+        (Some(a), _) if !a.is_closed() => {
+            // Bins as long as a vehicle at `v0` moves in a metrics sample: an open
+            // isoline's length is mostly ground the team never covers.
+            let step_m = v0 * mc.every_steps.max(1) as f64 * dt_s;
+            let mc = TeamMetricsConfig {
+                revisit_bins: metrics::open_revisit_bins(a.length_m(), step_m, mc.revisit_bins),
+                ..mc
+            };
+            Some(TeamMetrics::new(mc, n, a.length_m(), dt_s, v0).open())
+        }
+        (Some(a), _) => Some(TeamMetrics::new(mc, n, a.length_m(), dt_s, v0)),
+        (None, true) => Some(TeamMetrics::new(mc, n, f64::NAN, dt_s, v0).moving()),
+        (None, false) => None,
+    }
+}
+
 /// A team on one clock: the vehicles' states (in chunks of [`LANES`]), their runs in the step
 /// kernel, controllers, ranging units and spacing state. The field, the vehicle model, the
 /// oracles and the trace sinks are lent to each step, as for an [`Episode`](crate::Episode).
@@ -396,100 +554,23 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             return Err(TeamError::Empty);
         };
         let v0 = cfg.spacing.nominal_speed_mps;
-        if !(v0 > 0.0 && v0.is_finite()) {
-            return Err(TeamError::OutOfRange {
-                key: "nominal_speed_mps",
-                value: v0,
-                expected: "a positive finite speed",
-            });
-        }
-        match cfg.spacing.law {
-            SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s }
-                if !(gain_per_s >= 0.0 && gain_per_s.is_finite()) =>
-            {
-                return Err(TeamError::OutOfRange {
-                    key: "spacing_gain_per_s",
-                    value: gain_per_s,
-                    expected: "finite and >= 0",
-                });
-            }
-            SpacingLaw::ArcReference { .. }
-                if (arc.is_none() && moving.is_none())
-                    || arc_of(&arc).is_some_and(|a| !a.is_closed()) =>
-            {
-                return Err(TeamError::NoIsoline)
-            }
-            _ => {}
-        }
-        let discovery = match cfg.spacing.ring {
-            RingMode::Listed => None,
-            RingMode::Discover(d) => {
-                let ok = |x: f64| x.is_finite() && x >= 0.0;
-                let valid = ok(d.settle_s)
-                    && d.probe_s > 0.0
-                    && ok(d.probe_s)
-                    && d.probe_speed_delta_mps.is_finite()
-                    && d.probe_speed_delta_mps != 0.0;
-                if !valid {
-                    return Err(TeamError::OutOfRange {
-                        key: "ring.discover",
-                        value: d.probe_s,
-                        expected: "settle_s >= 0, probe_s > 0, a non-zero finite probe speed",
-                    });
-                }
-                Some(Discovery {
-                    cfg: d,
-                    settle_steps: (d.settle_s / plan.dt_s).round() as u64,
-                    probe_steps: ((d.probe_s / plan.dt_s).round() as u64).max(1),
-                    fits: vec![RateFit::default(); n],
-                    found: vec![None; n],
-                })
-            }
-        };
-        let ring = match discovery {
-            Some(_) => vec![None; n],
-            None => (0..n)
-                .map(|i| (n > 1).then(|| [((i + 1) % n) as u32, ((i + n - 1) % n) as u32]))
-                .collect(),
-        };
+        check_spacing(&cfg.spacing, arc_of(&arc), moving.is_some())?;
+        let discovery = Discovery::of(cfg.spacing.ring, plan, n)?;
+        let ring = starting_ring(n, discovery.is_some());
         let pad = first.x0.clone();
-        let chunks = n.div_ceil(LANES);
-        let mut states: Vec<[X; LANES]> = (0..chunks)
-            .map(|_| core::array::from_fn(|_| pad.clone()))
-            .collect();
-        let mut runs = Vec::with_capacity(n);
-        let mut controllers = Vec::with_capacity(n);
-        let mut wants_truth = Vec::with_capacity(n);
-        let mut ranging = Vec::with_capacity(n);
-        let mut speed_cmd = Vec::with_capacity(n);
-        for (i, m) in members.into_iter().enumerate() {
-            let mut x = m.x0;
-            speed_cmd.push(vehicle.command_speed(&mut x, v0));
-            runs.push(VehicleRun::new(plan, m.sensor, vehicle.pose(&x)));
-            wants_truth.push(m.controller.needs_ground_truth());
-            controllers.push(m.controller);
-            ranging.push(Ranging::new(cfg.ranging, plan.dt_s, m.ranging_seed)?);
-            states[i / LANES][i % LANES] = x;
-        }
+        let Started {
+            states,
+            runs,
+            controllers,
+            wants_truth,
+            ranging,
+            speed_cmd,
+        } = Started::of(vehicle, plan, &cfg, members, pad)?;
         let mc = TeamMetricsConfig {
             steady_state_start_step: plan.steady_state_start_step,
             ..cfg.metrics
         };
-        let metrics = match (arc_of(&arc), moving.is_some()) {
-            (Some(a), _) if !a.is_closed() => {
-                // Bins as long as a vehicle at `v0` moves in a metrics sample: an open
-                // isoline's length is mostly ground the team never covers.
-                let step_m = v0 * mc.every_steps.max(1) as f64 * plan.dt_s;
-                let mc = TeamMetricsConfig {
-                    revisit_bins: metrics::open_revisit_bins(a.length_m(), step_m, mc.revisit_bins),
-                    ..mc
-                };
-                Some(TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0).open())
-            }
-            (Some(a), _) => Some(TeamMetrics::new(mc, n, a.length_m(), plan.dt_s, v0)),
-            (None, true) => Some(TeamMetrics::new(mc, n, f64::NAN, plan.dt_s, v0).moving()),
-            (None, false) => None,
-        };
+        let metrics = team_metrics(mc, arc_of(&arc), moving.is_some(), n, plan.dt_s, v0);
         Ok(Self {
             n,
             k: 0,
@@ -1287,6 +1368,53 @@ fn in_parts<T: Split, P: Fn(T) -> usize + Sync>(item: T, parts: usize, f: &P) ->
     x + y
 }
 
+/// The positions `(x, y)` of one chunk's vehicles at `t` and the field there, in lanes.
+#[inline(always)]
+fn chunk_field_values<F, V, X>(
+    field: &F,
+    vehicle: &V,
+    chunk: &[X; LANES],
+    t: f64,
+) -> ([f64; LANES], [f64; LANES], [f64; LANES])
+where
+    F: ScalarField,
+    V: SpeedCommand<State = X>,
+{
+    let mut px = [0.0; LANES];
+    let mut py = [0.0; LANES];
+    for (l, s) in chunk.iter().enumerate() {
+        let p = vehicle.position(s);
+        (px[l], py[l]) = (p.x, p.y);
+    }
+    let v = field.value_lanes(t, &px, &py);
+    (px, py, v)
+}
+
+/// One chunk's controllers answer the samples of the lanes `sampled` (measurements `ms`)
+/// together, in lanes: `command[l]` is set for each lane sampled.
+#[inline(always)]
+fn answer_in_lanes<C: IsolineController>(
+    controllers: &mut [C],
+    sampled: &[bool; LANES],
+    ms: &[Measurement; LANES],
+    command: &mut [Option<f64>],
+) {
+    if sampled.iter().any(|&s| s) {
+        let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
+        for (l, ctrl) in controllers.iter_mut().enumerate() {
+            if sampled[l] {
+                ctrls[l] = Some(ctrl);
+            }
+        }
+        let w = C::update_lanes(&mut ctrls, ms);
+        for (l, cmd) in command.iter_mut().enumerate() {
+            if sampled[l] {
+                *cmd = Some(w[l]);
+            }
+        }
+    }
+}
+
 impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
     /// Steps 1-2 for the slab's vehicles: the positions and the field there, in lanes; each
     /// vehicle's kernel `sense`; the controllers answer the samples in lanes. `positions` and
@@ -1311,13 +1439,7 @@ impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
         for (c, chunk) in self.states.iter().enumerate() {
             let base = c * LANES;
             let m = LANES.min(n - base);
-            let mut px = [0.0; LANES];
-            let mut py = [0.0; LANES];
-            for (l, s) in chunk.iter().enumerate() {
-                let p = vehicle.position(s);
-                (px[l], py[l]) = (p.x, p.y);
-            }
-            let v = field.value_lanes(t, &px, &py);
+            let (px, py, v) = chunk_field_values(field, vehicle, chunk, t);
             let mut sampled = [false; LANES];
             let mut ms = [Measurement {
                 t_s: 0.0,
@@ -1359,20 +1481,12 @@ impl<X: Clone, C: IsolineController, S: TraceSink> Slab<'_, X, C, S> {
                 }
                 alive[i] = true;
             }
-            if sampled.iter().any(|&s| s) {
-                let mut ctrls: [Option<&mut C>; LANES] = [const { None }; LANES];
-                for (l, ctrl) in self.controllers[base..base + m].iter_mut().enumerate() {
-                    if sampled[l] {
-                        ctrls[l] = Some(ctrl);
-                    }
-                }
-                let w = C::update_lanes(&mut ctrls, &ms);
-                for l in 0..m {
-                    if sampled[l] {
-                        self.command[base + l] = Some(w[l]);
-                    }
-                }
-            }
+            answer_in_lanes(
+                &mut self.controllers[base..base + m],
+                &sampled,
+                &ms,
+                &mut self.command[base..base + m],
+            );
         }
     }
 
