@@ -584,9 +584,23 @@ fn the_chart_never_replaces_nor_removes_a_users_file() {
         MAP_COLUMNS[..8].join(",")
     );
     std::fs::write(out.join("stability_map.csv"), older).unwrap();
+    // att42-2: an older isotrack drew its chart's figures unmarked; beside its table they are
+    // that chart's, replaced (they were refused as the user's, so every older chart was).
+    std::fs::write(
+        out.join("stability_map.png"),
+        "an older isotrack's unmarked PNG",
+    )
+    .unwrap();
+    std::fs::write(out.join("stability_map.svg"), "<svg/>\n").unwrap();
     let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
     assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
     assert_eq!(read_csv(&out.join("stability_map.csv")).0, MAP_COLUMNS);
+    for f in ["stability_map.png", "stability_map.svg"] {
+        assert!(
+            isotrack_plot::is_isotrack_figure(&out.join(f)),
+            "{f} not replaced"
+        );
+    }
 }
 
 /// One writer per directory: while another holds `DIR/.isotrack.lock` (as `sweep` does),

@@ -583,10 +583,15 @@ fn open_map_dir(
     // first line is not isotrack's header for it, or a figure without isotrack's mark, is the
     // user's: refused (73, naming it), every file as it was (the lock removed as it drops).
     refuse_foreign_tables(&csv_path, &verify_path)?;
-    crate::figures::refuse_foreign_figures(
-        dir,
-        &["stability_map.png".into(), "stability_map.svg".into()],
-    )?;
+    // att42-2: beside isotrack's own chart table (it passed the header test above) the
+    // figures are that chart's: an isotrack from before the mark (att38-9) drew them unmarked,
+    // and refusing them refused every older chart. Without that table the mark decides.
+    if !csv_path.exists() {
+        crate::figures::refuse_foreign_figures(
+            dir,
+            &["stability_map.png".into(), "stability_map.svg".into()],
+        )?;
+    }
     if verify_path.exists() {
         std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;
         errln!(

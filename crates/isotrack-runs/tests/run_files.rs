@@ -673,12 +673,9 @@ fn the_close_approach_reason_fits_the_team() {
         .and_then(|r| r.split(' ').next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{w}"));
+    // The text prints 6 significant digits (217.759): within half a unit of the last.
     let l = 2.0 * std::f64::consts::PI * 10.0 * std::f64::consts::LN_2;
-    assert!(
-        (every - l / 0.2).abs() < 1e-6 * every,
-        "{every} vs {}",
-        l / 0.2
-    );
+    assert!((every - l / 0.2).abs() < 5e-4, "{every} vs {}", l / 0.2);
     assert!(!w.contains("discovered") && !w.contains("drove"), "{w}");
     // The other teams' reasons (from the settings alone).
     let spec_of = |sets: &[&str]| {
