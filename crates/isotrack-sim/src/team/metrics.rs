@@ -741,18 +741,22 @@ impl TeamMetrics {
     /// The closest approach of consecutive vehicles `i0` and `i1` (now at `p0`, `p1`, time `t`)
     /// since the last sample: the smallest so far kept, with its time. Between samples each
     /// vehicle is taken to move along the straight segment from its last sample's position
-    /// (exact for constant velocities; the relative position `d(u) = d0 + u (d1 - d0)`,
-    /// nearest the origin at `u* = -d0.(d1 - d0)/|d1 - d0|^2` clamped to `[0, 1]`): a pass
-    /// between samples (att41-4: 20 m/s apart, samples 0.1 s apart, 2 m of relative travel) is
-    /// caught, not only the samples' distances. Without a last position for either (its first
+    /// when their relative position reversed (a pass: `d0.d1 < 0`; exact for constant
+    /// velocities: `d(u) = d0 + u (d1 - d0)`, nearest the origin at
+    /// `u* = -d0.(d1 - d0)/|d1 - d0|^2` in `(0, 1)`): a pass between samples (att41-4: 20 m/s
+    /// apart, samples 0.1 s apart, 2 m of relative travel) is caught, not only the samples'
+    /// distances. Without a last position for either (its first
     /// sample, or one off the isoline), the distance now.
     fn note_separation(&mut self, p0: Vec2, p1: Vec2, t: f64, i0: u32, i1: u32) {
         let d1 = p1 - p0;
         let mut sep = d1.norm();
         let mut at = t;
         let (q0, q1) = (self.sep_prev_p[i0 as usize], self.sep_prev_p[i1 as usize]);
-        if q0.is_finite() && q1.is_finite() && self.sep_prev_t < t {
-            let d0 = q1 - q0;
+        let d0 = q1 - q0;
+        // Only a pass (the pair's relative position reversed, `d0.d1 < 0`): between samples of
+        // vehicles that keep their order the straight segments would cut the curve's chord
+        // short (by `1 - cos(dtheta/2)` of it), a bias, not an approach.
+        if q0.is_finite() && q1.is_finite() && self.sep_prev_t < t && d0.dot(d1) < 0.0 {
             let dd = d1 - d0;
             let den = dd.dot(dd);
             if den > 0.0 {
