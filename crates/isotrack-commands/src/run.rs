@@ -1,4 +1,4 @@
-//! `isotrack run` and `isotrack show`.
+//! `isotrack run`, `isotrack show` and `isotrack check`.
 
 use crate::cli::{CheckArgs, RunArgs, ScenarioArgs};
 use crate::exit;

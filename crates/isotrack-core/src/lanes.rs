@@ -261,7 +261,7 @@ fn sin_cos_reduced(x: f64) -> (f64, f64) {
 }
 
 /// `(sin x, cos x)` for an angle that is nearly always below `2^-5` in magnitude, such as a
-/// step's turn angle `omega dt / 2`: there by [`sin_cos_small`] (a third of the operations and
+/// step's turn angle `omega dt / 2`: there by `sin_cos_small` (a third of the operations and
 /// half the chain of dependent ones), elsewhere [`sin_cos`]. Each within 1 ulp, as `sin_cos`.
 #[inline(always)]
 pub fn sin_cos_small_angle(x: f64) -> (f64, f64) {

@@ -13,6 +13,9 @@
 //!   conditions), used by checks and by tests as independent oracles.
 //! * [`spacing`]: the theory of a team's spacing loop (ring Laplacian, sampled and delayed).
 //! * [`math`]: small 2-D geometry helpers.
+//! * [`lanes`]: elementary functions (`exp`, `tanh`, `sin_cos`) written once, branch-free, for
+//!   one value and for `N` lanes at a time.
+//! * [`numtext`]: the one formatting of numbers and user text in messages.
 //!
 //! Sign conventions, everywhere: x east, y north, heading counter-clockwise from +x, and a
 //! positive turn rate turns left (counter-clockwise seen from above).

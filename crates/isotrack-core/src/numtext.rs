@@ -17,7 +17,7 @@
 //!   itself is allowed), [`NumDown`] for "at most".
 //!
 //! User text (file names, keys, values, task names, units and names read from files) goes
-//! through [`Escaped`] (or [`Clipped`], which also bounds its length): control characters that
+//! through [`Escaped`] (or [`Clipped`](struct@Clipped), which also bounds its length): control characters that
 //! a terminal obeys (C0 but tab, DEL, C1, and the Unicode bidi controls that reorder what
 //! follows) and line feeds are written as escapes (`\x1b`, `\x0a`, `\u{202e}`), so a message
 //! shows what was typed instead of acting on the terminal or forging a line of its own.
@@ -231,7 +231,7 @@ impl fmt::Display for Escaped<'_> {
     }
 }
 
-/// How many characters of one string the user wrote a message echoes ([`Clipped`]).
+/// How many characters of one string the user wrote a message echoes ([`Clipped`](struct@Clipped)).
 pub const ECHO_CHARS: usize = 200;
 
 /// User text for a message: [`Escaped`] first, then cut so that at most [`ECHO_CHARS`]
@@ -249,7 +249,7 @@ pub struct Clipped<'a> {
 }
 
 #[allow(non_snake_case)]
-/// [`Clipped`] at [`ECHO_CHARS`] characters.
+/// [`Clipped`](struct@Clipped) at [`ECHO_CHARS`] characters.
 pub fn Clipped(text: &str) -> Clipped<'_> {
     Clipped::with_limit(text, ECHO_CHARS)
 }

@@ -5,8 +5,8 @@
 //! vehicle; [`fly`] is the companion computer that flies the scenario's law on the measurements
 //! it receives; [`wire`] is what the numbers become on the wire; [`mirror`] runs a scenario in
 //! process with the same rounding, the reference a lockstep flight must reproduce bit for bit.
-//! Framing, checksums and the common dialect are the `mavlink` crate's; [`link`] owns the UDP
-//! socket.
+//! Framing, checksums and the common dialect are the `mavlink` crate's; [`link`] owns the link
+//! (UDP, TCP or serial).
 #![deny(missing_docs)]
 
 pub mod fly;
