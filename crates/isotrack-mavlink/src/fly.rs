@@ -2244,7 +2244,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 // A copy of a frame already handled, delivered again (maybe late: att33f-2):
                 // ignored entirely, never evidence, never applied.
                 (FrameKind::Copy, _) => return,
-                // In a doubt (a first conflict, att37-1): the link is alive, nothing else.
+                // In a doubt (a first conflict, att37-1): the link is alive, nothing else but a
+                // pilot's word a heartbeat shows (att42f-5).
                 (FrameKind::Doubt, _) => {
                     self.doubt_frame(&r.msg);
                     if let MavMessage::HEARTBEAT(h) = &r.msg {
@@ -2357,7 +2358,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// A frame of the vehicle's ids in a doubt ([`FrameKind::Doubt`]: a first conflict of
     /// their frame numbers, two senders not proven): the link is alive; nothing in it is the
-    /// vehicle's state, a pilot's word or a confirmation.
+    /// vehicle's state or a confirmation (a heartbeat in it showing a pilot's word counts as
+    /// one awaiting confirmation: [`Flight::doubt_word`]).
     fn doubt_frame(&mut self, msg: &MavMessage) {
         self.last_link = Instant::now();
         if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
@@ -3226,7 +3228,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// the vehicle (no HOLD against the pilot's MANUAL); if it was the second sender's, the
     /// vehicle flown is still in OFFBOARD with no setpoints, and its autopilot's own
     /// offboard-loss failsafe takes it. A heartbeat is applied only outside a doubt and before
-    /// a second sender is seen ([`crate::same_ids`]), so a word is always heard before that.
+    /// a second sender is seen ([`crate::same_ids`]), and one in a doubt counts as a word only
+    /// before ([`Flight::doubt_word`]), so a word is always heard before that.
     fn word_before_second_sender(&self, end: FlyEnd) -> Option<&str> {
         if end != FlyEnd::VehicleLost || !self.lost_to_second_sender {
             return None;
