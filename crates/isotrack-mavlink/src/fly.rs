@@ -340,6 +340,10 @@ struct AnswerSeen {
     what: String,
     /// When the first heartbeat showing it came (or the last older one contradicting it).
     at: Instant,
+    /// Shown by a heartbeat in a doubt of the frame counter (att42f-5): a pilot's word for the
+    /// retries (none is sent meanwhile, and a second sender proven after it stops them), but
+    /// never the vehicle's answer: a heartbeat applied after the doubt starts its span over.
+    in_doubt: bool,
 }
 
 /// What the failsafe's retries have seen of the vehicle's heartbeats so far.
@@ -349,6 +353,13 @@ struct RetryWatch {
     seen: Option<AnswerSeen>,
     /// A disarm was commanded (the way out before a second sender was seen).
     disarm_sent: bool,
+    /// Once a second sender has been seen: since the last command sent, a heartbeat of the ids
+    /// showed it still armed in the mode the companion left it in ([`Flight::left_in`]): the
+    /// only reason for a retry then (att42f-2).
+    left_shown: bool,
+    /// A heartbeat of the ids older than the last applied was heard during the retries (a
+    /// second counter's, or one sender's late one): a change they show is no sure pilot's.
+    older: bool,
 }
 
 /// Options of [`run_fly`].
@@ -2233,9 +2244,13 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 // A copy of a frame already handled, delivered again (maybe late: att33f-2):
                 // ignored entirely, never evidence, never applied.
                 (FrameKind::Copy, _) => return,
-                // In a doubt (a first conflict, att37-1): the link is alive, nothing else.
+                // In a doubt (a first conflict, att37-1): the link is alive, nothing else but a
+                // pilot's word a heartbeat shows (att42f-5).
                 (FrameKind::Doubt, _) => {
                     self.doubt_frame(&r.msg);
+                    if let MavMessage::HEARTBEAT(h) = &r.msg {
+                        self.doubt_word(h);
+                    }
                     return;
                 }
                 (k, n) => (kind, number) = (Some(k), Some(n)),
@@ -2265,6 +2280,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         match &r.msg {
+            // Not an autopilot's (a ground station's, an onboard controller's: att42f-4): never
+            // the vehicle's state, nor its heartbeat (it says nothing of the vehicle's link).
+            MavMessage::HEARTBEAT(h) if !is_autopilot(h) => {}
             // Every heartbeat of the ids keeps the link alive (S11: a link that delivers each
             // heartbeat one frame late); after a second sender none is the vehicle's word.
             MavMessage::HEARTBEAT(_) if self.second_sender => self.beat_heard = Instant::now(),
@@ -2340,10 +2358,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// A frame of the vehicle's ids in a doubt ([`FrameKind::Doubt`]: a first conflict of
     /// their frame numbers, two senders not proven): the link is alive; nothing in it is the
-    /// vehicle's state, a pilot's word or a confirmation.
+    /// vehicle's state or a confirmation (a heartbeat in it showing a pilot's word counts as
+    /// one awaiting confirmation: [`Flight::doubt_word`]).
     fn doubt_frame(&mut self, msg: &MavMessage) {
         self.last_link = Instant::now();
-        if matches!(msg, MavMessage::HEARTBEAT(_)) {
+        if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
             self.beat_heard = self.last_link;
         }
     }
@@ -2510,8 +2529,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             )),
             _ => {}
         }
+        // A heartbeat that is no autopilot's (a ground station or an onboard controller
+        // misconfigured with the vehicle's ids, att42f-4) is never the vehicle's state, nor
+        // another vehicle: only its frame counts, above, as any frame of the ids (whoever sends
+        // frames with the ids numbers them on its own counter, so a sender other than the
+        // vehicle shows there as a second sender; skipping its heartbeats would leave its
+        // other frames with the ids to the counter all the same).
         if let (FrameKind::New | FrameKind::Late, MavMessage::HEARTBEAT(h)) = (kind, &r.msg) {
-            if h.mavtype != self.vehicle_type || h.autopilot != self.autopilot {
+            if is_autopilot(h) && (h.mavtype != self.vehicle_type || h.autopilot != self.autopilot)
+            {
                 self.second_sender_seen(format!(
                     "{ids}: a heartbeat of {:?} ({:?}) after the vehicle's {:?} ({:?}) (a second vehicle with its ids, or its autopilot changed): which to fly is ambiguous",
                     h.mavtype, h.autopilot, self.vehicle_type, self.autopilot
@@ -2844,17 +2870,56 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// unknown mode is not, ver33b-10); during a take-over (once a control command went out), a
     /// disarm after it was armed, or another mode than before that command and not OFFBOARD.
     fn shows_pilots_word(&self) -> bool {
-        let offboard = self
-            .custom_mode
-            .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        self.is_pilots_word(self.custom_mode, self.armed)
+    }
+
+    /// Whether a vehicle in `mode`, armed or not, shows a pilot's word
+    /// ([`Flight::shows_pilots_word`]).
+    fn is_pilots_word(&self, mode: Option<u32>, armed: bool) -> bool {
+        let offboard = mode.is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
         if self.in_control {
-            return !(self.armed && (self.custom_mode.is_none() || offboard));
+            return !(armed && (mode.is_none() || offboard));
         }
         let Some(before) = self.mode_at_first_command else {
             return false;
         };
-        (self.armed_since_command && !self.armed)
-            || (before.is_some() && self.custom_mode != before && !offboard)
+        (self.armed_since_command && !armed) || (before.is_some() && mode != before && !offboard)
+    }
+
+    /// A heartbeat of the vehicle's ids in a doubt of their frame counter ([`FrameKind::Doubt`]):
+    /// never the vehicle's state, but if it shows a pilot's word ([`Flight::is_pilots_word`]) it
+    /// counts as one awaiting confirmation (att42f-5, [`LeaveSeen`]), as if applied: nothing more
+    /// is commanded meanwhile, a second sender proven after it ends the flight with nothing
+    /// commanded ([`Flight::word_before_second_sender`]), a failsafe meanwhile commands nothing
+    /// against it, and after a resynchronisation the heartbeats applied confirm it (its span
+    /// starts at the resynchronisation) or contradict it (a doubt between: two senders). A pilot
+    /// may switch while a burst loss of one sender's frames is in doubt; taken as nothing, their
+    /// MANUAL was commanded against when a second burst proved "two senders".
+    fn doubt_word(&mut self, h: &HEARTBEAT_DATA) {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        let mode = mode_of(h);
+        if self.leave_seen.is_some() || !is_autopilot(h) || !self.is_pilots_word(mode, armed) {
+            return;
+        }
+        let what = format!(
+            "{} in {}",
+            if armed { "armed" } else { "disarmed" },
+            mode.map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
+        );
+        self.leave_seen = Some(LeaveSeen {
+            at: Instant::now(),
+            span: self.confirm_span(),
+            before: (self.custom_mode, self.armed),
+            what,
+            confirmed: false,
+            back: false,
+            // The doubt it came in counts as one since the word: a heartbeat applied after it
+            // that no longer shows the word is two senders' (a second sender's heartbeat opened
+            // the doubt, att39f-3), never one sender's change and back.
+            doubts: self.seq_watch.doubts.saturating_sub(1),
+        });
     }
 
     /// The vehicle's heartbeat just handled (applied): in control or during a take-over, a
@@ -3163,7 +3228,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// the vehicle (no HOLD against the pilot's MANUAL); if it was the second sender's, the
     /// vehicle flown is still in OFFBOARD with no setpoints, and its autopilot's own
     /// offboard-loss failsafe takes it. A heartbeat is applied only outside a doubt and before
-    /// a second sender is seen ([`crate::same_ids`]), so a word is always heard before that.
+    /// a second sender is seen ([`crate::same_ids`]), and one in a doubt counts as a word only
+    /// before ([`Flight::doubt_word`]), so a word is always heard before that.
     fn word_before_second_sender(&self, end: FlyEnd) -> Option<&str> {
         if end != FlyEnd::VehicleLost || !self.lost_to_second_sender {
             return None;
@@ -3402,7 +3468,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             // At least 5 tries before a lost link ends them (a vehicle may hear what it cannot
             // answer), unless it acknowledged the command as accepted: it heard it, and it is
             // not sent again before a heartbeat says what it did (att37-5).
-            if lost && (tries >= 5 || accepted.is_some()) {
+            // After a second sender a retry waits for a heartbeat showing the vehicle still in
+            // the mode it was left in (att42f-2): none comes over a lost link.
+            if lost && (tries >= 5 || accepted.is_some() || (self.second_sender && tries > 0)) {
                 return Ok((false, tries, "link lost"));
             }
             let bound = match (refused, self.second_sender) {
@@ -3421,15 +3489,21 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if Instant::now() >= retry_end {
                 return Ok((false, tries, bound));
             }
-            // After a second sender no heartbeat is applied: any heard says the vehicle answered.
-            let heard = if self.second_sender {
-                self.beat_heard
+            // After a second sender, once the way out has gone out, a retry only on a heartbeat
+            // of the ids heard since the last one showing the vehicle still in the mode it was
+            // left in (att42f-2: [`Flight::left_in`]), sent as soon as it is heard; never on one
+            // showing the way out (a retry a heartbeat period after the last, 0.03 to 0.3 s
+            // after any heartbeat, overrode a pilot's switch made in between). With one sender,
+            // every 0.3 s, or once the vehicle accepted it, after a heartbeat newer than that.
+            let due = if self.second_sender && tries > 0 {
+                watch.left_shown
             } else {
-                self.last_heartbeat
+                accepted.is_none_or(|at| self.last_heartbeat > at)
             };
-            if accepted.is_none_or(|at| heard > at) && watch.seen.is_none() {
+            if due && watch.seen.is_none() {
                 tries += 1;
                 watch.disarm_sent |= matches!(way, WayOut::Disarm);
+                watch.left_shown = false;
                 self.command(cmd, params)?;
             }
             match self.await_way_out(way, cmd, before, &mut accepted, (&mut watch, span))? {
@@ -3462,14 +3536,39 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     return Ok((false, tries, "a mode the companion did not command shown"));
                 }
                 Some(Answer::PilotTookOver(what)) => {
+                    self.way_out_overridden = true;
+                    if let Some(why) = self.twin_doubt(&watch) {
+                        // A second counter with the ids was seen (att42f-3): the heartbeats'
+                        // word may be a second sender's, never asserted a pilot's.
+                        self.event(format!(
+                            "during the failsafe's retries: the heartbeats of the vehicle's ids show it {what}, which the companion did not command: a pilot's or the second sender's ({why}); the retries stop, nothing more commanded (the pilot's mode stands)"
+                        ));
+                        return Ok((false, tries, "a mode the companion did not command shown"));
+                    }
                     self.event(format!(
                         "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
                     ));
-                    self.way_out_overridden = true;
                     return Ok((false, tries, "a pilot took over"));
                 }
                 None => {}
             }
+        }
+    }
+
+    /// Why a change the heartbeats showed during the retries, confirmed as a pilot's, may be a
+    /// second sender's (att42f-3): a second sender with the ids seen, a doubt of their frame
+    /// counter (a first conflict: maybe a second counter, resynchronised), or a heartbeat older
+    /// than the last applied heard during the retries (a second counter ahead makes the
+    /// vehicle's own older). `None`: one counter all along, the pilot's.
+    fn twin_doubt(&self, watch: &RetryWatch) -> Option<&'static str> {
+        if self.second_sender {
+            Some("a second sender with the ids was seen")
+        } else if self.seq_watch.doubts > 0 {
+            Some("their frame counter was in doubt before: a second counter, maybe")
+        } else if watch.older {
+            Some("a heartbeat of the ids older than the last applied came during the retries: a second counter ahead, maybe")
+        } else {
+            None
         }
     }
 
@@ -3487,7 +3586,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.way_out_overridden = true;
     }
 
-    /// Listens 0.3 s for the vehicle's answer to `way`: `Some(true)` confirmed by its heartbeat
+    /// Listens 0.3 s (after a second sender, less once a heartbeat shows the vehicle still in
+    /// the mode it was left in: a retry is due, `watch.left_shown`) for the vehicle's answer to
+    /// `way`: `Some(true)` confirmed by its heartbeat
     /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
     /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing),
     /// unless an acceptance followed the refusal within the listen (ver33b-11).
@@ -3504,7 +3605,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // someone else's same command, the vehicle's acceptance of this one may follow
         // (ver33b-11): a refusal is the answer only if none came by the end of the listen.
         let mut refused = false;
-        while Instant::now() < until {
+        let mut retry_now = false;
+        while Instant::now() < until && !retry_now {
             for r in self
                 .link
                 .poll(Duration::from_millis(20))
@@ -3518,23 +3620,24 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     // Delivered again: ignored entirely.
                     continue;
                 }
-                if let (true, MavMessage::HEARTBEAT(h)) = (self.second_sender, &r.msg) {
-                    // After a second sender (in a doubt of the frame counter or not): never a
-                    // confirmation, but a mode or disarm the companion did not command (a
-                    // pilot's, or the second sender's) stops the retries (att41f-3). A disarm
-                    // the companion commanded before the second sender was seen is its own.
-                    let armed = h
-                        .base_mode
-                        .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
-                    let way = WayOut::Mode(self.opts.failsafe.mode());
-                    let shown = match self.heartbeat_answer(h, way, before) {
-                        Some(Answer::PilotTookOver(_)) if !armed && watch.disarm_sent => None,
-                        Some(Answer::PilotTookOver(w)) => Some(w),
-                        Some(Answer::OtherSafeMode(n)) => Some(format!("in {n}")),
-                        _ => None,
-                    };
-                    if let Some(w) = shown {
-                        return Ok(Some(Answer::NotCommanded(w)));
+                if matches!(&r.msg, MavMessage::HEARTBEAT(h) if !is_autopilot(h)) {
+                    // No autopilot's heartbeat (a ground station's or an onboard controller's
+                    // with the vehicle's ids, att42f-4): never the vehicle's answer, state or
+                    // word (its frame counted above, as any of the ids'); the link alive.
+                    self.last_link = Instant::now();
+                    continue;
+                }
+                if let MavMessage::HEARTBEAT(h) = &r.msg {
+                    if self.second_sender || kind == FrameKind::Doubt {
+                        let (answer, left) = self.unapplied_beat(h, way, before, watch);
+                        if answer.is_some() {
+                            return Ok(answer);
+                        }
+                        // After a proof, a retry goes out at once on a heartbeat showing the
+                        // vehicle still in the mode it was left in (att42f-2): the listen ends
+                        // with this poll's frames.
+                        retry_now |= left;
+                        watch.left_shown |= left;
                     }
                 }
                 if kind == FrameKind::Doubt {
@@ -3556,6 +3659,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     // one showing another answer than the one awaited restarts its span.
                     MavMessage::HEARTBEAT(h) if self.beat_number.is_some_and(|b| number <= b) => {
                         self.beat_heard = Instant::now();
+                        watch.older = true;
                         let answer = self.heartbeat_answer(h, way, before);
                         let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
                         if let Some(seen) = watch.seen.as_mut() {
@@ -3618,7 +3722,8 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
     ) -> Option<Answer> {
         let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
         if let (Some(seen), true) = (&watch.seen, answer.is_some()) {
-            if seen.pilots == pilots {
+            // A word heard in a doubt is no answer of the vehicle's: its span starts here.
+            if seen.pilots == pilots && !seen.in_doubt {
                 return (seen.at.elapsed() >= span).then_some(answer).flatten();
             }
         }
@@ -3629,8 +3734,88 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                 _ => String::new(),
             },
             at: Instant::now(),
+            in_doubt: false,
         });
         None
+    }
+
+    /// A heartbeat of the ids (an autopilot's) during the retries of `way` that is no answer
+    /// of the vehicle's: heard after a second sender was seen, or in a doubt of the frame
+    /// counter. After a second sender, a mode or arming the companion did not command (a
+    /// pilot's, or the second sender's) stops the retries ([`Answer::NotCommanded`],
+    /// att41f-3), and whether it shows the vehicle still in the mode it was left in (the only
+    /// reason for a retry then: [`Flight::left_in`], att42f-2) is the second value. Before one,
+    /// in a doubt, such a mode or arming is a pilot's word awaiting confirmation (att42f-5,
+    /// [`AnswerSeen::in_doubt`]): no retry meanwhile, and a second sender proven after it stops
+    /// the retries with nothing more commanded
+    /// ([`Flight::word_before_second_sender_in_retries`]).
+    fn unapplied_beat(
+        &self,
+        h: &HEARTBEAT_DATA,
+        way: WayOut,
+        before: (Option<u32>, bool),
+        watch: &mut RetryWatch,
+    ) -> (Option<Answer>, bool) {
+        if self.second_sender {
+            let way = WayOut::Mode(self.opts.failsafe.mode());
+            if let Some(w) = self.word_not_commanded(h, way, before, watch.disarm_sent) {
+                return (Some(Answer::NotCommanded(w)), false);
+            }
+            return (None, self.left_in(h, before));
+        }
+        if let Some(what) = self.word_not_commanded(h, way, before, watch.disarm_sent) {
+            if watch.seen.as_ref().is_none_or(|s| !s.pilots) {
+                watch.seen = Some(AnswerSeen {
+                    pilots: true,
+                    what,
+                    at: Instant::now(),
+                    in_doubt: true,
+                });
+            }
+        }
+        (None, false)
+    }
+
+    /// What a heartbeat during the retries of `way` shows that the companion did not command,
+    /// in words (`in MANUAL`, `in RETURN`, `disarmed`): another mode than the way out's and the
+    /// one the failsafe began in (OFFBOARD is the companion's; a safe one counts), or a disarm
+    /// of a vehicle armed as the failsafe began unless the companion commanded one
+    /// (`disarm_sent`), whatever mode it shows, the way out's included (att42f-1: a pilot's
+    /// disarm of a vehicle already in HOLD).
+    fn word_not_commanded(
+        &self,
+        h: &HEARTBEAT_DATA,
+        way: WayOut,
+        before: (Option<u32>, bool),
+        disarm_sent: bool,
+    ) -> Option<String> {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        if before.1 && !armed && !disarm_sent {
+            return Some("disarmed".into());
+        }
+        match self.heartbeat_answer(h, way, before) {
+            Some(Answer::PilotTookOver(_)) if !armed && disarm_sent => None,
+            Some(Answer::PilotTookOver(w)) => Some(w),
+            Some(Answer::OtherSafeMode(n)) => Some(format!("in {n}")),
+            _ => None,
+        }
+    }
+
+    /// Whether a heartbeat shows the vehicle still armed in the mode the companion left it in:
+    /// OFFBOARD, or the mode the failsafe began in (`before`), not the `--failsafe` mode. After
+    /// a second sender, the only evidence that the way out is still owed (att42f-2): a retry is
+    /// sent on it, never on a heartbeat showing the way out or a mode nobody here commanded.
+    fn left_in(&self, h: &HEARTBEAT_DATA, before: (Option<u32>, bool)) -> bool {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        mode_of(h).is_some_and(|c| {
+            armed
+                && !self.firmware.is_in(c, self.opts.failsafe.mode())
+                && (self.firmware.is_in(c, FlyMode::Offboard) || before.0 == Some(c))
+        })
     }
 
     /// The vehicle's mode and arming as last confirmed: before a pilot's word still awaiting

@@ -42,7 +42,8 @@
 //! After [`DOUBT_FRAMES`] frames in doubt with no proof (or [`DOUBT_MIN_FRAMES`] once
 //! [`DOUBT_S`] has passed), the stream with more new frames in it becomes the window: one sender,
 //! resynchronised ([`SequenceWatch::take_resync`]). During a doubt nothing received is the
-//! vehicle's word (the companion keeps only the link alive). Resynchronised on the doubt's
+//! vehicle's state (the companion keeps the link alive, and takes a heartbeat showing a
+//! pilot's word as one awaiting confirmation: nothing is commanded against it, `fly`). Resynchronised on the doubt's
 //! window, the old window's frames are kept for [`SEQUENCE_WINDOW`] numbers more: a frame
 //! identical to one of them is a copy delivered again across the doubt (a redundant path,
 //! att39f's F10), whatever its number says in the new window.
@@ -136,7 +137,8 @@ pub enum FrameKind {
     /// In a doubt: the first conflict (another frame than the one seen with its number, no
     /// proof of two senders yet), or a frame after it (new or late in the doubt's window),
     /// until two senders are proven or the watch resynchronises: the link is alive, nothing
-    /// in the frame is the vehicle's word.
+    /// in the frame is the vehicle's state (`fly` takes a pilot's word a heartbeat in it shows
+    /// as one awaiting confirmation: nothing is commanded against it).
     Doubt,
 }
 

@@ -1655,6 +1655,19 @@ fn manual_over_a_link(
     manual_from: u32,
     max_duration_s: f64,
     tweak: impl FnOnce(&mut FlyOptions),
+    link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
+) -> (FlyReport, Vec<(u32, Sent)>) {
+    let beat = move |k| heartbeat(if k < manual_from { 6 } else { 1 });
+    beats_over_a_link(4, beat, max_duration_s, tweak, link)
+}
+
+/// [`manual_over_a_link`], the vehicle's heartbeat every `every` turns (4: 5 Hz, 20: PX4's
+/// 1 Hz) being `beat(k)` at turn `k`.
+fn beats_over_a_link(
+    every: u32,
+    beat: impl Fn(u32) -> MavMessage + Send + 'static,
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
     mut link: impl FnMut(u32, Vec<(u8, Vec<u8>)>, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
 ) -> (FlyReport, Vec<(u32, Sent)>) {
     let mut a = vehicle_sender();
@@ -1666,9 +1679,8 @@ fn manual_over_a_link(
             std::thread::sleep(wait);
         }
         let ms = 1000 + 50 * k;
-        let main = if k < manual_from { 6 } else { 1 };
-        let msgs = if k % 4 == 0 {
-            vec![heartbeat(main), iso_s(ms, 9.5), position(ms, 0.0)]
+        let msgs = if k % every == 0 {
+            vec![beat(k), iso_s(ms, 9.5), position(ms, 0.0)]
         } else {
             vec![iso_s(ms, 9.5), position(ms, 0.0), position(ms + 1, 0.0)]
         };
@@ -1767,6 +1779,11 @@ enum TwinCounter {
 /// beats armed in MANUAL once a second (every 20 turns) from turn 40, numbered by `counter`.
 /// The report and the commands fly sent.
 fn vehicle_with_a_slow_twin(counter: TwinCounter) -> (FlyReport, Vec<Sent>) {
+    vehicle_with_a_slow_beat(counter, heartbeat(1))
+}
+
+/// [`vehicle_with_a_slow_twin`], the second sender's heartbeat being `twin_beat`.
+fn vehicle_with_a_slow_beat(counter: TwinCounter, twin_beat: MavMessage) -> (FlyReport, Vec<Sent>) {
     let mut a = vehicle_sender();
     let mut free: Option<Sender> = None;
     let t0 = Instant::now();
@@ -1798,7 +1815,7 @@ fn vehicle_with_a_slow_twin(counter: TwinCounter) -> (FlyReport, Vec<Sent>) {
                         ids: (1, 1),
                     }),
                 };
-                out.extend(datagrams(b.frames(&[heartbeat(1)])));
+                out.extend(datagrams(b.frames(std::slice::from_ref(&twin_beat))));
             }
             out
         },
@@ -1942,6 +1959,284 @@ fn a_mode_nobody_commanded_after_a_proof_stops_the_retries() {
             "a heartbeat of the ids shows in MANUAL, which the companion did not command: a pilot's or the second sender's; nothing more commanded"
         )),
         "{:?}",
+        r.events
+    );
+}
+
+/// The vehicle's heartbeat in PX4's HOLD (AUTO.LOITER), armed or not.
+fn heartbeat_hold(armed: bool) -> MavMessage {
+    let mut hb = heartbeat_sub(4, 3);
+    if let (false, MavMessage::HEARTBEAT(h)) = (armed, &mut hb) {
+        h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+    }
+    hb
+}
+
+/// A turn's frames as sent: each one's number and bytes.
+type Frames = Vec<(u8, Vec<u8>)>;
+
+/// The links of att42f's tests: one sender that loses a burst of 200 frames sent at once
+/// after the frames of turn `first` and another after those of turn `second` (the turns'
+/// frames otherwise delivered as sent).
+fn two_bursts(
+    first: u32,
+    second: u32,
+) -> impl FnMut(u32, Frames, &mut Sender) -> Vec<Vec<u8>> + Send + 'static {
+    move |k, frames, a| {
+        if k == first || k == second {
+            a.seq = a.seq.wrapping_add(200);
+        }
+        frames.into_iter().map(|f| f.1).collect()
+    }
+}
+
+/// att42f-5 (in flight): in control (the pilot's OFFBOARD, PX4's 1 Hz heartbeat: every 20
+/// turns, three frames a turn), one sender whose link loses a burst of 200 frames at turn 50
+/// (a doubt from turn 51, resynchronised after 48 frames, about turn 67) and another at turn
+/// 70, within 5 s of the resync: a second sender by rule (c) at turn 71. The pilot switches
+/// to MANUAL at turn 60: its only heartbeat before the proof (turn 60) came inside the doubt.
+/// A word heard in a doubt counts as a pilot's word awaiting confirmation: nothing is
+/// commanded against it. Before: nothing in a doubt counted, so `vehicle_lost` commanded HOLD
+/// against the pilot's MANUAL.
+#[test]
+fn a_pilots_word_heard_in_a_doubt_then_a_proof_commands_nothing() {
+    let beat = |k: u32| heartbeat(if k < 60 { 6 } else { 1 });
+    let (r, c) = beats_over_a_link(20, beat, 12.0, |o| o.timeout_s = 3.0, two_bursts(50, 70));
+    let c: Vec<Sent> = c.into_iter().map(|x| x.1).collect();
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert_nothing_against_the_pilot(&r, &c);
+}
+
+/// att42f-5 (in the retries): as [`a_pilots_word_heard_in_a_doubt_then_a_proof_commands_nothing`],
+/// but Ctrl-C at 1.5 s (turn 30) started the failsafe first: HOLD commanded every 0.3 s, never
+/// shown (the vehicle stays in OFFBOARD). The pilot's MANUAL heartbeat at turn 60, inside the
+/// doubt, holds the retries as a word awaiting confirmation; the proof at turn 71 stops them
+/// with nothing more commanded (as att41f-2 for a word applied before the proof). Before: the
+/// retries went on through the doubt and after the proof, HOLD against the pilot's MANUAL every
+/// 0.3 s until the heartbeat at turn 80 showed it.
+#[test]
+fn a_pilots_word_heard_in_a_doubt_in_the_retries_stops_them_at_the_proof() {
+    let beat = |k: u32| heartbeat(if k < 60 { 6 } else { 1 });
+    let (r, c) = beats_over_a_link(
+        20,
+        beat,
+        30.0,
+        |o| {
+            o.timeout_s = 3.0;
+            support_stop_after(o, 1.5);
+        },
+        two_bursts(50, 70),
+    );
+    let modes = mode_command_turns(&c);
+    // The Ctrl-C's HOLD went out, and none once fly had the MANUAL heartbeat (turn 60; a
+    // command read at turn 61 may have left before it).
+    assert!(
+        modes.first().is_some_and(|&k| k < 60),
+        "{c:?} {:?}",
+        r.events
+    );
+    assert!(modes.iter().all(|&k| k <= 61), "{c:?} {:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "showed it in MANUAL (a pilot's word, or the second sender's, awaiting confirmation): the retries stop, nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
+}
+
+/// Sets `o.stop` (Ctrl-C) after `s` seconds.
+fn support_stop_after(o: &FlyOptions, s: f64) {
+    let stop = o.stop.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs_f64(s));
+        stop.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+}
+
+/// Whether every mode command after the first was read in the turn of a heartbeat at a
+/// multiple of 20 in `beats`, or the next (a retry sent on that heartbeat).
+fn retries_follow_beats(modes: &[u32], beats: std::ops::Range<u32>) -> bool {
+    modes.iter().skip(1).all(|&k| {
+        [k, k.saturating_sub(1)]
+            .iter()
+            .any(|b| b % 20 == 0 && beats.contains(b))
+    })
+}
+
+/// att42f-2: in control (the pilot's OFFBOARD, PX4's 1 Hz heartbeat), one sender whose link
+/// loses two bursts of 200 frames within 5 s (turns 40 and 70): a second sender by rule (c)
+/// at turn 71, `vehicle_lost`, HOLD commanded. The vehicle stays in OFFBOARD (heartbeats at
+/// turns 80, 100, 120), then shows HOLD from turn 140. After the proof a retry goes out only
+/// on a heartbeat showing the vehicle still in OFFBOARD, at once (in that heartbeat's turn or
+/// the next), never on one showing HOLD: 1 + 3 HOLDs. Before: a retry every 0.3 s (6 turns)
+/// whatever the heartbeats showed, HOLD too, to the retries' bound (a pilot's switch between
+/// a heartbeat and the next retry overridden at each).
+#[test]
+fn after_a_proof_a_retry_only_follows_a_heartbeat_in_offboard() {
+    let beat = |k: u32| {
+        if k < 130 {
+            heartbeat(6)
+        } else {
+            heartbeat_hold(true)
+        }
+    };
+    let (r, c) = beats_over_a_link(20, beat, 30.0, |o| o.timeout_s = 3.0, two_bursts(40, 70));
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    let modes = mode_command_turns(&c);
+    assert!(
+        modes.first().is_some_and(|&k| (70..80).contains(&k)),
+        "{modes:?} {:?}",
+        r.events
+    );
+    assert!(
+        retries_follow_beats(&modes, 80..121),
+        "{modes:?} {:?}",
+        r.events
+    );
+    assert_eq!(modes.len(), 4, "{modes:?} {:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(!r.way_out_overridden, "{:?}", r.events);
+}
+
+/// att42f-1: as [`after_a_proof_a_retry_only_follows_a_heartbeat_in_offboard`], the vehicle
+/// in HOLD from turn 100 (armed), then disarmed in HOLD from turn 140: a disarm of a vehicle
+/// armed as the failsafe began, which the companion did not command (it sends no disarm after
+/// a second sender): a pilot's or the second sender's word, the retries stop, nothing more
+/// commanded. Before: a disarmed heartbeat in the failsafe mode was no answer, and HOLD went on
+/// every 0.3 s to the retries' bound.
+#[test]
+fn after_a_proof_a_disarm_nobody_commanded_in_hold_stops_the_retries() {
+    let beat = |k: u32| match k {
+        0..100 => heartbeat(6),
+        100..140 => heartbeat_hold(true),
+        _ => heartbeat_hold(false),
+    };
+    let (r, c) = beats_over_a_link(20, beat, 30.0, |o| o.timeout_s = 3.0, two_bursts(40, 70));
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    let modes = mode_command_turns(&c);
+    assert!(modes.iter().all(|&k| k <= 141), "{modes:?} {:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(!disarm_sent(&c.iter().map(|x| x.1).collect::<Vec<_>>()));
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "a heartbeat of the ids shows disarmed, which the companion did not command: a pilot's or the second sender's; nothing more commanded"
+        )),
+        "{:?}",
+        r.events
+    );
+}
+
+/// In control (the pilot's OFFBOARD, a heartbeat every 4 turns, one sender over `link`), Ctrl-C
+/// at 2.5 s starts the failsafe (HOLD, never shown); the pilot switches to MANUAL at turn 80,
+/// which the heartbeats show for the span: the retries stop, nothing more commanded. Asserts
+/// that the log says "a pilot's or the second sender's" for `why`, never asserting a pilot
+/// (`pilot_took_over`), and returns the report.
+fn change_in_the_retries_hedged(
+    link: impl FnMut(u32, Frames, &mut Sender) -> Vec<Vec<u8>> + Send + 'static,
+    why: &str,
+) -> FlyReport {
+    let (r, _) = manual_over_a_link(
+        80,
+        30.0,
+        |o| {
+            o.timeout_s = 3.0;
+            support_stop_after(o, 2.5);
+        },
+        link,
+    );
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+    let said = format!("the heartbeats of the vehicle's ids show it in MANUAL, which the companion did not command: a pilot's or the second sender's ({why}");
+    assert!(r.events.iter().any(|e| e.contains(&said)), "{:?}", r.events);
+    r
+}
+
+/// att42f-3: [`change_in_the_retries_hedged`], one sender whose link loses a burst of 200
+/// frames at turn 30 (a doubt, resynchronised as one sender before the failsafe): the frame
+/// counter was in doubt before. Before: "pilot_took_over during the failsafe".
+#[test]
+fn a_change_in_the_retries_after_a_doubt_is_not_asserted_a_pilots() {
+    let r = change_in_the_retries_hedged(
+        move |k, frames, a| {
+            if k == 30 {
+                a.seq = a.seq.wrapping_add(200);
+            }
+            frames.into_iter().map(|f| f.1).collect()
+        },
+        "their frame counter was in doubt before",
+    );
+    assert_eq!(resyncs(&r), 1, "{:?}", r.events);
+}
+
+/// att42f-3: [`change_in_the_retries_hedged`], the link holding the last OFFBOARD heartbeat
+/// (turn 76) and delivering it after the first MANUAL one (turn 80): a heartbeat older than
+/// the last applied came during the retries (a second counter ahead would make the vehicle's
+/// own so; here one sender's late one, which nothing tells apart). Before: "pilot_took_over
+/// during the failsafe".
+#[test]
+fn a_change_in_the_retries_after_an_older_heartbeat_is_not_asserted_a_pilots() {
+    let mut held = Vec::new();
+    let r = change_in_the_retries_hedged(
+        move |k, frames, _| {
+            let mut out: Vec<Vec<u8>> = frames.into_iter().map(|f| f.1).collect();
+            if k == 76 {
+                held = out.remove(0);
+            } else if k == 80 {
+                out.insert(1, std::mem::take(&mut held));
+            }
+            out
+        },
+        "a heartbeat of the ids older than the last applied came during the retries",
+    );
+    assert_eq!(resyncs(&r), 0, "{:?}", r.events);
+}
+
+/// att42f-4: in control (the pilot's OFFBOARD), a ground station misconfigured with the
+/// vehicle's ids (its own counter, 60 ahead) beats once a second from turn 40
+/// (`MAV_TYPE_GCS`, `MAV_AUTOPILOT_INVALID`, `base_mode` 0). Its heartbeat is never the
+/// vehicle's state: never read as "disarmed", nor as another vehicle's type; its frames count
+/// in the frame counter as any of the ids' (a second sender there, then `vehicle_lost` with
+/// HOLD retried, or flown to the end). Before: at its first heartbeat "a heartbeat of
+/// MAV_TYPE_GCS ... after the vehicle's", HOLD, and its next one read as the vehicle
+/// "disarmed", which stopped the retries.
+#[test]
+fn a_ground_stations_heartbeat_with_the_vehicles_ids_is_no_state() {
+    let gcs = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_GCS,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        base_mode: MavModeFlag::empty(),
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    });
+    let (r, c) = vehicle_with_a_slow_beat(TwinCounter::Free(60), gcs);
+    assert!(
+        matches!(r.end, FlyEnd::VehicleLost | FlyEnd::MaxDuration),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events
+            .iter()
+            .any(|e| ["MAV_TYPE_GCS", "shows disarmed", "vehicle disarmed"]
+                .iter()
+                .any(|w| e.contains(w))),
+        "{:?}",
+        r.events
+    );
+    assert!(!r.way_out_overridden, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        c.iter().filter(|x| x.0 == SET_MODE).count() >= 3,
+        "{c:?} {:?}",
         r.events
     );
 }
