@@ -603,6 +603,65 @@ fn the_chart_never_replaces_nor_removes_a_users_file() {
     }
 }
 
+/// att42-8 SAFETY: the header and the mark said who first wrote a file, not that nobody edited
+/// it since: the user's edited `stability_map.csv` (the same header, a cell changed) and
+/// annotated `stability_map.svg` (a `<text>` added in Inkscape or by hand, the mark kept) were
+/// replaced without a word. Each is refused (73, naming it and saying it was edited since
+/// isotrack wrote it) before anything is computed, every file as it was; as isotrack wrote
+/// them, a second `check --map` replaces them; a `verify.csv` of the user's with isotrack's
+/// header, in a directory where isotrack records its tables and none of that name, is the
+/// user's too.
+#[test]
+fn a_chart_edited_since_isotrack_wrote_it_is_the_users() {
+    let d = tempfile::tempdir().unwrap();
+    let sc = scenario();
+    let out = d.path().join("o");
+    let outs = out.display().to_string();
+    let r = isotrack(&map_args(&outs, &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    assert!(out.join(".isotrack-tables.json").exists());
+    let r = isotrack(&map_args(&outs, &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+    let csv = out.join("stability_map.csv");
+    let svg = out.join("stability_map.svg");
+    let (table, figure) = (std::fs::read(&csv).unwrap(), std::fs::read(&svg).unwrap());
+    let text = String::from_utf8(figure.clone()).unwrap();
+    let at = text.rfind("</svg>").unwrap();
+    let annotated = format!(
+        "{}<text x=\"9\" y=\"9\">my note</text>{}",
+        &text[..at],
+        &text[at..]
+    );
+    let mut edited = table.clone();
+    let last = edited.len() - 2;
+    edited[last] = if edited[last] == b'1' { b'2' } else { b'1' };
+    for (file, bytes) in [(&csv, edited), (&svg, annotated.into_bytes())] {
+        std::fs::write(file, &bytes).unwrap();
+        let before = listing(&out);
+        let r = isotrack(&map_args(&outs, &sc, &[]));
+        let named = file.display().to_string();
+        assert_fails(
+            &r,
+            73,
+            &[&named, "edited since isotrack wrote it", "move it away"],
+        );
+        assert_eq!(listing(&out), before, "{named}");
+        std::fs::write(&csv, &table).unwrap();
+        std::fs::write(&svg, &figure).unwrap();
+    }
+    let mine = format!("{}\n0,1,1,1,1,1,1,1,1,1,mine\n", VERIFY_COLUMNS.join(","));
+    std::fs::write(out.join("verify.csv"), &mine).unwrap();
+    let r = isotrack(&map_args(&outs, &sc, &[]));
+    assert_fails(&r, 73, &["verify.csv", "records none of this name"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("verify.csv")).unwrap(),
+        mine
+    );
+    std::fs::remove_file(out.join("verify.csv")).unwrap();
+    let r = isotrack(&map_args(&outs, &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
+}
+
 /// One writer per directory: while another holds `DIR/.isotrack.lock` (as `sweep` does),
 /// `check --map --out DIR` exits 73 and writes nothing.
 #[test]

@@ -1136,6 +1136,16 @@ fn compare_out_never_replaces_a_users_comparison_or_summary() {
         std::fs::read_to_string(cmp.join("pid/trajectory.png")).unwrap(),
         "MY PICTURE\n"
     );
+    // att42-8: compare's own comparison.csv edited since (compare's header, a row appended by
+    // hand) is the user's now: refused (73, saying so), as it was.
+    let table = cmp.join("comparison.csv");
+    let mut edited = std::fs::read_to_string(&table).unwrap();
+    edited.push_str("my_law,converged\n");
+    std::fs::write(&table, &edited).unwrap();
+    let o = run(&cmp);
+    let file = table.display().to_string();
+    assert_fails(&o, 73, &[&file, "edited since isotrack wrote it"]);
+    assert_eq!(std::fs::read_to_string(&table).unwrap(), edited);
 }
 
 /// att38-10: Ctrl-C during `plot` left `.trajectory.png.PID.tmp.png` in the run directory,

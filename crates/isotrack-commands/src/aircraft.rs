@@ -129,7 +129,7 @@ fn read_replay_inputs(path: &Path) -> Result<Vec<(f64, Deltas)>, Failure> {
     let bytes =
         isotrack_fields::io::read_limited(path, MAX_REPLAY_INPUT_BYTES).map_err(|e| Failure {
             code: exit::NOINPUT,
-            message: format!("cannot read {shown}: {e}"),
+            message: format!("cannot read --inputs {shown}: {e}"),
         })?;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)

@@ -329,7 +329,10 @@ fn write_csv(
         w.write_record(&r).map_err(|e| cant(e.to_string()))?;
     }
     let bytes = w.into_inner().map_err(|e| cant(e.to_string()))?;
-    isotrack_runs::files::write_atomic(path, &bytes).map_err(|e| cant(e.to_string()))
+    isotrack_runs::files::write_atomic(path, &bytes).map_err(|e| cant(e.to_string()))?;
+    // Recorded as written (att42-8): a later `check --map` tells it from the user's edit.
+    isotrack_runs::owned::record_table(path, Some(bytes.as_slice()))
+        .map_err(|e| cant(e.to_string()))
 }
 
 /// Computes and writes the chart (and `--verify`), returns what was written.
@@ -534,13 +537,17 @@ fn map_grid(
     Ok(grid)
 }
 
-/// Refuses (73) a `stability_map.csv` or a `verify.csv` that isotrack did not write
-/// ([`isotrack_runs::owned::refuse_foreign_csv`]): its first line is not the header every
-/// `check --map` wrote for it (the chart's [`MAP_COLUMNS`], or the first eight of them, as
-/// before its `note` column came; `verify.csv`'s [`VERIFY_COLUMNS`], unchanged since
-/// `--verify` came).
-fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
-    isotrack_runs::owned::refuse_foreign_csv(
+/// Refuses (73) a `stability_map.csv` or a `verify.csv` that isotrack did not write, or that
+/// was edited since ([`isotrack_runs::owned::refuse_foreign_csv`]: its size and SHA-256 are not
+/// those the directory's record holds; in a directory without one, an older isotrack's, its
+/// first line is not the header every `check --map` wrote for it: the chart's
+/// [`MAP_COLUMNS`], or the first eight of them, as before its `note` column came; `verify.csv`'s
+/// [`VERIFY_COLUMNS`], unchanged since `--verify` came). Whose the chart's table is.
+fn refuse_foreign_tables(
+    csv: &Path,
+    verify: &Path,
+) -> Result<isotrack_runs::owned::TableOwner, Failure> {
+    let owner = isotrack_runs::owned::refuse_foreign_csv(
         csv,
         &[MAP_COLUMNS.join(","), MAP_COLUMNS[..8].join(",")],
         "an isotrack stability chart's table",
@@ -551,7 +558,8 @@ fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
         &[VERIFY_COLUMNS.join(",")],
         "an isotrack verification table",
         "check --map --verify's",
-    )
+    )?;
+    Ok(owner)
 }
 
 /// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
@@ -582,18 +590,25 @@ fn open_map_dir(
     // att41-11: whose files are these, before anything is computed or removed? A table whose
     // first line is not isotrack's header for it, or a figure without isotrack's mark, is the
     // user's: refused (73, naming it), every file as it was (the lock removed as it drops).
-    refuse_foreign_tables(&csv_path, &verify_path)?;
-    // att42-2: beside isotrack's own chart table (it passed the header test above) the
-    // figures are that chart's: an isotrack from before the mark (att38-9) drew them unmarked,
-    // and refusing them refused every older chart. Without that table the mark decides.
-    if !csv_path.exists() {
-        crate::figures::refuse_foreign_figures(
-            dir,
-            &["stability_map.png".into(), "stability_map.svg".into()],
+    let table = refuse_foreign_tables(&csv_path, &verify_path)?;
+    // att42-2: beside an older isotrack's chart table (no digests recorded; it passed the
+    // header test above) an unmarked figure is that chart's: an isotrack from before the mark
+    // (att38-9) drew them unmarked, and refusing them refused every older chart. A marked
+    // figure edited since isotrack drew it is refused there too (att42-8), and anywhere else
+    // the mark decides.
+    let unmarked_ok = table == isotrack_runs::owned::TableOwner::Legacy;
+    for name in ["stability_map.png", "stability_map.svg"] {
+        isotrack_plot::refuse_foreign_figure_with(&dir.join(name), unmarked_ok).map_err(
+            |message| Failure {
+                code: exit::CANTCREAT,
+                message,
+            },
         )?;
     }
     if verify_path.exists() {
         std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;
+        isotrack_runs::owned::record_table(&verify_path, None)
+            .map_err(|e| cant(&verify_path, e.to_string()))?;
         errln!(
             "note: removed {} from an earlier check --map (it described another chart)",
             verify_path.display()

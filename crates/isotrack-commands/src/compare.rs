@@ -255,11 +255,13 @@ fn open_out(
     Ok(lock)
 }
 
-/// Refuses (73) an existing `comparison.csv` that an isotrack did not write: every version of
-/// `compare` wrote [`COMPARISON_COLUMNS`] as its first line (unchanged since the command came),
-/// so a file whose first line is anything else is the user's, never replaced (att39-1: it was,
-/// without a word). Only the first line is read ([`isotrack_runs::owned::refuse_foreign_csv`]),
-/// never through a link nor from a FIFO (refused before this).
+/// Refuses (73) an existing `comparison.csv` that an isotrack did not write, or that was edited
+/// since ([`isotrack_runs::owned::refuse_foreign_csv`], att42-8): its size and SHA-256 are not
+/// those `compare` recorded in the directory when it wrote it. In a directory without a record
+/// (an older isotrack's), the first line decides for this release: every version of `compare`
+/// wrote [`COMPARISON_COLUMNS`] as its first line, so a file whose first line is anything else is
+/// the user's, never replaced (att39-1: it was, without a word). Never read through a link nor
+/// from a FIFO (refused before this).
 fn refuse_foreign_comparison(p: &Path) -> Result<(), Failure> {
     isotrack_runs::owned::refuse_foreign_csv(
         p,
@@ -267,6 +269,7 @@ fn refuse_foreign_comparison(p: &Path) -> Result<(), Failure> {
         "an isotrack comparison",
         "compare's",
     )
+    .map(drop)
 }
 
 /// The comparison table on stdout (Markdown): one row per law, a law in `never` marked as
@@ -321,7 +324,9 @@ fn write_comparison(p: &Path, results: &[(ControllerKind, RunResult)]) -> Result
     }
     w.write_all(text.as_bytes())
         .and_then(|_| w.flush())
-        .map_err(|e| cant(p, e))
+        .map_err(|e| cant(p, e))?;
+    // Recorded as written (att42-8): a later `compare` tells it from the user's edit.
+    isotrack_runs::owned::record_table(p, Some(text.as_bytes())).map_err(|e| cant(p, e))
 }
 
 /// The note under the table for the laws that never reached the isoline: what their rows

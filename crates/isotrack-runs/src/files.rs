@@ -35,18 +35,42 @@ pub fn sha256_data_file(path: &Path) -> std::io::Result<String> {
 /// The SHA-256 (hex) of what file `f` holds from where it stands, read in 1 MiB blocks.
 fn sha256_of(mut f: std::fs::File) -> std::io::Result<String> {
     use sha2::{Digest, Sha256};
-    use std::io::Read;
     let mut h = Sha256::new();
+    feed(&mut h, &mut f)?;
+    Ok(hex(&h.finalize()))
+}
+
+/// The SHA-256 (hex) of file `f`'s bytes outside `cut` (the file's bytes before `cut.start`,
+/// then those from `cut.end` on), read in 1 MiB blocks: the digest of what isotrack wrote
+/// before it put its mark at `cut` (a figure's mark, `isotrack_plot`'s `mark`).
+pub fn sha256_outside(f: &mut std::fs::File, cut: std::ops::Range<u64>) -> std::io::Result<String> {
+    use sha2::{Digest, Sha256};
+    use std::io::{Read, Seek, SeekFrom};
+    let mut h = Sha256::new();
+    f.seek(SeekFrom::Start(0))?;
+    feed(&mut h, &mut (&mut *f).take(cut.start))?;
+    f.seek(SeekFrom::Start(cut.end))?;
+    feed(&mut h, f)?;
+    Ok(hex(&h.finalize()))
+}
+
+/// Feeds everything `r` gives to `h`, 1 MiB at a time.
+fn feed(h: &mut sha2::Sha256, r: &mut impl std::io::Read) -> std::io::Result<()> {
+    use sha2::Digest;
     let mut buf = vec![0u8; 1 << 20];
     loop {
-        match f.read(&mut buf) {
-            Ok(0) => break,
+        match r.read(&mut buf) {
+            Ok(0) => return Ok(()),
             Ok(n) => h.update(&buf[..n]),
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => return Err(e),
         }
     }
-    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// Lowercase hex of `bytes`.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// Whether two paths name the same existing file (same device and inode), not just the same

@@ -1,11 +1,14 @@
 //! Whether a file isotrack is about to replace or remove is isotrack's own (README: "isotrack
-//! never removes a file it may not have written"): one test for each kind of file, shared by
-//! every command that writes into a directory. A run's files: [`crate::rundir::not_an_earlier_run`]
-//! (a `mavlink.tlog` only beside a flight's summary); a figure: its isotrack mark
-//! (`isotrack_plot::refuse_foreign_figure`, where the mark is written); a table: its first line
-//! is isotrack's header for that file ([`refuse_foreign_csv`]: `compare`'s `comparison.csv`,
-//! `check --map`'s `stability_map.csv` and `verify.csv`). Anything else of the name is the
-//! user's: refused (73, naming it) before the command computes, runs or draws anything.
+//! never removes a file it may not have written"), and as isotrack wrote it (att42-8: the
+//! user's edits of it are the user's): one test for each kind of file, shared by every command
+//! that writes into a directory. A run's files: [`crate::rundir::not_an_earlier_run`] (a
+//! `mavlink.tlog` only beside a flight's summary); a figure: its isotrack mark, which carries
+//! the SHA-256 and size of the figure as written (`isotrack_plot::refuse_foreign_figure`, where
+//! the mark is written); a table (`compare`'s `comparison.csv`, `check --map`'s
+//! `stability_map.csv` and `verify.csv`): its size and SHA-256 as recorded in the directory's
+//! [`TABLE_RECORD`] when isotrack wrote it ([`refuse_foreign_csv`], [`record_table`]). Anything
+//! else of the name is the user's: refused (73, naming it) before the command computes, runs or
+//! draws anything.
 
 use crate::failure::{exit, Failure};
 use std::path::Path;
@@ -25,35 +28,176 @@ pub fn first_line_is(path: &Path, headers: &[String]) -> std::io::Result<bool> {
     Ok(headers.iter().any(|h| h.as_bytes() == first))
 }
 
-/// Refuses (73) an existing `path` that is not isotrack's table: its first line is none of
-/// `headers` (every header isotrack has written for that file, the present one first;
-/// [`first_line_is`]), or it cannot be read. `what` names the table (`an isotrack
-/// comparison`), `whose` the header's writer (`compare's`). `Ok` when nothing is at `path`; a
-/// link, FIFO or directory there is refused too (it cannot be read as a regular file).
+/// The file in an output directory recording each table isotrack wrote there (att42-8): a JSON
+/// object, a table's file name -> `{"bytes": N, "sha256": "HEX"}` of the table as written,
+/// replaced each time a table is ([`record_table`]). A table there whose size or SHA-256 is no
+/// longer the recorded one was edited since (the user's copy now): never replaced.
+pub const TABLE_RECORD: &str = ".isotrack-tables.json";
+
+/// The largest [`TABLE_RECORD`] read, bytes: a few entries of ~100 bytes each.
+const MAX_TABLE_RECORD_BYTES: u64 = 64 << 10;
+
+/// A table as isotrack wrote it: its size and SHA-256 (lowercase hex).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Written {
+    bytes: u64,
+    sha256: String,
+}
+
+/// [`TABLE_RECORD`]'s content: a table's file name -> how isotrack wrote it.
+type TableRecord = std::collections::BTreeMap<String, Written>;
+
+/// Whose an existing table is, as [`refuse_foreign_csv`] judged it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TableOwner {
+    /// Nothing is at the path.
+    Absent,
+    /// isotrack's, as it wrote it: its size and SHA-256 are those [`TABLE_RECORD`] records.
+    Recorded,
+    /// An older isotrack's (its first line is isotrack's header, and the directory has no
+    /// [`TABLE_RECORD`]: isotrack recorded no digests before att42-8), accepted for this
+    /// release (README, "one release of grace").
+    Legacy,
+}
+
+/// The [`TABLE_RECORD`] of directory `dir`: `Ok(None)` when there is none, an error (the
+/// reason) when what is there is not such a record (a file of the user's of that name, a link,
+/// a FIFO, more than [`MAX_TABLE_RECORD_BYTES`]), never replaced then.
+fn read_table_record(dir: &Path) -> Result<Option<TableRecord>, String> {
+    use std::io::Read;
+    let path = dir.join(TABLE_RECORD);
+    if std::fs::symlink_metadata(&path).is_err() {
+        return Ok(None);
+    }
+    let mut text = String::new();
+    crate::files::open_read_regular(&path)
+        .and_then(|f| f.take(MAX_TABLE_RECORD_BYTES + 1).read_to_string(&mut text))
+        .map_err(|e| format!("it cannot be read: {e}"))?;
+    if text.len() as u64 > MAX_TABLE_RECORD_BYTES {
+        return Err(format!("it is larger than {MAX_TABLE_RECORD_BYTES} bytes"));
+    }
+    let record: TableRecord = serde_json::from_str(&text)
+        .map_err(|e| format!("it is not isotrack's record of its tables: {e}"))?;
+    let hex64 = |h: &str| h.len() == 64 && h.bytes().all(|b| b.is_ascii_hexdigit());
+    if let Some((name, _)) = record.iter().find(|(_, w)| !hex64(&w.sha256)) {
+        return Err(format!("its entry for {name:?} holds no SHA-256"));
+    }
+    Ok(Some(record))
+}
+
+/// Refuses (73) a [`TABLE_RECORD`] in `dir` that is not isotrack's ([`read_table_record`]),
+/// naming it: isotrack would replace it as it records a table.
+fn table_record_in(dir: &Path) -> Result<Option<TableRecord>, Failure> {
+    read_table_record(dir).map_err(|why| Failure {
+        code: exit::CANTCREAT,
+        message: format!(
+            "{} is not isotrack's record of the tables it wrote ({why}), and isotrack never replaces a file it did not write: move it away, or use another --out",
+            shell_quoted(&dir.join(TABLE_RECORD))
+        ),
+    })
+}
+
+/// The directory a table at `path` is in (`.` for a bare name).
+fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// `path`'s file name, as [`TABLE_RECORD`] keys it.
+fn name_of(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Refuses (73) an existing `path` that is not isotrack's table as isotrack wrote it, before
+/// anything is computed (att39-1, att41-11, att42-8): its size or SHA-256 is not the one the
+/// directory's [`TABLE_RECORD`] records for it (edited since isotrack wrote it: a user's
+/// annotated copy, a spreadsheet's re-export), or the record has no entry for it (isotrack
+/// records every table it writes there: the user's own file of that name). In a directory
+/// without a record (tables of an older isotrack, which recorded no digests) the table's first
+/// line decides as before: one of `headers` (every header isotrack has written for that file,
+/// the present one first; [`first_line_is`]), accepted for this release ([`TableOwner::Legacy`]).
+/// A record that is not isotrack's is refused too, whatever the table. `what` names the table
+/// (`an isotrack comparison`), `whose` the header's writer (`compare's`). A link, FIFO or
+/// directory at `path` is refused (it cannot be read as a regular file).
 pub fn refuse_foreign_csv(
     path: &Path,
     headers: &[String],
     what: &str,
     whose: &str,
-) -> Result<(), Failure> {
+) -> Result<TableOwner, Failure> {
+    let record = table_record_in(dir_of(path))?;
     if std::fs::symlink_metadata(path).is_err() {
-        return Ok(());
+        return Ok(TableOwner::Absent);
     }
-    let why = match first_line_is(path, headers) {
-        Ok(true) => return Ok(()),
-        Ok(false) => format!(
-            "its first line is not {whose} header `{}`",
-            headers.first().map(String::as_str).unwrap_or_default()
+    let why = match record.as_ref().map(|r| r.get(&name_of(path))) {
+        Some(Some(w)) => match as_written(path, w) {
+            Ok(true) => return Ok(TableOwner::Recorded),
+            Ok(false) => format!(
+                "it was edited since isotrack wrote it: its size or SHA-256 is no longer the one recorded in {TABLE_RECORD}; if the edits are yours to keep, move it away or rename it"
+            ),
+            Err(e) => format!("it cannot be read: {e}"),
+        },
+        Some(None) => format!(
+            "isotrack records every table it writes here in {TABLE_RECORD}, and it records none of this name: your own file"
         ),
-        Err(e) => format!("it cannot be read: {e}"),
+        None => match first_line_is(path, headers) {
+            Ok(true) => return Ok(TableOwner::Legacy),
+            Ok(false) => format!(
+                "its first line is not {whose} header `{}`",
+                headers.first().map(String::as_str).unwrap_or_default()
+            ),
+            Err(e) => format!("it cannot be read: {e}"),
+        },
     };
     Err(Failure {
         code: exit::CANTCREAT,
         message: format!(
-            "{} is not {what} ({why}): refusing to replace it; move it away or use another --out",
+            "{} is not {what} as isotrack wrote it ({why}): refusing to replace it; move it away or use another --out",
             shell_quoted(path)
         ),
     })
+}
+
+/// Whether the regular file `path` is `w` (its size from the metadata first: a file of another
+/// size is not read at all; then its SHA-256).
+fn as_written(path: &Path, w: &Written) -> std::io::Result<bool> {
+    let mut f = crate::files::open_read_regular(path)?;
+    let len = f.metadata()?.len();
+    Ok(len == w.bytes && crate::files::sha256_outside(&mut f, 0..0)? == w.sha256)
+}
+
+/// Records table `path` as isotrack wrote it (`bytes`, what was written there) in its
+/// directory's [`TABLE_RECORD`] (replaced atomically), so a later command tells it from the
+/// user's edit of it ([`refuse_foreign_csv`]); `bytes` `None` forgets the entry (a table
+/// isotrack removed). Call after the table is in place, in a directory whose record
+/// [`refuse_foreign_csv`] has accepted (under the directory's lock).
+pub fn record_table(path: &Path, bytes: Option<&[u8]>) -> std::io::Result<()> {
+    let dir = dir_of(path);
+    let mut record = read_table_record(dir)
+        .map_err(std::io::Error::other)?
+        .unwrap_or_default();
+    match bytes {
+        Some(b) => {
+            let w = Written {
+                bytes: b.len() as u64,
+                sha256: isotrack_fields::io::sha256_hex(b),
+            };
+            record.insert(name_of(path), w);
+        }
+        None => {
+            if record.remove(&name_of(path)).is_none() {
+                return Ok(());
+            }
+        }
+    }
+    let mut text = serde_json::to_string_pretty(&record).map_err(std::io::Error::other)?;
+    text.push('\n');
+    crate::files::write_atomic(&dir.join(TABLE_RECORD), text.as_bytes())
 }
 
 /// `path` as a POSIX shell word to paste, as every message naming a file the user is to move
@@ -153,5 +297,77 @@ mod tests {
             assert!(b - a < 1 << 20, "{} bytes read", b - a);
         }
         assert!(refuse_foreign_csv(&d.path().join("none.csv"), &headers, "x", "y").is_ok());
+    }
+
+    /// att42-8: a table isotrack recorded is its own only as written. The record holds what
+    /// was written (its size and the SHA-256 `sha256sum` gives: FIPS 180-2's `abc` vector
+    /// checks the digest); the same first line with one cell edited, or with a row appended, is
+    /// the user's (refused 73, "edited since isotrack wrote it"), and so is a table of another
+    /// name the record does not hold; without a record the first line decides (an older
+    /// isotrack's table: [`TableOwner::Legacy`]); a record that is not isotrack's is refused.
+    #[test]
+    fn a_recorded_table_is_isotracks_only_as_written() {
+        let d = tempfile::tempdir().unwrap();
+        let headers = ["a,b".to_string()];
+        let refuse = |p: &Path| refuse_foreign_csv(p, &headers, "a table of mine", "its");
+        let t = d.path().join("t.csv");
+        // No record yet: an older isotrack's table, by its first line.
+        std::fs::write(&t, "a,b\n1,2\n").unwrap();
+        assert_eq!(refuse(&t).unwrap(), TableOwner::Legacy);
+        record_table(&t, Some(b"a,b\n1,2\n")).unwrap();
+        assert_eq!(refuse(&t).unwrap(), TableOwner::Recorded);
+        // The record: size 8 and the digest of these 8 bytes, computed independently.
+        let rec: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.path().join(TABLE_RECORD)).unwrap())
+                .unwrap();
+        assert_eq!(rec["t.csv"]["bytes"], 8);
+        assert_eq!(
+            isotrack_fields::io::sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        assert_eq!(
+            rec["t.csv"]["sha256"],
+            isotrack_fields::io::sha256_hex(b"a,b\n1,2\n")
+        );
+        // Edited: the same size (one cell changed), then another size (a row added).
+        for edited in ["a,b\n1,3\n", "a,b\n1,2\n3,4\n"] {
+            std::fs::write(&t, edited).unwrap();
+            let e = refuse(&t).unwrap_err();
+            assert_eq!(e.code, exit::CANTCREAT);
+            assert!(
+                e.message.contains("edited since isotrack wrote it"),
+                "{}",
+                e.message
+            );
+            assert!(
+                e.message.contains(&t.display().to_string()),
+                "{}",
+                e.message
+            );
+            assert_eq!(std::fs::read_to_string(&t).unwrap(), edited);
+        }
+        // Another table of isotrack's header, not in the record: the user's.
+        let u = d.path().join("u.csv");
+        std::fs::write(&u, "a,b\n9,9\n").unwrap();
+        let e = refuse(&u).unwrap_err();
+        assert!(
+            e.message.contains("records none of this name"),
+            "{}",
+            e.message
+        );
+        // Nothing there: fine, whatever the record; a forgotten table is no longer recorded.
+        assert_eq!(refuse(&d.path().join("v.csv")).unwrap(), TableOwner::Absent);
+        record_table(&t, None).unwrap();
+        std::fs::write(&t, "a,b\n1,2\n").unwrap();
+        assert!(refuse(&t).is_err());
+        // A record that is not isotrack's is refused (it would be replaced), table or not.
+        std::fs::write(d.path().join(TABLE_RECORD), "my notes\n").unwrap();
+        let e = refuse(&d.path().join("v.csv")).unwrap_err();
+        assert!(e.message.contains(TABLE_RECORD), "{}", e.message);
+        assert!(record_table(&t, Some(b"x")).is_err());
+        assert_eq!(
+            std::fs::read_to_string(d.path().join(TABLE_RECORD)).unwrap(),
+            "my notes\n"
+        );
     }
 }

@@ -12,7 +12,9 @@ pub const MAX_GRID_FILE_BYTES: u64 = 4 << 30;
 /// directory) without blocking: the type is looked up (`stat`) before the file is opened,
 /// since opening a FIFO for reading waits for a writer, possibly for ever. On Unix the open
 /// itself is non-blocking too (`O_NONBLOCK`, which regular files ignore), and the opened file
-/// is checked again, so a FIFO swapped in between the two is refused rather than waited on.
+/// is checked again, so a FIFO swapped in between the two is refused rather than waited on. A
+/// "regular file" the kernel makes up as it is read (`/proc`, `/sys`: the open file's
+/// filesystem, [`refuse_kernel_pseudo_file`]) is refused before a byte is read.
 /// Every input path of isotrack opens its files through here.
 pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
     let not_regular = || {
@@ -35,7 +37,48 @@ pub fn open_regular(path: &Path) -> std::io::Result<std::fs::File> {
     if !f.metadata()?.is_file() {
         return Err(not_regular());
     }
+    refuse_kernel_pseudo_file(&f)?;
     Ok(f)
+}
+
+/// The filesystems whose "regular files" the kernel makes up as they are read (statfs(2)'s
+/// `f_type`): `/proc` (`PROC_SUPER_MAGIC`), `/sys` (`SYSFS_MAGIC`), debugfs, tracefs,
+/// securityfs. Their files declare a size of 0 (or 4096) whatever they produce: no data.
+#[cfg(target_os = "linux")]
+const KERNEL_PSEUDO_FILESYSTEMS: [(i64, &str); 5] = [
+    (0x9fa0, "/proc"),
+    (0x6265_6572, "/sys"),
+    (0x6462_6720, "debugfs"),
+    (0x7472_6163, "tracefs"),
+    (0x7363_6673, "securityfs"),
+];
+
+/// Refuses open file `f` when it lives on a kernel pseudo-filesystem
+/// ([`KERNEL_PSEUDO_FILESYSTEMS`], asked with `fstatfs` on the open file: no read, no wait),
+/// before a byte of it is read (issue 30: `/proc/self/pagemap` as a field's grid was read to
+/// the 4 GiB size cap, 7 s, before the kernel's EINVAL).
+fn refuse_kernel_pseudo_file(f: &std::fs::File) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::io::AsRawFd;
+        // SAFETY: `st` is a plain C struct that fstatfs fills; the descriptor is `f`'s, open.
+        let mut st: libc::statfs = unsafe { std::mem::zeroed() };
+        if unsafe { libc::fstatfs(f.as_raw_fd(), &mut st) } == 0 {
+            #[allow(clippy::unnecessary_cast)]
+            let kind = st.f_type as i64;
+            if let Some((_, fs)) = KERNEL_PSEUDO_FILESYSTEMS.iter().find(|(m, _)| *m == kind) {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!(
+                        "a kernel pseudo-file on {fs}, not data (its content is made up by the kernel as it is read)"
+                    ),
+                ));
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = f;
+    Ok(())
 }
 
 /// Reads a whole file of at most `max_bytes`, refusing what is not a regular file (a FIFO,
