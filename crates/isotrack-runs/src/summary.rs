@@ -585,7 +585,13 @@ pub fn close_approach(
             Num(c.distance_m),
             Num(c.t_s),
             Num(CLOSE_APPROACH_M),
-            approach_reason(c.pair, summary.isoline_length_m, spec)
+            if c.t_s == 0.0 {
+                // att43-9: at the first sample no law has acted: the deployment put them there.
+                "they were deployed that close (team.starts, team.spread): no law had acted yet"
+                    .into()
+            } else {
+                approach_reason(c.pair, summary.isoline_length_m, spec)
+            }
         )
     })
 }

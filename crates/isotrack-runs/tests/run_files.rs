@@ -697,3 +697,39 @@ fn the_close_approach_reason_fits_the_team() {
         "the spacing law drove them together, or they started too close"
     );
 }
+
+/// att43-9: four robots deployed 0.03 rad apart on the circle of radius 10 ln 2 start
+/// `2 r sin(0.015)` = 0.2079 m apart, inside the 0.5 m of a close approach, at t = 0, before any
+/// law acted: the warning says they were deployed that close, not that "the spacing law drove
+/// them together" (nor to try a discovered ring).
+#[test]
+fn a_close_approach_at_the_start_is_the_deployments() {
+    use isotrack_runs::summary::team_warnings;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/team-circular-4.toml");
+    let s = isotrack_scenario::load_scenario(
+        Some(&path),
+        &[
+            "team.spread.step_rad=0.03".into(),
+            "sim.duration_s=5".into(),
+        ],
+    )
+    .unwrap();
+    let team = s.run_team(&mut [] as &mut [NoTrace]).unwrap().unwrap();
+    let w = team_warnings(&s, &team);
+    let w = w
+        .iter()
+        .find(|w| w.contains(" came within "))
+        .unwrap_or_else(|| panic!("no close approach in {w:?}"));
+    let r = 10.0 * std::f64::consts::LN_2;
+    let d = 2.0 * r * 0.015f64.sin();
+    assert!(w.contains(&format!("{d:.5}")[..5]), "{w} ({d})");
+    assert!(w.contains("at t = 0 s"), "{w}");
+    assert!(
+        w.ends_with(
+            "they were deployed that close (team.starts, team.spread): no law had acted yet"
+        ),
+        "{w}"
+    );
+    assert!(!w.contains("drove") && !w.contains("discovered"), "{w}");
+}

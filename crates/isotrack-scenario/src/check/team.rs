@@ -191,7 +191,7 @@ fn range_slope(s: &Scenario, law: &SpacingLaw, n: usize) -> (f64, &'static str) 
     }
 }
 
-fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
+fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     let n = team.count();
     let period_s = 1.0 / team.ranging.rate_hz;
     let delay_s = team.ranging.delay_s;
@@ -217,7 +217,7 @@ fn spacing_report(s: &Scenario, team: &TeamSpec) -> SpacingLoopReport {
         slowest_time_constant_continuous_s: None,
         saturated_gap_amplitude_m: None,
         saturated_gap_cv_max: None,
-        range_halt: range_halt(s, team),
+        range_halt: range_halt(s, l, team),
         not_modelled: vec![],
         note: String::new(),
     };
@@ -404,13 +404,36 @@ pub struct RangeHaltReport {
     pub worst_gap_cv: f64,
     /// The gap CV at or below which a team counts as even (`time_to_even_s`'s).
     pub even_gap_cv: f64,
+    /// The radius of the circle the team flies when it is not the isoline's (att43-6: the P
+    /// law, `ki = 0`, settles on an orbit off it, [`super::setup::p_law_orbit`]), m: the ranges
+    /// are chords of that circle, so the bound is computed on it (absent: the isoline's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flown_radius_m: Option<f64>,
+    /// On a known circle, the gap CV of the team's starts (the arc gaps between them in angular
+    /// order about its centre, a CV the same whichever way the team travels), absent elsewhere.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub deployed_gap_cv: Option<f64>,
+    /// Whether every neighbour is out of range at the start (att43-3): every arc gap of the
+    /// starts at least `g_min` and every chord between neighbouring starts at least
+    /// `max_range_m`. The team is then halted from the start and keeps its deployment, so the
+    /// halt's CV is `deployed_gap_cv`, not the worst over deployments.
+    pub deployed_all_silent: bool,
 }
 
 impl RangeHaltReport {
     /// Whether a halt can leave the team uneven (`worst_gap_cv > even_gap_cv`): the spacing
     /// law's claim (the gaps converge to even) does not hold.
     pub fn fails(&self) -> bool {
-        self.worst_gap_cv > self.even_gap_cv
+        self.halt_gap_cv() > self.even_gap_cv
+    }
+
+    /// The gap CV the verdict judges: the deployment's when the team is halted from the start
+    /// ([`Self::deployed_all_silent`]), else the worst a halt can leave.
+    pub fn halt_gap_cv(&self) -> f64 {
+        match (self.deployed_all_silent, self.deployed_gap_cv) {
+            (true, Some(cv)) => cv,
+            _ => self.worst_gap_cv,
+        }
     }
 
     /// What the halt is, in words (the `fails` verdict's reason and `not_modelled`'s line).
@@ -422,12 +445,29 @@ impl RangeHaltReport {
             ),
             None => "the isoline is an extracted loop".into(),
         };
+        let flown = self.flown_radius_m.map_or(String::new(), |r| {
+            format!(
+                " (the circle the team flies, radius {} m: with ki = 0 the P law's orbit is off the isoline, and the ranges are its chords)",
+                Num(r)
+            )
+        });
+        let halt = match (self.deployed_all_silent, self.deployed_gap_cv) {
+            (true, Some(cv)) => format!(
+                "every neighbour is out of range at the start, so the team halts as deployed, with the starts' gap CV {}",
+                Num(cv)
+            ),
+            _ => format!(
+                "a halt on this isoline (L = {} m{flown}) can leave a gap CV up to {} (the worst over deployments{})",
+                Num(self.isoline_length_m),
+                Num(self.worst_gap_cv),
+                self.deployed_gap_cv
+                    .map_or(String::new(), |cv| format!("; the starts' is {}", Num(cv)))
+            ),
+        };
         format!(
-            "team.ranging.max_range_m = {}: where both neighbours are beyond it range_balance sees max_range_m for both, commands v0 and the team halts; {even}, every arc gap of at least {} m is out of range, so a halt on this isoline (L = {} m) can leave a gap CV up to {} (even: {})",
+            "team.ranging.max_range_m = {}: where both neighbours are beyond it range_balance sees max_range_m for both, commands v0 and the team halts; {even}, every arc gap of at least {} m is out of range, so {halt} (even: {})",
             Echo(self.max_range_m),
             Num(self.min_silent_gap_m),
-            Num(self.isoline_length_m),
-            Num(self.worst_gap_cv),
             Num(self.even_gap_cv)
         )
     }
@@ -439,7 +479,7 @@ impl RangeHaltReport {
 /// spacing every neighbour is heard). Two vehicles have no spacing loop whatever the range
 /// (each sees its one neighbour twice, att41-19); unequal speeds do not halt (the slower are
 /// lapped: the spacing loop's `team.vehicles` note).
-pub fn range_halt(s: &Scenario, team: &TeamSpec) -> Option<RangeHaltReport> {
+pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<RangeHaltReport> {
     let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
         return None;
     };
@@ -448,14 +488,25 @@ pub fn range_halt(s: &Scenario, team: &TeamSpec) -> Option<RangeHaltReport> {
     if gain_per_s == 0.0 || !r.is_finite() || n < 3 || team.nominal_speeds_mps().len() != 1 {
         return None;
     }
+    let mut flown_radius_m = None;
+    let mut deployed = None;
     let (length_m, g_min, even_range_m) = match s.team_isoline() {
         TeamIsolineModel::Circle(c) => {
-            let d = 2.0 * c.radius_m;
+            // The ranges are chords of the circle flown: the P law's orbit when it has one
+            // (att43-6), else the isoline. Gaps are measured along the isoline (the metrics
+            // project onto it), the same fractions of a turn as along the orbit.
+            let flown = super::setup::p_law_orbit(s, l)
+                .map(|o| o.orbit.radius_m)
+                .filter(|&f| f.is_finite() && f > 0.0 && f != c.radius_m);
+            flown_radius_m = flown;
+            let d = 2.0 * flown.unwrap_or(c.radius_m);
             if r >= d {
                 return None;
             }
+            let theta_min = 2.0 * (r / d).asin();
+            deployed = deployed_on_circle(team, c.center_m, theta_min, r);
             let even = d * (std::f64::consts::PI / n as f64).sin();
-            (c.length_m(), d * (r / d).asin(), Some(even))
+            (c.length_m(), theta_min * c.radius_m, Some(even))
         }
         TeamIsolineModel::Polyline(p) if p.is_closed() => {
             let l = p.length_m();
@@ -471,6 +522,72 @@ pub fn range_halt(s: &Scenario, team: &TeamSpec) -> Option<RangeHaltReport> {
         even_range_m,
         worst_gap_cv: slack * ((n - 1) as f64).sqrt() / length_m,
         even_gap_cv: TeamMetricsConfig::default().even_gap_cv,
+        flown_radius_m,
+        deployed_gap_cv: deployed.map(|d| d.gap_cv),
+        deployed_all_silent: deployed.is_some_and(|d| d.all_silent),
+    })
+}
+
+/// The team's starts on a known circle ([`deployed_on_circle`]).
+#[derive(Clone, Copy, Debug)]
+struct Deployment {
+    /// The gap CV of the starts (population CV of the arc gaps in angular order).
+    gap_cv: f64,
+    /// Every angular gap at least `theta_min` and every chord between neighbouring starts at
+    /// least the range: every neighbour out of range at the start.
+    all_silent: bool,
+    /// The longest chord between neighbouring starts, m, and the pair (listed indices).
+    widest_chord: (f64, [usize; 2]),
+}
+
+/// The starts of `team` about the centre `center` of a circle, in angular order (the same set
+/// of gaps whichever way the team travels): their gap CV, whether every neighbour is out of
+/// `range_m` (angular gap at least `theta_min` rad and chord at least `range_m`), and the
+/// widest chord between neighbours. `None` for fewer than two starts or one at the centre.
+fn deployed_on_circle(
+    team: &TeamSpec,
+    center: Vec2,
+    theta_min: f64,
+    range_m: f64,
+) -> Option<Deployment> {
+    let mut at: Vec<(f64, usize)> = team
+        .starts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let d = Vec2::new(p.x_m, p.y_m) - center;
+            (d.norm() > 0.0).then(|| (d.y.atan2(d.x), i))
+        })
+        .collect::<Option<_>>()?;
+    if at.len() < 2 {
+        return None;
+    }
+    at.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let start = |i: usize| Vec2::new(team.starts[i].x_m, team.starts[i].y_m);
+    let n = at.len();
+    let mut gaps = Vec::with_capacity(n);
+    let mut all_silent = true;
+    let mut widest = (0.0, [0, 0]);
+    for k in 0..n {
+        let (a, b) = (at[k], at[(k + 1) % n]);
+        let gap = if k + 1 < n {
+            b.0 - a.0
+        } else {
+            std::f64::consts::TAU - (a.0 - b.0)
+        };
+        let chord = (start(b.1) - start(a.1)).norm();
+        all_silent &= gap >= theta_min && chord >= range_m;
+        if chord > widest.0 {
+            widest = (chord, [a.1, b.1]);
+        }
+        gaps.push(gap);
+    }
+    let mean = std::f64::consts::TAU / n as f64;
+    let var = gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
+    Some(Deployment {
+        gap_cv: var.sqrt() / mean,
+        all_silent,
+        widest_chord: widest,
     })
 }
 
@@ -681,7 +798,7 @@ fn tracking_report(s: &Scenario, l: &Law, r: &Regions, team: &TeamSpec) -> TeamT
 /// The `team` section of a scenario with `[team]` (`None` without).
 pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamCheckReport> {
     let team = s.spec().team.as_ref()?;
-    let spacing = spacing_report(s, team);
+    let spacing = spacing_report(s, l, team);
     let tracking = tracking_report(s, l, r, team);
     let (verdict, verdict_reason) = match s.team_refusal() {
         Some(why) => (
@@ -690,7 +807,15 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
         ),
         None => match range_balance_out_of_range(&spacing) {
             Some(why) => (Verdict::Fails, why),
-            None => team_verdict(team, &spacing, &tracking),
+            None => match (
+                team_verdict(team, &spacing, &tracking),
+                spacing_claim(s, l, team),
+            ) {
+                // A loop that fails fails whatever the gaps do; otherwise what range_balance
+                // can do with the gaps decides (att43-1, -2, -8, -13).
+                (base, Some(claim)) if base.0 != Verdict::Fails => claim,
+                (base, _) => base,
+            },
         },
     };
     Some(TeamCheckReport {
@@ -701,6 +826,175 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
         verdict_reason,
         spacing,
         tracking,
+    })
+}
+
+/// Whether `range_balance` can even the gaps at all, beyond its loop's stability: `None` when
+/// nothing stands in its way (or for another law, or `k_v = 0`, the user's `none`), else the
+/// verdict and its reason:
+///
+/// * the law cannot move the gaps (att43-8, att43-13, att41-19): every range lost
+///   (`dropout_probability = 1`), no speed to command but `v0` (every envelope of zero width),
+///   or two vehicles (each sees its one neighbour as ahead and behind). The gaps stay as
+///   deployed: `holds` only when the starts are even on a known circle, else `fails`;
+/// * unequal nominal speeds with a range limit short of even spacing (att43-2): neither the
+///   halt bound (one speed) nor the linear loop (every neighbour heard) describes it:
+///   `not_applicable` (the runs seen stay uneven);
+/// * a discovered ring whose starts leave neighbours beyond the range (att43-1): the probes may
+///   not find the ring, and without it the law is off: `not_applicable`;
+///
+/// and, for either spacing law, a listed ring out of the order of travel
+/// ([`listed_ring_out_of_order`]): `fails`.
+fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, String)> {
+    if let Some(wrong) = listed_ring_out_of_order(s, l, team) {
+        return Some((Verdict::Fails, wrong));
+    }
+    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
+        return None;
+    };
+    let n = team.count();
+    if gain_per_s == 0.0 || n < 2 {
+        return None;
+    }
+    let circle = s.team_arc();
+    let deployed = |range_m: f64| {
+        circle.and_then(|c| deployed_on_circle(team, c.center_m, f64::INFINITY, range_m))
+    };
+    let even = TeamMetricsConfig::default().even_gap_cv;
+    let frozen = if n == 2 {
+        Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
+    } else if team.ranging.dropout_probability >= 1.0 {
+        Some("team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0".to_string())
+    } else if (0..n).all(|i| {
+        let v = team.speeds(i);
+        v.min_mps == v.max_mps
+    }) {
+        Some(format!(
+            "team.v_min_mps = team.v_max_mps = {} m/s: range_balance has no speed to command but v0",
+            Echo(team.v_min_mps)
+        ))
+    } else {
+        None
+    };
+    if let Some(why) = frozen {
+        let one_speed = team.nominal_speeds_mps().len() == 1;
+        return Some(match deployed(f64::INFINITY).filter(|_| one_speed) {
+            Some(d) if d.gap_cv <= even => (
+                Verdict::Holds,
+                format!(
+                    "{why}, so the team keeps its deployment, which is even (the starts' gap CV {} <= {})",
+                    Num(d.gap_cv),
+                    Num(even)
+                ),
+            ),
+            Some(d) => (
+                Verdict::Fails,
+                format!(
+                    "{why}, so the gaps stay as deployed: the starts' gap CV {} > {} (even spacing is not reached)",
+                    Num(d.gap_cv),
+                    Num(even)
+                ),
+            ),
+            None => (
+                Verdict::Fails,
+                format!("{why}, so the gaps stay as deployed (or drift with unequal speeds): even spacing is not reached"),
+            ),
+        });
+    }
+    let r = team.ranging.max_range_m;
+    if !r.is_finite() {
+        return None;
+    }
+    if team.nominal_speeds_mps().len() > 1 {
+        let even_range = circle.map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
+        if even_range.is_none_or(|d| d > r) {
+            return Some((
+                Verdict::NotApplicable,
+                format!(
+                    "unequal nominal speeds (team.vehicles) with team.ranging.max_range_m = {}{}: where neighbours fall silent range_balance commands each vehicle its own v0, so neither the halt of one speed nor the linear loop (every neighbour heard) describes the team; run it to see whether it spreads",
+                    Echo(r),
+                    even_range.map_or(String::new(), |d| format!(
+                        " short of the even spacing's range {} m",
+                        Num(d)
+                    ))
+                ),
+            ));
+        }
+    }
+    if let RingMode::Discover(_) = team.ring {
+        if let Some(d) = deployed(r).filter(|d| d.widest_chord.0 > r) {
+            let [a, b] = d.widest_chord.1;
+            return Some((
+                Verdict::NotApplicable,
+                format!(
+                    "team.ring = \"discovered\" with team.ranging.max_range_m = {}: vehicles {a} and {b}, neighbours at the start, are {} m apart, beyond the range, so the probes may not find the ring, and without it the spacing law is off for the whole run (the run warns it); list the ring or lengthen the range",
+                    Echo(r),
+                    Num(d.widest_chord.0)
+                ),
+            ));
+        }
+    }
+    None
+}
+
+/// The direction the PI-like law travels a radial field's circle (att43-10, -11): `-1`
+/// clockwise, `+1` counter-clockwise, `None` for another law. The field falls outward
+/// (`team_arc`'s radial fields: `i0 > 0`, `k > 0`), so inside the circle `eps > 0` and the
+/// law's steady term `kp c1 tanh(eps/c2)` turns the vehicle left (a positive turn rate is
+/// counter-clockwise) when `kp c1 > 0`: on a clockwise orbit left is outward, back to the
+/// circle, so the law travels clockwise, the paper's "higher values on the right"
+/// (`controller.higher_side = "right"`); `"left"` mirrors the law (`omega -> -omega`), and so
+/// does `kp c1 < 0`. A vehicle started the other way turns round.
+fn travel_direction(s: &Scenario, l: &Law) -> Option<f64> {
+    let side = s.spec().controller.pi_isoline()?.output.higher_side.sign();
+    let k = l.kp * l.c1;
+    (k != 0.0 && k.is_finite()).then(|| -k.signum() * side)
+}
+
+/// How many turns the listed ring makes round the circle's centre `center` in the direction of
+/// travel `dir`: from each start to the next listed one (the last to the first), the angle
+/// ahead in `[0, 2 pi)`, summed over the ring, in turns. 1 when the listed order is the order
+/// along the travel; a reversed list gives `N - 1`, a permuted one another count. `None` when a
+/// start is at the centre or two share an angle.
+fn listed_ring_turns(team: &TeamSpec, center: Vec2, dir: f64) -> Option<usize> {
+    let tau = std::f64::consts::TAU;
+    let angle = |i: usize| {
+        let d = Vec2::new(team.starts[i].x_m, team.starts[i].y_m) - center;
+        (d.norm() > 0.0).then(|| d.y.atan2(d.x))
+    };
+    let n = team.count();
+    let mut sum = 0.0;
+    for i in 0..n {
+        let step = (dir * (angle((i + 1) % n)? - angle(i)?)).rem_euclid(tau);
+        if step == 0.0 {
+            return None;
+        }
+        sum += step;
+    }
+    Some((sum / tau).round() as usize)
+}
+
+/// att43-10, att43-11: a listed ring (`ahead(i) = i + 1`) of a spacing law on a known circle
+/// whose starts are not in the order of travel ([`listed_ring_turns`] other than 1): each
+/// vehicle's "ahead" is not the neighbour ahead, so the law pushes neighbours together (the
+/// runs seen collided within 6 s). The reason, `None` when in order or not known.
+fn listed_ring_out_of_order(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<String> {
+    if team.law == SpacingLaw::None || team.count() < 3 || !matches!(team.ring, RingMode::Listed) {
+        return None;
+    }
+    let c = s.team_arc()?;
+    let dir = travel_direction(s, l)?;
+    let side = s.spec().controller.pi_isoline()?.output.higher_side.sign();
+    let turns = listed_ring_turns(team, c.center_m, dir)?;
+    (turns != 1).then(|| {
+        let way = if dir < 0.0 { "clockwise" } else { "counter-clockwise" };
+        format!(
+            "the listed ring is not the order of travel: the law travels this circle {way} (kp c1 {} 0, controller.higher_side = \"{}\"), and from each start to the next listed one, {way}, the ring winds {turns} times round the centre, not once, so a vehicle's neighbour \"ahead\" (the next listed) is not the one ahead and {} drives neighbours together; list the starts in the order of travel (team.spread.clockwise = {}), or use team.ring = \"discovered\"",
+            if (dir < 0.0) == (side > 0.0) { ">" } else { "<" },
+            if side > 0.0 { "right" } else { "left" },
+            team.law.name(),
+            dir < 0.0
+        )
     })
 }
 

@@ -606,25 +606,219 @@ fn a_ranging_limit_short_of_the_even_spacing_fails_by_the_halt_it_allows() {
     assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
 }
 
-/// att41-19: with two vehicles range_balance has no loop whatever the range (each vehicle's
-/// neighbour ahead is its neighbour behind), so a range limit changes neither the verdict nor
-/// the run.
+/// The gap CV (population, over the mean) of `n` vehicles deployed `step` rad apart round a
+/// circle: `n - 1` gaps of `step` and one of the rest of the turn, by direct computation.
+fn spread_cv(step: f64, n: usize) -> f64 {
+    let mut gaps = vec![step; n - 1];
+    gaps.push(2.0 * PI - (n - 1) as f64 * step);
+    let mean = 2.0 * PI / n as f64;
+    let var = gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
+    var.sqrt() / mean
+}
+
+fn run_cv(s: &Scenario) -> f64 {
+    let m = s
+        .run_team(&mut [] as &mut [NoTrace])
+        .unwrap()
+        .unwrap()
+        .team
+        .unwrap();
+    m.gap_cv_final.unwrap()
+}
+
+/// att41-19, att43-8, att43-13: where range_balance cannot move the gaps (two vehicles, each
+/// seeing its one neighbour ahead and behind; every range lost; an envelope of zero width) the
+/// team keeps its deployment, so the verdict is the deployment's: `fails` for the bundled
+/// cluster (0.3 rad steps: the gap CV of `spread_cv`, which the run keeps), `holds` for starts
+/// spread evenly. (They were `holds`, "the spacing loop is stable", while the team never
+/// spread: 1.401, 0.9045.)
 #[test]
-fn a_ranging_limit_does_not_touch_a_team_of_two() {
+fn a_law_that_cannot_move_the_gaps_is_judged_by_the_deployment() {
+    for (sets, n) in [
+        (&["team.count=2", "sim.duration_s=100"][..], 2),
+        (
+            &[
+                "team.count=2",
+                "team.ranging.max_range_m=5.0",
+                "sim.duration_s=100",
+            ],
+            2,
+        ),
+        (
+            &["team.ranging.dropout_probability=1.0", "sim.duration_s=100"],
+            4,
+        ),
+        (
+            &[
+                "team.v_min_mps=0.5",
+                "team.v_max_mps=0.5",
+                "sim.duration_s=100",
+            ],
+            4,
+        ),
+    ] {
+        let s = circular(sets);
+        let t = check(&s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Fails, "{sets:?}: {}", t.verdict_reason);
+        assert!(
+            t.verdict_reason.contains("the gaps stay as deployed"),
+            "{sets:?}: {}",
+            t.verdict_reason
+        );
+        let warned = isotrack_scenario::check::warnings(&s);
+        assert!(
+            warned
+                .iter()
+                .any(|w| w.starts_with("the team check fails: ")),
+            "{sets:?}: {warned:?}"
+        );
+        let want = spread_cv(0.3, n);
+        let cv = run_cv(&s);
+        assert!(
+            close(cv, want, 2e-3),
+            "{sets:?}: run {cv} vs deployed {want}"
+        );
+    }
+    // Spread evenly, the same teams keep an even deployment.
     for sets in [
-        &["team.count=2"][..],
-        &["team.count=2", "team.ranging.max_range_m=5.0"],
+        &["team.count=2", &format!("team.spread.step_rad={PI}")][..],
+        &[
+            "team.ranging.dropout_probability=1.0",
+            &format!("team.spread.step_rad={FRAC_PI_2}"),
+        ],
     ] {
         let s = circular(sets);
         let t = check(&s, None).team.unwrap();
         assert_eq!(t.verdict, Verdict::Holds, "{sets:?}: {}", t.verdict_reason);
-        assert!(t.spacing.range_halt.is_none());
-        let warned = isotrack_scenario::check::warnings(&s);
         assert!(
-            !warned.iter().any(|w| w.contains("max_range_m")),
-            "{warned:?}"
+            t.verdict_reason.contains("keeps its deployment"),
+            "{}",
+            t.verdict_reason
         );
     }
+}
+
+/// att43-3: four robots spread evenly (pi/2 apart, chords 9.80 m) with max_range_m = 5: every
+/// neighbour is out of range at the start, so the team is halted from the start and keeps its
+/// even deployment (the run's gap CV ~1e-15). The worst halt over deployments (0.918) is still
+/// reported, but the verdict is the deployment's: `holds` (it was `fails`).
+#[test]
+fn a_team_halted_from_an_even_start_stays_even() {
+    let s = circular(&[
+        "team.ranging.max_range_m=5.0",
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+        "sim.duration_s=100",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    let h = t.spacing.range_halt.unwrap();
+    assert!(h.deployed_all_silent, "{h:?}");
+    assert!(h.deployed_gap_cv.unwrap() < 1e-12, "{h:?}");
+    let r = 10.0 * std::f64::consts::LN_2;
+    let bound = halt_cv(2.0 * PI * r, 2.0 * r * (5.0 / (2.0 * r)).asin(), 4);
+    assert!(close(h.worst_gap_cv, bound, 1e-9), "{h:?}");
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert!(run_cv(&s) < 1e-9);
+}
+
+/// att43-6: with ki = 0 the P law flies an orbit off the isoline, radius `R'` where the
+/// orbit's turn rate `v/R'` is the law's `kp c1 tanh(|eps|/c2)` and the field there is the level
+/// less `|eps|`: `20 exp(-0.1 R') = 10 - atanh(v/(R' kp c1))` (kp = 1, c1 = 0.2, c2 = 1, v =
+/// 0.5: R' = 7.295 m, solved here by bisection). The ranges are chords of that circle, so a
+/// gap falls silent at `2 asin(M/(2 R'))` rad, not at the isoline's: with M = 9.7 the halt bound
+/// is 0.130 (the isoline's 0.023 let the check say `holds` while the team halted at 0.128).
+#[test]
+fn a_p_law_team_is_bounded_on_the_orbit_it_flies() {
+    let (v, kp, c1) = (0.5, 1.0, 0.2);
+    let r_iso = 10.0 * std::f64::consts::LN_2;
+    let h = |rr: f64| 20.0 * (-0.1 * rr).exp() - 10.0 + (v / (rr * kp * c1)).atanh();
+    let (mut lo, mut hi) = (r_iso, 2.0 * r_iso);
+    assert!(h(lo) > 0.0 && h(hi) < 0.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if h(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let orbit = 0.5 * (lo + hi);
+    let m = 9.7;
+    let s = circular(&[
+        "controller.ki=0.0",
+        "controller.kp=1.0",
+        &format!("team.ranging.max_range_m={m}"),
+        "sim.duration_s=900",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    let halt = t.spacing.range_halt.unwrap();
+    assert!(
+        close(halt.flown_radius_m.unwrap(), orbit, 1e-9),
+        "{halt:?} vs {orbit}"
+    );
+    let theta_min = 2.0 * (m / (2.0 * orbit)).asin();
+    let bound = halt_cv(2.0 * PI * r_iso, theta_min * r_iso, 4);
+    assert!(close(halt.worst_gap_cv, bound, 1e-9), "{halt:?} vs {bound}");
+    assert!(bound > 0.1, "{bound}");
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let cv = run_cv(&s);
+    assert!(
+        cv > 0.05 && cv <= bound * (1.0 + 1e-3),
+        "run {cv} vs bound {bound}"
+    );
+}
+
+/// att43-2: a range limit short of even spacing with unequal nominal speeds (one vehicle
+/// 1e-7 m/s faster) is neither the halt of one speed nor the linear loop: `not_applicable`, no
+/// longer `holds` (the run halts at 0.918 as with one speed).
+#[test]
+fn unequal_speeds_under_a_short_range_are_not_judged_holds() {
+    let s = circular(&[
+        "team.ranging.max_range_m=5.0",
+        "team.vehicles=[{index=1,speed_mps=0.5000001}]",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("unequal nominal speeds"),
+        "{}",
+        t.verdict_reason
+    );
+    // In range of even spacing, the loop's verdict stands.
+    let s = circular(&[
+        "team.ranging.max_range_m=12.0",
+        "team.vehicles=[{index=1,speed_mps=0.5000001}]",
+    ]);
+    assert_eq!(check(&s, None).team.unwrap().verdict, Verdict::Holds);
+}
+
+/// att43-1: a discovered ring of six robots clustered 0.3 rad apart on the circle of radius
+/// r = 10 ln 2 with max_range_m = 8: the cluster's two ends, neighbours on the ring, are
+/// `2 r sin((2 pi - 5 * 0.3)/2)` = 9.447 m apart, beyond the range, so the probes may not find
+/// the ring (the run's law was off, gap CV 1.596): `not_applicable`, naming them; with 10 m
+/// the verdict is the loop's.
+#[test]
+fn a_discovered_ring_beyond_the_range_at_the_start_is_not_judged_holds() {
+    let r = 10.0 * std::f64::consts::LN_2;
+    let ends = 2.0 * r * ((2.0 * PI - 5.0 * 0.3) / 2.0).sin();
+    let s = circular(&[
+        "team.count=6",
+        "team.ring=\"discovered\"",
+        "team.ranging.max_range_m=8.0",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("vehicles 0 and 5")
+            && t.verdict_reason.contains(&format!("{ends:.4}")[..5]),
+        "{} ({ends})",
+        t.verdict_reason
+    );
+    let s = circular(&[
+        "team.count=6",
+        "team.ring=\"discovered\"",
+        "team.ranging.max_range_m=10.0",
+    ]);
+    assert_eq!(check(&s, None).team.unwrap().verdict, Verdict::Holds);
 }
 
 /// att41-6: the same halt on an isoline the check extracts (an isotropic Gaussian whose level-10
@@ -701,4 +895,79 @@ fn a_spacing_loop_not_computed_is_no_holds() {
         None,
     );
     assert_eq!(r.verdict, Verdict::Fails, "{}", r.verdict_reason);
+}
+
+/// att43-10, att43-11: the PI-like law with `kp c1 > 0` travels the radial field's circle
+/// clockwise (inside it `eps > 0` turns the vehicle left, outward on a clockwise orbit), so the
+/// listed ring `ahead(i) = i + 1` must be the clockwise order of the starts. A spread with
+/// `clockwise = false`, or starts listed 0, 2, 1, 3 along the travel, wind round the centre 3
+/// and 2 times: the check fails them, and the simulated teams indeed collide (closer than
+/// 0.5 m; seen 0.004 and 0.016 m), while the clockwise spread holds and stays apart.
+#[test]
+fn a_listed_ring_out_of_the_order_of_travel_fails() {
+    let r = 10.0 * std::f64::consts::LN_2;
+    let start = |a: f64| {
+        format!(
+            "{{ x_m = {}, y_m = {}, heading_rad = {} }}",
+            r * a.cos(),
+            r * a.sin(),
+            a - FRAC_PI_2
+        )
+    };
+    let permuted = format!(
+        "starts = [{}]",
+        [0.0, -0.6, -0.3, -0.9].map(start).join(", ")
+    );
+    let text = circular_text();
+    let spread_line = text
+        .lines()
+        .find(|l| l.starts_with("spread = "))
+        .unwrap()
+        .to_string();
+    let listed = parse_scenario(
+        &text.replace(&spread_line, &permuted),
+        "permuted.toml",
+        &["sim.duration_s=60".to_string()],
+    )
+    .unwrap();
+    let reversed = circular(&["team.spread.clockwise=false", "sim.duration_s=60"]);
+    for (s, turns) in [(&listed, 2), (&reversed, 3)] {
+        let t = check(s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+        assert!(
+            t.verdict_reason
+                .contains(&format!("the ring winds {turns} times")),
+            "{}",
+            t.verdict_reason
+        );
+        let m = s
+            .run_team(&mut [] as &mut [NoTrace])
+            .unwrap()
+            .unwrap()
+            .team
+            .unwrap();
+        let d = m.closest_approach.unwrap().distance_m;
+        assert!(d < 0.5, "{d}");
+    }
+    // In order: the clockwise spread, and the counter-clockwise one under the mirrored law
+    // (`higher_side = "left"`: omega -> -omega, counter-clockwise travel).
+    for sets in [
+        &["sim.duration_s=60"][..],
+        &[
+            "sim.duration_s=60",
+            "team.spread.clockwise=false",
+            "controller.higher_side=\"left\"",
+        ],
+    ] {
+        let ok = circular(sets);
+        let t = check(&ok, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Holds, "{sets:?}: {}", t.verdict_reason);
+        let m = ok
+            .run_team(&mut [] as &mut [NoTrace])
+            .unwrap()
+            .unwrap()
+            .team
+            .unwrap();
+        assert!(m.closest_approach.unwrap().distance_m > 0.5, "{sets:?}");
+    }
 }

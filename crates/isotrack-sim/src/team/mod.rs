@@ -1067,7 +1067,7 @@ impl<'a, X: Clone, C: IsolineController> Group<'a, X, C> {
             .map(|r| r.map_or_else(|| "null".to_string(), |[a, b]| format!("[{a},{b}]")))
             .collect();
         self.warnings.push(format!(
-            "team.ring = \"discovered\": the neighbours found by the probes (ending at t = {} s) are not one ring through the vehicles flying ({fault}; [ahead, behind] by vehicle: [{}]); the spacing law is off: every vehicle flies its nominal speed for the rest of the run, unspaced (team.neighbours all null). The ranging is too lossy or slow for the probes (more rate_hz, less dropout_probability or delay_s), or list the ring (team.ring = \"listed\")",
+            "team.ring = \"discovered\": the neighbours found by the probes (ending at t = {} s) are not one ring through the vehicles flying ({fault}; [ahead, behind] by vehicle: [{}]); the spacing law is off: every vehicle flies its nominal speed for the rest of the run, unspaced (team.neighbours all null). The ranging is too lossy, slow or short for the probes (more rate_hz or max_range_m: each vehicle must range its neighbours at the start; less dropout_probability or delay_s), or list the ring (team.ring = \"listed\")",
             isotrack_core::numtext::Num(k as f64 * self.plan.dt_s),
             table.join(",")
         ));
