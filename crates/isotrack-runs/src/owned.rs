@@ -4,7 +4,10 @@
 //! (a `mavlink.tlog` only beside a flight's summary); a figure: its isotrack mark
 //! (`isotrack_plot::refuse_foreign_figure`, where the mark is written); a table: its first line
 //! is isotrack's header for that file ([`refuse_foreign_csv`]: `compare`'s `comparison.csv`,
-//! `check --map`'s `stability_map.csv` and `verify.csv`). Anything else of the name is the
+//! `check --map`'s `stability_map.csv` and `verify.csv`); any other file by its first bytes
+//! ([`refuse_foreign`] with [`empty_or_starts_with`]: a benchmark's files) or as a JSON object
+//! with isotrack's keys ([`json_object_with`]: a sweep's `sweep.json`,
+//! `crate::sweep::manifest::refuse_foreign_sweep_files`). Anything else of the name is the
 //! user's: refused (73, naming it) before the command computes, runs or draws anything.
 
 use crate::failure::{exit, Failure};
@@ -25,26 +28,39 @@ pub fn first_line_is(path: &Path, headers: &[String]) -> std::io::Result<bool> {
     Ok(headers.iter().any(|h| h.as_bytes() == first))
 }
 
-/// Refuses (73) an existing `path` that is not isotrack's table: its first line is none of
-/// `headers` (every header isotrack has written for that file, the present one first;
-/// [`first_line_is`]), or it cannot be read. `what` names the table (`an isotrack
-/// comparison`), `whose` the header's writer (`compare's`). `Ok` when nothing is at `path`; a
-/// link, FIFO or directory there is refused too (it cannot be read as a regular file).
-pub fn refuse_foreign_csv(
+/// Whether the regular file `path` is empty or begins with `prefix` (reads at most its
+/// length, never through a link nor from a FIFO: [`crate::files::open_read_regular`]).
+pub fn empty_or_starts_with(path: &Path, prefix: &[u8]) -> std::io::Result<bool> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(prefix.len());
+    crate::files::open_read_regular(path)?
+        .take(prefix.len() as u64)
+        .read_to_end(&mut head)?;
+    Ok(head.is_empty() || head == prefix)
+}
+
+/// Refuses (73) an existing `path` that is not a regular file (a link, FIFO, directory:
+/// [`crate::files::refuse_non_regular`]'s message), that `ours` does not find isotrack's
+/// (`Ok(false)`: the message says `why_not`), or that cannot be read: "PATH is not WHAT (WHY): refusing to replace it; move it away or
+/// use another --out", the path quoted for a shell. `Ok` when nothing is at `path`. The one
+/// refusal of a file isotrack names itself that is the user's (README, "Outputs").
+pub fn refuse_foreign(
     path: &Path,
-    headers: &[String],
+    ours: impl FnOnce(&Path) -> std::io::Result<bool>,
     what: &str,
-    whose: &str,
+    why_not: &str,
 ) -> Result<(), Failure> {
     if std::fs::symlink_metadata(path).is_err() {
         return Ok(());
     }
-    let why = match first_line_is(path, headers) {
+    // A link, FIFO, directory or device: refused as every output is (never read through).
+    crate::files::refuse_non_regular(path).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: e.to_string(),
+    })?;
+    let why = match ours(path) {
         Ok(true) => return Ok(()),
-        Ok(false) => format!(
-            "its first line is not {whose} header `{}`",
-            headers.first().map(String::as_str).unwrap_or_default()
-        ),
+        Ok(false) => why_not.to_string(),
         Err(e) => format!("it cannot be read: {e}"),
     };
     Err(Failure {
@@ -54,6 +70,61 @@ pub fn refuse_foreign_csv(
             shell_quoted(path)
         ),
     })
+}
+
+/// Refuses (73) an existing `path` that is not isotrack's table: its first line is none of
+/// `headers` (every header isotrack has written for that file, the present one first;
+/// [`first_line_is`]), or it cannot be read. `what` names the table (`an isotrack
+/// comparison`), `whose` the header's writer (`compare's`). `Ok` when nothing is at `path`; a
+/// link, FIFO or directory there is refused too ([`refuse_foreign`]).
+pub fn refuse_foreign_csv(
+    path: &Path,
+    headers: &[String],
+    what: &str,
+    whose: &str,
+) -> Result<(), Failure> {
+    let why_not = format!(
+        "its first line is not {whose} header `{}`",
+        headers.first().map(String::as_str).unwrap_or_default()
+    );
+    refuse_foreign(path, |p| first_line_is(p, headers), what, &why_not)
+}
+
+/// Reads the regular file `path` whole if it holds at most `max` bytes (`Ok(None)` when it
+/// holds more: never read whole), without following a link nor blocking on a FIFO
+/// ([`crate::files::open_read_regular`]).
+pub fn read_capped(path: &Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read;
+    let f = crate::files::open_read_regular(path)?;
+    if f.metadata()?.len() > max {
+        return Ok(None);
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= max).then_some(bytes))
+}
+
+/// Whether the regular file `path` (at most `max` bytes, else not) is a JSON object with a
+/// string at each of `strings` and a number at each of `numbers`: how isotrack tells its own
+/// JSON (a sweep's `sweep.json`, `interpolate`'s sidecar) from the user's file of that name.
+pub fn json_object_with(
+    path: &Path,
+    max: u64,
+    strings: &[&str],
+    numbers: &[&str],
+) -> std::io::Result<bool> {
+    let Some(bytes) = read_capped(path, max)? else {
+        return Ok(false);
+    };
+    let Ok(serde_json::Value::Object(m)) = serde_json::from_slice(&bytes) else {
+        return Ok(false);
+    };
+    Ok(strings
+        .iter()
+        .all(|k| m.get(*k).is_some_and(|v| v.is_string()))
+        && numbers
+            .iter()
+            .all(|k| m.get(*k).is_some_and(|v| v.is_number())))
 }
 
 /// `path` as a POSIX shell word to paste, as every message naming a file the user is to move
