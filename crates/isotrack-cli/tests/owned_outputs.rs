@@ -317,6 +317,9 @@ fn interpolate_never_writes_its_sidecar_over_the_grid_nor_a_users_file() {
     assert_eq!(std::fs::read_to_string(&out).unwrap().lines().count(), 5);
 }
 
+/// Puts a user's file into compare directory `CMP`; returns its path.
+type MakeUsersFile = fn(&Path) -> PathBuf;
+
 /// att42-11: `compare --out CMP`'s up-front checks missed a user's `.isotrack.lock` (and a
 /// file where a law's directory goes) in `CMP/LAW`: the laws before it ran and were written,
 /// then compare was refused. Every law's directory is checked (and locked) before any law
@@ -324,7 +327,7 @@ fn interpolate_never_writes_its_sidecar_over_the_grid_nor_a_users_file() {
 #[test]
 fn compare_checks_every_laws_directory_before_any_law_runs() {
     let d = tempfile::tempdir().unwrap();
-    let cases: [(&str, fn(&Path) -> PathBuf); 2] = [
+    let cases: [(&str, MakeUsersFile); 2] = [
         ("lock", |cmp| {
             std::fs::create_dir_all(cmp.join("pid")).unwrap();
             PathBuf::from(write(&cmp.join("pid"), ".isotrack.lock", "my lock notes\n"))
