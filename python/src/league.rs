@@ -148,6 +148,11 @@ pub fn benchmark_json(
             })
         })
         .transpose()?;
+    // Every output name checked before any task runs: a user's file refused (att42-6).
+    if let Some(d) = out {
+        isotrack_commands::league::refuse_foreign_outputs(Path::new(d), &suite)
+            .map_err(crate::errors::failure)?;
+    }
     let errors: FirstError = Arc::new(Mutex::new(None));
     let cancel = Arc::new(AtomicBool::new(false));
     let mut registry = Registry::builtin();

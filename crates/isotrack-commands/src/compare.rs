@@ -128,11 +128,16 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     let kinds = chosen_kinds(&a.controllers)?;
     check_gains(&a.gain)?;
     let origin = a.scenario.display().to_string();
-    // Held while the runs write into `--out` (released when dropped).
-    let _lock = match &a.out {
-        Some(dir) => Some(open_out(a, dir, &base, &kinds)?),
-        None => None,
+    // Held while the runs write into `--out` (released when dropped), with each law's run
+    // directory, opened (checked and locked) before any law runs.
+    let (_lock, law_dirs) = match &a.out {
+        Some(dir) => {
+            let (lock, dirs) = open_out(a, dir, &base, &kinds)?;
+            (Some(lock), dirs)
+        }
+        None => (None, vec![]),
     };
+    let mut law_dirs = law_dirs.into_iter();
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
     // The laws whose true error never reached the level (at any step, whatever the trace
     // records), with how far each went from its start, m.
@@ -144,11 +149,10 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         for w in &warnings {
             errln!("warning: {w}");
         }
-        let r = if let Some(dir) = &a.out {
+        let r = if let Some(out) = law_dirs.next() {
             // The directory's lock is held for all of them (above), and each law's directory
-            // is locked too while it is written: a `run --out CMP/LAW` meanwhile never saw the
-            // parent's lock, both wrote the directory and the run's result vanished (att36-9).
-            let out = RunDir::open(&dir.join(kind.name()), &[], &[], Some("compare"))?;
+            // is locked too: a `run --out CMP/LAW` meanwhile never saw the parent's lock, both
+            // wrote the directory and the run's result vanished (att36-9).
             let mut trace = out.trace(s.is_flying())?;
             let r = s.run(trace.writer());
             let warnings = isotrack_scenario::check::warnings(&s);
@@ -215,13 +219,18 @@ fn cant(what: &Path, e: std::io::Error) -> Failure {
 
 /// `--out DIR` opened for the runs of `kinds`: nothing written over an input (the scenario
 /// file, its field's data: exit 64), and one writer per directory (the lock, as sweeps: a
-/// second at once exits 73); every output that exists must be a regular file.
+/// second at once exits 73); every output that exists must be a regular file. Returns the
+/// lock and each law's run directory, in `kinds`' order, every one opened
+/// ([`RunDir::open`]: checked and locked) before any law runs (att42-11: a user's
+/// `.isotrack.lock` or a file that is no directory at `DIR/LAW` was found only when that law's
+/// turn came, after the laws before it had run and been written); on a refusal, the law
+/// directories this created are removed again.
 fn open_out(
     a: &CompareArgs,
     dir: &Path,
     base: &Scenario,
     kinds: &[ControllerKind],
-) -> Result<crate::sweep::DirLock, Failure> {
+) -> Result<(crate::sweep::DirLock, Vec<RunDir>), Failure> {
     let inputs = crate::output::input_files(Some(&a.scenario), base);
     let mut outputs = vec![dir.join("comparison.csv")];
     for kind in kinds {
@@ -246,13 +255,17 @@ fn open_out(
     // isotrack's, or a law's directory holding run files that are not an earlier isotrack
     // run's, is refused (73) naming it; the lock is removed again as it drops.
     refuse_foreign_comparison(&dir.join("comparison.csv"))?;
+    let mut laws: Vec<RunDir> = Vec::with_capacity(kinds.len());
     for kind in kinds {
-        let law = dir.join(kind.name());
-        if law.is_dir() {
-            isotrack_runs::rundir::refuse_not_an_earlier_run(&law, &[])?;
+        match RunDir::open(&dir.join(kind.name()), &[], &[], Some("compare")) {
+            Ok(law) => laws.push(law),
+            Err(e) => {
+                laws.into_iter().for_each(RunDir::release_unused);
+                return Err(e);
+            }
         }
     }
-    Ok(lock)
+    Ok((lock, laws))
 }
 
 /// Refuses (73) an existing `comparison.csv` that an isotrack did not write, or that was edited

@@ -43,7 +43,7 @@ pub fn interpolate(a: &InterpolateArgs) -> Result<(), Failure> {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", a.out.display()),
     };
-    let side = a.out.with_extension("json");
+    let side = sidecar_path(&a.out)?;
     prepare_outputs(a, &side)?;
     write_grid_csv(&a.out, &grid).map_err(cant)?;
     let (lo, hi) = grid.value_range();
@@ -129,9 +129,41 @@ fn station_grid(
     Ok((grid, method))
 }
 
+/// The sidecar of grid `out`: the same name with `.json`. A grid named `*.json` (any case)
+/// is refused (64, naming `--out` and the file): its sidecar would be written over the grid
+/// itself (att42-7).
+fn sidecar_path(out: &std::path::Path) -> Result<std::path::PathBuf, Failure> {
+    let side = out.with_extension("json");
+    let is_json = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    if is_json {
+        return Err(Failure {
+            code: exit::USAGE,
+            message: format!(
+                "--out {}: the grid's JSON sidecar is written to the grid's name with `.json` ({}), which would replace the grid itself: name the grid with another extension (`.csv`)",
+                isotrack_runs::owned::shell_quoted(out),
+                isotrack_runs::owned::shell_quoted(&side)
+            ),
+        });
+    }
+    Ok(side)
+}
+
+/// Whether the file at `path` (at most 1 MiB) is an isotrack grid's sidecar: a JSON object
+/// whose `derived` says `interpolated by isotrack` (every sidecar has, since the command came).
+fn is_sidecar(path: &std::path::Path) -> std::io::Result<bool> {
+    let bytes = isotrack_runs::owned::read_capped(path, 1 << 20)?.unwrap_or_default();
+    let v: serde_json::Value = serde_json::from_slice(&bytes).unwrap_or_default();
+    Ok(v["derived"]
+        .as_str()
+        .is_some_and(|d| d.starts_with("interpolated by isotrack")))
+}
+
 /// The outputs (`--out` and its `.json` sidecar `side`) checked before either is written:
 /// neither is the stations file, the directory exists, neither is a link or other non-regular
-/// file.
+/// file, and `side`, a name isotrack chose, is no file of the user's ([`is_sidecar`]; README,
+/// "Outputs": the grid, named on the command line, is replaced as `cp` replaces a file).
 fn prepare_outputs(a: &InterpolateArgs, side: &std::path::Path) -> Result<(), Failure> {
     let cant = |e: std::io::Error| Failure {
         code: exit::CANTCREAT,
@@ -152,7 +184,12 @@ fn prepare_outputs(a: &InterpolateArgs, side: &std::path::Path) -> Result<(), Fa
     for o in [a.out.as_path(), side] {
         isotrack_runs::files::refuse_non_regular(o).map_err(cant)?;
     }
-    Ok(())
+    isotrack_runs::owned::refuse_foreign(
+        side,
+        is_sidecar,
+        "an isotrack grid's sidecar",
+        "not a JSON object whose `derived` says `interpolated by isotrack`",
+    )
 }
 
 /// The grid's sidecar: what it was derived from, its layout, shape, spacing, origin and

@@ -76,6 +76,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     })?;
     let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     let _lock = open_out_dir(&a.out, a.resume)?;
+    refuse_foreign_outputs(&a.out, &suite)?;
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
@@ -128,6 +129,76 @@ pub fn open_out_dir(out: &Path, resume: bool) -> Result<crate::sweep::DirLock, F
         ));
     }
     Ok(lock)
+}
+
+/// The start of every file a benchmark writes into its directory, as every isotrack has
+/// written it since the command came: a file of one of these names that does not begin so
+/// (nor is empty) is the user's.
+const BENCHMARK_FILES: [(&str, &str); 4] = [
+    ("leaderboard.csv", "rank,controller,overall"),
+    ("leaderboard.md", "| rank | controller | overall |"),
+    (
+        "index.html",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<meta name=\"generator\" content=\"isotrack ",
+    ),
+    ("suite.toml", "# The suite as run by isotrack "),
+];
+
+/// The start of each task's `tasks/ID/results.csv`, as [`BENCHMARK_FILES`].
+const TASK_RESULTS_START: &str = "controller,seed,";
+
+/// The largest `tasks/ID/task.json` read (as `--resume` reads it).
+const MAX_TASK_JSON_BYTES: u64 = 64 << 20;
+
+/// Refuses (73, naming it) a file of benchmark directory `out` that `suite`'s benchmark would
+/// replace and that no benchmark wrote (att42-6: a user's `index.html`, `leaderboard.md` or
+/// `suite.toml` was replaced, and a link or FIFO there refused only once every task had
+/// run): every output name is checked before any task runs, each told by its first bytes
+/// ([`BENCHMARK_FILES`], [`TASK_RESULTS_START`]), a `tasks/ID/task.json` as a JSON object with
+/// the `id`, `title` and `digest` strings every one has had (its keys in any order: an
+/// edited one is `--resume`'s to judge); an older benchmark's are replaced as before. A
+/// `tasks/ID` that is not a directory is refused too. Call it holding the directory's lock
+/// ([`open_out_dir`]).
+pub fn refuse_foreign_outputs(out: &Path, suite: &Suite) -> Result<(), Failure> {
+    use isotrack_runs::owned::{
+        empty_or_starts_with, json_object_with, refuse_foreign, shell_quoted,
+    };
+    let check = |p: &Path, start: &str| {
+        refuse_foreign(
+            p,
+            |p| empty_or_starts_with(p, start.as_bytes()),
+            "an isotrack benchmark's",
+            &format!(
+                "it does not begin with `{}`, as every benchmark's does",
+                start.lines().last().unwrap_or_default()
+            ),
+        )
+    };
+    for (name, start) in BENCHMARK_FILES {
+        check(&out.join(name), start)?;
+    }
+    for task in &suite.tasks {
+        let dir = out.join("tasks").join(&task.id);
+        for d in [out.join("tasks"), dir.clone()] {
+            if std::fs::symlink_metadata(&d).is_ok_and(|m| !m.is_dir()) {
+                return Err(fail(
+                    exit::CANTCREAT,
+                    format!(
+                        "{} is not a directory: the benchmark writes its tasks' results there; move it away or use another --out",
+                        shell_quoted(&d)
+                    ),
+                ));
+            }
+        }
+        check(&dir.join("results.csv"), TASK_RESULTS_START)?;
+        refuse_foreign(
+            &dir.join("task.json"),
+            |p| json_object_with(p, MAX_TASK_JSON_BYTES, &["id", "title", "digest"], &[]),
+            "an isotrack benchmark's",
+            "not a JSON object with the `id`, `title` and `digest` every task.json has had",
+        )?;
+    }
+    Ok(())
 }
 
 /// Writes a finished benchmark into `out`: the leaderboard files, `index.html` and

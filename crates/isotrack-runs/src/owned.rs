@@ -6,9 +6,12 @@
 //! the SHA-256 and size of the figure as written (`isotrack_plot::refuse_foreign_figure`, where
 //! the mark is written); a table (`compare`'s `comparison.csv`, `check --map`'s
 //! `stability_map.csv` and `verify.csv`): its size and SHA-256 as recorded in the directory's
-//! [`TABLE_RECORD`] when isotrack wrote it ([`refuse_foreign_csv`], [`record_table`]). Anything
-//! else of the name is the user's: refused (73, naming it) before the command computes, runs or
-//! draws anything.
+//! [`TABLE_RECORD`] when isotrack wrote it ([`refuse_foreign_csv`], [`record_table`]); any
+//! other file by its first bytes ([`refuse_foreign`] with [`empty_or_starts_with`]: a
+//! benchmark's files) or as a JSON object with isotrack's keys ([`json_object_with`]: a sweep's
+//! `sweep.json`, `crate::sweep::manifest::refuse_foreign_sweep_files`). Anything else of the
+//! name is the user's: refused (73, naming it) before the command computes, runs or draws
+//! anything.
 
 use crate::failure::{exit, Failure};
 use std::path::Path;
@@ -134,6 +137,11 @@ pub fn refuse_foreign_csv(
     if std::fs::symlink_metadata(path).is_err() {
         return Ok(TableOwner::Absent);
     }
+    // A link, FIFO, directory or device: refused as every output is (never read through).
+    crate::files::refuse_non_regular(path).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: e.to_string(),
+    })?;
     let why = match record.as_ref().map(|r| r.get(&name_of(path))) {
         Some(Some(w)) => match as_written(path, w) {
             Ok(true) => return Ok(TableOwner::Recorded),
@@ -161,6 +169,87 @@ pub fn refuse_foreign_csv(
             shell_quoted(path)
         ),
     })
+}
+
+/// Whether the regular file `path` is empty or begins with `prefix` (reads at most its
+/// length, never through a link nor from a FIFO: [`crate::files::open_read_regular`]).
+pub fn empty_or_starts_with(path: &Path, prefix: &[u8]) -> std::io::Result<bool> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(prefix.len());
+    crate::files::open_read_regular(path)?
+        .take(prefix.len() as u64)
+        .read_to_end(&mut head)?;
+    Ok(head.is_empty() || head == prefix)
+}
+
+/// Refuses (73) an existing `path` that is not a regular file (a link, FIFO, directory:
+/// [`crate::files::refuse_non_regular`]'s message), that `ours` does not find isotrack's
+/// (`Ok(false)`: the message says `why_not`), or that cannot be read: "PATH is not WHAT (WHY): refusing to replace it; move it away or
+/// use another --out", the path quoted for a shell. `Ok` when nothing is at `path`. The one
+/// refusal of a file isotrack names itself that is the user's (README, "Outputs").
+pub fn refuse_foreign(
+    path: &Path,
+    ours: impl FnOnce(&Path) -> std::io::Result<bool>,
+    what: &str,
+    why_not: &str,
+) -> Result<(), Failure> {
+    if std::fs::symlink_metadata(path).is_err() {
+        return Ok(());
+    }
+    // A link, FIFO, directory or device: refused as every output is (never read through).
+    crate::files::refuse_non_regular(path).map_err(|e| Failure {
+        code: exit::CANTCREAT,
+        message: e.to_string(),
+    })?;
+    let why = match ours(path) {
+        Ok(true) => return Ok(()),
+        Ok(false) => why_not.to_string(),
+        Err(e) => format!("it cannot be read: {e}"),
+    };
+    Err(Failure {
+        code: exit::CANTCREAT,
+        message: format!(
+            "{} is not {what} ({why}): refusing to replace it; move it away or use another --out",
+            shell_quoted(path)
+        ),
+    })
+}
+
+/// Reads the regular file `path` whole if it holds at most `max` bytes (`Ok(None)` when it
+/// holds more: never read whole), without following a link nor blocking on a FIFO
+/// ([`crate::files::open_read_regular`]).
+pub fn read_capped(path: &Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read;
+    let f = crate::files::open_read_regular(path)?;
+    if f.metadata()?.len() > max {
+        return Ok(None);
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= max).then_some(bytes))
+}
+
+/// Whether the regular file `path` (at most `max` bytes, else not) is a JSON object with a
+/// string at each of `strings` and a number at each of `numbers`: how isotrack tells its own
+/// JSON (a sweep's `sweep.json`, `interpolate`'s sidecar) from the user's file of that name.
+pub fn json_object_with(
+    path: &Path,
+    max: u64,
+    strings: &[&str],
+    numbers: &[&str],
+) -> std::io::Result<bool> {
+    let Some(bytes) = read_capped(path, max)? else {
+        return Ok(false);
+    };
+    let Ok(serde_json::Value::Object(m)) = serde_json::from_slice(&bytes) else {
+        return Ok(false);
+    };
+    Ok(strings
+        .iter()
+        .all(|k| m.get(*k).is_some_and(|v| v.is_string()))
+        && numbers
+            .iter()
+            .all(|k| m.get(*k).is_some_and(|v| v.is_number())))
 }
 
 /// Whether the regular file `path` is `w` (its size from the metadata first: a file of another

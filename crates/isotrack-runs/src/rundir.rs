@@ -63,20 +63,6 @@ pub fn input_files(scenario_file: Option<&Path>, scenario: &Scenario) -> Vec<Pat
         .collect()
 }
 
-/// Reads regular file `path` whole if it holds at most `max` bytes (`Ok(None)` when it holds
-/// more: never read whole), without following a link nor blocking on a FIFO
-/// ([`crate::files::open_read_regular`]).
-fn read_capped(path: &Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
-    use std::io::Read;
-    let f = crate::files::open_read_regular(path)?;
-    if f.metadata()?.len() > max {
-        return Ok(None);
-    }
-    let mut bytes = Vec::new();
-    f.take(max + 1).read_to_end(&mut bytes)?;
-    Ok((bytes.len() as u64 <= max).then_some(bytes))
-}
-
 /// `it` or `them`, `is` or `are`, for `n` files.
 fn it_them(n: usize) -> (&'static str, &'static str) {
     if n == 1 {
@@ -114,7 +100,7 @@ pub fn not_an_earlier_run(dir: &Path, extra: &[&str]) -> Option<String> {
                 shell_quoted(&summary)
             ))
         };
-        let text = match read_capped(&summary, max) {
+        let text = match crate::owned::read_capped(&summary, max) {
             Ok(Some(bytes)) => match String::from_utf8(bytes) {
                 Ok(text) => text,
                 Err(_) => return refused("not UTF-8 text".into()),

@@ -241,7 +241,7 @@ pub fn data_files_entry(files: &BTreeMap<String, String>) -> Option<serde_json::
 /// Reads `DIR/sweep.json`.
 pub fn read_manifest(dir: &Path) -> Result<serde_json::Value, Failure> {
     let path = dir.join("sweep.json");
-    let text = isotrack_fields::io::read_text_limited(&path, 1 << 20).map_err(|e| {
+    let text = isotrack_fields::io::read_text_limited(&path, MAX_MANIFEST_BYTES).map_err(|e| {
         fail(
             exit::NOINPUT,
             format!("{}: no readable sweep.json ({e})", dir.display()),
@@ -285,4 +285,49 @@ pub fn shard_plan(dir: &Path, digest: &str) -> Result<(SweepPlan, ScenarioFile),
         )
     })?;
     Ok((plan, base))
+}
+
+/// The files `sweep` and `merge` write into a sweep directory besides `results.csv`, the
+/// manifest first.
+pub const SWEEP_FILES: [&str; 3] = ["sweep.json", "sweep.toml", "base_scenario.toml"];
+
+/// The largest `sweep.json` read ([`read_manifest`]'s cap).
+const MAX_MANIFEST_BYTES: u64 = 1 << 20;
+
+/// Refuses (73, naming it, before `sweep` or `merge` writes or removes anything) a file of
+/// sweep directory `dir` that no isotrack sweep wrote (att42-4: a user's `sweep.toml`,
+/// `base_scenario.toml` or `sweep.json` there was replaced without a word). Isotrack's are told
+/// as follows: `sweep.json` is a JSON object with the `sweep` and `scenario` strings and the
+/// `total_runs` number every manifest has had; `results.csv` is empty or begins with `run_id,`
+/// (every sweep's header); `sweep.toml` and `base_scenario.toml` are the sweep's beside either
+/// of those (every sweep writes its manifest before them, an older isotrack's results.csv may
+/// have no manifest, and a merge cut short may have its results.csv but no manifest yet).
+/// Anything else of those names is the user's. A link, FIFO or directory there is refused too.
+pub fn refuse_foreign_sweep_files(dir: &Path) -> Result<(), Failure> {
+    use crate::owned::{empty_or_starts_with, json_object_with, refuse_foreign};
+    let results = dir.join("results.csv");
+    refuse_foreign(
+        &results,
+        |p| empty_or_starts_with(p, b"run_id,"),
+        "an isotrack sweep's results",
+        "its first line does not begin with `run_id,`, as every sweep's results.csv does",
+    )?;
+    let manifest = dir.join("sweep.json");
+    refuse_foreign(
+        &manifest,
+        |p| json_object_with(p, MAX_MANIFEST_BYTES, &["sweep", "scenario"], &["total_runs"]),
+        "an isotrack sweep's manifest",
+        "not a JSON object with the `sweep`, `scenario` and `total_runs` keys every sweep.json has had",
+    )?;
+    let exists = |p: &Path| std::fs::symlink_metadata(p).is_ok();
+    let a_sweeps = exists(&manifest) || exists(&results);
+    for name in &SWEEP_FILES[1..] {
+        refuse_foreign(
+            &dir.join(name),
+            |_| Ok(a_sweeps),
+            "an isotrack sweep's",
+            "no sweep.json nor results.csv beside it: no sweep's directory",
+        )?;
+    }
+    Ok(())
 }

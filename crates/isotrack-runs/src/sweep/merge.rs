@@ -53,6 +53,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
     let cant = cant_write(out);
     std::fs::create_dir_all(out).map_err(cant)?;
     let _lock = lock_output_dir(out, "merge")?;
+    // Whose files are there (att42-4: a user's sweep.toml, base_scenario.toml or sweep.json
+    // was replaced), before any is written.
+    crate::sweep::manifest::refuse_foreign_sweep_files(out)?;
     let mut shards = Shards::default();
     for d in dirs {
         read_shard(&mut shards, d, dirs)?;

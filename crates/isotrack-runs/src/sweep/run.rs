@@ -7,9 +7,11 @@ use crate::failure::{exit, fail, Failure};
 use crate::sweep::check::RunSpans;
 use crate::sweep::index::{index_results, sort_rows, write_sorted};
 use crate::sweep::lock::{lock_output_dir, DirLock};
+use crate::sweep::manifest::SWEEP_FILES;
 use crate::sweep::manifest::{
     check_data_files, check_engine, data_files_entry, engine, given_toml,
-    plan_data_file_digests_all, read_manifest, sweep_digest, unrecorded_engine_note,
+    plan_data_file_digests_all, read_manifest, refuse_foreign_sweep_files, sweep_digest,
+    unrecorded_engine_note,
 };
 use crate::sweep::prepared::sweep_base;
 use crate::sweep::rows::{csv_fields, csv_line, results_header, run_rows};
@@ -26,6 +28,8 @@ use std::path::{Path, PathBuf};
 /// A sweep file read and checked, with its base scenario and digest: ready to run into a
 /// directory.
 pub struct SweepJob {
+    /// The sweep file's path.
+    pub path: PathBuf,
     /// The sweep file's bytes (kept as `sweep.toml`).
     pub sweep_bytes: Vec<u8>,
     /// The plan.
@@ -124,6 +128,7 @@ impl SweepJob {
         let header = results_header(&plan, base.spec().team.is_some());
         let data_files = plan_data_file_digests_all(&plan, base.given(), &name)?;
         Ok(Self {
+            path: path.to_path_buf(),
             sweep_bytes,
             plan,
             name,
@@ -151,10 +156,13 @@ impl SweepJob {
         let total = self.plan.total();
         let shard_runs = total / n + u64::from(total % n >= k);
         let cant = cant_write(out);
+        self.refuse_inputs_as_outputs(out)?;
         std::fs::create_dir_all(out).map_err(cant)?;
         // Held to the end of the sweep (dropped with the output, released by the OS on any
         // exit).
         let lock = lock_output_dir(out, "sweep")?;
+        // Whose files are there (att42-4), before anything is removed or written.
+        refuse_foreign_sweep_files(out)?;
         let results = out.join("results.csv");
         if results.exists() && force {
             std::fs::remove_file(&results).map_err(cant)?;
@@ -203,6 +211,49 @@ impl SweepJob {
             done,
             lock,
         })
+    }
+
+    /// Refuses (64) a sweep whose output in `out` (`sweep.json`, `sweep.toml`,
+    /// `base_scenario.toml`, `results.csv`) is one of its inputs (the sweep file, its base
+    /// scenario, a data file a run reads), through links too (att42-4: a sweep whose base
+    /// scenario was `DIR/base_scenario.toml` wrote its resolved keys over it). A `sweep.toml` or
+    /// `base_scenario.toml` that already holds exactly what the sweep would write there (the
+    /// sweep file `DIR/sweep.toml` of an earlier sweep run again) is no clash: it is left as
+    /// it is.
+    fn refuse_inputs_as_outputs(&self, out: &Path) -> Result<(), Failure> {
+        let inputs: Vec<PathBuf> = [self.path.clone(), self.plan.scenario.clone()]
+            .into_iter()
+            .chain(self.data_files.keys().map(PathBuf::from))
+            .collect();
+        for name in SWEEP_FILES.iter().chain(&["results.csv"]) {
+            let o = out.join(name);
+            let Some(input) = inputs.iter().find(|i| crate::files::same_file(i, &o)) else {
+                continue;
+            };
+            if self.unchanged(&o, name) {
+                continue;
+            }
+            return Err(fail(
+                exit::USAGE,
+                format!(
+                    "{} is an input ({}): an output cannot be one of the inputs; use another --out",
+                    crate::owned::shell_quoted(&o),
+                    input.display()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether `path` (the sweep directory's file `name`) already holds what the sweep writes
+    /// there (`sweep.toml`, `base_scenario.toml`): writing it would change nothing.
+    fn unchanged(&self, path: &Path, name: &str) -> bool {
+        let new: &[u8] = match name {
+            "sweep.toml" => &self.sweep_bytes,
+            "base_scenario.toml" => self.base_toml.as_bytes(),
+            _ => return false,
+        };
+        crate::owned::read_capped(path, new.len() as u64).is_ok_and(|b| b.as_deref() == Some(new))
     }
 
     /// Refuses directory `out` on `--resume` when its `sweep.json` names another digest or
@@ -311,10 +362,6 @@ impl SweepJob {
         record_engine: bool,
     ) -> Result<(), Failure> {
         let cant = cant_write(out);
-        // Never through a link nor into a FIFO (73 at once): `files::write_atomic`.
-        crate::files::write_atomic(&out.join("sweep.toml"), &self.sweep_bytes).map_err(cant)?;
-        crate::files::write_atomic(&out.join("base_scenario.toml"), self.base_toml.as_bytes())
-            .map_err(cant)?;
         let mut manifest = json!({
             "sweep": self.name,
             "scenario": self.plan.scenario.display().to_string(),
@@ -332,11 +379,26 @@ impl SweepJob {
         if record_engine {
             manifest["engine"] = json!(engine());
         }
+        // The manifest first, so that the two files after it are never without it (a sweep
+        // killed between them leaves them the sweep's, [`refuse_foreign_sweep_files`]).
+        // Never through a link nor into a
+        // FIFO (73 at once): `files::write_atomic`; a file that already holds its bytes (the
+        // sweep's own input: [`SweepJob::refuse_inputs_as_outputs`]) is left as it is.
         crate::files::write_atomic(
             &out.join("sweep.json"),
             (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
         )
-        .map_err(cant)
+        .map_err(cant)?;
+        for (name, bytes) in [
+            ("sweep.toml", self.sweep_bytes.as_slice()),
+            ("base_scenario.toml", self.base_toml.as_bytes()),
+        ] {
+            let p = out.join(name);
+            if !self.unchanged(&p, name) {
+                crate::files::write_atomic(&p, bytes).map_err(cant)?;
+            }
+        }
+        Ok(())
     }
 
     /// Runs the shard's runs not yet done on `pool`, appending each row to `results.csv` as it
