@@ -330,7 +330,7 @@ fn plot_and_note_before(
     let mut before = outputs_present(dir);
     if args.plot {
         let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
-        let written = crate::figures::plot_dirs(std::slice::from_ref(dir), &st, dir)?;
+        let written = crate::figures::plot_dirs(&[dir.to_path_buf()], &st, dir)?;
         before.retain(|n| {
             !written
                 .iter()
