@@ -169,123 +169,178 @@ pub fn run(args: &RunArgs) -> Result<(), Failure> {
     for w in &warnings {
         errln!("warning: {w}");
     }
-    // A team steps over `--threads` (capped as a sweep's; all cores by default).
-    let (count, note) = isotrack_runs::sweep::pool::thread_count(args.threads);
-    if let (Some(note), Some(_)) = (note, scenario.spec().team.as_ref()) {
-        errln!("{note}");
-    }
-    let threads = isotrack_sim::TeamThreads::new(
-        count.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-    );
+    let threads = team_threads(args, &scenario);
     let name = args.scenario.scenario.as_ref().map_or_else(
         || "<built-in default: paper Fig. 2(b)>".to_string(),
         |p| p.display().to_string(),
     );
-    let result = if let Some(dir) = &args.out {
-        // An output that is one of the inputs (the scenario file, the field's data) is refused
-        // before anything is written: a run directory never replaces what it was made from.
-        // One writer per run directory (as sweeps): a second `run --out D` at once exits 73.
-        let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), &scenario);
-        let out = RunDir::open(dir, &inputs, &[], Some("run"))?;
-        // `--plot` into a folder holding the user's own trajectory.png (no isotrack mark) is
-        // refused before the run, not after it (att38-9).
-        if args.plot {
-            crate::figures::refuse_foreign_figures(
-                dir,
-                &crate::figures::run_figure_names(
-                    isotrack_plot::Format::Png,
-                    scenario.spec().team.is_some(),
-                ),
-            )?;
-        }
-        // A team (`[team]`) writes one trace with a `vehicle` column; its summary's top-level
-        // metrics are vehicle 0's, beside the `team` object and the `vehicles` array.
-        let mut trace_file = if scenario.spec().team.is_some() {
-            out.team_trace(scenario.is_flying())?
-        } else {
-            out.trace(scenario.is_flying())?
-        };
-        let team =
-            match isotrack_runs::trace::run_team_into(&scenario, trace_file.writer(), threads) {
-                Some(Ok(t)) => Some(t),
-                Some(Err(e)) => return Err(refused_team(&out, trace_file, e)),
-                None => None,
-            };
-        warn_unfinished(&scenario, team.as_ref());
-        let (result, mut summary) = match &team {
-            Some(t) => (
-                t.runs[0].clone(),
-                Summary::of_team(&scenario, args.scenario.scenario.as_deref(), t, &warnings),
-            ),
-            None => {
-                let r = scenario.run(trace_file.writer());
-                let s =
-                    Summary::of_run(&scenario, args.scenario.scenario.as_deref(), &r, &warnings);
-                (r, s)
-            }
-        };
-        if let Some(w) = summary.data_files_as_read(read) {
-            errln!("warning: {w}");
-        }
-        out.finish(trace_file, &scenario_toml(&scenario), &summary)?;
-        let (trace, summary, resolved) = (
-            out.path("trace.csv"),
-            out.path("summary.json"),
-            out.path("scenario.toml"),
-        );
-        if !args.quiet {
-            out!("{}", human_summary(&name, &scenario, &result));
-            if let Some(t) = &team {
-                out!("{}", team_summary(&scenario, t));
-            }
-            outln!(
-                "wrote       {}, {}, {}",
-                trace.display(),
-                summary.display(),
-                resolved.display()
-            );
-        }
-        // Every file named as a figure or log here now is from before this run (the run wrote
-        // none yet), whatever its date (att39-7: by modification time, one dated in the future
-        // was missed); --plot's own are struck off below.
-        let mut before = outputs_present(dir);
-        if args.plot {
-            let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
-            let written = crate::figures::plot_dirs(std::slice::from_ref(dir), &st, dir)?;
-            before.retain(|n| {
-                !written
-                    .iter()
-                    .any(|w| std::path::Path::new(w).file_name() == Some(std::ffi::OsStr::new(n)))
-            });
-            if !args.quiet {
-                outln!("plotted     {}", written.join(", "));
-            }
-        }
-        note_outputs_from_before(
-            &before,
-            dir,
-            team.as_ref().is_some_and(|t| t.team.is_some()),
-        );
-        result
-    } else if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
+    match &args.out {
+        Some(dir) => run_into_dir(args, &scenario, &name, dir, read, &warnings, threads),
+        None => run_unrecorded(args, &scenario, &name, threads),
+    }
+}
+
+/// The threads a team steps over: `--threads` (capped as a sweep's; all cores by default), the
+/// cap's note on stderr for a team.
+fn team_threads(args: &RunArgs, scenario: &Scenario) -> isotrack_sim::TeamThreads {
+    let (count, note) = isotrack_runs::sweep::pool::thread_count(args.threads);
+    if let (Some(note), Some(_)) = (note, scenario.spec().team.as_ref()) {
+        errln!("{note}");
+    }
+    isotrack_sim::TeamThreads::new(
+        count.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    )
+}
+
+/// `isotrack run` without `--out`: the run (a team's or one vehicle's), its summary lines on
+/// stdout unless `--quiet`, nothing written.
+fn run_unrecorded(
+    args: &RunArgs,
+    scenario: &Scenario,
+    name: &str,
+    threads: isotrack_sim::TeamThreads,
+) -> Result<(), Failure> {
+    if let Some(team) = scenario.run_team_threads(&mut [] as &mut [NoTrace], threads) {
         let team = team.map_err(|e| Failure {
             code: exit::DATAERR,
             message: e.to_string(),
         })?;
-        warn_unfinished(&scenario, Some(&team));
+        warn_unfinished(scenario, Some(&team));
         if !args.quiet {
-            out!("{}", human_summary(&name, &scenario, &team.runs[0]));
-            out!("{}", team_summary(&scenario, &team));
+            out!("{}", human_summary(name, scenario, &team.runs[0]));
+            out!("{}", team_summary(scenario, &team));
         }
-        team.runs[0].clone()
     } else {
         let result = scenario.run(&mut NoTrace);
         if !args.quiet {
-            out!("{}", human_summary(&name, &scenario, &result));
+            out!("{}", human_summary(name, scenario, &result));
         }
-        result
+    }
+    Ok(())
+}
+
+/// `isotrack run --out DIR`: the run directory opened (refusals before the run), the run
+/// recorded into it, its summary lines, then `--plot`'s figures and the note on files from
+/// before this run.
+fn run_into_dir(
+    args: &RunArgs,
+    scenario: &Scenario,
+    name: &str,
+    dir: &std::path::Path,
+    read: std::collections::BTreeMap<String, String>,
+    warnings: &[String],
+    threads: isotrack_sim::TeamThreads,
+) -> Result<(), Failure> {
+    let out = open_run_dir(args, scenario, dir)?;
+    let (result, team) = record_run(args, scenario, &out, read, warnings, threads)?;
+    if !args.quiet {
+        out!("{}", human_summary(name, scenario, &result));
+        if let Some(t) = &team {
+            out!("{}", team_summary(scenario, t));
+        }
+        outln!(
+            "wrote       {}, {}, {}",
+            out.path("trace.csv").display(),
+            out.path("summary.json").display(),
+            out.path("scenario.toml").display()
+        );
+    }
+    plot_and_note_before(args, dir, team.as_ref().is_some_and(|t| t.team.is_some()))
+}
+
+/// Opens the run directory `dir` of `isotrack run --out`, refusing before the run what it
+/// must not write over.
+fn open_run_dir(
+    args: &RunArgs,
+    scenario: &Scenario,
+    dir: &std::path::Path,
+) -> Result<RunDir, Failure> {
+    // An output that is one of the inputs (the scenario file, the field's data) is refused
+    // before anything is written: a run directory never replaces what it was made from.
+    // One writer per run directory (as sweeps): a second `run --out D` at once exits 73.
+    let inputs = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
+    let out = RunDir::open(dir, &inputs, &[], Some("run"))?;
+    // `--plot` into a folder holding the user's own trajectory.png (no isotrack mark) is
+    // refused before the run, not after it (att38-9).
+    if args.plot {
+        crate::figures::refuse_foreign_figures(
+            dir,
+            &crate::figures::run_figure_names(
+                isotrack_plot::Format::Png,
+                scenario.spec().team.is_some(),
+            ),
+        )?;
+    }
+    Ok(out)
+}
+
+/// Runs `scenario` into the run directory `out`: its trace, then its `summary.json` and
+/// `scenario.toml`. Returns vehicle 0's result and, for a team, the team's.
+fn record_run(
+    args: &RunArgs,
+    scenario: &Scenario,
+    out: &RunDir,
+    read: std::collections::BTreeMap<String, String>,
+    warnings: &[String],
+    threads: isotrack_sim::TeamThreads,
+) -> Result<(RunResult, Option<isotrack_sim::TeamResult>), Failure> {
+    // A team (`[team]`) writes one trace with a `vehicle` column; its summary's top-level
+    // metrics are vehicle 0's, beside the `team` object and the `vehicles` array.
+    let mut trace_file = if scenario.spec().team.is_some() {
+        out.team_trace(scenario.is_flying())?
+    } else {
+        out.trace(scenario.is_flying())?
     };
-    let _ = result;
+    let team = match isotrack_runs::trace::run_team_into(scenario, trace_file.writer(), threads) {
+        Some(Ok(t)) => Some(t),
+        Some(Err(e)) => return Err(refused_team(out, trace_file, e)),
+        None => None,
+    };
+    warn_unfinished(scenario, team.as_ref());
+    let file = args.scenario.scenario.as_deref();
+    let (result, mut summary) = match &team {
+        Some(t) => (
+            t.runs[0].clone(),
+            Summary::of_team(scenario, file, t, warnings),
+        ),
+        None => {
+            let r = scenario.run(trace_file.writer());
+            let s = Summary::of_run(scenario, file, &r, warnings);
+            (r, s)
+        }
+    };
+    if let Some(w) = summary.data_files_as_read(read) {
+        errln!("warning: {w}");
+    }
+    out.finish(trace_file, &scenario_toml(scenario), &summary)?;
+    Ok((result, team))
+}
+
+/// After a run into `dir`: `--plot`'s figures drawn, then the note on the figures and logs
+/// there from before this run ([`note_outputs_from_before`]; `team_figure`: whether this run
+/// draws a team figure).
+fn plot_and_note_before(
+    args: &RunArgs,
+    dir: &std::path::Path,
+    team_figure: bool,
+) -> Result<(), Failure> {
+    // Every file named as a figure or log here now is from before this run (the run wrote
+    // none yet), whatever its date (att39-7: by modification time, one dated in the future
+    // was missed); --plot's own are struck off below.
+    let mut before = outputs_present(dir);
+    if args.plot {
+        let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+        let written = crate::figures::plot_dirs(&[dir.to_path_buf()], &st, dir)?;
+        before.retain(|n| {
+            !written
+                .iter()
+                .any(|w| std::path::Path::new(w).file_name() == Some(std::ffi::OsStr::new(n)))
+        });
+        if !args.quiet {
+            outln!("plotted     {}", written.join(", "));
+        }
+    }
+    note_outputs_from_before(&before, dir, team_figure);
     Ok(())
 }
 

@@ -410,6 +410,363 @@ fn check_not_a_team(
     }
 }
 
+/// Reads and checks `DIR/summary.json` of a run directory ([`RunData`]): an outcome isotrack
+/// writes; a team's run refused unless `team_ok`.
+fn read_summary(dir: &Path, team_ok: bool) -> Result<Summary, PlotError> {
+    let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
+    let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
+    let text = isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
+        .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
+    let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
+    // att36-15: an outcome isotrack never writes ("exploded") was drawn and reported as
+    // given.
+    if let Ended::Run(end) = &summary.ended {
+        if !RUN_OUTCOMES.contains(&end.record.outcome.as_str()) {
+            return Err(err(format!(
+                "summary.json: outcome = \"{}\" is no outcome of a run ({})",
+                isotrack_scenario::load::clip(&end.record.outcome),
+                RUN_OUTCOMES.join(", ")
+            )));
+        }
+    }
+    // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
+    // would join into one path; refused until the team's figures are drawn.
+    if !team_ok && summary.team().is_some() {
+        return Err(err(
+            "a team's run (summary.json has a `team` object): `isotrack plot` draws teams; this command does not yet (docs/TEAMS.md)".into(),
+        ));
+    }
+    Ok(summary)
+}
+
+/// Reads `DIR/trace.csv` of the run of `summary` and `scenario`: its rows, each row's
+/// `vehicle` cell and each row's line ([`RunData::read`]); every row checked ([`check_row`]).
+#[allow(clippy::type_complexity)]
+fn read_trace(
+    dir: &Path,
+    summary: &Summary,
+    scenario: &Scenario,
+    team_ok: bool,
+) -> Result<(Vec<TraceRow>, Vec<Option<usize>>, Vec<u64>), PlotError> {
+    let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
+    // Each `\r\n` read as `\n`: the csv reader counts a CRLF file's lines one short (its
+    // record starts before the `\n` of the line ending before it), so every trace.csv:LINE
+    // named was one too early (att32g-9).
+    let mut rdr =
+        csv::Reader::from_reader(CrlfAsLf::new(crate::open_input(&dir.join("trace.csv"))?));
+    let headers = rdr
+        .headers()
+        .map_err(|e| err(format!("trace.csv: {e}")))?
+        .clone();
+    let col = |n: &str| {
+        headers
+            .iter()
+            .position(|h| h == n)
+            .ok_or_else(|| err(format!("trace.csv has no column `{n}`")))
+    };
+    // The numeric columns every trace has (TRACE_COLUMNS: `t_s` ... `omega_radps`), then the
+    // optional `s_measured` (empty before the first measurement).
+    let [t_s, x_m, y_m, heading_rad, s, error, omega_radps, s_measured] = TRACE_COLUMNS;
+    let idx = [
+        col(t_s)?,
+        col(x_m)?,
+        col(y_m)?,
+        col(heading_rad)?,
+        col(s)?,
+        col(error)?,
+        col(omega_radps)?,
+    ];
+    let meas = headers.iter().position(|h| h == s_measured);
+    let vehicle_col = headers.iter().position(|h| h == "vehicle");
+    if summary.team().is_none() {
+        check_not_a_team(summary, scenario, vehicle_col.is_some()).map_err(err)?;
+    }
+    let mut vehicles = Vec::new();
+    let mut lines = Vec::new();
+    let mut trace = Vec::new();
+    let end_s = run_end_s(summary, team_ok);
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        lines.push(line);
+        let mut v = [0.0; 7];
+        for (k, &i) in idx.iter().enumerate() {
+            v[k] = rec.get(i).and_then(|t| t.parse().ok()).ok_or_else(|| {
+                err(format!(
+                    "trace.csv:{line}: column {} is not a number",
+                    headers.get(i).unwrap_or("?")
+                ))
+            })?;
+        }
+        check_row(&v, trace.last().map(|r: &TraceRow| r.t_s), end_s)
+            .map_err(|m| err(format!("trace.csv:{line}: {m}")))?;
+        let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
+        vehicles.push(
+            vehicle_col
+                .and_then(|i| rec.get(i))
+                .and_then(|t| t.parse().ok()),
+        );
+        trace.push(TraceRow {
+            t_s: v[0],
+            x_m: v[1],
+            y_m: v[2],
+            heading_rad: v[3],
+            s: v[4],
+            error: v[5],
+            omega_radps: v[6],
+            s_measured: m,
+            telemetry: None,
+        });
+    }
+    Ok((trace, vehicles, lines))
+}
+
+/// The end of the run of `summary`, which bounds every row's time: a team's is its last
+/// vehicle's (the top-level `t_end_s` is vehicle 0's, which may end first: its end once
+/// refused the others' later rows, att32e-2) when its team is read (`team_ok`); each vehicle's
+/// own end bounds its own rows ([`RunData::load_team`]).
+fn run_end_s(summary: &Summary, team_ok: bool) -> Option<f64> {
+    match (&summary.ended, team_ok && summary.team().is_some()) {
+        (Ended::Run(end), true) => end
+            .vehicles
+            .iter()
+            .flatten()
+            .filter_map(|v| v.t_end_s)
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))
+            .filter(|m| m.is_finite())
+            .or(summary.t_end_s()),
+        _ => summary.t_end_s(),
+    }
+}
+
+/// Why a run's trace.csv has no rows: its trace turned off, or the run's end.
+fn why_no_rows(summary: &Summary, scenario: &Scenario) -> String {
+    if scenario.file().output.record_rate_hz == Some(0.0) {
+        "the trace was turned off (output.record_rate_hz = 0)".to_string()
+    } else {
+        // A flight that answered no measurement has no end time (`t_end_s` null).
+        let when = match summary.t_end_s() {
+            Some(t) => format!("the run ended at t = {} s", serde_json::Value::from(t)),
+            None => "the run ended before its first measurement (no end time)".to_string(),
+        };
+        format!(
+            "{when}: {} ({})",
+            summary.outcome(),
+            summary.outcome_detail().unwrap_or("no detail")
+        )
+    }
+}
+
+/// A team's trace split into its vehicles' rows as it is read ([`RunData::load_team`]), each
+/// row checked against the recorded times. The rows come a recorded time at a time, every
+/// running vehicle's row at each: a vehicle's k-th row is at the k-th time (a vehicle that ends
+/// leaves for good). A row missing (or one too many) would pair one vehicle's positions with
+/// the others' at another time in every figure: refused, naming the line. The messages are
+/// the run directory's to prefix.
+struct TeamRows<'a> {
+    /// The team's `summary.json`.
+    summary: &'a Summary,
+    /// The team's vehicle count.
+    n: usize,
+    /// Each vehicle's rows so far.
+    traces: Vec<Vec<TraceRow>>,
+    /// The recorded times so far.
+    times: Vec<f64>,
+    /// Each vehicle's last row's line in trace.csv so far.
+    last_line: Vec<u64>,
+    /// A vehicle that ended early (`left_field`, `diverged`: summary.json) writes its last
+    /// valid state at the step it ended, which may fall between two recorded times: that
+    /// one row, at its `t_end_s`, is its last, off the schedule (att32d-14).
+    ended_at: Vec<Option<f64>>,
+    /// Every vehicle's own end (`vehicles[i].t_end_s`): a row after it is refused (att32e-4).
+    end_of: Vec<Option<f64>>,
+    /// Whether a vehicle's last row (off the schedule, at its end) was read.
+    done: Vec<bool>,
+    /// Each vehicle's last row (its index in the file), and for each recorded time the row
+    /// that set it and how many rows are at it: a time set by a vehicle's last row alone is
+    /// that vehicle's end off the recorded times (att32f-8).
+    last_row: Vec<usize>,
+    /// For each recorded time, its first row's vehicle, index and line.
+    time_set_by: Vec<(usize, usize, u64)>,
+    /// For each recorded time, whether every row at it is its vehicle's last: a time off the
+    /// schedule where one or more vehicles ended together (att32g-4: two vehicles ending at
+    /// the same step blamed a right row).
+    all_last: Vec<bool>,
+}
+
+impl<'a> TeamRows<'a> {
+    /// Nothing read yet of the trace of a team of `n` vehicles with `summary`, whose rows'
+    /// `vehicle` cells are `ids`.
+    fn new(summary: &'a Summary, ids: &[Option<usize>], n: usize) -> Self {
+        let mut ended_at: Vec<Option<f64>> = vec![None; n];
+        if let Ended::Run(end) = &summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                if v.outcome != "completed" {
+                    ended_at[i] = v.t_end_s;
+                }
+            }
+        }
+        let mut end_of: Vec<Option<f64>> = vec![None; n];
+        if let Ended::Run(end) = &summary.ended {
+            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+                end_of[i] = v.t_end_s;
+            }
+        }
+        let mut last_row = vec![usize::MAX; n];
+        for (row, id) in ids.iter().enumerate() {
+            if let Some(i) = id.filter(|&i| i < n) {
+                last_row[i] = row;
+            }
+        }
+        Self {
+            summary,
+            n,
+            traces: vec![Vec::new(); n],
+            times: Vec::new(),
+            last_line: vec![0u64; n],
+            ended_at,
+            end_of,
+            done: vec![false; n],
+            last_row,
+            time_set_by: Vec::new(),
+            all_last: Vec::new(),
+        }
+    }
+
+    /// The next row `t` (the `row`-th, at trace.csv's `line`, of vehicle `id`) given to its
+    /// vehicle, or why it cannot be that vehicle's next.
+    fn take(
+        &mut self,
+        row: usize,
+        t: &TraceRow,
+        id: Option<usize>,
+        line: u64,
+    ) -> Result<(), String> {
+        let n = self.n;
+        let Some(i) = id.filter(|&i| i < n) else {
+            return Err(format!(
+                "trace.csv:{line}: the vehicle column is not one of the team's {n} vehicles",
+            ));
+        };
+        if let Some(e) = self.end_of[i].filter(|e| t.t_s > e + 1e-9 * e.abs().max(1.0)) {
+            return Err(format!(
+                "trace.csv:{line}: vehicle {i} has a row at t = {} s, after its end (t_end_s = {} s in summary.json's vehicles[{i}])",
+                Echo(t.t_s),
+                Echo(e)
+            ));
+        }
+        if self.done[i] {
+            return Err(format!(
+                "trace.csv:{line}: vehicle {i} has a row after its last (at its end, t_end_s = {} s in summary.json)",
+                self.ended_at[i].map_or("?".to_string(), |e| Echo(e).to_string())
+            ));
+        }
+        let k = self.traces[i].len();
+        if self.ended_at[i] == Some(t.t_s)
+            && self.times.get(k) != Some(&t.t_s)
+            && self.times.last().is_none_or(|l| *l < t.t_s)
+        {
+            self.traces[i].push(*t);
+            self.last_line[i] = line;
+            self.done[i] = true;
+            return Ok(());
+        }
+        if self.times.last() != Some(&t.t_s) {
+            self.times.push(t.t_s);
+            self.time_set_by.push((i, row, line));
+            self.all_last.push(true);
+        }
+        if let Some(c) = self.all_last.last_mut() {
+            *c &= row == self.last_row[i];
+        }
+        if self.times.get(k) != Some(&t.t_s) {
+            return Err(self.off_schedule(i, k, t.t_s, line));
+        }
+        self.traces[i].push(*t);
+        self.last_line[i] = line;
+        Ok(())
+    }
+
+    /// Why vehicle `i`'s row `k` (0-based) at `t_s`, trace.csv's `line`, is not at the k-th
+    /// recorded time.
+    fn off_schedule(&self, i: usize, k: usize, t_s: f64, line: u64) -> String {
+        let (n, times) = (self.n, &self.times);
+        // The time this vehicle skipped is held by other vehicles' last rows only: a
+        // time off the recorded ones, which only a vehicle's end is, but the summary
+        // of one of them ends it elsewhere (a later end, or `completed`). That vehicle
+        // is named, not this one (att32f-8: "vehicle 0's row 5" was blamed at a line
+        // that was right; att32g-4: so it was when two vehicles ended there).
+        if let Some(&(j0, _, _)) = self.time_set_by.get(k) {
+            let ends_there = |j: usize| {
+                self.traces[j].last().map(|r| r.t_s) == Some(times[k])
+                    && self.ended_at[j] != Some(times[k])
+            };
+            let j = (0..n).find(|&j| j != i && ends_there(j)).unwrap_or(j0);
+            let jline = self.last_line[j];
+            if j != i && self.all_last[k] && times[k] < t_s {
+                return format!(
+                    "trace.csv:{jline}: vehicle {j}'s last row is at t = {} s, between the recorded times{} and t = {} s (trace.csv:{line}), off them, as a vehicle's row is only at its end, but summary.json's vehicles[{j}] {}: the summary is not this trace's, or a row of vehicle {j} is missing",
+                    Echo(times[k]),
+                    k.checked_sub(1)
+                        .map_or(String::new(), |p| format!(" t = {} s", Echo(times[p]))),
+                    Echo(t_s),
+                    vehicle_end(self.summary, j),
+                );
+            }
+        }
+        format!(
+            "trace.csv:{line}: vehicle {i}'s row {} is at t = {} s, but recorded time {} is {}: a row of the team's trace is missing or out of order (each vehicle has a row at every recorded time until it ends)",
+            k + 1,
+            Echo(t_s),
+            k + 1,
+            times.get(k).map_or("not there".to_string(), |x| format!("t = {} s", Echo(*x)))
+        )
+    }
+
+    /// After the last row: every vehicle has rows, each ends where its summary ends it.
+    fn check_ends(&self) -> Result<(), String> {
+        let (n, traces, times) = (self.n, &self.traces, &self.times);
+        // Every vehicle of the team has rows (att32f-1: one without any was drawn nowhere).
+        if let Some(i) = traces.iter().position(Vec::is_empty) {
+            return Err(format!(
+                "trace.csv has no row of vehicle {i}, one of the team's {n} (summary.json's team.vehicle_count)",
+            ));
+        }
+        let Ended::Run(end) = &self.summary.ended else {
+            return Ok(());
+        };
+        // A vehicle that completed the run has a row at the last recorded time.
+        for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+            let rows = traces[i].len();
+            if v.outcome == "completed" && rows < times.len() {
+                return Err(format!(
+                    "trace.csv:{}: vehicle {i}'s rows end at t = {} s, but it completed the run (summary.json) and the trace goes on to t = {} s: a row of the team's trace is missing",
+                    self.last_line[i],
+                    traces[i].last().map_or("?".to_string(), |r| Echo(r.t_s).to_string()),
+                    Echo(times[times.len() - 1])
+                ));
+            }
+        }
+        // Every vehicle's rows end at its end (its last valid state is always written, at the
+        // step it ended): a vehicle whose summary ends it later than its last row (a row cut,
+        // or another run's summary) is refused naming its last row (att32f-8).
+        for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
+            let Some((e, last)) = v.t_end_s.zip(traces[i].last()) else {
+                continue;
+            };
+            if last.t_s < e - 1e-9 * e.abs().max(1.0) {
+                return Err(format!(
+                    "trace.csv:{}: vehicle {i}'s rows end at t = {} s, but summary.json's vehicles[{i}] {}: a row of the team's trace is missing, or the summary is not this trace's",
+                    self.last_line[i],
+                    Echo(last.t_s),
+                    vehicle_end(self.summary, i),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl RunData {
     /// Loads `DIR/trace.csv`, `DIR/summary.json` and `DIR/scenario.toml` of a single-vehicle
     /// run (a team's run is refused: [`RunData::load_team`]).
@@ -440,178 +797,31 @@ impl RunData {
     /// them, tell the runs apart; issue 32, att32d-7), else `vehicle I`.
     pub fn load_team_named(dir: &Path, with_run: bool) -> Result<Vec<Self>, PlotError> {
         let (all, ids, lines) = Self::read(dir, true)?;
+        let in_dir = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
-            check_scenario_is_runs(&all)
-                .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
+            check_scenario_is_runs(&all).map_err(in_dir)?;
             return Ok(vec![all]);
         };
         if !(1..=1_000_000).contains(&n) {
-            return Err(PlotError::Data(format!(
-                "{}: summary.json: team.vehicle_count is not a vehicle count",
-                dir.display()
-            )));
+            return Err(in_dir(
+                "summary.json: team.vehicle_count is not a vehicle count".into(),
+            ));
         }
         check_team_lists(&all, n)
             .and_then(|()| check_scenario_is_runs(&all))
-            .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
-        let mut traces: Vec<Vec<TraceRow>> = vec![Vec::new(); n];
-        // The rows come a recorded time at a time, every running vehicle's row at each: a
-        // vehicle's k-th row is at the k-th time (a vehicle that ends leaves for good). A row
-        // missing (or one too many) would pair one vehicle's positions with the others' at
-        // another time in every figure: refused, naming the line.
-        let mut times: Vec<f64> = Vec::new();
-        let mut last_line = vec![0u64; n];
-        // A vehicle that ended early (`left_field`, `diverged`: summary.json) writes its last
-        // valid state at the step it ended, which may fall between two recorded times: that
-        // one row, at its `t_end_s`, is its last, off the schedule (att32d-14).
-        let mut ended_at: Vec<Option<f64>> = vec![None; n];
-        if let Ended::Run(end) = &all.summary.ended {
-            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
-                if v.outcome != "completed" {
-                    ended_at[i] = v.t_end_s;
-                }
-            }
-        }
-        // Every vehicle's own end (`vehicles[i].t_end_s`): a row after it is refused (att32e-4).
-        let mut end_of: Vec<Option<f64>> = vec![None; n];
-        if let Ended::Run(end) = &all.summary.ended {
-            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
-                end_of[i] = v.t_end_s;
-            }
-        }
-        let mut done = vec![false; n];
-        // Each vehicle's last row (its index in the file), and for each recorded time the row
-        // that set it and how many rows are at it: a time set by a vehicle's last row alone is
-        // that vehicle's end off the recorded times (att32f-8).
-        let mut last_row = vec![usize::MAX; n];
-        for (row, id) in ids.iter().enumerate() {
-            if let Some(i) = id.filter(|&i| i < n) {
-                last_row[i] = row;
-            }
-        }
-        let mut time_set_by: Vec<(usize, usize, u64)> = Vec::new();
-        // For each recorded time, whether every row at it is its vehicle's last: a time off the
-        // schedule where one or more vehicles ended together (att32g-4: two vehicles ending at
-        // the same step blamed a right row).
-        let mut all_last: Vec<bool> = Vec::new();
+            .map_err(in_dir)?;
+        let mut rows = TeamRows::new(&all.summary, &ids, n);
         for (row, ((t, id), line)) in all.trace.iter().zip(&ids).zip(&lines).enumerate() {
-            let Some(i) = id.filter(|&i| i < n) else {
-                return Err(PlotError::Data(format!(
-                    "{}: trace.csv:{line}: the vehicle column is not one of the team's {n} vehicles",
-                    dir.display(),
-                )));
-            };
-            if let Some(e) = end_of[i].filter(|e| t.t_s > e + 1e-9 * e.abs().max(1.0)) {
-                return Err(PlotError::Data(format!(
-                    "{}: trace.csv:{line}: vehicle {i} has a row at t = {} s, after its end (t_end_s = {} s in summary.json's vehicles[{i}])",
-                    dir.display(),
-                    Echo(t.t_s),
-                    Echo(e)
-                )));
-            }
-            if done[i] {
-                return Err(PlotError::Data(format!(
-                    "{}: trace.csv:{line}: vehicle {i} has a row after its last (at its end, t_end_s = {} s in summary.json)",
-                    dir.display(),
-                    ended_at[i].map_or("?".to_string(), |e| Echo(e).to_string())
-                )));
-            }
-            let k = traces[i].len();
-            if ended_at[i] == Some(t.t_s)
-                && times.get(k) != Some(&t.t_s)
-                && times.last().is_none_or(|l| *l < t.t_s)
-            {
-                traces[i].push(*t);
-                last_line[i] = *line;
-                done[i] = true;
-                continue;
-            }
-            if times.last() != Some(&t.t_s) {
-                times.push(t.t_s);
-                time_set_by.push((i, row, *line));
-                all_last.push(true);
-            }
-            if let Some(c) = all_last.last_mut() {
-                *c &= row == last_row[i];
-            }
-            if times.get(k) != Some(&t.t_s) {
-                // The time this vehicle skipped is held by other vehicles' last rows only: a
-                // time off the recorded ones, which only a vehicle's end is, but the summary
-                // of one of them ends it elsewhere (a later end, or `completed`). That vehicle
-                // is named, not this one (att32f-8: "vehicle 0's row 5" was blamed at a line
-                // that was right; att32g-4: so it was when two vehicles ended there).
-                if let Some(&(j0, _, _)) = time_set_by.get(k) {
-                    let ends_there = |j: usize| {
-                        traces[j].last().map(|r| r.t_s) == Some(times[k])
-                            && ended_at[j] != Some(times[k])
-                    };
-                    let j = (0..n).find(|&j| j != i && ends_there(j)).unwrap_or(j0);
-                    let jline = last_line[j];
-                    if j != i && all_last[k] && times[k] < t.t_s {
-                        return Err(PlotError::Data(format!(
-                            "{}: trace.csv:{jline}: vehicle {j}'s last row is at t = {} s, between the recorded times{} and t = {} s (trace.csv:{line}), off them, as a vehicle's row is only at its end, but summary.json's vehicles[{j}] {}: the summary is not this trace's, or a row of vehicle {j} is missing",
-                            dir.display(),
-                            Echo(times[k]),
-                            k.checked_sub(1)
-                                .map_or(String::new(), |p| format!(" t = {} s", Echo(times[p]))),
-                            Echo(t.t_s),
-                            vehicle_end(&all.summary, j),
-                        )));
-                    }
-                }
-                return Err(PlotError::Data(format!(
-                    "{}: trace.csv:{line}: vehicle {i}'s row {} is at t = {} s, but recorded time {} is {}: a row of the team's trace is missing or out of order (each vehicle has a row at every recorded time until it ends)",
-                    dir.display(),
-                    k + 1,
-                    Echo(t.t_s),
-                    k + 1,
-                    times.get(k).map_or("not there".to_string(), |x| format!("t = {} s", Echo(*x)))
-                )));
-            }
-            traces[i].push(*t);
-            last_line[i] = *line;
+            rows.take(row, t, *id, *line).map_err(in_dir)?;
         }
-        // Every vehicle of the team has rows (att32f-1: one without any was drawn nowhere).
-        if let Some(i) = traces.iter().position(Vec::is_empty) {
-            return Err(PlotError::Data(format!(
-                "{}: trace.csv has no row of vehicle {i}, one of the team's {n} (summary.json's team.vehicle_count)",
-                dir.display()
-            )));
-        }
-        // A vehicle that completed the run has a row at the last recorded time.
-        if let Ended::Run(end) = &all.summary.ended {
-            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
-                let rows = traces[i].len();
-                if v.outcome == "completed" && rows < times.len() {
-                    return Err(PlotError::Data(format!(
-                        "{}: trace.csv:{}: vehicle {i}'s rows end at t = {} s, but it completed the run (summary.json) and the trace goes on to t = {} s: a row of the team's trace is missing",
-                        dir.display(),
-                        last_line[i],
-                        traces[i].last().map_or("?".to_string(), |r| Echo(r.t_s).to_string()),
-                        Echo(times[times.len() - 1])
-                    )));
-                }
-            }
-        }
-        // Every vehicle's rows end at its end (its last valid state is always written, at the
-        // step it ended): a vehicle whose summary ends it later than its last row (a row cut,
-        // or another run's summary) is refused naming its last row (att32f-8).
-        if let Ended::Run(end) = &all.summary.ended {
-            for (i, v) in end.vehicles.iter().flatten().enumerate().take(n) {
-                let Some((e, last)) = v.t_end_s.zip(traces[i].last()) else {
-                    continue;
-                };
-                if last.t_s < e - 1e-9 * e.abs().max(1.0) {
-                    return Err(PlotError::Data(format!(
-                        "{}: trace.csv:{}: vehicle {i}'s rows end at t = {} s, but summary.json's vehicles[{i}] {}: a row of the team's trace is missing, or the summary is not this trace's",
-                        dir.display(),
-                        last_line[i],
-                        Echo(last.t_s),
-                        vehicle_end(&all.summary, i),
-                    )));
-                }
-            }
-        }
+        rows.check_ends().map_err(in_dir)?;
+        let traces = rows.traces;
+        Ok(Self::into_vehicles(all, traces, with_run))
+    }
+
+    /// A team's run `all` (its rows already split into `traces`, one per vehicle) as one
+    /// [`RunData`] per vehicle ([`load_team_named`](Self::load_team_named)).
+    fn into_vehicles(all: Self, traces: Vec<Vec<TraceRow>>, with_run: bool) -> Vec<Self> {
         // The rows are in `traces` now: each vehicle clones the rest only, without the lists
         // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies).
         let mut all = Self {
@@ -625,7 +835,7 @@ impl RunData {
                 team.neighbours = Vec::new();
             }
         }
-        Ok(traces
+        traces
             .into_iter()
             .enumerate()
             .map(|(i, trace)| {
@@ -646,7 +856,7 @@ impl RunData {
                     ..all.clone()
                 }
             })
-            .collect())
+            .collect()
     }
 
     /// The run and each row's `vehicle` cell (`None` when there is no such column or it does
@@ -656,28 +866,7 @@ impl RunData {
     fn read(dir: &Path, team_ok: bool) -> Result<(Self, Vec<Option<usize>>, Vec<u64>), PlotError> {
         let err = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let cannot = |m: String| PlotError::Input(format!("{}: {m}", dir.display()));
-        let text =
-            isotrack_fields::io::read_text_limited(&dir.join("summary.json"), MAX_SUMMARY_BYTES)
-                .map_err(|e| cannot(format!("summary.json: {e} (is this a run directory?)")))?;
-        let summary = Summary::from_json(&text).map_err(|e| err(format!("summary.json: {e}")))?;
-        // att36-15: an outcome isotrack never writes ("exploded") was drawn and reported as
-        // given.
-        if let Ended::Run(end) = &summary.ended {
-            if !RUN_OUTCOMES.contains(&end.record.outcome.as_str()) {
-                return Err(err(format!(
-                    "summary.json: outcome = \"{}\" is no outcome of a run ({})",
-                    isotrack_scenario::load::clip(&end.record.outcome),
-                    RUN_OUTCOMES.join(", ")
-                )));
-            }
-        }
-        // A team's run (issue 32): one trace of every vehicle, which the single-vehicle figures
-        // would join into one path; refused until the team's figures are drawn.
-        if !team_ok && summary.team().is_some() {
-            return Err(err(
-                "a team's run (summary.json has a `team` object): `isotrack plot` draws teams; this command does not yet (docs/TEAMS.md)".into(),
-            ));
-        }
+        let summary = read_summary(dir, team_ok)?;
         let scenario = load_scenario(Some(&dir.join("scenario.toml")), &[]).map_err(|e| {
             let m = format!("scenario.toml: {e}");
             if e.is_unreadable_input() {
@@ -686,104 +875,12 @@ impl RunData {
                 err(m)
             }
         })?;
-        // Each `\r\n` read as `\n`: the csv reader counts a CRLF file's lines one short (its
-        // record starts before the `\n` of the line ending before it), so every trace.csv:LINE
-        // named was one too early (att32g-9).
-        let mut rdr =
-            csv::Reader::from_reader(CrlfAsLf::new(crate::open_input(&dir.join("trace.csv"))?));
-        let headers = rdr
-            .headers()
-            .map_err(|e| err(format!("trace.csv: {e}")))?
-            .clone();
-        let col = |n: &str| {
-            headers
-                .iter()
-                .position(|h| h == n)
-                .ok_or_else(|| err(format!("trace.csv has no column `{n}`")))
-        };
-        // The numeric columns every trace has (TRACE_COLUMNS: `t_s` ... `omega_radps`), then the
-        // optional `s_measured` (empty before the first measurement).
-        let [t_s, x_m, y_m, heading_rad, s, error, omega_radps, s_measured] = TRACE_COLUMNS;
-        let idx = [
-            col(t_s)?,
-            col(x_m)?,
-            col(y_m)?,
-            col(heading_rad)?,
-            col(s)?,
-            col(error)?,
-            col(omega_radps)?,
-        ];
-        let meas = headers.iter().position(|h| h == s_measured);
-        let vehicle_col = headers.iter().position(|h| h == "vehicle");
-        if summary.team().is_none() {
-            check_not_a_team(&summary, &scenario, vehicle_col.is_some()).map_err(err)?;
-        }
-        let mut vehicles = Vec::new();
-        let mut lines = Vec::new();
-        let mut trace = Vec::new();
-        // The run's end: a team's is its last vehicle's (the top-level `t_end_s` is vehicle
-        // 0's, which may end first: its end once refused the others' later rows, att32e-2);
-        // each vehicle's own end bounds its own rows ([`RunData::load_team`]).
-        let run_end_s = match (&summary.ended, team_ok && summary.team().is_some()) {
-            (Ended::Run(end), true) => end
-                .vehicles
-                .iter()
-                .flatten()
-                .filter_map(|v| v.t_end_s)
-                .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))
-                .filter(|m| m.is_finite())
-                .or(summary.t_end_s()),
-            _ => summary.t_end_s(),
-        };
-        for rec in rdr.records() {
-            let rec = rec.map_err(|e| err(format!("trace.csv: {e}")))?;
-            let line = rec.position().map_or(0, |p| p.line());
-            lines.push(line);
-            let mut v = [0.0; 7];
-            for (k, &i) in idx.iter().enumerate() {
-                v[k] = rec.get(i).and_then(|t| t.parse().ok()).ok_or_else(|| {
-                    err(format!(
-                        "trace.csv:{line}: column {} is not a number",
-                        headers.get(i).unwrap_or("?")
-                    ))
-                })?;
-            }
-            check_row(&v, trace.last().map(|r: &TraceRow| r.t_s), run_end_s)
-                .map_err(|m| err(format!("trace.csv:{line}: {m}")))?;
-            let m = meas.and_then(|i| rec.get(i)).and_then(|t| t.parse().ok());
-            vehicles.push(
-                vehicle_col
-                    .and_then(|i| rec.get(i))
-                    .and_then(|t| t.parse().ok()),
-            );
-            trace.push(TraceRow {
-                t_s: v[0],
-                x_m: v[1],
-                y_m: v[2],
-                heading_rad: v[3],
-                s: v[4],
-                error: v[5],
-                omega_radps: v[6],
-                s_measured: m,
-                telemetry: None,
-            });
-        }
+        let (trace, vehicles, lines) = read_trace(dir, &summary, &scenario, team_ok)?;
         if trace.is_empty() {
-            let why = if scenario.file().output.record_rate_hz == Some(0.0) {
-                "the trace was turned off (output.record_rate_hz = 0)".to_string()
-            } else {
-                // A flight that answered no measurement has no end time (`t_end_s` null).
-                let when = match summary.t_end_s() {
-                    Some(t) => format!("the run ended at t = {} s", serde_json::Value::from(t)),
-                    None => "the run ended before its first measurement (no end time)".to_string(),
-                };
-                format!(
-                    "{when}: {} ({})",
-                    summary.outcome(),
-                    summary.outcome_detail().unwrap_or("no detail")
-                )
-            };
-            return Err(err(format!("trace.csv has no rows: {why}")));
+            return Err(err(format!(
+                "trace.csv has no rows: {}",
+                why_no_rows(&summary, &scenario)
+            )));
         }
         // The name as every figure, page and message shows it: each character the plain-text
         // rule refuses as its escape (`\u{202e}`, `\x1b`), as `--title` is drawn; a legend

@@ -191,12 +191,57 @@ fn range_slope(s: &Scenario, law: &SpacingLaw, n: usize) -> (f64, &'static str) 
     }
 }
 
+/// The spacing loop of `team` in scenario `s` flown by law `l` ([`SpacingLoopReport`]): why
+/// there is none, or its modes' stability at the law's gain.
 fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     let n = team.count();
+    let mut rep = spacing_report_unchecked(s, l, team);
+    let k_v = match team.law {
+        SpacingLaw::None => {
+            rep.note = "team.spacing = \"none\": every vehicle at v0, no spacing loop (the spacing stays as deployed)".into();
+            return rep;
+        }
+        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s } => {
+            gain_per_s
+        }
+    };
+    rep.k_v_per_s = Some(k_v);
+    if let Some(why) = no_spacing_loop(s, team, k_v) {
+        rep.note = why;
+        return rep;
+    }
+    let (c, source) = range_slope(s, &team.law, n);
+    rep.range_slope = Some(c);
+    rep.range_slope_source = Some(source);
+    rep.applicable = true;
+    rep.lambda_min = Some(ring_laplacian_eigenvalue(n, 1));
+    rep.lambda_max = Some(ring_laplacian_max_eigenvalue(n));
+    let (period_s, delay_s) = (rep.period_s, rep.delay_s);
+    let Some(g_star) = max_stable_gain_per_period(period_s, delay_s) else {
+        rep.note = format!(
+            "not computed: a delay of {} periods is past the {} the check's polynomial holds",
+            Num(delay_s / period_s),
+            isotrack_core::spacing::MAX_DEGREE - 2
+        );
+        return rep;
+    };
+    rep.max_gain_per_period = Some(g_star);
+    rep.max_stable_k_v_per_s = max_stable_spacing_gain(n, period_s, delay_s, c);
+    check_spacing_modes(&mut rep, n, k_v, c);
+    if rep.stable == Some(false) {
+        note_saturated_gaps(&mut rep, s, team);
+    }
+    rep.not_modelled = spacing_not_modelled(team, n, rep.range_halt.as_ref());
+    rep
+}
+
+/// The spacing loop's report before its law is checked: the ranging's period and delay, the
+/// range halt; nothing applicable yet.
+fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     let period_s = 1.0 / team.ranging.rate_hz;
     let delay_s = team.ranging.delay_s;
     let split = split_delay(period_s, delay_s);
-    let mut rep = SpacingLoopReport {
+    SpacingLoopReport {
         applicable: false,
         k_v_per_s: None,
         period_s,
@@ -220,57 +265,42 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         range_halt: range_halt(s, l, team),
         not_modelled: vec![],
         note: String::new(),
-    };
-    let k_v = match team.law {
-        SpacingLaw::None => {
-            rep.note = "team.spacing = \"none\": every vehicle at v0, no spacing loop (the spacing stays as deployed)".into();
-            return rep;
-        }
-        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s } => {
-            gain_per_s
-        }
-    };
-    rep.k_v_per_s = Some(k_v);
+    }
+}
+
+/// Why a team whose law has gain `k_v` has no spacing loop to check (the report's note), or
+/// `None` when it has one.
+fn no_spacing_loop(s: &Scenario, team: &TeamSpec, k_v: f64) -> Option<String> {
+    let n = team.count();
     if let Some(why) = s.team_refusal() {
         // att32g-3: `run` refuses it (65); no loop of a run that never starts holds.
-        rep.note = format!("not applicable: `isotrack run` refuses this scenario: {why}");
-        return rep;
+        return Some(format!(
+            "not applicable: `isotrack run` refuses this scenario: {why}"
+        ));
     }
     if k_v == 0.0 {
         // att32d-9: at g = 0 every mode's roots sit at z = 1 (marginal): the law commands v0
         // whatever the ranges, as `none` does; no loop to be past k_v*, no saturation.
-        rep.note = format!(
+        return Some(format!(
             "team.k_v = 0: {} commands v0 whatever the gaps, as team.spacing = \"none\": no spacing loop, the gaps stay as deployed and do not converge",
             team.law.name()
-        );
-        return rep;
+        ));
     }
     if n < 2 {
-        rep.note = "a team of one: no spacing loop".into();
-        return rep;
+        return Some("a team of one: no spacing loop".into());
     }
     if n == 2 && matches!(team.law, SpacingLaw::RangeBalance { .. }) {
-        rep.note = "with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and does nothing (use arc_reference or more vehicles)".into();
-        return rep;
+        return Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and does nothing (use arc_reference or more vehicles)".into());
     }
-    let (c, source) = range_slope(s, &team.law, n);
-    rep.range_slope = Some(c);
-    rep.range_slope_source = Some(source);
-    rep.applicable = true;
+    None
+}
+
+/// The spacing loop's modes of a ring of `n` vehicles at gain `k_v` and range slope `c` (the
+/// report's period and delay): whether every mode is stable, the modes listed, the slowest.
+fn check_spacing_modes(rep: &mut SpacingLoopReport, n: usize, k_v: f64, c: f64) {
+    let (period_s, delay_s) = (rep.period_s, rep.delay_s);
     let top = n / 2;
-    rep.lambda_min = Some(ring_laplacian_eigenvalue(n, 1));
-    rep.lambda_max = Some(ring_laplacian_max_eigenvalue(n));
     let gain = |m: usize| k_v * c * ring_laplacian_eigenvalue(n, m) * period_s;
-    let Some(g_star) = max_stable_gain_per_period(period_s, delay_s) else {
-        rep.note = format!(
-            "not computed: a delay of {} periods is past the {} the check's polynomial holds",
-            Num(delay_s / period_s),
-            isotrack_core::spacing::MAX_DEGREE - 2
-        );
-        return rep;
-    };
-    rep.max_gain_per_period = Some(g_star);
-    rep.max_stable_k_v_per_s = max_stable_spacing_gain(n, period_s, delay_s, c);
     // Every mode decides (not only the scan's g*): O(N/2) Schur tests.
     rep.stable = Some((1..=top).all(|m| spacing_mode_stable(gain(m), period_s, delay_s)));
     rep.all_modes_listed = top <= MAX_LISTED_MODES;
@@ -295,22 +325,24 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
             .filter(|t| t.is_finite());
     rep.slowest_time_constant_continuous_s =
         Some(slowest_mode_time_constant_s(n, k_v, c)).filter(|t| t.is_finite());
-    if rep.stable == Some(false) {
-        // The widest swing of any vehicle's speed: the union of the envelopes (att32d-15:
-        // the team's [v_min, v_max] alone understated it with per-vehicle envelopes).
-        let (lo, hi) = team.speed_envelope_mps();
-        let amplitude = (hi - lo) * (period_s + delay_s);
-        rep.saturated_gap_amplitude_m = Some(amplitude);
-        // About L/N only when every vehicle has one nominal speed (else the oscillation is
-        // about the shifted equilibrium of the not-modelled note: no CV bound).
-        rep.saturated_gap_cv_max = s
-            .team_arc()
-            .filter(|_| team.nominal_speeds_mps().len() == 1)
-            .map(|a| amplitude * n as f64 / (std::f64::consts::TAU * a.radius_m))
-            .filter(|x| x.is_finite());
-    }
-    rep.not_modelled = spacing_not_modelled(team, n, rep.range_halt.as_ref());
-    rep
+}
+
+/// An unstable spacing loop: the gaps' swing once the speeds saturate (its amplitude, and its
+/// gap CV bound about L/N when every vehicle has one nominal speed).
+fn note_saturated_gaps(rep: &mut SpacingLoopReport, s: &Scenario, team: &TeamSpec) {
+    let n = team.count();
+    // The widest swing of any vehicle's speed: the union of the envelopes (att32d-15:
+    // the team's [v_min, v_max] alone understated it with per-vehicle envelopes).
+    let (lo, hi) = team.speed_envelope_mps();
+    let amplitude = (hi - lo) * (rep.period_s + rep.delay_s);
+    rep.saturated_gap_amplitude_m = Some(amplitude);
+    // About L/N only when every vehicle has one nominal speed (else the oscillation is
+    // about the shifted equilibrium of the not-modelled note: no CV bound).
+    rep.saturated_gap_cv_max = s
+        .team_arc()
+        .filter(|_| team.nominal_speeds_mps().len() == 1)
+        .map(|a| amplitude * n as f64 / (std::f64::consts::TAU * a.radius_m))
+        .filter(|x| x.is_finite());
 }
 
 /// The effects the linear spacing loop leaves out, each naming its key.

@@ -174,6 +174,20 @@ pub struct MovingIsolineStats {
     pub samples_without_isoline: u64,
 }
 
+/// One sample as every live vehicle's passes are measured in it ([`TeamMetrics::observe`]).
+struct SampleAt {
+    /// The sample's time, s.
+    t: f64,
+    /// Whether it is in the steady window.
+    in_window: bool,
+    /// The length of its isoline, m.
+    l: f64,
+    /// The factor of the last sample's arc coordinates onto this isoline (its length changed).
+    rescale: Option<f64>,
+    /// Whether the last sample's positions are projected onto this isoline (an extraction).
+    reproject: bool,
+}
+
 /// The streaming team metrics.
 #[derive(Clone, Debug)]
 pub struct TeamMetrics {
@@ -420,6 +434,9 @@ impl TeamMetrics {
         self.sep_prev_t = self.t_last;
     }
 
+    /// [`observe`](Self::observe)'s sample before the last positions are kept for the next:
+    /// the time and window, the isoline's length (a moving one's bins carried), each live
+    /// vehicle's passes, then the gaps along a closed or an open isoline.
     fn observe_sample(
         &mut self,
         k: u64,
@@ -434,6 +451,43 @@ impl TeamMetrics {
         if in_window && self.t_window.is_none() {
             self.t_window = Some(t);
         }
+        let l = self.sample_length(arc);
+        // The last sample's arc coordinates on this sample's isoline (the same when it does
+        // not move).
+        let rescale = (self.last_l != l).then(|| l / self.last_l);
+        self.last_l = l;
+        let reproject = core::mem::take(&mut self.reproject);
+        if self.moving {
+            self.carry_bins(arc, l, reproject, rescale.is_some());
+        }
+        if in_window {
+            self.note_active(alive);
+        }
+        let at = SampleAt {
+            t,
+            in_window,
+            l,
+            rescale,
+            reproject,
+        };
+        self.scratch.clear();
+        for i in 0..self.n {
+            if alive[i] {
+                self.observe_vehicle(i, arc, positions[i], speeds[i], &at);
+            } else {
+                self.last_s[i] = f64::NAN;
+            }
+        }
+        if self.open {
+            self.observe_open(t, in_window, l);
+            return;
+        }
+        self.observe_closed(t, in_window, l, positions);
+    }
+
+    /// The length of this sample's isoline `arc` (of a moving isoline, counted in its length
+    /// statistics).
+    fn sample_length(&mut self, arc: &dyn ArcProjection) -> f64 {
         let l = if self.moving {
             arc.length_m()
         } else {
@@ -445,111 +499,121 @@ impl TeamMetrics {
             self.len_min = self.len_min.min(l);
             self.len_max = self.len_max.max(l);
         }
-        // The last sample's arc coordinates on this sample's isoline (the same when it does
-        // not move).
-        let rescale = (self.last_l != l).then(|| l / self.last_l);
-        self.last_l = l;
-        let reproject = core::mem::take(&mut self.reproject);
-        if self.moving {
-            self.carry_bins(arc, l, reproject, rescale.is_some());
+        l
+    }
+
+    /// A sample in the steady window: the live vehicles' nominal speeds (the ideal revisit
+    /// time of those still flying), whether a vehicle was lost, whether one is live.
+    fn note_active(&mut self, alive: &[bool]) {
+        let mut sum = 0.0;
+        for (v, _) in self
+            .member_speeds_mps
+            .iter()
+            .zip(alive)
+            .filter(|(_, a)| **a)
+        {
+            sum += v;
         }
-        let m = self.cfg.revisit_bins;
-        let bin = |s: f64| ((s / l * m as f64) as usize).min(m - 1);
-        if in_window {
-            let mut sum = 0.0;
-            for (v, _) in self
-                .member_speeds_mps
-                .iter()
-                .zip(alive)
-                .filter(|(_, a)| **a)
-            {
-                sum += v;
+        self.active_speed_sum += sum;
+        self.active_samples += 1;
+        self.lost_in_window |= alive.iter().take(self.n).any(|a| !a);
+        self.live_in_window |= alive.iter().take(self.n).any(|a| *a);
+    }
+
+    /// Live vehicle `i` at `position` and `speed` in the sample `at`: its speed in the range,
+    /// its arc coordinate in `scratch` (none off the isoline), the bins it passed since the
+    /// last sample.
+    #[inline]
+    fn observe_vehicle(
+        &mut self,
+        i: usize,
+        arc: &dyn ArcProjection,
+        position: Vec2,
+        speed: f64,
+        at: &SampleAt,
+    ) {
+        self.speed_min = self.speed_min.min(speed);
+        self.speed_max = self.speed_max.max(speed);
+        let Some(a) = arc.project(position) else {
+            self.last_s[i] = f64::NAN;
+            return;
+        };
+        let s = a.s_m;
+        self.scratch.push((s, i as u32));
+        let prev = if at.reproject && !self.last_s[i].is_nan() {
+            arc.project(self.last_p[i]).map_or(f64::NAN, |a| a.s_m)
+        } else {
+            match at.rescale {
+                // (A vehicle without a last arc coordinate keeps none: `NaN.min(x)` is `x`,
+                // which had it pass from the loop's end at the first sample and after a
+                // sample without an isoline.)
+                Some(r) if !self.last_s[i].is_nan() => (self.last_s[i] * r).min(at.l.next_down()),
+                _ => self.last_s[i],
             }
-            self.active_speed_sum += sum;
-            self.active_samples += 1;
-            self.lost_in_window |= alive.iter().take(self.n).any(|a| !a);
-            self.live_in_window |= alive.iter().take(self.n).any(|a| *a);
+        };
+        self.last_s[i] = s;
+        if self.moving || self.open {
+            self.last_p[i] = position;
         }
-        self.scratch.clear();
-        for i in 0..self.n {
-            if !alive[i] {
-                self.last_s[i] = f64::NAN;
-                continue;
-            }
-            self.speed_min = self.speed_min.min(speeds[i]);
-            self.speed_max = self.speed_max.max(speeds[i]);
-            let Some(a) = arc.project(positions[i]) else {
-                self.last_s[i] = f64::NAN;
-                continue;
-            };
-            let s = a.s_m;
-            self.scratch.push((s, i as u32));
-            let prev = if reproject && !self.last_s[i].is_nan() {
-                arc.project(self.last_p[i]).map_or(f64::NAN, |a| a.s_m)
-            } else {
-                match rescale {
-                    // (A vehicle without a last arc coordinate keeps none: `NaN.min(x)` is `x`,
-                    // which had it pass from the loop's end at the first sample and after a
-                    // sample without an isoline.)
-                    Some(r) if !self.last_s[i].is_nan() => (self.last_s[i] * r).min(l.next_down()),
-                    _ => self.last_s[i],
-                }
-            };
-            self.last_s[i] = s;
-            if self.moving || self.open {
-                self.last_p[i] = positions[i];
-            }
-            if prev.is_nan() {
-                continue;
-            }
-            // The bins entered between the last sample and this one (the shorter way round; on
-            // an open isoline, the only way).
-            let d = if self.open {
-                s - prev
-            } else {
-                wrap_arc(s - prev + 0.5 * l, l) - 0.5 * l
-            };
-            let (b0, b1) = (bin(prev), bin(s));
-            if b0 == b1 {
-                continue;
-            }
-            let forward = d > 0.0;
-            let mut b = b0;
-            loop {
-                b = if forward {
-                    (b + 1) % m
-                } else {
-                    (b + m - 1) % m
-                };
-                // Before the window a pass only dates the bin's last visit; in it, the
-                // interval it ends counts whole (its start may be before the window), and a
-                // bin not passed before counts from the run's start (t = 0).
-                let last = self.bin_last[b];
-                if in_window {
-                    if last.is_nan() {
-                        // On an open isoline only a point the team covered from the start
-                        // (the first pass over new ground ends no interval).
-                        if !self.open || self.from_start[b] {
-                            self.revisit_max = self.revisit_max.max(t);
-                        }
-                    } else {
-                        let gap = t - last;
-                        self.revisit_max = self.revisit_max.max(gap);
-                        self.revisit_sum += gap;
-                        self.revisit_count += 1;
-                    }
-                }
-                self.bin_last[b] = t;
-                if b == b1 {
-                    break;
-                }
-            }
-        }
-        let count = self.scratch.len();
-        if self.open {
-            self.observe_open(t, in_window, l);
+        if prev.is_nan() {
             return;
         }
+        self.count_passes(prev, s, at);
+    }
+
+    /// The bins a vehicle entered between its arc coordinate `prev` at the last sample and `s`
+    /// at this one (the shorter way round; on an open isoline, the only way), each dated.
+    #[inline]
+    fn count_passes(&mut self, prev: f64, s: f64, at: &SampleAt) {
+        let (l, m, t) = (at.l, self.cfg.revisit_bins, at.t);
+        let bin = |s: f64| ((s / l * m as f64) as usize).min(m - 1);
+        let d = if self.open {
+            s - prev
+        } else {
+            wrap_arc(s - prev + 0.5 * l, l) - 0.5 * l
+        };
+        let (b0, b1) = (bin(prev), bin(s));
+        if b0 == b1 {
+            return;
+        }
+        let forward = d > 0.0;
+        let mut b = b0;
+        loop {
+            b = if forward {
+                (b + 1) % m
+            } else {
+                (b + m - 1) % m
+            };
+            // Before the window a pass only dates the bin's last visit; in it, the
+            // interval it ends counts whole (its start may be before the window), and a
+            // bin not passed before counts from the run's start (t = 0).
+            let last = self.bin_last[b];
+            if at.in_window {
+                if last.is_nan() {
+                    // On an open isoline only a point the team covered from the start
+                    // (the first pass over new ground ends no interval).
+                    if !self.open || self.from_start[b] {
+                        self.revisit_max = self.revisit_max.max(t);
+                    }
+                } else {
+                    let gap = t - last;
+                    self.revisit_max = self.revisit_max.max(gap);
+                    self.revisit_sum += gap;
+                    self.revisit_count += 1;
+                }
+            }
+            self.bin_last[b] = t;
+            if b == b1 {
+                break;
+            }
+        }
+    }
+
+    /// The rest of a sample at time `t` on a closed isoline of length `l`, the vehicles' arc
+    /// coordinates in `scratch`: the gaps between consecutive vehicles round the loop (their
+    /// CV), the closest consecutive pair, the order.
+    fn observe_closed(&mut self, t: f64, in_window: bool, l: f64, positions: &[Vec2]) {
+        let count = self.scratch.len();
         if count < 2 {
             self.no_gap_cv();
             return;
@@ -818,49 +882,8 @@ impl TeamMetrics {
 
     /// The summary.
     pub fn finish(&self) -> TeamSummary {
-        let l = if self.moving {
-            if self.len_count > 0 {
-                self.len_sum / self.len_count as f64
-            } else {
-                f64::NAN
-            }
-        } else {
-            self.length_m
-        };
-        let (revisit_max, revisit_mean) = match self.t_window {
-            Some(_) if self.live_in_window => {
-                // The open interval at the run's end: the age of each bin then (from the run's
-                // start for a bin never passed).
-                let mut mx = self.revisit_max;
-                if self.open {
-                    // The points of the final stretch only (the ground behind the team is
-                    // left, the ground ahead not covered yet).
-                    if let Some((b_lo, b_hi)) = self.stretch_bins {
-                        for b in b_lo..=b_hi {
-                            let last = self.bin_last[b];
-                            if !last.is_nan() {
-                                mx = mx.max(self.t_last - last);
-                            } else if self.from_start[b] {
-                                mx = mx.max(self.t_last);
-                            }
-                        }
-                    }
-                } else {
-                    for &last in &self.bin_last {
-                        let open = if last.is_nan() {
-                            self.t_last
-                        } else {
-                            self.t_last - last
-                        };
-                        mx = mx.max(open);
-                    }
-                }
-                let mean =
-                    (self.revisit_count > 0).then(|| self.revisit_sum / self.revisit_count as f64);
-                (Some(mx), mean)
-            }
-            _ => (None, None),
-        };
+        let l = self.mean_length_m();
+        let (revisit_max, revisit_mean) = self.revisit_times_s();
         TeamSummary {
             count: self.n,
             isoline_length_m: l,
@@ -897,6 +920,59 @@ impl TeamMetrics {
                     mean_gap_m: (c > 0).then(|| self.mean_gap_sum / c as f64),
                 }
             }),
+        }
+    }
+
+    /// The isoline's length, m: a moving isoline's mean over the samples (NaN without one).
+    fn mean_length_m(&self) -> f64 {
+        if self.moving {
+            if self.len_count > 0 {
+                self.len_sum / self.len_count as f64
+            } else {
+                f64::NAN
+            }
+        } else {
+            self.length_m
+        }
+    }
+
+    /// The longest and the mean revisit time, s, the longest counting the intervals still open
+    /// at the run's end; none without a steady window with a live vehicle (the mean none
+    /// without a closed interval).
+    fn revisit_times_s(&self) -> (Option<f64>, Option<f64>) {
+        match self.t_window {
+            Some(_) if self.live_in_window => {
+                // The open interval at the run's end: the age of each bin then (from the run's
+                // start for a bin never passed).
+                let mut mx = self.revisit_max;
+                if self.open {
+                    // The points of the final stretch only (the ground behind the team is
+                    // left, the ground ahead not covered yet).
+                    if let Some((b_lo, b_hi)) = self.stretch_bins {
+                        for b in b_lo..=b_hi {
+                            let last = self.bin_last[b];
+                            if !last.is_nan() {
+                                mx = mx.max(self.t_last - last);
+                            } else if self.from_start[b] {
+                                mx = mx.max(self.t_last);
+                            }
+                        }
+                    }
+                } else {
+                    for &last in &self.bin_last {
+                        let open = if last.is_nan() {
+                            self.t_last
+                        } else {
+                            self.t_last - last
+                        };
+                        mx = mx.max(open);
+                    }
+                }
+                let mean =
+                    (self.revisit_count > 0).then(|| self.revisit_sum / self.revisit_count as f64);
+                (Some(mx), mean)
+            }
+            _ => (None, None),
         }
     }
 }
