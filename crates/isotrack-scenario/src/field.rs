@@ -640,8 +640,11 @@ struct GridFilesRead {
 
 /// What identifies a file named twice in `field.paths` (att43-7): its absolute path (symbolic
 /// links and `dir/../dir` spellings resolved, [`resolve_one`]), and on Unix its device and
-/// inode, so a hard link is the same file too.
-fn same_file_as(a: &(PathBuf, Option<(u64, u64)>), b: &(PathBuf, Option<(u64, u64)>)) -> bool {
+/// inode ([`dev_inode`]), so a hard link is the same file too.
+type FileId = (PathBuf, Option<(u64, u64)>);
+
+/// Whether two [`FileId`]s are one file: the same path, or the same device and inode.
+fn same_file_as(a: &FileId, b: &FileId) -> bool {
     a.0 == b.0 || (a.1.is_some() && a.1 == b.1)
 }
 
@@ -688,7 +691,7 @@ fn read_grid_files(
             let mut frames: Vec<Grid2> = Vec::with_capacity(list.len());
             let mut abs = Vec::with_capacity(list.len());
             // Each distinct file read so far, with the index of its frame and its digest.
-            let mut read_before: Vec<((PathBuf, Option<(u64, u64)>), usize, String)> = Vec::new();
+            let mut read_before: Vec<(FileId, usize, String)> = Vec::new();
             for (k, p) in list.iter().enumerate() {
                 let path = resolve_one(p, base_dir);
                 let id = (path.clone(), dev_inode(&path));
