@@ -271,6 +271,8 @@ fn draw_atomic(
     // An old temporary (or a link planted there) goes first; then the file is created here,
     // without following a link, before the library opens it.
     let _ = std::fs::remove_file(&tmp);
+    // Removed if the command is interrupted while drawing (att43-14), until renamed.
+    let pending = isotrack_runs::cleanup::register(&tmp);
     isotrack_runs::files::create_output(&tmp).map_err(|e| e.to_string())?;
     let result = draw(&tmp)
         .map_err(|e| e.to_string())
@@ -278,6 +280,7 @@ fn draw_atomic(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    drop(pending);
     result
 }
 

@@ -86,8 +86,8 @@ pub fn report_page(dirs: &[&Path]) -> Result<String, ReportError> {
     report_page_with_notes(dirs).map(|(page, _)| page)
 }
 
-/// [`report_page`] and the notes a command shows beside it (runs without recorded data-file
-/// digests beside runs with them: `isotrack_plot::unrecorded_data_files_note`).
+/// [`report_page`] and the notes a command shows beside it (runs with data files but no
+/// recorded data-file digests: `isotrack_plot::unrecorded_data_files_note`).
 pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), ReportError> {
     let data = load_runs(dirs)?;
     // The page draws the first run's field under every path: runs over different fields (or

@@ -1046,60 +1046,120 @@ fn data_digests(r: &RunData) -> Vec<(String, String)> {
         .unwrap_or_default()
 }
 
-/// Checks that each data file a run recorded (`summary.json` `data_files`, SHA-256 by path)
-/// still holds what the run read: the field is drawn from the file as it is now, so a file
-/// changed after the run would draw another field under its path. Otherwise a
-/// [`PlotError::Data`] (65) naming the file, the run and both digests. Each file is hashed
-/// once (`isotrack_runs::files::sha256_file`); a file that cannot be read now is left to the
-/// scenario's own loading (which has already read it).
+/// Checks each run's data files, as its scenario reads them now (the field drawn), against
+/// the digests its `summary.json` recorded (`data_files`): the field is drawn from the files as
+/// they are now, so a file changed after the run would draw another field under its path.
+/// att43-4: the scenario's own files are checked, not only the files the summary lists: a
+/// summary naming a file the scenario does not read, or lacking one it reads, is not this
+/// run's summary. Each a [`PlotError::Data`] (65) naming the run, the file and `data_files`.
+/// A summary with no digests at all (an older isotrack's) is drawn, with
+/// [`unrecorded_data_files_note`]'s note.
 pub fn data_files_unchanged(runs: &[RunData]) -> Result<(), PlotError> {
-    let mut now: std::collections::BTreeMap<String, Option<String>> = Default::default();
     let clip = isotrack_scenario::load::clip;
+    let short = |d: &str| clip(&d.chars().take(16).collect::<String>());
     for r in runs {
-        for (path, recorded) in data_digests(r) {
-            let current = now
-                .entry(path.clone())
-                .or_insert_with(|| isotrack_runs::files::sha256_file(Path::new(&path)).ok());
-            if let Some(current) = current {
-                if *current != recorded {
-                    return Err(PlotError::Data(format!(
-                        "{}: data file {} changed after the run (SHA-256 {} recorded in its summary.json, {} now): the field drawn would not be the one it ran over; re-run it",
-                        r.dir.display(),
-                        clip(&path),
-                        clip(&recorded.chars().take(16).collect::<String>()),
-                        &current[..16.min(current.len())],
-                    )));
-                }
+        let Some(recorded) = r.summary.data_files().filter(|d| !d.is_empty()) else {
+            continue;
+        };
+        let now = r.scenario.data_file_digests();
+        if let Some(path) = recorded.keys().find(|p| !now.contains_key(*p)) {
+            return Err(PlotError::Data(format!(
+                "{}: summary.json data_files names {}, a file its scenario's field does not read ({}): the summary is not this run's",
+                r.dir.display(),
+                clip(path),
+                field_files_text(now)
+            )));
+        }
+        for (path, current) in now {
+            let Some(was) = recorded.get(path) else {
+                return Err(PlotError::Data(format!(
+                    "{}: summary.json data_files has no digest of {}, a data file its scenario's field reads (it names {}): the summary is not this run's",
+                    r.dir.display(),
+                    clip(path),
+                    clip(&recorded.keys().cloned().collect::<Vec<_>>().join(", "))
+                )));
+            };
+            if was != current {
+                return Err(PlotError::Data(format!(
+                    "{}: data file {} changed after the run (SHA-256 {} recorded in its summary.json, {} now): the field drawn would not be the one it ran over; re-run it",
+                    r.dir.display(),
+                    clip(path),
+                    short(was),
+                    short(current),
+                )));
             }
         }
     }
     Ok(())
 }
 
-/// A note when some runs recorded their data files' digests (`data_files`) and others, with
-/// data files, did not (written before digests were recorded): those runs' fields cannot be
-/// checked against the others'. `None` otherwise.
+/// The data files a field reads, for a message (`none` for a field without files).
+fn field_files_text(files: &std::collections::BTreeMap<String, String>) -> String {
+    if files.is_empty() {
+        return "none".into();
+    }
+    isotrack_scenario::load::clip(&files.keys().cloned().collect::<Vec<_>>().join(", "))
+}
+
+/// A note naming the runs whose field reads data files but whose `summary.json` recorded no
+/// digest of them (`data_files` missing or empty: a run written before they were recorded):
+/// the field drawn for them is the files as they are now, unchecked against what they ran over
+/// (att43-4: drawn without a word), nor against the other runs' files. `None` when every run
+/// with data files recorded them.
 pub fn unrecorded_data_files_note(runs: &[RunData]) -> Option<String> {
-    let has_files = |r: &RunData| {
-        let f = &r.scenario.file().field;
-        f.path.is_some() || f.paths.as_ref().is_some_and(|p| !p.is_empty())
-    };
+    let has_files = |r: &RunData| !r.scenario.data_file_digests().is_empty();
     // `data_files` is left out of a summary when empty, so recorded means non-empty.
     let recorded = |r: &RunData| r.summary.data_files().is_some_and(|d| !d.is_empty());
-    if !runs.iter().any(|r| has_files(r) && recorded(r)) {
-        return None;
-    }
-    let missing: Vec<&str> = runs
+    // Each run by its directory: a team's vehicles share one summary, named once.
+    let mut missing: Vec<String> = runs
         .iter()
         .filter(|r| has_files(r) && !recorded(r))
-        .map(|r| r.name.as_str())
+        .map(|r| r.dir.display().to_string())
         .collect();
-    (!missing.is_empty()).then(|| {
-        format!(
-            "{} recorded no data_files digests in summary.json (an older run): whether its data files held the same content as the other runs' is not checked",
-            isotrack_scenario::load::clip(&missing.join(", "))
-        )
-    })
+    missing.dedup();
+    if missing.is_empty() {
+        return None;
+    }
+    let others = runs.iter().any(|r| has_files(r) && recorded(r));
+    Some(format!(
+        "{} recorded no data_files digests in summary.json (an older run): the field drawn is its data file as it is now, not checked against the one it ran over{}",
+        isotrack_scenario::load::clip(&missing.join(", ")),
+        if others {
+            ", nor against the other runs' data files"
+        } else {
+            ""
+        }
+    ))
+}
+
+/// [`field_identity`] with each data file's path (`field.path`, `field.paths`) replaced by the
+/// SHA-256 the run's `summary.json` recorded for it: the field by its bytes, wherever the
+/// file was (att43-12: the same bytes copied to a second folder were "runs over different
+/// fields"). `None` when a file has no recorded digest.
+fn field_identity_by_content(r: &RunData) -> Option<Vec<(String, String)>> {
+    let recorded = r.summary.data_files().filter(|d| !d.is_empty())?;
+    let digest_of = |v: &serde_json::Value| -> Option<serde_json::Value> {
+        match v {
+            serde_json::Value::String(p) => recorded.get(p).cloned().map(serde_json::Value::String),
+            _ => None,
+        }
+    };
+    let mut keys = field_identity(&r.scenario);
+    for (k, v) in &mut keys {
+        if k.as_str() != "field.path" && k.as_str() != "field.paths" {
+            continue;
+        }
+        let value: serde_json::Value = serde_json::from_str(v).ok()?;
+        let by_content = match &value {
+            serde_json::Value::Null => continue,
+            serde_json::Value::Array(list) => {
+                serde_json::Value::Array(list.iter().map(digest_of).collect::<Option<_>>()?)
+            }
+            one => digest_of(one)?,
+        };
+        *v = by_content.to_string();
+    }
+    Some(keys)
 }
 
 /// Checks that every run shows the same field and isoline (see `field_identity`: the
@@ -1139,6 +1199,15 @@ pub fn same_field(runs: &[RunData]) -> Result<(), PlotError> {
                 )));
             }
             continue;
+        }
+        // Other paths, the same bytes (both runs recorded their files' digests): one field.
+        if let (Some(ca), Some(cb)) = (
+            field_identity_by_content(first),
+            field_identity_by_content(r),
+        ) {
+            if ca == cb {
+                continue;
+            }
         }
         let lookup = |set: &[(String, String)], k: &str| {
             set.iter()

@@ -118,6 +118,41 @@ mod tests {
         assert!(!listed(&a));
     }
 
+    /// att43-14: the temporary file of [`crate::files::write_atomic`] (`report`'s page, a
+    /// summary, a sweep's files) is listed for removal on an interrupt while it is written, and
+    /// no longer once renamed into place (or removed after a failed write). Before, only
+    /// `run`'s trace and the lock were: Ctrl-C during `report`'s write left `.NAME.PID.tmp`.
+    #[test]
+    fn an_atomic_write_lists_its_temporary_while_writing() {
+        use std::io::Write;
+        let dir = tempfile::tempdir().unwrap();
+        let page = dir.path().join("x.html");
+        let tmp = crate::files::temp_beside(&page);
+        let listed = || {
+            PENDING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .iter()
+                .any(|(_, q)| *q == tmp)
+        };
+        crate::files::write_atomic_with(&page, |f| {
+            f.write_all(b"<html>")?;
+            assert!(listed(), "{} not listed while written", tmp.display());
+            Ok(())
+        })
+        .unwrap();
+        assert!(!listed());
+        assert!(!tmp.exists());
+        assert_eq!(std::fs::read(&page).unwrap(), b"<html>");
+        let e = crate::files::write_atomic_with(&page, |f| {
+            f.write_all(b"half")?;
+            Err(std::io::Error::other("disk full"))
+        });
+        assert!(e.is_err());
+        assert!(!listed() && !tmp.exists());
+        assert_eq!(std::fs::read(&page).unwrap(), b"<html>");
+    }
+
     /// A `.trace.csv.PID.tmp` of a process that no longer exists is removed; this process's,
     /// another name's and a non-number's are kept.
     #[cfg(unix)]

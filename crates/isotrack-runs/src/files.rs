@@ -161,14 +161,27 @@ pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
 /// existing `path` that is not a regular file is refused ([`refuse_non_regular`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
+    write_atomic_with(path, |f| f.write_all(bytes))
+}
+
+/// As [`write_atomic`], the temporary file's content written by `write`. The temporary is
+/// registered for removal if the command is interrupted ([`crate::cleanup::register`]: Ctrl-C,
+/// SIGTERM, SIGHUP) until it is renamed into place or removed (att43-14: Ctrl-C while `report`
+/// wrote its page left the whole `.NAME.PID.tmp` behind).
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     refuse_non_regular(path)?;
     let tmp = temp_beside(path);
+    let pending = crate::cleanup::register(&tmp);
     let result = create_output(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
+        .and_then(|mut f| write(&mut f).and_then(|()| f.sync_all()))
         .and_then(|()| std::fs::rename(&tmp, path));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    drop(pending);
     result
 }
 

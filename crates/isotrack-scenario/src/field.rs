@@ -10,7 +10,7 @@ use isotrack_core::math::{Mat2, Vec2};
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::{FieldDerivatives, ScalarField};
 use isotrack_fields::grid::{Grid2, GridField, GridSeries};
-use isotrack_fields::io::load_series_hashed;
+use isotrack_fields::io::{load_series_read, read_limited, ReadWhole};
 use isotrack_fields::isoline::{newton_distance, IsolineSegments};
 use isotrack_fields::puff::PuffPlume;
 use isotrack_fields::{AnalyticField, AnalyticKind};
@@ -638,15 +638,43 @@ struct GridFilesRead {
     one_file: Option<String>,
 }
 
+/// What identifies a file named twice in `field.paths` (att43-7): its absolute path (symbolic
+/// links and `dir/../dir` spellings resolved, [`resolve_one`]), and on Unix its device and
+/// inode ([`dev_inode`]), so a hard link is the same file too.
+type FileId = (PathBuf, Option<(u64, u64)>);
+
+/// Whether two [`FileId`]s are one file: the same path, or the same device and inode.
+fn same_file_as(a: &FileId, b: &FileId) -> bool {
+    a.0 == b.0 || (a.1.is_some() && a.1 == b.1)
+}
+
+/// The device and inode of the file at `path` (Unix; `None` elsewhere or if unknown).
+fn dev_inode(path: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        None
+    }
+}
+
 /// Reads `field.path` (one file, any number of frames) or `field.paths` (one frame per file),
 /// recording the paths as absolute into `filled`, the files' warnings into `notes` and the
-/// SHA-256 of each file's bytes as parsed into `digests`.
+/// SHA-256 of each file's bytes as parsed into `digests`. Each distinct file is read once
+/// (`read`: [`read_limited`] but in tests): a file `field.paths` names twice (two spellings, a
+/// link) gives its one frame, as read, to each place (att43-7: it was read twice, and a file
+/// changing meanwhile gave two frames under one digest).
 fn read_grid_files(
     g: &GridSpec,
     base_dir: &Path,
     filled: &mut FileFilled,
     notes: &mut Vec<String>,
     digests: &mut BTreeMap<String, String>,
+    read: ReadWhole<'_>,
 ) -> Result<GridFilesRead, Issue> {
     let issue = |key: &str, message: String| Issue {
         key: key.to_string(),
@@ -660,13 +688,25 @@ fn read_grid_files(
     let mut one_file: Option<String> = None;
     let (raw, file_times) = match &g.files {
         GridFiles::Paths(list) => {
-            let mut frames = Vec::with_capacity(list.len());
+            let mut frames: Vec<Grid2> = Vec::with_capacity(list.len());
             let mut abs = Vec::with_capacity(list.len());
+            // Each distinct file read so far, with the index of its frame and its digest.
+            let mut read_before: Vec<(FileId, usize, String)> = Vec::new();
             for (k, p) in list.iter().enumerate() {
                 let path = resolve_one(p, base_dir);
-                let (s, digest) = load_series_hashed(&path, g.format, g.variable.as_deref())
+                let id = (path.clone(), dev_inode(&path));
+                if let Some((_, at, digest)) =
+                    read_before.iter().find(|(o, ..)| same_file_as(o, &id))
+                {
+                    digests.insert(path.display().to_string(), digest.clone());
+                    frames.push(frames[*at].clone());
+                    abs.push(path.display().to_string());
+                    continue;
+                }
+                let (s, digest) = load_series_read(&path, g.format, g.variable.as_deref(), read)
                     .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
-                digests.insert(path.display().to_string(), digest);
+                digests.insert(path.display().to_string(), digest.clone());
+                read_before.push((id, frames.len(), digest));
                 if s.frames.len() != 1 {
                     return Err(issue(
                         "field.paths",
@@ -690,7 +730,7 @@ fn read_grid_files(
         }
         GridFiles::Path(p) => {
             let path = resolve_one(p, base_dir);
-            let (s, digest) = load_series_hashed(&path, g.format, g.variable.as_deref())
+            let (s, digest) = load_series_read(&path, g.format, g.variable.as_deref(), read)
                 .map_err(|e| load_issue("field.path", "", e))?;
             digests.insert(path.display().to_string(), digest);
             filled.path = Some(path.display().to_string());
@@ -731,7 +771,7 @@ fn build_grid(
         file_units,
         georef,
         one_file,
-    } = read_grid_files(g, base_dir, filled, notes, digests)?;
+    } = read_grid_files(g, base_dir, filled, notes, digests, &read_limited)?;
     filled.units = adopt_file_units(units, &g.transform, &file_units, notes);
     // The file's own position of the (cropped) south-west node, and its spacing: what
     // field.origin_m and field.spacing_m replace.
@@ -865,4 +905,64 @@ fn lonlat_frame(
         lat0_deg: lat0_deg + shift.y / k,
         ref_lat_deg,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// att43-7: `field.paths` naming one file three times (as written, as `vdir/../vdir/`, and
+    /// through a hard link) reads it once: the reader here gives other bytes at every later
+    /// read (a file rewritten while the scenario loads), yet every frame is the first read's
+    /// (its values, 1 to 9 as written) and every path's digest is that read's SHA-256. Before,
+    /// each name was read again: three reads, frames of other content under one digest.
+    #[test]
+    fn a_file_named_twice_is_read_once() {
+        let d = tempfile::tempdir().unwrap();
+        std::fs::create_dir(d.path().join("vdir")).unwrap();
+        let first = b"1,2,3\n4,5,6\n7,8,9\n".to_vec();
+        let later = b"9,9,9\n9,9,9\n9,9,9\n".to_vec();
+        std::fs::write(d.path().join("vdir/v.csv"), &first).unwrap();
+        std::fs::hard_link(d.path().join("vdir/v.csv"), d.path().join("h.csv")).unwrap();
+        let text = "[field]\nkind = \"grid\"\npaths = [\"vdir/v.csv\", \"h.csv\", \"vdir/../vdir/v.csv\"]\nframe_times_s = [0.0, 100.0, 200.0]\n[initial]\nx_m = 1.0\ny_m = 1.0\n[controller]\nlevel = 5.0\n";
+        let s = crate::parse_scenario_in(text, "s.toml", &[], d.path()).unwrap();
+        let FieldKindSpec::Grid(g) = &s.spec().field.kind else {
+            panic!("not a grid")
+        };
+        let mut g = g.clone();
+        g.files = GridFiles::Paths(
+            ["vdir/v.csv", "vdir/../vdir/v.csv", "h.csv"]
+                .map(String::from)
+                .to_vec(),
+        );
+        let reads = std::cell::Cell::new(0);
+        let read = |_: &Path, _: u64| {
+            reads.set(reads.get() + 1);
+            Ok(if reads.get() == 1 {
+                first.clone()
+            } else {
+                later.clone()
+            })
+        };
+        let (mut filled, mut notes, mut digests) = Default::default();
+        let got =
+            read_grid_files(&g, d.path(), &mut filled, &mut notes, &mut digests, &read).unwrap();
+        assert_eq!(reads.get(), 1);
+        assert_eq!(got.raw.len(), 3);
+        for f in &got.raw {
+            // Row 0 is the file's first line (south), column 0 west: 1, 2, 3 along it.
+            let row0: Vec<f64> = (0..3).map(|c| f.at(c, 0)).collect();
+            let row2: Vec<f64> = (0..3).map(|c| f.at(c, 2)).collect();
+            assert_eq!((row0, row2), (vec![1.0, 2.0, 3.0], vec![7.0, 8.0, 9.0]));
+        }
+        let sha = isotrack_fields::io::sha256_hex(&first);
+        let want: BTreeMap<String, String> = [
+            d.path().join("vdir/v.csv").canonicalize().unwrap(),
+            d.path().join("h.csv").canonicalize().unwrap(),
+        ]
+        .into_iter()
+        .map(|p| (p.display().to_string(), sha.clone()))
+        .collect();
+        assert_eq!(digests, want);
+    }
 }

@@ -66,8 +66,14 @@ impl LoadError {
             unreadable: false,
         }
     }
-    /// The file could not be read at all (see [`LoadError::unreadable`]).
+    /// The file could not be read at all (see [`LoadError::unreadable`]); a file too large
+    /// for the memory this process may use (an `OutOfMemory` error, from
+    /// [`super::limits::read_limited`]) is refused as the Limits table's memory check is, exit
+    /// 65, naming the memory (att43-5).
     pub(crate) fn cannot_read(path: &Path, e: std::io::Error) -> Self {
+        if e.kind() == std::io::ErrorKind::OutOfMemory {
+            return Self::new(path, None, format!("too large to load: {e}"));
+        }
         Self {
             unreadable: true,
             ..Self::new(path, None, format!("cannot read: {e}"))

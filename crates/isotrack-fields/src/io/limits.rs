@@ -85,7 +85,10 @@ fn refuse_kernel_pseudo_file(f: &std::fs::File) -> std::io::Result<()> {
 /// `/dev/zero`, a directory) before reading a byte: such "files" never end, or end anywhere.
 /// The size is checked from the metadata and again on the bytes actually read (a `/proc` file
 /// that declares 0 bytes, or a file that grows, is stopped with an error one byte past the
-/// limit, not read on).
+/// limit, not read on). The buffer is allocated fallibly ([`whole_file_buffer`]): a file
+/// larger than the memory this process may use is an `OutOfMemory` error naming the bytes
+/// wanted, never an abort (att43-5: a 3 GiB grid under `ulimit -v` aborted with "memory
+/// allocation of 3221225472 bytes failed").
 pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let f = open_regular(path)?;
@@ -99,11 +102,40 @@ pub fn read_limited(path: &Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
     if meta.len() > max_bytes {
         return Err(too_big(meta.len()));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    let mut bytes = whole_file_buffer(meta.len(), memory_budget_bytes())?;
+    // (`read_to_end` grows the buffer fallibly too, an `OutOfMemory` error, for a file that
+    // declares fewer bytes than it holds.)
     f.take(max_bytes + 1).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > max_bytes {
         return Err(too_big(bytes.len() as u64));
     }
+    Ok(bytes)
+}
+
+/// An empty buffer with room for a file's `len` bytes, allocated fallibly: `len` beyond
+/// `budget_bytes` (the memory this process may use, [`memory_budget_bytes`]) is refused before
+/// anything is allocated, and an allocation the system refuses is an error too, never an abort.
+/// Either is an `OutOfMemory` error naming the bytes wanted and the memory
+/// ([`LoadError::cannot_read`] gives it exit 65, as the Limits table's memory check).
+pub(crate) fn whole_file_buffer(len: u64, budget_bytes: Option<u64>) -> std::io::Result<Vec<u8>> {
+    let gib = |b: u64| b as f64 / f64::from(1u32 << 30);
+    let no_room = |why: String| {
+        std::io::Error::new(
+            std::io::ErrorKind::OutOfMemory,
+            format!("its {len} bytes ({:.2} GiB) are read whole into memory (to hash the very bytes parsed), and {why}", gib(len)),
+        )
+    };
+    if let Some(b) = budget_bytes.filter(|b| len > *b) {
+        return Err(no_room(format!(
+            "the memory this process may use ({:.2} GiB: MemAvailable, a cgroup limit or `ulimit -v`) holds fewer",
+            gib(b)
+        )));
+    }
+    let mut bytes = Vec::new();
+    let room = usize::try_from(len)
+        .map_err(|_| ())
+        .and_then(|n| bytes.try_reserve_exact(n).map_err(|_| ()));
+    room.map_err(|()| no_room("the system refused to allocate that much memory".into()))?;
     Ok(bytes)
 }
 

@@ -477,6 +477,39 @@ fn grid_values_beyond_the_limit_are_refused() {
     assert!(load_grid(&p, None).is_ok());
 }
 
+/// att43-5: a file read whole is allocated fallibly. Beyond the memory budget it is refused
+/// before any allocation, and an allocation the system refuses (2^62 bytes: more than any
+/// address space holds) is an `OutOfMemory` error naming the bytes, where `Vec::with_capacity`
+/// aborted the process ("memory allocation of 3221225472 bytes failed", rc 134). Through a
+/// loader, the error is the Limits table's memory refusal (65, not 66: `unreadable` false),
+/// naming the file and the bytes.
+#[test]
+fn a_file_too_large_for_memory_is_an_error_not_an_abort() {
+    use super::limits::whole_file_buffer;
+    let e = whole_file_buffer(1 << 62, None).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::OutOfMemory);
+    assert!(e.to_string().contains("4611686018427387904 bytes"), "{e}");
+    assert!(e.to_string().contains("refused to allocate"), "{e}");
+    let e = whole_file_buffer(3 << 30, Some(1 << 30)).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::OutOfMemory);
+    assert!(
+        e.to_string().contains("3221225472 bytes (3.00 GiB)")
+            && e.to_string().contains("(1.00 GiB: MemAvailable"),
+        "{e}"
+    );
+    // Within the budget: the room for exactly the file's bytes.
+    let b = whole_file_buffer(1000, Some(1 << 30)).unwrap();
+    assert!(b.is_empty() && b.capacity() >= 1000);
+    let (_d, p) = tmp("g.csv", b"1,2\n3,4\n");
+    let le = LoadError::cannot_read(&p, e);
+    assert!(!le.unreadable, "{le:?}");
+    assert!(
+        le.to_string()
+            .contains("g.csv: too large to load: its 3221225472 bytes"),
+        "{le}"
+    );
+}
+
 /// Regression (hostile inputs): devices, pipes and directories are refused before a byte is
 /// read (`/dev/zero` once grew the process to 18.7 GB), and files beyond the limit too.
 #[test]

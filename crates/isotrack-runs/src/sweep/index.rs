@@ -329,6 +329,8 @@ pub fn write_sorted(
                 .map_err(|e| fail(exit::NOINPUT, format!("cannot read {}: {e}", p.display())))
         })
         .collect::<Result<Vec<_>, Failure>>()?;
+    // Removed if the command is interrupted while it is written (att43-14), until renamed.
+    let _pending = crate::cleanup::register(&tmp);
     let mut f = std::io::BufWriter::new(crate::files::create_output(&tmp).map_err(cant)?);
     f.write_all(header.as_bytes()).map_err(cant)?;
     let mut at = vec![u64::MAX; inputs.len()];
