@@ -134,6 +134,14 @@ impl PyScenario {
             .collect()
     }
 
+    /// The SHA-256 (lowercase hex) of each data file by absolute path, of the bytes the field
+    /// was parsed from (one read: `Scenario::data_file_digests`), so the digest Python keeps
+    /// is the field's and never a second read's (a file changed between the two would be
+    /// recorded as flown while the old field flew).
+    fn data_file_digests(&self) -> std::collections::BTreeMap<String, String> {
+        self.inner.data_file_digests().clone()
+    }
+
     /// Whether `other` flies this scenario's field as it was read (no file read again since):
     /// a `set` of keys outside the resolved `[field]` shares it.
     fn shares_field(&self, other: &PyScenario) -> bool {

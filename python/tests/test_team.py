@@ -946,6 +946,36 @@ def test_a_scenario_whose_data_file_changed_is_not_run(tmp_path):
     assert again.summary["data_files"][str(tmp_path / "field.csv")] != digest
 
 
+def test_an_edit_keeping_size_and_modification_time_is_not_run(tmp_path):
+    """att40-9: the digest cache behind the check before a run was keyed on the path, the size
+    and the modification time, so an edit of the same size with the modification time set back
+    (``touch -r``, a tool restoring times) was taken for the file hashed before and the old
+    field flew under the edited file's name. Every write sets the status-change time, which is
+    in the key now."""
+    import time
+
+    data = ROOT / "data" / "no2_germany_kriged" / "no2_germany_kriged.csv"
+    field = tmp_path / "field.csv"
+    field.write_bytes(data.read_bytes())
+    text = (ROOT / "scenarios" / "paper-fig2a-field.toml").read_text()
+    text = text.replace('path = "../data/no2_germany_kriged/no2_germany_kriged.csv"', 'path = "field.csv"')
+    text = text.replace("duration_s = 600.0", "duration_s = 2.0")
+    (tmp_path / "s.toml").write_text(text)
+    sc = isotrack.Scenario.from_file(str(tmp_path / "s.toml"))
+    sc.run()  # the file hashed and cached
+    before = os.stat(field)
+    time.sleep(0.05)  # past the kernel's coarse timestamp tick
+    raw = bytearray(field.read_bytes())
+    at = max(i for i, b in enumerate(raw) if chr(b).isdigit())
+    raw[at] = ord("1") if raw[at] != ord("1") else ord("2")
+    field.write_bytes(bytes(raw))
+    os.utime(field, ns=(before.st_atime_ns, before.st_mtime_ns))
+    after = os.stat(field)
+    assert (after.st_size, after.st_mtime_ns) == (before.st_size, before.st_mtime_ns)
+    with pytest.raises(ValueError, match="changed since the scenario was made"):
+        sc.run()
+
+
 def _volcano_copy(tmp_path):
     """volcano.toml with its data file copied into tmp_path (the scenario reads the copy)."""
     shutil.copy(ROOT / "data" / "volcano" / "volcano.csv", tmp_path / "volcano.csv")

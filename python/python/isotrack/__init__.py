@@ -390,8 +390,11 @@ class Run:
         return f"Run(outcome={s.get('outcome')!r:.80}, t_end_s={s.get('t_end_s')!r:.40}, rows={rows})"
 
 
-#: SHA-256 of data files already hashed, by (path, size, modification time): a scenario made
-#: again and again (``set``, every run of a sweep) hashes each file once.
+#: SHA-256 of data files already hashed (the check before each run of a scenario), by path,
+#: device, inode, size, modification and status-change times: a file rewritten in place keeps
+#: its inode and may keep its size and, through ``touch -r`` or a coarse clock, its
+#: modification time, but every write sets its status-change time, which no user tool sets
+#: back (att40-9: keyed on path, size and modification time alone, such an edit was missed).
 _DIGESTS: Dict[tuple, str] = {}
 
 
@@ -401,7 +404,7 @@ def _sha256(path: str, cached: bool = True) -> str:
     import os
 
     st = os.stat(path)
-    key = (path, st.st_size, st.st_mtime_ns)
+    key = (path, st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
     if cached and key in _DIGESTS:
         return _DIGESTS[key]
     _DIGESTS[key] = _native.file_sha256(path)
@@ -423,7 +426,10 @@ class Scenario:
                 f"Scenario.from_toml(text), not Scenario({native!r:.80})"
             )
         self._native = native
-        self._digests = {p: _sha256(p) for p in dict.fromkeys(native.data_files())}
+        # The digests of the bytes the field was parsed from (one read), not of a second read
+        # of the files after it (a file changed in between would be recorded as the one flown).
+        parsed = native.data_file_digests()
+        self._digests = {p: parsed.get(p) or _sha256(p) for p in dict.fromkeys(native.data_files())}
 
     def _derived(self, native: "_native.Scenario") -> "Scenario":
         """A scenario made from this one (``set``): where it flies this one's field as read
@@ -453,9 +459,17 @@ class Scenario:
                     f"{want[:16]}... then): unpickled, it would fly another field"
                 )
         scenario = Scenario.from_toml(text)
-        if origin is None:  # pickled by an isotrack without the folder: as it was then
-            return scenario
-        return Scenario(scenario._native.relocated(origin, folder))
+        if origin is not None:  # (None: pickled by an isotrack without the folder: as it was then)
+            scenario = Scenario(scenario._native.relocated(origin, folder))
+        # Again on the bytes the field was parsed from: a file changed between the check above
+        # and the read would otherwise fly unnoticed.
+        for p, want in digests.items():
+            if scenario._digests.get(p, want) != want:
+                raise ValueError(
+                    f"{p}: the scenario's data file changed while the scenario was unpickled "
+                    f"(SHA-256 {want[:16]}... then): unpickled, it would fly another field"
+                )
+        return scenario
 
     @staticmethod
     def default() -> "Scenario":
