@@ -234,7 +234,14 @@ pub(crate) fn mark(path: &Path) -> Result<(), String> {
         }
     };
     match marked {
-        Some(m) => std::fs::write(path, m).map_err(|e| e.to_string()),
+        // Rewritten in place, never created: an interrupt that removed the temporary figure
+        // meanwhile must not see it come back (`isotrack_runs::cleanup`).
+        Some(m) => std::fs::OpenOptions::new()
+            .write(true)
+            .truncate(true)
+            .open(path)
+            .and_then(|mut f| std::io::Write::write_all(&mut f, &m))
+            .map_err(|e| e.to_string()),
         None => Ok(()),
     }
 }

@@ -39,6 +39,34 @@ pub fn register(path: &Path) -> Pending {
     Pending { id }
 }
 
+/// Set once an interrupt is ending the process ([`remove_pending_for_exit`]): from then on no
+/// output file is created ([`crate::files::create_output`] refuses), so none appears after the
+/// registered ones are removed.
+static EXITING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether an interrupt is ending the process ([`remove_pending_for_exit`]).
+pub fn exiting() -> bool {
+    EXITING.load(Ordering::SeqCst)
+}
+
+/// How long [`remove_pending_for_exit`] lets a write already under way finish before it removes
+/// the registered files again.
+const EXIT_GRACE: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// For an interrupt that ends the process (`crate::signals`): no output file is created from now
+/// on ([`exiting`]), every registered file is removed, and removed again after [`EXIT_GRACE`].
+/// The second pass is for a write that was already opening a registered file by its path when
+/// the first pass removed it (a figure's encoder, the mark rewriting it: both create the file
+/// anew): the signal is answered on its own thread while the command's thread runs on, so a
+/// single pass left `.trajectory.png.PID.tmp.png` behind now and then (runs_guard's
+/// ctrl_c_during_plot_leaves_no_temporary_figure, under load).
+pub fn remove_pending_for_exit() {
+    EXITING.store(true, Ordering::SeqCst);
+    remove_pending();
+    std::thread::sleep(EXIT_GRACE);
+    remove_pending();
+}
+
 /// Removes every registered file (best effort: a file already gone is no error).
 pub fn remove_pending() {
     let list = PENDING.lock().unwrap_or_else(|e| e.into_inner());

@@ -153,6 +153,11 @@ pub fn open_regular(path: &Path, read: bool, truncate: bool) -> std::io::Result<
 
 /// The one way a command opens an output file for writing: [`open_regular`], emptied.
 pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
+    if crate::cleanup::exiting() {
+        // An interrupt is removing the registered files and ending the process: a file created
+        // now would be left behind.
+        return Err(std::io::Error::other("the command is being interrupted"));
+    }
     open_regular(path, false, true)
 }
 

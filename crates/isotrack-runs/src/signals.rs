@@ -32,7 +32,7 @@ fn received(sig: i32) {
     LAST.store(sig, Ordering::SeqCst);
     let flags = FLAGS.lock().unwrap_or_else(|e| e.into_inner());
     if flags.is_empty() {
-        crate::cleanup::remove_pending();
+        crate::cleanup::remove_pending_for_exit();
         std::process::exit(128 + sig);
     }
     for f in flags.iter() {

@@ -34,7 +34,7 @@ use isotrack_core::spacing::{
     spacing_mode_stable, split_delay,
 };
 use isotrack_core::Vec2;
-use isotrack_sim::team::arc::{ArcProjection, PolylineArc};
+use isotrack_sim::team::arc::{ArcProjection, CircleArc, PolylineArc};
 use isotrack_sim::team::metrics::TeamMetricsConfig;
 use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
@@ -536,7 +536,7 @@ pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Range
                 return None;
             }
             let theta_min = 2.0 * (r / d).asin();
-            deployed = deployed_on_circle(team, c.center_m, theta_min, r);
+            deployed = deployed_on_circle(team, c, theta_min, r);
             let even = d * (std::f64::consts::PI / n as f64).sin();
             (c.length_m(), theta_min * c.radius_m, Some(even))
         }
@@ -560,6 +560,21 @@ pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Range
     })
 }
 
+/// How far from the circle, as a fraction of its radius, a start may lie and still be judged by
+/// its angle about the centre (att44-1, -2, -5: a start 13 m off the circle was taken for the
+/// point of the circle at its angle, where it does not join it).
+const ON_CIRCLE_REL_TOL: f64 = 1e-3;
+
+/// Start `i`'s angle about `circle`'s centre, rad, when it lies on the circle (within
+/// [`ON_CIRCLE_REL_TOL`]); `None` otherwise (where it joins the circle is not the check's to
+/// tell).
+fn start_angle(team: &TeamSpec, circle: CircleArc, i: usize) -> Option<f64> {
+    let d = Vec2::new(team.starts[i].x_m, team.starts[i].y_m) - circle.center_m;
+    let r = d.norm();
+    (r > 0.0 && (r - circle.radius_m).abs() <= ON_CIRCLE_REL_TOL * circle.radius_m)
+        .then(|| d.y.atan2(d.x))
+}
+
 /// The team's starts on a known circle ([`deployed_on_circle`]).
 #[derive(Clone, Copy, Debug)]
 struct Deployment {
@@ -572,24 +587,19 @@ struct Deployment {
     widest_chord: (f64, [usize; 2]),
 }
 
-/// The starts of `team` about the centre `center` of a circle, in angular order (the same set
-/// of gaps whichever way the team travels): their gap CV, whether every neighbour is out of
-/// `range_m` (angular gap at least `theta_min` rad and chord at least `range_m`), and the
-/// widest chord between neighbours. `None` for fewer than two starts or one at the centre.
+/// The starts of `team` on `circle`, in angular order about its centre (the same set of gaps
+/// whichever way the team travels): their gap CV, whether every neighbour is out of `range_m`
+/// (angular gap at least `theta_min` rad and chord at least `range_m`), and the widest chord
+/// between neighbours. `None` for fewer than two starts or one off the circle
+/// ([`start_angle`]).
 fn deployed_on_circle(
     team: &TeamSpec,
-    center: Vec2,
+    circle: CircleArc,
     theta_min: f64,
     range_m: f64,
 ) -> Option<Deployment> {
-    let mut at: Vec<(f64, usize)> = team
-        .starts
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let d = Vec2::new(p.x_m, p.y_m) - center;
-            (d.norm() > 0.0).then(|| (d.y.atan2(d.x), i))
-        })
+    let mut at: Vec<(f64, usize)> = (0..team.count())
+        .map(|i| start_angle(team, circle, i).map(|a| (a, i)))
         .collect::<Option<_>>()?;
     if at.len() < 2 {
         return None;
@@ -889,9 +899,8 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
         return None;
     }
     let circle = s.team_arc();
-    let deployed = |range_m: f64| {
-        circle.and_then(|c| deployed_on_circle(team, c.center_m, f64::INFINITY, range_m))
-    };
+    let deployed =
+        |range_m: f64| circle.and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m));
     let even = TeamMetricsConfig::default().even_gap_cv;
     let frozen = if n == 2 {
         Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
@@ -983,17 +992,14 @@ fn travel_direction(s: &Scenario, l: &Law) -> Option<f64> {
     (k != 0.0 && k.is_finite()).then(|| -k.signum() * side)
 }
 
-/// How many turns the listed ring makes round the circle's centre `center` in the direction of
+/// How many turns the listed ring makes round `circle`'s centre in the direction of
 /// travel `dir`: from each start to the next listed one (the last to the first), the angle
 /// ahead in `[0, 2 pi)`, summed over the ring, in turns. 1 when the listed order is the order
 /// along the travel; a reversed list gives `N - 1`, a permuted one another count. `None` when a
-/// start is at the centre or two share an angle.
-fn listed_ring_turns(team: &TeamSpec, center: Vec2, dir: f64) -> Option<usize> {
+/// start is off the circle ([`start_angle`]) or two share an angle.
+fn listed_ring_turns(team: &TeamSpec, circle: CircleArc, dir: f64) -> Option<usize> {
     let tau = std::f64::consts::TAU;
-    let angle = |i: usize| {
-        let d = Vec2::new(team.starts[i].x_m, team.starts[i].y_m) - center;
-        (d.norm() > 0.0).then(|| d.y.atan2(d.x))
-    };
+    let angle = |i: usize| start_angle(team, circle, i);
     let n = team.count();
     let mut sum = 0.0;
     for i in 0..n {
@@ -1017,7 +1023,7 @@ fn listed_ring_out_of_order(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<St
     let c = s.team_arc()?;
     let dir = travel_direction(s, l)?;
     let side = s.spec().controller.pi_isoline()?.output.higher_side.sign();
-    let turns = listed_ring_turns(team, c.center_m, dir)?;
+    let turns = listed_ring_turns(team, c, dir)?;
     (turns != 1).then(|| {
         let way = if dir < 0.0 { "clockwise" } else { "counter-clockwise" };
         format!(
