@@ -971,3 +971,57 @@ fn a_listed_ring_out_of_the_order_of_travel_fails() {
         assert!(m.closest_approach.unwrap().distance_m > 0.5, "{sets:?}");
     }
 }
+
+/// att44-1, -2: a start off the circle (here 13 m out) is not judged by its angle about the
+/// centre: where it joins the circle is not the check's to tell. Four starts spread pi/2 apart
+/// in angle, one of them at radius r + 13, with every range lost: the check no longer says the
+/// team "keeps its deployment, which is even" (the run ended uneven); it fails, the gaps
+/// unknown, and range_halt gives no deployment.
+#[test]
+fn a_start_off_the_circle_is_not_judged_by_its_angle() {
+    let r = 10.0 * std::f64::consts::LN_2;
+    let start = |a: f64, rr: f64| {
+        format!(
+            "{{ x_m = {}, y_m = {}, heading_rad = {} }}",
+            rr * a.cos(),
+            rr * a.sin(),
+            a - FRAC_PI_2
+        )
+    };
+    let starts = format!(
+        "starts = [{}, {}, {}, {}]",
+        start(0.0, r),
+        start(-FRAC_PI_2, r + 13.0),
+        start(-PI, r),
+        start(-1.5 * PI, r)
+    );
+    let text = circular_text();
+    let spread_line = text
+        .lines()
+        .find(|l| l.starts_with("spread = "))
+        .unwrap()
+        .to_string();
+    let text = text.replace(&spread_line, &starts);
+    let s = parse_scenario(
+        &text,
+        "off.toml",
+        &["team.ranging.dropout_probability=1.0".to_string()],
+    )
+    .unwrap();
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        !t.verdict_reason.contains("keeps its deployment"),
+        "{}",
+        t.verdict_reason
+    );
+    let s = parse_scenario(
+        &text,
+        "off.toml",
+        &["team.ranging.max_range_m=5.0".to_string()],
+    )
+    .unwrap();
+    let h = check(&s, None).team.unwrap().spacing.range_halt.unwrap();
+    assert_eq!(h.deployed_gap_cv, None, "{h:?}");
+    assert!(!h.deployed_all_silent, "{h:?}");
+}
