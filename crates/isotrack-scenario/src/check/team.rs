@@ -891,8 +891,10 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
     if let Some(wrong) = listed_ring_out_of_order(s, l, team) {
         return Some((Verdict::Fails, wrong));
     }
-    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
-        return None;
+    let (gain_per_s, ranges) = match team.law {
+        SpacingLaw::RangeBalance { gain_per_s } => (gain_per_s, true),
+        SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, false),
+        SpacingLaw::None => return None,
     };
     let n = team.count();
     if gain_per_s == 0.0 || n < 2 {
@@ -902,17 +904,19 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
     let deployed =
         |range_m: f64| circle.and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m));
     let even = TeamMetricsConfig::default().even_gap_cv;
-    let frozen = if n == 2 {
+    let frozen = if n == 2 && ranges {
         Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
-    } else if team.ranging.dropout_probability >= 1.0 {
+    } else if ranges && team.ranging.dropout_probability >= 1.0 {
         Some("team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0".to_string())
     } else if (0..n).all(|i| {
         let v = team.speeds(i);
         v.min_mps == v.max_mps
     }) {
+        // att44-9: arc_reference too.
         Some(format!(
-            "team.v_min_mps = team.v_max_mps = {} m/s: range_balance has no speed to command but v0",
-            Echo(team.v_min_mps)
+            "team.v_min_mps = team.v_max_mps = {} m/s: {} has no speed to command but v0",
+            Echo(team.v_min_mps),
+            team.law.name()
         ))
     } else {
         None
@@ -943,7 +947,7 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
         });
     }
     let r = team.ranging.max_range_m;
-    if !r.is_finite() {
+    if !ranges || !r.is_finite() {
         return None;
     }
     if team.nominal_speeds_mps().len() > 1 {

@@ -656,6 +656,16 @@ fn a_law_that_cannot_move_the_gaps_is_judged_by_the_deployment() {
             ],
             4,
         ),
+        // att44-9: arc_reference with no speed room is as frozen.
+        (
+            &[
+                "team.spacing=\"arc_reference\"",
+                "team.v_min_mps=0.5",
+                "team.v_max_mps=0.5",
+                "sim.duration_s=100",
+            ],
+            4,
+        ),
     ] {
         let s = circular(sets);
         let t = check(&s, None).team.unwrap();
