@@ -556,12 +556,7 @@ fn a_ranging_limit_short_of_the_even_spacing_fails_by_the_halt_it_allows() {
         assert!(close(h.worst_gap_cv, bound, 1e-9), "{h:?} vs {bound}");
         assert!(close(h.even_range_m.unwrap(), chord, 1e-12), "{h:?}");
         let warned = isotrack_scenario::check::warnings(&s);
-        let m = s
-            .run_team(&mut [] as &mut [NoTrace])
-            .unwrap()
-            .unwrap()
-            .team
-            .unwrap();
+        let m = team_metrics(&s);
         // The vehicles fly their tracking error off the circle (a chord between points just
         // outside it reaches the range at a shorter arc), so the halt meets the bound to within
         // 1e-3 of it (seen: 0.022965 against 0.022959 at 9.7 m).
@@ -597,12 +592,7 @@ fn a_ranging_limit_short_of_the_even_spacing_fails_by_the_halt_it_allows() {
     let t = check(&long, None).team.unwrap();
     assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
     assert!(t.spacing.range_halt.is_none());
-    let m = long
-        .run_team(&mut [] as &mut [NoTrace])
-        .unwrap()
-        .unwrap()
-        .team
-        .unwrap();
+    let m = team_metrics(&long);
     assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
 }
 
@@ -616,14 +606,17 @@ fn spread_cv(step: f64, n: usize) -> f64 {
     var.sqrt() / mean
 }
 
-fn run_cv(s: &Scenario) -> f64 {
-    let m = s
-        .run_team(&mut [] as &mut [NoTrace])
+/// The team metrics of a run of `s` (no trace kept).
+fn team_metrics(s: &Scenario) -> isotrack_sim::team::metrics::TeamSummary {
+    s.run_team(&mut [] as &mut [NoTrace])
         .unwrap()
         .unwrap()
         .team
-        .unwrap();
-    m.gap_cv_final.unwrap()
+        .unwrap()
+}
+
+fn run_cv(s: &Scenario) -> f64 {
+    team_metrics(s).gap_cv_final.unwrap()
 }
 
 /// att41-19, att43-8, att43-13: where range_balance cannot move the gaps (two vehicles, each
@@ -863,12 +856,7 @@ fn a_ranging_limit_fails_on_an_extracted_loop_too() {
     assert!(h.even_range_m.is_none(), "{h:?}");
     assert!(close(h.worst_gap_cv, bound, 1e-2), "{h:?} vs {bound}");
     assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
-    let m = s
-        .run_team(&mut [] as &mut [NoTrace])
-        .unwrap()
-        .unwrap()
-        .team
-        .unwrap();
+    let m = team_metrics(&s);
     // The vehicles fly their tracking error off the extracted loop, so their projected gaps
     // meet the bound to within 1e-3 of it (seen: 1.26021 against 1.26017).
     let cv = m.gap_cv_final.unwrap();
@@ -950,12 +938,7 @@ fn a_listed_ring_out_of_the_order_of_travel_fails() {
             "{}",
             t.verdict_reason
         );
-        let m = s
-            .run_team(&mut [] as &mut [NoTrace])
-            .unwrap()
-            .unwrap()
-            .team
-            .unwrap();
+        let m = team_metrics(&s);
         let d = m.closest_approach.unwrap().distance_m;
         assert!(d < 0.5, "{d}");
     }
@@ -972,12 +955,7 @@ fn a_listed_ring_out_of_the_order_of_travel_fails() {
         let ok = circular(sets);
         let t = check(&ok, None).team.unwrap();
         assert_eq!(t.verdict, Verdict::Holds, "{sets:?}: {}", t.verdict_reason);
-        let m = ok
-            .run_team(&mut [] as &mut [NoTrace])
-            .unwrap()
-            .unwrap()
-            .team
-            .unwrap();
+        let m = team_metrics(&ok);
         assert!(m.closest_approach.unwrap().distance_m > 0.5, "{sets:?}");
     }
 }
