@@ -938,7 +938,7 @@ fn a_listed_ring_out_of_the_order_of_travel_fails() {
             "{}",
             t.verdict_reason
         );
-        let m = team_metrics(&s);
+        let m = team_metrics(s);
         let d = m.closest_approach.unwrap().distance_m;
         assert!(d < 0.5, "{d}");
     }
