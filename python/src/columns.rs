@@ -4,7 +4,7 @@
 use numpy::{Element, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 
 /// One `trace.csv` column, checked to have `n` rows (a single run's and a team's).
 pub(crate) fn column<'py>(
@@ -54,21 +54,42 @@ pub(crate) fn copy_interruptible<T: Element + Copy>(
 /// there names it (`another isotrack Run.save pid 1234 on node7 is writing this directory`).
 pub(crate) const SAVE_LOCK: &str = "Run.save";
 
+/// What a `KeyboardInterrupt` says when it came after a save's commit: `dir` holds the new run,
+/// whole. One text for the check right after the commit ([`interrupt_after_save`]) and for the
+/// Python wrapper, which raises it for an interrupt that Python delivers once the native call
+/// has returned (`Run.save`, `_native.after_save_message`).
+#[pyfunction]
+pub fn after_save_message(dir: &str) -> String {
+    format!(
+        "interrupted after the save completed: {dir} holds the new run, whole (the interrupt \
+         came during the final writes, after the earlier run was replaced)"
+    )
+}
+
 /// The check for Ctrl-C right after a save's commit (ver30b-9): the signal handler runs here
 /// rather than after the call returns, so that a `KeyboardInterrupt` that came during the final
 /// writes (the summary, the scenario, their fsyncs and renames: past the last check before the
 /// commit, after which the earlier run is replaced) says that the save completed and `dir`
 /// holds the new run, whole. Another exception of a handler is raised as it is.
-pub(crate) fn interrupt_after_save(py: Python<'_>, dir: &std::path::Path) -> PyResult<()> {
+///
+/// `done` (the caller's list) gets `True` appended first: a signal that arrives after this
+/// check, while the call is returning, is delivered by Python in the caller (CPython runs
+/// pending handlers right after a native call returns), where the list tells the wrapper that
+/// the save had completed (the CI run of 2026-11-27 saw that window: a bare `KeyboardInterrupt`
+/// with the new run in place).
+pub(crate) fn interrupt_after_save(
+    py: Python<'_>,
+    dir: &str,
+    done: Option<&Bound<'_, PyList>>,
+) -> PyResult<()> {
     use pyo3::exceptions::PyKeyboardInterrupt;
+    if let Some(done) = done {
+        done.append(true)?;
+    }
     match py.check_signals() {
         Ok(()) => Ok(()),
         Err(e) if e.is_instance_of::<PyKeyboardInterrupt>(py) => {
-            let said = PyKeyboardInterrupt::new_err(format!(
-                "interrupted after the save completed: {} holds the new run, whole (the \
-                 interrupt came during the final writes, after the earlier run was replaced)",
-                dir.display()
-            ));
+            let said = PyKeyboardInterrupt::new_err(after_save_message(dir));
             said.set_cause(py, Some(e));
             Err(said)
         }

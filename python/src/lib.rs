@@ -44,6 +44,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<team::PyTeamEnv>()?;
     m.add_function(wrap_pyfunction!(team::team_run, m)?)?;
     m.add_function(wrap_pyfunction!(team::write_team_run, m)?)?;
+    m.add_function(wrap_pyfunction!(columns::after_save_message, m)?)?;
     m.add_function(wrap_pyfunction!(team::is_team, m)?)?;
     m.add_function(wrap_pyfunction!(team::team_count, m)?)?;
     m.add(

@@ -20,7 +20,7 @@ use isotrack_vehicles::{DubinsSpeedState, DubinsState, DubinsVariableSpeed};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use std::cell::RefCell;
 use std::path::Path;
 
@@ -245,7 +245,7 @@ pub fn team_count(scenario: &PyScenario) -> Option<usize> {
 /// resolved `scenario.toml` (after `note`, comment lines, when given), holding the directory's
 /// lock as a single run's save does (`crate::tools::write_run`).
 #[pyfunction]
-#[pyo3(signature = (dir, summary_json, scenario, trace, note=""))]
+#[pyo3(signature = (dir, summary_json, scenario, trace, note="", done=None))]
 pub fn write_team_run(
     py: Python<'_>,
     dir: &str,
@@ -253,9 +253,11 @@ pub fn write_team_run(
     scenario: &PyScenario,
     trace: &Bound<'_, PyDict>,
     note: &str,
+    done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
     use isotrack_core::vehicle::Telemetry;
     use isotrack_runs::trace::{TeamTraceSink, TELEMETRY_COLUMNS};
+    let dir_name = dir;
     let dir = Path::new(dir);
     let flying = scenario.inner.is_flying();
     let t = column(trace, "t_s", None)?;
@@ -352,7 +354,7 @@ pub fn write_team_run(
         summary_json,
     )
     .map_err(crate::errors::failure)?;
-    crate::columns::interrupt_after_save(py, dir)
+    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.

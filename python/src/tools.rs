@@ -14,7 +14,7 @@ use isotrack_runs::Failure;
 use isotrack_sim::{TraceRow, TraceSink};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -37,7 +37,7 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
 /// writer there is refused with an `OSError` naming it, and a `run --out` while this writes
 /// exits 73.
 #[pyfunction]
-#[pyo3(signature = (dir, summary_json, scenario, trace, note=""))]
+#[pyo3(signature = (dir, summary_json, scenario, trace, note="", done=None))]
 pub fn write_run(
     py: Python<'_>,
     dir: &str,
@@ -45,7 +45,9 @@ pub fn write_run(
     scenario: &PyScenario,
     trace: &Bound<'_, PyDict>,
     note: &str,
+    done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
+    let dir_name = dir;
     let dir = Path::new(dir);
     let flying = scenario.inner.is_flying();
     let t = column(trace, "t_s", None)?;
@@ -108,7 +110,7 @@ pub fn write_run(
         summary_json,
     )
     .map_err(failure)?;
-    crate::columns::interrupt_after_save(py, dir)
+    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;

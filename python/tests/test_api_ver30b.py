@@ -193,6 +193,43 @@ def test_ctrl_c_during_run_save_leaves_the_earlier_run_or_says_the_new_one_is_sa
     assert "KBI" in seen, seen  # the earlier side was reached at least once
 
 
+@pytest.mark.parametrize("team", [False, True])
+def test_ctrl_c_delivered_as_the_save_returns_says_the_save_completed(tmp_path, monkeypatch, team):
+    """CI 2026-11-27: a SIGINT that arrives after the native save's last check, while the call
+    returns, is delivered by CPython right after the call, in Run.save: it raised a bare
+    KeyboardInterrupt with the new run in place. Here the signal is sent as the native call
+    returns (a real SIGINT, delivered at the next bytecode): the KeyboardInterrupt says the
+    save completed and the directory holds the new run; one delivered before the native call
+    stays a bare KeyboardInterrupt with nothing written."""
+    import json
+    import signal
+
+    base = isotrack.Scenario.from_file(str(ROOT / "scenarios" / ("team-circular-4.toml" if team else "paper-fig2b-circular.toml")))
+    run = base.set("sim.duration_s", 1.5).run()
+    name = "write_team_run" if team else "write_run"
+    real = getattr(isotrack._native, name)
+
+    def returns_then_signal(*args):
+        real(*args)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    def signal_first(*args):
+        os.kill(os.getpid(), signal.SIGINT)
+        real(*args)
+
+    d = tmp_path / "d"
+    monkeypatch.setattr(isotrack._native, name, returns_then_signal)
+    with pytest.raises(KeyboardInterrupt, match=r"^interrupted after the save completed: .*/d holds the new run, whole"):
+        run.save(str(d))
+    assert json.load(open(d / "summary.json"))["t_end_s"] == 1.5
+    e = tmp_path / "e"
+    monkeypatch.setattr(isotrack._native, name, signal_first)
+    with pytest.raises(KeyboardInterrupt) as bare:
+        run.save(str(e))
+    assert "completed" not in str(bare.value)
+    assert not e.exists()
+
+
 @pytest.mark.parametrize("factory", [False, True])
 def test_a_sweeps_scenario_that_is_a_fifo_or_a_directory_gets_the_top_level_class(tmp_path, factory):
     """ver30b-12: `scenario =` naming a FIFO is an OSError (not FileNotFoundError: the file

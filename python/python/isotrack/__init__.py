@@ -336,7 +336,7 @@ class Run:
         is written into a temporary file beside ``trace.csv``, removed then, and a directory
         this call created is removed; no temporary file and no lock file), or the save
         completed: an interrupt that comes during the final writes (after the last row, once
-        the earlier run is being replaced) is held until they end and then raised as a
+        the earlier run is being replaced) or as the call returns is held until they end and then raised as a
         ``KeyboardInterrupt`` saying "interrupted after the save completed: DIR holds the new
         run". SIGTERM (what Slurm sends at a time limit) is not caught by Python: the process
         ends at once, leaving the earlier run's files (or, during the final writes, the new
@@ -359,10 +359,16 @@ class Run:
         # controller's run: said at the top of scenario.toml (written under the directory's
         # lock with the rest), so that nobody replays it with the CLI as if it were this run.
         note = "" if self._python_controller is None else _python_controller_note(self._python_controller)
-        if "vehicle" in self._trace:
-            _native.write_team_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
-        else:
-            _native.write_run(path, self._summary_json, self._scenario._native, dict(self._trace), note)
+        write = _native.write_team_run if "vehicle" in self._trace else _native.write_run
+        done = []  # [True] once the new run is in place (the native call's commit)
+        try:
+            write(path, self._summary_json, self._scenario._native, dict(self._trace), note, done)
+        except KeyboardInterrupt as e:
+            # CPython delivers a signal that came while the call was returning right after it
+            # returned, here: the new run is in place, and the interrupt says so.
+            if done and not str(e).startswith("interrupted after the save completed"):
+                raise KeyboardInterrupt(_native.after_save_message(path)) from e
+            raise
         return path
 
     def __reduce__(self):
