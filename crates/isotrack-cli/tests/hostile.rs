@@ -189,6 +189,85 @@ fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
+/// att43-15: `report` showed an edited summary.json's impossible numbers as the run's (a
+/// negative `max |eps|`, a convergence time past a 5 s run's end, a team vehicle's negative
+/// convergence time): `plot` and `report` refuse them (65) naming the key, as a sweep's row
+/// check does; the unedited runs are drawn.
+#[test]
+fn plot_and_report_refuse_impossible_summary_numbers() {
+    let d = tempfile::tempdir().unwrap();
+    let single = d.path().join("single");
+    let team = d.path().join("team");
+    let run = |scenario: Option<String>, out: &std::path::Path| {
+        let mut a = vec!["run".to_string()];
+        a.extend(scenario);
+        a.extend(
+            [
+                "--set",
+                "sim.duration_s=5",
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ]
+            .map(String::from),
+        );
+        let o = isotrack(&a.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run(None, &single);
+    run(Some(common::bundled("team-circular-4")), &team);
+    for dir in [&single, &team] {
+        let o = isotrack(&[
+            "report",
+            dir.to_str().unwrap(),
+            "--out",
+            d.path().join("ok.html").to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let cases: [(&std::path::Path, &str, f64, &str); 4] = [
+        (
+            &single,
+            "/steady_state_max_abs_error",
+            -5.0,
+            "steady_state_max_abs_error",
+        ),
+        (&single, "/convergence_time_s", 1e9, "convergence_time_s"),
+        (&single, "/convergence_time_s", -3.0, "convergence_time_s"),
+        (
+            &team,
+            "/vehicles/1/convergence_time_s",
+            -3.0,
+            "vehicles[1]: convergence_time_s",
+        ),
+    ];
+    for (k, (dir, pointer, value, needle)) in cases.iter().enumerate() {
+        let copy = d.path().join(format!("edited{k}"));
+        std::fs::create_dir(&copy).unwrap();
+        for f in ["trace.csv", "scenario.toml", "summary.json"] {
+            std::fs::copy(dir.join(f), copy.join(f)).unwrap();
+        }
+        let path = copy.join("summary.json");
+        let mut j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        *j.pointer_mut(pointer).unwrap() = serde_json::json!(value);
+        std::fs::write(&path, serde_json::to_string_pretty(&j).unwrap()).unwrap();
+        for cmd in ["report", "plot"] {
+            let out = d.path().join(format!(
+                "{cmd}{k}{}",
+                if cmd == "report" { ".html" } else { "" }
+            ));
+            let o = isotrack(&[cmd, copy.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+            assert_fails(&o, 65, &["summary.json: ", needle]);
+            assert!(
+                !out.exists(),
+                "{cmd} wrote {} from an impossible summary",
+                out.display()
+            );
+        }
+    }
+}
+
 /// Item 4, 10, 15: `replay`: a span of 1e12 s is refused up front; the output may not be the input
 /// (even spelled differently); a NaN altitude is refused at the door.
 #[test]

@@ -13,6 +13,15 @@ pub fn remove_on_interrupt() {
     isotrack_runs::signals::remove_on_interrupt();
 }
 
+/// Waits for the interrupt's exit when one is ending the process
+/// ([`isotrack_runs::cleanup::exiting`]): the binary calls it after [`main_with`], so that a
+/// command ending meanwhile does not exit first with its own code.
+pub fn wait_if_interrupted() {
+    if isotrack_runs::cleanup::exiting() {
+        isotrack_runs::cleanup::wait_for_exit();
+    }
+}
+
 /// Runs the command line `args` (the program name first) and returns its exit code (README,
 /// "Exit codes"); errors are printed on stderr as `error: ...`.
 pub fn main_with<I, T>(args: I) -> u8

@@ -141,6 +141,16 @@ fn check_duration(
     Ok(())
 }
 
+/// `summary.json`'s numbers as a sweep's row is held to
+/// ([`isotrack_runs::sweep::check::check_run_summary`], att43-15): `report` shows them as the
+/// run's, so an impossible one (a negative maximum, a convergence time past the run's end) is
+/// a data error naming its key, not a number on the page. After [`check_scenario_is_runs`]:
+/// the team's bounds are its scenario's.
+fn check_summary_numbers(run: &RunData) -> Result<(), String> {
+    isotrack_runs::sweep::check::check_run_summary(&run.summary, &run.scenario)
+        .map_err(|m| format!("summary.json: {m} (edited after the run?); re-run it"))
+}
+
 /// `scenario.toml` against the resolved scenario `summary.json` records (att36-5): the run
 /// flew the summary's; a `scenario.toml` edited after the run (another level, field, speed,
 /// steady fraction ...) drew the run against a scenario it never flew, and an edited
@@ -773,6 +783,7 @@ impl RunData {
     pub fn load(dir: &Path) -> Result<Self, PlotError> {
         let run = Self::read(dir, false)?.0;
         check_scenario_is_runs(&run)
+            .and_then(|()| check_summary_numbers(&run))
             .map_err(|m| PlotError::Data(format!("{}: {m}", dir.display())))?;
         Ok(run)
     }
@@ -799,7 +810,9 @@ impl RunData {
         let (all, ids, lines) = Self::read(dir, true)?;
         let in_dir = |m: String| PlotError::Data(format!("{}: {m}", dir.display()));
         let Some(n) = all.summary.team().map(|t| t.vehicle_count) else {
-            check_scenario_is_runs(&all).map_err(in_dir)?;
+            check_scenario_is_runs(&all)
+                .and_then(|()| check_summary_numbers(&all))
+                .map_err(in_dir)?;
             return Ok(vec![all]);
         };
         if !(1..=1_000_000).contains(&n) {
@@ -815,6 +828,8 @@ impl RunData {
             rows.take(row, t, *id, *line).map_err(in_dir)?;
         }
         rows.check_ends().map_err(in_dir)?;
+        // Last: an edit the trace contradicts is named by its row first.
+        check_summary_numbers(&all).map_err(in_dir)?;
         let traces = rows.traces;
         Ok(Self::into_vehicles(all, traces, with_run))
     }

@@ -49,6 +49,16 @@ pub fn exiting() -> bool {
     EXITING.load(Ordering::SeqCst)
 }
 
+/// For a thread that finds the process ending ([`exiting`]): waits for the interrupt's exit
+/// (at most [`EXIT_GRACE`] away), so that the thread neither creates a file the cleanup would
+/// miss nor ends the process first with another exit code (a command refused its output, exit
+/// 73, where the interrupt's is 130: review's a_failed_or_interrupted_command_leaves_no_lock).
+pub fn wait_for_exit() -> ! {
+    loop {
+        std::thread::park();
+    }
+}
+
 /// How long [`remove_pending_for_exit`] lets a write already under way finish before it removes
 /// the registered files again.
 const EXIT_GRACE: std::time::Duration = std::time::Duration::from_millis(50);

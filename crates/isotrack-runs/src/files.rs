@@ -155,8 +155,8 @@ pub fn open_regular(path: &Path, read: bool, truncate: bool) -> std::io::Result<
 pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
     if crate::cleanup::exiting() {
         // An interrupt is removing the registered files and ending the process: a file created
-        // now would be left behind.
-        return Err(std::io::Error::other("the command is being interrupted"));
+        // now would be left behind, an error would end the process with another code.
+        crate::cleanup::wait_for_exit();
     }
     open_regular(path, false, true)
 }

@@ -1265,3 +1265,44 @@ pub fn check_team_record(
         None => Ok(()),
     }
 }
+
+/// A simulated run's `summary.json` checked as a sweep's row is (att43-15: `report` showed an
+/// edited summary's impossible numbers, a negative `max |eps|`, a convergence time past the
+/// run's end, as the run's): the record's metrics by [`check_metrics`] (every number finite
+/// and of its sign, an RMS at most its maximum, the convergence time at most `t_end_s`, ...),
+/// each vehicle's of a team's run too, and a team's metrics by [`check_team_record`] within
+/// the bounds of `scenario`'s team ([`TeamBounds`]). A flight's summary and a cut `sitl` run's
+/// (`interrupted`, `companion_lost`: no row of a sweep) are not checked here. The error names
+/// the key (`vehicles[2].convergence_time_s`, `team: ...`).
+pub fn check_run_summary(
+    summary: &crate::summary::Summary,
+    scenario: &isotrack_scenario::Scenario,
+) -> Result<(), String> {
+    let crate::summary::Ended::Run(end) = &summary.ended else {
+        return Ok(());
+    };
+    let check = |r: &crate::results::RunRecord, key: &str| -> Result<(), String> {
+        if !OUTCOMES.contains(&r.outcome.as_str()) || r.outcome == "invalid_scenario" {
+            return Ok(());
+        }
+        let columns = &crate::sweep::rows::SWEEP_COLUMNS;
+        let cells = crate::results::result_cells(columns, Ok(r));
+        let cell = |n: &str| {
+            columns
+                .iter()
+                .position(|c| c.name() == n)
+                .and_then(|i| cells.get(i))
+                .map_or("", |c| c.as_str())
+        };
+        check_metrics(&r.outcome, &cell, true).map_err(|m| format!("{key}{m}"))
+    };
+    check(&end.record, "")?;
+    for (i, v) in end.vehicles.iter().flatten().enumerate() {
+        check(v, &format!("vehicles[{i}]: "))?;
+    }
+    if let Some(m) = end.team.as_ref().and_then(|t| t.metrics.as_ref()) {
+        check_team_record(m, TeamBounds::of(scenario).as_ref())
+            .map_err(|m| format!("team: {m}"))?;
+    }
+    Ok(())
+}
