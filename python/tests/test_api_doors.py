@@ -207,7 +207,7 @@ def test_benchmark_refuses_an_old_benchmark_in_its_own_words(tmp_path):
     only the refusal, before any run: a leaderboard.csv already in D."""
     out = tmp_path / "b"
     out.mkdir()
-    (out / "leaderboard.csv").write_text("controller,score\n")
+    (out / "leaderboard.csv").write_text("rank,controller,overall\n")
     suite = ROOT / "suites" / "standard-v2.toml"
 
     class Zero:

@@ -536,26 +536,26 @@ fn listing(dir: &Path) -> Vec<(String, Vec<u8>)> {
 }
 
 /// att41-11 SAFETY: `check --map --out DIR` deleted the user's own `verify.csv` (no --verify
-/// even asked for) and replaced their `stability_map.csv`, `.png`, `.svg`. A table whose first
-/// line is not isotrack's header for it and a figure without isotrack's mark are the user's:
-/// refused (73, naming the file) before anything is computed, every file as it was. An older
-/// isotrack's chart table (its eight columns, before `note`) is still isotrack's, replaced.
-/// Fails on the source before (exit 0, verify.csv gone, the others replaced).
+/// even asked for) and replaced their `stability_map.csv`, `.png`, `.svg`. A table no
+/// `.isotrack-tables.json` records and a figure without isotrack's mark are the user's:
+/// refused (73, naming the file) before anything is computed, every file as it was. So is an
+/// older isotrack's chart table (its eight columns, before `note`; recorded nowhere) and the
+/// unmarked figures beside it (att44-4, att44-11: the grace att42-2 gave them is over, since a
+/// copy of this isotrack's chart made without its record passed for one). Fails on the source
+/// before (exit 0, verify.csv gone, the others replaced).
 #[test]
 fn the_chart_never_replaces_nor_removes_a_users_file() {
     let d = tempfile::tempdir().unwrap();
     let sc = scenario();
+    let older = format!(
+        "{}\n1,1,1,0.5,true,stable,1,1\n",
+        MAP_COLUMNS[..8].join(",")
+    );
+    let unrecorded = "no .isotrack-tables.json beside it records it";
     for (name, text, why) in [
-        (
-            "stability_map.csv",
-            "MY DATA\n",
-            "first line is not check --map's header",
-        ),
-        (
-            "verify.csv",
-            "MY VERIFY\n",
-            "first line is not check --map --verify's header",
-        ),
+        ("stability_map.csv", "MY DATA\n", unrecorded),
+        ("stability_map.csv", older.as_str(), unrecorded),
+        ("verify.csv", "MY VERIFY\n", unrecorded),
         (
             "stability_map.png",
             "MY PIC\n",
@@ -567,7 +567,9 @@ fn the_chart_never_replaces_nor_removes_a_users_file() {
             "not a figure isotrack wrote",
         ),
     ] {
-        let out = d.path().join(name.replace('.', "_"));
+        let out = d
+            .path()
+            .join(format!("{}-{}", name.replace('.', "_"), text.len()));
         std::fs::create_dir(&out).unwrap();
         std::fs::write(out.join(name), text).unwrap();
         std::fs::write(out.join("notes.txt"), "mine").unwrap();
@@ -577,30 +579,69 @@ fn the_chart_never_replaces_nor_removes_a_users_file() {
         assert_fails(&r, 73, &[&named, why, "move it away"]);
         assert_eq!(listing(&out), before, "{name}");
     }
-    let out = d.path().join("older");
-    std::fs::create_dir(&out).unwrap();
-    let older = format!(
-        "{}\n1,1,1,0.5,true,stable,1,1\n",
-        MAP_COLUMNS[..8].join(",")
-    );
-    std::fs::write(out.join("stability_map.csv"), older).unwrap();
-    // att42-2: an older isotrack drew its chart's figures unmarked; beside its table they are
-    // that chart's, replaced (they were refused as the user's, so every older chart was).
-    std::fs::write(
-        out.join("stability_map.png"),
-        "an older isotrack's unmarked PNG",
-    )
-    .unwrap();
-    std::fs::write(out.join("stability_map.svg"), "<svg/>\n").unwrap();
-    let r = isotrack(&map_args(out.to_str().unwrap(), &sc, &[]));
+}
+
+/// att44-4, att44-11 SAFETY: a chart directory copied the usual way (`cp -r D/* E/`: the glob
+/// leaves `.isotrack-tables.json` behind) passed for an older isotrack's: the user's
+/// annotation of `E/stability_map.csv` was replaced (exit 0), and so were the user's own
+/// unmarked `stability_map.png` and `.svg` put beside the copied table. Each is refused (73,
+/// naming it), E as it was byte for byte; in D, where the record is, a second `check --map`
+/// replaces the chart as before. Fails on the source before (exit 0, the files replaced).
+#[test]
+fn a_chart_copied_without_its_record_is_not_taken_for_isotracks() {
+    let d = tempfile::tempdir().unwrap();
+    let sc = scenario();
+    let dd = d.path().join("D");
+    let r = isotrack(&map_args(dd.to_str().unwrap(), &sc, &[]));
     assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
-    assert_eq!(read_csv(&out.join("stability_map.csv")).0, MAP_COLUMNS);
-    for f in ["stability_map.png", "stability_map.svg"] {
-        assert!(
-            isotrack_plot::is_isotrack_figure(&out.join(f)),
-            "{f} not replaced"
-        );
+    let copy = |e: &Path| {
+        std::fs::create_dir(e).unwrap();
+        for f in [
+            "stability_map.csv",
+            "stability_map.png",
+            "stability_map.svg",
+        ] {
+            std::fs::copy(dd.join(f), e.join(f)).unwrap();
+        }
+    };
+    // E5: the copied table annotated; E6: the copied table, the user's own figures (no
+    // isotrack mark) beside it; E7: those figures alone. Each refused, naming the file.
+    let (e5, e6, e7) = (
+        d.path().join("E5"),
+        d.path().join("E6"),
+        d.path().join("E7"),
+    );
+    copy(&e5);
+    let csv = e5.join("stability_map.csv");
+    let mut mine = std::fs::read_to_string(&csv).unwrap();
+    mine.push_str("# mine\n");
+    std::fs::write(&csv, &mine).unwrap();
+    for e in [&e6, &e7] {
+        copy(e);
+        std::fs::write(
+            e.join("stability_map.png"),
+            b"\x89PNG\r\n\x1a\nmy own picture",
+        )
+        .unwrap();
+        std::fs::write(e.join("stability_map.svg"), "<svg>my own drawing</svg>\n").unwrap();
     }
+    std::fs::remove_file(e7.join("stability_map.csv")).unwrap();
+    let unrecorded = "no .isotrack-tables.json beside it records it";
+    for (e, named, why) in [
+        (&e5, "stability_map.csv", unrecorded),
+        (&e6, "stability_map.csv", unrecorded),
+        (&e7, "stability_map.png", "not a figure isotrack wrote"),
+    ] {
+        let before = listing(e);
+        let r = isotrack(&map_args(e.to_str().unwrap(), &sc, &[]));
+        let path = e.join(named).display().to_string();
+        assert_fails(&r, 73, &[&path, why, "move it away"]);
+        assert_eq!(&listing(e), &before, "{}", e.display());
+    }
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), mine);
+    // D itself, its record beside its files: replaced as before.
+    let r = isotrack(&map_args(dd.to_str().unwrap(), &sc, &[]));
+    assert_eq!(r.status.code(), Some(0), "{}", stderr(&r));
 }
 
 /// att42-8 SAFETY: the header and the mark said who first wrote a file, not that nobody edited

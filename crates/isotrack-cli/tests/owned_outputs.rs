@@ -249,6 +249,23 @@ fn benchmark_checks_every_output_before_any_task_runs() {
     let board = std::fs::read(dir.join("leaderboard.csv")).unwrap();
     ok(&["benchmark", &suite, "--out", out, "--resume"]);
     assert_eq!(std::fs::read(dir.join("leaderboard.csv")).unwrap(), board);
+    // own42: without --resume, "pass --resume" was advised for a user's leaderboard.csv, and
+    // beside a user's index.html, where --resume is refused too: the user's file is named
+    // instead; the advice stays for an earlier benchmark whose every file is a benchmark's.
+    let o = run(&["benchmark", &suite, "--out", out]);
+    assert_fails(&o, 73, &["already holds a benchmark", "pass --resume"]);
+    std::fs::write(dir.join("index.html"), "<p>my own page</p>\n").unwrap();
+    let user = d.path().join("user-board");
+    std::fs::create_dir(&user).unwrap();
+    std::fs::write(user.join("leaderboard.csv"), "my,own,board\n").unwrap();
+    for (at, named) in [(&dir, "index.html"), (&user, "leaderboard.csv")] {
+        let before = listing(at);
+        let o = run(&["benchmark", &suite, "--out", at.to_str().unwrap()]);
+        let file = at.join(named).display().to_string();
+        assert_fails(&o, 73, &[&file, "is not an isotrack benchmark's"]);
+        assert!(!stderr(&o).contains("--resume"), "{}", stderr(&o));
+        assert_eq!(listing(at), before, "{named}");
+    }
 }
 
 /// Four stations on a 100 m square and one in the middle, column `v`, in `dir/st.csv`.

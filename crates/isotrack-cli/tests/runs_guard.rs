@@ -1148,6 +1148,112 @@ fn compare_out_never_replaces_a_users_comparison_or_summary() {
     assert_eq!(std::fs::read_to_string(&table).unwrap(), edited);
 }
 
+/// `compare SCEN --controllers pi_isoline,pid --set SHORT --out CMP` with `extra` arguments.
+fn compare_into(cmp: &Path, extra: &[&str]) -> std::process::Output {
+    let cmp = cmp.display().to_string();
+    let mut args = vec![
+        "compare",
+        SCEN,
+        "--controllers",
+        "pi_isoline,pid",
+        "--set",
+        SHORT,
+        "--out",
+        &cmp,
+    ];
+    args.extend_from_slice(extra);
+    isotrack_within(&args, 120)
+}
+
+/// att44-4 SAFETY: a comparison copied the usual way (`cp -r D/* E/`: the glob leaves
+/// `.isotrack-tables.json` behind) passed for an older isotrack's by its first line: the
+/// user's annotation of `E/comparison.csv` was replaced (exit 0), and so was a user's own
+/// table that merely began with compare's header, in a fresh folder. Without a record beside
+/// it no table is isotrack's: each is refused (73, naming it, saying no record holds it)
+/// before any law runs, the folder as it was byte for byte; D, its record beside it, is
+/// replaced as before. Fails on the source before (exit 0, the edits replaced).
+#[test]
+fn a_comparison_copied_without_its_record_is_not_taken_for_isotracks() {
+    let d = tempfile::tempdir().unwrap();
+    let dd = d.path().join("D");
+    let o = compare_into(&dd, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let table = std::fs::read_to_string(dd.join("comparison.csv")).unwrap();
+    let header = table.lines().next().unwrap().to_string();
+    for (name, text) in [
+        (
+            "E4",
+            format!("{table}# my annotation: pid chatter is the sensor,,\n"),
+        ),
+        ("E4-plain", table.clone()),
+        ("E3", format!("{header}\nmy_law,completed\n")),
+    ] {
+        let e = d.path().join(name);
+        std::fs::create_dir(&e).unwrap();
+        write(&e, "comparison.csv", &text);
+        let before = listing(&e);
+        let o = compare_into(&e, &[]);
+        let file = e.join("comparison.csv").display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[
+                &file,
+                "no .isotrack-tables.json beside it records it",
+                "use another --out",
+            ],
+        );
+        assert_eq!(listing(&e), before, "{name}");
+    }
+    let o = compare_into(&dd, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}
+
+/// att44-12: `compare --out CMP` followed a symbolic link at `CMP/pid` (a name compare picks)
+/// and replaced the run directory it pointed to elsewhere with the pid law's run (exit 0). A
+/// link at a law's directory, even to a directory, is refused (73, naming it and what it is)
+/// before any law runs: the linked run as it was, CMP holding the link alone.
+#[test]
+fn compare_never_writes_a_laws_run_through_a_link() {
+    let d = tempfile::tempdir().unwrap();
+    let keep = d.path().join("keep");
+    let o = isotrack_within(
+        &["run", SCEN, "--set", SHORT, "--out", keep.to_str().unwrap()],
+        120,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let kept = listing(&keep);
+    let cmp = d.path().join("H7");
+    std::fs::create_dir(&cmp).unwrap();
+    std::os::unix::fs::symlink(&keep, cmp.join("pid")).unwrap();
+    let o = compare_into(&cmp, &[]);
+    let link = cmp.join("pid").display().to_string();
+    assert_fails(&o, 73, &[&link, "is a symbolic link", "not a directory"]);
+    assert_eq!(listing(&keep), kept);
+    let left: Vec<String> = std::fs::read_dir(&cmp)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["pid"]);
+}
+
+/// own42: a `--gain` the second law refuses (`pid.kd = -1`) failed compare only when that
+/// law's turn came: the first law had run into `CMP/pi_isoline` and `CMP/pid` stayed behind
+/// empty. Every law's scenario is built first: refused (65, naming the gain) with nothing
+/// written, CMP not created.
+#[test]
+fn a_gain_a_later_law_refuses_leaves_nothing_behind() {
+    let d = tempfile::tempdir().unwrap();
+    let cmp = d.path().join("C");
+    let o = compare_into(&cmp, &["--gain", "pid.kd=-1"]);
+    assert_fails(&o, 65, &["--gain pid.kd=-1", "controller.kd"]);
+    assert!(
+        !cmp.exists(),
+        "{:?}",
+        std::fs::read_dir(&cmp).map(|r| r.count())
+    );
+}
+
 /// att38-10: Ctrl-C during `plot` left `.trajectory.png.PID.tmp.png` in the run directory,
 /// which no later command removed. The interrupted plot removes its temporary figure (exit
 /// 130), as `run --out` removes its temporary trace.

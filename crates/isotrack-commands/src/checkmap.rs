@@ -542,27 +542,10 @@ fn map_grid(
 
 /// Refuses (73) a `stability_map.csv` or a `verify.csv` that isotrack did not write, or that
 /// was edited since ([`isotrack_runs::owned::refuse_foreign_csv`]: its size and SHA-256 are not
-/// those the directory's record holds; in a directory without one, an older isotrack's, its
-/// first line is not the header every `check --map` wrote for it: the chart's
-/// [`MAP_COLUMNS`], or the first eight of them, as before its `note` column came; `verify.csv`'s
-/// [`VERIFY_COLUMNS`], unchanged since `--verify` came). Whose the chart's table is.
-fn refuse_foreign_tables(
-    csv: &Path,
-    verify: &Path,
-) -> Result<isotrack_runs::owned::TableOwner, Failure> {
-    let owner = isotrack_runs::owned::refuse_foreign_csv(
-        csv,
-        &[MAP_COLUMNS.join(","), MAP_COLUMNS[..8].join(",")],
-        "an isotrack stability chart's table",
-        "check --map's",
-    )?;
-    isotrack_runs::owned::refuse_foreign_csv(
-        verify,
-        &[VERIFY_COLUMNS.join(",")],
-        "an isotrack verification table",
-        "check --map --verify's",
-    )?;
-    Ok(owner)
+/// those the directory's record holds, or no record there holds it).
+fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
+    isotrack_runs::owned::refuse_foreign_csv(csv, "an isotrack stability chart's table")?;
+    isotrack_runs::owned::refuse_foreign_csv(verify, "an isotrack verification table")
 }
 
 /// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
@@ -590,23 +573,18 @@ fn open_map_dir(
     // anything is written (without --verify it would sit beside a chart it does not describe;
     // with --verify and an interruption, beside a chart it was not made for).
     let verify_path = output_path(dir, "verify.csv", &input)?;
-    // att41-11: whose files are these, before anything is computed or removed? A table whose
-    // first line is not isotrack's header for it, or a figure without isotrack's mark, is the
-    // user's: refused (73, naming it), every file as it was (the lock removed as it drops).
-    let table = refuse_foreign_tables(&csv_path, &verify_path)?;
-    // att42-2: beside an older isotrack's chart table (no digests recorded; it passed the
-    // header test above) an unmarked figure is that chart's: an isotrack from before the mark
-    // (att38-9) drew them unmarked, and refusing them refused every older chart. A marked
-    // figure edited since isotrack drew it is refused there too (att42-8), and anywhere else
-    // the mark decides.
-    let unmarked_ok = table == isotrack_runs::owned::TableOwner::Legacy;
+    // att41-11: whose files are these, before anything is computed or removed? A table no
+    // record shows isotrack wrote as it is, or a figure without isotrack's mark (or edited
+    // since it was drawn), is the user's: refused (73, naming it), every file as it was (the
+    // lock removed as it drops). att44-11: an unmarked figure is never isotrack's, whatever
+    // table is beside it (att42-2 took one beside an unrecorded chart table for an older
+    // isotrack's, and a copy made without the record passed for that).
+    refuse_foreign_tables(&csv_path, &verify_path)?;
     for name in ["stability_map.png", "stability_map.svg"] {
-        isotrack_plot::refuse_foreign_figure_with(&dir.join(name), unmarked_ok).map_err(
-            |message| Failure {
-                code: exit::CANTCREAT,
-                message,
-            },
-        )?;
+        isotrack_plot::refuse_foreign_figure(&dir.join(name)).map_err(|message| Failure {
+            code: exit::CANTCREAT,
+            message,
+        })?;
     }
     if verify_path.exists() {
         std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;

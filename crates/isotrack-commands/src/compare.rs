@@ -128,6 +128,13 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     let kinds = chosen_kinds(&a.controllers)?;
     check_gains(&a.gain)?;
     let origin = a.scenario.display().to_string();
+    // Every law's scenario is built before any directory is opened or any law runs: a
+    // `--gain` a later law refuses fails the command with nothing written (own42: the laws
+    // before it had run and their directories stayed behind).
+    let variants = kinds
+        .iter()
+        .map(|&kind| variant(&base, kind, &a.gain, &origin).map(|s| (kind, s)))
+        .collect::<Result<Vec<_>, _>>()?;
     // Held while the runs write into `--out` (released when dropped), with each law's run
     // directory, opened (checked and locked) before any law runs.
     let (_lock, law_dirs) = match &a.out {
@@ -142,32 +149,24 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     // The laws whose true error never reached the level (at any step, whatever the trace
     // records), with how far each went from its start, m.
     let mut never: Vec<(ControllerKind, f64)> = Vec::new();
-    for kind in kinds {
-        let s = variant(&base, kind, &a.gain, &origin)?;
+    for (kind, s) in variants {
         // A baseline outside its own stated gain condition is said, not only run.
         let warnings = isotrack_scenario::check::baselines::baseline_warnings(&s);
         for w in &warnings {
             errln!("warning: {w}");
         }
-        let r = if let Some(out) = law_dirs.next() {
-            // The directory's lock is held for all of them (above), and each law's directory
-            // is locked too: a `run --out CMP/LAW` meanwhile never saw the parent's lock, both
-            // wrote the directory and the run's result vanished (att36-9).
-            let mut trace = out.trace(s.is_flying())?;
-            let r = s.run(trace.writer());
-            let warnings = isotrack_scenario::check::warnings(&s);
-            let mut summary = Summary::of_run(&s, Some(&a.scenario), &r, &warnings);
-            // Every law flew the field as read when the scenario loaded; a data file changed
-            // since is said (as `run` says it), and data_files names the one flown.
-            if let Some(w) = summary.data_files_as_read(base.data_file_digests().clone()) {
-                errln!("warning: {w}");
-            }
-            out.finish(trace, &scenario_toml(&s), &summary)?;
-            // An earlier run's figures there are not this run's: said, as `run` says it.
-            crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
-            r
-        } else {
-            s.run(&mut NoTrace)
+        let r = match law_dirs.next() {
+            Some(out) => match run_into(a, &base, &s, &out) {
+                Ok(r) => r,
+                Err(e) => {
+                    // The laws' directories not yet written: removed again where this
+                    // call created them (an earlier run's files there are left as they were).
+                    law_dirs.for_each(RunDir::release_unused);
+                    out.release_unused();
+                    return Err(e);
+                }
+            },
+            None => s.run(&mut NoTrace),
         };
         if let Some(far) = never_reached(&r) {
             never.push((kind, far));
@@ -187,6 +186,32 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// Runs law scenario `s` into its run directory `out` (compare's lock and `out`'s held): its
+/// trace, summary and scenario written, the notes `run` gives said.
+fn run_into(
+    a: &CompareArgs,
+    base: &Scenario,
+    s: &Scenario,
+    out: &RunDir,
+) -> Result<RunResult, Failure> {
+    // The directory's lock is held for all of them, and each law's directory is locked too:
+    // a `run --out CMP/LAW` meanwhile never saw the parent's lock, both wrote the directory
+    // and the run's result vanished (att36-9).
+    let mut trace = out.trace(s.is_flying())?;
+    let r = s.run(trace.writer());
+    let warnings = isotrack_scenario::check::warnings(s);
+    let mut summary = Summary::of_run(s, Some(&a.scenario), &r, &warnings);
+    // Every law flew the field as read when the scenario loaded; a data file changed since is
+    // said (as `run` says it), and data_files names the one flown.
+    if let Some(w) = summary.data_files_as_read(base.data_file_digests().clone()) {
+        errln!("warning: {w}");
+    }
+    out.finish(trace, &scenario_toml(s), &summary)?;
+    // An earlier run's figures there are not this run's: said, as `run` says it.
+    crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
+    Ok(r)
 }
 
 /// The laws `--controller` names (every built-in law when none is named); an unknown name is a
@@ -248,6 +273,11 @@ fn open_out(
     }
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
     let lock = crate::sweep::lock_output_dir(dir, "compare")?;
+    // att44-12: `CMP/LAW` is a name compare picks: a link there (to another run elsewhere) was
+    // followed and that run replaced; a link or anything but a directory is refused, named.
+    for kind in kinds {
+        isotrack_runs::rundir::refuse_not_own_directory(&dir.join(kind.name()))?;
+    }
     for o in &outputs {
         isotrack_runs::files::refuse_non_regular(o).map_err(|e| cant(o, e))?;
     }
@@ -269,20 +299,11 @@ fn open_out(
 }
 
 /// Refuses (73) an existing `comparison.csv` that an isotrack did not write, or that was edited
-/// since ([`isotrack_runs::owned::refuse_foreign_csv`], att42-8): its size and SHA-256 are not
-/// those `compare` recorded in the directory when it wrote it. In a directory without a record
-/// (an older isotrack's), the first line decides for this release: every version of `compare`
-/// wrote [`COMPARISON_COLUMNS`] as its first line, so a file whose first line is anything else is
-/// the user's, never replaced (att39-1: it was, without a word). Never read through a link nor
-/// from a FIFO (refused before this).
+/// since ([`isotrack_runs::owned::refuse_foreign_csv`], att39-1, att42-8, att44-4): its size and
+/// SHA-256 are not those `compare` recorded in the directory when it wrote it, or no record
+/// there holds it. Never read through a link nor from a FIFO (refused before this).
 fn refuse_foreign_comparison(p: &Path) -> Result<(), Failure> {
-    isotrack_runs::owned::refuse_foreign_csv(
-        p,
-        &[COMPARISON_COLUMNS.join(",")],
-        "an isotrack comparison",
-        "compare's",
-    )
-    .map(drop)
+    isotrack_runs::owned::refuse_foreign_csv(p, "an isotrack comparison")
 }
 
 /// The comparison table on stdout (Markdown): one row per law, a law in `never` marked as

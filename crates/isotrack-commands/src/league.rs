@@ -75,8 +75,11 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         )
     })?;
     let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
-    let _lock = open_out_dir(&a.out, a.resume)?;
+    // Whose files are there first: "pass --resume" is advised only where --resume would
+    // find every output a benchmark's.
+    let _lock = lock_out_dir(&a.out)?;
     refuse_foreign_outputs(&a.out, &suite)?;
+    refuse_finished_benchmark(&a.out, a.resume)?;
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
@@ -108,27 +111,45 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Makes benchmark output directory `out` ready: refuses one that already holds a benchmark
-/// (`leaderboard.csv`) unless `resume`, creates it, and takes its operating-system lock
-/// ([`crate::sweep::lock_output_dir`], held while the returned file lives): a second benchmark
-/// writing the same directory fails instead of overwriting it.
+/// Makes benchmark output directory `out` ready: creates it, takes its operating-system lock
+/// ([`crate::sweep::lock_output_dir`], held while the returned file lives: a second benchmark
+/// writing the same directory fails instead of overwriting it) and refuses one that already
+/// holds a benchmark unless `resume` ([`refuse_finished_benchmark`]).
 pub fn open_out_dir(out: &Path, resume: bool) -> Result<crate::sweep::DirLock, Failure> {
+    let lock = lock_out_dir(out)?;
+    refuse_finished_benchmark(out, resume)?;
+    Ok(lock)
+}
+
+/// Creates benchmark output directory `out` and takes its lock ([`open_out_dir`]).
+fn lock_out_dir(out: &Path) -> Result<crate::sweep::DirLock, Failure> {
     std::fs::create_dir_all(out)
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", out.display())))?;
     // One writer per directory, as for `sweep` and `merge`: the lock is taken before the
     // directory is looked at, held to the end of the command by the caller, and released by the
     // OS however the process ends.
-    let lock = crate::sweep::lock_output_dir(out, "benchmark")?;
-    if !resume && out.join("leaderboard.csv").exists() {
-        return Err(fail(
-            exit::CANTCREAT,
-            format!(
-                "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
-                out.display()
-            ),
-        ));
+    crate::sweep::lock_output_dir(out, "benchmark")
+}
+
+/// Refuses (73) benchmark directory `out` when it holds an earlier benchmark's
+/// `leaderboard.csv` and not `resume`, advising `--resume`; a `leaderboard.csv` no benchmark
+/// wrote is refused as the user's instead (own42: "pass --resume" was advised for the user's
+/// own file, which `--resume` refuses too). `benchmark` calls it after
+/// [`refuse_foreign_outputs`], so the advice is given only where `--resume` finds every file a
+/// benchmark's.
+fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
+    let board = out.join(BENCHMARK_FILES[0].0);
+    if resume || std::fs::symlink_metadata(&board).is_err() {
+        return Ok(());
     }
-    Ok(lock)
+    refuse_foreign_benchmark_file(&board, BENCHMARK_FILES[0].1)?;
+    Err(fail(
+        exit::CANTCREAT,
+        format!(
+            "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
+            out.display()
+        ),
+    ))
 }
 
 /// The start of every file a benchmark writes into its directory, as every isotrack has
@@ -160,22 +181,9 @@ const MAX_TASK_JSON_BYTES: u64 = 64 << 20;
 /// `tasks/ID` that is not a directory is refused too. Call it holding the directory's lock
 /// ([`open_out_dir`]).
 pub fn refuse_foreign_outputs(out: &Path, suite: &Suite) -> Result<(), Failure> {
-    use isotrack_runs::owned::{
-        empty_or_starts_with, json_object_with, refuse_foreign, shell_quoted,
-    };
-    let check = |p: &Path, start: &str| {
-        refuse_foreign(
-            p,
-            |p| empty_or_starts_with(p, start.as_bytes()),
-            "an isotrack benchmark's",
-            &format!(
-                "it does not begin with `{}`, as every benchmark's does",
-                start.lines().last().unwrap_or_default()
-            ),
-        )
-    };
+    use isotrack_runs::owned::{json_object_with, refuse_foreign, shell_quoted};
     for (name, start) in BENCHMARK_FILES {
-        check(&out.join(name), start)?;
+        refuse_foreign_benchmark_file(&out.join(name), start)?;
     }
     for task in &suite.tasks {
         let dir = out.join("tasks").join(&task.id);
@@ -190,7 +198,7 @@ pub fn refuse_foreign_outputs(out: &Path, suite: &Suite) -> Result<(), Failure> 
                 ));
             }
         }
-        check(&dir.join("results.csv"), TASK_RESULTS_START)?;
+        refuse_foreign_benchmark_file(&dir.join("results.csv"), TASK_RESULTS_START)?;
         refuse_foreign(
             &dir.join("task.json"),
             |p| json_object_with(p, MAX_TASK_JSON_BYTES, &["id", "title", "digest"], &[]),
@@ -199,6 +207,21 @@ pub fn refuse_foreign_outputs(out: &Path, suite: &Suite) -> Result<(), Failure> 
         )?;
     }
     Ok(())
+}
+
+/// Refuses (73) a file `p` of a benchmark's directory that is not empty and does not begin
+/// with `start`, as every benchmark's has ([`BENCHMARK_FILES`], [`TASK_RESULTS_START`]).
+fn refuse_foreign_benchmark_file(p: &Path, start: &str) -> Result<(), Failure> {
+    use isotrack_runs::owned::{empty_or_starts_with, refuse_foreign};
+    refuse_foreign(
+        p,
+        |p| empty_or_starts_with(p, start.as_bytes()),
+        "an isotrack benchmark's",
+        &format!(
+            "it does not begin with `{}`, as every benchmark's does",
+            start.lines().last().unwrap_or_default()
+        ),
+    )
 }
 
 /// Writes a finished benchmark into `out`: the leaderboard files, `index.html` and

@@ -36,10 +36,7 @@ pub use draw::{
 };
 pub(crate) use error::open_input;
 pub use error::{PlotError, MAX_INPUT_BYTES};
-pub use mark::{
-    figure_status, is_isotrack_figure, refuse_foreign_figure, refuse_foreign_figure_with,
-    FigureStatus,
-};
+pub use mark::{figure_status, is_isotrack_figure, refuse_foreign_figure, FigureStatus};
 pub use picture::FieldPicture;
 pub use run_data::{data_files_unchanged, same_field, unrecorded_data_files_note, RunData};
 pub use stability::{boundary_segments, stability_map_figure};

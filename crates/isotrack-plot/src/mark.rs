@@ -310,9 +310,10 @@ pub fn is_isotrack_figure(path: &Path) -> bool {
 /// mark: the user's own file of that name, or a figure of an older isotrack, which did not mark
 /// its figures) or that was edited since isotrack drew it (att42-8: its mark's digest no longer
 /// matches), naming it (shell-quoted, att41-2) and what to do (att38-9); `Ok` when nothing is
-/// there or the file is an isotrack figure ([`is_isotrack_figure`]). `unmarked_ok`: an unmarked
-/// file is accepted too (`check --map` beside an older isotrack's chart table, att42-2).
-pub fn refuse_foreign_figure_with(path: &Path, unmarked_ok: bool) -> Result<(), String> {
+/// there or the file is an isotrack figure ([`is_isotrack_figure`]). An unmarked file is never
+/// isotrack's, whatever is beside it (att44-11: `check --map` took one beside an unrecorded
+/// chart table for an older isotrack's figure, and replaced the user's own).
+pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
     let quoted = || isotrack_runs::owned::shell_quoted(path);
     match std::fs::symlink_metadata(path) {
         Err(_) => Ok(()),
@@ -320,7 +321,6 @@ pub fn refuse_foreign_figure_with(path: &Path, unmarked_ok: bool) -> Result<(), 
         Ok(m) if !m.is_file() => Ok(()),
         Ok(_) => match figure_status(path) {
             FigureStatus::AsDrawn | FigureStatus::Legacy => Ok(()),
-            FigureStatus::Unmarked if unmarked_ok => Ok(()),
             FigureStatus::Unmarked => Err(format!(
                 "{} is not a figure isotrack wrote (it has no isotrack mark: your own file of that name, or a figure of an older isotrack, which did not mark its figures), and isotrack never replaces a file it did not write: move it away, or draw elsewhere (--out DIR)",
                 quoted()
@@ -331,11 +331,6 @@ pub fn refuse_foreign_figure_with(path: &Path, unmarked_ok: bool) -> Result<(), 
             )),
         },
     }
-}
-
-/// [`refuse_foreign_figure_with`], an unmarked file refused.
-pub fn refuse_foreign_figure(path: &Path) -> Result<(), String> {
-    refuse_foreign_figure_with(path, false)
 }
 
 #[cfg(test)]
@@ -509,7 +504,6 @@ mod tests {
             let e = refuse_foreign_figure(&p).unwrap_err();
             assert!(e.contains("was edited since isotrack wrote it"), "{e}");
             assert!(e.contains(&p.display().to_string()), "{e}");
-            assert!(refuse_foreign_figure_with(&p, true).is_err(), "{name}");
             // An older isotrack's mark, without a digest: accepted, this release.
             std::fs::write(&p, &old).unwrap();
             assert_eq!(figure_status(&p), FigureStatus::Legacy, "{name}");

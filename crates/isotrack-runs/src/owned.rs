@@ -16,21 +16,6 @@
 use crate::failure::{exit, Failure};
 use std::path::Path;
 
-/// Whether the first line of the regular file `path` is one of `headers` exactly. Reads at
-/// most the longest header and its line end (never the whole file: a 20 GB file costs what a
-/// small one does), never through a link nor from a FIFO
-/// ([`crate::files::open_read_regular`]).
-pub fn first_line_is(path: &Path, headers: &[String]) -> std::io::Result<bool> {
-    use std::io::Read;
-    let max = headers.iter().map(String::len).max().unwrap_or(0) + 1;
-    let mut head = Vec::with_capacity(max);
-    crate::files::open_read_regular(path)?
-        .take(max as u64)
-        .read_to_end(&mut head)?;
-    let first = head.split(|b| *b == b'\n').next().unwrap_or_default();
-    Ok(headers.iter().any(|h| h.as_bytes() == first))
-}
-
 /// The file in an output directory recording each table isotrack wrote there (att42-8): a JSON
 /// object, a table's file name -> `{"bytes": N, "sha256": "HEX"}` of the table as written,
 /// replaced each time a table is ([`record_table`]). A table there whose size or SHA-256 is no
@@ -50,19 +35,6 @@ struct Written {
 
 /// [`TABLE_RECORD`]'s content: a table's file name -> how isotrack wrote it.
 type TableRecord = std::collections::BTreeMap<String, Written>;
-
-/// Whose an existing table is, as [`refuse_foreign_csv`] judged it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TableOwner {
-    /// Nothing is at the path.
-    Absent,
-    /// isotrack's, as it wrote it: its size and SHA-256 are those [`TABLE_RECORD`] records.
-    Recorded,
-    /// An older isotrack's (its first line is isotrack's header, and the directory has no
-    /// [`TABLE_RECORD`]: isotrack recorded no digests before att42-8), accepted for this
-    /// release (README, "one release of grace").
-    Legacy,
-}
 
 /// The [`TABLE_RECORD`] of directory `dir`: `Ok(None)` when there is none, an error (the
 /// reason) when what is there is not such a record (a file of the user's of that name, a link,
@@ -117,25 +89,21 @@ fn name_of(path: &Path) -> String {
 }
 
 /// Refuses (73) an existing `path` that is not isotrack's table as isotrack wrote it, before
-/// anything is computed (att39-1, att41-11, att42-8): its size or SHA-256 is not the one the
-/// directory's [`TABLE_RECORD`] records for it (edited since isotrack wrote it: a user's
-/// annotated copy, a spreadsheet's re-export), or the record has no entry for it (isotrack
-/// records every table it writes there: the user's own file of that name). In a directory
-/// without a record (tables of an older isotrack, which recorded no digests) the table's first
-/// line decides as before: one of `headers` (every header isotrack has written for that file,
-/// the present one first; [`first_line_is`]), accepted for this release ([`TableOwner::Legacy`]).
-/// A record that is not isotrack's is refused too, whatever the table. `what` names the table
-/// (`an isotrack comparison`), `whose` the header's writer (`compare's`). A link, FIFO or
-/// directory at `path` is refused (it cannot be read as a regular file).
-pub fn refuse_foreign_csv(
-    path: &Path,
-    headers: &[String],
-    what: &str,
-    whose: &str,
-) -> Result<TableOwner, Failure> {
+/// anything is computed (att39-1, att41-11, att42-8, att44-4): a table is isotrack's only while
+/// its directory's [`TABLE_RECORD`] holds its size and SHA-256. Refused: one whose size or
+/// SHA-256 is not the recorded one (edited since isotrack wrote it: a user's annotated copy, a
+/// spreadsheet's re-export), one the record has no entry for (isotrack records every table it
+/// writes there: the user's own file of that name), and any table in a directory without a
+/// record (att44-4: the record is what tells isotrack's table from the user's edit of it, and a
+/// copy made with `cp -r D/* E/` leaves it behind, so nothing there proves the table unedited;
+/// an older isotrack's table, which recorded no digests, is refused likewise: its grace of one
+/// release is over). A record that is not isotrack's is refused too, whatever the table.
+/// `what` names the table (`an isotrack comparison`). A link, FIFO or directory at `path` is
+/// refused (it cannot be read as a regular file).
+pub fn refuse_foreign_csv(path: &Path, what: &str) -> Result<(), Failure> {
     let record = table_record_in(dir_of(path))?;
     if std::fs::symlink_metadata(path).is_err() {
-        return Ok(TableOwner::Absent);
+        return Ok(());
     }
     // A link, FIFO, directory or device: refused as every output is (never read through).
     crate::files::refuse_non_regular(path).map_err(|e| Failure {
@@ -144,7 +112,7 @@ pub fn refuse_foreign_csv(
     })?;
     let why = match record.as_ref().map(|r| r.get(&name_of(path))) {
         Some(Some(w)) => match as_written(path, w) {
-            Ok(true) => return Ok(TableOwner::Recorded),
+            Ok(true) => return Ok(()),
             Ok(false) => format!(
                 "it was edited since isotrack wrote it: its size or SHA-256 is no longer the one recorded in {TABLE_RECORD}; if the edits are yours to keep, move it away or rename it"
             ),
@@ -153,14 +121,9 @@ pub fn refuse_foreign_csv(
         Some(None) => format!(
             "isotrack records every table it writes here in {TABLE_RECORD}, and it records none of this name: your own file"
         ),
-        None => match first_line_is(path, headers) {
-            Ok(true) => return Ok(TableOwner::Legacy),
-            Ok(false) => format!(
-                "its first line is not {whose} header `{}`",
-                headers.first().map(String::as_str).unwrap_or_default()
-            ),
-            Err(e) => format!("it cannot be read: {e}"),
-        },
+        None => format!(
+            "no {TABLE_RECORD} beside it records it, and isotrack records every table it writes: your own file, a copy made without that record (`cp -r D/* E/` leaves it behind) or an older isotrack's table, which nothing shows unedited; if it is an isotrack table you no longer need, remove it"
+        ),
     };
     Err(Failure {
         code: exit::CANTCREAT,
@@ -336,9 +299,6 @@ mod tests {
         );
     }
 
-    /// A table is isotrack's only when its first line is a header exactly: not a prefix of
-    /// one, not one with more after it on the line; a huge file is not read whole (a 4 GiB
-    /// sparse file answers from under 1 MiB read).
     /// Bytes this thread has read through `read` calls so far (`rchar` of
     /// `/proc/thread-self/io`; `None` where the kernel does not give it): what a test measures
     /// a reader's cost by, never the wall clock.
@@ -349,62 +309,59 @@ mod tests {
             .and_then(|v| v.trim().parse().ok())
     }
 
+    /// att44-4: without a record beside it a table is never isotrack's, whatever it holds:
+    /// isotrack's header with its rows (a copy made with `cp -r D/* E/`, the record left
+    /// behind, then annotated or not), the header alone, anything else; each is refused (73)
+    /// saying no record holds it, and a huge file is not read at all (a 4 GiB sparse file
+    /// answers from under 1 MiB read). Nothing there is fine.
     #[test]
-    fn a_table_is_told_by_its_first_line() {
+    fn without_a_record_no_table_is_isotracks() {
         let d = tempfile::tempdir().unwrap();
         let p = d.path().join("t.csv");
-        let headers = ["a,b,c".to_string(), "a,b".to_string()];
-        for (text, ours) in [
-            ("a,b,c\n1,2,3\n", true),
-            ("a,b\n1,2\n", true),
-            ("a,b,c", true),
-            ("a,b,c,d\n", false),
-            ("a\n", false),
-            ("", false),
-            ("MY DATA\n", false),
+        for text in [
+            "a,b,c\n1,2,3\n",
+            "a,b,c\n1,2,3\n# mine,,\n",
+            "a,b,c",
+            "",
+            "MY DATA\n",
         ] {
             std::fs::write(&p, text).unwrap();
-            assert_eq!(first_line_is(&p, &headers).unwrap(), ours, "{text:?}");
-            let r = refuse_foreign_csv(&p, &headers, "a table of mine", "its");
-            assert_eq!(r.is_ok(), ours, "{text:?}");
-            if let Err(e) = r {
-                assert_eq!(e.code, exit::CANTCREAT);
-                assert!(
-                    e.message
-                        .contains("its first line is not its header `a,b,c`"),
-                    "{}",
-                    e.message
-                );
-            }
+            let e = refuse_foreign_csv(&p, "a table of mine").unwrap_err();
+            assert_eq!(e.code, exit::CANTCREAT);
+            assert!(
+                e.message
+                    .contains("no .isotrack-tables.json beside it records it"),
+                "{}",
+                e.message
+            );
+            assert_eq!(std::fs::read_to_string(&p).unwrap(), text);
         }
         let f = std::fs::File::create(&p).unwrap();
         f.set_len(4 << 30).unwrap();
         drop(f);
         let before = bytes_read_by_this_thread();
-        assert!(refuse_foreign_csv(&p, &headers, "x", "y").is_err());
+        assert!(refuse_foreign_csv(&p, "x").is_err());
         if let (Some(a), Some(b)) = (before, bytes_read_by_this_thread()) {
             assert!(b - a < 1 << 20, "{} bytes read", b - a);
         }
-        assert!(refuse_foreign_csv(&d.path().join("none.csv"), &headers, "x", "y").is_ok());
+        assert!(refuse_foreign_csv(&d.path().join("none.csv"), "x").is_ok());
     }
 
     /// att42-8: a table isotrack recorded is its own only as written. The record holds what
     /// was written (its size and the SHA-256 `sha256sum` gives: FIPS 180-2's `abc` vector
     /// checks the digest); the same first line with one cell edited, or with a row appended, is
     /// the user's (refused 73, "edited since isotrack wrote it"), and so is a table of another
-    /// name the record does not hold; without a record the first line decides (an older
-    /// isotrack's table: [`TableOwner::Legacy`]); a record that is not isotrack's is refused.
+    /// name the record does not hold; a record that is not isotrack's is refused.
     #[test]
     fn a_recorded_table_is_isotracks_only_as_written() {
         let d = tempfile::tempdir().unwrap();
-        let headers = ["a,b".to_string()];
-        let refuse = |p: &Path| refuse_foreign_csv(p, &headers, "a table of mine", "its");
+        let refuse = |p: &Path| refuse_foreign_csv(p, "a table of mine");
         let t = d.path().join("t.csv");
-        // No record yet: an older isotrack's table, by its first line.
+        // No record yet: refused (above); recorded as written, isotrack's.
         std::fs::write(&t, "a,b\n1,2\n").unwrap();
-        assert_eq!(refuse(&t).unwrap(), TableOwner::Legacy);
+        assert!(refuse(&t).is_err());
         record_table(&t, Some(b"a,b\n1,2\n")).unwrap();
-        assert_eq!(refuse(&t).unwrap(), TableOwner::Recorded);
+        assert!(refuse(&t).is_ok());
         // The record: size 8 and the digest of these 8 bytes, computed independently.
         let rec: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(d.path().join(TABLE_RECORD)).unwrap())
@@ -445,7 +402,7 @@ mod tests {
             e.message
         );
         // Nothing there: fine, whatever the record; a forgotten table is no longer recorded.
-        assert_eq!(refuse(&d.path().join("v.csv")).unwrap(), TableOwner::Absent);
+        assert!(refuse(&d.path().join("v.csv")).is_ok());
         record_table(&t, None).unwrap();
         std::fs::write(&t, "a,b\n1,2\n").unwrap();
         assert!(refuse(&t).is_err());

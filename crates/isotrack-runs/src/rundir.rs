@@ -208,6 +208,35 @@ fn not_a_directory(dir: &Path) -> Option<String> {
     Some(format!("it exists and is {}, not a directory", kind_of(&m)))
 }
 
+/// Refuses (73) anything at `dir` but a directory of its own, where a command writes a
+/// directory whose name it picks itself inside an output directory (`compare --out CMP`'s
+/// `CMP/LAW`): a symbolic link (even to a directory: att44-12, `CMP/pid` linking to another
+/// run had that run replaced by the pid law's), a file, a FIFO; named, with what it is. A
+/// directory named on the command line may be a link ([`RunDir::open`]: the user named it).
+pub fn refuse_not_own_directory(dir: &Path) -> Result<(), Failure> {
+    let Ok(m) = std::fs::symlink_metadata(dir) else {
+        return Ok(());
+    };
+    if m.is_dir() {
+        return Ok(());
+    }
+    let what = if m.file_type().is_symlink() {
+        let to = std::fs::read_link(dir)
+            .map(|t| t.display().to_string())
+            .unwrap_or_else(|_| "?".into());
+        format!("a symbolic link (to {to})")
+    } else {
+        kind_of(&m).to_string()
+    };
+    Err(Failure {
+        code: exit::CANTCREAT,
+        message: format!(
+            "{} is {what}, not a directory: isotrack writes a directory of its own there and never writes through a link nor over another file; move it away or use another --out",
+            shell_quoted(dir)
+        ),
+    })
+}
+
 /// What a file is, in words (`a FIFO (named pipe)`, `a regular file`, ...).
 fn kind_of(m: &std::fs::Metadata) -> &'static str {
     let t = m.file_type();
