@@ -612,7 +612,7 @@ fn silent_gap_closing_mps(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<f64>
     }
     let d = 2.0 * flown_circle_radius_m(s, l, s.team_arc()?);
     let even = d * (std::f64::consts::PI / n as f64).sin();
-    (m > even && m < d).then(|| 2.0 * gain_per_s * (m - even))
+    (m > even && m < d).then_some(2.0 * gain_per_s * (m - even))
 }
 
 /// How far from the circle, as a fraction of its radius, a start may lie and still be judged by

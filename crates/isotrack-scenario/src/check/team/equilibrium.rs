@@ -260,10 +260,17 @@ pub(super) fn shifted_claim(
             Some((
                 super::Verdict::Fails,
                 format!(
-                    "{intro}; round the ring these differences need ranges {} m apart, and no range exceeds {limit} (vehicle {i} at v0 = {} m/s reaches at most {} m/s against V), so no equilibrium exists: the gaps never stand still, the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer",
+                    "{intro}; round the ring these differences need ranges {} m apart, {}, so no equilibrium exists: the gaps never stand still, the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer",
                     Num(eq.range_span_m),
-                    Echo(v0),
-                    Num(best)
+                    if eq.range_span_m >= eq.largest_range_m {
+                        format!(
+                            "and no range exceeds {limit} (vehicle {i} at v0 = {} m/s reaches at most {} m/s against V)",
+                            Echo(v0),
+                            Num(best)
+                        )
+                    } else {
+                        "and even with two vehicles touching their arcs overfill the circle".into()
+                    }
                 ),
             ))
         }
