@@ -19,6 +19,10 @@
 //!   `v0` included; the `none` law commands `v0` only): the paper's theory assumes a constant
 //!   speed, and the verdict holds only if the loop is stable at every speed of the range.
 
+mod equilibrium;
+
+pub use equilibrium::ShiftedEquilibrium;
+
 use super::regions::Regions;
 use super::sampled;
 use super::setup::{not_computed, Law, LoopSetup};
@@ -130,6 +134,19 @@ pub struct SpacingLoopReport {
     /// CV it can leave (absent when no halt exists or the law does not range).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub range_halt: Option<RangeHaltReport>,
+    /// att44-3: a `max_range_m` above the even spacing's range `e` on a known circle (and short
+    /// of its diameter): how fast a gap still out of range closes when its vehicles' other
+    /// neighbours sit at `e`, `2 k_v (max_range_m - e)`, m/s. The excess of a silent gap over
+    /// the range does not push (the law sees `max_range_m`), so a clustered team spreads at
+    /// this pace until every neighbour is in range; the time constants are the linear loop's,
+    /// with every neighbour heard (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub silent_gap_closing_mps: Option<f64>,
+    /// `range_balance` with unequal nominal speeds on a known circle (att44-6, -7): the
+    /// equilibrium the loop converges to, solved for its ranges, or why there is none (absent
+    /// otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shifted_equilibrium: Option<ShiftedEquilibrium>,
     /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
     /// discovery phase), each with its key.
     pub not_modelled: Vec<String>,
@@ -231,7 +248,7 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     if rep.stable == Some(false) {
         note_saturated_gaps(&mut rep, s, team);
     }
-    rep.not_modelled = spacing_not_modelled(team, n, rep.range_halt.as_ref());
+    rep.not_modelled = spacing_not_modelled(team, n, &rep);
     rep
 }
 
@@ -263,6 +280,10 @@ fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLo
         saturated_gap_amplitude_m: None,
         saturated_gap_cv_max: None,
         range_halt: range_halt(s, l, team),
+        silent_gap_closing_mps: silent_gap_closing_mps(s, l, team),
+        shifted_equilibrium: s
+            .team_arc()
+            .and_then(|c| equilibrium::shifted_equilibrium(team, flown_circle_radius_m(s, l, c))),
         not_modelled: vec![],
         note: String::new(),
     }
@@ -346,8 +367,9 @@ fn note_saturated_gaps(rep: &mut SpacingLoopReport, s: &Scenario, team: &TeamSpe
 }
 
 /// The effects the linear spacing loop leaves out, each naming its key.
-fn spacing_not_modelled(team: &TeamSpec, n: usize, halt: Option<&RangeHaltReport>) -> Vec<String> {
+fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> Vec<String> {
     let r = &team.ranging;
+    let halt = rep.range_halt.as_ref();
     let mut out = vec![format!(
         "speed saturation: the loop is the unsaturated law (it holds while v0 + k_v (r_ahead - r_behind) stays in [team.v_min_mps, team.v_max_mps] = [{}, {}] m/s)",
         Echo(team.v_min_mps),
@@ -390,13 +412,21 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, halt: Option<&RangeHaltReport
                 Echo(r.max_range_m)
             )),
         }
+        if let Some(v) = rep.silent_gap_closing_mps {
+            out.push(format!(
+                "the time constants are the linear loop's, once every neighbour is in range: while a gap's range exceeds team.ranging.max_range_m = {} its excess does not push (the law sees max_range_m), a vehicle with both neighbours silent commands v0, and a silent gap whose vehicles' other neighbours are at the even spacing's range closes at only 2 k_v (max_range_m - even range) = {} m/s, so a clustered team spreads more slowly than the time constants say (the closer max_range_m to the even range, the slower)",
+                Echo(r.max_range_m),
+                Num(v)
+            ));
+        }
     }
     if let RingMode::Discover(d) = team.ring {
         out.push(format!(
-            "team.ring = \"discovered\": the law starts after the discovery ({} s of settling and {} probe slots of {} s)",
+            "team.ring = \"discovered\": the law starts after the discovery ({} s of settling and {} probe slots of {} s){}",
             Num(d.settle_s),
             n,
-            Num(d.probe_s)
+            Num(d.probe_s),
+            equilibrium::probe_cut_note(team).map_or(String::new(), |w| format!("; {w}"))
         ));
     }
     out
@@ -527,11 +557,9 @@ pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Range
             // The ranges are chords of the circle flown: the P law's orbit when it has one
             // (att43-6), else the isoline. Gaps are measured along the isoline (the metrics
             // project onto it), the same fractions of a turn as along the orbit.
-            let flown = super::setup::p_law_orbit(s, l)
-                .map(|o| o.orbit.radius_m)
-                .filter(|&f| f.is_finite() && f > 0.0 && f != c.radius_m);
-            flown_radius_m = flown;
-            let d = 2.0 * flown.unwrap_or(c.radius_m);
+            let flown = flown_circle_radius_m(s, l, c);
+            flown_radius_m = (flown != c.radius_m).then_some(flown);
+            let d = 2.0 * flown;
             if r >= d {
                 return None;
             }
@@ -558,6 +586,33 @@ pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Range
         deployed_gap_cv: deployed.map(|d| d.gap_cv),
         deployed_all_silent: deployed.is_some_and(|d| d.all_silent),
     })
+}
+
+/// The radius of the circle the team flies round the known circle `c`: the P law's orbit when
+/// it has one (att43-6, [`super::setup::p_law_orbit`]), else the isoline's; the ranges are its
+/// chords.
+fn flown_circle_radius_m(s: &Scenario, l: &Law, c: CircleArc) -> f64 {
+    super::setup::p_law_orbit(s, l)
+        .map(|o| o.orbit.radius_m)
+        .filter(|&f| f.is_finite() && f > 0.0)
+        .unwrap_or(c.radius_m)
+}
+
+/// [`SpacingLoopReport::silent_gap_closing_mps`]: `2 k_v (max_range_m - e)` for
+/// `range_balance` on a known circle with `e < max_range_m < 2 R'` (`e = 2 R' sin(pi/N)`, the
+/// even spacing's range on the circle flown), `None` otherwise.
+fn silent_gap_closing_mps(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<f64> {
+    let SpacingLaw::RangeBalance { gain_per_s } = team.law else {
+        return None;
+    };
+    let m = team.ranging.max_range_m;
+    let n = team.count();
+    if gain_per_s <= 0.0 || n < 3 || !m.is_finite() {
+        return None;
+    }
+    let d = 2.0 * flown_circle_radius_m(s, l, s.team_arc()?);
+    let even = d * (std::f64::consts::PI / n as f64).sin();
+    (m > even && m < d).then_some(2.0 * gain_per_s * (m - even))
 }
 
 /// How far from the circle, as a fraction of its radius, a start may lie and still be judged by
@@ -851,7 +906,7 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
             Some(why) => (Verdict::Fails, why),
             None => match (
                 team_verdict(team, &spacing, &tracking),
-                spacing_claim(s, l, team),
+                spacing_claim(s, l, team, &spacing),
             ) {
                 // A loop that fails fails whatever the gaps do; otherwise what range_balance
                 // can do with the gaps decides (att43-1, -2, -8, -13).
@@ -879,15 +934,26 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
 ///   (`dropout_probability = 1`), no speed to command but `v0` (every envelope of zero width),
 ///   or two vehicles (each sees its one neighbour as ahead and behind). The gaps stay as
 ///   deployed: `holds` only when the starts are even on a known circle, else `fails`;
-/// * unequal nominal speeds with a range limit short of even spacing (att43-2): neither the
-///   halt bound (one speed) nor the linear loop (every neighbour heard) describes it:
-///   `not_applicable` (the runs seen stay uneven);
-/// * a discovered ring whose starts leave neighbours beyond the range (att43-1): the probes may
-///   not find the ring, and without it the law is off: `not_applicable`;
+///   Two or more vehicles with no speed room among others keep the arcs between them
+///   ([`equilibrium::pinned_arcs_claim`], att44-8): `fails` when the best spacing left is not
+///   even;
+/// * unequal nominal speeds on a known circle ([`equilibrium::shifted_claim`], att44-6, -7):
+///   `fails` when no equilibrium exists (the ranges it needs span more than any range can),
+///   `not_applicable` when its ranges reach past `max_range_m`; elsewhere, with a range limit
+///   short of even spacing (att43-2): `not_applicable` (neither the halt bound of one speed nor
+///   the linear loop describes it);
+/// * a discovered ring whose probe cannot change the speed (`team.v_max_mps <= v0`, att44-10):
+///   `fails`; whose starts leave neighbours beyond the range (att43-1): the probes may not find
+///   the ring, and without it the law is off: `not_applicable`;
 ///
 /// and, for either spacing law, a listed ring out of the order of travel
 /// ([`listed_ring_out_of_order`]): `fails`.
-fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, String)> {
+fn spacing_claim(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+) -> Option<(Verdict, String)> {
     if let Some(wrong) = listed_ring_out_of_order(s, l, team) {
         return Some((Verdict::Fails, wrong));
     }
@@ -908,14 +974,11 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
         Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
     } else if ranges && team.ranging.dropout_probability >= 1.0 {
         Some("team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0".to_string())
-    } else if (0..n).all(|i| {
-        let v = team.speeds(i);
-        v.min_mps == v.max_mps
-    }) {
-        // att44-9: arc_reference too.
+    } else if equilibrium::pinned(team).len() == n {
+        // att44-9: arc_reference too; att44-8: the keys in force, overrides or the team's.
         Some(format!(
-            "team.v_min_mps = team.v_max_mps = {} m/s: {} has no speed to command but v0",
-            Echo(team.v_min_mps),
+            "{}: {} has no speed to command but v0",
+            equilibrium::pinned_keys(team, &equilibrium::pinned(team)),
             team.law.name()
         ))
     } else {
@@ -946,11 +1009,21 @@ fn spacing_claim(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<(Verdict, Str
             ),
         });
     }
+    if let Some(claim) = equilibrium::pinned_arcs_claim(s, l, team) {
+        return Some(claim);
+    }
+    if let Some(why) = equilibrium::probe_cannot_fly(team) {
+        return Some((Verdict::Fails, why));
+    }
+    let solved = sp.shifted_equilibrium.as_ref().filter(|_| ranges);
+    if let Some(claim) = solved.and_then(|eq| equilibrium::shifted_claim(team, eq)) {
+        return Some(claim);
+    }
     let r = team.ranging.max_range_m;
     if !ranges || !r.is_finite() {
         return None;
     }
-    if team.nominal_speeds_mps().len() > 1 {
+    if team.nominal_speeds_mps().len() > 1 && solved.is_none() {
         let even_range = circle.map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
         if even_range.is_none_or(|d| d > r) {
             return Some((

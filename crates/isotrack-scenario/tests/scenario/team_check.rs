@@ -8,17 +8,17 @@ use isotrack_sim::NoTrace;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
-fn circular_text() -> String {
+pub(crate) fn circular_text() -> String {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/team-circular-4.toml");
     std::fs::read_to_string(p).unwrap()
 }
 
-fn circular(sets: &[&str]) -> Scenario {
+pub(crate) fn circular(sets: &[&str]) -> Scenario {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     parse_scenario(&circular_text(), "team-circular-4.toml", &sets).unwrap()
 }
 
-fn close(a: f64, b: f64, tol: f64) -> bool {
+pub(crate) fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * b.abs().max(1.0)
 }
 
@@ -598,7 +598,7 @@ fn a_ranging_limit_short_of_the_even_spacing_fails_by_the_halt_it_allows() {
 
 /// The gap CV (population, over the mean) of `n` vehicles deployed `step` rad apart round a
 /// circle: `n - 1` gaps of `step` and one of the rest of the turn, by direct computation.
-fn spread_cv(step: f64, n: usize) -> f64 {
+pub(crate) fn spread_cv(step: f64, n: usize) -> f64 {
     let mut gaps = vec![step; n - 1];
     gaps.push(2.0 * PI - (n - 1) as f64 * step);
     let mean = 2.0 * PI / n as f64;
@@ -607,7 +607,7 @@ fn spread_cv(step: f64, n: usize) -> f64 {
 }
 
 /// The team metrics of a run of `s` (no trace kept).
-fn team_metrics(s: &Scenario) -> isotrack_sim::team::metrics::TeamSummary {
+pub(crate) fn team_metrics(s: &Scenario) -> isotrack_sim::team::metrics::TeamSummary {
     s.run_team(&mut [] as &mut [NoTrace])
         .unwrap()
         .unwrap()
