@@ -1018,3 +1018,89 @@ fn team_figure_draws_its_dashed_references_over_the_curves() {
         dashes.len()
     );
 }
+
+/// mem45 (att43-17): `plot` and `report` of a team's run take memory growing with the rows and
+/// the vehicles, not with their square. A team of 2000 Dubins robots listed one by one in
+/// `team.starts` (team-circular-4's circle, evenly spread, 0.5 s: 6 rows each) is drawn and
+/// paged under an address-space limit of 1 GB (`ulimit -v`); each of the 2000 vehicles once
+/// held its own copy of the scenario and its recorded summary (the 2000 starts twice), about
+/// 3.3 GB resident for `plot` and 7 GB for `report`, whose page, 350 MB, listed the starts in
+/// each vehicle's summary. The legends name the first 9 vehicles and "and 1991 more".
+#[test]
+fn a_large_teams_figures_and_page_fit_a_memory_limit() {
+    let n = 2000;
+    let r = 10.0 * LN_2;
+    let starts: Vec<String> = (0..n)
+        .map(|i| {
+            let th = -2.0 * PI * i as f64 / n as f64;
+            format!(
+                "{{ x_m = {:?}, y_m = {:?}, heading_rad = {:?} }}",
+                r * th.cos(),
+                r * th.sin(),
+                th - 0.5 * PI
+            )
+        })
+        .collect();
+    let team = std::fs::read_to_string(TEAM).unwrap();
+    let text: Vec<String> = team
+        .lines()
+        .filter(|l| !l.starts_with("count = ") && !l.starts_with("spread = "))
+        .map(|l| match l {
+            "duration_s = 300.0" => "duration_s = 0.5".to_string(),
+            "[team]" => format!("[team]\nstarts = [\n{}\n]", starts.join(",\n")),
+            _ => l.to_string(),
+        })
+        .collect();
+    let d = tempfile::tempdir().unwrap();
+    let scenario = common::write(d.path(), "big-team.toml", &(text.join("\n") + "\n"));
+    let out = d.path().join("run");
+    let o = isotrack(&["run", &scenario, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let limited = |args: &[&str]| {
+        std::process::Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1000000 && exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_isotrack"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let figs = d.path().join("figs");
+    let o = limited(&[
+        "plot",
+        out.to_str().unwrap(),
+        "--format",
+        "svg",
+        "--out",
+        figs.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    for fig in ["trajectory.svg", "timeseries.svg"] {
+        let svg = std::fs::read_to_string(figs.join(fig)).unwrap();
+        let texts: Vec<String> = common::svg_texts(&svg).into_iter().map(|t| t.3).collect();
+        let has = |s: &str| texts.iter().any(|t| t == s);
+        assert!(has("vehicle 0") && has("vehicle 8"), "{fig}");
+        assert!(!has("vehicle 9") && !has("vehicle 1999"), "{fig}");
+        assert!(has("and 1991 more"), "{fig}");
+    }
+    let page = d.path().join("r.html");
+    let o = limited(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        page.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    // The recorded scenario (its 2000 starts) once, in vehicle 0's summary.
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert_eq!(
+        html.matches("\"heading_rad\":").count(),
+        n + 1,
+        "the starts and [initial]"
+    );
+    let names: Vec<String> = (0..9).map(|i| format!("vehicle {i}")).collect();
+    assert!(html.contains(&format!(
+        "<h1>isotrack report: {}, and 1991 more</h1>",
+        names.join(", ")
+    )));
+}

@@ -108,13 +108,7 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
         .units
         .clone()
         .unwrap_or_else(|| "field units".into());
-    let title = format!(
-        "isotrack report: {}",
-        runs.iter()
-            .map(|r| r.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    let title = format!("isotrack report: {}", named_runs(&runs));
     let body = page_body(&title);
     let json = ReportJson {
         level: scenario.level(),
@@ -124,6 +118,26 @@ pub fn report_page_with_notes(dirs: &[&Path]) -> Result<(String, Vec<String>), R
         units,
     };
     Ok((page(&title, &body, &script_json(&json), REPORT_JS), notes))
+}
+
+/// The most runs the page names one by one (in its title; its script's summary line, legend
+/// and tooltips likewise): as many as its colours, past which they repeat.
+const NAMED_RUNS: usize = 10;
+
+/// The runs' names joined for the title: every name when they are at most [`NAMED_RUNS`],
+/// else the first `NAMED_RUNS - 1` and "and K more" (mem45: a team of 10 000 vehicles was
+/// titled with every vehicle's name).
+fn named_runs(runs: &[RunJson]) -> String {
+    let shown = if runs.len() <= NAMED_RUNS {
+        runs.len()
+    } else {
+        NAMED_RUNS - 1
+    };
+    let mut names: Vec<String> = runs[..shown].iter().map(|r| r.name.clone()).collect();
+    if shown < runs.len() {
+        names.push(format!("and {} more", runs.len() - shown));
+    }
+    names.join(", ")
 }
 
 /// The runs of the run directories `dirs`, in order: a team's run is its vehicles, each shown
@@ -312,9 +326,14 @@ const REPORT_JS: &str = r##"
     while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (r.t[mid] <= t) lo = mid; else hi = mid - 1; }
     return lo;
   }
-  document.getElementById("summary").textContent = runs.map(r =>
+  // The runs the summary line, the legend and the tooltips name one by one: every run when
+  // they are at most as many as the colours (past them the colours repeat), else the first
+  // PALETTE.length - 1 and "and K more" (mem45: a team of 10 000 vehicles was listed whole).
+  const named = runs.length <= PALETTE.length ? runs : runs.slice(0, PALETTE.length - 1);
+  const andMore = runs.length > named.length ? ["and " + (runs.length - named.length) + " more"] : [];
+  document.getElementById("summary").textContent = named.map(r =>
     r.name + ": " + r.outcome + ", steady max |eps| = " + fmt(r.summary.steady_state_max_abs_error) +
-    " " + units + ", convergence " + (r.summary.convergence_time_s === null ? "never" : fmt(r.summary.convergence_time_s, 1) + " s")).join("; ");
+    " " + units + ", convergence " + (r.summary.convergence_time_s === null ? "never" : fmt(r.summary.convergence_time_s, 1) + " s")).concat(andMore).join("; ");
   // The map: the field at t = 0, or for a field that moves the frame nearest the cursor.
   const map = document.getElementById("map"), mctx = map.getContext("2d", { willReadFrequently: true });
   const mapnote = document.getElementById("mapnote");
@@ -354,11 +373,12 @@ const REPORT_JS: &str = r##"
   }
   if (!pic) mapnote.textContent = "no path to draw";
   const legend = document.getElementById("legend");
-  runs.forEach((r, i) => {
+  named.forEach((r, i) => {
     const item = el("span", { "data-run": r.name }, r.name + " (" + r.outcome + ")");
     const sw = el("span", { class: "swatch" }); sw.style.background = colour(i); item.prepend(sw);
     legend.appendChild(item);
   });
+  andMore.forEach(m => legend.appendChild(el("span", {}, m)));
   function drawMap(t) {
     if (!pic) return;
     showField(t);
@@ -437,10 +457,10 @@ const REPORT_JS: &str = r##"
       const rect = svg.getBoundingClientRect();
       const t = Math.min(tEnd, Math.max(0, (ev.clientX - rect.left - L) / (W - L - Rm) * tEnd));
       setTime(t);
-      showTip(ev, "t = " + fmt(t, 2) + " s: " + runs.map(r => {
+      showTip(ev, "t = " + fmt(t, 2) + " s: " + named.map(r => {
         const k = indexAt(r, t), v = k >= 0 ? r[sdef.key][k] : null;
         return r.name + " " + sdef.label + " = " + (v === null ? "n/a" : fmt(v)) + " " + sdef.unit;
-      }).join("; "));
+      }).concat(andMore).join("; "));
     });
     svg.addEventListener("mouseleave", hideTip);
     charts.appendChild(svg);

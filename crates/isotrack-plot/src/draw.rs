@@ -52,6 +52,33 @@ fn colour(i: usize) -> RGBColor {
     RUN_COLOURS[i % RUN_COLOURS.len()]
 }
 
+/// The most runs a legend names one by one: as many as there are colours (past them the
+/// colours repeat, and a legend of a team's 10 000 vehicles ran off the figure, mem45).
+const LEGEND_RUNS: usize = RUN_COLOURS.len();
+
+/// Whether a legend of `n` runs names run `i`: every run when they are at most
+/// [`LEGEND_RUNS`], else the first `LEGEND_RUNS - 1`, the last entry saying how many more
+/// ([`more_runs_entry`]).
+fn legend_names(i: usize, n: usize) -> bool {
+    n <= LEGEND_RUNS || i + 1 < LEGEND_RUNS
+}
+
+/// The last legend entry of a figure of `n` runs when it names fewer than all
+/// ([`legend_names`]): "and K more", with no line (their colours repeat the named ones').
+fn more_runs_entry<'a, DB: DrawingBackend + 'a>(
+    chart: &mut MapChart<'a, DB>,
+    n: usize,
+) -> DrawResult {
+    if n > LEGEND_RUNS {
+        chart
+            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+            .map_err(s)?
+            .label(format!("and {} more", n + 1 - LEGEND_RUNS))
+            .legend(|(x, y)| EmptyElement::at((x, y)));
+    }
+    Ok(())
+}
+
 type DrawResult = Result<(), String>;
 
 fn s<E: std::fmt::Display>(e: E) -> String {
@@ -657,8 +684,10 @@ pub fn trajectory_figure(
         (|| -> DrawResult {
             let mut chart = draw_map(&root, &first.scenario, range, (title, &lay), st, &times)?;
             for (i, run) in runs.iter().enumerate() {
-                draw_path(&mut chart, run, colour(i), arrow, st)?;
+                let named = legend_names(i, runs.len());
+                draw_path(&mut chart, run, (colour(i), named), arrow, st)?;
             }
+            more_runs_entry(&mut chart, runs.len())?;
             chart
                 .configure_series_labels()
                 .label_font(st.font(1.0))
@@ -686,17 +715,17 @@ fn paths_extent(runs: &[RunData]) -> Result<[f64; 4], PlotError> {
 }
 
 /// One run's path on the trajectory figure in colour `c`, labelled with its name for the
-/// legend: the line through its finite positions, an arrow `arrow` (m) long along its first
-/// heading, a ring at its start and a triangle at its end.
+/// legend when `named` ([`legend_names`]): the line through its finite positions, an arrow
+/// `arrow` (m) long along its first heading, a ring at its start and a triangle at its end.
 fn draw_path<DB: DrawingBackend>(
     chart: &mut MapChart<'_, DB>,
     run: &RunData,
-    c: RGBColor,
+    (c, named): (RGBColor, bool),
     arrow: f64,
     st: &Style,
 ) -> DrawResult {
     let (w2, w3) = (st.px(2.0), st.px(3.0));
-    chart
+    let line = chart
         .draw_series(LineSeries::new(
             run.trace
                 .iter()
@@ -704,9 +733,11 @@ fn draw_path<DB: DrawingBackend>(
                 .map(|t| (t.x_m, t.y_m)),
             c.stroke_width(w2),
         ))
-        .map_err(s)?
-        .label(run.name.clone())
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+        .map_err(s)?;
+    if named {
+        line.label(run.name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+    }
     let (a, b) = (run.trace[0], run.trace[run.trace.len() - 1]);
     let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
     let tip = (a.x_m + arrow * hx, a.y_m + arrow * hy);
@@ -1042,8 +1073,8 @@ pub fn timeseries_figure(
 /// One panel of [`timeseries_figure`] drawn: the steady-state window `[ss, t_end]` shaded,
 /// then each run's series (its light second one, if any, under its main one), the values
 /// outside `[lo, hi]` left out.
-fn draw_time_series<DB: DrawingBackend>(
-    chart: &mut MapChart<'_, DB>,
+fn draw_time_series<'a, DB: DrawingBackend + 'a>(
+    chart: &mut MapChart<'a, DB>,
     st: &Style,
     runs: &[RunData],
     series: &[[Series; 2]],
@@ -1079,16 +1110,19 @@ fn draw_time_series<DB: DrawingBackend>(
                 ))
                 .map_err(s)?;
         }
-        chart
+        let line = chart
             .draw_series(LineSeries::new(
                 main.iter().filter(inside).copied(),
                 c.stroke_width(w2),
             ))
-            .map_err(s)?
-            .label(run.name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
+            .map_err(s)?;
+        if legend_names(i, runs.len()) {
+            line.label(run.name.clone()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3))
+            });
+        }
     }
-    Ok(())
+    more_runs_entry(chart, runs.len())
 }
 
 /// One group of a sweep summary: `(x, mean, std, n)` per distinct x, sorted by x.

@@ -17,7 +17,10 @@ pub struct RunData {
     pub dir: PathBuf,
     /// The trace.
     pub trace: Vec<TraceRow>,
-    /// `summary.json` (read by its one reader, [`Summary::from_json`]).
+    /// `summary.json` (read by its one reader, [`Summary::from_json`]). A team's vehicle
+    /// ([`RunData::load_team`]) has its own record, without the lists of every vehicle
+    /// (`vehicles`, `team.neighbours`), and after vehicle 0 without the recorded `scenario`
+    /// (`null`: [`RunData::scenario`] is the team's).
     pub summary: Summary,
     /// The resolved scenario (its field rebuilt for the map).
     pub scenario: Scenario,
@@ -838,7 +841,9 @@ impl RunData {
     /// [`RunData`] per vehicle ([`load_team_named`](Self::load_team_named)).
     fn into_vehicles(all: Self, traces: Vec<Vec<TraceRow>>, with_run: bool) -> Vec<Self> {
         // The rows are in `traces` now: each vehicle clones the rest only, without the lists
-        // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies).
+        // of every vehicle (`vehicles`, `team.neighbours`: N of them in each of N copies), and
+        // shares the scenario (a clone of it shares its keys and settings: a `team.starts` of
+        // N starts once was copied into each of the N vehicles, O(N^2) memory, mem45).
         let mut all = Self {
             trace: Vec::new(),
             ..all
@@ -850,6 +855,10 @@ impl RunData {
                 team.neighbours = Vec::new();
             }
         }
+        // The resolved scenario summary.json records (checked against `scenario.toml` already,
+        // [`check_scenario_is_runs`]) is vehicle 0's only: the others' is `null` (it lists
+        // `team.starts`, N of them, in each of N copies, mem45).
+        let recorded = std::mem::take(&mut all.summary.scenario);
         traces
             .into_iter()
             .enumerate()
@@ -857,6 +866,9 @@ impl RunData {
                 // The vehicle's own outcome and metrics (`vehicles[i]`) over the team's
                 // top-level ones (vehicle 0's); the rest (`team`, `data_files`) shared.
                 let mut summary = all.summary.clone();
+                if i == 0 {
+                    summary.scenario = recorded.clone();
+                }
                 if let (Some(own), Ended::Run(end)) = (vehicles.get(i), &mut summary.ended) {
                     end.record = own.clone();
                 }

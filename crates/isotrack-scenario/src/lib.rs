@@ -49,17 +49,19 @@ use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
 /// A resolved, validated scenario with its field built (files read): ready to run, any number of
-/// times (cloning shares the field).
+/// times. Cloning shares everything (the keys, the settings, the field): a clone costs the same
+/// whatever the scenario holds (mem45: a team's `team.starts` list, `N` starts, was copied into
+/// each of the `N` vehicles `plot` and `report` read, `O(N^2)` memory).
 #[derive(Clone, Debug)]
 pub struct Scenario {
     /// The resolved keys: the user's, and every default resolution wrote (what `scenario.toml`
     /// records).
-    file: ScenarioFile,
+    file: Arc<ScenarioFile>,
     /// The user's own keys ([`Scenario::given`]): what [`Scenario::derive`] and sweeps apply
     /// their assignments to before resolving once.
     given: Arc<ScenarioFile>,
     /// Every setting in force, typed ([`spec`]).
-    spec: spec::ScenarioSpec,
+    spec: Arc<spec::ScenarioSpec>,
     field: Arc<FieldModel>,
     vehicle: Arc<vehicle::VehicleModel>,
     isoline: Arc<OnceLock<IsolineOracle>>,
@@ -218,9 +220,9 @@ impl Scenario {
         let start = start_xy(&file).map_err(|i| vec![i])?;
         let (vehicle, spec) = checked_parts(&file, start, &parts.model, None)?;
         Ok(Self {
-            file,
+            file: Arc::new(file),
             given: Arc::new(given),
-            spec,
+            spec: Arc::new(spec),
             field: parts.model,
             vehicle,
             isoline: Arc::new(OnceLock::new()),
@@ -348,9 +350,9 @@ impl Scenario {
             Arc::new(OnceLock::new())
         };
         Ok(Self {
-            file,
+            file: Arc::new(file),
             given: Arc::new(given),
-            spec,
+            spec: Arc::new(spec),
             field: parts.model,
             vehicle,
             isoline,
@@ -371,7 +373,7 @@ impl Scenario {
         if self.file.controller.kind == Some(kind) {
             return Ok(self.clone());
         }
-        let mut file = self.file.clone();
+        let mut file = (*self.file).clone();
         file.controller = file.controller.switched_to(kind);
         let mut given = (*self.given).clone();
         given.controller = given.controller.switched_to(kind);
@@ -380,9 +382,9 @@ impl Scenario {
         let spec = spec::ScenarioSpec::new(&file, self.vehicle.airframe_turn_rate_limit_radps())
             .map_err(|i| locate_derived(vec![i], &origin, &[]))?;
         Ok(Self {
-            file,
+            file: Arc::new(file),
             given: Arc::new(given),
-            spec,
+            spec: Arc::new(spec),
             field: self.field.clone(),
             vehicle: self.vehicle.clone(),
             isoline: self.isoline.clone(),
