@@ -34,6 +34,7 @@ mod regions;
 pub mod sampled;
 mod setup;
 pub mod team;
+mod team_ring;
 mod verdict;
 
 use crate::spec::FieldKindSpec;

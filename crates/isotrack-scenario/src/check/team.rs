@@ -26,6 +26,8 @@ pub use equilibrium::ShiftedEquilibrium;
 use super::regions::Regions;
 use super::sampled;
 use super::setup::{not_computed, Law, LoopSetup};
+use super::team_ring::{common_speed, start_angle, travel_direction};
+pub use super::team_ring::{disjoint_envelopes, DisjointEnvelopes};
 use super::verdict::Verdict;
 use crate::spec::TeamSpec;
 use crate::team::TeamIsolineModel;
@@ -615,21 +617,6 @@ fn silent_gap_closing_mps(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<f64>
     (m > even && m < d).then_some(2.0 * gain_per_s * (m - even))
 }
 
-/// How far from the circle, as a fraction of its radius, a start may lie and still be judged by
-/// its angle about the centre (att44-1, -2, -5: a start 13 m off the circle was taken for the
-/// point of the circle at its angle, where it does not join it).
-const ON_CIRCLE_REL_TOL: f64 = 1e-3;
-
-/// Start `i`'s angle about `circle`'s centre, rad, when it lies on the circle (within
-/// [`ON_CIRCLE_REL_TOL`]); `None` otherwise (where it joins the circle is not the check's to
-/// tell).
-fn start_angle(team: &TeamSpec, circle: CircleArc, i: usize) -> Option<f64> {
-    let d = Vec2::new(team.starts[i].x_m, team.starts[i].y_m) - circle.center_m;
-    let r = d.norm();
-    (r > 0.0 && (r - circle.radius_m).abs() <= ON_CIRCLE_REL_TOL * circle.radius_m)
-        .then(|| d.y.atan2(d.x))
-}
-
 /// The team's starts on a known circle ([`deployed_on_circle`]).
 #[derive(Clone, Copy, Debug)]
 struct Deployment {
@@ -723,33 +710,6 @@ fn min_silent_gap_m(p: &PolylineArc, range_m: f64, cap_m: f64) -> Option<f64> {
         best = best.min(lo);
     }
     Some(best)
-}
-
-/// Where the clamp of att32d-2 is active: the team's common steady speed
-/// `V = clamp(mean, max_i v_min_i, min_i v_max_i)` when it differs from `mean` (the mean
-/// nominal speed, where the unsaturated loop settles: the gaps' sum is conserved, so the
-/// speeds' mean offset is zero), with the vehicle whose bound sets it and which bound; `None`
-/// when the mean lies in every envelope (or none is common: [`disjoint_envelopes`]).
-fn common_speed(team: &TeamSpec, mean: f64) -> Option<(f64, usize, &'static str)> {
-    let (mut lo, mut hi) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
-    for i in 0..team.count() {
-        let v = team.speeds(i);
-        if v.min_mps > lo.1 {
-            lo = (i, v.min_mps);
-        }
-        if v.max_mps < hi.1 {
-            hi = (i, v.max_mps);
-        }
-    }
-    if lo.1 > hi.1 {
-        None
-    } else if mean > hi.1 {
-        Some((hi.1, hi.0, "top speed v_max"))
-    } else if mean < lo.1 {
-        Some((lo.1, lo.0, "slowest speed v_min"))
-    } else {
-        None
-    }
 }
 
 /// A team whose every range is dropped (`team.ranging.dropout_probability = 1`): no vehicle
@@ -1055,20 +1015,6 @@ fn spacing_claim(
     None
 }
 
-/// The direction the PI-like law travels a radial field's circle (att43-10, -11): `-1`
-/// clockwise, `+1` counter-clockwise, `None` for another law. The field falls outward
-/// (`team_arc`'s radial fields: `i0 > 0`, `k > 0`), so inside the circle `eps > 0` and the
-/// law's steady term `kp c1 tanh(eps/c2)` turns the vehicle left (a positive turn rate is
-/// counter-clockwise) when `kp c1 > 0`: on a clockwise orbit left is outward, back to the
-/// circle, so the law travels clockwise, the paper's "higher values on the right"
-/// (`controller.higher_side = "right"`); `"left"` mirrors the law (`omega -> -omega`), and so
-/// does `kp c1 < 0`. A vehicle started the other way turns round.
-fn travel_direction(s: &Scenario, l: &Law) -> Option<f64> {
-    let side = s.spec().controller.pi_isoline()?.output.higher_side.sign();
-    let k = l.kp * l.c1;
-    (k != 0.0 && k.is_finite()).then(|| -k.signum() * side)
-}
-
 /// How many turns the listed ring makes round `circle`'s centre in the direction of
 /// travel `dir`: from each start to the next listed one (the last to the first), the angle
 /// ahead in `[0, 2 pi)`, summed over the ring, in turns. 1 when the listed order is the order
@@ -1201,66 +1147,6 @@ fn team_verdict(
             },
         ),
     }
-}
-
-/// Two vehicles whose speed envelopes share no speed ([`disjoint_envelopes`]): vehicle
-/// `fast`'s slowest command is above vehicle `slow`'s fastest.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DisjointEnvelopes {
-    /// The vehicle with the largest `v_min_i` (the first in the listed order).
-    pub fast: usize,
-    /// Its `v_min_i`, m/s.
-    pub fast_v_min_mps: f64,
-    /// The vehicle with the smallest `v_max_i` (the first in the listed order).
-    pub slow: usize,
-    /// Its `v_max_i`, m/s.
-    pub slow_v_max_mps: f64,
-}
-
-impl DisjointEnvelopes {
-    /// Why the team fails, naming both vehicles and the keys.
-    pub fn reason(&self) -> String {
-        format!(
-            "no speed is common to every vehicle's envelope: vehicle {}'s slowest command (v_min = {} m/s) is above vehicle {}'s fastest (v_max = {} m/s; team.vehicles, team.v_min_mps, team.v_max_mps), so the gaps cannot settle whatever the law: vehicle {} gains at least {} m/s on vehicle {} and laps it (robots pass through each other)",
-            self.fast,
-            Echo(self.fast_v_min_mps),
-            self.slow,
-            Echo(self.slow_v_max_mps),
-            self.fast,
-            Num(self.fast_v_min_mps - self.slow_v_max_mps),
-            self.slow
-        )
-    }
-}
-
-/// Two vehicles of `team` with no common speed, or `None` (issue 32, att32d-1). A spread team
-/// on a closed isoline keeps its gaps only if every vehicle moves at one common speed `V` in
-/// steady state (each gap's rate is `v_{i+1} - v_i`, and the gaps sum to the isoline's
-/// length): so `V` must lie in every envelope, `max_i v_min_i <= V <= min_i v_max_i`. When
-/// `max_i v_min_i > min_i v_max_i` no such `V` exists: the vehicle with the largest `v_min`
-/// gains at least the difference on the one with the smallest `v_max`, whatever the spacing
-/// law commands, and laps it. `check` said `holds` and the robots passed through each other
-/// (closest approach 1.3e-4 m).
-pub fn disjoint_envelopes(team: &TeamSpec) -> Option<DisjointEnvelopes> {
-    if team.count() < 2 || team.vehicles.is_empty() {
-        return None;
-    }
-    let (mut fast, mut slow) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
-    for i in 0..team.count() {
-        let v = team.speeds(i);
-        if v.min_mps > fast.1 {
-            fast = (i, v.min_mps);
-        }
-        if v.max_mps < slow.1 {
-            slow = (i, v.max_mps);
-        }
-    }
-    (fast.1 > slow.1).then_some(DisjointEnvelopes {
-        fast: fast.0,
-        fast_v_min_mps: fast.1,
-        slow: slow.0,
-        slow_v_max_mps: slow.1,
-    })
 }
 
 impl TeamCheckReport {

@@ -2,7 +2,7 @@
 //! `range_balance` with unequal nominal speeds solved on a known circle (docs/TEAMS.md, "Per-vehicle
 //! overrides"), and the arcs that vehicles with no speed room (`v_min_i = v_max_i`) keep.
 
-use super::{common_speed, start_angle, travel_direction};
+use crate::check::team_ring::{common_speed, disjoint_envelopes, start_angle, travel_direction};
 use crate::spec::TeamSpec;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
@@ -11,7 +11,7 @@ use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
 use std::f64::consts::TAU;
 
-use super::super::setup::Law;
+use crate::check::setup::Law;
 
 /// `range_balance`'s equilibrium with unequal nominal speeds on a known circle: every vehicle
 /// flies one speed `V`, so vehicle `i`'s range ahead exceeds its range behind by
@@ -102,7 +102,7 @@ pub(super) fn pinned_arcs_claim(
     s: &Scenario,
     l: &Law,
     team: &TeamSpec,
-) -> Option<(super::Verdict, String)> {
+) -> Option<(crate::check::Verdict, String)> {
     let n = team.count();
     let ids = pinned(team);
     if ids.len() < 2 || ids.len() == n || team.nominal_speeds_mps().len() != 1 {
@@ -126,7 +126,7 @@ pub(super) fn pinned_arcs_claim(
     let even = TeamMetricsConfig::default().even_gap_cv;
     (cv > even).then(|| {
         (
-            super::Verdict::Fails,
+            crate::check::Verdict::Fails,
             format!(
                 "vehicles {} have no speed room ({}): each flies its one speed whatever {} commands, so the arc from each to the next of them along the ring stays as deployed, and the vehicles between can at best share it evenly: a gap CV of {} > {} at best (even spacing is not reached)",
                 ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", "),
@@ -152,7 +152,7 @@ pub(super) fn shifted_equilibrium(team: &TeamSpec, flown_m: f64) -> Option<Shift
     if k_v <= 0.0 || n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() > 1 {
         return None;
     }
-    if !(flown_m.is_finite() && flown_m > 0.0) || super::disjoint_envelopes(team).is_some() {
+    if !(flown_m.is_finite() && flown_m > 0.0) || disjoint_envelopes(team).is_some() {
         return None;
     }
     let mean = team.ideal_speed_mps();
@@ -233,7 +233,7 @@ pub(super) fn shifted_equilibrium(team: &TeamSpec, flown_m: f64) -> Option<Shift
 pub(super) fn shifted_claim(
     team: &TeamSpec,
     eq: &ShiftedEquilibrium,
-) -> Option<(super::Verdict, String)> {
+) -> Option<(crate::check::Verdict, String)> {
     let SpacingLaw::RangeBalance { gain_per_s: k_v } = team.law else {
         return None;
     };
@@ -258,7 +258,7 @@ pub(super) fn shifted_claim(
             let v0 = team.speeds(i).nominal_mps;
             let best = v0 + gap.signum() * k_v * eq.largest_range_m;
             Some((
-                super::Verdict::Fails,
+                crate::check::Verdict::Fails,
                 format!(
                     "{intro}; round the ring these differences need ranges {} m apart, {}, so no equilibrium exists: the gaps never stand still, the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer",
                     Num(eq.range_span_m),
@@ -275,7 +275,7 @@ pub(super) fn shifted_claim(
             ))
         }
         "past_half_circle" => Some((
-            super::Verdict::NotApplicable,
+            crate::check::Verdict::NotApplicable,
             format!(
                 "{intro}; the ranges this needs put one gap past half the circle, where the range shrinks as the gap grows, so the linear loop does not describe the equilibrium; run it to see whether the team settles"
             ),
@@ -284,7 +284,7 @@ pub(super) fn shifted_claim(
             let widest = eq.ranges_m.iter().copied().fold(0.0, f64::max);
             (widest > m).then(|| {
                 (
-                    super::Verdict::NotApplicable,
+                    crate::check::Verdict::NotApplicable,
                     format!(
                         "{intro}; on this circle that is the ranges ({}) m (chords whose arcs sum to the circle), and team.ranging.max_range_m = {} is short of the longest, {} m: where a neighbour falls silent range_balance sees max_range_m instead, so the equilibrium the linear loop converges to does not form; run it to see where the team settles",
                         eq.ranges_m.iter().map(|r| Num(*r).to_string()).collect::<Vec<_>>().join(", "),
