@@ -4,6 +4,7 @@
 use super::setup::Law;
 use crate::spec::TeamSpec;
 use crate::Scenario;
+use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::Vec2;
 use isotrack_sim::team::arc::CircleArc;
 
