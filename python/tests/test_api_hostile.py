@@ -48,6 +48,17 @@ def test_python_controller_recorded_in_saved_run(tmp_path):
     assert name in toml.splitlines()[0]
     # Still a scenario the CLI and the package read (plot and report need it).
     isotrack.Scenario.from_file(str(d / "scenario.toml"))
+    # att46-3: and plot and report draw the run (they refused every saved Python-controller
+    # run: "summary.json's scenario is not a scenario (unknown field `class`)").
+    isotrack.plot(str(d), out=str(tmp_path / "figs"))
+    assert (tmp_path / "figs" / "trajectory.png").exists()
+    isotrack.report(str(d), out=str(tmp_path / "r.html"))
+    assert (tmp_path / "r.html").stat().st_size > 0
+    # An edited level in scenario.toml is still not this run's.
+    head, law = toml.split("[controller]", 1)
+    (d / "scenario.toml").write_text(head + "[controller]" + law.replace("\nlevel = ", "\nlevel = 1", 1))
+    with pytest.raises(isotrack.ScenarioError, match="controller.level"):
+        isotrack.plot(str(d), out=str(tmp_path / "figs2"))
     # A run of the scenario's own law says nothing of the kind.
     own = short().run()
     assert "controller" not in own.summary

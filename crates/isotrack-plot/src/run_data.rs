@@ -154,6 +154,39 @@ fn check_summary_numbers(run: &RunData) -> Result<(), String> {
         .map_err(|m| format!("summary.json: {m} (edited after the run?); re-run it"))
 }
 
+/// The summary's scenario to compare with `scenario.toml`: as recorded, but a run flown by a
+/// Python controller (`Run.save`, README "From Python": `controller = {kind = "python", class =
+/// "module.Class", level ...}`) has its `controller` read as `scenario.toml`'s built-in law with
+/// the summary's other controller keys (the level) set on it: the law in `scenario.toml` is not
+/// the one that flew (its note says so), so it cannot differ from it (att46-3: every saved
+/// Python-controller run was refused "not a scenario (unknown field `class`)").
+fn python_law_as_toml_law(run: &RunData) -> serde_json::Value {
+    let mut recorded = run.summary.scenario.clone();
+    let Some(law) = recorded
+        .get_mut("controller")
+        .and_then(|c| c.as_object_mut())
+    else {
+        return recorded;
+    };
+    if law.get("kind").and_then(|k| k.as_str()) != Some("python") {
+        return recorded;
+    }
+    let Some(mut toml_law) = serde_json::to_value(run.scenario.file())
+        .ok()
+        .and_then(|f| f.get("controller").and_then(|c| c.as_object()).cloned())
+    else {
+        return recorded;
+    };
+    for (k, v) in law
+        .iter()
+        .filter(|(k, _)| !matches!(k.as_str(), "kind" | "class"))
+    {
+        toml_law.insert(k.clone(), v.clone());
+    }
+    *law = toml_law;
+    recorded
+}
+
 /// `scenario.toml` against the resolved scenario `summary.json` records (att36-5): the run
 /// flew the summary's; a `scenario.toml` edited after the run (another level, field, speed,
 /// steady fraction ...) drew the run against a scenario it never flew, and an edited
@@ -180,8 +213,8 @@ fn check_scenario_is_runs(run: &RunData) -> Result<(), String> {
     {
         return Err(not_runs("is empty".into()));
     }
-    let file: isotrack_scenario::ScenarioFile =
-        serde_json::from_value(run.summary.scenario.clone()).map_err(|e| {
+    let file: isotrack_scenario::ScenarioFile = serde_json::from_value(python_law_as_toml_law(run))
+        .map_err(|e| {
             not_runs(format!(
                 "is not a scenario ({})",
                 isotrack_scenario::load::clip(&e.to_string())
