@@ -29,16 +29,7 @@ pub(crate) fn start_angle(team: &TeamSpec, circle: CircleArc, i: usize) -> Optio
 /// speeds' mean offset is zero), with the vehicle whose bound sets it and which bound; `None`
 /// when the mean lies in every envelope (or none is common: [`disjoint_envelopes`]).
 pub(crate) fn common_speed(team: &TeamSpec, mean: f64) -> Option<(f64, usize, &'static str)> {
-    let (mut lo, mut hi) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
-    for i in 0..team.count() {
-        let v = team.speeds(i);
-        if v.min_mps > lo.1 {
-            lo = (i, v.min_mps);
-        }
-        if v.max_mps < hi.1 {
-            hi = (i, v.max_mps);
-        }
-    }
+    let (lo, hi) = envelope_extremes(team);
     if lo.1 > hi.1 {
         None
     } else if mean > hi.1 {
@@ -106,20 +97,28 @@ pub fn disjoint_envelopes(team: &TeamSpec) -> Option<DisjointEnvelopes> {
     if team.count() < 2 || team.vehicles.is_empty() {
         return None;
     }
-    let (mut fast, mut slow) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
-    for i in 0..team.count() {
-        let v = team.speeds(i);
-        if v.min_mps > fast.1 {
-            fast = (i, v.min_mps);
-        }
-        if v.max_mps < slow.1 {
-            slow = (i, v.max_mps);
-        }
-    }
+    let (fast, slow) = envelope_extremes(team);
     (fast.1 > slow.1).then_some(DisjointEnvelopes {
         fast: fast.0,
         fast_v_min_mps: fast.1,
         slow: slow.0,
         slow_v_max_mps: slow.1,
     })
+}
+
+/// The team's largest `v_min_i` and smallest `v_max_i`, m/s, each with the first vehicle (in the
+/// listed order) that has it: the bounds of a common speed, `max_i v_min_i <= V <= min_i v_max_i`
+/// ([`common_speed`], [`disjoint_envelopes`]).
+fn envelope_extremes(team: &TeamSpec) -> ((usize, f64), (usize, f64)) {
+    let (mut lo, mut hi) = ((0, f64::NEG_INFINITY), (0, f64::INFINITY));
+    for i in 0..team.count() {
+        let v = team.speeds(i);
+        if v.min_mps > lo.1 {
+            lo = (i, v.min_mps);
+        }
+        if v.max_mps < hi.1 {
+            hi = (i, v.max_mps);
+        }
+    }
+    (lo, hi)
 }
