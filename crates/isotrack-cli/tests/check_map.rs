@@ -931,3 +931,104 @@ fn sigterm_and_sighup_during_verify_exit_128_plus_the_signal() {
         assert!(text.contains("verify: PARTIAL (interrupted)"), "{text}");
     }
 }
+
+/// att46-12: `check --map --verify N --out M` into M's own earlier chart, interrupted (exit
+/// 130) before its chart is written, removed the earlier `verify.csv` up front while the
+/// earlier `stability_map.csv` and figures stayed: a chart without its verification. The
+/// earlier `verify.csv` now goes only as the new chart's table replaces the earlier one, in
+/// the same step. The signal comes at a controlled point: as soon as the second command holds
+/// M's lock (a 200x200 chart is then still being computed). After exit 130 either the earlier
+/// chart's table and its `verify.csv` are there byte for byte, or the chart's table is new and
+/// the earlier `verify.csv` is gone; no temporary nor lock file is left.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_before_the_new_chart_keeps_the_earlier_verify_csv() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let sc = scenario();
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = false;
+    for attempt in 0..4 {
+        let m = d.path().join(format!("M{attempt}"));
+        let ms = m.display().to_string();
+        let first = [
+            "check",
+            sc.as_str(),
+            "--map",
+            "--map-size",
+            "8x8",
+            "--verify",
+            "2",
+            "--threads",
+            "1",
+            "--out",
+            ms.as_str(),
+        ];
+        let o = isotrack_within(&first, 120);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let (csv, verify) = (m.join("stability_map.csv"), m.join("verify.csv"));
+        let (csv0, verify0) = (
+            std::fs::read(&csv).unwrap(),
+            std::fs::read(&verify).unwrap(),
+        );
+        let lock = m.join(".isotrack.lock");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args([
+                "check",
+                sc.as_str(),
+                "--map",
+                "--map-size",
+                "200x200",
+                "--verify",
+                "4",
+                "--threads",
+                "1",
+                "--out",
+                ms.as_str(),
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let t0 = Instant::now();
+        while !lock.exists() && child.try_wait().unwrap().is_none() {
+            assert!(t0.elapsed() < Duration::from_secs(120), "never locked");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        // It may have ended first: its exit status says so below.
+        let _ = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status();
+        let o = child.wait_with_output().unwrap();
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+        let litter: Vec<String> = std::fs::read_dir(&m)
+            .unwrap()
+            .flatten()
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".tmp") || n.contains(".tmp.") || n == ".isotrack.lock")
+            .collect();
+        assert_eq!(litter, Vec::<String>::new(), "attempt {attempt}");
+        let csv1 = std::fs::read(&csv).unwrap();
+        if csv1 == csv0 {
+            caught = true;
+            assert_eq!(
+                std::fs::read(&verify).ok().as_ref(),
+                Some(&verify0),
+                "attempt {attempt}: the earlier chart lost its verify.csv"
+            );
+        } else if verify.exists() {
+            assert_ne!(
+                std::fs::read(&verify).unwrap(),
+                verify0,
+                "attempt {attempt}"
+            );
+        }
+        // The next check into M takes every file there for isotrack's.
+        let o = isotrack_within(&first, 120);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    }
+    assert!(caught, "never interrupted before the new chart");
+}

@@ -232,9 +232,14 @@ fn an_interrupted_run_out_leaves_no_lock_file_nor_temporary_trace() {
         assert_eq!(status.code(), Some(code), "{signal}: {status:?}");
         assert_eq!(temporaries(&out), Vec::<String>::new(), "{signal}");
     }
+    // The interrupted runs created their directories: removed again, empty (att46-10).
+    for code in [130, 143, 129] {
+        assert!(!d.path().join(format!("r{code}")).exists(), "r{code} left");
+    }
     // A temporary trace of a process that is gone (killed with SIGKILL, which nothing can
     // answer) is removed by the next run into the directory; another name is kept.
     let out = d.path().join("r130");
+    std::fs::create_dir(&out).unwrap();
     let mut gone = Command::new("true").spawn().unwrap();
     let pid = gone.id();
     gone.wait().unwrap();

@@ -1506,3 +1506,199 @@ fn a_data_file_replaced_during_the_run_is_named_as_read() {
     assert!(warned, "{}", s["warnings"]);
     assert!(common::stderr(&o).contains("warning: a data file changed"));
 }
+
+/// The names in `dir` starting with `prefix`, sorted (none when `dir` cannot be read).
+fn entries(dir: &Path, prefix: &str) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| e.file_name().into_string().ok())
+        .filter(|n| n.starts_with(prefix))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The `t_end_s` of the run in `law` (its summary.json), `None` without a summary.
+fn run_end_s(law: &Path) -> Option<f64> {
+    let text = std::fs::read_to_string(law.join("summary.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["t_end_s"].as_f64()
+}
+
+/// The temporary and lock files anywhere in `dir` (one level of law directories).
+fn litter(dir: &Path) -> Vec<String> {
+    let mut found = vec![];
+    for d in std::iter::once(dir.to_path_buf()).chain(
+        std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.is_dir()),
+    ) {
+        found.extend(
+            entries(&d, ".")
+                .into_iter()
+                .filter(|n| n.ends_with(".tmp") || n == ".isotrack.lock")
+                .map(|n| d.join(n).display().to_string()),
+        );
+    }
+    found
+}
+
+/// att46-10 SAFETY, att46-11: Ctrl-C during `compare --out CMP` (into CMP's own earlier
+/// comparison, or into a new CMP) at a controlled point: the moment the first law's temporary
+/// trace is renamed into place, i.e. inside the replacement of its run directory. Before the
+/// fix the interrupt removed the law's temporary files while the replacement ran: the law's
+/// earlier summary.json was gone beside its earlier trace.csv and scenario.toml (the next
+/// compare refused 73 "not an isotrack run's"), a spurious "cannot write pid/scenario.toml"
+/// was printed, and the earlier comparison.csv (still recorded as isotrack's) stayed beside
+/// a law holding the new run. Now, after exit 130: every law directory holds the earlier run
+/// whole (t_end 20 s) or the new one (1200 s), or is absent when it did not exist before; no
+/// temporary nor lock file; no error printed; `comparison.csv` is the earlier table byte for
+/// byte when no law was replaced, and is gone (its record entry too) once one was; a plain
+/// re-run into CMP succeeds.
+#[test]
+fn an_interrupted_compare_leaves_every_law_whole_and_no_stale_table() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let d = tempfile::tempdir().unwrap();
+    let laws = ["pid", "sliding_mode"];
+    let args = |cmp: &Path, duration: &str| {
+        vec![
+            "compare".to_string(),
+            SCEN.to_string(),
+            "--controllers".into(),
+            laws.join(","),
+            "--set".into(),
+            format!("sim.duration_s={duration}"),
+            "--out".into(),
+            cmp.display().to_string(),
+        ]
+    };
+    let mut caught = 0;
+    for attempt in 0..8 {
+        let cmp = d.path().join(format!("C{attempt}"));
+        let fresh = attempt % 2 == 1;
+        let table = cmp.join("comparison.csv");
+        let earlier = if fresh {
+            None
+        } else {
+            let a = args(&cmp, "20");
+            let o = isotrack_within(&a.iter().map(String::as_str).collect::<Vec<_>>(), 120);
+            assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+            Some(std::fs::read(&table).unwrap())
+        };
+        let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+            .args(args(&cmp, "1200"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The first law's temporary trace: seen, then gone (renamed into place).
+        let first = cmp.join(laws[0]);
+        let (t0, mut seen) = (Instant::now(), false);
+        while child.try_wait().unwrap().is_none() {
+            assert!(t0.elapsed() < Duration::from_secs(120), "never caught");
+            let tmp = !entries(&first, ".trace.csv.").is_empty();
+            if tmp {
+                seen = true;
+            } else if seen {
+                // It may have ended first: its exit status says so below.
+                let _ = Command::new("kill")
+                    .args(["-INT", &child.id().to_string()])
+                    .status();
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let o = child.wait_with_output().unwrap();
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            // Finished before the signal came: nothing to check here.
+            continue;
+        }
+        caught += 1;
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        assert!(
+            !err.lines().any(|l| l.starts_with("error")),
+            "attempt {attempt}: {err}"
+        );
+        assert_eq!(litter(&cmp), Vec::<String>::new(), "attempt {attempt}");
+        let mut replaced = false;
+        for law in laws {
+            let dir = cmp.join(law);
+            match run_end_s(&dir) {
+                Some(t) if t == 1200.0 => replaced = true,
+                Some(t) if t == 20.0 && !fresh => {}
+                None if fresh => assert!(
+                    !dir.exists(),
+                    "attempt {attempt}: {law} left without a run: {:?}",
+                    entries(&dir, "")
+                ),
+                other => panic!(
+                    "attempt {attempt}: {law}: t_end {other:?}, files {:?}",
+                    entries(&dir, "")
+                ),
+            }
+        }
+        let record = std::fs::read_to_string(cmp.join(".isotrack-tables.json")).unwrap_or_default();
+        if replaced {
+            assert!(
+                !table.exists(),
+                "attempt {attempt}: a table beside new runs"
+            );
+            assert!(!record.contains("comparison.csv"), "{record}");
+        } else if let Some(earlier) = &earlier {
+            assert_eq!(
+                &std::fs::read(&table).unwrap(),
+                earlier,
+                "attempt {attempt}"
+            );
+        }
+        let a = args(&cmp, "20");
+        let o = isotrack_within(&a.iter().map(String::as_str).collect::<Vec<_>>(), 120);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "attempt {attempt}: {}",
+            common::stderr(&o)
+        );
+    }
+    assert!(caught > 0, "compare was never caught replacing a law");
+}
+
+/// att46-2: `compare --out` rewrote `comparison.csv` in place (same inode), so a hard-linked
+/// copy of the earlier table silently took the new one. It is replaced as every table is (a
+/// new file renamed into place, then recorded): the copy keeps the earlier bytes, the new
+/// table is another file holding the new rows (another duration: other results), and a
+/// further compare into CMP still takes it for isotrack's.
+#[test]
+fn compare_replaces_its_table_by_rename() {
+    use std::os::unix::fs::MetadataExt;
+    let d = tempfile::tempdir().unwrap();
+    let cmp = d.path().join("H");
+    let o = compare_into(&cmp, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let table = cmp.join("comparison.csv");
+    let kept = d.path().join("kept.csv");
+    std::fs::hard_link(&table, &kept).unwrap();
+    let earlier = std::fs::read(&kept).unwrap();
+    let o = compare_into(&cmp, &["--set", "sim.duration_s=22"]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    assert_eq!(
+        std::fs::read(&kept).unwrap(),
+        earlier,
+        "the kept copy changed"
+    );
+    assert_ne!(std::fs::read(&table).unwrap(), earlier);
+    assert_ne!(
+        std::fs::metadata(&kept).unwrap().ino(),
+        std::fs::metadata(&table).unwrap().ino()
+    );
+    assert_eq!(litter(&cmp), Vec::<String>::new());
+    let o = compare_into(&cmp, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}

@@ -332,10 +332,9 @@ fn write_csv(
         w.write_record(&r).map_err(|e| cant(e.to_string()))?;
     }
     let bytes = w.into_inner().map_err(|e| cant(e.to_string()))?;
-    isotrack_runs::files::write_atomic(path, &bytes).map_err(|e| cant(e.to_string()))?;
-    // Recorded as written (att42-8): a later `check --map` tells it from the user's edit.
-    isotrack_runs::owned::record_table(path, Some(bytes.as_slice()))
-        .map_err(|e| cant(e.to_string()))
+    // Replaced by rename and recorded as written (att42-8): a later `check --map` tells it
+    // from the user's edit.
+    isotrack_runs::owned::write_table(path, &bytes).map_err(|e| cant(e.to_string()))
 }
 
 /// Computes and writes the chart (and `--verify`), returns what was written.
@@ -376,12 +375,28 @@ pub fn write_map(
     });
     let map = StabilityMap::from_cells(&family, grid, cells);
     // The chart is written before any verification run starts: an interrupted --verify keeps
-    // it (the figure without the runs' marks).
-    write_csv(
-        &out.csv,
-        &MAP_COLUMNS,
-        (0..map.cells.len()).map(|i| cell_row(&map, i)),
-    )?;
+    // it (the figure without the runs' marks). `verify.csv` belongs to the chart it was made
+    // with: an earlier one is removed as the chart's table is replaced, in the same step an
+    // interrupt never cuts (att46-12: removed up front, Ctrl-C before the new chart was
+    // written left the earlier chart without its verify.csv).
+    let removed = isotrack_runs::cleanup::whole(|| {
+        let removed = isotrack_runs::owned::remove_table(&out.verify_csv).map_err(|e| Failure {
+            code: exit::CANTCREAT,
+            message: format!("cannot remove {}: {e}", out.verify_csv.display()),
+        })?;
+        write_csv(
+            &out.csv,
+            &MAP_COLUMNS,
+            (0..map.cells.len()).map(|i| cell_row(&map, i)),
+        )?;
+        Ok::<bool, Failure>(removed)
+    })?;
+    if removed {
+        errln!(
+            "note: removed {} from an earlier check --map (it described another chart)",
+            out.verify_csv.display()
+        );
+    }
     let mut files = vec![out.csv.display().to_string()];
     files.extend(out.draw(&map, &[])?);
     let (verify, verify_runs, far) = match args.verify {
@@ -550,8 +565,7 @@ fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
 
 /// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
 /// `verify.csv`), none of them an input nor a file of the user's (a table or figure isotrack
-/// did not write: [`refuse_foreign_tables`], the figures' mark); an earlier `verify.csv`
-/// removed.
+/// did not write: [`refuse_foreign_tables`], the figures' mark). Nothing in it is changed.
 fn open_map_dir(
     args: &CheckArgs,
     scenario: &Scenario,
@@ -569,9 +583,10 @@ fn open_map_dir(
     let csv_path = output_path(dir, "stability_map.csv", &input)?;
     let png_path = output_path(dir, "stability_map.png", &input)?;
     let svg_path = output_path(dir, "stability_map.svg", &input)?;
-    // `verify.csv` belongs to the chart it was made with: an earlier run's is removed before
-    // anything is written (without --verify it would sit beside a chart it does not describe;
-    // with --verify and an interruption, beside a chart it was not made for).
+    // `verify.csv` belongs to the chart it was made with: an earlier run's is removed as the
+    // new chart's table replaces the earlier one ([`write_map`]; without --verify it would sit
+    // beside a chart it does not describe; with --verify and an interruption, beside a chart
+    // it was not made for).
     let verify_path = output_path(dir, "verify.csv", &input)?;
     // att41-11: whose files are these, before anything is computed or removed? A table no
     // record shows isotrack wrote as it is, or a figure without isotrack's mark (or edited
@@ -585,15 +600,6 @@ fn open_map_dir(
             code: exit::CANTCREAT,
             message,
         })?;
-    }
-    if verify_path.exists() {
-        std::fs::remove_file(&verify_path).map_err(|e| cant(&verify_path, e.to_string()))?;
-        isotrack_runs::owned::record_table(&verify_path, None)
-            .map_err(|e| cant(&verify_path, e.to_string()))?;
-        errln!(
-            "note: removed {} from an earlier check --map (it described another chart)",
-            verify_path.display()
-        );
     }
     Ok((lock, [csv_path, png_path, svg_path, verify_path]))
 }

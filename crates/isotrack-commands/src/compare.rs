@@ -9,7 +9,6 @@ use isotrack_runs::results::{result_cells, Column, RunRecord};
 use isotrack_scenario::schema::ControllerKind;
 use isotrack_scenario::{apply_assignments, load_scenario, Assignment, Scenario};
 use isotrack_sim::{NoTrace, RunResult};
-use std::io::Write;
 use std::path::Path;
 
 /// The columns of `comparison.csv`, in order.
@@ -144,6 +143,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         }
         None => (None, vec![]),
     };
+    let table = a.out.as_ref().map(|dir| dir.join("comparison.csv"));
     let mut law_dirs = law_dirs.into_iter();
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
     // The laws whose true error never reached the level (at any step, whatever the trace
@@ -156,7 +156,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             errln!("warning: {w}");
         }
         let r = match law_dirs.next() {
-            Some(out) => match run_into(a, &base, &s, &out) {
+            Some(out) => match run_into(a, &base, &s, &out, table.as_deref()) {
                 Ok(r) => r,
                 Err(e) => {
                     // The laws' directories not yet written: removed again where this
@@ -177,9 +177,8 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
     if !never.is_empty() {
         outln!("\n{}", never_reached_note(&base, &never));
     }
-    if let Some(dir) = &a.out {
-        let p = dir.join("comparison.csv");
-        write_comparison(&p, &results)?;
+    if let Some(p) = &table {
+        write_comparison(p, &results)?;
         outln!(
             "\nwrote {} and one run directory per controller",
             p.display()
@@ -189,12 +188,19 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
 }
 
 /// Runs law scenario `s` into its run directory `out` (compare's lock and `out`'s held): its
-/// trace, summary and scenario written, the notes `run` gives said.
+/// trace, summary and scenario written, the notes `run` gives said. The earlier
+/// `comparison.csv` at `table` (README, "Ctrl-C") is removed, with its record, in the same step
+/// an interrupt never cuts as the law's run replaces the directory's
+/// ([`isotrack_runs::cleanup::whole`]; att46-11: an interrupted compare left the earlier table,
+/// still recorded as isotrack's, beside law directories holding the new runs): until a law is
+/// replaced the earlier comparison stands whole, and from then on no table claims to describe
+/// the laws until the new one is written after the last law.
 fn run_into(
     a: &CompareArgs,
     base: &Scenario,
     s: &Scenario,
     out: &RunDir,
+    table: Option<&Path>,
 ) -> Result<RunResult, Failure> {
     // The directory's lock is held for all of them, and each law's directory is locked too:
     // a `run --out CMP/LAW` meanwhile never saw the parent's lock, both wrote the directory
@@ -208,7 +214,12 @@ fn run_into(
     if let Some(w) = summary.data_files_as_read(base.data_file_digests().clone()) {
         errln!("warning: {w}");
     }
-    out.finish(trace, &scenario_toml(s), &summary)?;
+    isotrack_runs::cleanup::whole(|| {
+        if let Some(t) = table {
+            isotrack_runs::owned::remove_table(t).map_err(|e| cant(t, e))?;
+        }
+        out.finish(trace, &scenario_toml(s), &summary)
+    })?;
     // An earlier run's figures there are not this run's: said, as `run` says it.
     crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
     Ok(r)
@@ -255,7 +266,7 @@ fn open_out(
     dir: &Path,
     base: &Scenario,
     kinds: &[ControllerKind],
-) -> Result<(crate::sweep::DirLock, Vec<RunDir>), Failure> {
+) -> Result<(OutLock, Vec<RunDir>), Failure> {
     let inputs = crate::output::input_files(Some(&a.scenario), base);
     let mut outputs = vec![dir.join("comparison.csv")];
     for kind in kinds {
@@ -271,8 +282,12 @@ fn open_out(
             });
         }
     }
+    let created = std::fs::symlink_metadata(dir).is_err();
     std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
-    let lock = crate::sweep::lock_output_dir(dir, "compare")?;
+    // A directory this created is removed again (when empty) if the compare is interrupted,
+    // after its laws' (att46-10 addendum); held with the lock.
+    let created = created.then(|| isotrack_runs::cleanup::register_dir(dir));
+    let lock = (crate::sweep::lock_output_dir(dir, "compare")?, created);
     // att44-12: `CMP/LAW` is a name compare picks: a link there (to another run elsewhere) was
     // followed and that run replaced; a link or anything but a directory is refused, named.
     for kind in kinds {
@@ -297,6 +312,13 @@ fn open_out(
     }
     Ok((lock, laws))
 }
+
+/// `--out DIR`'s lock, with DIR's registration for removal on an interrupt when this compare
+/// created it ([`isotrack_runs::cleanup::register_dir`]); both held to the end.
+type OutLock = (
+    crate::sweep::DirLock,
+    Option<isotrack_runs::cleanup::Pending>,
+);
 
 /// Refuses (73) an existing `comparison.csv` that an isotrack did not write, or that was edited
 /// since ([`isotrack_runs::owned::refuse_foreign_csv`], att39-1, att42-8, att44-4): its size and
@@ -341,10 +363,10 @@ fn print_table(results: &[(ControllerKind, RunResult)], never: &[(ControllerKind
     }
 }
 
-/// `comparison.csv` at `p`: [`COMPARISON_COLUMNS`], one row per law.
+/// `comparison.csv` at `p`: [`COMPARISON_COLUMNS`], one row per law; written as every table is
+/// ([`isotrack_runs::owned::write_table`]: a new file renamed over the old one, att46-2: it was
+/// rewritten in place, so a hard-linked copy of the earlier table changed; then recorded).
 fn write_comparison(p: &Path, results: &[(ControllerKind, RunResult)]) -> Result<(), Failure> {
-    let mut w =
-        std::io::BufWriter::new(isotrack_runs::files::create_output(p).map_err(|e| cant(p, e))?);
     let mut text = COMPARISON_COLUMNS.join(",") + "\n";
     for (k, r) in results {
         // The one row builder (isotrack-runs): the law's name, then its result's cells.
@@ -356,11 +378,8 @@ fn write_comparison(p: &Path, results: &[(ControllerKind, RunResult)]) -> Result
         text += &row.join(",");
         text += "\n";
     }
-    w.write_all(text.as_bytes())
-        .and_then(|_| w.flush())
-        .map_err(|e| cant(p, e))?;
     // Recorded as written (att42-8): a later `compare` tells it from the user's edit.
-    isotrack_runs::owned::record_table(p, Some(text.as_bytes())).map_err(|e| cant(p, e))
+    isotrack_runs::owned::write_table(p, text.as_bytes()).map_err(|e| cant(p, e))
 }
 
 /// The note under the table for the laws that never reached the isoline: what their rows

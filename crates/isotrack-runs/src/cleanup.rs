@@ -1,16 +1,25 @@
 //! Files a command removes when it is interrupted (Ctrl-C, SIGTERM): an output directory's
 //! lock file ([`crate::sweep::lock::LOCK_FILE`]) and a trace being streamed into its
 //! temporary file (`.trace.csv.PID.tmp`). Each is registered while it exists ([`register`]);
-//! the signals are [`crate::signals`]': once the command-line program has called
+//! so is a directory a command created for a run ([`register_dir`]: removed when still
+//! empty). The signals are [`crate::signals`]': once the command-line program has called
 //! [`crate::signals::remove_on_interrupt`], SIGINT, SIGTERM and SIGHUP remove every registered
 //! file ([`remove_pending`]) and end the process with 128 + the signal.
+//!
+//! A replacement that must not be cut in two (a run directory's old summary removed, its new
+//! trace, scenario and summary put in place; a table and its record) runs as one [`whole`]
+//! step: the interrupt waits for a step under way to end before it removes anything, and a
+//! step not yet begun never begins (att46-10: the cleanup removed a law's temporary trace
+//! while its run directory was being replaced, so the old summary was gone and the new one
+//! never written).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
-/// The registered files, each with its registration's number.
-static PENDING: Mutex<Vec<(u64, PathBuf)>> = Mutex::new(Vec::new());
+/// The registered paths, each with its registration's number and whether it is a directory
+/// (removed only when empty, after the files).
+static PENDING: Mutex<Vec<(u64, PathBuf, bool)>> = Mutex::new(Vec::new());
 /// The next registration's number.
 static NEXT: AtomicU64 = AtomicU64::new(0);
 
@@ -24,19 +33,76 @@ pub struct Pending {
 impl Drop for Pending {
     fn drop(&mut self) {
         let mut list = PENDING.lock().unwrap_or_else(|e| e.into_inner());
-        list.retain(|(id, _)| *id != self.id);
+        list.retain(|(id, _, _)| *id != self.id);
     }
 }
 
 /// Registers `path` to be removed if the process is interrupted before the returned
 /// [`Pending`] is dropped.
 pub fn register(path: &Path) -> Pending {
+    register_path(path, false)
+}
+
+/// Registers directory `path` (one the command created) to be removed if the process is
+/// interrupted before the returned [`Pending`] is dropped, and only if it is empty then (its
+/// registered files removed first): an interrupted command leaves no empty directory of its
+/// own behind, and never one holding a file.
+pub fn register_dir(path: &Path) -> Pending {
+    register_path(path, true)
+}
+
+fn register_path(path: &Path, dir: bool) -> Pending {
     let id = NEXT.fetch_add(1, Ordering::Relaxed);
     PENDING
         .lock()
         .unwrap_or_else(|e| e.into_inner())
-        .push((id, path.to_path_buf()));
+        .push((id, path.to_path_buf(), dir));
     Pending { id }
+}
+
+/// Held by a [`whole`] step while it runs, and by the interrupt before it removes anything.
+static WHOLE: Mutex<()> = Mutex::new(());
+
+thread_local! {
+    /// Whether this thread is inside a [`whole`] step.
+    static IN_WHOLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is inside a [`whole`] step (its files are created even while an
+/// interrupt waits for it: [`crate::files::create_output`]).
+pub fn in_whole() -> bool {
+    IN_WHOLE.with(std::cell::Cell::get)
+}
+
+/// Runs `step` as one step an interrupt never cuts: an interrupt that comes while it runs
+/// waits for it to end before it removes the registered files and exits
+/// ([`remove_pending_for_exit`]), and once an interrupt is ending the process, no step begins
+/// (this thread waits for the exit instead). For a replacement that must leave the old files
+/// or the new ones, never a mix: [`crate::rundir::RunDir::finish`], a table with its record
+/// ([`crate::owned::write_table`]). A step inside a step is part of it. Keep steps short
+/// (renames and small writes): the interrupt waits for them.
+pub fn whole<T>(step: impl FnOnce() -> T) -> T {
+    if in_whole() {
+        return step();
+    }
+    let guard = WHOLE.lock().unwrap_or_else(|e| e.into_inner());
+    if exiting() {
+        drop(guard);
+        wait_for_exit();
+    }
+    /// Clears [`IN_WHOLE`] however the step ends (a panic included).
+    struct Leave;
+    impl Drop for Leave {
+        fn drop(&mut self) {
+            IN_WHOLE.with(|c| c.set(false));
+        }
+    }
+    IN_WHOLE.with(|c| c.set(true));
+    let leave = Leave;
+    let out = step();
+    drop(leave);
+    drop(guard);
+    out
 }
 
 /// Set once an interrupt is ending the process ([`remove_pending_for_exit`]): from then on no
@@ -64,7 +130,8 @@ pub fn wait_for_exit() -> ! {
 const EXIT_GRACE: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// For an interrupt that ends the process (`crate::signals`): no output file is created from now
-/// on ([`exiting`]), every registered file is removed, and removed again after [`EXIT_GRACE`].
+/// on ([`exiting`]) and no [`whole`] step begins; a step under way is waited for; then every
+/// registered file is removed, and removed again after [`EXIT_GRACE`].
 /// The second pass is for a write that was already opening a registered file by its path when
 /// the first pass removed it (a figure's encoder, the mark rewriting it: both create the file
 /// anew): the signal is answered on its own thread while the command's thread runs on, so a
@@ -72,16 +139,23 @@ const EXIT_GRACE: std::time::Duration = std::time::Duration::from_millis(50);
 /// ctrl_c_during_plot_leaves_no_temporary_figure, under load).
 pub fn remove_pending_for_exit() {
     EXITING.store(true, Ordering::SeqCst);
+    // A step under way ends first (held to the exit: none begins after it).
+    let _whole = WHOLE.lock().unwrap_or_else(|e| e.into_inner());
     remove_pending();
     std::thread::sleep(EXIT_GRACE);
     remove_pending();
 }
 
-/// Removes every registered file (best effort: a file already gone is no error).
+/// Removes every registered file, then every registered directory that is empty (best effort:
+/// a file already gone, or a directory holding a file, is no error).
 pub fn remove_pending() {
     let list = PENDING.lock().unwrap_or_else(|e| e.into_inner());
-    for (_, p) in list.iter() {
+    for (_, p, _) in list.iter().filter(|(_, _, dir)| !dir) {
         let _ = std::fs::remove_file(p);
+    }
+    // The innermost first (registered last): `CMP/LAW` before `CMP`.
+    for (_, p, _) in list.iter().rev().filter(|(_, _, dir)| *dir) {
+        let _ = std::fs::remove_dir(p);
     }
 }
 
@@ -146,7 +220,7 @@ mod tests {
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
                 .iter()
-                .any(|(_, q)| q == p)
+                .any(|(_, q, _)| q == p)
         };
         let pa = register(&a);
         drop(register(&b));
@@ -154,6 +228,48 @@ mod tests {
         assert!(!listed(&b));
         drop(pa);
         assert!(!listed(&a));
+    }
+
+    /// A directory is listed for removal as a directory (removed only when empty, after the
+    /// files: exercised through the binary, `runs_guard.rs`
+    /// `an_interrupted_compare_leaves_every_law_whole_and_no_stale_table`) while its
+    /// [`Pending`] lives.
+    #[test]
+    fn a_directory_is_listed_as_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let law = dir.path().join("pid");
+        let kind = || {
+            PENDING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .iter()
+                .find(|(_, q, _)| *q == law)
+                .map(|(_, _, d)| *d)
+        };
+        let p = register_dir(&law);
+        assert_eq!(kind(), Some(true));
+        drop(p);
+        assert_eq!(kind(), None);
+    }
+
+    /// A [`whole`] step marks its thread for its length (a step inside it is part of it), and
+    /// the mark goes however the step ends, a panic included; no interrupt is under way here,
+    /// so every step runs.
+    #[test]
+    fn a_whole_step_marks_its_thread_while_it_runs() {
+        assert!(!in_whole());
+        let v = whole(|| {
+            assert!(in_whole());
+            whole(|| assert!(in_whole()));
+            assert!(in_whole());
+            7
+        });
+        assert_eq!(v, 7);
+        assert!(!in_whole());
+        let r = std::panic::catch_unwind(|| whole(|| panic!("step failed")));
+        assert!(r.is_err());
+        assert!(!in_whole());
+        assert_eq!(whole(|| 1), 1, "the lock is free again after a panic");
     }
 
     /// att43-14: the temporary file of [`crate::files::write_atomic`] (`report`'s page, a
@@ -171,7 +287,7 @@ mod tests {
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
                 .iter()
-                .any(|(_, q)| *q == tmp)
+                .any(|(_, q, _)| *q == tmp)
         };
         crate::files::write_atomic_with(&page, |f| {
             f.write_all(b"<html>")?;

@@ -153,9 +153,10 @@ pub fn open_regular(path: &Path, read: bool, truncate: bool) -> std::io::Result<
 
 /// The one way a command opens an output file for writing: [`open_regular`], emptied.
 pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
-    if crate::cleanup::exiting() {
+    if crate::cleanup::exiting() && !crate::cleanup::in_whole() {
         // An interrupt is removing the registered files and ending the process: a file created
-        // now would be left behind, an error would end the process with another code.
+        // now would be left behind, an error would end the process with another code. (A
+        // `cleanup::whole` step under way is waited for by the interrupt: it finishes.)
         crate::cleanup::wait_for_exit();
     }
     open_regular(path, false, true)

@@ -252,6 +252,36 @@ pub fn record_table(path: &Path, bytes: Option<&[u8]>) -> std::io::Result<()> {
     crate::files::write_atomic(&dir.join(TABLE_RECORD), text.as_bytes())
 }
 
+/// Writes table `path` as every isotrack table is written: `bytes` into a temporary file
+/// renamed over it ([`crate::files::write_atomic`]: a hard-linked copy of the old table keeps
+/// its bytes, att46-2), then recorded in the directory's [`TABLE_RECORD`] ([`record_table`]),
+/// both as one step an interrupt never cuts ([`crate::cleanup::whole`]): the table there is
+/// always the one its record holds. For a directory whose record and table
+/// [`refuse_foreign_csv`] has accepted, under the directory's lock.
+pub fn write_table(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    crate::cleanup::whole(|| {
+        crate::files::write_atomic(path, bytes)?;
+        record_table(path, Some(bytes))
+    })
+}
+
+/// Removes isotrack's table `path` (when there) and forgets it in its directory's
+/// [`TABLE_RECORD`], as one step an interrupt never cuts ([`crate::cleanup::whole`]): a table
+/// that no longer describes what is beside it (`check --map`'s `verify.csv` as the chart is
+/// replaced, `compare`'s `comparison.csv` as a law's run is). Returns whether one was there.
+/// For a table [`refuse_foreign_csv`] has accepted, under the directory's lock.
+pub fn remove_table(path: &Path) -> std::io::Result<bool> {
+    crate::cleanup::whole(|| {
+        let there = match std::fs::remove_file(path) {
+            Ok(()) => true,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
+            Err(e) => return Err(e),
+        };
+        record_table(path, None)?;
+        Ok(there)
+    })
+}
+
 /// `path` as a POSIX shell word to paste, as every message naming a file the user is to move
 /// or look at names it (att41-2: a refusal printed it raw, so a name with a line break forged
 /// its own `error:` line; att39-7: `my run;touch PWNED` was printed bare, and a

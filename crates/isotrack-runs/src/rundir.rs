@@ -297,6 +297,10 @@ pub struct RunDir {
     /// Whether [`RunDir::open`] created the directory (removed again by
     /// [`RunDir::release_unused`] when nothing was written).
     created: bool,
+    /// The directory [`RunDir::open`] created, registered to be removed (when still empty) if
+    /// the command is interrupted ([`crate::cleanup::register_dir`]: att46-10, an interrupted
+    /// `compare` into a new `--out` left its laws' empty directories behind).
+    _created_pending: Option<crate::cleanup::Pending>,
     /// The [`RUN_OUTPUTS`] in the directory when it was opened but the command's own `extra`
     /// files (`fly`'s `mavlink.tlog`, replaced as the earlier run's): not written by
     /// this command ([`RunDir::outputs_from_before`]; att39-7: told by name, not by
@@ -382,6 +386,7 @@ impl RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
+            _created_pending: created.then(|| crate::cleanup::register_dir(dir)),
             before,
         })
     }
@@ -391,7 +396,11 @@ impl RunDir {
     /// empty. An earlier run's files are left as they were.
     pub fn release_unused(self) {
         let RunDir {
-            dir, lock, created, ..
+            dir,
+            lock,
+            created,
+            _created_pending,
+            ..
         } = self;
         drop(lock);
         if created {
@@ -495,15 +504,29 @@ impl RunDir {
         summary: &Summary<S>,
     ) -> Result<(), Failure> {
         let TraceFile { writer, tmp, .. } = trace;
-        let _ = writer.finish();
-        if let Some(tmp) = &tmp {
-            let _ = std::fs::rename(tmp, self.path("trace.csv"));
-        }
-        self.remove_old_summary()?;
+        let summary = summary.to_json();
+        // One step an interrupt never cuts (as `finish_text`).
+        crate::cleanup::whole(|| {
+            let _ = writer.finish();
+            if let Some(tmp) = &tmp {
+                let _ = std::fs::rename(tmp, self.path("trace.csv"));
+            }
+            self.remove_old_summary()?;
+            self.write_scenario_and_summary(scenario_toml, &summary)
+        })
+    }
+
+    /// `scenario.toml` and then `summary.json` (last: a directory with a summary is whole),
+    /// each written atomically.
+    fn write_scenario_and_summary(
+        &self,
+        scenario_toml: &str,
+        summary: &str,
+    ) -> Result<(), Failure> {
         let resolved = self.path("scenario.toml");
         write_atomic(&resolved, scenario_toml.as_bytes()).map_err(|e| cant(&resolved, e))?;
         let p = self.path("summary.json");
-        write_atomic(&p, summary.to_json().as_bytes()).map_err(|e| cant(&p, e))
+        write_atomic(&p, summary.as_bytes()).map_err(|e| cant(&p, e))
     }
 
     /// Starts `trace.csv` written in place as the run goes, for a run watched while it flies
@@ -566,7 +589,23 @@ impl RunDir {
         self.finish_text(trace, scenario_toml, &text)
     }
 
+    /// The replacement itself, as one step an interrupt never cuts
+    /// ([`crate::cleanup::whole`]): Ctrl-C while it runs is answered once the new run is whole,
+    /// and one that came before it leaves the earlier run whole (att46-10: the interrupt
+    /// removed the temporary trace after the old summary was removed, so the directory was
+    /// left with the earlier trace and no summary, and `cannot write trace.csv` printed).
     fn finish_text(
+        &self,
+        trace: TraceFile,
+        scenario_toml: &str,
+        summary: &str,
+    ) -> Result<(), Failure> {
+        crate::cleanup::whole(|| self.replace_run(trace, scenario_toml, summary))
+    }
+
+    /// [`RunDir::finish_text`]'s step: the old summary removed, the trace renamed into place,
+    /// `scenario.toml` and `summary.json` written.
+    fn replace_run(
         &self,
         trace: TraceFile,
         scenario_toml: &str,
@@ -592,10 +631,7 @@ impl RunDir {
                 }
                 cant(&path, e)
             })?;
-        let resolved = self.path("scenario.toml");
-        write_atomic(&resolved, scenario_toml.as_bytes()).map_err(|e| cant(&resolved, e))?;
-        let p = self.path("summary.json");
-        write_atomic(&p, summary.as_bytes()).map_err(|e| cant(&p, e))
+        self.write_scenario_and_summary(scenario_toml, summary)
     }
 }
 
