@@ -1631,8 +1631,8 @@ fn an_interrupted_compare_leaves_every_law_whole_and_no_stale_table() {
         for law in laws {
             let dir = cmp.join(law);
             match run_end_s(&dir) {
-                Some(t) if t == 1200.0 => replaced = true,
-                Some(t) if t == 20.0 && !fresh => {}
+                Some(1200.0) => replaced = true,
+                Some(20.0) if !fresh => {}
                 None if fresh => assert!(
                     !dir.exists(),
                     "attempt {attempt}: {law} left without a run: {:?}",
