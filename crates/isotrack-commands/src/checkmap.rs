@@ -337,6 +337,32 @@ fn write_csv(
     isotrack_runs::owned::write_table(path, &bytes).map_err(|e| cant(e.to_string()))
 }
 
+/// Writes the chart's table `stability_map.csv`, removing an earlier `verify.csv` in the same
+/// step an interrupt never cuts ([`isotrack_runs::cleanup::whole`]): `verify.csv` belongs to
+/// the chart it was made with (att46-12: it was removed up front, so Ctrl-C before the new
+/// chart was written left the earlier chart without its verify.csv).
+fn replace_chart_table(out: &ChartFiles, map: &StabilityMap) -> Result<(), Failure> {
+    let removed = isotrack_runs::cleanup::whole(|| {
+        let removed = isotrack_runs::owned::remove_table(&out.verify_csv).map_err(|e| Failure {
+            code: exit::CANTCREAT,
+            message: format!("cannot remove {}: {e}", out.verify_csv.display()),
+        })?;
+        write_csv(
+            &out.csv,
+            &MAP_COLUMNS,
+            (0..map.cells.len()).map(|i| cell_row(map, i)),
+        )?;
+        Ok::<bool, Failure>(removed)
+    })?;
+    if removed {
+        errln!(
+            "note: removed {} from an earlier check --map (it described another chart)",
+            out.verify_csv.display()
+        );
+    }
+    Ok(())
+}
+
 /// Computes and writes the chart (and `--verify`), returns what was written.
 pub fn write_map(
     args: &CheckArgs,
@@ -375,28 +401,8 @@ pub fn write_map(
     });
     let map = StabilityMap::from_cells(&family, grid, cells);
     // The chart is written before any verification run starts: an interrupted --verify keeps
-    // it (the figure without the runs' marks). `verify.csv` belongs to the chart it was made
-    // with: an earlier one is removed as the chart's table is replaced, in the same step an
-    // interrupt never cuts (att46-12: removed up front, Ctrl-C before the new chart was
-    // written left the earlier chart without its verify.csv).
-    let removed = isotrack_runs::cleanup::whole(|| {
-        let removed = isotrack_runs::owned::remove_table(&out.verify_csv).map_err(|e| Failure {
-            code: exit::CANTCREAT,
-            message: format!("cannot remove {}: {e}", out.verify_csv.display()),
-        })?;
-        write_csv(
-            &out.csv,
-            &MAP_COLUMNS,
-            (0..map.cells.len()).map(|i| cell_row(&map, i)),
-        )?;
-        Ok::<bool, Failure>(removed)
-    })?;
-    if removed {
-        errln!(
-            "note: removed {} from an earlier check --map (it described another chart)",
-            out.verify_csv.display()
-        );
-    }
+    // it (the figure without the runs' marks).
+    replace_chart_table(&out, &map)?;
     let mut files = vec![out.csv.display().to_string()];
     files.extend(out.draw(&map, &[])?);
     let (verify, verify_runs, far) = match args.verify {
