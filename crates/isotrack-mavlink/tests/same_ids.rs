@@ -2543,7 +2543,6 @@ fn set_mode_accepted() -> MavMessage {
     MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
         command: MavCmd::MAV_CMD_DO_SET_MODE,
         result: MavResult::MAV_RESULT_ACCEPTED,
-        ..Default::default()
     })
 }
 
