@@ -57,6 +57,12 @@ pub const TWO_VEHICLES_WINDOW_S: f64 = 2.0;
 /// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
 pub const MIN_HEARTBEAT_TIMEOUT_S: f64 = 3.0;
 
+/// How long `take_control` retries the arming and the switch to OFFBOARD (every 0.5 s, at
+/// most 20 commands), s, from its first command: an accepted switch is not sent again before
+/// a heartbeat newer than the acknowledgement (PX4 beats at 1 Hz), so the tries alone would
+/// stretch to 20 heartbeats (att45f-8).
+pub const TAKE_CONTROL_S: f64 = 10.0;
+
 /// The largest step back of the vehicle's own clock (`time_boot_ms` of its `ATTITUDE`,
 /// positions, `SYSTEM_TIME`) that is not a reboot, s: a larger one means its
 /// autopilot restarted (its clock begins again at 0), and the flight ends `vehicle_lost`.
@@ -767,7 +773,10 @@ struct Flight<'a, S: ?Sized> {
     armed_since_command: bool,
     was_armed: bool,
     next_control: Instant,
+    /// With `take_control`: the arming and switch commands sent ([`TAKE_CONTROL_S`]).
     control_tries: u32,
+    /// With `take_control`: when the first of them was due ([`TAKE_CONTROL_S`] from there).
+    control_first_at: Option<Instant>,
     tel: Telemetry,
     // The sensor.
     lines: Option<UdpSocket>,
@@ -1098,6 +1107,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             was_armed: false,
             next_control: now,
             control_tries: 0,
+            control_first_at: None,
             tel: Telemetry::default(),
             lines,
             wanted,
@@ -2025,14 +2035,28 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if !ready || Instant::now() < self.next_control {
             return Ok(None);
         }
-        self.control_tries += 1;
+        if self.armed
+            && self
+                .offboard_accepted_at
+                .is_some_and(|at| self.last_heartbeat <= at)
+        {
+            // Accepted: never sent again before a heartbeat newer than the acknowledgement
+            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
+            // who switched meanwhile); nor given up before it, at the bound too (att45f-8: a
+            // vehicle that may be in OFFBOARD is commanded out of it, one that shows the
+            // pilot's mode is left in it). Its silence is a lost link ([`Flight::link_silent`]).
+            self.next_control = Instant::now() + Duration::from_millis(100);
+            return Ok(None);
+        }
         let offboard = self.firmware.name_of(FlyMode::Offboard);
-        if self.control_tries > 20 {
+        let first = *self.control_first_at.get_or_insert_with(Instant::now);
+        if self.control_tries >= 20 || first.elapsed().as_secs_f64() >= TAKE_CONTROL_S {
             self.event(format!(
-                "the vehicle did not arm or switch to {offboard} in 10 s"
+                "the vehicle did not arm or switch to {offboard} in {TAKE_CONTROL_S} s"
             ));
             return Ok(Some(FlyEnd::ControlRefused));
         }
+        self.control_tries += 1;
         // Without a mode table for this vehicle nothing is commanded, not even the arming
         // (an armed vehicle that fly cannot switch to OFFBOARD would only be disarmed again).
         let Some(p) = self.firmware.set_mode_params(FlyMode::Offboard) else {
@@ -2068,16 +2092,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
-        } else if self
-            .offboard_accepted_at
-            .is_some_and(|at| self.last_heartbeat <= at)
-        {
-            // Accepted: never sent again before a heartbeat newer than the acknowledgement
-            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
-            // who switched meanwhile). The try is not counted.
-            self.control_tries -= 1;
-            self.next_control = Instant::now() + Duration::from_millis(100);
-            return Ok(None);
         } else {
             // PX4 wants setpoints before the switch.
             self.setpoint(
