@@ -2285,8 +2285,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if from == target {
             match self.ids_frame(r) {
                 // A copy of a frame already handled, delivered again (maybe late: att33f-2):
-                // ignored entirely, never evidence, never applied.
-                (FrameKind::Copy, _) => return,
+                // never evidence, never applied; in a doubt, the link speaking all the same
+                // ([`Flight::copy_frame`]).
+                (FrameKind::Copy, _) => return self.copy_frame(&r.msg),
                 // In a doubt (a first conflict, att37-1): the link is alive, nothing else but a
                 // pilot's word a heartbeat shows (att42f-5).
                 (FrameKind::Doubt, _) => {
@@ -2440,6 +2441,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.last_link = Instant::now();
         if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
             self.beat_heard = self.last_link;
+        }
+    }
+
+    /// A frame of the vehicle's ids classed a copy ([`FrameKind::Copy`]): never evidence, never
+    /// applied, and outside a doubt nothing more (a link that doubles frames). In a doubt of
+    /// the frame counter it keeps the link alive as every frame of the doubt does
+    /// ([`Flight::doubt_frame`], an autopilot's heartbeat the vehicle's heartbeat heard): a
+    /// copy there is one in either window, and an unchanging heartbeat is identical to the
+    /// last one with its number (its next one, on a counter the doubt has not settled, may
+    /// read as that one's copy): the link speaks while a doubt is open.
+    fn copy_frame(&mut self, msg: &MavMessage) {
+        if self.seq_watch.in_doubt() {
+            self.doubt_frame(msg);
         }
     }
 
@@ -3763,7 +3777,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     return Ok(None);
                 }
                 if kind == FrameKind::Copy {
-                    // Delivered again: ignored entirely.
+                    // Delivered again: no answer, nothing applied ([`Flight::copy_frame`]).
+                    self.copy_frame(&r.msg);
                     continue;
                 }
                 if matches!(&r.msg, MavMessage::HEARTBEAT(h) if !is_autopilot(h)) {

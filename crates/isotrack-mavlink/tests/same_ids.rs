@@ -2583,3 +2583,64 @@ fn after_a_proof_a_pilots_mode_is_no_reason_to_retry() {
     assert_eq!(holds.len(), 1, "{c:?} {:?}", r.events);
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
 }
+
+/// fly47: in the failsafe's retries (Ctrl-C at 1.5 s; HOLD never acknowledged, the vehicle
+/// stays armed in OFFBOARD), the vehicle's counter comes back 12 numbers behind at 2 s onto
+/// numbers seen (a burst lost: a doubt), and its unchanging 1 Hz heartbeat always carries the
+/// number of its last one before the doubt: identical to it, a copy in the old window. Its
+/// other frames (10 a second, on its own schedule) keep the doubt open 4.8 s (48 frames). A
+/// heartbeat heard while a doubt is open is the link speaking: the retries go to their bound
+/// (6 s). Before: "no heartbeat from the vehicle for 3 s" at 4 s, the retries ended "link
+/// lost".
+#[test]
+fn heartbeats_heard_as_copies_in_a_doubt_keep_the_link() {
+    let mut next_s = 0.0f64;
+    let mut k = 0u32;
+    let mut beat_seq: Option<u8> = None;
+    let (r, _) = in_the_retries(move |t, _, a| {
+        let mut out = Vec::new();
+        // One frame every 100 ms of wall time, however the turns go (caught up).
+        while next_s <= t {
+            let ms = 1000 + (next_s * 1000.0) as u32;
+            let mut msgs = Vec::new();
+            if k == 20 {
+                // The counter comes back onto numbers seen: a first conflict, a doubt.
+                a.seq = a.seq.wrapping_sub(12);
+            }
+            msgs.push(if k % 2 == 0 {
+                iso_s(ms, 9.5)
+            } else {
+                position(ms, 0.0)
+            });
+            out.extend(datagrams(a.frames(&msgs)));
+            if k % 10 == 0 {
+                let hb = heartbeat(6);
+                match beat_seq {
+                    // From the doubt on, on the number of the last one before it.
+                    Some(s) if k >= 20 => {
+                        let mut copy = Sender { seq: s, ids: a.ids };
+                        out.extend(datagrams(copy.frames(&[hb])));
+                    }
+                    _ => {
+                        beat_seq = Some(a.seq);
+                        out.extend(datagrams(a.frames(&[hb])));
+                    }
+                }
+            }
+            k += 1;
+            next_s += 0.1;
+        }
+        from_socket(0, out)
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(
+        way_out_end(&r).contains("retries' bound reached"),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("no heartbeat")),
+        "{:?}",
+        r.events
+    );
+}
