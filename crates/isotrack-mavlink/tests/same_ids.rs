@@ -2613,13 +2613,13 @@ fn heartbeats_heard_as_copies_in_a_doubt_keep_the_link() {
                 // The counter comes back onto numbers seen: a first conflict, a doubt.
                 a.seq = a.seq.wrapping_sub(12);
             }
-            msgs.push(if k % 2 == 0 {
+            msgs.push(if k.is_multiple_of(2) {
                 iso_s(ms, 9.5)
             } else {
                 position(ms, 0.0)
             });
             out.extend(datagrams(a.frames(&msgs)));
-            if k % 10 == 0 {
+            if k.is_multiple_of(10) {
                 let hb = heartbeat(6);
                 match beat_seq {
                     // From the doubt on, on the number of the last one before it.
