@@ -57,6 +57,12 @@ pub const TWO_VEHICLES_WINDOW_S: f64 = 2.0;
 /// while its other messages come, s: `timeout_s`, but at least this (autopilots beat at 1 Hz).
 pub const MIN_HEARTBEAT_TIMEOUT_S: f64 = 3.0;
 
+/// How long `take_control` retries the arming and the switch to OFFBOARD (every 0.5 s, at
+/// most 20 commands), s, from its first command: an accepted switch is not sent again before
+/// a heartbeat newer than the acknowledgement (PX4 beats at 1 Hz), so the tries alone would
+/// stretch to 20 heartbeats (att45f-8).
+pub const TAKE_CONTROL_S: f64 = 10.0;
+
 /// The largest step back of the vehicle's own clock (`time_boot_ms` of its `ATTITUDE`,
 /// positions, `SYSTEM_TIME`) that is not a reboot, s: a larger one means its
 /// autopilot restarted (its clock begins again at 0), and the flight ends `vehicle_lost`.
@@ -344,6 +350,9 @@ struct AnswerSeen {
     /// retries (none is sent meanwhile, and a second sender proven after it stops them), but
     /// never the vehicle's answer: a heartbeat applied after the doubt starts its span over.
     in_doubt: bool,
+    /// The doubts of the frame counter before the one it was heard in: a heartbeat applied
+    /// after it that contradicts it has a doubt between (att45f-4).
+    doubts: u64,
 }
 
 /// What the failsafe's retries have seen of the vehicle's heartbeats so far.
@@ -360,6 +369,20 @@ struct RetryWatch {
     /// A heartbeat of the ids older than the last applied was heard during the retries (a
     /// second counter's, or one sender's late one): a change they show is no sure pilot's.
     older: bool,
+}
+
+impl RetryWatch {
+    /// A heartbeat not applied (older than the last applied, or in a doubt of the frame
+    /// counter) showing `answer`: if it shows nothing yet, or the other kind of answer than
+    /// the one awaited, that one has not stood uncontradicted: its span starts again.
+    fn contradicted_by(&mut self, answer: &Option<Answer>) {
+        let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
+        if let Some(seen) = self.seen.as_mut() {
+            if answer.is_none() || seen.pilots != pilots {
+                seen.at = Instant::now();
+            }
+        }
+    }
 }
 
 /// Options of [`run_fly`].
@@ -750,7 +773,10 @@ struct Flight<'a, S: ?Sized> {
     armed_since_command: bool,
     was_armed: bool,
     next_control: Instant,
+    /// With `take_control`: the arming and switch commands sent ([`TAKE_CONTROL_S`]).
     control_tries: u32,
+    /// With `take_control`: when the first of them was due ([`TAKE_CONTROL_S`] from there).
+    control_first_at: Option<Instant>,
     tel: Telemetry,
     // The sensor.
     lines: Option<UdpSocket>,
@@ -1081,6 +1107,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             was_armed: false,
             next_control: now,
             control_tries: 0,
+            control_first_at: None,
             tel: Telemetry::default(),
             lines,
             wanted,
@@ -1305,23 +1332,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             self.next_setpoint = now + self.period;
         }
-        if now.duration_since(self.last_link) > self.timeout {
-            self.event(format!(
-                "no message from the vehicle for {} s",
-                self.opts.timeout_s
-            ));
-            return Ok(Some(FlyEnd::LinkLost));
-        }
-        let heartbeat_timeout = self
-            .timeout
-            .max(Duration::from_secs_f64(MIN_HEARTBEAT_TIMEOUT_S));
-        if self.target.is_some() && now.duration_since(self.beat_heard) > heartbeat_timeout {
-            // Other messages may still come: without heartbeats the vehicle's mode and arming
-            // (a pilot's take-over, a disarm, the autopilot's own failsafe) are unknown.
-            self.event(format!(
-                "no heartbeat from the vehicle for {} s (other messages may still come): its mode and arming are unknown",
-                heartbeat_timeout.as_secs_f64()
-            ));
+        if let Some(what) = self.link_silent() {
+            self.event(what);
             return Ok(Some(FlyEnd::LinkLost));
         }
         if let Some(what) = self.clock.fault.take() {
@@ -1350,6 +1362,34 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(Some(FlyEnd::SensorLost));
         }
         Ok(None)
+    }
+
+    /// Whether the link is lost, in control and in the failsafe's retries alike (att45f-3):
+    /// no message from the vehicle for `--timeout-s`, or no autopilot's heartbeat of its ids
+    /// for that (at least [`MIN_HEARTBEAT_TIMEOUT_S`]; other messages may still come, a ground
+    /// station's heartbeat with the ids among them, which says nothing of the vehicle's link),
+    /// in words.
+    fn link_silent(&self) -> Option<String> {
+        let now = Instant::now();
+        if now.duration_since(self.last_link) > self.timeout {
+            return Some(format!(
+                "no message from the vehicle for {} s",
+                self.opts.timeout_s
+            ));
+        }
+        let heartbeat_timeout = self
+            .timeout
+            .max(Duration::from_secs_f64(MIN_HEARTBEAT_TIMEOUT_S));
+        // Without heartbeats the vehicle's mode and arming (a pilot's take-over, a disarm, the
+        // autopilot's own failsafe) are unknown.
+        (self.target.is_some() && now.duration_since(self.beat_heard) > heartbeat_timeout).then(
+            || {
+                format!(
+                    "no heartbeat from the vehicle for {} s (other messages may still come): its mode and arming are unknown",
+                    heartbeat_timeout.as_secs_f64()
+                )
+            },
+        )
     }
 
     /// Logs the raw MAVLink log's first write error at once (a disk that filled mid-flight):
@@ -1995,14 +2035,28 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if !ready || Instant::now() < self.next_control {
             return Ok(None);
         }
-        self.control_tries += 1;
+        if self.armed
+            && self
+                .offboard_accepted_at
+                .is_some_and(|at| self.last_heartbeat <= at)
+        {
+            // Accepted: never sent again before a heartbeat newer than the acknowledgement
+            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
+            // who switched meanwhile); nor given up before it, at the bound too (att45f-8: a
+            // vehicle that may be in OFFBOARD is commanded out of it, one that shows the
+            // pilot's mode is left in it). Its silence is a lost link ([`Flight::link_silent`]).
+            self.next_control = Instant::now() + Duration::from_millis(100);
+            return Ok(None);
+        }
         let offboard = self.firmware.name_of(FlyMode::Offboard);
-        if self.control_tries > 20 {
+        let first = *self.control_first_at.get_or_insert_with(Instant::now);
+        if self.control_tries >= 20 || first.elapsed().as_secs_f64() >= TAKE_CONTROL_S {
             self.event(format!(
-                "the vehicle did not arm or switch to {offboard} in 10 s"
+                "the vehicle did not arm or switch to {offboard} in {TAKE_CONTROL_S} s"
             ));
             return Ok(Some(FlyEnd::ControlRefused));
         }
+        self.control_tries += 1;
         // Without a mode table for this vehicle nothing is commanded, not even the arming
         // (an armed vehicle that fly cannot switch to OFFBOARD would only be disarmed again).
         let Some(p) = self.firmware.set_mode_params(FlyMode::Offboard) else {
@@ -2038,16 +2092,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
             self.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, [1.0, 0.0, 0.0])?;
-        } else if self
-            .offboard_accepted_at
-            .is_some_and(|at| self.last_heartbeat <= at)
-        {
-            // Accepted: never sent again before a heartbeat newer than the acknowledgement
-            // says what the vehicle did (with a 1 Hz heartbeat a retry would override a pilot
-            // who switched meanwhile). The try is not counted.
-            self.control_tries -= 1;
-            self.next_control = Instant::now() + Duration::from_millis(100);
-            return Ok(None);
         } else {
             // PX4 wants setpoints before the switch.
             self.setpoint(
@@ -2239,11 +2283,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let mut number = None;
         let mut kind = None;
         if from == target {
-            self.vehicle_address(r.from);
-            match self.vehicle_sender(r) {
+            match self.ids_frame(r) {
                 // A copy of a frame already handled, delivered again (maybe late: att33f-2):
-                // ignored entirely, never evidence, never applied.
-                (FrameKind::Copy, _) => return,
+                // never evidence, never applied; in a doubt, the link speaking all the same
+                // ([`Flight::copy_frame`]).
+                (FrameKind::Copy, _) => return self.copy_frame(&r.msg),
                 // In a doubt (a first conflict, att37-1): the link is alive, nothing else but a
                 // pilot's word a heartbeat shows (att42f-5).
                 (FrameKind::Doubt, _) => {
@@ -2260,13 +2304,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // The measurement may come from another component of the vehicle's system.
         if from.0 != target.0 {
             return;
-        }
-        // The reboot test reads new frames only: a late one (or a copy) is one sender's
-        // reordered past, never its clock begun again (att37-2).
-        if kind == Some(FrameKind::New) {
-            if let Some(ms) = vehicle_time_ms(&r.msg) {
-                self.vehicle_time(ms);
-            }
         }
         if let MavMessage::NAMED_VALUE_FLOAT(n) = &r.msg {
             if !self.wanted.is_empty() && name_of(&n.name[..]) == self.wanted {
@@ -2356,6 +2393,46 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// A frame of the vehicle's ids through every check of a second sender or a reboot, one
+    /// and the same in control ([`Flight::handle`]) and in the failsafe's retries
+    /// ([`Flight::await_way_out`], att45f-1/-2/-10): its source address
+    /// ([`Flight::vehicle_address`]), its number on their frame counter
+    /// ([`Flight::vehicle_sender`]); then, unless a copy or in a doubt, a new frame's clock
+    /// ([`Flight::vehicle_time`]: the reboot test reads new frames only, a late one or a copy
+    /// is one sender's reordered past, never its clock begun again, att37-2) and a position's
+    /// jump ([`Flight::position_jumps`]). Returns what the frame is and its unwrapped number.
+    fn ids_frame(&mut self, r: &Received) -> (FrameKind, u64) {
+        self.vehicle_address(r.from);
+        let (kind, number) = self.vehicle_sender(r);
+        if matches!(kind, FrameKind::Copy | FrameKind::Doubt) {
+            return (kind, number);
+        }
+        if kind == FrameKind::New {
+            if let Some(ms) = vehicle_time_ms(&r.msg) {
+                self.vehicle_time(ms);
+            }
+        }
+        if let Some((ms, p)) = self.position_of(&r.msg) {
+            self.position_jumps(ms, p);
+        }
+        (kind, number)
+    }
+
+    /// The position (x east, y north, m) a frame of the vehicle's ids gives, stamped with its
+    /// clock: a finite `LOCAL_POSITION_NED`'s, or a `GLOBAL_POSITION_INT`'s while no local
+    /// position has come ([`Flight::global_local`]).
+    fn position_of(&mut self, msg: &MavMessage) -> Option<(u32, (f64, f64))> {
+        match msg {
+            MavMessage::LOCAL_POSITION_NED(p) if p.x.is_finite() && p.y.is_finite() => {
+                Some((p.time_boot_ms, (p.y as f64, p.x as f64)))
+            }
+            MavMessage::GLOBAL_POSITION_INT(g) if !self.tel.local_seen => {
+                self.global_local(g).map(|p| (g.time_boot_ms, p))
+            }
+            _ => None,
+        }
+    }
+
     /// A frame of the vehicle's ids in a doubt ([`FrameKind::Doubt`]: a first conflict of
     /// their frame numbers, two senders not proven): the link is alive; nothing in it is the
     /// vehicle's state or a confirmation (a heartbeat in it showing a pilot's word counts as
@@ -2364,6 +2441,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.last_link = Instant::now();
         if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
             self.beat_heard = self.last_link;
+        }
+    }
+
+    /// A frame of the vehicle's ids classed a copy ([`FrameKind::Copy`]): never evidence, never
+    /// applied, and outside a doubt nothing more (a link that doubles frames). In a doubt of
+    /// the frame counter it keeps the link alive as every frame of the doubt does
+    /// ([`Flight::doubt_frame`], an autopilot's heartbeat the vehicle's heartbeat heard): a
+    /// copy there is one in either window, and an unchanging heartbeat is identical to the
+    /// last one with its number (its next one, on a counter the doubt has not settled, may
+    /// read as that one's copy): the link speaks while a doubt is open.
+    fn copy_frame(&mut self, msg: &MavMessage) {
+        if self.seq_watch.in_doubt() {
+            self.doubt_frame(msg);
         }
     }
 
@@ -2886,6 +2976,31 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         (self.armed_since_command && !armed) || (before.is_some() && mode != before && !offboard)
     }
 
+    /// A pilot's `word` awaiting confirmation, then a heartbeat applied showing `state`
+    /// instead, with `n` doubts of the frame counter since the word: no change and back of one
+    /// sender, two senders (att39f-3; in the failsafe's retries too, att45f-4).
+    fn word_contradicted(&mut self, word: &str, state: &str, n: u64) {
+        let t = self.target.unwrap_or_default();
+        self.second_sender_seen(format!(
+            "two vehicles with the ids (system {}, component {}): the heartbeats showed it {word}, then {state}, with {n} doubt{} of the frame counter between (a pilot's change and back comes from one counter with no doubt between; a second sender's heartbeat taken as the vehicle's, then the vehicle's own, with one): which to fly is ambiguous",
+            t.0,
+            t.1,
+            if n == 1 { "" } else { "s" }
+        ));
+    }
+
+    /// What a heartbeat shows, in words: `armed in MANUAL`, `disarmed in an unknown mode`.
+    fn shown_state(&self, h: &HEARTBEAT_DATA) -> String {
+        let armed = h
+            .base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        format!(
+            "{} in {}",
+            if armed { "armed" } else { "disarmed" },
+            mode_of(h).map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
+        )
+    }
+
     /// A heartbeat of the vehicle's ids in a doubt of their frame counter ([`FrameKind::Doubt`]):
     /// never the vehicle's state, but if it shows a pilot's word ([`Flight::is_pilots_word`]) it
     /// counts as one awaiting confirmation (att42f-5, [`LeaveSeen`]), as if applied: nothing more
@@ -2903,11 +3018,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         if self.leave_seen.is_some() || !is_autopilot(h) || !self.is_pilots_word(mode, armed) {
             return;
         }
-        let what = format!(
-            "{} in {}",
-            if armed { "armed" } else { "disarmed" },
-            mode.map_or("an unknown mode".into(), |c| self.firmware.mode_name(c))
-        );
+        let what = self.shown_state(h);
         self.leave_seen = Some(LeaveSeen {
             at: Instant::now(),
             span: self.confirm_span(),
@@ -2949,13 +3060,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             .filter(|l| shows_control && !l.confirmed && doubts > l.doubts)
             .map(|l| (l.what.clone(), doubts - l.doubts))
         {
-            let t = self.target.unwrap_or_default();
-            self.second_sender_seen(format!(
-                "two vehicles with the ids (system {}, component {}): the heartbeats showed it {word}, then {state}, with {n} doubt{} of the frame counter between (a pilot's change and back comes from one counter with no doubt between; a second sender's heartbeat taken as the vehicle's, then the vehicle's own, with one): which to fly is ambiguous",
-                t.0,
-                t.1,
-                if n == 1 { "" } else { "s" }
-            ));
+            self.word_contradicted(&word, &state, n);
             return;
         }
         match (&mut self.leave_seen, shows_control) {
@@ -3065,19 +3170,28 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// A `GLOBAL_POSITION_INT` while no local position has come: projected about the first fix.
     fn global_position(&mut self, g: &GLOBAL_POSITION_INT_DATA) {
-        let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
-        if lat.abs() <= 90.0 && lon.abs() <= 180.0 && !(g.lat == 0 && g.lon == 0) {
-            let o = *self.tel.global_origin.get_or_insert(crate::geo::Home {
-                lat_deg: lat,
-                lon_deg: lon,
-                alt_m: 0.0,
-            });
+        if let Some(p) = self.global_local(g) {
             self.altitude(g.relative_alt as f64 * 1e-3, g.time_boot_ms);
-            self.position(g.time_boot_ms, o.to_local_m(lat, lon));
+            self.position(g.time_boot_ms, p);
         } else if self.tel.global_origin.is_some() {
             // No fix (or out of range) after positions: marked in the trace.
             self.record.no_position(g.time_boot_ms);
         }
+    }
+
+    /// A `GLOBAL_POSITION_INT`'s fix projected about the first one (x east, y north, m), if it
+    /// is one (in range, not 0, 0).
+    fn global_local(&mut self, g: &GLOBAL_POSITION_INT_DATA) -> Option<(f64, f64)> {
+        let (lat, lon) = (g.lat as f64 * 1e-7, g.lon as f64 * 1e-7);
+        if lat.abs() > 90.0 || lon.abs() > 180.0 || (g.lat == 0 && g.lon == 0) {
+            return None;
+        }
+        let o = *self.tel.global_origin.get_or_insert(crate::geo::Home {
+            lat_deg: lat,
+            lon_deg: lon,
+            alt_m: 0.0,
+        });
+        Some(o.to_local_m(lat, lon))
     }
 
     /// An altitude above home, m, stamped `ms` (the vehicle's clock). The first one received
@@ -3147,8 +3261,18 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
-    /// A finite position (x east, y north), m, stamped `ms`.
+    /// A finite position (x east, y north), m, stamped `ms` (its jump checked before:
+    /// [`Flight::ids_frame`]).
     fn position(&mut self, ms: u32, p: (f64, f64)) {
+        self.tel.position_at = Some(Instant::now());
+        self.tel.pos = Some(p);
+        self.record.position(ms, p, self.in_control);
+    }
+
+    /// A position of the vehicle's ids (x east, y north, m) stamped `ms`, watched for jumps
+    /// farther than a vehicle covers ([`crate::same_ids::PositionWatch`]): two vehicles'
+    /// positions interleaving are a second sender.
+    fn position_jumps(&mut self, ms: u32, p: (f64, f64)) {
         let wall_s = self.t0.elapsed().as_secs_f64();
         if self.pos_watch.position(p, ms, wall_s) && self.same_ids.is_none() {
             let t = self.target.unwrap_or_default();
@@ -3164,9 +3288,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 isotrack_core::numtext::Num(dt),
             ));
         }
-        self.tel.position_at = Some(Instant::now());
-        self.tel.pos = Some(p);
-        self.record.position(ms, p, self.in_control);
     }
 
     /// The way out of `end`: the failsafe mode once the companion had control (or with no
@@ -3432,7 +3553,20 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // A second sender with the ids was seen before the retries began (their log said so).
         let mut told = self.second_sender;
         loop {
+            if let Some(why) = self.reboot.take() {
+                // Its autopilot rebooted during the retries (att45f-10): what its heartbeats
+                // show from now on (a disarm, its boot mode) is the reboot's, no pilot's word
+                // nor an answer; nothing more is commanded.
+                self.event(format!(
+                    "during the failsafe's retries, {why}: the retries stop, nothing more commanded"
+                ));
+                return Ok((false, tries, "its autopilot rebooted"));
+            }
             if self.second_sender && !told {
+                // How it was seen (the same checks as in control: [`Flight::ids_frame`]).
+                if let Some(why) = self.same_ids.take() {
+                    self.event(format!("during the failsafe's retries, {why}"));
+                }
                 // A second sender with the ids seen during the retries after a heartbeat
                 // showed a pilot's word, awaiting confirmation (att41f-2): as for a word heard
                 // before the proof that ends the flight ([`Flight::word_before_second_sender`]),
@@ -3463,14 +3597,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 // No answer awaited holds the retries back any more.
                 watch.seen = None;
             }
-            let lost =
-                self.link_gone || Instant::now().duration_since(self.last_link) > self.timeout;
+            let lost = self.link_gone || self.link_silent().is_some();
             // At least 5 tries before a lost link ends them (a vehicle may hear what it cannot
             // answer), unless it acknowledged the command as accepted: it heard it, and it is
             // not sent again before a heartbeat says what it did (att37-5).
             // After a second sender a retry waits for a heartbeat showing the vehicle still in
             // the mode it was left in (att42f-2): none comes over a lost link.
             if lost && (tries >= 5 || accepted.is_some() || (self.second_sender && tries > 0)) {
+                self.word_held(&watch);
                 return Ok((false, tries, "link lost"));
             }
             let bound = match (refused, self.second_sender) {
@@ -3481,12 +3615,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 (false, false) => "retries' bound reached",
             };
             if tries >= MAX_WAY_OUT_TRIES {
+                self.word_held(&watch);
                 return Ok((false, tries, bound));
             }
             if self.opts.stop.load(Ordering::SeqCst) {
+                self.word_held(&watch);
                 return Ok((false, tries, "stopped by a signal"));
             }
             if Instant::now() >= retry_end {
+                self.word_held(&watch);
                 return Ok((false, tries, bound));
             }
             // After a second sender, once the way out has gone out, a retry only on a heartbeat
@@ -3555,6 +3692,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
+    /// The failsafe's retries end unconfirmed (their bound, a lost link, a signal) while a
+    /// pilot's word heard in a doubt of the frame counter still holds them (att45f-11: a doubt
+    /// longer than the retries, on a slow link): logged, so that the end is not read as a
+    /// vehicle that ignored the way out in OFFBOARD.
+    fn word_held(&mut self, watch: &RetryWatch) {
+        if let Some(seen) = watch.seen.as_ref().filter(|s| s.pilots && s.in_doubt) {
+            let what = seen.what.clone();
+            self.event(format!(
+                "during the failsafe's retries, a heartbeat of the vehicle's ids in a doubt of their frame counter showed it {what} (a pilot's word, or a second sender's), neither confirmed nor contradicted before the retries ended: none was sent since"
+            ));
+        }
+    }
+
     /// Why a change the heartbeats showed during the retries, confirmed as a pilot's, may be a
     /// second sender's (att42f-3): a second sender with the ids seen, a doubt of their frame
     /// counter (a first conflict: maybe a second counter, resynchronised), or a heartbeat older
@@ -3612,18 +3762,31 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 .poll(Duration::from_millis(20))
                 .map_err(FlyError::Io)?
             {
-                if Some((r.header.system_id, r.header.component_id)) != self.target {
+                let from = (r.header.system_id, r.header.component_id);
+                if Some(from) != self.target {
+                    // Another autopilot first heard now is logged as in control (att45f-9),
+                    // never flown.
+                    if let MavMessage::HEARTBEAT(h) = &r.msg {
+                        self.find_vehicle(from, h);
+                    }
                     continue;
                 }
-                let (kind, number) = self.vehicle_sender(&r);
+                let (kind, number) = self.ids_frame(&r);
+                if self.reboot.is_some() {
+                    // Its autopilot rebooted: the retries stop there (att45f-10).
+                    return Ok(None);
+                }
                 if kind == FrameKind::Copy {
-                    // Delivered again: ignored entirely.
+                    // Delivered again: no answer, nothing applied ([`Flight::copy_frame`]).
+                    self.copy_frame(&r.msg);
                     continue;
                 }
                 if matches!(&r.msg, MavMessage::HEARTBEAT(h) if !is_autopilot(h)) {
                     // No autopilot's heartbeat (a ground station's or an onboard controller's
                     // with the vehicle's ids, att42f-4): never the vehicle's answer, state or
-                    // word (its frame counted above, as any of the ids'); the link alive.
+                    // word (its frame counted above, as any of the ids'), nor its heartbeat:
+                    // the link is lost without the vehicle's for long (att45f-3:
+                    // [`Flight::link_silent`], as in control).
                     self.last_link = Instant::now();
                     continue;
                 }
@@ -3661,12 +3824,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                         self.beat_heard = Instant::now();
                         watch.older = true;
                         let answer = self.heartbeat_answer(h, way, before);
-                        let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
-                        if let Some(seen) = watch.seen.as_mut() {
-                            if answer.is_none() || seen.pilots != pilots {
-                                seen.at = Instant::now();
-                            }
-                        }
+                        watch.contradicted_by(&answer);
                         continue;
                     }
                     MavMessage::HEARTBEAT(_) => {
@@ -3698,7 +3856,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                         // A second vehicle with the ids may beat too (att33e-1, att33f-3):
                         // an answer once it has stood, none contradicting, for `span`.
                         let answer = self.heartbeat_answer(h, way, before);
-                        if let Some(answer) = self.answer_stands(answer, watch, span) {
+                        if let Some(answer) = self.answer_stands(h, answer, watch, span) {
                             return Ok(Some(answer));
                         }
                     }
@@ -3715,12 +3873,28 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
     /// ([`AnswerSeen`]): the answer once heartbeats have shown it for `span` with none
     /// contradicting (one showing nothing yet, or the other kind of answer, starts over).
     fn answer_stands(
-        &self,
+        &mut self,
+        h: &HEARTBEAT_DATA,
         answer: Option<Answer>,
         watch: &mut RetryWatch,
         span: Duration,
     ) -> Option<Answer> {
         let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
+        if let Some(seen) = watch
+            .seen
+            .as_ref()
+            .filter(|s| s.in_doubt && s.pilots && !pilots)
+        {
+            // A pilot's word heard in a doubt of the frame counter, then contradicted by a
+            // heartbeat applied after it resynchronised: no change and back of one sender,
+            // two senders (att45f-4, as in control: [`Flight::watch_leave`]); the word stays
+            // seen, and the retries stop with nothing more commanded
+            // ([`Flight::word_before_second_sender_in_retries`]).
+            let (word, n) = (seen.what.clone(), self.seq_watch.doubts - seen.doubts);
+            let state = self.shown_state(h);
+            self.word_contradicted(&word, &state, n);
+            return None;
+        }
         if let (Some(seen), true) = (&watch.seen, answer.is_some()) {
             // A word heard in a doubt is no answer of the vehicle's: its span starts here.
             if seen.pilots == pilots && !seen.in_doubt {
@@ -3735,6 +3909,7 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
             },
             at: Instant::now(),
             in_doubt: false,
+            doubts: self.seq_watch.doubts,
         });
         None
     }
@@ -3763,6 +3938,10 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
             }
             return (None, self.left_in(h, before));
         }
+        // One showing another answer than the one awaited (a second counter's heartbeat
+        // applied before the doubt, the vehicle's own in it) restarts its span, as an older
+        // one does: it has not stood uncontradicted.
+        watch.contradicted_by(&self.heartbeat_answer(h, way, before));
         if let Some(what) = self.word_not_commanded(h, way, before, watch.disarm_sent) {
             if watch.seen.as_ref().is_none_or(|s| !s.pilots) {
                 watch.seen = Some(AnswerSeen {
@@ -3770,6 +3949,7 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                     what,
                     at: Instant::now(),
                     in_doubt: true,
+                    doubts: self.seq_watch.doubts.saturating_sub(1),
                 });
             }
         }
@@ -3792,9 +3972,9 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         let armed = h
             .base_mode
             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
-        if before.1 && !armed && !disarm_sent {
-            return Some("disarmed".into());
-        }
+        // A disarm the companion commanded is no word ([`Flight::heartbeat_answer`] takes an
+        // uncommanded one as a pilot's in any mode).
+        let before = (before.0, before.1 && !disarm_sent);
         match self.heartbeat_answer(h, way, before) {
             Some(Answer::PilotTookOver(_)) if !armed && disarm_sent => None,
             Some(Answer::PilotTookOver(w)) => Some(w),
@@ -3811,10 +3991,14 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         let armed = h
             .base_mode
             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+        // The mode the failsafe began in is the companion's only on a vehicle it armed: on one
+        // its pilot armed (a take-over from POSCTL whose OFFBOARD was accepted but never shown)
+        // it is the pilot's mode (att45f-7), no reason for a retry.
         mode_of(h).is_some_and(|c| {
             armed
                 && !self.firmware.is_in(c, self.opts.failsafe.mode())
-                && (self.firmware.is_in(c, FlyMode::Offboard) || before.0 == Some(c))
+                && (self.firmware.is_in(c, FlyMode::Offboard)
+                    || (self.armed_by_us && before.0 == Some(c)))
         })
     }
 
@@ -3846,6 +4030,11 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         before: (Option<u32>, bool),
     ) -> Option<Answer> {
         let safe = |c: u32| self.firmware.safe_mode_name(c).map(Answer::OtherSafeMode);
+        if way != WayOut::Disarm && self.uncommanded_disarm(h, before) {
+            // A disarm the companion did not command is a pilot's word whatever mode it shows,
+            // the way out's or another safe one included (att45f-5).
+            return Some(Answer::PilotTookOver("disarmed".into()));
+        }
         match way {
             WayOut::LeaveOffboard(m) => {
                 let c = mode_of(h)?;
@@ -3877,14 +4066,21 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         }
     }
 
+    /// Whether a heartbeat during the failsafe's retries shows disarmed a vehicle armed as the
+    /// failsafe began (`before`): with a way out other than the disarm, nobody here commanded
+    /// it.
+    fn uncommanded_disarm(&self, h: &HEARTBEAT_DATA, before: (Option<u32>, bool)) -> bool {
+        before.1
+            && !h
+                .base_mode
+                .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED)
+    }
+
     /// A heartbeat during the failsafe's retries that shows what a pilot did: a mode other
     /// than the one the vehicle was in as the failsafe began (and not a safe one, checked
     /// before), or a disarm the companion did not command; in words (`in MANUAL`, `disarmed`).
     fn pilots_change(&self, h: &HEARTBEAT_DATA, before: (Option<u32>, bool)) -> Option<String> {
-        let armed = h
-            .base_mode
-            .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
-        if before.1 && !armed {
+        if self.uncommanded_disarm(h, before) {
             return Some("disarmed".into());
         }
         // OFFBOARD, which the companion itself asked for (a switch answered late) or flew in,

@@ -91,6 +91,11 @@ struct Script {
     /// After it accepts a mode switch, no heartbeat for this many beats (PX4's 1 Hz heartbeat:
     /// the switch shows only at the next one).
     quiet_after_ack_beats: u32,
+    /// After it accepts a mode switch, no heartbeat for this long, s (wall time: a 1 Hz
+    /// heartbeat however fast the turns go).
+    quiet_after_ack_s: f64,
+    /// It accepts the switch to OFFBOARD but stays in its mode (never shown).
+    offboard_unshown: bool,
     /// Right after it accepts the first mode switch, a pilot switches to this PX4 mode.
     pilot_after_ack: Option<u32>,
     /// With `disarm_at_beat`: this many beats later it is armed again in OFFBOARD, and it
@@ -158,6 +163,8 @@ impl Default for Script {
             unaddressed_denial_first: false,
             hold_denied_before: 1,
             quiet_after_ack_beats: 0,
+            quiet_after_ack_s: 0.0,
+            offboard_unshown: false,
             pilot_after_ack: None,
             rearm_after: None,
             late_frame_at: None,
@@ -232,6 +239,7 @@ fn against_counting(
     let mut clock0 = 1000u32;
     let mut north_m = 0.0f32;
     let (mut quiet_until, mut pilot_after_ack) = (0u32, script.pilot_after_ack);
+    let mut quiet_until_t = Instant::now();
     let mut got = Vec::new();
     let t0 = Instant::now();
     while !companion.is_finished() && t0.elapsed() < Duration::from_secs(60) {
@@ -270,6 +278,7 @@ fn against_counting(
         if (!script.gimbal || beats > 0)
             && script.heartbeats_stop_at.is_none_or(|b| beats < b)
             && beats >= quiet_until
+            && Instant::now() >= quiet_until_t
         {
             v.send(&heartbeat(
                 script.firmware.1,
@@ -422,7 +431,8 @@ fn against_counting(
                 MavCmd::MAV_CMD_DO_SET_MODE
                     if script.custom_mode(c.param2, c.param3) == script.guided() =>
                 {
-                    if script.offboard == MavResult::MAV_RESULT_ACCEPTED {
+                    if script.offboard == MavResult::MAV_RESULT_ACCEPTED && !script.offboard_unshown
+                    {
                         mode = script.guided();
                     }
                     script.offboard
@@ -461,6 +471,7 @@ fn against_counting(
             if c.command == MavCmd::MAV_CMD_DO_SET_MODE && result == MavResult::MAV_RESULT_ACCEPTED
             {
                 quiet_until = beats + script.quiet_after_ack_beats;
+                quiet_until_t = Instant::now() + Duration::from_secs_f64(script.quiet_after_ack_s);
                 if let Some(m) = pilot_after_ack.take() {
                     mode = m;
                 }
@@ -1610,6 +1621,37 @@ fn an_accepted_offboard_switch_is_never_sent_again() {
         "{got:?}"
     );
     assert!(r.commands.is_empty() && !r.way_out_commanded);
+}
+
+/// att45f-8: a pilot's vehicle (armed in POSCTL, a 1 Hz heartbeat: none for 1 s after an
+/// acknowledgement) accepts every switch to OFFBOARD and never makes it. Each switch waits for
+/// the heartbeat newer than the last acceptance, so in the 10 s of retries at most 1 + 10 go
+/// out (before: 20, over 19 s, the log saying 10 s); at the bound the last accepted switch's
+/// heartbeat is awaited, and it shows the pilot's POSCTL: `control_refused`, nothing
+/// commanded (before: HOLD sent to the vehicle that showed POSCTL in every heartbeat).
+#[test]
+fn an_offboard_accepted_and_never_shown_is_retried_for_10_s_and_commands_nothing() {
+    let script = Script {
+        armed: true,
+        start_mode: 3 << 16,
+        quiet_after_ack_s: 1.0,
+        offboard_unshown: true,
+        ..Script::default()
+    };
+    let (r, got) = against(script, |o| o.take_control = true);
+    assert_eq!(r.end, FlyEnd::ControlRefused, "{:?}", r.events);
+    let switches = got.iter().filter(|g| is_offboard_switch(g)).count();
+    assert!((2..=11).contains(&switches), "{switches} {got:?}");
+    assert!(!got.iter().any(is_hold), "{got:?}");
+    assert!(!got.iter().any(is_disarm), "{got:?}");
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("did not arm or switch to OFFBOARD in 10 s")),
+        "{:?}",
+        r.events
+    );
 }
 
 /// att33d-6: in control, a failsafe's HOLD is accepted, then the pilot switches to POSCTL

@@ -144,6 +144,21 @@ fn fly_against_turns(
     echo: bool,
     mut turn: impl FnMut(u32) -> Vec<Vec<u8>>,
 ) -> (FlyReport, Vec<(u32, Sent)>) {
+    let (r, c) = fly_against_sockets(max_duration_s, tweak, echo, move |k| {
+        turn(k).into_iter().map(|d| (0, d)).collect()
+    });
+    (r, c.into_iter().map(|(k, _, x)| (k, x)).collect())
+}
+
+/// [`fly_against_turns`] from TWO sockets (two source addresses): `turn(k)` gives each
+/// datagram of turn `k` with the socket it leaves from (0 or 1); each command comes with the
+/// socket it was read at (fly sends every command to each peer).
+fn fly_against_sockets(
+    max_duration_s: f64,
+    tweak: impl FnOnce(&mut FlyOptions),
+    echo: bool,
+    mut turn: impl FnMut(u32) -> Vec<(usize, Vec<u8>)>,
+) -> (FlyReport, Vec<(u32, usize, Sent)>) {
     let s = load_scenario(None, &[]).unwrap();
     let mut o = FlyOptions::new("udpin:127.0.0.1:0");
     o.timeout_s = 2.0;
@@ -158,30 +173,34 @@ fn fly_against_turns(
         .unwrap()
     });
     let fly: SocketAddr = rx.recv().unwrap();
-    let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
-    sock.set_read_timeout(Some(Duration::from_millis(50)))
-        .unwrap();
+    let socks = [
+        UdpSocket::bind("127.0.0.1:0").unwrap(),
+        UdpSocket::bind("127.0.0.1:0").unwrap(),
+    ];
     let mut buf = [0u8; 2048];
     let mut commands = Vec::new();
     let t0 = Instant::now();
     let mut k = 0;
     while t0.elapsed() < Duration::from_secs(60) && !companion.is_finished() {
-        for d in turn(k) {
-            sock.send_to(&d, fly).unwrap();
+        for (i, d) in turn(k) {
+            socks[i].send_to(&d, fly).unwrap();
         }
         k += 1;
         // Whatever fly sends (setpoints, commands) is read and left (no acknowledgement), or
-        // sent back to it.
-        while let Ok((n, _)) = sock.recv_from(&mut buf) {
-            if echo {
-                sock.send_to(&buf[..n], fly).unwrap();
-            }
-            commands.extend(command_longs(&buf[..n]).into_iter().map(|c| (k - 1, c)));
-            sock.set_read_timeout(Some(Duration::from_millis(1)))
+        // sent back to it; 50 ms a turn.
+        for (i, sock) in socks.iter().enumerate() {
+            let wait_ms = if i == 0 { 50 } else { 1 };
+            sock.set_read_timeout(Some(Duration::from_millis(wait_ms)))
                 .unwrap();
+            while let Ok((n, _)) = sock.recv_from(&mut buf) {
+                if echo {
+                    sock.send_to(&buf[..n], fly).unwrap();
+                }
+                commands.extend(command_longs(&buf[..n]).into_iter().map(|c| (k - 1, i, c)));
+                sock.set_read_timeout(Some(Duration::from_millis(1)))
+                    .unwrap();
+            }
         }
-        sock.set_read_timeout(Some(Duration::from_millis(50)))
-            .unwrap();
     }
     (companion.join().unwrap(), commands)
 }
@@ -850,11 +869,13 @@ impl Beats {
 }
 
 /// `fly` (tweaked as [`fly_against_with`]) against a vehicle (ids 1, 1) on wall time: its
-/// heartbeat whenever `vehicle(t_s)` gives one (`t_s` since the start), its measurement and
-/// position every 40 ms (stamped with the wall clock); and a second vehicle with the same ids
-/// behind the same socket beating whenever `twin(t_s)` gives a heartbeat, its frame counter
-/// 100 ahead of the vehicle's (each sender's frames in sequence: only their interleaving steps
-/// back).
+/// measurement and position every 40 ms (stamped with that time), then its heartbeat whenever
+/// `vehicle(t_s)` gives one (`t_s` since the start, on that 40 ms grid); and a second vehicle
+/// with the same ids behind the same socket beating whenever `twin(t_s)` gives a heartbeat, its
+/// frame counter 100 ahead of the vehicle's (each sender's frames in sequence: only their
+/// interleaving steps back). The turns due are caught up after a slow one (the harness's turns
+/// last as long as fly's datagrams make them, longer under load): the vehicle's 50 frames a
+/// second, which the frame counter's watch reads, never depend on the machine's load.
 fn vehicle_and_twin(
     max_duration_s: f64,
     tweak: impl FnOnce(&mut FlyOptions),
@@ -866,26 +887,26 @@ fn vehicle_and_twin(
         seq: 100,
         ids: (1, 1),
     };
-    let mut last_ms = 0u32;
+    let mut next_s = 0.0f64;
     let t0 = Instant::now();
     fly_against_with(max_duration_s, tweak, false, move |_| {
-        let t_s = t0.elapsed().as_secs_f64();
-        let ms = 1000 + (t_s * 1000.0) as u32;
-        let beat = vehicle(t_s);
-        let mut msgs = Vec::new();
-        if ms >= last_ms + 40 || beat.is_some() {
+        let now_s = t0.elapsed().as_secs_f64();
+        let mut out = Vec::new();
+        while next_s <= now_s {
+            let t_s = next_s;
+            let ms = 1000 + (t_s * 1000.0) as u32;
             // A heartbeat after the turn's measurement: never the vehicle's first frame after
             // the second vehicle's (which steps back, and is dropped as late if a heartbeat).
-            last_ms = ms;
-            msgs.extend([iso_s(ms, 9.5), position(ms, 0.0)]);
-        }
-        msgs.extend(beat);
-        let mut out = datagrams(a.frames(&msgs));
-        if let Some(hb) = twin(t_s) {
-            // Its counter kept 100 ahead of the vehicle's (a sender of more frames): each of
-            // its frames steps forward, the vehicle's next one back (out of sequence).
-            b.seq = a.seq.wrapping_add(100);
-            out.extend(datagrams(b.frames(&[hb])));
+            let mut msgs = vec![iso_s(ms, 9.5), position(ms, 0.0)];
+            msgs.extend(vehicle(t_s));
+            out.extend(datagrams(a.frames(&msgs)));
+            if let Some(hb) = twin(t_s) {
+                // Its counter kept 100 ahead of the vehicle's (a sender of more frames): each
+                // of its frames steps forward, the vehicle's next one back (out of sequence).
+                b.seq = a.seq.wrapping_add(100);
+                out.extend(datagrams(b.frames(&[hb])));
+            }
+            next_s += 0.04;
         }
         out
     })
@@ -1128,23 +1149,27 @@ fn a_heartbeat_on_the_number_of_the_last_one_is_no_copy() {
     let mut a = vehicle_sender();
     let mut own = Beats::new(0.0, &[1.0]);
     let mut fades = Beats::new(0.5, &[1.0]);
-    let mut last_ms = 0u32;
+    let mut next_s = 0.0f64;
     let t0 = Instant::now();
     let r = fly_against(5.0, move |_| {
-        let t = t0.elapsed().as_secs_f64();
-        let ms = 1000 + (t * 1000.0) as u32;
-        let beat = own.due(t).then(|| heartbeat(6));
-        if beat.is_some() {
-            a.seq = 7;
+        // A turn every 40 ms of wall time, caught up after a slow one (as `vehicle_and_twin`):
+        // the numbers the vehicle's frames span in a second are its own, never the load's.
+        let now_s = t0.elapsed().as_secs_f64();
+        let mut out = Vec::new();
+        while next_s <= now_s {
+            let t = next_s;
+            let ms = 1000 + (t * 1000.0) as u32;
+            let beat = own.due(t).then(|| heartbeat(6));
+            if beat.is_some() {
+                a.seq = 7;
+            }
+            if fades.due(t) {
+                a.seq = a.seq.wrapping_add(100);
+            }
+            out.extend(turn_frames(&mut a, beat, ms));
+            next_s += 0.04;
         }
-        if fades.due(t) {
-            a.seq = a.seq.wrapping_add(100);
-        }
-        if ms < last_ms + 40 && beat.is_none() {
-            return Vec::new();
-        }
-        last_ms = ms;
-        turn_frames(&mut a, beat, ms)
+        out
     });
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
     assert!(
@@ -2237,6 +2262,391 @@ fn a_ground_stations_heartbeat_with_the_vehicles_ids_is_no_state() {
     assert!(
         c.iter().filter(|x| x.0 == SET_MODE).count() >= 3,
         "{c:?} {:?}",
+        r.events
+    );
+}
+
+/// A Ctrl-C (the stop flag set) `ms` after the flight starts.
+fn ctrl_c_at(ms: u64) -> impl FnOnce(&mut FlyOptions) {
+    move |o| {
+        let stop = o.stop.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(ms));
+            stop.store(true, std::sync::atomic::Ordering::SeqCst);
+        });
+    }
+}
+
+/// `fly` against a vehicle (ids 1, 1) on wall time, a Ctrl-C at 1.5 s (in control: the
+/// pilot's OFFBOARD), so that the failsafe's HOLD (never acknowledged) is retried from then:
+/// each turn (every 50 ms) `turn(t_s, ms, a)` gives the datagrams, each with the socket (0 or
+/// 1: two source addresses) it leaves from, `a` the vehicle's frame counter, `ms` 1000 + the
+/// wall time since the start, ms.
+fn in_the_retries(
+    mut turn: impl FnMut(f64, u32, &mut Sender) -> Vec<(usize, Vec<u8>)>,
+) -> (FlyReport, Vec<(u32, usize, Sent)>) {
+    let mut a = vehicle_sender();
+    let t0 = Instant::now();
+    fly_against_sockets(30.0, ctrl_c_at(1500), false, move |_| {
+        let t_s = t0.elapsed().as_secs_f64();
+        turn(t_s, 1000 + (t_s * 1000.0) as u32, &mut a)
+    })
+}
+
+/// `datagrams` all leaving from socket `sock`.
+fn from_socket(sock: usize, datagrams: Vec<Vec<u8>>) -> Vec<(usize, Vec<u8>)> {
+    datagrams.into_iter().map(|d| (sock, d)).collect()
+}
+
+/// The way out's last word ("the vehicle did not confirm the HOLD (N tries, WHY)"), if any.
+fn way_out_end(r: &FlyReport) -> &str {
+    r.events
+        .iter()
+        .rev()
+        .find(|e| e.contains("did not confirm the") || e.contains("the vehicle is in"))
+        .map_or("", |e| e.as_str())
+}
+
+/// att45f-1: during the failsafe's retries (HOLD, never carried out: the vehicle stays
+/// armed in OFFBOARD, then falls silent at 2 s), a second vehicle with the ids beats armed in
+/// AUTO.LOITER (the HOLD commanded) at 1 Hz from ANOTHER source address, on the very numbers
+/// the vehicle's counter would go on with (only the address tells the two apart). As in
+/// control, the second address is a second sender: no heartbeat confirms the HOLD, and none of
+/// its heartbeats in the `--failsafe` mode is a reason to retry (no command ever reaches its
+/// address). Before: its heartbeats "confirmed" the HOLD ("the vehicle is in HOLD", exit 75)
+/// and the retries went to its address, nothing logged of a second sender.
+#[test]
+fn a_twin_at_another_address_in_the_retries_confirms_nothing() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (r, c) = in_the_retries(move |t, ms, a| {
+        let beat = own.due(t);
+        if t < 2.0 {
+            from_socket(0, turn_frames(a, beat.then(|| heartbeat(6)), ms))
+        } else {
+            let hb: Vec<MavMessage> = beat.then(|| heartbeat_sub(4, 3)).into_iter().collect();
+            from_socket(1, datagrams(a.frames(&hb)))
+        }
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e
+            .contains("during the failsafe's retries, two vehicles with the ids")
+            && e.contains("frames from")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("did not confirm the HOLD"),
+        "{:?}",
+        r.events
+    );
+    assert!(!c.iter().any(|x| x.1 == 1), "{c:?}");
+}
+
+/// att45f-2: during the failsafe's retries the vehicle's positions alternate between the
+/// origin and 11 km north from 1.8 s (two vehicles' positions interleaving, 11 km in 50 ms),
+/// and from 2.2 s its heartbeats show AUTO.LOITER (the HOLD). As in control, the jumps are a
+/// second sender: no heartbeat confirms the HOLD. Before: the jumps were never checked in the
+/// retries, "the vehicle is in HOLD" at the third heartbeat in it, exit 75.
+#[test]
+fn positions_jumping_in_the_retries_confirm_nothing() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut far = false;
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        let hb = own.due(t).then(|| {
+            if t < 2.2 {
+                heartbeat(6)
+            } else {
+                heartbeat_sub(4, 3)
+            }
+        });
+        far = t >= 1.8 && !far;
+        let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+        msgs.extend([
+            iso_s(ms, 9.5),
+            position(ms, if far { 11_000.0 } else { 0.0 }),
+        ]);
+        from_socket(0, datagrams(a.frames(&msgs)))
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e
+            .contains("during the failsafe's retries, two vehicles with the ids")
+            && e.contains("positions jumped farther")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("did not confirm the HOLD"),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att45f-5: during the failsafe's retries the vehicle's heartbeats show it DISARMED in
+/// AUTO.LOITER (the HOLD commanded) from 2.2 s: the companion commanded no disarm, so it is a
+/// pilot's word whatever mode it shows (`pilot_took_over during the failsafe`, the HOLD not
+/// confirmed). Before: "the vehicle is in HOLD", exit 75, the disarm never logged.
+#[test]
+fn a_disarm_shown_in_hold_during_the_retries_is_the_pilots() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        let hb = own.due(t).then(|| {
+            if t < 2.2 {
+                heartbeat(6)
+            } else {
+                let mut hb = heartbeat_sub(4, 3);
+                if let MavMessage::HEARTBEAT(h) = &mut hb {
+                    h.base_mode = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+                }
+                hb
+            }
+        });
+        from_socket(0, turn_frames(a, hb, ms))
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("pilot_took_over during the failsafe: the vehicle is disarmed")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att45f-3: the vehicle falls silent at 2 s, during the failsafe's retries; a ground
+/// station misconfigured with its ids (`MAV_TYPE_GCS`, on the vehicle's counter) beats on at
+/// 1 Hz. Its heartbeat says nothing of the vehicle's link, as in control: the retries end
+/// "link lost" once no autopilot's heartbeat came for 3 s (at 4 s: the last one at 1 s),
+/// before their bound (7.5 s). Before: "retries' bound reached".
+#[test]
+fn a_ground_stations_heartbeat_keeps_no_link_in_the_retries() {
+    let gcs = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+        custom_mode: 0,
+        mavtype: MavType::MAV_TYPE_GCS,
+        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
+        base_mode: MavModeFlag::empty(),
+        system_status: MavState::MAV_STATE_ACTIVE,
+        mavlink_version: 3,
+    });
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        let beat = own.due(t);
+        if t < 2.0 {
+            from_socket(0, turn_frames(a, beat.then(|| heartbeat(6)), ms))
+        } else {
+            let hb: Vec<MavMessage> = beat.then(|| gcs.clone()).into_iter().collect();
+            from_socket(0, datagrams(a.frames(&hb)))
+        }
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(way_out_end(&r).contains("link lost)"), "{:?}", r.events);
+}
+
+/// att45f-10: during the failsafe's retries every time the vehicle stamps (its position's
+/// `time_boot_ms`) drops by 50 s at 2 s, and goes on from there: its clock began again, as in
+/// control its autopilot rebooted: logged, the retries stop with nothing more commanded.
+/// Before: the reboot check was off in the retries, nothing logged, HOLD retried to the bound.
+#[test]
+fn a_reboot_during_the_retries_is_told() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        let clock = if t < 2.0 { ms + 60_000 } else { ms + 10_000 };
+        let mut msgs: Vec<MavMessage> = own.due(t).then(|| heartbeat(6)).into_iter().collect();
+        msgs.extend([iso_s(ms, 9.5), position(clock, 0.0)]);
+        from_socket(0, datagrams(a.frames(&msgs)))
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains("during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back")
+            && e.contains("its autopilot rebooted")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("its autopilot rebooted)"),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att45f-4: during the failsafe's retries the vehicle's frame counter jumps back 100 at
+/// 2.05 s (a doubt opens) and a heartbeat in the doubt shows it armed in MANUAL (a pilot's
+/// word awaiting confirmation: no retry meanwhile); the counter goes on from there (the
+/// doubt resynchronises as one sender) and the heartbeats applied after it show OFFBOARD again.
+/// As in control, a word contradicted with a doubt between is two senders', no change and back
+/// of one: the retries stop with nothing more commanded. Before: the word was forgotten, the
+/// HOLD retried to the bound, not a word of it logged.
+#[test]
+fn a_word_in_a_doubt_contradicted_in_the_retries_is_two_senders() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (mut jumped, mut manual) = (false, false);
+    let (r, c) = in_the_retries(move |t, ms, a| {
+        if t >= 2.05 && !jumped {
+            jumped = true;
+            a.seq = a.seq.wrapping_sub(100);
+        }
+        let mut hb = own.due(t).then(|| heartbeat(6));
+        if t >= 2.15 && !manual {
+            manual = true;
+            hb = Some(heartbeat(1));
+        }
+        from_socket(0, turn_frames(a, hb, ms))
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e
+            .contains("during the failsafe's retries, two vehicles with the ids")
+            && e.contains(
+                "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt"
+            )),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("a pilot's word before a second sender)"),
+        "{:?}",
+        r.events
+    );
+    assert!(c.len() <= 4 + 2, "{c:?}");
+}
+
+/// att45f-9: during the failsafe's retries a second autopilot (system 1, component 2, a PX4
+/// rover armed in MANUAL, its own address and counter) beats at 1 Hz from 2.3 s: never flown,
+/// logged once as in control. Before: never logged in the retries.
+#[test]
+fn another_autopilot_first_heard_in_the_retries_is_logged() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(2.3, &[1.0]);
+    let mut b = Sender {
+        seq: 0,
+        ids: (1, 2),
+    };
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        let mut out = from_socket(0, turn_frames(a, own.due(t).then(|| heartbeat(6)), ms));
+        if other.due(t) {
+            out.extend(from_socket(1, datagrams(b.frames(&[heartbeat(1)]))));
+        }
+        out
+    });
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e
+                .contains("another autopilot (system 1, component 2) heard in flight: not flown")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// An unaddressed `COMMAND_ACK`: `DO_SET_MODE` accepted.
+fn set_mode_accepted() -> MavMessage {
+    MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+        command: MavCmd::MAV_CMD_DO_SET_MODE,
+        result: MavResult::MAV_RESULT_ACCEPTED,
+    })
+}
+
+/// att45f-7: `--take-control` of a vehicle its pilot armed in POSCTL (1 Hz heartbeat): it
+/// accepts every `DO_SET_MODE` (an acknowledgement each turn: the switch goes out at 2 s) and
+/// never leaves POSCTL. From 3.5 s a second vehicle with its ids beats armed in POSCTL from
+/// another address: a second sender, `vehicle_lost`, HOLD commanded once (an OFFBOARD was
+/// accepted). The POSCTL its heartbeats show is the pilot's mode (the companion armed nothing),
+/// no reason for a retry: one HOLD in all. Before: a HOLD on every POSCTL heartbeat of either, to the bound.
+#[test]
+fn after_a_proof_a_pilots_mode_is_no_reason_to_retry() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut other = Beats::new(3.5, &[1.0]);
+    let mut a = vehicle_sender();
+    let t0 = Instant::now();
+    let (r, c) = fly_against_sockets(
+        30.0,
+        |o| o.take_control = true,
+        false,
+        move |_| {
+            let t = t0.elapsed().as_secs_f64();
+            let ms = 1000 + (t * 1000.0) as u32;
+            let hb = own.due(t).then(|| heartbeat(3));
+            let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+            msgs.extend([iso_s(ms, 9.5), position(ms, 0.0), set_mode_accepted()]);
+            let mut out = from_socket(0, datagrams(a.frames(&msgs)));
+            if t >= 3.5 && other.due(t) {
+                out.extend(from_socket(1, datagrams(a.frames(&[heartbeat(3)]))));
+            }
+            out
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    let holds: Vec<_> = c
+        .iter()
+        .filter(|x| x.2 .0 == SET_MODE && x.2 .1[1] == 4.0 && x.1 == 0)
+        .collect();
+    assert_eq!(holds.len(), 1, "{c:?} {:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+}
+
+/// fly47: in the failsafe's retries (Ctrl-C at 1.5 s; HOLD never acknowledged, the vehicle
+/// stays armed in OFFBOARD), the vehicle's counter comes back 12 numbers behind at 2 s onto
+/// numbers seen (a burst lost: a doubt), and its unchanging 1 Hz heartbeat always carries the
+/// number of its last one before the doubt: identical to it, a copy in the old window. Its
+/// other frames (10 a second, on its own schedule) keep the doubt open 4.8 s (48 frames). A
+/// heartbeat heard while a doubt is open is the link speaking: the retries go to their bound
+/// (6 s). Before: "no heartbeat from the vehicle for 3 s" at 4 s, the retries ended "link
+/// lost".
+#[test]
+fn heartbeats_heard_as_copies_in_a_doubt_keep_the_link() {
+    let mut next_s = 0.0f64;
+    let mut k = 0u32;
+    let mut beat_seq: Option<u8> = None;
+    let (r, _) = in_the_retries(move |t, _, a| {
+        let mut out = Vec::new();
+        // One frame every 100 ms of wall time, however the turns go (caught up).
+        while next_s <= t {
+            let ms = 1000 + (next_s * 1000.0) as u32;
+            let mut msgs = Vec::new();
+            if k == 20 {
+                // The counter comes back onto numbers seen: a first conflict, a doubt.
+                a.seq = a.seq.wrapping_sub(12);
+            }
+            msgs.push(if k.is_multiple_of(2) {
+                iso_s(ms, 9.5)
+            } else {
+                position(ms, 0.0)
+            });
+            out.extend(datagrams(a.frames(&msgs)));
+            if k.is_multiple_of(10) {
+                let hb = heartbeat(6);
+                match beat_seq {
+                    // From the doubt on, on the number of the last one before it.
+                    Some(s) if k >= 20 => {
+                        let mut copy = Sender { seq: s, ids: a.ids };
+                        out.extend(datagrams(copy.frames(&[hb])));
+                    }
+                    _ => {
+                        beat_seq = Some(a.seq);
+                        out.extend(datagrams(a.frames(&[hb])));
+                    }
+                }
+            }
+            k += 1;
+            next_s += 0.1;
+        }
+        from_socket(0, out)
+    });
+    assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
+    assert!(
+        way_out_end(&r).contains("retries' bound reached"),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("no heartbeat")),
+        "{:?}",
         r.events
     );
 }
