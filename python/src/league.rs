@@ -137,7 +137,9 @@ pub fn benchmark_json(
             isotrack_commands::league::open_out_dir(Path::new(d), resume).map_err(|f| {
                 // The command's refusal names its flags (`--resume`, `--out`): said here in
                 // this function's arguments.
-                if !resume && f.message.contains("already holds a benchmark") {
+                // Only where the command advises `--resume` (not beside a file no benchmark
+                // writes, which is named instead).
+                if !resume && f.message.contains("pass --resume") {
                     pyo3::exceptions::PyOSError::new_err(format!(
                         "{d} already holds a benchmark: pass resume=True to reuse its task \
                          results, or choose another out="

@@ -161,14 +161,20 @@ fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
         d.path().join("p").to_str().unwrap(),
     ]);
     assert_fails(&o, 65, &["x_m = 1e308 is not a position within +-1e100 m"]);
+    // A drawn series past +-1e100 is drawn at the bound, the panel's label saying so
+    // (att46-13: a genuine run's turn rate reaches 5.6e299; `report` draws it too).
     std::fs::write(&trace, edit(4, "-1e308")).unwrap();
     let o = isotrack(&[
         "plot",
         run.to_str().unwrap(),
         "--out",
         d.path().join("p").to_str().unwrap(),
+        "--format",
+        "svg",
     ]);
-    assert_fails(&o, 65, &["reaches -1e308"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(d.path().join("p/timeseries.svg")).unwrap();
+    assert!(svg.contains("clipped at"), "no clip note in the figure");
     // An infinite position is refused naming the row (the trace check `plot` and `report`
     // share, issue 30 att30c-18); a non-finite value in a drawn series is left out.
     std::fs::write(&trace, edit(1, "inf")).unwrap();
@@ -187,6 +193,84 @@ fn plot_refuses_absurd_values_and_skips_non_finite_ones() {
         d.path().join("p").to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// att46-13: a genuine run whose turn rate passes +-1e100 (`controller.kp = 1e300`: the
+/// first command is already -2e299 rad/s) was refused by `plot` and `run --plot` with 65 (a
+/// data error) while `report` drew it: both draw it now, the turn-rate panel clipped at the
+/// bound with a note in its label; a run within the bound has no note.
+#[test]
+fn plot_draws_a_genuine_run_past_the_axis_bound_clipped() {
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path().join("g");
+    let base = common::bundled("paper-fig2b-circular");
+    let o = isotrack(&[
+        "run",
+        &base,
+        "--set",
+        "sim.duration_s=20",
+        "--set",
+        "controller.kp=1e300",
+        "--out",
+        run.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let figs = d.path().join("figs");
+    let o = isotrack(&[
+        "plot",
+        run.to_str().unwrap(),
+        "--out",
+        figs.to_str().unwrap(),
+        "--format",
+        "svg",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(figs.join("timeseries.svg")).unwrap();
+    assert!(svg.contains("clipped at"), "no clip note in the figure");
+    let o = isotrack(&[
+        "report",
+        run.to_str().unwrap(),
+        "--out",
+        d.path().join("g.html").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = isotrack(&[
+        "run",
+        &base,
+        "--set",
+        "sim.duration_s=20",
+        "--set",
+        "controller.kp=1e300",
+        "--out",
+        d.path().join("g2").to_str().unwrap(),
+        "-q",
+        "--plot",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The same scenario at its own gain: no clip, no note.
+    let plain = d.path().join("plain");
+    let o = isotrack(&[
+        "run",
+        &base,
+        "--set",
+        "sim.duration_s=20",
+        "--out",
+        plain.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = isotrack(&[
+        "plot",
+        plain.to_str().unwrap(),
+        "--out",
+        d.path().join("pf").to_str().unwrap(),
+        "--format",
+        "svg",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let svg = std::fs::read_to_string(d.path().join("pf/timeseries.svg")).unwrap();
+    assert!(!svg.contains("clipped at"));
 }
 
 /// att43-15: `report` showed an edited summary.json's impossible numbers as the run's (a
@@ -225,23 +309,89 @@ fn plot_and_report_refuse_impossible_summary_numbers() {
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    let cases: [(&std::path::Path, &str, f64, &str); 4] = [
+    use serde_json::json;
+    // att46-4: numbers each consistent with its neighbours' form but impossible by the metrics'
+    // definitions (bounds from theory, in check.rs): a convergence at t = 0 (|eps| under the
+    // tolerance, 1 % of the level 10 = 0.1, from then on) beside a steady-state maximum of 50;
+    // a gap CV of 1000 for 4 vehicles (at most sqrt(3)); a speed range with min > max or
+    // outside team-circular-4's envelope [0.25, 0.75] m/s (its team.v_min_mps and v_max_mps);
+    // an even team (time_to_even_s = 0) with a final gap CV of 1.5 > 0.05; an isoline length
+    // of 1 m on the 43.55 m circle (2 pi x 6.93 m).
+    type Case<'a> = (
+        &'a std::path::Path,
+        Vec<(&'a str, serde_json::Value)>,
+        &'a str,
+    );
+    let cases: Vec<Case> = vec![
         (
             &single,
-            "/steady_state_max_abs_error",
-            -5.0,
+            vec![("/steady_state_max_abs_error", json!(-5.0))],
             "steady_state_max_abs_error",
         ),
-        (&single, "/convergence_time_s", 1e9, "convergence_time_s"),
-        (&single, "/convergence_time_s", -3.0, "convergence_time_s"),
+        (
+            &single,
+            vec![("/convergence_time_s", json!(1e9))],
+            "convergence_time_s",
+        ),
+        (
+            &single,
+            vec![("/convergence_time_s", json!(-3.0))],
+            "convergence_time_s",
+        ),
         (
             &team,
-            "/vehicles/1/convergence_time_s",
-            -3.0,
+            vec![("/vehicles/1/convergence_time_s", json!(-3.0))],
             "vehicles[1]: convergence_time_s",
         ),
+        (
+            &single,
+            vec![
+                ("/convergence_time_s", json!(0.0)),
+                ("/steady_state_max_abs_error", json!(50.0)),
+                ("/steady_state_rms_error", json!(40.0)),
+            ],
+            "steady_state_max_abs_error = 50 contradicts it (convergence_time_s = 0 s",
+        ),
+        (
+            &team,
+            vec![("/team/gap_cv", json!(1000.0))],
+            "gap_cv = 1000 exceeds sqrt(N - 1) = 1.73205 for N = 4",
+        ),
+        (
+            &team,
+            vec![("/team/gap_cv_final", json!(1.7321))],
+            "gap_cv_final = 1.7321 exceeds sqrt(N - 1)",
+        ),
+        (
+            &team,
+            vec![("/team/speed_range_mps", json!([0.75, 0.25]))],
+            "speed_range_mps = [0.75, 0.25]: its slowest speed exceeds its fastest",
+        ),
+        (
+            &team,
+            vec![("/team/speed_range_mps", json!([0.25, 100.0]))],
+            "leaves the team's speed envelope [0.25, 0.75] m/s",
+        ),
+        (
+            &team,
+            vec![("/team/speed_range_mps", json!([0.2, 0.75]))],
+            "leaves the team's speed envelope [0.25, 0.75] m/s",
+        ),
+        (
+            &team,
+            vec![
+                ("/team/time_to_even_s", json!(0.0)),
+                ("/team/gap_cv_final", json!(1.5)),
+            ],
+            "time_to_even_s = 0 s where gap_cv_final = 1.5",
+        ),
+        (
+            &team,
+            vec![("/team/isoline_length_m", json!(1.0))],
+            "isoline_length_m = 1 m is not the length of the run's isoline, 43.5517",
+        ),
     ];
-    for (k, (dir, pointer, value, needle)) in cases.iter().enumerate() {
+    for (k, (dir, edits, needle)) in cases.iter().enumerate() {
         let copy = d.path().join(format!("edited{k}"));
         std::fs::create_dir(&copy).unwrap();
         for f in ["trace.csv", "scenario.toml", "summary.json"] {
@@ -250,7 +400,9 @@ fn plot_and_report_refuse_impossible_summary_numbers() {
         let path = copy.join("summary.json");
         let mut j: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-        *j.pointer_mut(pointer).unwrap() = serde_json::json!(value);
+        for (pointer, value) in edits {
+            *j.pointer_mut(pointer).unwrap() = value.clone();
+        }
         std::fs::write(&path, serde_json::to_string_pretty(&j).unwrap()).unwrap();
         for cmd in ["report", "plot"] {
             let out = d.path().join(format!(

@@ -266,6 +266,64 @@ fn benchmark_checks_every_output_before_any_task_runs() {
         assert!(!stderr(&o).contains("--resume"), "{}", stderr(&o));
         assert_eq!(listing(at), before, "{named}");
     }
+    // att46-8: an earlier benchmark's tasks/ alone (its top-level files moved away) holds its
+    // results: refused with the --resume advice naming the task's file, nothing replaced (an
+    // edited results.csv row included).
+    let fresh = d.path().join("fresh");
+    ok(&["benchmark", &suite, "--out", fresh.to_str().unwrap()]);
+    let only_tasks = d.path().join("only-tasks");
+    std::fs::create_dir_all(only_tasks.join("tasks")).unwrap();
+    std::fs::rename(fresh.join("tasks/a"), only_tasks.join("tasks/a")).unwrap();
+    let csv = only_tasks.join("tasks/a/results.csv");
+    let mut rows = std::fs::read_to_string(&csv).unwrap();
+    rows.push_str("pid,9999,0.5\n");
+    std::fs::write(&csv, &rows).unwrap();
+    let before = listing(&only_tasks);
+    let o = run(&["benchmark", &suite, "--out", only_tasks.to_str().unwrap()]);
+    let named = only_tasks.join("tasks/a/results.csv").display().to_string();
+    assert_fails(
+        &o,
+        73,
+        &["already holds a benchmark", &named, "pass --resume"],
+    );
+    assert!(!stderr(&o).contains("task 1/1"), "{}", stderr(&o));
+    assert_eq!(listing(&only_tasks), before);
+    // Beside a file no benchmark writes (the top or a task's directory), the file is named
+    // and no --resume advised (README: only where every file is a benchmark's).
+    for extra in ["notes.txt", "tasks/a/extra.csv"] {
+        let at = d.path().join(format!("extra-{}", extra.replace('/', "-")));
+        std::fs::create_dir_all(at.join("tasks")).unwrap();
+        std::fs::create_dir_all(at.join("tasks/a")).unwrap();
+        std::fs::copy(
+            only_tasks.join("tasks/a/task.json"),
+            at.join("tasks/a/task.json"),
+        )
+        .unwrap();
+        std::fs::write(at.join(extra), "mine\n").unwrap();
+        let before = listing(&at);
+        let o = run(&["benchmark", &suite, "--out", at.to_str().unwrap()]);
+        let file = at.join(extra).display().to_string();
+        assert_fails(
+            &o,
+            73,
+            &[
+                "already holds a benchmark",
+                &file,
+                "which no benchmark writes",
+            ],
+        );
+        assert!(!stderr(&o).contains("--resume"), "{}", stderr(&o));
+        assert_eq!(listing(&at), before, "{extra}");
+    }
+    // A directory holding only files no benchmark writes is no benchmark: it runs.
+    let notes = d.path().join("notes-only");
+    std::fs::create_dir_all(&notes).unwrap();
+    std::fs::write(notes.join("notes.txt"), "mine\n").unwrap();
+    ok(&["benchmark", &suite, "--out", notes.to_str().unwrap()]);
+    assert_eq!(
+        std::fs::read_to_string(notes.join("notes.txt")).unwrap(),
+        "mine\n"
+    );
 }
 
 /// Four stations on a 100 m square and one in the middle, column `v`, in `dir/st.csv`.

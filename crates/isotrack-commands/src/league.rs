@@ -131,25 +131,88 @@ fn lock_out_dir(out: &Path) -> Result<crate::sweep::DirLock, Failure> {
     crate::sweep::lock_output_dir(out, "benchmark")
 }
 
-/// Refuses (73) benchmark directory `out` when it holds an earlier benchmark's
-/// `leaderboard.csv` and not `resume`, advising `--resume`; a `leaderboard.csv` no benchmark
-/// wrote is refused as the user's instead (own42: "pass --resume" was advised for the user's
-/// own file, which `--resume` refuses too). `benchmark` calls it after
-/// [`refuse_foreign_outputs`], so the advice is given only where `--resume` finds every file a
-/// benchmark's.
+/// Refuses (73) benchmark directory `out` when it holds an earlier benchmark's results and
+/// not `resume`: one of its top-level files ([`BENCHMARK_FILES`]) or a task's
+/// `tasks/ID/results.csv` or `task.json` (att46-8: a directory left with only an earlier
+/// benchmark's `tasks/`, its top-level files moved away, had its task results replaced
+/// without a word). The file found is named; each is checked to be a benchmark's first (one
+/// no benchmark wrote is refused as the user's: own42, "pass --resume" was advised for the
+/// user's own file, which `--resume` refuses too). "pass --resume" is advised only where every
+/// file there is one a benchmark writes (README "Whose file an output replaces"): a file of
+/// another name beside the benchmark's (hidden ones, the lock and temporaries, aside) is
+/// named instead. `benchmark` calls it after [`refuse_foreign_outputs`].
 fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
-    let board = out.join(BENCHMARK_FILES[0].0);
-    if resume || std::fs::symlink_metadata(&board).is_err() {
+    if resume {
         return Ok(());
     }
-    refuse_foreign_benchmark_file(&board, BENCHMARK_FILES[0].1)?;
+    let (found, other) = benchmark_entries(out);
+    let Some((file, _)) = found.first() else {
+        return Ok(());
+    };
+    for (p, start) in &found {
+        refuse_foreign_benchmark_file(p, start)?;
+    }
+    let quoted = isotrack_runs::owned::shell_quoted;
+    if let Some(o) = other.first() {
+        return Err(fail(
+            exit::CANTCREAT,
+            format!(
+                "{} already holds a benchmark ({}) and {}, which no benchmark writes: move it away or choose another --out",
+                out.display(),
+                quoted(file),
+                quoted(o)
+            ),
+        ));
+    }
     Err(fail(
         exit::CANTCREAT,
         format!(
-            "{} already holds a benchmark: pass --resume to reuse its task results, or choose another --out",
-            out.display()
+            "{} already holds a benchmark ({}): pass --resume to reuse its task results, or choose another --out",
+            out.display(),
+            quoted(file)
         ),
     ))
+}
+
+/// What benchmark directory `out` holds, in name order: the files a benchmark writes
+/// ([`BENCHMARK_FILES`], then `tasks/ID/results.csv` and `tasks/ID/task.json`), each with the
+/// start every benchmark's has (`""` for a `task.json`: any start), and the entries no
+/// benchmark writes (any other name at the top, in `tasks/` or in a `tasks/ID/`; hidden
+/// names, the lock and the writers' temporaries, aside).
+fn benchmark_entries(out: &Path) -> (Vec<(PathBuf, &'static str)>, Vec<PathBuf>) {
+    let (mut found, mut other) = (Vec::new(), Vec::new());
+    let names = |d: &Path| -> Vec<(String, PathBuf)> {
+        let mut v: Vec<(String, PathBuf)> = std::fs::read_dir(d)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| (e.file_name().to_string_lossy().into_owned(), e.path()))
+            .filter(|(n, _)| !n.starts_with('.'))
+            .collect();
+        v.sort();
+        v
+    };
+    for (name, path) in names(out) {
+        match BENCHMARK_FILES.iter().find(|(n, _)| *n == name) {
+            Some((_, start)) => found.push((path, *start)),
+            None if name == "tasks" && path.is_dir() => {}
+            None => other.push(path),
+        }
+    }
+    for (_, task) in names(&out.join("tasks")) {
+        if !task.is_dir() {
+            other.push(task);
+            continue;
+        }
+        for (name, path) in names(&task) {
+            match name.as_str() {
+                "results.csv" => found.push((path, TASK_RESULTS_START)),
+                "task.json" => found.push((path, "")),
+                _ => other.push(path),
+            }
+        }
+    }
+    (found, other)
 }
 
 /// The start of every file a benchmark writes into its directory, as every isotrack has

@@ -246,6 +246,21 @@ fn padded_axis(
     Ok(Some((mid - half, mid + half)))
 }
 
+/// Saturates every finite value of the series past [`MAX_AXIS_ABS`] to the bound, keeping its
+/// sign; whether any was. A genuine run's series can pass it (att46-13: a turn rate of
+/// -5.6e299 rad/s under `controller.kp = 1e300`): drawn at the bound with the panel's label
+/// saying so (`report` draws the same run), not refused as a data error.
+fn saturate_values<'a>(series: impl Iterator<Item = &'a mut Vec<(f64, f64)>>) -> bool {
+    let mut clipped = false;
+    for q in series.flatten() {
+        if q.1.is_finite() && q.1.abs() > MAX_AXIS_ABS {
+            q.1 = MAX_AXIS_ABS.copysign(q.1);
+            clipped = true;
+        }
+    }
+    clipped
+}
+
 /// Finite `(min, max)` of some values (`(inf, -inf)` when there are none).
 fn finite_bounds(values: impl Iterator<Item = f64>) -> (f64, f64) {
     values
@@ -683,9 +698,10 @@ pub fn trajectory_figure(
     render!(path, st.format, (lay.w, lay.h), |root| {
         (|| -> DrawResult {
             let mut chart = draw_map(&root, &first.scenario, range, (title, &lay), st, &times)?;
+            let marks = PathMarks::of(runs.len(), st);
             for (i, run) in runs.iter().enumerate() {
                 let named = legend_names(i, runs.len());
-                draw_path(&mut chart, run, (colour(i), named), arrow, st)?;
+                draw_path(&mut chart, run, (colour(i), named), arrow, &marks, st)?;
             }
             more_runs_entry(&mut chart, runs.len())?;
             chart
@@ -714,14 +730,61 @@ fn paths_extent(runs: &[RunData]) -> Result<[f64; 4], PlotError> {
     Ok([xa - pad, xb + pad, ya - pad, yb + pad])
 }
 
+/// Paths up to which each has its full start and end marks on the trajectory figure: an
+/// arrow along its first heading, a dot in a white ring at its start (7 px), a triangle at its
+/// end (9 px).
+pub const FULL_MARK_PATHS: usize = 16;
+
+/// The start and end marks of each of `n` paths on the trajectory figure ([`draw_path`]).
+/// Up to [`FULL_MARK_PATHS`] paths, the full marks. Beyond, the marks of all the paths cover
+/// no more than those of [`FULL_MARK_PATHS`] full ones: each mark's radius shrinks by
+/// `sqrt(FULL_MARK_PATHS / n)` (its area by `FULL_MARK_PATHS / n`), without the white ring
+/// and the arrow (att46-17: 5000 rings of 7 px round starts along a 6.93 m circle made a white
+/// band over the isoline and every track); a mark below one output pixel is left out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathMarks {
+    /// The start dot's radius, output px (`None`: no start dot).
+    pub start_px: Option<u32>,
+    /// The end triangle's size, output px (`None`: no end triangle).
+    pub end_px: Option<u32>,
+    /// Whether the start dot has its white ring.
+    pub ring: bool,
+    /// Whether the path has its heading arrow.
+    pub arrow: bool,
+}
+
+impl PathMarks {
+    /// The marks of each of `n` paths drawn in style `st`.
+    pub fn of(n: usize, st: &Style) -> Self {
+        let full = n <= FULL_MARK_PATHS;
+        let shrink = if full {
+            1.0
+        } else {
+            (FULL_MARK_PATHS as f64 / n as f64).sqrt()
+        };
+        let size = |px: f64| {
+            let out = px * shrink * st.k();
+            (out >= 1.0).then(|| out.round() as u32)
+        };
+        PathMarks {
+            start_px: if full { Some(st.px(7.0)) } else { size(7.0) },
+            end_px: if full { Some(st.px(9.0)) } else { size(9.0) },
+            ring: full,
+            arrow: full,
+        }
+    }
+}
+
 /// One run's path on the trajectory figure in colour `c`, labelled with its name for the
-/// legend when `named` ([`legend_names`]): the line through its finite positions, an arrow
-/// `arrow` (m) long along its first heading, a ring at its start and a triangle at its end.
+/// legend when `named` ([`legend_names`]): the line through its finite positions, and as
+/// `marks` says ([`PathMarks`]) an arrow `arrow` (m) long along its first heading, a dot in a
+/// ring at its start and a triangle at its end.
 fn draw_path<DB: DrawingBackend>(
     chart: &mut MapChart<'_, DB>,
     run: &RunData,
     (c, named): (RGBColor, bool),
     arrow: f64,
+    marks: &PathMarks,
     st: &Style,
 ) -> DrawResult {
     let (w2, w3) = (st.px(2.0), st.px(3.0));
@@ -739,28 +802,35 @@ fn draw_path<DB: DrawingBackend>(
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w3)));
     }
     let (a, b) = (run.trace[0], run.trace[run.trace.len() - 1]);
-    let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
-    let tip = (a.x_m + arrow * hx, a.y_m + arrow * hy);
-    let back = |ang: f64| {
-        let (sx, sy) = ((a.heading_rad + ang).cos(), (a.heading_rad + ang).sin());
-        (tip.0 - 0.3 * arrow * sx, tip.1 - 0.3 * arrow * sy)
-    };
-    chart
-        .draw_series([
-            PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(w3)),
-            PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(w3)),
-        ])
-        .map_err(s)?;
-    let r = st.px(7.0);
-    chart
-        .draw_series([Circle::new((a.x_m, a.y_m), r, c.filled())])
-        .map_err(s)?;
-    chart
-        .draw_series([Circle::new((a.x_m, a.y_m), r, WHITE.stroke_width(w2))])
-        .map_err(s)?;
-    chart
-        .draw_series([TriangleMarker::new((b.x_m, b.y_m), st.px(9.0), c.filled())])
-        .map_err(s)?;
+    if marks.arrow {
+        let (hx, hy) = (a.heading_rad.cos(), a.heading_rad.sin());
+        let tip = (a.x_m + arrow * hx, a.y_m + arrow * hy);
+        let back = |ang: f64| {
+            let (sx, sy) = ((a.heading_rad + ang).cos(), (a.heading_rad + ang).sin());
+            (tip.0 - 0.3 * arrow * sx, tip.1 - 0.3 * arrow * sy)
+        };
+        chart
+            .draw_series([
+                PathElement::new(vec![(a.x_m, a.y_m), tip], c.stroke_width(w3)),
+                PathElement::new(vec![back(0.45), tip, back(-0.45)], c.stroke_width(w3)),
+            ])
+            .map_err(s)?;
+    }
+    if let Some(r) = marks.start_px {
+        chart
+            .draw_series([Circle::new((a.x_m, a.y_m), r, c.filled())])
+            .map_err(s)?;
+        if marks.ring {
+            chart
+                .draw_series([Circle::new((a.x_m, a.y_m), r, WHITE.stroke_width(w2))])
+                .map_err(s)?;
+        }
+    }
+    if let Some(e) = marks.end_px {
+        chart
+            .draw_series([TriangleMarker::new((b.x_m, b.y_m), e, c.filled())])
+            .map_err(s)?;
+    }
     Ok(())
 }
 
@@ -1027,10 +1097,14 @@ pub fn timeseries_figure(
     // failed drawing).
     let mut data = Vec::with_capacity(list.len());
     for p in &list {
-        let series: Vec<[Vec<(f64, f64)>; 2]> = runs.iter().map(p.series).collect();
+        let mut series: Vec<[Vec<(f64, f64)>; 2]> = runs.iter().map(p.series).collect();
+        let label = match saturate_values(series.iter_mut().flatten()) {
+            true => format!("{} (clipped at \u{b1}{MAX_AXIS_ABS:e})", p.label),
+            false => p.label.to_string(),
+        };
         let (lo, hi) = finite_bounds(series.iter().flatten().flatten().map(|q| q.1));
         let range = padded_axis(p.label, lo, hi, 0.08, 1e-12)?.unwrap_or((-1.0, 1.0));
-        data.push((series, range));
+        data.push((series, range, label));
     }
     let n = list.len() as u32;
     let (w, h) = match st.size_px {
@@ -1047,8 +1121,7 @@ pub fn timeseries_figure(
                 root.titled(title, st.font(1.6)).map_err(s)?
             };
             let areas = body.split_evenly((list.len(), 1));
-            for (k, ((p, (series, (lo, hi))), area)) in
-                list.iter().zip(&data).zip(areas.iter()).enumerate()
+            for (k, ((series, (lo, hi), label), area)) in data.iter().zip(areas.iter()).enumerate()
             {
                 let (lo, hi) = (*lo, *hi);
                 let ys = tick_step(lo, hi, 8);
@@ -1056,7 +1129,7 @@ pub fn timeseries_figure(
                     area,
                     st,
                     ((0.0, t_end), (lo, hi)),
-                    ("time (s)", p.label),
+                    ("time (s)", label.as_str()),
                     (ts, ys),
                 )?;
                 draw_time_series(&mut chart, st, runs, series, (lo, hi), (ss, t_end))?;
@@ -2605,6 +2678,33 @@ fn panel_legend<'a, DB: DrawingBackend + 'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// att46-17: beyond [`FULL_MARK_PATHS`] paths the marks lose their white ring and arrow,
+    /// and all of them together cover at most the area of [`FULL_MARK_PATHS`] full ones
+    /// (`n pi r^2 <= 16 pi 7^2` px^2, to the rounding of `r` to whole pixels: `r <= 7
+    /// sqrt(16/n) + 0.5`); a mark under a pixel is left out (5000 paths in SVG: `7 sqrt(16 /
+    /// 5000) = 0.40 px`). Up to 16 the full marks (a team of 4 is drawn as before).
+    #[test]
+    fn many_paths_get_small_marks_without_rings() {
+        let st = Style::new(Format::Svg);
+        for n in [1, 4, 16] {
+            let m = PathMarks::of(n, &st);
+            assert_eq!(
+                (m.start_px, m.end_px, m.ring, m.arrow),
+                (Some(7), Some(9), true, true)
+            );
+        }
+        for n in [17, 100, 300, 784] {
+            let m = PathMarks::of(n, &st);
+            assert!(!m.ring && !m.arrow, "{n}: {m:?}");
+            let r = m.start_px.unwrap() as f64;
+            assert!(r <= 7.0 * (16.0 / n as f64).sqrt() + 0.5, "{n}: {r}");
+            let e = m.end_px.unwrap() as f64;
+            assert!(e <= 9.0 * (16.0 / n as f64).sqrt() + 0.5, "{n}: {e}");
+        }
+        let m = PathMarks::of(5000, &st);
+        assert_eq!((m.start_px, m.end_px), (None, None));
+    }
 
     /// att36-14: the revisit panel's key goes where neither the curve nor the ideal line is:
     /// a low curve (ERA5 at 600 s: 300-600 s under an ideal near the top) leaves the upper

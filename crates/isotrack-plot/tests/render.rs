@@ -397,3 +397,62 @@ fn wide_colour_bar_labels_fit_between_unit_and_bar() {
         }
     }
 }
+
+/// att46-17: a figure of many paths (here 100 starts along the level-10 circle of radius
+/// 6.93 m) had a white ring of 7 px round every start, a white band over the isoline and the
+/// tracks. Beyond 16 paths no ring is drawn (no white-stroked circle in the SVG) and each
+/// start dot's radius is at most `7 sqrt(16/100) = 2.8` px, rounded to 3: the 100 dots cover
+/// at most the area of 16 full ones.
+#[test]
+fn many_paths_have_small_start_marks_without_white_rings() {
+    let dir = tempfile::tempdir().unwrap();
+    // The level-10 isoline of F = 20 exp(-0.1 r): r = ln(2) / 0.1.
+    let r = 2f64.ln() / 0.1;
+    let n = 100;
+    let runs: Vec<RunData> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            let sets = [
+                "sim.duration_s=2".to_string(),
+                format!("initial.x_m={}", r * a.cos()),
+                format!("initial.y_m={}", r * a.sin()),
+                format!("initial.heading_rad={}", a - std::f64::consts::FRAC_PI_2),
+            ];
+            let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+            make_run(&dir.path().join(format!("r{i}")), &sets)
+        })
+        .collect();
+    let svg_path = dir.path().join("many.svg");
+    trajectory_figure(&runs, &svg_path, &Style::new(Format::Svg), "many").unwrap();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    let circles: Vec<&str> = svg
+        .split("<circle")
+        .skip(1)
+        .map(|c| c.split('>').next().unwrap())
+        .collect();
+    assert_eq!(circles.len(), n, "one start dot a path, no ring");
+    for c in &circles {
+        assert!(!c.contains("#FFFFFF"), "a white ring: {c}");
+        let r: f64 = c
+            .split("r=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(r <= 3.0, "start dot of {r} px");
+    }
+    // Two paths keep their full marks: a dot and a white ring of 7 px each.
+    let two = dir.path().join("two.svg");
+    trajectory_figure(&runs[..2], &two, &Style::new(Format::Svg), "two").unwrap();
+    let svg = std::fs::read_to_string(&two).unwrap();
+    let circles: Vec<&str> = svg
+        .split("<circle")
+        .skip(1)
+        .map(|c| c.split('>').next().unwrap())
+        .collect();
+    assert_eq!(circles.len(), 4);
+    assert_eq!(circles.iter().filter(|c| c.contains("#FFFFFF")).count(), 2);
+}

@@ -1151,6 +1151,31 @@ pub struct TeamBounds {
     /// mean of the lengths the run saw), an open one (its ideal is the stretch the team
     /// covered) or none.
     pub ideal_s: Option<f64>,
+    /// The team's vehicle count `N`: a gap CV is at most `sqrt(N - 1)` ([`max_gap_cv`]).
+    pub count: usize,
+    /// The speeds a vehicle of the team can hold, `[min v_min_i, max v_max_i]`, m/s
+    /// ([`isotrack_scenario::spec::team::TeamSpec::speed_envelope_mps`]: every command is
+    /// saturated to its vehicle's envelope and a Dubins robot holds its command); `None` for a
+    /// fixed wing, whose ground speed (what the metrics sample) adds the wind to its airspeed.
+    pub speed_envelope_mps: Option<(f64, f64)>,
+    /// The length of a fixed closed isoline, m, as the run measures it (the `L` of
+    /// [`TeamBounds::ideal_s`]; on a known circle `2 pi R`): the summary's
+    /// `isoline_length_m`. `None` where `ideal_s` is.
+    pub isoline_length_m: Option<f64>,
+}
+
+/// The largest gap CV of a team of `n` vehicles: `sqrt(n - 1)` (0 for one vehicle or none).
+///
+/// The metrics' gap CV (`isotrack_sim::team::metrics`) is the *population* standard deviation
+/// of `k` arc gaps `g_j >= 0` over their mean `m = S / k`, with `S` their sum (a closed
+/// isoline: the `k <= n` live vehicles' gaps round the loop, `S = L`; an open one: the `k =
+/// live - 1 <= n - 1` gaps along the team's stretch). Since every `g_j >= 0`, `sum g_j^2 <=
+/// (sum g_j)^2 = S^2`, so the variance `(1/k) sum g_j^2 - m^2 <= S^2 / k - m^2 = (k - 1) m^2`
+/// and the CV is at most `sqrt(k - 1) <= sqrt(n - 1)`, reached when one gap holds the whole
+/// length (every vehicle at one point). `gap_cv`, a mean of such CVs over the steady window,
+/// is bounded alike.
+pub fn max_gap_cv(n: usize) -> f64 {
+    (n.saturating_sub(1) as f64).sqrt()
 }
 
 impl TeamBounds {
@@ -1169,16 +1194,20 @@ impl TeamBounds {
             .speed_max_mps
             .map(|v| (spread + 2.0 * v * duration_s) * 1.01 + 1e-9);
         let n = team.starts.len() as f64;
-        let ideal_s = match s.team_isoline().as_team_isoline() {
-            Some(isotrack_sim::team::TeamIsoline::Fixed(a)) if a.is_closed() => {
-                Some(a.length_m() / (n * team.ideal_speed_mps()))
-            }
+        let isoline_length_m = match s.team_isoline().as_team_isoline() {
+            Some(isotrack_sim::team::TeamIsoline::Fixed(a)) if a.is_closed() => Some(a.length_m()),
             _ => None,
         };
+        let ideal_s = isoline_length_m.map(|l| l / (n * team.ideal_speed_mps()));
+        let fixed_wing =
+            s.file().vehicle.kind == Some(isotrack_scenario::schema::VehicleKind::FixedWing);
         Some(TeamBounds {
             duration_s,
             reach_m,
             ideal_s,
+            count: team.count(),
+            speed_envelope_mps: (!fixed_wing).then(|| team.speed_envelope_mps()),
+            isoline_length_m,
         })
     }
 }
@@ -1186,8 +1215,9 @@ impl TeamBounds {
 /// The team cells of a team run's row bounded by its scenario ([`TeamBounds`]): the times
 /// (`time_to_even_s`, `revisit_time_max_s`, `revisit_time_mean_s`) within the run's duration and
 /// the mean revisit at most the longest (to rounding); `min_separation_m` within the vehicles'
-/// reach; `revisit_time_ideal_s` exactly the recomputed `L / (N v0)` (bit for bit: the run
-/// computes it the same way), where the isoline is fixed. Each error names its column.
+/// reach; `gap_cv` at most [`max_gap_cv`] of the team's count; `revisit_time_ideal_s` exactly
+/// the recomputed `L / (N v0)` (bit for bit: the run computes it the same way), where the
+/// isoline is fixed. Each error names its column.
 pub fn check_team_bounds<'c>(
     cell: &dyn Fn(&str) -> &'c str,
     b: &TeamBounds,
@@ -1219,6 +1249,9 @@ pub fn check_team_bounds<'c>(
                 Echo(max)
             ));
         }
+    }
+    if let Some(cv) = value("gap_cv") {
+        check_gap_cv("gap_cv", cv, b.count).map_err(|m| format!("{}: {m}", column("gap_cv")))?;
     }
     if let (Some(sep), Some(reach)) = (value("min_separation_m"), b.reach_m) {
         if sep > reach {
@@ -1260,18 +1293,100 @@ pub fn check_team_record(
             .map_or("", |c| c.as_str())
     };
     check_team_cells("completed", &cell)?;
+    check_team_record_numbers(m, b)?;
     match b {
         Some(b) => check_team_bounds(&cell, b, &|n| n.to_string()),
         None => Ok(()),
     }
 }
 
+/// A gap CV (`gap_cv` or `gap_cv_final`) of a team of `n` vehicles at most [`max_gap_cv`]
+/// (to rounding: the bound is reached exactly with every vehicle at one point).
+fn check_gap_cv(key: &str, cv: f64, n: usize) -> Result<(), String> {
+    let most = max_gap_cv(n);
+    if cv > most * (1.0 + 1e-9) + 1e-12 {
+        return Err(format!(
+            "{key} = {} exceeds sqrt(N - 1) = {} for N = {n} vehicles, the largest coefficient of variation of their gaps (all of the isoline in one gap)",
+            Echo(cv),
+            Num(most)
+        ));
+    }
+    Ok(())
+}
+
+/// The team record's numbers that no sweep row holds, as the team metrics
+/// (`isotrack_sim::team::metrics::TeamMetrics::finish`) give them (att46-4: each edited into a
+/// genuine run's summary was shown as the run's):
+/// * `time_to_even_s` is the first sample of the last run of samples with a gap CV at or
+///   below the even threshold (0.05) that lasts to the end: every sample without one resets
+///   it, so with it the last sample's CV, `gap_cv_final`, is there and at most the threshold;
+/// * `speed_range_mps` is the slowest and the fastest speed a vehicle held at a sample:
+///   `min <= max`, both within the team's envelope where it bounds the speed held
+///   ([`TeamBounds::speed_envelope_mps`]);
+/// * `gap_cv_final` at most [`max_gap_cv`] of the team's count;
+/// * `isoline_length_m` the fixed closed isoline's length ([`TeamBounds::isoline_length_m`]).
+fn check_team_record_numbers(
+    m: &crate::summary::TeamRecord,
+    b: Option<&TeamBounds>,
+) -> Result<(), String> {
+    let even = isotrack_sim::team::metrics::TeamMetricsConfig::default().even_gap_cv;
+    if let Some(t) = m.time_to_even_s {
+        if !m.gap_cv_final.is_some_and(|cv| cv <= even) {
+            let last = m
+                .gap_cv_final
+                .map_or("null".to_string(), |cv| Echo(cv).to_string());
+            return Err(format!(
+                "time_to_even_s = {} s where gap_cv_final = {last}: a team evenly spread from then to the end has a final gap CV at most {}",
+                Echo(t),
+                Echo(even)
+            ));
+        }
+    }
+    if let Some([Some(lo), Some(hi)]) = m.speed_range_mps {
+        if lo > hi {
+            return Err(format!(
+                "speed_range_mps = [{}, {}]: its slowest speed exceeds its fastest",
+                Echo(lo),
+                Echo(hi)
+            ));
+        }
+        if let Some((v_min, v_max)) = b.and_then(|b| b.speed_envelope_mps) {
+            if lo < v_min * (1.0 - 1e-12) || hi > v_max * (1.0 + 1e-12) {
+                return Err(format!(
+                    "speed_range_mps = [{}, {}] m/s leaves the team's speed envelope [{}, {}] m/s (every speed command is saturated to it)",
+                    Echo(lo),
+                    Echo(hi),
+                    Echo(v_min),
+                    Echo(v_max)
+                ));
+            }
+        }
+    }
+    let Some(b) = b else { return Ok(()) };
+    if let Some(cv) = m.gap_cv_final {
+        check_gap_cv("gap_cv_final", cv, b.count)?;
+    }
+    if let (Some(got), Some(want)) = (m.isoline_length_m, b.isoline_length_m) {
+        if (got - want).abs() > want.abs() * 1e-9 {
+            return Err(format!(
+                "isoline_length_m = {} m is not the length of the run's isoline, {} m",
+                Echo(got),
+                Echo(want)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A simulated run's `summary.json` checked as a sweep's row is (att43-15: `report` showed an
 /// edited summary's impossible numbers, a negative `max |eps|`, a convergence time past the
 /// run's end, as the run's): the record's metrics by [`check_metrics`] (every number finite
-/// and of its sign, an RMS at most its maximum, the convergence time at most `t_end_s`, ...),
-/// each vehicle's of a team's run too, and a team's metrics by [`check_team_record`] within
-/// the bounds of `scenario`'s team ([`TeamBounds`]). A flight's summary and a cut `sitl` run's
+/// and of its sign, an RMS at most its maximum, the convergence time at most `t_end_s`, ...)
+/// and, for a completed run, by the tolerance's implications over the run's steady-state
+/// window ([`check_tolerance_implications`], the window and tolerance of `scenario`'s own
+/// step plan: a convergence at or before the window's start puts its maximum under the
+/// tolerance), each vehicle's of a team's run too, and a team's metrics by
+/// [`check_team_record`] within the bounds of `scenario`'s team ([`TeamBounds`]). A flight's summary and a cut `sitl` run's
 /// (`interrupted`, `companion_lost`: no row of a sweep) are not checked here. The error names
 /// the key (`vehicles[2].convergence_time_s`, `team: ...`).
 pub fn check_run_summary(
@@ -1281,6 +1396,8 @@ pub fn check_run_summary(
     let crate::summary::Ended::Run(end) = &summary.ended else {
         return Ok(());
     };
+    let metric_steps =
+        run_span(scenario.file()).and_then(|s| s.metric_steps.map(|ms| (ms, s.dt_s)));
     let check = |r: &crate::results::RunRecord, key: &str| -> Result<(), String> {
         if !OUTCOMES.contains(&r.outcome.as_str()) || r.outcome == "invalid_scenario" {
             return Ok(());
@@ -1294,7 +1411,17 @@ pub fn check_run_summary(
                 .and_then(|i| cells.get(i))
                 .map_or("", |c| c.as_str())
         };
-        check_metrics(&r.outcome, &cell, true).map_err(|m| format!("{key}{m}"))
+        check_metrics(&r.outcome, &cell, true).map_err(|m| format!("{key}{m}"))?;
+        // The convergence time, the steady-state window's numbers and the tolerance tie
+        // together as in a sweep's row (att46-4: a convergence time of 1 s beside a
+        // steady-state maximum of 50 past a tolerance of 0.1 was shown as the run's).
+        match metric_steps {
+            Some((ms, dt)) if r.outcome == "completed" => {
+                check_tolerance_implications(&ms, dt, &cell, &|n| n.to_string())
+                    .map_err(|m| format!("{key}{m}"))
+            }
+            _ => Ok(()),
+        }
     };
     check(&end.record, "")?;
     for (i, v) in end.vehicles.iter().flatten().enumerate() {
@@ -1305,4 +1432,111 @@ pub fn check_run_summary(
             .map_err(|m| format!("team: {m}"))?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod team_record_tests {
+    use super::{check_team_record_numbers, max_gap_cv, TeamBounds};
+    use crate::summary::TeamRecord;
+
+    /// The population CV of `gaps`, computed here from its definition.
+    fn population_cv(gaps: &[f64]) -> f64 {
+        let n = gaps.len() as f64;
+        let mean = gaps.iter().sum::<f64>() / n;
+        let var = gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n;
+        var.sqrt() / mean
+    }
+
+    /// att46-4: the largest gap CV of N vehicles is reached with every vehicle at one point
+    /// (one gap the whole loop): sqrt(N - 1) (4 vehicles: sqrt(3)); any other spread is below.
+    #[test]
+    fn the_gap_cv_bound_is_the_all_in_one_gap_spread() {
+        for n in 2..9usize {
+            let mut gaps = vec![0.0; n];
+            gaps[0] = 43.55;
+            let cv = population_cv(&gaps);
+            assert!((cv - max_gap_cv(n)).abs() < 1e-12, "n = {n}: {cv}");
+            let spread: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+            assert!(population_cv(&spread) < max_gap_cv(n));
+        }
+        assert_eq!(max_gap_cv(4), 3f64.sqrt());
+        assert_eq!(max_gap_cv(1), 0.0);
+    }
+
+    fn record() -> TeamRecord {
+        TeamRecord {
+            count: 4,
+            isoline_length_m: Some(43.55),
+            gap_cv: Some(0.01),
+            gap_cv_final: Some(0.01),
+            time_to_even_s: Some(0.0),
+            revisit_time_max_s: None,
+            revisit_time_mean_s: None,
+            revisit_time_ideal_s: None,
+            revisit_time_ideal_active_s: None,
+            min_separation_m: None,
+            order_preserved: true,
+            speed_range_mps: Some([Some(0.25), Some(0.75)]),
+            moving_isoline: None,
+            open_isoline: None,
+        }
+    }
+
+    const BOUNDS: TeamBounds = TeamBounds {
+        duration_s: 100.0,
+        reach_m: None,
+        ideal_s: None,
+        count: 4,
+        speed_envelope_mps: Some((0.25, 0.75)),
+        isoline_length_m: Some(43.55),
+    };
+
+    /// att46-4: each number edited to one the metrics cannot give is refused naming its key;
+    /// the record as a run gives it (its bounds reached exactly) is kept.
+    #[test]
+    fn impossible_team_numbers_are_refused() {
+        assert_eq!(check_team_record_numbers(&record(), Some(&BOUNDS)), Ok(()));
+        let mut at_bounds = record();
+        at_bounds.time_to_even_s = None;
+        at_bounds.gap_cv_final = Some(3f64.sqrt());
+        assert_eq!(check_team_record_numbers(&at_bounds, Some(&BOUNDS)), Ok(()));
+        type Edit = fn(&mut TeamRecord);
+        let cases: [(Edit, &str); 6] = [
+            (
+                |r| (r.time_to_even_s, r.gap_cv_final) = (None, Some(1.8)),
+                "gap_cv_final = 1.8 exceeds",
+            ),
+            (
+                |r| r.gap_cv_final = Some(0.06),
+                "time_to_even_s = 0 s where gap_cv_final = 0.06",
+            ),
+            (
+                |r| r.gap_cv_final = None,
+                "time_to_even_s = 0 s where gap_cv_final = null",
+            ),
+            (
+                |r| r.speed_range_mps = Some([Some(0.5), Some(0.4)]),
+                "slowest speed exceeds",
+            ),
+            (
+                |r| r.speed_range_mps = Some([Some(0.25), Some(0.76)]),
+                "speed envelope",
+            ),
+            (|r| r.isoline_length_m = Some(1.0), "isoline_length_m = 1 m"),
+        ];
+        for (edit, needle) in cases {
+            let mut r = record();
+            edit(&mut r);
+            let e = check_team_record_numbers(&r, Some(&BOUNDS)).unwrap_err();
+            assert!(e.contains(needle), "{e}");
+        }
+        // A fixed wing's ground speed is not bounded by its airspeed envelope.
+        let mut r = record();
+        r.speed_range_mps = Some([Some(0.1), Some(30.0)]);
+        let wing = TeamBounds {
+            speed_envelope_mps: None,
+            ..BOUNDS
+        };
+        assert_eq!(check_team_record_numbers(&r, Some(&wing)), Ok(()));
+    }
 }
