@@ -46,7 +46,8 @@ pub struct LoopSpectrum {
 /// lengths, a slope not in `(0, 1]` or every vehicle pinned (no loop).
 pub fn loop_spectrum(c: f64, slopes: &[f64], pinned: &[bool]) -> Option<LoopSpectrum> {
     let n = slopes.len();
-    if !(c > 0.0) || n < 2 || pinned.len() != n || slopes.iter().any(|c| !(*c > 0.0 && *c <= 1.0)) {
+    let bad = |x: f64| x.is_nan() || x <= 0.0;
+    if bad(c) || n < 2 || pinned.len() != n || slopes.iter().any(|&x| bad(x) || x > 1.0) {
         return None;
     }
     let free: Vec<usize> = (0..n).filter(|&i| !pinned[i]).collect();
