@@ -13,13 +13,17 @@
 //!   The range slope `c = dr/dg`: `cos(pi/N)` for `range_balance` on an isoline known to be a
 //!   circle (a chord `2R sin(g/(2R))` at the even gap `2 pi R/N`), 1 for `arc_reference` (arc
 //!   gaps) and, conservatively, 1 for `range_balance` elsewhere (`|dr/dg| <= 1` on any curve,
-//!   so `k_v*` is not overstated);
+//!   so `k_v*` is not overstated). Where the team does not settle at even spacing of a free ring
+//!   (a shifted equilibrium of unequal speeds, each gap with its own chord slope; vehicles with
+//!   no speed room, fixed in the frame moving at their speed) the modes are the eigenvalues of
+//!   that linearisation ([`linearised::loop_spectrum`]), `k_v* = g*/(T mu_max)`;
 //! * the **tracking loop**'s sampled check ([`super::sampled`]) at every speed of a grid over
 //!   the range the spacing law may command, `[team.v_min_mps, team.v_max_mps]` (both ends and
 //!   `v0` included; the `none` law commands `v0` only): the paper's theory assumes a constant
 //!   speed, and the verdict holds only if the loop is stable at every speed of the range.
 
 mod equilibrium;
+mod linearised;
 
 pub use equilibrium::ShiftedEquilibrium;
 
@@ -34,10 +38,7 @@ use crate::team::TeamIsolineModel;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::spacing::{
-    max_stable_gain_per_period, max_stable_spacing_gain, ring_laplacian_eigenvalue,
-    ring_laplacian_max_eigenvalue, slowest_mode_time_constant_s,
-    slowest_mode_time_constant_sampled_s, slowest_sampled_mode, spacing_mode_spectral_radius,
-    spacing_mode_stable, split_delay,
+    max_stable_gain_per_period, spacing_mode_spectral_radius, spacing_mode_stable, split_delay,
 };
 use isotrack_core::Vec2;
 use isotrack_sim::team::arc::{ArcProjection, CircleArc, PolylineArc};
@@ -57,9 +58,11 @@ pub const MAX_LISTED_MODES: usize = 16;
 /// One mode of the ring Laplacian in the spacing loop.
 #[derive(Clone, Debug, Serialize)]
 pub struct SpacingMode {
-    /// The mode's index `m` (`1..=floor(N/2)`; `m` and `N - m` share the eigenvalue).
+    /// The mode's index `m` (`1..=floor(N/2)`; `m` and `N - m` share the eigenvalue); linearised
+    /// elsewhere ([`SpacingLoopReport::linearised_about`]), the rank of its distinct eigenvalue,
+    /// ascending from 1.
     pub m: usize,
-    /// `lambda_m = 2 - 2 cos(2 pi m/N)`.
+    /// `lambda_m = 2 - 2 cos(2 pi m/N)`; linearised elsewhere, `mu/c` of its eigenvalue `mu`.
     pub lambda: f64,
     /// The gain per ranging period `g_m = k_v c lambda_m T`.
     pub gain_per_period: f64,
@@ -149,6 +152,13 @@ pub struct SpacingLoopReport {
     /// otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shifted_equilibrium: Option<ShiftedEquilibrium>,
+    /// Where the loop is linearised when not at even spacing of a free ring (absent there):
+    /// `shifted_equilibrium` (the chord slopes of its gaps, att46-1, -16) or `pinned` (vehicles
+    /// with no speed room fixed in the frame moving at their speed, att46-9). The modes are then
+    /// the eigenvalues `mu` of `K = D^T C D` over the free vehicles (docs/TEAMS.md, "Theory"),
+    /// each listed with `lambda = mu/c`, and `k_v* = g*/(T mu_max)`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linearised_about: Option<&'static str>,
     /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
     /// discovery phase), each with its key.
     pub not_modelled: Vec<String>,
@@ -233,8 +243,28 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     rep.range_slope = Some(c);
     rep.range_slope_source = Some(source);
     rep.applicable = true;
-    rep.lambda_min = Some(ring_laplacian_eigenvalue(n, 1));
-    rep.lambda_max = Some(ring_laplacian_max_eigenvalue(n));
+    let (slopes, about) = loop_slopes(s, l, team, &rep, c);
+    let mut pins = vec![false; n];
+    equilibrium::pinned(team)
+        .into_iter()
+        .for_each(|i| pins[i] = true);
+    let pinned_some = pins.iter().any(|&p| p) && !pins.iter().all(|&p| p);
+    let spectrum = linearised::loop_spectrum(c, &slopes, &pins)
+        .filter(|_| pinned_some)
+        .or_else(|| linearised::loop_spectrum(c, &slopes, &vec![false; n]));
+    let Some(spectrum) = spectrum else {
+        rep.applicable = false;
+        rep.note = "not computed: the range slopes at the equilibrium are not in (0, 1]".into();
+        return rep;
+    };
+    rep.linearised_about = match (pinned_some, about) {
+        (true, _) => Some("pinned"),
+        (false, "even_spacing") => None,
+        (false, a) => Some(a),
+    };
+    let lambdas = &spectrum.lambdas;
+    rep.lambda_min = Some(lambdas[0]);
+    rep.lambda_max = Some(lambdas[lambdas.len() - 1]);
     let (period_s, delay_s) = (rep.period_s, rep.delay_s);
     let Some(g_star) = max_stable_gain_per_period(period_s, delay_s) else {
         rep.note = format!(
@@ -245,8 +275,11 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         return rep;
     };
     rep.max_gain_per_period = Some(g_star);
-    rep.max_stable_k_v_per_s = max_stable_spacing_gain(n, period_s, delay_s, c);
-    check_spacing_modes(&mut rep, n, k_v, c);
+    rep.max_stable_k_v_per_s = rep
+        .lambda_max
+        .map(|lmax| g_star / (period_s * c * lmax))
+        .filter(|k| k.is_finite());
+    check_spacing_modes(&mut rep, k_v, c, &spectrum);
     if rep.stable == Some(false) {
         note_saturated_gaps(&mut rep, s, team);
     }
@@ -283,9 +316,10 @@ fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLo
         saturated_gap_cv_max: None,
         range_halt: range_halt(s, l, team),
         silent_gap_closing_mps: silent_gap_closing_mps(s, l, team),
-        shifted_equilibrium: s
-            .team_arc()
-            .and_then(|c| equilibrium::shifted_equilibrium(team, flown_circle_radius_m(s, l, c))),
+        shifted_equilibrium: s.team_arc().and_then(|c| {
+            equilibrium::shifted_equilibrium(s, l, team, c, flown_circle_radius_m(s, l, c))
+        }),
+        linearised_about: None,
         not_modelled: vec![],
         note: String::new(),
     }
@@ -318,36 +352,97 @@ fn no_spacing_loop(s: &Scenario, team: &TeamSpec, k_v: f64) -> Option<String> {
     None
 }
 
-/// The spacing loop's modes of a ring of `n` vehicles at gain `k_v` and range slope `c` (the
-/// report's period and delay): whether every mode is stable, the modes listed, the slowest.
-fn check_spacing_modes(rep: &mut SpacingLoopReport, n: usize, k_v: f64, c: f64) {
+/// The range slope of each gap (listed order) at the equilibrium the loop is linearised
+/// about, and which (`even_spacing`, `shifted_equilibrium`): on a known circle the chord slopes
+/// `cos(g_i/(2R'))` of the solved equilibrium's gaps (unequal nominal speeds) or of the best
+/// case vehicles with no speed room leave ([`equilibrium::pinned_best_arcs`]); else `c` for
+/// every gap.
+fn loop_slopes(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    rep: &SpacingLoopReport,
+    c: f64,
+) -> (Vec<f64>, &'static str) {
+    let n = team.count();
+    if rep.range_slope_source != Some("circle_chord") {
+        return (vec![c; n], "even_spacing");
+    }
+    let solved = rep.shifted_equilibrium.as_ref().filter(|e| e.exists());
+    if let (Some(eq), Some(circle)) = (solved, s.team_arc()) {
+        let d = 2.0 * flown_circle_radius_m(s, l, circle);
+        let slopes = eq
+            .ranges_m
+            .iter()
+            .map(|r| (1.0 - (r / d).powi(2)).max(0.0).sqrt())
+            .collect();
+        return (slopes, "shifted_equilibrium");
+    }
+    match equilibrium::pinned_best_arcs(s, l, team) {
+        Some(arcs) => (
+            arcs.iter().map(|a| (a / 2.0).cos()).collect(),
+            "even_spacing",
+        ),
+        None => (vec![c; n], "even_spacing"),
+    }
+}
+
+/// The spacing loop's modes at gain `k_v` (the report's period and delay), one per distinct
+/// eigenvalue `mu` of the linearised loop (`spectrum`, [`linearised::loop_spectrum`]; at even
+/// spacing `mu = c lambda_m`): whether every mode is stable, the modes listed (each with its
+/// `mu/c` as `lambda`), the slowest.
+fn check_spacing_modes(
+    rep: &mut SpacingLoopReport,
+    k_v: f64,
+    c: f64,
+    spectrum: &linearised::LoopSpectrum,
+) {
     let (period_s, delay_s) = (rep.period_s, rep.delay_s);
-    let top = n / 2;
-    let gain = |m: usize| k_v * c * ring_laplacian_eigenvalue(n, m) * period_s;
-    // Every mode decides (not only the scan's g*): O(N/2) Schur tests.
-    rep.stable = Some((1..=top).all(|m| spacing_mode_stable(gain(m), period_s, delay_s)));
-    rep.all_modes_listed = top <= MAX_LISTED_MODES;
+    let mu = &spectrum.lambdas;
+    let gain = |k: usize| k_v * c * mu[k] * period_s;
+    // Every mode decides (not only the scan's g*): one Schur test each.
+    rep.stable = Some((0..mu.len()).all(|k| spacing_mode_stable(gain(k), period_s, delay_s)));
+    rep.all_modes_listed = spectrum.exact && mu.len() <= MAX_LISTED_MODES;
     let listed: Vec<usize> = if rep.all_modes_listed {
-        (1..=top).collect()
+        (0..mu.len()).collect()
     } else {
-        vec![1, top]
+        vec![0, mu.len() - 1]
     };
+    let radius = |k: usize| spacing_mode_spectral_radius(gain(k), period_s, delay_s);
     rep.modes = listed
         .into_iter()
-        .map(|m| SpacingMode {
-            m,
-            lambda: ring_laplacian_eigenvalue(n, m),
-            gain_per_period: gain(m),
-            spectral_radius: spacing_mode_spectral_radius(gain(m), period_s, delay_s),
-            stable: spacing_mode_stable(gain(m), period_s, delay_s),
+        .map(|k| SpacingMode {
+            m: k + 1,
+            lambda: mu[k],
+            gain_per_period: gain(k),
+            spectral_radius: radius(k),
+            stable: spacing_mode_stable(gain(k), period_s, delay_s),
         })
         .collect();
-    rep.slowest_mode_m = slowest_sampled_mode(n, k_v, c, period_s, delay_s).map(|(m, _)| m);
-    rep.slowest_time_constant_s =
-        slowest_mode_time_constant_sampled_s(n, k_v, c, period_s, delay_s)
-            .filter(|t| t.is_finite());
+    // The slowest sampled mode: the largest radius (ties keep the smaller mu).
+    let slowest = (0..mu.len())
+        .map(|k| (k, radius(k)))
+        .try_fold(None::<(usize, f64)>, |best, (k, r)| {
+            let r = r?;
+            Some(Some(match best {
+                Some(b) if b.1 >= r => b,
+                _ => (k, r),
+            }))
+        })
+        .flatten()
+        .filter(|_| spectrum.exact);
+    rep.slowest_mode_m = slowest.map(|(k, _)| k + 1);
+    rep.slowest_time_constant_s = slowest
+        .map(|(_, rho)| {
+            if rho >= 1.0 {
+                f64::INFINITY
+            } else {
+                -period_s / rho.ln()
+            }
+        })
+        .filter(|t| t.is_finite());
     rep.slowest_time_constant_continuous_s =
-        Some(slowest_mode_time_constant_s(n, k_v, c)).filter(|t| t.is_finite());
+        Some(1.0 / (k_v * c * mu[0])).filter(|t| t.is_finite());
 }
 
 /// An unstable spacing loop: the gaps' swing once the speeds saturate (its amplitude, and its
@@ -377,7 +472,7 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> V
         Echo(team.v_min_mps),
         Echo(team.v_max_mps)
     )];
-    if team.has_speed_overrides() {
+    if team.nominal_speeds_mps().len() > 1 {
         let nominal = team.nominal_speeds_mps();
         let mean = team.ideal_speed_mps();
         let speed = match common_speed(team, mean) {
@@ -389,7 +484,7 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> V
             None => format!("the team moves at the mean v0 = {} m/s", Num(mean)),
         };
         out.push(format!(
-            "team.vehicles: unequal nominal speeds ({} to {} m/s) leave the loop's modes as they are (each v0_i is a constant input) but move its equilibrium: {speed} and vehicle i's gap ahead exceeds its gap behind by (V - v0_i)/(k_v c), while every command stays within the vehicle's own envelope",
+            "team.vehicles: unequal nominal speeds ({} to {} m/s) move the loop's equilibrium: {speed} and vehicle i's range ahead exceeds its range behind by (V - v0_i)/k_v, while every command stays within the vehicle's own envelope; where that equilibrium is solved (a known circle) the modes are linearised there, with each gap's own chord slope",
             Echo(nominal[0]),
             Echo(nominal[nominal.len() - 1])
         ));
@@ -975,8 +1070,18 @@ fn spacing_claim(
     if let Some(why) = equilibrium::probe_cannot_fly(team) {
         return Some((Verdict::Fails, why));
     }
+    if let Some(why) = equilibrium::probe_below_noise(team) {
+        return Some((Verdict::NotApplicable, why));
+    }
     let solved = sp.shifted_equilibrium.as_ref().filter(|_| ranges);
     if let Some(claim) = solved.and_then(|eq| equilibrium::shifted_claim(team, eq)) {
+        return Some(claim);
+    }
+    if let Some(claim) = circle
+        .is_none()
+        .then(|| equilibrium::extracted_claim(s, team))
+        .flatten()
+    {
         return Some(claim);
     }
     let r = team.ranging.max_range_m;
@@ -1238,14 +1343,24 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
             )
         })
         .collect();
-    out.push(format!(
-        "  ring Laplacian eigenvalues ({}; m = 0, the sum of the gaps, is conserved):",
-        if sp.all_modes_listed {
-            "every distinct one"
-        } else {
-            "the smallest and the largest of many"
-        }
-    ));
+    let which = if sp.all_modes_listed {
+        "every distinct one"
+    } else {
+        "the smallest and the largest of many"
+    };
+    out.push(match sp.linearised_about {
+        None => format!(
+            "  ring Laplacian eigenvalues ({which}; m = 0, the sum of the gaps, is conserved):"
+        ),
+        Some(about) => format!(
+            "  linearised about the {}: eigenvalues mu of K = D^T C D over the free vehicles, listed as lambda = mu/c ({which}; k_v* = g*/(T mu_max)):",
+            if about == "pinned" {
+                "equilibrium with the vehicles of no speed room fixed (their speed is the team's)"
+            } else {
+                "shifted equilibrium, each gap with its own chord slope cos(g_i/(2R))"
+            }
+        ),
+    });
     out.extend(modes.into_iter().map(|m| format!("    {m}")));
     if let (Some(g), Some(k), Some(lmax)) = (
         sp.max_gain_per_period,

@@ -19,6 +19,7 @@ mod series;
 mod stations;
 mod team_check;
 mod team_check_equilibrium;
+mod team_check_linearised;
 mod team_open;
 mod team_vehicles;
 mod theory;

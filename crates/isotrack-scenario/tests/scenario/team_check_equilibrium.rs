@@ -9,7 +9,7 @@ use isotrack_scenario::check::{check, Verdict};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// The isoline's radius, m.
-fn radius() -> f64 {
+pub(crate) fn radius() -> f64 {
     10.0 * std::f64::consts::LN_2
 }
 
@@ -17,7 +17,7 @@ fn radius() -> f64 {
 /// of radius `r`, by direct statement: every vehicle at `V = mean v0`, so
 /// `range_i = range_0 + sum_{j = 1..=i} (V - v0_j)/k_v`, with `range_0` bisected until the arcs
 /// `2 asin(range_i/(2 r))` sum to a turn; `None` when the ranges cannot all lie in `(0, 2r)`.
-fn equilibrium_ranges(r: f64, v0: &[f64], k_v: f64) -> Option<Vec<f64>> {
+pub(crate) fn equilibrium_ranges(r: f64, v0: &[f64], k_v: f64) -> Option<Vec<f64>> {
     let v = v0.iter().sum::<f64>() / v0.len() as f64;
     let offsets: Vec<f64> = (0..v0.len())
         .map(|i| (1..=i).map(|j| (v - v0[j]) / k_v).sum())
@@ -46,7 +46,7 @@ fn equilibrium_ranges(r: f64, v0: &[f64], k_v: f64) -> Option<Vec<f64>> {
 }
 
 /// The gap CV of arcs with chords `ranges` on a circle of radius `r`.
-fn cv_of_chords(r: f64, ranges: &[f64]) -> f64 {
+pub(crate) fn cv_of_chords(r: f64, ranges: &[f64]) -> f64 {
     let arcs: Vec<f64> = ranges
         .iter()
         .map(|c| 2.0 * (c / (2.0 * r)).asin())

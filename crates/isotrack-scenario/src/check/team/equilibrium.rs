@@ -3,10 +3,13 @@
 //! overrides"), and the arcs that vehicles with no speed room (`v_min_i = v_max_i`) keep.
 
 use crate::check::team_ring::{common_speed, disjoint_envelopes, start_angle, travel_direction};
+use crate::check::Verdict;
 use crate::spec::TeamSpec;
+use crate::team::TeamIsolineModel;
 use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
-use isotrack_sim::team::metrics::TeamMetricsConfig;
+use isotrack_sim::team::arc::{ArcProjection, CircleArc};
+use isotrack_sim::team::metrics::{TeamMetricsConfig, CLOSE_APPROACH_M};
 use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -15,9 +18,11 @@ use crate::check::setup::Law;
 
 /// `range_balance`'s equilibrium with unequal nominal speeds on a known circle: every vehicle
 /// flies one speed `V`, so vehicle `i`'s range ahead exceeds its range behind by
-/// `d_i = (V - v0_i)/k_v` (the vehicle whose envelope bound sets `V` takes up the rest), the
-/// ranges are chords `2 R' sin(theta/2)` of the circle flown (radius `R'`) and the arcs sum to
-/// a turn. Solved by bisection on the ranges' common offset.
+/// `d_i = (V - v0_i)/k_v` (the vehicle whose envelope bound sets `V` takes up the rest; with
+/// vehicles of no speed room, `V` is their speed and each takes up the rest of its run to the
+/// next of them, att46-7), the ranges are chords `2 R' sin(theta/2)` of the circle flown
+/// (radius `R'`) and the arcs sum to a turn (each run's to the arc its two ends keep). Solved
+/// by bisection on the ranges' common offset.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ShiftedEquilibrium {
     /// The common speed `V`, m/s.
@@ -34,6 +39,9 @@ pub struct ShiftedEquilibrium {
     pub status: &'static str,
     /// Each vehicle's range ahead at the equilibrium (listed order), m (empty unless `exists`).
     pub ranges_m: Vec<f64>,
+    /// The gap CV of the equilibrium's arcs (absent unless `exists`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gap_cv: Option<f64>,
 }
 
 impl ShiftedEquilibrium {
@@ -103,24 +111,9 @@ pub(super) fn pinned_arcs_claim(
     l: &Law,
     team: &TeamSpec,
 ) -> Option<(crate::check::Verdict, String)> {
-    let n = team.count();
     let ids = pinned(team);
-    if ids.len() < 2 || ids.len() == n || team.nominal_speeds_mps().len() != 1 {
-        return None;
-    }
-    if !matches!(team.ring, RingMode::Listed) {
-        return None;
-    }
-    let circle = s.team_arc()?;
-    let dir = travel_direction(s, l)?;
-    let angle = |i: usize| start_angle(team, circle, i);
-    let mut gaps = Vec::with_capacity(n);
-    for (k, &a) in ids.iter().enumerate() {
-        let b = ids[(k + 1) % ids.len()];
-        let count = (b + n - a) % n;
-        let arc = (dir * (angle(b)? - angle(a)?)).rem_euclid(TAU);
-        gaps.extend(std::iter::repeat_n(arc / count as f64, count));
-    }
+    let gaps = pinned_best_arcs(s, l, team)?;
+    let n = gaps.len();
     let mean = TAU / n as f64;
     let cv = (gaps.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64).sqrt() / mean;
     let even = TeamMetricsConfig::default().even_gap_cv;
@@ -139,60 +132,220 @@ pub(super) fn pinned_arcs_claim(
     })
 }
 
+/// [`pinned_arcs_claim`]'s best case: each vehicle's arc ahead (listed order, rad) when the
+/// vehicles between two with no speed room share the arc the two keep evenly; `None` in the
+/// cases that claim leaves out.
+pub(super) fn pinned_best_arcs(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Vec<f64>> {
+    let n = team.count();
+    let ids = pinned(team);
+    if ids.len() < 2 || ids.len() == n || team.nominal_speeds_mps().len() != 1 {
+        return None;
+    }
+    if !matches!(team.ring, RingMode::Listed) {
+        return None;
+    }
+    let circle = s.team_arc()?;
+    let dir = travel_direction(s, l)?;
+    let angle = |i: usize| start_angle(team, circle, i);
+    let mut gaps = vec![0.0; n];
+    for (k, &a) in ids.iter().enumerate() {
+        let b = ids[(k + 1) % ids.len()];
+        let count = (b + n - a) % n;
+        let arc = (dir * (angle(b)? - angle(a)?)).rem_euclid(TAU);
+        (0..count).for_each(|j| gaps[(a + j) % n] = arc / count as f64);
+    }
+    Some(gaps)
+}
+
 /// [`ShiftedEquilibrium`] of `team` flying `range_balance` (gain `k_v > 0`) with unequal
-/// nominal speeds on a known circle of flown radius `flown_m`; `None` for another team, for
-/// two or more vehicles with no speed room ([`pinned_arcs_claim`]'s) or where the clamp to the
-/// envelopes is set by two vehicles at once (the equilibrium is then a family).
-pub(super) fn shifted_equilibrium(team: &TeamSpec, flown_m: f64) -> Option<ShiftedEquilibrium> {
+/// nominal speeds on `circle`, flown at radius `flown_m`; `None` for another team, where the
+/// clamp to the envelopes is set by two vehicles at once (the equilibrium is then a family), or
+/// with two or more vehicles with no speed room whose arcs are not known (a start off the
+/// circle, no PI-like law to tell the direction of travel).
+///
+/// Vehicles with no speed room (`v_min_i = v_max_i`, att46-7) fly their one speed, which is
+/// then the common speed `V`; each takes up the rest of its own run of the ring, so from each
+/// to the next of them the ranges of the vehicles between follow the differences and their
+/// arcs sum to the arc the two keep (a whole turn with one of them).
+pub(super) fn shifted_equilibrium(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    circle: CircleArc,
+    flown_m: f64,
+) -> Option<ShiftedEquilibrium> {
     let SpacingLaw::RangeBalance { gain_per_s: k_v } = team.law else {
         return None;
     };
     let n = team.count();
     let ids = pinned(team);
-    if k_v <= 0.0 || n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() > 1 {
+    if k_v <= 0.0 || n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() == n {
         return None;
     }
     if !(flown_m.is_finite() && flown_m > 0.0) || disjoint_envelopes(team).is_some() {
         return None;
     }
-    let mean = team.ideal_speed_mps();
-    // The vehicle that takes up the rest: the one pinned, or the one whose bound sets V.
-    let (speed, absorber) = match (ids.first(), common_speed(team, mean)) {
-        (Some(&p), _) => (team.speeds(p).max_mps, p),
-        (None, Some((v, i, _))) => {
-            let ties = (0..n)
-                .filter(|&j| {
-                    let e = team.speeds(j);
-                    e.min_mps == v || e.max_mps == v
-                })
-                .count();
-            if ties > 1 {
-                return None;
-            }
-            (v, i)
-        }
-        (None, None) => (mean, 0),
+    let speed = match (ids.first(), common_speed(team, team.ideal_speed_mps())) {
+        (Some(&p), _) => team.speeds(p).max_mps,
+        (None, Some((v, _, _))) => v,
+        (None, None) => team.ideal_speed_mps(),
     };
+    let runs = equilibrium_runs(s, l, team, circle, speed, &ids)?;
     let d = |i: usize| (speed - team.speeds(i).nominal_mps) / k_v;
-    // Partial sums along the ring from the absorber: the range ahead of vehicle a + k is
-    // x + p[k].
-    let mut p = vec![0.0; n];
-    for k in 1..n {
-        p[k] = p[k - 1] + d((absorber + k) % n);
-    }
-    let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let diameter = 2.0 * flown_m;
-    let largest = diameter.min(team.ranging.max_range_m);
     let mut eq = ShiftedEquilibrium {
         speed_mps: speed,
-        range_span_m: hi_p - lo_p,
-        largest_range_m: largest,
-        status: "none",
-        ranges_m: vec![],
+        range_span_m: 0.0,
+        largest_range_m: diameter.min(team.ranging.max_range_m),
+        status: "exists",
+        ranges_m: vec![0.0; n],
+        gap_cv: None,
     };
-    if hi_p - lo_p >= largest {
+    for (a, count, arc) in runs {
+        // Partial sums along the run from its first vehicle: the range ahead of a + k is
+        // x + p[k].
+        let mut p = vec![0.0; count];
+        for k in 1..count {
+            p[k] = p[k - 1] + d((a + k) % n);
+        }
+        let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        eq.range_span_m = eq.range_span_m.max(hi_p - lo_p);
+        let status = solve_run(&p, diameter, eq.largest_range_m, arc);
+        match status {
+            Ok(x) => (0..count).for_each(|k| eq.ranges_m[(a + k) % n] = x + p[k]),
+            Err(why) => eq.status = worse(eq.status, why),
+        }
+    }
+    if !eq.exists() {
+        eq.ranges_m.clear();
         return Some(eq);
+    }
+    let arcs: Vec<f64> = eq
+        .ranges_m
+        .iter()
+        .map(|r| 2.0 * (r / diameter).clamp(-1.0, 1.0).asin())
+        .collect();
+    let mean = TAU / n as f64;
+    let var = arcs.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
+    eq.gap_cv = Some(var.sqrt() / mean);
+    Some(eq)
+}
+
+/// The runs of the ring each taken up by one vehicle (the first of the run): `(first, count of
+/// gaps, arc they fill, rad)`. With no vehicle pinned, one run of the whole turn from the
+/// vehicle whose envelope bound sets `speed` (vehicle 0 when none does; `None` when two set
+/// it); with one pinned, the whole turn from it; with more, from each to the next of them,
+/// filling the arc between their starts (`None` when not known).
+fn equilibrium_runs(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    circle: CircleArc,
+    speed: f64,
+    ids: &[usize],
+) -> Option<Vec<(usize, usize, f64)>> {
+    let n = team.count();
+    match ids {
+        [] => {
+            let bound = |j: usize| {
+                let e = team.speeds(j);
+                e.min_mps == speed || e.max_mps == speed
+            };
+            let setters: Vec<usize> = (0..n).filter(|&j| bound(j)).collect();
+            let sets = common_speed(team, team.ideal_speed_mps()).is_some();
+            match (sets, setters.as_slice()) {
+                (true, [one]) => Some(vec![(*one, n, TAU)]),
+                (true, _) => None,
+                (false, _) => Some(vec![(0, n, TAU)]),
+            }
+        }
+        [one] => Some(vec![(*one, n, TAU)]),
+        _ => {
+            let dir = travel_direction(s, l)?;
+            let angle = |i: usize| start_angle(team, circle, i);
+            let mut runs = Vec::with_capacity(ids.len());
+            for (k, &a) in ids.iter().enumerate() {
+                let b = ids[(k + 1) % ids.len()];
+                let arc = (dir * (angle(b)? - angle(a)?)).rem_euclid(TAU);
+                runs.push((a, (b + n - a) % n, arc));
+            }
+            Some(runs)
+        }
+    }
+}
+
+/// att46-14, -15: the rules a known circle decides, on a closed isoline the check extracts
+/// instead (`Scenario::team_isoline`): unequal nominal speeds whose range differences span at
+/// least the loop's longest chord (its largest vertex-to-vertex distance) have no equilibrium,
+/// `fails` as on a circle; short of it the equilibrium is not solved off a circle, and two or
+/// more vehicles with no speed room keep arcs the check does not measure there: both
+/// `not_applicable` (never `holds`). `None` on a circle, another isoline, or with neither.
+pub(super) fn extracted_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdict, String)> {
+    let TeamIsolineModel::Polyline(p) = s.team_isoline() else {
+        return None;
+    };
+    if !p.is_closed() {
+        return None;
+    }
+    let ids = pinned(team);
+    let unequal = team.nominal_speeds_mps().len() > 1;
+    if let (true, SpacingLaw::RangeBalance { gain_per_s: k_v }) = (unequal, team.law) {
+        // The vehicle that takes up the rest, as on a circle: the pinned one, the one whose
+        // bound sets V, else any (the differences then sum to zero).
+        let (speed, first) = match (ids.first(), common_speed(team, team.ideal_speed_mps())) {
+            (Some(&i), _) => (team.speeds(i).max_mps, i),
+            (None, Some((v, i, _))) => (v, i),
+            (None, None) => (team.ideal_speed_mps(), 0),
+        };
+        let n = team.count();
+        let mut sums = vec![0.0; n];
+        for k in 1..n {
+            let i = (first + k) % n;
+            sums[k] = sums[k - 1] + (speed - team.speeds(i).nominal_mps) / k_v;
+        }
+        let span = sums.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - sums.iter().copied().fold(f64::INFINITY, f64::min);
+        let v = p.vertices();
+        let longest = v
+            .iter()
+            .enumerate()
+            .flat_map(|(i, a)| v[i + 1..].iter().map(move |b| (*b - *a).norm()))
+            .fold(0.0, f64::max)
+            .min(team.ranging.max_range_m);
+        let intro = format!(
+            "unequal nominal speeds (team.vehicles) on an extracted closed isoline: the gaps stand still only where every vehicle flies one speed V = {} m/s, so vehicle i's range ahead must exceed its range behind by (V - v0_i)/k_v (team.k_v = {}); round the ring these differences need ranges {} m apart",
+            Num(speed),
+            Echo(k_v),
+            Num(span)
+        );
+        return Some(if span >= longest && ids.len() < 2 {
+            (Verdict::Fails, format!("{intro}, and no range on this loop exceeds {} m (its longest chord, or team.ranging.max_range_m when shorter), so no equilibrium exists: the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer", Num(longest)))
+        } else {
+            (Verdict::NotApplicable, format!("{intro}, within its longest chord {} m, but the equilibrium is solved on a known circle only (its chords' arcs), so whether it forms, and how even it is, is not the check's to tell here; run it to see where the team settles", Num(longest)))
+        });
+    }
+    (ids.len() >= 2 && ids.len() < team.count()).then(|| {
+        (
+            Verdict::NotApplicable,
+            format!(
+                "vehicles {} have no speed room ({}): each flies its one speed, so the arc from each to the next of them stays as deployed, and on an extracted closed isoline the check does not measure those arcs (a known circle's rule): whether the vehicles between can even out is not the check's to tell here; run it",
+                ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", "),
+                pinned_keys(team, &ids)
+            ),
+        )
+    })
+}
+
+/// The common offset `x` of a run's ranges `x + p[k]` (chords of a circle of `diameter`)
+/// whose arcs sum to `arc`, by bisection; `Err("none")` when the ranges cannot fit (their span
+/// reaches `largest`, or even at their shortest their arcs overfill `arc`), `Err
+/// ("past_half_circle")` when filling it takes a gap past half the circle.
+fn solve_run(p: &[f64], diameter: f64, largest: f64, arc: f64) -> Result<f64, &'static str> {
+    let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if hi_p - lo_p >= largest {
+        return Err("none");
     }
     let arcs = |x: f64| {
         p.iter()
@@ -200,29 +353,32 @@ pub(super) fn shifted_equilibrium(team: &TeamSpec, flown_m: f64) -> Option<Shift
             .sum::<f64>()
     };
     let (mut lo, mut hi) = (-lo_p, diameter - hi_p);
-    if arcs(lo) >= TAU {
-        return Some(eq);
+    if arcs(lo) >= arc {
+        return Err("none");
     }
-    if arcs(hi) < TAU {
-        eq.status = "past_half_circle";
-        return Some(eq);
+    if arcs(hi) < arc {
+        return Err("past_half_circle");
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if arcs(mid) < TAU {
+        if arcs(mid) < arc {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    let x = 0.5 * (lo + hi);
-    let mut ranges = vec![0.0; n];
-    for (k, pk) in p.iter().enumerate() {
-        ranges[(absorber + k) % n] = x + pk;
+    Ok(0.5 * (lo + hi))
+}
+
+/// Of two statuses, the one that decides: `none` over `past_half_circle` over `exists`.
+fn worse(a: &'static str, b: &'static str) -> &'static str {
+    if a == "none" || b == "none" {
+        "none"
+    } else if a == "past_half_circle" || b == "past_half_circle" {
+        "past_half_circle"
+    } else {
+        "exists"
     }
-    eq.status = "exists";
-    eq.ranges_m = ranges;
-    Some(eq)
 }
 
 /// The verdict [`ShiftedEquilibrium`] gives: `fails` when none exists (att44-6: the slower
@@ -280,21 +436,73 @@ pub(super) fn shifted_claim(
                 "{intro}; the ranges this needs put one gap past half the circle, where the range shrinks as the gap grows, so the linear loop does not describe the equilibrium; run it to see whether the team settles"
             ),
         )),
-        _ => {
-            let widest = eq.ranges_m.iter().copied().fold(0.0, f64::max);
-            (widest > m).then(|| {
-                (
-                    crate::check::Verdict::NotApplicable,
-                    format!(
-                        "{intro}; on this circle that is the ranges ({}) m (chords whose arcs sum to the circle), and team.ranging.max_range_m = {} is short of the longest, {} m: where a neighbour falls silent range_balance sees max_range_m instead, so the equilibrium the linear loop converges to does not form; run it to see where the team settles",
-                        eq.ranges_m.iter().map(|r| Num(*r).to_string()).collect::<Vec<_>>().join(", "),
-                        Echo(m),
-                        Num(widest)
-                    ),
-                )
-            })
-        }
+        _ => exists_claim(team, eq, &intro),
     }
+}
+
+/// [`shifted_claim`] of an equilibrium that exists: `not_applicable` when a range passes
+/// `team.ranging.max_range_m` (the equilibrium does not form), `fails` when a range is under
+/// the run's close-approach distance (att46-5: the law drives two vehicles together and holds
+/// them there, a collision) or, with two or more vehicles with no speed room, when its gap CV
+/// is not even (att46-7: the best the vehicles between can do); `None` otherwise.
+fn exists_claim(
+    team: &TeamSpec,
+    eq: &ShiftedEquilibrium,
+    intro: &str,
+) -> Option<(crate::check::Verdict, String)> {
+    let m = team.ranging.max_range_m;
+    let list = || {
+        eq.ranges_m
+            .iter()
+            .map(|r| Num(*r).to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let widest = eq.ranges_m.iter().copied().fold(0.0, f64::max);
+    if widest > m {
+        return Some((
+            crate::check::Verdict::NotApplicable,
+            format!(
+                "{intro}; on this circle that is the ranges ({}) m (chords whose arcs sum to the circle), and team.ranging.max_range_m = {} is short of the longest, {} m: where a neighbour falls silent range_balance sees max_range_m instead, so the equilibrium the linear loop converges to does not form; run it to see where the team settles",
+                list(),
+                Echo(m),
+                Num(widest)
+            ),
+        ));
+    }
+    let n = eq.ranges_m.len();
+    let (i, closest) = eq
+        .ranges_m
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    if closest < CLOSE_APPROACH_M {
+        return Some((
+            crate::check::Verdict::Fails,
+            format!(
+                "{intro}; on this circle that is the ranges ({}) m, and vehicle {i}'s range to vehicle {} ahead, {} m, is under the run's close-approach distance {} m: the law drives them together and holds them there (a collision), and the gaps never even out; raise team.k_v or bring the speeds closer",
+                list(),
+                (i + 1) % n,
+                Num(closest),
+                Num(CLOSE_APPROACH_M)
+            ),
+        ));
+    }
+    let ids = pinned(team);
+    let even = TeamMetricsConfig::default().even_gap_cv;
+    let cv = eq.gap_cv.filter(|cv| ids.len() >= 2 && *cv > even)?;
+    Some((
+        crate::check::Verdict::Fails,
+        format!(
+            "{intro}; vehicles {} have no speed room ({}), so V is their speed and the vehicles between settle at the ranges ({}) m: a gap CV of {} > {} at best (even spacing is not reached)",
+            ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", "),
+            pinned_keys(team, &ids),
+            list(),
+            Num(cv),
+            Num(even)
+        ),
+    ))
 }
 
 /// att44-10: the discovery probe of `team` (`team.ring = "discovered"`) commands
@@ -314,6 +522,44 @@ pub(super) fn probe_cannot_fly(team: &TeamSpec) -> Option<String> {
             Echo(team.v_max_mps),
             Num(probe),
             Num(probe)
+        )
+    })
+}
+
+/// att46-6: the discovery probe of `team` whose range change is lost in the ranging noise. In
+/// its slot of `S = probe_s` the prober fits each neighbour's range rate by least squares to
+/// the `n = S rate_hz` ranges it takes; the probe moves a neighbour's range by about
+/// `dv S` (`dv = min(v_max, v0 + probe_speed_delta_mps) - v0`, the speed change the envelope
+/// leaves), and noise of deviation `sigma` (`team.ranging.noise_std_m`) gives the fitted change
+/// a deviation of `sigma sqrt(12/n)` (a least-squares slope's, times `S`). Under one deviation
+/// the fitted sign is wrong for a neighbour more than one time in six, and the ring needs every
+/// one of its `2 N` picks right, so the probes may not find it (and the law is off for the run
+/// without it): the `not_applicable` reason, `None` when the change is at least one deviation
+/// (or without noise; `team.v_max_mps <= v0` is [`probe_cannot_fly`]'s).
+pub(super) fn probe_below_noise(team: &TeamSpec) -> Option<String> {
+    let RingMode::Discover(d) = team.ring else {
+        return None;
+    };
+    let v0 = team.nominal_speed_mps;
+    let sigma = team.ranging.noise_std_m;
+    let dv = (v0 + d.probe_speed_delta_mps).min(team.v_max_mps) - v0;
+    let samples = (d.probe_s * team.ranging.rate_hz).floor();
+    if !(sigma > 0.0 && dv > 0.0 && samples >= 1.0) {
+        return None;
+    }
+    let change = dv * d.probe_s;
+    let noise = sigma * (12.0 / samples).sqrt();
+    (change < noise).then(|| {
+        format!(
+            "team.ring = \"discovered\": the probe changes a speed by {} m/s (team.v_max_mps = {} m/s against v0 = {} m/s), moving a neighbour's range by about {} m over its {} s slot, under the {} m deviation team.ranging.noise_std_m = {} leaves in the fitted change ({} ranges: sigma sqrt(12/n)): the range rates that tell the vehicles ahead from those behind may take the wrong sign, so the probes may not find the ring, and without it the spacing law is off for the whole run; raise team.v_max_mps, lower the noise or list the ring",
+            Num(dv),
+            Echo(team.v_max_mps),
+            Echo(v0),
+            Num(change),
+            Num(d.probe_s),
+            Num(noise),
+            Echo(sigma),
+            samples
         )
     })
 }

@@ -1,0 +1,383 @@
+//! `check`'s spacing loop linearised where the team settles (issue 32, att46-1, -16, -9, -7, -5;
+//! docs/TEAMS.md, "Theory"): at a shifted equilibrium of unequal nominal speeds each gap has its
+//! own chord slope `c_i = cos(g_i/(2R))`, and vehicles with no speed room fix their positions in
+//! the frame moving at their speed. The numbers here are the gaps' matrix `L diag(c_i)` built in
+//! the test (its eigenvalues by nalgebra's general, non-symmetric solver, not the check's
+//! symmetric `K`), closed forms (`2 - 2 cos(pi/N)`) and the equilibria solved by the test's own
+//! bisection, against simulation on `scenarios/team-circular-4.toml`'s circle.
+
+use super::team_check::{circular, circular_text, close, team_metrics};
+use super::team_check_equilibrium::{cv_of_chords, equilibrium_ranges, radius};
+use isotrack_scenario::check::{check, Verdict};
+use isotrack_scenario::{parse_scenario, Scenario};
+use nalgebra::DMatrix;
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+/// The largest eigenvalue of the gaps' loop `g' = -k_v L diag(c) g` (per unit `k_v`): `L` the
+/// ring Laplacian `2 g_i - g_{i+1} - g_{i-1}` times `diag(c)`, by nalgebra's general
+/// eigenvalue solver (the matrix is not symmetric); its eigenvalues are real.
+fn largest_gap_eigenvalue(c: &[f64]) -> f64 {
+    let n = c.len();
+    let l = DMatrix::from_fn(n, n, |i, j| {
+        if i == j {
+            2.0
+        } else if (i + 1) % n == j || (j + 1) % n == i {
+            -1.0
+        } else {
+            0.0
+        }
+    });
+    let m = l * DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(c));
+    m.complex_eigenvalues()
+        .iter()
+        .map(|z| {
+            assert!(z.im.abs() < 1e-9, "{z}");
+            z.re
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The chord slopes `cos(g/(2R)) = sqrt(1 - (r/(2R))^2)` of ranges `r` on the circle.
+fn chord_slopes(ranges: &[f64]) -> Vec<f64> {
+    let d = 2.0 * radius();
+    ranges
+        .iter()
+        .map(|r| (1.0 - (r / d).powi(2)).sqrt())
+        .collect()
+}
+
+/// team-circular-4's text with `[team]`'s `spread` replaced by listed `starts` on the circle at
+/// the angles `at` (clockwise travel: heading `angle - pi/2`).
+fn at_angles(at: &[f64], sets: &[&str]) -> Scenario {
+    let r = radius();
+    let starts: Vec<String> = at
+        .iter()
+        .map(|a| {
+            format!(
+                "{{x_m = {}, y_m = {}, heading_rad = {}}}",
+                r * a.cos(),
+                r * a.sin(),
+                a - FRAC_PI_2
+            )
+        })
+        .collect();
+    let text: String = circular_text()
+        .lines()
+        .map(|l| {
+            if l.starts_with("spread =") {
+                format!("starts = [{}]", starts.join(", "))
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    parse_scenario(&text, "team-circular-4.toml", &sets).unwrap()
+}
+
+/// The angles of starts (clockwise from 0) whose chords ahead are `ranges`, one perturbed by
+/// `nudge` rad.
+fn angles_of(ranges: &[f64], nudge: f64) -> Vec<f64> {
+    let d = 2.0 * radius();
+    let mut at = vec![0.0];
+    for r in &ranges[..ranges.len() - 1] {
+        let last = at[at.len() - 1];
+        at.push(last - 2.0 * (r / d).asin());
+    }
+    at[1] += nudge;
+    at
+}
+
+/// att46-1 (SAFETY): three vehicles at 0.5294 / 1.3513 / 0.5193 m/s (mean 0.8), k_v = 0.12,
+/// 0.1 Hz ranging. At even spacing `k_v* = 2/(T cos(pi/3) 3) = 0.1333` and the check said
+/// `holds`; at the shifted equilibrium the slopes are about 0.128, 0.751, 0.559 and the gaps'
+/// largest eigenvalue 1.99, so `k_v* = 2/(T 1.99) = 0.1005 < 0.12`: unstable, `fails`. The run
+/// from the equilibrium (nudged 0.02 rad) saturates at v_min (the gaps swing), while at 0.2 Hz
+/// (`k_v* = 0.201`) it stays near V.
+#[test]
+fn a_shifted_equilibrium_past_its_own_stable_gain_fails() {
+    let v0 = [0.5293797830565965, 1.351316676200574, 0.5193035407428296];
+    let ranges = equilibrium_ranges(radius(), &v0, 0.12).unwrap();
+    let mu = largest_gap_eigenvalue(&chord_slopes(&ranges));
+    assert!((mu - 1.99).abs() < 0.01, "{mu}");
+    let want = 2.0 / (10.0 * mu);
+    assert!((want - 0.1005).abs() < 1e-3, "{want}");
+    let vehicles = format!(
+        "team.vehicles=[{{index=0,speed_mps={}}},{{index=1,speed_mps={}}},{{index=2,speed_mps={}}}]",
+        v0[0], v0[1], v0[2]
+    );
+    let at = angles_of(&ranges, 0.02);
+    let base = [
+        "team.count=3",
+        "team.k_v=0.12",
+        "team.v_min_mps=0.1",
+        "team.v_max_mps=2.0",
+        "sim.duration_s=800",
+    ];
+    let mut sets: Vec<&str> = base.to_vec();
+    sets.push(&vehicles);
+    let slow = [sets.clone(), vec!["team.ranging.rate_hz=0.1"]].concat();
+    let s = at_angles(&at, &slow);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let k = t.spacing.max_stable_k_v_per_s.unwrap();
+    assert!(close(k, want, 1e-9), "{k} vs {want}");
+    assert_eq!(t.spacing.linearised_about, Some("shifted_equilibrium"));
+    let m = team_metrics(&s);
+    let [lo, _] = m.speed_range_mps.unwrap();
+    assert!(lo < 0.1 + 1e-9, "{m:?}");
+
+    let fast = [sets, vec!["team.ranging.rate_hz=0.2"]].concat();
+    let s = at_angles(&at, &fast);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert!(close(
+        t.spacing.max_stable_k_v_per_s.unwrap(),
+        2.0 / (5.0 * mu),
+        1e-9
+    ));
+    // Never saturated (the first period flies the v0_i, 0.519 to 1.351), and settled at the
+    // equilibrium's gap CV.
+    let m = team_metrics(&s);
+    let [lo, hi] = m.speed_range_mps.unwrap();
+    assert!(lo > 0.4 && hi < 1.5, "{m:?}");
+    let want_cv = cv_of_chords(radius(), &ranges);
+    assert!(
+        (m.gap_cv_final.unwrap() - want_cv).abs() < 2e-3,
+        "{m:?} vs {want_cv}"
+    );
+}
+
+/// att46-16, the converse: four at 1.8218 / 0.1782 / 1.8218 / 0.1782 m/s (mean 1), k_v =
+/// 0.0778, 0.1 Hz: at even spacing `k_v* = 2/(T cos(pi/4) 4) = 0.0707` and the check said
+/// `fails`; at the equilibrium the gaps' largest eigenvalue is 2.383, `k_v* = 0.0839 > 0.0778`:
+/// stable, and the run settles (no speed near either bound).
+#[test]
+fn a_shifted_equilibrium_within_its_own_stable_gain_holds() {
+    let v0 = [
+        1.821798496760,
+        0.178201503240,
+        1.821798496760,
+        0.178201503240,
+    ];
+    let ranges = equilibrium_ranges(radius(), &v0, 0.0778).unwrap();
+    let mu = largest_gap_eigenvalue(&chord_slopes(&ranges));
+    assert!((mu - 2.383).abs() < 2e-3, "{mu}");
+    let want = 2.0 / (10.0 * mu);
+    assert!(want > 0.0778 && (want - 0.0839).abs() < 1e-3, "{want}");
+    let vehicles = format!(
+        "team.vehicles=[{}]",
+        (0..4)
+            .map(|i| format!("{{index={i},speed_mps={}}}", v0[i]))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let s = at_angles(
+        &angles_of(&ranges, 0.01),
+        &[
+            "team.k_v=0.0778",
+            "team.v_min_mps=0.1",
+            "team.v_max_mps=2.5",
+            "team.ranging.rate_hz=0.1",
+            "sim.duration_s=800",
+            &vehicles,
+        ],
+    );
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert!(close(t.spacing.max_stable_k_v_per_s.unwrap(), want, 1e-9));
+    // Never saturated at 0.1 or 2.5 (the first period flies the v0_i, 0.178 and 1.822), and
+    // settled at the equilibrium's gap CV.
+    let m = team_metrics(&s);
+    let [lo, hi] = m.speed_range_mps.unwrap();
+    assert!(lo > 0.15 && hi < 2.4, "{m:?}");
+    let want_cv = cv_of_chords(radius(), &ranges);
+    assert!(
+        (m.gap_cv_final.unwrap() - want_cv).abs() < 2e-3,
+        "{m:?} vs {want_cv}"
+    );
+}
+
+/// att46-9: one vehicle with no speed room at v0 among four (k_v = 0.1, c = cos(pi/4)): in the
+/// frame moving at v0 it stands still and the other three form a Dirichlet path, slowest
+/// eigenvalue `2 - 2 cos(pi/4)` (not the ring's `2 - 2 cos(pi/2) = 2`): continuous time
+/// constant `1/(k_v c (2 - 2 cos(pi/4)))` = 24.1 s (the run's fitted 24.3 s), not 7.07 s; and no
+/// "unequal nominal speeds" note when every speed is equal.
+#[test]
+fn one_vehicle_with_no_speed_room_slows_the_modes() {
+    let c = (PI / 4.0).cos();
+    let s = circular(&[
+        "team.vehicles=[{index=0,speed_mps=0.5,v_min_mps=0.5,v_max_mps=0.5}]",
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+    ]);
+    let t = check(&s, None).team.unwrap();
+    let sp = &t.spacing;
+    assert_eq!(sp.linearised_about, Some("pinned"));
+    let want = 1.0 / (0.1 * c * (2.0 - 2.0 * (PI / 4.0).cos()));
+    assert!((want - 24.14).abs() < 0.01, "{want}");
+    let got = sp.slowest_time_constant_continuous_s.unwrap();
+    assert!(close(got, want, 1e-9), "{got} vs {want}");
+    // The largest: 2 - 2 cos(3 pi/4), k_v* = 2/(T c lambda) at 10 Hz.
+    let top = 2.0 - 2.0 * (3.0 * PI / 4.0).cos();
+    assert!(close(
+        sp.max_stable_k_v_per_s.unwrap(),
+        2.0 / (0.1 * c * top),
+        1e-9
+    ));
+    assert!(
+        !sp.not_modelled
+            .iter()
+            .any(|w| w.contains("unequal nominal speeds")),
+        "{:?}",
+        sp.not_modelled
+    );
+}
+
+/// att46-7: vehicles 0 and 2 pinned at 0.4 m/s, 1 and 3 free at v0 = 0.5, k_v = 0.02, spread
+/// evenly: the team flies 0.4, so each free vehicle needs its range ahead 0.1/k_v = 5 m shorter
+/// than behind: chords x and x + 5 of arcs summing to half the circle (bisection here), gap CV
+/// about 0.33 > 0.05: `fails` (it said `holds`); the run settles there.
+#[test]
+fn pinned_vehicles_slower_than_the_free_fail_at_their_equilibrium() {
+    let r = radius();
+    let d = 2.0 * r;
+    let half = |x: f64| 2.0 * (x / d).asin() + 2.0 * ((x + 5.0) / d).asin();
+    let (mut lo, mut hi) = (0.0, d - 5.0);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if half(mid) < PI {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let (short, long) = (2.0 * (lo / d).asin(), 2.0 * ((lo + 5.0) / d).asin());
+    let mean = TAU / 4.0;
+    let cv = (((short - mean).powi(2) + (long - mean).powi(2)) / 2.0).sqrt() / mean;
+    assert!((cv - 0.33).abs() < 0.01, "{cv}");
+    let pin = |i: usize| format!("{{index={i},speed_mps=0.4,v_min_mps=0.4,v_max_mps=0.4}}");
+    let s = circular(&[
+        &format!("team.vehicles=[{},{}]", pin(0), pin(2)),
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+        "team.k_v=0.02",
+        "sim.duration_s=1500",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let eq = t.spacing.shifted_equilibrium.as_ref().unwrap();
+    assert!(close(eq.gap_cv.unwrap(), cv, 1e-9), "{eq:?} vs {cv}");
+    assert!(close(eq.speed_mps, 0.4, 1e-12), "{eq:?}");
+    let m = team_metrics(&s);
+    assert!((m.gap_cv_final.unwrap() - cv).abs() < 0.01, "{m:?} vs {cv}");
+}
+
+/// att46-5: four evenly spread, k_v = 0.02, speeds 0.74 / 0.26 / 0.5 / 0.5: the equilibrium
+/// (bisection here) puts vehicles 0 and 1 4.9 mm apart, under the run's 0.5 m close approach:
+/// `fails`, naming the range (it said `holds`); the run comes as close.
+#[test]
+fn an_equilibrium_closer_than_a_collision_fails() {
+    let v0 = [0.74, 0.26, 0.5, 0.5];
+    let ranges = equilibrium_ranges(radius(), &v0, 0.02).unwrap();
+    assert!(ranges[0] < 0.01, "{ranges:?}");
+    let s = circular(&[
+        "team.vehicles=[{index=0,speed_mps=0.74},{index=1,speed_mps=0.26}]",
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+        "team.k_v=0.02",
+        "team.v_min_mps=0.1",
+        "team.v_max_mps=1.0",
+    ]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("close-approach distance 0.5 m"),
+        "{}",
+        t.verdict_reason
+    );
+}
+
+/// team-circular-4 with its field written as one isotropic Gaussian source whose level-10
+/// isoline is the same circle (`20 exp(-r^2/(2 s^2)) = 10` at `r = 10 ln 2`: `s = r/sqrt(2 ln
+/// 2)`): the check extracts it as a closed polyline, not a known circle.
+fn gaussian(sets: &[&str]) -> Scenario {
+    let sigma = radius() / (2.0 * std::f64::consts::LN_2).sqrt();
+    let mut text = String::new();
+    let mut skip = false;
+    for l in circular_text().lines() {
+        if l.starts_with("[field]") {
+            text.push_str(&format!(
+                "[field]\nkind = \"gaussian_plumes\"\nbackground = 0.0\nsources = [ {{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [{sigma}, {sigma}], rotation_rad = 0.0 }} ]\n"
+            ));
+            skip = true;
+        } else if l.starts_with('[') {
+            skip = false;
+        }
+        if !skip {
+            text.push_str(l);
+            text.push('\n');
+        }
+    }
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    parse_scenario(&text, "team-gaussian-4.toml", &sets).unwrap()
+}
+
+/// att46-15, -14: on the extracted circle, vehicle 3 at 0.3 m/s with k_v = 0.01 needs ranges
+/// 0.15/0.01 = 15 m apart, past the loop's longest chord (its diameter, 13.86 m): `fails` as on
+/// the known circle (it said `holds`); with k_v = 0.05 (3 m) the equilibrium is not solved off a
+/// circle: `not_applicable`. Two vehicles pinned: their arcs are not measured there:
+/// `not_applicable` (the known circle's twin `fails`).
+#[test]
+fn an_extracted_loop_never_holds_what_a_circle_fails() {
+    let slow = "team.vehicles=[{index=3,speed_mps=0.3}]";
+    assert!(15.0 > 2.0 * radius());
+    let t = check(&gaussian(&["team.k_v=0.01", slow]), None)
+        .team
+        .unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("no equilibrium exists"),
+        "{}",
+        t.verdict_reason
+    );
+    let t = check(&gaussian(&["team.k_v=0.05", slow]), None)
+        .team
+        .unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let pins = "team.vehicles=[{index=0,v_min_mps=0.5,v_max_mps=0.5},{index=1,v_min_mps=0.5,v_max_mps=0.5}]";
+    let t = check(&gaussian(&[pins]), None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let t = check(&circular(&[pins]), None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+}
+
+/// att46-6: a discovered ring with v_max = 0.5005 (v0 = 0.5) and ranging noise 0.05 m: the probe
+/// moves a range by 0.0005 x 10 s = 5 mm, under the fitted change's deviation
+/// `0.05 sqrt(12/100)` = 17.3 mm of a least-squares slope over the slot's 100 ranges:
+/// `not_applicable` (it said `holds`); the run finds no ring and keeps its cluster. With
+/// v_max = 0.55 (0.5 m) the loop's verdict.
+#[test]
+fn a_discovery_probe_under_the_noise_is_not_judged_holds() {
+    let dev = 0.05 * (12.0f64 / 100.0).sqrt();
+    assert!(0.0005 * 10.0 < dev && 0.05 * 10.0 > dev);
+    let sets = |v: &str| {
+        vec![
+            "team.ring=\"discovered\"".to_string(),
+            "team.ranging.noise_std_m=0.05".to_string(),
+            format!("team.v_max_mps={v}"),
+            "sim.duration_s=200".to_string(),
+        ]
+    };
+    let s = parse_scenario(&circular_text(), "t.toml", &sets("0.5005")).unwrap();
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("0.0173205"),
+        "{}",
+        t.verdict_reason
+    );
+    let m = team_metrics(&s);
+    assert_eq!(m.time_to_even_s, None, "{m:?}");
+    let s = parse_scenario(&circular_text(), "t.toml", &sets("0.55")).unwrap();
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+}
