@@ -385,6 +385,40 @@ impl RetryWatch {
     }
 }
 
+/// The state the failsafe's retries ([`Flight::command_way_out`]) carry from one try to the
+/// next.
+struct WayOutRetries {
+    /// The way out commanded (the failsafe mode once a second sender is seen).
+    way: WayOut,
+    /// Its command.
+    cmd: MavCmd,
+    /// Its command's parameters.
+    params: [f32; 3],
+    /// The vehicle's mode and arming as the failsafe began (as last confirmed: not a pilot's
+    /// word still awaiting confirmation, which may be a second vehicle's): a change to
+    /// anything else than what is commanded (or another safe mode) is a pilot's.
+    before: (Option<u32>, bool),
+    /// When the retries' bound passes.
+    end: Instant,
+    /// The tries sent so far.
+    tries: u32,
+    /// When the vehicle last acknowledged the command as ACCEPTED: it is not sent again
+    /// before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
+    /// retry would yank back a pilot who took over meanwhile).
+    accepted: Option<Instant>,
+    /// A heartbeat's answer awaiting confirmation (att33e-1, att33f-3: taken once it has
+    /// stood, none contradicting, for `span`; no retry meanwhile).
+    watch: RetryWatch,
+    /// How long an answer must stand ([`Flight::confirm_span`]).
+    span: Duration,
+    /// The vehicle refused the way out: an unaddressed refusal may answer someone else's
+    /// same command (att33e-5), so the retries go on to their bound, which then says so.
+    refused: bool,
+    /// A second sender with the ids was seen before the retries began, or its log was
+    /// written since.
+    told: bool,
+}
+
 /// Options of [`run_fly`].
 #[derive(Clone, Debug)]
 pub struct FlyOptions {
@@ -3486,10 +3520,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         } else {
             way
         };
-        let what = match way {
-            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
-            WayOut::Disarm => "disarm",
-        };
+        let what = self.way_out_name(way);
         self.event(match (confirmed, way) {
             // `why` is the other safe mode the vehicle went to, when it did.
             (true, WayOut::Mode(_) | WayOut::LeaveOffboard(_)) if !why.is_empty() => {
@@ -3525,33 +3556,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// retries' bound passes (3 x `timeout_s` within [3, 30] s). Returns (confirmed, tries, why
     /// not); confirmed in another safe mode than `way`'s, the third is that mode's name.
     fn command_way_out(&mut self, way: WayOut) -> Result<(bool, u32, &'static str), FlyError> {
-        let mut way = way;
-        let Some((mut cmd, mut params)) = self.way_out_command(way) else {
+        let Some((cmd, params)) = self.way_out_command(way) else {
             return Ok((false, 0, "no mode table for this vehicle here"));
         };
         // A signal from here on (the one that may have caused the failsafe is spent) ends the
         // retries.
         self.opts.stop.store(false, Ordering::SeqCst);
-        // The vehicle's mode and arming as the failsafe began (as last confirmed: not a pilot's
-        // word still awaiting confirmation, which may be a second vehicle's): a change to
-        // anything else than what is commanded (or another safe mode) is a pilot's.
-        let before = self.confirmed_state();
-        let retry_end = Instant::now()
-            + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0));
-        let mut tries = 0u32;
-        // When the vehicle last acknowledged the command as ACCEPTED: it is not sent again
-        // before a heartbeat newer than that says what the vehicle did (with a 1 Hz heartbeat a
-        // retry would yank back a pilot who took over meanwhile).
-        let mut accepted: Option<Instant> = None;
-        // A heartbeat's answer awaiting confirmation (att33e-1, att33f-3: taken once it has
-        // stood, none contradicting, for `confirm_span`; no retry meanwhile).
-        let mut watch = RetryWatch::default();
-        let span = self.confirm_span();
-        // The vehicle refused the way out: an unaddressed refusal may answer someone else's
-        // same command (att33e-5), so the retries go on to their bound, which then says so.
-        let mut refused = false;
-        // A second sender with the ids was seen before the retries began (their log said so).
-        let mut told = self.second_sender;
+        let mut r = WayOutRetries {
+            way,
+            cmd,
+            params,
+            before: self.confirmed_state(),
+            end: Instant::now()
+                + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0)),
+            tries: 0,
+            accepted: None,
+            watch: RetryWatch::default(),
+            span: self.confirm_span(),
+            refused: false,
+            told: self.second_sender,
+        };
         loop {
             if let Some(why) = self.reboot.take() {
                 // Its autopilot rebooted during the retries (att45f-10): what its heartbeats
@@ -3560,135 +3584,190 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.event(format!(
                     "during the failsafe's retries, {why}: the retries stop, nothing more commanded"
                 ));
-                return Ok((false, tries, "its autopilot rebooted"));
+                return Ok((false, r.tries, "its autopilot rebooted"));
             }
-            if self.second_sender && !told {
-                // How it was seen (the same checks as in control: [`Flight::ids_frame`]).
-                if let Some(why) = self.same_ids.take() {
-                    self.event(format!("during the failsafe's retries, {why}"));
-                }
-                // A second sender with the ids seen during the retries after a heartbeat
-                // showed a pilot's word, awaiting confirmation (att41f-2): as for a word heard
-                // before the proof that ends the flight ([`Flight::word_before_second_sender`]),
-                // nothing more is commanded: the word was the pilot's (one sender read as two),
-                // whose mode stands, or the second sender's, and the vehicle flown keeps the
-                // way out already commanded or falls to its own offboard-loss failsafe.
-                if let Some(word) = watch.seen.as_ref().filter(|s| s.pilots) {
+            if let Some(ended) = self.second_sender_in_retries(&mut r) {
+                return Ok(ended);
+            }
+            if let Some(why) = self.retries_over(&r) {
+                self.word_held(&r.watch);
+                return Ok((false, r.tries, why));
+            }
+            if self.retry_due(&r) {
+                r.tries += 1;
+                r.watch.disarm_sent |= matches!(r.way, WayOut::Disarm);
+                r.watch.left_shown = false;
+                self.command(r.cmd, r.params)?;
+            }
+            let answer = self.await_way_out(
+                r.way,
+                r.cmd,
+                r.before,
+                &mut r.accepted,
+                (&mut r.watch, r.span),
+            )?;
+            if let Some(ended) = self.way_out_answered(&mut r, answer) {
+                return Ok(ended);
+            }
+        }
+    }
+
+    /// The name of what `way` commands: its mode's, or `disarm`.
+    fn way_out_name(&self, way: WayOut) -> &'static str {
+        match way {
+            WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
+            WayOut::Disarm => "disarm",
+        }
+    }
+
+    /// Decides what a second sender with the vehicle's ids, seen during the failsafe's retries
+    /// (FLYING.md, Failsafes, "Two senders"), changes in them: the retries end
+    /// (`Some`) on a pilot's word heard before it; else, once, the way out turns to the
+    /// failsafe mode (never a disarm) and no heartbeat's answer is awaited any more.
+    fn second_sender_in_retries(
+        &mut self,
+        r: &mut WayOutRetries,
+    ) -> Option<(bool, u32, &'static str)> {
+        if self.second_sender && !r.told {
+            // How it was seen (the same checks as in control: [`Flight::ids_frame`]).
+            if let Some(why) = self.same_ids.take() {
+                self.event(format!("during the failsafe's retries, {why}"));
+            }
+            // A second sender with the ids seen during the retries after a heartbeat
+            // showed a pilot's word, awaiting confirmation (att41f-2): as for a word heard
+            // before the proof that ends the flight ([`Flight::word_before_second_sender`]),
+            // nothing more is commanded: the word was the pilot's (one sender read as two),
+            // whose mode stands, or the second sender's, and the vehicle flown keeps the
+            // way out already commanded or falls to its own offboard-loss failsafe.
+            if let Some(word) = r.watch.seen.as_ref().filter(|s| s.pilots) {
+                self.word_before_second_sender_in_retries(&word.what);
+                return Some((false, r.tries, "a pilot's word before a second sender"));
+            }
+            // A second sender with the ids seen during the retries: no answer of the
+            // heartbeats any more, never a disarm (either may be the vehicle, maybe
+            // flying): the failsafe mode instead, to the bound or to a heartbeat showing a
+            // mode the companion did not command ([`Answer::NotCommanded`]).
+            r.told = true;
+            if !matches!(r.way, WayOut::Mode(_)) {
+                r.way = WayOut::Mode(self.opts.failsafe.mode());
+                let Some(c) = self.way_out_command(r.way) else {
+                    return Some((false, r.tries, "no mode table for this vehicle here"));
+                };
+                (r.cmd, r.params) = c;
+                r.accepted = None;
+            }
+            let note = self.second_sender_note();
+            self.event(format!("during the failsafe's retries{note}"));
+        }
+        if self.second_sender {
+            // No answer awaited holds the retries back any more.
+            r.watch.seen = None;
+        }
+        None
+    }
+
+    /// Decides whether the failsafe's retries are over unconfirmed (FLYING.md, "Failsafes"):
+    /// why (a lost link, their bound, a signal), or `None` to go on.
+    fn retries_over(&self, r: &WayOutRetries) -> Option<&'static str> {
+        let lost = self.link_gone || self.link_silent().is_some();
+        // At least 5 tries before a lost link ends them (a vehicle may hear what it cannot
+        // answer), unless it acknowledged the command as accepted: it heard it, and it is
+        // not sent again before a heartbeat says what it did (att37-5).
+        // After a second sender a retry waits for a heartbeat showing the vehicle still in
+        // the mode it was left in (att42f-2): none comes over a lost link.
+        if lost && (r.tries >= 5 || r.accepted.is_some() || (self.second_sender && r.tries > 0)) {
+            return Some("link lost");
+        }
+        let bound = match (r.refused, self.second_sender) {
+            (true, _) => "refused",
+            (false, true) => {
+                "retries' bound reached; a second sender with the ids: no heartbeat confirms it"
+            }
+            (false, false) => "retries' bound reached",
+        };
+        if r.tries >= MAX_WAY_OUT_TRIES {
+            return Some(bound);
+        }
+        if self.opts.stop.load(Ordering::SeqCst) {
+            return Some("stopped by a signal");
+        }
+        if Instant::now() >= r.end {
+            return Some(bound);
+        }
+        None
+    }
+
+    /// Decides whether the way out is sent again now (FLYING.md, "Failsafes"): never while a
+    /// heartbeat's answer awaits confirmation.
+    fn retry_due(&self, r: &WayOutRetries) -> bool {
+        // After a second sender, once the way out has gone out, a retry only on a heartbeat
+        // of the ids heard since the last one showing the vehicle still in the mode it was
+        // left in (att42f-2: [`Flight::left_in`]), sent as soon as it is heard; never on one
+        // showing the way out (a retry a heartbeat period after the last, 0.03 to 0.3 s
+        // after any heartbeat, overrode a pilot's switch made in between). With one sender,
+        // every 0.3 s, or once the vehicle accepted it, after a heartbeat newer than that.
+        let due = if self.second_sender && r.tries > 0 {
+            r.watch.left_shown
+        } else {
+            r.accepted.is_none_or(|at| self.last_heartbeat > at)
+        };
+        due && r.watch.seen.is_none()
+    }
+
+    /// Decides what the vehicle's `answer` to a try means for the failsafe's retries
+    /// (FLYING.md, "Failsafes"): their end (`Some`: confirmed, another safe mode, a pilot's
+    /// or a second sender's mode), or `None` to go on (a refusal is noted for the bound).
+    fn way_out_answered(
+        &mut self,
+        r: &mut WayOutRetries,
+        answer: Option<Answer>,
+    ) -> Option<(bool, u32, &'static str)> {
+        let tries = r.tries;
+        match answer {
+            Some(Answer::Confirmed) => Some((true, tries, "")),
+            Some(Answer::OtherSafeMode(name)) => {
+                let asked = self.way_out_name(r.way);
+                self.event(format!(
+                    "the vehicle went to {name}, not the {asked} commanded: a safe mode all the same, the failsafe ends there (not insisted on)"
+                ));
+                Some((true, tries, name))
+            }
+            Some(Answer::Refused) => {
+                r.refused = true;
+                None
+            }
+            Some(Answer::NotCommanded(what)) => {
+                if let Some(word) = r.watch.seen.as_ref().filter(|s| s.pilots && !r.told) {
+                    // The second sender was seen in this listen, after the word.
                     self.word_before_second_sender_in_retries(&word.what);
-                    return Ok((false, tries, "a pilot's word before a second sender"));
+                    return Some((false, tries, "a pilot's word before a second sender"));
                 }
-                // A second sender with the ids seen during the retries: no answer of the
-                // heartbeats any more, never a disarm (either may be the vehicle, maybe
-                // flying): the failsafe mode instead, to the bound or to a heartbeat showing a
-                // mode the companion did not command ([`Answer::NotCommanded`]).
-                told = true;
-                if !matches!(way, WayOut::Mode(_)) {
-                    way = WayOut::Mode(self.opts.failsafe.mode());
-                    let Some(c) = self.way_out_command(way) else {
-                        return Ok((false, tries, "no mode table for this vehicle here"));
-                    };
-                    (cmd, params) = c;
-                    accepted = None;
-                }
-                let note = self.second_sender_note();
-                self.event(format!("during the failsafe's retries{note}"));
+                let t = self.target.unwrap_or_default();
+                self.event(format!(
+                    "during the failsafe's retries, a second sender with the vehicle's ids (system {}, component {}) seen: a heartbeat of the ids shows {what}, which the companion did not command: a pilot's or the second sender's; nothing more commanded (the pilot's mode stands; the vehicle flown keeps the {} already commanded, or falls to its own offboard-loss failsafe)",
+                    t.0,
+                    t.1,
+                    self.firmware.name_of(self.opts.failsafe.mode())
+                ));
+                self.way_out_overridden = true;
+                Some((false, tries, "a mode the companion did not command shown"))
             }
-            if self.second_sender {
-                // No answer awaited holds the retries back any more.
-                watch.seen = None;
-            }
-            let lost = self.link_gone || self.link_silent().is_some();
-            // At least 5 tries before a lost link ends them (a vehicle may hear what it cannot
-            // answer), unless it acknowledged the command as accepted: it heard it, and it is
-            // not sent again before a heartbeat says what it did (att37-5).
-            // After a second sender a retry waits for a heartbeat showing the vehicle still in
-            // the mode it was left in (att42f-2): none comes over a lost link.
-            if lost && (tries >= 5 || accepted.is_some() || (self.second_sender && tries > 0)) {
-                self.word_held(&watch);
-                return Ok((false, tries, "link lost"));
-            }
-            let bound = match (refused, self.second_sender) {
-                (true, _) => "refused",
-                (false, true) => {
-                    "retries' bound reached; a second sender with the ids: no heartbeat confirms it"
-                }
-                (false, false) => "retries' bound reached",
-            };
-            if tries >= MAX_WAY_OUT_TRIES {
-                self.word_held(&watch);
-                return Ok((false, tries, bound));
-            }
-            if self.opts.stop.load(Ordering::SeqCst) {
-                self.word_held(&watch);
-                return Ok((false, tries, "stopped by a signal"));
-            }
-            if Instant::now() >= retry_end {
-                self.word_held(&watch);
-                return Ok((false, tries, bound));
-            }
-            // After a second sender, once the way out has gone out, a retry only on a heartbeat
-            // of the ids heard since the last one showing the vehicle still in the mode it was
-            // left in (att42f-2: [`Flight::left_in`]), sent as soon as it is heard; never on one
-            // showing the way out (a retry a heartbeat period after the last, 0.03 to 0.3 s
-            // after any heartbeat, overrode a pilot's switch made in between). With one sender,
-            // every 0.3 s, or once the vehicle accepted it, after a heartbeat newer than that.
-            let due = if self.second_sender && tries > 0 {
-                watch.left_shown
-            } else {
-                accepted.is_none_or(|at| self.last_heartbeat > at)
-            };
-            if due && watch.seen.is_none() {
-                tries += 1;
-                watch.disarm_sent |= matches!(way, WayOut::Disarm);
-                watch.left_shown = false;
-                self.command(cmd, params)?;
-            }
-            match self.await_way_out(way, cmd, before, &mut accepted, (&mut watch, span))? {
-                Some(Answer::Confirmed) => return Ok((true, tries, "")),
-                Some(Answer::OtherSafeMode(name)) => {
-                    let asked = match way {
-                        WayOut::Mode(m) | WayOut::LeaveOffboard(m) => self.firmware.name_of(m),
-                        WayOut::Disarm => "disarm",
-                    };
+            Some(Answer::PilotTookOver(what)) => {
+                self.way_out_overridden = true;
+                if let Some(why) = self.twin_doubt(&r.watch) {
+                    // A second counter with the ids was seen (att42f-3): the heartbeats'
+                    // word may be a second sender's, never asserted a pilot's.
                     self.event(format!(
-                        "the vehicle went to {name}, not the {asked} commanded: a safe mode all the same, the failsafe ends there (not insisted on)"
+                        "during the failsafe's retries: the heartbeats of the vehicle's ids show it {what}, which the companion did not command: a pilot's or the second sender's ({why}); the retries stop, nothing more commanded (the pilot's mode stands)"
                     ));
-                    return Ok((true, tries, name));
+                    return Some((false, tries, "a mode the companion did not command shown"));
                 }
-                Some(Answer::Refused) => refused = true,
-                Some(Answer::NotCommanded(what)) => {
-                    if let Some(word) = watch.seen.as_ref().filter(|s| s.pilots && !told) {
-                        // The second sender was seen in this listen, after the word.
-                        self.word_before_second_sender_in_retries(&word.what);
-                        return Ok((false, tries, "a pilot's word before a second sender"));
-                    }
-                    let t = self.target.unwrap_or_default();
-                    self.event(format!(
-                        "during the failsafe's retries, a second sender with the vehicle's ids (system {}, component {}) seen: a heartbeat of the ids shows {what}, which the companion did not command: a pilot's or the second sender's; nothing more commanded (the pilot's mode stands; the vehicle flown keeps the {} already commanded, or falls to its own offboard-loss failsafe)",
-                        t.0,
-                        t.1,
-                        self.firmware.name_of(self.opts.failsafe.mode())
-                    ));
-                    self.way_out_overridden = true;
-                    return Ok((false, tries, "a mode the companion did not command shown"));
-                }
-                Some(Answer::PilotTookOver(what)) => {
-                    self.way_out_overridden = true;
-                    if let Some(why) = self.twin_doubt(&watch) {
-                        // A second counter with the ids was seen (att42f-3): the heartbeats'
-                        // word may be a second sender's, never asserted a pilot's.
-                        self.event(format!(
-                            "during the failsafe's retries: the heartbeats of the vehicle's ids show it {what}, which the companion did not command: a pilot's or the second sender's ({why}); the retries stop, nothing more commanded (the pilot's mode stands)"
-                        ));
-                        return Ok((false, tries, "a mode the companion did not command shown"));
-                    }
-                    self.event(format!(
-                        "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
-                    ));
-                    return Ok((false, tries, "a pilot took over"));
-                }
-                None => {}
+                self.event(format!(
+                    "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
+                ));
+                Some((false, tries, "a pilot took over"))
             }
+            None => None,
         }
     }
 
