@@ -2351,36 +2351,54 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         match &r.msg {
-            // Not an autopilot's (a ground station's, an onboard controller's: att42f-4): never
-            // the vehicle's state, nor its heartbeat (it says nothing of the vehicle's link).
-            MavMessage::HEARTBEAT(h) if !is_autopilot(h) => {}
+            MavMessage::HEARTBEAT(h) => self.vehicle_beat(h, number, silent_s),
+            _ => self.vehicle_telemetry(r, kind),
+        }
+    }
+
+    /// Decides what a heartbeat of the vehicle's ids (number `number` on their frame counter,
+    /// after `silent_s` without a frame of theirs) says in control (FLYING.md, "The vehicle",
+    /// "The pilot's word is final"): nothing of the vehicle if not an autopilot's; only that
+    /// the link is alive after a second sender or if older than the last applied; else the
+    /// vehicle's state.
+    fn vehicle_beat(&mut self, h: &HEARTBEAT_DATA, number: Option<u64>, silent_s: f64) {
+        // Not an autopilot's (a ground station's, an onboard controller's: att42f-4): never
+        // the vehicle's state, nor its heartbeat (it says nothing of the vehicle's link).
+        if !is_autopilot(h) {
+            return;
+        }
+        if self.second_sender {
             // Every heartbeat of the ids keeps the link alive (S11: a link that delivers each
             // heartbeat one frame late); after a second sender none is the vehicle's word.
-            MavMessage::HEARTBEAT(_) if self.second_sender => self.beat_heard = Instant::now(),
+            self.beat_heard = Instant::now();
+        } else if number.zip(self.beat_number).is_some_and(|(n, b)| n <= b) {
             // Older than the last heartbeat applied (a late one, att33e-2): not the vehicle's
             // state now, never applied (a late OFFBOARD one after a pilot's MANUAL would read
             // as a change and back); one that contradicts a pilot's word pending restarts it.
-            MavMessage::HEARTBEAT(h)
-                if number.zip(self.beat_number).is_some_and(|(n, b)| n <= b) =>
-            {
-                self.beat_heard = Instant::now();
-                self.older_beat(h);
+            self.beat_heard = Instant::now();
+            self.older_beat(h);
+        } else {
+            self.last_heartbeat = Instant::now();
+            self.beat_heard = self.last_heartbeat;
+            self.beat_number = number.or(self.beat_number);
+            let was_armed = self.armed;
+            let was = (self.custom_mode, self.armed);
+            self.vehicle_heartbeat(h);
+            self.watch_leave(was);
+            self.note_beat();
+            if was_armed && !self.armed {
+                // A disarm after a silence: a reboot (whose clock need not go back far
+                // enough to say so) looks the same as a pilot's disarm (att33d-9a).
+                self.disarm_after_silence = silent_s > REBOOT_STEP_S;
             }
-            MavMessage::HEARTBEAT(h) => {
-                self.last_heartbeat = Instant::now();
-                self.beat_heard = self.last_heartbeat;
-                self.beat_number = number.or(self.beat_number);
-                let was_armed = self.armed;
-                let was = (self.custom_mode, self.armed);
-                self.vehicle_heartbeat(h);
-                self.watch_leave(was);
-                self.note_beat();
-                if was_armed && !self.armed {
-                    // A disarm after a silence: a reboot (whose clock need not go back far
-                    // enough to say so) looks the same as a pilot's disarm (att33d-9a).
-                    self.disarm_after_silence = silent_s > REBOOT_STEP_S;
-                }
-            }
+        }
+    }
+
+    /// Takes what a frame of the vehicle's ids other than a heartbeat (`kind` on their frame
+    /// counter) tells (FLYING.md, "Control", "Setpoint"): an acknowledgement before control, its
+    /// position, attitude, airspeed, landed state, a simulator's end of run.
+    fn vehicle_telemetry(&mut self, r: &Received, kind: Option<FrameKind>) {
+        match &r.msg {
             // Acknowledgements go to every peer of the vehicle: once in control, they may
             // answer someone else's command, and say nothing about ours.
             MavMessage::COMMAND_ACK(a) if !self.in_control && !self.ack_for_another(r) => {
