@@ -1773,104 +1773,19 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// and the switch to OFFBOARD (retried every 0.5 s for 10 s), once the sensor and a
     /// position are there.
     fn control(&mut self) -> Result<Option<FlyEnd>, FlyError> {
-        if self.armed != self.was_armed {
-            // Armed: ask for OFFBOARD at once.
-            self.was_armed = self.armed;
-            self.next_control = Instant::now();
-        }
-        self.active = self.armed
-            && self
-                .custom_mode
-                .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
-        if self.in_control && self.armed && self.custom_mode.is_none() {
-            // In control, a heartbeat armed in an unknown mode (no custom-mode flag: a relay
-            // rewriting base_mode, a glitch) is no pilot's word (ver33b-10): the companion
-            // carries on as in control, logged once; no known mode for `timeout_s` is a lost
-            // link (the way out commanded: OFFBOARD may still hold).
-            let since = *self.unknown_mode_since.get_or_insert_with(Instant::now);
-            if since.elapsed() > self.timeout {
-                self.event(format!(
-                    "no known mode from the vehicle for {} s (armed, its heartbeat without a custom mode): its mode is unknown, the link as good as lost",
-                    self.opts.timeout_s
-                ));
-                return Ok(Some(FlyEnd::LinkLost));
-            }
-            self.active = true;
-        } else {
-            self.unknown_mode_since = None;
+        if let Some(end) = self.note_active() {
+            return Ok(Some(end));
         }
         if let Some(end) = self.unconfirmed_leave() {
             return Ok(Some(end));
         }
-        if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
-            // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
-            // companion, a ground station's offboard) holds it. --take-control never joins.
-            let offboard = self.firmware.name_of(FlyMode::Offboard);
-            self.event(format!(
-                "another_controller: the vehicle is armed and in {offboard} and the companion commanded neither: another controller holds it; nothing commanded (without --take-control, fly flies a vehicle its pilot has put in {offboard})"
-            ));
-            self.active = false;
-            return Ok(Some(FlyEnd::AnotherController));
-        }
-        if self.active && self.in_control && self.disarm_seen.is_some() {
-            // Disarmed and armed again while the disarm was watched for a reboot: the disarm
-            // was nobody's here, so a pilot's (att33d-3): never flown on, no setpoint.
-            self.event(format!(
-                "pilot_took_over: the vehicle was disarmed, not by the companion, and is armed again in {}: setpoints stopped, nothing commanded",
-                self.mode_name()
-            ));
-            self.active = false;
-            return Ok(Some(FlyEnd::PilotTookOver));
+        if let Some(end) = self.offboard_not_ours() {
+            return Ok(Some(end));
         }
         if self.active {
-            if !self.in_control && self.held_dropped > 0 {
-                self.event(format!(
-                    "control taken: the law starts from the newest measurement held meanwhile ({} older ones dropped, never answered)",
-                    self.held_dropped
-                ));
-            }
-            if !self.in_control {
-                // The change that gave the companion control is logged at once (ver33-3).
-                self.flush_mode_log(true);
-                if self.refusal_pending.take().is_some() {
-                    let refusal = self.refusal.take().unwrap_or_default();
-                    self.event(format!(
-                        "the refusal heard ({refusal}) was not the vehicle's last word: its heartbeat shows it armed in {} (the refusal answered someone else's command)",
-                        self.mode_name()
-                    ));
-                }
-            }
-            self.in_control = true;
-            // --max-duration-s counts from here (the companion's clock).
-            self.ans.first_wall.get_or_insert_with(Instant::now);
+            self.control_taken();
         } else if self.in_control {
-            if !self.armed {
-                // A disarm nobody here commanded: a pilot's, or an autopilot that rebooted (its
-                // heartbeat may come before its clock says so). No setpoint leaves while the
-                // vehicle's next time-stamped message is awaited (REBOOT_WATCH_S at most).
-                let since = *self.disarm_seen.get_or_insert_with(Instant::now);
-                let clock_since = self.vehicle_ms.is_some_and(|(_, at)| at > since);
-                if !clock_since && since.elapsed().as_secs_f64() < REBOOT_WATCH_S {
-                    return Ok(None);
-                }
-            }
-            // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
-            // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
-            self.flush_mode_log(true);
-            let what = format!(
-                "pilot_took_over: the vehicle is {} in {}, not commanded by the companion{}: setpoints stopped, nothing commanded",
-                if self.armed { "armed" } else { "disarmed" },
-                self.mode_name(),
-                if !self.armed && self.disarm_after_silence {
-                    format!(
-                        " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
-                    )
-                } else {
-                    String::new()
-                }
-            );
-            self.event(what);
-            return Ok(Some(FlyEnd::PilotTookOver));
+            return Ok(self.control_left());
         }
         if !self.opts.take_control || self.active {
             return Ok(None);
@@ -1897,6 +1812,124 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(None);
         }
         self.take_control()
+    }
+
+    /// Decides whether the vehicle is flown now (`active`: armed in OFFBOARD, or in control
+    /// armed in an unknown mode) (FLYING.md, "Control"); asks for OFFBOARD at once on an
+    /// arming; ends the flight (`LinkLost`) on no known mode for `timeout_s` in control.
+    fn note_active(&mut self) -> Option<FlyEnd> {
+        if self.armed != self.was_armed {
+            // Armed: ask for OFFBOARD at once.
+            self.was_armed = self.armed;
+            self.next_control = Instant::now();
+        }
+        self.active = self.armed
+            && self
+                .custom_mode
+                .is_some_and(|c| self.firmware.is_in(c, FlyMode::Offboard));
+        if self.in_control && self.armed && self.custom_mode.is_none() {
+            // In control, a heartbeat armed in an unknown mode (no custom-mode flag: a relay
+            // rewriting base_mode, a glitch) is no pilot's word (ver33b-10): the companion
+            // carries on as in control, logged once; no known mode for `timeout_s` is a lost
+            // link (the way out commanded: OFFBOARD may still hold).
+            let since = *self.unknown_mode_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > self.timeout {
+                self.event(format!(
+                    "no known mode from the vehicle for {} s (armed, its heartbeat without a custom mode): its mode is unknown, the link as good as lost",
+                    self.opts.timeout_s
+                ));
+                return Some(FlyEnd::LinkLost);
+            }
+            self.active = true;
+        } else {
+            self.unknown_mode_since = None;
+        }
+        None
+    }
+
+    /// Decides whether a vehicle armed in OFFBOARD is someone else's to fly (FLYING.md,
+    /// "Another controller", "The pilot's word is final"): another controller's, before the
+    /// companion asked for it, or a pilot's, armed again after a disarm watched for a reboot.
+    fn offboard_not_ours(&mut self) -> Option<FlyEnd> {
+        if self.active && self.opts.take_control && !self.in_control && !self.offboard_sent {
+            // Armed and in OFFBOARD, and the companion asked for neither: someone else (another
+            // companion, a ground station's offboard) holds it. --take-control never joins.
+            let offboard = self.firmware.name_of(FlyMode::Offboard);
+            self.event(format!(
+                "another_controller: the vehicle is armed and in {offboard} and the companion commanded neither: another controller holds it; nothing commanded (without --take-control, fly flies a vehicle its pilot has put in {offboard})"
+            ));
+            self.active = false;
+            return Some(FlyEnd::AnotherController);
+        }
+        if self.active && self.in_control && self.disarm_seen.is_some() {
+            // Disarmed and armed again while the disarm was watched for a reboot: the disarm
+            // was nobody's here, so a pilot's (att33d-3): never flown on, no setpoint.
+            self.event(format!(
+                "pilot_took_over: the vehicle was disarmed, not by the companion, and is armed again in {}: setpoints stopped, nothing commanded",
+                self.mode_name()
+            ));
+            self.active = false;
+            return Some(FlyEnd::PilotTookOver);
+        }
+        None
+    }
+
+    /// The companion has control (FLYING.md, "Control"): the first time, the change that gave
+    /// it and a refusal it overrode are logged, and --max-duration-s starts counting.
+    fn control_taken(&mut self) {
+        if !self.in_control && self.held_dropped > 0 {
+            self.event(format!(
+                "control taken: the law starts from the newest measurement held meanwhile ({} older ones dropped, never answered)",
+                self.held_dropped
+            ));
+        }
+        if !self.in_control {
+            // The change that gave the companion control is logged at once (ver33-3).
+            self.flush_mode_log(true);
+            if self.refusal_pending.take().is_some() {
+                let refusal = self.refusal.take().unwrap_or_default();
+                self.event(format!(
+                    "the refusal heard ({refusal}) was not the vehicle's last word: its heartbeat shows it armed in {} (the refusal answered someone else's command)",
+                    self.mode_name()
+                ));
+            }
+        }
+        self.in_control = true;
+        // --max-duration-s counts from here (the companion's clock).
+        self.ans.first_wall.get_or_insert_with(Instant::now);
+    }
+
+    /// Decides what the vehicle leaving OFFBOARD or disarmed, in control and not commanded by
+    /// the companion, means (FLYING.md, "The pilot's word is final"): `None` while a disarm
+    /// is watched for a reboot (no setpoint meanwhile), else a pilot took over.
+    fn control_left(&mut self) -> Option<FlyEnd> {
+        if !self.armed {
+            // A disarm nobody here commanded: a pilot's, or an autopilot that rebooted (its
+            // heartbeat may come before its clock says so). No setpoint leaves while the
+            // vehicle's next time-stamped message is awaited (REBOOT_WATCH_S at most).
+            let since = *self.disarm_seen.get_or_insert_with(Instant::now);
+            let clock_since = self.vehicle_ms.is_some_and(|(_, at)| at > since);
+            if !clock_since && since.elapsed().as_secs_f64() < REBOOT_WATCH_S {
+                return None;
+            }
+        }
+        // Nothing of the companion's leaves OFFBOARD or disarms during the flight: a pilot
+        // (or the autopilot's own failsafe) took over. Stop at once and command nothing.
+        self.flush_mode_log(true);
+        let what = format!(
+            "pilot_took_over: the vehicle is {} in {}, not commanded by the companion{}: setpoints stopped, nothing commanded",
+            if self.armed { "armed" } else { "disarmed" },
+            self.mode_name(),
+            if !self.armed && self.disarm_after_silence {
+                format!(
+                    " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
+                )
+            } else {
+                String::new()
+            }
+        );
+        self.event(what);
+        Some(FlyEnd::PilotTookOver)
     }
 
     /// A refusal heard ([`Flight::refusal_pending`], ver33b-11) is the vehicle's last word once
