@@ -419,6 +419,17 @@ struct WayOutRetries {
     told: bool,
 }
 
+/// What the checks of a frame heard during the failsafe's retries decide
+/// ([`Flight::retry_frame`]).
+enum RetryFrame {
+    /// The listen ends with this answer (`None`: its autopilot rebooted).
+    End(Option<Answer>),
+    /// Nothing more to read in the frame.
+    Done,
+    /// A frame of the vehicle, its message to read, with its unwrapped number.
+    Read(u64),
+}
+
 /// Options of [`run_fly`].
 #[derive(Clone, Debug)]
 pub struct FlyOptions {
@@ -3650,13 +3661,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 r.watch.left_shown = false;
                 self.command(r.cmd, r.params)?;
             }
-            let answer = self.await_way_out(
-                r.way,
-                r.cmd,
-                r.before,
-                &mut r.accepted,
-                (&mut r.watch, r.span),
-            )?;
+            let answer = self.await_way_out(&mut r)?;
             if let Some(ended) = self.way_out_answered(&mut r, answer) {
                 return Ok(ended);
             }
@@ -3868,18 +3873,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
 
     /// Listens 0.3 s (after a second sender, less once a heartbeat shows the vehicle still in
     /// the mode it was left in: a retry is due, `watch.left_shown`) for the vehicle's answer to
-    /// `way`: `Some(true)` confirmed by its heartbeat
+    /// the retries' way out: `Some(true)` confirmed by its heartbeat
     /// (an acknowledgement is a promise: a vehicle may accept and stay in OFFBOARD),
     /// `Some(false)` refused (`DENIED`, `UNSUPPORTED`, `FAILED`: retrying changes nothing),
     /// unless an acceptance followed the refusal within the listen (ver33b-11).
-    fn await_way_out(
-        &mut self,
-        way: WayOut,
-        cmd: MavCmd,
-        before: (Option<u32>, bool),
-        accepted: &mut Option<Instant>,
-        (watch, span): (&mut RetryWatch, Duration),
-    ) -> Result<Option<Answer>, FlyError> {
+    fn await_way_out(&mut self, retries: &mut WayOutRetries) -> Result<Option<Answer>, FlyError> {
         let until = Instant::now() + Duration::from_millis(300);
         // A refusal heard and no acceptance after it: an unaddressed refusal may answer
         // someone else's same command, the vehicle's acceptance of this one may follow
@@ -3892,109 +3890,147 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 .poll(Duration::from_millis(20))
                 .map_err(FlyError::Io)?
             {
-                let from = (r.header.system_id, r.header.component_id);
-                if Some(from) != self.target {
-                    // Another autopilot first heard now is logged as in control (att45f-9),
-                    // never flown.
-                    if let MavMessage::HEARTBEAT(h) = &r.msg {
-                        self.find_vehicle(from, h);
-                    }
-                    continue;
-                }
-                let (kind, number) = self.ids_frame(&r);
-                if self.reboot.is_some() {
-                    // Its autopilot rebooted: the retries stop there (att45f-10).
-                    return Ok(None);
-                }
-                if kind == FrameKind::Copy {
-                    // Delivered again: no answer, nothing applied ([`Flight::copy_frame`]).
-                    self.copy_frame(&r.msg);
-                    continue;
-                }
-                if matches!(&r.msg, MavMessage::HEARTBEAT(h) if !is_autopilot(h)) {
-                    // No autopilot's heartbeat (a ground station's or an onboard controller's
-                    // with the vehicle's ids, att42f-4): never the vehicle's answer, state or
-                    // word (its frame counted above, as any of the ids'), nor its heartbeat:
-                    // the link is lost without the vehicle's for long (att45f-3:
-                    // [`Flight::link_silent`], as in control).
-                    self.last_link = Instant::now();
-                    continue;
-                }
-                if let MavMessage::HEARTBEAT(h) = &r.msg {
-                    if self.second_sender || kind == FrameKind::Doubt {
-                        let (answer, left) = self.unapplied_beat(h, way, before, watch);
-                        if answer.is_some() {
-                            return Ok(answer);
-                        }
-                        // After a proof, a retry goes out at once on a heartbeat showing the
-                        // vehicle still in the mode it was left in (att42f-2): the listen ends
-                        // with this poll's frames.
-                        retry_now |= left;
-                        watch.left_shown |= left;
-                    }
-                }
-                if kind == FrameKind::Doubt {
-                    // In a doubt: the link is alive, no answer.
-                    self.doubt_frame(&r.msg);
-                    continue;
-                }
-                self.last_link = Instant::now();
-                if self.ack_for_another(&r) {
-                    continue;
-                }
-                match &r.msg {
-                    // After a second sender: heard (the link alive), never an answer.
-                    MavMessage::HEARTBEAT(_) if self.second_sender => {
-                        self.beat_heard = Instant::now();
-                        continue;
-                    }
-                    // Older than the last applied (a late one): not the vehicle's answer now;
-                    // one showing another answer than the one awaited restarts its span.
-                    MavMessage::HEARTBEAT(h) if self.beat_number.is_some_and(|b| number <= b) => {
-                        self.beat_heard = Instant::now();
-                        watch.older = true;
-                        let answer = self.heartbeat_answer(h, way, before);
-                        watch.contradicted_by(&answer);
-                        continue;
-                    }
-                    MavMessage::HEARTBEAT(_) => {
-                        self.last_heartbeat = Instant::now();
-                        self.beat_heard = self.last_heartbeat;
-                        self.beat_number = Some(number);
-                    }
-                    MavMessage::COMMAND_ACK(a)
-                        if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
-                    {
-                        *accepted = Some(Instant::now());
-                        refused = false;
-                    }
-                    _ => {}
-                }
-                match &r.msg {
-                    MavMessage::COMMAND_ACK(a)
-                        if a.command == cmd
-                            && matches!(
-                                a.result,
-                                MavResult::MAV_RESULT_DENIED
-                                    | MavResult::MAV_RESULT_UNSUPPORTED
-                                    | MavResult::MAV_RESULT_FAILED
-                            ) =>
-                    {
-                        refused = true
-                    }
-                    MavMessage::HEARTBEAT(h) => {
-                        // A second vehicle with the ids may beat too (att33e-1, att33f-3):
-                        // an answer once it has stood, none contradicting, for `span`.
-                        let answer = self.heartbeat_answer(h, way, before);
-                        if let Some(answer) = self.answer_stands(h, answer, watch, span) {
-                            return Ok(Some(answer));
-                        }
-                    }
-                    _ => {}
+                let number = match self.retry_frame(&r, retries, &mut retry_now) {
+                    RetryFrame::End(answer) => return Ok(answer),
+                    RetryFrame::Done => continue,
+                    RetryFrame::Read(number) => number,
+                };
+                if let Some(answer) = self.retry_message(&r, number, retries, &mut refused) {
+                    return Ok(Some(answer));
                 }
             }
         }
         Ok(refused.then_some(Answer::Refused))
+    }
+
+    /// Decides what a frame heard during the failsafe's retries is before its message is
+    /// read (FLYING.md, Failsafes, "Two senders"; "The vehicle"): another autopilot's, a copy,
+    /// one in a doubt of the frame counter, not an autopilot's, an acknowledgement of another
+    /// peer's command (nothing more to read); the end of the listen (its autopilot rebooted,
+    /// or an answer of a heartbeat not applied); or the vehicle's, to read on. Sets
+    /// `retry_now` when a heartbeat after a second sender shows a retry due.
+    fn retry_frame(
+        &mut self,
+        r: &Received,
+        retries: &mut WayOutRetries,
+        retry_now: &mut bool,
+    ) -> RetryFrame {
+        let from = (r.header.system_id, r.header.component_id);
+        if Some(from) != self.target {
+            // Another autopilot first heard now is logged as in control (att45f-9),
+            // never flown.
+            if let MavMessage::HEARTBEAT(h) = &r.msg {
+                self.find_vehicle(from, h);
+            }
+            return RetryFrame::Done;
+        }
+        let (kind, number) = self.ids_frame(r);
+        if self.reboot.is_some() {
+            // Its autopilot rebooted: the retries stop there (att45f-10).
+            return RetryFrame::End(None);
+        }
+        if kind == FrameKind::Copy {
+            // Delivered again: no answer, nothing applied ([`Flight::copy_frame`]).
+            self.copy_frame(&r.msg);
+            return RetryFrame::Done;
+        }
+        if matches!(&r.msg, MavMessage::HEARTBEAT(h) if !is_autopilot(h)) {
+            // No autopilot's heartbeat (a ground station's or an onboard controller's
+            // with the vehicle's ids, att42f-4): never the vehicle's answer, state or
+            // word (its frame counted above, as any of the ids'), nor its heartbeat:
+            // the link is lost without the vehicle's for long (att45f-3:
+            // [`Flight::link_silent`], as in control).
+            self.last_link = Instant::now();
+            return RetryFrame::Done;
+        }
+        if let MavMessage::HEARTBEAT(h) = &r.msg {
+            if self.second_sender || kind == FrameKind::Doubt {
+                let (answer, left) =
+                    self.unapplied_beat(h, retries.way, retries.before, &mut retries.watch);
+                if answer.is_some() {
+                    return RetryFrame::End(answer);
+                }
+                // After a proof, a retry goes out at once on a heartbeat showing the
+                // vehicle still in the mode it was left in (att42f-2): the listen ends
+                // with this poll's frames.
+                *retry_now |= left;
+                retries.watch.left_shown |= left;
+            }
+        }
+        if kind == FrameKind::Doubt {
+            // In a doubt: the link is alive, no answer.
+            self.doubt_frame(&r.msg);
+            return RetryFrame::Done;
+        }
+        self.last_link = Instant::now();
+        if self.ack_for_another(r) {
+            return RetryFrame::Done;
+        }
+        RetryFrame::Read(number)
+    }
+
+    /// Decides what a message of the vehicle (number `number` on its frame counter) heard
+    /// during the failsafe's retries answers (FLYING.md, "Failsafes"): an acknowledgement of
+    /// the way out (accepted, or `refused` until an acceptance follows), a heartbeat whose
+    /// answer has stood for the retries' span (`Some`), or, after a second sender or older
+    /// than the last applied, a heartbeat that only says the link is alive.
+    fn retry_message(
+        &mut self,
+        r: &Received,
+        number: u64,
+        retries: &mut WayOutRetries,
+        refused: &mut bool,
+    ) -> Option<Answer> {
+        let (way, cmd, before) = (retries.way, retries.cmd, retries.before);
+        match &r.msg {
+            // After a second sender: heard (the link alive), never an answer.
+            MavMessage::HEARTBEAT(_) if self.second_sender => {
+                self.beat_heard = Instant::now();
+                return None;
+            }
+            // Older than the last applied (a late one): not the vehicle's answer now;
+            // one showing another answer than the one awaited restarts its span.
+            MavMessage::HEARTBEAT(h) if self.beat_number.is_some_and(|b| number <= b) => {
+                self.beat_heard = Instant::now();
+                retries.watch.older = true;
+                let answer = self.heartbeat_answer(h, way, before);
+                retries.watch.contradicted_by(&answer);
+                return None;
+            }
+            MavMessage::HEARTBEAT(_) => {
+                self.last_heartbeat = Instant::now();
+                self.beat_heard = self.last_heartbeat;
+                self.beat_number = Some(number);
+            }
+            MavMessage::COMMAND_ACK(a)
+                if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
+            {
+                retries.accepted = Some(Instant::now());
+                *refused = false;
+            }
+            _ => {}
+        }
+        match &r.msg {
+            MavMessage::COMMAND_ACK(a)
+                if a.command == cmd
+                    && matches!(
+                        a.result,
+                        MavResult::MAV_RESULT_DENIED
+                            | MavResult::MAV_RESULT_UNSUPPORTED
+                            | MavResult::MAV_RESULT_FAILED
+                    ) =>
+            {
+                *refused = true
+            }
+            MavMessage::HEARTBEAT(h) => {
+                // A second vehicle with the ids may beat too (att33e-1, att33f-3):
+                // an answer once it has stood, none contradicting, for `span`.
+                let answer = self.heartbeat_answer(h, way, before);
+                return self.answer_stands(h, answer, &mut retries.watch, retries.span);
+            }
+            _ => {}
+        }
+        None
     }
 }
 
