@@ -2146,26 +2146,45 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             return Ok(Some(FlyEnd::ControlRefused));
         };
         if self.mode_at_first_command.is_none() {
-            // A vehicle on its way home or down (its autopilot's failsafe, or its pilot's
-            // choice), taking off, avoiding traffic, or in a mode not known here is never
-            // pulled out of it: an armed vehicle is taken only from a mode its pilot flies or
-            // holds in ([`Firmware::takeover_allowed`]).
-            if let Some(why) = self.not_takeable() {
-                self.event(format!(
-                    "the vehicle is {} in {why}: --take-control never pulls it out, nothing commanded",
-                    if self.armed { "armed" } else { "disarmed" }
-                ));
-                return Ok(Some(FlyEnd::ControlRefused));
+            if let Some(end) = self.first_command_refused() {
+                return Ok(Some(end));
             }
-            if !self.armed && !self.opts.arm {
-                self.event(
-                    "the vehicle is disarmed: --take-control arms it only with --arm (for simulators: a real aircraft is armed and flown to the area by its pilot, then taken over), nothing commanded".into(),
-                );
-                return Ok(Some(FlyEnd::ControlRefused));
-            }
-            self.mode_at_first_command = Some(self.custom_mode);
-            self.armed_since_command = self.armed;
         }
+        self.command_control(p)?;
+        self.next_control = Instant::now() + Duration::from_millis(500);
+        Ok(None)
+    }
+
+    /// Decides, before the first command of the take-over, whether the vehicle may be taken
+    /// (FLYING.md, "Control"): never from a mode its pilot does not fly or hold in, never a
+    /// disarmed one without --arm (`ControlRefused`, logged); else notes its mode and arming
+    /// then.
+    fn first_command_refused(&mut self) -> Option<FlyEnd> {
+        // A vehicle on its way home or down (its autopilot's failsafe, or its pilot's
+        // choice), taking off, avoiding traffic, or in a mode not known here is never
+        // pulled out of it: an armed vehicle is taken only from a mode its pilot flies or
+        // holds in ([`Firmware::takeover_allowed`]).
+        if let Some(why) = self.not_takeable() {
+            self.event(format!(
+                "the vehicle is {} in {why}: --take-control never pulls it out, nothing commanded",
+                if self.armed { "armed" } else { "disarmed" }
+            ));
+            return Some(FlyEnd::ControlRefused);
+        }
+        if !self.armed && !self.opts.arm {
+            self.event(
+                "the vehicle is disarmed: --take-control arms it only with --arm (for simulators: a real aircraft is armed and flown to the area by its pilot, then taken over), nothing commanded".into(),
+            );
+            return Some(FlyEnd::ControlRefused);
+        }
+        self.mode_at_first_command = Some(self.custom_mode);
+        self.armed_since_command = self.armed;
+        None
+    }
+
+    /// The take-over's next command (FLYING.md, "Control"): the arming of a disarmed vehicle,
+    /// else a setpoint and the switch to OFFBOARD (`offboard`: its parameters).
+    fn command_control(&mut self, offboard: [f32; 3]) -> Result<(), FlyError> {
         if !self.armed {
             self.arm_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, Instant::now()));
@@ -2179,10 +2198,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             )?;
             self.offboard_sent = true;
             self.awaiting = Some((MavCmd::MAV_CMD_DO_SET_MODE, Instant::now()));
-            self.command(MavCmd::MAV_CMD_DO_SET_MODE, p)?;
+            self.command(MavCmd::MAV_CMD_DO_SET_MODE, offboard)?;
         }
-        self.next_control = Instant::now() + Duration::from_millis(500);
-        Ok(None)
+        Ok(())
     }
 
     /// Answers the measurements queued (held while `take_control` waits for control): a new
