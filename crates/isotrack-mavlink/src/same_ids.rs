@@ -477,31 +477,8 @@ impl SequenceWatch {
         self.newest = Some(n_a);
         if matches!(f, Fit::Late(_)) {
             self.late += 1;
-        } else {
-            match stream {
-                Stream::A => {
-                    if d.a_past && d.b_since {
-                        // (b): the old stream goes on past N_A, the doubt's frames between:
-                        // two counters alive side by side.
-                        self.resumed_from = Some(d.old_newest);
-                        return self.proof(u);
-                    }
-                    let past = (n_a as u8).wrapping_sub(d.old_newest);
-                    if (REORDER + 1..=MAX_STEP_AHEAD).contains(&past) {
-                        d.a_past = true;
-                    }
-                }
-                // A frame of the doubt's window that conflicts in the old one only on `N_A`
-                // itself is no frame of a second counter beside the old one (att41f-5): one
-                // sender's frame numbered `N_A` after a burst of 225 to 254 frames, delivered
-                // late, while its next frames walked the old window past `N_A` (they fit it
-                // nearer, by one, with that frame missing).
-                Stream::B => d.b_since |= d.a_past && !(fa == Fit::Conflict && seq == d.old_newest),
-            }
-            match stream {
-                Stream::A => d.new_a += 1,
-                Stream::B => d.new_b += 1,
-            }
+        } else if self.new_in_doubt(&mut d, stream, fa, n_a, seq) {
+            return self.proof(u);
         }
         d.frames += 1;
         let timed_out = d.frames >= DOUBT_MIN_FRAMES && wall_s - d.since_s >= DOUBT_S;
@@ -509,6 +486,65 @@ impl SequenceWatch {
             self.doubt = Some(d);
             return (FrameKind::Doubt, u);
         }
+        let kind = if matches!(f, Fit::New(_)) {
+            FrameKind::New
+        } else {
+            FrameKind::Late
+        };
+        self.resync(d, n_a, (seq, msg), (stream, kind), wall_s)
+    }
+
+    /// Counts a new frame of `stream` in the doubt `d` (FLYING.md, "The vehicle": what tells
+    /// two senders apart): whether it proves two senders by (b), the old stream gone on past
+    /// `N_A` (`n_a` its newest now) with the doubt's frames between (`fa`: how the frame, `seq`,
+    /// fit the old window).
+    fn new_in_doubt(
+        &mut self,
+        d: &mut DoubtState,
+        stream: Stream,
+        fa: Fit,
+        n_a: u64,
+        seq: u8,
+    ) -> bool {
+        match stream {
+            Stream::A => {
+                if d.a_past && d.b_since {
+                    // (b): the old stream goes on past N_A, the doubt's frames between:
+                    // two counters alive side by side.
+                    self.resumed_from = Some(d.old_newest);
+                    return true;
+                }
+                let past = (n_a as u8).wrapping_sub(d.old_newest);
+                if (REORDER + 1..=MAX_STEP_AHEAD).contains(&past) {
+                    d.a_past = true;
+                }
+            }
+            // A frame of the doubt's window that conflicts in the old one only on `N_A`
+            // itself is no frame of a second counter beside the old one (att41f-5): one
+            // sender's frame numbered `N_A` after a burst of 225 to 254 frames, delivered
+            // late, while its next frames walked the old window past `N_A` (they fit it
+            // nearer, by one, with that frame missing).
+            Stream::B => d.b_since |= d.a_past && !(fa == Fit::Conflict && seq == d.old_newest),
+        }
+        match stream {
+            Stream::A => d.new_a += 1,
+            Stream::B => d.new_b += 1,
+        }
+        false
+    }
+
+    /// Ends the doubt `d` without proof (FLYING.md, "The vehicle": a doubt resynchronised):
+    /// decides which stream is the one sender's, and renumbers its window above every number
+    /// given so far. The frame (`seq`, `msg`) went to `stream` as `kind`; `n_a` is the old
+    /// window's newest, `wall_s` when the frame came. Returns the frame's kind and number.
+    fn resync(
+        &mut self,
+        mut d: DoubtState,
+        n_a: u64,
+        (seq, msg): (u8, &MavMessage),
+        (stream, mut kind): (Stream, FrameKind),
+        wall_s: f64,
+    ) -> (FrameKind, u64) {
         // No proof: one sender, resynchronised on the stream that went on, the one with more
         // new frames in the doubt: the old one if the sender's numbers passed N_A and went on
         // alone (the doubt's first frames were strays, att39f-2), else the doubt's (which came
@@ -523,11 +559,6 @@ impl SequenceWatch {
         let (mut seen, mut newest) = match live {
             Stream::A => (std::mem::take(&mut self.seen), n_a),
             Stream::B => (std::mem::take(&mut d.seen_b), d.newest_b),
-        };
-        let mut kind = if matches!(f, Fit::New(_)) {
-            FrameKind::New
-        } else {
-            FrameKind::Late
         };
         if live != stream {
             kind = match fit(&seen, newest, seq, msg) {
