@@ -333,23 +333,7 @@ impl SequenceWatch {
     /// doubt's window numbers above every number before it). `wall_s` is when it came on the
     /// companion's clock (s, never going back).
     pub fn frame(&mut self, seq: u8, msg: &MavMessage, wall_s: f64) -> (FrameKind, u64) {
-        if let (Some(&first), Some(&last)) = (self.times.front(), self.times.back()) {
-            let m = self.times.len();
-            let took_s = (last - first) * RESTART_FRAMES as f64 / (m - 1).max(1) as f64;
-            if m >= RESTART_MIN_FRAMES && wall_s - last > took_s {
-                // (A doubt too ends: the next frame is taken as the first, numbered above
-                // every number given before, the doubt's too.)
-                if let Some(d) = self.doubt.take() {
-                    self.newest = self.newest.map(|n| n.max(d.newest_b));
-                }
-                self.restart();
-                self.times.clear();
-            }
-        }
-        self.times.push_back(wall_s);
-        if self.times.len() > RESTART_FRAMES + 1 {
-            self.times.pop_front();
-        }
+        self.restart_after_silence(wall_s);
         let Some(newest) = self.newest else {
             // The first (or the first after a restart): 256 up, so that a late frame's
             // unwrapped number stays above every number before the restart.
@@ -391,27 +375,8 @@ impl SequenceWatch {
                     self.after_resync_s = Some(since_s);
                     return self.proof(u);
                 }
-                // The first conflict: a doubt, its window seeded with this frame (numbered
-                // above every number of the old window).
-                self.doubts += 1;
-                self.before_doubt.clear();
-                let old = newest as u8;
-                let mut seen_b = vec![None; 256];
-                seen_b[seq as usize] = Some(msg.clone());
-                let newest_b = (newest / 256 + 2) * 256 + seq as u64;
-                self.doubt = Some(DoubtState {
-                    old_newest: old,
-                    jump: seq.wrapping_sub(old),
-                    frames: 0,
-                    since_s: wall_s,
-                    seen_b,
-                    newest_b,
-                    a_past: false,
-                    b_since: false,
-                    new_a: 0,
-                    new_b: 1,
-                });
-                (FrameKind::Doubt, newest_b)
+                // The first conflict: a doubt.
+                self.open_doubt(newest, seq, msg, wall_s)
             }
             f => {
                 if matches!(f, Fit::Late(_)) {
@@ -428,6 +393,61 @@ impl SequenceWatch {
                 (kind, u)
             }
         }
+    }
+
+    /// Decides, as a frame comes at `wall_s`, whether the sender restarted its counter
+    /// (FLYING.md, "The vehicle": a silence longer than its last [`RESTART_FRAMES`] frames
+    /// took): every number seen is then forgotten, a doubt's too; the frame's time is kept.
+    fn restart_after_silence(&mut self, wall_s: f64) {
+        if let (Some(&first), Some(&last)) = (self.times.front(), self.times.back()) {
+            let m = self.times.len();
+            let took_s = (last - first) * RESTART_FRAMES as f64 / (m - 1).max(1) as f64;
+            if m >= RESTART_MIN_FRAMES && wall_s - last > took_s {
+                // (A doubt too ends: the next frame is taken as the first, numbered above
+                // every number given before, the doubt's too.)
+                if let Some(d) = self.doubt.take() {
+                    self.newest = self.newest.map(|n| n.max(d.newest_b));
+                }
+                self.restart();
+                self.times.clear();
+            }
+        }
+        self.times.push_back(wall_s);
+        if self.times.len() > RESTART_FRAMES + 1 {
+            self.times.pop_front();
+        }
+    }
+
+    /// Opens a doubt on the first conflict (FLYING.md, "The vehicle": one conflict is no
+    /// proof), the old window's newest number being `newest`: the doubt's window is seeded
+    /// with the frame (`seq`, `msg`, come at `wall_s`), numbered above every number of the
+    /// old window. Returns its kind and number.
+    fn open_doubt(
+        &mut self,
+        newest: u64,
+        seq: u8,
+        msg: &MavMessage,
+        wall_s: f64,
+    ) -> (FrameKind, u64) {
+        self.doubts += 1;
+        self.before_doubt.clear();
+        let old = newest as u8;
+        let mut seen_b = vec![None; 256];
+        seen_b[seq as usize] = Some(msg.clone());
+        let newest_b = (newest / 256 + 2) * 256 + seq as u64;
+        self.doubt = Some(DoubtState {
+            old_newest: old,
+            jump: seq.wrapping_sub(old),
+            frames: 0,
+            since_s: wall_s,
+            seen_b,
+            newest_b,
+            a_past: false,
+            b_since: false,
+            new_a: 0,
+            new_b: 1,
+        });
+        (FrameKind::Doubt, newest_b)
     }
 
     /// A frame in a doubt, the old window's newest number being `newest_a`: it goes to the
