@@ -770,6 +770,11 @@ struct Flight<'a, S: ?Sized> {
     log_incomplete: Option<String>,
     /// The sequence numbers of the vehicle's frames, watched for a second sender with its ids.
     seq_watch: crate::same_ids::SequenceWatch,
+    /// When the vehicle's ids last sent a frame the frame watch classed no copy (new, late or
+    /// in a doubt): a copy in a doubt keeps the link only as of then ([`Flight::copy_frame`]).
+    fresh_at: Instant,
+    /// The doubts of the frame counter logged as they opened ([`Flight::doubt_news`]).
+    doubts_logged: u64,
     /// The vehicle's positions, watched for jumps no airframe makes.
     pos_watch: crate::same_ids::PositionWatch,
     /// With `take_control`, [`TWO_VEHICLES_WINDOW_S`] has passed (the sensor's timer was
@@ -1131,6 +1136,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             same_ids: None,
             log_incomplete: None,
             seq_watch: Default::default(),
+            fresh_at: now,
+            doubts_logged: 0,
             pos_watch: Default::default(),
             window_passed: false,
             refused: false,
@@ -1418,8 +1425,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         let now = Instant::now();
         if now.duration_since(self.last_link) > self.timeout {
             return Some(format!(
-                "no message from the vehicle for {} s",
-                self.opts.timeout_s
+                "no message from the vehicle for {} s{}",
+                self.opts.timeout_s,
+                self.doubt_at_loss()
             ));
         }
         let heartbeat_timeout = self
@@ -1430,8 +1438,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         (self.target.is_some() && now.duration_since(self.beat_heard) > heartbeat_timeout).then(
             || {
                 format!(
-                    "no heartbeat from the vehicle for {} s (other messages may still come): its mode and arming are unknown",
-                    heartbeat_timeout.as_secs_f64()
+                    "no heartbeat from the vehicle for {} s (other messages may still come): its mode and arming are unknown{}",
+                    heartbeat_timeout.as_secs_f64(),
+                    self.doubt_at_loss()
                 )
             },
         )
@@ -2517,7 +2526,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// jump ([`Flight::position_jumps`]). Returns what the frame is and its unwrapped number.
     fn ids_frame(&mut self, r: &Received) -> (FrameKind, u64) {
         self.vehicle_address(r.from);
+        let before = (self.seq_watch.in_doubt(), self.seq_watch.resyncs);
         let (kind, number) = self.vehicle_sender(r);
+        self.doubt_news(kind, r.header.sequence, before);
         if matches!(kind, FrameKind::Copy | FrameKind::Doubt) {
             return (kind, number);
         }
@@ -2552,23 +2563,68 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// vehicle's state or a confirmation (a heartbeat in it showing a pilot's word counts as
     /// one awaiting confirmation: [`Flight::doubt_word`]).
     fn doubt_frame(&mut self, msg: &MavMessage) {
-        self.last_link = Instant::now();
-        if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
-            self.beat_heard = self.last_link;
-        }
+        self.heard_at(msg, Instant::now());
     }
 
     /// A frame of the vehicle's ids classed a copy ([`FrameKind::Copy`]): never evidence, never
     /// applied, and outside a doubt nothing more (a link that doubles frames). In a doubt of
     /// the frame counter it keeps the link alive as every frame of the doubt does
-    /// ([`Flight::doubt_frame`], an autopilot's heartbeat the vehicle's heartbeat heard): a
-    /// copy there is one in either window, and an unchanging heartbeat is identical to the
-    /// last one with its number (its next one, on a counter the doubt has not settled, may
-    /// read as that one's copy): the link speaks while a doubt is open.
+    /// ([`Flight::doubt_frame`], an autopilot's heartbeat the vehicle's heartbeat heard), but
+    /// only as of the last frame of the ids that was no copy ([`Flight::fresh_at`]): a copy
+    /// there is one in either window, and an unchanging heartbeat is identical to the last one
+    /// with its number (its next one, on a counter the doubt has not settled, may read as that
+    /// one's copy), while a repeater re-sending a dead vehicle's last frame sends nothing else
+    /// (att49f-1: a doubt fed only copies never settles, and kept the link without bound).
     fn copy_frame(&mut self, msg: &MavMessage) {
         if self.seq_watch.in_doubt() {
-            self.doubt_frame(msg);
+            self.heard_at(msg, self.fresh_at);
         }
+    }
+
+    /// A frame of the vehicle's ids that keeps the link alive as if it had come `at` (never
+    /// moving the link's clocks back), an autopilot's heartbeat the vehicle's heartbeat heard.
+    fn heard_at(&mut self, msg: &MavMessage, at: Instant) {
+        self.last_link = self.last_link.max(at);
+        if matches!(msg, MavMessage::HEARTBEAT(h) if is_autopilot(h)) {
+            self.beat_heard = self.beat_heard.max(at);
+        }
+    }
+
+    /// After a frame of the vehicle's ids (`kind`, numbered `seq`; `before`: whether a doubt
+    /// was open and the resynchronisations before it): when the ids last sent a frame that
+    /// was no copy ([`Flight::copy_frame`]), and the log of a doubt of their frame counter that
+    /// opens (once each) or ends by a silence (its other ends are logged where they happen:
+    /// [`Flight::vehicle_sender`], a resynchronisation or a second sender proven).
+    fn doubt_news(&mut self, kind: FrameKind, seq: u8, before: (bool, u64)) {
+        if kind != FrameKind::Copy {
+            self.fresh_at = Instant::now();
+        }
+        if kind == FrameKind::Doubt && self.seq_watch.doubts > self.doubts_logged {
+            self.doubts_logged = self.seq_watch.doubts;
+            self.event(format!(
+                "the vehicle's frame counter in doubt: a frame numbered {seq} is another than the one seen with its number (a burst of frames lost, or another sender with the ids): nothing received from the ids is applied until the doubt ends (settled on one counter, two senders proven, or a silence), and copies of their frames keep the link alive only as of the last frame that was none"
+            ));
+        }
+        let (was_in_doubt, resyncs) = before;
+        let ended = was_in_doubt && !self.seq_watch.in_doubt();
+        if ended && kind != FrameKind::Conflict && self.seq_watch.resyncs == resyncs {
+            self.event(
+                "the doubt of the vehicle's frame counter ended with a silence of its ids: the frame watch starts afresh (this frame the first)".into(),
+            );
+        }
+    }
+
+    /// The doubt of the vehicle's frame counter open when the link is lost, in words (empty
+    /// if none): copies of the vehicle's frames kept it no longer than its last frame that
+    /// was none ([`Flight::copy_frame`]).
+    fn doubt_at_loss(&self) -> String {
+        if !self.seq_watch.in_doubt() {
+            return String::new();
+        }
+        format!(
+            " (the vehicle's frame counter in doubt; the last frame of its ids that was no copy came at wall {:.3} s)",
+            self.fresh_at.duration_since(self.t0).as_secs_f64()
+        )
     }
 
     /// Whether the vehicle's last `EXTENDED_SYS_STATE` said it is in the air (taking off,

@@ -2650,3 +2650,101 @@ fn heartbeats_heard_as_copies_in_a_doubt_keep_the_link() {
         r.events
     );
 }
+
+/// att49f-1: the vehicle (armed, OFFBOARD: in control) sends its position at 20 Hz and its
+/// heartbeat at 1 Hz, its measurement coming from another component of its system (1, 2) at
+/// 20 Hz throughout (a sensor that never stops). At 2.0 s its counter comes back 20 numbers,
+/// onto numbers seen (a doubt), at 2.1 s one more heartbeat, after 2.15 s nothing new: from 2.2 s a repeater
+/// re-sends the exact bytes of that last heartbeat every second (a copy in the doubt, which
+/// counts frames and so never settles). Copies keep the link only as of the vehicle's last
+/// frame that was none: `link_lost` within the heartbeat timeout (max(`--timeout-s` 2 s, 3 s))
+/// of that frame, plus a poll's slack, never before `--timeout-s` after it; the doubt logged
+/// as it opened. Before: the copies kept the link to `max_duration` (12 s), no line of the doubt.
+#[test]
+fn copies_of_a_dead_vehicles_heartbeat_in_a_doubt_keep_no_link() {
+    const LAST_NEW_S: f64 = 2.15;
+    let mut a = vehicle_sender();
+    let mut sensor = Sender {
+        seq: 0,
+        ids: (1, 2),
+    };
+    let mut k = 0u32;
+    let mut last_beat: Vec<Vec<u8>> = Vec::new();
+    let t0 = Instant::now();
+    let r = fly_against(12.0, move |_| {
+        // One step every 50 ms of wall time, caught up after a slow turn.
+        let now_s = t0.elapsed().as_secs_f64();
+        let mut out = Vec::new();
+        while 0.05 * k as f64 <= now_s {
+            let ms = 1000 + 50 * k;
+            out.extend(datagrams(sensor.frames(&[iso_s(ms, 9.5)])));
+            if k == 40 {
+                a.seq = a.seq.wrapping_sub(20);
+            }
+            if k <= 43 {
+                out.extend(datagrams(a.frames(&[position(ms, 0.0)])));
+            }
+            if (k < 40 && k.is_multiple_of(20)) || k == 42 {
+                last_beat = datagrams(a.frames(&[heartbeat(6)]));
+                out.extend(last_beat.clone());
+            } else if k >= 44 && (k - 44).is_multiple_of(20) {
+                out.extend(last_beat.clone());
+            }
+            k += 1;
+        }
+        out
+    });
+    assert_eq!(r.end, FlyEnd::LinkLost, "{:?}", r.events);
+    let lost_s = event_time_s(&r, "no message from the vehicle")
+        .or_else(|| event_time_s(&r, "no heartbeat from the vehicle"))
+        .expect("the link lost logged");
+    assert!(
+        lost_s > LAST_NEW_S + 2.0 - 0.2 && lost_s < LAST_NEW_S + 3.0 + 1.0,
+        "{lost_s} {:?}",
+        r.events
+    );
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("the vehicle's frame counter in doubt: a frame numbered")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att49f-1 in the failsafe's retries (01/D1R): the vehicle (its measurement and position
+/// every 100 ms, its heartbeat in OFFBOARD each second: the HOLD never confirmed) comes back
+/// 12 numbers on its counter at 2.0 s, onto numbers seen (a doubt), beats once more at 2.1 s, then sends nothing new; a
+/// repeater re-sends that last heartbeat's bytes every second. The copies keep the link only
+/// as of its last frame that was none: the retries end "link lost" (by about 5.1 s) before
+/// their bound (7.5 s). Before: "retries' bound reached", the copies keeping the link.
+#[test]
+fn copies_of_a_dead_vehicles_heartbeat_in_a_doubt_keep_no_link_in_the_retries() {
+    let mut next_s = 0.0f64;
+    let mut k = 0u32;
+    let mut last_beat: Vec<Vec<u8>> = Vec::new();
+    let (r, _) = in_the_retries(move |t, _, a| {
+        let mut out = Vec::new();
+        // One step every 100 ms of wall time, however the turns go (caught up).
+        while next_s <= t {
+            let ms = 1000 + 100 * k;
+            if k == 20 {
+                a.seq = a.seq.wrapping_sub(12);
+            }
+            if k <= 21 {
+                out.extend(datagrams(a.frames(&[iso_s(ms, 9.5), position(ms, 0.0)])));
+            }
+            if (k < 20 && k.is_multiple_of(10)) || k == 21 {
+                last_beat = datagrams(a.frames(&[heartbeat(6)]));
+                out.extend(last_beat.clone());
+            } else if k >= 22 && (k - 22).is_multiple_of(10) {
+                out.extend(last_beat.clone());
+            }
+            k += 1;
+            next_s += 0.1;
+        }
+        from_socket(0, out)
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(way_out_end(&r).contains("link lost)"), "{:?}", r.events);
+}
