@@ -1032,3 +1032,148 @@ fn ctrl_c_before_the_new_chart_keeps_the_earlier_verify_csv() {
     }
     assert!(caught, "never interrupted before the new chart");
 }
+
+/// Starts `check SCENARIO --map --map-size 200x200 --threads 1 --out OUT` (stderr piped) and
+/// sends it SIGINT once `ready(OUT)` holds (or it ended first: its status says so).
+#[cfg(unix)]
+fn big_chart_interrupted_when(
+    sc: &str,
+    out: &Path,
+    ready: impl Fn(&Path) -> bool,
+) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args([
+            "check",
+            sc,
+            "--map",
+            "--map-size",
+            "200x200",
+            "--threads",
+            "1",
+            "--out",
+        ])
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !ready(out) && child.try_wait().unwrap().is_none() {
+        assert!(t0.elapsed() < Duration::from_secs(120), "never ready");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    child.wait_with_output().unwrap()
+}
+
+/// att48-1: `check --map --out M` into M's earlier chart, interrupted while drawing its
+/// figures, left the NEW stability_map.csv (recorded) beside the earlier chart's .png/.svg,
+/// the earlier verify.csv gone, and now and then printed "cannot draw
+/// M/.stability_map.png.PID.tmp.png: No such file". The figures are drawn into their
+/// temporaries first, then table and figures go in place in one uncut step. The signal comes
+/// at a controlled point: as soon as the PNG's temporary appears. After exit 130 (quiet: no
+/// error) M holds the earlier chart whole (table, both figures and verify.csv byte for byte)
+/// or the new one whole (all three replaced, no verify.csv), and no temporary nor lock.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_while_drawing_leaves_one_chart_whole() {
+    let sc = scenario();
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = 0;
+    for attempt in 0..4 {
+        let m = d.path().join(format!("M{attempt}"));
+        let ms = m.display().to_string();
+        let first = [
+            "check",
+            sc.as_str(),
+            "--map",
+            "--map-size",
+            "8x8",
+            "--verify",
+            "2",
+            "--threads",
+            "1",
+            "--out",
+            ms.as_str(),
+        ];
+        let o = isotrack_within(&first, 120);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let names = [
+            "stability_map.csv",
+            "stability_map.png",
+            "stability_map.svg",
+            "verify.csv",
+        ];
+        let before: Vec<Vec<u8>> = names
+            .iter()
+            .map(|n| std::fs::read(m.join(n)).unwrap())
+            .collect();
+        let drawing = |m: &Path| {
+            std::fs::read_dir(m).unwrap().flatten().any(|e| {
+                let n = e.file_name().to_string_lossy().into_owned();
+                n.starts_with(".stability_map.png.") && n.contains(".tmp")
+            })
+        };
+        let o = big_chart_interrupted_when(&sc, &m, drawing);
+        let err = stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        assert!(!err.contains("error"), "attempt {attempt}: {err}");
+        let litter: Vec<String> = std::fs::read_dir(&m)
+            .unwrap()
+            .flatten()
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".tmp") || n.contains(".tmp.") || n == ".isotrack.lock")
+            .collect();
+        assert_eq!(litter, Vec::<String>::new(), "attempt {attempt}");
+        let now: Vec<Option<Vec<u8>>> = names
+            .iter()
+            .map(|n| std::fs::read(m.join(n)).ok())
+            .collect();
+        let kept: Vec<bool> = now
+            .iter()
+            .zip(&before)
+            .map(|(n, b)| n.as_ref() == Some(b))
+            .collect();
+        caught += 1;
+        if kept != [true; 4] {
+            assert_eq!(kept, [false; 4], "attempt {attempt}: a mixed chart");
+            assert!(now[..3].iter().all(Option::is_some), "attempt {attempt}");
+            assert_eq!(
+                now[3], None,
+                "attempt {attempt}: the earlier verify.csv kept"
+            );
+        }
+    }
+    assert!(caught > 0, "never interrupted while drawing");
+}
+
+/// att48-5: `check --map --out a/b/c` (none of them there) interrupted before writing anything
+/// left the directories it created, empty. Each level it created is removed (innermost first);
+/// the folder the user gave as its parent stays.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_before_the_chart_leaves_no_directory_it_created() {
+    let sc = scenario();
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = false;
+    for attempt in 0..4 {
+        let top = d.path().join(format!("a{attempt}"));
+        let c = top.join("b").join("c");
+        let o = big_chart_interrupted_when(&sc, &c, |c| c.join(".isotrack.lock").exists());
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+        caught = true;
+        assert!(!top.exists(), "attempt {attempt}: {} left", top.display());
+    }
+    assert!(d.path().is_dir());
+    assert!(caught, "never interrupted before the chart");
+}

@@ -367,9 +367,9 @@ fn an_interrupted_benchmark_keeps_its_finished_tasks() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut err = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
     let mut second = false;
-    for line in err.lines() {
+    for line in err.by_ref() {
         if line.unwrap().contains("task 2/") {
             second = true;
             break;
@@ -381,10 +381,27 @@ fn an_interrupted_benchmark_keeps_its_finished_tasks() {
         .status()
         .unwrap();
     assert!(ok.success());
-    child.wait().unwrap();
+    let rest: Vec<String> = err.map_while(Result::ok).collect();
+    let status = child.wait().unwrap();
     let first = out.join("tasks").join("circular-100hz").join("task.json");
     assert!(first.is_file(), "task 1's results were lost");
     assert!(!out.join("leaderboard.csv").exists());
+    // att48-3: exit 130 says how many finished tasks are kept and that --resume continues
+    // (it was silent); the count is the task.json files there.
+    assert_eq!(status.code(), Some(130));
+    let n = std::fs::read_dir(out.join("tasks"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().join("task.json").is_file())
+        .count();
+    let task_word = if n == 1 { "task" } else { "tasks" };
+    let said =
+        format!("holds {n} finished {task_word}; the same benchmark with `--resume` continues");
+    assert!(
+        rest.iter()
+            .any(|l| l.starts_with("interrupted: ") && l.ends_with(&said)),
+        "{rest:?}"
+    );
 }
 
 /// Issue 30 (fix30, item 1): every other file a command writes into its output directory
@@ -1651,6 +1668,20 @@ fn an_interrupted_compare_leaves_every_law_whole_and_no_stale_table() {
                 "attempt {attempt}: a table beside new runs"
             );
             assert!(!record.contains("comparison.csv"), "{record}");
+            // att48-6: exit 130 says which laws hold the new run and that the table is gone
+            // until a re-run writes it (it was silent).
+            let said = err
+                .lines()
+                .find(|l| l.starts_with("interrupted: "))
+                .unwrap_or_else(|| panic!("attempt {attempt}: nothing said: {err}"));
+            assert!(said.contains(laws[0]), "{said}");
+            assert!(
+                said.contains("comparison.csv holds no comparison"),
+                "{said}"
+            );
+            assert!(said.contains("run the same compare again"), "{said}");
+            let removed = "the earlier one was removed";
+            assert_eq!(said.contains(removed), !fresh, "attempt {attempt}: {said}");
         } else if let Some(earlier) = &earlier {
             assert_eq!(
                 &std::fs::read(&table).unwrap(),
@@ -1701,4 +1732,127 @@ fn compare_replaces_its_table_by_rename() {
     assert_eq!(litter(&cmp), Vec::<String>::new());
     let o = compare_into(&cmp, &[]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}
+
+/// Starts isotrack with `args` (stderr piped) and sends it SIGINT once `ready()` holds (or it
+/// ended first: its status says so).
+fn interrupted_when(args: &[&str], ready: impl Fn() -> bool) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !ready() && child.try_wait().unwrap().is_none() {
+        assert!(t0.elapsed() < Duration::from_secs(120), "never ready");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    child.wait_with_output().unwrap()
+}
+
+/// att48-2: `run --out P --plot` interrupted while drawing left the new run beside the earlier
+/// run's figures and said nothing (a plain `run --out` names them). It now says the same note
+/// on exit 130: the figures not yet redrawn are from before this run. The signal comes as the
+/// trajectory's temporary appears (neither figure redrawn yet).
+#[test]
+fn ctrl_c_while_run_plots_names_the_figures_from_before() {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("p");
+    let ps = p.display().to_string();
+    let o = isotrack(&[
+        "run", SCEN, "--out", &ps, "--quiet", "--plot", "--set", SHORT,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let mut caught = false;
+    for attempt in 0..6 {
+        let args = [
+            "run",
+            SCEN,
+            "--out",
+            &ps,
+            "--quiet",
+            "--plot",
+            "--set",
+            "sim.duration_s=6000",
+        ];
+        let o = interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught = true;
+        assert!(
+            err.contains("also holds trajectory.png, timeseries.png from before this run"),
+            "attempt {attempt}: {err}"
+        );
+        assert!(!err.contains("error"), "attempt {attempt}: {err}");
+        assert_eq!(litter(&p), Vec::<String>::new(), "attempt {attempt}");
+        // The next attempt starts from the earlier run's figures again.
+        let o = isotrack(&[
+            "run", SCEN, "--out", &ps, "--quiet", "--plot", "--set", SHORT,
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+        break;
+    }
+    assert!(caught, "run --plot was never caught drawing");
+}
+
+/// att48-5: `run --out a/b/c` (none there) interrupted while running removed `c` but left the
+/// parents `a/b` and `a` it created; `plot RUN --out x/y` interrupted while drawing left the
+/// directories it created. Every level the command created is removed (innermost first).
+#[test]
+fn ctrl_c_leaves_no_directory_the_command_created() {
+    let d = tempfile::tempdir().unwrap();
+    let top = d.path().join("a");
+    let c = top.join("b").join("c");
+    let cs = c.display().to_string();
+    let args = [
+        "run",
+        SCEN,
+        "--out",
+        &cs,
+        "--quiet",
+        "--set",
+        "sim.duration_s=30000",
+    ];
+    let o = interrupted_when(&args, || !entries(&c, ".trace.csv.").is_empty());
+    assert_eq!(o.status.code(), Some(130), "{}", common::stderr(&o));
+    assert!(!top.exists(), "{} left", top.display());
+    assert!(d.path().is_dir());
+    // A run long enough to catch plot drawing it, drawn into a new x/y.
+    let r = d.path().join("r");
+    let rs = r.display().to_string();
+    let o = isotrack(&[
+        "run",
+        SCEN,
+        "--out",
+        &rs,
+        "--quiet",
+        "--set",
+        "sim.duration_s=6000",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let mut caught = false;
+    for attempt in 0..6 {
+        let x = d.path().join(format!("x{attempt}"));
+        let y = x.join("y");
+        let ys = y.display().to_string();
+        let o = interrupted_when(&["plot", &rs, "--out", &ys], || {
+            !entries(&y, ".trajectory.png.").is_empty()
+        });
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "{}", common::stderr(&o));
+        caught = true;
+        assert!(!x.exists(), "attempt {attempt}: {} left", x.display());
+    }
+    assert!(caught, "plot was never caught drawing");
 }

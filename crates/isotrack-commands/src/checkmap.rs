@@ -254,13 +254,50 @@ fn output_path(dir: &Path, name: &str, inputs: &[PathBuf]) -> Result<PathBuf, Fa
     Ok(p)
 }
 
-/// Draws a figure into a temporary file beside `path` and renames it over `path` (as
-/// `isotrack_runs::files::write_atomic`): a link at `path` is replaced, never followed, and a
-/// reader sees the old figure or the new one.
-fn draw_atomic(
+/// A figure drawn into its temporary file beside `path` ([`draw_temp`]), put in place by
+/// [`Drawn::put_in_place`] (a rename) inside the step that replaces the chart's table
+/// ([`replace_chart`]); dropped before that, the temporary is removed.
+struct Drawn {
+    /// The temporary file holding the figure.
+    tmp: PathBuf,
+    /// Where it goes.
+    path: PathBuf,
+    /// Removes `tmp` if the command is interrupted before it is renamed (att43-14).
+    _pending: isotrack_runs::cleanup::Pending,
+    /// Whether `tmp` was renamed to `path`.
+    placed: bool,
+}
+
+impl Drawn {
+    /// Renames the figure over its path (a link there is replaced, never followed).
+    fn put_in_place(mut self) -> Result<(), Failure> {
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Failure {
+            code: exit::CANTCREAT,
+            message: format!("cannot write {}: {e}", self.path.display()),
+        })?;
+        self.placed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Drawn {
+    fn drop(&mut self) {
+        if !self.placed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Draws a figure into a temporary file beside `path` (as `isotrack_runs::files::write_atomic`),
+/// nothing replaced yet: the chart's table and both figures are then put in place in one step
+/// an interrupt never cuts (att48-1: each figure was renamed as it was drawn, after the new
+/// table, so Ctrl-C while drawing left the new table beside the earlier chart's figures). An
+/// interrupt while drawing removes the temporary and ends the process (exit 130): a drawing that
+/// fails then is waited out, never reported (att48-1: "cannot draw ...tmp.png: No such file").
+fn draw_temp(
     path: &Path,
     draw: impl FnOnce(&Path) -> Result<(), isotrack_plot::PlotError>,
-) -> Result<(), String> {
+) -> Result<Drawn, String> {
     isotrack_runs::files::refuse_non_regular(path).map_err(|e| e.to_string())?;
     let ext = path
         .extension()
@@ -271,17 +308,20 @@ fn draw_atomic(
     // An old temporary (or a link planted there) goes first; then the file is created here,
     // without following a link, before the library opens it.
     let _ = std::fs::remove_file(&tmp);
-    // Removed if the command is interrupted while drawing (att43-14), until renamed.
-    let pending = isotrack_runs::cleanup::register(&tmp);
-    isotrack_runs::files::create_output(&tmp).map_err(|e| e.to_string())?;
-    let result = draw(&tmp)
+    let drawn = Drawn {
+        _pending: isotrack_runs::cleanup::register(&tmp),
+        tmp,
+        path: path.to_path_buf(),
+        placed: false,
+    };
+    let result = isotrack_runs::files::create_output(&drawn.tmp)
         .map_err(|e| e.to_string())
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+        .and_then(|_| draw(&drawn.tmp).map_err(|e| e.to_string()));
+    if result.is_err() && isotrack_runs::cleanup::exiting() {
+        // The interrupt removed the temporary under the drawing: it ends the process.
+        isotrack_runs::cleanup::wait_for_exit();
     }
-    drop(pending);
-    result
+    result.map(|()| drawn)
 }
 
 fn cell_row(map: &StabilityMap, idx: usize) -> Vec<String> {
@@ -337,11 +377,13 @@ fn write_csv(
     isotrack_runs::owned::write_table(path, &bytes).map_err(|e| cant(e.to_string()))
 }
 
-/// Writes the chart's table `stability_map.csv`, removing an earlier `verify.csv` in the same
-/// step an interrupt never cuts ([`isotrack_runs::cleanup::whole`]): `verify.csv` belongs to
-/// the chart it was made with (att46-12: it was removed up front, so Ctrl-C before the new
-/// chart was written left the earlier chart without its verify.csv).
-fn replace_chart_table(out: &ChartFiles, map: &StabilityMap) -> Result<(), Failure> {
+/// Writes the chart's table `stability_map.csv` and puts its figures (drawn into their
+/// temporaries) in place, removing an earlier `verify.csv`, all in one step an interrupt never
+/// cuts ([`isotrack_runs::cleanup::whole`]): after Ctrl-C the directory holds the earlier chart
+/// whole or the new one (att46-12: verify.csv was removed up front; att48-1: the figures were
+/// renamed after the table, one by one, so Ctrl-C left the new table beside the earlier
+/// figures).
+fn replace_chart(out: &ChartFiles, map: &StabilityMap, figures: Vec<Drawn>) -> Result<(), Failure> {
     let removed = isotrack_runs::cleanup::whole(|| {
         let removed = isotrack_runs::owned::remove_table(&out.verify_csv).map_err(|e| Failure {
             code: exit::CANTCREAT,
@@ -352,6 +394,9 @@ fn replace_chart_table(out: &ChartFiles, map: &StabilityMap) -> Result<(), Failu
             &MAP_COLUMNS,
             (0..map.cells.len()).map(|i| cell_row(map, i)),
         )?;
+        for f in figures {
+            f.put_in_place()?;
+        }
         Ok::<bool, Failure>(removed)
     })?;
     if removed {
@@ -402,9 +447,10 @@ pub fn write_map(
     let map = StabilityMap::from_cells(&family, grid, cells);
     // The chart is written before any verification run starts: an interrupted --verify keeps
     // it (the figure without the runs' marks).
-    replace_chart_table(&out, &map)?;
+    let figures = out.draw(&map, &[])?;
     let mut files = vec![out.csv.display().to_string()];
-    files.extend(out.draw(&map, &[])?);
+    files.extend(figures.iter().map(|f| f.path.display().to_string()));
+    replace_chart(&out, &map, figures)?;
     let (verify, verify_runs, far) = match args.verify {
         Some(n) => {
             let (agreement, runs, far) =
@@ -449,21 +495,21 @@ struct ChartFiles {
 }
 
 impl ChartFiles {
-    /// Draws the chart with the `verified` runs' marks as PNG and SVG, each replacing its file
-    /// atomically; returns their paths.
-    fn draw(&self, map: &StabilityMap, verified: &[VerifyPoint]) -> Result<Vec<String>, Failure> {
-        let mut files = vec![];
+    /// Draws the chart with the `verified` runs' marks as PNG and SVG into their temporaries
+    /// ([`draw_temp`]), for the caller to put in place with the table they go with.
+    fn draw(&self, map: &StabilityMap, verified: &[VerifyPoint]) -> Result<Vec<Drawn>, Failure> {
+        let mut figures = vec![];
         for (path, style) in [(&self.png, &self.png_style), (&self.svg, &self.svg_style)] {
-            draw_atomic(path, |tmp| {
+            let drawn = draw_temp(path, |tmp| {
                 isotrack_plot::stability_map_figure(map, verified, tmp, style)
             })
             .map_err(|e| Failure {
                 code: exit::CANTCREAT,
                 message: format!("cannot write {}: {e}", path.display()),
             })?;
-            files.push(path.display().to_string());
+            figures.push(drawn);
         }
-        Ok(files)
+        Ok(figures)
     }
 }
 
@@ -484,14 +530,22 @@ fn verify_chart(
     let at = verify_points(grid, family.dt_s(), n, seed);
     let (verified, partial) = verify_runs_of(family, pool, at, n);
     let points: Vec<VerifyPoint> = verified.iter().map(|(_, p)| p.clone()).collect();
-    if !partial {
-        out.draw(map, &points)?;
-    }
-    write_csv(
-        &out.verify_csv,
-        &VERIFY_COLUMNS,
-        verified.iter().map(|(k, v)| verify_row(*k, v)),
-    )?;
+    // The figures with the runs' marks go in place with verify.csv, in one step (att48-1).
+    let figures = if partial {
+        vec![]
+    } else {
+        out.draw(map, &points)?
+    };
+    isotrack_runs::cleanup::whole(|| {
+        for f in figures {
+            f.put_in_place()?;
+        }
+        write_csv(
+            &out.verify_csv,
+            &VERIFY_COLUMNS,
+            verified.iter().map(|(k, v)| verify_row(*k, v)),
+        )
+    })?;
     let runs = VerifyRuns {
         requested: n,
         finished: verified.len(),
@@ -569,6 +623,10 @@ fn refuse_foreign_tables(csv: &Path, verify: &Path) -> Result<(), Failure> {
     isotrack_runs::owned::refuse_foreign_csv(verify, "an isotrack verification table")
 }
 
+/// The chart directory's lock, with the directories [`open_map_dir`] created, registered for
+/// removal on an interrupt while empty; both held to the end.
+type MapDirLock = (crate::sweep::DirLock, Vec<isotrack_runs::cleanup::Pending>);
+
 /// `dir` created and locked, and the chart's files in it (`stability_map.csv`, `.png`, `.svg`,
 /// `verify.csv`), none of them an input nor a file of the user's (a table or figure isotrack
 /// did not write: [`refuse_foreign_tables`], the figures' mark). Nothing in it is changed.
@@ -576,15 +634,18 @@ fn open_map_dir(
     args: &CheckArgs,
     scenario: &Scenario,
     dir: &Path,
-) -> Result<(crate::sweep::DirLock, [PathBuf; 4]), Failure> {
+) -> Result<(MapDirLock, [PathBuf; 4]), Failure> {
     let cant = |what: &Path, e: String| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot write {}: {e}", what.display()),
     };
-    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
+    // Each directory this creates is removed again (when empty) if the command is interrupted
+    // (att48-5), as `run --out`'s; held with the lock.
+    let created =
+        isotrack_runs::cleanup::create_dir_all(dir).map_err(|e| cant(dir, e.to_string()))?;
     // One writer per directory, as `sweep`, `merge` and `benchmark`: a second `check --map`
     // on DIR exits 73 instead of interleaving its files with this one's.
-    let lock = crate::sweep::lock_output_dir(dir, "check --map")?;
+    let lock = (crate::sweep::lock_output_dir(dir, "check --map")?, created);
     let input = crate::output::input_files(args.scenario.scenario.as_deref(), scenario);
     let csv_path = output_path(dir, "stability_map.csv", &input)?;
     let png_path = output_path(dir, "stability_map.png", &input)?;

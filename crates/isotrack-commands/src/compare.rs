@@ -144,6 +144,10 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
         None => (None, vec![]),
     };
     let table = a.out.as_ref().map(|dir| dir.join("comparison.csv"));
+    let progress = std::sync::Arc::new(std::sync::Mutex::new(Progress::default()));
+    let _said = table
+        .as_ref()
+        .map(|t| say_progress_on_interrupt(&progress, t));
     let mut law_dirs = law_dirs.into_iter();
     let mut results: Vec<(ControllerKind, RunResult)> = Vec::new();
     // The laws whose true error never reached the level (at any step, whatever the trace
@@ -156,7 +160,7 @@ pub fn compare(a: &CompareArgs) -> Result<(), Failure> {
             errln!("warning: {w}");
         }
         let r = match law_dirs.next() {
-            Some(out) => match run_into(a, &base, &s, &out, table.as_deref()) {
+            Some(out) => match run_into(a, &base, &s, &out, table.as_deref(), &progress) {
                 Ok(r) => r,
                 Err(e) => {
                     // The laws' directories not yet written: removed again where this
@@ -201,6 +205,7 @@ fn run_into(
     s: &Scenario,
     out: &RunDir,
     table: Option<&Path>,
+    progress: &std::sync::Mutex<Progress>,
 ) -> Result<RunResult, Failure> {
     // The directory's lock is held for all of them, and each law's directory is locked too:
     // a `run --out CMP/LAW` meanwhile never saw the parent's lock, both wrote the directory
@@ -215,14 +220,63 @@ fn run_into(
         errln!("warning: {w}");
     }
     isotrack_runs::cleanup::whole(|| {
-        if let Some(t) = table {
-            isotrack_runs::owned::remove_table(t).map_err(|e| cant(t, e))?;
-        }
-        out.finish(trace, &scenario_toml(s), &summary)
+        let removed = match table {
+            Some(t) => isotrack_runs::owned::remove_table(t).map_err(|e| cant(t, e))?,
+            None => false,
+        };
+        out.finish(trace, &scenario_toml(s), &summary)?;
+        // In the same step: an interrupt says what the directory holds (att48-6).
+        let mut p = progress.lock().unwrap_or_else(|e| e.into_inner());
+        p.replaced.push(out.dir().to_path_buf());
+        p.table_removed |= removed;
+        Ok::<(), Failure>(())
     })?;
     // An earlier run's figures there are not this run's: said, as `run` says it.
     crate::run::note_outputs_from_before(&out.outputs_from_before(), out.dir(), false);
     Ok(r)
+}
+
+/// What a `compare --out` has replaced so far, said if it is interrupted
+/// ([`say_progress_on_interrupt`]).
+#[derive(Debug, Default)]
+struct Progress {
+    /// The laws' directories that hold this compare's run.
+    replaced: Vec<std::path::PathBuf>,
+    /// Whether an earlier `comparison.csv` was removed.
+    table_removed: bool,
+}
+
+/// Registers the line an interrupted `compare --out` says on exit (att48-6: it removed the
+/// earlier `comparison.csv` and left laws of two comparisons without a word): which laws hold
+/// this compare's run, and that the table (`table`) is removed until a re-run writes it.
+/// Nothing is said before the first law is replaced: the directory is then as it was.
+fn say_progress_on_interrupt(
+    progress: &std::sync::Arc<std::sync::Mutex<Progress>>,
+    table: &Path,
+) -> isotrack_runs::cleanup::OnInterrupt {
+    let (progress, table) = (progress.clone(), table.to_path_buf());
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let p = progress.lock().unwrap_or_else(|e| e.into_inner());
+        if p.replaced.is_empty() {
+            return;
+        }
+        let laws: Vec<String> = p
+            .replaced
+            .iter()
+            .map(|d| isotrack_runs::owned::shell_quoted(d))
+            .collect();
+        let removed = if p.table_removed {
+            "the earlier one was removed (it described other runs)"
+        } else {
+            "none is written"
+        };
+        errln!(
+            "interrupted: {} now {} this compare's run (any other law's directory its earlier run); {} holds no comparison ({removed}): run the same compare again to write it",
+            laws.join(", "),
+            if laws.len() == 1 { "holds" } else { "hold" },
+            isotrack_runs::owned::shell_quoted(&table)
+        );
+    })
 }
 
 /// The laws `--controller` names (every built-in law when none is named); an unknown name is a
@@ -282,11 +336,9 @@ fn open_out(
             });
         }
     }
-    let created = std::fs::symlink_metadata(dir).is_err();
-    std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
-    // A directory this created is removed again (when empty) if the compare is interrupted,
-    // after its laws' (att46-10 addendum); held with the lock.
-    let created = created.then(|| isotrack_runs::cleanup::register_dir(dir));
+    // Each directory this created (parents included, att48-5) is removed again (when empty)
+    // if the compare is interrupted, after its laws' (att46-10 addendum); held with the lock.
+    let created = isotrack_runs::cleanup::create_dir_all(dir).map_err(|e| cant(dir, e))?;
     let lock = (crate::sweep::lock_output_dir(dir, "compare")?, created);
     // att44-12: `CMP/LAW` is a name compare picks: a link there (to another run elsewhere) was
     // followed and that run replaced; a link or anything but a directory is refused, named.
@@ -314,11 +366,9 @@ fn open_out(
 }
 
 /// `--out DIR`'s lock, with DIR's registration for removal on an interrupt when this compare
-/// created it ([`isotrack_runs::cleanup::register_dir`]); both held to the end.
-type OutLock = (
-    crate::sweep::DirLock,
-    Option<isotrack_runs::cleanup::Pending>,
-);
+/// created it and each parent it created ([`isotrack_runs::cleanup::create_dir_all`]); both
+/// held to the end.
+type OutLock = (crate::sweep::DirLock, Vec<isotrack_runs::cleanup::Pending>);
 
 /// Refuses (73) an existing `comparison.csv` that an isotrack did not write, or that was edited
 /// since ([`isotrack_runs::owned::refuse_foreign_csv`], att39-1, att42-8, att44-4): its size and

@@ -152,7 +152,9 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
         out,
         &run_figure_names(format, runs.len() == 1 && RunData::is_team(&runs[0])),
     )?;
-    std::fs::create_dir_all(out).map_err(|e| Failure {
+    // Each directory this creates is removed again (when empty) if the command is
+    // interrupted (att48-5); held to the end.
+    let _created = isotrack_runs::cleanup::create_dir_all(out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
     })?;
@@ -397,7 +399,9 @@ fn plot_sweep(a: &PlotArgs, results: &Path, out: &Path, st: &Style) -> Result<()
     // att41-10: the user's own file of the figure's name (no isotrack mark) is refused (73)
     // before anything is drawn, as for a run's figures.
     refuse_foreign_figures(out, std::slice::from_ref(&name))?;
-    std::fs::create_dir_all(out).map_err(|e| Failure {
+    // Each directory this creates is removed again (when empty) if the command is
+    // interrupted (att48-5); held to the end.
+    let _created = isotrack_runs::cleanup::create_dir_all(out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
     })?;
@@ -647,7 +651,9 @@ pub fn figures(a: &FiguresArgs) -> Result<(), Failure> {
         })
         .collect();
     refuse_foreign_figures(&a.out, &names)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| Failure {
+    // Each directory this creates is removed again (when empty) if the command is
+    // interrupted (att48-5); held to the end.
+    let _created = isotrack_runs::cleanup::create_dir_all(&a.out).map_err(|e| Failure {
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", a.out.display()),
     })?;

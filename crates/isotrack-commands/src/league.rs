@@ -80,6 +80,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let _lock = lock_out_dir(&a.out)?;
     refuse_foreign_outputs(&a.out, &suite)?;
     refuse_finished_benchmark(&a.out, a.resume)?;
+    let _said = say_tasks_on_interrupt(&a.out);
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
@@ -109,6 +110,27 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         a.out.display()
     );
     Ok(())
+}
+
+/// Registers the line an interrupted `benchmark --out DIR` says on exit (att48-3: it stopped
+/// silently, and nothing said that `--resume` continues): how many finished tasks DIR holds
+/// (`tasks/ID/task.json`, what `--resume` reuses), when any.
+fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
+    let out = out.to_path_buf();
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let n = std::fs::read_dir(out.join("tasks")).map_or(0, |d| {
+            d.flatten()
+                .filter(|e| e.path().join("task.json").is_file())
+                .count()
+        });
+        if n > 0 {
+            errln!(
+                "interrupted: {} holds {n} finished task{}; the same benchmark with `--resume` continues",
+                isotrack_runs::owned::shell_quoted(&out),
+                if n == 1 { "" } else { "s" }
+            );
+        }
+    })
 }
 
 /// Makes benchmark output directory `out` ready: creates it, takes its operating-system lock

@@ -330,6 +330,10 @@ fn plot_and_note_before(
     let mut before = outputs_present(dir);
     if args.plot {
         let st = crate::figures::style(&args.look, isotrack_plot::Format::Png)?;
+        // att48-2: Ctrl-C while drawing left the new run beside the earlier figures, silently;
+        // it now says the same note, naming the files not yet redrawn (each figure is renamed
+        // into place, a new file: one still the file it was is from before this run).
+        let _said = note_on_interrupt(&before, dir, team_figure);
         let written = crate::figures::plot_dirs(&[dir.to_path_buf()], &st, dir)?;
         before.retain(|n| {
             !written
@@ -342,6 +346,42 @@ fn plot_and_note_before(
     }
     note_outputs_from_before(&before, dir, team_figure);
     Ok(())
+}
+
+/// Registers, for an interrupt while `--plot` draws into `dir`, the note on the files there from
+/// before this run ([`note_outputs_from_before`]): of `before`, those still the same file
+/// (device and inode) as now, i.e. not yet replaced by a figure of this run.
+fn note_on_interrupt(
+    before: &[&'static str],
+    dir: &std::path::Path,
+    team_figure: bool,
+) -> isotrack_runs::cleanup::OnInterrupt {
+    let identity = |p: &std::path::Path| {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            std::fs::symlink_metadata(p)
+                .ok()
+                .map(|m| (m.dev(), m.ino()))
+        }
+        #[cfg(not(unix))]
+        {
+            std::fs::symlink_metadata(p).ok().map(|_| (0u64, 0u64))
+        }
+    };
+    let was: Vec<(&'static str, Option<(u64, u64)>)> = before
+        .iter()
+        .map(|&n| (n, identity(&dir.join(n))))
+        .collect();
+    let dir = dir.to_path_buf();
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let still: Vec<&str> = was
+            .iter()
+            .filter(|(n, id)| id.is_some() && identity(&dir.join(n)) == *id)
+            .map(|(n, _)| *n)
+            .collect();
+        note_outputs_from_before(&still, &dir, team_figure);
+    })
 }
 
 /// An earlier run's figures (or the user's files of those names) in the run directory `dir`,

@@ -112,6 +112,11 @@ pub(crate) fn draw_atomic(path: &Path, body: impl FnOnce(&Path) -> DrawResult) -
     drop(pending);
     if res.is_err() {
         let _ = std::fs::remove_file(&tmp);
+        if isotrack_runs::cleanup::exiting() {
+            // An interrupt removed the temporary under the drawing and ends the process (exit
+            // 130): no error of its making is printed (att48-1).
+            isotrack_runs::cleanup::wait_for_exit();
+        }
     }
     res
 }

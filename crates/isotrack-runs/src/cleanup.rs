@@ -51,6 +51,32 @@ pub fn register_dir(path: &Path) -> Pending {
     register_path(path, true)
 }
 
+/// Creates directory `dir` and each missing parent (as [`std::fs::create_dir_all`]), each level
+/// it creates registered with [`register_dir`], the outermost first (so removed last): an
+/// interrupted command removes every empty directory it made, `a/b/c` and its parents `a/b`
+/// and `a` alike (att48-5: only `c` was removed). Hold the returned registrations to the end.
+pub fn create_dir_all(dir: &Path) -> std::io::Result<Vec<Pending>> {
+    let missing: Vec<&Path> = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .take_while(|p| std::fs::symlink_metadata(p).is_err())
+        .collect();
+    let mut created = Vec::with_capacity(missing.len());
+    for level in missing.into_iter().rev() {
+        // Registered before it is made: an interrupt right after the creation finds it listed.
+        let pending = register_dir(level);
+        match std::fs::create_dir(level) {
+            Ok(()) => created.push(pending),
+            // Made by another process meanwhile: not this command's to remove.
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && level.is_dir() => {}
+            Err(e) => return Err(e),
+        }
+    }
+    // Whatever exists at `dir` must be a directory (as create_dir_all checks).
+    std::fs::create_dir_all(dir)?;
+    Ok(created)
+}
+
 fn register_path(path: &Path, dir: bool) -> Pending {
     let id = NEXT.fetch_add(1, Ordering::Relaxed);
     PENDING
@@ -58,6 +84,51 @@ fn register_path(path: &Path, dir: bool) -> Pending {
         .unwrap_or_else(|e| e.into_inner())
         .push((id, path.to_path_buf(), dir));
     Pending { id }
+}
+
+/// What an interrupt says before the process ends ([`on_interrupt`]), each with its
+/// registration's number.
+type Say = Box<dyn Fn() + Send>;
+static NOTES: Mutex<Vec<(u64, Say)>> = Mutex::new(Vec::new());
+
+/// A note said if the process is interrupted while this lives ([`on_interrupt`]).
+pub struct OnInterrupt {
+    id: u64,
+}
+
+impl std::fmt::Debug for OnInterrupt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OnInterrupt").field("id", &self.id).finish()
+    }
+}
+
+impl Drop for OnInterrupt {
+    fn drop(&mut self) {
+        let mut list = NOTES.lock().unwrap_or_else(|e| e.into_inner());
+        list.retain(|(id, _)| *id != self.id);
+    }
+}
+
+/// Registers `say` (it prints a line on stderr: what the interrupted command left, and how to
+/// go on) to be called if the process is interrupted before the returned [`OnInterrupt`] is
+/// dropped: after a [`whole`] step under way has ended and the registered files are removed, so
+/// it sees the directory as the command leaves it (att48-2, -6: exit 130 without a word on
+/// what was left). One place for every command's interrupted line.
+pub fn on_interrupt(say: impl Fn() + Send + 'static) -> OnInterrupt {
+    let id = NEXT.fetch_add(1, Ordering::Relaxed);
+    NOTES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push((id, Box::new(say)));
+    OnInterrupt { id }
+}
+
+/// Calls every registered [`on_interrupt`] note, in the order they were registered.
+fn say_notes() {
+    let list = NOTES.lock().unwrap_or_else(|e| e.into_inner());
+    for (_, say) in list.iter() {
+        say();
+    }
 }
 
 /// Held by a [`whole`] step while it runs, and by the interrupt before it removes anything.
@@ -131,7 +202,8 @@ const EXIT_GRACE: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// For an interrupt that ends the process (`crate::signals`): no output file is created from now
 /// on ([`exiting`]) and no [`whole`] step begins; a step under way is waited for; then every
-/// registered file is removed, and removed again after [`EXIT_GRACE`].
+/// registered file is removed, and removed again after [`EXIT_GRACE`]; then the registered
+/// notes are said ([`on_interrupt`]).
 /// The second pass is for a write that was already opening a registered file by its path when
 /// the first pass removed it (a figure's encoder, the mark rewriting it: both create the file
 /// anew): the signal is answered on its own thread while the command's thread runs on, so a
@@ -144,6 +216,7 @@ pub fn remove_pending_for_exit() {
     remove_pending();
     std::thread::sleep(EXIT_GRACE);
     remove_pending();
+    say_notes();
 }
 
 /// Removes every registered file, then every registered directory that is empty (best effort:
@@ -250,6 +323,32 @@ mod tests {
         assert_eq!(kind(), Some(true));
         drop(p);
         assert_eq!(kind(), None);
+    }
+
+    /// att48-5: each level [`create_dir_all`] creates is listed as a directory, the innermost
+    /// last (removed first); an existing level is not listed.
+    #[test]
+    fn each_created_level_is_listed_innermost_last() {
+        let dir = tempfile::tempdir().unwrap();
+        let c = dir.path().join("a").join("b").join("c");
+        let listed = || -> Vec<PathBuf> {
+            PENDING
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .iter()
+                .filter(|(_, q, d)| *d && q.starts_with(dir.path()))
+                .map(|(_, q, _)| q.clone())
+                .collect()
+        };
+        let held = create_dir_all(&c).unwrap();
+        assert!(c.is_dir());
+        let a = dir.path().join("a");
+        assert_eq!(listed(), vec![a.clone(), a.join("b"), c.clone()]);
+        drop(held);
+        assert_eq!(listed(), Vec::<PathBuf>::new());
+        let again = create_dir_all(&c.join("d")).unwrap();
+        assert_eq!(listed(), vec![c.join("d")]);
+        drop(again);
     }
 
     /// A [`whole`] step marks its thread for its length (a step inside it is part of it), and

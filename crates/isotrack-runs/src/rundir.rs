@@ -297,10 +297,10 @@ pub struct RunDir {
     /// Whether [`RunDir::open`] created the directory (removed again by
     /// [`RunDir::release_unused`] when nothing was written).
     created: bool,
-    /// The directory [`RunDir::open`] created, registered to be removed (when still empty) if
-    /// the command is interrupted ([`crate::cleanup::register_dir`]: att46-10, an interrupted
+    /// The directories [`RunDir::open`] created (parents included), registered to be removed
+    /// (when still empty) if the command is interrupted ([`crate::cleanup::create_dir_all`]: att46-10, an interrupted
     /// `compare` into a new `--out` left its laws' empty directories behind).
-    _created_pending: Option<crate::cleanup::Pending>,
+    _created_pending: Vec<crate::cleanup::Pending>,
     /// The [`RUN_OUTPUTS`] in the directory when it was opened but the command's own `extra`
     /// files (`fly`'s `mavlink.tlog`, replaced as the earlier run's): not written by
     /// this command ([`RunDir::outputs_from_before`]; att39-7: told by name, not by
@@ -365,7 +365,8 @@ impl RunDir {
             });
         }
         let created = std::fs::symlink_metadata(dir).is_err();
-        std::fs::create_dir_all(dir).map_err(|e| cant(dir, e))?;
+        // Each level created (parents included, att48-5) is removed on an interrupt while empty.
+        let created_pending = crate::cleanup::create_dir_all(dir).map_err(|e| cant(dir, e))?;
         let lock = command.map(|c| lock_output_dir(dir, c)).transpose()?;
         for name in &names {
             let p = dir.join(name);
@@ -386,7 +387,7 @@ impl RunDir {
             dir: dir.to_path_buf(),
             lock,
             created,
-            _created_pending: created.then(|| crate::cleanup::register_dir(dir)),
+            _created_pending: created_pending,
             before,
         })
     }

@@ -138,6 +138,11 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
     )))
 }
 
+/// The holder named when its record is not yet written (it has locked, not yet recorded
+/// itself): every command that locks an output directory (README, exit 73; att48-4: `run --out`,
+/// `compare --out` and `plot` were missing, the very holder at times).
+const UNNAMED_HOLDER: &str = "another isotrack command (sweep, merge, benchmark, run --out, compare --out, check --map, fly --out, sitl --out or plot)";
+
 /// One attempt of [`lock_output_dir`]: `None` when the file locked is no longer at the path.
 fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, Failure> {
     let cant = |e: std::io::Error| {
@@ -173,10 +178,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
         }
         Err(std::fs::TryLockError::WouldBlock) => {
             let holder = read_holder(&mut f).map_or_else(
-                || {
-                    "another isotrack command (sweep, merge, benchmark, check --map, fly or sitl)"
-                        .to_string()
-                },
+                || UNNAMED_HOLDER.to_string(),
                 |h| format!("another isotrack {h}"),
             );
             Err(fail(
@@ -226,5 +228,34 @@ pub fn check_not_being_written(dir: &Path) -> Result<(), Failure> {
             ))
         }
         _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// att48-4: a lock held by a command that has not yet written its holder record is refused
+    /// (73) naming every command that locks, `run --out`, `compare --out` and `plot` included.
+    #[test]
+    fn an_unrecorded_holder_is_named_as_any_locking_command() {
+        let dir = tempfile::tempdir().unwrap();
+        let held = std::fs::File::create(dir.path().join(LOCK_FILE)).unwrap();
+        held.lock().unwrap();
+        let e = lock_output_dir(dir.path(), "run").unwrap_err();
+        assert_eq!(e.code, exit::CANTCREAT);
+        for c in [
+            "sweep",
+            "merge",
+            "benchmark",
+            "run --out",
+            "compare --out",
+            "check --map",
+            "fly --out",
+            "sitl --out",
+            "plot",
+        ] {
+            assert!(e.message.contains(c), "{c} not named: {}", e.message);
+        }
     }
 }
