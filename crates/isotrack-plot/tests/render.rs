@@ -518,7 +518,7 @@ fn a_clipped_turn_rate_stays_inside_its_png_panel() {
         let mut st = Style::new(Format::Png);
         st.size_px = size;
         let png = dir.path().join("ts.png");
-        timeseries_figure(&[run.clone()], &png, &st, "", omega_only).unwrap();
+        timeseries_figure(std::slice::from_ref(&run), &png, &st, "", omega_only).unwrap();
         let img = image::open(&png).unwrap().to_rgb8();
         // The 2-pixel line may cover the axis it starts on: two pixels of slack.
         let (left, top, right, bottom) = plot_rect(&img);
