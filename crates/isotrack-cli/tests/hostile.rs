@@ -392,31 +392,145 @@ fn plot_and_report_refuse_impossible_summary_numbers() {
         ),
     ];
     for (k, (dir, edits, needle)) in cases.iter().enumerate() {
-        let copy = d.path().join(format!("edited{k}"));
-        std::fs::create_dir(&copy).unwrap();
-        for f in ["trace.csv", "scenario.toml", "summary.json"] {
-            std::fs::copy(dir.join(f), copy.join(f)).unwrap();
-        }
-        let path = copy.join("summary.json");
-        let mut j: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-        for (pointer, value) in edits {
-            *j.pointer_mut(pointer).unwrap() = value.clone();
-        }
-        std::fs::write(&path, serde_json::to_string_pretty(&j).unwrap()).unwrap();
-        for cmd in ["report", "plot"] {
-            let out = d.path().join(format!(
-                "{cmd}{k}{}",
-                if cmd == "report" { ".html" } else { "" }
-            ));
-            let o = isotrack(&[cmd, copy.to_str().unwrap(), "--out", out.to_str().unwrap()]);
-            assert_fails(&o, 65, &["summary.json: ", needle]);
-            assert!(
-                !out.exists(),
-                "{cmd} wrote {} from an impossible summary",
-                out.display()
-            );
-        }
+        assert_edit_refused(d.path(), &format!("edited{k}"), dir, edits, needle);
+    }
+}
+
+/// A copy `name` (in `d`) of the run in `dir` with its `summary.json` edited at each JSON
+/// pointer: `report` and `plot` refuse it (65) naming `needle`, and write nothing.
+fn assert_edit_refused(
+    d: &std::path::Path,
+    name: &str,
+    dir: &std::path::Path,
+    edits: &[(&str, serde_json::Value)],
+    needle: &str,
+) {
+    let copy = d.join(name);
+    std::fs::create_dir(&copy).unwrap();
+    for f in ["trace.csv", "scenario.toml", "summary.json"] {
+        std::fs::copy(dir.join(f), copy.join(f)).unwrap();
+    }
+    let path = copy.join("summary.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    for (pointer, value) in edits {
+        *j.pointer_mut(pointer).unwrap() = value.clone();
+    }
+    std::fs::write(&path, serde_json::to_string_pretty(&j).unwrap()).unwrap();
+    for cmd in ["report", "plot"] {
+        let out = d.join(format!(
+            "{cmd}-{name}{}",
+            if cmd == "report" { ".html" } else { "" }
+        ));
+        let o = isotrack(&[cmd, copy.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert_fails(&o, 65, &["summary.json: ", needle]);
+        assert!(
+            !out.exists(),
+            "{cmd} wrote {} from an impossible summary",
+            out.display()
+        );
+    }
+}
+
+/// att49-4/-5: rules checked one way only are checked both ways. A genuine run of the
+/// paper's circle (600 s: its steady-state window [480, 600] s, 120 s, is longer than the 60 s
+/// dwell) stays within the tolerance 0.1 over its window and converged before it; its summary
+/// edited to a convergence after the window's start, or none, or an in-band share below 1
+/// or past it, is refused. A genuine team run (team-circular-4, 300 s: window from 240 s) is
+/// even from before its window; edited to a window-mean gap CV of 1.5 beside an even spread
+/// from 1 s, to no even time beside a final CV of 0, to a negative isoline length or speed,
+/// it is refused. Each names the key; the genuine runs are drawn.
+#[test]
+fn plot_and_report_refuse_one_way_rules_broken_the_other_way() {
+    use serde_json::json;
+    let d = tempfile::tempdir().unwrap();
+    let (single, team) = (d.path().join("single"), d.path().join("team"));
+    for (scenario, out) in [
+        ("paper-fig2b-circular", &single),
+        ("team-circular-4", &team),
+    ] {
+        let o = isotrack(&[
+            "run",
+            &common::bundled(scenario),
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = isotrack(&[
+            "report",
+            out.to_str().unwrap(),
+            "--out",
+            d.path().join(format!("{scenario}.html")).to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |dir: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    };
+    // The genuine numbers the edits contradict.
+    let s = read(&single);
+    assert!(
+        s["steady_state_max_abs_error"].as_f64().unwrap() < 0.1,
+        "{s}"
+    );
+    assert!(s["convergence_time_s"].as_f64().unwrap() <= 480.0, "{s}");
+    assert_eq!(s["time_in_band_fraction"].as_f64(), Some(1.0), "{s}");
+    let t = read(&team);
+    assert!(
+        t["team"]["time_to_even_s"].as_f64().unwrap() <= 240.0,
+        "{t}"
+    );
+    assert!(t["team"]["gap_cv_final"].as_f64().unwrap() <= 0.05, "{t}");
+    type Case<'a> = (
+        &'a std::path::Path,
+        Vec<(&'a str, serde_json::Value)>,
+        &'a str,
+    );
+    let cases: Vec<Case> = vec![
+        (
+            &single,
+            vec![("/convergence_time_s", json!(590.0))],
+            "convergence_time_s = 590 s contradicts it (steady_state_max_abs_error",
+        ),
+        (
+            &single,
+            vec![("/convergence_time_s", json!(null))],
+            "convergence_time_s = null contradicts it",
+        ),
+        (
+            &single,
+            vec![("/time_in_band_fraction", json!(0.5))],
+            "time_in_band_fraction = 0.5",
+        ),
+        (
+            &single,
+            vec![("/time_in_band_fraction", json!(1.5))],
+            "time_in_band_fraction = `1.5` is not a share",
+        ),
+        (
+            &team,
+            vec![("/team/time_to_even_s", json!(1.0)), ("/team/gap_cv", json!(1.5))],
+            "gap_cv = 1.5 where time_to_even_s = 1 s is at or before the steady-state window's start (240 s)",
+        ),
+        (
+            &team,
+            vec![("/team/time_to_even_s", json!(null)), ("/team/gap_cv_final", json!(0.0))],
+            "time_to_even_s = null where gap_cv_final = 0",
+        ),
+        (
+            &team,
+            vec![("/team/isoline_length_m", json!(-5.0))],
+            "isoline_length_m = -5 m is negative",
+        ),
+        (
+            &team,
+            vec![("/team/speed_range_mps", json!([-50.0, 1e9]))],
+            "speed_range_mps holds -50 m/s",
+        ),
+    ];
+    for (k, (dir, edits, needle)) in cases.iter().enumerate() {
+        assert_edit_refused(d.path(), &format!("way{k}"), dir, edits, needle);
     }
 }
 

@@ -275,3 +275,27 @@ fn seeds_beyond_two_to_the_53_are_distinct_points_labelled_exactly() {
         assert!(seeds.contains(&l.as_str()), "{l} is no seed: {labels:?}");
     }
 }
+
+/// att49-3: a genuine sweep at `controller.kp = 1e300` (its chattering reaches about 1e301
+/// rad/s^2) was refused 65, "beyond the +-1e100 a plot can show", for the x axis and the
+/// metric, though `plot RUN_DIR` draws the same run clipped. Both axes are drawn at the bound
+/// now, each label saying so, as a run's time series; the axis within the bound has no note.
+#[test]
+fn a_sweep_past_the_axis_bound_is_drawn_clipped() {
+    let d = tempfile::tempdir().unwrap();
+    let svg = swept_svg(
+        d.path(),
+        "[base]\nsim.duration_s = 20.0\n[grid]\ncontroller.kp = [5.0, 1e300]\n",
+        &["--x", "controller.kp", "--metric", "chattering_radps2"],
+    );
+    assert!(svg.contains("controller.kp (clipped at"), "{svg}");
+    assert!(svg.contains("chattering_radps2 (clipped at"), "{svg}");
+    let d = tempfile::tempdir().unwrap();
+    let svg = swept_svg(
+        d.path(),
+        "[base]\nsim.duration_s = 20.0\n[grid]\ncontroller.kp = [5.0, 1e300]\n",
+        &["--x", "controller.kp", "--metric", "path_length_m"],
+    );
+    assert!(svg.contains("controller.kp (clipped at"), "{svg}");
+    assert!(!svg.contains("path_length_m (clipped"), "{svg}");
+}

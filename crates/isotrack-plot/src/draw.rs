@@ -129,7 +129,8 @@ macro_rules! render {
         let path: &Path = $path;
         let res: DrawResult = draw_atomic(path, |tmp| match $format {
             Format::Png => {
-                let $root = BitMapBackend::new(tmp, $size).into_drawing_area();
+                let $root =
+                    crate::bitmap::SafeLines(BitMapBackend::new(tmp, $size)).into_drawing_area();
                 $body.and_then(|_| $root.present().map_err(s))
             }
             Format::Svg => {
@@ -251,19 +252,52 @@ fn padded_axis(
     Ok(Some((mid - half, mid + half)))
 }
 
-/// Saturates every finite value of the series past [`MAX_AXIS_ABS`] to the bound, keeping its
-/// sign; whether any was. A genuine run's series can pass it (att46-13: a turn rate of
-/// -5.6e299 rad/s under `controller.kp = 1e300`): drawn at the bound with the panel's label
-/// saying so (`report` draws the same run), not refused as a data error.
-fn saturate_values<'a>(series: impl Iterator<Item = &'a mut Vec<(f64, f64)>>) -> bool {
-    let mut clipped = false;
-    for q in series.flatten() {
-        if q.1.is_finite() && q.1.abs() > MAX_AXIS_ABS {
-            q.1 = MAX_AXIS_ABS.copysign(q.1);
-            clipped = true;
-        }
+/// Saturates `v` at the bound [`MAX_AXIS_ABS`], keeping its sign, when it is finite and past
+/// it; whether it was. A genuine run's or sweep's number can pass the bound (att46-13: a turn
+/// rate of -5.6e299 rad/s under `controller.kp = 1e300`; att49-3: that `kp` as a sweep's x
+/// and a chattering of 2e301 as its metric): drawn at the bound with the axis label saying so
+/// ([`clip_note`]), not refused as a data error. The one rule of every figure's axes.
+fn saturate(v: &mut f64) -> bool {
+    let past = v.is_finite() && v.abs() > MAX_AXIS_ABS;
+    if past {
+        *v = MAX_AXIS_ABS.copysign(*v);
     }
-    clipped
+    past
+}
+
+/// An axis label `label`, with the note that values past the bound are drawn at it when
+/// `clipped` ([`saturate`]).
+fn clip_note(label: &str, clipped: bool) -> String {
+    match clipped {
+        true => format!("{label} (clipped at \u{b1}{MAX_AXIS_ABS:e})"),
+        false => label.to_string(),
+    }
+}
+
+/// [`saturate`] on every value of the series; whether any was.
+fn saturate_values<'a>(series: impl Iterator<Item = &'a mut Vec<(f64, f64)>>) -> bool {
+    series
+        .flatten()
+        .fold(false, |clipped, q| saturate(&mut q.1) | clipped)
+}
+
+/// A sweep summary point's error bar `(mean - std, mean + std)`, its ends (an overflowed
+/// standard deviation too) held within the bound ([`saturate`]).
+fn bar_ends(p: &(f64, f64, f64, usize)) -> (f64, f64) {
+    let end = |v: f64| v.clamp(-MAX_AXIS_ABS, MAX_AXIS_ABS);
+    (end(p.1 - p.2), end(p.1 + p.2))
+}
+
+/// [`saturate`] on a sweep summary's x values and means; whether any x was, and whether any
+/// mean or error bar end was ([`bar_ends`]).
+fn saturate_summary(lines: &mut [SummaryLine]) -> (bool, bool) {
+    let (mut x_clipped, mut y_clipped) = (false, false);
+    for p in lines.iter_mut().flat_map(|l| l.1.iter_mut()) {
+        let bar_past = p.1 - p.2 < -MAX_AXIS_ABS || p.1 + p.2 > MAX_AXIS_ABS;
+        x_clipped |= saturate(&mut p.0);
+        y_clipped |= saturate(&mut p.1) | bar_past;
+    }
+    (x_clipped, y_clipped)
 }
 
 /// Finite `(min, max)` of some values (`(inf, -inf)` when there are none).
@@ -884,9 +918,10 @@ pub fn animation_gif_team(
     );
     let res: DrawResult = draw_atomic(path, |path| {
         fonts();
-        let root = BitMapBackend::gif(path, (lay.w, lay.h), delay_ms)
-            .map_err(s)?
-            .into_drawing_area();
+        let root = crate::bitmap::SafeLines(
+            BitMapBackend::gif(path, (lay.w, lay.h), delay_ms).map_err(s)?,
+        )
+        .into_drawing_area();
         for k in 0..frames {
             let t = if frames == 1 {
                 t_end
@@ -1103,10 +1138,7 @@ pub fn timeseries_figure(
     let mut data = Vec::with_capacity(list.len());
     for p in &list {
         let mut series: Vec<[Vec<(f64, f64)>; 2]> = runs.iter().map(p.series).collect();
-        let label = match saturate_values(series.iter_mut().flatten()) {
-            true => format!("{} (clipped at \u{b1}{MAX_AXIS_ABS:e})", p.label),
-            false => p.label.to_string(),
-        };
+        let label = clip_note(p.label, saturate_values(series.iter_mut().flatten()));
         let (lo, hi) = finite_bounds(series.iter().flatten().flatten().map(|q| q.1));
         let range = padded_axis(p.label, lo, hi, 0.08, 1e-12)?.unwrap_or((-1.0, 1.0));
         data.push((series, range, label));
@@ -1513,8 +1545,8 @@ impl SweepAxes {
     ) -> Result<Self, PlotError> {
         let all = || lines.iter().flat_map(|l| l.1.iter());
         let (x0, x1) = finite_bounds(all().map(|p| p.0));
-        let (y0, _) = finite_bounds(all().map(|p| p.1 - p.2));
-        let (_, y1) = finite_bounds(all().map(|p| p.1 + p.2));
+        let (y0, _) = finite_bounds(all().map(|p| bar_ends(p).0));
+        let (_, y1) = finite_bounds(all().map(|p| bar_ends(p).1));
         let bad = || PlotError::Data(format!("{}: no finite values", results_csv.display()));
         // One whole x value (`team.count = [5]`): an axis one unit wide round it, labelled once
         // at the value (att30n-7: an axis 2e-7 wide was labelled 4.9999997 to 5.0000002).
@@ -1574,7 +1606,9 @@ pub fn sweep_figure(
     path: &Path,
     st: &Style,
 ) -> Result<(), PlotError> {
-    let (lines, skipped, x_offset) = sweep_summary_exact(results_csv, x_key, metric, group)?;
+    let (mut lines, skipped, x_offset) = sweep_summary_exact(results_csv, x_key, metric, group)?;
+    let (x_clipped, y_clipped) = saturate_summary(&mut lines);
+    let (x_desc, y_desc) = (clip_note(x_key, x_clipped), clip_note(metric, y_clipped));
     let all = || lines.iter().flat_map(|l| l.1.iter());
     let axes = SweepAxes::of(&lines, (x_key, metric), results_csv)?;
     let ((xa, xb), (ya, yb)) = (axes.x, axes.y);
@@ -1614,7 +1648,7 @@ pub fn sweep_figure(
                 steps: (xs, ys),
                 x_offset,
             };
-            draw_sweep_mesh(&mut chart, st, (x_key, metric), &axes, &ticks)?;
+            draw_sweep_mesh(&mut chart, st, (&x_desc, &y_desc), &axes, &ticks)?;
             draw_single_value_labels(&root, &chart, st, &axes)?;
             for (i, ((_, pts), label)) in lines.iter().zip(&labels).enumerate() {
                 draw_summary_line(&mut chart, pts, label.clone(), colour(i + 1), st)?;
@@ -1989,10 +2023,10 @@ fn draw_summary_line<DB: DrawingBackend>(
         .label(label)
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(w2)));
     chart
-        .draw_series(
-            pts.iter()
-                .map(|p| ErrorBar::new_vertical(p.0, p.1 - p.2, p.1, p.1 + p.2, c.filled(), bar)),
-        )
+        .draw_series(pts.iter().map(|p| {
+            let (lo, hi) = bar_ends(p);
+            ErrorBar::new_vertical(p.0, lo, p.1, hi, c.filled(), bar)
+        }))
         .map_err(s)?;
     chart
         .draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), r4, c.filled())))

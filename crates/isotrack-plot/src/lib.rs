@@ -20,6 +20,7 @@
 //! PNG or SVG; the font (DejaVu Sans, `assets/`) is compiled in, so no system font is needed.
 #![deny(missing_docs)]
 
+mod bitmap;
 mod draw;
 mod error;
 mod limits;

@@ -165,7 +165,8 @@ pub fn stability_map_figure(
     // Never through a link nor into a FIFO: `draw::draw_atomic`.
     draw(crate::draw::draw_atomic(path, |path| match st.format {
         Format::Png => {
-            let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
+            let root =
+                crate::bitmap::SafeLines(BitMapBackend::new(path, (w, h))).into_drawing_area();
             chart(&root, map, verify, st).and_then(|_| root.present().map_err(s))
         }
         Format::Svg => {

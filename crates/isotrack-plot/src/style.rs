@@ -207,11 +207,16 @@ pub(crate) fn svg_without_controls(path: &std::path::Path) -> Result<(), String>
 
 /// A tick label: the value at a precision that tells neighbouring ticks `step` apart, without a
 /// trailing `.0` and without `-0` (paper figures print `5`, `0.25`, `-3`, never `5.0` or `-0.0`).
+/// A value within a millionth of a step of zero is the zero tick and reads `0` (att49-2: the
+/// middle tick of a +-1e100 axis, -1e100 + 5 x 2e99 in `f64`, read `2e84`).
 pub fn tick_label(v: f64, step: f64) -> String {
     if !v.is_finite() {
         return String::new();
     }
     let step = step.abs();
+    if v.abs() <= 1e-6 * step {
+        return "0".into();
+    }
     let mag = v.abs().max(step);
     if mag != 0.0 && !(1e-4..1e6).contains(&mag) {
         // Scientific, with the digits the step needs.
@@ -309,6 +314,25 @@ mod tests {
         assert_eq!(tick_label(2e-5, 1e-5), "2e-5");
         assert_eq!(tick_step(0.0, 600.0, 10), 50.0);
         assert_eq!(tick_step(10.0, 10.001, 10), 1e-4);
+    }
+
+    /// att49-2: the zero tick of a +-1e100 axis (plotters steps to it by repeated addition)
+    /// carries rounding noise, 2e84 on a 2e99 step, as seen; it reads `0`.
+    #[test]
+    fn the_zero_tick_of_a_huge_axis_reads_zero() {
+        let step = tick_step(-1.16e100, 1.16e100, 8);
+        assert_eq!(step, 2e99);
+        assert_eq!(tick_label(2e84, step), "0");
+        assert_eq!(tick_label(-2e84, step), "0");
+        let mut v = -1.2e100;
+        for _ in 0..6 {
+            v += step;
+        }
+        assert_eq!(tick_label(v, step), "0", "{v:e}");
+        assert_eq!(tick_label(-2e99, step), "-2e99");
+        assert_eq!(tick_label(-1e100, step), "-1e100");
+        // Small axes are unchanged: a tick a step from zero is not zero.
+        assert_eq!(tick_label(1e-6, 1e-6), "1e-6");
     }
 
     /// A level reads back as written, however many digits (a tick label would round

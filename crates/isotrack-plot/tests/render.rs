@@ -456,3 +456,92 @@ fn many_paths_have_small_start_marks_without_white_rings() {
     assert_eq!(circles.len(), 4);
     assert_eq!(circles.iter().filter(|c| c.contains("#FFFFFF")).count(), 2);
 }
+
+/// The longest run of `true` in `flags`: `(first, last)` index.
+fn longest_run(flags: impl Iterator<Item = bool>) -> (u32, u32) {
+    let (mut best, mut start, mut len) = ((0, 0), 0, 0u32);
+    for (i, f) in flags.enumerate() {
+        let i = i as u32;
+        if f {
+            if len == 0 {
+                start = i;
+            }
+            len += 1;
+            if len > best.1 - best.0 + 1 || best == (0, 0) {
+                best = (start, i);
+            }
+        } else {
+            len = 0;
+        }
+    }
+    best
+}
+
+/// The plotting rectangle `(left, top, right, bottom)` of a one-panel PNG: its x axis is the
+/// row with the most black pixels, its y axis the column with the most; the rectangle spans
+/// the longest black run of each.
+fn plot_rect(img: &image::RgbImage) -> (u32, u32, u32, u32) {
+    let black = |x: u32, y: u32| img.get_pixel(x, y).0 == [0, 0, 0];
+    let (w, h) = img.dimensions();
+    let bottom = (0..h)
+        .max_by_key(|&y| (0..w).filter(|&x| black(x, y)).count())
+        .unwrap();
+    let left = (0..w)
+        .max_by_key(|&x| (0..h).filter(|&y| black(x, y)).count())
+        .unwrap();
+    let (x0, x1) = longest_run((0..w).map(|x| black(x, bottom)));
+    let (y0, y1) = longest_run((0..h).map(|y| black(left, y)));
+    (x0.min(left), y0, x1, y1.max(bottom))
+}
+
+/// att49-1: a genuine run at `controller.kp = 1e300` (600 s, as att49 ran it) flips its turn rate between about
+/// +-1e300 from one step to the next, drawn at the +-1e100 bound (the panel's top and bottom
+/// less its 8 % padding). plotters joined each near reversal of the 2-pixel line with edges
+/// meeting far past the corner, so the PNG's strokes ran over the panels above and off the
+/// image (the SVG stayed inside). No pixel of the run's colour may lie outside the panel's
+/// plotting rectangle, and the series is drawn (the colour is there).
+#[test]
+fn a_clipped_turn_rate_stays_inside_its_png_panel() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = make_run(&dir.path().join("kp"), &["controller.kp=1e300"]);
+    assert!(
+        run.trace.iter().any(|t| t.omega_radps.abs() > 1e100),
+        "the run does not pass the bound"
+    );
+    let omega_only = Panels {
+        error: false,
+        measurement: false,
+        measurement_rate: false,
+        omega: true,
+    };
+    for size in [None, Some((600, 800))] {
+        let mut st = Style::new(Format::Png);
+        st.size_px = size;
+        let png = dir.path().join("ts.png");
+        timeseries_figure(std::slice::from_ref(&run), &png, &st, "", omega_only).unwrap();
+        let img = image::open(&png).unwrap().to_rgb8();
+        // The 2-pixel line may cover the axis it starts on: two pixels of slack.
+        let (left, top, right, bottom) = plot_rect(&img);
+        let (left, top, right, bottom) = (left - 2, top - 2, right + 2, bottom + 2);
+        assert!(
+            right > left + 100 && bottom > top + 100,
+            "{size:?}: no plot found"
+        );
+        let run_colour = [214, 39, 40];
+        let mut inside = 0;
+        for (x, y, p) in img.enumerate_pixels() {
+            if p.0 != run_colour {
+                continue;
+            }
+            assert!(
+                (left..=right).contains(&x) && (top..=bottom).contains(&y),
+                "{size:?}: the series at ({x}, {y}), outside the panel ({left}, {top})..({right}, {bottom})"
+            );
+            inside += 1;
+        }
+        assert!(
+            inside > 100,
+            "{size:?}: the series is not drawn ({inside} pixels)"
+        );
+    }
+}

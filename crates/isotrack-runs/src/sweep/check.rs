@@ -751,6 +751,9 @@ fn check_metric_windows<'c>(
         }
     }
     check_tolerance_implications(ms, dt, cell, column)?;
+    if outcome == "completed" {
+        check_converged_window(ms, dt, k_end, cell, column)?;
+    }
     // A completed run observed every step of its window (`k_end = N`, the window from step
     // `ss`): its sign-change rate (a count over the window's duration, always finite) is there
     // once the window spans a step (att30d-1). A task's run records no rates (no `samples`).
@@ -861,7 +864,9 @@ fn check_tolerance_implications<'c>(
             return contradicts("steady_state_rms_error", r, &why);
         }
     }
-    if let (Some(m), Some(f)) = (max, share) {
+    // A NaN error (no value) is outside the band but leaves the maximum alone; it makes the
+    // RMS NaN (no number), so the maximum speaks for every step only beside a finite RMS.
+    if let (Some(m), Some(f), Some(_)) = (max, share, rms.filter(|r| r.is_finite())) {
         if m <= tol && f != 1.0 {
             return Err(format!(
                 "{}: time_in_band_fraction = {} where steady_state_max_abs_error = {} is within metrics.convergence_tolerance = {}: every step of the window is in the band (a share of 1)",
@@ -873,6 +878,52 @@ fn check_tolerance_implications<'c>(
         }
     }
     Ok(())
+}
+
+/// The converse of [`check_tolerance_implications`]' first rule (att49-5), for a run that
+/// completed at step `k` (`t_end_s = k dt`) with its steady-state window from step `s`:
+/// a window maximum `|eps|` below the tolerance (the metrics' strict `|eps| < tol`), with a
+/// finite RMS (no step without an error value: a NaN counts as outside the band but leaves
+/// the maximum alone, and makes the RMS NaN), puts no violation at any step from `s` to `k`,
+/// so the last one, if any, is at a step `j < s`. The run then converged at `(j + 1) dt <= s dt`
+/// (or 0 with none) as soon as the steps inside after it, `k - j - 1 >= k - s`, exceed the
+/// dwell's `w` (or `k >= w`): so when `k - s >= w`, `convergence_time_s` is there and at or
+/// before the window's start.
+fn check_converged_window<'c>(
+    ms: &isotrack_scenario::build::MetricSteps,
+    dt: f64,
+    k_end: u64,
+    cell: &dyn Fn(&str) -> &'c str,
+    column: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    let value = |n: &str| cell(n).parse::<f64>().ok();
+    let (tol, ss, w) = (
+        ms.convergence_tolerance,
+        ms.steady_state_start_step,
+        ms.convergence_min_dwell_steps,
+    );
+    let within = value("steady_state_max_abs_error").filter(|&m| m < tol);
+    let rms_finite = value("steady_state_rms_error").is_some_and(f64::is_finite);
+    let (Some(m), true) = (within, rms_finite) else {
+        return Ok(());
+    };
+    if k_end < ss || k_end - ss < w {
+        return Ok(());
+    }
+    let c = value("convergence_time_s");
+    if c.is_some_and(|c| (c / dt).round() <= ss as f64) {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: convergence_time_s = {} contradicts it (steady_state_max_abs_error = {} is below metrics.convergence_tolerance = {} over the whole steady-state window, steps {ss} to {k_end} of {} s, at least metrics.convergence_min_dwell_s = {} s long: the run converged at or before the window's start, {} s)",
+        column("convergence_time_s"),
+        c.map_or("null".to_string(), |c| format!("{} s", Echo(c))),
+        Echo(m),
+        Echo(tol),
+        Echo(dt),
+        Num(w as f64 * dt),
+        Num(ss as f64 * dt)
+    ))
 }
 
 /// The fewest samples a run of `span` that ended as `outcome` at step `k_end` delivered: none
@@ -1162,6 +1213,9 @@ pub struct TeamBounds {
     /// [`TeamBounds::ideal_s`]; on a known circle `2 pi R`): the summary's
     /// `isoline_length_m`. `None` where `ideal_s` is.
     pub isoline_length_m: Option<f64>,
+    /// The steady-state window's start `ss dt`, s (the run's step plan's; at or before the
+    /// window's first team sample); `None` without a window in the plan.
+    pub window_start_s: Option<f64>,
 }
 
 /// The largest gap CV of a team of `n` vehicles: `sqrt(n - 1)` (0 for one vehicle or none).
@@ -1208,6 +1262,9 @@ impl TeamBounds {
             count: team.count(),
             speed_envelope_mps: (!fixed_wing).then(|| team.speed_envelope_mps()),
             isoline_length_m,
+            window_start_s: span
+                .metric_steps
+                .map(|ms| ms.steady_state_start_step as f64 * span.dt_s),
         })
     }
 }
@@ -1252,6 +1309,25 @@ pub fn check_team_bounds<'c>(
     }
     if let Some(cv) = value("gap_cv") {
         check_gap_cv("gap_cv", cv, b.count).map_err(|m| format!("{}: {m}", column("gap_cv")))?;
+    }
+    // att49-4: `time_to_even_s = t` has every sample from `t` to the end evenly spread (each
+    // sample above the threshold or without a CV resets it): from at or before the window's
+    // start, every window sample's CV is at most the threshold, and so is their mean (to
+    // rounding).
+    let even = isotrack_sim::team::metrics::TeamMetricsConfig::default().even_gap_cv;
+    if let (Some(t), Some(cv), Some(start)) =
+        (value("time_to_even_s"), value("gap_cv"), b.window_start_s)
+    {
+        if t <= start && cv > even * (1.0 + 1e-12) {
+            return Err(format!(
+                "{}: gap_cv = {} where time_to_even_s = {} s is at or before the steady-state window's start ({} s): every sample of the window has a gap CV at most {}, and so has their mean",
+                column("gap_cv"),
+                Echo(cv),
+                Echo(t),
+                Num(start),
+                Echo(even)
+            ));
+        }
     }
     if let (Some(sep), Some(reach)) = (value("min_separation_m"), b.reach_m) {
         if sep > reach {
@@ -1323,6 +1399,8 @@ fn check_gap_cv(key: &str, cv: f64, n: usize) -> Result<(), String> {
 /// * `speed_range_mps` is the slowest and the fastest speed a vehicle held at a sample:
 ///   `min <= max`, both within the team's envelope where it bounds the speed held
 ///   ([`TeamBounds::speed_envelope_mps`]);
+/// * conversely a `gap_cv_final` at most the threshold sets `time_to_even_s` (att49-4);
+/// * `isoline_length_m` and every speed of `speed_range_mps` at least 0 (att49-4);
 /// * `gap_cv_final` at most [`max_gap_cv`] of the team's count;
 /// * `isoline_length_m` the fixed closed isoline's length ([`TeamBounds::isoline_length_m`]).
 fn check_team_record_numbers(
@@ -1341,6 +1419,35 @@ fn check_team_record_numbers(
                 Echo(even)
             ));
         }
+    }
+    // att49-4: a final CV at most the threshold starts an even spread at the last sample at the
+    // latest (`even_since` is set by every such sample), so `time_to_even_s` is there.
+    if let (None, Some(cv)) = (m.time_to_even_s, m.gap_cv_final.filter(|&cv| cv <= even)) {
+        return Err(format!(
+            "time_to_even_s = null where gap_cv_final = {}: a team whose last sample's gap CV is at most {} is evenly spread from that sample on at the latest",
+            Echo(cv),
+            Echo(even)
+        ));
+    }
+    // A length and a ground speed (a magnitude; a robot's speed command is saturated to its
+    // positive envelope) are at least 0, whatever the isoline or airframe.
+    if let Some(l) = m.isoline_length_m.filter(|&l| l < 0.0) {
+        return Err(format!(
+            "isoline_length_m = {} m is negative: a length is at least 0",
+            Echo(l)
+        ));
+    }
+    if let Some(v) = m
+        .speed_range_mps
+        .into_iter()
+        .flatten()
+        .flatten()
+        .find(|&v| v < 0.0)
+    {
+        return Err(format!(
+            "speed_range_mps holds {} m/s: a vehicle's speed is at least 0",
+            Echo(v)
+        ));
     }
     if let Some([Some(lo), Some(hi)]) = m.speed_range_mps {
         if lo > hi {
@@ -1404,7 +1511,12 @@ pub fn check_run_summary(
         }
         let columns = &crate::sweep::rows::SWEEP_COLUMNS;
         let cells = crate::results::result_cells(columns, Ok(r));
+        // Not a sweep column, but the record's (att49-5: an edited share went unchecked).
+        let share = crate::results::real_cell(r.metrics.time_in_band_fraction);
         let cell = |n: &str| {
+            if n == "time_in_band_fraction" {
+                return share.as_str();
+            }
             columns
                 .iter()
                 .position(|c| c.name() == n)
@@ -1417,7 +1529,14 @@ pub fn check_run_summary(
         // steady-state maximum of 50 past a tolerance of 0.1 was shown as the run's).
         match metric_steps {
             Some((ms, dt)) if r.outcome == "completed" => {
-                check_tolerance_implications(&ms, dt, &cell, &|n| n.to_string())
+                let name = |n: &str| n.to_string();
+                check_tolerance_implications(&ms, dt, &cell, &name)
+                    .and_then(|_| match r.t_end_s.map(|t| (t / dt).round()) {
+                        Some(k) if k >= 0.0 => {
+                            check_converged_window(&ms, dt, k as u64, &cell, &name)
+                        }
+                        _ => Ok(()),
+                    })
                     .map_err(|m| format!("{key}{m}"))
             }
             _ => Ok(()),
@@ -1436,7 +1555,7 @@ pub fn check_run_summary(
 
 #[cfg(test)]
 mod team_record_tests {
-    use super::{check_team_record_numbers, max_gap_cv, TeamBounds};
+    use super::{check_team_record, check_team_record_numbers, max_gap_cv, TeamBounds};
     use crate::summary::TeamRecord;
 
     /// The population CV of `gaps`, computed here from its definition.
@@ -1489,7 +1608,73 @@ mod team_record_tests {
         count: 4,
         speed_envelope_mps: Some((0.25, 0.75)),
         isoline_length_m: Some(43.55),
+        window_start_s: Some(50.0),
     };
+
+    /// att49-4: the rules that held one way only hold both ways: a `time_to_even_s` at or
+    /// before the window's start (50 s) with a window-mean `gap_cv` above 0.05, a null
+    /// `time_to_even_s` beside a final CV at most 0.05, a negative isoline length or speed are
+    /// refused naming the key; the edges a run can give are kept (an even spread from after
+    /// the window's start beside any mean; a mean of exactly 0.05; a final CV above 0.05 with
+    /// no time; a speed of 0; any of these without bounds where none is needed).
+    #[test]
+    fn team_rules_hold_both_ways() {
+        let refused = |edit: fn(&mut TeamRecord), needle: &str| {
+            let mut r = record();
+            edit(&mut r);
+            let e = check_team_record(&r, Some(&BOUNDS)).unwrap_err();
+            assert!(e.contains(needle), "{e}");
+        };
+        refused(
+            |r| (r.time_to_even_s, r.gap_cv) = (Some(1.0), Some(1.5)),
+            "gap_cv = 1.5 where time_to_even_s = 1 s is at or before",
+        );
+        refused(
+            |r| (r.time_to_even_s, r.gap_cv) = (Some(50.0), Some(0.0500001)),
+            "gap_cv = 0.0500001 where time_to_even_s = 50 s",
+        );
+        refused(
+            |r| (r.time_to_even_s, r.gap_cv_final) = (None, Some(0.0)),
+            "time_to_even_s = null where gap_cv_final = 0",
+        );
+        refused(
+            |r| (r.time_to_even_s, r.gap_cv_final) = (None, Some(0.05)),
+            "time_to_even_s = null where gap_cv_final = 0.05",
+        );
+        refused(
+            |r| r.isoline_length_m = Some(-5.0),
+            "isoline_length_m = -5 m is negative",
+        );
+        refused(
+            |r| r.speed_range_mps = Some([Some(-50.0), Some(1e9)]),
+            "speed_range_mps holds -50 m/s",
+        );
+        let kept = |edit: fn(&mut TeamRecord)| {
+            let mut r = record();
+            edit(&mut r);
+            assert_eq!(check_team_record(&r, Some(&BOUNDS)), Ok(()));
+        };
+        kept(|r| (r.time_to_even_s, r.gap_cv) = (Some(50.5), Some(1.5)));
+        kept(|r| (r.time_to_even_s, r.gap_cv) = (Some(10.0), Some(0.05)));
+        kept(|r| (r.time_to_even_s, r.gap_cv_final) = (None, Some(0.0500001)));
+        kept(|r| (r.time_to_even_s, r.gap_cv_final) = (None, None));
+        kept(|r| r.speed_range_mps = Some([Some(0.25), Some(0.25)]));
+        // Without a window in the plan the mean is not tied to the time.
+        let mut r = record();
+        (r.time_to_even_s, r.gap_cv) = (Some(1.0), Some(1.5));
+        let no_window = TeamBounds {
+            window_start_s: None,
+            ..BOUNDS
+        };
+        assert_eq!(check_team_record(&r, Some(&no_window)), Ok(()));
+        // Signs and the null time need no bounds (an open or moving isoline, a fixed wing).
+        let mut r = record();
+        r.isoline_length_m = Some(-5.0);
+        assert!(check_team_record_numbers(&r, None).is_err());
+        let mut r = record();
+        r.speed_range_mps = Some([Some(-1.0), Some(1.0)]);
+        assert!(check_team_record_numbers(&r, None).is_err());
+    }
 
     /// att46-4: each number edited to one the metrics cannot give is refused naming its key;
     /// the record as a run gives it (its bounds reached exactly) is kept.
