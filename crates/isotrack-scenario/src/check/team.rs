@@ -42,7 +42,7 @@ use isotrack_core::spacing::{
 };
 use isotrack_core::Vec2;
 use isotrack_sim::team::arc::{ArcProjection, CircleArc, PolylineArc};
-use isotrack_sim::team::metrics::TeamMetricsConfig;
+use isotrack_sim::team::metrics::{TeamMetricsConfig, CLOSE_APPROACH_M};
 use isotrack_sim::team::spacing::{RingMode, SpacingLaw};
 use serde::Serialize;
 
@@ -147,14 +147,15 @@ pub struct SpacingLoopReport {
     /// with every neighbour heard (absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub silent_gap_closing_mps: Option<f64>,
-    /// `range_balance` with unequal nominal speeds on a known circle (att44-6, -7): the
-    /// equilibrium the loop converges to, solved for its ranges, or why there is none (absent
-    /// otherwise).
+    /// `range_balance` or `arc_reference` (att50-2) with unequal nominal speeds on a known circle
+    /// (att44-6, -7): the equilibrium the loop converges to, solved for its ranges (arc gaps),
+    /// or why there is none (absent otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shifted_equilibrium: Option<ShiftedEquilibrium>,
     /// Where the loop is linearised when not at even spacing of a free ring (absent there):
     /// `shifted_equilibrium` (the chord slopes of its gaps, att46-1, -16) or `pinned` (vehicles
-    /// with no speed room fixed in the frame moving at their speed, att46-9). The modes are then
+    /// with no speed room, or saturated at an envelope bound at the equilibrium (att50-1), fixed
+    /// in the frame moving at their speed, att46-9). The modes are then
     /// the eigenvalues `mu` of `K = D^T C D` over the free vehicles (docs/TEAMS.md, "Theory"),
     /// each listed with `lambda = mu/c`, and `k_v* = g*/(T mu_max)`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -245,8 +246,14 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     rep.applicable = true;
     let (slopes, about) = loop_slopes(s, l, team, &rep, c);
     let mut pins = vec![false; n];
+    // att50-1: a vehicle saturated at an envelope bound at the equilibrium acts as a pin too.
+    let saturated = rep
+        .shifted_equilibrium
+        .as_ref()
+        .map_or(vec![], |eq| equilibrium::saturated(team, eq));
     equilibrium::pinned(team)
         .into_iter()
+        .chain(saturated)
         .for_each(|i| pins[i] = true);
     let pinned_some = pins.iter().any(|&p| p) && !pins.iter().all(|&p| p);
     let spectrum = linearised::loop_spectrum(c, &slopes, &pins)
@@ -722,6 +729,10 @@ struct Deployment {
     all_silent: bool,
     /// The longest chord between neighbouring starts, m, and the pair (listed indices).
     widest_chord: (f64, [usize; 2]),
+    /// The least `cos(theta/2)` over the arcs `theta` between neighbouring starts under half
+    /// the circle: how much of a probe's speed change a neighbour's range shows (att50-3), 1
+    /// when none is.
+    probe_slope: f64,
 }
 
 /// The starts of `team` on `circle`, in angular order about its centre (the same set of gaps
@@ -747,6 +758,7 @@ fn deployed_on_circle(
     let mut gaps = Vec::with_capacity(n);
     let mut all_silent = true;
     let mut widest = (0.0, [0, 0]);
+    let mut probe_slope: f64 = 1.0;
     for k in 0..n {
         let (a, b) = (at[k], at[(k + 1) % n]);
         let gap = if k + 1 < n {
@@ -759,6 +771,9 @@ fn deployed_on_circle(
         if chord > widest.0 {
             widest = (chord, [a.1, b.1]);
         }
+        if gap < std::f64::consts::PI {
+            probe_slope = probe_slope.min((gap / 2.0).cos());
+        }
         gaps.push(gap);
     }
     let mean = std::f64::consts::TAU / n as f64;
@@ -767,6 +782,7 @@ fn deployed_on_circle(
         gap_cv: var.sqrt() / mean,
         all_silent,
         widest_chord: widest,
+        probe_slope,
     })
 }
 
@@ -1070,12 +1086,17 @@ fn spacing_claim(
     if let Some(why) = equilibrium::probe_cannot_fly(team) {
         return Some((Verdict::Fails, why));
     }
-    if let Some(why) = equilibrium::probe_below_noise(team) {
+    let slope = deployed(f64::INFINITY).map_or(1.0, |d| d.probe_slope);
+    if let Some(why) = equilibrium::probe_below_noise(team, slope) {
         return Some((Verdict::NotApplicable, why));
     }
-    let solved = sp.shifted_equilibrium.as_ref().filter(|_| ranges);
+    // att50-2: arc_reference's equilibrium too (its arc gaps for the ranges).
+    let solved = sp.shifted_equilibrium.as_ref();
     if let Some(claim) = solved.and_then(|eq| equilibrium::shifted_claim(team, eq)) {
         return Some(claim);
+    }
+    if let Some(why) = first_sample_overshoot(s, l, team, sp) {
+        return Some((Verdict::NotApplicable, why));
     }
     if let Some(claim) = circle
         .is_none()
@@ -1160,6 +1181,82 @@ fn listed_ring_out_of_order(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<St
             if side > 0.0 { "right" } else { "left" },
             team.law.name(),
             dir < 0.0
+        )
+    })
+}
+
+/// att50-4: the close approach on the way to the equilibrium, not only at it. Past a gain per
+/// ranging period `g = k_v mu_max T` of 1 (the fastest mode's) each held sample overshoots the
+/// equilibrium by `g - 1` of the remaining error (`x_{j+1} = (1 - g) x_j`), so the first
+/// sample can carry a gap `(g - 1) max_i |deployed gap_i - equilibrium gap_i|` past its
+/// equilibrium, at most `(v_max - v_min)(T + d)` (the speeds saturate: how far a gap moves in
+/// the sample that crosses). When that reaches from the closest equilibrium gap to under
+/// [`CLOSE_APPROACH_M`] the reason (`not_applicable`: two robots may meet before the loop
+/// settles); `None` otherwise, off a known circle, or where the equilibrium is not known (a
+/// shifted one not solved, vehicles with no speed room).
+fn first_sample_overshoot(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+) -> Option<String> {
+    let g = sp
+        .modes
+        .iter()
+        .map(|m| m.gain_per_period)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if g.is_nan() || g <= 1.0 || !equilibrium::pinned(team).is_empty() {
+        return None;
+    }
+    let circle = s.team_arc()?;
+    let n = team.count();
+    // Arc gaps in m on the circle the law measures: the isoline's for arc_reference, else the
+    // circle flown (ranges are its chords).
+    let radius = match team.law {
+        SpacingLaw::ArcReference { .. } => circle.radius_m,
+        _ => flown_circle_radius_m(s, l, circle),
+    };
+    let tau = std::f64::consts::TAU;
+    let settled: Vec<f64> = match &sp.shifted_equilibrium {
+        Some(eq) if eq.exists() => match team.law {
+            SpacingLaw::ArcReference { .. } => eq.ranges_m.clone(),
+            _ => eq
+                .ranges_m
+                .iter()
+                .map(|r| 2.0 * radius * (r / (2.0 * radius)).clamp(-1.0, 1.0).asin())
+                .collect(),
+        },
+        Some(_) => return None,
+        None if team.nominal_speeds_mps().len() == 1 => vec![tau * radius / n as f64; n],
+        None => return None,
+    };
+    let dir = travel_direction(s, l)?;
+    let angle = |i: usize| start_angle(team, circle, i);
+    let mut error: f64 = 0.0;
+    for (i, eq_gap) in settled.iter().enumerate() {
+        let step = (dir * (angle((i + 1) % n)? - angle(i)?)).rem_euclid(tau);
+        error = error.max((step * radius - eq_gap).abs());
+    }
+    // The speeds saturate: a gap moves at most (v_max - v_min)(T + d) past where it crossed.
+    let (lo, hi) = team.speed_envelope_mps();
+    let cap = (hi - lo) * (sp.period_s + sp.delay_s);
+    let overshoot = ((g - 1.0) * error).min(cap);
+    let (i, closest) = settled
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    (closest - overshoot < CLOSE_APPROACH_M).then(|| {
+        format!(
+            "the spacing loop's fastest mode has a gain per ranging period k_v mu_max T = {} > 1, so each held sample overshoots the equilibrium by {} of the remaining error: from the deployment (a gap {} m from its equilibrium at most) the first sample can carry a gap {} m past its equilibrium ((g - 1) times that, at most the envelopes' (v_max - v_min)(T + d) = {} m), and vehicle {i}'s gap ahead settles at {} m: it may pass under the run's close-approach distance {} m (or through zero: robots pass through each other) before the loop settles; lower team.k_v under {} (a gain per period of 1) or deploy nearer the equilibrium",
+            Num(g),
+            Num(g - 1.0),
+            Num(error),
+            Num(overshoot),
+            Num(cap),
+            Num(closest),
+            Num(CLOSE_APPROACH_M),
+            Num(sp.k_v_per_s.unwrap_or(0.0) / g)
         )
     })
 }
@@ -1355,7 +1452,7 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
         Some(about) => format!(
             "  linearised about the {}: eigenvalues mu of K = D^T C D over the free vehicles, listed as lambda = mu/c ({which}; k_v* = g*/(T mu_max)):",
             if about == "pinned" {
-                "equilibrium with the vehicles of no speed room fixed (their speed is the team's)"
+                "equilibrium with the vehicles of no speed room, or saturated at an envelope bound there, fixed (their speed is the team's)"
             } else {
                 "shifted equilibrium, each gap with its own chord slope cos(g_i/(2R))"
             }

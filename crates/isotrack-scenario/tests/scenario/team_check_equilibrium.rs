@@ -272,3 +272,68 @@ fn a_range_just_above_the_even_spacing_notes_the_slow_spread() {
     let t = check(&circular(&["team.count=20"]), None).team.unwrap();
     assert_eq!(t.spacing.silent_gap_closing_mps, None);
 }
+
+/// att50-2: `arc_reference` with vehicle 3 at 0.3 m/s, the others at 0.5, four evenly spread:
+/// its arc gaps stand still only where every vehicle flies V = 0.45 m/s, `g_i - g_{i-1} =
+/// (V - v0_i)/k_v` (slope 1), so with `a = 0.05/k_v` the gaps ahead are `x - a, x - 2a, x - 3a,
+/// x` and they sum to `L`: `x = (L + 6a)/4`, vehicle 2's gap `(L - 6a)/4` (closed form here).
+/// k_v = 0.005: -4.11 m, no equilibrium with the listed order (`fails`; the run puts two robots
+/// on one point); k_v = 0.007018: 0.20 m, under the 0.5 m close approach (`fails`); k_v = 0.02:
+/// 7.14 m, the equilibrium solved and `holds` (all three said `holds` without an equilibrium).
+#[test]
+fn arc_reference_with_unequal_speeds_is_judged_by_its_equilibrium() {
+    let l = TAU * radius();
+    let gaps = |k_v: f64| {
+        let a = 0.05 / k_v;
+        let x = (l + 6.0 * a) / 4.0;
+        [x - a, x - 2.0 * a, x - 3.0 * a, x]
+    };
+    let set = |k_v: f64, extra: &[&str]| {
+        let mut sets = vec![
+            "team.spacing=\"arc_reference\"".to_string(),
+            format!("team.k_v={k_v}"),
+            SLOW_3.to_string(),
+            format!("team.spread.step_rad={FRAC_PI_2}"),
+        ];
+        sets.extend(extra.iter().map(|s| s.to_string()));
+        let refs: Vec<&str> = sets.iter().map(String::as_str).collect();
+        circular(&refs)
+    };
+    // No equilibrium: vehicle 2 would need a negative gap.
+    assert!(gaps(0.005)[2] < -4.0);
+    let s = set(0.005, &["sim.duration_s=1500"]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("no equilibrium exists") && t.verdict_reason.contains("arc gap"),
+        "{}",
+        t.verdict_reason
+    );
+    assert_eq!(t.spacing.shifted_equilibrium.unwrap().status, "none");
+    let m = team_metrics(&s);
+    assert!(m.min_separation_m.unwrap() < 0.5, "{m:?}");
+    // An equilibrium under the close approach.
+    let want = gaps(0.007018);
+    assert!(want[2] > 0.15 && want[2] < 0.25, "{want:?}");
+    let t = check(&set(0.007018, &[]), None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    assert!(
+        t.verdict_reason.contains("close-approach distance 0.5 m"),
+        "{}",
+        t.verdict_reason
+    );
+    let eq = t.spacing.shifted_equilibrium.unwrap();
+    for (a, b) in eq.ranges_m.iter().zip(want) {
+        assert!(close(*a, b, 1e-9), "{eq:?} vs {want:?}");
+    }
+    // The equilibrium well apart: holds, at the closed form's gaps.
+    let want = gaps(0.02);
+    let t = check(&set(0.02, &[]), None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let eq = t.spacing.shifted_equilibrium.unwrap();
+    assert!(close(eq.speed_mps, 0.45, 1e-12), "{eq:?}");
+    assert!(close(eq.largest_range_m, l, 1e-12), "{eq:?}");
+    for (a, b) in eq.ranges_m.iter().zip(want) {
+        assert!(close(*a, b, 1e-9), "{eq:?} vs {want:?}");
+    }
+}

@@ -16,8 +16,9 @@ use std::f64::consts::TAU;
 
 use crate::check::setup::Law;
 
-/// `range_balance`'s equilibrium with unequal nominal speeds on a known circle: every vehicle
-/// flies one speed `V`, so vehicle `i`'s range ahead exceeds its range behind by
+/// `range_balance`'s (or `arc_reference`'s, att50-2: its arc gaps for the ranges) equilibrium
+/// with unequal nominal speeds on a known circle: every vehicle flies one speed `V`, so vehicle
+/// `i`'s range ahead exceeds its range behind by
 /// `d_i = (V - v0_i)/k_v` (the vehicle whose envelope bound sets `V` takes up the rest; with
 /// vehicles of no speed room, `V` is their speed and each takes up the rest of its run to the
 /// next of them, att46-7), the ranges are chords `2 R' sin(theta/2)` of the circle flown
@@ -31,13 +32,14 @@ pub struct ShiftedEquilibrium {
     /// less the smallest), m.
     pub range_span_m: f64,
     /// The longest range a law can see: the circle's diameter `2 R'`, or
-    /// `team.ranging.max_range_m` when shorter, m.
+    /// `team.ranging.max_range_m` when shorter (`arc_reference`: the isoline's length), m.
     pub largest_range_m: f64,
     /// `exists` (the ranges below), `none` (the span reaches `largest_range_m`, or the arcs
     /// overfill the circle even with two vehicles touching) or `past_half_circle` (a gap would
     /// exceed half the circle, where the range shrinks as the gap grows: not the linear loop).
     pub status: &'static str,
-    /// Each vehicle's range ahead at the equilibrium (listed order), m (empty unless `exists`).
+    /// Each vehicle's range ahead at the equilibrium (listed order; `arc_reference`: its arc
+    /// gap ahead), m (empty unless `exists`).
     pub ranges_m: Vec<f64>,
     /// The gap CV of the equilibrium's arcs (absent unless `exists`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -57,6 +59,31 @@ pub(super) fn pinned(team: &TeamSpec) -> Vec<usize> {
         .filter(|&i| {
             let v = team.speeds(i);
             v.min_mps == v.max_mps
+        })
+        .collect()
+}
+
+/// att50-1: the vehicles of `team` saturated at an envelope bound at the equilibrium `eq`
+/// (listed order): vehicle `i`'s command there, `v0_i + k_v (r_i - r_{i-1})`, strictly outside
+/// `[v_min_i, v_max_i]` (the one whose bound sets `V`, taking up the rest). A small perturbation
+/// leaves it saturated at `V`, so the linearisation pins it as a vehicle of no speed room.
+/// Empty when `eq` does not exist or another law.
+pub(super) fn saturated(team: &TeamSpec, eq: &ShiftedEquilibrium) -> Vec<usize> {
+    let k_v = match team.law {
+        SpacingLaw::RangeBalance { gain_per_s } | SpacingLaw::ArcReference { gain_per_s } => {
+            gain_per_s
+        }
+        SpacingLaw::None => return vec![],
+    };
+    let n = eq.ranges_m.len();
+    if !eq.exists() || n != team.count() {
+        return vec![];
+    }
+    (0..n)
+        .filter(|&i| {
+            let e = team.speeds(i);
+            let cmd = e.nominal_mps + k_v * (eq.ranges_m[i] - eq.ranges_m[(i + n - 1) % n]);
+            e.min_mps < e.max_mps && (cmd > e.max_mps || cmd < e.min_mps)
         })
         .collect()
 }
@@ -157,16 +184,47 @@ pub(super) fn pinned_best_arcs(s: &Scenario, l: &Law, team: &TeamSpec) -> Option
     Some(gaps)
 }
 
-/// [`ShiftedEquilibrium`] of `team` flying `range_balance` (gain `k_v > 0`) with unequal
-/// nominal speeds on `circle`, flown at radius `flown_m`; `None` for another team, where the
-/// clamp to the envelopes is set by two vehicles at once (the equilibrium is then a family), or
-/// with two or more vehicles with no speed room whose arcs are not known (a start off the
-/// circle, no PI-like law to tell the direction of travel).
+/// How a law's measured gap maps to arc round the circle: `range_balance` ranges chords
+/// `2 R' sin(theta/2)` of the circle flown, `arc_reference` the arc gaps themselves on the
+/// isoline's circle (slope 1, att50-2). The one difference between the two laws' equilibria.
+#[derive(Clone, Copy, Debug)]
+enum GapMap {
+    /// Chords of a circle of this diameter, m.
+    Chord(f64),
+    /// Arcs of a circle of this radius, m.
+    Arc(f64),
+}
+
+impl GapMap {
+    /// The angle (rad) a measured gap `g` spans, `g` clamped to `[0, upper]`.
+    fn angle(self, g: f64) -> f64 {
+        match self {
+            GapMap::Chord(d) => 2.0 * (g / d).clamp(0.0, 1.0).asin(),
+            GapMap::Arc(r) => g.clamp(0.0, TAU * r) / r,
+        }
+    }
+
+    /// The largest gap the map holds: the diameter, or the whole circle's length, m.
+    fn upper(self) -> f64 {
+        match self {
+            GapMap::Chord(d) => d,
+            GapMap::Arc(r) => TAU * r,
+        }
+    }
+}
+
+/// [`ShiftedEquilibrium`] of `team` flying `range_balance` or `arc_reference` (gain `k_v > 0`)
+/// with unequal nominal speeds on `circle`, flown at radius `flown_m`; `None` for another team,
+/// where the clamp to the envelopes is set by two vehicles at once (the equilibrium is then a
+/// family), or with two or more vehicles with no speed room whose arcs are not known (a start
+/// off the circle, no PI-like law to tell the direction of travel).
 ///
 /// Vehicles with no speed room (`v_min_i = v_max_i`, att46-7) fly their one speed, which is
 /// then the common speed `V`; each takes up the rest of its own run of the ring, so from each
-/// to the next of them the ranges of the vehicles between follow the differences and their
-/// arcs sum to the arc the two keep (a whole turn with one of them).
+/// to the next of them the gaps of the vehicles between follow the differences and their
+/// arcs sum to the arc the two keep (a whole turn with one of them). `arc_reference` (att50-2)
+/// is the same with its arc gaps on the isoline for the ranges ([`GapMap`]): linear, so the
+/// common offset is `(L - sum p_k)/N` (the bisection finds it).
 pub(super) fn shifted_equilibrium(
     s: &Scenario,
     l: &Law,
@@ -174,15 +232,17 @@ pub(super) fn shifted_equilibrium(
     circle: CircleArc,
     flown_m: f64,
 ) -> Option<ShiftedEquilibrium> {
-    let SpacingLaw::RangeBalance { gain_per_s: k_v } = team.law else {
-        return None;
+    let (k_v, map) = match team.law {
+        SpacingLaw::RangeBalance { gain_per_s } => (gain_per_s, GapMap::Chord(2.0 * flown_m)),
+        SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, GapMap::Arc(circle.radius_m)),
+        SpacingLaw::None => return None,
     };
     let n = team.count();
     let ids = pinned(team);
     if k_v <= 0.0 || n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() == n {
         return None;
     }
-    if !(flown_m.is_finite() && flown_m > 0.0) || disjoint_envelopes(team).is_some() {
+    if !(map.upper().is_finite() && map.upper() > 0.0) || disjoint_envelopes(team).is_some() {
         return None;
     }
     let speed = match (ids.first(), common_speed(team, team.ideal_speed_mps())) {
@@ -192,17 +252,20 @@ pub(super) fn shifted_equilibrium(
     };
     let runs = equilibrium_runs(s, l, team, circle, speed, &ids)?;
     let d = |i: usize| (speed - team.speeds(i).nominal_mps) / k_v;
-    let diameter = 2.0 * flown_m;
+    let largest = match map {
+        GapMap::Chord(diameter) => diameter.min(team.ranging.max_range_m),
+        GapMap::Arc(_) => map.upper(),
+    };
     let mut eq = ShiftedEquilibrium {
         speed_mps: speed,
         range_span_m: 0.0,
-        largest_range_m: diameter.min(team.ranging.max_range_m),
+        largest_range_m: largest,
         status: "exists",
         ranges_m: vec![0.0; n],
         gap_cv: None,
     };
     for (a, count, arc) in runs {
-        // Partial sums along the run from its first vehicle: the range ahead of a + k is
+        // Partial sums along the run from its first vehicle: the gap ahead of a + k is
         // x + p[k].
         let mut p = vec![0.0; count];
         for k in 1..count {
@@ -211,8 +274,7 @@ pub(super) fn shifted_equilibrium(
         let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
         let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         eq.range_span_m = eq.range_span_m.max(hi_p - lo_p);
-        let status = solve_run(&p, diameter, eq.largest_range_m, arc);
-        match status {
+        match solve_run(&p, map, eq.largest_range_m, arc) {
             Ok(x) => (0..count).for_each(|k| eq.ranges_m[(a + k) % n] = x + p[k]),
             Err(why) => eq.status = worse(eq.status, why),
         }
@@ -221,11 +283,7 @@ pub(super) fn shifted_equilibrium(
         eq.ranges_m.clear();
         return Some(eq);
     }
-    let arcs: Vec<f64> = eq
-        .ranges_m
-        .iter()
-        .map(|r| 2.0 * (r / diameter).clamp(-1.0, 1.0).asin())
-        .collect();
+    let arcs: Vec<f64> = eq.ranges_m.iter().map(|r| map.angle(*r)).collect();
     let mean = TAU / n as f64;
     let var = arcs.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
     eq.gap_cv = Some(var.sqrt() / mean);
@@ -337,22 +395,18 @@ pub(super) fn extracted_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdict,
     })
 }
 
-/// The common offset `x` of a run's ranges `x + p[k]` (chords of a circle of `diameter`)
-/// whose arcs sum to `arc`, by bisection; `Err("none")` when the ranges cannot fit (their span
-/// reaches `largest`, or even at their shortest their arcs overfill `arc`), `Err
-/// ("past_half_circle")` when filling it takes a gap past half the circle.
-fn solve_run(p: &[f64], diameter: f64, largest: f64, arc: f64) -> Result<f64, &'static str> {
+/// The common offset `x` of a run's gaps `x + p[k]` (measured as `map` says) whose arcs sum to
+/// `arc`, by bisection; `Err("none")` when the gaps cannot fit (their span reaches `largest`,
+/// or even at their shortest their arcs overfill `arc`), `Err("past_half_circle")` when filling
+/// it takes a chord past half the circle (never for arc gaps).
+fn solve_run(p: &[f64], map: GapMap, largest: f64, arc: f64) -> Result<f64, &'static str> {
     let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
     let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if hi_p - lo_p >= largest {
         return Err("none");
     }
-    let arcs = |x: f64| {
-        p.iter()
-            .map(|pk| 2.0 * ((x + pk) / diameter).clamp(0.0, 1.0).asin())
-            .sum::<f64>()
-    };
-    let (mut lo, mut hi) = (-lo_p, diameter - hi_p);
+    let arcs = |x: f64| p.iter().map(|pk| map.angle(x + pk)).sum::<f64>();
+    let (mut lo, mut hi) = (-lo_p, map.upper() - hi_p);
     if arcs(lo) >= arc {
         return Err("none");
     }
@@ -390,16 +444,20 @@ pub(super) fn shifted_claim(
     team: &TeamSpec,
     eq: &ShiftedEquilibrium,
 ) -> Option<(crate::check::Verdict, String)> {
-    let SpacingLaw::RangeBalance { gain_per_s: k_v } = team.law else {
-        return None;
+    let (k_v, word) = match team.law {
+        SpacingLaw::RangeBalance { gain_per_s } => (gain_per_s, "range"),
+        SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, "arc gap"),
+        SpacingLaw::None => return None,
     };
     let m = team.ranging.max_range_m;
     let intro = format!(
-        "unequal nominal speeds (team.vehicles): the gaps stand still only where every vehicle flies one speed V = {} m/s, so vehicle i's range ahead must exceed its range behind by (V - v0_i)/k_v (team.k_v = {})",
+        "unequal nominal speeds (team.vehicles): the gaps stand still only where every vehicle flies one speed V = {} m/s, so vehicle i's {word} ahead must exceed its {word} behind by (V - v0_i)/k_v (team.k_v = {})",
         Num(eq.speed_mps),
         Echo(k_v)
     );
-    let limit = if m < eq.largest_range_m * (1.0 + 1e-12) {
+    let limit = if word == "arc gap" {
+        format!("the isoline's length {} m", Num(eq.largest_range_m))
+    } else if m < eq.largest_range_m * (1.0 + 1e-12) {
         format!("team.ranging.max_range_m = {}", Echo(m))
     } else {
         format!("the circle's diameter {} m", Num(eq.largest_range_m))
@@ -416,16 +474,16 @@ pub(super) fn shifted_claim(
             Some((
                 crate::check::Verdict::Fails,
                 format!(
-                    "{intro}; round the ring these differences need ranges {} m apart, {}, so no equilibrium exists: the gaps never stand still, the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer",
+                    "{intro}; round the ring these differences need {word}s {} m apart, {}, so no equilibrium exists: the gaps never stand still, the slower vehicles fall behind for ever and are lapped (robots pass through each other); raise team.k_v or bring the speeds closer",
                     Num(eq.range_span_m),
                     if eq.range_span_m >= eq.largest_range_m {
                         format!(
-                            "and no range exceeds {limit} (vehicle {i} at v0 = {} m/s reaches at most {} m/s against V)",
+                            "and no {word} exceeds {limit} (vehicle {i} at v0 = {} m/s reaches at most {} m/s against V)",
                             Echo(v0),
                             Num(best)
                         )
                     } else {
-                        "and even with two vehicles touching their arcs overfill the circle".into()
+                        "and even with two vehicles touching their arcs overfill the circle (one vehicle would have to pass another)".into()
                     }
                 ),
             ))
@@ -436,7 +494,7 @@ pub(super) fn shifted_claim(
                 "{intro}; the ranges this needs put one gap past half the circle, where the range shrinks as the gap grows, so the linear loop does not describe the equilibrium; run it to see whether the team settles"
             ),
         )),
-        _ => exists_claim(team, eq, &intro),
+        _ => exists_claim(team, eq, &intro, word),
     }
 }
 
@@ -449,6 +507,7 @@ fn exists_claim(
     team: &TeamSpec,
     eq: &ShiftedEquilibrium,
     intro: &str,
+    word: &str,
 ) -> Option<(crate::check::Verdict, String)> {
     let m = team.ranging.max_range_m;
     let list = || {
@@ -459,7 +518,7 @@ fn exists_claim(
             .join(", ")
     };
     let widest = eq.ranges_m.iter().copied().fold(0.0, f64::max);
-    if widest > m {
+    if widest > m && word == "range" {
         return Some((
             crate::check::Verdict::NotApplicable,
             format!(
@@ -481,7 +540,7 @@ fn exists_claim(
         return Some((
             crate::check::Verdict::Fails,
             format!(
-                "{intro}; on this circle that is the ranges ({}) m, and vehicle {i}'s range to vehicle {} ahead, {} m, is under the run's close-approach distance {} m: the law drives them together and holds them there (a collision), and the gaps never even out; raise team.k_v or bring the speeds closer",
+                "{intro}; on this circle that is the {word}s ({}) m, and vehicle {i}'s {word} to vehicle {} ahead, {} m, is under the run's close-approach distance {} m: the law drives them together and holds them there (a collision), and the gaps never even out; raise team.k_v or bring the speeds closer",
                 list(),
                 (i + 1) % n,
                 Num(closest),
@@ -495,7 +554,7 @@ fn exists_claim(
     Some((
         crate::check::Verdict::Fails,
         format!(
-            "{intro}; vehicles {} have no speed room ({}), so V is their speed and the vehicles between settle at the ranges ({}) m: a gap CV of {} > {} at best (even spacing is not reached)",
+            "{intro}; vehicles {} have no speed room ({}), so V is their speed and the vehicles between settle at the {word}s ({}) m: a gap CV of {} > {} at best (even spacing is not reached)",
             ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", "),
             pinned_keys(team, &ids),
             list(),
@@ -526,40 +585,74 @@ pub(super) fn probe_cannot_fly(team: &TeamSpec) -> Option<String> {
     })
 }
 
-/// att46-6: the discovery probe of `team` whose range change is lost in the ranging noise. In
-/// its slot of `S = probe_s` the prober fits each neighbour's range rate by least squares to
-/// the `n = S rate_hz` ranges it takes; the probe moves a neighbour's range by about
-/// `dv S` (`dv = min(v_max, v0 + probe_speed_delta_mps) - v0`, the speed change the envelope
-/// leaves), and noise of deviation `sigma` (`team.ranging.noise_std_m`) gives the fitted change
-/// a deviation of `sigma sqrt(12/n)` (a least-squares slope's, times `S`). Under one deviation
-/// the fitted sign is wrong for a neighbour more than one time in six, and the ring needs every
-/// one of its `2 N` picks right, so the probes may not find it (and the law is off for the run
-/// without it): the `not_applicable` reason, `None` when the change is at least one deviation
-/// (or without noise; `team.v_max_mps <= v0` is [`probe_cannot_fly`]'s).
-pub(super) fn probe_below_noise(team: &TeamSpec) -> Option<String> {
+/// The probability the discovery's picks must all be right for `check` to say `holds`
+/// (att50-3): `Phi(m)^(2 N) >= 0.99` for the probe's change `m` fitted deviations above zero.
+pub const PROBE_PICKS_RIGHT: f64 = 0.99;
+
+/// The standard normal's upper tail `Phi(-m) = erfc(m/sqrt 2)/2` (Abramowitz & Stegun 7.1.26,
+/// absolute error under 1.5e-7: the tail near 1e-3 that [`PROBE_PICKS_RIGHT`] asks for to
+/// 1e-4 relative). Written here: the workspace has no normal distribution.
+fn normal_upper_tail(m: f64) -> f64 {
+    let x = m.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erfc = poly * (-x * x).exp();
+    if m >= 0.0 {
+        0.5 * erfc
+    } else {
+        1.0 - 0.5 * erfc
+    }
+}
+
+/// att46-6, att50-3: the discovery probe of `team` whose range change is lost in the ranging
+/// noise. In its slot of `S = probe_s` the prober fits each neighbour's range rate by least
+/// squares to the ranges it gets, `n = S rate_hz (1 - p)` of them (`p =
+/// team.ranging.dropout_probability`: a dropped range is no sample); the probe moves a
+/// neighbour's range by `dv S cos(theta/2)` (`dv = min(v_max, v0 + probe_speed_delta_mps) -
+/// v0`, the speed change the envelope leaves; `theta` the arc to the neighbour about the
+/// circle's centre, `slope` the least `cos(theta/2)` of the starts' neighbours, 1 when not
+/// known), and noise of deviation `sigma` (`team.ranging.noise_std_m`) gives the fitted change a
+/// deviation of `sigma sqrt(12/n)` (a least-squares slope's, times `S`). With the change `m`
+/// such deviations each pick is right with probability `Phi(m)`, and the ring needs all `2 N`
+/// right: under [`PROBE_PICKS_RIGHT`] the probes may not find it (and the law is off for the
+/// run without it): the `not_applicable` reason, `None` otherwise (or without noise;
+/// `team.v_max_mps <= v0` is [`probe_cannot_fly`]'s).
+pub(super) fn probe_below_noise(team: &TeamSpec, slope: f64) -> Option<String> {
     let RingMode::Discover(d) = team.ring else {
         return None;
     };
     let v0 = team.nominal_speed_mps;
     let sigma = team.ranging.noise_std_m;
     let dv = (v0 + d.probe_speed_delta_mps).min(team.v_max_mps) - v0;
-    let samples = (d.probe_s * team.ranging.rate_hz).floor();
-    if !(sigma > 0.0 && dv > 0.0 && samples >= 1.0) {
+    let kept = 1.0 - team.ranging.dropout_probability;
+    let samples = (d.probe_s * team.ranging.rate_hz).floor() * kept;
+    if !(sigma > 0.0 && dv > 0.0 && samples > 0.0) {
         return None;
     }
-    let change = dv * d.probe_s;
+    let change = dv * d.probe_s * slope.clamp(0.0, 1.0);
     let noise = sigma * (12.0 / samples).sqrt();
-    (change < noise).then(|| {
+    let picks = 2 * team.count();
+    let all_right = (1.0 - normal_upper_tail(change / noise)).powi(picks as i32);
+    (all_right < PROBE_PICKS_RIGHT).then(|| {
         format!(
-            "team.ring = \"discovered\": the probe changes a speed by {} m/s (team.v_max_mps = {} m/s against v0 = {} m/s), moving a neighbour's range by about {} m over its {} s slot, under the {} m deviation team.ranging.noise_std_m = {} leaves in the fitted change ({} ranges: sigma sqrt(12/n)): the range rates that tell the vehicles ahead from those behind may take the wrong sign, so the probes may not find the ring, and without it the spacing law is off for the whole run; raise team.v_max_mps, lower the noise or list the ring",
+            "team.ring = \"discovered\": the probe changes a speed by {} m/s (team.v_max_mps = {} m/s against v0 = {} m/s), moving a neighbour's range by about {} m over its {} s slot (dv S cos(theta/2), theta the widest arc to a neighbour under half the circle), {} deviations of the {} m that team.ranging.noise_std_m = {} leaves in the fitted change ({} ranges kept of the slot's {} at team.ranging.dropout_probability = {}: sigma sqrt(12/n)): each of the ring's {picks} picks is right with probability Phi({}), all of them with {} < {}, so the probes may not find the ring, and without it the spacing law is off for the whole run; raise team.v_max_mps, lower the noise or the dropouts, or list the ring",
             Num(dv),
             Echo(team.v_max_mps),
             Echo(v0),
             Num(change),
             Num(d.probe_s),
+            Num(change / noise),
             Num(noise),
             Echo(sigma),
-            samples
+            Num(samples),
+            (d.probe_s * team.ranging.rate_hz).floor(),
+            Echo(team.ranging.dropout_probability),
+            Num(change / noise),
+            Num(all_right),
+            Num(PROBE_PICKS_RIGHT)
         )
     })
 }
