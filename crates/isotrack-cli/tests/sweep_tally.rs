@@ -329,9 +329,15 @@ fn convergence_and_sign_change_cells_are_bounded_by_the_metric_windows() {
     let row = text.lines().nth(1).unwrap();
     assert!(row.contains(",completed,") && !row.contains('"'), "{row}");
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    // A convergence time past the steady window's start (16 s) is consistent only with a window
+    // that is not wholly within the tolerance (0.05): the edits of convergence_time_s also set
+    // the window's maximum to 0.06, so each is judged by the dwell bound alone.
     let with = |name: &str, v: &str| {
         let mut cells: Vec<&str> = row.split(',').collect();
         cells[col(name)] = v;
+        if name == "convergence_time_s" {
+            cells[col("steady_state_max_abs_error")] = "0.06";
+        }
         text.replacen(row, &cells.join(","), 1)
     };
     let latest = format!("{:?}", 1800.0 * 0.01);
