@@ -1376,15 +1376,28 @@ pub fn check_team_record(
     }
 }
 
-/// A gap CV (`gap_cv` or `gap_cv_final`) of a team of `n` vehicles at most [`max_gap_cv`]
-/// (to rounding: the bound is reached exactly with every vehicle at one point).
+/// A gap CV (`gap_cv` or `gap_cv_final`) of a team of `n` vehicles at least 0 (a standard
+/// deviation over a positive mean gap, L/N) and at most [`max_gap_cv`] (to rounding: the bound
+/// is reached exactly with every vehicle at one point).
 fn check_gap_cv(key: &str, cv: f64, n: usize) -> Result<(), String> {
+    check_cv_not_negative(key, cv)?;
     let most = max_gap_cv(n);
     if cv > most * (1.0 + 1e-9) + 1e-12 {
         return Err(format!(
             "{key} = {} exceeds sqrt(N - 1) = {} for N = {n} vehicles, the largest coefficient of variation of their gaps (all of the isoline in one gap)",
             Echo(cv),
             Num(most)
+        ));
+    }
+    Ok(())
+}
+
+/// A gap CV is at least 0: a standard deviation over the gaps' positive mean, L/N (att49-4).
+fn check_cv_not_negative(key: &str, cv: f64) -> Result<(), String> {
+    if cv < 0.0 {
+        return Err(format!(
+            "{key} = {} is negative: a coefficient of variation of the gaps is a standard deviation over their positive mean",
+            Echo(cv)
         ));
     }
     Ok(())
@@ -1407,6 +1420,9 @@ fn check_team_record_numbers(
     m: &crate::summary::TeamRecord,
     b: Option<&TeamBounds>,
 ) -> Result<(), String> {
+    if let Some(cv) = m.gap_cv_final {
+        check_cv_not_negative("gap_cv_final", cv)?;
+    }
     let even = isotrack_sim::team::metrics::TeamMetricsConfig::default().even_gap_cv;
     if let Some(t) = m.time_to_even_s {
         if !m.gap_cv_final.is_some_and(|cv| cv <= even) {
@@ -1685,6 +1701,15 @@ mod team_record_tests {
         at_bounds.time_to_even_s = None;
         at_bounds.gap_cv_final = Some(3f64.sqrt());
         assert_eq!(check_team_record_numbers(&at_bounds, Some(&BOUNDS)), Ok(()));
+        // att49-4 addendum: a CV is never negative (std >= 0 over a mean L/N > 0).
+        let mut negative = record();
+        negative.time_to_even_s = None;
+        negative.gap_cv_final = Some(-0.5);
+        let refused = check_team_record_numbers(&negative, Some(&BOUNDS)).unwrap_err();
+        assert!(
+            refused.contains("gap_cv_final = -0.5 is negative"),
+            "{refused}"
+        );
         type Edit = fn(&mut TeamRecord);
         let cases: [(Edit, &str); 6] = [
             (
