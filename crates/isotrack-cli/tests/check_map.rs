@@ -932,6 +932,24 @@ fn sigterm_and_sighup_during_verify_exit_128_plus_the_signal() {
     }
 }
 
+/// The arguments of a small chart (8 x 8, two verify runs, one thread) of `sc` into `out`: the
+/// earlier chart the interrupt tests replace.
+fn small_chart<'a>(sc: &'a str, out: &'a str) -> [&'a str; 11] {
+    [
+        "check",
+        sc,
+        "--map",
+        "--map-size",
+        "8x8",
+        "--verify",
+        "2",
+        "--threads",
+        "1",
+        "--out",
+        out,
+    ]
+}
+
 /// att46-12: `check --map --verify N --out M` into M's own earlier chart, interrupted (exit
 /// 130) before its chart is written, removed the earlier `verify.csv` up front while the
 /// earlier `stability_map.csv` and figures stayed: a chart without its verification. The
@@ -951,19 +969,7 @@ fn ctrl_c_before_the_new_chart_keeps_the_earlier_verify_csv() {
     for attempt in 0..4 {
         let m = d.path().join(format!("M{attempt}"));
         let ms = m.display().to_string();
-        let first = [
-            "check",
-            sc.as_str(),
-            "--map",
-            "--map-size",
-            "8x8",
-            "--verify",
-            "2",
-            "--threads",
-            "1",
-            "--out",
-            ms.as_str(),
-        ];
+        let first = small_chart(&sc, &ms);
         let o = isotrack_within(&first, 120);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let (csv, verify) = (m.join("stability_map.csv"), m.join("verify.csv"));
@@ -1087,19 +1093,7 @@ fn ctrl_c_while_drawing_leaves_one_chart_whole() {
     for attempt in 0..4 {
         let m = d.path().join(format!("M{attempt}"));
         let ms = m.display().to_string();
-        let first = [
-            "check",
-            sc.as_str(),
-            "--map",
-            "--map-size",
-            "8x8",
-            "--verify",
-            "2",
-            "--threads",
-            "1",
-            "--out",
-            ms.as_str(),
-        ];
+        let first = small_chart(&sc, &ms);
         let o = isotrack_within(&first, 120);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let names = [
