@@ -1047,33 +1047,19 @@ fn big_chart_interrupted_when(
     out: &Path,
     ready: impl Fn(&Path) -> bool,
 ) -> std::process::Output {
-    use std::process::{Command, Stdio};
-    use std::time::{Duration, Instant};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args([
-            "check",
-            sc,
-            "--map",
-            "--map-size",
-            "200x200",
-            "--threads",
-            "1",
-            "--out",
-        ])
-        .arg(out)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    while !ready(out) && child.try_wait().unwrap().is_none() {
-        assert!(t0.elapsed() < Duration::from_secs(120), "never ready");
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    let _ = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status();
-    child.wait_with_output().unwrap()
+    let o = out.display().to_string();
+    let args = [
+        "check",
+        sc,
+        "--map",
+        "--map-size",
+        "200x200",
+        "--threads",
+        "1",
+        "--out",
+        &o,
+    ];
+    common::interrupted_when(&args, || ready(out))
 }
 
 /// att48-1: `check --map --out M` into M's earlier chart, interrupted while drawing its

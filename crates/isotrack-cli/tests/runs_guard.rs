@@ -1734,28 +1734,6 @@ fn compare_replaces_its_table_by_rename() {
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
 }
 
-/// Starts isotrack with `args` (stderr piped) and sends it SIGINT once `ready()` holds (or it
-/// ended first: its status says so).
-fn interrupted_when(args: &[&str], ready: impl Fn() -> bool) -> std::process::Output {
-    use std::process::{Command, Stdio};
-    use std::time::{Duration, Instant};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    while !ready() && child.try_wait().unwrap().is_none() {
-        assert!(t0.elapsed() < Duration::from_secs(120), "never ready");
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    let _ = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status();
-    child.wait_with_output().unwrap()
-}
-
 /// att48-2: `run --out P --plot` interrupted while drawing left the new run beside the earlier
 /// run's figures and said nothing (a plain `run --out` names them). It now says the same note
 /// on exit 130: the figures not yet redrawn are from before this run. The signal comes as the
@@ -1781,7 +1759,7 @@ fn ctrl_c_while_run_plots_names_the_figures_from_before() {
             "--set",
             "sim.duration_s=6000",
         ];
-        let o = interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
+        let o = common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
         let err = common::stderr(&o);
         if o.status.code() == Some(0) {
             continue;
@@ -1822,7 +1800,7 @@ fn ctrl_c_leaves_no_directory_the_command_created() {
         "--set",
         "sim.duration_s=30000",
     ];
-    let o = interrupted_when(&args, || !entries(&c, ".trace.csv.").is_empty());
+    let o = common::interrupted_when(&args, || !entries(&c, ".trace.csv.").is_empty());
     assert_eq!(o.status.code(), Some(130), "{}", common::stderr(&o));
     assert!(!top.exists(), "{} left", top.display());
     assert!(d.path().is_dir());
@@ -1844,7 +1822,7 @@ fn ctrl_c_leaves_no_directory_the_command_created() {
         let x = d.path().join(format!("x{attempt}"));
         let y = x.join("y");
         let ys = y.display().to_string();
-        let o = interrupted_when(&["plot", &rs, "--out", &ys], || {
+        let o = common::interrupted_when(&["plot", &rs, "--out", &ys], || {
             !entries(&y, ".trajectory.png.").is_empty()
         });
         if o.status.code() == Some(0) {

@@ -183,3 +183,26 @@ impl<'a> Cells<'a> {
         self.header.iter().position(|h| *h == name).unwrap()
     }
 }
+
+/// Starts isotrack with `args` (stderr piped) and sends it SIGINT once `ready()` holds (or it
+/// ended first: its status says so).
+#[cfg(unix)]
+pub fn interrupted_when(args: &[&str], ready: impl Fn() -> bool) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_isotrack"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !ready() && child.try_wait().unwrap().is_none() {
+        assert!(t0.elapsed() < Duration::from_secs(120), "never ready");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    child.wait_with_output().unwrap()
+}
