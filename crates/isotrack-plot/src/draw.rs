@@ -225,10 +225,17 @@ impl Raster {
 
 pub use crate::limits::MAX_AXIS_ABS;
 
+/// The relative spread under which [`padded_axis`] calls data flat: a few thousand `f64` ulps,
+/// far below any spread a figure could show in ticks of at most eight significant digits.
+const FLAT_REL: f64 = 1e-12;
+
 /// An axis range for data spanning `[lo, hi]` (finite values only; `None` when there are
 /// none): at least `min_width` wide (and 1e-9 of its magnitude, so the ticks stay distinct in
 /// `f64`), padded by `pad_frac` of its width on each side; an error naming `what` beyond
-/// [`MAX_AXIS_ABS`].
+/// [`MAX_AXIS_ABS`]. Data flat at a non-zero value (equal to within [`FLAT_REL`] of their
+/// magnitude: every value at the clip bound, a constant speed) get a tenth of their magnitude,
+/// as matplotlib's `nonsingular` widens a flat range by 5 % each side: ticks 1e-9 of the
+/// magnitude apart would need ten-digit labels that run off the figure (att49-8).
 fn padded_axis(
     what: &str,
     lo: f64,
@@ -246,7 +253,10 @@ fn padded_axis(
             if lo.abs() > hi.abs() { lo } else { hi }
         )));
     }
-    let width = (hi - lo).max(min_width).max(1e-9 * mag);
+    let flat = hi - lo <= FLAT_REL * mag;
+    let width = (hi - lo)
+        .max(min_width)
+        .max(if flat { 0.1 } else { 1e-9 } * mag);
     let mid = 0.5 * (lo + hi);
     let half = 0.5 * width * (1.0 + 2.0 * pad_frac);
     Ok(Some((mid - half, mid + half)))

@@ -545,3 +545,58 @@ fn a_clipped_turn_rate_stays_inside_its_png_panel() {
         );
     }
 }
+
+/// att49-8: a run whose error is past the clip bound for the whole run draws a flat line at
+/// 1e100; its axis spanned 1e-8 of the bound, labelled "1.00000004e100" .. "9.9999995e99",
+/// which ran off the figure over the axis label. A flat panel now spans a tenth of its value
+/// (matplotlib's `nonsingular`, 5 % each side): ticks 2e98 apart (tick_step of 1.16e99 over
+/// ten ticks), each label at most "1.04e100", one of them the bound itself.
+#[test]
+fn a_panel_flat_at_the_clip_bound_gets_readable_ticks() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = make_run(
+        &dir.path().join("big"),
+        &[
+            "field.i0=1e100",
+            "controller.level=-9e99",
+            "sim.duration_s=20",
+        ],
+    );
+    assert!(
+        run.trace.iter().all(|t| t.error.abs() > 1e100),
+        "the error is not past the bound the whole run"
+    );
+    let error_only = Panels {
+        error: true,
+        measurement: false,
+        measurement_rate: false,
+        omega: false,
+    };
+    let svg = dir.path().join("ts.svg");
+    timeseries_figure(
+        std::slice::from_ref(&run),
+        &svg,
+        &Style::new(Format::Svg),
+        "",
+        error_only,
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let labels: Vec<&str> = text
+        .split("<text")
+        .skip(1)
+        .filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once("</text>")))
+        .map(|(l, _)| l.trim())
+        .filter(|l| l.contains("e99") || l.contains("e100"))
+        .collect();
+    assert!(
+        labels.contains(&"1e100"),
+        "no tick at the bound: {labels:?}"
+    );
+    for l in &labels {
+        assert!(
+            l.len() <= 8 || l.starts_with("error"),
+            "a tick label too long to read: {l:?} in {labels:?}"
+        );
+    }
+}
