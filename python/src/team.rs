@@ -5,11 +5,12 @@
 //! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
 //! between each step's samples and its move so that agents outside the loop can answer.
 
-use crate::columns::column;
+use crate::columns::{save_run, TraceColumns};
 use crate::errors::ScenarioErrorPy;
 use crate::scenario::PyScenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
+use isotrack_runs::trace::TeamTraceSink;
 use isotrack_scenario::field::FieldModel;
 use isotrack_scenario::spec::TeamSpec;
 use isotrack_scenario::{Scenario, TeamIsolineModel, Tracker};
@@ -22,7 +23,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::cell::RefCell;
-use std::path::Path;
 
 /// A team's trace rows, each with its vehicle's index, in the order the team records them.
 type Rows = Vec<(u32, TraceRow)>;
@@ -255,43 +255,17 @@ pub fn write_team_run(
     note: &str,
     done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
-    use isotrack_core::vehicle::Telemetry;
-    use isotrack_runs::trace::{TeamTraceSink, TELEMETRY_COLUMNS};
-    let dir_name = dir;
-    let dir = Path::new(dir);
-    let flying = scenario.inner.is_flying();
-    let t = column(trace, "t_s", None)?;
-    let n = Some(t.len());
-    let cols: Vec<Vec<f64>> = [
-        "x_m",
-        "y_m",
-        "heading_rad",
-        "s",
-        "error",
-        "omega_radps",
-        "s_measured",
-    ]
-    .iter()
-    .map(|c| column(trace, c, n))
-    .collect::<PyResult<_>>()?;
-    let telemetry: Option<Vec<Vec<f64>>> = flying
-        .then(|| {
-            TELEMETRY_COLUMNS
-                .iter()
-                .map(|c| column(trace, c, n))
-                .collect::<PyResult<_>>()
-        })
-        .transpose()?;
+    let cols = TraceColumns::read(trace, scenario.inner.is_flying())?;
     let vehicles: PyReadonlyArray1<'_, i64> = trace
         .get_item(isotrack_runs::trace::VEHICLE_COLUMN)?
         .ok_or_else(|| PyValueError::new_err("the trace has no column `vehicle`"))?
         .extract()?;
     let vehicles = crate::columns::copy_interruptible(py, &vehicles)?;
-    if vehicles.len() != t.len() {
+    if vehicles.len() != cols.rows() {
         return Err(PyValueError::new_err(format!(
             "the trace's column `vehicle` has {} rows, `t_s` has {}",
             vehicles.len(),
-            t.len()
+            cols.rows()
         )));
     }
     let count = vehicles.iter().copied().max().unwrap_or(-1) + 1;
@@ -300,61 +274,20 @@ pub fn write_team_run(
             "the trace's column `vehicle` holds an index that is no vehicle's",
         ));
     }
-    let new_dir = std::fs::symlink_metadata(dir).is_err();
-    // The one run-directory writer, created and locked as `run --out` does (att30c-6; the lock
-    // held until this returns): the trace streamed into a temporary file beside `trace.csv`,
-    // renamed into place with the summary written last, so an interrupted save leaves an
-    // earlier run's files as they were.
-    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::columns::SAVE_LOCK))
-        .map_err(crate::columns::save_failure)?;
-    let mut file = out.team_trace(flying).map_err(crate::errors::failure)?;
-    let w = RefCell::new(file.writer());
-    let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
-    for i in 0..=t.len() {
-        // Ctrl-C is answered while the trace is written: the temporary trace is removed, and
-        // the directory if this call made it (issue 30, att30b item 4); checked once more after
-        // the last row, just before the commit (ver30b-9).
-        if i % crate::columns::SIGNAL_ROWS == 0 || i == t.len() {
-            if let Err(e) = py.check_signals() {
-                drop(team_sinks);
-                drop(out.abandon(file, "interrupted"));
-                drop(out);
-                if new_dir {
-                    let _ = std::fs::remove_dir(dir);
-                }
-                return Err(e);
-            }
-        }
-        let Some(&t_s) = t.get(i) else { break };
-        let m = cols[6][i];
-        team_sinks[vehicles[i] as usize].record(&TraceRow {
-            t_s,
-            x_m: cols[0][i],
-            y_m: cols[1][i],
-            heading_rad: cols[2][i],
-            s: cols[3][i],
-            error: cols[4][i],
-            omega_radps: cols[5][i],
-            // NaN in the numpy column is "no sample yet", an empty cell in the file.
-            s_measured: (!m.is_nan()).then_some(m),
-            telemetry: telemetry.as_ref().map(|tm| Telemetry {
-                altitude_m: tm[0][i],
-                airspeed_mps: tm[1][i],
-                roll_rad: tm[2][i],
-            }),
-        });
-    }
-    drop(team_sinks);
-    out.finish_json(
-        file,
-        &format!(
-            "{note}{}",
-            isotrack_runs::summary::scenario_toml(&scenario.inner)
-        ),
+    save_run(
+        py,
+        dir,
         summary_json,
+        &scenario.inner,
+        note,
+        done,
+        true,
+        |w| {
+            let w = RefCell::new(w);
+            let mut sinks = TeamTraceSink::for_team(&w, count as usize);
+            cols.stream(py, |i, row| sinks[vehicles[i] as usize].record(row))
+        },
     )
-    .map_err(crate::errors::failure)?;
-    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.

@@ -2,16 +2,12 @@
 //! entry runs it in this module, so one build gives both), run directories written as
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
-use crate::columns::{column, SAVE_LOCK, SIGNAL_ROWS};
+use crate::columns::{save_run, TraceColumns};
 use crate::errors::failure;
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
-use isotrack_core::vehicle::Telemetry;
-use isotrack_runs::rundir::RunDir;
-use isotrack_runs::summary::scenario_toml;
-use isotrack_runs::trace::TELEMETRY_COLUMNS;
 use isotrack_runs::Failure;
-use isotrack_sim::{TraceRow, TraceSink};
+use isotrack_sim::TraceSink;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -33,9 +29,9 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
 /// Writes a run directory as `isotrack run --out` does: `trace.csv` from the run's columns
 /// (numbers in the same shortest round-trip form, so they read back bit for bit),
 /// `summary.json` (its text) and the resolved `scenario.toml` (after `note`, comment lines,
-/// when given). Holding the directory's lock as `run --out` does ([`SAVE_LOCK`]): another
-/// writer there is refused with an `OSError` naming it, and a `run --out` while this writes
-/// exits 73.
+/// when given). Holding the directory's lock as `run --out` does ([`crate::columns::SAVE_LOCK`],
+/// [`save_run`]): another writer there is refused with an `OSError` naming it, and a
+/// `run --out` while this writes exits 73.
 #[pyfunction]
 #[pyo3(signature = (dir, summary_json, scenario, trace, note="", done=None))]
 pub fn write_run(
@@ -47,70 +43,17 @@ pub fn write_run(
     note: &str,
     done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
-    let dir_name = dir;
-    let dir = Path::new(dir);
-    let flying = scenario.inner.is_flying();
-    let t = column(trace, "t_s", None)?;
-    let n = Some(t.len());
-    let cols: Vec<Vec<f64>> = ["x_m", "y_m", "heading_rad", "s", "error", "omega_radps"]
-        .iter()
-        .chain(["s_measured"].iter())
-        .map(|c| column(trace, c, n))
-        .collect::<PyResult<_>>()?;
-    let telemetry: Option<Vec<Vec<f64>>> = flying
-        .then(|| {
-            TELEMETRY_COLUMNS
-                .iter()
-                .map(|c| column(trace, c, n))
-                .collect::<PyResult<_>>()
-        })
-        .transpose()?;
-    // The one run-directory writer, locked as `run --out` locks it (att30c-6).
-    let new_dir = std::fs::symlink_metadata(dir).is_err();
-    let out = RunDir::open(dir, &[], &[], Some(SAVE_LOCK)).map_err(crate::columns::save_failure)?;
-    let mut file = out.trace(flying).map_err(failure)?;
-    for i in 0..=t.len() {
-        // Ctrl-C is answered while the trace is written (2 M rows take seconds): the
-        // temporary trace is removed, and the directory if this call made it (issue 30,
-        // att30b item 4); checked once more after the last row, just before the commit
-        // (ver30b-9), so that an interrupt before it always leaves the earlier run.
-        if i % SIGNAL_ROWS == 0 || i == t.len() {
-            if let Err(e) = py.check_signals() {
-                drop(out.abandon(file, "interrupted"));
-                drop(out);
-                if new_dir {
-                    let _ = std::fs::remove_dir(dir);
-                }
-                return Err(e);
-            }
-        }
-        let Some(&t_s) = t.get(i) else { break };
-        let w = file.writer();
-        let m = cols[6][i];
-        w.record(&TraceRow {
-            t_s,
-            x_m: cols[0][i],
-            y_m: cols[1][i],
-            heading_rad: cols[2][i],
-            s: cols[3][i],
-            error: cols[4][i],
-            omega_radps: cols[5][i],
-            // NaN in the numpy column is "no sample yet", an empty cell in the file.
-            s_measured: (!m.is_nan()).then_some(m),
-            telemetry: telemetry.as_ref().map(|tm| Telemetry {
-                altitude_m: tm[0][i],
-                airspeed_mps: tm[1][i],
-                roll_rad: tm[2][i],
-            }),
-        });
-    }
-    out.finish_json(
-        file,
-        &format!("{note}{}", scenario_toml(&scenario.inner)),
+    let cols = TraceColumns::read(trace, scenario.inner.is_flying())?;
+    save_run(
+        py,
+        dir,
         summary_json,
+        &scenario.inner,
+        note,
+        done,
+        false,
+        |w| cols.stream(py, |_, row| w.record(row)),
     )
-    .map_err(failure)?;
-    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
