@@ -192,9 +192,7 @@ pub(crate) fn run_team_python(
         )));
     }
     for o in &objs {
-        if o.bind(py).hasattr("reset")? {
-            o.call_method0(py, "reset")?;
-        }
+        crate::controller::reset_if_any(py, o)?;
     }
     let stop = std::sync::Mutex::new(TeamStop {
         watch: crate::guard::SignalWatch::new(),

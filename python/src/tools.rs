@@ -6,7 +6,10 @@ use crate::columns::{save_run, TraceColumns};
 use crate::errors::failure;
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
+use isotrack_runs::sweep::prepared::PreparedSweep;
+use isotrack_runs::sweep::rows::{row_fields, run_scenario, team_row_fields};
 use isotrack_runs::Failure;
+use isotrack_scenario::Scenario;
 use isotrack_sim::TraceSink;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -345,15 +348,18 @@ pub fn sweep_cells_with(
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<crate::sweep::SweepCells> {
-    use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = crate::sweep::prepare(text, name)?;
-    // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
-    let folder = crate::scenario::absolute_dir(&sweep.plan.dir);
+    let mut factory = SweepFactory {
+        factory: &factory,
+        label: &sweep.label,
+        // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
+        folder: crate::scenario::absolute_dir(&sweep.plan.dir),
+        returned: crate::controller::Returned::default(),
+    };
     let team = sweep.base.spec().team.is_some();
     let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
-    let mut returned = crate::controller::Returned::default();
     let total = sweep.plan.total();
     let report = |done: u64| -> PyResult<()> {
         match &progress {
@@ -363,96 +369,113 @@ pub fn sweep_cells_with(
     };
     report(0)?;
     for id in 0..total {
-        if team {
-            // Each vehicle flies its own controller: the factory is called once per vehicle.
-            let fields = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
-                Err(e) => isotrack_runs::sweep::rows::team_row_fields(
-                    &sweep.plan,
-                    id,
-                    Err(e),
-                    String::new(),
-                ),
-                Ok(scenario) => {
-                    let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
-                    let mut objs = Vec::with_capacity(n);
-                    for _ in 0..n {
-                        let native = Py::new(
-                            py,
-                            PyScenario {
-                                inner: scenario.clone(),
-                                origin: format!("sweep {} run {id}", sweep.label),
-                                folder: Some(folder.clone()),
-                            },
-                        )?;
-                        let obj = factory.call1(py, (native,))?;
-                        // One object for two vehicles would interleave their samples through one
-                        // state (an integral, a last time): refused, never flown shared.
-                        if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
-                            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                                "controller_factory returned the same object for vehicles {j} and {} \
-                                 of run {id}: each vehicle flies its own instance (its state is its \
-                                 own, never shared); return a new controller at every call",
-                                objs.len()
-                            )));
-                        }
-                        let now = format!("vehicle {} of run {id}", objs.len());
-                        if let Some(earlier) = returned.check(py, &obj, now.clone())? {
-                            return Err(crate::controller::shared_across_runs(&earlier, &now));
-                        }
-                        objs.push(obj);
-                    }
-                    let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
-                    isotrack_runs::sweep::rows::team_row_fields(
-                        &sweep.plan,
-                        id,
-                        Ok(Some(r)),
-                        String::new(),
-                    )
-                }
-            };
-            rows.push(fields);
-            report(id + 1)?;
-            continue;
-        }
-        let result = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
-            Err(e) => Err(e),
-            Ok(scenario) => {
-                let native = Py::new(
-                    py,
-                    PyScenario {
-                        inner: scenario.clone(),
-                        origin: format!("sweep {} run {id}", sweep.label),
-                        folder: Some(folder.clone()),
-                    },
-                )?;
-                let obj = factory.call1(py, (native,))?;
-                let now = format!("run {id}");
-                if let Some(earlier) = returned.check(py, &obj, now.clone())? {
-                    return Err(crate::controller::shared_across_runs(&earlier, &now));
-                }
-                if obj.bind(py).hasattr("reset")? {
-                    obj.call_method0(py, "reset")?;
-                }
-                let mut c = crate::controller::PyController {
-                    obj,
-                    error: None,
-                    max_turn_rate_radps: scenario.max_turn_rate_radps(),
-                };
-                let r = py.detach(|| {
-                    scenario.run_with_watched(&mut c, &mut isotrack_sim::NoTrace, &mut || {
-                        watch.keep_going()
-                    })
-                });
-                if let Some(e) = c.error.or(watch.error.take()) {
-                    return Err(e);
-                }
-                r.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))
-                    .map(Ok)?
-            }
+        let fields = if team {
+            factory.team_row(py, &sweep, id)?
+        } else {
+            let result = factory.run(py, &sweep, id, &mut watch)?;
+            row_fields(&sweep.plan, id, result)
         };
-        rows.push(row_fields(&sweep.plan, id, result));
+        rows.push(fields);
         report(id + 1)?;
     }
     crate::sweep::literal_cells(&sweep.plan, &kinds, &mut rows);
     Ok((sweep.header, kinds, rows))
+}
+
+/// A sweep's `controller_factory` ([`sweep_cells_with`]): called with each run's scenario (for a
+/// team, once per vehicle), never to return one object for two runs or vehicles.
+struct SweepFactory<'a> {
+    factory: &'a Py<PyAny>,
+    /// The sweep's label, in its scenarios' origin (`sweep LABEL run ID`).
+    label: &'a str,
+    /// The folder a relative path the factory's scenario is `set` to is read against.
+    folder: PathBuf,
+    /// Every object returned so far, with the run (and vehicle) it flies.
+    returned: crate::controller::Returned,
+}
+
+impl SweepFactory<'_> {
+    /// `factory(scenario)` for run `id`, a new native scenario for each call.
+    fn call(&self, py: Python<'_>, scenario: &Scenario, id: u64) -> PyResult<Py<PyAny>> {
+        let native = Py::new(
+            py,
+            PyScenario {
+                inner: scenario.clone(),
+                origin: format!("sweep {} run {}", self.label, id),
+                folder: Some(self.folder.clone()),
+            },
+        )?;
+        self.factory.call1(py, (native,))
+    }
+
+    /// Records `obj` as flying `now`: refused when the factory returned it for an earlier run.
+    fn check_new(&mut self, py: Python<'_>, obj: &Py<PyAny>, now: String) -> PyResult<()> {
+        if let Some(earlier) = self.returned.check(py, obj, now.clone())? {
+            return Err(crate::controller::shared_across_runs(&earlier, &now));
+        }
+        Ok(())
+    }
+
+    /// Run `id`'s `results.csv` fields, a team's: each vehicle flies its own controller (the
+    /// factory is called once per vehicle), the runs on this thread.
+    fn team_row(
+        &mut self,
+        py: Python<'_>,
+        sweep: &PreparedSweep,
+        id: u64,
+    ) -> PyResult<Vec<String>> {
+        let scenario = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
+            Err(e) => return Ok(team_row_fields(&sweep.plan, id, Err(e), String::new())),
+            Ok(scenario) => scenario,
+        };
+        let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
+        let mut objs = Vec::with_capacity(n);
+        for _ in 0..n {
+            let obj = self.call(py, &scenario, id)?;
+            // One object for two vehicles would interleave their samples through one state (an
+            // integral, a last time): refused, never flown shared.
+            if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
+                return Err(PyValueError::new_err(format!(
+                    "controller_factory returned the same object for vehicles {j} and {} of run \
+                     {id}: each vehicle flies its own instance (its state is its own, never \
+                     shared); return a new controller at every call",
+                    objs.len()
+                )));
+            }
+            self.check_new(py, &obj, format!("vehicle {} of run {id}", objs.len()))?;
+            objs.push(obj);
+        }
+        let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
+        Ok(team_row_fields(&sweep.plan, id, Ok(Some(r)), String::new()))
+    }
+
+    /// Run `id`'s result, a single vehicle's, flown on this thread by the factory's controller
+    /// (`reset()` first when it has the method): its first exception is raised, and Ctrl-C
+    /// (`watch`) stops it within a sample.
+    fn run(
+        &mut self,
+        py: Python<'_>,
+        sweep: &PreparedSweep,
+        id: u64,
+        watch: &mut crate::guard::SignalWatch,
+    ) -> PyResult<Result<isotrack_sim::RunResult, String>> {
+        let scenario = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
+            Err(e) => return Ok(Err(e)),
+            Ok(scenario) => scenario,
+        };
+        let obj = self.call(py, &scenario, id)?;
+        self.check_new(py, &obj, format!("run {id}"))?;
+        let mut c =
+            crate::controller::PyController::started(py, obj, scenario.max_turn_rate_radps())?;
+        let r = py.detach(|| {
+            scenario.run_with_watched(&mut c, &mut isotrack_sim::NoTrace, &mut || {
+                watch.keep_going()
+            })
+        });
+        if let Some(e) = c.error.or(watch.error.take()) {
+            return Err(e);
+        }
+        r.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))
+            .map(Ok)
+    }
 }
