@@ -306,10 +306,6 @@ macro_rules! with_field {
     };
 }
 
-/// The turn-rate bound of the action space when the scenario has no limit, rad/s (as the
-/// single-vehicle environment's).
-const DEFAULT_MAX_TURN_RATE_RADPS: f64 = 1.0;
-
 /// Observation entries per agent: `[eps_m, deps_m, r_ahead_m, ahead_valid, r_behind_m,
 /// behind_valid]`.
 pub const OBS_LEN: usize = 6;
@@ -371,13 +367,27 @@ fn gcd(a: u64, b: u64) -> u64 {
     }
 }
 
-fn check_weight(name: &str, v: f64) -> PyResult<f64> {
-    use crate::env::{invalid, zero_or_normal, NON_NEGATIVE};
-    if v.is_finite() && v >= 0.0 && zero_or_normal(v) {
-        Ok(v)
-    } else {
-        Err(invalid(name, v, NON_NEGATIVE))
+/// The team of a scenario the environment can step: refused without `[team]`, with a ring
+/// discovered in flight, or with per-vehicle overrides.
+fn steppable_team(s: &Scenario) -> PyResult<&TeamSpec> {
+    let Some(team) = s.spec().team.as_ref() else {
+        return Err(PyValueError::new_err(
+            "not a team scenario (no [team] section): the single-vehicle environment is isotrack.gym",
+        ));
+    };
+    if matches!(team.ring, RingMode::Discover(_)) {
+        return Err(PyValueError::new_err(
+            "team.ring = \"discovered\": the environment's agents need a ring fixed at deployment \
+             (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
+        ));
     }
+    if !team.vehicles.is_empty() {
+        return Err(PyValueError::new_err(
+            "[[team.vehicles]]: per-vehicle overrides are flown by Scenario.run() and `isotrack run`; \
+             the environment's agents share one speed envelope and sensor for now (docs/TEAMS.md)",
+        ));
+    }
+    Ok(team)
 }
 
 #[pymethods]
@@ -393,42 +403,17 @@ impl PyTeamEnv {
         record: bool,
         termination_penalty: Option<f64>,
     ) -> PyResult<Self> {
+        use crate::env::check_weight;
         let s = scenario.inner.clone();
-        let Some(team) = s.spec().team.as_ref() else {
-            return Err(PyValueError::new_err(
-                "not a team scenario (no [team] section): the single-vehicle environment is isotrack.gym",
-            ));
-        };
-        if matches!(team.ring, RingMode::Discover(_)) {
-            return Err(PyValueError::new_err(
-                "team.ring = \"discovered\": the environment's agents need a ring fixed at deployment \
-                 (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
-            ));
-        }
-        if !team.vehicles.is_empty() {
-            return Err(PyValueError::new_err(
-                "[[team.vehicles]]: per-vehicle overrides are flown by Scenario.run() and `isotrack run`; \
-                 the environment's agents share one speed envelope and sensor for now (docs/TEAMS.md)",
-            ));
-        }
-        let omax = max_turn_rate_radps
-            .or(s.max_turn_rate_radps())
-            .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
+        let team = steppable_team(&s)?;
+        // The single-vehicle environment's bound, checked here without its float32 range.
+        let omax = crate::env::turn_rate_bound(&s, max_turn_rate_radps);
         if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
             return Err(PyValueError::new_err(format!(
                 "max_turn_rate_radps must be finite and > 0, got {omax:?}"
             )));
         }
-        let scale = error_scale
-            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
-            .unwrap_or(1.0);
-        if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
-            return Err(crate::env::invalid(
-                "error_scale",
-                scale,
-                crate::env::POSITIVE,
-            ));
-        }
+        let scale = crate::env::error_scale_of(&s, error_scale)?;
         let spacing_weight = check_weight("spacing_weight", spacing_weight)?;
         let effort_weight = check_weight("effort_weight", effort_weight)?;
         let termination_penalty = termination_penalty
@@ -470,11 +455,7 @@ impl PyTeamEnv {
             origin: scenario.origin.clone(),
             record,
         };
-        // A first team, to check the settings and find the period.
-        let g = env.build()?;
-        let (r_every, r_delay) = g.ranging_steps();
-        let s_every = env.scenario.sensor().steps_per_sample();
-        env.period = gcd(gcd(s_every, r_every), r_delay).max(1);
+        env.period = env.pause_period()?;
         Ok(env)
     }
 
@@ -760,6 +741,15 @@ impl PyTeamEnv {
 }
 
 impl PyTeamEnv {
+    /// The engine steps per env step, from a first team (which checks the settings): the
+    /// greatest common divisor of the sensor period, the ranging period and the ranging delay.
+    fn pause_period(&self) -> PyResult<u64> {
+        let g = self.build()?;
+        let (r_every, r_delay) = g.ranging_steps();
+        let s_every = self.scenario.sensor().steps_per_sample();
+        Ok(gcd(gcd(s_every, r_every), r_delay).max(1))
+    }
+
     /// A team at step 0, as `Scenario::run_team` builds it (sensor and ranging seeds from
     /// the episode's `sim.seed`).
     fn build(&self) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
