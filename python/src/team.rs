@@ -572,128 +572,17 @@ impl PyTeamEnv {
         Bound<'py, PyArray1<bool>>,
         f64,
     )> {
-        let (turn, speed, given) = (turn.as_slice()?, speed.as_slice()?, given.as_slice()?);
-        let n = self.agents.len();
-        if turn.len() != n || speed.len() != n || given.len() != n {
-            return Err(PyValueError::new_err(format!(
-                "expected {n} turn rates, speeds and flags, got {}, {} and {}",
-                turn.len(),
-                speed.len(),
-                given.len()
-            )));
-        }
-        let Some(g) = self.group.as_mut() else {
-            return Err(PyValueError::new_err(
-                "the episode has ended (or was never reset): call reset()",
-            ));
-        };
-        let (omax, (vlo, vhi)) = (
-            self.max_turn_rate_radps,
-            (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps),
-        );
-        for i in 0..n {
-            if !given[i] || !g.is_vehicle_running(i) {
-                continue;
-            }
-            // The Python side has checked finiteness and the (float32) bounds; the last
-            // rounding of a float32 bound is clipped here.
-            let (w, v) = (turn[i].clamp(-omax, omax), speed[i].clamp(vlo, vhi));
-            if g.replace_answer(i, w) {
-                self.agents[i].omega = w;
-            }
-            g.hold_speed(i, v);
-        }
+        self.act(turn.as_slice()?, speed.as_slice()?, given.as_slice()?)?;
         crate::guard::no_panic(|| {
-            let mut rewards = vec![0.0; n];
-            let mut terminated = vec![false; n];
-            let mut truncated = vec![false; n];
+            let mut rewards = vec![0.0; self.agents.len()];
             self.advance();
             self.run_to_pause();
             self.observe();
-            // The run's last step reached and sensed (t = sim.duration_s): no later action
-            // would move a vehicle, so the episode ends here, as `IsolineEnv` ends at the last
-            // sample (nu-17: one more step repeated the last observation), the last step
-            // completed with the laws' answers there (the trace's last row, as
-            // `Scenario.run()` writes it).
-            let last = self.scenario.plan().n_steps;
-            let period = self.period;
             // The time of this pause, before the run is completed below.
             let paused_t_s = self.t_s();
-            // The environment steps an agent ending in this one would not fly (the default
-            // penalty's count): the episode's `floor(last / period)` less the steps taken,
-            // this one included (a team whose every vehicle has ended pauses at the step that
-            // ended the last one, within this env step: hence the rounding up).
-            let pauses_left = self.group.as_ref().map_or(0, |g| {
-                (last / period).saturating_sub(g.step_index().div_ceil(period))
-            });
-            let mut last_pause = false;
-            if self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && g.step_index() >= last)
-            {
-                self.advance();
-            } else if self.group.as_ref().is_some_and(|g| {
-                g.is_running() && g.step_index() < last && g.step_index() + period > last
-            }) {
-                // The last pause of a run whose sim.duration_s is no multiple of the period:
-                // no later pause, so no later action or sample, as `IsolineEnv` ends at its
-                // last sample (att30n-6: one more step, t = sim.duration_s, repeated this
-                // observation as `sampled`). The run's last steps are flown here with the
-                // laws' answers to this pause, held, as `Scenario.run()` holds them.
-                last_pause = true;
-                // No action answers this pause: its speeds are the spacing laws' answers, as
-                // its turn rates are the tracking laws' (nu36-19: the agents' speeds of the
-                // pause before were held, and the tail flew another run than Scenario.run()).
-                if let Some(g) = self.group.as_mut() {
-                    g.release_speeds();
-                }
-                for (i, r) in rewards.iter_mut().enumerate() {
-                    if !self.agents[i].done {
-                        *r = self.reward(i);
-                    }
-                }
-                while self.group.as_ref().is_some_and(|g| g.is_running()) {
-                    self.advance();
-                    self.run_to_pause();
-                }
-            } else if self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && (0..n).all(|i| !g.is_vehicle_running(i)))
-            {
-                // Every vehicle's run has ended before sim.duration_s (each left the field,
-                // say): the step that ended the last one is completed, as the engine's loop
-                // completes it, so that the team stops and the summary comes (att30n-5: it
-                // stayed `None` although every agent was done).
-                self.advance();
-            }
-            let running = self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && (0..n).any(|i| g.is_vehicle_running(i)));
-            for i in 0..n {
-                if self.agents[i].done {
-                    continue;
-                }
-                if !last_pause {
-                    rewards[i] = self.reward(i);
-                }
-                let outcome = self.outcome(i);
-                match outcome {
-                    Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
-                    Some(_) => {
-                        terminated[i] = true;
-                        rewards[i] -= self.penalty(pauses_left);
-                    }
-                    None if !running => truncated[i] = true,
-                    None => {}
-                }
-                self.agents[i].done = terminated[i] || truncated[i];
-            }
-            if !running {
-                self.finish();
-            }
+            let pauses_left = self.pauses_left();
+            let last_pause = self.complete_run_end(&mut rewards);
+            let (terminated, truncated) = self.end_agents(&mut rewards, last_pause, pauses_left);
             // The episode's last step says the time of its last pause (its last sample, as
             // `IsolineEnv` says), the run's end otherwise.
             let t_s = if last_pause { paused_t_s } else { self.t_s() };
@@ -789,52 +678,172 @@ impl PyTeamEnv {
             .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))
     }
 
+    /// Hands the agents' actions to the paused team ([`PyTeamEnv::step`]'s `turn`, `speed` and
+    /// `given`): each acting agent's turn rate (taking effect at its sample) and speed, clipped
+    /// to the bounds; refused when the lengths are not the team's or no episode runs.
+    fn act(&mut self, turn: &[f64], speed: &[f64], given: &[bool]) -> PyResult<()> {
+        let n = self.agents.len();
+        if turn.len() != n || speed.len() != n || given.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "expected {n} turn rates, speeds and flags, got {}, {} and {}",
+                turn.len(),
+                speed.len(),
+                given.len()
+            )));
+        }
+        let Some(g) = self.group.as_mut() else {
+            return Err(PyValueError::new_err(
+                "the episode has ended (or was never reset): call reset()",
+            ));
+        };
+        let (omax, (vlo, vhi)) = (
+            self.max_turn_rate_radps,
+            (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps),
+        );
+        for i in 0..n {
+            if !given[i] || !g.is_vehicle_running(i) {
+                continue;
+            }
+            // The Python side has checked finiteness and the (float32) bounds; the last
+            // rounding of a float32 bound is clipped here.
+            let (w, v) = (turn[i].clamp(-omax, omax), speed[i].clamp(vlo, vhi));
+            if g.replace_answer(i, w) {
+                self.agents[i].omega = w;
+            }
+            g.hold_speed(i, v);
+        }
+        Ok(())
+    }
+
+    /// The environment steps an agent ending in this one would not fly (the default penalty's
+    /// count): the episode's `floor(last / period)` less the steps taken, this one included (a
+    /// team whose every vehicle has ended pauses at the step that ended the last one, within
+    /// this env step: hence the rounding up).
+    fn pauses_left(&self) -> u64 {
+        let (last, period) = (self.scenario.plan().n_steps, self.period);
+        self.group.as_ref().map_or(0, |g| {
+            (last / period).saturating_sub(g.step_index().div_ceil(period))
+        })
+    }
+
+    /// After a step's pause, completes the run where no later action would move a vehicle, as
+    /// `Scenario.run()` completes it: `true` when this was the episode's last pause, whose
+    /// rewards (of the agents not done) are then set in `rewards` before the run's last steps
+    /// are flown.
+    fn complete_run_end(&mut self, rewards: &mut [f64]) -> bool {
+        // The run's last step reached and sensed (t = sim.duration_s): no later action would
+        // move a vehicle, so the episode ends here, as `IsolineEnv` ends at the last sample
+        // (nu-17: one more step repeated the last observation), the last step completed with
+        // the laws' answers there (the trace's last row, as `Scenario.run()` writes it).
+        let last = self.scenario.plan().n_steps;
+        let (period, n) = (self.period, self.agents.len());
+        if self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && g.step_index() >= last)
+        {
+            self.advance();
+        } else if self.group.as_ref().is_some_and(|g| {
+            g.is_running() && g.step_index() < last && g.step_index() + period > last
+        }) {
+            // The last pause of a run whose sim.duration_s is no multiple of the period: no
+            // later pause, so no later action or sample, as `IsolineEnv` ends at its last
+            // sample (att30n-6: one more step, t = sim.duration_s, repeated this observation
+            // as `sampled`). The run's last steps are flown here with the laws' answers to this
+            // pause, held, as `Scenario.run()` holds them.
+            // No action answers this pause: its speeds are the spacing laws' answers, as its
+            // turn rates are the tracking laws' (nu36-19: the agents' speeds of the pause
+            // before were held, and the tail flew another run than Scenario.run()).
+            if let Some(g) = self.group.as_mut() {
+                g.release_speeds();
+            }
+            for (i, r) in rewards.iter_mut().enumerate() {
+                if !self.agents[i].done {
+                    *r = self.reward(i);
+                }
+            }
+            while self.group.as_ref().is_some_and(|g| g.is_running()) {
+                self.advance();
+                self.run_to_pause();
+            }
+            return true;
+        } else if self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && (0..n).all(|i| !g.is_vehicle_running(i)))
+        {
+            // Every vehicle's run has ended before sim.duration_s (each left the field, say):
+            // the step that ended the last one is completed, as the engine's loop completes
+            // it, so that the team stops and the summary comes (att30n-5: it stayed `None`
+            // although every agent was done).
+            self.advance();
+        }
+        false
+    }
+
+    /// Each agent not yet done: its reward in `rewards` (unless set at the `last_pause`), less
+    /// the penalty of an early end with `pauses_left`, and whether its episode is terminated
+    /// (an early end) or truncated (the run completed, or the team stopped); the team's run
+    /// finished once no vehicle runs. `(terminated, truncated)`.
+    fn end_agents(
+        &mut self,
+        rewards: &mut [f64],
+        last_pause: bool,
+        pauses_left: u64,
+    ) -> (Vec<bool>, Vec<bool>) {
+        let n = self.agents.len();
+        let mut terminated = vec![false; n];
+        let mut truncated = vec![false; n];
+        let running = self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && (0..n).any(|i| g.is_vehicle_running(i)));
+        for i in 0..n {
+            if self.agents[i].done {
+                continue;
+            }
+            if !last_pause {
+                rewards[i] = self.reward(i);
+            }
+            match self.outcome(i) {
+                Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
+                Some(_) => {
+                    terminated[i] = true;
+                    rewards[i] -= self.penalty(pauses_left);
+                }
+                None if !running => truncated[i] = true,
+                None => {}
+            }
+            self.agents[i].done = terminated[i] || truncated[i];
+        }
+        if !running {
+            self.finish();
+        }
+        (terminated, truncated)
+    }
+
     /// Senses steps (each completed and moved, the commands held) until one that is a pause
     /// (a multiple of the period), which is left sensed, or until the team has stopped.
     fn run_to_pause(&mut self) {
-        let s = self.scenario.clone();
-        let vehicle = self.vehicle;
-        let period = self.period;
-        let n = self.agents.len();
-        let log = RefCell::new(std::mem::take(&mut self.log));
-        if let Some(g) = self.group.as_mut() {
-            let mut sinks = if self.record {
-                sinks(&log, n)
-            } else {
-                Vec::new()
-            };
-            with_field!(s, field => {
-                let iso = s.isoline();
-                let dist = |t: f64, p: Vec2| iso.distance(t, p);
-                let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
-                let oracles = Oracles {
-                    isoline_distance: Some(&dist),
-                    gradient: Some(&grad),
-                };
-                while g.is_running() {
-                    g.sense(field, &vehicle, &oracles, &mut sinks);
-                    if g.step_index() % period == 0 {
-                        break;
-                    }
-                    g.advance(&vehicle, &oracles, &mut sinks);
-                }
-            });
-        }
-        self.log = log.into_inner();
+        self.fly(true);
     }
 
     /// Completes the paused step and moves.
     fn advance(&mut self) {
+        self.fly(false);
+    }
+
+    /// Flies the team through the scenario's field with its oracles, the trace recorded when
+    /// `record`: to the next pause when `to_pause` ([`PyTeamEnv::run_to_pause`]), else the
+    /// paused step completed and moved ([`PyTeamEnv::advance`]).
+    fn fly(&mut self, to_pause: bool) {
         let s = self.scenario.clone();
         let vehicle = self.vehicle;
-        let n = self.agents.len();
+        let period = self.period;
+        let n = if self.record { self.agents.len() } else { 0 };
         let log = RefCell::new(std::mem::take(&mut self.log));
         if let Some(g) = self.group.as_mut() {
-            let mut sinks = if self.record {
-                sinks(&log, n)
-            } else {
-                Vec::new()
-            };
+            let mut sinks = sinks(&log, n);
             with_field!(s, field => {
                 let iso = s.isoline();
                 let dist = |t: f64, p: Vec2| iso.distance(t, p);
@@ -843,7 +852,15 @@ impl PyTeamEnv {
                     isoline_distance: Some(&dist),
                     gradient: Some(&grad),
                 };
-                if g.is_running() {
+                if to_pause {
+                    while g.is_running() {
+                        g.sense(field, &vehicle, &oracles, &mut sinks);
+                        if g.step_index() % period == 0 {
+                            break;
+                        }
+                        g.advance(&vehicle, &oracles, &mut sinks);
+                    }
+                } else if g.is_running() {
                     g.advance(&vehicle, &oracles, &mut sinks);
                 }
             });
@@ -854,13 +871,9 @@ impl PyTeamEnv {
     /// Ends the team run: its result, the trace's last rows.
     fn finish(&mut self) {
         let Some(g) = self.group.take() else { return };
-        let n = self.agents.len();
+        let n = if self.record { self.agents.len() } else { 0 };
         let log = RefCell::new(std::mem::take(&mut self.log));
-        let mut sinks = if self.record {
-            sinks(&log, n)
-        } else {
-            Vec::new()
-        };
+        let mut sinks = sinks(&log, n);
         let r = g.finish(&mut sinks);
         drop(sinks);
         self.log = log.into_inner();
