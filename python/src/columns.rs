@@ -1,17 +1,20 @@
-//! Trace columns as the run writers read them from Python (a leaf: the single run's writer
-//! in tools.rs and the team's in team.rs both use it).
+//! Trace columns as the run writers read them from Python, and the one save of a run directory
+//! from them (a leaf: the single run's writer in tools.rs and the team's in team.rs both use
+//! it).
 
+use isotrack_core::vehicle::Telemetry;
+use isotrack_runs::rundir::RunDir;
+use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
+use isotrack_scenario::Scenario;
+use isotrack_sim::TraceRow;
 use numpy::{Element, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::path::Path;
 
 /// One `trace.csv` column, checked to have `n` rows (a single run's and a team's).
-pub(crate) fn column<'py>(
-    trace: &Bound<'py, PyDict>,
-    name: &str,
-    n: Option<usize>,
-) -> PyResult<Vec<f64>> {
+fn column<'py>(trace: &Bound<'py, PyDict>, name: &str, n: Option<usize>) -> PyResult<Vec<f64>> {
     let v = trace
         .get_item(name)?
         .ok_or_else(|| PyValueError::new_err(format!("the trace has no column `{name}`")))?;
@@ -23,6 +26,94 @@ pub(crate) fn column<'py>(
             v.len()
         ))),
         _ => Ok(v),
+    }
+}
+
+/// A trace's columns as `trace.csv` holds them, read from Python's dict of numpy arrays (a
+/// single run's and a team's, whose `vehicle` column its writer reads apart): `t_s` first, then
+/// the others, each checked to have `t_s`'s rows, in the file's order.
+pub(crate) struct TraceColumns {
+    t: Vec<f64>,
+    /// `x_m`, `y_m`, `heading_rad`, `s`, `error`, `omega_radps`, `s_measured`.
+    cols: Vec<Vec<f64>>,
+    /// A flying vehicle's [`TELEMETRY_COLUMNS`].
+    telemetry: Option<Vec<Vec<f64>>>,
+}
+
+impl TraceColumns {
+    /// The columns of `trace` (with the telemetry when `flying`).
+    pub(crate) fn read(trace: &Bound<'_, PyDict>, flying: bool) -> PyResult<Self> {
+        let t = column(trace, "t_s", None)?;
+        let n = Some(t.len());
+        let cols: Vec<Vec<f64>> = [
+            "x_m",
+            "y_m",
+            "heading_rad",
+            "s",
+            "error",
+            "omega_radps",
+            "s_measured",
+        ]
+        .iter()
+        .map(|c| column(trace, c, n))
+        .collect::<PyResult<_>>()?;
+        let telemetry: Option<Vec<Vec<f64>>> = flying
+            .then(|| {
+                TELEMETRY_COLUMNS
+                    .iter()
+                    .map(|c| column(trace, c, n))
+                    .collect::<PyResult<_>>()
+            })
+            .transpose()?;
+        Ok(Self { t, cols, telemetry })
+    }
+
+    /// The number of rows.
+    pub(crate) fn rows(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Row `i` (`i` below [`TraceColumns::rows`]).
+    fn row(&self, i: usize) -> TraceRow {
+        let cols = &self.cols;
+        let m = cols[6][i];
+        TraceRow {
+            t_s: self.t[i],
+            x_m: cols[0][i],
+            y_m: cols[1][i],
+            heading_rad: cols[2][i],
+            s: cols[3][i],
+            error: cols[4][i],
+            omega_radps: cols[5][i],
+            // NaN in the numpy column is "no sample yet", an empty cell in the file.
+            s_measured: (!m.is_nan()).then_some(m),
+            telemetry: self.telemetry.as_ref().map(|tm| Telemetry {
+                altitude_m: tm[0][i],
+                airspeed_mps: tm[1][i],
+                roll_rad: tm[2][i],
+            }),
+        }
+    }
+
+    /// Hands `record` each row with its index, in order, answering Ctrl-C while the trace is
+    /// written (2 M rows take seconds): `Python::check_signals` every [`SIGNAL_ROWS`] rows and
+    /// once more after the last row, just before the commit (ver30b-9), so that an interrupt
+    /// before it always leaves the earlier run ([`save_run`]).
+    pub(crate) fn stream(
+        &self,
+        py: Python<'_>,
+        mut record: impl FnMut(usize, &TraceRow),
+    ) -> PyResult<()> {
+        let n = self.t.len();
+        for i in 0..=n {
+            if i % SIGNAL_ROWS == 0 || i == n {
+                py.check_signals()?;
+            }
+            if i < n {
+                record(i, &self.row(i));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -107,4 +198,51 @@ pub(crate) fn save_failure(f: isotrack_runs::Failure) -> PyErr {
             .replace("give --out a directory", "save into a directory"),
         ..f
     })
+}
+
+/// Saves run directory `dir` as `isotrack run --out` does, for a single run's save and a team's:
+/// the one run-directory writer, created and locked as `run --out` does ([`SAVE_LOCK`],
+/// att30c-6; the lock held until this returns); `write` streams the trace (a team's when
+/// `team`) into a temporary file beside `trace.csv`, which is renamed into place with
+/// `summary_json` and the resolved `scenario.toml` (after `note`, comment lines, when given)
+/// written last, so that an interrupted save leaves an earlier run's files as they were. An
+/// error of `write` (Ctrl-C, [`TraceColumns::stream`]) removes the temporary trace, and the
+/// directory if this call made it (issue 30, att30b item 4), and is raised; a Ctrl-C after the
+/// commit says the save completed ([`interrupt_after_save`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn save_run(
+    py: Python<'_>,
+    dir: &str,
+    summary_json: &str,
+    scenario: &Scenario,
+    note: &str,
+    done: Option<&Bound<'_, PyList>>,
+    team: bool,
+    write: impl FnOnce(&mut TraceWriter) -> PyResult<()>,
+) -> PyResult<()> {
+    let path = Path::new(dir);
+    let flying = scenario.is_flying();
+    let new_dir = std::fs::symlink_metadata(path).is_err();
+    let out = RunDir::open(path, &[], &[], Some(SAVE_LOCK)).map_err(save_failure)?;
+    let trace = if team {
+        out.team_trace(flying)
+    } else {
+        out.trace(flying)
+    };
+    let mut file = trace.map_err(crate::errors::failure)?;
+    if let Err(e) = write(file.writer()) {
+        drop(out.abandon(file, "interrupted"));
+        drop(out);
+        if new_dir {
+            let _ = std::fs::remove_dir(path);
+        }
+        return Err(e);
+    }
+    out.finish_json(
+        file,
+        &format!("{note}{}", isotrack_runs::summary::scenario_toml(scenario)),
+        summary_json,
+    )
+    .map_err(crate::errors::failure)?;
+    interrupt_after_save(py, dir, done)
 }

@@ -14,6 +14,32 @@ pub(crate) struct PyController {
     pub(crate) max_turn_rate_radps: Option<f64>,
 }
 
+impl PyController {
+    /// `obj` as a controller clipped to `max_turn_rate_radps`, `reset()` first when it has the
+    /// method ([`reset_if_any`]).
+    pub(crate) fn started(
+        py: Python<'_>,
+        obj: Py<PyAny>,
+        max_turn_rate_radps: Option<f64>,
+    ) -> PyResult<Self> {
+        reset_if_any(py, &obj)?;
+        Ok(Self {
+            obj,
+            error: None,
+            max_turn_rate_radps,
+        })
+    }
+}
+
+/// Calls `obj.reset()` when `obj` has the method (a controller's reset before its run is
+/// optional).
+pub(crate) fn reset_if_any(py: Python<'_>, obj: &Py<PyAny>) -> PyResult<()> {
+    if obj.bind(py).hasattr("reset")? {
+        obj.call_method0(py, "reset")?;
+    }
+    Ok(())
+}
+
 impl IsolineController for PyController {
     fn update(&mut self, m: &Measurement) -> f64 {
         if self.error.is_some() {

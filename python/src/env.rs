@@ -165,6 +165,100 @@ pub(crate) fn zero_or_normal(x: f64) -> bool {
     x == 0.0 || x.is_normal()
 }
 
+/// A reward's weight (or penalty) `v`, named `name` in the refusal: a finite number >= 0, 0 or
+/// not subnormal ([`NON_NEGATIVE`]).
+pub(crate) fn check_weight(name: &str, v: f64) -> PyResult<f64> {
+    if v.is_finite() && v >= 0.0 && zero_or_normal(v) {
+        Ok(v)
+    } else {
+        Err(invalid(name, v, NON_NEGATIVE))
+    }
+}
+
+/// The turn-rate bound of an environment's action, rad/s: `given`, else the scenario's limit,
+/// else [`DEFAULT_MAX_TURN_RATE_RADPS`] (unchecked).
+pub(crate) fn turn_rate_bound(s: &Scenario, given: Option<f64>) -> f64 {
+    given
+        .or(s.max_turn_rate_radps())
+        .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS)
+}
+
+/// The reward's error scale, field units: `given`, else the scenario's PI law's `c2`, else 1;
+/// checked to be [`POSITIVE`].
+pub(crate) fn error_scale_of(s: &Scenario, given: Option<f64>) -> PyResult<f64> {
+    let scale = given
+        .or(s.spec().controller.pi_isoline().map(|p| p.c2))
+        .unwrap_or(1.0);
+    if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
+        return Err(invalid("error_scale", scale, POSITIVE));
+    }
+    Ok(scale)
+}
+
+/// A batch's size, at least 1 and at most [`MAX_NUM_ENVS`].
+fn check_num_envs(num_envs: usize) -> PyResult<()> {
+    if num_envs == 0 {
+        return Err(PyValueError::new_err("num_envs must be at least 1"));
+    }
+    if num_envs > MAX_NUM_ENVS {
+        return Err(PyValueError::new_err(format!(
+            "num_envs = {num_envs} is more than the {MAX_NUM_ENVS} environments one batch holds"
+        )));
+    }
+    Ok(())
+}
+
+/// The action's turn-rate bound ([`turn_rate_bound`]), rad/s: [`POSITIVE`], and within what
+/// the float32 action space holds.
+fn action_bound(s: &Scenario, given: Option<f64>) -> PyResult<f64> {
+    let omax = turn_rate_bound(s, given);
+    // Each a finite number, and not subnormal (a step of 1e-310 divides into infinity).
+    if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
+        return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
+    }
+    // The action space is float32 (Gymnasium's Box): a bound it cannot hold (1e300, or
+    // 1e-300 which rounds to 0) is refused here, in isotrack's words (issue 30, att30b
+    // item 7).
+    let (f32_max, f32_min) = (f64::from(f32::MAX), f64::from(f32::MIN_POSITIVE));
+    if !(f32_min..=f32_max).contains(&omax) {
+        return Err(PyValueError::new_err(format!(
+            "max_turn_rate_radps must be within [{}, {}] rad/s (the action space is float32), got {}",
+            isotrack_core::numtext::Num(f32_min),
+            isotrack_core::numtext::Num(f32_max),
+            isotrack_core::numtext::Echo(omax)
+        )));
+    }
+    Ok(omax)
+}
+
+/// Time of the run's last sample step, s ([`PyEnvBatch`]'s `last_sample_t_s`); refused when
+/// the run holds no sample after the first (an episode of no step).
+fn last_sample_t_s(s: &Scenario) -> PyResult<f64> {
+    let plan = s.plan();
+    // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
+    // values): the last sample step is the last multiple of `every` within the run.
+    let every = s.sensor().steps_per_sample();
+    if plan.n_steps < every {
+        return Err(PyValueError::new_err(format!(
+            "an episode needs at least one step: sim.duration_s = {} s holds no sensor \
+             sample after the first at {} Hz",
+            s.spec().sim.duration_s,
+            s.spec().sensor.rate_hz
+        )));
+    }
+    Ok((plan.n_steps / every * every) as f64 * plan.dt_s)
+}
+
+/// `num_envs` slots without a run, or `MemoryError` when they do not fit.
+fn empty_slots(num_envs: usize) -> PyResult<Vec<Slot>> {
+    let mut slots = Vec::new();
+    slots
+        .try_reserve_exact(num_envs)
+        .map_err(|_| PyMemoryError::new_err(format!("no memory for {num_envs} environments")))?;
+    slots.extend((0..num_envs).map(|_| Slot::EMPTY));
+    Ok(slots)
+}
+
 #[pymethods]
 impl PyEnvBatch {
     #[new]
@@ -178,47 +272,13 @@ impl PyEnvBatch {
         termination_penalty: Option<f64>,
     ) -> PyResult<Self> {
         let s = scenario.inner.clone();
-        if num_envs == 0 {
-            return Err(PyValueError::new_err("num_envs must be at least 1"));
-        }
-        if num_envs > MAX_NUM_ENVS {
-            return Err(PyValueError::new_err(format!(
-                "num_envs = {num_envs} is more than the {MAX_NUM_ENVS} environments one batch holds"
-            )));
-        }
-        let omax = max_turn_rate_radps
-            .or(s.max_turn_rate_radps())
-            .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
-        // Each a finite number, and not subnormal (a step of 1e-310 divides into infinity).
-        if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
-            return Err(invalid("max_turn_rate_radps", omax, POSITIVE));
-        }
-        // The action space is float32 (Gymnasium's Box): a bound it cannot hold (1e300, or
-        // 1e-300 which rounds to 0) is refused here, in isotrack's words (issue 30, att30b
-        // item 7).
-        let (f32_max, f32_min) = (f64::from(f32::MAX), f64::from(f32::MIN_POSITIVE));
-        if !(f32_min..=f32_max).contains(&omax) {
-            return Err(PyValueError::new_err(format!(
-                "max_turn_rate_radps must be within [{}, {}] rad/s (the action space is float32), got {}",
-                isotrack_core::numtext::Num(f32_min),
-                isotrack_core::numtext::Num(f32_max),
-                isotrack_core::numtext::Echo(omax)
-            )));
-        }
-        let scale = error_scale
-            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
-            .unwrap_or(1.0);
-        if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
-            return Err(invalid("error_scale", scale, POSITIVE));
-        }
-        if !(effort_weight.is_finite() && effort_weight >= 0.0 && zero_or_normal(effort_weight)) {
-            return Err(invalid("effort_weight", effort_weight, NON_NEGATIVE));
-        }
-        if let Some(p) = termination_penalty {
-            if !(p.is_finite() && p >= 0.0 && zero_or_normal(p)) {
-                return Err(invalid("termination_penalty", p, NON_NEGATIVE));
-            }
-        }
+        check_num_envs(num_envs)?;
+        let omax = action_bound(&s, max_turn_rate_radps)?;
+        let scale = error_scale_of(&s, error_scale)?;
+        check_weight("effort_weight", effort_weight)?;
+        let termination_penalty = termination_penalty
+            .map(|p| check_weight("termination_penalty", p))
+            .transpose()?;
         let duration = s.spec().sim.duration_s;
         let rate = s.spec().sensor.rate_hz;
         let samples = ((duration * rate).floor() + 1.0).max(1.0);
@@ -231,26 +291,11 @@ impl PyEnvBatch {
             samples,
             "samples of an episode",
         )?;
-        let plan = s.plan();
-        // The sensor samples the steps 0, every, 2 every, ... (a delay only holds back the first
-        // values): the last sample step is the last multiple of `every` within the run.
-        let every = s.sensor().steps_per_sample();
-        if plan.n_steps < every {
-            return Err(PyValueError::new_err(format!(
-                "an episode needs at least one step: sim.duration_s = {duration} s holds no sensor \
-                 sample after the first at {rate} Hz"
-            )));
-        }
-        let last_sample_t_s = (plan.n_steps / every * every) as f64 * plan.dt_s;
-        let mut slots = Vec::new();
-        slots.try_reserve_exact(num_envs).map_err(|_| {
-            PyMemoryError::new_err(format!("no memory for {num_envs} environments"))
-        })?;
-        slots.extend((0..num_envs).map(|_| Slot::EMPTY));
+        let last_sample_t_s = last_sample_t_s(&s)?;
         Ok(Self {
             level: s.level(),
             scenario: s,
-            slots,
+            slots: empty_slots(num_envs)?,
             max_turn_rate_radps: omax,
             error_scale: scale,
             effort_weight,

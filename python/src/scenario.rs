@@ -306,14 +306,7 @@ impl PyScenario {
                 None,
             ),
             Some(obj) => {
-                if obj.bind(py).hasattr("reset")? {
-                    obj.call_method0(py, "reset")?;
-                }
-                let mut c = PyController {
-                    obj,
-                    error: None,
-                    max_turn_rate_radps: scenario.max_turn_rate_radps(),
-                };
+                let mut c = PyController::started(py, obj, scenario.max_turn_rate_radps())?;
                 let r = py.detach(|| {
                     scenario.run_with_watched(&mut c, &mut rows, &mut || watch.keep_going())
                 });

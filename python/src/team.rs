@@ -5,11 +5,12 @@
 //! which steps the team through the one team engine (`isotrack_sim::team::Group`), paused
 //! between each step's samples and its move so that agents outside the loop can answer.
 
-use crate::columns::column;
+use crate::columns::{save_run, TraceColumns};
 use crate::errors::ScenarioErrorPy;
 use crate::scenario::PyScenario;
 use isotrack_core::math::Vec2;
 use isotrack_core::FieldDerivatives;
+use isotrack_runs::trace::TeamTraceSink;
 use isotrack_scenario::field::FieldModel;
 use isotrack_scenario::spec::TeamSpec;
 use isotrack_scenario::{Scenario, TeamIsolineModel, Tracker};
@@ -22,7 +23,6 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::cell::RefCell;
-use std::path::Path;
 
 /// A team's trace rows, each with its vehicle's index, in the order the team records them.
 type Rows = Vec<(u32, TraceRow)>;
@@ -192,9 +192,7 @@ pub(crate) fn run_team_python(
         )));
     }
     for o in &objs {
-        if o.bind(py).hasattr("reset")? {
-            o.call_method0(py, "reset")?;
-        }
+        crate::controller::reset_if_any(py, o)?;
     }
     let stop = std::sync::Mutex::new(TeamStop {
         watch: crate::guard::SignalWatch::new(),
@@ -255,43 +253,17 @@ pub fn write_team_run(
     note: &str,
     done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
-    use isotrack_core::vehicle::Telemetry;
-    use isotrack_runs::trace::{TeamTraceSink, TELEMETRY_COLUMNS};
-    let dir_name = dir;
-    let dir = Path::new(dir);
-    let flying = scenario.inner.is_flying();
-    let t = column(trace, "t_s", None)?;
-    let n = Some(t.len());
-    let cols: Vec<Vec<f64>> = [
-        "x_m",
-        "y_m",
-        "heading_rad",
-        "s",
-        "error",
-        "omega_radps",
-        "s_measured",
-    ]
-    .iter()
-    .map(|c| column(trace, c, n))
-    .collect::<PyResult<_>>()?;
-    let telemetry: Option<Vec<Vec<f64>>> = flying
-        .then(|| {
-            TELEMETRY_COLUMNS
-                .iter()
-                .map(|c| column(trace, c, n))
-                .collect::<PyResult<_>>()
-        })
-        .transpose()?;
+    let cols = TraceColumns::read(trace, scenario.inner.is_flying())?;
     let vehicles: PyReadonlyArray1<'_, i64> = trace
         .get_item(isotrack_runs::trace::VEHICLE_COLUMN)?
         .ok_or_else(|| PyValueError::new_err("the trace has no column `vehicle`"))?
         .extract()?;
     let vehicles = crate::columns::copy_interruptible(py, &vehicles)?;
-    if vehicles.len() != t.len() {
+    if vehicles.len() != cols.rows() {
         return Err(PyValueError::new_err(format!(
             "the trace's column `vehicle` has {} rows, `t_s` has {}",
             vehicles.len(),
-            t.len()
+            cols.rows()
         )));
     }
     let count = vehicles.iter().copied().max().unwrap_or(-1) + 1;
@@ -300,61 +272,20 @@ pub fn write_team_run(
             "the trace's column `vehicle` holds an index that is no vehicle's",
         ));
     }
-    let new_dir = std::fs::symlink_metadata(dir).is_err();
-    // The one run-directory writer, created and locked as `run --out` does (att30c-6; the lock
-    // held until this returns): the trace streamed into a temporary file beside `trace.csv`,
-    // renamed into place with the summary written last, so an interrupted save leaves an
-    // earlier run's files as they were.
-    let out = isotrack_runs::rundir::RunDir::open(dir, &[], &[], Some(crate::columns::SAVE_LOCK))
-        .map_err(crate::columns::save_failure)?;
-    let mut file = out.team_trace(flying).map_err(crate::errors::failure)?;
-    let w = RefCell::new(file.writer());
-    let mut team_sinks = TeamTraceSink::for_team(&w, count as usize);
-    for i in 0..=t.len() {
-        // Ctrl-C is answered while the trace is written: the temporary trace is removed, and
-        // the directory if this call made it (issue 30, att30b item 4); checked once more after
-        // the last row, just before the commit (ver30b-9).
-        if i % crate::columns::SIGNAL_ROWS == 0 || i == t.len() {
-            if let Err(e) = py.check_signals() {
-                drop(team_sinks);
-                drop(out.abandon(file, "interrupted"));
-                drop(out);
-                if new_dir {
-                    let _ = std::fs::remove_dir(dir);
-                }
-                return Err(e);
-            }
-        }
-        let Some(&t_s) = t.get(i) else { break };
-        let m = cols[6][i];
-        team_sinks[vehicles[i] as usize].record(&TraceRow {
-            t_s,
-            x_m: cols[0][i],
-            y_m: cols[1][i],
-            heading_rad: cols[2][i],
-            s: cols[3][i],
-            error: cols[4][i],
-            omega_radps: cols[5][i],
-            // NaN in the numpy column is "no sample yet", an empty cell in the file.
-            s_measured: (!m.is_nan()).then_some(m),
-            telemetry: telemetry.as_ref().map(|tm| Telemetry {
-                altitude_m: tm[0][i],
-                airspeed_mps: tm[1][i],
-                roll_rad: tm[2][i],
-            }),
-        });
-    }
-    drop(team_sinks);
-    out.finish_json(
-        file,
-        &format!(
-            "{note}{}",
-            isotrack_runs::summary::scenario_toml(&scenario.inner)
-        ),
+    save_run(
+        py,
+        dir,
         summary_json,
+        &scenario.inner,
+        note,
+        done,
+        true,
+        |w| {
+            let w = RefCell::new(w);
+            let mut sinks = TeamTraceSink::for_team(&w, count as usize);
+            cols.stream(py, |i, row| sinks[vehicles[i] as usize].record(row))
+        },
     )
-    .map_err(crate::errors::failure)?;
-    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// Runs `$body` with `$f` bound to the scenario's field as its concrete type.
@@ -374,10 +305,6 @@ macro_rules! with_field {
         }
     };
 }
-
-/// The turn-rate bound of the action space when the scenario has no limit, rad/s (as the
-/// single-vehicle environment's).
-const DEFAULT_MAX_TURN_RATE_RADPS: f64 = 1.0;
 
 /// Observation entries per agent: `[eps_m, deps_m, r_ahead_m, ahead_valid, r_behind_m,
 /// behind_valid]`.
@@ -440,13 +367,27 @@ fn gcd(a: u64, b: u64) -> u64 {
     }
 }
 
-fn check_weight(name: &str, v: f64) -> PyResult<f64> {
-    use crate::env::{invalid, zero_or_normal, NON_NEGATIVE};
-    if v.is_finite() && v >= 0.0 && zero_or_normal(v) {
-        Ok(v)
-    } else {
-        Err(invalid(name, v, NON_NEGATIVE))
+/// The team of a scenario the environment can step: refused without `[team]`, with a ring
+/// discovered in flight, or with per-vehicle overrides.
+fn steppable_team(s: &Scenario) -> PyResult<&TeamSpec> {
+    let Some(team) = s.spec().team.as_ref() else {
+        return Err(PyValueError::new_err(
+            "not a team scenario (no [team] section): the single-vehicle environment is isotrack.gym",
+        ));
+    };
+    if matches!(team.ring, RingMode::Discover(_)) {
+        return Err(PyValueError::new_err(
+            "team.ring = \"discovered\": the environment's agents need a ring fixed at deployment \
+             (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
+        ));
     }
+    if !team.vehicles.is_empty() {
+        return Err(PyValueError::new_err(
+            "[[team.vehicles]]: per-vehicle overrides are flown by Scenario.run() and `isotrack run`; \
+             the environment's agents share one speed envelope and sensor for now (docs/TEAMS.md)",
+        ));
+    }
+    Ok(team)
 }
 
 #[pymethods]
@@ -462,42 +403,17 @@ impl PyTeamEnv {
         record: bool,
         termination_penalty: Option<f64>,
     ) -> PyResult<Self> {
+        use crate::env::check_weight;
         let s = scenario.inner.clone();
-        let Some(team) = s.spec().team.as_ref() else {
-            return Err(PyValueError::new_err(
-                "not a team scenario (no [team] section): the single-vehicle environment is isotrack.gym",
-            ));
-        };
-        if matches!(team.ring, RingMode::Discover(_)) {
-            return Err(PyValueError::new_err(
-                "team.ring = \"discovered\": the environment's agents need a ring fixed at deployment \
-                 (team.ring = \"listed\"); the discovery's probes command the speeds themselves",
-            ));
-        }
-        if !team.vehicles.is_empty() {
-            return Err(PyValueError::new_err(
-                "[[team.vehicles]]: per-vehicle overrides are flown by Scenario.run() and `isotrack run`; \
-                 the environment's agents share one speed envelope and sensor for now (docs/TEAMS.md)",
-            ));
-        }
-        let omax = max_turn_rate_radps
-            .or(s.max_turn_rate_radps())
-            .unwrap_or(DEFAULT_MAX_TURN_RATE_RADPS);
+        let team = steppable_team(&s)?;
+        // The single-vehicle environment's bound, checked here without its float32 range.
+        let omax = crate::env::turn_rate_bound(&s, max_turn_rate_radps);
         if !(omax.is_finite() && omax > 0.0 && omax.is_normal()) {
             return Err(PyValueError::new_err(format!(
                 "max_turn_rate_radps must be finite and > 0, got {omax:?}"
             )));
         }
-        let scale = error_scale
-            .or(s.spec().controller.pi_isoline().map(|p| p.c2))
-            .unwrap_or(1.0);
-        if !(scale.is_finite() && scale > 0.0 && scale.is_normal()) {
-            return Err(crate::env::invalid(
-                "error_scale",
-                scale,
-                crate::env::POSITIVE,
-            ));
-        }
+        let scale = crate::env::error_scale_of(&s, error_scale)?;
         let spacing_weight = check_weight("spacing_weight", spacing_weight)?;
         let effort_weight = check_weight("effort_weight", effort_weight)?;
         let termination_penalty = termination_penalty
@@ -539,11 +455,7 @@ impl PyTeamEnv {
             origin: scenario.origin.clone(),
             record,
         };
-        // A first team, to check the settings and find the period.
-        let g = env.build()?;
-        let (r_every, r_delay) = g.ranging_steps();
-        let s_every = env.scenario.sensor().steps_per_sample();
-        env.period = gcd(gcd(s_every, r_every), r_delay).max(1);
+        env.period = env.pause_period()?;
         Ok(env)
     }
 
@@ -660,128 +572,17 @@ impl PyTeamEnv {
         Bound<'py, PyArray1<bool>>,
         f64,
     )> {
-        let (turn, speed, given) = (turn.as_slice()?, speed.as_slice()?, given.as_slice()?);
-        let n = self.agents.len();
-        if turn.len() != n || speed.len() != n || given.len() != n {
-            return Err(PyValueError::new_err(format!(
-                "expected {n} turn rates, speeds and flags, got {}, {} and {}",
-                turn.len(),
-                speed.len(),
-                given.len()
-            )));
-        }
-        let Some(g) = self.group.as_mut() else {
-            return Err(PyValueError::new_err(
-                "the episode has ended (or was never reset): call reset()",
-            ));
-        };
-        let (omax, (vlo, vhi)) = (
-            self.max_turn_rate_radps,
-            (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps),
-        );
-        for i in 0..n {
-            if !given[i] || !g.is_vehicle_running(i) {
-                continue;
-            }
-            // The Python side has checked finiteness and the (float32) bounds; the last
-            // rounding of a float32 bound is clipped here.
-            let (w, v) = (turn[i].clamp(-omax, omax), speed[i].clamp(vlo, vhi));
-            if g.replace_answer(i, w) {
-                self.agents[i].omega = w;
-            }
-            g.hold_speed(i, v);
-        }
+        self.act(turn.as_slice()?, speed.as_slice()?, given.as_slice()?)?;
         crate::guard::no_panic(|| {
-            let mut rewards = vec![0.0; n];
-            let mut terminated = vec![false; n];
-            let mut truncated = vec![false; n];
+            let mut rewards = vec![0.0; self.agents.len()];
             self.advance();
             self.run_to_pause();
             self.observe();
-            // The run's last step reached and sensed (t = sim.duration_s): no later action
-            // would move a vehicle, so the episode ends here, as `IsolineEnv` ends at the last
-            // sample (nu-17: one more step repeated the last observation), the last step
-            // completed with the laws' answers there (the trace's last row, as
-            // `Scenario.run()` writes it).
-            let last = self.scenario.plan().n_steps;
-            let period = self.period;
             // The time of this pause, before the run is completed below.
             let paused_t_s = self.t_s();
-            // The environment steps an agent ending in this one would not fly (the default
-            // penalty's count): the episode's `floor(last / period)` less the steps taken,
-            // this one included (a team whose every vehicle has ended pauses at the step that
-            // ended the last one, within this env step: hence the rounding up).
-            let pauses_left = self.group.as_ref().map_or(0, |g| {
-                (last / period).saturating_sub(g.step_index().div_ceil(period))
-            });
-            let mut last_pause = false;
-            if self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && g.step_index() >= last)
-            {
-                self.advance();
-            } else if self.group.as_ref().is_some_and(|g| {
-                g.is_running() && g.step_index() < last && g.step_index() + period > last
-            }) {
-                // The last pause of a run whose sim.duration_s is no multiple of the period:
-                // no later pause, so no later action or sample, as `IsolineEnv` ends at its
-                // last sample (att30n-6: one more step, t = sim.duration_s, repeated this
-                // observation as `sampled`). The run's last steps are flown here with the
-                // laws' answers to this pause, held, as `Scenario.run()` holds them.
-                last_pause = true;
-                // No action answers this pause: its speeds are the spacing laws' answers, as
-                // its turn rates are the tracking laws' (nu36-19: the agents' speeds of the
-                // pause before were held, and the tail flew another run than Scenario.run()).
-                if let Some(g) = self.group.as_mut() {
-                    g.release_speeds();
-                }
-                for (i, r) in rewards.iter_mut().enumerate() {
-                    if !self.agents[i].done {
-                        *r = self.reward(i);
-                    }
-                }
-                while self.group.as_ref().is_some_and(|g| g.is_running()) {
-                    self.advance();
-                    self.run_to_pause();
-                }
-            } else if self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && (0..n).all(|i| !g.is_vehicle_running(i)))
-            {
-                // Every vehicle's run has ended before sim.duration_s (each left the field,
-                // say): the step that ended the last one is completed, as the engine's loop
-                // completes it, so that the team stops and the summary comes (att30n-5: it
-                // stayed `None` although every agent was done).
-                self.advance();
-            }
-            let running = self
-                .group
-                .as_ref()
-                .is_some_and(|g| g.is_running() && (0..n).any(|i| g.is_vehicle_running(i)));
-            for i in 0..n {
-                if self.agents[i].done {
-                    continue;
-                }
-                if !last_pause {
-                    rewards[i] = self.reward(i);
-                }
-                let outcome = self.outcome(i);
-                match outcome {
-                    Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
-                    Some(_) => {
-                        terminated[i] = true;
-                        rewards[i] -= self.penalty(pauses_left);
-                    }
-                    None if !running => truncated[i] = true,
-                    None => {}
-                }
-                self.agents[i].done = terminated[i] || truncated[i];
-            }
-            if !running {
-                self.finish();
-            }
+            let pauses_left = self.pauses_left();
+            let last_pause = self.complete_run_end(&mut rewards);
+            let (terminated, truncated) = self.end_agents(&mut rewards, last_pause, pauses_left);
             // The episode's last step says the time of its last pause (its last sample, as
             // `IsolineEnv` says), the run's end otherwise.
             let t_s = if last_pause { paused_t_s } else { self.t_s() };
@@ -829,6 +630,15 @@ impl PyTeamEnv {
 }
 
 impl PyTeamEnv {
+    /// The engine steps per env step, from a first team (which checks the settings): the
+    /// greatest common divisor of the sensor period, the ranging period and the ranging delay.
+    fn pause_period(&self) -> PyResult<u64> {
+        let g = self.build()?;
+        let (r_every, r_delay) = g.ranging_steps();
+        let s_every = self.scenario.sensor().steps_per_sample();
+        Ok(gcd(gcd(s_every, r_every), r_delay).max(1))
+    }
+
     /// A team at step 0, as `Scenario::run_team` builds it (sensor and ranging seeds from
     /// the episode's `sim.seed`).
     fn build(&self) -> PyResult<Group<'static, DubinsSpeedState, Tracker>> {
@@ -868,52 +678,172 @@ impl PyTeamEnv {
             .map_err(|e| ScenarioErrorPy::new_err(format!("[team]: {e}")))
     }
 
+    /// Hands the agents' actions to the paused team ([`PyTeamEnv::step`]'s `turn`, `speed` and
+    /// `given`): each acting agent's turn rate (taking effect at its sample) and speed, clipped
+    /// to the bounds; refused when the lengths are not the team's or no episode runs.
+    fn act(&mut self, turn: &[f64], speed: &[f64], given: &[bool]) -> PyResult<()> {
+        let n = self.agents.len();
+        if turn.len() != n || speed.len() != n || given.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "expected {n} turn rates, speeds and flags, got {}, {} and {}",
+                turn.len(),
+                speed.len(),
+                given.len()
+            )));
+        }
+        let Some(g) = self.group.as_mut() else {
+            return Err(PyValueError::new_err(
+                "the episode has ended (or was never reset): call reset()",
+            ));
+        };
+        let (omax, (vlo, vhi)) = (
+            self.max_turn_rate_radps,
+            (self.vehicle.min_speed_mps, self.vehicle.max_speed_mps),
+        );
+        for i in 0..n {
+            if !given[i] || !g.is_vehicle_running(i) {
+                continue;
+            }
+            // The Python side has checked finiteness and the (float32) bounds; the last
+            // rounding of a float32 bound is clipped here.
+            let (w, v) = (turn[i].clamp(-omax, omax), speed[i].clamp(vlo, vhi));
+            if g.replace_answer(i, w) {
+                self.agents[i].omega = w;
+            }
+            g.hold_speed(i, v);
+        }
+        Ok(())
+    }
+
+    /// The environment steps an agent ending in this one would not fly (the default penalty's
+    /// count): the episode's `floor(last / period)` less the steps taken, this one included (a
+    /// team whose every vehicle has ended pauses at the step that ended the last one, within
+    /// this env step: hence the rounding up).
+    fn pauses_left(&self) -> u64 {
+        let (last, period) = (self.scenario.plan().n_steps, self.period);
+        self.group.as_ref().map_or(0, |g| {
+            (last / period).saturating_sub(g.step_index().div_ceil(period))
+        })
+    }
+
+    /// After a step's pause, completes the run where no later action would move a vehicle, as
+    /// `Scenario.run()` completes it: `true` when this was the episode's last pause, whose
+    /// rewards (of the agents not done) are then set in `rewards` before the run's last steps
+    /// are flown.
+    fn complete_run_end(&mut self, rewards: &mut [f64]) -> bool {
+        // The run's last step reached and sensed (t = sim.duration_s): no later action would
+        // move a vehicle, so the episode ends here, as `IsolineEnv` ends at the last sample
+        // (nu-17: one more step repeated the last observation), the last step completed with
+        // the laws' answers there (the trace's last row, as `Scenario.run()` writes it).
+        let last = self.scenario.plan().n_steps;
+        let (period, n) = (self.period, self.agents.len());
+        if self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && g.step_index() >= last)
+        {
+            self.advance();
+        } else if self.group.as_ref().is_some_and(|g| {
+            g.is_running() && g.step_index() < last && g.step_index() + period > last
+        }) {
+            // The last pause of a run whose sim.duration_s is no multiple of the period: no
+            // later pause, so no later action or sample, as `IsolineEnv` ends at its last
+            // sample (att30n-6: one more step, t = sim.duration_s, repeated this observation
+            // as `sampled`). The run's last steps are flown here with the laws' answers to this
+            // pause, held, as `Scenario.run()` holds them.
+            // No action answers this pause: its speeds are the spacing laws' answers, as its
+            // turn rates are the tracking laws' (nu36-19: the agents' speeds of the pause
+            // before were held, and the tail flew another run than Scenario.run()).
+            if let Some(g) = self.group.as_mut() {
+                g.release_speeds();
+            }
+            for (i, r) in rewards.iter_mut().enumerate() {
+                if !self.agents[i].done {
+                    *r = self.reward(i);
+                }
+            }
+            while self.group.as_ref().is_some_and(|g| g.is_running()) {
+                self.advance();
+                self.run_to_pause();
+            }
+            return true;
+        } else if self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && (0..n).all(|i| !g.is_vehicle_running(i)))
+        {
+            // Every vehicle's run has ended before sim.duration_s (each left the field, say):
+            // the step that ended the last one is completed, as the engine's loop completes
+            // it, so that the team stops and the summary comes (att30n-5: it stayed `None`
+            // although every agent was done).
+            self.advance();
+        }
+        false
+    }
+
+    /// Each agent not yet done: its reward in `rewards` (unless set at the `last_pause`), less
+    /// the penalty of an early end with `pauses_left`, and whether its episode is terminated
+    /// (an early end) or truncated (the run completed, or the team stopped); the team's run
+    /// finished once no vehicle runs. `(terminated, truncated)`.
+    fn end_agents(
+        &mut self,
+        rewards: &mut [f64],
+        last_pause: bool,
+        pauses_left: u64,
+    ) -> (Vec<bool>, Vec<bool>) {
+        let n = self.agents.len();
+        let mut terminated = vec![false; n];
+        let mut truncated = vec![false; n];
+        let running = self
+            .group
+            .as_ref()
+            .is_some_and(|g| g.is_running() && (0..n).any(|i| g.is_vehicle_running(i)));
+        for i in 0..n {
+            if self.agents[i].done {
+                continue;
+            }
+            if !last_pause {
+                rewards[i] = self.reward(i);
+            }
+            match self.outcome(i) {
+                Some(isotrack_sim::Outcome::Completed) => truncated[i] = true,
+                Some(_) => {
+                    terminated[i] = true;
+                    rewards[i] -= self.penalty(pauses_left);
+                }
+                None if !running => truncated[i] = true,
+                None => {}
+            }
+            self.agents[i].done = terminated[i] || truncated[i];
+        }
+        if !running {
+            self.finish();
+        }
+        (terminated, truncated)
+    }
+
     /// Senses steps (each completed and moved, the commands held) until one that is a pause
     /// (a multiple of the period), which is left sensed, or until the team has stopped.
     fn run_to_pause(&mut self) {
-        let s = self.scenario.clone();
-        let vehicle = self.vehicle;
-        let period = self.period;
-        let n = self.agents.len();
-        let log = RefCell::new(std::mem::take(&mut self.log));
-        if let Some(g) = self.group.as_mut() {
-            let mut sinks = if self.record {
-                sinks(&log, n)
-            } else {
-                Vec::new()
-            };
-            with_field!(s, field => {
-                let iso = s.isoline();
-                let dist = |t: f64, p: Vec2| iso.distance(t, p);
-                let grad = |t: f64, p: Vec2| Some((field.gradient(t, p)?, field.hessian(t, p)?));
-                let oracles = Oracles {
-                    isoline_distance: Some(&dist),
-                    gradient: Some(&grad),
-                };
-                while g.is_running() {
-                    g.sense(field, &vehicle, &oracles, &mut sinks);
-                    if g.step_index() % period == 0 {
-                        break;
-                    }
-                    g.advance(&vehicle, &oracles, &mut sinks);
-                }
-            });
-        }
-        self.log = log.into_inner();
+        self.fly(true);
     }
 
     /// Completes the paused step and moves.
     fn advance(&mut self) {
+        self.fly(false);
+    }
+
+    /// Flies the team through the scenario's field with its oracles, the trace recorded when
+    /// `record`: to the next pause when `to_pause` ([`PyTeamEnv::run_to_pause`]), else the
+    /// paused step completed and moved ([`PyTeamEnv::advance`]).
+    fn fly(&mut self, to_pause: bool) {
         let s = self.scenario.clone();
         let vehicle = self.vehicle;
-        let n = self.agents.len();
+        let period = self.period;
+        let n = if self.record { self.agents.len() } else { 0 };
         let log = RefCell::new(std::mem::take(&mut self.log));
         if let Some(g) = self.group.as_mut() {
-            let mut sinks = if self.record {
-                sinks(&log, n)
-            } else {
-                Vec::new()
-            };
+            let mut sinks = sinks(&log, n);
             with_field!(s, field => {
                 let iso = s.isoline();
                 let dist = |t: f64, p: Vec2| iso.distance(t, p);
@@ -922,7 +852,15 @@ impl PyTeamEnv {
                     isoline_distance: Some(&dist),
                     gradient: Some(&grad),
                 };
-                if g.is_running() {
+                if to_pause {
+                    while g.is_running() {
+                        g.sense(field, &vehicle, &oracles, &mut sinks);
+                        if g.step_index() % period == 0 {
+                            break;
+                        }
+                        g.advance(&vehicle, &oracles, &mut sinks);
+                    }
+                } else if g.is_running() {
                     g.advance(&vehicle, &oracles, &mut sinks);
                 }
             });
@@ -933,13 +871,9 @@ impl PyTeamEnv {
     /// Ends the team run: its result, the trace's last rows.
     fn finish(&mut self) {
         let Some(g) = self.group.take() else { return };
-        let n = self.agents.len();
+        let n = if self.record { self.agents.len() } else { 0 };
         let log = RefCell::new(std::mem::take(&mut self.log));
-        let mut sinks = if self.record {
-            sinks(&log, n)
-        } else {
-            Vec::new()
-        };
+        let mut sinks = sinks(&log, n);
         let r = g.finish(&mut sinks);
         drop(sinks);
         self.log = log.into_inner();

@@ -2,16 +2,15 @@
 //! entry runs it in this module, so one build gives both), run directories written as
 //! `isotrack run --out` writes them, `plot`, `report` and the controller variants of `compare`.
 
-use crate::columns::{column, SAVE_LOCK, SIGNAL_ROWS};
+use crate::columns::{save_run, TraceColumns};
 use crate::errors::failure;
 use crate::scenario::PyScenario;
 use isotrack_commands::cli::{FigureOptions, ImageFormat, PlotArgs, ReportArgs};
-use isotrack_core::vehicle::Telemetry;
-use isotrack_runs::rundir::RunDir;
-use isotrack_runs::summary::scenario_toml;
-use isotrack_runs::trace::TELEMETRY_COLUMNS;
+use isotrack_runs::sweep::prepared::PreparedSweep;
+use isotrack_runs::sweep::rows::{row_fields, run_scenario, team_row_fields};
 use isotrack_runs::Failure;
-use isotrack_sim::{TraceRow, TraceSink};
+use isotrack_scenario::Scenario;
+use isotrack_sim::TraceSink;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -33,9 +32,9 @@ pub fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
 /// Writes a run directory as `isotrack run --out` does: `trace.csv` from the run's columns
 /// (numbers in the same shortest round-trip form, so they read back bit for bit),
 /// `summary.json` (its text) and the resolved `scenario.toml` (after `note`, comment lines,
-/// when given). Holding the directory's lock as `run --out` does ([`SAVE_LOCK`]): another
-/// writer there is refused with an `OSError` naming it, and a `run --out` while this writes
-/// exits 73.
+/// when given). Holding the directory's lock as `run --out` does ([`crate::columns::SAVE_LOCK`],
+/// [`save_run`]): another writer there is refused with an `OSError` naming it, and a
+/// `run --out` while this writes exits 73.
 #[pyfunction]
 #[pyo3(signature = (dir, summary_json, scenario, trace, note="", done=None))]
 pub fn write_run(
@@ -47,70 +46,17 @@ pub fn write_run(
     note: &str,
     done: Option<&Bound<'_, PyList>>,
 ) -> PyResult<()> {
-    let dir_name = dir;
-    let dir = Path::new(dir);
-    let flying = scenario.inner.is_flying();
-    let t = column(trace, "t_s", None)?;
-    let n = Some(t.len());
-    let cols: Vec<Vec<f64>> = ["x_m", "y_m", "heading_rad", "s", "error", "omega_radps"]
-        .iter()
-        .chain(["s_measured"].iter())
-        .map(|c| column(trace, c, n))
-        .collect::<PyResult<_>>()?;
-    let telemetry: Option<Vec<Vec<f64>>> = flying
-        .then(|| {
-            TELEMETRY_COLUMNS
-                .iter()
-                .map(|c| column(trace, c, n))
-                .collect::<PyResult<_>>()
-        })
-        .transpose()?;
-    // The one run-directory writer, locked as `run --out` locks it (att30c-6).
-    let new_dir = std::fs::symlink_metadata(dir).is_err();
-    let out = RunDir::open(dir, &[], &[], Some(SAVE_LOCK)).map_err(crate::columns::save_failure)?;
-    let mut file = out.trace(flying).map_err(failure)?;
-    for i in 0..=t.len() {
-        // Ctrl-C is answered while the trace is written (2 M rows take seconds): the
-        // temporary trace is removed, and the directory if this call made it (issue 30,
-        // att30b item 4); checked once more after the last row, just before the commit
-        // (ver30b-9), so that an interrupt before it always leaves the earlier run.
-        if i % SIGNAL_ROWS == 0 || i == t.len() {
-            if let Err(e) = py.check_signals() {
-                drop(out.abandon(file, "interrupted"));
-                drop(out);
-                if new_dir {
-                    let _ = std::fs::remove_dir(dir);
-                }
-                return Err(e);
-            }
-        }
-        let Some(&t_s) = t.get(i) else { break };
-        let w = file.writer();
-        let m = cols[6][i];
-        w.record(&TraceRow {
-            t_s,
-            x_m: cols[0][i],
-            y_m: cols[1][i],
-            heading_rad: cols[2][i],
-            s: cols[3][i],
-            error: cols[4][i],
-            omega_radps: cols[5][i],
-            // NaN in the numpy column is "no sample yet", an empty cell in the file.
-            s_measured: (!m.is_nan()).then_some(m),
-            telemetry: telemetry.as_ref().map(|tm| Telemetry {
-                altitude_m: tm[0][i],
-                airspeed_mps: tm[1][i],
-                roll_rad: tm[2][i],
-            }),
-        });
-    }
-    out.finish_json(
-        file,
-        &format!("{note}{}", scenario_toml(&scenario.inner)),
+    let cols = TraceColumns::read(trace, scenario.inner.is_flying())?;
+    save_run(
+        py,
+        dir,
         summary_json,
+        &scenario.inner,
+        note,
+        done,
+        false,
+        |w| cols.stream(py, |_, row| w.record(row)),
     )
-    .map_err(failure)?;
-    crate::columns::interrupt_after_save(py, dir_name, done)
 }
 
 /// `isotrack plot RUN_DIR... [--out DIR] [--format png|svg] [--animate]` with the default look;
@@ -402,15 +348,18 @@ pub fn sweep_cells_with(
     factory: Py<PyAny>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<crate::sweep::SweepCells> {
-    use isotrack_runs::sweep::rows::{row_fields, run_scenario};
     let sweep = crate::sweep::prepare(text, name)?;
-    // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
-    let folder = crate::scenario::absolute_dir(&sweep.plan.dir);
+    let mut factory = SweepFactory {
+        factory: &factory,
+        label: &sweep.label,
+        // A relative path the factory's scenario is `set` to is read as the sweep reads its own.
+        folder: crate::scenario::absolute_dir(&sweep.plan.dir),
+        returned: crate::controller::Returned::default(),
+    };
     let team = sweep.base.spec().team.is_some();
     let kinds = crate::sweep::column_kinds(&sweep.plan, team);
     let mut rows = Vec::new();
     let mut watch = crate::guard::SignalWatch::new();
-    let mut returned = crate::controller::Returned::default();
     let total = sweep.plan.total();
     let report = |done: u64| -> PyResult<()> {
         match &progress {
@@ -420,96 +369,113 @@ pub fn sweep_cells_with(
     };
     report(0)?;
     for id in 0..total {
-        if team {
-            // Each vehicle flies its own controller: the factory is called once per vehicle.
-            let fields = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
-                Err(e) => isotrack_runs::sweep::rows::team_row_fields(
-                    &sweep.plan,
-                    id,
-                    Err(e),
-                    String::new(),
-                ),
-                Ok(scenario) => {
-                    let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
-                    let mut objs = Vec::with_capacity(n);
-                    for _ in 0..n {
-                        let native = Py::new(
-                            py,
-                            PyScenario {
-                                inner: scenario.clone(),
-                                origin: format!("sweep {} run {id}", sweep.label),
-                                folder: Some(folder.clone()),
-                            },
-                        )?;
-                        let obj = factory.call1(py, (native,))?;
-                        // One object for two vehicles would interleave their samples through one
-                        // state (an integral, a last time): refused, never flown shared.
-                        if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
-                            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                                "controller_factory returned the same object for vehicles {j} and {} \
-                                 of run {id}: each vehicle flies its own instance (its state is its \
-                                 own, never shared); return a new controller at every call",
-                                objs.len()
-                            )));
-                        }
-                        let now = format!("vehicle {} of run {id}", objs.len());
-                        if let Some(earlier) = returned.check(py, &obj, now.clone())? {
-                            return Err(crate::controller::shared_across_runs(&earlier, &now));
-                        }
-                        objs.push(obj);
-                    }
-                    let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
-                    isotrack_runs::sweep::rows::team_row_fields(
-                        &sweep.plan,
-                        id,
-                        Ok(Some(r)),
-                        String::new(),
-                    )
-                }
-            };
-            rows.push(fields);
-            report(id + 1)?;
-            continue;
-        }
-        let result = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
-            Err(e) => Err(e),
-            Ok(scenario) => {
-                let native = Py::new(
-                    py,
-                    PyScenario {
-                        inner: scenario.clone(),
-                        origin: format!("sweep {} run {id}", sweep.label),
-                        folder: Some(folder.clone()),
-                    },
-                )?;
-                let obj = factory.call1(py, (native,))?;
-                let now = format!("run {id}");
-                if let Some(earlier) = returned.check(py, &obj, now.clone())? {
-                    return Err(crate::controller::shared_across_runs(&earlier, &now));
-                }
-                if obj.bind(py).hasattr("reset")? {
-                    obj.call_method0(py, "reset")?;
-                }
-                let mut c = crate::controller::PyController {
-                    obj,
-                    error: None,
-                    max_turn_rate_radps: scenario.max_turn_rate_radps(),
-                };
-                let r = py.detach(|| {
-                    scenario.run_with_watched(&mut c, &mut isotrack_sim::NoTrace, &mut || {
-                        watch.keep_going()
-                    })
-                });
-                if let Some(e) = c.error.or(watch.error.take()) {
-                    return Err(e);
-                }
-                r.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))
-                    .map(Ok)?
-            }
+        let fields = if team {
+            factory.team_row(py, &sweep, id)?
+        } else {
+            let result = factory.run(py, &sweep, id, &mut watch)?;
+            row_fields(&sweep.plan, id, result)
         };
-        rows.push(row_fields(&sweep.plan, id, result));
+        rows.push(fields);
         report(id + 1)?;
     }
     crate::sweep::literal_cells(&sweep.plan, &kinds, &mut rows);
     Ok((sweep.header, kinds, rows))
+}
+
+/// A sweep's `controller_factory` ([`sweep_cells_with`]): called with each run's scenario (for a
+/// team, once per vehicle), never to return one object for two runs or vehicles.
+struct SweepFactory<'a> {
+    factory: &'a Py<PyAny>,
+    /// The sweep's label, in its scenarios' origin (`sweep LABEL run ID`).
+    label: &'a str,
+    /// The folder a relative path the factory's scenario is `set` to is read against.
+    folder: PathBuf,
+    /// Every object returned so far, with the run (and vehicle) it flies.
+    returned: crate::controller::Returned,
+}
+
+impl SweepFactory<'_> {
+    /// `factory(scenario)` for run `id`, a new native scenario for each call.
+    fn call(&self, py: Python<'_>, scenario: &Scenario, id: u64) -> PyResult<Py<PyAny>> {
+        let native = Py::new(
+            py,
+            PyScenario {
+                inner: scenario.clone(),
+                origin: format!("sweep {} run {}", self.label, id),
+                folder: Some(self.folder.clone()),
+            },
+        )?;
+        self.factory.call1(py, (native,))
+    }
+
+    /// Records `obj` as flying `now`: refused when the factory returned it for an earlier run.
+    fn check_new(&mut self, py: Python<'_>, obj: &Py<PyAny>, now: String) -> PyResult<()> {
+        if let Some(earlier) = self.returned.check(py, obj, now.clone())? {
+            return Err(crate::controller::shared_across_runs(&earlier, &now));
+        }
+        Ok(())
+    }
+
+    /// Run `id`'s `results.csv` fields, a team's: each vehicle flies its own controller (the
+    /// factory is called once per vehicle), the runs on this thread.
+    fn team_row(
+        &mut self,
+        py: Python<'_>,
+        sweep: &PreparedSweep,
+        id: u64,
+    ) -> PyResult<Vec<String>> {
+        let scenario = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
+            Err(e) => return Ok(team_row_fields(&sweep.plan, id, Err(e), String::new())),
+            Ok(scenario) => scenario,
+        };
+        let n = scenario.spec().team.as_ref().map_or(0, |t| t.count());
+        let mut objs = Vec::with_capacity(n);
+        for _ in 0..n {
+            let obj = self.call(py, &scenario, id)?;
+            // One object for two vehicles would interleave their samples through one state (an
+            // integral, a last time): refused, never flown shared.
+            if let Some(j) = objs.iter().position(|o: &Py<PyAny>| o.is(&obj)) {
+                return Err(PyValueError::new_err(format!(
+                    "controller_factory returned the same object for vehicles {j} and {} of run \
+                     {id}: each vehicle flies its own instance (its state is its own, never \
+                     shared); return a new controller at every call",
+                    objs.len()
+                )));
+            }
+            self.check_new(py, &obj, format!("vehicle {} of run {id}", objs.len()))?;
+            objs.push(obj);
+        }
+        let (r, _) = crate::team::run_team_python(py, &scenario, objs, false)?;
+        Ok(team_row_fields(&sweep.plan, id, Ok(Some(r)), String::new()))
+    }
+
+    /// Run `id`'s result, a single vehicle's, flown on this thread by the factory's controller
+    /// (`reset()` first when it has the method): its first exception is raised, and Ctrl-C
+    /// (`watch`) stops it within a sample.
+    fn run(
+        &mut self,
+        py: Python<'_>,
+        sweep: &PreparedSweep,
+        id: u64,
+        watch: &mut crate::guard::SignalWatch,
+    ) -> PyResult<Result<isotrack_sim::RunResult, String>> {
+        let scenario = match run_scenario(&sweep.plan, &sweep.base, id, &sweep.label) {
+            Err(e) => return Ok(Err(e)),
+            Ok(scenario) => scenario,
+        };
+        let obj = self.call(py, &scenario, id)?;
+        self.check_new(py, &obj, format!("run {id}"))?;
+        let mut c =
+            crate::controller::PyController::started(py, obj, scenario.max_turn_rate_radps())?;
+        let r = py.detach(|| {
+            scenario.run_with_watched(&mut c, &mut isotrack_sim::NoTrace, &mut || {
+                watch.keep_going()
+            })
+        });
+        if let Some(e) = c.error.or(watch.error.take()) {
+            return Err(e);
+        }
+        r.ok_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"))
+            .map(Ok)
+    }
 }
