@@ -676,11 +676,6 @@ fn read_grid_files(
     digests: &mut BTreeMap<String, String>,
     read: ReadWhole<'_>,
 ) -> Result<GridFilesRead, Issue> {
-    let issue = |key: &str, message: String| Issue {
-        key: key.to_string(),
-        message,
-        unreadable: false,
-    };
     // (file, its values' units) of the files that give one.
     let mut file_units: Vec<(String, String)> = Vec::new();
     let mut georef = isotrack_fields::georef::Georeference::None;
@@ -688,43 +683,18 @@ fn read_grid_files(
     let mut one_file: Option<String> = None;
     let (raw, file_times) = match &g.files {
         GridFiles::Paths(list) => {
-            let mut frames: Vec<Grid2> = Vec::with_capacity(list.len());
-            let mut abs = Vec::with_capacity(list.len());
-            // Each distinct file read so far, with the index of its frame and its digest.
-            let mut read_before: Vec<(FileId, usize, String)> = Vec::new();
-            for (k, p) in list.iter().enumerate() {
-                let path = resolve_one(p, base_dir);
-                let id = (path.clone(), dev_inode(&path));
-                if let Some((_, at, digest)) =
-                    read_before.iter().find(|(o, ..)| same_file_as(o, &id))
-                {
-                    digests.insert(path.display().to_string(), digest.clone());
-                    frames.push(frames[*at].clone());
-                    abs.push(path.display().to_string());
-                    continue;
-                }
-                let (s, digest) = load_series_read(&path, g.format, g.variable.as_deref(), read)
-                    .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
-                digests.insert(path.display().to_string(), digest.clone());
-                read_before.push((id, frames.len(), digest));
-                if s.frames.len() != 1 {
-                    return Err(issue(
-                        "field.paths",
-                        format!(
-                            "file {k} ({}) holds {} frames; each file of field.paths must hold one",
-                            path.display(),
-                            s.frames.len()
-                        ),
-                    ));
-                }
-                notes.extend(s.warnings);
-                file_units.extend(s.units.map(|u| (path.display().to_string(), u)));
-                if k == 0 {
-                    georef = s.georeference;
-                }
-                frames.extend(s.frames);
-                abs.push(path.display().to_string());
-            }
+            let (frames, abs) = read_frame_files(
+                list,
+                g,
+                base_dir,
+                FrameFilesOut {
+                    notes,
+                    digests,
+                    file_units: &mut file_units,
+                    georef: &mut georef,
+                },
+                read,
+            )?;
             filled.paths = Some(abs);
             (frames, None)
         }
@@ -748,6 +718,68 @@ fn read_grid_files(
         georef,
         one_file,
     })
+}
+
+/// Where [`read_frame_files`] records what it learns besides the frames: the files' warnings,
+/// each file's digest, the units of the files that give one, and the first file's
+/// georeference.
+struct FrameFilesOut<'a> {
+    notes: &'a mut Vec<String>,
+    digests: &'a mut BTreeMap<String, String>,
+    file_units: &'a mut Vec<(String, String)>,
+    georef: &'a mut isotrack_fields::georef::Georeference,
+}
+
+/// The frames of `field.paths` (one per file, in order) and the files' absolute paths: each
+/// distinct file read once, a file named twice giving its one frame, as read, to each place
+/// (att43-7); a file holding other than one frame is an error naming it.
+fn read_frame_files(
+    list: &[String],
+    g: &GridSpec,
+    base_dir: &Path,
+    out: FrameFilesOut<'_>,
+    read: ReadWhole<'_>,
+) -> Result<(Vec<Grid2>, Vec<String>), Issue> {
+    let mut frames: Vec<Grid2> = Vec::with_capacity(list.len());
+    let mut abs = Vec::with_capacity(list.len());
+    // Each distinct file read so far, with the index of its frame and its digest.
+    let mut read_before: Vec<(FileId, usize, String)> = Vec::new();
+    for (k, p) in list.iter().enumerate() {
+        let path = resolve_one(p, base_dir);
+        let id = (path.clone(), dev_inode(&path));
+        if let Some((_, at, digest)) = read_before.iter().find(|(o, ..)| same_file_as(o, &id)) {
+            out.digests
+                .insert(path.display().to_string(), digest.clone());
+            frames.push(frames[*at].clone());
+            abs.push(path.display().to_string());
+            continue;
+        }
+        let (s, digest) = load_series_read(&path, g.format, g.variable.as_deref(), read)
+            .map_err(|e| load_issue("field.paths", &format!("file {k}: "), e))?;
+        out.digests
+            .insert(path.display().to_string(), digest.clone());
+        read_before.push((id, frames.len(), digest));
+        if s.frames.len() != 1 {
+            return Err(Issue {
+                key: "field.paths".to_string(),
+                message: format!(
+                    "file {k} ({}) holds {} frames; each file of field.paths must hold one",
+                    path.display(),
+                    s.frames.len()
+                ),
+                unreadable: false,
+            });
+        }
+        out.notes.extend(s.warnings);
+        out.file_units
+            .extend(s.units.map(|u| (path.display().to_string(), u)));
+        if k == 0 {
+            *out.georef = s.georeference;
+        }
+        frames.extend(s.frames);
+        abs.push(path.display().to_string());
+    }
+    Ok((frames, abs))
 }
 
 /// A `grid` field: one frame (a [`GridField`]) or a time series (a [`GridSeries`]) from
