@@ -135,8 +135,8 @@ pub struct SpacingLoopReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_constants: Option<&'static str>,
     /// att51-7: the vehicles free in the linearisation whose equilibrium command sits on an
-    /// envelope bound (`team.v_max_mps = v0`, say): each can move one way only, so half the
-    /// linear law acts on it and its time constants do not apply (absent when none).
+    /// envelope bound (`team.v_max_mps = v0`, say): each can move one way only, so the law is
+    /// one-sided and `time_constants` says what is left of the linear loop's (absent when none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub one_sided_vehicles: Vec<usize>,
     /// Past `k_v*` (the linear loop unstable; null otherwise): how far the speed saturation lets
