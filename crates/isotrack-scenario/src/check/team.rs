@@ -119,6 +119,26 @@ pub struct SpacingLoopReport {
     pub slowest_time_constant_s: Option<f64>,
     /// The same in continuous time, `1/(k_v c lambda_1)`, s.
     pub slowest_time_constant_continuous_s: Option<f64>,
+    /// Whether `modes` are bounds, not eigenvalues (past
+    /// [`linearised::MAX_DENSE_VEHICLES`] free vehicles with unequal slopes or pins: the first
+    /// a lower bound of the smallest, the second an upper bound of the largest; att50-13).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub eigenvalue_bounds: bool,
+    /// How the two time constants above read (absent: the linear loop's values):
+    /// `lower_bound` (the conservative slope `c = 1` off a known circle makes every `mu` its
+    /// largest, so the loop decays no faster, att50-6), `upper_bound` (the continuous one from
+    /// the lower bound of the smallest `mu`, the sampled one not computed, att50-13),
+    /// `one_sided` (every vehicle on the same envelope bound at the equilibrium, att51-7: the
+    /// one-sided law's slowest piece, one vehicle cut, `mu = c (2 - 2 cos(pi/N))`) or
+    /// `not_applicable` (some vehicles on a bound otherwise, or bounds of the spectrum with the
+    /// conservative slope; both null).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_constants: Option<&'static str>,
+    /// att51-7: the vehicles free in the linearisation whose equilibrium command sits on an
+    /// envelope bound (`team.v_max_mps = v0`, say): each can move one way only, so the law is
+    /// one-sided and `time_constants` says what is left of the linear loop's (absent when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub one_sided_vehicles: Vec<usize>,
     /// Past `k_v*` (the linear loop unstable; null otherwise): how far the speed saturation lets
     /// a gap swing about the even spacing, m. The unstable mode grows until the commanded
     /// speeds saturate; then each vehicle runs at `team.v_min_mps` or `team.v_max_mps`, so a
@@ -287,6 +307,7 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         .map(|lmax| g_star / (period_s * c * lmax))
         .filter(|k| k.is_finite());
     check_spacing_modes(&mut rep, k_v, c, &spectrum);
+    time_constant_caveats(&mut rep, team, &pins, &slopes, &spectrum);
     if rep.stable == Some(false) {
         note_saturated_gaps(&mut rep, s, team);
     }
@@ -319,12 +340,15 @@ fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLo
         slowest_mode_m: None,
         slowest_time_constant_s: None,
         slowest_time_constant_continuous_s: None,
+        eigenvalue_bounds: false,
+        time_constants: None,
+        one_sided_vehicles: vec![],
         saturated_gap_amplitude_m: None,
         saturated_gap_cv_max: None,
         range_halt: range_halt(s, l, team),
         silent_gap_closing_mps: silent_gap_closing_mps(s, l, team),
         shifted_equilibrium: s.team_arc().and_then(|c| {
-            equilibrium::shifted_equilibrium(s, l, team, c, flown_circle_radius_m(s, l, c))
+            equilibrium::shifted_equilibrium(s, l, team, c, |v| flown_radius_at(s, l, c, v))
         }),
         linearised_about: None,
         not_modelled: vec![],
@@ -377,7 +401,7 @@ fn loop_slopes(
     }
     let solved = rep.shifted_equilibrium.as_ref().filter(|e| e.exists());
     if let (Some(eq), Some(circle)) = (solved, s.team_arc()) {
-        let d = 2.0 * flown_circle_radius_m(s, l, circle);
+        let d = 2.0 * flown_radius_at(s, l, circle, eq.speed_mps);
         let slopes = eq
             .ranges_m
             .iter()
@@ -450,6 +474,85 @@ fn check_spacing_modes(
         .filter(|t| t.is_finite());
     rep.slowest_time_constant_continuous_s =
         Some(1.0 / (k_v * c * mu[0])).filter(|t| t.is_finite());
+}
+
+/// How far the linear time constants of `rep` describe the decay ([`SpacingLoopReport::
+/// time_constants`]): vehicles on an envelope bound at the equilibrium (not `pins`) make them
+/// one-sided (att51-7: [`one_sided_time_constants`]), bounds of the spectrum leave an upper
+/// bound of the continuous one (att50-13) and the conservative slope a lower bound of both
+/// (att50-6).
+fn time_constant_caveats(
+    rep: &mut SpacingLoopReport,
+    team: &TeamSpec,
+    pins: &[bool],
+    slopes: &[f64],
+    spectrum: &linearised::LoopSpectrum,
+) {
+    let speed = match rep.shifted_equilibrium.as_ref() {
+        Some(eq) => eq.speed_mps,
+        None => equilibrium::equilibrium_speed(team),
+    };
+    rep.one_sided_vehicles = equilibrium::on_bound(team, speed, pins);
+    rep.eigenvalue_bounds = !spectrum.exact;
+    let conservative = rep.range_slope_source == Some("conservative");
+    rep.time_constants = if !rep.one_sided_vehicles.is_empty() {
+        one_sided_time_constants(rep, team, speed, slopes)
+    } else if conservative && !spectrum.exact {
+        Some("not_applicable")
+    } else if !spectrum.exact {
+        Some("upper_bound")
+    } else if conservative {
+        Some("lower_bound")
+    } else {
+        None
+    };
+    if rep.time_constants == Some("not_applicable") {
+        rep.slowest_mode_m = None;
+        rep.slowest_time_constant_s = None;
+        rep.slowest_time_constant_continuous_s = None;
+    }
+}
+
+/// att51-7: every vehicle free and on the same envelope bound at the equilibrium, every gap with
+/// one slope `c` (`team.v_max_mps = v0` at even spacing): each correction that asks a vehicle
+/// past the bound is cut, so the law is one-sided, linear in pieces. The corrections sum to zero,
+/// so some vehicle is always cut; the slowest piece has exactly one cut (flying `V`: a pin) and
+/// every other vehicle moving the other way, which the one-pin path's first mode is (its
+/// eigenvector has one sign, so the pattern keeps itself): `mu = c (2 - 2 cos(pi/N))`, time
+/// constant `1/(k_v mu)` (pieces with more cut vehicles decay faster). Sets `rep`'s time
+/// constants to it and gives `one_sided`; `not_applicable` in any other case.
+fn one_sided_time_constants(
+    rep: &mut SpacingLoopReport,
+    team: &TeamSpec,
+    speed: f64,
+    slopes: &[f64],
+) -> Option<&'static str> {
+    let n = team.count();
+    let same = equilibrium::on_one_bound(team, speed, &rep.one_sided_vehicles);
+    let (Some(k_v), Some(c)) = (rep.k_v_per_s, rep.range_slope) else {
+        return Some("not_applicable");
+    };
+    let conservative = rep.range_slope_source == Some("conservative");
+    if rep.one_sided_vehicles.len() != n
+        || !same
+        || conservative
+        || slopes.iter().any(|&x| x != slopes[0])
+    {
+        return Some("not_applicable");
+    }
+    let one_pin: Vec<bool> = (0..n).map(|i| i == 0).collect();
+    let Some(mu) = linearised::loop_spectrum(c, slopes, &one_pin)
+        .filter(|s| s.exact)
+        .map(|s| s.lambdas[0])
+    else {
+        return Some("not_applicable");
+    };
+    let (period_s, delay_s) = (rep.period_s, rep.delay_s);
+    let rho = spacing_mode_spectral_radius(k_v * c * mu * period_s, period_s, delay_s);
+    rep.slowest_mode_m = None;
+    rep.slowest_time_constant_s = rho.filter(|r| *r < 1.0).map(|r| -period_s / r.ln());
+    rep.slowest_time_constant_continuous_s = Some(1.0 / (k_v * c * mu)).filter(|t| t.is_finite());
+    Some("one_sided")
 }
 
 /// An unstable spacing loop: the gaps' swing once the speeds saturate (its amplitude, and its
@@ -700,6 +803,12 @@ fn flown_circle_radius_m(s: &Scenario, l: &Law, c: CircleArc) -> f64 {
         .map(|o| o.orbit.radius_m)
         .filter(|&f| f.is_finite() && f > 0.0)
         .unwrap_or(c.radius_m)
+}
+
+/// [`flown_circle_radius_m`] of a vehicle flying `speed_mps` (att50-12: at a shifted
+/// equilibrium every vehicle flies the common speed `V`, and the P law's orbit moves with it).
+fn flown_radius_at(s: &Scenario, l: &Law, c: CircleArc, speed_mps: f64) -> f64 {
+    flown_circle_radius_m(s, &Law { v: speed_mps, ..*l }, c)
 }
 
 /// [`SpacingLoopReport::silent_gap_closing_mps`]: `2 k_v (max_range_m - e)` for
@@ -1405,6 +1514,66 @@ impl TeamCheckReport {
     }
 }
 
+/// The line on the slowest mode's time constants, with how far they describe the decay
+/// ([`SpacingLoopReport::time_constants`]).
+fn slowest_line(sp: &SpacingLoopReport) -> String {
+    let vehicles = || {
+        format!(
+            "vehicle{} {}",
+            if sp.one_sided_vehicles.len() > 1 {
+                "s"
+            } else {
+                ""
+            },
+            sp.one_sided_vehicles
+                .iter()
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    let num = |x: Option<f64>, none: &str| x.map_or(none.to_string(), |v| format!("{} s", Num(v)));
+    if sp.time_constants == Some("one_sided") {
+        return format!(
+            "  slowest mode (one-sided): time constant {} sampled, {} continuous (1/(k_v c (2 - 2 cos(pi/N)))): {} fly at the same envelope bound at the equilibrium, so each can move one way only and a correction asking it past the bound is cut: the slowest pattern has one vehicle cut (flying the team's speed, a pin) and the rest moving, the one-pin path's first mode, not the ring's m = 1",
+            num(sp.slowest_time_constant_s, "none (does not decay)"),
+            num(sp.slowest_time_constant_continuous_s, "none (does not decay)"),
+            vehicles()
+        );
+    }
+    if sp.time_constants == Some("not_applicable") {
+        return if sp.one_sided_vehicles.is_empty() {
+            "  slowest mode: time constant not computed: the slope c = 1 only bounds the eigenvalues from above, and past the dense limit the smallest is bounded from below: the two bounds leave the time constant unbounded either way".into()
+        } else {
+            format!(
+                "  slowest mode: time constant not applicable: {} fly at an envelope bound at the equilibrium (their command there is the bound), so each can move one way only: a correction asking it past the bound is cut, only part of the linear law acts, and the linear loop's time constants do not describe the decay; run it to see how fast",
+                vehicles()
+            )
+        };
+    }
+    let (sampled, word) = match sp.time_constants {
+        Some("upper_bound") => ("not computed past the dense limit".to_string(), "at most "),
+        Some("lower_bound") => (
+            format!(
+                "at least {}",
+                num(sp.slowest_time_constant_s, "none (does not decay)")
+            ),
+            "at least ",
+        ),
+        _ => (num(sp.slowest_time_constant_s, "none (does not decay)"), ""),
+    };
+    let bound = match sp.time_constants {
+        Some("lower_bound") => " (bounds: the slope c = 1 is the largest a range can have, so the loop decays no faster)",
+        Some("upper_bound") => " (a bound: from the lower bound of the smallest eigenvalue)",
+        _ => "",
+    };
+    format!(
+        "  slowest mode (m = {}): time constant {sampled} sampled (-T/ln rho), {word}{} continuous (m = 1: 1/(k_v c lambda_1)){bound}",
+        sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
+        num(sp.slowest_time_constant_continuous_s, "none (does not decay)")
+    )
+}
+
 /// The lines of `isotrack check`'s team section on an applicable spacing loop: its sampling,
 /// range slope, ring modes, largest stable gain, slowest mode and what it leaves out.
 fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
@@ -1430,8 +1599,12 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
         .iter()
         .map(|m| {
             format!(
-                "m = {}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
-                m.m,
+                "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
+                match (sp.eigenvalue_bounds, m.m) {
+                    (false, k) => format!("m = {k}"),
+                    (true, 1) => "lower bound of the smallest".into(),
+                    (true, _) => "upper bound of the largest".into(),
+                },
                 Num(m.lambda),
                 Num(m.gain_per_period),
                 m.spectral_radius
@@ -1442,6 +1615,8 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
         .collect();
     let which = if sp.all_modes_listed {
         "every distinct one"
+    } else if sp.eigenvalue_bounds {
+        "bounds of the smallest and the largest: past the dense limit"
     } else {
         "the smallest and the largest of many"
     };
@@ -1482,14 +1657,7 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
     if !sp.note.is_empty() {
         out.push(format!("  note: {}", sp.note));
     }
-    let num =
-        |x: Option<f64>| x.map_or("none (does not decay)".into(), |v| format!("{} s", Num(v)));
-    out.push(format!(
-            "  slowest mode (m = {}): time constant {} sampled (-T/ln rho), {} continuous (m = 1: 1/(k_v c lambda_1))",
-            sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
-            num(sp.slowest_time_constant_s),
-            num(sp.slowest_time_constant_continuous_s)
-        ));
+    out.push(slowest_line(sp));
     for w in &sp.not_modelled {
         out.push(format!("  not modelled: {w}"));
     }

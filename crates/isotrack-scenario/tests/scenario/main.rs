@@ -18,6 +18,7 @@ mod search;
 mod series;
 mod stations;
 mod team_check;
+mod team_check_bounds;
 mod team_check_equilibrium;
 mod team_check_linearised;
 mod team_open;

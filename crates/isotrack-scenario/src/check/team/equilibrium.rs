@@ -19,7 +19,8 @@ use crate::check::setup::Law;
 /// `range_balance`'s (or `arc_reference`'s, att50-2: its arc gaps for the ranges) equilibrium
 /// with unequal nominal speeds on a known circle: every vehicle flies one speed `V`, so vehicle
 /// `i`'s range ahead exceeds its range behind by
-/// `d_i = (V - v0_i)/k_v` (the vehicle whose envelope bound sets `V` takes up the rest; with
+/// `d_i = (V - v0_i)/k_v` (the vehicle whose envelope bound sets `V` takes up the rest, each of
+/// them the rest of its run to the next when two or more set it, att50-9; with
 /// vehicles of no speed room, `V` is their speed and each takes up the rest of its run to the
 /// next of them, att46-7), the ranges are chords `2 R' sin(theta/2)` of the circle flown
 /// (radius `R'`) and the arcs sum to a turn (each run's to the arc its two ends keep). Solved
@@ -86,6 +87,35 @@ pub(super) fn saturated(team: &TeamSpec, eq: &ShiftedEquilibrium) -> Vec<usize> 
             e.min_mps < e.max_mps && (cmd > e.max_mps || cmd < e.min_mps)
         })
         .collect()
+}
+
+/// Relative tolerance within which a speed counts as ON an envelope bound (att51-7).
+pub const ON_BOUND_REL_TOL: f64 = 1e-9;
+
+/// att51-7: the vehicles of `team` free in the linearisation (`pins[i]` false, with speed room)
+/// whose equilibrium command, the common speed `speed`, sits on one of its envelope bounds
+/// (within [`ON_BOUND_REL_TOL`]): e.g. `team.v_max_mps = v0`. Such a vehicle can move only one
+/// way (a correction that asks it past the bound is cut), so half of the linear law acts on it
+/// and the linear time constants do not describe the decay. Listed order.
+pub(super) fn on_bound(team: &TeamSpec, speed: f64, pins: &[bool]) -> Vec<usize> {
+    let tol = ON_BOUND_REL_TOL * speed.abs().max(1.0);
+    (0..team.count())
+        .filter(|&i| !pins.get(i).copied().unwrap_or(false))
+        .filter(|&i| {
+            let e = team.speeds(i);
+            e.min_mps < e.max_mps
+                && ((speed - e.max_mps).abs() <= tol || (speed - e.min_mps).abs() <= tol)
+        })
+        .collect()
+}
+
+/// Whether the vehicles `ids` (from [`on_bound`]) all sit on the same side: each at its
+/// `v_max` (only slowing acts), or each at its `v_min` (only speeding up).
+pub(super) fn on_one_bound(team: &TeamSpec, speed: f64, ids: &[usize]) -> bool {
+    let tol = ON_BOUND_REL_TOL * speed.abs().max(1.0);
+    let top = |i: &usize| (speed - team.speeds(*i).max_mps).abs() <= tol;
+    let bottom = |i: &usize| (speed - team.speeds(*i).min_mps).abs() <= tol;
+    ids.iter().all(top) || ids.iter().all(bottom)
 }
 
 /// The keys that pin the vehicles `ids` (each with `v_min_i = v_max_i`): the overrides in
@@ -214,10 +244,10 @@ impl GapMap {
 }
 
 /// [`ShiftedEquilibrium`] of `team` flying `range_balance` or `arc_reference` (gain `k_v > 0`)
-/// with unequal nominal speeds on `circle`, flown at radius `flown_m`; `None` for another team,
-/// where the clamp to the envelopes is set by two vehicles at once (the equilibrium is then a
-/// family), or with two or more vehicles with no speed room whose arcs are not known (a start
-/// off the circle, no PI-like law to tell the direction of travel).
+/// with unequal nominal speeds on `circle`, flown at radius `flown_m(V)` at the common speed `V`
+/// (att50-12); `None` for another team, or with two or more anchors (vehicles with no speed room,
+/// or saturated at the bound that sets `V`, att50-9) whose arcs are not known (a start off the
+/// circle, no PI-like law to tell the direction of travel).
 ///
 /// Vehicles with no speed room (`v_min_i = v_max_i`, att46-7) fly their one speed, which is
 /// then the common speed `V`; each takes up the rest of its own run of the ring, so from each
@@ -230,26 +260,29 @@ pub(super) fn shifted_equilibrium(
     l: &Law,
     team: &TeamSpec,
     circle: CircleArc,
-    flown_m: f64,
+    flown_m: impl Fn(f64) -> f64,
 ) -> Option<ShiftedEquilibrium> {
+    let n = team.count();
+    let ids = pinned(team);
+    if n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() == n {
+        return None;
+    }
+    let speed = equilibrium_speed(team);
+    // att50-12: every vehicle flies V at the equilibrium, so the circle flown is V's (the P
+    // law's orbit moves with the speed).
     let (k_v, map) = match team.law {
-        SpacingLaw::RangeBalance { gain_per_s } => (gain_per_s, GapMap::Chord(2.0 * flown_m)),
+        SpacingLaw::RangeBalance { gain_per_s } => {
+            (gain_per_s, GapMap::Chord(2.0 * flown_m(speed)))
+        }
         SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, GapMap::Arc(circle.radius_m)),
         SpacingLaw::None => return None,
     };
-    let n = team.count();
-    let ids = pinned(team);
-    if k_v <= 0.0 || n < 3 || team.nominal_speeds_mps().len() < 2 || ids.len() == n {
+    if k_v <= 0.0 || !(map.upper().is_finite() && map.upper() > 0.0) {
         return None;
     }
-    if !(map.upper().is_finite() && map.upper() > 0.0) || disjoint_envelopes(team).is_some() {
+    if disjoint_envelopes(team).is_some() {
         return None;
     }
-    let speed = match (ids.first(), common_speed(team, team.ideal_speed_mps())) {
-        (Some(&p), _) => team.speeds(p).max_mps,
-        (None, Some((v, _, _))) => v,
-        (None, None) => team.ideal_speed_mps(),
-    };
     let runs = equilibrium_runs(s, l, team, circle, speed, &ids)?;
     let d = |i: usize| (speed - team.speeds(i).nominal_mps) / k_v;
     let largest = match map {
@@ -290,11 +323,42 @@ pub(super) fn shifted_equilibrium(
     Some(eq)
 }
 
+/// The common speed `V` of the equilibrium of `team` (docs/TEAMS.md, "Per-vehicle
+/// overrides"): the one speed of its vehicles with no speed room, else the mean nominal speed
+/// clamped to every envelope ([`common_speed`]), else that mean.
+pub(super) fn equilibrium_speed(team: &TeamSpec) -> f64 {
+    match (
+        pinned(team).first(),
+        common_speed(team, team.ideal_speed_mps()),
+    ) {
+        (Some(&p), _) => team.speeds(p).max_mps,
+        (None, Some((v, _, _))) => v,
+        (None, None) => team.ideal_speed_mps(),
+    }
+}
+
+/// The vehicles of `team` (with speed room) whose envelope bound is the common speed `speed`
+/// when that clamp sets it (att50-9: two or more saturate there at once); empty when the mean
+/// nominal speed is within every envelope.
+pub(super) fn bound_setters(team: &TeamSpec, speed: f64) -> Vec<usize> {
+    if common_speed(team, team.ideal_speed_mps()).is_none() {
+        return vec![];
+    }
+    (0..team.count())
+        .filter(|&j| {
+            let e = team.speeds(j);
+            e.min_mps < e.max_mps && (e.min_mps == speed || e.max_mps == speed)
+        })
+        .collect()
+}
+
 /// The runs of the ring each taken up by one vehicle (the first of the run): `(first, count of
-/// gaps, arc they fill, rad)`. With no vehicle pinned, one run of the whole turn from the
-/// vehicle whose envelope bound sets `speed` (vehicle 0 when none does; `None` when two set
-/// it); with one pinned, the whole turn from it; with more, from each to the next of them,
-/// filling the arc between their starts (`None` when not known).
+/// gaps, arc they fill, rad)`. The anchors are the vehicles pinned (no speed room), else those
+/// whose envelope bound sets `speed` ([`bound_setters`]; vehicle 0 when none does). With one
+/// anchor, the whole turn from it; with more (att50-9: two saturated at one bound act as pins
+/// too), from each to the next of them, filling the arc between their starts (`None` when not
+/// known): for saturated anchors the transient moves those arcs before they saturate, so the
+/// deployed arcs are the model's.
 fn equilibrium_runs(
     s: &Scenario,
     l: &Law,
@@ -304,22 +368,12 @@ fn equilibrium_runs(
     ids: &[usize],
 ) -> Option<Vec<(usize, usize, f64)>> {
     let n = team.count();
-    match ids {
-        [] => {
-            let bound = |j: usize| {
-                let e = team.speeds(j);
-                e.min_mps == speed || e.max_mps == speed
-            };
-            let setters: Vec<usize> = (0..n).filter(|&j| bound(j)).collect();
-            let sets = common_speed(team, team.ideal_speed_mps()).is_some();
-            match (sets, setters.as_slice()) {
-                (true, [one]) => Some(vec![(*one, n, TAU)]),
-                (true, _) => None,
-                (false, _) => Some(vec![(0, n, TAU)]),
-            }
-        }
+    let setters = bound_setters(team, speed);
+    let anchors = if ids.is_empty() { &setters } else { ids };
+    match anchors {
+        [] => Some(vec![(0, n, TAU)]),
         [one] => Some(vec![(*one, n, TAU)]),
-        _ => {
+        ids => {
             let dir = travel_direction(s, l)?;
             let angle = |i: usize| start_angle(team, circle, i);
             let mut runs = Vec::with_capacity(ids.len());
@@ -589,22 +643,10 @@ pub(super) fn probe_cannot_fly(team: &TeamSpec) -> Option<String> {
 /// (att50-3): `Phi(m)^(2 N) >= 0.99` for the probe's change `m` fitted deviations above zero.
 pub const PROBE_PICKS_RIGHT: f64 = 0.99;
 
-/// The standard normal's upper tail `Phi(-m) = erfc(m/sqrt 2)/2` (Abramowitz & Stegun 7.1.26,
-/// absolute error under 1.5e-7: the tail near 1e-3 that [`PROBE_PICKS_RIGHT`] asks for to
-/// 1e-4 relative). Written here: the workspace has no normal distribution.
+/// The standard normal's upper tail `Phi(-m) = erfc(m/sqrt 2)/2` (`libm::erfc`: accurate in the
+/// far tail, where `1 - Phi(m)` by subtraction would lose it).
 fn normal_upper_tail(m: f64) -> f64 {
-    let x = m.abs() / std::f64::consts::SQRT_2;
-    let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    let poly = t
-        * (0.254_829_592
-            + t * (-0.284_496_736
-                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
-    let erfc = poly * (-x * x).exp();
-    if m >= 0.0 {
-        0.5 * erfc
-    } else {
-        1.0 - 0.5 * erfc
-    }
+    0.5 * libm::erfc(m / std::f64::consts::SQRT_2)
 }
 
 /// att46-6, att50-3: the discovery probe of `team` whose range change is lost in the ranging
@@ -674,4 +716,21 @@ pub(super) fn probe_cut_note(team: &TeamSpec) -> Option<String> {
             Num(d.probe_speed_delta_mps)
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normal_upper_tail;
+
+    /// `Phi(-m)` at known quantiles: 1/2 at 0, 2.5 % at 1.959963984540054, and the far tail
+    /// `Phi(-8) = 6.220960574271784e-16` (to 1e-12 relative: where 1 - Phi(8) by subtraction is
+    /// lost, and Abramowitz & Stegun 7.1.26's absolute 1.5e-7 was all of it).
+    #[test]
+    fn the_normal_tail_at_known_quantiles() {
+        assert_eq!(normal_upper_tail(0.0), 0.5);
+        assert!((normal_upper_tail(1.959963984540054) - 0.025).abs() < 1e-15);
+        assert!((normal_upper_tail(-1.959963984540054) - 0.975).abs() < 1e-15);
+        let far = normal_upper_tail(8.0);
+        assert!((far / 6.220960574271784e-16 - 1.0).abs() < 1e-12, "{far}");
+    }
 }
