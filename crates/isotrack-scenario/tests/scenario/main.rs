@@ -20,6 +20,7 @@ mod stations;
 mod team_check;
 mod team_check_equilibrium;
 mod team_check_linearised;
+mod team_check_start;
 mod team_open;
 mod team_vehicles;
 mod theory;
