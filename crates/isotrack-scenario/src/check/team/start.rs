@@ -154,9 +154,8 @@ pub(super) fn delay_drift_claim(
     let r = &team.ranging;
     let n = team.count();
     let unequal = team.nominal_speeds_mps().len() > 1;
-    if !(r.delay_s > 0.0 && gain_per_s != 0.0 && n >= 3 && unequal)
-        || !matches!(team.ring, RingMode::Listed)
-    {
+    let listed = matches!(team.ring, RingMode::Listed);
+    if !(r.delay_s > 0.0 && gain_per_s != 0.0 && n >= 3 && unequal && listed) {
         return None;
     }
     let c = closest_before_loop(s, l, team, gain_per_s)?;
