@@ -24,13 +24,16 @@
 
 mod equilibrium;
 mod linearised;
+mod start;
 
 pub use equilibrium::ShiftedEquilibrium;
 
 use super::regions::Regions;
 use super::sampled;
 use super::setup::{not_computed, Law, LoopSetup};
-use super::team_ring::{common_speed, start_angle, travel_direction};
+use super::team_ring::{
+    common_speed, deployed_gaps_ahead, flown_circle_radius_m, start_angle, travel_direction,
+};
 pub use super::team_ring::{disjoint_envelopes, DisjointEnvelopes};
 use super::verdict::Verdict;
 use crate::spec::TeamSpec;
@@ -795,16 +798,6 @@ pub(super) fn range_halt(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<Range
     })
 }
 
-/// The radius of the circle the team flies round the known circle `c`: the P law's orbit when
-/// it has one (att43-6, [`super::setup::p_law_orbit`]), else the isoline's; the ranges are its
-/// chords.
-fn flown_circle_radius_m(s: &Scenario, l: &Law, c: CircleArc) -> f64 {
-    super::setup::p_law_orbit(s, l)
-        .map(|o| o.orbit.radius_m)
-        .filter(|&f| f.is_finite() && f > 0.0)
-        .unwrap_or(c.radius_m)
-}
-
 /// [`flown_circle_radius_m`] of a vehicle flying `speed_mps` (att50-12: at a shifted
 /// equilibrium every vehicle flies the common speed `V`, and the P law's orbit moves with it).
 fn flown_radius_at(s: &Scenario, l: &Law, c: CircleArc, speed_mps: f64) -> f64 {
@@ -1123,8 +1116,13 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
 ///   short of even spacing (att43-2): `not_applicable` (neither the halt bound of one speed nor
 ///   the linear loop describes it);
 /// * a discovered ring whose probe cannot change the speed (`team.v_max_mps <= v0`, att44-10):
-///   `fails`; whose starts leave neighbours beyond the range (att43-1): the probes may not find
-///   the ring, and without it the law is off: `not_applicable`;
+///   `fails`; whose probe slots do not hold the ranges of a fitted rate (att51-5,
+///   [`start::probe_slots_claim`]): `fails` or `not_applicable`; whose starts leave neighbours
+///   beyond the range (att43-1): the probes may not find the ring, and without it the law is
+///   off: `not_applicable`;
+/// * a ranging delay with unequal nominal speeds (att50-5, [`start::delay_drift_claim`]): the
+///   gaps' open-loop drift before the loop acts brings two robots together: `fails` (through
+///   each other) or `not_applicable` (under the close approach);
 ///
 /// and, for either spacing law, a listed ring out of the order of travel
 /// ([`listed_ring_out_of_order`]): `fails`.
@@ -1195,9 +1193,15 @@ fn spacing_claim(
     if let Some(why) = equilibrium::probe_cannot_fly(team) {
         return Some((Verdict::Fails, why));
     }
+    if let Some(claim) = start::probe_slots_claim(s, team) {
+        return Some(claim);
+    }
     let slope = deployed(f64::INFINITY).map_or(1.0, |d| d.probe_slope);
     if let Some(why) = equilibrium::probe_below_noise(team, slope) {
         return Some((Verdict::NotApplicable, why));
+    }
+    if let Some(claim) = start::delay_drift_claim(s, l, team) {
+        return Some(claim);
     }
     // att50-2: arc_reference's equilibrium too (its arc gaps for the ranges).
     let solved = sp.shifted_equilibrium.as_ref();
@@ -1339,13 +1343,11 @@ fn first_sample_overshoot(
         None if team.nominal_speeds_mps().len() == 1 => vec![tau * radius / n as f64; n],
         None => return None,
     };
-    let dir = travel_direction(s, l)?;
-    let angle = |i: usize| start_angle(team, circle, i);
-    let mut error: f64 = 0.0;
-    for (i, eq_gap) in settled.iter().enumerate() {
-        let step = (dir * (angle((i + 1) % n)? - angle(i)?)).rem_euclid(tau);
-        error = error.max((step * radius - eq_gap).abs());
-    }
+    let error = deployed_gaps_ahead(s, l, team, circle, radius)?
+        .iter()
+        .zip(&settled)
+        .map(|(g, eq_gap)| (g - eq_gap).abs())
+        .fold(0.0, f64::max);
     // The speeds saturate: a gap moves at most (v_max - v_min)(T + d) past where it crossed.
     let (lo, hi) = team.speed_envelope_mps();
     let cap = (hi - lo) * (sp.period_s + sp.delay_s);

@@ -122,3 +122,34 @@ fn envelope_extremes(team: &TeamSpec) -> ((usize, f64), (usize, f64)) {
     }
     (lo, hi)
 }
+
+/// The radius of the circle the team flies round the known circle `c`: the P law's orbit when
+/// it has one (att43-6, [`super::setup::p_law_orbit`]), else the isoline's; the ranges are its
+/// chords.
+pub(crate) fn flown_circle_radius_m(s: &Scenario, l: &Law, c: CircleArc) -> f64 {
+    super::setup::p_law_orbit(s, l)
+        .map(|o| o.orbit.radius_m)
+        .filter(|&f| f.is_finite() && f > 0.0)
+        .unwrap_or(c.radius_m)
+}
+
+/// The starts' arc gaps on the known circle `circle`, measured on a circle of `radius` m about
+/// its centre: gap `i` from vehicle `i` to the next listed one ahead in the direction of travel,
+/// in `[0, 2 pi radius)` m (`None`: a start off the circle, or the direction not known).
+pub(crate) fn deployed_gaps_ahead(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    circle: CircleArc,
+    radius: f64,
+) -> Option<Vec<f64>> {
+    let dir = travel_direction(s, l)?;
+    let angle = |i: usize| start_angle(team, circle, i);
+    let n = team.count();
+    (0..n)
+        .map(|i| {
+            let step = (dir * (angle((i + 1) % n)? - angle(i)?)).rem_euclid(std::f64::consts::TAU);
+            Some(step * radius)
+        })
+        .collect()
+}

@@ -21,6 +21,7 @@ mod team_check;
 mod team_check_bounds;
 mod team_check_equilibrium;
 mod team_check_linearised;
+mod team_check_start;
 mod team_open;
 mod team_vehicles;
 mod theory;

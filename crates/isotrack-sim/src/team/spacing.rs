@@ -229,6 +229,11 @@ pub fn ring_fault(ring: &[Option<[u32; 2]>], live: &[bool]) -> Option<String> {
     None
 }
 
+/// The fewest ranges to one vehicle from which a discovery probe fits its range rate
+/// ([`RateFit`]): a neighbour ranged fewer times in the prober's slot is not picked (att51-5:
+/// `isotrack check` asks every slot for this many, `team.ring = "discovered"`).
+pub const MIN_RATE_FIT_RANGES: usize = 3;
+
 /// A least-squares line through `(t, r)` samples: the range rate and mean range to one vehicle
 /// during a probe.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -249,9 +254,9 @@ impl RateFit {
         self.str_ += t * r;
     }
 
-    /// `(slope m/s, mean range m)` with at least 3 samples.
+    /// `(slope m/s, mean range m)` with at least [`MIN_RATE_FIT_RANGES`] samples.
     pub(crate) fn fit(&self) -> Option<(f64, f64)> {
-        if self.n < 3.0 {
+        if self.n < MIN_RATE_FIT_RANGES as f64 {
             return None;
         }
         let den = self.n * self.stt - self.st * self.st;

@@ -1,0 +1,257 @@
+//! `check`'s team verdict on what happens before the spacing loop acts (issue 32, att51-5,
+//! att50-5; docs/TEAMS.md, "Theory"): the discovery's probe slots need the ranges of a fitted
+//! rate, and a ranging delay leaves unequal nominal speeds open loop. The numbers are worked in
+//! the tests (slot instants counted by hand, binomial sums, the gaps' straight-line motion),
+//! against simulation on `scenarios/team-circular-4.toml`'s circle.
+
+use super::team_check::{circular_text, team_metrics};
+use super::team_check_equilibrium::radius;
+use isotrack_scenario::check::{check, Verdict};
+use isotrack_scenario::{parse_scenario, Scenario};
+use isotrack_sim::NoTrace;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// The bundled team with `sets` applied.
+fn scenario(text: &str, sets: &[String]) -> Scenario {
+    parse_scenario(text, "team-circular-4.toml", sets).unwrap()
+}
+
+/// The number after `after` in `text` (up to the next space or comma).
+fn shown(text: &str, after: &str) -> f64 {
+    text.split(after)
+        .nth(1)
+        .and_then(|r| r.split([' ', ',']).next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no number after {after:?} in: {text}"))
+}
+
+/// The warnings of a run of `s`.
+fn run_warnings(s: &Scenario) -> Vec<String> {
+    s.run_team(&mut [] as &mut [NoTrace])
+        .unwrap()
+        .unwrap()
+        .warnings
+}
+
+/// att51-5 (SAFETY): the bundled cluster (0.3 rad steps) with a discovered ring, no ranging
+/// noise, v_max 0.6, k_v 0.02. The prober fits a rate only to 3 or more ranges of a vehicle in
+/// its 10 s slot (after 60 s of settling); the ranging instants are the multiples of the period
+/// `1/rate`, so the slots [60, 70), [70, 80), [80, 90), [90, 100) s hold, counted by hand:
+/// 0.05 Hz (60, 80) 1, 0, 1, 0; 0.1 Hz 1 each; 0.125 Hz (64, 72, 80, 88, 96) 1, 1, 2, 1;
+/// 0.2 Hz 2 each; 0.25 Hz (60, 64, 68 | 72, 76 | 80, 84, 88 | 92, 96) 3, 2, 3, 2: some slot
+/// gives no rate, the ring cannot be found: `fails` (it said `holds`; the runs find no ring
+/// and the gaps stay as deployed). 0.4 Hz holds 4 per slot, 0.5 Hz 5, 1 Hz 10, 10 Hz 100:
+/// every fit made, `holds`.
+#[test]
+fn a_probe_slot_without_the_ranges_of_a_rate_fails() {
+    let text = circular_text();
+    let sets = |rate: &str, p: &str, secs: &str| -> Vec<String> {
+        vec![
+            "team.ring=\"discovered\"".into(),
+            "team.ranging.noise_std_m=0".into(),
+            "team.v_max_mps=0.6".into(),
+            "team.k_v=0.02".into(),
+            format!("team.ranging.rate_hz={rate}"),
+            format!("team.ranging.dropout_probability={p}"),
+            format!("sim.duration_s={secs}"),
+        ]
+    };
+    for (rate, slots) in [
+        ("0.05", "[1, 0, 1, 0]"),
+        ("0.1", "[1, 1, 1, 1]"),
+        ("0.125", "[1, 1, 2, 1]"),
+        ("0.2", "[2, 2, 2, 2]"),
+        ("0.25", "[3, 2, 3, 2]"),
+    ] {
+        let s = scenario(&text, &sets(rate, "0", "600"));
+        let t = check(&s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Fails, "{rate}: {}", t.verdict_reason);
+        let why = &t.verdict_reason;
+        assert!(why.contains(&format!("by slot {slots} ranging")), "{why}");
+        assert_eq!(shown(why, "with probability "), 0.0, "{why}");
+        let n_eff = 10.0 * rate.parse::<f64>().unwrap();
+        let got = shown(why, "(1 - dropout_probability) = ");
+        assert!((got - n_eff).abs() < 1e-9, "{got} vs {n_eff}: {why}");
+    }
+    for rate in ["0.4", "0.5", "1.0", "10.0"] {
+        let s = scenario(&text, &sets(rate, "0", "600"));
+        let t = check(&s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Holds, "{rate}: {}", t.verdict_reason);
+    }
+    // The runs: at 0.25 Hz the probes find no ring and the law is off, the gaps as deployed
+    // (the cluster's CV, 1.401); at 0.4 Hz the ring is found and the team spreads.
+    let s = scenario(&text, &sets("0.25", "0", "600"));
+    let w = run_warnings(&s);
+    assert!(
+        w.iter().any(|w| w.contains("the spacing law is off")),
+        "{w:?}"
+    );
+    let m = team_metrics(&s);
+    let deployed = super::team_check::spread_cv(0.3, 4);
+    assert!((m.gap_cv_final.unwrap() - deployed).abs() < 0.01, "{m:?}");
+    assert_eq!(m.time_to_even_s, None, "{m:?}");
+    let m = team_metrics(&scenario(&text, &sets("0.4", "0", "600")));
+    assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
+}
+
+/// `P(Binomial(n, q) >= 3)` by its three lowest terms, `C(n, 0) = 1`, `C(n, 1) = n`,
+/// `C(n, 2) = n (n - 1)/2`.
+fn at_least_three(n: f64, q: f64) -> f64 {
+    let p = 1.0 - q;
+    1.0 - (p.powf(n) + n * q * p.powf(n - 1.0) + n * (n - 1.0) / 2.0 * q * q * p.powf(n - 2.0))
+}
+
+/// att51-5, lossy links: 1 Hz (10 ranging instants a slot) with dropout 0.8 keeps
+/// `n_eff = 10 x 0.2 = 2` ranges on average; a neighbour gets its 3 with
+/// `P(Binomial(10, 0.2) >= 3) = 0.3222`, the ring's 8 fits all with `0.3222^8 = 1.2e-4`
+/// (dropout 0.9: `0.0702^8`), under 0.99: `not_applicable` (it said `holds`; the runs found
+/// no ring). Dropout 0.3 keeps 7: `P(Binomial(10, 0.7) >= 3) = 0.99841`, all 8 with 0.98735,
+/// still under 0.99; dropout 0.1: 0.9999996 each, `holds`.
+#[test]
+fn a_lossy_probe_is_judged_by_the_chance_of_every_fit() {
+    let text = circular_text();
+    let sets = |p: &str| -> Vec<String> {
+        vec![
+            "team.ring=\"discovered\"".into(),
+            "team.ranging.noise_std_m=0".into(),
+            "team.v_max_mps=0.6".into(),
+            "team.k_v=0.02".into(),
+            "team.ranging.rate_hz=1.0".into(),
+            format!("team.ranging.dropout_probability={p}"),
+            "sim.duration_s=600".into(),
+        ]
+    };
+    let p8 = at_least_three(10.0, 0.2);
+    assert!((p8 - 0.322_200_473_6).abs() < 1e-9, "{p8}");
+    for (p, q) in [("0.8", 0.2), ("0.9", 0.1), ("0.3", 0.7)] {
+        let want = at_least_three(10.0, q).powi(8);
+        assert!(want < 0.99, "{want}");
+        let t = check(&scenario(&text, &sets(p)), None).team.unwrap();
+        assert_eq!(
+            t.verdict,
+            Verdict::NotApplicable,
+            "{p}: {}",
+            t.verdict_reason
+        );
+        let why = &t.verdict_reason;
+        let got = shown(why, "with probability ");
+        assert!((got - want).abs() <= 1e-5 * want, "{p}: {got} vs {want}");
+        let n_eff = shown(why, "(1 - dropout_probability) = ");
+        assert!((n_eff - 10.0 * q).abs() < 1e-9, "{n_eff}: {why}");
+    }
+    assert!(at_least_three(10.0, 0.9).powi(8) > 0.99);
+    let t = check(&scenario(&text, &sets("0.1")), None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    // The run at dropout 0.8: the probes' table is not one ring, the law is off, and the
+    // gaps stay as deployed.
+    let s = scenario(&text, &sets("0.8"));
+    let w = run_warnings(&s);
+    assert!(
+        w.iter().any(|w| w.contains("the spacing law is off")),
+        "{w:?}"
+    );
+    let m = team_metrics(&s);
+    assert_eq!(m.time_to_even_s, None, "{m:?}");
+}
+
+/// att50-5's team: four robots on the circle, listed in the order of travel (clockwise) with
+/// arc gaps `3, L/2 - 3, 3, L/2 - 3` m, nominal speeds `v0_i = 0.5 - k_v (r_i - r_{i-1})`
+/// (`r_i` the chord of gap `i`: the equilibrium of range_balance, every vehicle at 0.5 m/s),
+/// k_v = 0.024, envelope [0.1, 1.0], ranging 0.1 Hz with delay `delay_s`. Returns the
+/// scenario and the speeds.
+fn open_loop_team(delay_s: f64, secs: f64) -> (Scenario, Vec<f64>) {
+    let r = radius();
+    let k_v = 0.024;
+    let l = 2.0 * PI * r;
+    let gaps = [3.0, l / 2.0 - 3.0, 3.0, l / 2.0 - 3.0];
+    let chord = |g: f64| 2.0 * r * (g / (2.0 * r)).sin();
+    let v0: Vec<f64> = (0..4)
+        .map(|i| 0.5 - k_v * (chord(gaps[i]) - chord(gaps[(i + 3) % 4])))
+        .collect();
+    let mut angle = 0.0;
+    let mut starts = vec![];
+    for g in gaps {
+        starts.push(format!(
+            "{{x_m = {}, y_m = {}, heading_rad = {}}}",
+            r * f64::cos(angle),
+            r * f64::sin(angle),
+            angle - FRAC_PI_2
+        ));
+        angle -= g / r;
+    }
+    let text = circular_text();
+    let spread = text
+        .lines()
+        .find(|l| l.starts_with("spread = "))
+        .expect("the bundled team is spread");
+    let text = text.replace(spread, &format!("starts = [{}]", starts.join(", ")));
+    let vehicles: Vec<String> = v0
+        .iter()
+        .enumerate()
+        .map(|(i, v)| format!("{{index={i},speed_mps={v}}}"))
+        .collect();
+    let sets = vec![
+        format!("team.vehicles=[{}]", vehicles.join(",")),
+        format!("team.k_v={k_v}"),
+        "team.v_min_mps=0.1".into(),
+        "team.v_max_mps=1.0".into(),
+        "team.ranging.rate_hz=0.1".into(),
+        format!("team.ranging.delay_s={delay_s}"),
+        format!("sim.duration_s={secs}"),
+    ];
+    (scenario(&text, &sets), v0)
+}
+
+/// att50-5 (SAFETY): att50-5's team, started AT its equilibrium. Until the first ranges arrive
+/// at `t = d` every vehicle flies its own v0, so gap 0 closes at `v0_0 - v0_1 = 0.507 m/s`;
+/// from `d` to `d + T` the commands of the ranges measured at 0 are the equilibrium's (all
+/// 0.5), the gap still. With d = 20 s it reaches zero at `3/0.507 = 5.92 s`: `fails` (it said
+/// `holds`; the run drives vehicle 0 through vehicle 1). With d = 5.5 s it ends at
+/// `3 - 0.507 x 5.5 = 0.211 m`, under the 0.5 m close approach: `not_applicable` (the run
+/// comes that close). With d = 4 s it ends at 0.972 m: `holds`, and the run keeps that.
+#[test]
+fn a_ranging_delay_with_unequal_speeds_is_judged_by_its_open_loop_drift() {
+    let (s, v0) = open_loop_team(20.0, 60.0);
+    let closing = v0[0] - v0[1];
+    assert!((closing - 0.507).abs() < 1e-3, "{v0:?}");
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let at = shown(&t.verdict_reason, "each other at t = ");
+    assert!(
+        (at - 3.0 / closing).abs() < 1e-5,
+        "{at}: {}",
+        t.verdict_reason
+    );
+    let gap = shown(&t.verdict_reason, "m to ");
+    assert!(
+        (gap - (3.0 - 20.0 * closing)).abs() < 1e-4,
+        "{}",
+        t.verdict_reason
+    );
+    let m = team_metrics(&s);
+    assert!(m.min_separation_m.unwrap() < 0.1, "{m:?}");
+    let met = m.closest_approach.as_ref().unwrap().t_s;
+    assert!((met - 3.0 / closing).abs() < 0.05, "{m:?}");
+
+    let (s, _) = open_loop_team(5.5, 300.0);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let want = 3.0 - 5.5 * closing;
+    assert!((shown(&t.verdict_reason, "m to ") - want).abs() < 1e-4);
+    assert!((shown(&t.verdict_reason, "m at t = d and ") - want).abs() < 1e-4);
+    let m = team_metrics(&s);
+    let sep = m.min_separation_m.unwrap();
+    assert!(sep < 0.5 && (sep - want).abs() < 0.03, "{sep} vs {want}");
+
+    let (s, _) = open_loop_team(4.0, 300.0);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let want = 3.0 - 4.0 * closing;
+    let sep = team_metrics(&s).min_separation_m.unwrap();
+    assert!(sep > 0.5 && (sep - want).abs() < 0.03, "{sep} vs {want}");
+    // No delay: the loop acts from t = 0 and the team keeps its equilibrium (att50's control).
+    let (s, _) = open_loop_team(0.0, 300.0);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert!(team_metrics(&s).min_separation_m.unwrap() > 2.9);
+}
