@@ -1896,6 +1896,52 @@ fn an_interrupted_sweep_leaves_its_manifest_whole_or_nothing_and_says_so() {
     whole(&c, &err, "once sweep.json is there");
 }
 
+/// att51-6: `merge H1 H2 --out a/b/c` interrupted a few milliseconds in left `c` holding
+/// results.csv without sweep.json (the same merge then refused 73, `sweep --resume` called it
+/// an older isotrack's), or the empty levels it created, with no word. Signalled once `a`
+/// exists: after exit 130, nothing of it is left ("nothing written"), or `c` holds the merged
+/// table with its whole manifest (no lock, no temporary) and says so; never an error.
+#[test]
+fn an_interrupted_merge_leaves_its_table_with_its_manifest_or_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let seeds: Vec<String> = (1..=200).map(|k| k.to_string()).collect();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\nsim.seed = [{}]\n",
+            seeds.join(", ")
+        ),
+    );
+    let (h1, h2) = (d.path().join("H1"), d.path().join("H2"));
+    common::swept(&sw, &h1, &["--shard", "1/2"]);
+    common::swept(&sw, &h2, &["--shard", "2/2"]);
+    let (h1, h2) = (h1.display().to_string(), h2.display().to_string());
+    let mut caught = 0;
+    for attempt in 0..10 {
+        let top = d.path().join(format!("a{attempt}"));
+        let c = top.join("b").join("c");
+        let cs = c.display().to_string();
+        let o = common::interrupted_when(&["merge", &h1, &h2, "--out", &cs], || top.exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        caught += 1;
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        assert!(!err.contains("error"), "attempt {attempt}: {err}");
+        if top.exists() {
+            assert_eq!(entries(&c, ""), SWEEP_DIR, "attempt {attempt}: {err}");
+            let said = format!("interrupted after the merge was written: {cs} holds its 200 runs");
+            assert!(err.contains(&said), "attempt {attempt}: {err}");
+        } else {
+            let said = format!("interrupted: nothing written to {cs}");
+            assert!(err.contains(&said), "attempt {attempt}: {err}");
+        }
+    }
+    assert!(caught > 0, "the merge was never interrupted");
+}
+
 /// att51-4: `benchmark --out a/b/c` interrupted before its first task finished left the empty
 /// `a/b/c/tasks/TASK` chain it created and said nothing. Signalled once `a` exists: after exit
 /// 130 every level it created is gone and it says no task finished; a task that did finish
@@ -1928,6 +1974,41 @@ fn an_interrupted_benchmark_leaves_no_empty_directory_and_says_0() {
         let said = format!("interrupted: {cs} holds {n} finished task");
         assert!(err.contains(&said), "{err}");
     }
+}
+
+/// att51-2: `run --out NEW --plot` interrupted while drawing, with no earlier figures in NEW,
+/// said nothing of the figures. It says they were not drawn and what draws them.
+#[test]
+fn ctrl_c_while_drawing_says_which_figures_are_not_drawn() {
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = false;
+    for attempt in 0..6 {
+        let p = d.path().join(format!("p{attempt}"));
+        let ps = p.display().to_string();
+        let args = [
+            "run",
+            SCEN,
+            "--out",
+            &ps,
+            "--quiet",
+            "--plot",
+            "--set",
+            "sim.duration_s=6000",
+        ];
+        let o = common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught = true;
+        let said =
+            format!("interrupted before the figures were drawn: `isotrack plot {ps}` draws them");
+        assert!(err.contains(&said), "attempt {attempt}: {err}");
+        assert!(!p.join("trajectory.png").exists());
+        break;
+    }
+    assert!(caught, "run --plot was never caught drawing");
 }
 
 /// att49-7: a directory holding another suite's benchmark (its suite.toml names `standard`
