@@ -1157,3 +1157,46 @@ fn ctrl_c_before_the_chart_leaves_no_directory_it_created() {
     assert!(d.path().is_dir());
     assert!(caught, "never interrupted before the chart");
 }
+
+/// att51-1: `check --map --verify N --out M` interrupted after its chart was in place but
+/// before the verify runs answered the signal exited 130 saying nothing of the verify (only
+/// "interrupted during --verify: K of N runs finished" later on). Signalled as soon as the
+/// chart's SVG is in place (a 200 x 200 chart: its verify points take a while): exit 130, the
+/// chart whole, and the line says 0 of the 200 runs (each 20000 s: none finishes first).
+#[cfg(unix)]
+#[test]
+fn ctrl_c_after_the_chart_before_any_verify_run_says_so() {
+    let sc = scenario();
+    let d = tempfile::tempdir().unwrap();
+    let m = d.path().join("M");
+    let ms = m.display().to_string();
+    let args = [
+        "check",
+        sc.as_str(),
+        "--set",
+        "sim.duration_s=20000",
+        "--map",
+        "--map-size",
+        "200x200",
+        "--verify",
+        "200",
+        "--threads",
+        "1",
+        "--out",
+        &ms,
+    ];
+    let o = common::interrupted_when(&args, || m.join("stability_map.svg").exists());
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("interrupted during --verify: 0 of 200 runs finished"),
+        "{err}"
+    );
+    for f in [
+        "stability_map.csv",
+        "stability_map.png",
+        "stability_map.svg",
+    ] {
+        assert!(m.join(f).is_file(), "{f}: {err}");
+    }
+}

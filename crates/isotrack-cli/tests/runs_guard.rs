@@ -1834,3 +1834,227 @@ fn ctrl_c_leaves_no_directory_the_command_created() {
     }
     assert!(caught, "plot was never caught drawing");
 }
+
+/// The files of a sweep directory once its manifest is in place (a merge's too), by name.
+const SWEEP_DIR: [&str; 4] = [
+    "base_scenario.toml",
+    "results.csv",
+    "sweep.json",
+    "sweep.toml",
+];
+
+/// att51-3: `sweep --out a/b/c` (none there) interrupted in its first milliseconds left the
+/// empty `a`, `a/b`, `a/b/c` it created, or `c` holding `sweep.json` alone (or beside
+/// `sweep.toml`) with a false "error: cannot write a/b/c: No such file or directory", and said
+/// nothing. Signalled once `a` exists: after exit 130, either nothing of it is left and it says
+/// "nothing written", or `c` holds its manifest whole with the header of results.csv (no lock,
+/// no temporary) and it says 0 of 4 runs; never an error. Signalled once `sweep.json` is there
+/// (the manifest's step under way): always the manifest whole.
+#[test]
+fn an_interrupted_sweep_leaves_its_manifest_whole_or_nothing_and_says_so() {
+    let d = tempfile::tempdir().unwrap();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 30000.0\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0, 40.0]\n"
+        ),
+    );
+    let whole = |c: &Path, err: &str, why: &str| {
+        assert_eq!(entries(c, ""), SWEEP_DIR, "{why}: {err}");
+        let results = std::fs::read_to_string(c.join("results.csv")).unwrap();
+        assert_eq!(results.lines().count(), 1, "{why}: {results}");
+        let said = format!(
+            "interrupted: {} holds 0 of 4 runs; the same sweep with `--resume` continues",
+            c.display()
+        );
+        assert!(err.contains(&said), "{why}: {err}");
+    };
+    for attempt in 0..4 {
+        let top = d.path().join(format!("a{attempt}"));
+        let c = top.join("b").join("c");
+        let cs = c.display().to_string();
+        let args = ["sweep", &sw, "--out", &cs, "--threads", "1"];
+        let o = common::interrupted_when(&args, || top.exists());
+        let err = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        assert!(!err.contains("error"), "attempt {attempt}: {err}");
+        if top.exists() {
+            whole(&c, &err, &format!("attempt {attempt}"));
+        } else {
+            let said = format!("interrupted: nothing written to {cs}");
+            assert!(err.contains(&said), "attempt {attempt}: {err}");
+        }
+    }
+    let c = d.path().join("m").join("b").join("c");
+    let cs = c.display().to_string();
+    let args = ["sweep", &sw, "--out", &cs, "--threads", "1"];
+    let o = common::interrupted_when(&args, || c.join("sweep.json").exists());
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(!err.contains("error"), "{err}");
+    whole(&c, &err, "once sweep.json is there");
+}
+
+/// att51-6: `merge H1 H2 --out a/b/c` interrupted a few milliseconds in left `c` holding
+/// results.csv without sweep.json (the same merge then refused 73, `sweep --resume` called it
+/// an older isotrack's), or the empty levels it created, with no word. Signalled once `a`
+/// exists: after exit 130, nothing of it is left ("nothing written"), or `c` holds the merged
+/// table with its whole manifest (no lock, no temporary) and says so; never an error.
+#[test]
+fn an_interrupted_merge_leaves_its_table_with_its_manifest_or_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let seeds: Vec<String> = (1..=200).map(|k| k.to_string()).collect();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\nsim.seed = [{}]\n",
+            seeds.join(", ")
+        ),
+    );
+    let (h1, h2) = (d.path().join("H1"), d.path().join("H2"));
+    common::swept(&sw, &h1, &["--shard", "1/2"]);
+    common::swept(&sw, &h2, &["--shard", "2/2"]);
+    let (h1, h2) = (h1.display().to_string(), h2.display().to_string());
+    let mut caught = 0;
+    for attempt in 0..10 {
+        let top = d.path().join(format!("a{attempt}"));
+        let c = top.join("b").join("c");
+        let cs = c.display().to_string();
+        let o = common::interrupted_when(&["merge", &h1, &h2, "--out", &cs], || top.exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        caught += 1;
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        assert!(!err.contains("error"), "attempt {attempt}: {err}");
+        if top.exists() {
+            assert_eq!(entries(&c, ""), SWEEP_DIR, "attempt {attempt}: {err}");
+            let said = format!("interrupted after the merge was written: {cs} holds its 200 runs");
+            assert!(err.contains(&said), "attempt {attempt}: {err}");
+        } else {
+            let said = format!("interrupted: nothing written to {cs}");
+            assert!(err.contains(&said), "attempt {attempt}: {err}");
+        }
+    }
+    assert!(caught > 0, "the merge was never interrupted");
+}
+
+/// att51-4: `benchmark --out a/b/c` interrupted before its first task finished left the empty
+/// `a/b/c/tasks/TASK` chain it created and said nothing. Signalled once `a` exists: after exit
+/// 130 every level it created is gone and it says no task finished; a task that did finish
+/// is there whole (its results.csv beside its task.json) and counted.
+#[test]
+fn an_interrupted_benchmark_leaves_no_empty_directory_and_says_0() {
+    let d = tempfile::tempdir().unwrap();
+    let suite = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+    let top = d.path().join("a");
+    let c = top.join("b").join("c");
+    let cs = c.display().to_string();
+    let args = ["benchmark", suite, "--out", &cs, "--threads", "1"];
+    let o = common::interrupted_when(&args, || top.exists());
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let tasks = entries(&c.join("tasks"), "");
+    for t in &tasks {
+        assert_eq!(
+            entries(&c.join("tasks").join(t), ""),
+            ["results.csv", "task.json"],
+            "{err}"
+        );
+    }
+    if tasks.is_empty() {
+        assert!(!top.exists(), "{} left: {err}", top.display());
+        let said = format!("interrupted before any task finished: nothing written to {cs}");
+        assert!(err.contains(&said), "{err}");
+    } else {
+        let n = tasks.len();
+        let said = format!("interrupted: {cs} holds {n} finished task");
+        assert!(err.contains(&said), "{err}");
+    }
+}
+
+/// att51-2: `run --out NEW --plot` interrupted while drawing, with no earlier figures in NEW,
+/// said nothing of the figures. It says they were not drawn and what draws them.
+#[test]
+fn ctrl_c_while_drawing_says_which_figures_are_not_drawn() {
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = false;
+    for attempt in 0..6 {
+        let p = d.path().join(format!("p{attempt}"));
+        let ps = p.display().to_string();
+        let args = [
+            "run",
+            SCEN,
+            "--out",
+            &ps,
+            "--quiet",
+            "--plot",
+            "--set",
+            "sim.duration_s=6000",
+        ];
+        let o = common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught = true;
+        let said =
+            format!("interrupted before the figures were drawn: `isotrack plot {ps}` draws them");
+        assert!(err.contains(&said), "attempt {attempt}: {err}");
+        assert!(!p.join("trajectory.png").exists());
+        break;
+    }
+    assert!(caught, "run --plot was never caught drawing");
+}
+
+/// att49-7: a directory holding another suite's benchmark (its suite.toml names `standard`
+/// version 2) was advised "pass --resume to reuse its task results", and `--resume` then
+/// reused nothing and replaced every result. Both are refused 73 naming the two suites.
+/// att49-9: the refusal names the directory quoted for a shell, as it quotes the file.
+#[test]
+fn a_benchmark_of_another_suite_is_refused_and_the_directory_quoted() {
+    let d = tempfile::tempdir().unwrap();
+    let suite = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+    let v2 = d.path().join("sp ace");
+    std::fs::create_dir(&v2).unwrap();
+    write(
+        &v2,
+        "suite.toml",
+        "# The suite as run by isotrack 0.1.0 (suites/standard-v2.toml)\nname = \"standard\"\nversion = 2\n",
+    );
+    let q = format!("'{}'", v2.display());
+    let qf = format!("'{}'", v2.join("suite.toml").display());
+    for extra in [&[][..], &["--resume"][..]] {
+        let mut args = vec!["benchmark", suite, "--out", v2.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = isotrack_within(&args, 60);
+        assert_fails(
+            &o,
+            73,
+            &[
+                &format!("{q} holds a benchmark of another suite ({qf}: `standard` version 2; this one is `standard` version 1)"),
+                "--resume would reuse none of its tasks",
+            ],
+        );
+        assert!(!common::stderr(&o).contains("pass --resume"));
+    }
+    let same = d.path().join("sp ace2");
+    std::fs::create_dir(&same).unwrap();
+    write(&same, "leaderboard.csv", "rank,controller,overall\n");
+    let o = isotrack_within(&["benchmark", suite, "--out", same.to_str().unwrap()], 60);
+    let (q2, qf2) = (
+        format!("'{}'", same.display()),
+        format!("'{}'", same.join("leaderboard.csv").display()),
+    );
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{q2} already holds a benchmark ({qf2}): pass --resume"
+        )],
+    );
+}

@@ -383,7 +383,13 @@ fn write_csv(
 /// whole or the new one (att46-12: verify.csv was removed up front; att48-1: the figures were
 /// renamed after the table, one by one, so Ctrl-C left the new table beside the earlier
 /// figures).
-fn replace_chart(out: &ChartFiles, map: &StabilityMap, figures: Vec<Drawn>) -> Result<(), Failure> {
+/// `placed` is set in that step once the new chart is in place.
+fn replace_chart(
+    out: &ChartFiles,
+    map: &StabilityMap,
+    figures: Vec<Drawn>,
+    placed: &std::sync::atomic::AtomicBool,
+) -> Result<(), Failure> {
     let removed = isotrack_runs::cleanup::whole(|| {
         let removed = isotrack_runs::owned::remove_table(&out.verify_csv).map_err(|e| Failure {
             code: exit::CANTCREAT,
@@ -397,6 +403,7 @@ fn replace_chart(out: &ChartFiles, map: &StabilityMap, figures: Vec<Drawn>) -> R
         for f in figures {
             f.put_in_place()?;
         }
+        placed.store(true, std::sync::atomic::Ordering::SeqCst);
         Ok::<bool, Failure>(removed)
     })?;
     if removed {
@@ -406,6 +413,23 @@ fn replace_chart(out: &ChartFiles, map: &StabilityMap, figures: Vec<Drawn>) -> R
         );
     }
     Ok(())
+}
+
+/// Registers the line `check --map --verify n` says when interrupted after its new chart is in
+/// place (`placed`) and before the verify runs answer the signal themselves
+/// ([`verify_runs_of`]'s flag; from then on the command reports the runs that finished): none
+/// of the `n` runs finished (att51-1: it exited 130 without a word on the verify).
+fn say_no_run_on_interrupt(
+    n: usize,
+    placed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> isotrack_runs::cleanup::OnInterrupt {
+    isotrack_runs::cleanup::on_interrupt(move || {
+        if placed.load(std::sync::atomic::Ordering::SeqCst) {
+            errln!(
+                "interrupted during --verify: 0 of {n} runs finished; the chart holds what was done (no verify.csv: no run finished)"
+            );
+        }
+    })
 }
 
 /// Computes and writes the chart (and `--verify`), returns what was written.
@@ -450,7 +474,11 @@ pub fn write_map(
     let figures = out.draw(&map, &[])?;
     let mut files = vec![out.csv.display().to_string()];
     files.extend(figures.iter().map(|f| f.path.display().to_string()));
-    replace_chart(&out, &map, figures)?;
+    let placed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let _said = args
+        .verify
+        .map(|n| say_no_run_on_interrupt(n, placed.clone()));
+    replace_chart(&out, &map, figures, &placed)?;
     let (verify, verify_runs, far) = match args.verify {
         Some(n) => {
             let (agreement, runs, far) =

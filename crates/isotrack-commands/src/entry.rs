@@ -68,6 +68,12 @@ where
     match result {
         Ok(()) => stdout_exit_code(),
         Err(f) => {
+            // A failure while an interrupt is removing the command's files and ending the
+            // process is the cleanup's doing (a directory it created and removed, a temporary
+            // gone), not the command's: never printed (att51-3: "cannot write a/b/c: No such
+            // file or directory" for a directory the interrupt removed); the interrupt's own
+            // lines say what was left.
+            wait_if_interrupted();
             crate::errln!("error: {}", f.message);
             f.code
         }

@@ -130,6 +130,56 @@ fn dir_label(dir: &Path) -> String {
     )
 }
 
+/// Registers the line said when the drawing of `runs` into `out` is interrupted (att51-2: `run
+/// --out NEW --plot` stopped while drawing said nothing of the figures): which of `names` were
+/// drawn (put in place since this call: another file there than before) and which not, and the
+/// `plot` command that draws them; nothing once all are drawn.
+fn say_figures_on_interrupt(
+    runs: &[PathBuf],
+    out: &Path,
+    format: Format,
+    names: Vec<String>,
+) -> isotrack_runs::cleanup::OnInterrupt {
+    use isotrack_runs::files::identity;
+    use isotrack_runs::owned::shell_quoted;
+    let was: Vec<_> = names.iter().map(|n| identity(&out.join(n))).collect();
+    let mut cmd = format!(
+        "isotrack plot {}",
+        runs.iter()
+            .map(|r| shell_quoted(r))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    if !(runs.len() == 1 && same_dir(out, &runs[0])) {
+        cmd += &format!(" --out {}", shell_quoted(out));
+    }
+    if format == Format::Svg {
+        cmd += " --format svg";
+    }
+    let out = out.to_path_buf();
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let (drawn, not): (Vec<_>, Vec<_>) = names.iter().zip(&was).partition(|(n, before)| {
+            let now = identity(&out.join(n));
+            now.is_some() && now != **before
+        });
+        let list = |v: Vec<(&String, _)>| {
+            v.into_iter()
+                .map(|(n, _)| n.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if drawn.is_empty() {
+            errln!("interrupted before the figures were drawn: `{cmd}` draws them");
+        } else if !not.is_empty() {
+            errln!(
+                "interrupted while drawing the figures: {} drawn, {} not: `{cmd}` draws them all",
+                list(drawn),
+                list(not)
+            );
+        }
+    })
+}
+
 /// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
 pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
     let format = st.format;
@@ -158,6 +208,10 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
         code: exit::CANTCREAT,
         message: format!("cannot create {}: {e}", out.display()),
     })?;
+    let team_drawn = runs.len() == 1
+        && RunData::is_team(&runs[0])
+        && isotrack_plot::TeamTracks::new(&data).is_some();
+    let _said = say_figures_on_interrupt(runs, out, format, run_figure_names(format, team_drawn));
     // One run directory (a team's too: its vehicles are drawn as runs) is titled by its
     // scenario.
     let title = if runs.len() == 1 {

@@ -77,8 +77,9 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let suite = Suite::from_text(&path, &text).map_err(|e| fail(exit::DATAERR, e.to_string()))?;
     // Whose files are there first: "pass --resume" is advised only where --resume would
     // find every output a benchmark's.
-    let _lock = lock_out_dir(&a.out)?;
+    let (_created, _lock) = lock_out_dir(&a.out)?;
     refuse_foreign_outputs(&a.out, &suite)?;
+    refuse_other_suite(&a.out, &suite)?;
     refuse_finished_benchmark(&a.out, a.resume)?;
     let _said = say_tasks_on_interrupt(&a.out);
     let registry = Registry::builtin();
@@ -114,7 +115,7 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
 
 /// Registers the line an interrupted `benchmark --out DIR` says on exit (att48-3: it stopped
 /// silently, and nothing said that `--resume` continues): how many finished tasks DIR holds
-/// (`tasks/ID/task.json`, what `--resume` reuses), when any.
+/// (`tasks/ID/task.json`, what `--resume` reuses), 0 included.
 fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
     let out = out.to_path_buf();
     isotrack_runs::cleanup::on_interrupt(move || {
@@ -123,12 +124,15 @@ fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
                 .filter(|e| e.path().join("task.json").is_file())
                 .count()
         });
-        if n > 0 {
-            errln!(
-                "interrupted: {} holds {n} finished task{}; the same benchmark with `--resume` continues",
-                isotrack_runs::owned::shell_quoted(&out),
+        let q = isotrack_runs::owned::shell_quoted(&out);
+        match n {
+            // att51-4: before the first task finished it said nothing.
+            0 if out.is_dir() => errln!("interrupted: {q} holds 0 finished tasks"),
+            0 => errln!("interrupted before any task finished: nothing written to {q}"),
+            _ => errln!(
+                "interrupted: {q} holds {n} finished task{}; the same benchmark with `--resume` continues",
                 if n == 1 { "" } else { "s" }
-            );
+            ),
         }
     })
 }
@@ -138,19 +142,24 @@ fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
 /// writing the same directory fails instead of overwriting it) and refuses one that already
 /// holds a benchmark unless `resume` ([`refuse_finished_benchmark`]).
 pub fn open_out_dir(out: &Path, resume: bool) -> Result<crate::sweep::DirLock, Failure> {
-    let lock = lock_out_dir(out)?;
+    let (_, lock) = lock_out_dir(out)?;
     refuse_finished_benchmark(out, resume)?;
     Ok(lock)
 }
 
-/// Creates benchmark output directory `out` and takes its lock ([`open_out_dir`]).
-fn lock_out_dir(out: &Path) -> Result<crate::sweep::DirLock, Failure> {
-    std::fs::create_dir_all(out)
+/// Creates benchmark output directory `out` and takes its lock ([`open_out_dir`]); returned
+/// with the levels of `out` it created, removed if the command is interrupted while they are
+/// still empty ([`isotrack_runs::cleanup::create_dir_all`]; att51-4: `a/b/c` was left): hold
+/// both to the end.
+fn lock_out_dir(
+    out: &Path,
+) -> Result<(Vec<isotrack_runs::cleanup::Pending>, crate::sweep::DirLock), Failure> {
+    let created = isotrack_runs::cleanup::create_dir_all(out)
         .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", out.display())))?;
     // One writer per directory, as for `sweep` and `merge`: the lock is taken before the
     // directory is looked at, held to the end of the command by the caller, and released by the
     // OS however the process ends.
-    crate::sweep::lock_output_dir(out, "benchmark")
+    Ok((created, crate::sweep::lock_output_dir(out, "benchmark")?))
 }
 
 /// Refuses (73) benchmark directory `out` when it holds an earlier benchmark's results and
@@ -174,13 +183,14 @@ fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
     for (p, start) in &found {
         refuse_foreign_benchmark_file(p, start)?;
     }
+    // att49-9: the directory quoted as the file is (a name with a space or a line break).
     let quoted = isotrack_runs::owned::shell_quoted;
     if let Some(o) = other.first() {
         return Err(fail(
             exit::CANTCREAT,
             format!(
                 "{} already holds a benchmark ({}) and {}, which no benchmark writes: move it away or choose another --out",
-                out.display(),
+                quoted(out),
                 quoted(file),
                 quoted(o)
             ),
@@ -190,8 +200,46 @@ fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
         exit::CANTCREAT,
         format!(
             "{} already holds a benchmark ({}): pass --resume to reuse its task results, or choose another --out",
-            out.display(),
+            quoted(out),
             quoted(file)
+        ),
+    ))
+}
+
+/// Refuses (73, with or without `--resume`) benchmark directory `out` whose `suite.toml` (the
+/// suite as an earlier benchmark ran it) names another suite than `suite` (its `name` or
+/// `version`): `--resume` would reuse none of its tasks and replace them all, and a plain run
+/// was advised `--resume` for it (att49-7: a standard-v2 benchmark's directory, run with
+/// standard-v1 and `--resume` as advised, lost every v2 result without a word). A `suite.toml`
+/// that cannot be read as a suite's `name` and `version` is left to the other checks.
+fn refuse_other_suite(out: &Path, suite: &Suite) -> Result<(), Failure> {
+    let path = out.join("suite.toml");
+    let Ok(text) = Suite::read(&path) else {
+        return Ok(());
+    };
+    let Ok(table) = text.parse::<toml::Table>() else {
+        return Ok(());
+    };
+    let (Some(name), Some(version)) = (
+        table.get("name").and_then(toml::Value::as_str),
+        table.get("version").and_then(toml::Value::as_integer),
+    ) else {
+        return Ok(());
+    };
+    if name == suite.name && version == i64::from(suite.version) {
+        return Ok(());
+    }
+    let quoted = isotrack_runs::owned::shell_quoted;
+    Err(fail(
+        exit::CANTCREAT,
+        format!(
+            "{} holds a benchmark of another suite ({}: `{}` version {}; this one is `{}` version {}): --resume would reuse none of its tasks and replace them all; choose another --out, or move it away",
+            quoted(out),
+            quoted(&path),
+            isotrack_scenario::load::clip(name),
+            version,
+            isotrack_scenario::load::clip(&suite.name),
+            suite.version
         ),
     ))
 }

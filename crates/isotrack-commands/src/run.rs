@@ -356,19 +356,7 @@ fn note_on_interrupt(
     dir: &std::path::Path,
     team_figure: bool,
 ) -> isotrack_runs::cleanup::OnInterrupt {
-    let identity = |p: &std::path::Path| {
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::MetadataExt;
-            std::fs::symlink_metadata(p)
-                .ok()
-                .map(|m| (m.dev(), m.ino()))
-        }
-        #[cfg(not(unix))]
-        {
-            std::fs::symlink_metadata(p).ok().map(|_| (0u64, 0u64))
-        }
-    };
+    let identity = isotrack_runs::files::identity;
     let was: Vec<(&'static str, Option<(u64, u64)>)> = before
         .iter()
         .map(|&n| (n, identity(&dir.join(n))))

@@ -81,6 +81,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         errln!("note: {note}");
     }
     let opened_at = std::time::SystemTime::now();
+    let _said = say_runs_on_interrupt(&a.out, job.shard_runs((k, n)));
     let out = job.open_output(&a.out, (k, n), a.resume, a.force)?;
     if a.force {
         note_figures_from_before(&a.out, opened_at);
@@ -188,9 +189,67 @@ fn print_tally(report: &SweepReport) {
     );
 }
 
+/// The rows (whole lines after the header) of `results.csv` at `path` when it is not the file
+/// `before` names ([`isotrack_runs::files::identity`]): a table this command put in place (a
+/// sweep's, renewed or begun, or a merge's); `None` when it is absent or still the earlier one.
+fn rows_written(path: &std::path::Path, before: Option<(u64, u64)>) -> Option<u64> {
+    use std::io::Read;
+    let now = isotrack_runs::files::identity(path);
+    if now.is_none() || now == before {
+        return None;
+    }
+    let mut f = isotrack_runs::files::open_read_regular(path).ok()?;
+    let (mut lines, mut buf) = (0u64, vec![0u8; 1 << 16]);
+    loop {
+        match f.read(&mut buf) {
+            Ok(0) => break,
+            Ok(k) => lines += buf[..k].iter().filter(|&&b| b == b'\n').count() as u64,
+            Err(_) => return None,
+        }
+    }
+    Some(lines.saturating_sub(1))
+}
+
+/// Registers the line an interrupted `sweep --out DIR` says on exit (att51-3: it stopped
+/// silently): how many of the shard's `runs` DIR holds (the same sweep with `--resume`
+/// continues), or that it wrote nothing (its manifest goes in place whole or not at all, and a
+/// directory it created is removed while still empty).
+fn say_runs_on_interrupt(out: &std::path::Path, runs: u64) -> isotrack_runs::cleanup::OnInterrupt {
+    let out = out.to_path_buf();
+    let results = out.join("results.csv");
+    let before = isotrack_runs::files::identity(&results);
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let q = isotrack_runs::owned::shell_quoted(&out);
+        match rows_written(&results, before) {
+            Some(n) => errln!(
+                "interrupted: {q} holds {n} of {runs} run{}; the same sweep with `--resume` continues",
+                if runs == 1 { "" } else { "s" }
+            ),
+            None => errln!("interrupted: nothing written to {q}"),
+        }
+    })
+}
+
+/// Registers the line an interrupted `merge --out DIR` says on exit (att51-6: it stopped
+/// silently): the merged table and its manifest went in place together, or nothing was
+/// written.
+fn say_merge_on_interrupt(out: &std::path::Path) -> isotrack_runs::cleanup::OnInterrupt {
+    let out = out.to_path_buf();
+    let results = out.join("results.csv");
+    let before = isotrack_runs::files::identity(&results);
+    isotrack_runs::cleanup::on_interrupt(move || {
+        let q = isotrack_runs::owned::shell_quoted(&out);
+        match rows_written(&results, before) {
+            Some(n) => errln!("interrupted after the merge was written: {q} holds its {n} runs"),
+            None => errln!("interrupted: nothing written to {q}"),
+        }
+    })
+}
+
 /// `isotrack merge`: the shards of one sweep (same digest) into one directory; refuses missing,
 /// duplicate or damaged rows, and an `--out` holding another sweep's results unless `--force`.
 pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
+    let _said = say_merge_on_interrupt(&a.out);
     let total = isotrack_runs::sweep::merge::merge(&a.dirs, &a.out, a.force)?;
     outln!(
         "merged {total} runs from {} directories -> {}",

@@ -199,18 +199,25 @@ pub fn write_task(t: &TaskResult, dir: &Path) -> Result<(), BenchError> {
         message: e.to_string(),
     };
     let json = task_file(dir, &t.id);
-    if let Some(parent) = json.parent() {
-        std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
-    }
     let csv = json.with_file_name("results.csv");
-    // Never through a link nor into a FIFO: `isotrack_runs::files::write_atomic`.
-    isotrack_runs::files::write_atomic(&csv, task_results_csv(t).as_bytes())
-        .map_err(|e| io(&csv, e))?;
-    isotrack_runs::files::write_atomic(
-        &json,
-        serde_json::to_string(t).unwrap_or_default().as_bytes(),
-    )
-    .map_err(|e| io(&json, e))
+    let (csv_text, json_text) = (
+        task_results_csv(t),
+        serde_json::to_string(t).unwrap_or_default(),
+    );
+    // The task's directory (`tasks/ID`, and `tasks`) removed again while empty if the command is
+    // interrupted, and its two files written in one step an interrupt never cuts: Ctrl-C leaves
+    // the task whole or no trace of it (att51-4: the empty `tasks/ID` chain was left).
+    isotrack_runs::cleanup::whole(|| {
+        let _created = match json.parent() {
+            Some(parent) => {
+                isotrack_runs::cleanup::create_dir_all(parent).map_err(|e| io(parent, e))?
+            }
+            None => vec![],
+        };
+        // Never through a link nor into a FIFO: `isotrack_runs::files::write_atomic`.
+        isotrack_runs::files::write_atomic(&csv, csv_text.as_bytes()).map_err(|e| io(&csv, e))?;
+        isotrack_runs::files::write_atomic(&json, json_text.as_bytes()).map_err(|e| io(&json, e))
+    })
 }
 
 #[cfg(test)]

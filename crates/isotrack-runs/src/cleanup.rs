@@ -104,6 +104,12 @@ impl std::fmt::Debug for OnInterrupt {
 
 impl Drop for OnInterrupt {
     fn drop(&mut self) {
+        // Kept once an interrupt is ending the process: a command that fails meanwhile (the
+        // cleanup removed a temporary or a directory under it) returns through its note's
+        // scope before the interrupt says the notes, which must still say what was left.
+        if exiting() {
+            return;
+        }
         let mut list = NOTES.lock().unwrap_or_else(|e| e.into_inner());
         list.retain(|(id, _)| *id != self.id);
     }

@@ -93,6 +93,23 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// The identity of the file at `path` (not followed if a link): its device and inode, `None`
+/// when nothing is there. A file put in place by rename since has another: what an interrupted
+/// command's note tells its own files from those there before it by.
+pub fn identity(path: &Path) -> Option<(u64, u64)> {
+    let m = std::fs::symlink_metadata(path).ok()?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = m;
+        Some((0, 0))
+    }
+}
+
 /// Refuses an existing `path` that is not a regular file (a symbolic link, a FIFO, a
 /// directory, a device): as read by `lstat` (`std::fs::symlink_metadata`), so a link is
 /// refused, not followed. An absent path is fine (it will be created). Opening a FIFO for

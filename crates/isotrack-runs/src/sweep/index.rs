@@ -313,6 +313,45 @@ pub fn write_sorted(
     rows: &[RowRef],
     sources: &[PathBuf],
 ) -> Result<(), Failure> {
+    write_sorted_temp(path, header, rows, sources)?.put_in_place()
+}
+
+/// A table written into its temporary beside `path` ([`write_sorted_temp`]), removed if the
+/// command is interrupted before [`SortedTable::put_in_place`] renames it (or if this is
+/// dropped first).
+pub struct SortedTable {
+    tmp: PathBuf,
+    path: PathBuf,
+    _pending: crate::cleanup::Pending,
+}
+
+impl SortedTable {
+    /// Renames the table into place.
+    pub fn put_in_place(self) -> Result<(), Failure> {
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| {
+            fail(
+                exit::CANTCREAT,
+                format!("cannot write {}: {e}", self.path.display()),
+            )
+        })
+    }
+}
+
+impl Drop for SortedTable {
+    fn drop(&mut self) {
+        // Gone once renamed into place; else not left behind.
+        let _ = std::fs::remove_file(&self.tmp);
+    }
+}
+
+/// As [`write_sorted`], into a temporary beside `path` for the caller to put in place (a
+/// merge: with its manifest, in one step an interrupt never cuts).
+pub fn write_sorted_temp(
+    path: &Path,
+    header: &str,
+    rows: &[RowRef],
+    sources: &[PathBuf],
+) -> Result<SortedTable, Failure> {
     use std::io::{Read, Seek, SeekFrom};
     let tmp = path.with_extension("csv.tmp");
     let cant = |e: std::io::Error| {
@@ -330,7 +369,11 @@ pub fn write_sorted(
         })
         .collect::<Result<Vec<_>, Failure>>()?;
     // Removed if the command is interrupted while it is written (att43-14), until renamed.
-    let _pending = crate::cleanup::register(&tmp);
+    let table = SortedTable {
+        _pending: crate::cleanup::register(&tmp),
+        tmp: tmp.clone(),
+        path: path.to_path_buf(),
+    };
     let mut f = std::io::BufWriter::new(crate::files::create_output(&tmp).map_err(cant)?);
     f.write_all(header.as_bytes()).map_err(cant)?;
     let mut at = vec![u64::MAX; inputs.len()];
@@ -351,7 +394,7 @@ pub fn write_sorted(
         .map_err(|e| cant(e.into_error()))?
         .sync_all()
         .map_err(cant)?;
-    std::fs::rename(&tmp, path).map_err(cant)
+    Ok(table)
 }
 
 #[cfg(test)]

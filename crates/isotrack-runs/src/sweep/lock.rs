@@ -153,6 +153,11 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
     };
     // Never through a link nor into a FIFO: a `.isotrack.lock` that is a link to a user's file
     // would have that file emptied (the holder record replaces its content).
+    // A file this creates is registered before it is created: an interrupt right after the
+    // creation removes it, and with it the directory the command created (att51-3).
+    let created = std::fs::symlink_metadata(path)
+        .is_err()
+        .then(|| crate::cleanup::register(path));
     let mut f = crate::files::open_regular(path, true, false).map_err(cant)?;
     match f.try_lock() {
         Ok(()) if !is_this_file(&f, path) => Ok(None),
@@ -173,7 +178,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
             Ok(Some(DirLock {
                 file: f,
                 path: path.to_path_buf(),
-                _pending: crate::cleanup::register(path),
+                _pending: created.unwrap_or_else(|| crate::cleanup::register(path)),
             }))
         }
         Err(std::fs::TryLockError::WouldBlock) => {

@@ -3,7 +3,7 @@
 use crate::failure::{exit, fail, Failure};
 use crate::files::same_file;
 use crate::sweep::check::RunSpans;
-use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted, RowRef};
+use crate::sweep::index::{index_results, read_header, sort_rows, write_sorted_temp, RowRef};
 use crate::sweep::lock::{check_not_being_written, lock_output_dir};
 use crate::sweep::manifest::{
     check_data_files, check_engine, check_recorded_files_now, engine, read_manifest,
@@ -30,7 +30,11 @@ struct Shards {
 
 /// Merges the shard directories `dirs` of one sweep (same digest) into `out`: refuses missing,
 /// duplicate or damaged rows, a shard a command still writes, and an `out` holding another
-/// sweep's results unless `force`. Returns the number of runs merged.
+/// sweep's results unless `force`. Returns the number of runs merged. Each level of `out` it
+/// creates is removed again, when still empty, if the merge is interrupted
+/// ([`crate::cleanup::create_dir_all`]), and the merged table goes in place with its manifest
+/// in one step an interrupt never cuts ([`crate::cleanup::whole`]; att51-6: Ctrl-C left a
+/// `results.csv` without `sweep.json`, which `sweep --resume` then called an older isotrack's).
 pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> {
     let out_results = out.join("results.csv");
     for d in dirs {
@@ -51,7 +55,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
         ));
     }
     let cant = cant_write(out);
-    std::fs::create_dir_all(out).map_err(cant)?;
+    let _created = crate::cleanup::create_dir_all(out).map_err(cant)?;
     let _lock = lock_output_dir(out, "merge")?;
     // Whose files are there (att42-4: a user's sweep.toml, base_scenario.toml or sweep.json
     // was replaced), before any is written.
@@ -64,13 +68,26 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
     dupes.dedup();
     let (total, _, manifest) = shards.first.take().unwrap_or((0, String::new(), json!({})));
     check_complete(&shards.rows, &dupes, total)?;
-    write_sorted(
+    let files = merged_manifest(dirs, out, manifest, total, !shards.unrecorded_engine)?;
+    // The table written into its temporary (removed if interrupted), then put in place after
+    // its manifest: an earlier table removed first, so that no results.csv is ever beside a
+    // manifest not its own, even if the process is killed (SIGKILL) between two renames.
+    let table = write_sorted_temp(
         &out_results,
         shards.header.as_deref().unwrap_or(""),
         &shards.rows,
         &shards.sources,
     )?;
-    write_merged_manifest(dirs, out, manifest, total, !shards.unrecorded_engine)?;
+    crate::cleanup::whole(|| {
+        match std::fs::remove_file(&out_results) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(cant(e)),
+            _ => {}
+        }
+        for (path, bytes) in &files {
+            crate::files::write_atomic(path, bytes).map_err(cant)?;
+        }
+        table.put_in_place()
+    })?;
     Ok(total)
 }
 
@@ -289,19 +306,21 @@ fn check_complete(rows: &[RowRef], dupes: &[u64], total: u64) -> Result<(), Fail
     Ok(())
 }
 
-/// The first shard's `sweep.toml` and `base_scenario.toml` copied to `out`, and its manifest
-/// as one whole sweep (`shard = [1, 1]`, `merged_from` the shard directories).
-fn write_merged_manifest(
+/// The files of the merged sweep's manifest in `out`, each with its bytes, in the order they
+/// are written: the first shard's `sweep.json` as one whole sweep (`shard = [1, 1]`,
+/// `merged_from` the shard directories), then its `sweep.toml` and `base_scenario.toml` (when
+/// there, and not already the same file).
+fn merged_manifest(
     dirs: &[PathBuf],
     out: &Path,
     mut manifest: serde_json::Value,
     total: u64,
     record_engine: bool,
-) -> Result<(), Failure> {
+) -> Result<Vec<(PathBuf, Vec<u8>)>, Failure> {
     let Some(first) = dirs.first() else {
-        return Ok(());
+        return Ok(vec![]);
     };
-    let cant = cant_write(out);
+    let mut files = vec![];
     for f in ["sweep.toml", "base_scenario.toml"] {
         if first.join(f).exists() && !same_file(&first.join(f), &out.join(f)) {
             // Read as a regular file of bounded size, written never through a link nor into a
@@ -313,7 +332,7 @@ fn write_merged_manifest(
                         format!("cannot read {}: {e}", first.join(f).display()),
                     )
                 })?;
-            crate::files::write_atomic(&out.join(f), &bytes).map_err(cant)?;
+            files.push((out.join(f), bytes));
         }
     }
     // Every shard this engine's: the merged rows are too; else none is claimed.
@@ -330,11 +349,11 @@ fn write_merged_manifest(
         .iter()
         .map(|d| d.display().to_string())
         .collect::<Vec<_>>());
-    crate::files::write_atomic(
-        &out.join("sweep.json"),
-        (serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n").as_bytes(),
-    )
-    .map_err(cant)
+    let json = serde_json::to_string_pretty(&manifest).unwrap_or_default() + "\n";
+    // The manifest first: the two files after it are never without it
+    // ([`crate::sweep::manifest::refuse_foreign_sweep_files`] tells them a sweep's by it).
+    files.insert(0, (out.join("sweep.json"), json.into_bytes()));
+    Ok(files)
 }
 
 /// The failure for an output in directory `out` that cannot be written.

@@ -65,6 +65,9 @@ pub struct SweepOutput {
     pub done: Vec<u64>,
     /// The directory's lock, held while this lives.
     pub lock: DirLock,
+    /// The levels of the directory the sweep created, removed if it is interrupted while they
+    /// are still empty ([`crate::cleanup::create_dir_all`]), held while this lives.
+    _created: Vec<crate::cleanup::Pending>,
 }
 
 /// What a finished sweep holds.
@@ -140,11 +143,20 @@ impl SweepJob {
         })
     }
 
-    /// Opens output directory `out` for shard `(k, n)`: creates and locks it; with an existing
-    /// `results.csv`, refuses it unless `resume` (or removes it with `force`), checks on
-    /// `--resume` that the same sweep made it and indexes its rows (a cut-off last line
-    /// dropped); then writes `sweep.toml`, `base_scenario.toml` and `sweep.json` (after those
-    /// checks, before the first new row) and the header of a new `results.csv`.
+    /// How many runs shard `(k, n)` of this sweep holds (the runs with `id % n == k - 1`).
+    pub fn shard_runs(&self, (k, n): (u64, u64)) -> u64 {
+        let total = self.plan.total();
+        total / n + u64::from(total % n >= k)
+    }
+
+    /// Opens output directory `out` for shard `(k, n)`: creates it (each level it creates
+    /// removed again, when still empty, if the sweep is interrupted:
+    /// [`crate::cleanup::create_dir_all`]) and locks it; with an existing `results.csv`,
+    /// refuses it unless `resume` (or replaces it with `force`), checks on `--resume` that the
+    /// same sweep made it and indexes its rows (a cut-off last line dropped); then, in one step
+    /// an interrupt never cuts ([`crate::cleanup::whole`]: att51-3, Ctrl-C left `sweep.json`
+    /// alone, or beside `sweep.toml`, with a false "cannot write DIR"), writes `sweep.json`,
+    /// `sweep.toml`, `base_scenario.toml` and the header of a new `results.csv`.
     pub fn open_output(
         &self,
         out: &Path,
@@ -152,22 +164,19 @@ impl SweepJob {
         resume: bool,
         force: bool,
     ) -> Result<SweepOutput, Failure> {
-        let (k, n) = shard;
-        let total = self.plan.total();
-        let shard_runs = total / n + u64::from(total % n >= k);
+        let shard_runs = self.shard_runs(shard);
         let cant = cant_write(out);
         self.refuse_inputs_as_outputs(out)?;
-        std::fs::create_dir_all(out).map_err(cant)?;
+        let created = crate::cleanup::create_dir_all(out).map_err(cant)?;
         // Held to the end of the sweep (dropped with the output, released by the OS on any
         // exit).
         let lock = lock_output_dir(out, "sweep")?;
         // Whose files are there (att42-4), before anything is removed or written.
         refuse_foreign_sweep_files(out)?;
         let results = out.join("results.csv");
-        if results.exists() && force {
-            std::fs::remove_file(&results).map_err(cant)?;
-        }
-        if results.exists() && !resume {
+        // The rows there that this sweep continues (`--force` replaces them instead).
+        let kept = results.exists() && !force;
+        if kept && !resume {
             return Err(fail(
                 exit::CANTCREAT,
                 format!(
@@ -177,11 +186,12 @@ impl SweepJob {
             ));
         }
         // Whether the rows there are of a known engine (a new results.csv: this one's).
-        let mut engine_known = true;
-        if results.exists() && resume {
-            engine_known = self.check_same_sweep(out)?;
-        }
-        let done = if results.exists() {
+        let engine_known = if kept {
+            self.check_same_sweep(out)?
+        } else {
+            true
+        };
+        let done = if kept {
             self.resumed_ids(&results, shard).map_err(|e| {
                 if engine_known {
                     e
@@ -192,17 +202,24 @@ impl SweepJob {
         } else {
             vec![]
         };
-        // The rows kept are appended to in a file of their own (att36-13 addendum): a hard
-        // link to the results.csv resumed (a `cp -al` snapshot) keeps the rows it had.
-        if resume && results.exists() {
-            crate::files::renew_inode(&results).map_err(cant_write(out))?;
-        }
         // Rows of an unknown engine kept: the manifest does not claim them for this one.
-        self.write_manifest(out, shard, shard_runs, engine_known || done.is_empty())?;
-        if !results.exists() {
-            crate::files::write_atomic(&results, csv_line(&self.header).as_bytes())
-                .map_err(cant)?;
-        }
+        let record_engine = engine_known || done.is_empty();
+        crate::cleanup::whole(|| {
+            if results.exists() && !kept {
+                std::fs::remove_file(&results).map_err(cant)?;
+            }
+            // The rows kept are appended to in a file of their own (att36-13 addendum): a hard
+            // link to the results.csv resumed (a `cp -al` snapshot) keeps the rows it had.
+            if kept {
+                crate::files::renew_inode(&results).map_err(cant)?;
+            }
+            self.write_manifest(out, shard, shard_runs, record_engine)?;
+            if !kept {
+                crate::files::write_atomic(&results, csv_line(&self.header).as_bytes())
+                    .map_err(cant)?;
+            }
+            Ok::<(), Failure>(())
+        })?;
         Ok(SweepOutput {
             dir: out.to_path_buf(),
             results,
@@ -210,6 +227,7 @@ impl SweepJob {
             shard_runs,
             done,
             lock,
+            _created: created,
         })
     }
 
