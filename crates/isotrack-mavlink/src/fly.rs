@@ -350,8 +350,10 @@ struct AnswerSeen {
     /// retries (none is sent meanwhile, and a second sender proven after it stops them), but
     /// never the vehicle's answer: a heartbeat applied after the doubt starts its span over.
     in_doubt: bool,
-    /// The doubts of the frame counter before the one it was heard in: a heartbeat applied
-    /// after it that contradicts it has a doubt between (att45f-4).
+    /// The doubts of the frame counter opened before a pilot's word was FIRST heard (in a
+    /// doubt: before that one; kept when heartbeats applied after the resync repeat it,
+    /// att49f-3): a heartbeat applied after it that contradicts it with a doubt between is two
+    /// senders' ([`Flight::contradicted_across_a_doubt`], att45f-4).
     doubts: u64,
 }
 
@@ -1940,16 +1942,26 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             "pilot_took_over: the vehicle is {} in {}, not commanded by the companion{}: setpoints stopped, nothing commanded",
             if self.armed { "armed" } else { "disarmed" },
             self.mode_name(),
-            if !self.armed && self.disarm_after_silence {
-                format!(
-                    " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
-                )
-            } else {
-                String::new()
-            }
+            self.maybe_rebooted()
         );
         self.event(what);
         Some(FlyEnd::PilotTookOver)
+    }
+
+    /// The vehicle shown disarmed after a silence of more than [`REBOOT_STEP_S`]
+    /// ([`Flight::disarm_after_silence`]: a reboot whose clock did not go back far enough to
+    /// say so, or not yet in two frames, looks the same as a pilot's disarm, att33d-9a), in
+    /// words for the log line that ends the flight: taken as the pilot's, or a failsafe while
+    /// it awaits confirmation (att49f's CB: `sensor_clock_jump`, a measurement stamped by the
+    /// rebooted clock); empty otherwise.
+    fn maybe_rebooted(&self) -> String {
+        if !self.armed && self.disarm_after_silence {
+            format!(
+                " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
+            )
+        } else {
+            String::new()
+        }
     }
 
     /// A refusal heard ([`Flight::refusal_pending`], ver33b-11) is the vehicle's last word once
@@ -2838,7 +2850,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// A time of the vehicle's own clock: one more than [`REBOOT_STEP_S`] behind the newest is
-    /// a reboot (its autopilot's clock begins again at 0).
+    /// a reboot (its autopilot's clock begins again at 0). A reboot found makes the rebooted
+    /// clock the newest: the watch goes on from it, so the failsafe's retries that follow
+    /// (att45f-10) stop only on a reboot after it, never on the one that caused the failsafe,
+    /// whose frames all lie behind the clock before it (att49f-2).
     fn vehicle_time(&mut self, ms: u32) {
         let now = Instant::now();
         let Some((newest, _)) = self.vehicle_ms else {
@@ -2858,6 +2873,9 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 wire::unwrapped_s(newest),
                 wire::unwrapped_s(t)
             ));
+            self.clock_behind = 0;
+            self.vehicle_ms = Some((t, now));
+            return;
         } else {
             self.clock_behind = 0;
         }
@@ -3146,10 +3164,27 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         (self.armed_since_command && !armed) || (before.is_some() && mode != before && !offboard)
     }
 
-    /// A pilot's `word` awaiting confirmation, then a heartbeat applied showing `state`
-    /// instead, with `n` doubts of the frame counter since the word: no change and back of one
-    /// sender, two senders (att39f-3; in the failsafe's retries too, att45f-4).
-    fn word_contradicted(&mut self, word: &str, state: &str, n: u64) {
+    /// The doubts of the vehicle's frame counter opened before a pilot's word was FIRST heard
+    /// ([`LeaveSeen::doubts`], [`AnswerSeen::doubts`]), heard now (`in_doubt`: in a doubt,
+    /// which then counts as one since the word: a heartbeat applied after it that no longer
+    /// shows the word is two senders', a second sender's heartbeat having opened the doubt,
+    /// att39f-3, never one sender's change and back).
+    fn doubts_before_word(&self, in_doubt: bool) -> u64 {
+        self.seq_watch.doubts.saturating_sub(u64::from(in_doubt))
+    }
+
+    /// A pilot's `word` awaiting confirmation, first heard after `before` doubts of the frame
+    /// counter ([`Flight::doubts_before_word`]), then a heartbeat applied showing `state`
+    /// instead: with a doubt opened since the word was first heard, however many heartbeats
+    /// applied repeated it after the resync, no change and back of one sender but two senders
+    /// (logged, [`Flight::second_sender_seen`]; att39f-3, in the failsafe's retries too:
+    /// att45f-4, att49f-3). The one rule for control ([`Flight::watch_leave`]) and the
+    /// retries ([`Flight::answer_stands`]); returns whether it found two senders.
+    fn contradicted_across_a_doubt(&mut self, word: &str, before: u64, state: &str) -> bool {
+        let n = self.seq_watch.doubts.saturating_sub(before);
+        if n == 0 {
+            return false;
+        }
         let t = self.target.unwrap_or_default();
         self.second_sender_seen(format!(
             "two vehicles with the ids (system {}, component {}): the heartbeats showed it {word}, then {state}, with {n} doubt{} of the frame counter between (a pilot's change and back comes from one counter with no doubt between; a second sender's heartbeat taken as the vehicle's, then the vehicle's own, with one): which to fly is ambiguous",
@@ -3157,6 +3192,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             t.1,
             if n == 1 { "" } else { "s" }
         ));
+        true
     }
 
     /// What a heartbeat shows, in words: `armed in MANUAL`, `disarmed in an unknown mode`.
@@ -3196,10 +3232,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             what,
             confirmed: false,
             back: false,
-            // The doubt it came in counts as one since the word: a heartbeat applied after it
-            // that no longer shows the word is two senders' (a second sender's heartbeat opened
-            // the doubt, att39f-3), never one sender's change and back.
-            doubts: self.seq_watch.doubts.saturating_sub(1),
+            doubts: self.doubts_before_word(true),
         });
     }
 
@@ -3213,7 +3246,6 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
         let shows_control = !self.shows_pilots_word();
         let span = self.confirm_span();
-        let doubts = self.seq_watch.doubts;
         let state = format!(
             "{} in {}",
             if self.armed { "armed" } else { "disarmed" },
@@ -3224,14 +3256,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         // then the vehicle's own, a doubt between): two senders, not one sender's change and
         // back (nothing commanded: the word was heard before,
         // [`Flight::word_before_second_sender`]).
-        if let Some((word, n)) = self
+        if let Some((word, before)) = self
             .leave_seen
             .as_ref()
-            .filter(|l| shows_control && !l.confirmed && doubts > l.doubts)
-            .map(|l| (l.what.clone(), doubts - l.doubts))
+            .filter(|l| shows_control && !l.confirmed)
+            .map(|l| (l.what.clone(), l.doubts))
         {
-            self.word_contradicted(&word, &state, n);
-            return;
+            if self.contradicted_across_a_doubt(&word, before, &state) {
+                return;
+            }
         }
         match (&mut self.leave_seen, shows_control) {
             (None, true) => {}
@@ -3243,7 +3276,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                     what: state,
                     confirmed: false,
                     back: false,
-                    doubts,
+                    doubts: self.doubts_before_word(false),
                 })
             }
             // Late frames (a link that reorders) change nothing (att33e-6, att33g-2).
@@ -3577,8 +3610,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         }
     }
 
-    /// What the failsafe's log says once a second sender with the vehicle's ids was seen.
+    /// What the failsafe's log says once a second sender with the vehicle's ids was seen
+    /// (empty before).
     fn second_sender_note(&self) -> String {
+        if !self.second_sender {
+            return String::new();
+        }
         let t = self.target.unwrap_or_default();
         format!(
             ": a second sender with the vehicle's ids (system {}, component {}) was seen, and nothing tells the two apart: no heartbeat of the ids is taken as a confirmation or a pilot's word, and no disarm is sent (either may be the vehicle, maybe flying); {} is commanded to the retries' bound, or until a heartbeat of the ids shows a mode or arming the companion did not command (a pilot's or the second sender's: then nothing more). A vehicle armed on the ground must be disarmed by its operator (PX4's preflight auto-disarm may do it)",
@@ -3608,9 +3645,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
             if end.is_failsafe() && self.pilots_word_pending() && end != FlyEnd::VehicleLost {
                 self.event(format!(
-                    "failsafe ({}) while the vehicle's heartbeats showed it {}, not yet confirmed as its pilot's: nothing commanded against it, the pilot's mode stands",
+                    "failsafe ({}) while the vehicle's heartbeats showed it {}, not yet confirmed as its pilot's{}: nothing commanded against it, the pilot's mode stands",
                     end.as_str(),
-                    self.leave_seen.as_ref().map_or(String::new(), |l| l.what.clone())
+                    self.leave_seen.as_ref().map_or(String::new(), |l| l.what.clone()),
+                    self.maybe_rebooted()
                 ));
             } else if end.is_failsafe() {
                 self.event(format!(
@@ -3643,11 +3681,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         self.event(format!(
             "failsafe ({}): setpoints stopped, {what}{}",
             end.as_str(),
-            if self.second_sender {
-                self.second_sender_note()
-            } else {
-                String::new()
-            }
+            self.second_sender_note()
         ));
         let (confirmed, tries, why) = self.command_way_out(way)?;
         // The way out may have turned to the failsafe mode (a second sender seen meanwhile).
@@ -4120,20 +4154,22 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
         span: Duration,
     ) -> Option<Answer> {
         let pilots = matches!(answer, Some(Answer::PilotTookOver(_)));
-        if let Some(seen) = watch
+        if let Some((word, before)) = watch
             .seen
             .as_ref()
-            .filter(|s| s.in_doubt && s.pilots && !pilots)
+            .filter(|s| s.pilots && !pilots)
+            .map(|s| (s.what.clone(), s.doubts))
         {
-            // A pilot's word heard in a doubt of the frame counter, then contradicted by a
-            // heartbeat applied after it resynchronised: no change and back of one sender,
-            // two senders (att45f-4, as in control: [`Flight::watch_leave`]); the word stays
+            // A pilot's word, then contradicted by a heartbeat applied with a doubt of the
+            // frame counter since the word was first heard (heard in the doubt, then maybe
+            // repeated by heartbeats applied after the resync, att49f-3): no change and back
+            // of one sender, two senders (att45f-4, the rule of control); the word stays
             // seen, and the retries stop with nothing more commanded
             // ([`Flight::word_before_second_sender_in_retries`]).
-            let (word, n) = (seen.what.clone(), self.seq_watch.doubts - seen.doubts);
             let state = self.shown_state(h);
-            self.word_contradicted(&word, &state, n);
-            return None;
+            if self.contradicted_across_a_doubt(&word, before, &state) {
+                return None;
+            }
         }
         if let (Some(seen), true) = (&watch.seen, answer.is_some()) {
             // A word heard in a doubt is no answer of the vehicle's: its span starts here.
@@ -4141,6 +4177,12 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                 return (seen.at.elapsed() >= span).then_some(answer).flatten();
             }
         }
+        // A word heard in a doubt and repeated now keeps the doubts from when it was first
+        // heard (as in control, [`LeaveSeen::doubts`]).
+        let doubts = match &watch.seen {
+            Some(s) if s.pilots && pilots => s.doubts,
+            _ => self.doubts_before_word(false),
+        };
         watch.seen = answer.as_ref().map(|a| AnswerSeen {
             pilots,
             what: match a {
@@ -4149,7 +4191,7 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
             },
             at: Instant::now(),
             in_doubt: false,
-            doubts: self.seq_watch.doubts,
+            doubts,
         });
         None
     }
@@ -4189,7 +4231,7 @@ impl<S: TraceSink + ?Sized> Flight<'_, S> {
                     what,
                     at: Instant::now(),
                     in_doubt: true,
-                    doubts: self.seq_watch.doubts.saturating_sub(1),
+                    doubts: self.doubts_before_word(true),
                 });
             }
         }

@@ -465,6 +465,35 @@ fn a_disarm_after_a_silence_may_be_a_reboot() {
     );
 }
 
+/// att49f's CB (att45f-10): in control the vehicle falls silent for 1.5 s and comes back
+/// disarmed in MANUAL, its measurement stamped 100 s back (its autopilot rebooted; no position
+/// to show its clock): `sensor_clock_jump` fires while the disarm awaits confirmation as the
+/// pilot's word (nothing commanded), and the log says it may be a reboot, as
+/// `pilot_took_over` does ([`a_disarm_after_a_silence_may_be_a_reboot`]). Before: "rebooted"
+/// only in the measurement's "(a rebooted or spoofed clock)", the failsafe's line silent.
+#[test]
+fn a_failsafe_on_a_disarm_after_a_silence_says_it_may_be_a_reboot() {
+    let mut a = vehicle_sender();
+    let r = fly_against(20.0, move |k| {
+        let ms = 1000 + 50 * k;
+        match k {
+            0..=19 => datagrams(a.frames(&[heartbeat(6), iso_s(ms + 100_000, 9.5)])),
+            20..=49 => Vec::new(),
+            _ => datagrams(a.frames(&[heartbeat_disarmed(1), iso_s(ms, 9.5)])),
+        }
+    });
+    assert_eq!(r.end, FlyEnd::SensorClockJump, "{:?}", r.events);
+    assert!(!r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("not yet confirmed as its pilot's")
+                && e.contains("(or its autopilot rebooted: it was silent for more than 1 s")),
+        "{:?}",
+        r.events
+    );
+}
+
 /// ver33b-1: a second autopilot (system 4) heard 0.5 s after the vehicle, once the companion has
 /// control (the pilot's OFFBOARD): `two_vehicles`, and the way out (HOLD) is commanded to the
 /// vehicle flown, not "nothing commanded" with the vehicle left in OFFBOARD.
@@ -2474,6 +2503,86 @@ fn a_reboot_during_the_retries_is_told() {
     );
 }
 
+/// `fly` in control (the pilot's OFFBOARD) against a vehicle (1 Hz heartbeat; its measurement
+/// and position each 50 ms turn, the measurement on its own steady clock) whose clock (the
+/// position's `time_boot_ms`) goes back 50 s at 2 s (its autopilot rebooted) and, if
+/// `again_s`, 50 s more then (a second reboot); from 2.5 s its heartbeats show AUTO.LOITER, the
+/// HOLD the failsafe commands (it obeyed).
+fn rebooted_in_control(again_s: Option<f64>) -> FlyReport {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut a = vehicle_sender();
+    let t0 = Instant::now();
+    fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let back = match (t >= 2.0, again_s.is_some_and(|s| t >= s)) {
+            (_, true) => 100_000,
+            (true, false) => 50_000,
+            (false, false) => 0,
+        };
+        let hb = own.due(t).then(|| {
+            if t < 2.5 {
+                heartbeat(6)
+            } else {
+                heartbeat_sub(4, 3)
+            }
+        });
+        let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+        msgs.extend([iso_s(ms, 9.5), position(ms + 200_000 - back, 0.0)]);
+        datagrams(a.frames(&msgs))
+    })
+}
+
+/// att49f-2 (M3): in control the vehicle's clock goes back 50 s at 2 s: its autopilot
+/// rebooted, `vehicle_lost`, HOLD commanded; it obeys (AUTO.LOITER from 2.5 s). The reboot
+/// that caused the failsafe is no new one for the retries' reboot watch, which goes on from
+/// the rebooted clock: the HOLD is confirmed once its heartbeats have shown it for the span
+/// ("the vehicle is in HOLD", exit 75), the reboot logged once. Before (fly45 to fly50): the
+/// retries' watch caught the same clock step ("went back from 203.0 s", the same reference)
+/// a frame later and stopped them: "did not confirm the HOLD (1 tries, its autopilot
+/// rebooted)", exit 69.
+#[test]
+fn a_reboot_in_control_is_no_new_one_in_the_retries() {
+    let r = rebooted_in_control(None);
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        way_out_end(&r).contains("the vehicle is in HOLD ("),
+        "{:?}",
+        r.events
+    );
+    let reboots = r
+        .events
+        .iter()
+        .filter(|e| e.contains("its autopilot rebooted"))
+        .count();
+    assert_eq!(reboots, 1, "{:?}", r.events);
+}
+
+/// att49f-2, the other side (att45f-10's RB2): in control the vehicle's clock goes back 50 s at
+/// 2 s (`vehicle_lost`, HOLD commanded), and 50 s more at 2.3 s, before any heartbeat shows
+/// the HOLD: a second reboot, after the one that caused the failsafe, found by the retries'
+/// watch from the rebooted clock: the retries stop, nothing more commanded, the HOLD not
+/// confirmed.
+#[test]
+fn a_second_reboot_in_the_retries_is_told() {
+    let r = rebooted_in_control(Some(2.3));
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back from 153."
+        )),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("its autopilot rebooted)"),
+        "{:?}",
+        r.events
+    );
+}
+
 /// att45f-4: during the failsafe's retries the vehicle's frame counter jumps back 100 at
 /// 2.05 s (a doubt opens) and a heartbeat in the doubt shows it armed in MANUAL (a pilot's
 /// word awaiting confirmation: no retry meanwhile); the counter goes on from there (the
@@ -2514,6 +2623,65 @@ fn a_word_in_a_doubt_contradicted_in_the_retries_is_two_senders() {
         r.events
     );
     assert!(c.len() <= 4 + 2, "{c:?}");
+}
+
+/// att49f-3 (R8b): during the failsafe's retries (Ctrl-C at 1.5 s; the HOLD never carried
+/// out, the vehicle armed in OFFBOARD) the vehicle's counter jumps back 100 at 2.0 s, onto
+/// numbers seen (a doubt), and its heartbeat in the doubt (2.1 s) shows it armed in MANUAL (a
+/// pilot's word awaiting confirmation: no retry meanwhile). Its frames (one every 20 ms, on its
+/// own schedule) resynchronise the doubt as one sender within 64 frames (by 3.3 s); its next
+/// heartbeat, applied (3.5 s), shows MANUAL again, and those from 4.5 s OFFBOARD. The word was
+/// FIRST heard in the doubt: a heartbeat applied that contradicts it has a doubt between, two
+/// senders, however many applied ones repeated it after the resync; as in control (C8b), the
+/// retries stop, nothing more commanded, the MANUAL logged. Before: the applied MANUAL took
+/// the word as new (no doubt since), the OFFBOARD heartbeat forgot it, and the HOLD was
+/// retried from 4.5 s to the bound, the MANUAL never logged.
+#[test]
+fn a_word_in_a_doubt_repeated_after_the_resync_then_contradicted_is_two_senders() {
+    let (mut next_s, mut k) = (0.0f64, 0u32);
+    let (r, c) = in_the_retries(move |t, _, a| {
+        let mut out = Vec::new();
+        // One step every 20 ms of wall time, however the turns go (caught up).
+        while next_s <= t {
+            let ms = 1000 + 20 * k;
+            if k == 100 {
+                a.seq = a.seq.wrapping_sub(100);
+            }
+            let mut msgs = vec![if k.is_multiple_of(2) {
+                iso_s(ms, 9.5)
+            } else {
+                position(ms, 0.0)
+            }];
+            if k == 105 || k == 175 {
+                msgs.push(heartbeat(1));
+            } else if (k < 100 && k.is_multiple_of(50)) || (k >= 225 && (k + 25).is_multiple_of(50))
+            {
+                msgs.push(heartbeat(6));
+            }
+            out.extend(datagrams(a.frames(&msgs)));
+            k += 1;
+            next_s += 0.02;
+        }
+        from_socket(0, out)
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e
+            .contains("during the failsafe's retries, two vehicles with the ids")
+            && e.contains(
+                "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt"
+            )),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("a pilot's word before a second sender)"),
+        "{:?}",
+        r.events
+    );
+    // The tries before the word (1.5 s to 2.1 s, one each 0.3 s), none after it.
+    assert!(c.len() <= 4, "{c:?} {:?}", r.events);
 }
 
 /// att45f-9: during the failsafe's retries a second autopilot (system 1, component 2, a PX4
