@@ -1423,6 +1423,36 @@ fn check_team_record_numbers(
     if let Some(cv) = m.gap_cv_final {
         check_cv_not_negative("gap_cv_final", cv)?;
     }
+    check_time_to_even(m)?;
+    // A length and a ground speed (a magnitude; a robot's speed command is saturated to its
+    // positive envelope) are at least 0, whatever the isoline or airframe.
+    if let Some(l) = m.isoline_length_m.filter(|&l| l < 0.0) {
+        return Err(format!(
+            "isoline_length_m = {} m is negative: a length is at least 0",
+            Echo(l)
+        ));
+    }
+    check_speed_range(m.speed_range_mps, b)?;
+    let Some(b) = b else { return Ok(()) };
+    if let Some(cv) = m.gap_cv_final {
+        check_gap_cv("gap_cv_final", cv, b.count)?;
+    }
+    if let (Some(got), Some(want)) = (m.isoline_length_m, b.isoline_length_m) {
+        if (got - want).abs() > want.abs() * 1e-9 {
+            return Err(format!(
+                "isoline_length_m = {} m is not the length of the run's isoline, {} m",
+                Echo(got),
+                Echo(want)
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `time_to_even_s` and `gap_cv_final` of team record `m` agree: an even spread that lasts to
+/// the end (a gap CV at or below the team metrics' even threshold) has a final gap CV at most the threshold,
+/// and a final CV at most the threshold starts one (att49-4).
+fn check_time_to_even(m: &crate::summary::TeamRecord) -> Result<(), String> {
     let even = isotrack_sim::team::metrics::TeamMetricsConfig::default().even_gap_cv;
     if let Some(t) = m.time_to_even_s {
         if !m.gap_cv_final.is_some_and(|cv| cv <= even) {
@@ -1445,27 +1475,22 @@ fn check_team_record_numbers(
             Echo(even)
         ));
     }
-    // A length and a ground speed (a magnitude; a robot's speed command is saturated to its
-    // positive envelope) are at least 0, whatever the isoline or airframe.
-    if let Some(l) = m.isoline_length_m.filter(|&l| l < 0.0) {
-        return Err(format!(
-            "isoline_length_m = {} m is negative: a length is at least 0",
-            Echo(l)
-        ));
-    }
-    if let Some(v) = m
-        .speed_range_mps
-        .into_iter()
-        .flatten()
-        .flatten()
-        .find(|&v| v < 0.0)
-    {
+    Ok(())
+}
+
+/// A team record's `speed_range_mps`, `range`: every speed at least 0, the slowest at most the
+/// fastest, both within the team's speed envelope where bounds `b` give one.
+fn check_speed_range(
+    range: Option<[Option<f64>; 2]>,
+    b: Option<&TeamBounds>,
+) -> Result<(), String> {
+    if let Some(v) = range.into_iter().flatten().flatten().find(|&v| v < 0.0) {
         return Err(format!(
             "speed_range_mps holds {} m/s: a vehicle's speed is at least 0",
             Echo(v)
         ));
     }
-    if let Some([Some(lo), Some(hi)]) = m.speed_range_mps {
+    if let Some([Some(lo), Some(hi)]) = range {
         if lo > hi {
             return Err(format!(
                 "speed_range_mps = [{}, {}]: its slowest speed exceeds its fastest",
@@ -1483,19 +1508,6 @@ fn check_team_record_numbers(
                     Echo(v_max)
                 ));
             }
-        }
-    }
-    let Some(b) = b else { return Ok(()) };
-    if let Some(cv) = m.gap_cv_final {
-        check_gap_cv("gap_cv_final", cv, b.count)?;
-    }
-    if let (Some(got), Some(want)) = (m.isoline_length_m, b.isoline_length_m) {
-        if (got - want).abs() > want.abs() * 1e-9 {
-            return Err(format!(
-                "isoline_length_m = {} m is not the length of the run's isoline, {} m",
-                Echo(got),
-                Echo(want)
-            ));
         }
     }
     Ok(())

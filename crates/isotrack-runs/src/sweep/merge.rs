@@ -142,6 +142,38 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
     // column would mislabel every value; a BOM, CRLF or control character is no header
     // isotrack writes).
     let expected = results_header(&plan, base.team.is_some());
+    check_manifest_columns(d, &m, &expected)?;
+    let (k, n) = manifest_shard(d, &m)?;
+    check_same_sweep(shards, d, dirs, t, digest, m)?;
+    let path = d.join("results.csv");
+    check_header_columns(&path, &expected)?;
+    let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans).map_err(|e| {
+        if engine_known {
+            e
+        } else {
+            unrecorded_engine_note(e, d)
+        }
+    })?;
+    check_rows_in_shard(&path, &idx.rows, k, n)?;
+    if shards.header.as_ref().is_some_and(|x| *x != idx.header) {
+        return Err(fail(
+            exit::DATAERR,
+            format!("{}: different columns", d.display()),
+        ));
+    }
+    shards.header = Some(idx.header);
+    shards.rows.extend(idx.rows);
+    shards.sources.push(path);
+    Ok(())
+}
+
+/// The columns shard `d`'s manifest `m` records (`columns`, where recorded) must be this
+/// sweep's, `expected`.
+fn check_manifest_columns(
+    d: &Path,
+    m: &serde_json::Value,
+    expected: &[String],
+) -> Result<(), Failure> {
     if m.get("columns").is_some_and(|c| *c != json!(expected)) {
         return Err(fail(
             exit::DATAERR,
@@ -151,11 +183,14 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
-    let (k, n) = manifest_shard(d, &m)?;
-    check_same_sweep(shards, d, dirs, t, digest, m)?;
-    let path = d.join("results.csv");
-    let header = read_header(&path)?;
-    if !header.is_empty() && header != csv_line(&expected) {
+    Ok(())
+}
+
+/// The header of the shard's table at `path` (when it has one) must be exactly the one
+/// isotrack writes for this sweep's columns, `expected`.
+fn check_header_columns(path: &Path, expected: &[String]) -> Result<(), Failure> {
+    let header = read_header(path)?;
+    if !header.is_empty() && header != csv_line(expected) {
         return Err(fail(
             exit::DATAERR,
             format!(
@@ -165,14 +200,13 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
-    let idx = index_results(&path, shards.sources.len(), false, t, &plan, &spans).map_err(|e| {
-        if engine_known {
-            e
-        } else {
-            unrecorded_engine_note(e, d)
-        }
-    })?;
-    if let Some(r) = idx.rows.iter().find(|r| r.id % n != k - 1) {
+    Ok(())
+}
+
+/// Every row of the shard's table at `path` must be of shard `k`/`n` that its manifest names
+/// (`id % n == k - 1`, [`manifest_shard`]).
+fn check_rows_in_shard(path: &Path, rows: &[RowRef], k: u64, n: u64) -> Result<(), Failure> {
+    if let Some(r) = rows.iter().find(|r| r.id % n != k - 1) {
         return Err(fail(
             exit::DATAERR,
             format!(
@@ -183,15 +217,6 @@ fn read_shard(shards: &mut Shards, d: &Path, dirs: &[PathBuf]) -> Result<(), Fai
             ),
         ));
     }
-    if shards.header.as_ref().is_some_and(|x| *x != idx.header) {
-        return Err(fail(
-            exit::DATAERR,
-            format!("{}: different columns", d.display()),
-        ));
-    }
-    shards.header = Some(idx.header);
-    shards.rows.extend(idx.rows);
-    shards.sources.push(path);
     Ok(())
 }
 
