@@ -591,6 +591,17 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
         report.samples,
         report.commands.len()
     );
+    check_stopped_before_control(report, args)?;
+    if report.end == FlyEnd::PilotTookOver {
+        errln!("isotrack fly: pilot_took_over: the companion let go, nothing commanded");
+    }
+    check_way_out(report)
+}
+
+/// A flight that stopped before it had any vehicle to command (README's exit table): two
+/// autopilots heard (69), a vehicle of another kind than the scenario's (65), another
+/// controller (79), or no vehicle heard before a failsafe (69).
+fn check_stopped_before_control(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
     if report.end == FlyEnd::TwoVehicles && !report.way_out_commanded {
         return Err(Failure {
             code: exit::UNAVAILABLE,
@@ -612,17 +623,7 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
         });
     }
     if report.end.is_failsafe() && !report.vehicle_heard {
-        let heard = match (report.other_system_heard, args.target_system) {
-            (Some((sys, comp)), Some(want)) => format!(
-                "the vehicle of --target-system {want} was never heard on {}, only system {sys}'s autopilot (component {comp}): a mistyped id?",
-                args.mavlink
-            ),
-            _ if report.link.frames_in > 0 => format!(
-                "no vehicle was ever heard on {}: {} frames came, but no autopilot's HEARTBEAT (one beating slower than --timeout-s, or no autopilot among the senders)",
-                args.mavlink, report.link.frames_in
-            ),
-            _ => format!("no vehicle was ever heard on {}", args.mavlink),
-        };
+        let heard = never_heard(report, args);
         return Err(Failure {
             code: exit::UNAVAILABLE,
             message: format!(
@@ -631,9 +632,29 @@ fn fly_exit(report: &FlyReport, args: &FlyArgs) -> Result<(), Failure> {
             ),
         });
     }
-    if report.end == FlyEnd::PilotTookOver {
-        errln!("isotrack fly: pilot_took_over: the companion let go, nothing commanded");
+    Ok(())
+}
+
+/// Why no vehicle was heard on `--mavlink`: another system's autopilot than `--target-system`,
+/// frames without an autopilot's HEARTBEAT, or nothing at all.
+fn never_heard(report: &FlyReport, args: &FlyArgs) -> String {
+    match (report.other_system_heard, args.target_system) {
+        (Some((sys, comp)), Some(want)) => format!(
+            "the vehicle of --target-system {want} was never heard on {}, only system {sys}'s autopilot (component {comp}): a mistyped id?",
+            args.mavlink
+        ),
+        _ if report.link.frames_in > 0 => format!(
+            "no vehicle was ever heard on {}: {} frames came, but no autopilot's HEARTBEAT (one beating slower than --timeout-s, or no autopilot among the senders)",
+            args.mavlink, report.link.frames_in
+        ),
+        _ => format!("no vehicle was ever heard on {}", args.mavlink),
     }
+}
+
+/// The exit of a flight past its contact with the vehicle, as it ended and what was commanded
+/// (README's exit table): 79 with nothing commanded, 69 for a way out overridden or
+/// unconfirmed, 75 for one the vehicle confirmed, 0 for a flight that ended on its own.
+fn check_way_out(report: &FlyReport) -> Result<(), Failure> {
     let commanded = report.way_out_commanded;
     if report.end.is_failsafe() && !commanded {
         return Err(Failure {
