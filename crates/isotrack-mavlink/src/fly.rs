@@ -1063,6 +1063,8 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     }
 
     /// The flight's state at its start, on an open link and sensor.
+    // Long by choice: one struct literal, a line per field of the flight's state; grouped into
+    // sub-structs, the file's ~650 `self.` uses of these fields would all change with it.
     fn start(
         scenario: &Scenario,
         opts: &'a FlyOptions,
