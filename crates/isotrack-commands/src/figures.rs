@@ -180,6 +180,54 @@ fn say_figures_on_interrupt(
     })
 }
 
+/// The team figure (`team.*`) of one team's run directory plotted alone, its path; else the
+/// note saying why none is drawn (the run's own reason, or several directories together).
+fn team_figure_or_note(
+    runs: &[PathBuf],
+    data: &[RunData],
+    out: &Path,
+    st: &Style,
+    title: &str,
+) -> Result<Option<String>, Failure> {
+    let ext = st.format.extension();
+    if runs.len() == 1 && RunData::is_team(&runs[0]) {
+        if isotrack_plot::TeamTracks::new(data).is_some() {
+            let team = out.join(format!("team.{ext}"));
+            isotrack_plot::team_figure(data, &team, st, title).map_err(failure)?;
+            return Ok(Some(team.display().to_string()));
+        } else {
+            // nu36-10: the run's own reason (summary.json's team.metrics_note), not an
+            // either/or whose first clause may be false.
+            let why = data[0]
+                .summary
+                .team()
+                .and_then(|t| t.metrics_note.clone())
+                .map(|n| n.trim_start_matches("no team metrics: ").to_string())
+                .unwrap_or_else(|| "the run recorded no team metrics".to_string());
+            errln!(
+                "note: no team figure (gaps, revisit time): {}",
+                isotrack_scenario::load::clip(&why)
+            );
+        }
+    } else if runs.len() > 1 {
+        // nu36-16: several run directories, a team's among them: its team figure is drawn
+        // from it alone, said rather than dropped without a word.
+        let teams: Vec<String> = runs
+            .iter()
+            .filter(|d| RunData::is_team(d))
+            .map(|d| d.display().to_string())
+            .collect();
+        if !teams.is_empty() {
+            errln!(
+                "note: no team figure (gaps, revisit time): team.{ext} is drawn for one team's run directory plotted alone (`isotrack plot {}`), not for {} directories together",
+                teams[0],
+                runs.len()
+            );
+        }
+    }
+    Ok(None)
+}
+
 /// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
 pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
     let format = st.format;
@@ -230,41 +278,7 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     trajectory_figure(&data, &traj, st, &title).map_err(failure)?;
     timeseries_figure(&data, &ts, st, &title, Panels::default()).map_err(failure)?;
     let mut written = vec![traj.display().to_string(), ts.display().to_string()];
-    if runs.len() == 1 && RunData::is_team(&runs[0]) {
-        if isotrack_plot::TeamTracks::new(&data).is_some() {
-            let team = out.join(format!("team.{ext}"));
-            isotrack_plot::team_figure(&data, &team, st, &title).map_err(failure)?;
-            written.push(team.display().to_string());
-        } else {
-            // nu36-10: the run's own reason (summary.json's team.metrics_note), not an
-            // either/or whose first clause may be false.
-            let why = data[0]
-                .summary
-                .team()
-                .and_then(|t| t.metrics_note.clone())
-                .map(|n| n.trim_start_matches("no team metrics: ").to_string())
-                .unwrap_or_else(|| "the run recorded no team metrics".to_string());
-            errln!(
-                "note: no team figure (gaps, revisit time): {}",
-                isotrack_scenario::load::clip(&why)
-            );
-        }
-    } else if runs.len() > 1 {
-        // nu36-16: several run directories, a team's among them: its team figure is drawn
-        // from it alone, said rather than dropped without a word.
-        let teams: Vec<String> = runs
-            .iter()
-            .filter(|d| RunData::is_team(d))
-            .map(|d| d.display().to_string())
-            .collect();
-        if !teams.is_empty() {
-            errln!(
-                "note: no team figure (gaps, revisit time): team.{ext} is drawn for one team's run directory plotted alone (`isotrack plot {}`), not for {} directories together",
-                teams[0],
-                runs.len()
-            );
-        }
-    }
+    written.extend(team_figure_or_note(runs, &data, out, st, &title)?);
     Ok(written)
 }
 
