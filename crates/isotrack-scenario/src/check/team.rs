@@ -1140,65 +1140,17 @@ fn spacing_claim(
         SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, false),
         SpacingLaw::None => return None,
     };
-    let n = team.count();
-    if gain_per_s == 0.0 || n < 2 {
+    if gain_per_s == 0.0 || team.count() < 2 {
         return None;
     }
-    let circle = s.team_arc();
-    let deployed =
-        |range_m: f64| circle.and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m));
-    let even = TeamMetricsConfig::default().even_gap_cv;
-    let frozen = if n == 2 && ranges {
-        Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
-    } else if ranges && team.ranging.dropout_probability >= 1.0 {
-        Some("team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0".to_string())
-    } else if equilibrium::pinned(team).len() == n {
-        // att44-9: arc_reference too; att44-8: the keys in force, overrides or the team's.
-        Some(format!(
-            "{}: {} has no speed to command but v0",
-            equilibrium::pinned_keys(team, &equilibrium::pinned(team)),
-            team.law.name()
-        ))
-    } else {
-        None
-    };
-    if let Some(why) = frozen {
-        let one_speed = team.nominal_speeds_mps().len() == 1;
-        return Some(match deployed(f64::INFINITY).filter(|_| one_speed) {
-            Some(d) if d.gap_cv <= even => (
-                Verdict::Holds,
-                format!(
-                    "{why}, so the team keeps its deployment, which is even (the starts' gap CV {} <= {})",
-                    Num(d.gap_cv),
-                    Num(even)
-                ),
-            ),
-            Some(d) => (
-                Verdict::Fails,
-                format!(
-                    "{why}, so the gaps stay as deployed: the starts' gap CV {} > {} (even spacing is not reached)",
-                    Num(d.gap_cv),
-                    Num(even)
-                ),
-            ),
-            None => (
-                Verdict::Fails,
-                format!("{why}, so the gaps stay as deployed (or drift with unequal speeds): even spacing is not reached"),
-            ),
-        });
+    if let Some(claim) = frozen_gaps_claim(s, team, ranges) {
+        return Some(claim);
     }
     if let Some(claim) = equilibrium::pinned_arcs_claim(s, l, team) {
         return Some(claim);
     }
-    if let Some(why) = equilibrium::probe_cannot_fly(team) {
-        return Some((Verdict::Fails, why));
-    }
-    if let Some(claim) = start::probe_slots_claim(s, team) {
+    if let Some(claim) = discovery_probe_claim(s, team) {
         return Some(claim);
-    }
-    let slope = deployed(f64::INFINITY).map_or(1.0, |d| d.probe_slope);
-    if let Some(why) = equilibrium::probe_below_noise(team, slope) {
-        return Some((Verdict::NotApplicable, why));
     }
     if let Some(claim) = start::delay_drift_claim(s, l, team) {
         return Some(claim);
@@ -1211,19 +1163,105 @@ fn spacing_claim(
     if let Some(why) = first_sample_overshoot(s, l, team, sp) {
         return Some((Verdict::NotApplicable, why));
     }
-    if let Some(claim) = circle
+    if let Some(claim) = s
+        .team_arc()
         .is_none()
         .then(|| equilibrium::extracted_claim(s, team))
         .flatten()
     {
         return Some(claim);
     }
+    range_limit_claim(s, team, sp, ranges)
+}
+
+/// [`deployed_on_circle`] of `team`'s starts on the scenario's known circle (no arc bound),
+/// against `range_m`; `None` off a known circle.
+fn deployed(s: &Scenario, team: &TeamSpec, range_m: f64) -> Option<Deployment> {
+    s.team_arc()
+        .and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m))
+}
+
+/// [`spacing_claim`]'s first case: the law cannot move the gaps (`ranges`: a law that ranges,
+/// `range_balance`). Two vehicles of `range_balance`, every range lost, or every envelope of
+/// zero width: the gaps stay as deployed, `holds` only when the starts are even on a known
+/// circle with one nominal speed, else `fails`. `None` when the law can move them.
+fn frozen_gaps_claim(s: &Scenario, team: &TeamSpec, ranges: bool) -> Option<(Verdict, String)> {
+    let n = team.count();
+    let even = TeamMetricsConfig::default().even_gap_cv;
+    let why = if n == 2 && ranges {
+        "with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string()
+    } else if ranges && team.ranging.dropout_probability >= 1.0 {
+        "team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0"
+            .to_string()
+    } else if equilibrium::pinned(team).len() == n {
+        // att44-9: arc_reference too; att44-8: the keys in force, overrides or the team's.
+        format!(
+            "{}: {} has no speed to command but v0",
+            equilibrium::pinned_keys(team, &equilibrium::pinned(team)),
+            team.law.name()
+        )
+    } else {
+        return None;
+    };
+    let one_speed = team.nominal_speeds_mps().len() == 1;
+    Some(match deployed(s, team, f64::INFINITY).filter(|_| one_speed) {
+        Some(d) if d.gap_cv <= even => (
+            Verdict::Holds,
+            format!(
+                "{why}, so the team keeps its deployment, which is even (the starts' gap CV {} <= {})",
+                Num(d.gap_cv),
+                Num(even)
+            ),
+        ),
+        Some(d) => (
+            Verdict::Fails,
+            format!(
+                "{why}, so the gaps stay as deployed: the starts' gap CV {} > {} (even spacing is not reached)",
+                Num(d.gap_cv),
+                Num(even)
+            ),
+        ),
+        None => (
+            Verdict::Fails,
+            format!("{why}, so the gaps stay as deployed (or drift with unequal speeds): even spacing is not reached"),
+        ),
+    })
+}
+
+/// [`spacing_claim`]'s discovered-ring probe cases (att44-10, att51-5, att50-3): a probe that
+/// cannot change the speed (`fails`), probe slots that do not hold the ranges of a fitted rate
+/// ([`start::probe_slots_claim`]), a probe's range change under the ranging noise
+/// (`not_applicable`). `None` otherwise.
+fn discovery_probe_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdict, String)> {
+    if let Some(why) = equilibrium::probe_cannot_fly(team) {
+        return Some((Verdict::Fails, why));
+    }
+    if let Some(claim) = start::probe_slots_claim(s, team) {
+        return Some(claim);
+    }
+    let slope = deployed(s, team, f64::INFINITY).map_or(1.0, |d| d.probe_slope);
+    equilibrium::probe_below_noise(team, slope).map(|why| (Verdict::NotApplicable, why))
+}
+
+/// [`spacing_claim`]'s last cases, of `range_balance` (`ranges`) with a finite
+/// `team.ranging.max_range_m`: unequal nominal speeds without a solved equilibrium and a range
+/// short of the even spacing's (att43-2), or a discovered ring whose starts leave neighbours
+/// beyond the range (att43-1): `not_applicable`. `None` otherwise.
+fn range_limit_claim(
+    s: &Scenario,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+    ranges: bool,
+) -> Option<(Verdict, String)> {
     let r = team.ranging.max_range_m;
     if !ranges || !r.is_finite() {
         return None;
     }
-    if team.nominal_speeds_mps().len() > 1 && solved.is_none() {
-        let even_range = circle.map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
+    let n = team.count();
+    if team.nominal_speeds_mps().len() > 1 && sp.shifted_equilibrium.is_none() {
+        let even_range = s
+            .team_arc()
+            .map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
         if even_range.is_none_or(|d| d > r) {
             return Some((
                 Verdict::NotApplicable,
@@ -1238,20 +1276,19 @@ fn spacing_claim(
             ));
         }
     }
-    if let RingMode::Discover(_) = team.ring {
-        if let Some(d) = deployed(r).filter(|d| d.widest_chord.0 > r) {
-            let [a, b] = d.widest_chord.1;
-            return Some((
-                Verdict::NotApplicable,
-                format!(
-                    "team.ring = \"discovered\" with team.ranging.max_range_m = {}: vehicles {a} and {b}, neighbours at the start, are {} m apart, beyond the range, so the probes may not find the ring, and without it the spacing law is off for the whole run (the run warns it); list the ring or lengthen the range",
-                    Echo(r),
-                    Num(d.widest_chord.0)
-                ),
-            ));
-        }
-    }
-    None
+    let RingMode::Discover(_) = team.ring else {
+        return None;
+    };
+    let d = deployed(s, team, r).filter(|d| d.widest_chord.0 > r)?;
+    let [a, b] = d.widest_chord.1;
+    Some((
+        Verdict::NotApplicable,
+        format!(
+            "team.ring = \"discovered\" with team.ranging.max_range_m = {}: vehicles {a} and {b}, neighbours at the start, are {} m apart, beyond the range, so the probes may not find the ring, and without it the spacing law is off for the whole run (the run warns it); list the ring or lengthen the range",
+            Echo(r),
+            Num(d.widest_chord.0)
+        ),
+    ))
 }
 
 /// How many turns the listed ring makes round `circle`'s centre in the direction of
@@ -1586,35 +1623,35 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
             sp.delay_whole_periods.map_or("n/a".into(), |q| q.to_string()),
             sp.delay_fraction.map_or("n/a".into(), |f| Num(f).to_string())
         ));
-    let c = sp.range_slope.unwrap_or(1.0);
-    out.push(format!(
+    out.push(range_slope_line(sp));
+    out.push(modes_heading(sp));
+    out.extend(sp.modes.iter().map(|m| format!("    {}", mode_line(sp, m))));
+    out.extend(k_v_star_line(sp));
+    if !sp.note.is_empty() {
+        out.push(format!("  note: {}", sp.note));
+    }
+    out.push(slowest_line(sp));
+    for w in &sp.not_modelled {
+        out.push(format!("  not modelled: {w}"));
+    }
+}
+
+/// The line on the range slope `c` and where it comes from.
+fn range_slope_line(sp: &SpacingLoopReport) -> String {
+    format!(
         "  range slope c = dr/dg = {} ({})",
-        Num(c),
+        Num(sp.range_slope.unwrap_or(1.0)),
         match sp.range_slope_source {
             Some("circle_chord") => "chord of the circular isoline at even spacing, cos(pi/N)",
             Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
             _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
         }
-    ));
-    let modes: Vec<String> = sp
-        .modes
-        .iter()
-        .map(|m| {
-            format!(
-                "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
-                match (sp.eigenvalue_bounds, m.m) {
-                    (false, k) => format!("m = {k}"),
-                    (true, 1) => "lower bound of the smallest".into(),
-                    (true, _) => "upper bound of the largest".into(),
-                },
-                Num(m.lambda),
-                Num(m.gain_per_period),
-                m.spectral_radius
-                    .map_or("n/a".into(), |r| format!("{r:.6}")),
-                if m.stable { "stable" } else { "UNSTABLE" }
-            )
-        })
-        .collect();
+    )
+}
+
+/// The heading of the modes' list: the ring Laplacian's at even spacing of a free ring, else
+/// the linearisation's ([`SpacingLoopReport::linearised_about`]), and which modes are listed.
+fn modes_heading(sp: &SpacingLoopReport) -> String {
     let which = if sp.all_modes_listed {
         "every distinct one"
     } else if sp.eigenvalue_bounds {
@@ -1622,7 +1659,7 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
     } else {
         "the smallest and the largest of many"
     };
-    out.push(match sp.linearised_about {
+    match sp.linearised_about {
         None => format!(
             "  ring Laplacian eigenvalues ({which}; m = 0, the sum of the gaps, is conserved):"
         ),
@@ -1634,33 +1671,46 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
                 "shifted equilibrium, each gap with its own chord slope cos(g_i/(2R))"
             }
         ),
-    });
-    out.extend(modes.into_iter().map(|m| format!("    {m}")));
-    if let (Some(g), Some(k), Some(lmax)) = (
-        sp.max_gain_per_period,
-        sp.max_stable_k_v_per_s,
-        sp.lambda_max,
-    ) {
-        out.push(format!(
-                "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
-                Num(g),
-                Num(sp.period_s),
-                Num(c),
-                Num(lmax),
-                Num(k),
-                Echo(sp.k_v_per_s.unwrap_or(0.0)),
-                match sp.stable {
-                    Some(true) => "stable",
-                    Some(false) => "UNSTABLE",
-                    None => "not computed",
-                }
-            ));
     }
-    if !sp.note.is_empty() {
-        out.push(format!("  note: {}", sp.note));
-    }
-    out.push(slowest_line(sp));
-    for w in &sp.not_modelled {
-        out.push(format!("  not modelled: {w}"));
-    }
+}
+
+/// One listed mode (or bound of the spectrum): its `lambda`, gain per period, radius, stability.
+fn mode_line(sp: &SpacingLoopReport, m: &SpacingMode) -> String {
+    format!(
+        "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
+        match (sp.eigenvalue_bounds, m.m) {
+            (false, k) => format!("m = {k}"),
+            (true, 1) => "lower bound of the smallest".into(),
+            (true, _) => "upper bound of the largest".into(),
+        },
+        Num(m.lambda),
+        Num(m.gain_per_period),
+        m.spectral_radius
+            .map_or("n/a".into(), |r| format!("{r:.6}")),
+        if m.stable { "stable" } else { "UNSTABLE" }
+    )
+}
+
+/// The line on the largest stable `k_v*` and the scenario's `k_v` against it (`None` when not
+/// computed).
+fn k_v_star_line(sp: &SpacingLoopReport) -> Option<String> {
+    let (g, k, lmax) = (
+        sp.max_gain_per_period?,
+        sp.max_stable_k_v_per_s?,
+        sp.lambda_max?,
+    );
+    Some(format!(
+        "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
+        Num(g),
+        Num(sp.period_s),
+        Num(sp.range_slope.unwrap_or(1.0)),
+        Num(lmax),
+        Num(k),
+        Echo(sp.k_v_per_s.unwrap_or(0.0)),
+        match sp.stable {
+            Some(true) => "stable",
+            Some(false) => "UNSTABLE",
+            None => "not computed",
+        }
+    ))
 }
