@@ -183,6 +183,25 @@ pub struct SpacingLoopReport {
     /// each listed with `lambda = mu/c`, and `k_v* = g*/(T mu_max)`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub linearised_about: Option<&'static str>,
+    /// att50-11: which range slopes that linearisation uses (absent with `linearised_about`):
+    /// `shifted_equilibrium` (each gap's own chord slope `cos(g_i/(2R'))` at the solved shifted
+    /// equilibrium), `pinned_best_arcs` (the chords of the arcs the vehicles between two of no
+    /// speed room share evenly) or `range_slope` (`c` for every gap).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub linearised_slopes: Option<&'static str>,
+    /// The slope of each gap (listed order, vehicle `i` to the one ahead) in that linearisation
+    /// (empty without `linearised_about`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gap_slopes: Vec<f64>,
+    /// The vehicles fixed in the linearisation for having no speed room (`v_min_i = v_max_i`),
+    /// listed order (empty unless `linearised_about = "pinned"`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pinned_vehicles: Vec<usize>,
+    /// The vehicles fixed in the linearisation for being saturated at an envelope bound at the
+    /// equilibrium (att50-1: their command there past their own envelope), listed order (empty
+    /// unless `linearised_about = "pinned"`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub saturated_vehicles: Vec<usize>,
     /// What the linear loop leaves out (noise, dropouts, range limit, speed saturation, the
     /// discovery phase), each with its key.
     pub not_modelled: Vec<String>,
@@ -267,17 +286,13 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     rep.range_slope = Some(c);
     rep.range_slope_source = Some(source);
     rep.applicable = true;
-    let (slopes, about) = loop_slopes(s, l, team, &rep, c);
+    let (slopes, slopes_from) = loop_slopes(s, l, team, &rep, c);
+    let (pinned, saturated) = fixed_vehicles(team, &rep);
     let mut pins = vec![false; n];
-    // att50-1: a vehicle saturated at an envelope bound at the equilibrium acts as a pin too.
-    let saturated = rep
-        .shifted_equilibrium
-        .as_ref()
-        .map_or(vec![], |eq| equilibrium::saturated(team, eq));
-    equilibrium::pinned(team)
-        .into_iter()
-        .chain(saturated)
-        .for_each(|i| pins[i] = true);
+    pinned
+        .iter()
+        .chain(&saturated)
+        .for_each(|&i| pins[i] = true);
     let pinned_some = pins.iter().any(|&p| p) && !pins.iter().all(|&p| p);
     let spectrum = linearised::loop_spectrum(c, &slopes, &pins)
         .filter(|_| pinned_some)
@@ -287,11 +302,18 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         rep.note = "not computed: the range slopes at the equilibrium are not in (0, 1]".into();
         return rep;
     };
-    rep.linearised_about = match (pinned_some, about) {
+    rep.linearised_about = match (pinned_some, slopes_from) {
         (true, _) => Some("pinned"),
-        (false, "even_spacing") => None,
-        (false, a) => Some(a),
+        (false, "shifted_equilibrium") => Some("shifted_equilibrium"),
+        (false, _) => None,
     };
+    if rep.linearised_about.is_some() {
+        rep.linearised_slopes = Some(slopes_from);
+        rep.gap_slopes = slopes.clone();
+    }
+    if pinned_some {
+        (rep.pinned_vehicles, rep.saturated_vehicles) = (pinned, saturated);
+    }
     let lambdas = &spectrum.lambdas;
     rep.lambda_min = Some(lambdas[0]);
     rep.lambda_max = Some(lambdas[lambdas.len() - 1]);
@@ -316,6 +338,17 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     }
     rep.not_modelled = spacing_not_modelled(team, n, &rep);
     rep
+}
+
+/// The vehicles the linearisation fixes in the frame moving at the team's speed: those with no
+/// speed room ([`equilibrium::pinned`]) and, att50-1, those saturated at an envelope bound at
+/// the solved equilibrium ([`equilibrium::saturated`]), each listed order.
+fn fixed_vehicles(team: &TeamSpec, rep: &SpacingLoopReport) -> (Vec<usize>, Vec<usize>) {
+    let saturated = rep
+        .shifted_equilibrium
+        .as_ref()
+        .map_or(vec![], |eq| equilibrium::saturated(team, eq));
+    (equilibrium::pinned(team), saturated)
 }
 
 /// The spacing loop's report before its law is checked: the ranging's period and delay, the
@@ -354,6 +387,10 @@ fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLo
             equilibrium::shifted_equilibrium(s, l, team, c, |v| flown_radius_at(s, l, c, v))
         }),
         linearised_about: None,
+        linearised_slopes: None,
+        gap_slopes: vec![],
+        pinned_vehicles: vec![],
+        saturated_vehicles: vec![],
         not_modelled: vec![],
         note: String::new(),
     }
@@ -387,10 +424,11 @@ fn no_spacing_loop(s: &Scenario, team: &TeamSpec, k_v: f64) -> Option<String> {
 }
 
 /// The range slope of each gap (listed order) at the equilibrium the loop is linearised
-/// about, and which (`even_spacing`, `shifted_equilibrium`): on a known circle the chord slopes
-/// `cos(g_i/(2R'))` of the solved equilibrium's gaps (unequal nominal speeds) or of the best
-/// case vehicles with no speed room leave ([`equilibrium::pinned_best_arcs`]); else `c` for
-/// every gap.
+/// about, and where they come from ([`SpacingLoopReport::linearised_slopes`]:
+/// `shifted_equilibrium`, `pinned_best_arcs`, `range_slope`): on a known circle the chord
+/// slopes `cos(g_i/(2R'))` of the solved equilibrium's gaps (unequal nominal speeds) or of the
+/// best case vehicles with no speed room leave ([`equilibrium::pinned_best_arcs`]); else `c`
+/// for every gap.
 fn loop_slopes(
     s: &Scenario,
     l: &Law,
@@ -400,7 +438,7 @@ fn loop_slopes(
 ) -> (Vec<f64>, &'static str) {
     let n = team.count();
     if rep.range_slope_source != Some("circle_chord") {
-        return (vec![c; n], "even_spacing");
+        return (vec![c; n], "range_slope");
     }
     let solved = rep.shifted_equilibrium.as_ref().filter(|e| e.exists());
     if let (Some(eq), Some(circle)) = (solved, s.team_arc()) {
@@ -415,9 +453,9 @@ fn loop_slopes(
     match equilibrium::pinned_best_arcs(s, l, team) {
         Some(arcs) => (
             arcs.iter().map(|a| (a / 2.0).cos()).collect(),
-            "even_spacing",
+            "pinned_best_arcs",
         ),
-        None => (vec![c; n], "even_spacing"),
+        None => (vec![c; n], "range_slope"),
     }
 }
 
@@ -580,28 +618,8 @@ fn note_saturated_gaps(rep: &mut SpacingLoopReport, s: &Scenario, team: &TeamSpe
 fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> Vec<String> {
     let r = &team.ranging;
     let halt = rep.range_halt.as_ref();
-    let mut out = vec![format!(
-        "speed saturation: the loop is the unsaturated law (it holds while v0 + k_v (r_ahead - r_behind) stays in [team.v_min_mps, team.v_max_mps] = [{}, {}] m/s)",
-        Echo(team.v_min_mps),
-        Echo(team.v_max_mps)
-    )];
-    if team.nominal_speeds_mps().len() > 1 {
-        let nominal = team.nominal_speeds_mps();
-        let mean = team.ideal_speed_mps();
-        let speed = match common_speed(team, mean) {
-            Some((v, i, bound)) => format!(
-                "the team moves at V = clamp(mean v0 = {}, max v_min_i, min v_max_i) = {} m/s, vehicle {i}'s {bound} (saturated there; the reachable ideal revisit time is L/(N V), not L/sum v0_i)",
-                Num(mean),
-                Num(v)
-            ),
-            None => format!("the team moves at the mean v0 = {} m/s", Num(mean)),
-        };
-        out.push(format!(
-            "team.vehicles: unequal nominal speeds ({} to {} m/s) move the loop's equilibrium: {speed} and vehicle i's range ahead exceeds its range behind by (V - v0_i)/k_v, while every command stays within the vehicle's own envelope; where that equilibrium is solved (a known circle) the modes are linearised there, with each gap's own chord slope",
-            Echo(nominal[0]),
-            Echo(nominal[nominal.len() - 1])
-        ));
-    }
+    let mut out = vec![saturation_note(team, rep)];
+    out.extend(unequal_speeds_note(team, rep));
     if r.noise_std_m > 0.0 {
         out.push(format!(
             "team.ranging.noise_std_m = {} (noise moves the speeds about the loop's equilibrium; it does not change its stability)",
@@ -640,6 +658,111 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> V
         ));
     }
     out
+}
+
+/// "vehicle 3" or "vehicles 0, 2" (listed order).
+fn vehicles_text(ids: &[usize]) -> String {
+    format!(
+        "vehicle{} {}",
+        if ids.len() > 1 { "s" } else { "" },
+        ids.iter()
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+/// The not-modelled line on speed saturation: the envelope each vehicle's command must stay in
+/// for the unsaturated loop to hold, the team's `[team.v_min_mps, team.v_max_mps]` or, with
+/// per-vehicle envelopes (`team.vehicles`, att50-11), each vehicle's own, and the vehicles the
+/// linearisation fixes at the team's speed.
+fn saturation_note(team: &TeamSpec, rep: &SpacingLoopReport) -> String {
+    let team_env = format!(
+        "[team.v_min_mps, team.v_max_mps] = [{}, {}] m/s",
+        Echo(team.v_min_mps),
+        Echo(team.v_max_mps)
+    );
+    let n = team.count();
+    let own: Vec<String> = (0..n)
+        .filter_map(|i| {
+            let e = team.speeds(i);
+            (e.min_mps != team.v_min_mps || e.max_mps != team.v_max_mps)
+                .then(|| format!("vehicle {i} [{}, {}]", Echo(e.min_mps), Echo(e.max_mps)))
+        })
+        .collect();
+    if own.is_empty() {
+        return format!("speed saturation: the loop is the unsaturated law (it holds while v0 + k_v (r_ahead - r_behind) stays in {team_env})");
+    }
+    let others = if own.len() < n {
+        format!(", the others the team's {team_env}")
+    } else {
+        " m/s".into()
+    };
+    let fixed: Vec<usize> = rep
+        .pinned_vehicles
+        .iter()
+        .chain(&rep.saturated_vehicles)
+        .copied()
+        .collect();
+    let fixed = if fixed.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; {} fixed in the linearisation fly the team's speed V whatever is commanded",
+            vehicles_text(&fixed)
+        )
+    };
+    format!(
+        "speed saturation: the loop is the unsaturated law (it holds while each free vehicle's v0_i + k_v (r_ahead - r_behind) stays in its own envelope: {} (team.vehicles){others}{fixed})",
+        own.join(", ")
+    )
+}
+
+/// The not-modelled line on unequal nominal speeds (`None` with one): the common speed `V` and
+/// what sets it (the mean, the one speed of vehicles with no speed room, or the bound a vehicle
+/// saturates at), the equilibrium's range differences, and what `holds` claims there (att50-10:
+/// the loop converges to that equilibrium, not to even spacing).
+fn unequal_speeds_note(team: &TeamSpec, rep: &SpacingLoopReport) -> Option<String> {
+    let nominal = team.nominal_speeds_mps();
+    if nominal.len() < 2 {
+        return None;
+    }
+    let mean = team.ideal_speed_mps();
+    let pinned = equilibrium::pinned(team);
+    let speed = match common_speed(team, mean) {
+        // att50-11: a vehicle with no speed room sets V by its one speed; it is not saturated.
+        Some(_) if !pinned.is_empty() => format!(
+            "the team moves at V = {} m/s, the one speed of {} (v_min_i = v_max_i: no speed room, pinned, not saturated; the reachable ideal revisit time is L/(N V), not L/sum v0_i)",
+            Num(equilibrium::equilibrium_speed(team)),
+            vehicles_text(&pinned)
+        ),
+        Some((v, i, bound)) => format!(
+            "the team moves at V = clamp(mean v0 = {}, max v_min_i, min v_max_i) = {} m/s, vehicle {i}'s {bound} (saturated there; the reachable ideal revisit time is L/(N V), not L/sum v0_i)",
+            Num(mean),
+            Num(v)
+        ),
+        None => format!("the team moves at the mean v0 = {} m/s", Num(mean)),
+    };
+    let even = TeamMetricsConfig::default().even_gap_cv;
+    let evenness = if pinned.len() >= 2 {
+        format!(
+            "; with two or more vehicles of no speed room the verdict also judges that equilibrium's evenness (the arcs between them are the deployment's, att46-7): a gap CV above {} fails",
+            Num(even)
+        )
+    } else {
+        String::new()
+    };
+    let solved = rep.shifted_equilibrium.as_ref().is_some_and(|e| e.exists());
+    Some(format!(
+        "team.vehicles: unequal nominal speeds ({} to {} m/s) move the loop's equilibrium: {speed} and vehicle i's range ahead exceeds its range behind by (V - v0_i)/k_v, for every vehicle whose command stays within its own envelope (one pinned, or saturated at the bound that sets V, flies V and takes up the rest); where that equilibrium is solved (a known circle) the modes are linearised there, with each gap's own chord slope; `holds` then claims that the loop converges to that equilibrium ({}), not that the gaps even out{evenness}",
+        Echo(nominal[0]),
+        Echo(nominal[nominal.len() - 1]),
+        if solved {
+            "its gap CV is on the shifted equilibrium line"
+        } else {
+            "not solved here"
+        }
+    ))
 }
 
 /// Samples of a closed extracted isoline's arc coordinate at which [`min_silent_gap_m`] looks
@@ -1140,65 +1263,17 @@ fn spacing_claim(
         SpacingLaw::ArcReference { gain_per_s } => (gain_per_s, false),
         SpacingLaw::None => return None,
     };
-    let n = team.count();
-    if gain_per_s == 0.0 || n < 2 {
+    if gain_per_s == 0.0 || team.count() < 2 {
         return None;
     }
-    let circle = s.team_arc();
-    let deployed =
-        |range_m: f64| circle.and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m));
-    let even = TeamMetricsConfig::default().even_gap_cv;
-    let frozen = if n == 2 && ranges {
-        Some("with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string())
-    } else if ranges && team.ranging.dropout_probability >= 1.0 {
-        Some("team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0".to_string())
-    } else if equilibrium::pinned(team).len() == n {
-        // att44-9: arc_reference too; att44-8: the keys in force, overrides or the team's.
-        Some(format!(
-            "{}: {} has no speed to command but v0",
-            equilibrium::pinned_keys(team, &equilibrium::pinned(team)),
-            team.law.name()
-        ))
-    } else {
-        None
-    };
-    if let Some(why) = frozen {
-        let one_speed = team.nominal_speeds_mps().len() == 1;
-        return Some(match deployed(f64::INFINITY).filter(|_| one_speed) {
-            Some(d) if d.gap_cv <= even => (
-                Verdict::Holds,
-                format!(
-                    "{why}, so the team keeps its deployment, which is even (the starts' gap CV {} <= {})",
-                    Num(d.gap_cv),
-                    Num(even)
-                ),
-            ),
-            Some(d) => (
-                Verdict::Fails,
-                format!(
-                    "{why}, so the gaps stay as deployed: the starts' gap CV {} > {} (even spacing is not reached)",
-                    Num(d.gap_cv),
-                    Num(even)
-                ),
-            ),
-            None => (
-                Verdict::Fails,
-                format!("{why}, so the gaps stay as deployed (or drift with unequal speeds): even spacing is not reached"),
-            ),
-        });
+    if let Some(claim) = frozen_gaps_claim(s, team, ranges) {
+        return Some(claim);
     }
     if let Some(claim) = equilibrium::pinned_arcs_claim(s, l, team) {
         return Some(claim);
     }
-    if let Some(why) = equilibrium::probe_cannot_fly(team) {
-        return Some((Verdict::Fails, why));
-    }
-    if let Some(claim) = start::probe_slots_claim(s, team) {
+    if let Some(claim) = discovery_probe_claim(s, team) {
         return Some(claim);
-    }
-    let slope = deployed(f64::INFINITY).map_or(1.0, |d| d.probe_slope);
-    if let Some(why) = equilibrium::probe_below_noise(team, slope) {
-        return Some((Verdict::NotApplicable, why));
     }
     if let Some(claim) = start::delay_drift_claim(s, l, team) {
         return Some(claim);
@@ -1211,19 +1286,105 @@ fn spacing_claim(
     if let Some(why) = first_sample_overshoot(s, l, team, sp) {
         return Some((Verdict::NotApplicable, why));
     }
-    if let Some(claim) = circle
+    if let Some(claim) = s
+        .team_arc()
         .is_none()
         .then(|| equilibrium::extracted_claim(s, team))
         .flatten()
     {
         return Some(claim);
     }
+    range_limit_claim(s, team, sp, ranges)
+}
+
+/// [`deployed_on_circle`] of `team`'s starts on the scenario's known circle (no arc bound),
+/// against `range_m`; `None` off a known circle.
+fn deployed(s: &Scenario, team: &TeamSpec, range_m: f64) -> Option<Deployment> {
+    s.team_arc()
+        .and_then(|c| deployed_on_circle(team, c, f64::INFINITY, range_m))
+}
+
+/// [`spacing_claim`]'s first case: the law cannot move the gaps (`ranges`: a law that ranges,
+/// `range_balance`). Two vehicles of `range_balance`, every range lost, or every envelope of
+/// zero width: the gaps stay as deployed, `holds` only when the starts are even on a known
+/// circle with one nominal speed, else `fails`. `None` when the law can move them.
+fn frozen_gaps_claim(s: &Scenario, team: &TeamSpec, ranges: bool) -> Option<(Verdict, String)> {
+    let n = team.count();
+    let even = TeamMetricsConfig::default().even_gap_cv;
+    let why = if n == 2 && ranges {
+        "with two vehicles the neighbour ahead is the neighbour behind: range_balance sees the same range twice and commands v0".to_string()
+    } else if ranges && team.ranging.dropout_probability >= 1.0 {
+        "team.ranging.dropout_probability = 1: every range is lost and range_balance commands v0"
+            .to_string()
+    } else if equilibrium::pinned(team).len() == n {
+        // att44-9: arc_reference too; att44-8: the keys in force, overrides or the team's.
+        format!(
+            "{}: {} has no speed to command but v0",
+            equilibrium::pinned_keys(team, &equilibrium::pinned(team)),
+            team.law.name()
+        )
+    } else {
+        return None;
+    };
+    let one_speed = team.nominal_speeds_mps().len() == 1;
+    Some(match deployed(s, team, f64::INFINITY).filter(|_| one_speed) {
+        Some(d) if d.gap_cv <= even => (
+            Verdict::Holds,
+            format!(
+                "{why}, so the team keeps its deployment, which is even (the starts' gap CV {} <= {})",
+                Num(d.gap_cv),
+                Num(even)
+            ),
+        ),
+        Some(d) => (
+            Verdict::Fails,
+            format!(
+                "{why}, so the gaps stay as deployed: the starts' gap CV {} > {} (even spacing is not reached)",
+                Num(d.gap_cv),
+                Num(even)
+            ),
+        ),
+        None => (
+            Verdict::Fails,
+            format!("{why}, so the gaps stay as deployed (or drift with unequal speeds): even spacing is not reached"),
+        ),
+    })
+}
+
+/// [`spacing_claim`]'s discovered-ring probe cases (att44-10, att51-5, att50-3): a probe that
+/// cannot change the speed (`fails`), probe slots that do not hold the ranges of a fitted rate
+/// ([`start::probe_slots_claim`]), a probe's range change under the ranging noise
+/// (`not_applicable`). `None` otherwise.
+fn discovery_probe_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdict, String)> {
+    if let Some(why) = equilibrium::probe_cannot_fly(team) {
+        return Some((Verdict::Fails, why));
+    }
+    if let Some(claim) = start::probe_slots_claim(s, team) {
+        return Some(claim);
+    }
+    let slope = deployed(s, team, f64::INFINITY).map_or(1.0, |d| d.probe_slope);
+    equilibrium::probe_below_noise(team, slope).map(|why| (Verdict::NotApplicable, why))
+}
+
+/// [`spacing_claim`]'s last cases, of `range_balance` (`ranges`) with a finite
+/// `team.ranging.max_range_m`: unequal nominal speeds without a solved equilibrium and a range
+/// short of the even spacing's (att43-2), or a discovered ring whose starts leave neighbours
+/// beyond the range (att43-1): `not_applicable`. `None` otherwise.
+fn range_limit_claim(
+    s: &Scenario,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+    ranges: bool,
+) -> Option<(Verdict, String)> {
     let r = team.ranging.max_range_m;
     if !ranges || !r.is_finite() {
         return None;
     }
-    if team.nominal_speeds_mps().len() > 1 && solved.is_none() {
-        let even_range = circle.map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
+    let n = team.count();
+    if team.nominal_speeds_mps().len() > 1 && sp.shifted_equilibrium.is_none() {
+        let even_range = s
+            .team_arc()
+            .map(|c| 2.0 * c.radius_m * (std::f64::consts::PI / n as f64).sin());
         if even_range.is_none_or(|d| d > r) {
             return Some((
                 Verdict::NotApplicable,
@@ -1238,20 +1399,19 @@ fn spacing_claim(
             ));
         }
     }
-    if let RingMode::Discover(_) = team.ring {
-        if let Some(d) = deployed(r).filter(|d| d.widest_chord.0 > r) {
-            let [a, b] = d.widest_chord.1;
-            return Some((
-                Verdict::NotApplicable,
-                format!(
-                    "team.ring = \"discovered\" with team.ranging.max_range_m = {}: vehicles {a} and {b}, neighbours at the start, are {} m apart, beyond the range, so the probes may not find the ring, and without it the spacing law is off for the whole run (the run warns it); list the ring or lengthen the range",
-                    Echo(r),
-                    Num(d.widest_chord.0)
-                ),
-            ));
-        }
-    }
-    None
+    let RingMode::Discover(_) = team.ring else {
+        return None;
+    };
+    let d = deployed(s, team, r).filter(|d| d.widest_chord.0 > r)?;
+    let [a, b] = d.widest_chord.1;
+    Some((
+        Verdict::NotApplicable,
+        format!(
+            "team.ring = \"discovered\" with team.ranging.max_range_m = {}: vehicles {a} and {b}, neighbours at the start, are {} m apart, beyond the range, so the probes may not find the ring, and without it the spacing law is off for the whole run (the run warns it); list the ring or lengthen the range",
+            Echo(r),
+            Num(d.widest_chord.0)
+        ),
+    ))
 }
 
 /// How many turns the listed ring makes round `circle`'s centre in the direction of
@@ -1586,76 +1746,11 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
             sp.delay_whole_periods.map_or("n/a".into(), |q| q.to_string()),
             sp.delay_fraction.map_or("n/a".into(), |f| Num(f).to_string())
         ));
-    let c = sp.range_slope.unwrap_or(1.0);
-    out.push(format!(
-        "  range slope c = dr/dg = {} ({})",
-        Num(c),
-        match sp.range_slope_source {
-            Some("circle_chord") => "chord of the circular isoline at even spacing, cos(pi/N)",
-            Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
-            _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
-        }
-    ));
-    let modes: Vec<String> = sp
-        .modes
-        .iter()
-        .map(|m| {
-            format!(
-                "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
-                match (sp.eigenvalue_bounds, m.m) {
-                    (false, k) => format!("m = {k}"),
-                    (true, 1) => "lower bound of the smallest".into(),
-                    (true, _) => "upper bound of the largest".into(),
-                },
-                Num(m.lambda),
-                Num(m.gain_per_period),
-                m.spectral_radius
-                    .map_or("n/a".into(), |r| format!("{r:.6}")),
-                if m.stable { "stable" } else { "UNSTABLE" }
-            )
-        })
-        .collect();
-    let which = if sp.all_modes_listed {
-        "every distinct one"
-    } else if sp.eigenvalue_bounds {
-        "bounds of the smallest and the largest: past the dense limit"
-    } else {
-        "the smallest and the largest of many"
-    };
-    out.push(match sp.linearised_about {
-        None => format!(
-            "  ring Laplacian eigenvalues ({which}; m = 0, the sum of the gaps, is conserved):"
-        ),
-        Some(about) => format!(
-            "  linearised about the {}: eigenvalues mu of K = D^T C D over the free vehicles, listed as lambda = mu/c ({which}; k_v* = g*/(T mu_max)):",
-            if about == "pinned" {
-                "equilibrium with the vehicles of no speed room, or saturated at an envelope bound there, fixed (their speed is the team's)"
-            } else {
-                "shifted equilibrium, each gap with its own chord slope cos(g_i/(2R))"
-            }
-        ),
-    });
-    out.extend(modes.into_iter().map(|m| format!("    {m}")));
-    if let (Some(g), Some(k), Some(lmax)) = (
-        sp.max_gain_per_period,
-        sp.max_stable_k_v_per_s,
-        sp.lambda_max,
-    ) {
-        out.push(format!(
-                "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
-                Num(g),
-                Num(sp.period_s),
-                Num(c),
-                Num(lmax),
-                Num(k),
-                Echo(sp.k_v_per_s.unwrap_or(0.0)),
-                match sp.stable {
-                    Some(true) => "stable",
-                    Some(false) => "UNSTABLE",
-                    None => "not computed",
-                }
-            ));
-    }
+    out.push(range_slope_line(sp));
+    out.extend(shifted_equilibrium_line(sp));
+    out.push(modes_heading(sp));
+    out.extend(sp.modes.iter().map(|m| format!("    {}", mode_line(sp, m))));
+    out.extend(k_v_star_line(sp));
     if !sp.note.is_empty() {
         out.push(format!("  note: {}", sp.note));
     }
@@ -1663,4 +1758,165 @@ fn spacing_lines(sp: &SpacingLoopReport, out: &mut Vec<String>) {
     for w in &sp.not_modelled {
         out.push(format!("  not modelled: {w}"));
     }
+}
+
+/// The line on the range slope `c` and where it comes from; when the linearisation uses each
+/// gap's own chord slope instead (att50-11), that `c` is only what the eigenvalues are listed
+/// against.
+fn range_slope_line(sp: &SpacingLoopReport) -> String {
+    let own = match sp.linearised_slopes {
+        Some("shifted_equilibrium" | "pinned_best_arcs") => "; the linearisation below uses each gap's own chord slope instead, and lists its eigenvalues against this c",
+        _ => "",
+    };
+    format!(
+        "  range slope c = dr/dg = {} ({}{own})",
+        Num(sp.range_slope.unwrap_or(1.0)),
+        match sp.range_slope_source {
+            Some("circle_chord") => "chord of the circular isoline at even spacing, cos(pi/N)",
+            Some("arc_gaps") => "arc_reference uses the arc gaps themselves",
+            _ => "conservative: the isoline is not known to be a circle, |dr/dg| <= 1",
+        }
+    )
+}
+
+/// att50-10: the line on a solved shifted equilibrium (unequal nominal speeds): its common
+/// speed, ranges and gap CV, and that `holds` claims convergence to it, not even spacing
+/// (`None` without one that exists).
+fn shifted_equilibrium_line(sp: &SpacingLoopReport) -> Option<String> {
+    let eq = sp.shifted_equilibrium.as_ref().filter(|e| e.exists())?;
+    let ranges = eq
+        .ranges_m
+        .iter()
+        .map(|r| Num(*r).to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    Some(format!(
+        "  shifted equilibrium (unequal nominal speeds): every vehicle at V = {} m/s, {} ahead {ranges} m, gap CV {}: the loop below converges here (what `holds` claims), not to even spacing",
+        Num(eq.speed_mps),
+        if sp.range_slope_source == Some("arc_gaps") {
+            "arc gaps"
+        } else {
+            "ranges"
+        },
+        eq.gap_cv.map_or("n/a".into(), |cv| Num(cv).to_string())
+    ))
+}
+
+/// The heading of the modes' list: the ring Laplacian's at even spacing of a free ring, else
+/// the linearisation's ([`SpacingLoopReport::linearised_about`]), and which modes are listed.
+fn modes_heading(sp: &SpacingLoopReport) -> String {
+    let which = if sp.all_modes_listed {
+        "every distinct one"
+    } else if sp.eigenvalue_bounds {
+        "bounds of the smallest and the largest: past the dense limit"
+    } else {
+        "the smallest and the largest of many"
+    };
+    match sp.linearised_about {
+        None => format!(
+            "  ring Laplacian eigenvalues ({which}; m = 0, the sum of the gaps, is conserved):"
+        ),
+        Some(_) => format!(
+            "  linearised about the {}{}, {}: eigenvalues mu of K = D^T C D over the free vehicles, listed as lambda = mu/c ({which}; k_v* = g*/(T mu_max)):",
+            match sp.linearised_slopes {
+                Some("shifted_equilibrium") => "shifted equilibrium",
+                Some("pinned_best_arcs") => "best case the vehicles of no speed room leave (those between sharing each arc they keep evenly)",
+                _ => "equilibrium",
+            },
+            fixed_vehicles_text(sp),
+            slopes_text(sp)
+        ),
+    }
+}
+
+/// att50-11: " with vehicle 0 (no speed room, ...) fixed ..." for the vehicles the
+/// linearisation fixes, pinned and saturated named apart; empty when none.
+fn fixed_vehicles_text(sp: &SpacingLoopReport) -> String {
+    let mut parts = vec![];
+    if !sp.pinned_vehicles.is_empty() {
+        parts.push(format!(
+            "{} (no speed room: v_min_i = v_max_i, pinned)",
+            vehicles_text(&sp.pinned_vehicles)
+        ));
+    }
+    if !sp.saturated_vehicles.is_empty() {
+        parts.push(format!(
+            "{} (saturated: the command there is past the vehicle's own envelope bound)",
+            vehicles_text(&sp.saturated_vehicles)
+        ));
+    }
+    if parts.is_empty() {
+        return String::new();
+    }
+    format!(
+        " with {} fixed in the frame moving at the team's speed V",
+        parts.join(" and ")
+    )
+}
+
+/// att50-11: which slopes the linearisation uses, with their values.
+fn slopes_text(sp: &SpacingLoopReport) -> String {
+    let g = &sp.gap_slopes;
+    let list = if g.len() > MAX_LISTED_MODES {
+        format!(
+            "{} to {}",
+            Num(g.iter().copied().fold(f64::INFINITY, f64::min)),
+            Num(g.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        )
+    } else {
+        g.iter()
+            .map(|c| Num(*c).to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match sp.linearised_slopes {
+        Some("shifted_equilibrium" | "pinned_best_arcs") => {
+            format!("each gap with its own chord slope cos(g_i/(2R')) = {list}")
+        }
+        _ => format!(
+            "every gap with the slope c = {}",
+            Num(sp.range_slope.unwrap_or(1.0))
+        ),
+    }
+}
+
+/// One listed mode (or bound of the spectrum): its `lambda`, gain per period, radius, stability.
+fn mode_line(sp: &SpacingLoopReport, m: &SpacingMode) -> String {
+    format!(
+        "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
+        match (sp.eigenvalue_bounds, m.m) {
+            (false, k) => format!("m = {k}"),
+            (true, 1) => "lower bound of the smallest".into(),
+            (true, _) => "upper bound of the largest".into(),
+        },
+        Num(m.lambda),
+        Num(m.gain_per_period),
+        m.spectral_radius
+            .map_or("n/a".into(), |r| format!("{r:.6}")),
+        if m.stable { "stable" } else { "UNSTABLE" }
+    )
+}
+
+/// The line on the largest stable `k_v*` and the scenario's `k_v` against it (`None` when not
+/// computed).
+fn k_v_star_line(sp: &SpacingLoopReport) -> Option<String> {
+    let (g, k, lmax) = (
+        sp.max_gain_per_period?,
+        sp.max_stable_k_v_per_s?,
+        sp.lambda_max?,
+    );
+    Some(format!(
+        "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
+        Num(g),
+        Num(sp.period_s),
+        Num(sp.range_slope.unwrap_or(1.0)),
+        Num(lmax),
+        Num(k),
+        Echo(sp.k_v_per_s.unwrap_or(0.0)),
+        match sp.stable {
+            Some(true) => "stable",
+            Some(false) => "UNSTABLE",
+            None => "not computed",
+        }
+    ))
 }

@@ -578,3 +578,124 @@ fn an_overshoot_past_the_close_approach_is_not_judged_holds() {
         }
     }
 }
+
+/// The numbers after `key` in `text` up to the next `:`, comma-separated.
+fn numbers_after(text: &str, key: &str) -> Vec<f64> {
+    let at = text
+        .find(key)
+        .unwrap_or_else(|| panic!("{key} not in {text}"))
+        + key.len();
+    let rest = &text[at..];
+    rest[..rest.find(':').unwrap()]
+        .split(", ")
+        .map(|x| x.trim().parse().unwrap())
+        .collect()
+}
+
+/// att50-11, att50-10: att50-01's B team (vehicle 0 with no speed room at 0.4 m/s, the others
+/// free at 0.5 in [0.25, 0.75], k_v = 0.1, evenly spread). The team flies V = 0.4, so each free
+/// vehicle's range ahead is 1 m shorter than behind: chords x, x - 1, x - 2, x - 3 whose arcs sum
+/// to a turn (bisection here), about 11.24 / 10.24 / 9.24 / 8.24 m, slopes
+/// `sqrt(1 - (r/2R)^2)` about 0.586 / 0.674 / 0.746 / 0.804. The page names them as the
+/// linearisation's (it named the even spacing's `cos(pi/4)` only), calls vehicle 0 pinned, not
+/// saturated, quotes its own envelope [0.4, 0.4], and says what `holds` claims (convergence to
+/// that equilibrium, its gap CV beside it); the JSON says which slopes (`linearised_slopes`,
+/// `gap_slopes`). The A team (vehicle 3 at 0.3 in [0.15, 0.35]) names vehicle 3 saturated.
+#[test]
+fn the_page_names_the_linearisations_slopes_and_its_fixed_vehicles() {
+    let r = radius();
+    let offsets = [0.0, -1.0, -2.0, -3.0];
+    let turn = |x: f64| -> f64 {
+        offsets
+            .iter()
+            .map(|o| 2.0 * ((x + o) / (2.0 * r)).asin())
+            .sum()
+    };
+    let (mut lo, mut hi) = (3.0, 2.0 * r);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if turn(mid) < TAU {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let ranges: Vec<f64> = offsets.iter().map(|o| lo + o).collect();
+    assert!((ranges[0] - 11.24).abs() < 0.01, "{ranges:?}");
+    let slopes = chord_slopes(&ranges);
+    assert!((slopes[0] - 0.586).abs() < 1e-3 && (slopes[3] - 0.804).abs() < 1e-3);
+    let s = circular(&[
+        "team.vehicles=[{index=0,speed_mps=0.4,v_min_mps=0.4,v_max_mps=0.4}]",
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+    ]);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let sp = &t.spacing;
+    assert_eq!(sp.linearised_about, Some("pinned"));
+    assert_eq!(sp.linearised_slopes, Some("shifted_equilibrium"));
+    assert_eq!(sp.pinned_vehicles, vec![0]);
+    assert!(sp.saturated_vehicles.is_empty());
+    for (a, b) in sp.gap_slopes.iter().zip(&slopes) {
+        assert!(close(*a, *b, 1e-9), "{:?} vs {slopes:?}", sp.gap_slopes);
+    }
+    let text = t.lines().join("\n");
+    let key = "linearised about the shifted equilibrium with vehicle 0 (no speed room: v_min_i = v_max_i, pinned) fixed in the frame moving at the team's speed V, each gap with its own chord slope cos(g_i/(2R')) = ";
+    let shown = numbers_after(&text, key);
+    assert_eq!(shown.len(), 4, "{text}");
+    for (a, b) in shown.iter().zip(&slopes) {
+        assert!((a - b).abs() < 1e-5, "{shown:?} vs {slopes:?}");
+    }
+    assert!(
+        text.contains("the linearisation below uses each gap's own chord slope instead"),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "the one speed of vehicle 0 (v_min_i = v_max_i: no speed room, pinned, not saturated"
+        ),
+        "{text}"
+    );
+    assert!(!text.contains("saturated there"), "{text}");
+    assert!(
+        text.contains("stays in its own envelope: vehicle 0 [0.4, 0.4] (team.vehicles), the others the team's [team.v_min_mps, team.v_max_mps] = [0.25, 0.75] m/s; vehicle 0 fixed in the linearisation"),
+        "{text}"
+    );
+    // att50-10: what `holds` claims, with the equilibrium's gap CV on the page.
+    let cv = cv_of_chords(r, &ranges);
+    let line = text
+        .lines()
+        .find(|l| l.contains("shifted equilibrium (unequal nominal speeds)"))
+        .unwrap_or_else(|| panic!("{text}"));
+    let got: f64 = line
+        .split("gap CV ")
+        .nth(1)
+        .unwrap()
+        .split(':')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((got - cv).abs() < 1e-5, "{got} vs {cv}");
+    assert!(line.contains("what `holds` claims"), "{line}");
+    assert!(
+        text.contains("`holds` then claims that the loop converges to that equilibrium"),
+        "{text}"
+    );
+    // A: vehicle 3 saturated at its own top speed (its command 0.75 > 0.35).
+    let a = circular(&[
+        "team.vehicles=[{index=3,speed_mps=0.3,v_min_mps=0.15,v_max_mps=0.35}]",
+        &format!("team.spread.step_rad={FRAC_PI_2}"),
+    ]);
+    let t = check(&a, None).team.unwrap();
+    assert_eq!(t.spacing.saturated_vehicles, vec![3]);
+    assert!(t.spacing.pinned_vehicles.is_empty());
+    let text = t.lines().join("\n");
+    assert!(
+        text.contains("linearised about the shifted equilibrium with vehicle 3 (saturated: the command there is past the vehicle's own envelope bound) fixed"),
+        "{text}"
+    );
+    assert!(
+        text.contains("its own envelope: vehicle 3 [0.15, 0.35] (team.vehicles)"),
+        "{text}"
+    );
+}
