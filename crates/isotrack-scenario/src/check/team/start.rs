@@ -313,12 +313,24 @@ fn closest_in_model(
     let delay_periods = (d / t).ceil() as u64;
     let periods =
         (MODEL_PERIODS + delay_periods).min((MODEL_WORK / n as u64).max(delay_periods + 2));
+    // The gaps at d and d + T on their lines (the model overwrites them when it gets there;
+    // a crossing before stops it).
+    let first: Vec<f64> = measure(&pos, 0)
+        .iter()
+        .zip(&speeds)
+        .map(|(&(a, b), m)| m.saturate(balance_speed(m.nominal_mps, k_v, a, b)))
+        .collect();
     let mut out: Vec<Closest> = (0..n)
-        .map(|i| Closest {
+        .map(|i| {
+            let j = (i + 1) % n;
+            let at_delay_m = gaps[i] + (cmd[j] - cmd[i]) * d;
+            (i, at_delay_m, at_delay_m + (first[j] - first[i]) * t)
+        })
+        .map(|(i, at_delay_m, at_period_m)| Closest {
             i,
             deployed_m: gaps[i],
-            at_delay_m: gaps[i],
-            at_period_m: gaps[i],
+            at_delay_m,
+            at_period_m,
             least_m: gaps[i],
             least_s: 0.0,
             crossing_s: None,
