@@ -160,6 +160,11 @@ fn a_lossy_probe_is_judged_by_the_chance_of_every_fit() {
 /// k_v = 0.024, envelope [0.1, 1.0], ranging 0.1 Hz with delay `delay_s`. Returns the
 /// scenario and the speeds.
 fn open_loop_team(delay_s: f64, secs: f64) -> (Scenario, Vec<f64>) {
+    open_loop_team_with(delay_s, secs, &[])
+}
+
+/// [`open_loop_team`] with `extra` sets applied after its own.
+fn open_loop_team_with(delay_s: f64, secs: f64, extra: &[String]) -> (Scenario, Vec<f64>) {
     let r = radius();
     let k_v = 0.024;
     let l = 2.0 * PI * r;
@@ -190,7 +195,7 @@ fn open_loop_team(delay_s: f64, secs: f64) -> (Scenario, Vec<f64>) {
         .enumerate()
         .map(|(i, v)| format!("{{index={i},speed_mps={v}}}"))
         .collect();
-    let sets = vec![
+    let mut sets = vec![
         format!("team.vehicles=[{}]", vehicles.join(",")),
         format!("team.k_v={k_v}"),
         "team.v_min_mps=0.1".into(),
@@ -199,6 +204,7 @@ fn open_loop_team(delay_s: f64, secs: f64) -> (Scenario, Vec<f64>) {
         format!("team.ranging.delay_s={delay_s}"),
         format!("sim.duration_s={secs}"),
     ];
+    sets.extend_from_slice(extra);
     (scenario(&text, &sets), v0)
 }
 
@@ -254,4 +260,203 @@ fn a_ranging_delay_with_unequal_speeds_is_judged_by_its_open_loop_drift() {
     let t = check(&s, None).team.unwrap();
     assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
     assert!(team_metrics(&s).min_separation_m.unwrap() > 2.9);
+}
+
+/// An independent kinematic model of range_balance on a circle of radius `r` (stepped at
+/// `dt`, as att53t's `kin.py`): arc positions, chord ranges measured every `period` s (from
+/// t = 0) and applied `delay` s later, each vehicle on its own `v0` until its first ranges
+/// arrive. Returns the least gap (vehicle `i` to the one ahead) over `secs` and when.
+fn kinematic_least_gap(
+    gaps: &[f64],
+    v0: &[f64],
+    k_v: f64,
+    env: (f64, f64),
+    period: f64,
+    delay: f64,
+    secs: f64,
+) -> (f64, f64) {
+    let (r, dt, n) = (radius(), 0.001, gaps.len());
+    let length: f64 = gaps.iter().sum();
+    let mut pos: Vec<f64> = (0..n).map(|i| gaps[..i].iter().sum()).collect();
+    let gap = |p: &[f64], i: usize| {
+        if i + 1 == n {
+            p[0] + length - p[i]
+        } else {
+            p[i + 1] - p[i]
+        }
+    };
+    let chord = |g: f64| (2.0 * r * (g / (2.0 * r)).sin()).abs();
+    let (every, late) = (
+        (period / dt).round() as usize,
+        (delay / dt).round() as usize,
+    );
+    let mut cmd = v0.to_vec();
+    let mut queue: Vec<(usize, Vec<f64>)> = vec![];
+    let mut least = (f64::INFINITY, 0.0);
+    for k in 0..(secs / dt).round() as usize {
+        if k % every == 0 {
+            let want = (0..n)
+                .map(|i| {
+                    let ahead = chord(gap(&pos, i));
+                    let behind = chord(gap(&pos, (i + n - 1) % n));
+                    (v0[i] + k_v * (ahead - behind)).clamp(env.0, env.1)
+                })
+                .collect();
+            queue.push((k + late, want));
+        }
+        while queue.first().is_some_and(|q| q.0 == k) {
+            cmd = queue.remove(0).1;
+        }
+        for (p, v) in pos.iter_mut().zip(&cmd) {
+            *p += v * dt;
+        }
+        for i in 0..n {
+            if gap(&pos, i) < least.0 {
+                least = (gap(&pos, i), (k + 1) as f64 * dt);
+            }
+        }
+    }
+    least
+}
+
+/// att53t-1's team: the bundled four evenly spread (gaps L/4 = 10.888 m), v0 0.8/0.2/0.8/0.2,
+/// k_v 0.035, envelope [0.1, 1.0], ranging every `period` s with a delay of `q` periods, no
+/// noise.
+fn delayed_team(period: f64, q: f64, secs: f64) -> Scenario {
+    let text = circular_text().replace("step_rad = 0.3", &format!("step_rad = {}", FRAC_PI_2));
+    let sets = vec![
+        "team.vehicles=[{index=0,speed_mps=0.8},{index=1,speed_mps=0.2},{index=2,speed_mps=0.8},{index=3,speed_mps=0.2}]".to_string(),
+        "team.k_v=0.035".into(),
+        "team.v_min_mps=0.1".into(),
+        "team.v_max_mps=1.0".into(),
+        format!("team.ranging.rate_hz={}", 1.0 / period),
+        format!("team.ranging.delay_s={}", q * period),
+        format!("sim.duration_s={secs}"),
+    ];
+    scenario(&text, &sets)
+}
+
+/// att53t-1 (SAFETY): a delay of whole periods. Up to `d + T` (the old rule's horizon) gap 0
+/// closes at `0.6 m/s` from `L/4` to `L/4 - 0.6 (d + T)` (T = 5.5, d = 11: 0.988 m, over the
+/// 0.5 m line: it said `holds`), but the ranges measured at T, 2T while still open loop act
+/// only from d + T, d + 2T, and the delayed loop keeps closing it: the independent kinematic
+/// model drives it through zero, and so does the run (vehicle 0 through vehicle 1 near 20 s):
+/// `fails`, at the model's crossing. T = 5 s, d = 10 s: the model's least is 0.24 m, the run
+/// comes within 0.5 m: `not_applicable`.
+#[test]
+fn a_delayed_loop_that_keeps_closing_after_the_first_period_is_judged_by_the_model() {
+    let l = 2.0 * PI * radius();
+    let v0 = [0.8, 0.2, 0.8, 0.2];
+    let gaps = [l / 4.0; 4];
+    let old = l / 4.0 - 0.6 * (11.0 + 5.5);
+    assert!((old - 0.988).abs() < 1e-3 && old > 0.5, "{old}");
+    let (least, when) = kinematic_least_gap(&gaps, &v0, 0.035, (0.1, 1.0), 5.5, 11.0, 40.0);
+    assert!(least < 0.0, "{least} at {when}");
+    let s = delayed_team(5.5, 2.0, 30.0);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let at = shown(&t.verdict_reason, "each other at t = ");
+    assert!(
+        (shown(&t.verdict_reason, "m at t = d and ") - old).abs() < 1e-6,
+        "{}",
+        t.verdict_reason
+    );
+    assert!(
+        at > 16.5 && at < when,
+        "{at} vs {when}: {}",
+        t.verdict_reason
+    );
+    let m = team_metrics(&s);
+    assert!(m.min_separation_m.unwrap() < 0.1, "{m:?}");
+    let met = m.closest_approach.as_ref().unwrap().t_s;
+    assert!((met - at).abs() < 1.0, "{met} vs {at}: {m:?}");
+
+    let (least, _) = kinematic_least_gap(&gaps, &v0, 0.035, (0.1, 1.0), 5.0, 10.0, 60.0);
+    assert!(least > 0.0 && least < 0.5, "{least}");
+    let s = delayed_team(5.0, 2.0, 60.0);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let got = shown(&t.verdict_reason, "the least gap is ");
+    assert!(
+        (got - least).abs() < 0.01,
+        "{got} vs {least}: {}",
+        t.verdict_reason
+    );
+    let sep = team_metrics(&s).min_separation_m.unwrap();
+    assert!(sep < 0.5, "{sep}");
+}
+
+/// att53t-2 (SAFETY): att50-5's team with d = 4 s keeps every gap over 0.5 m when every range
+/// arrives (0.972 m, `holds`, above), but with dropout 0.1 a lost first range keeps a vehicle
+/// on its own v0 one more period: gap 0 can close by `|v0_0 - v0_1| T = 5.07 m` more, far past
+/// its 0.972 m: `not_applicable`, naming it (it said `holds`; att53t's seeds 0 and 1 pass
+/// through). The run of seed 0 comes under 0.5 m.
+#[test]
+fn a_lost_first_range_under_a_delay_is_not_assumed_kept() {
+    let lossy = ["team.ranging.dropout_probability=0.1".to_string()];
+    let (s, v0) = open_loop_team_with(4.0, 60.0, &lossy);
+    let closing = v0[0] - v0[1];
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let why = &t.verdict_reason;
+    assert!(
+        why.contains("a lost first range keeps a vehicle on its own v0"),
+        "{why}"
+    );
+    let more = shown(why, "close the gap by up to ");
+    assert!((more - closing * 10.0).abs() < 1e-4, "{more}: {why}");
+    let least = shown(why, "the least gap is ");
+    assert!(
+        (least - (3.0 - 4.0 * closing)).abs() < 1e-4,
+        "{least}: {why}"
+    );
+    let sep = team_metrics(&s).min_separation_m.unwrap();
+    assert!(sep < 0.5, "{sep}");
+}
+
+/// att53t-8 (SAFETY): the bundled four in a cluster 0.12 rad (0.832 m) apart, one v0 0.5,
+/// k_v 0.1, [0.25, 0.75], ranging every 2 s with dropout 0.2 and max_range_m 30. A lost range
+/// is held only 1 s, so at this period it reads 30 m and kicks a vehicle to a bound for a
+/// period: `(0.75 - 0.25) 2 = 1 m`, more than the 0.832 m gap: `not_applicable` (it said
+/// `holds`); the run (seed 0) comes under 0.5 m. Without max_range_m a lost range is held:
+/// `holds`, and the run keeps the deployed gap.
+#[test]
+fn a_lost_range_read_as_max_range_is_a_kick_to_a_bound() {
+    let text = circular_text().replace("step_rad = 0.3", "step_rad = 0.12");
+    let sets = |max: &str| -> Vec<String> {
+        let mut v: Vec<String> = vec![
+            "team.v_min_mps=0.25".into(),
+            "team.v_max_mps=0.75".into(),
+            "team.k_v=0.1".into(),
+            "team.ranging.rate_hz=0.5".into(),
+            "team.ranging.dropout_probability=0.2".into(),
+            "sim.duration_s=60".into(),
+        ];
+        v.extend(max.split_terminator(';').map(String::from));
+        v
+    };
+    let gap = 0.12 * radius();
+    let s = scenario(&text, &sets("team.ranging.max_range_m=30"));
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
+    let why = &t.verdict_reason;
+    assert!(
+        why.contains("is read as max_range_m and kicks a vehicle"),
+        "{why}"
+    );
+    assert!(
+        (shown(why, "close the gap by up to ") - 1.0).abs() < 1e-9,
+        "{why}"
+    );
+    assert!(
+        (shown(why, "the least gap is ") - gap).abs() < 1e-3,
+        "{gap}: {why}"
+    );
+    let sep = team_metrics(&s).min_separation_m.unwrap();
+    assert!(sep < 0.5, "{sep}");
+    let s = scenario(&text, &sets(""));
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let sep = team_metrics(&s).min_separation_m.unwrap();
+    assert!(sep > gap - 0.05, "{sep} vs {gap}");
 }

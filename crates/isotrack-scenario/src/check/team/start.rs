@@ -16,7 +16,9 @@ use crate::Scenario;
 use isotrack_core::numtext::{Echo, Num};
 use isotrack_core::Vec2;
 use isotrack_sim::team::metrics::CLOSE_APPROACH_M;
-use isotrack_sim::team::spacing::{balance_speed, RingMode, SpacingLaw, MIN_RATE_FIT_RANGES};
+use isotrack_sim::team::spacing::{
+    balance_speed, RingMode, SpacingLaw, MIN_RATE_FIT_RANGES, RANGE_HOLD_S,
+};
 use isotrack_sim::whole_steps;
 
 /// The ranging instants in each probe slot of a discovery, as the engine schedules them: a
@@ -117,8 +119,17 @@ pub(super) fn probe_slots_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdic
     ))
 }
 
-/// The closest any listed neighbours come before the loop acts on a drift
-/// ([`delay_drift_claim`]): vehicle `i` and the one ahead of it.
+/// Ranging periods the start model ([`closest_in_model`]) steps past the first delivery: enough
+/// for the transient of a delayed loop (its overshoot peaks a few periods after the first
+/// ranges that show a drift arrive) and for a slow loop to have turned.
+const MODEL_PERIODS: u64 = 40;
+
+/// At most this many vehicle-events in the start model (the horizon is cut short for very
+/// large teams, never below two periods past the delay).
+const MODEL_WORK: u64 = 4_000_000;
+
+/// The closest any listed neighbours come in the start model ([`delay_drift_claim`]): vehicle
+/// `i` and the one ahead of it.
 struct Closest {
     /// The vehicle behind, listed.
     i: usize,
@@ -128,21 +139,32 @@ struct Closest {
     at_delay_m: f64,
     /// The gap at `t = d + T` (each holding the command of the ranges measured at `t = 0`), m.
     at_period_m: f64,
-    /// When the gap reaches zero within `[0, d + T]` (the two pass through each other), s.
+    /// The least gap over the model's horizon, m, and when, s.
+    least_m: f64,
+    least_s: f64,
+    /// When the gap reaches zero (the two pass through each other), s.
     crossing_s: Option<f64>,
+    /// How much closer a lost range can bring the two, m (0 without dropouts).
+    lost_m: f64,
 }
 
-/// att50-5: `range_balance` with unequal nominal speeds and a ranging delay `d`. The first
-/// ranges, measured at `t = 0`, arrive at `d` (the engine's first ranging step is step 0):
-/// until then each vehicle flies its own `v0_i`, so gap `i` (vehicle `i` to the one ahead)
-/// moves by `(v0_{i+1} - v0_i) d`; from `d` to `d + T`, when the first ranges that show any of
-/// that drift arrive, each holds the command of the ranges measured at `t = 0` (the starts'
-/// distances), `sat(v0_i + k_v (r_ahead - r_behind))`, so the gap moves by the difference of
-/// those times `T`. The linear loop starts from the end of that: on a known circle, with the
-/// first ranges kept (a lost one holds the vehicles open loop longer), a gap that reaches zero
-/// in `[0, d + T]` means two robots pass through each other and the listed ring is no longer
-/// the order of travel: `fails`; one under [`CLOSE_APPROACH_M`]: `not_applicable`. `None`
-/// otherwise (one nominal speed, no delay, another law or ring, off a known circle).
+/// att50-5, att53t-1, -2, -8: `range_balance` on a listed ring whose start the sampled linear
+/// loop does not describe: unequal nominal speeds with a ranging delay `d`, or ranges lost at a
+/// period `T` past [`RANGE_HOLD_S`] with a finite `max_range_m`. The first ranges, measured at
+/// `t = 0`, arrive at `d` (the engine's first ranging step is step 0): until then each vehicle
+/// flies its own `v0_i`; from then on each holds the command of the last ranges delivered,
+/// `sat(v0_i + k_v (r_ahead - r_behind))`, the ranges measured at `k T` acting from `k T + d`.
+/// [`closest_in_model`] steps that (arc positions on the flown circle, chord ranges) for
+/// [`MODEL_PERIODS`] periods past the delay, so a delayed loop that keeps closing a gap after
+/// `d + T` (att53t-1) is seen. A gap that reaches zero means two robots pass through each other
+/// and the listed ring is no longer the order of travel: `fails`; one under
+/// [`CLOSE_APPROACH_M`]: `not_applicable`. The model keeps every range; with
+/// `dropout_probability > 0` a lost range can close a gap further: a lost first range keeps a
+/// vehicle on its `v0` one more period (`|v0_j - v0_i| T`, att53t-2), and with a finite
+/// `max_range_m` and `T > RANGE_HOLD_S` a lost range reads `max_range_m` and kicks a vehicle to
+/// a bound for a period (`(v_max_i - v_min_j) T`, att53t-8): a least gap within that of
+/// [`CLOSE_APPROACH_M`] is `not_applicable` too. `None` otherwise (one nominal speed and no
+/// such kick, no delay, another law or ring, off a known circle).
 pub(super) fn delay_drift_claim(
     s: &Scenario,
     l: &Law,
@@ -155,23 +177,32 @@ pub(super) fn delay_drift_claim(
     let n = team.count();
     let unequal = team.nominal_speeds_mps().len() > 1;
     let listed = matches!(team.ring, RingMode::Listed);
-    if !(r.delay_s > 0.0 && gain_per_s != 0.0 && n >= 3 && unequal && listed) {
+    let (d, t) = (r.delay_s, 1.0 / r.rate_hz);
+    let drift = r.delay_s > 0.0 && unequal;
+    let lossy = r.dropout_probability > 0.0;
+    let kick = lossy && r.max_range_m.is_finite() && t > RANGE_HOLD_S;
+    if !((drift || kick) && gain_per_s != 0.0 && n >= 3 && listed) {
         return None;
     }
-    let c = closest_before_loop(s, l, team, gain_per_s)?;
-    let least = c.at_delay_m.min(c.at_period_m);
-    if least >= CLOSE_APPROACH_M && c.crossing_s.is_none() {
+    let c = closest_in_model(s, l, team, gain_per_s, lossy && drift, kick)?;
+    if c.least_m >= CLOSE_APPROACH_M + c.lost_m && c.crossing_s.is_none() {
         return None;
     }
     let (i, j) = (c.i, (c.i + 1) % n);
-    let (d, t) = (r.delay_s, 1.0 / r.rate_hz);
     let outcome = match c.crossing_s {
         Some(at) => format!(
             "they pass through each other at t = {} s, so the listed ring is no longer the order of travel and range_balance drives neighbours together",
             Num(at)
         ),
+        None if c.least_m < CLOSE_APPROACH_M => format!(
+            "under the run's close-approach distance {} m: two robots may meet before the loop settles",
+            Num(CLOSE_APPROACH_M)
+        ),
         None => format!(
-            "under the run's close-approach distance {} m: two robots may meet before the loop acts",
+            "the model keeps every range, but with team.ranging.dropout_probability = {} a lost range can close the gap by up to {} m more ({}), which would bring it under the run's close-approach distance {} m: two robots may meet",
+            Echo(r.dropout_probability),
+            Num(c.lost_m),
+            lost_range_effect(drift, kick),
             Num(CLOSE_APPROACH_M)
         ),
     };
@@ -179,72 +210,197 @@ pub(super) fn delay_drift_claim(
         Some(_) => Verdict::Fails,
         None => Verdict::NotApplicable,
     };
+    let cause = if drift {
+        format!(
+            "unequal nominal speeds and team.ranging.delay_s = {} s",
+            Echo(d)
+        )
+    } else {
+        format!(
+            "team.ranging.max_range_m = {} and ranging every {} s",
+            Echo(r.max_range_m),
+            Num(t)
+        )
+    };
     Some((
         verdict,
         format!(
-            "range_balance with unequal nominal speeds and team.ranging.delay_s = {} s: the first ranges, measured at t = 0, arrive at t = d, so until then every vehicle flies its own v0, and until the ranges measured at T = {} s arrive (t = d + T = {} s) each holds the command of the first: vehicle {i} (v0 = {} m/s) and vehicle {j} ahead of it (v0 = {} m/s) go from a deployed gap of {} m to {} m at t = d and {} m at t = d + T; {outcome}; shorten team.ranging.delay_s, deploy the faster vehicles further behind the slower, or give the vehicles one nominal speed",
-            Echo(d),
+            "range_balance with {cause}: the first ranges, measured at t = 0, arrive at t = d, so until then every vehicle flies its own v0, and until the ranges measured at T = {} s arrive (t = d + T = {} s) each holds the command of the first: vehicle {i} (v0 = {} m/s) and vehicle {j} ahead of it (v0 = {} m/s) go from a deployed gap of {} m to {} m at t = d and {} m at t = d + T; stepping on (the ranges measured every T applied d later, saturated, on the flown circle, for {MODEL_PERIODS} periods past the delay), the least gap is {} m at t = {} s; {outcome}; {}",
             Num(t),
             Num(d + t),
             Echo(team.speeds(i).nominal_mps),
             Echo(team.speeds(j).nominal_mps),
             Num(c.deployed_m),
             Num(c.at_delay_m),
-            Num(c.at_period_m)
+            Num(c.at_period_m),
+            Num(c.least_m),
+            Num(c.least_s),
+            if drift {
+                "shorten team.ranging.delay_s, deploy the faster vehicles further behind the slower, or give the vehicles one nominal speed"
+            } else {
+                "range faster than every 1 s (a lost range is then held), lower the dropouts, or deploy the vehicles further apart"
+            }
         ),
     ))
 }
 
+/// The lost-range effects [`delay_drift_claim`] adds, named.
+fn lost_range_effect(drift: bool, kick: bool) -> &'static str {
+    match (drift, kick) {
+        (true, true) => "a lost first range keeps a vehicle on its own v0 one more period, |v0_j - v0_i| T, or a lost range read as max_range_m kicks a vehicle to a bound for a period, (v_max_i - v_min_j) T",
+        (true, false) => "a lost first range keeps a vehicle on its own v0 one more period: |v0_j - v0_i| T",
+        _ => "a lost range, past the 1 s hold, is read as max_range_m and kicks a vehicle to a bound for a period: (v_max_i - v_min_j) T",
+    }
+}
+
 /// [`Closest`] for `range_balance` at gain `k_v` on the known circle (arc gaps on the circle
-/// flown), `None` off it: each gap's path over `[0, d]` and `[d, d + T]` is a line, so its
-/// least is at an end, and the first zero (if any) is where that line crosses it.
-fn closest_before_loop(s: &Scenario, l: &Law, team: &TeamSpec, k_v: f64) -> Option<Closest> {
+/// flown), `None` off it: the start model of [`delay_drift_claim`], stepped from event to
+/// event (the ranging instants `k T` and the deliveries `k T + d`). Between events every speed
+/// is constant, so each gap moves on a line: its least is at an event, its first zero where the
+/// line crosses it (the model stops there). `drift_lost`, `kick_lost`: add the lost-range
+/// effects to [`Closest::lost_m`].
+fn closest_in_model(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    k_v: f64,
+    drift_lost: bool,
+    kick_lost: bool,
+) -> Option<Closest> {
     let circle = s.team_arc()?;
-    let gaps = deployed_gaps_ahead(s, l, team, circle, flown_circle_radius_m(s, l, circle))?;
+    let radius = flown_circle_radius_m(s, l, circle);
+    let gaps = deployed_gaps_ahead(s, l, team, circle, radius)?;
     let n = team.count();
     let r = &team.ranging;
     let (d, t) = (r.delay_s, 1.0 / r.rate_hz);
     let start = |i: usize| Vec2::new(team.starts[i].x_m, team.starts[i].y_m);
-    // A neighbour beyond the range does not answer: the law sees max_range_m.
-    let range = |i: usize, j: usize| (start(j) - start(i)).norm().min(r.max_range_m);
-    let v0: Vec<f64> = (0..n).map(|i| team.speeds(i).nominal_mps).collect();
-    let held: Vec<f64> = (0..n)
-        .map(|i| {
-            let (ahead, behind) = (range(i, (i + 1) % n), range(i, (i + n - 1) % n));
-            team.speeds(i)
-                .saturate(balance_speed(v0[i], k_v, ahead, behind))
+    let speeds: Vec<_> = (0..n).map(|i| team.speeds(i)).collect();
+    // Arc positions along the travel: gap i = pos[i + 1] - pos[i] (the last one wraps).
+    let length: f64 = gaps.iter().sum();
+    let mut pos: Vec<f64> = gaps
+        .iter()
+        .scan(0.0, |at, g| {
+            let here = *at;
+            *at += g;
+            Some(here)
         })
         .collect();
-    (0..n)
+    let gap = |pos: &[f64], i: usize| {
+        let ahead = if i + 1 == n {
+            pos[0] + length
+        } else {
+            pos[i + 1]
+        };
+        ahead - pos[i]
+    };
+    // A neighbour beyond the range does not answer: the law sees max_range_m. The first
+    // ranges are the starts' distances, later ones chords of the arc gaps.
+    let chord = |g: f64| (2.0 * radius * (g / (2.0 * radius)).sin()).abs();
+    let measure = |pos: &[f64], k: u64| -> Vec<(f64, f64)> {
+        (0..n)
+            .map(|i| {
+                let (a, b) = ((i + 1) % n, (i + n - 1) % n);
+                let (ahead, behind) = if k == 0 {
+                    ((start(a) - start(i)).norm(), (start(i) - start(b)).norm())
+                } else {
+                    (chord(gap(pos, i)), chord(gap(pos, b)))
+                };
+                (ahead.min(r.max_range_m), behind.min(r.max_range_m))
+            })
+            .collect()
+    };
+    let mut cmd: Vec<f64> = speeds.iter().map(|m| m.nominal_mps).collect();
+    let delay_periods = (d / t).ceil() as u64;
+    let periods =
+        (MODEL_PERIODS + delay_periods).min((MODEL_WORK / n as u64).max(delay_periods + 2));
+    // The gaps at d and d + T on their lines (the model overwrites them when it gets there;
+    // a crossing before stops it).
+    let first: Vec<f64> = measure(&pos, 0)
+        .iter()
+        .zip(&speeds)
+        .map(|(&(a, b), m)| m.saturate(balance_speed(m.nominal_mps, k_v, a, b)))
+        .collect();
+    let mut out: Vec<Closest> = (0..n)
         .map(|i| {
             let j = (i + 1) % n;
-            let (open, closed) = (v0[j] - v0[i], held[j] - held[i]);
-            let at_delay_m = gaps[i] + open * d;
-            let at_period_m = at_delay_m + closed * t;
-            let crossing_s = if at_delay_m <= 0.0 {
-                // open < 0 here, or the two start together (gap 0, open 0).
-                Some(if open < 0.0 { gaps[i] / -open } else { 0.0 })
-            } else if at_period_m <= 0.0 {
-                Some(d + at_delay_m / -closed)
-            } else {
-                None
-            };
-            Closest {
-                i,
-                deployed_m: gaps[i],
-                at_delay_m,
-                at_period_m,
-                crossing_s,
+            let at_delay_m = gaps[i] + (cmd[j] - cmd[i]) * d;
+            (i, at_delay_m, at_delay_m + (first[j] - first[i]) * t)
+        })
+        .map(|(i, at_delay_m, at_period_m)| Closest {
+            i,
+            deployed_m: gaps[i],
+            at_delay_m,
+            at_period_m,
+            least_m: gaps[i],
+            least_s: 0.0,
+            crossing_s: None,
+            lost_m: 0.0,
+        })
+        .collect();
+    let mut pending = std::collections::VecDeque::new();
+    let (mut sampled, mut delivered, mut now) = (0_u64, 0_u64, 0.0_f64);
+    while delivered < periods {
+        let (t_sample, t_deliver) = (sampled as f64 * t, delivered as f64 * t + d);
+        let next = t_sample.min(t_deliver);
+        let span = next - now;
+        let mut crossed = false;
+        for (i, c) in out.iter_mut().enumerate() {
+            let before = gap(&pos, i);
+            let rate = cmd[(i + 1) % n] - cmd[i];
+            let after = before + rate * span;
+            if after <= 0.0 && c.crossing_s.is_none() {
+                let at = if before <= 0.0 {
+                    now
+                } else {
+                    now + before / -rate
+                };
+                (c.crossing_s, c.least_m, c.least_s) = (Some(at), 0.0, at);
+                crossed = true;
+            } else if after < c.least_m {
+                (c.least_m, c.least_s) = (after, next);
             }
-        })
-        .min_by(|a, b| {
-            let least = |c: &Closest| c.crossing_s.unwrap_or(f64::INFINITY);
-            least(a).total_cmp(&least(b)).then(
-                a.at_delay_m
-                    .min(a.at_period_m)
-                    .total_cmp(&b.at_delay_m.min(b.at_period_m)),
-            )
-        })
+        }
+        if crossed {
+            break;
+        }
+        for (p, v) in pos.iter_mut().zip(&cmd) {
+            *p += v * span;
+        }
+        now = next;
+        if t_sample <= t_deliver {
+            pending.push_back(measure(&pos, sampled));
+            sampled += 1;
+            continue;
+        }
+        for (c, i) in out.iter_mut().zip(0..) {
+            match delivered {
+                0 => c.at_delay_m = gap(&pos, i),
+                1 => c.at_period_m = gap(&pos, i),
+                _ => {}
+            }
+        }
+        let ranges = pending.pop_front()?;
+        for (i, (ahead, behind)) in ranges.into_iter().enumerate() {
+            cmd[i] = speeds[i].saturate(balance_speed(speeds[i].nominal_mps, k_v, ahead, behind));
+        }
+        delivered += 1;
+    }
+    for c in &mut out {
+        let (a, b) = (&speeds[c.i], &speeds[(c.i + 1) % n]);
+        let drift = (a.nominal_mps - b.nominal_mps).abs() * t;
+        let kick = (a.max_mps - b.min_mps).max(0.0) * t;
+        c.lost_m = f64::max(
+            if drift_lost { drift } else { 0.0 },
+            if kick_lost { kick } else { 0.0 },
+        );
+    }
+    out.into_iter().min_by(|a, b| {
+        let cross = |c: &Closest| c.crossing_s.unwrap_or(f64::INFINITY);
+        let margin = |c: &Closest| c.least_m - c.lost_m;
+        cross(a)
+            .total_cmp(&cross(b))
+            .then(margin(a).total_cmp(&margin(b)))
+    })
 }
 
 #[cfg(test)]
