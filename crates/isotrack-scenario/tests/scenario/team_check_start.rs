@@ -460,3 +460,20 @@ fn a_lost_range_read_as_max_range_is_a_kick_to_a_bound() {
     let sep = team_metrics(&s).min_separation_m.unwrap();
     assert!(sep > gap - 0.05, "{sep} vs {gap}");
 }
+
+/// att54t-7: the start model queues every ranging sample in flight (d / T periods x N) and
+/// steps N vehicles per event; N = 1000, d = 5000 s at 100 Hz took 20 s and 7.8 GB. Past
+/// 4e6 vehicle-steps it is not run and the start is not vouched for: here 4 x (12000 s x
+/// 100 Hz + 40) = 4 800 160 > 4 000 000.
+#[test]
+fn a_start_model_past_its_bound_is_not_run_and_not_vouched_for() {
+    let (s, _) = open_loop_team_with(12000.0, 12100.0, &["team.ranging.rate_hz=100".to_string()]);
+    let t = check(&s, None).team.unwrap();
+    assert_ne!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let all = format!("{} {:?}", t.verdict_reason, t);
+    assert!(
+        all.contains("past the check's bound of 4000000"),
+        "{}",
+        t.verdict_reason
+    );
+}

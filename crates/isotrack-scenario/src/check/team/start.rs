@@ -124,8 +124,9 @@ pub(super) fn probe_slots_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdic
 /// ranges that show a drift arrive) and for a slow loop to have turned.
 const MODEL_PERIODS: u64 = 40;
 
-/// At most this many vehicle-events in the start model (the horizon is cut short for very
-/// large teams, never below two periods past the delay).
+/// At most this many vehicle-events in the start model: a team and delay past it are not
+/// modelled ([`delay_drift_claim`] says `not_applicable`), so the model's time and the samples
+/// it holds in flight stay bounded (att54t-7).
 const MODEL_WORK: u64 = 4_000_000;
 
 /// The closest any listed neighbours come in the start model ([`delay_drift_claim`]): vehicle
@@ -183,6 +184,21 @@ pub(super) fn delay_drift_claim(
     let kick = lossy && r.max_range_m.is_finite() && t > RANGE_HOLD_S;
     if !((drift || kick) && gain_per_s != 0.0 && n >= 3 && listed) {
         return None;
+    }
+    // The model queues every ranging sample in flight (d / T periods x N vehicles) and steps
+    // N vehicles per event: past MODEL_WORK vehicle-events it is not run, and the start is
+    // not vouched for (att54t-7: N = 1000, d = 5000 s at 100 Hz took 20 s and 7.8 GB).
+    let work = n as f64 * ((d / t).ceil() + MODEL_PERIODS as f64);
+    if work > MODEL_WORK as f64 {
+        return Some((
+            Verdict::NotApplicable,
+            format!(
+                "range_balance with team.ranging.delay_s = {} s at {} Hz and {n} vehicles: the start before the loop acts (each vehicle on its own command until the first ranges arrive, then ranges applied d later) would need {} vehicle-steps to model, past the check's bound of {MODEL_WORK}: the start is not checked; a shorter delay or fewer vehicles bring it within reach",
+                Echo(d),
+                Echo(r.rate_hz),
+                Num(work)
+            ),
+        ));
     }
     let c = closest_in_model(s, l, team, gain_per_s, lossy && drift, kick)?;
     if c.least_m >= CLOSE_APPROACH_M + c.lost_m && c.crossing_s.is_none() {
