@@ -1604,6 +1604,20 @@ fn team_verdict(
                 sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string())
             ),
         ),
+        // att54t-12: with no spacing loop each vehicle flies its own v0; with unequal nominal
+        // speeds the faster ones lap the slower, passing through their neighbours.
+        (false, _, Some(true)) if team.nominal_speeds_mps().len() > 1 => (
+            Verdict::Fails,
+            format!(
+                "no spacing loop ({}), and the nominal speeds differ ({} m/s): each vehicle keeps its own v0, so the faster ones lap the slower, passing through their neighbours, and the gaps do not stay as deployed",
+                sp.note,
+                team.nominal_speeds_mps()
+                    .iter()
+                    .map(|v| Num(*v).to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
         (false, _, Some(true)) => (
             Verdict::Holds,
             format!(

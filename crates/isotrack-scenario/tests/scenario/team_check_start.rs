@@ -477,3 +477,26 @@ fn a_start_model_past_its_bound_is_not_run_and_not_vouched_for() {
         t.verdict_reason
     );
 }
+
+/// att54t-12: with no spacing loop (`team.spacing = "none"`, or `k_v = 0`) and unequal
+/// nominal speeds each vehicle keeps its own v0: att50-5's team (gap 0 of 3 m closing at
+/// `v0_0 - v0_1 = 0.507 m/s`) meets at `3 / 0.507 = 5.92 s`. It said `holds` ("the spacing
+/// stays as deployed"); now `fails`, and the run shows the meeting.
+#[test]
+fn no_spacing_loop_with_unequal_speeds_fails() {
+    for extra in ["team.spacing=\"none\"", "team.k_v=0"] {
+        let (s, v0) = open_loop_team_with(0.0, 20.0, &[extra.to_string()]);
+        let t = check(&s, None).team.unwrap();
+        assert_eq!(t.verdict, Verdict::Fails, "{extra}: {}", t.verdict_reason);
+        assert!(
+            t.verdict_reason.contains("lap the slower"),
+            "{}",
+            t.verdict_reason
+        );
+        let m = team_metrics(&s);
+        let met = m.closest_approach.as_ref().unwrap().t_s;
+        let closing = v0[0] - v0[1];
+        assert!(m.min_separation_m.unwrap() < 0.1, "{extra}: {m:?}");
+        assert!((met - 3.0 / closing).abs() < 0.05, "{extra}: {met}");
+    }
+}
