@@ -215,18 +215,11 @@ fn rows_written(path: &std::path::Path, before: Option<(u64, u64)>) -> Option<u6
 /// continues), or that it wrote nothing (its manifest goes in place whole or not at all, and a
 /// directory it created is removed while still empty).
 fn say_runs_on_interrupt(out: &std::path::Path, runs: u64) -> isotrack_runs::cleanup::OnInterrupt {
-    let out = out.to_path_buf();
-    let results = out.join("results.csv");
-    let before = isotrack_runs::files::identity(&results);
-    isotrack_runs::cleanup::on_interrupt(move || {
-        let q = isotrack_runs::owned::shell_quoted(&out);
-        match rows_written(&results, before) {
-            Some(n) => errln!(
-                "interrupted: {q} holds {n} of {runs} run{}; the same sweep with `--resume` continues",
-                if runs == 1 { "" } else { "s" }
-            ),
-            None => errln!("interrupted: nothing written to {q}"),
-        }
+    say_rows_on_interrupt(out, move |q, n| {
+        format!(
+            "interrupted: {q} holds {n} of {runs} run{}; the same sweep with `--resume` continues",
+            if runs == 1 { "" } else { "s" }
+        )
     })
 }
 
@@ -234,13 +227,24 @@ fn say_runs_on_interrupt(out: &std::path::Path, runs: u64) -> isotrack_runs::cle
 /// silently): the merged table and its manifest went in place together, or nothing was
 /// written.
 fn say_merge_on_interrupt(out: &std::path::Path) -> isotrack_runs::cleanup::OnInterrupt {
+    say_rows_on_interrupt(out, |q, n| {
+        format!("interrupted after the merge was written: {q} holds its {n} runs")
+    })
+}
+
+/// The one interrupt note of `sweep` and `merge`: `held(DIR quoted, rows)` when `DIR/results.csv`
+/// is a table this command wrote ([`rows_written`]), else that nothing was written to DIR.
+fn say_rows_on_interrupt(
+    out: &std::path::Path,
+    held: impl Fn(&str, u64) -> String + Send + 'static,
+) -> isotrack_runs::cleanup::OnInterrupt {
     let out = out.to_path_buf();
     let results = out.join("results.csv");
     let before = isotrack_runs::files::identity(&results);
     isotrack_runs::cleanup::on_interrupt(move || {
         let q = isotrack_runs::owned::shell_quoted(&out);
         match rows_written(&results, before) {
-            Some(n) => errln!("interrupted after the merge was written: {q} holds its {n} runs"),
+            Some(n) => errln!("{}", held(&q, n)),
             None => errln!("interrupted: nothing written to {q}"),
         }
     })
