@@ -201,6 +201,10 @@ struct SensorClock {
     /// Measurements received since the newest one that were not newer (a frozen sensor
     /// resending its last time), for the sensor-loss message.
     not_newer: u64,
+    /// The time the measurements' clock jumped back to (unwrapped, ms) and when that
+    /// measurement came, with the fault: a step of the vehicle's own clock to the same time is
+    /// the same step ([`Flight::same_step_as_sensor`]), no reboot seen a second time.
+    back_to: Option<(u64, Instant)>,
 }
 
 impl SensorClock {
@@ -211,6 +215,9 @@ impl SensorClock {
         match self.newest_ms {
             Some(n) if ms <= n => {
                 if n - ms > max_ms {
+                    if self.fault.is_none() {
+                        self.back_to = Some((ms, Instant::now()));
+                    }
                     self.fault.get_or_insert(format!(
                         "the measurement's time jumped back from {} s to {} s (a rebooted or spoofed clock)",
                         wire::unwrapped_s(n),
@@ -371,9 +378,27 @@ struct RetryWatch {
     /// A heartbeat of the ids older than the last applied was heard during the retries (a
     /// second counter's, or one sender's late one): a change they show is no sure pilot's.
     older: bool,
+    /// The last heartbeat applied showed the vehicle armed (at the start: as last known).
+    armed_shown: bool,
+    /// The silence of the vehicle's ids before the frame being read, s.
+    silent_s: f64,
+    /// The last disarm shown came after a silence of more than [`REBOOT_STEP_S`] (as
+    /// [`Flight::disarm_after_silence`] in control, att53f-2).
+    disarm_after_silence: bool,
 }
 
 impl RetryWatch {
+    /// A heartbeat applied during the retries showing the vehicle `armed` or not: a disarm
+    /// right after a silence of more than [`REBOOT_STEP_S`] may be a reboot's.
+    fn arming_shown(&mut self, armed: bool) {
+        if !armed && self.armed_shown {
+            self.disarm_after_silence = self.silent_s > REBOOT_STEP_S;
+        } else if armed {
+            self.disarm_after_silence = false;
+        }
+        self.armed_shown = armed;
+    }
+
     /// A heartbeat not applied (older than the last applied, or in a doubt of the frame
     /// counter) showing `answer`: if it shows nothing yet, or the other kind of answer than
     /// the one awaited, that one has not stood uncontradicted: its span starts again.
@@ -749,6 +774,9 @@ struct Flight<'a, S: ?Sized> {
     /// Time-stamped frames in a row more than [`REBOOT_STEP_S`] behind the newest (one is a
     /// late frame; two, a reboot).
     clock_behind: u32,
+    /// The vehicle's clock went back (a reboot found, or with the measurements' clock): from
+    /// and to what time (unwrapped, ms) and when ([`Flight::clock_ahead_of_reboot`]).
+    rebased: Option<(u64, u64, Instant)>,
     /// In control, the vehicle disarmed without the companion asking: since when (watched for
     /// a reboot for [`REBOOT_WATCH_S`]).
     disarm_seen: Option<Instant>,
@@ -1128,6 +1156,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             reboot: None,
             landed: None,
             clock_behind: 0,
+            rebased: None,
             disarm_seen: None,
             mavlink1_logged: false,
             twin_logged: false,
@@ -1185,6 +1214,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 last: now,
                 fault: None,
                 not_newer: 0,
+                back_to: None,
             },
             clock_start: now,
             queue: VecDeque::new(),
@@ -1957,13 +1987,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// it awaits confirmation (att49f's CB: `sensor_clock_jump`, a measurement stamped by the
     /// rebooted clock); empty otherwise.
     fn maybe_rebooted(&self) -> String {
-        if !self.armed && self.disarm_after_silence {
-            format!(
-                " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
-            )
-        } else {
-            String::new()
-        }
+        silence_note(!self.armed && self.disarm_after_silence)
     }
 
     /// A refusal heard ([`Flight::refusal_pending`], ver33b-11) is the vehicle's last word once
@@ -2828,6 +2852,11 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     fn second_sender_seen(&mut self, why: String) {
         if !self.second_sender {
             self.second_sender = true;
+            // A reboot found in the same poll and not yet acted on is the second sender's
+            // clock interleaved with the vehicle's (att53f-7), no reboot: from here on the
+            // clock watch reads nothing ([`Flight::vehicle_time`]).
+            self.reboot = None;
+            self.clock_behind = 0;
             self.same_ids.get_or_insert(why);
         }
     }
@@ -2856,7 +2885,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// clock the newest: the watch goes on from it, so the failsafe's retries that follow
     /// (att45f-10) stop only on a reboot after it, never on the one that caused the failsafe,
     /// whose frames all lie behind the clock before it (att49f-2).
+    ///
+    /// Once a second sender with the ids has been seen, the watch reads nothing: two autopilots
+    /// never share a clock, and their interleaved frames step it back and forth, which is no
+    /// reboot of the vehicle flown (att53f-6: the second sender's clock 50 s behind stopped the
+    /// two-sender retries after 1 try as "its autopilot rebooted").
     fn vehicle_time(&mut self, ms: u32) {
+        if self.second_sender {
+            return;
+        }
         let now = Instant::now();
         let Some((newest, _)) = self.vehicle_ms else {
             self.vehicle_ms = Some((ms as u64, now));
@@ -2864,6 +2901,12 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
         };
         let t = wire::unwrap_ms(newest, ms);
         if t + ((REBOOT_STEP_S * 1000.0) as u64) < newest {
+            if self.same_step_as_sensor(t) {
+                // The step back the measurements' clock made (`sensor_clock_jump`, the
+                // failsafe it ends control with): one step is seen once (att53f-1).
+                self.clock_rebased(newest, t, now);
+                return;
+            }
             // One frame that far back is a late one (a link that reorders or delays), dropped;
             // two in a row are the clock begun again: a reboot (att33d-4).
             self.clock_behind += 1;
@@ -2875,13 +2918,72 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 wire::unwrapped_s(newest),
                 wire::unwrapped_s(t)
             ));
-            self.clock_behind = 0;
-            self.vehicle_ms = Some((t, now));
+            self.clock_rebased(newest, t, now);
             return;
         } else {
             self.clock_behind = 0;
         }
+        if self.clock_ahead_of_reboot(t) {
+            return;
+        }
         self.vehicle_ms = Some((newest.max(t), now));
+    }
+
+    /// After the vehicle's clock went back ([`Flight::rebased`]), whether a time `t`
+    /// (unwrapped, ms) runs ahead of the rebooted clock by more than the time since plus
+    /// [`REBOOT_STEP_S`], back at (within [`REBOOT_STEP_S`]) or past the time it went back from
+    /// (att53f-4: a second sender at the vehicle's address with a clock 50 s behind read as a
+    /// reboot, then the vehicle's own clock back where it was): no rebooted autopilot's clock
+    /// does that, two clocks are two senders ([`Flight::second_sender_seen`]).
+    fn clock_ahead_of_reboot(&mut self, t: u64) -> bool {
+        let Some((from, to, at)) = self.rebased else {
+            return false;
+        };
+        let since = at.elapsed().as_millis() as u64;
+        let step = (REBOOT_STEP_S * 1000.0) as u64;
+        if t <= to + since + step || t + step < from {
+            return false;
+        }
+        let ids = self.target.unwrap_or_default();
+        self.second_sender_seen(format!(
+            "two vehicles with the ids (system {}, component {}): the vehicle's clock (time_boot_ms) went back from {} s to {} s (read as its autopilot's reboot), then a frame of the ids stamped {} s came {:.3} s after, {:.3} s ahead of that clock: no rebooted autopilot's clock runs ahead so; two clocks are two senders: their measurements and positions would mix, which to fly is ambiguous",
+            ids.0,
+            ids.1,
+            wire::unwrapped_s(from),
+            wire::unwrapped_s(to),
+            wire::unwrapped_s(t),
+            since as f64 / 1000.0,
+            (t - to - since) as f64 / 1000.0
+        ));
+        true
+    }
+
+    /// Whether a time `t` (unwrapped, ms) of the vehicle's clock, more than [`REBOOT_STEP_S`]
+    /// behind its newest, lies where the measurements' clock jumped back to
+    /// ([`SensorClock::back_to`], as much later as has passed since, within [`REBOOT_STEP_S`]):
+    /// the measurement stamped by the vehicle's clock, the two went back together, one step
+    /// (taken once: a later step is another).
+    fn same_step_as_sensor(&mut self, t: u64) -> bool {
+        let Some((back, at)) = self.clock.back_to else {
+            return false;
+        };
+        let newest = self.vehicle_ms.map_or(t, |v| v.0);
+        let expected =
+            wire::unwrap_ms(newest, wire::wire_ms(back)) + at.elapsed().as_millis() as u64;
+        let same = t.abs_diff(expected) <= (REBOOT_STEP_S * 1000.0) as u64;
+        if same {
+            self.clock.back_to = None;
+        }
+        same
+    }
+
+    /// The vehicle's clock watch re-based on `t` (unwrapped, ms), where its clock went back
+    /// to from `newest` (a reboot found, or the measurements' step back): the watch goes on
+    /// from the rebooted clock.
+    fn clock_rebased(&mut self, newest: u64, t: u64, now: Instant) {
+        self.clock_behind = 0;
+        self.vehicle_ms = Some((t, now));
+        self.rebased = Some((newest, t, now));
     }
 
     /// A heartbeat: the first autopilot heard is the vehicle (or `target_system`'s); another
@@ -3743,7 +3845,10 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 + Duration::from_secs_f64((3.0 * self.opts.timeout_s.max(0.0)).clamp(3.0, 30.0)),
             tries: 0,
             accepted: None,
-            watch: RetryWatch::default(),
+            watch: RetryWatch {
+                armed_shown: self.armed,
+                ..Default::default()
+            },
             span: self.confirm_span(),
             refused: false,
             told: self.second_sender,
@@ -3918,23 +4023,45 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 self.way_out_overridden = true;
                 Some((false, tries, "a mode the companion did not command shown"))
             }
-            Some(Answer::PilotTookOver(what)) => {
-                self.way_out_overridden = true;
-                if let Some(why) = self.twin_doubt(&r.watch) {
-                    // A second counter with the ids was seen (att42f-3): the heartbeats'
-                    // word may be a second sender's, never asserted a pilot's.
-                    self.event(format!(
-                        "during the failsafe's retries: the heartbeats of the vehicle's ids show it {what}, which the companion did not command: a pilot's or the second sender's ({why}); the retries stop, nothing more commanded (the pilot's mode stands)"
-                    ));
-                    return Some((false, tries, "a mode the companion did not command shown"));
-                }
-                self.event(format!(
-                    "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion: the retries stop, the pilot's mode stands"
-                ));
-                Some((false, tries, "a pilot took over"))
-            }
+            Some(Answer::PilotTookOver(what)) => self.pilots_change_in_retries(r, &what),
             None => None,
         }
+    }
+
+    /// Decides what a change the heartbeats showed during the retries, not commanded by the
+    /// companion and confirmed as it stood (`what`: `disarmed`, `in MANUAL`), ends them with
+    /// (FLYING.md, "The pilot's word is final", "reboots"): the reboot's when the vehicle's
+    /// clock went back as the failsafe began (att53f-3: its boot state, no pilot's word); a
+    /// pilot's or the second sender's after a doubt of the frame counter (att42f-3); else the
+    /// pilot's (a disarm after a silence noted as maybe a reboot's, att53f-2). Nothing more is
+    /// commanded either way.
+    fn pilots_change_in_retries(
+        &mut self,
+        r: &WayOutRetries,
+        what: &str,
+    ) -> Option<(bool, u32, &'static str)> {
+        if let Some((from, to, _)) = self.rebased {
+            self.event(format!(
+                "during the failsafe's retries, the heartbeats of the vehicle's ids show it {what}, which the companion did not command: its autopilot rebooted (its clock went back from {} s to {} s as the failsafe began), and what it shows after is the reboot's (a disarm, its boot mode), no pilot's word: the retries stop, nothing more commanded",
+                wire::unwrapped_s(from),
+                wire::unwrapped_s(to)
+            ));
+            return Some((false, r.tries, "its autopilot rebooted"));
+        }
+        self.way_out_overridden = true;
+        let note = silence_note(what == "disarmed" && r.watch.disarm_after_silence);
+        if let Some(why) = self.twin_doubt(&r.watch) {
+            // A second counter with the ids was seen (att42f-3): the heartbeats' word may be
+            // a second sender's, never asserted a pilot's.
+            self.event(format!(
+                "during the failsafe's retries: the heartbeats of the vehicle's ids show it {what}, which the companion did not command{note}: a pilot's or the second sender's ({why}); the retries stop, nothing more commanded (the pilot's mode stands)"
+            ));
+            return Some((false, r.tries, "a mode the companion did not command shown"));
+        }
+        self.event(format!(
+            "pilot_took_over during the failsafe: the vehicle is {what}, not commanded by the companion{note}: the retries stop, the pilot's mode stands"
+        ));
+        Some((false, r.tries, "a pilot took over"))
     }
 
     /// The failsafe's retries end unconfirmed (their bound, a lost link, a signal) while a
@@ -4072,6 +4199,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             self.doubt_frame(&r.msg);
             return RetryFrame::Done;
         }
+        retries.watch.silent_s = self.last_link.elapsed().as_secs_f64();
         self.last_link = Instant::now();
         if self.ack_for_another(r) {
             return RetryFrame::Done;
@@ -4107,10 +4235,14 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
                 retries.watch.contradicted_by(&answer);
                 return None;
             }
-            MavMessage::HEARTBEAT(_) => {
+            MavMessage::HEARTBEAT(h) => {
                 self.last_heartbeat = Instant::now();
                 self.beat_heard = self.last_heartbeat;
                 self.beat_number = Some(number);
+                retries.watch.arming_shown(
+                    h.base_mode
+                        .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED),
+                );
             }
             MavMessage::COMMAND_ACK(a)
                 if a.command == cmd && a.result == MavResult::MAV_RESULT_ACCEPTED =>
@@ -4388,6 +4520,19 @@ pub fn mode_of(h: &HEARTBEAT_DATA) -> Option<u32> {
     h.base_mode
         .contains(MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
         .then_some(h.custom_mode)
+}
+
+/// The note of a disarm that came after a silence of the vehicle's of more than
+/// [`REBOOT_STEP_S`] (`disarm_after_silence`), in control ([`Flight::maybe_rebooted`]) and in
+/// the failsafe's retries alike (att53f-2); empty otherwise.
+fn silence_note(disarm_after_silence: bool) -> String {
+    if disarm_after_silence {
+        format!(
+            " (or its autopilot rebooted: it was silent for more than {REBOOT_STEP_S} s before the disarm)"
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// The `time_boot_ms` of a message stamped with the sender's clock since its boot (the ones

@@ -2509,6 +2509,18 @@ fn a_reboot_during_the_retries_is_told() {
 /// `again_s`, 50 s more then (a second reboot); from 2.5 s its heartbeats show AUTO.LOITER, the
 /// HOLD the failsafe commands (it obeyed).
 fn rebooted_in_control(again_s: Option<f64>) -> FlyReport {
+    clock_back_in_control(again_s, 50_000, false, heartbeat_sub(4, 3))
+}
+
+/// [`rebooted_in_control`], the clock going back `back_ms` (twice that from `again_s`), the
+/// measurement stamped by the vehicle's clock too if `shared` (as the autopilot's own `ISO_S`),
+/// the heartbeats from 2.5 s `after`.
+fn clock_back_in_control(
+    again_s: Option<f64>,
+    back_ms: u32,
+    shared: bool,
+    after: MavMessage,
+) -> FlyReport {
     let mut own = Beats::new(0.0, &[1.0]);
     let mut a = vehicle_sender();
     let t0 = Instant::now();
@@ -2516,19 +2528,19 @@ fn rebooted_in_control(again_s: Option<f64>) -> FlyReport {
         let t = t0.elapsed().as_secs_f64();
         let ms = 1000 + (t * 1000.0) as u32;
         let back = match (t >= 2.0, again_s.is_some_and(|s| t >= s)) {
-            (_, true) => 100_000,
-            (true, false) => 50_000,
+            (_, true) => 2 * back_ms,
+            (true, false) => back_ms,
             (false, false) => 0,
         };
-        let hb = own.due(t).then(|| {
-            if t < 2.5 {
-                heartbeat(6)
-            } else {
-                heartbeat_sub(4, 3)
-            }
-        });
+        let hb = own
+            .due(t)
+            .then(|| if t < 2.5 { heartbeat(6) } else { after.clone() });
         let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
-        msgs.extend([iso_s(ms, 9.5), position(ms + 200_000 - back, 0.0)]);
+        let clock = ms + 200_000 - back;
+        msgs.extend([
+            iso_s(if shared { clock } else { ms }, 9.5),
+            position(clock, 0.0),
+        ]);
         datagrams(a.frames(&msgs))
     })
 }
@@ -2578,6 +2590,258 @@ fn a_second_reboot_in_the_retries_is_told() {
     );
     assert!(
         way_out_end(&r).contains("its autopilot rebooted)"),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att53f-1 (A11): in control the vehicle's clock, which stamps its measurement too (an
+/// autopilot's own `ISO_S`), goes back 65 s at 2 s: the measurement's step (more than 60 s)
+/// fires `sensor_clock_jump`, HOLD commanded; the vehicle obeys (AUTO.LOITER from 2.5 s). The
+/// vehicle's own frames went back with it: one step, seen once, no reboot found again by the
+/// retries' watch: the HOLD is confirmed once its heartbeats have shown it for the span ("the
+/// vehicle is in HOLD", exit 75), "its autopilot rebooted" never logged. Before: the retries'
+/// watch found the same step a frame later ("went back from 203.0 s"): "did not confirm the
+/// HOLD (1 tries, its autopilot rebooted)", exit 69.
+#[test]
+fn a_clock_step_that_fired_sensor_clock_jump_is_no_reboot_in_the_retries() {
+    let r = clock_back_in_control(None, 65_000, true, heartbeat_sub(4, 3));
+    assert_eq!(r.end, FlyEnd::SensorClockJump, "{:?}", r.events);
+    assert!(r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        way_out_end(&r).contains("the vehicle is in HOLD ("),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events
+            .iter()
+            .any(|e| e.contains("its autopilot rebooted")),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att53f-4 (A15): in control (the pilot's OFFBOARD; its clock stamps its positions) two
+/// positions at the vehicle's address and on its counter (a second sender with its ids, in step)
+/// come at 2 s stamped 50 s behind the vehicle's clock: read as its autopilot's reboot,
+/// `vehicle_lost`, HOLD commanded (its heartbeats show AUTO.LOITER from 2.5 s). Then the
+/// vehicle's own clock comes back 50 s ahead of the rebooted one: no rebooted autopilot does
+/// that, two clocks are two senders, so the retries go on as for two senders (no heartbeat
+/// confirms, to the bound), and a second such pair at 3.5 s is no second reboot. Before: the
+/// clock back ahead was taken silently, and the second pair stopped the retries ("(1 tries,
+/// its autopilot rebooted)").
+#[test]
+fn a_clock_back_then_ahead_again_is_two_senders() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut a = vehicle_sender();
+    let mut pairs = [(2.0, false), (3.5, false)];
+    let t0 = Instant::now();
+    let r = fly_against(30.0, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let ms = 1000 + (t * 1000.0) as u32;
+        let hb = own.due(t).then(|| {
+            if t < 2.5 {
+                heartbeat(6)
+            } else {
+                heartbeat_sub(4, 3)
+            }
+        });
+        let mut msgs: Vec<MavMessage> = hb.into_iter().collect();
+        msgs.extend([iso_s(ms, 9.5), position(ms + 60_000, 0.0)]);
+        for (at_s, done) in pairs.iter_mut() {
+            if t >= *at_s && !*done {
+                *done = true;
+                msgs.extend([position(ms + 10_000, 0.0), position(ms + 10_020, 0.0)]);
+            }
+        }
+        datagrams(a.frames(&msgs))
+    });
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "two vehicles with the ids (system 1, component 1): the vehicle's clock (time_boot_ms) went back from"
+        ) && e.contains("no rebooted autopilot's clock runs ahead so")),
+        "{:?}",
+        r.events
+    );
+    let reboots = r
+        .events
+        .iter()
+        .filter(|e| e.contains("its autopilot rebooted"))
+        .count();
+    assert!(reboots <= 1, "{:?}", r.events);
+    assert!(
+        way_out_end(&r).contains("retries' bound reached; a second sender"),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att53f-3 (A8b, A18): in control the vehicle's clock goes back 50 s at 2 s (its autopilot
+/// rebooted: `vehicle_lost`, HOLD commanded), and from 2.5 s its heartbeats show it as a
+/// rebooted autopilot comes up, disarmed in MANUAL. What it shows after the reboot is the
+/// reboot's, no pilot's word: once it has stood, the retries stop "its autopilot rebooted",
+/// nothing more commanded, no pilot's take-over logged or reported. Before: "pilot_took_over
+/// during the failsafe: the vehicle is disarmed ...: the pilot's mode stands", "a pilot took
+/// over during the retries" (exit 69 as now).
+#[test]
+fn a_rebooted_autopilots_disarm_in_the_retries_is_no_pilots() {
+    let r = clock_back_in_control(None, 50_000, false, heartbeat_disarmed(1));
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(!r.way_out_overridden, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "during the failsafe's retries, the heartbeats of the vehicle's ids show it disarmed, which the companion did not command: its autopilot rebooted (its clock went back from "
+        )),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events.iter().any(|e| e.contains("pilot_took_over")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("its autopilot rebooted)"),
+        "{:?}",
+        r.events
+    );
+}
+
+/// att53f-2 (C9): during the failsafe's retries (Ctrl-C at 1.5 s; the HOLD never carried out,
+/// the vehicle armed in OFFBOARD) the vehicle falls silent from 2.1 s to 3.6 s (1.5 s: less
+/// than `--timeout-s`) and comes back disarmed, its clock not stepped: a pilot's disarm, or
+/// its autopilot rebooted with a clock that did not go back far enough to show. As in control,
+/// the line that ends the retries says so: "pilot_took_over during the failsafe: the vehicle
+/// is disarmed, not commanded by the companion (or its autopilot rebooted: it was silent for
+/// more than 1 s before the disarm)". Before: no word of a reboot.
+#[test]
+fn a_disarm_after_a_silence_in_the_retries_may_be_a_reboot() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (r, _) = in_the_retries(move |t, ms, a| {
+        if (2.1..3.6).contains(&t) {
+            return Vec::new();
+        }
+        let hb = own.due(t).then(|| {
+            if t < 2.1 {
+                heartbeat(6)
+            } else {
+                heartbeat_disarmed(6)
+            }
+        });
+        from_socket(0, turn_frames(a, hb, ms))
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "pilot_took_over during the failsafe: the vehicle is disarmed, not commanded by the companion (or its autopilot rebooted: it was silent for more than 1 s before the disarm)"
+        )),
+        "{:?}",
+        r.events
+    );
+}
+
+/// The vehicle's frames of one turn from socket 0 (its 1 Hz heartbeat in OFFBOARD from `own`,
+/// its measurement and its position stamped with its clock, `ms` + 60 s), and, once at `twin_s`
+/// and later, a second sender's two positions from socket 1 on the numbers the vehicle's counter
+/// goes on with, stamped with ITS clock, 50 s behind the vehicle's.
+fn vehicle_and_twins_clock(
+    own: &mut Beats,
+    twin_s: f64,
+    paired: &mut bool,
+    t: f64,
+    ms: u32,
+    a: &mut Sender,
+) -> Vec<(usize, Vec<u8>)> {
+    let mut msgs: Vec<MavMessage> = own.due(t).then(|| heartbeat(6)).into_iter().collect();
+    msgs.extend([iso_s(ms, 9.5), position(ms + 60_000, 0.0)]);
+    let mut out = from_socket(0, datagrams(a.frames(&msgs)));
+    if t >= twin_s && !*paired {
+        *paired = true;
+        let twin = [position(ms + 10_000, 0.0), position(ms + 10_020, 0.0)];
+        out.extend(from_socket(1, datagrams(a.frames(&twin))));
+    }
+    out
+}
+
+/// att53f-6: during the failsafe's retries (Ctrl-C at 1.5 s; the HOLD never carried out, the
+/// vehicle armed in OFFBOARD, beating at 1 Hz) a second vehicle with the ids beats once from
+/// ANOTHER address at 1.8 s (two senders proven), then at 2.5 s sends two positions stamped
+/// with its own clock, 50 s behind the vehicle's. Two senders' clocks interleaved are no reboot
+/// of the vehicle flown: the two-sender retries go on, a HOLD on each OFFBOARD heartbeat to the
+/// bound (3 x 2 s from 1.5 s: the vehicle's beats at 2 to 7 s, one HOLD each, and the first at
+/// 1.5 s), never "its autopilot rebooted". Before: the pair read as the vehicle's reboot stopped
+/// them ("(2 tries, its autopilot rebooted)"), the vehicle left in OFFBOARD.
+#[test]
+fn a_second_senders_clock_after_the_proof_is_no_reboot() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let (mut told, mut paired) = (false, false);
+    let (r, c) = in_the_retries(move |t, ms, a| {
+        let mut out = vehicle_and_twins_clock(&mut own, 2.5, &mut paired, t, ms, a);
+        if t >= 1.8 && !told {
+            told = true;
+            out.extend(from_socket(1, datagrams(a.frames(&[heartbeat(6)]))));
+        }
+        out
+    });
+    assert!(!r.failsafe_acknowledged, "{:?}", r.events);
+    assert!(
+        !r.events
+            .iter()
+            .any(|e| e.contains("its autopilot rebooted")),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        way_out_end(&r).contains("retries' bound reached; a second sender"),
+        "{:?}",
+        r.events
+    );
+    let holds = c
+        .iter()
+        .filter(|x| x.1 == 0 && x.2 .0 == SET_MODE && x.2 .1[1] == 4.0)
+        .count();
+    assert!(holds >= 5, "{holds} {c:?} {:?}", r.events);
+}
+
+/// att53f-7: in control (the pilot's OFFBOARD) a second vehicle with the ids sends from ANOTHER
+/// address at 2 s its first frames, two positions stamped with its own clock, 50 s behind the
+/// vehicle's. The second address proves two senders at the first of them, and the second is
+/// no reboot: the flight ends `vehicle_lost` naming the two addresses, the HOLD commanded as
+/// for two senders, never "its autopilot rebooted". Before: the pair read as the vehicle's
+/// reboot was logged first ("its autopilot rebooted"), the two addresses never named.
+#[test]
+fn a_second_address_with_its_own_clock_is_no_reboot() {
+    let mut own = Beats::new(0.0, &[1.0]);
+    let mut a = vehicle_sender();
+    let mut paired = false;
+    let t0 = Instant::now();
+    let (r, _) = fly_against_sockets(
+        30.0,
+        |_| {},
+        false,
+        move |_| {
+            let t = t0.elapsed().as_secs_f64();
+            let ms = 1000 + (t * 1000.0) as u32;
+            vehicle_and_twins_clock(&mut own, 2.0, &mut paired, t, ms, &mut a)
+        },
+    );
+    assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
+    assert!(r.way_out_commanded, "{:?}", r.events);
+    assert!(
+        r.events.iter().any(|e| e.contains(
+            "vehicle_lost: two vehicles with the ids (system 1, component 1): frames from"
+        )),
+        "{:?}",
+        r.events
+    );
+    assert!(
+        !r.events
+            .iter()
+            .any(|e| e.contains("its autopilot rebooted")),
         "{:?}",
         r.events
     );
