@@ -1932,8 +1932,15 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
     /// it and a refusal it overrode are logged, and --max-duration-s starts counting.
     fn control_taken(&mut self) {
         if !self.in_control && self.held_dropped > 0 {
+            // None held: those from before a doubt of the frame counter were dropped at its
+            // resync, none came since (att53f-8).
+            let from = if self.queue.is_empty() {
+                "the first measurement to come"
+            } else {
+                "the newest measurement held meanwhile"
+            };
             self.event(format!(
-                "control taken: the law starts from the newest measurement held meanwhile ({} older ones dropped, never answered)",
+                "control taken: the law starts from {from} ({} older ones dropped, never answered)",
                 self.held_dropped
             ));
         }
@@ -2788,6 +2795,7 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             if let Some(l) = self.leave_seen.as_mut().filter(|l| !l.confirmed) {
                 l.at = Instant::now();
             }
+            self.held_before_the_doubt_dropped();
             self.resyncs += 1;
             self.event(format!(
                 "the vehicle's frame counter jumped by {} numbers ({} frames lost in a burst?) and nothing showed a second sender in the next {} frames ({:.2} s) of doubt: resynchronised as one sender{} (the frames of the doubt were not applied; {} such jump{} since the start; another conflict within {} s of this is taken as a second sender)",
@@ -2843,6 +2851,24 @@ impl<'a, S: TraceSink + ?Sized> Flight<'a, S> {
             }
         }
         (kind, number)
+    }
+
+    /// A doubt of the vehicle's frame counter ended resynchronised while `take_control` holds
+    /// the measurements: those held are from before the doubt (nothing of the ids is applied
+    /// in it), dropped as older ones are (counted in the "control taken" line), so that the law
+    /// starts from a measurement received after the resync and `--max-duration-s`, on the
+    /// vehicle's clock from the first measurement answered in control, counts from control's
+    /// start (att53f-8: control taken 20 ms after a resync answered one 1.4 s old first, and
+    /// the 3 s flight was cut to 1.56 s).
+    fn held_before_the_doubt_dropped(&mut self) {
+        if !self.opts.take_control || self.active || self.in_control {
+            return;
+        }
+        self.held_dropped += self.queue.len() as u64;
+        self.queue.clear();
+        self.held_scanned = 0;
+        // A lockstep vehicle sends its unanswered measurement again: held as received now.
+        self.held_newest = None;
     }
 
     /// A second sender with the vehicle's ids, `why`: the flight ends `vehicle_lost`

@@ -2744,6 +2744,69 @@ fn a_disarm_after_a_silence_in_the_retries_may_be_a_reboot() {
     );
 }
 
+/// att53f-8 (tk12): `--take-control` of a vehicle its pilot armed in POSCTL (one frame each
+/// 20 ms of its clock, its measurement and position in turn, its heartbeat each second; the
+/// switch to OFFBOARD goes out at 2 s, unanswered). At 3.0 s its counter comes back 100 (a
+/// doubt: nothing of the ids applied), and from then its heartbeats show OFFBOARD; it sends no
+/// measurement from 3.0 s to 5.2 s. The doubt resynchronises (48 frames and 0.5 s, or 64: by
+/// 4.3 s), and the first heartbeat applied after it gives control (at 4.0 or 5.0 s), before any
+/// measurement came since. The measurement held from before the doubt (stamped 3.96 s) is
+/// dropped at the resync: the law starts from the first one after it (stamped 6.2 s, the
+/// vehicle's clock 1 s ahead of the frames' 20 ms grid), and `--max-duration-s` counts from
+/// there. Before: the law's first answer was to the one held from before the doubt.
+#[test]
+fn control_after_a_resync_starts_on_a_measurement_after_it() {
+    let mut a = vehicle_sender();
+    let (mut next_s, mut k) = (0.0f64, 0u32);
+    let t0 = Instant::now();
+    let tweak = |o: &mut FlyOptions| {
+        o.take_control = true;
+        o.timeout_s = 3.0;
+    };
+    let r = fly_against_with(2.0, tweak, false, move |_| {
+        let t = t0.elapsed().as_secs_f64();
+        let mut out = Vec::new();
+        // One frame every 20 ms of wall time, however the turns go (caught up).
+        while next_s <= t {
+            let ms = 1000 + 20 * k;
+            if k == 150 {
+                a.seq = a.seq.wrapping_sub(100);
+            }
+            let measured = k.is_multiple_of(2) && !(150..260).contains(&k);
+            let mut msgs = vec![if measured {
+                iso_s(ms, 9.5)
+            } else {
+                position(ms, 0.0)
+            }];
+            if k.is_multiple_of(50) {
+                msgs.push(match k {
+                    ..150 => heartbeat(3),
+                    150..400 => heartbeat(6),
+                    _ => heartbeat_sub(4, 3),
+                });
+            }
+            out.extend(datagrams(a.frames(&msgs)));
+            k += 1;
+            next_s += 0.02;
+        }
+        out
+    });
+    assert!(
+        r.events
+            .iter()
+            .any(|e| e.contains("resynchronised as one sender")),
+        "{:?}",
+        r.events
+    );
+    assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
+    let first = r.commands.first().map(|c| c.0);
+    assert!(
+        first.is_some_and(|ms| ms >= 1000 + 20 * 260),
+        "{first:?} {:?}",
+        r.events
+    );
+}
+
 /// The vehicle's frames of one turn from socket 0 (its 1 Hz heartbeat in OFFBOARD from `own`,
 /// its measurement and its position stamped with its clock, `ms` + 60 s), and, once at `twin_s`
 /// and later, a second sender's two positions from socket 1 on the numbers the vehicle's counter
