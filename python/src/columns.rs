@@ -4,7 +4,7 @@
 
 use isotrack_core::vehicle::Telemetry;
 use isotrack_runs::rundir::RunDir;
-use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS};
+use isotrack_runs::trace::{TraceWriter, TELEMETRY_COLUMNS, TRACE_COLUMNS};
 use isotrack_scenario::Scenario;
 use isotrack_sim::TraceRow;
 use numpy::{Element, PyReadonlyArray1};
@@ -34,7 +34,8 @@ fn column<'py>(trace: &Bound<'py, PyDict>, name: &str, n: Option<usize>) -> PyRe
 /// the others, each checked to have `t_s`'s rows, in the file's order.
 pub(crate) struct TraceColumns {
     t: Vec<f64>,
-    /// `x_m`, `y_m`, `heading_rad`, `s`, `error`, `omega_radps`, `s_measured`.
+    /// [`TRACE_COLUMNS`] after `t_s`: `x_m`, `y_m`, `heading_rad`, `s`, `error`, `omega_radps`,
+    /// `s_measured` (the indices [`TraceColumns::row`] reads).
     cols: Vec<Vec<f64>>,
     /// A flying vehicle's [`TELEMETRY_COLUMNS`].
     telemetry: Option<Vec<Vec<f64>>>,
@@ -43,20 +44,12 @@ pub(crate) struct TraceColumns {
 impl TraceColumns {
     /// The columns of `trace` (with the telemetry when `flying`).
     pub(crate) fn read(trace: &Bound<'_, PyDict>, flying: bool) -> PyResult<Self> {
-        let t = column(trace, "t_s", None)?;
+        let t = column(trace, TRACE_COLUMNS[0], None)?;
         let n = Some(t.len());
-        let cols: Vec<Vec<f64>> = [
-            "x_m",
-            "y_m",
-            "heading_rad",
-            "s",
-            "error",
-            "omega_radps",
-            "s_measured",
-        ]
-        .iter()
-        .map(|c| column(trace, c, n))
-        .collect::<PyResult<_>>()?;
+        let cols: Vec<Vec<f64>> = TRACE_COLUMNS[1..]
+            .iter()
+            .map(|c| column(trace, c, n))
+            .collect::<PyResult<_>>()?;
         let telemetry: Option<Vec<Vec<f64>>> = flying
             .then(|| {
                 TELEMETRY_COLUMNS

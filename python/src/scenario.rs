@@ -6,6 +6,7 @@ use crate::errors::{scenario_err, ScenarioErrorPy};
 use crate::guard::{self, no_panic, SignalWatch};
 use crate::values::{as_written, check_key, toml_literal, toml_value};
 use isotrack_core::{ScalarField, Vec2};
+use isotrack_runs::trace::{TELEMETRY_COLUMNS, TRACE_COLUMNS};
 use isotrack_scenario::{load_scenario, parse_scenario, Scenario};
 use isotrack_sim::{RunResult, TraceRow};
 use numpy::{PyArray1, PyReadonlyArray1};
@@ -416,34 +417,24 @@ pub(crate) fn trace_columns_by<'py, T>(
     let d = PyDict::new(py);
     let col =
         |f: &dyn Fn(&TraceRow) -> f64| -> Vec<f64> { rows.iter().map(|r| f(row(r))).collect() };
-    d.set_item("t_s", PyArray1::from_vec(py, col(&|r| r.t_s)))?;
-    d.set_item("x_m", PyArray1::from_vec(py, col(&|r| r.x_m)))?;
-    d.set_item("y_m", PyArray1::from_vec(py, col(&|r| r.y_m)))?;
-    d.set_item(
-        "heading_rad",
-        PyArray1::from_vec(py, col(&|r| r.heading_rad)),
-    )?;
-    d.set_item("s", PyArray1::from_vec(py, col(&|r| r.s)))?;
-    d.set_item("error", PyArray1::from_vec(py, col(&|r| r.error)))?;
-    d.set_item(
-        "omega_radps",
-        PyArray1::from_vec(py, col(&|r| r.omega_radps)),
-    )?;
-    d.set_item(
-        "s_measured",
-        PyArray1::from_vec(py, col(&|r| r.s_measured.unwrap_or(f64::NAN))),
-    )?;
+    // Named as `trace.csv`'s columns, in its order (`isotrack_runs::trace`, one home).
+    let [t_s, x_m, y_m, heading_rad, s, error, omega_radps, s_measured] = TRACE_COLUMNS;
+    let set =
+        |name: &str, f: &dyn Fn(&TraceRow) -> f64| d.set_item(name, PyArray1::from_vec(py, col(f)));
+    set(t_s, &|r| r.t_s)?;
+    set(x_m, &|r| r.x_m)?;
+    set(y_m, &|r| r.y_m)?;
+    set(heading_rad, &|r| r.heading_rad)?;
+    set(s, &|r| r.s)?;
+    set(error, &|r| r.error)?;
+    set(omega_radps, &|r| r.omega_radps)?;
+    set(s_measured, &|r| r.s_measured.unwrap_or(f64::NAN))?;
     if flying {
+        let [altitude_m, airspeed_mps, roll_rad] = TELEMETRY_COLUMNS;
         let t = |r: &TraceRow| r.telemetry.unwrap_or_default();
-        d.set_item(
-            "altitude_m",
-            PyArray1::from_vec(py, col(&|r| t(r).altitude_m)),
-        )?;
-        d.set_item(
-            "airspeed_mps",
-            PyArray1::from_vec(py, col(&|r| t(r).airspeed_mps)),
-        )?;
-        d.set_item("roll_rad", PyArray1::from_vec(py, col(&|r| t(r).roll_rad)))?;
+        set(altitude_m, &|r| t(r).altitude_m)?;
+        set(airspeed_mps, &|r| t(r).airspeed_mps)?;
+        set(roll_rad, &|r| t(r).roll_rad)?;
     }
     Ok(d)
 }

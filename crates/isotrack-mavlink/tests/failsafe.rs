@@ -732,20 +732,11 @@ fn an_interrupt_before_offboard_holds_sitls_fixed_wing_in_the_air() {
         "{:?}",
         report.events
     );
-    assert!(
-        r.events.iter().any(|e| e.contains(
-            "HOLD commanded (armed by the companion, but the vehicle reports itself in the air"
-        )),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &["HOLD commanded (armed by the companion, but the vehicle reports itself in the air"],
     );
-    assert!(
-        r.events
-            .iter()
-            .any(|e| e.contains("the vehicle is in HOLD")),
-        "{:?}",
-        r.events
-    );
+    support::assert_logged(&r, &["the vehicle is in HOLD"]);
 }
 
 /// att39f-4: PX4's rover land detector reports `MAV_LANDED_STATE_IN_AIR` whenever the rover is

@@ -12,6 +12,8 @@ use mavlink::MavHeader;
 use std::net::{SocketAddr, UdpSocket};
 use std::time::{Duration, Instant};
 
+mod support;
+
 /// A PX4 ground rover's heartbeat, armed, in PX4 main mode `main` (6: OFFBOARD, 2: POSCTL).
 fn heartbeat(main: u32) -> MavMessage {
     MavMessage::HEARTBEAT(HEARTBEAT_DATA {
@@ -427,11 +429,7 @@ fn a_link_echoing_fly_s_own_frames_is_no_twin() {
     );
     assert_eq!(r.end, FlyEnd::MaxDuration, "{:?}", r.events);
     assert!(!r.commands.is_empty(), "{:?}", r.events);
-    let echoes = r
-        .events
-        .iter()
-        .filter(|e| e.contains("own frames came back"))
-        .count();
+    let echoes = support::logged(&r, &["own frames came back"]);
     assert_eq!(echoes, 1, "{:?}", r.events);
 }
 
@@ -484,13 +482,12 @@ fn a_failsafe_on_a_disarm_after_a_silence_says_it_may_be_a_reboot() {
     });
     assert_eq!(r.end, FlyEnd::SensorClockJump, "{:?}", r.events);
     assert!(!r.way_out_commanded, "{:?}", r.events);
-    assert!(
-        r.events
-            .iter()
-            .any(|e| e.contains("not yet confirmed as its pilot's")
-                && e.contains("(or its autopilot rebooted: it was silent for more than 1 s")),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &[
+            "not yet confirmed as its pilot's",
+            "(or its autopilot rebooted: it was silent for more than 1 s",
+        ],
     );
 }
 
@@ -2336,6 +2333,13 @@ fn way_out_end(r: &FlyReport) -> &str {
         .map_or("", |e| e.as_str())
 }
 
+/// Asserts that the failsafe's way out ended with a line holding `text` ([`way_out_end`]; the
+/// events shown when it did not).
+#[track_caller]
+fn assert_way_out_end(r: &FlyReport, text: &str) {
+    assert!(way_out_end(r).contains(text), "{:?}", r.events);
+}
+
 /// att45f-1: during the failsafe's retries (HOLD, never carried out: the vehicle stays
 /// armed in OFFBOARD, then falls silent at 2 s), a second vehicle with the ids beats armed in
 /// AUTO.LOITER (the HOLD commanded) at 1 Hz from ANOTHER source address, on the very numbers
@@ -2366,11 +2370,7 @@ fn a_twin_at_another_address_in_the_retries_confirms_nothing() {
         "{:?}",
         r.events
     );
-    assert!(
-        way_out_end(&r).contains("did not confirm the HOLD"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "did not confirm the HOLD");
     assert!(!c.iter().any(|x| x.1 == 1), "{c:?}");
 }
 
@@ -2408,11 +2408,7 @@ fn positions_jumping_in_the_retries_confirm_nothing() {
         "{:?}",
         r.events
     );
-    assert!(
-        way_out_end(&r).contains("did not confirm the HOLD"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "did not confirm the HOLD");
 }
 
 /// att45f-5: during the failsafe's retries the vehicle's heartbeats show it DISARMED in
@@ -2473,7 +2469,7 @@ fn a_ground_stations_heartbeat_keeps_no_link_in_the_retries() {
         }
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(way_out_end(&r).contains("link lost)"), "{:?}", r.events);
+    assert_way_out_end(&r, "link lost)");
 }
 
 /// att45f-10: during the failsafe's retries every time the vehicle stamps (its position's
@@ -2490,17 +2486,14 @@ fn a_reboot_during_the_retries_is_told() {
         from_socket(0, datagrams(a.frames(&msgs)))
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(
-        r.events.iter().any(|e| e.contains("during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back")
-            && e.contains("its autopilot rebooted")),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &[
+            "during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back",
+            "its autopilot rebooted",
+        ],
     );
-    assert!(
-        way_out_end(&r).contains("its autopilot rebooted)"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "its autopilot rebooted)");
 }
 
 /// `fly` in control (the pilot's OFFBOARD) against a vehicle (1 Hz heartbeat; its measurement
@@ -2558,16 +2551,8 @@ fn a_reboot_in_control_is_no_new_one_in_the_retries() {
     let r = rebooted_in_control(None);
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(
-        way_out_end(&r).contains("the vehicle is in HOLD ("),
-        "{:?}",
-        r.events
-    );
-    let reboots = r
-        .events
-        .iter()
-        .filter(|e| e.contains("its autopilot rebooted"))
-        .count();
+    assert_way_out_end(&r, "the vehicle is in HOLD (");
+    let reboots = support::logged(&r, &["its autopilot rebooted"]);
     assert_eq!(reboots, 1, "{:?}", r.events);
 }
 
@@ -2581,18 +2566,11 @@ fn a_second_reboot_in_the_retries_is_told() {
     let r = rebooted_in_control(Some(2.3));
     assert_eq!(r.end, FlyEnd::VehicleLost, "{:?}", r.events);
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(
-        r.events.iter().any(|e| e.contains(
-            "during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back from 153."
-        )),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &["during the failsafe's retries, vehicle_lost: the vehicle's clock (time_boot_ms) went back from 153."],
     );
-    assert!(
-        way_out_end(&r).contains("its autopilot rebooted)"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "its autopilot rebooted)");
 }
 
 /// att53f-1 (A11): in control the vehicle's clock, which stamps its measurement too (an
@@ -2935,20 +2913,14 @@ fn a_word_in_a_doubt_contradicted_in_the_retries_is_two_senders() {
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
     assert!(r.way_out_overridden, "{:?}", r.events);
-    assert!(
-        r.events.iter().any(|e| e
-            .contains("during the failsafe's retries, two vehicles with the ids")
-            && e.contains(
-                "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt"
-            )),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &[
+            "during the failsafe's retries, two vehicles with the ids",
+            "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt",
+        ],
     );
-    assert!(
-        way_out_end(&r).contains("a pilot's word before a second sender)"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "a pilot's word before a second sender)");
     assert!(c.len() <= 4 + 2, "{c:?}");
 }
 
@@ -2993,20 +2965,14 @@ fn a_word_in_a_doubt_repeated_after_the_resync_then_contradicted_is_two_senders(
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
     assert!(r.way_out_overridden, "{:?}", r.events);
-    assert!(
-        r.events.iter().any(|e| e
-            .contains("during the failsafe's retries, two vehicles with the ids")
-            && e.contains(
-                "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt"
-            )),
-        "{:?}",
-        r.events
+    support::assert_logged(
+        &r,
+        &[
+            "during the failsafe's retries, two vehicles with the ids",
+            "the heartbeats showed it in MANUAL, then armed in OFFBOARD, with 1 doubt",
+        ],
     );
-    assert!(
-        way_out_end(&r).contains("a pilot's word before a second sender)"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "a pilot's word before a second sender)");
     // The tries before the word (1.5 s to 2.1 s, one each 0.3 s), none after it.
     assert!(c.len() <= 4, "{c:?} {:?}", r.events);
 }
@@ -3134,11 +3100,7 @@ fn heartbeats_heard_as_copies_in_a_doubt_keep_the_link() {
         from_socket(0, out)
     });
     assert_eq!(r.end, FlyEnd::Interrupted, "{:?}", r.events);
-    assert!(
-        way_out_end(&r).contains("retries' bound reached"),
-        "{:?}",
-        r.events
-    );
+    assert_way_out_end(&r, "retries' bound reached");
     assert!(
         !r.events.iter().any(|e| e.contains("no heartbeat")),
         "{:?}",
@@ -3241,5 +3203,5 @@ fn copies_of_a_dead_vehicles_heartbeat_in_a_doubt_keep_no_link_in_the_retries() 
         from_socket(0, out)
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(way_out_end(&r).contains("link lost)"), "{:?}", r.events);
+    assert_way_out_end(&r, "link lost)");
 }

@@ -1,9 +1,9 @@
 //! Helpers the bridge's test binaries share (each `mod support;`): the stand-in vehicles'
-//! heartbeat, a command and its acknowledgement, a Ctrl-C after a delay. Not every binary uses
-//! every helper.
+//! heartbeat, a command and its acknowledgement, a Ctrl-C after a delay, what a flight logged.
+//! Not every binary uses every helper.
 #![allow(dead_code)]
 
-use isotrack_mavlink::fly::FlyOptions;
+use isotrack_mavlink::fly::{FlyOptions, FlyReport};
 use isotrack_mavlink::link::Link;
 use mavlink::dialects::common::*;
 use std::time::{Duration, Instant};
@@ -66,4 +66,19 @@ pub fn stop_after(o: &FlyOptions, s: f64) {
         std::thread::sleep(Duration::from_secs_f64(s));
         stop.store(true, std::sync::atomic::Ordering::SeqCst);
     });
+}
+
+/// How many of `r`'s events hold every one of `needles`.
+pub fn logged(r: &FlyReport, needles: &[&str]) -> usize {
+    r.events
+        .iter()
+        .filter(|e| needles.iter().all(|n| e.contains(n)))
+        .count()
+}
+
+/// Asserts that one of `r`'s events holds every one of `needles` (the events shown when none
+/// does).
+#[track_caller]
+pub fn assert_logged(r: &FlyReport, needles: &[&str]) {
+    assert!(logged(r, needles) > 0, "{:?}", r.events);
 }
