@@ -4,7 +4,8 @@
 #![cfg(unix)]
 mod common;
 use common::{assert_fails, fifo, isotrack, isotrack_within, write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::Output;
 
 const SCEN: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -1747,8 +1748,30 @@ fn ctrl_c_while_run_plots_names_the_figures_from_before() {
         "run", SCEN, "--out", &ps, "--quiet", "--plot", "--set", SHORT,
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
-    let mut caught = false;
-    for attempt in 0..6 {
+    let (attempt, o) =
+        run_plot_caught_drawing(|_| p.clone()).expect("run --plot was never caught drawing");
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+    assert!(
+        err.contains("also holds trajectory.png, timeseries.png from before this run"),
+        "attempt {attempt}: {err}"
+    );
+    assert!(!err.contains("error"), "attempt {attempt}: {err}");
+    assert_eq!(litter(&p), Vec::<String>::new(), "attempt {attempt}");
+    // The interrupted run's directory takes the next run.
+    let o = isotrack(&[
+        "run", SCEN, "--out", &ps, "--quiet", "--plot", "--set", SHORT,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}
+
+/// `run SCEN --out P --quiet --plot`, long enough (6000 s) to be caught drawing, interrupted as
+/// the trajectory's temporary appears in P (`out(attempt)`), tried up to 6 times
+/// ([`common::first_caught`]): the first try caught before it finished, its number and output.
+fn run_plot_caught_drawing(out: impl Fn(usize) -> PathBuf) -> Option<(usize, Output)> {
+    common::first_caught(6, |attempt| {
+        let p = out(attempt);
+        let ps = p.display().to_string();
         let args = [
             "run",
             SCEN,
@@ -1759,27 +1782,8 @@ fn ctrl_c_while_run_plots_names_the_figures_from_before() {
             "--set",
             "sim.duration_s=6000",
         ];
-        let o = common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
-        let err = common::stderr(&o);
-        if o.status.code() == Some(0) {
-            continue;
-        }
-        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
-        caught = true;
-        assert!(
-            err.contains("also holds trajectory.png, timeseries.png from before this run"),
-            "attempt {attempt}: {err}"
-        );
-        assert!(!err.contains("error"), "attempt {attempt}: {err}");
-        assert_eq!(litter(&p), Vec::<String>::new(), "attempt {attempt}");
-        // The next attempt starts from the earlier run's figures again.
-        let o = isotrack(&[
-            "run", SCEN, "--out", &ps, "--quiet", "--plot", "--set", SHORT,
-        ]);
-        assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
-        break;
-    }
-    assert!(caught, "run --plot was never caught drawing");
+        common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty())
+    })
 }
 
 /// att48-5: `run --out a/b/c` (none there) interrupted while running removed `c` but left the
@@ -1981,34 +1985,16 @@ fn an_interrupted_benchmark_leaves_no_empty_directory_and_says_0() {
 #[test]
 fn ctrl_c_while_drawing_says_which_figures_are_not_drawn() {
     let d = tempfile::tempdir().unwrap();
-    let mut caught = false;
-    for attempt in 0..6 {
-        let p = d.path().join(format!("p{attempt}"));
-        let ps = p.display().to_string();
-        let args = [
-            "run",
-            SCEN,
-            "--out",
-            &ps,
-            "--quiet",
-            "--plot",
-            "--set",
-            "sim.duration_s=6000",
-        ];
-        let o = common::interrupted_when(&args, || !entries(&p, ".trajectory.png.").is_empty());
-        let err = common::stderr(&o);
-        if o.status.code() == Some(0) {
-            continue;
-        }
-        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
-        caught = true;
-        let said =
-            format!("interrupted before the figures were drawn: `isotrack plot {ps}` draws them");
-        assert!(err.contains(&said), "attempt {attempt}: {err}");
-        assert!(!p.join("trajectory.png").exists());
-        break;
-    }
-    assert!(caught, "run --plot was never caught drawing");
+    let p_of = |attempt: usize| d.path().join(format!("p{attempt}"));
+    let (attempt, o) = run_plot_caught_drawing(p_of).expect("run --plot was never caught drawing");
+    let (p, err) = (p_of(attempt), common::stderr(&o));
+    assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+    let said = format!(
+        "interrupted before the figures were drawn: `isotrack plot {}` draws them",
+        p.display()
+    );
+    assert!(err.contains(&said), "attempt {attempt}: {err}");
+    assert!(!p.join("trajectory.png").exists());
 }
 
 /// att49-7: a directory holding another suite's benchmark (its suite.toml names `standard`

@@ -206,3 +206,15 @@ pub fn interrupted_when(args: &[&str], ready: impl Fn() -> bool) -> std::process
         .status();
     child.wait_with_output().unwrap()
 }
+
+/// Tries an interrupted run (`attempt(i)` for try `i`, [`interrupted_when`]) up to `attempts`
+/// times, until one is caught before it finished: that try's number and output (its exit
+/// status not 0); `None` when each try finished first.
+pub fn first_caught(
+    attempts: usize,
+    mut attempt: impl FnMut(usize) -> Output,
+) -> Option<(usize, Output)> {
+    (0..attempts)
+        .map(|i| (i, attempt(i)))
+        .find(|(_, o)| o.status.code() != Some(0))
+}
