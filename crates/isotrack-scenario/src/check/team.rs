@@ -626,12 +626,7 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> V
             Echo(r.noise_std_m)
         ));
     }
-    if r.dropout_probability > 0.0 {
-        out.push(format!(
-            "team.ranging.dropout_probability = {} (a lost range is held up to 1 s: an extra, random delay)",
-            Echo(r.dropout_probability)
-        ));
-    }
+    out.extend(start::dropout_note(team));
     if r.max_range_m.is_finite() {
         match halt {
             Some(h) => out.push(h.text()),
@@ -1243,9 +1238,10 @@ pub(super) fn team_report(s: &Scenario, l: &Law, r: &Regions) -> Option<TeamChec
 ///   [`start::probe_slots_claim`]): `fails` or `not_applicable`; whose starts leave neighbours
 ///   beyond the range (att43-1): the probes may not find the ring, and without it the law is
 ///   off: `not_applicable`;
-/// * a ranging delay with unequal nominal speeds (att50-5, [`start::delay_drift_claim`]): the
-///   gaps' open-loop drift before the loop acts brings two robots together: `fails` (through
-///   each other) or `not_applicable` (under the close approach);
+/// * the start rule ([`start::start_claim`], att50-5, att53t, att54t): when the start matters,
+///   a start model whose gap passes through zero `fails`; one whose least gap less its margin
+///   is under the close approach, or a start the rule cannot model, `not_applicable` (unless a
+///   later rule `fails`);
 ///
 /// and, for either spacing law, a listed ring out of the order of travel
 /// ([`listed_ring_out_of_order`]): `fails`.
@@ -1275,26 +1271,33 @@ fn spacing_claim(
     if let Some(claim) = discovery_probe_claim(s, team) {
         return Some(claim);
     }
-    if let Some(claim) = start::delay_drift_claim(s, l, team) {
-        return Some(claim);
+    let start = start::start_claim(s, l, team, sp);
+    let later = 'later: {
+        // att50-2: arc_reference's equilibrium too (its arc gaps for the ranges).
+        let solved = sp.shifted_equilibrium.as_ref();
+        if let Some(claim) = solved.and_then(|eq| equilibrium::shifted_claim(team, eq)) {
+            break 'later Some(claim);
+        }
+        if let Some(why) = first_sample_overshoot(s, l, team, sp) {
+            break 'later Some((Verdict::NotApplicable, why));
+        }
+        if let Some(claim) = s
+            .team_arc()
+            .is_none()
+            .then(|| equilibrium::extracted_claim(s, team))
+            .flatten()
+        {
+            break 'later Some(claim);
+        }
+        range_limit_claim(s, team, sp, ranges)
+    };
+    // The start rule's claim, unless a later rule fails (no equilibrium: the cause); none of
+    // them says `holds`.
+    match (start, later) {
+        (_, Some(claim)) if claim.0 == Verdict::Fails => Some(claim),
+        (Some(claim), _) => Some(claim),
+        (None, claim) => claim,
     }
-    // att50-2: arc_reference's equilibrium too (its arc gaps for the ranges).
-    let solved = sp.shifted_equilibrium.as_ref();
-    if let Some(claim) = solved.and_then(|eq| equilibrium::shifted_claim(team, eq)) {
-        return Some(claim);
-    }
-    if let Some(why) = first_sample_overshoot(s, l, team, sp) {
-        return Some((Verdict::NotApplicable, why));
-    }
-    if let Some(claim) = s
-        .team_arc()
-        .is_none()
-        .then(|| equilibrium::extracted_claim(s, team))
-        .flatten()
-    {
-        return Some(claim);
-    }
-    range_limit_claim(s, team, sp, ranges)
 }
 
 /// [`deployed_on_circle`] of `team`'s starts on the scenario's known circle (no arc bound),

@@ -513,9 +513,10 @@ fn a_vehicle_saturated_at_the_equilibrium_is_linearised_as_a_pin() {
 /// nominal speeds chosen so the equilibrium's gaps are about 1 / 14 / 14 / 14.55 m. At
 /// k_v = 0.02556 the fastest mode's gain per period `g = k_v mu_max T` is 1.4 (the gaps' matrix
 /// built here): each sample overshoots by `g - 1` of the error, and the first carries vehicle
-/// 0's gap `0.4 x 9.9 = 4 m` past its 1 m equilibrium: `not_applicable` naming the overshoot
-/// (it said `holds`; the run drives vehicle 0 through vehicle 1, 6 mm apart). The control at
-/// k_v = 0.01826 (g = 1.0003) overshoots by 3 mm: `holds`.
+/// 0's gap `0.4 x 9.9 = 4 m` past its 1 m equilibrium (it said `holds`; the run drives vehicle
+/// 0 through vehicle 1, 6 mm apart); the start rule's model, run at d = 0 too (att54t), shows
+/// the pass-through in the first period: `fails`. The control at k_v = 0.01826 (g = 1.0003)
+/// overshoots by 3 mm: `holds`.
 #[test]
 fn an_overshoot_past_the_close_approach_is_not_judged_holds() {
     let r = radius();
@@ -561,15 +562,20 @@ fn an_overshoot_past_the_close_approach_is_not_judged_holds() {
                 (g - 1.4).abs() < 1e-3 && arcs[0] - overshoot < 0.5,
                 "{g} {arcs:?}"
             );
-            assert_eq!(t.verdict, Verdict::NotApplicable, "{}", t.verdict_reason);
-            let shown: f64 = t
+            // The start rule (att54t: its model runs at d = 0 too) sees it first: the ranges
+            // measured at t = 0 are even, so the first commands are the v0 and gap 0 closes at
+            // v0_0 - v0_1 for the whole first period of 20 s, L/4 = 10.888 m in
+            // 10.888/0.556 = 19.57 s: the two pass through each other, `fails`.
+            assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+            let at: f64 = t
                 .verdict_reason
-                .split("carry a gap ")
+                .split("through each other at t = ")
                 .nth(1)
                 .and_then(|x| x.split(' ').next())
                 .and_then(|x| x.parse().ok())
                 .unwrap_or_else(|| panic!("{}", t.verdict_reason));
-            assert!((shown - overshoot).abs() < 1e-4, "{shown} vs {overshoot}");
+            let want = TAU * r / 4.0 / (v0[0] - v0[1]);
+            assert!((at - want).abs() < 1e-4, "{at} vs {want}");
             let m = team_metrics(&s);
             assert!(m.min_separation_m.unwrap() < 0.5, "{m:?}");
         } else {
