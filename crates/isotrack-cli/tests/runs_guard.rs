@@ -2058,3 +2058,61 @@ fn a_benchmark_of_another_suite_is_refused_and_the_directory_quoted() {
         )],
     );
 }
+
+/// att53o-2: `--out u/b/../c` (the user's `u`, no `u/b`): the command made `u/b` to pass
+/// through it, the interrupt removed it as empty, and the note then read `u/b/../c` through the
+/// missing level: "nothing written" of a directory holding the sweep's manifest (or a
+/// benchmark's finished task). The directory is settled once, before anything is created
+/// (`u/c`): no `u/b` is made, and the note names `u/c` with what it holds.
+#[test]
+fn a_parent_step_through_a_level_the_command_made_is_settled_first() {
+    let d = tempfile::tempdir().unwrap();
+    let u = d.path().join("u");
+    std::fs::create_dir(&u).unwrap();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 30000.0\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0, 40.0]\n"
+        ),
+    );
+    let c = u.join("c");
+    let through = u.join("b").join("..").join("c").display().to_string();
+    let args = ["sweep", &sw, "--out", &through, "--threads", "1"];
+    let o = common::interrupted_when(&args, || c.join("sweep.json").exists());
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert_eq!(entries(&c, ""), SWEEP_DIR, "{err}");
+    assert!(!u.join("b").exists(), "{err}");
+    let said = format!(
+        "interrupted: {} holds 0 of 4 runs; the same sweep with `--resume` continues",
+        c.display()
+    );
+    assert!(err.contains(&said), "{err}");
+    assert!(!err.contains("nothing written"), "{err}");
+    // A benchmark, once its first task is in place.
+    let suite = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+    let e = u.join("e");
+    let through = u.join("x").join("..").join("e").display().to_string();
+    let args = [
+        "benchmark",
+        suite,
+        "--controllers",
+        "pi_isoline",
+        "--out",
+        &through,
+        "--threads",
+        "1",
+    ];
+    let o = common::interrupted_when(&args, || {
+        std::fs::read_dir(e.join("tasks"))
+            .is_ok_and(|mut r| r.any(|t| t.is_ok_and(|t| t.path().join("task.json").exists())))
+    });
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(!u.join("x").exists(), "{err}");
+    let n = entries(&e.join("tasks"), "").len();
+    assert!(n > 0, "{err}");
+    let said = format!("interrupted: {} holds {n} finished task", e.display());
+    assert!(err.contains(&said), "{err}");
+}
