@@ -2116,3 +2116,94 @@ fn a_parent_step_through_a_level_the_command_made_is_settled_first() {
     let said = format!("interrupted: {} holds {n} finished task", e.display());
     assert!(err.contains(&said), "{err}");
 }
+
+/// The bundled standard-v1 suite.
+const STANDARD_V1: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+
+/// A finished `benchmark standard-v1 --controllers pi_isoline --out DIR` (10 tasks).
+fn benchmarked(dir: &Path) {
+    let o = isotrack_within(
+        &[
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            "pi_isoline",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        300,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}
+
+/// A copy of directory `from` at `to` (`cp -a`).
+fn copied(from: &Path, to: &Path) {
+    let ok = std::process::Command::new("cp")
+        .arg("-a")
+        .arg(from)
+        .arg(to)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+}
+
+/// att53o-9: a benchmark interrupted while it wrote its top-level files left this run's
+/// leaderboard.csv (and .md) beside the earlier run's index.html and suite.toml. They are put
+/// in place together: signalled the moment the new leaderboard.csv is in place (a `--resume`
+/// reusing every task, so each file is renewed), the four are all the earlier run's files or
+/// all this run's (told by their inodes), whether the signal came in time (130) or not (0).
+#[test]
+fn an_interrupted_benchmark_leaves_its_top_level_files_of_one_run() {
+    let d = tempfile::tempdir().unwrap();
+    let first = d.path().join("first");
+    benchmarked(&first);
+    let top = [
+        "leaderboard.csv",
+        "leaderboard.md",
+        "index.html",
+        "suite.toml",
+    ];
+    for attempt in 0..4 {
+        let b = d.path().join(format!("b{attempt}"));
+        copied(&first, &b);
+        let before: Vec<_> = top
+            .iter()
+            .map(|n| isotrack_runs_identity(&b.join(n)))
+            .collect();
+        let bs = b.display().to_string();
+        let args = [
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            "pi_isoline",
+            "--out",
+            &bs,
+            "--resume",
+        ];
+        let csv = b.join("leaderboard.csv");
+        let o = common::interrupted_when(&args, || isotrack_runs_identity(&csv) != before[0]);
+        let err = common::stderr(&o);
+        let renewed: Vec<bool> = top
+            .iter()
+            .zip(&before)
+            .map(|(n, was)| isotrack_runs_identity(&b.join(n)) != *was)
+            .collect();
+        assert!(
+            matches!(o.status.code(), Some(0 | 130)),
+            "attempt {attempt}: {err}"
+        );
+        assert!(
+            renewed.iter().all(|r| *r == renewed[0]),
+            "attempt {attempt}: {top:?} renewed {renewed:?}: {err}"
+        );
+        assert!(litter(&b).is_empty(), "attempt {attempt}: {:?}", litter(&b));
+    }
+}
+
+/// The device and inode of the file at `p` (`None` when absent).
+fn isotrack_runs_identity(p: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::symlink_metadata(p)
+        .ok()
+        .map(|m| (m.dev(), m.ino()))
+}

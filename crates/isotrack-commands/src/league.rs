@@ -357,9 +357,10 @@ fn refuse_foreign_benchmark_file(p: &Path, start: &str) -> Result<(), Failure> {
     )
 }
 
-/// Writes a finished benchmark into `out`: the leaderboard files, `index.html` and
-/// `suite.toml` (the suite `path` as run, with the gains each task's scores used; `tune`: they
-/// were tuned afresh).
+/// Writes a finished benchmark into `out`: its tasks, then the leaderboard files, `index.html`
+/// and `suite.toml` (the suite `path` as run, with the gains each task's scores used; `tune`:
+/// they were tuned afresh) put in place together, as one step an interrupt never cuts
+/// ([`write_files`]; att53o-9).
 pub fn write_outputs(
     suite: &Suite,
     path: &Path,
@@ -367,10 +368,6 @@ pub fn write_outputs(
     out: &Path,
     tune: bool,
 ) -> Result<(), Failure> {
-    write_files(result, out).map_err(bench_failure)?;
-    let html = out.join("index.html");
-    isotrack_runs::files::write_atomic(&html, isotrack_league::benchmark_page(result).as_bytes())
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
     // The suite as run: the gains every built-in law ran with recorded per task.
     let mut as_run = suite.clone();
     for (task, res) in as_run.tasks.iter_mut().zip(&result.tasks) {
@@ -399,10 +396,11 @@ pub fn write_outputs(
         path.display(),
         if tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
     );
-    let suite_out = out.join("suite.toml");
-    isotrack_runs::files::write_atomic(&suite_out, as_run.to_toml(&header).as_bytes())
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
-    Ok(())
+    let more = [
+        ("index.html", isotrack_league::benchmark_page(result)),
+        ("suite.toml", as_run.to_toml(&header)),
+    ];
+    write_files(result, out, &more).map_err(bench_failure)
 }
 
 /// `isotrack report RUN_DIR... --out report.html`.
