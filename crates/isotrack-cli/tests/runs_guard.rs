@@ -394,9 +394,8 @@ fn an_interrupted_benchmark_keeps_its_finished_tasks() {
         .flatten()
         .filter(|e| e.path().join("task.json").is_file())
         .count();
-    let task_word = if n == 1 { "task" } else { "tasks" };
     let said =
-        format!("holds {n} finished {task_word}; the same benchmark with `--resume` continues");
+        format!("holds {n} of the 10 tasks finished; the same benchmark with `--resume` continues");
     assert!(
         rest.iter()
             .any(|l| l.starts_with("interrupted: ") && l.ends_with(&said)),
@@ -1971,7 +1970,7 @@ fn an_interrupted_benchmark_leaves_no_empty_directory_and_says_0() {
         assert!(err.contains(&said), "{err}");
     } else {
         let n = tasks.len();
-        let said = format!("interrupted: {cs} holds {n} finished task");
+        let said = format!("interrupted: {cs} holds {n} of the 10 tasks finished");
         assert!(err.contains(&said), "{err}");
     }
 }
@@ -2113,7 +2112,10 @@ fn a_parent_step_through_a_level_the_command_made_is_settled_first() {
     assert!(!u.join("x").exists(), "{err}");
     let n = entries(&e.join("tasks"), "").len();
     assert!(n > 0, "{err}");
-    let said = format!("interrupted: {} holds {n} finished task", e.display());
+    let said = format!(
+        "interrupted: {} holds {n} of the 10 tasks finished",
+        e.display()
+    );
     assert!(err.contains(&said), "{err}");
 }
 
@@ -2206,4 +2208,66 @@ fn isotrack_runs_identity(p: &Path) -> Option<(u64, u64)> {
     std::fs::symlink_metadata(p)
         .ok()
         .map(|m| (m.dev(), m.ino()))
+}
+
+/// att53o-3, -7: a benchmark directory whose stored tasks `--resume` would not reuse (another
+/// `--controllers` set: the digest covers it; and so with its suite.toml gone) was advised
+/// "pass --resume to reuse its task results", and `--resume` then replaced every task without
+/// a word. The advice is given only where `--resume` reuses a stored task, naming how many;
+/// where it reuses none, the refusal says so and how to keep them; `--resume` that replaces
+/// stored tasks says how many of them it reuses and which it replaces. The same run is still
+/// advised `--resume`, plainly.
+#[test]
+fn a_benchmark_advises_resume_only_where_it_reuses_results() {
+    let d = tempfile::tempdir().unwrap();
+    let a = d.path().join("a");
+    benchmarked(&a);
+    let aq = a.to_str().unwrap();
+    let bench = |controllers: &str, extra: &[&str]| {
+        let mut args = vec![
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            controllers,
+            "--out",
+            aq,
+        ];
+        args.extend_from_slice(extra);
+        isotrack_within(&args, 300)
+    };
+    let o = bench("pi_isoline", &[]);
+    assert_fails(&o, 73, &["pass --resume to reuse its task results"]);
+    let none = "whose 10 stored tasks are another run's (another controller set";
+    let keep =
+        "--resume would reuse none of them and replace them all; choose another --out to keep them";
+    let o = bench("pid", &[]);
+    assert_fails(&o, 73, &[none, keep]);
+    assert!(!common::stderr(&o).contains("pass --resume"));
+    // Its suite.toml gone: the same.
+    std::fs::rename(a.join("suite.toml"), d.path().join("suite.toml")).unwrap();
+    let o = bench("pid", &[]);
+    assert_fails(&o, 73, &[none, keep]);
+    // One task of another digest: --resume reuses 9 of 10, and says so.
+    let task = a.join("tasks/circular-1hz/task.json");
+    let mut t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&task).unwrap()).unwrap();
+    t["digest"] = serde_json::json!("0".repeat(64));
+    std::fs::write(&task, t.to_string()).unwrap();
+    let o = bench("pi_isoline", &[]);
+    assert_fails(
+        &o,
+        73,
+        &["pass --resume to reuse 9 of its 10 stored tasks (the results of circular-1hz are another run's and would be replaced)"],
+    );
+    let o = bench("pi_isoline", &["--resume"]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let said = format!("note: --resume reuses 9 of the 10 tasks {aq} holds; the results of 1 (circular-1hz) are another run's");
+    assert!(err.contains(&said), "{err}");
+    // Another controller set with --resume: every task replaced, said.
+    let o = bench("pid", &["--resume"]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let said = format!("note: --resume reuses 0 of the 10 tasks {aq} holds; the results of 10 (circular-100hz, circular-1hz, plumes-noisy-10hz and 7 more) are another run's");
+    assert!(err.contains(&said), "{err}");
 }
