@@ -2271,3 +2271,52 @@ fn a_benchmark_advises_resume_only_where_it_reuses_results() {
     let said = format!("note: --resume reuses 0 of the 10 tasks {aq} holds; the results of 10 (circular-100hz, circular-1hz, plumes-noisy-10hz and 7 more) are another run's");
     assert!(err.contains(&said), "{err}");
 }
+
+/// att53o-1: `sweep --resume` interrupted before it renewed the table said "nothing written"
+/// of a directory holding the 100 runs it resumed. Signalled once it holds the directory's
+/// lock (before or after the renewal), it says how many of the 400 runs DIR holds, at least
+/// the 100 it began with, and that `--resume` continues.
+#[test]
+fn an_interrupted_sweep_resume_counts_the_runs_it_continues() {
+    let d = tempfile::tempdir().unwrap();
+    let seeds: Vec<String> = (1..=400).map(|k| k.to_string()).collect();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\nsim.seed = [{}]\n",
+            seeds.join(", ")
+        ),
+    );
+    let full = d.path().join("full");
+    common::swept(&sw, &full, &[]);
+    let text = std::fs::read_to_string(full.join("results.csv")).unwrap();
+    let cut: String = text.lines().take(101).map(|l| format!("{l}\n")).collect();
+    let mut caught = 0;
+    for attempt in 0..4 {
+        let r = d.path().join(format!("r{attempt}"));
+        copied(&full, &r);
+        std::fs::write(r.join("results.csv"), &cut).unwrap();
+        let rs = r.display().to_string();
+        let args = ["sweep", &sw, "--out", &rs, "--resume", "--threads", "1"];
+        let o = common::interrupted_when(&args, || r.join(".isotrack.lock").exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught += 1;
+        assert!(!err.contains("nothing written"), "attempt {attempt}: {err}");
+        let rows = std::fs::read_to_string(r.join("results.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            - 1;
+        assert!(rows >= 100, "attempt {attempt}: {rows}");
+        let said = format!(
+            "interrupted: {rs} holds {rows} of 400 runs; the same sweep with `--resume` continues"
+        );
+        assert!(err.contains(&said), "attempt {attempt}: {err}");
+    }
+    assert!(caught > 0, "the sweep was never interrupted");
+}
