@@ -2320,3 +2320,74 @@ fn an_interrupted_sweep_resume_counts_the_runs_it_continues() {
     }
     assert!(caught > 0, "the sweep was never interrupted");
 }
+
+/// att53o-4: the lock refusal (benchmark, sweep), a FIFO at a benchmark's suite.toml, and
+/// sweep's and merge's "results.csv exists" printed the directory raw: a name with a line
+/// break cut the message in two lines. Each names it as one shell word (`$'...'`), on one line.
+#[test]
+fn refusals_name_a_directory_with_a_line_break_as_one_word() {
+    let d = tempfile::tempdir().unwrap();
+    let n = d.path().join("n l\nx");
+    let q = |p: &Path| format!("$'{}'", p.display().to_string().replace('\n', "\\x0a"));
+    let one_line = |o: &std::process::Output| {
+        let err = common::stderr(o);
+        assert_eq!(err.lines().filter(|l| !l.is_empty()).count(), 1, "{err}");
+    };
+    // Locked.
+    let lock = hold_lock(&n);
+    let o = isotrack_within(
+        &["benchmark", STANDARD_V1, "--out", n.to_str().unwrap()],
+        60,
+    );
+    assert_fails(&o, 73, &[&format!("{}: another isotrack", q(&n))]);
+    one_line(&o);
+    drop(lock);
+    // A FIFO at suite.toml.
+    fifo(&n, "suite.toml");
+    let o = isotrack_within(
+        &["benchmark", STANDARD_V1, "--out", n.to_str().unwrap()],
+        60,
+    );
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists and is not a regular file",
+            q(&n.join("suite.toml"))
+        )],
+    );
+    one_line(&o);
+    // A sweep's and a merge's results.csv there.
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\ncontroller.kp = [5.0]\n"
+        ),
+    );
+    let s = d.path().join("s l\nx");
+    common::swept(&sw, &s, &[]);
+    let o = isotrack(&["sweep", &sw, "--out", s.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists: pass --resume",
+            q(&s.join("results.csv"))
+        )],
+    );
+    one_line(&o);
+    let m = d.path().join("m l\nx");
+    let o = isotrack(&["merge", s.to_str().unwrap(), "--out", m.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = isotrack(&["merge", s.to_str().unwrap(), "--out", m.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists: pass --force",
+            q(&m.join("results.csv"))
+        )],
+    );
+    one_line(&o);
+}

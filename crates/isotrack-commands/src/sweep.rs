@@ -104,7 +104,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             format!("{total}")
         },
         started.elapsed().as_secs_f64(),
-        out.results.display()
+        isotrack_runs::owned::shell_quoted(&out.results)
     );
     print_tally(&report);
     let invalid = report.invalid;
@@ -157,14 +157,14 @@ fn note_figures_from_before(dir: &std::path::Path, since: std::time::SystemTime)
         .collect();
     errln!(
         "note: {} also holds {}{} from before this sweep, not this sweep's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this sweep's",
-        dir.display(),
+        isotrack_runs::owned::shell_quoted(dir),
         shown.join(", "),
         if more > 0 {
             format!(" and {more} more")
         } else {
             String::new()
         },
-        dir.display()
+        isotrack_runs::owned::shell_quoted(dir)
     );
 }
 
@@ -268,7 +268,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
     outln!(
         "merged {total} runs from {} directories -> {}",
         a.dirs.len(),
-        a.out.join("results.csv").display()
+        isotrack_runs::owned::shell_quoted(&a.out.join("results.csv"))
     );
     Ok(())
 }

@@ -50,7 +50,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
             exit::CANTCREAT,
             format!(
                 "{} exists: pass --force to replace it, or another --out",
-                out_results.display()
+                crate::owned::shell_quoted(&out_results)
             ),
         ));
     }
