@@ -2391,3 +2391,40 @@ fn refusals_name_a_directory_with_a_line_break_as_one_word() {
     );
     one_line(&o);
 }
+
+/// att53o-5: `run --out NEW --plot` interrupted after the run was in place, while its trace
+/// was read back for the figures, exited 130 without a word of them (the note was registered
+/// once the trace was read). Signalled as soon as the run's summary.json is there, it says
+/// the figures are not drawn (or which are), and how to draw them.
+#[test]
+fn ctrl_c_while_plot_reads_the_run_says_the_figures_are_not_drawn() {
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = 0;
+    for attempt in 0..3 {
+        let p = d.path().join(format!("p{attempt}"));
+        let ps = p.display().to_string();
+        let args = [
+            "run",
+            SCEN,
+            "--out",
+            &ps,
+            "--quiet",
+            "--plot",
+            "--set",
+            "sim.duration_s=30000",
+        ];
+        let o = common::interrupted_when(&args, || p.join("summary.json").exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught += 1;
+        let before = format!("interrupted before the figures were drawn: `isotrack plot {ps}`");
+        assert!(
+            err.contains(&before) || err.contains("interrupted while drawing the figures"),
+            "attempt {attempt}: {err}"
+        );
+    }
+    assert!(caught > 0, "run --plot was never interrupted");
+}
