@@ -2756,8 +2756,8 @@ mod tests {
                 .trim_start_matches('0')
                 .len()
         };
-        for mag in [0.3, 1.037_361_544_9, 2e5, 9e99, -4.5e-7] {
-            for rel in [2e-12, 1e-11, 4.3e-11, 1e-9, 1e-7] {
+        for mag in [0.3_f64, 1.037_361_544_9, 2e5, 9e99, -4.5e-7] {
+            for rel in [2e-12_f64, 1e-11, 4.3e-11, 1e-9, 1e-7] {
                 let (lo, hi) = (mag * (1.0 - rel), mag * (1.0 + rel));
                 let (lo, hi) = (lo.min(hi), lo.max(hi));
                 let (a, b) = padded_axis("v", lo, hi, 0.08, 1e-12).unwrap().unwrap();
