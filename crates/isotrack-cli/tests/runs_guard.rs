@@ -395,9 +395,8 @@ fn an_interrupted_benchmark_keeps_its_finished_tasks() {
         .flatten()
         .filter(|e| e.path().join("task.json").is_file())
         .count();
-    let task_word = if n == 1 { "task" } else { "tasks" };
     let said =
-        format!("holds {n} finished {task_word}; the same benchmark with `--resume` continues");
+        format!("holds {n} of the 10 tasks finished; the same benchmark with `--resume` continues");
     assert!(
         rest.iter()
             .any(|l| l.starts_with("interrupted: ") && l.ends_with(&said)),
@@ -1975,7 +1974,7 @@ fn an_interrupted_benchmark_leaves_no_empty_directory_and_says_0() {
         assert!(err.contains(&said), "{err}");
     } else {
         let n = tasks.len();
-        let said = format!("interrupted: {cs} holds {n} finished task");
+        let said = format!("interrupted: {cs} holds {n} of the 10 tasks finished");
         assert!(err.contains(&said), "{err}");
     }
 }
@@ -2043,4 +2042,375 @@ fn a_benchmark_of_another_suite_is_refused_and_the_directory_quoted() {
             "{q2} already holds a benchmark ({qf2}): pass --resume"
         )],
     );
+}
+
+/// att53o-2: `--out u/b/../c` (the user's `u`, no `u/b`): the command made `u/b` to pass
+/// through it, the interrupt removed it as empty, and the note then read `u/b/../c` through the
+/// missing level: "nothing written" of a directory holding the sweep's manifest (or a
+/// benchmark's finished task). The directory is settled once, before anything is created
+/// (`u/c`): no `u/b` is made, and the note names `u/c` with what it holds.
+#[test]
+fn a_parent_step_through_a_level_the_command_made_is_settled_first() {
+    let d = tempfile::tempdir().unwrap();
+    let u = d.path().join("u");
+    std::fs::create_dir(&u).unwrap();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 30000.0\n[grid]\ncontroller.kp = [5.0, 10.0, 20.0, 40.0]\n"
+        ),
+    );
+    let c = u.join("c");
+    let through = u.join("b").join("..").join("c").display().to_string();
+    let args = ["sweep", &sw, "--out", &through, "--threads", "1"];
+    let o = common::interrupted_when(&args, || c.join("sweep.json").exists());
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert_eq!(entries(&c, ""), SWEEP_DIR, "{err}");
+    assert!(!u.join("b").exists(), "{err}");
+    let said = format!(
+        "interrupted: {} holds 0 of 4 runs; the same sweep with `--resume` continues",
+        c.display()
+    );
+    assert!(err.contains(&said), "{err}");
+    assert!(!err.contains("nothing written"), "{err}");
+    // A benchmark, once its first task is in place.
+    let suite = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+    let e = u.join("e");
+    let through = u.join("x").join("..").join("e").display().to_string();
+    let args = [
+        "benchmark",
+        suite,
+        "--controllers",
+        "pi_isoline",
+        "--out",
+        &through,
+        "--threads",
+        "1",
+    ];
+    let o = common::interrupted_when(&args, || {
+        std::fs::read_dir(e.join("tasks"))
+            .is_ok_and(|mut r| r.any(|t| t.is_ok_and(|t| t.path().join("task.json").exists())))
+    });
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(!u.join("x").exists(), "{err}");
+    let n = entries(&e.join("tasks"), "").len();
+    assert!(n > 0, "{err}");
+    let said = format!(
+        "interrupted: {} holds {n} of the 10 tasks finished",
+        e.display()
+    );
+    assert!(err.contains(&said), "{err}");
+}
+
+/// The bundled standard-v1 suite.
+const STANDARD_V1: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../suites/standard-v1.toml");
+
+/// A finished `benchmark standard-v1 --controllers pi_isoline --out DIR` (10 tasks).
+fn benchmarked(dir: &Path) {
+    let o = isotrack_within(
+        &[
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            "pi_isoline",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        300,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+}
+
+/// A copy of directory `from` at `to` (`cp -a`).
+fn copied(from: &Path, to: &Path) {
+    let ok = std::process::Command::new("cp")
+        .arg("-a")
+        .arg(from)
+        .arg(to)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+}
+
+/// att53o-9: a benchmark interrupted while it wrote its top-level files left this run's
+/// leaderboard.csv (and .md) beside the earlier run's index.html and suite.toml. They are put
+/// in place together: signalled the moment the new leaderboard.csv is in place (a `--resume`
+/// reusing every task, so each file is renewed), the four are all the earlier run's files or
+/// all this run's (told by their inodes), whether the signal came in time (130) or not (0).
+#[test]
+fn an_interrupted_benchmark_leaves_its_top_level_files_of_one_run() {
+    let d = tempfile::tempdir().unwrap();
+    let first = d.path().join("first");
+    benchmarked(&first);
+    let top = [
+        "leaderboard.csv",
+        "leaderboard.md",
+        "index.html",
+        "suite.toml",
+    ];
+    for attempt in 0..4 {
+        let b = d.path().join(format!("b{attempt}"));
+        copied(&first, &b);
+        let before: Vec<_> = top
+            .iter()
+            .map(|n| isotrack_runs_identity(&b.join(n)))
+            .collect();
+        let bs = b.display().to_string();
+        let args = [
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            "pi_isoline",
+            "--out",
+            &bs,
+            "--resume",
+        ];
+        let csv = b.join("leaderboard.csv");
+        let o = common::interrupted_when(&args, || isotrack_runs_identity(&csv) != before[0]);
+        let err = common::stderr(&o);
+        let renewed: Vec<bool> = top
+            .iter()
+            .zip(&before)
+            .map(|(n, was)| isotrack_runs_identity(&b.join(n)) != *was)
+            .collect();
+        assert!(
+            matches!(o.status.code(), Some(0 | 130)),
+            "attempt {attempt}: {err}"
+        );
+        assert!(
+            renewed.iter().all(|r| *r == renewed[0]),
+            "attempt {attempt}: {top:?} renewed {renewed:?}: {err}"
+        );
+        assert!(litter(&b).is_empty(), "attempt {attempt}: {:?}", litter(&b));
+    }
+}
+
+/// The device and inode of the file at `p` (`None` when absent).
+fn isotrack_runs_identity(p: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::symlink_metadata(p)
+        .ok()
+        .map(|m| (m.dev(), m.ino()))
+}
+
+/// att53o-3, -7: a benchmark directory whose stored tasks `--resume` would not reuse (another
+/// `--controllers` set: the digest covers it; and so with its suite.toml gone) was advised
+/// "pass --resume to reuse its task results", and `--resume` then replaced every task without
+/// a word. The advice is given only where `--resume` reuses a stored task, naming how many;
+/// where it reuses none, the refusal says so and how to keep them; `--resume` that replaces
+/// stored tasks says how many of them it reuses and which it replaces. The same run is still
+/// advised `--resume`, plainly.
+#[test]
+fn a_benchmark_advises_resume_only_where_it_reuses_results() {
+    let d = tempfile::tempdir().unwrap();
+    let a = d.path().join("a");
+    benchmarked(&a);
+    let aq = a.to_str().unwrap();
+    let bench = |controllers: &str, extra: &[&str]| {
+        let mut args = vec![
+            "benchmark",
+            STANDARD_V1,
+            "--controllers",
+            controllers,
+            "--out",
+            aq,
+        ];
+        args.extend_from_slice(extra);
+        isotrack_within(&args, 300)
+    };
+    let o = bench("pi_isoline", &[]);
+    assert_fails(&o, 73, &["pass --resume to reuse its task results"]);
+    let none = "whose 10 stored tasks are another run's (another controller set";
+    let keep =
+        "--resume would reuse none of them and replace them all; choose another --out to keep them";
+    let o = bench("pid", &[]);
+    assert_fails(&o, 73, &[none, keep]);
+    assert!(!common::stderr(&o).contains("pass --resume"));
+    // Its suite.toml gone: the same.
+    std::fs::rename(a.join("suite.toml"), d.path().join("suite.toml")).unwrap();
+    let o = bench("pid", &[]);
+    assert_fails(&o, 73, &[none, keep]);
+    // One task of another digest: --resume reuses 9 of 10, and says so.
+    let task = a.join("tasks/circular-1hz/task.json");
+    let mut t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&task).unwrap()).unwrap();
+    t["digest"] = serde_json::json!("0".repeat(64));
+    std::fs::write(&task, t.to_string()).unwrap();
+    let o = bench("pi_isoline", &[]);
+    assert_fails(
+        &o,
+        73,
+        &["pass --resume to reuse 9 of its 10 stored tasks (the results of circular-1hz are another run's and would be replaced)"],
+    );
+    let o = bench("pi_isoline", &["--resume"]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let said = format!("note: --resume reuses 9 of the 10 tasks {aq} holds; the results of 1 (circular-1hz) are another run's");
+    assert!(err.contains(&said), "{err}");
+    // Another controller set with --resume: every task replaced, said.
+    let o = bench("pid", &["--resume"]);
+    let err = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let said = format!("note: --resume reuses 0 of the 10 tasks {aq} holds; the results of 10 (circular-100hz, circular-1hz, plumes-noisy-10hz and 7 more) are another run's");
+    assert!(err.contains(&said), "{err}");
+}
+
+/// att53o-1: `sweep --resume` interrupted before it renewed the table said "nothing written"
+/// of a directory holding the 100 runs it resumed. Signalled once it holds the directory's
+/// lock (before or after the renewal), it says how many of the 400 runs DIR holds, at least
+/// the 100 it began with, and that `--resume` continues.
+#[test]
+fn an_interrupted_sweep_resume_counts_the_runs_it_continues() {
+    let d = tempfile::tempdir().unwrap();
+    let seeds: Vec<String> = (1..=400).map(|k| k.to_string()).collect();
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\nsim.seed = [{}]\n",
+            seeds.join(", ")
+        ),
+    );
+    let full = d.path().join("full");
+    common::swept(&sw, &full, &[]);
+    let text = std::fs::read_to_string(full.join("results.csv")).unwrap();
+    let cut: String = text.lines().take(101).map(|l| format!("{l}\n")).collect();
+    let mut caught = 0;
+    for attempt in 0..4 {
+        let r = d.path().join(format!("r{attempt}"));
+        copied(&full, &r);
+        std::fs::write(r.join("results.csv"), &cut).unwrap();
+        let rs = r.display().to_string();
+        let args = ["sweep", &sw, "--out", &rs, "--resume", "--threads", "1"];
+        let o = common::interrupted_when(&args, || r.join(".isotrack.lock").exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught += 1;
+        assert!(!err.contains("nothing written"), "attempt {attempt}: {err}");
+        let rows = std::fs::read_to_string(r.join("results.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            - 1;
+        assert!(rows >= 100, "attempt {attempt}: {rows}");
+        let said = format!(
+            "interrupted: {rs} holds {rows} of 400 runs; the same sweep with `--resume` continues"
+        );
+        assert!(err.contains(&said), "attempt {attempt}: {err}");
+    }
+    assert!(caught > 0, "the sweep was never interrupted");
+}
+
+/// att53o-4: the lock refusal (benchmark, sweep), a FIFO at a benchmark's suite.toml, and
+/// sweep's and merge's "results.csv exists" printed the directory raw: a name with a line
+/// break cut the message in two lines. Each names it as one shell word (`$'...'`), on one line.
+#[test]
+fn refusals_name_a_directory_with_a_line_break_as_one_word() {
+    let d = tempfile::tempdir().unwrap();
+    let n = d.path().join("n l\nx");
+    let q = |p: &Path| format!("$'{}'", p.display().to_string().replace('\n', "\\x0a"));
+    let one_line = |o: &std::process::Output| {
+        let err = common::stderr(o);
+        assert_eq!(err.lines().filter(|l| !l.is_empty()).count(), 1, "{err}");
+    };
+    // Locked.
+    let lock = hold_lock(&n);
+    let o = isotrack_within(
+        &["benchmark", STANDARD_V1, "--out", n.to_str().unwrap()],
+        60,
+    );
+    assert_fails(&o, 73, &[&format!("{}: another isotrack", q(&n))]);
+    one_line(&o);
+    drop(lock);
+    // A FIFO at suite.toml.
+    fifo(&n, "suite.toml");
+    let o = isotrack_within(
+        &["benchmark", STANDARD_V1, "--out", n.to_str().unwrap()],
+        60,
+    );
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists and is not a regular file",
+            q(&n.join("suite.toml"))
+        )],
+    );
+    one_line(&o);
+    // A sweep's and a merge's results.csv there.
+    let sw = write(
+        d.path(),
+        "sw.toml",
+        &format!(
+            "scenario = {SCEN:?}\n[base]\nsim.duration_s = 2.0\n[grid]\ncontroller.kp = [5.0]\n"
+        ),
+    );
+    let s = d.path().join("s l\nx");
+    common::swept(&sw, &s, &[]);
+    let o = isotrack(&["sweep", &sw, "--out", s.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists: pass --resume",
+            q(&s.join("results.csv"))
+        )],
+    );
+    one_line(&o);
+    let m = d.path().join("m l\nx");
+    let o = isotrack(&["merge", s.to_str().unwrap(), "--out", m.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stderr(&o));
+    let o = isotrack(&["merge", s.to_str().unwrap(), "--out", m.to_str().unwrap()]);
+    assert_fails(
+        &o,
+        73,
+        &[&format!(
+            "{} exists: pass --force",
+            q(&m.join("results.csv"))
+        )],
+    );
+    one_line(&o);
+}
+
+/// att53o-5: `run --out NEW --plot` interrupted after the run was in place, while its trace
+/// was read back for the figures, exited 130 without a word of them (the note was registered
+/// once the trace was read). Signalled as soon as the run's summary.json is there, it says
+/// the figures are not drawn (or which are), and how to draw them.
+#[test]
+fn ctrl_c_while_plot_reads_the_run_says_the_figures_are_not_drawn() {
+    let d = tempfile::tempdir().unwrap();
+    let mut caught = 0;
+    for attempt in 0..3 {
+        let p = d.path().join(format!("p{attempt}"));
+        let ps = p.display().to_string();
+        let args = [
+            "run",
+            SCEN,
+            "--out",
+            &ps,
+            "--quiet",
+            "--plot",
+            "--set",
+            "sim.duration_s=30000",
+        ];
+        let o = common::interrupted_when(&args, || p.join("summary.json").exists());
+        let err = common::stderr(&o);
+        if o.status.code() == Some(0) {
+            continue;
+        }
+        assert_eq!(o.status.code(), Some(130), "attempt {attempt}: {err}");
+        caught += 1;
+        let before = format!("interrupted before the figures were drawn: `isotrack plot {ps}`");
+        assert!(
+            err.contains(&before) || err.contains("interrupted while drawing the figures"),
+            "attempt {attempt}: {err}"
+        );
+    }
+    assert!(caught > 0, "run --plot was never interrupted");
 }

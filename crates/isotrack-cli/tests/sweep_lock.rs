@@ -904,3 +904,65 @@ fn a_merge_of_a_stamped_and_an_unstamped_shard_is_refused() {
         assert!(!merged.join("results.csv").exists());
     }
 }
+
+/// att53o-10: `merge` copied the first shard's `scenario` and `sweep` into the merged
+/// sweep.json unchecked: an edited one (another bundled scenario, a file that does not exist)
+/// named another scenario for every merged row, exit 0. A shard whose manifest names another
+/// sweep file or base scenario than the first's is refused (65, naming its sweep.json and
+/// the key), whichever shard is first; the unedited shards merge, their names kept.
+#[test]
+fn a_merge_refuses_shards_naming_another_sweep_or_scenario() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "sc.toml", "sim.duration_s = 1.0\n");
+    let sw = write(
+        d.path(),
+        "s.toml",
+        "scenario = \"sc.toml\"\n[grid]\ncontroller.kp = [5.0, 10.0]\n",
+    );
+    let shard = |k: &str| {
+        let out = d.path().join(format!("shard-{k}"));
+        let o = isotrack(&[
+            "sweep",
+            &sw,
+            "--out",
+            out.to_str().unwrap(),
+            "--shard",
+            &format!("{k}/2"),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        out
+    };
+    let (a, b) = (shard("1"), shard("2"));
+    let original = std::fs::read_to_string(a.join("sweep.json")).unwrap();
+    let merge = |x: &Path, y: &Path, out: &str| {
+        isotrack(&[
+            "merge",
+            x.to_str().unwrap(),
+            y.to_str().unwrap(),
+            "--out",
+            d.path().join(out).to_str().unwrap(),
+        ])
+    };
+    let other = bundled("team-circular-4");
+    for (key, value) in [("scenario", other.as_str()), ("sweep", "/nonexistent.toml")] {
+        let mut m: serde_json::Value = serde_json::from_str(&original).unwrap();
+        m[key] = serde_json::json!(value);
+        std::fs::write(a.join("sweep.json"), m.to_string()).unwrap();
+        for (x, y, named) in [(&a, &b, &b), (&b, &a, &a)] {
+            let o = merge(x, y, &format!("m-{key}"));
+            let file = format!("{}: `{key}` is ", named.join("sweep.json").display());
+            assert_fails(&o, 65, &[&file, value]);
+            assert!(!d.path().join(format!("m-{key}/results.csv")).exists());
+        }
+    }
+    std::fs::write(a.join("sweep.json"), &original).unwrap();
+    let o = merge(&a, &b, "m");
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join("m/sweep.json")).unwrap())
+            .unwrap();
+    let first: serde_json::Value = serde_json::from_str(&original).unwrap();
+    assert_eq!(m["scenario"], first["scenario"]);
+    assert_eq!(m["sweep"], first["sweep"]);
+    assert!(!m["scenario"].as_str().unwrap().contains("team"));
+}

@@ -90,7 +90,7 @@ pub struct SitlArgs {
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub timeout_s: f64,
     /// Write the simulation's own `trace.csv`, `summary.json` and `scenario.toml` into DIR.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
 }
 
@@ -134,7 +134,7 @@ pub struct FlyArgs {
     pub allow_generic: bool,
     /// Write `trace.csv` (received positions, measurements, commands), `summary.json`,
     /// `scenario.toml` and the raw MAVLink log `mavlink.tlog` into DIR.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
     /// End the flight (commanding the --failsafe mode) after this long since the companion has
     /// control, s: on the vehicle's clock from the first measurement answered in control, on
@@ -171,7 +171,7 @@ pub struct BenchmarkArgs {
     /// The suite file (default: `suites/standard-v2.toml` of this repository).
     pub suite: Option<PathBuf>,
     /// Output directory.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: PathBuf,
     /// Comma-separated controllers (default: the suite's).
     #[arg(long, value_delimiter = ',', value_name = "NAME,...")]
@@ -197,6 +197,14 @@ pub struct ReportArgs {
     /// The HTML file to write.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+}
+
+/// Every `--out DIR`: the directory as the command creates, cleans up on an interrupt and names
+/// it, settled once as the arguments are read, before anything is created
+/// ([`isotrack_runs::cleanup::settled_dir`]: `u/b/../c` with no `u/b` is `u/c`; att53o-2).
+fn out_dir() -> impl clap::builder::TypedValueParser<Value = PathBuf> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PathBufValueParser::new().map(|p| isotrack_runs::cleanup::settled_dir(&p))
 }
 
 /// A count written canonically: decimal digits, no sign, space or leading zero (`+5` and `05`
@@ -231,7 +239,7 @@ pub struct CheckArgs {
     #[arg(long)]
     pub map: bool,
     /// Output directory of `--map` (created if missing, as `run --out`).
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
     /// The chart's kp range `LO:HI` (default: 1/100 to 100 times the scenario's kp).
     #[arg(long, value_name = "LO:HI", allow_hyphen_values = true)]
@@ -274,7 +282,7 @@ pub struct CompareArgs {
     pub gain: Vec<String>,
     /// Write `comparison.csv` and one run directory per controller (`trace.csv`,
     /// `summary.json`, `scenario.toml`) into DIR.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
 }
 
@@ -297,7 +305,7 @@ pub struct PlotArgs {
     #[arg(long, value_enum, default_value_t = ImageFormat::Png)]
     pub format: ImageFormat,
     /// Where to write `trajectory.*` and `timeseries.*` (default: the first run directory).
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
     /// For a sweep directory (one with `results.csv`): the swept key on the x axis (default: the
     /// first varied key). A vector key (`vehicle.wind_mps`) is plotted by its norm, or one
@@ -350,7 +358,7 @@ pub struct FigureOptions {
 #[derive(Debug, Args)]
 pub struct FiguresArgs {
     /// Output directory.
-    #[arg(long, value_name = "DIR", default_value = "docs/figures")]
+    #[arg(long, value_name = "DIR", default_value = "docs/figures", value_parser = out_dir())]
     pub out: PathBuf,
     /// Also write SVG versions.
     #[arg(long)]
@@ -372,7 +380,7 @@ pub struct SweepArgs {
     /// The sweep file (TOML).
     pub sweep: PathBuf,
     /// Output directory.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: PathBuf,
     /// Continue an interrupted sweep in DIR: keep the complete rows, run the rest.
     #[arg(long, conflicts_with = "force")]
@@ -399,7 +407,7 @@ pub struct MergeArgs {
     #[arg(required = true, value_name = "DIR")]
     pub dirs: Vec<PathBuf>,
     /// Merged output directory.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: PathBuf,
     /// Replace the `results.csv` of an existing sweep in `--out`.
     #[arg(long)]
@@ -488,7 +496,7 @@ pub struct RunArgs {
     pub scenario: ScenarioArgs,
     /// Write `trace.csv`, `summary.json` and the resolved `scenario.toml` into DIR (created if
     /// needed).
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", value_parser = out_dir())]
     pub out: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(long, short)]

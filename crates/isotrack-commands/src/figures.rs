@@ -231,6 +231,10 @@ fn team_figure_or_note(
 /// Plots run directories into `out` (`trajectory.*`, `timeseries.*`).
 pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>, Failure> {
     let format = st.format;
+    // Said from the start, while the runs are still being read (att53o-5: `run --plot`
+    // interrupted while its 3e6-sample trace was read back said nothing of the figures); the
+    // team figure's name is known once they are read, and the note is registered again then.
+    let early = say_figures_on_interrupt(runs, out, format, run_figure_names(format, false));
     // A team's run is its vehicles, each drawn as a run (issue 32).
     let data: Vec<RunData> = runs
         .iter()
@@ -259,7 +263,10 @@ pub fn plot_dirs(runs: &[PathBuf], st: &Style, out: &Path) -> Result<Vec<String>
     let team_drawn = runs.len() == 1
         && RunData::is_team(&runs[0])
         && isotrack_plot::TeamTracks::new(&data).is_some();
-    let _said = say_figures_on_interrupt(runs, out, format, run_figure_names(format, team_drawn));
+    // The early note gives way (an interrupt already under way keeps it, and says it alone).
+    let _said = (!isotrack_runs::cleanup::exiting())
+        .then(|| say_figures_on_interrupt(runs, out, format, run_figure_names(format, team_drawn)));
+    drop(early);
     // One run directory (a team's too: its vehicles are drawn as runs) is titled by its
     // scenario.
     let title = if runs.len() == 1 {

@@ -80,8 +80,6 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     let (_created, _lock) = lock_out_dir(&a.out)?;
     refuse_foreign_outputs(&a.out, &suite)?;
     refuse_other_suite(&a.out, &suite)?;
-    refuse_finished_benchmark(&a.out, a.resume)?;
-    let _said = say_tasks_on_interrupt(&a.out);
     let registry = Registry::builtin();
     let opts = Options {
         controllers: (!a.controllers.is_empty()).then(|| a.controllers.clone()),
@@ -90,6 +88,12 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
         cancel: None,
         save_to: Some(a.out.clone()),
     };
+    let stored = StoredTasks::read(&a.out, &suite, &registry, &opts);
+    refuse_finished_benchmark(&a.out, a.resume, Some(&stored))?;
+    if a.resume {
+        stored.note_replaced(&a.out);
+    }
+    let _said = say_tasks_on_interrupt(&a.out, stored);
     let pool = worker_pool(a.threads)?;
     let started = std::time::Instant::now();
     let progress = |i: usize, n: usize, id: &str| {
@@ -113,25 +117,121 @@ pub fn benchmark(a: &BenchmarkArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// This suite's tasks whose results a benchmark directory holds (`tasks/ID/task.json`), and
+/// what `--resume` does with them: reuses those whose digest is this run's, reruns and replaces
+/// the others (att53o-3, -7: a plain run advised `--resume` "to reuse its task results" where
+/// every digest differed, another controller set or a `suite.toml` gone, and `--resume` then
+/// replaced every task without a word).
+struct StoredTasks {
+    /// Each task of the suite with this run's digest, in the suite's order; the digest `None`
+    /// where it is not known before running (`--tune`, a task that cannot be built:
+    /// [`isotrack_league::run::task_digests`]).
+    tasks: Vec<(String, Option<String>)>,
+    /// Of the tasks stored when the command began, the ids of those `--resume` reuses and of
+    /// those it replaces (`None`: not known before running).
+    split: Option<(Vec<String>, Vec<String>)>,
+}
+
+impl StoredTasks {
+    /// What `out` holds of `suite`'s tasks for this run (`reg`, `opts`); the digests are
+    /// computed (each task's scenario loaded) only when some task is stored.
+    fn read(out: &Path, suite: &Suite, reg: &Registry, opts: &Options) -> Self {
+        let stored: Vec<&str> = suite
+            .tasks
+            .iter()
+            .map(|t| t.id.as_str())
+            .filter(|id| isotrack_league::run::task_file(out, id).is_file())
+            .collect();
+        let digests = (!stored.is_empty())
+            .then(|| isotrack_league::run::task_digests(suite, reg, opts))
+            .flatten();
+        let tasks: Vec<(String, Option<String>)> = match &digests {
+            Some(d) => d
+                .iter()
+                .map(|(id, g)| (id.clone(), Some(g.clone())))
+                .collect(),
+            None => suite.tasks.iter().map(|t| (t.id.clone(), None)).collect(),
+        };
+        let split = digests.map(|d| {
+            stored
+                .iter()
+                .map(|id| id.to_string())
+                .partition(|id| d.iter().any(|(i, g)| i == id && is_this_runs(out, id, g)))
+        });
+        Self { tasks, split }
+    }
+
+    /// Says (a note on stderr) how many of the stored tasks `--resume` reuses, and which it
+    /// replaces, when it replaces any.
+    fn note_replaced(&self, out: &Path) {
+        let Some((reused, replaced)) = &self.split else {
+            return;
+        };
+        if replaced.is_empty() {
+            return;
+        }
+        errln!(
+            "note: --resume reuses {} of the {} tasks {} holds; the results of {} ({}) are another run's (another controller set, gains, scenario, data file, suite or isotrack) and are replaced",
+            reused.len(),
+            reused.len() + replaced.len(),
+            isotrack_runs::owned::shell_quoted(out),
+            replaced.len(),
+            named_ids(replaced)
+        );
+    }
+
+    /// How many of the suite's tasks `out` holds finished for this run: a stored `task.json`
+    /// whose digest is this run's (any, where that is not known).
+    fn finished(&self, out: &Path) -> usize {
+        self.tasks
+            .iter()
+            .filter(|(id, digest)| match digest {
+                Some(g) => is_this_runs(out, id, g),
+                None => isotrack_league::run::task_file(out, id).is_file(),
+            })
+            .count()
+    }
+}
+
+/// Whether `out/tasks/ID/task.json` holds results of digest `digest` (this run's).
+fn is_this_runs(out: &Path, id: &str, digest: &str) -> bool {
+    isotrack_league::run::stored_digest(out, id).as_deref() == Some(digest)
+}
+
+/// The first few of task `ids`, for a message (`a, b, c and 7 more`).
+fn named_ids(ids: &[String]) -> String {
+    const NAMED: usize = 3;
+    let shown: Vec<String> = ids
+        .iter()
+        .take(NAMED)
+        .map(|i| isotrack_scenario::load::clip(i))
+        .collect();
+    match ids.len().saturating_sub(NAMED) {
+        0 => shown.join(", "),
+        more => format!("{} and {more} more", shown.join(", ")),
+    }
+}
+
 /// Registers the line an interrupted `benchmark --out DIR` says on exit (att48-3: it stopped
-/// silently, and nothing said that `--resume` continues): how many finished tasks DIR holds
-/// (`tasks/ID/task.json`, what `--resume` reuses), 0 included.
-fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
+/// silently, and nothing said that `--resume` continues): how many of the suite's tasks DIR
+/// holds finished for this run (`tasks/ID/task.json` of this run's digest, what `--resume`
+/// reuses: att53o-7, a stored task of another controller set, to be rerun, was counted, and so
+/// was any `task.json` under `tasks/`), 0 included.
+fn say_tasks_on_interrupt(out: &Path, stored: StoredTasks) -> isotrack_runs::cleanup::OnInterrupt {
     let out = out.to_path_buf();
     isotrack_runs::cleanup::on_interrupt(move || {
-        let n = std::fs::read_dir(out.join("tasks")).map_or(0, |d| {
-            d.flatten()
-                .filter(|e| e.path().join("task.json").is_file())
-                .count()
-        });
+        let n = stored.finished(&out);
         let q = isotrack_runs::owned::shell_quoted(&out);
         match n {
             // att51-4: before the first task finished it said nothing.
-            0 if out.is_dir() => errln!("interrupted: {q} holds 0 finished tasks"),
+            0 if out.is_dir() => errln!(
+                "interrupted: {q} holds 0 of the {} tasks finished",
+                stored.tasks.len()
+            ),
             0 => errln!("interrupted before any task finished: nothing written to {q}"),
             _ => errln!(
-                "interrupted: {q} holds {n} finished task{}; the same benchmark with `--resume` continues",
-                if n == 1 { "" } else { "s" }
+                "interrupted: {q} holds {n} of the {} tasks finished; the same benchmark with `--resume` continues",
+                stored.tasks.len()
             ),
         }
     })
@@ -143,7 +243,7 @@ fn say_tasks_on_interrupt(out: &Path) -> isotrack_runs::cleanup::OnInterrupt {
 /// holds a benchmark unless `resume` ([`refuse_finished_benchmark`]).
 pub fn open_out_dir(out: &Path, resume: bool) -> Result<crate::sweep::DirLock, Failure> {
     let (_, lock) = lock_out_dir(out)?;
-    refuse_finished_benchmark(out, resume)?;
+    refuse_finished_benchmark(out, resume, None)?;
     Ok(lock)
 }
 
@@ -171,8 +271,14 @@ fn lock_out_dir(
 /// user's own file, which `--resume` refuses too). "pass --resume" is advised only where every
 /// file there is one a benchmark writes (README "Whose file an output replaces"): a file of
 /// another name beside the benchmark's (hidden ones, the lock and temporaries, aside) is
-/// named instead. `benchmark` calls it after [`refuse_foreign_outputs`].
-fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
+/// named instead; and only where `--resume` would reuse a stored task (`stored`, when known:
+/// att53o-3, -7): where it would reuse none, the refusal says so and how to keep them.
+/// `benchmark` calls it after [`refuse_foreign_outputs`].
+fn refuse_finished_benchmark(
+    out: &Path,
+    resume: bool,
+    stored: Option<&StoredTasks>,
+) -> Result<(), Failure> {
     if resume {
         return Ok(());
     }
@@ -195,6 +301,32 @@ fn refuse_finished_benchmark(out: &Path, resume: bool) -> Result<(), Failure> {
                 quoted(o)
             ),
         ));
+    }
+    if let Some((reused, replaced)) = stored.and_then(|s| s.split.as_ref()) {
+        if reused.is_empty() && !replaced.is_empty() {
+            return Err(fail(
+                exit::CANTCREAT,
+                format!(
+                    "{} already holds a benchmark ({}) whose {} stored tasks are another run's (another controller set, gains, scenario, data file, suite or isotrack): --resume would reuse none of them and replace them all; choose another --out to keep them, or move them away",
+                    quoted(out),
+                    quoted(file),
+                    replaced.len()
+                ),
+            ));
+        }
+        if !replaced.is_empty() {
+            return Err(fail(
+                exit::CANTCREAT,
+                format!(
+                    "{} already holds a benchmark ({}): pass --resume to reuse {} of its {} stored tasks (the results of {} are another run's and would be replaced), or choose another --out",
+                    quoted(out),
+                    quoted(file),
+                    reused.len(),
+                    reused.len() + replaced.len(),
+                    named_ids(replaced)
+                ),
+            ));
+        }
     }
     Err(fail(
         exit::CANTCREAT,
@@ -357,9 +489,10 @@ fn refuse_foreign_benchmark_file(p: &Path, start: &str) -> Result<(), Failure> {
     )
 }
 
-/// Writes a finished benchmark into `out`: the leaderboard files, `index.html` and
-/// `suite.toml` (the suite `path` as run, with the gains each task's scores used; `tune`: they
-/// were tuned afresh).
+/// Writes a finished benchmark into `out`: its tasks, then the leaderboard files, `index.html`
+/// and `suite.toml` (the suite `path` as run, with the gains each task's scores used; `tune`:
+/// they were tuned afresh) put in place together, as one step an interrupt never cuts
+/// ([`write_files`]; att53o-9).
 pub fn write_outputs(
     suite: &Suite,
     path: &Path,
@@ -367,10 +500,6 @@ pub fn write_outputs(
     out: &Path,
     tune: bool,
 ) -> Result<(), Failure> {
-    write_files(result, out).map_err(bench_failure)?;
-    let html = out.join("index.html");
-    isotrack_runs::files::write_atomic(&html, isotrack_league::benchmark_page(result).as_bytes())
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", html.display())))?;
     // The suite as run: the gains every built-in law ran with recorded per task.
     let mut as_run = suite.clone();
     for (task, res) in as_run.tasks.iter_mut().zip(&result.tasks) {
@@ -399,10 +528,11 @@ pub fn write_outputs(
         path.display(),
         if tune { ", tuned afresh on the tuning seeds (--tune)" } else { "" }
     );
-    let suite_out = out.join("suite.toml");
-    isotrack_runs::files::write_atomic(&suite_out, as_run.to_toml(&header).as_bytes())
-        .map_err(|e| fail(exit::CANTCREAT, format!("{}: {e}", suite_out.display())))?;
-    Ok(())
+    let more = [
+        ("index.html", isotrack_league::benchmark_page(result)),
+        ("suite.toml", as_run.to_toml(&header)),
+    ];
+    write_files(result, out, &more).map_err(bench_failure)
 }
 
 /// `isotrack report RUN_DIR... --out report.html`.

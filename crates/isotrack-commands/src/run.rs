@@ -240,9 +240,9 @@ fn run_into_dir(
         }
         outln!(
             "wrote       {}, {}, {}",
-            out.path("trace.csv").display(),
-            out.path("summary.json").display(),
-            out.path("scenario.toml").display()
+            isotrack_runs::owned::shell_quoted(&out.path("trace.csv")),
+            isotrack_runs::owned::shell_quoted(&out.path("summary.json")),
+            isotrack_runs::owned::shell_quoted(&out.path("scenario.toml"))
         );
     }
     plot_and_note_before(args, dir, team.as_ref().is_some_and(|t| t.team.is_some()))

@@ -81,7 +81,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
         errln!("note: {note}");
     }
     let opened_at = std::time::SystemTime::now();
-    let _said = say_runs_on_interrupt(&a.out, job.shard_runs((k, n)));
+    let _said = say_runs_on_interrupt(&a.out, job.shard_runs((k, n)), a.resume);
     let out = job.open_output(&a.out, (k, n), a.resume, a.force)?;
     if a.force {
         note_figures_from_before(&a.out, opened_at);
@@ -104,7 +104,7 @@ pub fn sweep(a: &SweepArgs) -> Result<(), Failure> {
             format!("{total}")
         },
         started.elapsed().as_secs_f64(),
-        out.results.display()
+        isotrack_runs::owned::shell_quoted(&out.results)
     );
     print_tally(&report);
     let invalid = report.invalid;
@@ -157,14 +157,14 @@ fn note_figures_from_before(dir: &std::path::Path, since: std::time::SystemTime)
         .collect();
     errln!(
         "note: {} also holds {}{} from before this sweep, not this sweep's (isotrack never removes a file it may not have written): `isotrack plot {}` draws this sweep's",
-        dir.display(),
+        isotrack_runs::owned::shell_quoted(dir),
         shown.join(", "),
         if more > 0 {
             format!(" and {more} more")
         } else {
             String::new()
         },
-        dir.display()
+        isotrack_runs::owned::shell_quoted(dir)
     );
 }
 
@@ -191,11 +191,13 @@ fn print_tally(report: &SweepReport) {
 
 /// The rows (whole lines after the header) of `results.csv` at `path` when it is not the file
 /// `before` names ([`isotrack_runs::files::identity`]): a table this command put in place (a
-/// sweep's, renewed or begun, or a merge's); `None` when it is absent or still the earlier one.
-fn rows_written(path: &std::path::Path, before: Option<(u64, u64)>) -> Option<u64> {
+/// sweep's, renewed or begun, or a merge's); also when it is still that file if `continued`
+/// (`sweep --resume`: the rows it continues are held, renewed yet or not; att53o-1); `None`
+/// when it is absent or still the earlier one.
+fn rows_held(path: &std::path::Path, before: Option<(u64, u64)>, continued: bool) -> Option<u64> {
     use std::io::Read;
     let now = isotrack_runs::files::identity(path);
-    if now.is_none() || now == before {
+    if now.is_none() || (now == before && !continued) {
         return None;
     }
     let mut f = isotrack_runs::files::open_read_regular(path).ok()?;
@@ -212,10 +214,16 @@ fn rows_written(path: &std::path::Path, before: Option<(u64, u64)>) -> Option<u6
 
 /// Registers the line an interrupted `sweep --out DIR` says on exit (att51-3: it stopped
 /// silently): how many of the shard's `runs` DIR holds (the same sweep with `--resume`
-/// continues), or that it wrote nothing (its manifest goes in place whole or not at all, and a
-/// directory it created is removed while still empty).
-fn say_runs_on_interrupt(out: &std::path::Path, runs: u64) -> isotrack_runs::cleanup::OnInterrupt {
-    say_rows_on_interrupt(out, move |q, n| {
+/// continues; under `resume` the rows it continues count before its table is renewed:
+/// att53o-1, "nothing written" of a directory holding 100 resumed runs), or that it wrote
+/// nothing (its manifest goes in place whole or not at all, and a directory it created is
+/// removed while still empty).
+fn say_runs_on_interrupt(
+    out: &std::path::Path,
+    runs: u64,
+    resume: bool,
+) -> isotrack_runs::cleanup::OnInterrupt {
+    say_rows_on_interrupt(out, resume, move |q, n| {
         format!(
             "interrupted: {q} holds {n} of {runs} run{}; the same sweep with `--resume` continues",
             if runs == 1 { "" } else { "s" }
@@ -227,15 +235,17 @@ fn say_runs_on_interrupt(out: &std::path::Path, runs: u64) -> isotrack_runs::cle
 /// silently): the merged table and its manifest went in place together, or nothing was
 /// written.
 fn say_merge_on_interrupt(out: &std::path::Path) -> isotrack_runs::cleanup::OnInterrupt {
-    say_rows_on_interrupt(out, |q, n| {
+    say_rows_on_interrupt(out, false, |q, n| {
         format!("interrupted after the merge was written: {q} holds its {n} runs")
     })
 }
 
 /// The one interrupt note of `sweep` and `merge`: `held(DIR quoted, rows)` when `DIR/results.csv`
-/// is a table this command wrote ([`rows_written`]), else that nothing was written to DIR.
+/// is a table this command wrote, or the one it `continued` ([`rows_held`]), else that
+/// nothing was written to DIR.
 fn say_rows_on_interrupt(
     out: &std::path::Path,
+    continued: bool,
     held: impl Fn(&str, u64) -> String + Send + 'static,
 ) -> isotrack_runs::cleanup::OnInterrupt {
     let out = out.to_path_buf();
@@ -243,7 +253,7 @@ fn say_rows_on_interrupt(
     let before = isotrack_runs::files::identity(&results);
     isotrack_runs::cleanup::on_interrupt(move || {
         let q = isotrack_runs::owned::shell_quoted(&out);
-        match rows_written(&results, before) {
+        match rows_held(&results, before, continued) {
             Some(n) => errln!("{}", held(&q, n)),
             None => errln!("interrupted: nothing written to {q}"),
         }
@@ -258,7 +268,7 @@ pub fn merge(a: &MergeArgs) -> Result<(), Failure> {
     outln!(
         "merged {total} runs from {} directories -> {}",
         a.dirs.len(),
-        a.out.join("results.csv").display()
+        isotrack_runs::owned::shell_quoted(&a.out.join("results.csv"))
     );
     Ok(())
 }

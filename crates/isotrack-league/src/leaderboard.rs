@@ -169,25 +169,38 @@ fn csv_cell(s: &str) -> String {
     }
 }
 
-/// Writes `leaderboard.csv`, `leaderboard.md` and each task's `results.csv` and `task.json`
-/// under `dir`.
-pub fn write_files(r: &BenchResult, dir: &Path) -> Result<(), BenchError> {
+/// Writes each task's `results.csv` and `task.json` under `dir`, then the top-level files:
+/// `leaderboard.csv`, `leaderboard.md` and `more` (each a name and its text: `benchmark`'s
+/// `index.html` and `suite.toml`), put in place together as one step an interrupt never cuts
+/// ([`isotrack_runs::cleanup::whole`]): an interrupted benchmark leaves the earlier set whole
+/// or this one (att53o-9: Ctrl-C while they were written left this run's leaderboard beside
+/// the earlier run's `index.html` and `suite.toml`). The texts are made before the step, so it
+/// holds the writes only.
+pub fn write_files(r: &BenchResult, dir: &Path, more: &[(&str, String)]) -> Result<(), BenchError> {
     let io = |p: &Path, e: std::io::Error| BenchError::Io {
         path: p.display().to_string(),
         message: e.to_string(),
     };
-    let write = |p: &Path, text: &str| -> Result<(), BenchError> {
-        if let Some(parent) = p.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
-        }
-        isotrack_runs::files::write_atomic(p, text.as_bytes()).map_err(|e| io(p, e))
-    };
-    write(&dir.join("leaderboard.csv"), &leaderboard_csv(r))?;
-    write(&dir.join("leaderboard.md"), &leaderboard_md(r))?;
     for t in &r.tasks {
         write_task(t, dir)?;
     }
-    Ok(())
+    let board = [
+        ("leaderboard.csv", leaderboard_csv(r)),
+        ("leaderboard.md", leaderboard_md(r)),
+    ];
+    let top: Vec<(std::path::PathBuf, &str)> = board
+        .iter()
+        .chain(more)
+        .map(|(n, t)| (dir.join(n), t.as_str()))
+        .collect();
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    isotrack_runs::cleanup::whole(|| {
+        for (p, text) in &top {
+            // Never through a link nor into a FIFO: `isotrack_runs::files::write_atomic`.
+            isotrack_runs::files::write_atomic(p, text.as_bytes()).map_err(|e| io(p, e))?;
+        }
+        Ok(())
+    })
 }
 
 /// Writes one finished task's `tasks/ID/results.csv` and `tasks/ID/task.json` under `dir`

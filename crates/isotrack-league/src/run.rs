@@ -772,6 +772,36 @@ fn task_digest(
         .collect::<String>()
 }
 
+/// Each task of `suite` with the digest its results get in this run (`task.json`'s `digest`:
+/// `--resume` reuses a stored task only when it is this one, [`run_task`]), known before any
+/// run: what a front end tells the user `--resume` would reuse and replace (att53o-3, -7:
+/// `--resume` was advised where it reused nothing). `None` under `o.tune` (the digest holds the
+/// gains the tuning finds) or when a task cannot be built (the run then says why).
+pub fn task_digests(suite: &Suite, reg: &Registry, o: &Options) -> Option<Vec<(String, String)>> {
+    if o.tune {
+        return None;
+    }
+    let controllers = controllers_of(suite, reg, o).ok()?;
+    suite
+        .tasks
+        .iter()
+        .map(|t| {
+            let base = task_base(suite, t).ok()?;
+            let gains = task_gains(suite, t, &base, reg, &controllers, o).ok()?;
+            Some((
+                t.id.clone(),
+                task_digest(suite, t, &controllers, &gains, &base),
+            ))
+        })
+        .collect()
+}
+
+/// The digest of the task results stored in `dir/tasks/ID/task.json`, when the file reads as a
+/// task's results (as `--resume` reads it).
+pub fn stored_digest(dir: &Path, id: &str) -> Option<String> {
+    read_task(dir, id).map(|t| t.digest)
+}
+
 fn read_task(dir: &Path, id: &str) -> Option<TaskResult> {
     // A task file is a few KB; anything that is not a regular file is not one of ours.
     let text = isotrack_fields::io::read_text_limited(&task_file(dir, id), 64 << 20).ok()?;

@@ -77,6 +77,46 @@ pub fn create_dir_all(dir: &Path) -> std::io::Result<Vec<Pending>> {
     Ok(created)
 }
 
+/// Output directory `dir` as a command creates, cleans up and names it, settled once before
+/// anything is created: a `..` in the part of `dir` not there yet (`u/b/../c` with no `u/b`,
+/// `x/../u/b` with no `x`) is resolved in the text, so that [`create_dir_all`] never makes a
+/// level only to pass through it (att53o-2: it made `u/b`, the interrupt removed it as empty,
+/// and the note then read `u/b/../c` through the missing `u/b` and said "nothing written" of
+/// a directory holding the rows). The part that exists is kept as written (the system
+/// resolves it: a link there is followed as before, never replaced by its target's path), and
+/// `dir` is returned as it is when its missing part has no `..`.
+pub fn settled_dir(dir: &Path) -> PathBuf {
+    use std::path::Component;
+    let there = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .find(|p| std::fs::symlink_metadata(p).is_ok());
+    let (mut settled, missing) = match there {
+        Some(p) => (p.to_path_buf(), dir.strip_prefix(p).unwrap_or(dir)),
+        None => (PathBuf::new(), dir),
+    };
+    if !missing.components().any(|c| c == Component::ParentDir) {
+        return dir.to_path_buf();
+    }
+    let mut levels: Vec<&std::ffi::OsStr> = Vec::new();
+    for c in missing.components() {
+        match c {
+            Component::Normal(name) => levels.push(name),
+            // A level not there yet: `NAME/..` is where NAME would be made.
+            Component::ParentDir if levels.pop().is_some() => {}
+            // Above the missing part: the existing part's parent, which the system resolves.
+            Component::ParentDir => settled.push(".."),
+            Component::CurDir | Component::RootDir | Component::Prefix(_) => {}
+        }
+    }
+    settled.extend(levels);
+    if settled.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        settled
+    }
+}
+
 fn register_path(path: &Path, dir: bool) -> Pending {
     let id = NEXT.fetch_add(1, Ordering::Relaxed);
     PENDING
@@ -355,6 +395,30 @@ mod tests {
         let again = create_dir_all(&c.join("d")).unwrap();
         assert_eq!(listed(), vec![c.join("d")]);
         drop(again);
+    }
+
+    /// att53o-2: a `..` through a level not there yet is resolved in the text (the directory
+    /// the system would reach once the level were made), one above the missing part is kept
+    /// for the system; a path whose missing part has no `..` is returned as written, and so
+    /// is the existing part (`u/./b/..` kept: the system resolves it).
+    #[test]
+    fn a_parent_step_through_a_missing_level_is_settled() {
+        let dir = tempfile::tempdir().unwrap();
+        let u = dir.path().join("u");
+        std::fs::create_dir(&u).unwrap();
+        std::fs::create_dir(u.join("e")).unwrap();
+        let s = |rel: &str| settled_dir(&dir.path().join(rel));
+        let at = |rel: &str| dir.path().join(rel);
+        assert_eq!(s("u/b/../c"), at("u/c"));
+        assert_eq!(s("x/../u/b"), at("u/b"));
+        assert_eq!(s("u/b/c/../../d"), at("u/d"));
+        assert_eq!(s("u/b/../../z"), at("u/../z"));
+        assert_eq!(s("u/b/.."), at("u"));
+        // Nothing to settle: as written, byte for byte.
+        assert_eq!(s("u/b/c"), at("u/b/c"));
+        assert_eq!(s("u/./b//c"), at("u/./b//c"));
+        assert_eq!(s("u/e/../c"), at("u/e/../c"));
+        assert_eq!(settled_dir(Path::new("n0ne/..")), PathBuf::from("."));
     }
 
     /// A [`whole`] step marks its thread for its length (a step inside it is part of it), and

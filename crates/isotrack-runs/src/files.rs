@@ -118,7 +118,7 @@ pub fn refuse_non_regular(path: &Path) -> std::io::Result<()> {
     match std::fs::symlink_metadata(path) {
         Ok(m) if !m.file_type().is_file() => Err(std::io::Error::other(format!(
             "{} exists and is not a regular file (a link, FIFO, directory or device): refusing to write it",
-            path.display()
+            crate::owned::shell_quoted(path)
         ))),
         _ => Ok(()),
     }

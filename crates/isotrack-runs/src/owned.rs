@@ -287,8 +287,16 @@ pub fn remove_table(path: &Path) -> std::io::Result<bool> {
 /// its own `error:` line; att39-7: `my run;touch PWNED` was printed bare, and a
 /// line break in it forged a line of output): as it is when every character is plain, else in
 /// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
+///
+/// A relative path whose first character is `-` is named `./-x` (att53o-8: `isotrack plot -x`,
+/// the command a note gave, was read as an option).
 pub fn shell_quoted(path: &Path) -> String {
     let s = path.to_string_lossy();
+    let s = if s.starts_with('-') {
+        std::borrow::Cow::Owned(format!("./{s}"))
+    } else {
+        s
+    };
     let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
     if !s.is_empty() && s.chars().all(plain) {
         return s.into_owned();
@@ -323,6 +331,9 @@ mod tests {
             "'my run;touch PWNED'"
         );
         assert_eq!(shell_quoted(Path::new("it's")), "'it'\\''s'");
+        assert_eq!(shell_quoted(Path::new("-x")), "./-x");
+        assert_eq!(shell_quoted(Path::new("-a b")), "'./-a b'");
+        assert_eq!(shell_quoted(Path::new("a/-x")), "a/-x");
         assert_eq!(
             shell_quoted(Path::new("inj\u{1b}[2J\nnote")),
             "$'inj\\x1b[2J\\x0anote'"

@@ -121,7 +121,7 @@ pub fn lock_output_dir(dir: &Path, command: &str) -> Result<DirLock, Failure> {
     let cant = |e: std::io::Error| {
         fail(
             exit::CANTCREAT,
-            format!("cannot lock {}: {e}", path.display()),
+            format!("cannot lock {}: {e}", crate::owned::shell_quoted(&path)),
         )
     };
     // A holder removes the file as it lets go (DirLock's drop): a lock taken on a file no
@@ -148,7 +148,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
     let cant = |e: std::io::Error| {
         fail(
             exit::CANTCREAT,
-            format!("cannot lock {}: {e}", path.display()),
+            format!("cannot lock {}: {e}", crate::owned::shell_quoted(path)),
         )
     };
     // Never through a link nor into a FIFO: a `.isotrack.lock` that is a link to a user's file
@@ -190,7 +190,7 @@ fn lock_once(dir: &Path, path: &Path, command: &str) -> Result<Option<DirLock>, 
                 exit::CANTCREAT,
                 format!(
                     "{}: {holder} is writing this directory (it holds the lock on {LOCK_FILE}); wait for it to end, or use another --out",
-                    dir.display()
+                    crate::owned::shell_quoted(dir)
                 ),
             ))
         }
@@ -211,7 +211,7 @@ pub fn check_not_being_written(dir: &Path) -> Result<(), Failure> {
                 exit::CANTCREAT,
                 format!(
                     "{}: {LOCK_FILE} is not a regular file (a link, FIFO, directory or device); remove it",
-                    dir.display()
+                    crate::owned::shell_quoted(dir)
                 ),
             ))
         }
@@ -228,7 +228,7 @@ pub fn check_not_being_written(dir: &Path) -> Result<(), Failure> {
                 exit::CANTCREAT,
                 format!(
                     "{}: {holder} is still writing this directory (it holds the lock on {LOCK_FILE}); merge once it has ended",
-                    dir.display()
+                    crate::owned::shell_quoted(dir)
                 ),
             ))
         }

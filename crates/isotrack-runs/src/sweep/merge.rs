@@ -50,7 +50,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, force: bool) -> Result<u64, Failure> 
             exit::CANTCREAT,
             format!(
                 "{} exists: pass --force to replace it, or another --out",
-                out_results.display()
+                crate::owned::shell_quoted(&out_results)
             ),
         ));
     }
@@ -283,6 +283,7 @@ fn check_same_sweep(
             ),
         )),
         Some((_, _, m0)) => {
+            check_same_names(d, &m, &dirs[0], m0)?;
             let first = recorded_files(m0);
             let against = format!("in {}'s", dirs[0].display());
             check_data_files(d, &m, &first, &against)
@@ -292,6 +293,52 @@ fn check_same_sweep(
             Ok(())
         }
     }
+}
+
+/// The keys of a shard's `sweep.json` that name its sweep file and base scenario, copied into
+/// the merged manifest from the first shard: every shard must name the same files.
+const NAMING_KEYS: [&str; 2] = ["sweep", "scenario"];
+
+/// Refuses (65, naming the file and the key) shard `d` whose manifest `m` names another sweep
+/// file or base scenario ([`NAMING_KEYS`]) than the first shard's (`first`, manifest `m0`): two
+/// paths that differ as text and do not name one file (att53o-10: an edited `scenario` or
+/// `sweep` was copied into the merged manifest without a check, which then named another
+/// scenario for every row). The digest, which every shard must share, covers the sweep file's
+/// and the base scenario's contents, not these names.
+fn check_same_names(
+    d: &Path,
+    m: &serde_json::Value,
+    first: &Path,
+    m0: &serde_json::Value,
+) -> Result<(), Failure> {
+    for key in NAMING_KEYS {
+        let (here, there) = (m.get(key), m0.get(key));
+        let same = match (
+            here.and_then(serde_json::Value::as_str),
+            there.and_then(serde_json::Value::as_str),
+        ) {
+            (Some(a), Some(b)) => a == b || same_file(Path::new(a), Path::new(b)),
+            _ => here == there,
+        };
+        if !same {
+            let shown = |v: Option<&serde_json::Value>| {
+                v.map_or("none".to_string(), |v| {
+                    isotrack_scenario::load::clip(&v.to_string())
+                })
+            };
+            return Err(fail(
+                exit::DATAERR,
+                format!(
+                    "{}: `{key}` is {} where {} has {}: the shards of one sweep name the same files (edited since?); run that shard again, or restore its sweep.json",
+                    crate::owned::shell_quoted(&d.join("sweep.json")),
+                    shown(here),
+                    crate::owned::shell_quoted(&first.join("sweep.json")),
+                    shown(there)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses runs that appear more than once (`dupes`) or are missing from the sorted `rows` of

@@ -181,7 +181,7 @@ impl SweepJob {
                 exit::CANTCREAT,
                 format!(
                     "{} exists: pass --resume to continue that sweep, --force to start over, or another --out",
-                    results.display()
+                    crate::owned::shell_quoted(&results)
                 ),
             ));
         }
