@@ -1903,8 +1903,9 @@ fn slowest_line(sp: &SpacingLoopReport) -> String {
         _ => "",
     };
     format!(
-        "  slowest mode (m = {}): time constant {sampled} sampled (-T/ln rho), {word}{} continuous (m = 1: 1/(k_v c lambda_1)){bound}",
-        sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
+        "  slowest mode{}: time constant {sampled} sampled (-T/ln rho), {word}{} continuous (m = 1: 1/(k_v c lambda_1)){bound}",
+        sp.slowest_mode_m
+            .map_or(String::new(), |m| format!(" (m = {m})")),
         num(sp.slowest_time_constant_continuous_s, "none (does not decay)")
     )
 }
