@@ -85,7 +85,9 @@ pub struct SpacingLoopReport {
     pub k_v_per_s: Option<f64>,
     /// The ranging period `T = 1/team.ranging.rate_hz`, s.
     pub period_s: f64,
-    /// `team.ranging.delay_s`, s.
+    /// `team.ranging.delay_s`, s; 0 for `arc_reference` (att53t-7: the engine reads its true
+    /// arc gaps at the ranging steps themselves, without the ranging unit's delay, noise or
+    /// losses).
     pub delay_s: f64,
     /// The delay's whole periods `q` (`d = (q + f) T`; null when past the polynomial's degree
     /// cap).
@@ -129,7 +131,8 @@ pub struct SpacingLoopReport {
     pub eigenvalue_bounds: bool,
     /// How the two time constants above read (absent: the linear loop's values):
     /// `lower_bound` (the conservative slope `c = 1` off a known circle makes every `mu` its
-    /// largest, so the loop decays no faster, att50-6), `upper_bound` (the continuous one from
+    /// largest, so the loop decays no faster, att50-6; the sampled one only without a delay and
+    /// with every gain per period at most 1, else null, att53t-6), `upper_bound` (the continuous one from
     /// the lower bound of the smallest `mu`, the sampled one not computed, att50-13),
     /// `one_sided` (every vehicle on the same envelope bound at the equilibrium, att51-7: the
     /// one-sided law's slowest piece, one vehicle cut, `mu = c (2 - 2 cos(pi/N))`) or
@@ -142,6 +145,24 @@ pub struct SpacingLoopReport {
     /// one-sided and `time_constants` says what is left of the linear loop's (absent when none).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub one_sided_vehicles: Vec<usize>,
+    /// att53t-4: whether `modes`, `k_v*` and `stable` are the one-sided law's pieces, not the
+    /// free ring's: every vehicle ON the same envelope bound at the equilibrium, one slope
+    /// (`time_constants = "one_sided"`). A correction that asks a vehicle past the bound is
+    /// cut, so only patterns whose free vehicles all move one way survive: the slowest piece is
+    /// the one-pin path's first mode (`lambda = 2 - 2 cos(pi/N)`), the fastest a lone free
+    /// vehicle between two cut ones (`mu = c_{i-1} + c_i = 2c`, `lambda = 2`), so
+    /// `k_v* = g*/(T 2c)`: the ring's alternating mode (`lambda = 4`) needs half the vehicles
+    /// to move the cut way and cannot grow.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub one_sided_stability: bool,
+    /// att53t-10: the vehicles of `one_sided_vehicles` are near their bound, not on it: the
+    /// least room from the equilibrium's command to that bound, m/s (absent when on it). It is
+    /// under the largest correction the deployment asks (`k_v` times the largest deviation of a
+    /// vehicle's range difference from the equilibrium's), so the decay from the deployment is
+    /// one-sided until every correction fits in the room, i.e. a range difference within
+    /// `room/k_v` of the equilibrium's, and the linear loop's below that.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub one_sided_room_mps: Option<f64>,
     /// Past `k_v*` (the linear loop unstable; null otherwise): how far the speed saturation lets
     /// a gap swing about the even spacing, m. The unstable mode grows until the commanded
     /// speeds saturate; then each vehicle runs at `team.v_min_mps` or `team.v_max_mps`, so a
@@ -282,6 +303,16 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         rep.note = why;
         return rep;
     }
+    let stuck = equilibrium::pinned(team);
+    if stuck.len() == n {
+        // att53t-9: no free vehicle, so no mode to list and no time constant.
+        rep.note = format!(
+            "no free vehicle: {} (no speed room), so {} has no speed to command but v0 and there is no loop to linearise: no modes, k_v* or time constants; the gaps stay as deployed (the verdict judges the deployment)",
+            equilibrium::pinned_keys(team, &stuck),
+            team.law.name()
+        );
+        return rep;
+    }
     let (c, source) = range_slope(s, &team.law, n);
     rep.range_slope = Some(c);
     rep.range_slope_source = Some(source);
@@ -332,7 +363,8 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         .map(|lmax| g_star / (period_s * c * lmax))
         .filter(|k| k.is_finite());
     check_spacing_modes(&mut rep, k_v, c, &spectrum);
-    time_constant_caveats(&mut rep, team, &pins, &slopes, &spectrum);
+    let reach = deployed_correction_mps(s, l, team, &rep);
+    time_constant_caveats(&mut rep, team, &pins, &slopes, &spectrum, reach);
     if rep.stable == Some(false) {
         note_saturated_gaps(&mut rep, s, team);
     }
@@ -355,7 +387,10 @@ fn fixed_vehicles(team: &TeamSpec, rep: &SpacingLoopReport) -> (Vec<usize>, Vec<
 /// range halt; nothing applicable yet.
 fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     let period_s = 1.0 / team.ranging.rate_hz;
-    let delay_s = team.ranging.delay_s;
+    let delay_s = match team.law {
+        SpacingLaw::ArcReference { .. } => 0.0,
+        _ => team.ranging.delay_s,
+    };
     let split = split_delay(period_s, delay_s);
     SpacingLoopReport {
         applicable: false,
@@ -379,6 +414,8 @@ fn spacing_report_unchecked(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLo
         eigenvalue_bounds: false,
         time_constants: None,
         one_sided_vehicles: vec![],
+        one_sided_stability: false,
+        one_sided_room_mps: None,
         saturated_gap_amplitude_m: None,
         saturated_gap_cv_max: None,
         range_halt: range_halt(s, l, team),
@@ -528,16 +565,37 @@ fn time_constant_caveats(
     pins: &[bool],
     slopes: &[f64],
     spectrum: &linearised::LoopSpectrum,
+    reach_mps: Option<f64>,
 ) {
     let speed = match rep.shifted_equilibrium.as_ref() {
         Some(eq) => eq.speed_mps,
         None => equilibrium::equilibrium_speed(team),
     };
-    rep.one_sided_vehicles = equilibrium::on_bound(team, speed, pins);
+    rep.one_sided_vehicles = equilibrium::on_bound(team, speed, pins, 0.0);
+    // att53t-10: near a bound (its room under the deployment's largest correction) the decay
+    // from the deployment is one-sided too, until the corrections fit in the room. Only without
+    // vehicles fixed in the linearisation: then the corrections sum to zero round the ring, so
+    // a large one each way meets both sides; with pins they need not, and the deployment's
+    // largest correction does not say which bound the transient meets.
+    let mut reach = 0.0;
+    let free = pins.iter().all(|&p| !p);
+    if let (true, true, Some(r)) = (free, rep.one_sided_vehicles.is_empty(), reach_mps) {
+        rep.one_sided_vehicles = equilibrium::on_bound(team, speed, pins, r);
+        reach = r;
+        rep.one_sided_room_mps = (!rep.one_sided_vehicles.is_empty()).then(|| {
+            rep.one_sided_vehicles
+                .iter()
+                .map(|&i| {
+                    let e = team.speeds(i);
+                    (e.max_mps - speed).min(speed - e.min_mps)
+                })
+                .fold(f64::INFINITY, f64::min)
+        });
+    }
     rep.eigenvalue_bounds = !spectrum.exact;
     let conservative = rep.range_slope_source == Some("conservative");
     rep.time_constants = if !rep.one_sided_vehicles.is_empty() {
-        one_sided_time_constants(rep, team, speed, slopes)
+        one_sided_time_constants(rep, team, speed, slopes, reach)
     } else if conservative && !spectrum.exact {
         Some("not_applicable")
     } else if !spectrum.exact {
@@ -551,6 +609,14 @@ fn time_constant_caveats(
         rep.slowest_mode_m = None;
         rep.slowest_time_constant_s = None;
         rep.slowest_time_constant_continuous_s = None;
+    }
+    // att53t-6: c = 1 makes every gain its largest; a sampled mode's radius falls with its gain
+    // only while it does not overshoot (no delay, g <= 1: rho = 1 - g), so only then is the
+    // sampled time constant at c = 1 a lower bound too. Otherwise it is none: not given.
+    let fastest = rep.k_v_per_s.unwrap_or(0.0) * rep.lambda_max.unwrap_or(0.0) * rep.period_s;
+    if rep.time_constants == Some("lower_bound") && (rep.delay_s > 0.0 || fastest > 1.0) {
+        rep.slowest_mode_m = None;
+        rep.slowest_time_constant_s = None;
     }
 }
 
@@ -567,9 +633,10 @@ fn one_sided_time_constants(
     team: &TeamSpec,
     speed: f64,
     slopes: &[f64],
+    reach_mps: f64,
 ) -> Option<&'static str> {
     let n = team.count();
-    let same = equilibrium::on_one_bound(team, speed, &rep.one_sided_vehicles);
+    let same = equilibrium::on_one_bound(team, speed, &rep.one_sided_vehicles, reach_mps);
     let (Some(k_v), Some(c)) = (rep.k_v_per_s, rep.range_slope) else {
         return Some("not_applicable");
     };
@@ -593,7 +660,40 @@ fn one_sided_time_constants(
     rep.slowest_mode_m = None;
     rep.slowest_time_constant_s = rho.filter(|r| *r < 1.0).map(|r| -period_s / r.ln());
     rep.slowest_time_constant_continuous_s = Some(1.0 / (k_v * c * mu)).filter(|t| t.is_finite());
+    if rep.one_sided_room_mps.is_none() {
+        // ON the bound (not near it): no linear tail, the pieces decide the stability too.
+        one_sided_stability(rep, k_v, c, [mu, 2.0 * slopes[0] / c]);
+    }
     Some("one_sided")
+}
+
+/// att53t-4: the one-sided law's stability from its pieces ([`SpacingLoopReport::
+/// one_sided_stability`]): `lambdas` the slowest piece's (the one-pin path's first mode) and
+/// the fastest's (a lone free vehicle between two cut ones), over `c`. Replaces the free ring's
+/// modes, `k_v*` and `stable` in `rep`.
+fn one_sided_stability(rep: &mut SpacingLoopReport, k_v: f64, c: f64, lambdas: [f64; 2]) {
+    let (period_s, delay_s) = (rep.period_s, rep.delay_s);
+    let gain = |lambda: f64| k_v * c * lambda * period_s;
+    rep.modes = lambdas
+        .iter()
+        .enumerate()
+        .map(|(k, &lambda)| SpacingMode {
+            m: k + 1,
+            lambda,
+            gain_per_period: gain(lambda),
+            spectral_radius: spacing_mode_spectral_radius(gain(lambda), period_s, delay_s),
+            stable: spacing_mode_stable(gain(lambda), period_s, delay_s),
+        })
+        .collect();
+    rep.all_modes_listed = false;
+    rep.lambda_min = Some(lambdas[0]);
+    rep.lambda_max = Some(lambdas[1]);
+    rep.max_stable_k_v_per_s = rep
+        .max_gain_per_period
+        .map(|g| g / (period_s * c * lambdas[1]))
+        .filter(|k| k.is_finite());
+    rep.stable = Some(rep.modes.iter().all(|m| m.stable));
+    rep.one_sided_stability = true;
 }
 
 /// An unstable spacing loop: the gaps' swing once the speeds saturate (its amplitude, and its
@@ -617,9 +717,40 @@ fn note_saturated_gaps(rep: &mut SpacingLoopReport, s: &Scenario, team: &TeamSpe
 /// The effects the linear spacing loop leaves out, each naming its key.
 fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> Vec<String> {
     let r = &team.ranging;
-    let halt = rep.range_halt.as_ref();
     let mut out = vec![saturation_note(team, rep)];
     out.extend(unequal_speeds_note(team, rep));
+    if let SpacingLaw::ArcReference { .. } = team.law {
+        // att53t-7: the engine's arc_reference reads the true arc gaps at the ranging steps.
+        let lossy = r.noise_std_m > 0.0 || r.dropout_probability > 0.0;
+        if r.delay_s > 0.0 || lossy || r.max_range_m.is_finite() {
+            out.push(format!(
+                "team.ranging.delay_s = {}, noise_std_m = {}, dropout_probability = {}, max_range_m = {}: arc_reference reads the true arc gaps at the ranging steps, without the ranging unit's delay, noise, losses or range limit, so the loop above is the delay-free one and none of them acts",
+                Echo(r.delay_s),
+                Echo(r.noise_std_m),
+                Echo(r.dropout_probability),
+                Echo(r.max_range_m)
+            ));
+        }
+    } else {
+        ranging_notes(team, rep, &mut out);
+    }
+    if let RingMode::Discover(d) = team.ring {
+        out.push(format!(
+            "team.ring = \"discovered\": the law starts after the discovery ({} s of settling and {} probe slots of {} s){}",
+            Num(d.settle_s),
+            n,
+            Num(d.probe_s),
+            equilibrium::probe_cut_note(team).map_or(String::new(), |w| format!("; {w}"))
+        ));
+    }
+    out
+}
+
+/// [`spacing_not_modelled`]'s lines on the ranging unit (not `arc_reference`, which reads true
+/// arc gaps): noise, dropouts and a finite `max_range_m`, each naming its key.
+fn ranging_notes(team: &TeamSpec, rep: &SpacingLoopReport, out: &mut Vec<String>) {
+    let r = &team.ranging;
+    let halt = rep.range_halt.as_ref();
     if r.noise_std_m > 0.0 {
         out.push(format!(
             "team.ranging.noise_std_m = {} (noise moves the speeds about the loop's equilibrium; it does not change its stability)",
@@ -643,16 +774,6 @@ fn spacing_not_modelled(team: &TeamSpec, n: usize, rep: &SpacingLoopReport) -> V
             ));
         }
     }
-    if let RingMode::Discover(d) = team.ring {
-        out.push(format!(
-            "team.ring = \"discovered\": the law starts after the discovery ({} s of settling and {} probe slots of {} s){}",
-            Num(d.settle_s),
-            n,
-            Num(d.probe_s),
-            equilibrium::probe_cut_note(team).map_or(String::new(), |w| format!("; {w}"))
-        ));
-    }
-    out
 }
 
 /// "vehicle 3" or "vehicles 0, 2" (listed order).
@@ -738,18 +859,9 @@ fn unequal_speeds_note(team: &TeamSpec, rep: &SpacingLoopReport) -> Option<Strin
         ),
         None => format!("the team moves at the mean v0 = {} m/s", Num(mean)),
     };
-    let even = TeamMetricsConfig::default().even_gap_cv;
-    let evenness = if pinned.len() >= 2 {
-        format!(
-            "; with two or more vehicles of no speed room the verdict also judges that equilibrium's evenness (the arcs between them are the deployment's, att46-7): a gap CV above {} fails",
-            Num(even)
-        )
-    } else {
-        String::new()
-    };
     let solved = rep.shifted_equilibrium.as_ref().is_some_and(|e| e.exists());
     Some(format!(
-        "team.vehicles: unequal nominal speeds ({} to {} m/s) move the loop's equilibrium: {speed} and vehicle i's range ahead exceeds its range behind by (V - v0_i)/k_v, for every vehicle whose command stays within its own envelope (one pinned, or saturated at the bound that sets V, flies V and takes up the rest); where that equilibrium is solved (a known circle) the modes are linearised there, with each gap's own chord slope; `holds` then claims that the loop converges to that equilibrium ({}), not that the gaps even out{evenness}",
+        "team.vehicles: unequal nominal speeds ({} to {} m/s) move the loop's equilibrium: {speed} and vehicle i's range ahead exceeds its range behind by (V - v0_i)/k_v, for every vehicle whose command stays within its own envelope (one pinned, or saturated at the bound that sets V, flies V and takes up the rest); where that equilibrium is solved (a known circle) the modes are linearised there, with each gap's own chord slope; `holds` then claims that the loop converges to that equilibrium ({}), not that the gaps even out, with any number of vehicles of no speed room (att50-10: one rule)",
         Echo(nominal[0]),
         Echo(nominal[nominal.len() - 1]),
         if solved {
@@ -1461,6 +1573,67 @@ fn listed_ring_out_of_order(s: &Scenario, l: &Law, team: &TeamSpec) -> Option<St
     })
 }
 
+/// The arc gaps (m, listed order, each vehicle's ahead) of the equilibrium the loop settles at
+/// and of the deployment, on the circle the law measures (the isoline's for `arc_reference`,
+/// else the circle flown, whose chords are the ranges; its radius first): even spacing with one
+/// nominal speed, else the solved shifted equilibrium. `None` off a known circle, where the
+/// equilibrium is not known (not solved, or vehicles with no speed room) or a start is off it.
+fn settled_and_deployed_gaps(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    if !equilibrium::pinned(team).is_empty() {
+        return None;
+    }
+    let circle = s.team_arc()?;
+    let n = team.count();
+    let radius = match team.law {
+        SpacingLaw::ArcReference { .. } => circle.radius_m,
+        _ => flown_circle_radius_m(s, l, circle),
+    };
+    let tau = std::f64::consts::TAU;
+    let settled: Vec<f64> = match &sp.shifted_equilibrium {
+        Some(eq) if eq.exists() => match team.law {
+            SpacingLaw::ArcReference { .. } => eq.ranges_m.clone(),
+            _ => eq
+                .ranges_m
+                .iter()
+                .map(|r| 2.0 * radius * (r / (2.0 * radius)).clamp(-1.0, 1.0).asin())
+                .collect(),
+        },
+        Some(_) => return None,
+        None if team.nominal_speeds_mps().len() == 1 => vec![tau * radius / n as f64; n],
+        None => return None,
+    };
+    let deployed = deployed_gaps_ahead(s, l, team, circle, radius)?;
+    Some((radius, settled, deployed))
+}
+
+/// att53t-10: the largest correction the deployment asks of a vehicle against the equilibrium's
+/// command, `k_v max_i |(r_i - r_{i-1}) - (r_i - r_{i-1})_eq|` (ranges the chords of the
+/// [`settled_and_deployed_gaps`], arc gaps for `arc_reference`), m/s; `None` where those are not
+/// known.
+fn deployed_correction_mps(
+    s: &Scenario,
+    l: &Law,
+    team: &TeamSpec,
+    sp: &SpacingLoopReport,
+) -> Option<f64> {
+    let k_v = sp.k_v_per_s?;
+    let (radius, settled, deployed) = settled_and_deployed_gaps(s, l, team, sp)?;
+    let measure = |g: f64| match team.law {
+        SpacingLaw::ArcReference { .. } => g,
+        _ => 2.0 * radius * (g / (2.0 * radius)).sin(),
+    };
+    let n = settled.len();
+    let diff = |g: &[f64], i: usize| measure(g[i]) - measure(g[(i + n - 1) % n]);
+    (0..n)
+        .map(|i| k_v * (diff(&deployed, i) - diff(&settled, i)).abs())
+        .reduce(f64::max)
+}
+
 /// att50-4: the close approach on the way to the equilibrium, not only at it. Past a gain per
 /// ranging period `g = k_v mu_max T` of 1 (the fastest mode's) each held sample overshoots the
 /// equilibrium by `g - 1` of the remaining error (`x_{j+1} = (1 - g) x_j`), so the first
@@ -1481,32 +1654,11 @@ fn first_sample_overshoot(
         .iter()
         .map(|m| m.gain_per_period)
         .fold(f64::NEG_INFINITY, f64::max);
-    if g.is_nan() || g <= 1.0 || !equilibrium::pinned(team).is_empty() {
+    if g.is_nan() || g <= 1.0 {
         return None;
     }
-    let circle = s.team_arc()?;
-    let n = team.count();
-    // Arc gaps in m on the circle the law measures: the isoline's for arc_reference, else the
-    // circle flown (ranges are its chords).
-    let radius = match team.law {
-        SpacingLaw::ArcReference { .. } => circle.radius_m,
-        _ => flown_circle_radius_m(s, l, circle),
-    };
-    let tau = std::f64::consts::TAU;
-    let settled: Vec<f64> = match &sp.shifted_equilibrium {
-        Some(eq) if eq.exists() => match team.law {
-            SpacingLaw::ArcReference { .. } => eq.ranges_m.clone(),
-            _ => eq
-                .ranges_m
-                .iter()
-                .map(|r| 2.0 * radius * (r / (2.0 * radius)).clamp(-1.0, 1.0).asin())
-                .collect(),
-        },
-        Some(_) => return None,
-        None if team.nominal_speeds_mps().len() == 1 => vec![tau * radius / n as f64; n],
-        None => return None,
-    };
-    let error = deployed_gaps_ahead(s, l, team, circle, radius)?
+    let (_, settled, deployed) = settled_and_deployed_gaps(s, l, team, sp)?;
+    let error = deployed
         .iter()
         .zip(&settled)
         .map(|(g, eq_gap)| (g - eq_gap).abs())
@@ -1575,7 +1727,7 @@ fn team_verdict(
                 Echo(sp.k_v_per_s.unwrap_or(0.0)),
                 sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
                 Echo(team.ranging.rate_hz),
-                Echo(team.ranging.delay_s),
+                Num(sp.delay_s),
                 Echo(team.speed_envelope_mps().0),
                 Echo(team.speed_envelope_mps().1),
                 if team.nominal_speeds_mps().len() == 1 {
@@ -1713,8 +1865,15 @@ fn slowest_line(sp: &SpacingLoopReport) -> String {
     };
     let num = |x: Option<f64>, none: &str| x.map_or(none.to_string(), |v| format!("{} s", Num(v)));
     if sp.time_constants == Some("one_sided") {
+        let near = sp.one_sided_room_mps.map_or(String::new(), |room| {
+            format!(
+                "; they are near the bound, not on it: the room {} m/s is under the largest correction the deployment asks, so the decay from the deployment is one-sided until every range difference is within room/k_v = {} m of the equilibrium's, and the linear loop's (the modes above) below that",
+                Num(room),
+                Num(room / sp.k_v_per_s.unwrap_or(f64::NAN))
+            )
+        });
         return format!(
-            "  slowest mode (one-sided): time constant {} sampled, {} continuous (1/(k_v c (2 - 2 cos(pi/N)))): {} fly at the same envelope bound at the equilibrium, so each can move one way only and a correction asking it past the bound is cut: the slowest pattern has one vehicle cut (flying the team's speed, a pin) and the rest moving, the one-pin path's first mode, not the ring's m = 1",
+            "  slowest mode (one-sided): time constant {} sampled, {} continuous (1/(k_v c (2 - 2 cos(pi/N)))): {} fly at the same envelope bound at the equilibrium, so each can move one way only and a correction asking it past the bound is cut: the slowest pattern has one vehicle cut (flying the team's speed, a pin) and the rest moving, the one-pin path's first mode, not the ring's m = 1{near}",
             num(sp.slowest_time_constant_s, "none (does not decay)"),
             num(sp.slowest_time_constant_continuous_s, "none (does not decay)"),
             vehicles()
@@ -1733,9 +1892,9 @@ fn slowest_line(sp: &SpacingLoopReport) -> String {
     let (sampled, word) = match sp.time_constants {
         Some("upper_bound") => ("not computed past the dense limit".to_string(), "at most "),
         Some("lower_bound") => (
-            format!(
-                "at least {}",
-                num(sp.slowest_time_constant_s, "none (does not decay)")
+            sp.slowest_time_constant_s.map_or(
+                "not bounded by c = 1 (with a delay, or a gain per period past 1, a sampled mode overshoots and a smaller gain can decay slower or faster)".to_string(),
+                |t| format!("at least {} s", Num(t)),
             ),
             "at least ",
         ),
@@ -1747,8 +1906,9 @@ fn slowest_line(sp: &SpacingLoopReport) -> String {
         _ => "",
     };
     format!(
-        "  slowest mode (m = {}): time constant {sampled} sampled (-T/ln rho), {word}{} continuous (m = 1: 1/(k_v c lambda_1)){bound}",
-        sp.slowest_mode_m.map_or("n/a".into(), |m| m.to_string()),
+        "  slowest mode{}: time constant {sampled} sampled (-T/ln rho), {word}{} continuous (m = 1: 1/(k_v c lambda_1)){bound}",
+        sp.slowest_mode_m
+            .map_or(String::new(), |m| format!(" (m = {m})")),
         num(sp.slowest_time_constant_continuous_s, "none (does not decay)")
     )
 }
@@ -1829,6 +1989,9 @@ fn modes_heading(sp: &SpacingLoopReport) -> String {
     } else {
         "the smallest and the largest of many"
     };
+    if sp.one_sided_stability {
+        return "  one-sided law's pieces (every vehicle on the same envelope bound: a correction asking a vehicle past it is cut, so only patterns whose free vehicles all move one way survive; the ring's alternating modes cannot grow): the slowest has one vehicle cut (the one-pin path's first mode, lambda = 2 - 2 cos(pi/N)), the fastest a lone free vehicle between two cut ones (mu = c_{i-1} + c_i, lambda = 2; k_v* = g*/(T c 2)):".into();
+    }
     match sp.linearised_about {
         None => format!(
             "  ring Laplacian eigenvalues ({which}; m = 0, the sum of the gaps, is conserved):"
@@ -1902,6 +2065,10 @@ fn mode_line(sp: &SpacingLoopReport, m: &SpacingMode) -> String {
     format!(
         "{}: lambda {}, g = k_v c lambda T = {}, radius {} {}",
         match (sp.eigenvalue_bounds, m.m) {
+            _ if sp.one_sided_stability => {
+                let piece = if m.m == 1 { "slowest" } else { "fastest" };
+                format!("{piece} piece")
+            }
             (false, k) => format!("m = {k}"),
             (true, 1) => "lower bound of the smallest".into(),
             (true, _) => "upper bound of the largest".into(),
@@ -1923,12 +2090,17 @@ fn k_v_star_line(sp: &SpacingLoopReport) -> Option<String> {
         sp.lambda_max?,
     );
     Some(format!(
-        "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s; team.k_v = {} -> {}",
+        "  largest stable k_v* = g*/(T c lambda_max) = {}/({} * {} * {}) = {} 1/s{}; team.k_v = {} -> {}",
         Num(g),
         Num(sp.period_s),
         Num(sp.range_slope.unwrap_or(1.0)),
         Num(lmax),
         Num(k),
+        if sp.one_sided_stability {
+            " (the one-sided law's fastest piece, not the free ring's lambda_max)"
+        } else {
+            ""
+        },
         Echo(sp.k_v_per_s.unwrap_or(0.0)),
         match sp.stable {
             Some(true) => "stable",

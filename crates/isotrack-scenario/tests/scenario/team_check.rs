@@ -523,6 +523,40 @@ fn arc_reference_above_the_peak_says_there_is_no_isoline() {
     assert_eq!(s.team_refusal(), None);
 }
 
+/// att53t-7: `arc_reference` reads the true arc gaps at the ranging steps, without the ranging
+/// unit's delay (isotrack-sim's team step), so its loop is the delay-free sampled one: at 1 Hz
+/// `g* = 2`, `k_v* = 2/(T 1 lambda_max) = 2/4 = 0.5`, and `k_v = 0.3` is stable whatever
+/// `team.ranging.delay_s` says (the check put the 2 s delay in: `k_v* = 0.1545`, `fails`). The
+/// runs with delay 2 s and 0 are the same and settle.
+#[test]
+fn arc_reference_is_checked_without_the_ranging_delay_it_does_not_have() {
+    let sets = |d: &str| {
+        circular(&[
+            "team.spacing=\"arc_reference\"",
+            "team.k_v=0.3",
+            "team.ranging.rate_hz=1.0",
+            d,
+            "sim.duration_s=120",
+        ])
+    };
+    let (delayed, prompt) = (
+        sets("team.ranging.delay_s=2.0"),
+        sets("team.ranging.delay_s=0.0"),
+    );
+    let t = check(&delayed, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    assert_eq!(t.spacing.delay_s, 0.0);
+    assert!(close(t.spacing.max_stable_k_v_per_s.unwrap(), 0.5, 1e-12));
+    let text = t.lines().join("\n");
+    assert!(
+        text.contains("without the ranging unit's delay, noise, losses or range limit"),
+        "{text}"
+    );
+    let (a, b) = (team_metrics(&delayed), team_metrics(&prompt));
+    assert_eq!(a.gap_cv_final, b.gap_cv_final);
+    assert!(a.gap_cv_final.unwrap() < 1e-3, "{a:?}");
+}
+
 /// The largest gap CV a team of `n` can halt with on a closed isoline of length `l` when every
 /// arc gap of at least `g_min` is out of range (an independent statement of the bound: the
 /// population CV of `n - 1` gaps of `g_min` and one taking the rest), by direct computation.
@@ -699,6 +733,30 @@ fn a_law_that_cannot_move_the_gaps_is_judged_by_the_deployment() {
             t.verdict_reason
         );
     }
+}
+
+/// att53t-9: every vehicle with `v_min = v_max = v0`: no free vehicle, so the page lists no
+/// ring modes, `k_v*` or time constants (it printed the free ring's 7.07 and 7.02 s beside a
+/// `fails` that says the gaps stay as deployed); the verdict is the deployment's, as above.
+#[test]
+fn a_team_with_no_free_vehicle_lists_no_modes() {
+    let t = check(
+        &circular(&["team.v_min_mps=0.5", "team.v_max_mps=0.5"]),
+        None,
+    )
+    .team
+    .unwrap();
+    assert_eq!(t.verdict, Verdict::Fails, "{}", t.verdict_reason);
+    let sp = &t.spacing;
+    assert!(!sp.applicable && sp.modes.is_empty(), "{sp:?}");
+    assert_eq!(sp.max_stable_k_v_per_s, None);
+    assert_eq!(sp.slowest_time_constant_s, None);
+    let text = t.lines().join("\n");
+    assert!(text.contains("no free vehicle"), "{text}");
+    assert!(
+        !text.contains("ring Laplacian") && !text.contains("slowest mode"),
+        "{text}"
+    );
 }
 
 /// att43-3: four robots spread evenly (pi/2 apart, chords 9.80 m) with max_range_m = 5: every

@@ -6,6 +6,7 @@
 
 use super::team_check::{circular, circular_text, close, team_metrics};
 use super::team_check_equilibrium::radius;
+use super::team_check_linearised::at_angles;
 use isotrack_scenario::check::{check, Verdict};
 use isotrack_scenario::parse_scenario;
 use isotrack_sim::TraceRow;
@@ -100,6 +101,115 @@ fn a_team_on_its_envelope_bound_decays_as_the_one_pin_path() {
     );
 }
 
+/// The largest [`even_deviation`] over the rows from `from` to `to` s.
+fn worst_even_deviation(rows: &[Vec<TraceRow>], from: f64, to: f64) -> f64 {
+    rows[0]
+        .iter()
+        .filter(|r| r.t_s >= from && r.t_s <= to)
+        .map(|r| even_deviation(rows, r.t_s))
+        .fold(0.0, f64::max)
+}
+
+/// att53t-4: every vehicle on `v_max = v0 = 0.5`, 10 Hz ranging, no delay, evenly spread but
+/// vehicle 1 0.3 rad off. A vehicle asked to
+/// speed up is cut, so the ring's alternating mode (`lambda = 4`, unstable past the free ring's
+/// `k_v* = 2/(T c 4)` = 7.07) cannot grow: only patterns whose free vehicles all slow survive,
+/// and the fastest is a lone free vehicle between two cut ones, `mu = 2c`, stable while
+/// `k_v T 2c < 2`: `k_v* = 2/(T 2c)` = 14.14. At `k_v = 10` the check said `fails`; the run
+/// settles (the gaps' deviation from L/4 over 30..40 s under a millimetre); at 16 the lone
+/// vehicle's overshoot grows and the run keeps swinging (by more than 5 mm, within the
+/// envelope's `(v_max - v_min) T` = 25 mm).
+#[test]
+fn a_one_sided_team_is_stable_up_to_its_fastest_piece() {
+    let c = (PI / 4.0).cos();
+    let ring = 2.0 / (0.1 * c * 4.0);
+    let one_sided = 2.0 / (0.1 * c * 2.0);
+    assert!((ring - 7.0711).abs() < 1e-4 && (one_sided - 14.1421).abs() < 1e-4);
+    let at = [0.0, -FRAC_PI_2 + 0.3, -PI, -1.5 * PI];
+    let deviation = |k_v: f64| {
+        let s = at_angles(
+            &at,
+            &[
+                "team.v_max_mps=0.5",
+                &format!("team.k_v={k_v}"),
+                "sim.duration_s=40",
+                "output.record_rate_hz=10",
+            ],
+        );
+        let t = check(&s, None).team.unwrap();
+        let sp = &t.spacing;
+        assert!(sp.one_sided_stability, "{sp:?}");
+        assert!(
+            close(sp.max_stable_k_v_per_s.unwrap(), one_sided, 1e-9),
+            "{sp:?}"
+        );
+        assert!(close(sp.lambda_max.unwrap(), 2.0, 1e-12));
+        let text = t.lines().join("\n");
+        assert!(text.contains("one-sided law's fastest piece"), "{text}");
+        let mut rows: Vec<Vec<TraceRow>> = vec![Vec::new(); 4];
+        s.run_team(&mut rows).unwrap().unwrap();
+        (t.verdict, worst_even_deviation(&rows, 30.0, 40.0))
+    };
+    let (verdict, settled) = deviation(10.0);
+    assert_eq!(verdict, Verdict::Holds);
+    assert!(settled < 1e-3, "{settled}");
+    let (verdict, swinging) = deviation(16.0);
+    assert_eq!(verdict, Verdict::Fails);
+    assert!(swinging > 5e-3 && swinging < 0.025 + 1e-3, "{swinging}");
+}
+
+/// att53t-10: four evenly spread but vehicle 1 0.3 rad off, `v_max = 0.5005` (v0 0.5): the
+/// deployment asks corrections of up to `k_v` times a range difference of 2.9 m, far past the
+/// 0.0005 m/s of room above v0 (and under the 0.25 below), so from the deployment down to range
+/// differences of `0.0005/k_v` = 5 mm the law is the one-sided one: its time constant, the
+/// one-pin path's `-T/ln(1 - k_v T c (2 - 2 cos(pi/4)))` = 24.1 s, not the ring's 7.02 s (the
+/// check gave 7.02 s from a 1e-9 tolerance). The run's decay over 10..60 s agrees within 10 %;
+/// with `v_max = 0.75` (as much room above as below) the linear loop's time constant stands, and
+/// the bundled cluster (corrections past both bounds' equal rooms) is not one-sided either.
+#[test]
+fn a_team_near_its_bound_decays_one_sided_from_its_deployment() {
+    let c = (PI / 4.0).cos();
+    let mu = c * (2.0 - 2.0 * (PI / 4.0).cos());
+    let sampled = -0.1 / (1.0 - 0.1 * mu * 0.1).ln();
+    assert!((sampled - 24.09).abs() < 0.01, "{sampled}");
+    let at = [0.0, -FRAC_PI_2 + 0.3, -PI, -1.5 * PI];
+    let s = at_angles(
+        &at,
+        &[
+            "team.v_max_mps=0.5005",
+            "sim.duration_s=60",
+            "output.record_rate_hz=1",
+        ],
+    );
+    let t = check(&s, None).team.unwrap();
+    let sp = &t.spacing;
+    assert_eq!(sp.time_constants, Some("one_sided"), "{sp:?}");
+    assert_eq!(sp.one_sided_vehicles, [0, 1, 2, 3]);
+    assert!(
+        close(sp.one_sided_room_mps.unwrap(), 0.0005, 1e-9),
+        "{sp:?}"
+    );
+    assert!(!sp.one_sided_stability);
+    assert!(
+        close(sp.slowest_time_constant_s.unwrap(), sampled, 1e-9),
+        "{sp:?}"
+    );
+    let text = t.lines().join("\n");
+    assert!(text.contains("near the bound, not on it"), "{text}");
+    let mut rows: Vec<Vec<TraceRow>> = vec![Vec::new(); 4];
+    s.run_team(&mut rows).unwrap().unwrap();
+    let (early, late) = (even_deviation(&rows, 10.0), even_deviation(&rows, 60.0));
+    let fit = 50.0 / (early / late).ln();
+    assert!((fit - sampled).abs() < 0.1 * sampled, "{fit} vs {sampled}");
+    let roomy = check(&at_angles(&at, &["team.v_max_mps=0.75"]), None)
+        .team
+        .unwrap();
+    assert_eq!(roomy.spacing.time_constants, None);
+    assert!(roomy.spacing.one_sided_vehicles.is_empty());
+    let bundled = check(&circular(&[]), None).team.unwrap();
+    assert!(bundled.spacing.one_sided_vehicles.is_empty());
+}
+
 /// att50-9: vehicles 2 and 3 at 0.3 m/s in [0.15, 0.35], 0 and 1 at 0.5, k_v = 0.1, evenly
 /// spread: mean v0 0.4 is past both slow vehicles' v_max, so V = 0.35 is set by both and both
 /// saturate (pins). Between them the deployed arcs: a quarter turn from 2 to 3, three quarters
@@ -148,6 +258,54 @@ fn two_vehicles_saturated_at_one_bound_are_both_pins() {
     assert!(close(got, tau, 1e-9), "{got} vs {tau}");
     let run = team_metrics(&s).gap_cv_final.unwrap();
     assert!((run - cv).abs() < 0.005, "{run} vs {cv}");
+}
+
+/// att53t-5: att50-9's team (vehicles 2, 3 at 0.3 m/s in [0.15, 0.35], 0, 1 at 0.5, `k_v =
+/// 0.1`, V = 0.35) deployed with the arc from 2 to 3 at 4 m (and 18 m), the other three equal.
+/// The free vehicles need `r0 - r3 = r1 - r0 = -1.5` m; an anchor flies V only while its
+/// command `0.3 + 0.1 (r_i - r_{i-1})` is at least 0.35, `r_i - r_{i-1} >= 0.5`, and the four
+/// differences sum to zero, so the two anchors' share 3 m. Kept as deployed, the 4 m arc left
+/// vehicle 2 at `r2 - r1 = -5.7` (command 0.13: not saturated, not an equilibrium); the run
+/// moves it back until it is ON its bound: `r2 - r1 = 0.5`, `r3 - r2 = 2.5`, ranges `y, y - 1.5,
+/// y - 1, y + 1.5` with arcs summing to a turn (the 18 m arc: vehicle 3 on its bound, `y, y -
+/// 1.5, y + 1, y + 1.5`). Vehicle 2 is then no pin but one-sided: no linear time constant. The
+/// run settles at the gap CV of those ranges.
+#[test]
+fn anchors_deployed_off_their_bound_settle_on_it() {
+    let d = 2.0 * radius();
+    let l = TAU * radius();
+    for (arc_m, offsets, on_bound, pin) in [
+        (4.0, [0.0, -1.5, -1.0, 1.5], 2usize, 3usize),
+        (18.0, [0.0, -1.5, 1.0, 1.5], 3, 2),
+    ] {
+        let turn = |y: f64| -> f64 { offsets.iter().map(|o| 2.0 * ((y + o) / d).asin()).sum() };
+        let y = bisect(turn, TAU, 1.5, d - 1.5);
+        let ranges: Vec<f64> = offsets.iter().map(|o| y + o).collect();
+        let arcs: Vec<f64> = ranges.iter().map(|r| 2.0 * (r / d).asin()).collect();
+        let cv =
+            (arcs.iter().map(|g| (g - FRAC_PI_2).powi(2)).sum::<f64>() / 4.0).sqrt() / FRAC_PI_2;
+        let g = (l - arc_m) / 3.0 / radius();
+        let at = [0.0, -g, -2.0 * g, -2.0 * g - arc_m / radius()];
+        let s = at_angles(
+            &at,
+            &[
+                "team.vehicles=[{index=2,speed_mps=0.3,v_min_mps=0.15,v_max_mps=0.35},{index=3,speed_mps=0.3,v_min_mps=0.15,v_max_mps=0.35}]",
+                "team.k_v=0.1",
+            ],
+        );
+        let t = check(&s, None).team.unwrap();
+        let sp = &t.spacing;
+        let eq = sp.shifted_equilibrium.as_ref().unwrap();
+        for (got, want) in eq.ranges_m.iter().zip(&ranges) {
+            assert!(close(*got, *want, 1e-9), "{eq:?} vs {ranges:?}");
+        }
+        assert!(close(eq.gap_cv.unwrap(), cv, 1e-9), "{eq:?} vs {cv}");
+        assert_eq!(sp.saturated_vehicles, [pin], "{sp:?}");
+        assert!(sp.one_sided_vehicles.contains(&on_bound), "{sp:?}");
+        assert_eq!(sp.time_constants, Some("not_applicable"));
+        let run = team_metrics(&s).gap_cv_final.unwrap();
+        assert!((run - cv).abs() < 0.005, "{arc_m}: {run} vs {cv}");
+    }
 }
 
 /// The P law's orbit radius at speed `v` on team-circular-4's field with `kp = 1`: `kp c1
@@ -231,6 +389,40 @@ fn time_constants_from_the_conservative_slope_are_lower_bounds() {
         1e-12
     ));
     assert!(on_circle > 5.0);
+}
+
+/// att53t-6: the conservative `c = 1` gives every mode its largest gain, but with a delay (or a
+/// gain per period past 1) a sampled mode overshoots and its radius is not monotone in the
+/// gain: a gaussian plume whose level-10 set is team-circular-4's circle (`sigma^2 = R^2/(2 ln
+/// 2)`), `k_v = 0.15`, 1 Hz, 2 s delay: at `c = 1` the `m = 2` mode has `g = 0.6`, near the
+/// delayed loop's `g* = 2 cos(2 pi/5)` = 0.618, and a sampled "at least 116 s" (the run decays
+/// some ten times faster). The sampled value is not given there; the continuous one,
+/// `1/(k_v lambda_1) = 1/(0.15 x 2)` = 3.33 s, stays a lower bound, and the run's decay (the
+/// deviation from L/4 between 40 and 100 s) is slower than it and far faster than 116 s.
+#[test]
+fn a_delayed_loop_gets_no_sampled_bound_from_the_conservative_slope() {
+    let r = radius();
+    let sigma = (r * r / (2.0 * std::f64::consts::LN_2)).sqrt();
+    let plume = format!("[field]\nkind = \"gaussian_plumes\"\nbackground = 0.0\nsources = [{{ center_m = [0.0, 0.0], amplitude = 20.0, sigma_m = [{sigma}, {sigma}], rotation_rad = 0.0 }}]\n[controller]\nlevel = 10.0\n[vehicle]\nkind = \"dubins\"\nspeed_mps = 0.5\n[sim]\nduration_s = 100.0\n[output]\nrecord_rate_hz = 1.0\n[team]\ncount = 4\nspread = {{ along = \"arc\", center_m = [0.0, 0.0], radius_m = {r}, step_rad = 0.3 }}\nk_v = 0.15\nranging = {{ rate_hz = 1.0, delay_s = 2.0 }}\n");
+    let p = parse_scenario(&plume, "<test>", &[]).unwrap();
+    let t = check(&p, None).team.unwrap();
+    let sp = &t.spacing;
+    assert_eq!(sp.range_slope_source, Some("conservative"));
+    assert_eq!(sp.time_constants, Some("lower_bound"));
+    assert_eq!(sp.slowest_time_constant_s, None, "{sp:?}");
+    let cont = 1.0 / (0.15 * 2.0);
+    assert!(close(
+        sp.slowest_time_constant_continuous_s.unwrap(),
+        cont,
+        1e-12
+    ));
+    let text = t.lines().join("\n");
+    assert!(text.contains("not bounded by c = 1"), "{text}");
+    let mut rows: Vec<Vec<TraceRow>> = vec![Vec::new(); 4];
+    p.run_team(&mut rows).unwrap().unwrap();
+    let (early, late) = (even_deviation(&rows, 40.0), even_deviation(&rows, 100.0));
+    let fit = 60.0 / (early / late).ln();
+    assert!(fit > cont && fit < 116.0 / 4.0, "{fit} ({early}, {late})");
 }
 
 /// att50-13: 600 vehicles evenly on a 693 m circle, vehicle 0 with no speed room: 599 free, past

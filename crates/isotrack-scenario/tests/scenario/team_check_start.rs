@@ -95,6 +95,34 @@ fn a_probe_slot_without_the_ranges_of_a_rate_fails() {
     assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
 }
 
+/// att53t-3: ranging every 3.4 s, no dropouts: the instants 61.2, 64.6, 68.0 | 71.4, 74.8,
+/// 78.2 | 81.6, 85.0, 88.4 | 91.8, 95.2, 98.6 s put exactly 3 in every slot (counted by hand),
+/// so every fit is made with probability 1, although the mean `n_eff = 10/3.4` = 2.94 is under
+/// 3: `holds` (it said `not_applicable`, "may not find the ring"). The run finds the ring (no
+/// warning) and spreads.
+#[test]
+fn exact_slot_counts_without_dropouts_decide_the_probes() {
+    let text = circular_text();
+    let sets: Vec<String> = vec![
+        "team.ring=\"discovered\"".into(),
+        "team.ranging.noise_std_m=0".into(),
+        "team.v_max_mps=0.6".into(),
+        "team.k_v=0.02".into(),
+        format!("team.ranging.rate_hz={}", 1.0 / 3.4),
+        "sim.duration_s=600".into(),
+    ];
+    let s = scenario(&text, &sets);
+    let t = check(&s, None).team.unwrap();
+    assert_eq!(t.verdict, Verdict::Holds, "{}", t.verdict_reason);
+    let w = run_warnings(&s);
+    assert!(
+        !w.iter().any(|w| w.contains("the spacing law is off")),
+        "{w:?}"
+    );
+    let m = team_metrics(&s);
+    assert!(m.gap_cv_final.unwrap() < 0.05, "{m:?}");
+}
+
 /// `P(Binomial(n, q) >= 3)` by its three lowest terms, `C(n, 0) = 1`, `C(n, 1) = n`,
 /// `C(n, 2) = n (n - 1)/2`.
 fn at_least_three(n: f64, q: f64) -> f64 {

@@ -80,11 +80,14 @@ pub(super) fn saturated(team: &TeamSpec, eq: &ShiftedEquilibrium) -> Vec<usize> 
     if !eq.exists() || n != team.count() {
         return vec![];
     }
+    // att53t-5: an anchor settled ON its bound (its command the bound, to rounding) is not
+    // saturated: it can move one way.
+    let tol = ON_BOUND_REL_TOL * eq.speed_mps.abs().max(1.0);
     (0..n)
         .filter(|&i| {
             let e = team.speeds(i);
             let cmd = e.nominal_mps + k_v * (eq.ranges_m[i] - eq.ranges_m[(i + n - 1) % n]);
-            e.min_mps < e.max_mps && (cmd > e.max_mps || cmd < e.min_mps)
+            e.min_mps < e.max_mps && (cmd > e.max_mps + tol || cmd < e.min_mps - tol)
         })
         .collect()
 }
@@ -94,28 +97,47 @@ pub const ON_BOUND_REL_TOL: f64 = 1e-9;
 
 /// att51-7: the vehicles of `team` free in the linearisation (`pins[i]` false, with speed room)
 /// whose equilibrium command, the common speed `speed`, sits on one of its envelope bounds
-/// (within [`ON_BOUND_REL_TOL`]): e.g. `team.v_max_mps = v0`. Such a vehicle can move only one
-/// way (a correction that asks it past the bound is cut), so half of the linear law acts on it
-/// and the linear time constants do not describe the decay. Listed order.
-pub(super) fn on_bound(team: &TeamSpec, speed: f64, pins: &[bool]) -> Vec<usize> {
-    let tol = ON_BOUND_REL_TOL * speed.abs().max(1.0);
+/// ([`bound_side`]): e.g. `team.v_max_mps = v0`. Such a vehicle can move only one way (a
+/// correction that asks it past the bound is cut), so half of the linear law acts on it and the
+/// linear time constants do not describe the decay. Listed order.
+pub(super) fn on_bound(team: &TeamSpec, speed: f64, pins: &[bool], reach_mps: f64) -> Vec<usize> {
     (0..team.count())
         .filter(|&i| !pins.get(i).copied().unwrap_or(false))
-        .filter(|&i| {
-            let e = team.speeds(i);
-            e.min_mps < e.max_mps
-                && ((speed - e.max_mps).abs() <= tol || (speed - e.min_mps).abs() <= tol)
-        })
+        .filter(|&i| bound_side(team, speed, i, reach_mps).is_some())
         .collect()
 }
 
-/// Whether the vehicles `ids` (from [`on_bound`]) all sit on the same side: each at its
-/// `v_max` (only slowing acts), or each at its `v_min` (only speeding up).
-pub(super) fn on_one_bound(team: &TeamSpec, speed: f64, ids: &[usize]) -> bool {
-    let tol = ON_BOUND_REL_TOL * speed.abs().max(1.0);
-    let top = |i: &usize| (speed - team.speeds(*i).max_mps).abs() <= tol;
-    let bottom = |i: &usize| (speed - team.speeds(*i).min_mps).abs() <= tol;
-    ids.iter().all(top) || ids.iter().all(bottom)
+/// Which envelope bound vehicle `i`'s command at `speed` sits on: `Some(true)` its `v_max`,
+/// `Some(false)` its `v_min`, `None` neither (or no speed room). With `reach_mps = 0`, ON it
+/// within the rounding of [`ON_BOUND_REL_TOL`]; with `reach_mps > 0` (att53t-10: the largest
+/// correction the deployment asks), near it: the room to that bound under `reach_mps` and under
+/// the room to the other bound, so the near side cuts the corrections for longer than the far
+/// side saturates them (with equal rooms both cut alike: no one-sided law).
+fn bound_side(team: &TeamSpec, speed: f64, i: usize, reach_mps: f64) -> Option<bool> {
+    let e = team.speeds(i);
+    if e.min_mps >= e.max_mps {
+        return None;
+    }
+    let tol = (ON_BOUND_REL_TOL * speed.abs().max(1.0)).max(reach_mps);
+    let (top, bottom) = ((e.max_mps - speed).abs(), (speed - e.min_mps).abs());
+    let one_way = |room: f64, other: f64| room <= tol && (reach_mps == 0.0 || room < other);
+    if one_way(top, bottom) {
+        Some(true)
+    } else if one_way(bottom, top) {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// Whether the vehicles `ids` (from [`on_bound`] with the same `reach_mps`) all sit on the same
+/// side: each at its `v_max` (only slowing acts), or each at its `v_min` (only speeding up).
+pub(super) fn on_one_bound(team: &TeamSpec, speed: f64, ids: &[usize], reach_mps: f64) -> bool {
+    let side = |want: bool| {
+        ids.iter()
+            .all(|&i| bound_side(team, speed, i, reach_mps) == Some(want))
+    };
+    side(true) || side(false)
 }
 
 /// The keys that pin the vehicles `ids` (each with `v_min_i = v_max_i`): the overrides in
@@ -297,17 +319,38 @@ pub(super) fn shifted_equilibrium(
         ranges_m: vec![0.0; n],
         gap_cv: None,
     };
-    for (a, count, arc) in runs {
-        // Partial sums along the run from its first vehicle: the gap ahead of a + k is
-        // x + p[k].
-        let mut p = vec![0.0; count];
-        for k in 1..count {
-            p[k] = p[k - 1] + d((a + k) % n);
-        }
+    // Partial sums along each run from its first vehicle: the gap ahead of a + k is x + p[k].
+    let sums: Vec<Vec<f64>> = runs
+        .iter()
+        .map(|&(a, count, _)| {
+            let mut p = vec![0.0; count];
+            for k in 1..count {
+                p[k] = p[k - 1] + d((a + k) % n);
+            }
+            p
+        })
+        .collect();
+    let mut arcs: Vec<f64> = runs.iter().map(|r| r.2).collect();
+    if ids.is_empty() && runs.len() >= 2 {
+        // att53t-5: saturated anchors keep their arcs only while each stays saturated.
+        let anchors: Vec<Anchor> = runs
+            .iter()
+            .map(|&(a, _, _)| Anchor {
+                d: d(a),
+                side: if team.speeds(a).max_mps == speed {
+                    1.0
+                } else {
+                    -1.0
+                },
+            })
+            .collect();
+        settle_anchor_arcs(&mut arcs, &sums, &anchors, map, largest);
+    }
+    for ((&(a, count, _), p), &arc) in runs.iter().zip(&sums).zip(&arcs) {
         let lo_p = p.iter().copied().fold(f64::INFINITY, f64::min);
         let hi_p = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         eq.range_span_m = eq.range_span_m.max(hi_p - lo_p);
-        match solve_run(&p, map, eq.largest_range_m, arc) {
+        match solve_run(p, map, eq.largest_range_m, arc) {
             Ok(x) => (0..count).for_each(|k| eq.ranges_m[(a + k) % n] = x + p[k]),
             Err(why) => eq.status = worse(eq.status, why),
         }
@@ -358,7 +401,8 @@ pub(super) fn bound_setters(team: &TeamSpec, speed: f64) -> Vec<usize> {
 /// anchor, the whole turn from it; with more (att50-9: two saturated at one bound act as pins
 /// too), from each to the next of them, filling the arc between their starts (`None` when not
 /// known): for saturated anchors the transient moves those arcs before they saturate, so the
-/// deployed arcs are the model's.
+/// deployed arcs are the model's, kept while each anchor stays saturated there (else moved
+/// until it is ON its bound, [`settle_anchor_arcs`], att53t-5).
 fn equilibrium_runs(
     s: &Scenario,
     l: &Law,
@@ -383,6 +427,76 @@ fn equilibrium_runs(
                 runs.push((a, (b + n - a) % n, arc));
             }
             Some(runs)
+        }
+    }
+}
+
+/// A vehicle saturated at the bound that sets the common speed, first of its run
+/// ([`settle_anchor_arcs`]).
+#[derive(Clone, Copy, Debug)]
+struct Anchor {
+    /// `(V - v0_i)/k_v`: the range difference at which its command is exactly `V`, m.
+    d: f64,
+    /// `1` when `V` is its `v_max` (saturated while `r_i - r_{i-1} >= d`), `-1` at `v_min`.
+    side: f64,
+}
+
+/// att53t-5: the arcs of runs led by vehicles saturated at the bound that sets `V` (two or more
+/// at one bound, att50-9). An anchor flies `V` only while its command is past its bound
+/// (`side (r_i - r_{i-1} - d) >= 0`, its range behind the last of the previous run); a deployed
+/// arc that leaves it short is not an equilibrium: the anchor is free, moves, and stops ON its
+/// bound. So each anchor whose command falls short is moved along the ring (its arc behind
+/// traded against its arc ahead, by bisection) until its command is exactly the bound, sweep
+/// after sweep, until none falls short; arcs that keep every anchor saturated stay as deployed.
+/// The excesses sum to `-sum_i d_i`, which the clamp that sets `V` makes of the anchors' sign, so
+/// a settled arrangement exists.
+fn settle_anchor_arcs(
+    arcs: &mut [f64],
+    sums: &[Vec<f64>],
+    anchors: &[Anchor],
+    map: GapMap,
+    largest: f64,
+) {
+    let m = arcs.len();
+    // A run's common offset at `arc`, +-infinity where it cannot fit (too short or too long).
+    let offset = |k: usize, arc: f64| match solve_run(&sums[k], map, largest, arc) {
+        Ok(x) => x,
+        Err("past_half_circle") => f64::INFINITY,
+        Err(_) => f64::NEG_INFINITY,
+    };
+    let tol = 1e-9 * largest.max(1.0);
+    for _ in 0..64 * m {
+        let mut moved = false;
+        for k in 0..m {
+            let before = (k + m - 1) % m;
+            let last = sums[before].last().copied().unwrap_or(0.0);
+            // The anchor's range difference less d, its arc behind grown by `delta`
+            // (decreasing in `delta`).
+            let f = |delta: f64| {
+                offset(k, arcs[k] - delta)
+                    - offset(before, arcs[before] + delta)
+                    - last
+                    - anchors[k].d
+            };
+            if anchors[k].side * f(0.0) >= -tol {
+                continue;
+            }
+            let (mut lo, mut hi) = (-arcs[before], arcs[k]);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if f(mid) > 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let delta = 0.5 * (lo + hi);
+            arcs[before] += delta;
+            arcs[k] -= delta;
+            moved = true;
+        }
+        if !moved {
+            break;
         }
     }
 }
@@ -555,8 +669,8 @@ pub(super) fn shifted_claim(
 /// [`shifted_claim`] of an equilibrium that exists: `not_applicable` when a range passes
 /// `team.ranging.max_range_m` (the equilibrium does not form), `fails` when a range is under
 /// the run's close-approach distance (att46-5: the law drives two vehicles together and holds
-/// them there, a collision) or, with two or more vehicles with no speed room, when its gap CV
-/// is not even (att46-7: the best the vehicles between can do); `None` otherwise.
+/// them there, a collision); `None` otherwise: its evenness is not judged (att50-10: `holds`
+/// claims convergence to it, with any number of vehicles of no speed room).
 fn exists_claim(
     team: &TeamSpec,
     eq: &ShiftedEquilibrium,
@@ -602,20 +716,10 @@ fn exists_claim(
             ),
         ));
     }
-    let ids = pinned(team);
-    let even = TeamMetricsConfig::default().even_gap_cv;
-    let cv = eq.gap_cv.filter(|cv| ids.len() >= 2 && *cv > even)?;
-    Some((
-        crate::check::Verdict::Fails,
-        format!(
-            "{intro}; vehicles {} have no speed room ({}), so V is their speed and the vehicles between settle at the {word}s ({}) m: a gap CV of {} > {} at best (even spacing is not reached)",
-            ids.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", "),
-            pinned_keys(team, &ids),
-            list(),
-            Num(cv),
-            Num(even)
-        ),
-    ))
+    // att50-10, att53t (item 8): with unequal nominal speeds `holds` claims convergence to this
+    // equilibrium (its gap CV on the page), not evenness, whatever the vehicles of no speed
+    // room: one rule for any number of them.
+    None
 }
 
 /// att44-10: the discovery probe of `team` (`team.ring = "discovered"`) commands

@@ -74,8 +74,9 @@ pub(super) fn binomial_at_least(n: u64, q: f64, k: usize) -> f64 {
 /// range), so a neighbour gets its rate with `P(Binomial(n_j, 1 - p) >= 3)`, and the ring needs
 /// both neighbours of every prober (one with two vehicles): the product over the slots. With
 /// that product 0 (a slot with fewer instants than the fit needs) the probes cannot find the
-/// ring: `fails`; under [`PROBE_PICKS_RIGHT`], or with the mean kept per slot
-/// `n_eff = probe_s rate_hz (1 - p)` under the need, they may not: `not_applicable`. Without
+/// ring: `fails`; under [`PROBE_PICKS_RIGHT`], or with dropouts and the mean kept per slot
+/// `n_eff = probe_s rate_hz (1 - p)` under the need, they may not: `not_applicable` (without
+/// dropouts the slots' exact counts decide, att53t-3). Without
 /// the ring the spacing law is off for the whole run (the run warns it). `None` otherwise.
 pub(super) fn probe_slots_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdict, String)> {
     let RingMode::Discover(d) = team.ring else {
@@ -95,7 +96,10 @@ pub(super) fn probe_slots_claim(s: &Scenario, team: &TeamSpec) -> Option<(Verdic
         .map(|&m| binomial_at_least(m, kept, need).powi(fits_per_slot as i32))
         .product();
     let n_eff = d.probe_s * r.rate_hz * kept;
-    if all_fit >= PROBE_PICKS_RIGHT && n_eff >= need as f64 {
+    // att53t-3: without dropouts every slot's count is exact (all_fit 1 when each holds `need`),
+    // and the mean n_eff (below `need` when some slots hold one fewer) adds nothing.
+    let lossless = r.dropout_probability == 0.0;
+    if all_fit >= PROBE_PICKS_RIGHT && (lossless || n_eff >= need as f64) {
         return None;
     }
     let (verdict, can) = if all_fit == 0.0 {
