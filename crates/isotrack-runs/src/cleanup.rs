@@ -78,38 +78,42 @@ pub fn create_dir_all(dir: &Path) -> std::io::Result<Vec<Pending>> {
 }
 
 /// Output directory `dir` as a command creates, cleans up and names it, settled once before
-/// anything is created: a `..` in the part of `dir` not there yet (`u/b/../c` with no `u/b`,
+/// anything is created: a `..` right after a level not there yet (`u/b/../c` with no `u/b`,
 /// `x/../u/b` with no `x`) is resolved in the text, so that [`create_dir_all`] never makes a
 /// level only to pass through it (att53o-2: it made `u/b`, the interrupt removed it as empty,
 /// and the note then read `u/b/../c` through the missing `u/b` and said "nothing written" of
-/// a directory holding the rows). The part that exists is kept as written (the system
-/// resolves it: a link there is followed as before, never replaced by its target's path), and
-/// `dir` is returned as it is when its missing part has no `..`.
+/// a directory holding the rows). The levels are walked in order, as the system walks them
+/// once the missing ones are made: a `..` after a level that is there (a link is followed) is
+/// kept for the system to resolve, never taken off in the text (att55o-1: `x/../L/../c`, `L`
+/// a link to `elsewhere/deep`, was settled to `c` and replaced a run there, where the system
+/// and the earlier build wrote `elsewhere/c`). `dir` is returned as it is without a `..`.
 pub fn settled_dir(dir: &Path) -> PathBuf {
     use std::path::Component;
-    let there = dir
-        .ancestors()
-        .filter(|p| !p.as_os_str().is_empty())
-        .find(|p| std::fs::symlink_metadata(p).is_ok());
-    let (mut settled, missing) = match there {
-        Some(p) => (p.to_path_buf(), dir.strip_prefix(p).unwrap_or(dir)),
-        None => (PathBuf::new(), dir),
-    };
-    if !missing.components().any(|c| c == Component::ParentDir) {
+    if !dir.components().any(|c| c == Component::ParentDir) {
         return dir.to_path_buf();
     }
-    let mut levels: Vec<&std::ffi::OsStr> = Vec::new();
-    for c in missing.components() {
+    let mut settled = PathBuf::new();
+    // The trailing levels of `settled` not there yet (made later by create_dir_all).
+    let mut missing = 0_usize;
+    for c in dir.components() {
         match c {
-            Component::Normal(name) => levels.push(name),
             // A level not there yet: `NAME/..` is where NAME would be made.
-            Component::ParentDir if levels.pop().is_some() => {}
-            // Above the missing part: the existing part's parent, which the system resolves.
+            Component::ParentDir if missing > 0 => {
+                settled.pop();
+                missing -= 1;
+            }
+            // After a level that is there: the system resolves it (through a link too).
             Component::ParentDir => settled.push(".."),
-            Component::CurDir | Component::RootDir | Component::Prefix(_) => {}
+            Component::Normal(name) => {
+                settled.push(name);
+                if missing > 0 || std::fs::symlink_metadata(&settled).is_err() {
+                    missing += 1;
+                }
+            }
+            Component::CurDir => {}
+            Component::RootDir | Component::Prefix(_) => settled.push(c.as_os_str()),
         }
     }
-    settled.extend(levels);
     if settled.as_os_str().is_empty() {
         PathBuf::from(".")
     } else {
@@ -500,5 +504,28 @@ mod tests {
         remove_stale_temporaries(dir.path(), &["trace.csv", "summary.json"]);
         let left: Vec<bool> = names.iter().map(|n| dir.path().join(n).exists()).collect();
         assert_eq!(left, [false, true, true, true]);
+    }
+
+    /// att55o-1: a `..` after a link that is there is the system's to resolve (the link's
+    /// target's parent), a `..` after a level not there yet is taken off in the text: with
+    /// `L -> elsewhere/deep`, `x/../L/../c` (no `x`) is `L/../c`, made as `elsewhere/c`;
+    /// `u/b/../c` (no `u/b`) is `u/c`; a path without `..` is returned as it is.
+    #[cfg(unix)]
+    #[test]
+    fn a_dot_dot_after_a_link_is_not_taken_off_in_the_text() {
+        let base = tempfile::tempdir().unwrap();
+        let b = base.path();
+        std::fs::create_dir_all(b.join("elsewhere/deep")).unwrap();
+        std::fs::create_dir(b.join("u")).unwrap();
+        std::os::unix::fs::symlink(b.join("elsewhere/deep"), b.join("L")).unwrap();
+        let settled = settled_dir(&b.join("x/../L/../c"));
+        assert_eq!(settled, b.join("L/../c"));
+        create_dir_all(&settled).unwrap();
+        assert!(b.join("elsewhere/c").is_dir());
+        assert!(!b.join("c").exists() && !b.join("x").exists());
+        assert_eq!(settled_dir(&b.join("u/b/../c")), b.join("u/c"));
+        assert_eq!(settled_dir(&b.join("x/../u/b")), b.join("u/b"));
+        assert_eq!(settled_dir(&b.join("L/../../u")), b.join("L/../../u"));
+        assert_eq!(settled_dir(&b.join("p/q")), b.join("p/q"));
     }
 }

@@ -118,7 +118,7 @@ pub fn refuse_non_regular(path: &Path) -> std::io::Result<()> {
     match std::fs::symlink_metadata(path) {
         Ok(m) if !m.file_type().is_file() => Err(std::io::Error::other(format!(
             "{} exists and is not a regular file (a link, FIFO, directory or device): refusing to write it",
-            crate::owned::shell_quoted(path)
+            shell_quoted(path)
         ))),
         _ => Ok(()),
     }
@@ -237,4 +237,39 @@ pub fn temp_beside(path: &Path) -> std::path::PathBuf {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// `path` as a POSIX shell word to paste, as every message naming a file the user is to move
+/// or look at names it (att41-2: a refusal printed it raw, so a name with a line break forged
+/// its own `error:` line; att39-7: `my run;touch PWNED` was printed bare, and a
+/// line break in it forged a line of output): as it is when every character is plain, else in
+/// single quotes, or as bash's `$'...'` with escapes when it holds a control character.
+///
+/// A relative path whose first character is `-` is named `./-x` (att53o-8: `isotrack plot -x`,
+/// the command a note gave, was read as an option).
+pub fn shell_quoted(path: &Path) -> String {
+    let s = path.to_string_lossy();
+    let s = if s.starts_with('-') {
+        std::borrow::Cow::Owned(format!("./{s}"))
+    } else {
+        s
+    };
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./+,:@%=".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        return s.into_owned();
+    }
+    if s.chars().any(char::is_control) {
+        let body: String = s
+            .chars()
+            .map(|c| match c {
+                '\\' => "\\\\".to_string(),
+                '\'' => "\\'".to_string(),
+                c if c.is_control() && (c as u32) < 0x80 => format!("\\x{:02x}", c as u32),
+                c if c.is_control() => format!("\\u{:04x}", c as u32),
+                c => c.to_string(),
+            })
+            .collect();
+        return format!("$'{body}'");
+    }
+    format!("'{}'", s.replace('\'', "'\\''"))
 }

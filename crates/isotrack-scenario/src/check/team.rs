@@ -303,14 +303,8 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         rep.note = why;
         return rep;
     }
-    let stuck = equilibrium::pinned(team);
-    if stuck.len() == n {
-        // att53t-9: no free vehicle, so no mode to list and no time constant.
-        rep.note = format!(
-            "no free vehicle: {} (no speed room), so {} has no speed to command but v0 and there is no loop to linearise: no modes, k_v* or time constants; the gaps stay as deployed (the verdict judges the deployment)",
-            equilibrium::pinned_keys(team, &stuck),
-            team.law.name()
-        );
+    if let Some(why) = no_free_vehicle(team) {
+        rep.note = why;
         return rep;
     }
     let (c, source) = range_slope(s, &team.law, n);
@@ -333,18 +327,13 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
         rep.note = "not computed: the range slopes at the equilibrium are not in (0, 1]".into();
         return rep;
     };
-    rep.linearised_about = match (pinned_some, slopes_from) {
-        (true, _) => Some("pinned"),
-        (false, "shifted_equilibrium") => Some("shifted_equilibrium"),
-        (false, _) => None,
-    };
-    if rep.linearised_about.is_some() {
-        rep.linearised_slopes = Some(slopes_from);
-        rep.gap_slopes = slopes.clone();
-    }
-    if pinned_some {
-        (rep.pinned_vehicles, rep.saturated_vehicles) = (pinned, saturated);
-    }
+    record_linearisation(
+        &mut rep,
+        pinned_some,
+        slopes_from,
+        &slopes,
+        (pinned, saturated),
+    );
     let lambdas = &spectrum.lambdas;
     rep.lambda_min = Some(lambdas[0]);
     rep.lambda_max = Some(lambdas[lambdas.len() - 1]);
@@ -370,6 +359,43 @@ fn spacing_report(s: &Scenario, l: &Law, team: &TeamSpec) -> SpacingLoopReport {
     }
     rep.not_modelled = spacing_not_modelled(team, n, &rep);
     rep
+}
+
+/// att53t-9: the note when no vehicle has speed room (every one pinned at `v0`): no mode to
+/// list and no time constant; `None` when one is free.
+fn no_free_vehicle(team: &TeamSpec) -> Option<String> {
+    let stuck = equilibrium::pinned(team);
+    (stuck.len() == team.count()).then(|| {
+        format!(
+            "no free vehicle: {} (no speed room), so {} has no speed to command but v0 and there is no loop to linearise: no modes, k_v* or time constants; the gaps stay as deployed (the verdict judges the deployment)",
+            equilibrium::pinned_keys(team, &stuck),
+            team.law.name()
+        )
+    })
+}
+
+/// What the linearisation of [`spacing_report`] was taken about (att50-11): the pinned
+/// vehicles' frame, the shifted equilibrium, or (`None`) the even ring; its slopes and the
+/// fixed vehicles `(pinned, saturated)` when some but not all are fixed.
+fn record_linearisation(
+    rep: &mut SpacingLoopReport,
+    pinned_some: bool,
+    slopes_from: &'static str,
+    slopes: &[f64],
+    (pinned, saturated): (Vec<usize>, Vec<usize>),
+) {
+    rep.linearised_about = match (pinned_some, slopes_from) {
+        (true, _) => Some("pinned"),
+        (false, "shifted_equilibrium") => Some("shifted_equilibrium"),
+        (false, _) => None,
+    };
+    if rep.linearised_about.is_some() {
+        rep.linearised_slopes = Some(slopes_from);
+        rep.gap_slopes = slopes.to_vec();
+    }
+    if pinned_some {
+        (rep.pinned_vehicles, rep.saturated_vehicles) = (pinned, saturated);
+    }
 }
 
 /// The vehicles the linearisation fixes in the frame moving at the team's speed: those with no
@@ -1383,7 +1409,10 @@ fn spacing_claim(
     if let Some(claim) = discovery_probe_claim(s, team) {
         return Some(claim);
     }
-    let start = start::start_claim(s, l, team, sp);
+    let tau_s = sp
+        .slowest_time_constant_s
+        .or(sp.slowest_time_constant_continuous_s);
+    let start = start::start_claim(s, l, team, tau_s);
     let later = 'later: {
         // att50-2: arc_reference's equilibrium too (its arc gaps for the ranges).
         let solved = sp.shifted_equilibrium.as_ref();
@@ -1701,6 +1730,30 @@ fn range_balance_out_of_range(sp: &SpacingLoopReport) -> Option<String> {
     ))
 }
 
+/// The `fails` text of an unstable spacing loop: the bound it is past, and how the speed
+/// saturation bounds the gaps' oscillation (`(v_max - v_min)(T + d)`).
+fn unstable_spacing_text(team: &TeamSpec, sp: &SpacingLoopReport) -> String {
+    format!(
+        "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay, so the gaps do not converge; the speed saturation bounds them: the speeds switch between the vehicles' envelopes [min v_min_i, max v_max_i] = [{}, {}] m/s and the gaps oscillate about {} by up to (v_max - v_min)(T + d) = {} m{}",
+        Echo(sp.k_v_per_s.unwrap_or(0.0)),
+        sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
+        Echo(team.ranging.rate_hz),
+        Num(sp.delay_s),
+        Echo(team.speed_envelope_mps().0),
+        Echo(team.speed_envelope_mps().1),
+        if team.nominal_speeds_mps().len() == 1 {
+            "the even spacing"
+        } else {
+            "the equilibrium of the unequal nominal speeds"
+        },
+        Num(sp.saturated_gap_amplitude_m.unwrap_or(f64::NAN)),
+        sp.saturated_gap_cv_max
+            .map_or(String::new(), |c| format!(" (a gap CV up to {})", Num(c)))
+    )
+}
+
+/// The team section's verdict: disjoint envelopes, an unstable spacing or tracking loop fail;
+/// both stable hold; no spacing loop holds only with one nominal speed (att54t-12).
 fn team_verdict(
     team: &TeamSpec,
     sp: &SpacingLoopReport,
@@ -1720,26 +1773,7 @@ fn team_verdict(
         return (Verdict::Fails, d.reason());
     }
     if sp.stable == Some(false) {
-        return (
-            Verdict::Fails,
-            format!(
-                "the spacing loop is unstable: team.k_v = {} is past the largest stable k_v* = {} 1/s at {} Hz ranging with {} s delay, so the gaps do not converge; the speed saturation bounds them: the speeds switch between the vehicles' envelopes [min v_min_i, max v_max_i] = [{}, {}] m/s and the gaps oscillate about {} by up to (v_max - v_min)(T + d) = {} m{}",
-                Echo(sp.k_v_per_s.unwrap_or(0.0)),
-                sp.max_stable_k_v_per_s.map_or("n/a".into(), |k| Num(k).to_string()),
-                Echo(team.ranging.rate_hz),
-                Num(sp.delay_s),
-                Echo(team.speed_envelope_mps().0),
-                Echo(team.speed_envelope_mps().1),
-                if team.nominal_speeds_mps().len() == 1 {
-                    "the even spacing"
-                } else {
-                    "the equilibrium of the unequal nominal speeds"
-                },
-                Num(sp.saturated_gap_amplitude_m.unwrap_or(f64::NAN)),
-                sp.saturated_gap_cv_max
-                    .map_or(String::new(), |c| format!(" (a gap CV up to {})", Num(c)))
-            ),
-        );
+        return (Verdict::Fails, unstable_spacing_text(team, sp));
     }
     if tr.stable_over_range == Some(false) {
         return (

@@ -92,6 +92,13 @@ pub(super) fn saturated(team: &TeamSpec, eq: &ShiftedEquilibrium) -> Vec<usize> 
         .collect()
 }
 
+/// att53t-10: a vehicle counts as near one envelope bound (one-sided) only when its room to it
+/// is at most this fraction of its room to the other: with rooms alike both sides cut the
+/// corrections alike, and a strict `room < other` was a knife edge (a nominal speed 1e-7 m/s
+/// off the others' tipped a centred team, [0.25, 0.75] about 0.5, to "near v_max", which hid
+/// its time constants and, through the start rule's horizon, turned its verdict).
+pub const NEAR_BOUND_ROOM_RATIO: f64 = 0.5;
+
 /// Relative tolerance within which a speed counts as ON an envelope bound (att51-7).
 pub const ON_BOUND_REL_TOL: f64 = 1e-9;
 
@@ -110,9 +117,10 @@ pub(super) fn on_bound(team: &TeamSpec, speed: f64, pins: &[bool], reach_mps: f6
 /// Which envelope bound vehicle `i`'s command at `speed` sits on: `Some(true)` its `v_max`,
 /// `Some(false)` its `v_min`, `None` neither (or no speed room). With `reach_mps = 0`, ON it
 /// within the rounding of [`ON_BOUND_REL_TOL`]; with `reach_mps > 0` (att53t-10: the largest
-/// correction the deployment asks), near it: the room to that bound under `reach_mps` and under
-/// the room to the other bound, so the near side cuts the corrections for longer than the far
-/// side saturates them (with equal rooms both cut alike: no one-sided law).
+/// correction the deployment asks), near it: the room to that bound under `reach_mps` and at
+/// most [`NEAR_BOUND_ROOM_RATIO`] of the room to the other bound, so the near side cuts the
+/// corrections for longer than the far side saturates them (with rooms alike both cut alike: no
+/// one-sided law).
 fn bound_side(team: &TeamSpec, speed: f64, i: usize, reach_mps: f64) -> Option<bool> {
     let e = team.speeds(i);
     if e.min_mps >= e.max_mps {
@@ -120,7 +128,9 @@ fn bound_side(team: &TeamSpec, speed: f64, i: usize, reach_mps: f64) -> Option<b
     }
     let tol = (ON_BOUND_REL_TOL * speed.abs().max(1.0)).max(reach_mps);
     let (top, bottom) = ((e.max_mps - speed).abs(), (speed - e.min_mps).abs());
-    let one_way = |room: f64, other: f64| room <= tol && (reach_mps == 0.0 || room < other);
+    let one_way = |room: f64, other: f64| {
+        room <= tol && (reach_mps == 0.0 || room <= NEAR_BOUND_ROOM_RATIO * other)
+    };
     if one_way(top, bottom) {
         Some(true)
     } else if one_way(bottom, top) {
@@ -319,17 +329,7 @@ pub(super) fn shifted_equilibrium(
         ranges_m: vec![0.0; n],
         gap_cv: None,
     };
-    // Partial sums along each run from its first vehicle: the gap ahead of a + k is x + p[k].
-    let sums: Vec<Vec<f64>> = runs
-        .iter()
-        .map(|&(a, count, _)| {
-            let mut p = vec![0.0; count];
-            for k in 1..count {
-                p[k] = p[k - 1] + d((a + k) % n);
-            }
-            p
-        })
-        .collect();
+    let sums = run_partial_sums(&runs, n, &d);
     let mut arcs: Vec<f64> = runs.iter().map(|r| r.2).collect();
     if ids.is_empty() && runs.len() >= 2 {
         // att53t-5: saturated anchors keep their arcs only while each stays saturated.
@@ -359,11 +359,40 @@ pub(super) fn shifted_equilibrium(
         eq.ranges_m.clear();
         return Some(eq);
     }
-    let arcs: Vec<f64> = eq.ranges_m.iter().map(|r| map.angle(*r)).collect();
-    let mean = TAU / n as f64;
-    let var = arcs.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / n as f64;
-    eq.gap_cv = Some(var.sqrt() / mean);
+    eq.gap_cv = Some(angle_cv(&eq.ranges_m, map));
     Some(eq)
+}
+
+/// Partial sums along each run `(a, count, arc)` of the ring from its first vehicle `a`:
+/// `p[0] = 0`, `p[k] = p[k - 1] + d(a + k)`, so the gap ahead of `a + k` is `x + p[k]` for the
+/// run's offset `x`.
+fn run_partial_sums(
+    runs: &[(usize, usize, f64)],
+    n: usize,
+    d: impl Fn(usize) -> f64,
+) -> Vec<Vec<f64>> {
+    runs.iter()
+        .map(|&(a, count, _)| {
+            let mut p = vec![0.0; count];
+            for k in 1..count {
+                p[k] = p[k - 1] + d((a + k) % n);
+            }
+            p
+        })
+        .collect()
+}
+
+/// The coefficient of variation of the gaps' angles `map.angle(r_i)` about the even `2 pi / N`
+/// (the population standard deviation over the mean).
+fn angle_cv(ranges_m: &[f64], map: GapMap) -> f64 {
+    let n = ranges_m.len() as f64;
+    let mean = TAU / n;
+    let var = ranges_m
+        .iter()
+        .map(|r| (map.angle(*r) - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    var.sqrt() / mean
 }
 
 /// The common speed `V` of the equilibrium of `team` (docs/TEAMS.md, "Per-vehicle

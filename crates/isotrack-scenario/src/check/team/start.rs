@@ -10,7 +10,6 @@
 //!   stay over the close-approach distance.
 
 use super::equilibrium::PROBE_PICKS_RIGHT;
-use super::SpacingLoopReport;
 use crate::check::setup::Law;
 use crate::check::team_ring::{
     deployed_gaps_ahead, flown_circle_radius_m, start_angle, ON_CIRCLE_REL_TOL,
@@ -166,14 +165,12 @@ struct Horizon {
 }
 
 impl Horizon {
-    /// The horizon of `team`'s start, `tau` from `sp` (the sampled one, else the continuous).
-    fn of(team: &TeamSpec, sp: &SpacingLoopReport) -> Self {
+    /// The horizon of `team`'s start, given the spacing loop's slowest time constant `tau_s`
+    /// (the sampled one, else the continuous; `None`: not known).
+    fn of(team: &TeamSpec, tau_s: Option<f64>) -> Self {
         let r = &team.ranging;
         let (d, t) = (r.delay_s, 1.0 / r.rate_hz);
-        let tau_s = sp
-            .slowest_time_constant_s
-            .or(sp.slowest_time_constant_continuous_s)
-            .filter(|x| x.is_finite() && *x > 0.0);
+        let tau_s = tau_s.filter(|x| x.is_finite() && *x > 0.0);
         let past = (MODEL_MIN_PERIODS * t)
             .max(MODEL_DELAYS * d)
             .max(MODEL_TIME_CONSTANTS * tau_s.unwrap_or(0.0));
@@ -531,7 +528,7 @@ pub(super) fn start_claim(
     s: &Scenario,
     l: &Law,
     team: &TeamSpec,
-    sp: &SpacingLoopReport,
+    tau_s: Option<f64>,
 ) -> Option<(Verdict, String)> {
     let SpacingLaw::RangeBalance { gain_per_s: k_v } = team.law else {
         return None;
@@ -546,7 +543,7 @@ pub(super) fn start_claim(
             format!("range_balance's start is not checked ({matters}; docs/TEAMS.md, the start rule): {why}"),
         ))
     };
-    let h = Horizon::of(team, sp);
+    let h = Horizon::of(team, tau_s);
     let trivial = team.nominal_speeds_mps().len() == 1 && team.ranging.delay_s == 0.0;
     let model = StartModel::new(s, l, team, k_v, &h).and_then(|m| h.settles().map(|()| m));
     let (gaps, model) = match model {
