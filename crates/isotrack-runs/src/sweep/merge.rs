@@ -304,7 +304,10 @@ const NAMING_KEYS: [&str; 2] = ["sweep", "scenario"];
 /// paths that differ as text and do not name one file (att53o-10: an edited `scenario` or
 /// `sweep` was copied into the merged manifest without a check, which then named another
 /// scenario for every row). The digest, which every shard must share, covers the sweep file's
-/// and the base scenario's contents, not these names.
+/// and the base scenario's contents, not these names; so a name typed another way (`s.toml`,
+/// `./s.toml`, `/abs/s.toml`: relative to where each shard ran, unknown here) or a copy of the
+/// file of the same name is the same file (att55o-4: honest shards started as `sw1.toml` and
+/// `./sw1.toml` were refused when merged from another directory).
 fn check_same_names(
     d: &Path,
     m: &serde_json::Value,
@@ -317,7 +320,10 @@ fn check_same_names(
             here.and_then(serde_json::Value::as_str),
             there.and_then(serde_json::Value::as_str),
         ) {
-            (Some(a), Some(b)) => a == b || same_file(Path::new(a), Path::new(b)),
+            (Some(a), Some(b)) => {
+                let (a, b) = (Path::new(a), Path::new(b));
+                a == b || same_file(a, b) || a.file_name() == b.file_name()
+            }
             _ => here == there,
         };
         if !same {
