@@ -957,14 +957,15 @@ fn a_merge_refuses_shards_naming_another_sweep_or_scenario() {
     }
     // att55o-4: the same file named another way (relative to where that shard ran, not to
     // the merge's directory) is no edit: merged, the first shard's name kept.
-    let mut m: serde_json::Value = serde_json::from_str(&original).unwrap();
+    let original_b = std::fs::read_to_string(b.join("sweep.json")).unwrap();
+    let mut m: serde_json::Value = serde_json::from_str(&original_b).unwrap();
     m["sweep"] = serde_json::json!("./s.toml");
     m["scenario"] = serde_json::json!("sc.toml");
     std::fs::write(b.join("sweep.json"), m.to_string()).unwrap();
     std::fs::write(a.join("sweep.json"), &original).unwrap();
     let o = merge(&a, &b, "m-spelled");
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    std::fs::write(b.join("sweep.json"), &original).unwrap();
+    std::fs::write(b.join("sweep.json"), &original_b).unwrap();
     let o = merge(&a, &b, "m");
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let m: serde_json::Value =
