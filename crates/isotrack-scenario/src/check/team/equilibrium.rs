@@ -329,7 +329,7 @@ pub(super) fn shifted_equilibrium(
         ranges_m: vec![0.0; n],
         gap_cv: None,
     };
-    let sums = run_partial_sums(&runs, n, &d);
+    let sums = run_partial_sums(&runs, n, d);
     let mut arcs: Vec<f64> = runs.iter().map(|r| r.2).collect();
     if ids.is_empty() && runs.len() >= 2 {
         // att53t-5: saturated anchors keep their arcs only while each stays saturated.
