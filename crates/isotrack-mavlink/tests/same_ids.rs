@@ -2591,10 +2591,9 @@ fn a_clock_step_that_fired_sensor_clock_jump_is_no_reboot_in_the_retries() {
         "{:?}",
         r.events
     );
-    assert!(
-        !r.events
-            .iter()
-            .any(|e| e.contains("its autopilot rebooted")),
+    assert_eq!(
+        support::logged(&r, &["its autopilot rebooted"]),
+        0,
         "{:?}",
         r.events
     );
@@ -2829,10 +2828,9 @@ fn a_second_senders_clock_after_the_proof_is_no_reboot() {
         out
     });
     assert!(!r.failsafe_acknowledged, "{:?}", r.events);
-    assert!(
-        !r.events
-            .iter()
-            .any(|e| e.contains("its autopilot rebooted")),
+    assert_eq!(
+        support::logged(&r, &["its autopilot rebooted"]),
+        0,
         "{:?}",
         r.events
     );
@@ -2879,10 +2877,9 @@ fn a_second_address_with_its_own_clock_is_no_reboot() {
         "{:?}",
         r.events
     );
-    assert!(
-        !r.events
-            .iter()
-            .any(|e| e.contains("its autopilot rebooted")),
+    assert_eq!(
+        support::logged(&r, &["its autopilot rebooted"]),
+        0,
         "{:?}",
         r.events
     );
